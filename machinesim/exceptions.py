@@ -1,0 +1,76 @@
+"""The exception hierarchy: every error machinesim raises on purpose is a `MachineSimError`.
+
+Messages name where the problem is (file, line, column, key), the value that arrived and
+what was expected, so that a user can fix the input without reading the source.
+"""
+
+from __future__ import annotations
+
+
+class MachineSimError(Exception):
+    """Root of every error machinesim raises on purpose."""
+
+
+class InputError(MachineSimError, ValueError):
+    """An input (file, spec, array, key) is malformed or out of range.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong and what was expected.
+    source : str, optional
+        The file (or other origin) the input came from.
+    line, column : int, optional
+        1-based position in ``source``.
+    key : str, optional
+        The key, word or field the problem is in.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        source: str | None = None,
+        line: int | None = None,
+        column: int | None = None,
+        key: str | None = None,
+    ) -> None:
+        self.source = source
+        self.line = line
+        self.column = column
+        self.key = key
+        where = []
+        if source is not None:
+            where.append(str(source))
+        if line is not None:
+            where.append(f"line {line}")
+        if column is not None:
+            where.append(f"column {column}")
+        if key is not None:
+            where.append(f"key '{key}'")
+        prefix = ", ".join(where)
+        super().__init__(f"{prefix}: {message}" if prefix else message)
+
+
+class ModelError(MachineSimError):
+    """A machine model (URDF) is missing, malformed or breaks a machinesim convention."""
+
+
+class ErrorModelError(InputError):
+    """An error model (TOML or dict) has an unknown key, a missing unit or a bad value."""
+
+
+class NCProgramError(InputError):
+    """An NC program has a word, block or modal state that cannot be run."""
+
+
+class KinematicsError(MachineSimError):
+    """A pose cannot be reached, or an axis value lies outside its travel."""
+
+
+class UnreachableError(KinematicsError):
+    """No axis values put the tool edge at the requested pose."""
+
+
+class AxisLimitError(KinematicsError):
+    """An axis value lies outside the axis travel."""

@@ -1,0 +1,68 @@
+"""Unit conversion at the edges: SI inside (m, rad, s), mm/um/nm/deg only in names at the edges.
+
+Every conversion goes through the factors below, so a unit is never guessed. `to_si` and
+`from_si` take a unit name as written in file keys (``offset_um`` -> ``"um"``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Length units, as factors to metres.
+LENGTH = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "nm": 1e-9}
+#: Angle units, as factors to radians.
+ANGLE = {
+    "rad": 1.0,
+    "mrad": 1e-3,
+    "urad": 1e-6,
+    "deg": math.pi / 180.0,
+    "arcsec": math.pi / (180.0 * 3600.0),
+}
+#: Every unit machinesim reads, with its factor to SI.
+FACTORS = {**LENGTH, **ANGLE}
+
+M_PER_MM = LENGTH["mm"]
+M_PER_UM = LENGTH["um"]
+M_PER_NM = LENGTH["nm"]
+RAD_PER_DEG = ANGLE["deg"]
+
+
+def is_length(unit: str) -> bool:
+    """True when ``unit`` names a length unit."""
+    return unit in LENGTH
+
+
+def is_angle(unit: str) -> bool:
+    """True when ``unit`` names an angle unit."""
+    return unit in ANGLE
+
+
+def to_si(value, unit: str):
+    """Convert ``value`` given in ``unit`` to SI (m or rad), as float64."""
+    return np.asarray(value, dtype=np.float64) * FACTORS[unit] if np.ndim(value) else (
+        float(value) * FACTORS[unit]
+    )
+
+
+def from_si(value, unit: str):
+    """Convert an SI ``value`` (m or rad) to ``unit``, as float64."""
+    return np.asarray(value, dtype=np.float64) / FACTORS[unit] if np.ndim(value) else (
+        float(value) / FACTORS[unit]
+    )
+
+
+def mm(value):
+    """Millimetres to metres."""
+    return to_si(value, "mm")
+
+
+def um(value):
+    """Micrometres to metres."""
+    return to_si(value, "um")
+
+
+def deg(value):
+    """Degrees to radians."""
+    return to_si(value, "deg")
