@@ -1,0 +1,496 @@
+"""Machines: load a URDF model, and ask where the tool edge is on a machine with errors.
+
+>>> import machinesim
+>>> machine = machinesim.load_machine("robonano_a0ib")
+>>> machine.axes
+('X', 'Y', 'Z', 'B', 'C')
+"""
+
+from __future__ import annotations
+
+import functools
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from machinesim import tolerances
+from machinesim.exceptions import (
+    AxisLimitError,
+    ErrorModelError,
+    InputError,
+    ModelError,
+    UnreachableError,
+)
+from machinesim.kinematics import (
+    DOF_OF_LETTER,
+    DOFS,
+    TOOL_PARAMS,
+    WORKPIECE_PARAMS,
+    Axis,
+    Binding,
+    Kinematics,
+)
+
+#: NC letters in the order machinesim puts them in a configuration vector.
+AXIS_ORDER = "XYZABC"
+#: Frames every machine has.
+REQUIRED_FRAMES = ("base", "table", "workpiece", "tool_mount", "tool_tip")
+_NS = "{https://machinesim.invalid/urdf}"
+
+
+def models_dir() -> Path:
+    """The folder of the shipped URDF models (in the wheel, or the source tree's models/)."""
+    here = Path(__file__).resolve().parent
+    for candidate in (here / "models", here.parent / "models"):
+        if candidate.is_dir() and any(candidate.glob("*.urdf")):
+            return candidate
+    raise ModelError(f"no URDF models found beside {here}")
+
+
+def list_machines() -> tuple[str, ...]:
+    """Names of the shipped machines, sorted."""
+    return tuple(sorted(p.stem for p in models_dir().glob("*.urdf")))
+
+
+def load_machine(name_or_path: str | Path) -> Machine:
+    """Load a shipped machine by name, or any machinesim URDF by path.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A name from `list_machines()`, or the path of a ``.urdf`` file.
+    """
+    text = str(name_or_path)
+    path = Path(text)
+    if not text.endswith(".urdf"):
+        path = models_dir() / f"{text}.urdf"
+        if not path.is_file():
+            raise ModelError(
+                f"unknown machine {text!r}; expected one of {', '.join(list_machines())} "
+                "or the path of a .urdf file")
+    elif not path.is_file():
+        raise ModelError(f"{path}: no such URDF file")
+    return _load(path.resolve())
+
+
+@functools.lru_cache(maxsize=16)
+def _load(path: Path) -> Machine:
+    return Machine(path)
+
+
+@dataclass(frozen=True)
+class AxisSolution:
+    """Axis values that put the tool edge at a requested pose, and what they could not match.
+
+    Attributes
+    ----------
+    q : ndarray, shape (n_axes,) or (N, n_axes)
+        Axis values, SI, in `Machine.axes` order.
+    position_residual : ndarray, shape (3,) or (N, 3)
+        Requested minus reached edge position, workpiece frame, m.
+    rotation_residual : ndarray, shape (3,) or (N, 3)
+        Rotation (axis times angle, workpiece frame, rad) from the reached to the requested
+        tool orientation: the part of the orientation the machine's axes cannot produce.
+    unmatched : str
+        Empty when the whole pose was matched, else what was not.
+    """
+
+    q: np.ndarray
+    position_residual: np.ndarray
+    rotation_residual: np.ndarray
+    unmatched: str
+
+
+class Machine:
+    """A machine model: its axes, its Pinocchio model with error joints, and its kinematics.
+
+    Build with `load_machine`. Nothing here holds an error model: every method takes one
+    (an `machinesim.errors.ErrorModel`, or None for the nominal machine).
+    """
+
+    def __init__(self, path: Path) -> None:
+        self.path = Path(path)
+        try:
+            root = ET.parse(self.path).getroot()
+        except ET.ParseError as exc:
+            raise ModelError(f"{self.path}: not readable XML ({exc})") from exc
+        self.name = root.get("name") or self.path.stem
+        self._urdf_root = root
+        self._axes = _read_axes(root, self.path)
+        self.axes: tuple[str, ...] = tuple(a.letter for a in self._axes)
+        self.kin = Kinematics(root, self._axes, str(self.path))
+        missing = [f for f in REQUIRED_FRAMES if f not in self.kin.frame_id]
+        if missing:
+            raise ModelError(f"{self.path}: missing frame(s) {', '.join(missing)}; every "
+                             f"machine needs {', '.join(REQUIRED_FRAMES)}")
+        self.lower = np.array([a.lower for a in self._axes])
+        self.upper = np.array([a.upper for a in self._axes])
+        self.resolution = np.array([a.resolution for a in self._axes])
+        self.rapid_rate = np.array([a.velocity for a in self._axes])
+        self.rotary = np.array([a.rotary for a in self._axes])
+        self._bindings: dict[int, Binding] = {}
+
+    def __repr__(self) -> str:
+        return f"Machine({self.name!r}, axes={''.join(self.axes)})"
+
+    # ----------------------------------------------------------------------------- axes
+
+    def axis(self, letter: str) -> Axis:
+        """Description of one axis (side, direction, travel, resolution)."""
+        for a in self._axes:
+            if a.letter == letter:
+                return a
+        raise InputError(f"axis {letter!r} is not on {self.name}; it has {''.join(self.axes)}")
+
+    @property
+    def frames(self) -> tuple[str, ...]:
+        """Named frames of this machine (base, table, workpiece, tool_mount, tool_tip, ...)."""
+        return tuple(self.kin.frame_id)
+
+    @property
+    def model(self) -> pin.Model:
+        """The Pinocchio model with its error joints (all zero on the nominal machine)."""
+        return self.kin.model
+
+    @property
+    def urdf_xml(self) -> str:
+        """URDF text of the error-augmented model (visuals as in the machine's file)."""
+        return self.kin.xml
+
+    def limit_violations(self, q) -> list[str]:
+        """Descriptions of the axis values in ``q`` (n_axes,) or (N, n_axes) out of travel."""
+        q2 = np.atleast_2d(self._check_q(q))
+        slack = tolerances.LIMIT_SLACK
+        found = []
+        for i, a in enumerate(self._axes):
+            bad = np.flatnonzero((q2[:, i] < a.lower - slack) | (q2[:, i] > a.upper + slack))
+            if bad.size:
+                v = q2[bad[0], i]
+                found.append(f"axis {a.letter} = {_fmt(a, v)} outside its travel "
+                             f"{_fmt(a, a.lower)} .. {_fmt(a, a.upper)}"
+                             + (f" (and {bad.size - 1} more)" if bad.size > 1 else ""))
+        return found
+
+    # ------------------------------------------------------------------------ kinematics
+
+    def binding(self, errors) -> Binding:
+        """The error-joint values of ``errors`` on this machine (checked; cached per model)."""
+        key = id(errors)
+        b = self._bindings.get(key)
+        if b is None or b.errors is not errors:
+            b = self.kin.bind(errors)
+            if len(self._bindings) > 32:
+                self._bindings.clear()
+            self._bindings[key] = b
+        return b
+
+    def check_errors(self, errors) -> None:
+        """Raise ErrorModelError when ``errors`` does not fit this machine."""
+        self.kin.bind(errors)
+
+    def tool_pose(self, q, errors=None) -> np.ndarray:
+        """Pose of ``tool_tip`` in the ``workpiece`` frame.
+
+        Parameters
+        ----------
+        q : array_like, shape (n_axes,) or (N, n_axes)
+            Axis values in `axes` order, m and rad.
+        errors : ErrorModel, optional
+            Injected errors; None for the nominal machine.
+
+        Returns
+        -------
+        wMt : ndarray, shape (4, 4) or (N, 4, 4)
+        """
+        return self.frame_pose("tool_tip", q, errors)
+
+    def frame_pose(self, frame: str, q, errors=None) -> np.ndarray:
+        """Pose of any named frame (e.g. ``probe_tip``) in the workpiece frame; see tool_pose."""
+        if frame not in self.kin.frame_id:
+            raise InputError(f"frame {frame!r} is not on {self.name}; it has "
+                             f"{', '.join(self.frames)}")
+        q = self._check_q(q)
+        out = self.kin.poses(np.atleast_2d(q), self.binding(errors), frame)
+        return out[0] if q.ndim == 1 else out
+
+    def pinocchio_pose(self, q, errors=None, frame: str = "tool_tip") -> np.ndarray:
+        """The same pose as `frame_pose`, one configuration, by Pinocchio's forwardKinematics."""
+        q = self._check_q(q, batch=False)
+        return self.kin.frame_pose(self.kin.full_q(q, self.binding(errors)), frame)
+
+    def parameter_names(self, errors=None) -> tuple[str, ...]:
+        """Every error parameter name this machine accepts (tables: those in ``errors``)."""
+        names = [*TOOL_PARAMS, *WORKPIECE_PARAMS]
+        for a in self._axes:
+            names += [f"location.{a.letter}.{s}" for s in a.location_symbols()]
+        if errors is not None:
+            for letter, symbols in errors.component.items():
+                for symbol, comp in symbols.items():
+                    names += [f"component.{letter}.{symbol}[{i}]"
+                              for i in range(len(comp.values))]
+        return tuple(names)
+
+    def error_jacobian(self, q, errors=None, params=None) -> np.ndarray:
+        """Derivative of the tool pose with respect to named error parameters.
+
+        Parameters
+        ----------
+        q : array_like, shape (n_axes,) or (N, n_axes)
+            Axis values, SI.
+        errors : ErrorModel, optional
+            The errors at which to differentiate (None: the nominal machine).
+        params : sequence of str, optional
+            Parameter names (see `parameter_names`); default: every parameter ``errors``
+            carries (``errors.parameters()``).
+
+        Returns
+        -------
+        J : ndarray, shape (6, k) or (N, 6, k)
+            Rows: the tool-edge position (m) and the tool rotation (rad, axis-angle), both in
+            the workpiece frame; columns: per unit (m or rad) of each parameter.
+        """
+        q = self._check_q(q)
+        binding = self.binding(errors)
+        if params is None:
+            params = tuple(errors.parameters()) if errors is not None else ()
+        columns = [self._param_columns(p, errors) for p in params]
+        q2 = np.atleast_2d(q)
+        out = np.empty((q2.shape[0], 6, len(columns)))
+        for n, qn in enumerate(q2):
+            jac = self.kin.relative_jacobian(self.kin.full_q(qn, binding))
+            for c, terms in enumerate(columns):
+                col = np.zeros(6)
+                for v_index, coeff in terms:
+                    col += jac[:, v_index] * (coeff(qn) if callable(coeff) else coeff)
+                out[n, :, c] = col
+        return out[0] if q.ndim == 1 else out
+
+    def axis_jacobian(self, q, errors=None) -> np.ndarray:
+        """Derivative of the tool pose (6, n_axes) with respect to the axis values."""
+        q = self._check_q(q, batch=False)
+        return self.kin.axis_jacobian(q, self.binding(errors))
+
+    def _param_columns(self, name: str, errors) -> list:
+        """(velocity index, coefficient) terms: d(error joint)/d(parameter)."""
+        vi = self.kin.v_index
+        if name in TOOL_PARAMS:
+            return [(vi[f"tool_{TOOL_PARAMS[name]}"], 1.0)]
+        if name in WORKPIECE_PARAMS:
+            return [(vi[f"workpiece_{WORKPIECE_PARAMS[name]}"], 1.0)]
+        parts = name.split(".")
+        if len(parts) == 3 and parts[0] == "location":
+            _, letter, symbol = parts
+            ax = self.kin.axis(letter, key=name)
+            self.kin.check_location_symbol(ax, symbol)
+            dof = DOF_OF_LETTER[symbol[1]]
+            if dof == ax.own_dof:
+                return [(vi[letter], 1.0)]
+            return [(vi[f"{letter}__loc_{dof}"], 1.0), (vi[f"{letter}__inv_{dof}"], -1.0)]
+        if len(parts) == 3 and parts[0] == "component" and parts[2].endswith("]"):
+            _, letter, rest = parts
+            symbol, _, index = rest[:-1].partition("[")
+            comp = (errors.component.get(letter, {}).get(symbol) if errors is not None
+                    else None)
+            if comp is None or not index.isdigit() or int(index) >= len(comp.values):
+                raise ErrorModelError(
+                    f"no component error {letter}.{symbol} with an entry {index} in the error "
+                    "model; a component parameter needs its table or polynomial there",
+                    key=name)
+            ax = self.kin.axis(letter, key=name)
+            i, k = self.axes.index(letter), int(index)
+            sign = float(ax.side)
+            dof = DOF_OF_LETTER[symbol[1]]
+
+            def coeff(qn, comp=comp, i=i, k=k, sign=sign):
+                return sign * comp.basis(np.array([qn[i]]))[0, k]
+
+            return [(vi[f"{letter}__comp_{dof}"], coeff)]
+        raise ErrorModelError(
+            f"unknown error parameter {name!r}; expected tool.x .. tool.rz, workpiece.x .. "
+            "workpiece.gamma, location.<axis>.<symbol> or component.<axis>.<symbol>[i]",
+            key=name)
+
+    # ------------------------------------------------------------------------------ inverse
+
+    def axis_values(self, wMt, errors=None, q_start=None, check_limits: bool = True,
+                    max_iterations: int = 50) -> AxisSolution:
+        """Axis values that put the tool edge at the pose ``wMt`` on this model.
+
+        The edge position is matched exactly (to `tolerances.IK_POSITION_M`); the orientation
+        as far as the axes can produce it, without giving up position (a second task in the
+        null space of the position task). What cannot be matched is reported in the result.
+
+        Parameters
+        ----------
+        wMt : array_like, shape (4, 4) or (N, 4, 4)
+            Requested pose of ``tool_tip`` in ``workpiece``, m.
+        errors : ErrorModel, optional
+            The model to solve on: None for the nominal machine, or the identified errors
+            (model-based compensation).
+        q_start : array_like, shape (n_axes,) or (N, n_axes), optional
+            Where the search starts (default zeros; for a batch, each solution starts from the
+            previous one). Choose it near the wanted branch where several exist.
+        check_limits : bool
+            Raise AxisLimitError when a solution lies outside the travel.
+
+        Raises
+        ------
+        UnreachableError
+            When no axis values reach the position.
+        AxisLimitError
+            When the solution lies outside the travel (``check_limits``).
+        """
+        target = np.asarray(wMt, dtype=np.float64)
+        if target.shape[-2:] != (4, 4) or target.ndim not in (2, 3):
+            raise InputError(f"expected a pose of shape (4, 4) or (N, 4, 4), got {target.shape}")
+        if not np.all(np.isfinite(target)):
+            raise InputError("the requested pose has NaN or inf entries")
+        batch = target.ndim == 3
+        targets = target if batch else target[None]
+        n_axes = len(self.axes)
+        starts = None if q_start is None else np.atleast_2d(self._check_q(q_start))
+        binding = self.binding(errors)
+        qs, pres, rres, notes = [], [], [], set()
+        prev = np.zeros(n_axes)
+        for n, t in enumerate(targets):
+            start = prev if starts is None else starts[min(n, len(starts) - 1)]
+            q, dp, dr = self._solve(t, binding, start.copy(), max_iterations)
+            if np.linalg.norm(dp) > tolerances.UNREACHABLE_M:
+                raise UnreachableError(
+                    f"{self.name}: no axis values reach the edge position "
+                    f"{np.round(t[:3, 3] * 1e3, 6).tolist()} mm (pose {n}); the best miss is "
+                    f"{np.linalg.norm(dp) * 1e9:.3g} nm")
+            if np.linalg.norm(dr) > tolerances.IK_ANGLE_RAD * 1e3:
+                notes.add(self._describe_rotation(dr))
+            qs.append(q)
+            pres.append(dp)
+            rres.append(dr)
+            prev = q
+        qs, pres, rres = np.array(qs), np.array(pres), np.array(rres)
+        if check_limits:
+            bad = self.limit_violations(qs)
+            if bad:
+                raise AxisLimitError(f"{self.name}: the requested pose needs " + "; ".join(bad))
+        unmatched = "; ".join(sorted(notes))
+        if not batch:
+            return AxisSolution(qs[0], pres[0], rres[0], unmatched)
+        return AxisSolution(qs, pres, rres, unmatched)
+
+    def _solve(self, target, binding, q, max_iterations):
+        kin = self.kin
+        p_target, r_target = target[:3, 3], target[:3, :3]
+        dp = dr = np.zeros(3)
+        for _ in range(max_iterations):
+            jac = kin.axis_jacobian(q, binding)
+            pose = kin.frame_pose(kin.full_q(q, binding), "tool_tip")
+            dp = p_target - pose[:3, 3]
+            dr = pin.log3(r_target @ pose[:3, :3].T)
+            jp, jr = jac[:3], jac[3:]
+            jp_pinv = _pinv(jp)
+            step = jp_pinv @ dp
+            null = np.eye(len(q)) - jp_pinv @ jp
+            step += _pinv(jr @ null) @ (dr - jr @ step)
+            q = q + step
+            if (np.linalg.norm(dp) < tolerances.IK_POSITION_M
+                    and np.linalg.norm(step) < tolerances.IK_ANGLE_RAD):
+                break
+        full = kin.full_q(q, binding)
+        pose = kin.frame_pose(full, "tool_tip")
+        dp = p_target - pose[:3, 3]
+        dr = pin.log3(r_target @ pose[:3, :3].T)
+        return q, dp, dr
+
+    def _describe_rotation(self, dr: np.ndarray) -> str:
+        about = [f"{'XYZ'[k]}" for k in range(3) if abs(dr[k]) > tolerances.IK_ANGLE_RAD * 1e3]
+        return (f"{self.name} ({''.join(self.axes)}) cannot turn the tool about "
+                f"{'/'.join(about)} here: orientation left unmatched by up to "
+                f"{np.degrees(np.max(np.abs(dr))):.6g} deg")
+
+    # ------------------------------------------------------------------------------ input
+
+    def _check_q(self, q, batch: bool = True) -> np.ndarray:
+        arr = np.asarray(q, dtype=np.float64)
+        n = len(self.axes)
+        ok = (arr.shape == (n,)) or (batch and arr.ndim == 2 and arr.shape[1] == n)
+        if not ok:
+            want = f"({n},)" + (f" or (N, {n})" if batch else "")
+            raise InputError(f"{self.name} has axes {''.join(self.axes)}: expected axis values "
+                             f"of shape {want}, got {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise InputError("axis values contain NaN or inf")
+        return arr
+
+
+#: Singular values below this (per m or per rad of axis motion) are directions the axes cannot
+#: move the tool in: an absolute cut-off, so that a null-space task with nothing left to move
+#: does not amplify round-off into a step.
+_SINGULAR = 1e-9
+
+
+def _pinv(a: np.ndarray) -> np.ndarray:
+    """Pseudo-inverse with the absolute singular-value cut-off `_SINGULAR`."""
+    u, s, vt = np.linalg.svd(a, full_matrices=False)
+    inv = np.divide(1.0, s, out=np.zeros_like(s), where=s > _SINGULAR)
+    return (vt.T * inv) @ u.T
+
+
+def _fmt(a: Axis, value: float) -> str:
+    return f"{np.degrees(value):.5f} deg" if a.rotary else f"{value * 1e3:.6f} mm"
+
+
+def _read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
+    """Axes of a machinesim URDF, in AXIS_ORDER, with side, direction and resolution."""
+    resolution = {e.get("joint"): float(e.get("resolution")) for e in root.iter(f"{_NS}axis")}
+    links_parent = {j.find("child").get("link"): j for j in root.findall("joint")}
+
+    def ancestors(link: str) -> set[str]:
+        names = set()
+        while link in links_parent:
+            joint = links_parent[link]
+            names.add(joint.get("name"))
+            link = joint.find("parent").get("link")
+        return names
+
+    tool_side, wp_side = ancestors("tool_tip"), ancestors("workpiece")
+    axes = []
+    for joint in root.findall("joint"):
+        kind = joint.get("type")
+        if kind == "fixed":
+            continue
+        name = joint.get("name")
+        where = f"{path}: joint {name!r}"
+        if kind not in ("prismatic", "revolute"):
+            raise ModelError(f"{where}: type {kind!r}; machine axes are prismatic or revolute "
+                             "(a spindle is a revolute joint with wide limits)")
+        if name not in AXIS_ORDER or len(name) != 1:
+            raise ModelError(f"{where}: axis joints are named by their NC letter, one of "
+                             f"{', '.join(AXIS_ORDER)}")
+        axis = np.array([float(v) for v in joint.find("axis").get("xyz").split()])
+        k = int(np.argmax(np.abs(axis)))
+        if np.count_nonzero(axis) != 1 or abs(abs(axis[k]) - 1.0) > 0:
+            raise ModelError(f"{where}: axis {axis.tolist()} must be a unit machine direction")
+        side = 1 if name in tool_side else -1 if name in wp_side else 0
+        if side == 0:
+            raise ModelError(f"{where}: moves neither the tool_tip nor the workpiece")
+        expected_sign = 1.0 if side > 0 else -1.0
+        if np.sign(axis[k]) != expected_sign:
+            raise ModelError(
+                f"{where}: a {'tool' if side > 0 else 'workpiece'}-side axis must point "
+                f"{'+' if side > 0 else '-'}{'XYZ'[k]} so that positive commands move the tool "
+                "positively relative to the workpiece (ISO 841)")
+        if name not in resolution:
+            raise ModelError(f"{where}: no <machinesim:axis joint=\"{name}\" resolution=...> "
+                             "element")
+        limit = joint.find("limit")
+        axes.append(Axis(
+            letter=name, rotary=kind == "revolute", side=side, direction=k,
+            lower=float(limit.get("lower")), upper=float(limit.get("upper")),
+            velocity=float(limit.get("velocity")), resolution=resolution[name]))
+    return tuple(sorted(axes, key=lambda a: AXIS_ORDER.index(a.letter)))
+
+
+__all__ = ["AXIS_ORDER", "AxisSolution", "DOFS", "Machine", "list_machines", "load_machine",
+           "models_dir"]

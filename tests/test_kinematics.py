@@ -1,0 +1,390 @@
+"""Kinematics against an independent chain, paper geometry, finite differences, round trips.
+
+The independent chain below is written from docs/machines.md (its placement tables and its
+error formulas) with plain 4x4 matrices: it shares no code with the URDF reading, the error
+joints or Pinocchio.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from machinesim.errors import ComponentError, ErrorModel, ToolSetting, WorkpieceSetting
+from machinesim.exceptions import AxisLimitError, ErrorModelError, InputError, UnreachableError
+from machinesim.machines import list_machines, load_machine
+
+MM = 1e-3
+UM = 1e-6
+URAD = 1e-6
+
+# docs/machines.md, tables of joint origins (mm), axis direction and sign, per branch.
+# ("fixed", xyz) or (letter, xyz, direction, sign).
+GEOMETRY = {
+    "robonano_ui": {
+        "workpiece": [("Y", (0, 0, 100), 1, -1), ("C", (0, 0, 80), 2, -1),
+                      ("fixed", (0, 0, 20)), ("fixed", (0, 0, 5))],
+        "tool": [("X", (0, 300, 400), 0, 1), ("Z", (0, -300, -50), 2, 1),
+                 ("B", (0, 0, -145), 1, 1), ("A", (0, 0, 0), 2, 1),
+                 ("fixed", (0, 0, 20)), ("fixed", (0, 0, -20))],
+    },
+    "robonano_a0ib": {
+        "workpiece": [("Y", (0, 0, 100), 1, -1), ("C", (0, 0, 80), 2, -1),
+                      ("fixed", (0, 0, 20)), ("fixed", (0, 0, 5))],
+        "tool": [("X", (0, 300, 400), 0, 1), ("Z", (0, -300, -50), 2, 1),
+                 ("B", (0, 0, -145), 1, 1), ("fixed", (0, 0, 20)), ("fixed", (0, 0, -20))],
+        "probe": [("X", (0, 300, 400), 0, 1), ("Z", (0, -300, -50), 2, 1),
+                  ("B", (0, 0, -145), 1, 1), ("fixed", (0, 40, 1)), ("fixed", (0, 0, 0))],
+    },
+    "planer_4axis": {
+        "workpiece": [("X", (0, 0, 100), 0, -1), ("fixed", (0, 0, 95)), ("fixed", (0, 0, 5))],
+        "tool": [("Y", (0, 0, 450), 1, 1), ("Z", (0, 0, -50), 2, 1),
+                 ("A", (0, 0, -79.5), 0, 1), ("fixed", (0, 0, -100.5)),
+                 ("fixed", (0, 0, -20))],
+    },
+    "grooving_4axis": {
+        "workpiece": [("Y", (0, 0, 80), 1, -1), ("C", (0, 0, 60), 2, -1),
+                      ("fixed", (0, 0, 55)), ("fixed", (0, 0, 5))],
+        "tool": [("X", (0, 400, 550), 0, 1), ("Z", (0, -400, -250), 2, 1),
+                 ("fixed", (0, 0, -80)), ("fixed", (0, 0, -20))],
+    },
+    "sts_lathe": {
+        "workpiece": [("X", (0, 0, 80), 0, -1), ("C", (0, 0, 70), 2, -1),
+                      ("fixed", (0, 0, 45)), ("fixed", (0, 0, 5))],
+        "tool": [("Z", (0, 0, 350), 2, 1), ("fixed", (0, 0, -130)), ("fixed", (0, 0, -20))],
+    },
+}
+
+
+def trans(v) -> np.ndarray:
+    out = np.eye(4)
+    out[:3, 3] = v
+    return out
+
+
+def rot(k: int, angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    i, j = (k + 1) % 3, (k + 2) % 3
+    out = np.eye(4)
+    out[i, i], out[i, j], out[j, i], out[j, j] = c, -s, s, c
+    return out
+
+
+def six(t, r) -> np.ndarray:
+    """T(t) Rx(r0) Ry(r1) Rz(r2), the error transform of docs/machines.md."""
+    return trans(t) @ rot(0, r[0]) @ rot(1, r[1]) @ rot(2, r[2])
+
+
+def reference_branch(machine, branch, q, errors: ErrorModel, terminal=None):
+    """Pose of the branch's end in the base, by the docs' formulas."""
+    values = dict(zip(machine.axes, q, strict=True))
+    out = np.eye(4)
+    for element in GEOMETRY[machine.name][branch]:
+        if element[0] == "fixed":
+            out = out @ trans(np.array(element[1]) * MM)
+            continue
+        letter, xyz, k, sign = element
+        ax = machine.axis(letter)
+        loc = errors.location.get(letter, {})
+        vec = {d: loc.get(f"E{d}0{letter}", 0.0) for d in "XYZABC"}
+        own = "ABC"[k] if ax.rotary else None
+        zero = vec.pop(own) if own else 0.0
+        e = six([vec["X"], vec["Y"], vec["Z"]],
+                 [vec.get("A", 0.0), vec.get("B", 0.0), vec.get("C", 0.0)])
+        comp = errors.component.get(letter, {})
+        cv = {d: float(comp[f"E{d}{letter}"].evaluate([values[letter]])[0])
+              if f"E{d}{letter}" in comp else 0.0 for d in "XYZABC"}
+        c = six([cv["X"], cv["Y"], cv["Z"]], [cv["A"], cv["B"], cv["C"]])
+        c = c if ax.side > 0 else np.linalg.inv(c)
+        if ax.rotary:
+            motion = c @ rot(k, sign * (values[letter] + zero))
+        else:
+            step = np.zeros(3)
+            step[k] = sign * values[letter]
+            motion = trans(step) @ c
+        out = out @ trans(np.array(xyz) * MM) @ e @ motion @ np.linalg.inv(e)
+    if terminal is not None:
+        out = out @ terminal
+    return out
+
+
+def reference_pose(machine, q, errors, frame="tool_tip"):
+    wp = errors.workpiece
+    w = reference_branch(machine, q=q, errors=errors, branch="workpiece",
+                         terminal=six(wp.delta, [wp.alpha, wp.beta, wp.gamma]))
+    if frame == "tool_tip":
+        t = reference_branch(machine, "tool", q, errors,
+                             terminal=six(errors.tool.offset, errors.tool.rotation))
+    else:
+        t = reference_branch(machine, "probe", q, errors)
+    return np.linalg.inv(w) @ t
+
+
+def random_errors(machine, rng, tables=True) -> ErrorModel:
+    """Errors of every family on every axis, at sizes a real machine has (or larger)."""
+    location, component = {}, {}
+    for letter in machine.axes:
+        ax = machine.axis(letter)
+        location[letter] = {
+            s: rng.normal(0, 20 * UM if s[1] in "XYZ" else 50 * URAD)
+            for s in ax.location_symbols()}
+        if not tables:
+            continue
+        span = (ax.lower, ax.upper) if ax.upper - ax.lower < 20 else (-10.0, 10.0)
+        positions = np.linspace(*span, 5)
+        table = {}
+        for s in ax.component_symbols():
+            scale = 5 * UM if s[1] in "XYZ" else 20 * URAD
+            table[s] = ComponentError("table", positions, rng.normal(0, scale, 5))
+        # one polynomial per axis, the straightness in the first perpendicular direction
+        s = ax.component_symbols()[(ax.direction + 1) % 3]
+        table[s] = ComponentError("poly", None, np.array([1 * UM, 2e-6, 1e-6]))
+        component[letter] = table
+    return ErrorModel(
+        tool=ToolSetting(rng.normal(0, 200 * UM, 3), rng.normal(0, 2e-3, 3)),
+        workpiece=WorkpieceSetting(rng.normal(0, 50 * UM, 3), *rng.normal(0, 5e-3, 3)),
+        location=location, component=component)
+
+
+def random_q(machine, rng, n, fraction=0.9):
+    lower = np.maximum(machine.lower, -2 * np.pi)
+    upper = np.minimum(machine.upper, 2 * np.pi)
+    mid = (lower + upper) / 2
+    half = (upper - lower) / 2 * fraction
+    return rng.uniform(mid - half, mid + half, size=(n, len(machine.axes)))
+
+
+def assert_pose_close(a, b, tol=1e-12):
+    """Positions within tol m, rotation matrices within tol (rad, to first order)."""
+    np.testing.assert_allclose(a[..., :3, 3], b[..., :3, 3], rtol=0, atol=tol)
+    np.testing.assert_allclose(a[..., :3, :3], b[..., :3, :3], rtol=0, atol=tol)
+
+
+MACHINES = list_machines()
+
+
+def test_the_five_machines_ship():
+    assert MACHINES == ("grooving_4axis", "planer_4axis", "robonano_a0ib", "robonano_ui",
+                        "sts_lathe")
+    axes = {name: load_machine(name).axes for name in MACHINES}
+    assert axes == {"robonano_ui": ("X", "Y", "Z", "A", "B", "C"),
+                    "robonano_a0ib": ("X", "Y", "Z", "B", "C"),
+                    "planer_4axis": ("X", "Y", "Z", "A"),
+                    "grooving_4axis": ("X", "Y", "Z", "C"),
+                    "sts_lathe": ("X", "Z", "C")}
+
+
+@pytest.mark.parametrize("name", MACHINES)
+def test_nominal_zero_puts_the_edge_on_the_workpiece_origin(name):
+    machine = load_machine(name)
+    pose = machine.tool_pose(np.zeros(len(machine.axes)))
+    # 1e-15 m: the placements are decimal millimetres, summed in float64 along the chain
+    assert_pose_close(pose, np.eye(4), tol=1e-15)
+
+
+@pytest.mark.parametrize("name", MACHINES)
+def test_pose_matches_the_independent_chain_with_every_error_family(name):
+    machine = load_machine(name)
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        errors = random_errors(machine, rng)
+        qs = random_q(machine, rng, 8)
+        batch = machine.tool_pose(qs, errors)
+        for q, pose in zip(qs, batch, strict=True):
+            expected = reference_pose(machine, q, errors)
+            assert_pose_close(pose, expected)  # batched evaluator
+            assert_pose_close(machine.pinocchio_pose(q, errors), expected)  # Pinocchio
+
+
+def test_probe_tip_follows_the_same_erroneous_kinematics():
+    machine = load_machine("robonano_a0ib")
+    rng = np.random.default_rng(3)
+    errors = random_errors(machine, rng)
+    for q in random_q(machine, rng, 5):
+        pose = machine.frame_pose("probe_tip", q, errors)
+        assert_pose_close(pose, reference_pose(machine, q, errors, frame="probe_tip"))
+
+
+def test_zero_error_model_is_the_nominal_machine():
+    machine = load_machine("robonano_ui")
+    q = random_q(machine, np.random.default_rng(1), 20)
+    np.testing.assert_array_equal(machine.tool_pose(q, ErrorModel()), machine.tool_pose(q))
+
+
+def test_planer_edge_swings_on_its_arm_with_the_setting_error():
+    """Paper 000: edge on an arm of radius r below the A axis, offset e_ys sideways.
+
+    At tool angle theta the edge sits at y = e cos(theta) + r sin(theta),
+    z = r0 + e sin(theta) - r cos(theta) in the workpiece frame (A axis at height r0 = 120.5
+    mm over the origin), so the depth grows by e sin(theta) + r (1 - cos(theta)) -
+    derived in docs/procedures/seed000.md.
+    """
+    machine = load_machine("planer_4axis")
+    r0, r, e = 120.5 * MM, 120.555 * MM, -0.178 * MM
+    errors = ErrorModel(tool=ToolSetting([0.0, e, -(r - r0)], [0.0, 0.0, 0.0]))
+    for theta_deg in (0.0, 10.0, 20.0, 30.0, 40.0):
+        t = math.radians(theta_deg)
+        pose = machine.tool_pose([0.0, 0.0, 0.0, t], errors)
+        expected = [0.0, e * math.cos(t) + r * math.sin(t), r0 + e * math.sin(t) - r * math.cos(t)]
+        np.testing.assert_allclose(pose[:3, 3], expected, rtol=0, atol=1e-15)
+        z0 = machine.tool_pose([0.0, 0.0, 0.0, 0.0], errors)[2, 3]
+        rise = e * math.sin(t) + r * (1 - math.cos(t))
+        assert pose[2, 3] - z0 == pytest.approx(rise, abs=1e-15)
+
+
+def test_robonano_ui_a_flip_moves_the_edge_by_twice_its_offset():
+    """Paper 001: an edge offset (dx, dy) from the A centre line flips with A = 180 deg."""
+    machine = load_machine("robonano_ui")
+    dx, dy = 490.04 / 2 * UM, 680.12 / 2 * UM
+    errors = ErrorModel(tool=ToolSetting([dx, dy, 0.0], [0.0, 0.0, 0.0]))
+    at0 = machine.tool_pose([1 * MM, 2 * MM, 0.0, 0.0, 0.0, 0.0], errors)
+    at180 = machine.tool_pose([1 * MM, 2 * MM, 0.0, math.pi, 0.0, 0.0], errors)
+    np.testing.assert_allclose(at0[:3, 3] - at180[:3, 3], [2 * dx, 2 * dy, 0.0], atol=1e-15)
+
+
+def test_c_axis_offset_turns_the_part_about_the_true_centre():
+    """A C centre line at (ex, ey): the tool at C = 180 lands at 2 (ex, ey) - p."""
+    machine = load_machine("grooving_4axis")
+    ex, ey = 12 * UM, -7 * UM
+    errors = ErrorModel(location={"C": {"EX0C": ex, "EY0C": ey}})
+    x, y = 3 * MM, 4 * MM
+    pose = machine.tool_pose([x, y, 0.0, math.pi], errors)
+    # the workpiece turned by pi about (ex, ey) in the machine; the tool at (x, y) then sits at
+    # the workpiece point that was at 2 e - (x, y)
+    np.testing.assert_allclose(pose[:2, 3], [2 * ex - x, 2 * ey - y], atol=1e-15)
+    assert_pose_close(machine.tool_pose([x, y, 0.0, 0.0], errors), trans([x, y, 0.0]), 1e-15)
+
+
+def test_squareness_tilts_the_y_motion():
+    """EC0Y: Y moves along (-sin e, cos e) in the XY plane, relative to the workpiece."""
+    machine = load_machine("grooving_4axis")
+    eps = 10 * URAD
+    errors = ErrorModel(location={"Y": {"EC0Y": eps}})
+    y = 200 * MM
+    pose = machine.tool_pose([0.0, y, 0.0, 0.0], errors)
+    np.testing.assert_allclose(pose[:3, 3], [-y * math.sin(eps), y * math.cos(eps), 0.0],
+                               atol=1e-15)
+
+
+def test_positioning_error_table_adds_along_the_axis():
+    machine = load_machine("grooving_4axis")
+    table = ComponentError("table", np.array([-250, 0, 250]) * MM, np.array([-3, 0, 8]) * UM)
+    errors = ErrorModel(component={"X": {"EXX": table}, "Y": {"EYY": table}})
+    for v in (-250 * MM, -100 * MM, 125 * MM):
+        expected = v + table.evaluate([v])[0]
+        assert machine.tool_pose([v, 0, 0, 0], errors)[0, 3] == pytest.approx(expected, abs=1e-15)
+        assert machine.tool_pose([0, v, 0, 0], errors)[1, 3] == pytest.approx(expected, abs=1e-15)
+
+
+def _pose_difference(a, b):
+    """Position and rotation (axis-angle, frame of the poses) from b to a."""
+    return np.concatenate([a[:3, 3] - b[:3, 3], pin.log3(a[:3, :3] @ b[:3, :3].T)])
+
+
+@pytest.mark.parametrize("name", MACHINES)
+def test_error_jacobian_matches_central_differences(name):
+    machine = load_machine(name)
+    rng = np.random.default_rng(11)
+    errors = random_errors(machine, rng)
+    names = list(machine.parameter_names(errors))
+    q = random_q(machine, rng, 2)
+    jac = machine.error_jacobian(q, errors, names)
+    assert jac.shape == (2, 6, len(names))
+    values = errors.parameters()
+    for c, p in enumerate(names):
+        h = 1e-6
+        base = values.get(p, 0.0)
+        plus = machine.tool_pose(q, errors.with_parameters({p: base + h}))
+        minus = machine.tool_pose(q, errors.with_parameters({p: base - h}))
+        for n in range(2):
+            fd = _pose_difference(plus[n], minus[n]) / (2 * h)
+            # truncation h^2 * (third derivative ~ lever 1 m) ~ 1e-12 and round-off
+            # 1e-16 / 1e-6 ~ 1e-10 per unit: 1e-8 holds with margin, far below the 1e-3..1
+            # size of the entries
+            np.testing.assert_allclose(jac[n, :, c], fd, rtol=0, atol=1e-8, err_msg=p)
+
+
+def test_axis_jacobian_matches_central_differences():
+    machine = load_machine("robonano_ui")
+    rng = np.random.default_rng(5)
+    errors = random_errors(machine, rng)
+    q = random_q(machine, rng, 1)[0]
+    jac = machine.axis_jacobian(q, errors)
+    for i in range(len(q)):
+        h = 1e-6
+        dq = np.zeros_like(q)
+        dq[i] = h
+        fd = _pose_difference(machine.tool_pose(q + dq, errors),
+                              machine.tool_pose(q - dq, errors)) / (2 * h)
+        np.testing.assert_allclose(jac[:, i], fd, rtol=0, atol=1e-8)
+
+
+def test_jacobian_of_a_linear_setting_parameter_is_exact():
+    """The tool offset in tool_mount axes moves the edge by R_mount * d: checks columns."""
+    machine = load_machine("robonano_ui")
+    q = np.array([0.0, 0.0, 0.0, 0.3, -0.5, 0.0])
+    jac = machine.error_jacobian(q, ErrorModel(), ["tool.x", "tool.y", "tool.z"])
+    # rotation of tool_mount in the workpiece: Ry(B) Rz(A) (C = 0)
+    expected = (rot(1, -0.5) @ rot(2, 0.3))[:3, :3]
+    np.testing.assert_allclose(jac[:3, :3], expected, atol=1e-15)
+    np.testing.assert_allclose(jac[3:, :3], 0.0, atol=1e-15)
+
+
+@pytest.mark.parametrize("name", MACHINES)
+def test_axis_values_round_trips_poses(name):
+    machine = load_machine(name)
+    rng = np.random.default_rng(13)
+    errors = random_errors(machine, rng)
+    qs = random_q(machine, rng, 4, fraction=0.5)
+    poses = machine.tool_pose(qs, errors)
+    start = qs + rng.normal(0, 0.02, qs.shape)
+    solution = machine.axis_values(poses, errors, q_start=start)
+    assert solution.unmatched == ""
+    assert_pose_close(machine.tool_pose(solution.q, errors), poses)
+    np.testing.assert_allclose(solution.q, qs, rtol=0, atol=1e-10)
+
+
+def test_axis_values_from_zero_on_the_nominal_machine():
+    machine = load_machine("robonano_a0ib")
+    q = np.array([3 * MM, -2 * MM, 1 * MM, math.radians(20), math.radians(-30)])
+    solution = machine.axis_values(machine.tool_pose(q))
+    np.testing.assert_allclose(solution.q, q, atol=1e-12)
+
+
+def test_axis_values_reports_the_orientation_a_planer_cannot_make():
+    machine = load_machine("planer_4axis")
+    target = trans([1 * MM, 2 * MM, 0.0]) @ rot(1, 0.01)  # a tilt about Y: no axis for it
+    solution = machine.axis_values(target)
+    np.testing.assert_allclose(solution.position_residual, 0.0, atol=1e-13)
+    assert solution.rotation_residual[1] == pytest.approx(0.01, abs=1e-12)
+    assert "cannot turn the tool about Y" in solution.unmatched
+
+
+def test_axis_values_errors_are_clear():
+    machine = load_machine("planer_4axis")
+    with pytest.raises(AxisLimitError, match="axis X = 300.000000 mm outside its travel"):
+        machine.axis_values(trans([300 * MM, 0.0, 0.0]))
+    lathe = load_machine("sts_lathe")
+    with pytest.raises(UnreachableError, match="no axis values reach"):
+        # one Newton step from the spindle axis cannot reach a point 80 mm off it at 90 deg
+        lathe.axis_values(trans([0.0, 80 * MM, 0.0]), max_iterations=1)
+    with pytest.raises(InputError, match=r"expected a pose of shape \(4, 4\)"):
+        machine.axis_values(np.eye(3))
+
+
+def test_bad_input_is_refused_with_the_machine_and_shape():
+    machine = load_machine("planer_4axis")
+    with pytest.raises(InputError, match=r"axes XYZA: expected axis values of shape \(4,\)"):
+        machine.tool_pose([0.0, 0.0])
+    with pytest.raises(InputError, match="NaN"):
+        machine.tool_pose([0.0, np.nan, 0.0, 0.0])
+    with pytest.raises(ErrorModelError, match="EX0X has no effect on linear axis X"):
+        machine.tool_pose(np.zeros(4), ErrorModel(location={"X": {"EX0X": 1e-6}}))
+    with pytest.raises(ErrorModelError, match="axis 'C' is not on this machine"):
+        machine.tool_pose(np.zeros(4), ErrorModel(location={"C": {"EX0C": 1e-6}}))
+    table = ComponentError("table", np.array([0.0, 0.5]), np.array([0.0, 1e-6]))
+    with pytest.raises(ErrorModelError, match=r"outside the travel of axis X, -200 \.\. 200 mm"):
+        machine.tool_pose(np.zeros(4), ErrorModel(component={"X": {"EXX": table}}))
