@@ -431,7 +431,8 @@ class Kinematics:
 
         def flush():
             nonlocal acc
-            ops.append(("C", acc.rotation.copy(), acc.translation.copy()))
+            if not ops or not acc.isIdentity(0.0):
+                ops.append(("C", acc.rotation.copy(), acc.translation.copy()))
             acc = pin.SE3.Identity()
 
         for j in reversed(chain):
@@ -475,8 +476,10 @@ class Kinematics:
                     rot = np.repeat(c_rot[:, :, None], n, axis=2)
                     pos = np.repeat(c_pos[:, None], n, axis=1)
                 else:
-                    pos = pos + np.einsum("ikn,k->in", rot, c_pos)
-                    rot = np.einsum("ikn,kj->ijn", rot, c_rot)
+                    pos = pos + sum(rot[:, k, :] * c_pos[k] for k in range(3) if c_pos[k])
+                    if not np.array_equal(c_rot, np.eye(3)):
+                        rot = np.stack([sum(rot[:, k, :] * c_rot[k, j] for k in range(3)
+                                            if c_rot[k, j]) for j in range(3)], axis=1)
                 continue
             _, kind, k, source = op
             if source[0] == "axis":

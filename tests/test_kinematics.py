@@ -16,6 +16,8 @@ import pytest
 from machinesim.errors import ComponentError, ErrorModel, ToolSetting, WorkpieceSetting
 from machinesim.exceptions import AxisLimitError, ErrorModelError, InputError, UnreachableError
 from machinesim.machines import list_machines, load_machine
+from machinesim.sampling import random_axis_values as random_q
+from machinesim.sampling import random_errors
 
 MM = 1e-3
 UM = 1e-6
@@ -121,40 +123,6 @@ def reference_pose(machine, q, errors, frame="tool_tip"):
     else:
         t = reference_branch(machine, "probe", q, errors)
     return np.linalg.inv(w) @ t
-
-
-def random_errors(machine, rng, tables=True) -> ErrorModel:
-    """Errors of every family on every axis, at sizes a real machine has (or larger)."""
-    location, component = {}, {}
-    for letter in machine.axes:
-        ax = machine.axis(letter)
-        location[letter] = {
-            s: rng.normal(0, 20 * UM if s[1] in "XYZ" else 50 * URAD)
-            for s in ax.location_symbols()}
-        if not tables:
-            continue
-        span = (ax.lower, ax.upper) if ax.upper - ax.lower < 20 else (-10.0, 10.0)
-        positions = np.linspace(*span, 5)
-        table = {}
-        for s in ax.component_symbols():
-            scale = 5 * UM if s[1] in "XYZ" else 20 * URAD
-            table[s] = ComponentError("table", positions, rng.normal(0, scale, 5))
-        # one polynomial per axis, the straightness in the first perpendicular direction
-        s = ax.component_symbols()[(ax.direction + 1) % 3]
-        table[s] = ComponentError("poly", None, np.array([1 * UM, 2e-6, 1e-6]))
-        component[letter] = table
-    return ErrorModel(
-        tool=ToolSetting(rng.normal(0, 200 * UM, 3), rng.normal(0, 2e-3, 3)),
-        workpiece=WorkpieceSetting(rng.normal(0, 50 * UM, 3), *rng.normal(0, 5e-3, 3)),
-        location=location, component=component)
-
-
-def random_q(machine, rng, n, fraction=0.9):
-    lower = np.maximum(machine.lower, -2 * np.pi)
-    upper = np.minimum(machine.upper, 2 * np.pi)
-    mid = (lower + upper) / 2
-    half = (upper - lower) / 2 * fraction
-    return rng.uniform(mid - half, mid + half, size=(n, len(machine.axes)))
 
 
 def assert_pose_close(a, b, tol=1e-12):

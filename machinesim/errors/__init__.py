@@ -1,0 +1,40 @@
+"""The injected errors of a machine, as immutable values, read from and written to TOML.
+
+Four families, machine-independent (the kinematics decides which symbols an axis can carry):
+
+- tool setting error (`ToolSetting`), in the ``tool_mount`` frame;
+- workpiece setting error (`WorkpieceSetting`, paper 002);
+- location errors of an axis, position independent, ISO 230-1/-7 symbols ``E<d>0<axis>``
+  (``EX0C``, ``EB0C``, squareness ``EC0Y``);
+- component errors of an axis, position dependent, symbols ``E<d><axis>`` (``EXX``, ``EYX``,
+  ``ECC``), each a table or a polynomial of the axis position (`ComponentError`).
+
+In a symbol, ``d`` in X Y Z is a translation along that machine direction (a length), ``d`` in
+A B C a rotation about X Y Z (an angle). SI inside (m, rad); units appear only in TOML keys.
+
+TOML layout (every key carries its unit: m mm um nm, rad mrad urad deg arcsec)::
+
+    [tool]           # offset_<length unit> = [x, y, z], rotation_<angle unit> = [a, b, c]
+    [workpiece]      # delta_<length unit> = [x, y, z], alpha_/beta_/gamma_<angle unit> = v
+    [location.C]     # <SYM>_<unit> = value, e.g. EX0C_um = 2.0
+    [component.X]    # position_<unit> = [...], shared by the tables of the axis;
+                     # <SYM>_<unit> = [...] a table, values at those positions;
+                     # <SYM>_poly_<valueunit>_<positionunit> = [c0, c1, ...] a polynomial,
+                     # value = sum c_k (x / positionunit)**k in valueunit
+
+`ErrorModel.to_toml` writes lengths in um, angles in urad, positions of linear axes in mm and
+of rotary axes in deg (polynomials in um or urad per mm**k or deg**k).
+`ErrorModel.to_dict` gives the same structure in m and rad, so that it round trips exactly.
+"""
+
+from machinesim.errors._checks import AXES, LINEAR_AXES
+from machinesim.errors.model import ComponentError, ErrorModel, ToolSetting, WorkpieceSetting
+
+__all__ = [
+    "AXES",
+    "LINEAR_AXES",
+    "ComponentError",
+    "ErrorModel",
+    "ToolSetting",
+    "WorkpieceSetting",
+]

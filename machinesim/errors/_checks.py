@@ -1,0 +1,111 @@
+"""Validation helpers shared by the error-model values and their TOML reader.
+
+Each raises `ErrorModelError` naming the source, the key, the value that arrived and what
+was expected; the number checks return float64 copies.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+import numpy as np
+
+from machinesim.exceptions import ErrorModelError
+from machinesim.units import ANGLE, FACTORS, LENGTH
+
+#: Axis letters, in the canonical order of sections and symbols.
+AXES = "XYZABC"
+#: Linear axes (positions and translation symbols in lengths); the others are rotary.
+LINEAR_AXES = "XYZ"
+
+_SYMBOL_RE = re.compile(r"E(.)(0?)(.)")
+
+
+def _fail(message: str, source: str | None, key: str | None) -> ErrorModelError:
+    return ErrorModelError(message, source=source, key=key)
+
+
+def _describe(value: Any) -> str:
+    text = repr(value.tolist() if isinstance(value, np.ndarray) else value)
+    return f"{text if len(text) <= 80 else text[:77] + '...'} ({type(value).__name__})"
+
+
+def _number(value: Any, source: str | None, key: str | None) -> float:
+    """A finite float from an int or float (bools and strings refused)."""
+    if isinstance(value, bool | np.bool_) or not isinstance(
+        value, int | float | np.integer | np.floating
+    ):
+        raise _fail(f"expected a number, got {_describe(value)}", source, key)
+    if not math.isfinite(number := float(value)):
+        raise _fail(f"expected a finite number, got {number}", source, key)
+    return number
+
+
+def _numbers(value: Any, source: str | None, key: str | None, size: int | None = None):
+    """A read-only float64 copy of a 1-D list of finite numbers (non-empty, or `size` long)."""
+    if isinstance(value, np.ndarray) and value.ndim == 1 and value.dtype.kind in "iuf":
+        array = value.astype(np.float64)
+        if not np.all(np.isfinite(array)):
+            bad = array[~np.isfinite(array)][0]
+            raise _fail(f"expected finite numbers, got {bad} in {_describe(value)}", source, key)
+    elif isinstance(value, list | tuple):
+        array = np.array([_number(item, source, key) for item in value], dtype=np.float64)
+    else:
+        raise _fail(f"expected a list of numbers, got {_describe(value)}", source, key)
+    if size is not None and array.size != size:
+        message = f"expected {size} values, got {array.size}: {_describe(value)}"
+        raise _fail(message, source, key)
+    if array.size == 0:
+        raise _fail("expected at least one value, got an empty list", source, key)
+    array.flags.writeable = False
+    return array
+
+
+def _check_increasing(positions: np.ndarray, source: str | None, key: str | None) -> None:
+    if np.any(not_up := np.diff(positions) <= 0.0):
+        i = int(np.argmax(not_up))
+        raise _fail(
+            f"positions must be strictly increasing, got {positions[i].item()!r} then "
+            f"{positions[i + 1].item()!r} (indices {i}, {i + 1}) in {positions.tolist()!r}",
+            source,
+            key,
+        )
+
+
+def _quantity(letter: str) -> str:
+    """'length' for X Y Z (translation, linear axis), 'angle' for A B C (rotation, rotary)."""
+    return "length" if letter in LINEAR_AXES else "angle"
+
+
+def _check_unit(unit: str, quantity: str, source: str | None, key: str) -> float:
+    """The factor to SI of `unit`, which must be a `quantity` ('length' or 'angle') unit."""
+    units = LENGTH if quantity == "length" else ANGLE
+    if unit in units:
+        return units[unit]
+    expected = f"expected {'a length' if quantity == 'length' else 'an angle'} unit "
+    expected += f"({', '.join(units)})"
+    if unit in FACTORS:
+        other = "an angle" if quantity == "length" else "a length"
+        raise _fail(f"{expected}, got {unit!r}, {other} unit", source, key)
+    raise _fail(f"unit {unit!r} is not recognised; {expected}", source, key)
+
+
+def _check_axis(axis: Any, source: str | None, key: str) -> None:
+    if axis not in tuple(AXES):
+        raise _fail(f"axis letter {axis!r} is not one of {', '.join(AXES)}", source, key)
+
+
+def _check_symbol(symbol: str, axis: str, location: bool, source: str | None, key: str):
+    """Refuse `symbol` unless it is an ISO 230 location (E<d>0<axis>) or component symbol."""
+    kind, form = ("location", f"E<d>0{axis}") if location else ("component", f"E<d>{axis}")
+    match = _SYMBOL_RE.fullmatch(symbol)
+    if match is None or match[1] not in AXES or match[3] not in AXES:
+        message = f"{symbol!r} is not an ISO 230 {kind} error symbol; expected {form}"
+        raise _fail(f"{message} with d one of {', '.join(AXES)}", source, key)
+    if bool(match[2]) != location:
+        other = "a component (position-dependent)" if location else "a location (constant)"
+        raise _fail(f"{symbol!r} is {other} symbol; [{kind}.{axis}] takes {form}", source, key)
+    if match[3] != axis:
+        raise _fail(f"symbol {symbol!r} is of axis {match[3]}, not [{kind}.{axis}]", source, key)

@@ -1,0 +1,266 @@
+"""Error models read from and written to TOML or its dict (the layout: `machinesim.errors`).
+
+`ErrorModel.from_dict`, `to_dict`, `from_toml` and `to_toml` call these functions.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import tomli_w
+
+from machinesim.errors._checks import (
+    LINEAR_AXES,
+    _check_axis,
+    _check_increasing,
+    _check_symbol,
+    _check_unit,
+    _describe,
+    _fail,
+    _number,
+    _numbers,
+    _quantity,
+)
+from machinesim.errors.model import (
+    _WORKPIECE_ANGLES,
+    ComponentError,
+    ErrorModel,
+    ToolSetting,
+    WorkpieceSetting,
+)
+from machinesim.exceptions import ErrorModelError
+from machinesim.units import ANGLE, FACTORS, LENGTH
+
+_SECTIONS = ("tool", "workpiece", "location", "component")
+_TOML_POSITION_RE = re.compile(r"\s*\(at line (\d+), column (\d+)\)")
+_READABLE_UNITS = {"length": "um", "angle": "urad", "linear": "mm", "rotary": "deg"}
+_SI_UNITS = {"length": "m", "angle": "rad", "linear": "m", "rotary": "rad"}
+_HEADER = (
+    "# machinesim error model. Lengths in um, angles in urad, positions of linear axes in mm,\n"
+    "# of rotary axes in deg; <SYM>_poly_<value>_<position> = c_k in value/position**k.\n\n"
+)
+
+
+def _poly_factors(value_factor: float, position_factor: float, count: int) -> np.ndarray:
+    """SI per file unit of each coefficient c_k: the value factor over position factor**k.
+
+    Reading multiplies by these and writing divides by the very same numbers, so a round
+    trip through a file costs two roundings per coefficient.
+    """
+    return value_factor / np.power(position_factor, np.arange(count, dtype=np.float64))
+
+
+def read_toml(path: str | os.PathLike) -> dict[str, Any]:
+    """The tables of the TOML file `path`; errors name the file, and the line and column."""
+    source = str(path)
+    try:
+        data = tomllib.loads(Path(path).read_bytes().decode("utf-8"))
+    except OSError as exc:
+        raise ErrorModelError(f"cannot read the file: {exc.strerror}", source=source) from exc
+    except UnicodeDecodeError as exc:
+        raise ErrorModelError(f"not UTF-8 text: {exc}", source=source) from exc
+    except tomllib.TOMLDecodeError as exc:
+        position = _TOML_POSITION_RE.search(str(exc))
+        line, column = (int(position[1]), int(position[2])) if position else (None, None)
+        message = f"not valid TOML: {_TOML_POSITION_RE.sub('', str(exc))}"
+        raise ErrorModelError(message, source=source, line=line, column=column) from exc
+    return data
+
+
+def write_toml(data: Mapping[str, Any], path: str | os.PathLike) -> None:
+    """Write `data` (``to_dict(readable=True)``) under the units header, whole or not at all."""
+    text = _HEADER + tomli_w.dumps(data)
+    path = Path(path)
+    fd, temp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as file:
+            file.write(text)
+        os.chmod(temp, 0o644)
+        os.replace(temp, path)
+    except BaseException:
+        os.unlink(temp)
+        raise
+
+
+def dict_from_model(model: ErrorModel, readable: bool) -> dict[str, Any]:
+    """The TOML structure of `model`, in m and rad, or in the units of `to_toml` if `readable`."""
+    units = _READABLE_UNITS if readable else _SI_UNITS
+    length, angle = units["length"], units["angle"]
+    wp = model.workpiece
+    out: dict[str, Any] = {
+        "tool": {
+            f"offset_{length}": (model.tool.offset / LENGTH[length]).tolist(),
+            f"rotation_{angle}": (model.tool.rotation / ANGLE[angle]).tolist(),
+        },
+        "workpiece": {
+            f"delta_{length}": (wp.delta / LENGTH[length]).tolist(),
+            **{f"{n}_{angle}": getattr(wp, n) / ANGLE[angle] for n in _WORKPIECE_ANGLES},
+        },
+    }
+    if model.location:
+        out["location"] = {
+            axis: {
+                f"{s}_{units[_quantity(s[1])]}": v / FACTORS[units[_quantity(s[1])]]
+                for s, v in table.items()
+            }
+            for axis, table in model.location.items()
+        }
+    if model.component:
+        out["component"] = {
+            axis: _component_section(axis, table, units)
+            for axis, table in model.component.items()
+        }
+    return out
+
+
+def _component_section(axis: str, table: Mapping[str, ComponentError], units: dict) -> dict:
+    position_unit = units["linear" if axis in LINEAR_AXES else "rotary"]
+    position_factor = FACTORS[position_unit]
+    out: dict[str, Any] = {}
+    grids = [e.positions for e in table.values() if e.kind == "table"]
+    if grids:
+        out[f"position_{position_unit}"] = (grids[0] / position_factor).tolist()
+    for symbol, error in table.items():
+        value_unit = units[_quantity(symbol[1])]
+        if error.kind == "table":
+            out[f"{symbol}_{value_unit}"] = (error.values / FACTORS[value_unit]).tolist()
+        else:
+            factors = _poly_factors(FACTORS[value_unit], position_factor, error.values.size)
+            out[f"{symbol}_poly_{value_unit}_{position_unit}"] = (error.values / factors).tolist()
+    return out
+
+
+def _table(value: Any, source: str, key: str | None) -> Mapping:
+    if not isinstance(value, Mapping):
+        raise _fail(f"expected a table, got {_describe(value)}", source, key)
+    return value
+
+
+def model_from_dict(data: Any, source: str) -> ErrorModel:
+    for section in _table(data, source, None):
+        if section not in _SECTIONS:
+            raise _fail(f"unknown section; expected one of {', '.join(_SECTIONS)}", source, section)
+    tool_spec = {"offset": ("length", 3), "rotation": ("angle", 3)}
+    workpiece_spec = {"delta": ("length", 3)} | {a: ("angle", None) for a in _WORKPIECE_ANGLES}
+    tool = _parse_fields(data.get("tool", {}), "tool", tool_spec, source)
+    workpiece = _parse_fields(data.get("workpiece", {}), "workpiece", workpiece_spec, source)
+    location = {
+        axis: _parse_location(axis, table, source)
+        for axis, table in _table(data.get("location", {}), source, "location").items()
+    }
+    component = {
+        axis: _parse_component(axis, table, source)
+        for axis, table in _table(data.get("component", {}), source, "component").items()
+    }
+    return ErrorModel(ToolSetting(**tool), WorkpieceSetting(**workpiece), location, component)
+
+
+def _split_key(key: Any, expected: str, source: str, path: str) -> list[str]:
+    if not isinstance(key, str) or not key:
+        raise _fail(f"unknown key; expected {expected}", source, path)
+    return key.split("_")
+
+
+def _parse_fields(section: Any, name: str, spec: dict, source: str) -> dict[str, Any]:
+    """The fields of [tool] or [workpiece]: `spec` maps a field to (quantity, size or None)."""
+    expected = ", ".join(f"{field_}_<{q} unit>" for field_, (q, _) in spec.items())
+    out: dict[str, Any] = {}
+    for key, value in _table(section, source, name).items():
+        path = f"{name}.{key}"
+        parts = _split_key(key, expected, source, path)
+        if parts[0] not in spec or len(parts) > 2:
+            raise _fail(f"unknown key; expected {expected}", source, path)
+        quantity, size = spec[parts[0]]
+        if len(parts) == 1:
+            message = f"key has no unit suffix; expected {parts[0]}_<{quantity} unit>"
+            raise _fail(message, source, path)
+        factor = _check_unit(parts[1], quantity, source, path)
+        if parts[0] in out:
+            raise _fail(f"{parts[0]} is given twice (with two units)", source, path)
+        if size is None:
+            out[parts[0]] = _number(value, source, path) * factor
+        else:
+            out[parts[0]] = _numbers(value, source, path, size) * factor
+    return out
+
+
+def _symbol_unit(key: Any, axis: str, location: bool, source: str, path: str):
+    """(symbol, rest of the key split at '_') of a [location.*] or [component.*] key."""
+    zero = "0" if location else ""
+    parts = _split_key(key, f"E<d>{zero}{axis}_<unit>", source, path)
+    _check_symbol(parts[0], axis, location, source, path)
+    if len(parts) == 1:
+        message = f"key has no unit suffix; expected {parts[0]}_<{_quantity(parts[0][1])} unit>"
+        raise _fail(message, source, path)
+    return parts[0], parts[1:]
+
+
+def _parse_location(axis: Any, table: Any, source: str) -> dict[str, float]:
+    path = f"location.{axis}"
+    _check_axis(axis, source, path)
+    out: dict[str, float] = {}
+    for key, value in _table(table, source, path).items():
+        symbol, units = _symbol_unit(key, axis, True, source, f"{path}.{key}")
+        if len(units) != 1:
+            raise _fail(f"expected the key {symbol}_<unit>", source, f"{path}.{key}")
+        factor = _check_unit(units[0], _quantity(symbol[1]), source, f"{path}.{key}")
+        if symbol in out:
+            raise _fail(f"{symbol} is given twice", source, f"{path}.{key}")
+        out[symbol] = _number(value, source, f"{path}.{key}") * factor
+    return out
+
+
+def _parse_component(axis: Any, table: Any, source: str) -> dict[str, ComponentError]:
+    path = f"component.{axis}"
+    _check_axis(axis, source, path)
+    axis_quantity = _quantity(axis)
+    positions = position_key = None
+    out: dict[str, ComponentError | None] = {}
+    tables = {}  # symbol -> (key path, file value, SI values): built once positions are known
+    for key, value in _table(table, source, path).items():
+        key_path = f"{path}.{key}"
+        if key == "position" or (isinstance(key, str) and key.startswith("position_")):
+            if key.count("_") != 1:
+                raise _fail(f"expected the key position_<{axis_quantity} unit>", source, key_path)
+            factor = _check_unit(key.split("_")[1], axis_quantity, source, key_path)
+            if positions is not None:
+                raise _fail(f"positions are given twice (and as {position_key})", source, key_path)
+            in_file = _numbers(value, source, key_path)
+            _check_increasing(in_file, source, key_path)
+            positions, position_key = in_file * factor, key
+            continue
+        symbol, units = _symbol_unit(key, axis, False, source, key_path)
+        if symbol in out:
+            raise _fail(f"{symbol} is given twice", source, key_path)
+        quantity = _quantity(symbol[1])
+        if units[0] == "poly":
+            if len(units) != 3:
+                form = f"{symbol}_poly_<{quantity} unit>_<{axis_quantity} unit>"
+                raise _fail(f"expected a polynomial key {form}", source, key_path)
+            value_factor = _check_unit(units[1], quantity, source, key_path)
+            position_factor = _check_unit(units[2], axis_quantity, source, key_path)
+            coefficients = _numbers(value, source, key_path)
+            factors = _poly_factors(value_factor, position_factor, coefficients.size)
+            out[symbol] = ComponentError("poly", None, coefficients * factors)
+            continue
+        if len(units) != 1:
+            raise _fail(f"expected the key {symbol}_<{quantity} unit>", source, key_path)
+        factor = _check_unit(units[0], quantity, source, key_path)
+        out[symbol] = None
+        tables[symbol] = (key_path, value, _numbers(value, source, key_path) * factor)
+    for symbol, (key_path, raw, values) in tables.items():
+        if positions is None:
+            message = f"a table needs positions: no position_<unit> key in [{path}]"
+            raise _fail(message, source, key_path)
+        if values.size != positions.size:
+            message = f"the table has {values.size} values, {_describe(raw)}, but {position_key} "
+            raise _fail(f"{message}has {positions.size} positions", source, key_path)
+        out[symbol] = ComponentError("table", positions, values)
+    return out

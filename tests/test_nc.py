@@ -1,0 +1,448 @@
+"""NC programs: parsing against hand-computed SI values, refusals, write/read round trips."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from decimal import ROUND_HALF_EVEN, Decimal
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from machinesim.exceptions import NCProgramError
+from machinesim.nc import (
+    AXES,
+    Move,
+    Program,
+    ProgramBuilder,
+    format_program,
+    parse_program,
+    read_program,
+    write_program,
+)
+
+DEG = math.pi / 180.0
+#: Targets are a decimal in mm times 1e-3 plus an offset: float64 round-off at <= 0.1 m is
+#: below 1e-17 m per operation; 1e-15 m leaves room for a few operations and is 1e6 x below
+#: 1 nm, so any real misreading (a unit, an offset, a sign) fails.
+EXACT_M = 1e-15
+#: The same for angles in rad (values <= 2 pi).
+EXACT_RAD = 1e-15
+
+HAND_WRITTEN = """%
+O0100 (hand-written test program)
+(work offsets: G54 X 10 mm, Z 5 mm; G55 X -20 mm, C 90 deg)
+N1 G90 G21 G94 G17 G54
+N2 G00 X0 Y0. Z2. C0 S12000 M03
+N3 g01 z.5 f60 ; plunge at 60 mm/min
+N4 X12.5Y-3.25
+N5 G91 X-0.5 C45.
+N6 G04 P1500
+N7 G4 X0.25 (seconds)
+N8 G90 G55 G00 X0 C0
+N9 G20 G01 Y1. F10.
+N10 M09
+N11 G21 G91 Z -1 M05
+N12 M30
+(nothing after the end but comments)
+%
+"""
+OFFSETS = {"G54": {"X": 0.010, "Z": 0.005}, "G55": {"X": -0.020, "C": math.pi / 2}}
+MM_PER_MIN = 1e-3 / 60.0
+INCH_PER_MIN = 0.0254 / 60.0
+
+
+def test_hand_written_program_gives_hand_computed_si_values():
+    program = parse_program(HAND_WRITTEN, "hand.nc", work_offsets=OFFSETS)
+    # (kind, X, Y, Z, C, feed m/s, dwell s, line, N, M codes), worked out by hand:
+    # G54 adds 10 mm to X and 5 mm to Z; G55 subtracts 20 mm from X and adds 90 deg to C.
+    start = (0.010, 0.0, 0.007, 0.0)
+    cut = (0.0225, -0.00325, 0.0055, 0.0)
+    turned = (0.022, -0.00325, 0.0055, 45 * DEG)
+    g55 = (-0.020, -0.00325, 0.0055, 90 * DEG)
+    inch = (-0.020, 0.0254, 0.0055, 90 * DEG)
+    expected = [
+        ("rapid", start, None, 0.0, 5, 2, (3,)),
+        ("linear", (0.010, 0.0, 0.0055, 0.0), 60 * MM_PER_MIN, 0.0, 6, 3, ()),
+        ("linear", cut, 60 * MM_PER_MIN, 0.0, 7, 4, ()),
+        ("linear", turned, 60 * MM_PER_MIN, 0.0, 8, 5, ()),
+        ("dwell", turned, None, 1.5, 9, 6, ()),
+        ("dwell", turned, None, 0.25, 10, 7, ()),
+        ("rapid", g55, None, 0.0, 11, 8, ()),
+        ("linear", inch, 10 * INCH_PER_MIN, 0.0, 12, 9, ()),
+        ("dwell", inch, None, 0.0, 13, 10, (9,)),
+        ("linear", (-0.020, 0.0254, 0.0045, 90 * DEG), 10 * INCH_PER_MIN, 0.0, 14, 11, (5,)),
+    ]
+    assert len(program) == len(expected)
+    assert program.number == 100
+    assert program.source == "hand.nc"
+    assert program.axes == ("X", "Y", "Z", "C")
+    for move, (kind, xyzc, feed, dwell, line, n, m_codes) in zip(program, expected, strict=True):
+        assert (move.kind, move.line, move.block_number, move.m_codes) == (kind, line, n, m_codes)
+        assert list(move.target) == ["X", "Y", "Z", "C"]
+        np.testing.assert_allclose([move.target[a] for a in "XYZ"], xyzc[:3], rtol=0,
+                                   atol=EXACT_M)
+        assert move.target["C"] == pytest.approx(xyzc[3], rel=0, abs=EXACT_RAD)
+        if feed is None:
+            assert move.feed_m_per_s is None
+        else:
+            assert move.feed_m_per_s == pytest.approx(feed, rel=1e-15)
+        assert move.dwell_s == dwell
+        assert move.spindle_rpm == 12000.0
+
+
+def test_integer_input_rules():
+    text = "G00 X10 Z1. A5 C2.\nG20 X10 Y.5\nG04 X500\nG04 X0.5\n"
+    calculator = parse_program(text).moves
+    increment = parse_program(text, integer_input="increment").moves
+    # Calculator: X10 is 10 mm, A5 is 5 deg, X10 under G20 is 10 inch, G04 X500 is 500 s.
+    assert calculator[0].target["X"] == pytest.approx(0.010, abs=EXACT_M)
+    assert calculator[0].target["A"] == pytest.approx(5 * DEG, abs=EXACT_RAD)
+    assert calculator[1].target["X"] == pytest.approx(0.254, abs=EXACT_M)
+    assert calculator[2].dwell_s == 500.0
+    # Increment: 10 x 1 nm, 5 x 0.00001 deg, 10 x 0.0000001 inch, 500 ms; words with a
+    # decimal point read the same in both modes.
+    assert increment[0].target["X"] == pytest.approx(10e-9, abs=1e-20)
+    assert increment[0].target["A"] == pytest.approx(5e-5 * DEG, abs=1e-20)
+    assert increment[1].target["X"] == pytest.approx(10 * 1e-7 * 0.0254, abs=1e-20)
+    assert increment[2].dwell_s == 0.5
+    for a, b in zip(calculator, increment, strict=True):
+        for axis in ("Z", "C", "Y"):
+            assert a.target.get(axis) == b.target.get(axis)
+    assert calculator[3].dwell_s == increment[3].dwell_s == 0.5
+
+
+def test_read_program_names_the_file_and_accepts_crlf(tmp_path):
+    path = tmp_path / "part.nc"
+    path.write_bytes(b"%\r\nO7\r\nG00 X1. (\xc3\x98 5 tool)\r\nG01 X2. F100\r\n%\r\n")
+    program = read_program(path)
+    assert program.source == str(path)
+    assert [m.line for m in program] == [3, 4]
+    bad = tmp_path / "bad.nc"
+    bad.write_text("G00 X0\nG00 X1 Q5\n")
+    with pytest.raises(NCProgramError, match=r"bad\.nc, line 2, column 8, key 'Q5'"):
+        read_program(bad)
+
+
+# (text, line, column, word, message): each refusal the language describes.
+REFUSALS = [
+    ("G00 X0\nG02 X1. Y1. R1.", 2, 1, "G02", r"circular interpolation \(G02/G03\) is not"),
+    ("G03 X1", 1, 1, "G03", r"circular interpolation \(G02/G03\) is not supported"),
+    ("G00 X0\n\nG28 X0", 3, 1, "G28", "unknown G code G28"),
+    ("G54.1 X0", 1, 1, "G54.1", "unknown G code G54.1"),
+    ("G95", 1, 1, "G95", r"feed per revolution \(G95\)"),
+    ("G00 X0 T1", 1, 8, "T1", "unknown word letter 'T'"),
+    ("G00 X0 I5", 1, 8, "I5", "arc words belong to G02/G03"),
+    ("G00 X1e5", 1, 7, "E5", "unknown word letter 'E'"),
+    ("G00 X1.2.3", 1, 5, "X1.2.3", "malformed number"),
+    ("G00 X--1", 1, 5, "X--1", "malformed number"),
+    ("G00 Y", 1, 5, "Y", "malformed number"),
+    ("G00 X1 X2", 1, 8, "X2", "axis word X appears twice in one block"),
+    ("G01 X1 F10 F20", 1, 12, "F20", "word F appears twice"),
+    ("G00 G01 X1", 1, 5, "G01", "two motion G-codes in one block: G00 and G01"),
+    ("G00 X0\nG04 G01 X1", 2, 5, "G01", "two motion G-codes in one block: G04 and G01"),
+    ("G90 G91", 1, 5, "G91", "two distance G-codes in one block"),
+    ("G04", 1, 1, "G04", "dwell without time"),
+    ("G04 P1.5", 1, 5, "P1.5", "integer milliseconds"),
+    ("G04 P100 X1.", 1, 10, "X1.", "got both P and X"),
+    ("G04 X-1.", 1, 5, "X-1.", "dwell time must be >= 0"),
+    ("G04 Y1", 1, 5, "Y1", "axis word Y in a dwell block"),
+    ("G00 X0 P100", 1, 8, "P100", "P is only read with G04"),
+    ("X1", 1, 1, "X1", "without a motion mode"),
+    ("G91 G00 X1", 1, 9, "X1", "incremental .G91. move on axis X before its position"),
+    ("G00 X0\nM30\nG00 X1", 3, 1, "G00", "block after the program end M30 on line 2"),
+    ("G00 X0 M02 (end)\n%\nN5", 3, 1, "N5", "block after the program end M02"),
+    ("G00 X0 (unclosed", 1, 8, "(", "comment '\\(' is not closed"),
+    ("G00 X0 )", 1, 8, ")", "without an opening"),
+    ("G00 X0 / Y1", 1, 8, "/", "unexpected character '/'"),
+    ("G00 #1", 1, 5, "#", "unexpected character '#'"),
+    ("G00 10", 1, 5, "10", "without an address letter"),
+    ("G01 X0 F0", 1, 8, "F0", "feed must be > 0"),
+    ("G01 X0 F-5", 1, 8, "F-5", "feed must be > 0"),
+    ("S-100", 1, 1, "S-100", "spindle speed must be >= 0"),
+    ("M3.5", 1, 1, "M3.5", "M code must be an unsigned integer"),
+    ("N1234567890", 1, 1, "N1234567890", "at most 9 digits"),
+    ("G-1", 1, 1, "G-1", "has a sign"),
+    ("G00 X0\nO1", 2, 1, "O1", "must be the first block"),
+    ("O1 G00", 1, 4, "G00", "must stand alone"),
+    ("% G00", 1, 3, "G", "must stand alone on its line"),
+    ("G00 X" + "9" * 400, 1, 5, "X" + "9" * 400, "out of range"),
+    ("G00 X1.\nG04 X" + "9" * 400 + ".", 2, 5, "X" + "9" * 400 + ".", "out of range"),
+]
+
+
+@pytest.mark.parametrize(("text", "line", "column", "word", "message"), REFUSALS)
+def test_refusals_name_line_column_and_word(text, line, column, word, message):
+    with pytest.raises(NCProgramError, match=message) as info:
+        parse_program(text, "prog.nc")
+    error = info.value
+    assert (error.source, error.line, error.column, error.key) == ("prog.nc", line, column, word)
+    assert str(error).startswith(f"prog.nc, line {line}, column {column}, key '{word}': ")
+
+
+def test_refused_arguments():
+    with pytest.raises(NCProgramError, match="integer_input must be one of"):
+        parse_program("G00 X0", integer_input="decimal")
+    with pytest.raises(NCProgramError, match="unknown work offset 'G60'"):
+        parse_program("G00 X0", work_offsets={"G60": {"X": 0.0}})
+    with pytest.raises(NCProgramError, match="unknown axis 'U'"):
+        parse_program("G00 X0", work_offsets={"G54": {"U": 0.0}})
+    with pytest.raises(NCProgramError, match="must be str"):
+        parse_program(b"G00 X0")
+
+
+@pytest.mark.parametrize("distance", ["G90", "G91"])
+def test_target_beyond_float64_is_refused(distance):
+    # An offset near the float64 maximum (1.798e308) plus 1e305 m overflows: absolute values
+    # add the offset, incremental ones the previous target (which holds the offset).
+    huge = "1" + "0" * 308 + "."  # 1e308 mm = 1e305 m
+    with pytest.raises(NCProgramError, match="out of range") as info:
+        parse_program(f"G00 X0\n{distance} X{huge}", work_offsets={"G54": {"X": 1.797e308}})
+    assert (info.value.line, info.value.column, info.value.key) == (2, 5, "X" + huge)
+
+
+def test_builder_matches_the_equivalent_nc_text():
+    built = (
+        ProgramBuilder(number=1)
+        .spindle(8000)
+        .rapid(X=0.0, Z=1e-3, m_codes=(3,))
+        .linear(X=0.01, feed_mm_per_min=100.0)
+        .linear(Z=0.0)
+        .dwell(0.5)
+        .dwell(0.0, m_codes=(8,))
+        .build()
+    )
+    text = "O1\nG00 X0 Z1. S8000 M03\nG01 X10. F100.\nZ0\nG04 P500\nM08\n"
+    parsed = parse_program(text)
+    assert len(built) == len(parsed) == 5
+    for b, p in zip(built, parsed, strict=True):
+        assert dataclasses.replace(b, line=p.line) == p
+    assert built.moves[2].target == {"X": 0.01, "Z": 0.0}
+    assert built.moves[2].feed_m_per_s == pytest.approx(100 * MM_PER_MIN, rel=1e-15)
+
+
+def test_moves_and_programs_are_immutable_and_hashable():
+    program = ProgramBuilder().rapid(X=0.0).linear(Y=1e-3, feed_m_per_s=1e-3).build()
+    move = program.moves[1]
+    with pytest.raises(TypeError):
+        move.target["X"] = 1.0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        move.kind = "rapid"
+    with pytest.raises(TypeError):
+        program.work_offsets["G54"] = {"X": 1.0}
+    assert hash(move) == hash(Move("linear", {"Y": 1e-3, "X": 0.0}, 1e-3, line=2))
+    assert list(move.target) == ["X", "Y"]
+
+
+@pytest.mark.parametrize(
+    ("moves", "message"),
+    [
+        ([Move("rapid", {"X": 0.0, "Y": 0.0}), Move("rapid", {"X": 1.0})], "drops axis Y"),
+        ([Move("rapid", {"X": 0.0}), Move("dwell", {"X": 1.0}, dwell_s=1.0)], "is a dwell but"),
+        ([Move("linear", {"X": 0.0}, 1e-3), Move("linear", {"X": 1.0})], "without feed after"),
+        ([Move("rapid", {"X": 0.0}, m_codes=(30,)), Move("rapid", {"X": 1.0})], "ends the prog"),
+        ([Move("rapid", {"X": 0.0}, spindle_rpm=1.0), Move("rapid", {"X": 1.0})], "S is modal"),
+    ],
+)
+def test_from_moves_refuses_what_nc_cannot_say(moves, message):
+    with pytest.raises(NCProgramError, match=message):
+        Program.from_moves(moves)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"kind": "arc", "target": {"X": 0.0}}, "kind must be one of"),
+        ({"kind": "rapid", "target": {}}, "needs at least one axis"),
+        ({"kind": "rapid", "target": {"X": 0.0}, "feed_m_per_s": 1.0}, "feed must be None"),
+        ({"kind": "linear", "target": {"X": math.nan}}, "must be finite"),
+        ({"kind": "linear", "target": {"X": 0.0}, "dwell_s": 1.0}, "dwell_s must be"),
+        ({"kind": "dwell", "target": {}, "m_codes": (-1,)}, "m_codes must be"),
+    ],
+)
+def test_move_refuses_bad_fields(kwargs, message):
+    with pytest.raises(NCProgramError, match=message):
+        Move(**kwargs)
+
+
+def _rounded(value: float, decimals: int) -> float:
+    """Round-half-even of the exact binary value with Decimal: a second method to f-strings."""
+    quantum = Decimal(1).scaleb(-decimals)
+    return float(Decimal(value).quantize(quantum, rounding=ROUND_HALF_EVEN))
+
+
+def _random_program(rng: np.random.Generator) -> Program:
+    offsets = {"G54": {"X": rng.uniform(-0.05, 0.05), "Z": rng.uniform(-0.05, 0.05),
+                       "C": rng.uniform(-1.0, 1.0)}}
+    builder = ProgramBuilder(number=int(rng.integers(0, 10000)), work_offsets=offsets)
+    axes = list(rng.choice(AXES, size=int(rng.integers(1, 7)), replace=False))
+    last: dict[str, float] = {}
+    n_moves = 40
+    for index in range(n_moves):
+        if rng.random() < 0.1:
+            builder.spindle(float(rng.choice([0.0, 12000.0, rng.uniform(0.0, 20000.0)])))
+        number = int(rng.integers(0, 100000)) if rng.random() < 0.3 else None
+        m_codes = tuple(int(c) for c in rng.choice([0, 1, 3, 5, 8, 9, 99],
+                                                   size=int(rng.integers(0, 3))))
+        if index == n_moves - 1 and rng.random() < 0.5:
+            m_codes += (30,)
+        kind = rng.choice(["rapid", "linear", "linear", "dwell", "m"])
+        if kind in ("rapid", "linear"):
+            chosen = rng.choice(axes, size=int(rng.integers(1, len(axes) + 1)), replace=False)
+            values = {
+                str(a): (last[a] if a in last and rng.random() < 0.2  # zero-length moves too
+                         else rng.uniform(-2 * math.pi, 2 * math.pi) if a in "ABC"
+                         else rng.uniform(-0.5, 0.5))
+                for a in chosen
+            }
+            last.update(values)
+            if kind == "rapid":
+                builder.rapid(block_number=number, m_codes=m_codes, **values)
+            else:
+                feed = rng.uniform(0.1, 2000.0) if rng.random() < 0.3 else None
+                builder.linear(feed_mm_per_min=feed, block_number=number, m_codes=m_codes,
+                               **values)
+        elif kind == "dwell":
+            seconds = float(rng.choice([0.0, int(rng.integers(0, 100000)) / 1000.0,
+                                        rng.uniform(0.0, 10.0)]))
+            builder.dwell(seconds, block_number=number, m_codes=m_codes)
+        else:
+            builder.dwell(0.0, block_number=number, m_codes=m_codes or (8,))
+    return builder.build()
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_write_read_round_trip_at_the_resolution(seed, tmp_path):
+    program = _random_program(np.random.default_rng(seed))
+    path = tmp_path / "out.nc"
+    write_program(program, path)
+    text = path.read_text()
+    assert text == format_program(program)
+    back = read_program(path, work_offsets=program.work_offsets)
+    assert format_program(back) == text  # the format is stable
+    offset = program.work_offsets["G54"]
+    assert len(back) == len(program)
+    assert back.number == program.number
+    for before, after in zip(program, back, strict=True):
+        assert (after.kind, after.block_number, after.m_codes, after.spindle_rpm) == (
+            before.kind, before.block_number, before.m_codes, before.spindle_rpm)
+        assert after.dwell_s == before.dwell_s  # dwell is written exactly
+        assert list(after.target) == list(before.target)
+        for axis, value in before.target.items():
+            off = offset.get(axis, 0.0)
+            if axis in "ABC":
+                # Within half the 0.00001 deg resolution (+ round-off), and exactly the
+                # Decimal-rounded value read back.
+                assert abs(after.target[axis] - value) <= 0.5e-5 * DEG + EXACT_RAD
+                expected = _rounded((value - off) / DEG, 5) * DEG + off
+            else:
+                # Within half the 1 nm resolution (+ round-off), and exactly the rounded value.
+                assert abs(after.target[axis] - value) <= 0.5e-9 + EXACT_M
+                expected = _rounded((value - off) / 1e-3, 6) * 1e-3 + off
+            assert after.target[axis] == expected
+        if before.feed_m_per_s is None:
+            assert after.feed_m_per_s is None
+        else:
+            expected = _rounded(before.feed_m_per_s * 60.0 / 1e-3, 6) * 1e-3 / 60.0
+            assert after.feed_m_per_s == expected
+
+
+def test_written_text_looks_as_documented():
+    offsets = {"G54": {"Z": 0.001}}
+    program = (ProgramBuilder(number=12, work_offsets=offsets)
+               .rapid(X=1e-3, Z=1.0000004e-3, A=math.pi)
+               .linear(X=2e-3, feed_mm_per_min=50.0, block_number=7)
+               .linear(X=2e-3)
+               .dwell(0.1234)
+               .dwell(0.123456789)
+               .dwell(0.0)
+               .dwell(0.0, m_codes=(9,))
+               .dwell(0.0, m_codes=(30,))
+               .build())
+    text = format_program(program)
+    assert text == (
+        "%\nO0012\nG90 G21 G94 G54\n"
+        "G00 X1. Z0. A180.\n"   # Z: 1.0000004 mm - 1 mm offset rounds to 0 at 1 nm
+        "N7 G01 X2. F50.\n"
+        "X2.\n"                 # a move that changes nothing still gets a block
+        "G04 X0.1234\n"         # 0.1234 s is not whole milliseconds
+        "G04 X0.123456789\n"
+        "G04 P0\n"
+        "M09\n"                 # M codes without motion: a 0 s dwell
+        "G04 P0 M30\n"          # a lone M30 would make no move; no second M30
+        "%\n"
+    )
+    back = parse_program(text, work_offsets=offsets)
+    assert [(m.kind, m.dwell_s, m.m_codes) for m in back.moves[-3:]] == [
+        ("dwell", 0.0, ()), ("dwell", 0.0, (9,)), ("dwell", 0.0, (30,))]
+    assert len(back) == len(program)
+
+
+def test_write_is_whole_or_nothing(tmp_path, monkeypatch):
+    path = tmp_path / "p.nc"
+    good = ProgramBuilder().rapid(X=0.0).build()
+    write_program(good, path)
+    before = path.read_text()
+    too_slow = ProgramBuilder().linear(X=0.0, feed_m_per_s=1e-15).build()
+    with pytest.raises(NCProgramError, match="rounds to F0"):
+        write_program(too_slow, path)
+
+    def failing_replace(src, dst):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", failing_replace)
+    with pytest.raises(OSError, match="disk full"):
+        write_program(ProgramBuilder().rapid(X=1.0).build(), path)
+    assert path.read_text() == before
+    assert os.listdir(tmp_path) == ["p.nc"]
+
+
+NC_CHARACTERS = "GXYZABCMNFSPOIJKTgxz0123456789.+-  ()%;\n\t/#"
+_number = st.one_of(
+    st.integers(-10**12, 10**12).map(str),
+    st.floats(allow_nan=False, allow_infinity=False, width=64).map(lambda v: f"{v:f}"),
+    st.text("0123456789.+-", max_size=6),
+)
+_any_word = st.tuples(st.sampled_from("GGGMNFSPOXYZABCxyzIT"), _number).map("".join)
+# Mostly well-formed words, so that many programs parse and reach the writer too.
+_good_word = st.one_of(
+    st.sampled_from(["G0", "G00", "G1", "g01", "G04", "G90", "G91", "G20", "G21", "G18",
+                     "G55", "G94", "M3", "M08", "M30", "S1000", "F100", "P250"]),
+    st.tuples(st.sampled_from("XYZABCxz"), _number).map("".join),
+)
+_word = st.one_of(_good_word, _good_word, _good_word, _any_word)
+_block = st.lists(_word, max_size=6).map(" ".join)
+_words_text = st.tuples(
+    st.sampled_from(["", "G00 X0 Y0 Z0 A0 B0 C0\n", "G01 X0 F100\n"]),
+    st.lists(_block, max_size=12).map("\n".join),
+).map("".join)
+
+
+def _parse_only_nc_errors(text: str, integer_input: str) -> None:
+    try:
+        program = parse_program(text, "fuzz.nc", integer_input=integer_input)
+    except NCProgramError as error:
+        assert error.line is not None
+        assert 1 <= error.line <= text.count("\n") + 1
+        assert f"line {error.line}," in str(error)
+        return
+    try:
+        written = format_program(program)
+    except NCProgramError:
+        return
+    parse_program(written)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.text(NC_CHARACTERS, max_size=200), st.sampled_from(["calculator", "increment"]))
+def test_fuzz_nc_characters_raise_only_nc_errors(text, integer_input):
+    _parse_only_nc_errors(text, integer_input)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_words_text, st.sampled_from(["calculator", "increment"]))
+def test_fuzz_word_sequences_raise_only_nc_errors(text, integer_input):
+    _parse_only_nc_errors(text, integer_input)
