@@ -13,7 +13,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from machinesim.errors import ComponentError, ErrorModel, ToolSetting, WorkpieceSetting
+from machinesim.errors import ComponentError, ErrorModel, ToolSetting
 from machinesim.exceptions import AxisLimitError, ErrorModelError, InputError, UnreachableError
 from machinesim.machines import list_machines, load_machine
 from machinesim.sampling import random_axis_values as random_q
