@@ -1,0 +1,71 @@
+"""Motion: machining time by the FANUC feed rule, rotary moves split to the chord tolerance."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from machinesim import ErrorModel, ToolSetting, load_machine
+from machinesim.exceptions import NCProgramError
+from machinesim.motion import plan
+from machinesim.nc import ProgramBuilder, parse_program
+
+
+def test_times_follow_the_feed_rule_by_hand():
+    machine = load_machine("robonano_a0ib")
+    program = parse_program(
+        "G90 G21\nG00 X1. Y2.\nG01 X4. Y6. F300.\nG01 C90. F600.\nG04 P1500\nG01 X5. C100.\nM30\n")
+    tr = plan(program, machine)
+    rapid = max(1e-3 / 0.025, 2e-3 / 0.025)  # each axis at 25 mm/s, the slowest sets the time
+    feed1 = 5.0 / 300.0 * 60.0  # 5 mm at 300 mm/min
+    turn = 90.0 / 600.0 * 60.0  # 90 deg at 600 deg/min
+    mixed = math.hypot(1.0, 10.0) / 600.0 * 60.0  # 1 mm and 10 deg count as a 1:10 vector
+    expected = [rapid, feed1, turn, 1.5, mixed]
+    np.testing.assert_allclose([s.duration for s in tr.segments], expected, rtol=1e-14)
+    assert tr.duration == pytest.approx(sum(expected), rel=1e-14)
+    assert tr.cutting_time == pytest.approx(feed1 + turn + mixed, rel=1e-14)
+    np.testing.assert_allclose(tr.segments[-1].q[-1], [5e-3, 6e-3, 0.0, 0.0, math.radians(100)],
+                               rtol=0, atol=1e-18)
+
+
+@pytest.mark.parametrize("tolerance", [1e-9, 1e-8])
+def test_a_tool_rotation_is_split_so_the_chord_stays_within_tolerance(tolerance):
+    """The planer's edge turns on an arm of r = 120.5 mm: an arc, whose chord over a step
+    dtheta deviates by the sagitta r (1 - cos(dtheta / 2)); the fewest steps over 20 deg is
+    ceil(theta / (2 acos(1 - tol / r)))."""
+    machine = load_machine("planer_4axis")
+    theta, r = math.radians(20.0), 0.1205
+    program = ProgramBuilder().rapid(X=0.0, Y=0.0, Z=0.0, A=0.0).linear(
+        A=theta, feed_mm_per_min=100.0).build()
+    steps = len(plan(program, machine, chord_tolerance=tolerance).segments[1].q) - 1
+    fewest = math.ceil(theta / (2 * math.acos(1 - tolerance / r)))
+    assert fewest <= steps <= fewest + 1
+    dtheta = theta / steps
+    assert r * (1 - math.cos(dtheta / 2)) <= tolerance
+
+
+def test_the_chord_follows_the_real_path_with_errors_and_the_tool_extent():
+    """A longer arm (tool set 5 mm low) and a tool point 1 mm above the edge: the farthest
+    point from the A axis sets the step count."""
+    machine = load_machine("planer_4axis")
+    errors = ErrorModel(tool=ToolSetting([0.0, 0.0, -5e-3], [0.0, 0.0, 0.0]))
+    theta = math.radians(5.0)
+    program = ProgramBuilder().rapid(X=0.0, Y=0.0, Z=0.0, A=0.0).linear(
+        A=theta, feed_mm_per_min=100.0).build()
+    steps = len(plan(program, machine, errors, tool_points=[[0.0, 0.0, 1e-3]],
+                     chord_tolerance=1e-9).segments[1].q) - 1
+    r = 0.1205 + 5e-3  # the edge, farther from A than the point 1 mm above it
+    fewest = math.ceil(theta / (2 * math.acos(1 - 1e-9 / r)))
+    assert fewest <= steps <= fewest + 1
+
+
+def test_linear_moves_are_not_split_and_bad_programs_are_refused():
+    machine = load_machine("grooving_4axis")
+    tr = plan(parse_program("G01 X10. Y5. F100.\nM30\n"), machine)
+    assert [len(s.q) for s in tr.segments] == [2]
+    with pytest.raises(NCProgramError, match="axis A is not on grooving_4axis"):
+        plan(parse_program("G01 A10. F100.\n"), machine)
+    with pytest.raises(NCProgramError, match="line 1.*no feed rate F"):
+        plan(parse_program("G01 X1.\n"), machine)
