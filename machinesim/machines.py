@@ -76,6 +76,19 @@ def load_machine(name_or_path: str | Path) -> Machine:
     return _load(path.resolve())
 
 
+def machines_summary() -> list[str]:
+    """One line per shipped machine: name, axes and travel (mm, deg)."""
+    lines = []
+    for name in list_machines():
+        m = load_machine(name)
+        travel = ", ".join(
+            (f"{a} spindle" if hi > 100 else f"{a} {np.degrees(lo):g}..{np.degrees(hi):g} deg")
+            if m.axis(a).rotary else f"{a} {lo * 1e3:g}..{hi * 1e3:g} mm"
+            for a, lo, hi in zip(m.axes, m.lower, m.upper, strict=True))
+        lines.append(f"{name:16s} {''.join(m.axes):8s} {travel}")
+    return lines
+
+
 @functools.lru_cache(maxsize=16)
 def _load(path: Path) -> Machine:
     return Machine(path)
@@ -493,4 +506,4 @@ def _read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
 
 
 __all__ = ["AXIS_ORDER", "AxisSolution", "DOFS", "Machine", "list_machines", "load_machine",
-           "models_dir"]
+           "machines_summary", "models_dir"]

@@ -12,20 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 import machinesim
+from machinesim.machines import machines_summary
 from machinesim.units import deg, mm, um
-
-
-def machines_table() -> str:
-    lines = ["machine          axes     travel"]
-    for name in machinesim.list_machines():
-        m = machinesim.load_machine(name)
-        travel = ", ".join(
-            f"{a} {np.degrees(lo):.0f}..{np.degrees(hi):.0f} deg" if m.axis(a).rotary and hi < 100
-            else f"{a} spindle" if m.axis(a).rotary
-            else f"{a} {lo * 1e3:.0f}..{hi * 1e3:.0f} mm"
-            for a, lo, hi in zip(m.axes, m.lower, m.upper, strict=True))
-        lines.append(f"{name:16s} {''.join(m.axes):8s} {travel}")
-    return "\n".join(lines)
 
 
 def sweep_table(machine, errors, target_mm=(1.0, 1.0, 0.0)) -> str:
@@ -58,7 +46,8 @@ def _rot_z(a):
 
 def main() -> None:
     print("machinesim machines\n")
-    print(machines_table())
+    print("machine          axes     travel")
+    print("\n".join(machines_summary()))
     machine = machinesim.load_machine("robonano_a0ib")
     errors = machinesim.ErrorModel.from_dict({"tool": {"offset_um": [10.0, 0.0, 5.0]}})
     print("\nrobonano_a0ib, tool setting error offset = (10, 0, 5) um in tool_mount:")

@@ -1,0 +1,30 @@
+"""Every scenario script runs top to bottom, as `make demo` runs it."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(script: str, *args: str) -> str:
+    result = subprocess.run([sys.executable, str(ROOT / "scenarios" / script), *args],
+                            capture_output=True, text=True, check=False, cwd=ROOT)
+    assert result.returncode == 0, result.stderr
+    return result.stdout
+
+
+def test_demo_prints_the_machines_and_the_landing_table():
+    out = run("demo.py")
+    for name in ("robonano_ui", "robonano_a0ib", "planer_4axis", "grooving_4axis", "sts_lathe"):
+        assert name in out
+    rows = [line.split() for line in out.splitlines()
+            if line.strip() and line.split()[0].lstrip("-").replace(".", "").isdigit()]
+    assert len(rows) == 12  # B in (-30, 0, 30) x C in (0, 90, 180, 270)
+    for b, c, dx, dy, dz, norm in (map(float, r) for r in rows):
+        # a tool offset (10, 0, 5) um keeps its length whatever B and C do
+        assert abs(norm - (10.0**2 + 5.0**2) ** 0.5) < 1e-3
+        if b == 0.0 and c == 0.0:
+            assert (dx, dy, dz) == (10.0, 0.0, 5.0)
