@@ -1,0 +1,323 @@
+"""Exact top-surface heights of a part: a float64 z-buffer over its mesh.
+
+A height is the plane of the triangle above the sample, evaluated in float64 at the sample
+point: no interpolation, no ray, no rounding of the geometry. The mesh is rasterised onto the
+samples: each upward-facing triangle is binned to the samples inside its xy bounding box, an
+edge-function test keeps those inside the triangle, and each sample keeps the highest plane
+value that covers it.
+
+Why no sample falls through a crack: each edge function is evaluated from the edge's
+canonical anchor (its endpoint lower in (y, x)), with the direction taken as the difference of
+the two endpoints. IEEE subtraction and multiplication are symmetric under negation, so the two
+triangles that share an edge get exactly opposite values at any sample. A triangle is closed
+(a sample on its edge is inside), so a sample on a shared edge is inside both, and one exactly
+on a vertex gets exact zeros from every edge through it. Where several triangles cover a sample
+the highest wins: a sample exactly on a vertical step reads the top of the step, as
+"the highest surface point above (x, y)" asks.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.metrology._mesh import as_positive, as_vector, mesh_arrays
+
+__all__ = ["height_map", "profile"]
+
+#: Triangles read per pass: small enough that a pass's arrays stay in the CPU cache
+#: (measured: 8192 is ~1.5x faster than 131072 on the pyramid benchmark).
+TRIANGLE_CHUNK = 8192
+#: Triangle-sample candidates evaluated per pass, for the same reason; also bounds memory when
+#: one triangle covers millions of samples.
+CANDIDATE_BLOCK = 32768
+#: A grid whose coordinates lie within this fraction of a spacing of an arithmetic progression
+#: is binned by arithmetic instead of binary search (a linspace grid is within ~1e-13).
+UNIFORM_GRID = 1e-3
+#: Bins found by arithmetic are widened by this many spacings beyond the grid's own deviation
+#: and the round-off of the arithmetic, so that they are a superset of the samples in a
+#: triangle's box whatever the rounding; extra samples are rejected by the exact test.
+INDEX_SLACK = 1e-6
+#: A profile line is taken to pass near a triangle's box when within this fraction of the
+#: largest coordinate: far above the ~1e-16 relative round-off of the line test and of the
+#: sample points, far below any feature; again only a superset for the exact test.
+LINE_MARGIN = 1e-12
+#: The end of a profile is sampled when the length is a whole number of spacings to within this
+#: fraction of a spacing (round-off of length / spacing).
+END_SLACK = 1e-9
+
+# Rows of the per-triangle parameter table used by the rasteriser.
+_X0, _Y0, _Z0, _GX, _GY, _ZLO, _ZHI, _EDGES = range(8)
+
+
+def height_map(surface, x, y) -> np.ndarray:
+    """Heights of the top surface over a grid of sample points.
+
+    Parameters
+    ----------
+    surface : Part or MeshIndex or tuple of (array-like, array-like)
+        The measured solid, or its ``(vertices (n, 3) float64 m, triangles (m, 3) int)``.
+    x : array-like, shape (nx,)
+        Sample x coordinates in the workpiece frame, m, strictly increasing.
+    y : array-like, shape (ny,)
+        Sample y coordinates, m, strictly increasing.
+
+    Returns
+    -------
+    heights : ndarray, shape (ny, nx), float64, read-only
+        ``heights[j, i]`` is the highest surface point above ``(x[i], y[j])``, m; NaN where no
+        surface lies below.
+
+    Raises
+    ------
+    InputError
+        For a malformed mesh or sample axes that are not 1-D, finite and strictly increasing.
+    """
+    vertices, triangles = mesh_arrays(surface)
+    grid = _Grid(_axis(x, "x"), _axis(y, "y"))
+    return _finish(_zbuffer(vertices, triangles, grid).reshape(grid.shape))
+
+
+def profile(surface, start, end, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Heights of the top surface along a straight line in xy.
+
+    Parameters
+    ----------
+    surface : Part or MeshIndex or tuple of (array-like, array-like)
+        The measured solid, or its ``(vertices, triangles)``.
+    start, end : array-like, shape (2,)
+        End points (x, y) of the line in the workpiece frame, m.
+    spacing : float
+        Distance between samples along the line, m. The first sample is at ``start``; the
+        last is the last whole spacing not beyond ``end`` (``end`` itself when the length is a
+        whole number of spacings).
+
+    Returns
+    -------
+    s : ndarray, shape (k,), float64, read-only
+        Distance of each sample from ``start`` along the line, m.
+    z : ndarray, shape (k,), float64, read-only
+        Height of the top surface at each sample, m; NaN where no surface lies below.
+
+    Raises
+    ------
+    InputError
+        For a malformed mesh, a zero-length line or a spacing that is not > 0.
+    """
+    vertices, triangles = mesh_arrays(surface)
+    start = as_vector(start, 2, "start")
+    end = as_vector(end, 2, "end")
+    spacing = as_positive(spacing, "spacing")
+    length = float(np.hypot(*(end - start)))
+    if length == 0.0:
+        raise InputError(f"Expected a profile of non-zero length, got start = end = {start}")
+    count = int(np.floor(length / spacing + END_SLACK)) + 1
+    s = np.arange(count) * spacing
+    if abs(s[-1] - length) <= END_SLACK * spacing:
+        s[-1] = length
+    line = _Line(start, end, length, s, vertices)
+    z = _zbuffer(vertices, triangles, line)
+    s.setflags(write=False)
+    return s, _finish(z)
+
+
+def _axis(values, name: str) -> np.ndarray:
+    """A sample axis as a finite, strictly increasing float64 1-D copy."""
+    try:
+        axis = np.array(values, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"Expected {name} as numbers (m), got {values!r}", key=name) from error
+    if axis.ndim != 1 or axis.size == 0:
+        raise InputError(f"Expected {name} with shape (n,), n >= 1, got {axis.shape}", key=name)
+    if not np.isfinite(axis).all():
+        raise InputError(f"Expected finite {name}, got NaN or infinity", key=name)
+    if np.any(np.diff(axis) <= 0.0):
+        raise InputError(f"Expected strictly increasing {name}", key=name)
+    return axis
+
+
+def _finish(top: np.ndarray) -> np.ndarray:
+    top[top == -np.inf] = np.nan
+    top.setflags(write=False)
+    return top
+
+
+class _AxisBins:
+    """Index range of the samples of one sorted axis that lie in [lo, hi]."""
+
+    def __init__(self, axis: np.ndarray) -> None:
+        self.axis = axis
+        n = axis.size
+        self.uniform = False
+        if n >= 2:
+            self.step = (axis[-1] - axis[0]) / (n - 1)
+            deviation = np.max(np.abs(axis - (axis[0] + np.arange(n) * self.step))) / self.step
+            if deviation < UNIFORM_GRID:
+                self.uniform = True
+                # Round-off, in spacings, of the deviation itself and of the bin arithmetic.
+                round_off = 8 * np.finfo(np.float64).eps * (np.abs(axis).max() / self.step + n)
+                self.slack = deviation + round_off + INDEX_SLACK
+
+    def __call__(self, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """First index with axis >= lo and the count of indices with lo <= axis <= hi."""
+        n = self.axis.size
+        if self.uniform:
+            first = np.ceil((lo - self.axis[0]) / self.step - self.slack)
+            stop = np.floor((hi - self.axis[0]) / self.step + self.slack) + 1.0
+            np.clip(first, 0, n, out=first)
+            np.clip(stop, 0, n, out=stop)
+            first = first.astype(np.int64)
+            stop = stop.astype(np.int64)
+        else:
+            first = np.searchsorted(self.axis, lo, side="left")
+            stop = np.searchsorted(self.axis, hi, side="right")
+        return first, np.maximum(stop - first, 0)
+
+
+class _Grid:
+    """Samples on the grid x[i], y[j], stored row by row (index j * nx + i)."""
+
+    def __init__(self, x: np.ndarray, y: np.ndarray) -> None:
+        self.x, self.y = x, y
+        self.shape = (y.size, x.size)
+        self.size = x.size * y.size
+        self.bins_x, self.bins_y = _AxisBins(x), _AxisBins(y)
+
+    def ranges(self, xmin, xmax, ymin, ymax):
+        first_x, count_x = self.bins_x(xmin, xmax)
+        first_y, count_y = self.bins_y(ymin, ymax)
+        return first_x, count_x, first_y, count_y
+
+    def coordinates(self, i, j):
+        return self.x[i], self.y[j]
+
+    def flat(self, i, j):
+        return j * self.x.size + i
+
+
+class _Line:
+    """Samples start + s[i] * direction along a line; a degenerate grid of one row."""
+
+    def __init__(self, start, end, length, s, vertices) -> None:
+        self.start = start
+        self.direction = direction = (end - start) / length
+        self.px = start[0] + s * direction[0]
+        self.py = start[1] + s * direction[1]
+        if s[-1] == length:
+            # The end is sampled: take it exactly, not one rounding away from it.
+            self.px[-1], self.py[-1] = end
+        self.size = s.size
+        scale = max(np.abs(vertices).max(initial=0.0), np.abs(start).max(),
+                    np.abs(self.px[-1]), np.abs(self.py[-1]))
+        self.margin = LINE_MARGIN * scale
+        # Along the axis the line runs most along, the sample coordinate is monotonic in i (the
+        # rounding of start + s * u is monotonic in s), so a box maps to one index range.
+        self.axis = 0 if abs(direction[0]) >= abs(direction[1]) else 1
+        self.sign = 1.0 if direction[self.axis] > 0 else -1.0
+        self.key = self.sign * (self.px if self.axis == 0 else self.py)
+
+    def ranges(self, xmin, xmax, ymin, ymax):
+        ux, uy = self.direction
+        # Signed distance (times |u| = 1) of the box corners from the line: a box the line
+        # misses has all four on one side.
+        across_x = np.stack([(xmin - self.start[0]) * uy, (xmax - self.start[0]) * uy])
+        across_y = np.stack([(ymin - self.start[1]) * -ux, (ymax - self.start[1]) * -ux])
+        low = across_x.min(axis=0) + across_y.min(axis=0)
+        high = across_x.max(axis=0) + across_y.max(axis=0)
+        near = np.flatnonzero((low <= self.margin) & (high >= -self.margin))
+        lo, hi = (xmin[near], xmax[near]) if self.axis == 0 else (ymin[near], ymax[near])
+        if self.sign < 0:
+            lo, hi = -hi, -lo
+        first = np.zeros(xmin.size, dtype=np.int64)
+        count = np.zeros(xmin.size, dtype=np.int64)
+        first[near] = np.searchsorted(self.key, lo, side="left")
+        count[near] = np.searchsorted(self.key, hi, side="right") - first[near]
+        return first, count, np.zeros_like(first), np.ones_like(count)
+
+    def coordinates(self, i, j):
+        return self.px[i], self.py[i]
+
+    def flat(self, i, j):
+        return i
+
+
+def _zbuffer(vertices: np.ndarray, triangles: np.ndarray, samples) -> np.ndarray:
+    """Highest plane value over each sample, flat, -inf where no triangle covers it."""
+    vx, vy, vz = (np.ascontiguousarray(vertices[:, k]) for k in range(3))
+    top = np.full(samples.size, -np.inf)
+    for begin in range(0, len(triangles), TRIANGLE_CHUNK):
+        chunk = triangles[begin:begin + TRIANGLE_CHUNK]
+        i0, i1, i2 = chunk[:, 0], chunk[:, 1], chunk[:, 2]
+        x = (vx[i0], vx[i1], vx[i2])
+        y = (vy[i0], vy[i1], vy[i2])
+        # Twice the projected area, > 0 for a triangle counter-clockwise seen from above, i.e.
+        # facing up. Vertical (0) and downward faces never carry the top surface of a solid.
+        area2 = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0])
+        first_x, count_x, first_y, count_y = samples.ranges(
+            np.minimum(np.minimum(x[0], x[1]), x[2]), np.maximum(np.maximum(x[0], x[1]), x[2]),
+            np.minimum(np.minimum(y[0], y[1]), y[2]), np.maximum(np.maximum(y[0], y[1]), y[2]),
+        )
+        keep = np.flatnonzero((area2 > 0.0) & (count_x > 0) & (count_y > 0))
+        if keep.size == 0:
+            continue
+        x = tuple(c[keep] for c in x)
+        y = tuple(c[keep] for c in y)
+        z = (vz[i0[keep]], vz[i1[keep]], vz[i2[keep]])
+        table = _triangle_table(x, y, z, area2[keep])
+        _rasterise(table, first_x[keep], count_x[keep], first_y[keep], count_y[keep],
+                   samples, top)
+    return top
+
+
+def _triangle_table(x, y, z, area2) -> np.ndarray:
+    """Per-triangle plane and edge functions, shape (19, m): rows named by the _ constants."""
+    ax, ay, az = x[1] - x[0], y[1] - y[0], z[1] - z[0]
+    bx, by, bz = x[2] - x[0], y[2] - y[0], z[2] - z[0]
+    rows = [
+        x[0], y[0], z[0],
+        (az * by - ay * bz) / area2,
+        (ax * bz - az * bx) / area2,
+        # The plane evaluated inside a triangle lies between its lowest and highest vertex;
+        # clamping to that only bites on near-vertical slivers, where round-off of the tiny
+        # projected area would otherwise throw a height far off.
+        np.minimum(np.minimum(z[0], z[1]), z[2]),
+        np.maximum(np.maximum(z[0], z[1]), z[2]),
+    ]
+    for i, j in ((0, 1), (1, 2), (2, 0)):
+        swap = (y[i] > y[j]) | ((y[i] == y[j]) & (x[i] > x[j]))
+        rows += [np.where(swap, x[j], x[i]), np.where(swap, y[j], y[i]), x[j] - x[i], y[j] - y[i]]
+    return np.stack(rows)
+
+
+def _rasterise(table, first_x, count_x, first_y, count_y, samples, top) -> None:
+    """Evaluate every (triangle, sample-in-its-box) pair and keep the maximum per sample."""
+    counts = count_x * count_y
+    ends = np.cumsum(counts)
+    starts = ends - counts
+    total = int(ends[-1])
+    for k0 in range(0, total, CANDIDATE_BLOCK):
+        k1 = min(k0 + CANDIDATE_BLOCK, total)
+        t0 = int(np.searchsorted(ends, k0, side="right"))
+        t1 = int(np.searchsorted(ends, k1 - 1, side="right")) + 1
+        share = np.minimum(ends[t0:t1], k1) - np.maximum(starts[t0:t1], k0)
+        tri = np.repeat(np.arange(t0, t1), share)
+        offset = np.arange(k0, k1) - starts[tri]
+        width = count_x[tri]
+        row = offset // width
+        i = first_x[tri] + (offset - row * width)
+        j = first_y[tri] + row
+        px, py = samples.coordinates(i, j)
+        p = table[:, tri]
+        inside = None
+        for e in range(_EDGES, _EDGES + 12, 4):
+            ax, ay, dx, dy = p[e], p[e + 1], p[e + 2], p[e + 3]
+            ok = dx * (py - ay) - dy * (px - ax) >= 0.0
+            inside = ok if inside is None else inside & ok
+        hit = np.flatnonzero(inside)
+        if hit.size == 0:
+            continue
+        p = p[:_EDGES, hit]
+        px, py = px[hit], py[hit]
+        z = p[_Z0] + p[_GX] * (px - p[_X0]) + p[_GY] * (py - p[_Y0])
+        np.clip(z, p[_ZLO], p[_ZHI], out=z)
+        np.maximum.at(top, samples.flat(i[hit], j[hit]), z)
