@@ -1,11 +1,36 @@
-"""Stock and machined parts: immutable float64 manifold3d solids in the workpiece frame."""
+"""Stock and machined parts: immutable float64 manifold3d solids in the workpiece frame.
+
+Stock conventions (workpiece frame, metres): a block L x W x H occupies x in [0, L],
+y in [0, W], z in [-H, 0]; a cylinder has its axis on Z through the origin and its top face
+at z = 0. A placement translates either. Specs are in mm: ``"block:10x10x2"``,
+``"cylinder:5x2"`` (radius x height), ``"block:10x10x2@-5,-5,0"``,
+``"spheres:30x30x5:2"`` (block with three reference spheres of radius 2 mm, seed 002 Fig. 4)
+and ``"crown"`` (seed 002's roughly machined diamond crown, 10 um oversize).
+"""
 
 from __future__ import annotations
 
+import math
+import os
+import struct
+import tempfile
 from dataclasses import dataclass
+from pathlib import Path
 
 import manifold3d
 import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.tools import arc_segments, sphere_polygon
+from machinesim.units import M_PER_MM, M_PER_UM
+
+#: Chord tolerance of cylindrical stock (m): 1 nm, the machines' axis resolution, so the
+#: polygon never shows in a measurement of an unmachined face.
+CYLINDER_CHORD_M = 1e-9
+#: Chord tolerance of the reference spheres (m): they are rough-machined features whose form
+#: error in seed 002 is 1-2 um, so 0.1 um is well below it while a R2 mm sphere stays at
+#: ~10^5 triangles (facet depth, not chord sagitta: see tools.sphere_polygon).
+SPHERE_CHORD_M = 1e-7
 
 
 @dataclass(frozen=True)
@@ -20,6 +45,43 @@ class Part:
 
     manifold: manifold3d.Manifold
 
+    @classmethod
+    def from_mesh(cls, vertices, triangles) -> Part:
+        """Part from a closed, oriented triangle mesh.
+
+        Parameters
+        ----------
+        vertices : array-like, shape (n, 3)
+            Vertex positions (m), float64.
+        triangles : array-like, shape (m, 3)
+            Vertex indices, counter-clockwise seen from outside.
+
+        Raises
+        ------
+        InputError
+            If the arrays have the wrong shape or the mesh is not a closed 2-manifold.
+        """
+        # manifold3d accepts only writeable C arrays: copy, which also detaches the caller's.
+        vertices = np.array(vertices, dtype=np.float64, order="C")
+        triangles = np.array(triangles, order="C")
+        if vertices.ndim != 2 or vertices.shape[1] != 3 or not np.all(np.isfinite(vertices)):
+            raise InputError(f"expected finite vertices of shape (n, 3), got {vertices.shape}")
+        if triangles.ndim != 2 or triangles.shape[1] != 3:
+            raise InputError(f"expected triangles of shape (m, 3), got {triangles.shape}")
+        if triangles.size and (triangles.min() < 0 or triangles.max() >= len(vertices)):
+            raise InputError(
+                f"triangle indices must lie in [0, {len(vertices)}), got "
+                f"[{triangles.min()}, {triangles.max()}]"
+            )
+        mesh = manifold3d.Mesh64(
+            vert_properties=vertices,
+            tri_verts=np.array(triangles, dtype=np.uint64, order="C"),
+        )
+        manifold = manifold3d.Manifold(mesh)
+        if manifold.status() != manifold3d.Error.NoError:
+            raise InputError(f"mesh is not a closed oriented 2-manifold: {manifold.status()}")
+        return cls(manifold)
+
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
         """Vertices, shape (n, 3) float64 in m, and triangles, shape (m, 3) int64."""
         mesh = self.manifold.to_mesh64()
@@ -31,3 +93,240 @@ class Part:
     def volume(self) -> float:
         """Volume in m^3."""
         return float(self.manifold.volume())
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """Axis-aligned bounds, shape (2, 3) (m): row 0 the minimum corner, row 1 the maximum."""
+        box = np.array(self.manifold.bounding_box(), dtype=np.float64).reshape(2, 3)
+        box.flags.writeable = False
+        return box
+
+    def export_stl(self, path) -> None:
+        """Write a binary STL. The format stores float32, so it is for display only."""
+        vertices, triangles = self.mesh()
+        corner = vertices[triangles]
+        normal = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
+        length = np.linalg.norm(normal, axis=1, keepdims=True)
+        normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
+        record = np.zeros(len(triangles), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)),
+                                                  ("a", "<u2")])
+        record["n"] = normal
+        record["v"] = corner
+        header = b"machinesim part, binary STL (float32: display only)".ljust(80, b" ")
+        _write_atomic(path, header + struct.pack("<I", len(triangles)) + record.tobytes())
+
+    def export_ply(self, path) -> None:
+        """Write a binary little-endian PLY with float64 vertices: exact, bit for bit."""
+        vertices, triangles = self.mesh()
+        header = (
+            "ply\nformat binary_little_endian 1.0\ncomment machinesim part, metres\n"
+            f"element vertex {len(vertices)}\n"
+            "property double x\nproperty double y\nproperty double z\n"
+            f"element face {len(triangles)}\n"
+            "property list uchar int vertex_indices\nend_header\n"
+        ).encode("ascii")
+        faces = np.zeros(len(triangles), dtype=[("n", "u1"), ("i", "<i4", 3)])
+        faces["n"] = 3
+        faces["i"] = triangles
+        body = np.ascontiguousarray(vertices, dtype="<f8").tobytes() + faces.tobytes()
+        _write_atomic(path, header + body)
+
+    def export_glb(self, path) -> None:
+        """Write a binary glTF (via trimesh, float32 inside): for display only."""
+        import trimesh
+
+        vertices, triangles = self.mesh()
+        data = trimesh.Trimesh(vertices, triangles, process=False).export(file_type="glb")
+        _write_atomic(path, data)
+
+
+def _write_atomic(path, data: bytes) -> None:
+    """Write ``data`` to ``path`` whole or not at all (temp file in the folder, then rename)."""
+    path = Path(path)
+    handle, temp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(handle, "wb") as file:
+            file.write(data)
+        os.replace(temp, path)
+    except BaseException:
+        Path(temp).unlink(missing_ok=True)
+        raise
+
+
+def block(length: float, width: float, height: float, origin=(0.0, 0.0, 0.0)) -> Part:
+    """Block occupying [0, L] x [0, W] x [-H, 0] (m), translated by ``origin`` (m)."""
+    for name, value in (("length", length), ("width", width), ("height", height)):
+        if not math.isfinite(value) or value <= 0.0:
+            raise InputError(f"block {name} must be positive, got {value!r} m", key=name)
+    solid = manifold3d.Manifold.cube((length, width, height)).translate((0.0, 0.0, -height))
+    return Part(solid.translate(tuple(float(v) for v in origin)))
+
+
+def cylinder(radius: float, height: float, origin=(0.0, 0.0, 0.0),
+             chord_tol: float = CYLINDER_CHORD_M) -> Part:
+    """Cylinder about Z through ``origin``, top face at z = origin z, radius and height in m.
+
+    The circle is an inscribed polygon whose sagitta is at most ``chord_tol`` (m).
+    """
+    for name, value in (("radius", radius), ("height", height)):
+        if not math.isfinite(value) or value <= 0.0:
+            raise InputError(f"cylinder {name} must be positive, got {value!r} m", key=name)
+    segments = arc_segments(radius, 2.0 * math.pi, chord_tol)
+    solid = manifold3d.Manifold.cylinder(height, radius, radius, segments)
+    return Part(solid.translate((float(origin[0]), float(origin[1]), float(origin[2]) - height)))
+
+
+def block_with_spheres(length: float, width: float, height: float, radius: float,
+                       centres=None, dimples: bool = False,
+                       chord_tol: float = SPHERE_CHORD_M) -> Part:
+    """Block with three reference spheres on its top face (seed 002, Fig. 4), all in m.
+
+    Parameters
+    ----------
+    length, width, height : float
+        Block size; the block occupies [0, L] x [0, W] x [-H, 0].
+    radius : float
+        Sphere radius.
+    centres : array-like, shape (3, 2), optional
+        (x, y) of the sphere centres S1, S2, S3 on the plane z = 0. Default: three corners,
+        2 R in from the edges, so that S1->S2 runs along +X and S1->S3 along +Y (the
+        workpiece axes of seed 002, Fig. 5a).
+    dimples : bool
+        False: hemispherical bumps above the top face. True: hemispherical cavities (seed
+        002 cuts its spheres with a ball end mill and finds the centre above the bottom point,
+        which fits a cavity).
+    chord_tol : float
+        Largest facet depth of the sphere polygon.
+    """
+    stock = block(length, width, height).manifold
+    if radius <= 0.0 or 4.0 * radius >= min(length, width):
+        raise InputError(
+            f"sphere radius must be positive and below a quarter of the block's smaller side "
+            f"({min(length, width) / 4!r} m), got {radius!r} m",
+            key="radius",
+        )
+    if centres is None:
+        inset = 2.0 * radius
+        centres = [(inset, inset), (length - inset, inset), (inset, width - inset)]
+    centres = np.asarray(centres, dtype=np.float64)
+    if centres.shape != (3, 2):
+        raise InputError(f"expected three (x, y) sphere centres, got shape {centres.shape}")
+    sphere = sphere_polygon(radius, chord_tol)
+    spheres = manifold3d.Manifold.batch_boolean(
+        [sphere.translate((float(x), float(y), 0.0)) for x, y in centres], manifold3d.OpType.Add
+    )
+    return Part(stock - spheres if dimples else stock + spheres)
+
+
+def diamond_crown(oversize: float = 10.0 * M_PER_UM, top_across_flats: float = 4.0 * M_PER_MM,
+                  crown_height: float = 0.2 * M_PER_MM, base_size: float = 10.0 * M_PER_MM,
+                  base_height: float = 3.0 * M_PER_MM,
+                  slope: float = math.atan(0.2)) -> Part:
+    """Seed 002's diamond crown (section 3.2), roughly machined ``oversize`` larger (m, rad).
+
+    Fig. 9 of the paper is missing; these dimensions follow its text: one top face and
+    eight side faces sloped at 11.31 deg (tan = 0.2, ``slope``) facing C = 0, 45, ..., 315
+    deg, opposite edges parallel in pairs (L1/L5 ... L4/L8). The target is a regular
+    octagonal frustum, top face 4 mm across flats at z = 0, 0.2 mm high (so each side face
+    runs 1 mm horizontally, one laser-microscope field), standing on a flat at z = -0.2 mm
+    of a 10 x 10 mm base, 3 mm thick, centred on the C axis (x = y = 0). The rough part is
+    that shape with every machined face (top, eight sides, flat) moved out by ``oversize``
+    along its normal; the finishing cut then removes ``oversize`` (seed 002 Table 2: 10 um).
+    """
+    normal_xy = math.sin(slope)
+    normal_z = math.cos(slope)
+    top_z = oversize
+    flat_z = -crown_height + oversize
+    bottom_z = -crown_height - base_height
+    # Side plane k: normal (sin(slope) u_k, cos(slope)) . p = apothem_top * sin(slope) + d.
+    offset = 0.5 * top_across_flats * normal_xy + oversize
+
+    def apothem(z: float) -> float:
+        return (offset - z * normal_z) / normal_xy
+
+    corners = []
+    # The frustum reaches half its height into the base so the union meets it in clean lines.
+    for z in (top_z, flat_z - 0.5 * crown_height):
+        circum = apothem(z) / math.cos(math.pi / 8.0)
+        for k in range(8):
+            angle = (k + 0.5) * math.pi / 4.0
+            corners.append((circum * math.cos(angle), circum * math.sin(angle), z))
+    frustum = manifold3d.Manifold.hull_points(np.array(corners))
+    base = manifold3d.Manifold.cube((base_size, base_size, flat_z - bottom_z), center=True)
+    base = base.translate((0.0, 0.0, 0.5 * (flat_z + bottom_z)))
+    return Part(base + frustum)
+
+
+_STOCK_FORMS = (
+    "'block:LxWxH', 'cylinder:RxH', 'spheres:LxWxH:R', 'spheres:LxWxH:R:dimples', "
+    "'crown' or 'crown:OVERSIZE' (mm), each optionally followed by '@x,y,z' (mm)"
+)
+
+
+def _numbers(spec: str, text: str, count: int, separator: str) -> list[float]:
+    fields = text.split(separator)
+    try:
+        values = [float(field) for field in fields]
+    except ValueError:
+        values = []
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise InputError(
+            f"stock spec {spec!r}: expected {count} numbers separated by {separator!r} in "
+            f"{text!r}; forms: {_STOCK_FORMS}",
+            key="stock",
+        )
+    return values
+
+
+def stock_from_spec(spec: str) -> Part:
+    """Build stock from a text spec in mm (see the module docstring for the forms).
+
+    Raises
+    ------
+    InputError
+        Naming the spec and the expected forms when it cannot be read.
+    """
+    text = str(spec).strip()
+    body, _, placement = text.partition("@")
+    origin = (
+        [v * M_PER_MM for v in _numbers(spec, placement, 3, ",")] if placement else [0.0] * 3
+    )
+    fields = body.split(":")
+    kind = fields[0].lower()
+    try:
+        if kind == "block" and len(fields) == 2:
+            size = [v * M_PER_MM for v in _numbers(spec, fields[1], 3, "x")]
+            return block(*size, origin=origin)
+        if kind == "cylinder" and len(fields) == 2:
+            radius, height = (v * M_PER_MM for v in _numbers(spec, fields[1], 2, "x"))
+            return cylinder(radius, height, origin=origin)
+        if kind == "spheres" and len(fields) in (3, 4):
+            size = [v * M_PER_MM for v in _numbers(spec, fields[1], 3, "x")]
+            radius = _numbers(spec, fields[2], 1, ",")[0] * M_PER_MM
+            if len(fields) == 4 and fields[3].lower() != "dimples":
+                raise InputError(f"stock spec {spec!r}: expected 'dimples', got {fields[3]!r}")
+            part = block_with_spheres(*size, radius, dimples=len(fields) == 4)
+            return Part(part.manifold.translate(tuple(origin)))
+        if kind == "crown" and len(fields) in (1, 2):
+            oversize = (
+                _numbers(spec, fields[1], 1, ",")[0] * M_PER_MM if len(fields) == 2
+                else 10.0 * M_PER_UM
+            )
+            return Part(diamond_crown(oversize).manifold.translate(tuple(origin)))
+    except InputError as error:
+        if str(spec) in str(error):
+            raise
+        raise InputError(f"stock spec {spec!r}: {error}", key="stock") from None
+    raise InputError(f"stock spec {spec!r}: expected {_STOCK_FORMS}", key="stock")
+
+
+__all__ = [
+    "CYLINDER_CHORD_M",
+    "SPHERE_CHORD_M",
+    "Part",
+    "block",
+    "block_with_spheres",
+    "cylinder",
+    "diamond_crown",
+    "stock_from_spec",
+]

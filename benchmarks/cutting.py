@@ -1,0 +1,200 @@
+"""Speed and memory of the material-removal engine (machinesim.cutting.engine.remove).
+
+Scenarios (poses built directly as 4x4 arrays, no kinematics):
+
+a. 2000 parallel 90-deg V grooves, 20 um pitch, 10 um deep, on a 40 x 10 mm block.
+   Goal >= 10,000 sweeps/s.
+b. Crossing pattern, 500 x 500 grooves, 50 um pitch, 25 um deep (pyramids, seed 003).
+   Goal >= 1,000,000 output triangles/s.
+c. A 20-deg rotary sweep of a V tool about an axis 100 mm away, split into sub-steps whose
+   chord error stays under 1 nm (`rotary_substeps`). Goal >= 5,000 sub-steps/s.
+d. 400 x 400 mm plate, 8000 x 8000 grooves at 50 um pitch, cut only in 25 windows of 1 x 1 mm.
+   Goal < 60 s and < 2 GB.
+
+For a and b the naive engine (subtract one sweep hull at a time, evaluating the mesh after
+each) is timed in the same run on the first sweeps only, and its rate is extrapolated to the
+whole job. Its cost per sweep grows with the mesh, so the extrapolated time is a lower bound
+and the quoted speed-up is conservative.
+
+Each scenario runs in its own process so that its peak memory (ru_maxrss, which includes
+manifold3d's C++ heap, unlike tracemalloc) is its own. Times are medians of ``--repeat`` runs.
+
+Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcd] [--repeat 3]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import resource
+import statistics
+import subprocess
+import sys
+import time
+
+import manifold3d
+import numpy as np
+
+from machinesim.cutting import remove, rotary_substeps
+from machinesim.tools import VTool
+from machinesim.workpiece import block
+
+V90 = VTool(math.pi / 2.0)
+#: Tool X along workpiece +Y: the grooves of the Y set are cut with this orientation.
+ALONG_Y = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def pose(rotation: np.ndarray, position) -> np.ndarray:
+    """4x4 wMt from a rotation (3, 3) and a position (3,) in m."""
+    matrix = np.eye(4)
+    matrix[:3, :3] = rotation
+    matrix[:3, 3] = position
+    return matrix
+
+
+def grooves_along_x(ys, depth: float, x0: float, x1: float) -> list[np.ndarray]:
+    """One straight path per groove, tool along +X at height -depth, from x0 to x1 (m)."""
+    return [np.array([pose(np.eye(3), (x0, y, -depth)), pose(np.eye(3), (x1, y, -depth))])
+            for y in ys]
+
+
+def grooves_along_y(xs, depth: float, y0: float, y1: float) -> list[np.ndarray]:
+    """One straight path per groove, tool along +Y at height -depth, from y0 to y1 (m)."""
+    return [np.array([pose(ALONG_Y, (x, y0, -depth)), pose(ALONG_Y, (x, y1, -depth))])
+            for x in xs]
+
+
+def naive(stock, tool, paths, count: int) -> float:
+    """Seconds per sweep of naive one-at-a-time subtraction over the first ``count`` sweeps."""
+    vertices = tool.vertices()
+    part = stock.manifold
+    start = time.perf_counter()
+    done = 0
+    for path in paths:
+        for a, b in zip(path[:-1], path[1:], strict=True):
+            points = np.concatenate([vertices @ a[:3, :3].T + a[:3, 3],
+                                     vertices @ b[:3, :3].T + b[:3, 3]])
+            part = part - manifold3d.Manifold.hull_points(points)
+            part.num_tri()
+            done += 1
+            if done == count:
+                return (time.perf_counter() - start) / done
+    return (time.perf_counter() - start) / max(done, 1)
+
+
+def scenario_a():
+    stock = block(40e-3, 10e-3, 2e-3)
+    paths = grooves_along_y(10e-6 + 20e-6 * np.arange(2000), 10e-6, -0.5e-3, 10.5e-3)
+    return stock, V90, paths, None
+
+
+def scenario_b():
+    pitch, count = 50e-6, 500
+    side = pitch * count
+    stock = block(side, side, 2e-3)
+    centres = pitch / 2 + pitch * np.arange(count)
+    paths = (grooves_along_y(centres, 25e-6, -0.5e-3, side + 0.5e-3)
+             + grooves_along_x(centres, 25e-6, -0.5e-3, side + 0.5e-3))
+    return stock, V90, paths, None
+
+
+def scenario_c():
+    radius, sweep = 0.1, math.radians(20.0)
+    steps = rotary_substeps(radius, sweep, 1e-9)
+    stock = block(10e-3, 4e-3, 2e-3)
+    axis = np.array([5e-3, 2e-3, radius - 10e-6])
+    poses = []
+    # Decreasing angle moves the tip along +X, the cutting direction of the tool.
+    for angle in np.linspace(sweep / 2, -sweep / 2, steps + 1):
+        c, s = math.cos(angle), math.sin(angle)
+        rotation = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+        poses.append(pose(rotation, axis + rotation @ np.array([0.0, 0.0, -radius])))
+    return stock, V90, [np.array(poses)], None
+
+
+def scenario_d():
+    pitch, count = 50e-6, 8000
+    side = pitch * count
+    stock = block(side, side, 10e-3)
+    centres = pitch / 2 + pitch * np.arange(count)
+    paths = (grooves_along_y(centres, 25e-6, -1e-3, side + 1e-3)
+             + grooves_along_x(centres, 25e-6, -1e-3, side + 1e-3))
+    starts = 40.0123e-3 + 80e-3 * np.arange(5)
+    roi = [(x, x + 1e-3, y, y + 1e-3) for x in starts for y in starts]
+    return stock, V90, paths, roi
+
+
+SCENARIOS = {"a": scenario_a, "b": scenario_b, "c": scenario_c, "d": scenario_d}
+NAIVE_SWEEPS = {"a": 200, "b": 20}
+
+
+def run_child(name: str, repeat: int, with_naive: bool) -> dict:
+    """Run one scenario here and return its figures."""
+    stock, tool, paths, roi = SCENARIOS[name]()
+    times, cpu = [], []
+    for _ in range(repeat):
+        before = resource.getrusage(resource.RUSAGE_SELF)
+        start = time.perf_counter()
+        part, report = remove(stock, tool, paths, roi=roi)
+        times.append(time.perf_counter() - start)
+        after = resource.getrusage(resource.RUSAGE_SELF)
+        cpu.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
+    figures = {
+        "scenario": name,
+        "median_s": statistics.median(times),
+        "times_s": times,
+        "median_cpu_s": statistics.median(cpu),
+        "sweeps": report.n_sweeps,
+        "sweeps_cut": report.n_sweeps_cut,
+        "cells": report.n_cells,
+        "triangles": part.manifold.num_tri(),
+        "removed_volume_m3": report.removed_volume,
+    }
+    if with_naive and name in NAIVE_SWEEPS:
+        ordered = paths
+        if name == "b":
+            # The crossing direction: its sweeps cut the ridges left by the first direction.
+            first, _ = remove(stock, tool, paths[:500])
+            stock, ordered = first, paths[500:]
+        per_sweep = naive(stock, tool, ordered, NAIVE_SWEEPS[name])
+        figures["naive_s_per_sweep"] = per_sweep
+        figures["naive_extrapolated_s"] = per_sweep * report.n_sweeps
+    figures["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    return figures
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenarios", default="abcd")
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--no-naive", action="store_true")
+    parser.add_argument("--child", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        print(json.dumps(run_child(args.child, args.repeat, not args.no_naive)))
+        return
+    for name in args.scenarios:
+        command = [sys.executable, __file__, "--child", name, "--repeat", str(args.repeat)]
+        if args.no_naive:
+            command.append("--no-naive")
+        out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+        f = json.loads(out.strip().splitlines()[-1])
+        line = (f"({name}) median {f['median_s']:.3f} s (cpu {f['median_cpu_s']:.3f} s) over "
+                f"{len(f['times_s'])} runs; {f['sweeps']} sweeps ({f['sweeps_cut']} cut, "
+                f"{f['cells']} cells) -> {f['triangles']} triangles; "
+                f"peak RSS {f['peak_rss_mb']:.0f} MB")
+        rate = {"a": f["sweeps"] / f["median_s"], "b": f["triangles"] / f["median_s"],
+                "c": f["sweeps"] / f["median_s"], "d": None}[name]
+        unit = {"a": "sweeps/s", "b": "triangles/s", "c": "sub-steps/s", "d": ""}[name]
+        if rate is not None:
+            line += f"; {rate:,.0f} {unit}"
+        if "naive_s_per_sweep" in f:
+            line += (f"; naive {f['naive_s_per_sweep'] * 1e3:.2f} ms/sweep on the first "
+                     f"{NAIVE_SWEEPS[name]} sweeps -> >= {f['naive_extrapolated_s']:.1f} s "
+                     f"whole, ratio >= {f['naive_extrapolated_s'] / f['median_s']:.1f}x")
+        print(line, flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,105 @@
+"""cut(): NC program -> motion -> erroneous poses -> exact part, against analytic geometry."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from machinesim import ErrorModel, ToolSetting
+from machinesim.cli import main
+from machinesim.cutting import cut
+from machinesim.metrology import height_map
+from machinesim.nc import ProgramBuilder, write_program
+
+UM, MM = 1e-6, 1e-3
+
+
+def grooves(n=3, pitch=20 * UM, depth=10 * UM, y0=1 * MM, length=5 * MM):
+    """Grooves along X, entering and leaving outside a 5 mm block, with rapids above it."""
+    b = ProgramBuilder(1)
+    for i in range(n):
+        y = y0 + i * pitch
+        b.rapid(X=-0.5 * MM, Y=y, Z=0.1 * MM).rapid(Z=-depth)
+        b.linear(X=length + 0.5 * MM, feed_mm_per_min=500.0).rapid(Z=0.1 * MM)
+    return b.build()
+
+
+def test_v_grooves_have_the_analytic_section_and_volume():
+    part, report = cut(grooves(), "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    # 90-deg V, depth d: section d^2 (tan 45 = 1), over the 5 mm block, three grooves
+    assert report.removed_volume_m3 == pytest.approx(3 * (10 * UM) ** 2 * 5 * MM, rel=1e-9)
+    assert report.sweeps == 3 and not report.empty_cut and report.rapids_that_cut == ()
+    y = np.linspace(0.99 * MM, 1.01 * MM, 2001)
+    h = height_map(part, np.array([2.5 * MM]), y)[:, 0]
+    # 0.01 nm: the float64 mesh carries the V exactly; heights are plane evaluations
+    expected = np.minimum(-10 * UM + np.abs(y - 1 * MM), 0.0)
+    np.testing.assert_allclose(h, expected, rtol=0, atol=1e-11)
+    # machining time from the feeds: 3 x (6 mm at 500 mm/min) plus rapids at 25 mm/s
+    feed = 3 * 6.0 / 500.0 * 60.0
+    assert report.cutting_time_s == pytest.approx(feed, rel=1e-12)
+
+
+def test_a_tool_setting_error_moves_the_groove_by_exactly_the_offset():
+    dy, dz = 3 * UM, -2 * UM
+    errors = ErrorModel(tool=ToolSetting([0.0, dy, dz], [0.0, 0.0, 0.0]))
+    part, _ = cut(grooves(n=1), "grooving_4axis", tool="v:90", stock="block:5x3x1",
+                  errors=errors)
+    y = np.linspace(0.98 * MM, 1.02 * MM, 4001)
+    h = height_map(part, np.array([2.5 * MM]), y)[:, 0]
+    expected = np.minimum(-10 * UM + dz + np.abs(y - (1 * MM + dy)), 0.0)
+    np.testing.assert_allclose(h, expected, rtol=0, atol=1e-11)
+
+
+def test_a_rotary_move_stays_within_the_chord_tolerance_of_the_true_path():
+    """The planer swings its edge on the 120.5 mm arm while X feeds: the edge follows
+    y = r sin(theta), z = Z + r (1 - cos(theta)); the groove bottom under that path may
+    stand above it by at most the 1 nm chord tolerance, and never below it."""
+    r, z0 = 0.1205, -5 * UM
+    a0, a1 = math.radians(-0.3), math.radians(0.3)
+    x0, x1 = 0.5 * MM, 4.5 * MM
+    program = (ProgramBuilder(1).rapid(X=x0, Y=0.0, Z=0.1 * MM, A=a0).rapid(Z=z0)
+               .linear(X=x1, A=a1, feed_mm_per_min=100.0).rapid(Z=0.1 * MM).build())
+    part, report = cut(program, "planer_4axis", tool="v:90", stock="block:5x3x1@0,-1.5,0")
+    # split into the fewest sub-steps whose sagitta on the arm stays within 1 nm
+    assert report.sweeps >= math.ceil((a1 - a0) / (2 * math.acos(1 - 1e-9 / r)))
+    s = np.linspace(0.02, 0.98, 97)
+    theta = a0 + (a1 - a0) * s
+    x, y = x0 + (x1 - x0) * s, r * np.sin(theta)
+    z = z0 + r * (1 - np.cos(theta))
+    h = np.array([height_map(part, np.array([xi]), np.array([yi]))[0, 0]
+                  for xi, yi in zip(x, y, strict=True)])
+    assert np.all(h - z <= 1e-9 + 1e-12)
+    assert np.all(h - z >= -1e-12)
+
+
+def test_a_rapid_into_the_stock_is_reported_and_an_empty_cut_flagged():
+    b = ProgramBuilder(1).rapid(X=1 * MM, Y=1 * MM, Z=0.1 * MM).rapid(Z=-5 * UM)
+    program = b.linear(X=4 * MM, feed_mm_per_min=100.0).rapid(Z=0.1 * MM).build()
+    _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    assert report.rapids_that_cut == (program.moves[1].line,)
+    miss = ProgramBuilder(1).rapid(X=1 * MM, Y=1 * MM, Z=0.1 * MM).linear(
+        X=4 * MM, feed_mm_per_min=100.0).build()
+    _, report = cut(miss, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    assert report.empty_cut and report.removed_volume_m3 == 0.0
+
+
+def test_the_command_line_cuts_and_writes_part_and_report(tmp_path, capsys):
+    program = tmp_path / "grooves.nc"
+    write_program(grooves(n=2, pitch=40 * UM), program)
+    errors = tmp_path / "errors.toml"
+    ErrorModel(tool=ToolSetting([0.0, 0.0, -1 * UM], [0.0, 0.0, 0.0])).to_toml(errors)
+    out, report = tmp_path / "part.ply", tmp_path / "report.json"
+    code = main(["cut", str(program), "--machine", "grooving_4axis", "--tool", "v:90",
+                 "--stock", "block:5x3x1", "--errors", str(errors), "--out", str(out),
+                 "--report", str(report), "--quiet"])
+    assert code == 0
+    data = json.loads(report.read_text())
+    # depth 11 um with the 1 um setting error: 2 x 11^2 um^2 x 5 mm
+    assert data["removed_volume_mm3"] == pytest.approx(2 * (11e-3) ** 2 * 5, rel=1e-9)
+    assert out.stat().st_size > 0
+    assert main(["cut", str(program), "--machine", "nope", "--tool", "v:90", "--stock",
+                 "block:5x3x1", "--out", str(out)]) == 2
+    assert "unknown machine 'nope'" in capsys.readouterr().err

@@ -1,0 +1,242 @@
+"""Material removal against analytic grooves, pyramids and capsules; reports; determinism."""
+
+import math
+
+import numpy as np
+import pytest
+
+from machinesim.cutting import remove, rotary_substeps
+from machinesim.exceptions import InputError
+from machinesim.tools import BallEndMill, VTool
+from machinesim.workpiece import block
+
+#: Geometry read off the exact float64 mesh: vertices at mm scale carry ~1e-19 m round-off
+#: per operation, so 0.01 nm (1e-11 m) leaves eight orders of margin and still catches any
+#: real geometric error.
+LENGTH_TOL = 1e-11
+#: Volumes of exact meshes agree to float64 summation round-off (~1e-15 relative).
+VOLUME_REL = 1e-12
+
+ALONG_Y = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def pose(position, rotation=None):
+    matrix = np.eye(4)
+    matrix[:3, :3] = np.eye(3) if rotation is None else rotation
+    matrix[:3, 3] = position
+    return matrix
+
+
+def groove_x(y, depth, x0=-1e-3, x1=5e-3, dz=0.0):
+    return np.array([pose((x0, y, -depth + dz)), pose((x1, y, -depth + dz))])
+
+
+def groove_y(x, depth, y0=-1e-3, y1=5e-3):
+    return np.array([pose((x, y0, -depth), ALONG_Y), pose((x, y1, -depth), ALONG_Y)])
+
+
+def v_section(part, x):
+    """Vertices of the part on the plane x (its end face), as (y, z) rows."""
+    vertices, _ = part.mesh()
+    return vertices[np.abs(vertices[:, 0] - x) < LENGTH_TOL][:, 1:]
+
+
+@pytest.mark.parametrize("angle_deg", [90.0, 60.0])
+def test_v_groove_section_is_the_analytic_v(angle_deg):
+    depth, y0, length = 7e-6, 1.234567e-3, 4e-3
+    angle = math.radians(angle_deg)
+    stock = block(length, 3e-3, 1e-3)
+    part, report = remove(stock, VTool(angle), [groove_x(y0, depth)])
+    half = depth * math.tan(angle / 2)
+    for x in (0.0, length):
+        section = v_section(part, x)
+        notch = section[section[:, 1] > -0.5e-3]
+        bottom = notch[np.argmin(notch[:, 1])]
+        assert bottom == pytest.approx([y0, -depth], abs=LENGTH_TOL)
+        top = notch[(notch[:, 1] == 0.0) & (np.abs(notch[:, 0] - y0) < 2 * half)]
+        assert np.sort(top[:, 0]) == pytest.approx([y0 - half, y0 + half], abs=LENGTH_TOL)
+    area = depth * half  # the V: depth d, width 2 d tan(included / 2)
+    assert report.removed_volume == pytest.approx(area * length, rel=VOLUME_REL)
+    assert report.n_sweeps == report.n_sweeps_cut == 1
+    assert not report.empty_cut and report.sideways == ()
+
+
+def test_shifted_poses_shift_the_groove_exactly():
+    rng = np.random.default_rng(0)
+    stock = block(4e-3, 3e-3, 1e-3)
+    tool = VTool(math.pi / 2)
+    base, _ = remove(stock, tool, [groove_x(1.5e-3, 8e-6)])
+    dy, dz = rng.uniform(-0.5e-3, 0.5e-3), rng.uniform(-3e-6, 3e-6)
+    shifted, _ = remove(stock, tool, [groove_x(1.5e-3 + dy, 8e-6, dz=dz)])
+    a = v_section(base, 0.0)
+    b = v_section(shifted, 0.0)
+    a = a[a[:, 1] > -0.5e-3]
+    b = b[b[:, 1] > -0.5e-3]
+    bottom_a, bottom_b = a[np.argmin(a[:, 1])], b[np.argmin(b[:, 1])]
+    assert bottom_b - bottom_a == pytest.approx([dy, dz], abs=LENGTH_TOL)
+
+
+def test_crossing_grooves_leave_pyramids_of_the_analytic_height():
+    # Pitch p, 90-deg tool, depth D >= p/2: neighbouring flanks (45 deg) meet halfway between
+    # grooves, p/2 above the groove bottom, so the apexes sit at z = p/2 - D and the
+    # pyramids (base p x p, height p/2, volume p^3 / 6) stand on the plane z = -D.
+    pitch, n, depth, height = 40e-6, 8, 26e-6, 0.2e-3
+    side = n * pitch
+    stock = block(side, side, height)
+    centres = pitch / 2 + pitch * np.arange(n)
+    ends = dict(x0=-0.1e-3, x1=side + 0.1e-3)
+    paths = [groove_x(c, depth, **ends) for c in centres]
+    paths += [groove_y(c, depth, y0=ends["x0"], y1=ends["x1"]) for c in centres]
+    part, report = remove(stock, VTool(math.pi / 2), paths)
+    apex = pitch / 2 - depth
+    assert part.bounds[1, 2] == pytest.approx(apex, abs=LENGTH_TOL)
+    vertices, _ = part.mesh()
+    tops = vertices[np.abs(vertices[:, 2] - apex) < LENGTH_TOL]
+    grid = pitch * np.arange(1, n)
+    interior = tops[(tops[:, 0] > pitch / 2) & (tops[:, 0] < side - pitch / 2)
+                    & (tops[:, 1] > pitch / 2) & (tops[:, 1] < side - pitch / 2)]
+    assert len(interior) == (n - 1) ** 2
+    assert np.sort(np.unique(np.round(interior[:, 0] / pitch))) == pytest.approx(grid / pitch)
+    expected = side * side * (height - depth) + n * n * pitch**3 / 6
+    assert part.volume == pytest.approx(expected, rel=VOLUME_REL)
+    assert report.n_sweeps_cut == 2 * n
+
+
+def test_tiling_does_not_change_the_solid():
+    pitch, n, depth = 40e-6, 16, 25e-6
+    side = n * pitch
+    stock = block(side, side, 0.1e-3)
+    centres = pitch / 2 + pitch * np.arange(n)
+    paths = [groove_x(c, depth, x0=-0.1e-3, x1=side + 0.1e-3) for c in centres]
+    paths += [groove_y(c, depth, y0=-0.1e-3, y1=side + 0.1e-3) for c in centres]
+    whole, _ = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=10**9)
+    tiled, report = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=4)
+    assert report.n_cells > 1
+    assert tiled.volume == pytest.approx(whole.volume, rel=VOLUME_REL)
+    assert np.array_equal(tiled.bounds, whole.bounds)
+
+
+def test_ball_sweep_removes_the_capsule_within_the_tessellation_bound():
+    # The sphere polygon has its vertices on the sphere and facets at most tol inside, so it
+    # lies between balls of radius R - tol and R; the hull of two copies lies between the
+    # capsules of those radii: V(R - tol) <= removed <= V(R), a bound of about
+    # (2 pi R l + 4 pi R^2) tol.
+    radius, tol, travel = 1e-3, 2e-6, 3e-3
+    tool = BallEndMill(radius, chord_tol=tol)
+    stock = block(10e-3, 10e-3, 10e-3)
+    path = np.array([pose((3e-3, 5e-3, -5e-3)), pose((3e-3 + travel, 5e-3, -5e-3))])
+    _, report = remove(stock, tool, [path])
+
+    def capsule(r):
+        return math.pi * r * r * travel + 4.0 / 3.0 * math.pi * r**3
+
+    assert capsule(radius - tol) * (1 - 1e-12) <= report.removed_volume
+    assert report.removed_volume <= capsule(radius) * (1 + 1e-12)
+    assert report.sideways == ()  # a rotating tool is never dragged sideways
+
+
+def test_reports_flag_empty_sideways_and_degenerate_sweeps():
+    stock = block(4e-3, 3e-3, 1e-3)
+    tool = VTool(math.pi / 2)
+    _, above = remove(stock, tool, [groove_x(1.5e-3, -5e-6)])
+    assert above.empty_cut and above.removed_volume == 0.0 and above.n_sweeps_cut == 0
+    drag = np.array([pose((1e-3, 1e-3, -5e-6)), pose((2e-3, 1.01e-3, -5e-6))])
+    plunge = np.array([pose((1e-3, 1e-3, 1e-6)), pose((1e-3, 1e-3, -5e-6))])
+    _, report = remove(stock, tool, [groove_x(0.5e-3, 5e-6), drag, plunge])
+    assert report.sideways == (1,)
+    assert report.n_degenerate == 1  # the plunge moves the profile within its own plane
+    assert report.n_sweeps == 3 and not report.empty_cut
+
+
+def test_roi_cuts_only_the_windows():
+    depth = 6e-6
+    stock = block(4e-3, 4e-3, 1e-3)
+    paths = [groove_x(y, depth) for y in (0.5e-3, 1.5e-3, 2.5e-3, 3.5e-3)]
+    windows = [(1e-3, 2e-3, 1e-3, 2e-3), (3e-3, 3.5e-3, 3e-3, 4e-3)]
+    part, report = remove(stock, VTool(math.pi / 2), paths, roi=windows)
+    assert report.n_sweeps_cut == 2
+    window_volume = (1e-3 * 1e-3 + 0.5e-3 * 1e-3) * 1e-3
+    removed = depth * depth * (1e-3 + 0.5e-3)
+    assert part.volume == pytest.approx(window_volume - removed, rel=VOLUME_REL)
+    assert report.removed_volume == pytest.approx(removed, rel=1e-9)
+    np.testing.assert_allclose(part.bounds, [[1e-3, 1e-3, -1e-3], [3.5e-3, 4e-3, 0.0]],
+                               atol=LENGTH_TOL)
+
+
+def test_rotary_sub_steps_keep_the_chord_error():
+    radius, angle, tol = 0.1, math.radians(20.0), 1e-9
+    n = rotary_substeps(radius, angle, tol)
+    assert radius * (1 - math.cos(angle / n / 2)) <= tol
+    assert radius * (1 - math.cos(angle / (n - 1) / 2)) > tol
+
+
+def test_rotating_sweep_cuts_the_arc_groove():
+    # A fly-cut: the tool on an arm of radius r swings about the Y axis and dips d into the
+    # top face, leaving an arc groove whose deepest point is at -d and whose length on the
+    # top face is the chord 2 sqrt(2 r d - d^2).
+    radius, depth = 5e-3, 10e-6
+    stock = block(4e-3, 2e-3, 1e-3)
+    axis = np.array([2e-3, 1e-3, radius - depth])
+    angles = np.linspace(0.1, -0.1, rotary_substeps(radius, 0.2, 1e-9) + 1)
+    poses = []
+    for a in angles:
+        rotation = np.array([[math.cos(a), 0, math.sin(a)], [0, 1, 0],
+                             [-math.sin(a), 0, math.cos(a)]])
+        poses.append(pose(axis + rotation @ [0.0, 0.0, -radius], rotation))
+    part, report = remove(stock, VTool(math.pi / 2), [np.array(poses)])
+    assert part.bounds[0, 2] == -1e-3
+    vertices, _ = part.mesh()
+    assert vertices[:, 2][vertices[:, 2] > -0.5e-3].min() == pytest.approx(-depth, abs=1e-9)
+    on_top = vertices[(vertices[:, 2] == 0.0) & (np.abs(vertices[:, 1] - 1e-3) < 1e-12)]
+    chord = 2 * math.sqrt(2 * radius * depth - depth**2)
+    # The sub-step chords lie above the arc by at most 1 nm; where the path meets the top
+    # face at slope s that shortens each end by at most 1 nm / s.
+    slope = math.sqrt(2 * radius * depth - depth**2) / (radius - depth)
+    assert 0.0 <= chord - np.ptp(on_top[:, 0]) <= 2 * 1e-9 / slope
+    assert report.sideways == ()
+
+
+def test_same_inputs_give_the_same_bytes():
+    rng = np.random.default_rng(0)
+    stock = block(1e-3, 1e-3, 0.2e-3)
+    paths = [groove_x(y, 10e-6, x0=-0.1e-3, x1=1.1e-3) for y in rng.uniform(0, 1e-3, 12)]
+    paths += [groove_y(x, 10e-6, y0=-0.1e-3, y1=1.1e-3) for x in rng.uniform(0, 1e-3, 12)]
+    first, _ = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=8)
+    second, _ = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=8)
+    (v1, t1), (v2, t2) = first.mesh(), second.mesh()
+    assert v1.tobytes() == v2.tobytes() and t1.tobytes() == t2.tobytes()
+
+
+def test_progress_reaches_its_total():
+    calls = []
+    stock = block(2e-3, 2e-3, 0.2e-3)
+    paths = [groove_x(y, 5e-6) for y in (0.5e-3, 1.5e-3)]
+    remove(stock, VTool(math.pi / 2), paths, progress=lambda done, total: calls.append((done,
+                                                                                          total)))
+    assert calls[0][0] == 0 and calls[-1][0] == calls[-1][1] == 2
+    assert all(a[0] <= b[0] for a, b in zip(calls, calls[1:], strict=False))
+
+
+@pytest.mark.parametrize(
+    ("paths", "roi", "message"),
+    [
+        ([np.eye(4)], None, r"path 0: expected poses of shape \(N, 4, 4\)"),
+        ([np.stack([np.eye(4), 2 * np.eye(4)])], None, "path 0: pose 1 is not a rigid"),
+        ([np.stack([np.eye(4), np.full((4, 4), np.nan)])], None, "pose 1 is not a rigid"),
+        ([np.stack([np.eye(4)] * 2)], [(0, 1, 0)], r"roi: expected windows"),
+        ([np.stack([np.eye(4)] * 2)], [(1, 0, 0, 1)], "xmin < xmax"),
+    ],
+)
+def test_bad_inputs_raise_input_error(paths, roi, message):
+    with pytest.raises(InputError, match=message):
+        remove(block(1e-3, 1e-3, 1e-3), VTool(math.pi / 2), paths, roi=roi)
+
+
+def test_overlapping_windows_count_their_common_part_once():
+    depth = 6e-6
+    stock = block(4e-3, 4e-3, 1e-3)
+    windows = [(1e-3, 2e-3, 1e-3, 2e-3), (1.5e-3, 2.5e-3, 1e-3, 2e-3)]
+    part, report = remove(stock, VTool(math.pi / 2), [groove_x(1.5e-3, depth)], roi=windows)
+    removed = depth * depth * 1.5e-3
+    assert part.volume == pytest.approx(1.5e-3 * 1e-3 * 1e-3 - removed, rel=VOLUME_REL)
+    assert report.removed_volume == pytest.approx(removed, rel=1e-9)

@@ -1,0 +1,164 @@
+"""Stock shapes against their analytic volumes and bounds, specs, mesh round trips, exports."""
+
+import math
+import os
+
+import numpy as np
+import pytest
+
+from machinesim.exceptions import InputError
+from machinesim.workpiece import (
+    Part,
+    block,
+    block_with_spheres,
+    cylinder,
+    diamond_crown,
+    stock_from_spec,
+)
+
+#: Volumes of shapes with a few hundred float64 vertices at mm scale agree to ~1e-15 relative;
+#: 1e-12 leaves room for the summation order of manifold3d's volume.
+VOLUME_REL = 1e-12
+
+
+def test_block_spec_occupies_the_stated_box():
+    part = stock_from_spec("block:10x20x2")
+    np.testing.assert_array_equal(part.bounds, [[0, 0, -2e-3], [10e-3, 20e-3, 0]])
+    assert part.volume == pytest.approx(10e-3 * 20e-3 * 2e-3, rel=VOLUME_REL)
+
+
+def test_placement_translates_the_stock():
+    part = stock_from_spec("block:10x10x2@-5,-5,0.5")
+    np.testing.assert_allclose(part.bounds, [[-5e-3, -5e-3, -1.5e-3], [5e-3, 5e-3, 0.5e-3]],
+                               atol=1e-18)
+
+
+def test_cylinder_is_the_inscribed_polygon_prism():
+    part = stock_from_spec("cylinder:5x2")
+    vertices, _ = part.mesh()
+    radius, height = 5e-3, 2e-3
+    np.testing.assert_allclose(np.hypot(vertices[:, 0], vertices[:, 1]), radius, rtol=1e-14)
+    n = len(vertices) // 2
+    # Inscribed n-gon: area n/2 r^2 sin(2 pi / n); its sagitta is within 1 nm of the circle.
+    assert part.volume == pytest.approx(0.5 * n * radius**2 * math.sin(2 * math.pi / n)
+                                        * height, rel=VOLUME_REL)
+    assert radius * (1 - math.cos(math.pi / n)) <= 1e-9
+    assert part.bounds[1, 2] == 0.0 and part.bounds[0, 2] == -height
+
+
+def test_reference_spheres_add_three_hemispheres():
+    radius = 1e-3
+    part = block_with_spheres(10e-3, 10e-3, 2e-3, radius, chord_tol=1e-6)
+    dimpled = block_with_spheres(10e-3, 10e-3, 2e-3, radius, chord_tol=1e-6, dimples=True)
+    hemispheres = 3 * 2.0 / 3.0 * math.pi * radius**3
+    base = 10e-3 * 10e-3 * 2e-3
+    # The polygon lies between spheres of radius R - tol and R (vertices on the sphere).
+    low = 3 * 2.0 / 3.0 * math.pi * (radius - 1e-6) ** 3
+    assert low <= part.volume - base <= hemispheres
+    assert low <= base - dimpled.volume <= hemispheres
+    assert part.bounds[1, 2] == pytest.approx(radius, abs=1e-18)
+    # Default centres: S1 -> S2 along +X and S1 -> S3 along +Y, 2 R in from the edges.
+    vertices, _ = part.mesh()
+    top = vertices[vertices[:, 2] > radius * (1 - 1e-12)]
+    np.testing.assert_allclose(np.sort(top[:, 0]), [2e-3, 2e-3, 8e-3], atol=1e-15)
+
+
+def test_crown_volume_matches_the_frustum_formula():
+    across, height, base_size, base_height, slope = 4e-3, 0.2e-3, 10e-3, 3e-3, math.atan(0.2)
+
+    def octagon(apothem):
+        return 8 * apothem**2 * math.tan(math.pi / 8)
+
+    for oversize in (0.0, 10e-6):
+        part = diamond_crown(oversize)
+        # Sides moved out by the oversize along their normals, top raised by it: at the new
+        # top the apothem grows by oversize * (1 - cos(slope)) / sin(slope).
+        a_top = across / 2 + oversize * math.tan(slope / 2)
+        a_bottom = a_top + height / math.tan(slope)
+        top, bottom = octagon(a_top), octagon(a_bottom)
+        frustum = height / 3 * (top + bottom + math.sqrt(top * bottom))
+        expected = base_size**2 * (base_height + oversize) + frustum
+        assert part.volume == pytest.approx(expected, rel=VOLUME_REL)
+        assert part.bounds[1, 2] == pytest.approx(oversize, abs=1e-18)
+    assert stock_from_spec("crown").volume == pytest.approx(diamond_crown().volume, rel=1e-15)
+
+
+def test_from_mesh_round_trip_is_exact():
+    rng = np.random.default_rng(0)
+    part = block(1e-3, 2e-3, 3e-3, origin=rng.normal(size=3) * 1e-3)
+    vertices, triangles = part.mesh()
+    again = Part.from_mesh(vertices, triangles)
+    v2, t2 = again.mesh()
+    np.testing.assert_array_equal(v2, vertices)
+    np.testing.assert_array_equal(t2, triangles)
+
+
+def test_from_mesh_rejects_an_open_mesh():
+    vertices, triangles = block(1e-3, 1e-3, 1e-3).mesh()
+    with pytest.raises(InputError, match="not a closed oriented 2-manifold"):
+        Part.from_mesh(vertices, triangles[:-1])
+    with pytest.raises(InputError, match=r"shape \(n, 3\)"):
+        Part.from_mesh(vertices[:, :2], triangles)
+
+
+def _read_ply(path):
+    """Independent binary PLY reader for the layout written by export_ply."""
+    data = open(path, "rb").read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode("ascii").splitlines()
+    nv = int(next(line for line in header if line.startswith("element vertex")).split()[-1])
+    nf = int(next(line for line in header if line.startswith("element face")).split()[-1])
+    assert "property double x" in header
+    vertices = np.frombuffer(data, dtype="<f8", count=3 * nv, offset=end).reshape(nv, 3)
+    faces = np.frombuffer(data, dtype=[("n", "u1"), ("i", "<i4", 3)], count=nf,
+                          offset=end + 24 * nv)
+    assert np.all(faces["n"] == 3)
+    return vertices, faces["i"].astype(np.int64)
+
+
+def test_ply_round_trip_is_bit_exact(tmp_path):
+    rng = np.random.default_rng(0)
+    # Irrational coordinates: every mantissa bit matters.
+    part = Part(stock_from_spec("cylinder:1x1").manifold.translate(tuple(rng.normal(size=3))))
+    path = tmp_path / "part.ply"
+    part.export_ply(path)
+    vertices, triangles = _read_ply(path)
+    expected_v, expected_t = part.mesh()
+    assert vertices.tobytes() == expected_v.tobytes()
+    np.testing.assert_array_equal(triangles, expected_t)
+    assert [p.name for p in tmp_path.iterdir()] == ["part.ply"]  # no temp file left
+
+
+def test_stl_and_glb_exports_are_readable(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    part = stock_from_spec("block:1x2x3")
+    part.export_stl(tmp_path / "part.stl")
+    part.export_glb(tmp_path / "part.glb")
+    stl = trimesh.load(tmp_path / "part.stl")
+    assert len(stl.faces) == 12
+    assert stl.volume == pytest.approx(6e-9, rel=1e-6)  # float32 coordinates
+    assert os.path.getsize(tmp_path / "part.stl") == 84 + 50 * 12
+    glb = trimesh.load(tmp_path / "part.glb", force="mesh")
+    assert glb.volume == pytest.approx(6e-9, rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ("block:10x10", "'block:10x10'.*expected 3 numbers"),
+        ("block:10x10x-2", "'block:10x10x-2'.*height must be positive"),
+        ("cylinder:5", "'cylinder:5'.*expected 2 numbers"),
+        ("block:10x10x2@1,2", "expected 3 numbers separated by ','"),
+        ("sphere:1", "'sphere:1'.*expected 'block:LxWxH'"),
+        ("spheres:10x10x2:3", "radius must be positive and below"),
+        ("spheres:10x10x2:1:bumps", "expected 'dimples'"),
+    ],
+)
+def test_bad_stock_specs_raise_input_error(spec, message):
+    with pytest.raises(InputError, match=message):
+        stock_from_spec(spec)
+
+
+def test_cylinder_radius_error():
+    with pytest.raises(InputError, match="radius must be positive"):
+        cylinder(0.0, 1e-3)
