@@ -1,0 +1,105 @@
+"""What every virtual instrument shares: a reading with a resolution and a seeded noise model.
+
+An instrument turns an exact value (a height, a skip position, a displacement) into what it
+would display: the exact value, plus Gaussian noise, rounded to the instrument's resolution,
+in that order (the noise is physical, the rounding is the display). NaN stays NaN.
+
+The instruments themselves live beside this module: `TouchProbe` (``probe_instrument``),
+`Microscope` and `WhiteLightInterferometer` (``optical``), `LaserInterferometer`
+(``interferometer``); all are exported by `machinesim.metrology`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+
+__all__ = ["Readout", "as_generator"]
+
+
+@dataclass(frozen=True)
+class Readout:
+    """Noise and quantisation of one kind of reading.
+
+    Attributes
+    ----------
+    sigma : float
+        Standard deviation of the Gaussian noise added to each reading, in the reading's
+        unit (m for every instrument here); 0 adds none.
+    resolution : float
+        Quantisation step of the displayed reading (same unit); 0 leaves it unrounded.
+
+    Notes
+    -----
+    With ``sigma`` well above ``resolution`` the displayed reading is unbiased and its
+    standard deviation is ``sqrt(sigma**2 + resolution**2 / 12)`` (Sheppard's correction for
+    rounding); `std` returns that value.
+    """
+
+    sigma: float
+    resolution: float
+
+    def __post_init__(self) -> None:
+        for name in ("sigma", "resolution"):
+            value = getattr(self, name)
+            try:
+                number = float(value)
+            except (TypeError, ValueError) as error:
+                raise InputError(f"Expected {name} as a number (m), got {value!r}",
+                                 key=name) from error
+            if not math.isfinite(number) or number < 0.0:
+                raise InputError(f"Expected {name} >= 0 (m), got {number}", key=name)
+            object.__setattr__(self, name, number)
+
+    @classmethod
+    def of(cls, sigma: float, resolution: float, noise: bool) -> Readout:
+        """The readout of an instrument built with ``noise=False`` (sigma ignored) or True."""
+        return cls(sigma if noise else 0.0, resolution)
+
+    @property
+    def std(self) -> float:
+        """Standard deviation of the displayed reading, noise and rounding together (m)."""
+        return math.sqrt(self.sigma**2 + self.resolution**2 / 12.0)
+
+    def read(self, exact, rng: np.random.Generator) -> np.ndarray:
+        """Display exact values: add the noise, then round to the resolution.
+
+        Parameters
+        ----------
+        exact : array-like, any shape
+            Exact values (m); NaN where there is nothing to read.
+        rng : numpy.random.Generator
+            Source of the noise; not drawn from when ``sigma`` is 0.
+
+        Returns
+        -------
+        ndarray, the shape of ``exact``, float64
+            Displayed values; NaN where ``exact`` is NaN.
+        """
+        values = np.array(exact, dtype=np.float64)
+        if self.sigma > 0.0:
+            values += self.sigma * rng.standard_normal(values.shape)
+        if self.resolution > 0.0:
+            values = np.round(values / self.resolution) * self.resolution
+        return values
+
+
+def as_generator(rng) -> np.random.Generator:
+    """The noise source of an instrument.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator or int or None
+        A generator (used as is, so several instruments may share one), a seed, or None for
+        fresh entropy (readings then differ from run to run, as a real instrument's do).
+    """
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if rng is None or (isinstance(rng, int | np.integer) and not isinstance(rng, bool)):
+        return np.random.default_rng(rng)
+    raise InputError(f"Expected rng as a numpy Generator, an int seed or None, got {rng!r}",
+                     key="rng")

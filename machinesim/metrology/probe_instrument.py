@@ -1,0 +1,345 @@
+"""On-machine touch probe (paper 002): a ruby ball moved by the machine's own axes.
+
+The probe of paper 002 (FANUC NANO CHECKER) stands on the B table of the ROBOnano
+alpha-0iB beside the tool and moves through the same, erroneous, kinematics; the NC system
+records the axis values. So the probe here is commanded in axis values and returns axis
+values: where the ball centre is comes from the machine (`Machine.frame_pose` of
+``probe_tip`` with the injected errors), where it touches from the part's exact mesh
+(`machinesim.metrology.touch_many`). The errors themselves are never read.
+
+The path of the ball. A move q(t) = q_start + t u in axis space carries the ball centre along
+c(t) in the workpiece frame. Errors that do not depend on the axis positions (location and
+setting errors) turn and shift the linear axes' directions but keep each a translation, so
+c(t) is then an exact straight line traversed at constant speed. Position-dependent
+(component) errors and rotary axes bend it. So c(t) is sampled and replaced by a polyline,
+split until every sampled point lies within `CHORD_M` of its chord (checked against the
+constant-speed interpolation, so the travel maps back to t linearly); the ball is swept
+along the pieces in order and the first contact wins. A straight path stays one piece.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.exceptions import AxisLimitError, InputError
+from machinesim.metrology._mesh import as_positive
+from machinesim.metrology.instruments import Readout, as_generator
+from machinesim.metrology.meshindex import MeshIndex
+from machinesim.metrology.probe import touch_many
+
+__all__ = ["ScanReading", "TouchProbe"]
+
+#: A path piece is straight enough when every sampled centre lies within this distance of its
+#: constant-speed chord, m: 100x below the probe's 1 nm resolution, 10^4x above the ~1e-15 m
+#: round-off of centres computed through a ~0.5 m kinematic chain.
+CHORD_M = 1e-11
+#: Interior points tested on each piece: a smooth path's largest departure from a chord is
+#: near its middle, and a kink anywhere inside a piece moves every interior point.
+CHORD_SAMPLES = 7
+#: Halvings of a piece before it is accepted whatever its departure: 2^-40 of the travel is
+#: below float64 resolution of t on any travel, so a deeper split could not change anything.
+MAX_SPLITS = 40
+
+
+@dataclass(frozen=True, eq=False)
+class ScanReading:
+    """Displacement scan: machine axis values and the probe's deflection at each point.
+
+    Attributes
+    ----------
+    q : ndarray, shape (N, n_axes), float64, read-only
+        Axis values of the path points, m and rad, rounded as the controller records them.
+    deflection : ndarray, shape (N,), float64, read-only
+        How far the surface pushed the ball back along +Z (axis space) from its free
+        position at ``q``, m, with noise and rounded to the probe's resolution; NaN where the
+        ball hung free (the surface below its free position).
+    contact_q : ndarray, shape (N, n_axes), float64, read-only
+        ``q`` with ``deflection`` added to Z: the axis values at which the free ball would
+        touch the surface (NaN rows where it hung free). `TouchProbe.nominal_centres` turns
+        them into measured points.
+    """
+
+    q: np.ndarray
+    deflection: np.ndarray
+    contact_q: np.ndarray
+
+
+class TouchProbe:
+    """A touch probe on a machine, touching one part.
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine carrying the probe; it must have the frame ``frame``.
+    errors : ErrorModel or None
+        The machine's injected errors: they move the ball as they move the tool. Only the
+        machine's kinematics reads them.
+    part : Part or MeshIndex or tuple of (array-like, array-like)
+        The part on the machine, in its workpiece frame (m). Indexed once, here.
+    radius : float
+        Ball radius, m. Default 0.25 mm (paper 002's R0.25 ruby ball).
+    sigma : float
+        Standard deviation of the trigger (and deflection) noise, m, along the direction of
+        motion of the ball. Default 20 nm: paper 002 gives the probe's 1 nm resolution but no
+        repeatability; 20 nm is the order of low-force on-machine contact probes of this
+        class, and keeps the probe well inside the paper's error budget (workpiece position
+        found to 1-2 um, limited by sphere form error; groove depths equal to ~100 nm).
+    resolution : float
+        Rounding of the recorded linear axis values and deflections, m. Default 1 nm (paper
+        002). Rotary axis values are rounded to the machine's own axis resolution.
+    noise : bool
+        False turns the noise off exactly (``sigma`` ignored); rounding stays (resolution 0
+        turns it off).
+    rng : numpy.random.Generator or int or None
+        Noise source, or its seed.
+    frame : str
+        The machine frame at the ball centre. Default ``"probe_tip"``.
+    """
+
+    def __init__(self, machine, errors, part, radius: float = 0.25e-3, sigma: float = 20e-9,
+                 resolution: float = 1e-9, *, noise: bool = True, rng=None,
+                 frame: str = "probe_tip") -> None:
+        if frame not in machine.frames:
+            raise InputError(f"Expected a machine with a {frame!r} frame to carry the probe, "
+                             f"got {machine.name} with {', '.join(machine.frames)}", key="frame")
+        machine.check_errors(errors)
+        self.machine = machine
+        self.errors = errors
+        self.frame = frame
+        self.index = MeshIndex.from_surface(part)
+        self.radius = as_positive(radius, "radius")
+        self.readout = Readout.of(sigma, resolution, noise)
+        self.rng = as_generator(rng)
+        # The controller records linear axes at the probe's resolution, rotary ones at theirs.
+        self._axis_rounding = [Readout(0.0, float(r) if rotary else self.readout.resolution)
+                               for r, rotary in zip(machine.resolution, machine.rotary,
+                                                    strict=True)]
+
+    def __repr__(self) -> str:
+        return (f"TouchProbe({self.machine.name}, frame={self.frame!r}, radius={self.radius:g} "
+                f"m, sigma={self.readout.sigma:g} m, resolution={self.readout.resolution:g} m)")
+
+    # ------------------------------------------------------------------------------ reading
+
+    def touch(self, q_start, direction, max_travel: float) -> np.ndarray | None:
+        """Move the axes from ``q_start`` along ``direction`` until the ball touches the part.
+
+        Parameters
+        ----------
+        q_start : array-like, shape (n_axes,)
+            Axis values at the start, m and rad (`Machine.axes` order). The ball must start
+            clear of the part: one that overlaps it is refused; one wholly inside it is not
+            detected (it may then report a contact from inside).
+        direction : str or array-like, shape (n_axes,)
+            Direction of the move in axis space: ``"-Z"``, ``"+X"`` ..., or a vector
+            (normalised here). Travel t then moves the axes by t times the unit vector:
+            metres for a move of linear axes.
+        max_travel : float
+            Longest travel to search, > 0 (m for a move of linear axes).
+
+        Returns
+        -------
+        ndarray, shape (n_axes,), read-only, or None
+            The axis values at contact as the controller records them (the skip position):
+            with the trigger noise along the move and rounded to the resolution. None when the
+            ball touches nothing within ``max_travel``.
+
+        Raises
+        ------
+        InputError
+            For bad arguments or a ball that overlaps the part at ``q_start``.
+        AxisLimitError
+            When the start or the contact lies outside an axis travel.
+        """
+        q_start = self._q(q_start, "q_start")[None]
+        u = self._direction(direction)
+        travel = as_positive(max_travel, "max_travel")
+        t, speed = self._sweep(q_start, u, travel, "q_start")
+        if np.isnan(t[0]):
+            return None
+        if self.readout.sigma > 0.0:
+            t = t + self.readout.sigma * self.rng.standard_normal(1) / speed
+        contact = q_start + t[:, None] * u
+        self._check_limits(contact, "the contact")
+        return self._record(contact)[0]
+
+    def scan(self, q_path, stroke: float = 0.5e-3) -> ScanReading:
+        """Displacement scanning along a path (paper 002 Fig. 4b).
+
+        Modelled as one touch along -Z (axis space) per path point: the ball comes down from
+        above the part until it touches; its deflection is how far above the point's Z that
+        contact is. A real scan follows the surface continuously with the stylus pressed in;
+        sampled at the same points it records the same deflections (the probe's dynamics and
+        contact force are not modelled).
+
+        Parameters
+        ----------
+        q_path : array-like, shape (N, n_axes)
+            Axis values of the path points, m and rad; Z is where the free (undeflected) ball
+            would be, below the surface so that the stylus is pressed in.
+        stroke : float
+            Measuring range of the stylus deflection, m, > 0. Default 0.5 mm.
+
+        Returns
+        -------
+        ScanReading
+            NaN deflection where the surface lies below the free ball.
+
+        Raises
+        ------
+        InputError
+            For a bad path, or points where the surface stands more than ``stroke`` above
+            the free ball (over-travel of the stylus).
+        """
+        q = self._q(q_path, "q_path", batch=True)
+        stroke = as_positive(stroke, "stroke")
+        u = self._direction("-Z")
+        # Start every ball above the whole part (2 radii of clearance against the errors'
+        # small departure of the ball's height from Z), so that it meets the surface as a
+        # stylus coming down from above does, whatever the path's Z.
+        top = self.index.vertices[:, 2].max()
+        lift = max(stroke, top - self._centres(q)[:, 2].min() + 2.0 * self.radius)
+        t, _ = self._sweep(q - lift * u, u, lift, "q_path")
+        exact = lift - t
+        over = np.flatnonzero(exact > stroke)
+        if over.size:
+            raise InputError(f"Expected the surface within the stylus stroke ({stroke} m) above "
+                             f"the path, got it {exact[over].max()} m above at points "
+                             f"{over.tolist()[:10]} (over-travel)", key="q_path")
+        deflection = self.readout.read(exact, self.rng)
+        recorded = self._record(q)
+        contact = recorded - deflection[:, None] * u
+        contact[np.isnan(deflection)] = np.nan
+        for array in (deflection, contact):
+            array.setflags(write=False)
+        return ScanReading(recorded, deflection, contact)
+
+    def nominal_centres(self, q) -> np.ndarray:
+        """Ball centres the nominal machine puts at recorded axis values (what a lab computes).
+
+        Parameters
+        ----------
+        q : array-like, shape (n_axes,) or (N, n_axes)
+            Recorded axis values, m and rad.
+
+        Returns
+        -------
+        ndarray, shape (3,) or (N, 3)
+            Ball centre in the workpiece frame of the error-free machine, m.
+        """
+        return self.machine.frame_pose(self.frame, q)[..., :3, 3]
+
+    # ---------------------------------------------------------------------------- internals
+
+    def _q(self, q, name: str, batch: bool = False) -> np.ndarray:
+        n = len(self.machine.axes)
+        try:
+            array = np.array(q, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise InputError(f"Expected {name} as numbers, got {q!r}", key=name) from error
+        shape = (array.ndim == 2 and array.shape[1] == n and len(array) > 0) if batch else (
+            array.shape == (n,))
+        if not shape:
+            want = f"(N, {n})" if batch else f"({n},)"
+            raise InputError(f"Expected {name} with shape {want} (axes "
+                             f"{''.join(self.machine.axes)}), got {array.shape}", key=name)
+        if not np.isfinite(array).all():
+            raise InputError(f"Expected finite {name}, got NaN or infinity", key=name)
+        self._check_limits(array, name)
+        return array
+
+    def _check_limits(self, q: np.ndarray, what: str) -> None:
+        bad = self.machine.limit_violations(q)
+        if bad:
+            raise AxisLimitError(f"{self.machine.name}: {what} needs " + "; ".join(bad))
+
+    def _direction(self, direction) -> np.ndarray:
+        axes = self.machine.axes
+        if isinstance(direction, str):
+            sign, letter = direction[:1], direction[1:]
+            if sign not in "+-" or not sign or letter not in axes:
+                raise InputError(f"Expected a direction like '-Z' or '+X' on axes "
+                                 f"{''.join(axes)}, got {direction!r}", key="direction")
+            u = np.zeros(len(axes))
+            u[axes.index(letter)] = 1.0 if sign == "+" else -1.0
+            return u
+        try:
+            u = np.array(direction, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise InputError(f"Expected direction as a string or numbers, got {direction!r}",
+                             key="direction") from error
+        norm = np.linalg.norm(u) if u.shape == (len(axes),) else np.nan
+        if not (np.isfinite(norm) and norm > 0.0):
+            raise InputError(f"Expected a finite non-zero direction of shape ({len(axes)},), "
+                             f"got {direction!r}", key="direction")
+        return u / norm
+
+    def _centres(self, q: np.ndarray) -> np.ndarray:
+        """Ball centres (..., 3) of the erroneous machine at axis values q (..., n_axes)."""
+        flat = q.reshape(-1, q.shape[-1])
+        poses = self.machine.frame_pose(self.frame, flat, self.errors)
+        return poses[:, :3, 3].reshape(q.shape[:-1] + (3,))
+
+    def _polyline(self, q0: np.ndarray, u: np.ndarray, travel: float) -> np.ndarray:
+        """Knots 0 = t_0 < ... < t_S = travel of pieces along which every path is straight."""
+        fractions = np.arange(CHORD_SAMPLES + 2) / (CHORD_SAMPLES + 1)
+        pending = np.array([[0.0, travel]])
+        knots = [travel]
+        for split in range(MAX_SPLITS + 1):
+            t = pending[:, :1] + fractions * (pending[:, 1:] - pending[:, :1])  # (P, F)
+            c = self._centres(q0[:, None, None, :] + t[None, :, :, None] * u)  # (K, P, F, 3)
+            chord = c[:, :, :1] + fractions[:, None] * (c[:, :, -1:] - c[:, :, :1])
+            departure = np.linalg.norm(c - chord, axis=-1).max(axis=(0, 2))
+            straight = (departure <= CHORD_M) | (split == MAX_SPLITS)
+            knots += pending[straight, 0].tolist()
+            halves = pending[~straight].mean(axis=1)
+            pending = np.concatenate([np.stack([pending[~straight, 0], halves], axis=1),
+                                      np.stack([halves, pending[~straight, 1]], axis=1)])
+            if pending.size == 0:
+                break
+        return np.unique(knots)
+
+    def _sweep(self, q0: np.ndarray, u: np.ndarray, travel: float, name: str):
+        """First contact of each ball moved from axis values q0 (K, n) along u up to travel.
+
+        Returns
+        -------
+        t : ndarray, shape (K,)
+            Travel at contact (axis-space units); NaN where nothing is touched.
+        speed : ndarray, shape (K,)
+            Ball speed along its path at contact, m per unit of t; NaN where no contact.
+        """
+        knots = self._polyline(q0, u, travel)
+        centres = self._centres(q0[:, None, :] + knots[None, :, None] * u)  # (K, S + 1, 3)
+        k = len(q0)
+        t = np.full(k, np.nan)
+        speed = np.full(k, np.nan)
+        for s in range(len(knots) - 1):
+            step = centres[:, s + 1] - centres[:, s]
+            length = np.linalg.norm(step, axis=1)
+            if not np.isnan(t).any():
+                break
+            active = np.flatnonzero(np.isnan(t) & (length > 0.0))
+            if active.size == 0:
+                continue
+            try:
+                hit = touch_many(self.index, centres[active, s], step[active], self.radius,
+                                 length[active])
+            except InputError as error:
+                raise InputError(f"Expected the probe ball (radius {self.radius} m) to start "
+                                 f"clear of the part; it overlaps it ({error})",
+                                 key=name) from error
+            touched = active[hit.touched]
+            dt = knots[s + 1] - knots[s]
+            speed[touched] = length[touched] / dt
+            t[touched] = knots[s] + hit.travel[hit.touched] / speed[touched]
+        return t, speed
+
+    def _record(self, q: np.ndarray) -> np.ndarray:
+        """Axis values (N, n_axes) rounded as the controller records them, read-only."""
+        out = np.column_stack([r.read(q[:, i], self.rng)
+                               for i, r in enumerate(self._axis_rounding)])
+        out.setflags(write=False)
+        return out

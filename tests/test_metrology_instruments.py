@@ -1,0 +1,304 @@
+"""Virtual instruments against closed forms: probe contacts on a block, a cut groove's depth,
+an injected error table read back, a squareness seen on the diagonal; seeded noise statistics."""
+
+import math
+
+import numpy as np
+import pytest
+
+import machinesim
+from machinesim.cutting import cut
+from machinesim.errors import ComponentError, ErrorModel, ToolSetting, WorkpieceSetting
+from machinesim.exceptions import AxisLimitError, InputError
+from machinesim.metrology import (
+    LaserInterferometer,
+    Microscope,
+    Readout,
+    TouchProbe,
+    WhiteLightInterferometer,
+    squareness_from_diagonal,
+)
+from machinesim.metrology.probe_instrument import CHORD_M
+from machinesim.nc import ProgramBuilder
+from machinesim.workpiece import block
+
+MM, UM, NM = 1e-3, 1e-6, 1e-9
+R = 0.25 * MM
+#: Axis values are rounded to 1 nm; an exact contact on the 1 nm grid reads back to round-off
+#: of ~1e-3 m values (~1e-19 m): 0.1 nm (the brief) is far above that, far below 1 nm.
+EXACT_M = 1e-10
+#: Heights and interferometer readings: float64 round-off of mm-scale (heights) or 0.1 m-scale
+#: (carriage positions) values is ~1e-17 m; 1e-15 m fails on any real error.
+ROUND_OFF_M = 1e-15
+#: Standard normal quantile for "within 4 sigma of the estimator": a seeded test never
+#: flakes, and a wrong model (a sigma off by 10 % at N = 2000) fails it.
+K = 4.0
+N = 2000
+
+
+@pytest.fixture(scope="module")
+def a0ib():
+    return machinesim.load_machine("robonano_a0ib")
+
+
+@pytest.fixture(scope="module")
+def grooving():
+    return machinesim.load_machine("grooving_4axis")
+
+
+@pytest.fixture(scope="module")
+def flat():
+    """5 x 3 x 1 mm block: x in [0, 5] mm, y in [0, 3] mm, top face at z = 0."""
+    return block(5 * MM, 3 * MM, 1 * MM)
+
+
+def above(a0ib, x, y, z_centre):
+    """Axis values that put the nominal ball centre at (x, y, z_centre): the probe_tip sits
+    40 mm along +Y and 1 mm above the tool edge (docs/machines.md)."""
+    q = np.zeros(len(a0ib.axes))
+    q[:3] = x, y - 40 * MM, z_centre - 1 * MM
+    return q
+
+
+def assert_noise_model(readings, truth, readout):
+    """Mean and standard deviation within K standard errors of the model's (Sheppard) std."""
+    readings = np.asarray(readings)
+    n = readings.size
+    std = readout.std
+    assert abs(readings.mean() - truth) <= K * std / math.sqrt(n)
+    assert abs(readings.std(ddof=1) - std) <= K * std / math.sqrt(2 * (n - 1))
+
+
+# ------------------------------------------------------------------------------ touch probe
+
+
+def test_touch_on_a_flat_block_reads_the_exact_axis_values(a0ib, flat):
+    probe = TouchProbe(a0ib, None, flat, noise=False)
+    q = probe.touch(above(a0ib, 2.5 * MM, 1.5 * MM, 1 * MM), "-Z", 2 * MM)
+    # ball centre R above the top face: Z = R - 1 mm (the probe's 1 mm above the edge)
+    np.testing.assert_allclose(q, above(a0ib, 2.5 * MM, 1.5 * MM, R), rtol=0, atol=EXACT_M)
+    side = probe.touch(above(a0ib, -1 * MM, 1.5 * MM, -0.5 * MM), [1.0, 0, 0, 0, 0], 2 * MM)
+    np.testing.assert_allclose(side, above(a0ib, -R, 1.5 * MM, -0.5 * MM), rtol=0, atol=EXACT_M)
+    assert probe.touch(above(a0ib, 2.5 * MM, 1.5 * MM, 1 * MM), "+Z", 2 * MM) is None
+    np.testing.assert_allclose(probe.nominal_centres(q), [2.5 * MM, 1.5 * MM, R], atol=EXACT_M)
+
+
+def test_a_workpiece_offset_moves_the_readings_by_the_offset(a0ib, flat):
+    delta = np.array([3.2, -1.1, -1.7]) * UM
+    # A tool setting error moves the tool, not the probe beside it: it must not show.
+    errors = ErrorModel(tool=ToolSetting([5 * UM, 0.0, 2 * UM], [0.0, 1e-4, 0.0]),
+                        workpiece=WorkpieceSetting(delta))
+    probe = TouchProbe(a0ib, errors, flat, noise=False)
+    top = probe.touch(above(a0ib, 2.5 * MM, 1.5 * MM, 1 * MM), "-Z", 2 * MM)
+    side = probe.touch(above(a0ib, -1 * MM, 1.5 * MM, -0.5 * MM), "+X", 2 * MM)
+    face = probe.touch(above(a0ib, 2.5 * MM, -1 * MM, -0.5 * MM), "+Y", 2 * MM)
+    assert top[2] == pytest.approx(R - 1 * MM + delta[2], abs=EXACT_M)
+    assert side[0] == pytest.approx(-R + delta[0], abs=EXACT_M)
+    assert face[1] == pytest.approx(-R - 40 * MM + delta[1], abs=EXACT_M)
+
+
+def test_a_curved_axis_motion_is_followed_along_its_true_path(a0ib, flat):
+    """EZZ = c1 z + c2 z^2 makes the ball run along Z at a varying rate: the contact solves
+    Z + EZZ(Z) = R - 1 mm (Z on the tool side: the error adds to the tool's motion)."""
+    c1, c2 = 1e-3, 0.5
+    errors = ErrorModel(component={"Z": {"EZZ": ComponentError("poly", None, [0.0, c1, c2])}})
+    probe = TouchProbe(a0ib, errors, flat, noise=False, resolution=0.0)
+    q = probe.touch(above(a0ib, 2.5 * MM, 1.5 * MM, 1 * MM), "-Z", 2 * MM)
+    a, b, c = c2, 1.0 + c1, 1 * MM - R
+    z = (-b + math.sqrt(b * b - 4 * a * c)) / (2 * a)
+    # the path is replaced by chords within CHORD_M; the contact can be off by that much
+    # (over the ~1:1 slope of the Z travel), 2x for a kink anywhere in a piece
+    assert q[2] == pytest.approx(z, abs=2 * CHORD_M)
+    assert abs(q[2] - (R - 1 * MM)) > 1e-7  # the error is really there: ~0.3 um
+
+
+def test_touch_noise_has_the_stated_mean_and_spread(a0ib, flat):
+    probe = TouchProbe(a0ib, None, flat, rng=np.random.default_rng(0))
+    start = above(a0ib, 2.5 * MM, 1.5 * MM, 1 * MM)
+    z = [probe.touch(start, "-Z", 2 * MM)[2] for _ in range(N)]
+    assert_noise_model(z, R - 1 * MM, probe.readout)
+    assert probe.readout.std == pytest.approx(20 * NM, rel=1e-3)  # the stated default
+
+
+def test_scan_deflections_follow_the_surface_and_its_edge(a0ib, flat):
+    """Across the edge at x = 5 mm the ball rests on the edge line: centre height
+    sqrt(R^2 - (x - 5 mm)^2); beyond x = 5 mm + R it hangs free (NaN)."""
+    x = np.array([1.0, 4.9, 5.1, 5.2, 5.3]) * MM
+    free = 0.1 * MM  # free ball centre height: below every resting height, within the stroke
+    path = np.array([above(a0ib, xi, 1.5 * MM, free) for xi in x])
+    scan = TouchProbe(a0ib, None, flat, noise=False, resolution=0.0).scan(path)
+    rest = np.array([R, R, math.sqrt(R**2 - (0.1 * MM) ** 2),
+                     math.sqrt(R**2 - (0.2 * MM) ** 2), np.nan])
+    np.testing.assert_allclose(scan.deflection, rest - free, rtol=0, atol=ROUND_OFF_M)
+    np.testing.assert_allclose(scan.contact_q[:4, 2], rest[:4] - 1 * MM, rtol=0,
+                               atol=ROUND_OFF_M)
+    assert np.isnan(scan.contact_q[4]).all() and not scan.q.flags.writeable
+
+
+def test_scan_noise_has_the_stated_mean_and_spread(a0ib, flat):
+    probe = TouchProbe(a0ib, None, flat, sigma=50 * NM, rng=7)
+    path = np.tile(above(a0ib, 2.5 * MM, 1.5 * MM, R - 1 * UM), (N, 1))
+    assert_noise_model(probe.scan(path).deflection, 1 * UM, probe.readout)
+
+
+def test_probe_refuses_bad_set_ups(a0ib, grooving, flat):
+    with pytest.raises(InputError, match="probe_tip"):
+        TouchProbe(grooving, None, flat)
+    probe = TouchProbe(a0ib, None, flat)
+    with pytest.raises(InputError, match="start clear of the part"):
+        probe.touch(above(a0ib, 2.5 * MM, 1.5 * MM, 0.1 * MM), "-Z", 1 * MM)
+    for z in (-0.3 * MM, -0.6 * MM):  # the top face 0.55 and 0.85 mm above the free ball
+        with pytest.raises(InputError, match=r"over-travel"):
+            probe.scan([above(a0ib, 1 * MM, 1.5 * MM, 1 * MM),
+                        above(a0ib, 2.5 * MM, 1.5 * MM, z)], stroke=0.5 * MM)
+    with pytest.raises(InputError, match="direction like '-Z'"):
+        probe.touch(above(a0ib, 2.5 * MM, 1.5 * MM, 1 * MM), "-A", 1 * MM)
+    with pytest.raises(InputError, match=r"shape \(5,\)"):
+        probe.touch([0.0, 0.0, 0.0], "-Z", 1 * MM)
+    with pytest.raises(AxisLimitError, match="axis X"):
+        probe.touch(above(a0ib, 200 * MM, 1.5 * MM, 1 * MM), "-Z", 1 * MM)
+    with pytest.raises(InputError, match="sigma >= 0"):
+        TouchProbe(a0ib, None, flat, sigma=-1e-9)
+    with pytest.raises(InputError, match="rng"):
+        TouchProbe(a0ib, None, flat, rng="seed")
+
+
+# ------------------------------------------------------------------------ optical profilers
+
+
+@pytest.fixture(scope="module")
+def grooved(grooving):
+    """One 90-degree V groove 3 um deep along X at y = 1 mm (paper 002's microgrooves)."""
+    b = ProgramBuilder(1).rapid(X=-0.5 * MM, Y=1 * MM, Z=0.1 * MM).rapid(Z=-3 * UM)
+    program = b.linear(X=5.5 * MM, feed_mm_per_min=500.0).rapid(Z=0.1 * MM).build()
+    part, _ = cut(program, grooving, tool="v:90", stock="block:5x3x1")
+    return part
+
+
+@pytest.mark.parametrize("instrument", [Microscope, WhiteLightInterferometer])
+def test_optical_instruments_read_the_cut_groove_depth(grooved, instrument):
+    reader = instrument(noise=False)
+    # 0.1 um spacing from y = 0.99 mm puts sample 100 on the groove's apex line y = 1 mm
+    p = reader.profile(grooved, (2.5 * MM, 0.99 * MM), (2.5 * MM, 1.01 * MM), 0.1 * UM)
+    reference = np.concatenate([p.z[:50], p.z[-50:]]).mean()  # flat top either side
+    # 0.01 nm (the brief): the depth is a 1 nm (and 0.1 nm) multiple, so rounding keeps it
+    assert reference - p.z.min() == pytest.approx(3 * UM, abs=1e-11)
+    assert np.argmin(p.z) == 100
+    np.testing.assert_allclose(p.xy[100], [2.5 * MM, 1 * MM], rtol=0, atol=ROUND_OFF_M)
+    hm = reader.height_map(grooved, 2.4 * MM, 2.6 * MM, 0.99 * MM, 1.01 * MM, 0.1 * UM)
+    assert hm.z.shape == (201, 2001) and hm.y[100] == pytest.approx(1 * MM, abs=ROUND_OFF_M)
+    np.testing.assert_allclose(hm.z[100], -3 * UM, rtol=0, atol=1e-11)
+
+
+def test_optical_reading_rounds_to_the_resolution_and_keeps_nan():
+    raised = block(5 * MM, 3 * MM, 1 * MM, origin=(0.0, 0.0, 0.4 * NM))
+    start, end = (4.9 * MM, 1 * MM), (5.1 * MM, 1 * MM)
+    micro = Microscope(noise=False).profile(raised, start, end, 10 * UM)
+    wli = WhiteLightInterferometer(noise=False).profile(raised, start, end, 10 * UM)
+    assert micro.s.size == 21
+    # sample 10 lies on the block's edge to round-off: left out
+    np.testing.assert_array_equal(micro.z[:10], 0.0)  # 0.4 nm rounds to 0 on a 1 nm grid
+    np.testing.assert_allclose(wli.z[:10], 0.4 * NM, rtol=0, atol=ROUND_OFF_M)
+    noisy = Microscope(rng=1).profile(raised, start, end, 10 * UM)
+    for z in (micro.z, wli.z, noisy.z):  # beyond x = 5 mm there is no surface
+        assert np.isnan(z[11:]).all() and np.isfinite(z[:10]).all()
+
+
+@pytest.mark.parametrize("instrument, sigma", [(Microscope, 12 * NM),
+                                               (WhiteLightInterferometer, 0.5 * NM)])
+def test_optical_noise_has_the_stated_mean_and_spread(flat, instrument, sigma):
+    reader = instrument(rng=np.random.default_rng(3))
+    assert reader.readout.sigma == pytest.approx(sigma, rel=1e-12)
+    hm = reader.height_map(flat, 1 * MM, 1 * MM + 49 * UM, 1 * MM, 1 * MM + 39 * UM, 1 * UM)
+    assert hm.z.size == N
+    assert_noise_model(hm.z, 0.0, reader.readout)
+
+
+# ---------------------------------------------------------------------- laser interferometer
+
+TABLE_X = np.linspace(-200, 200, 9) * MM
+TABLE_E = np.array([0, 120, -35, 40, 80, -10, 5, 60, -25]) * NM
+
+
+def test_interferometer_reads_back_an_injected_positioning_table(grooving):
+    errors = ErrorModel(
+        component={"X": {"EXX": ComponentError("table", TABLE_X, TABLE_E)}},
+        # the laser rides on the table: the part's setting on the chuck must not show
+        workpiece=WorkpieceSetting([1 * MM, -2 * MM, 0.0], alpha=0.01, beta=-0.02, gamma=0.03))
+    laser = LaserInterferometer(grooving, errors, noise=False)
+    reading = laser.positioning("X", TABLE_X)
+    # zeroed at the first position, where the table reads 0; the values are 1 nm multiples
+    np.testing.assert_allclose(reading.deviation, TABLE_E, rtol=0, atol=ROUND_OFF_M)
+    between = laser.positioning("X", [-175 * MM, 25 * MM], reference=-200 * MM)
+    np.testing.assert_allclose(between.deviation, [60 * NM, 35 * NM], rtol=0, atol=ROUND_OFF_M)
+    assert not reading.deviation.flags.writeable
+
+
+def test_interferometer_straightness_and_its_reference_lines(grooving):
+    errors = ErrorModel(component={"X": {"EYX": ComponentError("table", TABLE_X, TABLE_E)}})
+    laser = LaserInterferometer(grooving, errors, noise=False, resolution=0.0)
+    raw = laser.straightness("X", TABLE_X, "Y", reference="none").deviation
+    np.testing.assert_allclose(raw, TABLE_E, rtol=0, atol=ROUND_OFF_M)
+    line = np.polyval(np.polyfit(TABLE_X, TABLE_E, 1), TABLE_X)
+    fitted = laser.straightness("X", TABLE_X, "Y").deviation
+    np.testing.assert_allclose(fitted, TABLE_E - line, rtol=0, atol=ROUND_OFF_M)
+    ends = laser.straightness("X", TABLE_X, "Y", reference="end_points").deviation
+    chord = TABLE_E[0] + (TABLE_E[-1] - TABLE_E[0]) * (TABLE_X - TABLE_X[0]) / 0.4
+    np.testing.assert_allclose(ends, TABLE_E - chord, rtol=0, atol=ROUND_OFF_M)
+    flat_z = laser.straightness("X", TABLE_X, "Z", reference="none").deviation
+    np.testing.assert_allclose(flat_z, 0.0, rtol=0, atol=ROUND_OFF_M)
+
+
+@pytest.mark.parametrize("corner, opposite", [((-200 * MM, -150 * MM), (200 * MM, 150 * MM)),
+                                              ((200 * MM, -150 * MM), (-200 * MM, 150 * MM))])
+def test_iso_230_6_diagonal_sees_the_squareness_in_closed_form(grooving, corner, opposite):
+    """EC0Y = e runs Y along (-sin e, cos e): commanding (x, y) from the corner moves the tool
+    (x - y sin e, y cos e); the laser reads its projection on the nominal diagonal."""
+    e = 20e-6
+    laser = LaserInterferometer(grooving, ErrorModel(location={"Y": {"EC0Y": e}}), noise=False,
+                                resolution=0.0)
+    a, b = np.subtract(opposite, corner)
+    d = math.hypot(a, b)
+    s = np.linspace(0.0, d, 11)
+    reading = laser.diagonal(s, corner, opposite)
+    x, y = s * a / d, s * b / d
+    expected = ((x - y * math.sin(e)) * a + y * math.cos(e) * b) / d - s
+    np.testing.assert_allclose(reading.deviation, expected, rtol=0, atol=ROUND_OFF_M)
+    # first order: -a b e / d at the far corner (4.8 um here); second order ~e^2 d ~ 1e-10 m
+    assert reading.deviation[-1] == pytest.approx(-a * b * e / d, abs=1e-9)
+    # paper 003 eq 2 inverted; the projection differs from the length at second order: e^2
+    assert squareness_from_diagonal(d + reading.deviation[-1], a, b) == pytest.approx(
+        e, rel=1e-4)
+
+
+def test_interferometer_noise_has_the_stated_mean_and_spread(grooving):
+    laser = LaserInterferometer(grooving, None, rng=np.random.default_rng(11))
+    # targets off the 1 nm grid: the display's rounding adds its resolution^2 / 12
+    x = np.linspace(-100 * MM, 100 * MM, N) + 0.3 * NM
+    reading = laser.positioning("X", x, reference=0.0)
+    assert_noise_model(reading.deviation, 0.0, laser.readout)
+
+
+def test_interferometer_refuses_bad_tests(grooving):
+    laser = LaserInterferometer(grooving)
+    with pytest.raises(InputError, match="rotary axis C"):
+        laser.positioning("C", [0.0, 0.1])
+    with pytest.raises(InputError, match="across axis X"):
+        laser.straightness("X", [0.0, 0.1], "X")
+    with pytest.raises(InputError, match="reference in"):
+        laser.straightness("X", [0.0, 0.1], "Y", reference="best")
+    with pytest.raises(AxisLimitError, match="axis X"):
+        laser.positioning("X", [0.0, 0.3])
+    with pytest.raises(InputError, match="along the diagonal"):
+        laser.diagonal([0.0, 1.0], (0.0, 0.0), (0.1, 0.1))
+    with pytest.raises(InputError, match="possible for spans"):
+        squareness_from_diagonal(1.0, 0.3, 0.4)
+
+
+def test_readout_is_seeded_and_rounds():
+    readout = Readout(sigma=2 * NM, resolution=1 * NM)
+    first = readout.read(np.zeros(5), np.random.default_rng(5))
+    again = readout.read(np.zeros(5), np.random.default_rng(5))
+    np.testing.assert_array_equal(first, again)
+    np.testing.assert_allclose(first / NM, np.round(first / NM), rtol=0, atol=1e-9)
+    assert Readout.of(2 * NM, 0.0, noise=False).read([1.25 * NM, np.nan], None)[0] == 1.25 * NM
