@@ -3,15 +3,43 @@
 The exact, noise-free core: top-surface height maps and profiles (`surface`), and the
 contact of a touch-probe ball swept against the part's triangles (`probe`), found through
 a tree over them (`meshindex`).
+Feature fits on what they read: V grooves (`grooves`), lines, crossings and edges (`lines`),
+spheres, planes, form error and Sa (`fits`); x3p files and PNG pictures (`export`).
 """
 
 from __future__ import annotations
 
+from machinesim.metrology.export import export_x3p, length_unit, plot_height_map, plot_profile
+from machinesim.metrology.fits import (
+    FormError,
+    PlaneFit,
+    SphereFit,
+    fit_plane,
+    fit_sphere,
+    form_error,
+    height_map_points,
+    plane_angle,
+    roughness_sa,
+    sphere_centre_from_touch,
+)
+from machinesim.metrology.grooves import Pitch, VGroove, fit_v_groove, fit_v_grooves, groove_pitch
 from machinesim.metrology.instruments import Readout
 from machinesim.metrology.interferometer import (
     InterferometerReading,
     LaserInterferometer,
     squareness_from_diagonal,
+)
+from machinesim.metrology.lines import (
+    GrooveCrossing,
+    Line2D,
+    ParallelEdges,
+    edge_distance,
+    fit_line,
+    fit_parallel_edges,
+    groove_crossing,
+    intersect_lines,
+    profile_points,
+    step_positions,
 )
 from machinesim.metrology.meshindex import MeshIndex
 from machinesim.metrology.optical import HeightMap, Microscope, Profile, WhiteLightInterferometer
@@ -23,4 +51,11 @@ __all__ = ["Contact", "Contacts", "MeshIndex", "height_map", "profile", "touch",
 __all__ += [
     "HeightMap", "InterferometerReading", "LaserInterferometer", "Microscope", "Profile",
     "Readout", "ScanReading", "TouchProbe", "WhiteLightInterferometer", "squareness_from_diagonal",
+]
+__all__ += [
+    "FormError", "GrooveCrossing", "Line2D", "ParallelEdges", "Pitch", "PlaneFit", "SphereFit",
+    "VGroove", "edge_distance", "export_x3p", "fit_line", "fit_parallel_edges", "fit_plane",
+    "fit_sphere", "fit_v_groove", "fit_v_grooves", "form_error", "groove_crossing", "groove_pitch",
+    "height_map_points", "intersect_lines", "length_unit", "plane_angle", "plot_height_map",
+    "plot_profile", "profile_points", "roughness_sa", "sphere_centre_from_touch", "step_positions",
 ]

@@ -1,0 +1,360 @@
+"""Feature fits on measured points: sphere, plane and inclination, form error, roughness Sa.
+
+Inputs are plain float64 arrays in SI: point clouds (N, 3), profiles (s, z) and height maps
+(x (nx,), y (ny,), z (ny, nx)) as `machinesim.metrology.height_map` and `profile` return them,
+with NaN where no surface was seen (such samples are left out). Results are frozen dataclasses
+in m and rad.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import frozen, map_arrays, point_rows, regular_step
+from machinesim.units import M_PER_UM
+
+__all__ = [
+    "FormError",
+    "PlaneFit",
+    "SphereFit",
+    "fit_plane",
+    "fit_sphere",
+    "form_error",
+    "height_map_points",
+    "plane_angle",
+    "roughness_sa",
+    "sphere_centre_from_touch",
+]
+
+#: Gauss-Newton iterations stop when a step moves the centre (or radius) by less than this
+#: fraction of the point cloud's size: ~20 ulps, where float64 stops improving a fit.
+STEP_TOL = 4e-15
+#: Gauss-Newton gives up after this many iterations (it takes ~3-6 on a sphere cap).
+MAX_ITERATIONS = 100
+#: Central-difference step of the nominal surface's gradient, as a fraction of the map's size:
+#: truncation ~1e-12 and round-off ~eps / 1e-6 = 2e-10 relative. The gradient only steers
+#: Gauss-Newton: where the residual vanishes the fixed point is exact whatever its error.
+GRADIENT_STEP = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class SphereFit:
+    """A least-squares sphere (m).
+
+    Attributes
+    ----------
+    centre : ndarray, shape (3,), read-only
+        Centre of the sphere.
+    radius : float
+        Its radius (the one given when the fit held the radius fixed).
+    residual_rms, residual_max : float
+        RMS and largest absolute distance of the points from the sphere surface.
+    """
+
+    centre: np.ndarray
+    radius: float
+    residual_rms: float
+    residual_max: float
+
+
+@dataclass(frozen=True, eq=False)
+class PlaneFit:
+    """A total-least-squares plane (m).
+
+    Attributes
+    ----------
+    point : ndarray, shape (3,), read-only
+        Centroid of the points, on the plane.
+    normal : ndarray, shape (3,), read-only
+        Unit normal, with normal[2] >= 0 (pointing up out of a measured face).
+    residual_rms : float
+        RMS distance of the points from the plane.
+    flatness : float
+        Largest minus smallest signed distance of the points from the plane (P-V).
+    """
+
+    point: np.ndarray
+    normal: np.ndarray
+    residual_rms: float
+    flatness: float
+
+    @property
+    def inclination(self) -> float:
+        """Angle of the plane to the XY plane (rad), in [0, pi/2]."""
+        return math.atan2(math.hypot(self.normal[0], self.normal[1]), abs(self.normal[2]))
+
+
+@dataclass(frozen=True, eq=False)
+class FormError:
+    """Deviation of a height map from a nominal surface after best-fit alignment (m, rad).
+
+    Attributes
+    ----------
+    pv, rms : float
+        Peak-to-valley and RMS of the residual (its mean is zero: the piston is fitted).
+    piston : float
+        Fitted height offset at the centre of the map's xy box.
+    tilt : ndarray, shape (2,), read-only
+        Fitted slopes dz/dx and dz/dy.
+    shift : ndarray, shape (2,), read-only
+        Fitted (x, y) shift of the measured surface against the nominal; zeros unless fitted.
+    residual : ndarray, shape (ny, nx), read-only
+        Measured minus aligned nominal; NaN where the map is NaN.
+    """
+
+    pv: float
+    rms: float
+    piston: float
+    tilt: np.ndarray
+    shift: np.ndarray
+    residual: np.ndarray
+
+
+def fit_sphere(points, radius: float | None = None) -> SphereFit:
+    """Least-squares sphere through points (seed 002, Fig. 4b: two orthogonal scans).
+
+    The algebraic fit (linear in the centre and radius^2 - |centre|^2) starts Gauss-Newton
+    on the geometric distances |p - c| - R. On a cap (a probe or a microscope sees one side of
+    a sphere) the centre's height and the radius are strongly correlated, so a small form
+    error moves both while the xy centre stays put: seed 002 therefore takes xy from this fit
+    and z from a bottom touch, see `sphere_centre_from_touch`.
+
+    Parameters
+    ----------
+    points : array-like, shape (N, 3)
+        Points on the sphere, m; rows with NaN are left out. N >= 4 (3 with ``radius``).
+    radius : float, optional
+        Hold the radius at this value (m) and fit the centre only.
+
+    Returns
+    -------
+    SphereFit
+    """
+    points = point_rows(points, 3, "points")
+    minimum = 4 if radius is None else 3
+    if len(points) < minimum:
+        raise InputError(f"Expected at least {minimum} points on the sphere, got {len(points)}")
+    if radius is not None and (not math.isfinite(radius) or radius <= 0.0):
+        raise InputError(f"Expected radius > 0 (m), got {radius!r}", key="radius")
+    origin = points.mean(axis=0)
+    local = points - origin
+    size = float(np.abs(local).max())
+    design = np.column_stack([2.0 * local, np.ones(len(local))])
+    solution, _, rank, _ = np.linalg.lstsq(design, np.einsum("ij,ij->i", local, local),
+                                           rcond=None)
+    if rank < 4:
+        raise InputError("Expected points spread over a sphere, got points on one plane or line")
+    centre = solution[:3]
+    fitted = math.sqrt(max(solution[3] + centre @ centre, 0.0)) if radius is None else radius
+    for _ in range(MAX_ITERATIONS):
+        offset = local - centre
+        distance = np.linalg.norm(offset, axis=1)
+        jacobian = -offset / distance[:, None]
+        if radius is None:
+            jacobian = np.column_stack([jacobian, -np.ones(len(local))])
+        step = np.linalg.lstsq(jacobian, fitted - distance, rcond=None)[0]
+        centre = centre + step[:3]
+        if radius is None:
+            fitted += step[3]
+        if np.abs(step).max() <= STEP_TOL * size:
+            break
+    else:
+        raise InputError(f"The sphere fit did not settle in {MAX_ITERATIONS} steps (last step "
+                         f"{np.abs(step).max():.3g} m): are the points on a sphere?")
+    residual = np.linalg.norm(local - centre, axis=1) - fitted
+    return SphereFit(frozen(origin + centre), float(fitted),
+                     float(np.sqrt(np.mean(residual**2))), float(np.abs(residual).max()))
+
+
+def sphere_centre_from_touch(xy, z_touch: float, radius: float, *, probe_radius: float = 0.0,
+                             concave: bool = True) -> np.ndarray:
+    """Sphere centre from its least-squares xy and a vertical touch there (seed 002, Fig. 4c).
+
+    Seed 002 feeds the probe along -Z at the fitted xy centre until it touches the sphere's
+    bottom point; the centre lies the sphere radius R above it (R the mean radius of the
+    three reference spheres). The probe ball of radius r touches that point with its lowest
+    point, so the surface point is ``z_touch - r`` when ``z_touch`` is the ball centre.
+
+    Parameters
+    ----------
+    xy : array-like, shape (2,)
+        Fitted centre (x, y), m (``SphereFit.centre[:2]``).
+    z_touch : float
+        Z of the probe ball centre at contact, m (of the surface point when r = 0).
+    radius : float
+        Known sphere radius R, m.
+    probe_radius : float
+        Probe ball radius r, m (0.25 mm ruby in seed 002).
+    concave : bool
+        True for a cavity (ball-end-milled, as in seed 002: touched at its bottom, centre
+        above); False for a bump (touched at its top, centre below).
+
+    Returns
+    -------
+    ndarray, shape (3,), read-only
+        The centre, m.
+    """
+    xy = np.array(xy, dtype=np.float64).reshape(-1)
+    if xy.shape != (2,) or not np.isfinite(xy).all():
+        raise InputError(f"Expected xy as two finite numbers (m), got {xy!r}", key="xy")
+    if not math.isfinite(radius) or radius <= 0.0:
+        raise InputError(f"Expected radius > 0 (m), got {radius!r}", key="radius")
+    if not math.isfinite(probe_radius) or probe_radius < 0.0:
+        raise InputError(f"Expected probe_radius >= 0 (m), got {probe_radius!r}",
+                         key="probe_radius")
+    if not math.isfinite(z_touch):
+        raise InputError(f"Expected a finite z_touch (m), got {z_touch!r}", key="z_touch")
+    surface = z_touch - probe_radius
+    return frozen([xy[0], xy[1], surface + radius if concave else surface - radius])
+
+
+def fit_plane(points) -> PlaneFit:
+    """Total-least-squares plane through points (rows with NaN are left out).
+
+    Parameters
+    ----------
+    points : array-like, shape (N, 3)
+        Points, m, N >= 3, not all on one line (`height_map_points` makes them from a map).
+    """
+    points = point_rows(points, 3, "points")
+    if len(points) < 3:
+        raise InputError(f"Expected at least 3 points on the plane, got {len(points)}")
+    centroid = points.mean(axis=0)
+    _, singular, vt = np.linalg.svd(points - centroid, full_matrices=False)
+    if singular[1] <= 1e-12 * singular[0]:
+        raise InputError("Expected points spanning a plane, got points on one line")
+    normal = vt[2] if vt[2][2] >= 0.0 else -vt[2]
+    distance = (points - centroid) @ normal
+    return PlaneFit(frozen(centroid), frozen(normal), float(np.sqrt(np.mean(distance**2))),
+                    float(np.ptp(distance)))
+
+
+def plane_angle(first: PlaneFit, second: PlaneFit) -> float:
+    """Angle between two planes (rad), in [0, pi/2]: e.g. a side face against the bottom face."""
+    n1, n2 = first.normal, second.normal
+    return math.atan2(float(np.linalg.norm(np.cross(n1, n2))), abs(float(n1 @ n2)))
+
+
+def height_map_points(x, y, z) -> np.ndarray:
+    """The measured points of a height map as (N, 3) rows (x, y, z), m; NaN samples left out."""
+    x, y, z = map_arrays(x, y, z)
+    grid_x, grid_y = np.meshgrid(x, y)
+    seen = ~np.isnan(z)
+    return np.column_stack([grid_x[seen], grid_y[seen], z[seen]])
+
+
+def form_error(x, y, z, nominal, *, shift: bool = False) -> FormError:
+    """P-V and RMS of a height map against a nominal surface after best-fit alignment.
+
+    The alignment is least squares over piston and tilt (the measured surface may sit at any
+    height and lean on its fixture): residual = z - nominal(x, y) - (p + tx (x - xm) + ty
+    (y - ym)), (xm, ym) the centre of the map's box. With ``shift=True`` a rigid xy shift
+    (sx, sy) of the measured surface is fitted as well, nominal(x - sx, y - sy) (Gauss-Newton
+    with a central-difference gradient of ``nominal``). The shift is defined only when the
+    nominal has terms above second order: a shifted plane or quadratic surface is the same
+    surface tilted and raised, so its shift cannot be told apart (InputError).
+
+    Parameters
+    ----------
+    x : array-like, shape (nx,)
+    y : array-like, shape (ny,)
+    z : array-like, shape (ny, nx)
+        The height map, m, NaN where not seen.
+    nominal : callable
+        ``nominal(X, Y)`` -> Z, the design surface, vectorised over arrays of x and y (m).
+    shift : bool
+        Also fit a rigid xy shift.
+    """
+    x, y, z = map_arrays(x, y, z)
+    grid_x, grid_y = np.meshgrid(x, y)
+    seen = ~np.isnan(z)
+    if np.count_nonzero(seen) < (5 if shift else 3) or x.size < 2 or y.size < 2:
+        raise InputError(f"Expected a map of at least 2 x 2 samples, {5 if shift else 3} of "
+                         f"them measured, got {z.shape} with {np.count_nonzero(seen)} measured")
+    px, py, pz = grid_x[seen], grid_y[seen], z[seen]
+    centre = np.array([0.5 * (x[0] + x[-1]), 0.5 * (y[0] + y[-1])])
+    size = max(float(x[-1] - x[0]), float(y[-1] - y[0]))
+
+    def nominal_at(dx, dy):
+        values = np.asarray(nominal(px - dx, py - dy), dtype=np.float64)
+        if values.shape != px.shape or not np.isfinite(values).all():
+            raise InputError(f"Expected nominal(X, Y) to return finite heights of shape "
+                             f"{px.shape}, got {values.shape}", key="nominal")
+        return values
+
+    plane = np.column_stack([np.ones_like(px), px - centre[0], py - centre[1]])
+    moved = np.zeros(2)
+    values = nominal_at(0.0, 0.0)
+    params = np.linalg.lstsq(plane, pz - values, rcond=None)[0]
+    if shift:
+        h = GRADIENT_STEP * size
+        for _ in range(MAX_ITERATIONS):
+            gradient = [(nominal_at(moved[0] - h, moved[1]) - nominal_at(moved[0] + h, moved[1]))
+                        / (2.0 * h),
+                        (nominal_at(moved[0], moved[1] - h) - nominal_at(moved[0], moved[1] + h))
+                        / (2.0 * h)]
+            design = np.column_stack([plane, -gradient[0], -gradient[1]])
+            # Unit columns, so that the rank test compares shapes, not units.
+            norms = np.linalg.norm(design, axis=0)
+            norms[norms == 0.0] = 1.0
+            step, _, rank, _ = np.linalg.lstsq(design / norms, pz - values - plane @ params,
+                                               rcond=None)
+            step = step / norms
+            if rank < 5:
+                raise InputError("The nominal surface does not fix an xy shift (a shifted "
+                                 "plane or quadratic is a tilted one): fit without shift",
+                                 key="shift")
+            params = params + step[:3]
+            moved = moved + step[3:]
+            values = nominal_at(*moved)
+            if np.abs(step[3:]).max() <= STEP_TOL * size:
+                break
+        else:
+            raise InputError(f"The shift fit did not settle in {MAX_ITERATIONS} steps (last "
+                             f"step {np.abs(step[3:]).max():.3g} m)", key="shift")
+        params = np.linalg.lstsq(plane, pz - values, rcond=None)[0]
+    residual = np.full(z.shape, np.nan)
+    residual[seen] = pz - values - plane @ params
+    residual.flags.writeable = False
+    finite = residual[seen]
+    return FormError(float(np.ptp(finite)), float(np.sqrt(np.mean(finite**2))), float(params[0]),
+                     frozen(params[1:]), frozen(moved), residual)
+
+
+def roughness_sa(x, y, z) -> float:
+    """Arithmetic mean height Sa (ISO 25178-2) of a height map through surfalize, m.
+
+    Filters: the F-operator is the least-squares plane (surfalize ``level``); no S-filter
+    and no L-filter (no nesting index) are applied, so Sa is that of the whole levelled map:
+    mean |z - plane|. Crop or filter beforehand for a scale-limited Sa. NaN samples are masked
+    (left out of both the plane and the mean).
+
+    Parameters
+    ----------
+    x : array-like, shape (nx,)
+    y : array-like, shape (ny,)
+        Regular grid axes, m, nx, ny >= 2.
+    z : array-like, shape (ny, nx)
+        Heights, m.
+    """
+    from surfalize import Surface
+
+    x, y, z = map_arrays(x, y, z)
+    step_x = regular_step(x, "x")
+    step_y = regular_step(y, "y")
+    missing = np.isnan(z)
+    if np.count_nonzero(~missing) < 3:
+        raise InputError("Expected at least three measured samples for Sa", key="z")
+    with warnings.catch_warnings():
+        # surfalize warns for unequal steps; levelling and Sa do not depend on them.
+        warnings.filterwarnings("ignore", message=".*different pixel size.*")
+        surface = Surface(np.where(missing, 0.0, z) / M_PER_UM, step_x / M_PER_UM,
+                          step_y / M_PER_UM, mask=missing if missing.any() else None)
+    return float(surface.level().Sa()) * M_PER_UM
+
+

@@ -1,0 +1,113 @@
+"""x3p round trips read back with x3pio, PNG pictures checked by their header, unit choice."""
+
+import struct
+
+import numpy as np
+import pytest
+import x3pio
+
+from machinesim.exceptions import InputError
+from machinesim.metrology import export
+from machinesim.metrology.export import export_x3p, length_unit, plot_height_map, plot_profile
+
+MM = 1e-3
+UM = 1e-6
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def rough_map():
+    rng = np.random.default_rng(0)
+    x = np.linspace(1 * MM, 2 * MM, 101)
+    y = np.linspace(-0.5 * MM, 0.3 * MM, 81)
+    grid_x, grid_y = np.meshgrid(x, y)
+    z = 1e-7 * np.sin(grid_x / (0.1 * MM)) + rng.normal(0.0, 2e-9, grid_x.shape) - 2 * MM
+    z[3, 4] = np.nan
+    return x, y, z
+
+
+def png_size(path):
+    """Width and height from a PNG file's IHDR chunk, after checking the signature."""
+    data = path.read_bytes()
+    assert data[:8] == PNG_MAGIC
+    assert data[12:16] == b"IHDR"
+    return struct.unpack(">II", data[16:24])
+
+
+def test_x3p_round_trip_keeps_heights_bit_for_bit(tmp_path):
+    x, y, z = rough_map()
+    path = tmp_path / "map.x3p"
+    export_x3p(path, x, y, z, comment="machinesim test")
+    stored = x3pio.read(path)
+    layer = stored.layers[0]
+    # float64 'D' storage: the heights come back exactly, NaN where no surface.
+    assert stored.header.z.data_type == x3pio.DataType.FLOAT64
+    np.testing.assert_array_equal(layer.z, z)
+    points = layer.points()
+    grid_x, grid_y = np.meshgrid(x, y)
+    # The grid is stored as offset + index * increment: linspace axes agree with that to
+    # their own round-off (~1e-19 m at 2 mm); 1e-15 m fails on a wrong offset or increment.
+    np.testing.assert_allclose(points[..., 0], grid_x, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(points[..., 1], grid_y, rtol=0, atol=1e-15)
+    assert stored.metadata.comment == "machinesim test"
+    assert list(tmp_path.iterdir()) == [path]  # no temporary file left behind
+
+
+def test_x3p_refuses_an_irregular_grid_and_leaves_the_old_file(tmp_path):
+    x, y, z = rough_map()
+    path = tmp_path / "map.x3p"
+    export_x3p(path, x, y, z)
+    before = path.read_bytes()
+    bent = x.copy()
+    bent[50] += 0.1 * UM
+    with pytest.raises(InputError, match="regular grid along x"):
+        export_x3p(path, bent, y, z)
+    with pytest.raises(InputError, match="z \\(ny, nx\\)"):
+        export_x3p(path, x, y, z.T)
+    assert path.read_bytes() == before
+    assert list(tmp_path.iterdir()) == [path]
+
+
+def test_plot_profile_writes_a_png(tmp_path):
+    s = np.arange(2000) * 0.5 * UM
+    z = -np.clip(2 * UM - np.abs(s - 0.5 * MM), 0.0, None)
+    z[100:120] = np.nan
+    path = tmp_path / "profile.png"
+    plot_profile(path, s, z, title="groove")
+    assert png_size(path) == (1600, 1000)
+    # A line plot at 200 dpi: tens of kB; far more would mean an image, far less an empty one.
+    assert 10_000 < path.stat().st_size < 1_000_000
+    assert list(tmp_path.iterdir()) == [path]
+
+
+def test_plot_height_map_writes_a_png_on_regular_and_irregular_grids(tmp_path):
+    x, y, z = rough_map()
+    regular = tmp_path / "map.png"
+    plot_height_map(regular, x, y, z, title="map")
+    assert png_size(regular) == (1600, 1000)
+    assert 10_000 < regular.stat().st_size < 2_000_000
+    irregular = tmp_path / "irregular.png"
+    plot_height_map(irregular, x**1.5 / np.sqrt(2 * MM), y, z)
+    assert png_size(irregular) == (1600, 1000)
+    assert 10_000 < irregular.stat().st_size < 2_000_000
+    with pytest.raises(InputError, match="only NaN"):
+        plot_height_map(tmp_path / "empty.png", x, y, np.full_like(z, np.nan))
+    assert not (tmp_path / "empty.png").exists()
+
+
+def test_length_unit_follows_the_data_range():
+    assert length_unit([0.0, 2 * MM]) == ("mm", 1e-3)
+    assert length_unit([-2 * MM, -2 * MM + 3 * UM]) == ("um", 1e-6)
+    assert length_unit([0.0, 50e-9, np.nan]) == ("nm", 1e-9)
+    assert length_unit([0.2e-9, 0.3e-9]) == ("nm", 1e-9)  # below 1 nm still reads in nm
+    assert length_unit([5 * UM, 5 * UM]) == ("um", 1e-6)  # constant: sized by magnitude
+
+
+def test_axis_far_from_zero_is_drawn_from_a_named_offset():
+    # 200 nm of form on a face 2 mm below zero: nm from z + 2 mm, not -2000000 nm.
+    heights = -2 * MM + np.array([-100e-9, 0.0, 100e-9])
+    offset, factor, label = export._axis(heights, "z")
+    assert (offset, factor, label) == (-2 * MM, 1e-9, "z + 2 mm (nm)")
+    offset, factor, label = export._axis(np.array([10.0, 10.1]) * MM, "x")
+    assert (offset, factor) == (10.05 * MM, 1e-6)
+    assert label == "x \N{MINUS SIGN} 10.05 mm (\N{MICRO SIGN}m)"
+    assert export._axis(np.array([1.0, 2.0]) * MM, "x") == (0.0, 1e-3, "x (mm)")
