@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
-import tempfile
 from pathlib import Path
 
+from machinesim._io import write_atomic
 from machinesim.exceptions import InputError, MachineSimError
 
 EXAMPLES = """examples:
@@ -133,7 +132,7 @@ def _cut(args) -> int:
     {".ply": part.export_ply, ".stl": part.export_stl, ".glb": part.export_glb}[suffix](args.out)
     summary = report.to_dict()
     if args.report:
-        _write_json(args.report, summary)
+        write_atomic(args.report, json.dumps(summary, indent=2) + "\n")
     print(f"wrote {args.out}: removed {summary['removed_volume_mm3']:.6g} mm^3 in "
           f"{report.sweeps} sweeps; machining time {report.machining_time_s:.1f} s")
     for what, items in (("rapid that cuts at line", report.rapids_that_cut),
@@ -144,19 +143,6 @@ def _cut(args) -> int:
         print("warning: the program removed no material (does it reach the stock?)",
               file=sys.stderr)
     return 0
-
-
-def _write_json(path: Path, data: dict) -> None:
-    """Whole or not at all: a temp file beside the target, then an atomic rename."""
-    fd, temp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump(data, f, indent=2)
-            f.write("\n")
-        os.replace(temp, path)
-    except BaseException:
-        Path(temp).unlink(missing_ok=True)
-        raise
 
 
 if __name__ == "__main__":

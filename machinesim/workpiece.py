@@ -11,15 +11,13 @@ and ``"crown"`` (seed 002's roughly machined diamond crown, 10 um oversize).
 from __future__ import annotations
 
 import math
-import os
 import struct
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 
 import manifold3d
 import numpy as np
 
+from machinesim._io import write_atomic
 from machinesim.exceptions import InputError
 from machinesim.tools import arc_segments, sphere_polygon
 from machinesim.units import M_PER_MM, M_PER_UM
@@ -113,7 +111,7 @@ class Part:
         record["n"] = normal
         record["v"] = corner
         header = b"machinesim part, binary STL (float32: display only)".ljust(80, b" ")
-        _write_atomic(path, header + struct.pack("<I", len(triangles)) + record.tobytes())
+        write_atomic(path, header + struct.pack("<I", len(triangles)) + record.tobytes())
 
     def export_ply(self, path) -> None:
         """Write a binary little-endian PLY with float64 vertices: exact, bit for bit."""
@@ -129,7 +127,7 @@ class Part:
         faces["n"] = 3
         faces["i"] = triangles
         body = np.ascontiguousarray(vertices, dtype="<f8").tobytes() + faces.tobytes()
-        _write_atomic(path, header + body)
+        write_atomic(path, header + body)
 
     def export_glb(self, path) -> None:
         """Write a binary glTF (via trimesh, float32 inside): for display only."""
@@ -137,20 +135,7 @@ class Part:
 
         vertices, triangles = self.mesh()
         data = trimesh.Trimesh(vertices, triangles, process=False).export(file_type="glb")
-        _write_atomic(path, data)
-
-
-def _write_atomic(path, data: bytes) -> None:
-    """Write ``data`` to ``path`` whole or not at all (temp file in the folder, then rename)."""
-    path = Path(path)
-    handle, temp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "wb") as file:
-            file.write(data)
-        os.replace(temp, path)
-    except BaseException:
-        Path(temp).unlink(missing_ok=True)
-        raise
+        write_atomic(path, data)
 
 
 def block(length: float, width: float, height: float, origin=(0.0, 0.0, 0.0)) -> Part:

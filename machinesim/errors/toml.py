@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import os
 import re
-import tempfile
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -16,6 +15,7 @@ from typing import Any
 import numpy as np
 import tomli_w
 
+from machinesim._io import write_atomic
 from machinesim.errors._checks import (
     LINEAR_AXES,
     _check_axis,
@@ -77,16 +77,7 @@ def read_toml(path: str | os.PathLike) -> dict[str, Any]:
 def write_toml(data: Mapping[str, Any], path: str | os.PathLike) -> None:
     """Write `data` (``to_dict(readable=True)``) under the units header, whole or not at all."""
     text = _HEADER + tomli_w.dumps(data)
-    path = Path(path)
-    fd, temp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as file:
-            file.write(text)
-        os.chmod(temp, 0o644)
-        os.replace(temp, path)
-    except BaseException:
-        os.unlink(temp)
-        raise
+    write_atomic(path, text)
 
 
 def dict_from_model(model: ErrorModel, readable: bool) -> dict[str, Any]:

@@ -19,10 +19,10 @@ import io
 
 import numpy as np
 
+from machinesim._io import write_atomic
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import map_arrays, profile_arrays, regular_step
 from machinesim.units import LENGTH
-from machinesim.workpiece import _write_atomic
 
 __all__ = ["export_x3p", "length_unit", "plot_height_map", "plot_profile"]
 
@@ -91,7 +91,7 @@ def export_x3p(path, x, y, z, *, comment: str | None = None) -> None:
         placement=x3pio.Placement.translation(float(x[0]), float(y[0]), 0.0),
         coordinate_system=x3pio.CoordinateSystem.VIEW,
     )
-    _write_atomic(path, surface.dumps())
+    write_atomic(path, surface.dumps())
 
 
 def plot_profile(path, s, z, *, title: str | None = None, label: str = "s") -> None:
@@ -207,5 +207,5 @@ def _finish(figure, axes, title, path) -> None:
         axes.set_title(title)
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png")
-    _write_atomic(path, buffer.getvalue())
+    write_atomic(path, buffer.getvalue())
 

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
-import tempfile
 from decimal import Decimal
 
+from machinesim._io import write_atomic
 from machinesim.exceptions import NCProgramError
 from machinesim.nc.parser import MAX_INTEGER_DIGITS
 from machinesim.nc.program import PROGRAM_END, ROTARY_AXES, Move, Program
@@ -97,24 +96,9 @@ def format_program(program: Program) -> str:
 
 
 def write_program(program: Program, path: str | os.PathLike) -> None:
-    """Write the program to ``path`` whole or not at all (temp file, then os.replace)."""
+    """Write the program to ``path`` whole or not at all (`machinesim._io.write_atomic`)."""
     text = format_program(program)
-    path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    mode = os.stat(path).st_mode & 0o777 if os.path.exists(path) else 0o644
-    handle, temp = tempfile.mkstemp(dir=folder, prefix=f".{os.path.basename(path)}.",
-                                    suffix=".tmp")
-    try:
-        with os.fdopen(handle, "w", encoding="ascii", newline="\n") as file:
-            file.write(text)
-            file.flush()
-            os.fsync(file.fileno())
-        os.chmod(temp, mode)
-        os.replace(temp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(temp)
-        raise
+    write_atomic(path, text, encoding="ascii")
 
 
 def _fixed(value: float, decimals: int) -> str:
