@@ -1,6 +1,7 @@
 """The ``machinesim`` command line.
 
     machinesim machines
+    machinesim view MACHINE | PART.ply | REPORT_DIR [--html FILE]
     machinesim cut PROGRAM --machine NAME --tool SPEC --stock SPEC [--errors ERRORS.toml]
                    --out PART.ply [--report REPORT.json] [--roi X0,X1,Y0,Y1 ...]
 """
@@ -14,6 +15,7 @@ from pathlib import Path
 
 from machinesim._io import write_atomic
 from machinesim.exceptions import InputError, MachineSimError
+from machinesim.viewer.cli import add_view_parser, run_view
 
 EXAMPLES = """examples:
   machinesim machines
@@ -61,6 +63,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="cut only in this window (mm, workpiece frame); repeatable; "
                           "e.g. --roi 0,1,0,1")
     cut.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_view_parser(sub)
     return parser
 
 
@@ -69,6 +72,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "machines":
             return _machines()
+        if args.command == "view":
+            return run_view(args)
         return _cut(args)
     except MachineSimError as exc:
         print(f"machinesim: error: {exc}", file=sys.stderr)

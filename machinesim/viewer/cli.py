@@ -1,0 +1,164 @@
+"""The ``machinesim view`` subcommand: a machine, a part or a report folder in the browser.
+
+    machinesim view MACHINE [--program P.nc --tool SPEC --stock SPEC --errors E.toml]
+    machinesim view PART.ply [--report REPORT.json] [--nominal NOMINAL.ply]
+    machinesim view REPORT_DIR
+    ... [--html FILE.html] [--screenshot FILE.png] [--port PORT] [--max-triangles N]
+
+Without ``--html`` a live meshcat server starts on 127.0.0.1 and its URL is printed; it runs
+until Ctrl-C. Heavy modules are imported only when the command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from machinesim.exceptions import InputError
+
+EXAMPLES = """examples:
+  machinesim view robonano_a0ib
+  machinesim view grooving_4axis --program grooves.nc --tool v:90 --stock block:5x5x1 \\
+      --errors models/errors/example.toml --html grooves.html
+  machinesim view part.ply --report report.json --nominal nominal.ply
+  machinesim view reports/seed003/ --html seed003.html --screenshot seed003.png
+"""
+
+
+def add_view_parser(sub) -> argparse.ArgumentParser:
+    """Add the ``view`` subcommand to ``sub`` (argparse subparsers) and return its parser."""
+    view = sub.add_parser(
+        "view", help="show a machine, a part or a report folder in the browser",
+        description="Show a machine (animated along a program), a machined part coloured by "
+                    "its deviation or height, or a scenario report folder, live in the "
+                    "browser (a meshcat server on 127.0.0.1) or as one self-contained HTML "
+                    "file.",
+        formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EXAMPLES)
+    view.add_argument("target", help="a machine name (see 'machinesim machines') or .urdf "
+                                     "path, a part .ply, or a report folder (*.ply and "
+                                     "summary.json)")
+    view.add_argument("--html", type=Path, default=None,
+                      help="write one self-contained HTML file (no server, no network) "
+                           "instead of serving live")
+    view.add_argument("--screenshot", type=Path, default=None,
+                      help="also render the view to this PNG with headless Chromium")
+    view.add_argument("--port", type=int, default=None,
+                      help="live mode: web port on 127.0.0.1 (default: first free from 7000)")
+    view.add_argument("--max-triangles", type=int, default=None, metavar="N",
+                      help="display budget per mesh; larger parts are decimated for display "
+                           "only (default 200000)")
+    part = view.add_argument_group("a part (PART.ply)")
+    part.add_argument("--report", type=Path, default=None,
+                      help="cut report JSON (from 'machinesim cut --report') shown beside it")
+    part.add_argument("--nominal", type=Path, default=None,
+                      help="nominal part .ply: colour by deviation from it (else by height)")
+    machine = view.add_argument_group("a machine (MACHINE)")
+    machine.add_argument("--program", type=Path, default=None,
+                         help="NC program to run and animate (mm, deg), e.g. grooves.nc")
+    machine.add_argument("--tool", default="v:90",
+                         help="tool spec in mm/deg: v:ANGLE, nose:RADIUS:ANGLE, ball:RADIUS "
+                              "(default v:90)")
+    machine.add_argument("--stock", default="block:10x10x2",
+                         help="stock spec in mm, e.g. block:10x10x2@-5,-5,0 (default "
+                              "block:10x10x2)")
+    machine.add_argument("--errors", type=Path, default=None,
+                         help="injected errors, TOML (default: none)")
+    machine.add_argument("--duration", type=float, default=20.0,
+                         help="longest animation, s: a longer program plays faster "
+                              "(default 20)")
+    return view
+
+
+def run_view(args: argparse.Namespace) -> int:
+    """Run ``machinesim view`` with parsed ``args``; return the exit code.
+
+    Raises
+    ------
+    MachineSimError
+        For input the command cannot show (the caller prints it).
+    """
+    from machinesim.viewer.meshes import DISPLAY_TRIANGLES
+
+    budget = DISPLAY_TRIANGLES if args.max_triangles is None else args.max_triangles
+    if budget < 1:
+        raise InputError(f"--max-triangles {budget}: expected a positive count")
+    if args.html is not None and args.html.suffix.lower() not in (".html", ".htm"):
+        raise InputError(f"--html {args.html}: expected a file name ending in .html")
+    scene = _scene(args, budget)
+    if args.html is not None:
+        from machinesim.viewer.scene import write_html
+
+        write_html(scene, args.html)
+        print(f"wrote {args.html} ({args.html.stat().st_size / 1e6:.1f} MB, self-contained: "
+              "open it in any browser, no server needed)")
+        if args.screenshot is not None:
+            _screenshot(args.html.resolve().as_uri(), "true", args.screenshot)
+        return 0
+    from machinesim.viewer.live import serve
+
+    session = serve(scene, args.port)
+    try:
+        print(f"machinesim viewer at {session.url} (listening on 127.0.0.1 only); "
+              "Ctrl-C to stop", flush=True)
+        if args.screenshot is not None:
+            _screenshot(session.url, f"viewer.num_messages_received >= {session.messages}",
+                        args.screenshot)
+        session.wait()
+    except KeyboardInterrupt:
+        print("machinesim viewer stopped", file=sys.stderr)
+    finally:
+        session.close()
+    return 0
+
+
+def _scene(args, budget: int):
+    target = Path(args.target)
+    machine_options = [f"--{name}" for name in ("program", "errors")
+                       if getattr(args, name) is not None]
+    part_options = [f"--{name}" for name in ("report", "nominal")
+                    if getattr(args, name) is not None]
+    if target.is_dir():
+        from machinesim.viewer.views import report_scene
+
+        _refuse(machine_options + part_options, "a report folder")
+        return report_scene(target, budget)
+    if target.suffix.lower() == ".ply":
+        from machinesim.viewer.views import part_scene
+
+        _refuse(machine_options, "a part")
+        if not target.is_file():
+            raise InputError(f"{target}: no such part file")
+        return part_scene(target, nominal=args.nominal, report=args.report,
+                          title=f"part {target.name}", max_triangles=budget)
+    from machinesim.viewer.machine import machine_scene
+
+    _refuse(part_options, "a machine")
+    program = errors = None
+    if args.program is not None:
+        from machinesim.nc import read_program
+
+        program = read_program(args.program)
+    if args.errors is not None:
+        from machinesim.errors import ErrorModel
+
+        errors = ErrorModel.from_toml(args.errors)
+    return machine_scene(args.target, program, tool=args.tool, stock=args.stock,
+                         errors=errors, duration_s=args.duration, max_triangles=budget)
+
+
+def _refuse(options: list[str], what: str) -> None:
+    if options:
+        raise InputError(f"{', '.join(options)} do(es) not apply to {what}; see "
+                         "'machinesim view --help'")
+
+
+def _screenshot(url: str, ready: str, path: Path) -> None:
+    from machinesim._io import write_atomic
+    from machinesim.viewer.browser import screenshot
+
+    write_atomic(path, screenshot(url, ready))
+    print(f"wrote {path} (headless Chromium)")
+
+
+__all__ = ["add_view_parser", "run_view"]

@@ -1,0 +1,169 @@
+"""Live mode: start the loopback meshcat server (`machinesim.viewer.server`), replay a scene.
+
+`serve` starts the server in its own process, sends it the scene's page overlay and its
+meshcat commands over ZeroMQ, and returns a `LiveSession` with the URL to open.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+
+import zmq
+from meshcat.servers.tree import SceneTree, find_node, walk
+
+from machinesim.exceptions import MachineSimError
+from machinesim.viewer.scene import Scene, overlay_html
+
+#: The only address the live server listens on.
+LOOPBACK = "127.0.0.1"
+#: Seconds to wait for the server process to report its URLs.
+START_TIMEOUT_S = 30.0
+#: Seconds to wait for the server to take one command (a large mesh is a few MB).
+REPLY_TIMEOUT_S = 60.0
+#: ZeroMQ command that sets the page's title and overlay (ours, beside meshcat's commands).
+PAGE_COMMAND = b"machinesim_page"
+
+
+@dataclass
+class LiveSession:
+    """A running live server showing a scene.
+
+    Attributes
+    ----------
+    url : str
+        The page to open, ``http://127.0.0.1:PORT/static/``.
+    zmq_url : str
+        Where the server takes meshcat commands.
+    process : subprocess.Popen
+        The server process; `close` ends it.
+    messages : int
+        Messages a browser that connects now receives (meshcat's viewer counts them in
+        ``viewer.num_messages_received``): the scene is complete when it has them all.
+    """
+
+    url: str
+    zmq_url: str
+    process: subprocess.Popen
+    messages: int = 0
+
+    def send(self, scene: Scene) -> None:
+        """Send ``scene`` (page overlay and commands) to the server, which has shown nothing
+        yet (`serve` does this once)."""
+        socket = zmq.Context.instance().socket(zmq.REQ)
+        socket.setsockopt(zmq.RCVTIMEO, int(REPLY_TIMEOUT_S * 1000))
+        socket.connect(self.zmq_url)
+        try:
+            socket.send_multipart([PAGE_COMMAND, scene.title.encode("utf-8"),
+                                   overlay_html(scene).encode("utf-8")])
+            socket.recv()
+            for kind, path, data in scene.frames:
+                socket.send_multipart([kind.encode("utf-8"), path.encode("utf-8"), data])
+                reply = socket.recv()
+                if reply != b"ok":
+                    raise MachineSimError(f"the live viewer refused a {kind} command at "
+                                          f"{path!r}: {reply.decode('utf-8', 'replace')}")
+        except zmq.Again:
+            raise MachineSimError(f"the live viewer server did not answer within "
+                                  f"{REPLY_TIMEOUT_S:g} s") from None
+        finally:
+            socket.close(linger=0)
+        self.messages = replay_count(scene.frames)
+
+    def wait(self) -> int:
+        """Block until the server process ends; return its exit code."""
+        return self.process.wait()
+
+    def close(self) -> None:
+        """End the server process."""
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+
+    def __enter__(self) -> LiveSession:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def replay_count(frames) -> int:
+    """How many messages meshcat's server sends a new browser after ``frames``.
+
+    The server keeps, per scene node, the last object, the properties set since it, the
+    last transform and the last animation, and replays those (meshcat.servers.zmqserver).
+    """
+    tree = SceneTree()
+    for kind, path, _ in frames:
+        names = [p for p in path.split("/") if p]
+        if kind == "delete":
+            parent = find_node(tree, names[:-1]) if names else None
+            if parent is None:
+                tree = SceneTree()
+            else:
+                parent.pop(names[-1], None)
+            continue
+        node = find_node(tree, names)
+        if kind == "set_object":
+            node.object, node.properties = True, []
+        elif kind == "set_property":
+            node.properties.append(True)
+        elif kind == "set_transform":
+            node.transform = True
+        elif kind == "set_animation":
+            node.animation = True
+    return sum((n.object is not None) + len(n.properties) + (n.transform is not None)
+               + (n.animation is not None) for n in walk(tree))
+
+
+def start_server(port: int | None = None) -> LiveSession:
+    """Start the loopback server in a new process (nothing shown yet)."""
+    command = [sys.executable, "-u", "-m", "machinesim.viewer.server"]
+    if port is not None:
+        command += ["--port", str(port)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                               text=True)
+    urls, deadline = {}, time.monotonic() + START_TIMEOUT_S
+    while len(urls) < 2:
+        line = process.stdout.readline()
+        if not line or time.monotonic() > deadline:
+            process.kill()
+            process.wait()
+            raise MachineSimError("the live viewer server did not start (is the port free? "
+                                  "try --port, or --html FILE to export instead)")
+        key, _, value = line.strip().partition("=")
+        if key in ("zmq_url", "web_url"):
+            urls[key] = value
+    return LiveSession(urls["web_url"], urls["zmq_url"], process)
+
+
+def serve(scene: Scene, port: int | None = None) -> LiveSession:
+    """Show ``scene`` live: start the loopback server and replay the scene into it.
+
+    Parameters
+    ----------
+    scene : Scene
+    port : int, optional
+        Web port; default: the first free one from 7000 (meshcat's rule).
+
+    Returns
+    -------
+    LiveSession
+        Open `LiveSession.url` in a browser; `LiveSession.close` ends the server.
+    """
+    session = start_server(port)
+    try:
+        session.send(scene)
+    except BaseException:
+        session.close()
+        raise
+    return session
+
+
+__all__ = ["LOOPBACK", "LiveSession", "replay_count", "serve", "start_server"]

@@ -1,0 +1,262 @@
+"""A machine in the browser: its URDF visuals moving along an NC program, with errors.
+
+The machine is drawn by Pinocchio's `MeshcatVisualizer` from the visual geometry of the
+error-augmented URDF, so the bodies move as the erroneous kinematics says. Along a program
+the scene shows the tool, the nominal tool path (machine without errors) and the actual one
+(with errors) in the workpiece frame, and the part as it is cut: the engine cuts the stock
+block by block and each stage is switched on while the next block runs. Beside the machine
+stands an enlarged copy of the finished part, coloured by its deviation from the part the
+nominal machine cuts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+from pinocchio.visualize import MeshcatVisualizer
+
+from machinesim import motion
+from machinesim.cutting import cut, remove
+from machinesim.exceptions import InputError
+from machinesim.tools import tool_from_spec
+from machinesim.viewer.maps import legend_for
+from machinesim.viewer.meshes import DISPLAY_TRIANGLES, decimate, tool_mesh
+from machinesim.viewer.scene import Scene, transform_tracks, visibility_track
+from machinesim.viewer.views import PART_COLOUR, add_part, frame_scene
+from machinesim.workpiece import stock_from_spec
+
+#: Longest animation (s) before the program's time is compressed to fit: a minute-long
+#: program plays in 20 s, a 5 s program in real time.
+DURATION_S = 20.0
+#: Key frames per second of animation: enough for smooth rotary moves between keys (three.js
+#: interpolates positions linearly and rotations by slerp between them).
+KEY_RATE = 20.0
+#: Block starts and ends become key frames (so a short block is not skipped) for programs of
+#: up to this many blocks; longer programs use the uniform rate only, to bound the page size.
+MAX_BLOCK_KEYS = 2000
+#: Most part stages (meshes) in a scene: up to this many feed blocks, one stage per block;
+#: beyond, consecutive blocks share a stage, so the page stays a few MB.
+MAX_STAGES = 60
+#: Display budget of each stage mesh (triangles).
+STAGE_TRIANGLES = 20_000
+#: Most points of a drawn tool path; longer paths are thinned (display only).
+PATH_POINTS = 20_000
+#: The finished part's copy beside the machine is this fraction of the machine's size.
+INSPECTION_SIZE = 0.3
+#: Colours: nominal path cyan, actual path red, tool bright white.
+NOMINAL_COLOUR, ACTUAL_COLOUR, TOOL_COLOUR = 0x00E5FF, 0xFF3030, 0xF0F0FF
+
+
+def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", errors=None,
+                  start=None, duration_s: float = DURATION_S, max_stages: int = MAX_STAGES,
+                  max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
+    """A scene of ``machine``, and of it running ``program`` if one is given.
+
+    Parameters
+    ----------
+    machine : machinesim.Machine or str
+    program : machinesim.nc.Program, optional
+    tool : str or tool
+        Tool spec (``"v:90"``, ``"nose:2.0:90"``, ``"ball:2.0"``, mm and deg) or object.
+    stock : str or Part
+        Stock spec (``"block:10x10x2"``, mm) or Part, workpiece frame.
+    errors : ErrorModel, optional
+        The machine's errors; None for the nominal machine.
+    start : array-like, shape (n_axes,), optional
+        Axis values before the first block (m, rad); default zeros.
+    duration_s : float
+        Longest animation, s: a longer program plays faster.
+    max_stages : int
+        Most part stages; a program with more feed blocks groups them.
+    max_triangles : int
+        Display budget of the deviation map.
+    """
+    from machinesim.machines import Machine, load_machine
+
+    machine = machine if isinstance(machine, Machine) else load_machine(machine)
+    machine.check_errors(errors)
+    scene = Scene(f"{machine.name} ({''.join(machine.axes)})")
+    model = machine.model
+    geometry = pin.buildGeomFromUrdfString(model, machine.urdf_xml, pin.GeometryType.VISUAL)
+    visualizer = MeshcatVisualizer(model, visual_model=geometry)
+    visualizer.initViewer(viewer=scene.vis)
+    visualizer.loadViewerModel(rootNodeName="machine")
+    binding = machine.binding(errors)
+    q0 = np.zeros(len(machine.axes)) if start is None else np.asarray(start, dtype=np.float64)
+    visualizer.display(machine.kin.full_q(q0, binding))
+    lo, hi = _machine_box(visualizer)
+    scene.notes.append("travel: " + ", ".join(
+        f"{a} {lo_a * 1e3:g}..{hi_a * 1e3:g} mm" if not r else f"{a} rotary"
+        for a, lo_a, hi_a, r in zip(machine.axes, machine.lower, machine.upper,
+                                    machine.rotary, strict=True)))
+    if program is not None:
+        lo, hi = _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi,
+                      duration_s, max_stages, max_triangles)
+    frame_scene(scene, lo, hi)
+    return scene
+
+
+def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, duration_s,
+         max_stages, max_triangles):
+    """Animate the program; return the box (m) of everything drawn."""
+    if duration_s <= 0.0 or max_stages < 1:
+        raise InputError(f"duration_s and max_stages must be positive, got {duration_s} and "
+                         f"{max_stages}")
+    tool = tool_from_spec(tool) if isinstance(tool, str) else tool
+    stock = stock_from_spec(stock) if isinstance(stock, str) else stock
+    trajectory = motion.plan(program, machine, errors, start=q0, tool_points=tool.vertices())
+    times, qs = _samples(trajectory, q0)
+    speed = max(1.0, trajectory.duration / duration_s)
+    keys = _key_times(trajectory, times[-1], speed)
+    key_q = np.column_stack([np.interp(keys, times, qs[:, i]) for i in range(qs.shape[1])])
+
+    # tool paths in the workpiece frame: commanded axis values on both machines
+    moving = [s for s in trajectory.segments if s.kind != "dwell"]
+    path_q = np.vstack([s.q for s in moving]) if moving else q0[None]
+    step = max(1, len(path_q) // PATH_POINTS)
+    path_q = path_q[np.unique(np.append(np.arange(0, len(path_q), step), len(path_q) - 1))]
+    scene.add_lines("workpiece/paths/nominal", machine.tool_pose(path_q, None)[:, :3, 3],
+                    NOMINAL_COLOUR)
+    scene.add_lines("workpiece/paths/actual", machine.tool_pose(path_q, errors)[:, :3, 3],
+                    ACTUAL_COLOUR)
+    scene.add_mesh("tool", *tool_mesh(tool), colour=TOOL_COLOUR)
+
+    stage_times, parts = cut_by_block(trajectory, machine, tool, stock, errors, max_stages)
+    for k, part in enumerate(parts):
+        scene.add_mesh(f"workpiece/stages/{k}", *decimate(*part.mesh(), STAGE_TRIANGLES),
+                       colour=PART_COLOUR)
+    tracks = _body_tracks(visualizer, machine, errors, keys / speed, key_q)
+    for k in range(len(parts)):
+        on = [t / speed for t in stage_times[k:k + 2]]
+        switch = sorted({0.0, *on})
+        tracks[f"workpiece/stages/{k}"] = [visibility_track(
+            switch, [on[0] <= t < (on[1] if len(on) > 1 else np.inf) for t in switch])]
+    scene.animate(tracks)
+
+    nominal, _ = cut(program, machine, tool=tool, stock=stock, errors=None, start=q0)
+    part_lo, part_hi = parts[-1].bounds
+    size = float(np.max(hi - lo))
+    scale = INSPECTION_SIZE * size / float(np.max(part_hi - part_lo))
+    place = np.diag([scale, scale, scale, 1.0])
+    anchor = np.array([hi[0] + 0.1 * size, 0.5 * (lo[1] + hi[1]), lo[2]])
+    place[:3, 3] = anchor - scale * np.array([part_lo[0], 0.5 * (part_lo[1] + part_hi[1]),
+                                              part_lo[2]])
+    scene.set_transform("inspection", place)
+    smap = add_part(scene, "inspection/part", parts[-1], nominal, max_triangles)
+    scene.legends.append(legend_for(smap, notes=(
+        "finished part (enlarged, right of the machine) vs the nominal machine's",)))
+    scene.notes += [
+        f"program: {len(program.moves)} blocks, {trajectory.duration:.3g} s machining",
+        f"animation: {keys[-1] / speed:.3g} s ({speed:.3g}x real time)",
+        f"part stages: {len(parts) - 1} (stock, then after "
+        + ("each feed block)" if len(parts) - 1 == _feed_count(trajectory) else
+           "groups of feed blocks)"),
+        "tool path: cyan nominal, red actual (with errors)",
+    ]
+    extent = scale * (part_hi - part_lo)
+    return lo, np.maximum(hi, anchor + extent * [1.0, 0.5, 1.0])
+
+
+def cut_by_block(trajectory, machine, tool, stock, errors=None, max_stages: int = MAX_STAGES):
+    """The part after each feed block (or group of blocks), cut one after the other.
+
+    Parameters
+    ----------
+    trajectory : machinesim.motion.Trajectory
+    machine : machinesim.Machine
+    tool : tool object
+    stock : Part
+    errors : ErrorModel, optional
+    max_stages : int
+        At most this many cuts: feed blocks are grouped evenly when there are more.
+
+    Returns
+    -------
+    times : list of float
+        Program time (s) from which each stage is the current part: 0 for the stock, then the
+        end of each block or group.
+    parts : list of Part
+        The stock, then the part after each block or group (same length as ``times``).
+    """
+    feeds = [s for s in trajectory.segments if s.kind == "linear" and len(s.q) > 1]
+    groups = np.array_split(np.arange(len(feeds)), min(len(feeds), max_stages)) if feeds else []
+    times, parts = [0.0], [stock]
+    for group in groups:
+        paths = [machine.tool_pose(feeds[i].q, errors) for i in group]
+        part, _ = remove(parts[-1], tool, paths)
+        times.append(float(feeds[group[-1]].t[-1]))
+        parts.append(part)
+    return times, parts
+
+
+def _feed_count(trajectory) -> int:
+    return sum(1 for s in trajectory.segments if s.kind == "linear" and len(s.q) > 1)
+
+
+def _samples(trajectory, q0):
+    """All samples as (times (k,), axis values (k, n)), one sample per distinct time."""
+    if not trajectory.segments:
+        return np.array([0.0, 1.0]), np.vstack([q0, q0])
+    times = np.concatenate([s.t for s in trajectory.segments])
+    qs = np.vstack([s.q for s in trajectory.segments])
+    # at a block boundary the later sample holds: keep the last of equal times
+    last = np.append(np.diff(times) > 0.0, True)
+    times, qs = times[last], qs[last]
+    if len(times) == 1:
+        return np.array([0.0, 1.0]), np.vstack([qs[0], qs[0]])
+    return times, qs
+
+
+def _key_times(trajectory, end: float, speed: float) -> np.ndarray:
+    """Program times of the key frames: a uniform rate plus every block's start and end."""
+    count = max(int(np.ceil(end / speed * KEY_RATE)), 1)
+    segments = trajectory.segments if len(trajectory.segments) <= MAX_BLOCK_KEYS else ()
+    bounds = [s.t[0] for s in segments] + [s.t[-1] for s in segments]
+    keys = np.unique(np.concatenate([np.linspace(0.0, end, count + 1), bounds]))
+    return keys[(keys >= 0.0) & (keys <= end)]
+
+
+def _body_tracks(visualizer, machine, errors, times, key_q) -> dict:
+    """Tracks of every visual body, the workpiece node and the tool: at animation ``times``
+    (k,), s, the machine stands at axis values ``key_q`` (k, n)."""
+    model, data = visualizer.model, visualizer.data
+    geometry, gdata = visualizer.visual_model, visualizer.visual_data
+    binding = machine.binding(errors)
+    frames = {name: model.getFrameId(name) for name in ("workpiece", "tool_tip")}
+    bodies = {g.name: [] for g in geometry.geometryObjects}
+    placed = {name: [] for name in frames}
+    for q in key_q:
+        full = machine.kin.full_q(q, binding)
+        pin.forwardKinematics(model, data, full)
+        pin.updateFramePlacements(model, data)
+        pin.updateGeometryPlacements(model, data, geometry, gdata)
+        for g_id, g in enumerate(geometry.geometryObjects):
+            bodies[g.name].append(gdata.oMg[g_id].homogeneous)
+        for name, f_id in frames.items():
+            placed[name].append(data.oMf[f_id].homogeneous)
+    tracks = {visualizer.getViewerNodeName(g, pin.GeometryType.VISUAL):
+              transform_tracks(times, bodies[g.name]) for g in geometry.geometryObjects}
+    tracks["workpiece"] = transform_tracks(times, placed["workpiece"])
+    tracks["tool"] = transform_tracks(times, placed["tool_tip"])
+    return tracks
+
+
+def _machine_box(visualizer) -> tuple[np.ndarray, np.ndarray]:
+    """World box (m) of the visual bodies where they stand now."""
+    corners = []
+    for g_id, g in enumerate(visualizer.visual_model.geometryObjects):
+        shape = g.geometry
+        if hasattr(shape, "halfSide"):
+            half = np.asarray(shape.halfSide, dtype=np.float64)
+        elif hasattr(shape, "radius") and hasattr(shape, "halfLength"):
+            half = np.array([shape.radius, shape.radius, shape.halfLength])
+        else:
+            continue
+        box = np.array(np.meshgrid(*[(-h, h) for h in half])).reshape(3, -1).T
+        pose = visualizer.visual_data.oMg[g_id]
+        corners.append(box @ pose.rotation.T + pose.translation)
+    points = np.vstack(corners) if corners else np.zeros((1, 3))
+    return points.min(axis=0), points.max(axis=0)
+
+
+__all__ = ["DURATION_S", "MAX_STAGES", "cut_by_block", "machine_scene"]

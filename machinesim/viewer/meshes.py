@@ -1,0 +1,217 @@
+"""Meshes for display: PLY reading (exact), decimation and float32 buffers (display only).
+
+Measurements never go through this module's decimated or float32 output: the viewer measures
+on the exact float64 mesh (`machinesim.metrology`) and only then thins and converts what it
+draws.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import manifold3d
+import numpy as np
+
+from machinesim.exceptions import InputError
+
+#: Triangles of one displayed mesh above which it is decimated: ~200k triangles keep a scene
+#: interactive in a browser without a GPU (swiftshader) and the HTML file under ~10 MB.
+DISPLAY_TRIANGLES = 200_000
+#: Each decimation pass shrinks the clustering cell by this factor beyond the estimate when
+#: the estimate left too many triangles (a few passes at most).
+CELL_GROWTH = 1.25
+
+_PLY_TYPES = {
+    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
+    "short": "i2", "int16": "i2", "ushort": "u2", "uint16": "u2",
+    "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
+}
+
+
+def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a triangle mesh from a binary little-endian PLY (as `Part.export_ply` writes it).
+
+    Vertices stored as double come back bit for bit; float ones are widened to float64.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    vertices : ndarray, shape (n, 3), float64, m
+    triangles : ndarray, shape (m, 3), int64
+
+    Raises
+    ------
+    InputError
+        When the file is missing, not a binary little-endian PLY, or has non-triangle faces.
+    """
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"cannot read the PLY file ({exc.strerror})", source=str(path)) from None
+    end = data.find(b"end_header\n")
+    if not data.startswith(b"ply\n") or end < 0:
+        raise InputError("not a PLY file: expected 'ply' and 'end_header' lines",
+                         source=str(path))
+    header = data[:end].decode("ascii", errors="replace").splitlines()
+    if "format binary_little_endian 1.0" not in header:
+        fmt = next((h for h in header if h.startswith("format")), "no format line")
+        raise InputError(f"{fmt!r}: expected 'format binary_little_endian 1.0' (as "
+                         "machinesim writes parts)", source=str(path))
+    elements = _ply_elements(header, path)
+    offset = end + len(b"end_header\n")
+    vertices = triangles = None
+    for name, count, props in elements:
+        if name == "face":
+            triangles, offset = _ply_faces(data, offset, count, props, path)
+            continue
+        if any(kind == "list" for _, kind, _ in props):
+            raise InputError(f"element {name!r} has list properties; only 'face' may",
+                             source=str(path))
+        dtype = np.dtype([(p, "<" + _PLY_TYPES[kind]) for p, kind, _ in props])
+        block = np.frombuffer(data, dtype=dtype, count=count, offset=offset)
+        offset += dtype.itemsize * count
+        if name == "vertex":
+            if not {"x", "y", "z"} <= set(dtype.names):
+                raise InputError("vertex element lacks x, y, z", source=str(path))
+            vertices = np.column_stack([block[c].astype(np.float64) for c in "xyz"])
+    if vertices is None or triangles is None:
+        raise InputError("expected 'vertex' and 'face' elements", source=str(path))
+    if triangles.size and (triangles.min() < 0 or triangles.max() >= len(vertices)):
+        raise InputError(f"face indices outside [0, {len(vertices)})", source=str(path))
+    return vertices, triangles
+
+
+def _ply_elements(header: list[str], path: Path):
+    elements = []
+    for line in header:
+        words = line.split()
+        if not words:
+            continue
+        if words[0] == "element":
+            elements.append((words[1], int(words[2]), []))
+        elif words[0] == "property":
+            if not elements:
+                raise InputError("property before any element", source=str(path))
+            if words[1] == "list":
+                if len(words) != 5 or words[2] not in _PLY_TYPES or words[3] not in _PLY_TYPES:
+                    raise InputError(f"malformed list property {line!r}", source=str(path))
+                elements[-1][2].append((words[4], "list", (words[2], words[3])))
+            elif len(words) == 3 and words[1] in _PLY_TYPES:
+                elements[-1][2].append((words[2], words[1], None))
+            else:
+                raise InputError(f"unknown property {line!r}", source=str(path))
+    return elements
+
+
+def _ply_faces(data: bytes, offset: int, count: int, props, path: Path):
+    if len(props) != 1 or props[0][1] != "list":
+        raise InputError("expected faces with one list property (vertex_indices)",
+                         source=str(path))
+    count_type, index_type = props[0][2]
+    dtype = np.dtype([("n", "<" + _PLY_TYPES[count_type]),
+                      ("i", "<" + _PLY_TYPES[index_type], 3)])
+    faces = np.frombuffer(data, dtype=dtype, count=count, offset=offset)
+    if np.any(faces["n"] != 3):
+        raise InputError("only triangle faces are supported (every face with 3 indices)",
+                         source=str(path))
+    return faces["i"].astype(np.int64), offset + dtype.itemsize * count
+
+
+def triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Unnormalised outward normals (m^2, twice the area), shape (m, 3) float64."""
+    corner = vertices[triangles]
+    return np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
+
+
+def decimate(vertices, triangles, max_triangles: int = DISPLAY_TRIANGLES):
+    """Fewer triangles for display by vertex clustering (display only: never measure on it).
+
+    Vertices are merged per cubic cell (their mean), triangles whose corners fall in fewer than
+    three cells vanish, duplicates are dropped. The cell is chosen from the surface area so
+    that the result has at most ``max_triangles``; meshes already small enough come back
+    unchanged but for the vertices no triangle uses. The result need not be manifold.
+
+    Parameters
+    ----------
+    vertices : array-like, shape (n, 3), m
+    triangles : array-like, shape (m, 3), int
+    max_triangles : int
+
+    Returns
+    -------
+    vertices : ndarray, shape (n', 3), float64
+    triangles : ndarray, shape (m', 3), int64, m' <= max_triangles
+    """
+    vertices = np.asarray(vertices, dtype=np.float64)
+    triangles = np.asarray(triangles, dtype=np.int64)
+    if max_triangles < 1:
+        raise InputError(f"max_triangles must be at least 1, got {max_triangles}")
+    if len(triangles) <= max_triangles:
+        return compact(vertices, triangles)
+    area = 0.5 * np.linalg.norm(triangle_normals(vertices, triangles), axis=1).sum()
+    lo = vertices.min(axis=0)
+    # A clustered closed surface has about 2 triangles per occupied cell, A / h^2 cells.
+    # (A mesh of zero area starts from its extent instead.)
+    cell = np.sqrt(2.0 * area / max_triangles) or float(np.ptp(vertices, axis=0).max()) or 1.0
+    while True:
+        out_v, out_t = _cluster(vertices, triangles, lo, cell)
+        if len(out_t) <= max_triangles:
+            return out_v, out_t
+        cell *= max(CELL_GROWTH, np.sqrt(len(out_t) / max_triangles))
+
+
+def _cluster(vertices, triangles, lo, cell):
+    cells = np.floor((vertices - lo) / cell).astype(np.int64)
+    span = cells.max(axis=0) + 1
+    key = (cells[:, 0] * span[1] + cells[:, 1]) * span[2] + cells[:, 2]
+    _, group = np.unique(key, return_inverse=True)
+    counts = np.bincount(group).astype(np.float64)
+    merged = np.column_stack(
+        [np.bincount(group, weights=vertices[:, k]) / counts for k in range(3)])
+    tri = group[triangles]
+    keep = (tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])
+    tri = tri[keep]
+    # rotate each triangle to start at its smallest index, keeping its orientation
+    start = np.argmin(tri, axis=1)
+    rows = np.arange(len(tri))[:, None]
+    tri = tri[rows, (start[:, None] + np.arange(3)) % 3]
+    return compact(merged, np.unique(tri, axis=0))
+
+
+def compact(vertices: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The same triangles over only the vertices they use (in their original order)."""
+    used = np.zeros(len(vertices), dtype=bool)
+    used[triangles.ravel()] = True
+    remap = np.cumsum(used) - 1
+    return vertices[used], remap[triangles]
+
+
+def display_buffers(vertices, triangles) -> tuple[np.ndarray, np.ndarray]:
+    """float32 positions and uint32 indices for WebGL: display only, after measuring."""
+    return (np.ascontiguousarray(vertices, dtype=np.float32),
+            np.ascontiguousarray(triangles, dtype=np.uint32))
+
+
+def tool_mesh(tool) -> tuple[np.ndarray, np.ndarray]:
+    """A solid to draw for a tool (tool_tip frame, m): the hull of its points.
+
+    A V or round-nose profile has zero thickness; it is drawn 1/10 of its height thick along
+    the cutting direction X, for display only.
+    """
+    points = np.asarray(tool.vertices(), dtype=np.float64)
+    extent = np.ptp(points, axis=0)
+    if extent[0] == 0.0:
+        half = 0.05 * max(float(extent.max()), 1e-9)
+        points = np.vstack([points + [half, 0.0, 0.0], points - [half, 0.0, 0.0]])
+    mesh = manifold3d.Manifold.hull_points(points).to_mesh64()
+    return (np.asarray(mesh.vert_properties[:, :3], dtype=np.float64),
+            np.asarray(mesh.tri_verts, dtype=np.int64))
+
+
+__all__ = ["DISPLAY_TRIANGLES", "compact", "decimate", "display_buffers", "read_ply", "tool_mesh",
+           "triangle_normals"]

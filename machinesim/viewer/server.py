@@ -1,0 +1,89 @@
+"""The live server: meshcat's bridge with its web server bound to 127.0.0.1 only.
+
+meshcat's own server binds its ZeroMQ socket to 127.0.0.1 but its web server (tornado's
+``listen(port)``) to every interface. This one binds both to the loopback interface and
+serves the scene's page (meshcat's viewer plus the overlay with notes and legends) at the
+URL it prints. Run as ``python -m machinesim.viewer.server [--port PORT]`` (`live.serve`
+does); it prints ``zmq_url=...`` and ``web_url=...`` and runs until interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+import tornado.web
+from meshcat.servers.zmqserver import (
+    VIEWER_ROOT,
+    StaticFileHandlerNoCache,
+    WebSocketHandler,
+    ZMQWebSocketBridge,
+)
+
+from machinesim.viewer.live import LOOPBACK, PAGE_COMMAND
+from machinesim.viewer.scene import page
+
+
+class _LoopbackApplication(tornado.web.Application):
+    """A tornado application that listens on `LOOPBACK` whatever address it is given."""
+
+    def listen(self, port, address=None, **kwargs):
+        return super().listen(port, address=LOOPBACK, **kwargs)
+
+
+class LoopbackBridge(ZMQWebSocketBridge):
+    """meshcat's ZeroMQ-to-WebSocket bridge, listening on the loopback interface only."""
+
+    def __init__(self, port: int | None = None) -> None:
+        self.title, self.overlay = "machinesim", ""
+        super().__init__(host=LOOPBACK, port=port)
+
+    def make_app(self):
+        bridge = self
+
+        class PageHandler(tornado.web.RequestHandler):
+            def get(self, *_):
+                self.set_header("Cache-Control", "no-store")
+                self.write(bridge.page())
+
+        return _LoopbackApplication([
+            (r"/static/(?:index\.html)?", PageHandler),
+            (r"/static/(.*)", StaticFileHandlerNoCache,
+             {"path": VIEWER_ROOT, "default_filename": "index.html"}),
+            (r"/", WebSocketHandler, {"bridge": self}),
+        ])
+
+    def page(self) -> str:
+        script = ('<script src="main.min.js"></script>\n<script>\n'
+                  'var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));\n'
+                  "viewer.connect();\n</script>")
+        return page(self.title, self.overlay, script)
+
+    def handle_zmq(self, frames):
+        if frames[0] == PAGE_COMMAND:
+            self.title, self.overlay = frames[1].decode("utf-8"), frames[2].decode("utf-8")
+            self.zmq_socket.send(b"ok")
+            return
+        super().handle_zmq(frames)
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description="meshcat server on 127.0.0.1 only")
+    parser.add_argument("--port", type=int, default=None)
+    args = parser.parse_args(argv)
+    bridge = LoopbackBridge(port=args.port)
+    print(f"zmq_url={bridge.zmq_url}")
+    print(f"web_url={bridge.web_url}", flush=True)
+    # nobody reads the pipe after the URLs: a full pipe would stall the server
+    sys.stdout = open(os.devnull, "w")
+    try:
+        bridge.run()
+    except KeyboardInterrupt:
+        pass
+
+
+__all__ = ["LoopbackBridge", "main"]
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,200 @@
+"""Scenes of machined parts: one part (with its cut report), or a scenario report folder.
+
+A part is drawn as its colour-mapped top surface (`maps.surface_map`: deviation from a
+nominal part, else height) and, in the part colour, the faces that do not face up (sides,
+walls, bottom), decimated for display if large.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.viewer.maps import (
+    SurfaceMap,
+    legend_for,
+    map_mesh,
+    map_title,
+    mesh_of,
+    surface_map,
+)
+from machinesim.viewer.meshes import DISPLAY_TRIANGLES, decimate, read_ply, triangle_normals
+from machinesim.viewer.scene import Scene
+
+#: Colour of a part's faces that are not colour-mapped (sides, walls, bottom): pale copper,
+#: the material of many diamond-turned parts.
+PART_COLOUR = 0xD9A066
+#: Parts of a report folder stand side by side, this fraction of the largest one apart.
+GAP = 0.25
+#: Lines of a report JSON shown in the overlay (the rest is left out, with a note).
+MAX_NOTE_LINES = 14
+#: Camera position in the world for a scene scaled to 1 (front right, above): the whole
+#: scene fills about two thirds of the view of meshcat's 75-degree camera.
+CAMERA_POSITION = np.array([0.55, -0.9, 0.65])
+
+
+def add_part(scene: Scene, path: str, surface, nominal=None,
+             max_triangles: int = DISPLAY_TRIANGLES) -> SurfaceMap:
+    """Draw a part under ``path`` in its workpiece frame; return the surface map drawn.
+
+    Parameters
+    ----------
+    scene : Scene
+    path : str
+        Scene node, e.g. ``"parts/part"``: the map goes to ``path/map``, the other faces to
+        ``path/body``.
+    surface : Part or tuple of (vertices, triangles)
+        The part, exact float64 (measured before anything is thinned).
+    nominal : Part or tuple, optional
+        Colour by deviation from this part; else by height.
+    max_triangles : int
+        Display budget of each of the two meshes.
+    """
+    vertices, triangles = mesh_of(surface)
+    smap = surface_map((vertices, triangles), nominal, max_triangles)
+    grid_v, grid_t, rgb = map_mesh(smap)
+    scene.add_mesh(f"{path}/map", grid_v, grid_t, rgb=rgb)
+    # the map covers every face that faces up; the rest keeps the part's silhouette
+    body = triangles[triangle_normals(vertices, triangles)[:, 2] <= 0.0]
+    if len(body):
+        scene.add_mesh(f"{path}/body", *decimate(vertices, body, max_triangles),
+                       colour=PART_COLOUR)
+    return smap
+
+
+def frame_scene(scene: Scene, lo, hi, root: str = "/meshcat") -> None:
+    """Scale and shift ``root`` so the box [lo, hi] (m) is ~1 unit, centred at the origin,
+    and aim the camera at it (meshcat's camera orbits the origin)."""
+    lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    size = float(np.max(hi - lo)) or 1.0
+    scale = 1.0 / size
+    matrix = np.diag([scale, scale, scale, 1.0])
+    matrix[:3, 3] = -0.5 * (lo + hi) * scale
+    scene.set_transform(root, matrix)
+    scene.set_camera(CAMERA_POSITION)
+
+
+def part_scene(surface, nominal=None, report=None, title: str = "machined part",
+               max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
+    """A scene of one part, colour-mapped, with its cut report's figures in the overlay.
+
+    Parameters
+    ----------
+    surface : Part or tuple of (vertices, triangles) or path of a PLY file
+    nominal : Part or tuple or path, optional
+    report : dict or path of a JSON file, optional
+        A cut report (`CutReport.to_dict`) or any JSON object: its entries become notes.
+    title : str
+    max_triangles : int
+    """
+    vertices, triangles = mesh_of(_load(surface))
+    scene = Scene(title)
+    smap = add_part(scene, "part", (vertices, triangles),
+                    _load(nominal) if nominal is not None else None, max_triangles)
+    scene.notes += _mesh_notes(len(triangles), max_triangles)
+    if report is not None:
+        scene.notes += report_notes(report)
+    scene.legends.append(legend_for(smap))
+    frame_scene(scene, vertices.min(axis=0), vertices.max(axis=0))
+    return scene
+
+
+def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
+    """A scene of a scenario report folder: its part meshes side by side and its summary.
+
+    The folder holds ``*.ply`` parts and ``summary.json``. The nominal part is the one that
+    ``summary.json`` names under ``"nominal_ply"``, else ``nominal.ply`` if present; every
+    other part is coloured by its deviation from it (without a nominal: by height).
+    """
+    folder = Path(folder)
+    plys = sorted(folder.glob("*.ply"))
+    summary_path = folder / "summary.json"
+    if not plys:
+        raise InputError(f"{folder}: no part meshes (*.ply) in this folder; a report folder "
+                         "holds *.ply parts and summary.json")
+    summary = _read_json(summary_path) if summary_path.is_file() else {}
+    if not isinstance(summary, dict):
+        raise InputError(f"expected a JSON object, got {type(summary).__name__}",
+                         source=str(summary_path))
+    nominal_path = folder / str(summary.get("nominal_ply", "nominal.ply"))
+    shown = [p for p in plys if p != nominal_path] or plys
+    # a folder holding only the nominal part shows it by height
+    nominal = read_ply(nominal_path) if nominal_path.is_file() and shown != plys else None
+    scene = Scene(f"report {folder.name}")
+    if summary:
+        scene.notes += report_notes(summary)
+    else:
+        scene.notes.append("no summary.json in this folder")
+    if nominal is not None:
+        scene.notes.append(f"coloured by deviation from {nominal_path.name}")
+    meshes = [read_ply(p) for p in shown]
+    boxes = [(v.min(axis=0), v.max(axis=0)) for v, _ in meshes]
+    step = (1.0 + GAP) * max(float(np.max(hi - lo)) for lo, hi in boxes)
+    lo_all, hi_all = np.full(3, math.inf), np.full(3, -math.inf)
+    for k, (p, mesh, (lo, hi)) in enumerate(zip(shown, meshes, boxes, strict=True)):
+        # side by side along X: shift each part's box to start at k * step
+        shift = np.array([k * step - lo[0], -0.5 * (lo[1] + hi[1]), 0.0])
+        place = np.eye(4)
+        place[:3, 3] = shift
+        node = f"parts/{k}"
+        scene.set_transform(node, place)
+        smap = add_part(scene, node, mesh, nominal, max_triangles)
+        scene.legends.append(legend_for(smap, title=f"{p.name}: {map_title(smap.kind)}",
+                                        notes=_mesh_notes(len(mesh[1]), max_triangles)))
+        lo_all, hi_all = np.minimum(lo_all, lo + shift), np.maximum(hi_all, hi + shift)
+    frame_scene(scene, lo_all, hi_all)
+    return scene
+
+
+def report_notes(report) -> list[str]:
+    """'key: value' lines of a report (a dict, or a JSON file's path), nested keys dotted."""
+    data = _read_json(Path(report)) if isinstance(report, str | Path) else report
+    if not isinstance(data, dict):
+        raise InputError(f"expected a JSON object as report, got {type(data).__name__}")
+    lines = []
+
+    def walk(prefix: str, value) -> None:
+        if isinstance(value, dict):
+            for key, item in value.items():
+                walk(f"{prefix}{key}.", item)
+        elif isinstance(value, float):
+            lines.append(f"{prefix[:-1]}: {value:.6g}")
+        elif isinstance(value, list) and len(value) > 4:
+            lines.append(f"{prefix[:-1]}: [{len(value)} entries]")
+        else:
+            lines.append(f"{prefix[:-1]}: {value}")
+
+    walk("", data)
+    if len(lines) > MAX_NOTE_LINES:
+        lines = lines[:MAX_NOTE_LINES] + [f"... {len(lines) - MAX_NOTE_LINES} more entries"]
+    return lines
+
+
+def _mesh_notes(count: int, max_triangles: int) -> list[str]:
+    if count <= max_triangles:
+        return [f"{count:,} triangles"]
+    return [f"{count:,} triangles, drawn decimated (display only; measured exact)"]
+
+
+def _load(surface):
+    if isinstance(surface, str | Path):
+        return read_ply(surface)
+    return surface
+
+
+def _read_json(path: Path):
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InputError(f"cannot read ({exc.strerror})", source=str(path)) from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON: {exc.msg}", source=str(path), line=exc.lineno,
+                         column=exc.colno) from None
+
+
+__all__ = ["PART_COLOUR", "add_part", "frame_scene", "part_scene", "report_notes",
+           "report_scene"]

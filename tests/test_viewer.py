@@ -1,0 +1,374 @@
+"""The viewer without a browser: exact maps, decimation, staged cuts, scene contents, export,
+the loopback server and the command line (the browser itself: test_viewer_browser.py)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import urllib.request
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import manifold3d
+import numpy as np
+import pytest
+import umsgpack
+from scipy.spatial.transform import Rotation
+
+from machinesim import ErrorModel, ToolSetting, load_machine
+from machinesim.cutting import cut
+from machinesim.exceptions import InputError, ModelError
+from machinesim.metrology import height_map
+from machinesim.motion import plan
+from machinesim.nc import ProgramBuilder
+from machinesim.tools import tool_from_spec
+from machinesim.viewer import (
+    cut_by_block,
+    decimate,
+    machine_scene,
+    part_scene,
+    read_ply,
+    serve,
+    surface_map,
+    write_html,
+)
+from machinesim.viewer.cli import add_view_parser, run_view
+from machinesim.viewer.maps import DIVERGING, NO_DATA, colours, legend_for, map_mesh
+from machinesim.viewer.scene import Scene
+from machinesim.viewer.views import report_notes
+from machinesim.workpiece import Part, block, stock_from_spec
+
+UM, MM = 1e-6, 1e-3
+#: A small display budget keeps these scenes fast; the exactness checks do not depend on it.
+BUDGET = 4000
+
+
+def grooves(n=4, pitch=150 * UM, depth=20 * UM, y0=0.2 * MM, length=1 * MM):
+    """Grooves along X across a 1 mm block, entering and leaving outside it."""
+    b = ProgramBuilder(1)
+    for i in range(n):
+        b.rapid(X=-0.2 * MM, Y=y0 + i * pitch, Z=0.1 * MM).rapid(Z=-depth)
+        b.linear(X=length + 0.2 * MM, feed_mm_per_min=500.0).rapid(Z=0.1 * MM)
+    return b.build()
+
+
+ERRORS = ErrorModel(tool=ToolSetting([0.0, 4 * UM, -1 * UM], [0.0, 0.0, 0.0]))
+STOCK = "block:1x0.8x0.5"
+
+
+def tilted_block(slope: float, length=2 * MM, width=1 * MM, height=0.5 * MM) -> Part:
+    """Block [0, L] x [0, W] x [-H, top] whose top is z = slope * (x - L/2)."""
+    x, y = (0.0, length), (0.0, width)
+    top = [slope * (xi - length / 2) for xi in x]
+    vertices = [(x[i], y[j], z) for z in (-height, None) for j in (0, 1) for i in (0, 1)]
+    vertices = [(vx, vy, top[i % 2] if vz is None else vz)
+                for i, (vx, vy, vz) in enumerate(vertices)]
+    faces = [(0, 2, 3), (0, 3, 1), (4, 5, 7), (4, 7, 6), (0, 1, 5), (0, 5, 4),
+             (1, 3, 7), (1, 7, 5), (3, 2, 6), (3, 6, 7), (2, 0, 4), (2, 4, 6)]
+    return Part.from_mesh(vertices, faces)
+
+
+def decoded(scene: Scene) -> list[dict]:
+    return [umsgpack.unpackb(data) for _, _, data in scene.frames]
+
+
+def floats(ext) -> np.ndarray:
+    return np.frombuffer(ext.data, dtype=np.float32)
+
+
+# ------------------------------------------------------------------------------- meshes
+
+def test_read_ply_gives_back_the_exact_float64_mesh(tmp_path):
+    part = stock_from_spec("cylinder:1.234567x0.5@0.1,0.2,0.3")
+    part.export_ply(tmp_path / "part.ply")
+    vertices, triangles = read_ply(tmp_path / "part.ply")
+    expected_v, expected_t = part.mesh()
+    assert vertices.dtype == np.float64
+    assert np.array_equal(vertices, expected_v)  # bit for bit
+    assert np.array_equal(triangles, expected_t)
+
+
+def test_read_ply_refuses_what_it_cannot_read(tmp_path):
+    ascii_ply = tmp_path / "ascii.ply"
+    ascii_ply.write_text("ply\nformat ascii 1.0\nelement vertex 0\nend_header\n")
+    with pytest.raises(InputError, match="binary_little_endian"):
+        read_ply(ascii_ply)
+    quad = tmp_path / "quad.ply"
+    header = (b"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty double x\n"
+              b"property double y\nproperty double z\nelement face 1\n"
+              b"property list uchar int vertex_indices\nend_header\n")
+    body = np.zeros((4, 3)).tobytes() + bytes([4]) + np.arange(4, dtype="<i4").tobytes()
+    quad.write_bytes(header + body)
+    with pytest.raises(InputError, match="only triangle faces"):
+        read_ply(quad)
+    with pytest.raises(InputError, match="cannot read"):
+        read_ply(tmp_path / "missing.ply")
+
+
+def test_decimate_meets_the_budget_and_keeps_the_shape():
+    radius = 5 * MM
+    mesh = manifold3d.Manifold.sphere(radius, 600).to_mesh64()
+    vertices, triangles = np.asarray(mesh.vert_properties), np.asarray(mesh.tri_verts)
+    assert len(triangles) > 100_000
+    out_v, out_t = decimate(vertices, triangles, 20_000)
+    assert 5_000 < len(out_t) <= 20_000  # thinned to the budget, not far below it
+    # cluster means of points on the sphere stay within a cell of it: cells of ~0.1 mm here
+    r = np.linalg.norm(out_v, axis=1)
+    assert np.all(r <= radius * (1 + 1e-12)) and np.all(r > radius - 0.2 * MM)
+    assert out_t.min() == 0 and out_t.max() == len(out_v) - 1  # every vertex used
+    same_v, same_t = decimate(vertices, triangles, len(triangles))
+    assert np.array_equal(same_v, vertices) and np.array_equal(same_t, triangles)
+    with pytest.raises(InputError, match="max_triangles"):
+        decimate(vertices, triangles, 0)
+
+
+# --------------------------------------------------------------------------------- maps
+
+def test_deviation_map_of_a_tilted_top_is_the_exact_plane_difference():
+    slope = 1e-4  # 0.1 um per mm: +-100 nm over the 2 mm block
+    smap = surface_map(tilted_block(slope), block(2 * MM, 1 * MM, 0.5 * MM), BUDGET)
+    expected = slope * (smap.x - 1 * MM)[None, :] * np.ones((len(smap.y), 1))
+    # float64 plane evaluations of ~1e-7 m values: round-off ~1e-22 m, far below 1e-18 m
+    np.testing.assert_allclose(smap.values, expected, rtol=0, atol=1e-18)
+    assert smap.kind == "deviation"
+    assert smap.peak_to_valley == pytest.approx(200e-9, rel=1e-12)
+    legend = legend_for(smap)
+    assert [label for _, label in legend.ticks] == ["-100 nm", "-50 nm", "+0 nm", "+50 nm",
+                                                    "+100 nm"]
+    assert legend.notes[0].startswith("P-V 200 nm, RMS")
+
+
+def test_map_mesh_faces_up_covers_the_part_and_leaves_out_cells_off_it():
+    smap = surface_map(tilted_block(1e-4), block(2 * MM, 1 * MM, 0.5 * MM), BUDGET)
+    vertices, triangles, rgb = map_mesh(smap)
+    nx, ny = len(smap.x), len(smap.y)
+    assert len(triangles) == 2 * (nx - 1) * (ny - 1) <= BUDGET
+    corner = vertices[triangles]
+    normal_z = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])[:, 2]
+    assert np.all(normal_z > 0)
+    # the scale is symmetric and the extremes are at x = 0 and x = L: the end colours
+    np.testing.assert_allclose(rgb[0], DIVERGING[0], atol=1e-12)
+    np.testing.assert_allclose(rgb[nx - 1], DIVERGING[-1], atol=1e-12)
+    round_map = surface_map(stock_from_spec("cylinder:1x0.5"), max_triangles=BUDGET)
+    _, round_tri, _ = map_mesh(round_map)
+    assert 0 < len(round_tri) < 2 * (len(round_map.x) - 1) * (len(round_map.y) - 1)
+    assert np.all(np.isfinite(round_map.heights.ravel()[np.unique(round_tri)]))
+
+
+def test_colours_interpolate_the_stops_and_mark_missing_values():
+    rgb = colours([-2.0, -1.0, 0.0, 0.5, 1.0, 3.0, np.nan], -1.0, 1.0, DIVERGING)
+    np.testing.assert_allclose(rgb[0], DIVERGING[0])  # clipped below
+    np.testing.assert_allclose(rgb[1], DIVERGING[0])
+    np.testing.assert_allclose(rgb[2], DIVERGING[5])  # the middle of 11 stops
+    np.testing.assert_allclose(rgb[3], 0.5 * (DIVERGING[7] + DIVERGING[8]))
+    np.testing.assert_allclose(rgb[4], DIVERGING[-1])
+    np.testing.assert_allclose(rgb[5], DIVERGING[-1])
+    np.testing.assert_allclose(rgb[6], NO_DATA)
+
+
+# ----------------------------------------------------------------------- staged cutting
+
+def test_cutting_block_by_block_ends_with_the_part_cut_in_one_go():
+    machine = load_machine("grooving_4axis")
+    tool = tool_from_spec("v:150")
+    stock = stock_from_spec(STOCK)
+    trajectory = plan(grooves(), machine, ERRORS, tool_points=tool.vertices())
+    times, parts = cut_by_block(trajectory, machine, tool, stock, ERRORS)
+    assert len(parts) == 5 and times[0] == 0.0 and np.all(np.diff(times) > 0)
+    assert np.all(np.diff([p.volume for p in parts]) < 0)  # every groove removes material
+    whole, _ = cut(grooves(), machine, tool=tool, stock=stock, errors=ERRORS)
+    assert parts[-1].volume == pytest.approx(whole.volume, rel=1e-12)
+    x, y = np.linspace(0.1 * MM, 0.9 * MM, 9), np.linspace(0.0, 0.8 * MM, 801)
+    # the same planes cut in another order: heights agree to float64 round-off (1 pm)
+    np.testing.assert_allclose(height_map(parts[-1], x, y), height_map(whole, x, y),
+                               rtol=0, atol=1e-12)
+    _, grouped = cut_by_block(trajectory, machine, tool, stock, ERRORS, max_stages=2)
+    assert len(grouped) == 3
+    assert grouped[-1].volume == pytest.approx(whole.volume, rel=1e-12)
+
+
+# ----------------------------------------------------------------------- machine scene
+
+def test_machine_scene_draws_every_visual_and_moves_the_tool_as_the_kinematics_say():
+    machine = load_machine("grooving_4axis")
+    scene = machine_scene(machine, grooves(), tool="v:150", stock=STOCK, errors=ERRORS,
+                          max_triangles=BUDGET)
+    commands = decoded(scene)
+    objects = {c["path"] for c in commands if c["type"] == "set_object"}
+    # every <visual> of every link in the URDF, named as Pinocchio names them: link_k
+    visuals = {f"/meshcat/machine/visuals/{link.get('name')}_{k}"
+               for link in ET.fromstring(machine.urdf_xml).iter("link")
+               for k, _ in enumerate(link.findall("visual"))}
+    assert len(visuals) == 8 and visuals <= objects
+    assert {"/meshcat/tool", "/meshcat/workpiece/paths/nominal",
+            "/meshcat/workpiece/paths/actual", "/meshcat/inspection/part/map"} <= objects
+    [animation] = [c for c in commands if c["type"] == "set_animation"]
+    clips = {a["path"]: a["clip"] for a in animation["animations"]}
+
+    def pose_at_end(path):
+        tracks = {t["name"]: t["keys"][-1]["value"] for t in clips[path]["tracks"]}
+        pose = np.eye(4)
+        pose[:3, :3] = Rotation.from_quat(tracks[".quaternion"]).as_matrix()
+        pose[:3, 3] = tracks[".position"]
+        return pose
+
+    end_q = plan(grooves(), machine, ERRORS).segments[-1].q[-1]
+    wMt = np.linalg.inv(pose_at_end("/meshcat/workpiece")) @ pose_at_end("/meshcat/tool")
+    # Pinocchio's forward kinematics vs machinesim's batched chain: tolerances.POSE_M
+    np.testing.assert_allclose(wMt, machine.tool_pose(end_q, ERRORS), rtol=0, atol=1e-12)
+
+    stages = {p: c for p, c in clips.items() if "/stages/" in p}
+    assert len(stages) == 5
+    for t in np.linspace(0.0, max(k["time"] for c in clips.values()
+                                  for tr in c["tracks"] for k in tr["keys"]), 97):
+        shown = 0
+        for clip in stages.values():
+            keys = clip["tracks"][0]["keys"]
+            shown += [k["value"] for k in keys if k["time"] <= t][-1]
+        assert shown == 1  # one stage of the part at any time
+
+    [nominal] = [c for c in commands if c["path"] == "/meshcat/workpiece/paths/nominal"]
+    points = floats(nominal["object"]["geometries"][0]["data"]["attributes"]["position"]["array"])
+    feed_q = np.vstack([s.q for s in plan(grooves(), machine, ERRORS).segments])
+    expected = machine.tool_pose(feed_q, None)[:, :3, 3]
+    # float32 display buffers: 24-bit mantissa on coordinates under 2 mm
+    np.testing.assert_allclose(points.reshape(-1, 3), expected, rtol=0, atol=1e-9)
+
+
+def test_machine_scene_without_program_and_with_bad_settings():
+    scene = machine_scene("robonano_a0ib")
+    assert not [c for c in decoded(scene) if c["type"] == "set_animation"]
+    assert scene.notes[0].startswith("travel: X -140..140 mm")
+    with pytest.raises(InputError, match="duration_s and max_stages must be positive"):
+        machine_scene("grooving_4axis", grooves(), stock=STOCK, duration_s=0.0)
+
+
+# ------------------------------------------------------------------------------ export
+
+def test_exported_html_is_self_contained_and_written_whole(tmp_path, monkeypatch):
+    scene = part_scene(tilted_block(1e-4), nominal=block(2 * MM, 1 * MM, 0.5 * MM),
+                       max_triangles=BUDGET)
+    target = write_html(scene, tmp_path / "part.html")
+    text = target.read_text(encoding="utf-8")
+    urls = set(re.findall(r"(?:https?|wss?|ftp)://[^\s\"'`)]+", text))
+    # XHTML's namespace name inside three.js (never fetched) and meshcat's default server
+    # address, used only by viewer.connect(), which the exported page never calls
+    assert urls == {"http://www.w3.org/1999/xhtml", "ws://${location.host}"}
+    assert "viewer.connect(" not in text
+    assert " src=" not in text and "<link" not in text
+    assert text.count("MeshCat.Viewer") == 1 and "deviation from nominal" in text
+
+    def broken(self):
+        raise RuntimeError("interrupted")
+
+    monkeypatch.setattr(Scene, "to_html", broken)
+    with pytest.raises(RuntimeError):
+        write_html(scene, target)
+    assert target.read_text(encoding="utf-8") == text  # the old file, whole
+    assert [p.name for p in tmp_path.iterdir()] == ["part.html"]  # no temp file left
+
+
+def test_report_notes_flatten_nested_keys():
+    lines = report_notes({"volume_mm3": 0.0123456789, "rapid": {"lines": [1, 2]},
+                          "big": list(range(10))})
+    assert lines == ["volume_mm3: 0.0123457", "rapid.lines: [1, 2]", "big: [10 entries]"]
+    many = report_notes({f"k{i}": i for i in range(20)})
+    assert len(many) == 15 and many[-1] == "... 6 more entries"
+
+
+# -------------------------------------------------------------------------------- live
+
+def _listening(pid: int) -> list[tuple[str, int]]:
+    """(address, port) of the TCP sockets process ``pid`` listens on (Linux /proc)."""
+    inodes = set()
+    for fd in os.listdir(f"/proc/{pid}/fd"):
+        try:
+            link = os.readlink(f"/proc/{pid}/fd/{fd}")
+        except OSError:
+            continue
+        if link.startswith("socket:["):
+            inodes.add(link[8:-1])
+    found = []
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        for line in Path(table).read_text().splitlines()[1:]:
+            fields = line.split()
+            if fields[3] == "0A" and fields[9] in inodes:  # 0A: LISTEN
+                address, port = fields[1].split(":")
+                if len(address) == 8:
+                    address = ".".join(str(int(address[i:i + 2], 16)) for i in (6, 4, 2, 0))
+                found.append((address, int(port, 16)))
+    return found
+
+
+def test_live_server_listens_on_loopback_only_and_serves_the_page():
+    scene = part_scene(tilted_block(1e-4), max_triangles=BUDGET)
+    with serve(scene) as live:
+        sockets = _listening(live.process.pid)
+        assert len(sockets) == 2  # the web server and the ZeroMQ socket
+        assert {address for address, _ in sockets} == {"127.0.0.1"}
+        assert live.url == f"http://127.0.0.1:{sockets[0][1]}/static/" or \
+            live.url == f"http://127.0.0.1:{sockets[1][1]}/static/"
+        with urllib.request.urlopen(live.url, timeout=10) as response:
+            page = response.read().decode("utf-8")
+        assert "viewer.connect()" in page and "height z (workpiece frame)" in page
+        # background (2), hidden grid and axes, camera (2), root transform, map and body
+        assert live.messages == 9
+    assert live.process.poll() is not None
+
+
+# --------------------------------------------------------------------------------- cli
+
+def run(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(prog="machinesim")
+    add_view_parser(parser.add_subparsers(dest="command", required=True))
+    return run_view(parser.parse_args(["view", *argv]))
+
+
+def test_cli_exports_a_machine_a_part_and_a_report_folder(tmp_path, capsys):
+    program = tmp_path / "grooves.nc"
+    program.write_text("G90 G21\nG00 X-0.2 Y0.4 Z0.1\nG00 Z-0.02\nG01 X1.2 F500\n"
+                       "G00 Z0.1\nM30\n")
+    assert run(["grooving_4axis", "--program", str(program), "--stock", STOCK,
+                "--tool", "v:150", "--max-triangles", str(BUDGET),
+                "--html", str(tmp_path / "m.html")]) == 0
+    assert "self-contained" in capsys.readouterr().out
+
+    part, report = cut(grooves(), "grooving_4axis", tool="v:150", stock=STOCK, errors=ERRORS)
+    nominal, _ = cut(grooves(), "grooving_4axis", tool="v:150", stock=STOCK)
+    part.export_ply(tmp_path / "part.ply")
+    nominal.export_ply(tmp_path / "nominal.ply")
+    (tmp_path / "report.json").write_text(json.dumps(report.to_dict()))
+    assert run([str(tmp_path / "part.ply"), "--report", str(tmp_path / "report.json"),
+                "--nominal", str(tmp_path / "nominal.ply"), "--max-triangles", str(BUDGET),
+                "--html", str(tmp_path / "p.html")]) == 0
+    text = (tmp_path / "p.html").read_text(encoding="utf-8")
+    assert "removed_volume_mm3" in text and "deviation from nominal" in text
+
+    folder = tmp_path / "report"
+    folder.mkdir()
+    for name in ("nominal.ply", "part.ply"):
+        (folder / name).write_bytes((tmp_path / name).read_bytes())
+    (folder / "summary.json").write_text(json.dumps({"pv_nm": 123.0}))
+    assert run([str(folder), "--max-triangles", str(BUDGET),
+                "--html", str(tmp_path / "r.html")]) == 0
+    text = (tmp_path / "r.html").read_text(encoding="utf-8")
+    assert "pv_nm: 123" in text and "part.ply: deviation from nominal" in text
+    assert "coloured by deviation from nominal.ply" in text
+
+
+def test_cli_refuses_bad_input_with_a_clear_message(tmp_path):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(InputError, match="no part meshes"):
+        run([str(empty), "--html", str(tmp_path / "x.html")])
+    with pytest.raises(InputError, match="no such part file"):
+        run([str(tmp_path / "missing.ply"), "--html", str(tmp_path / "x.html")])
+    with pytest.raises(InputError, match="--program do\\(es\\) not apply to a part"):
+        run([str(tmp_path / "missing.ply"), "--program", "p.nc"])
+    with pytest.raises(InputError, match="expected a file name ending in .html"):
+        run(["robonano_a0ib", "--html", str(tmp_path / "x.png")])
+    with pytest.raises(ModelError, match="unknown machine 'nosuch'"):
+        run(["nosuch", "--html", str(tmp_path / "x.html")])
+    assert not list(tmp_path.glob("*.html"))
