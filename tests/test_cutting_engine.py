@@ -2,10 +2,12 @@
 
 import math
 
+import manifold3d
 import numpy as np
 import pytest
 
 from machinesim.cutting import remove, rotary_substeps
+from machinesim.cutting.stitch import exact_box, stitch
 from machinesim.exceptions import InputError
 from machinesim.tools import BallEndMill, VTool
 from machinesim.workpiece import block
@@ -240,3 +242,53 @@ def test_overlapping_windows_count_their_common_part_once():
     removed = depth * depth * 1.5e-3
     assert part.volume == pytest.approx(1.5e-3 * 1e-3 * 1e-3 - removed, rel=VOLUME_REL)
     assert report.removed_volume == pytest.approx(removed, rel=1e-9)
+
+
+def _tile_pieces(walls_x, walls_y, hull):
+    boxes, pieces = [], []
+    for x0, x1 in zip(walls_x[:-1], walls_x[1:], strict=True):
+        for y0, y1 in zip(walls_y[:-1], walls_y[1:], strict=True):
+            boxes.append((x0, x1, y0, y1))
+            pieces.append(exact_box(x0, x1, y0, y1, -1e-3, 0.0) - hull)
+    return boxes, pieces
+
+
+def test_stitched_tiles_are_the_union_of_the_tiles():
+    # A groove running diagonally across four tiles: its flanks cross every wall.
+    tool = VTool(math.pi / 2).vertices()
+    rotation = np.array([[math.cos(0.3), -math.sin(0.3), 0], [math.sin(0.3), math.cos(0.3), 0],
+                         [0, 0, 1.0]])
+    ends = [tool @ rotation.T + p for p in ([-0.2e-3, 0.1e-3, -20e-6], [1.2e-3, 0.6e-3, -20e-6])]
+    hull = manifold3d.Manifold.hull_points(np.vstack(ends))
+    walls = [0.0, 0.4123e-3, 1e-3]
+    boxes, pieces = _tile_pieces(walls, walls, hull)
+    joined = stitch(pieces, boxes, (0.0, 1e-3, 0.0, 1e-3), 1e-3)
+    union = manifold3d.Manifold.batch_boolean(pieces, manifold3d.OpType.Add)
+    assert joined is not None
+    assert joined.volume() == pytest.approx(union.volume(), rel=VOLUME_REL)
+    assert joined.num_tri() <= union.num_tri() + 8  # no wall faces left inside
+    v_joined = np.unique(np.asarray(joined.to_mesh64().vert_properties), axis=0)
+    v_union = np.unique(np.asarray(union.to_mesh64().vert_properties), axis=0)
+    assert len(v_joined) == len(v_union)
+    np.testing.assert_allclose(v_joined, v_union, atol=1e-18)
+
+
+def test_stitch_refuses_tiles_whose_walls_do_not_match():
+    hull = manifold3d.Manifold.hull_points(np.vstack(
+        [VTool(math.pi / 2).vertices() + p for p in ([-1e-4, 0.5e-3, -2e-5],
+                                                       [1.1e-3, 0.5e-3, -2e-5])]))
+    boxes, pieces = _tile_pieces([0.0, 0.5e-3, 1e-3], [0.0, 1e-3], hull)
+    # The right tile's groove 1 nm off: its wall section no longer matches the left one's.
+    pieces[1] = exact_box(*boxes[1], -1e-3, 0.0) - hull.translate((0.0, 1e-9, 0.0))
+    assert stitch(pieces, boxes, (0.0, 1e-3, 0.0, 1e-3), 1e-3) is None
+
+
+def test_stitch_keeps_the_wall_of_an_empty_neighbour():
+    hull = manifold3d.Manifold.hull_points(np.vstack(
+        [VTool(math.pi / 2).vertices() + p for p in ([-1e-4, 0.5e-3, -2e-5],
+                                                       [1.1e-3, 0.5e-3, -2e-5])]))
+    boxes, pieces = _tile_pieces([0.0, 0.5e-3, 1e-3], [0.0, 1e-3], hull)
+    pieces[1] = manifold3d.Manifold()  # all material of the right tile is gone
+    joined = stitch(pieces, boxes, (0.0, 1e-3, 0.0, 1e-3), 1e-3)
+    assert joined is not None
+    assert joined.volume() == pytest.approx(pieces[0].volume(), rel=VOLUME_REL)

@@ -14,10 +14,12 @@ Speed comes from never touching the part mesh once per sweep:
    stay (almost) disjoint and their union is nearly free.
 3. Sweeps are grouped by their direction of travel in XY. Parallel sweeps are unioned in
    one `batch_boolean`; groups that cross each other are subtracted one after the other,
-   because the union of crossing sweeps costs as much as cutting them.
-4. The region is split into cells (ROI windows, and tiles inside them): each cell is cut
-   with only the sweeps that touch it, so no boolean handles a polygon with thousands of
-   notches, and cells are joined by one union at the end.
+   each evaluated before the next, because the union of crossing sweeps costs as much as
+   cutting them (and manifold3d, left lazy, would form exactly that union).
+4. The region is split into cells (ROI windows, and a grid of tiles inside each): a tile is
+   cut with only the sweeps that touch it, which keeps manifold3d's faster-than-linear
+   boolean cost down, and the tiles of a cell are joined by `stitch` (a mesh merge along
+   the walls, with a boolean union as the fallback), the cells by one union.
 """
 
 from __future__ import annotations
@@ -32,7 +34,15 @@ import numpy as np
 from manifold3d import OpType
 
 from machinesim.cutting.stitch import exact_box, stitch
+from machinesim.cutting.tiling import (
+    SWEEPS_PER_TILE,
+    grid_tiles,
+    members_in,
+    overlapping,
+    tile_box,
+)
 from machinesim.exceptions import InputError
+from machinesim.tools import arc_segments
 from machinesim.workpiece import Part
 
 #: Sweeps are clipped at z = stock top + CLIP_MARGIN_REL * (largest stock coordinate). The
@@ -50,6 +60,12 @@ SAME_ORIENTATION = 1e-12
 SIDEWAYS_REL = 1e-6
 #: Sweeps travelling within this angle (rad) in XY are cut together as one parallel group.
 DIRECTION_BIN_RAD = math.radians(5.0)
+#: A sweep whose XY travel is below this fraction of its travel (a plunge, a turn in place)
+#: has no XY direction and joins the group of such sweeps.
+PLANAR_TRAVEL_REL = 1e-3
+#: Poses are rigid when R^T R = I within this: a float64 kinematic chain gives ~1e-15, so
+#: this rejects scaled or sheared matrices, never round-off.
+RIGID_TOL = 1e-9
 #: Rotating sweeps clip only when the all-pairs edge search is small: beyond this many tool
 #: vertices their hull is built unclipped (still exact, only slower to union).
 PAIR_CLIP_MAX_VERTICES = 64
@@ -60,21 +76,6 @@ POINTS_PER_CHUNK = 1 << 19
 #: a float64 volume sum over ~10^6 triangles is ~1e-13 relative. A real cut smaller than
 #: this (a 1 nm scratch on a 0.1 l block) is reported empty too.
 EMPTY_REL = 1e-12
-#: Tiles are made small enough to hold this many sweeps: manifold3d's boolean cost grows faster than
-#: the sweep count (measured: 2000 grooves cost 1.6x more in one piece than in 8 tiles).
-SWEEPS_PER_TILE = 256
-#: Interior tile walls sit this fraction of a tile width before the regular grid lines, in
-#: X and in Y. Not 0: patterns laid out on round numbers put grooves and ridges exactly on
-#: regular grid lines, and a wall through a feature line makes manifold3d resolve coincident
-#: geometry. Not equal: on a square cell, equal X and Y walls meet on the diagonal, where the
-#: X and Y grooves of a symmetric crossing pattern cross a tile corner at the same height
-#: (measured: one such tile 30x slower than its neighbours). Irrational values make such
-#: coincidences unlikely.
-WALL_OFFSET = ((math.sqrt(5.0) - 2.0) / 10.0, (math.sqrt(2.0) - 1.3) / 10.0)
-#: Most tiles per cell: bounds the member bookkeeping (tiles x sweeps).
-MAX_TILES = 4096
-#: A doubling of the tile grid must leave at most this fraction of the fullest tile's sweeps.
-SPLIT_GAIN = 0.8
 
 
 @dataclass(frozen=True)
@@ -131,10 +132,7 @@ def rotary_substeps(radius: float, angle: float, chord_tol: float = 1e-9) -> int
     """
     if radius <= 0.0 or angle == 0.0:
         return 1
-    if chord_tol >= radius:
-        return max(1, math.ceil(abs(angle) / math.pi))
-    step = 2.0 * math.acos(1.0 - chord_tol / radius)
-    return max(1, math.ceil(abs(angle) / step - 1e-12))
+    return arc_segments(radius, abs(angle), chord_tol)
 
 
 def _check_paths(paths) -> list[np.ndarray]:
@@ -155,13 +153,13 @@ def _check_paths(paths) -> list[np.ndarray]:
     error = np.abs(np.einsum("nji,njk->nik", rotation, rotation) - np.eye(3)).reshape(-1, 9)
     bottom = np.abs(poses[:, 3] - [0.0, 0.0, 0.0, 1.0])
     bad = ~np.isfinite(poses).reshape(-1, 16).all(axis=1)
-    bad |= (error.max(axis=1, initial=0.0) > 1e-9) | (bottom.max(axis=1, initial=0.0) > 0.0)
+    bad |= (error.max(axis=1, initial=0.0) > RIGID_TOL) | (bottom.max(axis=1, initial=0.0) > 0.0)
     if bad.any():
         first = int(np.flatnonzero(bad)[0])
         path = int(np.searchsorted(np.cumsum([len(a) for a in arrays]), first, side="right"))
         raise InputError(
             f"path {path}: pose {first - sum(len(a) for a in arrays[:path])} is not a rigid "
-            f"transform (finite, orthonormal rotation within 1e-9, last row 0 0 0 1): "
+            f"transform (finite, orthonormal rotation within {RIGID_TOL}, last row 0 0 0 1): "
             f"{poses[first].tolist()}",
             key="paths",
         )
@@ -215,16 +213,24 @@ class _Sweeps:
                 [edges, edges + k, np.stack([i.ravel(), j.ravel()], axis=1)]
             )
 
-    def _clip(self, points: np.ndarray, segments) -> list[np.ndarray | None]:
-        """Point sets whose hulls are the sweeps' hulls cut by z <= clip_z (None: all above).
+    def _clip(self, points: np.ndarray, segments):
+        """Point sets whose hulls are the sweeps' hulls cut by z <= clip_z, and their bounds.
 
         ``points`` has shape (s, 2k, 3). Every candidate lies in the hull, and every vertex
         of the clipped hull is a point below the plane or a crossing of a hull edge, so the
         hull of the candidates is exactly the clipped sweep.
+
+        Returns
+        -------
+        candidates : list of (ndarray, shape (c, 3)) or None
+            None where the whole sweep lies above the plane.
+        lower, upper : ndarray, shape (s, 3)
+            Bounds of each candidate set, m.
         """
         below = points[:, :, 2] <= self.clip_z
         if segments is None:
-            return [p if b.any() else None for p, b in zip(points, below, strict=True)]
+            kept = [p if b.any() else None for p, b in zip(points, below, strict=True)]
+            return kept, points.min(axis=1), points.max(axis=1)
         a, b = points[:, segments[:, 0]], points[:, segments[:, 1]]
         crossing = below[:, segments[:, 0]] != below[:, segments[:, 1]]
         # Segments that do not cross may divide by zero; only crossing ones are read.
@@ -232,16 +238,20 @@ class _Sweeps:
             t = (self.clip_z - a[:, :, 2]) / (b[:, :, 2] - a[:, :, 2])
             cut = a + t[:, :, None] * (b - a)
         cut[:, :, 2] = self.clip_z
+        every = np.concatenate([points, cut], axis=1)
+        valid = np.concatenate([below, crossing], axis=1)[:, :, None]
+        lower = np.where(valid, every, np.inf).min(axis=1)
+        upper = np.where(valid, every, -np.inf).max(axis=1)
         out = []
-        for sweep in range(len(points)):
-            keep = below[sweep]
-            if keep.all():
+        for sweep, state in enumerate(below.sum(axis=1)):
+            if state == below.shape[1]:
                 out.append(points[sweep])
-            elif not keep.any():
+            elif state == 0:
                 out.append(None)
             else:
-                out.append(np.concatenate([points[sweep][keep], cut[sweep][crossing[sweep]]]))
-        return out
+                out.append(np.concatenate([points[sweep][below[sweep]],
+                                           cut[sweep][crossing[sweep]]]))
+        return out, lower, upper
 
     def hulls(self, keep: Callable[[np.ndarray, np.ndarray], np.ndarray]):
         """Clipped hulls of the sweeps whose point bounds pass ``keep``.
@@ -281,9 +291,8 @@ class _Sweeps:
             same = np.abs(r1 - r0).reshape(-1, 9).max(axis=1) <= SAME_ORIENTATION
             for subset, segments in ((chosen[same[chosen]], self.translation_segments),
                                      (chosen[~same[chosen]], self.rotation_segments)):
-                for offset, candidates in zip(
-                    subset, self._clip(points[subset], segments), strict=True
-                ):
+                kept, low, high = self._clip(points[subset], segments)
+                for row, (offset, candidates) in enumerate(zip(subset, kept, strict=True)):
                     if candidates is None:
                         continue
                     hull = manifold3d.Manifold.hull_points(candidates)
@@ -292,8 +301,8 @@ class _Sweeps:
                         n_degenerate += 1
                         continue
                     hulls.append(hull)
-                    lower.append(candidates.min(axis=0))
-                    upper.append(candidates.max(axis=0))
+                    lower.append(low[row])
+                    upper.append(high[row])
                     direction.append(move[offset])
         shape = (-1, 3)
         return (hulls, np.array(lower).reshape(shape), np.array(upper).reshape(shape),
@@ -306,82 +315,7 @@ def _direction_keys(direction: np.ndarray) -> np.ndarray:
     angle = np.mod(np.arctan2(direction[:, 1], direction[:, 0]), math.pi)
     bins = int(round(math.pi / DIRECTION_BIN_RAD))
     key = np.mod(np.rint(angle / DIRECTION_BIN_RAD).astype(np.int64), bins)
-    return np.where(planar > 1e-3 * np.linalg.norm(direction, axis=1), key, -1)
-
-
-def _members(lower, upper, box, margin: float) -> np.ndarray:
-    """Indices of the sweeps whose bounds reach the box (xmin, xmax, ymin, ymax)."""
-    return np.flatnonzero(
-        (lower[:, 0] <= box[1] + margin) & (upper[:, 0] >= box[0] - margin)
-        & (lower[:, 1] <= box[3] + margin) & (upper[:, 1] >= box[2] - margin)
-    )
-
-
-def _walls(low: float, high: float, count: int, axis: int) -> np.ndarray:
-    """Tile boundaries along one axis: the ends and ``count - 1`` offset interior walls."""
-    inner = low + (high - low) * (np.arange(1, count) - WALL_OFFSET[axis]) / count
-    return np.concatenate([[low], inner, [high]])
-
-
-def _grid_ranges(lower, upper, walls, axis: int, margin: float):
-    """First and last tile index along ``axis`` that each sweep's bounds reach."""
-    inner = walls[1:-1]
-    first = np.searchsorted(inner, lower[:, axis] - margin, side="left")
-    last = np.searchsorted(inner, upper[:, axis] + margin, side="right")
-    return first, last
-
-
-def _tiles(box, members, lower, upper, margin: float, target: int):
-    """Split a cell (xmin, xmax, ymin, ymax) into a grid of tiles with few sweeps each.
-
-    The grid doubles along X or Y, whichever leaves the fullest tile emptier, until every
-    tile has at most ``target`` sweeps, or a doubling would keep more than `SPLIT_GAIN` of
-    the fullest tile's sweeps (sweeps that span the cell gain nothing from more tiles, and
-    every tile adds wall geometry). A grid, not a k-d split: a wall must be shared whole by
-    the two tiles beside it for `stitch` to join them.
-
-    Returns
-    -------
-    list of (box, members)
-    """
-    low, high = lower[members], upper[members]
-
-    def fullest(counts) -> int:
-        grid = np.zeros((counts[0] + 1, counts[1] + 1), dtype=np.int64)
-        ranges = [_grid_ranges(low, high, _walls(box[2 * a], box[2 * a + 1], counts[a], a),
-                               a, margin) for a in (0, 1)]
-        (x0, x1), (y0, y1) = ranges
-        for dx, dy, sign in ((x0, y0, 1), (x1 + 1, y0, -1), (x0, y1 + 1, -1),
-                             (x1 + 1, y1 + 1, 1)):
-            np.add.at(grid, (dx, dy), sign)
-        return int(grid.cumsum(0).cumsum(1).max(initial=0))
-
-    counts, worst = [1, 1], len(members)
-    while worst > target and counts[0] * counts[1] < MAX_TILES:
-        options = [(fullest(c), c) for c in ([2 * counts[0], counts[1]],
-                                              [counts[0], 2 * counts[1]])]
-        best, choice = min(options, key=lambda option: option[0])
-        if best > SPLIT_GAIN * worst:
-            break
-        worst, counts = best, choice
-    walls = [_walls(box[2 * a], box[2 * a + 1], counts[a], a) for a in (0, 1)]
-    (x0, x1), (y0, y1) = (_grid_ranges(low, high, walls[a], a, margin) for a in (0, 1))
-    tiles = []
-    for i in range(counts[0]):
-        in_column = (x0 <= i) & (x1 >= i)
-        for j in range(counts[1]):
-            inside = members[in_column & (y0 <= j) & (y1 >= j)]
-            tiles.append(((walls[0][i], walls[0][i + 1], walls[1][j], walls[1][j + 1]), inside))
-    return tiles
-
-
-def _overlapping(cells: np.ndarray) -> bool:
-    """True when two of the windows (n, 4) overlap with positive area."""
-    x = (cells[:, None, 0] < cells[None, :, 1]) & (cells[None, :, 0] < cells[:, None, 1])
-    y = (cells[:, None, 2] < cells[None, :, 3]) & (cells[None, :, 2] < cells[:, None, 3])
-    both = x & y
-    np.fill_diagonal(both, False)
-    return bool(both.any())
+    return np.where(planar > PLANAR_TRAVEL_REL * np.linalg.norm(direction, axis=1), key, -1)
 
 
 def remove(
@@ -444,7 +378,7 @@ def remove(
     hulls, lower, upper, direction, n_degenerate, sideways = sweeps.hulls(touches)
     keys = _direction_keys(direction)
 
-    plan = [(cell, _tiles(cell, _members(lower, upper, cell, margin), lower, upper, margin,
+    plan = [(cell, grid_tiles(cell, members_in(lower, upper, cell, margin), lower, upper, margin,
                           sweeps_per_tile)) for cell in cells]
     total = int(sum(len(members) for _, tiles in plan for _, members in tiles))
     done = 0
@@ -459,11 +393,15 @@ def remove(
             if roi is None and len(tiles) == 1:
                 piece = base
             else:
-                piece = base ^ exact_box(xmin, xmax, ymin, ymax, z_low - margin, z_high)
+                piece = base ^ exact_box(*tile_box((xmin, xmax, ymin, ymax), cell, roi is None,
+                                                    bounds, scale))
             stock_pieces.append(piece)
             for key in np.unique(keys[members]):
                 group = [hulls[i] for i in members[keys[members] == key]]
                 piece = piece - manifold3d.Manifold.batch_boolean(group, OpType.Add)
+                # Evaluate now: manifold3d is lazy and would flatten A - B - C into
+                # A - (B + C), the union of crossing groups this loop exists to avoid.
+                piece.num_tri()
             pieces.append(piece)
             done += len(members)
             if progress is not None:
@@ -475,7 +413,7 @@ def remove(
                           else manifold3d.Manifold.batch_boolean(pieces, OpType.Add))
     result = (manifold3d.Manifold.batch_boolean(cell_parts, OpType.Add) if cell_parts
               else manifold3d.Manifold())
-    if _overlapping(cell_array):
+    if overlapping(cell_array):
         stock_volume = manifold3d.Manifold.batch_boolean(stock_pieces, OpType.Add).volume()
     else:
         stock_volume = sum(piece.volume() for piece in stock_pieces)

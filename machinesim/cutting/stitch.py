@@ -44,25 +44,40 @@ def _roots(parent: np.ndarray) -> np.ndarray:
         parent = grand
 
 
+def _neighbour_filled(grid: np.ndarray, filled: np.ndarray, box, side: int) -> bool:
+    """True when the tile across ``side`` of ``box`` exists and holds material."""
+    other = 1 - side // 2
+    facing = side ^ 1
+    match = ((grid[:, facing] == box[side]) & (grid[:, 2 * other] == box[2 * other])
+             & (grid[:, 2 * other + 1] == box[2 * other + 1]))
+    return bool(np.any(match & filled))
+
+
 def stitch(pieces, boxes, outer, scale: float) -> manifold3d.Manifold | None:
     """One solid from tiles cut separately, or None when they do not stitch cleanly.
 
     Parameters
     ----------
     pieces : list of manifold3d.Manifold
-        The cut tiles.
+        The cut tiles. An empty tile (no material left) has no wall: its neighbours keep
+        their faces on the wall they share with it.
     boxes : list of (xmin, xmax, ymin, ymax)
-        Each tile's box (m); neighbouring boxes share exact wall coordinates.
+        Each tile's box (m). They must form a grid: each wall is shared whole by the two
+        tiles beside it, with exactly equal coordinates.
     outer : (xmin, xmax, ymin, ymax)
         The cell the tiles partition; its sides are not walls.
     scale : float
         Largest coordinate magnitude of the part (m), for `WALL_TOL_REL`.
     """
     tol = WALL_TOL_REL * scale
+    filled = np.array([not piece.is_empty() for piece in pieces])
+    grid = np.array(boxes, dtype=np.float64).reshape(-1, 4)
     all_vertices, all_triangles, on_wall = [], [], []
     offset = 0
     expected_volume = 0.0
-    for piece, box in zip(pieces, boxes, strict=True):
+    for piece, box, full in zip(pieces, boxes, filled, strict=True):
+        if not full:
+            continue
         mesh = piece.to_mesh64()
         vertices = np.asarray(mesh.vert_properties[:, :3], dtype=np.float64)
         triangles = np.asarray(mesh.tri_verts, dtype=np.int64)
@@ -71,7 +86,7 @@ def stitch(pieces, boxes, outer, scale: float) -> manifold3d.Manifold | None:
         wall_triangle = np.zeros(len(triangles), dtype=bool)
         for side, value in enumerate(box):
             axis = side // 2
-            if value == outer[side]:
+            if value == outer[side] or not _neighbour_filled(grid, filled, box, side):
                 continue
             near = np.abs(vertices[:, axis] - value) <= tol
             wall_vertex |= near
