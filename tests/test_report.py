@@ -1,0 +1,36 @@
+"""Report folders: units in every key, tables in Markdown and JSON, whole files."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from machinesim.exceptions import InputError
+from machinesim.report import ReportFolder, check_units, parse_floats
+
+
+def test_summary_and_tables_round_trip(tmp_path):
+    folder = ReportFolder(tmp_path / "out")
+    text = folder.write_table("table", ["angle_deg", "depth_um"], [[0, 10.0], [10, 10.25]])
+    assert "| angle_deg | depth_um |" in text and "10.250" in text
+    assert json.loads((tmp_path / "out" / "table.json").read_text())["rows"][1] == [10, 10.25]
+    folder.write_summary({"e_ys_um": np.float64(-178.0)}, {"e_ys_um": -177.9},
+                         {"depth_error_um": [np.nan, 60.9]}, {"depth_error_um": 0.4}, seed=3)
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["injected"]["e_ys_um"] == -178.0
+    assert summary["before"]["depth_error_um"] == [None, 60.9]
+    assert summary["files"] == ["table.json", "table.md"]
+
+
+def test_a_number_without_a_unit_is_refused():
+    check_units({"after": {"depth_error_um": 1.0, "rows": [[1, 2]]}, "seed": 1})
+    with pytest.raises(InputError, match="'after.depth' holds a number but names no unit"):
+        check_units({"after": {"depth": 1.0}})
+
+
+def test_parse_floats_names_the_option():
+    assert parse_floats("1,2.5,-3", 3, "--delta-um") == [1.0, 2.5, -3.0]
+    with pytest.raises(InputError, match="--delta-um '1,2': expected 3 comma-separated"):
+        parse_floats("1,2", 3, "--delta-um")
