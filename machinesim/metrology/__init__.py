@@ -43,6 +43,7 @@ from machinesim.metrology.lines import (
 )
 from machinesim.metrology.meshindex import MeshIndex
 from machinesim.metrology.optical import HeightMap, Microscope, Profile, WhiteLightInterferometer
+from machinesim.metrology.prisms import fit_apexes
 from machinesim.metrology.probe import Contact, Contacts, touch, touch_many
 from machinesim.metrology.probe_instrument import ScanReading, TouchProbe
 from machinesim.metrology.surface import height_map, profile
@@ -59,3 +60,4 @@ __all__ += [
     "height_map_points", "intersect_lines", "length_unit", "plane_angle", "plot_height_map",
     "plot_profile", "profile_points", "roughness_sa", "sphere_centre_from_touch", "step_positions",
 ]
+__all__ += ["fit_apexes"]
