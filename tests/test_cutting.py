@@ -86,6 +86,13 @@ def test_a_rapid_into_the_stock_is_reported_and_an_empty_cut_flagged():
     assert report.empty_cut and report.removed_volume_m3 == 0.0
 
 
+def test_a_rapid_back_along_a_groove_just_cut_cuts_nothing():
+    b = ProgramBuilder(1).rapid(X=-0.5 * MM, Y=1 * MM, Z=0.1 * MM).rapid(Z=-5 * UM)
+    b.linear(X=4 * MM, feed_mm_per_min=100.0).rapid(X=1 * MM).rapid(Z=0.1 * MM)
+    _, report = cut(b.build(), "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    assert report.rapids_that_cut == ()
+
+
 def test_the_command_line_cuts_and_writes_part_and_report(tmp_path, capsys):
     program = tmp_path / "grooves.nc"
     write_program(grooves(n=2, pitch=40 * UM), program)

@@ -170,34 +170,57 @@ def _rapids_that_cut(stock: Part, tool, paths, kinds, lines) -> tuple[int, ...]:
     """Lines of rapids whose sweep met material still there when they ran.
 
     The material at that time is the stock less the feed sweeps before the rapid that
-    overlap it: exact, and cheap since only rapids entering the stock's box are examined.
+    overlap it: exact, and cheap since only rapids whose sweep meets the stock are examined
+    further, against the earlier feed sweeps whose boxes overlap theirs.
     """
     lo, hi = stock.bounds
     points = _thick(tool)
+    boxes = None  # (sweep path index, pose index, min corner, max corner) of feed sweeps
     found = []
     for i, (path, kind) in enumerate(zip(paths, kinds, strict=True)):
         if kind != "rapid":
             continue
-        world = np.einsum("nij,kj->nki", path[:, :3, :3], points) + path[:, None, :3, 3]
-        if np.any(world.max(axis=(0, 1)) < lo) or np.any(world.min(axis=(0, 1)) > hi):
+        world = _corners(points, path)
+        low, high = world.min(axis=(0, 1)), world.max(axis=(0, 1))
+        if np.any(high < lo) or np.any(low > hi):
             continue
         hit = stock.manifold ^ manifold3d.Manifold.batch_boolean(
             [_hull(points, path[j], path[j + 1]) for j in range(len(path) - 1)],
             manifold3d.OpType.Add)
         if hit.volume() <= RAPID_CUT_VOLUME_M3:
             continue
-        box = (world.min(axis=(0, 1)), world.max(axis=(0, 1)))
-        earlier = [_hull(points, p[j], p[j + 1])
-                   for p, k in zip(paths[:i], kinds[:i], strict=True) if k == "linear"
-                   for j in range(len(p) - 1) if _overlaps(points, p[j:j + 2], box)]
-        if earlier:
+        if boxes is None:
+            boxes = _sweep_boxes(points, paths, kinds)
+        owner, pose, b_low, b_high = boxes
+        near = np.flatnonzero((owner < i) & np.all(b_high >= low, axis=1)
+                              & np.all(b_low <= high, axis=1))
+        if near.size:
+            earlier = [_hull(points, paths[owner[k]][pose[k]], paths[owner[k]][pose[k] + 1])
+                       for k in near]
             hit = hit - manifold3d.Manifold.batch_boolean(earlier, manifold3d.OpType.Add)
         if hit.volume() > RAPID_CUT_VOLUME_M3:
             found.append(lines[i])
     return tuple(found)
 
 
-def _overlaps(points: np.ndarray, pair: np.ndarray, box) -> bool:
-    world = np.einsum("nij,kj->nki", pair[:, :3, :3], points) + pair[:, None, :3, 3]
-    return bool(np.all(world.max(axis=(0, 1)) >= box[0]) and
-                np.all(world.min(axis=(0, 1)) <= box[1]))
+def _corners(points: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """Tool points at each pose, (n_poses, n_points, 3)."""
+    return np.einsum("nij,kj->nki", poses[:, :3, :3], points) + poses[:, None, :3, 3]
+
+
+def _sweep_boxes(points, paths, kinds):
+    """Boxes of every feed sweep, with the path and pose each starts at."""
+    owner, pose, low, high = [], [], [], []
+    for i, (path, kind) in enumerate(zip(paths, kinds, strict=True)):
+        if kind != "linear" or len(path) < 2:
+            continue
+        world = _corners(points, path)
+        ends_low, ends_high = world.min(axis=1), world.max(axis=1)
+        low.append(np.minimum(ends_low[:-1], ends_low[1:]))
+        high.append(np.maximum(ends_high[:-1], ends_high[1:]))
+        owner.append(np.full(len(path) - 1, i))
+        pose.append(np.arange(len(path) - 1))
+    if not owner:
+        empty = np.zeros((0, 3))
+        return np.zeros(0, int), np.zeros(0, int), empty, empty
+    return (np.concatenate(owner), np.concatenate(pose), np.vstack(low), np.vstack(high))
