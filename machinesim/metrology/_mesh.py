@@ -42,7 +42,7 @@ def mesh_arrays(surface) -> tuple[np.ndarray, np.ndarray]:
     if vertices.ndim != 2 or vertices.shape[1] != 3:
         raise InputError(f"Expected vertices with shape (n, 3), got {vertices.shape}")
     if vertices.dtype != np.float64:
-        # float32 would have rounded the measured geometry already: refuse it, do not widen it.
+        # single precision would have rounded the measured geometry already: refuse, not widen
         raise InputError(f"Expected float64 vertices, got {vertices.dtype}")
     if not np.isfinite(vertices).all():
         raise InputError("Expected finite vertices, got NaN or infinity")

@@ -3,7 +3,7 @@
 Scenes are built without a server (`Scene` records meshcat commands), then written as one
 self-contained HTML file (`write_html`) or shown live by a meshcat server on 127.0.0.1
 (`serve`). Parts are measured on their exact float64 meshes; only what is drawn is decimated
-and converted to float32.
+and converted to single precision for display.
 
 >>> from machinesim.viewer import machine_scene, write_html
 >>> write_html(machine_scene("robonano_a0ib"), "machine.html")  # doctest: +SKIP

@@ -1,7 +1,7 @@
 """Meshes for display: PLY reading (exact), decimation and float32 buffers (display only).
 
-Measurements never go through this module's decimated or float32 output: the viewer measures
-on the exact float64 mesh (`machinesim.metrology`) and only then thins and converts what it
+Measurements never go through this module's decimated output for display: the viewer
+measures on the exact float64 mesh (`machinesim.metrology`) and only then thins and converts what it
 draws.
 """
 
@@ -25,7 +25,7 @@ _PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
     "short": "i2", "int16": "i2", "ushort": "u2", "uint16": "u2",
     "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
-    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
+    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",  # PLY types; f4 files only display
 }
 
 
@@ -193,7 +193,7 @@ def compact(vertices: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np
 
 def display_buffers(vertices, triangles) -> tuple[np.ndarray, np.ndarray]:
     """float32 positions and uint32 indices for WebGL: display only, after measuring."""
-    return (np.ascontiguousarray(vertices, dtype=np.float32),
+    return (np.ascontiguousarray(vertices, dtype=np.float32),  # display only
             np.ascontiguousarray(triangles, dtype=np.uint32))
 
 

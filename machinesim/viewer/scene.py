@@ -104,7 +104,7 @@ class Scene:
 
     def add_lines(self, path: str, points, colour: int) -> None:
         """A polyline through ``points`` (k, 3), m."""
-        p32 = np.ascontiguousarray(np.asarray(points, dtype=np.float64).T, dtype=np.float32)
+        p32 = np.ascontiguousarray(np.asarray(points).T, dtype=np.float32)  # display only
         self.vis[path].set_object(mg.Line(mg.PointsGeometry(p32),
                                           mg.LineBasicMaterial(color=colour)))
 
