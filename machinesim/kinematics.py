@@ -37,6 +37,7 @@ import numpy as np
 import pinocchio as pin
 
 from machinesim.exceptions import ErrorModelError, ModelError
+from machinesim.tolerances import SERIES_MAX_RAD
 
 #: The six error degrees of freedom, in the order of ``T(t) Rx Ry Rz``.
 DOFS = ("tx", "ty", "tz", "rx", "ry", "rz")
@@ -265,10 +266,6 @@ class Binding:
         self.varying = tuple(varying)
 
 
-#: Below this angle (rad) `_cos_sin` uses its series: the first omitted terms, x**9/9! and
-#: x**10/10!, are then below 3e-24 relative, far under float64's 1.1e-16, and error angles
-#: (micro- to milliradians) always qualify.
-_SERIES_MAX_RAD = 1e-2
 
 
 def _cos_sin(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -277,7 +274,7 @@ def _cos_sin(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Error joints turn by micro- to milliradians; numpy's sin and cos cost several times a
     short polynomial, and dominate the batched evaluator otherwise.
     """
-    if x.size and np.max(np.abs(x)) < _SERIES_MAX_RAD:
+    if x.size and np.max(np.abs(x)) < SERIES_MAX_RAD:
         x2 = x * x
         s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)))
         c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)))

@@ -33,6 +33,7 @@ from machinesim.kinematics import (
     Binding,
     Kinematics,
 )
+from machinesim.tolerances import IK_SINGULAR
 
 #: NC letters in the order machinesim puts them in a configuration vector.
 AXIS_ORDER = "XYZABC"
@@ -437,16 +438,12 @@ class Machine:
         return arr
 
 
-#: Singular values below this (per m or per rad of axis motion) are directions the axes cannot
-#: move the tool in: an absolute cut-off, so that a null-space task with nothing left to move
-#: does not amplify round-off into a step.
-_SINGULAR = 1e-9
 
 
 def _pinv(a: np.ndarray) -> np.ndarray:
-    """Pseudo-inverse with the absolute singular-value cut-off `_SINGULAR`."""
+    """Pseudo-inverse with the absolute singular-value cut-off `IK_SINGULAR`."""
     u, s, vt = np.linalg.svd(a, full_matrices=False)
-    inv = np.divide(1.0, s, out=np.zeros_like(s), where=s > _SINGULAR)
+    inv = np.divide(1.0, s, out=np.zeros_like(s), where=s > IK_SINGULAR)
     return (vt.T * inv) @ u.T
 
 

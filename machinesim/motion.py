@@ -21,9 +21,8 @@ from typing import Protocol
 import numpy as np
 
 from machinesim.exceptions import InputError, NCProgramError
+from machinesim.tolerances import CHORD_TOLERANCE_M
 
-#: Default chord tolerance of a rotary move, m: the issue's 1 nm, the resolution of the axes.
-CHORD_TOLERANCE_M = 1e-9
 #: A move is split into at most this many sub-steps: beyond it the request is unreasonable
 #: (a 1 nm chord over a full turn at 1 m radius needs ~70,000).
 MAX_SUBSTEPS = 1_000_000

@@ -18,3 +18,113 @@ UNREACHABLE_M = 1e-12
 #: Axis values may exceed their limits by this much (round-off of a value written at the
 #: limit), relative to SI units: 1e-12 m or 1e-12 rad.
 LIMIT_SLACK = 1e-12
+
+# --- kinematics
+#: Below this angle (rad) `_cos_sin` uses its series: the first omitted terms, x**9/9! and
+#: x**10/10!, are then below 3e-24 relative, far under float64's 1.1e-16, and error angles
+#: (micro- to milliradians) always qualify.
+SERIES_MAX_RAD = 1e-2
+
+# --- motion
+#: Default chord tolerance of a rotary move, m: the issue's 1 nm, the resolution of the axes.
+CHORD_TOLERANCE_M = 1e-9
+
+# --- cutting.engine
+#: Sweeps are clipped at z = stock top + CLIP_MARGIN_REL * (largest stock coordinate). The
+#: margin is 10^6 times manifold3d's own tolerance (1e-12 relative), so the clip plane never
+#: merges with the top face, and small enough (10 nm on a 10 mm part) that the slivers by
+#: which neighbouring clipped grooves still overlap are tiny.
+CLIP_MARGIN_REL = 1e-6
+#: Two poses have the same orientation when their rotation matrices differ by at most this:
+#: then the sweep is a translation and its hull edges are known, so clipping needs no pair
+#: search. 1e-12 is the kinematic agreement of two float64 chains (tolerances.POSE_M / 1 m).
+SAME_ORIENTATION = 1e-12
+#: A non-rotational tool is dragged sideways when its move direction, in the tool frame, has
+#: a Y component above this fraction of the move: 1 urad, i.e. the groove widens by more than
+#: 1 nm per mm of travel, far above float64 round-off of a kinematic chain (~1e-15).
+SIDEWAYS_REL = 1e-6
+#: A sweep whose XY travel is below this fraction of its travel (a plunge, a turn in place)
+#: has no XY direction and joins the group of such sweeps.
+PLANAR_TRAVEL_REL = 1e-3
+#: Poses are rigid when R^T R = I within this: a float64 kinematic chain gives ~1e-15, so
+#: this rejects scaled or sheared matrices, never round-off.
+RIGID_TOL = 1e-9
+#: A cut is empty when it removes at most this fraction of the stock volume: the round-off of
+#: a float64 volume sum over ~10^6 triangles is ~1e-13 relative. A real cut smaller than
+#: this (a 1 nm scratch on a 0.1 l block) is reported empty too.
+EMPTY_REL = 1e-12
+
+# --- cutting.program
+#: A rapid whose sweep overlaps material by more than this volume (m^3) has cut: (10 nm)^3,
+#: far above boolean round-off on a millimetre part, far below any real collision.
+RAPID_CUT_VOLUME_M3 = 1e-24
+#: Half thickness (m) given to a zero-thickness cutting edge for the rapid check only: an
+#: edge plunging into material sweeps no volume, so the check thickens it (and the feed sweeps
+#: it subtracts) by this much along the tool's X. 0.1 um: a plunge 1 um deep still shows
+#: 1e-19 m^3, a million times the threshold.
+RAPID_EDGE_HALF_THICKNESS_M = 1e-7
+
+# --- tools
+#: Chord tolerance of profile arcs (m): 1 nm, the axis resolution of the machines (1 nm),
+#: so the tessellation never shows in a simulated measurement of a nose-radius profile.
+PROFILE_CHORD_M = 1e-9
+#: Chord tolerance of the ball end mill sphere (m). A ball end mill roughs (seed 002 leaves
+#: the crown 10 um oversize), so 1 um is ten times finer than the stock allowance while a
+#: R2 mm sphere stays at a few thousand vertices, keeping the hull of a sweep (two spheres)
+#: a few milliseconds.
+BALL_CHORD_M = 1e-6
+
+# --- workpiece
+#: Chord tolerance of cylindrical stock (m): 1 nm, the machines' axis resolution, so the
+#: polygon never shows in a measurement of an unmachined face.
+CYLINDER_CHORD_M = 1e-9
+#: Chord tolerance of the reference spheres (m): they are rough-machined features whose form
+#: error in seed 002 is 1-2 um, so 0.1 um is well below it while a R2 mm sphere stays at
+#: ~10^5 triangles (facet depth, not chord sagitta: see tools.sphere_polygon).
+SPHERE_CHORD_M = 1e-7
+
+# --- machines
+#: Singular values below this (per m or per rad of axis motion) are directions the axes cannot
+#: move the tool in: an absolute cut-off, so that a null-space task with nothing left to move
+#: does not amplify round-off into a step.
+IK_SINGULAR = 1e-9
+
+# --- metrology.surface
+#: A grid whose coordinates lie within this fraction of a spacing of an arithmetic progression
+#: is binned by arithmetic instead of binary search (a linspace grid is within ~1e-13).
+UNIFORM_GRID = 1e-3
+#: Bins found by arithmetic are widened by this many spacings beyond the grid's own deviation
+#: and the round-off of the arithmetic, so that they are a superset of the samples in a
+#: triangle's box whatever the rounding; extra samples are rejected by the exact test.
+INDEX_SLACK = 1e-6
+#: A profile line is taken to pass near a triangle's box when within this fraction of the
+#: largest coordinate: far above the ~1e-16 relative round-off of the line test and of the
+#: sample points, far below any feature; again only a superset for the exact test.
+LINE_MARGIN = 1e-12
+#: The end of a profile is sampled when the length is a whole number of spacings to within this
+#: fraction of a spacing (round-off of length / spacing).
+END_SLACK = 1e-9
+
+# --- metrology.probe
+#: The swept box is padded by this fraction of (|centre| + travel + radius): far above the
+#: ~1e-16 relative round-off of centre + travel * direction, far below anything measurable.
+#: It only widens the candidate cull; contact itself is solved exactly.
+SWEEP_PAD = 1e-12
+
+# --- metrology.probe_instrument
+#: A path piece is straight enough when every sampled centre lies within this distance of its
+#: constant-speed chord, m: 100x below the probe's 1 nm resolution, 10^4x above the ~1e-15 m
+#: round-off of centres computed through a ~0.5 m kinematic chain.
+PROBE_CHORD_M = 1e-11
+
+# --- cutting.stitch
+#: Wall vertices of neighbouring tiles that lie within this distance (relative to the
+#: largest coordinate) are one vertex. Both sides compute the same point from the same
+#: float64 data; measured disagreement is ~2e-16 relative, and 1e-13 stays 10x below
+#: manifold3d's own tolerance (1e-12), so no distinct vertices of a valid part are merged.
+WALL_TOL_REL = 1e-13
+
+# --- cutting.tiling
+#: Tile boxes reach this far (relative to the largest stock coordinate) beyond the stock
+#: wherever they are not cutting it, far from the clip plane and the cell edges.
+BOX_CLEARANCE_REL = 1e-2

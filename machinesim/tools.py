@@ -26,6 +26,7 @@ import manifold3d
 import numpy as np
 
 from machinesim.exceptions import InputError
+from machinesim.tolerances import BALL_CHORD_M, PROFILE_CHORD_M
 from machinesim.units import M_PER_MM, RAD_PER_DEG
 
 #: Height of V and round-nose profiles above the edge point (m): 8x the deepest groove of
@@ -33,14 +34,6 @@ from machinesim.units import M_PER_MM, RAD_PER_DEG
 #: the profile. The engine clips sweeps just above the stock, so a taller profile costs
 #: nothing; it only matters where a real tool's shank could touch the part.
 PROFILE_HEIGHT_M = 0.2e-3
-#: Chord tolerance of profile arcs (m): 1 nm, the axis resolution of the machines (1 nm),
-#: so the tessellation never shows in a simulated measurement of a nose-radius profile.
-PROFILE_CHORD_M = 1e-9
-#: Chord tolerance of the ball end mill sphere (m). A ball end mill roughs (seed 002 leaves
-#: the crown 10 um oversize), so 1 um is ten times finer than the stock allowance while a
-#: R2 mm sphere stays at a few thousand vertices, keeping the hull of a sweep (two spheres)
-#: a few milliseconds.
-BALL_CHORD_M = 1e-6
 
 
 def arc_segments(radius: float, angle: float, chord_tol: float) -> int:

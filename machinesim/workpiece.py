@@ -19,16 +19,9 @@ import numpy as np
 
 from machinesim._io import write_atomic
 from machinesim.exceptions import InputError
+from machinesim.tolerances import CYLINDER_CHORD_M, SPHERE_CHORD_M
 from machinesim.tools import arc_segments, sphere_polygon
 from machinesim.units import M_PER_MM, M_PER_UM
-
-#: Chord tolerance of cylindrical stock (m): 1 nm, the machines' axis resolution, so the
-#: polygon never shows in a measurement of an unmachined face.
-CYLINDER_CHORD_M = 1e-9
-#: Chord tolerance of the reference spheres (m): they are rough-machined features whose form
-#: error in seed 002 is 1-2 um, so 0.1 um is well below it while a R2 mm sphere stays at
-#: ~10^5 triangles (facet depth, not chord sagitta: see tools.sphere_polygon).
-SPHERE_CHORD_M = 1e-7
 
 
 @dataclass(frozen=True)

@@ -18,8 +18,8 @@ from machinesim.metrology import (
     WhiteLightInterferometer,
     squareness_from_diagonal,
 )
-from machinesim.metrology.probe_instrument import CHORD_M
 from machinesim.nc import ProgramBuilder
+from machinesim.tolerances import PROBE_CHORD_M as CHORD_M
 from machinesim.workpiece import block
 
 MM, UM, NM = 1e-3, 1e-6, 1e-9

@@ -42,40 +42,25 @@ from machinesim.cutting.tiling import (
     tile_box,
 )
 from machinesim.exceptions import InputError
+from machinesim.tolerances import (
+    CLIP_MARGIN_REL,
+    EMPTY_REL,
+    PLANAR_TRAVEL_REL,
+    RIGID_TOL,
+    SAME_ORIENTATION,
+    SIDEWAYS_REL,
+)
 from machinesim.tools import arc_segments
 from machinesim.workpiece import Part
 
-#: Sweeps are clipped at z = stock top + CLIP_MARGIN_REL * (largest stock coordinate). The
-#: margin is 10^6 times manifold3d's own tolerance (1e-12 relative), so the clip plane never
-#: merges with the top face, and small enough (10 nm on a 10 mm part) that the slivers by
-#: which neighbouring clipped grooves still overlap are tiny.
-CLIP_MARGIN_REL = 1e-6
-#: Two poses have the same orientation when their rotation matrices differ by at most this:
-#: then the sweep is a translation and its hull edges are known, so clipping needs no pair
-#: search. 1e-12 is the kinematic agreement of two float64 chains (tolerances.POSE_M / 1 m).
-SAME_ORIENTATION = 1e-12
-#: A non-rotational tool is dragged sideways when its move direction, in the tool frame, has
-#: a Y component above this fraction of the move: 1 urad, i.e. the groove widens by more than
-#: 1 nm per mm of travel, far above float64 round-off of a kinematic chain (~1e-15).
-SIDEWAYS_REL = 1e-6
 #: Sweeps travelling within this angle (rad) in XY are cut together as one parallel group.
 DIRECTION_BIN_RAD = math.radians(5.0)
-#: A sweep whose XY travel is below this fraction of its travel (a plunge, a turn in place)
-#: has no XY direction and joins the group of such sweeps.
-PLANAR_TRAVEL_REL = 1e-3
-#: Poses are rigid when R^T R = I within this: a float64 kinematic chain gives ~1e-15, so
-#: this rejects scaled or sheared matrices, never round-off.
-RIGID_TOL = 1e-9
 #: Rotating sweeps clip only when the all-pairs edge search is small: beyond this many tool
 #: vertices their hull is built unclipped (still exact, only slower to union).
 PAIR_CLIP_MAX_VERTICES = 64
 #: Sweeps whose tool points are processed together: bounds the transient memory (k points
 #: per pose, ~100 bytes each) to ~50 MB whatever the path length.
 POINTS_PER_CHUNK = 1 << 19
-#: A cut is empty when it removes at most this fraction of the stock volume: the round-off of
-#: a float64 volume sum over ~10^6 triangles is ~1e-13 relative. A real cut smaller than
-#: this (a 1 nm scratch on a 0.1 l block) is reported empty too.
-EMPTY_REL = 1e-12
 
 
 @dataclass(frozen=True)

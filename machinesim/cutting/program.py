@@ -10,17 +10,9 @@ import numpy as np
 
 from machinesim import motion
 from machinesim.cutting.engine import remove
+from machinesim.tolerances import RAPID_CUT_VOLUME_M3, RAPID_EDGE_HALF_THICKNESS_M
 from machinesim.tools import tool_from_spec
 from machinesim.workpiece import Part, stock_from_spec
-
-#: A rapid whose sweep overlaps material by more than this volume (m^3) has cut: (10 nm)^3,
-#: far above boolean round-off on a millimetre part, far below any real collision.
-RAPID_CUT_VOLUME_M3 = 1e-24
-#: Half thickness (m) given to a zero-thickness cutting edge for the rapid check only: an
-#: edge plunging into material sweeps no volume, so the check thickens it (and the feed sweeps
-#: it subtracts) by this much along the tool's X. 0.1 um: a plunge 1 um deep still shows
-#: 1e-19 m^3, a million times the threshold.
-RAPID_EDGE_HALF_THICKNESS_M = 1e-7
 
 
 @dataclass(frozen=True)

@@ -16,11 +16,7 @@ import manifold3d
 import numpy as np
 from scipy.spatial import cKDTree
 
-#: Wall vertices of neighbouring tiles that lie within this distance (relative to the
-#: largest coordinate) are one vertex. Both sides compute the same point from the same
-#: float64 data; measured disagreement is ~2e-16 relative, and 1e-13 stays 10x below
-#: manifold3d's own tolerance (1e-12), so no distinct vertices of a valid part are merged.
-WALL_TOL_REL = 1e-13
+from machinesim.tolerances import WALL_TOL_REL
 
 
 def exact_box(xmin: float, xmax: float, ymin: float, ymax: float, zmin: float,

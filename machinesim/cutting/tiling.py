@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 
+from machinesim.tolerances import BOX_CLEARANCE_REL
+
 #: Tiles are made small enough to hold this many sweeps: manifold3d's boolean cost grows
 #: faster than the sweep count (measured: 2000 parallel grooves 0.30 s in one piece, 0.21 s
 #: in 8 tiles; 500 x 500 crossing grooves 13.9 s in one piece, 11.9 s in 16 tiles).
@@ -16,9 +18,6 @@ SWEEPS_PER_TILE = 256
 #: (measured on 500 x 500 crossing grooves: 3 % more triangles, same time). An irrational
 #: fraction makes such coincidences unlikely.
 WALL_OFFSET = (math.sqrt(5.0) - 2.0) / 10.0
-#: Tile boxes reach this far (relative to the largest stock coordinate) beyond the stock
-#: wherever they are not cutting it, far from the clip plane and the cell edges.
-BOX_CLEARANCE_REL = 1e-2
 #: Most tiles per cell: bounds the member bookkeeping (tiles x sweeps).
 MAX_TILES = 4096
 #: A doubling of the tile grid must leave at most this fraction of the fullest tile's sweeps.

@@ -23,15 +23,12 @@ import numpy as np
 from machinesim.exceptions import InputError
 from machinesim.metrology._mesh import as_positive, as_vector
 from machinesim.metrology.meshindex import MeshIndex, candidates
+from machinesim.tolerances import SWEEP_PAD
 
 __all__ = ["Contact", "Contacts", "touch", "touch_many"]
 
 #: Probes queried together: bounds the (probe, box) pair arrays of one pass.
 PROBE_BLOCK = 256
-#: The swept box is padded by this fraction of (|centre| + travel + radius): far above the
-#: ~1e-16 relative round-off of centre + travel * direction, far below anything measurable.
-#: It only widens the candidate cull; contact itself is solved exactly.
-SWEEP_PAD = 1e-12
 #: Below this many (ball, triangle) pairs in a block, all are solved in one pass: a second
 #: pass costs more numpy call overhead (~0.3 ms) than the pairs it would skip.
 ONE_PASS_PAIRS = 256

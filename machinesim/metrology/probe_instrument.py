@@ -12,7 +12,7 @@ c(t) in the workpiece frame. Errors that do not depend on the axis positions (lo
 setting errors) turn and shift the linear axes' directions but keep each a translation, so
 c(t) is then an exact straight line traversed at constant speed. Position-dependent
 (component) errors and rotary axes bend it. So c(t) is sampled and replaced by a polyline,
-split until every sampled point lies within `CHORD_M` of its chord (checked against the
+split until every sampled point lies within `PROBE_CHORD_M` of its chord (checked against the
 constant-speed interpolation, so the travel maps back to t linearly); the ball is swept
 along the pieces in order and the first contact wins. A straight path stays one piece.
 """
@@ -28,13 +28,10 @@ from machinesim.metrology._mesh import as_positive
 from machinesim.metrology.instruments import Readout, as_generator
 from machinesim.metrology.meshindex import MeshIndex
 from machinesim.metrology.probe import touch_many
+from machinesim.tolerances import PROBE_CHORD_M
 
 __all__ = ["ScanReading", "TouchProbe"]
 
-#: A path piece is straight enough when every sampled centre lies within this distance of its
-#: constant-speed chord, m: 100x below the probe's 1 nm resolution, 10^4x above the ~1e-15 m
-#: round-off of centres computed through a ~0.5 m kinematic chain.
-CHORD_M = 1e-11
 #: Interior points tested on each piece: a smooth path's largest departure from a chord is
 #: near its middle, and a kink anywhere inside a piece moves every interior point.
 CHORD_SAMPLES = 7
@@ -292,7 +289,7 @@ class TouchProbe:
             c = self._centres(q0[:, None, None, :] + t[None, :, :, None] * u)  # (K, P, F, 3)
             chord = c[:, :, :1] + fractions[:, None] * (c[:, :, -1:] - c[:, :, :1])
             departure = np.linalg.norm(c - chord, axis=-1).max(axis=(0, 2))
-            straight = (departure <= CHORD_M) | (split == MAX_SPLITS)
+            straight = (departure <= PROBE_CHORD_M) | (split == MAX_SPLITS)
             knots += pending[straight, 0].tolist()
             halves = pending[~straight].mean(axis=1)
             pending = np.concatenate([np.stack([pending[~straight, 0], halves], axis=1),

@@ -22,6 +22,7 @@ import numpy as np
 
 from machinesim.exceptions import InputError
 from machinesim.metrology._mesh import as_positive, as_vector, mesh_arrays
+from machinesim.tolerances import END_SLACK, INDEX_SLACK, LINE_MARGIN, UNIFORM_GRID
 
 __all__ = ["height_map", "profile"]
 
@@ -31,20 +32,6 @@ TRIANGLE_CHUNK = 8192
 #: Triangle-sample candidates evaluated per pass, for the same reason; also bounds memory when
 #: one triangle covers millions of samples.
 CANDIDATE_BLOCK = 32768
-#: A grid whose coordinates lie within this fraction of a spacing of an arithmetic progression
-#: is binned by arithmetic instead of binary search (a linspace grid is within ~1e-13).
-UNIFORM_GRID = 1e-3
-#: Bins found by arithmetic are widened by this many spacings beyond the grid's own deviation
-#: and the round-off of the arithmetic, so that they are a superset of the samples in a
-#: triangle's box whatever the rounding; extra samples are rejected by the exact test.
-INDEX_SLACK = 1e-6
-#: A profile line is taken to pass near a triangle's box when within this fraction of the
-#: largest coordinate: far above the ~1e-16 relative round-off of the line test and of the
-#: sample points, far below any feature; again only a superset for the exact test.
-LINE_MARGIN = 1e-12
-#: The end of a profile is sampled when the length is a whole number of spacings to within this
-#: fraction of a spacing (round-off of length / spacing).
-END_SLACK = 1e-9
 
 # Rows of the per-triangle parameter table used by the rasteriser.
 _X0, _Y0, _Z0, _GX, _GY, _ZLO, _ZHI, _EDGES = range(8)
