@@ -1,6 +1,6 @@
-"""Flagship demo (for now): the machines, and what a tool setting error does on a 5-axis machine.
+"""The machines, and what a tool setting error does on a 5-axis machine.
 
-Run: ``make demo`` (or ``.venv/bin/python scenarios/demo.py``).
+Run: ``.venv/bin/python scenarios/demo.py`` (``make demo`` runs the flagship, paper 002).
 
 For robonano_a0ib with the tool edge set 10 um off in X and 5 um in Z (a typical manual
 setting), the program aims the edge at the workpiece point (1, 1, 0) mm at several B tilts
