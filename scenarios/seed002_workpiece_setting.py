@@ -1,7 +1,7 @@
 """Paper 002 replay: a robot-loaded workpiece, its setting errors found and compensated.
 
-Run: ``.venv/bin/python scenarios/seed002_workpiece_setting.py`` (about a minute on 2 cores;
-``--quick`` about 20 s, smaller crown windows, as the tests run it) with options
+Run: ``.venv/bin/python scenarios/seed002_workpiece_setting.py`` (about 35 s on 2 cores;
+``--quick`` about 25 s, smaller crown windows, as the tests run it) with options
 
     --robot-repeatability-um R  the robot that loads each workpiece (default 30, the
                                 paper's LR Mate 200iD); its landing is drawn with --seed

@@ -21,12 +21,14 @@ the finishing against cutting the crown out of the full prism with the same pass
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, replace
 
 import manifold3d
 import numpy as np
 
 from machinesim import motion
+from machinesim.cutting import remove
 from machinesim.exceptions import InputError
 from machinesim.identification.seed002 import ReferenceSpheres
 from machinesim.metrology import MeshIndex, fit_plane, plane_angle
@@ -417,7 +419,7 @@ def crown_roi(plan: CrownPlan = CROWN, margin: float = 0.35 * MM, top: float = 0
         ``top_rows``, ``side_rows`` for `crown_passes`: the passes within ``margin`` of a
         window (default 0.35 mm, the R2 mm nose's half width at a 30 um cut).
     """
-    side = (plan.apothem + 0.2 * MM, plan.apothem + 0.8 * MM, -side, side)
+    side = (plan.apothem + 0.35 * MM, plan.apothem + 0.65 * MM, -side, side)
     flat_r, flat_half = 4.5 * MM, 0.2 * MM
     flats = []
     for j in range(4):
@@ -454,8 +456,9 @@ class CrownCut:
     sweeps : int
         Feed sweeps that reached the windows' material.
     sideways : int
-        Feed sweeps that drag the tool across its edge (the engine's flag): plunges and
-        retracts of a compensated program, by the roll five axes cannot undo.
+        Feed sweeps the engine flags as dragging the tool across its edge: a compensated
+        program's plunges, retracts and slope passes, where the roll five axes cannot undo
+        turns the tool ~1e-4 rad off the plane of its motion.
     removed_volume_m3 : float
     elapsed_s : float
     """
@@ -503,10 +506,6 @@ def cut_crown(program: Program, machine, tool, stock: Part, errors=None, boxes=N
         ``floor`` (m) if given.
     floor : float, optional
     """
-    import time
-
-    from machinesim.cutting import remove
-
     began = time.perf_counter()
     part = stock if boxes is None else clip_to(stock, boxes, floor)
     trajectory = motion.plan(program, machine, errors, start=PARK,
