@@ -74,3 +74,20 @@ class UnreachableError(KinematicsError):
 
 class AxisLimitError(KinematicsError):
     """An axis value lies outside the axis travel."""
+
+
+def check_length(value, name: str, *, positive: bool = False) -> float:
+    """``value`` as a finite float length (m), >= 0 (or > 0 with ``positive``).
+
+    Raises InputError naming ``name``, the value that arrived and what was expected.
+    """
+    import math
+
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"Expected {name} as a number (m), got {value!r}", key=name) from error
+    if not math.isfinite(number) or number < 0.0 or (positive and number == 0.0):
+        want = "> 0" if positive else ">= 0"
+        raise InputError(f"Expected {name} {want} (m), got {number!r}", key=name)
+    return number

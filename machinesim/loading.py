@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.errors import WorkpieceSetting
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, check_length
 
 __all__ = ["RP_PER_SIGMA", "RobotLoader"]
 
@@ -55,15 +55,7 @@ class RobotLoader:
 
     def __post_init__(self) -> None:
         for name in ("repeatability", "lever"):
-            value = getattr(self, name)
-            try:
-                number = float(value)
-            except (TypeError, ValueError) as error:
-                raise InputError(f"Expected {name} as a number (m), got {value!r}",
-                                 key=name) from error
-            if not math.isfinite(number) or number < 0.0 or (name == "lever" and number == 0):
-                want = "> 0" if name == "lever" else ">= 0"
-                raise InputError(f"Expected {name} {want} (m), got {number!r}", key=name)
+            number = check_length(getattr(self, name), name, positive=name == "lever")
             object.__setattr__(self, name, number)
 
     @property

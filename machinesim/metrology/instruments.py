@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, check_length
 
 __all__ = ["Readout", "as_generator"]
 
@@ -45,14 +45,7 @@ class Readout:
 
     def __post_init__(self) -> None:
         for name in ("sigma", "resolution"):
-            value = getattr(self, name)
-            try:
-                number = float(value)
-            except (TypeError, ValueError) as error:
-                raise InputError(f"Expected {name} as a number (m), got {value!r}",
-                                 key=name) from error
-            if not math.isfinite(number) or number < 0.0:
-                raise InputError(f"Expected {name} >= 0 (m), got {number}", key=name)
+            number = check_length(getattr(self, name), name)
             object.__setattr__(self, name, number)
 
     @classmethod
