@@ -128,3 +128,14 @@ WALL_TOL_REL = 1e-13
 #: Tile boxes reach this far (relative to the largest stock coordinate) beyond the stock
 #: wherever they are not cutting it, far from the clip plane and the cell edges.
 BOX_CLEARANCE_REL = 1e-2
+
+# --- cutting.relief
+#: A move is straight along X (or Y) when its other two components are at most this fraction
+#: of its length; the relief then extrudes the profile at the start pose, off by at most this
+#: fraction of the travel (5e-13 m over 0.5 m), where a float64 kinematic chain leaves ~1e-16.
+STRAIGHT_REL = 1e-12
+#: F(y) and G(x) are equal at a grid corner when they differ by at most this fraction of the
+#: largest coordinate (2.5e-15 m on a 25 mm block): their float64 evaluations from different
+#: grooves differ by a few ulp (~1e-17 m) where they are equal in exact arithmetic, and
+#: treating them as equal saves sliver triangles of that width.
+HEIGHT_TIE_REL = 1e-13

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 import struct
-from dataclasses import dataclass
 
 import manifold3d
 import numpy as np
@@ -24,17 +23,61 @@ from machinesim.tools import arc_segments, sphere_polygon
 from machinesim.units import M_PER_MM, M_PER_UM
 
 
-@dataclass(frozen=True)
 class Part:
     """A solid in its workpiece frame (metres), exact float64 mesh behind a manifold3d value.
 
-    Attributes
+    Never mutated: every operation returns a new `Part`. A part is made from a
+    `manifold3d.Manifold`, or by a mesher that closes its mesh by construction (the
+    height-field cutter, `machinesim.cutting.relief`); the latter builds its manifold only
+    when `manifold` is first read, since importing a mesh of millions of triangles into
+    manifold3d costs about a second per million and measuring never needs it.
+
+    Parameters
     ----------
     manifold : manifold3d.Manifold
-        The solid. Never mutated: every operation returns a new `Part`.
+        The solid.
     """
 
-    manifold: manifold3d.Manifold
+    __slots__ = ("_manifold", "_vertices", "_triangles", "_volume", "reliefs")
+
+    def __init__(self, manifold: manifold3d.Manifold) -> None:
+        self._manifold = manifold
+        self._vertices = None
+        self._triangles = None
+        self._volume = None
+        #: Height-field description of the part, when it has one (private to the cutter).
+        self.reliefs = None
+
+    @classmethod
+    def _closed(cls, vertices: np.ndarray, triangles: np.ndarray, reliefs=None,
+                volume: float | None = None) -> Part:
+        """Part from a mesh that is closed and oriented by construction (not re-checked).
+
+        ``volume`` (m^3), when the mesher knows it, spares summing over every triangle.
+        """
+        part = cls.__new__(cls)
+        part._manifold = None
+        part._volume = volume
+        part._vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+        part._triangles = np.ascontiguousarray(triangles, dtype=np.int64)
+        part._vertices.flags.writeable = False
+        part._triangles.flags.writeable = False
+        part.reliefs = reliefs
+        return part
+
+    @property
+    def manifold(self) -> manifold3d.Manifold:
+        """The solid as a `manifold3d.Manifold` (built on first use for a meshed part)."""
+        if self._manifold is None:
+            mesh = manifold3d.Mesh64(
+                vert_properties=np.array(self._vertices, order="C"),
+                tri_verts=np.array(self._triangles, dtype=np.uint64, order="C"),
+            )
+            manifold = manifold3d.Manifold(mesh)
+            if manifold.status() != manifold3d.Error.NoError:
+                raise RuntimeError(f"meshed part is not a closed 2-manifold: {manifold.status()}")
+            self._manifold = manifold
+        return self._manifold
 
     @classmethod
     def from_mesh(cls, vertices, triangles) -> Part:
@@ -75,6 +118,8 @@ class Part:
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
         """Vertices, shape (n, 3) float64 in m, and triangles, shape (m, 3) int64."""
+        if self._vertices is not None:
+            return self._vertices, self._triangles
         mesh = self.manifold.to_mesh64()
         vertices = np.ascontiguousarray(mesh.vert_properties[:, :3], dtype=np.float64)
         triangles = np.ascontiguousarray(mesh.tri_verts, dtype=np.int64)
@@ -83,12 +128,20 @@ class Part:
     @property
     def volume(self) -> float:
         """Volume in m^3."""
-        return float(self.manifold.volume())
+        if self._volume is None:
+            if self._manifold is None:
+                self._volume = mesh_volume(self._vertices, self._triangles)
+            else:
+                self._volume = float(self._manifold.volume())
+        return self._volume
 
     @property
     def bounds(self) -> np.ndarray:
         """Axis-aligned bounds, shape (2, 3) (m): row 0 the minimum corner, row 1 the maximum."""
-        box = np.array(self.manifold.bounding_box(), dtype=np.float64).reshape(2, 3)
+        if self._manifold is None:
+            box = np.stack([self._vertices.min(axis=0), self._vertices.max(axis=0)])
+        else:
+            box = np.array(self._manifold.bounding_box(), dtype=np.float64).reshape(2, 3)
         box.flags.writeable = False
         return box
 
@@ -129,6 +182,20 @@ class Part:
         vertices, triangles = self.mesh()
         data = trimesh.Trimesh(vertices, triangles, process=False).export(file_type="glb")
         write_atomic(path, data)
+
+
+def mesh_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:
+    """Volume (m^3) enclosed by a closed, outward-oriented triangle mesh (divergence theorem).
+
+    Tetrahedra are taken from the centre of the bounds, not the origin, so that a small part
+    far from the origin does not lose digits to cancellation.
+    """
+    if len(triangles) == 0:
+        return 0.0
+    centre = (vertices.min(axis=0) + vertices.max(axis=0)) / 2.0
+    corner = vertices[triangles] - centre
+    return float(np.einsum("ij,ij->i", corner[:, 0],
+                           np.cross(corner[:, 1], corner[:, 2])).sum() / 6.0)
 
 
 def block(length: float, width: float, height: float, origin=(0.0, 0.0, 0.0)) -> Part:

@@ -19,6 +19,11 @@ LENGTH_TOL = 1e-11
 #: Volumes of exact meshes agree to float64 summation round-off (~1e-15 relative).
 VOLUME_REL = 1e-12
 
+#: Both engines, with the method each reports: the height-field mesher takes straight
+#: grooves across a block when allowed, the boolean engine always can.
+METHODS = pytest.mark.parametrize(("method", "used"), [("auto", "relief"),
+                                                        ("boolean", "boolean")])
+
 ALONG_Y = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
@@ -43,12 +48,14 @@ def v_section(part, x):
     return vertices[np.abs(vertices[:, 0] - x) < LENGTH_TOL][:, 1:]
 
 
+@METHODS
 @pytest.mark.parametrize("angle_deg", [90.0, 60.0])
-def test_v_groove_section_is_the_analytic_v(angle_deg):
+def test_v_groove_section_is_the_analytic_v(angle_deg, method, used):
     depth, y0, length = 7e-6, 1.234567e-3, 4e-3
     angle = math.radians(angle_deg)
     stock = block(length, 3e-3, 1e-3)
-    part, report = remove(stock, VTool(angle), [groove_x(y0, depth)])
+    part, report = remove(stock, VTool(angle), [groove_x(y0, depth)], method=method)
+    assert report.method == used
     half = depth * math.tan(angle / 2)
     for x in (0.0, length):
         section = v_section(part, x)
@@ -63,13 +70,15 @@ def test_v_groove_section_is_the_analytic_v(angle_deg):
     assert not report.empty_cut and report.sideways == ()
 
 
-def test_shifted_poses_shift_the_groove_exactly():
+@METHODS
+def test_shifted_poses_shift_the_groove_exactly(method, used):
     rng = np.random.default_rng(0)
     stock = block(4e-3, 3e-3, 1e-3)
     tool = VTool(math.pi / 2)
-    base, _ = remove(stock, tool, [groove_x(1.5e-3, 8e-6)])
+    base, report = remove(stock, tool, [groove_x(1.5e-3, 8e-6)], method=method)
+    assert report.method == used
     dy, dz = rng.uniform(-0.5e-3, 0.5e-3), rng.uniform(-3e-6, 3e-6)
-    shifted, _ = remove(stock, tool, [groove_x(1.5e-3 + dy, 8e-6, dz=dz)])
+    shifted, _ = remove(stock, tool, [groove_x(1.5e-3 + dy, 8e-6, dz=dz)], method=method)
     a = v_section(base, 0.0)
     b = v_section(shifted, 0.0)
     a = a[a[:, 1] > -0.5e-3]
@@ -78,7 +87,8 @@ def test_shifted_poses_shift_the_groove_exactly():
     assert bottom_b - bottom_a == pytest.approx([dy, dz], abs=LENGTH_TOL)
 
 
-def test_crossing_grooves_leave_pyramids_of_the_analytic_height():
+@METHODS
+def test_crossing_grooves_leave_pyramids_of_the_analytic_height(method, used):
     # Pitch p, 90-deg tool, depth D >= p/2: neighbouring flanks (45 deg) meet halfway between
     # grooves, p/2 above the groove bottom, so the apexes sit at z = p/2 - D and the
     # pyramids (base p x p, height p/2, volume p^3 / 6) stand on the plane z = -D.
@@ -89,7 +99,8 @@ def test_crossing_grooves_leave_pyramids_of_the_analytic_height():
     ends = dict(x0=-0.1e-3, x1=side + 0.1e-3)
     paths = [groove_x(c, depth, **ends) for c in centres]
     paths += [groove_y(c, depth, y0=ends["x0"], y1=ends["x1"]) for c in centres]
-    part, report = remove(stock, VTool(math.pi / 2), paths)
+    part, report = remove(stock, VTool(math.pi / 2), paths, method=method)
+    assert report.method == used
     apex = pitch / 2 - depth
     assert part.bounds[1, 2] == pytest.approx(apex, abs=LENGTH_TOL)
     vertices, _ = part.mesh()
@@ -111,8 +122,10 @@ def test_tiling_does_not_change_the_solid():
     centres = pitch / 2 + pitch * np.arange(n)
     paths = [groove_x(c, depth, x0=-0.1e-3, x1=side + 0.1e-3) for c in centres]
     paths += [groove_y(c, depth, y0=-0.1e-3, y1=side + 0.1e-3) for c in centres]
-    whole, _ = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=10**9)
-    tiled, report = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=4)
+    whole, _ = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=10**9,
+                      method="boolean")
+    tiled, report = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=4,
+                           method="boolean")
     assert report.n_cells > 1
     assert tiled.volume == pytest.approx(whole.volume, rel=VOLUME_REL)
     assert np.array_equal(tiled.bounds, whole.bounds)
@@ -150,12 +163,14 @@ def test_reports_flag_empty_sideways_and_degenerate_sweeps():
     assert report.n_sweeps == 3 and not report.empty_cut
 
 
-def test_roi_cuts_only_the_windows():
+@METHODS
+def test_roi_cuts_only_the_windows(method, used):
     depth = 6e-6
     stock = block(4e-3, 4e-3, 1e-3)
     paths = [groove_x(y, depth) for y in (0.5e-3, 1.5e-3, 2.5e-3, 3.5e-3)]
     windows = [(1e-3, 2e-3, 1e-3, 2e-3), (3e-3, 3.5e-3, 3e-3, 4e-3)]
-    part, report = remove(stock, VTool(math.pi / 2), paths, roi=windows)
+    part, report = remove(stock, VTool(math.pi / 2), paths, roi=windows, method=method)
+    assert report.method == used
     assert report.n_sweeps_cut == 2
     window_volume = (1e-3 * 1e-3 + 0.5e-3 * 1e-3) * 1e-3
     removed = depth * depth * (1e-3 + 0.5e-3)
@@ -198,23 +213,28 @@ def test_rotating_sweep_cuts_the_arc_groove():
     assert report.sideways == ()
 
 
-def test_same_inputs_give_the_same_bytes():
+@METHODS
+def test_same_inputs_give_the_same_bytes(method, used):
     rng = np.random.default_rng(0)
     stock = block(1e-3, 1e-3, 0.2e-3)
     paths = [groove_x(y, 10e-6, x0=-0.1e-3, x1=1.1e-3) for y in rng.uniform(0, 1e-3, 12)]
     paths += [groove_y(x, 10e-6, y0=-0.1e-3, y1=1.1e-3) for x in rng.uniform(0, 1e-3, 12)]
-    first, _ = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=8)
-    second, _ = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=8)
+    first, report = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=8,
+                           method=method)
+    second, _ = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=8, method=method)
+    assert report.method == used
     (v1, t1), (v2, t2) = first.mesh(), second.mesh()
     assert v1.tobytes() == v2.tobytes() and t1.tobytes() == t2.tobytes()
 
 
-def test_progress_reaches_its_total():
+@METHODS
+def test_progress_reaches_its_total(method, used):
     calls = []
     stock = block(2e-3, 2e-3, 0.2e-3)
     paths = [groove_x(y, 5e-6) for y in (0.5e-3, 1.5e-3)]
-    remove(stock, VTool(math.pi / 2), paths, progress=lambda done, total: calls.append((done,
-                                                                                          total)))
+    _, report = remove(stock, VTool(math.pi / 2), paths, method=method,
+                       progress=lambda done, total: calls.append((done, total)))
+    assert report.method == used
     assert calls[0][0] == 0 and calls[-1][0] == calls[-1][1] == 2
     assert all(a[0] <= b[0] for a, b in zip(calls, calls[1:], strict=False))
 

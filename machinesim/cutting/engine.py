@@ -33,6 +33,7 @@ import manifold3d
 import numpy as np
 from manifold3d import OpType
 
+from machinesim.cutting.relief import cut_reliefs
 from machinesim.cutting.stitch import exact_box, stitch
 from machinesim.cutting.tiling import (
     SWEEPS_PER_TILE,
@@ -84,7 +85,10 @@ class EngineReport:
         Indices (over all paths, in order) of sweeps that drag a non-rotational tool
         sideways (`SIDEWAYS_REL`).
     n_cells : int
-        Cells (ROI windows times tiles) the region was cut in.
+        Cells (ROI windows times tiles) the region was cut in; 1 per window by relief.
+    method : str
+        "relief" when the cut was meshed as a height field (straight grooves across a block,
+        `machinesim.cutting.relief`), "boolean" when the sweeps were subtracted.
     elapsed_s : float
         Wall time of the call, s.
     """
@@ -96,6 +100,7 @@ class EngineReport:
     empty_cut: bool
     sideways: tuple[int, ...]
     n_cells: int
+    method: str
     elapsed_s: float
 
 
@@ -265,10 +270,7 @@ class _Sweeps:
             r0, r1 = rotation[first], rotation[first + 1]
             move = origin[first + 1] - origin[first]
             if not self.rotational:
-                local = np.einsum("nji,nj->ni", r0, move)
-                length = np.linalg.norm(local, axis=1)
-                lateral = (np.abs(local[:, 1]) > SIDEWAYS_REL * length) & (length > 0.0)
-                sideways.extend((begin + np.flatnonzero(lateral)).tolist())
+                sideways.extend((begin + np.flatnonzero(dragged(r0, move))).tolist())
             p0 = np.einsum("nij,kj->nki", r0, self.vertices) + origin[first][:, None, :]
             p1 = np.einsum("nij,kj->nki", r1, self.vertices) + origin[first + 1][:, None, :]
             points = np.concatenate([p0, p1], axis=1)
@@ -294,6 +296,13 @@ class _Sweeps:
                 np.array(direction).reshape(shape), n_degenerate, sideways)
 
 
+def dragged(rotation: np.ndarray, move: np.ndarray) -> np.ndarray:
+    """Which moves (s, 3) drag a non-rotational tool at ``rotation`` (s, 3, 3) sideways."""
+    local = np.einsum("nji,nj->ni", rotation, move)
+    length = np.linalg.norm(local, axis=1)
+    return (np.abs(local[:, 1]) > SIDEWAYS_REL * length) & (length > 0.0)
+
+
 def _direction_keys(direction: np.ndarray) -> np.ndarray:
     """Group key per sweep: its XY travel direction modulo pi, in bins; -1 for no XY travel."""
     planar = np.hypot(direction[:, 0], direction[:, 1])
@@ -311,6 +320,7 @@ def remove(
     roi=None,
     progress: Callable[[int, int], None] | None = None,
     sweeps_per_tile: int = SWEEPS_PER_TILE,
+    method: str = "auto",
 ) -> tuple[Part, EngineReport]:
     """Cut ``stock`` with ``tool`` moved along ``paths``.
 
@@ -331,6 +341,11 @@ def remove(
     sweeps_per_tile : int
         Cells are split into a grid of tiles until each has at most this many sweeps (or
         splitting stops paying, see `SPLIT_GAIN`); a huge value disables tiling.
+    method : {"auto", "boolean"}
+        "auto" meshes the cut as a height field when every sweep that reaches the stock is
+        a straight groove along X or Y right across a block (or a part cut that way before),
+        `machinesim.cutting.relief`, and subtracts sweeps otherwise; "boolean" always
+        subtracts. Both are exact; the height field is 10-20 times faster on groove patterns.
 
     Returns
     -------
@@ -360,6 +375,32 @@ def remove(
         return inside & hit.any(axis=1)
 
     sweeps = _Sweeps(tool, paths, z_high)
+    if method not in ("auto", "boolean"):
+        raise InputError(f"method must be 'auto' or 'boolean', got {method!r}", key="method")
+    if method == "auto" and sweeps.count:
+        relief = cut_reliefs(stock, sweeps.vertices, sweeps.poses, sweeps.pairs,
+                             None if roi is None else cells)
+        if relief is not None:
+            if progress is not None:
+                progress(0, relief.n_sweeps_cut)
+                progress(relief.n_sweeps_cut, relief.n_sweeps_cut)
+            sideways = []
+            if not sweeps.rotational:
+                first = sweeps.pairs
+                move = sweeps.poses[first + 1, :3, 3] - sweeps.poses[first, :3, 3]
+                sideways = np.flatnonzero(dragged(sweeps.poses[first, :3, :3], move)).tolist()
+            report = EngineReport(
+                removed_volume=relief.removed_volume,
+                n_sweeps=sweeps.count,
+                n_sweeps_cut=relief.n_sweeps_cut,
+                n_degenerate=relief.n_degenerate,
+                empty_cut=not relief.removed_volume > EMPTY_REL * relief.stock_volume,
+                sideways=tuple(sideways),
+                n_cells=len(relief.part.reliefs),
+                method="relief",
+                elapsed_s=time.perf_counter() - start,
+            )
+            return relief.part, report
     hulls, lower, upper, direction, n_degenerate, sideways = sweeps.hulls(touches)
     keys = _direction_keys(direction)
 
@@ -411,6 +452,7 @@ def remove(
         empty_cut=not removed > EMPTY_REL * stock_volume,
         sideways=tuple(int(i) for i in sideways),
         n_cells=sum(len(tiles) for _, tiles in plan),
+        method="boolean",
         elapsed_s=time.perf_counter() - start,
     )
     return Part(result), report
