@@ -11,6 +11,13 @@ c. A 20-deg rotary sweep of a V tool about an axis 100 mm away, split into sub-s
 d. 400 x 400 mm plate, 8000 x 8000 grooves at 50 um pitch, cut only in 25 windows of 1 x 1 mm.
    Goal < 60 s and < 2 GB.
 
+a, b and d are run twice, each in its own process: with the default engine (``method="auto"``,
+which meshes straight grooves across a block as an exact height field,
+`machinesim.cutting.relief`) and with the boolean engine alone (``method="boolean"``), so the
+two are compared in one run. For b the relief mesh has more triangles than the boolean one
+for the same solid (each pyramid face is split where the other groove set has a corner), so
+its rate is also given per triangle of the boolean part.
+
 For a and b the naive engine (subtract one sweep hull at a time, evaluating the mesh after
 each) is too slow to run whole, so it is timed in the same run on a subset: per sweep on the
 first sweeps (small mesh) and per sweep on the engine's final part (full-size mesh, grooves
@@ -23,7 +30,7 @@ too.
 Each scenario runs in its own process so that its peak memory (ru_maxrss, which includes
 manifold3d's C++ heap, unlike tracemalloc) is its own. Times are medians of ``--repeat`` runs.
 
-Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcd] [--repeat 3]``
+Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcd] [--repeat 3] [--no-naive]``
 """
 
 from __future__ import annotations
@@ -161,26 +168,27 @@ def naive_estimate(name: str, stock, tool, paths, final) -> dict:
             "naive_estimate_s": half * start_first + half * (start + end) / 2}
 
 
-def run_child(name: str, repeat: int, with_naive: bool) -> dict:
+def run_child(name: str, repeat: int, with_naive: bool, method: str) -> dict:
     """Run one scenario here and return its figures."""
     stock, tool, paths, roi = SCENARIOS[name]()
     times, cpu = [], []
     for _ in range(repeat):
         before = resource.getrusage(resource.RUSAGE_SELF)
         start = time.perf_counter()
-        part, report = remove(stock, tool, paths, roi=roi)
+        part, report = remove(stock, tool, paths, roi=roi, method=method)
         times.append(time.perf_counter() - start)
         after = resource.getrusage(resource.RUSAGE_SELF)
         cpu.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
     figures = {
         "scenario": name,
+        "method": report.method,
         "median_s": statistics.median(times),
         "times_s": times,
         "median_cpu_s": statistics.median(cpu),
         "sweeps": report.n_sweeps,
         "sweeps_cut": report.n_sweeps_cut,
         "cells": report.n_cells,
-        "triangles": part.manifold.num_tri(),
+        "triangles": len(part.mesh()[1]),
         "removed_volume_m3": report.removed_volume,
         # Peak before the naive runs: the engine's own figure.
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
@@ -196,33 +204,48 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-naive", action="store_true")
     parser.add_argument("--child", help=argparse.SUPPRESS)
+    parser.add_argument("--method", default="auto", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        print(json.dumps(run_child(args.child, args.repeat, not args.no_naive)))
+        print(json.dumps(run_child(args.child, args.repeat, not args.no_naive, args.method)))
         return
+    boolean_triangles = {}
     for name in args.scenarios:
-        command = [sys.executable, __file__, "--child", name, "--repeat", str(args.repeat)]
-        if args.no_naive:
-            command.append("--no-naive")
-        out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
-        f = json.loads(out.strip().splitlines()[-1])
-        line = (f"({name}) median {f['median_s']:.3f} s (cpu {f['median_cpu_s']:.3f} s) over "
-                f"{len(f['times_s'])} runs; {f['sweeps']} sweeps ({f['sweeps_cut']} cut, "
-                f"{f['cells']} cells) -> {f['triangles']} triangles; "
-                f"peak RSS {f['peak_rss_mb']:.0f} MB")
-        rate = {"a": f["sweeps"] / f["median_s"], "b": f["triangles"] / f["median_s"],
-                "c": f["sweeps"] / f["median_s"], "d": None}[name]
-        unit = {"a": "sweeps/s", "b": "triangles/s", "c": "sub-steps/s", "d": ""}[name]
-        if rate is not None:
-            line += f"; {rate:,.0f} {unit}"
-        if "naive_estimate_s" in f:
-            line += (f"; naive {f['naive_start_s'] * 1e3:.2f} ms/sweep at the start, "
-                     f"{f['naive_end_s'] * 1e3:.2f} ms/sweep on the final part -> about "
-                     f"{f['naive_estimate_s']:.1f} s whole (at least "
-                     f"{f['naive_lower_s']:.1f} s): ratio ~"
-                     f"{f['naive_estimate_s'] / f['median_s']:.0f}x (>= "
-                     f"{f['naive_lower_s'] / f['median_s']:.1f}x)")
-        print(line, flush=True)
+        for method in ("boolean", "auto") if name in "abd" else ("auto",):
+            run_one(name, method, args, boolean_triangles)
+
+
+def run_one(name: str, method: str, args, boolean_triangles: dict) -> None:
+    """Run one scenario with one engine in a child process and print its line."""
+    command = [sys.executable, __file__, "--child", name, "--repeat", str(args.repeat),
+               "--method", method]
+    if args.no_naive or method == "boolean":
+        command.append("--no-naive")
+    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+    f = json.loads(out.strip().splitlines()[-1])
+    if f["method"] == "boolean":
+        boolean_triangles[name] = f["triangles"]
+    line = (f"({name}, {f['method']}) median {f['median_s']:.3f} s "
+            f"(cpu {f['median_cpu_s']:.3f} s) over "
+            f"{len(f['times_s'])} runs; {f['sweeps']} sweeps ({f['sweeps_cut']} cut, "
+            f"{f['cells']} cells) -> {f['triangles']} triangles; "
+            f"peak RSS {f['peak_rss_mb']:.0f} MB")
+    rate = {"a": f["sweeps"] / f["median_s"], "b": f["triangles"] / f["median_s"],
+            "c": f["sweeps"] / f["median_s"], "d": None}[name]
+    unit = {"a": "sweeps/s", "b": "triangles/s", "c": "sub-steps/s", "d": ""}[name]
+    if rate is not None:
+        line += f"; {rate:,.0f} {unit}"
+    if name == "b" and f["method"] == "relief" and name in boolean_triangles:
+        line += (f" ({boolean_triangles[name] / f['median_s']:,.0f} per triangle of the "
+                 f"boolean part, {boolean_triangles[name]})")
+    if "naive_estimate_s" in f:
+        line += (f"; naive {f['naive_start_s'] * 1e3:.2f} ms/sweep at the start, "
+                 f"{f['naive_end_s'] * 1e3:.2f} ms/sweep on the final part -> about "
+                 f"{f['naive_estimate_s']:.1f} s whole (at least "
+                 f"{f['naive_lower_s']:.1f} s): ratio ~"
+                 f"{f['naive_estimate_s'] / f['median_s']:.0f}x (>= "
+                 f"{f['naive_lower_s'] / f['median_s']:.1f}x)")
+    print(line, flush=True)
 
 
 if __name__ == "__main__":

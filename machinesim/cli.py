@@ -139,7 +139,8 @@ def _cut(args) -> int:
     if args.report:
         write_atomic(args.report, json.dumps(summary, indent=2) + "\n")
     print(f"wrote {args.out}: removed {summary['removed_volume_mm3']:.6g} mm^3 in "
-          f"{report.sweeps} sweeps; machining time {report.machining_time_s:.1f} s")
+          f"{report.sweeps} sweeps ({report.engine}); "
+          f"machining time {report.machining_time_s:.1f} s")
     for what, items in (("rapid that cuts at line", report.rapids_that_cut),
                         ("outside travel:", report.limit_violations)):
         for item in items:

@@ -32,6 +32,7 @@ def test_v_grooves_have_the_analytic_section_and_volume():
     # 90-deg V, depth d: section d^2 (tan 45 = 1), over the 5 mm block, three grooves
     assert report.removed_volume_m3 == pytest.approx(3 * (10 * UM) ** 2 * 5 * MM, rel=1e-9)
     assert report.sweeps == 3 and not report.empty_cut and report.rapids_that_cut == ()
+    assert report.engine == "relief"  # straight grooves right across the block
     y = np.linspace(0.99 * MM, 1.01 * MM, 2001)
     h = height_map(part, np.array([2.5 * MM]), y)[:, 0]
     # 0.01 nm: the float64 mesh carries the V exactly; heights are plane evaluations

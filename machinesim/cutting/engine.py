@@ -5,7 +5,9 @@ A sweep is the convex hull of the tool at two consecutive poses of a path (float
 swept by the tool; a move that rotates must arrive already split into sub-steps whose chord
 error is within tolerance (`rotary_substeps`).
 
-Speed comes from never touching the part mesh once per sweep:
+Straight grooves right across a block are first offered to `machinesim.cutting.relief`,
+which meshes their height field exactly without any boolean; everything else is subtracted
+here. Speed comes from never touching the part mesh once per sweep:
 
 1. Tool points for all poses are transformed at once (numpy).
 2. Each sweep is clipped, before its hull is built, to the half-space a hair above the top

@@ -36,6 +36,9 @@ class CutReport:
         Feed sweeps that drag a non-rotational tool sideways (across its cutting edge).
     empty_cut : bool
         True when nothing was removed: a program that misses the stock is flagged, not silent.
+    engine : str
+        How the material was removed: "relief" (straight grooves across a block, meshed as a
+        height field) or "boolean" (sweeps subtracted); both exact (`engine.remove`).
     elapsed_s : float
         Wall time of the simulation.
     notes : tuple of str
@@ -50,6 +53,7 @@ class CutReport:
     limit_violations: tuple[str, ...]
     sideways_sweeps: int
     empty_cut: bool
+    engine: str
     elapsed_s: float
     notes: tuple[str, ...] = field(default=())
 
@@ -65,6 +69,7 @@ class CutReport:
             "limit_violations": list(self.limit_violations),
             "sideways_sweeps": self.sideways_sweeps,
             "empty_cut": self.empty_cut,
+            "engine": self.engine,
             "elapsed_s": self.elapsed_s,
             "notes": list(self.notes),
         }
@@ -130,6 +135,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         limit_violations=limits,
         sideways_sweeps=len(engine.sideways),
         empty_cut=bool(engine.empty_cut),
+        engine=engine.method,
         elapsed_s=time.perf_counter() - began,
         notes=trajectory.notes,
     )

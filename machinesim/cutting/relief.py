@@ -458,8 +458,8 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
                           *envelope(*_segments_of(old.gx, old.gz), box[0], box[1], old.top),
                           *envelope(*_segments_of(old.fy, old.fz), box[2], box[3], old.top))
                    for old, box in rects)
-    flat = all(np.all(r.gz == r.top) and np.all(r.fz == r.top) for r in before)
-    cut_before = 0.0 if flat else relief_part(before)[1]
+    uncut = all(np.all(r.gz == r.top) and np.all(r.fz == r.top) for r in before)
+    cut_before = 0.0 if uncut else relief_part(before)[1]
     stock_volume = sum((r.x1 - r.x0) * (r.y1 - r.y0) * (r.top - r.bottom) for r in before)
     stock_volume -= cut_before
     return ReliefCut(part, cut_after - cut_before, stock_volume, n_cut, n_degenerate)
