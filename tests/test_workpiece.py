@@ -13,6 +13,7 @@ from machinesim.workpiece import (
     block_with_spheres,
     cylinder,
     diamond_crown,
+    mesh_volume,
     stock_from_spec,
 )
 
@@ -114,6 +115,28 @@ def _read_ply(path):
                           offset=end + 24 * nv)
     assert np.all(faces["n"] == 3)
     return vertices, faces["i"].astype(np.int64)
+
+
+def test_mesh_volume_of_a_far_placed_cylinder_is_the_prism_formula():
+    # Inscribed n-gon prism: (n / 2) r^2 sin(2 pi / n) h, 1 km from the origin, where a sum
+    # of tetrahedra from the origin would lose ~12 digits to cancellation.
+    part = cylinder(1e-3, 2e-3, origin=(1e3, -1e3, 5e2), chord_tol=1e-6)
+    vertices, triangles = part.mesh()
+    n = len(vertices) // 2
+    expected = n / 2 * (1e-3) ** 2 * math.sin(2 * math.pi / n) * 2e-3
+    assert mesh_volume(vertices, triangles) == pytest.approx(expected, rel=1e-9)
+
+
+def test_a_meshed_part_builds_the_same_manifold_on_demand():
+    source = diamond_crown()
+    vertices, triangles = source.mesh()
+    part = Part._closed(vertices, triangles)
+    assert part.volume == pytest.approx(source.volume, rel=VOLUME_REL)
+    np.testing.assert_array_equal(part.bounds, source.bounds)
+    assert part.manifold.num_tri() == len(triangles)
+    assert part.manifold.volume() == pytest.approx(source.volume, rel=VOLUME_REL)
+    with pytest.raises(ValueError):
+        part.mesh()[0][0, 0] = 1.0  # immutable: the arrays are read-only
 
 
 def test_ply_round_trip_is_bit_exact(tmp_path):

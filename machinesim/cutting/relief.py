@@ -120,6 +120,10 @@ def _clip_to_top(u0, z0, u1, z1, top):
 def envelope(u0, z0, u1, z1, lo: float, hi: float, top: float):
     """Lower envelope of segments and the line z = top over [lo, hi], exactly.
 
+    The segments must form chains that start and end at or above ``top`` (groove profiles,
+    or an earlier envelope): their minimum is then continuous, and every corner of it is a
+    segment end or the crossing of two segments within one interval between ends.
+
     Parameters
     ----------
     u0, z0, u1, z1 : ndarray
