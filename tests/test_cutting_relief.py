@@ -8,8 +8,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from machinesim.cutting import relief as relief_engine
 from machinesim.cutting import remove
 from machinesim.cutting.relief import envelope, lower_hull
+from machinesim.exceptions import InputError
 from machinesim.metrology.surface import height_map
 from machinesim.tools import BallEndMill, RoundNoseTool, VTool
 from machinesim.workpiece import Part, block, mesh_volume
@@ -158,6 +160,13 @@ def test_separated_windows_are_cut_by_relief_and_touching_ones_are_not():
     touching = [(0.3e-3, 1.1e-3, 0.2e-3, 1.3e-3), (1.1e-3, 2.9e-3, 0.2e-3, 1.3e-3)]
     _, report = remove(stock, tool, paths, roi=touching)
     assert report.method == "boolean"
+
+
+def test_a_part_too_large_to_build_is_refused_with_advice(monkeypatch):
+    monkeypatch.setattr(relief_engine, "MAX_CELLS", 20)
+    rng = np.random.default_rng(5)
+    with pytest.raises(InputError, match=r"about [\d,]+ triangles.*roi="):
+        remove(block(3e-3, 3e-3, 0.5e-3), VTool(math.pi / 2), crossing_paths(rng))
 
 
 @pytest.mark.parametrize("case", ["short groove", "turned block", "through the bottom",

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from machinesim.exceptions import InputError
 from machinesim.tolerances import HEIGHT_TIE_REL, SAME_ORIENTATION, STRAIGHT_REL
 from machinesim.workpiece import Part
 
@@ -37,6 +38,10 @@ from machinesim.workpiece import Part
 MAX_ORIENTATIONS = 64
 #: Cells meshed per block: bounds the transient index arrays to ~100 MB.
 CELLS_PER_BLOCK = 1 << 18
+#: Most grid cells in one cut: about 2 triangles and 120 bytes of mesh each, so 2e7 cells
+#: make a ~2.4 GB part. Larger parts are refused with advice, not left to exhaust memory
+#: (the boolean engine could not cut them either).
+MAX_CELLS = 20_000_000
 
 
 @dataclass(frozen=True)
@@ -457,6 +462,13 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
         if min(gz.min(), fz.min()) <= old.bottom:
             return None  # cut through the bottom: the walls would not close
         new.append(Relief(box[0], box[1], box[2], box[3], old.bottom, old.top, gx, gz, fy, fz))
+    cells = sum((len(r.gx) - 1) * (len(r.fy) - 1) for r in new)
+    if cells > MAX_CELLS:
+        raise InputError(
+            f"the cut part would have about {2 * cells:,} triangles ({cells * 120 / 1e9:.1f} GB), "
+            f"over the {2 * MAX_CELLS:,} this engine builds in one piece; cut it where it will "
+            "be measured with roi=[(xmin, xmax, ymin, ymax), ...] (m) or --roi (mm)",
+            key="roi")
     part, cut_after = relief_part(tuple(new))
     before = tuple(Relief(box[0], box[1], box[2], box[3], old.bottom, old.top,
                           *envelope(*_segments_of(old.gx, old.gz), box[0], box[1], old.top),
