@@ -79,6 +79,13 @@ class Part:
             self._manifold = manifold
         return self._manifold
 
+    def __repr__(self) -> str:
+        count = (len(self._triangles) if self._manifold is None
+                 else self._manifold.num_tri())
+        low, high = self.bounds
+        return (f"Part({count} triangles, bounds {low.tolist()} .. {high.tolist()} m, "
+                f"volume {self.volume:.6g} m^3)")
+
     @classmethod
     def from_mesh(cls, vertices, triangles) -> Part:
         """Part from a closed, oriented triangle mesh.
