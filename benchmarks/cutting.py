@@ -107,13 +107,18 @@ def scenario_a():
     return stock, V90, paths, None
 
 
-def scenario_b():
-    pitch, count = 50e-6, 500
+def crossing(count: int, height: float, overrun: float):
+    """Block and paths of ``count`` x ``count`` crossing grooves, 50 um pitch, 25 um deep."""
+    pitch = 50e-6
     side = pitch * count
-    stock = block(side, side, 2e-3)
     centres = pitch / 2 + pitch * np.arange(count)
-    paths = (grooves_along_y(centres, 25e-6, -0.5e-3, side + 0.5e-3)
-             + grooves_along_x(centres, 25e-6, -0.5e-3, side + 0.5e-3))
+    paths = (grooves_along_y(centres, 25e-6, -overrun, side + overrun)
+             + grooves_along_x(centres, 25e-6, -overrun, side + overrun))
+    return block(side, side, height), paths
+
+
+def scenario_b():
+    stock, paths = crossing(500, 2e-3, 0.5e-3)
     return stock, V90, paths, None
 
 
@@ -132,12 +137,7 @@ def scenario_c():
 
 
 def scenario_d():
-    pitch, count = 50e-6, 8000
-    side = pitch * count
-    stock = block(side, side, 10e-3)
-    centres = pitch / 2 + pitch * np.arange(count)
-    paths = (grooves_along_y(centres, 25e-6, -1e-3, side + 1e-3)
-             + grooves_along_x(centres, 25e-6, -1e-3, side + 1e-3))
+    stock, paths = crossing(8000, 10e-3, 1e-3)
     starts = 40.0123e-3 + 80e-3 * np.arange(5)
     roi = [(x, x + 1e-3, y, y + 1e-3) for x in starts for y in starts]
     return stock, V90, paths, roi

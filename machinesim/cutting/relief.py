@@ -436,7 +436,7 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
                 profiles[(key, axis)] = lower_hull(shape[:, across], shape[:, 2])
             hull = profiles[(key, axis)]
             if len(hull) < 2:
-                n_degenerate += int(touch[group].any(axis=1).sum())
+                n_degenerate += len(group)  # every chosen sweep reaches a rectangle
                 continue
             for r, (old, _) in enumerate(rects):
                 mine = group[touch[group, r]]
