@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from machinesim.arrays import frozen  # noqa: F401  (re-exported for the metrology modules)
 from machinesim.exceptions import InputError
 
 #: A grid is regular (as x3p and surfalize need it) when every coordinate lies within this
@@ -12,11 +13,6 @@ from machinesim.exceptions import InputError
 REGULAR_GRID = 1e-6
 
 
-def frozen(values) -> np.ndarray:
-    """A read-only float64 copy."""
-    array = np.array(values, dtype=np.float64)
-    array.flags.writeable = False
-    return array
 
 
 def point_rows(points, width: int, name: str) -> np.ndarray:
