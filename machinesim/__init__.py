@@ -13,16 +13,31 @@ from __future__ import annotations
 
 from machinesim.errors import ComponentError, ErrorModel, ToolSetting, WorkpieceSetting
 from machinesim.exceptions import MachineSimError
+from machinesim.lab import Lab
 from machinesim.machines import AxisSolution, Machine, list_machines, load_machine
+
+
+def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, **options):
+    """Run an NC program on a machine with errors: `machinesim.cutting.cut` (see there).
+
+    Returns ``(Part, CutReport)``. Imported on first use: the cutting engine's libraries
+    (manifold3d, trimesh) load only when something is cut.
+    """
+    from machinesim.cutting import cut as run
+
+    return run(program, machine, tool, stock, errors, **options)
+
 
 __all__ = [
     "AxisSolution",
     "ComponentError",
     "ErrorModel",
+    "Lab",
     "Machine",
     "MachineSimError",
     "ToolSetting",
     "WorkpieceSetting",
+    "cut",
     "list_machines",
     "load_machine",
 ]

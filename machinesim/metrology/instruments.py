@@ -18,7 +18,7 @@ import numpy as np
 
 from machinesim.exceptions import InputError, check_length
 
-__all__ = ["Readout", "as_generator"]
+__all__ = ["Readout", "as_generator", "motion_of"]
 
 
 @dataclass(frozen=True)
@@ -96,3 +96,24 @@ def as_generator(rng) -> np.random.Generator:
         return np.random.default_rng(rng)
     raise InputError(f"Expected rng as a numpy Generator, an int seed or None, got {rng!r}",
                      key="rng")
+
+
+def motion_of(machine, errors):
+    """The machine's actual motion, as an instrument on it sees it, with no door to ``errors``.
+
+    Returns ``pose(frame, q) -> (..., 4, 4)``: the pose of ``frame`` in the workpiece frame at
+    axis values ``q`` on the machine with ``errors``. An instrument keeps this function, not
+    the errors: what it reads comes from where the machine really moves, and no attribute of
+    the instrument returns the injected model (the honesty rule of DESIGN.md).
+
+    Raises
+    ------
+    ErrorModelError
+        When ``errors`` does not fit ``machine``.
+    """
+    machine.check_errors(errors)
+
+    def pose(frame: str, q) -> np.ndarray:
+        return machine.frame_pose(frame, q, errors)
+
+    return pose

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.exceptions import AxisLimitError, InputError
-from machinesim.metrology.instruments import Readout, as_generator
+from machinesim.metrology.instruments import Readout, as_generator, motion_of
 
 __all__ = ["InterferometerReading", "LaserInterferometer", "squareness_from_diagonal"]
 
@@ -64,7 +64,8 @@ class LaserInterferometer:
     machine : Machine
         The machine under test.
     errors : ErrorModel or None
-        Its injected errors: only the machine's kinematics reads them.
+        Its injected errors: only the machine's kinematics reads them; the interferometer
+        keeps no attribute that returns them.
     sigma : float
         Noise of each displacement reading, m. Default 2 nm: the 1 nm resolution class of a
         heterodyne laser system (Renishaw XL-80 / Keysight class) in a temperature-controlled
@@ -87,9 +88,8 @@ class LaserInterferometer:
         if frame not in machine.frames:
             raise InputError(f"Expected a frame of {machine.name} ({', '.join(machine.frames)}),"
                              f" got {frame!r}", key="frame")
-        machine.check_errors(errors)
         self.machine = machine
-        self.errors = errors
+        self._pose = motion_of(machine, errors)
         self.frame = frame
         self.readout = Readout.of(sigma, resolution, noise)
         self.rng = as_generator(rng)
@@ -240,8 +240,8 @@ class LaserInterferometer:
 
     def _displacement(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Displacement along u (table frame) from the last row of q to each other row, m."""
-        wMf = self.machine.frame_pose(self.frame, q, self.errors)
-        wMt = self.machine.frame_pose("table", q, self.errors)
+        wMf = self._pose(self.frame, q)
+        wMt = self._pose("table", q)
         # The frame's position in the table frame: R^T (p_frame - p_table).
         p = np.einsum("nji,nj->ni", wMt[:, :3, :3], wMf[:, :3, 3] - wMt[:, :3, 3])
         return (p[:-1] - p[-1]) @ u

@@ -25,7 +25,7 @@ import numpy as np
 
 from machinesim.exceptions import AxisLimitError, InputError
 from machinesim.metrology._mesh import as_positive
-from machinesim.metrology.instruments import Readout, as_generator
+from machinesim.metrology.instruments import Readout, as_generator, motion_of
 from machinesim.metrology.meshindex import MeshIndex
 from machinesim.metrology.probe import touch_many
 from machinesim.tolerances import PROBE_CHORD_M
@@ -72,7 +72,8 @@ class TouchProbe:
         The machine carrying the probe; it must have the frame ``frame``.
     errors : ErrorModel or None
         The machine's injected errors: they move the ball as they move the tool. Only the
-        machine's kinematics reads them.
+        machine's kinematics reads them; the probe keeps no attribute that returns them
+        (`machinesim.Lab.touch_probe` builds one without handing them out).
     part : Part or MeshIndex or tuple of (array-like, array-like)
         The part on the machine, in its workpiece frame (m). Indexed once, here.
     radius : float
@@ -101,9 +102,8 @@ class TouchProbe:
         if frame not in machine.frames:
             raise InputError(f"Expected a machine with a {frame!r} frame to carry the probe, "
                              f"got {machine.name} with {', '.join(machine.frames)}", key="frame")
-        machine.check_errors(errors)
         self.machine = machine
-        self.errors = errors
+        self._pose = motion_of(machine, errors)
         self.frame = frame
         self.index = MeshIndex.from_surface(part)
         self.radius = as_positive(radius, "radius")
@@ -276,7 +276,7 @@ class TouchProbe:
     def _centres(self, q: np.ndarray) -> np.ndarray:
         """Ball centres (..., 3) of the erroneous machine at axis values q (..., n_axes)."""
         flat = q.reshape(-1, q.shape[-1])
-        poses = self.machine.frame_pose(self.frame, flat, self.errors)
+        poses = self._pose(self.frame, flat)
         return poses[:, :3, 3].reshape(q.shape[:-1] + (3,))
 
     def _polyline(self, q0: np.ndarray, u: np.ndarray, travel: float) -> np.ndarray:

@@ -1,0 +1,156 @@
+"""The lab keeps the truth: no public door to the injected errors, seeded per-instrument
+noise, and a scan that keeps identification and compensation away from the truth."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import machinesim
+from machinesim import ErrorModel, Lab
+from machinesim.exceptions import InputError
+from machinesim.nc import ProgramBuilder
+
+ROOT = Path(__file__).resolve().parents[1]
+TRUTH = {"tool": {"offset_um": [5.0, -3.0, 1.0]}, "location": {"C": {"EX0C_um": 2.0}}}
+
+
+def groove():
+    return (ProgramBuilder(1).rapid(X=1e-3, Y=1e-3, Z=1e-3).linear(Z=-1e-5, feed_mm_per_min=100)
+            .linear(X=8e-3, feed_mm_per_min=100).rapid(Z=1e-3).build())
+
+
+def _holds_truth(value, truth) -> bool:
+    if value is truth or isinstance(value, ErrorModel):
+        return True
+    if isinstance(value, dict | list | tuple):
+        items = value.values() if isinstance(value, dict) else value
+        return any(_holds_truth(v, truth) for v in items)
+    return False
+
+
+def _public(obj):
+    for name in dir(obj):
+        if name.startswith("_"):
+            continue
+        value = getattr(obj, name)
+        if callable(value):
+            continue
+        yield name, value
+
+
+def test_no_public_attribute_of_the_lab_or_its_instruments_holds_the_truth():
+    lab = Lab("robonano_a0ib", TRUTH, seed=3)
+    truth = lab.reveal()
+    part, _ = lab.cut(groove(), "v:90", "block:10x10x2")
+    things = [lab, lab.touch_probe(part), lab.laser_interferometer(), lab.microscope(),
+              lab.white_light_interferometer()]
+    for thing in things:
+        for name, value in _public(thing):
+            assert not _holds_truth(value, truth), f"{type(thing).__name__}.{name}"
+    methods = {name for name in dir(lab) if not name.startswith("_")}
+    assert methods == {"cut", "laser_interferometer", "machine", "microscope", "noise",
+                       "reveal", "seed", "touch_probe", "white_light_interferometer"}
+
+
+def test_the_lab_cuts_with_its_truth_as_cut_does_with_the_errors():
+    lab = Lab("robonano_a0ib", TRUTH, noise=False)
+    part, report = lab.cut(groove(), "v:90", "block:10x10x2")
+    direct, direct_report = machinesim.cut(groove(), "robonano_a0ib", "v:90", "block:10x10x2",
+                                           ErrorModel.from_dict(TRUTH))
+    assert np.array_equal(part.mesh()[0], direct.mesh()[0])
+    assert report.removed_volume_m3 == direct_report.removed_volume_m3
+    with pytest.raises(InputError, match="own errors"):
+        lab.cut(groove(), errors=None)
+
+
+def test_a_reading_does_not_change_when_another_instrument_reads_first():
+    def read(extra: bool):
+        lab = Lab("robonano_a0ib", TRUTH, seed=11)
+        part, _ = lab.cut(groove(), "v:90", "block:10x10x2")
+        if extra:
+            lab.touch_probe(part).touch([5e-3, 5e-3, 1e-3, 0.0, 0.0], "-Z", 2e-3)
+            lab.white_light_interferometer().profile(part, (2e-3, 0.0), (2e-3, 2e-3))
+            lab.microscope(label="elsewhere").profile(part, (1e-3, 0.0), (1e-3, 2e-3))
+        return lab.microscope().profile(part, (5e-3, 0.0), (5e-3, 2e-3), spacing=1e-5).z
+
+    alone, after_others = read(False), read(True)
+    assert np.array_equal(alone, after_others)
+    # and the noise is there: a second microscope has its own stream
+    lab = Lab("robonano_a0ib", TRUTH, seed=11)
+    part, _ = lab.cut(groove(), "v:90", "block:10x10x2")
+    first = lab.microscope().profile(part, (5e-3, 0.0), (5e-3, 2e-3), spacing=1e-5).z
+    second = lab.microscope().profile(part, (5e-3, 0.0), (5e-3, 2e-3), spacing=1e-5).z
+    assert np.array_equal(first, alone) and not np.array_equal(first, second)
+
+
+def test_noise_off_reads_exactly_and_seeds_differ_with_noise_on():
+    lab = Lab("robonano_a0ib", TRUTH, noise=False, seed=1)
+    part, _ = lab.cut(groove(), "v:90", "block:10x10x2")
+    z = lab.microscope(resolution=0.0).profile(part, (5e-3, 0.0), (5e-3, 0.5e-3)).z
+    assert np.all(z == 0.0)  # land far from the groove: exactly the top face
+    noisy = [Lab("robonano_a0ib", TRUTH, seed=s).microscope().profile(
+        part, (5e-3, 0.0), (5e-3, 0.5e-3)).z for s in (1, 2)]
+    assert not np.array_equal(*noisy)
+
+
+def test_bad_lab_arguments_are_clear_errors():
+    with pytest.raises(InputError, match="seed"):
+        Lab("robonano_a0ib", seed=-1)
+    with pytest.raises(InputError, match="noise"):
+        Lab("robonano_a0ib", noise="yes")
+    with pytest.raises(InputError, match="errors"):
+        Lab("robonano_a0ib", errors=3.0)
+    with pytest.raises(machinesim.MachineSimError, match="axis 'A' is not on this machine"):
+        Lab("robonano_a0ib", {"location": {"A": {"EX0A_um": 1.0}}})
+
+
+# ---------------------------------------------------------------------------- the honesty scan
+
+#: Where the truth must never be reached.
+HONEST = [*sorted((ROOT / "machinesim" / "identification").glob("*.py")),
+          ROOT / "machinesim" / "compensation.py"]
+
+
+def _violations(path: Path) -> list[str]:
+    tree = ast.parse(path.read_text(), filename=str(path))
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute):
+            attr = node.attr
+            owner = node.value.id if isinstance(node.value, ast.Name) else None
+            if attr == "reveal":
+                found.append(f"{path.name}:{node.lineno} calls reveal()")
+            elif attr.startswith("_") and not attr.startswith("__") and owner not in (
+                    "self", "cls"):
+                found.append(f"{path.name}:{node.lineno} reaches private .{attr}")
+            elif "_Lab__" in attr:
+                found.append(f"{path.name}:{node.lineno} reaches the lab's truth")
+            elif attr in ("__dict__", "__closure__", "__globals__"):
+                found.append(f"{path.name}:{node.lineno} reaches .{attr}")
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.args:
+            name, args = node.func.id, node.args
+            private = (len(args) > 1 and isinstance(args[1], ast.Constant)
+                       and str(args[1].value).startswith("_"))
+            if name == "vars" or (name in ("getattr", "setattr") and private):
+                found.append(f"{path.name}:{node.lineno} uses {name}() past the public API")
+        elif isinstance(node, ast.Name) and node.id in ("Lab",):
+            found.append(f"{path.name}:{node.lineno} names the Lab")
+    return found
+
+
+def test_identification_and_compensation_never_reach_the_truth():
+    assert HONEST, "nothing to scan"
+    found = [v for path in HONEST if path.exists() for v in _violations(path)]
+    assert not found, "\n".join(found)
+
+
+def test_the_honesty_scan_catches_what_it_must(tmp_path):
+    bad = tmp_path / "bad.py"
+    bad.write_text("def f(lab, probe):\n    t = lab.reveal()\n    e = probe._pose\n"
+                   "    return getattr(lab, '_Lab__truth'), vars(probe), f.__closure__\n")
+    found = _violations(bad)
+    assert len(found) == 5, found
