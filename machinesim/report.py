@@ -22,7 +22,7 @@ UNIT_SUFFIXES = ("_m", "_mm", "_um", "_nm", "_rad", "_mrad", "_urad", "_deg", "_
                  "_per_s")
 #: Keys that are not quantities.
 PLAIN_KEYS = {"seed", "noise", "machine", "paper", "program", "scenario", "note", "notes",
-              "name", "files", "version", "units"}
+              "name", "files", "version", "units", "procedure"}
 
 
 def check_units(data, path: str = "") -> None:
@@ -81,12 +81,39 @@ class ReportFolder:
         write_atomic(target, json.dumps(data, indent=2) + "\n")
         return target
 
-    def write_summary(self, injected: Mapping, identified: Mapping, before: Mapping,
-                      after: Mapping, **extra) -> Path:
-        """``summary.json`` with the four objects every scenario reports, plus ``extra``."""
-        return self.write_json("summary.json", {"injected": injected, "identified": identified,
-                                                "before": before, "after": after, **extra,
-                                                "files": sorted(set(self.files))})
+    def write_summary(self, summary: Mapping) -> Path:
+        """``summary.json`` in the one schema of docs/reports.md (checked, `check_summary`).
+
+        The list of the folder's files is added under ``files``.
+        """
+        data = _clean({**summary, "files": sorted(set(self.files) | {"summary.json"})})
+        check_summary(data)
+        target = self._target("summary.json")
+        write_atomic(target, json.dumps(data, indent=2) + "\n")
+        return target
+
+    def write_result(self, result, digits: int = 4) -> str:
+        """A `machinesim.experiment.Result`: its parts, programs, the figures table (Markdown
+        and JSON), the identification table, and summary.json. Returns the Markdown."""
+        for name, part in result.evaluation.parts.items():
+            self.write_part(f"{name}.ply", part)
+        for name, program in {**result.evaluation.programs, **result.programs}.items():
+            self.write_program(f"{name}.nc", program)
+        figures = self.write_table(
+            "figures", ["figure", "unit", "paper before", "before", "paper after", "after"],
+            [[f.name, f.unit, _cell(f.paper_before), _cell(f.before), _cell(f.paper_after),
+              _cell(f.after)] for f in result.figures],
+            title=f"Paper {result.paper}, {result.procedure} on {result.machine}: before and "
+                  "after compensation", digits=digits)
+        identified = self.write_table(
+            "identified", ["parameter", "injected (SI)", "identified (SI)", "std (SI)",
+                           "error (SI)"],
+            [[name, result.injected.get(name, math.nan), value, std,
+              value - result.injected.get(name, math.nan)]
+             for name, (value, std) in result.identified.items()],
+            title="Identified error parameters (m, rad)", digits=12)
+        self.write_summary(result.summary())
+        return figures + "\n" + identified
 
     def write_table(self, name: str, columns: Sequence[str], rows: Sequence[Sequence],
                     title: str = "", digits: int = 3) -> str:
@@ -154,9 +181,58 @@ class ReportFolder:
         return target
 
 
+def _cell(value):
+    return math.nan if value is None else value
+
+
+#: Top-level keys of summary.json, with what each must hold (docs/reports.md).
+SUMMARY_KEYS = {"paper": str, "procedure": str, "machine": str, "seed": int, "noise": bool,
+                "injected": Mapping, "identified": Mapping, "figures": list}
+#: Keys of each entry of ``figures``.
+FIGURE_KEYS = ("name", "unit", "before", "after", "paper_before", "paper_after")
+
+
+def check_summary(data: Mapping) -> None:
+    """Raise InputError when ``data`` is not a summary.json of the documented schema.
+
+    ``injected`` maps error parameter names (`machinesim.ErrorModel.parameters`) to SI values,
+    ``identified`` maps them to ``{"value", "std"}``; ``figures`` is a list of objects with
+    `FIGURE_KEYS` (numbers or null, and a ``unit``); every other numeric key names its unit.
+    """
+    from machinesim.errors.model import _PARAMETER_RE
+
+    for key, kind in SUMMARY_KEYS.items():
+        if key not in data or not isinstance(data[key], kind) or (
+                kind is int and isinstance(data[key], bool)):
+            raise InputError(f"summary.json: expected {key!r} as {kind.__name__}, got "
+                             f"{data.get(key)!r}", key=key)
+    for section in ("injected", "identified"):
+        for name, value in data[section].items():
+            if not _PARAMETER_RE.fullmatch(name):
+                raise InputError(f"summary.json: {section} key {name!r} is not an error "
+                                 "parameter name (tool.x, workpiece.alpha, location.C.EX0C, "
+                                 "component.X.EXX[0])", key=section)
+            if section == "identified" and (not isinstance(value, Mapping)
+                                            or set(value) != {"value", "std"}):
+                raise InputError(f"summary.json: identified[{name!r}] must be "
+                                 f'{{"value": v, "std": s}}, got {value!r}', key=section)
+    for i, figure in enumerate(data["figures"]):
+        missing = [k for k in FIGURE_KEYS if k not in figure]
+        if missing:
+            raise InputError(f"summary.json: figures[{i}] lacks {', '.join(missing)}",
+                             key="figures")
+    rest = {k: v for k, v in data.items() if k not in SUMMARY_KEYS}
+    check_units(rest)
+
+
 def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentParser:
-    """The options every scenario takes: --noise on|off, --seed N, --out DIR."""
+    """The options every scenario takes: --errors FILE.toml, --noise on|off, --seed N,
+    --out DIR."""
     parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--errors", type=Path, metavar="FILE.toml",
+                        help="inject this error model (any ErrorModel TOML, units in every "
+                        "key) instead of the scenario's default; the scenario's own error "
+                        "options, when given, are applied on top")
     parser.add_argument("--noise", choices=("on", "off"), default="on",
                         help="instrument noise (default on, the instruments' stated models)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the noise (default 0)")
@@ -174,3 +250,23 @@ def parse_floats(text: str, count: int, option: str) -> list[float]:
     if len(values) != count or not all(math.isfinite(v) for v in values):
         raise InputError(f"{option} {text!r}: expected {count} comma-separated numbers")
     return values
+
+
+def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, float]):
+    """The error model a scenario injects: ``--errors`` (or ``defaults`` without it), with
+    the scenario's own options that were given on the command line (``given``) on top.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        From `scenario_arguments`.
+    defaults : Mapping[str, float]
+        The scenario's default parameters (SI, names as `ErrorModel.parameters`).
+    given : Mapping[str, float]
+        Parameters set by options given explicitly.
+    """
+    from machinesim.errors import ErrorModel
+
+    base = (ErrorModel.from_toml(args.errors) if args.errors is not None
+            else ErrorModel().with_parameters(defaults))
+    return base.with_parameters(given) if given else base

@@ -1,0 +1,265 @@
+"""One experiment shape for every procedure: test pieces, measurements, identification,
+compensated programs, evaluation; and `run`, which drives it on a `Lab`.
+
+A procedure (paper 000's tool-rotation arm, 001's 6-axis tool setting, 002's workpiece
+setting, ...) is an object with four steps:
+
+``measure(lab)``
+    Cut the test pieces on the lab and read them with the lab's instruments. Returns the
+    measurements (readings, profiles, fitted features): plain values, no lab inside. A
+    staged procedure (one whose later test pieces are cut with what earlier ones found)
+    calls its own identification between the cuts, from the readings only.
+``identify(measurements)``
+    The identification, from the measurements alone: returns an `Identified`.
+``compensate(identified)``
+    The compensated NC programs, by name (`machinesim.compensation`).
+``evaluate(lab, identified, programs)``
+    Cut before and after compensation, measure, and return an `Evaluation`: the paper's
+    table as `Figure` rows, with parts and programs for the report.
+
+`run(procedure, lab)` calls the four in order and returns a frozen `Result`; only `run`
+asks the lab for the truth (`Lab.reveal`), and only to put it beside the identified values
+in the report. Nothing a procedure receives can reach it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any, Protocol
+
+from machinesim.exceptions import InputError
+
+__all__ = ["Evaluation", "Figure", "Identified", "Procedure", "Result", "run"]
+
+#: Units a figure may be reported in (the report's unit table; see docs/reports.md).
+FIGURE_UNITS = ("m", "mm", "um", "nm", "rad", "mrad", "urad", "deg", "arcsec", "s", "min",
+                "h", "percent", "count", "ratio")
+
+
+def _number(value, name: str) -> float | None:
+    if value is None:
+        return None
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"Expected {name} as a number or None, got {value!r}",
+                         key=name) from error
+    return number if math.isfinite(number) else None
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One row of a paper's table: a figure before and after compensation.
+
+    Attributes
+    ----------
+    name : str
+        What is measured, as a key (``"a_dx"``, ``"edge_distance_L1_L5"``).
+    unit : str
+        Unit of the four values, one of `FIGURE_UNITS`.
+    before, after : float or None
+        The simulated values; None where not measured (or not measurable).
+    paper_before, paper_after : float or None
+        The paper's values; None where the paper gives none.
+    note : str
+        Optional: what a reader must know (``"paper: > 50"``).
+    """
+
+    name: str
+    unit: str
+    before: float | None
+    after: float | None
+    paper_before: float | None = None
+    paper_after: float | None = None
+    note: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise InputError(f"Expected a figure name, got {self.name!r}", key="name")
+        if self.unit not in FIGURE_UNITS:
+            raise InputError(f"figure {self.name!r}: unit {self.unit!r}; expected one of "
+                             f"{', '.join(FIGURE_UNITS)}", key="unit")
+        for name in ("before", "after", "paper_before", "paper_after"):
+            object.__setattr__(self, name, _number(getattr(self, name), f"{self.name}.{name}"))
+
+    def as_dict(self) -> dict:
+        """The figure as summary.json holds it."""
+        out = {"name": self.name, "unit": self.unit, "before": self.before,
+               "after": self.after, "paper_before": self.paper_before,
+               "paper_after": self.paper_after}
+        if self.note:
+            out["note"] = self.note
+        return out
+
+
+def _parameters(values: Mapping, what: str) -> Mapping[str, tuple[float, float]]:
+    out = {}
+    for name, value in values.items():
+        pair = value if isinstance(value, tuple | list) else (value, math.nan)
+        if len(pair) != 2:
+            raise InputError(f"Expected {what}[{name!r}] as (value, std), got {value!r}",
+                             key=name)
+        out[str(name)] = (float(pair[0]), float(pair[1]))
+    return MappingProxyType(out)
+
+
+@dataclass(frozen=True)
+class Identified:
+    """What a procedure identified.
+
+    Attributes
+    ----------
+    parameters : Mapping[str, (float, float)]
+        Error parameter name (as `Machine.parameter_names` spells it) -> (value, std), SI
+        (m, rad); std NaN where the procedure gives none. A bare number means std unknown.
+    detail : Any
+        The procedure's own result (its paper's quantities), for `compensate` and reports.
+    """
+
+    parameters: Mapping[str, tuple[float, float]]
+    detail: Any = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "parameters", _parameters(self.parameters, "parameters"))
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """The test pieces before and after compensation, as measured.
+
+    Attributes
+    ----------
+    figures : tuple of Figure
+        One per row of the paper's table.
+    details : Mapping
+        Further results for summary.json, every numeric key with its unit suffix.
+    parts, programs : Mapping[str, object]
+        Parts (`machinesim.workpiece.Part`) and NC programs to write into the report.
+    """
+
+    figures: tuple[Figure, ...]
+    details: Mapping = field(default_factory=dict)
+    parts: Mapping = field(default_factory=dict)
+    programs: Mapping = field(default_factory=dict)
+
+
+class Procedure(Protocol):
+    """What `run` needs of a procedure (see the module docstring)."""
+
+    name: str
+    paper: str
+
+    def measure(self, lab) -> Any: ...
+
+    def identify(self, measurements) -> Identified: ...
+
+    def compensate(self, identified: Identified) -> Mapping[str, Any]: ...
+
+    def evaluate(self, lab, identified: Identified, programs: Mapping[str, Any]) -> Evaluation: ...
+
+
+@dataclass(frozen=True)
+class Result:
+    """One run of a procedure on a lab.
+
+    Attributes
+    ----------
+    paper, procedure, machine : str
+    seed : int
+    noise : bool
+    injected : Mapping[str, float]
+        The lab's injected parameters, SI: every non-zero one and every identified one.
+    identified : Mapping[str, (float, float)]
+        (value, std), SI.
+    figures : tuple of Figure
+    measurements : Any
+        What `measure` returned.
+    identification : Identified
+    programs : Mapping[str, Program]
+        The compensated programs.
+    evaluation : Evaluation
+    elapsed_s : Mapping[str, float]
+        Wall time of each step and in all, s.
+    """
+
+    paper: str
+    procedure: str
+    machine: str
+    seed: int
+    noise: bool
+    injected: Mapping[str, float]
+    identified: Mapping[str, tuple[float, float]]
+    figures: tuple[Figure, ...]
+    measurements: Any
+    identification: Identified
+    programs: Mapping[str, Any]
+    evaluation: Evaluation
+    elapsed_s: Mapping[str, float]
+
+    def figure(self, name: str) -> Figure:
+        """The figure called ``name``."""
+        for f in self.figures:
+            if f.name == name:
+                return f
+        raise InputError(f"no figure {name!r}; this result has "
+                         f"{', '.join(f.name for f in self.figures)}", key="name")
+
+    def summary(self) -> dict:
+        """summary.json of this result, in the schema of docs/reports.md."""
+        return {
+            "paper": self.paper, "procedure": self.procedure, "machine": self.machine,
+            "seed": self.seed, "noise": self.noise,
+            "injected": dict(self.injected),
+            "identified": {name: {"value": v, "std": s}
+                           for name, (v, s) in self.identified.items()},
+            "figures": [f.as_dict() for f in self.figures],
+            "details": dict(self.evaluation.details),
+            "elapsed_s": dict(self.elapsed_s),
+        }
+
+
+def run(procedure: Procedure, lab) -> Result:
+    """Drive ``procedure`` on ``lab``: measure, identify, compensate, evaluate.
+
+    Parameters
+    ----------
+    procedure : Procedure
+    lab : machinesim.Lab
+
+    Returns
+    -------
+    Result
+    """
+    clock = {}
+    began = time.perf_counter()
+
+    def step(name, function, *args):
+        start = time.perf_counter()
+        value = function(*args)
+        clock[f"{name}_s"] = time.perf_counter() - start
+        return value
+
+    measurements = step("measure", procedure.measure, lab)
+    identified = step("identify", procedure.identify, measurements)
+    if not isinstance(identified, Identified):
+        raise InputError(f"{procedure.name}.identify returned {type(identified).__name__}; "
+                         "expected an Identified", key="identify")
+    programs = step("compensate", procedure.compensate, identified)
+    evaluation = step("evaluate", procedure.evaluate, lab, identified, programs)
+    clock["total_s"] = time.perf_counter() - began
+    truth = lab.reveal().parameters()
+    injected = {name: value for name, value in truth.items()
+                if value != 0.0 or name in identified.parameters}
+    for name in identified.parameters:
+        injected.setdefault(name, 0.0)
+    return Result(
+        paper=procedure.paper, procedure=procedure.name, machine=lab.machine.name,
+        seed=lab.seed, noise=lab.noise, injected=MappingProxyType(injected),
+        identified=identified.parameters, figures=tuple(evaluation.figures),
+        measurements=measurements, identification=identified,
+        programs=MappingProxyType(dict(programs)), evaluation=evaluation,
+        elapsed_s=MappingProxyType(clock))
