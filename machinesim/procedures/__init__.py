@@ -1,0 +1,13 @@
+"""Procedures: each published calibration experiment in the one shape of
+`machinesim.experiment` (measure on a lab, identify, compensate, evaluate).
+
+One module per procedure, named by what it identifies; each cites its paper:
+
+- `tool_rotation_arm`: a planer's tool-rotation arm, r and e_ys (paper 000);
+- `tool_setting_6axis`: the tool edge's offset from the A, B, C centres (paper 001);
+- `workpiece_setting`: a robot-loaded workpiece's setting and the C centre (paper 002).
+
+Run one with `machinesim.experiment.run(procedure, lab)`. The formulas live in
+`machinesim.identification`, which sees measurements only; the test pieces' design in
+`machinesim.cam`.
+"""
