@@ -20,6 +20,7 @@ from typing import Protocol
 
 import numpy as np
 
+from machinesim.arrays import frozen
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.tolerances import CHORD_TOLERANCE_M
 
@@ -172,7 +173,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         samples = q + fractions[:, None] * (end - q)
         times = t_now + fractions * duration
         samples = servo.follow(times, samples)
-        segments.append(Segment(move.kind, _frozen(samples), _frozen(times), move.line))
+        segments.append(Segment(move.kind, frozen(samples, copy=False),
+                                frozen(times, copy=False), move.line))
         t_now += duration
         if move.kind == "linear":
             cutting += duration
@@ -224,12 +226,6 @@ def _fewest(deviation, n: int, tolerance: float) -> int:
         else:
             lo = mid
     return hi
-
-
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    a.setflags(write=False)
-    return a
 
 
 __all__ = ["CHORD_TOLERANCE_M", "IdealServo", "Segment", "ServoModel", "Trajectory",

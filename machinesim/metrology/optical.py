@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.metrology._mesh import as_positive, as_vector
 from machinesim.metrology.instruments import Readout, as_generator
@@ -99,8 +100,8 @@ class _Profiler:
         """
         spacing = self.lateral_spacing if spacing is None else spacing
         s, z = profile(part, start, end, spacing)
-        return Profile(s, self._display(z), _frozen(as_vector(start, 2, "start")),
-                       _frozen(as_vector(end, 2, "end")))
+        return Profile(s, self._display(z), frozen(as_vector(start, 2, "start")),
+                       frozen(as_vector(end, 2, "end")))
 
     def height_map(self, part, x0: float, x1: float, y0: float, y1: float,
                    spacing: float | None = None) -> HeightMap:
@@ -126,7 +127,7 @@ class _Profiler:
         return HeightMap(x, y, self._display(height_map(part, x, y)))
 
     def _display(self, exact: np.ndarray) -> np.ndarray:
-        return _frozen(self.readout.read(exact, self.rng))
+        return frozen(self.readout.read(exact, self.rng), copy=False)
 
 
 class Microscope(_Profiler):
@@ -192,9 +193,4 @@ def _axis(lo: float, hi: float, spacing: float, name: str) -> np.ndarray:
     axis = lo + np.arange(count) * spacing
     if abs(axis[-1] - hi) <= END_SLACK * spacing:
         axis[-1] = hi
-    return _frozen(axis)
-
-
-def _frozen(array: np.ndarray) -> np.ndarray:
-    array.setflags(write=False)
-    return array
+    return frozen(axis, copy=False)
