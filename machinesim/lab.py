@@ -106,6 +106,14 @@ class Lab:
         return LaserInterferometer(self.machine, self.__truth, noise=self.noise,
                                    rng=self._stream("laser_interferometer", label), **options)
 
+    def r_test(self, *, label: str | None = None, **options):
+        """An R-test (ISO 10791-6, `machinesim.metrology.RTest`): a ball on the tool side read
+        by three displacement sensors on the table, for the machine's kinematics."""
+        from machinesim.metrology import RTest
+
+        return RTest(self.machine, self.__truth, noise=self.noise,
+                     rng=self._stream("r_test", label), **options)
+
     def microscope(self, *, label: str | None = None, **options):
         """The laser (confocal) microscope (`machinesim.metrology.Microscope`)."""
         from machinesim.metrology import Microscope

@@ -47,13 +47,14 @@ def test_no_public_attribute_of_the_lab_or_its_instruments_holds_the_truth():
     truth = lab.reveal()
     part, _ = lab.cut(groove(), "v:90", "block:10x10x2")
     things = [lab, lab.touch_probe(part), lab.laser_interferometer(), lab.microscope(),
-              lab.white_light_interferometer()]
+              lab.white_light_interferometer(), lab.r_test()]
     for thing in things:
         for name, value in _public(thing):
             assert not _holds_truth(value, truth), f"{type(thing).__name__}.{name}"
     methods = {name for name in dir(lab) if not name.startswith("_")}
     assert methods == {"cut", "laser_interferometer", "machine", "microscope", "noise",
-                       "reveal", "seed", "touch_probe", "white_light_interferometer"}
+                       "r_test", "reveal", "seed", "touch_probe",
+                       "white_light_interferometer"}
 
 
 def test_the_lab_cuts_with_its_truth_as_cut_does_with_the_errors():
@@ -154,3 +155,18 @@ def test_the_honesty_scan_catches_what_it_must(tmp_path):
                    "    return getattr(lab, '_Lab__truth'), vars(probe), f.__closure__\n")
     found = _violations(bad)
     assert len(found) == 5, found
+
+
+def test_the_r_test_reads_the_ball_displacement_of_a_tool_offset_turned_by_b_and_c():
+    # A tool offset d (tool_mount frame) on robonano_a0ib is carried by B (about Y) and seen
+    # from the workpiece turned by -C: at B = 0 and C = 0 the ball is displaced by d itself.
+    d = np.array([5.0, -3.0, 2.0]) * 1e-6
+    lab = Lab("robonano_a0ib", {"tool": {"offset_um": (d * 1e6).tolist()}}, noise=False)
+    reading = lab.r_test(resolution=0.0).read(np.zeros((1, 5)))
+    assert np.allclose(reading.displacement[0], d, rtol=0, atol=1e-15)
+    # the length of the displacement is the offset's, whatever B and C (a rigid offset)
+    q = np.zeros((6, 5))
+    q[:, 3] = np.radians([-30, 0, 30, 10, -20, 45])
+    q[:, 4] = np.radians([0, 90, 180, 270, 33, -120])
+    shown = lab.r_test(resolution=0.0).read(q).displacement
+    assert np.allclose(np.linalg.norm(shown, axis=1), np.linalg.norm(d), rtol=0, atol=1e-15)

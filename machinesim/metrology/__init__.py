@@ -46,6 +46,7 @@ from machinesim.metrology.optical import HeightMap, Microscope, Profile, WhiteLi
 from machinesim.metrology.prisms import fit_apexes
 from machinesim.metrology.probe import Contact, Contacts, touch, touch_many
 from machinesim.metrology.probe_instrument import ScanReading, TouchProbe
+from machinesim.metrology.rtest import RTest, RTestReading
 from machinesim.metrology.surface import height_map, profile
 
 __all__ = ["Contact", "Contacts", "MeshIndex", "height_map", "profile", "touch", "touch_many"]
@@ -60,4 +61,4 @@ __all__ += [
     "height_map_points", "intersect_lines", "length_unit", "plane_angle", "plot_height_map",
     "plot_profile", "profile_points", "roughness_sa", "sphere_centre_from_touch", "step_positions",
 ]
-__all__ += ["fit_apexes"]
+__all__ += ["RTest", "RTestReading", "fit_apexes"]

@@ -1,0 +1,121 @@
+"""R-test (ISO 10791-6): a precision ball on the tool side, three displacement sensors in a
+nest on the workpiece side, read as the machine moves its axes.
+
+The nest is set up on the table at the ball's nominal place and zeroed there (the
+measurement's reference), so each reading is the displacement of the ball centre from where
+the nominal machine would put it, relative to the workpiece, along the three sensor
+directions (here the workpiece frame's X, Y, Z). This is what a lab uses to identify a
+five-axis machine's location errors (ISO 230-7) and what Heidenhain's KinematicsOpt cycle
+reads with a touch probe on a calibration sphere: the machine's actual motion, never its
+error model.
+
+The ball's centre is a point fixed in a machine frame (``tool_tip`` by default, or given
+coordinates in it: a ball on a stylus of known length). Its actual place comes from the
+machine's motion (`machinesim.metrology.instruments.motion_of`); its nominal place from the
+nominal kinematics, as the controller knows it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.arrays import frozen
+from machinesim.exceptions import AxisLimitError, InputError
+from machinesim.metrology.instruments import Readout, as_generator, motion_of
+
+__all__ = ["RTest", "RTestReading"]
+
+
+@dataclass(frozen=True, eq=False)
+class RTestReading:
+    """Ball-centre displacements read at a set of axis values.
+
+    Attributes
+    ----------
+    q : ndarray, shape (N, n_axes), read-only
+        The commanded axis values, m and rad.
+    displacement : ndarray, shape (N, 3), read-only
+        Actual minus nominal ball centre, workpiece frame X, Y, Z, m, as displayed (noise and
+        rounding).
+    sigma : float
+        Standard uncertainty of each displacement reading, m (noise and rounding together).
+    frame : str
+    point : ndarray, shape (3,), read-only
+        The ball centre in ``frame``, m.
+    """
+
+    q: np.ndarray
+    displacement: np.ndarray
+    sigma: float
+    frame: str
+    point: np.ndarray
+
+
+class RTest:
+    """An R-test device on a machine.
+
+    Parameters
+    ----------
+    machine : Machine
+    errors : ErrorModel or None
+        The machine's injected errors; only its motion reads them (`Lab.r_test` builds one
+        without handing them out).
+    sigma : float
+        Noise of each sensor reading, m. Default 50 nm: contact displacement sensors (LVDT
+        class) of R-test devices repeat to some tens of nm over the sub-mm ranges they read.
+    resolution : float
+        Display step, m. Default 1 nm.
+    noise : bool
+        False turns the noise off exactly; rounding stays.
+    rng : numpy.random.Generator or int or None
+    frame : str
+        The machine frame carrying the ball. Default ``"tool_tip"``.
+    point : array-like, shape (3,)
+        The ball centre in ``frame``, m. Default the frame's origin.
+    """
+
+    def __init__(self, machine, errors=None, sigma: float = 50e-9, resolution: float = 1e-9,
+                 *, noise: bool = True, rng=None, frame: str = "tool_tip",
+                 point=(0.0, 0.0, 0.0)) -> None:
+        if frame not in machine.frames:
+            raise InputError(f"Expected a frame of {machine.name} ({', '.join(machine.frames)}),"
+                             f" got {frame!r}", key="frame")
+        self.machine = machine
+        self._pose = motion_of(machine, errors)
+        self.frame = frame
+        point = np.array(point, dtype=np.float64)
+        if point.shape != (3,) or not np.isfinite(point).all():
+            raise InputError(f"Expected the ball centre as 3 finite coordinates (m), got "
+                             f"{point!r}", key="point")
+        self.point = frozen(point)
+        self.readout = Readout.of(sigma, resolution, noise)
+        self.rng = as_generator(rng)
+
+    def __repr__(self) -> str:
+        return (f"RTest({self.machine.name}, frame={self.frame!r}, sigma="
+                f"{self.readout.sigma:g} m, resolution={self.readout.resolution:g} m)")
+
+    def read(self, q) -> RTestReading:
+        """Read the ball's displacement at each row of ``q`` (N, n_axes), m and rad."""
+        n = len(self.machine.axes)
+        try:
+            q = np.array(q, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise InputError(f"Expected axis values as numbers, got {q!r}", key="q") from error
+        if q.ndim == 1:
+            q = q[None]
+        if q.ndim != 2 or q.shape[1] != n or not len(q) or not np.isfinite(q).all():
+            raise InputError(f"Expected finite axis values of shape (N, {n}) (axes "
+                             f"{''.join(self.machine.axes)}), got {q.shape}", key="q")
+        bad = self.machine.limit_violations(q)
+        if bad:
+            raise AxisLimitError(f"{self.machine.name}: the R-test plan needs " + "; ".join(bad))
+        actual = self._centre(self._pose(self.frame, q))
+        nominal = self._centre(self.machine.frame_pose(self.frame, q))
+        shown = self.readout.read(actual - nominal, self.rng)
+        return RTestReading(frozen(q), frozen(shown), self.readout.std, self.frame, self.point)
+
+    def _centre(self, wMf: np.ndarray) -> np.ndarray:
+        return wMf[:, :3, 3] + wMf[:, :3, :3] @ self.point
