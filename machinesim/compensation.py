@@ -1,0 +1,385 @@
+"""Compensation: rewrite an NC program so the real machine cuts what the nominal one would.
+
+The last arrow of the data flow (shared/DESIGN.md): identified errors -> corrected
+`Program`. Every compensation procedure maps programs the same way, by one rule:
+
+The rule
+--------
+1. **Walk.** The program is walked move by move with the modal state of *all* axes of the
+   machine, exactly as motion planning walks it (`machinesim.motion.plan`,
+   ``cut(start=...)``): before the first block every axis is at ``start`` (default the
+   machine's zero, ``np.zeros(n_axes)``), and an axis not yet programmed stays there. Each
+   move so has a full axis vector (n_axes,), SI, in `Machine.axes` order
+   (`program_axes`). An axis the machine lacks is an `NCProgramError`, as in planning.
+2. **Map.** The full vectors of the motion blocks (rapid G00 and linear G01 alike: a
+   rapid's target is where the tool goes) are mapped, all in one call: by a paper's own
+   formulas (`map_program`) or through the identified model (`model_based`).
+3. **Round.** Mapped values are rounded to the machine's resolution (`Machine.resolution`,
+   1 nm and 0.00001 deg on the shipped machines) on the grid the NC text carries, i.e.
+   relative to the program's G54 work offset, to the very float that `read_program` gives
+   back (`to_resolution`). Writing the result with `write_program` and reading it back
+   therefore gives exactly the same moves.
+4. **Write.** Every motion block of the output carries *every* machine axis (its target is
+   the full mapped vector): the output never depends on what a later reader assumes about an
+   unprogrammed axis. A dwell (G04, or a block of M codes only) stays where the motion before
+   it ended (the mapped target; before the first motion block it keeps its empty target: the
+   machine is still at ``start``). Kinds, feeds, dwell times, spindle speeds, block numbers,
+   M codes, source lines, the program number, source and work offsets are kept unchanged.
+
+Incremental mode and work offsets need no special case: a `Program` holds absolute machine
+targets (the parser has already applied G91 and G54..G59), and the writer emits absolute
+G90 words relative to G54. An output pins every axis, so it is valid for the ``start`` it
+was made with (the default zero is the planner's default too).
+
+A move is compensated at its ends. The control interpolates linearly in axis space, so a
+move that turns a rotary axis is exact only at its two ends; split such moves before
+compensating when the path between them matters.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from machinesim import tolerances
+from machinesim.exceptions import InputError, NCProgramError
+from machinesim.machines import Machine, load_machine
+from machinesim.nc.program import Program
+from machinesim.nc.writer import LINEAR_DECIMALS, ROTARY_DECIMALS
+from machinesim.units import M_PER_MM, RAD_PER_DEG
+
+__all__ = [
+    "Compensated",
+    "map_program",
+    "model_based",
+    "program_axes",
+    "rewrite",
+    "start_axes",
+    "to_resolution",
+]
+
+#: A kept tool point (``model_based(point=...)``) is reached by moving the tip target by the
+#: point's miss and solving again. The miss comes only from the orientation change of the
+#: new solution, a second-order effect of a nanometre move, so two rounds reach round-off;
+#: five leave room for a badly conditioned pose, and the residual is reported either way.
+POINT_ITERATIONS = 5
+
+
+@dataclass(frozen=True)
+class Compensated:
+    """A program compensated through the identified model, and what it could not match.
+
+    Attributes
+    ----------
+    program : Program
+        The compensated program (the rule of `machinesim.compensation`).
+    unmatched : str
+        Empty when every block's tool orientation was matched; else what the machine's axes
+        cannot produce (`AxisSolution.unmatched`), e.g. a tilt about X on five axes.
+    max_position_residual : float
+        Largest distance, m, between where the kept tool point lands on the identified model
+        and where the nominal program puts it on the nominal machine, before rounding to the
+        resolution (which adds at most half a resolution step per axis).
+    max_rotation_residual : float
+        Largest tool orientation left unmatched, rad (axis-angle norm), before rounding.
+    """
+
+    program: Program
+    unmatched: str
+    max_position_residual: float
+    max_rotation_residual: float
+
+
+def start_axes(machine: Machine, start=None) -> np.ndarray:
+    """The axis values before the first block, (n_axes,), SI: ``start`` or zeros.
+
+    The same convention and check as `machinesim.motion.plan`.
+    """
+    axes = machine.axes
+    q = np.zeros(len(axes)) if start is None else np.array(start, dtype=np.float64)
+    if q.shape != (len(axes),):
+        raise InputError(f"start must have shape ({len(axes)},) for axes {''.join(axes)}, "
+                         f"got {q.shape}")
+    if not np.all(np.isfinite(q)):
+        raise InputError(f"start must be finite, got {q.tolist()}", key="start")
+    return q
+
+
+def program_axes(program: Program, machine: Machine | str, *, start=None) -> np.ndarray:
+    """The full axis vector of every move, walked with the modal state of all axes.
+
+    Parameters
+    ----------
+    program : Program
+    machine : Machine or str
+    start : array_like, shape (n_axes,), optional
+        Axis values before the first block (default zeros); axes not yet programmed are here.
+
+    Returns
+    -------
+    q : ndarray, shape (len(program), n_axes)
+        m and rad, `Machine.axes` order; a dwell repeats the position it waits at.
+
+    Raises
+    ------
+    NCProgramError
+        When the program moves an axis the machine does not have.
+    """
+    machine = _machine(machine)
+    index = {a: i for i, a in enumerate(machine.axes)}
+    q = start_axes(machine, start)
+    rows = np.empty((len(program.moves), len(q)))
+    for n, move in enumerate(program.moves):
+        for letter, value in move.target.items():
+            if letter not in index:
+                raise NCProgramError(
+                    f"axis {letter} is not on {machine.name} (axes {''.join(machine.axes)})",
+                    source=program.source, line=move.line, key=letter)
+            q[index[letter]] = value
+        rows[n] = q
+    return rows
+
+
+def to_resolution(q, machine: Machine | str, work_offsets=None) -> np.ndarray:
+    """Axis values rounded to the machine's resolution, as the NC text carries them.
+
+    Each value is rounded to a whole number of resolution steps relative to the G54 work
+    offset (the writer's reference) and returned as the float `read_program` makes of the
+    written word: ``float(text) * unit + offset``. Writing and reading it back is exact.
+
+    Parameters
+    ----------
+    q : array_like, shape (n_axes,) or (N, n_axes)
+        m and rad, `Machine.axes` order.
+    machine : Machine or str
+    work_offsets : mapping, optional
+        `Program.work_offsets`; only G54 matters (absent: zero).
+
+    Returns
+    -------
+    ndarray, the shape of ``q``
+
+    Raises
+    ------
+    InputError
+        When an axis resolution is not a whole number of the NC word's increment (1 nm,
+        0.00001 deg): the text could not carry it.
+    """
+    machine = _machine(machine)
+    q = np.asarray(q, dtype=np.float64)
+    if q.shape[-1:] != (len(machine.axes),) or q.ndim not in (1, 2):
+        raise InputError(f"expected axis values of shape ({len(machine.axes)},) or "
+                         f"(N, {len(machine.axes)}) for axes {''.join(machine.axes)}, "
+                         f"got {q.shape}")
+    g54 = (work_offsets or {}).get("G54", {})
+    offset = np.array([g54.get(a, 0.0) for a in machine.axes])
+    # The parser reads a word as float(text) * unit + offset; n / scale is that float(text)
+    # (IEEE division of two exact floats is correctly rounded, as float() of a decimal is).
+    unit = np.where(machine.rotary, RAD_PER_DEG, M_PER_MM)
+    scale = 10.0 ** np.where(machine.rotary, ROTARY_DECIMALS, LINEAR_DECIMALS)
+    steps = _increments_per_step(machine, unit, scale)
+    n = np.round((q - offset) / unit * scale / steps) * steps
+    return (n / scale) * unit + offset
+
+
+def rewrite(program: Program, machine: Machine | str, q, *, rounded: bool = True) -> Program:
+    """The program with new axis values for its motion blocks (steps 3 and 4 of the rule).
+
+    Parameters
+    ----------
+    program : Program
+    machine : Machine or str
+    q : array_like, shape (n_motion, n_axes)
+        One row per motion block (rapid or linear), in program order; m and rad.
+    rounded : bool
+        Round to the machine's resolution (`to_resolution`). False keeps the exact floats
+        (for analysis: the NC text would round them, so writing and reading back differs).
+
+    Returns
+    -------
+    Program
+        Every motion block with every machine axis; everything else unchanged.
+    """
+    machine = _machine(machine)
+    motion = [n for n, move in enumerate(program.moves) if move.kind != "dwell"]
+    q = np.asarray(q, dtype=np.float64)
+    shape = (len(motion), len(machine.axes))
+    if q.shape != shape:
+        raise InputError(f"expected axis values of shape {shape} (one row per motion block, "
+                         f"axes {''.join(machine.axes)}), got {q.shape}",
+                         source=program.source)
+    if rounded and len(q):
+        q = to_resolution(q, machine, program.work_offsets)
+    rows = iter(q)
+    target: dict[str, float] = {}
+    moves = []
+    for move in program.moves:
+        if move.kind != "dwell":
+            target = {a: float(v) for a, v in zip(machine.axes, next(rows), strict=True)}
+        moves.append(replace(move, target=target))
+    return Program(tuple(moves), program.number, program.source, program.work_offsets)
+
+
+def map_program(
+    program: Program,
+    machine: Machine | str,
+    function: Callable[[np.ndarray], np.ndarray],
+    *,
+    start=None,
+    rounded: bool = True,
+) -> Program:
+    """Compensate a program by a paper's own formulas (route 1).
+
+    Parameters
+    ----------
+    program : Program
+        Written for the nominal machine.
+    machine : Machine or str
+    function : callable
+        ``function(q) -> q_compensated``: nominal axis values, shape (N, n_axes), one row per
+        motion block with every axis (m and rad, `Machine.axes` order), to the compensated
+        values of the same shape. Called once with all blocks (a fresh array it may change);
+        not called when the program has no motion block.
+    start : array_like, shape (n_axes,), optional
+        Axis values before the first block (default zeros).
+    rounded : bool
+        Round to the machine's resolution (default; see `rewrite`).
+
+    Returns
+    -------
+    Program
+        By the rule of `machinesim.compensation`.
+
+    Raises
+    ------
+    InputError
+        When ``function`` returns something other than a finite (N, n_axes) array.
+    """
+    machine = _machine(machine)
+    nominal, motion = _motion_axes(program, machine, start)
+    if not len(motion):
+        return rewrite(program, machine, nominal, rounded=rounded)
+    result = function(nominal.copy())
+    shape = nominal.shape
+    expected = (f"an array of shape {shape} (one row per motion block, columns "
+                f"{' '.join(machine.axes)} in m and rad)")
+    try:
+        mapped = np.asarray(result, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"the compensation function must return {expected}, got "
+                         f"{type(result).__name__}", source=program.source) from None
+    if mapped.shape != shape:
+        raise InputError(f"the compensation function must return {expected}, got shape "
+                         f"{mapped.shape}", source=program.source)
+    bad = np.argwhere(~np.isfinite(mapped))
+    if len(bad):
+        row, col = bad[0]
+        raise InputError(f"the compensation function returned {float(mapped[row, col])!r} for axis "
+                         f"{machine.axes[col]} ({len(bad)} value(s) not finite); expected "
+                         "finite values", source=program.source,
+                         line=program.moves[motion[row]].line, key=machine.axes[col])
+    return rewrite(program, machine, mapped, rounded=rounded)
+
+
+def model_based(
+    program: Program,
+    machine: Machine | str,
+    identified,
+    *,
+    start=None,
+    point=None,
+    rounded: bool = True,
+) -> Compensated:
+    """Compensate a program through the identified model (route 2), as a control would.
+
+    For each motion block: the pose the nominal machine (no errors) gives the tool at the
+    programmed axis values, then the axis values that put the tool at that pose on the
+    identified model (`Machine.axis_values`, starting from the programmed values): the kept
+    point exactly, the orientation as far as the machine's axes can produce it.
+
+    Parameters
+    ----------
+    program : Program
+        Written for the nominal machine.
+    machine : Machine or str
+    identified : ErrorModel or None
+        The identified errors (None: the nominal machine, which returns the program).
+    start : array_like, shape (n_axes,), optional
+        Axis values before the first block (default zeros).
+    point : array_like, shape (3,), optional
+        The tool point kept on the path, m, in the ``tool_tip`` frame (default the tip, its
+        origin). It matters only where orientation is left unmatched.
+    rounded : bool
+        Round to the machine's resolution (default; see `rewrite`).
+
+    Returns
+    -------
+    Compensated
+
+    Raises
+    ------
+    UnreachableError, AxisLimitError
+        From `Machine.axis_values`, when no axis values (within travel) reach a pose.
+    """
+    machine = _machine(machine)
+    machine.check_errors(identified)
+    p = np.zeros(3) if point is None else np.array(point, dtype=np.float64)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise InputError(f"point must be 3 finite coordinates (m) in the tool_tip frame, got "
+                         f"{np.asarray(point).tolist()!r}", key="point")
+    nominal, motion = _motion_axes(program, machine, start)
+    if not len(motion):
+        return Compensated(rewrite(program, machine, nominal, rounded=rounded), "", 0.0, 0.0)
+    target = machine.tool_pose(nominal)
+    wanted = _points(target, p)
+    solution = machine.axis_values(target, identified, q_start=nominal)
+    for _ in range(POINT_ITERATIONS if np.any(p) else 0):
+        miss = wanted - _points(machine.tool_pose(solution.q, identified), p)
+        if np.max(np.linalg.norm(miss, axis=1)) < tolerances.IK_POSITION_M:
+            break
+        target[:, :3, 3] += miss
+        solution = machine.axis_values(target, identified, q_start=solution.q)
+    miss = wanted - _points(machine.tool_pose(solution.q, identified), p)
+    return Compensated(
+        program=rewrite(program, machine, solution.q, rounded=rounded),
+        unmatched=solution.unmatched,
+        max_position_residual=float(np.max(np.linalg.norm(miss, axis=1))),
+        max_rotation_residual=float(np.max(np.linalg.norm(solution.rotation_residual,
+                                                          axis=1))),
+    )
+
+
+def _machine(machine: Machine | str) -> Machine:
+    return machine if isinstance(machine, Machine) else load_machine(machine)
+
+
+def _motion_axes(program: Program, machine: Machine, start) -> tuple[np.ndarray, list[int]]:
+    """Full axis vectors (n_motion, n_axes) of the motion blocks, and their move indices."""
+    q = program_axes(program, machine, start=start)
+    motion = [n for n, move in enumerate(program.moves) if move.kind != "dwell"]
+    return q[motion], motion
+
+
+def _points(poses: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """The point ``p`` of the tool_tip frame at each pose (N, 4, 4), in the workpiece frame."""
+    return poses[:, :3, :3] @ p + poses[:, :3, 3]
+
+
+def _increments_per_step(machine: Machine, unit: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """Each axis resolution as a whole number of NC word increments (unit / scale)."""
+    ratio = machine.resolution / (unit / scale)
+    steps = np.round(ratio)
+    # A URDF may give an angle resolution with fewer digits (1.74532925e-07 rad for
+    # 0.00001 deg is 1e-9 relative off); 1e-6 accepts that and no resolution really off it.
+    bad = (steps < 1) | (np.abs(ratio - steps) > 1e-6 * steps)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        word = (f"{10.0 ** -ROTARY_DECIMALS:g} deg" if machine.rotary[i]
+                else f"{10.0 ** -LINEAR_DECIMALS * M_PER_MM:g} m")
+        raise InputError(f"{machine.name}: axis {machine.axes[i]} has resolution "
+                         f"{machine.resolution[i]!r} (SI), not a whole number of the NC "
+                         f"word's increment {word}; an NC program cannot carry it",
+                         key=machine.axes[i])
+    return steps

@@ -1,0 +1,375 @@
+"""The one program mapping of every compensation procedure (machinesim.compensation).
+
+Truths are independent of the module: offsets subtracted on paper, tool poses from the
+kinematics, the planner's walk of the program, and the NC writer and reader.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from machinesim import ErrorModel, load_machine, motion
+from machinesim.compensation import (
+    Compensated,
+    map_program,
+    model_based,
+    program_axes,
+    rewrite,
+    to_resolution,
+)
+from machinesim.exceptions import InputError, NCProgramError
+from machinesim.nc import Program, format_program, parse_program, read_program, write_program
+from machinesim.tolerances import POSE_M
+from machinesim.units import RAD_PER_DEG
+
+UM, MM, NM = 1e-6, 1e-3, 1e-9
+DEG = RAD_PER_DEG
+GROOVING = load_machine("grooving_4axis")
+ROBONANO = load_machine("robonano_a0ib")
+
+# X Y Z C; Y and C are not programmed at first (they start at the start position), a dwell
+# and M codes sit between the moves.
+GROOVES_NC = """%
+O0012
+G90 G21 G94 G54
+N5 M03 S1000
+N10 G00 X0. Z1.
+N20 C30.
+N30 G01 Z-0.002 F100.
+N40 X5.123456 Y2.5 F50.
+N50 G04 P500
+N60 X6. C45.5 M08
+N70 G00 Z1.
+M30
+%
+"""
+#: The full nominal axis vector (mm, mm, mm, deg) of each motion block of GROOVES_NC from
+#: the zero start, written out by hand.
+GROOVES_FULL = np.array([
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0, 30.0],
+    [0.0, 0.0, -0.002, 30.0],
+    [5.123456, 2.5, -0.002, 30.0],
+    [6.0, 2.5, -0.002, 45.5],
+    [6.0, 2.5, 1.0, 45.5],
+]) * np.array([MM, MM, MM, DEG])
+
+# X Y Z B C, the tool tilted and the workpiece turned.
+TILTED_NC = """%
+O0021
+G90 G21 G94 G54
+N10 G00 X-3. Y2. Z1. B0. C0.
+N20 G01 Z-0.001 F20.
+N30 X3. B10. C15.
+N40 Y-2.5 C-20.25
+N50 G04 X0.25
+N60 B-5. C90.
+N70 G00 Z1.
+%
+"""
+
+
+def grooves() -> Program:
+    return parse_program(GROOVES_NC, "grooves.nc")
+
+
+def tilted() -> Program:
+    return parse_program(TILTED_NC, "tilted.nc")
+
+
+def targets(program: Program, machine) -> np.ndarray:
+    """Targets of the motion blocks, which the rule says carry every machine axis."""
+    rows = [[move.target[a] for a in machine.axes] for move in program.moves
+            if move.kind != "dwell"]
+    return np.array(rows)
+
+
+def same_program(a: Program, b: Program) -> None:
+    """Equal moves (source lines aside: the writer adds a header), number and offsets."""
+    assert a.number == b.number
+    assert dict(a.work_offsets) == dict(b.work_offsets)
+    assert [dataclasses.replace(m, line=1) for m in a.moves] == [
+        dataclasses.replace(m, line=1) for m in b.moves]
+
+
+def rotation_angle(r_a: np.ndarray, r_b: np.ndarray) -> np.ndarray:
+    """Angle (rad) between orientations, (N, 3, 3) each."""
+    return np.array([np.linalg.norm(pin.log3(a.T @ b)) for a, b in zip(r_a, r_b, strict=True)])
+
+
+def rounding_bound(machine, q, errors) -> tuple[np.ndarray, np.ndarray]:
+    """First-order bound on what rounding every axis by half its resolution moves the tool:
+    position (m) and rotation (rad) per block. The second-order term, (1e-7 rad)^2 times
+    ~0.1 m, is 1e-15 m, inside the POSE_M slack the tests add."""
+    jac = np.array([machine.axis_jacobian(qn, errors) for qn in q])
+    half = machine.resolution / 2.0
+    return (np.linalg.norm(jac[:, :3], axis=1) @ half,
+            np.linalg.norm(jac[:, 3:], axis=1) @ half)
+
+
+# ---------------------------------------------------------------------------- the walk
+
+
+def test_the_walk_is_the_planners():
+    """program_axes gives each move's full vector exactly where motion.plan ends the move,
+    for a start that is not zero: one convention for an axis not yet programmed."""
+    start = np.array([1.0 * MM, 3.0 * MM, 10.0 * MM, 20.0 * DEG])
+    program = grooves()
+    q = program_axes(program, GROOVING, start=start)
+    planned = motion.plan(program, GROOVING, start=start)
+    # the planner interpolates q0 + 1.0 * (q1 - q0): its ends are q1 to round-off
+    np.testing.assert_allclose(q, [s.q[-1] for s in planned.segments], rtol=0.0, atol=1e-17)
+    np.testing.assert_array_equal(q[0], start)  # the M03 block, before any motion
+    motion_rows = [n for n, m in enumerate(program.moves) if m.kind != "dwell"]
+    np.testing.assert_array_equal(program_axes(program, GROOVING)[motion_rows], GROOVES_FULL)
+
+
+def test_an_axis_the_machine_lacks_is_refused_like_the_planner_does():
+    program = parse_program("G00 X1. A5.\n", "a.nc")
+    with pytest.raises(NCProgramError, match=r"a\.nc, line 1, key 'A': axis A is not on"):
+        map_program(program, GROOVING, lambda q: q)
+    with pytest.raises(InputError, match=r"start must have shape \(4,\)"):
+        program_axes(grooves(), GROOVING, start=[0.0, 0.0])
+
+
+# --------------------------------------------------------------- (a) a tool offset
+
+
+@pytest.mark.parametrize("rounded", [False, True])
+def test_a_tool_offset_is_subtracted_along_its_axes(rounded):
+    """On grooving_4axis the tool side carries no rotary axis, so tool_mount stays parallel
+    to the machine axes, and the edge offset (dx, dy, 0) moves the edge by (dx, dy, 0)
+    relative to the workpiece whatever C is (C turns the workpiece about its own centre,
+    and X, Y command the tool relative to it). The axis values that put the edge back are
+    the programmed ones minus the offset: X - dx, Y - dy, Z and C unchanged."""
+    d = np.array([12.3456, -7.8, 0.0]) * UM  # not on the 1 nm grid: rounding shows
+    errors = ErrorModel.from_dict({"tool": {"offset_um": (d / UM).tolist()}})
+    program = grooves()
+    result = model_based(program, GROOVING, errors, rounded=rounded)
+    assert isinstance(result, Compensated)
+    assert result.unmatched == ""
+    assert result.max_position_residual < POSE_M
+    assert result.max_rotation_residual < POSE_M
+    q = targets(result.program, GROOVING)
+    expected = GROOVES_FULL - np.r_[d, 0.0]
+    if rounded:  # to the nm and 0.00001 deg grid, worked out here on its own
+        expected = np.column_stack([np.round(expected[:, :3] / NM) * NM,
+                                    np.round(expected[:, 3] / (1e-5 * DEG)) * (1e-5 * DEG)])
+    np.testing.assert_allclose(q, expected, rtol=0.0, atol=1e-15)
+    # the edge on the machine with the offset is where the nominal program puts it on the
+    # nominal machine: exactly before rounding, within half a nanometre per axis after
+    reached = GROOVING.tool_pose(q, errors)
+    wanted = GROOVING.tool_pose(GROOVES_FULL)
+    miss = np.linalg.norm(reached[:, :3, 3] - wanted[:, :3, 3], axis=1)
+    limit = math.sqrt(3) * NM / 2 + POSE_M if rounded else POSE_M
+    assert miss.max() < limit
+    assert rotation_angle(reached[:, :3, :3], wanted[:, :3, :3]).max() < POSE_M
+
+
+# ------------------------------------------------------------- (b) rotary-axis errors
+
+
+def test_workpiece_rotation_and_c_offsets_are_undone_to_the_resolution():
+    """A workpiece turned by gamma and a C axis off centre: five axes match the whole pose,
+    so the compensated program gives the nominal poses exactly before rounding and to the
+    rounding bound after."""
+    errors = ErrorModel.from_dict({"workpiece": {"gamma_deg": 0.5},
+                                   "location": {"C": {"EX0C_um": 2.0, "EY0C_um": -3.0}}})
+    program = tilted()
+    nominal_q = targets(program, ROBONANO)
+    wanted = ROBONANO.tool_pose(nominal_q)
+    before = ROBONANO.tool_pose(nominal_q, errors)
+    assert np.linalg.norm(before[:, :3, 3] - wanted[:, :3, 3], axis=1).max() > 1 * UM
+    for rounded in (False, True):
+        result = model_based(program, ROBONANO, errors, rounded=rounded)
+        assert result.unmatched == ""
+        q = targets(result.program, ROBONANO)
+        reached = ROBONANO.tool_pose(q, errors)
+        miss = np.linalg.norm(reached[:, :3, 3] - wanted[:, :3, 3], axis=1)
+        turn = rotation_angle(reached[:, :3, :3], wanted[:, :3, :3])
+        if rounded:
+            position, rotation = rounding_bound(ROBONANO, q, errors)
+            assert np.all(miss <= position + POSE_M)
+            assert np.all(turn <= rotation + POSE_M)
+            assert miss.max() > 1e-3 * NM  # rounding did happen
+        else:
+            assert miss.max() < POSE_M
+            assert turn.max() < POSE_M
+
+
+def test_orientation_five_axes_cannot_give_is_reported_and_the_point_kept():
+    """A workpiece tilted about X: the tool would have to roll, which X Y Z B C cannot do.
+    The tip (or a chosen tool point) still lands where the nominal program puts it."""
+    errors = ErrorModel.from_dict({"workpiece": {"alpha_deg": 0.1}})
+    program = tilted()
+    nominal_q = targets(program, ROBONANO)
+    wanted = ROBONANO.tool_pose(nominal_q)
+    tip = model_based(program, ROBONANO, errors, rounded=False)
+    assert "cannot turn the tool" in tip.unmatched
+    assert tip.max_rotation_residual > 1e-4  # ~alpha, 1.7 mrad
+    reached = ROBONANO.tool_pose(targets(tip.program, ROBONANO), errors)
+    assert np.linalg.norm(reached[:, :3, 3] - wanted[:, :3, 3], axis=1).max() < POSE_M
+    assert tip.max_position_residual < POSE_M
+
+    point = np.array([0.3, -0.5, 1.0]) * MM
+    kept = model_based(program, ROBONANO, errors, point=point, rounded=False)
+    reached = ROBONANO.tool_pose(targets(kept.program, ROBONANO), errors)
+
+    def at(poses):
+        return poses[:, :3, :3] @ point + poses[:, :3, 3]
+
+    miss = np.linalg.norm(at(reached) - at(wanted), axis=1)
+    assert miss.max() < POSE_M
+    assert kept.max_position_residual == pytest.approx(miss.max(), abs=1e-15)
+    # the tip program leaves that point off by the unmatched turn times its lever
+    tip_reached = ROBONANO.tool_pose(targets(tip.program, ROBONANO), errors)
+    assert np.linalg.norm(at(tip_reached) - at(wanted), axis=1).max() > 100 * NM
+
+
+def test_no_errors_give_the_program_back():
+    program = tilted()
+    result = model_based(program, ROBONANO, None)
+    same_program(result.program, program)
+    assert result.max_position_residual < POSE_M
+
+
+# ----------------------------------------------------------------- (c) the function route
+
+
+def test_the_function_sees_every_axis_and_only_axis_values_change():
+    start = np.array([1.0 * MM, 3.0 * MM, 10.0 * MM, 20.0 * DEG])
+    shift = np.array([1.0 * UM, 0.0, -2.0 * UM, 0.0])
+    calls = []
+
+    def function(q):
+        calls.append(q.copy())
+        return q + shift
+
+    program = grooves()
+    out = map_program(program, GROOVING, function, start=start)
+    assert len(calls) == 1
+    seen = calls[0]
+    assert seen.shape == (6, 4)  # the six motion blocks, rapids included
+    # Y and C until programmed, and X before N10, are at the start
+    np.testing.assert_array_equal(seen[:3, 1], start[1])
+    np.testing.assert_array_equal(seen[0, 3], start[3])
+    np.testing.assert_array_equal(seen[:, 0], [0.0, 0.0, 0.0, 5.123456 * MM, 6 * MM, 6 * MM])
+
+    # every motion block carries every axis, shifted (the shifts are on the grid)
+    got = targets(out, GROOVING)
+    np.testing.assert_allclose(got, seen + shift, rtol=0.0, atol=1e-17)
+    assert got[0, 1] == 3.0 * MM and got[0, 3] == 20.0 * DEG  # exactly, after rounding
+
+    # everything but the targets is unchanged; a dwell stays where the move before it ended
+    assert (out.number, out.source, out.work_offsets) == (
+        program.number, program.source, program.work_offsets)
+    for before, after in zip(program.moves, out.moves, strict=True):
+        assert dataclasses.replace(after, target=before.target) == before
+    assert out.moves[0].kind == "dwell" and dict(out.moves[0].target) == {}
+    assert out.moves[0].m_codes == (3,) and out.moves[0].spindle_rpm == 1000.0
+    dwell = next(n for n, m in enumerate(out.moves) if m.dwell_s == 0.5)
+    assert out.moves[dwell].target == out.moves[dwell - 1].target
+    assert [m.block_number for m in out.moves] == [5, 10, 20, 30, 40, 50, 60, 70]
+    assert out.moves[6].m_codes == (8,)
+
+
+def test_an_identity_function_keeps_programmed_values_exactly():
+    program = grooves()
+    out = map_program(program, GROOVING, lambda q: q)
+    for before, after in zip(program.moves, out.moves, strict=True):
+        for axis, value in before.target.items():
+            assert after.target[axis] == value
+
+
+def test_a_program_without_motion_does_not_call_the_function():
+    program = parse_program("O5\nM03 S100\nG04 P20\n")
+
+    def function(q):
+        raise AssertionError("called")
+
+    same_program(map_program(program, GROOVING, function), program)
+
+
+# ------------------------------------------------------------------- (d) the round trip
+
+
+def test_writing_and_reading_the_output_gives_it_back(tmp_path):
+    """Through G91, a G55 block and work offsets off the nanometre grid: the output is on
+    the grid the writer uses (relative to G54), so the text reads back as the same floats."""
+    offsets = {"G54": {"X": 0.1234567891 * MM, "Z": -7.77777777 * UM},
+               "G55": {"X": 10.0 * MM + 0.1 * NM}}
+    text = """%
+O0100
+G90 G21 G94 G54
+N10 G00 X1. Y-2. Z3. C10.
+N20 G01 Z-0.0015 F75.5
+N30 G91 X0.25 Y0.125
+N40 G90 G55 X2.
+N50 G04 P1000
+N60 G54 C-12.34567 M08
+%
+"""
+    program = parse_program(text, "offsets.nc", work_offsets=offsets)
+    shift = np.array([math.pi * UM, -math.e * UM, 1.0 / 3.0 * UM, 1e-3 * math.sqrt(2) * DEG])
+    out = map_program(program, GROOVING, lambda q: q + shift)
+    path = tmp_path / "out.nc"
+    write_program(out, path)
+    back = read_program(path, work_offsets=offsets)
+    same_program(back, out)
+    assert format_program(back) == format_program(out)
+    # rounding moved each value by at most half a step from the exact mapping
+    exact = targets(map_program(program, GROOVING, lambda q: q + shift, rounded=False),
+                    GROOVING)
+    assert np.all(np.abs(targets(out, GROOVING) - exact) <= GROOVING.resolution / 2 + 1e-18)
+
+
+def test_the_model_based_output_reads_back_identically(tmp_path):
+    errors = ErrorModel.from_dict({"workpiece": {"gamma_deg": 0.5, "delta_um": [3.0, 1.0, 0.5]},
+                                   "location": {"C": {"EX0C_um": 2.0}}})
+    out = model_based(tilted(), ROBONANO, errors).program
+    write_program(out, tmp_path / "out.nc")
+    same_program(read_program(tmp_path / "out.nc"), out)
+
+
+def test_to_resolution_is_idempotent_and_on_the_grid():
+    rng = np.random.default_rng(0)
+    q = rng.uniform(-0.1, 0.1, (50, 4))
+    once = to_resolution(q, GROOVING)
+    np.testing.assert_array_equal(to_resolution(once, GROOVING), once)
+    assert np.all(np.abs(once - q) <= GROOVING.resolution / 2 + 1e-18)
+    steps = once / GROOVING.resolution
+    np.testing.assert_allclose(steps, np.round(steps), rtol=0.0, atol=1e-6)
+
+
+# --------------------------------------------------------------------- (e) bad input
+
+
+def test_a_function_of_the_wrong_shape_is_refused_naming_the_shape():
+    with pytest.raises(InputError, match=r"shape \(6, 4\).*got shape \(6, 3\)"):
+        map_program(grooves(), GROOVING, lambda q: q[:, :3])
+    with pytest.raises(InputError, match=r"got shape \(4,\)"):
+        map_program(grooves(), GROOVING, lambda q: q[0])
+    with pytest.raises(InputError, match=r"must return an array of shape \(6, 4\).*got str"):
+        map_program(grooves(), GROOVING, lambda q: "nonsense")
+
+
+def test_a_function_returning_nan_is_refused_naming_the_block_and_axis():
+    def function(q):
+        q[3, 2] = np.nan
+        return q
+
+    where = r"grooves\.nc, line 8, key 'Z': "  # N40, the fourth motion block
+    with pytest.raises(InputError, match=where + r".*returned nan for axis Z"):
+        map_program(grooves(), GROOVING, function)
+
+
+def test_rewrite_and_point_check_their_input():
+    with pytest.raises(InputError, match=r"shape \(6, 4\).*got \(5, 4\)"):
+        rewrite(grooves(), GROOVING, np.zeros((5, 4)))
+    with pytest.raises(InputError, match="point must be 3 finite coordinates"):
+        model_based(tilted(), ROBONANO, None, point=[0.0, 1.0])
