@@ -43,8 +43,8 @@ def example_dict() -> dict:
         "location": {"C": {"EX0C_um": 2.0, "EB0C_urad": 15.0}},
         "component": {
             "X": {
-                "position_mm": [0.0, 250.0, 500.0],
-                "EXX_um": [0.0, 4.1, 11.6],
+                "position_mm": [-140.0, 0.0, 140.0],
+                "EXX_um": [-3.5, 0.0, 4.1],
                 "EYX_poly_um_mm": [0.0, 0.0, 2e-5],
             },
             "C": {"position_deg": [-180.0, 0.0, 180.0], "ECC_arcsec": [1.0, 0.0, -1.0]},
@@ -114,8 +114,8 @@ def test_example_gives_the_hand_converted_si_values(load):
     assert dict(model.location) == {"C": pytest.approx({"EX0C": 2e-6, "EB0C": 1.5e-5}, rel=rtol)}
     exx, eyx = model.component["X"]["EXX"], model.component["X"]["EYX"]
     assert exx.kind == "table" and eyx.kind == "poly" and eyx.positions is None
-    assert_allclose(exx.positions, [0.0, 0.25, 0.5], rtol=rtol, atol=0.0)
-    assert_allclose(exx.values, [0.0, 4.1e-6, 1.16e-5], rtol=rtol, atol=0.0)
+    assert_allclose(exx.positions, [-0.14, 0.0, 0.14], rtol=rtol, atol=0.0)
+    assert_allclose(exx.values, [-3.5e-6, 0.0, 4.1e-6], rtol=rtol, atol=0.0)
     # 2e-5 um/mm^2 = 2e-5 * 1e-6 m / (1e-3 m)^2 = 2e-5 m/m^2.
     assert_allclose(eyx.values, [0.0, 0.0, 2e-5], rtol=rtol, atol=0.0)
     # EYX at x = 500 mm: 2e-5 * 500^2 um = 5 um.
@@ -178,7 +178,7 @@ def test_toml_is_written_in_readable_units(tmp_path):
                 "position_mm", "EXX_um", "EYX_poly_um_mm", "position_deg", "ECC_urad"):
         assert re.search(rf"^{key} = ", text, re.MULTILINE), key
     d = ErrorModel.from_toml(EXAMPLE).to_dict(readable=True)
-    assert d["component"]["X"]["position_mm"] == pytest.approx([0.0, 250.0, 500.0], rel=1e-15)
+    assert d["component"]["X"]["position_mm"] == pytest.approx([-140.0, 0.0, 140.0], rel=1e-15)
     assert d["component"]["C"]["position_deg"] == pytest.approx([-180.0, 0.0, 180.0], rel=1e-15)
     assert d["workpiece"]["gamma_urad"] == pytest.approx(0.5 * math.pi / 180 * 1e6, rel=1e-15)
 

@@ -28,11 +28,22 @@ def _generator():
     return module
 
 
+def find_check_urdf() -> str | None:
+    """urdfdom's ``check_urdf``: beside the running interpreter first (Pinocchio's ``pin``
+    wheel installs it into the environment's bin folder, which is not on PATH when the tests
+    run as ``.venv/bin/python -m pytest``), then on PATH (Debian's liburdfdom-tools)."""
+    return (shutil.which("check_urdf", path=str(Path(sys.executable).parent))
+            or shutil.which("check_urdf"))
+
+
 @pytest.mark.parametrize("name", list_machines())
 def test_check_urdf_accepts_every_model(name):
-    if shutil.which("check_urdf") is None:
-        pytest.fail("check_urdf is missing: install Debian's liburdfdom-tools (.ci/run does)")
-    result = subprocess.run(["check_urdf", str(MODELS / f"{name}.urdf")],
+    check_urdf = find_check_urdf()
+    if check_urdf is None:
+        pytest.fail(f"check_urdf is missing, neither beside {sys.executable} nor on PATH: "
+                    f"it comes with Pinocchio's wheel ('{sys.executable} -m pip install pin', "
+                    f"which `make test` does), or install Debian's liburdfdom-tools")
+    result = subprocess.run([check_urdf, str(MODELS / f"{name}.urdf")],
                             capture_output=True, text=True, check=False)
     assert result.returncode == 0, result.stdout + result.stderr
     assert "Successfully Parsed XML" in result.stdout

@@ -1,6 +1,7 @@
 """The viewer in a real browser: headless Chromium (Debian package ``chromium``) draws the
 exported page and a live session; the pixels must show the machine, the part and the colour
-map. Without Chromium these tests fail (CI installs it), they do not skip."""
+map. Without Chromium these tests skip, saying so, except under ``CI=true`` (.ci/run installs
+Chromium and sets it), where they fail."""
 
 from __future__ import annotations
 
@@ -36,12 +37,21 @@ STOCK = "block:1x0.8x0.5"
 PURPLE, GREEN, ORANGE = (265.0, 315.0), (100.0, 160.0), (20.0, 45.0)
 
 
+def running_in_ci() -> bool:
+    """True when the CI environment variable says so (CI=true, as CI services set it)."""
+    return os.environ.get("CI", "").strip().lower() in ("true", "1", "yes")
+
+
 @pytest.fixture(scope="module")
 def browser():
     try:
         find_chromium()
-    except MachineSimError:
-        pytest.fail(f"headless Chromium is required for the browser tests: {INSTALL_HINT}")
+    except MachineSimError as error:
+        if running_in_ci():
+            pytest.fail(f"CI=true and headless Chromium is missing, so the browser tests "
+                        f"cannot run: {error}")
+        pytest.skip(f"headless Chromium not found, browser tests skipped (with CI=true they "
+                    f"fail); install it: {INSTALL_HINT}")
     with Browser(WIDTH, HEIGHT) as b:
         yield b
 
