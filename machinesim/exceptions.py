@@ -64,6 +64,11 @@ class NCProgramError(InputError):
     """An NC program has a word, block or modal state that cannot be run."""
 
 
+class NotConvergedError(MachineSimError):
+    """An iteration (e.g. the Gauss-Newton of `machinesim.identification.fit`) did not reach
+    its stopping rule within its cap."""
+
+
 class KinematicsError(MachineSimError):
     """A pose cannot be reached, or an axis value lies outside its travel."""
 

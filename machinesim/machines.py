@@ -247,8 +247,9 @@ class Machine:
                               for i in range(len(comp.values))]
         return tuple(names)
 
-    def error_jacobian(self, q, errors=None, params=None) -> np.ndarray:
-        """Derivative of the tool pose with respect to named error parameters.
+    def error_jacobian(self, q, errors=None, params=None, *, frame: str = "tool_tip",
+                       point=None) -> np.ndarray:
+        """Derivative of a frame's pose (or of a point fixed in it) w.r.t. named error parameters.
 
         Parameters
         ----------
@@ -259,27 +260,60 @@ class Machine:
         params : sequence of str, optional
             Parameter names (see `parameter_names`); default: every parameter ``errors``
             carries (``errors.parameters()``).
+        frame : str
+            Any frame of the machine (`frames`), e.g. ``probe_tip``; default the tool edge.
+        point : array_like, shape (3,) or (N, 3), optional
+            Coordinates (m) of a point fixed in ``frame`` (one for all configurations, or one
+            per row of ``q``). The position rows are then those of that point,
+            d(x + R p) = v + omega x (R p), with ``R`` the frame's rotation in the workpiece.
+            Default: the frame origin.
 
         Returns
         -------
         J : ndarray, shape (6, k) or (N, 6, k)
-            Rows: the tool-edge position (m) and the tool rotation (rad, axis-angle), both in
-            the workpiece frame; columns: per unit (m or rad) of each parameter.
+            Rows: the position of the point (m) and the frame rotation (rad, axis-angle), both
+            in the workpiece frame; columns: per unit (m or rad) of each parameter.
+
+        Notes
+        -----
+        Pinocchio's Jacobian is evaluated once per distinct row of ``q``: rows repeated (one
+        pose read along several directions, several points of one frame) cost nothing more.
         """
+        if frame not in self.kin.frame_id:
+            raise InputError(f"frame {frame!r} is not on {self.name}; it has "
+                             f"{', '.join(self.frames)}")
         q = self._check_q(q)
         binding = self.binding(errors)
         if params is None:
             params = tuple(errors.parameters()) if errors is not None else ()
         columns = [self._param_columns(p, errors) for p in params]
         q2 = np.atleast_2d(q)
-        out = np.empty((q2.shape[0], 6, len(columns)))
-        for n, qn in enumerate(q2):
-            jac = self.kin.relative_jacobian(self.kin.full_q(qn, binding))
-            for c, terms in enumerate(columns):
-                col = np.zeros(6)
-                for v_index, coeff in terms:
-                    col += jac[:, v_index] * (coeff(qn) if callable(coeff) else coeff)
-                out[n, :, c] = col
+        lever = None if point is None else self._check_point(point, q2.shape[0], q.ndim == 2)
+        # Constant coefficients form one (nv, k) map applied by a matrix product; only the
+        # component errors' coefficients vary with q (evaluated for every row at once).
+        const = np.zeros((self.kin.model.nv, len(columns)))
+        varying = []
+        for c, terms in enumerate(columns):
+            for v_index, coeff in terms:
+                if callable(coeff):
+                    varying.append((c, v_index, coeff(q2)))
+                else:
+                    const[v_index, c] += coeff
+        unique, inverse = np.unique(q2, axis=0, return_inverse=True)
+        inverse = inverse.ravel()
+        jacs = np.empty((unique.shape[0], 6, self.kin.model.nv))
+        rot = np.empty((unique.shape[0], 3, 3))
+        for n, qn in enumerate(unique):
+            full = self.kin.full_q(qn, binding)
+            jacs[n] = self.kin.relative_jacobian(full, frame)
+            if lever is not None:
+                rot[n] = self.kin.frame_pose(full, frame)[:3, :3]
+        out = (jacs @ const)[inverse]
+        for c, v_index, values in varying:
+            out[:, :, c] += jacs[inverse, :, v_index] * values[:, None]
+        if lever is not None:
+            arm = np.einsum("nij,nj->ni", rot[inverse], lever)
+            out[:, :3, :] += np.cross(out[:, 3:, :], arm[:, :, None], axis=1)
         return out[0] if q.ndim == 1 else out
 
     def axis_jacobian(self, q, errors=None) -> np.ndarray:
@@ -318,8 +352,8 @@ class Machine:
             sign = float(ax.side)
             dof = DOF_OF_LETTER[symbol[1]]
 
-            def coeff(qn, comp=comp, i=i, k=k, sign=sign):
-                return sign * comp.basis(np.array([qn[i]]))[0, k]
+            def coeff(q2, comp=comp, i=i, k=k, sign=sign):
+                return sign * comp.basis(q2[:, i])[:, k]
 
             return [(vi[f"{letter}__comp_{dof}"], coeff)]
         raise ErrorModelError(
@@ -424,6 +458,18 @@ class Machine:
                 f"{np.degrees(np.max(np.abs(dr))):.6g} deg")
 
     # ------------------------------------------------------------------------------ input
+
+    def _check_point(self, point, n: int, batch: bool) -> np.ndarray:
+        """``point`` as (n, 3) m: one point for every configuration, or one per row."""
+        arr = np.asarray(point, dtype=np.float64)
+        if arr.shape == (3,):
+            arr = np.broadcast_to(arr, (n, 3))
+        elif not (batch and arr.shape == (n, 3)):
+            want = "(3,)" + (f" or ({n}, 3)" if batch else "")
+            raise InputError(f"expected point coordinates (m) of shape {want}, got {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise InputError(f"point coordinates contain NaN or inf: {arr.tolist()}")
+        return arr
 
     def _check_q(self, q, batch: bool = True) -> np.ndarray:
         arr = np.asarray(q, dtype=np.float64)

@@ -139,3 +139,34 @@ STRAIGHT_REL = 1e-12
 #: grooves differ by a few ulp (~1e-17 m) where they are equal in exact arithmetic, and
 #: treating them as equal saves sliver triangles of that width.
 HEIGHT_TIE_REL = 1e-13
+
+# --- identification.fit
+#: Singular values of the column-scaled weighted Jacobian below this fraction of the largest
+#: are null directions (rank cut-off). Exact symmetries of a model (a rotary axis' zero offset
+#: absorbed by a setting error, a parameter no reading sees) come out at 1e-16 .. 1e-13 of
+#: the largest: float64 round-off of Pinocchio's entries (~1e-16) times sqrt(k). A real
+#: direction as weak as 1e-8 would carry a standard uncertainty 1e8 times that of the best
+#: determined one, metres or radians for nanometre sensors, which no plan should rely on; and
+#: null vectors cut here are accurate to ~eps / 1e-8 ~ 2e-8, below `FIT_NULL_COMPONENT`.
+FIT_RANK_REL = 1e-8
+#: A parameter is identifiable on its own when its unit vector (scaled coordinates) has a
+#: null-space component of at most this (the sine of its angle to the row space); the
+#: coefficients of a named null-space combination below this fraction of the largest (scaled
+#: coordinates: their effect on the readings) are dropped. 50x above the round-off of the null
+#: basis (see `FIT_RANK_REL`); and a parameter so weakly tied to a symmetry moves by at most
+#: 1e-6 of the symmetry's displacement, the relative accuracy identification is held to.
+FIT_NULL_COMPONENT = 1e-6
+#: A parameter whose weighted RMS sensitivity (m per m, or m per rad: a lever arm) is at most
+#: this moves no reading: its column is set to zero instead of being scaled to unit norm,
+#: which would turn Pinocchio's ~1e-16 round-off into a direction. 1e-12 is 10^4 above that
+#: round-off and a 1 pm lever, far below any real sensitivity.
+FIT_ZERO_COLUMN = 1e-12
+#: Gauss-Newton stops when every length step is below this (m): 1000x below the 1 nm axis
+#: resolution of the machines, and far above the float64 floor of the steps (~1e-16 m on
+#: the R-test fits of tests/test_identification_fit.py, noisy or not, iterated past this
+#: rule), so it is reached, not approached: quadratic convergence lands well under it.
+FIT_STEP_M = 1e-12
+#: The same for angle steps (rad): 1e5x below the 0.00001 deg (1.7e-7 rad) rotary resolution
+#: (a 1e-12 rad step moves a point 0.1 m away by 1e-13 m); the floor measured as above is
+#: ~1e-15 rad.
+FIT_STEP_RAD = 1e-12

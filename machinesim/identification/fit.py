@@ -1,0 +1,494 @@
+"""Generic identification: any subset of error parameters, from displacement readings.
+
+An observation is what one displacement sensor reads: how far a point fixed in a machine
+frame (the centre of a ball on the tool, a probe tip) lies from its nominal place, relative
+to the workpiece, along a unit direction of the workpiece frame. The R-test of ISO 10791-6
+reads a ball on the tool with three such sensors; a touch probe or a laser interferometer
+reads one. `fit` finds the error parameters that explain the readings (weighted Gauss-Newton
+on Pinocchio's error Jacobians, `Machine.error_jacobian`, with column scaling and
+truncated-SVD steps) and reports what the plan could and could not identify;
+`plan_quality` gives the same figures for a plan before any reading is taken. The derivation
+(observation model, weighting, rank, covariance, the null space and its names) is in
+docs/identification.md.
+
+>>> import numpy as np, machinesim
+>>> from machinesim.identification.fit import fit, observations
+>>> machine = machinesim.load_machine("robonano_ui")
+>>> q = np.zeros((3, 6)); u = np.eye(3)
+>>> obs = observations(q, u, [1e-6, -2e-6, 0.0], 1e-8)
+>>> estimate = fit(machine, obs, ["workpiece.x", "workpiece.y"])
+>>> np.round(estimate.values * 1e6, 9), estimate.rank
+(array([-1.,  2.]), 2)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim import tolerances
+from machinesim.arrays import frozen
+from machinesim.errors import ErrorModel
+from machinesim.exceptions import ErrorModelError, InputError, NotConvergedError
+from machinesim.identification.observations import (
+    Observation,
+    Observations,
+    is_angle,
+    observations,
+)
+
+__all__ = [
+    "Combination", "Estimate", "NotConvergedError", "Observation", "Observations",
+    "PlanQuality", "fit", "observations", "plan_quality",
+]
+
+#: Gauss-Newton steps before `fit` gives up. From a zero prior it converges in 4 steps for
+#: setting errors of hundreds of um and 2 degrees (quadratically once near the solution);
+#: 50 leaves room for a slowly converging fit without hiding a divergence.
+MAX_ITERATIONS = 50
+
+
+# ------------------------------------------------------------------------- identifiability
+
+
+@dataclass(frozen=True, eq=False)
+class Combination:
+    """A null-space direction: moving the parameters by ``t * coefficients`` (SI) together
+    changes no reading of the plan (to first order), whatever ``t``.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The parameters involved, in the fit's order.
+    coefficients : ndarray, shape (len(names),)
+        SI (m or rad per unit of t), the largest magnitude exactly 1 (positive); coefficients
+        whose effect on the readings is below `tolerances.FIT_NULL_COMPONENT` of the largest
+        are dropped.
+    """
+
+    names: tuple[str, ...]
+    coefficients: np.ndarray
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "names", tuple(self.names))
+        object.__setattr__(self, "coefficients", frozen(self.coefficients))
+
+    def value(self, parameters: Mapping[str, float]) -> float:
+        """``coefficients . parameters[names]`` (missing names count as 0)."""
+        return float(sum(c * parameters.get(n, 0.0)
+                         for n, c in zip(self.names, self.coefficients, strict=True)))
+
+    def __str__(self) -> str:
+        terms = []
+        for name, c in zip(self.names, self.coefficients, strict=True):
+            size = f"{abs(c):.4g}"
+            terms.append(("- " if c < 0 else "+ ") + (name if size == "1" else f"{size}*{name}"))
+        text = " ".join(terms)
+        return text[2:] if text.startswith("+ ") else "-" + text[2:]
+
+    def __repr__(self) -> str:
+        return f"Combination({str(self)!r})"
+
+
+@dataclass(frozen=True, eq=False)
+class _Figures:
+    """What a plan can identify, from its Jacobian (shared by PlanQuality and Estimate)."""
+
+    names: tuple[str, ...]
+    std: np.ndarray
+    covariance: np.ndarray
+    correlation: np.ndarray
+    rank: int
+    condition: float
+    singular_values: np.ndarray
+    unidentifiable: tuple
+    n_observations: int
+
+    @property
+    def identifiable(self) -> tuple[str, ...]:
+        """Names of the parameters identifiable on their own."""
+        return tuple(n for n, s in zip(self.names, self.std, strict=True) if not math.isnan(s))
+
+    @property
+    def combinations(self) -> tuple[Combination, ...]:
+        """The named null-space directions (the `Combination` entries of `unidentifiable`)."""
+        return tuple(u for u in self.unidentifiable if isinstance(u, Combination))
+
+
+_FIGURES_DOC = """
+    names : tuple of str
+        The parameters, in the order given.
+    std : ndarray, shape (k,)
+        Standard uncertainty of each parameter (m or rad) from the readings' sigma (a priori,
+        not rescaled by the residuals); NaN for a parameter not identifiable on its own.
+    covariance : ndarray, shape (k, k)
+        From the truncated pseudo-inverse of the weighted Jacobian (SI); rows and columns of
+        unidentifiable parameters are NaN.
+    correlation : ndarray, shape (k, k)
+        covariance / (std std^T); NaN where either parameter is unidentifiable.
+    rank : int
+        Number of singular values above `tolerances.FIT_RANK_REL` of the largest.
+    condition : float
+        Largest over smallest kept singular value of the column-scaled weighted Jacobian:
+        the condition number of its identifiable part (NaN when nothing is identifiable).
+    singular_values : ndarray, shape (k,)
+        Of the column-scaled weighted Jacobian, largest first (dimensionless); zero for a
+        parameter that moves no reading and beyond the number of readings.
+    unidentifiable : tuple
+        The names (str) of the parameters not identifiable on their own, then one
+        `Combination` per null-space direction (k - rank of them): a reduced echelon basis,
+        each with a leading parameter the others lack (a parameter that moves no reading is
+        a combination of one).
+    n_observations : int
+        Number of readings.
+"""
+
+
+@dataclass(frozen=True, eq=False)
+class PlanQuality(_Figures):
+    __doc__ = ("""What a measurement plan can identify, before any reading (`plan_quality`).
+
+    The per-parameter ``std`` is the plan's valuation: what the readings' uncertainty
+    becomes in each parameter.
+
+    Attributes
+    ----------""" + _FIGURES_DOC)
+
+
+@dataclass(frozen=True, eq=False)
+class Estimate(_Figures):
+    __doc__ = ("""The result of `fit`: the parameters and what the readings could identify.
+
+    Attributes
+    ----------""" + _FIGURES_DOC + """    values : ndarray, shape (k,)
+        The estimates, SI. Along the null space they stay as near the prior as the readings
+        allow (estimate minus prior is orthogonal, in SI, to every `Combination`); a
+        parameter that moves no reading keeps the prior's value exactly.
+    residual_rms : float
+        RMS of reading minus model at the estimate, m (unweighted).
+    normalised_residual_rms : float
+        sqrt(sum(((reading - model) / sigma)^2) / (N - rank)), dimensionless: about 1 when
+        the sigma are right (NaN when N <= rank).
+    iterations : int
+        Gauss-Newton steps taken.
+    errors : ErrorModel
+        The prior with the fitted values.
+""")
+
+    values: np.ndarray
+    residual_rms: float
+    normalised_residual_rms: float
+    iterations: int
+    errors: ErrorModel
+
+    def as_dict(self) -> dict[str, dict[str, float]]:
+        """``{name: {"value": v, "std": s}}`` in SI (std NaN when unidentifiable)."""
+        return {n: {"value": float(v), "std": float(s)}
+                for n, v, s in zip(self.names, self.values, self.std, strict=True)}
+
+
+@dataclass(frozen=True, eq=False)
+class _Linearisation:
+    """SVD of the column-scaled weighted Jacobian of one linearisation."""
+
+    scale: np.ndarray  # (k,) column norms of the weighted Jacobian (1 for zero columns)
+    zero: np.ndarray  # (k,) bool: parameters that move no reading
+    u: np.ndarray  # (N, r) kept left singular vectors
+    s: np.ndarray  # (k,) singular values, largest first (zeros: zero columns, N < k)
+    v: np.ndarray  # (k, r) kept right singular vectors (scaled coordinates)
+    null: np.ndarray  # (k, k - r) orthonormal null basis (scaled), zero columns' first
+
+    @property
+    def rank(self) -> int:
+        return self.v.shape[1]
+
+    def step(self, residual_w: np.ndarray, to_prior: np.ndarray) -> np.ndarray:
+        """Gauss-Newton step (SI) for weighted residuals (N,) and ``to_prior`` = prior minus
+        current values (k,): the truncated-SVD solution of the linearised problem (scaled
+        coordinates), with its null-space part chosen so that the new values lie as near
+        the prior as the data allow (SI distance, m and rad counted alike)."""
+        step = (self.v @ ((self.u.T @ residual_w) / self.s[:self.rank])) / self.scale
+        # The null basis starts with the unit vectors of the zero columns, orthogonal to the
+        # rest in any metric: handled exactly. The rest is orthonormalised in SI.
+        step[self.zero] = to_prior[self.zero]
+        rest = self.null[:, np.count_nonzero(self.zero):] / self.scale[:, None]
+        if rest.shape[1]:
+            basis, _ = np.linalg.qr(rest / np.linalg.norm(rest, axis=0))
+            step += basis @ (basis.T @ (to_prior - step))
+        return step
+
+
+def _linearise(jacobian: np.ndarray, sigma: np.ndarray) -> _Linearisation:
+    """Weight the Jacobian (N, k) by 1 / sigma, scale its columns to unit norm, SVD it."""
+    k = jacobian.shape[1]
+    weighted = jacobian / sigma[:, None]
+    norms = np.linalg.norm(weighted, axis=0)
+    # weighted RMS sensitivity, m per unit of the parameter, whatever the sigma
+    zero = norms / np.linalg.norm(1.0 / sigma) <= tolerances.FIT_ZERO_COLUMN
+    scale = np.where(zero, 1.0, norms)
+    live = np.flatnonzero(~zero)
+    u, s, vt = np.linalg.svd(weighted[:, live] / scale[live], full_matrices=False)
+    rank = int(np.count_nonzero(s > tolerances.FIT_RANK_REL * s[0])) if s.size and s[0] else 0
+    if vt.shape[0] < live.size:  # fewer readings than parameters: complete the basis
+        vt = np.linalg.svd(vt[:rank], full_matrices=True)[2] if rank else np.eye(live.size)
+    v = np.zeros((k, rank))
+    v[live] = vt[:rank].T
+    null = np.zeros((k, k - rank))
+    null[np.flatnonzero(zero), np.arange(zero.sum())] = 1.0
+    null[live, zero.sum():] = vt[rank:].T
+    singular_values = np.zeros(k)
+    singular_values[:s.size] = s
+    return _Linearisation(scale, zero, u[:, :rank], singular_values, v, null)
+
+
+def _figures(lin: _Linearisation, names: tuple[str, ...]) -> dict:
+    """Identifiability figures of a linearisation: the fields of `PlanQuality`. The one
+    function behind both `fit` and `plan_quality`."""
+    r, s, v = lin.rank, lin.s, lin.v
+    identifiable = np.linalg.norm(lin.null, axis=1) <= tolerances.FIT_NULL_COMPONENT
+    covariance = (v / s[:r] ** 2) @ v.T / np.outer(lin.scale, lin.scale)
+    covariance[~identifiable, :] = np.nan
+    covariance[:, ~identifiable] = np.nan
+    std = np.sqrt(np.diag(covariance))
+    correlation = covariance / np.outer(std, std)
+    np.fill_diagonal(correlation, np.where(identifiable, 1.0, np.nan))
+    alone = tuple(n for n, ok in zip(names, identifiable, strict=True) if not ok)
+    return dict(names=tuple(names), std=frozen(std), covariance=frozen(covariance),
+                correlation=frozen(correlation), rank=r,
+                condition=float(s[0] / s[r - 1]) if r else math.nan,
+                singular_values=frozen(s),
+                unidentifiable=alone + _combinations(lin.null, lin.scale, names),
+                n_observations=lin.u.shape[0])
+
+
+def _combinations(null: np.ndarray, scale: np.ndarray, names) -> tuple[Combination, ...]:
+    """Readable names of the null space: a reduced echelon basis (Gauss-Jordan, full
+    pivoting) of its orthonormal basis, so that each direction has a leading parameter the
+    others lack; coefficients then in SI, the largest 1."""
+    rows = null.T.copy()
+    m = rows.shape[0]
+    pivots = []
+    for i in range(m):
+        sub = np.abs(rows[i:])
+        r, c = np.unravel_index(int(np.argmax(sub)), sub.shape)
+        rows[[i, i + r]] = rows[[i + r, i]]
+        rows[i] /= rows[i, c]
+        for j in range(m):
+            if j != i:
+                rows[j] -= rows[j, c] * rows[i]
+        pivots.append(c)
+    out = []
+    for i in np.argsort(pivots):
+        row = rows[i]
+        keep = np.abs(row) > tolerances.FIT_NULL_COMPONENT * np.max(np.abs(row))
+        si = np.where(keep, row / scale, 0.0)
+        si /= si[np.argmax(np.abs(si))]
+        out.append(Combination(tuple(np.asarray(names)[keep]), si[keep]))
+    return tuple(out)
+
+
+# -------------------------------------------------------------------------------- the model
+
+
+class _Plan:
+    """The readings bound to a machine and a parameter list: model readings and Jacobian."""
+
+    def __init__(self, machine, obs: Observations, names: tuple[str, ...]) -> None:
+        if obs.q.shape[1] != len(machine.axes):
+            raise InputError(
+                f"{machine.name} has axes {''.join(machine.axes)}: expected axis values of "
+                f"shape (N, {len(machine.axes)}), got {obs.q.shape}", key="q")
+        unknown = sorted(set(obs.frames) - set(machine.frames))
+        if unknown:
+            raise InputError(f"frame {unknown[0]!r} is not on {machine.name}; it has "
+                             f"{', '.join(machine.frames)}", key="frames")
+        self.machine = machine
+        self.obs = obs
+        self.names = names
+        frames = np.asarray(obs.frames)
+        self.groups = []
+        for frame in dict.fromkeys(obs.frames):
+            rows = np.flatnonzero(frames == frame)
+            unique, inverse = np.unique(obs.q[rows], axis=0, return_inverse=True)
+            self.groups.append((frame, rows, unique, inverse.ravel()))
+        self.nominal = self._positions(None)
+
+    def _positions(self, errors) -> np.ndarray:
+        """Positions (N, 3) of the observed points in the workpiece frame, m.
+
+        One Pinocchio pass per distinct pose, as `Machine.error_jacobian` does: a plan reads
+        several points and directions per pose, and the batched evaluator would build its
+        chain anew for every error model of the iteration.
+        """
+        out = np.empty((len(self.obs), 3))
+        for frame, rows, unique, inverse in self.groups:
+            poses = np.array([self.machine.pinocchio_pose(qn, errors, frame) for qn in unique])
+            poses = poses[inverse]
+            out[rows] = poses[:, :3, 3] + np.einsum("nij,nj->ni", poses[:, :3, :3],
+                                                    self.obs.points[rows])
+        return out
+
+    def readings(self, errors) -> np.ndarray:
+        """Model readings (N,), m: u . (x(errors) - x(nominal))."""
+        return np.einsum("ni,ni->n", self.obs.directions, self._positions(errors) - self.nominal)
+
+    def jacobian(self, errors) -> np.ndarray:
+        """d readings / d parameters (N, k), m per m or per rad."""
+        out = np.empty((len(self.obs), len(self.names)))
+        for frame, rows, _, _ in self.groups:
+            jac = self.machine.error_jacobian(self.obs.q[rows], errors, self.names, frame=frame,
+                                              point=self.obs.points[rows])
+            out[rows] = np.einsum("ni,nik->nk", self.obs.directions[rows], jac[:, :3, :])
+        return out
+
+
+def _prior(machine, prior) -> ErrorModel:
+    if prior is None:
+        model = ErrorModel()
+    elif isinstance(prior, ErrorModel):
+        model = prior
+    elif isinstance(prior, Mapping):
+        model = ErrorModel().with_parameters(prior)
+    else:
+        raise InputError(f"expected the prior as an ErrorModel or a mapping name -> value "
+                         f"(SI), got {type(prior).__name__}", key="prior")
+    machine.check_errors(model)
+    return model
+
+
+def _names(machine, params, prior: ErrorModel) -> tuple[str, ...]:
+    if isinstance(params, str) or not isinstance(params, Sequence | np.ndarray):
+        raise InputError(f"expected a sequence of parameter names, got {params!r}",
+                         key="params")
+    names = tuple(params)
+    if not names:
+        raise InputError("expected at least one parameter name, got none", key="params")
+    accepted = set(machine.parameter_names(prior))
+    for name in names:
+        if name not in accepted:
+            raise ErrorModelError(
+                f"unknown error parameter {name!r} for {machine.name}; expected one of "
+                "Machine.parameter_names(prior): tool.x .. tool.rz, workpiece.x .. "
+                f"workpiece.gamma, location.<axis>.<symbol> of axes {''.join(machine.axes)}, "
+                "or component.<axis>.<symbol>[i] of a table or polynomial in the prior",
+                key=str(name))
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        raise InputError(f"parameter {repeated[0]!r} is listed more than once", key="params")
+    return names
+
+
+def fit(machine, observations: Observations | Iterable, params: Sequence[str], *,
+        prior=None, max_iterations: int = MAX_ITERATIONS) -> Estimate:
+    """Identify the named error parameters from displacement readings.
+
+    Model: reading_i = u_i . (x_i(p) - x_i(nominal)), with x_i(p) the observed point's
+    position in the workpiece frame at q_i on the machine with errors
+    ``prior.with_parameters(p)``. Weighted Gauss-Newton (weights 1 / sigma), Jacobian columns
+    scaled to unit norm, truncated-SVD steps (`tolerances.FIT_RANK_REL`) whose null-space
+    part keeps the estimate as near the prior as the readings allow; stops when every
+    length step is below `tolerances.FIT_STEP_M` and every angle step below
+    `tolerances.FIT_STEP_RAD` (docs/identification.md). What the readings cannot see is
+    reported in `Estimate.unidentifiable`; to fix a datum, leave one parameter of each
+    `Combination` out of ``params`` (it keeps the prior's value).
+
+    Parameters
+    ----------
+    machine : Machine
+    observations : Observations, or sequence of Observation / Observations
+        The readings.
+    params : sequence of str
+        The parameters to fit (`Machine.parameter_names`), k of them.
+    prior : ErrorModel or mapping of str to float, optional
+        The starting point, and the values of every parameter not fitted (default: no error).
+    max_iterations : int
+        Gauss-Newton steps before `NotConvergedError`.
+
+    Returns
+    -------
+    Estimate
+
+    Raises
+    ------
+    InputError
+        Malformed readings (axis count, unknown frame), repeated parameter names.
+    ErrorModelError
+        An unknown parameter name, or a prior that does not fit the machine.
+    NotConvergedError
+        When the steps do not fall below the stopping rule within ``max_iterations``.
+    """
+    prior = _prior(machine, prior)
+    names = _names(machine, params, prior)
+    obs = Observations.of(observations)
+    plan = _Plan(machine, obs, names)
+    start = np.array([prior.parameters().get(n, 0.0) for n in names])
+    tolerance = np.where([is_angle(n) for n in names], tolerances.FIT_STEP_RAD,
+                         tolerances.FIT_STEP_M)
+    values = start.copy()
+    iterations = 0
+    while True:
+        iterations += 1
+        errors = prior.with_parameters(dict(zip(names, values.tolist(), strict=True)))
+        residual = (obs.values - plan.readings(errors)) / obs.sigma
+        lin = _linearise(plan.jacobian(errors), obs.sigma)
+        step = lin.step(residual, start - values)
+        values = values + step
+        if np.all(np.abs(step) < tolerance):
+            break
+        if iterations == max_iterations:
+            worst = int(np.argmax(np.abs(step) / tolerance))
+            raise NotConvergedError(
+                f"fit on {machine.name} did not converge in {max_iterations} Gauss-Newton steps: "
+                f"the last step of {names[worst]} was {step[worst]:.3g} "
+                f"{'rad' if is_angle(names[worst]) else 'm'} (stopping rule "
+                f"{tolerance[worst]:g}); the plan's condition number is "
+                f"{_figures(lin, names)['condition']:.3g}. Give a prior nearer the solution, or "
+                "check the readings' signs and units (m)")
+    errors = prior.with_parameters(dict(zip(names, values.tolist(), strict=True)))
+    residual = obs.values - plan.readings(errors)
+    figures = _figures(lin, names)
+    dof = len(obs) - lin.rank
+    chi = math.sqrt(float(np.sum((residual / obs.sigma) ** 2)) / dof) if dof > 0 else math.nan
+    return Estimate(**figures, values=frozen(values),
+                    residual_rms=float(np.sqrt(np.mean(residual ** 2))),
+                    normalised_residual_rms=chi, iterations=iterations, errors=errors)
+
+
+def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *,
+                 prior=None, points=None) -> PlanQuality:
+    """What a measurement plan can identify, before any reading is taken.
+
+    The same figures as `fit` reports (one function computes both), from the Jacobian at
+    the prior: per-parameter standard uncertainty (the plan's valuation of each parameter),
+    rank, condition, singular values and the unidentifiable parameters and combinations.
+
+    Parameters
+    ----------
+    machine : Machine
+    q : array_like, shape (N, n_axes)
+        Axis values of the readings, m and rad.
+    frames : str or sequence of str
+        The frame of the observed point: one for all readings, or one per reading.
+    directions : array_like, shape (N, 3)
+        Sensing directions in the workpiece frame.
+    params : sequence of str
+        The parameters to identify.
+    sigma : float or array_like, shape (N,)
+        Standard uncertainty of the readings, m.
+    prior : ErrorModel or mapping of str to float, optional
+        Where to linearise (default: the nominal machine).
+    points : array_like, shape (3,) or (N, 3), optional
+        Point coordinates in their frames, m (default the frame origins).
+
+    Returns
+    -------
+    PlanQuality
+    """
+    prior = _prior(machine, prior)
+    names = _names(machine, params, prior)
+    obs = Observations(q, 0.0, directions, sigma, frames, points)
+    plan = _Plan(machine, obs, names)
+    return PlanQuality(**_figures(_linearise(plan.jacobian(prior), obs.sigma), names))

@@ -1,0 +1,240 @@
+"""Observations: what displacement sensors read, as the input of `machinesim.identification.fit`.
+
+An observation is one reading: how far a point fixed in a machine frame (the centre of a ball
+on the tool, a probe tip) lies from its nominal place, relative to the workpiece, along a
+unit direction of the workpiece frame, with its standard uncertainty. `Observation` is one,
+`Observations` a batch held as arrays; `observations` builds a batch.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from machinesim.arrays import frozen
+from machinesim.exceptions import InputError
+
+__all__ = ["Observation", "Observations", "is_angle", "observations"]
+
+
+def is_angle(name: str) -> bool:
+    """True for a parameter in rad (rotations, ISO 230 symbols E[ABC]..), False for m."""
+    if name.startswith("tool."):
+        return name[5:].startswith("r")
+    if name.startswith("workpiece."):
+        return name[10:] in ("alpha", "beta", "gamma")
+    parts = name.split(".")
+    return len(parts) == 3 and len(parts[2]) > 1 and parts[2][1] in "ABC"
+
+
+@dataclass(frozen=True, eq=False)
+class Observation:
+    """One displacement reading.
+
+    Parameters
+    ----------
+    q : array_like, shape (n_axes,)
+        Axis values at the reading, m and rad, in `Machine.axes` order.
+    value : float
+        The reading, m: the displacement of the point from its nominal place (its position
+        on the nominal machine at ``q``), relative to the workpiece, along `direction`.
+    direction : array_like, shape (3,)
+        Sensing direction in the workpiece frame; normalised here, zero refused.
+    sigma : float
+        Standard uncertainty of the reading, m, > 0.
+    frame : str
+        The machine frame the point is fixed in (``tool_tip``, ``probe_tip``, ...).
+    point : array_like, shape (3,)
+        Coordinates of the point in ``frame``, m (default its origin).
+    """
+
+    q: np.ndarray
+    value: float
+    direction: np.ndarray
+    sigma: float
+    frame: str = "tool_tip"
+    point: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def __post_init__(self) -> None:
+        for key, want in (("q", 1), ("value", 0), ("direction", 1), ("sigma", 0),
+                          ("point", 1)):
+            if np.ndim(getattr(self, key)) != want:
+                raise InputError(f"expected {key} of one observation as "
+                                 f"{'a vector' if want else 'a number'}, got shape "
+                                 f"{np.shape(getattr(self, key))}", key=key)
+        batch = Observations(self.q, self.value, self.direction, self.sigma, self.frame,
+                             self.point)
+        object.__setattr__(self, "q", frozen(batch.q[0]))
+        object.__setattr__(self, "value", float(batch.values[0]))
+        object.__setattr__(self, "direction", frozen(batch.directions[0]))
+        object.__setattr__(self, "sigma", float(batch.sigma[0]))
+        object.__setattr__(self, "point", frozen(batch.points[0]))
+
+
+@dataclass(frozen=True, eq=False)
+class Observations:
+    """Many displacement readings as arrays (what `fit` works on).
+
+    Every argument is either one value for all readings or one per reading; the number of
+    readings N comes from those given per reading. See `Observation` for the meaning.
+
+    Parameters
+    ----------
+    q : array_like, shape (n_axes,) or (N, n_axes)
+        Axis values, m and rad.
+    values : float or array_like, shape (N,)
+        Readings, m.
+    directions : array_like, shape (3,) or (N, 3)
+        Sensing directions in the workpiece frame; normalised here, zero refused.
+    sigma : float or array_like, shape (N,)
+        Standard uncertainties, m, > 0.
+    frames : str or sequence of str, length N
+        Machine frame of each point.
+    points : array_like, shape (3,) or (N, 3), optional
+        Point coordinates in their frame, m (default the frame origins).
+
+    Attributes
+    ----------
+    q : ndarray, shape (N, n_axes)
+    values, sigma : ndarray, shape (N,)
+    directions, points : ndarray, shape (N, 3)
+        Read-only; directions of unit length.
+    frames : tuple of str, length N
+    """
+
+    q: np.ndarray
+    values: np.ndarray
+    directions: np.ndarray
+    sigma: np.ndarray
+    frames: tuple[str, ...] | str = "tool_tip"
+    points: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        q = np.asarray(self.q, dtype=np.float64)
+        values = np.asarray(self.values, dtype=np.float64)
+        directions = np.asarray(self.directions, dtype=np.float64)
+        sigma = np.asarray(self.sigma, dtype=np.float64)
+        points = np.zeros(3) if self.points is None else np.asarray(self.points, np.float64)
+        frames = self.frames
+        if q.ndim not in (1, 2) or q.shape[-1] == 0:
+            raise InputError(f"expected axis values of shape (n_axes,) or (N, n_axes), got "
+                             f"{q.shape}", key="q")
+        sizes = {"q": q.shape[0] if q.ndim == 2 else None,
+                 "values": values.shape[0] if values.ndim == 1 else None,
+                 "directions": directions.shape[0] if directions.ndim == 2 else None,
+                 "sigma": sigma.shape[0] if sigma.ndim == 1 else None,
+                 "frames": None if isinstance(frames, str) else len(frames),
+                 "points": points.shape[0] if points.ndim == 2 else None}
+        given = {k: v for k, v in sizes.items() if v is not None}
+        n = max(given.values(), default=1)
+        bad = {k: v for k, v in given.items() if v != n}
+        if bad:
+            listed = ", ".join(f"{k} {v}" for k, v in given.items())
+            raise InputError(f"per-reading inputs disagree on the number of readings ({listed});"
+                             " expected one value for all or one per reading",
+                             key=next(iter(bad)))
+        for key, arr, width in (("directions", directions, 3), ("points", points, 3)):
+            if arr.shape[-1:] != (width,) or arr.ndim > 2:
+                raise InputError(f"expected {key} of shape (3,) or (N, 3), got {arr.shape}",
+                                 key=key)
+        for key, arr in (("values", values), ("sigma", sigma)):
+            if arr.ndim > 1:
+                raise InputError(f"expected {key} as a number or shape (N,), got {arr.shape}",
+                                 key=key)
+        q = np.broadcast_to(q, (n, q.shape[-1]))
+        values = np.broadcast_to(values, (n,))
+        directions = np.broadcast_to(directions, (n, 3))
+        sigma = np.broadcast_to(sigma, (n,))
+        points = np.broadcast_to(points, (n, 3))
+        frames = (frames,) * n if isinstance(frames, str) else tuple(frames)
+        for key, arr in (("q", q), ("values", values), ("directions", directions),
+                         ("points", points)):
+            rows = np.flatnonzero(~np.isfinite(arr.reshape(n, -1)).all(axis=1))
+            if rows.size:
+                raise InputError(f"reading {rows[0]}: {key} {arr[rows[0]].tolist()} has NaN "
+                                 "or inf; expected finite numbers (SI)", key=key)
+        norms = np.linalg.norm(directions, axis=1)
+        rows = np.flatnonzero(~(norms > 0.0))
+        if rows.size:
+            raise InputError(f"reading {rows[0]}: direction {directions[rows[0]].tolist()} is "
+                             "zero; expected a non-zero vector (it is normalised)",
+                             key="directions")
+        rows = np.flatnonzero(~((sigma > 0.0) & np.isfinite(sigma)))
+        if rows.size:
+            raise InputError(f"reading {rows[0]}: sigma {float(sigma[rows[0]])!r} m; expected a "
+                             "finite standard uncertainty > 0 (m)", key="sigma")
+        wrong = [f for f in frames if not isinstance(f, str)]
+        if wrong:
+            raise InputError(f"expected frame names (str), got {wrong[0]!r}", key="frames")
+        object.__setattr__(self, "q", frozen(q))
+        object.__setattr__(self, "values", frozen(values))
+        object.__setattr__(self, "directions", frozen(directions / norms[:, None]))
+        object.__setattr__(self, "sigma", frozen(sigma))
+        object.__setattr__(self, "frames", frames)
+        object.__setattr__(self, "points", frozen(points))
+
+    def __len__(self) -> int:
+        return self.values.shape[0]
+
+    def __getitem__(self, i: int) -> Observation:
+        return Observation(self.q[i], self.values[i], self.directions[i], self.sigma[i],
+                           self.frames[i], self.points[i])
+
+    def __iter__(self):
+        return (self[i] for i in range(len(self)))
+
+    @classmethod
+    def of(cls, items: Observations | Observation | Iterable) -> Observations:
+        """One batch from an `Observations`, an `Observation`, or a sequence of either."""
+        if isinstance(items, Observations):
+            return items
+        if isinstance(items, Observation):
+            items = (items,)
+        parts = []
+        for item in items:
+            if isinstance(item, Observation):
+                parts.append(Observations(item.q, item.value, item.direction, item.sigma,
+                                          item.frame, item.point))
+            elif isinstance(item, Observations):
+                parts.append(item)
+            else:
+                raise InputError(f"expected Observation or Observations, got "
+                                 f"{type(item).__name__}", key="observations")
+        if not parts:
+            raise InputError("expected at least one observation, got none", key="observations")
+        widths = {p.q.shape[1] for p in parts}
+        if len(widths) > 1:
+            raise InputError(f"observations have axis values of different lengths "
+                             f"{sorted(widths)}; expected one machine's n_axes", key="q")
+        return cls(np.concatenate([p.q for p in parts]),
+                   np.concatenate([p.values for p in parts]),
+                   np.concatenate([p.directions for p in parts]),
+                   np.concatenate([p.sigma for p in parts]),
+                   tuple(f for p in parts for f in p.frames),
+                   np.concatenate([p.points for p in parts]))
+
+
+def observations(q, directions, values, sigma, *, frame="tool_tip",
+                 point=None) -> Observations:
+    """Readings as one `Observations` batch (each argument one for all, or one per reading).
+
+    Parameters
+    ----------
+    q : array_like, shape (n_axes,) or (N, n_axes)
+        Axis values, m and rad.
+    directions : array_like, shape (3,) or (N, 3)
+        Sensing directions in the workpiece frame (normalised here).
+    values : float or array_like, shape (N,)
+        Readings, m.
+    sigma : float or array_like, shape (N,)
+        Standard uncertainties, m.
+    frame : str or sequence of str
+        Frame of the point(s).
+    point : array_like, shape (3,) or (N, 3), optional
+        Point coordinates in the frame, m.
+    """
+    return Observations(q, values, directions, sigma, frame, point)
+
+

@@ -1,0 +1,385 @@
+"""Generic identification (machinesim.identification.fit) on an R-test plan of robonano_ui.
+
+The plan follows the R-test of ISO 10791-6: a ball on the tool, read by three displacement
+sensors along the workpiece X, Y and Z, at poses that turn A, B and C together while X, Y
+and Z move. Two balls are read at each pose (a two-length R-test): one centred on the tool
+edge, one 40 mm up the tool axis, whose lever is what shows tilts of the tool and of the A
+axis line. The tests make the readings from a truth ErrorModel with `Machine.frame_pose`
+(the truth minus the nominal machine, projected on the directions); `fit` only receives the
+readings.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from machinesim.errors import ErrorModel
+from machinesim.exceptions import ErrorModelError, InputError
+from machinesim.identification.fit import (
+    Combination,
+    NotConvergedError,
+    Observation,
+    Observations,
+    fit,
+    observations,
+    plan_quality,
+)
+from machinesim.machines import load_machine
+from machinesim.sampling import random_axis_values, random_errors
+
+DEG = np.pi / 180
+UM = 1e-6
+URAD = 1e-6
+MACHINE = load_machine("robonano_ui")
+SETTING = ("tool.x", "tool.y", "tool.z", "tool.rx", "tool.ry", "tool.rz",
+           "workpiece.x", "workpiece.y", "workpiece.z",
+           "workpiece.alpha", "workpiece.beta", "workpiece.gamma")
+LOCATION = tuple(n for n in MACHINE.parameter_names()
+                 if n.startswith(("location.A.", "location.B.", "location.C.")))
+FULL = SETTING + LOCATION
+#: No reading of points on the tool sees these 7 directions (`test_full_set_...` finds them):
+#: the tool's rotation about its own axis; a rotary axis' zero offset, which a rotation of the
+#: tool (A; B with the A line's tilt) or workpiece setting (C) undoes; and a shift of
+#: everything along X, Y or Z. A lab fixes a datum, one parameter per direction, by not
+#: fitting it: here the zero of each rotary axis, the C axis line as the XY origin and the B
+#: axis line as the Z origin.
+DATUM = ("tool.rz", "location.A.EC0A", "location.B.EB0B", "location.C.EC0C",
+         "location.C.EX0C", "location.C.EY0C", "location.B.EZ0B")
+FITTED = tuple(n for n in FULL if n not in DATUM)
+BALLS = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.04]])
+SIGMA = 50e-9
+
+
+def r_test_plan(poses_deg, seed=0):
+    """Axis values, directions and ball centres (6 readings per pose: 2 balls x X, Y, Z).
+
+    ``poses_deg`` are (A, B, C) in degrees; X, Y, Z are drawn within the travel.
+    """
+    rng = np.random.default_rng(seed)
+    abc = np.asarray(poses_deg, dtype=float) * DEG
+    xyz = rng.uniform([-0.05, -0.03, -0.01], [0.05, 0.03, 0.05], (len(abc), 3))
+    q = np.repeat(np.column_stack([xyz, abc]), 6, axis=0)
+    points = np.tile(np.repeat(BALLS, 3, axis=0), (len(abc), 1))
+    directions = np.tile(np.eye(3), (2 * len(abc), 1))
+    return q, directions, points
+
+
+#: 12 poses: A at four angles, B at three, C at four, each combination of A and B once.
+PLAN = r_test_plan([(a, b, c) for (a, b), c in zip(
+    [(a, b) for a in (0, 90, 180, 270) for b in (-45, 0, 45)], [0, 90, 180, 270] * 3,
+    strict=True)])
+
+
+def read(truth, q, directions, points, frame="tool_tip"):
+    """What the sensors read: the point's displacement from its nominal place, along u."""
+    points = np.broadcast_to(points, (len(q), 3))
+
+    def place(errors):
+        pose = MACHINE.frame_pose(frame, q, errors)
+        return pose[:, :3, 3] + np.einsum("nij,nj->ni", pose[:, :3, :3], points)
+    return np.einsum("ni,ni->n", directions, place(truth) - place(None))
+
+
+def random_truth(rng, names, length=20 * UM, angle=50 * URAD, tool=200 * UM,
+                 tool_angle=1e-3, workpiece=50 * UM, workpiece_angle=5e-3):
+    """Errors on ``names`` only (normal, standard deviations by family), zero elsewhere."""
+    values = {}
+    for name in names:
+        rotation = name.split(".")[-1] in ("rx", "ry", "rz", "alpha", "beta", "gamma") or (
+            name.startswith("location") and name.split(".")[-1][1] in "ABC")
+        if name.startswith("tool."):
+            values[name] = rng.normal(0, tool_angle if rotation else tool)
+        elif name.startswith("workpiece."):
+            values[name] = rng.normal(0, workpiece_angle if rotation else workpiece)
+        else:
+            values[name] = rng.normal(0, angle if rotation else length)
+    return ErrorModel().with_parameters(values)
+
+
+def assert_recovered(estimate, truth, names):
+    """1e-6 relative or 1e-12 (m or rad) absolute: far above the float64 floor of the fit
+    (its steps bottom out at ~1e-16 m and ~1e-15 rad), far below anything a plan with 50 nm
+    sensors resolves."""
+    values = truth.parameters()
+    for name in names:
+        got = estimate.values[estimate.names.index(name)]
+        want = values.get(name, 0.0)
+        assert abs(got - want) <= max(1e-6 * abs(want), 1e-12), (name, got, want)
+
+
+def test_datum_fixed_r_test_identifies_every_parameter():
+    rng = np.random.default_rng(1)
+    truth = random_truth(rng, FITTED)
+    q, u, p = PLAN
+    estimate = fit(MACHINE, observations(q, u, read(truth, q, u, p), SIGMA, point=p), FITTED)
+    assert estimate.rank == len(FITTED) == 20
+    assert estimate.unidentifiable == ()
+    assert np.all(np.isfinite(estimate.std))
+    assert estimate.condition < 30  # measured 13.5 on this plan
+    assert_recovered(estimate, truth, FITTED)
+    assert estimate.residual_rms < 1e-15
+    assert estimate.errors.parameters()["tool.x"] == estimate.values[0]
+    report = estimate.as_dict()
+    assert set(report) == set(FITTED)
+    assert report["tool.y"]["std"] == estimate.std[1]
+    # the tool and workpiece settings were drawn at 200 um and 5 mrad: Gauss-Newton needs
+    # a few steps, then converges quadratically
+    assert estimate.iterations <= 6
+
+
+def test_full_set_names_the_symmetries_and_recovers_the_rest():
+    rng = np.random.default_rng(2)
+    truth = random_truth(rng, FULL)
+    q, u, p = PLAN
+    estimate = fit(MACHINE, observations(q, u, read(truth, q, u, p), SIGMA, point=p), FULL)
+    assert estimate.rank == len(FULL) - 7
+    combinations = estimate.combinations
+    assert len(combinations) == 7
+    members = [set(c.names) for c in combinations]
+
+    def named(*names):
+        return any(set(names) <= m for m in members)
+
+    # the seven symmetries of tool-ball readings (see DATUM)
+    assert {"tool.rz"} in members
+    assert named("location.A.EC0A", "tool.x", "tool.y")
+    assert named("location.B.EB0B", "location.A.EB0A", "tool.ry")
+    assert named("location.C.EC0C", "workpiece.gamma")
+    assert named("tool.x", "workpiece.x", "location.A.EX0A", "location.B.EX0B",
+                 "location.C.EX0C")
+    assert named("tool.y", "workpiece.y", "location.A.EY0A", "location.C.EY0C")
+    assert named("tool.z", "workpiece.z", "location.B.EZ0B")
+    # the tilts of the B and C axis lines take part in none of them
+    tilts = ("location.B.EA0B", "location.B.EC0B", "location.C.EA0C", "location.C.EB0C")
+    assert set(tilts) <= set(estimate.identifiable)
+    assert_recovered(estimate, truth, estimate.identifiable)
+    # A parameter no reading sees keeps the prior's value exactly, and its std is NaN.
+    i = FULL.index("tool.rz")
+    assert estimate.values[i] == 0.0 and np.isnan(estimate.std[i])
+    assert "tool.rz" in estimate.unidentifiable
+    # Along the null space the estimate keeps the prior's part: estimate minus prior (zero)
+    # is orthogonal (SI) to every named combination (measured 3e-11 of the norms; the
+    # coefficients dropped from a combination, below 1e-6 of its largest, bound it).
+    values = dict(zip(FULL, estimate.values, strict=True))
+    for c in combinations:
+        scale = np.linalg.norm(c.coefficients) * np.linalg.norm(estimate.values)
+        assert abs(c.value(values)) <= 1e-6 * scale, str(c)
+    # So a combination's own value (coefficients . truth) is exactly what the readings
+    # cannot fix: along an exact linear symmetry (the shifts, tool.rz) the estimate holds
+    # the prior's, and the rest is fixed; the zero-offset symmetries are curved (each turns
+    # the settings it is traded against), so not even that is linear. What is guaranteed is
+    # that the estimate lies on the truth's orbit: it predicts every reading of a ball on
+    # the tool axis, at any pose and along any direction, as the truth does; checked at
+    # fresh poses (to 1e-12 m; measured 1e-16 m). The check can fail: a ball off the tool
+    # axis would see tool.rz, and there the two models differ by micrometres.
+    check_indistinguishable(estimate.errors, truth)
+    q_new = random_axis_values(MACHINE, np.random.default_rng(8), 20)
+    off_axis = np.broadcast_to([0.01, 0.0, 0.02], (20, 3))
+    u_new = np.tile([1.0, 0.0, 0.0], (20, 1))
+    miss = read(estimate.errors, q_new, u_new, off_axis) - read(truth, q_new, u_new, off_axis)
+    assert np.max(np.abs(miss)) > 1 * UM
+    # Fixing a datum makes the same readings fully identifiable (rank 20), on the same orbit.
+    datum = fit(MACHINE, observations(q, u, read(truth, q, u, p), SIGMA, point=p), FITTED)
+    assert datum.rank == len(FITTED) and datum.unidentifiable == ()
+    check_indistinguishable(datum.errors, truth)
+
+
+def check_indistinguishable(estimate, truth):
+    rng = np.random.default_rng(7)
+    q = random_axis_values(MACHINE, rng, 50, fraction=0.9)
+    u = rng.normal(size=(50, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    for ball in BALLS:
+        points = np.broadcast_to(ball, (50, 3))
+        np.testing.assert_allclose(read(estimate, q, u, points), read(truth, q, u, points),
+                                   rtol=0, atol=1e-12)
+
+
+def test_reported_std_matches_the_scatter_of_noisy_fits():
+    rng = np.random.default_rng(1)
+    truth = random_truth(rng, FITTED)
+    q, u, p = PLAN
+    clean = read(truth, q, u, p)
+    noise = np.random.default_rng(2024)
+    # A lab recalibrating starts from its previous calibration: one noisy fit from no prior,
+    # then the 200 trials from it (3 Gauss-Newton steps each instead of 4: this test's time).
+    previous = fit(MACHINE, observations(q, u, clean + noise.normal(0, SIGMA, len(q)), SIGMA,
+                                         point=p), FITTED)
+    estimates, stds = [], []
+    for _ in range(200):
+        readings = clean + noise.normal(0, SIGMA, len(q))
+        estimate = fit(MACHINE, observations(q, u, readings, SIGMA, point=p), FITTED,
+                       prior=previous.errors)
+        estimates.append(estimate.values)
+        stds.append(estimate.std)
+    estimates, stds = np.array(estimates), np.array(stds)
+    want = np.array([truth.parameters().get(n, 0.0) for n in FITTED])
+    # 200 trials give the sample std to ~5 % (1 / sqrt(2 * 199)): 20 % is 4 of those
+    np.testing.assert_allclose(estimates.std(axis=0, ddof=1) / stds.mean(axis=0), 1.0, atol=0.2)
+    z = (estimates - want) / stds
+    assert abs(z.mean()) < 0.15
+    assert abs(z.std() - 1.0) < 0.2
+
+
+def xy_plan():
+    """Tool vertical (A = B = 0), C at 10 angles, readings along workpiece X and Y only."""
+    rng = np.random.default_rng(3)
+    n = 10
+    xyz = rng.uniform([-0.05, -0.03, -0.01], [0.05, 0.03, 0.05], (n, 3))
+    q = np.column_stack([xyz, np.zeros((n, 2)), np.arange(n) * 36 * DEG])
+    return np.repeat(q, 2, axis=0), np.tile(np.eye(3)[:2], (n, 1))
+
+
+def test_a_plan_that_cannot_see_a_parameter_names_it():
+    # location.C.EZ0C would move the C line along itself: the machine refuses that symbol.
+    # What XY readings cannot see is the workpiece's Z: at the nominal machine its column is
+    # exactly zero.
+    names = ("workpiece.x", "workpiece.y", "workpiece.z", "workpiece.alpha", "workpiece.beta",
+             "workpiece.gamma", "location.C.EX0C", "location.C.EY0C", "location.C.EA0C",
+             "location.C.EB0C")
+    q, u = xy_plan()
+    before = plan_quality(MACHINE, q, "tool_tip", u, names, SIGMA)
+    assert before.rank == len(names) - 1
+    assert "workpiece.z" in before.unidentifiable
+    assert [str(c) for c in before.combinations] == ["workpiece.z"]
+    assert np.isnan(before.std[2]) and np.all(np.isfinite(np.delete(before.std, 2)))
+    truth = ErrorModel().with_parameters({
+        "workpiece.x": 30 * UM, "workpiece.y": -20 * UM, "workpiece.z": 10 * UM,
+        "workpiece.alpha": 2e-3, "workpiece.beta": -1e-3, "workpiece.gamma": 4e-3,
+        "location.C.EX0C": 5 * UM, "location.C.EY0C": -7 * UM,
+        "location.C.EA0C": 30 * URAD, "location.C.EB0C": -20 * URAD})
+    estimate = fit(MACHINE, observations(q, u, read(truth, q, u, np.zeros(3)), SIGMA), names)
+    assert estimate.rank == len(names) - 1
+    assert "workpiece.z" in estimate.unidentifiable
+    # Tilted by alpha and beta, the workpiece's Z leans into X and Y: at the estimate it is
+    # one combination with workpiece.x and .y (which then lose their own identifiability)
+    (c,) = estimate.combinations
+    assert set(c.names) == {"workpiece.x", "workpiece.y", "workpiece.z"}
+    assert c.coefficients[c.names.index("workpiece.z")] == 1.0
+    # it stays near the prior (0) instead of absorbing the readings: the combination's
+    # coefficients on x and y (~alpha, beta) are what it costs them
+    assert abs(estimate.values[2]) < 0.1 * UM
+    assert_recovered(estimate, truth, names[3:])
+    # plan_quality linearised where the fit ended gives the fit's figures
+    after = plan_quality(MACHINE, q, "tool_tip", u, names, SIGMA, prior=estimate.errors)
+    assert after.rank == estimate.rank
+    assert after.condition == pytest.approx(estimate.condition, rel=1e-9)
+    r = estimate.rank
+    np.testing.assert_allclose(after.singular_values[:r], estimate.singular_values[:r],
+                               rtol=1e-9)
+    assert np.all(after.singular_values[r:] < 1e-8 * after.singular_values[0])
+    assert [str(x) for x in after.unidentifiable] == [str(x) for x in estimate.unidentifiable]
+
+
+def test_large_setting_errors_converge():
+    rng = np.random.default_rng(4)
+    small = dict(random_truth(rng, FITTED).parameters())
+    large = {"workpiece.x": 80 * UM, "workpiece.y": -80 * UM, "workpiece.z": 80 * UM,
+             "workpiece.alpha": 1.0 * DEG, "workpiece.beta": -0.5 * DEG,
+             "workpiece.gamma": 2.0 * DEG, "tool.x": 300 * UM, "tool.y": -450 * UM,
+             "tool.z": 250 * UM, "tool.rx": 0.3 * DEG, "tool.ry": -0.2 * DEG}
+    truth = ErrorModel().with_parameters(small | large)
+    q, u, p = PLAN
+    estimate = fit(MACHINE, observations(q, u, read(truth, q, u, p), SIGMA, point=p), FITTED)
+    assert estimate.rank == len(FITTED)
+    assert_recovered(estimate, truth, FITTED)
+    assert estimate.iterations <= 6  # measured 4
+
+
+@pytest.mark.parametrize(("name", "frame"), [("robonano_ui", "tool_tip"),
+                                             ("robonano_a0ib", "probe_tip"),
+                                             ("grooving_4axis", "tool_mount")])
+def test_error_jacobian_of_a_point_matches_central_differences(name, frame):
+    machine = load_machine(name)
+    rng = np.random.default_rng(12)
+    errors = random_errors(machine, rng)
+    every = machine.parameter_names(errors)
+    # every setting and location parameter, and one component entry in 25 (the time)
+    names = [n for i, n in enumerate(every) if not n.startswith("component") or i % 25 == 0]
+    q = random_axis_values(machine, rng, 3)
+    point = rng.normal(0, 0.05, (3, 3))
+    jac = machine.error_jacobian(q, errors, names, frame=frame, point=point)
+    origin = machine.error_jacobian(q, errors, names, frame=frame)
+    assert jac.shape == (3, 6, len(names))
+    np.testing.assert_array_equal(jac[:, 3:], origin[:, 3:])  # rotation rows: the frame's
+    values = errors.parameters()
+
+    def place(model):
+        pose = machine.frame_pose(frame, q, model)
+        return pose[:, :3, 3] + np.einsum("nij,nj->ni", pose[:, :3, :3], point)
+
+    h = 1e-6
+    for c, p in enumerate(names):
+        base = values.get(p, 0.0)
+        fd = (place(errors.with_parameters({p: base + h}))
+              - place(errors.with_parameters({p: base - h}))) / (2 * h)
+        # truncation h^2 / 6 * (third derivative, ~ the 1 m lever) ~ 2e-13, round-off
+        # 1e-16 m / 1e-6 ~ 1e-10 per unit: 1e-8 holds with margin, far below the
+        # 1e-3 .. 1 size of the entries (as tests/test_kinematics.py)
+        np.testing.assert_allclose(jac[:, :3, c], fd, rtol=0, atol=1e-8, err_msg=p)
+    # one point for all rows, and one configuration, give the same rows
+    single = machine.error_jacobian(q[1], errors, names, frame=frame, point=point[1])
+    np.testing.assert_array_equal(single, jac[1])
+    shared = machine.error_jacobian(q, errors, names, frame=frame, point=point[0])
+    np.testing.assert_array_equal(shared[0], jac[0])
+    with pytest.raises(InputError, match=r"point coordinates \(m\) of shape \(3,\) or \(3, 3\)"):
+        machine.error_jacobian(q, errors, names, frame=frame, point=np.zeros((2, 3)))
+    with pytest.raises(InputError, match="frame 'nowhere' is not on"):
+        machine.error_jacobian(q, errors, names, frame="nowhere")
+
+
+def test_observations_as_objects_or_batches_agree():
+    truth = ErrorModel().with_parameters({"workpiece.x": 3 * UM, "location.C.EX0C": 2 * UM})
+    q, u = xy_plan()
+    values = read(truth, q, u, np.zeros(3))
+    batch = observations(q, 2 * u, values, SIGMA)
+    np.testing.assert_array_equal(batch.directions, u)  # normalised
+    singles = [Observation(q[i], values[i], u[i], SIGMA) for i in range(len(values))]
+    assert singles[3].frame == "tool_tip" and singles[3].point.tolist() == [0.0, 0.0, 0.0]
+    names = ["workpiece.x", "location.C.EX0C"]
+    a, b = fit(MACHINE, batch, names), fit(MACHINE, singles, names)
+    np.testing.assert_array_equal(a.values, b.values)
+    assert Observations.of([batch[0], batch]).q.shape == (21, 6)
+    assert len(batch) == 20 and batch[5].value == values[5]
+    with pytest.raises(ValueError, match="read-only"):
+        batch.values[0] = 1.0
+    assert str(Combination(("a", "b", "c"), [1.0, -0.5, 1e-5])) == "a - 0.5*b + 1e-05*c"
+    assert str(Combination(("a", "b"), [-0.25, 1.0])) == "-0.25*a + b"
+
+
+def test_bad_input_is_refused_with_the_value_named():
+    q, u = xy_plan()
+    values = np.zeros(len(q))
+    with pytest.raises(InputError, match=r"reading 2: direction \[0.0, 0.0, 0.0\] is zero"):
+        observations(q, np.where(np.arange(len(q))[:, None] == 2, 0.0, u), values, SIGMA)
+    with pytest.raises(InputError, match=r"reading 0: sigma -5e-08 m; expected a finite"):
+        observations(q, u, values, -SIGMA)
+    with pytest.raises(InputError, match="disagree on the number of readings"):
+        observations(q, u, values[:5], SIGMA)
+    with pytest.raises(ErrorModelError, match="unknown error parameter 'location.C.EZ0C'"):
+        fit(MACHINE, observations(q, u, values, SIGMA), ["workpiece.x", "location.C.EZ0C"])
+    with pytest.raises(InputError, match="'workpiece.x' is listed more than once"):
+        fit(MACHINE, observations(q, u, values, SIGMA), ["workpiece.x", "workpiece.x"])
+    with pytest.raises(InputError, match=r"expected axis values of shape \(N, 6\), got \(20, 5\)"):
+        fit(MACHINE, observations(q[:, :5], u, values, SIGMA), ["workpiece.x"])
+    with pytest.raises(InputError, match="frame 'probe_tip' is not on robonano_ui"):
+        plan_quality(MACHINE, q, "probe_tip", u, ["workpiece.x"], SIGMA)
+    with pytest.raises(InputError, match="expected a sequence of parameter names"):
+        fit(MACHINE, observations(q, u, values, SIGMA), "workpiece.x")
+    truth = ErrorModel().with_parameters({"workpiece.gamma": 2 * DEG})
+    with pytest.raises(NotConvergedError, match="did not converge in 1 Gauss-Newton steps"):
+        fit(MACHINE, observations(q, u, read(truth, q, u, np.zeros(3)), SIGMA),
+            ["workpiece.gamma"], max_iterations=1)
+
+
+def test_the_documented_example_runs(capsys):
+    text = (Path(__file__).parents[1] / "docs" / "identification.md").read_text()
+    code = re.search(r"```python\n(.*?)```", text, re.S).group(1)
+    exec(compile(code, "docs/identification.md", "exec"), {})
+    out = capsys.readouterr().out
+    assert "rank 6" in out and "unidentifiable: []" in out
+    assert "tool.x        120.0000 um" in out
