@@ -188,7 +188,7 @@ def test_planer_edge_swings_on_its_arm_with_the_setting_error():
     At tool angle theta the edge sits at y = e cos(theta) + r sin(theta),
     z = r0 + e sin(theta) - r cos(theta) in the workpiece frame (A axis at height r0 = 120.5
     mm over the origin), so the depth grows by e sin(theta) + r (1 - cos(theta)) -
-    derived in docs/procedures/seed000.md.
+    derived in docs/procedures/tool_rotation_arm.md.
     """
     machine = load_machine("planer_4axis")
     r0, r, e = 120.5 * MM, 120.555 * MM, -0.178 * MM

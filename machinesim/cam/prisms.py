@@ -1,0 +1,202 @@
+"""Test pieces of V grooves cut at set tool angles: paper 000's calibration ramps and its
+angle-variable prism pattern, for a planer whose V tool turns about the A axis.
+
+Each piece is a stock block and an NC program for the nominal arm radius r0 (the edge placed
+by `machinesim.identification.tool_rotation_arm.nominal_axes`). They carry no measuring and no
+identification: `machinesim.procedures.tool_rotation_arm` cuts and reads them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.identification.tool_rotation_arm import nominal_axes
+from machinesim.nc import ProgramBuilder
+from machinesim.nc.program import Program
+from machinesim.units import M_PER_MM, M_PER_UM
+
+__all__ = ["STATION_DITHER_M", "CalibrationPlan", "PrismPattern"]
+
+#: Extra depth step between calibration stations (m): 1/9 of the microscope's 1 nm display
+#: step, so the nine stations' apexes fall at nine places on that step and its rounding
+#: averages out (with stations whole um apart, it repeats at every station when the noise
+#: is off).
+STATION_DITHER_M = 1e-9 / 9
+
+
+def _groove_program(r0: float, clearance: float, x_out: float, grooves, feed: float,
+                    number: int) -> Program:
+    """Grooves along +X: ``grooves`` of (angle, edge points (x, y, z)), the first by rapids."""
+    b, current = ProgramBuilder(number), 0.0
+
+    def axes(y, z, angle):
+        Y, Z = nominal_axes(y, z, angle, r0)
+        return {"Y": float(Y), "Z": float(Z), "A": float(angle)}
+
+    for angle, path in grooves:
+        # A turns only with the edge before the stock in x: turning A swings the edge by tens
+        # of mm on its arm, far below a straight-line interpolation of Y and Z.
+        b.rapid(Z=float(nominal_axes(0.0, clearance, current, r0)[1])).rapid(X=x_out)
+        (x0, y0, z0), current = path[0], angle
+        b.rapid(**axes(y0, clearance, angle)).rapid(X=x0).rapid(Z=axes(y0, z0, angle)["Z"])
+        for x, y, z in path[1:]:
+            b.linear(X=x, **axes(y, z, angle), feed_mm_per_min=feed)
+        b.rapid(Z=axes(path[-1][1], clearance, angle)["Z"])
+    return b.rapid(X=x_out).build()
+
+
+def _angles(angles, tool_angle: float, name: str) -> tuple[float, ...]:
+    values = tuple(float(a) for a in angles)
+    limit = (math.pi - tool_angle) / 2.0
+    if not values or not all(math.isfinite(a) and abs(a) < limit for a in values):
+        raise InputError(f"Expected tool angles within +-{math.degrees(limit):g} deg (a flank "
+                         f"of the {math.degrees(tool_angle):g}-deg tool turns flat there), got "
+                         f"{[round(math.degrees(a), 6) for a in values]} deg", key=name)
+    return values
+
+
+@dataclass(frozen=True)
+class CalibrationPlan:
+    """Ramp grooves at the calibration angles (paper 000: 0, 10, 20, 30, 40 deg).
+
+    Attributes
+    ----------
+    angles : tuple of float
+        Tool angles (rad); 0 first for `touch_off`.
+    search : float
+        Half range of each ramp's programmed depth (m): it must exceed the largest
+        ``sqrt(e_ys**2 + (r - r0)**2)`` expected, the length of the edge's offset vector.
+    slope : float
+        Descent of the ramp per unit of x.
+    spacing : float
+        Distance between the ramps' starts along Y (m).
+    station_depths : tuple of float
+        Groove depths (m) at which the microscope reads each groove.
+    origin : (float, float)
+        Corner (x, y) of the stock (m), away from the workpiece origin where the edge starts.
+    tool_angle, clearance, feed_mm_per_min : float
+        Included angle of the V tool (rad), edge clearance over the surface for rapids (m),
+        feed (the paper's 12,000 mm/min).
+    """
+
+    angles: tuple[float, ...] = tuple(math.radians(a) for a in (0, 10, 20, 30, 40))
+    search: float = 0.35 * M_PER_MM
+    slope: float = 0.1
+    spacing: float = 3.0 * M_PER_MM
+    station_depths: tuple[float, ...] = tuple((8 + k) * M_PER_UM + k * STATION_DITHER_M
+                                              for k in range(9))
+    origin: tuple[float, float] = (1.0 * M_PER_MM, 1.0 * M_PER_MM)
+    tool_angle: float = math.pi / 2
+    clearance: float = 1.0 * M_PER_MM
+    feed_mm_per_min: float = 12000.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "angles", _angles(self.angles, self.tool_angle, "angles"))
+        for name in ("search", "slope", "spacing"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise InputError(f"Expected {name} > 0, got {value!r}", key=name)
+        if self.clearance <= self.search:
+            raise InputError(f"Expected a clearance above the search range {self.search:g} m, "
+                             f"got {self.clearance!r}", key="clearance")
+
+    @property
+    def ramp(self) -> tuple[float, float]:
+        """x (m) where the ramps start (edge ``search`` above the surface) and end (below)."""
+        x_a = self.origin[0] + 0.5 * M_PER_MM
+        return x_a, x_a + 2.0 * self.search / self.slope
+
+    def edge(self, k: int, x):
+        """Programmed edge (y, z) (m) of ramp ``k`` at ``x``: down the tool's own axis."""
+        x_a = self.ramp[0]
+        z = self.search - self.slope * (np.asarray(x) - x_a)
+        # Descending along the tilted tool's axis keeps the move in the tool's X-Z plane: the
+        # edge cuts forward, never dragged sideways.
+        y = self.origin[1] + 1.0 * M_PER_MM + k * self.spacing + (self.search - z) * math.tan(
+            self.angles[k])
+        return y, z
+
+    @property
+    def stock(self) -> str:
+        """Stock spec of the calibration block (mm)."""
+        length = (self.ramp[1] - self.origin[0]) / M_PER_MM + 2.0 * self.search / M_PER_MM + 1.0
+        width = len(self.angles) * self.spacing / M_PER_MM + 1.0
+        return (f"block:{length:.6g}x{width:.6g}x1@{self.origin[0] / M_PER_MM:.6g},"
+                f"{self.origin[1] / M_PER_MM:.6g},0")
+
+    def program(self, r0: float, number: int = 1) -> Program:
+        """The calibration program for the nominal arm radius ``r0`` (m)."""
+        x_a, x_b = self.ramp
+        # each ramp leaves the stock climbing the tool axis back at slope 1
+        grooves = [(angle, [(x_a, *self.edge(k, x_a)), (x_b, *self.edge(k, x_b)),
+                            (x_b + 2.0 * self.search, *self.edge(k, x_a))])
+                   for k, angle in enumerate(self.angles)]
+        return _groove_program(r0, self.clearance, self.origin[0] - 0.5 * M_PER_MM, grooves,
+                               self.feed_mm_per_min, number)
+
+
+@dataclass(frozen=True)
+class PrismPattern:
+    """The angle-variable prism pattern (paper 000: 0-20 deg by 1 deg, 10 um deep, 20 um pitch).
+
+    Grooves along +X across the whole stock, one per angle, at increasing Y.
+
+    Attributes
+    ----------
+    angles : tuple of float
+        Tool angle of each groove (rad).
+    depth, pitch : float
+        Programmed apex depth below the surface and groove spacing (m).
+    length, margin : float
+        Stock length along X, and uncut land either side of the pattern along Y (m).
+    origin : (float, float)
+        Corner (x, y) of the stock (m).
+    tool_angle, clearance, feed_mm_per_min : float
+        As in `CalibrationPlan`.
+    """
+
+    angles: tuple[float, ...] = tuple(math.radians(a) for a in range(21))
+    depth: float = 10.0 * M_PER_UM
+    pitch: float = 20.0 * M_PER_UM
+    length: float = 1.0 * M_PER_MM
+    margin: float = 0.3 * M_PER_MM
+    origin: tuple[float, float] = (1.0 * M_PER_MM, 1.0 * M_PER_MM)
+    tool_angle: float = math.pi / 2
+    clearance: float = 1.0 * M_PER_MM
+    feed_mm_per_min: float = 12000.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "angles", _angles(self.angles, self.tool_angle, "angles"))
+        for name in ("depth", "pitch", "length", "margin"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise InputError(f"Expected {name} > 0, got {value!r}", key=name)
+
+    @property
+    def centres(self) -> np.ndarray:
+        """Programmed edge y of each groove (m), shape (n,)."""
+        return self.origin[1] + self.margin + self.pitch * np.arange(len(self.angles))
+
+    @property
+    def width(self) -> float:
+        """Stock width along Y (m)."""
+        return 2.0 * self.margin + self.pitch * (len(self.angles) - 1)
+
+    @property
+    def stock(self) -> str:
+        """Stock spec of the pattern block (mm)."""
+        return (f"block:{self.length / M_PER_MM:.9g}x{self.width / M_PER_MM:.9g}x0.5"
+                f"@{self.origin[0] / M_PER_MM:.9g},{self.origin[1] / M_PER_MM:.9g},0")
+
+    def program(self, r0: float, number: int = 2) -> Program:
+        """The nominal pattern program for the arm radius ``r0`` (m), to be compensated
+        (`machinesim.procedures.tool_rotation_arm.compensate_program`)."""
+        x_in = self.origin[0] - 0.2 * M_PER_MM
+        x_out = self.origin[0] + self.length + 0.2 * M_PER_MM
+        grooves = [(angle, [(x_in, float(y), -self.depth), (x_out, float(y), -self.depth)])
+                   for angle, y in zip(self.angles, self.centres, strict=True)]
+        return _groove_program(r0, self.clearance, x_in, grooves, self.feed_mm_per_min, number)

@@ -1,0 +1,164 @@
+"""Paper 000 replayed: tool setting error e_ys and arm radius r of a 4-axis planer.
+
+Run: ``.venv/bin/python scenarios/tool_rotation_arm.py [--e-ys-um -178] [--r-mm 120.555]
+[--errors FILE.toml] [--noise on|off] [--seed N] [--out reports/tool_rotation_arm]``
+(about 5 s).
+
+The planer_4axis gets the paper's errors (arm radius r = 120.555 mm against the nominal
+120.5 mm, tool setting error e_ys = -0.178 mm: ``tool.y = e_ys``, ``tool.z = -(r - r0)``),
+or those of ``--errors`` with ``--e-ys-um`` / ``--r-mm`` on top when given. The procedure
+(`machinesim.procedures.tool_rotation_arm.ToolRotationArm`) cuts calibration ramp grooves at
+0, 10, 20, 30 and 40 deg, reads them with the lab's laser microscope, fits eq 1 to the depth
+changes, and cuts the angle-variable prism pattern (0-20 deg by 1 deg, 10 um deep, 20 um
+pitch, 90-deg tool) with the edge touched off at 0 deg only (before) and with the program
+rewritten by the identified r and e_ys (after). See docs/procedures/tool_rotation_arm.md.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+import numpy as np
+
+from machinesim import Lab, load_machine
+from machinesim.exceptions import MachineSimError
+from machinesim.experiment import run
+from machinesim.identification.tool_rotation_arm import (
+    arm_radius,
+    height_change,
+    lateral_change,
+)
+from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+from machinesim.report import ReportFolder, injected_errors, scenario_arguments
+from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
+
+PAPER = {"r_mm": 120.555, "e_ys_um": -178.0, "depth_error_before_um": "> 50",
+         "depth_error_after_um": "< 1"}
+UM, MM = M_PER_UM, M_PER_MM
+
+
+def main() -> None:
+    parser = scenario_arguments(__doc__.splitlines()[0], "reports/tool_rotation_arm")
+    parser.add_argument("--e-ys-um", type=float, default=None,
+                        help="injected tool setting error e_ys (tool.y), um (default -178, "
+                        "the paper's)")
+    parser.add_argument("--r-mm", type=float, default=None,
+                        help="injected arm radius r, mm: tool.z = -(r - r0) (default 120.555, "
+                        "the paper's)")
+    args = parser.parse_args()
+    try:
+        report(args)
+    except MachineSimError as error:
+        print(f"error: {error}", file=sys.stderr)
+        sys.exit(2)
+
+
+def report(args) -> None:
+    began = time.perf_counter()
+    machine = load_machine("planer_4axis")
+    r0 = arm_radius(machine)
+    defaults = {"tool.y": PAPER["e_ys_um"] * UM, "tool.z": -(PAPER["r_mm"] * MM - r0)}
+    given = {}
+    if args.e_ys_um is not None:
+        given["tool.y"] = args.e_ys_um * UM
+    if args.r_mm is not None:
+        given["tool.z"] = -(args.r_mm * MM - r0)
+    lab = Lab(machine, injected_errors(args, defaults, given), noise=args.noise == "on",
+              seed=args.seed)
+    injected = lab.reveal().parameters()
+    r, e_ys = r0 - injected["tool.z"], injected["tool.y"]
+    print(f"Paper 000 on planer_4axis (nominal arm r0 = {r0 / MM:.3f} mm): injected r = "
+          f"{r / MM:.3f} mm, e_ys = {e_ys / UM:.1f} um; microscope noise {args.noise}, "
+          f"seed {args.seed}\n")
+
+    procedure = ToolRotationArm()
+    result = run(procedure, lab)
+    out = ReportFolder(args.out)
+    calibration, detail = result.measurements, result.identification.detail
+    out.write_part("calibration.ply", calibration.part)
+    out.write_program("calibration.nc", calibration.program)
+    print(calibration_table(out, calibration.readings, detail.estimate))
+    print(identification_table(out, r0, r, e_ys, detail))
+    print(pattern_tables(out, procedure.pattern, result.evaluation.details))
+    print(paper_table(out, result))
+    print(out.write_result(result))
+    print(f"Report written to {out.path} ({time.perf_counter() - began:.1f} s)")
+
+
+def calibration_table(out, readings, fit) -> str:
+    """Per calibration angle: the measured edge rise and shift from 0 deg against eqs 1-2."""
+    z0, y0 = readings[0].mean("dz")[0], readings[0].mean("dy")[0]
+    rows = []
+    for reading in readings:
+        (dz, dz_sigma), (dy, _) = reading.mean("dz"), reading.mean("dy")
+        rows.append([math.degrees(reading.angle), (dz - z0) / UM, dz_sigma / M_PER_NM,
+                     float(height_change(reading.angle, fit.r, fit.e_ys, fit.r0)) / UM,
+                     (dy - y0) / UM,
+                     float(lateral_change(reading.angle, fit.r, fit.e_ys, fit.r0)) / UM])
+    angles = [row[0] for row in rows]
+    out.plot("calibration_height_change.png",
+             [("measured e_z,total", angles, [row[1] for row in rows]),
+              ("eq 1, fitted", angles, [row[3] for row in rows])],
+             xlabel="tool angle (deg)", ylabel="edge rise from 0 deg (um)",
+             title="Calibration grooves: edge height change (paper 000 eq 1)")
+    return out.write_table(
+        "calibration", ["angle_deg", "e_z_measured_um", "sigma_nm", "e_z_eq1_um",
+                        "e_y_measured_um", "e_y_eq2_um"], rows,
+        title="Calibration ramps: edge rise e_z,total and shift e_y,total from 0 deg", digits=4)
+
+
+def identification_table(out, r0, r, e_ys, detail) -> str:
+    paper, joint, check = detail.estimate, detail.lateral, detail.check
+    rows = [["r (mm)", PAPER["r_mm"], r / MM, paper.r / MM, paper.r_sigma / MM,
+             joint.r / MM, joint.r_sigma / MM, check.r / MM, (check.r - paper.r) / M_PER_NM],
+            ["e_ys (um)", PAPER["e_ys_um"], e_ys / UM, paper.e_ys / UM, paper.e_ys_sigma / UM,
+             joint.e_ys / UM, joint.e_ys_sigma / UM, check.e_ys / UM,
+             (check.e_ys - paper.e_ys) / M_PER_NM]]
+    return out.write_table(
+        "identification", ["quantity", "paper", "injected", "eq 1 fit", "sigma",
+                           "eqs 1+2 fit", "sigma", "fit() check", "check - eq 1 (nm)"], rows,
+        title=f"Identified arm (nominal r0 = {r0 / MM:.3f} mm)", digits=6)
+
+
+def pattern_tables(out, pattern, details) -> str:
+    angles = np.degrees(pattern.angles)
+    series = {state: np.asarray(details[f"pattern_{state}"]["depth_um"])
+              for state in ("before", "after") if "depth_um" in details[f"pattern_{state}"]}
+    out.plot("pattern_depth.png", [(f"apex depth, {name}", angles, depth)
+                                   for name, depth in series.items()],
+             xlabel="tool angle (deg)", ylabel="apex depth (um)",
+             title="Angle-variable prism pattern before and after compensation",
+             hlines=[(pattern.depth / UM, "programmed 10 um")])
+    if "after" in series:
+        out.plot("pattern_depth_after.png",
+                 [("apex depth - 10 um, after", angles, (series["after"] - pattern.depth / UM)
+                   * 1e3)], xlabel="tool angle (deg)", ylabel="apex depth - 10 um (nm)",
+                 title="Prism pattern after compensation: depth deviation")
+    rows = [[float(a)] + [float(series[n][k]) if n in series else math.nan
+                          for n in ("before", "after")] for k, a in enumerate(angles)]
+    return out.write_table("pattern_depths", ["angle_deg", "depth_before_um",
+                                              "depth_after_um"], rows,
+                           title="Apex depth of each prism groove", digits=4)
+
+
+def paper_table(out, result) -> str:
+    """The paper's table (its values are bounds, so they stay text) beside the simulated."""
+    paper = {"depth_error": (PAPER["depth_error_before_um"], PAPER["depth_error_after_um"])}
+    labels = {"depth_error": "depth error (um)",
+              "depth_variation": "depth variation 0-20 deg (um)",
+              "pitch_error": "pitch error (um)"}
+
+    def cell(value):
+        return math.nan if value is None else value
+
+    rows = [[labels[f.name], paper.get(f.name, ("", ""))[0], cell(f.before),
+             paper.get(f.name, ("", ""))[1], cell(f.after)] for f in result.figures]
+    return out.write_table(
+        "pattern", ["angle-variable prisms", "paper before", "before", "paper after", "after"],
+        rows, title="Prism pattern 0-20 deg, 10 um deep, 20 um pitch", digits=4)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,465 @@
+"""Paper 000: arm radius r and tool setting error e_ys of the planer, from microscope readings
+(`machinesim.identification.tool_rotation_arm`, `machinesim.procedures.tool_rotation_arm`)."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from machinesim import ErrorModel, Lab, ToolSetting, load_machine
+from machinesim.cam.prisms import CalibrationPlan, PrismPattern
+from machinesim.cutting import cut
+from machinesim.exceptions import InputError
+from machinesim.experiment import run
+from machinesim.identification import tool_rotation_arm as arm
+from machinesim.metrology import Microscope, fit_apexes
+from machinesim.procedures import tool_rotation_arm as procedure
+from machinesim.procedures.tool_rotation_arm import (
+    AngleReading,
+    ToolRotationArm,
+    compensate_program,
+    measure_calibration,
+    measure_pattern,
+)
+from machinesim.report import ReportFolder, check_summary
+
+MM, UM, NM = 1e-3, 1e-6, 1e-9
+ROOT = Path(__file__).resolve().parents[1]
+PAPER_R, PAPER_E = 120.555 * MM, -0.178 * MM
+#: Kinematic round-off: sums and products of ~0.12 m quantities in float64 (ulp 1.4e-17 m)
+#: through a chain of ~10 transforms.
+KINEMATIC_TOL = 1e-15
+
+
+@pytest.fixture(scope="module")
+def machine():
+    return load_machine("planer_4axis")
+
+
+@pytest.fixture(scope="module")
+def r0(machine):
+    return arm.arm_radius(machine)
+
+
+def errors_for(r, e_ys, r0):
+    """The paper's two errors as the tool setting of docs/machines.md (tool_mount axes)."""
+    return ErrorModel(tool=ToolSetting([0.0, e_ys, -(r - r0)], [0.0, 0.0, 0.0]))
+
+
+def test_the_nominal_program_puts_the_nominal_edge_where_asked(machine, r0):
+    assert r0 == pytest.approx(120.5 * MM, abs=KINEMATIC_TOL)  # docs/machines.md
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        x, y, z = rng.uniform(-5 * MM, 5 * MM, 3)
+        t = rng.uniform(-math.radians(40), math.radians(40))
+        Y, Z = arm.nominal_axes(y, z, t, r0)
+        pose = machine.tool_pose([x, Y, Z, t])
+        np.testing.assert_allclose(pose[:3, 3], [x, y, z], rtol=0, atol=KINEMATIC_TOL)
+
+
+def test_equations_1_and_2_are_the_erroneous_machine(machine, r0):
+    """Eqs 1-2 (derived, the paper's print lost them) against the kinematic chain."""
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        r, e = r0 + rng.uniform(-0.1, 0.1) * MM, rng.uniform(-0.3, 0.3) * MM
+        errors = errors_for(r, e, r0)
+        truth = arm.ArmEstimate(r0=r0, r=r, e_ys=e, z_offset=-(r - r0), y_offset=e)
+        landed = []
+        for t in np.radians([0.0, 7.0, 10.0, 20.0, 33.0, 40.0]):
+            Y, Z = arm.nominal_axes(1 * MM, -10 * UM, t, r0)
+            position = machine.tool_pose([0.0, Y, Z, t], errors)[:3, 3]
+            landed.append(position[1:] - [1 * MM, -10 * UM])
+            np.testing.assert_allclose(truth.edge_error(t), landed[-1], rtol=0,
+                                       atol=KINEMATIC_TOL)
+            change = landed[-1] - landed[0]
+            assert arm.height_change(t, r, e, r0) == pytest.approx(change[1],
+                                                                       abs=KINEMATIC_TOL)
+            assert arm.lateral_change(t, r, e, r0) == pytest.approx(change[0],
+                                                                        abs=KINEMATIC_TOL)
+    # the paper's numbers: at 20 deg the edge drops by more than 50 um (the grooves deepen)
+    drop = -arm.height_change(math.radians(20), PAPER_R, PAPER_E, r0)
+    assert drop == pytest.approx(0.178 * math.sin(math.radians(20)) * MM
+                                 - 0.055 * (1 - math.cos(math.radians(20))) * MM, rel=1e-12)
+    assert drop > 50 * UM
+
+
+def test_compensation_lands_every_move_on_the_nominal_path(machine, r0):
+    r, e = r0 + 0.07 * MM, -0.21 * MM
+    errors = errors_for(r, e, r0)
+    truth = arm.ArmEstimate(r0=r0, r=r, e_ys=e, z_offset=-(r - r0), y_offset=e)
+    nominal = PrismPattern().program(r0)
+    # the paper's formulas exactly (rounded=False): every move lands on the nominal path
+    compensated = compensate_program(nominal, machine, truth, rounded=False)
+    assert [m.kind for m in compensated] == [m.kind for m in nominal]
+    assert [m.feed_m_per_s for m in compensated] == [m.feed_m_per_s for m in nominal]
+    axes = ("X", "Y", "Z", "A")
+    q_nominal = np.array([[m.target.get(a, 0.0) for a in axes] for m in nominal])
+    q_compensated = np.array([[m.target.get(a, 0.0) for a in axes] for m in compensated])
+    np.testing.assert_allclose(machine.tool_pose(q_compensated, errors),
+                               machine.tool_pose(q_nominal), rtol=0, atol=KINEMATIC_TOL)
+    # as the NC program carries it (the compensation rule rounds to the 1 nm resolution):
+    # each edge position is off by at most half a step of Y and of Z; A keeps its whole
+    # degrees, which the 0.00001-deg grid holds exactly
+    rounded = compensate_program(nominal, machine, truth)
+    assert [m.kind for m in rounded] == [m.kind for m in nominal]
+    q_rounded = np.array([[m.target[a] for a in axes] for m in rounded])
+    np.testing.assert_allclose(q_rounded[:, 3], q_nominal[:, 3], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(machine.tool_pose(q_rounded, errors)[:, :3, 3],
+                               machine.tool_pose(q_nominal)[:, :3, 3], rtol=0,
+                               atol=0.5 * NM + KINEMATIC_TOL)
+
+
+def synthetic_readings(r, e, r0, z0, y0, sigma, angles_deg=(0, 10, 20, 30, 40)):
+    readings = []
+    for t in np.radians(angles_deg):
+        dz = z0 + arm.height_change(t, r, e, r0)
+        dy = y0 + arm.lateral_change(t, r, e, r0)
+        readings.append(AngleReading(t, np.zeros(1), np.array([dz]), np.array([dy]),
+                                             np.array([sigma]), np.array([sigma])))
+    return readings
+
+
+def test_fit_arm_solves_exact_readings_and_propagates_their_uncertainty(r0):
+    r, e, z0, y0 = r0 - 0.04 * MM, 0.25 * MM, 3 * UM, -7 * UM
+    readings = synthetic_readings(r, e, r0, z0, y0, sigma=1 * NM)
+    t = np.radians([0, 10, 20, 30, 40])
+    # the least-squares covariance of eq 1 with a free offset, by the normal equations
+    design = np.column_stack([np.ones(5), 1 - np.cos(t), np.sin(t)])
+    expected = np.sqrt(np.diag(np.linalg.inv(design.T @ design))) * 1 * NM
+    for lateral in (False, True):
+        fit = arm.fit_arm(readings, r0, lateral=lateral)
+        # 1e-16 m: a 3x3 or 4x4 least-squares solve of readings of ~1e-4 m
+        assert fit.r == pytest.approx(r, abs=1e-16)
+        assert fit.e_ys == pytest.approx(e, abs=1e-16)
+        assert fit.z_offset == pytest.approx(z0, abs=1e-16)
+        assert fit.y_offset == pytest.approx(y0, abs=1e-16)
+    paper = arm.fit_arm(readings, r0)
+    np.testing.assert_allclose([paper.z_offset_sigma, paper.r_sigma, paper.e_ys_sigma],
+                               expected, rtol=1e-9)
+    # the lateral readings fix r ~10x better: eq 2's sin t against eq 1's 1 - cos t
+    assert arm.fit_arm(readings, r0, lateral=True).r_sigma < paper.r_sigma / 5
+    with pytest.raises(InputError, match="three or more distinct angles"):
+        arm.fit_arm(readings[:2], r0)
+    with pytest.raises(InputError, match="reading at tool angle 0"):
+        arm.touch_off(readings[1:], r0)
+
+
+def test_plans_refuse_angles_where_a_flank_turns_flat_and_bad_sizes():
+    with pytest.raises(InputError, match=r"within \+-45 deg"):
+        CalibrationPlan(angles=(0.0, math.radians(50)))
+    with pytest.raises(InputError, match="depth > 0"):
+        PrismPattern(depth=-10 * UM)
+    with pytest.raises(InputError, match="clearance above the search range"):
+        CalibrationPlan(search=2 * MM)
+
+
+def v_profile(apexes, depths, left_slopes, right_slopes, s):
+    """Grooves that meet in ridges: the surface is the lowest of the V's and the top z = 0."""
+    z = np.zeros_like(s)
+    for a, d, lo, hi in zip(apexes, depths, left_slopes, right_slopes, strict=True):
+        z = np.minimum(z, -d + np.where(s < a, lo * (a - s), hi * (s - a)))
+    return z
+
+
+def test_fit_apexes_reads_grooves_that_share_ridges_exactly():
+    t = np.radians(np.arange(6) * 4.0)
+    apexes = 100 * UM + 20 * UM * np.arange(6) + 1.3 * UM * np.arange(6) ** 2
+    depths = 10 * UM + 3 * UM * np.arange(6)
+    # a 90-deg V tilted by t: flanks at 45 - t (towards -s) and 45 + t from horizontal
+    s = np.arange(0.0, 400 * UM, 0.3 * UM)
+    z = v_profile(apexes, depths, np.tan(np.pi / 4 - t), np.tan(np.pi / 4 + t), s)
+    centre, depth, centre_sigma, depth_sigma = fit_apexes(s, z, 6, prominence=2 * UM)
+    # 1e-17 m: the flanks are exact lines, so the fits only add float64 round-off
+    np.testing.assert_allclose(depth, depths, rtol=0, atol=1e-17)
+    np.testing.assert_allclose(centre, apexes, rtol=0, atol=1e-15)
+    with pytest.raises(InputError, match="Expected 7 groove apexes in the profile, found 6"):
+        fit_apexes(s, z, 7, prominence=2 * UM)
+
+
+@pytest.fixture(scope="module")
+def calibrated(machine, r0):
+    """A calibration part cut with seeded random errors within the brief's ranges."""
+    rng = np.random.default_rng(0)
+    r, e = r0 + rng.uniform(-0.1, 0.1) * MM, rng.uniform(-0.3, 0.3) * MM
+    plan = CalibrationPlan()
+    errors = errors_for(r, e, r0)
+    part, report = cut(plan.program(r0), machine, tool="v:90", stock=plan.stock, errors=errors)
+    assert report.sideways_sweeps == 0 and report.rapids_that_cut == ()
+    return r, e, errors, plan, part
+
+
+def after_compensation(machine, estimate, errors, microscope, rounded=True):
+    pattern = PrismPattern()
+    program = compensate_program(pattern.program(estimate.r0), machine, estimate,
+                                 rounded=rounded)
+    part, _ = cut(program, machine, tool="v:90", stock=pattern.stock, errors=errors)
+    return measure_pattern(part, pattern, microscope)
+
+
+def design_gain(lateral: bool) -> np.ndarray:
+    """Uncertainty of (offset(s), r, e_ys) per 1 m of reading uncertainty, at 0-40 deg."""
+    t = np.radians([0, 10, 20, 30, 40])
+    rows = np.column_stack([np.ones(5), 1 - np.cos(t), np.sin(t), np.zeros(5)])
+    if lateral:
+        rows = np.vstack([rows, np.column_stack([np.zeros(5), np.sin(t), np.cos(t) - 1,
+                                                 np.ones(5)])])
+    else:
+        rows = rows[:, :3]
+    return np.sqrt(np.diag(np.linalg.inv(rows.T @ rows)))
+
+
+def worst_gain() -> np.ndarray:
+    """Largest change of (offset, r, e_ys) per 1 m of bias in every reading of eq 1's fit."""
+    t = np.radians([0, 10, 20, 30, 40])
+    design = np.column_stack([np.ones(5), 1 - np.cos(t), np.sin(t)])
+    return np.abs(np.linalg.pinv(design)).sum(axis=1)
+
+
+def test_identification_and_compensation_with_microscope_noise(machine, r0, calibrated):
+    r, e, errors, plan, part = calibrated
+    microscope = Microscope(rng=1)
+    readings = measure_calibration(part, plan, microscope)
+    # 1.5 nm per angle: the microscope's 12 nm noise averaged over the hundreds of flank
+    # samples of five stations; the design of eq 1 (and eq 2) amplifies it by design_gain
+    per_angle = 1.5 * NM
+    for reading in readings:
+        assert reading.mean("dz")[1] < per_angle and reading.mean("dy")[1] < per_angle
+    for lateral in (False, True):
+        fit = arm.fit_arm(readings, r0, lateral=lateral)
+        gain = design_gain(lateral)
+        assert fit.r_sigma < gain[1] * per_angle
+        assert fit.e_ys_sigma < gain[2] * per_angle
+        # 4 sigma: a seeded run; the reported sigmas are those of the fits (calibrated
+        # against repeated seeds in docs/procedures/tool_rotation_arm.md)
+        assert abs(fit.r - r) < 4 * fit.r_sigma
+        assert abs(fit.e_ys - e) < 4 * fit.e_ys_sigma
+    reading = after_compensation(machine, arm.fit_arm(readings, r0), errors, microscope)
+    assert reading.depth_variation < 1 * UM  # the paper's result
+    # and far below it: identification error <~ 50 nm x sin 20 deg plus 12 nm reading noise
+    assert reading.depth_variation < 0.1 * UM
+
+
+def test_identification_and_compensation_without_noise(machine, r0, calibrated):
+    r, e, errors, plan, part = calibrated
+    microscope = Microscope(noise=False)
+    readings = measure_calibration(part, plan, microscope)
+    fit = arm.fit_arm(readings, r0)
+    # Only the microscope's 1 nm display rounding is left: dithered over the nine stations
+    # it leaves <= 0.1 nm per angle, which eq 1's estimator sums with weights of L1 norm
+    # `worst_gain` at most.
+    gain = worst_gain()
+    assert abs(fit.r - r) < gain[1] * 0.1 * NM
+    assert abs(fit.e_ys - e) < gain[2] * 0.1 * NM
+    # the program as the formulas give it, unrounded (the identification's own error)
+    reading = after_compensation(machine, fit, errors, microscope, rounded=False)
+    assert reading.depth_variation < 1 * NM  # the brief's bound with the noise off
+    # the apexes' lateral error: r's error x sin 20 deg plus the 1 nm rounding of the readings
+    assert reading.pitch_error < abs(fit.r - r) * math.sin(math.radians(20)) + 1 * NM
+    # as the NC program carries it: Y and Z on the machine's 1 nm grid move each groove by
+    # up to half a step in depth and in y, so depths and pitches may spread 1 nm more
+    reading = after_compensation(machine, fit, errors, microscope)
+    assert reading.depth_variation < 2 * NM
+    assert reading.pitch_error < abs(fit.r - r) * math.sin(math.radians(20)) + 2 * NM
+
+
+def test_the_paper_case_before_compensation_follows_eqs_1_and_2(machine, r0):
+    errors = errors_for(PAPER_R, PAPER_E, r0)
+    plan = CalibrationPlan(angles=(0.0,))
+    part, _ = cut(plan.program(r0), machine, tool="v:90", stock=plan.stock, errors=errors)
+    microscope = Microscope(rng=2)
+    before = arm.touch_off(measure_calibration(part, plan, microscope), r0)
+    reading = after_compensation(machine, before, errors, microscope)
+    t = reading.angles
+    expected = 10 * UM - arm.height_change(t, PAPER_R, PAPER_E, r0)
+    # 5 sigma of each apex depth and of the touch-off at 0 deg
+    tol = 5 * np.hypot(reading.depth_sigma, before.z_offset_sigma)
+    assert np.all(np.abs(reading.depth - expected) < tol)
+    shift = reading.centre - reading.centre[0] - 20 * UM * np.arange(t.size)
+    expected_shift = arm.lateral_change(t, PAPER_R, PAPER_E, r0)
+    assert np.all(np.abs(shift - expected_shift) < 5 * np.hypot(reading.centre_sigma,
+                                                                 reading.centre_sigma[0]))
+    assert reading.depth_error > 50 * UM  # the paper: over 50 um before compensation
+
+
+def test_a_groove_outside_the_search_range_is_reported(machine, r0):
+    plan = CalibrationPlan(angles=(0.0, math.radians(40)), search=0.1 * MM)
+    errors = errors_for(PAPER_R, PAPER_E, r0)  # 157 um edge drop at 40 deg
+    part, _ = cut(plan.program(r0), machine, tool="v:90", stock=plan.stock, errors=errors)
+    with pytest.raises(InputError, match="ramp groove at 40 deg.*search range"):
+        measure_calibration(part, plan, Microscope(noise=False))
+
+
+def scenario(*args, cwd=ROOT):
+    return subprocess.run([sys.executable, str(ROOT / "scenarios" / "tool_rotation_arm.py"),
+                           *args], capture_output=True, text=True, check=False, cwd=cwd)
+
+
+def test_the_scenario_reports_the_papers_case(tmp_path, r0):
+    result = scenario("--noise", "off", "--out", str(tmp_path))
+    assert result.returncode == 0, result.stderr
+    assert "> 50" in result.stdout and "< 1" in result.stdout
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    check_summary(summary)
+    assert (summary["paper"], summary["procedure"], summary["machine"]) == (
+        "000", "tool_rotation_arm", "planer_4axis")
+    # the paper's r = 120.555 mm and e_ys = -178 um, as the tool setting (1e-18 m: the
+    # subtraction r - r0 of two ~0.12 m numbers)
+    assert summary["injected"].keys() == {"tool.y", "tool.z"}
+    assert summary["injected"]["tool.y"] == -178.0 * UM
+    assert summary["injected"]["tool.z"] == pytest.approx(-(PAPER_R - r0), abs=1e-18)
+    identified = {name: entry["value"] for name, entry in summary["identified"].items()}
+    # noise off: the display rounding leaves <= 1.8 nm on r and 0.65 nm on e_ys (see above)
+    assert r0 - identified["tool.z"] == pytest.approx(PAPER_R, abs=1.8e-9)
+    assert identified["tool.y"] == pytest.approx(PAPER_E, abs=0.65e-9)
+    figures = {f["name"]: f for f in summary["figures"]}
+    assert figures["depth_error"]["before"] > 50.0
+    assert figures["depth_error"]["note"] == "paper: > 50 before, < 1 after"
+    # < 1 nm with the formulas' exact axis values; the NC program's 1 nm grid adds up to 1 nm
+    # (test_identification_and_compensation_without_noise)
+    assert figures["depth_variation"]["after"] < 2e-3
+    # the generic fit agrees with eq 1's fit to round-off (test below)
+    assert abs(summary["details"]["fit_check"]["r_difference_nm"]) < 1e-3
+    assert abs(summary["details"]["fit_check"]["e_ys_difference_nm"]) < 1e-3
+    for name in ("calibration.ply", "pattern_before.ply", "pattern_after.ply",
+                 "pattern_compensated.nc", "pattern_depth.png", "identification.md",
+                 "figures.md", "identified.json"):
+        assert (tmp_path / name).stat().st_size > 0
+
+
+def test_the_scenario_takes_an_error_file_and_its_own_options_on_top(tmp_path, r0):
+    errors = tmp_path / "errors.toml"
+    errors.write_text("[tool]\noffset_um = [0.0, 120.0, 30.0]\n"
+                      "[workpiece]\ndelta_um = [0.0, 0.0, 4.0]\n")
+    result = scenario("--noise", "off", "--errors", str(errors), "--r-mm", "120.48",
+                      "--out", str(tmp_path / "out"))
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    injected = summary["injected"]
+    assert injected["tool.y"] == pytest.approx(120.0 * UM, abs=1e-18)  # from the file
+    assert injected["tool.z"] == pytest.approx(-(120.48 * MM - r0), abs=1e-18)  # --r-mm
+    assert injected["workpiece.z"] == pytest.approx(4.0 * UM, abs=1e-18)
+    identified = {name: entry["value"] for name, entry in summary["identified"].items()}
+    # the workpiece height goes into eq 1's offset, not into r or e_ys (bounds as above)
+    assert identified["tool.y"] == pytest.approx(120.0 * UM, abs=0.65e-9)
+    assert identified["tool.z"] == pytest.approx(injected["tool.z"], abs=1.8e-9)
+
+
+def test_the_scenario_ends_a_machinesim_error_with_one_line(tmp_path):
+    # an arm 0.5 mm long: the edge 0.5 mm low, beyond the ramps' 0.35 mm search range
+    result = scenario("--noise", "off", "--r-mm", "121", "--out", str(tmp_path))
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    assert result.stderr.startswith("error: ") and result.stderr.count("\n") == 1
+    assert "search range" in result.stderr
+
+
+# ---------------------------------------------------------------------- the procedure class
+
+
+@pytest.fixture(scope="module")
+def exact_run():
+    """The paper's case on a lab with the noise off, run through `run`."""
+    machine = load_machine("planer_4axis")
+    r0 = arm.arm_radius(machine)
+    lab = Lab(machine, errors_for(PAPER_R, PAPER_E, r0), noise=False, seed=3)
+    return run(ToolRotationArm(), lab), lab
+
+
+def test_the_procedure_identifies_the_injected_tool_setting(exact_run, r0):
+    result, lab = exact_run
+    truth = lab.reveal().parameters()
+    assert set(result.identified) == {"tool.y", "tool.z"}
+    # same sign and size as the truth: tool.y = e_ys, tool.z = -(r - r0); noise off, only the
+    # microscope's display rounding is left (bounds of the noise-off test above)
+    gain = worst_gain()
+    value, std = result.identified["tool.y"]
+    assert value == pytest.approx(truth["tool.y"], abs=gain[2] * 0.1 * NM)
+    assert std == result.identification.detail.estimate.e_ys_sigma
+    value, std = result.identified["tool.z"]
+    assert value == pytest.approx(truth["tool.z"], abs=gain[1] * 0.1 * NM)
+    assert std == result.identification.detail.estimate.r_sigma
+    detail = result.identification.detail
+    assert (detail.r0, detail.r, detail.e_ys) == (r0, detail.estimate.r, detail.estimate.e_ys)
+    assert result.injected == {"tool.y": truth["tool.y"], "tool.z": truth["tool.z"]}
+    assert result.figure("depth_error").before > 50.0
+    assert result.figure("depth_error").after < 2e-3  # um; the 1 nm grid, as above
+    assert result.figure("depth_variation").after < 2e-3
+
+
+def test_the_procedure_report_follows_the_one_schema(exact_run, tmp_path):
+    result, _ = exact_run
+    check_summary(json.loads(json.dumps(result.summary())))
+    ReportFolder(tmp_path).write_result(result)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    check_summary(summary)
+    assert summary["seed"] == 3 and summary["noise"] is False
+    assert [f["name"] for f in summary["figures"]] == ["depth_error", "depth_variation",
+                                                       "pitch_error"]
+    for name in ("pattern_before.nc", "pattern_compensated.nc", "pattern_after.ply"):
+        assert (tmp_path / name).stat().st_size > 0
+
+
+def test_the_compensated_program_is_the_model_based_one(exact_run):
+    """Route 1 (the paper's formulas through map_program) and route 2 (the identified model
+    through Machine.axis_values) give the same NC program: every axis on the same 1 nm and
+    0.00001-deg steps (both round to the machine's resolution)."""
+    result, _ = exact_run
+    route = result.evaluation.details["model_based"]
+    assert route["max_linear_axis_difference_nm"] == 0.0
+    assert route["max_rotary_axis_difference_urad"] == 0.0
+    # before rounding, the identified model puts the edge on the path to IK round-off
+    assert route["max_position_residual_nm"] < 1e-3
+
+
+@pytest.mark.parametrize("noise", [False, True])
+def test_the_generic_fit_agrees_with_eq_1(noise):
+    """The cross-check of paper 000's fit by `fit` on the machine's error Jacobians.
+
+    tool.y, tool.z and workpiece.z from the stations' edge heights are a linear change of eq
+    1's (offset, r - r0, e_ys), and the per-angle weighted means `fit_arm` fits are a
+    sufficient statistic of the stations: both are the same weighted least-squares estimate,
+    noise or not. So they agree to round-off, far below the fit's 1e-12 m stopping step
+    (`tolerances.FIT_STEP_M`) and a thousand times below the reported std with noise.
+    """
+    machine = load_machine("planer_4axis")
+    r0 = arm.arm_radius(machine)
+    rng = np.random.default_rng(5)
+    r, e = r0 + rng.uniform(-0.1, 0.1) * MM, rng.uniform(-0.3, 0.3) * MM
+    lab = Lab(machine, errors_for(r, e, r0).with_parameters({"workpiece.z": 3 * UM}),
+              noise=noise, seed=5)
+    procedure_ = ToolRotationArm()
+    identified = procedure_.identify(procedure_.measure(lab))
+    detail = identified.detail
+    for check, paper in ((detail.check, detail.estimate), (detail.check_lateral,
+                                                           detail.lateral)):
+        assert check.estimate.unidentifiable == ()  # tool.z turns with A, workpiece.z not
+        assert check.estimate.rank == len(check.estimate.names)
+        assert abs(check.r - paper.r) < 1e-12
+        assert abs(check.e_ys - paper.e_ys) < 1e-12
+        # the same a-priori covariance (1e-9 relative: two inversions of a 3x3 or 4x4)
+        assert check.r_sigma == pytest.approx(paper.r_sigma, rel=1e-9)
+        assert check.e_ys_sigma == pytest.approx(paper.e_ys_sigma, rel=1e-9)
+        assert abs(check.r - paper.r) < 1e-3 * paper.r_sigma
+    # the workpiece height is what eq 1's offset took: dz(0) = tool.z - workpiece.z
+    values = dict(zip(detail.check.estimate.names, detail.check.estimate.values, strict=True))
+    assert values["tool.z"] - values["workpiece.z"] == pytest.approx(
+        detail.estimate.z_offset, abs=1e-12)
+
+
+def test_the_check_needs_the_programmed_edge_and_three_angles(machine, r0):
+    readings = synthetic_readings(r0, 0.1 * MM, r0, 0.0, 0.0, sigma=1 * NM)
+    with pytest.raises(InputError, match="programmed edge"):
+        arm.fit_check(readings, machine, r0)
+    with pytest.raises(InputError, match="three or more distinct angles"):
+        arm.fit_check(readings[:2], machine, r0)
+
+
+def test_the_correction_needs_y_z_and_a():
+    with pytest.raises(InputError, match="axes Y, Z and A"):
+        procedure.arm_correction(arm.ArmEstimate(r0=0.1, r=0.1, e_ys=0.0), ("X", "Y", "Z"))
