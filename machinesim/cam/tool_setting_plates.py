@@ -1,0 +1,190 @@
+"""The brass test plates of paper 001's tool setting (6-axis ROBOnano Ui): layout, stock and
+NC programs.
+
+Paper 001 (Nakamoto et al., docs/procedures/tool_setting_6axis.md) cuts simple grooves in
+brass with a 90-deg V tool, the NC data written with the tool edge on the rotary centres.
+This module is the CAM side only: where each groove goes, at which A, B, C and depth, on
+which plate. Cutting them is the lab's business, reading them the procedure's
+(`machinesim.procedures.tool_setting_6axis`), the formulas the identification's
+(`machinesim.identification.tool_setting_6axis`).
+
+Four plates, each its own program, each on a fresh plate of the same workpiece frame:
+
+``touch``
+    One groove along X stepping down in Z (a lab's tool-length touch-off).
+``a``
+    Two pairs of grooves sharing a start point, cut at A = 0 / 180 deg (along +X / -X) and
+    at A = 90 / -90 deg (along +Y / -Y) (paper Fig. 4).
+``c``
+    One groove cut at C = 0, 120 and 240 deg: a triangle (paper Fig. 3).
+``b``
+    Grooves along Y at A = theta1 and B = 0, theta2, theta3 (paper Fig. 5).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.nc import Program, ProgramBuilder
+from machinesim.units import M_PER_MM, M_PER_UM
+
+__all__ = [
+    "B_GROOVE_X", "CENTRE_RANGE", "C_TURNS", "OFFSET_RANGE", "PAIR_LENGTH", "PARKED", "Plan",
+    "PlateCut", "TOUCH_COUNT", "TOUCH_SEGMENT", "TOUCH_STEP", "TOUCH_TOP", "TRIANGLE_HALF",
+    "TRIANGLE_R", "pair_grooves", "plate_cuts",
+]
+
+#: Capture range of the plan: the layout below keeps every groove inside its microscope
+#: windows and clear of its neighbours for tool offsets |dx|, |dy|, |dz| up to this (m) and a
+#: C centre |e| up to `CENTRE_RANGE`; beyond, a measurement finds no groove and says so.
+OFFSET_RANGE = 0.5 * M_PER_MM
+CENTRE_RANGE = 1.0 * M_PER_MM
+#: Heights of the tool edge above the plate for rotary moves and before a plunge (m): above
+#: the 0.6 mm touch-off range, so rapids never reach the plate.
+SAFE_Z, CLEAR_Z = 2.0 * M_PER_MM, 0.1 * M_PER_MM
+#: Axis values (m, rad; X Y Z A B C) the machine is parked at before every program: the edge
+#: high above the plates (at zero it would sit on them, or in them with a long tool).
+PARKED = (0.0, 0.0, SAFE_Z, 0.0, 0.0, 0.0)
+#: Touch-off staircase: segment length, first Z, Z step and count. Only grooves 0..200 um
+#: deep are seen (the V profile is 0.2 mm tall; deeper sweeps are buried), so a 150 um step
+#: always leaves one segment 2..190 um deep for a touch Z in -0.6 .. +0.79 mm.
+TOUCH_SEGMENT, TOUCH_TOP, TOUCH_STEP, TOUCH_COUNT = (1.5 * M_PER_MM, 0.6 * M_PER_MM,
+                                                     0.15 * M_PER_MM, 9)
+#: A plate: half the lateral separation of a pair (keeps the two grooves apart for any
+#: offset in range), groove length, and the plate spots of the X and Y pairs.
+PAIR_HALF_GAP, PAIR_LENGTH = 1.0 * M_PER_MM, 2.0 * M_PER_MM
+X_PAIR_START, Y_PAIR_START = (0.0, -3.0 * M_PER_MM), (0.0, 3.0 * M_PER_MM)
+#: B plate: x of the grooves at B = 0, theta2, theta3 (1 mm apart: a 0.5 mm dZ moves a
+#: groove tilted by 20 deg by 0.17 mm) and their half length in y.
+B_GROOVE_X, B_HALF = (-1.0 * M_PER_MM, 0.0, 1.0 * M_PER_MM), 2.5 * M_PER_MM
+#: C plate: inradius of the programmed triangle and half length of each groove. With r = 5 mm
+#: a side moves at most sqrt(3) |e| (1.7 mm) and the other sides stay > 4 mm from any window.
+TRIANGLE_R, TRIANGLE_HALF = 5.0 * M_PER_MM, 11.5 * M_PER_MM
+C_TURNS = (0.0, 2.0 * math.pi / 3.0, 4.0 * math.pi / 3.0)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The paper's measurement plan: groove depths, tilts and feed.
+
+    Attributes
+    ----------
+    depth : float
+        Depth of cut D of the A- and C-axis grooves (m).
+    b_depth : float
+        Depth of cut D of the B-axis grooves (m): a tilt theta adds dZ (1 - cos theta), up to
+        33 um at 20 deg, and the low flank of the tilted V ends 120 um above the edge.
+    theta1, theta2, theta3 : float
+        A angle that turns the cutting direction onto Y, and the two B tilts (rad).
+    feed_mm_per_min : float
+        Cutting feed.
+
+    Notes
+    -----
+    The plate layout (module constants) is sized for the defaults and the capture range.
+    """
+
+    depth: float = 10 * M_PER_UM
+    b_depth: float = 40 * M_PER_UM
+    theta1: float = math.pi / 2.0
+    theta2: float = math.radians(20.0)
+    theta3: float = math.radians(-20.0)
+    feed_mm_per_min: float = 200.0
+
+    def __post_init__(self) -> None:
+        for name in ("depth", "b_depth", "feed_mm_per_min"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise InputError(f"Expected {name} > 0, got {value!r}", key=name)
+
+    @property
+    def tilts(self) -> tuple[float, float, float]:
+        """B of the three B-plate grooves: 0, theta2, theta3 (rad)."""
+        return (0.0, self.theta2, self.theta3)
+
+
+@dataclass(frozen=True)
+class PlateCut:
+    """An NC program and the brass plate (stock spec, mm) it is cut on."""
+
+    program: Program
+    stock: str
+
+
+def plate_cuts(plan: Plan = Plan()) -> dict[str, PlateCut]:
+    """The NC data of each stage (edge on the rotary centres), each on its own brass plate.
+
+    Every program starts with all six axes given, high above the plate (`PARKED`), and turns
+    the rotary axes only there.
+
+    Returns
+    -------
+    dict
+        ``"touch"``, ``"a"``, ``"b"``, ``"c"`` -> `PlateCut`.
+    """
+    f = plan.feed_mm_per_min
+    mm = M_PER_MM
+    touch = _builder(1, "touch-off").rapid(X=-1 * mm).rapid(Z=TOUCH_TOP)
+    for k in range(TOUCH_COUNT):
+        if k:
+            touch.linear(Z=TOUCH_TOP - k * TOUCH_STEP, feed_mm_per_min=f)
+        end = (k + 1) * TOUCH_SEGMENT + (1 * mm if k == TOUCH_COUNT - 1 else 0.0)
+        touch.linear(X=end, feed_mm_per_min=f)
+    touch.rapid(Z=SAFE_Z)
+    a = _builder(2, "A axis")
+    for angle, start in pair_grooves():
+        direction = np.array([math.cos(angle), math.sin(angle)])
+        _groove(a, start, start + PAIR_LENGTH * direction, -plan.depth, angle, 0.0, 0.0, f,
+                inside=True)
+    b = _builder(3, "B axis")
+    for x, tilt in zip(B_GROOVE_X, plan.tilts, strict=True):
+        _groove(b, (x, -B_HALF), (x, B_HALF), -plan.b_depth, plan.theta1, tilt, 0.0, f)
+    c = _builder(4, "C axis")
+    for turn in C_TURNS:
+        _groove(c, (-TRIANGLE_HALF, -TRIANGLE_R), (TRIANGLE_HALF, -TRIANGLE_R), -plan.depth,
+                0.0, 0.0, turn, f)
+    return {"touch": PlateCut(touch.build(),
+                              f"block:{TOUCH_COUNT * TOUCH_SEGMENT / mm:g}x3x1@0,-1.5,0"),
+            "a": PlateCut(a.build(), "block:6x12x1@-3,-6,0"),
+            "b": PlateCut(b.build(), "block:4x3x1@-2,-1.5,0"),
+            "c": PlateCut(c.build(), "block:16x16x1@-8,-8,0")}
+
+
+def pair_grooves() -> list[tuple[float, np.ndarray]]:
+    """(A angle (rad), programmed start point (2,) m) of the four A-plate grooves: the X pair
+    (A = 0, 180 deg), then the Y pair (A = 90, -90 deg), in cutting order."""
+    out = []
+    for angle, spot in ((0.0, X_PAIR_START), (math.pi, X_PAIR_START),
+                        (math.pi / 2, Y_PAIR_START), (-math.pi / 2, Y_PAIR_START)):
+        # the pair's two grooves run on either side of the spot, across their direction
+        side = np.array([-math.sin(angle), math.cos(angle)])
+        out.append((angle, np.array(spot) + PAIR_HALF_GAP * side))
+    return out
+
+
+def _builder(number: int, name: str) -> ProgramBuilder:
+    """A program that starts with every axis given, high above the plate at zero."""
+    return ProgramBuilder(number, source=f"tool_setting_6axis {name}").rapid(
+        X=0.0, Y=0.0, Z=SAFE_Z, A=0.0, B=0.0, C=0.0)
+
+
+def _groove(builder, start, end, z, a, b, c, feed, inside=False) -> None:
+    """One groove: turn the axes high above the plate, then plunge and cut along start->end.
+
+    A groove starting on the plate (``inside``) is plunged and left at the feed, as its
+    zero-thickness edge sweeps nothing then; one starting off the plate is entered by rapid
+    (a tilted plunge would drag the edge sideways).
+    """
+    builder.rapid(Z=SAFE_Z).rapid(A=a, B=b, C=c).rapid(X=start[0], Y=start[1])
+    if inside:
+        builder.rapid(Z=CLEAR_Z).linear(Z=z, feed_mm_per_min=feed)
+    else:
+        builder.rapid(Z=z)
+    builder.linear(X=end[0], Y=end[1], feed_mm_per_min=feed)
+    if inside:
+        builder.linear(Z=CLEAR_Z)
+    builder.rapid(Z=SAFE_Z)

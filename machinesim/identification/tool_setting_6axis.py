@@ -1,0 +1,574 @@
+"""The tool edge's offset from the A, B and C rotary centres of a 6-axis machine (paper 001).
+
+Paper 001 (Nakamoto et al., 6-axis ROBOnano Ui; docs/procedures/tool_setting_6axis.md
+derives every step). NC data for the 6-axis machine is written with the tool edge on the
+rotary centres. The edge really sits at ``d = (dx, dy, dz)`` from the A/B centres
+(tool_mount axes: error parameters ``tool.x``, ``tool.y``, ``tool.z``) and the C centre line
+at ``e = (ex, ey)`` (workpiece frame at C = 0: ``location.C.EX0C``, ``location.C.EY0C``),
+so with ``P = (X, Y, Z)`` the edge lands at ``e + Rz(C) (P + Ry(B) Rz(A) d - e)`` instead
+of ``Rz(C) P``.
+
+Everything here takes measured features only (`GrooveReading`: groove centre points, depths
+and start points read under the microscope, with the axis values each groove was cut at)
+and returns identified values; reading the plates is `machinesim.procedures.
+tool_setting_6axis`'s job, their design `machinesim.cam.tool_setting_plates`'.
+
+- `a_axis_pairs`: the A pairs (paper Fig. 4): start points of grooves cut at A and A + 180
+  deg differ by ``2 Rz(A) d``, which gives dx and dy.
+- `c_axis_triangle`: the triangle cut at C = 0, 120, 240 deg is centred on ``e``.
+- `b_axis_offsets` (paper eqs 1-2, eq 2 corrected) and `b_axis_tilts`: the depths of
+  grooves cut at B = 0, theta2, theta3 give the edge offset from the B centre.
+- `identify`: all stages, the final `Compensation`, and the standard uncertainties of the
+  paper's values propagated from the readings'.
+- `corrected_axes`: the paper's rewrite of the NC data, as the function
+  `machinesim.compensation.map_program` applies.
+- `fit_observations`, `fit_check`: the same readings as observations of the tool tip for
+  the generic `machinesim.identification.fit`, a model-based cross-check.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+import numpy as np
+
+from machinesim.arrays import frozen
+from machinesim.exceptions import InputError
+from machinesim.metrology import Line2D, fit_line, groove_crossing
+from machinesim.metrology.prisms import SIGMA_FLOOR_M
+from machinesim.rotations import rot_y, rot_z
+
+__all__ = [
+    "AAxisResult", "BAxisResult", "CAxisResult", "Compensation", "GrooveReading",
+    "Identification", "PARAMETERS", "a_axis_pairs", "b_axis_offsets", "b_axis_tilts",
+    "c_axis_triangle", "corrected_axes", "fit_check", "fit_observations", "identify",
+]
+
+#: The error parameters paper 001 identifies, as `Machine.parameter_names` spells them.
+PARAMETERS = ("tool.x", "tool.y", "tool.z", "location.C.EX0C", "location.C.EY0C")
+#: Axes `corrected_axes` expects, in this order (robonano_ui's `Machine.axes`).
+AXES = ("X", "Y", "Z", "A", "B", "C")
+#: Smallest |den| of eqs 1-2 accepted: there (tilts of +-0.06 deg) a 1 nm depth error already
+#: moves dZ by ~1 mm, so the tilts measure nothing.
+MIN_DETERMINANT = 1e-9
+#: Step (m) of the central differences that propagate the readings' uncertainties through
+#: the paper's formulas: they are linear (A pairs, eqs 1-2) or, for the triangle, curved on
+#: the scale of the 10 mm plate, so a 1 nm step is exact to ~1e-7 relative, far above
+#: float64 round-off (1e-19 m on readings of a few mm, i.e. 1e-10 of the step).
+PROPAGATION_STEP = 1e-9
+
+
+# ---------------------------------------------------------------------------- readings
+
+
+@dataclass(frozen=True, eq=False)
+class GrooveReading:
+    """One straight groove as the microscope read it, and the axis values it was cut at.
+
+    Attributes
+    ----------
+    q_start, q_end : ndarray, shape (n_axes,)
+        Axis values (m, rad, `Machine.axes` order) at the two ends of the block that cut the
+        groove, as the program that was cut commanded them.
+    points : ndarray, shape (k, 2)
+        The groove's centre (apex) in k profiles across it, workpiece frame (m).
+    point_sigma : ndarray, shape (k,)
+        Standard uncertainty of each centre across the groove (m).
+    depths, depth_sigma : ndarray, shape (k,)
+        Apex depth below the plate top in the same profiles, and its uncertainty (m).
+    start : ndarray, shape (2,), optional
+        Where the centre line meets the groove's start face (m), for grooves that start on
+        the plate (the A pairs).
+    start_sigma : float
+        Standard uncertainty of the start point along the groove (m): across, the start
+        point is the centre line's, whose uncertainty comes from the points.
+    """
+
+    q_start: np.ndarray
+    q_end: np.ndarray
+    points: np.ndarray
+    point_sigma: np.ndarray
+    depths: np.ndarray
+    depth_sigma: np.ndarray
+    start: np.ndarray | None = None
+    start_sigma: float = math.nan
+
+    def __post_init__(self) -> None:
+        for name in ("q_start", "q_end", "points", "point_sigma", "depths", "depth_sigma"):
+            object.__setattr__(self, name, frozen(getattr(self, name)))
+        k = len(self.points)
+        if (self.points.shape != (k, 2) or k < 2 or self.q_start.shape != self.q_end.shape
+                or any(getattr(self, n).shape != (k,)
+                       for n in ("point_sigma", "depths", "depth_sigma"))):
+            raise InputError(f"Expected a groove reading of k >= 2 points (k, 2) with k "
+                             f"sigmas, depths and depth sigmas, got points "
+                             f"{self.points.shape}", key="points")
+        if self.start is not None:
+            object.__setattr__(self, "start", frozen(self.start))
+
+    @property
+    def line(self) -> Line2D:
+        """The centre line fitted to `points`."""
+        return fit_line(self.points)
+
+
+@dataclass(frozen=True, eq=False)
+class Compensation:
+    """What the NC data must cancel (m, workpiece frame; SI).
+
+    Attributes
+    ----------
+    tool_offset : ndarray, shape (3,)
+        Edge offset (dx, dy, dz) from the A/B centres, tool_mount axes.
+    c_centre : ndarray, shape (2,)
+        C centre line (ex, ey) in the workpiece frame at C = 0.
+    z_shift : float
+        Added to every Z (a work offset: the touch-off of stage 0).
+    """
+
+    tool_offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    c_centre: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    z_shift: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name, n in (("tool_offset", 3), ("c_centre", 2)):
+            value = np.array(getattr(self, name), dtype=np.float64)
+            if value.shape != (n,) or not np.isfinite(value).all():
+                raise InputError(f"Expected {name} as {n} finite numbers (m), got {value!r}",
+                                 key=name)
+            object.__setattr__(self, name, frozen(value))
+        if not math.isfinite(self.z_shift):
+            raise InputError(f"Expected a finite z_shift (m), got {self.z_shift!r}",
+                             key="z_shift")
+
+
+@dataclass(frozen=True, eq=False)
+class AAxisResult:
+    """A-axis pairs: start points (m) and what they give.
+
+    Attributes
+    ----------
+    starts : ndarray, shape (4, 2)
+        Start points of the grooves cut at A = 0, 180, 90, -90 deg.
+    distances : ndarray, shape (2, 2)
+        Start-point displacement within the X pair and the Y pair, minus the programmed one:
+        ``2 (dx, dy)`` and ``2 (-dy, dx)`` (Table 1's "distance between grooves").
+    offset : ndarray, shape (2,)
+        (dx, dy), least squares over both pairs.
+    """
+
+    starts: np.ndarray
+    distances: np.ndarray
+    offset: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class BAxisResult:
+    """B-axis grooves: depths (3,) at B = 0, theta2, theta3, and eqs 1-2's edge offset from
+    the B centre, dX (machine X at A = theta1, B = 0) and dZ (along the tool), all in m."""
+
+    depths: np.ndarray
+    offset_x: float
+    offset_z: float
+
+
+@dataclass(frozen=True, eq=False)
+class CAxisResult:
+    """C-axis triangle: its three crossings (3, 2), its centre (2,) and its sides (m)."""
+
+    vertices: np.ndarray
+    centre: np.ndarray
+    sides: tuple[Line2D, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class Identification:
+    """All stages of paper 001, and what they identify.
+
+    Attributes
+    ----------
+    z_touch : float
+        Z (m) at which the edge met the plate at B = 0 (the touch-off).
+    a, b, c : AAxisResult, BAxisResult, CAxisResult
+        The stages.
+    compensation : Compensation
+        The final compensation: d = (dx, dy, dZ) and e, no Z shift.
+    std : Mapping[str, float]
+        Standard uncertainty (m) of each of `PARAMETERS`, propagated from the readings'
+        through the paper's formulas.
+    check : Estimate, optional
+        The model-based cross-check (`fit_check`) on the same readings.
+    """
+
+    z_touch: float
+    a: AAxisResult
+    b: BAxisResult
+    c: CAxisResult
+    compensation: Compensation
+    std: Mapping[str, float] = field(default_factory=dict)
+    check: object = None
+
+    @property
+    def values(self) -> dict[str, float]:
+        """`PARAMETERS` -> identified value (m): d = (dx, dy, dZ), then e."""
+        comp = self.compensation
+        return dict(zip(PARAMETERS, (*comp.tool_offset.tolist(), *comp.c_centre.tolist()),
+                        strict=True))
+
+    @property
+    def parameters(self) -> dict[str, tuple[float, float]]:
+        """`PARAMETERS` -> (value, std) (m), as `machinesim.experiment.Identified` holds."""
+        return {name: (value, float(self.std.get(name, math.nan)))
+                for name, value in self.values.items()}
+
+
+# ---------------------------------------------------------------------------- the stages
+
+
+def a_axis_pairs(starts, programmed) -> AAxisResult:
+    """dx and dy from the A pairs' start points (paper 001, Fig. 4).
+
+    A groove cut at A starts where the edge is at the start of its cut: ``S + Rz(A) d`` (xy)
+    for a programmed start ``S``. Within a pair the tool turns by 180 deg, so
+
+        X pair:  S(A=0) - S(A=180)  - (programmed)  = 2 (dx, dy)
+        Y pair:  S(A=90) - S(A=-90) - (programmed)  = 2 (-dy, dx)
+
+    and each component of d is read twice (their mean is the least-squares value).
+
+    Parameters
+    ----------
+    starts : array_like, shape (4, 2)
+        Measured start points of the grooves cut at A = 0, 180, 90, -90 deg (m).
+    programmed : array_like, shape (4, 2)
+        Their programmed start points (m).
+
+    Returns
+    -------
+    AAxisResult
+    """
+    starts, programmed = np.asarray(starts, float), np.asarray(programmed, float)
+    if starts.shape != (4, 2) or programmed.shape != (4, 2):
+        raise InputError(f"Expected 4 start points (4, 2) and their programmed places, got "
+                         f"{starts.shape} and {programmed.shape}", key="starts")
+    distances = (starts[[0, 2]] - starts[[1, 3]]) - (programmed[[0, 2]] - programmed[[1, 3]])
+    offset = 0.25 * np.array([distances[0, 0] + distances[1, 1],
+                              distances[0, 1] - distances[1, 0]])
+    return AAxisResult(frozen(starts), frozen(distances), frozen(offset))
+
+
+def c_axis_triangle(points: Sequence) -> CAxisResult:
+    """The C centre line from the triangle cut at C = 0, 120, 240 deg (paper 001, Fig. 3).
+
+    One groove turned about the true C centre ``e`` by thirds of a turn bounds an equilateral
+    triangle centred on ``e``, whatever the tool offset; the programmed triangle is centred on
+    the origin, so the centroid of the three crossings is ``e``.
+
+    Parameters
+    ----------
+    points : sequence of 3 array_like, shape (k, 2)
+        Centre points of the grooves cut at C = 0, 120, 240 deg (m).
+
+    Returns
+    -------
+    CAxisResult
+    """
+    if len(points) != 3:
+        raise InputError(f"Expected the centre points of 3 grooves, got {len(points)}",
+                         key="points")
+    crossings = [groove_crossing(points[i], points[j]) for i, j in ((0, 1), (1, 2), (2, 0))]
+    vertices = np.array([cr.point for cr in crossings])
+    sides = (crossings[0].first, crossings[1].first, crossings[2].first)
+    return CAxisResult(frozen(vertices), frozen(vertices.mean(axis=0)), sides)
+
+
+def b_axis_offsets(d0: float, d1: float, d2: float, theta2: float, theta3: float):
+    """Edge offset from the B centre from three groove depths (paper 001, eqs 1-2).
+
+    At B = theta the edge offset (dX, dZ) (machine X and Z at B = 0) turns to
+    ``Ry(theta) (dX, dZ)``, whose z is ``-dX sin(theta) + dZ cos(theta)``, so the groove
+    depth grows by ``d - D = dX sin(theta) + dZ (1 - cos(theta))`` over the B = 0 depth D.
+    Solved for the two tilts (Cramer's rule)::
+
+        dX = ((d1 - D)(1 - cos t3) - (d2 - D)(1 - cos t2)) / den       (eq 1, sign below)
+        dZ = ((d2 - D) sin t2 - (d1 - D) sin t3) / den                  (eq 2, corrected)
+        den = sin t2 (1 - cos t3) - sin t3 (1 - cos t2)
+
+    The paper's eq 1 is -dX: its positive B tilts the other way (theta -> -theta changes
+    the signs of dX and den only), and dZ is the same in both senses. The printed eq 2,
+    ``((d1 - D) sin t2 + (d2 - D) sin t3) / den``, follows from neither.
+
+    Parameters
+    ----------
+    d0, d1, d2 : float
+        Depths (m) at B = 0 (D), theta2 and theta3.
+    theta2, theta3 : float
+        The B tilts (rad).
+
+    Returns
+    -------
+    (float, float)
+        dX, dZ (m).
+    """
+    den = (math.sin(theta2) * (1.0 - math.cos(theta3))
+           - math.sin(theta3) * (1.0 - math.cos(theta2)))
+    if not abs(den) > MIN_DETERMINANT:
+        raise InputError(f"Expected two distinct non-zero B tilts, got theta2 = "
+                         f"{math.degrees(theta2):g} deg, theta3 = {math.degrees(theta3):g} deg")
+    u, v = d1 - d0, d2 - d0
+    return ((u * (1.0 - math.cos(theta3)) - v * (1.0 - math.cos(theta2))) / den,
+            (v * math.sin(theta2) - u * math.sin(theta3)) / den)
+
+
+def b_axis_tilts(depths, theta2: float, theta3: float, commanded_z=None) -> BAxisResult:
+    """The B stage (paper 001, Fig. 5): eqs 1-2 (`b_axis_offsets`) on the depths of the
+    grooves cut at B = 0, theta2 and theta3.
+
+    The paper cuts the three grooves at one depth of cut D. Where their commanded Z differ
+    (a compensation of what earlier stages found, and its rounding to the machine's 1 nm),
+    each depth is first taken back to the B = 0 groove's command: ``d_k + Z_k - Z_0``. Eqs
+    1-2 then give the edge's offset from the B centre whatever the program added.
+
+    Parameters
+    ----------
+    depths : array_like, shape (3,)
+        Measured depths below the plate top (m), B = 0, theta2, theta3.
+    theta2, theta3 : float
+        The B tilts (rad).
+    commanded_z : array_like, shape (3,), optional
+        The Z each groove was cut at (m); default all equal.
+
+    Returns
+    -------
+    BAxisResult
+        ``depths`` as measured; dX, dZ from the depths at one command.
+    """
+    depths = np.asarray(depths, dtype=np.float64)
+    z = np.zeros(3) if commanded_z is None else np.asarray(commanded_z, dtype=np.float64)
+    if depths.shape != (3,) or z.shape != (3,):
+        raise InputError(f"Expected 3 groove depths and 3 commanded Z, got shapes "
+                         f"{depths.shape} and {z.shape}", key="depths")
+    dx, dz = b_axis_offsets(*(depths + z - z[0]), theta2, theta3)
+    return BAxisResult(frozen(depths), float(dx), float(dz))
+
+
+def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReading],
+             b: Sequence[GrooveReading], programmed_starts, theta2: float,
+             theta3: float) -> Identification:
+    """Paper 001's identification from the readings of its three plates.
+
+    Parameters
+    ----------
+    z_touch : float
+        The touch-off Z (m).
+    a : sequence of 4 GrooveReading
+        The A pairs (A = 0, 180, 90, -90 deg), each with its start point.
+    c : sequence of 3 GrooveReading
+        The triangle's grooves (C = 0, 120, 240 deg).
+    b : sequence of 3 GrooveReading
+        The B grooves (B = 0, theta2, theta3); each groove's depth is the mean over its
+        profiles, taken back to one commanded Z (`b_axis_tilts`).
+    programmed_starts : array_like, shape (4, 2)
+        The A grooves' programmed start points (m).
+    theta2, theta3 : float
+        The B tilts (rad).
+
+    Returns
+    -------
+    Identification
+        ``compensation`` holds d = (dx, dy, dZ) and e with no Z shift; ``std`` the
+        uncertainties propagated from the readings' (`point_sigma`, `depth_sigma`,
+        `start_sigma`) through the same formulas.
+    """
+    if len(a) != 4 or len(c) != 3 or len(b) != 3:
+        raise InputError(f"Expected 4 A, 3 C and 3 B groove readings, got {len(a)}, {len(c)} "
+                         f"and {len(b)}", key="readings")
+    if any(g.start is None for g in a):
+        raise InputError("Expected the start point of every A groove", key="start")
+    programmed = np.asarray(programmed_starts, dtype=np.float64)
+
+    def stages(shift):
+        starts, points, depths = _shifted(a, c, b, shift)
+        return (a_axis_pairs(starts, programmed), c_axis_triangle(points),
+                b_axis_tilts([dep.mean() for dep in depths], theta2, theta3,
+                             [g.q_start[AXES.index("Z")] for g in b]))
+
+    def values(shift):
+        ra, rc, rb = stages(shift)
+        return np.r_[ra.offset, rb.offset_z, rc.centre]
+
+    ra, rc, rb = stages(None)
+    compensation = Compensation(tool_offset=[ra.offset[0], ra.offset[1], rb.offset_z],
+                                c_centre=rc.centre)
+    sigma = np.concatenate([_sigmas(g) for g in (*a, *c, *b)])
+    std = _propagate(values, sigma)
+    return Identification(float(z_touch), ra, rb, rc, compensation,
+                          MappingProxyType(dict(zip(PARAMETERS, std.tolist(), strict=True))))
+
+
+def _sigmas(g: GrooveReading) -> np.ndarray:
+    """The readings' standard uncertainties in the order `_shifted` takes their shifts."""
+    start = [max(g.start_sigma, SIGMA_FLOOR_M)] if g.start is not None else []
+    return np.concatenate([start, np.maximum(g.point_sigma, SIGMA_FLOOR_M),
+                           np.maximum(g.depth_sigma, SIGMA_FLOOR_M)])
+
+
+def _shifted(a, c, b, shift):
+    """Start points, centre points and depths of the readings, each moved by its ``shift``
+    (m; start points along the groove, centres across it; None: as read).
+
+    A start point lies on its groove's centre line: moving the centres moves the line and
+    the start point with it (the face is read along the line, the line across it).
+    """
+    if shift is None:
+        return ([g.start for g in a], [g.points for g in c], [g.depths for g in b])
+    shift = iter(shift)
+    starts, points, depths = [], [], []
+    for g in (*a, *c, *b):
+        along = next(shift) if g.start is not None else 0.0
+        line = g.line
+        normal = np.array([-line.direction[1], line.direction[0]])
+        moved = g.points + np.array([next(shift) for _ in g.points])[:, None] * normal
+        depths.append(g.depths + np.array([next(shift) for _ in g.depths]))
+        points.append(moved)
+        if g.start is not None:
+            new = fit_line(moved)
+            t = (g.start - new.point) @ new.direction + along
+            starts.append(new.point + t * new.direction)
+    return starts, points[len(a):len(a) + len(c)], depths[len(a) + len(c):]
+
+
+def _propagate(function: Callable[[np.ndarray], np.ndarray], sigma: np.ndarray) -> np.ndarray:
+    """Standard uncertainties of ``function(shift)`` for independent readings of ``sigma``
+    (first order: central differences of `PROPAGATION_STEP`)."""
+    h = PROPAGATION_STEP
+    columns = []
+    for i in range(sigma.size):
+        step = np.zeros(sigma.size)
+        step[i] = h
+        columns.append((function(step) - function(-step)) / (2.0 * h))
+    jacobian = np.column_stack(columns)
+    return np.sqrt(((jacobian * sigma) ** 2).sum(axis=1))
+
+
+# ---------------------------------------------------------------------------- compensation
+
+
+def corrected_axes(q: np.ndarray, compensation: Compensation) -> np.ndarray:
+    """The paper's rewrite of the NC data: axis values that put the edge where the NC data
+    put it, for `machinesim.compensation.map_program`.
+
+    ``P' = P - Ry(B) Rz(A) d + e - Rz(-C) e`` (e in xy) and ``Z' += z_shift``: then the edge
+    at ``e + Rz(C) (P' + Ry(B) Rz(A) d - e)`` is ``Rz(C) P``. A, B and C are kept. Exact at
+    every block end; a block that turns A, B or C while it moves is exact only at its ends.
+
+    Parameters
+    ----------
+    q : ndarray, shape (N, 6)
+        Axis values X Y Z A B C (m, rad), one row per block.
+    compensation : Compensation
+
+    Returns
+    -------
+    ndarray, shape (N, 6)
+    """
+    q = np.array(q, dtype=np.float64)
+    if q.ndim != 2 or q.shape[1] != len(AXES):
+        raise InputError(f"Expected axis values of shape (N, 6), columns {' '.join(AXES)}, "
+                         f"got {q.shape}", key="q")
+    d, e = compensation.tool_offset, compensation.c_centre
+    a, b, c = q[:, 3], q[:, 4], q[:, 5]
+    shift = -(rot_y(b) @ rot_z(a) @ d)
+    shift[:, :2] += e - rot_z(-c)[:, :2, :2] @ e
+    shift[:, 2] += compensation.z_shift
+    q[:, :3] += shift
+    return q
+
+
+# ---------------------------------------------------------------------------- the cross-check
+
+
+def fit_observations(machine, a: Sequence[GrooveReading], c: Sequence[GrooveReading],
+                     b: Sequence[GrooveReading]):
+    """The plates' readings as observations of the tool tip for
+    `machinesim.identification.fit`.
+
+    A groove is the sweep of the edge along its cutting block: at the axis values of a
+    profile's station (``q_start`` to ``q_end``, interpolated where the nominal edge passes
+    the measured centre), the tip was seen displaced from its nominal place (the nominal
+    machine at those axis values) by
+
+    - across the groove: the measured centre minus the nominal edge (every groove);
+    - along the groove: the measured start point minus the nominal start (the A pairs: the
+      start face is the edge profile at the start of the cut);
+    - along +z: minus the measured depth minus the nominal edge height (the B grooves, the
+      paper's source of dZ; the plate top is the workpiece's z = 0).
+
+    Each with the reading's standard uncertainty (floored at `SIGMA_FLOOR_M`).
+
+    Parameters
+    ----------
+    machine : Machine
+        The nominal machine the plates were cut on (axes X Y Z A B C).
+    a, c, b : sequence of GrooveReading
+
+    Returns
+    -------
+    Observations
+    """
+    from machinesim.identification.fit import observations
+
+    q, directions, values, sigma = [], [], [], []
+    for group, depths in ((a, False), (c, False), (b, True)):
+        for g in group:
+            ends = machine.tool_pose(np.array([g.q_start, g.q_end]))[:, :3, 3]
+            run = ends[1, :2] - ends[0, :2]
+            length = float(np.hypot(*run))
+            if not length > 0.0:
+                raise InputError("Expected a groove whose cutting block moves in xy",
+                                 key="q_end")
+            along = np.r_[run / length, 0.0]
+            across = np.array([-along[1], along[0], 0.0])
+            t = (g.points - ends[0, :2]) @ along[:2] / length
+            stations = g.q_start + t[:, None] * (g.q_end - g.q_start)
+            nominal = machine.tool_pose(stations)[:, :3, 3]
+            seen = np.column_stack([g.points, -g.depths])
+            q.append(stations)
+            directions.append(np.tile(across, (len(t), 1)))
+            values.append((seen - nominal) @ across)
+            sigma.append(np.maximum(g.point_sigma, SIGMA_FLOOR_M))
+            if depths:
+                q.append(stations)
+                directions.append(np.tile((0.0, 0.0, 1.0), (len(t), 1)))
+                values.append(seen[:, 2] - nominal[:, 2])
+                sigma.append(np.maximum(g.depth_sigma, SIGMA_FLOOR_M))
+            if g.start is not None:
+                q.append(g.q_start[None, :])
+                directions.append(along[None, :])
+                values.append([(g.start - ends[0, :2]) @ along[:2]])
+                sigma.append([max(g.start_sigma, SIGMA_FLOOR_M)])
+    return observations(np.concatenate(q), np.concatenate(directions),
+                        np.concatenate(values), np.concatenate(sigma))
+
+
+def fit_check(machine, a: Sequence[GrooveReading], c: Sequence[GrooveReading],
+              b: Sequence[GrooveReading]):
+    """Cross-check the paper's formulas: `PARAMETERS` by `machinesim.identification.fit` on
+    the machine's kinematics, from the same readings (`fit_observations`).
+
+    The paper reads each parameter from one stage (dx, dy from the A pairs, e from the
+    triangle, dZ from the B depths); the fit uses every reading at once, through Pinocchio's
+    error Jacobians instead of the closed forms. Both are least squares on the same
+    readings, so without noise they agree to the readings' resolution; with noise, within
+    the uncertainties (docs/procedures/tool_setting_6axis.md gives the figures).
+
+    Returns
+    -------
+    Estimate
+    """
+    from machinesim.identification.fit import fit
+
+    return fit(machine, fit_observations(machine, a, c, b), list(PARAMETERS))

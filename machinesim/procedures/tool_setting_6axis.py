@@ -1,0 +1,515 @@
+"""Paper 001 as an experiment: the tool edge's offset from the A, B and C rotary centres.
+
+`ToolSetting6Axis` runs paper 001's procedure (Nakamoto et al., 6-axis ROBOnano Ui) on a
+`machinesim.Lab` (machine ``robonano_ui``), staged as the paper stages it: each plate
+(`machinesim.cam.tool_setting_plates`) is cut with what the earlier ones found, and read
+with the lab's confocal microscope only.
+
+0. Touch-off: a groove stepping down in Z finds the Z at which the edge meets the plate.
+1. A plate, cut with the touch-off: the pairs' start points give dx, dy
+   (`machinesim.identification.tool_setting_6axis.a_axis_pairs`).
+2. C plate, cut with dx, dy compensated: the triangle's centre gives e (`c_axis_triangle`).
+3. B plate, cut with dx, dy compensated: the depths at three B tilts give dZ (eqs 1-2,
+   `b_axis_tilts`).
+
+Then the paper's rewrite of the NC data (`corrected_axes` through
+`machinesim.compensation.map_program`), and the A, C and B plates cut and read again (Table
+1). docs/procedures/tool_setting_6axis.md derives each step.
+
+>>> import machinesim
+>>> from machinesim.experiment import run
+>>> from machinesim.procedures.tool_setting_6axis import ToolSetting6Axis
+>>> lab = machinesim.Lab("robonano_ui", {"tool": {"offset_um": [245.02, 340.06, 150.0]}})
+>>> result = run(ToolSetting6Axis(), lab)  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from functools import lru_cache, partial
+from types import MappingProxyType
+from typing import ClassVar
+
+import numpy as np
+
+from machinesim.cam.tool_setting_plates import (
+    B_GROOVE_X,
+    C_TURNS,
+    CENTRE_RANGE,
+    OFFSET_RANGE,
+    PAIR_LENGTH,
+    PARKED,
+    TOUCH_COUNT,
+    TOUCH_SEGMENT,
+    TOUCH_STEP,
+    TOUCH_TOP,
+    TRIANGLE_R,
+    Plan,
+    pair_grooves,
+    plate_cuts,
+)
+from machinesim.compensation import map_program, model_based, program_axes
+from machinesim.errors import ErrorModel
+from machinesim.exceptions import InputError
+from machinesim.experiment import Evaluation, Figure, Identified
+from machinesim.identification.tool_setting_6axis import (
+    AAxisResult,
+    CAxisResult,
+    Compensation,
+    GrooveReading,
+    Identification,
+    a_axis_pairs,
+    b_axis_tilts,
+    c_axis_triangle,
+    corrected_axes,
+    fit_check,
+    identify,
+)
+from machinesim.machines import load_machine
+from machinesim.metrology import (
+    fit_line,
+    fit_v_groove,
+    fit_v_grooves,
+    profile_points,
+    step_positions,
+)
+from machinesim.nc import Program
+from machinesim.rotations import rot_z
+from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, from_si
+
+__all__ = [
+    "PAPER_TABLE_1", "Readings", "ToolSetting6Axis", "compensate_program", "layout_lines",
+    "read_plate", "touch_off_z",
+]
+
+#: The tool of paper 001: a single-crystal diamond V tool, 90 deg included angle.
+TOOL = "v:90"
+#: Table 1 of paper 001: distances between grooves (um), original and compensated NC data.
+PAPER_TABLE_1 = {"a_dx": (490.04, 4.06), "a_dy": (680.12, 2.97), "c_dx": (108.97, 0.74),
+                 "c_dy": (852.81, 1.40)}
+#: Touch-off: only segments this deep (m) are used: 2 um clears the microscope's noise, 190
+#: um keeps the whole 0.2 mm tall V profile visible.
+TOUCH_DEPTHS = (2 * M_PER_UM, 190 * M_PER_UM)
+#: Half width (m) of the windows across the A grooves and the touch-off: the capture range
+#: and a quarter millimetre of plate either side.
+PAIR_WINDOW = OFFSET_RANGE + 0.25 * M_PER_MM
+#: The start face is read on a profile along the centre line at the instrument's spacing,
+#: then zoomed in to +-ZOOM at FINE_SPACING: the face is vertical (zero-thickness edge
+#: profile), so its position is known to half the spacing, 0.025 nm, whatever the height noise.
+ZOOM, FINE_SPACING = 0.5 * M_PER_UM, 0.05e-9
+#: Half windows (m) across the B grooves (1 mm apart) and across the triangle's sides.
+B_WINDOW, C_WINDOW = 0.45 * M_PER_MM, 2.0 * M_PER_MM
+#: Sample pitch of the profiles across grooves: the microscope's 0.3 um less (1 - 0.618) nm.
+#: At a whole number of nanometres every sample of a 45-deg flank would sit at the same phase
+#: of the 1 nm height display, all would round alike and the fitted centre would snap to
+#: whole nanometres; a golden-ratio phase step spreads the rounding evenly over each flank.
+ACROSS_SPACING = 0.3 * M_PER_UM - (1.0 - 0.5 * (math.sqrt(5.0) - 1.0)) * 1e-9
+#: Stations (m along a groove) of the profiles across it.
+STATIONS = {"a": (0.6 * M_PER_MM, 0.8 * M_PER_MM, 1.0 * M_PER_MM, 1.2 * M_PER_MM,
+                  1.4 * M_PER_MM),
+            "b": (-1.0 * M_PER_MM, -0.5 * M_PER_MM, 0.0, 0.5 * M_PER_MM, 1.0 * M_PER_MM),
+            "c": (-2.0 * M_PER_MM, -1.0 * M_PER_MM, 0.0, 1.0 * M_PER_MM, 2.0 * M_PER_MM)}
+#: File stems of the plates as the procedure cuts them, and of the compensated re-cuts.
+AS_CUT = {"touch": "00_touch_off_as_cut", "a": "01_a_axis_as_cut", "c": "02_c_axis_as_cut",
+          "b": "03_b_axis_as_cut"}
+COMPENSATED = {"a": "04_a_axis_compensated", "c": "05_c_axis_compensated",
+               "b": "06_b_axis_compensated"}
+
+
+# ---------------------------------------------------------------------------- reading plates
+
+
+def touch_off_z(part, microscope) -> float:
+    """Z (m) at which the edge meets the plate at B = 0, from the touch-off staircase.
+
+    Each segment k, cut at Z_k, is ``Z_touch - Z_k`` deep where seen; the segments 2..190 um
+    deep give ``Z_touch = Z_k + depth``, averaged.
+    """
+    found = []
+    for k in range(TOUCH_COUNT):
+        x = (k + 0.5) * TOUCH_SEGMENT
+        p = microscope.profile(part, (x, -PAIR_WINDOW - 0.2 * M_PER_MM),
+                               (x, PAIR_WINDOW + 0.2 * M_PER_MM))
+        try:
+            grooves = fit_v_grooves(p.s, p.z)
+        except InputError:
+            continue
+        found += [TOUCH_TOP - k * TOUCH_STEP + g.depth for g in grooves
+                  if TOUCH_DEPTHS[0] <= g.depth <= TOUCH_DEPTHS[1]]
+    if not found:
+        raise InputError("touch-off: no staircase segment 2..190 um deep; the edge meets the "
+                         "plate outside the range of Z -0.6 .. +0.79 mm")
+    return float(np.mean(found))
+
+
+def read_plate(stage: str, part, microscope, program: Program, machine,
+               plan: Plan | None = None) -> tuple[GrooveReading, ...]:
+    """Read the grooves of the ``stage`` plate ("a", "b" or "c") under the microscope.
+
+    Parameters
+    ----------
+    stage : str
+    part : Part
+        The plate as cut.
+    microscope : Microscope
+    program : Program
+        The program the plate was cut with (the axis values of each groove come from it).
+    machine : Machine
+        The nominal machine (its axes and their order).
+    plan : Plan, optional
+        Default the paper's.
+
+    Returns
+    -------
+    tuple of GrooveReading
+        In cutting order: A = 0, 180, 90, -90 deg; B = 0, theta2, theta3; C = 0, 120, 240
+        deg.
+    """
+    if stage not in ("a", "b", "c"):
+        raise InputError(f"Expected stage 'a', 'b' or 'c', got {stage!r}", key="stage")
+    blocks = _cutting_blocks(program, machine)
+    read = {"a": _read_a, "b": _read_b, "c": _read_c}[stage]
+    return read(part, microscope, blocks, Plan() if plan is None else plan)
+
+
+def _cutting_blocks(program: Program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(axis values at the start, at the end) of each block that cuts a groove: a linear
+    block that moves in X or Y, in program order."""
+    q = program_axes(program, machine, start=PARKED)
+    before = np.vstack([PARKED, q[:-1]])
+    x, y = machine.axes.index("X"), machine.axes.index("Y")
+    return [(before[n], q[n]) for n, move in enumerate(program.moves)
+            if move.kind == "linear" and (q[n, x] != before[n, x] or q[n, y] != before[n, y])]
+
+
+def _fits(part, microscope, origin, along, stations, half_width, what):
+    """Grooves across profiles at ``stations`` along ``along`` from ``origin``: (VGroove, xy)."""
+    across = np.array([-along[1], along[0]])
+    out = []
+    for t in stations:
+        mid = np.asarray(origin) + t * along
+        p0, p1 = mid - half_width * across, mid + half_width * across
+        p = microscope.profile(part, p0, p1, spacing=ACROSS_SPACING)
+        try:
+            g = fit_v_groove(p.s, p.z)
+        except InputError as error:
+            raise InputError(f"{what}, profile {t / M_PER_MM:+.2f} mm along: {error}; the "
+                             f"errors may exceed the plan's range (|d| <= "
+                             f"{OFFSET_RANGE / M_PER_MM} mm, |e| <= {CENTRE_RANGE / M_PER_MM} "
+                             "mm)") from error
+        out.append((g, profile_points(p0, p1, [g.centre])[0]))
+    return out
+
+
+def _reading(fits, block, start=None) -> GrooveReading:
+    return GrooveReading(
+        q_start=block[0], q_end=block[1], points=[xy for _, xy in fits],
+        point_sigma=[g.centre_sigma for g, _ in fits], depths=[g.depth for g, _ in fits],
+        depth_sigma=[g.depth_sigma for g, _ in fits], start=start,
+        start_sigma=FINE_SPACING / math.sqrt(12.0) if start is not None else math.nan)
+
+
+def _start_point(part, microscope, points, spot, along) -> np.ndarray:
+    """Where the centre line meets the groove's start face: coarse profile, then zoomed."""
+    line = fit_line(points)
+    direction = line.direction if line.direction @ along > 0 else -line.direction
+    foot = line.point + ((np.asarray(spot) - line.point) @ direction) * direction
+    p0 = foot - PAIR_WINDOW * direction
+    coarse = microscope.profile(part, p0, foot + PAIR_WINDOW * direction)
+    level = 0.5 * (float(np.nanmin(coarse.z)) + float(np.nanmax(coarse.z)))
+    steps = step_positions(coarse.s, coarse.z, level)
+    if steps.size != 1:
+        raise InputError(f"A axis: expected one start face near "
+                         f"{np.round(foot / M_PER_MM, 4)} mm along the groove, found "
+                         f"{steps.size}")
+    q0 = p0 + (steps[0] - ZOOM) * direction
+    fine = microscope.profile(part, q0, q0 + 2 * ZOOM * direction, spacing=FINE_SPACING)
+    return q0 + step_positions(fine.s, fine.z, level)[0] * direction
+
+
+def _read_a(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
+    out = []
+    for (angle, spot), block in zip(pair_grooves(), blocks, strict=True):
+        along = np.array([math.cos(angle), math.sin(angle)])
+        fits = _fits(part, microscope, spot, along, STATIONS["a"], PAIR_WINDOW,
+                     f"A axis, groove at A = {math.degrees(angle):g} deg")
+        start = _start_point(part, microscope, [xy for _, xy in fits], spot, along)
+        out.append(_reading(fits, block, start))
+    return tuple(out)
+
+
+def _read_b(part, microscope, blocks, plan: Plan) -> tuple[GrooveReading, ...]:
+    out = []
+    for x, tilt, block in zip(B_GROOVE_X, plan.tilts, blocks, strict=True):
+        fits = _fits(part, microscope, (x, 0.0), np.array([0.0, 1.0]), STATIONS["b"],
+                     B_WINDOW, f"B axis, groove at B = {math.degrees(tilt):g} deg")
+        out.append(_reading(fits, block))
+    return tuple(out)
+
+
+def _read_c(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
+    out = []
+    for turn, block in zip(C_TURNS, blocks, strict=True):
+        rot = rot_z(turn)[:2, :2]
+        fits = _fits(part, microscope, rot @ (0.0, -TRIANGLE_R), rot @ (1.0, 0.0),
+                     STATIONS["c"], C_WINDOW, f"C axis, groove at C = {math.degrees(turn):g} deg")
+        out.append(_reading(fits, block))
+    return tuple(out)
+
+
+def _programmed_starts() -> np.ndarray:
+    return np.array([spot for _, spot in pair_grooves()])
+
+
+# ---------------------------------------------------------------------------- compensation
+
+
+def compensate_program(program: Program, machine, compensation: Compensation) -> Program:
+    """A plate program rewritten by the paper's formulas (`corrected_axes`) through
+    `machinesim.compensation.map_program` (from `PARKED`, rounded to the machine's
+    resolution)."""
+    if tuple(machine.axes) != ("X", "Y", "Z", "A", "B", "C"):
+        raise InputError(f"Expected a machine with axes X Y Z A B C, got "
+                         f"{' '.join(machine.axes)}", key="machine")
+    return map_program(program, machine, partial(corrected_axes, compensation=compensation),
+                       start=PARKED)
+
+
+def layout_lines(stage: str, points) -> list[tuple[str, np.ndarray]]:
+    """Polylines (label, (k, 2) m) for a layout plot of a measured plate.
+
+    Parameters
+    ----------
+    stage : str
+        ``"a"``: ``points`` are the A grooves' start points (4, 2), drawn as grooves of the
+        programmed length; ``"c"``: the triangle's vertices (3, 2), with their centroid.
+    points : array_like
+        m.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    if stage == "c":
+        return [("triangle (crossings)", np.vstack([points, points[:1]])),
+                ("centre", points.mean(axis=0)[None, :])]
+    if stage != "a":
+        raise InputError(f"Expected stage 'a' or 'c', got {stage!r}", key="stage")
+    out = []
+    for (angle, _), start, name in zip(pair_grooves(), points,
+                                       ("A=0", "A=180", "A=90", "A=-90"), strict=True):
+        along = np.array([math.cos(angle), math.sin(angle)])
+        out.append((f"groove {name}", np.vstack([start, start + PAIR_LENGTH * along])))
+    return out
+
+
+# ---------------------------------------------------------------------------- procedure
+
+
+@dataclass(frozen=True, eq=False)
+class Readings:
+    """What `ToolSetting6Axis.measure` returns: the plates as cut and as read.
+
+    Attributes
+    ----------
+    z_touch : float
+        The touch-off Z (m).
+    a, c, b : tuple of GrooveReading
+        The A, C and B plates' grooves, in cutting order.
+    plates : Mapping[str, tuple]
+        File stem (`AS_CUT`) -> (Program, Part, CutReport) of each plate as cut.
+    """
+
+    z_touch: float
+    a: tuple[GrooveReading, ...]
+    c: tuple[GrooveReading, ...]
+    b: tuple[GrooveReading, ...]
+    plates: Mapping[str, tuple]
+
+
+@lru_cache(maxsize=4)
+def _nominal(name: str):
+    return load_machine(name)
+
+
+@dataclass(frozen=True)
+class ToolSetting6Axis:
+    """Paper 001's procedure: the tool edge's offset d from the A/B centres and the C centre
+    line e, and Table 1 before and after compensation.
+
+    Parameters
+    ----------
+    plan : Plan
+        Groove depths, tilts and feed (default: the paper's).
+    machine : str
+        The machine the programs are written for (a 6-axis X Y Z A B C machine).
+    """
+
+    plan: Plan = Plan()
+    machine: str = "robonano_ui"
+    name: ClassVar[str] = "tool_setting_6axis"
+    paper: ClassVar[str] = "001"
+
+    def measure(self, lab) -> Readings:
+        """Cut and read the four plates in the paper's order, each cut with what the earlier
+        ones found (microscopes labelled ``"touch-off"``, ``"a"``, ``"c"``, ``"b"``)."""
+        machine = self._machine()
+        if lab.machine.name != machine.name:
+            raise InputError(f"{self.name} writes its programs for {machine.name}; the lab "
+                             f"has {lab.machine.name}", key="machine")
+        cuts = plate_cuts(self.plan)
+        plates = {}
+
+        def cut(stage, program):
+            part, report = lab.cut(program, TOOL, cuts[stage].stock, start=PARKED)
+            plates[AS_CUT[stage]] = (program, part, report)
+            return part
+
+        touch = cut("touch", cuts["touch"].program)
+        z_touch = touch_off_z(touch, lab.microscope(label="touch-off"))
+        readings = {}
+
+        def stage(name, known):
+            program = compensate_program(cuts[name].program, machine, known)
+            readings[name] = read_plate(name, cut(name, program), lab.microscope(label=name),
+                                        program, machine, self.plan)
+            return readings[name]
+
+        a = a_axis_pairs([g.start for g in stage("a", Compensation(z_shift=z_touch))],
+                         _programmed_starts())
+        known = Compensation(tool_offset=[a.offset[0], a.offset[1], 0.0], z_shift=z_touch)
+        stage("c", known)
+        stage("b", known)
+        return Readings(z_touch, readings["a"], readings["c"], readings["b"],
+                        MappingProxyType(plates))
+
+    def identify(self, measurements: Readings) -> Identified:
+        """The paper's formulas on the readings (`identify`), with the model-based
+        cross-check (`fit_check`) beside them in ``detail.check``.
+
+        Parameters identified (SI, std propagated from the readings'): ``tool.x``,
+        ``tool.y``, ``tool.z`` (d, with dZ from the B tilts), ``location.C.EX0C``,
+        ``location.C.EY0C`` (e).
+        """
+        m = measurements
+        found = identify(m.z_touch, m.a, m.c, m.b, _programmed_starts(), self.plan.theta2,
+                         self.plan.theta3)
+        found = replace(found, check=fit_check(self._machine(), m.a, m.c, m.b))
+        return Identified(parameters=found.parameters, detail=found)
+
+    def compensate(self, identified: Identified) -> dict[str, Program]:
+        """The A, C and B plate programs rewritten by the identified d and e (`COMPENSATED`
+        names); no touch-off needed: the tool length is dZ."""
+        cuts = plate_cuts(self.plan)
+        compensation = identified.detail.compensation
+        return {COMPENSATED[s]: compensate_program(cuts[s].program, self._machine(),
+                                                   compensation) for s in "acb"}
+
+    def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
+        """Cut the compensated plates, read them (microscopes ``"a/compensated"``, ...), and
+        give Table 1: before from the identification's own plates, after from these."""
+        machine = self._machine()
+        cuts = plate_cuts(self.plan)
+        before: Identification = identified.detail
+        parts, reports, after = {}, {}, {}
+        for s in "acb":
+            name = COMPENSATED[s]
+            part, report = lab.cut(programs[name], TOOL, cuts[s].stock, start=PARKED)
+            parts[name], reports[name] = part, cut_summary(report)
+            after[s] = read_plate(s, part, lab.microscope(label=f"{s}/compensated"),
+                                  programs[name], machine, self.plan)
+        a_after = a_axis_pairs([g.start for g in after["a"]], _programmed_starts())
+        c_after = c_axis_triangle([g.points for g in after["c"]])
+        b_after = b_axis_tilts([g.depths.mean() for g in after["b"]], self.plan.theta2,
+                               self.plan.theta3, [g.q_start[2] for g in after["b"]])
+        old, new = (_table(before.a, before.b, before.c), _table(a_after, b_after, c_after))
+        figures = tuple(Figure(k, "um", old[k], new[k], *PAPER_TABLE_1.get(k, (None, None)))
+                        for k in old)
+        details = {
+            "before": _stage_dict(before.a, before.b, before.c),
+            "after": _stage_dict(a_after, b_after, c_after),
+            "identification": {"touch_off_z_um": before.z_touch / M_PER_UM,
+                               "b_dx_um": before.b.offset_x / M_PER_UM},
+            "fit_check": _check_dict(before),
+            "model_based": self._model_based(before, cuts),
+            "plan": {"depth_um": self.plan.depth / M_PER_UM,
+                     "b_depth_um": self.plan.b_depth / M_PER_UM,
+                     "theta1_deg": math.degrees(self.plan.theta1),
+                     "theta2_deg": math.degrees(self.plan.theta2),
+                     "theta3_deg": math.degrees(self.plan.theta3)},
+            "cuts": reports,
+        }
+        return Evaluation(figures=figures, details=details, parts=parts)
+
+    def _machine(self):
+        return _nominal(self.machine)
+
+    def _model_based(self, found: Identification, cuts) -> dict:
+        """Both routes of `machinesim.compensation` on the identified model: how far the
+        paper's rewrite and the model-based one put the tool edge (and its orientation)
+        from where the nominal programs put them, over the A, C and B plates.
+
+        The axis values themselves may differ: at B = 0, A and C turn about parallel axes,
+        so the model-based solver may split a rotation between them differently."""
+        machine = self._machine()
+        model = ErrorModel().with_parameters(found.values)
+        worst = {"paper": [0.0, 0.0], "model": [0.0, 0.0]}
+        for s in "acb":
+            nominal = cuts[s].program
+            want = machine.tool_pose(program_axes(nominal, machine, start=PARKED))
+            routes = {"paper": compensate_program(nominal, machine, found.compensation),
+                      "model": model_based(nominal, machine, model, start=PARKED).program}
+            for route, program in routes.items():
+                got = machine.tool_pose(program_axes(program, machine, start=PARKED), model)
+                position = np.linalg.norm(got[:, :3, 3] - want[:, :3, 3], axis=1).max()
+                cosine = (np.trace(np.swapaxes(got[:, :3, :3], 1, 2) @ want[:, :3, :3],
+                                   axis1=1, axis2=2) - 1.0) / 2.0
+                angle = np.arccos(np.clip(cosine, -1.0, 1.0)).max()
+                worst[route] = [max(worst[route][0], float(position)),
+                                max(worst[route][1], float(angle))]
+        return {f"{route}_route": {"max_edge_position_error_nm": pos / M_PER_NM,
+                                   "max_orientation_error_urad": from_si(angle, "urad")}
+                for route, (pos, angle) in worst.items()}
+
+
+def cut_summary(report) -> dict:
+    """A `CutReport` as the report's details hold it (units in the keys)."""
+    return {"removed_volume_mm3": report.removed_volume_m3 * 1e9,
+            "machining_time_s": report.machining_time_s,
+            "sweeps_count": report.sweeps,
+            "sideways_sweeps_count": report.sideways_sweeps,
+            "rapids_that_cut_count": len(report.rapids_that_cut),
+            "empty_cut": report.empty_cut}
+
+
+def _table(a: AAxisResult, b, c: CAxisResult) -> dict[str, float]:
+    """Table 1's quantities (um) and the B depth changes, from one set of measured plates."""
+    rise = b.depths[1:] - b.depths[0]
+    return {"a_dx": a.distances[0, 0] / M_PER_UM, "a_dy": a.distances[0, 1] / M_PER_UM,
+            "c_dx": c.centre[0] / M_PER_UM, "c_dy": c.centre[1] / M_PER_UM,
+            "b_depth_change_theta2": rise[0] / M_PER_UM,
+            "b_depth_change_theta3": rise[1] / M_PER_UM}
+
+
+def _stage_dict(a, b, c) -> dict:
+    return {"a_starts_um": a.starts / M_PER_UM,
+            "a_x_pair_distance_um": a.distances[0] / M_PER_UM,
+            "a_y_pair_distance_um": a.distances[1] / M_PER_UM,
+            "c_centre_displacement_um": c.centre / M_PER_UM,
+            "c_vertices_um": c.vertices / M_PER_UM,
+            "b_depths_um": b.depths / M_PER_UM,
+            "b_depth_change_um": (b.depths[1:] - b.depths[0]) / M_PER_UM}
+
+
+def _check_dict(found: Identification) -> dict:
+    """The fit cross-check beside the paper's values, per parameter (um and nm)."""
+    check = found.check
+    fitted = dict(zip(check.names, check.values, strict=True))
+    std = dict(zip(check.names, check.std, strict=True))
+    out = {name: {"paper_um": value / M_PER_UM, "fit_um": fitted[name] / M_PER_UM,
+                  "difference_nm": (fitted[name] - value) / M_PER_NM,
+                  "paper_std_nm": found.std[name] / M_PER_NM,
+                  "fit_std_nm": std[name] / M_PER_NM}
+           for name, value in found.values.items()}
+    out["rank_count"] = check.rank
+    out["normalised_residual_rms_ratio"] = check.normalised_residual_rms
+    return out

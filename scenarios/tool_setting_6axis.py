@@ -1,0 +1,162 @@
+"""Paper 001 replay: tool setting errors of a 6-axis ultraprecision machine (A, B, C axes).
+
+Run: ``.venv/bin/python scenarios/tool_setting_6axis.py`` (about 5 s with the defaults,
+which are small enough for a test) with options
+
+    --tool-offset-um dx,dy,dz   edge offset from the A/B centres, tool_mount axes: tool.x,
+                                tool.y, tool.z (default 245.02,340.06,150: half of Table 1's
+                                A distances; the paper gives no B value, 150 um is a
+                                plausible setting)
+    --c-offset-um x,y           C-axis centre line from the edge: location.C.EX0C, EY0C
+                                (default 108.97,852.81, Table 1's C distances)
+    --errors FILE.toml          any error model instead of those defaults (the two options
+                                above, when given, on top)
+    --noise on|off --seed N --out DIR   (default reports/tool_setting_6axis)
+
+On robonano_ui with those errors injected, the procedure
+(`machinesim.procedures.tool_setting_6axis.ToolSetting6Axis`: touch-off, A pairs, C
+triangle, B tilts) identifies them from virtual-microscope readings of the cut grooves,
+rewrites the NC data, re-cuts and re-measures. It prints Table 1 of the paper beside the
+simulated distances before and after compensation, the identified errors, and the
+model-based cross-check (`fit`), and writes the report folder (docs/reports.md): figures and
+identified tables, summary.json, the plates (PLY), the NC programs as cut and compensated,
+the cut reports and groove layout plots. See docs/procedures/tool_setting_6axis.md.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import numpy as np
+
+from machinesim import Lab
+from machinesim.cam.tool_setting_plates import Plan
+from machinesim.exceptions import MachineSimError
+from machinesim.experiment import run
+from machinesim.identification.tool_setting_6axis import PARAMETERS
+from machinesim.procedures.tool_setting_6axis import (
+    ToolSetting6Axis,
+    cut_summary,
+    layout_lines,
+)
+from machinesim.report import ReportFolder, injected_errors, parse_floats, scenario_arguments
+from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
+
+#: The injected errors without --errors: Table 1's distances (d from the A pairs, halved;
+#: e from the C triangle), and 150 um along the tool.
+DEFAULTS = {"tool.x": 245.02 * M_PER_UM, "tool.y": 340.06 * M_PER_UM,
+            "tool.z": 150.0 * M_PER_UM, "location.C.EX0C": 108.97 * M_PER_UM,
+            "location.C.EY0C": 852.81 * M_PER_UM}
+#: Table 1's row labels for the figures.
+LABELS = {"a_dx": "A dx", "a_dy": "A dy", "c_dx": "C dx", "c_dy": "C dy",
+          "b_depth_change_theta2": "B depth change at theta2",
+          "b_depth_change_theta3": "B depth change at theta3"}
+
+
+def main(argv=None) -> int:
+    parser = scenario_arguments(__doc__.splitlines()[0], "reports/tool_setting_6axis")
+    parser.add_argument("--tool-offset-um", default=None,
+                        help="edge offset dx,dy,dz from the A/B centres (um; default "
+                        "245.02,340.06,150)")
+    parser.add_argument("--c-offset-um", default=None,
+                        help="C-axis centre line x,y from the edge (um; default "
+                        "108.97,852.81)")
+    args = parser.parse_args(argv)
+    try:
+        given = {}
+        if args.tool_offset_um is not None:
+            values = parse_floats(args.tool_offset_um, 3, "--tool-offset-um")
+            given.update(zip(PARAMETERS[:3], (v * M_PER_UM for v in values), strict=True))
+        if args.c_offset_um is not None:
+            values = parse_floats(args.c_offset_um, 2, "--c-offset-um")
+            given.update(zip(PARAMETERS[3:], (v * M_PER_UM for v in values), strict=True))
+        lab = Lab("robonano_ui", injected_errors(args, DEFAULTS, given),
+                  noise=args.noise == "on", seed=args.seed)
+        report(args, lab)
+    except MachineSimError as error:
+        print(f"tool_setting_6axis: {error}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def report(args, lab) -> None:
+    procedure = ToolSetting6Axis()
+    result = run(procedure, lab)
+    folder = ReportFolder(args.out)
+    readings = result.measurements
+    for name, (program, part, _) in readings.plates.items():
+        folder.write_program(f"{name}.nc", program)
+        folder.write_part(f"{name}.ply", part)
+    folder.write_json("cuts.json", {
+        **{name: cut_summary(report) for name, (_, _, report) in readings.plates.items()},
+        **result.evaluation.details["cuts"]})
+    details = result.evaluation.details
+    for stage, key, title in (
+            ("a", "a_starts_um", "A-axis grooves from their measured start points"),
+            ("c", "c_vertices_um", "C-axis triangle from the groove crossings")):
+        series = [(f"{state}: {what}", xy[:, 0] / M_PER_MM, xy[:, 1] / M_PER_MM)
+                  for state in ("before", "after")
+                  for what, xy in layout_lines(stage, np.asarray(details[state][key])
+                                               * M_PER_UM)]
+        folder.plot(f"layout_{stage}_axis.png", series, xlabel="x (mm)", ylabel="y (mm)",
+                    title=title)
+    table = table_1(folder, result)
+    ident = identification_table(folder, result, procedure.plan)
+    check = check_table(folder, details["fit_check"])
+    folder.write_result(result)
+    print(table)
+    print(ident)
+    print(check)
+    print(f"report folder: {folder.path}")
+
+
+def table_1(folder, result) -> str:
+    """Table 1 of the paper beside the simulated distances (um)."""
+    rows = [[LABELS[f.name], _cell(f.paper_before), _cell(f.paper_after), f.before, f.after]
+            for f in result.figures]
+    return folder.write_table(
+        "table1", ["distance between grooves", "paper original (um)",
+                   "paper compensated (um)", "simulated before (um)", "simulated after (um)"],
+        rows, title="Paper 001, Table 1: measured machining errors against A and C axis",
+        digits=4)
+
+
+def identification_table(folder, result, plan: Plan) -> str:
+    """Injected and identified d and e, and the two second readings of the procedure."""
+    found = result.identification.detail
+    truth = result.injected
+    # dX: the edge's offset from the B centre in machine X at A = theta1 (docs/procedures)
+    dx = (truth["tool.x"] * math.cos(plan.theta1) - truth["tool.y"] * math.sin(plan.theta1))
+    names = ["tool dx", "tool dy", "tool dz (B: dZ)", "C centre x", "C centre y"]
+    rows = [[label, truth[name] / M_PER_UM, result.identified[name][0] / M_PER_UM,
+             (result.identified[name][0] - truth[name]) / M_PER_NM,
+             result.identified[name][1] / M_PER_NM]
+            for label, name in zip(names, PARAMETERS, strict=True)]
+    rows += [["B: dX (machine X at A = theta1)", dx / M_PER_UM, found.b.offset_x / M_PER_UM,
+              (found.b.offset_x - dx) / M_PER_NM, math.nan],
+             ["tool length from touch-off", truth["tool.z"] / M_PER_UM,
+              -found.z_touch / M_PER_UM, (-found.z_touch - truth["tool.z"]) / M_PER_NM,
+              math.nan]]
+    return folder.write_table(
+        "identification", ["quantity", "injected (um)", "identified (um)", "error (nm)",
+                           "std (nm)"], rows, title="Injected and identified", digits=4)
+
+
+def check_table(folder, check) -> str:
+    """The paper's formulas beside the model-based fit on the same readings."""
+    rows = [[name, check[name]["paper_um"], check[name]["fit_um"],
+             check[name]["difference_nm"], check[name]["paper_std_nm"],
+             check[name]["fit_std_nm"]] for name in PARAMETERS]
+    return folder.write_table(
+        "fit_check", ["parameter", "paper's formulas (um)", "fit (um)", "fit - paper (nm)",
+                      "paper std (nm)", "fit std (nm)"], rows,
+        title="Cross-check: machinesim.identification.fit on the same readings", digits=4)
+
+
+def _cell(value):
+    return math.nan if value is None else value
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,323 @@
+"""Paper 001 replay: B-axis equations against the kinematics, the compensation rule, the
+whole procedure on a Lab (cut, measure, identify, compensate, re-cut) with seeded random
+errors, the model-based cross-check, and the scenario."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from machinesim import ErrorModel, Lab, ToolSetting, load_machine
+from machinesim.cam.tool_setting_plates import PARKED, Plan, plate_cuts
+from machinesim.compensation import program_axes
+from machinesim.exceptions import InputError
+from machinesim.experiment import run
+from machinesim.identification import tool_setting_6axis as ident
+from machinesim.nc import Move, Program
+from machinesim.procedures.tool_setting_6axis import (
+    ToolSetting6Axis,
+    compensate_program,
+    read_plate,
+)
+from machinesim.report import ReportFolder, check_summary
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIO = ROOT / "scenarios" / "tool_setting_6axis.py"
+UM, MM = 1e-6, 1e-3
+MACHINE = load_machine("robonano_ui")
+
+
+def errors_of(d, e) -> ErrorModel:
+    return ErrorModel(tool=ToolSetting(d, [0.0, 0.0, 0.0]),
+                      location={"C": {"EX0C": e[0], "EY0C": e[1]}})
+
+
+def paper_offsets(rng):
+    """Tool offset and C centre of the paper's size: Table 1 holds distances of 100-850 um,
+    i.e. offsets of a few hundred um; every component at least 100 um (50 um for e), with a
+    random sign, all within the plan's capture range."""
+    d = rng.uniform(100, 450, 3) * UM * rng.choice([-1.0, 1.0], 3)
+    e = rng.uniform(50, 650, 2) * UM * rng.choice([-1.0, 1.0], 2)
+    return d, e
+
+
+class After:
+    """The compensated plates' stage results, from the evaluation's details (m)."""
+
+    def __init__(self, details):
+        after = details["after"]
+        self.a_distances = np.array([after["a_x_pair_distance_um"],
+                                     after["a_y_pair_distance_um"]]) * UM
+        self.c_centre = np.array(after["c_centre_displacement_um"]) * UM
+        self.b_depths = np.array(after["b_depths_um"]) * UM
+
+
+def replay(d, e, noise, seed):
+    """The procedure on a lab with errors (d, e), then the compensated re-cuts."""
+    lab = Lab(MACHINE, errors_of(d, e), noise=noise, seed=seed)
+    result = run(ToolSetting6Axis(), lab)
+    reports = [r for _, _, r in result.measurements.plates.values()]
+    for report in reports:
+        assert report.sideways_sweeps == 0 and report.rapids_that_cut == ()
+        assert not report.empty_cut
+    for report in result.evaluation.details["cuts"].values():
+        assert report["sideways_sweeps_count"] == 0 and report["rapids_that_cut_count"] == 0
+        assert not report["empty_cut"]
+    return result, result.identification.detail, After(result.evaluation.details)
+
+
+def edge_z(d, a, b):
+    q = np.array([0.0, 0.0, 0.0, a, b, 0.0])
+    return MACHINE.tool_pose(q, errors_of(d, (0.0, 0.0)))[2, 3]
+
+
+def printed_eq2(d0, d1, d2, t2, t3):
+    """Paper 001's eq 2 as printed (with D the B = 0 depth)."""
+    den = math.sin(t2) * (1 - math.cos(t3)) - math.sin(t3) * (1 - math.cos(t2))
+    return ((d1 - d0) * math.sin(t2) + (d2 - d0) * math.sin(t3)) / den
+
+
+def test_b_axis_equations_follow_from_the_kinematics():
+    """Depth at a B tilt (A = 90 deg) read from Machine.tool_pose: eq 1 gives -dX, the
+    corrected eq 2 gives dZ exactly, the printed eq 2 does not."""
+    rng = np.random.default_rng(0)
+    for t2, t3 in ((20.0, -20.0), (10.0, 35.0), (-15.0, 30.0)):
+        t2, t3 = math.radians(t2), math.radians(t3)
+        d = rng.uniform(-450, 450, 3) * UM
+        depths = [-edge_z(d, math.pi / 2, t) for t in (0.0, t2, t3)]
+        # at A = 90 deg the edge offset in machine X is -dy, in Z dz
+        for t, depth in zip((t2, t3), depths[1:], strict=True):
+            # 1e-15 m: float64 round-off of the chain at the 0.3 m scale of the machine
+            assert depth - depths[0] == pytest.approx(
+                -d[1] * math.sin(t) + d[2] * (1 - math.cos(t)), abs=1e-15)
+        dx, dz = ident.b_axis_offsets(*depths, t2, t3)
+        # the 1e-15 m round-off above, divided by (1 - cos t) ~ 0.015 at the smallest tilt
+        assert dx == pytest.approx(-d[1], abs=1e-13)
+        assert dz == pytest.approx(d[2], abs=1e-13)
+        assert abs(printed_eq2(*depths, t2, t3) - d[2]) > 10 * UM
+        result = ident.b_axis_tilts(depths, t2, t3)
+        assert (result.offset_x, result.offset_z) == (dx, dz)
+
+
+def random_program(rng, n=20):
+    q = np.column_stack([rng.uniform(-5, 5, (n, 3)) * MM, rng.uniform(-np.pi, np.pi, n),
+                         rng.uniform(-1.0, 1.0, n), rng.uniform(-np.pi, np.pi, n)])
+    program = Program.from_moves(Move("rapid", dict(zip("XYZABC", row, strict=True)),
+                                      line=k + 1) for k, row in enumerate(q))
+    return q, program
+
+
+def test_compensation_puts_the_edge_where_the_nc_data_put_it():
+    rng = np.random.default_rng(1)
+    d, e = paper_offsets(rng)
+    q, program = random_program(rng)
+    q_fixed = ident.corrected_axes(q, ident.Compensation(d, e))
+    np.testing.assert_array_equal(q_fixed[:, 3:], q[:, 3:])
+    # 1e-15 m: the same chain evaluated twice, values of a few mm, float64
+    np.testing.assert_allclose(MACHINE.tool_pose(q_fixed, errors_of(d, e)),
+                               MACHINE.tool_pose(q), rtol=0, atol=1e-15)
+    shifted = ident.corrected_axes(q, ident.Compensation(z_shift=3 * UM))
+    assert shifted[:, 2] == pytest.approx(q[:, 2] + 3 * UM, abs=1e-18)
+    # the same rule through map_program: exact unrounded, and within the machine's
+    # resolution rounded (0.5 nm on X, Y, Z, 0.000005 deg on C at |P| < 9 mm: 0.8 nm)
+    fixed = compensate_program(program, MACHINE, ident.Compensation(d, e))
+    q_rounded = program_axes(fixed, MACHINE, start=PARKED)
+    assert np.abs(q_rounded[:, :3] - q_fixed[:, :3]).max() <= 0.5e-9 + 1e-18
+    assert np.abs(q_rounded[:, 3:] - q_fixed[:, 3:]).max() <= math.radians(0.5e-5) * (1 + 1e-9)
+    np.testing.assert_allclose(MACHINE.tool_pose(q_rounded, errors_of(d, e))[:, :3, 3],
+                               MACHINE.tool_pose(q)[:, :3, 3], rtol=0, atol=2e-9)
+    with pytest.raises(InputError, match=r"shape \(N, 6\)"):
+        ident.corrected_axes(q[:, :5], ident.Compensation())
+
+
+def test_the_plate_programs_are_compensated_as_before_the_port():
+    """The rule through map_program gives the NC text the old ad-hoc rewrite gave (the writer
+    rounds to 1 nm either way): every block of every plate within half a nanometre of the
+    unrounded rule, on the machine's grid."""
+    d, e = np.array([245.02, 340.06, 150.0]) * UM, np.array([108.97, 852.81]) * UM
+    for stage, plate in plate_cuts().items():
+        if stage == "touch":
+            continue
+        nominal = program_axes(plate.program, MACHINE, start=PARKED)
+        exact = ident.corrected_axes(nominal, ident.Compensation(d, e, z_shift=-1.5e-4))
+        got = program_axes(compensate_program(plate.program, MACHINE,
+                                              ident.Compensation(d, e, z_shift=-1.5e-4)),
+                           MACHINE, start=PARKED)
+        assert np.abs(got[:, :3] - exact[:, :3]).max() <= 0.5e-9 + 1e-18
+        np.testing.assert_allclose(np.round(got[:, :3] / 1e-9), got[:, :3] / 1e-9, atol=1e-6)
+
+
+@pytest.mark.parametrize("seed", [3, 11])
+def test_seeded_offsets_are_identified_and_compensated_with_noise(seed):
+    d, e = paper_offsets(np.random.default_rng(seed))
+    result, found, after = replay(d, e, noise=True, seed=seed)
+    comp = found.compensation
+    # before: the pairs' start points part by 2 (dx, dy) and 2 (-dy, dx), the triangle is
+    # centred on e; 50 nm covers the microscope readings (see the tolerances below)
+    np.testing.assert_allclose(found.a.distances, [2 * d[:2], [-2 * d[1], 2 * d[0]]],
+                               atol=50e-9)
+    # dx, dy: 20 nm, six sigma of the centre lines (sigma 3 nm over ten seeds with the
+    # 12 nm height noise); dx alone is read on the start faces, to 0.05 nm
+    np.testing.assert_allclose(comp.tool_offset[:2], d[:2], atol=20e-9)
+    # dZ: 0.1 um, six sigma (17 nm) of four depth fits amplified by 1 / (1 - cos 20 deg)
+    assert comp.tool_offset[2] == pytest.approx(d[2], abs=0.1 * UM)
+    # e: 30 nm, six sigma (5 nm) of the triangle centre from three fitted sides
+    np.testing.assert_allclose(comp.c_centre, e, atol=30e-9)
+    # second methods: the B tilts' dX is the edge's offset from the B centre in machine X at
+    # A = 90 deg, -dy (read from depths at one commanded Z, so whatever the A compensation
+    # added); 20 nm covers its depth-difference readings (sigma 6 nm, 1 / sin 20 deg); the
+    # touch-off reads the tool length the B tilts read as dZ
+    assert found.b.offset_x == pytest.approx(-d[1], abs=20e-9)
+    assert -found.z_touch == pytest.approx(comp.tool_offset[2], abs=0.1 * UM)
+    assert abs(printed_eq2(*found.b.depths, math.radians(20), math.radians(-20))
+               - d[2]) > 10 * UM
+    # after: the brief's 1 um, and 0.1 um from the identification and reading errors above
+    # (at most 25 nm over ten seeds)
+    assert np.abs(after.a_distances).max() < 0.1 * UM
+    assert np.abs(after.c_centre).max() < 0.1 * UM
+    assert np.abs(after.b_depths - Plan().b_depth).max() < 0.1 * UM
+    # the propagated standard uncertainties explain the errors (6 sigma), and the fit on
+    # the same readings agrees with the paper's formulas within the part of the paper's
+    # scatter the fit does not share (it uses every reading, the paper a subset)
+    truth = result.injected
+    check = result.evaluation.details["fit_check"]
+    for name, (value, std) in result.identified.items():
+        assert 0.0 < std and abs(value - truth[name]) < 6 * std + 1e-12, name
+        paper_std, fit_std = check[name]["paper_std_nm"], check[name]["fit_std_nm"]
+        spread = math.sqrt(max(paper_std**2 - fit_std**2, 0.0)) + 0.01
+        assert abs(check[name]["difference_nm"]) < 6 * spread, name
+        assert abs(check[name]["fit_um"] * UM - truth[name]) < 6 * fit_std * 1e-9 + 1e-12
+    assert check["rank_count"] == 5
+    # the sigmas are the readings' own: the fit's normalised residual is about 1
+    assert 0.5 < check["normalised_residual_rms_ratio"] < 2.0
+
+
+def test_without_noise_the_residuals_stay_below_a_nanometre():
+    d, e = paper_offsets(np.random.default_rng(5))
+    result, found, after = replay(d, e, noise=False, seed=0)
+    comp = found.compensation
+    # what is left: the 1 nm height display (spread by the golden-ratio pitch, < 0.1 nm on a
+    # centre) and the 0.05 nm pitch of the start-face zoom; 1 nm for dZ, which divides depth
+    # errors by 1 - cos 20 deg
+    np.testing.assert_allclose(comp.tool_offset[:2], d[:2], atol=0.5e-9)
+    assert comp.tool_offset[2] == pytest.approx(d[2], abs=1e-9)
+    np.testing.assert_allclose(comp.c_centre, e, atol=0.5e-9)
+    assert np.abs(after.a_distances).max() < 1e-9
+    assert np.abs(after.c_centre).max() < 1e-9
+    # the compensated programs are rounded to the machine's 1 nm, each B groove's Z by up to
+    # 0.5 nm: two grooves' depths part by up to 1 nm more than the readings' 0.5 nm
+    assert np.abs(after.b_depths - after.b_depths[0]).max() < 1.5e-9
+    # the procedure's parameters, as the machine names them, are the injected ones
+    truth = MACHINE.parameter_names(errors_of(d, e))
+    assert set(result.identified) <= set(truth)
+    for name, (value, _) in result.identified.items():
+        assert value == pytest.approx(result.injected[name], abs=1e-9), name
+    assert result.injected["tool.y"] == d[1] and result.injected["location.C.EY0C"] == e[1]
+    # the fit on the same readings: to a few hundredths of a nanometre, but for dZ, which
+    # the paper divides by 2 (1 - cos 20 deg) = 0.12 from depth differences: there the
+    # display's sub-nanometre bias on a tilted V's depth makes up to 1 nm (as bounded above)
+    check = result.evaluation.details["fit_check"]
+    for name in ident.PARAMETERS:
+        assert abs(check[name]["difference_nm"]) < (1.0 if name == "tool.z" else 0.05), name
+    # both compensation routes land the edge within the rounding to the machine's
+    # resolution: the paper's moves X, Y, Z only (sqrt(3) 0.5 nm), the model-based one also
+    # rounds C (0.000005 deg at 12.4 mm from its centre: 1.1 nm more)
+    routes = result.evaluation.details["model_based"]
+    assert routes["paper_route"]["max_edge_position_error_nm"] < 0.87
+    assert routes["model_route"]["max_edge_position_error_nm"] < 2.0
+    for route in ("paper_route", "model_route"):
+        assert routes[route]["max_orientation_error_urad"] < 0.1
+
+
+def test_the_summary_fits_the_one_schema(tmp_path):
+    lab = Lab(MACHINE, errors_of([2e-4, -1e-4, 1.2e-4], [3e-4, -2e-4]), noise=False)
+    result = run(ToolSetting6Axis(), lab)
+    ReportFolder(tmp_path).write_result(result)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    check_summary(summary)
+    assert (summary["paper"], summary["procedure"], summary["machine"]) == (
+        "001", "tool_setting_6axis", "robonano_ui")
+    assert set(summary["identified"]) == set(ident.PARAMETERS)
+    assert [f["name"] for f in summary["figures"]] == [
+        "a_dx", "a_dy", "c_dx", "c_dy", "b_depth_change_theta2", "b_depth_change_theta3"]
+    assert summary["figures"][0]["paper_before"] == 490.04
+    assert summary["figures"][4]["paper_before"] is None
+    for name in ("04_a_axis_compensated.nc", "06_b_axis_compensated.ply"):
+        assert (tmp_path / name).stat().st_size > 0
+
+
+def test_errors_outside_the_capture_range_are_reported():
+    plate = plate_cuts()["a"]
+    lab = Lab(MACHINE, errors_of([0.0, 0.9 * MM, 0.0], [0.0, 0.0]), noise=False)
+    part, _ = lab.cut(plate.program, "v:90", plate.stock)
+    microscope = lab.microscope(label="a")
+    with pytest.raises(InputError, match=r"A axis, groove at A = 0 deg.*plan's range"):
+        read_plate("a", part, microscope, plate.program, MACHINE)
+    with pytest.raises(InputError, match="Expected stage 'a', 'b' or 'c', got 'd'"):
+        read_plate("d", part, microscope, plate.program, MACHINE)
+    with pytest.raises(InputError, match="Expected two distinct non-zero B tilts"):
+        ident.b_axis_offsets(0.0, 1e-6, 1e-6, 0.3, 0.3)
+    with pytest.raises(InputError, match=r"Expected tool_offset as 3 finite numbers"):
+        ident.Compensation(tool_offset=[1e-6, 2e-6])
+    with pytest.raises(InputError, match="Expected a finite z_shift"):
+        ident.Compensation(z_shift=math.nan)
+    with pytest.raises(InputError, match="writes its programs for robonano_ui"):
+        ToolSetting6Axis().measure(Lab("robonano_a0ib"))
+
+
+def scenario(*args):
+    return subprocess.run([sys.executable, str(SCENARIO), *args], capture_output=True,
+                          text=True, check=False, cwd=ROOT)
+
+
+def test_the_scenario_reproduces_table_1(tmp_path):
+    out = tmp_path / "report"
+    result = scenario("--noise", "off", "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    assert "| A dx | 490.0400 | 4.0600 | 490.0400 |" in result.stdout
+    summary = json.loads((out / "summary.json").read_text())
+    check_summary(summary)
+    details = summary["details"]
+    # defaults: half of Table 1's A distances, its C distances; the original distances come
+    # back to 1 nm (noise off) and vanish to 1 nm after compensation
+    np.testing.assert_allclose(details["before"]["a_x_pair_distance_um"], [490.04, 680.12],
+                               atol=1e-3)
+    np.testing.assert_allclose(details["before"]["c_centre_displacement_um"],
+                               [108.97, 852.81], atol=1e-3)
+    assert np.abs(details["after"]["a_x_pair_distance_um"]).max() < 1e-3
+    assert np.abs(details["after"]["c_centre_displacement_um"]).max() < 1e-3
+    for name in ("table1.md", "identification.json", "layout_a_axis.png",
+                 "04_a_axis_compensated.nc", "05_c_axis_compensated.ply", "fit_check.md",
+                 "01_a_axis_as_cut.nc", "cuts.json", "figures.md"):
+        assert (out / name).stat().st_size > 0
+    assert summary["injected"]["tool.x"] == pytest.approx(245.02e-6, abs=1e-18)
+    bad = scenario("--tool-offset-um", "1,2", "--out", str(out))
+    assert bad.returncode == 2
+    assert "--tool-offset-um '1,2': expected 3 comma-separated numbers" in bad.stderr
+    assert "Traceback" not in bad.stderr
+
+
+def test_the_scenario_takes_an_error_model_file(tmp_path):
+    errors = tmp_path / "errors.toml"
+    errors.write_text("[tool]\noffset_um = [-120.0, 210.0, -90.0]\n"
+                      "[location.C]\nEX0C_um = 40.0\nEY0C_um = -300.0\n")
+    out = tmp_path / "report"
+    result = scenario("--errors", str(errors), "--c-offset-um=-75,60", "--noise", "off",
+                      "--out", str(out))
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    injected, identified = summary["injected"], summary["identified"]
+    # the file's tool offset, with --c-offset-um on top
+    expected = {"tool.x": -120e-6, "tool.y": 210e-6, "tool.z": -90e-6,
+                "location.C.EX0C": -75e-6, "location.C.EY0C": 60e-6}
+    for name, value in expected.items():
+        assert injected[name] == pytest.approx(value, abs=1e-15), name
+        assert identified[name]["value"] == pytest.approx(value, abs=1e-9), name
+    missing = scenario("--errors", str(tmp_path / "none.toml"), "--out", str(out))
+    assert missing.returncode == 2 and "Traceback" not in missing.stderr
