@@ -383,3 +383,28 @@ def test_the_documented_example_runs(capsys):
     out = capsys.readouterr().out
     assert "rank 6" in out and "unidentifiable: []" in out
     assert "tool.x        120.0000 um" in out
+
+
+def test_through_the_lab_an_r_test_plan_identifies_the_injected_errors():
+    """The honest path: a Lab holds the truth, its R-test reads two balls on the tool, the
+    fit sees only the readings; then the identified values are compared with lab.reveal()."""
+    from machinesim import Lab
+    from machinesim.identification import from_r_test
+
+    q = PLAN[0][::6]  # one row per pose
+    truth = random_truth(np.random.default_rng(5), FITTED)
+    for noise in (False, True):
+        lab = Lab(MACHINE, truth, noise=noise, seed=4)
+        readings = [lab.r_test(label=f"ball {k}", point=ball, resolution=0.0).read(q)
+                    for k, ball in enumerate(BALLS)]
+        obs = Observations.of([from_r_test(r) for r in readings])
+        estimate = fit(MACHINE, obs, FITTED)
+        assert estimate.rank == len(FITTED)
+        injected = lab.reveal().parameters()
+        if not noise:
+            assert_recovered(estimate, lab.reveal(), FITTED)
+            continue
+        z = [(estimate.values[i] - injected[n]) / estimate.std[i]
+             for i, n in enumerate(estimate.names)]
+        # 20 standard normal scores: none beyond 4.5 (a chance of 1e-4 for the set)
+        assert np.max(np.abs(z)) < 4.5, z

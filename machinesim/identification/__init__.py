@@ -23,7 +23,12 @@ from machinesim.identification.fit import (
     fit,
     plan_quality,
 )
-from machinesim.identification.observations import Observation, Observations, observations
+from machinesim.identification.observations import (
+    Observation,
+    Observations,
+    from_r_test,
+    observations,
+)
 
 __all__ = ["Combination", "Estimate", "Observation", "Observations", "PlanQuality", "fit",
-           "observations", "plan_quality"]
+           "from_r_test", "observations", "plan_quality"]

@@ -16,7 +16,7 @@ import numpy as np
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 
-__all__ = ["Observation", "Observations", "is_angle", "observations"]
+__all__ = ["Observation", "Observations", "from_r_test", "is_angle", "observations"]
 
 
 def is_angle(name: str) -> bool:
@@ -214,6 +214,15 @@ class Observations:
                    np.concatenate([p.sigma for p in parts]),
                    tuple(f for p in parts for f in p.frames),
                    np.concatenate([p.points for p in parts]))
+
+
+def from_r_test(reading) -> Observations:
+    """The readings of an R-test (`machinesim.metrology.RTestReading`) as observations: three
+    per position, along the workpiece frame's X, Y and Z, with the reading's uncertainty."""
+    n = len(reading.q)
+    return Observations(np.repeat(reading.q, 3, axis=0), reading.displacement.reshape(-1),
+                        np.tile(np.eye(3), (n, 1)), reading.sigma, reading.frame,
+                        reading.point)
 
 
 def observations(q, directions, values, sigma, *, frame="tool_tip",

@@ -40,7 +40,9 @@ class RTestReading:
         Actual minus nominal ball centre, workpiece frame X, Y, Z, m, as displayed (noise and
         rounding).
     sigma : float
-        Standard uncertainty of each displacement reading, m (noise and rounding together).
+        Standard uncertainty of each displacement reading as the instrument states it, m
+        (its noise and rounding together; stated even when the lab's noise is off, as a
+        data sheet states it, so that a fit can weight the readings).
     frame : str
     point : ndarray, shape (3,), read-only
         The ball centre in ``frame``, m.
@@ -91,6 +93,7 @@ class RTest:
                              f"{point!r}", key="point")
         self.point = frozen(point)
         self.readout = Readout.of(sigma, resolution, noise)
+        self.uncertainty = Readout(sigma, resolution).std
         self.rng = as_generator(rng)
 
     def __repr__(self) -> str:
@@ -115,7 +118,7 @@ class RTest:
         actual = self._centre(self._pose(self.frame, q))
         nominal = self._centre(self.machine.frame_pose(self.frame, q))
         shown = self.readout.read(actual - nominal, self.rng)
-        return RTestReading(frozen(q), frozen(shown), self.readout.std, self.frame, self.point)
+        return RTestReading(frozen(q), frozen(shown), self.uncertainty, self.frame, self.point)
 
     def _centre(self, wMf: np.ndarray) -> np.ndarray:
         return wMf[:, :3, 3] + wMf[:, :3, :3] @ self.point
