@@ -100,9 +100,10 @@ class ReportFolder:
         for name, program in {**result.evaluation.programs, **result.programs}.items():
             self.write_program(f"{name}.nc", program)
         figures = self.write_table(
-            "figures", ["figure", "unit", "paper before", "before", "paper after", "after"],
+            "figures", ["figure", "unit", "paper before", "before", "paper after", "after",
+                        "note"],
             [[f.name, f.unit, _cell(f.paper_before), _cell(f.before), _cell(f.paper_after),
-              _cell(f.after)] for f in result.figures],
+              _cell(f.after), f.note] for f in result.figures],
             title=f"Paper {result.paper}, {result.procedure} on {result.machine}: before and "
                   "after compensation", digits=digits)
         identified = self.write_table(
