@@ -15,7 +15,7 @@ $(STAMP): $(BIN)/python pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/python scenarios/seed002_workpiece_setting.py
+	$(BIN)/python scenarios/workpiece_setting.py
 
 test: $(STAMP)
 	$(BIN)/python -m ruff check .

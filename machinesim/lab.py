@@ -74,17 +74,21 @@ class Lab:
 
         Parameters are those of `machinesim.cutting.cut` (``start``, ``chord_tolerance``,
         ``servo``, ``progress`` as keywords), without the errors: the lab supplies its own.
+        With ``turn_step`` (rad) the lab cuts by `machinesim.cutting.cut_turned` instead
+        (the same part, each group of feed moves at one C position cut in its own turned
+        frame: faster for faces at many C positions), which also takes ``floor``.
 
         Returns
         -------
         (Part, CutReport)
         """
-        from machinesim.cutting import cut
+        from machinesim.cutting import cut, cut_turned
 
         if "errors" in options:
             raise InputError("a lab cuts with its own errors; pass none to Lab.cut",
                              key="errors")
-        return cut(program, self.machine, tool, stock, self.__truth, roi=roi, **options)
+        cutter = cut_turned if "turn_step" in options else cut
+        return cutter(program, self.machine, tool, stock, self.__truth, roi=roi, **options)
 
     # -------------------------------------------------------------------------- instruments
 

@@ -2,5 +2,7 @@
 
 from machinesim.cutting.engine import EngineReport, remove, rotary_substeps
 from machinesim.cutting.program import CutReport, cut
+from machinesim.cutting.windows import clip_to, cut_turned
 
-__all__ = ["CutReport", "EngineReport", "cut", "remove", "rotary_substeps"]
+__all__ = ["CutReport", "EngineReport", "clip_to", "cut", "cut_turned", "remove",
+           "rotary_substeps"]

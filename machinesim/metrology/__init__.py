@@ -43,6 +43,13 @@ from machinesim.metrology.lines import (
 )
 from machinesim.metrology.meshindex import MeshIndex
 from machinesim.metrology.optical import HeightMap, Microscope, Profile, WhiteLightInterferometer
+from machinesim.metrology.part_features import (
+    CrownFeatures,
+    GrooveDepths,
+    crown_features,
+    groove_depths,
+)
+from machinesim.metrology.planes import Line3D, line_distance, plane_intersection
 from machinesim.metrology.prisms import fit_apexes
 from machinesim.metrology.probe import Contact, Contacts, touch, touch_many
 from machinesim.metrology.probe_instrument import ScanReading, TouchProbe
@@ -62,3 +69,5 @@ __all__ += [
     "plot_profile", "profile_points", "roughness_sa", "sphere_centre_from_touch", "step_positions",
 ]
 __all__ += ["RTest", "RTestReading", "fit_apexes"]
+__all__ += ["CrownFeatures", "GrooveDepths", "Line3D", "crown_features", "groove_depths",
+            "line_distance", "plane_intersection"]

@@ -1,50 +1,50 @@
-"""Paper 002's two machining experiments: crossing grooves and the finished diamond crown.
+"""Paper 002's two workpieces as CAM prepares them: the crossing grooves and the diamond crown.
 
 Both run on `robonano_a0ib` with a R2.0 round-nose diamond tool (Tables 1 and 2), on
-workpieces that carry three R2 mm reference spheres (ball-end-milled cavities) for
-`machinesim.identification.seed002`. Programs are written for the ideal workpiece; the
-tool cuts along its own +X (docs/machines.md), so where the paper feeds along Y the
-programs feed along X, with C turned to point the cut: nothing else changes.
+workpieces that carry three R2 mm reference spheres (ball-end-milled cavities) for the
+setting identification (`machinesim.identification.workpiece_setting`). Programs are
+written for the ideal workpiece; the tool cuts along its own +X (docs/machines.md), so where
+the paper feeds along Y the programs feed along X, with C turned to point the cut: nothing
+else changes. Nothing here cuts or measures: `machinesim.procedures.workpiece_setting` does.
 
 Grooves (section 3.1): four grooves 3 um deep and 1 mm long from a common point, cut at
-C = 0, 90, 180, 270 deg; their depth is read along each (`groove_depths`).
+C = 0, 90, 180, 270 deg (`groove_program`) on a block (`GROOVE_STOCK`).
 
 Crown (section 3.2): the roughly machined crown (`workpiece.diamond_crown`, 10 um oversize,
-here on a 20 x 20 mm base with the spheres in its flat) is finished with 1 um layers
-(Table 2: 10 um in all, pitch feed 12.5 um): the top face by passes along X at C = 0, each
-side face by passes down its slope (X and Z together) at C = k 45 deg. `crown_features`
-reads the distances between opposite top edges (L1..L8) and the side-face inclinations
-(S1..S8) from planes fitted to microscope height maps. `machining_time` gives the time of
-the finishing against cutting the crown out of the full prism with the same passes.
+here on a 20 x 20 mm base with the spheres in its flat, `crown_stock`) is finished with 1 um
+layers (Table 2: 10 um in all, pitch feed 12.5 um): the top face by passes along X at C = 0,
+each side face by passes down its slope (X and Z together) at C = k 45 deg (`crown_passes`,
+`passes_program`). `crown_roi` gives the measuring windows and the passes that reach them;
+`machining_time` the time of the finishing against cutting the crown out of the full prism
+with the same passes.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, replace
 
 import manifold3d
 import numpy as np
 
 from machinesim import motion
-from machinesim.cutting import remove
+from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
-from machinesim.identification.seed002 import ReferenceSpheres
-from machinesim.metrology import MeshIndex, fit_plane, plane_angle
+from machinesim.identification.workpiece_setting import ReferenceSpheres
 from machinesim.nc import Program, ProgramBuilder
 from machinesim.tolerances import SPHERE_CHORD_M
 from machinesim.tools import RoundNoseTool, sphere_polygon
+from machinesim.units import M_PER_MM, M_PER_UM
 from machinesim.workpiece import Part, diamond_crown
 
 __all__ = [
-    "CROWN", "GROOVE_ROI", "GROOVE_SPHERES", "GROOVE_STOCK", "MAP_SPACING", "PARK", "CrownCut",
-    "CrownFeatures", "CrownPlan", "GrooveDepths", "PassGroup", "clip_to", "crown_features",
-    "crown_passes", "crown_roi", "crown_spheres", "crown_stock", "crown_tool", "cut_crown",
-    "groove_depths", "groove_program", "machining_time", "passes_program",
+    "CLEARANCE", "CROWN", "CROWN_BASE", "CROWN_BASE_HEIGHT", "FEED_MM_PER_MIN", "GROOVE_ROI",
+    "GROOVE_SPHERES", "GROOVE_STOCK", "PARK", "SAFE_Z", "CrownPlan", "PassGroup",
+    "crown_design", "crown_passes", "crown_roi", "crown_spheres", "crown_stock", "crown_tool",
+    "groove_program", "machining_time", "passes_program",
 ]
 
-MM, UM = 1e-3, 1e-6
+MM, UM = M_PER_MM, M_PER_UM
 #: Table 1 and 2: feed 20 (printed "mm/rev" for a tool that does not turn: read mm/min).
 FEED_MM_PER_MIN = 20.0
 #: Heights above a pass's start where the tool arrives (rapid) and leaves (feed), and the
@@ -67,15 +67,6 @@ GROOVE_SPHERES = ReferenceSpheres(np.array([[-6.0, -6.0, 0.0], [6.0, -6.0, 0.0],
                                             [-6.0, 6.0, 0.0]]) * MM, 2.0 * MM)
 #: The grooves are cut and read inside this window (xmin, xmax, ymin, ymax), m.
 GROOVE_ROI = ((-1.5 * MM, 1.5 * MM, -1.5 * MM, 1.5 * MM),)
-#: Stations along each groove where its depth is read (m from the crossing point); 0.95 mm
-#: is the paper's "end of each groove".
-STATIONS = (0.5 * MM, 0.6 * MM, 0.7 * MM, 0.8 * MM, 0.9 * MM, 0.95 * MM)
-#: Half length of a profile across a groove, and the fitted stretch about its bottom, m: a
-#: R2 mm groove 30 um deep is 0.7 mm wide; 25 um either side of the bottom rises 0.16 um.
-PROFILE_HALF, BOTTOM_HALF = 0.35 * MM, 25 * UM
-#: Patches of the uncut top face between the grooves, centre distance from the crossing
-#: along the diagonals and half size, m: the reference surface for the depths.
-PATCH_AT, PATCH_HALF = 0.75 * MM, 0.15 * MM
 
 
 def groove_program(depth: float = 3 * UM, length: float = 1 * MM,
@@ -85,73 +76,13 @@ def groove_program(depth: float = 3 * UM, length: float = 1 * MM,
     Each groove: rapid above the crossing point, plunge to ``-depth`` at the feed (the edge
     plunging cuts nothing), feed ``length`` along the tool's +X, leave upwards at the feed.
     """
-    b = ProgramBuilder(2, source="seed002 grooves")
+    b = ProgramBuilder(2, source="workpiece_setting grooves")
     b.rapid(X=0.0, Y=0.0, Z=SAFE_Z, B=0.0, C=0.0)
     for k in range(4):
         b.rapid(C=math.radians(90.0 * k)).rapid(Z=CLEARANCE)
         b.linear(Z=-depth, feed_mm_per_min=feed_mm_per_min)
         b.linear(X=length).linear(Z=CLEARANCE).rapid(Z=SAFE_Z).rapid(X=0.0)
     return b.build()
-
-
-@dataclass(frozen=True, eq=False)
-class GrooveDepths:
-    """Depths read along the four grooves (m).
-
-    Attributes
-    ----------
-    stations : ndarray, shape (n,)
-        Distances from the crossing point, m.
-    depths : ndarray, shape (4, n)
-        Depth of groove k (cut at C = 90 k deg) at each station, below the top face.
-    """
-
-    stations: np.ndarray
-    depths: np.ndarray
-
-    @property
-    def ends(self) -> np.ndarray:
-        """Depths at the last station, shape (4,)."""
-        return self.depths[:, -1]
-
-
-def groove_depths(part, microscope, stations=STATIONS) -> GrooveDepths:
-    """Read each groove's depth along it with the microscope (paper Fig. 8b).
-
-    The top face is the plane fitted to four patches between the grooves; at each station a
-    profile across the groove gives its bottom (parabola through the stretch about the
-    lowest sample) and the depth is the plane's height there less the bottom.
-    """
-    points = []
-    for sx, sy in ((1, 1), (-1, 1), (-1, -1), (1, -1)):
-        cx, cy = sx * PATCH_AT, sy * PATCH_AT
-        area = microscope.height_map(part, cx - PATCH_HALF, cx + PATCH_HALF, cy - PATCH_HALF,
-                                     cy + PATCH_HALF, spacing=5 * UM)
-        gx, gy = np.meshgrid(area.x, area.y)
-        points.append(np.column_stack([gx.ravel(), gy.ravel(), area.z.ravel()]))
-    top = fit_plane(np.vstack(points))
-    stations = np.asarray(stations, dtype=np.float64)
-    depths = np.zeros((4, len(stations)))
-    for k in range(4):
-        along = np.array([math.cos(k * math.pi / 2), math.sin(k * math.pi / 2)])
-        across = np.array([-along[1], along[0]])
-        for j, t in enumerate(stations):
-            centre = t * along
-            read = microscope.profile(part, centre - PROFILE_HALF * across,
-                                      centre + PROFILE_HALF * across)
-            xy, z = read.xy, read.z
-            lowest = int(np.nanargmin(z))
-            near = (np.abs(read.s - read.s[lowest]) <= BOTTOM_HALF) & ~np.isnan(z)
-            s = read.s[near] - read.s[lowest]
-            c2, c1, c0 = np.polyfit(s, z[near], 2)
-            vertex = -c1 / (2.0 * c2) if c2 > 0.0 else 0.0
-            bottom = c0 + c1 * vertex + c2 * vertex**2 if abs(vertex) <= BOTTOM_HALF else (
-                float(np.mean(z[near])))
-            p = xy[lowest]
-            level = top.point[2] - (top.normal[0] * (p[0] - top.point[0])
-                                    + top.normal[1] * (p[1] - top.point[1])) / top.normal[2]
-            depths[k, j] = level - bottom
-    return GrooveDepths(_frozen(stations), _frozen(depths))
 
 
 # -------------------------------------------------------------------------------- crown
@@ -207,6 +138,12 @@ class CrownPlan:
         """Finishing layers (Table 2: 10 um in 1 um cuts)."""
         return int(round(self.oversize / self.depth_of_cut))
 
+    @property
+    def foot_distance(self) -> float:
+        """Designed distance between opposite foot edges of the finished crown, m."""
+        return 2.0 * (self.apothem + (self.rough_top - self.oversize - self.rough_flat)
+                      / math.tan(self.slope))
+
 
 #: The crown of `workpiece.diamond_crown` and Table 2.
 CROWN = CrownPlan()
@@ -230,6 +167,12 @@ def crown_stock(plan: CrownPlan = CROWN, chord_tol: float = SPHERE_CHORD_M) -> P
         [sphere.translate(tuple(float(v) for v in c)) for c in crown_spheres(plan).centres],
         manifold3d.OpType.Add)
     return Part(crown.manifold - cavities)
+
+
+def crown_design(plan: CrownPlan = CROWN) -> Part:
+    """The finished crown as designed, on the flat as roughed (a reference for views)."""
+    return diamond_crown(0.0, 2 * plan.apothem, plan.height - plan.oversize, CROWN_BASE,
+                         CROWN_BASE_HEIGHT, plan.slope)
 
 
 def crown_tool(height: float = 50 * UM) -> RoundNoseTool:
@@ -288,9 +231,9 @@ def crown_passes(plan: CrownPlan = CROWN, offsets=None, prism: bool = False,
     top_lanes = _rows(lanes, top_rows)
     for o in offsets:
         if len(top_lanes):
-            groups.append(PassGroup(0.0, _frozen([-plan.top_half, top_lanes[0], o]),
-                                    _frozen([plan.top_half, top_lanes[0], o]),
-                                    _frozen([0.0, plan.pitch, 0.0]), len(top_lanes)))
+            groups.append(PassGroup(0.0, frozen([-plan.top_half, top_lanes[0], o]),
+                                    frozen([plan.top_half, top_lanes[0], o]),
+                                    frozen([0.0, plan.pitch, 0.0]), len(top_lanes)))
     side_offsets = offsets
     if prism:
         corner = sin_s * (plan.prism_apothem - plan.apothem) + cos_s * plan.rough_top
@@ -310,9 +253,9 @@ def crown_passes(plan: CrownPlan = CROWN, offsets=None, prism: bool = False,
                 continue
             height = [lift - (r - plan.apothem) * tan_s for r in (r0, r1)]
             groups.append(PassGroup(math.radians(45.0 * k),
-                                    _frozen([r0, side_lanes[0], height[0]]),
-                                    _frozen([r1, side_lanes[0], height[1]]),
-                                    _frozen([0.0, plan.pitch, 0.0]), len(side_lanes)))
+                                    frozen([r0, side_lanes[0], height[0]]),
+                                    frozen([r1, side_lanes[0], height[1]]),
+                                    frozen([0.0, plan.pitch, 0.0]), len(side_lanes)))
     return tuple(groups)
 
 
@@ -330,7 +273,7 @@ PARK = (0.0, 0.0, SAFE_Z, 0.0, 0.0)
 
 
 def passes_program(groups, number: int = 3, stagger: bool = True,
-                   source: str = "seed002 crown") -> Program:
+                   source: str = "workpiece_setting crown") -> Program:
     """The NC program of pass groups, from and back to `PARK`.
 
     Each pass: rapid to its start + `CLEARANCE`, feed down, feed along, feed up; every turn
@@ -384,14 +327,14 @@ def machining_time(machine, groups) -> float:
     for group in groups:
         times = []
         for count in (1, 2):
-            b = ProgramBuilder(0, source="seed002 timing")
+            b = ProgramBuilder(0, source="workpiece_setting timing")
             _add_passes(b, [replace(group, count=count)], c_now, stagger=False)
             times.append(motion.plan(b.build(), machine, start=q).duration)
         total += times[0] + (group.count - 1) * (times[1] - times[0])
         c_now = group.c
         end = group.end + (group.count - 1) * group.step
         q = np.array([end[0], end[1], end[2] + CLEARANCE, 0.0, c_now])
-    closing = ProgramBuilder(0, source="seed002 timing").rapid(Z=SAFE_Z)
+    closing = ProgramBuilder(0, source="workpiece_setting timing").rapid(Z=SAFE_Z)
     closing.rapid(X=0.0, Y=0.0, C=0.0)
     return total + motion.plan(closing.build(), machine, start=q).duration
 
@@ -443,182 +386,3 @@ def _face_point(k: int, r: float, v: float) -> np.ndarray:
     """Workpiece (x, y) of the point r along face k's outward direction and v along it."""
     c, s = math.cos(k * math.pi / 4), math.sin(k * math.pi / 4)
     return np.array([r * c - v * s, r * s + v * c])
-
-
-@dataclass(frozen=True)
-class CrownCut:
-    """What `cut_crown` did.
-
-    Attributes
-    ----------
-    machining_time_s, cutting_time_s : float
-        From the feeds (`motion.plan`), the whole program and its feed moves.
-    sweeps : int
-        Feed sweeps that reached the windows' material.
-    sideways : int
-        Feed sweeps the engine flags as dragging the tool across its edge: a compensated
-        program's plunges, retracts and slope passes, where the roll five axes cannot undo
-        turns the tool ~1e-4 rad off the plane of its motion.
-    removed_volume_m3 : float
-    elapsed_s : float
-    """
-
-    machining_time_s: float
-    cutting_time_s: float
-    sweeps: int
-    sideways: int
-    removed_volume_m3: float
-    elapsed_s: float
-
-
-def clip_to(stock: Part, boxes, floor: float | None = None) -> Part:
-    """The stock inside the boxes (x0, x1, y0, y1), m, above ``floor`` (m; default all)."""
-    low, high = stock.bounds
-    pad = 1.0 * MM
-    bottom = low[2] - pad if floor is None else floor
-    pieces = [manifold3d.Manifold.cube((x1 - x0, y1 - y0, high[2] + pad - bottom))
-              .translate((x0, y0, bottom)) for x0, x1, y0, y1 in boxes]
-    return Part(stock.manifold ^ manifold3d.Manifold.batch_boolean(pieces,
-                                                                   manifold3d.OpType.Add))
-
-
-def cut_crown(program: Program, machine, tool, stock: Part, errors=None, boxes=None,
-              floor: float | None = None) -> tuple[Part, CrownCut]:
-    """Cut a crown program, each C position's passes in that face's own frame.
-
-    The part is the same as `cutting.cut` makes (tested), but the booleans of passes turned
-    45 deg off the machine axes are 4-5 times slower than of passes along them (measured:
-    105 side passes, 9.8 s at C = 45 deg, 2.2 s at 0): so the feed moves are grouped by
-    their C, rounded to 45 deg, and each group is cut in the part turned back by that angle.
-    Rapids are not checked against the part: crown programs keep them above it.
-
-    Parameters
-    ----------
-    program : Program
-        A crown program (`passes_program`), nominal or compensated.
-    machine : Machine
-    tool : RoundNoseTool
-    stock : Part
-    errors : ErrorModel, optional
-        The machine's (injected) errors.
-    boxes : sequence of (x0, x1, y0, y1), optional
-        Cut only inside these boxes (m): the stock is clipped to them first, and below
-        ``floor`` (m) if given.
-    floor : float, optional
-    """
-    began = time.perf_counter()
-    part = stock if boxes is None else clip_to(stock, boxes, floor)
-    trajectory = motion.plan(program, machine, errors, start=PARK,
-                             tool_points=tool.vertices())
-    step = math.pi / 4.0
-    groups: dict[int, list[np.ndarray]] = {}
-    for segment in trajectory.segments:
-        if segment.kind == "linear":
-            key = int(round(float(segment.q[0, 4]) / step))
-            groups.setdefault(key, []).append(machine.tool_pose(segment.q, errors))
-    before = part.volume
-    sweeps = sideways = 0
-    for key, paths in groups.items():
-        turn = np.eye(4)
-        turn[:3, :3] = _turn(-key * step)
-        turned = Part(part.manifold.rotate((0.0, 0.0, -45.0 * key)))
-        cut_part, report = remove(turned, tool, [turn @ path for path in paths])
-        part = Part(cut_part.manifold.rotate((0.0, 0.0, 45.0 * key)))
-        sweeps += report.n_sweeps_cut
-        sideways += len(report.sideways)
-    return part, CrownCut(trajectory.duration, trajectory.cutting_time, sweeps, sideways,
-                          before - part.volume, time.perf_counter() - began)
-
-
-def _turn(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-#: Sample spacing of the crown's height maps, m: about a tenth of the 12.5 um pitch feed, and
-#: chosen so an 11.31 deg face (tan = 0.2) rises 248.618 nm a sample, not a whole number of
-#: nm: on 2.5 um (500 nm a sample) the microscope's 1 nm rounding, without noise, rounds every
-#: sample of a row alike and the fitted inclination locks onto the rounding (measured: 3e-5
-#: deg on one face for a 0.1 nm shift of the cut); here the rounding averages out (1e-7 deg).
-MAP_SPACING = 1.24309 * UM
-
-
-@dataclass(frozen=True, eq=False)
-class CrownFeatures:
-    """Table 3's quantities of a machined crown.
-
-    Attributes
-    ----------
-    edge_distances : ndarray, shape (4,)
-        Distances between opposite top edges, pairs (L1, L5) .. (L4, L8), m: the lines where
-        the fitted side planes meet the fitted top plane.
-    inclinations : ndarray, shape (8,)
-        Angle of each side face (S1..S8, faces at C = 0, 45, .. deg) to the bottom face, rad.
-    foot_distances : ndarray, shape (4,)
-        Distances between opposite foot edges (side planes on the flat's plane), m.
-    """
-
-    edge_distances: np.ndarray
-    inclinations: np.ndarray
-    foot_distances: np.ndarray
-
-
-def crown_features(part, microscope, windows, spacing: float = MAP_SPACING) -> CrownFeatures:
-    """Read Table 3's quantities with the microscope (Fig. 12).
-
-    Planes are fitted to height maps in the ``windows`` of `crown_roi`: the top face, each
-    side face and four patches of the flat. Each side face is mapped with the part turned so
-    that the face's own axes (r out, v along its edge) are the map's, as a microscope stage
-    turns a sample: a map's cost grows with the triangles' boxes, which the long scallop
-    triangles of a face at 45 deg make large. ``spacing``: see `MAP_SPACING`.
-    """
-    mesh = MeshIndex.from_surface(part)
-    top = fit_plane(_map_points(mesh, microscope, windows["top"], spacing))
-    flat = fit_plane(np.vstack([_map_points(mesh, microscope, box, 4 * spacing)
-                                for box in windows["flat"]]))
-    sides, edges, feet = [], [], []
-    for k in range(8):
-        turned = Part(part.manifold.rotate((0.0, 0.0, -45.0 * k)))
-        local = fit_plane(_map_points(turned, microscope, windows["side"], spacing))
-        back = _turn(k * math.pi / 4)
-        side = replace(local, point=_frozen(back @ local.point),
-                       normal=_frozen(back @ local.normal))
-        sides.append(side)
-        edges.append(_meet(top, side))
-        feet.append(_meet(flat, side))
-    inclinations = np.array([plane_angle(side, flat) for side in sides])
-    return CrownFeatures(_frozen([_distance(edges[k], edges[k + 4]) for k in range(4)]),
-                         _frozen(inclinations),
-                         _frozen([_distance(feet[k], feet[k + 4]) for k in range(4)]))
-
-
-def _map_points(part, microscope, box, spacing: float) -> np.ndarray:
-    area = microscope.height_map(part, *box, spacing=spacing)
-    gx, gy = np.meshgrid(area.x, area.y)
-    points = np.column_stack([gx.ravel(), gy.ravel(), area.z.ravel()])
-    return points[~np.isnan(points[:, 2])]
-
-
-def _meet(first, second) -> tuple[np.ndarray, np.ndarray]:
-    """The line where two fitted planes meet: a point on it and its unit direction."""
-    direction = np.cross(first.normal, second.normal)
-    direction /= np.linalg.norm(direction)
-    normals = np.array([first.normal, second.normal, direction])
-    offsets = np.array([first.normal @ first.point, second.normal @ second.point,
-                        direction @ (0.5 * (first.point + second.point))])
-    return np.linalg.solve(normals, offsets), direction
-
-
-def _distance(first, second) -> float:
-    """Distance between two (nearly) parallel lines, across their mean direction, m."""
-    (p, d), (q, e) = first, second
-    mean = d + (e if d @ e >= 0.0 else -e)
-    mean /= np.linalg.norm(mean)
-    gap = q - p
-    return float(np.linalg.norm(gap - (gap @ mean) * mean))
-
-
-def _frozen(values) -> np.ndarray:
-    array = np.array(values, dtype=np.float64)
-    array.flags.writeable = False
-    return array

@@ -1,0 +1,130 @@
+"""The fast path for parts cut face by face at many C positions: each C group in its own frame.
+
+`cut_turned` makes the part `machinesim.cutting.cut` makes (tested to 1e-12 in volume and
+height) for a program whose feed moves each run at one of a few positions of a rotary axis
+about the workpiece Z (a crown's eight faces at C = k 45 deg, paper 002). The booleans of
+sweeps turned 45 deg off the machine axes are 4-5 times slower than of sweeps along them
+(measured: 105 side passes, 9.8 s at C = 45 deg, 2.2 s at 0), so the feed moves are grouped
+by that axis' value, rounded to ``turn_step``, and each group is cut in the part turned back
+by its angle. `clip_to` cuts a stock down to measuring windows first.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import manifold3d
+import numpy as np
+
+from machinesim import motion
+from machinesim.cutting.engine import remove
+from machinesim.cutting.program import CutReport
+from machinesim.exceptions import InputError
+from machinesim.rotations import rot_z
+from machinesim.tools import tool_from_spec
+from machinesim.units import M_PER_MM
+from machinesim.workpiece import Part, stock_from_spec
+
+__all__ = ["clip_to", "cut_turned"]
+
+#: The clipping boxes reach this far past the stock above it (and below, without a floor), m.
+CLIP_PAD = 1.0 * M_PER_MM
+
+
+def clip_to(stock: Part, boxes, floor: float | None = None) -> Part:
+    """The stock inside the boxes (x0, x1, y0, y1), m, above ``floor`` (m; default all)."""
+    low, high = stock.bounds
+    bottom = low[2] - CLIP_PAD if floor is None else floor
+    pieces = [manifold3d.Manifold.cube((x1 - x0, y1 - y0, high[2] + CLIP_PAD - bottom))
+              .translate((x0, y0, bottom)) for x0, x1, y0, y1 in boxes]
+    return Part(stock.manifold ^ manifold3d.Manifold.batch_boolean(pieces,
+                                                                   manifold3d.OpType.Add))
+
+
+def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *,
+               roi=None, floor: float | None = None, start=None, turn_step: float = math.pi / 4,
+               turn_axis: str = "C", chord_tolerance: float = motion.CHORD_TOLERANCE_M,
+               servo=None) -> tuple[Part, CutReport]:
+    """Cut ``program`` as `machinesim.cutting.cut` does, each turn group in its own frame.
+
+    The feed moves are grouped by the value of ``turn_axis`` at their start, rounded to a
+    multiple k of ``turn_step``; each group's sweeps are subtracted from the part turned by
+    -k ``turn_step`` about the workpiece Z, with the poses turned alike, and the part turned
+    back. Rapids are not checked against the part (the program must keep them above it;
+    the report says so in its notes).
+
+    Parameters
+    ----------
+    program : Program
+    machine : Machine
+    tool, stock
+        As `machinesim.cutting.cut`.
+    errors : ErrorModel, optional
+        The machine's errors (None: the nominal machine).
+    roi : sequence of (x0, x1, y0, y1), optional
+        Cut only inside these boxes (m): the stock is clipped to them first (`clip_to`),
+        and below ``floor`` (m) if given.
+    floor : float, optional
+    start : array_like, optional
+        Axis values before the first block (default zeros).
+    turn_step : float
+        rad, > 0.
+    turn_axis : str
+        The rotary axis about the workpiece Z whose positions group the feed moves.
+    chord_tolerance, servo
+        As `machinesim.cutting.cut`.
+
+    Returns
+    -------
+    part : Part
+    report : CutReport
+        ``sweeps`` counts the feed sweeps that reached the material; ``sideways_sweeps`` those
+        the engine flags as dragging the tool across its edge.
+    """
+    from machinesim.machines import Machine, load_machine
+
+    began = time.perf_counter()
+    machine = machine if isinstance(machine, Machine) else load_machine(machine)
+    tool = tool_from_spec(tool) if isinstance(tool, str) else tool
+    stock = stock_from_spec(stock) if isinstance(stock, str) else stock
+    if turn_axis not in machine.axes:
+        raise InputError(f"{machine.name} has no axis {turn_axis} (axes "
+                         f"{''.join(machine.axes)})", key="turn_axis")
+    if not (math.isfinite(turn_step) and turn_step > 0.0):
+        raise InputError(f"Expected turn_step > 0 (rad), got {turn_step!r}", key="turn_step")
+    machine.check_errors(errors)
+    part = stock if roi is None else clip_to(stock, roi, floor)
+    trajectory = motion.plan(program, machine, errors, start=start,
+                             tool_points=tool.vertices(), chord_tolerance=chord_tolerance,
+                             servo=servo)
+    column = machine.axes.index(turn_axis)
+    groups: dict[int, list[np.ndarray]] = {}
+    all_q = []
+    for segment in trajectory.segments:
+        if segment.kind == "dwell":
+            continue
+        all_q.append(segment.q)
+        if segment.kind == "linear":
+            key = int(round(float(segment.q[0, column]) / turn_step))
+            groups.setdefault(key, []).append(machine.tool_pose(segment.q, errors))
+    before = part.volume
+    sweeps = sideways = 0
+    step_deg = math.degrees(turn_step)
+    for key, paths in groups.items():
+        turn = np.eye(4)
+        turn[:3, :3] = rot_z(-key * turn_step)
+        turned = Part(part.manifold.rotate((0.0, 0.0, -step_deg * key)))
+        cut_part, report = remove(turned, tool, [turn @ path for path in paths])
+        part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
+        sweeps += report.n_sweeps_cut
+        sideways += len(report.sideways)
+    removed = before - part.volume
+    limits = tuple(machine.limit_violations(np.vstack(all_q))) if all_q else ()
+    return part, CutReport(
+        removed_volume_m3=float(removed), machining_time_s=trajectory.duration,
+        cutting_time_s=trajectory.cutting_time, sweeps=sweeps, substeps=trajectory.substeps,
+        rapids_that_cut=(), limit_violations=limits, sideways_sweeps=sideways,
+        empty_cut=not removed > 0.0, engine="boolean, turned groups",
+        elapsed_s=time.perf_counter() - began,
+        notes=(*trajectory.notes, "rapids not checked against the part (turned groups)"))

@@ -1,0 +1,165 @@
+"""Features of paper 002's machined parts, read with the laser microscope.
+
+`groove_depths`: the depths along four grooves cut from a common point (paper 002, Fig. 8b),
+below the top face fitted between them. `crown_features`: the edge distances L and side-face
+inclinations S of an octagonal crown (Table 3, Fig. 12) from planes fitted to height maps in
+measuring windows (`machinesim.cam.crown.crown_roi`). Both take a part and a microscope
+(`machinesim.Lab.microscope`) and return what was read; `machinesim.procedures.
+workpiece_setting` calls them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from machinesim.arrays import frozen
+from machinesim.metrology.fits import fit_plane, height_map_points, plane_angle
+from machinesim.metrology.meshindex import MeshIndex
+from machinesim.metrology.planes import line_distance, plane_intersection
+from machinesim.rotations import rot_z
+from machinesim.units import M_PER_MM, M_PER_UM
+from machinesim.workpiece import Part
+
+__all__ = ["MAP_SPACING", "STATIONS", "CrownFeatures", "GrooveDepths", "crown_features",
+           "groove_depths"]
+
+MM, UM = M_PER_MM, M_PER_UM
+
+# ------------------------------------------------------------------------------ grooves
+
+#: Stations along each groove where its depth is read (m from the crossing point); 0.95 mm
+#: is the paper's "end of each groove".
+STATIONS = (0.5 * MM, 0.6 * MM, 0.7 * MM, 0.8 * MM, 0.9 * MM, 0.95 * MM)
+#: Half length of a profile across a groove, and the fitted stretch about its bottom, m: a
+#: R2 mm groove 30 um deep is 0.7 mm wide; 25 um either side of the bottom rises 0.16 um.
+PROFILE_HALF, BOTTOM_HALF = 0.35 * MM, 25 * UM
+#: Patches of the uncut top face between the grooves, centre distance from the crossing
+#: along the diagonals and half size, m: the reference surface for the depths.
+PATCH_AT, PATCH_HALF = 0.75 * MM, 0.15 * MM
+
+
+@dataclass(frozen=True, eq=False)
+class GrooveDepths:
+    """Depths read along the four grooves (m).
+
+    Attributes
+    ----------
+    stations : ndarray, shape (n,)
+        Distances from the crossing point, m.
+    depths : ndarray, shape (4, n)
+        Depth of groove k (cut at C = 90 k deg) at each station, below the top face.
+    """
+
+    stations: np.ndarray
+    depths: np.ndarray
+
+    @property
+    def ends(self) -> np.ndarray:
+        """Depths at the last station, shape (4,)."""
+        return self.depths[:, -1]
+
+
+def groove_depths(part, microscope, stations=STATIONS) -> GrooveDepths:
+    """Read each groove's depth along it with the microscope (paper 002 Fig. 8b).
+
+    The top face is the plane fitted to four patches between the grooves; at each station a
+    profile across the groove gives its bottom (parabola through the stretch about the
+    lowest sample) and the depth is the plane's height there less the bottom.
+    """
+    points = []
+    for sx, sy in ((1, 1), (-1, 1), (-1, -1), (1, -1)):
+        cx, cy = sx * PATCH_AT, sy * PATCH_AT
+        area = microscope.height_map(part, cx - PATCH_HALF, cx + PATCH_HALF, cy - PATCH_HALF,
+                                     cy + PATCH_HALF, spacing=5 * UM)
+        gx, gy = np.meshgrid(area.x, area.y)
+        points.append(np.column_stack([gx.ravel(), gy.ravel(), area.z.ravel()]))
+    top = fit_plane(np.vstack(points))
+    stations = np.asarray(stations, dtype=np.float64)
+    depths = np.zeros((4, len(stations)))
+    for k in range(4):
+        along = np.array([math.cos(k * math.pi / 2), math.sin(k * math.pi / 2)])
+        across = np.array([-along[1], along[0]])
+        for j, t in enumerate(stations):
+            centre = t * along
+            read = microscope.profile(part, centre - PROFILE_HALF * across,
+                                      centre + PROFILE_HALF * across)
+            xy, z = read.xy, read.z
+            lowest = int(np.nanargmin(z))
+            near = (np.abs(read.s - read.s[lowest]) <= BOTTOM_HALF) & ~np.isnan(z)
+            s = read.s[near] - read.s[lowest]
+            c2, c1, c0 = np.polyfit(s, z[near], 2)
+            vertex = -c1 / (2.0 * c2) if c2 > 0.0 else 0.0
+            bottom = c0 + c1 * vertex + c2 * vertex**2 if abs(vertex) <= BOTTOM_HALF else (
+                float(np.mean(z[near])))
+            p = xy[lowest]
+            level = top.point[2] - (top.normal[0] * (p[0] - top.point[0])
+                                    + top.normal[1] * (p[1] - top.point[1])) / top.normal[2]
+            depths[k, j] = level - bottom
+    return GrooveDepths(frozen(stations), frozen(depths))
+
+
+# -------------------------------------------------------------------------------- crown
+
+#: Sample spacing of the crown's height maps, m: about a tenth of the 12.5 um pitch feed, and
+#: chosen so an 11.31 deg face (tan = 0.2) rises 248.618 nm a sample, not a whole number of
+#: nm: on 2.5 um (500 nm a sample) the microscope's 1 nm rounding, without noise, rounds every
+#: sample of a row alike and the fitted inclination locks onto the rounding (measured: 3e-5
+#: deg on one face for a 0.1 nm shift of the cut); here the rounding averages out (1e-7 deg).
+MAP_SPACING = 1.24309 * UM
+
+
+@dataclass(frozen=True, eq=False)
+class CrownFeatures:
+    """Table 3's quantities of a machined crown.
+
+    Attributes
+    ----------
+    edge_distances : ndarray, shape (4,)
+        Distances between opposite top edges, pairs (L1, L5) .. (L4, L8), m: the lines where
+        the fitted side planes meet the fitted top plane.
+    inclinations : ndarray, shape (8,)
+        Angle of each side face (S1..S8, faces at C = 0, 45, .. deg) to the bottom face, rad.
+    foot_distances : ndarray, shape (4,)
+        Distances between opposite foot edges (side planes on the flat's plane), m.
+    """
+
+    edge_distances: np.ndarray
+    inclinations: np.ndarray
+    foot_distances: np.ndarray
+
+
+def _map_points(part, microscope, box, spacing: float) -> np.ndarray:
+    area = microscope.height_map(part, *box, spacing=spacing)
+    return height_map_points(area.x, area.y, area.z)
+
+
+def crown_features(part, microscope, windows, spacing: float = MAP_SPACING) -> CrownFeatures:
+    """Read Table 3's quantities with the microscope (paper 002 Fig. 12).
+
+    Planes are fitted to height maps in the ``windows`` of `machinesim.cam.crown.crown_roi`:
+    the top face, each side face and four patches of the flat. Each side face is mapped with
+    the part turned so that the face's own axes (r out, v along its edge) are the map's, as a
+    microscope stage turns a sample: a map's cost grows with the triangles' boxes, which the
+    long scallop triangles of a face at 45 deg make large. ``spacing``: see `MAP_SPACING`.
+    """
+    mesh = MeshIndex.from_surface(part)
+    top = fit_plane(_map_points(mesh, microscope, windows["top"], spacing))
+    flat = fit_plane(np.vstack([_map_points(mesh, microscope, box, 4 * spacing)
+                                for box in windows["flat"]]))
+    sides, edges, feet = [], [], []
+    for k in range(8):
+        turned = Part(part.manifold.rotate((0.0, 0.0, -45.0 * k)))
+        local = fit_plane(_map_points(turned, microscope, windows["side"], spacing))
+        back = rot_z(k * math.pi / 4)
+        side = replace(local, point=frozen(back @ local.point),
+                       normal=frozen(back @ local.normal))
+        sides.append(side)
+        edges.append(plane_intersection(top, side))
+        feet.append(plane_intersection(flat, side))
+    inclinations = np.array([plane_angle(side, flat) for side in sides])
+    return CrownFeatures(frozen([line_distance(edges[k], edges[k + 4]) for k in range(4)]),
+                         frozen(inclinations),
+                         frozen([line_distance(feet[k], feet[k + 4]) for k in range(4)]))

@@ -1,0 +1,66 @@
+"""Edges of fitted planes: where two faces meet, and the distance across a part between two
+such edges (paper 002, Table 3: the crown's edge distances L).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.arrays import frozen
+from machinesim.exceptions import InputError
+
+__all__ = ["Line3D", "line_distance", "plane_intersection"]
+
+#: Two planes whose normals' cross product (the sine of their angle) is below this are
+#: parallel: the line where they meet would move by more than 1e12 times any error in them.
+PARALLEL_SINE = 1e-12
+
+
+@dataclass(frozen=True, eq=False)
+class Line3D:
+    """A straight line in space (m).
+
+    Attributes
+    ----------
+    point : ndarray, shape (3,)
+        A point on the line.
+    direction : ndarray, shape (3,)
+        Unit direction.
+    """
+
+    point: np.ndarray
+    direction: np.ndarray
+
+
+def plane_intersection(first, second) -> Line3D:
+    """The line where two planes meet (`machinesim.metrology.PlaneFit` or anything with a
+    ``point`` and a unit ``normal``): its point nearest the midpoint of the planes' points.
+
+    Raises
+    ------
+    InputError
+        When the planes are parallel (`PARALLEL_SINE`).
+    """
+    direction = np.cross(first.normal, second.normal)
+    norm = np.linalg.norm(direction)
+    if not norm > PARALLEL_SINE:
+        raise InputError(f"Expected two planes that meet, got parallel normals "
+                         f"{np.asarray(first.normal).tolist()} and "
+                         f"{np.asarray(second.normal).tolist()}")
+    direction = direction / norm
+    normals = np.array([first.normal, second.normal, direction])
+    offsets = np.array([first.normal @ first.point, second.normal @ second.point,
+                        direction @ (0.5 * (first.point + second.point))])
+    return Line3D(frozen(np.linalg.solve(normals, offsets)), frozen(direction))
+
+
+def line_distance(first: Line3D, second: Line3D) -> float:
+    """Distance between two (nearly) parallel lines, across their mean direction, m."""
+    p, d = first.point, first.direction
+    q, e = second.point, second.direction
+    mean = d + (e if d @ e >= 0.0 else -e)
+    mean = mean / np.linalg.norm(mean)
+    gap = q - p
+    return float(np.linalg.norm(gap - (gap @ mean) * mean))

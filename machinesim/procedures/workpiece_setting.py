@@ -1,0 +1,613 @@
+"""Paper 002 as an experiment: a robot-loaded workpiece, its setting found and compensated.
+
+`RobotLoadedWorkpiece` runs paper 002's procedure (Xu, Nakamoto, Takeuchi 2021) on a
+`machinesim.Lab` (machine ``robonano_a0ib``) whose injected errors are one robot load of
+one workpiece: the setting ``workpiece.x .. gamma`` and any other error (the C-axis centre,
+``location.C.EX0C``, ``EY0C``). It probes the workpiece's three reference spheres at C = 0
+and 180 deg (`read_spheres`, Fig. 4), identifies the setting and the C centre
+(`machinesim.identification.workpiece_setting`: eqs 1-4, Fig. 6, and the cross-check by
+`machinesim.identification.fit`), rewrites the NC program (eqs 5-7 through
+`machinesim.compensation.map_program`; the model-based route through
+`machinesim.compensation.model_based`) and machines one of the paper's two experiments
+before and after compensation, read with the lab's laser microscope:
+
+- ``"grooves"`` (section 3.1): four crossing grooves 3 um deep
+  (`machinesim.metrology.part_features.groove_depths`, Fig. 8);
+- ``"crown"`` (section 3.2): the finished diamond crown in measuring windows
+  (`machinesim.metrology.part_features.crown_features`: Table 3's edge distances L and
+  inclinations S) and its machining time.
+
+The two experiments are two workpieces, each loaded by the robot: two labs, one per load
+(the robot's landing is part of the truth of that load); `scenarios/workpiece_setting.py`
+runs both and reports them together. docs/procedures/workpiece_setting.md has the geometry,
+the derivations and the figures.
+
+>>> import machinesim
+>>> from machinesim.experiment import run
+>>> from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
+>>> lab = machinesim.Lab("robonano_a0ib", {"workpiece": {"delta_um": [5, -3, 2]}})
+>>> result = run(RobotLoadedWorkpiece("grooves"), lab)  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from functools import cached_property
+
+import numpy as np
+
+from machinesim.cam.crown import (
+    CROWN,
+    GROOVE_ROI,
+    GROOVE_SPHERES,
+    GROOVE_STOCK,
+    PARK,
+    CrownPlan,
+    crown_design,
+    crown_passes,
+    crown_roi,
+    crown_spheres,
+    crown_stock,
+    crown_tool,
+    groove_program,
+    machining_time,
+    passes_program,
+)
+from machinesim.compensation import map_program, model_based
+from machinesim.cutting import clip_to, cut
+from machinesim.exceptions import InputError
+from machinesim.experiment import Evaluation, Figure, Identified
+from machinesim.identification.fit import Estimate
+from machinesim.identification.workpiece_setting import (
+    AXES,
+    Identification,
+    ReferenceSpheres,
+    SphereReading,
+    SphereReadings,
+    check_machine,
+    eqs_5_to_7,
+    fit_setting,
+    identified_errors,
+    identify,
+    nose_shift,
+    parameters,
+    program_poses,
+    sphere_reading,
+)
+from machinesim.metrology import fit_sphere
+from machinesim.metrology.part_features import CrownFeatures, crown_features, groove_depths
+from machinesim.nc import Program
+from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
+from machinesim.workpiece import Part, stock_from_spec
+
+__all__ = [
+    "EXPERIMENTS", "NOSE", "ProbePlan", "RobotLoadedWorkpiece", "SettingIdentification",
+    "WorkpieceMeasurements", "eqs_5_to_7_program", "model_based_program", "probe_axes",
+    "read_sphere", "read_spheres",
+]
+
+MM, UM = M_PER_MM, M_PER_UM
+#: The two experiments of paper 002, each on its own robot-loaded workpiece.
+EXPERIMENTS = ("grooves", "crown")
+#: Nose radius of Tables 1 and 2's round-nose tool, m.
+NOSE = 2.0 * MM
+#: The grooves' tool (Table 1).
+GROOVE_TOOL = "nose:2.0:90"
+#: Table 3 of paper 002: errors before and after compensation (um for L, deg for S).
+PAPER_L = {"L1_L5": (149.15, -0.31), "L2_L6": (152.60, 0.82), "L3_L7": (138.43, -1.69),
+           "L4_L8": (163.21, 1.14)}
+PAPER_S = ((-1.73, -0.10), (0.95, 0.05), (2.30, 0.02), (0.93, 0.03), (-1.56, 0.04),
+           (-1.53, 0.03), (-2.06, -0.17), (-1.35, -0.08))
+#: Section 3.2.4: machining time of the finishing, from the cuboid, and the saving.
+PAPER_TIME = {"finishing_h": 9.5, "cuboid_h": 40.0, "saved_percent": 76.0}
+#: Fig. 8b: the four grooves' depths "within about 100 nm" of each other after.
+PAPER_GROOVE_SPREAD_NM = 100.0
+
+# ------------------------------------------------------------------------------ probing
+
+
+@dataclass(frozen=True)
+class ProbePlan:
+    """How the spheres are probed (Fig. 4b, 4c).
+
+    Attributes
+    ----------
+    half_width : float
+        Each scan runs the ball centre this far either side of the centre, m. Default 1.2
+        mm: on a R2 mm cavity read with a R0.25 mm ball the contact then stays 0.6 mm inside
+        the rim, room for a workpiece 0.5 mm off.
+    points : int
+        Points per scan line.
+    press : float
+        How far below the expected surface the free ball runs, m: the stylus stays pressed in
+        for setting errors up to this. Default 0.1 mm.
+    stroke : float
+        Measuring range of the stylus, m.
+    lift : float
+        Height of the ball centre above the sphere centre where the bottom touch starts, m.
+    passes : int
+        Readings of each sphere, the scans of each centred on the last one's result: the
+        three spheres are then seen alike (docs/procedures/workpiece_setting.md).
+    """
+
+    half_width: float = 1.2 * MM
+    points: int = 41
+    press: float = 0.1 * MM
+    stroke: float = 0.5 * MM
+    lift: float = 0.3 * MM
+    passes: int = 2
+
+    def __post_init__(self) -> None:
+        for name in ("half_width", "press", "stroke", "lift"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0.0):
+                raise InputError(f"Expected {name} > 0 (m), got {value!r}", key=name)
+        for name, least in (("points", 5), ("passes", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < least:
+                raise InputError(f"Expected {name} an int >= {least}, got {value!r}", key=name)
+
+
+def probe_axes(machine, ball, c_angle: float = 0.0) -> np.ndarray:
+    """Axis values that put the nominal probe-ball centre at machine coordinates ``ball``.
+
+    Parameters
+    ----------
+    machine : Machine
+        `robonano_a0ib` (the ball sits on the B table, found from its ``probe_tip`` frame).
+    ball : array-like, shape (N, 3) or (3,)
+        Ball centres in machine coordinates (the ideal frame at C = 0), m.
+    c_angle : float
+        C axis value, rad (B stays 0).
+
+    Returns
+    -------
+    ndarray, shape (N, 5) or (5,)
+    """
+    check_machine(machine)
+    ball = np.asarray(ball, dtype=np.float64)
+    offset = machine.frame_pose("probe_tip", np.zeros(len(AXES)))[:3, 3]
+    flat = ball.reshape(-1, 3)
+    q = np.zeros((len(flat), len(AXES)))
+    q[:, :3] = flat - offset
+    q[:, 4] = c_angle
+    return q.reshape(ball.shape[:-1] + (len(AXES),))
+
+
+def _machine_points(probe, q: np.ndarray) -> np.ndarray:
+    """Nominal ball centres (N, 3) in machine coordinates for recorded axis values (N, 5)."""
+    at_zero = np.array(q, dtype=np.float64)
+    at_zero[..., 3:] = 0.0
+    return probe.nominal_centres(at_zero)
+
+
+def read_sphere(probe, centre, plan: ProbePlan = ProbePlan(), c_angle: float = 0.0,
+                radius: float = 2.0 * MM) -> SphereReading:
+    """Read one sphere cavity: two orthogonal scans, a sphere fit, a bottom touch.
+
+    Parameters
+    ----------
+    probe : TouchProbe
+        On the machine with the workpiece (`machinesim.Lab.touch_probe`).
+    centre : array-like, shape (3,)
+        Where the sphere centre is expected, machine coordinates at ``c_angle``, m.
+    plan : ProbePlan
+    c_angle : float
+        C axis value during the reading, rad.
+    radius : float
+        Designed sphere radius, m (plans the scan heights only).
+
+    Returns
+    -------
+    SphereReading
+        `machinesim.identification.workpiece_setting.sphere_reading` of the last pass's
+        scans and the bottom touch.
+
+    Raises
+    ------
+    InputError
+        When a scan misses the sphere or the bottom touch finds nothing: the sphere lies
+        farther from ``centre`` than the plan reaches (about ``half_width`` / 2 sideways,
+        ``press`` in height).
+    """
+    guess = np.array(centre, dtype=np.float64)
+    inner = radius - probe.radius
+    if plan.half_width >= inner:
+        raise InputError(f"Expected a scan half width below the ball-centre sphere radius "
+                         f"{inner} m, got {plan.half_width} m", key="half_width")
+    s = np.linspace(-plan.half_width, plan.half_width, plan.points)
+    for _ in range(plan.passes):
+        points = []
+        for axis in (0, 1):
+            path = np.tile(guess, (plan.points, 1))
+            path[:, axis] += s
+            path[:, 2] = guess[2] - np.sqrt(inner**2 - s**2) - plan.press
+            scan = probe.scan(probe_axes(probe.machine, path, c_angle), stroke=plan.stroke)
+            seen = ~np.isnan(scan.deflection)
+            if np.count_nonzero(seen) < plan.points // 2:
+                raise InputError(f"Expected the scan through {guess.tolist()} m to touch the "
+                                 f"sphere at {plan.points // 2} of {plan.points} points or "
+                                 f"more, got {np.count_nonzero(seen)}", key="centre")
+            points.append(_machine_points(probe, scan.contact_q[seen]))
+        points = np.vstack(points)
+        guess = np.r_[fit_sphere(points).centre[:2], guess[2]]
+    start = probe_axes(probe.machine, [guess[0], guess[1], guess[2] + plan.lift], c_angle)
+    contact = probe.touch(start, "-Z", plan.lift + radius)
+    if contact is None:
+        raise InputError(f"Expected the bottom touch under {guess[:2].tolist()} m to meet the "
+                         f"sphere within {plan.lift + radius} m, it met nothing", key="centre")
+    bottom = _machine_points(probe, contact[None])[0]
+    return sphere_reading(points, bottom, probe.radius, c_angle)
+
+
+def read_spheres(probe, spheres: ReferenceSpheres, plan: ProbePlan = ProbePlan()
+                 ) -> SphereReadings:
+    """The whole measurement (Fig. 4, Fig. 6): three spheres at C = 0, again at C = 180 deg.
+
+    The spheres are looked for where the ideal setting puts them; after the turn, where the
+    first readings put them turned by 180 deg about the nominal C axis (a table point p
+    shows at -p in machine coordinates).
+    """
+    check_machine(probe.machine)
+    ideal = spheres.centres
+    first = [read_sphere(probe, c, plan, 0.0, spheres.radius) for c in ideal]
+    turned = [read_sphere(probe, np.r_[-r.xy, c[2]], plan, math.pi, spheres.radius)
+              for r, c in zip(first, ideal, strict=True)]
+    return SphereReadings(spheres, tuple(first), tuple(turned), probe.radius,
+                          probe.readout.std)
+
+
+# ------------------------------------------------------------------------- compensation
+
+
+def eqs_5_to_7_program(program: Program, machine, found: Identification,
+                       nose_radius: float = 0.0, *, start=PARK, rounded: bool = True
+                       ) -> Program:
+    """Rewrite ``program`` by eqs 5-7 (`machinesim.compensation.map_program` with
+    `machinesim.identification.workpiece_setting.eqs_5_to_7`).
+
+    Parameters
+    ----------
+    program : Program
+        Written for the ideal workpiece on the nominal machine (axes X Y Z B C).
+    machine : Machine
+    found : Identification
+    nose_radius : float
+        m: keep the nose arc's lowest point on the path (`nose_shift`); 0 keeps the tip, as
+        the paper's eq 7.
+    start : array-like, shape (5,)
+        Axis values before the first block (default `machinesim.cam.crown.PARK`).
+    rounded : bool
+        Round to the machine's resolution (default; the NC text's values).
+    """
+    return map_program(program, machine,
+                       lambda q: eqs_5_to_7(q, found.setting, found.c_centre, nose_radius),
+                       start=start, rounded=rounded)
+
+
+def model_based_program(program: Program, machine, found: Identification,
+                        nose_radius: float = 0.0, *, start=PARK, rounded: bool = True,
+                        iterations: int = 3) -> Program:
+    """Rewrite ``program`` through the identified model (`identified_errors`).
+
+    The tip route is `machinesim.compensation.model_based`. With a nose radius the point to
+    keep on the path is the nose arc's lowest point along the wanted tool axis, which depends
+    on the orientation reached (`nose_shift`) and so is no fixed point of the tool frame, the
+    only kind `model_based` keeps (keeping the nose centre misses by 0.4 nm at 3 mrad
+    settings, docs/procedures/workpiece_setting.md). So that route solves
+    `Machine.axis_values` for the tip moved by `nose_shift`, ``iterations`` times, through
+    `machinesim.compensation.map_program`.
+    """
+    check_machine(machine)
+    errors = identified_errors(found)
+    if nose_radius == 0.0:
+        return model_based(program, machine, errors, start=start, rounded=rounded).program
+
+    def solve(q: np.ndarray) -> np.ndarray:
+        wanted, tip = program_poses(q)
+        target = np.tile(np.eye(4), (len(q), 1, 1))
+        target[:, :3, :3] = wanted
+        target[:, :3, 3] = tip
+        solution = q
+        for _ in range(iterations):
+            solution = machine.axis_values(target, errors, q_start=solution).q
+            reached = machine.tool_pose(solution, errors)[:, :3, :3]
+            target[:, :3, 3] = tip + nose_shift(wanted, reached, nose_radius)
+        return solution
+
+    return map_program(program, machine, solve, start=start, rounded=rounded)
+
+
+# ---------------------------------------------------------------------------- procedure
+
+
+@dataclass(frozen=True, eq=False)
+class WorkpieceMeasurements:
+    """What `RobotLoadedWorkpiece.measure` returns.
+
+    Attributes
+    ----------
+    experiment : str
+        ``"grooves"`` or ``"crown"``: which workpiece was loaded.
+    machine : Machine
+        The machine the probe moved on (its nominal kinematics: the fit cross-check's model).
+    readings : SphereReadings
+    """
+
+    experiment: str
+    machine: object
+    readings: SphereReadings
+
+
+@dataclass(frozen=True, eq=False)
+class SettingIdentification:
+    """`RobotLoadedWorkpiece.identify`'s detail: eqs 1-4 and Fig. 6, and the fit's check.
+
+    Attributes
+    ----------
+    found : Identification
+        The paper's formulas.
+    check : Estimate
+        The same parameters by `machinesim.identification.fit` on the same readings.
+    machine : Machine
+        The machine the probe moved on (nominal kinematics), for the compensation.
+    """
+
+    found: Identification
+    check: Estimate
+    machine: object
+
+    def agreement(self) -> dict[str, float]:
+        """Fit minus eqs for each parameter, SI."""
+        paper = parameters(self.found)
+        return {name: float(value - paper[name])
+                for name, value in zip(self.check.names, self.check.values, strict=True)}
+
+
+@dataclass(frozen=True)
+class _CrownLayout:
+    tool: object
+    windows: dict
+    boxes: list
+    rows: dict
+    floor: float
+
+
+class RobotLoadedWorkpiece:
+    """Paper 002's procedure on one robot-loaded workpiece (`machinesim.experiment` protocol).
+
+    Parameters
+    ----------
+    experiment : {"crown", "grooves"}
+        Which workpiece the lab's robot loaded (`EXPERIMENTS`).
+    nose_correction : bool
+        Keep the nose arc's lowest point on the path, not the tip as the paper's eq 7 does.
+    all_layers : bool
+        Crown: cut all ten 1 um finishing layers, not only the last (the same part, ten
+        times longer: docs/procedures/workpiece_setting.md).
+    quick : bool
+        Crown: smaller measuring windows.
+    plan : ProbePlan
+    crown : CrownPlan
+    """
+
+    name = "workpiece_setting"
+    paper = "002"
+
+    def __init__(self, experiment: str = "crown", *, nose_correction: bool = False,
+                 all_layers: bool = False, quick: bool = False, plan: ProbePlan = ProbePlan(),
+                 crown: CrownPlan = CROWN) -> None:
+        if experiment not in EXPERIMENTS:
+            raise InputError(f"Expected an experiment in {', '.join(EXPERIMENTS)}, got "
+                             f"{experiment!r}", key="experiment")
+        self.experiment = experiment
+        self.nose = NOSE if nose_correction else 0.0
+        self.all_layers = bool(all_layers)
+        self.quick = bool(quick)
+        self.plan = plan
+        self.crown = crown
+
+    def __repr__(self) -> str:
+        return (f"RobotLoadedWorkpiece({self.experiment!r}, nose_correction="
+                f"{self.nose > 0.0}, quick={self.quick}, all_layers={self.all_layers})")
+
+    @property
+    def spheres(self) -> ReferenceSpheres:
+        """The loaded workpiece's reference spheres as designed."""
+        return GROOVE_SPHERES if self.experiment == "grooves" else crown_spheres(self.crown)
+
+    @cached_property
+    def stock(self) -> Part:
+        """The loaded workpiece as designed (the groove block, or the rough crown)."""
+        return (stock_from_spec(GROOVE_STOCK) if self.experiment == "grooves"
+                else crown_stock(self.crown))
+
+    # ------------------------------------------------------------------------- the steps
+
+    def measure(self, lab) -> WorkpieceMeasurements:
+        """Probe the three spheres at C = 0 and 180 deg (`read_spheres`)."""
+        check_machine(lab.machine)
+        probe = lab.touch_probe(self.stock, label=self.experiment)
+        return WorkpieceMeasurements(self.experiment, lab.machine,
+                                     read_spheres(probe, self.spheres, self.plan))
+
+    def identify(self, measurements: WorkpieceMeasurements) -> Identified:
+        """Eqs 1-4 and Fig. 6; each std is the fit cross-check's (the probe's stated noise
+        propagated to first order through the same readings)."""
+        found = identify(measurements.readings)
+        check = fit_setting(measurements.machine, measurements.readings, found)
+        std = dict(zip(check.names, check.std.tolist(), strict=True))
+        return Identified({name: (value, std[name]) for name, value in
+                           parameters(found).items()},
+                          SettingIdentification(found, check, measurements.machine))
+
+    def compensate(self, identified: Identified) -> dict[str, Program]:
+        """The experiment's program rewritten by eqs 5-7 (and, for the grooves, also by the
+        model-based route, which the paper does not have)."""
+        found, machine = identified.detail.found, identified.detail.machine
+        nominal = self.nominal_program(found)
+        programs = {f"{self.experiment}_compensated":
+                    eqs_5_to_7_program(nominal, machine, found, self.nose)}
+        if self.experiment == "grooves":
+            programs["grooves_compensated_model"] = model_based_program(nominal, machine,
+                                                                        found, self.nose)
+        return programs
+
+    def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
+        """Cut before and after compensation, read with the lab's microscope."""
+        found = identified.detail.found
+        extra = {"identification": _identification_details(identified),
+                 "nose_correction_mm": self.nose / MM}
+        if self.experiment == "grooves":
+            evaluation = self._grooves(lab, programs)
+        else:
+            evaluation = self._crown(lab, found, programs)
+        return replace(evaluation, details={**evaluation.details, **extra})
+
+    # ----------------------------------------------------------------------- programs
+
+    def nominal_program(self, found: Identification) -> Program:
+        """The experiment's NC program for the ideal workpiece. The crown's passes are those
+        that reach its measuring windows, for the deepest cut the identified setting allows
+        (`layout`)."""
+        if self.experiment == "grooves":
+            return groove_program()
+        layout = self.layout(found)
+        offsets = None if self.all_layers else [0.0]
+        return passes_program(crown_passes(self.crown, offsets, **layout.rows))
+
+    def layout(self, found: Identification) -> _CrownLayout:
+        """The crown's tool, windows, cut boxes, pass rows and floor for the found setting.
+
+        The deepest cut the misplaced crown can see (stock allowance, height error, the tilt
+        over the crown's 4 mm) sets the tool profile's height and how far from a window a
+        pass still cuts it; the identified setting stands for the actual one (to nm).
+        """
+        crown, s = self.crown, found.setting
+        deepest = (crown.oversize + abs(s.delta[2]) + 4 * MM * math.hypot(s.alpha, s.beta)
+                   + 5 * UM)
+        sizes = {"top": 0.15 * MM, "side": 0.1 * MM} if self.quick else {}
+        windows, boxes, rows = crown_roi(crown, margin=math.sqrt(2 * NOSE * deepest), **sizes)
+        # the windows are cut and kept below the flat as deep as the deepest cut, and more
+        floor = crown.rough_flat - max(0.1 * MM, 2 * deepest)
+        return _CrownLayout(crown_tool(max(50 * UM, 1.2 * deepest)), windows, boxes, rows,
+                            floor)
+
+    # ---------------------------------------------------------------------- experiments
+
+    def _grooves(self, lab, programs) -> Evaluation:
+        scope = lab.microscope(label="grooves")
+        nominal = groove_program()
+        ideal, _ = cut(nominal, lab.machine, GROOVE_TOOL, self.stock, None, roi=GROOVE_ROI,
+                       start=PARK)
+        parts, depths, cuts = {"grooves_ideal": ideal}, {}, {}
+        for name, program in (("before", nominal), ("after", programs["grooves_compensated"]),
+                              ("after_model", programs["grooves_compensated_model"])):
+            part, report = lab.cut(program, GROOVE_TOOL, self.stock, roi=GROOVE_ROI,
+                                   start=PARK)
+            depths[name] = groove_depths(part, scope)
+            cuts[f"grooves_{name}"] = _cut_details(report)
+            if name != "after_model":
+                parts[f"grooves_{name}"] = part
+        before, after = depths["before"], depths["after"]
+        figures = [Figure(f"groove_depth_C{90 * k}", "um", before.ends[k] / UM,
+                          after.ends[k] / UM, note="depth at the end of the groove cut at "
+                          f"C = {90 * k} deg (3 um programmed)") for k in range(4)]
+        figures.append(Figure("groove_depth_spread", "nm", np.ptp(before.ends) / M_PER_NM,
+                              np.ptp(after.ends) / M_PER_NM,
+                              paper_after=PAPER_GROOVE_SPREAD_NM,
+                              note="paper Fig. 8b: within about 100 nm of each other"))
+        details = {"groove_stations_mm": (before.stations / MM).tolist(),
+                   **{f"groove_depths_{name}_um": (d.depths / UM).tolist()
+                      for name, d in depths.items()},
+                   "groove_depth_spread_after_model_nm": float(np.ptp(
+                       depths["after_model"].ends) / M_PER_NM),
+                   "groove_end_depths_after_model_um": (depths["after_model"].ends / UM)
+                   .tolist(),
+                   "cuts": cuts}
+        return Evaluation(tuple(figures), details, parts, {"grooves_nominal": nominal})
+
+    def _crown(self, lab, found: Identification, programs) -> Evaluation:
+        crown = self.crown
+        layout = self.layout(found)
+        nominal = self.nominal_program(found)
+        scope = lab.microscope(label="crown")
+        features, parts, cuts = {}, {}, {}
+        for name, program in (("before", nominal), ("after", programs["crown_compensated"])):
+            part, report = lab.cut(program, layout.tool, self.stock, roi=layout.boxes,
+                                   floor=layout.floor, start=PARK, turn_step=math.pi / 4)
+            features[name] = crown_features(part, scope, layout.windows)
+            parts[f"crown_{name}"] = part
+            cuts[f"crown_{name}"] = _cut_details(report)
+        parts["crown_design"] = clip_to(crown_design(crown), layout.boxes, layout.floor)
+        errors = {name: _crown_errors(f, crown) for name, f in features.items()}
+        figures = []
+        for i, (key, (paper_before, paper_after)) in enumerate(PAPER_L.items()):
+            figures.append(Figure(f"edge_distance_{key}", "um", errors["before"]["edge"][i],
+                                  errors["after"]["edge"][i], paper_before, paper_after,
+                                  note="distance between opposite top edges less its design"))
+        for i, (paper_before, paper_after) in enumerate(PAPER_S):
+            figures.append(Figure(f"inclination_S{i + 1}", "deg",
+                                  errors["before"]["inclination"][i],
+                                  errors["after"]["inclination"][i], paper_before, paper_after,
+                                  note=f"side face at C = {45 * i} deg, angle to the flat "
+                                  "less its design"))
+        for i, key in enumerate(PAPER_L):
+            figures.append(Figure(f"foot_distance_{key}", "um", errors["before"]["foot"][i],
+                                  errors["after"]["foot"][i],
+                                  note="distance between opposite foot edges less its design "
+                                  "(not in the paper)"))
+        finishing = machining_time(lab.machine, crown_passes(crown))
+        prism = machining_time(lab.machine, crown_passes(crown, prism=True))
+        saved = 100.0 * (1.0 - finishing / prism)
+        figures.append(Figure("machining_time", "h", prism / 3600.0, finishing / 3600.0,
+                              PAPER_TIME["cuboid_h"], PAPER_TIME["finishing_h"],
+                              note="before: the crown cut from the full stock (paper: a "
+                              "cuboid; here the octagonal prism); after: finishing the "
+                              "robot-loaded rough crown"))
+        figures.append(Figure("machining_time_saved", "percent", None, saved, None,
+                              PAPER_TIME["saved_percent"]))
+        details = {**{f"crown_{kind}_{name}": values for name, e in errors.items()
+                      for kind, values in (("edge_distance_error_um", e["edge"]),
+                                           ("inclination_error_deg", e["inclination"]),
+                                           ("foot_distance_error_um", e["foot"]))},
+                   "machining_time": {"finishing_h": finishing / 3600.0,
+                                      "prism_h": prism / 3600.0, "saved_percent": saved},
+                   "cuts": cuts,
+                   "note": "crown cut in its measuring windows"
+                   + (", every layer" if self.all_layers else ", last finishing layer only")}
+        return Evaluation(tuple(figures), details, parts, {"crown_nominal": nominal})
+
+
+def _crown_errors(features: CrownFeatures, plan: CrownPlan) -> dict[str, list[float]]:
+    return {"edge": ((features.edge_distances - 2 * plan.apothem) / UM).tolist(),
+            "inclination": np.degrees(features.inclinations - plan.slope).tolist(),
+            "foot": ((features.foot_distances - plan.foot_distance) / UM).tolist()}
+
+
+def _cut_details(report) -> dict:
+    return {"machining_time_s": report.machining_time_s, "sweeps_count": report.sweeps,
+            "sideways_sweeps_count": report.sideways_sweeps,
+            "rapids_that_cut_count": len(report.rapids_that_cut),
+            "removed_volume_mm3": report.removed_volume_m3 * 1e9, "elapsed_s": report.elapsed_s}
+
+
+def _identification_details(identified: Identified) -> dict:
+    """The paper's own quantities and the fit's agreement, units in the keys."""
+    detail = identified.detail
+    found, check = detail.found, detail.check
+    s = found.setting
+    agreement = detail.agreement()
+    return {"delta_um": (s.delta / UM).tolist(), "alpha_deg": math.degrees(s.alpha),
+            "beta_deg": math.degrees(s.beta), "gamma_deg": math.degrees(s.gamma),
+            "s1_offset_um": (found.delta / UM).tolist(),
+            "c_centre_um": (found.c_centre / UM).tolist(),
+            "sphere_radius_mm": found.radius / MM,
+            "fit_minus_eqs": {
+                "position_nm": [agreement[f"workpiece.{a}"] / M_PER_NM for a in "xyz"],
+                "angles_urad": [agreement[f"workpiece.{a}"] * 1e6
+                                for a in ("alpha", "beta", "gamma")],
+                "c_centre_nm": [agreement[f"location.C.E{a}0C"] / M_PER_NM for a in "XY"]},
+            "fit_rank_count": check.rank, "fit_condition_ratio": check.condition,
+            "fit_normalised_residual_rms_ratio": check.normalised_residual_rms}
