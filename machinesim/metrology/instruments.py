@@ -98,7 +98,7 @@ def as_generator(rng) -> np.random.Generator:
                      key="rng")
 
 
-def motion_of(machine, errors):
+def motion_of(machine, errors, frame: str | None = None):
     """The machine's actual motion, as an instrument on it sees it, with no door to ``errors``.
 
     Returns ``pose(frame, q) -> (..., 4, 4)``: the pose of ``frame`` in the workpiece frame at
@@ -106,11 +106,18 @@ def motion_of(machine, errors):
     the errors: what it reads comes from where the machine really moves, and no attribute of
     the instrument returns the injected model (the honesty rule of DESIGN.md).
 
+    ``frame``, when given, is the frame the instrument rides on: it must be on the machine.
+
     Raises
     ------
     ErrorModelError
         When ``errors`` does not fit ``machine``.
+    InputError
+        When ``frame`` is not a frame of ``machine``.
     """
+    if frame is not None and frame not in machine.frames:
+        raise InputError(f"Expected a frame of {machine.name} ({', '.join(machine.frames)}), "
+                         f"got {frame!r}", key="frame")
     machine.check_errors(errors)
 
     def pose(frame: str, q) -> np.ndarray:

@@ -85,11 +85,8 @@ class LaserInterferometer:
 
     def __init__(self, machine, errors=None, sigma: float = 2e-9, resolution: float = 1e-9,
                  *, noise: bool = True, rng=None, frame: str = "tool_tip") -> None:
-        if frame not in machine.frames:
-            raise InputError(f"Expected a frame of {machine.name} ({', '.join(machine.frames)}),"
-                             f" got {frame!r}", key="frame")
         self.machine = machine
-        self._pose = motion_of(machine, errors)
+        self._pose = motion_of(machine, errors, frame)
         self.frame = frame
         self.readout = Readout.of(sigma, resolution, noise)
         self.rng = as_generator(rng)

@@ -99,11 +99,8 @@ class TouchProbe:
     def __init__(self, machine, errors, part, radius: float = 0.25e-3, sigma: float = 20e-9,
                  resolution: float = 1e-9, *, noise: bool = True, rng=None,
                  frame: str = "probe_tip") -> None:
-        if frame not in machine.frames:
-            raise InputError(f"Expected a machine with a {frame!r} frame to carry the probe, "
-                             f"got {machine.name} with {', '.join(machine.frames)}", key="frame")
         self.machine = machine
-        self._pose = motion_of(machine, errors)
+        self._pose = motion_of(machine, errors, frame)
         self.frame = frame
         self.index = MeshIndex.from_surface(part)
         self.radius = as_positive(radius, "radius")

@@ -81,11 +81,8 @@ class RTest:
     def __init__(self, machine, errors=None, sigma: float = 50e-9, resolution: float = 1e-9,
                  *, noise: bool = True, rng=None, frame: str = "tool_tip",
                  point=(0.0, 0.0, 0.0)) -> None:
-        if frame not in machine.frames:
-            raise InputError(f"Expected a frame of {machine.name} ({', '.join(machine.frames)}),"
-                             f" got {frame!r}", key="frame")
         self.machine = machine
-        self._pose = motion_of(machine, errors)
+        self._pose = motion_of(machine, errors, frame)
         self.frame = frame
         point = np.array(point, dtype=np.float64)
         if point.shape != (3,) or not np.isfinite(point).all():
