@@ -5,16 +5,37 @@ Load a machine, inject the errors a real machine has, and ask where its tool edg
 >>> import machinesim
 >>> machine = machinesim.load_machine("robonano_a0ib")
 >>> errors = machinesim.ErrorModel.from_dict({"tool": {"offset_um": [5.0, 0.0, 0.0]}})
->>> machine.tool_pose([0, 0, 0, 0, 0], errors)[:3, 3]  # m, in the workpiece frame
+>>> machine.tool_pose([0, 0, 0, 0, 0], errors)[:3, 3].round(15)  # m, in the workpiece frame
 array([5.e-06, 0.e+00, 0.e+00])
 """
 
 from __future__ import annotations
 
-from machinesim.errors import ComponentError, ErrorModel, ToolSetting, WorkpieceSetting
+import importlib
+
 from machinesim.exceptions import MachineSimError
-from machinesim.lab import Lab
-from machinesim.machines import AxisSolution, Machine, list_machines, load_machine
+
+#: Names imported on first use (PEP 562), so that ``import machinesim.cli`` costs little:
+#: the command line then catches even a Ctrl-C while numpy and Pinocchio load.
+_LAZY = {
+    "ComponentError": "machinesim.errors", "ErrorModel": "machinesim.errors",
+    "ToolSetting": "machinesim.errors", "WorkpieceSetting": "machinesim.errors",
+    "Lab": "machinesim.lab", "AxisSolution": "machinesim.machines",
+    "Machine": "machinesim.machines", "list_machines": "machinesim.machines",
+    "load_machine": "machinesim.machines",
+}
+
+
+def __getattr__(name: str):
+    if name not in _LAZY:
+        raise AttributeError(f"module 'machinesim' has no attribute {name!r}")
+    value = getattr(importlib.import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
 
 
 def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, **options):

@@ -1,10 +1,157 @@
-"""Writing files whole or not at all."""
+"""Files: read with errors that name the user's path, written whole (or together) or not at all.
+
+Every file-system problem (missing file, a folder given as a file, a folder that is not
+there or cannot be written, a full disk) becomes a `FileError` (an `InputError`, and an
+`OSError`) whose ``source`` is the path the user gave: the command line prints it as one
+line, the Python API raises it.
+"""
 
 from __future__ import annotations
 
+import json
+import math
 import os
+import secrets
+import shutil
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
+
+from machinesim.exceptions import InputError, MachineSimError
+
+
+class FileError(InputError, OSError):
+    """A file-system problem with a file the user named (``source``): an `InputError`, so a
+    `MachineSimError`, and also an `OSError`, so that code written for the plain library
+    call it replaces (``except OSError``) still catches it."""
+
+
+#: Longest file name component (bytes) where the file system does not say (POSIX NAME_MAX).
+_NAME_MAX = 255
+#: Characters of the final name kept in a temporary file's name, so that it stays short.
+_TEMP_STEM = 64
+
+
+def _reason(exc: OSError) -> str:
+    return exc.strerror or str(exc) or type(exc).__name__
+
+
+def check_readable_file(path, what: str) -> Path:
+    """``path`` as a Path, after checking it is a regular file this process can read.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file the user named.
+    what : str
+        What the file is, for the message (e.g. ``"NC program"``).
+
+    Raises
+    ------
+    InputError
+        Naming ``path`` when it does not exist, is a folder or a device, or cannot be opened.
+    """
+    path = Path(path)
+    try:
+        if path.is_dir():
+            raise FileError(f"is a folder; expected the {what} file", source=str(path))
+        if not path.exists():
+            raise FileError(f"no such file; expected the {what}", source=str(path))
+        if not path.is_file():
+            # a FIFO or device would block or never end: refuse it before opening
+            raise FileError(f"is not a regular file; expected the {what}", source=str(path))
+        with open(path, "rb"):
+            pass
+    except OSError as exc:
+        raise FileError(f"cannot read the {what}: {_reason(exc)}", source=str(path)) from None
+    return path
+
+
+def check_writable(path, what: str) -> Path:
+    """``path`` as a Path, after checking a file can be written there (nothing is left behind).
+
+    A temporary file is created in the folder and removed again: this is the test that
+    counts (permissions, read-only mounts, a full folder), not a guess from mode bits.
+
+    Raises
+    ------
+    InputError
+        Naming ``path`` when it is a folder, its folder is missing or not a folder, the name
+        is too long, or the folder cannot be written.
+    """
+    path = Path(path)
+    folder = path.parent
+    if path.name in ("", ".", ".."):
+        raise FileError(f"expected a file name for the {what}", source=str(path))
+    try:
+        if path.is_dir():
+            raise FileError(f"is a folder; expected a file name for the {what}",
+                             source=str(path))
+        if not folder.is_dir():
+            reason = "is not a folder" if folder.exists() else "does not exist"
+            raise FileError(f"cannot write the {what}: the folder {str(folder)!r} {reason}",
+                             source=str(path))
+        if len(os.fsencode(path.name)) > _name_max(folder):
+            raise FileError(f"cannot write the {what}: the file name is longer than this "
+                             f"file system allows ({_name_max(folder)} bytes)",
+                             source=str(path))
+        handle, temp = tempfile.mkstemp(dir=folder, prefix=_temp_prefix(path), suffix=".tmp")
+        os.close(handle)
+        os.unlink(temp)
+    except OSError as exc:
+        raise FileError(f"cannot write the {what} in the folder {str(folder)!r}: "
+                         f"{_reason(exc)}", source=str(path)) from None
+    return path
+
+
+def _name_max(folder: Path) -> int:
+    try:
+        return int(os.pathconf(folder, "PC_NAME_MAX"))
+    except (OSError, ValueError):
+        return _NAME_MAX
+
+
+def _temp_prefix(path: Path) -> str:
+    return f".{path.name[:_TEMP_STEM]}."
+
+
+def _mode(path: Path) -> int:
+    """Permissions for a new version of ``path``: the old file's, else 0666 less the umask."""
+    try:
+        return path.stat().st_mode & 0o777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def _stage(path: Path, raw: bytes) -> str:
+    """Write ``raw`` to a flushed temporary file beside ``path``; return its name."""
+    handle, temp = tempfile.mkstemp(dir=path.parent, prefix=_temp_prefix(path), suffix=".tmp")
+    try:
+        with os.fdopen(handle, "wb") as file:
+            file.write(raw)
+            file.flush()
+            os.fsync(file.fileno())
+        os.chmod(temp, _mode(path))
+    except BaseException:
+        Path(temp).unlink(missing_ok=True)
+        raise
+    return temp
+
+
+def _write_error(path: Path, exc: OSError) -> FileError:
+    folder = path.parent
+    if not folder.is_dir():
+        reason = "is not a folder" if folder.exists() else "does not exist"
+        return FileError(f"cannot write: the folder {str(folder)!r} {reason}", source=str(path))
+    if path.is_dir():
+        return FileError("cannot write: it is a folder; expected a file name", source=str(path))
+    return FileError(f"cannot write: {_reason(exc)}", source=str(path))
+
+
+def _raw(data: bytes | str, encoding: str) -> bytes:
+    return data.encode(encoding) if isinstance(data, str) else bytes(data)
 
 
 def write_atomic(path, data: bytes | str, encoding: str = "utf-8") -> None:
@@ -14,23 +161,159 @@ def write_atomic(path, data: bytes | str, encoding: str = "utf-8") -> None:
     renamed over ``path`` (atomic on POSIX): an interrupted run leaves the old file or none,
     never half of one. The new file keeps the old file's permissions, or gets the usual ones
     (0666 less the umask) when there was none.
+
+    Raises
+    ------
+    InputError
+        Naming ``path`` for any file-system problem (missing folder, no permission, disk
+        full); the old file, if any, is then untouched.
     """
-    path = Path(path)
-    raw = data.encode(encoding) if isinstance(data, str) else data
-    if path.exists():
-        mode = path.stat().st_mode & 0o777
-    else:
-        umask = os.umask(0)
-        os.umask(umask)
-        mode = 0o666 & ~umask
-    handle, temp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    write_together([(path, data)], encoding)
+
+
+def write_together(items: Iterable[tuple[object, bytes | str]], encoding: str = "utf-8") -> None:
+    """Write several files so that either all of them are written or none is changed.
+
+    Each file is first written whole to a temporary file beside it (see `write_atomic`).
+    Only when every one is on disk are they renamed into place, one after the other; if a
+    rename fails, the files already renamed get their old contents back (or are removed when
+    there were none), so a part is never left without its report, nor beside an old one.
+
+    Parameters
+    ----------
+    items : iterable of (path, data)
+        Destinations (distinct) and their contents (bytes, or str encoded with ``encoding``).
+
+    Raises
+    ------
+    InputError
+        Naming the path whose write failed.
+    """
+    plan = [(Path(path), _raw(data, encoding)) for path, data in items]
+    if len({os.path.abspath(p) for p, _ in plan}) != len(plan):
+        raise InputError("the same file is named twice as an output: "
+                         + ", ".join(str(p) for p, _ in plan), source=str(plan[0][0]))
+    staged: list[tuple[Path, str]] = []
     try:
-        with os.fdopen(handle, "wb") as file:
-            file.write(raw)
-            file.flush()
-            os.fsync(file.fileno())
-        os.chmod(temp, mode)
-        os.replace(temp, path)
-    except BaseException:
-        Path(temp).unlink(missing_ok=True)
+        for path, raw in plan:
+            try:
+                staged.append((path, _stage(path, raw)))
+            except OSError as exc:
+                raise _write_error(path, exc) from None
+        _rename_all(staged)
+    finally:
+        for _, temp in staged:
+            Path(temp).unlink(missing_ok=True)
+
+
+def _rename_all(staged: list[tuple[Path, str]]) -> None:
+    """Rename every staged file into place; on any failure put the old files back."""
+    done: list[tuple[Path, str | None]] = []
+    failing = staged[0][0]
+    try:
+        for failing, temp in staged:
+            backup = _backup(failing) if len(staged) > 1 else None
+            try:
+                os.replace(temp, failing)
+            except BaseException:
+                if backup is not None:
+                    Path(backup).unlink(missing_ok=True)
+                raise
+            done.append((failing, backup))
+    except BaseException as exc:
+        for path, backup in reversed(done):
+            if backup is not None:
+                os.replace(backup, path)
+            else:
+                path.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise _write_error(failing, exc) from None
         raise
+    for _, backup in done:
+        if backup is not None:
+            Path(backup).unlink(missing_ok=True)
+
+
+def _backup(path: Path) -> str | None:
+    """A second name for the current ``path`` (hard link, else a copy), or None if none."""
+    if not path.is_file():
+        return None
+    name = str(path.parent / f"{_temp_prefix(path)}{secrets.token_hex(4)}.old")
+    try:
+        os.link(path, name)
+    except OSError:
+        shutil.copy2(path, name)
+    return name
+
+
+def json_text(data, what: str = "report") -> str:
+    """``data`` as indented JSON text, refusing NaN and infinity (JSON has neither).
+
+    Raises
+    ------
+    MachineSimError
+        Naming the key whose value is not a finite number; nothing should then be written.
+    """
+    try:
+        return json.dumps(data, indent=2, allow_nan=False) + "\n"
+    except ValueError:
+        bad = ", ".join(f"{key} = {value!r}" for key, value in _non_finite(data))
+        if not bad:
+            raise
+        raise MachineSimError(f"the {what} has values that are not finite numbers ({bad}); "
+                              "JSON has no NaN or infinity, so nothing was written") from None
+
+
+def _non_finite(value, key: str = ""):
+    if isinstance(value, float) and not math.isfinite(value):
+        yield key or "<value>", value
+    elif isinstance(value, dict):
+        for k, v in value.items():
+            yield from _non_finite(v, f"{key}.{k}" if key else str(k))
+    elif isinstance(value, list | tuple):
+        for i, v in enumerate(value):
+            yield from _non_finite(v, f"{key}[{i}]")
+
+
+def read_json(path, what: str = "JSON file"):
+    """The JSON value in the file ``path`` (UTF-8), with errors naming the path and position.
+
+    NaN and Infinity, which Python's json would accept, are refused: they are not JSON.
+
+    Raises
+    ------
+    InputError
+        When the file cannot be read, is not UTF-8 text, or is not valid JSON.
+    """
+    path = check_readable_file(path, what)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise FileError(f"cannot read the {what}: {_reason(exc)}", source=str(path)) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start}); "
+                         f"expected the {what} as JSON", source=str(path)) from None
+
+    def refuse(constant: str):
+        raise InputError(f"{constant} is not a finite number, which JSON requires; expected "
+                         f"the {what} as JSON", source=str(path))
+
+    def number(literal: str) -> float:
+        value = float(literal)
+        if not math.isfinite(value):
+            refuse(literal)
+        return value
+
+    try:
+        return json.loads(text, parse_constant=refuse, parse_float=number)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON ({exc.msg}); expected the {what}", source=str(path),
+                         line=exc.lineno, column=exc.colno) from None
+    except RecursionError:
+        raise InputError(f"nested too deeply to be the {what}", source=str(path)) from None
+
+
+__all__ = ["FileError", "check_readable_file", "check_writable", "json_text", "read_json",
+           "write_atomic", "write_together"]

@@ -4,18 +4,25 @@
     machinesim view MACHINE | PART.ply | REPORT_DIR [--html FILE]
     machinesim cut PROGRAM --machine NAME --tool SPEC --stock SPEC [--errors ERRORS.toml]
                    --out PART.ply [--report REPORT.json] [--roi X0,X1,Y0,Y1 ...]
+                   [--tools TOOLS.toml] [--integer-input calculator|increment]
+                   [--allow-overtravel]
+
+Exit status: 0 done; 2 the input cannot be used (the message names the file, line, key or
+value; nothing was written); 1 anything else (one line, never a traceback; set
+``MACHINESIM_TRACEBACK=1`` to see it); 130 interrupted (nothing was written). Heavy modules
+are imported inside `main`, so that even an interrupt while they load ends cleanly.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
+import math
+import os
 import sys
 from pathlib import Path
 
-from machinesim._io import write_atomic
+from machinesim._io import check_readable_file, check_writable, json_text, write_together
 from machinesim.exceptions import InputError, MachineSimError
-from machinesim.viewer.cli import add_view_parser, run_view
 
 EXAMPLES = """examples:
   machinesim machines
@@ -25,8 +32,21 @@ EXAMPLES = """examples:
       --out prisms.ply --roi 0,1,0,1 --roi 10,11,0,1
 """
 
+#: Part file formats by suffix: (format, what the CLI says about the file).
+PART_FORMATS = {
+    ".ply": ("ply", "PLY, float64 metres: exact"),
+    ".stl": ("stl", "binary STL, millimetres, float32: display only"),
+    ".glb": ("glb", "binary glTF, millimetres, float32: display only"),
+}
+#: Exit status when the input cannot be used.
+EXIT_INPUT = 2
+#: Exit status after Ctrl-C (128 + SIGINT, as shells report it).
+EXIT_INTERRUPTED = 130
+
 
 def _parser() -> argparse.ArgumentParser:
+    from machinesim.viewer.cli import add_view_parser
+
     parser = argparse.ArgumentParser(
         prog="machinesim", description="A virtual multi-axis ultraprecision machine tool.",
         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EXAMPLES)
@@ -36,7 +56,7 @@ def _parser() -> argparse.ArgumentParser:
     cut = sub.add_parser(
         "cut", help="cut an NC program on a machine with errors",
         description="Run an NC program on a machine (with injected errors) and write the "
-                    "machined part as an exact float64 PLY.",
+                    "machined part, and its report, together or not at all.",
         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EXAMPLES)
     cut.add_argument("program", type=Path,
                      help="FANUC-style NC program (mm, deg), e.g. grooves.nc")
@@ -55,32 +75,65 @@ def _parser() -> argparse.ArgumentParser:
                      help="injected errors, TOML with units in every key "
                           "(e.g. models/errors/example.toml); default: none")
     cut.add_argument("--out", type=Path, required=True,
-                     help="where to write the part: .ply (float64, exact) or .stl/.glb "
-                          "(display only)")
+                     help="where to write the part: .ply (float64, metres: exact) or "
+                          ".stl/.glb (float32, millimetres: display only)")
     cut.add_argument("--report", type=Path, default=None,
                      help="where to write the cut report as JSON (units in every key)")
     cut.add_argument("--roi", action="append", default=None, metavar="X0,X1,Y0,Y1",
                      help="cut only in this window (mm, workpiece frame); repeatable; "
                           "e.g. --roi 0,1,0,1")
+    cut.add_argument("--tools", type=Path, default=None, metavar="TOOLS.toml",
+                     help="tool table for T/D/H words and G43/G44 (TOML, units in keys)")
+    cut.add_argument("--integer-input", choices=("calculator", "increment"), default=None,
+                     help="how an axis number without decimal point reads: calculator "
+                          "(X10 is 10 mm, the default) or increment (X10 is 10 nm)")
+    cut.add_argument("--allow-overtravel", action="store_true",
+                     help="cut even where an axis leaves its travel (listed in the report); "
+                          "default: refuse the program and write nothing")
     cut.add_argument("--quiet", action="store_true", help="no progress bar")
     add_view_parser(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
+    """Run the command line with ``argv`` (default ``sys.argv[1:]``); return the exit status.
+
+    Usage errors and ``--help`` leave through argparse's ``SystemExit`` (status 2 and 0).
+    """
     try:
+        args = _parser().parse_args(argv)
         if args.command == "machines":
             return _machines()
         if args.command == "view":
+            from machinesim.viewer.cli import run_view
+
             return run_view(args)
         return _cut(args)
     except MachineSimError as exc:
-        print(f"machinesim: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(f"error: {exc}", EXIT_INPUT)
     except KeyboardInterrupt:
-        print("machinesim: interrupted; nothing was written", file=sys.stderr)
-        return 130
+        return _fail("interrupted; nothing was written", EXIT_INTERRUPTED)
+    except BrokenPipeError:
+        # the reader of our output went away (``machinesim machines | head -1``): not an error
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0
+    except OSError as exc:
+        where = f"{exc.filename}: " if exc.filename else ""
+        return _fail(f"error: {where}{exc.strerror or exc}", EXIT_INPUT)
+    except MemoryError:
+        return _fail("error: out of memory (a spec or program asks for more than this "
+                     "machine has)", 1)
+    except Exception as exc:
+        if os.environ.get("MACHINESIM_TRACEBACK"):
+            raise
+        return _fail(f"internal error: {type(exc).__name__}: {exc} (a bug in machinesim: "
+                     "please report it; MACHINESIM_TRACEBACK=1 shows where)", 1)
+
+
+def _fail(message: str, status: int) -> int:
+    print(f"machinesim: {message}", file=sys.stderr)
+    return status
 
 
 def _machines() -> int:
@@ -90,20 +143,35 @@ def _machines() -> int:
     return 0
 
 
-def _roi(texts):
+def parse_roi(texts) -> list[tuple[float, float, float, float]] | None:
+    """``--roi`` texts (mm) as windows (xmin, xmax, ymin, ymax) in m, or None for none.
+
+    Raises
+    ------
+    InputError
+        Naming the text when it is not four finite numbers with X0 < X1 and Y0 < Y1.
+    """
     if not texts:
         return None
     windows = []
     for text in texts:
         try:
-            values = [float(v) * 1e-3 for v in text.split(",")]
+            values = [float(v) * 1e-3 for v in str(text).split(",")]
         except ValueError:
             values = []
-        if len(values) != 4 or values[0] >= values[1] or values[2] >= values[3]:
-            raise InputError(f"--roi {text!r}: expected X0,X1,Y0,Y1 in mm with X0 < X1 and "
-                             "Y0 < Y1, e.g. 0,1,0,1")
+        if (len(values) != 4 or not all(math.isfinite(v) for v in values)
+                or values[0] >= values[1] or values[2] >= values[3]):
+            raise InputError(f"--roi {text!r}: expected X0,X1,Y0,Y1 in mm, four finite numbers "
+                             "with X0 < X1 and Y0 < Y1, e.g. 0,1,0,1", key="--roi")
         windows.append(tuple(values))
     return windows
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # either does not exist (yet)
+        return False
 
 
 def _progress_bar(quiet: bool):
@@ -123,24 +191,67 @@ def _progress_bar(quiet: bool):
 
 
 def _cut(args) -> int:
+    """``machinesim cut``: every input checked before cutting, both outputs written together.
+
+    The checks that cost nothing come first (file names, folders, options), so that a
+    mistake there is reported at once instead of after the cut; the part and the report are
+    then encoded in memory and written together (`machinesim._io.write_together`).
+    """
+    suffix = args.out.suffix.lower()
+    if suffix not in PART_FORMATS:
+        raise InputError(f"--out {args.out}: expected a file name ending in .ply, .stl or .glb")
+    file_format, description = PART_FORMATS[suffix]
+    check_readable_file(args.program, "NC program")
+    for option, path, what in (("--errors", args.errors, "error model"),
+                               ("--tools", args.tools, "tool table")):
+        if path is not None:
+            check_readable_file(path, f"{what} ({option})")
+    outputs = [(args.out, "part (--out)")]
+    if args.report is not None:
+        outputs.append((args.report, "report (--report)"))
+        if os.path.abspath(args.report) == os.path.abspath(args.out):
+            raise InputError("--out and --report name the same file; give two file names",
+                             source=str(args.out))
+    inputs = [p for p in (args.program, args.errors, args.tools, Path(args.machine)) if p]
+    for path, what in outputs:
+        check_writable(path, what)
+        if any(_same_file(path, source) for source in inputs):
+            raise InputError(f"the {what} would overwrite an input file; give another name",
+                             source=str(path))
+    roi = parse_roi(args.roi)
+
     from machinesim.cutting import cut
     from machinesim.errors import ErrorModel
+    from machinesim.machines import load_machine
     from machinesim.nc import read_program
+    from machinesim.tools import tool_from_spec
+    from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
-    suffix = args.out.suffix.lower()
-    if suffix not in (".ply", ".stl", ".glb"):
-        raise InputError(f"--out {args.out}: expected a .ply, .stl or .glb file name")
-    program = read_program(args.program)
+    machine = load_machine(args.machine)
+    tool = tool_from_spec(args.tool)
+    stock = stock_from_spec(args.stock)
+    reading = {}
+    if args.tools is not None:
+        reading["tools"] = args.tools
+    if args.integer_input is not None:
+        reading["integer_input"] = args.integer_input
+    program = read_program(args.program, **reading)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None
-    part, report = cut(program, args.machine, tool=args.tool, stock=args.stock, errors=errors,
-                       roi=_roi(args.roi), progress=_progress_bar(args.quiet))
-    {".ply": part.export_ply, ".stl": part.export_stl, ".glb": part.export_glb}[suffix](args.out)
+    options = {"allow_overtravel": True} if args.allow_overtravel else {}
+    part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
+                       progress=_progress_bar(args.quiet), **options)
     summary = report.to_dict()
-    if args.report:
-        write_atomic(args.report, json.dumps(summary, indent=2) + "\n")
-    print(f"wrote {args.out}: removed {summary['removed_volume_mm3']:.6g} mm^3 in "
-          f"{report.sweeps} sweeps ({report.engine}); "
+    summary["part_file"] = str(args.out)
+    summary["part_unit"] = EXPORT_UNITS[file_format]
+    files = [(args.out, part.encode(file_format))]
+    if args.report is not None:
+        files.append((args.report, json_text(summary, "cut report")))
+    write_together(files)
+    print(f"wrote {args.out} ({description}): removed {summary['removed_volume_mm3']:.6g} mm^3 "
+          f"in {report.sweeps} sweeps ({report.engine}); "
           f"machining time {report.machining_time_s:.1f} s")
+    if args.report is not None:
+        print(f"wrote {args.report} (cut report, JSON, units in every key)")
     for what, items in (("rapid that cuts at line", report.rapids_that_cut),
                         ("outside travel:", report.limit_violations)):
         for item in items:

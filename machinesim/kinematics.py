@@ -29,6 +29,7 @@ configurations at once with numpy.
 
 from __future__ import annotations
 
+import copy
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -170,7 +171,7 @@ def augment_urdf(root: ET.Element, axes: Mapping[str, Axis]) -> str:
     axes : mapping of str to Axis
         The machine's axes by letter.
     """
-    root = ET.fromstring(ET.tostring(root))
+    root = copy.deepcopy(root)
     for extra in [e for e in root if e.tag not in ("link", "joint", "material")]:
         root.remove(extra)
     for joint in list(root.findall("joint")):
@@ -316,7 +317,10 @@ class Kinematics:
         self.axes = tuple(a.letter for a in axes)
         self._axis = {a.letter: a for a in axes}
         self.xml = augment_urdf(urdf_root, self._axis)
-        self.model = pin.buildModelFromXML(self.xml)
+        try:
+            self.model = pin.buildModelFromXML(self.xml)
+        except (RuntimeError, ValueError) as exc:
+            raise ModelError(f"{source}: Pinocchio cannot build the model: {exc}") from None
         self.data = self.model.createData()
         self.q_index = {self.model.names[j]: self.model.idx_qs[j]
                         for j in range(1, self.model.njoints)}

@@ -152,22 +152,34 @@ class Part:
         box.flags.writeable = False
         return box
 
-    def export_stl(self, path) -> None:
-        """Write a binary STL. The format stores float32, so it is for display only."""
-        vertices, triangles = self.mesh()
-        corner = vertices[triangles]
-        normal = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
-        length = np.linalg.norm(normal, axis=1, keepdims=True)
-        normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
-        record = np.zeros(len(triangles), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)),
-                                                  ("a", "<u2")])
-        record["n"] = normal
-        record["v"] = corner
-        header = b"machinesim part, binary STL (float32: display only)".ljust(80, b" ")
-        write_atomic(path, header + struct.pack("<I", len(triangles)) + record.tobytes())
+    def encode(self, file_format: str) -> bytes:
+        """The part as the bytes of a ``"ply"``, ``"stl"`` or ``"glb"`` file.
+
+        PLY keeps the float64 vertices in metres, exact bit for bit. STL and GLB store
+        float32 (display only) in millimetres, the unit CAD tools assume for STL; the
+        coordinates are scaled in float64 and rounded to float32 once. Each file states its
+        unit: the PLY and STL headers, the glTF ``asset.extras``. `EXPORT_UNITS` lists them.
+        """
+        encoders = {"ply": self._ply_bytes, "stl": self._stl_bytes, "glb": self._glb_bytes}
+        key = str(file_format).lower().lstrip(".")
+        if key not in encoders:
+            raise InputError(f"unknown part file format {file_format!r}; expected one of "
+                             f"{', '.join(encoders)}", key="format")
+        return encoders[key]()
 
     def export_ply(self, path) -> None:
-        """Write a binary little-endian PLY with float64 vertices: exact, bit for bit."""
+        """Write a binary little-endian PLY with float64 vertices in metres: exact, bit for bit."""
+        write_atomic(path, self._ply_bytes())
+
+    def export_stl(self, path) -> None:
+        """Write a binary STL in millimetres. The format stores float32: for display only."""
+        write_atomic(path, self._stl_bytes())
+
+    def export_glb(self, path) -> None:
+        """Write a binary glTF in millimetres (float32 inside, via trimesh): for display only."""
+        write_atomic(path, self._glb_bytes())
+
+    def _ply_bytes(self) -> bytes:
         vertices, triangles = self.mesh()
         header = (
             "ply\nformat binary_little_endian 1.0\ncomment machinesim part, metres\n"
@@ -179,16 +191,38 @@ class Part:
         faces = np.zeros(len(triangles), dtype=[("n", "u1"), ("i", "<i4", 3)])
         faces["n"] = 3
         faces["i"] = triangles
-        body = np.ascontiguousarray(vertices, dtype="<f8").tobytes() + faces.tobytes()
-        write_atomic(path, header + body)
+        return header + np.ascontiguousarray(vertices, dtype="<f8").tobytes() + faces.tobytes()
 
-    def export_glb(self, path) -> None:
-        """Write a binary glTF (via trimesh, float32 inside): for display only."""
+    def _stl_bytes(self) -> bytes:
+        vertices, triangles = self.mesh()
+        corner = (vertices / M_PER_MM)[triangles]
+        normal = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
+        length = np.linalg.norm(normal, axis=1, keepdims=True)
+        normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
+        record = np.zeros(len(triangles), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)),
+                                                  ("a", "<u2")])
+        record["n"] = normal
+        record["v"] = corner
+        return _STL_HEADER + struct.pack("<I", len(triangles)) + record.tobytes()
+
+    def _glb_bytes(self) -> bytes:
         import trimesh
 
         vertices, triangles = self.mesh()
-        data = trimesh.Trimesh(vertices, triangles, process=False).export(file_type="glb")
-        write_atomic(path, data)
+
+        def state_unit(tree: dict) -> None:
+            tree.setdefault("asset", {})["extras"] = {"unit": "mm", "note": _GLB_NOTE}
+
+        mesh = trimesh.Trimesh(vertices / M_PER_MM, triangles, process=False)
+        return trimesh.exchange.gltf.export_glb(trimesh.Scene(mesh),
+                                                tree_postprocessor=state_unit)
+
+
+#: Unit of the coordinates each export format holds (`Part.encode`).
+EXPORT_UNITS = {"ply": "m", "stl": "mm", "glb": "mm"}
+_STL_HEADER = b"machinesim part, binary STL, units: mm (float32: display only)".ljust(80, b" ")
+_GLB_NOTE = ("machinesim part in millimetres, as CAD tools read STL; float32: display only "
+             "(the exact float64 part in metres is the PLY export)")
 
 
 def mesh_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:
@@ -315,7 +349,15 @@ _STOCK_FORMS = (
 )
 
 
-def _numbers(spec: str, text: str, count: int, separator: str) -> list[float]:
+#: Range of a size in a stock spec (mm): from 1 nm (below it float64 squares of the size
+#: underflow: a cylinder of radius 1e-200 mm has volume 0) to 10 m, twenty times the largest
+#: machine travel (beyond it a 1 nm chord polygon needs billions of vertices). Placements
+#: stay within +-10 m too: 1e300 + 1 == 1e300 would swallow the part's own size.
+STOCK_SIZE_MM = (1e-6, 1e4)
+
+
+def _numbers(spec: str, text: str, count: int, separator: str,
+             sizes: bool = True) -> list[float]:
     fields = text.split(separator)
     try:
         values = [float(field) for field in fields]
@@ -327,6 +369,13 @@ def _numbers(spec: str, text: str, count: int, separator: str) -> list[float]:
             f"{text!r}; forms: {_STOCK_FORMS}",
             key="stock",
         )
+    low, high = STOCK_SIZE_MM
+    if sizes and not all(low <= v <= high for v in values):
+        raise InputError(f"stock spec {spec!r}: sizes {text!r} must lie in {low:g} .. "
+                         f"{high:g} mm", key="stock")
+    if not sizes and not all(abs(v) <= high for v in values):
+        raise InputError(f"stock spec {spec!r}: placement {text!r} must lie within +-{high:g} "
+                         "mm", key="stock")
     return values
 
 
@@ -341,7 +390,8 @@ def stock_from_spec(spec: str) -> Part:
     text = str(spec).strip()
     body, _, placement = text.partition("@")
     origin = (
-        [v * M_PER_MM for v in _numbers(spec, placement, 3, ",")] if placement else [0.0] * 3
+        [v * M_PER_MM for v in _numbers(spec, placement, 3, ",", sizes=False)] if placement
+        else [0.0] * 3
     )
     fields = body.split(":")
     kind = fields[0].lower()
@@ -361,9 +411,12 @@ def stock_from_spec(spec: str) -> Part:
             return Part(part.manifold.translate(tuple(origin)))
         if kind == "crown" and len(fields) in (1, 2):
             oversize = (
-                _numbers(spec, fields[1], 1, ",")[0] * M_PER_MM if len(fields) == 2
-                else 10.0 * M_PER_UM
+                _numbers(spec, fields[1], 1, ",", sizes=False)[0] * M_PER_MM
+                if len(fields) == 2 else 10.0 * M_PER_UM
             )
+            if not 0.0 <= oversize <= 1.0 * M_PER_MM:
+                raise InputError(f"stock spec {spec!r}: crown oversize must lie in 0 .. 1 mm, "
+                                 f"got {oversize / M_PER_MM!r} mm", key="stock")
             return Part(diamond_crown(oversize).manifold.translate(tuple(origin)))
     except InputError as error:
         if str(spec) in str(error):
@@ -374,6 +427,8 @@ def stock_from_spec(spec: str) -> Part:
 
 __all__ = [
     "CYLINDER_CHORD_M",
+    "EXPORT_UNITS",
+    "STOCK_SIZE_MM",
     "SPHERE_CHORD_M",
     "Part",
     "block",

@@ -1,10 +1,60 @@
-"""The command line: `machinesim machines` and clear errors."""
+"""The command line: clear one-line errors, never a traceback, outputs written together or not
+at all, reports without NaN, and the options that reach the NC reader and the cutter."""
 
 from __future__ import annotations
 
+import inspect
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
 import pytest
 
+import machinesim.cutting
+import machinesim.nc
 from machinesim.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+GROOVES = ROOT / "models" / "examples" / "grooves.nc"
+GROOVING = ROOT / "models" / "grooving_4axis.urdf"
+#: grooves.nc: four 90-deg V grooves 20 um deep right across the 10 mm block: each removes
+#: a triangle of depth d and width 2 d (area d^2) over 10 mm.
+GROOVES_MM3 = 4 * 0.020**2 * 10.0
+CUT = ["--machine", "grooving_4axis", "--tool", "v:90", "--stock", "block:10x10x2", "--quiet"]
+
+
+def run(argv, capsys) -> tuple[int, str, str]:
+    """Exit status, stdout and stderr of ``machinesim ARGV`` run in this process."""
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:  # argparse: usage errors and --help
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_clean_failure(code: int, err: str, *words: str, status: int = 2) -> None:
+    """A refusal: the status, one line on stderr naming what is wrong, no traceback."""
+    assert code == status, err
+    assert "Traceback" not in err and "internal error" not in err, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("machinesim: "), err
+    for word in words:
+        assert word in err, f"{word!r} not in {err!r}"
+
+
+def entry_point() -> list[str]:
+    """The installed ``machinesim`` script (what users run), else ``python -m``."""
+    script = Path(sys.executable).parent / "machinesim"
+    return [str(script)] if script.exists() else [sys.executable, "-m", "machinesim.cli"]
+
+
+def no_nan(constant: str):
+    raise AssertionError(f"{constant} in a JSON report")
 
 
 def test_machines_lists_each_machine_with_its_axes(capsys):
@@ -20,6 +70,282 @@ def test_help_documents_every_cut_option_with_an_example(capsys):
     with pytest.raises(SystemExit):
         main(["cut", "--help"])
     out = capsys.readouterr().out
-    for option in ("--machine", "--tool", "--stock", "--errors", "--out", "--report", "--roi"):
+    for option in ("--machine", "--tool", "--stock", "--errors", "--out", "--report", "--roi",
+                   "--tools", "--integer-input", "--allow-overtravel"):
         assert option in out
     assert "e.g. block:10x10x2" in out and "e.g. v:90" in out
+    assert "millimetres" in out and "metres" in out
+
+
+# --------------------------------------------------------------------- a good cut
+
+
+def test_a_cut_writes_part_and_report_with_units_and_no_nan(tmp_path, capsys):
+    out, report = tmp_path / "part.stl", tmp_path / "report.json"
+    code, stdout, err = run(["cut", GROOVES, *CUT, "--out", out, "--report", report], capsys)
+    assert code == 0, err
+    data = json.loads(report.read_text(), parse_constant=no_nan)
+    assert data["removed_volume_mm3"] == pytest.approx(GROOVES_MM3, rel=1e-9)
+    assert data["part_file"] == str(out) and data["part_unit"] == "mm"
+    assert f"wrote {out} (binary STL, millimetres" in stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["part.stl", "report.json"]
+
+
+def test_integer_input_increment_reads_axis_words_in_nanometres(tmp_path, capsys):
+    program = tmp_path / "increment.nc"
+    program.write_text(GROOVES.read_text().replace("Z-0.02", "Z-20000"))  # 20000 nm = 20 um
+    report = tmp_path / "report.json"
+    code, _, err = run(["cut", program, *CUT, "--integer-input", "increment",
+                        "--out", tmp_path / "part.ply", "--report", report], capsys)
+    assert code == 0, err
+    data = json.loads(report.read_text(), parse_constant=no_nan)
+    assert data["removed_volume_mm3"] == pytest.approx(GROOVES_MM3, rel=1e-9)
+
+
+# ------------------------------------------------------------ refusals: one line, no files
+
+
+def test_a_missing_or_folder_program_is_one_line_naming_it(tmp_path, capsys):
+    out = tmp_path / "part.ply"
+    code, _, err = run(["cut", tmp_path / "nope.nc", *CUT, "--out", out], capsys)
+    assert_clean_failure(code, err, "nope.nc: no such file; expected the NC program")
+    code, _, err = run(["cut", tmp_path, *CUT, "--out", out], capsys)
+    assert_clean_failure(code, err, f"{tmp_path}: is a folder; expected the NC program file")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("bad", ["out", "report"])
+def test_an_unwritable_output_leaves_neither_file(tmp_path, capsys, bad):
+    paths = {"out": tmp_path / "part.ply", "report": tmp_path / "report.json"}
+    paths[bad] = tmp_path / "missing folder" / paths[bad].name
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", paths["out"], "--report", paths["report"]],
+                       capsys)
+    assert_clean_failure(code, err, f"{paths[bad]}: cannot write the", "does not exist")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_failure_while_writing_leaves_neither_file(tmp_path, capsys, monkeypatch):
+    """Both destinations pass the checks, then the disk fails on the second rename."""
+    import machinesim._io as io
+
+    out, report = tmp_path / "part.ply", tmp_path / "report.json"
+    real = os.replace
+
+    def second_fails(src, dst):
+        if Path(dst) == report:
+            raise OSError(28, "No space left on device")
+        real(src, dst)
+
+    monkeypatch.setattr(io.os, "replace", second_fails)
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", out, "--report", report], capsys)
+    assert_clean_failure(code, err, "report.json: cannot write: No space left on device")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_outputs_naming_one_file_or_an_input_are_refused(tmp_path, capsys):
+    out = tmp_path / "part.ply"
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", out, "--report", out], capsys)
+    assert_clean_failure(code, err, "--out and --report name the same file")
+    program = tmp_path / "grooves.nc"
+    program.write_bytes(GROOVES.read_bytes())
+    code, _, err = run(["cut", program, *CUT, "--out", out, "--report", program], capsys)
+    assert_clean_failure(code, err, "grooves.nc: the report (--report) would overwrite an input")
+    assert program.read_bytes() == GROOVES.read_bytes()
+    program.unlink()
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "part.obj"], capsys)
+    assert_clean_failure(code, err, "part.obj: expected a file name ending in .ply, .stl or .glb")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("roi", ["nan,1,0,1", "0,inf,0,1", "1,0,0,1", "0,1,0", "a,b,c,d", ""])
+def test_a_bad_roi_is_refused_before_cutting(tmp_path, capsys, roi):
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", f"--roi={roi}"],
+                       capsys)
+    assert_clean_failure(code, err, f"--roi {roi!r}: expected X0,X1,Y0,Y1 in mm")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_machine_with_zero_rapid_rate_is_refused_not_a_nan_report(tmp_path, capsys):
+    urdf = tmp_path / "slow.urdf"
+    urdf.write_text(GROOVING.read_text().replace('velocity="0.025"', 'velocity="0"', 1))
+    code, _, err = run(["cut", GROOVES, "--machine", urdf, "--tool", "v:90", "--stock",
+                        "block:10x10x2", "--out", tmp_path / "p.ply", "--report",
+                        tmp_path / "r.json"], capsys)
+    assert_clean_failure(code, err, "slow.urdf: joint 'Y'", "velocity=0.0", "rapid rate > 0")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["slow.urdf"]
+
+
+def test_a_report_that_would_hold_nan_is_refused_and_nothing_is_written(tmp_path, capsys,
+                                                                       monkeypatch):
+    real = machinesim.cutting.cut
+
+    def nan_time(*args, **kwargs):
+        from dataclasses import replace
+
+        part, report = real(*args, **kwargs)
+        return part, replace(report, machining_time_s=float("nan"))
+
+    monkeypatch.setattr(machinesim.cutting, "cut", nan_time)
+    out, report = tmp_path / "part.ply", tmp_path / "report.json"
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", out, "--report", report], capsys)
+    assert_clean_failure(code, err, "machining_time_s = nan", "nothing was written")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_during_the_cut_exits_130_and_writes_nothing(tmp_path, capsys, monkeypatch):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(machinesim.cutting, "cut", interrupted)
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "part.ply"], capsys)
+    assert_clean_failure(code, err, "interrupted; nothing was written", status=130)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_binary_or_malformed_view_report_is_one_line(tmp_path, capsys):
+    part = tmp_path / "part.ply"
+    assert run(["cut", GROOVES, *CUT, "--out", part], capsys)[0] == 0
+    cases = {b"\x00\xff\xfe binary": "not UTF-8 text", b'{"a": ': "not valid JSON",
+             b"[1, 2]": "expected a JSON object (a cut report), got a list",
+             b'{"a": NaN}': "NaN is not a finite number"}
+    for content, words in cases.items():
+        report = tmp_path / "report.json"
+        report.write_bytes(content)
+        code, _, err = run(["view", part, "--report", report, "--html", tmp_path / "v.html"],
+                           capsys)
+        assert_clean_failure(code, err, f"{report}", words)
+    assert not (tmp_path / "v.html").exists()
+
+
+def test_view_refuses_an_unwritable_page_before_building_it(tmp_path, capsys):
+    code, _, err = run(["view", "grooving_4axis", "--html", tmp_path / "no" / "v.html"], capsys)
+    assert_clean_failure(code, err, "v.html: cannot write the page (--html)", "does not exist")
+
+
+# ------------------------------------------------------ options reaching other modules
+
+
+def test_tools_and_integer_input_reach_the_nc_reader(tmp_path, capsys, monkeypatch):
+    seen = {}
+    real = machinesim.nc.read_program
+
+    def reader(path, **kwargs):
+        seen.update(kwargs)
+        return real(path, integer_input=kwargs.get("integer_input", "calculator"))
+
+    monkeypatch.setattr(machinesim.nc, "read_program", reader)
+    table = tmp_path / "tools.toml"
+    table.write_text("")
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", "--tools", table,
+                        "--integer-input", "calculator"], capsys)
+    assert code == 0, err
+    assert seen == {"tools": table, "integer_input": "calculator"}
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", "--tools",
+                        tmp_path / "none.toml"], capsys)
+    assert_clean_failure(code, err, "none.toml: no such file; expected the tool table (--tools)")
+
+
+def test_the_nc_reader_takes_a_tool_table(tmp_path):
+    table = tmp_path / "tools.toml"
+    table.write_text("")
+    try:
+        with_table = machinesim.nc.read_program(GROOVES, tools=table)
+    except TypeError as exc:
+        if "tools" not in str(exc):
+            raise
+        pytest.skip("machinesim.nc.read_program(path, tools=...) is not there yet (the NC "
+                    "part of issue 12): the CLI passes --tools to it")
+    assert with_table.moves == machinesim.nc.read_program(GROOVES).moves
+
+
+def _overtravel_program(tmp_path) -> Path:
+    program = tmp_path / "overtravel.nc"
+    program.write_text("G90 G21 G94\nG00 X-300. Y2. Z0.1\nG00 X0.\nM30\n")  # X travel +-250 mm
+    return program
+
+
+def test_allow_overtravel_reaches_the_cutter(tmp_path, capsys, monkeypatch):
+    seen = []
+    real = machinesim.cutting.cut
+
+    def cutter(*args, **kwargs):
+        seen.append(kwargs.pop("allow_overtravel", None))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(machinesim.cutting, "cut", cutter)
+    for flag in ([], ["--allow-overtravel"]):
+        code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", *flag], capsys)
+        assert code == 0, err
+    assert seen == [None, True]  # without the flag, the cutter's default (refuse) holds
+
+
+def test_overtravel_is_refused_by_default_and_listed_when_allowed(tmp_path, capsys):
+    if "allow_overtravel" not in inspect.signature(machinesim.cutting.cut).parameters:
+        pytest.skip("machinesim.cutting.cut(..., allow_overtravel=) is not there yet (the CUT "
+                    "part of issue 12): the CLI passes --allow-overtravel to it")
+    program = _overtravel_program(tmp_path)
+    out, report = tmp_path / "p.ply", tmp_path / "r.json"
+    code, _, err = run(["cut", program, *CUT, "--out", out, "--report", report], capsys)
+    assert_clean_failure(code, err, "X", "-300")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["overtravel.nc"]
+    code, _, err = run(["cut", program, *CUT, "--out", out, "--report", report,
+                        "--allow-overtravel"], capsys)
+    assert code == 0, err
+    data = json.loads(report.read_text(), parse_constant=no_nan)
+    assert any("axis X = -300" in v for v in data["limit_violations"])
+    assert "outside travel" in err
+
+
+# --------------------------------------------------- the real entry point, in a process
+
+
+def _run_process(args, **kwargs) -> subprocess.CompletedProcess:
+    return subprocess.run([*entry_point(), *map(str, args)], capture_output=True, text=True,
+                          timeout=120, check=False, **kwargs)
+
+
+def test_the_installed_command_reports_file_errors_in_one_line(tmp_path):
+    result = _run_process(["cut", tmp_path / "missing.nc", *CUT, "--out", tmp_path / "p.ply"])
+    assert_clean_failure(result.returncode, result.stderr, "missing.nc: no such file")
+    result = _run_process(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply",
+                           "--report", tmp_path / "nowhere" / "r.json"])
+    assert_clean_failure(result.returncode, result.stderr, "r.json: cannot write the report")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_huge_tool_is_refused_cleanly(tmp_path):
+    result = _run_process(["cut", GROOVES, "--machine", "grooving_4axis", "--tool", "ball:1e9",
+                           "--stock", "block:10x10x2", "--out", tmp_path / "p.ply"])
+    if result.returncode < 0:
+        pytest.skip(f"machinesim.tools does not bound tool sizes yet (the CUT part of issue "
+                    f"12): ball:1e9 kills the process with signal {-result.returncode}")
+    assert_clean_failure(result.returncode, result.stderr, "ball:1e9")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="needs Linux /proc")
+def test_ctrl_c_while_loading_exits_130_in_one_line(tmp_path):
+    """SIGINT once the process maps SciPy's own libraries (not numpy's scipy_openblas): only
+    the viewer loads SciPy, inside `main`, so the process is importing it or building the
+    page."""
+    page = tmp_path / "machine.html"
+    process = subprocess.Popen([*entry_point(), "view", "robonano_a0ib", "--html", str(page)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and process.poll() is None:
+            try:
+                maps = Path(f"/proc/{process.pid}/maps").read_text()
+            except OSError:
+                maps = ""
+            if "site-packages/scipy/" in maps:
+                break
+            time.sleep(0.01)
+        assert process.poll() is None, "the command ended before it could be interrupted"
+        process.send_signal(signal.SIGINT)
+        _, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert_clean_failure(process.returncode, err, "interrupted", status=130)
+    assert not page.exists()

@@ -1,12 +1,21 @@
-"""Atomic writes: whole or not at all, with ordinary permissions."""
+"""Files: atomic writes with ordinary permissions, several written together, every
+file-system problem an InputError naming the path, JSON without NaN, export units."""
 
 from __future__ import annotations
 
+import errno
+import json
+import math
 import os
+import struct
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from machinesim import _io
+from machinesim.exceptions import InputError, MachineSimError
+from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
 
 def test_new_files_get_the_umask_permissions_and_old_ones_keep_theirs(tmp_path):
@@ -34,3 +43,189 @@ def test_an_interrupted_write_leaves_the_old_file_and_no_debris(tmp_path, monkey
         _io.write_atomic(target, "new")
     assert target.read_text() == "old"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["part.ply"]
+
+
+# ------------------------------------------------------------- file-system errors, named
+
+
+def test_a_missing_folder_a_folder_and_a_file_as_folder_are_input_errors(tmp_path):
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "file").write_text("x")
+    cases = {
+        tmp_path / "missing" / "part.ply": "the folder '.*missing' does not exist",
+        tmp_path / "folder": "is a folder",
+        tmp_path / "file" / "part.ply": "the folder '.*file' is not a folder",
+    }
+    for path, words in cases.items():
+        with pytest.raises(InputError, match=words) as raised:
+            _io.write_atomic(path, "data")
+        assert raised.value.source == str(path)
+        # also an OSError: callers written for open() still catch it
+        assert isinstance(raised.value, OSError) and isinstance(raised.value, MachineSimError)
+        with pytest.raises(InputError, match=words):
+            _io.check_writable(path, "part")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "folder"]
+    assert list((tmp_path / "folder").iterdir()) == []
+
+
+def _locked_folder(tmp_path) -> Path:
+    """A folder this process cannot create files in: a read-only one, or as root /sys."""
+    if os.geteuid() != 0:
+        folder = tmp_path / "locked"
+        folder.mkdir()
+        folder.chmod(0o500)
+        return folder
+    try:
+        os.close(os.open("/sys/machinesim-probe", os.O_CREAT | os.O_WRONLY))
+    except OSError:
+        return Path("/sys")
+    os.unlink("/sys/machinesim-probe")
+    pytest.skip("running as root with a writable /sys: no folder refuses writes")
+
+
+def test_a_folder_that_refuses_writes_is_an_input_error(tmp_path):
+    folder = _locked_folder(tmp_path)
+    try:
+        with pytest.raises(InputError, match="part.ply: cannot write the part in the folder"):
+            _io.check_writable(folder / "part.ply", "part")
+        with pytest.raises(InputError, match="part.ply: cannot write"):
+            _io.write_atomic(folder / "part.ply", "data")
+    finally:
+        if folder.is_relative_to(tmp_path):
+            folder.chmod(0o700)
+
+
+def test_a_full_disk_is_an_input_error_and_leaves_the_old_file(tmp_path, monkeypatch):
+    target = tmp_path / "report.json"
+    target.write_text("old")
+
+    def full(_fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(_io.os, "fsync", full)
+    with pytest.raises(InputError, match="report.json: cannot write: No space left on device"):
+        _io.write_atomic(target, "new")
+    assert target.read_text() == "old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report.json"]
+
+
+def test_readable_file_checks_name_the_path(tmp_path):
+    (tmp_path / "dir").mkdir()
+    with pytest.raises(InputError, match="nope.nc: no such file; expected the NC program"):
+        _io.check_readable_file(tmp_path / "nope.nc", "NC program")
+    with pytest.raises(InputError, match="dir: is a folder; expected the NC program file"):
+        _io.check_readable_file(tmp_path / "dir", "NC program")
+    fifo = tmp_path / "pipe.nc"
+    os.mkfifo(fifo)
+    with pytest.raises(InputError, match="pipe.nc: is not a regular file"):
+        _io.check_readable_file(fifo, "NC program")  # opening it would block forever
+
+
+# ------------------------------------------------------------------- written together
+
+
+def test_files_written_together_all_appear(tmp_path):
+    part, report = tmp_path / "part.ply", tmp_path / "report.json"
+    _io.write_together([(part, b"\x00\x01"), (report, "{}\n")])
+    assert part.read_bytes() == b"\x00\x01" and report.read_text() == "{}\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["part.ply", "report.json"]
+
+
+def test_when_the_second_rename_fails_the_first_file_is_put_back(tmp_path, monkeypatch):
+    part, report = tmp_path / "part.ply", tmp_path / "report.json"
+    part.write_text("old part")  # the first file existed: it gets its old contents back
+    real = os.replace
+
+    def second_fails(src, dst):
+        if Path(dst) == report:
+            raise OSError(errno.EIO, os.strerror(errno.EIO))
+        real(src, dst)
+
+    monkeypatch.setattr(_io.os, "replace", second_fails)
+    with pytest.raises(InputError, match="report.json: cannot write: Input/output error"):
+        _io.write_together([(part, "new part"), (report, "new report")])
+    assert part.read_text() == "old part"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["part.ply"]
+    part.unlink()  # the first file is new: it is removed again
+    with pytest.raises(InputError):
+        _io.write_together([(part, "new part"), (report, "new report")])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupt_between_the_renames_leaves_neither_file(tmp_path, monkeypatch):
+    part, report = tmp_path / "part.ply", tmp_path / "report.json"
+    real = os.replace
+
+    def interrupted(src, dst):
+        if Path(dst) == report:
+            raise KeyboardInterrupt
+        real(src, dst)
+
+    monkeypatch.setattr(_io.os, "replace", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        _io.write_together([(part, "part"), (report, "report")])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_same_file_twice_is_refused_before_writing(tmp_path):
+    with pytest.raises(InputError, match="the same file is named twice"):
+        _io.write_together([(tmp_path / "a", "1"), (tmp_path / ".." / tmp_path.name / "a", "2")])
+    assert list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------------------------- JSON
+
+
+def _no_constants(name):
+    raise AssertionError(f"{name} in JSON text")
+
+
+def test_json_text_refuses_nan_and_infinity_naming_the_key():
+    text = _io.json_text({"a": 1.5, "b": [0.0, 2.0]})
+    assert json.loads(text, parse_constant=_no_constants) == {"a": 1.5, "b": [0.0, 2.0]}
+    with pytest.raises(MachineSimError, match=r"machining_time_s = nan.*b\.c\[1\] = inf"):
+        _io.json_text({"machining_time_s": math.nan, "b": {"c": [1.0, math.inf]}})
+
+
+@pytest.mark.parametrize(("content", "words"), [
+    (bytes(range(256)), "not UTF-8 text"),
+    (b'{"a": NaN}', "NaN is not a finite number"),
+    (b'{"a": 1e999}', "1e999 is not a finite number"),
+    (b'{"a": [1, 2}', r"line 1, column 12: not valid JSON"),
+    (b"[" * 100000 + b"]" * 100000, "nested too deeply|not valid JSON"),
+])
+def test_read_json_names_the_file_and_what_is_wrong(tmp_path, content, words):
+    path = tmp_path / "report.json"
+    path.write_bytes(content)
+    with pytest.raises(InputError, match=words) as raised:
+        _io.read_json(path, "cut report")
+    assert raised.value.source == str(path)
+
+
+# ---------------------------------------------------------------------- export units
+
+
+def test_stl_and_glb_are_millimetres_and_say_so_ply_stays_metres(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    part = stock_from_spec("block:1x2x3@10,20,0")  # mm: x 10..11, y 20..22, z -3..0
+    part.export_stl(tmp_path / "part.stl")
+    part.export_glb(tmp_path / "part.glb")
+    part.export_ply(tmp_path / "part.ply")
+    expected_mm = np.array([[10.0, 20.0, -3.0], [11.0, 22.0, 0.0]])
+    stl = tmp_path / "part.stl"
+    assert b"units: mm" in stl.read_bytes()[:80]
+    mesh = trimesh.load(stl)
+    np.testing.assert_allclose(mesh.bounds, expected_mm, rtol=1e-7)  # float32 coordinates
+    assert mesh.volume == pytest.approx(6.0, rel=1e-6)  # mm^3
+    glb = (tmp_path / "part.glb").read_bytes()
+    length = struct.unpack("<I", glb[12:16])[0]
+    assert json.loads(glb[20:20 + length])["asset"]["extras"]["unit"] == "mm"
+    mesh = trimesh.load(tmp_path / "part.glb", force="mesh")
+    np.testing.assert_allclose(mesh.bounds, expected_mm, rtol=1e-7)
+    assert mesh.volume == pytest.approx(6.0, rel=1e-6)
+    ply = (tmp_path / "part.ply").read_bytes()
+    assert b"comment machinesim part, metres" in ply[:200]
+    assert b"property double x" in ply[:200]
+    assert EXPORT_UNITS == {"ply": "m", "stl": "mm", "glb": "mm"}
+    for file_format in EXPORT_UNITS:
+        assert part.encode(file_format) == (tmp_path / f"part.{file_format}").read_bytes()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import os
 import shutil
 import subprocess
 import sys
@@ -121,3 +122,127 @@ def test_a_plain_wheel_install_ships_the_models(tmp_path):
     assert Path(out[0]) == target / "machinesim" / "models"
     assert out[1] == "('X', 'Z', 'C')"
     assert models_dir() == MODELS  # the source tree itself uses models/
+
+
+# --------------------------------------------------------------------- validation at load
+
+GROOVING = (MODELS / "grooving_4axis.urdf").read_text()
+X_LIMIT = '<limit lower="-0.25" upper="0.25" effort="1000.0" velocity="0.025"/>'
+
+
+def _in_joint(name: str, old: str, new: str) -> str:
+    """grooving_4axis.urdf with ``old`` replaced by ``new`` inside joint ``name`` only."""
+    start = GROOVING.index(f'<joint name="{name}"')
+    end = GROOVING.index("</joint>", start)
+    body = GROOVING[start:end]
+    assert old in body, f"{old!r} is not in joint {name} of grooving_4axis.urdf"
+    return GROOVING[:start] + body.replace(old, new, 1) + GROOVING[end:]
+
+
+# Each case: the hostile file (a text edit of a shipped model) and words the message must
+# hold: what is wrong, where (joint or link) and the value.
+HOSTILE_URDFS = {
+    "cycle": (_in_joint("Y", '<parent link="base"/>', '<parent link="c_table"/>'),
+              ["joints 'C' -> 'Y' form a cycle", "'c_table'"]),
+    "self_loop": (_in_joint("Z", '<parent link="x_carriage"/>', '<parent link="z_carriage"/>'),
+                  ["joints 'Z' form a cycle", "'z_carriage'"]),
+    "dangling_parent": (_in_joint("Z", '<parent link="x_carriage"/>',
+                                  '<parent link="x_carriag"/>'),
+                        ["joint 'Z'", "parent link 'x_carriag' does not exist"]),
+    "dangling_child": (_in_joint("X", '<child link="x_carriage"/>', '<child link="nowhere"/>'),
+                       ["joint 'X'", "child link 'nowhere' does not exist"]),
+    "duplicate_joint": (_in_joint("Z", '<joint name="Z"', '<joint name="X"'),
+                        ["joint 'X' is defined twice"]),
+    "duplicate_link": (GROOVING.replace('<link name="tool_tip">',
+                                        '<link name="tool_tip"/><link name="tool_tip">'),
+                       ["link 'tool_tip' is defined twice"]),
+    "two_parents": (_in_joint("Z", '<child link="z_carriage"/>', '<child link="x_carriage"/>'),
+                    ["joint 'Z'", "'x_carriage' is already the child of joint 'X'"]),
+    "two_roots": (GROOVING.replace('<link name="base">', '<link name="stray"/><link name="base">'),
+                  ["2 root links", "'stray'"]),
+    "missing_limit": (_in_joint("X", X_LIMIT, ""), ["joint 'X'", "no <limit"]),
+    "missing_lower": (_in_joint("X", ' lower="-0.25"', ""), ["joint 'X'", "no lower="]),
+    "missing_upper": (_in_joint("X", ' upper="0.25"', ""), ["joint 'X'", "no upper="]),
+    "missing_velocity": (_in_joint("X", ' velocity="0.025"', ""), ["joint 'X'", "no velocity="]),
+    "swapped_limits": (_in_joint("X", 'lower="-0.25" upper="0.25"', 'lower="0.25" upper="-0.25"'),
+                       ["joint 'X'", "lower=0.25 upper=-0.25", "expected lower < upper"]),
+    "empty_travel": (_in_joint("Z", 'lower="-0.05" upper="0.1"', 'lower="0.1" upper="0.1"'),
+                     ["joint 'Z'", "lower=0.1 upper=0.1", "expected lower < upper"]),
+    "velocity_zero": (_in_joint("X", 'velocity="0.025"', 'velocity="0"'),
+                      ["joint 'X'", "velocity=0.0", "rapid rate > 0"]),
+    "velocity_negative": (_in_joint("C", 'velocity="2.0"', 'velocity="-2"'),
+                          ["joint 'C'", "velocity=-2.0", "rapid rate > 0"]),
+    "velocity_nan": (_in_joint("X", 'velocity="0.025"', 'velocity="nan"'),
+                     ["joint 'X'", "velocity", "'nan'", "finite"]),
+    "limit_not_a_number": (_in_joint("X", 'upper="0.25"', 'upper="0.25mm"'),
+                           ["joint 'X'", "upper", "'0.25mm' is not a number"]),
+    "axis_nan": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', '<axis xyz="nan 0.0 0.0"/>'),
+                 ["joint 'X'", "<axis> xyz", "'nan'", "finite"]),
+    "axis_inf": (_in_joint("Y", '<axis xyz="0.0 -1.0 0.0"/>', '<axis xyz="0.0 -inf 0.0"/>'),
+                 ["joint 'Y'", "<axis> xyz", "'-inf'", "finite"]),
+    "axis_missing": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', ""), ["joint 'X'", "no <axis"]),
+    "axis_two_numbers": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', '<axis xyz="1.0 0.0"/>'),
+                         ["joint 'X'", "xyz='1.0 0.0'", "three numbers"]),
+    "origin_nan": (_in_joint("X", 'xyz="0.0 0.4 0.55"', 'xyz="0.0 NaN 0.55"'),
+                   ["joint 'X'", "<origin> xyz", "'NaN'", "finite"]),
+    "origin_rpy_inf": (_in_joint("C", 'rpy="0.0 0.0 0.0"', 'rpy="0.0 inf 0.0"'),
+                       ["joint 'C'", "<origin> rpy", "'inf'", "finite"]),
+    "resolution_zero": (GROOVING.replace('joint="X" resolution="1e-09"',
+                                         'joint="X" resolution="0"'),
+                        ["joint='X'", "resolution 0.0", "> 0"]),
+    "resolution_missing": (GROOVING.replace('joint="X" resolution="1e-09"', 'joint="X"'),
+                           ["joint='X'", "no resolution="]),
+    "no_tool_tip": (GROOVING.replace('<link name="tool_tip">', '<link name="tool_tap">')
+                    .replace('<child link="tool_tip"/>', '<child link="tool_tap"/>'),
+                    ["missing frame(s) tool_tip"]),
+    "reserved_name": (_in_joint("Z", '<joint name="Z"', '<joint name="tool_tx"'),
+                      ["joint name 'tool_tx' is reserved"]),
+    "not_a_robot": (GROOVING.replace("<robot ", "<robut ").replace("</robot>", "</robut>"),
+                    ["root element <robut>", "expected <robot>"]),
+    "truncated": (GROOVING[:len(GROOVING) // 2], ["not readable XML"]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(HOSTILE_URDFS))
+def test_a_hostile_urdf_is_a_located_model_error(case, tmp_path):
+    text, words = HOSTILE_URDFS[case]
+    assert text != GROOVING
+    path = tmp_path / f"{case}.urdf"
+    path.write_text(text)
+    with pytest.raises(ModelError) as raised:
+        load_machine(path)
+    message = str(raised.value)
+    assert message.startswith(str(path)), message
+    for word in words:
+        assert word in message, f"{word!r} not in {message!r}"
+
+
+def test_a_cyclic_urdf_fails_fast_instead_of_hanging(tmp_path):
+    """Every link in one ring: no root to start from, and the walk up never ends."""
+    links = "".join(f'<link name="l{i}"/>' for i in range(4))
+    joints = "".join(f'<joint name="j{i}" type="fixed"><parent link="l{i}"/>'
+                     f'<child link="l{(i + 1) % 4}"/></joint>' for i in range(4))
+    path = tmp_path / "ring.urdf"
+    path.write_text(f'<robot name="ring">{links}{joints}</robot>')
+    with pytest.raises(ModelError, match=r"joints 'j\d' -> 'j\d' -> 'j\d' -> 'j\d' form a cycle"):
+        load_machine(path)
+
+
+def test_a_folder_or_an_unreadable_urdf_is_a_model_error_naming_it(tmp_path):
+    folder = tmp_path / "machine.urdf"
+    folder.mkdir()
+    with pytest.raises(ModelError, match="machine.urdf: is a folder; expected a .urdf file"):
+        load_machine(folder)
+    binary = tmp_path / "binary.urdf"
+    binary.write_bytes(bytes(range(256)))
+    with pytest.raises(ModelError, match="binary.urdf: not readable XML"):
+        load_machine(binary)
+
+
+def test_a_urdf_edited_after_loading_loads_again(tmp_path):
+    path = tmp_path / "edited.urdf"
+    path.write_text(GROOVING)
+    assert load_machine(path).upper[0] == 0.25
+    path.write_text(_in_joint("X", 'upper="0.25"', 'upper="0.125"'))
+    os.utime(path, ns=(path.stat().st_atime_ns, path.stat().st_mtime_ns + 10**9))
+    assert load_machine(path).upper[0] == 0.125

@@ -159,17 +159,17 @@ def test_stl_and_glb_exports_are_readable(tmp_path):
     part.export_glb(tmp_path / "part.glb")
     stl = trimesh.load(tmp_path / "part.stl")
     assert len(stl.faces) == 12
-    assert stl.volume == pytest.approx(6e-9, rel=1e-6)  # float32 coordinates
+    assert stl.volume == pytest.approx(6.0, rel=1e-6)  # mm^3, float32 coordinates
     assert os.path.getsize(tmp_path / "part.stl") == 84 + 50 * 12
     glb = trimesh.load(tmp_path / "part.glb", force="mesh")
-    assert glb.volume == pytest.approx(6e-9, rel=1e-6)
+    assert glb.volume == pytest.approx(6.0, rel=1e-6)  # mm^3
 
 
 @pytest.mark.parametrize(
     ("spec", "message"),
     [
         ("block:10x10", "'block:10x10'.*expected 3 numbers"),
-        ("block:10x10x-2", "'block:10x10x-2'.*height must be positive"),
+        ("block:10x10x-2", "'block:10x10x-2'.*sizes '10x10x-2' must lie in 1e-06 .. 10000 mm"),
         ("cylinder:5", "'cylinder:5'.*expected 2 numbers"),
         ("block:10x10x2@1,2", "expected 3 numbers separated by ','"),
         ("sphere:1", "'sphere:1'.*expected 'block:LxWxH'"),

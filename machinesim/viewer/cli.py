@@ -12,9 +12,11 @@ until Ctrl-C. Heavy modules are imported only when the command runs.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
+from machinesim._io import check_readable_file, check_writable, read_json
 from machinesim.exceptions import InputError
 
 EXAMPLES = """examples:
@@ -83,8 +85,17 @@ def run_view(args: argparse.Namespace) -> int:
     budget = DISPLAY_TRIANGLES if args.max_triangles is None else args.max_triangles
     if budget < 1:
         raise InputError(f"--max-triangles {budget}: expected a positive count")
+    if not (math.isfinite(args.duration) and args.duration > 0.0):
+        raise InputError(f"--duration {args.duration}: expected a positive number of seconds")
+    if args.port is not None and not 0 < args.port < 65536:
+        raise InputError(f"--port {args.port}: expected a TCP port, 1 .. 65535")
     if args.html is not None and args.html.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"--html {args.html}: expected a file name ending in .html")
+    if args.screenshot is not None and args.screenshot.suffix.lower() != ".png":
+        raise InputError(f"--screenshot {args.screenshot}: expected a file name ending in .png")
+    for path, what in ((args.html, "page (--html)"), (args.screenshot, "image (--screenshot)")):
+        if path is not None:
+            check_writable(path, what)
     scene = _scene(args, budget)
     if args.html is not None:
         from machinesim.viewer.scene import write_html
@@ -122,14 +133,23 @@ def _scene(args, budget: int):
         from machinesim.viewer.views import report_scene
 
         _refuse(machine_options + part_options, "a report folder")
+        if (target / "summary.json").exists():
+            read_json(target / "summary.json", "report summary")
         return report_scene(target, budget)
     if target.suffix.lower() == ".ply":
         from machinesim.viewer.views import part_scene
 
         _refuse(machine_options, "a part")
-        if not target.is_file():
+        if not target.exists():
             raise InputError(f"{target}: no such part file")
-        return part_scene(target, nominal=args.nominal, report=args.report,
+        check_readable_file(target, "part (PLY)")
+        if args.nominal is not None:
+            check_readable_file(args.nominal, "nominal part (--nominal)")
+        report = None if args.report is None else read_json(args.report, "cut report (--report)")
+        if report is not None and not isinstance(report, dict):
+            raise InputError(f"expected a JSON object (a cut report), got a "
+                             f"{type(report).__name__}", source=str(args.report))
+        return part_scene(target, nominal=args.nominal, report=report,
                           title=f"part {target.name}", max_triangles=budget)
     from machinesim.viewer.machine import machine_scene
 
@@ -138,7 +158,7 @@ def _scene(args, budget: int):
     if args.program is not None:
         from machinesim.nc import read_program
 
-        program = read_program(args.program)
+        program = read_program(check_readable_file(args.program, "NC program (--program)"))
     if args.errors is not None:
         from machinesim.errors import ErrorModel
 
