@@ -17,14 +17,7 @@ import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 
-from machinesim.exceptions import InputError, MachineSimError
-
-
-class FileError(InputError, OSError):
-    """A file-system problem with a file the user named (``source``): an `InputError`, so a
-    `MachineSimError`, and also an `OSError`, so that code written for the plain library
-    call it replaces (``except OSError``) still catches it."""
-
+from machinesim.exceptions import FileError, InputError, MachineSimError
 
 #: Longest file name component (bytes) where the file system does not say (POSIX NAME_MAX).
 _NAME_MAX = 255

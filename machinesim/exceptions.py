@@ -52,6 +52,12 @@ class InputError(MachineSimError, ValueError):
         super().__init__(f"{prefix}: {message}" if prefix else message)
 
 
+class FileError(InputError, OSError):
+    """A file-system problem with a file the user named (``source``): an `InputError`, so a
+    `MachineSimError`, and also an `OSError`, so that code written for the plain library
+    call it replaces (``except OSError``) still catches it."""
+
+
 class ModelError(MachineSimError):
     """A machine model (URDF) is missing, malformed or breaks a machinesim convention."""
 

@@ -8,12 +8,11 @@ key does not end in a unit, so a report never leaves a reader guessing.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from machinesim._io import write_atomic
+from machinesim._io import json_text, write_atomic
 from machinesim.exceptions import InputError
 
 #: Suffixes that name a unit (or say that a number has none).
@@ -78,7 +77,7 @@ class ReportFolder:
         data = _clean(data)
         check_units(data)
         target = self._target(name)
-        write_atomic(target, json.dumps(data, indent=2) + "\n")
+        write_atomic(target, json_text(data, name))
         return target
 
     def write_summary(self, summary: Mapping) -> Path:
@@ -89,7 +88,7 @@ class ReportFolder:
         data = _clean({**summary, "files": sorted(set(self.files) | {"summary.json"})})
         check_summary(data)
         target = self._target("summary.json")
-        write_atomic(target, json.dumps(data, indent=2) + "\n")
+        write_atomic(target, json_text(data, "summary"))
         return target
 
     def write_result(self, result, digits: int = 4) -> str:

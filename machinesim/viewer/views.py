@@ -7,12 +7,12 @@ walls, bottom), decimated for display if large.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
+from machinesim._io import read_json
 from machinesim.exceptions import InputError
 from machinesim.viewer.maps import (
     SurfaceMap,
@@ -116,7 +116,7 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
     if not plys:
         raise InputError(f"{folder}: no part meshes (*.ply) in this folder; a report folder "
                          "holds *.ply parts and summary.json")
-    summary = _read_json(summary_path) if summary_path.is_file() else {}
+    summary = read_json(summary_path, 'report summary') if summary_path.is_file() else {}
     if not isinstance(summary, dict):
         raise InputError(f"expected a JSON object, got {type(summary).__name__}",
                          source=str(summary_path))
@@ -152,7 +152,7 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
 
 def report_notes(report) -> list[str]:
     """'key: value' lines of a report (a dict, or a JSON file's path), nested keys dotted."""
-    data = _read_json(Path(report)) if isinstance(report, str | Path) else report
+    data = read_json(Path(report), 'report') if isinstance(report, str | Path) else report
     if not isinstance(data, dict):
         raise InputError(f"expected a JSON object as report, got {type(data).__name__}")
     lines = []
@@ -184,16 +184,6 @@ def _load(surface):
     if isinstance(surface, str | Path):
         return read_ply(surface)
     return surface
-
-
-def _read_json(path: Path):
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"cannot read ({exc.strerror})", source=str(path)) from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"not valid JSON: {exc.msg}", source=str(path), line=exc.lineno,
-                         column=exc.colno) from None
 
 
 __all__ = ["PART_COLOUR", "add_part", "frame_scene", "part_scene", "report_notes",
