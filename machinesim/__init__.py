@@ -20,7 +20,7 @@ from machinesim.exceptions import MachineSimError
 _LAZY = {
     "ComponentError": "machinesim.errors", "ErrorModel": "machinesim.errors",
     "ToolSetting": "machinesim.errors", "WorkpieceSetting": "machinesim.errors",
-    "Lab": "machinesim.lab", "AxisSolution": "machinesim.machines",
+    "Lab": "machinesim.lab", "Realism": "machinesim.realism", "AxisSolution": "machinesim.machines",
     "Machine": "machinesim.machines", "list_machines": "machinesim.machines",
     "load_machine": "machinesim.machines",
 }
@@ -56,6 +56,7 @@ __all__ = [
     "Lab",
     "Machine",
     "MachineSimError",
+    "Realism",
     "ToolSetting",
     "WorkpieceSetting",
     "cut",

@@ -15,10 +15,22 @@ Instruments handed out without a label are numbered per kind in the order they a
 for ("microscope/0", "microscope/1", ...); give a label to make a stream independent of
 that order too.
 
+Realism. By default the lab is exact but for its instruments' noise. ``realism=`` (a
+`machinesim.realism.Realism`) switches on, one by one, what a real lab adds: the optical
+instruments' spot, lateral noise and registration, the probe's pre-travel and ball form, the
+laser interferometer's beam alignment, reference spheres off their design
+(`Lab.make_artefacts`), and the machine's own residual errors (the background, added to the
+injected errors in everything the lab cuts and measures). Each imperfection an instrument
+has is drawn once, when the lab hands it out, from its own stream: (seed, kind, label, the
+switch's name). So switching one off changes nothing that another draws.
+
 >>> import machinesim
 >>> lab = machinesim.Lab("robonano_a0ib", {"tool": {"offset_um": [5.0, 0.0, 0.0]}}, seed=1)
 >>> lab
 Lab(robonano_a0ib, noise=on, seed=1)
+>>> from machinesim.realism import Realism
+>>> machinesim.Lab("robonano_a0ib", seed=1, realism=Realism.lab())
+Lab(robonano_a0ib, noise=on, seed=1, realism=lab)
 """
 
 from __future__ import annotations
@@ -26,8 +38,11 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+from machinesim import realism as _realism
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
+from machinesim.metrology.imperfections import Lobing, Registration, ZonalForm
+from machinesim.realism import Realism, SphereArtefacts
 from machinesim.streams import stream
 
 __all__ = ["Lab"]
@@ -45,27 +60,62 @@ class Lab:
         Default none (the nominal machine).
     noise : bool
         Instrument noise on (default) or off. Off, every instrument reads the exact value
-        rounded to its resolution, so exact tests stay exact.
+        rounded to its resolution, so exact tests stay exact. With ``realism`` given, leave
+        it at its default: ``realism.instrument_noise`` decides.
     seed : int
         The lab's seed (non-negative); every instrument's stream derives from it.
+    realism : Realism, optional
+        Which imperfections the lab has (`machinesim.realism`). Default:
+        ``Realism.noise_only()`` with ``noise=True``, ``Realism.ideal()`` with False, so that
+        a lab built without it reads what it always read.
+    background : ErrorModel, Mapping, str or Path, optional
+        The machine's own residual errors when ``realism.background_errors`` is on; default
+        the shipped ``models/errors/background_<machine>.toml`` (`machinesim.realism`).
+        Ignored with the switch off.
     """
 
-    def __init__(self, machine, errors=None, *, noise: bool = True, seed: int = 0) -> None:
+    def __init__(self, machine, errors=None, *, noise: bool = True, seed: int = 0,
+                 realism: Realism | None = None, background=None) -> None:
         from machinesim.machines import Machine, load_machine
 
         self.machine = machine if isinstance(machine, Machine) else load_machine(machine)
-        truth = _error_model(errors)
-        self.machine.check_errors(truth)
+        injected = _error_model(errors)
+        self.machine.check_errors(injected)
         if not isinstance(noise, bool):
             raise InputError(f"Expected noise as True or False, got {noise!r}", key="noise")
+        if realism is None:
+            realism = Realism.noise_only() if noise else Realism.ideal()
+            self.__told = False
+        elif not isinstance(realism, Realism):
+            raise InputError(f"Expected realism as a machinesim.realism.Realism, got "
+                             f"{type(realism).__name__}", key="realism")
+        elif not noise:
+            raise InputError("Expected either noise=False or a realism, not both: "
+                             "Realism.instrument_noise turns the noise off", key="noise")
+        else:
+            self.__told = True
         stream(seed)  # refuses a bad seed here, not at the first reading
-        self.noise = noise
+        self.realism = realism
+        self.noise = realism.instrument_noise
         self.seed = seed
+        self.__injected = injected
+        self.__background = ErrorModel()
+        truth = injected
+        if realism.background_errors:
+            own = (_realism.background_model(self.machine) if background is None
+                   else _error_model(background))
+            self.machine.check_errors(own)
+            self.__background = own
+            truth = _realism.add_errors(injected, own)
         self.__truth = truth
         self.__issued: dict[str, int] = {}
+        self.__instruments: dict[str, dict] = {}
+        self.__artefacts: dict[str, object] = {}
 
     def __repr__(self) -> str:
-        return f"Lab({self.machine.name}, noise={'on' if self.noise else 'off'}, seed={self.seed})"
+        told = f", realism={self.realism}" if self.__told else ""
+        return (f"Lab({self.machine.name}, noise={'on' if self.noise else 'off'}, "
+                f"seed={self.seed}{told})")
 
     # ------------------------------------------------------------------------------ cutting
 
@@ -73,7 +123,8 @@ class Lab:
         """Run ``program`` on the lab's machine, errors and all.
 
         Parameters are those of `machinesim.cutting.cut` (``start``, ``chord_tolerance``,
-        ``servo``, ``progress`` as keywords), without the errors: the lab supplies its own.
+        ``servo``, ``progress`` as keywords), without the errors: the lab supplies its own
+        (the injected ones, and the background when `realism` has it).
         With ``turn_step`` (rad) the lab cuts by `machinesim.cutting.cut_turned` instead
         (the same part, each group of feed moves at one C position cut in its own turned
         frame: faster for faces at many C positions), which also takes ``floor``.
@@ -90,65 +141,169 @@ class Lab:
         cutter = cut_turned if "turn_step" in options else cut
         return cutter(program, self.machine, tool, stock, self.__truth, roi=roi, **options)
 
+    def make_artefacts(self, stock, design: SphereArtefacts, *, label: str):
+        """The workpiece with its reference spheres, as the lab's workshop made it.
+
+        The spheres are cut into the stock (or onto it) where and as they really came out:
+        with ``realism.artefact_errors`` off, exactly as designed; on, each centre off by a
+        drawn amount, their common radius off, each with a drawn form error
+        (`machinesim.realism.ARTEFACT`, from paper 002's own estimate). The actual spheres are
+        the lab's truth: only `reveal_artefacts` gives them.
+
+        Parameters
+        ----------
+        stock : Part
+            The workpiece without its spheres, workpiece frame.
+        design : SphereArtefacts
+            The spheres as designed (what CAM and the procedure know).
+        label : str
+            Names the workpiece: the same label gives the same actual spheres (one physical
+            workpiece, made once), whatever else the lab did before.
+
+        Returns
+        -------
+        Part
+        """
+        if not isinstance(design, SphereArtefacts):
+            raise InputError(f"Expected design as a machinesim.realism.SphereArtefacts, got "
+                             f"{type(design).__name__}", key="design")
+        label = self._label("artefact", label, numbered=False)
+        if self.realism.artefact_errors:
+            actual = _realism.draw_spheres(
+                design, _realism.ARTEFACT,
+                *(stream(self.seed, "artefact", label, part)
+                  for part in ("position", "radius", "form")))
+        else:
+            actual = _realism.draw_spheres(design, None)
+        self.__artefacts[label] = actual
+        return _realism.make_spheres(stock, design, actual)
+
     # -------------------------------------------------------------------------- instruments
 
     def touch_probe(self, part, *, label: str | None = None, **options):
         """The on-machine touch probe (`machinesim.metrology.TouchProbe`) touching ``part``.
 
-        ``options`` are the probe's own (``radius``, ``sigma``, ``resolution``, ``frame``);
-        the ball moves through the lab's erroneous kinematics.
+        ``options`` are the probe's own (``radius``, ``sigma``, ``resolution``, ``frame``,
+        ``pretravel``, ``ball_form``); the ball moves through the lab's erroneous kinematics.
+        With ``realism.probe_pretravel`` / ``probe_ball_form`` the lab gives the probe a drawn
+        lobing and ball form (`machinesim.realism.PROBE`) unless ``options`` name their own.
         """
         from machinesim.metrology import TouchProbe
 
+        kind = "touch_probe"
+        label = self._label(kind, label)
+        drawn = {}
+        if self.realism.probe_pretravel and "pretravel" not in options:
+            drawn["pretravel"] = Lobing.draw(self._imperfection(kind, label, "pretravel"),
+                                             _realism.PROBE.lobing)
+        if self.realism.probe_ball_form and "ball_form" not in options:
+            drawn["ball_form"] = ZonalForm.draw(self._imperfection(kind, label, "ball_form"),
+                                                _realism.PROBE.sphericity)
+        self.__instruments[f"{kind}/{label}"] = drawn
         return TouchProbe(self.machine, self.__truth, part, noise=self.noise,
-                          rng=self._stream("touch_probe", label), **options)
+                          rng=stream(self.seed, kind, label), **drawn, **options)
 
     def laser_interferometer(self, *, label: str | None = None, **options):
-        """A laser interferometer on the machine (`machinesim.metrology.LaserInterferometer`)."""
+        """A laser interferometer on the machine (`machinesim.metrology.LaserInterferometer`).
+
+        With ``realism.registration`` its beam is misaligned by a drawn pair of angles
+        (`machinesim.realism.PROBE`), unless ``options`` give ``alignment``.
+        """
         from machinesim.metrology import LaserInterferometer
 
+        kind = "laser_interferometer"
+        label = self._label(kind, label)
+        drawn = {}
+        if self.realism.registration and "alignment" not in options:
+            rng = self._imperfection(kind, label, "registration")
+            drawn["alignment"] = _realism.PROBE.beam_alignment * rng.standard_normal(2)
+        self.__instruments[f"{kind}/{label}"] = drawn
         return LaserInterferometer(self.machine, self.__truth, noise=self.noise,
-                                   rng=self._stream("laser_interferometer", label), **options)
+                                   rng=stream(self.seed, kind, label), **drawn, **options)
 
     def r_test(self, *, label: str | None = None, **options):
         """An R-test (ISO 10791-6, `machinesim.metrology.RTest`): a ball on the tool side read
         by three displacement sensors on the table, for the machine's kinematics."""
         from machinesim.metrology import RTest
 
+        kind = "r_test"
+        label = self._label(kind, label)
         return RTest(self.machine, self.__truth, noise=self.noise,
-                     rng=self._stream("r_test", label), **options)
+                     rng=stream(self.seed, kind, label), **options)
 
     def microscope(self, *, label: str | None = None, **options):
-        """The laser (confocal) microscope (`machinesim.metrology.Microscope`)."""
+        """The laser (confocal) microscope (`machinesim.metrology.Microscope`), with the lab's
+        spot, lateral noise and registration when `realism` has them
+        (`machinesim.realism.MICROSCOPE`) and ``options`` do not name their own."""
         from machinesim.metrology import Microscope
 
-        return Microscope(noise=self.noise, rng=self._stream("microscope", label), **options)
+        return self._optical(Microscope, "microscope", _realism.MICROSCOPE, label, options)
 
     def white_light_interferometer(self, *, label: str | None = None, **options):
-        """The white-light interferometer (`machinesim.metrology.WhiteLightInterferometer`)."""
+        """The white-light interferometer (`machinesim.metrology.WhiteLightInterferometer`),
+        with the lab's imperfections as the microscope (`machinesim.realism.WHITE_LIGHT`)."""
         from machinesim.metrology import WhiteLightInterferometer
 
-        return WhiteLightInterferometer(noise=self.noise,
-                                        rng=self._stream("white_light_interferometer", label),
-                                        **options)
+        return self._optical(WhiteLightInterferometer, "white_light_interferometer",
+                             _realism.WHITE_LIGHT, label, options)
 
     # -------------------------------------------------------------------------------- truth
 
-    def reveal(self) -> ErrorModel:
-        """The injected errors: for reports and tests only, never for identification."""
-        return self.__truth
+    def reveal(self, *, background: bool = True) -> ErrorModel:
+        """The machine's errors: for reports and tests only, never for identification.
+
+        Parameters
+        ----------
+        background : bool
+            True (default): everything the machine has, the injected errors plus the
+            background (what an identification should find). False: the injected errors
+            alone (what a scenario chose). Without background errors the two are the same.
+        """
+        return self.__truth if background else self.__injected
+
+    def reveal_background(self) -> ErrorModel:
+        """The machine's own residual errors the lab added (none with the switch off)."""
+        return self.__background
+
+    def reveal_artefacts(self) -> dict:
+        """The reference spheres the lab made, by label (`machinesim.realism.ActualSpheres`)."""
+        return dict(self.__artefacts)
+
+    def reveal_instruments(self) -> dict:
+        """The imperfections drawn for each instrument handed out, by ``"kind/label"``: a dict
+        of what was drawn (``registration``, ``pretravel``, ``ball_form``, ``alignment``)."""
+        return {name: dict(drawn) for name, drawn in self.__instruments.items()}
 
     # ---------------------------------------------------------------------------- internals
 
-    def _stream(self, kind: str, label: str | None):
-        if label is None:
+    def _optical(self, cls, kind: str, defaults, label, options):
+        label = self._label(kind, label)
+        drawn, given = {}, {}
+        if self.realism.lateral_resolution and "spot" not in options:
+            given["spot"] = defaults.spot
+        if self.realism.lateral_noise and "lateral_sigma" not in options:
+            given["lateral_sigma"] = defaults.lateral_sigma
+        if "lateral_rng" not in options:  # a lab's instrument is seeded, whoever sets sigma
+            given["lateral_rng"] = self._imperfection(kind, label, "lateral_noise")
+        if self.realism.registration and "registration" not in options:
+            drawn["registration"] = Registration.draw(
+                self._imperfection(kind, label, "registration"), defaults.registration)
+        self.__instruments[f"{kind}/{label}"] = drawn
+        return cls(noise=self.noise, rng=stream(self.seed, kind, label), **given, **drawn,
+                   **options)
+
+    def _imperfection(self, kind: str, label: str, name: str):
+        return stream(self.seed, kind, label, name)
+
+    def _label(self, kind: str, label: str | None, numbered: bool = True) -> str:
+        if label is None and numbered:
             count = self.__issued.get(kind, 0)
             self.__issued[kind] = count + 1
-            label = str(count)
-        elif not isinstance(label, str) or not label:
-            raise InputError(f"Expected an instrument label as a non-empty string, got "
-                             f"{label!r}", key="label")
-        return stream(self.seed, kind, label)
+            return str(count)
+        if not isinstance(label, str) or not label:
+            raise InputError(f"Expected a label as a non-empty string, got {label!r}",
+                             key="label")
+        return label
 
 
 def _error_model(errors) -> ErrorModel:

@@ -52,9 +52,26 @@ def test_no_public_attribute_of_the_lab_or_its_instruments_holds_the_truth():
         for name, value in _public(thing):
             assert not _holds_truth(value, truth), f"{type(thing).__name__}.{name}"
     methods = {name for name in dir(lab) if not name.startswith("_")}
-    assert methods == {"cut", "laser_interferometer", "machine", "microscope", "noise",
-                       "r_test", "reveal", "seed", "touch_probe",
-                       "white_light_interferometer"}
+    assert methods == {"cut", "laser_interferometer", "machine", "make_artefacts",
+                       "microscope", "noise", "r_test", "realism", "reveal",
+                       "reveal_artefacts", "reveal_background", "reveal_instruments", "seed",
+                       "touch_probe", "white_light_interferometer"}
+
+
+def test_with_realism_no_public_attribute_holds_the_truth_or_an_imperfection():
+    from machinesim.metrology.imperfections import Lobing, Registration, ZonalForm
+    from machinesim.realism import Realism
+
+    lab = Lab("robonano_a0ib", TRUTH, seed=3, realism=Realism.lab())
+    truth = lab.reveal()
+    part, _ = lab.cut(groove(), "v:90", "block:10x10x2")
+    things = [lab, lab.touch_probe(part), lab.laser_interferometer(), lab.microscope(),
+              lab.white_light_interferometer(), lab.r_test()]
+    hidden = (Registration, Lobing, ZonalForm)
+    for thing in things:
+        for name, value in _public(thing):
+            assert not _holds_truth(value, truth), f"{type(thing).__name__}.{name}"
+            assert not isinstance(value, hidden), f"{type(thing).__name__}.{name}"
 
 
 def test_the_lab_cuts_with_its_truth_as_cut_does_with_the_errors():

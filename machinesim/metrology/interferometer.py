@@ -11,6 +11,15 @@ the chuck) therefore does not enter, as it would not on a real machine.
 Readings are zeroed at a reference position, as a laser interferometer is, then noise is
 added and the displayed displacement rounded to the resolution.
 
+Beam alignment (off by default; `machinesim.Lab` draws one per interferometer when
+`machinesim.realism.Realism` turns ``registration`` on). A beam set up along the unit
+direction ``u`` of a test runs along ``u + a e1 + b e2`` (normalised), ``e1``, ``e2`` a
+right-handed pair across ``u`` (``e1`` along ``u x Z``, or ``u x X`` for a beam along Z),
+``(a, b)`` the two misalignment angles (rad). The reading is the motion's projection on the
+actual beam: a positioning test of travel L then reads ``L cos(theta)``, the cosine error
+of ``L theta**2 / 2`` (``theta = hypot(a, b)`` to second order), plus the straightness seen
+through the beam's slant.
+
 Diagonal test and squareness (ISO 230-6, paper 003 eq 2). With a squareness error ``e`` of Y
 to X (``EC0Y``: the Y motion runs along (-sin e, cos e) in the XY plane; docs/machines.md),
 commanding X and Y by ``(a, b)`` moves the tool by ``(a - b sin e, b cos e)``, of length
@@ -81,15 +90,20 @@ class LaserInterferometer:
     frame : str
         The machine frame whose motion is read (where the optic on the tool side sits).
         Default ``"tool_tip"``: the functional point, free of Abbe offsets to the cut.
+    alignment : array-like, shape (2,), optional
+        The beam's misalignment angles (a, b), rad (module docstring); default none. The
+        lab's: 0.1 mrad scatter per angle (`machinesim.realism.PROBE`, assumed).
     """
 
     def __init__(self, machine, errors=None, sigma: float = 2e-9, resolution: float = 1e-9,
-                 *, noise: bool = True, rng=None, frame: str = "tool_tip") -> None:
+                 *, noise: bool = True, rng=None, frame: str = "tool_tip",
+                 alignment=None) -> None:
         self.machine = machine
         self._pose = motion_of(machine, errors, frame)
         self.frame = frame
         self.readout = Readout.of(sigma, resolution, noise)
         self.rng = as_generator(rng)
+        self._alignment = None if alignment is None else _vector(alignment, 2, "alignment")
 
     def __repr__(self) -> str:
         return (f"LaserInterferometer({self.machine.name}, frame={self.frame!r}, "
@@ -241,7 +255,19 @@ class LaserInterferometer:
         wMt = self._pose("table", q)
         # The frame's position in the table frame: R^T (p_frame - p_table).
         p = np.einsum("nji,nj->ni", wMt[:, :3, :3], wMf[:, :3, 3] - wMt[:, :3, 3])
-        return (p[:-1] - p[-1]) @ u
+        return (p[:-1] - p[-1]) @ self._beam(u)
+
+    def _beam(self, u: np.ndarray) -> np.ndarray:
+        """The beam's actual direction for a test along u (module docstring)."""
+        if self._alignment is None:
+            return u
+        e1 = np.cross(u, [0.0, 0.0, 1.0])
+        if np.linalg.norm(e1) < 0.5:
+            e1 = np.cross(u, [1.0, 0.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(u, e1)
+        beam = u + self._alignment[0] * e1 + self._alignment[1] * e2
+        return beam / np.linalg.norm(beam)
 
 
 def squareness_from_diagonal(measured_length: float, x_span: float, y_span: float) -> float:

@@ -2,9 +2,23 @@
 
 Both read the top surface of a part from above: exact heights from the float64 mesh
 (`machinesim.metrology.height_map` / `profile`), then Gaussian height noise, then rounding to
-the vertical resolution. They differ only in their defaults (justified in each class). The
-lateral sampling is ideal (heights at the sample points, no optical transfer function): the
-spot and the slope limit of a real objective are not modelled.
+the vertical resolution. They differ only in their defaults (justified in each class).
+
+By default the lateral sampling is ideal: heights exactly at the sample points, in the
+workpiece frame. Three imperfections of a real instrument can be given (all off by default;
+`machinesim.Lab` gives the lab's values, `machinesim.realism.MICROSCOPE` and ``WHITE_LIGHT``,
+when `machinesim.realism.Realism` turns them on):
+
+- ``spot`` (`machinesim.metrology.imperfections.Spot`): each reading is the mean of the exact
+  heights over a Gaussian spot or a top-hat pixel, not the height at a point;
+- ``lateral_sigma``: the sample positions jitter (lateral noise): on a height map each
+  column sits off in x and each row (scan line) in y by its own normal deviate; on a profile
+  each sample sits off along the line by its own and the whole line across it by one;
+- ``registration`` (`machinesim.metrology.imperfections.Registration`): the instrument's own
+  frame, in which it takes and reports every coordinate and height, sits off the
+  workpiece's. The instrument keeps it to itself, as a real stage does not know it.
+
+The slope limit of a real objective (no light back from steep flanks) is not modelled.
 """
 
 from __future__ import annotations
@@ -14,8 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.arrays import frozen
-from machinesim.exceptions import InputError
-from machinesim.metrology._mesh import as_positive, as_vector
+from machinesim.exceptions import InputError, check_length
+from machinesim.metrology._mesh import as_positive, as_vector, mesh_arrays
+from machinesim.metrology.imperfections import Registration, Spot, line_heights, spot_heights
 from machinesim.metrology.instruments import Readout, as_generator
 from machinesim.metrology.surface import END_SLACK, height_map, profile
 
@@ -68,18 +83,33 @@ class HeightMap:
 
 
 class _Profiler:
-    """A height-reading instrument: its readout, its lateral spacing and its noise source."""
+    """A height-reading instrument: its readout, its lateral spacing and its noise source,
+    and the lateral imperfections it was given (module docstring)."""
 
     def __init__(self, sigma: float, resolution: float, lateral_spacing: float, noise: bool,
-                 rng) -> None:
+                 rng, spot: Spot | None = None, lateral_sigma: float = 0.0,
+                 lateral_rng=None, registration: Registration | None = None) -> None:
         self.readout = Readout.of(sigma, resolution, noise)
         self.lateral_spacing = as_positive(lateral_spacing, "lateral_spacing")
         self.rng = as_generator(rng)
+        if spot is not None and not isinstance(spot, Spot):
+            raise InputError(f"Expected spot as a Spot or None, got {spot!r}", key="spot")
+        if registration is not None and not isinstance(registration, Registration):
+            raise InputError(f"Expected registration as a Registration or None, got "
+                             f"{type(registration).__name__}", key="registration")
+        self.spot = spot
+        self.lateral_sigma = check_length(lateral_sigma, "lateral_sigma")
+        self.lateral_rng = as_generator(lateral_rng) if self.lateral_sigma > 0.0 else None
+        self._registration = registration
+        self._seen = None  # (part, its vertices in the instrument frame, triangles)
 
     def __repr__(self) -> str:
         r = self.readout
+        extra = "" if self.spot is None else f", spot={self.spot.shape}:{self.spot.width:g} m"
+        if self.lateral_sigma > 0.0:
+            extra += f", lateral_sigma={self.lateral_sigma:g} m"
         return (f"{type(self).__name__}(sigma={r.sigma:g} m, resolution={r.resolution:g} m, "
-                f"lateral_spacing={self.lateral_spacing:g} m)")
+                f"lateral_spacing={self.lateral_spacing:g} m{extra})")
 
     def profile(self, part, start, end, spacing: float | None = None) -> Profile:
         """Read the heights along a line.
@@ -99,7 +129,20 @@ class _Profiler:
         Profile
         """
         spacing = self.lateral_spacing if spacing is None else spacing
-        s, z = profile(part, start, end, spacing)
+        surface = self._surface(part)
+        if self.spot is None and self.lateral_sigma == 0.0:
+            s, z = profile(surface, start, end, spacing)
+        else:
+            a, b = as_vector(start, 2, "start"), as_vector(end, 2, "end")
+            s = _line_samples(a, b, as_positive(spacing, "spacing"))
+            ds, across = np.zeros(len(s)), 0.0
+            if self.lateral_rng is not None:
+                ds = self.lateral_sigma * self.lateral_rng.standard_normal(len(s))
+                across = self.lateral_sigma * float(self.lateral_rng.standard_normal())
+            vertices, triangles = mesh_arrays(surface)
+            z = line_heights(vertices, triangles, a, (b - a) / np.hypot(*(b - a)), s, ds,
+                             across, self.spot)
+            s = frozen(s, copy=False)
         return Profile(s, self._display(z), frozen(as_vector(start, 2, "start")),
                        frozen(as_vector(end, 2, "end")))
 
@@ -124,10 +167,29 @@ class _Profiler:
         spacing = as_positive(self.lateral_spacing if spacing is None else spacing, "spacing")
         x = _axis(x0, x1, spacing, "x")
         y = _axis(y0, y1, spacing, "y")
-        return HeightMap(x, y, self._display(height_map(part, x, y)))
+        surface = self._surface(part)
+        if self.spot is None and self.lateral_sigma == 0.0:
+            return HeightMap(x, y, self._display(height_map(surface, x, y)))
+        dx, dy = np.zeros(len(x)), np.zeros(len(y))
+        if self.lateral_rng is not None:
+            dx = self.lateral_sigma * self.lateral_rng.standard_normal(len(x))
+            dy = self.lateral_sigma * self.lateral_rng.standard_normal(len(y))
+        vertices, triangles = mesh_arrays(surface)
+        return HeightMap(x, y, self._display(spot_heights(vertices, triangles, x, y, dx, dy,
+                                                          self.spot)))
 
     def _display(self, exact: np.ndarray) -> np.ndarray:
         return frozen(self.readout.read(exact, self.rng), copy=False)
+
+    def _surface(self, part):
+        """The part as this instrument sees it: itself, or its mesh in the instrument frame
+        (kept for the last part read, as a stage keeps a part until the next is put on)."""
+        if self._registration is None:
+            return part
+        if self._seen is None or self._seen[0] is not part:
+            vertices, triangles = mesh_arrays(part)
+            self._seen = (part, self._registration.to_instrument(vertices), triangles)
+        return self._seen[1], self._seen[2]
 
 
 class Microscope(_Profiler):
@@ -149,11 +211,25 @@ class Microscope(_Profiler):
         False turns the noise off exactly (``sigma`` ignored); rounding stays.
     rng : numpy.random.Generator or int or None
         Noise source, or its seed (see `machinesim.metrology.instruments.as_generator`).
+    spot : Spot, optional
+        Lateral resolution: the spot each reading averages over. Default none (heights at
+        points). The lab's: a Gaussian of 0.3 um FWHM (`machinesim.realism.MICROSCOPE`,
+        from lambda / NA of a 50x / 0.95 objective).
+    lateral_sigma : float
+        Lateral noise, m (module docstring). Default 0; the lab's 20 nm (assumed).
+    lateral_rng : numpy.random.Generator or int or None
+        Source of the lateral noise, apart from the height noise's.
+    registration : Registration, optional
+        Where the instrument's frame sits on the workpiece; default exactly on it. The lab
+        draws one per instrument (5 um, 1 mrad, 10 um, 0.2 mrad scatter, assumed).
     """
 
     def __init__(self, sigma: float = 12e-9, resolution: float = 1e-9,
-                 lateral_spacing: float = 0.3e-6, *, noise: bool = True, rng=None) -> None:
-        super().__init__(sigma, resolution, lateral_spacing, noise, rng)
+                 lateral_spacing: float = 0.3e-6, *, noise: bool = True, rng=None,
+                 spot: Spot | None = None, lateral_sigma: float = 0.0, lateral_rng=None,
+                 registration: Registration | None = None) -> None:
+        super().__init__(sigma, resolution, lateral_spacing, noise, rng, spot, lateral_sigma,
+                         lateral_rng, registration)
 
 
 class WhiteLightInterferometer(_Profiler):
@@ -173,11 +249,30 @@ class WhiteLightInterferometer(_Profiler):
         False turns the noise off exactly (``sigma`` ignored); rounding stays.
     rng : numpy.random.Generator or int or None
         Noise source, or its seed.
+    spot, lateral_sigma, lateral_rng, registration
+        As the `Microscope`'s, all off by default. The lab's: a Gaussian spot of 0.8 um FWHM
+        (0.61 lambda / NA of a 20x / 0.4 objective at 0.55 um), 10 nm lateral noise
+        (assumed), the microscope's registration scatter (`machinesim.realism.WHITE_LIGHT`).
     """
 
     def __init__(self, sigma: float = 0.5e-9, resolution: float = 0.1e-9,
-                 lateral_spacing: float = 0.5e-6, *, noise: bool = True, rng=None) -> None:
-        super().__init__(sigma, resolution, lateral_spacing, noise, rng)
+                 lateral_spacing: float = 0.5e-6, *, noise: bool = True, rng=None,
+                 spot: Spot | None = None, lateral_sigma: float = 0.0, lateral_rng=None,
+                 registration: Registration | None = None) -> None:
+        super().__init__(sigma, resolution, lateral_spacing, noise, rng, spot, lateral_sigma,
+                         lateral_rng, registration)
+
+
+def _line_samples(start: np.ndarray, end: np.ndarray, spacing: float) -> np.ndarray:
+    """Distances along a profile, as `machinesim.metrology.profile` takes them."""
+    length = float(np.hypot(*(end - start)))
+    if length == 0.0:
+        raise InputError(f"Expected a profile of non-zero length, got start = end = {start}")
+    count = int(np.floor(length / spacing + END_SLACK)) + 1
+    s = np.arange(count) * spacing
+    if abs(s[-1] - length) <= END_SLACK * spacing:
+        s[-1] = length
+    return s
 
 
 def _axis(lo: float, hi: float, spacing: float, name: str) -> np.ndarray:

@@ -1,0 +1,428 @@
+"""What makes a real instrument read other than the exact value: the models, as plain values.
+
+Each class here is one imperfection of one kind of instrument, frozen, with a ``draw``
+classmethod that makes one at random from a stated scatter (`machinesim.Lab` draws them from
+the instrument's own streams when `machinesim.realism.Realism` turns them on; a test builds
+known ones directly):
+
+- `Spot`: the lateral resolution of an optical instrument, a Gaussian spot or a square
+  top-hat (a camera pixel) over which the exact heights are averaged;
+- `Registration`: where the optical instrument's own frame sits on the workpiece (an offset
+  and a rotation in xy, a height offset and a tilt);
+- `Lobing`: the pre-travel variation of a touch probe with the direction of contact;
+- `ZonalForm`: the form error of a ball (the probe's ruby, a reference sphere) as a few
+  low-order spherical harmonics.
+
+The optical instruments sample through `spot_heights` and `line_heights` here, which read the
+exact top surface (`machinesim.metrology.surface`) at many points and average them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.polynomial import hermite, legendre
+
+from machinesim.arrays import frozen
+from machinesim.exceptions import InputError, check_length
+from machinesim.metrology.surface import _finish, _zbuffer, height_map
+from machinesim.tolerances import LINE_MARGIN
+
+__all__ = ["Lobing", "Registration", "RegistrationScatter", "Spot", "ZonalForm",
+           "line_heights", "spot_heights"]
+
+SPOT_SHAPES = ("gaussian", "tophat")
+#: Samples of a sub-grid read per call of the height map (rows are read in blocks): keeps a
+#: block's arrays at ~100 MB whatever the map's size.
+BLOCK_SAMPLES = 4_000_000
+#: Unit vectors on which a drawn form is scaled to its stated peak-to-valley: a Fibonacci
+#: sphere this dense puts every point within ~0.04 rad of a sample, where a degree-4 term
+#: moves by under 1 % of its amplitude.
+FORM_POINTS = 4000
+
+
+def _fwhm_sigma(fwhm: float) -> float:
+    return fwhm / (2.0 * math.sqrt(2.0 * math.log(2.0)))
+
+
+@dataclass(frozen=True)
+class Spot:
+    """The area over which an optical instrument averages the surface at one sample.
+
+    Parameters
+    ----------
+    width : float
+        m, > 0: the full width at half maximum of a ``"gaussian"`` spot (round), or the side
+        of a ``"tophat"`` (a square pixel aligned with the instrument's x and y).
+    shape : {"gaussian", "tophat"}
+    samples : int
+        Points per axis of the sub-grid that stands for the spot (>= 1); the reading is the
+        weighted mean of the exact heights at ``samples**2`` points. A Gaussian uses the
+        Gauss-Hermite nodes and weights (exact for heights that are polynomials of degree
+        up to ``2 samples - 1``), a top-hat equally weighted points at the centres of
+        ``samples`` equal cells: a step edge read across then rises in ``samples`` equal
+        steps over the width, the top-hat's ramp in the limit.
+
+    Notes
+    -----
+    A plane reads unchanged through either spot: the offsets are symmetric and the weights
+    sum to one. Samples whose sub-grid partly misses the part average the points that hit it.
+    """
+
+    width: float
+    shape: str = "gaussian"
+    samples: int = 5
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "width", check_length(self.width, "width", positive=True))
+        if self.shape not in SPOT_SHAPES:
+            raise InputError(f"Expected a spot shape in {SPOT_SHAPES}, got {self.shape!r}",
+                             key="shape")
+        if isinstance(self.samples, bool) or not isinstance(self.samples, int | np.integer) \
+                or self.samples < 1:
+            raise InputError(f"Expected samples an int >= 1, got {self.samples!r}",
+                             key="samples")
+        object.__setattr__(self, "samples", int(self.samples))
+
+    def axis(self) -> tuple[np.ndarray, np.ndarray]:
+        """Offsets (m) and weights along one axis, each shape (samples,); weights sum to 1."""
+        n = self.samples
+        if self.shape == "tophat":
+            offsets = ((np.arange(n) + 0.5) / n - 0.5) * self.width
+            return offsets, np.full(n, 1.0 / n)
+        nodes, weights = hermite.hermgauss(n)
+        # integral of f(x) exp(-x**2 / (2 s**2)) / (s sqrt(2 pi)) = sum w_i f(sqrt(2) s x_i)
+        return math.sqrt(2.0) * _fwhm_sigma(self.width) * nodes, weights / math.sqrt(math.pi)
+
+
+@dataclass(frozen=True)
+class RegistrationScatter:
+    """How far a drawn `Registration` strays (standard deviations).
+
+    Attributes
+    ----------
+    offset_xy : float
+        m, of each of the instrument origin's x and y on the workpiece.
+    offset_z : float
+        m, of the height zero.
+    rotation : float
+        rad, of the instrument's x axis about z.
+    tilt : float
+        rad, of each of the two slopes.
+    """
+
+    offset_xy: float
+    offset_z: float
+    rotation: float
+    tilt: float
+
+    def __post_init__(self) -> None:
+        for name in ("offset_xy", "offset_z", "rotation", "tilt"):
+            object.__setattr__(self, name, check_length(getattr(self, name), name))
+
+
+@dataclass(frozen=True, eq=False)
+class Registration:
+    """Where an optical instrument's frame sits on the workpiece.
+
+    The instrument reads the surface in its own frame: its point ``(xi, yi)`` is the
+    workpiece's ``R(rotation) (xi, yi) + offset[:2]``, and the height it shows there is the
+    workpiece's plus ``offset[2] + tilt[0] xi + tilt[1] yi``. The tilt is applied as a shear
+    of heights (x and y stay): a true rotation would also move each point sideways by the
+    tilt times its height, under 1 nm for tilts below 1 mrad on heights below 1 mm.
+
+    Parameters
+    ----------
+    offset : array-like, shape (3,)
+        m: the instrument origin in the workpiece's x, y; the height offset.
+    rotation : float
+        rad: the instrument's x axis turned about z from the workpiece's.
+    tilt : array-like, shape (2,)
+        The slopes dz/dx and dz/dy the part shows in the instrument frame (rad).
+    """
+
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rotation: float = 0.0
+    tilt: np.ndarray = field(default_factory=lambda: np.zeros(2))
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "offset", _finite(self.offset, (3,), "offset"))
+        object.__setattr__(self, "tilt", _finite(self.tilt, (2,), "tilt"))
+        object.__setattr__(self, "rotation", float(_finite(self.rotation, (), "rotation")))
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator, scatter: RegistrationScatter) -> Registration:
+        """One registration: independent normal deviates, in the order x, y, z, rotation,
+        tilt x, tilt y."""
+        d = rng.standard_normal(6)
+        return cls(d[:3] * [scatter.offset_xy, scatter.offset_xy, scatter.offset_z],
+                   d[3] * scatter.rotation, d[4:] * scatter.tilt)
+
+    def to_workpiece(self, xy) -> np.ndarray:
+        """Workpiece (x, y) of instrument points ``xy`` (..., 2), m."""
+        xy = np.asarray(xy, dtype=np.float64)
+        c, s = math.cos(self.rotation), math.sin(self.rotation)
+        return np.stack([c * xy[..., 0] - s * xy[..., 1] + self.offset[0],
+                         s * xy[..., 0] + c * xy[..., 1] + self.offset[1]], axis=-1)
+
+    def to_instrument(self, vertices: np.ndarray) -> np.ndarray:
+        """The part's vertices (n, 3) as the instrument sees them (its x, y; its heights)."""
+        c, s = math.cos(self.rotation), math.sin(self.rotation)
+        dx = vertices[:, 0] - self.offset[0]
+        dy = vertices[:, 1] - self.offset[1]
+        xi = c * dx + s * dy
+        yi = c * dy - s * dx
+        zi = vertices[:, 2] + self.offset[2] + self.tilt[0] * xi + self.tilt[1] * yi
+        return np.column_stack([xi, yi, zi])
+
+    def __repr__(self) -> str:
+        return (f"Registration(offset={self.offset.tolist()} m, rotation={self.rotation:g} "
+                f"rad, tilt={self.tilt.tolist()})")
+
+
+@dataclass(frozen=True, eq=False)
+class Lobing:
+    """Pre-travel variation of a touch probe with the direction of contact (lobing).
+
+    The probe triggers, or its reading settles, when the ball has pressed ``p`` into the
+    surface along the contact normal, ``p`` depending on the normal's direction in the
+    probe's frame: with ``n`` the unit contact normal (surface to ball centre) there,
+    ``h = hypot(n_x, n_y)`` and ``phi = atan2(n_y, n_x)``::
+
+        p(n) = h * sum_k a_k cos(k (phi - phi_k))
+
+    The constant part of a real probe's pre-travel is calibrated into its effective ball
+    radius and left out; contacts along the probe axis (``h = 0``) see none. The three lobes
+    of a kinematic seat are ``k = 3``; ``k = 1`` is what the centre calibration leaves (it
+    shifts every fitted centre by ``-a_1`` towards ``phi_1``, see the tests).
+
+    Parameters
+    ----------
+    harmonics : sequence of (int, float, float)
+        ``(k, a_k, phi_k)``: order >= 1, amplitude m, phase rad.
+    """
+
+    harmonics: tuple = ()
+
+    def __post_init__(self) -> None:
+        terms = []
+        for term in self.harmonics:
+            try:
+                k, a, phi = term
+            except (TypeError, ValueError) as error:
+                raise InputError(f"Expected harmonics as (k, amplitude, phase), got {term!r}",
+                                 key="harmonics") from error
+            if isinstance(k, bool) or not isinstance(k, int | np.integer) or k < 1:
+                raise InputError(f"Expected a lobing order k >= 1, got {k!r}", key="harmonics")
+            a = float(_finite(a, (), "amplitude"))
+            terms.append((int(k), a, float(_finite(phi, (), "phase"))))
+        object.__setattr__(self, "harmonics", tuple(terms))
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator, amplitudes: dict[int, float]) -> Lobing:
+        """A probe with the given amplitude per order (m) and uniformly drawn phases."""
+        orders = sorted(amplitudes)
+        phases = rng.uniform(0.0, 2.0 * math.pi, len(orders))
+        return cls(tuple((k, amplitudes[k], float(p)) for k, p in zip(orders, phases,
+                                                                    strict=True)))
+
+    def __call__(self, normal) -> np.ndarray:
+        """Pre-travel (m) for unit contact normals (..., 3) in the probe's frame."""
+        n = np.asarray(normal, dtype=np.float64)
+        h = np.hypot(n[..., 0], n[..., 1])
+        phi = np.arctan2(n[..., 1], n[..., 0])
+        total = np.zeros(n.shape[:-1])
+        for k, a, p in self.harmonics:
+            total += a * np.cos(k * (phi - p))
+        return h * total
+
+
+@dataclass(frozen=True, eq=False)
+class ZonalForm:
+    """Form error of a ball: radial departures as a sum of zonal spherical harmonics.
+
+    The surface of the ball in direction ``v`` (unit, from its centre, in the ball's own
+    frame) lies at ``R + sum_i a_i P_{l_i}(v . w_i)``: each term a Legendre polynomial of
+    degree ``l_i`` about its own axis ``w_i``, which is a spherical harmonic of that degree.
+    Degrees 0 and 1 (a size error and a shift) are left out: a calibration takes them up.
+
+    Parameters
+    ----------
+    degrees : sequence of int
+        Each >= 2.
+    amplitudes : array-like, shape (k,)
+        m.
+    axes : array-like, shape (k, 3)
+        Normalised here.
+    """
+
+    degrees: tuple = ()
+    amplitudes: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    axes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+
+    def __post_init__(self) -> None:
+        degrees = tuple(int(d) for d in self.degrees)
+        if any(d < 2 for d in degrees):
+            raise InputError(f"Expected form degrees >= 2, got {list(degrees)}",
+                             key="degrees")
+        k = len(degrees)
+        amplitudes = _finite(self.amplitudes, (k,), "amplitudes")
+        axes = np.array(_finite(self.axes, (k, 3), "axes"))
+        norms = np.linalg.norm(axes, axis=1)
+        if np.any(norms == 0.0):
+            raise InputError("Expected non-zero form axes", key="axes")
+        object.__setattr__(self, "degrees", degrees)
+        object.__setattr__(self, "amplitudes", amplitudes)
+        object.__setattr__(self, "axes", frozen(axes / norms[:, None]))
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator, peak_to_valley: float,
+             degrees=(2, 3, 4)) -> ZonalForm:
+        """A form of the given degrees, axes uniform on the sphere, normal amplitudes scaled
+        so that its peak-to-valley over `FORM_POINTS` directions is ``peak_to_valley`` (m)."""
+        axes = rng.standard_normal((len(degrees), 3))
+        raw = cls(tuple(degrees), rng.standard_normal(len(degrees)), axes)
+        values = raw(fibonacci_sphere(FORM_POINTS))
+        scale = peak_to_valley / np.ptp(values)
+        return cls(raw.degrees, raw.amplitudes * scale, raw.axes)
+
+    def __call__(self, directions) -> np.ndarray:
+        """Radial departure (m) of the ball's surface in unit directions (..., 3)."""
+        v = np.asarray(directions, dtype=np.float64)
+        total = np.zeros(v.shape[:-1])
+        for degree, a, w in zip(self.degrees, self.amplitudes, self.axes, strict=True):
+            total += a * legendre.legval(v @ w, np.eye(degree + 1)[degree])
+        return total
+
+
+def fibonacci_sphere(count: int) -> np.ndarray:
+    """``count`` unit vectors (count, 3) spread evenly over the sphere (golden spiral)."""
+    i = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * i / count
+    r = np.sqrt(1.0 - z * z)
+    phi = math.pi * (3.0 - math.sqrt(5.0)) * i
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
+# ------------------------------------------------------------------------------- sampling
+
+
+def spot_heights(vertices, triangles, x, y, dx, dy, spot: Spot | None) -> np.ndarray:
+    """Heights over the grid ``(x[i] + dx[i], y[j] + dy[j])`` through a spot, (ny, nx).
+
+    ``x``, ``y`` are the nominal sample axes and ``dx``, ``dy`` how far each column and row
+    really sits off (lateral noise; zeros for none), all m. Without a spot each value is the
+    exact height there; with one, the spot's weighted mean of the exact heights around it.
+    """
+    ox, wx = (np.zeros(1), np.ones(1)) if spot is None else spot.axis()
+    xs, ix = np.unique(((x + dx)[:, None] + ox[None, :]).ravel(), return_inverse=True)
+    ys, iy = np.unique(((y + dy)[:, None] + ox[None, :]).ravel(), return_inverse=True)
+    ix = ix.reshape(len(x), len(ox))
+    iy = iy.reshape(len(y), len(ox))
+    out = np.empty((len(y), len(x)))
+    rows = max(1, BLOCK_SAMPLES // (len(xs) * len(ox)))
+    for j0 in range(0, len(y), rows):
+        block = iy[j0:j0 + rows]
+        lo, hi = int(block.min()), int(block.max()) + 1
+        h = height_map((vertices, triangles), xs, ys[lo:hi])
+        # (rows, n_y offsets, nx, n_x offsets) heights of every sub-sample of the block
+        sub = h[(block - lo)[:, :, None, None], ix[None, None, :, :]]
+        weights = wx[None, :, None, None] * wx[None, None, None, :]
+        out[j0:j0 + rows] = _weighted(sub, weights, axes=(1, 3))
+    return out
+
+
+def line_heights(vertices, triangles, start, direction, s, ds, across: float,
+                 spot: Spot | None) -> np.ndarray:
+    """Heights along the line ``start + (s + ds) u + across n`` through a spot, shape (k,).
+
+    ``u`` is the unit ``direction``, ``n`` its left normal; ``ds`` (k,) and ``across`` are the
+    lateral noise along and across the line (m). The spot's offsets are the instrument's x
+    and y, each split into its parts along and across the line: one exact line is read per
+    distinct across part.
+    """
+    ox, w = (np.zeros(1), np.ones(1)) if spot is None else spot.axis()
+    u = np.asarray(direction, dtype=np.float64)
+    normal = np.array([-u[1], u[0]])
+    offsets = np.stack(np.meshgrid(ox, ox, indexing="ij"), axis=-1).reshape(-1, 2)
+    weights = np.outer(w, w).ravel()
+    along = offsets @ u
+    side = offsets @ normal
+    heights = np.empty((len(s), len(offsets)))
+    for value in np.unique(side):
+        pick = np.flatnonzero(side == value)
+        points, inverse = np.unique(((s + ds)[:, None] + along[pick][None, :]).ravel(),
+                                    return_inverse=True)
+        origin = np.asarray(start, dtype=np.float64) + (across + value) * normal
+        line = _LineSamples(origin, u, points, vertices)
+        z = _finish(_zbuffer(vertices, triangles, line))
+        heights[:, pick] = z[inverse.reshape(len(s), len(pick))]
+    return _weighted(heights, weights[None, :], axes=(1,))
+
+
+def _weighted(values: np.ndarray, weights: np.ndarray, axes: tuple) -> np.ndarray:
+    """Weighted mean over ``axes`` of the finite values; NaN where none is finite."""
+    seen = np.isfinite(values)
+    w = np.where(seen, weights, 0.0)
+    total = np.sum(w, axis=axes)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.sum(np.where(seen, values, 0.0) * w, axis=axes) / total
+    mean[total == 0.0] = np.nan
+    return mean
+
+
+class _LineSamples:
+    """Samples ``origin + s[i] u`` at sorted ``s`` (any sign), for the exact rasteriser.
+
+    The sample set of `machinesim.metrology.surface` for a profile, at given distances: along
+    the axis the line runs most along, the sample coordinate is monotonic in i, so a
+    triangle's box maps to one index range.
+    """
+
+    def __init__(self, origin, u, s, vertices) -> None:
+        self.start = origin
+        self.direction = u
+        self.px = origin[0] + s * u[0]
+        self.py = origin[1] + s * u[1]
+        self.size = s.size
+        scale = max(np.abs(vertices).max(initial=0.0), np.abs(origin).max(),
+                    np.abs(self.px).max(), np.abs(self.py).max())
+        self.margin = LINE_MARGIN * scale
+        self.axis = 0 if abs(u[0]) >= abs(u[1]) else 1
+        self.sign = 1.0 if u[self.axis] > 0 else -1.0
+        self.key = self.sign * (self.px if self.axis == 0 else self.py)
+
+    def ranges(self, xmin, xmax, ymin, ymax):
+        ux, uy = self.direction
+        across_x = np.stack([(xmin - self.start[0]) * uy, (xmax - self.start[0]) * uy])
+        across_y = np.stack([(ymin - self.start[1]) * -ux, (ymax - self.start[1]) * -ux])
+        low = across_x.min(axis=0) + across_y.min(axis=0)
+        high = across_x.max(axis=0) + across_y.max(axis=0)
+        near = np.flatnonzero((low <= self.margin) & (high >= -self.margin))
+        lo, hi = (xmin[near], xmax[near]) if self.axis == 0 else (ymin[near], ymax[near])
+        if self.sign < 0:
+            lo, hi = -hi, -lo
+        first = np.zeros(xmin.size, dtype=np.int64)
+        count = np.zeros(xmin.size, dtype=np.int64)
+        first[near] = np.searchsorted(self.key, lo, side="left")
+        count[near] = np.searchsorted(self.key, hi, side="right") - first[near]
+        return first, count, np.zeros_like(first), np.ones_like(count)
+
+    def coordinates(self, i, j):
+        return self.px[i], self.py[i]
+
+    def flat(self, i, j):
+        return i
+
+
+def _finite(value, shape: tuple, name: str) -> np.ndarray:
+    try:
+        array = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"Expected {name} as numbers, got {value!r}", key=name) from error
+    if array.shape != shape or not np.isfinite(array).all():
+        raise InputError(f"Expected {name} as finite numbers of shape {shape}, got "
+                         f"{value!r}", key=name)
+    return frozen(array)

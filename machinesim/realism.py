@@ -1,0 +1,395 @@
+"""How real the lab is: one switch per source of imperfection, and the values a real lab has.
+
+A `machinesim.Lab` reads exactly by default, but for its instruments' noise (today's
+behaviour). `Realism` switches on, one by one, what a real laboratory adds:
+
+=====================  ========================================================================
+switch                 what it adds (the lab's defaults below, with their sources)
+=====================  ========================================================================
+instrument_noise       each instrument's height / trigger / displacement noise (its ``sigma``)
+lateral_resolution     microscope and white-light interferometer average over a spot
+lateral_noise          their sample positions jitter
+registration           their frame sits off the workpiece's (offset, rotation, height, tilt);
+                       the laser interferometer's beam is misaligned (cosine error)
+probe_pretravel        the touch probe's pre-travel varies with the contact direction
+probe_ball_form        the probe's ruby ball is not a perfect sphere
+artefact_errors        reference spheres are off their designed place, size and form
+background_errors      the machine's own residual geometric errors (a well-compensated machine)
+=====================  ========================================================================
+
+Each imperfection draws from its own stream (`machinesim.streams.stream` with the
+instrument's kind and label and the switch's name), so turning one off never changes what
+another draws: an error budget switches each off in turn (`Realism.without`) and reads the
+change. With a switch off the reading is exactly what it was without the feature.
+
+>>> Realism.lab().without("registration").on[:3]
+('instrument_noise', 'lateral_resolution', 'lateral_noise')
+>>> Realism.noise_only() == Realism.with_only("instrument_noise")
+True
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+
+import numpy as np
+
+from machinesim.arrays import frozen
+from machinesim.errors import ComponentError, ErrorModel
+from machinesim.exceptions import InputError, check_length
+from machinesim.metrology.imperfections import RegistrationScatter, Spot, ZonalForm
+from machinesim.tolerances import SPHERE_CHORD_M
+from machinesim.units import M_PER_NM, M_PER_UM
+
+__all__ = [
+    "ARTEFACT", "MICROSCOPE", "PROBE", "WHITE_LIGHT", "ActualSpheres", "ArtefactScatter",
+    "OpticalDefaults", "ProbeDefaults", "Realism", "SphereArtefacts", "add_errors",
+    "background_model", "background_path", "draw_spheres", "make_spheres",
+]
+
+
+@dataclass(frozen=True)
+class Realism:
+    """Which imperfections a lab has; each a bool (module docstring). ``Realism()`` has none.
+
+    Presets: `ideal` (none), `noise_only` (today's `Lab` default), `lab` (all). `without`
+    and `with_only` build the variants of an error budget.
+    """
+
+    instrument_noise: bool = False
+    lateral_resolution: bool = False
+    lateral_noise: bool = False
+    registration: bool = False
+    probe_pretravel: bool = False
+    probe_ball_form: bool = False
+    artefact_errors: bool = False
+    background_errors: bool = False
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            if not isinstance(getattr(self, f.name), bool):
+                raise InputError(f"Expected {f.name} as True or False, got "
+                                 f"{getattr(self, f.name)!r}", key=f.name)
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        """Every switch, in order."""
+        return tuple(f.name for f in fields(cls))
+
+    @classmethod
+    def ideal(cls) -> Realism:
+        """Nothing: every instrument reads the exact value (rounded to its resolution)."""
+        return cls()
+
+    @classmethod
+    def noise_only(cls) -> Realism:
+        """Instrument noise only: what `machinesim.Lab` does with ``noise=True``."""
+        return cls(instrument_noise=True)
+
+    @classmethod
+    def lab(cls) -> Realism:
+        """Everything a real lab has."""
+        return cls(**dict.fromkeys(cls.names(), True))
+
+    @classmethod
+    def with_only(cls, *names: str) -> Realism:
+        """Only the named switches on."""
+        return cls(**dict.fromkeys(_check_names(names), True))
+
+    def without(self, *names: str) -> Realism:
+        """A copy with the named switches off."""
+        return replace(self, **dict.fromkeys(_check_names(names), False))
+
+    @property
+    def on(self) -> tuple[str, ...]:
+        """The switches that are on, in order."""
+        return tuple(name for name in self.names() if getattr(self, name))
+
+    def __str__(self) -> str:
+        for preset in ("ideal", "noise_only", "lab"):
+            if self == getattr(Realism, preset)():
+                return preset
+        return "+".join(self.on)
+
+
+def _check_names(names) -> tuple[str, ...]:
+    for name in names:
+        if name not in Realism.names():
+            raise InputError(f"Expected a realism switch in {', '.join(Realism.names())}, got "
+                             f"{name!r}", key="realism")
+    return tuple(names)
+
+
+# ------------------------------------------------------------------ the lab's instruments
+
+
+@dataclass(frozen=True)
+class OpticalDefaults:
+    """What `Realism` gives an optical instrument of the lab (keyword arguments of it)."""
+
+    spot: Spot
+    lateral_sigma: float
+    registration: RegistrationScatter
+
+
+#: The laser confocal microscope (Keyence VK-X class; paper 002 names the VK-X50, paper 001
+#: a laser confocal microscope). Spot: a Gaussian of 0.3 um FWHM, between the diffraction
+#: limits 0.61 lambda / NA of a 50x / 0.95 objective at the 405-408 nm of the violet-laser
+#: models (0.26 um) and at the 658 nm of the red-laser ones (0.42 um); no data sheet of the
+#: VK-X50 was at hand: assumed from lambda / NA. Lateral noise: 20 nm per scan line and
+#: column (assumed: scan-mirror position repeatability, well under the 0.1 um pixel).
+#: Registration (all assumed; a microscope stage has no reference to the workpiece's origin
+#: but what the operator sets on it): the origin set on a part edge or corner under the
+#: objective to 5 um in x and y, the part's x turned on the stage by 1 mrad (an edge aligned
+#: by eye over a ~1 mm field), the height zero anywhere within 10 um (the focus), the part
+#: tilted by 0.2 mrad (levelled on the stage; procedures level their data anyway).
+MICROSCOPE = OpticalDefaults(Spot(0.3e-6, "gaussian"), 20 * M_PER_NM,
+                             RegistrationScatter(5 * M_PER_UM, 10 * M_PER_UM, 1e-3, 0.2e-3))
+#: The white-light (coherence scanning) interferometer, 20x / 0.4 objective: spot 0.8 um
+#: FWHM (0.61 lambda / NA at 0.55 um, the centre of its white light: 0.84 um); lateral noise
+#: 10 nm (assumed: the camera's pixels are fixed, vibration moves the field between frames);
+#: registration as the microscope's (the same stage practice).
+WHITE_LIGHT = OpticalDefaults(Spot(0.8e-6, "gaussian"), 10 * M_PER_NM, MICROSCOPE.registration)
+
+
+@dataclass(frozen=True)
+class ProbeDefaults:
+    """What `Realism` gives the lab's touch probe and laser interferometer."""
+
+    lobing: dict
+    sphericity: float
+    beam_alignment: float
+
+
+#: The on-machine probe (paper 002's FANUC NANO CHECKER, an air-loaded displacement probe with
+#: a R0.25 mm ruby ball; no data sheet of its lobing is published). Lobing: 3 lobes of 0.10 um
+#: and a first-order residual of 0.02 um (assumed: below the 2-D lobing of +-0.25 um that
+#: strain-gauge machine-tool probes of the Renishaw OMP400 class state, since the NANO
+#: CHECKER reads a displacement at a low, air-set force; the first order is what a centre
+#: calibration on a reference sphere leaves, one fifth of the lobing). Ball form: 0.13 um
+#: peak to valley, the sphericity of an ISO 3290 grade 5 ball, the standard grade of ruby
+#: styli (grade 3, 0.08 um, on request). Laser interferometer beam alignment: 0.1 mrad per
+#: axis (assumed: the return beam kept centred on its target to ~0.03 mm over a 300 mm
+#: travel), a cosine error of 5e-9 of the travel.
+PROBE = ProbeDefaults({1: 0.02 * M_PER_UM, 3: 0.10 * M_PER_UM}, 0.13 * M_PER_UM, 0.1e-3)
+
+
+# ------------------------------------------------------------------------------ artefacts
+
+
+@dataclass(frozen=True)
+class ArtefactScatter:
+    """How far actual reference spheres stray from their design.
+
+    Attributes
+    ----------
+    position : float
+        m, standard deviation of each coordinate of each centre.
+    radius : float
+        m, standard deviation of the radius error, common to the spheres of one workpiece
+        (one ball end mill cut them all).
+    form : float
+        m, peak to valley of each sphere's form error (a drawn `ZonalForm`).
+    """
+
+    position: float
+    radius: float
+    form: float
+
+    def __post_init__(self) -> None:
+        for name in ("position", "radius", "form"):
+            object.__setattr__(self, name, check_length(getattr(self, name), name))
+
+
+#: Paper 002's reference spheres, ball-end-milled by an ordinary machining centre (1 um
+#: resolution) with the rough shape (section 3.2.1). Position: 3 um per coordinate, so that
+#: the workpiece position found from three spheres is off by ~5 um (3 um times sqrt 3) and its
+#: inclination by ~0.02 deg (3 um times sqrt 2 over the 12 mm between spheres), the paper's
+#: own estimate of what the sphere shift does (section 2.2). Radius: 3 um (assumed: the radius
+#: tolerance of a precision R2 ball end mill, +-5 um class; the paper takes the mean measured
+#: radius because "the machined sphere radius is a little different from the targeted one").
+#: Form: 2 um peak to valley (assumed, so that its effect on the workpiece position is of the
+#: paper's "less than 1-2 um").
+ARTEFACT = ArtefactScatter(3 * M_PER_UM, 3 * M_PER_UM, 2 * M_PER_UM)
+
+
+@dataclass(frozen=True, eq=False)
+class SphereArtefacts:
+    """Reference spheres as designed, cut into (cavities) or onto (bumps) a stock.
+
+    Parameters
+    ----------
+    centres : array-like, shape (N, 3)
+        Designed centres, workpiece frame, m.
+    radius : float
+        Designed radius, m.
+    cavities : bool
+        True: the stock minus the spheres (paper 002's ball-end-milled cavities). False: plus.
+    chord_tol : float
+        Largest facet depth of each sphere polygon, m (`machinesim.tools.sphere_polygon`).
+    """
+
+    centres: np.ndarray
+    radius: float
+    cavities: bool = True
+    chord_tol: float = SPHERE_CHORD_M
+
+    def __post_init__(self) -> None:
+        centres = np.array(self.centres, dtype=np.float64)
+        if centres.ndim != 2 or centres.shape[1] != 3 or not len(centres) \
+                or not np.isfinite(centres).all():
+            raise InputError(f"Expected sphere centres of shape (N, 3) (m), got "
+                             f"{centres.shape}", key="centres")
+        object.__setattr__(self, "centres", frozen(centres))
+        object.__setattr__(self, "radius", check_length(self.radius, "radius", positive=True))
+        object.__setattr__(self, "chord_tol", check_length(self.chord_tol, "chord_tol",
+                                                           positive=True))
+        if not isinstance(self.cavities, bool):
+            raise InputError(f"Expected cavities as True or False, got {self.cavities!r}",
+                             key="cavities")
+
+
+@dataclass(frozen=True, eq=False)
+class ActualSpheres:
+    """Reference spheres as a lab made them: part of the lab's truth (`Lab.reveal_artefacts`).
+
+    Attributes
+    ----------
+    centres : ndarray, shape (N, 3), m
+    radius : float, m
+    forms : tuple of ZonalForm or None
+        Each sphere's form error about its centre (None: perfect).
+    """
+
+    centres: np.ndarray
+    radius: float
+    forms: tuple
+
+
+def draw_spheres(design: SphereArtefacts, scatter: ArtefactScatter | None,
+                 rng_position: np.random.Generator | None = None,
+                 rng_radius: np.random.Generator | None = None,
+                 rng_form: np.random.Generator | None = None) -> ActualSpheres:
+    """Actual spheres for a design; ``scatter`` None gives the design itself."""
+    if scatter is None:
+        return ActualSpheres(design.centres, design.radius, (None,) * len(design.centres))
+    n = len(design.centres)
+    centres = design.centres + scatter.position * rng_position.standard_normal((n, 3))
+    radius = design.radius + scatter.radius * float(rng_radius.standard_normal())
+    if radius <= 0.0:
+        raise InputError(f"Expected a drawn sphere radius > 0, got {radius} m: the radius "
+                         f"scatter {scatter.radius} m is too large for {design.radius} m",
+                         key="radius")
+    forms = tuple(ZonalForm.draw(rng_form, scatter.form) if scatter.form > 0.0 else None
+                  for _ in range(n))
+    return ActualSpheres(frozen(centres), radius, forms)
+
+
+def make_spheres(stock, design: SphereArtefacts, actual: ActualSpheres):
+    """The stock with the actual spheres cut into it (or added): a `Part`.
+
+    With the design's own values (no scatter) this is the design made exactly: one sphere
+    polygon translated to each centre, unioned in one batch, subtracted (or added) once, as
+    `machinesim.cam.crown.crown_stock` and `machinesim.workpiece.block_with_spheres` do (the
+    same vertices bit for bit; manifold3d may list the triangles in another order). With a
+    form, each vertex of the polygon is moved along its radius onto the actual sphere.
+    """
+    import manifold3d
+
+    from machinesim.tools import sphere_polygon
+    from machinesim.workpiece import Part
+
+    solid = stock.manifold if hasattr(stock, "manifold") else stock
+    base = sphere_polygon(actual.radius, design.chord_tol)
+    spheres = []
+    for centre, form in zip(actual.centres, actual.forms, strict=True):
+        sphere = base
+        if form is not None:
+            def warp(points, form=form, radius=actual.radius):
+                points = np.asarray(points, dtype=np.float64)
+                r = np.linalg.norm(points, axis=1, keepdims=True)
+                return points * ((radius + form(points / r)[:, None]) / r)
+            sphere = base.warp_batch(warp)
+        spheres.append(sphere.translate(tuple(float(v) for v in centre)))
+    union = manifold3d.Manifold.batch_boolean(spheres, manifold3d.OpType.Add)
+    return Part(solid - union if design.cavities else solid + union)
+
+
+# ---------------------------------------------------------------------- background errors
+
+
+def background_path(machine_name: str):
+    """``models/errors/background_<machine>.toml`` (shipped with the machines)."""
+    from machinesim.machines import models_dir
+
+    return models_dir() / "errors" / f"background_{machine_name}.toml"
+
+
+def background_model(machine) -> ErrorModel:
+    """The machine's own residual geometric errors (a well-compensated one), from its file.
+
+    Raises
+    ------
+    InputError
+        When the machine has no background file (a machine loaded from elsewhere): give the
+        lab one with ``background=``.
+    """
+    path = background_path(machine.name)
+    if not path.is_file():
+        raise InputError(f"Expected a background error model for {machine.name} at {path}; "
+                         f"give one with Lab(..., background=...)", key="background")
+    model = ErrorModel.from_toml(path)
+    machine.check_errors(model)
+    return model
+
+
+def add_errors(a: ErrorModel, b: ErrorModel) -> ErrorModel:
+    """The errors of ``a`` and ``b`` together: location errors add, component errors add.
+
+    Component tables of an axis are put on the union of the two models' positions (each
+    table is piecewise linear, so their sum is exactly the table of the sums there, and both
+    hold their end values beyond); polynomials add coefficient by coefficient. ``b`` must
+    carry no tool or workpiece setting (a setting belongs to a set-up, not to the machine).
+
+    Raises
+    ------
+    InputError
+        When ``b`` has a setting, or one symbol is a table in one model and a polynomial in
+        the other (their sum is neither).
+    """
+    if not (b.tool == ErrorModel().tool and b.workpiece == ErrorModel().workpiece):
+        raise InputError("Expected a background without tool or workpiece setting errors",
+                         key="background")
+    location = {axis: dict(table) for axis, table in a.location.items()}
+    for axis, table in b.location.items():
+        merged = location.setdefault(axis, {})
+        for symbol, value in table.items():
+            merged[symbol] = merged.get(symbol, 0.0) + value
+    component = {}
+    for axis in sorted(set(a.component) | set(b.component)):
+        ta, tb = a.component.get(axis, {}), b.component.get(axis, {})
+        grids = [e.positions for t in (ta, tb) for e in t.values() if e.kind == "table"]
+        grid = np.unique(np.concatenate(grids)) if grids else None
+        out = {}
+        for symbol in list(ta) + [s for s in tb if s not in ta]:
+            out[symbol] = _add_component(ta.get(symbol), tb.get(symbol), grid, axis, symbol)
+        component[axis] = out
+    return ErrorModel(a.tool, a.workpiece, location, component)
+
+
+def _add_component(ea, eb, grid, axis: str, symbol: str) -> ComponentError:
+    kinds = {e.kind for e in (ea, eb) if e is not None}
+    if kinds == {"table", "poly"}:
+        raise InputError(f"Expected component.{axis}.{symbol} as a table in both models or a "
+                         f"polynomial in both, got one of each", key=f"component.{axis}.{symbol}")
+    if kinds == {"poly"}:
+        size = max(e.values.size for e in (ea, eb) if e is not None)
+        total = np.zeros(size)
+        for e in (ea, eb):
+            if e is not None:
+                total[:e.values.size] += e.values
+        return ComponentError("poly", None, total)
+    present = [e for e in (ea, eb) if e is not None]
+    if len(present) == 1 and np.array_equal(present[0].positions, grid):
+        return present[0]
+    return ComponentError("table", grid, sum(e.evaluate(grid) for e in present))
