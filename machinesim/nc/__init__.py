@@ -1,75 +1,77 @@
-"""NC programs: read and write FANUC-style G-code as ultraprecision machines run it.
+"""NC programs: read and write FANUC-style G-code as ultraprecision machines and CAM posts
+write it.
 
 The first arrow of the data flow: NC text (mm, inch, deg) -> `Program` (moves with absolute
 machine axis targets in SI: m for X Y Z, rad for A B C, s, m/s). `format_program` writes a
-`Program` back as NC text; `ProgramBuilder` makes one in Python.
+`Program` back as NC text; `ProgramBuilder` makes one in Python. The full table of words
+(supported, accepted as a state, refused), the tool table, subprograms, arcs and their
+tolerances are in docs/nc.md; the rules in short:
 
-The language read by `parse_program`
-------------------------------------
+The language read by `parse_program` / `read_program`
+-----------------------------------------------------
 Lines and blocks
     One block per line (lines split at ``\\n``; ``\\r`` and tab count as blanks). Lines that
-    are blank, only comments, or a lone ``%`` (tape start/end marker, comments aside) are
-    skipped. Comments: ``(...)`` closed on the same line, anywhere between words (no
-    nesting), and everything after ``;``.
+    are blank, only comments, or a lone ``%`` are skipped. Comments: ``(...)`` closed on the
+    same line (no nesting), and everything after ``;``.
 Words
-    A letter (upper or lower case) and a number: optional sign, digits, optional decimal
-    point (``X-.5``, ``X10.``, ``x+3``). Blanks between words are optional; blanks between a
-    letter and its number are allowed, inside the number not (``Z - 1`` is refused); words
-    come in any order. Letters read:
-    N O G M S F P X Y Z A B C. Any other letter (I J K R of arcs, T, D, H, E, ...) is
-    refused, as is any other character (``/`` block delete, ``#`` macros, ``=``, ...), a
-    number without a letter, or a malformed number (``X1.2.3``, ``X--1``, ``X``).
-    Integer words N O G M P take at most 9 unsigned digits. A value that is not finite in
-    float64 is refused.
-Once per block
-    Each of N O S F P X Y Z A B C at most once (an axis word twice is refused); several M
-    words are passed through in order; several G codes are allowed if each belongs to a
-    different modal group (two motion codes, or G90 and G91, in one block are refused).
-    Within a block the G codes act first, then F and S, then the axis words.
-Program number
-    ``O<n>`` must stand alone in the first block (before it only ``%``, comments and blank
-    lines). It becomes `Program.number`.
-G codes (anything else, e.g. G28, G41, G54.1, is refused as unknown)
-    G00 rapid, G01 linear: modal motion mode (no default: an axis word before the first
-    G00/G01 is refused). G04 dwell: one-shot, leaves the motion mode; ``G04 P<ms>`` with
-    integer milliseconds as FANUC (a decimal point in P is refused) or ``G04 X<s>``
-    seconds; exactly one of P and X, >= 0; a dwell without time, or with another axis word,
-    is refused; P without G04 is refused. G02/G03 (circular interpolation) are refused.
-    G90/G91 absolute/incremental (default G90). An incremental value on an axis that has
-    no value yet is refused (the start position is unknown). G20/G21 inch/mm (default G21):
-    X Y Z and F in inch and inch/min under G20; A B C are always degrees; switching
-    mid-program is allowed and affects the words that follow. G17/G18/G19 plane selection
-    (default G17): carried as state, no effect without arcs. G54..G59 work offsets
-    (default G54). G94 feed per minute (the default and only mode; G95 is refused).
+    A letter (either case) and a number: optional sign, digits, optional decimal point
+    (``X-.5``, ``X10.``, ``x+3``); blanks between words optional, between a letter and its
+    number allowed, inside a number not. Letters read: N O G M S F P X Y Z A B C (axes and
+    the rest as before) and I J K R Q L H T D where a G or M code reads them (arcs, cycles,
+    subprograms, tools). Any other letter, ``/``, ``#``, ``=``, a number without letter,
+    a malformed number is refused. Integer words N O G M P L H T D take at most 9 unsigned
+    digits. Each letter other than G and M at most once a block; G codes one per modal group.
+    Within a block: modal G codes, then F S T D H, then the motion, then M codes.
+G codes
+    Motion (modal, no default): G00 rapid, G01 linear, G02/G03 arcs (expanded at read time
+    into linear moves within ``chord_tolerance``, default 1 nm; centre I J K from the start
+    or radius R, R < 0 over 180 deg; full circle with I J K and end = start; helical with
+    the plane's third axis, other axes move with the angle; an end off the circle by more
+    than `ARC_RADIUS_TOLERANCE_M` is refused). G04 dwell (P ms or X s). G17/G18/G19 plane.
+    G20/G21 inch/mm. G90/G91. G54..G59 work offsets. G94. G28 (rapid through the
+    intermediate point to machine zero of the named axes; ``G28 G91 Z0`` before Z is known
+    goes straight to zero), G53 (one block in machine coordinates: no work offset, no tool
+    length; absolute only). G43/G44 H (tool length from the tool table added to / taken
+    from absolute Z words; G49 cancels; like a work offset change it moves nothing by
+    itself). G81/G82/G83 canned cycles along Z in G17 with R, Z, Q, P, K and G98/G99,
+    expanded into moves; G80 or a motion code cancels. Accepted as states, no geometric
+    effect, listed in `Program.states` with their first line: G40, G61, G64, G80,
+    G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words. Refused: G41/G42 (cutter radius
+    compensation), G95, and every G code not named here.
+Subprograms
+    The main program is the file's first program (its O number in the first block, if any);
+    after its M02/M30, ``O<n>`` blocks start subprograms, each ending in M99. ``M98 P<n>
+    L<count>`` or ``M98 P<count><nnnn>`` calls one; calls nest up to 10 deep; recursion,
+    calls to missing programs, M99 in the main program (FANUC loops forever), M02/M30 in a
+    subprogram, blocks after a subprogram's M99, and programs that would run more than
+    `parser.MAX_BLOCK_RUNS` blocks are refused before anything runs.
 Axis values
-    The machine target of an absolute axis word is the programmed value plus the active
-    work offset (`work_offsets`, SI, absent = 0); an incremental word adds to the axis's
-    current machine target (work offset changes do not move axes). Targets are modal: each
-    move's target holds every axis given a value so far.
-Integer input (a number without decimal point in X Y Z A B C)
-    ``integer_input="calculator"`` (the default): X10 is 10 mm (10 inch under G20),
-    A10 10 deg, like X10. . ``integer_input="increment"`` (FANUC's default without
-    calculator-type input): X10 is 10 least input increments: 1 nm (0.0000001 inch under
-    G20) for X Y Z, 0.00001 deg for A B C; ``G04 X`` without decimal point counts
-    milliseconds. Words with a decimal point read the same in both modes. F, S, P, N, M,
-    O and G are never affected.
+    The machine target of an absolute axis word is the programmed value plus the active work
+    offset (`work_offsets`, SI, absent = 0), plus the tool length offset for Z; an
+    incremental word adds to the axis's current machine target. Targets are modal.
+Integer input (a number without decimal point in a length or angle: X Y Z A B C I J K R Q)
+    ``integer_input="calculator"`` (the default): X10 is 10 mm (10 inch under G20), A10
+    10 deg. ``"increment"`` (FANUC without calculator-type input): X10 is 10 least input
+    increments: 1 nm (0.0000001 inch under G20) for lengths, 0.00001 deg for A B C;
+    ``G04 X`` counts milliseconds. `Program.integer_input` says which rule was used.
 F, S, M
-    F: feed (mm/min, inch/min under G20), > 0, modal, stored in m/s (kept across G20/G21);
-    linear moves carry it, rapid and dwell moves carry None, a linear move before any F
-    carries None. S: spindle speed (rev/min) >= 0, modal, passed through. M: unsigned
-    integers, any code passed through in `Move.m_codes`.
-Which blocks make a `Move`
-    A block with axis words makes a rapid or linear move (even if nothing changes); a G04
-    block makes a dwell. A block with M words but neither makes a dwell of 0 s at the
-    current position carrying them, so they keep their place, unless all its M words are
-    program ends. Blocks with only modal words (G, F, S, N) make no move.
-Program end
-    M02 or M30 ends the program. Blocks after it are refused (NCProgramError); blank, comment
-    and ``%`` lines after it are fine. A program without M02/M30 is accepted.
+    F: feed (mm/min, inch/min under G20), > 0, modal; linear moves carry it (m/s). S:
+    spindle speed, passed through. M: passed through on the block's last move (M98/M99 are
+    consumed); a block with M codes and no move makes a 0 s dwell carrying them, unless all
+    are program ends. Blocks after M02/M30 (outside subprograms) are refused.
 Errors
-    Every refusal is an `NCProgramError` whose message names the source, line, column and
-    word (``prog.nc, line 7, column 5, key 'G02': circular interpolation ...``), with the
-    same as attributes.
+    Every refusal is an `NCProgramError` naming source, line, column and word. All refusals
+    of a program are collected: one error lists them all (``error.problems`` holds each).
+
+Reading speed
+    Runs of plain modal motion lines (``X.. Z.. C..``: words N G0/G1 X Y Z A B C F only) are
+    read by numpy over the whole text (`machinesim.nc.fastscan`), bit-identical to the
+    word-by-word path; ``fast=False`` forces the latter.
+
+Arrays
+    A `Program` holds its moves as read-only arrays (`Program.targets` (N, 6) with NaN for
+    axes without a value yet, `kinds`, `feeds`, `dwells`, `lines`, ...); `Program.moves` makes
+    `Move` values on demand. `Program.from_arrays` builds one from arrays, checked.
 
 The writer
 ----------
@@ -82,6 +84,7 @@ offsets gives the moves at that resolution, and formatting them again gives the 
 
 from __future__ import annotations
 
+from machinesim.nc.arcs import ARC_CHORD_M, ARC_RADIUS_TOLERANCE_M
 from machinesim.nc.parser import (
     INCREMENT_INCH_M,
     INCREMENT_M,
@@ -89,7 +92,18 @@ from machinesim.nc.parser import (
     parse_program,
     read_program,
 )
-from machinesim.nc.program import AXES, FrozenMapping, Move, Program, ProgramBuilder
+from machinesim.nc.program import (
+    AXES,
+    KIND_DWELL,
+    KIND_LINEAR,
+    KIND_RAPID,
+    MOVE_KINDS,
+    FrozenMapping,
+    Move,
+    Program,
+    ProgramBuilder,
+)
+from machinesim.nc.tooltable import Tool, ToolTable
 from machinesim.nc.writer import (
     LINEAR_DECIMALS,
     ROTARY_DECIMALS,
@@ -98,12 +112,20 @@ from machinesim.nc.writer import (
 )
 
 __all__ = [
+    "ARC_CHORD_M",
+    "ARC_RADIUS_TOLERANCE_M",
     "AXES",
     "INCREMENT_INCH_M",
     "INCREMENT_M",
     "INCREMENT_RAD",
+    "KIND_DWELL",
+    "KIND_LINEAR",
+    "KIND_RAPID",
     "LINEAR_DECIMALS",
+    "MOVE_KINDS",
     "ROTARY_DECIMALS",
+    "Tool",
+    "ToolTable",
     "FrozenMapping",
     "Move",
     "Program",

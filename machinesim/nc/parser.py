@@ -1,82 +1,105 @@
-"""Read FANUC-style NC text into a `Program`; the language rules are in `machinesim.nc`."""
+"""Read FANUC-style NC text into a `Program`; the language rules are in `machinesim.nc`.
+
+The reader makes two passes. The first (`machinesim.nc.layout`) finds the programs in the
+file (the main program and its O-numbered subprograms), their calls, and every malformed
+word. The second runs the main program block by block (`machinesim.nc.blocks`) on a modal
+state (`_State`), expanding arcs, canned cycles and subprogram calls into moves; runs of
+plain modal motion lines go through the vectorised fast path (`machinesim.nc.fastscan`)
+with identical results. Every refusal is collected, and one `NCProgramError` lists them all
+at the end.
+"""
 
 from __future__ import annotations
 
 import math
 import os
-import re
-import string
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
+import numpy as np
+
+from machinesim._io import check_readable_file
 from machinesim.exceptions import NCProgramError
+from machinesim.nc import fastscan
+from machinesim.nc.arcs import ARC_CHORD_M
+from machinesim.nc.blocks import Block
+from machinesim.nc.layout import Layout
+from machinesim.nc.lexer import Word, tokenize
 from machinesim.nc.program import (
     AXES,
-    PROGRAM_END,
+    INTEGER_INPUTS,
+    KIND_LINEAR,
     ROTARY_AXES,
-    Move,
     Program,
     work_offsets_si,
 )
+from machinesim.nc.tooltable import ToolTable, tool_table
+from machinesim.nc.words import (
+    INCREMENT_INCH_M,
+    INCREMENT_M,
+    INCREMENT_RAD,
+    M_PER_INCH,
+    MAX_BLOCK_RUNS,
+    MAX_INTEGER_DIGITS,
+    MAX_MOVES,
+    MAX_SUBPROGRAM_DEPTH,
+    integer,
+)
 from machinesim.units import M_PER_MM, RAD_PER_DEG
 
-#: One inch in metres (exact by definition).
-M_PER_INCH = 0.0254
-#: Least input increments of the "increment" integer-input rule: 1 nm and 0.00001 deg as the
-#: machines of the seeds resolve; 0.0000001 inch is the inch increment of that (nano) system.
-INCREMENT_M = 1e-9
-INCREMENT_INCH_M = 1e-7 * M_PER_INCH
-INCREMENT_RAD = 1e-5 * RAD_PER_DEG
-#: Integer words (N O G M P) longer than this are refused: FANUC takes at most 8 digits, and
-#: the bound keeps int() away from Python's digit limit on hostile input.
-MAX_INTEGER_DIGITS = 9
+#: Problems listed in the message of the one error (all are in its ``problems``).
+MAX_LISTED = 100
+#: Reading stops after this many problems: the rest would be consequences.
+MAX_PROBLEMS = 10_000
+#: Runs of at least this many simple lines go through the vectorised fast path (below, the
+#: per-line Python path is as fast as numpy's per-call overhead).
+FAST_MIN_LINES = 16
 
 IntegerInput = Literal["calculator", "increment"]
-INTEGER_INPUTS = ("calculator", "increment")
 
-_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)")
-_BLANK = " \t\r"
-_LETTERS = frozenset(string.ascii_letters)
-_READ_LETTERS = frozenset("NOGMSFPXYZABC")
-_ARC_LETTERS = frozenset("IJKR")
-_MOTION_KINDS = {"G00": "rapid", "G01": "linear"}
-_G_GROUPS = {
-    "G00": "motion", "G01": "motion", "G04": "motion",
+G_GROUPS = {
+    "G00": "motion", "G01": "motion", "G02": "motion", "G03": "motion", "G04": "motion",
     "G17": "plane", "G18": "plane", "G19": "plane",
     "G20": "units", "G21": "units",
+    "G28": "one-shot", "G53": "one-shot", "G05.1": "one-shot", "G08": "one-shot",
+    "G40": "cutter compensation",
+    "G43": "tool length", "G44": "tool length", "G49": "tool length",
     "G54": "work offset", "G55": "work offset", "G56": "work offset",
     "G57": "work offset", "G58": "work offset", "G59": "work offset",
+    "G61": "path mode", "G64": "path mode",
+    "G80": "canned cycle", "G81": "canned cycle", "G82": "canned cycle",
+    "G83": "canned cycle",
     "G90": "distance", "G91": "distance",
     "G94": "feed mode",
+    "G98": "return level", "G99": "return level",
 }  # fmt: skip
-_CIRCULAR = (
-    "circular interpolation (G02/G03) is not supported; approximate the arc with G01 "
-    "segments within your chord tolerance"
+_CUTTER_COMPENSATION = (
+    "cutter radius compensation ({}) is not supported: it offsets the path by the tool radius "
+    "along its normal, with start-up, corner and cancel rules (FANUC types A, B, C) that a "
+    "simulation would have to guess; post the tool-centre path (compensation 'in computer' "
+    "in the CAM) and cancel with G40"
 )
-_G_REFUSED = {
-    "G02": _CIRCULAR,
-    "G03": _CIRCULAR,
+G_REFUSED = {
+    "G41": _CUTTER_COMPENSATION.format("G41"),
+    "G42": _CUTTER_COMPENSATION.format("G42"),
     "G95": "feed per revolution (G95) is not supported; use G94 with F in mm/min",
 }
-
-
-@dataclass(frozen=True)
-class _Word:
-    letter: str  # upper case
-    text: str  # the number as written
-    column: int  # 1-based column of the letter
-
-    @property
-    def key(self) -> str:
-        return self.letter + self.text
+#: Words accepted as modal states without geometric effect, listed in `Program.states`.
+_STATE_CODES = ("G40", "G61", "G64", "G80")
+SINGLE = frozenset("NOSFPXYZABCIJKRQLHTD")
+_MOTION = {"G00": "rapid", "G01": "linear"}
+ARC = ("G02", "G03")
+NON_MOVING = ("G05.1", "G08")
+M99_IN_MAIN = ("M99 in the main program would jump back to its start forever (FANUC); end "
+                "the main program with M30 or M02")
 
 
 @dataclass
 class _State:
     """The modal state of the control while reading, in SI."""
 
-    motion: str | None = None
+    motion: str | None = None  # G00 G01 G02 G03
     incremental: bool = False
     inch: bool = False
     plane: str = "G17"
@@ -85,8 +108,95 @@ class _State:
     spindle: float | None = None
     target: dict[str, float] = field(default_factory=dict)
     number: int | None = None
-    blocks: int = 0
     end: tuple[int, str] | None = None
+    length_mode: str = "G49"
+    h: int = 0
+    cycle: str | None = None
+    cycle_z: float | None = None  # machine Z of the hole bottom
+    cycle_r: float | None = None  # machine Z of the R plane
+    cycle_q: float | None = None
+    cycle_p: float = 0.0
+    initial_z: float | None = None
+    retract: str = "G98"
+
+
+class _Problems:
+    """Every refusal, once each (a subprogram run 100 times reports its error once)."""
+
+    def __init__(self) -> None:
+        self.found: dict[tuple, NCProgramError] = {}
+
+    def add(self, error: NCProgramError) -> None:
+        key = (error.line, error.column, error.key, str(error))
+        self.found.setdefault(key, error)
+
+    def __len__(self) -> int:
+        return len(self.found)
+
+    def raise_all(self, source: str) -> None:
+        if not self.found:
+            return
+        errors = sorted(self.found.values(), key=lambda e: (e.line or 0, e.column or 0))
+        if len(errors) == 1:
+            raise errors[0]
+        listed = "\n".join(f"  {e}" for e in errors[:MAX_LISTED])
+        more = len(errors) - MAX_LISTED
+        tail = f"\n  ... and {more} more (all in .problems)" if more > 0 else ""
+        first = errors[0]
+        error = NCProgramError(
+            f"{len(errors)} problems in the program (the first at line {first.line}):\n"
+            f"{listed}{tail}",
+            source=source, line=first.line, column=first.column, key=first.key,
+        )
+        error.problems = tuple(errors)
+        raise error
+
+
+class _Output:
+    """The moves as they come: Python lists for single blocks, arrays for expanded runs."""
+
+    def __init__(self) -> None:
+        self.chunks: list[tuple[np.ndarray, ...]] = []
+        self.lists: tuple[list, ...] = tuple([] for _ in range(7))
+        self.m_codes: dict[int, tuple[int, ...]] = {}
+        self.count = 0
+
+    def add(self, kind: int, target: Mapping[str, float], feed: float | None, dwell: float,
+            line: int, block: int | None, spindle: float | None) -> None:
+        rows, kinds, feeds, dwells, lines, spindles, blocks = self.lists
+        rows.append(tuple(target.get(a, math.nan) for a in AXES))
+        kinds.append(kind)
+        feeds.append(math.nan if feed is None else feed)
+        dwells.append(dwell)
+        lines.append(line)
+        spindles.append(math.nan if spindle is None else spindle)
+        blocks.append(-1 if block is None else block)
+        self.count += 1
+
+    def add_arrays(self, *arrays: np.ndarray) -> None:
+        self.flush()
+        self.chunks.append(arrays)
+        self.count += len(arrays[1])
+
+    def flush(self) -> None:
+        rows, kinds, feeds, dwells, lines, spindles, blocks = self.lists
+        if kinds:
+            self.chunks.append((
+                np.array(rows, dtype=np.float64).reshape(-1, len(AXES)),
+                np.array(kinds, dtype=np.int8), np.array(feeds, dtype=np.float64),
+                np.array(dwells, dtype=np.float64), np.array(lines, dtype=np.int64),
+                np.array(spindles, dtype=np.float64), np.array(blocks, dtype=np.int64)))
+            for items in self.lists:
+                items.clear()
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        self.flush()
+        if not self.chunks:
+            return (np.empty((0, len(AXES))), np.empty(0, np.int8), np.empty(0), np.empty(0),
+                    np.empty(0, np.int64), np.empty(0), np.empty(0, np.int64))
+        if len(self.chunks) == 1:
+            return self.chunks[0]
+        return tuple(np.concatenate(parts) for parts in zip(*self.chunks, strict=True))
 
 
 def parse_program(
@@ -95,6 +205,9 @@ def parse_program(
     *,
     work_offsets: Mapping[str, Mapping[str, float]] | None = None,
     integer_input: IntegerInput = "calculator",
+    tools: Any = None,
+    chord_tolerance: float = ARC_CHORD_M,
+    fast: bool = True,
 ) -> Program:
     """Read an NC program.
 
@@ -107,306 +220,319 @@ def parse_program(
     work_offsets : mapping, optional
         {"G54": {"X": m, ...}, ...} in SI; absent systems and axes are zero.
     integer_input : {"calculator", "increment"}
-        How an axis number without decimal point reads: "calculator" (X10 is 10 mm, the
+        How a length or angle without decimal point reads: "calculator" (X10 is 10 mm, the
         default) or "increment" (X10 is 10 least input increments: 10 nm, 0.0001 deg).
+    tools : path, dict or ToolTable, optional
+        The tool table for H (tool length, G43/G44), T and D words
+        (`machinesim.nc.tooltable`).
+    chord_tolerance : float
+        Largest distance, m, between an arc and the straight moves that replace it.
+    fast : bool
+        Read runs of plain motion lines with the vectorised path (the same result; False
+        is for tests and benchmarks).
 
     Returns
     -------
     Program
-        Moves with absolute machine targets in SI.
+        Moves with absolute machine targets in SI; `Program.states` lists the words read
+        as states and `Program.integer_input` the rule used.
 
     Raises
     ------
     NCProgramError
-        For anything not understood, naming source, line, column and word.
+        For anything not understood, naming source, line, column and word; when there are
+        several, one error lists them all (its ``problems`` holds each).
     """
     if not isinstance(text, str):
         raise NCProgramError(f"NC program text must be str, got {type(text).__name__}",
                              source=source)
-    if integer_input not in INTEGER_INPUTS:
-        raise NCProgramError(f"integer_input must be one of {INTEGER_INPUTS}, got "
-                             f"{integer_input!r}", source=source, key="integer_input")
-    offsets = work_offsets_si(work_offsets, source=source)
-    state = _State()
-    moves: list[Move] = []
-    for line, raw in enumerate(text.split("\n"), start=1):
-        words = _tokenize(raw, source, line)
-        if not words:
-            continue
-        if state.end is not None:
-            raise NCProgramError(
-                f"block after the program end {state.end[1]} on line {state.end[0]}; blocks "
-                "after M02/M30 are refused",
-                source=source,
-                line=line,
-                column=words[0].column,
-                key=words[0].key,
-            )
-        state.blocks += 1
-        move = _Block(words, state, offsets, integer_input, source, line).run()
-        if move is not None:
-            moves.append(move)
-    return Program(tuple(moves), state.number, source, offsets)
+    return _parse(text.encode("utf-8", "surrogatepass"), "surrogatepass", source,
+                  work_offsets, integer_input, tools, chord_tolerance, fast)
 
 
 def read_program(path: str | os.PathLike, **kwargs) -> Program:
-    """Read an NC program file (keyword arguments as `parse_program`; source is the path)."""
-    with open(path, encoding="utf-8", errors="replace", newline="") as file:
-        text = file.read()
-    return parse_program(text, os.fspath(path), **kwargs)
+    """Read an NC program file (keyword arguments as `parse_program`; source is the path).
+
+    Bytes that are not UTF-8 read as U+FFFD and are refused where they stand.
+    """
+    source = os.fspath(path)
+    check_readable_file(path, "NC program")
+    try:
+        with open(path, "rb") as file:
+            data = file.read()
+    except OSError as exc:
+        raise NCProgramError(f"cannot read the NC program: {exc.strerror or exc}",
+                             source=source) from None
+    return _parse(data, "replace", source, kwargs.pop("work_offsets", None),
+                  kwargs.pop("integer_input", "calculator"), kwargs.pop("tools", None),
+                  kwargs.pop("chord_tolerance", ARC_CHORD_M), kwargs.pop("fast", True),
+                  **kwargs)
 
 
-def _tokenize(raw: str, source: str, line: int) -> list[_Word]:
-    """Words of one line; comments, blanks and a lone '%' give no words."""
-    words: list[_Word] = []
-    percent = False
-    i, n = 0, len(raw)
-
-    def fail(message: str, column: int, key: str) -> NCProgramError:
-        return NCProgramError(message, source=source, line=line, column=column, key=key)
-
-    while i < n:
-        c = raw[i]
-        if c in _BLANK:
-            i += 1
-        elif c == "(":
-            close = raw.find(")", i + 1)
-            if close < 0:
-                raise fail("comment '(' is not closed on its line", i + 1, "(")
-            i = close + 1
-        elif c == ";":
-            break
-        elif c == ")":
-            raise fail("')' without an opening '('", i + 1, ")")
-        elif c == "%" or percent:
-            if words or percent:
-                raise fail("'%' must stand alone on its line (comments aside)", i + 1, c)
-            percent = True
-            i += 1
-        elif c in _LETTERS:
-            start = i
-            i += 1
-            while i < n and raw[i] in _BLANK:
-                i += 1
-            match = _NUMBER.match(raw, i)
-            end = match.end() if match else i
-            if match is None or (end < n and raw[end] in "0123456789.+-"):
-                tail = raw[i:_end_of_garbage(raw, i)]
-                raise fail(
-                    f"malformed number {tail!r} after {c.upper()!r}; expected digits with an "
-                    f"optional sign and decimal point, e.g. {c.upper()}-12.5",
-                    start + 1,
-                    c.upper() + tail,
-                )
-            words.append(_Word(c.upper(), match.group(), start + 1))
-            i = end
-        elif c in "0123456789+-.":
-            tail = raw[i:_end_of_garbage(raw, i)]
-            raise fail(f"number {tail!r} without an address letter", i + 1, tail)
-        else:
-            raise fail(
-                f"unexpected character {c!r}; expected words (a letter and a number), "
-                "'(comment)', ';comment' or a lone '%'",
-                i + 1,
-                c,
-            )
-    return words
+def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, tools,
+           chord_tolerance, fast, **unknown) -> Program:
+    if unknown:
+        raise NCProgramError(f"unknown keyword argument(s) {sorted(unknown)}; expected "
+                             "work_offsets, integer_input, tools, chord_tolerance, fast",
+                             source=source)
+    if integer_input not in INTEGER_INPUTS:
+        raise NCProgramError(f"integer_input must be one of {INTEGER_INPUTS}, got "
+                             f"{integer_input!r}", source=source, key="integer_input")
+    try:
+        tolerance = float(chord_tolerance)
+    except (TypeError, ValueError):
+        tolerance = math.nan
+    if not tolerance > 0.0 or not math.isfinite(tolerance):
+        raise NCProgramError(f"chord_tolerance must be a length > 0 (m), got "
+                             f"{chord_tolerance!r}", source=source, key="chord_tolerance")
+    offsets = work_offsets_si(work_offsets, source=source)
+    reader = Reader(data, errors, source, offsets, integer_input, tool_table(tools),
+                     tolerance, fast)
+    return reader.read()
 
 
-def _end_of_garbage(raw: str, i: int) -> int:
-    while i < len(raw) and raw[i] not in _BLANK and raw[i] not in _LETTERS and raw[i] not in "(;":
-        i += 1
-    return i
+class Reader:
+    """Both passes over one file: the layout, then the main program's run."""
 
-
-class _Block:
-    """One block: checks its words, updates the modal state and returns its move."""
-
-    def __init__(self, words: list[_Word], state: _State, offsets: Mapping,
-                 integer_input: str, source: str, line: int) -> None:
-        self.words = words
-        self.state = state
-        self.offsets = offsets
-        self.increment = integer_input == "increment"
+    def __init__(self, data: bytes, errors: str, source: str, offsets, integer_input: str,
+                 tools: ToolTable | None, chord_tolerance: float, fast: bool) -> None:
+        self.data = data
+        self.errors = errors
         self.source = source
-        self.line = line
+        self.offsets = offsets
+        self.integer_input = integer_input
+        self.increment = integer_input == "increment"
+        self.tools = tools
+        self.chord_tolerance = chord_tolerance
+        self.fast = fast
+        self.scan = fastscan.scan(data)
+        self.problems = _Problems()
+        self.state = _State()
+        self.out = _Output()
+        self.states: dict[str, int] = {}
+        self.cache: dict[int, list[Word] | None] = {}
+        n = self.scan.simple.size
+        # the end of the run of simple lines each line is in (itself when not simple)
+        index = np.where(self.scan.simple, n, np.arange(n))
+        self.run_end = np.minimum.accumulate(index[::-1])[::-1]
 
-    def fail(self, message: str, word: _Word) -> NCProgramError:
-        return NCProgramError(message, source=self.source, line=self.line,
-                              column=word.column, key=word.key)
+    def fail(self, message: str, line: int, word: Word | None = None) -> NCProgramError:
+        return NCProgramError(message, source=self.source, line=line,
+                              column=None if word is None else word.column,
+                              key=None if word is None else word.key)
 
-    def run(self) -> Move | None:
+    def text(self, i: int) -> str:
+        return self.data[self.scan.starts[i]:self.scan.ends[i]].decode("utf-8", self.errors)
+
+    def words(self, i: int, cache: bool = False) -> list[Word] | None:
+        """The words of line i (0-based); None when the line has malformed words."""
+        if i in self.cache:
+            return self.cache[i]
+        words, problems = tokenize(self.text(i), self.source, i + 1)
+        for problem in problems:
+            self.problems.add(problem)
+        result = None if problems else words
+        if cache:
+            self.cache[i] = result
+        return result
+
+    def note(self, key: str, line: int) -> None:
+        self.states.setdefault(key, line)
+
+    # --- the whole program
+
+    def read(self) -> Program:
+        self.layout = Layout(self)
+        self.run(self.layout.main_first, self.layout.main_stop, 0)
+        self.problems.raise_all(self.source)
+        targets, kinds, feeds, dwells, lines, spindles, blocks = self.out.arrays()
+        return Program._from_parts(
+            targets, kinds, feeds, dwells, lines, spindles, blocks, self.out.m_codes,
+            number=self.state.number, source=self.source, work_offsets=self.offsets,
+            states=self.states, integer_input=self.integer_input)
+
+    def run(self, first: int, stop: int, depth: int) -> None:
+        """Run lines [first, stop) (0-based); stops at M99 in a subprogram."""
+        scan = self.scan
         state = self.state
-        single: dict[str, _Word] = {}
-        g_codes: dict[str, tuple[str, _Word]] = {}
-        m_codes: list[int] = []
-        for word in self.words:
-            if word.letter not in _READ_LETTERS:
-                hint = (" (arc words belong to G02/G03, which are not supported)"
-                        if word.letter in _ARC_LETTERS else "")
-                raise self.fail(f"unknown word letter {word.letter!r}{hint}; machinesim reads "
-                                "N O G M S F P X Y Z A B C", word)
-            if word.letter == "G":
-                self.g_code(word, g_codes)
-            elif word.letter == "M":
-                m_codes.append(self.integer(word, "M code"))
-            elif word.letter in single:
-                first = single[word.letter]
-                kind = "axis word" if word.letter in AXES else "word"
-                raise self.fail(f"{kind} {word.letter} appears twice in one block (first as "
-                                f"{first.key} at column {first.column})", word)
-            else:
-                single[word.letter] = word
-        if "O" in single:
-            self.program_number(single["O"])
-            return None
-        self.apply_modal(g_codes)
-        block_number = self.integer(single["N"], "block number") if "N" in single else None
-        if "F" in single:
-            feed = self.real(single["F"])
-            if feed <= 0.0:
-                raise self.fail(f"feed must be > 0, got {single['F'].key}", single["F"])
-            state.feed = self.finite(feed * self.length_unit() / 60.0, single["F"])
-        if "S" in single:
-            spindle = self.real(single["S"])
-            if spindle < 0.0:
-                raise self.fail(f"spindle speed must be >= 0, got {single['S'].key}",
-                                single["S"])
-            state.spindle = spindle
-        motion = g_codes.get("motion")
-        if "P" in single and (motion is None or motion[0] != "G04"):
-            raise self.fail("word P is only read with G04 (dwell time in milliseconds)",
-                            single["P"])
-        ends = [m for m in m_codes if m in PROGRAM_END]
-        if ends:
-            state.end = (self.line, f"M{ends[0]:02d}")
-        axes = [single[a] for a in AXES if a in single]
-        if motion is not None and motion[0] == "G04":
-            return self.dwell(motion[1], single, axes, block_number, m_codes)
-        if motion is not None:
-            state.motion = _MOTION_KINDS[motion[0]]
-        if axes:
-            return self.motion(axes, block_number, m_codes)
-        if any(m not in PROGRAM_END for m in m_codes):
-            return self.move("dwell", 0.0, block_number, m_codes)
-        return None
+        i = first
+        slow_until = first
+        while i < stop:
+            if len(self.problems) >= MAX_PROBLEMS:
+                return
+            if scan.simple[i]:
+                if scan.empty[i]:
+                    i += 1
+                    continue
+                j = min(int(self.run_end[i]), stop)
+                if (self.fast and i >= slow_until and j - i >= FAST_MIN_LINES
+                        and self.fast_state()):
+                    if state.end is None and self.fast_run(i, j):
+                        i = j
+                        continue
+                    slow_until = j
+            words = self.words(i, cache=depth > 0)
+            if words is None or not words:
+                i += 1
+                continue
+            if state.end is not None and depth == 0:
+                self.problems.add(self.fail(
+                    f"block after the program end {state.end[1]} on line {state.end[0]}; "
+                    "blocks after M02/M30 are refused (subprograms start with their O "
+                    "number)", i + 1, words[0]))
+                return
+            if i in self.layout.skip:
+                pass
+            elif i == self.layout.first_block and any(w.letter == "O" for w in words):
+                self.program_number(words, i + 1)
+            elif Block(self, words, i + 1, depth).run() == "return":
+                return
+            i += 1
 
-    def g_code(self, word: _Word, g_codes: dict[str, tuple[str, _Word]]) -> None:
-        text = word.text
-        if text[0] in "+-":
-            raise self.fail(f"G code {word.key} has a sign; expected e.g. G01", word)
-        if "." in text or len(text) > MAX_INTEGER_DIGITS:
-            name = word.key
-        else:
-            name = f"G{int(text):02d}"
-        if name in _G_REFUSED:
-            raise self.fail(_G_REFUSED[name], word)
-        group = _G_GROUPS.get(name)
-        if group is None:
-            raise self.fail(f"unknown G code {name}; machinesim reads "
-                            f"{' '.join(sorted(set(_G_GROUPS)))}", word)
-        if group in g_codes:
-            first = g_codes[group][0]
-            what = "two motion G-codes" if group == "motion" else f"two {group} G-codes"
-            raise self.fail(f"{what} in one block: {first} and {name}", word)
-        g_codes[group] = (name, word)
-
-    def apply_modal(self, g_codes: dict[str, tuple[str, _Word]]) -> None:
+    def fast_state(self) -> bool:
         state = self.state
-        if "units" in g_codes:
-            state.inch = g_codes["units"][0] == "G20"
-        if "distance" in g_codes:
-            state.incremental = g_codes["distance"][0] == "G91"
-        if "plane" in g_codes:
-            state.plane = g_codes["plane"][0]
-        if "work offset" in g_codes:
-            state.work_offset = g_codes["work offset"][0]
+        return (not state.incremental and state.cycle is None
+                and state.motion in (None, "G00", "G01"))
 
-    def program_number(self, word: _Word) -> None:
-        others = [w for w in self.words if w is not word]
-        if others:
-            raise self.fail(f"the O number must stand alone in its block, found "
-                            f"{others[0].key} with it", others[0])
-        if self.state.blocks != 1:
-            raise self.fail("the O number must be the first block of the program", word)
-        self.state.number = self.integer(word, "program number")
-
-    def dwell(self, g04: _Word, single: dict[str, _Word], axes: list[_Word],
-              block_number: int | None, m_codes: list[int]) -> Move:
-        for word in axes:
-            if word.letter != "X":
-                raise self.fail(f"axis word {word.letter} in a dwell block; G04 takes only "
-                                "P<milliseconds> or X<seconds>", word)
-        if "P" in single and "X" in single:
-            raise self.fail("G04 takes one dwell time, got both P and X", single["X"])
-        if "P" in single:
-            word = single["P"]
-            if "." in word.text:
-                raise self.fail(f"G04 P takes integer milliseconds, got {word.key}; use "
-                                "G04 X<seconds> for fractions", word)
-            dwell_s = self.integer(word, "dwell time") / 1000.0
-        elif "X" in single:
-            word = single["X"]
-            dwell_s = self.real(word)
-            if self.increment and "." not in word.text:
-                dwell_s /= 1000.0
-            if dwell_s < 0.0:
-                raise self.fail(f"dwell time must be >= 0, got {word.key}", word)
-        else:
-            raise self.fail("dwell without time: G04 needs P<milliseconds> or X<seconds>", g04)
-        return self.move("dwell", dwell_s, block_number, m_codes)
-
-    def motion(self, axes: list[_Word], block_number: int | None,
-               m_codes: list[int]) -> Move:
+    def fast_run(self, i: int, j: int) -> bool:
+        """Apply simple lines [i, j) at once; False (nothing done) when any needs the slow
+        path's judgement (an error, a move before any motion mode)."""
         state = self.state
-        if state.motion is None:
-            raise self.fail(f"axis word {axes[0].letter} without a motion mode; give G00 or "
-                            "G01 first", axes[0])
+        values = self.scan.values[:, i:j]
+        point = self.scan.point[:, i:j]
+        col = fastscan.COLUMN
+        length_unit = M_PER_INCH if state.inch else M_PER_MM
         offset = self.offsets.get(state.work_offset, {})
-        for word in axes:
-            value = self.real(word) * self.axis_unit(word)
-            if state.incremental:
-                if word.letter not in state.target:
-                    raise self.fail(
-                        f"incremental (G91) move on axis {word.letter} before its position is "
-                        "known; give an absolute (G90) value first",
-                        word,
-                    )
-                value += state.target[word.letter]
+        tlo = self.tool_length()
+        present = [~np.isnan(values[col[letter]]) for letter in AXES]
+        moves = present[0].copy()
+        for given in present[1:]:
+            moves |= given
+        rows = np.flatnonzero(moves)
+        n = rows.size
+        if self.out.count + n > MAX_MOVES:
+            return False
+        targets = np.empty((n, len(AXES)))
+        for k, letter in enumerate(AXES):
+            given = present[k]
+            if not given.any():
+                targets[:, k] = state.target.get(letter, math.nan)
+                continue
+            unit = RAD_PER_DEG if letter in ROTARY_AXES else length_unit
+            if self.increment:
+                small = INCREMENT_RAD if letter in ROTARY_AXES else (
+                    INCREMENT_INCH_M if state.inch else INCREMENT_M)
+                machine = values[col[letter]] * np.where(point[col[letter]], unit, small)
             else:
-                value += offset.get(word.letter, 0.0)
-            state.target[word.letter] = self.finite(value, word)
-        return self.move(state.motion, 0.0, block_number, m_codes)
+                machine = values[col[letter]] * unit
+            machine += offset.get(letter, 0.0)
+            if letter == "Z":
+                machine += tlo
+            if np.isinf(machine).any():
+                return False
+            if np.array_equal(given, moves):  # on every move: no fill needed
+                targets[:, k] = machine[rows]
+            else:
+                targets[:, k] = _fill(machine, given, state.target.get(letter, math.nan), rows)
+        g = values[col["G"]]
+        start = {None: math.nan, "G00": 0.0, "G01": 1.0}[state.motion]
+        has_g = ~np.isnan(g)
+        motion = _fill(g, has_g, start, None) if has_g.any() else np.full(j - i, start)
+        if state.motion is None and np.isnan(motion[rows]).any():
+            return False
+        f = values[col["F"]]
+        has_f = ~np.isnan(f)
+        feed_before = math.nan if state.feed is None else state.feed
+        if has_f.any():
+            feed = f * length_unit / 60.0
+            if np.isinf(feed).any():
+                return False
+            feed = _fill(feed, has_f, feed_before, None)
+        else:
+            feed = np.full(j - i, feed_before)
+        kinds = motion[rows].astype(np.int8)
+        feeds = np.where(kinds == KIND_LINEAR, feed[rows], math.nan)
+        numbers = values[col["N"], rows]
+        blocks = np.where(np.isnan(numbers), -1, numbers).astype(np.int64)
+        spindle = math.nan if state.spindle is None else state.spindle
+        self.out.add_arrays(targets, kinds, feeds, np.zeros(n), rows + (i + 1),
+                            np.full(n, spindle), blocks)
+        if n:
+            state.target = {a: float(v) for a, v in zip(AXES, targets[-1].tolist(), strict=True)
+                            if v == v}
+        if not np.isnan(motion[-1]):
+            state.motion = ("G00", "G01")[int(motion[-1])]
+        if not np.isnan(feed[-1]):
+            state.feed = float(feed[-1])
+        return True
 
-    def move(self, kind: str, dwell_s: float, block_number: int | None,
-             m_codes: list[int]) -> Move:
+    def tool_length(self) -> float:
+        """The tool length offset added to absolute Z words now, m."""
         state = self.state
-        return Move(kind, dict(state.target), state.feed if kind == "linear" else None,
-                    dwell_s, self.line, block_number, state.spindle, tuple(m_codes))
+        if state.length_mode == "G49" or state.h == 0 or self.tools is None:
+            return 0.0
+        length = self.tools.length(state.h)
+        return length if state.length_mode == "G43" else -length
 
-    def length_unit(self) -> float:
-        return M_PER_INCH if self.state.inch else M_PER_MM
+    def program_number(self, words: list[Word], line: int) -> None:
+        word = next(w for w in words if w.letter == "O")
+        others = [w for w in words if w is not word]
+        if others:
+            self.problems.add(self.fail(f"the O number must stand alone in its block, found "
+                                        f"{others[0].key} with it", line, others[0]))
+            return
+        number = integer(word)
+        if number is None:
+            self.problems.add(self.fail(f"program number must be an unsigned integer of at "
+                                        f"most {MAX_INTEGER_DIGITS} digits, got {word.key}",
+                                        line, word))
+            return
+        self.state.number = number
 
-    def axis_unit(self, word: _Word) -> float:
-        rotary = word.letter in ROTARY_AXES
-        if self.increment and "." not in word.text:
-            if rotary:
-                return INCREMENT_RAD
-            return INCREMENT_INCH_M if self.state.inch else INCREMENT_M
-        return RAD_PER_DEG if rotary else self.length_unit()
+    def call(self, number: int, repeats: int, depth: int, line: int, word: Word) -> None:
+        sub = self.layout.subprograms.get(number)
+        if sub is None:
+            have = " ".join(f"O{n:04d}" for n in self.layout.subprograms) or "none"
+            raise self.fail(f"M98 calls O{number:04d}, which is not in this file "
+                            f"(subprograms: {have})", line, word)
+        if depth + 1 > MAX_SUBPROGRAM_DEPTH:
+            raise self.fail(f"subprograms nest deeper than {MAX_SUBPROGRAM_DEPTH} levels",
+                            line, word)
+        if sub.ret is None:
+            return  # the layout has refused it already
+        for _ in range(repeats):
+            self.run(sub.first, sub.stop, depth + 1)
 
-    def real(self, word: _Word) -> float:
-        return self.finite(float(word.text), word)
 
-    def finite(self, value: float, word: _Word) -> float:
-        if not math.isfinite(value):
-            raise self.fail(f"value of {word.key} is out of range (not finite in float64)",
-                            word)
-        return value
+def _fill(values: np.ndarray, given: np.ndarray, initial: float,
+          rows: np.ndarray | None) -> np.ndarray:
+    """Forward fill of ``values`` where ``given``, starting from ``initial``; at ``rows``.
 
-    def integer(self, word: _Word, what: str) -> int:
-        text = word.text
-        if not text.isdigit() or len(text) > MAX_INTEGER_DIGITS:
-            raise self.fail(f"{what} must be an unsigned integer of at most "
-                            f"{MAX_INTEGER_DIGITS} digits, got {word.key}", word)
-        return int(text)
+    Modal words are either rare (G, F: a few lines of a point list) or on nearly every line
+    (the axes): both have a path that touches only the exceptions.
+    """
+    n = values.size
+    count = int(np.count_nonzero(given))
+    if count == 0:
+        filled = np.full(n, initial)
+    elif count <= n // 8:
+        where = np.flatnonzero(given)
+        filled = np.empty(n)
+        filled[:where[0]] = initial
+        filled[where[0]:] = np.repeat(values[where], np.diff(np.append(where, n)))
+    elif n - count <= n // 8:
+        filled = values.copy()
+        gaps = np.flatnonzero(~given)
+        first = np.flatnonzero(np.diff(gaps, prepend=-2) != 1)  # gap runs, by first index
+        source = np.repeat(gaps[first] - 1, np.diff(np.append(first, gaps.size)))
+        filled[gaps] = np.where(source >= 0, values[np.maximum(source, 0)], initial)
+    else:
+        index = np.where(given, np.arange(n), -1)
+        np.maximum.accumulate(index, out=index)
+        filled = np.where(index >= 0, np.take(values, np.maximum(index, 0)), initial)
+    return filled if rows is None else filled[rows]
+
+
+__all__ = ["INCREMENT_INCH_M", "INCREMENT_M", "INCREMENT_RAD", "MAX_BLOCK_RUNS",
+           "MAX_INTEGER_DIGITS", "MAX_MOVES", "MAX_SUBPROGRAM_DEPTH", "M_PER_INCH",
+           "parse_program", "read_program"]

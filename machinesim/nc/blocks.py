@@ -1,0 +1,540 @@
+"""One block of NC: its words checked, the modal state updated, its moves emitted.
+
+Internal to the reader (`machinesim.nc.parser`); arcs and canned cycles come from
+`machinesim.nc.arcs` and `machinesim.nc.cycles`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from machinesim.exceptions import NCProgramError
+from machinesim.nc.arcs import PLANES, arc_points
+from machinesim.nc.cycles import drill_steps
+from machinesim.nc.lexer import Word
+from machinesim.nc.program import AXES, KIND_LINEAR, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
+from machinesim.nc.words import (
+    ARC,
+    G_GROUPS,
+    G_REFUSED,
+    INCREMENT_INCH_M,
+    INCREMENT_M,
+    INCREMENT_RAD,
+    M99_IN_MAIN,
+    M_PER_INCH,
+    MAX_INTEGER_DIGITS,
+    MAX_MOVES,
+    MOTION,
+    NON_MOVING,
+    SINGLE,
+    call_of,
+    g_name,
+    integer,
+)
+from machinesim.units import M_PER_MM, RAD_PER_DEG
+
+if TYPE_CHECKING:
+    from machinesim.nc.parser import Reader
+
+
+class Block:
+    """One block: checks its words, updates the modal state and emits its moves."""
+
+    def __init__(self, reader: Reader, words: list[Word], line: int, depth: int) -> None:
+        self.reader = reader
+        self.words = words
+        self.state = reader.state
+        self.offsets = reader.offsets
+        self.increment = reader.increment
+        self.source = reader.source
+        self.line = line
+        self.depth = depth
+        self.single: dict[str, Word] = {}
+        self.g_codes: dict[str, tuple[str, Word]] = {}
+        self.m_codes: list[tuple[int, Word]] = []
+
+    def fail(self, message: str, word: Word | None) -> NCProgramError:
+        return self.reader.fail(message, self.line, word)
+
+    def refuse(self, message: str, word: Word) -> None:
+        """Record a refused word; the block goes on without it."""
+        self.reader.problems.add(self.fail(message, word))
+
+    def run(self) -> str | None:
+        try:
+            return self._run()
+        except NCProgramError as error:
+            self.reader.problems.add(error)
+            return None
+        except KeyError as error:  # a tool the tool table lacks
+            self.reader.problems.add(self.fail(error.args[0], self.tool_word()))
+            self.state.h = 0
+            return None
+
+    def _run(self) -> str | None:
+        state = self.state
+        self.classify()
+        single, g = self.single, self.g_codes
+        if "O" in single:
+            raise self.fail("the O number must stand alone in the first block of the program "
+                            "or of a subprogram", single["O"])
+        self.apply_modal()
+        block_number = self.integer(single["N"], "block number") if "N" in single else None
+        self.feed_and_spindle()
+        self.tool_words()
+        motion = g.get("motion")
+        one_shot = g.get("one-shot")
+        if motion is not None and motion[0] == "G04" and one_shot is not None:
+            raise self.fail(f"G04 and {one_shot[0]} in one block; give each its own block",
+                            one_shot[1])
+        if motion is not None and motion[0] != "G04":
+            state.motion = motion[0]
+            if state.cycle is not None and "canned cycle" not in g:
+                state.cycle = None  # a motion code cancels the canned cycle
+        self.check_context(motion, one_shot)
+        codes = [code for code, _ in self.m_codes]
+        ends = [c for c in codes if c in PROGRAM_END]
+        first_move = self.reader.out.count
+        axes = [single[a] for a in AXES if a in single]
+        if motion is not None and motion[0] == "G04":
+            self.dwell(motion[1], axes, block_number)
+        elif one_shot is not None:
+            self.one_shot(one_shot, axes, block_number)
+        elif state.cycle is not None and any(k in single for k in "XYZR"):
+            self.drill(axes, block_number)
+        elif state.motion in ARC and (axes or any(k in single for k in "IJKR")):
+            self.arc(axes, block_number)
+        elif axes:
+            self.straight(axes, block_number)
+        passed = tuple(c for c in codes if c not in (98, 99))
+        out = self.reader.out
+        if out.count > first_move:
+            if passed:
+                out.m_codes[out.count - 1] = passed
+        elif any(c not in PROGRAM_END for c in passed):
+            self.add("dwell", 0.0, block_number)
+            out.m_codes[out.count - 1] = passed
+        if ends and self.depth == 0:  # in a subprogram, refused by the layout
+            state.end = (self.line, f"M{ends[0]:02d}")
+        if 98 in codes:
+            call = call_of(self.words)
+            m98 = dict((c, w) for c, w in self.m_codes)[98]
+            if isinstance(call, str) or call is None:
+                raise self.fail(call or "M98 needs P<program number>", m98)
+            self.reader.call(call[0], call[1], self.depth, self.line, m98)
+        if 99 in codes:
+            if self.depth == 0:
+                raise self.fail(M99_IN_MAIN, dict((c, w) for c, w in self.m_codes)[99])
+            return "return"
+        return None
+
+    # --- words
+
+    def classify(self) -> None:
+        for word in self.words:
+            letter = word.letter
+            if letter == "G":
+                self.g_code(word)
+            elif letter == "M":
+                code = integer(word)
+                if code is None:
+                    self.refuse(f"M code must be an unsigned integer of at most "
+                                f"{MAX_INTEGER_DIGITS} digits, got {word.key}", word)
+                else:
+                    self.m_codes.append((code, word))
+            elif letter not in SINGLE:
+                self.refuse(f"unknown word letter {letter!r}; machinesim reads "
+                            "N O G M S F P X Y Z A B C I J K R Q L H T D", word)
+            elif letter in self.single:
+                first = self.single[letter]
+                kind = "axis word" if letter in AXES else "word"
+                self.refuse(f"{kind} {letter} appears twice in one block (first as "
+                            f"{first.key} at column {first.column})", word)
+            else:
+                self.single[letter] = word
+
+    def g_code(self, word: Word) -> None:
+        if word.text[0] in "+-":
+            self.refuse(f"G code {word.key} has a sign; expected e.g. G01", word)
+            return
+        name = g_name(word)
+        if name in G_REFUSED:
+            self.refuse(G_REFUSED[name], word)
+            return
+        group = G_GROUPS.get(name)
+        if group is None:
+            self.refuse(f"unknown G code {name}; machinesim reads "
+                        f"{' '.join(sorted(G_GROUPS))}", word)
+            return
+        if group in self.g_codes:
+            first = self.g_codes[group][0]
+            what = "two motion G-codes" if group == "motion" else f"two {group} G-codes"
+            self.refuse(f"{what} in one block: {first} and {name}", word)
+            return
+        self.g_codes[group] = (name, word)
+
+    def apply_modal(self) -> None:
+        state, g, line = self.state, self.g_codes, self.line
+        if "units" in g:
+            state.inch = g["units"][0] == "G20"
+        if "distance" in g:
+            state.incremental = g["distance"][0] == "G91"
+        if "plane" in g:
+            state.plane = g["plane"][0]
+        if "work offset" in g:
+            state.work_offset = g["work offset"][0]
+        if "return level" in g:
+            state.retract = g["return level"][0]
+        for group in ("cutter compensation", "path mode"):
+            if group in g:
+                self.reader.note(g[group][0], line)
+        if "tool length" in g:
+            state.length_mode = g["tool length"][0]
+        if "canned cycle" in g:
+            name, word = g["canned cycle"]
+            if name == "G80":
+                self.reader.note("G80", line)
+                state.cycle = None
+            else:
+                if state.plane != "G17":
+                    raise self.fail(f"canned cycle {name} in {state.plane}: machinesim drills "
+                                    "along Z only (G17)", word)
+                if state.cycle is None:
+                    if "Z" not in state.target:
+                        raise self.fail(f"{name} starts a canned cycle but Z is not known "
+                                        "yet (the initial level); move Z first", word)
+                    state.initial_z = state.target["Z"]
+                    state.cycle_z = state.cycle_r = state.cycle_q = None
+                    state.cycle_p = 0.0
+                state.cycle = name
+
+    def feed_and_spindle(self) -> None:
+        state, single = self.state, self.single
+        if "F" in single:
+            feed = self.real(single["F"])
+            if feed <= 0.0:
+                raise self.fail(f"feed must be > 0, got {single['F'].key}", single["F"])
+            state.feed = self.finite(feed * self.length_unit() / 60.0, single["F"])
+        if "S" in single:
+            spindle = self.real(single["S"])
+            if spindle < 0.0:
+                raise self.fail(f"spindle speed must be >= 0, got {single['S'].key}",
+                                single["S"])
+            state.spindle = spindle
+
+    def tool_words(self) -> None:
+        state, single, reader = self.state, self.single, self.reader
+        for letter, what in (("T", "tool number"), ("D", "cutter radius offset number")):
+            if letter in single:
+                number = self.integer(single[letter], what)
+                reader.note(f"{letter}{number}", self.line)
+                if reader.tools is not None and number != 0 and number not in reader.tools.tools:
+                    raise self.fail(f"{letter}{number}: tool {number} is not in the tool "
+                                    f"table {reader.tools.source}", single[letter])
+        if "H" in single:
+            state.h = self.integer(single["H"], "tool length offset number")
+        if state.length_mode != "G49" and state.h != 0:
+            if reader.tools is None:
+                message = (f"{state.length_mode} H{state.h} needs the tool length: give a tool "
+                           "table (read_program(..., tools=...), CLI --tools)")
+                state.h = 0
+                raise self.fail(message, self.tool_word())
+            reader.tools.length(state.h)  # refuses a tool the table lacks
+
+    def tool_word(self) -> Word | None:
+        return self.single.get("H") or self.g_codes.get("tool length", (None, None))[1]
+
+    def check_context(self, motion, one_shot) -> None:
+        """Refuse P Q R I J K L where nothing reads them."""
+        state, single = self.state, self.single
+        codes = {code for code, _ in self.m_codes}
+        g04 = motion is not None and motion[0] == "G04"
+        shot = None if one_shot is None else one_shot[0]
+        cycle = state.cycle
+        arc = state.motion in ARC and cycle is None and one_shot is None and not g04
+        plane_words = PLANES[state.plane][1]
+        allowed = {
+            "P": g04 or cycle == "G82" or 98 in codes or shot == "G08",
+            "Q": cycle == "G83" or shot == "G05.1",
+            "R": arc or cycle is not None or shot == "G05.1",
+            "I": arc and "I" in plane_words,
+            "J": arc and "J" in plane_words,
+            "K": (arc and "K" in plane_words) or cycle is not None,
+            "L": 98 in codes,
+        }
+        reads = {
+            "P": "G04 (dwell, ms), G82 (dwell at the bottom), G08 (P1/P0) and M98 (program)",
+            "Q": "G83 (peck depth) and G05.1 (Q1/Q0)",
+            "R": "G02/G03 (radius), G81-G83 (R plane) and G05.1",
+            "I": f"G02/G03 in {state.plane} (centre words {' '.join(plane_words)})",
+            "J": f"G02/G03 in {state.plane} (centre words {' '.join(plane_words)})",
+            "K": f"G02/G03 in {state.plane} (centre words {' '.join(plane_words)}) and "
+                 "G81-G83 (repeats)",
+            "L": "M98 (repeat count)",
+        }
+        for letter, ok in allowed.items():
+            if letter in single and not ok:
+                self.refuse(f"word {letter} is only read with {reads[letter]}", single[letter])
+                del single[letter]
+
+    # --- moves
+
+    def add(self, kind: str, dwell_s: float, block_number: int | None) -> None:
+        out, state = self.reader.out, self.state
+        if out.count + 1 > MAX_MOVES:
+            raise self.fail(f"the program expands to more than {MAX_MOVES} moves",
+                            self.words[0])
+        out.add(MOVE_KINDS.index(kind), state.target,
+                state.feed if kind == "linear" else None, dwell_s, self.line, block_number,
+                state.spindle)
+
+    def reserve(self, n: int, word: Word) -> None:
+        if self.reader.out.count + n > MAX_MOVES:
+            raise self.fail(f"this block expands to {n} moves: the program would exceed "
+                            f"{MAX_MOVES} moves", word)
+
+    def machine(self, word: Word, *, machine_coordinates: bool = False) -> float:
+        """The machine value of one axis word (absolute or incremental, offsets applied)."""
+        state = self.state
+        letter = word.letter
+        value = self.real(word) * self.axis_unit(word)
+        if machine_coordinates:
+            return self.finite(value, word)
+        if state.incremental:
+            if letter not in state.target:
+                raise self.fail(
+                    f"incremental (G91) move on axis {letter} before its position is known; "
+                    "give an absolute (G90) value first",
+                    word,
+                )
+            value += state.target[letter]
+        else:
+            value += self.offsets.get(state.work_offset, {}).get(letter, 0.0)
+            if letter == "Z":
+                value += self.reader.tool_length()
+        return self.finite(value, word)
+
+    def straight(self, axes: list[Word], block_number: int | None) -> None:
+        state = self.state
+        if state.motion is None:
+            raise self.fail(f"axis word {axes[0].letter} without a motion mode; give G00 or "
+                            "G01 first", axes[0])
+        values = {word.letter: self.machine(word) for word in axes}
+        state.target.update(values)
+        self.add(MOTION[state.motion], 0.0, block_number)
+
+    def dwell(self, g04: Word, axes: list[Word], block_number: int | None) -> None:
+        single = self.single
+        for word in axes:
+            if word.letter != "X":
+                raise self.fail(f"axis word {word.letter} in a dwell block; G04 takes only "
+                                "P<milliseconds> or X<seconds>", word)
+        if "P" in single and "X" in single:
+            raise self.fail("G04 takes one dwell time, got both P and X", single["X"])
+        if "P" in single:
+            word = single["P"]
+            if "." in word.text:
+                raise self.fail(f"G04 P takes integer milliseconds, got {word.key}; use "
+                                "G04 X<seconds> for fractions", word)
+            dwell_s = self.integer(word, "dwell time") / 1000.0
+        elif "X" in single:
+            word = single["X"]
+            dwell_s = self.real(word)
+            if self.increment and "." not in word.text:
+                dwell_s /= 1000.0
+            if dwell_s < 0.0:
+                raise self.fail(f"dwell time must be >= 0, got {word.key}", word)
+        else:
+            raise self.fail("dwell without time: G04 needs P<milliseconds> or X<seconds>", g04)
+        self.add("dwell", dwell_s, block_number)
+
+    def one_shot(self, code: tuple[str, Word], axes: list[Word],
+                 block_number: int | None) -> None:
+        name, word = code
+        state, single = self.state, self.single
+        if name in NON_MOVING:
+            letter = "Q" if name == "G05.1" else "P"
+            extra = [w for w in self.words if w.letter not in ("N", "G", letter, "R")
+                     or (w.letter == "R" and name != "G05.1")]
+            if extra:
+                raise self.fail(f"{name} stands in a block of its own (with {letter}1 or "
+                                f"{letter}0), found {extra[0].key}", extra[0])
+            if letter not in single or single[letter].text not in ("0", "1"):
+                raise self.fail(f"{name} needs {letter}1 (on) or {letter}0 (off)", word)
+            key = f"{name} {single[letter].key}"
+            if "R" in single:
+                self.integer(single["R"], "AI contour precision level")
+                key += f" {single['R'].key}"
+            self.reader.note(key, self.line)
+            return
+        if not axes:
+            raise self.fail(f"{name} needs the axes it moves, e.g. {name} G91 Z0", word)
+        if name == "G53":
+            if state.incremental:
+                raise self.fail("G53 moves to machine coordinates, which are absolute; found "
+                                "under G91", word)
+            for axis in axes:
+                state.target[axis.letter] = self.machine(axis, machine_coordinates=True)
+            self.add("rapid", 0.0, block_number)
+            return
+        # G28: through the intermediate point to the reference (machine zero) of these axes.
+        # An incremental 0 on an axis whose position is not known yet (the CAM header's
+        # G28 G91 Z0) is the current position whatever it is: no intermediate move there.
+        here = [a for a in axes if not (state.incremental and a.letter not in state.target
+                                        and self.real(a) == 0.0)]
+        if here:
+            state.target.update({axis.letter: self.machine(axis) for axis in here})
+            self.add("rapid", 0.0, block_number)
+        for axis in axes:
+            state.target[axis.letter] = 0.0
+        self.add("rapid", 0.0, block_number)
+
+    def arc(self, axes: list[Word], block_number: int | None) -> None:
+        state, single, reader = self.state, self.single, self.reader
+        (u, v, normal), centre_letters = PLANES[state.plane]
+        word = next(iter(axes), None) or next(single[k] for k in "IJKR" if k in single)
+        g_word = self.g_codes.get("motion", (None, word))[1]
+        for letter in (u, v):
+            if letter not in state.target:
+                raise self.fail(f"the arc starts where {letter} is not known yet; move "
+                                f"{u} and {v} before {state.motion}", word)
+        start = dict(state.target)
+        end = dict(start)
+        end.update({axis.letter: self.machine(axis) for axis in axes})
+        given = [single[k] for k in centre_letters if k in single]
+        if "R" in single and given:
+            raise self.fail(f"an arc takes R or {' '.join(centre_letters)}, not both",
+                            single["R"])
+        if "R" not in single and not given:
+            raise self.fail(f"{state.motion} needs the centre ({' '.join(centre_letters)}) or "
+                            "the radius R", g_word)
+        try:
+            if "R" in single:
+                radius = self.real(single["R"]) * self.length_of(single["R"])
+                centre = None
+            else:
+                offsets = [self.real(single[k]) * self.length_of(single[k]) if k in single
+                           else 0.0 for k in centre_letters]
+                centre = (start[u] + offsets[0], start[v] + offsets[1])
+                radius = None
+            fractions, points, _, _ = arc_points(
+                (start[u], start[v]), (end[u], end[v]), clockwise=state.motion == "G02",
+                centre=centre, radius=radius, chord_tolerance=reader.chord_tolerance,
+                max_segments=MAX_MOVES - reader.out.count)
+        except NCProgramError as error:
+            located = single.get("R") or (given[0] if given else word)
+            raise self.fail(str(error), located) from None
+        n = fractions.size
+        self.reserve(n, word)
+        targets = np.empty((n, len(AXES)))
+        for k, letter in enumerate(AXES):
+            if letter == u:
+                targets[:, k] = points[:, 0]
+            elif letter == v:
+                targets[:, k] = points[:, 1]
+            elif letter in end:
+                a, b = start.get(letter, end[letter]), end[letter]
+                targets[:, k] = a + (b - a) * fractions
+                targets[-1, k] = b
+            else:
+                targets[:, k] = math.nan
+        state.target = end
+        feed = math.nan if state.feed is None else state.feed
+        spindle = math.nan if state.spindle is None else state.spindle
+        reader.out.add_arrays(targets, np.full(n, KIND_LINEAR, dtype=np.int8),
+                              np.full(n, feed), np.zeros(n), np.full(n, self.line, np.int64),
+                              np.full(n, spindle),
+                              np.full(n, -1 if block_number is None else block_number))
+
+    def drill(self, axes: list[Word], block_number: int | None) -> None:
+        state, single = self.state, self.single
+        cycle_word = self.g_codes.get("canned cycle", (None, next(iter(self.words))))[1]
+        for word in axes:
+            if word.letter not in "XYZ":
+                raise self.fail(f"axis word {word.letter} in a canned cycle block; a drilling "
+                                "cycle takes X Y Z R Q P K F", word)
+        if "R" in single:
+            r = self.real(single["R"]) * self.length_of(single["R"])
+            if state.incremental:
+                r += state.initial_z
+            else:
+                r += self.offsets.get(state.work_offset, {}).get("Z", 0.0)
+                r += self.reader.tool_length()
+            state.cycle_r = self.finite(r, single["R"])
+        if "Z" in single:
+            z = self.real(single["Z"]) * self.length_of(single["Z"])
+            if state.incremental:
+                if state.cycle_r is None:
+                    raise self.fail("an incremental hole depth Z counts from the R plane; "
+                                    "give R first", single["Z"])
+                z += state.cycle_r
+            else:
+                z += self.offsets.get(state.work_offset, {}).get("Z", 0.0)
+                z += self.reader.tool_length()
+            state.cycle_z = self.finite(z, single["Z"])
+        if "Q" in single:
+            state.cycle_q = abs(self.real(single["Q"]) * self.length_of(single["Q"]))
+        if "P" in single:
+            state.cycle_p = self.integer(single["P"], "dwell time") / 1000.0
+        repeats = self.integer(single["K"], "repeat count") if "K" in single else 1
+        if state.cycle_z is None or state.cycle_r is None:
+            raise self.fail(f"{state.cycle} needs the hole bottom Z and the R plane R",
+                            cycle_word)
+        return_z = state.initial_z if state.retract == "G98" else state.cycle_r
+        try:
+            steps = drill_steps(state.cycle, r_z=state.cycle_r, bottom_z=state.cycle_z,
+                                return_z=return_z, peck=state.cycle_q, dwell_s=state.cycle_p,
+                                max_steps=MAX_MOVES - self.reader.out.count)
+        except NCProgramError as error:
+            word = next((single[k] for k in "ZRQ" if k in single), cycle_word)
+            raise self.fail(str(error), word) from None
+        self.reserve(repeats * (len(steps) + 1), cycle_word)
+        plane = [w for w in axes if w.letter in "XY"]
+        for _ in range(repeats):
+            if plane or repeats > 1:
+                state.target.update({w.letter: self.machine(w) for w in plane})
+            self.add("rapid", 0.0, block_number)
+            for kind, value in steps:
+                if kind == "dwell":
+                    self.add("dwell", value, block_number)
+                else:
+                    state.target["Z"] = value
+                    self.add(kind, 0.0, block_number)
+
+    # --- numbers
+
+    def length_unit(self) -> float:
+        return M_PER_INCH if self.state.inch else M_PER_MM
+
+    def length_of(self, word: Word) -> float:
+        """Metres per unit of a length word that is not an axis (I J K R Q)."""
+        if self.increment and "." not in word.text:
+            return INCREMENT_INCH_M if self.state.inch else INCREMENT_M
+        return self.length_unit()
+
+    def axis_unit(self, word: Word) -> float:
+        rotary = word.letter in ROTARY_AXES
+        if self.increment and "." not in word.text:
+            if rotary:
+                return INCREMENT_RAD
+            return INCREMENT_INCH_M if self.state.inch else INCREMENT_M
+        return RAD_PER_DEG if rotary else self.length_unit()
+
+    def real(self, word: Word) -> float:
+        return self.finite(float(word.text), word)
+
+    def finite(self, value: float, word: Word) -> float:
+        if not math.isfinite(value):
+            raise self.fail(f"value of {word.key} is out of range (not finite in float64)",
+                            word)
+        return value
+
+    def integer(self, word: Word, what: str) -> int:
+        number = integer(word)
+        if number is None:
+            raise self.fail(f"{what} must be an unsigned integer of at most "
+                            f"{MAX_INTEGER_DIGITS} digits, got {word.key}", word)
+        return number

@@ -1,0 +1,166 @@
+"""The tool table: tool lengths (G43/G44 H words) and radii (D words) by tool number.
+
+A TOML file with one table per tool, units in the keys::
+
+    [tool.1]
+    length_mm = 50.0      # tool length offset, read by H1 under G43/G44
+    radius_mm = 0.5       # tool radius, the D1 register (only listed: G41/G42 are refused)
+    name = "R0.5 ball end mill"   # optional
+
+    [tool.2]
+    length_um = 48012.5   # any length unit machinesim reads: m, mm, um, nm
+
+H and D numbers are the tool numbers (``H1`` reads ``[tool.1]``), as CAM posts write them;
+``H0`` and ``D0`` are zero by definition. A tool may give only a length or only a radius.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from machinesim._io import check_readable_file
+from machinesim.exceptions import NCProgramError
+from machinesim.nc.program import FrozenMapping
+from machinesim.units import LENGTH
+
+#: Largest tool number read: 8 digits, as FANUC's T words (H and D registers are fewer).
+MAX_TOOL_NUMBER = 99999999
+
+
+@dataclass(frozen=True)
+class Tool:
+    """One tool's offsets, SI.
+
+    Attributes
+    ----------
+    length_m : float or None
+        Tool length offset, m (None: not given).
+    radius_m : float or None
+        Tool radius, m (None: not given).
+    name : str
+    """
+
+    length_m: float | None = None
+    radius_m: float | None = None
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class ToolTable:
+    """Tools by number, read from TOML (`from_toml`) or a dict (`from_dict`)."""
+
+    tools: Mapping[int, Tool]
+    source: str = "<tools>"
+
+    @classmethod
+    def from_toml(cls, path: str | os.PathLike) -> ToolTable:
+        """Read a tool table file (layout in the module docstring)."""
+        path = check_readable_file(path, "tool table")
+        try:
+            data = tomllib.loads(Path(path).read_bytes().decode("utf-8"))
+        except OSError as exc:
+            raise NCProgramError(f"cannot read the tool table: {exc.strerror or exc}",
+                                 source=str(path)) from None
+        except UnicodeDecodeError as exc:
+            raise NCProgramError(f"the tool table is not UTF-8 text ({exc.reason} at byte "
+                                 f"{exc.start})", source=str(path)) from None
+        except tomllib.TOMLDecodeError as exc:
+            raise NCProgramError(f"not valid TOML: {exc}", source=str(path)) from None
+        return cls.from_dict(data, source=str(path))
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], *, source: str = "<tools>") -> ToolTable:
+        """A tool table from ``{"tool": {"1": {"length_mm": 50.0}, ...}}``."""
+        if not isinstance(data, Mapping) or set(data) - {"tool"}:
+            extra = sorted(set(data) - {"tool"}) if isinstance(data, Mapping) else data
+            raise NCProgramError(f"a tool table has only [tool.<number>] tables, got {extra!r}",
+                                 source=source, key="tool")
+        tables = data.get("tool", {})
+        if not isinstance(tables, Mapping):
+            raise NCProgramError("'tool' must be tables [tool.<number>]", source=source,
+                                 key="tool")
+        tools = []
+        for name, entry in tables.items():
+            key = f"tool.{name}"
+            text = str(name)
+            if not text.isdigit() or int(text) > MAX_TOOL_NUMBER:
+                raise NCProgramError(f"tool number must be an unsigned integer up to "
+                                     f"{MAX_TOOL_NUMBER}, got {text!r}", source=source, key=key)
+            if not isinstance(entry, Mapping):
+                raise NCProgramError(f"[{key}] must be a table, got {entry!r}", source=source,
+                                     key=key)
+            tools.append((int(text), _tool(entry, source, key)))
+        numbers = [n for n, _ in tools]
+        if len(set(numbers)) != len(numbers):
+            raise NCProgramError("a tool number is given twice (e.g. [tool.1] and [tool.01])",
+                                 source=source, key="tool")
+        return cls(FrozenMapping(sorted(tools)), source)
+
+    def length(self, number: int) -> float:
+        """Length offset of tool ``number``, m (0 for H0)."""
+        return self._value(number, "length")
+
+    def radius(self, number: int) -> float:
+        """Radius of tool ``number``, m (0 for D0)."""
+        return self._value(number, "radius")
+
+    def _value(self, number: int, what: str) -> float:
+        if number == 0:
+            return 0.0
+        tool = self.tools.get(number)
+        value = None if tool is None else getattr(tool, f"{what}_m")
+        if value is None:
+            have = " ".join(str(n) for n in self.tools) or "none"
+            raise KeyError(f"the tool table {self.source} has no {what} for tool {number} "
+                           f"(tools: {have})")
+        return value
+
+
+def _tool(entry: Mapping[str, Any], source: str, key: str) -> Tool:
+    values: dict[str, float] = {}
+    name = ""
+    for field, value in entry.items():
+        where = {"source": source, "key": f"{key}.{field}"}
+        if field == "name":
+            if not isinstance(value, str):
+                raise NCProgramError(f"name must be a string, got {value!r}", **where)
+            name = value
+            continue
+        what, _, unit = field.rpartition("_")
+        if what not in ("length", "radius"):
+            raise NCProgramError(f"unknown key {field!r}; a tool has length_<unit>, "
+                                 "radius_<unit> and name", **where)
+        if unit not in LENGTH:
+            raise NCProgramError(f"unknown length unit {unit!r} in {field!r}; expected one "
+                                 f"of {', '.join(LENGTH)}", **where)
+        if what in values:
+            raise NCProgramError(f"{what} is given twice", **where)
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(
+                value):
+            raise NCProgramError(f"{field} must be a finite number, got {value!r}", **where)
+        si = float(value) * LENGTH[unit]
+        if what == "radius" and si < 0.0:
+            raise NCProgramError(f"{field} must be >= 0, got {value!r}", **where)
+        if abs(si) > 10.0:
+            raise NCProgramError(f"{field} = {value!r} is beyond 10 m; expected a tool "
+                                 "offset", **where)
+        values[what] = si
+    return Tool(values.get("length"), values.get("radius"), name)
+
+
+def tool_table(tools: Any) -> ToolTable | None:
+    """``tools`` as a ToolTable: None, a ToolTable, a path to TOML, or a dict."""
+    if tools is None or isinstance(tools, ToolTable):
+        return tools
+    if isinstance(tools, str | os.PathLike):
+        return ToolTable.from_toml(tools)
+    if isinstance(tools, Mapping):
+        return ToolTable.from_dict(tools)
+    raise NCProgramError(f"tools must be a tool table path, a dict or a ToolTable, got "
+                         f"{type(tools).__name__}", key="tools")

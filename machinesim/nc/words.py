@@ -1,0 +1,104 @@
+"""The words and codes of the dialect: limits, G-code groups, integer words, M98 calls.
+
+Internal to the reader (`machinesim.nc.parser`); the rules are in `machinesim.nc` and
+docs/nc.md.
+"""
+
+from __future__ import annotations
+
+from machinesim.nc.lexer import Word
+from machinesim.units import RAD_PER_DEG
+
+#: One inch in metres (exact by definition).
+M_PER_INCH = 0.0254
+#: Least input increments of the "increment" integer-input rule: 1 nm and 0.00001 deg as the
+#: machines of the seeds resolve; 0.0000001 inch is the inch increment of that (nano) system.
+INCREMENT_M = 1e-9
+INCREMENT_INCH_M = 1e-7 * M_PER_INCH
+INCREMENT_RAD = 1e-5 * RAD_PER_DEG
+#: Integer words (N O G M P L H T D) longer than this are refused: FANUC takes at most 8
+#: digits, and the bound keeps int() away from Python's digit limit on hostile input.
+MAX_INTEGER_DIGITS = 9
+#: Subprograms nest at most this deep (FANUC controls allow 4 to 10 levels); a subprogram
+#: that calls itself is refused before it runs.
+MAX_SUBPROGRAM_DEPTH = 10
+#: Most moves one program may expand to (arcs, cycles, repeats included): twice the 10^7
+#: points of the largest freeform programs, ~1.3 GB of move arrays.
+MAX_MOVES = 20_000_000
+#: Most blocks one program may run, counting each subprogram repeat, so that nested repeat
+#: counts (9999 x 9999 x ...) are refused before they run, not after hours.
+MAX_BLOCK_RUNS = 50_000_000
+
+G_GROUPS = {
+    "G00": "motion", "G01": "motion", "G02": "motion", "G03": "motion", "G04": "motion",
+    "G17": "plane", "G18": "plane", "G19": "plane",
+    "G20": "units", "G21": "units",
+    "G28": "one-shot", "G53": "one-shot", "G05.1": "one-shot", "G08": "one-shot",
+    "G40": "cutter compensation",
+    "G43": "tool length", "G44": "tool length", "G49": "tool length",
+    "G54": "work offset", "G55": "work offset", "G56": "work offset",
+    "G57": "work offset", "G58": "work offset", "G59": "work offset",
+    "G61": "path mode", "G64": "path mode",
+    "G80": "canned cycle", "G81": "canned cycle", "G82": "canned cycle",
+    "G83": "canned cycle",
+    "G90": "distance", "G91": "distance",
+    "G94": "feed mode",
+    "G98": "return level", "G99": "return level",
+}  # fmt: skip
+CUTTER_COMPENSATION = (
+    "cutter radius compensation ({}) is not supported: it offsets the path by the tool radius "
+    "along its normal, with start-up, corner and cancel rules (FANUC types A, B, C) that a "
+    "simulation would have to guess; post the tool-centre path (compensation 'in computer' "
+    "in the CAM) and cancel with G40"
+)
+G_REFUSED = {
+    "G41": CUTTER_COMPENSATION.format("G41"),
+    "G42": CUTTER_COMPENSATION.format("G42"),
+    "G95": "feed per revolution (G95) is not supported; use G94 with F in mm/min",
+}
+SINGLE = frozenset("NOSFPXYZABCIJKRQLHTD")
+MOTION = {"G00": "rapid", "G01": "linear"}
+ARC = ("G02", "G03")
+NON_MOVING = ("G05.1", "G08")
+M99_IN_MAIN = ("M99 in the main program would jump back to its start forever (FANUC); end "
+                "the main program with M30 or M02")
+
+
+def integer(word: Word) -> int | None:
+    text = word.text
+    if not text.isdigit() or len(text) > MAX_INTEGER_DIGITS:
+        return None
+    return int(text)
+
+
+def g_name(word: Word) -> str:
+    text = word.text
+    whole, dot, fraction = text.partition(".")
+    if whole.isdigit() and len(text) <= MAX_INTEGER_DIGITS and (
+            not dot or (fraction.isdigit() and len(fraction) == 1)):
+        return f"G{int(whole):02d}" + (f".{fraction}" if dot else "")
+    return word.key
+
+
+def call_of(words: list[Word]) -> tuple[int, int, Word] | str | None:
+    """(program number, repeats, M98 word) of an M98 block, a message when malformed, or
+    None when the block has no M98."""
+    m98 = next((w for w in words if w.letter == "M" and integer(w) == 98), None)
+    if m98 is None:
+        return None
+    p = next((w for w in words if w.letter == "P"), None)
+    count = next((w for w in words if w.letter == "L"), None)
+    if p is None or integer(p) is None:
+        return "M98 needs P<program number> (an unsigned integer)"
+    if count is not None:
+        repeats = integer(count)
+        if repeats is None:
+            return f"M98 L takes an unsigned integer repeat count, got {count.key}"
+        return int(p.text), repeats, m98
+    if len(p.text) > 4:  # FANUC's P<repeats><4-digit program number>
+        repeats = int(p.text[:-4])
+        if repeats == 0:
+            return (f"M98 {p.key} asks for 0 repeats of O{p.text[-4:]}; write "
+                    f"M98 P{int(p.text[-4:])} for one call or use L")
+        return int(p.text[-4:]), repeats, m98
+    return int(p.text), 1, m98

@@ -1,0 +1,22 @@
+%
+O3001 (MAIN: FOUR GROOVES BY A SUBPROGRAM, THEN TWO DWELLS)
+(Written for the machinesim corpus.)
+G90 G21 G94 G54
+G00 X0. Y0. Z1.
+M98 P3002 L4 (four grooves, 2 mm apart in Y)
+G90 G00 Z5.
+M98 P23003 (FANUC's P<repeats><program>: O3003 twice)
+M30
+
+O3002 (ONE GROOVE 0.01 MM DEEP, THEN A 2 MM STEP IN Y)
+G91 G01 Z-1.01 F50.
+X10. F200.
+G00 Z1.01
+X-10. Y2.
+G90
+M99
+
+O3003 (A DWELL OF 0.1 S)
+G04 P100
+M99
+%

@@ -1,0 +1,427 @@
+"""The FANUC dialect of issue 12: arcs, G28/G53, tool length, states, canned cycles,
+subprograms, integer input, and every refusal at once; expected values worked out by hand."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from machinesim.exceptions import MachineSimError, NCProgramError
+from machinesim.nc import (
+    ARC_RADIUS_TOLERANCE_M,
+    AXES,
+    KIND_DWELL,
+    KIND_LINEAR,
+    KIND_RAPID,
+    Move,
+    Program,
+    ToolTable,
+    parse_program,
+    read_program,
+)
+from machinesim.nc.cycles import PECK_CLEARANCE_M
+
+MM = 1e-3
+#: Targets are a decimal in mm times 1e-3 (plus offsets): float64 round-off is far below this,
+#: and it is 10^6 x below 1 nm, so any misreading fails.
+EXACT_M = 1e-15
+#: Points of an arc are centre + r (cos, sin): float64 round-off ~1e-18 m at 10 mm; the
+#: issue's bound for "on the circle".
+ON_CIRCLE_M = 1e-12
+TOOLS = {"tool": {"1": {"length_mm": 50.0, "radius_mm": 3.0},
+                  "2": {"length_um": 2500.0, "radius_mm": 0.5, "name": "ball"}}}
+
+
+def _column(letter: str) -> int:
+    return AXES.index(letter)
+
+
+def _arc_rows(program: Program, line: int) -> np.ndarray:
+    """The targets of the moves of one block, preceded by the position before it."""
+    rows = np.flatnonzero(program.lines == line)
+    return program.targets[rows[0] - 1:rows[-1] + 1]
+
+
+def _sagitta(points: np.ndarray, centre: np.ndarray, radius: float) -> float:
+    """Largest distance between a chord and its arc: r minus the chord midpoint's radius."""
+    mid = (points[1:] + points[:-1]) / 2.0
+    return float(np.max(radius - np.linalg.norm(mid - centre, axis=1)))
+
+
+# --- arcs
+
+
+@pytest.mark.parametrize("tolerance", [1e-9, 1e-6])
+def test_quarter_arc_points_on_circle_within_chord_tolerance(tolerance):
+    program = parse_program("G17 G00 X10. Y0 Z0\nG03 X0 Y10. I-10. J0 F100.",
+                            chord_tolerance=tolerance)
+    pts = _arc_rows(program, 2)[:, :2]
+    radius = 10 * MM
+    r = np.linalg.norm(pts, axis=1)
+    assert np.max(np.abs(r - radius)) <= ON_CIRCLE_M
+    assert _sagitta(pts, np.zeros(2), radius) <= tolerance
+    # fewest segments: one fewer would break the tolerance (sagitta = r (1 - cos(step / 2)))
+    n = len(pts) - 1
+    assert radius * (1 - math.cos(math.pi / 2 / (n - 1) / 2)) > tolerance
+    assert pts[-1].tolist() == [0.0, 10 * MM]  # the programmed end, exactly
+    angles = np.unwrap(np.arctan2(pts[:, 1], pts[:, 0]))
+    assert np.all(np.diff(angles) > 0)  # G03 turns counter-clockwise about +Z
+    assert angles[-1] - angles[0] == pytest.approx(math.pi / 2, abs=1e-12)
+    assert np.all(program.kinds[1:] == KIND_LINEAR)
+    assert program.feeds[1] == pytest.approx(100 * MM / 60, rel=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("text", "centre_mm", "sweep_deg"),
+    [
+        ("G00 X0 Y10.\nG03 X-10. Y0 R10. F1", (0.0, 0.0), 90.0),  # R > 0: up to 180 deg
+        ("G00 X-10. Y0\nG02 X0 Y-10. R-10. F1", (0.0, 0.0), -270.0),  # R < 0: over 180
+        ("G00 X-10. Y0\nG02 X0 Y-10. R10. F1", (-10.0, -10.0), -90.0),
+        ("G00 X-10. Y0\nG03 X0 Y-10. R10. F1", (0.0, 0.0), 90.0),
+        ("G00 X10. Y0\nG03 I-10. F1", (0.0, 0.0), 360.0),  # full circle, no end words
+        ("G00 X10. Y0\nG02 X10. Y0 I-10. J0 F1", (0.0, 0.0), -360.0),
+    ],
+)
+def test_arc_centre_and_sweep(text, centre_mm, sweep_deg):
+    program = parse_program(text)
+    pts = _arc_rows(program, 2)[:, :2]
+    centre = np.array(centre_mm) * MM
+    assert np.max(np.abs(np.linalg.norm(pts - centre, axis=1) - 10 * MM)) <= ON_CIRCLE_M
+    angles = np.unwrap(np.arctan2(pts[:, 1] - centre[1], pts[:, 0] - centre[0]))
+    assert math.degrees(angles[-1] - angles[0]) == pytest.approx(sweep_deg, abs=1e-9)
+    assert _sagitta(pts, centre, 10 * MM) <= 1e-9
+
+
+@pytest.mark.parametrize(
+    ("plane", "start", "end", "centre_words", "normal"),
+    [
+        ("G17", "X10. Y0 Z0", "X0 Y10.", "I-10. J0", "Z"),
+        ("G18", "X0 Y0 Z10.", "X10. Z0", "K-10. I0", "Y"),
+        ("G19", "X0 Y10. Z0", "Y0 Z10.", "J-10. K0", "X"),
+    ],
+)
+@pytest.mark.parametrize("code", ["G02", "G03"])
+def test_arc_direction_follows_the_right_hand_rule(plane, start, end, centre_words, normal,
+                                                   code):
+    # G03 turns positively about the plane's normal (+Z, +Y, +X), G02 negatively: checked
+    # with the cross product of successive radius vectors, independently of the reader's
+    # (u, v) plane coordinates.
+    program = parse_program(f"{plane} G00 {start}\n{code} {end} {centre_words} F1")
+    pts = _arc_rows(program, 2)[:, :3]
+    cross = np.cross(pts[:-1], pts[1:])[:, _column(normal)]
+    assert np.all(cross > 0) if code == "G03" else np.all(cross < 0)
+    sweep = 90.0 if code == "G03" else 270.0  # the same ends: a quarter one way round
+    angle = np.sum(np.arccos(np.clip(np.sum(pts[:-1] * pts[1:], axis=1)
+                                     / (10 * MM) ** 2, -1.0, 1.0)))
+    assert math.degrees(angle) == pytest.approx(sweep, abs=1e-6)
+    assert np.max(np.abs(np.linalg.norm(pts, axis=1) - 10 * MM)) <= ON_CIRCLE_M
+
+
+def test_helix_moves_the_third_axis_with_the_angle():
+    program = parse_program("G00 X10. Y0 Z0 A0\nG03 X10. Y0 Z-1. A90. I-10. F50")
+    rows = _arc_rows(program, 2)
+    angle = np.unwrap(np.arctan2(rows[:, 1], rows[:, 0]))
+    fraction = (angle - angle[0]) / (2 * math.pi)
+    assert np.max(np.abs(rows[:, 2] - (-1 * MM) * fraction)) <= 1e-17
+    assert np.max(np.abs(rows[:, 3] - math.radians(90) * fraction)) <= 1e-15
+    assert np.max(np.abs(np.linalg.norm(rows[:, :2], axis=1) - 10 * MM)) <= ON_CIRCLE_M
+    # the helix chord error equals the planar sagitta (midpoint deviation), within 1 nm
+    assert _sagitta(rows[:, :2], np.zeros(2), 10 * MM) <= 1e-9
+
+
+def test_end_off_the_circle_within_the_tolerance_spirals_to_the_programmed_end():
+    off = 0.002  # mm: 2 um, within the 3 um a 3-decimal post may leave
+    program = parse_program(f"G00 X10. Y0\nG03 X0 Y{10 + off:.3f} I-10. F1")
+    pts = _arc_rows(program, 2)[:, :2]
+    assert pts[-1].tolist() == [0.0, (10 + off) * MM]
+    r = np.linalg.norm(pts, axis=1)
+    assert np.all(np.diff(r) >= -1e-15)  # the radius grows from 10 to 10.002 mm
+    assert r[0] == pytest.approx(10 * MM, abs=1e-15)
+    with pytest.raises(NCProgramError, match="end point is off the arc") as info:
+        parse_program("G00 X10. Y0\nG03 X0 Y10.004 I-10. F1", "p.nc")
+    assert (info.value.line, info.value.column, info.value.key) == (2, 16, "I-10.")
+    assert ARC_RADIUS_TOLERANCE_M == 3e-6
+
+
+def test_arc_refusals_are_located():
+    cases = [
+        ("G17 G00 X0 Y0\nG02 X1. K1.", "word K is only read with"),
+        ("G00 X0 Y0\nG02 X1.", "needs the centre"),
+        ("G00 X0 Y0\nG02 X1. I0 J0", "zero radius"),
+        ("G00 X0\nG02 X1. I1.", "Y is not known yet"),
+        ("G00 X0 Y0\nG02 X1. R0", "R0 is no arc"),
+    ]
+    for text, message in cases:
+        with pytest.raises(NCProgramError, match=message) as info:
+            parse_program(text, "p.nc")
+        assert info.value.line == 2 and info.value.column is not None
+
+
+def test_arc_in_increments_and_incremental_end():
+    # G91: the end is incremental; I J always are. Integer input: I-10000 = 10 um.
+    program = parse_program("G00 X0.01 Y0\nG91 G03 X-10000 Y10000 I-10000 J0 F1",
+                            integer_input="increment")
+    pts = _arc_rows(program, 2)[:, :2]
+    assert pts[-1] == pytest.approx([0.0, 10e-6], abs=1e-20)
+    assert np.max(np.abs(np.linalg.norm(pts, axis=1) - 10e-6)) <= ON_CIRCLE_M
+
+
+# --- G28, G53, tool length, states
+
+
+def test_g28_goes_through_the_intermediate_point_to_machine_zero():
+    offsets = {"G54": {"X": 100 * MM, "Y": 50 * MM, "Z": -20 * MM}}
+    text = "G91 G28 Z0\nG90 G00 X10. Y5. Z3.\nG28 X20. Y0\nG91 G28 Z1.\n"
+    program = parse_program(text, work_offsets=offsets)
+    assert program.targets[0, 2] == 0.0  # unknown Z, incremental 0: straight to zero
+    assert len(program) == 6
+    t = program.targets
+    assert t[2, :2].tolist() == pytest.approx([120 * MM, 50 * MM], abs=EXACT_M)  # via point
+    assert t[3, :3].tolist() == [0.0, 0.0, -17 * MM]  # X Y at machine zero, Z untouched
+    assert t[4, 2] == pytest.approx(-16 * MM, abs=EXACT_M)  # incremental intermediate point
+    assert t[5, 2] == 0.0
+    assert np.all(program.kinds == KIND_RAPID)
+    assert program.lines.tolist() == [1, 2, 3, 3, 4, 4]
+
+
+def test_g53_moves_in_machine_coordinates_for_one_block():
+    offsets = {"G54": {"X": 100 * MM, "Z": -20 * MM}}
+    program = parse_program("G00 X1. Z1.\nG43 H1 Z2.\nG53 G00 X-1. Z-2.\nG00 X3.",
+                            work_offsets=offsets, tools=TOOLS)
+    t = program.targets
+    assert t[1, 2] == pytest.approx((2 + 50 - 20) * MM, abs=EXACT_M)
+    assert t[2, [0, 2]].tolist() == [-1 * MM, -2 * MM]  # no work offset, no tool length
+    assert t[3, 0] == pytest.approx(103 * MM, abs=EXACT_M)  # the next block: G54 again
+
+
+@pytest.mark.parametrize("tools", [TOOLS, "toml"])
+def test_tool_length_offsets_z_words(tools, tmp_path):
+    if tools == "toml":
+        path = tmp_path / "tools.toml"
+        path.write_text("[tool.1]\nlength_mm = 50.0\n[tool.2]\nlength_um = 2500.0\n")
+        tools = path
+    text = ("G00 X0 Z100.\nG43 H2 Z10.\nZ5.\nG91 Z-1.\nG90 G44 H1 Z10.\nG49 Z10.\n"
+            "G43 X1.\nZ10.")
+    program = parse_program(text, tools=tools)
+    z = program.targets[:, 2] / MM
+    assert z.tolist() == pytest.approx([100, 12.5, 7.5, 6.5, -40, 10, 10, 60], abs=1e-12)
+
+
+def test_tool_words_are_checked_against_the_table():
+    with pytest.raises(NCProgramError, match="H7: tool 7|no length for tool 7") as info:
+        parse_program("G00 Z0\nG43 H7 Z1.", tools=TOOLS)
+    assert (info.value.line, info.value.key) == (2, "H7")
+    with pytest.raises(NCProgramError, match="T9: tool 9 is not in the tool table"):
+        parse_program("T9 M06", tools=TOOLS)
+    with pytest.raises(NCProgramError, match="needs the tool length: give a tool table"):
+        parse_program("G43 H1")
+    program = parse_program("T9 M06\nD4\nG43 H0 G00 Z1.")  # no table: T D listed, H0 = 0
+    assert dict(program.states) == {"T9": 1, "D4": 2}
+    assert program.targets[-1, 2] == pytest.approx(1 * MM, abs=EXACT_M)
+
+
+def test_tool_table_refusals(tmp_path):
+    for data, message in [
+        ({"tool": {"1": {"length": 5.0}}}, "unknown key 'length'"),
+        ({"tool": {"1": {"length_in": 5.0}}}, "unknown length unit 'in'"),
+        ({"tool": {"x": {"length_mm": 5.0}}}, "tool number must be an unsigned integer"),
+        ({"tool": {"1": {"radius_mm": -1.0}}}, "must be >= 0"),
+        ({"tool": {"1": {"length_mm": float("nan")}}}, "must be a finite number"),
+        ({"tools": {}}, "only \\[tool.<number>\\]"),
+    ]:
+        with pytest.raises(NCProgramError, match=message):
+            ToolTable.from_dict(data)
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[tool.1\n")
+    with pytest.raises(NCProgramError, match="not valid TOML"):
+        ToolTable.from_toml(bad)
+    with pytest.raises(MachineSimError, match="no such file"):
+        ToolTable.from_toml(tmp_path / "missing.toml")
+
+
+def test_states_are_listed_with_their_first_line():
+    text = ("G90 G94 G17 G49 G40 G80\nG05.1 Q1\nG08 P1\nG61\nG64\nT1 M06\nG05.1 Q0\n"
+            "G05.1 Q1 R5\nG40\nG00 X0\nM30")
+    program = parse_program(text)
+    assert dict(program.states) == {"G40": 1, "G80": 1, "G05.1 Q1": 2, "G08 P1": 3, "G61": 4,
+                                    "G64": 5, "T1": 6, "G05.1 Q0": 7, "G05.1 Q1 R5": 8}
+    assert len(program) == 2  # the M06 dwell and the move: states move nothing
+
+
+def test_every_refusal_is_listed_at_once():
+    text = ("O1 (a CAM file with what machinesim refuses)\n"
+            "G90 G95 G54.1 P1\n"
+            "G00 X0 Y0 #5\n"
+            "G41 D1 G01 X1. F100\n"
+            "G01 X2. U3. E4.\n"
+            "M99\n"
+            "X1.2.3 Z--1\n"
+            "M30\n")
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text, "cam.nc")
+    located = [(e.line, e.column, e.key) for e in info.value.problems]
+    assert located == [(2, 5, "G95"), (2, 9, "G54.1"), (2, 15, "P1"), (3, 11, "#"),
+                       (4, 1, "G41"), (5, 9, "U3."), (5, 13, "E4."), (6, 1, "M99"),
+                       (7, 1, "X1.2.3"), (7, 8, "Z--1")]
+    message = str(info.value)
+    assert message.startswith("cam.nc, line 2, column 5, key 'G95': 10 problems")
+    for line, column, key in located:
+        assert f"line {line}, column {column}, key '{key}'" in message
+
+
+# --- canned cycles
+
+
+def test_drilling_cycles_expand_to_fanuc_sequences():
+    text = ("G00 X0 Y0 Z10.\n"
+            "G98 G81 X5. Y5. Z-2. R1. F100.\n"
+            "G99 G82 X6. Z-1.5 R0.5 P250\n"
+            "G98 G83 X7. Z-3. R1. Q1.2\n"
+            "G80 X8.\n")
+    program = parse_program(text)
+    moves = [(MOVE := ("rapid", "linear", "dwell")[k], *(t[[0, 2]] / MM), d)
+             for k, t, d in zip(program.kinds, program.targets, program.dwells, strict=True)]
+    del MOVE
+    c = PECK_CLEARANCE_M / MM
+    expected = [
+        ("rapid", 0, 10, 0),
+        ("rapid", 5, 10, 0), ("rapid", 5, 1, 0), ("linear", 5, -2, 0), ("rapid", 5, 10, 0),
+        ("rapid", 6, 10, 0), ("rapid", 6, 0.5, 0), ("linear", 6, -1.5, 0),
+        ("dwell", 6, -1.5, 0.25), ("rapid", 6, 0.5, 0),  # G99: back to R
+        ("rapid", 7, 0.5, 0), ("rapid", 7, 1, 0),
+        ("linear", 7, -0.2, 0), ("rapid", 7, 1, 0), ("rapid", 7, -0.2 + c, 0),
+        ("linear", 7, -1.4, 0), ("rapid", 7, 1, 0), ("rapid", 7, -1.4 + c, 0),
+        ("linear", 7, -2.6, 0), ("rapid", 7, 1, 0), ("rapid", 7, -2.6 + c, 0),
+        ("linear", 7, -3, 0), ("rapid", 7, 10, 0),  # G98: the initial level of G81
+        ("rapid", 8, 10, 0),  # after G80 a plain move
+    ]
+    assert len(moves) == len(expected)
+    for got, want in zip(moves, expected, strict=True):
+        assert got[0] == want[0]
+        assert got[1:] == pytest.approx(want[1:], abs=1e-12)
+
+
+def test_incremental_cycle_with_repeats_drills_a_row():
+    # G91: R from the initial level, Z from R; K4 drills four holes 3 mm apart in X
+    program = parse_program("G00 X0 Y0 Z5.\nG91 G99 G81 X3. Z-2. R-4. K4 F50")
+    bottoms = program.targets[program.kinds == KIND_LINEAR]
+    assert bottoms[:, 0].tolist() == pytest.approx([3 * MM, 6 * MM, 9 * MM, 12 * MM])
+    assert np.all(bottoms[:, 2] == pytest.approx(-1 * MM, abs=EXACT_M))
+    assert program.targets[-1, 2] == pytest.approx(1 * MM, abs=EXACT_M)  # G99: at R
+
+
+def test_a_motion_code_cancels_the_cycle():
+    program = parse_program("G00 Z5.\nG81 X1. Z-1. R1. F10\nG00 X2.\nX3.")
+    assert program.targets[-2:, 0].tolist() == [2 * MM, 3 * MM]
+    assert program.targets[-1, 2] == pytest.approx(5 * MM, abs=EXACT_M)
+
+
+# --- subprograms
+
+
+SUBPROGRAMS = """O100
+G00 X0 Y0 Z0
+M98 P200 L3
+M98 P20300
+M30
+O200
+G91 G01 X1. F10
+G90
+M99
+O300
+M98 P200
+G00 Y1.
+M99
+"""
+
+
+def test_subprograms_with_repeats_and_nesting():
+    program = parse_program(SUBPROGRAMS)
+    assert program.number == 100
+    # O200 three times, then O300 twice (each O200 once and a move)
+    assert program.targets[:, 0].tolist() == pytest.approx(
+        [0, 1 * MM, 2 * MM, 3 * MM, 4 * MM, 4 * MM, 5 * MM, 5 * MM])
+    assert program.lines.tolist() == [2, 7, 7, 7, 7, 12, 7, 12]
+
+
+def test_subprogram_depth_and_recursion_are_refused_before_running():
+    chain = "O1\nM98 P2\nM30\n" + "".join(f"O{k}\nM98 P{k + 1}\nM99\n" for k in range(2, 13))
+    chain += "O13\nG00 X0\nM99\n"
+    with pytest.raises(NCProgramError, match="nests deeper than 10 levels"):
+        parse_program(chain)
+    mutual = "O1\nM98 P2\nM30\nO2\nM98 P3\nM99\nO3\nM98 P2\nM99\n"
+    with pytest.raises(NCProgramError, match=r"calls itself \(main -> O0002 -> O0003 -> O0002"):
+        parse_program(mutual)
+    runaway = "O1\nM98 P2 L99999999\nM30\nO2\nM98 P3 L9999\nM99\nO3\nG04 P0\nM99\n"
+    with pytest.raises(NCProgramError, match="more than 50000000 blocks"):
+        parse_program(runaway)
+
+
+def test_subprogram_layout_refusals():
+    with pytest.raises(NCProgramError, match="has no M99"):
+        parse_program("O1\nM30\nO2\nG00 X0\n")
+    with pytest.raises(NCProgramError, match="must be the first block"):
+        parse_program("O1\nG00 X0\nO2\nM99\n")
+
+
+# --- integer input, arrays, files
+
+
+def test_integer_input_is_reported_and_reads_lengths_and_angles():
+    text = "G00 X10 Y0 A5 Z1.\nG03 X0 Y10000 I-10 J0 F1\n"
+    calc = parse_program("G00 X10 Y0 A5 Z1.")
+    assert calc.integer_input == "calculator"
+    assert calc.targets[0, [0, 3]].tolist() == pytest.approx([10 * MM, math.radians(5)])
+    inc = parse_program("G00 X10 Y0 A5 Z1.", integer_input="increment")
+    assert inc.integer_input == "increment"
+    assert inc.targets[0, [0, 2, 3]].tolist() == pytest.approx(
+        [10e-9, 1 * MM, math.radians(5e-5)], abs=1e-20)
+    with pytest.raises(NCProgramError, match="end point is off the arc"):
+        parse_program(text, integer_input="increment")  # I-10 is 10 nm, the end 10 um away
+
+
+def test_program_arrays_and_move_views_agree():
+    program = parse_program("G00 X1. Z2. S100 M03\nG01 Y3. F60\nG04 P500\nM08\nM30")
+    assert program.targets.shape == (4, 6)
+    assert np.isnan(program.targets[0, 1])  # Y not given yet
+    assert program.kinds.tolist() == [KIND_RAPID, KIND_LINEAR, KIND_DWELL, KIND_DWELL]
+    assert program.m_codes == {0: (3,), 3: (8,)}
+    assert not program.targets.flags.writeable
+    rebuilt = Program(tuple(program.moves), program.number, program.source,
+                      program.work_offsets, states=program.states,
+                      integer_input=program.integer_input)
+    assert rebuilt == program
+    arrays = Program.from_arrays(program.targets, program.kinds, program.feeds,
+                                 program.dwells, program.lines, spindles=program.spindles,
+                                 block_numbers=program.block_numbers, m_codes=program.m_codes,
+                                 source=program.source, integer_input="calculator")
+    assert arrays == program
+    assert list(arrays.moves) == list(program.moves)
+    assert program.moves[1] == Move("linear", {"X": 1e-3, "Y": 3e-3, "Z": 2e-3}, 1e-3,
+                                    line=2, spindle_rpm=100.0)
+    with pytest.raises(NCProgramError, match="drops axis Y"):
+        Program.from_arrays([[0.0, 0.0] + [np.nan] * 4, [0.0] + [np.nan] * 5], [0, 0])
+    with pytest.raises(NCProgramError, match="a subprogram call or return"):
+        Program.from_arrays([[0.0] + [np.nan] * 5], [0], m_codes={0: (99,)})
+
+
+def test_programs_pickle_and_copy():
+    import copy
+    import pickle
+
+    program = parse_program("G00 X1. C5.\nG01 Y2. F10 M08\nG05.1 Q1", work_offsets={
+        "G54": {"X": 1e-3}})
+    for back in (pickle.loads(pickle.dumps(program)), copy.deepcopy(program)):
+        assert back == program
+        assert not back.targets.flags.writeable
+        assert back.moves[1] == program.moves[1]
+
+
+def test_read_program_file_errors_name_the_path(tmp_path):
+    for path, message in [(tmp_path / "missing.nc", "no such file"),
+                          (tmp_path, "is a folder")]:
+        with pytest.raises(MachineSimError, match=message) as info:
+            read_program(path)
+        assert str(path) in str(info.value)
