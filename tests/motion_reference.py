@@ -1,4 +1,9 @@
-"""Motion: an NC program becomes a sampled axis trajectory q(t).
+"""The line-by-line motion planner as it was before vectorisation (issue 12), kept verbatim
+as the reference the vectorised `machinesim.motion.plan` is held to, segment by segment.
+
+Not part of the package: only tests import it. Its module docstring follows.
+
+Motion: an NC program becomes a sampled axis trajectory q(t).
 
 The controller interpolates G01 (and G00) linearly in *axis* space, so a move that turns a
 rotary axis sweeps the tool along a curve in the workpiece frame. Such a move is split into

@@ -1,0 +1,28 @@
+"""Motion: an NC program becomes a sampled axis trajectory q(t).
+
+The controller interpolates G01 (and G00) linearly in *axis* space, so a move that turns a
+rotary axis sweeps the tool along a curve in the workpiece frame. Such a move is split into
+sub-steps until the chord between consecutive samples stays within ``chord_tolerance`` of
+the true path for every point of the tool (the edge and the tool's extreme points): the
+midpoint of each sub-step is evaluated through the kinematics and compared with the chord
+(`machinesim.motion.chords`).
+
+Feed and time (FANUC rule, feed per minute, G94): a move's length is
+``sqrt(sum(d_linear_mm**2) + sum(d_rotary_deg**2))`` and takes ``length / F`` minutes, so F
+reads as mm/min for linear moves and deg/min for pure rotary moves. A rapid runs every axis
+at its own rapid rate (the URDF velocity limit) and takes as long as its slowest axis. A
+dwell takes its time. Servo follow-up errors enter through a `ServoModel` (ideal by default).
+
+`plan` reads the program as arrays (`machinesim.nc.Program.targets`, ``kinds``, ...) and
+works on all moves at once: a program of 10^6 moves is planned in numpy passes, not a
+Python loop per move. The `Trajectory` it returns holds all samples end to end in ``q`` and
+``t`` with ``offsets`` per move; ``trajectory.segments`` gives each move as a `Segment`.
+"""
+
+from machinesim.motion.chords import MAX_SUBSTEPS
+from machinesim.motion.planner import move_duration, plan
+from machinesim.motion.trajectory import IdealServo, Segment, Segments, ServoModel, Trajectory
+from machinesim.tolerances import CHORD_TOLERANCE_M
+
+__all__ = ["CHORD_TOLERANCE_M", "MAX_SUBSTEPS", "IdealServo", "Segment", "Segments",
+           "ServoModel", "Trajectory", "move_duration", "plan"]

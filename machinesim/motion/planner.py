@@ -1,0 +1,293 @@
+"""`plan`: a program's moves, as arrays, become a `Trajectory`, every step vectorised."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from machinesim.exceptions import InputError, NCProgramError
+from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps
+from machinesim.motion.trajectory import IdealServo, ServoModel, Trajectory
+from machinesim.nc.program import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
+from machinesim.tolerances import CHORD_TOLERANCE_M
+
+_M_PER_MM = 1e-3
+_RAD_PER_DEG = np.pi / 180.0
+
+
+def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndarray,
+                  rapid_rate: np.ndarray, feed_m_per_s: float | None, dwell_s: float) -> float:
+    """Time of one move by the rules in the module docstring, s."""
+    if kind == "dwell":
+        return float(dwell_s)
+    delta = np.abs(end - start)
+    if kind == "rapid":
+        return float(np.max(delta / rapid_rate)) if delta.size else 0.0
+    # FANUC: degrees count as millimetres in the feed length
+    scaled = np.where(rotary, delta / _RAD_PER_DEG, delta / _M_PER_MM)
+    length_mm = float(np.sqrt(np.sum(scaled**2)))
+    if length_mm == 0.0:
+        return 0.0
+    feed_mm_per_s = feed_m_per_s / _M_PER_MM
+    return length_mm / feed_mm_per_s
+
+
+def _program_arrays(program):
+    """targets (N, 6) (columns `machinesim.nc.AXES`, NaN: no value yet), kinds (N,) int8
+    (index into MOVE_KINDS), feeds (N,) m/s (NaN: none), dwells (N,) s, lines (N,) int64.
+
+    A `machinesim.nc.Program` holds these arrays; any other object with ``moves`` (each with
+    ``kind``, ``target``, ``feed_m_per_s``, ``dwell_s``, ``line``) is read move by move.
+    """
+    arrays = getattr(program, "targets", None), getattr(program, "kinds", None)
+    if all(isinstance(a, np.ndarray) for a in arrays):
+        return (program.targets, program.kinds, program.feeds, program.dwells,
+                program.lines)
+    moves = tuple(program.moves)
+    targets = np.full((len(moves), len(AXES)), np.nan)
+    column = {a: i for i, a in enumerate(AXES)}
+    for row, move in enumerate(moves):
+        for letter, value in move.target.items():
+            if letter not in column:
+                raise NCProgramError(f"unknown axis {letter!r}; expected one of "
+                                     f"{' '.join(AXES)}", source=_source(program),
+                                     line=move.line, key=str(letter))
+            targets[row, column[letter]] = value
+    kinds = np.array([MOVE_KINDS.index(m.kind) for m in moves], dtype=np.int8)
+    feeds = np.array([np.nan if m.feed_m_per_s is None else m.feed_m_per_s for m in moves])
+    dwells = np.array([m.dwell_s for m in moves], dtype=np.float64)
+    lines = np.array([m.line for m in moves], dtype=np.int64)
+    return targets, kinds, feeds, dwells, lines
+
+
+def _source(program) -> str:
+    return getattr(program, "source", "<program>")
+
+
+def plan(program, machine, errors=None, *, start=None, tool_points=None,
+         chord_tolerance: float = CHORD_TOLERANCE_M, servo: ServoModel | None = None,
+         ) -> Trajectory:
+    """Sample ``program`` on ``machine`` into a `Trajectory`.
+
+    Parameters
+    ----------
+    program : machinesim.nc.Program
+    machine : machinesim.Machine
+    errors : ErrorModel, optional
+        The machine's errors: the chord check follows the real (erroneous) tool path.
+    start : array_like, shape (n_axes,), optional
+        Axis values before the first block (default zeros); axes the program never sets
+        stay there.
+    tool_points : ndarray, shape (k, 3), optional
+        Points of the tool in the tool_tip frame (m) whose paths must stay within the chord
+        tolerance; the edge (origin) is always included.
+    chord_tolerance : float
+        Largest allowed distance, m, between a sub-step's chord and the true path.
+    servo : ServoModel, optional
+        Follow-up model applied to each move's samples (default: ideal).
+
+    Raises
+    ------
+    NCProgramError
+        At the first move (in program order) that sets an axis the machine lacks, feeds
+        without a feed rate, or would need more than `MAX_SUBSTEPS` sub-steps.
+    """
+    axes = tuple(machine.axes)
+    n_axes = len(axes)
+    q0 = np.zeros(n_axes) if start is None else np.array(start, dtype=np.float64)
+    if q0.shape != (n_axes,):
+        raise InputError(f"start must have shape ({n_axes},) for axes {''.join(axes)}, "
+                         f"got {q0.shape}")
+    if not np.all(np.isfinite(q0)):
+        raise InputError(f"start must be finite axis values, got {q0.tolist()}")
+    if not chord_tolerance > 0.0:
+        raise InputError(f"chord_tolerance must be positive, got {chord_tolerance}")
+    points = np.zeros((1, 3)) if tool_points is None else np.vstack(
+        [np.zeros((1, 3)), np.asarray(tool_points, dtype=np.float64).reshape(-1, 3)])
+    targets, kinds, feeds, dwells, lines = _program_arrays(program)
+    source = _source(program)
+    count = len(kinds)
+
+    # where each move starts and ends: an axis the program has not set stays at start
+    ends = np.empty((count, n_axes))
+    for i, letter in enumerate(axes):
+        if letter in AXES:
+            column = targets[:, AXES.index(letter)]
+            ends[:, i] = np.where(np.isnan(column), q0[i], column)
+        else:
+            ends[:, i] = q0[i]
+    starts = np.empty_like(ends)
+    if count:
+        starts[0] = q0
+        starts[1:] = ends[:-1]
+    delta = ends - starts
+
+    # errors the moves themselves show: the first in program order wins
+    stop, error = count, None
+    for c, letter in enumerate(AXES):
+        if letter in axes:
+            continue
+        given = np.flatnonzero(~np.isnan(targets[:stop, c]))
+        if given.size and given[0] < stop:
+            stop = int(given[0])
+            error = NCProgramError(f"axis {letter} is not on {machine.name} (axes "
+                                   f"{''.join(axes)})", source=source,
+                                   line=int(lines[stop]), key=letter)
+    moved = np.zeros(stop, dtype=bool)
+    for i in range(n_axes):
+        moved |= delta[:stop, i] != 0.0
+    unfed = np.flatnonzero((kinds[:stop] == KIND_LINEAR) & np.isnan(feeds[:stop]) & moved)
+    if unfed.size:
+        stop = int(unfed[0])
+        error = NCProgramError("a feed move (G01) with no feed rate F given so far",
+                               source=source, line=int(lines[stop]), key="F")
+
+    # rotary moves: split to the chord tolerance (only those before a located error)
+    steps = np.ones(stop, dtype=np.int64)
+    rotary = np.asarray(machine.rotary, dtype=bool)
+    if rotary.any():
+        turns = np.zeros(stop, dtype=bool)
+        for i in np.flatnonzero(rotary).tolist():
+            turns |= delta[:stop, i] != 0.0
+        turning = np.flatnonzero(turns & (kinds[:stop] != KIND_DWELL))
+        if turning.size:
+            paths = ToolPaths(machine, errors, points)
+            found, failed = substeps(paths, starts[turning], delta[turning], chord_tolerance)
+            if failed.any():
+                bad = int(turning[np.argmax(failed)])
+                raise NCProgramError(
+                    f"a rotary move would need more than {MAX_SUBSTEPS} sub-steps to keep the "
+                    f"chord within {chord_tolerance * 1e9:g} nm; raise chord_tolerance",
+                    source=source, line=int(lines[bad]))
+            steps[turning] = found
+    if error is not None:
+        raise error
+
+    durations = _durations(kinds, starts, ends, feeds, dwells, rotary,
+                           np.asarray(machine.rapid_rate, dtype=np.float64))
+    # times add up move after move from 0.0, as a running sum does (np.cumsum is sequential)
+    clock = np.cumsum(np.concatenate([[0.0], durations]))
+    cutting = float(np.cumsum(np.concatenate([[0.0], durations[kinds == KIND_LINEAR]]))[-1])
+    q, t, offsets = _samples(starts, delta, clock[:-1], durations, steps)
+    if servo is not None and type(servo) is not IdealServo:
+        _follow(servo, q, t, offsets)
+    q.flags.writeable = False
+    t.flags.writeable = False
+    offsets.flags.writeable = False
+    kinds_out = np.array(kinds, dtype=np.int8)
+    lines_out = np.array(lines, dtype=np.int64)
+    kinds_out.flags.writeable = False
+    lines_out.flags.writeable = False
+    return Trajectory(axes, q, t, offsets, kinds_out, lines_out, float(clock[-1]), cutting)
+
+
+def _durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate) -> np.ndarray:
+    """`move_duration` of every move, by the same operations (axis by axis: the largest
+    ratio, and the squares summed in numpy's order, first axis first, for up to 7 axes)."""
+    out = np.zeros(len(kinds))
+    dwell = kinds == KIND_DWELL
+    out[dwell] = dwells[dwell]
+    n_axes = starts.shape[1]
+    if not n_axes:
+        return out
+    rapid = np.flatnonzero(kinds == KIND_RAPID)
+    if rapid.size:
+        slowest = None
+        for i in range(n_axes):
+            ratio = np.abs(ends[rapid, i] - starts[rapid, i]) / rapid_rate[i]
+            slowest = ratio if slowest is None else np.maximum(slowest, ratio)
+        out[rapid] = slowest
+    linear = np.flatnonzero(kinds == KIND_LINEAR)
+    if linear.size:
+        if n_axes <= 7:
+            total = None
+            for i in range(n_axes):
+                scaled = np.abs(ends[linear, i] - starts[linear, i]) / (
+                    _RAD_PER_DEG if rotary[i] else _M_PER_MM)
+                scaled *= scaled
+                total = scaled if total is None else total + scaled
+        else:
+            delta = np.abs(ends[linear] - starts[linear])
+            total = np.sum(np.where(rotary, delta / _RAD_PER_DEG, delta / _M_PER_MM)**2, axis=1)
+        length_mm = np.sqrt(total)
+        moving = length_mm != 0.0
+        out[linear[moving]] = length_mm[moving] / (feeds[linear[moving]] / _M_PER_MM)
+    return out
+
+
+def _linspace_by_product(most: int = 4096) -> bool:
+    """Whether ``np.linspace(0, 1, n + 1)`` is ``i * (1.0 / n)`` with its last value 1.0 (as
+    numpy computes it), so that fractions can be formed for all samples at once."""
+    for n in (*range(1, 300), 997, most):
+        f = np.arange(n + 1) * (1.0 / n)
+        f[-1] = 1.0
+        if not np.array_equal(f, np.linspace(0.0, 1.0, n + 1)):
+            return False
+    return True
+
+
+_BY_PRODUCT = _linspace_by_product()
+#: Samples formed in one pass of `_samples`.
+_SAMPLES_PER_CHUNK = 1 << 20
+
+
+def _samples(starts, delta, t0, durations, steps):
+    """Samples ``start + f * delta`` and times ``t0 + f * duration`` of every move,
+    ``f = linspace(0, 1, steps + 1)``, end to end."""
+    count, n_axes = starts.shape
+    counts = steps + 1
+    offsets = np.zeros(count + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    total = int(offsets[-1])
+    q = np.empty((total, n_axes))
+    t = np.empty(total)
+    if np.all(steps == 1):  # the common case: rows 2i and 2i + 1
+        for k, f in enumerate((0.0, 1.0)):
+            q[k::2] = starts + f * delta
+            t[k::2] = t0 + f * durations
+        return q, t, offsets
+    # moves a chunk at a time, so that the per-sample work arrays stay small
+    bounds = np.searchsorted(offsets, np.arange(0, total, _SAMPLES_PER_CHUNK), side="right") - 1
+    for first, last in zip(bounds.tolist(), [*bounds[1:].tolist(), count], strict=True):
+        if last > first:
+            _sample_moves(first, last, starts, delta, t0, durations, steps, offsets, q, t)
+    return q, t, offsets
+
+
+def _sample_moves(first, last, starts, delta, t0, durations, steps, offsets, q, t) -> None:
+    """Samples of moves ``first:last`` into their rows of ``q`` and ``t``."""
+    a, b = int(offsets[first]), int(offsets[last])
+    counts = steps[first:last] + 1
+    move = np.repeat(np.arange(first, last, dtype=np.intp), counts)
+    if _BY_PRODUCT:
+        fraction = np.arange(a, b, dtype=np.float64)
+        fraction -= offsets[move]
+        fraction *= (1.0 / steps[first:last])[move - first]
+        fraction[offsets[first + 1:last + 1] - 1 - a] = 1.0
+    else:
+        fraction = np.empty(b - a)
+        for n in np.unique(counts - 1).tolist():
+            at = offsets[first:last][counts - 1 == n] - a
+            fraction[at[:, None] + np.arange(n + 1)] = np.linspace(0.0, 1.0, n + 1)
+    for i in range(starts.shape[1]):
+        column = delta[:, i][move]
+        column *= fraction  # start + f * delta, as the reference forms it (+ and * commute)
+        column += starts[:, i][move]
+        q[a:b, i] = column
+    column = durations[move]
+    column *= fraction
+    column += t0[move]
+    t[a:b] = column
+
+
+def _follow(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray) -> None:
+    """Apply ``servo.follow`` to each move's samples (one call per move, as it is defined)."""
+    bounds = offsets.tolist()
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        followed = np.asarray(servo.follow(t[a:b].copy(), q[a:b].copy()), dtype=np.float64)
+        if followed.shape != (b - a, q.shape[1]):
+            raise InputError(f"servo.follow must return axis values of shape "
+                             f"({b - a}, {q.shape[1]}), got {followed.shape}")
+        q[a:b] = followed
+
+
+__all__ = ["MAX_SUBSTEPS", "move_duration", "plan"]

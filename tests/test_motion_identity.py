@@ -1,0 +1,217 @@
+"""The vectorised planner gives the line-by-line planner's trajectory, number for number.
+
+`motion_reference` (next to this file) is the planner as it was before it was vectorised,
+kept verbatim. Every segment is compared exactly: the same samples, times, kinds and lines,
+the same durations, machining and cutting time, sub-step counts and notes. Exact equality
+holds because the vectorised planner forms every number by the same float64 operations in
+the same order (see `machinesim.motion.chords`); only the sign of a zero may differ, which
+``==`` does not see and which no later number depends on.
+"""
+
+from __future__ import annotations
+
+import math
+
+import motion_reference as reference
+import numpy as np
+import pytest
+
+from machinesim import load_machine
+from machinesim.exceptions import NCProgramError
+from machinesim.motion import Trajectory, plan
+from machinesim.motion.chords import ToolPaths, deviations
+from machinesim.nc import ProgramBuilder, parse_program
+from machinesim.sampling import random_errors
+from machinesim.tools import tool_from_spec
+
+MACHINES = ("robonano_a0ib", "planer_4axis", "grooving_4axis", "robonano_ui", "sts_lathe")
+
+
+@pytest.fixture(scope="module")
+def machines():
+    return {name: load_machine(name) for name in MACHINES}
+
+
+def assert_same(new: Trajectory, old) -> None:
+    """Every field of the two trajectories equal, segment by segment."""
+    assert new.axes == old.axes
+    assert len(new.segments) == len(old.segments)
+    for i, (a, b) in enumerate(zip(new.segments, old.segments, strict=True)):
+        assert (a.kind, a.line) == (b.kind, b.line), i
+        assert a.q.shape == b.q.shape, (i, a.kind, a.q.shape, b.q.shape)
+        assert np.array_equal(a.q, b.q), i
+        assert np.array_equal(a.t, b.t), i
+        assert a.duration == b.duration, i
+        assert not a.q.flags.writeable and not a.t.flags.writeable
+    assert new.duration == old.duration
+    assert new.cutting_time == old.cutting_time
+    assert new.substeps == old.substeps
+    assert new.notes == old.notes
+
+
+def random_program(machine, rng: np.random.Generator, moves: int, *, big_turns: bool = True):
+    """A feed move first, then rapids, feeds (some changing the feed), dwells, and rotary
+    moves small (the kinematics' series range), medium and large, setting a few axes at a
+    time."""
+    b = ProgramBuilder(source="random").linear(feed_mm_per_min=200.0,
+                                               **{machine.axes[0]: 1e-3})
+    lower, upper = np.maximum(machine.lower, -4.0), np.minimum(machine.upper, 4.0)
+    for _ in range(moves):
+        r = rng.random()
+        if r < 0.08:
+            b.dwell(float(rng.choice([0.0, 0.25, 1.5])))
+            continue
+        values = {}
+        for i, a in enumerate(machine.axes):
+            if rng.random() < 0.5:
+                continue
+            if machine.rotary[i]:
+                scale = rng.choice([1e-4, 3e-3, 0.02, 0.3] + ([1.5] if big_turns else []))
+                values[a] = float(np.clip(rng.normal(0.0, scale), lower[i], upper[i]))
+            else:
+                values[a] = float(rng.uniform(lower[i], upper[i]) * 0.1)
+        values = values or {machine.axes[0]: float(rng.uniform(-1e-3, 1e-3))}
+        if r < 0.3:
+            b.rapid(**values)
+        elif r < 0.4:
+            b.linear(feed_mm_per_min=float(rng.choice([50.0, 300.0, 1234.5])), **values)
+        elif r < 0.45:
+            b.linear(feed_m_per_s=float(rng.uniform(1e-4, 1e-2)), **values)
+        else:
+            b.linear(**values)
+    return b.build()
+
+
+@pytest.mark.parametrize("name", MACHINES)
+@pytest.mark.parametrize("seed", [0, 1])
+def test_random_programs_nominal_and_with_errors(machines, name, seed):
+    machine = machines[name]
+    rng = np.random.default_rng(seed * 101 + MACHINES.index(name))
+    program = random_program(machine, rng, 40)
+    for errors in (None, random_errors(machine, rng)):
+        for tolerance in (1e-9, 1e-7):
+            new = plan(program, machine, errors, chord_tolerance=tolerance)
+            old = reference.plan(program, machine, errors, chord_tolerance=tolerance)
+            assert_same(new, old)
+
+
+@pytest.mark.parametrize("spec", ["v:90", "nose:2.0:90"])
+@pytest.mark.parametrize("name", ["planer_4axis", "robonano_a0ib", "sts_lathe"])
+def test_tool_points_and_start(machines, name, spec):
+    machine = machines[name]
+    rng = np.random.default_rng(len(spec) + MACHINES.index(name))
+    program = random_program(machine, rng, 12, big_turns=False)
+    points = tool_from_spec(spec).vertices()
+    if len(points) > 40:
+        points = points[:: len(points) // 40]
+    start = (machine.lower + machine.upper) / 2 * 0.0 + rng.normal(0, 1e-3, len(machine.axes))
+    errors = random_errors(machine, rng)
+    new = plan(program, machine, errors, start=start, tool_points=points, chord_tolerance=5e-9)
+    old = reference.plan(program, machine, errors, start=start, tool_points=points,
+                         chord_tolerance=5e-9)
+    assert_same(new, old)
+
+
+class LagServo:
+    """A first-order lag over each move (state restarts at the move's first sample)."""
+
+    def __init__(self, tau: float) -> None:
+        self.tau = tau
+
+    def follow(self, t, q):
+        out = q.copy()
+        for i in range(1, len(q)):
+            a = 1.0 - math.exp(-(t[i] - t[i - 1]) / self.tau) if self.tau else 1.0
+            out[i] = out[i - 1] + a * (q[i] - out[i - 1])
+        return out
+
+
+def test_a_servo_model_is_applied_move_by_move(machines):
+    machine = machines["grooving_4axis"]
+    program = random_program(machine, np.random.default_rng(7), 25)
+    servo = LagServo(0.05)
+    assert_same(plan(program, machine, servo=servo),
+                reference.plan(program, machine, servo=servo))
+
+
+def test_an_sts_point_list_from_nc_text(machines):
+    """The slow-tool-servo style: G01 X Z C point after point on a spiral, read from text."""
+    machine = machines["sts_lathe"]
+    k = np.arange(300)
+    x = 10.0 * (1.0 - k / 300)
+    c = k * 2.7  # deg, 2.7 deg a point: 1 to 8 sub-steps depending on the radius
+    z = 0.01 * np.sin(np.radians(c) * 3.0)
+    text = "G90 G21 G94\nG00 X10. Z1. C0.\nG01 Z0. F20.\n" + "".join(
+        f"X{a:.6f} Z{b:.6f} C{d:.5f}\n" for a, b, d in zip(x, z, c, strict=True)) + "M30\n"
+    program = parse_program(text)
+    new = plan(program, machine)
+    old = reference.plan(program, machine)
+    assert_same(new, old)
+    assert len({len(s.q) for s in new.segments}) > 3  # various sub-step counts were chosen
+
+
+def test_moves_large_enough_for_several_kinematic_blocks(machines):
+    """A move split into more than 8192 sub-steps is evaluated in blocks by tool_pose: the
+    series/cos choice is made per block, here too."""
+    machine = machines["grooving_4axis"]
+    program = ProgramBuilder().rapid(X=0.05, Y=0.0, Z=0.0, C=-0.001).linear(
+        C=0.03, feed_mm_per_min=100.0).linear(C=0.5).linear(C=0.501).linear(C=-0.001).linear(
+        C=0.03).build()
+    # the last turn repeats the first: the same n, yet each is a batch of its own when cut
+    # in blocks (at 5e-14, n ~ 12,000); at 1e-14 the first block of these turns is in series
+    # range (|C| < 0.01 rad) and their next blocks are not
+    for tolerance in (1e-12, 5e-14, 1e-14):
+        new = plan(program, machine, chord_tolerance=tolerance)
+        old = reference.plan(program, machine, chord_tolerance=tolerance)
+        assert_same(new, old)
+    assert max(len(s.q) for s in new.segments) > 8193
+
+
+def test_an_empty_program_and_dwells_only(machines):
+    machine = machines["planer_4axis"]
+    for program in (ProgramBuilder().build(), ProgramBuilder().dwell(1.0).dwell(-0.0).build()):
+        assert_same(plan(program, machine), reference.plan(program, machine))
+
+
+def errors_of(call):
+    try:
+        call()
+    except NCProgramError as error:
+        return str(error), error.line, error.key
+    return None
+
+
+@pytest.mark.parametrize("text", [
+    "G01 X1. F100.\nG01 A10.\nG01 C10.\n",          # A is not on the machine: line 2
+    "G00 X1.\nG01 X2.\nG01 C20. F10.\n",              # no feed: line 2
+    "G01 C180. F100.\nG01 A1.\n",                      # the rotary move fails first: line 1
+    "G00 X1.\nG01 Y1. F10\nG01 C359.\nG01 A1.\n",     # the rotary move fails first: line 3
+])
+def test_errors_name_the_same_move(machines, text):
+    machine = machines["grooving_4axis"]
+    program = parse_program(text)
+    new = errors_of(lambda: plan(program, machine, chord_tolerance=1e-17))
+    old = errors_of(lambda: reference.plan(program, machine, chord_tolerance=1e-17))
+    assert new is not None and new == old
+
+
+def test_batched_deviations_equal_one_move_at_a_time(machines):
+    """The batch evaluator against the reference's deviation, move by move and n by n."""
+    machine = machines["robonano_ui"]
+    rng = np.random.default_rng(5)
+    errors = random_errors(machine, rng)
+    points = np.vstack([np.zeros((1, 3)), rng.normal(0, 1e-3, (4, 3))])
+    paths = ToolPaths(machine, errors, points)
+    start = rng.normal(0, 0.2, (30, 6)) * [0.1, 0.1, 0.1, 1, 1, 1]
+    delta = rng.normal(0, 0.05, (30, 6))
+    ns = rng.integers(1, 40, 30)
+    batch = deviations(paths, start, delta, ns)
+    for i in range(30):
+        f = np.linspace(0.0, 1.0, ns[i] + 1)
+        mid = (f[:-1] + f[1:]) / 2
+        nodes = machine.tool_pose(start[i] + f[:, None] * delta[i], errors)
+        middle = machine.tool_pose(start[i] + mid[:, None] * delta[i], errors)
+        p_nodes = nodes[:, :3, :3] @ points.T + nodes[:, :3, 3:4]
+        p_mid = middle[:, :3, :3] @ points.T + middle[:, :3, 3:4]
+        one = float(np.max(np.linalg.norm(p_mid - (p_nodes[:-1] + p_nodes[1:]) / 2, axis=1)))
+        assert batch[i] == one, i
