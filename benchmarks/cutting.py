@@ -10,6 +10,11 @@ c. A 20-deg rotary sweep of a V tool about an axis 100 mm away, split into sub-s
    chord error stays under 1 nm (`rotary_substeps`). Goal >= 5,000 sub-steps/s.
 d. 400 x 400 mm plate, 8000 x 8000 grooves at 50 um pitch, cut only in 25 windows of 1 x 1 mm.
    Goal < 60 s and < 2 GB.
+e. Case a end to end: an NC program of the 2000 grooves (each: rapid over its start, rapid
+   down beside the block, feed across it, rapid up; 8000 moves) cut by `machinesim.cut` on
+   the grooving_4axis machine, grooves along X (the tool's cutting direction at C = 0) on a
+   10 x 40 x 2 mm block. Goals (issue 12): >= 10,000 grooves/s end to end, and the whole
+   call within twice the engine's own time (`CutReport.engine_s`) in the same run.
 
 a, b and d are run twice, each in its own process: with the default engine (``method="auto"``,
 which meshes straight grooves across a block as an exact height field,
@@ -30,7 +35,7 @@ too.
 Each scenario runs in its own process so that its peak memory (ru_maxrss, which includes
 manifold3d's C++ heap, unlike tracemalloc) is its own. Times are medians of ``--repeat`` runs.
 
-Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcd] [--repeat 3] [--no-naive]``
+Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcde] [--repeat 3] [--no-naive]``
 """
 
 from __future__ import annotations
@@ -143,6 +148,39 @@ def scenario_d():
     return stock, V90, paths, roi
 
 
+def groove_program(count: int = 2000, pitch: float = 20e-6, depth: float = 10e-6):
+    """Case a as an NC program: grooves along X across a 10 mm block, rapids beside it."""
+    from machinesim.nc import ProgramBuilder
+
+    builder = ProgramBuilder(1, source="benchmark case e")
+    for i in range(count):
+        builder.rapid(X=-0.5e-3, Y=pitch / 2 + pitch * i, Z=0.1e-3).rapid(Z=-depth)
+        builder.linear(X=10.5e-3, feed_mm_per_min=500.0).rapid(Z=0.1e-3)
+    return builder.build()
+
+
+def run_end_to_end(repeat: int) -> dict:
+    """Case e: machinesim.cut end to end, and the engine's share of each run."""
+    from machinesim import load_machine
+    from machinesim.cutting import cut
+
+    program, machine = groove_program(), load_machine("grooving_4axis")
+    stock = block(10e-3, 40e-3, 2e-3)
+    times, engine = [], []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        part, report = cut(program, machine, tool=V90, stock=stock)
+        times.append(time.perf_counter() - start)
+        engine.append(report.engine_s)
+    return {"scenario": "e", "method": report.engine, "median_s": statistics.median(times),
+            "times_s": times, "median_engine_s": statistics.median(engine),
+            "engine_s": engine, "grooves": 2000, "moves": len(program.moves),
+            "sweeps_cut": report.sweeps, "removed_volume_m3": report.removed_volume_m3,
+            "ratios": [t / e for t, e in zip(times, engine, strict=True)],
+            "triangles": len(part.mesh()[1]),
+            "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
+
+
 SCENARIOS = {"a": scenario_a, "b": scenario_b, "c": scenario_c, "d": scenario_d}
 #: Sweeps timed by the naive engine at the start, and on the final part (a, b only).
 NAIVE_SWEEPS = {"a": (200, 10), "b": (20, 3)}
@@ -200,19 +238,39 @@ def run_child(name: str, repeat: int, with_naive: bool, method: str) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenarios", default="abcd")
+    parser.add_argument("--scenarios", default="abcde")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-naive", action="store_true")
     parser.add_argument("--child", help=argparse.SUPPRESS)
     parser.add_argument("--method", default="auto", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.child == "e":
+        print(json.dumps(run_end_to_end(args.repeat)))
+        return
     if args.child:
         print(json.dumps(run_child(args.child, args.repeat, not args.no_naive, args.method)))
         return
     boolean_triangles = {}
     for name in args.scenarios:
+        if name == "e":
+            run_end_to_end_child(args)
+            continue
         for method in ("boolean", "auto") if name in "abd" else ("auto",):
             run_one(name, method, args, boolean_triangles)
+
+
+def run_end_to_end_child(args) -> None:
+    """Run case e in a child process and print its line: both figures from the same runs."""
+    command = [sys.executable, __file__, "--child", "e", "--repeat", str(args.repeat)]
+    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+    f = json.loads(out.strip().splitlines()[-1])
+    print(f"(e, cut end to end, {f['method']}) median {f['median_s']:.3f} s over "
+          f"{len(f['times_s'])} runs: {f['grooves'] / f['median_s']:,.0f} grooves/s "
+          f"({f['moves']} moves, {f['sweeps_cut']} sweeps cut); the engine's own time in "
+          f"the same runs median {f['median_engine_s']:.3f} s; end to end / engine: median "
+          f"{statistics.median(f['ratios']):.2f}x (runs "
+          f"{', '.join(f'{r:.2f}' for r in f['ratios'])}); peak RSS "
+          f"{f['peak_rss_mb']:.0f} MB", flush=True)
 
 
 def run_one(name: str, method: str, args, boolean_triangles: dict) -> None:

@@ -1,19 +1,33 @@
-"""Cutting tools as convex point sets in the ``tool_tip`` frame (metres).
+"""Cutting tools as convex bodies of their full height, in the ``tool_tip`` frame (metres).
 
-Every tool has its edge point at the origin and points along -Z: the body lies at z >= 0.
+Every tool has its edge point at the origin and points along -Z: its body lies at
+0 <= z <= ``height``, and the holder begins at z = ``height``. A cut of any depth up to
+``height`` is therefore exact, with no hidden tunnel above a short profile; where the top of
+the body (the holder's face) comes below the top of the stock the engine reports holder
+contact (`machinesim.cutting.EngineReport.holder_contact`), since the holder itself is not
+modelled.
+
 A non-rotational tool (V, round nose) cuts along its frame's +X axis; its cutting edge is a
-profile in the tool's Y-Z plane. The profile has zero thickness along X on purpose: the
-convex hull of the profile at the two ends of a linear move is then the exact volume swept
-by the edge, with no body behind the edge that a real tool clears with its clearance angle.
-The consequence at groove ends: where a move starts or stops inside the material, the
-simulated groove ends in the flat plane of the profile, whereas a real tool's body (rake and
-clearance faces) would also leave its shape there. A move inside the profile plane (a
-sideways drag) sweeps no volume with a zero-thickness profile: the engine flags those moves.
+profile in the tool's Y-Z plane, continued up to the holder: the flanks rise to
+``flank_height`` (by default all the way), then straight shank sides as wide as the flanks'
+top rise to ``height``. The profile has zero thickness along X on purpose: the prism of the
+profile at the two ends of a linear move is then the exact volume swept by the edge, with no
+body behind the edge that a real tool clears with its clearance angle. The consequence at
+groove ends: where a move starts or stops inside the material, the simulated groove ends in
+the flat plane of the profile, whereas a real tool's body (rake and clearance faces) would
+also leave its shape there. A move inside the profile plane (a sideways drag, a plunge)
+sweeps no volume with a zero-thickness profile: the engine flags those moves.
 
-A ball end mill is modelled by its rotating envelope, a sphere, without the shank.
+A ball end mill is modelled by its rotating envelope: a hemisphere of radius R about
+(0, 0, R) under a cylindrical shank of the same radius up to ``height``.
 
 Arcs and spheres are inscribed polygons whose vertices lie on the true surface; the chord
-tolerance (the sagitta between a chord and its arc) is a parameter of each tool.
+tolerance (the sagitta between a chord and its arc) is a parameter of each tool. The ball's
+polygon is a stack of rings of latitude, so that its volume has a closed form (a sum of
+frusta of regular pyramids, `BallEndMill.rings`).
+
+Sizes are bounded (`MAX_TOOL_SIZE_M`, `MAX_TOOL_VERTICES`): a tool larger than the machines
+or a polygon of millions of vertices is an input error, refused with `InputError`.
 """
 
 from __future__ import annotations
@@ -29,11 +43,21 @@ from machinesim.exceptions import InputError
 from machinesim.tolerances import BALL_CHORD_M, PROFILE_CHORD_M
 from machinesim.units import M_PER_MM, RAD_PER_DEG
 
-#: Height of V and round-nose profiles above the edge point (m): 8x the deepest groove of
-#: the seed experiments (25 um pyramids, seed 003), so no depth of cut reaches the top of
-#: the profile. The engine clips sweeps just above the stock, so a taller profile costs
-#: nothing; it only matters where a real tool's shank could touch the part.
-PROFILE_HEIGHT_M = 0.2e-3
+#: Default length of a tool's body from its edge point to the holder (m). Ten times the
+#: deepest cut of the shipped examples and seed experiments (grooves and face passes of tens
+#: of um, the 5 mm deep grooves of the tests stay below it) and of the order of a diamond
+#: tool's overhang from its holder. The engine clips every sweep just above the stock, so a
+#: tall body costs nothing where it does not reach the stock.
+TOOL_HEIGHT_M = 10e-3
+#: Largest tool dimension accepted (m): radius, height, or the width of the flanks' top.
+#: The shipped machines travel at most 0.5 m (+-250 mm), so a larger tool is a unit mix-up
+#: (``ball:1e9`` is a kilometre-wide ball); tessellating it within the nm chord tolerances
+#: would need billions of vertices (that spec crashed manifold3d before this bound).
+MAX_TOOL_SIZE_M = 1.0
+#: Most vertices of a tool polygon or polyhedron: about 10 MB of float64 points per pose
+#: pair in the engine, far above the defaults (a R2 mm ball at 1 um has ~5,000, a R2 mm
+#: nose at 1 nm ~900). A finer request is refused with advice to loosen ``chord_tol``.
+MAX_TOOL_VERTICES = 200_000
 
 
 def arc_segments(radius: float, angle: float, chord_tol: float) -> int:
@@ -66,6 +90,19 @@ def _check_positive(name: str, value: float) -> float:
     return value
 
 
+def _check_size(name: str, value: float) -> float:
+    """A positive length at most `MAX_TOOL_SIZE_M`, else InputError naming it."""
+    value = _check_positive(name, value)
+    if value > MAX_TOOL_SIZE_M:
+        raise InputError(
+            f"{name} must be at most {MAX_TOOL_SIZE_M:g} m (MAX_TOOL_SIZE_M: larger than any "
+            f"machine's travel, and too many polygon vertices at the nm chord tolerance), "
+            f"got {value!r} m",
+            key=name,
+        )
+    return value
+
+
 def _check_angle(name: str, value: float) -> float:
     value = float(value)
     if not math.isfinite(value) or not 0.0 < value < math.pi:
@@ -73,6 +110,42 @@ def _check_angle(name: str, value: float) -> float:
             f"{name} must lie in (0, pi) rad, got {value!r} rad ({math.degrees(value)!r} deg)",
             key=name,
         )
+    return value
+
+
+def _check_count(what: str, count: int, chord_tol: float) -> None:
+    if count > MAX_TOOL_VERTICES:
+        raise InputError(
+            f"the {what} would have {count:,} vertices at chord_tol {chord_tol!r} m, over "
+            f"MAX_TOOL_VERTICES ({MAX_TOOL_VERTICES:,}); give a larger chord_tol",
+            key="chord_tol",
+        )
+
+
+def _flank_height(tool, top_half_width) -> float:
+    """``tool.flank_height`` checked, or its default: the full height, or lower where the
+    flanks' top would be wider than `MAX_TOOL_SIZE_M` (an included angle near 180 deg)."""
+    if tool.flank_height is None:
+        height = tool.height
+        if 2.0 * top_half_width(height) > MAX_TOOL_SIZE_M:
+            low, high = 0.0, height
+            for _ in range(200):  # bisection to float64 resolution: the width is monotonic
+                middle = 0.5 * (low + high)
+                if 2.0 * top_half_width(middle) > MAX_TOOL_SIZE_M:
+                    high = middle
+                else:
+                    low = middle
+            height = low
+        return height
+    value = _check_size("flank_height", tool.flank_height)
+    if value > tool.height:
+        raise InputError(f"flank_height ({value!r} m) must not exceed height "
+                         f"({tool.height!r} m)", key="flank_height")
+    if 2.0 * top_half_width(value) > MAX_TOOL_SIZE_M:
+        raise InputError(
+            f"the flanks are {2.0 * top_half_width(value)!r} m wide at flank_height "
+            f"{value!r} m, over MAX_TOOL_SIZE_M ({MAX_TOOL_SIZE_M:g} m); give a lower "
+            "flank_height", key="flank_height")
     return value
 
 
@@ -89,47 +162,73 @@ def _profile_points(yz: np.ndarray) -> np.ndarray:
     return points
 
 
+def _with_shank(yz: np.ndarray, flank_height: float, height: float) -> np.ndarray:
+    """Profile (from the -Y flank top round to the +Y one) with straight shank sides from
+    the flanks' top at ``flank_height`` up to ``height``, when it is higher."""
+    if height <= flank_height:
+        return yz
+    half = yz[-1, 0]
+    return np.vstack([[-half, height], yz, [half, height]])
+
+
 @dataclass(frozen=True)
 class VTool:
-    """V (prism) tool: flanks at +-included_angle/2 from -Z, from the edge point up to height.
+    """V (prism) tool: flanks at +-included_angle/2 from -Z from the edge point up to
+    ``flank_height``, then straight shank sides up to ``height``, where the holder begins.
 
     Parameters
     ----------
     included_angle : float
         Included angle of the V (rad), in (0, pi). An included-angle error is part of it.
     height : float
-        Height of the profile above the edge point (m), see `PROFILE_HEIGHT_M`.
+        Length of the body from the edge point to the holder (m), `TOOL_HEIGHT_M` by default.
+    flank_height : float, optional
+        Height the flanks reach (m), at most ``height``. Default: ``height``, or lower where
+        the flanks' top would be wider than `MAX_TOOL_SIZE_M`.
     """
 
     included_angle: float
-    height: float = PROFILE_HEIGHT_M
+    height: float = TOOL_HEIGHT_M
+    flank_height: float | None = None
     rotational = False
+    planar = True
 
     def __post_init__(self) -> None:
         _check_angle("included_angle", self.included_angle)
-        _check_positive("height", self.height)
+        _check_size("height", self.height)
+        tangent = math.tan(self.included_angle / 2.0)
+        object.__setattr__(self, "flank_height",
+                           _flank_height(self, lambda h: h * tangent))
 
     def vertices(self) -> np.ndarray:
-        """Profile corners, shape (3, 3) (m): edge point, then the flank tops at -Y and +Y."""
-        half = self.height * math.tan(self.included_angle / 2.0)
-        return _profile_points(np.array([[0.0, 0.0], [-half, self.height], [half, self.height]]))
+        """Profile corners (m), shape (3, 3), or (5, 3) with a shank: the edge point, then
+        round the polygon up the -Y side (flank top, shank top) and down the +Y side."""
+        half = self.flank_height * math.tan(self.included_angle / 2.0)
+        yz = np.array([[-half, self.flank_height], [0.0, 0.0], [half, self.flank_height]])
+        yz = _with_shank(yz, self.flank_height, self.height)
+        # The edge point first, then up the -Y side: the polygon read backwards and rotated.
+        yz = yz[::-1]
+        start = int(np.flatnonzero(np.all(yz == 0.0, axis=1))[0])
+        return _profile_points(np.roll(yz, -start, axis=0))
 
     def edges(self) -> np.ndarray:
-        """Index pairs of the profile's edges into `vertices`, shape (3, 2) int64."""
-        return _polygon_edges(3)
+        """Index pairs of the profile's edges into `vertices`, shape (k, 2) int64."""
+        return _polygon_edges(len(self.vertices()))
 
     def with_errors(self, included_angle_error: float = 0.0) -> VTool:
         """The same tool with its included angle off by ``included_angle_error`` (rad)."""
-        return replace(self, included_angle=self.included_angle + included_angle_error)
+        return replace(self, included_angle=self.included_angle + included_angle_error,
+                       flank_height=None if self.flank_height == self.height
+                       else self.flank_height)
 
 
 @dataclass(frozen=True)
 class RoundNoseTool:
-    """Round-nose tool: an arc of radius R centred at (0, 0, R), then tangent straight flanks.
+    """Round-nose tool: an arc of radius R centred at (0, 0, R), then tangent straight flanks
+    up to ``flank_height``, then straight shank sides up to ``height``.
 
-    The arc spans +-included_angle/2 about -Z and the flanks continue tangentially up to
-    ``height``; where the arc already rises above ``height`` the profile is the arc cut by
-    the plane z = height.
+    The arc spans +-included_angle/2 about -Z and the flanks continue tangentially; where the
+    arc already rises above ``flank_height`` the profile is the arc cut by that plane.
 
     Parameters
     ----------
@@ -138,46 +237,50 @@ class RoundNoseTool:
     included_angle : float
         Included angle between the flanks (rad), in (0, pi).
     height : float
-        Height of the profile above the edge point (m).
+        Length of the body from the edge point to the holder (m).
     chord_tol : float
         Largest sagitta of the arc polygon (m); vertices lie on the true arc.
+    flank_height : float, optional
+        Height the arc and flanks reach (m), at most ``height`` (default as `VTool`).
     """
 
     nose_radius: float
     included_angle: float
-    height: float = PROFILE_HEIGHT_M
+    height: float = TOOL_HEIGHT_M
     chord_tol: float = PROFILE_CHORD_M
+    flank_height: float | None = None
     rotational = False
+    planar = True
 
     def __post_init__(self) -> None:
-        _check_positive("nose_radius", self.nose_radius)
+        _check_size("nose_radius", self.nose_radius)
         _check_angle("included_angle", self.included_angle)
-        _check_positive("height", self.height)
+        _check_size("height", self.height)
         _check_positive("chord_tol", self.chord_tol)
+        object.__setattr__(self, "flank_height", _flank_height(self, self._half_width))
+        end = min(self.included_angle / 2.0, self._arc_end(self.flank_height))
+        _check_count("nose arc", 2 * arc_segments(self.nose_radius, end, self.chord_tol) + 1,
+                     self.chord_tol)
+
+    def _arc_end(self, level: float) -> float:
+        """Angle from -Z at which the arc reaches ``level`` (pi / 2 above the centre)."""
+        return math.acos(max(-1.0, 1.0 - level / self.nose_radius))
+
+    def _half_width(self, level: float) -> float:
+        """Half width of the profile at ``level`` above the edge point (m)."""
+        radius, end = self.nose_radius, self.included_angle / 2.0
+        arc_top = radius * (1.0 - math.cos(end))
+        if level <= arc_top:
+            return radius * math.sin(self._arc_end(level))
+        return radius * math.sin(end) + (level - arc_top) * math.tan(end)
 
     def vertices(self) -> np.ndarray:
         """Profile polygon from the -Y top round to the +Y top, shape (k, 3) (m).
 
         The edge point (0, 0, 0) is always a vertex.
         """
-        radius, height = self.nose_radius, self.height
-        end = self.included_angle / 2.0
-        arc_top = radius * (1.0 - math.cos(end))
-        if arc_top > height:
-            end = math.acos(1.0 - height / radius)
-        # An even count keeps phi = 0, the edge point, exactly on a vertex.
-        half = arc_segments(radius, end, self.chord_tol)
-        phi = np.linspace(-end, end, 2 * half + 1)
-        phi[half] = 0.0
-        yz = np.stack([radius * np.sin(phi), radius * (1.0 - np.cos(phi))], axis=1)
-        if arc_top > height:
-            yz[[0, -1], 1] = height
-        else:
-            rise = (height - arc_top) / math.sin(end)
-            top = yz[-1] + rise * np.array([math.cos(end), math.sin(end)])
-            top[1] = height
-            yz = np.vstack([[-top[0], height], yz, top])
-        return _profile_points(yz)
+        return _nose_profile(self.nose_radius, self.included_angle, self.flank_height,
+                             self.height, self.chord_tol)
 
     def edges(self) -> np.ndarray:
         """Index pairs of the profile's edges into `vertices`, shape (k, 2) int64."""
@@ -191,7 +294,30 @@ class RoundNoseTool:
             self,
             nose_radius=self.nose_radius + nose_radius_error,
             included_angle=self.included_angle + included_angle_error,
+            flank_height=None if self.flank_height == self.height else self.flank_height,
         )
+
+
+@functools.lru_cache(maxsize=32)
+def _nose_profile(radius: float, included_angle: float, flank_height: float, height: float,
+                  chord_tol: float) -> np.ndarray:
+    end = included_angle / 2.0
+    arc_top = radius * (1.0 - math.cos(end))
+    if arc_top > flank_height:
+        end = math.acos(1.0 - flank_height / radius)
+    # An even count keeps phi = 0, the edge point, exactly on a vertex.
+    half = arc_segments(radius, end, chord_tol)
+    phi = np.linspace(-end, end, 2 * half + 1)
+    phi[half] = 0.0
+    yz = np.stack([radius * np.sin(phi), radius * (1.0 - np.cos(phi))], axis=1)
+    if arc_top > flank_height:
+        yz[[0, -1], 1] = flank_height
+    else:
+        rise = (flank_height - arc_top) / math.sin(end)
+        top = yz[-1] + rise * np.array([math.cos(end), math.sin(end)])
+        top[1] = flank_height
+        yz = np.vstack([[-top[0], flank_height], yz, top])
+    return _profile_points(_with_shank(yz, flank_height, height))
 
 
 @functools.lru_cache(maxsize=16)
@@ -201,6 +327,7 @@ def sphere_polygon(radius: float, chord_tol: float) -> manifold3d.Manifold:
     manifold3d's geodesic sphere puts its vertices on the sphere; the segment count (a
     multiple of 4) starts from the arc formula and grows until the measured facet depth
     (radius minus the least facet-plane distance from the centre) is within tolerance.
+    Used for stock features (reference spheres); tools use `BallEndMill`'s rings.
 
     Parameters
     ----------
@@ -219,48 +346,126 @@ def sphere_polygon(radius: float, chord_tol: float) -> manifold3d.Manifold:
         segments += 4 * math.ceil(segments / 16)
 
 
+def ring_facet_depth(radius: float, rings: int, segments: int) -> float:
+    """Largest facet depth (m) of the ring polygon of a hemisphere.
+
+    The hemisphere's vertices lie on ``rings`` rings of latitude at polar angles
+    k pi / (2 rings) from the pole, each a regular ``segments``-gon at the same azimuths, so
+    each facet is a planar trapezoid (a triangle at the pole). Its plane's distance from the
+    centre follows from the two edge midpoints in its meridian plane; the depth is the radius
+    minus that distance. The shank's faces lie at the equator polygon's apothem.
+    """
+    theta = np.linspace(0.0, math.pi / 2.0, rings + 1)
+    a, b = theta[:-1], theta[1:]
+    c = math.cos(math.pi / segments)
+    distance = c * np.sin(b - a) / np.hypot(c * (np.sin(b) - np.sin(a)), np.cos(b) - np.cos(a))
+    return float(radius * (1.0 - min(distance.min(), c)))
+
+
 @functools.lru_cache(maxsize=16)
-def _sphere_mesh(radius: float, chord_tol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Sphere polygon centred at (0, 0, radius): vertices (k, 3) m, triangles (t, 3) int64."""
-    mesh = sphere_polygon(radius, chord_tol).to_mesh64()
-    vertices = np.array(mesh.vert_properties[:, :3], dtype=np.float64)
-    vertices[:, 2] += radius
-    triangles = np.array(mesh.tri_verts, dtype=np.int64)
+def _ball_mesh(radius: float, chord_tol: float, height: float):
+    """Hemisphere ring polygon under a prism shank: vertices (k, 3), triangles (t, 3) int64,
+    rings and segments (see `BallEndMill.rings`)."""
+    if chord_tol >= radius:
+        rings, segments = 1, 4
+    else:
+        step = 2.0 * math.acos(1.0 - chord_tol / (2.0 * radius))
+        rings = max(1, math.ceil(math.pi / 2.0 / step))
+        segments = max(4, 4 * math.ceil(2.0 * math.pi / step / 4.0))
+    while True:
+        _check_count("ball polygon", rings * segments + segments + 1, chord_tol)
+        if ring_facet_depth(radius, rings, segments) <= chord_tol:
+            break
+        rings += math.ceil(rings / 8)
+        segments += 4 * math.ceil(segments / 32)
+    theta = np.linspace(0.0, math.pi / 2.0, rings + 1)[1:]
+    phi = 2.0 * math.pi * np.arange(segments) / segments
+    ring_radius = radius * np.sin(theta)
+    ring_z = radius * (1.0 - np.cos(theta))
+    ring_radius[-1], ring_z[-1] = radius, radius  # the equator exactly
+    if height > radius:
+        ring_radius = np.append(ring_radius, radius)
+        ring_z = np.append(ring_z, height)
+    count = len(ring_z)
+    vertices = np.zeros((1 + count * segments, 3))
+    vertices[1:, 0] = (ring_radius[:, None] * np.cos(phi)[None, :]).ravel()
+    vertices[1:, 1] = (ring_radius[:, None] * np.sin(phi)[None, :]).ravel()
+    vertices[1:, 2] = np.repeat(ring_z, segments)
+    j = np.arange(segments)
+    nxt = (j + 1) % segments
+
+    def ring(i, k):
+        return 1 + i * segments + k
+
+    triangles = [np.stack([np.zeros(segments, dtype=np.int64), ring(0, nxt), ring(0, j)], 1)]
+    for i in range(count - 1):
+        triangles.append(np.stack([ring(i, j), ring(i, nxt), ring(i + 1, nxt)], 1))
+        triangles.append(np.stack([ring(i, j), ring(i + 1, nxt), ring(i + 1, j)], 1))
+    top = count - 1
+    inner = np.arange(1, segments - 1)
+    triangles.append(np.stack([np.full(len(inner), ring(top, 0)), ring(top, inner),
+                               ring(top, inner + 1)], 1))
+    triangles = np.concatenate(triangles).astype(np.int64)
     vertices.flags.writeable = False
     triangles.flags.writeable = False
-    return vertices, triangles
+    return vertices, triangles, rings, segments
 
 
 @dataclass(frozen=True)
 class BallEndMill:
-    """Envelope of a rotating ball end mill: a sphere of radius R centred at (0, 0, R).
+    """Envelope of a rotating ball end mill: a hemisphere of radius R about (0, 0, R) under a
+    cylindrical shank of radius R up to ``height``.
 
     Parameters
     ----------
     radius : float
         Ball radius (m).
     chord_tol : float
-        Largest distance of a facet of the sphere polygon from the true sphere (m).
+        Largest distance of a facet of the polygon from the true surface (m).
+    height : float, optional
+        Length from the tip to the holder (m), at least ``radius``. Default: the larger of
+        `TOOL_HEIGHT_M` and the diameter.
     """
 
     radius: float
     chord_tol: float = BALL_CHORD_M
+    height: float | None = None
     rotational = True
+    planar = False
 
     def __post_init__(self) -> None:
-        _check_positive("radius", self.radius)
+        _check_size("radius", self.radius)
         _check_positive("chord_tol", self.chord_tol)
+        if self.height is None:
+            object.__setattr__(self, "height", max(TOOL_HEIGHT_M, 2.0 * self.radius))
+        _check_size("height", self.height)
+        if self.height < self.radius:
+            raise InputError(f"height ({self.height!r} m) must be at least the radius "
+                             f"({self.radius!r} m)", key="height")
+        self._mesh()
 
-    def _mesh(self) -> tuple[np.ndarray, np.ndarray]:
-        return _sphere_mesh(self.radius, self.chord_tol)
+    def _mesh(self):
+        return _ball_mesh(self.radius, self.chord_tol, self.height)
+
+    @property
+    def rings(self) -> tuple[int, int]:
+        """(rings, segments): the hemisphere's vertices lie on ``rings`` rings of latitude at
+        polar angles k pi / (2 rings), k = 1 .. rings, from the tip, each a regular
+        ``segments``-gon at azimuths 2 pi j / segments; the shank's top is the equator's
+        polygon at ``height``. The polyhedron is a stack of frusta of regular pyramids."""
+        return self._mesh()[2:]
 
     def vertices(self) -> np.ndarray:
-        """Sphere polygon vertices, shape (k, 3) (m), all at distance R from (0, 0, R)."""
+        """Polyhedron vertices, shape (k, 3) (m): the tip first, then ring by ring."""
         return self._mesh()[0]
 
+    def triangles(self) -> np.ndarray:
+        """Outward-oriented triangles of the polyhedron, indices into `vertices`, (t, 3)."""
+        return self._mesh()[1]
+
     def edges(self) -> np.ndarray:
-        """Index pairs of the sphere polygon's edges into `vertices`, shape (e, 2) int64."""
-        triangles = self._mesh()[1]
+        """Index pairs of the polyhedron's edges into `vertices`, shape (e, 2) int64."""
+        triangles = self.triangles()
         pairs = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
         return np.unique(np.sort(pairs, axis=1), axis=0)
 
@@ -275,7 +480,7 @@ _SPEC_FORMS = "'v:ANGLE_DEG', 'nose:RADIUS_MM:ANGLE_DEG' or 'ball:RADIUS_MM'"
 
 
 def tool_from_spec(spec: str) -> Tool:
-    """Build a tool from a text spec in mm and degrees.
+    """Build a tool from a text spec in mm and degrees, with the default height.
 
     Parameters
     ----------
@@ -290,7 +495,8 @@ def tool_from_spec(spec: str) -> Tool:
     Raises
     ------
     InputError
-        If the spec does not have one of these forms or a number is out of range.
+        If the spec does not have one of these forms or a number is out of range (sizes are
+        bounded by `MAX_TOOL_SIZE_M`).
     """
     fields = str(spec).strip().split(":")
     kind = fields[0].lower()

@@ -11,8 +11,10 @@ import pytest
 from machinesim import ErrorModel, ToolSetting
 from machinesim.cli import main
 from machinesim.cutting import cut
+from machinesim.exceptions import AxisLimitError
 from machinesim.metrology import height_map
 from machinesim.nc import ProgramBuilder, write_program
+from machinesim.tools import VTool
 
 UM, MM = 1e-6, 1e-3
 
@@ -111,3 +113,54 @@ def test_the_command_line_cuts_and_writes_part_and_report(tmp_path, capsys):
     assert main(["cut", str(program), "--machine", "nope", "--tool", "v:90", "--stock",
                  "block:5x3x1", "--out", str(out)]) == 2
     assert "unknown machine 'nope'" in capsys.readouterr().err
+
+
+def test_rapids_that_cut_are_cut_and_listed_with_their_lines():
+    # A rapid plunge 5 um into the block, a rapid 3 mm along X through it (a crash), then
+    # out: the part shows the 90-deg V the crash cut (section d^2), and both rapids are
+    # listed; the plunge of the zero-thickness edge removes nothing itself.
+    depth = 5 * UM
+    b = ProgramBuilder(1).rapid(X=1 * MM, Y=1 * MM, Z=0.1 * MM).rapid(Z=-depth)
+    program = b.rapid(X=4 * MM).rapid(Z=0.1 * MM).build()
+    part, report = cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    assert report.rapids_that_cut == (program.moves[1].line, program.moves[2].line)
+    assert report.removed_volume_m3 == pytest.approx(depth**2 * 3 * MM, rel=1e-9)
+    assert not report.empty_cut
+    h = height_map(part, np.array([2.5 * MM]), np.array([1 * MM]))[0, 0]
+    assert h == pytest.approx(-depth, abs=1e-12)
+
+
+def test_overtravel_is_an_error_naming_axis_value_travel_and_line_unless_allowed():
+    b = ProgramBuilder(1).rapid(X=1 * MM, Y=1 * MM, Z=0.1 * MM).rapid(X=-300 * MM)
+    program = b.rapid(X=1 * MM).build()
+    line = program.moves[1].line
+    with pytest.raises(AxisLimitError, match=rf"axis X = -300\.000000 mm at line {line} "
+                                             r"outside its travel -250\.000000 mm \.\. 250"):
+        cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1",
+                    allow_overtravel=True)
+    assert len(report.limit_violations) == 1
+    assert f"axis X = -300.000000 mm at line {line}" in report.limit_violations[0]
+    assert report.to_dict()["limit_violations"] == list(report.limit_violations)
+
+
+def test_a_cut_deeper_than_the_tool_reports_its_holder_lines():
+    tool = VTool(math.pi / 2, height=20 * UM)
+    b = ProgramBuilder(1).rapid(X=-0.5 * MM, Y=1 * MM, Z=0.1 * MM).rapid(Z=-30 * UM)
+    program = b.linear(X=5.5 * MM, feed_mm_per_min=500.0).rapid(Z=0.1 * MM).build()
+    _, report = cut(program, "grooving_4axis", tool=tool, stock="block:5x3x1")
+    assert report.holder_contact == (program.moves[2].line,)
+    assert report.to_dict()["holder_contact_lines"] == [program.moves[2].line]
+    _, clear = cut(grooves(n=1), "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    assert clear.holder_contact == ()
+
+
+def test_a_10_nm_groove_on_a_100_mm_block_is_not_an_empty_cut():
+    # Judged against the tool's swept size, not the stock's; integrated over the cut, so the
+    # 2e-19 m^3 come out to 1e-6 although the block holds 2e-5 m^3.
+    depth = 10e-9
+    b = ProgramBuilder(1).rapid(X=40 * MM, Y=50 * MM, Z=0.1 * MM)
+    b.linear(Z=-depth, feed_mm_per_min=100.0).linear(X=42 * MM).linear(Z=0.1 * MM)
+    _, report = cut(b.build(), "grooving_4axis", tool="v:90", stock="block:100x100x2")
+    assert not report.empty_cut and report.engine == "boolean"
+    assert report.removed_volume_m3 == pytest.approx(depth**2 * 2 * MM, rel=1e-6)

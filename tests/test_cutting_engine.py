@@ -131,23 +131,27 @@ def test_tiling_does_not_change_the_solid():
     assert np.array_equal(tiled.bounds, whole.bounds)
 
 
-def test_ball_sweep_removes_the_capsule_within_the_tessellation_bound():
-    # The sphere polygon has its vertices on the sphere and facets at most tol inside, so it
-    # lies between balls of radius R - tol and R; the hull of two copies lies between the
-    # capsules of those radii: V(R - tol) <= removed <= V(R), a bound of about
-    # (2 pi R l + 4 pi R^2) tol.
-    radius, tol, travel = 1e-3, 2e-6, 3e-3
+def test_ball_sweep_removes_the_swept_ball_and_shank_within_the_tessellation_bound():
+    # The ball end mill is a hemisphere under a cylindrical shank of its radius. Its polygon
+    # has its vertices on the true surface and facets at most tol inside, so it lies between
+    # the tools of radius R - tol and R, and so do their sweeps. Swept along X by l with the
+    # tip D below the top, the true tool removes, slice by slice in z: the stadium of the
+    # shank (pi r^2 + 2 r l) over D - r, and over the hemisphere pi rho^2 + 2 rho l, whose
+    # integrals are 2/3 pi r^3 and l pi r^2 / 2.
+    radius, tol, travel, depth = 1e-3, 2e-6, 3e-3, 5e-3
     tool = BallEndMill(radius, chord_tol=tol)
     stock = block(10e-3, 10e-3, 10e-3)
-    path = np.array([pose((3e-3, 5e-3, -5e-3)), pose((3e-3 + travel, 5e-3, -5e-3))])
+    path = np.array([pose((3e-3, 5e-3, -depth)), pose((3e-3 + travel, 5e-3, -depth))])
     _, report = remove(stock, tool, [path])
 
-    def capsule(r):
-        return math.pi * r * r * travel + 4.0 / 3.0 * math.pi * r**3
+    def swept(r):
+        return (2.0 / 3.0 * math.pi * r**3 + travel * math.pi * r * r / 2.0
+                + (depth - r) * (math.pi * r * r + 2.0 * r * travel))
 
-    assert capsule(radius - tol) * (1 - 1e-12) <= report.removed_volume
-    assert report.removed_volume <= capsule(radius) * (1 + 1e-12)
+    assert swept(radius - tol) * (1 - 1e-12) <= report.removed_volume
+    assert report.removed_volume <= swept(radius) * (1 + 1e-12)
     assert report.sideways == ()  # a rotating tool is never dragged sideways
+    assert report.holder_contact == ()  # the 10 mm body stands out of the stock
 
 
 def test_reports_flag_empty_sideways_and_degenerate_sweeps():

@@ -7,6 +7,8 @@ import pytest
 
 from machinesim.exceptions import InputError
 from machinesim.tools import (
+    MAX_TOOL_SIZE_M,
+    TOOL_HEIGHT_M,
     BallEndMill,
     RoundNoseTool,
     VTool,
@@ -56,26 +58,87 @@ def test_round_nose_flanks_are_tangent_to_the_arc():
     assert top[1] == 0.2e-3
 
 
-def test_round_nose_taller_than_height_is_cut_flat():
+def test_round_nose_taller_than_its_flanks_is_cut_flat_and_continues_as_a_shank():
     tool = RoundNoseTool(2e-3, math.radians(90.0), height=0.2e-3)
     vertices = tool.vertices()
     assert vertices[:, 2].max() == 0.2e-3
     assert np.count_nonzero(vertices[:, 2] == 0.2e-3) == 2
+    # Flanks stop at 0.1 mm, the shank goes straight up from their top to the holder.
+    shank = RoundNoseTool(2e-3, math.radians(90.0), height=0.2e-3, flank_height=0.1e-3)
+    yz = shank.vertices()[:, 1:]
+    half = math.sqrt(2e-3**2 - (2e-3 - 0.1e-3) ** 2)  # the arc's half width at 0.1 mm
+    for side in (-1.0, 1.0):
+        corners = yz[np.abs(yz[:, 0] - side * half) < 1e-15]
+        assert sorted(corners[:, 1]) == pytest.approx([0.1e-3, 0.2e-3], abs=1e-18)
 
 
-def test_ball_vertices_on_sphere_and_facets_within_tolerance():
+def test_tools_reach_the_holder_at_their_full_height_by_default():
+    for tool in (VTool(math.pi / 2), RoundNoseTool(2e-3, math.pi / 2), BallEndMill(1e-3)):
+        assert tool.height == TOOL_HEIGHT_M
+        assert tool.vertices()[:, 2].max() == TOOL_HEIGHT_M
+        assert tool.vertices()[:, 2].min() == 0.0
+    # A 90-deg V's flanks go all the way: the top is 2 x 10 mm wide.
+    v = VTool(math.pi / 2)
+    assert v.flank_height == v.height
+    assert np.ptp(v.vertices()[:, 1]) == pytest.approx(2 * TOOL_HEIGHT_M, rel=1e-15)
+    assert BallEndMill(8e-3).height == 16e-3  # at least the diameter
+
+
+def test_v_tool_with_a_shank_has_straight_sides_above_its_flanks():
+    tool = VTool(math.radians(60.0), height=2e-3, flank_height=0.5e-3)
+    yz = tool.vertices()[:, 1:]
+    half = 0.5e-3 * math.tan(math.radians(30.0))
+    expected = [[0.0, 0.0], [-half, 0.5e-3], [-half, 2e-3], [half, 2e-3], [half, 0.5e-3]]
+    np.testing.assert_allclose(yz, expected, rtol=0, atol=1e-18)
+
+
+def test_a_v_near_180_deg_stops_its_flanks_at_the_size_bound():
+    tool = tool_from_spec("v:179")
+    assert tool.flank_height < tool.height
+    top = tool.vertices()[:, 1]
+    assert np.ptp(top) == pytest.approx(MAX_TOOL_SIZE_M, rel=1e-12)
+
+
+def _frusta_volume(radius, rings, segments, height):
+    """Volume of the ring polyhedron from its construction: regular m-gons of circumradius
+    R sin(theta_k) at height R (1 - cos(theta_k)), theta_k = k pi / (2 rings), aligned; each
+    band is a frustum of a regular pyramid, V = h (A1 + A2 + sqrt(A1 A2)) / 3 with
+    A = m r^2 sin(2 pi / m) / 2, then a prism of the equator polygon up to ``height``."""
+    theta = np.linspace(0.0, math.pi / 2, rings + 1)
+    r, z = radius * np.sin(theta), radius * (1 - np.cos(theta))
+    area = segments / 2 * r**2 * math.sin(2 * math.pi / segments)
+    bands = np.diff(z) / 3 * (area[1:] + area[:-1] + np.sqrt(area[1:] * area[:-1]))
+    return bands.sum() + area[-1] * (height - radius), area[-1]
+
+
+def test_ball_is_a_ring_polyhedron_on_the_sphere_under_its_shank():
     radius, tol = 1e-3, 2e-6
     tool = BallEndMill(radius, chord_tol=tol)
-    vertices = tool.vertices()
+    vertices, triangles = tool.vertices(), tool.triangles()
+    rings, segments = tool.rings
     centre = np.array([0.0, 0.0, radius])
-    np.testing.assert_allclose(np.linalg.norm(vertices - centre, axis=1), radius, rtol=1e-14)
-    assert vertices[:, 2].min() == pytest.approx(0.0, abs=1e-18)
+    lower = vertices[:, 2] <= radius
+    np.testing.assert_allclose(np.linalg.norm(vertices[lower] - centre, axis=1), radius,
+                               rtol=1e-14)
+    assert np.all(vertices[~lower, 2] == tool.height)
+    np.testing.assert_allclose(np.hypot(*vertices[~lower, :2].T), radius, rtol=1e-14)
+    assert np.array_equal(vertices[0], [0.0, 0.0, 0.0])
+    assert len(vertices) == 1 + (rings + 1) * segments
     edges = tool.edges()
-    # Closed triangulated sphere: V - E + F = 2 with 2E = 3F.
-    assert len(vertices) - len(edges) + 2 * len(edges) // 3 == 2
-    # Facet depth read independently: the midpoint of every edge is inside by <= tol.
-    middle = 0.5 * (vertices[edges[:, 0]] + vertices[edges[:, 1]])
-    assert (radius - np.linalg.norm(middle - centre, axis=1)).max() <= tol
+    assert len(vertices) - len(edges) + len(triangles) == 2  # a closed polyhedron
+    # Facet depth read independently: the planes of the hemisphere's triangles lie within
+    # tol of the sphere (distance of each plane from the centre).
+    corner = vertices[triangles]
+    on_ball = np.all(corner[:, :, 2] <= radius, axis=1)
+    normal = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    distance = np.einsum("ij,ij->i", normal, corner[:, 0] - centre)[on_ball]
+    assert np.all(distance > 0)  # outward
+    assert (radius - distance).max() <= tol
+    # Its volume by the divergence theorem equals the closed form of its construction.
+    volume = np.einsum("ij,ij->i", corner[:, 0], np.cross(corner[:, 1], corner[:, 2])).sum() / 6
+    assert volume == pytest.approx(_frusta_volume(radius, rings, segments, tool.height)[0],
+                                   rel=1e-13)
 
 
 def test_with_errors_moves_only_the_named_geometry():
@@ -121,8 +184,26 @@ def test_tool_from_spec(spec, expected):
         ("v:abc", "'v:abc'.*expected numbers"),
         ("v:200", "'v:200'.*included_angle must lie in"),
         ("ball:-1", "'ball:-1'.*radius must be a positive"),
+        ("ball:1e9", "'ball:1e9'.*radius must be at most 1 m"),
+        ("nose:2000:90", "nose_radius must be at most 1 m"),
+        ("ball:nan", "radius must be a positive finite"),
     ],
 )
 def test_bad_tool_specs_raise_input_error(spec, message):
     with pytest.raises(InputError, match=message):
         tool_from_spec(spec)
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda: VTool(math.pi / 2, height=2.0), "height must be at most 1 m"),
+        (lambda: VTool(math.pi / 2, height=1e-3, flank_height=2e-3), "must not exceed height"),
+        (lambda: BallEndMill(2e-3, height=1e-3), "at least the radius"),
+        (lambda: BallEndMill(0.5, chord_tol=1e-9), "vertices at chord_tol"),
+        (lambda: RoundNoseTool(0.5, math.pi / 2, chord_tol=1e-15), "vertices at chord_tol"),
+    ],
+)
+def test_tool_sizes_are_bounded(make, message):
+    with pytest.raises(InputError, match=message):
+        make()

@@ -1,19 +1,22 @@
 """Exact material removal: stock minus the convex sweeps of a tool along pose sequences.
 
-A sweep is the convex hull of the tool at two consecutive poses of a path (float64,
-`manifold3d.Manifold.hull_points`). For a move at fixed orientation this is the exact volume
-swept by the tool; a move that rotates must arrive already split into sub-steps whose chord
-error is within tolerance (`rotary_substeps`).
+A sweep is the convex hull of the tool at two consecutive poses of a path, built exactly in
+float64 (`machinesim.cutting.sweeps`: the prism of a profile for a translation, Qhull for a
+solid or a move that rotates; never manifold3d's QuickHull, which drops points near flat
+sets and mis-builds hulls of coplanar rings). For a move at fixed orientation this is the
+exact volume swept by the tool; a move that rotates must arrive already split into sub-steps
+whose chord error is within tolerance (`rotary_substeps`).
 
 Straight grooves right across a block are first offered to `machinesim.cutting.relief`,
 which meshes their height field exactly without any boolean; everything else is subtracted
 here. Speed comes from never touching the part mesh once per sweep:
 
 1. Tool points for all poses are transformed at once (numpy).
-2. Each sweep is clipped, before its hull is built, to the half-space a hair above the top
-   of the stock (`CLIP_MARGIN_REL`). The part is unchanged (nothing above the stock is
-   material), but tall tool bodies no longer overlap their neighbours, so parallel sweeps
-   stay (almost) disjoint and their union is nearly free.
+2. Each sweep is clipped to the half-space a hair above the top of the stock
+   (`CLIP_MARGIN_REL`; a translated profile at that height plus its Z travel, `_prism`). The
+   part is unchanged (nothing above the stock is material), but tall tool bodies no longer
+   overlap their neighbours, so parallel sweeps stay (almost) disjoint and their union is
+   nearly free.
 3. Sweeps are grouped by their direction of travel in XY. Parallel sweeps are unioned in
    one `batch_boolean`; groups that cross each other are subtracted one after the other,
    each evaluated before the next, because the union of crossing sweeps costs as much as
@@ -22,6 +25,11 @@ here. Speed comes from never touching the part mesh once per sweep:
    cut with only the sweeps that touch it, which keeps manifold3d's faster-than-linear
    boolean cost down, and the tiles of a cell are joined by `stitch` (a mesh merge along
    the walls, with a boolean union as the fallback), the cells by one union.
+
+Subtraction commutes, so the part does not depend on how the sweeps are batched or ordered:
+removing a set of sweeps at once or one by one gives the same solid (to manifold3d's
+round-off, tested on paper 002's groove programs). The removed volume is integrated over the
+cut itself (`removed_volume`), not taken as the difference of two large volumes.
 """
 
 from __future__ import annotations
@@ -29,7 +37,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import manifold3d
 import numpy as np
@@ -37,6 +45,7 @@ from manifold3d import OpType
 
 from machinesim.cutting.relief import cut_reliefs
 from machinesim.cutting.stitch import exact_box, stitch
+from machinesim.cutting.sweepset import SweepSet, dragged
 from machinesim.cutting.tiling import (
     SWEEPS_PER_TILE,
     grid_tiles,
@@ -47,23 +56,28 @@ from machinesim.cutting.tiling import (
 from machinesim.exceptions import InputError
 from machinesim.tolerances import (
     CLIP_MARGIN_REL,
-    EMPTY_REL,
     PLANAR_TRAVEL_REL,
     RIGID_TOL,
-    SAME_ORIENTATION,
-    SIDEWAYS_REL,
 )
 from machinesim.tools import arc_segments
 from machinesim.workpiece import Part
 
 #: Sweeps travelling within this angle (rad) in XY are cut together as one parallel group.
 DIRECTION_BIN_RAD = math.radians(5.0)
-#: Rotating sweeps clip only when the all-pairs edge search is small: beyond this many tool
-#: vertices their hull is built unclipped (still exact, only slower to union).
-PAIR_CLIP_MAX_VERTICES = 64
-#: Sweeps whose tool points are processed together: bounds the transient memory (k points
-#: per pose, ~100 bytes each) to ~50 MB whatever the path length.
-POINTS_PER_CHUNK = 1 << 19
+#: A cut is empty when it removes at most this fraction of the volume its sweeps could
+#: remove (the clipped sweeps' own volume), not of the stock's: the removed volume is
+#: integrated over the cut faces, so its round-off is ~1e-15 of the cut's size, and a cut
+#: that removes nothing integrates to exactly 0. A 10 nm deep groove on a 100 mm block is
+#: 1e-2 of its clipped sweep, ten orders above this.
+EMPTY_SWEPT_REL = 1e-12
+#: A face's integral changes by a cut only when the change exceeds this fraction of the
+#: magnitude of its terms: an untouched face split by tile walls sums to itself within
+#: ~1e-15 (float64 summation over its pieces). A real cut below it on a face that is not
+#: the top (e.g. grazing a block's bottom) moves the volume by less than this fraction of
+#: that face's integral, and is dropped as round-off.
+FACE_ROUND_REL = 1e-12
+#: Key of a (run id, face id) pair, run * FACE_KEY + face: face ids stay below 2^31.
+FACE_KEY = 1 << 31
 
 
 @dataclass(frozen=True)
@@ -73,7 +87,8 @@ class EngineReport:
     Attributes
     ----------
     removed_volume : float
-        Volume removed from the stock (clipped to the ROI), m^3.
+        Volume removed from the stock (clipped to the ROI), m^3, integrated over the cut
+        (exact to float64 round-off of the cut's own size, whatever the stock's).
     n_sweeps : int
         Sweeps in the input (consecutive pose pairs over all paths).
     n_sweeps_cut : int
@@ -82,10 +97,11 @@ class EngineReport:
         Sweeps with no volume (a zero-thickness profile moved within its own plane or not
         at all); they remove nothing.
     empty_cut : bool
-        True when nothing was removed: flagged, never silent.
+        True when nothing was removed, judged against ``swept_volume`` (`EMPTY_SWEPT_REL`):
+        flagged, never silent.
     sideways : tuple of int
-        Indices (over all paths, in order) of sweeps that drag a non-rotational tool
-        sideways (`SIDEWAYS_REL`).
+        Indices (over all paths, in order) of sweeps that reach the stock and drag a
+        non-rotational tool sideways (`SIDEWAYS_REL`).
     n_cells : int
         Cells (ROI windows times tiles) the region was cut in; 1 per window by relief.
     method : str
@@ -93,6 +109,16 @@ class EngineReport:
         `machinesim.cutting.relief`), "boolean" when the sweeps were subtracted.
     elapsed_s : float
         Wall time of the call, s.
+    swept_volume : float
+        Volume of the sweeps that reach the stock, clipped just above it, m^3 (the relief
+        engine: the profiles' area below the top times the groove lengths).
+    holder_contact : tuple of int
+        Indices (over all paths) of sweeps in which the top of the tool's body, where its
+        holder begins (`tools`), comes below the top of the stock over it: the holder, not
+        modelled, would touch the part.
+    reached : ndarray of int
+        Indices (over all paths) of the sweeps that reach the stock region (those cut, and
+        those with no volume); `machinesim.cutting.cut` checks its rapids among them.
     """
 
     removed_volume: float
@@ -104,6 +130,9 @@ class EngineReport:
     n_cells: int
     method: str
     elapsed_s: float
+    swept_volume: float = 0.0
+    holder_contact: tuple[int, ...] = ()
+    reached: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
 
 def rotary_substeps(radius: float, angle: float, chord_tol: float = 1e-9) -> int:
@@ -177,134 +206,6 @@ def _check_roi(roi, bounds: np.ndarray) -> list[tuple[float, float, float, float
     return cells
 
 
-class _Sweeps:
-    """The sweeps of all paths, built chunk by chunk into clipped convex hulls."""
-
-    def __init__(self, tool, paths: list[np.ndarray], clip_z: float) -> None:
-        self.rotational = bool(tool.rotational)
-        self.vertices = np.asarray(tool.vertices(), dtype=np.float64)
-        edges = np.asarray(tool.edges(), dtype=np.int64)
-        self.clip_z = clip_z
-        self.poses = np.concatenate(paths) if paths else np.zeros((0, 4, 4))
-        firsts = np.cumsum([0] + [len(poses) for poses in paths])
-        # A sweep joins pose i to pose i + 1 of the same path, never across paths.
-        self.pairs = np.concatenate(
-            [np.arange(a, b - 1) for a, b in zip(firsts[:-1], firsts[1:], strict=True)]
-            + [np.zeros(0, dtype=np.int64)]
-        ).astype(np.int64)
-        self.count = len(self.pairs)
-        k = len(self.vertices)
-        # Candidate edges of hull(T0, T1), T1 = points k.. 2k-1: for a translation the edges
-        # of T0, of T1 and each vertex's own path; for a rotation any T0-T1 pair as well.
-        ends = np.stack([np.arange(k), np.arange(k) + k], axis=1)
-        self.translation_segments = np.concatenate([edges, edges + k, ends])
-        self.rotation_segments = None
-        if k <= PAIR_CLIP_MAX_VERTICES:
-            i, j = np.meshgrid(np.arange(k), np.arange(k) + k, indexing="ij")
-            self.rotation_segments = np.concatenate(
-                [edges, edges + k, np.stack([i.ravel(), j.ravel()], axis=1)]
-            )
-
-    def _clip(self, points: np.ndarray, segments):
-        """Point sets whose hulls are the sweeps' hulls cut by z <= clip_z, and their bounds.
-
-        ``points`` has shape (s, 2k, 3). Every candidate lies in the hull, and every vertex
-        of the clipped hull is a point below the plane or a crossing of a hull edge, so the
-        hull of the candidates is exactly the clipped sweep.
-
-        Returns
-        -------
-        candidates : list of (ndarray, shape (c, 3)) or None
-            None where the whole sweep lies above the plane.
-        lower, upper : ndarray, shape (s, 3)
-            Bounds of each candidate set, m.
-        """
-        below = points[:, :, 2] <= self.clip_z
-        if segments is None:
-            kept = [p if b.any() else None for p, b in zip(points, below, strict=True)]
-            return kept, points.min(axis=1), points.max(axis=1)
-        a, b = points[:, segments[:, 0]], points[:, segments[:, 1]]
-        crossing = below[:, segments[:, 0]] != below[:, segments[:, 1]]
-        # Segments that do not cross may divide by zero; only crossing ones are read.
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (self.clip_z - a[:, :, 2]) / (b[:, :, 2] - a[:, :, 2])
-            cut = a + t[:, :, None] * (b - a)
-        cut[:, :, 2] = self.clip_z
-        every = np.concatenate([points, cut], axis=1)
-        valid = np.concatenate([below, crossing], axis=1)[:, :, None]
-        lower = np.where(valid, every, np.inf).min(axis=1)
-        upper = np.where(valid, every, -np.inf).max(axis=1)
-        out = []
-        for sweep, state in enumerate(below.sum(axis=1)):
-            if state == below.shape[1]:
-                out.append(points[sweep])
-            elif state == 0:
-                out.append(None)
-            else:
-                out.append(np.concatenate([points[sweep][below[sweep]],
-                                           cut[sweep][crossing[sweep]]]))
-        return out, lower, upper
-
-    def hulls(self, keep: Callable[[np.ndarray, np.ndarray], np.ndarray]):
-        """Clipped hulls of the sweeps whose point bounds pass ``keep``.
-
-        Returns
-        -------
-        hulls : list of manifold3d.Manifold
-        lower, upper : ndarray, shape (s, 3)
-            Bounds of each clipped hull's points, m.
-        direction : ndarray, shape (s, 3)
-            Displacement of the tool tip over each sweep, m.
-        n_degenerate : int
-        sideways : list of int
-            Sweep indices (over all paths) that drag a non-rotational tool sideways.
-        """
-        hulls, lower, upper, direction, sideways = [], [], [], [], []
-        n_degenerate = 0
-        rotation, origin = self.poses[:, :3, :3], self.poses[:, :3, 3]
-        k = len(self.vertices)
-        nseg = len(self.translation_segments)
-        if self.rotation_segments is not None:
-            nseg = max(nseg, len(self.rotation_segments))
-        step = max(1, POINTS_PER_CHUNK // (2 * k + nseg))
-        for begin in range(0, self.count, step):
-            first = self.pairs[begin:begin + step]
-            r0, r1 = rotation[first], rotation[first + 1]
-            move = origin[first + 1] - origin[first]
-            if not self.rotational:
-                sideways.extend((begin + np.flatnonzero(dragged(r0, move))).tolist())
-            p0 = np.einsum("nij,kj->nki", r0, self.vertices) + origin[first][:, None, :]
-            p1 = np.einsum("nij,kj->nki", r1, self.vertices) + origin[first + 1][:, None, :]
-            points = np.concatenate([p0, p1], axis=1)
-            chosen = np.flatnonzero(keep(points.min(axis=1), points.max(axis=1)))
-            same = np.abs(r1 - r0).reshape(-1, 9).max(axis=1) <= SAME_ORIENTATION
-            for subset, segments in ((chosen[same[chosen]], self.translation_segments),
-                                     (chosen[~same[chosen]], self.rotation_segments)):
-                kept, low, high = self._clip(points[subset], segments)
-                for row, (offset, candidates) in enumerate(zip(subset, kept, strict=True)):
-                    if candidates is None:
-                        continue
-                    hull = manifold3d.Manifold.hull_points(candidates)
-                    # Coplanar points give an empty or a flat, zero-volume hull.
-                    if hull.is_empty() or not hull.volume() > 0.0:
-                        n_degenerate += 1
-                        continue
-                    hulls.append(hull)
-                    lower.append(low[row])
-                    upper.append(high[row])
-                    direction.append(move[offset])
-        shape = (-1, 3)
-        return (hulls, np.array(lower).reshape(shape), np.array(upper).reshape(shape),
-                np.array(direction).reshape(shape), n_degenerate, sideways)
-
-
-def dragged(rotation: np.ndarray, move: np.ndarray) -> np.ndarray:
-    """Which moves (s, 3) drag a non-rotational tool at ``rotation`` (s, 3, 3) sideways."""
-    local = np.einsum("nji,nj->ni", rotation, move)
-    length = np.linalg.norm(local, axis=1)
-    return (np.abs(local[:, 1]) > SIDEWAYS_REL * length) & (length > 0.0)
-
-
 def _direction_keys(direction: np.ndarray) -> np.ndarray:
     """Group key per sweep: its XY travel direction modulo pi, in bins; -1 for no XY travel."""
     planar = np.hypot(direction[:, 0], direction[:, 1])
@@ -312,6 +213,55 @@ def _direction_keys(direction: np.ndarray) -> np.ndarray:
     bins = int(round(math.pi / DIRECTION_BIN_RAD))
     key = np.mod(np.rint(angle / DIRECTION_BIN_RAD).astype(np.int64), bins)
     return np.where(planar > PLANAR_TRAVEL_REL * np.linalg.norm(direction, axis=1), key, -1)
+
+
+def _face_moments(solid: manifold3d.Manifold, z0: float):
+    """Each triangle's integral of (z - z0) n_z dA, with its origin (run id, face id).
+
+    By the divergence theorem (field (0, 0, z - z0), divergence 1) these sum to the solid's
+    volume. For a flat triangle the integral is its signed area projected on XY times its
+    centroid's height above z0; both use coordinate differences, so a small feature far from
+    the origin keeps its own relative precision.
+    """
+    mesh = solid.to_mesh64()
+    vertices = np.asarray(mesh.vert_properties)[:, :3]
+    triangles = np.asarray(mesh.tri_verts, dtype=np.int64)
+    a, b, c = (vertices[triangles[:, i]] for i in range(3))
+    area = 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
+                  - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1]))
+    moment = area * ((a[:, 2] + b[:, 2] + c[:, 2]) / 3.0 - z0)
+    runs = np.asarray(mesh.run_original_id, dtype=np.int64)
+    run_index = np.asarray(mesh.run_index, dtype=np.int64)
+    run = np.repeat(runs, np.diff(run_index[:len(runs) + 1]) // 3)
+    face = np.asarray(mesh.face_id, dtype=np.int64)
+    if len(face) != len(triangles):
+        face = np.arange(len(triangles), dtype=np.int64)
+    return run, face, moment
+
+
+def removed_volume(before: manifold3d.Manifold, after: manifold3d.Manifold, cut_id: int,
+                   z0: float) -> float:
+    """Volume of ``before`` not in ``after`` (m^3), integrated over the region removed.
+
+    The region's boundary is the cut surface (faces of ``after`` that came from the sweeps,
+    ``cut_id``) and the parts of ``before``'s faces that the sweeps took away. With the field
+    (0, 0, z - z0), z0 the stock top, the top face and every vertical face contribute
+    nothing; each other face of ``before`` contributes the difference of its integral before
+    and after, kept only where it exceeds `FACE_ROUND_REL` of the face's own terms (an
+    untouched face, split by tile walls, agrees with itself to round-off). So the removed
+    volume is a sum over the cut, free of the cancellation of two whole volumes: a 10 nm
+    groove on a 100 mm block comes out to its own float64 precision.
+    """
+    run_b, face_b, moment_b = _face_moments(before, z0)
+    run_a, face_a, moment_a = _face_moments(after, z0)
+    cut = run_a == cut_id
+    removed = -float(np.sum(moment_a[cut]))
+    keys = np.concatenate([run_b * FACE_KEY + face_b, run_a[~cut] * FACE_KEY + face_a[~cut]])
+    moments = np.concatenate([moment_b, -moment_a[~cut]])
+    _, group = np.unique(keys, return_inverse=True)
+    change = np.bincount(group, weights=moments)
+    size = np.bincount(group, weights=np.abs(moments))
+    return removed + float(np.sum(change[np.abs(change) > FACE_ROUND_REL * size]))
 
 
 def remove(
@@ -357,6 +307,8 @@ def remove(
     """
     start = time.perf_counter()
     paths = _check_paths(paths)
+    if method not in ("auto", "boolean"):
+        raise InputError(f"method must be 'auto' or 'boolean', got {method!r}", key="method")
     bounds = stock.bounds
     scale = float(np.abs(bounds).max()) or 1.0
     margin = CLIP_MARGIN_REL * scale
@@ -376,34 +328,38 @@ def remove(
                & (high[:, None, 1] >= cell_array[None, :, 2] - margin))
         return inside & hit.any(axis=1)
 
-    sweeps = _Sweeps(tool, paths, z_high)
-    if method not in ("auto", "boolean"):
-        raise InputError(f"method must be 'auto' or 'boolean', got {method!r}", key="method")
+    sweeps = SweepSet(tool, paths, z_high)
+    holder = tuple(sweeps.holder_contact(bounds[1, 2], touches))
     if method == "auto" and sweeps.count:
         relief = cut_reliefs(stock, sweeps.vertices, sweeps.poses, sweeps.pairs,
-                             None if roi is None else cells)
+                             None if roi is None else cells, sweeps.pose_bounds)
         if relief is not None:
             if progress is not None:
                 progress(0, relief.n_sweeps_cut)
                 progress(relief.n_sweeps_cut, relief.n_sweeps_cut)
             sideways = []
             if not sweeps.rotational:
-                first = sweeps.pairs
+                first = sweeps.pairs[relief.reached]
                 move = sweeps.poses[first + 1, :3, 3] - sweeps.poses[first, :3, 3]
-                sideways = np.flatnonzero(dragged(sweeps.poses[first, :3, :3], move)).tolist()
+                drag = dragged(sweeps.poses[first, :3, :3], move)
+                sideways = relief.reached[drag].tolist()
             report = EngineReport(
                 removed_volume=relief.removed_volume,
                 n_sweeps=sweeps.count,
                 n_sweeps_cut=relief.n_sweeps_cut,
                 n_degenerate=relief.n_degenerate,
-                empty_cut=not relief.removed_volume > EMPTY_REL * relief.stock_volume,
+                empty_cut=not relief.removed_volume > EMPTY_SWEPT_REL * relief.swept_volume,
                 sideways=tuple(sideways),
                 n_cells=len(relief.part.reliefs),
                 method="relief",
                 elapsed_s=time.perf_counter() - start,
+                swept_volume=relief.swept_volume,
+                holder_contact=holder,
+                reached=relief.reached,
             )
             return relief.part, report
-    hulls, lower, upper, direction, n_degenerate, sideways = sweeps.hulls(touches)
+    hulls, lower, upper, direction, n_degenerate, sideways, swept, reached = sweeps.hulls(
+        touches)
     keys = _direction_keys(direction)
 
     plan = [(cell, grid_tiles(cell, members_in(lower, upper, cell, margin), lower, upper, margin,
@@ -414,7 +370,9 @@ def remove(
         progress(done, total)
 
     base = stock.manifold
+    top = float(bounds[1, 2])
     stock_pieces, cell_parts = [], []
+    removed = 0.0
     for cell, tiles in plan:
         pieces = []
         for (xmin, xmax, ymin, ymax), members in tiles:
@@ -424,12 +382,15 @@ def remove(
                 piece = base ^ exact_box(*tile_box((xmin, xmax, ymin, ymax), cell, roi is None,
                                                     bounds, scale))
             stock_pieces.append(piece)
+            uncut = piece
             for key in np.unique(keys[members]):
                 group = [hulls[i] for i in members[keys[members] == key]]
                 piece = piece - manifold3d.Manifold.batch_boolean(group, OpType.Add)
                 # Evaluate now: manifold3d is lazy and would flatten A - B - C into
                 # A - (B + C), the union of crossing groups this loop exists to avoid.
                 piece.num_tri()
+            if len(members):
+                removed += removed_volume(uncut, piece, sweeps.run_id, top)
             pieces.append(piece)
             done += len(members)
             if progress is not None:
@@ -442,19 +403,21 @@ def remove(
     result = (manifold3d.Manifold.batch_boolean(cell_parts, OpType.Add) if cell_parts
               else manifold3d.Manifold())
     if overlapping(cell_array):
+        # Windows that overlap cut their common part twice: count it once, by difference.
         stock_volume = manifold3d.Manifold.batch_boolean(stock_pieces, OpType.Add).volume()
-    else:
-        stock_volume = sum(piece.volume() for piece in stock_pieces)
-    removed = stock_volume - result.volume()
+        removed = stock_volume - result.volume()
     report = EngineReport(
         removed_volume=removed,
         n_sweeps=sweeps.count,
         n_sweeps_cut=len(hulls),
         n_degenerate=n_degenerate,
-        empty_cut=not removed > EMPTY_REL * stock_volume,
+        empty_cut=not removed > EMPTY_SWEPT_REL * swept,
         sideways=tuple(int(i) for i in sideways),
         n_cells=sum(len(tiles) for _, tiles in plan),
         method="boolean",
         elapsed_s=time.perf_counter() - start,
+        swept_volume=swept,
+        holder_contact=holder,
+        reached=np.array(reached, dtype=np.int64),
     )
     return Part(result), report

@@ -1,4 +1,11 @@
-"""Cut an NC program on a machine with errors: program -> motion -> poses -> material removal."""
+"""Cut an NC program on a machine with errors: program -> motion -> poses -> material removal.
+
+Every move removes material, rapids (G00) included: a rapid into the part is a crash, and
+the part shows it. Rapids that met material still there when they ran are listed with their
+lines; blocks outside the travel of an axis stop the cut (`AxisLimitError`) unless
+``allow_overtravel`` is set, when they are cut and listed; sweeps in which the tool's holder
+would touch the part are listed with their lines.
+"""
 
 from __future__ import annotations
 
@@ -10,9 +17,24 @@ import numpy as np
 
 from machinesim import motion
 from machinesim.cutting.engine import remove
-from machinesim.tolerances import RAPID_CUT_VOLUME_M3, RAPID_EDGE_HALF_THICKNESS_M
+from machinesim.cutting.sweeps import SolidSweep, hull_mesh, manifold_from, prism_triangles
+from machinesim.cutting.sweepset import POINTS_PER_CHUNK
+from machinesim.exceptions import AxisLimitError
+from machinesim.nc import MOVE_KINDS
+from machinesim.tolerances import (
+    LIMIT_SLACK,
+    RAPID_CUT_VOLUME_M3,
+    RAPID_EDGE_HALF_THICKNESS_M,
+    SAME_ORIENTATION,
+)
 from machinesim.tools import tool_from_spec
 from machinesim.workpiece import Part, stock_from_spec
+
+#: A move continues the previous one when its first axis values equal the previous end to
+#: within this (m or rad): the planner's end sample, start + 1.0 * (end - start), may differ
+#: from the next start by an ulp (~1e-17 at 0.1 m); 1e-12 is `tolerances.POSE_M`, the
+#: agreement of two float64 kinematic chains, 1000 times below the 1 nm axis resolution.
+JOIN_TOL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -22,26 +44,35 @@ class CutReport:
     Attributes
     ----------
     removed_volume_m3 : float
+        Integrated over the cut (`machinesim.cutting.engine.removed_volume`).
     machining_time_s, cutting_time_s : float
         From the feeds (motion's FANUC rule), all moves and feed moves only.
     sweeps : int
-        Feed sub-steps swept through the material-removal engine.
+        Sweeps (sub-steps of any move, rapids included) that reached the stock and were cut.
     substeps : int
         Sub-steps of all moves, rapids included.
     rapids_that_cut : tuple of int
-        Source lines of rapids (G00) whose sweep met material present at that time.
+        Source lines of rapids (G00) whose sweep met material present at that time; they are
+        cut like any move (a crash shows in the part).
     limit_violations : tuple of str
-        Axis values outside their travel.
+        Axis values outside their travel, with their lines (only with ``allow_overtravel``:
+        otherwise `cut` raises `AxisLimitError`).
     sideways_sweeps : int
-        Feed sweeps that drag a non-rotational tool sideways (across its cutting edge).
+        Sweeps that drag a non-rotational tool sideways (across its cutting edge).
     empty_cut : bool
-        True when nothing was removed: a program that misses the stock is flagged, not silent.
+        True when nothing was removed, judged against the volume the sweeps that reach the
+        stock could remove (`EngineReport.swept_volume`), not against the stock.
     engine : str
         How the material was removed: "relief" (straight grooves across a block, meshed as a
         height field) or "boolean" (sweeps subtracted); both exact (`engine.remove`).
     elapsed_s : float
         Wall time of the simulation.
     notes : tuple of str
+    holder_contact : tuple of int
+        Source lines of moves in which the top of the tool's body, where its holder begins,
+        came below the top of the stock over it (`EngineReport.holder_contact`).
+    engine_s : float
+        Wall time of the material removal alone (`EngineReport.elapsed_s`).
     """
 
     removed_volume_m3: float
@@ -56,6 +87,8 @@ class CutReport:
     engine: str
     elapsed_s: float
     notes: tuple[str, ...] = field(default=())
+    holder_contact: tuple[int, ...] = field(default=())
+    engine_s: float = 0.0
 
     def to_dict(self) -> dict:
         """JSON-ready dict, every key with its unit."""
@@ -67,17 +100,19 @@ class CutReport:
             "substeps": self.substeps,
             "rapids_that_cut_lines": list(self.rapids_that_cut),
             "limit_violations": list(self.limit_violations),
+            "holder_contact_lines": list(self.holder_contact),
             "sideways_sweeps": self.sideways_sweeps,
             "empty_cut": self.empty_cut,
             "engine": self.engine,
             "elapsed_s": self.elapsed_s,
+            "engine_s": self.engine_s,
             "notes": list(self.notes),
         }
 
 
 def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, roi=None,
         start=None, chord_tolerance: float = motion.CHORD_TOLERANCE_M, servo=None,
-        progress=None) -> tuple[Part, CutReport]:
+        progress=None, allow_overtravel: bool = False) -> tuple[Part, CutReport]:
     """Run ``program`` on ``machine`` (with ``errors``) and return the machined part.
 
     Parameters
@@ -101,6 +136,15 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         Axis follow-up model (default ideal).
     progress : callable(done, total), optional
         Called as the engine works through the sweeps.
+    allow_overtravel : bool
+        Cut a program that takes an axis outside its travel, listing where, instead of
+        refusing it.
+
+    Raises
+    ------
+    AxisLimitError
+        When an axis leaves its travel (and ``allow_overtravel`` is False): the message names
+        the axis, the value, the travel and the program's lines. Nothing is cut.
     """
     from machinesim.machines import Machine, load_machine
 
@@ -112,24 +156,18 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tool.vertices(), chord_tolerance=chord_tolerance,
                              servo=servo)
-    segments = [s for s in trajectory.segments if s.kind != "dwell"]
-    all_q = np.vstack([s.q for s in segments]) if segments else np.zeros((0, len(machine.axes)))
-    limits = tuple(machine.limit_violations(all_q)) if len(all_q) else ()
-    poses = machine.tool_pose(all_q, errors) if len(all_q) else np.zeros((0, 4, 4))
-    paths, kinds, lines, offset = [], [], [], 0
-    for s in segments:
-        paths.append(poses[offset:offset + len(s.q)])
-        kinds.append(s.kind)
-        lines.append(s.line)
-        offset += len(s.q)
-    feed_paths = _join([p for p, k in zip(paths, kinds, strict=True) if k == "linear"])
-    part, engine = remove(stock, tool, feed_paths, roi=roi, progress=progress)
-    rapids = _rapids_that_cut(stock, tool, paths, kinds, lines)
+    moves = _Moves(trajectory, len(machine.axes))
+    limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
+    poses = machine.tool_pose(moves.q, errors) if len(moves.q) else np.zeros((0, 4, 4))
+    paths = np.split(poses, moves.breaks) if len(poses) else []
+    part, engine = remove(stock, tool, paths, roi=roi, progress=progress)
+    rapids = _rapids_that_cut(stock, tool, poses, moves, engine.reached)
+    holder = sorted({int(moves.sweep_line[i]) for i in engine.holder_contact})
     report = CutReport(
         removed_volume_m3=float(engine.removed_volume),
         machining_time_s=trajectory.duration,
         cutting_time_s=trajectory.cutting_time,
-        sweeps=int(engine.n_sweeps),
+        sweeps=int(engine.n_sweeps_cut),
         substeps=trajectory.substeps,
         rapids_that_cut=rapids,
         limit_violations=limits,
@@ -138,87 +176,183 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         engine=engine.method,
         elapsed_s=time.perf_counter() - began,
         notes=trajectory.notes,
+        holder_contact=tuple(holder),
+        engine_s=engine.elapsed_s,
     )
     return part, report
 
 
-def _join(paths: list[np.ndarray]) -> list[np.ndarray]:
-    """Merge feed paths that continue one another (end pose == next start pose)."""
-    joined: list[np.ndarray] = []
-    for p in paths:
-        if joined and np.array_equal(joined[-1][-1], p[0]):
-            joined[-1] = np.concatenate([joined[-1], p[1:]])
-        else:
-            joined.append(p)
-    return joined
+class _Moves:
+    """The trajectory's samples as one array, joined into continuous paths.
 
+    Each move starts where the last one ended, so its first sample repeats the last one's
+    end and is dropped; a path breaks only where it does not (a servo model may leave a gap).
 
-def _thick(tool) -> np.ndarray:
-    points = tool.vertices()
-    shift = np.array([RAPID_EDGE_HALF_THICKNESS_M, 0.0, 0.0])
-    return np.vstack([points + shift, points - shift])
-
-
-def _hull(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> manifold3d.Manifold:
-    ends = [(m[:3, :3] @ points.T).T + m[:3, 3] for m in (a, b)]
-    return manifold3d.Manifold.hull_points(np.vstack(ends))
-
-
-def _rapids_that_cut(stock: Part, tool, paths, kinds, lines) -> tuple[int, ...]:
-    """Lines of rapids whose sweep met material still there when they ran.
-
-    The material at that time is the stock less the feed sweeps before the rapid that
-    overlap it: exact, and cheap since only rapids whose sweep meets the stock are examined
-    further, against the earlier feed sweeps whose boxes overlap theirs.
+    Attributes
+    ----------
+    q : ndarray, shape (n, n_axes)
+        Axis values of the samples kept.
+    line, rapid : ndarray, shape (n,)
+        Source line of the move each sample ends, and whether that move is a rapid.
+    breaks : ndarray of int
+        Sample indices where a new path starts (`numpy.split` points).
+    sweep_line, sweep_rapid : ndarray, shape (s,)
+        Per sweep (consecutive samples of a path, in the engine's order): the line of its
+        move, and whether the move is a rapid.
+    sweep_start : ndarray, shape (s,)
+        Index of each sweep's first sample.
     """
-    lo, hi = stock.bounds
-    points = _thick(tool)
-    boxes = None  # (sweep path index, pose index, min corner, max corner) of feed sweeps
+
+    def __init__(self, trajectory, n_axes: int) -> None:
+        moving = trajectory.kinds != MOVE_KINDS.index("dwell")
+        counts = np.diff(trajectory.offsets)[moving]
+        if not counts.size:
+            self.q = np.zeros((0, n_axes))
+            self.line = self.sweep_line = self.sweep_start = np.zeros(0, dtype=np.int64)
+            self.rapid = self.sweep_rapid = np.zeros(0, dtype=bool)
+            self.breaks = np.zeros(0, dtype=np.int64)
+            return
+        rows = trajectory.rows(("rapid", "linear"))
+        q = trajectory.q[rows]
+        line = np.repeat(trajectory.lines[moving], counts)
+        rapid = np.repeat(trajectory.kinds[moving] == MOVE_KINDS.index("rapid"), counts)
+        first = np.cumsum(counts) - counts
+        # A move continues the last when its first sample is the last one's end, to the
+        # round-off of the planner's interpolation (`JOIN_TOL`).
+        joined = np.zeros(len(counts), dtype=bool)
+        joined[1:] = np.all(np.abs(q[first[1:]] - q[first[1:] - 1]) <= JOIN_TOL, axis=1)
+        keep = np.ones(len(q), dtype=bool)
+        keep[first[joined]] = False
+        starts = np.zeros(len(q), dtype=bool)
+        starts[first[~joined]] = True
+        self.q, self.line, self.rapid = q[keep], line[keep], rapid[keep]
+        path_start = starts[keep]
+        self.breaks = np.flatnonzero(path_start)[1:]
+        # A sweep ends at every sample that does not start a path; it belongs to that move.
+        end = np.flatnonzero(~path_start)
+        self.sweep_start = end - 1
+        self.sweep_line = self.line[end]
+        self.sweep_rapid = self.rapid[end]
+
+
+def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
+    """Descriptions of the blocks that take an axis outside its travel, with their lines.
+
+    Raises AxisLimitError listing them all unless ``allow``.
+    """
+    if not len(moves.q):
+        return ()
     found = []
-    for i, (path, kind) in enumerate(zip(paths, kinds, strict=True)):
-        if kind != "rapid":
+    for i, letter in enumerate(machine.axes):
+        low, high = machine.lower[i], machine.upper[i]
+        bad = np.flatnonzero((moves.q[:, i] < low - LIMIT_SLACK)
+                             | (moves.q[:, i] > high + LIMIT_SLACK))
+        if not bad.size:
             continue
-        world = _corners(points, path)
-        low, high = world.min(axis=(0, 1)), world.max(axis=(0, 1))
-        if np.any(high < lo) or np.any(low > hi):
-            continue
-        hit = stock.manifold ^ manifold3d.Manifold.batch_boolean(
-            [_hull(points, path[j], path[j + 1]) for j in range(len(path) - 1)],
-            manifold3d.OpType.Add)
-        if hit.volume() <= RAPID_CUT_VOLUME_M3:
-            continue
-        if boxes is None:
-            boxes = _sweep_boxes(points, paths, kinds)
-        owner, pose, b_low, b_high = boxes
-        near = np.flatnonzero((owner < i) & np.all(b_high >= low, axis=1)
-                              & np.all(b_low <= high, axis=1))
-        if near.size:
-            earlier = [_hull(points, paths[owner[k]][pose[k]], paths[owner[k]][pose[k] + 1])
-                       for k in near]
-            hit = hit - manifold3d.Manifold.batch_boolean(earlier, manifold3d.OpType.Add)
-        if hit.volume() > RAPID_CUT_VOLUME_M3:
-            found.append(lines[i])
+        lines = list(dict.fromkeys(int(n) for n in moves.line[bad]))
+        worst = bad[np.argmax(np.maximum(low - moves.q[bad, i], moves.q[bad, i] - high))]
+        unit = _format(machine.rotary[i])
+        more = f" (lines {', '.join(map(str, lines[:10]))}" + (
+            f" and {len(lines) - 10} more)" if len(lines) > 10 else ")")
+        found.append(f"axis {letter} = {unit(moves.q[worst, i])} at line "
+                     f"{int(moves.line[worst])} outside its travel {unit(low)} .. "
+                     f"{unit(high)}" + (more if len(lines) > 1 else ""))
+    if found and not allow:
+        where = f"{source}: " if source else ""
+        raise AxisLimitError(
+            f"{where}{'; '.join(found)}; nothing was cut (allow_overtravel=True, "
+            "--allow-overtravel on the command line, cuts it anyway and lists it)")
     return tuple(found)
 
 
-def _corners(points: np.ndarray, poses: np.ndarray) -> np.ndarray:
-    """Tool points at each pose, (n_poses, n_points, 3)."""
-    return np.einsum("nij,kj->nki", poses[:, :3, :3], points) + poses[:, None, :3, 3]
+def _format(rotary: bool):
+    if rotary:
+        return lambda value: f"{np.degrees(value):.5f} deg"
+    return lambda value: f"{value * 1e3:.6f} mm"
 
 
-def _sweep_boxes(points, paths, kinds):
-    """Boxes of every feed sweep, with the path and pose each starts at."""
-    owner, pose, low, high = [], [], [], []
-    for i, (path, kind) in enumerate(zip(paths, kinds, strict=True)):
-        if kind != "linear" or len(path) < 2:
+def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
+                     reached: np.ndarray) -> tuple[int, ...]:
+    """Lines of rapids whose sweep met material still there when they ran.
+
+    A zero-thickness edge plunging into material sweeps no volume, so the check thickens a
+    profile by `RAPID_EDGE_HALF_THICKNESS_M` along the tool's X (here only). Candidates are
+    the rapid sweeps the engine found reaching the stock (``reached``); each is intersected
+    with the stock, less the sweeps before it (feeds and rapids) whose boxes overlap its
+    own: exact, and free for rapids that stay clear.
+    """
+    candidates = reached[moves.sweep_rapid[reached]]
+    if not len(candidates):
+        return ()
+    shape = _Thick(tool)
+    found = []
+    boxes = None
+    for sweep in candidates:
+        a = moves.sweep_start[sweep]
+        swept = shape.solid(poses[a], poses[a + 1])
+        if swept is None:
             continue
-        world = _corners(points, path)
-        ends_low, ends_high = world.min(axis=1), world.max(axis=1)
-        low.append(np.minimum(ends_low[:-1], ends_low[1:]))
-        high.append(np.maximum(ends_high[:-1], ends_high[1:]))
-        owner.append(np.full(len(path) - 1, i))
-        pose.append(np.arange(len(path) - 1))
-    if not owner:
-        empty = np.zeros((0, 3))
-        return np.zeros(0, int), np.zeros(0, int), empty, empty
-    return (np.concatenate(owner), np.concatenate(pose), np.vstack(low), np.vstack(high))
+        hit = stock.manifold ^ swept
+        if hit.volume() <= RAPID_CUT_VOLUME_M3:
+            continue
+        if boxes is None:
+            boxes = shape.bounds(poses, moves.sweep_start)
+        box_low, box_high = np.array(swept.bounding_box()).reshape(2, 3)
+        earlier = np.flatnonzero(np.all(boxes[1][:sweep] >= box_low, axis=1)
+                                 & np.all(boxes[0][:sweep] <= box_high, axis=1))
+        solids = [s for s in (shape.solid(poses[moves.sweep_start[k]],
+                                          poses[moves.sweep_start[k] + 1]) for k in earlier)
+                  if s is not None]
+        if solids:
+            hit = hit - manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+        if hit.volume() > RAPID_CUT_VOLUME_M3:
+            found.append(int(moves.sweep_line[sweep]))
+    return tuple(dict.fromkeys(found))
+
+
+class _Thick:
+    """The tool as a solid for the rapid check: a profile thickened along its X."""
+
+    def __init__(self, tool) -> None:
+        vertices = np.asarray(tool.vertices(), dtype=np.float64)
+        if getattr(tool, "planar", False):
+            shift = np.array([RAPID_EDGE_HALF_THICKNESS_M, 0.0, 0.0])
+            self.vertices = np.concatenate([vertices - shift, vertices + shift])
+            triangles = prism_triangles(len(vertices)).astype(np.int64)
+            corner = self.vertices[triangles]
+            volume = np.einsum("ij,ij->i", corner[:, 0],
+                               np.cross(corner[:, 1], corner[:, 2])).sum()
+            self.triangles = triangles if volume > 0.0 else triangles[:, ::-1]
+        else:
+            self.vertices, self.triangles = vertices, np.asarray(tool.triangles())
+        self.sweep = SolidSweep(self.vertices, self.triangles)
+        self.run_id = manifold3d.Manifold.reserve_ids(1)
+
+    def bounds(self, poses: np.ndarray, starts: np.ndarray):
+        """Bounds (s, 3) of the sweeps starting at poses ``starts`` (the points of both
+        poses, which contain the hull), m."""
+        low, high = np.empty((len(starts), 3)), np.empty((len(starts), 3))
+        step = max(1, POINTS_PER_CHUNK // (2 * len(self.vertices)))
+        for begin in range(0, len(starts), step):
+            a = starts[begin:begin + step]
+            points = np.concatenate(
+                [np.einsum("nij,kj->nki", poses[i][:, :3, :3], self.vertices)
+                 + poses[i][:, None, :3, 3] for i in (a, a + 1)], axis=1)
+            low[begin:begin + step] = points.min(axis=1)
+            high[begin:begin + step] = points.max(axis=1)
+        return low, high
+
+    def solid(self, start: np.ndarray, end: np.ndarray) -> manifold3d.Manifold | None:
+        """The thickened tool swept from pose ``start`` to ``end`` (4, 4), or None."""
+        rotation = start[:3, :3]
+        if np.abs(end[:3, :3] - rotation).max() <= SAME_ORIENTATION:
+            vertices, triangles = self.sweep.mesh(rotation, start[:3, 3],
+                                                  end[:3, 3] - start[:3, 3])
+        else:
+            points = np.concatenate([self.vertices @ m[:3, :3].T + m[:3, 3]
+                                     for m in (start, end)])
+            hull = hull_mesh(points)
+            if hull is None:
+                return None
+            vertices, triangles = hull[0], hull[1]
+        return manifold_from(vertices, triangles, self.run_id)

@@ -333,13 +333,20 @@ def relief_part(reliefs: tuple[Relief, ...]) -> tuple[Part, float]:
 
 @dataclass(frozen=True)
 class ReliefCut:
-    """What `cut_reliefs` did: the part, and the counts for the engine's report."""
+    """What `cut_reliefs` did: the part, and the counts for the engine's report.
+
+    ``swept_volume`` (m^3) is the most the grooves could remove: each profile's area below
+    the top times the groove's length over the block; the empty-cut rule is relative to it.
+    ``reached`` (int array) indexes the sweeps that reach the block.
+    """
 
     part: Part
     removed_volume: float
     stock_volume: float
     n_sweeps_cut: int
     n_degenerate: int
+    swept_volume: float = 0.0
+    reached: np.ndarray = None
 
 
 def _separated(rects: np.ndarray) -> bool:
@@ -352,7 +359,7 @@ def _separated(rects: np.ndarray) -> bool:
 
 
 def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.ndarray,
-                windows=None) -> ReliefCut | None:
+                windows=None, pose_bounds=None) -> ReliefCut | None:
     """Cut ``stock`` by height field, or None when the cut does not qualify.
 
     Parameters
@@ -366,6 +373,11 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
         Sweep i joins pose pairs[i] to pose pairs[i] + 1.
     windows : list of (xmin, xmax, ymin, ymax), optional
         Region of interest (m), already clipped to the stock.
+    pose_bounds : callable() -> (ndarray, ndarray), each shape (N, 3), optional
+        Bounds of the part of the tool that can reach the stock (below a plane just above
+        it) at each pose, m; default the whole tool's. A tall tool's body beside a window
+        or above the block then neither touches it nor stops a groove from spanning it.
+        Called only once the stock qualifies.
     """
     reliefs = stock_reliefs(stock)
     if reliefs is None:
@@ -383,13 +395,19 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
         return None
     rotation, origin = poses[:, :3, :3], poses[:, :3, 3]
     flat = np.ascontiguousarray(rotation.reshape(-1, 9))
-    unique, which = np.unique(flat, axis=0, return_inverse=True)
-    which = which.reshape(-1)
+    if np.all(flat == flat[:1]):  # one orientation, the usual case: no row sort
+        unique, which = flat[:1], np.zeros(len(flat), dtype=np.int64)
+    else:
+        unique, which = np.unique(flat, axis=0, return_inverse=True)
+        which = which.reshape(-1)
     if len(unique) > MAX_ORIENTATIONS:
         return None
     turned = np.einsum("rij,kj->rki", unique.reshape(-1, 3, 3), vertices)
-    low = turned.min(axis=1)[which] + origin
-    high = turned.max(axis=1)[which] + origin
+    if pose_bounds is None:
+        low = turned.min(axis=1)[which] + origin
+        high = turned.max(axis=1)[which] + origin
+    else:
+        low, high = pose_bounds()
     a, b = pairs, pairs + 1
     sweep_low, sweep_high = np.minimum(low[a], low[b]), np.maximum(high[a], high[b])
     tops = np.array([old.top for old, _ in rects])
@@ -415,6 +433,7 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
     profiles: dict[tuple[int, int], np.ndarray] = {}
     segments: list[dict[int, list]] = [{0: [], 1: []} for _ in rects]
     n_cut = n_degenerate = 0
+    swept = 0.0
     for axis in (0, 1):
         across = 1 - axis
         chosen = np.flatnonzero(relevant & along[axis])
@@ -446,8 +465,12 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
                     return None  # a profile end below the top: the groove has a wall there
                 du = origin[a[mine], across][:, None]
                 dz = origin[a[mine], 2][:, None]
-                segments[r][across].append((hull[:-1, 0] + du, hull[:-1, 1] + dz,
-                                            hull[1:, 0] + du, hull[1:, 1] + dz))
+                piece = (hull[:-1, 0] + du, hull[:-1, 1] + dz, hull[1:, 0] + du,
+                         hull[1:, 1] + dz)
+                segments[r][across].append(piece)
+                u0, z0, u1, z1 = _clip_to_top(*(np.ravel(p) for p in piece), old.top)
+                span = rects[r][1][2 * axis + 1] - rects[r][1][2 * axis]
+                swept += span * float(np.sum((u1 - u0) * (old.top - (z0 + z1) / 2.0)))
             n_cut += len(group)
     new = []
     for r, (old, box) in enumerate(rects):
@@ -478,7 +501,8 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
     cut_before = 0.0 if uncut else relief_part(before)[1]
     stock_volume = sum((r.x1 - r.x0) * (r.y1 - r.y0) * (r.top - r.bottom) for r in before)
     stock_volume -= cut_before
-    return ReliefCut(part, cut_after - cut_before, stock_volume, n_cut, n_degenerate)
+    return ReliefCut(part, cut_after - cut_before, stock_volume, n_cut, n_degenerate, swept,
+                     np.flatnonzero(relevant))
 
 
 __all__ = ["Relief", "ReliefCut", "cut_reliefs", "envelope", "lower_hull", "mesh_relief",

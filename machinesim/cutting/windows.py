@@ -18,8 +18,8 @@ import manifold3d
 import numpy as np
 
 from machinesim import motion
-from machinesim.cutting.engine import remove
-from machinesim.cutting.program import CutReport
+from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
+from machinesim.cutting.program import CutReport, _Moves, _overtravel
 from machinesim.exceptions import InputError
 from machinesim.rotations import rot_z
 from machinesim.tools import tool_from_spec
@@ -45,14 +45,14 @@ def clip_to(stock: Part, boxes, floor: float | None = None) -> Part:
 def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *,
                roi=None, floor: float | None = None, start=None, turn_step: float = math.pi / 4,
                turn_axis: str = "C", chord_tolerance: float = motion.CHORD_TOLERANCE_M,
-               servo=None) -> tuple[Part, CutReport]:
+               servo=None, allow_overtravel: bool = False) -> tuple[Part, CutReport]:
     """Cut ``program`` as `machinesim.cutting.cut` does, each turn group in its own frame.
 
     The feed moves are grouped by the value of ``turn_axis`` at their start, rounded to a
     multiple k of ``turn_step``; each group's sweeps are subtracted from the part turned by
     -k ``turn_step`` about the workpiece Z, with the poses turned alike, and the part turned
-    back. Rapids are not checked against the part (the program must keep them above it;
-    the report says so in its notes).
+    back. Rapids are neither cut nor checked against the part (the program must keep them
+    above it; the report says so in its notes).
 
     Parameters
     ----------
@@ -72,8 +72,9 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         rad, > 0.
     turn_axis : str
         The rotary axis about the workpiece Z whose positions group the feed moves.
-    chord_tolerance, servo
-        As `machinesim.cutting.cut`.
+    chord_tolerance, servo, allow_overtravel
+        As `machinesim.cutting.cut` (an axis outside its travel raises `AxisLimitError`
+        unless ``allow_overtravel``).
 
     Returns
     -------
@@ -94,37 +95,41 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     if not (math.isfinite(turn_step) and turn_step > 0.0):
         raise InputError(f"Expected turn_step > 0 (rad), got {turn_step!r}", key="turn_step")
     machine.check_errors(errors)
-    part = stock if roi is None else clip_to(stock, roi, floor)
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tool.vertices(), chord_tolerance=chord_tolerance,
                              servo=servo)
+    limits = _overtravel(machine, _Moves(trajectory, len(machine.axes)),
+                         getattr(program, "source", None), allow_overtravel)
+    part = stock if roi is None else clip_to(stock, roi, floor)
     column = machine.axes.index(turn_axis)
-    groups: dict[int, list[np.ndarray]] = {}
-    all_q = []
+    groups: dict[int, list] = {}
     for segment in trajectory.segments:
-        if segment.kind == "dwell":
-            continue
-        all_q.append(segment.q)
         if segment.kind == "linear":
             key = int(round(float(segment.q[0, column]) / turn_step))
-            groups.setdefault(key, []).append(machine.tool_pose(segment.q, errors))
-    before = part.volume
+            groups.setdefault(key, []).append(segment)
+    removed = swept = engine_s = 0.0
     sweeps = sideways = 0
+    holder: set[int] = set()
     step_deg = math.degrees(turn_step)
-    for key, paths in groups.items():
+    for key, segments in groups.items():
         turn = np.eye(4)
         turn[:3, :3] = rot_z(-key * turn_step)
         turned = Part(part.manifold.rotate((0.0, 0.0, -step_deg * key)))
-        cut_part, report = remove(turned, tool, [turn @ path for path in paths])
+        paths = [turn @ machine.tool_pose(segment.q, errors) for segment in segments]
+        cut_part, report = remove(turned, tool, paths)
         part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
+        sweep_line = np.repeat([s.line for s in segments], [len(s.q) - 1 for s in segments])
+        holder.update(int(sweep_line[i]) for i in report.holder_contact)
         sweeps += report.n_sweeps_cut
         sideways += len(report.sideways)
-    removed = before - part.volume
-    limits = tuple(machine.limit_violations(np.vstack(all_q))) if all_q else ()
+        removed += report.removed_volume
+        swept += report.swept_volume
+        engine_s += report.elapsed_s
     return part, CutReport(
         removed_volume_m3=float(removed), machining_time_s=trajectory.duration,
         cutting_time_s=trajectory.cutting_time, sweeps=sweeps, substeps=trajectory.substeps,
         rapids_that_cut=(), limit_violations=limits, sideways_sweeps=sideways,
-        empty_cut=not removed > 0.0, engine="boolean, turned groups",
+        empty_cut=not removed > EMPTY_SWEPT_REL * swept, engine="boolean, turned groups",
         elapsed_s=time.perf_counter() - began,
-        notes=(*trajectory.notes, "rapids not checked against the part (turned groups)"))
+        notes=(*trajectory.notes, "rapids not cut nor checked against the part (turned groups)"),
+        holder_contact=tuple(sorted(holder)), engine_s=engine_s)
