@@ -1,0 +1,643 @@
+"""Slow-tool-servo (STS) tool paths for freeform surfaces (paper 004, section 3.1).
+
+Zhu, Takeuchi, et al., deterministic error compensation in STS turning
+(`shared/seeds/004_3f9e6f9e74319d55.txt`); equation numbers are the paper's. The steps, as
+a CAM system runs them for the ``sts_lathe`` (X Z C, C the work spindle; docs/machines.md):
+
+1. a designed surface z(x, y) in the workpiece frame (`Design`): the 2-D sine grid of eq 2
+   (`sine_grid`), a sphere (`sphere`), any callable (`Design`), or a height map in memory or
+   in a file (`design_from_height_map`, `read_design`);
+2. an Archimedean spiral of pitch f (the feed per revolution) from the outer radius r to the
+   centre (`Spiral`, eqs 3-6), and cutting points on it by Constant Angle or Constant Arc
+   Length (`cutting_angles`, `constant_angle`, `constant_arc_length`), each with the designed
+   height and its radial slope (`cutting_points`);
+3. the tool tip for each point, compensated for the nose radius (`tool_path`, eqs 18-19);
+4. the path between points: linear or cubic spline (`interpolate`, eqs 7-9), and the
+   program-related form error that interpolation leaves, from the path alone
+   (`program_error`, `program_error_table`: eqs 10-11 and Fig. 11);
+5. the X Z C program (`spiral_program`; write it with `machinesim.nc.write_program`).
+
+Geometry. On ``sts_lathe`` the tool tip sits in the workpiece frame at (X cos C, X sin C, Z)
+(`Machine.tool_pose`): C is the polar angle theta of the point being cut and X its radius.
+The spiral starts at theta = 0 on the outer radius and winds in as C grows, rho(theta) =
+r - f theta / (2 pi) (eq 4 as it must read; the printed "rho = r - f_r r" is garbled). The
+machine interpolates linear moves linearly in X, Z and C, so between two points the tip
+stays on the Archimedean spiral and Z is linear in C; the spline is taken in C as well (in
+STS the slides are slaved to the spindle angle). Derivations, the garbled equations and the
+forms used: docs/procedures/sts_turning.md.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import CubicSpline, RectBivariateSpline
+
+from machinesim._io import check_readable_file
+from machinesim.arrays import frozen
+from machinesim.exceptions import FileError, InputError, check_length
+from machinesim.nc import AXES, KIND_LINEAR, KIND_RAPID, Program
+from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, RAD_PER_DEG
+
+__all__ = [
+    "AMPLITUDE_M", "CAL_STEP_M", "CA_STEP_RAD", "FEED_M", "NOSE_RADIUS_M", "PART_RADIUS_M",
+    "SPINDLE_RPM", "WAVELENGTH_M", "CuttingPoints", "Design", "ProgramError", "Spiral",
+    "ToolPath", "constant_angle", "constant_arc_length", "cutting_angles", "cutting_points",
+    "design_from_height_map", "interpolate", "program_error", "program_error_table",
+    "read_design", "sine_grid", "sphere", "spiral_program", "tool_path",
+]
+
+# --- the paper's conditions (Table 1, section 2.3, Table 4) ---------------------------------
+#: Eq 2 and section 2.3: amplitude A = 50 nm and wavelength lambda = 100 um of the sine grid.
+AMPLITUDE_M = 50 * M_PER_NM
+WAVELENGTH_M = 100 * M_PER_UM
+#: Table 1: feed 2 um/rev, spindle 20 rpm.
+FEED_M = 2 * M_PER_UM
+SPINDLE_RPM = 20.0
+#: Section 2.3: nose radius 1.0 mm (Table 1 prints 2 mm; the text's 1.0 mm is the one that
+#: gives its "~130 nm" chip thickness by eq 1 at f = 2 um, a = 2.1 um: 128 nm, 2 mm gives 91).
+NOSE_RADIUS_M = 1 * M_PER_MM
+#: Radius of the turned area, not printed: 0.5 mm is the one for which Table 4's counts
+#: follow from Figs. 9-10's spacings (CAL, 30 um: 13,090 steps; CA, 2 deg: 45,000 steps).
+PART_RADIUS_M = 0.5 * M_PER_MM
+#: Table 4 "after" (Case 3, 4): Constant Angle, 2 deg (45,000 cutting points).
+CA_STEP_RAD = 2.0 * RAD_PER_DEG
+#: Table 4 "before" (Case 1, 2): Constant Arc Length, 30 um (13,090 cutting points).
+CAL_STEP_M = 30 * M_PER_UM
+
+#: Central-difference step for the gradient of a callable design without one (m): on the
+#: paper's sine grid the truncation h^2 |z'''| / 6 (|z'''| <= A (2 pi / lambda)^3) is 2e-10
+#: of slope (the tip moves by R times that: 0.2 pm), the round-off eps |z| / h 2e-14 per um
+#: of height.
+GRADIENT_STEP_M = 10 * M_PER_NM
+#: Newton steps that invert eq 3 (arc length -> angle); it converges monotonically from the
+#: start used, quadratically at the end: 6-8 steps reach round-off, the rest is a margin.
+_NEWTON_STEPS = 40
+
+
+# --- designed surfaces -----------------------------------------------------------------------
+@dataclass(frozen=True)
+class Design:
+    """A designed surface z(x, y) in the workpiece frame, m.
+
+    Parameters
+    ----------
+    height : callable
+        ``height(x, y) -> z``, vectorised over arrays of x and y (m).
+    gradient : callable, optional
+        ``gradient(x, y) -> (dz/dx, dz/dy)``; central differences (`GRADIENT_STEP_M`) when
+        None.
+    name : str
+        For reports.
+    """
+
+    height: Callable
+    gradient: Callable | None = None
+    name: str = "design"
+
+    def __call__(self, x, y) -> np.ndarray:
+        return np.asarray(self.height(np.asarray(x, dtype=np.float64),
+                                      np.asarray(y, dtype=np.float64)), dtype=np.float64)
+
+    def slope(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+        """(dz/dx, dz/dy) at (x, y)."""
+        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        if self.gradient is not None:
+            gx, gy = self.gradient(x, y)
+            return np.asarray(gx, dtype=np.float64), np.asarray(gy, dtype=np.float64)
+        h = GRADIENT_STEP_M
+        return ((self(x + h, y) - self(x - h, y)) / (2.0 * h),
+                (self(x, y + h) - self(x, y - h)) / (2.0 * h))
+
+
+def sine_grid(amplitude: float = AMPLITUDE_M, wavelength: float = WAVELENGTH_M, *,
+              amplitude_y: float | None = None, wavelength_y: float | None = None) -> Design:
+    """Eq 2: z = A1 sin(2 pi x / lambda1) + A2 cos(2 pi y / lambda2), m.
+
+    The second amplitude and wavelength default to the first (the paper: both 50 nm and
+    100 um).
+    """
+    a1 = check_length(amplitude, "amplitude")
+    l1 = check_length(wavelength, "wavelength", positive=True)
+    a2 = a1 if amplitude_y is None else check_length(amplitude_y, "amplitude_y")
+    l2 = l1 if wavelength_y is None else check_length(wavelength_y, "wavelength_y",
+                                                      positive=True)
+    k1, k2 = 2.0 * math.pi / l1, 2.0 * math.pi / l2
+
+    def height(x, y):
+        return a1 * np.sin(k1 * x) + a2 * np.cos(k2 * y)
+
+    def gradient(x, y):
+        return a1 * k1 * np.cos(k1 * x), -a2 * k2 * np.sin(k2 * y) + 0.0 * x
+
+    return Design(height, gradient, f"sine grid A {a1 / M_PER_NM:g} nm, lambda "
+                                    f"{l1 / M_PER_UM:g} um")
+
+
+def sphere(radius: float) -> Design:
+    """A sphere cap with its pole at the origin: convex (z = sqrt(Rs^2 - rho^2) - Rs) for
+    ``radius`` > 0, concave (z = |Rs| - sqrt(Rs^2 - rho^2)) for ``radius`` < 0, m.
+
+    Defined for rho < |Rs|; NaN beyond.
+    """
+    try:
+        rs = float(radius)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"Expected radius as a number (m), got {radius!r}",
+                         key="radius") from error
+    if not math.isfinite(rs) or rs == 0.0:
+        raise InputError(f"Expected a finite, non-zero sphere radius (m), got {rs!r}",
+                         key="radius")
+    sign, size = math.copysign(1.0, rs), abs(rs)
+
+    def root(x, y):
+        with np.errstate(invalid="ignore"):
+            return np.sqrt(size * size - (x * x + y * y))
+
+    def height(x, y):
+        return sign * (root(x, y) - size)
+
+    def gradient(x, y):
+        r = root(x, y)
+        return -sign * x / r, -sign * y / r
+
+    return Design(height, gradient, f"sphere R {rs / M_PER_MM:g} mm")
+
+
+def design_from_height_map(x, y, z, *, name: str = "height map") -> Design:
+    """A design from a height map: bicubic interpolating spline (scipy), m.
+
+    Parameters
+    ----------
+    x : array-like, shape (nx,)
+    y : array-like, shape (ny,)
+        Strictly increasing grid axes, m, at least 4 each.
+    z : array-like, shape (ny, nx)
+        Heights, m, finite (``z[j, i]`` over ``(x[i], y[j])``, as `machinesim.metrology`).
+
+    The design refuses points outside the map's box (InputError naming the first).
+    """
+    gx, gy = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    gz = np.asarray(z, dtype=np.float64)
+    for axis, values in (("x", gx), ("y", gy)):
+        if values.ndim != 1 or values.size < 4 or not np.isfinite(values).all() or (
+                np.diff(values) <= 0.0).any():
+            raise InputError(f"Expected {axis} as at least 4 finite, strictly increasing "
+                             f"values (m), got shape {values.shape}", key=axis)
+    if gz.shape != (gy.size, gx.size):
+        raise InputError(f"Expected z of shape ({gy.size}, {gx.size}) (ny, nx), got "
+                         f"{gz.shape}", key="z")
+    if not np.isfinite(gz).all():
+        raise InputError(f"Expected finite heights, {np.count_nonzero(~np.isfinite(gz))} are "
+                         "not (fill the holes first)", key="z")
+    spline = RectBivariateSpline(gx, gy, gz.T, kx=3, ky=3, s=0)
+    box = (gx[0], gx[-1], gy[0], gy[-1])
+
+    def check(px, py):
+        outside = (px < box[0]) | (px > box[1]) | (py < box[2]) | (py > box[3])
+        if np.any(outside):
+            i = int(np.flatnonzero(np.ravel(outside))[0])
+            raise InputError(f"design {name!r}: point ({np.ravel(px)[i]!r}, "
+                             f"{np.ravel(py)[i]!r}) m lies outside the height map "
+                             f"[{box[0]!r}, {box[1]!r}] x [{box[2]!r}, {box[3]!r}] m",
+                             key="design")
+
+    def height(px, py):
+        check(px, py)
+        return spline.ev(px, py)
+
+    def gradient(px, py):
+        check(px, py)
+        return spline.ev(px, py, dx=1), spline.ev(px, py, dy=1)
+
+    return Design(height, gradient, name)
+
+
+def read_design(path: str | os.PathLike) -> Design:
+    """A design from a height-map file: ISO 25178-72 ``.x3p`` (as
+    `machinesim.metrology.export_x3p` writes) or ``.npz`` with arrays ``x``, ``y``, ``z``
+    in metres (``z`` of shape (ny, nx))."""
+    file = check_readable_file(path, "height map")
+    suffix = file.suffix.lower()
+    if suffix == ".npz":
+        try:
+            with np.load(file, allow_pickle=False) as data:
+                missing = [key for key in ("x", "y", "z") if key not in data]
+                if missing:
+                    raise InputError(f"missing array(s) {', '.join(missing)}; expected x, y, "
+                                     "z in metres", source=str(file))
+                x, y, z = data["x"], data["y"], data["z"]
+        except (OSError, ValueError) as error:
+            if isinstance(error, InputError):
+                raise
+            raise FileError(f"cannot read the height map: {error}", source=str(file)) from None
+    elif suffix == ".x3p":
+        x, y, z = _read_x3p(file)
+    else:
+        raise InputError(f"Expected a .x3p or .npz height map, got {suffix or 'no suffix'!r}",
+                         source=str(file))
+    return design_from_height_map(x, y, z, name=Path(file).name)
+
+
+def _read_x3p(file: Path):
+    import x3pio
+
+    try:
+        surface = x3pio.read(file)
+    except (OSError, x3pio.X3pError) as error:
+        raise FileError(f"cannot read the height map: {error}", source=str(file)) from None
+    layer = surface.layers[0]
+    rotation = np.asarray(surface.placement.rotation, dtype=np.float64)
+    if not np.allclose(rotation, np.eye(3), rtol=0.0, atol=1e-12):
+        raise InputError("Expected an x3p map without rotation in its placement",
+                         source=str(file))
+    offset = np.asarray(surface.placement.offset, dtype=np.float64)
+    return (np.asarray(layer.x_values, dtype=np.float64) + offset[0],
+            np.asarray(layer.y_values, dtype=np.float64) + offset[1],
+            np.asarray(layer.z, dtype=np.float64) + offset[2])
+
+
+# --- the spiral (eqs 3-6) --------------------------------------------------------------------
+@dataclass(frozen=True)
+class Spiral:
+    """Archimedean spiral from the outer radius to the centre, pitch = feed per revolution.
+
+    Eqs 4-6: rho(theta) = r - f_r theta, f_r = f / (2 pi), N_t = r / f turns; theta runs
+    from 0 (outer radius, C = 0) to 2 pi N_t (the centre).
+
+    Parameters
+    ----------
+    radius : float
+        r, m.
+    feed : float
+        f, m per revolution.
+    """
+
+    radius: float
+    feed: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius", check_length(self.radius, "radius", positive=True))
+        object.__setattr__(self, "feed", check_length(self.feed, "feed", positive=True))
+        if self.feed > self.radius:
+            raise InputError(f"Expected a feed below the radius, got feed {self.feed!r} m, "
+                             f"radius {self.radius!r} m", key="feed")
+
+    @property
+    def turns(self) -> float:
+        """Eq 6: N_t = r / f."""
+        return self.radius / self.feed
+
+    @property
+    def feed_per_radian(self) -> float:
+        """Eq 5: f_r = f / (2 pi), m/rad."""
+        return self.feed / (2.0 * math.pi)
+
+    @property
+    def end_angle(self) -> float:
+        """2 pi N_t, rad: theta at the centre."""
+        return 2.0 * math.pi * self.turns
+
+    @property
+    def length(self) -> float:
+        """Arc length of the whole spiral, m (eq 3 at theta = 0)."""
+        return float(self.arc_length(0.0))
+
+    def radius_at(self, theta) -> np.ndarray:
+        """Eq 4: rho = r - f_r theta, m."""
+        return self.radius - self.feed_per_radian * np.asarray(theta, dtype=np.float64)
+
+    def arc_length(self, theta) -> np.ndarray:
+        """Eq 3: arc length S from the centre to the point at ``theta``, m.
+
+        With phi = 2 pi N_t - theta (the angle left to the centre; rho = f_r phi),
+        S = f_r / 2 [phi sqrt(phi^2 + 1) + asinh(phi)] (ln(phi + sqrt(phi^2 + 1)) = asinh).
+        """
+        phi = self.end_angle - np.asarray(theta, dtype=np.float64)
+        return 0.5 * self.feed_per_radian * (phi * np.sqrt(phi * phi + 1.0) + np.arcsinh(phi))
+
+    def angle_at(self, arc_length) -> np.ndarray:
+        """theta at arc length S from the centre (eq 3 inverted by Newton's method)."""
+        s = np.asarray(arc_length, dtype=np.float64)
+        fr = self.feed_per_radian
+        # F(phi) = S is convex and F(phi) >= f_r phi^2 / 2: from sqrt(2 S / f_r) Newton comes
+        # down monotonically
+        phi = np.sqrt(2.0 * np.maximum(s, 0.0) / fr)
+        for _ in range(_NEWTON_STEPS):
+            value = 0.5 * fr * (phi * np.sqrt(phi * phi + 1.0) + np.arcsinh(phi)) - s
+            step = value / (fr * np.sqrt(phi * phi + 1.0))
+            phi = np.maximum(phi - step, 0.0)
+            if np.all(np.abs(step) <= 4.0 * np.finfo(float).eps * np.maximum(phi, 1.0)):
+                break
+        return self.end_angle - phi
+
+
+# --- distributions of cutting points ----------------------------------------------------------
+def _steps(total: float, step: float) -> np.ndarray:
+    """0, step, 2 step, ... up to ``total`` inclusive (the last step shorter if need be)."""
+    # a total that is a whole number of steps up to round-off ends on a full step
+    count = math.floor(total / step * (1.0 + 1e-12))
+    values = step * np.arange(count + 1, dtype=np.float64)
+    if total - values[-1] > 1e-9 * step:
+        values = np.append(values, total)
+    else:
+        values[-1] = total
+    return values
+
+
+def constant_angle(spiral: Spiral, step: float) -> np.ndarray:
+    """Constant Angle (CA): theta = 0, step, 2 step, ... to the centre, rad.
+
+    The last step is shorter unless 2 pi N_t is a whole number of steps.
+    """
+    step = _positive(step, "step (rad)")
+    return frozen(_steps(spiral.end_angle, step))
+
+
+def constant_arc_length(spiral: Spiral, step: float) -> np.ndarray:
+    """Constant Arc Length (CAL): points every ``step`` (m) of arc from the outer end
+    inwards (eq 3 inverted), the last step shorter, as angles theta (rad)."""
+    step = check_length(step, "step", positive=True)
+    total = spiral.length
+    s = total - _steps(total, step)
+    theta = spiral.angle_at(s)
+    theta[0], theta[-1] = 0.0, spiral.end_angle
+    return frozen(theta)
+
+
+def cutting_angles(spiral: Spiral, distribution: str, *, step: float | None = None,
+                   count: int | None = None) -> np.ndarray:
+    """Angles of the cutting points by ``"CA"`` or ``"CAL"``, given the step (rad for CA,
+    m for CAL) or the number of points (then equal steps from the outer end to the
+    centre)."""
+    if (step is None) == (count is None):
+        raise InputError("Expected either step or count", key="step")
+    if distribution not in ("CA", "CAL"):
+        raise InputError(f"Expected distribution 'CA' or 'CAL', got {distribution!r}",
+                         key="distribution")
+    if count is not None:
+        if isinstance(count, bool) or not isinstance(count, int | np.integer) or count < 2:
+            raise InputError(f"Expected count as an int >= 2, got {count!r}", key="count")
+        total = spiral.end_angle if distribution == "CA" else spiral.length
+        step = total / (count - 1)
+    if distribution == "CA":
+        return constant_angle(spiral, step)
+    return constant_arc_length(spiral, step)
+
+
+def _positive(value, name: str) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as error:
+        raise InputError(f"Expected {name} as a number, got {value!r}", key=name) from error
+    if not math.isfinite(number) or number <= 0.0:
+        raise InputError(f"Expected {name} > 0, got {number!r}", key=name)
+    return number
+
+
+@dataclass(frozen=True)
+class CuttingPoints:
+    """Cutting points on the spiral with the designed surface there.
+
+    Attributes
+    ----------
+    theta : ndarray, shape (N,)
+        Polar angle = C, rad, increasing.
+    rho : ndarray, shape (N,)
+        Radius, m (eq 4).
+    z : ndarray, shape (N,)
+        Designed height, m.
+    slope : ndarray, shape (N,)
+        Radial slope dz/drho = tan(phi) (eq 13).
+    """
+
+    theta: np.ndarray
+    rho: np.ndarray
+    z: np.ndarray
+    slope: np.ndarray
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.rho * np.cos(self.theta)
+
+    @property
+    def y(self) -> np.ndarray:
+        return self.rho * np.sin(self.theta)
+
+    def __len__(self) -> int:
+        return self.theta.size
+
+
+def cutting_points(design: Design, spiral: Spiral, theta) -> CuttingPoints:
+    """The designed surface at the spiral's points ``theta`` (rad): z(rho, theta) and the
+    radial slope (eq 13) for the nose compensation."""
+    theta = np.array(theta, dtype=np.float64)
+    if theta.ndim != 1 or theta.size < 2 or not np.isfinite(theta).all():
+        raise InputError(f"Expected at least 2 finite angles, shape (N,), got {theta.shape}",
+                         key="theta")
+    rho = spiral.radius_at(theta)
+    cos, sin = np.cos(theta), np.sin(theta)
+    x, y = rho * cos, rho * sin
+    z = design(x, y)
+    gx, gy = design.slope(x, y)
+    slope = cos * gx + sin * gy
+    if not (np.isfinite(z).all() and np.isfinite(slope).all()):
+        i = int(np.flatnonzero(~(np.isfinite(z) & np.isfinite(slope)))[0])
+        raise InputError(f"design {design.name!r} is not defined at the cutting point "
+                         f"({x[i]!r}, {y[i]!r}) m", key="design")
+    return CuttingPoints(*(frozen(v) for v in (theta, rho, z, slope)))
+
+
+# --- tool path (eqs 18-19) and interpolation (eqs 7-9) -----------------------------------------
+@dataclass(frozen=True)
+class ToolPath:
+    """Tool tip positions as ``sts_lathe`` axis values.
+
+    Attributes
+    ----------
+    c : ndarray, shape (N,)
+        C = theta, rad, increasing.
+    x : ndarray, shape (N,)
+        X, the tip's radius (may be negative near the centre), m.
+    z : ndarray, shape (N,)
+        Z, the tip height, m.
+    """
+
+    c: np.ndarray
+    x: np.ndarray
+    z: np.ndarray
+
+    def tips(self) -> np.ndarray:
+        """Tip positions in the workpiece frame, (X cos C, X sin C, Z), shape (N, 3), m."""
+        return np.column_stack([self.x * np.cos(self.c), self.x * np.sin(self.c), self.z])
+
+    def __len__(self) -> int:
+        return self.c.size
+
+
+def tool_path(points: CuttingPoints, nose_radius: float | None = None) -> ToolPath:
+    """Tool tips for the cutting points, compensated for the nose radius (eqs 18-19).
+
+    The nose (radius R, in the radial plane) touches the designed profile at the cutting
+    point when its centre lies R along the profile's normal: centre = (rho - R sin phi,
+    z + R cos phi), tan phi = dz/drho. The tip, R below the centre, is then
+
+        X = rho - R sin(phi),   Z = z - R (1 - cos(phi)).
+
+    The paper's eq 18 is this X; its eq 19, z_t = z - R cos(phi), is the nose centre with Z
+    counted into the part (docs/procedures/sts_turning.md). ``nose_radius`` None or 0: the
+    tip on the cutting point, uncompensated.
+    """
+    if nose_radius is None or nose_radius == 0.0:
+        return ToolPath(points.theta, points.rho, points.z)
+    radius = check_length(nose_radius, "nose_radius", positive=True)
+    phi = np.arctan(points.slope)
+    return ToolPath(points.theta, frozen(points.rho - radius * np.sin(phi)),
+                    frozen(points.z - radius * (1.0 - np.cos(phi))))
+
+
+def interpolate(path: ToolPath, method: str = "linear", substeps: int = 10) -> ToolPath:
+    """The path between its points as the controller moves it, ``substeps`` samples per
+    step: ``"linear"`` (eqs 7-8: X and Z linear in C, the machine's G01) or ``"spline"``
+    (eq 9: not-a-knot cubic splines of X and Z in C through the points).
+
+    A dense path for the turning engine (`machinesim.cutting.turning`) or the motion planner.
+    """
+    if method not in ("linear", "spline"):
+        raise InputError(f"Expected method 'linear' or 'spline', got {method!r}", key="method")
+    if isinstance(substeps, bool) or not isinstance(substeps, int | np.integer) or substeps < 1:
+        raise InputError(f"Expected substeps as an int >= 1, got {substeps!r}", key="substeps")
+    c = _substeps(path.c, substeps)
+    if method == "linear":
+        return ToolPath(frozen(c), frozen(np.interp(c, path.c, path.x)),
+                        frozen(np.interp(c, path.c, path.z)))
+    return ToolPath(frozen(c), frozen(CubicSpline(path.c, path.x)(c)),
+                    frozen(CubicSpline(path.c, path.z)(c)))
+
+
+def _substeps(values: np.ndarray, substeps: int) -> np.ndarray:
+    """``values`` with ``substeps - 1`` equally spaced values inserted in each step."""
+    fractions = np.arange(substeps) / substeps
+    inner = values[:-1, None] + fractions[None, :] * np.diff(values)[:, None]
+    return np.append(inner.ravel(), values[-1])
+
+
+# --- program-related form error (eqs 10-11, Fig. 11) ----------------------------------------------
+@dataclass(frozen=True)
+class ProgramError:
+    """Eqs 10-11: dz = z_ideal - z_interpolated at sub-steps along the spiral.
+
+    Attributes
+    ----------
+    theta, rho, dz : ndarray, shape (M,)
+        Sample angle (rad), radius (m) and deviation (m).
+    """
+
+    theta: np.ndarray
+    rho: np.ndarray
+    dz: np.ndarray
+
+    @property
+    def pv(self) -> float:
+        """Peak to valley of dz, m."""
+        return float(self.dz.max() - self.dz.min())
+
+    @property
+    def rms(self) -> float:
+        return float(np.sqrt(np.mean(self.dz * self.dz)))
+
+
+def program_error(design: Design, spiral: Spiral, theta, *, method: str = "linear",
+                  substeps: int = 10, rho_range: tuple[float, float] | None = None
+                  ) -> ProgramError:
+    """The form error the interpolation of the cutting points leaves, from the path alone.
+
+    Each step between cutting points (``theta``, rad) is divided into ``substeps`` equal
+    steps of C (Fig. 6(c)); there the designed height z_ideal (on the spiral, eq 4) is
+    compared with the interpolated path of the cutting points' heights, linear (eqs 7-8) or
+    spline (eq 9): dz = z_ideal - z_interpolated (eqs 10-11). Only samples with rho in
+    ``rho_range`` (m, inclusive) are kept, if given.
+    """
+    points = cutting_points(design, spiral, theta)
+    path = interpolate(ToolPath(points.theta, points.rho, points.z), method, substeps)
+    rho = spiral.radius_at(path.c)
+    ideal = design(rho * np.cos(path.c), rho * np.sin(path.c))
+    dz = ideal - path.z
+    keep = np.ones(dz.size, dtype=bool)
+    if rho_range is not None:
+        low, high = (float(v) for v in rho_range)
+        keep = (rho >= low) & (rho <= high)
+        if not keep.any():
+            raise InputError(f"Expected rho_range to meet the spiral (0 .. {spiral.radius!r} "
+                             f"m), got {rho_range!r}", key="rho_range")
+    return ProgramError(frozen(path.c[keep]), frozen(rho[keep]), frozen(dz[keep]))
+
+
+def program_error_table(design: Design, spiral: Spiral, counts: Sequence[int], *,
+                        distributions: Sequence[str] = ("CA", "CAL"),
+                        methods: Sequence[str] = ("linear", "spline"), substeps: int = 10,
+                        rho_range: tuple[float, float] | None = None) -> dict:
+    """Fig. 11: P-V of the program-related form error against the number of cutting points.
+
+    Returns
+    -------
+    dict
+        ``(distribution, method) -> ndarray`` of P-V (m), one per count.
+    """
+    table = {}
+    for distribution in distributions:
+        angles = [cutting_angles(spiral, distribution, count=int(n)) for n in counts]
+        for method in methods:
+            table[distribution, method] = frozen([
+                program_error(design, spiral, theta, method=method, substeps=substeps,
+                              rho_range=rho_range).pv for theta in angles])
+    return table
+
+
+# --- the NC program -----------------------------------------------------------------------
+def spiral_program(path: ToolPath, *, spindle_rpm: float = SPINDLE_RPM,
+                   clearance: float = 10 * M_PER_UM, plunge_mm_per_min: float = 1.0,
+                   number: int | None = None, start_c: float = 0.0) -> Program:
+    """The X Z C program of ``path`` for ``sts_lathe``.
+
+    Blocks: a rapid to the first point ``clearance`` above it, a feed down to it, one G01
+    per further point, a feed up by ``clearance``. The path moves run at F = 360 x
+    ``spindle_rpm`` deg/min: with the FANUC feed of a move that turns C (the move length
+    counts degrees as millimetres; `machinesim.motion`) the spindle then turns at
+    ``spindle_rpm`` up to (dX^2 + dZ^2) / (2 dC^2) relative (X, Z in mm, C in deg), below
+    1e-9 for the paper's paths. ``start_c`` (rad) is added to C (the spindle's position at
+    the start; ``sts_lathe`` allows |C| <= 1e5 rad, i.e. 15,915 revolutions).
+
+    Returns
+    -------
+    Program
+        Axis values in SI (m, rad); `machinesim.nc.write_program` writes it in mm and deg at
+        1 nm and 0.00001 deg.
+    """
+    if not isinstance(path, ToolPath):
+        raise InputError(f"Expected a ToolPath, got {type(path).__name__}", key="path")
+    rpm = _positive(spindle_rpm, "spindle_rpm")
+    lift = check_length(clearance, "clearance", positive=True)
+    plunge = _positive(plunge_mm_per_min, "plunge_mm_per_min") * M_PER_MM / 60.0
+    c0 = float(start_c)
+    if not math.isfinite(c0):
+        raise InputError(f"Expected a finite start_c (rad), got {c0!r}", key="start_c")
+    # rows: rapid above the first point, feed down to it, the path, feed up
+    x = np.concatenate([path.x[:1], path.x, path.x[-1:]])
+    z = np.concatenate([path.z[:1] + lift, path.z, path.z[-1:] + lift])
+    c = np.concatenate([path.c[:1], path.c, path.c[-1:]]) + c0
+    targets = np.full((x.size, len(AXES)), np.nan)
+    for axis, values in (("X", x), ("Z", z), ("C", c)):
+        targets[:, AXES.index(axis)] = values
+    kinds = np.full(x.size, KIND_LINEAR, dtype=np.int64)
+    kinds[0] = KIND_RAPID
+    # F in deg/min, which the controller reads as mm/min of the move length, in m/s
+    feeds = np.full(x.size, 360.0 * rpm * M_PER_MM / 60.0)
+    feeds[0] = np.nan
+    feeds[1] = feeds[-1] = plunge
+    return Program.from_arrays(targets, kinds, feeds, number=number, source="<spiral>")

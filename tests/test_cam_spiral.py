@@ -1,0 +1,251 @@
+"""STS tool paths (machinesim.cam.spiral): paper 004's eqs 3-11 and 18-19, the program."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from machinesim.cam import spiral as sp
+from machinesim.exceptions import FileError, InputError
+from machinesim.metrology import export_x3p
+from machinesim.nc import format_program, parse_program, read_program, write_program
+
+PAPER = sp.Spiral(sp.PART_RADIUS_M, sp.FEED_M)
+
+
+def test_eq_3_is_the_arc_length_of_the_spiral_of_eqs_4_to_6():
+    assert PAPER.turns == pytest.approx(250.0, rel=1e-15)
+    assert PAPER.end_angle == pytest.approx(2 * math.pi * 250, rel=1e-15)
+    assert PAPER.radius_at(PAPER.end_angle) == pytest.approx(0.0, abs=1e-18)
+    fr = PAPER.feed_per_radian
+    for a, b in [(0.0, 0.3), (100.0, 100.05), (1500.0, PAPER.end_angle)]:
+        exact, _ = quad(lambda t: math.hypot(PAPER.radius - fr * t, fr), a, b, epsabs=1e-18,
+                        epsrel=1e-13, limit=200)
+        assert PAPER.arc_length(a) - PAPER.arc_length(b) == pytest.approx(exact, rel=1e-11)
+    # Table 4 and Figs. 9-10: 0.5 mm at 2 um/rev is 30 um x 13,090 long
+    assert PAPER.length / sp.CAL_STEP_M == pytest.approx(13090.0, abs=0.02)
+    # eq 3 inverted, all along
+    theta = np.linspace(0.0, PAPER.end_angle, 1001)
+    np.testing.assert_allclose(PAPER.angle_at(PAPER.arc_length(theta)), theta, rtol=0,
+                               atol=1e-9)  # 1e-9 rad of 1571: 1.4 ulp-scale of S
+
+
+def test_constant_angle_steps_by_the_same_angle():
+    theta = sp.constant_angle(PAPER, sp.CA_STEP_RAD)
+    assert theta.size == 45_001  # Table 4: 45,000 steps of 2 deg
+    np.testing.assert_allclose(np.diff(theta), sp.CA_STEP_RAD, rtol=1e-11)
+    assert theta[0] == 0.0 and theta[-1] == PAPER.end_angle
+    # a step that does not divide the spiral: the last one shorter
+    odd = sp.constant_angle(PAPER, 0.7)
+    assert np.diff(odd)[:-1] == pytest.approx(0.7) and 0.0 < np.diff(odd)[-1] < 0.7
+
+
+def test_constant_arc_length_steps_by_the_same_arc_length():
+    theta = sp.constant_arc_length(PAPER, sp.CAL_STEP_M)
+    assert theta.size == 13_092  # 13,090 steps of 30 um and one of 0.44 um to the centre
+    arcs = -np.diff(PAPER.arc_length(theta))
+    np.testing.assert_allclose(arcs[:-1], sp.CAL_STEP_M, rtol=1e-9)
+    assert arcs[-1] == pytest.approx(PAPER.length - 13090 * sp.CAL_STEP_M, rel=1e-6)
+    # the angle step grows towards the centre (where CAL is sparse, Fig. 10(e))
+    steps = np.diff(theta)
+    assert steps[-2] > 100 * steps[0]
+    # by count: equal steps from the rim to the centre
+    by_count = sp.cutting_angles(PAPER, "CAL", count=1001)
+    np.testing.assert_allclose(-np.diff(PAPER.arc_length(by_count)), PAPER.length / 1000,
+                               rtol=1e-9)
+    np.testing.assert_allclose(np.diff(sp.cutting_angles(PAPER, "CA", count=1001)),
+                               PAPER.end_angle / 1000, rtol=1e-11)
+
+
+def test_cutting_points_carry_the_design_and_its_radial_slope():
+    design = sp.sine_grid()
+    theta = np.linspace(0.1, 700.0, 500)
+    points = sp.cutting_points(design, PAPER, theta)
+    np.testing.assert_allclose(points.rho, PAPER.radius_at(theta), rtol=0, atol=0)
+    np.testing.assert_allclose(points.z, design(points.x, points.y), rtol=0, atol=0)
+    h = 1e-9
+    cos, sin = np.cos(theta), np.sin(theta)
+    numeric = (design((points.rho + h) * cos, (points.rho + h) * sin)
+               - design((points.rho - h) * cos, (points.rho - h) * sin)) / (2 * h)
+    np.testing.assert_allclose(points.slope, numeric, rtol=0, atol=1e-9)  # slopes ~3e-3
+    # a callable without gradient: central differences
+    bare = sp.Design(design.height)
+    np.testing.assert_allclose(sp.cutting_points(bare, PAPER, theta).slope, points.slope,
+                               rtol=0, atol=1e-9)  # truncation h^2 A k^3 / 6 = 2e-10
+
+
+def test_nose_compensation_puts_the_nose_centre_on_the_offset_surface():
+    # eqs 18-19 on a sphere: the nose centre (tip + R z) must lie at Rs + R from the
+    # sphere's centre, on the cutting point's normal
+    rs, radius = 4e-3, 1e-3
+    design = sp.sphere(rs)
+    spiral = sp.Spiral(1e-3, 10e-6)
+    points = sp.cutting_points(design, spiral, sp.constant_angle(spiral, 0.05))
+    path = sp.tool_path(points, radius)
+    centre_rho, centre_z = path.x, path.z + radius
+    np.testing.assert_allclose(np.hypot(centre_rho, centre_z + rs), rs + radius, rtol=1e-14)
+    # its direction from the sphere's centre is the cutting point's
+    np.testing.assert_allclose(np.arctan2(centre_rho, centre_z + rs),
+                               np.arctan2(points.rho, points.z + rs), rtol=0, atol=1e-13)
+    # where the design is flat, the tip is the cutting point; uncompensated, always
+    np.testing.assert_array_equal(sp.tool_path(points).x, points.rho)
+    flat = sp.cutting_points(sp.Design(lambda x, y: 0 * x), spiral, [0.0, 1.0])
+    np.testing.assert_allclose(sp.tool_path(flat, radius).x, flat.rho, rtol=0, atol=0)
+    # the tips as workpiece positions of sts_lathe: (X cos C, X sin C, Z)
+    tips = path.tips()
+    np.testing.assert_allclose(np.hypot(tips[:, 0], tips[:, 1]), np.abs(path.x), rtol=1e-15)
+
+
+def rotational(coefficients):
+    """z = sum c_k rho^k: along the spiral (rho linear in theta) a polynomial in theta."""
+    def height(x, y):
+        rho = np.hypot(x, y)
+        return sum(c * rho ** k for k, c in enumerate(coefficients))
+
+    def gradient(x, y):
+        rho = np.hypot(x, y)
+        slope = sum(k * c * rho ** (k - 1) for k, c in enumerate(coefficients) if k)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return (np.where(rho > 0, slope * x / rho, 0.0),
+                    np.where(rho > 0, slope * y / rho, 0.0))
+
+    return sp.Design(height, gradient, "rotational polynomial")
+
+
+@pytest.mark.parametrize("distribution, step", [("CA", math.radians(3.0)), ("CAL", 40e-6)])
+def test_spline_reproduces_a_cubic_along_the_spiral_and_linear_leaves_its_chord(distribution,
+                                                                               step):
+    # a rotational cubic in rho is a cubic in C along the spiral: the not-a-knot cubic
+    # spline through the points is the polynomial itself (eq 11 gives round-off only)
+    spiral = sp.Spiral(0.2e-3, 4e-6)
+    theta = sp.cutting_angles(spiral, distribution, step=step)
+    cubic = rotational([1e-7, 2e-4, -3e3, 4e6])  # 7 um of sag over the 0.2 mm
+    spline = sp.program_error(cubic, spiral, theta, method="spline", substeps=7)
+    linear = sp.program_error(cubic, spiral, theta, method="linear", substeps=7)
+    assert np.abs(spline.dz).max() < 1e-19  # round-off of z ~ 1e-5 m: ~1e-21
+    assert linear.pv > 1e4 * np.abs(spline.dz).max()
+    # a paraboloid z = c rho^2 is c (r - f_r C)^2: the linear path (eqs 7-8) misses it at
+    # mid-step by exactly c f_r^2 dC^2 / 4, the chord of a parabola
+    c = 2.0
+    paraboloid = rotational([0.0, 0.0, c])
+    mid = sp.program_error(paraboloid, spiral, theta, method="linear", substeps=2)
+    dz = mid.dz[1::2]
+    expected = -c * spiral.feed_per_radian ** 2 * np.diff(theta) ** 2 / 4
+    np.testing.assert_allclose(dz, expected, rtol=1e-6, atol=1e-22)
+
+
+def test_program_error_falls_with_the_number_of_points_and_fig_11_orders():
+    design = sp.sine_grid()
+    spiral = sp.Spiral(0.2e-3, 2e-6)
+    counts = [3_000, 6_000, 12_000, 24_000]
+    table = sp.program_error_table(design, spiral, counts, substeps=6,
+                                   rho_range=(50e-6, 150e-6))
+    assert set(table) == {("CA", "linear"), ("CA", "spline"), ("CAL", "linear"),
+                          ("CAL", "spline")}
+    for values in table.values():
+        assert values.shape == (4,) and (np.diff(values) < 0).all()
+    # linear converges as 1/n^2, the spline as 1/n^4 (the paper: spline better with many
+    # points)
+    ca_linear, ca_spline = table["CA", "linear"], table["CA", "spline"]
+    assert ca_linear[-2] / ca_linear[-1] == pytest.approx(4.0, rel=0.1)
+    assert ca_spline[-2] / ca_spline[-1] == pytest.approx(16.0, rel=0.25)
+    assert ca_spline[-1] < ca_linear[-1]
+
+
+def test_program_error_of_the_paper_programs():
+    # Table 4: before (CAL 30 um, spline) and after (CA 2 deg, spline), Fig. 15(a)
+    design = sp.sine_grid()
+    region = (200e-6, 300e-6)  # r around 250 um, where the paper measures
+    before = sp.program_error(design, PAPER, sp.constant_arc_length(PAPER, sp.CAL_STEP_M),
+                              method="spline", rho_range=region)
+    after = sp.program_error(design, PAPER, sp.constant_angle(PAPER, sp.CA_STEP_RAD),
+                             method="spline")
+    assert 5e-9 < before.pv < 10e-9   # the paper: 8 nm
+    assert 0.5e-9 < after.pv < 1.5e-9  # the paper: 1 nm (whole part)
+    assert before.rho.min() >= region[0] and before.rho.max() <= region[1]
+
+
+def paper_program(number=4):
+    spiral = sp.Spiral(0.05e-3, sp.FEED_M)
+    points = sp.cutting_points(sp.sine_grid(), spiral, sp.constant_angle(spiral, 0.0123))
+    path = sp.tool_path(points, sp.NOSE_RADIUS_M)
+    return path, sp.spiral_program(path, number=number)
+
+
+def test_program_reads_back_at_the_machine_resolution(tmp_path):
+    path, program = paper_program()
+    assert len(program) == len(path) + 2
+    assert program.kinds[0] == 0 and (program.kinds[1:] == 1).all()
+    file = tmp_path / "sts.nc"
+    write_program(program, file)
+    back = read_program(file)
+    x, z, c = (back.targets[:, "XYZABC".index(a)] for a in "XZC")
+    np.testing.assert_allclose(x[1:-1], path.x, rtol=0, atol=0.5e-9 + 1e-15)
+    np.testing.assert_allclose(z[1:-1], path.z, rtol=0, atol=0.5e-9 + 1e-15)
+    np.testing.assert_allclose(np.degrees(c[1:-1]), np.degrees(path.c), rtol=0,
+                               atol=0.5e-5 + 1e-9)
+    assert z[0] == pytest.approx(path.z[0] + 10e-6, abs=1e-9)
+    # F: 20 rpm as 7200 deg/min; the spindle then turns at 20 rpm
+    assert "F7200." in file.read_text()
+    # written again, the same text
+    assert format_program(back) == file.read_text()
+
+
+def test_large_spindle_angles_keep_their_resolution():
+    # C is a spindle: thousands of turns. The writer prints C in deg with 5 decimals; a
+    # float64 holds 0.00001 deg exactly enough up to 1e10 deg, so reading back loses
+    # nothing but the rounding to 0.00001 deg (plus one ulp of the value in deg)
+    path, _ = paper_program()
+    start = 5e4  # rad, 8,000 turns: half of sts_lathe's +-1e5 rad travel
+    program = sp.spiral_program(path, start_c=start)
+    back = parse_program(format_program(program))
+    c = back.targets[:, 5]
+    worst = np.abs(np.degrees(c[1:-1]) - np.degrees(path.c + start)).max()
+    assert worst <= 0.5e-5 + 4 * np.spacing(np.degrees(start + path.c[-1]))
+    assert np.degrees(c).max() > 2.8e6
+
+
+def test_designs_from_height_maps_and_files(tmp_path):
+    sine = sp.sine_grid()
+    x = np.linspace(-0.3e-3, 0.3e-3, 241)
+    y = np.linspace(-0.3e-3, 0.3e-3, 221)
+    z = sine(*np.meshgrid(x, y))
+    mapped = sp.design_from_height_map(x, y, z)
+    rng = np.random.default_rng(2)
+    px, py = rng.uniform(-0.29e-3, 0.29e-3, (2, 200))
+    # a bicubic spline at 2.5 um spacing on lambda = 100 um: h^4 k^4 A / 384 ~ 2e-14
+    np.testing.assert_allclose(mapped(px, py), sine(px, py), rtol=0, atol=1e-12)
+    # its slope converges as h^3 A k^4 / 24 ~ 5e-7 (of slopes ~3e-3)
+    np.testing.assert_allclose(mapped.slope(px, py), sine.slope(px, py), rtol=0, atol=1e-6)
+    with pytest.raises(InputError, match="outside the height map"):
+        mapped(np.array([0.31e-3]), np.array([0.0]))
+    np.savez(tmp_path / "map.npz", x=x, y=y, z=z)
+    export_x3p(tmp_path / "map.x3p", x, y, z)
+    for name in ("map.npz", "map.x3p"):
+        read = sp.read_design(tmp_path / name)
+        np.testing.assert_allclose(read(px, py), mapped(px, py), rtol=0, atol=1e-15)
+    with pytest.raises(FileError, match="no such file"):
+        sp.read_design(tmp_path / "none.npz")
+    (tmp_path / "map.txt").write_text("1 2 3")
+    with pytest.raises(InputError, match=r"\.x3p or \.npz"):
+        sp.read_design(tmp_path / "map.txt")
+    np.savez(tmp_path / "bad.npz", x=x, y=y)
+    with pytest.raises(InputError, match="missing array"):
+        sp.read_design(tmp_path / "bad.npz")
+
+
+def test_bad_inputs_are_refused_with_what_was_expected():
+    with pytest.raises(InputError, match="feed below the radius"):
+        sp.Spiral(1e-6, 2e-6)
+    with pytest.raises(InputError, match="distribution 'CA' or 'CAL'"):
+        sp.cutting_angles(PAPER, "CS", count=10)
+    with pytest.raises(InputError, match="either step or count"):
+        sp.cutting_angles(PAPER, "CA")
+    with pytest.raises(InputError, match="method 'linear' or 'spline'"):
+        sp.interpolate(sp.ToolPath(np.arange(3.0), np.ones(3), np.zeros(3)), "cubic")
+    with pytest.raises(InputError, match="not defined at the cutting point"):
+        sp.cutting_points(sp.sphere(0.1e-3), PAPER, [0.0, 1.0])
+    with pytest.raises(InputError, match="rho_range to meet the spiral"):
+        sp.program_error(sp.sine_grid(), PAPER, sp.constant_angle(PAPER, 0.5),
+                         rho_range=(1.0, 2.0))
