@@ -58,43 +58,6 @@ FAST_MIN_LINES = 16
 
 IntegerInput = Literal["calculator", "increment"]
 
-G_GROUPS = {
-    "G00": "motion", "G01": "motion", "G02": "motion", "G03": "motion", "G04": "motion",
-    "G17": "plane", "G18": "plane", "G19": "plane",
-    "G20": "units", "G21": "units",
-    "G28": "one-shot", "G53": "one-shot", "G05.1": "one-shot", "G08": "one-shot",
-    "G40": "cutter compensation",
-    "G43": "tool length", "G44": "tool length", "G49": "tool length",
-    "G54": "work offset", "G55": "work offset", "G56": "work offset",
-    "G57": "work offset", "G58": "work offset", "G59": "work offset",
-    "G61": "path mode", "G64": "path mode",
-    "G80": "canned cycle", "G81": "canned cycle", "G82": "canned cycle",
-    "G83": "canned cycle",
-    "G90": "distance", "G91": "distance",
-    "G94": "feed mode",
-    "G98": "return level", "G99": "return level",
-}  # fmt: skip
-_CUTTER_COMPENSATION = (
-    "cutter radius compensation ({}) is not supported: it offsets the path by the tool radius "
-    "along its normal, with start-up, corner and cancel rules (FANUC types A, B, C) that a "
-    "simulation would have to guess; post the tool-centre path (compensation 'in computer' "
-    "in the CAM) and cancel with G40"
-)
-G_REFUSED = {
-    "G41": _CUTTER_COMPENSATION.format("G41"),
-    "G42": _CUTTER_COMPENSATION.format("G42"),
-    "G95": "feed per revolution (G95) is not supported; use G94 with F in mm/min",
-}
-#: Words accepted as modal states without geometric effect, listed in `Program.states`.
-_STATE_CODES = ("G40", "G61", "G64", "G80")
-SINGLE = frozenset("NOSFPXYZABCIJKRQLHTD")
-_MOTION = {"G00": "rapid", "G01": "linear"}
-ARC = ("G02", "G03")
-NON_MOVING = ("G05.1", "G08")
-M99_IN_MAIN = ("M99 in the main program would jump back to its start forever (FANUC); end "
-                "the main program with M30 or M02")
-
-
 @dataclass
 class _State:
     """The modal state of the control while reading, in SI."""
