@@ -58,6 +58,7 @@ FAST_MIN_LINES = 16
 
 IntegerInput = Literal["calculator", "increment"]
 
+
 @dataclass
 class _State:
     """The modal state of the control while reading, in SI."""
