@@ -193,7 +193,6 @@ def clipped_prisms(polygons: np.ndarray, moves: np.ndarray, levels: np.ndarray):
                                                          turn.tolist(), repeated.tolist(),
                                                          strict=True):
             if again:  # a vertex on the plane: drop the repeat, one polygon at a time
-                polygon = clip_polygon(polygon, np.inf)
                 polygon = polygon[np.any(polygon != np.roll(polygon, 1, axis=0), axis=1)]
                 out[row] = prism_mesh(polygon, moves[row]) if len(polygon) >= 3 else None
             else:
