@@ -27,7 +27,7 @@ from numpy.polynomial import hermite, legendre
 
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError, check_length
-from machinesim.metrology.surface import _finish, _zbuffer, height_map
+from machinesim.metrology.surface import _finish, _Line, _zbuffer, height_map
 from machinesim.tolerances import LINE_MARGIN
 
 __all__ = ["Lobing", "Registration", "RegistrationScatter", "Spot", "ZonalForm",
@@ -373,7 +373,7 @@ def _weighted(values: np.ndarray, weights: np.ndarray, axes: tuple) -> np.ndarra
     return mean
 
 
-class _LineSamples:
+class _LineSamples(_Line):
     """Samples ``origin + s[i] u`` at sorted ``s`` (any sign), for the exact rasteriser.
 
     The sample set of `machinesim.metrology.surface` for a profile, at given distances: along
@@ -393,28 +393,6 @@ class _LineSamples:
         self.axis = 0 if abs(u[0]) >= abs(u[1]) else 1
         self.sign = 1.0 if u[self.axis] > 0 else -1.0
         self.key = self.sign * (self.px if self.axis == 0 else self.py)
-
-    def ranges(self, xmin, xmax, ymin, ymax):
-        ux, uy = self.direction
-        across_x = np.stack([(xmin - self.start[0]) * uy, (xmax - self.start[0]) * uy])
-        across_y = np.stack([(ymin - self.start[1]) * -ux, (ymax - self.start[1]) * -ux])
-        low = across_x.min(axis=0) + across_y.min(axis=0)
-        high = across_x.max(axis=0) + across_y.max(axis=0)
-        near = np.flatnonzero((low <= self.margin) & (high >= -self.margin))
-        lo, hi = (xmin[near], xmax[near]) if self.axis == 0 else (ymin[near], ymax[near])
-        if self.sign < 0:
-            lo, hi = -hi, -lo
-        first = np.zeros(xmin.size, dtype=np.int64)
-        count = np.zeros(xmin.size, dtype=np.int64)
-        first[near] = np.searchsorted(self.key, lo, side="left")
-        count[near] = np.searchsorted(self.key, hi, side="right") - first[near]
-        return first, count, np.zeros_like(first), np.ones_like(count)
-
-    def coordinates(self, i, j):
-        return self.px[i], self.py[i]
-
-    def flat(self, i, j):
-        return i
 
 
 def _finite(value, shape: tuple, name: str) -> np.ndarray:
