@@ -130,7 +130,7 @@ def test_bad_lab_arguments_are_clear_errors():
 
 #: Where the truth must never be reached.
 HONEST = [*sorted((ROOT / "machinesim" / "identification").glob("*.py")),
-          ROOT / "machinesim" / "compensation.py"]
+          ROOT / "machinesim" / "compensation.py", ROOT / "machinesim" / "compensation_table.py"]
 
 
 def _violations(path: Path) -> list[str]:

@@ -28,3 +28,14 @@ def test_demo_prints_the_machines_and_the_landing_table():
         assert abs(norm - (10.0**2 + 5.0**2) ** 0.5) < 1e-3
         if b == 0.0 and c == 0.0:
             assert (dx, dy, dz) == (10.0, 0.0, 5.0)
+
+
+def test_xy_plane_errors_writes_the_paper_figures(tmp_path):
+    import json
+
+    run("xy_plane_errors.py", "--noise", "off", "--out", str(tmp_path))
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    figures = {f["name"]: f for f in summary["figures"]}
+    # paper 003: 11.59 um before compensation (its Fig. 2); within 25 %
+    assert abs(figures["xy_error_x"]["before"] - 11.59) < 0.25 * 11.59
+    assert figures["xy_error_x"]["after"] < 1e-3

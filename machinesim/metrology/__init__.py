@@ -29,6 +29,13 @@ from machinesim.metrology.interferometer import (
     LaserInterferometer,
     squareness_from_diagonal,
 )
+from machinesim.metrology.iso230 import (
+    PositioningEvaluation,
+    evaluate_positioning,
+    iso230_2_targets,
+    positioning_test,
+    squareness_from_diagonals,
+)
 from machinesim.metrology.lines import (
     GrooveCrossing,
     Line2D,
@@ -69,5 +76,7 @@ __all__ += [
     "plot_profile", "profile_points", "roughness_sa", "sphere_centre_from_touch", "step_positions",
 ]
 __all__ += ["RTest", "RTestReading", "fit_apexes"]
+__all__ += ["PositioningEvaluation", "evaluate_positioning", "iso230_2_targets",
+            "positioning_test", "squareness_from_diagonals"]
 __all__ += ["CrownFeatures", "GrooveDepths", "Line3D", "crown_features", "groove_depths",
             "line_distance", "plane_intersection"]

@@ -1,0 +1,107 @@
+"""Pyramid patterns across a plate (paper 003 section IV): two sets of V grooves crossed by
+turning the workpiece 90 deg on C.
+
+The first set is grooved along X (C = 0), C turns the workpiece 90 deg, and the same set is
+grooved again along X, now across the first (paper 003: "the triangular prism pattern is
+grooved firstly along X axis then patterned material is rotated 90 deg by C axis and same
+triangular prism is grooved cross of the previous pattern"). With a 90-deg V tool, 50 um
+pitch and 25 um depth the flanks of neighbouring grooves meet in sharp ridges at the top
+surface, and the two sets leave square pyramids 25 um high.
+
+Only the grooves that reach a measuring window are programmed (a window of 1 x 1 mm on a
+400 x 400 mm plate), each one long stroke of X across the window and a margin. Positions are
+placed on the nominal machine (`workpiece_axes`); the program carries no compensation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.nc import ProgramBuilder
+from machinesim.nc.program import Program
+
+__all__ = ["PAPER_PLAN", "PyramidPlan", "pyramid_program", "workpiece_axes"]
+
+
+@dataclass(frozen=True)
+class PyramidPlan:
+    """Pyramid pattern parameters (SI).
+
+    Attributes
+    ----------
+    pitch : float
+        Groove spacing, m (paper 003: 50 um).
+    depth : float
+        Groove depth below the plate's top, m (25 um: the 90-deg flanks meet at the top).
+    window : float
+        Side of the square measuring window, m (1 mm).
+    margin : float
+        Extra groove length and extra grooves beyond the window, m.
+    clearance : float
+        Tool height over the top for rapids, m.
+    feed_mm_per_min : float
+    """
+
+    pitch: float = 50e-6
+    depth: float = 25e-6
+    window: float = 1e-3
+    margin: float = 0.1e-3
+    clearance: float = 0.5e-3
+    feed_mm_per_min: float = 2000.0
+
+    def __post_init__(self) -> None:
+        for name in ("pitch", "depth", "window", "margin", "clearance", "feed_mm_per_min"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise InputError(f"Expected a positive {name}, got {value!r}", key=name)
+
+    def offsets(self) -> np.ndarray:
+        """Groove centre offsets from the window centre, m (symmetric, whole pitches)."""
+        n = int(math.ceil((0.5 * self.window + self.margin) / self.pitch))
+        return self.pitch * np.arange(-n, n + 1, dtype=np.float64)
+
+
+PAPER_PLAN = PyramidPlan()
+"""Paper 003's pattern: 50 um pitch, 25 um deep, in 1 x 1 mm windows."""
+
+
+def workpiece_axes(machine, x: float, y: float, c: float, z: float = 0.0) -> np.ndarray:
+    """X and Y that put the nominal tool tip over workpiece point (x, y) with C at ``c``."""
+    n = len(machine.axes)
+    ix, iy, iz, ic = (machine.axes.index(a) for a in "XYZC")
+    q = np.zeros(n)
+    q[iz], q[ic] = z, c
+    p0 = machine.tool_pose(q)[:3, 3]
+    columns = []
+    for k in (ix, iy):
+        dq = q.copy()
+        dq[k] += 1e-3
+        columns.append((machine.tool_pose(dq)[:3, 3] - p0) / 1e-3)
+    jac = np.stack(columns, axis=1)[:2]         # affine in X and Y on the nominal machine
+    return np.linalg.solve(jac, np.array([x, y]) - p0[:2])
+
+
+def pyramid_program(machine, centre, plan: PyramidPlan = PAPER_PLAN,
+                    number: int = 3003) -> Program:
+    """The two groove sets over the window centred at workpiece point ``centre`` (m)."""
+    cx, cy = (float(v) for v in centre)
+    half = 0.5 * plan.window + plan.margin
+    b = ProgramBuilder(number)
+    z_cut = -plan.depth
+    for c in (0.0, 0.5 * math.pi):
+        b.rapid(Z=plan.clearance).rapid(C=c)
+        for off in plan.offsets():
+            if c == 0.0:       # set 1: along the workpiece's X
+                start, end = (cx - half, cy + off), (cx + half, cy + off)
+            else:              # set 2: along the workpiece's Y, cut by X after C turned
+                start, end = (cx + off, cy - half), (cx + off, cy + half)
+            a = workpiece_axes(machine, *start, c)
+            e = workpiece_axes(machine, *end, c)
+            b.rapid(X=float(a[0]), Y=float(a[1])).rapid(Z=z_cut)
+            b.linear(X=float(e[0]), Y=float(e[1]), feed_mm_per_min=plan.feed_mm_per_min)
+            b.rapid(Z=plan.clearance)
+    return b.build()

@@ -1,0 +1,246 @@
+"""Paper 003's laser measurements of the XY plane, taken through a `machinesim.Lab`.
+
+The 1-D measurements along the table's centre lines (ISO 230-2 positioning of X and Y,
+straightness of each read across it) at the machining point, and the two ISO 230-6 face
+diagonals of the 400 mm square at the corners with the beam 120 mm above the table (paper
+003 Fig. 3). The beam height is set by reading the optic on the tool mount (``tool_mount``,
+25 mm above the table's top at Z = 0 on ``grooving_4axis``) with Z at 95 mm: the angular
+errors' lever arms between that height and the machining point are the Abbe offsets that
+make the diagonals (corners, beam height) differ from eq 1's estimate (centre lines,
+machining point).
+
+`compensated_*` read the same tests with a `machinesim.compensation_table.CompensationTable`
+active in the control: every commanded point goes through the table, as the control's
+compensation does, and the interferometer reads the machine's actual motion.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.identification.xy_plane import (
+    Curve,
+    DiagonalReading,
+    XYPlaneMap,
+    squareness_of_lines,
+)
+from machinesim.metrology.iso230 import (
+    PositioningEvaluation,
+    evaluate_positioning,
+    iso230_2_targets,
+    squareness_from_diagonals,
+)
+
+__all__ = ["BEAM_FRAME", "BEAM_Z", "DIAGONALS", "PLATE", "XYPlaneMeasurements",
+           "measure_xy_plane"]
+
+PLATE = (-0.2, 0.2)
+"""The 400 mm square on the table, machine X and Y, m (table centre at 0)."""
+DIAGONALS = (((0.2, 0.2), (-0.2, -0.2)), ((-0.2, 0.2), (0.2, -0.2)))
+"""Paper 003's diagonals (400,400)->(0,0) and (0,400)->(400,0) mm of the plate, in X, Y."""
+BEAM_FRAME = "tool_mount"
+BEAM_Z = 0.095
+"""Z value putting the ``tool_mount`` frame 120 mm above the table (25 mm + 95 mm)."""
+
+
+@dataclass(frozen=True, eq=False)
+class XYPlaneMeasurements:
+    """What the interferometer gave, and eq 1's map built from it.
+
+    Attributes
+    ----------
+    positioning_x, positioning_y : PositioningEvaluation
+        ISO 230-2 tests of X on Y = 0 and of Y on X = 0.
+    straightness_x_in_y, straightness_y_in_x : Curve
+        Straightness (least-squares line removed) of X read in Y, of Y read in X.
+    raw_x_in_y, raw_y_in_x : Curve
+        The same read against the table's axes (optic aligned to the nominal axis), for
+        `machinesim.identification.xy_plane.fit_xy_plane`.
+    diagonals : tuple of PositioningEvaluation
+        ISO 230-6 tests of the two diagonals (`DIAGONALS`), positions = distance from the
+        start corner.
+    diagonal_squareness : float
+        Squareness from the two diagonals' far-end mean deviations, rad.
+    map : XYPlaneMap
+        Eq 1's map.
+    """
+
+    positioning_x: PositioningEvaluation
+    positioning_y: PositioningEvaluation
+    straightness_x_in_y: Curve
+    straightness_y_in_x: Curve
+    raw_x_in_y: Curve
+    raw_y_in_x: Curve
+    diagonals: tuple
+    diagonal_squareness: float
+    map: XYPlaneMap
+
+    @property
+    def diagonal_deviation(self) -> float:
+        """The larger diagonal systematic deviation E (ISO 230-6), m."""
+        return max(d.E for d in self.diagonals)
+
+    def fit_inputs(self) -> tuple:
+        """(curves, diagonals) as `machinesim.identification.xy_plane.fit_xy_plane` takes
+        them: mean positioning, straightness against the table's axes, the diagonals."""
+        curves = (self.map.position_x, self.map.position_y, self.raw_x_in_y, self.raw_y_in_x)
+        diagonals = tuple(DiagonalReading(c, o, d.targets, d.mean, BEAM_FRAME, BEAM_Z)
+                          for (c, o), d in zip(DIAGONALS, self.diagonals, strict=True))
+        return curves, diagonals
+
+
+def measure_xy_plane(interferometer, diagonal_interferometer, *, count: int = 21,
+                     runs: int = 5, seed: int | None = 0, table=None) -> XYPlaneMeasurements:
+    """Run the laser measurements and build eq 1's map.
+
+    Parameters
+    ----------
+    interferometer : LaserInterferometer
+        Reading the tool point (``frame="tool_tip"``), for the centre-line tests.
+    diagonal_interferometer : LaserInterferometer
+        Reading the optic at beam height (``frame=BEAM_FRAME``), for the diagonals.
+    count : int
+        Targets per test (ISO 230-2 asks at least 5 over 400 mm; paper-like 21).
+    runs : int
+        Runs per direction.
+    seed : int or None
+        Seed of the targets' ISO 230-2 offsets; None: uniformly spaced targets.
+    table : CompensationTable, optional
+        A compensation active in the control while measuring (the "after" tests).
+    """
+    reader = _Reader(interferometer, table)
+    targets = iso230_2_targets(*PLATE, count=count, rng=seed)
+    pos_x = _positioning(reader, 0, targets, runs)
+    pos_y = _positioning(reader, 1, targets, runs)
+    raw_xy = Curve(targets, reader.across(0, targets))
+    raw_yx = Curve(targets, reader.across(1, targets))
+    str_xy = Curve(targets, _without_line(targets, raw_xy.values))
+    str_yx = Curve(targets, _without_line(targets, raw_yx.values))
+    beam = _Reader(diagonal_interferometer, table, z=BEAM_Z)
+    diagonals = tuple(_diagonal(beam, c, o, count, runs) for c, o in DIAGONALS)
+    same, opposite = diagonals
+    # The first diagonal runs (0.2, 0.2) -> (-0.2, -0.2): spans of the same sign; the
+    # second (-0.2, 0.2) -> (0.2, -0.2): opposite signs.
+    e_diag = squareness_from_diagonals(same.mean[-1], opposite.mean[-1], 0.4, 0.4)
+    e_lines = squareness_of_lines(e_diag, str_xy, str_yx, PLATE, PLATE)
+    xy_map = XYPlaneMap(Curve(targets, pos_x.mean), Curve(targets, pos_y.mean), str_xy,
+                        str_yx, e_lines)
+    return XYPlaneMeasurements(pos_x, pos_y, str_xy, str_yx, raw_xy, raw_yx, diagonals,
+                               e_diag, xy_map)
+
+
+# -------------------------------------------------------------------------------- internals
+
+class _Reader:
+    """Displacements of the instrument's point between commanded XY points, the control's
+    compensation (if any) applied to every command.
+
+    The lab's interferometer moves one axis per positioning test; a compensated point moves
+    both X and Y by micrometres. Each reading is therefore taken as a move along the axis
+    from the compensated reference command, at the other axes of the compensated target
+    (``base``), plus the remaining command difference. The reference is so read at the
+    target's cross-axis command, micrometres from its own: the reading is off by the
+    deviation's cross slope (squareness, straightness: ~3e-5) times that shift, ~0.1 nm
+    for the errors of these machines.
+    """
+
+    def __init__(self, interferometer, table, z: float = 0.0):
+        self.li = interferometer
+        self.table = table
+        self.n = len(interferometer.machine.axes)
+        self.z = z
+
+    def command(self, x, y) -> np.ndarray:
+        q = np.zeros((np.size(x), self.n))
+        q[:, 0], q[:, 1], q[:, 2] = x, y, self.z
+        return q if self.table is None else self.table.apply(q)
+
+    def along(self, k: int, targets, other: float, reference: float) -> np.ndarray:
+        """Displacement along machine direction k, from the point at ``reference`` to the
+        points at ``targets`` on the line (the other axis at ``other``), minus the commanded
+        travel."""
+        t = np.asarray(targets, dtype=np.float64)
+        xy = (t, np.full_like(t, other)) if k == 0 else (np.full_like(t, other), t)
+        ref = (reference, other) if k == 0 else (other, reference)
+        q = self.command(*xy)
+        q0 = self.command(*ref)[0]
+        axis = "XY"[k]
+        if self.table is None:
+            return self.li.positioning(axis, t, base=q0, reference=reference).deviation
+        out = np.empty(t.size)
+        for i in range(t.size):
+            reading = self.li.positioning(axis, [q[i, k]], base=q[i], reference=q0[k])
+            out[i] = reading.deviation[0] + (q[i, k] - q0[k]) - (t[i] - reference)
+        return out
+
+    def across(self, k: int, targets) -> np.ndarray:
+        """Lateral displacement (the other direction) of the axis k moving along its centre
+        line, zeroed at the first target (no reference line removed)."""
+        t = np.asarray(targets, dtype=np.float64)
+        axis, lateral = "XY"[k], "YX"[k]
+        xy = (t, np.zeros_like(t)) if k == 0 else (np.zeros_like(t), t)
+        q = self.command(*xy)
+        j = 1 - k
+        if self.table is None:
+            return self.li.straightness(axis, t, lateral, base=q[0], reference="none").deviation
+        out = np.empty(t.size)
+        for i in range(t.size):
+            rest = q[i, j] - q[0, j]
+            if q[i, k] == q[0, k]:          # the start point: only the cross shift
+                out[i] = rest
+                continue
+            reading = self.li.straightness(axis, [q[0, k], q[i, k]], lateral, base=q[i],
+                                           reference="none")
+            out[i] = reading.deviation[1] + rest
+        return out
+
+    def diagonal(self, corner, opposite, positions) -> np.ndarray:
+        c = np.asarray(corner, dtype=np.float64)
+        span = np.asarray(opposite, dtype=np.float64) - c
+        length = float(np.linalg.norm(span))
+        u = span / length
+        s = np.asarray(positions, dtype=np.float64)
+        if self.table is None:
+            base = np.zeros(self.n)
+            base[2] = self.z
+            return self.li.diagonal(s, c, c + span, base=base).deviation
+        qc = self.command(c[0], c[1])[0]
+        points = c + s[:, None] * u
+        q = self.command(points[:, 0], points[:, 1])
+        out = np.empty(s.size)
+        for i in range(s.size):
+            # A straight move from the compensated corner along the nominal diagonal to the
+            # point m nearest the compensated target, then the micrometre rest q - m.
+            step = float(np.dot(q[i, :2] - qc[:2], u))
+            if step <= 0.0:
+                out[i] = float(np.dot(q[i, :2] - qc[:2], u)) - s[i]
+                continue
+            m = qc[:2] + step * u
+            reading = self.li.diagonal([step], qc[:2], m, base=qc).deviation[0]
+            out[i] = reading + step + float(np.dot(q[i, :2] - m, u)) - s[i]
+        return out
+
+
+def _positioning(reader: _Reader, k: int, targets, runs: int) -> PositioningEvaluation:
+    up = [reader.along(k, targets, 0.0, targets[0]) for _ in range(runs)]
+    down = [reader.along(k, targets[::-1], 0.0, targets[0])[::-1] for _ in range(runs)]
+    return evaluate_positioning(targets, np.array(up), np.array(down))
+
+
+def _without_line(targets, raw) -> np.ndarray:
+    """The reading about its least-squares line (ISO 230-1's reference straight line)."""
+    centre = targets.mean()
+    slope = np.dot(targets - centre, raw - raw.mean()) / np.dot(targets - centre,
+                                                                 targets - centre)
+    return raw - (raw.mean() + slope * (targets - centre))
+
+
+def _diagonal(reader: _Reader, corner, opposite, count: int, runs: int):
+    length = math.dist(corner, opposite)
+    s = np.linspace(0.0, length, count)
+    up = [reader.diagonal(corner, opposite, s) for _ in range(runs)]
+    down = [reader.diagonal(corner, opposite, s[::-1])[::-1] for _ in range(runs)]
+    return evaluate_positioning(s, np.array(up), np.array(down))

@@ -1,0 +1,179 @@
+"""Paper 003 replayed: the grooving machine's XY-plane errors and its C table's squareness.
+
+Run: ``.venv/bin/python scenarios/xy_plane_errors.py [--errors FILE.toml] [--noise on|off]
+[--seed N] [--out reports/xy_plane_errors]`` (about 40 s).
+
+The grooving_4axis gets the errors of ``models/errors/xy_plane_grooving_4axis.toml`` (chosen
+to give paper 003's magnitudes: 2-D errors of 11.59 um in X and 12.33 um in Y over the
+400 mm plate, a diagonal deviation of 17.3 um), or those of ``--errors``. The procedure
+(`machinesim.procedures.xy_plane_errors.XYPlaneErrors`) measures the plate with the lab's
+laser interferometer (ISO 230-2 positioning and straightness on the centre lines, ISO 230-6
+diagonals with the beam 120 mm above the table), builds eq 1's 2-D map, fits the same
+parameters with `machinesim.identification.fit`, compensates by a control table of
+re-shaped commands and by the identified model, and measures again; it reads the C table's
+squareness by simultaneous XY + C motion (Figs 7-9) with displacement sensors. Writes
+summary.json (docs/reports.md), the paper's table, the 2-D error maps (Figs 2 and 5), the
+diagonal curves (Figs 4 and 6), h(theta) (Fig. 9) and the pyramid apex heights of five
+1 x 1 mm windows across the plate, before and after. See docs/procedures/xy_plane_errors.md.
+"""
+
+from __future__ import annotations
+
+import io
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from machinesim import Lab
+from machinesim._io import write_atomic
+from machinesim.errors import ErrorModel
+from machinesim.exceptions import MachineSimError
+from machinesim.experiment import run
+from machinesim.procedures.pyramid_windows import WINDOWS
+from machinesim.procedures.xy_plane_errors import XYPlaneErrors, compensations
+from machinesim.procedures.xy_plane_measurements import (
+    BEAM_FRAME,
+    DIAGONALS,
+    PLATE,
+    measure_xy_plane,
+)
+from machinesim.report import ReportFolder, scenario_arguments
+
+DEFAULT_ERRORS = (Path(__file__).resolve().parents[1] / "models" / "errors"
+                  / "xy_plane_grooving_4axis.toml")
+UM = 1e-6
+
+
+def main() -> None:
+    parser = scenario_arguments(__doc__.splitlines()[0], "reports/xy_plane_errors")
+    args = parser.parse_args()
+    try:
+        report(args)
+    except MachineSimError as error:
+        print(f"error: {error}", file=sys.stderr)
+        sys.exit(2)
+
+
+def report(args) -> None:
+    began = time.perf_counter()
+    errors = ErrorModel.from_toml(args.errors if args.errors is not None else DEFAULT_ERRORS)
+    lab = Lab("grooving_4axis", errors, noise=args.noise == "on", seed=args.seed)
+    print(f"Paper 003 on grooving_4axis: noise {args.noise}, seed {args.seed}\n")
+    result = run(XYPlaneErrors(), lab)
+    out = ReportFolder(args.out)
+    detail = result.identification.detail
+    xy = result.measurements["xy"]
+    after = result.evaluation.details
+    vector_map(out, "xy_map_before.png", detail["map"], "Estimated 2-D errors (eq 1), before")
+    table, _ = compensations(result.identification)
+    li = lab.laser_interferometer(label="report_after")
+    ld = lab.laser_interferometer(label="report_after_diagonals", frame=BEAM_FRAME)
+    after_xy = measure_xy_plane(li, ld, seed=None, table=table)
+    vector_map(out, "xy_map_after.png", after_xy.map,
+               "Estimated 2-D errors (eq 1), after table compensation")
+    diagonal_plot(out, "diagonals_before.png", xy, "Diagonals before compensation")
+    diagonal_plot(out, "diagonals_after.png", after_xy, "Diagonals after compensation")
+    sep = detail["c"]
+    deg = np.degrees(sep.theta)
+    out.plot("c_heights.png", [
+        ("h(theta), following test", deg, sep.h / UM),
+        ("table tilt (fixed tests)", deg, sep.table_tilt / UM),
+        ("perpendicularity (EA0C, EB0C)", deg, sep.perpendicularity / UM),
+        ("tilt motion (EAC, EBC)", deg, sep.wobble / UM),
+        ("XY motion errors", deg, sep.xy_motion / UM)],
+        xlabel="C (deg)", ylabel="height (um)", title="C squareness test (paper 003 Fig. 9)")
+    pyramid_map(out, "pyramid_heights.png", after)
+    print(paper_table(result))
+    print(f"\nmodel-based route after: X {after['xy_error_x_model_after_um']:.3f} um, "
+          f"Y {after['xy_error_y_model_after_um']:.3f} um, diagonal "
+          f"{after['diagonal_model_after_um']:.3f} um")
+    print(out.write_result(result))
+    print(f"Report written to {out.path} ({time.perf_counter() - began:.1f} s)")
+
+
+def paper_table(result) -> str:
+    lines = ["| figure | unit | before | after | paper before | paper after |",
+             "|---|---|---|---|---|---|"]
+    for f in result.figures:
+        cells = [f.before, f.after, f.paper_before, f.paper_after]
+        lines.append(f"| {f.name} | {f.unit} | " + " | ".join(
+            "-" if v is None else f"{v:.3f}" for v in cells) + " |")
+    return "\n".join(lines)
+
+
+def vector_map(out: ReportFolder, name: str, xy_map, title: str) -> None:
+    """Arrows of (dPx, dPy) on the plate (paper 003 Figs 2 and 5)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    gx, gy, dx, dy = xy_map.grid(PLATE, PLATE, count=11)
+    figure, axes = plt.subplots(figsize=(6.5, 6), dpi=120)
+    scale = max(float(np.hypot(dx, dy).max()), 1e-12)
+    q = axes.quiver(gx * 1e3, gy * 1e3, dx / UM, dy / UM, angles="xy",
+                    scale_units="xy", scale=scale / UM / 30.0)
+    axes.quiverkey(q, 0.9, -0.09, scale / UM, f"{scale / UM:.3g} um")
+    axes.set_xlabel("X (mm)")
+    axes.set_ylabel("Y (mm)")
+    rx, ry = xy_map.ranges(PLATE, PLATE)
+    axes.set_title(f"{title}\nrange X {rx / UM:.2f} um, Y {ry / UM:.2f} um")
+    axes.set_aspect("equal")
+    buffer = io.BytesIO()
+    figure.tight_layout()
+    figure.savefig(buffer, format="png")
+    plt.close(figure)
+    write_atomic(out.path / name, buffer.getvalue())
+    out.files.append(name)
+
+
+def pyramid_map(out: ReportFolder, name: str, details) -> None:
+    """Mean pyramid apex height of each window at its place on the plate, before and after
+    (a colour map of the plate)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    xy = np.array(WINDOWS) * 1e3
+    before = np.array(details["pyramid_apex_mean_before_um"])
+    after_ = np.array(details["pyramid_apex_mean_after_um"])
+    low, high = min(before.min(), after_.min()), max(before.max(), after_.max())
+    figure, axes = plt.subplots(1, 2, figsize=(11, 5), dpi=120)
+    for ax, values, title in ((axes[0], before, "before"), (axes[1], after_, "after (model)")):
+        dots = ax.scatter(xy[:, 0], xy[:, 1], c=values, s=900, marker="s", cmap="viridis",
+                          vmin=low, vmax=high)
+        for (x, y), v in zip(xy, values, strict=True):
+            ax.annotate(f"{v:.2f}", (x, y), ha="center", va="center", color="white")
+        ax.set_xlim(-230, 230)
+        ax.set_ylim(-230, 230)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x (mm)")
+        ax.set_ylabel("y (mm)")
+        ax.set_title(f"pyramid apex height (um), {title}")
+    figure.colorbar(dots, ax=axes, label="mean apex height (um)")
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png")
+    plt.close(figure)
+    write_atomic(out.path / name, buffer.getvalue())
+    out.files.append(name)
+
+
+def diagonal_plot(out: ReportFolder, name: str, xy, title: str) -> None:
+    """Measured and eq-1-estimated diagonal deviations (paper 003 Figs 4 and 6)."""
+    series = []
+    for (corner, opposite), d in zip(DIAGONALS, xy.diagonals, strict=True):
+        label = f"({corner[0] * 1e3:+.0f},{corner[1] * 1e3:+.0f})->" \
+                f"({opposite[0] * 1e3:+.0f},{opposite[1] * 1e3:+.0f}) mm"
+        s = d.targets
+        series.append((f"measured {label}", s * 1e3, d.mean / UM))
+        series.append((f"estimated {label}", s * 1e3,
+                       xy.map.diagonal(corner, opposite, s) / UM))
+    out.plot(name, series, xlabel="distance along the diagonal (mm)",
+             ylabel="deviation (um)", title=title)
+
+
+if __name__ == "__main__":
+    main()

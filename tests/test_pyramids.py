@@ -1,0 +1,74 @@
+"""Pyramids across the plate (paper 003 section IV): the cut pattern read back."""
+
+import math
+
+import numpy as np
+import pytest
+
+import machinesim
+from machinesim.cam.pyramids import PyramidPlan, pyramid_program, workpiece_axes
+from machinesim.exceptions import MachineSimError
+from machinesim.procedures.pyramid_windows import cut_and_read, v_flanks
+
+CORNER = ((0.19, -0.19),)   # at C = 90 deg it lies at X = -0.19 m
+P = 50e-6
+
+
+def test_nominal_machine_cuts_sharp_pyramids_at_the_top():
+    lab = machinesim.Lab("grooving_4axis", noise=False)
+    (w,), _ = cut_and_read(lab, windows=((0.0, 0.0),))
+    # 90-deg flanks, pitch = 2 x depth: ridges meet at the plate's top, z = 0.
+    np.testing.assert_allclose(w.apex, 0.0, atol=1e-12)
+    assert w.pitch == pytest.approx(P, abs=1e-12)
+    assert w.angle_error == pytest.approx(0.0, abs=1e-9)
+
+
+def test_apex_heights_follow_the_tool_height_error_of_each_set():
+    # A tool set 2 um off in Z and X straightness in Z: each set's grooves sit higher by the
+    # tool's actual height error where it cuts, so the ridges rise by it and an apex is the
+    # lower of the two crossing ridges (by kinematics with the revealed errors).
+    errors = {"tool": {"offset_um": [0.0, 0.0, 2.0]},
+              "component": {"X": {"position_mm": [-250.0, 250.0], "EZX_um": [-3.0, 3.0]}}}
+    lab = machinesim.Lab("grooving_4axis", errors, noise=False)
+    (w,), _ = cut_and_read(lab, windows=CORNER)
+    m, truth = lab.machine, lab.reveal()
+    lift = []
+    for c in (0.0, 0.5 * math.pi):
+        xy = workpiece_axes(m, *CORNER[0], c)
+        q = np.array([xy[0], xy[1], -25e-6, c])
+        lift.append(m.tool_pose(q, truth)[2, 3] - m.tool_pose(q)[2, 3])
+    # EZX varies along set 1's strokes (slope 12e-6) across the 0.6 mm read: +-3.6 nm.
+    np.testing.assert_allclose(w.apex, min(lift), atol=5e-9)
+    assert abs(lift[0] - lift[1]) > 1e-7                   # the two sets differ
+
+
+def test_pitch_follows_the_y_scale_and_the_angle_the_c_positioning():
+    # Y positioning with a scale error of 1e-4: the grooves of both sets are stepped by Y
+    # (set 2 after C turned 90 deg), so the pitch reads 50 um (1 + 1e-4). C positioned
+    # 50 urad off at 90 deg turns set 2 by 50 urad against set 1.
+    errors = {"component": {"Y": {"position_mm": [-250.0, 250.0], "EYY_um": [-25.0, 25.0]},
+                            "C": {"position_deg": [0.0, 90.0, 180.0],
+                                  "ECC_urad": [0.0, 50.0, 50.0]}}}
+    lab = machinesim.Lab("grooving_4axis", errors, noise=False)
+    (w,), _ = cut_and_read(lab, windows=((0.0, 0.0),))
+    assert w.pitch == pytest.approx(P * (1 + 1e-4), rel=2e-6)
+    assert abs(w.angle_error) == pytest.approx(50e-6, rel=0.02)
+
+
+def test_v_flanks_recovers_a_drawn_v_profile():
+    s = np.arange(0.0, 200e-6, 0.1e-6)
+    centres, bottoms = np.array([50e-6, 100e-6, 150e-6]), np.array([-25e-6, -24e-6, -26e-6])
+    z = np.min([b + np.abs(s - c) for c, b in zip(centres, bottoms, strict=True)], axis=0)
+    pos, bot, _, _ = v_flanks(s, z, centres + 2e-6, P)
+    np.testing.assert_allclose(pos, centres, atol=1e-12)
+    np.testing.assert_allclose(bot, bottoms, atol=1e-12)
+
+
+def test_bad_plans_are_refused():
+    m = machinesim.load_machine("grooving_4axis")
+    with pytest.raises(MachineSimError):
+        PyramidPlan(pitch=0.0)
+    with pytest.raises(MachineSimError):
+        v_flanks([0.0, 1e-6], [0.0, 0.0], [0.5e-6], P)
+    program = pyramid_program(m, (0.0, 0.0))
+    assert len(program.moves) > 0

@@ -1,0 +1,169 @@
+"""Paper 003's XY plane: eq 1's map, the fit route, compensation by re-shaped commands."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import machinesim
+from machinesim.compensation_table import CompensationTable, ModelCompensation
+from machinesim.exceptions import MachineSimError
+from machinesim.experiment import run
+from machinesim.identification.xy_plane import Curve, XYPlaneMap, fit_xy_plane
+from machinesim.nc import ProgramBuilder
+from machinesim.procedures.xy_plane_errors import XYPlaneErrors
+from machinesim.procedures.xy_plane_measurements import (
+    BEAM_FRAME,
+    DIAGONALS,
+    PLATE,
+    measure_xy_plane,
+)
+from machinesim.report import check_summary
+
+PAPER = Path(__file__).resolve().parents[1] / "models" / "errors" / "xy_plane_grooving_4axis.toml"
+UM = 1e-6
+KNOTS = [-250.0, -200.0, -100.0, 0.0, 100.0, 200.0, 250.0]
+# Errors of eq 1's form only (no angular errors): knots on the 20 mm targets.
+EQ1 = {"location": {"Y": {"EC0Y_urad": 20.0}},
+       "component": {"X": {"position_mm": KNOTS, "EXX_um": [-5, -4, 2, 0, 3, 5, 6],
+                           "EYX_um": [1, 1, -1.5, 0, 1, 2, 2]},
+                     "Y": {"position_mm": KNOTS, "EYY_um": [-3, -3, 1, 0, 2, 4, 4],
+                           "EXY_um": [0.5, 0.5, -1, 0, 1.2, -0.4, -0.4]}}}
+
+
+def instruments(lab, resolution=None):
+    extra = {} if resolution is None else {"resolution": resolution}
+    return (lab.laser_interferometer(label="centre", **extra),
+            lab.laser_interferometer(label="diagonal", frame=BEAM_FRAME, **extra))
+
+
+def true_deviation(lab, x, y):
+    """The actual XY deviation of the tool point from kinematics with the revealed errors."""
+    q = np.zeros((x.size, len(lab.machine.axes)))
+    q[:, 0], q[:, 1] = x.ravel(), y.ravel()
+    actual = lab.machine.tool_pose(q, lab.reveal())[:, :2, 3]
+    nominal = lab.machine.tool_pose(q)[:, :2, 3]
+    return actual - nominal
+
+
+@pytest.fixture(scope="module")
+def eq1_lab():
+    lab = machinesim.Lab("grooving_4axis", EQ1, noise=False)
+    return lab, measure_xy_plane(*instruments(lab, resolution=0.0), seed=None)
+
+
+def test_eq1_map_equals_the_kinematics_up_to_a_rigid_move(eq1_lab):
+    lab, meas = eq1_lab
+    g = np.linspace(-0.2, 0.2, 9)
+    x, y = (a.ravel() for a in np.meshgrid(g, g))
+    truth = true_deviation(lab, x, y)
+    dx, dy = meas.map.deviation(x, y)
+    # The least-squares straightness lines leave a rigid turn and shift no reading sees:
+    # difference = (tx - w y, ty + w x), fitted by least squares, rest below 1e-12 m.
+    a = np.zeros((2 * x.size, 3))
+    a[: x.size, 0], a[: x.size, 2] = 1.0, -y
+    a[x.size:, 1], a[x.size:, 2] = 1.0, x
+    diff = np.concatenate([truth[:, 0] - dx, truth[:, 1] - dy])
+    coef, *_ = np.linalg.lstsq(a, diff, rcond=None)
+    assert np.abs(diff - a @ coef).max() < 1e-12
+    # The diagonals (corners, beam height) equal the map's prediction: no angular errors.
+    for (c, o), d in zip(DIAGONALS, meas.diagonals, strict=True):
+        np.testing.assert_allclose(d.mean, meas.map.diagonal(c, o, d.targets), atol=1e-12)
+
+
+def test_squareness_from_the_diagonals_against_the_injected(eq1_lab):
+    lab, meas = eq1_lab
+    truth = lab.reveal()
+    e = truth.location["Y"]["EC0Y"]
+    # Diagonals see the corner chords: e minus the chord slopes of the two straightness
+    # tables over the plate (docstring of squareness_of_lines), by hand from EQ1:
+    # EXY(200) - EXY(-200) = -0.4 - 0.5 um over 0.4 m; EYX(200) - EYX(-200) = 2 - 1 um.
+    chords = (-0.9e-6) / 0.4 + (1.0e-6) / 0.4
+    # First-order formulas: the rest is of second order, (deviation / length)**2 * d / (a b)
+    # with deviations of ~10 um over 0.4 m, i.e. ~1e-9 rad.
+    assert meas.diagonal_squareness == pytest.approx(e - chords, abs=2e-9)
+
+
+def test_fit_route_identifies_the_injected_tables(eq1_lab):
+    lab, meas = eq1_lab
+    curves, diagonals = meas.fit_inputs()
+    knots = meas.map.position_x.positions
+    est = fit_xy_plane(lab.machine, curves, diagonals, knots)
+    assert not est.unidentifiable
+    truth = lab.reveal()
+    for axis, symbol in (("X", "EXX"), ("X", "EYX"), ("Y", "EYY")):
+        got = est.errors.component[axis][symbol].evaluate(knots)
+        np.testing.assert_allclose(got, truth.component[axis][symbol].evaluate(knots),
+                                   atol=1e-11)
+    # Datum: EXY at the last knot (0.2 m) is 0, so EC0Y is e minus EXY's chord slope.
+    exy = truth.component["Y"]["EXY"].evaluate([0.2])[0]
+    assert est.as_dict()["location.Y.EC0Y"]["value"] == pytest.approx(
+        truth.location["Y"]["EC0Y"] - exy / 0.2, abs=1e-10)   # second order: ~4e-11
+
+
+def test_table_and_model_compensation_leave_below_a_nanometre_without_noise(eq1_lab):
+    lab, meas = eq1_lab
+    li, ld = instruments(lab, resolution=0.0)
+    after = measure_xy_plane(li, ld, seed=None, table=CompensationTable(meas.map))
+    assert max(after.map.ranges(PLATE, PLATE)) < 1e-9
+    assert after.diagonal_deviation < 1e-9
+    curves, diagonals = meas.fit_inputs()
+    est = fit_xy_plane(lab.machine, curves, diagonals, meas.map.position_x.positions)
+    model = measure_xy_plane(li, ld, seed=None, table=ModelCompensation(lab.machine,
+                                                                        est.errors))
+    assert max(model.map.ranges(PLATE, PLATE)) < 1e-9
+    assert model.diagonal_deviation < 1e-9
+
+
+def test_the_experiment_gives_the_paper_magnitudes_before_and_after():
+    lab = machinesim.Lab("grooving_4axis", PAPER, seed=11)
+    result = run(XYPlaneErrors(), lab)
+    summary = result.summary()
+    summary["files"] = []
+    check_summary(summary)                     # the core's schema (docs/reports.md)
+    fig = {f.name: f for f in result.figures}
+    for name, paper_before in (("xy_error_x", 11.59), ("xy_error_y", 12.33),
+                               ("diagonal", 17.3)):
+        assert fig[name].before == pytest.approx(paper_before, rel=0.25), name
+        assert fig[name].after <= fig[name].paper_after, name
+    # The Abbe offsets (angular errors between beam height at the corners and the centre
+    # lines) stay on the diagonals after the table compensation: paper 1.44 um.
+    assert fig["diagonal"].after >= 0.5
+    # C perpendicularity: injected hypot(8, 6) urad = 10 urad.
+    assert fig["c_perpendicularity"].before == pytest.approx(10.0, abs=0.5)
+    assert fig["c_perpendicularity"].after < 0.5
+    # Pyramids: the model route takes the C tilts out of the apex heights.
+    assert fig["pyramid_height_range"].after < 0.5 * fig["pyramid_height_range"].before
+    truth = lab.reveal().parameters()
+    for name, (value, std) in result.identified.items():
+        assert abs(value - truth[name]) < 5 * std + 1e-9, name
+
+
+def test_compensation_table_rewrites_a_program_so_the_tool_lands():
+    lab = machinesim.Lab("grooving_4axis", EQ1, noise=False)
+    meas = measure_xy_plane(*instruments(lab, resolution=0.0), seed=None)
+    table = CompensationTable(meas.map)
+    program = (ProgramBuilder(1).rapid(X=-0.15, Y=0.12, Z=0.001)
+               .linear(X=0.18, Y=-0.1, feed_mm_per_min=500).build())
+    out = table.program(program, lab.machine, rounded=False)
+    q_nom = np.array([[-0.15, 0.12, 0.001, 0.0], [0.18, -0.1, 0.001, 0.0]])
+    q_out = np.array([[m.target[a] for a in "XYZC"] for m in out.moves])
+    x, y = q_nom[:, 0], q_nom[:, 1]
+    dx, dy = meas.map.deviation(q_out[:, 0], q_out[:, 1])
+    np.testing.assert_allclose(q_out[:, 0] + dx, x, atol=1e-15)
+    np.testing.assert_allclose(q_out[:, 1] + dy, y, atol=1e-15)
+    np.testing.assert_array_equal(q_out[:, 2:], q_nom[:, 2:])
+
+
+def test_bad_curves_and_commands_are_refused():
+    with pytest.raises(MachineSimError):
+        Curve([0.0, 0.0], [1.0, 2.0])
+    with pytest.raises(MachineSimError):
+        Curve([0.0, 1.0], [1.0])
+    with pytest.raises(MachineSimError):
+        XYPlaneErrors(c_step_deg=7.0)          # 360 / 7 is no whole number of steps
+    with pytest.raises(MachineSimError):
+        XYPlaneErrors(c_radius=0.3)            # beyond the plate
+    flat = Curve([-1.0, 1.0], [0.0, 0.0])
+    with pytest.raises(MachineSimError):
+        CompensationTable(XYPlaneMap(flat, flat, flat, flat, 0.0)).apply([1.0, 2.0])
