@@ -91,9 +91,12 @@ class ReportFolder:
         write_atomic(target, json_text(data, "summary"))
         return target
 
-    def write_result(self, result, digits: int = 4) -> str:
+    def write_result(self, result, digits: int = 4, budget=None) -> str:
         """A `machinesim.experiment.Result`: its parts, programs, the figures table (Markdown
-        and JSON), the identification table, and summary.json. Returns the Markdown."""
+        and JSON), the identification table, and summary.json. Returns the Markdown.
+
+        With ``budget`` (a `machinesim.budget.Budget`), also its table (``budget.md``), its
+        bar plot (``budget.png``) and its rows under ``budget`` in summary.json."""
         for name, part in result.evaluation.parts.items():
             self.write_part(f"{name}.ply", part)
         for name, program in {**result.evaluation.programs, **result.programs}.items():
@@ -112,8 +115,22 @@ class ReportFolder:
               value - result.injected.get(name, math.nan)]
              for name, (value, std) in result.identified.items()],
             title="Identified error parameters (m, rad)", digits=12)
-        self.write_summary(result.summary())
-        return figures + "\n" + identified
+        summary = result.summary()
+        text = figures + "\n" + identified
+        if budget is not None:
+            text += "\n" + self.write_budget(budget)
+            summary["budget"] = budget.to_dict()
+        self.write_summary(summary)
+        return text
+
+    def write_budget(self, budget, name: str = "budget") -> str:
+        """A `machinesim.budget.Budget` as ``name.md`` (table) and ``name.png`` (bar plot);
+        returns the Markdown."""
+        text = ("### Error budget: share of each source in the 'after' figures\n\n"
+                + budget.table())
+        write_atomic(self._target(f"{name}.md"), text)
+        budget.plot(self._target(f"{name}.png"))
+        return text
 
     def write_table(self, name: str, columns: Sequence[str], rows: Sequence[Sequence],
                     title: str = "", digits: int = 3) -> str:
@@ -221,8 +238,33 @@ def check_summary(data: Mapping) -> None:
         if missing:
             raise InputError(f"summary.json: figures[{i}] lacks {', '.join(missing)}",
                              key="figures")
-    rest = {k: v for k, v in data.items() if k not in SUMMARY_KEYS}
+    if "budget" in data:
+        _check_budget(data["budget"])
+    rest = {k: v for k, v in data.items() if k not in SUMMARY_KEYS and k != "budget"}
     check_units(rest)
+
+
+def _check_budget(rows) -> None:
+    """``budget`` of summary.json: a list of rows with `machinesim.budget.BUDGET_KEYS`."""
+    from machinesim.budget import BUDGET_KEYS
+
+    if not isinstance(rows, list):
+        raise InputError(f"summary.json: expected 'budget' as a list of rows, got "
+                         f"{type(rows).__name__}", key="budget")
+    for i, row in enumerate(rows):
+        if not isinstance(row, Mapping) or set(row) != set(BUDGET_KEYS):
+            raise InputError(f"summary.json: budget[{i}] must have exactly the keys "
+                             f"{', '.join(BUDGET_KEYS)}, got {row!r}", key="budget")
+        for key in ("source", "figure", "unit"):
+            if not isinstance(row[key], str) or not row[key]:
+                raise InputError(f"summary.json: budget[{i}].{key} must be a non-empty "
+                                 f"string, got {row[key]!r}", key="budget")
+        for key in ("after_all", "after_without", "share"):
+            value = row[key]
+            if (not isinstance(value, (int, float)) or isinstance(value, bool)
+                    or not math.isfinite(value)):
+                raise InputError(f"summary.json: budget[{i}].{key} must be a finite number, "
+                                 f"got {value!r}", key="budget")
 
 
 def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentParser:
@@ -239,6 +281,34 @@ def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentP
     parser.add_argument("--out", type=Path, default=Path(default_out),
                         help=f"report folder (default {default_out})")
     return parser
+
+
+#: The presets of `machinesim.realism.Realism` a scenario's ``--realism`` takes.
+REALISM_PRESETS = ("ideal", "noise_only", "lab")
+
+
+def realism_options(parser: argparse.ArgumentParser, default: str = "lab") -> None:
+    """Add ``--realism ideal|noise_only|lab`` and ``--budget on|off`` to a scenario's parser
+    (`scenario_arguments` gives the options every scenario takes; these are for scenarios
+    that build their lab with a `machinesim.realism.Realism`, see `realism_from`)."""
+    parser.add_argument("--realism", choices=REALISM_PRESETS, default=default,
+                        help="how real the lab is (docs/lab.md): ideal (exact readings), "
+                        "noise_only (instrument noise), lab (instruments, artefacts and "
+                        f"machine as real labs have them); default {default}. --noise off "
+                        "takes the instrument noise out of it")
+    parser.add_argument("--budget", choices=("on", "off"), default="on",
+                        help="error budget (docs/budget.md): run again with each source of "
+                        "the realism switched off in turn (default on; one more run per "
+                        "source)")
+
+
+def realism_from(args):
+    """The `machinesim.realism.Realism` of ``--realism``, less the instrument noise with
+    ``--noise off``."""
+    from machinesim.realism import Realism
+
+    realism = getattr(Realism, args.realism)()
+    return realism.without("instrument_noise") if args.noise == "off" else realism
 
 
 def parse_floats(text: str, count: int, option: str) -> list[float]:

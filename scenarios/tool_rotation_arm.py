@@ -1,8 +1,10 @@
 """Paper 000 replayed: tool setting error e_ys and arm radius r of a 4-axis planer.
 
 Run: ``.venv/bin/python scenarios/tool_rotation_arm.py [--e-ys-um -178] [--r-mm 120.555]
-[--errors FILE.toml] [--noise on|off] [--seed N] [--out reports/tool_rotation_arm]``
-(about 5 s).
+[--capture-mm 1] [--realism ideal|noise_only|lab] [--budget on|off] [--errors FILE.toml]
+[--noise on|off] [--seed N] [--out reports/tool_rotation_arm]`` (about 3 minutes with the
+default lab realism and its error budget; 20 s with ``--budget off``; 3 s with
+``--realism noise_only``).
 
 The planer_4axis gets the paper's errors (arm radius r = 120.555 mm against the nominal
 120.5 mm, tool setting error e_ys = -0.178 mm: ``tool.y = e_ys``, ``tool.z = -(r - r0)``),
@@ -11,7 +13,10 @@ or those of ``--errors`` with ``--e-ys-um`` / ``--r-mm`` on top when given. The 
 0, 10, 20, 30 and 40 deg, reads them with the lab's laser microscope, fits eq 1 to the depth
 changes, and cuts the angle-variable prism pattern (0-20 deg by 1 deg, 10 um deep, 20 um
 pitch, 90-deg tool) with the edge touched off at 0 deg only (before) and with the program
-rewritten by the identified r and e_ys (after). See docs/procedures/tool_rotation_arm.md.
+rewritten by the identified r and e_ys (after). The lab is as real as ``--realism`` says
+(default ``lab``: the microscope's spot, lateral noise and stage registration, and the
+planer's own residual errors, docs/metrology.md); the error budget reruns it with each of
+those switched off in turn (docs/budget.md). See docs/procedures/tool_rotation_arm.md.
 """
 
 from __future__ import annotations
@@ -23,7 +28,9 @@ import time
 import numpy as np
 
 from machinesim import Lab, load_machine
-from machinesim.exceptions import MachineSimError
+from machinesim.budget import error_budget
+from machinesim.cam.prisms import CalibrationPlan
+from machinesim.exceptions import InputError, MachineSimError
 from machinesim.experiment import run
 from machinesim.identification.tool_rotation_arm import (
     arm_radius,
@@ -31,12 +38,21 @@ from machinesim.identification.tool_rotation_arm import (
     lateral_change,
 )
 from machinesim.procedures.tool_rotation_arm import ToolRotationArm
-from machinesim.report import ReportFolder, injected_errors, scenario_arguments
+from machinesim.report import (
+    ReportFolder,
+    injected_errors,
+    realism_from,
+    realism_options,
+    scenario_arguments,
+)
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 
 PAPER = {"r_mm": 120.555, "e_ys_um": -178.0, "depth_error_before_um": "> 50",
          "depth_error_after_um": "< 1"}
 UM, MM = M_PER_UM, M_PER_MM
+#: Largest --capture-mm: ramps 20 x longer than the capture at slope 0.1 (a 10 mm capture
+#: makes them 0.2 m, the planer's X travel).
+MAX_CAPTURE_MM = 8.0
 
 
 def main() -> None:
@@ -47,6 +63,10 @@ def main() -> None:
     parser.add_argument("--r-mm", type=float, default=None,
                         help="injected arm radius r, mm: tool.z = -(r - r0) (default 120.555, "
                         "the paper's)")
+    parser.add_argument("--capture-mm", type=float, default=None,
+                        help="largest edge offset |(e_ys, r - r0)| the calibration ramps find, "
+                        "mm (default 1; the ramps grow with it)")
+    realism_options(parser)
     args = parser.parse_args()
     try:
         report(args)
@@ -65,16 +85,24 @@ def report(args) -> None:
         given["tool.y"] = args.e_ys_um * UM
     if args.r_mm is not None:
         given["tool.z"] = -(args.r_mm * MM - r0)
-    lab = Lab(machine, injected_errors(args, defaults, given), noise=args.noise == "on",
-              seed=args.seed)
-    injected = lab.reveal().parameters()
+    errors, realism = injected_errors(args, defaults, given), realism_from(args)
+
+    def make_lab(realism):
+        return Lab(machine, errors, seed=args.seed, realism=realism)
+
+    lab = make_lab(realism)
+    injected = lab.reveal(background=False).parameters()
     r, e_ys = r0 - injected["tool.z"], injected["tool.y"]
     print(f"Paper 000 on planer_4axis (nominal arm r0 = {r0 / MM:.3f} mm): injected r = "
-          f"{r / MM:.3f} mm, e_ys = {e_ys / UM:.1f} um; microscope noise {args.noise}, "
-          f"seed {args.seed}\n")
+          f"{r / MM:.3f} mm, e_ys = {e_ys / UM:.1f} um; realism {realism}, seed {args.seed}\n")
 
-    procedure = ToolRotationArm()
+    procedure = ToolRotationArm(plan=calibration_plan(args.capture_mm))
     result = run(procedure, lab)
+    budget = None
+    sources = [name for name in realism.on if name in procedure.realism_sources]
+    if args.budget == "on" and sources:
+        budget = error_budget(lambda off: result if off is None else run(
+            procedure, make_lab(realism.without(off))), sources)
     out = ReportFolder(args.out)
     calibration, detail = result.measurements, result.identification.detail
     out.write_part("calibration.ply", calibration.part)
@@ -83,8 +111,18 @@ def report(args) -> None:
     print(identification_table(out, r0, r, e_ys, detail))
     print(pattern_tables(out, procedure.pattern, result.evaluation.details))
     print(paper_table(out, result))
-    print(out.write_result(result))
+    print(out.write_result(result, budget=budget))
     print(f"Report written to {out.path} ({time.perf_counter() - began:.1f} s)")
+
+
+def calibration_plan(capture_mm) -> CalibrationPlan:
+    """The paper's plan, with ``--capture-mm`` when given."""
+    if capture_mm is None:
+        return CalibrationPlan()
+    if not (math.isfinite(capture_mm) and 0.0 < capture_mm <= MAX_CAPTURE_MM):
+        raise InputError(f"--capture-mm {capture_mm!r}: expected a length in mm above 0 and "
+                         f"at most {MAX_CAPTURE_MM:g}", key="capture-mm")
+    return CalibrationPlan(capture=capture_mm * MM)
 
 
 def calibration_table(out, readings, fit) -> str:

@@ -156,7 +156,9 @@ def test_plans_refuse_angles_where_a_flank_turns_flat_and_bad_sizes():
     with pytest.raises(InputError, match="depth > 0"):
         PrismPattern(depth=-10 * UM)
     with pytest.raises(InputError, match="clearance above the search range"):
-        CalibrationPlan(search=2 * MM)
+        CalibrationPlan(search=2 * MM, clearance=1 * MM)
+    with pytest.raises(InputError, match="capture > 0"):
+        CalibrationPlan(capture=-1 * MM)
 
 
 def v_profile(apexes, depths, left_slopes, right_slopes, s):
@@ -291,7 +293,7 @@ def test_a_groove_outside_the_search_range_is_reported(machine, r0):
     plan = CalibrationPlan(angles=(0.0, math.radians(40)), search=0.1 * MM)
     errors = errors_for(PAPER_R, PAPER_E, r0)  # 157 um edge drop at 40 deg
     part, _ = cut(plan.program(r0), machine, tool="v:90", stock=plan.stock, errors=errors)
-    with pytest.raises(InputError, match="ramp groove at 40 deg.*search range"):
+    with pytest.raises(InputError, match="ramp groove at 40 deg.*capture range"):
         measure_calibration(part, plan, Microscope(noise=False))
 
 
@@ -301,7 +303,7 @@ def scenario(*args, cwd=ROOT):
 
 
 def test_the_scenario_reports_the_papers_case(tmp_path, r0):
-    result = scenario("--noise", "off", "--out", str(tmp_path))
+    result = scenario("--realism", "ideal", "--out", str(tmp_path))
     assert result.returncode == 0, result.stderr
     assert "> 50" in result.stdout and "< 1" in result.stdout
     summary = json.loads((tmp_path / "summary.json").read_text())
@@ -336,7 +338,7 @@ def test_the_scenario_takes_an_error_file_and_its_own_options_on_top(tmp_path, r
     errors = tmp_path / "errors.toml"
     errors.write_text("[tool]\noffset_um = [0.0, 120.0, 30.0]\n"
                       "[workpiece]\ndelta_um = [0.0, 0.0, 4.0]\n")
-    result = scenario("--noise", "off", "--errors", str(errors), "--r-mm", "120.48",
+    result = scenario("--realism", "ideal", "--errors", str(errors), "--r-mm", "120.48",
                       "--out", str(tmp_path / "out"))
     assert result.returncode == 0, result.stderr
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
@@ -351,12 +353,17 @@ def test_the_scenario_takes_an_error_file_and_its_own_options_on_top(tmp_path, r
 
 
 def test_the_scenario_ends_a_machinesim_error_with_one_line(tmp_path):
-    # an arm 0.5 mm long: the edge 0.5 mm low, beyond the ramps' 0.35 mm search range
-    result = scenario("--noise", "off", "--r-mm", "121", "--out", str(tmp_path))
-    assert result.returncode == 2
-    assert "Traceback" not in result.stderr
-    assert result.stderr.startswith("error: ") and result.stderr.count("\n") == 1
-    assert "search range" in result.stderr
+    # an arm 1.2 mm long: the edge 1.2 mm low, beyond the ramps' 1 mm capture range
+    for options, message in ((("--r-mm", "121.7"), "exceeds the plan's capture range 1 mm"),
+                             (("--r-mm", "121.7", "--capture-mm", "0"),
+                              "--capture-mm 0.0: expected a length in mm above 0"),
+                             (("--r-mm", "121", "--capture-mm", "0.3"),
+                              "exceeds the plan's capture range 0.3 mm")):
+        result = scenario("--realism", "ideal", *options, "--out", str(tmp_path))
+        assert result.returncode == 2
+        assert "Traceback" not in result.stderr
+        assert result.stderr.startswith("error: ") and result.stderr.count("\n") == 1
+        assert message in result.stderr
 
 
 # ---------------------------------------------------------------------- the procedure class

@@ -52,8 +52,7 @@ class After:
 
     def __init__(self, details):
         after = details["after"]
-        self.a_distances = np.array([after["a_x_pair_distance_um"],
-                                     after["a_y_pair_distance_um"]]) * UM
+        self.a_distances = np.array(after["a_pair_distance_um"]) * UM
         self.c_centre = np.array(after["c_centre_displacement_um"]) * UM
         self.b_depths = np.array(after["b_depths_um"]) * UM
 
@@ -158,10 +157,9 @@ def test_seeded_offsets_are_identified_and_compensated_with_noise(seed):
     d, e = paper_offsets(np.random.default_rng(seed))
     result, found, after = replay(d, e, noise=True, seed=seed)
     comp = found.compensation
-    # before: the pairs' start points part by 2 (dx, dy) and 2 (-dy, dx), the triangle is
-    # centred on e; 50 nm covers the microscope readings (see the tolerances below)
-    np.testing.assert_allclose(found.a.distances, [2 * d[:2], [-2 * d[1], 2 * d[0]]],
-                               atol=50e-9)
+    # before: the pair's start points part by 2 (dx, dy), the triangle is centred on e;
+    # 50 nm covers the microscope readings (see the tolerances below)
+    np.testing.assert_allclose(found.a.distances, [2 * d[:2]], atol=50e-9)
     # dx, dy: 20 nm, six sigma of the centre lines (sigma 3 nm over ten seeds with the
     # 12 nm height noise); dx alone is read on the start faces, to 0.05 nm
     np.testing.assert_allclose(comp.tool_offset[:2], d[:2], atol=20e-9)
@@ -222,9 +220,15 @@ def test_without_noise_the_residuals_stay_below_a_nanometre():
     # the fit on the same readings: to a few hundredths of a nanometre, but for dZ, which
     # the paper divides by 2 (1 - cos 20 deg) = 0.12 from depth differences: there the
     # display's sub-nanometre bias on a tilted V's depth makes up to 1 nm (as bounded above)
+    # The paper's e is placed by the C plate's reference mark, cut where the compensated
+    # program put it: off by the A stage's residual dy (test_tool_setting_6axis_fidelity.py;
+    # sub-picometre here) and by the program's rounding to the machine's 1 nm (up to 0.5 nm
+    # in X and Y), which the fit, reading absolute positions, does not share
     check = result.evaluation.details["fit_check"]
+    bound = {"tool.x": 0.05, "tool.y": 0.05, "tool.z": 1.0, "location.C.EX0C": 0.55,
+             "location.C.EY0C": 0.55}
     for name in ident.PARAMETERS:
-        assert abs(check[name]["difference_nm"]) < (1.0 if name == "tool.z" else 0.05), name
+        assert abs(check[name]["difference_nm"]) < bound[name], name
     # both compensation routes land the edge within the rounding to the machine's
     # resolution: the paper's moves X, Y, Z only (sqrt(3) 0.5 nm), the model-based one also
     # rounds C (0.000005 deg at 12.4 mm from its centre: 1.1 nm more)
@@ -278,25 +282,30 @@ def scenario(*args):
 
 def test_the_scenario_reproduces_table_1(tmp_path):
     out = tmp_path / "report"
-    result = scenario("--noise", "off", "--out", str(out))
+    result = scenario("--realism", "ideal", "--out", str(out))
     assert result.returncode == 0, result.stderr
-    assert "| A dx | 490.0400 | 4.0600 | 490.0400 |" in result.stdout
+    assert "| A dx | 490.0400 | 4.0600 | 500.0000 |" in result.stdout
     summary = json.loads((out / "summary.json").read_text())
     check_summary(summary)
     details = summary["details"]
-    # defaults: half of Table 1's A distances, its C distances; the original distances come
-    # back to 1 nm (noise off) and vanish to 1 nm after compensation
-    np.testing.assert_allclose(details["before"]["a_x_pair_distance_um"], [490.04, 680.12],
+    # defaults: round values of the paper's order (d = 250, 350, 150 um; e = 100, 850 um);
+    # the distances they make come back to 1 nm (noise off): 2 dx, 2 dy and e
+    np.testing.assert_allclose(details["before"]["a_pair_distance_um"], [500.0, 700.0],
                                atol=1e-3)
     np.testing.assert_allclose(details["before"]["c_centre_displacement_um"],
-                               [108.97, 852.81], atol=1e-3)
-    assert np.abs(details["after"]["a_x_pair_distance_um"]).max() < 1e-3
+                               [100.0, 850.0], atol=1e-3)
+    # ... within 25 % of Table 1's "original NC data" column (490.04, 680.12, 108.97, 852.81)
+    for figure in summary["figures"]:
+        if figure["paper_before"] is not None:
+            assert abs(figure["before"] / figure["paper_before"] - 1.0) < 0.25, figure
+            assert abs(figure["after"]) < 1e-3, figure  # everything off: below 1 nm
+    assert np.abs(details["after"]["a_pair_distance_um"]).max() < 1e-3
     assert np.abs(details["after"]["c_centre_displacement_um"]).max() < 1e-3
     for name in ("table1.md", "identification.json", "layout_a_axis.png",
                  "04_a_axis_compensated.nc", "05_c_axis_compensated.ply", "fit_check.md",
                  "01_a_axis_as_cut.nc", "cuts.json", "figures.md"):
         assert (out / name).stat().st_size > 0
-    assert summary["injected"]["tool.x"] == pytest.approx(245.02e-6, abs=1e-18)
+    assert summary["injected"]["tool.x"] == pytest.approx(250e-6, abs=1e-18)
     bad = scenario("--tool-offset-um", "1,2", "--out", str(out))
     assert bad.returncode == 2
     assert "--tool-offset-um '1,2': expected 3 comma-separated numbers" in bad.stderr
@@ -308,7 +317,7 @@ def test_the_scenario_takes_an_error_model_file(tmp_path):
     errors.write_text("[tool]\noffset_um = [-120.0, 210.0, -90.0]\n"
                       "[location.C]\nEX0C_um = 40.0\nEY0C_um = -300.0\n")
     out = tmp_path / "report"
-    result = scenario("--errors", str(errors), "--c-offset-um=-75,60", "--noise", "off",
+    result = scenario("--errors", str(errors), "--c-offset-um=-75,60", "--realism", "ideal",
                       "--out", str(out))
     assert result.returncode == 0, result.stderr
     summary = json.loads((out / "summary.json").read_text())

@@ -19,13 +19,21 @@ from machinesim.nc import ProgramBuilder
 from machinesim.nc.program import Program
 from machinesim.units import M_PER_MM, M_PER_UM
 
-__all__ = ["STATION_DITHER_M", "CalibrationPlan", "PrismPattern"]
+__all__ = ["CLEARANCE_MARGIN_M", "SEARCH_MARGIN_M", "SPACING_MARGIN_M", "STATION_DITHER_M",
+           "CalibrationPlan", "PrismPattern"]
 
 #: Extra depth step between calibration stations (m): 1/9 of the microscope's 1 nm display
 #: step, so the nine stations' apexes fall at nine places on that step and its rounding
 #: averages out (with stations whole um apart, it repeats at every station when the noise
 #: is off).
 STATION_DITHER_M = 1e-9 / 9
+#: Ramp depth kept beyond the capture range and the deepest station (m): two of the coarse
+#: search's 10 um depth steps, so the walk down the ramp sees the groove start before it.
+SEARCH_MARGIN_M = 20e-6
+#: Ramp spacing kept beyond `CalibrationPlan.min_spacing`'s sum (m).
+SPACING_MARGIN_M = 0.1 * M_PER_MM
+#: Edge clearance over the ramps' top for rapids (m), beyond the search range.
+CLEARANCE_MARGIN_M = 0.5 * M_PER_MM
 
 
 def _groove_program(r0: float, clearance: float, x_out: float, grooves, feed: float,
@@ -67,42 +75,88 @@ class CalibrationPlan:
     ----------
     angles : tuple of float
         Tool angles (rad); 0 first for `touch_off`.
-    search : float
-        Half range of each ramp's programmed depth (m): it must exceed the largest
-        ``sqrt(e_ys**2 + (r - r0)**2)`` expected, the length of the edge's offset vector.
+    capture : float
+        The largest length ``sqrt(e_ys**2 + (r - r0)**2)`` of the edge's offset vector the
+        ramps find (m). At any tool angle the edge's height error is the offset vector turned
+        by that angle, so its z is never beyond this length. Default 1 mm: five times the
+        paper's 0.18 mm, more than a tool set by hand under a tool-setting microscope is off.
+    search : float, optional
+        Half range of each ramp's programmed depth (m); default (None) derived from
+        ``capture``: ``capture + the deepest station + SEARCH_MARGIN_M``, so that an edge
+        anywhere within the capture range starts its groove on the ramp with every station
+        still on it.
     slope : float
         Descent of the ramp per unit of x.
-    spacing : float
-        Distance between the ramps' starts along Y (m).
+    spacing : float, optional
+        Distance between the ramps' starts along Y (m); default (None) 3 mm, or more where
+        the capture range needs it (`min_spacing`): a groove's search window across Y
+        (`window`) must stay clear of the next ramp's groove, whose low flank (5 deg from
+        the surface at 40 deg) spreads sideways 11 times as far as it is deep.
     station_depths : tuple of float
         Groove depths (m) at which the microscope reads each groove.
     origin : (float, float)
         Corner (x, y) of the stock (m), away from the workpiece origin where the edge starts.
     tool_angle, clearance, feed_mm_per_min : float
-        Included angle of the V tool (rad), edge clearance over the surface for rapids (m),
-        feed (the paper's 12,000 mm/min).
+        Included angle of the V tool (rad), edge clearance over the surface for rapids (m;
+        default None: ``search + CLEARANCE_MARGIN_M``), feed (the paper's 12,000 mm/min).
     """
 
     angles: tuple[float, ...] = tuple(math.radians(a) for a in (0, 10, 20, 30, 40))
-    search: float = 0.35 * M_PER_MM
+    capture: float = 1.0 * M_PER_MM
+    search: float | None = None
     slope: float = 0.1
-    spacing: float = 3.0 * M_PER_MM
+    spacing: float | None = None
     station_depths: tuple[float, ...] = tuple((8 + k) * M_PER_UM + k * STATION_DITHER_M
                                               for k in range(9))
     origin: tuple[float, float] = (1.0 * M_PER_MM, 1.0 * M_PER_MM)
     tool_angle: float = math.pi / 2
-    clearance: float = 1.0 * M_PER_MM
+    clearance: float | None = None
     feed_mm_per_min: float = 12000.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "angles", _angles(self.angles, self.tool_angle, "angles"))
-        for name in ("search", "slope", "spacing"):
+        capture = self.capture
+        if not (isinstance(capture, int | float) and math.isfinite(capture) and capture > 0.0):
+            raise InputError(f"Expected capture > 0 (m), got {capture!r}", key="capture")
+        if self.search is None:
+            object.__setattr__(self, "search", capture + max(self.station_depths)
+                               + SEARCH_MARGIN_M)
+        if isinstance(self.search, int | float):
+            if self.clearance is None:
+                object.__setattr__(self, "clearance", self.search + CLEARANCE_MARGIN_M)
+            if self.spacing is None:
+                object.__setattr__(self, "spacing", max(3.0 * M_PER_MM, self.min_spacing))
+        for name in ("search", "slope", "spacing", "clearance"):
             value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0.0):
                 raise InputError(f"Expected {name} > 0, got {value!r}", key=name)
         if self.clearance <= self.search:
             raise InputError(f"Expected a clearance above the search range {self.search:g} m, "
                              f"got {self.clearance!r}", key="clearance")
+
+    @property
+    def window(self) -> float:
+        """Half width (m) of the sections across Y that look for a ramp's groove: the search
+        range (the groove's lateral offset is never beyond it) and 0.25 mm of land."""
+        return self.search + 0.25 * M_PER_MM
+
+    @property
+    def min_spacing(self) -> float:
+        """Least ramp spacing (m) that keeps each search window clear of the next groove.
+
+        Where ramp k is searched and read (down to its deepest station), the next ramp's
+        groove is deeper by at most the change of the edge's height between their angles,
+        ``capture * 2 sin(dt / 2)`` (the offset vector turned by dt), plus the deepest
+        station and `SEARCH_MARGIN_M`; its low flank, ``(pi - tool_angle) / 2 - t`` from the
+        surface, spreads that depth sideways by 1 / tan of it. Add the window, the next
+        groove's own lateral offset (up to ``capture``) and `SPACING_MARGIN_M`.
+        """
+        angles = sorted(self.angles)
+        step = max((b - a for a, b in zip(angles[:-1], angles[1:], strict=True)), default=0.0)
+        flank = (math.pi - self.tool_angle) / 2.0 - max(abs(a) for a in angles)
+        depth = (2.0 * self.capture * math.sin(step / 2.0) + max(self.station_depths)
+                 + SEARCH_MARGIN_M)
+        return self.window + self.capture + depth / math.tan(flank) + SPACING_MARGIN_M
 
     @property
     def ramp(self) -> tuple[float, float]:
@@ -121,12 +175,16 @@ class CalibrationPlan:
         return y, z
 
     @property
+    def length(self) -> float:
+        """Length of the calibration block along X (m): the ramps, their climb out, 1 mm."""
+        return self.ramp[1] - self.origin[0] + 2.0 * self.search + 1.0 * M_PER_MM
+
+    @property
     def stock(self) -> str:
         """Stock spec of the calibration block (mm)."""
-        length = (self.ramp[1] - self.origin[0]) / M_PER_MM + 2.0 * self.search / M_PER_MM + 1.0
         width = len(self.angles) * self.spacing / M_PER_MM + 1.0
-        return (f"block:{length:.6g}x{width:.6g}x1@{self.origin[0] / M_PER_MM:.6g},"
-                f"{self.origin[1] / M_PER_MM:.6g},0")
+        return (f"block:{self.length / M_PER_MM:.6g}x{width:.6g}x1"
+                f"@{self.origin[0] / M_PER_MM:.6g},{self.origin[1] / M_PER_MM:.6g},0")
 
     def program(self, r0: float, number: int = 1) -> Program:
         """The calibration program for the nominal arm radius ``r0`` (m)."""

@@ -13,10 +13,13 @@ Four plates, each its own program, each on a fresh plate of the same workpiece f
 ``touch``
     One groove along X stepping down in Z (a lab's tool-length touch-off).
 ``a``
-    Two pairs of grooves sharing a start point, cut at A = 0 / 180 deg (along +X / -X) and
-    at A = 90 / -90 deg (along +Y / -Y) (paper Fig. 4).
+    A pair of grooves sharing a start X, cut at A = 0 (along +X) and, with the tool turned,
+    at A = 180 deg (along -X) (paper Fig. 4; 2 mm apart sideways, see
+    docs/procedures/tool_setting_6axis.md).
 ``c``
-    One groove cut at C = 0, 120 and 240 deg: a triangle (paper Fig. 3).
+    One groove cut at C = 0, 120 and 240 deg: a triangle (paper Fig. 3), and a reference
+    mark: a short groove across the C = 0 side, cut at C = 0 and A = 90 deg (along +Y), whose
+    crossing with that side places the triangle without the microscope stage's origin.
 ``b``
     Grooves along Y at A = theta1 and B = 0, theta2, theta3 (paper Fig. 5).
 """
@@ -33,9 +36,9 @@ from machinesim.nc import Program, ProgramBuilder
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = [
-    "B_GROOVE_X", "CENTRE_RANGE", "C_TURNS", "OFFSET_RANGE", "PAIR_LENGTH", "PARKED", "Plan",
-    "PlateCut", "TOUCH_COUNT", "TOUCH_SEGMENT", "TOUCH_STEP", "TOUCH_TOP", "TRIANGLE_HALF",
-    "TRIANGLE_R", "pair_grooves", "plate_cuts",
+    "B_GROOVE_X", "CENTRE_RANGE", "C_TURNS", "MARK_HALF", "MARK_X", "OFFSET_RANGE",
+    "PAIR_LENGTH", "PARKED", "Plan", "PlateCut", "TOUCH_COUNT", "TOUCH_SEGMENT", "TOUCH_STEP",
+    "TOUCH_TOP", "TRIANGLE_HALF", "TRIANGLE_R", "mark_point", "pair_grooves", "plate_cuts",
 ]
 
 #: Capture range of the plan: the layout below keeps every groove inside its microscope
@@ -54,10 +57,10 @@ PARKED = (0.0, 0.0, SAFE_Z, 0.0, 0.0, 0.0)
 #: always leaves one segment 2..190 um deep for a touch Z in -0.6 .. +0.79 mm.
 TOUCH_SEGMENT, TOUCH_TOP, TOUCH_STEP, TOUCH_COUNT = (1.5 * M_PER_MM, 0.6 * M_PER_MM,
                                                      0.15 * M_PER_MM, 9)
-#: A plate: half the lateral separation of a pair (keeps the two grooves apart for any
-#: offset in range), groove length, and the plate spots of the X and Y pairs.
+#: A plate: half the lateral separation of the pair (keeps the two grooves apart for any
+#: offset in range), groove length, and the plate spot of the pair.
 PAIR_HALF_GAP, PAIR_LENGTH = 1.0 * M_PER_MM, 2.0 * M_PER_MM
-X_PAIR_START, Y_PAIR_START = (0.0, -3.0 * M_PER_MM), (0.0, 3.0 * M_PER_MM)
+PAIR_START = (0.0, -3.0 * M_PER_MM)
 #: B plate: x of the grooves at B = 0, theta2, theta3 (1 mm apart: a 0.5 mm dZ moves a
 #: groove tilted by 20 deg by 0.17 mm) and their half length in y.
 B_GROOVE_X, B_HALF = (-1.0 * M_PER_MM, 0.0, 1.0 * M_PER_MM), 2.5 * M_PER_MM
@@ -65,6 +68,9 @@ B_GROOVE_X, B_HALF = (-1.0 * M_PER_MM, 0.0, 1.0 * M_PER_MM), 2.5 * M_PER_MM
 #: a side moves at most sqrt(3) |e| (1.7 mm) and the other sides stay > 4 mm from any window.
 TRIANGLE_R, TRIANGLE_HALF = 5.0 * M_PER_MM, 11.5 * M_PER_MM
 C_TURNS = (0.0, 2.0 * math.pi / 3.0, 4.0 * math.pi / 3.0)
+#: C plate's reference mark: x of the groove across the C = 0 side (clear of the side's
+#: profiles at -2 .. 2 mm and 4.5 mm from the other sides) and its half length in y.
+MARK_X, MARK_HALF = 3.5 * M_PER_MM, 1.2 * M_PER_MM
 
 
 @dataclass(frozen=True)
@@ -147,19 +153,25 @@ def plate_cuts(plan: Plan = Plan()) -> dict[str, PlateCut]:
     for turn in C_TURNS:
         _groove(c, (-TRIANGLE_HALF, -TRIANGLE_R), (TRIANGLE_HALF, -TRIANGLE_R), -plan.depth,
                 0.0, 0.0, turn, f)
+    _groove(c, (MARK_X, -TRIANGLE_R - MARK_HALF), (MARK_X, -TRIANGLE_R + MARK_HALF),
+            -plan.depth, math.pi / 2.0, 0.0, 0.0, f, inside=True)
     return {"touch": PlateCut(touch.build(),
                               f"block:{TOUCH_COUNT * TOUCH_SEGMENT / mm:g}x3x1@0,-1.5,0"),
-            "a": PlateCut(a.build(), "block:6x12x1@-3,-6,0"),
+            "a": PlateCut(a.build(), "block:6x6x1@-3,-6,0"),
             "b": PlateCut(b.build(), "block:4x3x1@-2,-1.5,0"),
             "c": PlateCut(c.build(), "block:16x16x1@-8,-8,0")}
 
 
+def mark_point() -> np.ndarray:
+    """Programmed crossing (2,) m of the C plate's reference mark with the C = 0 side."""
+    return np.array([MARK_X, -TRIANGLE_R])
+
+
 def pair_grooves() -> list[tuple[float, np.ndarray]]:
-    """(A angle (rad), programmed start point (2,) m) of the four A-plate grooves: the X pair
-    (A = 0, 180 deg), then the Y pair (A = 90, -90 deg), in cutting order."""
+    """(A angle (rad), programmed start point (2,) m) of the two A-plate grooves, A = 0 and
+    180 deg, in cutting order."""
     out = []
-    for angle, spot in ((0.0, X_PAIR_START), (math.pi, X_PAIR_START),
-                        (math.pi / 2, Y_PAIR_START), (-math.pi / 2, Y_PAIR_START)):
+    for angle, spot in ((0.0, PAIR_START), (math.pi, PAIR_START)):
         # the pair's two grooves run on either side of the spot, across their direction
         side = np.array([-math.sin(angle), math.cos(angle)])
         out.append((angle, np.array(spot) + PAIR_HALF_GAP * side))

@@ -13,8 +13,8 @@ and start points read under the microscope, with the axis values each groove was
 and returns identified values; reading the plates is `machinesim.procedures.
 tool_setting_6axis`'s job, their design `machinesim.cam.tool_setting_plates`'.
 
-- `a_axis_pairs`: the A pairs (paper Fig. 4): start points of grooves cut at A and A + 180
-  deg differ by ``2 Rz(A) d``, which gives dx and dy.
+- `a_axis_pairs`: the A pair (paper Fig. 4): start points of grooves cut at A = 0 and
+  180 deg differ by ``2 d`` (xy), which gives dx and dy.
 - `c_axis_triangle`: the triangle cut at C = 0, 120, 240 deg is centred on ``e``.
 - `b_axis_offsets` (paper eqs 1-2, eq 2 corrected) and `b_axis_tilts`: the depths of
   grooves cut at B = 0, theta2, theta3 give the edge offset from the B centre.
@@ -22,8 +22,9 @@ tool_setting_6axis`'s job, their design `machinesim.cam.tool_setting_plates`'.
   paper's values propagated from the readings'.
 - `corrected_axes`: the paper's rewrite of the NC data, as the function
   `machinesim.compensation.map_program` applies.
-- `fit_observations`, `fit_check`: the same readings as observations of the tool tip for
-  the generic `machinesim.identification.fit`, a model-based cross-check.
+
+The model-based cross-check (the same readings through the generic
+`machinesim.identification.fit`) is `machinesim.identification.tool_setting_6axis_fit`.
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ from machinesim.rotations import rot_y, rot_z
 __all__ = [
     "AAxisResult", "BAxisResult", "CAxisResult", "Compensation", "GrooveReading",
     "Identification", "PARAMETERS", "a_axis_pairs", "b_axis_offsets", "b_axis_tilts",
-    "c_axis_triangle", "corrected_axes", "fit_check", "fit_observations", "identify",
+    "c_axis_triangle", "corrected_axes", "identify",
 ]
 
 #: The error parameters paper 001 identifies, as `Machine.parameter_names` spells them.
@@ -147,17 +148,17 @@ class Compensation:
 
 @dataclass(frozen=True, eq=False)
 class AAxisResult:
-    """A-axis pairs: start points (m) and what they give.
+    """The A-axis pair: start points (m) and what they give.
 
     Attributes
     ----------
-    starts : ndarray, shape (4, 2)
-        Start points of the grooves cut at A = 0, 180, 90, -90 deg.
-    distances : ndarray, shape (2, 2)
-        Start-point displacement within the X pair and the Y pair, minus the programmed one:
-        ``2 (dx, dy)`` and ``2 (-dy, dx)`` (Table 1's "distance between grooves").
+    starts : ndarray, shape (2, 2)
+        Start points of the grooves cut at A = 0 and 180 deg.
+    distances : ndarray, shape (1, 2)
+        Their displacement minus the programmed one, ``2 (dx, dy)`` (Table 1's "distance
+        between grooves" against the A axis).
     offset : ndarray, shape (2,)
-        (dx, dy), least squares over both pairs.
+        (dx, dy).
     """
 
     starts: np.ndarray
@@ -177,11 +178,18 @@ class BAxisResult:
 
 @dataclass(frozen=True, eq=False)
 class CAxisResult:
-    """C-axis triangle: its three crossings (3, 2), its centre (2,) and its sides (m)."""
+    """C-axis triangle: its three crossings (3, 2), its centre (2,) and its sides (m).
+
+    With a reference mark, ``vertices`` and ``centre`` are placed by the mark (workpiece
+    frame up to the mark's own cutting error), ``mark`` is the mark's crossing with the
+    C = 0 side and ``rotation`` the turn of the microscope's frame found on that side, both
+    as the microscope read them; the sides stay as read."""
 
     vertices: np.ndarray
     centre: np.ndarray
     sides: tuple[Line2D, ...]
+    mark: np.ndarray | None = None
+    rotation: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -229,21 +237,19 @@ class Identification:
 
 
 def a_axis_pairs(starts, programmed) -> AAxisResult:
-    """dx and dy from the A pairs' start points (paper 001, Fig. 4).
+    """dx and dy from the A pair's start points (paper 001, Fig. 4).
 
     A groove cut at A starts where the edge is at the start of its cut: ``S + Rz(A) d`` (xy)
-    for a programmed start ``S``. Within a pair the tool turns by 180 deg, so
+    for a programmed start ``S``. The pair is cut at A = 0 and, with the tool turned by
+    180 deg, at A = 180 deg, so
 
-        X pair:  S(A=0) - S(A=180)  - (programmed)  = 2 (dx, dy)
-        Y pair:  S(A=90) - S(A=-90) - (programmed)  = 2 (-dy, dx)
-
-    and each component of d is read twice (their mean is the least-squares value).
+        S(A=0) - S(A=180) - (programmed) = Rz(0) d - Rz(180) d = 2 (dx, dy).
 
     Parameters
     ----------
-    starts : array_like, shape (4, 2)
-        Measured start points of the grooves cut at A = 0, 180, 90, -90 deg (m).
-    programmed : array_like, shape (4, 2)
+    starts : array_like, shape (2, 2)
+        Measured start points of the grooves cut at A = 0 and 180 deg (m).
+    programmed : array_like, shape (2, 2)
         Their programmed start points (m).
 
     Returns
@@ -251,38 +257,56 @@ def a_axis_pairs(starts, programmed) -> AAxisResult:
     AAxisResult
     """
     starts, programmed = np.asarray(starts, float), np.asarray(programmed, float)
-    if starts.shape != (4, 2) or programmed.shape != (4, 2):
-        raise InputError(f"Expected 4 start points (4, 2) and their programmed places, got "
+    if starts.shape != (2, 2) or programmed.shape != (2, 2):
+        raise InputError(f"Expected 2 start points (2, 2) and their programmed places, got "
                          f"{starts.shape} and {programmed.shape}", key="starts")
-    distances = (starts[[0, 2]] - starts[[1, 3]]) - (programmed[[0, 2]] - programmed[[1, 3]])
-    offset = 0.25 * np.array([distances[0, 0] + distances[1, 1],
-                              distances[0, 1] - distances[1, 0]])
-    return AAxisResult(frozen(starts), frozen(distances), frozen(offset))
+    distances = ((starts[0] - starts[1]) - (programmed[0] - programmed[1]))[None, :]
+    return AAxisResult(frozen(starts), frozen(distances), frozen(0.5 * distances[0]))
 
 
-def c_axis_triangle(points: Sequence) -> CAxisResult:
+def c_axis_triangle(points: Sequence, mark_at=None) -> CAxisResult:
     """The C centre line from the triangle cut at C = 0, 120, 240 deg (paper 001, Fig. 3).
 
     One groove turned about the true C centre ``e`` by thirds of a turn bounds an equilateral
     triangle centred on ``e``, whatever the tool offset; the programmed triangle is centred on
     the origin, so the centroid of the three crossings is ``e``.
 
+    A microscope does not know where the workpiece origin is (its stage's registration), so
+    the triangle is placed by a reference mark cut at C = 0 across the C = 0 side: the mark's
+    crossing with that side is where the program put it (``mark_at``), up to the residual
+    tool offset it was cut with, and the C = 0 side runs along the workpiece's x. So the
+    vertices, as read, are taken relative to the crossing, turned so that the C = 0 side is
+    along x, and placed at ``mark_at``: neither the stage's offset nor its rotation is left.
+
     Parameters
     ----------
-    points : sequence of 3 array_like, shape (k, 2)
-        Centre points of the grooves cut at C = 0, 120, 240 deg (m).
+    points : sequence of 3 or 4 array_like, shape (k, 2)
+        Centre points of the grooves cut at C = 0, 120, 240 deg (m), and of the reference
+        mark (4th, optional).
+    mark_at : array_like, shape (2,), optional
+        The programmed crossing of the mark with the C = 0 side (m); needed with a mark.
 
     Returns
     -------
     CAxisResult
     """
-    if len(points) != 3:
-        raise InputError(f"Expected the centre points of 3 grooves, got {len(points)}",
-                         key="points")
+    if len(points) not in (3, 4):
+        raise InputError(f"Expected the centre points of 3 grooves (and a mark), got "
+                         f"{len(points)}", key="points")
     crossings = [groove_crossing(points[i], points[j]) for i, j in ((0, 1), (1, 2), (2, 0))]
     vertices = np.array([cr.point for cr in crossings])
     sides = (crossings[0].first, crossings[1].first, crossings[2].first)
-    return CAxisResult(frozen(vertices), frozen(vertices.mean(axis=0)), sides)
+    if len(points) == 3:
+        return CAxisResult(frozen(vertices), frozen(vertices.mean(axis=0)), sides)
+    if mark_at is None:
+        raise InputError("Expected the programmed crossing of the reference mark (mark_at)",
+                         key="mark_at")
+    mark = groove_crossing(points[0], points[3]).point
+    along = sides[0].direction if sides[0].direction[0] > 0 else -sides[0].direction
+    rotation = math.atan2(along[1], along[0])
+    placed = (vertices - mark) @ rot_z(-rotation)[:2, :2].T + np.asarray(mark_at, float)
+    return CAxisResult(frozen(placed), frozen(placed.mean(axis=0)), sides, frozen(mark),
+                       rotation)
 
 
 def b_axis_offsets(d0: float, d1: float, d2: float, theta2: float, theta3: float):
@@ -357,24 +381,27 @@ def b_axis_tilts(depths, theta2: float, theta3: float, commanded_z=None) -> BAxi
 
 def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReading],
              b: Sequence[GrooveReading], programmed_starts, theta2: float,
-             theta3: float) -> Identification:
+             theta3: float, mark_at=None) -> Identification:
     """Paper 001's identification from the readings of its three plates.
 
     Parameters
     ----------
     z_touch : float
         The touch-off Z (m).
-    a : sequence of 4 GrooveReading
-        The A pairs (A = 0, 180, 90, -90 deg), each with its start point.
-    c : sequence of 3 GrooveReading
-        The triangle's grooves (C = 0, 120, 240 deg).
+    a : sequence of 2 GrooveReading
+        The A pair (A = 0, 180 deg), each with its start point.
+    c : sequence of 3 or 4 GrooveReading
+        The triangle's grooves (C = 0, 120, 240 deg), and its reference mark (4th).
     b : sequence of 3 GrooveReading
         The B grooves (B = 0, theta2, theta3); each groove's depth is the mean over its
         profiles, taken back to one commanded Z (`b_axis_tilts`).
-    programmed_starts : array_like, shape (4, 2)
+    programmed_starts : array_like, shape (2, 2)
         The A grooves' programmed start points (m).
     theta2, theta3 : float
         The B tilts (rad).
+    mark_at : array_like, shape (2,), optional
+        The programmed crossing of the reference mark with the C = 0 side (m), with a mark
+        (`c_axis_triangle`).
 
     Returns
     -------
@@ -383,16 +410,16 @@ def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReadi
         uncertainties propagated from the readings' (`point_sigma`, `depth_sigma`,
         `start_sigma`) through the same formulas.
     """
-    if len(a) != 4 or len(c) != 3 or len(b) != 3:
-        raise InputError(f"Expected 4 A, 3 C and 3 B groove readings, got {len(a)}, {len(c)} "
-                         f"and {len(b)}", key="readings")
+    if len(a) != 2 or len(c) not in (3, 4) or len(b) != 3:
+        raise InputError(f"Expected 2 A, 3 C (and a mark) and 3 B groove readings, got "
+                         f"{len(a)}, {len(c)} and {len(b)}", key="readings")
     if any(g.start is None for g in a):
         raise InputError("Expected the start point of every A groove", key="start")
     programmed = np.asarray(programmed_starts, dtype=np.float64)
 
     def stages(shift):
         starts, points, depths = _shifted(a, c, b, shift)
-        return (a_axis_pairs(starts, programmed), c_axis_triangle(points),
+        return (a_axis_pairs(starts, programmed), c_axis_triangle(points, mark_at),
                 b_axis_tilts([dep.mean() for dep in depths], theta2, theta3,
                              [g.q_start[AXES.index("Z")] for g in b]))
 
@@ -486,89 +513,3 @@ def corrected_axes(q: np.ndarray, compensation: Compensation) -> np.ndarray:
     shift[:, 2] += compensation.z_shift
     q[:, :3] += shift
     return q
-
-
-# ---------------------------------------------------------------------------- the cross-check
-
-
-def fit_observations(machine, a: Sequence[GrooveReading], c: Sequence[GrooveReading],
-                     b: Sequence[GrooveReading]):
-    """The plates' readings as observations of the tool tip for
-    `machinesim.identification.fit`.
-
-    A groove is the sweep of the edge along its cutting block: at the axis values of a
-    profile's station (``q_start`` to ``q_end``, interpolated where the nominal edge passes
-    the measured centre), the tip was seen displaced from its nominal place (the nominal
-    machine at those axis values) by
-
-    - across the groove: the measured centre minus the nominal edge (every groove);
-    - along the groove: the measured start point minus the nominal start (the A pairs: the
-      start face is the edge profile at the start of the cut);
-    - along +z: minus the measured depth minus the nominal edge height (the B grooves, the
-      paper's source of dZ; the plate top is the workpiece's z = 0).
-
-    Each with the reading's standard uncertainty (floored at `SIGMA_FLOOR_M`).
-
-    Parameters
-    ----------
-    machine : Machine
-        The nominal machine the plates were cut on (axes X Y Z A B C).
-    a, c, b : sequence of GrooveReading
-
-    Returns
-    -------
-    Observations
-    """
-    from machinesim.identification.fit import observations
-
-    q, directions, values, sigma = [], [], [], []
-    for group, depths in ((a, False), (c, False), (b, True)):
-        for g in group:
-            ends = machine.tool_pose(np.array([g.q_start, g.q_end]))[:, :3, 3]
-            run = ends[1, :2] - ends[0, :2]
-            length = float(np.hypot(*run))
-            if not length > 0.0:
-                raise InputError("Expected a groove whose cutting block moves in xy",
-                                 key="q_end")
-            along = np.r_[run / length, 0.0]
-            across = np.array([-along[1], along[0], 0.0])
-            t = (g.points - ends[0, :2]) @ along[:2] / length
-            stations = g.q_start + t[:, None] * (g.q_end - g.q_start)
-            nominal = machine.tool_pose(stations)[:, :3, 3]
-            seen = np.column_stack([g.points, -g.depths])
-            q.append(stations)
-            directions.append(np.tile(across, (len(t), 1)))
-            values.append((seen - nominal) @ across)
-            sigma.append(np.maximum(g.point_sigma, SIGMA_FLOOR_M))
-            if depths:
-                q.append(stations)
-                directions.append(np.tile((0.0, 0.0, 1.0), (len(t), 1)))
-                values.append(seen[:, 2] - nominal[:, 2])
-                sigma.append(np.maximum(g.depth_sigma, SIGMA_FLOOR_M))
-            if g.start is not None:
-                q.append(g.q_start[None, :])
-                directions.append(along[None, :])
-                values.append([(g.start - ends[0, :2]) @ along[:2]])
-                sigma.append([max(g.start_sigma, SIGMA_FLOOR_M)])
-    return observations(np.concatenate(q), np.concatenate(directions),
-                        np.concatenate(values), np.concatenate(sigma))
-
-
-def fit_check(machine, a: Sequence[GrooveReading], c: Sequence[GrooveReading],
-              b: Sequence[GrooveReading]):
-    """Cross-check the paper's formulas: `PARAMETERS` by `machinesim.identification.fit` on
-    the machine's kinematics, from the same readings (`fit_observations`).
-
-    The paper reads each parameter from one stage (dx, dy from the A pairs, e from the
-    triangle, dZ from the B depths); the fit uses every reading at once, through Pinocchio's
-    error Jacobians instead of the closed forms. Both are least squares on the same
-    readings, so without noise they agree to the readings' resolution; with noise, within
-    the uncertainties (docs/procedures/tool_setting_6axis.md gives the figures).
-
-    Returns
-    -------
-    Estimate
-    """
-    from machinesim.identification.fit import fit
-
-    return fit(machine, fit_observations(machine, a, c, b), list(PARAMETERS))

@@ -7,7 +7,8 @@
 rewrite the angle-variable prism pattern (`machinesim.cam.prisms.PrismPattern`) by the
 paper's correction (`compensate_program`, through `machinesim.compensation.map_program`),
 and cut and read it before (edge touched off at 0 deg only) and after compensation
-(`measure_pattern`). docs/procedures/tool_rotation_arm.md gives the geometry and figures.
+(`measure_pattern`). The readings live in `machinesim.procedures.tool_rotation_arm_reading`
+(re-exported here); docs/procedures/tool_rotation_arm.md gives the geometry and figures.
 
 >>> import machinesim
 >>> from machinesim.experiment import run
@@ -18,14 +19,12 @@ and cut and read it before (edge touched off at 0 deg only) and after compensati
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
-from machinesim.arrays import frozen
 from machinesim.cam.prisms import CalibrationPlan, PrismPattern
 from machinesim.compensation import map_program, model_based, program_axes
 from machinesim.errors import ErrorModel
@@ -39,224 +38,26 @@ from machinesim.identification.tool_rotation_arm import (
     fit_check,
     touch_off,
 )
-from machinesim.metrology import MeshIndex, fit_v_groove
-from machinesim.metrology.prisms import SIGMA_FLOOR_M, fit_apexes
 from machinesim.nc.program import Program
+from machinesim.procedures.tool_rotation_arm_reading import (
+    AlignedMicroscope,
+    AngleReading,
+    PatternReading,
+    level_on_land,
+    measure_calibration,
+    measure_pattern,
+    stage_rotation,
+)
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, from_si
 
 __all__ = [
-    "AngleReading", "ArmIdentification", "Calibration", "PatternReading", "ToolRotationArm",
-    "arm_correction", "compensate_program", "measure_calibration", "measure_pattern",
+    "AlignedMicroscope", "AngleReading", "ArmIdentification", "Calibration", "PatternReading",
+    "ToolRotationArm", "arm_correction", "compensate_program", "level_on_land",
+    "measure_calibration", "measure_pattern", "stage_rotation",
 ]
 
-#: The coarse search calls a ramp groove found where the section is this deep (m): 160
-#: microscope noise sigmas (12 nm), yet shallow enough to be met early on the ramp.
-FIND_DEPTH_M = 2e-6
-#: Depth step (m) between the coarse sections that look for the start of a ramp groove: the
-#: whole V of a 90-deg tool stays visible up to 24 um deep at 40 deg (its flank top).
-SCAN_DEPTH_M = 10e-6
-#: Sample spacing of the coarse sections (m): a 2 um deep 90-deg groove is >= 4 um wide.
-COARSE_SPACING_M = 1e-6
-#: The bisection for the groove's start stops at this step along x (m): 0.1 um of depth at
-#: the default ramp slope 0.1, well inside the 8-16 um band of the stations.
-BISECTION_STEP_M = 1e-6
-#: Sample spacing of the fine sections (m): the microscope's finest objective (0.1 um pixel
-#: pitch, see `Microscope`); a 90-deg V tilted by 40 deg has a flank only 0.09 D wide at
-#: depth D, which this still samples 7 times at the shallowest station.
-FINE_SPACING_M = 0.1e-6
-#: Land kept either side of a groove in a fine section (m), at least: 33 samples at 0.3 um.
-FINE_LAND_M = 10e-6
-#: A pattern apex is a local minimum rising by at least this fraction of the pattern depth to
-#: the ridges either side. Neighbouring 90-deg grooves at 20 um pitch meet in ridges >= 5 um
-#: above the shallower apex (0-20 deg, depth changes of 3 um per deg), while noise (12 nm)
-#: makes minima of ~0.05 um prominence.
-APEX_PROMINENCE = 0.2
 #: The tool of paper 000: a 90-deg V (prism) tool.
 TOOL = "v:90"
-
-
-# ---------------------------------------------------------------------------- readings
-
-
-@dataclass(frozen=True, eq=False)
-class AngleReading:
-    """What the microscope read of one calibration groove (m).
-
-    Attributes
-    ----------
-    angle : float
-        Tool angle (rad).
-    x : ndarray, shape (k,)
-        The stations along the ramp.
-    dz, dy : ndarray, shape (k,)
-        Apex height above, and apex position beside, the programmed edge at each station.
-    dz_sigma, dy_sigma : ndarray, shape (k,)
-        Their standard uncertainties from the groove fits.
-    y_edge, z_edge : ndarray, shape (k,), optional
-        The programmed edge (y, z) at each station (what the plan asked for there); needed
-        to place the stations on the machine (`fit_observations`).
-    """
-
-    angle: float
-    x: np.ndarray
-    dz: np.ndarray
-    dy: np.ndarray
-    dz_sigma: np.ndarray
-    dy_sigma: np.ndarray
-    y_edge: np.ndarray | None = None
-    z_edge: np.ndarray | None = None
-
-    def mean(self, which: str) -> tuple[float, float]:
-        """Weighted mean of ``"dz"`` or ``"dy"`` over the stations, and its uncertainty."""
-        values = getattr(self, which)
-        weights = 1.0 / np.maximum(getattr(self, f"{which}_sigma"), SIGMA_FLOOR_M) ** 2
-        return float(weights @ values / weights.sum()), float(1.0 / math.sqrt(weights.sum()))
-
-
-@dataclass(frozen=True, eq=False)
-class PatternReading:
-    """Apexes of a machined prism pattern read in one section across it (m).
-
-    Attributes
-    ----------
-    angles : ndarray, shape (n,)
-        Tool angle of each groove (rad).
-    depth, depth_sigma : ndarray, shape (n,)
-        Apex depth below the surface, and its standard uncertainty.
-    centre, centre_sigma : ndarray, shape (n,)
-        Apex y, and its standard uncertainty.
-    nominal_depth, nominal_pitch : float
-        As programmed.
-    """
-
-    angles: np.ndarray
-    depth: np.ndarray
-    depth_sigma: np.ndarray
-    centre: np.ndarray
-    centre_sigma: np.ndarray
-    nominal_depth: float
-    nominal_pitch: float
-
-    @property
-    def depth_variation(self) -> float:
-        """Largest minus smallest apex depth (m)."""
-        return float(self.depth.max() - self.depth.min())
-
-    @property
-    def depth_error(self) -> float:
-        """Largest deviation of an apex depth from the programmed depth (m)."""
-        return float(np.abs(self.depth - self.nominal_depth).max())
-
-    @property
-    def pitch_error(self) -> float:
-        """Largest deviation of an apex from its programmed place relative to the first (m)."""
-        offsets = self.centre - self.centre[0] - self.nominal_pitch * np.arange(self.centre.size)
-        return float(np.abs(offsets).max())
-
-
-# ---------------------------------------------------------------------------- measuring
-
-
-def measure_calibration(part, plan: CalibrationPlan, microscope) -> tuple[AngleReading, ...]:
-    """Read every ramp groove of a calibration part with the microscope.
-
-    Finds where each groove starts by bisection on coarse sections, then reads fine sections
-    at the stations where it is ``plan.station_depths`` deep and fits each (`fit_v_groove`).
-
-    Parameters
-    ----------
-    part : Part
-        The calibration part cut by ``plan.program``.
-    plan : CalibrationPlan
-    microscope : Microscope
-        Its noise, resolution and stream are the reading's; the lateral spacing is the plan's.
-
-    Returns
-    -------
-    tuple of AngleReading
-        One per ``plan.angles``, in that order.
-
-    Raises
-    ------
-    InputError
-        When a groove lies outside the ramp's search range.
-    """
-    index = MeshIndex.from_surface(part)
-    return tuple(_read_ramp(index, plan, k, microscope) for k in range(len(plan.angles)))
-
-
-def _section(index, microscope, x: float, y0: float, y1: float, spacing=None):
-    """A section across Y at ``x``: (y, height below the land's median)."""
-    prof = microscope.profile(index, (x, y0), (x, y1), spacing=spacing)
-    return y0 + prof.s, prof.z - np.nanmedian(prof.z)
-
-
-def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading:
-    x_a, x_b = plan.ramp
-    window = plan.search + 0.25 * M_PER_MM
-    where = f"ramp groove at {math.degrees(plan.angles[k]):g} deg"
-
-    def coarse(x):
-        y = float(plan.edge(k, x)[0])
-        return _section(index, microscope, x, y - window, y + window, COARSE_SPACING_M)
-
-    def found(x):
-        return bool(np.nanmin(coarse(x)[1]) < -FIND_DEPTH_M)
-
-    # Walk down the ramp in steps of SCAN_DEPTH_M, then bisect: deeper down, where the whole
-    # V profile is buried, the section no longer shows the groove.
-    step = SCAN_DEPTH_M / plan.slope
-    stations = x_a + step * np.arange(1, int((x_b - x_a) / step))
-    first = next((i for i, x in enumerate(stations) if found(x)), 0)
-    lo, hi = stations[max(first - 1, 0)], stations[first]
-    while hi - lo > BISECTION_STEP_M:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if found(mid) else (mid, hi)
-    dz_guess = -FIND_DEPTH_M - float(plan.edge(k, hi)[1])
-    x_stations = x_a + (plan.search + dz_guess + np.array(plan.station_depths)) / plan.slope
-    # not found, or already cut at the first station (the edge may start below the surface)
-    if first == 0 or x_stations.max() >= x_b:
-        raise InputError(f"{where}: the groove does not start on the ramp; the edge's offset "
-                         f"exceeds the plan's search range {plan.search:g} m", key="search")
-    rows = []
-    floor = microscope.readout.resolution / math.sqrt(12.0)
-    for depth, x in zip(plan.station_depths, x_stations, strict=True):
-        y, h = coarse(x)
-        inside = y[h < -0.1 * depth]
-        margin = max(FINE_LAND_M, 0.25 * (inside[-1] - inside[0]))
-        y0 = float(inside[0] - margin)
-        prof = microscope.profile(index, (x, y0), (x, float(inside[-1] + margin)),
-                                  spacing=FINE_SPACING_M)
-        groove = fit_v_groove(prof.s, prof.z)
-        y_prog, z_prog = plan.edge(k, x)
-        # A reading is never better than the display's rounding (resolution / sqrt(12)),
-        # which a fit with no residual would not show.
-        rows.append((x, -groove.depth - z_prog, y0 + groove.centre - y_prog,
-                     max(groove.depth_sigma, floor), max(groove.centre_sigma, floor),
-                     y_prog, z_prog))
-    return AngleReading(plan.angles[k], *(frozen(c) for c in zip(*rows, strict=True)))
-
-
-def measure_pattern(part, pattern: PrismPattern, microscope, x: float | None = None
-                    ) -> PatternReading:
-    """Read a prism pattern's apexes in a microscope section across it at ``x`` (m).
-
-    The section spans the stock from land to land (at mid-length by default) at the
-    microscope's own spacing; see `fit_apexes`.
-
-    Raises
-    ------
-    InputError
-        When the section does not show one apex per groove (grooves not cut, or merged).
-    """
-    x = pattern.origin[0] + 0.5 * pattern.length if x is None else float(x)
-    guard = 0.1 * pattern.margin
-    y0 = pattern.origin[1] + guard
-    prof = microscope.profile(part, (x, y0), (x, pattern.origin[1] + pattern.width - guard))
-    centre, depth, centre_sigma, depth_sigma = fit_apexes(
-        prof.s, prof.z, len(pattern.angles), prominence=APEX_PROMINENCE * pattern.depth)
-    return PatternReading(np.array(pattern.angles), depth, depth_sigma, y0 + centre,
-                          centre_sigma, pattern.depth, pattern.pitch)
 
 
 # -------------------------------------------------------------------------- compensation
@@ -406,6 +207,11 @@ class ToolRotationArm:
     pattern: PrismPattern = PrismPattern()
     name: ClassVar[str] = "tool_rotation_arm"
     paper: ClassVar[str] = "000"
+    #: The `machinesim.realism.Realism` switches this procedure feels (it reads with the
+    #: microscope only: no probe, no reference artefacts), for an error budget.
+    realism_sources: ClassVar[tuple[str, ...]] = (
+        "instrument_noise", "lateral_resolution", "lateral_noise", "registration",
+        "background_errors")
 
     def measure(self, lab) -> Calibration:
         """Cut the calibration ramps with the nominal program and read them (microscope

@@ -6,7 +6,7 @@
 with the lab's confocal microscope only.
 
 0. Touch-off: a groove stepping down in Z finds the Z at which the edge meets the plate.
-1. A plate, cut with the touch-off: the pairs' start points give dx, dy
+1. A plate, cut with the touch-off: the pair's start points give dx, dy
    (`machinesim.identification.tool_setting_6axis.a_axis_pairs`).
 2. C plate, cut with dx, dy compensated: the triangle's centre gives e (`c_axis_triangle`).
 3. B plate, cut with dx, dy compensated: the depths at three B tilts give dZ (eqs 1-2,
@@ -47,6 +47,7 @@ from machinesim.cam.tool_setting_plates import (
     TOUCH_TOP,
     TRIANGLE_R,
     Plan,
+    mark_point,
     pair_grooves,
     plate_cuts,
 )
@@ -64,9 +65,9 @@ from machinesim.identification.tool_setting_6axis import (
     b_axis_tilts,
     c_axis_triangle,
     corrected_axes,
-    fit_check,
     identify,
 )
+from machinesim.identification.tool_setting_6axis_fit import fit_check
 from machinesim.machines import load_machine
 from machinesim.metrology import (
     fit_line,
@@ -99,8 +100,10 @@ PAIR_WINDOW = OFFSET_RANGE + 0.25 * M_PER_MM
 #: then zoomed in to +-ZOOM at FINE_SPACING: the face is vertical (zero-thickness edge
 #: profile), so its position is known to half the spacing, 0.025 nm, whatever the height noise.
 ZOOM, FINE_SPACING = 0.5 * M_PER_UM, 0.05e-9
-#: Half windows (m) across the B grooves (1 mm apart) and across the triangle's sides.
-B_WINDOW, C_WINDOW = 0.45 * M_PER_MM, 2.0 * M_PER_MM
+#: Half windows (m) across the B grooves (1 mm apart), across the triangle's sides and
+#: across the C plate's reference mark (cut with dx, dy compensated: within a few um of its
+#: place, and 3.5 mm from the nearest other groove along its profiles).
+B_WINDOW, C_WINDOW, MARK_WINDOW = 0.45 * M_PER_MM, 2.0 * M_PER_MM, 0.5 * M_PER_MM
 #: Sample pitch of the profiles across grooves: the microscope's 0.3 um less (1 - 0.618) nm.
 #: At a whole number of nanometres every sample of a 45-deg flank would sit at the same phase
 #: of the 1 nm height display, all would round alike and the fitted centre would snap to
@@ -110,7 +113,11 @@ ACROSS_SPACING = 0.3 * M_PER_UM - (1.0 - 0.5 * (math.sqrt(5.0) - 1.0)) * 1e-9
 STATIONS = {"a": (0.6 * M_PER_MM, 0.8 * M_PER_MM, 1.0 * M_PER_MM, 1.2 * M_PER_MM,
                   1.4 * M_PER_MM),
             "b": (-1.0 * M_PER_MM, -0.5 * M_PER_MM, 0.0, 0.5 * M_PER_MM, 1.0 * M_PER_MM),
-            "c": (-2.0 * M_PER_MM, -1.0 * M_PER_MM, 0.0, 1.0 * M_PER_MM, 2.0 * M_PER_MM)}
+            "c": (-2.0 * M_PER_MM, -1.0 * M_PER_MM, 0.0, 1.0 * M_PER_MM, 2.0 * M_PER_MM),
+            # the reference mark, from its crossing with the C = 0 side: clear of that
+            # side's 20 um width by 0.3 mm either way
+            "mark": (-1.0 * M_PER_MM, -0.65 * M_PER_MM, -0.3 * M_PER_MM, 0.3 * M_PER_MM,
+                     0.65 * M_PER_MM, 1.0 * M_PER_MM)}
 #: File stems of the plates as the procedure cuts them, and of the compensated re-cuts.
 AS_CUT = {"touch": "00_touch_off_as_cut", "a": "01_a_axis_as_cut", "c": "02_c_axis_as_cut",
           "b": "03_b_axis_as_cut"}
@@ -164,8 +171,8 @@ def read_plate(stage: str, part, microscope, program: Program, machine,
     Returns
     -------
     tuple of GrooveReading
-        In cutting order: A = 0, 180, 90, -90 deg; B = 0, theta2, theta3; C = 0, 120, 240
-        deg.
+        In cutting order: A = 0, 180 deg; B = 0, theta2, theta3; C = 0, 120, 240 deg and
+        the reference mark.
     """
     if stage not in ("a", "b", "c"):
         raise InputError(f"Expected stage 'a', 'b' or 'c', got {stage!r}", key="stage")
@@ -250,13 +257,18 @@ def _read_b(part, microscope, blocks, plan: Plan) -> tuple[GrooveReading, ...]:
 
 
 def _read_c(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
+    if len(blocks) != len(C_TURNS) + 1:
+        raise InputError(f"C plate: expected {len(C_TURNS)} triangle grooves and a reference "
+                         f"mark in the program, got {len(blocks)} grooves", key="program")
     out = []
-    for turn, block in zip(C_TURNS, blocks, strict=True):
+    for turn, block in zip(C_TURNS, blocks, strict=False):
         rot = rot_z(turn)[:2, :2]
         fits = _fits(part, microscope, rot @ (0.0, -TRIANGLE_R), rot @ (1.0, 0.0),
                      STATIONS["c"], C_WINDOW, f"C axis, groove at C = {math.degrees(turn):g} deg")
         out.append(_reading(fits, block))
-    return tuple(out)
+    fits = _fits(part, microscope, mark_point(), np.array([0.0, 1.0]), STATIONS["mark"],
+                 MARK_WINDOW, "C axis, reference mark")
+    return (*out, _reading(fits, blocks[-1]))
 
 
 def _programmed_starts() -> np.ndarray:
@@ -283,7 +295,7 @@ def layout_lines(stage: str, points) -> list[tuple[str, np.ndarray]]:
     Parameters
     ----------
     stage : str
-        ``"a"``: ``points`` are the A grooves' start points (4, 2), drawn as grooves of the
+        ``"a"``: ``points`` are the A grooves' start points (2, 2), drawn as grooves of the
         programmed length; ``"c"``: the triangle's vertices (3, 2), with their centroid.
     points : array_like
         m.
@@ -296,7 +308,7 @@ def layout_lines(stage: str, points) -> list[tuple[str, np.ndarray]]:
         raise InputError(f"Expected stage 'a' or 'c', got {stage!r}", key="stage")
     out = []
     for (angle, _), start, name in zip(pair_grooves(), points,
-                                       ("A=0", "A=180", "A=90", "A=-90"), strict=True):
+                                       ("A=0", "A=180"), strict=True):
         along = np.array([math.cos(angle), math.sin(angle)])
         out.append((f"groove {name}", np.vstack([start, start + PAIR_LENGTH * along])))
     return out
@@ -348,6 +360,11 @@ class ToolSetting6Axis:
     machine: str = "robonano_ui"
     name: ClassVar[str] = "tool_setting_6axis"
     paper: ClassVar[str] = "001"
+    #: The `machinesim.realism.Realism` switches this procedure feels (it reads with the
+    #: microscope only: no probe, no reference artefacts), for an error budget.
+    realism_sources: ClassVar[tuple[str, ...]] = (
+        "instrument_noise", "lateral_resolution", "lateral_noise", "registration",
+        "background_errors")
 
     def measure(self, lab) -> Readings:
         """Cut and read the four plates in the paper's order, each cut with what the earlier
@@ -392,7 +409,7 @@ class ToolSetting6Axis:
         """
         m = measurements
         found = identify(m.z_touch, m.a, m.c, m.b, _programmed_starts(), self.plan.theta2,
-                         self.plan.theta3)
+                         self.plan.theta3, mark_at=mark_point())
         found = replace(found, check=fit_check(self._machine(), m.a, m.c, m.b))
         return Identified(parameters=found.parameters, detail=found)
 
@@ -418,7 +435,7 @@ class ToolSetting6Axis:
             after[s] = read_plate(s, part, lab.microscope(label=f"{s}/compensated"),
                                   programs[name], machine, self.plan)
         a_after = a_axis_pairs([g.start for g in after["a"]], _programmed_starts())
-        c_after = c_axis_triangle([g.points for g in after["c"]])
+        c_after = c_axis_triangle([g.points for g in after["c"]], mark_point())
         b_after = b_axis_tilts([g.depths.mean() for g in after["b"]], self.plan.theta2,
                                self.plan.theta3, [g.q_start[2] for g in after["b"]])
         old, new = (_table(before.a, before.b, before.c), _table(a_after, b_after, c_after))
@@ -492,8 +509,7 @@ def _table(a: AAxisResult, b, c: CAxisResult) -> dict[str, float]:
 
 def _stage_dict(a, b, c) -> dict:
     return {"a_starts_um": a.starts / M_PER_UM,
-            "a_x_pair_distance_um": a.distances[0] / M_PER_UM,
-            "a_y_pair_distance_um": a.distances[1] / M_PER_UM,
+            "a_pair_distance_um": a.distances[0] / M_PER_UM,
             "c_centre_displacement_um": c.centre / M_PER_UM,
             "c_vertices_um": c.vertices / M_PER_UM,
             "b_depths_um": b.depths / M_PER_UM,

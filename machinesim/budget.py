@@ -1,0 +1,246 @@
+"""Error budget: the share of each error source in a procedure's "after" figures.
+
+Each source (an instrument's noise, the artefacts' errors, the machine's background errors,
+an approximation of the procedure) is switched off in turn and the procedure run again; the
+share of a source in a figure is how much of the figure's square it removes:
+
+    share = (a**2 - b**2) / a**2,   a = |after with every source on|,
+                                    b = |after with only this source off|
+
+If the sources are independent and each adds its own error in quadrature (a**2 = sum of the
+sources' squares plus what none of them explains), the shares of one figure sum to at most 1
+and the rest, ``1 - sum``, is what the listed sources do not explain (the identification's
+own residual, the evaluation's rounding). Sources that correlate (two errors that cancel in
+one run) can give shares below 0 or above 1; a single seeded run is one draw of the noise,
+so a share near 0 says "small", not "absent". Switching factors off one at a time follows
+paper 004's Fig. 16 (form error with and without each compensation); the quadrature share is
+this project's way of putting the comparisons in one table. See docs/budget.md.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+from machinesim._io import write_atomic
+from machinesim.exceptions import InputError
+
+__all__ = ["BUDGET_KEYS", "Budget", "BudgetRow", "error_budget", "quadrature_share"]
+
+#: Keys of each row of ``budget`` in summary.json (`Budget.to_dict`).
+BUDGET_KEYS = ("source", "figure", "unit", "after_all", "after_without", "share")
+
+
+def quadrature_share(after_all: float, after_without: float) -> float:
+    """The share of a source in a figure: ``(a^2 - b^2) / a^2``, 0 when ``a == 0``.
+
+    Parameters
+    ----------
+    after_all : float
+        The figure's "after" with every source on (``a``; its sign is ignored).
+    after_without : float
+        The same with only this source off (``b``; its sign is ignored).
+    """
+    a, b = abs(float(after_all)), abs(float(after_without))
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise InputError(f"budget: expected finite figures, got after_all={after_all!r}, "
+                         f"after_without={after_without!r}")
+    return 0.0 if a == 0.0 else (a * a - b * b) / (a * a)
+
+
+@dataclass(frozen=True)
+class BudgetRow:
+    """One source's share in one figure.
+
+    Attributes
+    ----------
+    source : str
+        The source switched off (``"instrument_noise"``, ``"artefact_errors"``,
+        ``"background"``, ``"tip_vs_nose"``, ...).
+    figure : str
+        A `machinesim.experiment.Figure` name of the result.
+    unit : str
+        The figure's unit.
+    after_all : float
+        The figure's "after" with every source on.
+    after_without : float
+        The same with only this source off.
+    share : float
+        ``(a^2 - b^2) / a^2`` with ``a = |after_all|``, ``b = |after_without|``; 0 if a == 0.
+    """
+
+    source: str
+    figure: str
+    unit: str
+    after_all: float
+    after_without: float
+    share: float
+
+    def as_dict(self) -> dict:
+        """The row as summary.json holds it (keys `BUDGET_KEYS`)."""
+        return {key: getattr(self, key) for key in BUDGET_KEYS}
+
+
+@dataclass(frozen=True)
+class Budget:
+    """The shares of every source in every "after" figure of a result.
+
+    Attributes
+    ----------
+    rows : tuple of BudgetRow
+        Grouped by figure (in the result's order), sources in the order given.
+    """
+
+    rows: tuple[BudgetRow, ...]
+
+    @classmethod
+    def from_dict(cls, rows: Sequence[Mapping]) -> Budget:
+        """The inverse of `to_dict` (rows as summary.json holds them)."""
+        out = []
+        for i, row in enumerate(rows):
+            missing = [key for key in BUDGET_KEYS if not isinstance(row, Mapping)
+                       or key not in row]
+            if missing:
+                raise InputError(f"budget[{i}]: expected an object with "
+                                 f"{', '.join(BUDGET_KEYS)}; lacks {', '.join(missing)}",
+                                 key="budget")
+            out.append(BudgetRow(str(row["source"]), str(row["figure"]), str(row["unit"]),
+                                 float(row["after_all"]), float(row["after_without"]),
+                                 float(row["share"])))
+        return cls(tuple(out))
+
+    @property
+    def sources(self) -> tuple[str, ...]:
+        """The sources, in order."""
+        return tuple(dict.fromkeys(row.source for row in self.rows))
+
+    @property
+    def figures(self) -> tuple[str, ...]:
+        """The figures, in order."""
+        return tuple(dict.fromkeys(row.figure for row in self.rows))
+
+    def share(self, source: str, figure: str) -> float:
+        """The share of ``source`` in ``figure``."""
+        for row in self.rows:
+            if row.source == source and row.figure == figure:
+                return row.share
+        raise InputError(f"budget has no row for source {source!r} and figure {figure!r}; "
+                         f"sources {', '.join(self.sources)}, figures "
+                         f"{', '.join(self.figures)}", key="source")
+
+    def unexplained(self, figure: str) -> float:
+        """``1 - sum of the shares`` of ``figure``: what no listed source explains (under the
+        independence assumption of the module docstring)."""
+        shares = [row.share for row in self.rows if row.figure == figure]
+        if not shares:
+            raise InputError(f"budget has no figure {figure!r}; it has "
+                             f"{', '.join(self.figures)}", key="figure")
+        return 1.0 - sum(shares)
+
+    def table(self) -> str:
+        """The budget as a Markdown table: one row per figure and source, then per figure
+        the part no listed source explains."""
+        lines = ["| figure | unit | source | after, all on | after, source off | share |",
+                 "|---|---|---|---|---|---|"]
+        for figure in self.figures:
+            rows = [row for row in self.rows if row.figure == figure]
+            for row in rows:
+                lines.append(f"| {row.figure} | {row.unit} | {row.source} | "
+                             f"{row.after_all:.4g} | {row.after_without:.4g} | "
+                             f"{100.0 * row.share:.1f} % |")
+            lines.append(f"| {figure} | {rows[0].unit} | (none of these) | | | "
+                         f"{100.0 * self.unexplained(figure):.1f} % |")
+        return "\n".join(lines) + "\n"
+
+    def to_dict(self) -> list[dict]:
+        """The rows as summary.json holds them under ``budget``."""
+        return [row.as_dict() for row in self.rows]
+
+    def plot(self, path) -> None:
+        """A bar plot (PNG) of the shares in percent: one group per figure, a bar per source.
+
+        Written whole or not at all (`machinesim._io.write_atomic`).
+        """
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        figures, sources = self.figures, self.sources
+        width = 0.8 / max(len(sources), 1)
+        figure, axes = plt.subplots(figsize=(max(6.0, 1.6 * len(figures) + 3.0), 4.5),
+                                    dpi=120)
+        for k, source in enumerate(sources):
+            x = [i + (k - (len(sources) - 1) / 2) * width for i in range(len(figures))]
+            y = [100.0 * self.share(source, name) for name in figures]
+            axes.bar(x, y, width=width, label=source)
+        axes.axhline(0.0, color="black", linewidth=0.8)
+        axes.set_xticks(range(len(figures)))
+        axes.set_xticklabels(figures, rotation=20 if len(figures) > 4 else 0)
+        axes.set_ylabel("share of the 'after' figure, % (quadrature)")
+        axes.set_title("Error budget: each source switched off in turn")
+        axes.grid(True, axis="y", alpha=0.3)
+        axes.legend(fontsize="small")
+        buffer = io.BytesIO()
+        figure.tight_layout()
+        figure.savefig(buffer, format="png")
+        plt.close(figure)
+        write_atomic(path, buffer.getvalue())
+
+
+def _check_sources(sources) -> tuple[str, ...]:
+    if isinstance(sources, str):
+        raise InputError(f"error_budget: expected a sequence of source names, got the "
+                         f"string {sources!r}", key="sources")
+    out = tuple(sources)
+    bad = [s for s in out if not isinstance(s, str) or not s]
+    if bad or not out:
+        raise InputError(f"error_budget: expected a non-empty sequence of source names, got "
+                         f"{list(out)!r}", key="sources")
+    doubled = sorted({s for s in out if out.count(s) > 1})
+    if doubled:
+        raise InputError(f"error_budget: source(s) {', '.join(doubled)} given twice",
+                         key="sources")
+    return out
+
+
+def _figures(result, what: str) -> dict:
+    figures = getattr(result, "figures", None)
+    if figures is None:
+        raise InputError(f"error_budget: run({what}) returned {type(result).__name__}; "
+                         "expected a machinesim.experiment.Result", key="run")
+    return {f.name: f for f in figures}
+
+
+def error_budget(run: Callable, sources: Sequence[str]) -> Budget:
+    """The error budget of a procedure: each source switched off in turn.
+
+    Parameters
+    ----------
+    run : callable
+        ``run(None)`` -> `machinesim.experiment.Result` with every source on;
+        ``run(source)`` -> the same with that one source off.
+    sources : sequence of str
+        The sources, in the order of the table.
+
+    Returns
+    -------
+    Budget
+        A row per figure with an "after" value (in the result's order) and per source.
+    """
+    sources = _check_sources(sources)
+    every = _figures(run(None), "None")
+    names = [name for name, f in every.items() if f.after is not None]
+    rows = {name: [] for name in names}
+    for source in sources:
+        without = _figures(run(source), repr(source))
+        for name in names:
+            if name not in without or without[name].after is None:
+                raise InputError(f"error_budget: with {source!r} off the result has no "
+                                 f"'after' for figure {name!r}", key=source)
+            a, b = every[name].after, without[name].after
+            rows[name].append(BudgetRow(source, name, every[name].unit, a, b,
+                                        quadrature_share(a, b)))
+    return Budget(tuple(row for name in names for row in rows[name]))

@@ -1,0 +1,319 @@
+"""Paper 000's test pieces under the microscope: the calibration ramps and the prism pattern.
+
+`measure_calibration` finds each ramp groove's start and reads its edge height and lateral
+position at stations along it (`AngleReading`), with the sections turned by the stage's
+rotation found on the block (`stage_rotation`, `AlignedMicroscope`); `measure_pattern` reads
+the apexes of the angle-variable prism pattern in one levelled section (`PatternReading`).
+The procedure that cuts them and uses the readings is
+`machinesim.procedures.tool_rotation_arm`; docs/procedures/tool_rotation_arm.md gives the
+plan.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.arrays import frozen
+from machinesim.cam.prisms import CalibrationPlan, PrismPattern
+from machinesim.exceptions import InputError
+from machinesim.metrology import MeshIndex, fit_v_groove
+from machinesim.metrology.prisms import SIGMA_FLOOR_M, fit_apexes
+from machinesim.units import M_PER_MM
+
+__all__ = [
+    "AlignedMicroscope", "AngleReading", "PatternReading", "level_on_land",
+    "measure_calibration", "measure_pattern", "stage_rotation",
+]
+
+#: The coarse search calls a ramp groove found where the section is this deep (m): 160
+#: microscope noise sigmas (12 nm), yet shallow enough to be met early on the ramp.
+FIND_DEPTH_M = 2e-6
+#: Depth step (m) between the coarse sections that look for the start of a ramp groove: the
+#: whole V of a 90-deg tool stays visible up to 24 um deep at 40 deg (its flank top).
+SCAN_DEPTH_M = 10e-6
+#: Sample spacing of the coarse sections (m): a 2 um deep 90-deg groove is >= 4 um wide.
+COARSE_SPACING_M = 1e-6
+#: The bisection for the groove's start stops at this step along x (m): 0.1 um of depth at
+#: the default ramp slope 0.1, well inside the 8-16 um band of the stations.
+BISECTION_STEP_M = 1e-6
+#: Sample spacing of the fine sections (m): the microscope's finest objective (0.1 um pixel
+#: pitch, see `Microscope`); a 90-deg V tilted by 40 deg has a flank only 0.09 D wide at
+#: depth D, which this still samples 7 times at the shallowest station.
+FINE_SPACING_M = 0.1e-6
+#: Land kept either side of a groove in a fine section (m), at least: 33 samples at 0.3 um.
+FINE_LAND_M = 10e-6
+#: A pattern apex is a local minimum rising by at least this fraction of the pattern depth to
+#: the ridges either side. Neighbouring 90-deg grooves at 20 um pitch meet in ridges >= 5 um
+#: above the shallower apex (0-20 deg, depth changes of 3 um per deg), while noise (12 nm)
+#: makes minima of ~0.05 um prominence.
+APEX_PROMINENCE = 0.2
+#: Part of the pattern's margin (from each end of the section) taken as land to level the
+#: section on: 0.5 x 0.3 mm less the 0.03 mm guard leaves 0.12 mm clear of the first groove's
+#: 10 um half width and the last's steep flank (<= 0.5 x its depth of up to 70 um before
+#: compensation) with 30 um of pitch error.
+LEVEL_LAND_FRACTION = 0.5
+#: Where the calibration block's low-y edge is looked for (`stage_rotation`): this far (m)
+#: in from each end of the block (both uncut: the ramps start 0.5 mm in and leave the
+#: surface before the block's last millimetre), +- this window across it (the stage's
+#: offset and its rotation over the block's length: 5 um and 1 mrad x 25 mm, a few
+#: sigmas), at this spacing.
+EDGE_INSET_M, EDGE_WINDOW_M, EDGE_SPACING_M = 0.25 * M_PER_MM, 0.1 * M_PER_MM, 0.1e-6
+
+
+# ---------------------------------------------------------------------------- readings
+
+
+@dataclass(frozen=True, eq=False)
+class AngleReading:
+    """What the microscope read of one calibration groove (m).
+
+    Attributes
+    ----------
+    angle : float
+        Tool angle (rad).
+    x : ndarray, shape (k,)
+        The stations along the ramp.
+    dz, dy : ndarray, shape (k,)
+        Apex height above, and apex position beside, the programmed edge at each station.
+    dz_sigma, dy_sigma : ndarray, shape (k,)
+        Their standard uncertainties from the groove fits.
+    y_edge, z_edge : ndarray, shape (k,), optional
+        The programmed edge (y, z) at each station (what the plan asked for there); needed
+        to place the stations on the machine (`fit_observations`).
+    """
+
+    angle: float
+    x: np.ndarray
+    dz: np.ndarray
+    dy: np.ndarray
+    dz_sigma: np.ndarray
+    dy_sigma: np.ndarray
+    y_edge: np.ndarray | None = None
+    z_edge: np.ndarray | None = None
+
+    def mean(self, which: str) -> tuple[float, float]:
+        """Weighted mean of ``"dz"`` or ``"dy"`` over the stations, and its uncertainty."""
+        values = getattr(self, which)
+        weights = 1.0 / np.maximum(getattr(self, f"{which}_sigma"), SIGMA_FLOOR_M) ** 2
+        return float(weights @ values / weights.sum()), float(1.0 / math.sqrt(weights.sum()))
+
+
+@dataclass(frozen=True, eq=False)
+class PatternReading:
+    """Apexes of a machined prism pattern read in one section across it (m).
+
+    Attributes
+    ----------
+    angles : ndarray, shape (n,)
+        Tool angle of each groove (rad).
+    depth, depth_sigma : ndarray, shape (n,)
+        Apex depth below the surface, and its standard uncertainty.
+    centre, centre_sigma : ndarray, shape (n,)
+        Apex y, and its standard uncertainty.
+    nominal_depth, nominal_pitch : float
+        As programmed.
+    """
+
+    angles: np.ndarray
+    depth: np.ndarray
+    depth_sigma: np.ndarray
+    centre: np.ndarray
+    centre_sigma: np.ndarray
+    nominal_depth: float
+    nominal_pitch: float
+
+    @property
+    def depth_variation(self) -> float:
+        """Largest minus smallest apex depth (m)."""
+        return float(self.depth.max() - self.depth.min())
+
+    @property
+    def depth_error(self) -> float:
+        """Largest deviation of an apex depth from the programmed depth (m)."""
+        return float(np.abs(self.depth - self.nominal_depth).max())
+
+    @property
+    def pitch_error(self) -> float:
+        """Largest deviation of an apex from its programmed place relative to the first (m)."""
+        offsets = self.centre - self.centre[0] - self.nominal_pitch * np.arange(self.centre.size)
+        return float(np.abs(offsets).max())
+
+
+# ---------------------------------------------------------------------------- measuring
+
+
+def measure_calibration(part, plan: CalibrationPlan, microscope) -> tuple[AngleReading, ...]:
+    """Read every ramp groove of a calibration part with the microscope.
+
+    Finds where each groove starts by bisection on coarse sections, then reads fine sections
+    at the stations where it is ``plan.station_depths`` deep and fits each (`fit_v_groove`).
+
+    Parameters
+    ----------
+    part : Part
+        The calibration part cut by ``plan.program``.
+    plan : CalibrationPlan
+    microscope : Microscope
+        Its noise, resolution and stream are the reading's; the lateral spacing is the plan's.
+
+    Returns
+    -------
+    tuple of AngleReading
+        One per ``plan.angles``, in that order.
+
+    Raises
+    ------
+    InputError
+        When a groove lies outside the ramp's search range.
+    """
+    index = MeshIndex.from_surface(part)
+    aligned = AlignedMicroscope(microscope, stage_rotation(index, plan, microscope))
+    return tuple(_read_ramp(index, plan, k, aligned) for k in range(len(plan.angles)))
+
+
+class AlignedMicroscope:
+    """A microscope whose sections are turned by the stage rotation found on the part.
+
+    A microscope's stage holds the part turned by some rotation (`Realism`'s registration:
+    1 mrad), so a section asked for at x along a ramp 20 mm from the stage's origin falls
+    20 um off in x, and a ramp of slope 0.1 reads 2 um deeper or shallower: different at
+    every ramp, so a bias of r and e_ys, not an offset. Turning each requested section by
+    ``-rotation`` (the rotation found by `stage_rotation`) puts every section where it was
+    asked for up to a common offset, which eq 1's free offset takes.
+    """
+
+    def __init__(self, microscope, rotation: float) -> None:
+        self.microscope = microscope
+        self.rotation = float(rotation)
+        self.readout = microscope.readout
+
+    def profile(self, part, start, end, spacing=None):
+        c, s = math.cos(self.rotation), math.sin(self.rotation)
+        turn = np.array([[c, s], [-s, c]])
+        return self.microscope.profile(part, turn @ np.asarray(start, dtype=np.float64),
+                                       turn @ np.asarray(end, dtype=np.float64),
+                                       spacing=spacing)
+
+
+def stage_rotation(index, plan: CalibrationPlan, microscope) -> float:
+    """The rotation (rad) of the microscope's frame from the part's, from the calibration
+    block's low-y edge (a straight edge along X, uncut) found at both ends of the block.
+
+    Each of two sections across the edge (``EDGE_WINDOW_M`` either side of where the plan
+    put it, at ``EDGE_SPACING_M``) finds its first sample on the part; the edge's slope in
+    the microscope's frame is minus the rotation. The edge is found to a sample spacing at
+    each end, so the rotation to 0.1 um over the block's length (4e-6 rad at 24 mm).
+    """
+    y_edge = plan.origin[1]
+    x_end = plan.origin[0] + plan.length
+    found = []
+    for x in (plan.origin[0] + EDGE_INSET_M, x_end - EDGE_INSET_M):
+        prof = microscope.profile(index, (x, y_edge - EDGE_WINDOW_M),
+                                  (x, y_edge + EDGE_WINDOW_M), spacing=EDGE_SPACING_M)
+        on = np.flatnonzero(np.isfinite(prof.z))
+        if on.size == 0 or on[0] == 0:
+            raise InputError(f"calibration block: expected its edge within "
+                             f"{EDGE_WINDOW_M:g} m of y = {y_edge:g} m at x = {x:g} m under "
+                             "the microscope", key="edge")
+        found.append((x, y_edge - EDGE_WINDOW_M + prof.s[on[0]]))
+    (x1, y1), (x2, y2) = found
+    return -math.atan2(y2 - y1, x2 - x1)
+
+
+def _section(index, microscope, x: float, y0: float, y1: float, spacing=None):
+    """A section across Y at ``x``: (y, height below the land's median)."""
+    prof = microscope.profile(index, (x, y0), (x, y1), spacing=spacing)
+    return y0 + prof.s, prof.z - np.nanmedian(prof.z)
+
+
+def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading:
+    x_a, x_b = plan.ramp
+    window = plan.window
+    where = f"ramp groove at {math.degrees(plan.angles[k]):g} deg"
+
+    def coarse(x):
+        y = float(plan.edge(k, x)[0])
+        return _section(index, microscope, x, y - window, y + window, COARSE_SPACING_M)
+
+    def found(x):
+        return bool(np.nanmin(coarse(x)[1]) < -FIND_DEPTH_M)
+
+    # Walk down the ramp in steps of SCAN_DEPTH_M, then bisect: deeper down, where the whole
+    # V profile is buried, the section no longer shows the groove.
+    step = SCAN_DEPTH_M / plan.slope
+    stations = x_a + step * np.arange(1, int((x_b - x_a) / step))
+    first = next((i for i, x in enumerate(stations) if found(x)), 0)
+    lo, hi = stations[max(first - 1, 0)], stations[first]
+    while hi - lo > BISECTION_STEP_M:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if found(mid) else (mid, hi)
+    dz_guess = -FIND_DEPTH_M - float(plan.edge(k, hi)[1])
+    x_stations = x_a + (plan.search + dz_guess + np.array(plan.station_depths)) / plan.slope
+    # not found, or already cut at the first station (the edge may start below the surface)
+    if first == 0 or x_stations.max() >= x_b:
+        raise InputError(f"{where}: the groove does not start on the ramp; the edge's offset "
+                         f"|(e_ys, r - r0)| exceeds the plan's capture range "
+                         f"{plan.capture / M_PER_MM:g} mm (search range {plan.search:g} m): "
+                         "give a larger CalibrationPlan(capture=...) (scenario: --capture-mm)",
+                         key="capture")
+    rows = []
+    floor = microscope.readout.resolution / math.sqrt(12.0)
+    for depth, x in zip(plan.station_depths, x_stations, strict=True):
+        y, h = coarse(x)
+        inside = y[h < -0.1 * depth]
+        margin = max(FINE_LAND_M, 0.25 * (inside[-1] - inside[0]))
+        y0 = float(inside[0] - margin)
+        prof = microscope.profile(index, (x, y0), (x, float(inside[-1] + margin)),
+                                  spacing=FINE_SPACING_M)
+        groove = fit_v_groove(prof.s, prof.z)
+        y_prog, z_prog = plan.edge(k, x)
+        # A reading is never better than the display's rounding (resolution / sqrt(12)),
+        # which a fit with no residual would not show.
+        rows.append((x, -groove.depth - z_prog, y0 + groove.centre - y_prog,
+                     max(groove.depth_sigma, floor), max(groove.centre_sigma, floor),
+                     y_prog, z_prog))
+    return AngleReading(plan.angles[k], *(frozen(c) for c in zip(*rows, strict=True)))
+
+
+def level_on_land(s, z, land: float) -> np.ndarray:
+    """Heights less the line through the first and last ``land`` (m) of a profile.
+
+    A microscope's stage holds the part tilted (`Realism`'s registration: 0.2 mrad, 0.2 um
+    over a 1 mm section), which `fit_apexes`'s search for the uncut land (samples within
+    its noise of the highest) would take for cut. A shear changes neither an apex's depth
+    below the land line nor where its two flank lines cross, so levelling first leaves
+    both as they were.
+    """
+    s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
+    ends = ((s <= s[0] + land) | (s >= s[-1] - land)) & np.isfinite(z)
+    if np.count_nonzero(ends) < 4:
+        raise InputError(f"Expected land over the first and last {land:g} m of the section, "
+                         f"got {np.count_nonzero(ends)} samples there", key="land")
+    slope, intercept = np.polyfit(s[ends], z[ends], 1)
+    return z - (intercept + slope * s)
+
+
+def measure_pattern(part, pattern: PrismPattern, microscope, x: float | None = None
+                    ) -> PatternReading:
+    """Read a prism pattern's apexes in a microscope section across it at ``x`` (m).
+
+    The section spans the stock from land to land (at mid-length by default) at the
+    microscope's own spacing; see `fit_apexes`.
+
+    Raises
+    ------
+    InputError
+        When the section does not show one apex per groove (grooves not cut, or merged).
+    """
+    x = pattern.origin[0] + 0.5 * pattern.length if x is None else float(x)
+    guard = 0.1 * pattern.margin
+    y0 = pattern.origin[1] + guard
+    prof = microscope.profile(part, (x, y0), (x, pattern.origin[1] + pattern.width - guard))
+    centre, depth, centre_sigma, depth_sigma = fit_apexes(
+        prof.s, level_on_land(prof.s, prof.z, LEVEL_LAND_FRACTION * pattern.margin),
+        len(pattern.angles), prominence=APEX_PROMINENCE * pattern.depth)
+    return PatternReading(np.array(pattern.angles), depth, depth_sigma, y0 + centre,
+                          centre_sigma, pattern.depth, pattern.pitch)

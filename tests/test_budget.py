@@ -1,0 +1,104 @@
+"""Error budget: quadrature shares of sources switched off one at a time."""
+
+from __future__ import annotations
+
+import json
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from machinesim.budget import Budget, BudgetRow, error_budget, quadrature_share
+from machinesim.exceptions import InputError, MachineSimError
+from machinesim.experiment import Figure
+from machinesim.report import ReportFolder, check_summary
+
+#: Independent synthetic sources: each adds its error, um, in quadrature to each figure.
+SOURCES = {"instrument_noise": (0.3, 1.2), "artefact_errors": (0.4, 0.0),
+           "background": (1.2, 0.5)}
+#: What no listed source explains (the identification's own residual), um.
+RESIDUAL = (0.1, 0.2)
+
+
+def synthetic_run(off):
+    """A result whose "after" figures are the quadrature sum of the sources that are on."""
+    figures = []
+    for k, name in enumerate(("a_dx", "a_dy")):
+        squares = RESIDUAL[k] ** 2 + sum(v[k] ** 2 for s, v in SOURCES.items() if s != off)
+        figures.append(Figure(name, "um", 100.0, -math.sqrt(squares)))
+    figures.append(Figure("not_measured", "um", 1.0, None))
+    return SimpleNamespace(figures=tuple(figures))
+
+
+def test_shares_of_independent_sources_are_their_squares_over_the_total():
+    budget = error_budget(synthetic_run, list(SOURCES))
+    assert budget.figures == ("a_dx", "a_dy") and budget.sources == tuple(SOURCES)
+    for k, figure in enumerate(budget.figures):
+        total = RESIDUAL[k] ** 2 + sum(v[k] ** 2 for v in SOURCES.values())
+        for source, values in SOURCES.items():
+            assert budget.share(source, figure) == pytest.approx(values[k] ** 2 / total,
+                                                                 abs=1e-12)
+        # the shares of independent sources sum to 1 - residual^2 / total
+        assert budget.unexplained(figure) == pytest.approx(RESIDUAL[k] ** 2 / total, abs=1e-12)
+    row = budget.rows[0]
+    assert row.after_all == pytest.approx(-math.sqrt(0.1**2 + 0.3**2 + 0.4**2 + 1.2**2))
+
+
+def test_quadrature_share_by_hand():
+    assert quadrature_share(5.0, 3.0) == pytest.approx(16.0 / 25.0)  # 3-4-5 triangle
+    assert quadrature_share(-5.0, 4.0) == pytest.approx(9.0 / 25.0)
+    assert quadrature_share(0.0, 2.0) == 0.0
+    assert quadrature_share(1.0, 2.0) == pytest.approx(-3.0)  # switching off made it worse
+    with pytest.raises(InputError, match="finite"):
+        quadrature_share(np.nan, 1.0)
+
+
+def test_table_dict_and_plot_round_trip(tmp_path):
+    budget = error_budget(synthetic_run, list(SOURCES))
+    assert Budget.from_dict(json.loads(json.dumps(budget.to_dict()))) == budget
+    table = budget.table()
+    lines = [line for line in table.splitlines() if line.startswith("| a_dy |")]
+    assert len(lines) == len(SOURCES) + 1
+    total = RESIDUAL[1] ** 2 + sum(v[1] ** 2 for v in SOURCES.values())
+    assert f"{100 * 1.2**2 / total:.1f} %" in lines[0]
+    budget.plot(tmp_path / "budget.png")
+    assert (tmp_path / "budget.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_report_writes_the_budget_and_the_summary_accepts_it(tmp_path):
+    budget = error_budget(synthetic_run, list(SOURCES))
+    folder = ReportFolder(tmp_path / "out")
+    text = folder.write_budget(budget)
+    assert budget.table() in text
+    base = {"paper": "001", "procedure": "p", "machine": "m", "seed": 0, "noise": False,
+            "injected": {}, "identified": {}, "figures": [], "budget": budget.to_dict()}
+    folder.write_summary(base)
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert Budget.from_dict(summary["budget"]) == budget
+    assert {"budget.md", "budget.png"} <= set(summary["files"])
+    bad_row = {**budget.to_dict()[0], "share": "big"}
+    for rows, message in (({"a": 1}, "as a list"), ([{"source": "x"}], "exactly the keys"),
+                          ([bad_row], "share must be a finite number"),
+                          ([{**bad_row, "share": 0.1, "unit": ""}], "unit must be")):
+        with pytest.raises(InputError, match=message):
+            check_summary({**base, "budget": rows})
+
+
+def test_bad_sources_and_runs_are_refused_clearly():
+    for sources, message in (("background", "the string"), ([], "non-empty"),
+                             (["a", "a"], "given twice"), ([None], "non-empty")):
+        with pytest.raises(MachineSimError, match=message):
+            error_budget(synthetic_run, sources)
+    with pytest.raises(MachineSimError, match="expected a machinesim.experiment.Result"):
+        error_budget(lambda off: 3.0, ["background"])
+
+    def loses_a_figure(off):
+        result = synthetic_run(off)
+        return result if off is None else SimpleNamespace(figures=result.figures[1:])
+
+    with pytest.raises(MachineSimError, match="'background' off the result has no 'after' "
+                                              "for figure 'a_dx'"):
+        error_budget(loses_a_figure, ["background"])
+    with pytest.raises(MachineSimError, match="no row for source 'x'"):
+        Budget((BudgetRow("s", "f", "um", 1.0, 0.5, 0.75),)).share("x", "f")
