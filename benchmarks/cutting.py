@@ -15,6 +15,13 @@ e. Case a end to end: an NC program of the 2000 grooves (each: rapid over its st
    the grooving_4axis machine, grooves along X (the tool's cutting direction at C = 0) on a
    10 x 40 x 2 mm block. Goals (issue 12): >= 10,000 grooves/s end to end, and the whole
    call within twice the engine's own time (`CutReport.engine_s`) in the same run.
+f. Slanted pyramids end to end (issue 14): 500 x 500 crossing grooves, 50 um pitch, 25 um
+   deep, as an NC program cut by `machinesim.cut` on grooving_4axis with a squareness error
+   of Y to X (EC0Y = 100 urad), the first set along X at C = 0.3 deg, the second at
+   C = 90.6 deg: both sets slanted on the block, 90.3 deg apart, so the height field grids
+   them in their own directions. Goal >= 1,000,000 output triangles/s end to end. In the same
+   run the boolean engine and the relief cut a 100 x 100 pattern of the same slants (paths
+   built directly) for comparison.
 
 a, b and d are run twice, each in its own process: with the default engine (``method="auto"``,
 which meshes straight grooves across a block as an exact height field,
@@ -35,7 +42,7 @@ too.
 Each scenario runs in its own process so that its peak memory (ru_maxrss, which includes
 manifold3d's C++ heap, unlike tracemalloc) is its own. Times are medians of ``--repeat`` runs.
 
-Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcde] [--repeat 3] [--no-naive]``
+Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcdef] [--repeat 3] [--no-naive]``
 """
 
 from __future__ import annotations
@@ -181,6 +188,84 @@ def run_end_to_end(repeat: int) -> dict:
             "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
 
 
+#: Case f: C positions of the two groove sets (rad) and the squareness error.
+SLANT_C = (math.radians(0.3), math.radians(90.6))
+SLANT_ERRORS = {"location": {"Y": {"EC0Y_urad": 100.0}}}
+
+
+def pyramid_program(count: int, pitch: float = 50e-6, depth: float = 25e-6,
+                    overrun: float = 1e-3):
+    """Case f as an NC program: two sets of grooves along X, C turned between them.
+
+    The block is centred on the C axis; each groove: rapid beside the block, down, feed
+    across it, rapid up.
+    """
+    from machinesim.nc import ProgramBuilder
+
+    side = count * pitch
+    builder = ProgramBuilder(1, source="benchmark case f")
+    ys = -side / 2 + pitch / 2 + pitch * np.arange(count)
+    for c in SLANT_C:
+        builder.rapid(Z=0.1e-3).rapid(C=c)
+        for y in ys:
+            builder.rapid(X=-side / 2 - overrun, Y=y, Z=0.1e-3).rapid(Z=-depth)
+            builder.linear(X=side / 2 + overrun, feed_mm_per_min=500.0).rapid(Z=0.1e-3)
+    return builder.build()
+
+
+def slanted_crossing(count: int, pitch: float = 50e-6, depth: float = 25e-6):
+    """Block and paths of case f's pattern built directly (no errors): each set along X
+    turned by its C position, as the table's turn by C leaves it on the block."""
+    side = count * pitch
+    centres = -side / 2 + pitch / 2 + pitch * np.arange(count)
+    paths = []
+    for c in SLANT_C:
+        turn = np.array([[math.cos(c), -math.sin(c), 0.0], [math.sin(c), math.cos(c), 0.0],
+                         [0.0, 0.0, 1.0]])
+        d, n = turn[:, 0], turn[:, 1]
+        for y in centres:
+            middle = y * n + np.array([0.0, 0.0, -depth])
+            paths.append(np.array([pose(turn, middle - (side / 2 + 1e-3) * d),
+                                   pose(turn, middle + (side / 2 + 1e-3) * d)]))
+    return block(side, side, 2e-3, origin=(-side / 2, -side / 2, 0.0)), paths
+
+
+def run_slanted(repeat: int) -> dict:
+    """Case f: machinesim.cut end to end, and both engines on a smaller pattern."""
+    from machinesim import load_machine
+    from machinesim.cutting import cut
+    from machinesim.errors.model import ErrorModel
+
+    count = 500
+    program, machine = pyramid_program(count), load_machine("grooving_4axis")
+    errors = ErrorModel.from_dict(SLANT_ERRORS)
+    side = count * 50e-6
+    stock = block(side, side, 2e-3, origin=(-side / 2, -side / 2, 0.0))
+    times, engine, cpu = [], [], []
+    for _ in range(repeat):
+        before = resource.getrusage(resource.RUSAGE_SELF)
+        start = time.perf_counter()
+        part, report = cut(program, machine, tool=V90, stock=stock, errors=errors)
+        times.append(time.perf_counter() - start)
+        after = resource.getrusage(resource.RUSAGE_SELF)
+        cpu.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
+        engine.append(report.engine_s)
+    small_stock, small_paths = slanted_crossing(100)
+    small = {}
+    for method in ("boolean", "auto"):
+        start = time.perf_counter()
+        small_part, small_report = remove(small_stock, V90, small_paths, method=method)
+        small[small_report.method] = (time.perf_counter() - start,
+                                      len(small_part.mesh()[1]))
+    return {"scenario": "f", "method": report.engine, "median_s": statistics.median(times),
+            "times_s": times, "median_engine_s": statistics.median(engine),
+            "median_cpu_s": statistics.median(cpu),
+            "triangles": len(part.mesh()[1]), "sweeps_cut": report.sweeps,
+            "families": [f.normal.tolist() for f in part.reliefs[0].families]
+            if part.reliefs else [], "small": small,
+            "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
+
+
 SCENARIOS = {"a": scenario_a, "b": scenario_b, "c": scenario_c, "d": scenario_d}
 #: Sweeps timed by the naive engine at the start, and on the final part (a, b only).
 NAIVE_SWEEPS = {"a": (200, 10), "b": (20, 3)}
@@ -238,7 +323,7 @@ def run_child(name: str, repeat: int, with_naive: bool, method: str) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenarios", default="abcde")
+    parser.add_argument("--scenarios", default="abcdef")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-naive", action="store_true")
     parser.add_argument("--child", help=argparse.SUPPRESS)
@@ -247,6 +332,9 @@ def main() -> None:
     if args.child == "e":
         print(json.dumps(run_end_to_end(args.repeat)))
         return
+    if args.child == "f":
+        print(json.dumps(run_slanted(args.repeat)))
+        return
     if args.child:
         print(json.dumps(run_child(args.child, args.repeat, not args.no_naive, args.method)))
         return
@@ -254,6 +342,9 @@ def main() -> None:
     for name in args.scenarios:
         if name == "e":
             run_end_to_end_child(args)
+            continue
+        if name == "f":
+            run_slanted_child(args)
             continue
         for method in ("boolean", "auto") if name in "abd" else ("auto",):
             run_one(name, method, args, boolean_triangles)
@@ -271,6 +362,23 @@ def run_end_to_end_child(args) -> None:
           f"{statistics.median(f['ratios']):.2f}x (runs "
           f"{', '.join(f'{r:.2f}' for r in f['ratios'])}); peak RSS "
           f"{f['peak_rss_mb']:.0f} MB", flush=True)
+
+
+def run_slanted_child(args) -> None:
+    """Run case f in a child process and print its line."""
+    command = [sys.executable, __file__, "--child", "f", "--repeat", str(args.repeat)]
+    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+    f = json.loads(out.strip().splitlines()[-1])
+    (b_s, b_tri), (r_s, r_tri) = f["small"]["boolean"], f["small"]["relief"]
+    print(f"(f, slanted pyramids cut end to end, {f['method']}) median {f['median_s']:.3f} s "
+          f"over {len(f['times_s'])} runs (runs {', '.join(f'{t:.3f}' for t in f['times_s'])}; "
+          f"engine median {f['median_engine_s']:.3f} s); {f['sweeps_cut']} sweeps cut -> "
+          f"{f['triangles']} triangles: {f['triangles'] / f['median_s']:,.0f} triangles/s "
+          f"(cpu median {f['median_cpu_s']:.3f} s: "
+          f"{f['triangles'] / f['median_cpu_s']:,.0f} per cpu second); "
+          f"groove normals {[[round(c, 6) for c in n] for n in f['families']]}; "
+          f"100 x 100 of the same slants: boolean {b_s:.2f} s ({b_tri} triangles), relief "
+          f"{r_s:.3f} s ({r_tri} triangles); peak RSS {f['peak_rss_mb']:.0f} MB", flush=True)
 
 
 def run_one(name: str, method: str, args, boolean_triangles: dict) -> None:

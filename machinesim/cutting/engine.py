@@ -7,9 +7,10 @@ sets and mis-builds hulls of coplanar rings). For a move at fixed orientation th
 exact volume swept by the tool; a move that rotates must arrive already split into sub-steps
 whose chord error is within tolerance (`rotary_substeps`).
 
-Straight grooves right across a block are first offered to `machinesim.cutting.relief`,
-which meshes their height field exactly without any boolean; everything else is subtracted
-here. Speed comes from never touching the part mesh once per sweep:
+Straight grooves right across a block, in at most two directions in XY (along the block's
+axes or slanted), are first offered to `machinesim.cutting.relief`, which meshes their height
+field exactly without any boolean; everything else is subtracted here. Speed comes from
+never touching the part mesh once per sweep:
 
 1. Tool points for all poses are transformed at once (numpy).
 2. Each sweep is clipped to the half-space a hair above the top of the stock
@@ -105,8 +106,9 @@ class EngineReport:
     n_cells : int
         Cells (ROI windows times tiles) the region was cut in; 1 per window by relief.
     method : str
-        "relief" when the cut was meshed as a height field (straight grooves across a block,
-        `machinesim.cutting.relief`), "boolean" when the sweeps were subtracted.
+        "relief" when the cut was meshed as a height field (straight grooves across a block
+        in at most two XY directions, `machinesim.cutting.relief`), "boolean" when the
+        sweeps were subtracted.
     elapsed_s : float
         Wall time of the call, s.
     swept_volume : float
@@ -295,9 +297,10 @@ def remove(
         splitting stops paying, see `SPLIT_GAIN`); a huge value disables tiling.
     method : {"auto", "boolean"}
         "auto" meshes the cut as a height field when every sweep that reaches the stock is
-        a straight groove along X or Y right across a block (or a part cut that way before),
-        `machinesim.cutting.relief`, and subtracts sweeps otherwise; "boolean" always
-        subtracts. Both are exact; the height field is 10-20 times faster on groove patterns.
+        a straight level groove right across a block (or a part cut that way before), in at
+        most two directions in XY, `machinesim.cutting.relief`, and subtracts sweeps
+        otherwise; "boolean" always subtracts. Both are exact; the height field is 10-100
+        times faster on groove patterns.
 
     Returns
     -------
