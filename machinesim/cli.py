@@ -92,6 +92,9 @@ def _parser() -> argparse.ArgumentParser:
                           "default: refuse the program and write nothing")
     cut.add_argument("--quiet", action="store_true", help="no progress bar")
     add_view_parser(sub)
+    from machinesim.campaign.cli import add_campaign_parser
+
+    add_campaign_parser(sub)
     return parser
 
 
@@ -108,6 +111,10 @@ def main(argv: list[str] | None = None) -> int:
             from machinesim.viewer.cli import run_view
 
             return run_view(args)
+        if args.command == "campaign":
+            from machinesim.campaign.cli import run_campaign
+
+            return run_campaign(args)
         return _cut(args)
     except MachineSimError as exc:
         return _fail(f"error: {exc}", EXIT_INPUT)

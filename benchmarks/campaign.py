@@ -1,0 +1,78 @@
+"""Campaign throughput: trials/s with 1 and 2 Dask workers, and the scheduler's per-trial cost.
+
+Run: ``.venv/bin/python benchmarks/campaign.py [--trials 12]`` (about 1 min on 2 free cores).
+
+The trial is probing only: paper 002's three reference spheres probed at C = 0 and 180 deg
+and the setting identified (`machinesim campaign workpiece_setting --identify-only`), the
+robot's landing drawn with 30 um repeatability. Each worker count gets its own LocalCluster
+(processes, one thread each), started and warmed up (one trial per worker, which loads the
+machine) before the clock starts; the figure is the wall time of ``trials`` trials through
+``machinesim.campaign.runner``'s own path (client.map, as_completed, one file written per
+trial). The goal on a 2-core machine: 2 workers >= 1.7 x one worker.
+
+The scheduler's per-trial overhead is timed with an empty task (a function returning its
+argument) mapped over 500 keys on the 2-worker cluster: the round trip per task through
+client.map and as_completed, which every trial pays on top of its own work.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import tempfile
+import time
+
+from distributed import Client, LocalCluster, as_completed
+
+from machinesim.campaign import CampaignSpec, parse_vary, run_trial
+from machinesim.campaign.results import CampaignFolder
+
+SPEC = CampaignSpec("workpiece_setting", 10_000, (parse_vary("robot.repeatability=30um"),),
+                    seed=1, identify_only=True)
+
+
+def _identity(x):
+    return x
+
+
+def trials_per_second(workers: int, trials: int) -> tuple[float, float]:
+    """(trials/s, per-task scheduler overhead in s) on a fresh LocalCluster of ``workers``."""
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                           dashboard_address=None, silence_logs=logging.CRITICAL)
+    with cluster, Client(cluster) as client, tempfile.TemporaryDirectory() as folder:
+        warm = client.map(run_trial, [SPEC] * workers, range(10_000 - workers, 10_000),
+                          pure=False)
+        client.gather(warm)
+        store = CampaignFolder(folder, SPEC.describe())
+        began = time.perf_counter()
+        futures = client.map(run_trial, [SPEC] * trials, range(trials), pure=False)
+        for future in as_completed(futures):
+            store.write_trial(future.result())
+        rate = trials / (time.perf_counter() - began)
+        began = time.perf_counter()
+        empty = client.map(_identity, range(500), pure=False)
+        for future in as_completed(empty):
+            future.result()
+        overhead = (time.perf_counter() - began) / 500
+    return rate, overhead
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=12, help="trials per worker count")
+    args = parser.parse_args()
+    began = time.perf_counter()
+    single = run_trial(SPEC, 9_000)["elapsed_s"]
+    print(f"one probing-only trial in this process: {single:.2f} s")
+    rates = {}
+    for workers in (1, 2):
+        rates[workers], overhead = trials_per_second(workers, args.trials)
+        print(f"{workers} worker(s): {rates[workers]:.3f} trials/s over {args.trials} trials; "
+              f"scheduler overhead {overhead * 1e3:.2f} ms per task (empty tasks)")
+    speedup = rates[2] / rates[1]
+    print(f"speed-up 2 workers / 1 worker: {speedup:.2f} x (goal >= 1.7 x on 2 free cores)")
+    print(f"total {time.perf_counter() - began:.0f} s")
+
+
+if __name__ == "__main__":
+    main()

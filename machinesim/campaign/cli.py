@@ -1,0 +1,130 @@
+"""``machinesim campaign``: the command-line front of `machinesim.campaign.run`.
+
+`add_campaign_parser` registers the subcommand on ``machinesim``'s parser; `run_campaign`
+runs it. ``python -m machinesim.campaign.cli ...`` runs it alone.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
+from machinesim.campaign.trials import PROCEDURES
+from machinesim.exceptions import InputError, MachineSimError
+
+__all__ = ["add_campaign_parser", "main", "run_campaign"]
+
+EXAMPLES = """\
+DIST (every number with its unit: m mm um nm rad mrad urad deg arcsec; 0 needs none):
+  normal:MEAN,STD       e.g. normal:0,5um
+  uniform:LOW,HIGH      e.g. uniform:-10um,10um
+  fixed:VALUE or VALUE  e.g. 30um
+PARAM: an error parameter of the procedure's machine (tool.y, workpiece.alpha,
+  location.C.EX0C, ...) or a lab parameter: {lab}
+
+procedures:
+{procedures}
+
+examples:
+  # paper 000: e_ys and r against the microscope's noise, 20 trials on 2 local workers
+  machinesim campaign tool_rotation_arm --trials 20 --workers 2 \\
+      --vary microscope.sigma=uniform:5nm,100nm --out reports/campaign_arm_noise
+  # paper 002: the crown against the loading robot's repeatability (10 to 100 um)
+  machinesim campaign workpiece_setting --quick --trials 10 \\
+      --vary robot.repeatability=uniform:10um,100um --out reports/campaign_crown
+  # probing only (no cutting after): the identification's errors and z-scores
+  machinesim campaign workpiece_setting --identify-only --trials 50 \\
+      --vary robot.repeatability=100um --out reports/campaign_probing
+  # on a running Dask cluster
+  machinesim campaign tool_rotation_arm --trials 1000 --scheduler tcp://10.0.0.5:8786 \\
+      --vary tool.y=normal:-178um,20um --out reports/campaign_big
+
+Run again with the same --out to finish an interrupted campaign (only the missing trials
+run) or to extend it to more trials; DIR gets campaign.nc (xarray, netCDF), summary.json,
+summary.md, hist_<figure>.png, z_scores.png and trials/ (one file per trial).
+"""
+
+
+def _epilog() -> str:
+    procedures = "\n".join(f"  {name}: {entry.about}" for name, entry in PROCEDURES.items())
+    return EXAMPLES.format(lab=", ".join(LAB_PARAMETERS), procedures=procedures)
+
+
+def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser.add_argument("procedure", help=f"one of {', '.join(PROCEDURES)}")
+    parser.add_argument("--trials", type=int, required=True, metavar="N",
+                        help="number of trials")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, metavar="K",
+                       help="local Dask worker processes (default: the cores; 0: no Dask, "
+                       "in this process)")
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="run on this Dask scheduler (e.g. tcp://host:8786)")
+    parser.add_argument("--vary", action="append", default=[], metavar="PARAM=DIST",
+                        help="a parameter's distribution over the trials (repeatable)")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="the campaign's seed: trial i is SeedSequence(seed).spawn(N)[i]")
+    parser.add_argument("--noise", choices=("on", "off"), default="on",
+                        help="instrument noise (default on)")
+    parser.add_argument("--identify-only", action="store_true",
+                        help="measure and identify only (probing-only trial): no "
+                        "compensation, no figures")
+    parser.add_argument("--quick", action="store_true",
+                        help="the crown's smaller measuring windows (workpiece_setting)")
+    parser.add_argument("--out", type=Path, required=True, metavar="DIR",
+                        help="campaign folder (resumed when it holds the same campaign)")
+    parser.add_argument("--quiet", action="store_true", help="no progress line")
+    return parser
+
+
+def add_campaign_parser(sub) -> argparse.ArgumentParser:
+    """Register ``campaign`` on a subparsers object of ``machinesim``'s parser."""
+    return _arguments(sub.add_parser(
+        "campaign", help="run a procedure as N seeded trials (Dask), with statistics",
+        description="Run a procedure over N trials, each with its own drawn errors and "
+        "noise (SeedSequence(seed).spawn(N)[i]), locally or on a Dask cluster; write the "
+        "trials as an xarray Dataset with distributions, coverage intervals, z-scores and "
+        "sensitivities.", epilog=_epilog(),
+        formatter_class=argparse.RawDescriptionHelpFormatter))
+
+
+def run_campaign(args) -> int:
+    """Run the parsed ``campaign`` command; print where the report is. MachineSimError
+    propagates to the caller (``machinesim``'s main prints it as one line)."""
+    from machinesim.campaign.runner import run
+
+    vary = [parse_vary(text) for text in args.vary]
+    if args.trials < 1:
+        raise InputError(f"--trials {args.trials}; expected a whole number >= 1",
+                         key="--trials")
+    dataset = run(args.procedure, args.trials, vary=vary, seed=args.seed, out=args.out,
+                  workers=args.workers, scheduler=args.scheduler, noise=args.noise == "on",
+                  identify_only=args.identify_only, quick=args.quick,
+                  progress=not args.quiet)
+    failed = int(dataset["failed"].sum())
+    print(f"campaign: {dataset.sizes['trial']} trials ({failed} failed) in {args.out}: "
+          "campaign.nc, summary.md, summary.json")
+    return 0
+
+
+def main(argv=None) -> int:
+    """``python -m machinesim.campaign.cli``: the subcommand on its own."""
+    parser = _arguments(argparse.ArgumentParser(
+        prog="machinesim campaign", epilog=_epilog(),
+        formatter_class=argparse.RawDescriptionHelpFormatter))
+    args = parser.parse_args(argv)
+    try:
+        return run_campaign(args)
+    except MachineSimError as error:
+        print(f"machinesim campaign: error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("machinesim campaign: interrupted; the finished trials are kept in "
+              f"{args.out}/trials (run again to finish)", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

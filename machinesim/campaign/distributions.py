@@ -1,0 +1,177 @@
+"""What a campaign varies: ``PARAM=DIST`` texts, parsed into distributions with units.
+
+A distribution is written ``KIND:ARGS`` with every number carrying its unit
+(`machinesim.units.FACTORS`: ``m mm um nm rad mrad urad deg arcsec``):
+
+- ``normal:MEAN,STD``, e.g. ``normal:0,5um`` (a zero needs no unit);
+- ``uniform:LOW,HIGH``, e.g. ``uniform:-10um,10um``;
+- ``fixed:VALUE`` or just ``VALUE``, e.g. ``30um``.
+
+A parameter is an error parameter as `Machine.parameter_names` spells it (``tool.y``,
+``workpiece.alpha``, ``location.C.EX0C``) or a lab parameter (`LAB_PARAMETERS`): the loading
+robot's repeatability, from which the workpiece setting is drawn
+(`machinesim.loading.RobotLoader`), and an instrument's noise ``sigma``.
+
+>>> name, dist = parse_vary("tool.y=normal:-178um,5um")
+>>> name, dist.kind, round(dist.a * 1e6, 6), round(dist.b * 1e6, 6)
+('tool.y', 'normal', -178.0, 5.0)
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.units import ANGLE, FACTORS, LENGTH
+
+__all__ = ["Distribution", "INSTRUMENTS", "LAB_PARAMETERS", "parameter_kind",
+           "parse_distribution", "parse_vary"]
+
+#: Instruments of a `Lab` whose noise ``sigma`` a campaign can set (``microscope.sigma``).
+INSTRUMENTS = ("microscope", "white_light_interferometer", "touch_probe",
+               "laser_interferometer", "r_test")
+#: Parameters of the lab rather than of the machine's errors, with their kind.
+LAB_PARAMETERS = {"robot.repeatability": "length",
+                  **{f"{name}.sigma": "length" for name in INSTRUMENTS}}
+#: Distribution kinds and how many numbers each takes.
+KINDS = {"normal": 2, "uniform": 2, "fixed": 1}
+
+_NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-z]*)\s*")
+
+
+def parameter_kind(name: str) -> str | None:
+    """``"length"``, ``"angle"`` or None (no fixed unit: a component table's coefficient)
+    of a parameter name."""
+    if name in LAB_PARAMETERS:
+        return LAB_PARAMETERS[name]
+    head, _, tail = name.partition(".")
+    if head in ("tool", "workpiece"):
+        if tail in ("x", "y", "z"):
+            return "length"
+        return "angle" if tail in ("rx", "ry", "rz", "alpha", "beta", "gamma") else None
+    if head == "location":
+        symbol = tail.partition(".")[2]
+        if len(symbol) >= 2 and symbol[0] == "E":
+            return "length" if symbol[1] in "XYZ" else "angle"
+    return None
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """One parameter's distribution over the trials, SI.
+
+    Attributes
+    ----------
+    kind : str
+        ``"normal"`` (a = mean, b = standard deviation), ``"uniform"`` (a = low, b = high)
+        or ``"fixed"`` (a = the value; b unused, 0).
+    a, b : float
+        SI (m or rad).
+    text : str
+        As the user wrote it (for messages and the dataset's attributes).
+    """
+
+    kind: str
+    a: float
+    b: float = 0.0
+    text: str = ""
+
+    def draw(self, rng: np.random.Generator) -> float:
+        """One value. A fixed value draws nothing, so fixing one parameter changes no other
+        parameter's draw (each has its own stream anyway: `machinesim.campaign.trials`)."""
+        if self.kind == "normal":
+            return float(self.a + self.b * rng.standard_normal())
+        if self.kind == "uniform":
+            return float(rng.uniform(self.a, self.b))
+        return float(self.a)
+
+    @property
+    def varies(self) -> bool:
+        """True unless fixed."""
+        return self.kind != "fixed"
+
+
+def _number(text: str, where: str) -> tuple[float, str | None]:
+    match = _NUMBER.fullmatch(text)
+    if match is None:
+        raise InputError(f"{text!r} is not a number with a unit; expected e.g. 5um, -0.2deg, "
+                         "0", key=where)
+    value, unit = float(match.group(1)), match.group(2) or None
+    if unit is not None and unit not in FACTORS:
+        raise InputError(f"unit {unit!r} in {text!r}; expected one of "
+                         f"{' '.join(FACTORS)}", key=where)
+    if not math.isfinite(value):
+        raise InputError(f"{text!r} is not a finite number", key=where)
+    if unit is None and value != 0.0:
+        raise InputError(f"{text!r} has no unit; expected one of {' '.join(FACTORS)} "
+                         "(e.g. 5um): only 0 may go without", key=where)
+    return value * (FACTORS[unit] if unit else 1.0), unit
+
+
+def parse_distribution(text: str, name: str = "") -> Distribution:
+    """``text`` (``normal:0,5um``, ``uniform:-10um,10um``, ``fixed:30um``, ``30um``) as a
+    `Distribution` in SI; ``name``, when given, checks the units' kind against the
+    parameter's (`parameter_kind`).
+
+    Raises
+    ------
+    InputError
+        Naming the text and what was expected: an unknown kind, a wrong count of numbers, a
+        missing or unknown unit, lengths mixed with angles, a std <= 0, low >= high.
+    """
+    where = f"--vary {name}={text}" if name else text
+    if not isinstance(text, str) or not text.strip():
+        raise InputError("empty distribution; expected KIND:ARGS, e.g. normal:0,5um",
+                         key=where)
+    kind, colon, args = text.strip().partition(":")
+    if not colon:
+        kind, args = "fixed", text.strip()
+    if kind not in KINDS:
+        raise InputError(f"distribution {kind!r}; expected one of {', '.join(KINDS)} "
+                         "(normal:MEAN,STD, uniform:LOW,HIGH, fixed:VALUE)", key=where)
+    parts = args.split(",")
+    if len(parts) != KINDS[kind]:
+        raise InputError(f"{kind} takes {KINDS[kind]} number(s), got {len(parts)} in "
+                         f"{args!r}", key=where)
+    values, units = zip(*(_number(p, where) for p in parts), strict=True)
+    kinds = {("length" if u in LENGTH else "angle") for u in units if u is not None}
+    if len(kinds) > 1:
+        raise InputError(f"{text!r} mixes lengths and angles", key=where)
+    wanted = parameter_kind(name) if name else None
+    if wanted is not None and kinds and kinds != {wanted}:
+        raise InputError(f"{name} is {'a length' if wanted == 'length' else 'an angle'}; "
+                         f"{text!r} gives {'an angle' if wanted == 'length' else 'a length'} "
+                         f"(units: {' '.join(LENGTH if wanted == 'length' else ANGLE)})",
+                         key=where)
+    a, b = (values[0], values[1]) if len(values) == 2 else (values[0], 0.0)
+    if kind == "normal" and not b > 0.0:
+        raise InputError(f"normal std {parts[1].strip()!r}; expected > 0", key=where)
+    if kind == "uniform" and not b > a:
+        raise InputError(f"uniform low {parts[0].strip()!r} >= high {parts[1].strip()!r}; "
+                         "expected LOW < HIGH", key=where)
+    if name in LAB_PARAMETERS and kind == "fixed" and a < 0.0:
+        raise InputError(f"{name} {text!r}; expected >= 0", key=where)
+    if name in LAB_PARAMETERS and kind != "fixed" and (a < 0.0 if kind == "uniform"
+                                                       else a - 3.0 * b < 0.0):
+        raise InputError(f"{name} {text!r} reaches below zero; expected a non-negative "
+                         "range (uniform with LOW >= 0, or a normal within 3 std of zero)",
+                         key=where)
+    return Distribution(kind, float(a), float(b), text.strip())
+
+
+def parse_vary(text: str) -> tuple[str, Distribution]:
+    """``PARAM=DIST`` as ``(name, Distribution)``; the name is checked for its form here and
+    against the machine when the campaign is built."""
+    if not isinstance(text, str) or "=" not in text:
+        raise InputError(f"--vary {text!r}; expected PARAM=DIST, e.g. "
+                         "tool.y=normal:-178um,5um", key="--vary")
+    name, _, dist = text.partition("=")
+    name = name.strip()
+    if not name:
+        raise InputError(f"--vary {text!r} names no parameter; expected PARAM=DIST",
+                         key="--vary")
+    return name, parse_distribution(dist, name)

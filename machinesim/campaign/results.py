@@ -1,0 +1,207 @@
+"""A campaign's files: one small file per finished trial, then the whole as an xarray Dataset.
+
+``DIR/campaign.json`` holds the spec (what the campaign runs); ``DIR/trials/trial_NNNNNN.json``
+one trial's record (`machinesim.campaign.trials.run_trial`), each written atomically as the
+trial completes (`machinesim._io.write_atomic`). Run again on the same DIR, a campaign reads
+the trials already there and computes only the missing ones; a DIR holding another campaign
+(another procedure, seed or distribution) is refused, never mixed.
+
+``DIR/campaign.nc`` (netCDF 3, xarray's scipy engine) is the Dataset `assemble` builds, written
+whole or not at all:
+
+============================  ======================  ==========================================
+variable                      dims                    what
+============================  ======================  ==========================================
+``drawn``                     (trial, varied)         the varied parameters' values, SI
+``injected``                  (trial, parameter)      the lab's truth (``lab.reveal()``), SI
+``identified``                (trial, parameter)      identified value, SI
+``identified_std``            (trial, parameter)      the std the identification reported
+``before``, ``after``         (trial, figure)         each figure before / after compensation
+``elapsed_s``                 (trial)                 wall time of the trial, s
+``failed``                    (trial)                 1 where the trial ended in an error
+``figure_unit``               (figure)                unit of ``before``/``after`` (coordinate)
+============================  ======================  ==========================================
+
+Attributes: the campaign's ``seed``, ``procedure``, ``trials``, ``vary`` (JSON), ``noise``,
+``identify_only``, ``versions`` (JSON: machinesim, numpy, xarray, dask, distributed, python),
+``errors`` (JSON: trial -> message of each failed trial).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import platform
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+
+from machinesim._io import check_writable, json_text, read_json, write_atomic
+from machinesim.exceptions import FileError, InputError
+
+__all__ = ["CampaignFolder", "assemble", "versions"]
+
+
+def versions() -> dict:
+    """Versions of the packages a campaign's numbers depend on."""
+    out = {"python": platform.python_version()}
+    for name in ("machinesim", "numpy", "scipy", "xarray", "dask", "distributed"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "not installed"
+    return out
+
+
+def _clean(value):
+    """NaN -> None, recursively (JSON has no NaN)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_clean(v) for v in value]
+    return value
+
+
+def _nan(value):
+    if value is None:
+        return math.nan
+    if isinstance(value, dict):
+        return {k: _nan(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [v if isinstance(v, str) else _nan(v) for v in value]
+    return value
+
+
+class CampaignFolder:
+    """The folder of one campaign (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+        DIR; created when missing.
+    spec : dict
+        `CampaignSpec.describe`: written to campaign.json, or checked against it.
+    """
+
+    def __init__(self, path, spec: dict) -> None:
+        self.path = Path(path)
+        self.trials_path = self.path / "trials"
+        if self.path.exists() and not self.path.is_dir():
+            raise FileError("is a file; expected the campaign folder", source=str(path))
+        try:
+            self.trials_path.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise FileError(f"cannot make the campaign folder: {exc.strerror or exc}",
+                            source=str(path)) from None
+        check_writable(self.trials_path / "trial_000000.json", "campaign trial")
+        stored = self.path / "campaign.json"
+        if stored.exists():
+            old = read_json(stored, "campaign spec")
+            if old != spec:
+                diff = ", ".join(f"{k}: {old.get(k)!r} there, {spec.get(k)!r} now"
+                                 for k in sorted(set(old) | set(spec))
+                                 if old.get(k) != spec.get(k))
+                raise InputError(f"holds another campaign ({diff}); give another --out or "
+                                 "empty it", source=str(self.path))
+        else:
+            write_atomic(stored, json_text(spec, "campaign spec"))
+        self.spec = spec
+
+    def trial_file(self, i: int) -> Path:
+        return self.trials_path / f"trial_{i:06d}.json"
+
+    def done(self, trials: int) -> list[int]:
+        """The trials below ``trials`` whose file is there."""
+        return [i for i in range(trials) if self.trial_file(i).exists()]
+
+    def write_trial(self, record: dict) -> None:
+        write_atomic(self.trial_file(record["trial"]), json_text(_clean(record), "trial"))
+
+    def read_trial(self, i: int) -> dict:
+        raw = read_json(self.trial_file(i), "campaign trial")
+        if not isinstance(raw, dict) or raw.get("trial") != i:
+            raise InputError(f"expected the record of trial {i}", source=str(self.trial_file(i)))
+        return {**_nan(raw), "error": raw.get("error")}
+
+    def write_dataset(self, dataset, name: str = "campaign.nc") -> Path:
+        path = self.path / name
+        write_atomic(path, bytes(dataset.to_netcdf()))
+        return path
+
+
+def _names(records, key: str) -> list[str]:
+    names: dict[str, None] = {}
+    for record in records:
+        names.update(dict.fromkeys(record[key]))
+    return list(names)
+
+
+def assemble(records: list[dict], spec: dict, trials: int):
+    """The records of trials 0 .. trials-1 as one `xarray.Dataset` (module docstring)."""
+    import xarray as xr
+
+    records = sorted(records, key=lambda r: r["trial"])
+    if [r["trial"] for r in records] != list(range(trials)):
+        raise InputError(f"expected the records of trials 0 .. {trials - 1}, got "
+                         f"{len(records)}", key="records")
+    varied = list(spec["vary"])
+    parameters = _names(records, "identified")
+    figures = _names(records, "figures")
+    units = {}
+    for record in records:
+        for name, (unit, _, _) in record["figures"].items():
+            units.setdefault(name, unit)
+    n = len(records)
+
+    def table(names, value):
+        out = np.full((n, len(names)), np.nan)
+        for t, record in enumerate(records):
+            for k, name in enumerate(names):
+                out[t, k] = value(record, name)
+        return out
+
+    def get(mapping, name, index=None):
+        v = mapping.get(name)
+        if v is None:
+            return math.nan
+        return v if index is None else v[index]
+
+    data = {
+        "drawn": (("trial", "varied"), table(varied, lambda r, k: get(r["drawn"], k))),
+        "injected": (("trial", "parameter"),
+                     table(parameters, lambda r, k: get(r["injected"], k))),
+        "identified": (("trial", "parameter"),
+                       table(parameters, lambda r, k: get(r["identified"], k, 0))),
+        "identified_std": (("trial", "parameter"),
+                           table(parameters, lambda r, k: get(r["identified"], k, 1))),
+        "before": (("trial", "figure"), table(figures, lambda r, k: get(r["figures"], k, 1))),
+        "after": (("trial", "figure"), table(figures, lambda r, k: get(r["figures"], k, 2))),
+        "elapsed_s": (("trial",), np.array([r["elapsed_s"] for r in records], dtype=float)),
+        "failed": (("trial",), np.array([r["error"] is not None for r in records],
+                                        dtype=np.int8)),
+    }
+    errors = {str(r["trial"]): r["error"] for r in records if r["error"] is not None}
+    coords = {"trial": np.arange(n), "varied": np.array(varied, dtype=object),
+              "parameter": np.array(parameters, dtype=object),
+              "figure": np.array(figures, dtype=object),
+              "figure_unit": ("figure", np.array([units[f] for f in figures], dtype=object))}
+    # netCDF 3 has no zero-length fixed dimension: a dimension with nothing on it (no
+    # figures in an identification-only campaign, nothing varied) is left out
+    for dim, names in (("varied", ("drawn",)), ("parameter", ("injected", "identified",
+                                                              "identified_std")),
+                       ("figure", ("before", "after"))):
+        if not len(coords[dim]):
+            for name in names:
+                del data[name]
+            del coords[dim]
+            if dim == "figure":
+                del coords["figure_unit"]
+    attrs = {"procedure": spec["procedure"], "seed": int(spec["seed"]), "trials": int(trials),
+             "noise": int(bool(spec["noise"])), "identify_only": int(bool(spec["identify_only"])),
+             "vary": json.dumps(spec["vary"]), "versions": json.dumps(versions()),
+             "errors": json.dumps(errors),
+             "seeding": "trial i: numpy SeedSequence(seed).spawn(trials)[i]"}
+    return xr.Dataset(data, coords=coords, attrs=attrs)

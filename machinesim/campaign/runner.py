@@ -1,0 +1,172 @@
+"""Run a campaign: its missing trials on Dask (or in this process), then its Dataset and report.
+
+Locally by default: a `dask.distributed.LocalCluster` of ``workers`` processes (default: the
+machine's cores), one thread each (the trials are CPU-bound Python). Given a
+`distributed.Client` or a scheduler address, the trials run on that cluster instead; the
+client writes every finished trial, so the workers need no shared file system (they need
+machinesim installed). ``workers=0`` runs the trials here, one after the other, without Dask.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+import time
+import warnings
+from collections.abc import Iterable
+
+from machinesim.campaign.distributions import Distribution, parse_vary
+from machinesim.campaign.results import CampaignFolder, assemble
+from machinesim.campaign.summary import write_report
+from machinesim.campaign.trials import CampaignSpec, run_trial
+from machinesim.exceptions import InputError
+
+__all__ = ["run"]
+
+
+class _Progress:
+    """One line on stderr, rewritten: done / total, rate, time left."""
+
+    def __init__(self, total: int, resumed: int, stream) -> None:
+        self.total, self.resumed, self.stream = total, resumed, stream
+        self.done, self.failed, self.began = resumed, 0, time.perf_counter()
+
+    def step(self, record: dict) -> None:
+        self.done += 1
+        self.failed += record["error"] is not None
+        if self.stream is None:
+            return
+        new = self.done - self.resumed
+        elapsed = time.perf_counter() - self.began
+        rate = new / elapsed if elapsed > 0 else 0.0
+        left = (self.total - self.done) / rate if rate > 0 else float("nan")
+        self.stream.write(f"\rcampaign: {self.done}/{self.total} trials ({self.resumed} "
+                          f"resumed, {self.failed} failed), {rate:.2f} trials/s, "
+                          f"{left:.0f} s left   ")
+        self.stream.flush()
+
+    def end(self) -> None:
+        if self.stream is not None:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _vary(vary) -> tuple[tuple[str, Distribution], ...]:
+    if isinstance(vary, dict):
+        vary = list(vary.items())
+    out = []
+    for item in vary:
+        out.append(parse_vary(item) if isinstance(item, str) else tuple(item))
+    return tuple(out)
+
+
+def _client(workers, scheduler, client):
+    """(client, cluster to close or None)."""
+    if client is not None:
+        return client, None
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            return Client(scheduler, timeout="20s"), None
+        except (OSError, TimeoutError, ValueError) as error:
+            raise InputError(f"cannot reach the Dask scheduler {scheduler!r} ({error}); "
+                             "expected the address of a running one, e.g. tcp://host:8786",
+                             key="--scheduler") from None
+    count = workers if workers is not None else (os.cpu_count() or 1)
+    with warnings.catch_warnings():
+        # the scheduler's HTTP server (health checks; the dashboard is off) moves to a free
+        # port when 8787 is taken, by another campaign say: nothing for the user to act on
+        warnings.filterwarnings("ignore", message="Port .* is already in use")
+        cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+    return Client(cluster), cluster
+
+
+def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder, progress,
+             workers, scheduler, client) -> None:
+    if not missing:
+        return
+    if workers == 0 and scheduler is None and client is None:
+        for i in missing:
+            record = run_trial(spec, i)
+            folder.write_trial(record)
+            progress.step(record)
+        return
+    from distributed import as_completed
+
+    client, cluster = _client(workers, scheduler, client)
+    owned = cluster is not None or scheduler is not None
+    try:
+        futures = client.map(run_trial, [spec] * len(missing), missing, pure=False)
+        for future in as_completed(futures):
+            record = future.result()
+            folder.write_trial(record)
+            progress.step(record)
+    finally:
+        if owned:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+
+
+def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
+        workers: int | None = None, scheduler: str | None = None, client=None,
+        noise: bool = True, identify_only: bool = False, quick: bool = False,
+        progress: bool = True, report: bool = True):
+    """Run ``trials`` trials of ``procedure`` (those not already in ``out``) and assemble them.
+
+    Parameters
+    ----------
+    procedure : str
+        A key of `machinesim.campaign.PROCEDURES` (``"tool_rotation_arm"``, ...).
+    trials : int
+        N.
+    vary : iterable of ``"PARAM=DIST"`` or (name, Distribution); or a dict name -> Distribution
+        On top of the procedure's default errors (`machinesim.campaign.distributions`).
+    seed : int
+        The campaign's seed: trial i is ``SeedSequence(seed).spawn(trials)[i]``.
+    out : str or Path
+        The campaign folder (`machinesim.campaign.results`); trials already there are reused.
+    workers : int, optional
+        Local Dask worker processes (default: the cores); 0: run here without Dask.
+    scheduler : str, optional
+        Address of a Dask scheduler (``tcp://host:8786``) to run on instead.
+    client : distributed.Client, optional
+        A client to run on (left open).
+    noise, identify_only, quick : bool
+        `CampaignSpec`.
+    progress : bool
+        Show progress on stderr.
+    report : bool
+        Write summary.json, summary.md and the plots beside campaign.nc.
+
+    Returns
+    -------
+    xarray.Dataset
+        Also written to ``out/campaign.nc``.
+    """
+    given = sum(x is not None for x in (scheduler, client)) + (workers is not None)
+    if given > 1:
+        raise InputError("give one of workers, scheduler and client", key="workers")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 0):
+        raise InputError(f"--workers {workers!r}; expected a whole number >= 0 (0: no Dask)",
+                         key="--workers")
+    spec = CampaignSpec(procedure, trials, _vary(vary), seed=seed, noise=noise,
+                        identify_only=identify_only, quick=quick)
+    folder = CampaignFolder(out, spec.describe())
+    done = folder.done(spec.trials)
+    missing = sorted(set(range(spec.trials)) - set(done))
+    shown = _Progress(spec.trials, len(done), sys.stderr if progress else None)
+    try:
+        _execute(spec, missing, folder, shown, workers, scheduler, client)
+    finally:
+        shown.end()
+    records = [folder.read_trial(i) for i in range(spec.trials)]
+    dataset = assemble(records, spec.describe(), spec.trials)
+    folder.write_dataset(dataset)
+    if report:
+        write_report(dataset, folder.path)
+    return dataset

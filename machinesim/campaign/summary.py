@@ -1,0 +1,193 @@
+"""A campaign's report: summary.json, summary.md and the plots, from its Dataset.
+
+summary.json (every number under a key ending in its unit, as docs/reports.md asks):
+
+- ``procedure``, ``seed``, ``trials_count``, ``failed_count``, ``vary`` (name -> DIST text),
+  ``versions``;
+- ``figures``: per figure, its ``unit`` and ``before``/``after``: `statistics.describe`
+  (count, mean, std, min, max, ``shortest_95`` and ``symmetric_95`` coverage intervals) in
+  the figure's unit, and ``sensitivity``: varied parameter -> Spearman rank correlation with
+  the after value;
+- ``parameters``: per identified parameter, the identification error (identified - injected)
+  described in SI (``error_si``), its z-scores (`statistics.z_summary`) and ``sensitivity``:
+  varied parameter -> Spearman rank correlation with the error's magnitude;
+- ``coverage_interval``: which intervals are given (JCGM 101 7.7.1 and 7.7.2).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from machinesim._io import json_text, write_atomic
+from machinesim.campaign.statistics import describe, spearman, z_scores, z_summary
+
+__all__ = ["summarise", "write_report"]
+
+
+def _finite(value):
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    return value
+
+
+def _names(dataset, dim: str) -> list[str]:
+    """The coordinate ``dim`` as strings; empty when the dataset has no such dimension (an
+    identification-only campaign has no figures)."""
+    return [str(v) for v in dataset[dim].values] if dim in dataset.dims else []
+
+
+def summarise(dataset) -> dict:
+    """summary.json of a campaign Dataset (module docstring)."""
+    failed = dataset["failed"].values.astype(bool)
+    varied = _names(dataset, "varied")
+    figures = {}
+    for k, name in enumerate(_names(dataset, "figure")):
+        after = dataset["after"].values[:, k]
+        figures[str(name)] = {
+            "unit": str(dataset["figure_unit"].values[k]),
+            "before": describe(dataset["before"].values[:, k]),
+            "after": describe(after),
+            "sensitivity": {v: spearman(dataset["drawn"].values[:, j], after)
+                            for j, v in enumerate(varied)},
+        }
+    parameters = {}
+    for k, name in enumerate(_names(dataset, "parameter")):
+        found, truth = dataset["identified"].values[:, k], dataset["injected"].values[:, k]
+        z = z_scores(found, truth, dataset["identified_std"].values[:, k])
+        parameters[str(name)] = {
+            "error_si": describe(found - truth), "z": z_summary(z),
+            "sensitivity": {v: spearman(dataset["drawn"].values[:, j], np.abs(found - truth))
+                            for j, v in enumerate(varied)}}
+    return _finite({
+        "procedure": dataset.attrs["procedure"], "seed": int(dataset.attrs["seed"]),
+        "trials_count": int(dataset.sizes["trial"]), "failed_count": int(failed.sum()),
+        "vary": json.loads(dataset.attrs["vary"]),
+        "versions": json.loads(dataset.attrs["versions"]),
+        "coverage_interval": "95 %, JCGM 101:2008 7.7 from the sorted trials: shortest_95 "
+        "(7.7.2) and symmetric_95 (probabilistically symmetric, 7.7.1)",
+        "sensitivity": "Spearman rank correlation of each varied parameter with the figure "
+        "after compensation (figures) and with |identified - injected| (parameters)",
+        "figures": figures, "parameters": parameters,
+    })
+
+
+def _g(value, digits: int = 4) -> str:
+    return "n/a" if value is None else f"{value:.{digits}g}"
+
+
+def _interval(pair) -> str:
+    low, high = pair
+    return "n/a (too few trials)" if low is None else f"[{_g(low)}, {_g(high)}]"
+
+
+def _markdown(summary: dict) -> str:
+    lines = [f"# Campaign: {summary['procedure']}, {summary['trials_count']} trials "
+             f"(seed {summary['seed']}, {summary['failed_count']} failed)", ""]
+    if summary["vary"]:
+        lines += ["Varied: " + ", ".join(f"`{n}={d}`" for n, d in summary["vary"].items()), ""]
+    varied = list(summary["vary"])
+    if summary["figures"]:
+        lines += ["## Figures before and after compensation", "",
+                  "95 % coverage intervals from the sorted trials (JCGM 101 7.7.2, the "
+                  "shortest); sensitivity: Spearman rank correlation with the after value.",
+                  "", "| figure | unit | before mean | before std | after mean | after std | "
+                  "after 95 % (shortest) | " + " | ".join(f"rho {v}" for v in varied) + " |",
+                  "|---|---|---|---|---|---|---|" + "---|" * len(varied)]
+        for name, f in summary["figures"].items():
+            b, a = f["before"], f["after"]
+            lines.append(f"| {name} | {f['unit']} | {_g(b['mean'])} | {_g(b['std'])} | "
+                         f"{_g(a['mean'])} | {_g(a['std'])} | {_interval(a['shortest_95'])} | "
+                         + " | ".join(_g(f["sensitivity"][v], 3) for v in varied) + " |")
+        lines.append("")
+    if summary["parameters"]:
+        lines += ["## Identification: error and z-scores", "",
+                  "error = identified - injected (SI); z = error / reported std: honest "
+                  "uncertainty gives mean 0, std 1, 95 % within +-1.96; rho: Spearman rank "
+                  "correlation with |error|.", "",
+                  "| parameter | error mean | error std | error 95 % (symmetric) | z mean | "
+                  "z std | within +-1.96 | " + " | ".join(f"rho {v}" for v in varied) + " |",
+                  "|---|---|---|---|---|---|---|" + "---|" * len(varied)]
+        for name, p in summary["parameters"].items():
+            e, z = p["error_si"], p["z"]
+            lines.append(f"| {name} | {_g(e['mean'])} | {_g(e['std'])} | "
+                         f"{_interval(e['symmetric_95'])} | {_g(z['mean'], 3)} | "
+                         f"{_g(z['std'], 3)} | "
+                         f"{_g(z['within_1_96_ratio'], 3)} | "
+                         + " | ".join(_g(p["sensitivity"][v], 3) for v in varied) + " |")
+        lines.append("")
+    lines += ["Versions: " + ", ".join(f"{k} {v}" for k, v in summary["versions"].items()), ""]
+    return "\n".join(lines)
+
+
+def _plots(dataset, folder: Path) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    written = []
+
+    def save(fig, name):
+        import io
+
+        buffer = io.BytesIO()
+        fig.savefig(buffer, format="png", dpi=100)
+        plt.close(fig)
+        write_atomic(folder / name, buffer.getvalue())
+        written.append(name)
+
+    for k, name in enumerate(_names(dataset, "figure")):
+        unit = str(dataset["figure_unit"].values[k])
+        # side by side, each on its own scale: after is often 1000 x smaller than before
+        fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
+        for ax, which, colour in zip(axes, ("before", "after"), ("C0", "C1"), strict=True):
+            y = dataset[which].values[:, k]
+            y = y[np.isfinite(y)]
+            if y.size:
+                ax.hist(y, bins=max(5, min(40, y.size // 3)), color=colour)
+            else:
+                ax.text(0.5, 0.5, "not measured", ha="center", transform=ax.transAxes)
+            ax.set_xlabel(f"{name} {which} ({unit})")
+            ax.set_ylabel("trials")
+            ax.set_title(f"{which} compensation ({y.size} trials)")
+        fig.tight_layout()
+        save(fig, f"hist_{name}.png")
+    z_all = []
+    for k, name in enumerate(_names(dataset, "parameter")):
+        z = z_scores(dataset["identified"].values[:, k], dataset["injected"].values[:, k],
+                     dataset["identified_std"].values[:, k])
+        z_all.append((str(name), z[np.isfinite(z)]))
+    if any(z.size for _, z in z_all):
+        fig, ax = plt.subplots(figsize=(6, 4))
+        grid = np.linspace(-4, 4, 200)
+        ax.plot(grid, np.exp(-grid**2 / 2) / math.sqrt(2 * math.pi), "k-", label="N(0, 1)")
+        for name, z in z_all:
+            if z.size:
+                ax.hist(z, bins=max(5, min(30, z.size // 3)), density=True, alpha=0.4,
+                        label=name, histtype="stepfilled")
+        ax.set_xlabel("z = (identified - injected) / reported std")
+        ax.set_ylabel("density")
+        ax.set_title("Identification error against the reported std")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        save(fig, "z_scores.png")
+    return written
+
+
+def write_report(dataset, folder) -> dict:
+    """Write summary.json, summary.md and the plots into ``folder``; return the summary."""
+    folder = Path(folder)
+    summary = summarise(dataset)
+    summary["files"] = sorted(["campaign.nc", "summary.json", "summary.md",
+                               *_plots(dataset, folder)])
+    write_atomic(folder / "summary.md", _markdown(summary))
+    write_atomic(folder / "summary.json", json_text(summary, "campaign summary"))
+    return summary

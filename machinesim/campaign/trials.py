@@ -1,0 +1,317 @@
+"""One trial of a campaign: draw its errors and noise seed, run the procedure, keep the numbers.
+
+Trial ``i`` of a campaign with seed ``s`` lives entirely in the seed sequence
+``SeedSequence(s).spawn(N)[i]`` (equal to ``SeedSequence(s, spawn_key=(i,))``, whatever N):
+
+- each varied parameter draws from its own stream, ``stream(child, "campaign", name)``
+  (`machinesim.streams`), so adding or fixing another parameter changes nothing here;
+- the robot's landing (when ``robot.repeatability`` is set) from
+  ``stream(child, "campaign", "robot")``;
+- the lab gets ``child`` as its seed, so every instrument's noise stream is
+  ``stream(child, kind, label)``.
+
+Nothing depends on the process, the worker or the order in which trials run: a trial is the
+same with 1, 2 or 8 workers (the per-worker seeding mistake, where each worker seeds its own
+generator and a trial's draws depend on which worker took it, cannot happen: no generator
+lives outside a trial).
+
+`run_trial(spec, i)` is a plain function of picklable arguments, for Dask workers.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from machinesim.campaign.distributions import INSTRUMENTS, LAB_PARAMETERS, Distribution
+from machinesim.exceptions import InputError, MachineSimError
+from machinesim.experiment import Evaluation, Identified, run
+from machinesim.streams import stream
+from machinesim.units import M_PER_MM, M_PER_UM
+
+__all__ = ["PROCEDURES", "CampaignSpec", "IdentificationOnly", "ProcedureEntry", "run_trial",
+           "trial_seed"]
+
+
+# ------------------------------------------------------------------------------ procedures
+
+
+def _tool_rotation_arm(options):
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+
+    return ToolRotationArm()
+
+
+def _tool_rotation_arm_defaults(machine) -> dict:
+    from machinesim.identification.tool_rotation_arm import arm_radius
+
+    # paper 000: r = 120.555 mm, e_ys = -178 um (scenarios/tool_rotation_arm.py)
+    return {"tool.y": -178.0 * M_PER_UM, "tool.z": -(120.555 * M_PER_MM - arm_radius(machine))}
+
+
+def _workpiece(experiment: str):
+    def build(options):
+        from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
+
+        return RobotLoadedWorkpiece(experiment, quick=options.get("quick", False))
+    return build
+
+
+def _tool_setting_6axis(options):
+    from machinesim.procedures.tool_setting_6axis import ToolSetting6Axis
+
+    return ToolSetting6Axis()
+
+
+def _tool_setting_defaults(machine) -> dict:
+    # paper 001, Table 1's injected offsets (scenarios/tool_setting_6axis.py)
+    um = M_PER_UM
+    return {"tool.x": 245.02 * um, "tool.y": 340.06 * um, "tool.z": 150.0 * um,
+            "location.C.EX0C": 108.97 * um, "location.C.EY0C": 852.81 * um}
+
+
+@dataclass(frozen=True)
+class ProcedureEntry:
+    """A procedure a campaign can run: its machine, how to build it, its default errors
+    (the paper's, SI) and default lab parameters (`LAB_PARAMETERS`)."""
+
+    machine: str
+    build: Callable[[Mapping], Any]
+    defaults: Callable[[Any], dict] = field(default=lambda machine: {})
+    lab: Mapping[str, float] = field(default_factory=dict)
+    about: str = ""
+
+
+#: Procedures by campaign name (``machinesim campaign NAME``).
+PROCEDURES = {
+    "tool_rotation_arm": ProcedureEntry(
+        "planer_4axis", _tool_rotation_arm, _tool_rotation_arm_defaults,
+        about="paper 000: r and e_ys of a planer's tool-rotation arm (default errors: the "
+        "paper's r = 120.555 mm, e_ys = -178 um)"),
+    "workpiece_setting": ProcedureEntry(
+        "robonano_a0ib", _workpiece("crown"), lab={"robot.repeatability": 30.0 * M_PER_UM},
+        about="paper 002: a robot-loaded workpiece's setting and the C centre, the crown "
+        "before and after (default: the robot's landing, repeatability 30 um)"),
+    "workpiece_setting_grooves": ProcedureEntry(
+        "robonano_a0ib", _workpiece("grooves"), lab={"robot.repeatability": 30.0 * M_PER_UM},
+        about="paper 002, section 3.1: the same identification, the crossing grooves"),
+    "tool_setting_6axis": ProcedureEntry(
+        "robonano_ui", _tool_setting_6axis, _tool_setting_defaults,
+        about="paper 001: the tool edge's offset from the A, B, C centres (default errors: "
+        "Table 1's)"),
+}
+
+
+class IdentificationOnly:
+    """A procedure's measurement and identification alone (a probing-only trial): no
+    compensation, no test pieces after, so no figures; the identified values and their
+    errors are the trial's result."""
+
+    def __init__(self, procedure) -> None:
+        self.procedure = procedure
+        self.name = f"{procedure.name}/identification"
+        self.paper = procedure.paper
+
+    def measure(self, lab):
+        return self.procedure.measure(lab)
+
+    def identify(self, measurements) -> Identified:
+        return self.procedure.identify(measurements)
+
+    def compensate(self, identified: Identified) -> dict:
+        return {}
+
+    def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
+        return Evaluation(figures=())
+
+
+class _LabWithInstruments:
+    """The lab, its instruments built with the campaign's noise ``sigma`` (``options`` given
+    by the procedure still win). Everything else is the lab's own."""
+
+    def __init__(self, lab, sigmas: Mapping[str, float]) -> None:
+        self._lab = lab
+        for kind, sigma in sigmas.items():
+            setattr(self, kind, self._instrument(getattr(lab, kind), sigma))
+
+    @staticmethod
+    def _instrument(make, sigma):
+        def instrument(*args, **options):
+            options.setdefault("sigma", sigma)
+            return make(*args, **options)
+        return instrument
+
+    def __getattr__(self, name):
+        return getattr(self._lab, name)
+
+
+# ----------------------------------------------------------------------------------- spec
+
+
+@dataclass(frozen=True)
+class CampaignSpec:
+    """What a campaign runs: everything a trial needs, picklable, checked when built.
+
+    Parameters
+    ----------
+    procedure : str
+        A key of `PROCEDURES`.
+    trials : int
+        N, the number of trials (>= 1).
+    vary : tuple of (str, Distribution)
+        Parameters and their distributions, SI; on top of the procedure's defaults.
+    seed : int
+        The campaign's seed (non-negative).
+    noise : bool
+        Instrument noise on (default).
+    identify_only : bool
+        Run `IdentificationOnly` (a probing-only trial) instead of the whole procedure.
+    quick : bool
+        Passed to procedures that have it (the crown's smaller windows).
+    """
+
+    procedure: str
+    trials: int
+    vary: tuple[tuple[str, Distribution], ...] = ()
+    seed: int = 0
+    noise: bool = True
+    identify_only: bool = False
+    quick: bool = False
+
+    def __post_init__(self) -> None:
+        if self.procedure not in PROCEDURES:
+            raise InputError(f"procedure {self.procedure!r}; expected one of "
+                             f"{', '.join(PROCEDURES)}", key="procedure")
+        if isinstance(self.trials, bool) or not isinstance(self.trials, int | np.integer) \
+                or self.trials < 1:
+            raise InputError(f"--trials {self.trials!r}; expected a whole number >= 1",
+                             key="--trials")
+        object.__setattr__(self, "trials", int(self.trials))
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int | np.integer) \
+                or self.seed < 0:
+            raise InputError(f"--seed {self.seed!r}; expected a whole number >= 0",
+                             key="--seed")
+        object.__setattr__(self, "seed", int(self.seed))
+        vary = tuple((str(n), d) for n, d in self.vary)
+        names = [n for n, _ in vary]
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice:
+            raise InputError(f"--vary {', '.join(twice)} given more than once", key="--vary")
+        for name, dist in vary:
+            if not isinstance(dist, Distribution):
+                raise InputError(f"--vary {name}: expected a Distribution, got "
+                                 f"{type(dist).__name__}", key="--vary")
+        object.__setattr__(self, "vary", vary)
+        known = set(self.machine.parameter_names()) | set(LAB_PARAMETERS)
+        for name in names:
+            if name not in known:
+                raise InputError(
+                    f"--vary {name}: not a parameter of {self.entry.machine} nor of the lab; "
+                    f"expected one of {', '.join(sorted(known))}", key="--vary")
+
+    @property
+    def entry(self) -> ProcedureEntry:
+        return PROCEDURES[self.procedure]
+
+    @property
+    def machine(self):
+        from machinesim.machines import load_machine
+
+        return _machine(self.entry.machine, load_machine)
+
+    def build(self):
+        """The procedure to run (`IdentificationOnly` around it with ``identify_only``)."""
+        procedure = self.entry.build({"quick": self.quick})
+        return IdentificationOnly(procedure) if self.identify_only else procedure
+
+    def describe(self) -> dict:
+        """The spec as plain values (campaign.json; the resume check compares it)."""
+        return {"procedure": self.procedure, "seed": self.seed, "noise": self.noise,
+                "identify_only": self.identify_only, "quick": self.quick,
+                "vary": {n: d.text for n, d in self.vary}}
+
+
+_MACHINES: dict[str, Any] = {}
+
+
+def _machine(name: str, load):
+    # one load per process: a worker running many trials parses the URDF once
+    if name not in _MACHINES:
+        _MACHINES[name] = load(name)
+    return _MACHINES[name]
+
+
+def trial_seed(seed: int, i: int) -> np.random.SeedSequence:
+    """``SeedSequence(seed).spawn(N)[i]`` for any N > i."""
+    return np.random.SeedSequence(seed, spawn_key=(i,))
+
+
+def _landing(repeatability: float, rng) -> dict:
+    from machinesim.loading import RobotLoader
+
+    setting = RobotLoader(repeatability).land(rng)
+    out = {f"workpiece.{a}": float(v) for a, v in zip("xyz", setting.delta, strict=True)}
+    out.update({f"workpiece.{a}": float(getattr(setting, a))
+                for a in ("alpha", "beta", "gamma")})
+    return out
+
+
+def draw(spec: CampaignSpec, i: int) -> tuple[dict, dict, dict]:
+    """Trial ``i``'s draws: ``(drawn, errors, lab)``: the varied parameters' values, the
+    error parameters injected (defaults, robot landing, drawn: later wins) and the lab
+    parameters, all SI."""
+    child = trial_seed(spec.seed, i)
+    drawn = {name: dist.draw(stream(child, "campaign", name)) for name, dist in spec.vary}
+    lab = {**spec.entry.lab, **{n: max(v, 0.0) for n, v in drawn.items()
+                                if n in LAB_PARAMETERS}}
+    errors = dict(spec.entry.defaults(spec.machine))
+    if "robot.repeatability" in lab:
+        errors.update(_landing(lab["robot.repeatability"], stream(child, "campaign", "robot")))
+    errors.update({n: v for n, v in drawn.items() if n not in LAB_PARAMETERS})
+    return drawn, errors, lab
+
+
+def run_trial(spec: CampaignSpec, i: int) -> dict:
+    """Run trial ``i`` of ``spec``: a record of plain values (JSON-ready but for NaN).
+
+    Returns
+    -------
+    dict
+        ``trial``, ``drawn`` (varied parameters, SI), ``injected`` (the lab's truth as
+        `machinesim.experiment.run` reports it), ``identified`` (name -> [value, std]),
+        ``figures`` (name -> [unit, before, after]), ``elapsed_s``, ``error`` (None, or the
+        message of the `MachineSimError` the trial ended with: a failed identification is a
+        result too).
+    """
+    from machinesim.errors import ErrorModel
+    from machinesim.lab import Lab
+
+    began = time.perf_counter()
+    drawn, errors, lab_parameters = draw(spec, i)
+    record = {"trial": int(i), "drawn": drawn, "injected": {}, "identified": {},
+              "figures": {}, "elapsed_s": math.nan, "error": None}
+    try:
+        lab = Lab(spec.machine, ErrorModel().with_parameters(errors), noise=spec.noise,
+                  seed=trial_seed(spec.seed, i))
+        sigmas = {kind: lab_parameters[f"{kind}.sigma"] for kind in INSTRUMENTS
+                  if f"{kind}.sigma" in lab_parameters}
+        result = run(spec.build(), _LabWithInstruments(lab, sigmas) if sigmas else lab)
+    except MachineSimError as error:
+        record["error"] = f"{type(error).__name__}: {error}"
+    else:
+        record["injected"] = {n: float(v) for n, v in result.injected.items()}
+        record["identified"] = {n: [float(v), float(s)] for n, (v, s)
+                                in result.identified.items()}
+        record["figures"] = {f.name: [f.unit, _float(f.before), _float(f.after)]
+                             for f in result.figures}
+    record["elapsed_s"] = time.perf_counter() - began
+    return record
+
+
+def _float(value) -> float:
+    return math.nan if value is None else float(value)

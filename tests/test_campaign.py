@@ -1,0 +1,297 @@
+"""machinesim.campaign: distributions, seeding, determinism, resume, statistics, CLI.
+
+Trials run paper 000's calibration alone (``identify_only``: ~1.5 s each), a few per test.
+The Dask LocalCluster test is in test_campaign_dask.py.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+from scipy import stats
+
+import machinesim.campaign.runner as runner
+from machinesim.campaign import CampaignSpec, parse_distribution, parse_vary, run, run_trial
+from machinesim.campaign.statistics import coverage_interval, ranks, spearman, z_scores, z_summary
+from machinesim.campaign.trials import draw, trial_seed
+from machinesim.cli import main as cli_main
+from machinesim.exceptions import InputError, MachineSimError
+
+UM, NM = 1e-6, 1e-9
+ARM = dict(identify_only=True)
+
+
+# ------------------------------------------------------------------------- distributions
+
+
+def test_distribution_units_are_parsed_to_si():
+    d = parse_distribution("normal:0,5um", "tool.y")
+    assert (d.kind, d.a, d.b) == ("normal", 0.0, 5 * UM)
+    d = parse_distribution("uniform:-10um,0.01mm", "tool.y")
+    assert (d.a, d.b) == pytest.approx((-10 * UM, 10 * UM), rel=1e-15)
+    d = parse_distribution("0.2deg", "workpiece.alpha")
+    assert (d.kind, d.a) == ("fixed", pytest.approx(math.radians(0.2), rel=1e-15))
+    name, d = parse_vary("robot.repeatability=uniform:10um,100um")
+    assert name == "robot.repeatability" and (d.a, d.b) == pytest.approx((10 * UM, 100 * UM))
+
+
+@pytest.mark.parametrize("text, words", [
+    ("tool.y=normal:0,5", ["'5'", "no unit"]),
+    ("tool.y=normal:0,5deg", ["tool.y is a length"]),
+    ("workpiece.beta=uniform:1um,2um", ["workpiece.beta is an angle"]),
+    ("tool.y=uniform:5um,1um", ["'5um' >= high '1um'"]),
+    ("tool.y=normal:0,-1um", ["std '-1um'"]),
+    ("tool.y=gauss:0,1um", ["'gauss'", "normal, uniform, fixed"]),
+    ("tool.y=normal:0,1um,2um", ["takes 2", "got 3"]),
+    ("tool.y=normal:0,1furlong", ["unit 'furlong'"]),
+    ("tool.y=normal:0,1um,", ["takes 2"]),
+    ("tool.y", ["PARAM=DIST"]),
+    ("robot.repeatability=uniform:-1um,10um", ["below zero"]),
+])
+def test_bad_distributions_name_the_value(text, words):
+    with pytest.raises(InputError) as info:
+        parse_vary(text)
+    for word in words:
+        assert word in str(info.value)
+
+
+def test_draws_follow_the_distributions():
+    rng = np.random.default_rng(1)
+    n = 20000
+    normal = parse_distribution("normal:3um,2um")
+    x = np.array([normal.draw(rng) for _ in range(n)])
+    assert abs(x.mean() - 3 * UM) < 5 * 2 * UM / math.sqrt(n)
+    assert x.std() == pytest.approx(2 * UM, rel=0.03)
+    uniform = parse_distribution("uniform:-10um,30um")
+    y = np.array([uniform.draw(rng) for _ in range(n)])
+    assert y.min() >= -10 * UM and y.max() <= 30 * UM
+    # uniform on [a, b]: mean (a + b) / 2, std (b - a) / sqrt(12)
+    assert abs(y.mean() - 10 * UM) < 5 * (40 * UM / math.sqrt(12)) / math.sqrt(n)
+    assert y.std() == pytest.approx(40 * UM / math.sqrt(12), rel=0.03)
+
+
+# ---------------------------------------------------------------------------------- seeding
+
+
+def test_trial_seed_is_the_spawned_child_whatever_n():
+    for n in (5, 17):
+        children = np.random.SeedSequence(42).spawn(n)
+        for i in (0, 3, n - 1):
+            assert np.array_equal(trial_seed(42, i).generate_state(4),
+                                  children[i].generate_state(4))
+
+
+def test_a_parameter_draws_the_same_whatever_else_varies():
+    one = CampaignSpec("tool_rotation_arm", 4, (parse_vary("tool.y=normal:0,5um"),), seed=3)
+    two = CampaignSpec("tool_rotation_arm", 4, (parse_vary("microscope.sigma=uniform:1nm,9nm"),
+                                                parse_vary("tool.y=normal:0,5um")), seed=3)
+    other = CampaignSpec("tool_rotation_arm", 4, (parse_vary("tool.y=normal:0,5um"),), seed=4)
+    for i in range(4):
+        assert draw(one, i)[0]["tool.y"] == draw(two, i)[0]["tool.y"]
+        assert draw(one, i)[0]["tool.y"] != draw(other, i)[0]["tool.y"]
+    assert len({draw(one, i)[0]["tool.y"] for i in range(4)}) == 4
+
+
+def test_robot_landing_scatter_matches_the_repeatability():
+    # ISO 9283 RP of an isotropic Gaussian scatter: RP = (2 sqrt(2/pi) + 3 sqrt(3 - 8/pi)) s
+    spec = CampaignSpec("workpiece_setting", 1, (parse_vary("robot.repeatability=50um"),))
+    x = np.array([draw(spec, i)[1]["workpiece.x"] for i in range(3000)])
+    s = 50 * UM / (2 * math.sqrt(2 / math.pi) + 3 * math.sqrt(3 - 8 / math.pi))
+    assert x.std() == pytest.approx(s, rel=0.05)
+    assert abs(x.mean()) < 5 * s / math.sqrt(x.size)
+
+
+def test_unknown_parameter_and_bad_trials_are_refused():
+    with pytest.raises(InputError, match="workpiece.q"):
+        CampaignSpec("tool_rotation_arm", 2, (("workpiece.q", parse_distribution("1um")),))
+    with pytest.raises(InputError, match="--trials 0"):
+        CampaignSpec("tool_rotation_arm", 0)
+    with pytest.raises(InputError, match="'paper_999'"):
+        CampaignSpec("paper_999", 2)
+
+
+# ----------------------------------------------------------- trials, determinism, resume
+
+
+@pytest.fixture(scope="module")
+def campaign(tmp_path_factory):
+    out = tmp_path_factory.mktemp("arm")
+    vary = ["tool.y=normal:-178um,20um", "microscope.sigma=uniform:5nm,60nm"]
+    ds = run("tool_rotation_arm", 3, vary=vary, seed=11, out=out, workers=0,
+             progress=False, **ARM)
+    return out, vary, ds
+
+
+def test_trial_draws_reach_the_lab_and_identification_finds_them(campaign):
+    _, _, ds = campaign
+    assert not ds["failed"].values.any()
+    drawn_y = ds["drawn"].sel(varied="tool.y").values
+    assert np.array_equal(ds["injected"].sel(parameter="tool.y").values, drawn_y)
+    error = ds["identified"] - ds["injected"]
+    # microscope noise of at most 60 nm: e_ys found within a few hundred nm
+    assert float(abs(error.sel(parameter="tool.y")).max()) < 0.5 * UM
+
+
+def test_shuffled_order_and_foreign_global_seeding_change_nothing(campaign):
+    _, vary, ds = campaign
+    spec = CampaignSpec("tool_rotation_arm", 3, tuple(parse_vary(v) for v in vary), seed=11,
+                        **ARM)
+    for i in (2, 0):  # another order, and numpy's global RNG (the legacy one) disturbed
+        np.random.seed(1000 + i)  # noqa: NPY002 (the legacy global state is the point)
+        np.random.standard_normal(7)  # noqa: NPY002
+        record = run_trial(spec, i)
+        assert [record["identified"][p][0] for p in ("tool.y", "tool.z")] == \
+            list(ds["identified"].sel(trial=i).values)
+        assert [record["identified"][p][1] for p in ("tool.y", "tool.z")] == \
+            list(ds["identified_std"].sel(trial=i).values)
+
+
+def test_microscope_sigma_reaches_the_instrument():
+    def reported_std(sigma):
+        spec = CampaignSpec("tool_rotation_arm", 1, (parse_vary(f"microscope.sigma={sigma}"),),
+                            **ARM)
+        return run_trial(spec, 0)["identified"]["tool.y"][1]
+
+    quiet, loud = reported_std("2nm"), reported_std("200nm")
+    # the fit's std scales with the readings' noise (rounding to 1 nm aside): ~100 x
+    assert 30 < loud / quiet < 150
+
+
+def test_dataset_file_holds_the_trials_seed_and_versions(campaign):
+    out, vary, ds = campaign
+    on_disk = xr.open_dataset(out / "campaign.nc").load()
+    for name in ("drawn", "injected", "identified", "identified_std"):
+        assert np.array_equal(on_disk[name].values, ds[name].values)
+    assert on_disk.attrs["seed"] == 11
+    assert set(json.loads(on_disk.attrs["versions"])) >= {"machinesim", "numpy", "dask"}
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["trials_count"] == 3 and "z_scores.png" in summary["files"]
+    assert (out / "z_scores.png").stat().st_size > 1000
+
+
+def test_resume_runs_only_the_missing_trials(campaign, tmp_path, monkeypatch):
+    source, vary, ds = campaign
+    for name in ("campaign.json", "trials/trial_000000.json", "trials/trial_000002.json"):
+        (tmp_path / name).parent.mkdir(exist_ok=True)
+        (tmp_path / name).write_bytes((source / name).read_bytes())
+    ran = []
+    real = runner.run_trial
+
+    def counting(spec, i):
+        ran.append(i)
+        return real(spec, i)
+
+    monkeypatch.setattr(runner, "run_trial", counting)
+    again = run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
+                progress=False, report=False, **ARM)
+    assert ran == [1]
+    for name in ("drawn", "identified", "identified_std", "injected"):
+        assert np.array_equal(again[name].values, ds[name].values)
+
+
+def test_interrupted_campaign_keeps_its_finished_trials(tmp_path, monkeypatch):
+    real, ran = runner.run_trial, []
+
+    def interrupted(spec, i):
+        if ran:
+            raise KeyboardInterrupt
+        ran.append(i)
+        return real(spec, i)
+
+    monkeypatch.setattr(runner, "run_trial", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        run("tool_rotation_arm", 2, seed=5, out=tmp_path, workers=0, progress=False, **ARM)
+    assert sorted(p.name for p in (tmp_path / "trials").iterdir()) == ["trial_000000.json"]
+    assert not (tmp_path / "campaign.nc").exists()
+
+
+def test_another_campaign_in_the_same_folder_is_refused(campaign):
+    out, vary, _ = campaign
+    with pytest.raises(InputError) as info:
+        run("tool_rotation_arm", 3, vary=vary, seed=12, out=out, workers=0, progress=False,
+            **ARM)
+    assert "seed: 11 there, 12 now" in str(info.value) and str(out) in str(info.value)
+
+
+# ------------------------------------------------------------------------------ statistics
+
+
+def test_coverage_interval_on_sorted_integers_by_hand():
+    # M = 100, p = 0.95: q = 95; symmetric r = (M - q + 1) / 2 = 3 -> [y_3, y_98] (JCGM 101
+    # 7.7.1); shortest: every window of q + 1 values is 95 wide, the first wins -> [y_1, y_96]
+    y = np.arange(1.0, 101.0)
+    rng = np.random.default_rng(0)
+    assert coverage_interval(rng.permutation(y), kind="symmetric") == (3.0, 98.0)
+    assert coverage_interval(y, kind="shortest") == (1.0, 96.0)
+    assert all(math.isnan(v) for v in coverage_interval([1.0, 2.0]))
+
+
+def test_coverage_interval_on_known_distributions():
+    rng = np.random.default_rng(7)
+    z = rng.standard_normal(200_000)
+    low, high = coverage_interval(z, kind="symmetric")
+    assert (low, high) == pytest.approx((-1.959964, 1.959964), abs=0.02)
+    # exponential(1): the shortest 95 % interval is [0, ln 20]
+    e = rng.exponential(size=200_000)
+    low, high = coverage_interval(e, kind="shortest")
+    assert low == pytest.approx(0.0, abs=1e-3) and high == pytest.approx(math.log(20), abs=0.03)
+    low, high = coverage_interval(e, kind="symmetric")        # [-ln 0.975, -ln 0.025]
+    assert (low, high) == pytest.approx((-math.log(0.975), -math.log(0.025)), abs=0.03)
+
+
+def test_z_scores_of_honest_and_dishonest_uncertainty():
+    rng = np.random.default_rng(3)
+    truth = rng.uniform(-1, 1, 50_000)
+    std = rng.uniform(0.5, 2.0, truth.size)
+    found = truth + std * rng.standard_normal(truth.size)
+    honest = z_summary(z_scores(found, truth, std))
+    assert honest["mean"] == pytest.approx(0.0, abs=0.02)
+    assert honest["std"] == pytest.approx(1.0, abs=0.02)
+    assert honest["within_1_96_ratio"] == pytest.approx(0.95, abs=0.005)
+    optimistic = z_summary(z_scores(found, truth, std / 2))
+    assert optimistic["std"] == pytest.approx(2.0, abs=0.04)
+    assert math.isnan(z_scores([1.0], [0.0], [math.nan])[0])
+
+
+def test_spearman_against_scipy_and_monotonic_maps():
+    rng = np.random.default_rng(5)
+    x = rng.integers(0, 6, 300).astype(float)           # many ties
+    y = x + rng.normal(0, 2, x.size)
+    assert spearman(x, y) == pytest.approx(stats.spearmanr(x, y).statistic, abs=1e-12)
+    assert spearman(x[:50], np.exp(x[:50] + 0.01 * np.arange(50))) == pytest.approx(
+        stats.spearmanr(x[:50], np.exp(x[:50] + 0.01 * np.arange(50))).statistic)
+    u = rng.uniform(size=40)
+    assert spearman(u, u**3) == pytest.approx(1.0) and spearman(u, -u) == pytest.approx(-1.0)
+    assert list(ranks([3.0, 1.0, 3.0, 2.0])) == [3.5, 1.0, 3.5, 2.0]
+
+
+# ------------------------------------------------------------------------------------ CLI
+
+
+def test_cli_bad_input_is_one_line_naming_the_value(tmp_path, capsys):
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--vary",
+                       "tool.y=uniform:5um", "--out", str(tmp_path / "c")])
+    err = capsys.readouterr().err
+    assert status == 2 and "tool.y=uniform:5um" in err and "takes 2" in err
+    assert "Traceback" not in err
+
+
+def test_cli_runs_a_campaign(tmp_path, capsys):
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "1", "--workers", "0",
+                       "--identify-only", "--quiet", "--vary", "tool.y=fixed:-100um",
+                       "--out", str(tmp_path)])
+    assert status == 0
+    ds = xr.open_dataset(tmp_path / "campaign.nc").load()
+    assert ds["injected"].sel(parameter="tool.y").item() == pytest.approx(-100 * UM)
+    assert "1 trials (0 failed)" in capsys.readouterr().out
+
+
+def test_out_that_is_a_file_is_refused(tmp_path):
+    afile = tmp_path / "taken"
+    afile.write_text("x")
+    with pytest.raises(MachineSimError, match="expected the campaign folder"):
+        run("tool_rotation_arm", 1, out=afile, workers=0, progress=False, **ARM)
