@@ -14,9 +14,12 @@ Crown (section 3.2): the roughly machined crown (`workpiece.diamond_crown`, 10 u
 here on a 20 x 20 mm base with the spheres in its flat, `crown_stock`) is finished with 1 um
 layers (Table 2: 10 um in all, pitch feed 12.5 um): the top face by passes along X at C = 0,
 each side face by passes down its slope (X and Z together) at C = k 45 deg (`crown_passes`,
-`passes_program`). `crown_roi` gives the measuring windows and the passes that reach them;
-`machining_time` the time of the finishing against cutting the crown out of the full prism
-with the same passes.
+`passes_program`), every pass clipped to its face. `crown_roi` gives the measuring windows
+and the passes that reach them; `machining_time` the time of the finishing against cutting
+the crown out of the cuboid with the same passes (section 3.2.4). The crown's size (Fig. 9
+is missing) is chosen so that the finishing takes the paper's 9.5 h with its 12 min of
+setting (`CrownPlan`). `crown_blank` is the rough crown without its spheres, for
+`machinesim.Lab.make_artefacts`; `crown_stock` has them as designed.
 """
 
 from __future__ import annotations
@@ -24,7 +27,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-import manifold3d
 import numpy as np
 
 from machinesim import motion
@@ -32,15 +34,17 @@ from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.identification.workpiece_setting import ReferenceSpheres
 from machinesim.nc import Program, ProgramBuilder
+from machinesim.realism import SphereArtefacts, draw_spheres, make_spheres
 from machinesim.tolerances import SPHERE_CHORD_M
-from machinesim.tools import RoundNoseTool, sphere_polygon
+from machinesim.tools import RoundNoseTool
 from machinesim.units import M_PER_MM, M_PER_UM
 from machinesim.workpiece import Part, diamond_crown
 
 __all__ = [
-    "CLEARANCE", "CROWN", "CROWN_BASE", "CROWN_BASE_HEIGHT", "FEED_MM_PER_MIN", "GROOVE_ROI",
-    "GROOVE_SPHERES", "GROOVE_STOCK", "PARK", "SAFE_Z", "CrownPlan", "PassGroup",
-    "crown_design", "crown_passes", "crown_roi", "crown_spheres", "crown_stock", "crown_tool",
+    "CLEARANCE", "CROWN", "CROWN_BASE", "CROWN_BASE_HEIGHT", "FEED_MM_PER_MIN", "GROOVE_BLANK",
+    "GROOVE_ROI", "GROOVE_SPHERE_DESIGN", "GROOVE_SPHERES", "GROOVE_STOCK", "PARK", "SAFE_Z",
+    "SETTING_S", "CrownPlan", "PassGroup", "crown_blank", "crown_design", "crown_passes",
+    "crown_roi", "crown_sphere_design", "crown_spheres", "crown_stock", "crown_tool",
     "groove_program", "machining_time", "passes_program",
 ]
 
@@ -63,8 +67,12 @@ GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 #: The groove workpiece: a 20 x 20 x 3 mm block centred on C with three R2 mm sphere
 #: cavities 4 mm in from its edges (`workpiece.block_with_spheres`, dimples).
 GROOVE_STOCK = "spheres:20x20x3:2:dimples@-10,-10,0"
+#: The same block without its spheres (`machinesim.Lab.make_artefacts` cuts them).
+GROOVE_BLANK = "block:20x20x3@-10,-10,0"
 GROOVE_SPHERES = ReferenceSpheres(np.array([[-6.0, -6.0, 0.0], [6.0, -6.0, 0.0],
                                             [-6.0, 6.0, 0.0]]) * MM, 2.0 * MM)
+#: The same as a design for `machinesim.Lab.make_artefacts`.
+GROOVE_SPHERE_DESIGN = SphereArtefacts(GROOVE_SPHERES.centres, GROOVE_SPHERES.radius)
 #: The grooves are cut and read inside this window (xmin, xmax, ymin, ymax), m.
 GROOVE_ROI = ((-1.5 * MM, 1.5 * MM, -1.5 * MM, 1.5 * MM),)
 
@@ -92,10 +100,14 @@ def groove_program(depth: float = 3 * UM, length: float = 1 * MM,
 class CrownPlan:
     """The designed crown and its finishing passes (Fig. 9, Table 2), m and rad.
 
+    Fig. 9 (the crown's dimensions) is missing from the paper's text; the apothem and height
+    are chosen so that the finishing time with Table 2's passes, plus the paper's 12 min of
+    setting, is the paper's 9.5 h (section 3.2.4; docs/procedures/workpiece_setting.md).
+
     Attributes
     ----------
     apothem : float
-        Half the top face's across-flats (`workpiece.diamond_crown`: 4 mm across).
+        Half the top face's across-flats.
     height : float
         Crown height above the flat.
     slope : float
@@ -104,24 +116,18 @@ class CrownPlan:
         Stock allowance of the rough crown (Table 2: total depth 10 um).
     depth_of_cut, pitch : float
         Table 2: 1 um and 12.5 um.
-    top_half : float
-        Top passes run x in [-top_half, top_half] at y in the same range.
-    side_half : float
-        Side passes run across the face for v (along its edge) in [-side_half, side_half].
-    prism_apothem : float
-        The solid the crown is cut from in the comparison without rough machining: the
-        octagonal prism standing on the crown's foot, its top at the rough top.
+    overrun : float
+        Top passes run this far past the top octagon's edges (the stock allowance over the
+        slope: where a top layer leaves the rough side face).
     """
 
-    apothem: float = 2.0 * MM
-    height: float = 0.2 * MM
+    apothem: float = 1.5 * MM
+    height: float = 0.07 * MM
     slope: float = math.atan(0.2)
     oversize: float = 10 * UM
     depth_of_cut: float = 1 * UM
     pitch: float = 12.5 * UM
-    top_half: float = 2.3 * MM
-    side_half: float = 1.25 * MM
-    prism_apothem: float = 3.0 * MM
+    overrun: float = 50 * UM
 
     @property
     def rough_top(self) -> float:
@@ -139,10 +145,21 @@ class CrownPlan:
         return int(round(self.oversize / self.depth_of_cut))
 
     @property
+    def run(self) -> float:
+        """Horizontal run of a finished side face, top edge to foot, m."""
+        return (self.rough_top - self.oversize - self.rough_flat) / math.tan(self.slope)
+
+    @property
     def foot_distance(self) -> float:
         """Designed distance between opposite foot edges of the finished crown, m."""
-        return 2.0 * (self.apothem + (self.rough_top - self.oversize - self.rough_flat)
-                      / math.tan(self.slope))
+        return 2.0 * (self.apothem + self.run)
+
+    @property
+    def cuboid_half(self) -> float:
+        """Half width of the cuboid the crown is cut from without rough machining (section
+        3.2.4): the smallest square block holding the crown's foot, its top at the rough
+        top, m."""
+        return self.apothem + self.run
 
 
 #: The crown of `workpiece.diamond_crown` and Table 2.
@@ -158,15 +175,24 @@ def crown_spheres(plan: CrownPlan = CROWN) -> ReferenceSpheres:
                                       [-6.0, 6.0, 0.0]]) * MM + [0.0, 0.0, z], 2.0 * MM)
 
 
+def crown_blank(plan: CrownPlan = CROWN) -> Part:
+    """The roughly machined crown on its base, without its sphere cavities (Fig. 9b): what
+    `machinesim.Lab.make_artefacts` cuts the spheres into (`crown_sphere_design`)."""
+    return diamond_crown(plan.oversize, 2 * plan.apothem, plan.height, CROWN_BASE,
+                         CROWN_BASE_HEIGHT, plan.slope)
+
+
+def crown_sphere_design(plan: CrownPlan = CROWN, chord_tol: float = SPHERE_CHORD_M
+                        ) -> SphereArtefacts:
+    """The crown workpiece's reference spheres as designed (`crown_spheres`), cavities."""
+    spheres = crown_spheres(plan)
+    return SphereArtefacts(spheres.centres, spheres.radius, cavities=True, chord_tol=chord_tol)
+
+
 def crown_stock(plan: CrownPlan = CROWN, chord_tol: float = SPHERE_CHORD_M) -> Part:
-    """The roughly machined crown on its base, with the three sphere cavities (Fig. 9b)."""
-    crown = diamond_crown(plan.oversize, 2 * plan.apothem, plan.height, CROWN_BASE,
-                          CROWN_BASE_HEIGHT, plan.slope)
-    sphere = sphere_polygon(crown_spheres(plan).radius, chord_tol)
-    cavities = manifold3d.Manifold.batch_boolean(
-        [sphere.translate(tuple(float(v) for v in c)) for c in crown_spheres(plan).centres],
-        manifold3d.OpType.Add)
-    return Part(crown.manifold - cavities)
+    """The roughly machined crown with its three sphere cavities exactly as designed."""
+    design = crown_sphere_design(plan, chord_tol)
+    return make_spheres(crown_blank(plan), design, draw_spheres(design, None))
 
 
 def crown_design(plan: CrownPlan = CROWN) -> Part:
@@ -186,7 +212,8 @@ def crown_tool(height: float = 50 * UM) -> RoundNoseTool:
 
 @dataclass(frozen=True, eq=False)
 class PassGroup:
-    """Equal parallel passes at one C, in machine coordinates at that C (m, rad).
+    """Parallel passes at one C whose ends move linearly from pass to pass, in machine
+    coordinates at that C (m, rad).
 
     Attributes
     ----------
@@ -195,8 +222,10 @@ class PassGroup:
     start, end : ndarray, shape (3,)
         Tip at the start and end of the first pass; the tool cuts along +X.
     step : ndarray, shape (3,)
-        From one pass to the next.
+        From one pass's start to the next's.
     count : int
+    end_step : ndarray, shape (3,), optional
+        From one pass's end to the next's (default ``step``: equal passes).
     """
 
     c: float
@@ -204,11 +233,33 @@ class PassGroup:
     end: np.ndarray
     step: np.ndarray
     count: int
+    end_step: np.ndarray | None = None
+
+    @property
+    def equal(self) -> bool:
+        """All passes the same, shifted by ``step``."""
+        return self.end_step is None or bool(np.array_equal(self.end_step, self.step))
+
+    def pass_ends(self, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """Start and end of pass ``j``."""
+        end_step = self.step if self.end_step is None else self.end_step
+        return self.start + j * self.step, self.end + j * end_step
 
 
-def crown_passes(plan: CrownPlan = CROWN, offsets=None, prism: bool = False,
+#: tan(22.5 deg): half an octagon side over its apothem; a side face's hip lines run at
+#: |v| = r tan(22.5 deg) in its own axes (r out along the face, v along its edge).
+HIP = math.tan(math.pi / 8.0)
+
+
+def crown_passes(plan: CrownPlan = CROWN, offsets=None, cuboid: bool = False,
                  top_rows=None, side_rows=None) -> tuple[PassGroup, ...]:
-    """The crown's passes, one group per face and layer: top face first, then the sides.
+    """The crown's passes, groups per face and layer: top face first, then the sides.
+
+    Every pass is clipped to its face (Fig. 10): a top pass along X at row y runs over the
+    octagon's chord at y, `CrownPlan.overrun` past its edges; a side pass down the slope at
+    v along the edge starts on the face's layer where the layer meets the rough top, or on
+    the hip line to the next face (|v| = r tan 22.5 deg), and ends 1 um above the flat.
+    Rows are spaced by the pitch feed about the face's centre line.
 
     Parameters
     ----------
@@ -216,9 +267,10 @@ def crown_passes(plan: CrownPlan = CROWN, offsets=None, prism: bool = False,
     offsets : sequence of float, optional
         Layer offsets above the finished faces, m, in cutting order. Default: the
         finishing layers, ``oversize - depth_of_cut`` down to 0.
-    prism : bool
-        Cut from the prism instead (`CrownPlan.prism_apothem`): the top layers as above,
-        each side with layers out to the prism's top corner, passes ending at its wall.
+    cuboid : bool
+        Cut from the cuboid instead (`CrownPlan.cuboid_half`, section 3.2.4): the same
+        passes, the top face over the whole block, each side with layers out to the
+        block's top corner, passes ending at its walls.
     top_rows, side_rows : (float, float), optional
         Keep only the passes with y (top) or v (sides) in this range, m (a window's cut).
     """
@@ -227,36 +279,79 @@ def crown_passes(plan: CrownPlan = CROWN, offsets=None, prism: bool = False,
     offsets = [float(o) for o in offsets]
     tan_s, sin_s, cos_s = math.tan(plan.slope), math.sin(plan.slope), math.cos(plan.slope)
     groups = []
-    lanes = np.arange(-plan.top_half, plan.top_half + 0.5 * plan.pitch, plan.pitch)
-    top_lanes = _rows(lanes, top_rows)
+    reach = plan.apothem + plan.overrun
+    top_lanes = _rows(_lanes(plan.cuboid_half if cuboid else reach, plan.pitch), top_rows)
+    if cuboid:
+        x1 = np.full(len(top_lanes), plan.cuboid_half + plan.overrun)
+    else:
+        # the octagon of apothem `reach`: |x| <= reach and |x| + |y| <= reach sqrt 2
+        x1 = np.minimum(reach, reach * math.sqrt(2.0) - np.abs(top_lanes))
+    keep = x1 > 0.0
+    top_lanes, x1 = top_lanes[keep], x1[keep]
     for o in offsets:
-        if len(top_lanes):
-            groups.append(PassGroup(0.0, frozen([-plan.top_half, top_lanes[0], o]),
-                                    frozen([plan.top_half, top_lanes[0], o]),
-                                    frozen([0.0, plan.pitch, 0.0]), len(top_lanes)))
+        starts = np.column_stack([-x1, top_lanes, np.full(len(x1), o)])
+        ends = np.column_stack([x1, top_lanes, np.full(len(x1), o)])
+        groups += _groups(0.0, starts, ends)
     side_offsets = offsets
-    if prism:
-        corner = sin_s * (plan.prism_apothem - plan.apothem) + cos_s * plan.rough_top
+    if cuboid:
+        wall = plan.cuboid_half * math.sqrt(2.0)  # the block's corner, seen from a 45 deg face
+        corner = sin_s * (wall - plan.apothem) + cos_s * plan.rough_top
         side_offsets = list(np.arange(corner // plan.depth_of_cut, -0.5, -1.0)
                             * plan.depth_of_cut)
-    lanes = np.arange(-plan.side_half, plan.side_half + 0.5 * plan.pitch, plan.pitch)
-    side_lanes = _rows(lanes, side_rows)
     for k in range(8):
         for o in side_offsets:
             lift = o / cos_s
-            r0 = plan.apothem + (lift - plan.rough_top) / tan_s
+            top_r = plan.apothem + (lift - plan.rough_top) / tan_s
             # 1 um above the flat: a tip exactly on it would touch, not cut
-            r1 = plan.apothem + (lift - plan.rough_flat - plan.depth_of_cut) / tan_s
-            if prism:
-                r1 = min(r1, plan.prism_apothem)
-            if r1 <= r0 or not len(side_lanes):
+            foot_r = plan.apothem + (lift - plan.rough_flat - plan.depth_of_cut) / tan_s
+            lanes = _rows(_lanes(foot_r * HIP, plan.pitch), side_rows)
+            r0 = np.maximum(top_r, np.abs(lanes) / HIP)
+            r1 = np.full(len(lanes), foot_r)
+            if cuboid:
+                r1 = np.minimum(r1, _wall_r(k, lanes, plan.cuboid_half))
+            keep = r1 > r0
+            lanes, r0, r1 = lanes[keep], r0[keep], r1[keep]
+            if not len(lanes):
                 continue
-            height = [lift - (r - plan.apothem) * tan_s for r in (r0, r1)]
-            groups.append(PassGroup(math.radians(45.0 * k),
-                                    frozen([r0, side_lanes[0], height[0]]),
-                                    frozen([r1, side_lanes[0], height[1]]),
-                                    frozen([0.0, plan.pitch, 0.0]), len(side_lanes)))
+            starts = np.column_stack([r0, lanes, lift - (r0 - plan.apothem) * tan_s])
+            ends = np.column_stack([r1, lanes, lift - (r1 - plan.apothem) * tan_s])
+            groups += _groups(math.radians(45.0 * k), starts, ends)
     return tuple(groups)
+
+
+def _lanes(half: float, pitch: float) -> np.ndarray:
+    """Rows at multiples of the pitch within [-half, half]."""
+    n = math.floor(half / pitch + 1e-9)
+    return np.arange(-n, n + 1) * pitch
+
+
+def _wall_r(k: int, v: np.ndarray, half: float) -> np.ndarray:
+    """r where a row at v of face k meets the wall of the square block of half width
+    ``half`` (face axes: r out along the face at k 45 deg, v along its edge)."""
+    if k % 2 == 0:
+        return np.full(len(v), half)
+    return half * math.sqrt(2.0) - np.abs(v)
+
+
+def _groups(c: float, starts: np.ndarray, ends: np.ndarray) -> list[PassGroup]:
+    """Rows (in order) split into runs whose starts and ends each move by a constant step."""
+    groups, i, n = [], 0, len(starts)
+    while i < n:
+        j = i + 1
+        if j < n:
+            step, end_step = starts[j] - starts[i], ends[j] - ends[i]
+            while (j + 1 < n and np.allclose(starts[j + 1] - starts[j], step, rtol=0.0,
+                                             atol=1e-12)
+                   and np.allclose(ends[j + 1] - ends[j], end_step, rtol=0.0, atol=1e-12)):
+                j += 1
+        else:
+            step = end_step = np.zeros(3)
+        count = j - i + 1 if j < n else 1
+        equal = np.allclose(end_step, step, rtol=0.0, atol=1e-12)
+        groups.append(PassGroup(c, frozen(starts[i]), frozen(ends[i]), frozen(step), count,
+                                None if equal else frozen(end_step)))
+        i += count
+    return groups
 
 
 def _rows(lanes: np.ndarray, span) -> np.ndarray:
@@ -267,6 +362,9 @@ def _rows(lanes: np.ndarray, span) -> np.ndarray:
         raise InputError(f"Expected a row range (low, high) with low < high, got {span!r}")
     return lanes[(lanes >= low - 1e-12) & (lanes <= high + 1e-12)]
 
+
+#: Section 3.2.4: workpiece setting time counted in the paper's 9.5 h (12 min), s.
+SETTING_S = 12 * 60.0
 
 #: Axis values (X Y Z B C; m, rad) every crown program starts and ends at: above the centre.
 PARK = (0.0, 0.0, SAFE_Z, 0.0, 0.0)
@@ -301,15 +399,16 @@ def _add_passes(b: ProgramBuilder, groups, c_now: float, stagger: bool) -> None:
         if group.c != c_now:
             b.rapid(Z=SAFE_Z).rapid(X=0.0, Y=0.0).rapid(C=group.c)
             c_now = group.c
-        run = group.end - group.start
-        unit = run / np.linalg.norm(run)
-        # a pass that ends going down ends on the part (the foot of a face): shorten it there
-        sign_end = -1.0 if run[2] < 0.0 else 1.0
         for j in range(group.count):
+            start, end = group.pass_ends(j)
+            run = end - start
+            unit = run / np.linalg.norm(run)
+            # a pass that ends going down ends on the part (the foot of a face): shorten it
+            sign_end = -1.0 if run[2] < 0.0 else 1.0
             e = ((n * GOLDEN) % 1.0) * STAGGER if stagger else 0.0
             n += 1
-            start = group.start + j * group.step - e * unit
-            end = group.end + j * group.step + sign_end * e * unit
+            start = start - e * unit
+            end = end + sign_end * e * unit
             b.rapid(X=float(start[0]), Y=float(start[1]), Z=float(start[2] + CLEARANCE))
             b.linear(Z=float(start[2]), feed_mm_per_min=FEED_MM_PER_MIN)
             b.linear(X=float(end[0]), Y=float(end[1]), Z=float(end[2]))
@@ -319,20 +418,33 @@ def _add_passes(b: ProgramBuilder, groups, c_now: float, stagger: bool) -> None:
 def machining_time(machine, groups) -> float:
     """Time of ``passes_program(groups, stagger=False)`` by `motion.plan`, s, from `PARK`.
 
-    The program is not built whole: each group is planned with one and with two of its
-    passes, from where the groups before it left the axes; its passes repeat exactly, so it
-    takes ``t1 + (count - 1) (t2 - t1)``.
+    The program is not built whole: each group is planned from where the groups before it
+    left the axes, with its first one, two (and three) passes. Equal passes repeat exactly:
+    ``t1 + (count - 1) (t2 - t1)``. Where the ends move by different steps the feed moves'
+    lengths change linearly from pass to pass and the time per pass is taken as linear in
+    the pass number, from the first three: exact for the feed moves, while the short rapid
+    between passes changes its length slightly non-linearly (tested against the whole
+    program's plan).
     """
     total, q, c_now = 0.0, np.array(PARK), 0.0
     for group in groups:
+        counts = (1, 2) if group.equal else (1, 2, 3)
+        counts = tuple(k for k in counts if k <= group.count)
         times = []
-        for count in (1, 2):
+        for count in counts:
             b = ProgramBuilder(0, source="workpiece_setting timing")
             _add_passes(b, [replace(group, count=count)], c_now, stagger=False)
             times.append(motion.plan(b.build(), machine, start=q).duration)
-        total += times[0] + (group.count - 1) * (times[1] - times[0])
+        n = group.count
+        if n <= len(times):
+            total += times[n - 1]
+        elif len(times) == 2:
+            total += times[0] + (n - 1) * (times[1] - times[0])
+        else:
+            first, growth = times[1] - times[0], (times[2] - times[1]) - (times[1] - times[0])
+            total += times[0] + (n - 1) * first + 0.5 * (n - 1) * (n - 2) * growth
         c_now = group.c
-        end = group.end + (group.count - 1) * group.step
+        end = group.pass_ends(group.count - 1)[1]
         q = np.array([end[0], end[1], end[2] + CLEARANCE, 0.0, c_now])
     closing = ProgramBuilder(0, source="workpiece_setting timing").rapid(Z=SAFE_Z)
     closing.rapid(X=0.0, Y=0.0, C=0.0)
@@ -348,8 +460,9 @@ def crown_roi(plan: CrownPlan = CROWN, margin: float = 0.35 * MM, top: float = 0
     """Measurement windows, the cut's ROI boxes and pass rows (`crown_passes`) to cut them.
 
     The top window is ``top`` square about the centre (half size, m); each side window runs
-    r = 2.35 .. 2.65 mm out along the face and ``side`` either side along its edge (m); four
-    flat patches 0.4 mm square sit 4.5 mm out between the faces.
+    over the middle half of the face's run out along it (at most 0.3 mm) and ``side``
+    either side along its edge (m); four flat patches 0.4 mm square sit 4.5 mm out
+    between the faces.
 
     Returns
     -------
@@ -362,7 +475,8 @@ def crown_roi(plan: CrownPlan = CROWN, margin: float = 0.35 * MM, top: float = 0
         ``top_rows``, ``side_rows`` for `crown_passes`: the passes within ``margin`` of a
         window (default 0.35 mm, the R2 mm nose's half width at a 30 um cut).
     """
-    side = (plan.apothem + 0.35 * MM, plan.apothem + 0.65 * MM, -side, side)
+    middle, reach = plan.apothem + 0.5 * plan.run, min(0.15 * MM, 0.25 * plan.run)
+    side = (middle - reach, middle + reach, -side, side)
     flat_r, flat_half = 4.5 * MM, 0.2 * MM
     flats = []
     for j in range(4):

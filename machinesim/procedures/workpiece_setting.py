@@ -4,12 +4,15 @@
 `machinesim.Lab` (machine ``robonano_a0ib``) whose injected errors are one robot load of
 one workpiece: the setting ``workpiece.x .. gamma`` and any other error (the C-axis centre,
 ``location.C.EX0C``, ``EY0C``). It probes the workpiece's three reference spheres at C = 0
-and 180 deg (`read_spheres`, Fig. 4), identifies the setting and the C centre
+and 180 deg (`read_spheres`, Fig. 4, in
+`machinesim.procedures.sphere_probing`), identifies the setting and the C centre
 (`machinesim.identification.workpiece_setting`: eqs 1-4, Fig. 6, and the cross-check by
 `machinesim.identification.fit`), rewrites the NC program (eqs 5-7 through
 `machinesim.compensation.map_program`; the model-based route through
-`machinesim.compensation.model_based`) and machines one of the paper's two experiments
-before and after compensation, read with the lab's laser microscope:
+`machinesim.compensation.model_based`; the nose arc's lowest point on the path by default,
+the paper's tip on request) and machines one of the paper's two experiments before and
+after compensation on the workpiece the lab made (`Lab.make_artefacts`: its spheres where
+they really came out), read with the lab's laser microscope:
 
 - ``"grooves"`` (section 3.1): four crossing grooves 3 um deep
   (`machinesim.metrology.part_features.groove_depths`, Fig. 8);
@@ -39,14 +42,19 @@ import numpy as np
 
 from machinesim.cam.crown import (
     CROWN,
+    GROOVE_BLANK,
     GROOVE_ROI,
+    GROOVE_SPHERE_DESIGN,
     GROOVE_SPHERES,
     GROOVE_STOCK,
     PARK,
+    SETTING_S,
     CrownPlan,
+    crown_blank,
     crown_design,
     crown_passes,
     crown_roi,
+    crown_sphere_design,
     crown_spheres,
     crown_stock,
     crown_tool,
@@ -60,10 +68,8 @@ from machinesim.exceptions import InputError
 from machinesim.experiment import Evaluation, Figure, Identified
 from machinesim.identification.fit import Estimate
 from machinesim.identification.workpiece_setting import (
-    AXES,
     Identification,
     ReferenceSpheres,
-    SphereReading,
     SphereReadings,
     check_machine,
     eqs_5_to_7,
@@ -73,16 +79,22 @@ from machinesim.identification.workpiece_setting import (
     nose_shift,
     parameters,
     program_poses,
-    sphere_reading,
 )
-from machinesim.metrology import fit_sphere
 from machinesim.metrology.part_features import CrownFeatures, crown_features, groove_depths
 from machinesim.nc import Program
+from machinesim.procedures.sphere_probing import (
+    PROBE_PLAN,
+    ProbePlan,
+    probe_axes,
+    read_sphere,
+    read_spheres,
+)
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 from machinesim.workpiece import Part, stock_from_spec
 
 __all__ = [
     "EXPERIMENTS", "NOSE", "ProbePlan", "RobotLoadedWorkpiece", "SettingIdentification",
+    "crown_times",
     "WorkpieceMeasurements", "eqs_5_to_7_program", "model_based_program", "probe_axes",
     "read_sphere", "read_spheres",
 ]
@@ -103,160 +115,6 @@ PAPER_S = ((-1.73, -0.10), (0.95, 0.05), (2.30, 0.02), (0.93, 0.03), (-1.56, 0.0
 PAPER_TIME = {"finishing_h": 9.5, "cuboid_h": 40.0, "saved_percent": 76.0}
 #: Fig. 8b: the four grooves' depths "within about 100 nm" of each other after.
 PAPER_GROOVE_SPREAD_NM = 100.0
-
-# ------------------------------------------------------------------------------ probing
-
-
-@dataclass(frozen=True)
-class ProbePlan:
-    """How the spheres are probed (Fig. 4b, 4c).
-
-    Attributes
-    ----------
-    half_width : float
-        Each scan runs the ball centre this far either side of the centre, m. Default 1.2
-        mm: on a R2 mm cavity read with a R0.25 mm ball the contact then stays 0.6 mm inside
-        the rim, room for a workpiece 0.5 mm off.
-    points : int
-        Points per scan line.
-    press : float
-        How far below the expected surface the free ball runs, m: the stylus stays pressed in
-        for setting errors up to this. Default 0.1 mm.
-    stroke : float
-        Measuring range of the stylus, m.
-    lift : float
-        Height of the ball centre above the sphere centre where the bottom touch starts, m.
-    passes : int
-        Readings of each sphere, the scans of each centred on the last one's result: the
-        three spheres are then seen alike (docs/procedures/workpiece_setting.md).
-    """
-
-    half_width: float = 1.2 * MM
-    points: int = 41
-    press: float = 0.1 * MM
-    stroke: float = 0.5 * MM
-    lift: float = 0.3 * MM
-    passes: int = 2
-
-    def __post_init__(self) -> None:
-        for name in ("half_width", "press", "stroke", "lift"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0.0):
-                raise InputError(f"Expected {name} > 0 (m), got {value!r}", key=name)
-        for name, least in (("points", 5), ("passes", 1)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < least:
-                raise InputError(f"Expected {name} an int >= {least}, got {value!r}", key=name)
-
-
-def probe_axes(machine, ball, c_angle: float = 0.0) -> np.ndarray:
-    """Axis values that put the nominal probe-ball centre at machine coordinates ``ball``.
-
-    Parameters
-    ----------
-    machine : Machine
-        `robonano_a0ib` (the ball sits on the B table, found from its ``probe_tip`` frame).
-    ball : array-like, shape (N, 3) or (3,)
-        Ball centres in machine coordinates (the ideal frame at C = 0), m.
-    c_angle : float
-        C axis value, rad (B stays 0).
-
-    Returns
-    -------
-    ndarray, shape (N, 5) or (5,)
-    """
-    check_machine(machine)
-    ball = np.asarray(ball, dtype=np.float64)
-    offset = machine.frame_pose("probe_tip", np.zeros(len(AXES)))[:3, 3]
-    flat = ball.reshape(-1, 3)
-    q = np.zeros((len(flat), len(AXES)))
-    q[:, :3] = flat - offset
-    q[:, 4] = c_angle
-    return q.reshape(ball.shape[:-1] + (len(AXES),))
-
-
-def _machine_points(probe, q: np.ndarray) -> np.ndarray:
-    """Nominal ball centres (N, 3) in machine coordinates for recorded axis values (N, 5)."""
-    at_zero = np.array(q, dtype=np.float64)
-    at_zero[..., 3:] = 0.0
-    return probe.nominal_centres(at_zero)
-
-
-def read_sphere(probe, centre, plan: ProbePlan = ProbePlan(), c_angle: float = 0.0,
-                radius: float = 2.0 * MM) -> SphereReading:
-    """Read one sphere cavity: two orthogonal scans, a sphere fit, a bottom touch.
-
-    Parameters
-    ----------
-    probe : TouchProbe
-        On the machine with the workpiece (`machinesim.Lab.touch_probe`).
-    centre : array-like, shape (3,)
-        Where the sphere centre is expected, machine coordinates at ``c_angle``, m.
-    plan : ProbePlan
-    c_angle : float
-        C axis value during the reading, rad.
-    radius : float
-        Designed sphere radius, m (plans the scan heights only).
-
-    Returns
-    -------
-    SphereReading
-        `machinesim.identification.workpiece_setting.sphere_reading` of the last pass's
-        scans and the bottom touch.
-
-    Raises
-    ------
-    InputError
-        When a scan misses the sphere or the bottom touch finds nothing: the sphere lies
-        farther from ``centre`` than the plan reaches (about ``half_width`` / 2 sideways,
-        ``press`` in height).
-    """
-    guess = np.array(centre, dtype=np.float64)
-    inner = radius - probe.radius
-    if plan.half_width >= inner:
-        raise InputError(f"Expected a scan half width below the ball-centre sphere radius "
-                         f"{inner} m, got {plan.half_width} m", key="half_width")
-    s = np.linspace(-plan.half_width, plan.half_width, plan.points)
-    for _ in range(plan.passes):
-        points = []
-        for axis in (0, 1):
-            path = np.tile(guess, (plan.points, 1))
-            path[:, axis] += s
-            path[:, 2] = guess[2] - np.sqrt(inner**2 - s**2) - plan.press
-            scan = probe.scan(probe_axes(probe.machine, path, c_angle), stroke=plan.stroke)
-            seen = ~np.isnan(scan.deflection)
-            if np.count_nonzero(seen) < plan.points // 2:
-                raise InputError(f"Expected the scan through {guess.tolist()} m to touch the "
-                                 f"sphere at {plan.points // 2} of {plan.points} points or "
-                                 f"more, got {np.count_nonzero(seen)}", key="centre")
-            points.append(_machine_points(probe, scan.contact_q[seen]))
-        points = np.vstack(points)
-        guess = np.r_[fit_sphere(points).centre[:2], guess[2]]
-    start = probe_axes(probe.machine, [guess[0], guess[1], guess[2] + plan.lift], c_angle)
-    contact = probe.touch(start, "-Z", plan.lift + radius)
-    if contact is None:
-        raise InputError(f"Expected the bottom touch under {guess[:2].tolist()} m to meet the "
-                         f"sphere within {plan.lift + radius} m, it met nothing", key="centre")
-    bottom = _machine_points(probe, contact[None])[0]
-    return sphere_reading(points, bottom, probe.radius, c_angle)
-
-
-def read_spheres(probe, spheres: ReferenceSpheres, plan: ProbePlan = ProbePlan()
-                 ) -> SphereReadings:
-    """The whole measurement (Fig. 4, Fig. 6): three spheres at C = 0, again at C = 180 deg.
-
-    The spheres are looked for where the ideal setting puts them; after the turn, where the
-    first readings put them turned by 180 deg about the nominal C axis (a table point p
-    shows at -p in machine coordinates).
-    """
-    check_machine(probe.machine)
-    ideal = spheres.centres
-    first = [read_sphere(probe, c, plan, 0.0, spheres.radius) for c in ideal]
-    turned = [read_sphere(probe, np.r_[-r.xy, c[2]], plan, math.pi, spheres.radius)
-              for r, c in zip(first, ideal, strict=True)]
-    return SphereReadings(spheres, tuple(first), tuple(turned), probe.radius,
-                          probe.readout.std)
-
 
 # ------------------------------------------------------------------------- compensation
 
@@ -382,12 +240,16 @@ class RobotLoadedWorkpiece:
     experiment : {"crown", "grooves"}
         Which workpiece the lab's robot loaded (`EXPERIMENTS`).
     nose_correction : bool
-        Keep the nose arc's lowest point on the path, not the tip as the paper's eq 7 does.
+        Keep the nose arc's lowest point on the path (default), not the tip as the paper's
+        eq 7 does (False: the paper's own route; the scenario reports both).
     all_layers : bool
         Crown: cut all ten 1 um finishing layers, not only the last (the same part, ten
         times longer: docs/procedures/workpiece_setting.md).
     quick : bool
         Crown: smaller measuring windows.
+    after_only : bool
+        Crown: cut and read only the compensated crown (the "before" figures None): what
+        the variants of an error budget need, at half the cost.
     plan : ProbePlan
     crown : CrownPlan
     """
@@ -395,8 +257,9 @@ class RobotLoadedWorkpiece:
     name = "workpiece_setting"
     paper = "002"
 
-    def __init__(self, experiment: str = "crown", *, nose_correction: bool = False,
-                 all_layers: bool = False, quick: bool = False, plan: ProbePlan = ProbePlan(),
+    def __init__(self, experiment: str = "crown", *, nose_correction: bool = True,
+                 all_layers: bool = False, quick: bool = False, after_only: bool = False,
+                 plan: ProbePlan = PROBE_PLAN,
                  crown: CrownPlan = CROWN) -> None:
         if experiment not in EXPERIMENTS:
             raise InputError(f"Expected an experiment in {', '.join(EXPERIMENTS)}, got "
@@ -405,8 +268,10 @@ class RobotLoadedWorkpiece:
         self.nose = NOSE if nose_correction else 0.0
         self.all_layers = bool(all_layers)
         self.quick = bool(quick)
+        self.after_only = bool(after_only)
         self.plan = plan
         self.crown = crown
+        self._workpieces: dict[int, tuple] = {}
 
     def __repr__(self) -> str:
         return (f"RobotLoadedWorkpiece({self.experiment!r}, nose_correction="
@@ -423,12 +288,26 @@ class RobotLoadedWorkpiece:
         return (stock_from_spec(GROOVE_STOCK) if self.experiment == "grooves"
                 else crown_stock(self.crown))
 
+    def workpiece(self, lab) -> Part:
+        """The loaded workpiece as the lab's workshop made it: the blank with its spheres
+        cut where they really came out (`machinesim.Lab.make_artefacts`, labelled by the
+        experiment: one workpiece per lab, made once)."""
+        made = self._workpieces.get(id(lab))
+        if made is None or made[0] is not lab:
+            if self.experiment == "grooves":
+                blank, design = stock_from_spec(GROOVE_BLANK), GROOVE_SPHERE_DESIGN
+            else:
+                blank, design = crown_blank(self.crown), crown_sphere_design(self.crown)
+            made = (lab, lab.make_artefacts(blank, design, label=self.experiment))
+            self._workpieces[id(lab)] = made
+        return made[1]
+
     # ------------------------------------------------------------------------- the steps
 
     def measure(self, lab) -> WorkpieceMeasurements:
         """Probe the three spheres at C = 0 and 180 deg (`read_spheres`)."""
         check_machine(lab.machine)
-        probe = lab.touch_probe(self.stock, label=self.experiment)
+        probe = lab.touch_probe(self.workpiece(lab), label=self.experiment)
         return WorkpieceMeasurements(self.experiment, lab.machine,
                                      read_spheres(probe, self.spheres, self.plan))
 
@@ -504,7 +383,7 @@ class RobotLoadedWorkpiece:
         parts, depths, cuts = {"grooves_ideal": ideal}, {}, {}
         for name, program in (("before", nominal), ("after", programs["grooves_compensated"]),
                               ("after_model", programs["grooves_compensated_model"])):
-            part, report = lab.cut(program, GROOVE_TOOL, self.stock, roi=GROOVE_ROI,
+            part, report = lab.cut(program, GROOVE_TOOL, self.workpiece(lab), roi=GROOVE_ROI,
                                    start=PARK)
             depths[name] = groove_depths(part, scope)
             cuts[f"grooves_{name}"] = _cut_details(report)
@@ -534,14 +413,18 @@ class RobotLoadedWorkpiece:
         nominal = self.nominal_program(found)
         scope = lab.microscope(label="crown")
         features, parts, cuts = {}, {}, {}
-        for name, program in (("before", nominal), ("after", programs["crown_compensated"])):
-            part, report = lab.cut(program, layout.tool, self.stock, roi=layout.boxes,
+        runs = (("before", nominal), ("after", programs["crown_compensated"]))
+        for name, program in runs[1:] if self.after_only else runs:
+            part, report = lab.cut(program, layout.tool, self.workpiece(lab),
+                                   roi=layout.boxes,
                                    floor=layout.floor, start=PARK, turn_step=math.pi / 4)
             features[name] = crown_features(part, scope, layout.windows)
             parts[f"crown_{name}"] = part
             cuts[f"crown_{name}"] = _cut_details(report)
         parts["crown_design"] = clip_to(crown_design(crown), layout.boxes, layout.floor)
         errors = {name: _crown_errors(f, crown) for name, f in features.items()}
+        errors.setdefault("before", dict.fromkeys(("edge", "inclination", "foot"),
+                                                  [None] * 8))
         figures = []
         for i, (key, (paper_before, paper_after)) in enumerate(PAPER_L.items()):
             figures.append(Figure(f"edge_distance_{key}", "um", errors["before"]["edge"][i],
@@ -558,26 +441,41 @@ class RobotLoadedWorkpiece:
                                   errors["after"]["foot"][i],
                                   note="distance between opposite foot edges less its design "
                                   "(not in the paper)"))
-        finishing = machining_time(lab.machine, crown_passes(crown))
-        prism = machining_time(lab.machine, crown_passes(crown, prism=True))
-        saved = 100.0 * (1.0 - finishing / prism)
-        figures.append(Figure("machining_time", "h", prism / 3600.0, finishing / 3600.0,
+        finishing, cuboid = crown_times(lab.machine, crown)
+        saved = 100.0 * (1.0 - finishing / cuboid)
+        figures.append(Figure("machining_time", "h", cuboid / 3600.0, finishing / 3600.0,
                               PAPER_TIME["cuboid_h"], PAPER_TIME["finishing_h"],
-                              note="before: the crown cut from the full stock (paper: a "
-                              "cuboid; here the octagonal prism); after: finishing the "
+                              note="12 min of setting included; before: the crown cut from "
+                              "the cuboid with the same passes; after: finishing the "
                               "robot-loaded rough crown"))
         figures.append(Figure("machining_time_saved", "percent", None, saved, None,
                               PAPER_TIME["saved_percent"]))
         details = {**{f"crown_{kind}_{name}": values for name, e in errors.items()
+                      if name in features
                       for kind, values in (("edge_distance_error_um", e["edge"]),
                                            ("inclination_error_deg", e["inclination"]),
                                            ("foot_distance_error_um", e["foot"]))},
                    "machining_time": {"finishing_h": finishing / 3600.0,
-                                      "prism_h": prism / 3600.0, "saved_percent": saved},
+                                      "cuboid_h": cuboid / 3600.0, "saved_percent": saved,
+                                      "setting_h": SETTING_S / 3600.0},
                    "cuts": cuts,
                    "note": "crown cut in its measuring windows"
                    + (", every layer" if self.all_layers else ", last finishing layer only")}
         return Evaluation(tuple(figures), details, parts, {"crown_nominal": nominal})
+
+
+_TIMES: dict = {}
+
+
+def crown_times(machine, crown: CrownPlan = CROWN) -> tuple[float, float]:
+    """Section 3.2.4's two times, s, each with the paper's 12 min of setting (`SETTING_S`):
+    finishing the rough crown (Table 2's ten layers) and cutting it from the cuboid with the
+    same passes (`machinesim.cam.crown.machining_time`; remembered per machine and plan)."""
+    key = (machine.name, crown)
+    if key not in _TIMES:
+        _TIMES[key] = (machining_time(machine, crown_passes(crown)) + SETTING_S,
+                       machining_time(machine, crown_passes(crown, cuboid=True)) + SETTING_S)
+    return _TIMES[key]
 
 
 def _crown_errors(features: CrownFeatures, plan: CrownPlan) -> dict[str, list[float]]:

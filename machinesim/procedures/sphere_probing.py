@@ -1,0 +1,188 @@
+"""Reading a workpiece's reference spheres with the on-machine touch probe (paper 002, Fig. 4).
+
+Paper 002 (Xu, Nakamoto, Takeuchi 2021, section 2.3) finds a robot-loaded workpiece from
+three ball-end-milled sphere cavities: each is scanned in two orthogonal lines, its centre's
+x and y found by a least-squares sphere fit, and its z by a touch down the probe axis at the
+fitted centre (Fig. 4b, 4c); all three are read at C = 0 and again at C = 180 deg for the C
+centre (Fig. 6). `read_spheres` does that on a `machinesim.metrology.TouchProbe` and returns
+the `SphereReadings` that `machinesim.identification.workpiece_setting.identify` turns into
+the setting. The procedure (`machinesim.procedures.workpiece_setting`) calls it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.identification.workpiece_setting import (
+    AXES,
+    ReferenceSpheres,
+    SphereReading,
+    SphereReadings,
+    check_machine,
+    sphere_reading,
+)
+from machinesim.metrology import fit_sphere
+from machinesim.units import M_PER_MM
+
+__all__ = ["PROBE_PLAN", "ProbePlan", "probe_axes", "read_sphere", "read_spheres"]
+
+MM = M_PER_MM
+
+
+@dataclass(frozen=True)
+class ProbePlan:
+    """How the spheres are probed (Fig. 4b, 4c).
+
+    Attributes
+    ----------
+    half_width : float
+        Each scan runs the ball centre this far either side of the centre, m. Default 1.2
+        mm: on a R2 mm cavity read with a R0.25 mm ball the contact then stays 0.6 mm inside
+        the rim, room for a workpiece 0.5 mm off.
+    points : int
+        Points per scan line.
+    press : float
+        How far below the expected surface the free ball runs, m: the stylus stays pressed in
+        for setting errors up to this. Default 0.1 mm.
+    stroke : float
+        Measuring range of the stylus, m.
+    lift : float
+        Height of the ball centre above the sphere centre where the bottom touch starts, m.
+    passes : int
+        Readings of each sphere, the scans of each centred on the last one's result: the
+        three spheres are then seen alike (docs/procedures/workpiece_setting.md).
+    """
+
+    half_width: float = 1.2 * MM
+    points: int = 41
+    press: float = 0.1 * MM
+    stroke: float = 0.5 * MM
+    lift: float = 0.3 * MM
+    passes: int = 2
+
+    def __post_init__(self) -> None:
+        for name in ("half_width", "press", "stroke", "lift"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0.0):
+                raise InputError(f"Expected {name} > 0 (m), got {value!r}", key=name)
+        for name, least in (("points", 5), ("passes", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < least:
+                raise InputError(f"Expected {name} an int >= {least}, got {value!r}", key=name)
+
+
+#: The default plan.
+PROBE_PLAN = ProbePlan()
+
+
+def probe_axes(machine, ball, c_angle: float = 0.0) -> np.ndarray:
+    """Axis values that put the nominal probe-ball centre at machine coordinates ``ball``.
+
+    Parameters
+    ----------
+    machine : Machine
+        `robonano_a0ib` (the ball sits on the B table, found from its ``probe_tip`` frame).
+    ball : array-like, shape (N, 3) or (3,)
+        Ball centres in machine coordinates (the ideal frame at C = 0), m.
+    c_angle : float
+        C axis value, rad (B stays 0).
+
+    Returns
+    -------
+    ndarray, shape (N, 5) or (5,)
+    """
+    check_machine(machine)
+    ball = np.asarray(ball, dtype=np.float64)
+    offset = machine.frame_pose("probe_tip", np.zeros(len(AXES)))[:3, 3]
+    flat = ball.reshape(-1, 3)
+    q = np.zeros((len(flat), len(AXES)))
+    q[:, :3] = flat - offset
+    q[:, 4] = c_angle
+    return q.reshape(ball.shape[:-1] + (len(AXES),))
+
+
+def _machine_points(probe, q: np.ndarray) -> np.ndarray:
+    """Nominal ball centres (N, 3) in machine coordinates for recorded axis values (N, 5)."""
+    at_zero = np.array(q, dtype=np.float64)
+    at_zero[..., 3:] = 0.0
+    return probe.nominal_centres(at_zero)
+
+
+def read_sphere(probe, centre, plan: ProbePlan = ProbePlan(), c_angle: float = 0.0,
+                radius: float = 2.0 * MM) -> SphereReading:
+    """Read one sphere cavity: two orthogonal scans, a sphere fit, a bottom touch.
+
+    Parameters
+    ----------
+    probe : TouchProbe
+        On the machine with the workpiece (`machinesim.Lab.touch_probe`).
+    centre : array-like, shape (3,)
+        Where the sphere centre is expected, machine coordinates at ``c_angle``, m.
+    plan : ProbePlan
+    c_angle : float
+        C axis value during the reading, rad.
+    radius : float
+        Designed sphere radius, m (plans the scan heights only).
+
+    Returns
+    -------
+    SphereReading
+        `machinesim.identification.workpiece_setting.sphere_reading` of the last pass's
+        scans and the bottom touch.
+
+    Raises
+    ------
+    InputError
+        When a scan misses the sphere or the bottom touch finds nothing: the sphere lies
+        farther from ``centre`` than the plan reaches (about ``half_width`` / 2 sideways,
+        ``press`` in height).
+    """
+    guess = np.array(centre, dtype=np.float64)
+    inner = radius - probe.radius
+    if plan.half_width >= inner:
+        raise InputError(f"Expected a scan half width below the ball-centre sphere radius "
+                         f"{inner} m, got {plan.half_width} m", key="half_width")
+    s = np.linspace(-plan.half_width, plan.half_width, plan.points)
+    for _ in range(plan.passes):
+        points = []
+        for axis in (0, 1):
+            path = np.tile(guess, (plan.points, 1))
+            path[:, axis] += s
+            path[:, 2] = guess[2] - np.sqrt(inner**2 - s**2) - plan.press
+            scan = probe.scan(probe_axes(probe.machine, path, c_angle), stroke=plan.stroke)
+            seen = ~np.isnan(scan.deflection)
+            if np.count_nonzero(seen) < plan.points // 2:
+                raise InputError(f"Expected the scan through {guess.tolist()} m to touch the "
+                                 f"sphere at {plan.points // 2} of {plan.points} points or "
+                                 f"more, got {np.count_nonzero(seen)}", key="centre")
+            points.append(_machine_points(probe, scan.contact_q[seen]))
+        points = np.vstack(points)
+        guess = np.r_[fit_sphere(points).centre[:2], guess[2]]
+    start = probe_axes(probe.machine, [guess[0], guess[1], guess[2] + plan.lift], c_angle)
+    contact = probe.touch(start, "-Z", plan.lift + radius)
+    if contact is None:
+        raise InputError(f"Expected the bottom touch under {guess[:2].tolist()} m to meet the "
+                         f"sphere within {plan.lift + radius} m, it met nothing", key="centre")
+    bottom = _machine_points(probe, contact[None])[0]
+    return sphere_reading(points, bottom, probe.radius, c_angle)
+
+
+def read_spheres(probe, spheres: ReferenceSpheres, plan: ProbePlan = ProbePlan()
+                 ) -> SphereReadings:
+    """The whole measurement (Fig. 4, Fig. 6): three spheres at C = 0, again at C = 180 deg.
+
+    The spheres are looked for where the ideal setting puts them; after the turn, where the
+    first readings put them turned by 180 deg about the nominal C axis (a table point p
+    shows at -p in machine coordinates).
+    """
+    check_machine(probe.machine)
+    ideal = spheres.centres
+    first = [read_sphere(probe, c, plan, 0.0, spheres.radius) for c in ideal]
+    turned = [read_sphere(probe, np.r_[-r.xy, c[2]], plan, math.pi, spheres.radius)
+              for r, c in zip(first, ideal, strict=True)]
+    return SphereReadings(spheres, tuple(first), tuple(turned), probe.radius,
+                          probe.readout.std)
