@@ -11,6 +11,9 @@ planned with `machinesim.motion.plan` (nominal machine, default 1 nm chord toler
   by the radius).
 * **XYZ**: a raster of ``X.. Y.. Z..`` points on ``grooving_4axis`` (no rotary move).
 
+Reading is timed on the vectorised fast path and, on the STS program, on the word-by-word
+path too (``--slow-repeats`` runs, 0 to skip; ~10 us a line), for the speed-up.
+
 Goals: reading >= 1,000,000 lines/s, planning >= 1,000,000 moves/s, memory < 1 GB.
 
 Also timed: `plan` of the 2000-groove program of ``benchmarks/cutting.py`` (case e, 8000
@@ -157,6 +160,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--lines", type=int, default=1_000_000)
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--slow-repeats", type=int, default=1,
+                        help="runs of the word-by-word reader on the STS program (0: skip)")
     parser.add_argument("--reference-moves", type=int, default=5000,
                         help="moves planned by the line-by-line planner for the speed-up")
     args = parser.parse_args()
@@ -175,6 +180,11 @@ def main() -> None:
             print(f"  reading : {lines / read_s:12,.0f} lines/s (median of {args.repeats}: "
                   f"{read_s:.3f} s, {len(program):,} moves), peak traced "
                   f"{read_peak / 2**20:,.0f} MiB")
+            if write is write_sts and args.slow_repeats > 0:
+                slow_s, _ = median_time(lambda p=path: read_program(p, fast=False),
+                                        args.slow_repeats)
+                print(f"  reading word by word: {lines / slow_s:12,.0f} lines/s (median of "
+                      f"{args.slow_repeats}: {slow_s:.3f} s; fast path x{slow_s / read_s:.1f})")
             plan_s, trajectory = median_time(lambda p=program, m=machine: plan(p, m),
                                              args.repeats)
             del trajectory

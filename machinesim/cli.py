@@ -66,7 +66,8 @@ def _parser() -> argparse.ArgumentParser:
     cut.add_argument("--tool", required=True,
                      help="tool spec in mm/deg: v:ANGLE (V tool, e.g. v:90), "
                           "nose:RADIUS:ANGLE (round nose, e.g. nose:2.0:90), "
-                          "ball:RADIUS (ball end mill, e.g. ball:2.0)")
+                          "ball:RADIUS (ball end mill, e.g. ball:2.0); optionally :h=HEIGHT, "
+                          "the height to the holder in mm (e.g. v:90:h=5, default 10)")
     cut.add_argument("--stock", required=True,
                      help="stock spec in mm: block:LxWxH (e.g. block:10x10x2, top face at "
                           "z = 0) or cylinder:RxH (e.g. cylinder:5x2), optionally placed "
@@ -259,10 +260,12 @@ def _cut(args) -> int:
           f"machining time {report.machining_time_s:.1f} s")
     if args.report is not None:
         print(f"wrote {args.report} (cut report, JSON, units in every key)")
-    for what, items in (("rapid that cuts at line", report.rapids_that_cut),
-                        ("outside travel:", report.limit_violations)):
-        for item in items:
-            print(f"warning: {what} {item}", file=sys.stderr)
+    for line in report.holder_contact:
+        print(f"warning: holder touched the part at line {line}", file=sys.stderr)
+    for line in report.rapids_that_cut:
+        print(f"warning: rapid cut the part at line {line}", file=sys.stderr)
+    for item in report.limit_violations:
+        print(f"warning: outside travel: {item}", file=sys.stderr)
     if report.empty_cut:
         print("warning: the program removed no material (does it reach the stock?)",
               file=sys.stderr)

@@ -49,10 +49,6 @@ PLANAR_TRAVEL_REL = 1e-3
 #: Poses are rigid when R^T R = I within this: a float64 kinematic chain gives ~1e-15, so
 #: this rejects scaled or sheared matrices, never round-off.
 RIGID_TOL = 1e-9
-#: A cut is empty when it removes at most this fraction of the stock volume: the round-off of
-#: a float64 volume sum over ~10^6 triangles is ~1e-13 relative. A real cut smaller than
-#: this (a 1 nm scratch on a 0.1 l block) is reported empty too.
-EMPTY_REL = 1e-12
 
 # --- cutting.program
 #: A rapid whose sweep overlaps material by more than this volume (m^3) has cut: (10 nm)^3,

@@ -476,17 +476,32 @@ class BallEndMill:
 
 Tool = VTool | RoundNoseTool | BallEndMill
 
-_SPEC_FORMS = "'v:ANGLE_DEG', 'nose:RADIUS_MM:ANGLE_DEG' or 'ball:RADIUS_MM'"
+_SPEC_FORMS = ("'v:ANGLE_DEG', 'nose:RADIUS_MM:ANGLE_DEG' or 'ball:RADIUS_MM', optionally "
+               "followed by ':h=HEIGHT_MM' (e.g. 'v:90:h=5')")
+
+
+def _spec_height(spec, field: str) -> float:
+    """The height (m) of a spec's ``h=HEIGHT_MM`` field (a trailing ``mm`` is allowed)."""
+    text = field[2:].strip()
+    if text.lower().endswith("mm"):
+        text = text[:-2]
+    try:
+        return float(text) * M_PER_MM
+    except ValueError:
+        raise InputError(f"tool spec {spec!r}: {field!r} is not a height; expected "
+                         "'h=HEIGHT_MM' with a number in mm, e.g. 'h=5'", key="tool") from None
 
 
 def tool_from_spec(spec: str) -> Tool:
-    """Build a tool from a text spec in mm and degrees, with the default height.
+    """Build a tool from a text spec in mm and degrees.
 
     Parameters
     ----------
     spec : str
         ``"v:90"`` (included angle, deg), ``"nose:2.0:90"`` (nose radius mm, included angle
-        deg) or ``"ball:2.0"`` (radius mm).
+        deg) or ``"ball:2.0"`` (radius mm), optionally followed by ``":h=5"``: the tool's
+        height from its edge to the holder in mm (default `TOOL_HEIGHT_M`, 10 mm; ``"h=5mm"``
+        reads the same).
 
     Returns
     -------
@@ -495,10 +510,13 @@ def tool_from_spec(spec: str) -> Tool:
     Raises
     ------
     InputError
-        If the spec does not have one of these forms or a number is out of range (sizes are
-        bounded by `MAX_TOOL_SIZE_M`).
+        If the spec does not have one of these forms or a number is out of range (sizes,
+        the height included, are bounded by `MAX_TOOL_SIZE_M`).
     """
     fields = str(spec).strip().split(":")
+    height = {}
+    if len(fields) > 1 and fields[-1].strip().lower().startswith("h="):
+        height["height"] = _spec_height(spec, fields.pop().strip())
     kind = fields[0].lower()
     arity = {"v": 1, "nose": 2, "ball": 1}
     if kind not in arity or len(fields) != arity[kind] + 1:
@@ -512,9 +530,9 @@ def tool_from_spec(spec: str) -> Tool:
         ) from None
     try:
         if kind == "v":
-            return VTool(values[0] * RAD_PER_DEG)
+            return VTool(values[0] * RAD_PER_DEG, **height)
         if kind == "nose":
-            return RoundNoseTool(values[0] * M_PER_MM, values[1] * RAD_PER_DEG)
-        return BallEndMill(values[0] * M_PER_MM)
+            return RoundNoseTool(values[0] * M_PER_MM, values[1] * RAD_PER_DEG, **height)
+        return BallEndMill(values[0] * M_PER_MM, **height)
     except InputError as error:
         raise InputError(f"tool spec {spec!r}: {error}", key="tool") from None

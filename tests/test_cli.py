@@ -349,3 +349,54 @@ def test_ctrl_c_while_loading_exits_130_in_one_line(tmp_path):
             process.kill()
     assert_clean_failure(process.returncode, err, "interrupted", status=130)
     assert not page.exists()
+
+
+# ------------------------------------------------------------------ warnings on stderr
+
+
+def test_each_holder_contact_and_each_rapid_that_cuts_is_one_warning_line(tmp_path, capsys):
+    # a V tool 20 um tall (v:90:h=0.02): line 5 feeds 30 um deep right across the block, so
+    # the holder touches there; lines 8 and 9 are rapids that plunge 5 um into the block and
+    # run 3 mm along X through it (lines counted in the text below, % being line 1)
+    program = tmp_path / "crash.nc"
+    program.write_text("%\nG90 G21 G94 G54\nG00 X-0.5 Y2. Z0.1\nG00 Z-0.03\n"
+                       "G01 X5.5 F500.\nG00 Z0.1\nG00 X1. Y1.\nG00 Z-0.005\nG00 X4.\n"
+                       "G00 Z0.1\nM30\n%\n")
+    argv = ["cut", program, "--machine", "grooving_4axis", "--tool", "v:90:h=0.02",
+            "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply"]
+    code, _, err = run(argv, capsys)
+    assert code == 0, err
+    warnings = [line for line in err.splitlines() if line.startswith("warning:")]
+    assert warnings == ["warning: holder touched the part at line 5",
+                        "warning: rapid cut the part at line 8",
+                        "warning: rapid cut the part at line 9"], err
+
+
+def test_the_report_lists_how_the_program_was_read(tmp_path, capsys):
+    # the corpus CAM program, its stock far from the tool: the report says which modal
+    # states it set (first line of each, found in the text here), the integer rule and the
+    # tool table
+    corpus = ROOT / "tests" / "nc_corpus"
+    program, tools = corpus / "cam_header.nc", corpus / "tools.toml"
+    lines = program.read_text().splitlines()
+
+    def line_of(block: str) -> int:
+        return next(n for n, text in enumerate(lines, 1) if text.startswith(block))
+
+    report = tmp_path / "r.json"
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "ball:0.5",
+                        "--stock", "block:1x1x1@100,100,-50", "--tools", tools, "--quiet",
+                        "--integer-input", "increment", "--out", tmp_path / "p.ply",
+                        "--report", report], capsys)
+    assert code == 0, err
+    nc = json.loads(report.read_text(), parse_constant=no_nan)["nc"]
+    expected = [("G40", "N10 "), ("G80", "N10 "), ("T1", "N30 "), ("T2", "N120 "),
+                ("G05.1 Q1", "N130 "), ("G64", "N135 "), ("G05.1 Q0", "N165 ")]
+    assert nc == {"integer_input": "increment",
+                  "states": [{"word": w, "line": line_of(b)} for w, b in expected],
+                  "tool_table": str(tools)}
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "g.ply", "--report", report],
+                       capsys)
+    assert code == 0, err
+    nc = json.loads(report.read_text(), parse_constant=no_nan)["nc"]
+    assert nc["integer_input"] == "calculator" and nc["tool_table"] is None

@@ -65,11 +65,23 @@ def specs(kinds, limit: float, smallest: float = 1e-3) -> st.SearchStrategy[str]
     return st.one_of(structured, st.text(max_size=30))
 
 
+def tool_specs(limit: float, smallest: float = 1e-3) -> st.SearchStrategy[str]:
+    """Tool specs: `specs`, and the same with a height field (``h=``, ``H=``, ``mm`` or not,
+    or a field that only looks like one)."""
+    height = st.builds(lambda key, v, unit: f"{key}{v}{unit}",
+                       st.sampled_from(["h=", "H=", "h", "h==", "height="]),
+                       numbers(limit, smallest), st.sampled_from(["", "mm", "MM", " mm", "m"]))
+    return st.one_of(
+        specs(["v", "nose", "ball", "V", "Ball", "cone", ""], limit, smallest),
+        st.builds(lambda s, h: f"{s}:{h}", specs(["v", "nose", "ball"], limit, smallest),
+                  height))
+
+
 # ------------------------------------------------------------------------------ specs
 
 
 @SETTINGS
-@given(spec=specs(["v", "nose", "ball", "V", "Ball", "cone", ""], limit=10.0))
+@given(spec=tool_specs(limit=10.0))
 def test_a_tool_spec_builds_a_tool_or_is_an_input_error(spec):
     try:
         tool = tool_from_spec(spec)
@@ -101,7 +113,7 @@ def _huge_tools_are_bounded() -> str:
 
 
 @SETTINGS
-@given(spec=specs(["v", "nose", "ball"], limit=1e300, smallest=1e-300))
+@given(spec=tool_specs(limit=1e300, smallest=1e-300))
 def test_a_tool_spec_of_any_size_builds_a_tool_or_is_an_input_error(spec):
     unbounded = _huge_tools_are_bounded()
     if unbounded:

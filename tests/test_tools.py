@@ -176,6 +176,18 @@ def test_tool_from_spec(spec, expected):
 
 
 @pytest.mark.parametrize(
+    ("spec", "height_m"),
+    [("v:90:h=5", 5e-3), ("v:90:h=5mm", 5e-3), ("ball:0.5:h=20mm", 20e-3),
+     ("nose:2.0:90:H=3", 3e-3), ("V:60", 10e-3)],
+)
+def test_a_spec_height_sets_where_the_holder_begins(spec, height_m):
+    # the body's highest vertex is the holder plane, at the spec's height (mm -> m)
+    tool = tool_from_spec(spec)
+    assert tool.height == pytest.approx(height_m, rel=1e-15)
+    assert tool.vertices()[:, 2].max() == pytest.approx(height_m, rel=1e-15)
+
+
+@pytest.mark.parametrize(
     ("spec", "message"),
     [
         ("v", "expected 'v:ANGLE_DEG'"),
@@ -187,6 +199,11 @@ def test_tool_from_spec(spec, expected):
         ("ball:1e9", "'ball:1e9'.*radius must be at most 1 m"),
         ("nose:2000:90", "nose_radius must be at most 1 m"),
         ("ball:nan", "radius must be a positive finite"),
+        ("v:90:h=2000", "'v:90:h=2000'.*height must be at most 1 m"),
+        ("v:90:h=-1", "height must be a positive finite number, got -0.001"),
+        ("v:90:h=abc", "'h=abc' is not a height; expected 'h=HEIGHT_MM'"),
+        ("ball:2:h=1", "height \\(0.001 m\\) must be at least the radius \\(0.002 m\\)"),
+        ("v:h=5", "expected 'v:ANGLE_DEG'"),
     ],
 )
 def test_bad_tool_specs_raise_input_error(spec, message):

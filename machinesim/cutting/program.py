@@ -10,6 +10,7 @@ would touch the part are listed with their lines.
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import manifold3d
@@ -73,6 +74,9 @@ class CutReport:
         came below the top of the stock over it (`EngineReport.holder_contact`).
     engine_s : float
         Wall time of the material removal alone (`EngineReport.elapsed_s`).
+    nc : Mapping
+        How the program was read (`nc_summary`): ``integer_input``, the modal ``states``
+        seen with their first lines, and the ``tool_table`` path; empty when unknown.
     """
 
     removed_volume_m3: float
@@ -89,6 +93,7 @@ class CutReport:
     notes: tuple[str, ...] = field(default=())
     holder_contact: tuple[int, ...] = field(default=())
     engine_s: float = 0.0
+    nc: Mapping = field(default_factory=dict, hash=False)
 
     def to_dict(self) -> dict:
         """JSON-ready dict, every key with its unit."""
@@ -107,7 +112,24 @@ class CutReport:
             "elapsed_s": self.elapsed_s,
             "engine_s": self.engine_s,
             "notes": list(self.notes),
+            "nc": {"integer_input": self.nc.get("integer_input"),
+                   "states": [dict(state) for state in self.nc.get("states", ())],
+                   "tool_table": self.nc.get("tool_table")},
         }
+
+
+def nc_summary(program) -> dict:
+    """How ``program`` was read, for `CutReport.nc`: ``integer_input`` (None when not read
+    from text), ``states`` (the words read as modal states without geometric effect, G40,
+    G80, G64, G61, G05.1 Q1, G08 P1, T1, ..., as ``{"word", "line"}`` in the order of their
+    first lines) and ``tool_table`` (the path of the table the T, H and D words used, or
+    None). A program that is not a `Program` (moves built in Python) gives Nones and no
+    states."""
+    states = getattr(program, "states", {}) or {}
+    return {"integer_input": getattr(program, "integer_input", None),
+            "states": tuple({"word": word, "line": int(line)} for word, line in
+                            sorted(states.items(), key=lambda item: (item[1], item[0]))),
+            "tool_table": getattr(program, "tool_table", None)}
 
 
 def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, roi=None,
@@ -178,6 +200,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         notes=trajectory.notes,
         holder_contact=tuple(holder),
         engine_s=engine.elapsed_s,
+        nc=nc_summary(program),
     )
     return part, report
 

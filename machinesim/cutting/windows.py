@@ -19,7 +19,7 @@ import numpy as np
 
 from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
-from machinesim.cutting.program import CutReport, _Moves, _overtravel
+from machinesim.cutting.program import CutReport, _Moves, _overtravel, nc_summary
 from machinesim.exceptions import InputError
 from machinesim.rotations import rot_z
 from machinesim.tools import tool_from_spec
@@ -132,4 +132,4 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         empty_cut=not removed > EMPTY_SWEPT_REL * swept, engine="boolean, turned groups",
         elapsed_s=time.perf_counter() - began,
         notes=(*trajectory.notes, "rapids not cut nor checked against the part (turned groups)"),
-        holder_contact=tuple(sorted(holder)), engine_s=engine_s)
+        holder_contact=tuple(sorted(holder)), engine_s=engine_s, nc=nc_summary(program))

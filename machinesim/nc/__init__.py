@@ -85,6 +85,7 @@ offsets gives the moves at that resolution, and formatting them again gives the 
 from __future__ import annotations
 
 from machinesim.nc.arcs import ARC_CHORD_M, ARC_RADIUS_TOLERANCE_M
+from machinesim.nc.builder import ProgramBuilder
 from machinesim.nc.parser import (
     INCREMENT_INCH_M,
     INCREMENT_M,
@@ -101,7 +102,6 @@ from machinesim.nc.program import (
     FrozenMapping,
     Move,
     Program,
-    ProgramBuilder,
 )
 from machinesim.nc.tooltable import Tool, ToolTable
 from machinesim.nc.writer import (

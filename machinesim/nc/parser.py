@@ -313,7 +313,8 @@ class Reader:
         return Program._from_parts(
             targets, kinds, feeds, dwells, lines, spindles, blocks, self.out.m_codes,
             number=self.state.number, source=self.source, work_offsets=self.offsets,
-            states=self.states, integer_input=self.integer_input)
+            states=self.states, integer_input=self.integer_input,
+            tool_table=None if self.tools is None else self.tools.source)
 
     def run(self, first: int, stop: int, depth: int) -> None:
         """Run lines [first, stop) (0-based); stops at M99 in a subprogram."""

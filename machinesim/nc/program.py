@@ -1,257 +1,43 @@
-"""The parsed NC program as immutable values: `Move`, `Program` and `ProgramBuilder`.
+"""The parsed NC program as immutable arrays: `Program`, and the modal rules it checks.
 
 Everything here is SI (m for X Y Z, rad for A B C, s, m/s). A `Program` keeps its moves as
 read-only arrays, one row per move (`Program.targets`, `kinds`, `feeds`, ...), so that a
 program of 10^6 or 10^7 points costs tens of bytes per move and can be planned without
-Python loops; `Program.moves` hands out `Move` values made on demand from those rows.
-A `Program` checks on construction that its moves follow the modal rules of the NC language
-(see `machinesim.nc`), so that every `Program`, however it was made, can be written back as
-NC text.
+Python loops; `Program.moves` hands out `Move` values (`machinesim.nc.moves`) made on demand
+from those rows. A `Program` checks on construction that its moves follow the modal rules of
+the NC language (see `machinesim.nc`), so that every `Program`, however it was made, can be
+written back as NC text. `machinesim.nc.builder.ProgramBuilder` builds one in Python.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any, Literal, overload
+from typing import Any, overload
 
 import numpy as np
 
 from machinesim.exceptions import NCProgramError
-from machinesim.units import M_PER_MM
-
-#: Axis letters in their canonical order: linear (m), then rotary (rad); the columns of
-#: `Program.targets`.
-AXES = ("X", "Y", "Z", "A", "B", "C")
-ROTARY_AXES = ("A", "B", "C")
-#: Work coordinate systems selectable by G54..G59.
-WORK_OFFSETS = ("G54", "G55", "G56", "G57", "G58", "G59")
-#: M codes that end the program.
-PROGRAM_END = (2, 30)
-#: M codes of subprogram call (M98) and return (M99): control flow, never on a move.
-SUBPROGRAM_CODES = (98, 99)
-#: Move kinds; `Program.kinds` holds the index into this tuple.
-MOVE_KINDS = ("rapid", "linear", "dwell")
-KIND_RAPID, KIND_LINEAR, KIND_DWELL = 0, 1, 2
-_KIND_CODE = {name: code for code, name in enumerate(MOVE_KINDS)}
-INTEGER_INPUTS = ("calculator", "increment")
-
-
-class FrozenMapping(Mapping):
-    """An immutable, hashable mapping that keeps the order it was given.
-
-    Parameters
-    ----------
-    items : iterable of (key, value) pairs
-        Keys must be unique; values must be hashable for `hash` to work.
-    """
-
-    __slots__ = ("_dict", "_items")
-
-    def __init__(self, items: Iterable[tuple[Any, Any]] = ()) -> None:
-        pairs = tuple(items)
-        object.__setattr__(self, "_items", pairs)
-        object.__setattr__(self, "_dict", dict(pairs))
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        raise AttributeError(f"{type(self).__name__} is immutable")
-
-    def __getitem__(self, key: Any) -> Any:
-        return self._dict[key]
-
-    def __iter__(self) -> Iterator[Any]:
-        return iter(self._dict)
-
-    def __len__(self) -> int:
-        return len(self._items)
-
-    def __hash__(self) -> int:
-        return hash(frozenset(self._items))
-
-    def __reduce__(self):
-        return (type(self), (self._items,))
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self._dict!r})"
-
-
-def _finite(value: Any, what: str, *, source: str, line: int | None, key: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise NCProgramError(
-            f"{what} must be a real number, got {value!r}", source=source, line=line, key=key
-        ) from None
-    if not math.isfinite(number):
-        raise NCProgramError(
-            f"{what} must be finite, got {number!r}", source=source, line=line, key=key
-        )
-    return number
-
-
-def axis_values(
-    values: Mapping[str, Any] | Iterable[tuple[str, Any]],
-    *,
-    source: str = "<moves>",
-    line: int | None = None,
-) -> FrozenMapping:
-    """Check axis letters and values and freeze them in the canonical order X Y Z A B C.
-
-    Parameters
-    ----------
-    values : mapping or iterable of pairs
-        Axis letter -> value in SI (m for X Y Z, rad for A B C).
-    source, line : optional
-        Where the values came from, for the error message.
-
-    Returns
-    -------
-    FrozenMapping
-        Axis letter -> float, letters in canonical order.
-    """
-    given = dict(values.items() if isinstance(values, Mapping) else values)
-    for letter in given:
-        if letter not in AXES:
-            raise NCProgramError(
-                f"unknown axis {letter!r}; expected one of {' '.join(AXES)}",
-                source=source,
-                line=line,
-                key=str(letter),
-            )
-    return FrozenMapping(
-        (a, _finite(given[a], f"axis {a}", source=source, line=line, key=a))
-        for a in AXES
-        if a in given
-    )
-
-
-@dataclass(frozen=True)
-class Move:
-    """One block of an NC program that moves, dwells, or carries M codes.
-
-    Attributes
-    ----------
-    kind : {"rapid", "linear", "dwell"}
-        G00, G01, or G04 (a block with M codes but no motion is a dwell of 0 s). Arcs and
-        canned cycles arrive as the linear and rapid moves they expand to.
-    target : Mapping[str, float]
-        Absolute machine axis values after this block (m for X Y Z, rad for A B C), work
-        offset and tool length offset applied; every axis given a value so far in the
-        program (modal). Frozen.
-    feed_m_per_s : float or None
-        Feed rate in m/s for linear moves (the modal F); None for rapid and dwell, and for a
-        linear move before any F.
-    dwell_s : float
-        Dwell time in s; 0.0 unless ``kind == "dwell"``.
-    line : int
-        1-based source line of the block (for built programs: the 1-based move index).
-    block_number : int or None
-        The N word of the block.
-    spindle_rpm : float or None
-        The modal S word, passed through (rev/min).
-    m_codes : tuple of int
-        The M words of this block, in source order, passed through.
-    """
-
-    kind: Literal["rapid", "linear", "dwell"]
-    target: Mapping[str, float]
-    feed_m_per_s: float | None = None
-    dwell_s: float = 0.0
-    line: int = 1
-    block_number: int | None = None
-    spindle_rpm: float | None = None
-    m_codes: tuple[int, ...] = field(default=())
-
-    def __post_init__(self) -> None:
-        where = {"source": "<move>", "line": self.line if _is_int(self.line) else None}
-        if not _is_int(self.line) or self.line < 1:
-            raise NCProgramError(f"line must be an int >= 1, got {self.line!r}", key="line")
-        if self.kind not in MOVE_KINDS:
-            raise NCProgramError(
-                f"kind must be one of {MOVE_KINDS}, got {self.kind!r}", **where, key="kind"
-            )
-        object.__setattr__(self, "target", axis_values(self.target, source="<move>",
-                                                       line=self.line))
-        if self.kind != "dwell" and not self.target:
-            raise NCProgramError(f"a {self.kind} move needs at least one axis value",
-                                 **where, key="target")
-        if self.feed_m_per_s is not None:
-            feed = _finite(self.feed_m_per_s, "feed", **where, key="feed_m_per_s")
-            if self.kind != "linear" or feed <= 0.0:
-                raise NCProgramError(
-                    f"feed must be None for a {self.kind} move and > 0 for a linear move, "
-                    f"got {feed!r}",
-                    **where,
-                    key="feed_m_per_s",
-                )
-            object.__setattr__(self, "feed_m_per_s", feed)
-        dwell = _finite(self.dwell_s, "dwell time", **where, key="dwell_s")
-        if dwell < 0.0 or (dwell != 0.0 and self.kind != "dwell"):
-            raise NCProgramError(
-                f"dwell_s must be >= 0 for a dwell and 0.0 otherwise, got {dwell!r} for a "
-                f"{self.kind} move",
-                **where,
-                key="dwell_s",
-            )
-        object.__setattr__(self, "dwell_s", dwell)
-        if self.block_number is not None and (
-            not _is_int(self.block_number) or self.block_number < 0
-        ):
-            raise NCProgramError(f"block_number must be None or an int >= 0, got "
-                                 f"{self.block_number!r}", **where, key="block_number")
-        if self.spindle_rpm is not None:
-            rpm = _finite(self.spindle_rpm, "spindle speed", **where, key="spindle_rpm")
-            if rpm < 0.0:
-                raise NCProgramError(f"spindle_rpm must be >= 0, got {rpm!r}", **where,
-                                     key="spindle_rpm")
-            object.__setattr__(self, "spindle_rpm", rpm)
-        codes = tuple(self.m_codes)
-        if not all(_is_int(c) and c >= 0 for c in codes):
-            raise NCProgramError(f"m_codes must be ints >= 0, got {codes!r}", **where,
-                                 key="m_codes")
-        object.__setattr__(self, "m_codes", tuple(int(c) for c in codes))
-
-
-def _is_int(value: Any) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool)
-
-
-def _trusted_move(kind: str, target: FrozenMapping, feed: float | None, dwell: float,
-                  line: int, block_number: int | None, spindle: float | None,
-                  m_codes: tuple[int, ...]) -> Move:
-    """A `Move` from values a `Program` has already checked (no second validation)."""
-    move = object.__new__(Move)
-    for name, value in (("kind", kind), ("target", target), ("feed_m_per_s", feed),
-                        ("dwell_s", dwell), ("line", line), ("block_number", block_number),
-                        ("spindle_rpm", spindle), ("m_codes", m_codes)):
-        object.__setattr__(move, name, value)
-    return move
-
-
-def work_offsets_si(
-    offsets: Mapping[str, Mapping[str, float]] | None, *, source: str = "<work_offsets>"
-) -> Mapping[str, FrozenMapping]:
-    """Check and freeze work offsets {"G54": {"X": m, ...}, ...} (SI, default all zero)."""
-    if offsets is None:
-        return FrozenMapping()
-    if not isinstance(offsets, Mapping):
-        raise NCProgramError(f"work_offsets must be a mapping like {{'G54': {{'X': 0.0}}}}, "
-                             f"got {type(offsets).__name__}", source=source, key="work_offsets")
-    for name in offsets:
-        if name not in WORK_OFFSETS:
-            raise NCProgramError(
-                f"unknown work offset {name!r}; expected one of {' '.join(WORK_OFFSETS)}",
-                source=source,
-                key=str(name),
-            )
-        if not isinstance(offsets[name], Mapping):
-            raise NCProgramError(f"work offset {name} must map axis letters to values in SI, "
-                                 f"got {offsets[name]!r}", source=source, key=name)
-    return FrozenMapping(
-        (name, axis_values(offsets[name], source=source)) for name in WORK_OFFSETS
-        if name in offsets
-    )
+from machinesim.nc.moves import (  # noqa: F401  (re-exported: the names of this module before)
+    _KIND_CODE,
+    AXES,
+    INTEGER_INPUTS,
+    KIND_DWELL,
+    KIND_LINEAR,
+    KIND_RAPID,
+    MOVE_KINDS,
+    PROGRAM_END,
+    ROTARY_AXES,
+    SUBPROGRAM_CODES,
+    WORK_OFFSETS,
+    FrozenMapping,
+    Move,
+    _finite,
+    _is_int,
+    _trusted_move,
+    axis_values,
+    work_offsets_si,
+)
 
 
 class Moves(Sequence):
@@ -326,6 +112,8 @@ class Program:
         ``"T1"``, ...) -> the first line each appeared on, for reports.
     integer_input : {"calculator", "increment"} or None
         How axis numbers without a decimal point were read (None: not read from text).
+    tool_table : str or None
+        Where the tool table the program was read with came from (its path), or None.
 
     Attributes
     ----------
@@ -363,7 +151,7 @@ class Program:
 
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
-                 "_moves")
+                 "tool_table", "_moves")
 
     def __init__(
         self,
@@ -374,6 +162,7 @@ class Program:
         *,
         states: Mapping[str, int] | None = None,
         integer_input: str | None = None,
+        tool_table: str | None = None,
     ) -> None:
         moves = tuple(moves)
         for index, move in enumerate(moves):
@@ -398,7 +187,7 @@ class Program:
             np.array([-1 if m.block_number is None else m.block_number for m in moves],
                      dtype=np.int64),
             {i: m.m_codes for i, m in enumerate(moves) if m.m_codes},
-            number, source, work_offsets, states, integer_input,
+            number, source, work_offsets, states, integer_input, tool_table,
         )
 
     @classmethod
@@ -418,6 +207,7 @@ class Program:
         work_offsets: Mapping[str, Mapping[str, float]] | None = None,
         states: Mapping[str, int] | None = None,
         integer_input: str | None = None,
+        tool_table: str | None = None,
     ) -> Program:
         """A program from its arrays (layout as the attributes), checked like any program.
 
@@ -463,21 +253,22 @@ class Program:
             column(spindles, np.nan, np.float64, "spindles"),
             column(block_numbers, -1, np.int64, "block_numbers"),
             {} if m_codes is None else m_codes,
-            number, source, work_offsets, states, integer_input,
+            number, source, work_offsets, states, integer_input, tool_table,
         )
         return program
 
     @classmethod
     def _from_parts(cls, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, *,
-                    number, source, work_offsets, states, integer_input) -> Program:
+                    number, source, work_offsets, states, integer_input,
+                    tool_table=None) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
-                      source, work_offsets, states, integer_input)
+                      source, work_offsets, states, integer_input, tool_table)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
-              source, work_offsets, states, integer_input) -> None:
+              source, work_offsets, states, integer_input, tool_table=None) -> None:
         set_ = object.__setattr__
         set_(self, "source", source)
         set_(self, "number", number)
@@ -489,6 +280,10 @@ class Program:
             raise NCProgramError(f"integer_input must be None or one of {INTEGER_INPUTS}, "
                                  f"got {integer_input!r}", source=source, key="integer_input")
         set_(self, "integer_input", integer_input)
+        if tool_table is not None and not isinstance(tool_table, str):
+            raise NCProgramError(f"tool_table must be None or a str (where the table came "
+                                 f"from), got {tool_table!r}", source=source, key="tool_table")
+        set_(self, "tool_table", tool_table)
         set_(self, "states", _states(states, source))
         codes = _m_codes(m_codes, len(kinds), source)
         for name, array in (("_targets", targets), ("_kinds", kinds), ("_feeds", feeds),
@@ -562,9 +357,10 @@ class Program:
         if not isinstance(other, Program):
             return NotImplemented
         return (
-            (self.number, self.source, self.work_offsets, self.states, self.integer_input)
+            (self.number, self.source, self.work_offsets, self.states, self.integer_input,
+             self.tool_table)
             == (other.number, other.source, other.work_offsets, other.states,
-                other.integer_input)
+                other.integer_input, other.tool_table)
             and self._same_moves(other)
         )
 
@@ -575,7 +371,7 @@ class Program:
         return (_rebuild, (self._targets, self._kinds, self._feeds, self._dwells, self._lines,
                            self._spindles, self._blocks, dict(self._m_codes), self.number,
                            self.source, {k: dict(v) for k, v in self.work_offsets.items()},
-                           dict(self.states), self.integer_input))
+                           dict(self.states), self.integer_input, self.tool_table))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -589,11 +385,12 @@ class Program:
 
 
 def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number, source,
-             work_offsets, states, integer_input) -> Program:
+             work_offsets, states, integer_input, tool_table=None) -> Program:
     """Unpickle a `Program` (the arrays come back writeable copies: made read-only again)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
-                               states=states, integer_input=integer_input)
+                               states=states, integer_input=integer_input,
+                               tool_table=tool_table)
 
 
 def _states(states: Mapping[str, int] | None, source: str) -> FrozenMapping:
@@ -726,100 +523,3 @@ def _dropped_axis(unset: np.ndarray, i: int) -> str:
 
 def _target_text(row: np.ndarray) -> str:
     return str({a: float(v) for a, v in zip(AXES, row, strict=True) if v == v})
-
-
-class ProgramBuilder:
-    """Build a `Program` in Python, with axis values in SI machine coordinates.
-
-    Each method appends one move and returns the builder, so calls chain::
-
-        ProgramBuilder(number=1).rapid(X=0.0, Z=1e-3).linear(X=0.01, feed_mm_per_min=100.0)
-            .dwell(0.5).build()
-
-    Targets are modal as in NC: an axis keeps its value until given a new one. Feed and
-    spindle speed are modal too. A block with M codes but no motion is ``dwell(0.0,
-    m_codes=(...))``.
-
-    Parameters
-    ----------
-    number : int, optional
-        The O number.
-    work_offsets : mapping, optional
-        {"G54": {"X": m, ...}}; the axis values given to the builder are machine values
-        (offset already applied), the offsets only matter to the writer.
-    source : str
-        Name of the program in messages.
-    """
-
-    def __init__(
-        self,
-        number: int | None = None,
-        *,
-        work_offsets: Mapping[str, Mapping[str, float]] | None = None,
-        source: str = "<builder>",
-    ) -> None:
-        self._number = number
-        self._offsets = work_offsets_si(work_offsets, source=source)
-        self._source = source
-        self._moves: list[Move] = []
-        self._target: dict[str, float] = {}
-        self._feed: float | None = None
-        self._spindle: float | None = None
-
-    def spindle(self, rpm: float) -> ProgramBuilder:
-        """Set the modal spindle speed (rev/min) for the moves that follow."""
-        self._spindle = rpm
-        return self
-
-    def rapid(self, *, block_number: int | None = None, m_codes: Iterable[int] = (),
-              **axes: float) -> ProgramBuilder:
-        """Append a rapid move (G00) to the given axis values (m, rad)."""
-        return self._motion("rapid", None, block_number, m_codes, axes)
-
-    def linear(
-        self,
-        *,
-        feed_mm_per_min: float | None = None,
-        feed_m_per_s: float | None = None,
-        block_number: int | None = None,
-        m_codes: Iterable[int] = (),
-        **axes: float,
-    ) -> ProgramBuilder:
-        """Append a linear move (G01); the feed (one of the two units) is modal."""
-        if feed_mm_per_min is not None and feed_m_per_s is not None:
-            raise NCProgramError("give the feed once: feed_mm_per_min or feed_m_per_s",
-                                 source=self._source, key="feed")
-        if feed_mm_per_min is not None:
-            self._feed = _finite(feed_mm_per_min, "feed", source=self._source,
-                                 line=len(self._moves) + 1, key="feed_mm_per_min") * (
-                M_PER_MM / 60.0
-            )
-        elif feed_m_per_s is not None:
-            self._feed = feed_m_per_s
-        return self._motion("linear", self._feed, block_number, m_codes, axes)
-
-    def dwell(self, seconds: float, *, block_number: int | None = None,
-              m_codes: Iterable[int] = ()) -> ProgramBuilder:
-        """Append a dwell (G04) of ``seconds`` at the current position."""
-        self._append("dwell", self._target, None, seconds, block_number, m_codes)
-        return self
-
-    def _motion(self, kind: str, feed: float | None, block_number: int | None,
-                m_codes: Iterable[int], axes: Mapping[str, float]) -> ProgramBuilder:
-        if not axes:
-            raise NCProgramError(f"a {kind} move needs at least one axis value",
-                                 source=self._source, line=len(self._moves) + 1, key=kind)
-        given = axis_values(axes, source=self._source, line=len(self._moves) + 1)
-        self._append(kind, {**self._target, **given}, feed, 0.0, block_number, m_codes)
-        return self
-
-    def _append(self, kind: str, target: Mapping[str, float], feed: float | None,
-                dwell_s: float, block_number: int | None, m_codes: Iterable[int]) -> None:
-        move = Move(kind, target, feed, dwell_s, len(self._moves) + 1, block_number,
-                    self._spindle, tuple(m_codes))
-        self._moves.append(move)
-        self._target = dict(move.target)
-
-    def build(self) -> Program:
-        """The program built so far (the builder can go on)."""
-        return Program(tuple(self._moves), self._number, self._source, self._offsets)
