@@ -1,0 +1,47 @@
+"""The edge path the axes really follow: a spiral tool path run through a servo model.
+
+The STS program turns C at a constant spindle speed while X and Z follow the cutting points;
+the axes' servo loops (`machinesim.servo`, or any `ServoModel`) lag behind. Here the whole
+path is one continuous motion, as on the machine (the motion planner applies a servo move by
+move instead, each move starting from rest).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from machinesim.cam.spiral import SPINDLE_RPM, ToolPath
+from machinesim.cutting.turning import EdgePath
+from machinesim.exceptions import InputError
+
+
+def path_times(path: ToolPath, spindle_rpm: float = SPINDLE_RPM) -> np.ndarray:
+    """Time of each point of ``path`` (s) at a constant spindle speed, from 0."""
+    if not (spindle_rpm > 0.0) or not math.isfinite(spindle_rpm):
+        raise InputError(f"Expected spindle_rpm > 0, got {spindle_rpm!r}", key="spindle_rpm")
+    return (path.c - path.c[0]) / (2.0 * math.pi * spindle_rpm / 60.0)
+
+
+def followed_path(path: ToolPath, servo, spindle_rpm: float = SPINDLE_RPM) -> ToolPath:
+    """The (C, X, Z) the axes reach when ``servo`` (``follow(t, q)``, q columns X, Z, C)
+    follows ``path`` at ``spindle_rpm``."""
+    t = path_times(path, spindle_rpm)
+    q = np.column_stack([path.x, path.z, path.c])
+    reached = np.asarray(servo.follow(t, q), dtype=np.float64)
+    if reached.shape != q.shape:
+        raise InputError(f"servo.follow must return shape {q.shape}, got {reached.shape}",
+                         key="servo")
+    return ToolPath(reached[:, 2], reached[:, 0], reached[:, 1])
+
+
+def followed_edge_path(path: ToolPath, servo, spindle_rpm: float = SPINDLE_RPM, *,
+                       dx: float = 0.0, dy: float = 0.0) -> EdgePath:
+    """`EdgePath` of the followed path, the tool set off by ``dx`` (radial) and ``dy``
+    (centre height), m."""
+    reached = followed_path(path, servo, spindle_rpm)
+    return EdgePath(reached.c, reached.x + dx, dy, reached.z)
+
+
+__all__ = ["followed_edge_path", "followed_path", "path_times"]

@@ -1,0 +1,109 @@
+"""Tool errors dx, dR and |dy| from the measured height map of a turned test sphere.
+
+How the errors show on a turned, nose-compensated sphere (machinesim.cutting.tool_form_error;
+docs/procedures/sts_turning.md, "Identifying the tool errors"):
+
+* dx (radial offset): the surface at rho is the design's at rho - dx, a cone about the centre,
+  ~ dx |rho| / Rs, with its kink at the spindle axis: not a lateral shift, so it is told apart
+  from the part's placement in the measurement.
+* dR (nose radius): the design offset inwards by dR and raised by dR, ~ -dR rho^2 / (2 Rs^2):
+  the W (or M) with the cone.
+* dy (centre height): outside the core only a piston (~ dy^2 / 2Rs); the edge never reaches
+  rho < |dy|, which stays uncut: the core's area gives |dy| (its sign is not seen).
+
+Only the measured map and the design are used (heights, and the uncut core above the cut
+surface); the fit is a least-squares of the exact forms with the spindle centre (x0, y0) and a
+piston free.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from machinesim.cam.spiral import Design
+from machinesim.cutting.tool_form_error import nose_radius_error
+from machinesim.exceptions import InputError, NotConvergedError
+
+
+@dataclass(frozen=True)
+class TurnedToolErrors:
+    """Tool errors read from a turned surface, m.
+
+    Attributes
+    ----------
+    dx : float
+        Radial tool offset (parameter ``tool.offset_um`` x, in m here).
+    dy_abs : float
+        |centre height error|, from the uncut core (resolution: the map's pixel).
+    d_radius : float
+        Nose radius error (parameter ``tool_geometry.nose_radius``, in m here).
+    centre : tuple[float, float]
+        Spindle axis in the map's coordinates, m.
+    residual_rms : float
+        RMS of the fit's residuals, m.
+    """
+
+    dx: float
+    dy_abs: float
+    d_radius: float
+    centre: tuple
+    residual_rms: float
+
+
+def identify_tool_errors(design: Design, x, y, heights, *, core_step: float,
+                         aperture: float) -> TurnedToolErrors:
+    """Fit dx, dR (and read |dy|) from ``heights`` (ny, nx) measured over ``x`` x ``y``.
+
+    Parameters
+    ----------
+    design : Design
+        The rotationally symmetric surface the program was made for.
+    x, y : array-like
+        Grid axes of the map, m.
+    heights : array-like, shape (ny, nx)
+        Measured heights, m; NaN where the instrument saw nothing.
+    core_step : float
+        Height (m) above the fitted surface from which a point counts as uncut core.
+    aperture : float
+        Only points within this distance (m) of the map's origin are used: the turned area.
+    """
+    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    z = np.asarray(heights, dtype=np.float64)
+    if z.shape != (y.size, x.size):
+        raise InputError(f"Expected heights of shape ({y.size}, {x.size}), got {z.shape}",
+                         key="heights")
+    if not isinstance(design, Design):
+        raise InputError(f"Expected a Design, got {type(design).__name__}", key="design")
+    px, py = np.meshgrid(x, y)
+    valid = np.isfinite(z) & (np.hypot(px, py) < aperture)
+    cut = valid.copy()
+    pixel = abs(x[1] - x[0]) * abs(y[1] - y[0]) if x.size > 1 and y.size > 1 else 0.0
+    dy_abs = 0.0
+
+    def residual(p, mask):
+        x0, y0, piston, dx, dr = p
+        rho = np.hypot(px[mask] - x0, py[mask] - y0)
+        # the point at rho is cut by the program point a = sqrt(rho^2 - dy^2), its tip dx out
+        a = np.sqrt(np.maximum(rho * rho - dy_abs * dy_abs, 0.0)) - dx
+        model = design(a, 0.0) + nose_radius_error(design, a, 0.0, dr) + piston
+        return (model - z[mask]) * 1e9  # nm: a well-scaled problem
+
+    p = np.zeros(5)
+    for _ in range(4):  # fit, mark the core (points well above the fit), refit without it
+        result = least_squares(residual, p, args=(cut,), x_scale=[1e-6, 1e-6, 1e-8, 1e-6, 1e-5])
+        if not result.success:
+            raise NotConvergedError(f"tool error fit did not converge: {result.message}")
+        p = result.x
+        above = np.zeros(z.shape, dtype=bool)
+        above[valid] = residual(p, valid) * -1e-9 > core_step
+        cut = valid & ~above
+        dy_abs = float(np.sqrt(above.sum() * pixel / np.pi))
+    rms = float(np.sqrt(np.mean(residual(p, cut) ** 2)) * 1e-9)
+    return TurnedToolErrors(dx=float(p[3]), dy_abs=dy_abs, d_radius=float(p[4]),
+                            centre=(float(p[0]), float(p[1])), residual_rms=rms)
+
+
+__all__ = ["TurnedToolErrors", "identify_tool_errors"]

@@ -1,0 +1,216 @@
+"""Servo follow-up error: a sampled PID loop with feed-forward on a plant with mass and damping.
+
+Each axis is modelled as
+
+* plant ``P(s) = 1 / (m s^2 + c s)``: a mass ``m`` (kg; kg m^2 for a rotary axis) on a
+  viscous guide of damping ``c`` (N s/m; N m s/rad), driven by a force (torque) ``u``;
+* feedback ``C(s) = Kp + Ki / s + Kd s`` on the position error ``e = r - y``;
+* acceleration feed-forward ``u_ff = acc_ff * m * a_ref`` passed through a first-order
+  low-pass at the system bandwidth ``bandwidth_hz`` (``F(s) = 1 / (s / w_b + 1)``),
+
+in the spirit of the PID + "ATC" (system bandwidth, mass, acceleration feed-forward) parameters
+of paper 004 (Table 6). The controller and the feed-forward filter are discretised with the
+Tustin rule, the plant with a zero-order hold (``control.sample_system``), the loop is closed in
+discrete time (``control.feedback``) and driven by its transfer function's difference equation
+(``scipy.signal.lfilter``, equal to ``control.forced_response`` and much faster: tested); no
+integrator is written by hand. The sampled loop is checked for stability when the axis is built: a
+closed-loop pole on or outside the unit circle raises `ServoDivergenceError` (the paper's
+oscillation), so unstable gains never reach a part.
+
+Units of Table 6. The paper prints the gains without units. The presets read them as
+Kp in N/um, Ki in N/(um s) and Kd in N ms/um (so 1e6, 1e6 and 1e3 times the printed numbers in
+SI), M in kg (x, z) and kg m^2 (c), and ACCFF x 1000 as the fraction of the inertial force fed
+forward. This reading is an assumption (see docs/procedures/sts_turning.md); the model itself
+takes SI gains and does not depend on it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import control
+import numpy as np
+from scipy.signal import lfilter
+
+from machinesim.exceptions import InputError, MachineSimError
+
+DEFAULT_SAMPLE_TIME_S = 1e-4  # 10 kHz servo loop
+
+
+class ServoDivergenceError(MachineSimError):
+    """The sampled servo loop of an axis is unstable: the axis would oscillate and diverge."""
+
+
+@dataclass(frozen=True)
+class AxisServo:
+    """Gains and plant of one axis, SI.
+
+    Attributes
+    ----------
+    kp, ki, kd : float
+        PID gains on the position error: N/m, N/(m s), N s/m (rotary: per rad).
+    mass : float
+        Moving mass, kg (rotary: inertia, kg m^2); also the feed-forward's mass estimate.
+    damping : float
+        Viscous damping of the guide, N s/m (rotary: N m s/rad).
+    acc_ff : float
+        Fraction of the inertial force ``mass * a_ref`` fed forward (0 = none, 1 = all).
+    bandwidth_hz : float
+        Cut-off of the feed-forward low-pass, Hz; ``inf`` for no filter.
+    sample_time_s : float
+        Servo loop period, s.
+    name : str
+        Axis name, used in messages.
+    """
+
+    kp: float
+    ki: float
+    kd: float
+    mass: float
+    damping: float = 0.0
+    acc_ff: float = 0.0
+    bandwidth_hz: float = float("inf")
+    sample_time_s: float = DEFAULT_SAMPLE_TIME_S
+    name: str = "axis"
+    _loops: tuple = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        for key in ("kp", "ki", "kd", "damping", "acc_ff"):
+            value = getattr(self, key)
+            if not np.isfinite(value) or value < 0.0:
+                raise InputError(f"servo gain of axis {self.name} must be finite and >= 0, "
+                                 f"got {value!r}", key=key)
+        for key in ("mass", "sample_time_s", "bandwidth_hz"):
+            value = getattr(self, key)
+            if not (value > 0.0) or np.isnan(value) or (key != "bandwidth_hz"
+                                                        and not np.isfinite(value)):
+                raise InputError(f"servo parameter of axis {self.name} must be > 0, "
+                                 f"got {value!r}", key=key)
+        if self.kp == 0.0 and self.ki == 0.0 and self.kd == 0.0:
+            raise InputError(f"axis {self.name} has no feedback (Kp = Ki = Kd = 0)", key="kp")
+        object.__setattr__(self, "_loops", self._build())
+
+    def _build(self):
+        ts = self.sample_time_s
+        s = control.tf("s")
+        plant = control.sample_system(1.0 / (self.mass * s**2 + self.damping * s), ts, "zoh")
+        pid = self.kp + self.ki / s + self.kd * s / (ts / 2.0 * s + 1.0)  # proper derivative
+        controller = control.sample_system(control.minreal(pid, verbose=False), ts, "tustin")
+        if np.isfinite(self.bandwidth_hz):
+            ff = 1.0 / (s / (2.0 * np.pi * self.bandwidth_hz) + 1.0)
+            ff_d = control.sample_system(ff, ts, "tustin")
+        else:
+            ff_d = control.tf([1.0], [1.0], ts)
+        sensitivity_plant = control.feedback(plant, controller)      # a force -> y
+        reference = control.feedback(controller * plant, 1)          # r -> y
+        poles = control.poles(reference)
+        radius = float(np.max(np.abs(poles))) if poles.size else 0.0
+        if radius >= 1.0 - 1e-12:
+            raise ServoDivergenceError(
+                f"servo loop of axis {self.name} is unstable (largest closed-loop pole "
+                f"|z| = {radius:.6f} >= 1 at Ts = {ts} s) with Kp = {self.kp:g}, "
+                f"Ki = {self.ki:g}, Kd = {self.kd:g}, mass = {self.mass:g}: the axis would "
+                f"oscillate; lower the gains")
+        feed = control.minreal(ff_d * sensitivity_plant, verbose=False) * (self.acc_ff
+                                                                           * self.mass)
+        return reference, feed, radius
+
+    @property
+    def pole_radius(self) -> float:
+        """Largest |z| of the closed loop's poles (< 1: stable)."""
+        return self._loops[2]
+
+    def respond(self, t: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Position reached for the command ``r`` sampled at uniform times ``t`` (the loop's
+        period), the axis at rest on ``r[0]`` at ``t[0]``."""
+        reference, feed, _ = self._loops
+        r = np.asarray(r, dtype=np.float64)
+        if r.size < 2:
+            return r.copy()
+        ts = self.sample_time_s
+        y = _simulate(reference, r - r[0])
+        if self.acc_ff > 0.0:
+            y = y + _simulate(feed, np.gradient(np.gradient(r, ts), ts))
+        return r[0] + y
+
+
+def _simulate(system, u: np.ndarray) -> np.ndarray:
+    """Response of the discrete SISO ``system`` from rest to ``u`` (one value per period): the
+    same as ``control.forced_response(system, U=u)``, filtered by ``scipy.signal.lfilter``
+    from the transfer function's coefficients (compiled: 10^6-10^7 samples in seconds)."""
+    num, den = control.tfdata(system)
+    num, den = np.asarray(num[0][0], dtype=np.float64), np.asarray(den[0][0], dtype=np.float64)
+    # descending powers of z -> powers of z^-1: align the numerator's end with the denominator's
+    num = np.concatenate([np.zeros(den.size - num.size), num])
+    return lfilter(num, den, u)
+
+
+@dataclass(frozen=True)
+class PIDServo:
+    """A `ServoModel` (``follow(t, q)``) made of one `AxisServo` per axis column; ``None`` for an
+    axis that follows its command exactly. Commands are resampled to the loop period, simulated
+    and read back at the requested times (linear interpolation)."""
+
+    axes: tuple
+
+    def follow(self, t: np.ndarray, q: np.ndarray) -> np.ndarray:
+        t = np.asarray(t, dtype=np.float64)
+        q = np.asarray(q, dtype=np.float64)
+        if q.ndim != 2 or q.shape[1] != len(self.axes) or t.shape != (q.shape[0],):
+            raise InputError(f"PIDServo with {len(self.axes)} axes needs t (N,) and q "
+                             f"(N, {len(self.axes)}), got {t.shape} and {q.shape}")
+        out = q.copy()
+        if t.size < 2 or t[-1] <= t[0]:
+            return out
+        for i, axis in enumerate(self.axes):
+            if axis is None:
+                continue
+            ts = axis.sample_time_s
+            grid = t[0] + ts * np.arange(int(np.ceil((t[-1] - t[0]) / ts)) + 1)
+            y = axis.respond(grid - grid[0], np.interp(grid, t, q[:, i]))
+            out[:, i] = np.interp(t, grid, y)
+        return out
+
+    def following_error(self, t: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """Commanded minus reached axis values, (N, n_axes)."""
+        return np.asarray(q, dtype=np.float64) - self.follow(t, q)
+
+
+# Paper 004, Table 6 (printed values; see the module docstring for the units read into them).
+TABLE6 = {
+    "before": {"x": (60, 7000, 0.9, 12, 4, 0), "z": (100, 7000, 1.2, 12, 4, 0.0009),
+               "c": (70, 7000, 0.7, 10, 0.115, 0)},
+    "after": {"x": (110, 10000, 1.1, 1.5, 4, 0.001), "z": (180, 10000, 1.5, 16, 4.8, 0.001),
+              "c": (100, 10000, 1.5, 8, 0.3, 0)},
+}
+
+
+TABLE6_DAMPING = {"x": 1e4, "z": 1e4, "c": 50.0}  # assumed guide damping, N s/m; N m s/rad
+
+
+def table6_axis(preset: str, axis: str, *, damping: float | None = None,
+                sample_time_s: float = DEFAULT_SAMPLE_TIME_S) -> AxisServo:
+    """The `AxisServo` of ``axis`` ("x", "z", "c") for Table 6's ``preset`` ("before", "after")."""
+    if preset not in TABLE6:
+        raise InputError(f"unknown servo preset {preset!r}; expected one of {sorted(TABLE6)}")
+    if axis not in TABLE6[preset]:
+        raise InputError(f"unknown axis {axis!r}; expected one of {sorted(TABLE6[preset])}")
+    kp, ki, kd, bw, mass, accff = TABLE6[preset][axis]
+    scale = 1e3 if axis == "c" else 1e6  # per mrad (rotary) or per um (linear)
+    if damping is None:
+        damping = TABLE6_DAMPING[axis]
+    return AxisServo(kp=kp * scale, ki=ki * scale, kd=kd * scale * 1e-3, mass=mass,
+                     damping=damping,
+                     acc_ff=accff * 1e3, bandwidth_hz=bw, sample_time_s=sample_time_s,
+                     name=axis)
+
+
+def table6_servo(preset: str, axis_order: tuple = ("x", "z", "c"), **kwargs) -> PIDServo:
+    """A `PIDServo` for Table 6's ``preset``, one column per name in ``axis_order`` (names in
+    either case; a name not in the table, e.g. "y", follows exactly)."""
+    return PIDServo(tuple(table6_axis(preset, a.lower(), **kwargs)
+                          if a.lower() in TABLE6["before"] else None for a in axis_order))
+
+
+__all__ = ["DEFAULT_SAMPLE_TIME_S", "TABLE6", "AxisServo", "PIDServo", "ServoDivergenceError",
+           "table6_axis", "table6_servo"]

@@ -1,0 +1,117 @@
+"""The sampled PID + feed-forward servo against closed forms of continuous linear systems."""
+
+import numpy as np
+import pytest
+
+from machinesim.exceptions import InputError, MachineSimError
+from machinesim.servo import AxisServo, PIDServo, ServoDivergenceError, table6_servo
+
+
+def test_step_of_p_loop_matches_second_order_response():
+    # P control on m s^2 + c s: T(s) = kp / (m s^2 + c s + kp), a pure second-order system.
+    m, c, kp = 2.0, 80.0, 2.0e4
+    wn = np.sqrt(kp / m)
+    zeta = c / (2.0 * np.sqrt(kp * m))
+    wd = wn * np.sqrt(1.0 - zeta**2)
+    ts = 1e-5
+    axis = AxisServo(kp=kp, ki=0.0, kd=0.0, mass=m, damping=c, sample_time_s=ts)
+    t = ts * np.arange(20001)
+    r = np.ones_like(t)
+    r[0] = 0.0  # at rest on 0, step to 1 at the first period
+    y = axis.respond(t, r)
+    tt = t - ts
+    expected = 1.0 - np.exp(-zeta * wn * tt) * (np.cos(wd * tt)
+                                                + zeta / np.sqrt(1 - zeta**2) * np.sin(wd * tt))
+    expected[0] = 0.0
+    # the zero-order hold delays by half a period: error of order wn * ts
+    assert np.max(np.abs(y - expected)) < 2e-3
+    assert y.max() - 1.0 == pytest.approx(np.exp(-np.pi * zeta / np.sqrt(1 - zeta**2)),
+                                          abs=2e-3)
+
+
+def _ramp_error(axis: AxisServo, v: float, duration: float) -> float:
+    t = np.linspace(0.0, duration, 2001)
+    q = (v * t)[:, None]
+    return float(PIDServo((axis,)).following_error(t, q)[-1, 0])
+
+
+def test_ramp_error_of_pd_loop_is_final_value_theorem():
+    # L(s) = (kd s + kp) / (s (m s + c)): velocity constant Kv = kp / c, e_ss = v / Kv.
+    m, c, kp, kd, v = 4.0, 1e4, 6e7, 2e4, 1e-3
+    axis = AxisServo(kp=kp, ki=0.0, kd=kd, mass=m, damping=c)
+    assert _ramp_error(axis, v, 0.2) == pytest.approx(v * c / kp, rel=1e-3)
+
+
+def test_ramp_error_vanishes_with_integral_action():
+    # the integrator makes the loop type 2: zero steady-state error for a ramp
+    m, c, kp, kd, ki, v = 4.0, 1e4, 6e7, 2e4, 1e9, 1e-3
+    axis = AxisServo(kp=kp, ki=ki, kd=kd, mass=m, damping=c)
+    assert abs(_ramp_error(axis, v, 0.5)) < 1e-3 * v * c / kp
+
+
+@pytest.mark.parametrize("factor, stable", [(0.8, True), (1.25, False)])
+def test_instability_matches_routh_criterion(factor, stable):
+    # m s^3 + kd s^2 + kp s + ki (c = 0) is stable iff kd kp > m ki (Routh-Hurwitz).
+    m, kp, kd = 1.0, 1e4, 100.0
+    ki = factor * kd * kp / m
+    if stable:
+        axis = AxisServo(kp=kp, ki=ki, kd=kd, mass=m, sample_time_s=1e-6)
+        assert axis.pole_radius < 1.0
+    else:
+        with pytest.raises(ServoDivergenceError) as info:
+            AxisServo(kp=kp, ki=ki, kd=kd, mass=m, sample_time_s=1e-6, name="x")
+        assert isinstance(info.value, MachineSimError)
+        assert "axis x is unstable" in str(info.value)
+
+
+def test_table6_after_follows_better_than_before():
+    # the paper's tuning (Table 6) reduces the follow-up error on a servo sine
+    t = np.linspace(0.0, 0.2, 2001)
+    q = np.stack([1e-4 * np.sin(2 * np.pi * 5 * t)] * 2 + [np.sin(2 * np.pi * 5 * t)], axis=1)
+    before = np.abs(table6_servo("before").following_error(t, q)[1000:]).max(axis=0)
+    after = np.abs(table6_servo("after").following_error(t, q)[1000:]).max(axis=0)
+    assert np.all(after < before)
+
+
+def test_bad_input_is_named():
+    with pytest.raises(InputError, match="kp"):
+        AxisServo(kp=-1.0, ki=0.0, kd=0.0, mass=1.0)
+    with pytest.raises(InputError, match="mass"):
+        AxisServo(kp=1.0, ki=0.0, kd=0.0, mass=0.0)
+    with pytest.raises(InputError, match="preset"):
+        table6_servo("middle")
+    with pytest.raises(InputError, match="needs t"):
+        PIDServo((None,)).follow(np.zeros(3), np.zeros((3, 2)))
+
+
+def test_plan_applies_the_servo_to_each_move():
+    # a G01 move is a ramp from rest: with a PD loop on X the lag at its end is v c / kp
+    from machinesim import load_machine
+    from machinesim.motion import plan
+    from machinesim.nc import parse_program
+
+    machine = load_machine("sts_lathe")
+    program = parse_program("G90 G21\nG01 X1.0 Z-0.5 F100\n")
+    m, c, kp, kd = 4.0, 1e4, 6e7, 2e4
+    servo = PIDServo((AxisServo(kp=kp, ki=0.0, kd=kd, mass=m, damping=c, name="x"), None,
+                      None))
+    ideal = plan(program, machine)
+    lagged = plan(program, machine, servo=servo)
+    v_x = (ideal.q[-1, 0] - ideal.q[0, 0]) / (ideal.t[-1] - ideal.t[0])
+    assert ideal.q[-1, 0] - lagged.q[-1, 0] == pytest.approx(v_x * c / kp, rel=1e-3)
+    np.testing.assert_array_equal(lagged.q[:, 1:], ideal.q[:, 1:])
+
+
+def test_fast_filter_equals_forced_response():
+    # second method: python-control's own simulation of the same closed loop
+    import control
+
+    from machinesim.servo import table6_axis
+    axis = table6_axis("after", "z")
+    reference, feed, _ = axis._loops
+    t = axis.sample_time_s * np.arange(3000)
+    r = 1e-5 * np.sin(2 * np.pi * 7 * t) + 2e-6 * t
+    a = np.gradient(np.gradient(r, axis.sample_time_s), axis.sample_time_s)
+    expected = (r[0] + control.forced_response(reference, T=t, U=r - r[0]).outputs
+                + control.forced_response(feed, T=t, U=a).outputs)
+    np.testing.assert_allclose(axis.respond(t, r), expected, rtol=0, atol=1e-15)

@@ -1,0 +1,37 @@
+"""dx, |dy| and dR read back from the height map of a sphere turned with them (engine-cut;
+the identification sees only the map and the design)."""
+
+import numpy as np
+import pytest
+
+import machinesim.cam.spiral as sp
+from machinesim.cutting.turning import EdgePath, turned_surface
+from machinesim.exceptions import InputError
+from machinesim.identification.turning_tool import identify_tool_errors
+
+RS, FEED, RADIUS, R = 0.5e-3, 1e-6, 0.12e-3, 0.2e-3
+DESIGN = sp.sphere(RS)
+
+
+def test_tool_errors_from_a_turned_sphere():
+    dx, dy, dr = 0.8e-6, -3e-6, 15e-6
+    shift = (4e-6, -2.5e-6)  # where the spindle axis lies in the measurement's coordinates
+    spiral = sp.Spiral(RADIUS, FEED)
+    tp = sp.tool_path(sp.cutting_points(DESIGN, spiral, sp.constant_angle(spiral, 0.02)), R)
+    x = np.linspace(-0.1e-3, 0.1e-3, 201) + 0.3e-6
+    heights = turned_surface(EdgePath(tp.c, tp.x + dx, dy, tp.z), R + dr, x, x, top=1e-6)
+    found = identify_tool_errors(DESIGN, x + shift[0], x + shift[1], heights,
+                                 core_step=50e-9, aperture=0.1e-3)
+    # bias from the scallops (<= f_c^2 / 8R ~ 1.2 nm) over the sensitivities rho / Rs (dx) and
+    # rho^2 / 2 Rs^2 (dR) at rho ~ 0.1 mm: ~ 6 nm and ~ 0.1 um
+    assert found.dx == pytest.approx(dx, abs=10e-9)
+    assert found.d_radius == pytest.approx(dr, abs=0.1e-6)
+    assert found.dy_abs == pytest.approx(abs(dy), abs=1e-6)  # the map's pixel
+    assert found.centre == pytest.approx(shift, abs=20e-9)
+    assert found.residual_rms < 1.5e-9
+
+
+def test_bad_map_is_named():
+    x = np.linspace(-1e-4, 1e-4, 5)
+    with pytest.raises(InputError, match="heights"):
+        identify_tool_errors(DESIGN, x, x, np.zeros((4, 5)), core_step=5e-8, aperture=1e-4)
