@@ -5,10 +5,11 @@ Run: ``.venv/bin/python benchmarks/campaign.py [--trials 12]`` (about 1 min on 2
 The trial is probing only: paper 002's three reference spheres probed at C = 0 and 180 deg
 and the setting identified (`machinesim campaign workpiece_setting --identify-only`), the
 robot's landing drawn with 30 um repeatability. Each worker count gets its own LocalCluster
-(processes, one thread each), started and warmed up (one trial per worker, which loads the
-machine) before the clock starts; the figure is the wall time of ``trials`` trials through
-``machinesim.campaign.runner``'s own path (client.map, as_completed, one file written per
-trial). The goal on a 2-core machine: 2 workers >= 1.7 x one worker.
+as the runner makes it (processes, one thread and one core each), started and warmed up
+(one trial per worker, which loads the machine) before the clock starts; the figure is the
+wall time of ``trials`` trials through ``machinesim.campaign.runner``'s own path
+(client.map, as_completed, one file written per trial). The goal on a 2-core machine:
+2 workers >= 1.7 x one worker.
 
 The scheduler's per-trial overhead is timed with an empty task (a function returning its
 argument) mapped over 500 keys on the 2-worker cluster: the round trip per task through
@@ -18,14 +19,14 @@ client.map and as_completed, which every trial pays on top of its own work.
 from __future__ import annotations
 
 import argparse
-import logging
 import tempfile
 import time
 
-from distributed import Client, LocalCluster, as_completed
+from distributed import as_completed
 
 from machinesim.campaign import CampaignSpec, parse_vary, run_trial
 from machinesim.campaign.results import CampaignFolder
+from machinesim.campaign.runner import _client
 
 SPEC = CampaignSpec("workpiece_setting", 10_000, (parse_vary("robot.repeatability=30um"),),
                     seed=1, identify_only=True)
@@ -37,9 +38,8 @@ def _identity(x):
 
 def trials_per_second(workers: int, trials: int) -> tuple[float, float]:
     """(trials/s, per-task scheduler overhead in s) on a fresh LocalCluster of ``workers``."""
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.CRITICAL)
-    with cluster, Client(cluster) as client, tempfile.TemporaryDirectory() as folder:
+    client, cluster = _client(workers, None, None)  # the runner's own local cluster
+    with cluster, client, tempfile.TemporaryDirectory() as folder:
         warm = client.map(run_trial, [SPEC] * workers, range(10_000 - workers, 10_000),
                           pure=False)
         client.gather(warm)

@@ -81,7 +81,23 @@ def _client(workers, scheduler, client):
         warnings.filterwarnings("ignore", message="Port .* is already in use")
         cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
                                dashboard_address=None, silence_logs=logging.ERROR)
-    return Client(cluster), cluster
+    client = Client(cluster)
+    client.run(_one_core_each)
+    return client, cluster
+
+
+def _one_core_each(dask_worker) -> None:
+    """Keep a local worker to one core: pinned to core ``name mod cores`` (Linux), and the
+    planner's and reader's thread pools to one thread. A trial alone spreads over ~1.3
+    cores (manifold3d's TBB threads, the planner's pool); K such workers on K cores would
+    fight for them, while one worker per core keeps every core busy with its own trial."""
+    if hasattr(os, "sched_setaffinity"):
+        cores = sorted(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {cores[int(dask_worker.name) % len(cores)]})
+    from machinesim.motion import chords
+    from machinesim.nc import fastscan
+
+    chords.WORKERS = fastscan.WORKERS = 1
 
 
 def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder, progress,
