@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from machinesim.cam.pyramids import workpiece_axes
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
 
@@ -45,22 +46,11 @@ def following_axes(machine, theta, radius: float, z: float = 0.0) -> np.ndarray:
     """Axis values (N, n_axes) that keep the tool tip on the table point at ``(radius, 0)``
     (workpiece frame) while C takes the angles ``theta`` (rad), on the nominal machine."""
     theta = _angles(theta)
-    n = len(machine.axes)
     ix, iy, iz, ic = (machine.axes.index(a) for a in "XYZC")
-    out = np.zeros((theta.size, n))
+    out = np.zeros((theta.size, len(machine.axes)))
     for i, t in enumerate(theta):
-        q = np.zeros(n)
-        q[iz], q[ic] = z, t
-        p0 = machine.tool_pose(q)[:3, 3]
-        columns = []
-        for k in (ix, iy):
-            dq = q.copy()
-            dq[k] += 1e-3
-            columns.append((machine.tool_pose(dq)[:3, 3] - p0) / 1e-3)
-        jac = np.stack(columns, axis=1)[:2]            # the nominal map is affine in X, Y
-        xy = np.linalg.solve(jac, np.array([radius, 0.0]) - p0[:2])
-        q[ix], q[iy] = xy
-        out[i] = q
+        out[i, iz], out[i, ic] = z, t
+        out[i, [ix, iy]] = workpiece_axes(machine, radius, 0.0, t, z)
     return out
 
 
