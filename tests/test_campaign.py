@@ -295,3 +295,16 @@ def test_out_that_is_a_file_is_refused(tmp_path):
     afile.write_text("x")
     with pytest.raises(MachineSimError, match="expected the campaign folder"):
         run("tool_rotation_arm", 1, out=afile, workers=0, progress=False, **ARM)
+
+
+def test_the_xy_plane_procedure_varies_a_c_location_error_on_its_tables():
+    """Paper 003's procedure starts from its error tables (`ProcedureEntry.base`): a drawn
+    C offset lands in the lab and the C squareness test finds it within its reported std."""
+    spec = CampaignSpec("xy_plane_errors", 4, (parse_vary("location.C.EX0C=normal:3um,1um"),),
+                        seed=3, identify_only=True)
+    record = run_trial(spec, 0)
+    assert record["error"] is None
+    drawn = record["drawn"]["location.C.EX0C"]
+    value, std = record["identified"]["location.C.EX0C"]
+    assert record["injected"]["location.C.EX0C"] == drawn
+    assert abs(value - drawn) < 5 * std and std < 50e-9

@@ -75,16 +75,39 @@ def _tool_setting_defaults(machine) -> dict:
             "location.C.EX0C": 108.97 * um, "location.C.EY0C": 852.81 * um}
 
 
+def _xy_plane_errors(options):
+    from machinesim.procedures.xy_plane_errors import XYPlaneErrors
+
+    return XYPlaneErrors()
+
+
+def _xy_plane_base():
+    """Paper 003's error model: its position-dependent tables (component errors) can only
+    be varied where the model already has them, so the trial starts from this file."""
+    from machinesim.errors import ErrorModel
+    from machinesim.machines import models_dir
+
+    return ErrorModel.from_toml(models_dir() / "errors" / "xy_plane_grooving_4axis.toml")
+
+
+def _no_errors():
+    from machinesim.errors import ErrorModel
+
+    return ErrorModel()
+
+
 @dataclass(frozen=True)
 class ProcedureEntry:
     """A procedure a campaign can run: its machine, how to build it, its default errors
-    (the paper's, SI) and default lab parameters (`LAB_PARAMETERS`)."""
+    (the paper's, SI), default lab parameters (`LAB_PARAMETERS`), and the error model
+    those parameters are set on (`base`: no errors unless the procedure needs tables)."""
 
     machine: str
     build: Callable[[Mapping], Any]
     defaults: Callable[[Any], dict] = field(default=lambda machine: {})
     lab: Mapping[str, float] = field(default_factory=dict)
     about: str = ""
+    base: Callable[[], Any] = _no_errors
 
 
 #: Procedures by campaign name (``machinesim campaign NAME``).
@@ -104,6 +127,10 @@ PROCEDURES = {
         "robonano_ui", _tool_setting_6axis, _tool_setting_defaults,
         about="paper 001: the tool edge's offset from the A, B, C centres (default errors: "
         "Table 1's)"),
+    "xy_plane_errors": ProcedureEntry(
+        "grooving_4axis", _xy_plane_errors, base=_xy_plane_base,
+        about="paper 003: the XY plane's 2-D errors, diagonals, C squareness and pyramids "
+        "(default errors: models/errors/xy_plane_grooving_4axis.toml)"),
 }
 
 
@@ -288,7 +315,6 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
         message of the `MachineSimError` the trial ended with: a failed identification is a
         result too).
     """
-    from machinesim.errors import ErrorModel
     from machinesim.lab import Lab
 
     began = time.perf_counter()
@@ -296,7 +322,7 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
     record = {"trial": int(i), "drawn": drawn, "injected": {}, "identified": {},
               "figures": {}, "elapsed_s": math.nan, "error": None}
     try:
-        lab = Lab(spec.machine, ErrorModel().with_parameters(errors), noise=spec.noise,
+        lab = Lab(spec.machine, spec.entry.base().with_parameters(errors), noise=spec.noise,
                   seed=trial_seed(spec.seed, i))
         sigmas = {kind: lab_parameters[f"{kind}.sigma"] for kind in INSTRUMENTS
                   if f"{kind}.sigma" in lab_parameters}
