@@ -230,6 +230,9 @@ def test_tool_table_refusals(tmp_path):
         ({"tool": {"1": {"radius_mm": -1.0}}}, "must be >= 0"),
         ({"tool": {"1": {"length_mm": float("nan")}}}, "must be a finite number"),
         ({"tools": {}}, "only \\[tool.<number>\\]"),
+        ({"tool": {"1": {"shape": 0.5}}}, "shape must be a tool spec string"),
+        ({"tool": {"1": {"shape": "drill:3"}}}, "tool spec 'drill:3': expected"),
+        ({"tool": {"1": {"shape": "ball:1e9"}}}, "tool spec 'ball:1e9'"),
     ]:
         with pytest.raises(NCProgramError, match=message):
             ToolTable.from_dict(data)
@@ -239,6 +242,24 @@ def test_tool_table_refusals(tmp_path):
         ToolTable.from_toml(bad)
     with pytest.raises(MachineSimError, match="no such file"):
         ToolTable.from_toml(tmp_path / "missing.toml")
+
+
+def test_tool_changes_follow_t_and_m06():
+    # T preselects, M06 puts the last selected tool in (T2 is selected during T1's run and
+    # changed at line 4; T3 is selected but never changed); the change starts at the move
+    # after the M06 and carries the table's length and shape.
+    table = {"tool": {"1": {"length_mm": 1.0, "shape": "ball:0.5"},
+                      "2": {"length_um": 2500.0}, "3": {"length_mm": 0.0}}}
+    text = "G00 X0\nT1 M06\nG01 X1. F100 T2\nM06\nX2.\nT3\nX3.\nM30"
+    program = parse_program(text, tools=table)
+    changes = [(c.number, c.line, c.length_m, c.shape) for c in program.tool_changes]
+    assert changes == [(1, 2, 1 * MM, "ball:0.5"), (2, 4, 2.5 * MM, None)]
+    moves = [c.move for c in program.tool_changes]
+    assert program.lines[moves].tolist() == [3, 5]  # each tool's first move, after the M06
+    # a turret (no M06): every T is a change, where it stands
+    turret = parse_program("G00 X0\nT1\nX1.\nT2 X2.\nM30", tools=table)
+    assert [(c.number, c.line) for c in turret.tool_changes] == [(1, 2), (2, 4)]
+    assert parse_program(text).tool_changes == ()  # without a table T is a state only
 
 
 def test_states_are_listed_with_their_first_line():

@@ -36,6 +36,9 @@ from machinesim.nc.words import (
 )
 from machinesim.units import M_PER_MM, RAD_PER_DEG
 
+#: M06 puts the tool selected by the last T word in the spindle (FANUC machining centres).
+TOOL_CHANGE = 6
+
 if TYPE_CHECKING:
     from machinesim.nc.parser import Reader
 
@@ -85,6 +88,9 @@ class Block:
         block_number = self.integer(single["N"], "block number") if "N" in single else None
         self.feed_and_spindle()
         self.tool_words()
+        if "T" in single:
+            self.reader.tool_events.append(
+                (self.reader.out.count, self.integer(single["T"], "tool number"), self.line))
         motion = g.get("motion")
         one_shot = g.get("one-shot")
         if motion is not None and motion[0] == "G04" and one_shot is not None:
@@ -117,6 +123,8 @@ class Block:
         elif any(c not in PROGRAM_END for c in passed):
             self.add("dwell", 0.0, block_number)
             out.m_codes[out.count - 1] = passed
+        if TOOL_CHANGE in codes:
+            self.reader.tool_events.append((out.count, None, self.line))
         if ends and self.depth == 0:  # in a subprogram, refused by the layout
             state.end = (self.line, f"M{ends[0]:02d}")
         if 98 in codes:

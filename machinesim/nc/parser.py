@@ -274,6 +274,9 @@ class Reader:
         self.state = _State()
         self.out = _Output()
         self.states: dict[str, int] = {}
+        # (move index, tool number, line) of each T word and (move index, None, line) of
+        # each M06, in the order they run
+        self.tool_events: list[tuple[int, int | None, int]] = []
         self.cache: dict[int, list[Word] | None] = {}
         n = self.scan.simple.size
         # the end of the run of simple lines each line is in (itself when not simple)
@@ -314,7 +317,26 @@ class Reader:
             targets, kinds, feeds, dwells, lines, spindles, blocks, self.out.m_codes,
             number=self.state.number, source=self.source, work_offsets=self.offsets,
             states=self.states, integer_input=self.integer_input,
-            tool_table=None if self.tools is None else self.tools.source)
+            tool_table=None if self.tools is None else self.tools.source,
+            tool_changes=self.tool_changes())
+
+    def tool_changes(self) -> tuple:
+        """The tools put in the spindle (`ToolChange`), from the T words and M06: at each
+        M06 the tool the last T before it selected; in a program without M06 (a turret, a
+        machine without changer), each T itself. Empty without a tool table (T words are
+        then only listed as states)."""
+        if self.tools is None:
+            return ()
+        events = self.tool_events
+        if all(number is not None for _, number, _ in events):
+            return tuple(self.tools.change(*event) for event in events)
+        found, selected = [], None
+        for move, number, line in events:
+            if number is not None:
+                selected = number
+            elif selected is not None:
+                found.append(self.tools.change(move, selected, line))
+        return tuple(found)
 
     def run(self, first: int, stop: int, depth: int) -> None:
         """Run lines [first, stop) (0-based); stops at M99 in a subprogram."""

@@ -138,6 +138,9 @@ class Program:
         N words; -1 where None.
     m_codes : Mapping[int, tuple of int]
         Move index -> its M codes, for the moves that carry any.
+    tool_changes : tuple of machinesim.nc.tooltable.ToolChange
+        The tools put in the spindle and the moves they cut from (read from T and M06
+        with a tool table; empty otherwise, and for programs built from moves).
 
     All arrays are read-only.
 
@@ -151,7 +154,7 @@ class Program:
 
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
-                 "tool_table", "_moves")
+                 "tool_table", "tool_changes", "_moves")
 
     def __init__(
         self,
@@ -260,15 +263,16 @@ class Program:
     @classmethod
     def _from_parts(cls, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, *,
                     number, source, work_offsets, states, integer_input,
-                    tool_table=None) -> Program:
+                    tool_table=None, tool_changes=()) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
-                      source, work_offsets, states, integer_input, tool_table)
+                      source, work_offsets, states, integer_input, tool_table, tool_changes)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
-              source, work_offsets, states, integer_input, tool_table=None) -> None:
+              source, work_offsets, states, integer_input, tool_table=None,
+              tool_changes=()) -> None:
         set_ = object.__setattr__
         set_(self, "source", source)
         set_(self, "number", number)
@@ -285,6 +289,7 @@ class Program:
                                  f"from), got {tool_table!r}", source=source, key="tool_table")
         set_(self, "tool_table", tool_table)
         set_(self, "states", _states(states, source))
+        set_(self, "tool_changes", tuple(tool_changes))
         codes = _m_codes(m_codes, len(kinds), source)
         for name, array in (("_targets", targets), ("_kinds", kinds), ("_feeds", feeds),
                             ("_dwells", dwells), ("_lines", lines), ("_spindles", spindles),

@@ -1,10 +1,11 @@
-"""The tool table: tool lengths (G43/G44 H words) and radii (D words) by tool number.
+"""The tool table: tool lengths (G43/G44 H words), radii (D words) and shapes by tool number.
 
 A TOML file with one table per tool, units in the keys::
 
     [tool.1]
-    length_mm = 50.0      # tool length offset, read by H1 under G43/G44
+    length_mm = 2.5       # tool length, read by H1 under G43/G44 and carried by T1 in the cut
     radius_mm = 0.5       # tool radius, the D1 register (only listed: G41/G42 are refused)
+    shape = "ball:0.5"    # optional: the tool's solid, a `machinesim.tools.tool_from_spec` spec
     name = "R0.5 ball end mill"   # optional
 
     [tool.2]
@@ -12,6 +13,11 @@ A TOML file with one table per tool, units in the keys::
 
 H and D numbers are the tool numbers (``H1`` reads ``[tool.1]``), as CAM posts write them;
 ``H0`` and ``D0`` are zero by definition. A tool may give only a length or only a radius.
+
+A length is measured from the machine model's ``tool_tip`` (where the tool the model carries
+has its edge) along the tool's axis: the tool in the spindle after a change (`ToolChange`)
+has its edge that far beyond ``tool_tip``, and ``G43 H<n>`` lifts Z by the same amount, so
+a tool whose H matches its T cuts at the programmed point.
 """
 
 from __future__ import annotations
@@ -25,8 +31,9 @@ from pathlib import Path
 from typing import Any
 
 from machinesim._io import check_readable_file
-from machinesim.exceptions import NCProgramError
+from machinesim.exceptions import InputError, NCProgramError
 from machinesim.nc.program import FrozenMapping
+from machinesim.tools import tool_from_spec
 from machinesim.units import LENGTH
 
 #: Largest tool number read: 8 digits, as FANUC's T words (H and D registers are fewer).
@@ -44,11 +51,32 @@ class Tool:
     radius_m : float or None
         Tool radius, m (None: not given).
     name : str
+    shape : str or None
+        The tool's solid as a `machinesim.tools.tool_from_spec` spec (None: the cut's own
+        tool, ``--tool`` on the command line).
     """
 
     length_m: float | None = None
     radius_m: float | None = None
     name: str = ""
+    shape: str | None = None
+
+
+@dataclass(frozen=True)
+class ToolChange:
+    """A tool put in the spindle: from move ``move`` on, tool ``number`` cuts.
+
+    ``length_m`` (the table's length, 0 when it gives none) places the tool's edge that far
+    beyond the model's ``tool_tip`` along the tool axis; ``shape`` (None: the cut's own tool)
+    is its solid. Read by `machinesim.nc.read_program` from T words: at each M06 the last T
+    selected, or, in a program without M06, each T itself.
+    """
+
+    move: int
+    number: int
+    line: int
+    length_m: float = 0.0
+    shape: str | None = None
 
 
 @dataclass(frozen=True)
@@ -110,6 +138,13 @@ class ToolTable:
         """Radius of tool ``number``, m (0 for D0)."""
         return self._value(number, "radius")
 
+    def change(self, move: int, number: int, line: int) -> ToolChange:
+        """The `ToolChange` that puts tool ``number`` in the spindle at move ``move``."""
+        tool = self.tools.get(number)
+        if tool is None:
+            return ToolChange(move, number, line)
+        return ToolChange(move, number, line, tool.length_m or 0.0, tool.shape)
+
     def _value(self, number: int, what: str) -> float:
         if number == 0:
             return 0.0
@@ -124,7 +159,7 @@ class ToolTable:
 
 def _tool(entry: Mapping[str, Any], source: str, key: str) -> Tool:
     values: dict[str, float] = {}
-    name = ""
+    name, shape = "", None
     for field, value in entry.items():
         where = {"source": source, "key": f"{key}.{field}"}
         if field == "name":
@@ -132,10 +167,13 @@ def _tool(entry: Mapping[str, Any], source: str, key: str) -> Tool:
                 raise NCProgramError(f"name must be a string, got {value!r}", **where)
             name = value
             continue
+        if field == "shape":
+            shape = _shape(value, where)
+            continue
         what, _, unit = field.rpartition("_")
         if what not in ("length", "radius"):
             raise NCProgramError(f"unknown key {field!r}; a tool has length_<unit>, "
-                                 "radius_<unit> and name", **where)
+                                 "radius_<unit>, shape and name", **where)
         if unit not in LENGTH:
             raise NCProgramError(f"unknown length unit {unit!r} in {field!r}; expected one "
                                  f"of {', '.join(LENGTH)}", **where)
@@ -151,7 +189,19 @@ def _tool(entry: Mapping[str, Any], source: str, key: str) -> Tool:
             raise NCProgramError(f"{field} = {value!r} is beyond 10 m; expected a tool "
                                  "offset", **where)
         values[what] = si
-    return Tool(values.get("length"), values.get("radius"), name)
+    return Tool(values.get("length"), values.get("radius"), name, shape)
+
+
+def _shape(value: Any, where: Mapping[str, str]) -> str:
+    """A tool table's ``shape``, checked by building the tool it names."""
+    if not isinstance(value, str):
+        raise NCProgramError(f"shape must be a tool spec string such as \"ball:0.5\", got "
+                             f"{value!r}", **where)
+    try:
+        tool_from_spec(value)
+    except InputError as error:
+        raise NCProgramError(str(error.args[0] if error.args else error), **where) from None
+    return value
 
 
 def tool_table(tools: Any) -> ToolTable | None:
