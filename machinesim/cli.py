@@ -84,7 +84,8 @@ def _parser() -> argparse.ArgumentParser:
                      help="cut only in this window (mm, workpiece frame); repeatable; "
                           "e.g. --roi 0,1,0,1")
     cut.add_argument("--tools", type=Path, default=None, metavar="TOOLS.toml",
-                     help="tool table for T/D/H words and G43/G44 (TOML, units in keys)")
+                     help="tool table for T/D/H words and G43/G44 (TOML, units in keys); "
+                          "T/M06 change the cut to a tool's length and shape (docs/nc.md)")
     cut.add_argument("--integer-input", choices=("calculator", "increment"), default=None,
                      help="how an axis number without decimal point reads: calculator "
                           "(X10 is 10 mm, the default) or increment (X10 is 10 nm)")

@@ -60,3 +60,66 @@ def test_drilling_cycles_leave_four_ball_holes():
     true = sum(2 / 3 * math.pi * tool.radius**3 + math.pi * tool.radius**2
                * (d * MM - tool.radius) for d in (2.0, 2.0, 1.5, 3.0))
     assert true * (1 - 1e-2) < expected <= true
+
+
+#: The CAM program's tools as solids: T1 the 6 mm cutter of its header (a ball, R 3 mm),
+#: T2 the R0.5 ball end mill, 2.5 mm longer than the model's tool.
+CAM_TOOLS = """
+[tool.1]
+length_mm = 0.0
+shape = "ball:3"
+[tool.2]
+length_mm = {t2_mm}
+shape = "ball:0.5"
+"""
+
+
+def _cam_cut(tmp_path, t2_mm: float, text: str | None = None):
+    """cam_header.nc cut on a block round T2's circle only (centre (15, 15) mm, R 5 mm;
+    T1's contour stays 3 mm and more outside it). Work zero is 5 mm below machine zero so
+    that G28 Z0 clears the block; arcs are read at a 1 um chord to keep the cut short."""
+    table = tmp_path / "tools.toml"
+    table.write_text(CAM_TOOLS.format(t2_mm=t2_mm))
+    program = tmp_path / "cam.nc"
+    program.write_text(text or (CORPUS / "cam_header.nc").read_text())
+    read = read_program(program, tools=table, work_offsets={"G54": {"Z": -5 * MM}},
+                        chord_tolerance=1e-6)
+    return cut(read, "grooving_4axis", tool="v:90", stock="block:12x12x3@9,9,-5")[1]
+
+
+def _torus_below(radius: float, depth: float, centre_radius: float) -> float:
+    """Volume of a ball of ``radius`` swept round a circle of ``centre_radius`` at ``depth``
+    (its lowest point below the top), with its shank above: the section below the top,
+    symmetric about the tool axis, turned about the circle's axis (Pappus)."""
+    if depth <= radius:
+        a = radius - depth
+        section = radius**2 * math.acos(a / radius) - a * math.sqrt(radius**2 - a**2)
+    else:
+        section = math.pi * radius**2 / 2 + 2 * radius * (depth - radius)
+    return 2 * math.pi * centre_radius * section
+
+
+def test_cam_program_cuts_with_the_tools_it_changes_to(tmp_path):
+    # T1 M06 (line 13) and T02 M06 (line 33) put the table's tools in; G43 H02 lifts Z by
+    # T2's 2.5 mm and the longer tool reaches it back down, so T2 cuts 0.2 mm deep round its
+    # circle (a ball swept round a circle is a torus: the volume is Pappus's), and the same
+    # program with a T2 of length 0 cuts the same part.
+    report = _cam_cut(tmp_path, 2.5)
+    assert [(t["tool"], t["line"], t["length_m"]) for t in report.tools] == [
+        (None, None, 0.0), (1, 13, 0.0), (2, 33, 2.5 * MM)]
+    t2 = report.tools[2]["removed_volume_m3"]
+    assert report.removed_volume_m3 == t2  # T1's contour is off this block
+    true = _torus_below(0.5 * MM, 0.2 * MM, 5 * MM)
+    assert true * (1 - 1e-2) < t2 <= true  # polyhedral ball, inscribed path polygon
+    assert report.rapids_that_cut == () and report.holder_contact == ()
+    same = _cam_cut(tmp_path, 0.0)
+    assert same.removed_volume_m3 == pytest.approx(t2, rel=VOLUME_REL)
+
+
+def test_a_wrong_length_offset_crashes_the_tool_into_the_part(tmp_path):
+    # G43 H01 under T2: Z lifted by T1's 0 mm while the tool in the spindle is 2.5 mm
+    # longer, so the ball goes round 2.7 mm deep, its shank cutting the wall above it.
+    text = (CORPUS / "cam_header.nc").read_text().replace("Z10. H02", "Z10. H01")
+    report = _cam_cut(tmp_path, 2.5, text)
+    true = _torus_below(0.5 * MM, 2.7 * MM, 5 * MM)
+    assert true * (1 - 1e-2) < report.removed_volume_m3 <= true

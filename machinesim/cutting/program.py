@@ -77,6 +77,11 @@ class CutReport:
     nc : Mapping
         How the program was read (`nc_summary`): ``integer_input``, the modal ``states``
         seen with their first lines, and the ``tool_table`` path; empty when unknown.
+    tools : tuple of Mapping
+        One entry per run of moves cut by one tool (`Program.tool_changes`): ``tool``
+        (its number, None for the cut's own tool before any change), ``line`` (where it
+        was put in, None before any change), ``length_m``, ``removed_volume_m3`` and
+        ``engine``.
     """
 
     removed_volume_m3: float
@@ -94,6 +99,7 @@ class CutReport:
     holder_contact: tuple[int, ...] = field(default=())
     engine_s: float = 0.0
     nc: Mapping = field(default_factory=dict, hash=False)
+    tools: tuple = field(default=(), hash=False)
 
     def to_dict(self) -> dict:
         """JSON-ready dict, every key with its unit."""
@@ -115,6 +121,9 @@ class CutReport:
             "nc": {"integer_input": self.nc.get("integer_input"),
                    "states": [dict(state) for state in self.nc.get("states", ())],
                    "tool_table": self.nc.get("tool_table")},
+            "tools": [{"tool": t["tool"], "line": t["line"], "length_mm": t["length_m"] * 1e3,
+                       "removed_volume_mm3": t["removed_volume_m3"] * 1e9,
+                       "engine": t["engine"]} for t in self.tools],
         }
 
 
@@ -175,32 +184,46 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     tool = tool_from_spec(tool) if isinstance(tool, str) else tool
     stock = stock_from_spec(stock) if isinstance(stock, str) else stock
     machine.check_errors(errors)
+    tools = _ToolSections(program, tool)
     trajectory = motion.plan(program, machine, errors, start=start,
-                             tool_points=tool.vertices(), chord_tolerance=chord_tolerance,
+                             tool_points=tools.points(), chord_tolerance=chord_tolerance,
                              servo=servo)
     moves = _Moves(trajectory, len(machine.axes))
     limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
     poses = machine.tool_pose(moves.q, errors) if len(moves.q) else np.zeros((0, 4, 4))
-    paths = np.split(poses, moves.breaks) if len(poses) else []
-    part, engine = remove(stock, tool, paths, roi=roi, progress=progress)
-    rapids = _rapids_that_cut(stock, tool, poses, moves, engine.reached)
-    holder = sorted({int(moves.sweep_line[i]) for i in engine.holder_contact})
+    part, engines, rapids, holder, sections = stock, [], [], set(), []
+    for section_tool, length, section, (lo, hi), (number, line) in tools.split(moves):
+        section_poses = poses[lo:hi] if length == 0.0 else poses[lo:hi] @ _beyond_tip(length)
+        paths = np.split(section_poses, section.breaks) if len(section_poses) else []
+        before = part
+        part, engine = remove(before, section_tool, paths, roi=roi, progress=progress)
+        rapids += _rapids_that_cut(before, section_tool, section_poses, section,
+                                   engine.reached)
+        holder |= {int(section.sweep_line[i]) for i in engine.holder_contact}
+        engines.append(engine)
+        sections.append({"tool": number, "line": line, "length_m": length,
+                         "removed_volume_m3": float(engine.removed_volume),
+                         "engine": engine.method})
+    if not engines:  # no tool moved: the stock as it is, and an engine report saying so
+        part, engine = remove(stock, tool, [], roi=roi, progress=progress)
+        engines.append(engine)
     report = CutReport(
-        removed_volume_m3=float(engine.removed_volume),
+        removed_volume_m3=float(sum(e.removed_volume for e in engines)),
         machining_time_s=trajectory.duration,
         cutting_time_s=trajectory.cutting_time,
-        sweeps=int(engine.n_sweeps_cut),
+        sweeps=sum(int(e.n_sweeps_cut) for e in engines),
         substeps=trajectory.substeps,
-        rapids_that_cut=rapids,
+        rapids_that_cut=tuple(dict.fromkeys(rapids)),
         limit_violations=limits,
-        sideways_sweeps=len(engine.sideways),
-        empty_cut=bool(engine.empty_cut),
-        engine=engine.method,
+        sideways_sweeps=sum(len(e.sideways) for e in engines),
+        empty_cut=all(bool(e.empty_cut) for e in engines),
+        engine="+".join(dict.fromkeys(e.method for e in engines)),
         elapsed_s=time.perf_counter() - began,
         notes=trajectory.notes,
-        holder_contact=tuple(holder),
-        engine_s=engine.elapsed_s,
+        holder_contact=tuple(sorted(holder)),
+        engine_s=sum(e.elapsed_s for e in engines),
         nc=nc_summary(program),
+        tools=tuple(sections),
     )
     return part, report
 
@@ -232,6 +255,8 @@ class _Moves:
         if not counts.size:
             self.q = np.zeros((0, n_axes))
             self.line = self.sweep_line = self.sweep_start = np.zeros(0, dtype=np.int64)
+            self.move = np.zeros(0, dtype=np.int64)
+            self.path_start = np.zeros(0, dtype=bool)
             self.rapid = self.sweep_rapid = np.zeros(0, dtype=bool)
             self.breaks = np.zeros(0, dtype=np.int64)
             return
@@ -249,13 +274,83 @@ class _Moves:
         starts = np.zeros(len(q), dtype=bool)
         starts[first[~joined]] = True
         self.q, self.line, self.rapid = q[keep], line[keep], rapid[keep]
-        path_start = starts[keep]
+        self.move = np.repeat(np.flatnonzero(moving), counts)[keep]
+        self._paths(starts[keep])
+
+    def _paths(self, path_start: np.ndarray) -> None:
+        self.path_start = path_start
         self.breaks = np.flatnonzero(path_start)[1:]
         # A sweep ends at every sample that does not start a path; it belongs to that move.
         end = np.flatnonzero(~path_start)
         self.sweep_start = end - 1
         self.sweep_line = self.line[end]
         self.sweep_rapid = self.rapid[end]
+
+    def section(self, first_move: int, stop_move: int) -> tuple[_Moves, tuple[int, int]]:
+        """The samples of moves [first_move, stop_move) as their own paths, and their
+        sample range [lo, hi): a section that continues the one before starts at its last
+        sample (the point its first move starts from)."""
+        lo, hi = (int(i) for i in np.searchsorted(self.move, [first_move, stop_move]))
+        if 0 < lo < hi and not self.path_start[lo]:
+            lo -= 1
+        part = object.__new__(_Moves)
+        part.q, part.line, part.rapid = self.q[lo:hi], self.line[lo:hi], self.rapid[lo:hi]
+        part.move = self.move[lo:hi]
+        starts = self.path_start[lo:hi].copy()
+        starts[:1] = True
+        part._paths(starts)
+        return part, (lo, hi)
+
+
+class _ToolSections:
+    """The tools a program cuts with, from its tool changes (`Program.tool_changes`).
+
+    Before the first change, and for a change whose tool table entry gives no ``shape``,
+    the tool is the cut's own; a change's length puts the tool's edge that far beyond
+    ``tool_tip`` along the tool axis (the tool's +z, towards the holder), as a longer tool
+    in the spindle does, while ``G43`` lifted Z by the same length.
+    """
+
+    def __init__(self, program, tool) -> None:
+        built = {None: tool}
+        # (first move, tool, length) of each run of moves cut by one tool and length
+        self.runs = [(0, tool, 0.0)]
+        self.names = [(None, None)]  # (tool number, line) of each run
+        for change in getattr(program, "tool_changes", ()):
+            if change.shape not in built:
+                built[change.shape] = tool_from_spec(change.shape)
+            run = (change.move, built[change.shape], float(change.length_m))
+            if run[1:] != self.runs[-1][1:]:
+                self.runs.append(run)
+                self.names.append((change.number, change.line))
+
+    def points(self) -> np.ndarray:
+        """Every tool's vertices where it cuts, in the ``tool_tip`` frame (for the chord
+        tolerance of rotary moves)."""
+        setups = dict.fromkeys((id(t), length) for _, t, length in self.runs)
+        tools = {id(t): t for _, t, _ in self.runs}
+        return np.concatenate([np.asarray(tools[key].vertices(), dtype=np.float64)
+                               - np.array([0.0, 0.0, length]) for key, length in setups])
+
+    def split(self, moves: _Moves):
+        """(tool, length, section moves, sample range, (number, line)) of each run with
+        samples; the whole program as one section when one tool cuts it all."""
+        if len(self.runs) == 1:
+            yield self.runs[0][1], self.runs[0][2], moves, (0, len(moves.q)), self.names[0]
+            return
+        stops = [first for first, _, _ in self.runs[1:]] + [np.iinfo(np.int64).max]
+        for (first, tool, length), stop, name in zip(self.runs, stops, self.names,
+                                                     strict=True):
+            section, (lo, hi) = moves.section(first, stop)
+            if hi - lo >= 2:
+                yield tool, length, section, (lo, hi), name
+
+
+def _beyond_tip(length: float) -> np.ndarray:
+    """The pose of an edge ``length`` beyond ``tool_tip`` along the tool axis (-z)."""
+    shift = np.eye(4)
+    shift[2, 3] = -length
+    return shift
 
 
 def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
