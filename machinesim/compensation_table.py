@@ -13,6 +13,11 @@ so that the machine, whose actual XY point is ``q' + a(q')``, lands on ``q``. Th
 is solved by fixed-point iteration from ``q' = q``: the map's slopes are ~1e-4 at most, so
 each step gains four orders and three steps reach round-off.
 
+Beyond eq 1, the table takes the table's yaw as a cross term (``yaw_y``, from
+`machinesim.procedures.xy_plane_measurements`): ``dPy += x yaw_y(y)``, the Y deviation a
+point X = x from the table's centre gets as Y turns the table about Z, which controls hold as
+a 2-D (bilinear) cross-compensation table.
+
 `CompensationTable.program` rewrites an NC program through
 `machinesim.compensation.map_program` (every block's end point, rounded to the machine's
 resolution), so the same rules hold as for every other compensation of the project.
@@ -26,7 +31,7 @@ import numpy as np
 
 from machinesim.compensation import map_program, model_based
 from machinesim.exceptions import InputError
-from machinesim.identification.xy_plane import XYPlaneMap
+from machinesim.identification.xy_plane import Curve, XYPlaneMap
 
 __all__ = ["CompensationTable", "ModelCompensation"]
 
@@ -41,13 +46,24 @@ class CompensationTable:
     ----------
     map : XYPlaneMap
         The identified deviations a(x, y) (m) the table removes.
+    yaw_y : Curve or None
+        The table's yaw as Y travels (rad, ``dPy / dx``, zero at Y = 0); None: eq 1 only,
+        as paper 003 compensated.
     x_index, y_index : int
         Columns of X and Y in the machine's axis vector (0 and 1 on ``grooving_4axis``).
     """
 
     map: XYPlaneMap
+    yaw_y: Curve | None = None
     x_index: int = 0
     y_index: int = 1
+
+    def deviation(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+        """The deviations (dPx, dPy) the table removes at commanded (x, y), m."""
+        dx, dy = self.map.deviation(x, y)
+        if self.yaw_y is not None:
+            dy = dy + np.asarray(x, dtype=np.float64) * self.yaw_y(y)
+        return dx, dy
 
     def apply(self, q) -> np.ndarray:
         """Compensated axis values of nominal ones, (N, n_axes) -> (N, n_axes), SI."""
@@ -59,7 +75,7 @@ class CompensationTable:
         x, y = q[:, self.x_index].copy(), q[:, self.y_index].copy()
         cx, cy = x.copy(), y.copy()
         for _ in range(_ITERATIONS):
-            dx, dy = self.map.deviation(cx, cy)
+            dx, dy = self.deviation(cx, cy)
             cx, cy = x - dx, y - dy
         out = q.copy()
         out[:, self.x_index], out[:, self.y_index] = cx, cy

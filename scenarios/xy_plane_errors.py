@@ -60,16 +60,21 @@ def report(args) -> None:
     began = time.perf_counter()
     errors = ErrorModel.from_toml(args.errors if args.errors is not None else DEFAULT_ERRORS)
     lab = Lab("grooving_4axis", errors, noise=args.noise == "on", seed=args.seed)
-    print(f"Paper 003 on grooving_4axis: noise {args.noise}, seed {args.seed}\n")
-    result = run(XYPlaneErrors(), lab)
+    ideal = args.noise == "off"
+    print(f"Paper 003 on grooving_4axis: noise {args.noise}, seed {args.seed}"
+          + (" (laser readings ideal: no noise, no 1 nm display rounding)" if ideal else "")
+          + "\n")
+    procedure = XYPlaneErrors(interferometer_resolution=0.0 if ideal else None)
+    result = run(procedure, lab)
     out = ReportFolder(args.out)
     detail = result.identification.detail
     xy = result.measurements["xy"]
     after = result.evaluation.details
     vector_map(out, "xy_map_before.png", detail["map"], "Estimated 2-D errors (eq 1), before")
     table, _ = compensations(result.identification)
-    li = lab.laser_interferometer(label="report_after")
-    ld = lab.laser_interferometer(label="report_after_diagonals", frame=BEAM_FRAME)
+    extra = {"resolution": 0.0} if ideal else {}
+    li = lab.laser_interferometer(label="report_after", **extra)
+    ld = lab.laser_interferometer(label="report_after_diagonals", frame=BEAM_FRAME, **extra)
     after_xy = measure_xy_plane(li, ld, seed=None, table=table)
     vector_map(out, "xy_map_after.png", after_xy.map,
                "Estimated 2-D errors (eq 1), after table compensation")
@@ -162,7 +167,8 @@ def pyramid_map(out: ReportFolder, name: str, details) -> None:
 
 
 def diagonal_plot(out: ReportFolder, name: str, xy, title: str) -> None:
-    """Measured and eq-1-estimated diagonal deviations (paper 003 Figs 4 and 6)."""
+    """Measured (beam height) and eq-1-estimated diagonal deviations (paper 003 Figs 4
+    and 6), and the same diagonals read at the tool tip."""
     series = []
     for (corner, opposite), d in zip(DIAGONALS, xy.diagonals, strict=True):
         label = f"({corner[0] * 1e3:+.0f},{corner[1] * 1e3:+.0f})->" \
@@ -171,6 +177,10 @@ def diagonal_plot(out: ReportFolder, name: str, xy, title: str) -> None:
         series.append((f"measured {label}", s * 1e3, d.mean / UM))
         series.append((f"estimated {label}", s * 1e3,
                        xy.map.diagonal(corner, opposite, s) / UM))
+    for (corner, opposite), d in zip(DIAGONALS, xy.work_diagonals, strict=True):
+        label = f"({corner[0] * 1e3:+.0f},{corner[1] * 1e3:+.0f})->" \
+                f"({opposite[0] * 1e3:+.0f},{opposite[1] * 1e3:+.0f}) mm"
+        series.append((f"at the tool tip {label}", d.targets * 1e3, d.mean / UM))
     out.plot(name, series, xlabel="distance along the diagonal (mm)",
              ylabel="deviation (um)", title=title)
 

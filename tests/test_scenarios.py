@@ -39,3 +39,5 @@ def test_xy_plane_errors_writes_the_paper_figures(tmp_path):
     # paper 003: 11.59 um before compensation (its Fig. 2); within 25 %
     assert abs(figures["xy_error_x"]["before"] - 11.59) < 0.25 * 11.59
     assert figures["xy_error_x"]["after"] < 1e-3
+    # ideal readings (noise off): the diagonals at the tool tip below 1 nm after the table
+    assert figures["diagonal_machining_point"]["after"] < 1e-3

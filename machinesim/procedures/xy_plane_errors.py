@@ -9,7 +9,8 @@ machine ``grooving_4axis``:
    following and fixed height tests, `machinesim.identification.c_axis_squareness`) read
    with the lab's R-test sensors;
 2. *identify*: eq 1's map, the same parameters by `fit`, and the C location errors;
-3. *compensate*: a corner-to-corner test program re-shaped by the compensation table and by
+3. *compensate*: a corner-to-corner test program re-shaped by the compensation table (eq
+   1's map and the table's yaw) and by
    the identified model (`machinesim.compensation_table`);
 4. *evaluate*: the same tests again with each compensation active in the control; the
    figures of the paper (estimated 2-D error, diagonal) and the C perpendicularity; pyramids
@@ -84,6 +85,10 @@ class XYPlaneErrors:
     uniform_targets : bool
         True: targets evenly spaced (with the noise off, eq 1's interpolation is then
         exact on tables with knots on them); False: ISO 230-2's offset targets.
+    interferometer_resolution : float or None
+        Display resolution of the laser interferometers, m; None: the instrument's own
+        (1 nm). 0 with the lab's noise off gives ideal readings: a 1 nm display without
+        noise rounds every reading alike, and the diagonals' E then keeps ~1 nm of it.
     """
 
     count: int = 21
@@ -92,6 +97,7 @@ class XYPlaneErrors:
     c_step_deg: float = 10.0
     sensor_sigma: float = 10e-9
     uniform_targets: bool = True
+    interferometer_resolution: float | None = None
     name: str = "xy_plane_errors"
     paper: str = "003"
 
@@ -125,7 +131,8 @@ class XYPlaneErrors:
         return Identified(parameters, detail={
             "map": xy.map, "fit": estimate, "c": sep, "machine": _machine(measurements),
             "diagonals": xy.diagonals, "diagonal_before": xy.diagonal_deviation,
-            "diagonal_squareness": xy.diagonal_squareness})
+            "work_diagonal_before": xy.work_diagonal_deviation,
+            "diagonal_squareness": xy.diagonal_squareness, "yaw_y": xy.yaw_y})
 
     def compensate(self, identified: Identified):
         table, model = compensations(identified)
@@ -161,7 +168,14 @@ class XYPlaneErrors:
                    note="range of eq 1's dPy over the 400 mm plate; after: table route"),
             Figure("diagonal", "um", before_diag * um,
                    after_table.diagonal_deviation * um, *PAPER_FIGURES["diagonal"],
-                   note="ISO 230-6 E, larger of the two face diagonals; after: table route"),
+                   note="ISO 230-6 E, larger of the two face diagonals, beam 120 mm above "
+                   "the table as in the paper; after: table route (the pitch's Abbe offsets "
+                   "remain)"),
+            Figure("diagonal_machining_point", "um",
+                   identified.detail["work_diagonal_before"] * um,
+                   after_table.work_diagonal_deviation * um,
+                   note="the same diagonals read at the tool tip, where the part is cut; "
+                   "after: table route"),
             Figure("c_perpendicularity", "urad", sep.perpendicularity_angle * 1e6,
                    sep_after.perpendicularity_angle * 1e6,
                    note="angle of C to the XY normal, hypot(EA0C, EB0C); after: model route"),
@@ -177,6 +191,10 @@ class XYPlaneErrors:
             "diagonal_model_after_um": after_model.diagonal_deviation * um,
             "diagonal_before_each_um": [d.E * um for d in identified.detail["diagonals"]],
             "diagonal_table_after_each_um": [d.E * um for d in after_table.diagonals],
+            "diagonal_machining_point_model_after_um":
+                after_model.work_diagonal_deviation * um,
+            "yaw_y_urad": {"y_mm": (identified.detail["yaw_y"].positions * 1e3).tolist(),
+                           "value": (identified.detail["yaw_y"].values * 1e6).tolist()},
             "squareness_diagonals_urad": identified.detail["diagonal_squareness"] * 1e6,
             "squareness_lines_urad": before_map.squareness * 1e6,
             "c_h_first_harmonic_before_um": first_harmonic(sep.theta, sep.h) * um,
@@ -201,8 +219,10 @@ class XYPlaneErrors:
         return None if self.uniform_targets else 0
 
     def _interferometers(self, lab):
-        return (lab.laser_interferometer(label="centre_lines"),
-                lab.laser_interferometer(label="diagonals", frame=BEAM_FRAME))
+        extra = ({} if self.interferometer_resolution is None
+                 else {"resolution": self.interferometer_resolution})
+        return (lab.laser_interferometer(label="centre_lines", **extra),
+                lab.laser_interferometer(label="diagonals", frame=BEAM_FRAME, **extra))
 
     def _c_tests(self, lab, compensation) -> CTests:
         m = lab.machine
@@ -230,10 +250,10 @@ def _pyramid_figures(windows) -> tuple[float, float]:
 
 def compensations(identified: Identified):
     """(table route, model route) of an identification: the control's compensation table
-    from eq 1's map, and the identified model (the fitted XY tables and squareness with the
-    C location errors) as `ModelCompensation`."""
+    from eq 1's map and the table's yaw, and the identified model (the fitted XY tables
+    and squareness with the C location errors) as `ModelCompensation`."""
     machine = identified.detail["machine"]
-    table = CompensationTable(identified.detail["map"])
+    table = CompensationTable(identified.detail["map"], identified.detail["yaw_y"])
     model = ModelCompensation(machine, _with_c(identified.detail["fit"].errors,
                                                identified.detail["c"]))
     return table, model
