@@ -215,6 +215,32 @@ def test_a_corner_of_an_error_table_is_held_to_the_tolerance(machines):
     assert chord_deviation(machine, errors, np.zeros((1, 3)), turn.q) <= tolerance
 
 
+def test_a_straight_move_follows_a_straightness_table(machines):
+    """X travelling 300 mm on a machine whose EYX table bends at -100, 0 and +100 mm: the
+    tool's path is the table, not the chord between the ends, so the move is split like a
+    rotary one and its chords hold the tolerance; at the breakpoints the path's Y is
+    EYX there (a table on the knots, read back by kinematics)."""
+    machine = machines["grooving_4axis"]
+    knots = [-200.0, -100.0, 0.0, 100.0, 200.0]
+    eyx = [0.0, 1.5, -0.5, 2.0, 0.0]
+    errors = machinesim.ErrorModel.from_dict({"component": {"X": {
+        "position_mm": knots, "EYX_um": eyx}}})
+    program = ProgramBuilder(source="line").rapid(X=-0.15, Y=0.0, Z=0.0).linear(
+        X=0.15, feed_mm_per_min=500.0).build()
+    tolerance = 1e-9
+    new = plan(program, machine, errors, chord_tolerance=tolerance)
+    move = new.segments[-1]
+    assert len(move.q) > 2
+    assert chord_deviation(machine, errors, np.zeros((1, 3)), move.q) <= tolerance
+    nominal = chord_deviation(machine, None, np.zeros((1, 3)), move.q[[0, -1]])
+    assert nominal == 0.0  # the same move on the nominal machine is one straight sweep
+    bent = machine.tool_pose(np.array([[x * 1e-3, 0, 0, 0] for x in (-100.0, 0.0, 100.0)]),
+                             errors)[:, 1, 3] - machine.tool_pose(
+        np.array([[x * 1e-3, 0, 0, 0] for x in (-100.0, 0.0, 100.0)]))[:, 1, 3]
+    assert np.abs(np.abs(bent) - np.array([1.5, 0.5, 2.0]) * 1e-6).max() < 1e-12
+    assert len(plan(program, machine, None, chord_tolerance=tolerance).segments[-1].q) == 2
+
+
 def test_a_pure_turn_takes_the_fewest_sub_steps(machines):
     """C turning a point at radius r: a chord of angle h deviates by r (1 - cos(h / 2)), so
     the fewest sub-steps are ceil(theta / (2 acos(1 - tol / r)))."""

@@ -4,8 +4,12 @@ The controller interpolates G01 (and G00) linearly in *axis* space, so a move th
 rotary axis sweeps the tool along a curve in the workpiece frame. Such a move is split into
 sub-steps until the chord between consecutive samples stays within ``chord_tolerance`` of
 the true path for every point of the tool (the edge and the tool's extreme points): the
-midpoint of each sub-step is evaluated through the kinematics and compared with the chord
-(`machinesim.motion.chords`).
+midpoint of each sub-step is evaluated through the kinematics and compared with the chord,
+and so is every point where an axis crosses a breakpoint of an error table, where the path
+has a corner (`machinesim.motion.chords`). A straight move of an axis whose errors vary
+along it (straightness, angular or positioning tables, polynomials) bends the same way on
+the erroneous machine, and is split by the same rule; on the nominal machine, and for axes
+without such errors, a straight move stays one sweep.
 
 Feed and time (FANUC rule, feed per minute, G94): a move's length is
 ``sqrt(sum(d_linear_mm**2) + sum(d_rotary_deg**2))`` and takes ``length / F`` minutes, so F

@@ -141,12 +141,18 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         error = NCProgramError("a feed move (G01) with no feed rate F given so far",
                                source=source, line=int(lines[stop]), key="F")
 
-    # rotary moves: split to the chord tolerance (only those before a located error)
+    # rotary moves, and moves of an axis whose errors vary along it (a straightness or
+    # angular table bends a straight move): split to the chord tolerance (only those
+    # before a located error)
     steps = np.ones(stop, dtype=np.int64)
     rotary = np.asarray(machine.rotary, dtype=bool)
-    if rotary.any():
+    bending = rotary.copy()
+    if errors is not None:
+        for var in machine.binding(errors).varying:
+            bending[var.axis] = True
+    if bending.any():
         turns = np.zeros(stop, dtype=bool)
-        for i in np.flatnonzero(rotary).tolist():
+        for i in np.flatnonzero(bending).tolist():
             turns |= delta[:stop, i] != 0.0
         turning = np.flatnonzero(turns & (kinds[:stop] != KIND_DWELL))
         if turning.size:
@@ -155,7 +161,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
             if failed.any():
                 bad = int(turning[np.argmax(failed)])
                 raise NCProgramError(
-                    f"a rotary move would need more than {MAX_SUBSTEPS} sub-steps to keep the "
+                    f"a move would need more than {MAX_SUBSTEPS} sub-steps to keep the "
                     f"chord within {chord_tolerance * 1e9:g} nm; raise chord_tolerance",
                     source=source, line=int(lines[bad]))
             steps[turning] = found
