@@ -72,3 +72,26 @@ def test_bad_plans_are_refused():
         v_flanks([0.0, 1e-6], [0.0, 0.0], [0.5e-6], P)
     program = pyramid_program(m, (0.0, 0.0))
     assert len(program.moves) > 0
+
+
+def test_a_registered_instrument_finds_the_window_and_its_grooves():
+    # A white-light interferometer whose stage sits 30 / -20 um off and turned by 1.5 mrad
+    # sees the corner window (190 mm out) ~0.3 mm away from its design and its grooves off
+    # by fractions of a pitch: it finds both, and reads the same pattern as an instrument
+    # without registration: 1 um higher (its height zero), the pitch along profiles that
+    # cross the grooves 1.5 mrad askew (p / cos), the sets' angle unchanged (both turn).
+    from machinesim.metrology.imperfections import Registration
+    from machinesim.procedures.pyramid_windows import PAPER_PLAN, STOCK, read_window
+
+    lab = machinesim.Lab("grooving_4axis", noise=False)
+    program = pyramid_program(lab.machine, CORNER[0], PAPER_PLAN)
+    cx, cy = CORNER[0]
+    w = PAPER_PLAN.window / 2
+    part, _ = lab.cut(program, "v:90", STOCK, roi=[(cx - w, cx + w, cy - w, cy + w)])
+    plain = read_window(lab.white_light_interferometer(label="plain"), part, CORNER[0])
+    stage = Registration(offset=[30e-6, -20e-6, 1e-6], rotation=1.5e-3, tilt=[0.0, 0.0])
+    seen = read_window(lab.white_light_interferometer(label="stage", registration=stage),
+                       part, CORNER[0])
+    assert seen.pitch == pytest.approx(plain.pitch / math.cos(1.5e-3), rel=2e-7)  # 10 pm
+    assert seen.angle_error == pytest.approx(plain.angle_error, abs=1e-9)
+    np.testing.assert_allclose(seen.apex - 1e-6, plain.apex, atol=1e-10)

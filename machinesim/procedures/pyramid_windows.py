@@ -57,6 +57,10 @@ class PyramidWindow:
     angle_error: float
 
 
+#: Sample spacing of the profiles that find a window's edges, m.
+LOCATE = 2e-6
+
+
 def v_flanks(s, z, centres, pitch: float, band=(0.1, 0.35)):
     """Fit each V groove near the given centres: (positions, bottoms, left, right).
 
@@ -103,32 +107,82 @@ def _ridges(lefts, rights) -> np.ndarray:
     return np.array(out)
 
 
+def groove_phase(s, z, pitch: float) -> float:
+    """Where a profile's grooves are, modulo the pitch: the position of the bottoms of the
+    fundamental of the periodic pattern (m, in [0, pitch)).
+
+    A V-groove pattern is a triangle wave whose fundamental, ``-A cos(2 pi (s - s0) / p)``,
+    has its minima at the groove bottoms ``s0 + k p``; its phase is the angle of the
+    profile's Fourier coefficient at ``1 / p``. Used to find the grooves where the
+    instrument's registration (its stage) put them, not where they were designed.
+    """
+    s = np.asarray(s, dtype=np.float64)
+    z = np.asarray(z, dtype=np.float64)
+    ok = np.isfinite(z)
+    s, z = s[ok], z[ok]
+    c = np.sum((z - z.mean()) * np.exp(-2j * np.pi * s / pitch))
+    return float((-np.angle(-c) * pitch / (2.0 * np.pi)) % pitch)
+
+
+def locate_window(instrument, part, centre, window: float) -> tuple[float, float]:
+    """The centre of a cut window as the instrument sees it: the middle of the surface it
+    finds on a profile along X and one along Y through the designed ``centre``, each
+    reaching a window's width beyond the window (the part is the window alone, `cut_and_read`
+    cuts it with ``roi``)."""
+    cx, cy = (float(v) for v in centre)
+    found = []
+    for along_x in (True, False):
+        if along_x:
+            prof = instrument.profile(part, (cx - window, cy), (cx + window, cy), LOCATE)
+        else:
+            prof = instrument.profile(part, (cx, cy - window), (cx, cy + window), LOCATE)
+        seen = prof.s[np.isfinite(prof.z)]
+        if seen.size < 2:
+            raise InputError(f"Found no surface within {window * 1e3:g} mm of the window "
+                             f"at ({cx * 1e3:g}, {cy * 1e3:g}) mm", key="centre")
+        found.append((cx if along_x else cy) - window + 0.5 * (seen.min() + seen.max()))
+    return found[0], found[1]
+
+
 def read_window(instrument, part, centre, plan: PyramidPlan = PAPER_PLAN,
                 span: float = 0.3e-3) -> PyramidWindow:
-    """Read one window (module docstring) with the white-light interferometer."""
-    cx, cy = (float(v) for v in centre)
+    """Read one window (module docstring) with the white-light interferometer.
+
+    A registered instrument (``Realism.registration``) sees the window off its design, by
+    micrometres at the plate's centre and by a few tenths of a millimetre at its corners (a
+    stage's rotation of ~1 mrad over 190 mm), so the window is first found as labs find it:
+    its edges on two profiles through the designed centre (`locate_window`). Each set's
+    grooves are then located on the centre profile (`groove_phase`) and the same grooves
+    read on the profiles either side.
+    """
+    cx, cy = locate_window(instrument, part, centre, plan.window)
     p = plan.pitch
     k = np.arange(-int(round(0.3 * plan.window / p)), int(round(0.3 * plan.window / p)) + 1)
     nominal = k * p                                  # groove offsets read, inside the window
-    half = nominal[-1] + 0.5 * p
+    half = nominal[-1] + 1.5 * p
     sets = []
     for along_x in (True, False):
-        positions, ridges = [], []
-        for shift in (-span, span, 0.0):
+        profiles = {}
+        for shift in (0.0, -span, span):
             # Along the other set's ridge (half a pitch off its grooves), across this set.
             if along_x:     # set 1 runs along X: profile along Y at fixed x
                 x = cx + shift + 0.5 * p
                 prof = instrument.profile(part, (x, cy - half), (x, cy + half), SPACING)
-                base = cy - half
             else:
                 y = cy + shift + 0.5 * p
                 prof = instrument.profile(part, (cx - half, y), (cx + half, y), SPACING)
-                base = cx - half
-            pos, _, lefts, rights = v_flanks(prof.s, prof.z, nominal + half, p)
-            positions.append(pos + base)
-            ridges.append(_ridges(lefts, rights))
-        slope = np.mean((positions[1] - positions[0]) / (2.0 * span))
-        sets.append((positions[2], ridges[2], slope))
+            profiles[shift] = prof
+        # the grooves' offset from their design, within half a pitch
+        found = groove_phase(profiles[0.0].s, profiles[0.0].z, p)
+        offset = (found - half + 0.5 * p) % p - 0.5 * p
+        base = (cy if along_x else cx) - half
+        positions, ridges = {}, {}
+        for shift, prof in profiles.items():
+            pos, _, lefts, rights = v_flanks(prof.s, prof.z, nominal + half + offset, p)
+            positions[shift] = pos + base
+            ridges[shift] = _ridges(lefts, rights)
+        slope = np.mean((positions[span] - positions[-span]) / (2.0 * span))
+        sets.append((positions[0.0], ridges[0.0], slope))
     (pos1, r1, m1), (pos2, r2, m2) = sets
     apex = np.minimum(r1[:, None], r2[None, :])
     pitch = float(np.mean(np.concatenate([np.diff(pos1), np.diff(pos2)])))
