@@ -1,7 +1,7 @@
 """Paper 003 replayed: the grooving machine's XY-plane errors and its C table's squareness.
 
 Run: ``.venv/bin/python scenarios/xy_plane_errors.py [--errors FILE.toml] [--noise on|off]
-[--seed N] [--out reports/xy_plane_errors]`` (about 40 s).
+[--seed N] [--out reports/xy_plane_errors]`` (about 10 s).
 
 The grooving_4axis gets the errors of ``models/errors/xy_plane_grooving_4axis.toml`` (chosen
 to give paper 003's magnitudes: 2-D errors of 11.59 um in X and 12.33 um in Y over the
