@@ -46,10 +46,15 @@ def true_deviation(lab, x, y):
     return actual - nominal
 
 
+def measured_without_noise(errors):
+    """A noise-free lab with ``errors`` and its laser tests read exactly (resolution 0)."""
+    lab = machinesim.Lab("grooving_4axis", errors, noise=False)
+    return lab, measure_xy_plane(*instruments(lab, resolution=0.0), seed=None)
+
+
 @pytest.fixture(scope="module")
 def eq1_lab():
-    lab = machinesim.Lab("grooving_4axis", EQ1, noise=False)
-    return lab, measure_xy_plane(*instruments(lab, resolution=0.0), seed=None)
+    return measured_without_noise(EQ1)
 
 
 def test_eq1_map_equals_the_kinematics_up_to_a_rigid_move(eq1_lab):
@@ -117,8 +122,7 @@ def test_table_and_model_compensation_leave_below_a_nanometre_without_noise(eq1_
 
 @pytest.fixture(scope="module")
 def paper_lab():
-    lab = machinesim.Lab("grooving_4axis", PAPER, noise=False)
-    return lab, measure_xy_plane(*instruments(lab, resolution=0.0), seed=None)
+    return measured_without_noise(PAPER)
 
 
 def test_the_tables_yaw_is_read_from_two_edge_lines(paper_lab):
