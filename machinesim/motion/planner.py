@@ -160,8 +160,9 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
             found, failed = substeps(paths, starts[turning], delta[turning], chord_tolerance)
             if failed.any():
                 bad = int(turning[np.argmax(failed)])
+                what = "a rotary move" if np.any(delta[bad, rotary] != 0.0) else "a move"
                 raise NCProgramError(
-                    f"a move would need more than {MAX_SUBSTEPS} sub-steps to keep the "
+                    f"{what} would need more than {MAX_SUBSTEPS} sub-steps to keep the "
                     f"chord within {chord_tolerance * 1e9:g} nm; raise chord_tolerance",
                     source=source, line=int(lines[bad]))
             steps[turning] = found
