@@ -72,10 +72,14 @@ class Lab:
         The machine's own residual errors when ``realism.background_errors`` is on; default
         the shipped ``models/errors/background_<machine>.toml`` (`machinesim.realism`).
         Ignored with the switch off.
+    servo : ServoModel, optional
+        The machine's servo loops (``follow(t, q)``, e.g. `machinesim.servo.PIDServo`), kept
+        hidden like the errors: `cut` runs every program through them and `encoders`
+        records the follow-up error they leave. Default none (axes follow exactly).
     """
 
     def __init__(self, machine, errors=None, *, noise: bool = True, seed: int = 0,
-                 realism: Realism | None = None, background=None) -> None:
+                 realism: Realism | None = None, background=None, servo=None) -> None:
         from machinesim.machines import Machine, load_machine
 
         self.machine = machine if isinstance(machine, Machine) else load_machine(machine)
@@ -108,6 +112,10 @@ class Lab:
             self.__background = own
             truth = _realism.add_errors(injected, own)
         self.__truth = truth
+        if servo is not None and not callable(getattr(servo, "follow", None)):
+            raise InputError(f"Expected a servo with follow(t, q) (a ServoModel), got "
+                             f"{type(servo).__name__}", key="servo")
+        self.__servo = servo
         self.__issued: dict[str, int] = {}
         self.__instruments: dict[str, dict] = {}
         self.__artefacts: dict[str, object] = {}
@@ -124,7 +132,8 @@ class Lab:
 
         Parameters are those of `machinesim.cutting.cut` (``start``, ``chord_tolerance``,
         ``servo``, ``progress`` as keywords), without the errors: the lab supplies its own
-        (the injected ones, and the background when `realism` has it).
+        (the injected ones, and the background when `realism` has it), and its servo loops
+        unless ``servo`` names others.
         With ``turn_step`` (rad) the lab cuts by `machinesim.cutting.cut_turned` instead
         (the same part, each group of feed moves at one C position cut in its own turned
         frame: faster for faces at many C positions), which also takes ``floor``.
@@ -139,6 +148,8 @@ class Lab:
             raise InputError("a lab cuts with its own errors; pass none to Lab.cut",
                              key="errors")
         cutter = cut_turned if "turn_step" in options else cut
+        if self.__servo is not None and "servo" not in options:
+            options["servo"] = self.__servo
         return cutter(program, self.machine, tool, stock, self.__truth, roi=roi, **options)
 
     def make_artefacts(self, stock, design: SphereArtefacts, *, label: str):
@@ -221,6 +232,23 @@ class Lab:
         return LaserInterferometer(self.machine, self.__truth, noise=self.noise,
                                    rng=stream(self.seed, kind, label), **drawn, **options)
 
+    def encoders(self, *, label: str | None = None, **options):
+        """The machine's axis encoders as its control records them
+        (`machinesim.metrology.encoders.Encoders`): ``record(program)`` gives commands,
+        positions and the follow-up error the lab's servo loops leave. ``options``: ``sigma``
+        (per axis)."""
+        from machinesim.metrology.encoders import Encoders
+
+        kind = "encoders"
+        label = self._label(kind, label)
+        servo = self.__servo
+
+        def follow(t, q):
+            return q if servo is None else servo.follow(t, q)
+
+        return Encoders(self.machine, follow, noise=self.noise,
+                        rng=stream(self.seed, kind, label), **options)
+
     def r_test(self, *, label: str | None = None, **options):
         """An R-test (ISO 10791-6, `machinesim.metrology.RTest`): a ball on the tool side read
         by three displacement sensors on the table, for the machine's kinematics."""
@@ -260,6 +288,11 @@ class Lab:
             alone (what a scenario chose). Without background errors the two are the same.
         """
         return self.__truth if background else self.__injected
+
+    def reveal_servo(self):
+        """The lab's servo loops (None: ideal axes). For tests and reports, never for
+        identification."""
+        return self.__servo
 
     def reveal_background(self) -> ErrorModel:
         """The machine's own residual errors the lab added (none with the switch off)."""

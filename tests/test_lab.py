@@ -47,15 +47,15 @@ def test_no_public_attribute_of_the_lab_or_its_instruments_holds_the_truth():
     truth = lab.reveal()
     part, _ = lab.cut(groove(), "v:90", "block:10x10x2")
     things = [lab, lab.touch_probe(part), lab.laser_interferometer(), lab.microscope(),
-              lab.white_light_interferometer(), lab.r_test()]
+              lab.white_light_interferometer(), lab.r_test(), lab.encoders()]
     for thing in things:
         for name, value in _public(thing):
             assert not _holds_truth(value, truth), f"{type(thing).__name__}.{name}"
     methods = {name for name in dir(lab) if not name.startswith("_")}
-    assert methods == {"cut", "laser_interferometer", "machine", "make_artefacts",
+    assert methods == {"cut", "encoders", "laser_interferometer", "machine", "make_artefacts",
                        "microscope", "noise", "r_test", "realism", "reveal",
-                       "reveal_artefacts", "reveal_background", "reveal_instruments", "seed",
-                       "touch_probe", "white_light_interferometer"}
+                       "reveal_artefacts", "reveal_background", "reveal_instruments",
+                       "reveal_servo", "seed", "touch_probe", "white_light_interferometer"}
 
 
 def test_with_realism_no_public_attribute_holds_the_truth_or_an_imperfection():

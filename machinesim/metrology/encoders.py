@@ -1,0 +1,116 @@
+"""The machine's own axis encoders, as its control records them: the follow-up error.
+
+A control samples every axis' scale (its linear or rotary encoder) each servo period and can
+record the commanded and the measured position side by side (FANUC's servo guide, Heidenhain's
+oscilloscope). Their difference, command minus position, is the follow-up (following) error
+paper 004 tunes its servo loops against (section 3.3, Table 6, Fig. 14).
+
+`Encoders` runs a program's commanded trajectory (`machinesim.motion.plan` on the nominal
+machine: the control interpolates without knowing the machine's errors) through the lab's
+servo loops as one continuous motion and reads the positions reached through the readout of
+each axis: Gaussian noise, then rounding to the axis' resolution (the machine's URDF
+``resolution``). Like every instrument it keeps a function (``follow``), not the servo
+model, so nothing it returns exposes the loops' gains (the honesty rule).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.arrays import frozen
+from machinesim.exceptions import InputError
+from machinesim.metrology.instruments import Readout, as_generator
+
+__all__ = ["ENCODER_SIGMA_OF_RESOLUTION", "EncoderReading", "Encoders"]
+
+#: Noise of an encoder reading, as a fraction of the axis' resolution (assumed: the
+#: interpolation jitter of a scale interpolated down to its resolution stays below one step).
+ENCODER_SIGMA_OF_RESOLUTION = 0.3
+
+
+@dataclass(frozen=True, eq=False)
+class EncoderReading:
+    """A recorded run: times, commanded and measured axis values (SI: m, rad).
+
+    Attributes
+    ----------
+    axes : tuple of str
+        Axis letters, the columns of ``commanded`` and ``position``.
+    t : ndarray (N,)
+        Times, s.
+    commanded : ndarray (N, n_axes)
+        The control's commands.
+    position : ndarray (N, n_axes)
+        What the encoders read.
+    """
+
+    axes: tuple
+    t: np.ndarray
+    commanded: np.ndarray
+    position: np.ndarray
+
+    @property
+    def following_error(self) -> np.ndarray:
+        """Command minus measured position, (N, n_axes), m or rad."""
+        return self.commanded - self.position
+
+    def peak(self, axis: str) -> float:
+        """Largest |following error| of one axis, m or rad."""
+        if axis not in self.axes:
+            raise InputError(f"unknown axis {axis!r}; the reading has {''.join(self.axes)}",
+                             key="axis")
+        return float(np.max(np.abs(self.following_error[:, self.axes.index(axis)])))
+
+
+class Encoders:
+    """The control's recording of its axis encoders (module docstring).
+
+    Parameters
+    ----------
+    machine : Machine
+    follow : callable(t, q) -> q
+        The axes' response to commands (the lab's servo loops; identity for ideal axes).
+    noise : bool
+        Encoder noise on or off (rounding to the resolution stays).
+    rng : numpy Generator or seed
+    sigma : sequence of float, optional
+        Noise per axis, m or rad; default `ENCODER_SIGMA_OF_RESOLUTION` x the resolution.
+    """
+
+    def __init__(self, machine, follow: Callable, *, noise: bool = True, rng=None,
+                 sigma=None) -> None:
+        resolution = np.asarray(machine.resolution, dtype=np.float64)
+        sigma = (ENCODER_SIGMA_OF_RESOLUTION * resolution if sigma is None
+                 else np.asarray(sigma, dtype=np.float64))
+        if sigma.shape != resolution.shape:
+            raise InputError(f"Expected one sigma per axis ({len(resolution)}), got "
+                             f"{sigma.shape}", key="sigma")
+        self.machine = machine
+        self.readouts = tuple(Readout.of(float(s), float(r), noise)
+                              for s, r in zip(sigma, resolution, strict=True))
+        self._follow = follow
+        self.rng = as_generator(rng)
+
+    def __repr__(self) -> str:
+        return (f"Encoders({self.machine.name}, resolution="
+                f"{[r.resolution for r in self.readouts]})")
+
+    def record(self, program, *, start=None) -> EncoderReading:
+        """Run ``program`` (an NC program) and record commands and encoder positions at the
+        planned samples (every sub-step of a rotary move)."""
+        from machinesim import motion
+
+        trajectory = motion.plan(program, self.machine, None, start=start)
+        t = np.asarray(trajectory.t, dtype=np.float64)
+        commanded = np.asarray(trajectory.q, dtype=np.float64)
+        reached = np.asarray(self._follow(t, commanded), dtype=np.float64)
+        if reached.shape != commanded.shape:
+            raise InputError(f"the servo returned axis values of shape {reached.shape} for "
+                             f"commands of shape {commanded.shape}", key="servo")
+        position = np.column_stack([readout.read(reached[:, i], self.rng)
+                                    for i, readout in enumerate(self.readouts)])
+        return EncoderReading(tuple(self.machine.axes), frozen(t), frozen(commanded),
+                              frozen(position.reshape(commanded.shape)))

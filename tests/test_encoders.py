@@ -1,0 +1,71 @@
+"""The lab's axis encoders: the follow-up error its hidden servo loops leave, as a control
+records it, against the final-value theorem."""
+
+import numpy as np
+import pytest
+
+import machinesim
+from machinesim.cutting import cut
+from machinesim.exceptions import InputError
+from machinesim.nc import parse_program
+from machinesim.servo import AxisServo, PIDServo
+
+#: A PD loop on X (mass 4 kg, guide damping 1e4 N s/m, kd adding 2e3): the velocity
+#: constant is kp / c = 60 /s, the slow closed-loop pole kp / (c + kd) = 50 /s.
+M, C, KP, KD = 4.0, 1e4, 6e5, 2e3
+V = 1e-3  # m/s: G01 at F60 mm/min
+RAMP = parse_program("G90 G21 G94\nG01 X1. F60.\nM30")
+
+
+def lab_with_pd_x(**options) -> machinesim.Lab:
+    servo = PIDServo((AxisServo(kp=KP, ki=0.0, kd=KD, mass=M, damping=C), None, None))
+    return machinesim.Lab("sts_lathe", servo=servo, **options)
+
+
+def test_a_ramp_lags_by_the_final_value_theorem():
+    # L(s) = (kd s + kp) / (s (m s + c)): e_ss = v c / kp = 16.67 um; after 1 s (50 time
+    # constants of the slow pole) the transient is gone; the encoder rounds to the axis'
+    # resolution.
+    lab = lab_with_pd_x(noise=False)
+    reading = lab.encoders().record(RAMP)
+    resolution = lab.machine.resolution[0]
+    assert reading.following_error[-1, 0] == pytest.approx(V * C / KP,
+                                                           abs=resolution / 2 + 1e-15)
+    assert reading.peak("Z") == 0.0 and reading.peak("C") == 0.0  # ideal axes
+    np.testing.assert_array_equal(reading.commanded[[0, -1], 0], [0.0, 1e-3])
+
+
+def test_encoder_noise_is_the_stated_fraction_of_the_resolution():
+    # Ideal axes on 1 um steps, exact multiples of the resolution q: a reading is the noise
+    # (sigma = 0.3 q) rounded to whole steps, k q with probability
+    # Phi((k + 1/2) q / sigma) - Phi((k - 1/2) q / sigma); its standard deviation follows.
+    from scipy.stats import norm
+
+    lab = machinesim.Lab("sts_lathe", seed=3)
+    program = parse_program("G90 G21 G94\n" + "".join(
+        f"G01 X{0.001 * k:.3f} F60.\n" for k in range(1, 2001)) + "M30")
+    encoders = lab.encoders()
+    reading = encoders.record(program)
+    readout = encoders.readouts[0]
+    error = reading.following_error[:, 0]
+    k = np.arange(-5, 6)
+    z = readout.resolution / readout.sigma
+    p = norm.cdf((k + 0.5) * z) - norm.cdf((k - 0.5) * z)
+    expected = readout.resolution * np.sqrt(np.sum(p * k**2))
+    assert readout.sigma == pytest.approx(0.3 * lab.machine.resolution[0], rel=1e-12)
+    assert np.std(error) == pytest.approx(expected, rel=0.1)  # 4000 samples: ~3 %
+
+
+def test_the_lab_cuts_through_its_own_servo_and_hides_it():
+    lab = lab_with_pd_x(noise=False)
+    program = parse_program("G90 G21 G94\nG00 X-0.5 Z0.1\nG01 Z-0.01 F60.\nX0.5\nG00 Z0.1\nM30")
+    stock = "cylinder:2x1"
+    _, by_lab = lab.cut(program, "ball:0.5", stock)
+    _, given = cut(program, "sts_lathe", "ball:0.5", stock, servo=lab.reveal_servo())
+    _, ideal = cut(program, "sts_lathe", "ball:0.5", stock)
+    assert by_lab.removed_volume_m3 == given.removed_volume_m3
+    assert by_lab.removed_volume_m3 != ideal.removed_volume_m3  # the lag shortens the cut
+    encoders = lab.encoders()
+    assert not any(name in ("servo", "_servo") for name in vars(encoders))
+    with pytest.raises(InputError, match="follow"):
+        machinesim.Lab("sts_lathe", servo=object())
