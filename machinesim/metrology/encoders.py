@@ -5,11 +5,12 @@ record the commanded and the measured position side by side (FANUC's servo guide
 oscilloscope). Their difference, command minus position, is the follow-up (following) error
 paper 004 tunes its servo loops against (section 3.3, Table 6, Fig. 14).
 
-`Encoders` runs a program's commanded trajectory (`machinesim.motion.plan` on the nominal
-machine: the control interpolates without knowing the machine's errors) through the lab's
-servo loops as one continuous motion and reads the positions reached through the readout of
-each axis: Gaussian noise, then rounding to the axis' resolution (the machine's URDF
-``resolution``). Like every instrument it keeps a function (``follow``), not the servo
+`Encoders` plans a program's commanded trajectory (`machinesim.motion.plan` on the nominal
+machine: the control interpolates without knowing the machine's errors), runs it through the
+lab's servo loops as `Lab.cut` does (the planner's ``servo`` slot, move by move), and reads
+the positions reached through the readout of each axis: Gaussian noise, then rounding to the
+axis' resolution (the machine's URDF ``resolution``). What it records is the motion the
+lab cuts with. Like every instrument it keeps a function (``follow``), not the servo
 model, so nothing it returns exposes the loops' gains (the honesty rule).
 """
 
@@ -106,11 +107,17 @@ class Encoders:
         trajectory = motion.plan(program, self.machine, None, start=start)
         t = np.asarray(trajectory.t, dtype=np.float64)
         commanded = np.asarray(trajectory.q, dtype=np.float64)
-        reached = np.asarray(self._follow(t, commanded), dtype=np.float64)
-        if reached.shape != commanded.shape:
-            raise InputError(f"the servo returned axis values of shape {reached.shape} for "
-                             f"commands of shape {commanded.shape}", key="servo")
+        followed = motion.plan(program, self.machine, None, start=start,
+                               servo=_Follow(self._follow))
+        reached = np.asarray(followed.q, dtype=np.float64)
         position = np.column_stack([readout.read(reached[:, i], self.rng)
                                     for i, readout in enumerate(self.readouts)])
         return EncoderReading(tuple(self.machine.axes), frozen(t), frozen(commanded),
                               frozen(position.reshape(commanded.shape)))
+
+
+class _Follow:
+    """A follow function as the planner's `machinesim.motion.ServoModel`."""
+
+    def __init__(self, follow: Callable) -> None:
+        self.follow = follow
