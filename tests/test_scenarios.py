@@ -33,11 +33,11 @@ def test_demo_prints_the_machines_and_the_landing_table():
 def test_xy_plane_errors_writes_the_paper_figures(tmp_path):
     import json
 
-    run("xy_plane_errors.py", "--noise", "off", "--out", str(tmp_path))
+    run("xy_plane_errors.py", "--realism", "ideal", "--out", str(tmp_path))
     summary = json.loads((tmp_path / "summary.json").read_text())
     figures = {f["name"]: f for f in summary["figures"]}
     # paper 003: 11.59 um before compensation (its Fig. 2); within 25 %
     assert abs(figures["xy_error_x"]["before"] - 11.59) < 0.25 * 11.59
     assert figures["xy_error_x"]["after"] < 1e-3
-    # ideal readings (noise off): the diagonals at the tool tip below 1 nm after the table
+    # ideal lab (ideal readings): the diagonals at the tool tip below 1 nm after the table
     assert figures["diagonal_machining_point"]["after"] < 1e-3

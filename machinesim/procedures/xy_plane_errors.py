@@ -23,6 +23,7 @@ docs/procedures/xy_plane_errors.md has the derivations and sign conventions.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -99,6 +100,14 @@ class XYPlaneErrors:
     uniform_targets: bool = True
     interferometer_resolution: float | None = None
     name: str = "xy_plane_errors"
+    #: The `machinesim.realism.Realism` switches this procedure feels, for an error budget:
+    #: the laser, R-test and white-light readings' noise, the white-light interferometer's
+    #: spot and lateral noise, the machine's own residual errors. Not the optical
+    #: registration: the lab draws one frame for the whole part, whose tilt (0.2 mrad)
+    #: becomes tens of micrometres of height between windows 380 mm apart, where a lab
+    #: reading window by window levels each field.
+    realism_sources: ClassVar[tuple[str, ...]] = (
+        "instrument_noise", "lateral_resolution", "lateral_noise", "background_errors")
     paper: str = "003"
 
     def __post_init__(self) -> None:
