@@ -259,6 +259,11 @@ def _cut(args) -> int:
     print(f"wrote {args.out} ({description}): removed {summary['removed_volume_mm3']:.6g} mm^3 "
           f"in {report.sweeps} sweeps ({report.engine}); "
           f"machining time {report.machining_time_s:.1f} s")
+    for entry in summary["tools"] if len(summary["tools"]) > 1 else ():
+        name = ("--tool before the first change" if entry["tool"] is None
+                else f"T{entry['tool']} from line {entry['line']}")
+        print(f"  {name}: length {entry['length_mm']:.6g} mm, removed "
+              f"{entry['removed_volume_mm3']:.6g} mm^3")
     if args.report is not None:
         print(f"wrote {args.report} (cut report, JSON, units in every key)")
     for line in report.holder_contact:

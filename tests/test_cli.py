@@ -245,6 +245,29 @@ def test_tools_and_integer_input_reach_the_nc_reader(tmp_path, capsys, monkeypat
     assert_clean_failure(code, err, "none.toml: no such file; expected the tool table (--tools)")
 
 
+def test_each_tool_cuts_at_its_length_and_the_summary_says_what_it_removed(tmp_path, capsys):
+    # Two 90-deg V grooves 10 um deep and 10 mm long (each d^2 x L = 1e-3 mm^3): T1 the
+    # model's tool, T2 2.5 mm longer with G43 H2 lifting Z by as much, so both cut at the
+    # programmed depth; the change to T2 is made 5 mm up, clear of the part.
+    table = tmp_path / "tools.toml"
+    table.write_text('[tool.1]\nlength_mm = 0.0\nshape = "v:90"\n'
+                     '[tool.2]\nlength_mm = 2.5\nshape = "v:90"\n')
+    program = tmp_path / "two_tools.nc"
+    program.write_text("T1 M06\nG00 X0 Y1. Z1.\nG01 Z-0.01 F100.\nX10.\nG00 Z5.\n"
+                       "T2 M06\nG43 H2 Z1.\nG00 X0 Y3.\nG01 Z-0.01\nX10.\nG00 Z5.\nM30\n")
+    report = tmp_path / "r.json"
+    code, out, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "ball:1",
+                          "--stock", "block:12x4x1@-1,0,0", "--tools", table, "--out",
+                          tmp_path / "p.ply", "--report", report, "--quiet"], capsys)
+    assert code == 0, err
+    assert "T1 from line 1: length 0 mm, removed 0.001 mm^3" in out
+    assert "T2 from line 6: length 2.5 mm, removed 0.001 mm^3" in out
+    tools = json.loads(report.read_text(), parse_constant=no_nan)["tools"]
+    assert [(t["tool"], t["line"]) for t in tools] == [(1, 1), (2, 6)]  # nothing before T1
+    for t in tools:
+        assert t["removed_volume_mm3"] == pytest.approx(0.01**2 * 10.0, rel=1e-9)
+
+
 def test_the_nc_reader_takes_a_tool_table(tmp_path):
     table = tmp_path / "tools.toml"
     table.write_text("")
