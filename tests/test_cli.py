@@ -250,13 +250,13 @@ def test_each_tool_cuts_at_its_length_and_the_summary_says_what_it_removed(tmp_p
     # model's tool, T2 2.5 mm longer with G43 H2 lifting Z by as much, so both cut at the
     # programmed depth; the change to T2 is made 5 mm up, clear of the part.
     table = tmp_path / "tools.toml"
-    table.write_text('[tool.1]\nlength_mm = 0.0\nshape = "v:90"\n'
+    table.write_text('[tool.1]\nlength_mm = 0.0\n'   # no shape: the cut's --tool
                      '[tool.2]\nlength_mm = 2.5\nshape = "v:90"\n')
     program = tmp_path / "two_tools.nc"
     program.write_text("T1 M06\nG00 X0 Y1. Z1.\nG01 Z-0.01 F100.\nX10.\nG00 Z5.\n"
                        "T2 M06\nG43 H2 Z1.\nG00 X0 Y3.\nG01 Z-0.01\nX10.\nG00 Z5.\nM30\n")
     report = tmp_path / "r.json"
-    code, out, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "ball:1",
+    code, out, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
                           "--stock", "block:12x4x1@-1,0,0", "--tools", table, "--out",
                           tmp_path / "p.ply", "--report", report, "--quiet"], capsys)
     assert code == 0, err

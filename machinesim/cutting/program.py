@@ -313,16 +313,14 @@ class _ToolSections:
 
     def __init__(self, program, tool) -> None:
         built = {None: tool}
-        # (first move, tool, length) of each run of moves cut by one tool and length
+        # (first move, tool, length) of each run of moves between changes, and its name
         self.runs = [(0, tool, 0.0)]
-        self.names = [(None, None)]  # (tool number, line) of each run
+        self.names = [(None, None)]  # (tool number, line of the change)
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
                 built[change.shape] = tool_from_spec(change.shape)
-            run = (change.move, built[change.shape], float(change.length_m))
-            if run[1:] != self.runs[-1][1:]:
-                self.runs.append(run)
-                self.names.append((change.number, change.line))
+            self.runs.append((change.move, built[change.shape], float(change.length_m)))
+            self.names.append((change.number, change.line))
 
     def points(self) -> np.ndarray:
         """Every tool's vertices where it cuts, in the ``tool_tip`` frame (for the chord
