@@ -27,7 +27,8 @@ from dataclasses import dataclass
 from machinesim._io import write_atomic
 from machinesim.exceptions import InputError
 
-__all__ = ["BUDGET_KEYS", "Budget", "BudgetRow", "error_budget", "quadrature_share"]
+__all__ = ["BUDGET_KEYS", "Budget", "BudgetRow", "error_budget", "quadrature_share",
+           "realism_budget"]
 
 #: Keys of each row of ``budget`` in summary.json (`Budget.to_dict`).
 BUDGET_KEYS = ("source", "figure", "unit", "after_all", "after_without", "share")
@@ -212,6 +213,20 @@ def _figures(result, what: str) -> dict:
         raise InputError(f"error_budget: run({what}) returned {type(result).__name__}; "
                          "expected a machinesim.experiment.Result", key="run")
     return {f.name: f for f in figures}
+
+
+def realism_budget(procedure, result, realism, make_lab, enabled: bool = True):
+    """The error budget of a scenario's run over its lab's realism switches: each switch
+    that is on and that ``procedure.realism_sources`` lists, turned off in turn on a lab of
+    its own (``make_lab(realism)``); ``result`` is the run with every switch on. None when
+    not ``enabled`` or no such switch is on."""
+    from machinesim.experiment import run
+
+    sources = [name for name in realism.on if name in procedure.realism_sources]
+    if not enabled or not sources:
+        return None
+    return error_budget(lambda off: result if off is None else run(
+        procedure, make_lab(realism.without(off))), sources)
 
 
 def error_budget(run: Callable, sources: Sequence[str]) -> Budget:

@@ -28,7 +28,7 @@ import time
 import numpy as np
 
 from machinesim import Lab, load_machine
-from machinesim.budget import error_budget
+from machinesim.budget import realism_budget
 from machinesim.cam.prisms import CalibrationPlan
 from machinesim.exceptions import InputError, MachineSimError
 from machinesim.experiment import run
@@ -98,11 +98,7 @@ def report(args) -> None:
 
     procedure = ToolRotationArm(plan=calibration_plan(args.capture_mm))
     result = run(procedure, lab)
-    budget = None
-    sources = [name for name in realism.on if name in procedure.realism_sources]
-    if args.budget == "on" and sources:
-        budget = error_budget(lambda off: result if off is None else run(
-            procedure, make_lab(realism.without(off))), sources)
+    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on")
     out = ReportFolder(args.out)
     calibration, detail = result.measurements, result.identification.detail
     out.write_part("calibration.ply", calibration.part)

@@ -37,7 +37,7 @@ import sys
 import numpy as np
 
 from machinesim import Lab
-from machinesim.budget import error_budget
+from machinesim.budget import realism_budget
 from machinesim.cam.tool_setting_plates import Plan
 from machinesim.exceptions import MachineSimError
 from machinesim.experiment import run
@@ -102,11 +102,7 @@ def report(args, make_lab, realism) -> None:
     procedure = ToolSetting6Axis()
     print(f"Paper 001 on robonano_ui: realism {realism}, seed {args.seed}\n")
     result = run(procedure, make_lab(realism))
-    budget = None
-    sources = [name for name in realism.on if name in procedure.realism_sources]
-    if args.budget == "on" and sources:
-        budget = error_budget(lambda off: result if off is None else run(
-            procedure, make_lab(realism.without(off))), sources)
+    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on")
     folder = ReportFolder(args.out)
     readings = result.measurements
     for name, (program, part, _) in readings.plates.items():

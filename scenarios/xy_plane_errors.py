@@ -33,7 +33,7 @@ import numpy as np
 
 from machinesim import Lab
 from machinesim._io import write_atomic
-from machinesim.budget import error_budget
+from machinesim.budget import realism_budget
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import MachineSimError
 from machinesim.experiment import run
@@ -78,11 +78,7 @@ def report(args) -> None:
           + "\n")
     procedure = XYPlaneErrors(interferometer_resolution=0.0 if ideal else None)
     result = run(procedure, lab)
-    budget = None
-    sources = [name for name in realism.on if name in procedure.realism_sources]
-    if args.budget == "on" and sources:
-        budget = error_budget(lambda off: result if off is None else run(
-            procedure, make_lab(realism.without(off))), sources)
+    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on")
     out = ReportFolder(args.out)
     detail = result.identification.detail
     xy = result.measurements["xy"]
