@@ -192,7 +192,11 @@ def test_view_in_live_mode_prints_its_url_and_stops_on_ctrl_c(browser, tmp_path)
         line = process.stdout.readline()
         assert line.startswith("machinesim viewer at http://127.0.0.1:"), line
         url = line.split()[3]
-        assert process.stdout.readline().startswith("wrote")  # the --screenshot PNG
+        second = process.stdout.readline()
+        if not second.startswith("wrote"):  # the --screenshot PNG; say why it is missing
+            process.kill()
+            pytest.fail(f"no screenshot line ({second!r}); stderr: "
+                        f"{process.communicate(timeout=20)[1]}")
         view = hue_counts((tmp_path / "live.png").read_bytes(), "view")
         assert view["orange"] > 2000, view  # the part's sides: height map is one colour
         browser.open(url)
