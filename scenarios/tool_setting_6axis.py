@@ -43,6 +43,7 @@ from machinesim.exceptions import MachineSimError
 from machinesim.experiment import run
 from machinesim.identification.tool_setting_6axis import PARAMETERS
 from machinesim.procedures.tool_setting_6axis import (
+    DEFAULT_INJECTED,
     ToolSetting6Axis,
     cut_summary,
     layout_lines,
@@ -57,13 +58,8 @@ from machinesim.report import (
 )
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 
-#: The injected errors without --errors: round values of the paper's order (a tool set by
-#: hand, a C centre line found to the better part of a millimetre), chosen so that the
-#: "before" distances land within 25 % of Table 1's (2 dx, 2 dy for the A pairs; e for the
-#: triangle), not Table 1 itself; 150 um along the tool (the paper gives no B value).
-DEFAULTS = {"tool.x": 250.0 * M_PER_UM, "tool.y": 350.0 * M_PER_UM,
-            "tool.z": 150.0 * M_PER_UM, "location.C.EX0C": 100.0 * M_PER_UM,
-            "location.C.EY0C": 850.0 * M_PER_UM}
+#: The injected errors without --errors (shared with the campaign, see the procedure).
+DEFAULTS = DEFAULT_INJECTED
 #: Table 1's row labels for the figures.
 LABELS = {"a_dx": "A dx", "a_dy": "A dy", "c_dx": "C dx", "c_dy": "C dy",
           "b_depth_change_theta2": "B depth change at theta2",

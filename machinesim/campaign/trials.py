@@ -69,10 +69,10 @@ def _tool_setting_6axis(options):
 
 
 def _tool_setting_defaults(machine) -> dict:
-    # paper 001, Table 1's injected offsets (scenarios/tool_setting_6axis.py)
-    um = M_PER_UM
-    return {"tool.x": 245.02 * um, "tool.y": 340.06 * um, "tool.z": 150.0 * um,
-            "location.C.EX0C": 108.97 * um, "location.C.EY0C": 852.81 * um}
+    # paper 001: the scenario's defaults (round values of the paper's order)
+    from machinesim.procedures.tool_setting_6axis import DEFAULT_INJECTED
+
+    return dict(DEFAULT_INJECTED)
 
 
 def _xy_plane_errors(options):

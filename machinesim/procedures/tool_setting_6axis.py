@@ -81,8 +81,8 @@ from machinesim.rotations import rot_z
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, from_si
 
 __all__ = [
-    "PAPER_TABLE_1", "Readings", "ToolSetting6Axis", "compensate_program", "layout_lines",
-    "read_plate", "touch_off_z",
+    "DEFAULT_INJECTED", "PAPER_TABLE_1", "Readings", "ToolSetting6Axis", "compensate_program",
+    "layout_lines", "read_plate", "touch_off_z",
 ]
 
 #: The tool of paper 001: a single-crystal diamond V tool, 90 deg included angle.
@@ -90,6 +90,14 @@ TOOL = "v:90"
 #: Table 1 of paper 001: distances between grooves (um), original and compensated NC data.
 PAPER_TABLE_1 = {"a_dx": (490.04, 4.06), "a_dy": (680.12, 2.97), "c_dx": (108.97, 0.74),
                  "c_dy": (852.81, 1.40)}
+#: The errors a replay injects by default (scenario and campaign): round values of the
+#: paper's order (a tool set by hand, a C centre line found to the better part of a
+#: millimetre), chosen so that the "before" distances land within 25 % of Table 1's (2 dx,
+#: 2 dy for the A pairs; e for the triangle), not Table 1 itself; 150 um along the tool (the
+#: paper gives no B value). SI, by `Machine.parameter_names`.
+DEFAULT_INJECTED = MappingProxyType({
+    "tool.x": 250.0 * M_PER_UM, "tool.y": 350.0 * M_PER_UM, "tool.z": 150.0 * M_PER_UM,
+    "location.C.EX0C": 100.0 * M_PER_UM, "location.C.EY0C": 850.0 * M_PER_UM})
 #: Touch-off: only segments this deep (m) are used: 2 um clears the microscope's noise, 190
 #: um keeps the whole 0.2 mm tall V profile visible.
 TOUCH_DEPTHS = (2 * M_PER_UM, 190 * M_PER_UM)
