@@ -52,6 +52,17 @@ def measured_without_noise(errors):
     return lab, measure_xy_plane(*instruments(lab, resolution=0.0), seed=None)
 
 
+def rigid_rest(truth, dx, dy, x, y) -> float:
+    """Largest difference between the true deviations and (dx, dy) once the best rigid
+    shift and turn of the plate, which no reading sees, is taken out, m."""
+    a = np.zeros((2 * x.size, 3))
+    a[: x.size, 0], a[: x.size, 2] = 1.0, -y
+    a[x.size:, 1], a[x.size:, 2] = 1.0, x
+    diff = np.concatenate([truth[:, 0] - dx, truth[:, 1] - dy])
+    coef, *_ = np.linalg.lstsq(a, diff, rcond=None)
+    return float(np.abs(diff - a @ coef).max())
+
+
 @pytest.fixture(scope="module")
 def eq1_lab():
     return measured_without_noise(EQ1)
@@ -65,12 +76,7 @@ def test_eq1_map_equals_the_kinematics_up_to_a_rigid_move(eq1_lab):
     dx, dy = meas.map.deviation(x, y)
     # The least-squares straightness lines leave a rigid turn and shift no reading sees:
     # difference = (tx - w y, ty + w x), fitted by least squares, rest below 1e-12 m.
-    a = np.zeros((2 * x.size, 3))
-    a[: x.size, 0], a[: x.size, 2] = 1.0, -y
-    a[x.size:, 1], a[x.size:, 2] = 1.0, x
-    diff = np.concatenate([truth[:, 0] - dx, truth[:, 1] - dy])
-    coef, *_ = np.linalg.lstsq(a, diff, rcond=None)
-    assert np.abs(diff - a @ coef).max() < 1e-12
+    assert rigid_rest(truth, dx, dy, x, y) < 1e-12
     # The diagonals (corners, beam height) equal the map's prediction: no angular errors.
     for (c, o), d in zip(DIAGONALS, meas.diagonals, strict=True):
         np.testing.assert_allclose(d.mean, meas.map.diagonal(c, o, d.targets), atol=1e-12)
@@ -87,6 +93,29 @@ def test_squareness_from_the_diagonals_against_the_injected(eq1_lab):
     # First-order formulas: the rest is of second order, (deviation / length)**2 * d / (a b)
     # with deviations of ~10 um over 0.4 m, i.e. ~1e-9 rad.
     assert meas.diagonal_squareness == pytest.approx(e - chords, abs=2e-9)
+
+
+def test_the_yaw_is_read_and_taken_out_of_the_diagonal_squareness():
+    # EQ1 plus a yaw of the table (ECY): x ECY(y) in Y at the corners does not cancel
+    # between the two diagonals, so left in it would bias the squareness. Read from the
+    # edge lines and taken out, eq 1's map plus the yaw term equals the kinematics up to a
+    # rigid move, as eq 1's map alone does without the yaw.
+    errors = {**EQ1, "component": {**EQ1["component"], "Y": {
+        **EQ1["component"]["Y"], "ECY_urad": [-4.0, -2.0, 1.0, 0.0, 2.0, 5.0, 6.0]}}}
+    lab, meas = measured_without_noise(errors)
+    ecy = lab.reveal().component["Y"]["ECY"]
+    y = meas.yaw_y.positions
+    # second order (yaw x squareness over the 0.4 m separation): ~1e-10 rad
+    np.testing.assert_allclose(meas.yaw_y.values, ecy.evaluate(y), rtol=0, atol=2e-10)
+    # on the targets: between them the yaw's X part (y ECY(y), quadratic between the
+    # table's knots) is interpolated linearly, ~1 nm off
+    g = np.linspace(-0.2, 0.2, 11)
+    x, y = (a.ravel() for a in np.meshgrid(g, g))
+    truth = true_deviation(lab, x, y)
+    dx, dy = meas.map.deviation(x, y)
+    # second order: the yaw reading's ~1e-10 rad over the 0.2 m lever
+    assert rigid_rest(truth, dx, dy + x * meas.yaw_y(y), x, y) < 5e-11
+    assert rigid_rest(truth, dx, dy, x, y) > 1e-7  # eq 1 alone cannot hold the yaw
 
 
 def test_fit_route_identifies_the_injected_tables(eq1_lab):
