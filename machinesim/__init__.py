@@ -20,6 +20,7 @@ from machinesim.exceptions import MachineSimError
 _LAZY = {
     "ComponentError": "machinesim.errors", "ErrorModel": "machinesim.errors",
     "ToolSetting": "machinesim.errors", "WorkpieceSetting": "machinesim.errors",
+    "ToolGeometry": "machinesim.errors",
     "Lab": "machinesim.lab", "Realism": "machinesim.realism", "AxisSolution": "machinesim.machines",
     "Machine": "machinesim.machines", "list_machines": "machinesim.machines",
     "load_machine": "machinesim.machines",
@@ -57,6 +58,7 @@ __all__ = [
     "Machine",
     "MachineSimError",
     "Realism",
+    "ToolGeometry",
     "ToolSetting",
     "WorkpieceSetting",
     "cut",

@@ -38,6 +38,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+import numpy as np
+
 from machinesim import realism as _realism
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
@@ -112,6 +114,7 @@ class Lab:
             self.__background = own
             truth = _realism.add_errors(injected, own)
         self.__truth = truth
+        self.__adjusted = np.zeros(3)
         if servo is not None and not callable(getattr(servo, "follow", None)):
             raise InputError(f"Expected a servo with follow(t, q) (a ServoModel), got "
                              f"{type(servo).__name__}", key="servo")
@@ -151,6 +154,52 @@ class Lab:
         if self.__servo is not None and "servo" not in options:
             options["servo"] = self.__servo
         return cutter(program, self.machine, tool, stock, self.__truth, roi=roi, **options)
+
+    def turn(self, program, tool="nose:1.0:90", *, top: float = 0.0):
+        """Turn ``program`` on the lab's lathe: its servo loops, its errors (tool setting,
+        the tool's nose radius error, geometry) and the turning engine
+        (`machinesim.cutting.lathe.turn`).
+
+        Returns
+        -------
+        (TurnedPart, TurningReport)
+            The part is a height field the optical instruments read.
+        """
+        from machinesim.cutting.lathe import turn
+
+        return turn(program, self.machine, tool, self.__truth, servo=self.__servo, top=top)
+
+    def adjust_tool(self, offset, *, label: str | None = None) -> None:
+        """The operator moves the tool in its holder by ``offset`` (tool_mount X, Y, Z, m),
+        e.g. to cancel an identified setting error (paper 004's tool-workpiece alignment).
+
+        The move is made with the adjuster's resolution: with instrument noise on, each
+        axis lands off the commanded amount by a draw uniform within +-half the resolution
+        (`machinesim.realism.TOOL_ADJUSTER_RESOLUTION_M`, from ``label``'s stream); off, exactly.
+        Every cut and turn after it has the tool there. `reveal` still gives the errors as
+        injected; `reveal_adjustments` the moves as made.
+        """
+        from machinesim.errors import ToolSetting
+        from machinesim.metrology._mesh import as_vector
+
+        move = as_vector(offset, 3, "offset")
+        label = self._label("tool_adjuster", label)
+        if self.noise:
+            half = 0.5 * _realism.TOOL_ADJUSTER_RESOLUTION_M
+            move = move + stream(self.seed, "tool_adjuster", label).uniform(-half, half, 3)
+        self.__adjusted = self.__adjusted + move
+        truth = self.__truth
+        self.__truth = truth.__class__(
+            ToolSetting(truth.tool.offset + move, truth.tool.rotation), truth.workpiece,
+            truth.location, truth.component, truth.tool_geometry)
+
+    def tune_servo(self, servo) -> None:
+        """Set new servo loops on the machine (the operator's tuning of the control's gains);
+        `cut`, `turn` and `encoders` use them from now on."""
+        if not callable(getattr(servo, "follow", None)):
+            raise InputError(f"Expected a servo with follow(t, q) (a ServoModel), got "
+                             f"{type(servo).__name__}", key="servo")
+        self.__servo = servo
 
     def make_artefacts(self, stock, design: SphereArtefacts, *, label: str):
         """The workpiece with its reference spheres, as the lab's workshop made it.
@@ -286,8 +335,21 @@ class Lab:
             True (default): everything the machine has, the injected errors plus the
             background (what an identification should find). False: the injected errors
             alone (what a scenario chose). Without background errors the two are the same.
+        Tool moves made by `adjust_tool` are not in it (`reveal_adjustments`).
         """
-        return self.__truth if background else self.__injected
+        if not self.__adjusted.any():
+            return self.__truth if background else self.__injected
+        from machinesim.errors import ToolSetting
+
+        truth = self.__truth if background else self.__injected
+        return truth.__class__(ToolSetting(truth.tool.offset - self.__adjusted
+                                           if background else truth.tool.offset,
+                                           truth.tool.rotation), truth.workpiece,
+                               truth.location, truth.component, truth.tool_geometry)
+
+    def reveal_adjustments(self):
+        """The sum of the tool moves `adjust_tool` made (tool_mount X, Y, Z, m), as made."""
+        return self.__adjusted.copy()
 
     def reveal_servo(self):
         """The lab's servo loops (None: ideal axes). For tests and reports, never for

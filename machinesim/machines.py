@@ -35,6 +35,10 @@ from machinesim.kinematics import (
 from machinesim.tolerances import IK_SINGULAR
 from machinesim.urdf import AXIS_ORDER, REQUIRED_FRAMES, check_tree, read_axes, read_urdf
 
+#: The tool geometry family's parameter (the nose radius error, m): accepted by every machine,
+#: moves no frame (a zero column in `Machine.error_jacobian`).
+NOSE_RADIUS_PARAM = "tool_geometry.nose_radius"
+
 
 def models_dir() -> Path:
     """The folder of the shipped URDF models (in the wheel, or the source tree's models/)."""
@@ -244,7 +248,7 @@ class Machine:
 
     def parameter_names(self, errors=None) -> tuple[str, ...]:
         """Every error parameter name this machine accepts (tables: those in ``errors``)."""
-        names = [*TOOL_PARAMS, *WORKPIECE_PARAMS]
+        names = [*TOOL_PARAMS, NOSE_RADIUS_PARAM, *WORKPIECE_PARAMS]
         for a in self._axes:
             names += [f"location.{a.letter}.{s}" for s in a.location_symbols()]
         if errors is not None:
@@ -331,6 +335,8 @@ class Machine:
     def _param_columns(self, name: str, errors) -> list:
         """(velocity index, coefficient) terms: d(error joint)/d(parameter)."""
         vi = self.kin.v_index
+        if name == NOSE_RADIUS_PARAM:
+            return []  # the nose radius moves no frame: a zero column
         if name in TOOL_PARAMS:
             return [(vi[f"tool_{TOOL_PARAMS[name]}"], 1.0)]
         if name in WORKPIECE_PARAMS:

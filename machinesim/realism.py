@@ -212,6 +212,11 @@ class ArtefactScatter:
 #: paper's "less than 1-2 um").
 ARTEFACT = ArtefactScatter(3 * M_PER_UM, 3 * M_PER_UM, 2 * M_PER_UM)
 
+#: Resolution of the tool holder's adjuster (m): an operator's move of the tool lands within
+#: +-half of it (`machinesim.Lab.adjust_tool`). Chosen from paper 004, Table 5: its
+#: tool-workpiece alignment left dx and dy at 0.25 um, half of a 0.5 um step.
+TOOL_ADJUSTER_RESOLUTION_M = 0.5 * M_PER_UM
+
 
 @dataclass(frozen=True, eq=False)
 class SphereArtefacts:
@@ -357,7 +362,8 @@ def add_errors(a: ErrorModel, b: ErrorModel) -> ErrorModel:
         When ``b`` has a setting, or one symbol is a table in one model and a polynomial in
         the other (their sum is neither).
     """
-    if not (b.tool == ErrorModel().tool and b.workpiece == ErrorModel().workpiece):
+    if not (b.tool == ErrorModel().tool and b.workpiece == ErrorModel().workpiece
+            and b.tool_geometry == ErrorModel().tool_geometry):
         raise InputError("Expected a background without tool or workpiece setting errors",
                          key="background")
     location = {axis: dict(table) for axis, table in a.location.items()}
@@ -374,7 +380,7 @@ def add_errors(a: ErrorModel, b: ErrorModel) -> ErrorModel:
         for symbol in list(ta) + [s for s in tb if s not in ta]:
             out[symbol] = _add_component(ta.get(symbol), tb.get(symbol), grid, axis, symbol)
         component[axis] = out
-    return ErrorModel(a.tool, a.workpiece, location, component)
+    return ErrorModel(a.tool, a.workpiece, location, component, a.tool_geometry)
 
 
 def _add_component(ea, eb, grid, axis: str, symbol: str) -> ComponentError:

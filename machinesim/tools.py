@@ -536,3 +536,23 @@ def tool_from_spec(spec: str) -> Tool:
         return BallEndMill(values[0] * M_PER_MM, **height)
     except InputError as error:
         raise InputError(f"tool spec {spec!r}: {error}", key="tool") from None
+
+
+def with_nose_radius_error(tool: Tool, d_radius: float) -> Tool:
+    """The tool as it is with the error model's nose radius error ``d_radius`` (m): a
+    round-nose tool's nose or a ball's radius that much larger, still set by its tip.
+
+    Raises
+    ------
+    InputError
+        When ``d_radius`` is not zero and the tool has no radius (a V tool).
+    """
+    if d_radius == 0.0:
+        return tool
+    if isinstance(tool, RoundNoseTool):
+        return tool.with_errors(nose_radius_error=d_radius)
+    if isinstance(tool, BallEndMill):
+        return tool.with_errors(radius_error=d_radius)
+    raise InputError(f"the error model has tool_geometry.nose_radius = {d_radius!r} m, but a "
+                     f"{type(tool).__name__} has no nose radius; expected a round-nose "
+                     "('nose:R:ANGLE') or ball tool", key="tool_geometry.nose_radius")

@@ -28,7 +28,7 @@ from machinesim.tolerances import (
     RAPID_EDGE_HALF_THICKNESS_M,
     SAME_ORIENTATION,
 )
-from machinesim.tools import tool_from_spec
+from machinesim.tools import tool_from_spec, with_nose_radius_error
 from machinesim.workpiece import Part, stock_from_spec
 
 #: A move continues the previous one when its first axis values equal the previous end to
@@ -184,7 +184,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     tool = tool_from_spec(tool) if isinstance(tool, str) else tool
     stock = stock_from_spec(stock) if isinstance(stock, str) else stock
     machine.check_errors(errors)
-    tools = _ToolSections(program, tool)
+    tools = _ToolSections(program, tool, 0.0 if errors is None
+                          else errors.tool_geometry.nose_radius)
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tools.points(), chord_tolerance=chord_tolerance,
                              servo=servo)
@@ -311,14 +312,16 @@ class _ToolSections:
     in the spindle does, while ``G43`` lifted Z by the same length.
     """
 
-    def __init__(self, program, tool) -> None:
+    def __init__(self, program, tool, d_radius: float = 0.0) -> None:
+        tool = with_nose_radius_error(tool, d_radius)  # every tool as it is
         built = {None: tool}
         # (first move, tool, length) of each run of moves between changes, and its name
         self.runs = [(0, tool, 0.0)]
         self.names = [(None, None)]  # (tool number, line of the change)
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
-                built[change.shape] = tool_from_spec(change.shape)
+                built[change.shape] = with_nose_radius_error(tool_from_spec(change.shape),
+                                                             d_radius)
             self.runs.append((change.move, built[change.shape], float(change.length_m)))
             self.names.append((change.number, change.line))
 

@@ -70,7 +70,7 @@ from machinesim.exceptions import InputError, check_length
 from machinesim.tools import RoundNoseTool
 
 __all__ = ["EdgePath", "NoseProfile", "edge_path_from_poses", "edge_path_from_tips",
-           "nose_profile", "turned_surface"]
+           "nose_profile", "turned_heights", "turned_surface"]
 
 #: Grid points per chunk: bounds the memory of the candidate pairs (a few arrays of
 #: chunk x candidates float64), ~100 MB at the paper's densities.
@@ -298,10 +298,27 @@ def turned_surface(path: EdgePath, tool, x, y, *, top: float | None = None,
     ndarray, shape (ny, nx), float64, read-only
         ``z[j, i]`` the machined height over ``(x[i], y[j])``, m.
     """
+    gx, gy = _vector(x, "x"), _vector(y, "y")
+    px, py = np.meshgrid(gx, gy)
+    heights = turned_heights(path, tool, px.ravel(), py.ravel(), top=top, sectors=sectors)
+    return frozen(heights.reshape(gy.size, gx.size), copy=False)
+
+
+def turned_heights(path: EdgePath, tool, px, py, *, top: float | None = None,
+                   sectors: int | None = None) -> np.ndarray:
+    """Heights the tool leaves along ``path`` at the points ``(px[i], py[i])``.
+
+    As `turned_surface` (same parameters and result), at scattered points instead of over a
+    grid: ``px`` and ``py`` are 1-D arrays of one length, m.
+
+    Returns
+    -------
+    ndarray, shape (n,), float64, read-only
+    """
     if not isinstance(path, EdgePath):
         raise InputError(f"Expected an EdgePath, got {type(path).__name__}", key="path")
     profile = nose_profile(tool)
-    gx, gy = _vector(x, "x"), _vector(y, "y")
+    px, py = _vector(px, "px"), _vector(py, "py", np.size(px))
     if top is not None:
         top = float(top)
         if not math.isfinite(top):
@@ -310,8 +327,6 @@ def turned_surface(path: EdgePath, tool, x, y, *, top: float | None = None,
                                 or not isinstance(sectors, int | np.integer) or sectors < 1):
         raise InputError(f"Expected sectors as an int >= 1, got {sectors!r}", key="sectors")
     engine = _Engine(path, profile, sectors)
-    px, py = np.meshgrid(gx, gy)
-    px, py = px.ravel(), py.ravel()
     heights = np.empty(px.size)
     for start in range(0, px.size, CHUNK_POINTS):
         stop = min(start + CHUNK_POINTS, px.size)
@@ -320,4 +335,4 @@ def turned_surface(path: EdgePath, tool, x, y, *, top: float | None = None,
         heights[np.isinf(heights)] = np.nan
     else:
         np.minimum(heights, top, out=heights)
-    return frozen(heights.reshape(gy.size, gx.size), copy=False)
+    return frozen(heights, copy=False)

@@ -1,8 +1,10 @@
 """The injected errors of a machine, as immutable values, read from and written to TOML.
 
-Four families, machine-independent (the kinematics decides which symbols an axis can carry):
+Five families, machine-independent (the kinematics decides which symbols an axis can carry):
 
 - tool setting error (`ToolSetting`), in the ``tool_mount`` frame;
+- tool geometry error (`ToolGeometry`): the nose radius error dR (paper 004), applied by the
+  cutting engines to the tool's shape;
 - workpiece setting error (`WorkpieceSetting`, paper 002);
 - location errors of an axis, position independent, ISO 230-1/-7 symbols ``E<d>0<axis>``
   (``EX0C``, ``EB0C``, squareness ``EC0Y``);
@@ -15,6 +17,7 @@ A B C a rotation about X Y Z (an angle). SI inside (m, rad); units appear only i
 TOML layout (every key carries its unit: m mm um nm, rad mrad urad deg arcsec)::
 
     [tool]           # offset_<length unit> = [x, y, z], rotation_<angle unit> = [a, b, c]
+    [tool_geometry]  # nose_radius_<length unit> = dR
     [workpiece]      # delta_<length unit> = [x, y, z], alpha_/beta_/gamma_<angle unit> = v
     [location.C]     # <SYM>_<unit> = value, e.g. EX0C_um = 2.0
     [component.X]    # position_<unit> = [...], shared by the tables of the axis;
@@ -28,13 +31,20 @@ of rotary axes in deg (polynomials in um or urad per mm**k or deg**k).
 """
 
 from machinesim.errors._checks import AXES, LINEAR_AXES
-from machinesim.errors.model import ComponentError, ErrorModel, ToolSetting, WorkpieceSetting
+from machinesim.errors.model import (
+    ComponentError,
+    ErrorModel,
+    ToolGeometry,
+    ToolSetting,
+    WorkpieceSetting,
+)
 
 __all__ = [
     "AXES",
     "LINEAR_AXES",
     "ComponentError",
     "ErrorModel",
+    "ToolGeometry",
     "ToolSetting",
     "WorkpieceSetting",
 ]

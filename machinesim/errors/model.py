@@ -28,11 +28,12 @@ from machinesim.errors._checks import (
 
 _WORKPIECE_ANGLES = ("alpha", "beta", "gamma")
 _PARAMETER_RE = re.compile(
-    r"tool\.(?P<tool>x|y|z|rx|ry|rz)|workpiece\.(?P<workpiece>x|y|z|alpha|beta|gamma)"
+    r"tool\.(?P<tool>x|y|z|rx|ry|rz)|tool_geometry\.(?P<geometry>nose_radius)|workpiece\.(?P<workpiece>x|y|z|alpha|beta|gamma)"
     r"|location\.(?P<laxis>\w)\.(?P<lsym>\w+)|component\.(?P<caxis>\w)\.(?P<csym>\w+)\[(?P<k>\d+)\]"
 )
 _PARAMETER_FORMS = (
-    "tool.<x|y|z|rx|ry|rz>, workpiece.<x|y|z|alpha|beta|gamma>, location.<axis>.<SYM> or "
+    "tool.<x|y|z|rx|ry|rz>, tool_geometry.nose_radius, workpiece.<x|y|z|alpha|beta|gamma>, "
+    "location.<axis>.<SYM> or "
     "component.<axis>.<SYM>[k]"
 )
 
@@ -88,6 +89,25 @@ class ToolSetting(_Value):
     def __post_init__(self) -> None:
         object.__setattr__(self, "offset", _numbers(self.offset, None, "offset", 3))
         object.__setattr__(self, "rotation", _numbers(self.rotation, None, "rotation", 3))
+
+
+@dataclass(frozen=True, eq=False)
+class ToolGeometry(_Value):
+    """Tool geometry error: the tool as it is against the tool as programmed.
+
+    Attributes
+    ----------
+    nose_radius : float, m
+        Nose (or ball) radius error dR: the edge's radius is the nominal one plus dR, the
+        tool still set by its tip (the ``tool_tip`` frame), so its centre sits dR higher
+        (paper 004, eq 20). It moves no frame of the machine: the cutting engines apply it
+        to the tool's shape.
+    """
+
+    nose_radius: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "nose_radius", _number(self.nose_radius, None, "nose_radius"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -264,15 +284,19 @@ class ErrorModel(_Value):
     component : Mapping[str, Mapping[str, ComponentError]]
         Per axis letter, component error symbol -> error, e.g. ``{"X": {"EXX": ...}}``.
         Read-only; the tables of one axis share their positions (one list per axis in TOML).
+    tool_geometry : ToolGeometry
+        The tool's shape errors (nose radius).
     """
 
     tool: ToolSetting = field(default_factory=ToolSetting)
     workpiece: WorkpieceSetting = field(default_factory=WorkpieceSetting)
     location: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
     component: Mapping[str, Mapping[str, ComponentError]] = field(default_factory=dict)
+    tool_geometry: ToolGeometry = field(default_factory=ToolGeometry)
 
     def __post_init__(self) -> None:
-        for name, kind in (("tool", ToolSetting), ("workpiece", WorkpieceSetting)):
+        for name, kind in (("tool", ToolSetting), ("workpiece", WorkpieceSetting),
+                           ("tool_geometry", ToolGeometry)):
             if not isinstance(getattr(self, name), kind):
                 message = f"expected a {kind.__name__}, got {_describe(getattr(self, name))}"
                 raise _fail(message, None, name)
@@ -290,13 +314,16 @@ class ErrorModel(_Value):
     def parameters(self) -> dict[str, float]:
         """Every parameter, by canonical name, in SI (m or rad).
 
-        Order: ``tool.x .y .z .rx .ry .rz``, ``workpiece.x .y .z .alpha .beta .gamma``,
-        ``location.<axis>.<SYM>``, ``component.<axis>.<SYM>[k]`` (table value or polynomial
-        coefficient k), axes and symbols in X Y Z A B C order.
+        Order: ``tool.x .y .z .rx .ry .rz``, ``tool_geometry.nose_radius`` (only when not
+        zero), ``workpiece.x .y .z .alpha .beta .gamma``, ``location.<axis>.<SYM>``,
+        ``component.<axis>.<SYM>[k]`` (table value or polynomial coefficient k), axes and
+        symbols in X Y Z A B C order.
         """
         tool = np.concatenate([self.tool.offset, self.tool.rotation]).tolist()
         names = ("tool.x", "tool.y", "tool.z", "tool.rx", "tool.ry", "tool.rz")
         out = dict(zip(names, tool, strict=True))
+        if self.tool_geometry.nose_radius != 0.0:
+            out["tool_geometry.nose_radius"] = self.tool_geometry.nose_radius
         wp = self.workpiece
         out |= {f"workpiece.{n}": v for n, v in zip("xyz", wp.delta.tolist(), strict=True)}
         out |= {"workpiece.alpha": wp.alpha, "workpiece.beta": wp.beta, "workpiece.gamma": wp.gamma}
@@ -316,6 +343,7 @@ class ErrorModel(_Value):
         """
         offset, rotation = self.tool.offset.copy(), self.tool.rotation.copy()
         delta = self.workpiece.delta.copy()
+        nose_radius = self.tool_geometry.nose_radius
         angles = {name: getattr(self.workpiece, name) for name in _WORKPIECE_ANGLES}
         location = _plain(self.location)
         values = {(axis, symbol): error.values.copy()
@@ -328,6 +356,8 @@ class ErrorModel(_Value):
             if match["tool"]:
                 target = rotation if match["tool"].startswith("r") else offset
                 target["xyz".index(match["tool"][-1])] = value
+            elif match["geometry"]:
+                nose_radius = value
             elif match["workpiece"] in ("x", "y", "z"):
                 delta["xyz".index(match["workpiece"])] = value
             elif match["workpiece"]:
@@ -349,7 +379,7 @@ class ErrorModel(_Value):
             for axis, t in self.component.items()
         }
         tool, workpiece = ToolSetting(offset, rotation), WorkpieceSetting(delta, **angles)
-        return ErrorModel(tool, workpiece, location, component)
+        return ErrorModel(tool, workpiece, location, component, ToolGeometry(nose_radius))
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], source: str = "<dict>") -> ErrorModel:
@@ -358,7 +388,8 @@ class ErrorModel(_Value):
         Parameters
         ----------
         d : Mapping
-            Sections ``tool``, ``workpiece``, ``location``, ``component``, all optional.
+            Sections ``tool``, ``tool_geometry``, ``workpiece``, ``location``, ``component``,
+            all optional.
             Numbers may be ints or floats; lists may be lists, tuples or 1-D arrays.
         source : str
             Where `d` came from, for error messages.

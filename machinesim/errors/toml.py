@@ -32,13 +32,14 @@ from machinesim.errors.model import (
     _WORKPIECE_ANGLES,
     ComponentError,
     ErrorModel,
+    ToolGeometry,
     ToolSetting,
     WorkpieceSetting,
 )
 from machinesim.exceptions import ErrorModelError
 from machinesim.units import ANGLE, FACTORS, LENGTH
 
-_SECTIONS = ("tool", "workpiece", "location", "component")
+_SECTIONS = ("tool", "tool_geometry", "workpiece", "location", "component")
 _TOML_POSITION_RE = re.compile(r"\s*\(at line (\d+), column (\d+)\)")
 _READABLE_UNITS = {"length": "um", "angle": "urad", "linear": "mm", "rotary": "deg"}
 _SI_UNITS = {"length": "m", "angle": "rad", "linear": "m", "rotary": "rad"}
@@ -95,6 +96,9 @@ def dict_from_model(model: ErrorModel, readable: bool) -> dict[str, Any]:
             **{f"{n}_{angle}": getattr(wp, n) / ANGLE[angle] for n in _WORKPIECE_ANGLES},
         },
     }
+    if model.tool_geometry.nose_radius != 0.0:
+        out["tool_geometry"] = {
+            f"nose_radius_{length}": model.tool_geometry.nose_radius / LENGTH[length]}
     if model.location:
         out["location"] = {
             axis: {
@@ -142,6 +146,8 @@ def model_from_dict(data: Any, source: str) -> ErrorModel:
     workpiece_spec = {"delta": ("length", 3)} | {a: ("angle", None) for a in _WORKPIECE_ANGLES}
     tool = _parse_fields(data.get("tool", {}), "tool", tool_spec, source)
     workpiece = _parse_fields(data.get("workpiece", {}), "workpiece", workpiece_spec, source)
+    geometry = _parse_fields(data.get("tool_geometry", {}), "tool_geometry",
+                             {"nose_radius": ("length", None)}, source)
     location = {
         axis: _parse_location(axis, table, source)
         for axis, table in _table(data.get("location", {}), source, "location").items()
@@ -150,7 +156,8 @@ def model_from_dict(data: Any, source: str) -> ErrorModel:
         axis: _parse_component(axis, table, source)
         for axis, table in _table(data.get("component", {}), source, "component").items()
     }
-    return ErrorModel(ToolSetting(**tool), WorkpieceSetting(**workpiece), location, component)
+    return ErrorModel(ToolSetting(**tool), WorkpieceSetting(**workpiece), location, component,
+                      ToolGeometry(**geometry))
 
 
 def _split_key(key: Any, expected: str, source: str, path: str) -> list[str]:
@@ -166,6 +173,8 @@ def _parse_fields(section: Any, name: str, spec: dict, source: str) -> dict[str,
     for key, value in _table(section, source, name).items():
         path = f"{name}.{key}"
         parts = _split_key(key, expected, source, path)
+        if key not in spec:  # field names may hold '_' (nose_radius): the unit is the last part
+            parts = key.rsplit("_", 1)
         if parts[0] not in spec or len(parts) > 2:
             raise _fail(f"unknown key; expected {expected}", source, path)
         quantity, size = spec[parts[0]]

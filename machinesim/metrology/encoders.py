@@ -116,6 +116,25 @@ class Encoders:
                               frozen(position.reshape(commanded.shape)))
 
 
+    def record_turning(self, program) -> EncoderReading:
+        """Record a turning program (`machinesim.cutting.lathe`): each run of feed moves
+        that turn C as the one continuous motion the control runs it as (not move by move
+        from rest), sampled at the program's points; the runs one after the other."""
+        from machinesim.cutting.lathe import turning_runs
+
+        ts, commands, positions, offset = [], [], [], 0.0
+        for t, points in turning_runs(program, self.machine):
+            reached = np.asarray(self._follow(t, points), dtype=np.float64)
+            ts.append(t + offset)
+            offset = float(ts[-1][-1])
+            commands.append(points)
+            positions.append(np.column_stack([readout.read(reached[:, i], self.rng)
+                                              for i, readout in enumerate(self.readouts)]))
+        return EncoderReading(tuple(self.machine.axes), frozen(np.concatenate(ts)),
+                              frozen(np.concatenate(commands)),
+                              frozen(np.concatenate(positions)))
+
+
 class _Follow:
     """A follow function as the planner's `machinesim.motion.ServoModel`."""
 

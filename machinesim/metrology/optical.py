@@ -18,6 +18,11 @@ when `machinesim.realism.Realism` turns them on):
   frame, in which it takes and reports every coordinate and height, sits off the
   workpiece's. The instrument keeps it to itself, as a real stage does not know it.
 
+A part may also be a height field (anything with ``heights_at(px, py)``, e.g. the
+`machinesim.cutting.lathe.TurnedPart` a turn leaves): it is read at the sample points
+exactly, with lateral and height noise; spot and registration are modelled for meshes only
+and refused there.
+
 The slope limit of a real objective (no light back from steep flanks) is not modelled.
 """
 
@@ -116,7 +121,7 @@ class _Profiler:
 
         Parameters
         ----------
-        part : Part or MeshIndex or tuple of (array-like, array-like)
+        part : Part or MeshIndex or tuple of (array-like, array-like) or TurnedPart
             The measured solid (workpiece frame, m).
         start, end : array-like, shape (2,)
             End points (x, y) of the line, m.
@@ -129,6 +134,14 @@ class _Profiler:
         Profile
         """
         spacing = self.lateral_spacing if spacing is None else spacing
+        if _is_field(part):
+            a, b = as_vector(start, 2, "start"), as_vector(end, 2, "end")
+            s = _line_samples(a, b, as_positive(spacing, "spacing"))
+            ds, across = self._jitter(len(s)), self._jitter(1)[0]
+            along = (b - a) / np.hypot(*(b - a))
+            points = a + (s + ds)[:, None] * along + across * np.array([-along[1], along[0]])
+            z = self._field(part, points[:, 0], points[:, 1])
+            return Profile(frozen(s, copy=False), self._display(z), frozen(a), frozen(b))
         surface = self._surface(part)
         if self.spot is None and self.lateral_sigma == 0.0:
             s, z = profile(surface, start, end, spacing)
@@ -152,7 +165,7 @@ class _Profiler:
 
         Parameters
         ----------
-        part : Part or MeshIndex or tuple of (array-like, array-like)
+        part : Part or MeshIndex or tuple of (array-like, array-like) or TurnedPart
             The measured solid (workpiece frame, m).
         x0, x1, y0, y1 : float
             The rectangle, m, with ``x0 < x1`` and ``y0 < y1``.
@@ -167,6 +180,10 @@ class _Profiler:
         spacing = as_positive(self.lateral_spacing if spacing is None else spacing, "spacing")
         x = _axis(x0, x1, spacing, "x")
         y = _axis(y0, y1, spacing, "y")
+        if _is_field(part):
+            px, py = np.meshgrid(x + self._jitter(len(x)), y + self._jitter(len(y)))
+            z = self._field(part, px.ravel(), py.ravel()).reshape(len(y), len(x))
+            return HeightMap(x, y, self._display(z))
         surface = self._surface(part)
         if self.spot is None and self.lateral_sigma == 0.0:
             return HeightMap(x, y, self._display(height_map(surface, x, y)))
@@ -177,6 +194,21 @@ class _Profiler:
         vertices, triangles = mesh_arrays(surface)
         return HeightMap(x, y, self._display(spot_heights(vertices, triangles, x, y, dx, dy,
                                                           self.spot)))
+
+    def _jitter(self, n: int) -> np.ndarray:
+        """Lateral noise of ``n`` sample positions (zeros without it), m."""
+        if self.lateral_rng is None:
+            return np.zeros(n)
+        return self.lateral_sigma * self.lateral_rng.standard_normal(n)
+
+    def _field(self, part, px: np.ndarray, py: np.ndarray) -> np.ndarray:
+        """Exact heights of a height-field part (a `TurnedPart`) at the sample points."""
+        if self.spot is not None or self._registration is not None:
+            raise InputError(f"{type(self).__name__}: a turned part (a height field) is read "
+                             "without spot and registration, which are modelled for mesh "
+                             "parts only; give the instrument spot=None and no registration "
+                             "(Realism: lateral_resolution and registration off)", key="part")
+        return np.asarray(part.heights_at(px, py), dtype=np.float64)
 
     def _display(self, exact: np.ndarray) -> np.ndarray:
         return frozen(self.readout.read(exact, self.rng), copy=False)
@@ -261,6 +293,11 @@ class WhiteLightInterferometer(_Profiler):
                  registration: Registration | None = None) -> None:
         super().__init__(sigma, resolution, lateral_spacing, noise, rng, spot, lateral_sigma,
                          lateral_rng, registration)
+
+
+def _is_field(part) -> bool:
+    """True for a part given as a height field (``heights_at``), e.g. a turned face."""
+    return callable(getattr(part, "heights_at", None))
 
 
 def _line_samples(start: np.ndarray, end: np.ndarray, spacing: float) -> np.ndarray:

@@ -1,0 +1,255 @@
+"""Turning an NC program on a lathe: the program's moves through the machine's servo loops and
+errors, cut by the turning engine (`machinesim.cutting.turning`).
+
+A slow-tool-servo (STS) or facing program on a lathe (``sts_lathe``: X carries the work
+spindle C, the tool rides Z) is a list of feed moves that turn C while X and Z follow. What
+the machine does with it, in order:
+
+1. **Axis values.** Every move's target (modal: an axis not named keeps its value), from
+   the first move that sets every axis of the machine.
+2. **Times.** The control runs each feed move in length / F, the length with rotary axes in
+   degrees counted as millimetres (FANUC, as `machinesim.motion` plans it).
+3. **Servo.** Each run of feed moves that turn C is one continuous motion: the servo loops
+   (`machinesim.servo`, any ``follow(t, q)``) follow it from rest at its first point, and the
+   axes reach the followed values, not the commanded ones.
+4. **Kinematics and errors.** The tool tip's pose for the reached axis values, through the
+   machine's errors (tool setting dx, dy, dz and any geometric error), gives the edge plane
+   of each point (`edge_path_from_poses`); the tool's nose is its nominal radius plus the
+   error model's ``tool_geometry.nose_radius``, still set by its tip.
+5. **Surface.** The lower envelope of the nose arc along each run (`turned_heights`), the
+   lowest over all runs, clipped at the stock's top.
+
+Moves that do not turn C (the plunge to the first point, the retract) are not cut: at one
+spindle angle the edge marks a line, not a surface; a program whose C stands still
+throughout is refused. Rapids are never cut.
+
+The result is a `TurnedPart`: a height field evaluated on demand (exactly, at any points),
+which the optical instruments read like a mesh part (`machinesim.metrology.optical`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.cutting.turning import EdgePath, edge_path_from_poses, turned_heights
+from machinesim.exceptions import InputError
+from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
+from machinesim.tools import RoundNoseTool, tool_from_spec, with_nose_radius_error
+
+__all__ = ["TurnedPart", "TurningReport", "followed", "turn", "turning_runs"]
+
+#: Relative change of the spindle angle below which a move counts as not turning, rad.
+STILL_C_RAD = 1e-12
+
+
+@dataclass(frozen=True, eq=False)
+class TurnedPart:
+    """A turned face: the height field the tool left, evaluated on demand.
+
+    Attributes
+    ----------
+    paths : tuple of EdgePath
+        The edge's path of each turning run, workpiece frame.
+    tool : RoundNoseTool
+        The tool as it cut (its nose radius error included).
+    top : float
+        The stock's top, m: heights above it, and points the edge never reached, read it.
+    """
+
+    paths: tuple
+    tool: RoundNoseTool
+    top: float
+
+    def heights_at(self, px, py) -> np.ndarray:
+        """Heights at the points ``(px[i], py[i])`` (m, workpiece frame), shape (n,)."""
+        px = np.asarray(px, dtype=np.float64).ravel()
+        py = np.asarray(py, dtype=np.float64).ravel()
+        out = np.full(px.size, self.top)
+        for path in self.paths:
+            np.minimum(out, turned_heights(path, self.tool, px, py, top=self.top), out=out)
+        return out
+
+    def heights(self, x, y) -> np.ndarray:
+        """Heights over the grid ``x`` x ``y`` (m), shape (ny, nx): ``z[j, i]`` at
+        ``(x[i], y[j])``."""
+        gx = np.asarray(x, dtype=np.float64)
+        gy = np.asarray(y, dtype=np.float64)
+        px, py = np.meshgrid(gx, gy)
+        return self.heights_at(px, py).reshape(gy.size, gx.size)
+
+
+@dataclass(frozen=True)
+class TurningReport:
+    """What the turn did.
+
+    Attributes
+    ----------
+    points : int
+        Path points cut (all runs).
+    runs : int
+        Runs of feed moves that turn C.
+    machining_time_s : float
+        Time of the turning runs at the programmed feeds, s.
+    revolutions : float
+        Spindle revolutions cut.
+    peak_following_error : dict
+        Axis letter -> largest |command - reached| over the runs (m or rad); zeros without
+        servo loops.
+    """
+
+    points: int
+    runs: int
+    machining_time_s: float
+    revolutions: float
+    peak_following_error: dict
+
+
+def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
+         top: float = 0.0) -> tuple[TurnedPart, TurningReport]:
+    """Cut ``program`` on the lathe ``machine`` with the turning engine (module docstring).
+
+    Parameters
+    ----------
+    program : Program
+        The NC program (`machinesim.nc`), axis values SI.
+    machine : Machine or str
+        A machine with a C (work spindle) and an X axis, e.g. ``"sts_lathe"``.
+    tool : str or RoundNoseTool
+        The tool as programmed (``"nose:RADIUS_MM:ANGLE_DEG"``).
+    errors : ErrorModel, optional
+        The machine's errors (tool setting, tool geometry, geometric).
+    servo : ServoModel, optional
+        Servo loops (``follow(t, q)``, columns in the machine's axis order); None: the axes
+        follow exactly.
+    top : float
+        The stock's top, m (default 0: the face at Z = 0).
+
+    Returns
+    -------
+    (TurnedPart, TurningReport)
+    """
+    from machinesim.machines import Machine, load_machine
+
+    machine = machine if isinstance(machine, Machine) else load_machine(machine)
+    if "C" not in machine.axes or "X" not in machine.axes:
+        raise InputError(f"Expected a lathe with X and C axes, {machine.name} has "
+                         f"{', '.join(machine.axes)}", key="machine")
+    tool = tool_from_spec(tool) if isinstance(tool, str) else tool
+    if not isinstance(tool, RoundNoseTool):
+        raise InputError(f"Expected a round-nose tool for turning ('nose:R:ANGLE'), got "
+                         f"{type(tool).__name__}", key="tool")
+    top = float(top)
+    if not math.isfinite(top):
+        raise InputError(f"Expected a finite top (m), got {top!r}", key="top")
+    machine.check_errors(errors)
+    if errors is not None:
+        tool = with_nose_radius_error(tool, errors.tool_geometry.nose_radius)
+    paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
+    for t, points in turning_runs(program, machine):
+        reached = followed(servo, t, points)
+        for k, axis in enumerate(machine.axes):
+            peak[axis] = max(peak[axis], float(np.max(np.abs(points[:, k] - reached[:, k]))))
+        poses = machine.tool_pose(reached, errors)
+        paths.append(edge_path_from_poses(poses, tool.nose_radius))
+        seconds += float(t[-1])
+        c = points[:, machine.axes.index("C")]
+        turns += abs(float(c[-1] - c[0])) / (2.0 * math.pi)
+    part = TurnedPart(tuple(paths), tool, top)
+    report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak)
+    return part, report
+
+
+def turning_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The commanded motion of each turning run of ``program`` on ``machine``: times from
+    the run's start (s, shape (n,)) and axis values (SI, shape (n, n_axes), the machine's
+    axis order), one row per point, the run's start point first (module docstring)."""
+    source = getattr(program, "source", "<program>")
+    q, kinds, feeds, lines = _axis_values(program, machine, source)
+    out = []
+    for first, last in _turning_runs(q, kinds, machine.axes.index("C"), lines, source):
+        points = q[first - 1:last + 1]  # moves first..last: points first-1..last
+        durations = _durations(points, feeds[first:last + 1], machine.axes)
+        out.append((np.concatenate([[0.0], np.cumsum(durations)]), points))
+    return out
+
+
+def followed(servo, t: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The axis values ``servo`` (``follow(t, q)`` or None: exact) reaches for a run."""
+    if servo is None:
+        return points
+    reached = np.asarray(servo.follow(t, points), dtype=np.float64)
+    if reached.shape != points.shape:
+        raise InputError(f"servo.follow must return shape {points.shape}, got "
+                         f"{reached.shape}", key="servo")
+    return reached
+
+
+def _axis_values(program, machine, source: str):
+    """Per move of ``program``: the machine's axis values (modal), kinds, feeds, lines; from
+    the first move at which every machine axis has a value."""
+    targets = np.asarray(program.targets, dtype=np.float64)
+    columns = [AXES.index(a) for a in machine.axes]
+    extra = [a for a in AXES if a not in machine.axes
+             and not np.all(np.isnan(targets[:, AXES.index(a)]))]
+    if extra:
+        raise InputError(f"{source}: the program moves {', '.join(extra)}, which "
+                         f"{machine.name} does not have (axes {', '.join(machine.axes)})",
+                         key="program")
+    q = targets[:, columns].copy()
+    for k in range(1, q.shape[0]):  # modal: an axis not named keeps its value
+        unset = np.isnan(q[k])
+        q[k, unset] = q[k - 1, unset]
+    known = np.flatnonzero(~np.isnan(q).any(axis=1))
+    if known.size == 0:
+        raise InputError(f"{source}: no move sets every axis of {machine.name} "
+                         f"({', '.join(machine.axes)}); the turn has no start", key="program")
+    start = int(known[0])
+    kinds = np.asarray(program.kinds)
+    lines = np.asarray(program.lines)
+    for k in range(start):
+        if kinds[k] == KIND_LINEAR:
+            raise InputError(f"{source}, line {int(lines[k])}: a feed move before every axis "
+                             f"of {machine.name} has a value", key="program")
+    feeds = np.asarray(program.feeds, dtype=np.float64)
+    return q[start:], kinds[start:], feeds[start:], lines[start:]
+
+
+def _turning_runs(q, kinds, c_column: int, lines, source: str) -> list[tuple[int, int]]:
+    """(first, last) move index of each run of consecutive feed moves that turn C."""
+    c = q[:, c_column]
+    dc = np.abs(np.diff(c, prepend=c[0]))
+    turning = (kinds == KIND_LINEAR) & (dc > STILL_C_RAD * np.maximum(1.0, np.abs(c)))
+    turning[0] = False  # the first point is a start, not a move from a known point
+    runs, k = [], 0
+    while k < turning.size:
+        if turning[k]:
+            first = k
+            while k + 1 < turning.size and turning[k + 1]:
+                k += 1
+            runs.append((first, k))
+        k += 1
+    if not runs:
+        raise InputError(f"{source}: no feed move turns C: nothing to turn", key="program")
+    rapid = np.flatnonzero(kinds == KIND_RAPID)
+    for first, last in runs:
+        inside = rapid[(rapid >= first) & (rapid <= last)]
+        if inside.size:
+            raise InputError(f"{source}, line {int(lines[inside[0]])}: a rapid inside a "
+                             f"turning run", key="program")
+    return runs
+
+
+def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple) -> np.ndarray:
+    """Time of each move between consecutive ``points`` at ``feeds`` (m/s), s: the length in
+    mm with rotary axes in degrees, over F in mm/s (FANUC)."""
+    steps = np.diff(points, axis=0)
+    scale = np.array([math.degrees(1.0) * 1e-3 if a in ROTARY_AXES else 1.0 for a in axes])
+    length = np.sqrt(np.sum((steps * scale) ** 2, axis=1))
+    bad = ~(np.isfinite(feeds) & (feeds > 0.0))
+    if bad.any():
+        raise InputError(f"Expected a positive feed on every turning move, got "
+                         f"{feeds[np.flatnonzero(bad)[0]]!r}", key="F")
+    return length / feeds
