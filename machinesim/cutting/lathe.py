@@ -10,8 +10,9 @@ the machine does with it, in order:
 2. **Times.** The control runs each feed move in length / F, the length with rotary axes in
    degrees counted as millimetres (FANUC, as `machinesim.motion` plans it).
 3. **Servo.** Each run of feed moves that turn C is one continuous motion: the servo loops
-   (`machinesim.servo`, any ``follow(t, q)``) follow it from rest at its first point, and the
-   axes reach the followed values, not the commanded ones.
+   (`machinesim.servo`, any ``follow(t, q)``) follow it, entering it settled at its first
+   step's speed (the spindle is run up before the tool engages: `followed`), and the axes
+   reach the followed values, not the commanded ones.
 4. **Kinematics and errors.** The tool tip's pose for the reached axis values, through the
    machine's errors (tool setting dx, dy, dz and any geometric error), gives the edge plane
    of each point (`edge_path_from_poses`); the tool's nose is its nominal radius plus the
@@ -43,6 +44,11 @@ __all__ = ["TurnedPart", "TurningReport", "followed", "turn", "turning_runs"]
 
 #: Relative change of the spindle angle below which a move counts as not turning, rad.
 STILL_C_RAD = 1e-12
+#: How long the servo loops follow the run's first velocity before its start (s): the
+#: spindle run up before the tool engages. 3 s is a revolution at paper 004's 20 rpm and
+#: ~10 time constants of its loops' integral action.
+LEAD_IN_S = 3.0
+LEAD_IN_SAMPLES = 30
 
 
 @dataclass(frozen=True, eq=False)
@@ -149,7 +155,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
         tool = with_nose_radius_error(tool, errors.tool_geometry.nose_radius)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
     for t, points in turning_runs(program, machine):
-        reached = followed(servo, t, points)
+        reached = followed(None if servo is None else servo.follow, t, points)
         for k, axis in enumerate(machine.axes):
             peak[axis] = max(peak[axis], float(np.max(np.abs(points[:, k] - reached[:, k]))))
         poses = machine.tool_pose(reached, errors)
@@ -176,15 +182,25 @@ def turning_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
-def followed(servo, t: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """The axis values ``servo`` (``follow(t, q)`` or None: exact) reaches for a run."""
-    if servo is None:
+def followed(follow, t: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The axis values the servo loops (``follow(t, q)``, or None: exact) reach for a run.
+
+    The axes enter the run already moving at its first step's speed, as on the machine,
+    where the spindle is run up and the slides follow before the tool engages: the loops
+    follow `LEAD_IN_S` of the first step's velocity before the run's start point, so they
+    start it settled rather than from rest.
+    """
+    if follow is None:
         return points
-    reached = np.asarray(servo.follow(t, points), dtype=np.float64)
-    if reached.shape != points.shape:
-        raise InputError(f"servo.follow must return shape {points.shape}, got "
-                         f"{reached.shape}", key="servo")
-    return reached
+    velocity = (points[1] - points[0]) / (t[1] - t[0]) if t[1] > t[0] else 0.0 * points[0]
+    lead = np.linspace(-LEAD_IN_S, 0.0, LEAD_IN_SAMPLES + 1)[:-1]
+    times = np.concatenate([lead + t[0], t])
+    q = np.concatenate([points[0] + lead[:, None] * velocity, points])
+    reached = np.asarray(follow(times, q), dtype=np.float64)
+    if reached.shape != q.shape:
+        raise InputError(f"servo.follow must return shape {q.shape}, got {reached.shape}",
+                         key="servo")
+    return reached[LEAD_IN_SAMPLES:]
 
 
 def _axis_values(program, machine, source: str):

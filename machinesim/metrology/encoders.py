@@ -120,11 +120,11 @@ class Encoders:
         """Record a turning program (`machinesim.cutting.lathe`): each run of feed moves
         that turn C as the one continuous motion the control runs it as (not move by move
         from rest), sampled at the program's points; the runs one after the other."""
-        from machinesim.cutting.lathe import turning_runs
+        from machinesim.cutting.lathe import followed, turning_runs
 
         ts, commands, positions, offset = [], [], [], 0.0
         for t, points in turning_runs(program, self.machine):
-            reached = np.asarray(self._follow(t, points), dtype=np.float64)
+            reached = followed(self._follow, t, points)
             ts.append(t + offset)
             offset = float(ts[-1][-1])
             commands.append(points)

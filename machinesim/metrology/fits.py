@@ -326,13 +326,15 @@ def form_error(x, y, z, nominal, *, shift: bool = False) -> FormError:
                      frozen(params[1:]), frozen(moved), residual)
 
 
-def roughness_sa(x, y, z) -> float:
+def roughness_sa(x, y, z, *, l_cutoff: float | None = None) -> float:
     """Arithmetic mean height Sa (ISO 25178-2) of a height map through surfalize, m.
 
-    Filters: the F-operator is the least-squares plane (surfalize ``level``); no S-filter
-    and no L-filter (no nesting index) are applied, so Sa is that of the whole levelled map:
-    mean |z - plane|. Crop or filter beforehand for a scale-limited Sa. NaN samples are masked
-    (left out of both the plane and the mean).
+    Filters: the F-operator is the least-squares plane (surfalize ``level``); no S-filter.
+    Without ``l_cutoff`` no L-filter is applied, so Sa is that of the whole levelled map:
+    mean |z - plane|. With it, surfalize's Gaussian high-pass of that cut-off (the nesting
+    index, ISO 25178-3) removes the longer wavelengths first: Sa of the S-L surface. NaN
+    samples are masked (left out of both the plane and the mean); a filtered map must have
+    none.
 
     Parameters
     ----------
@@ -341,6 +343,8 @@ def roughness_sa(x, y, z) -> float:
         Regular grid axes, m, nx, ny >= 2.
     z : array-like, shape (ny, nx)
         Heights, m.
+    l_cutoff : float, optional
+        The L-filter's cut-off wavelength, m.
     """
     from surfalize import Surface
 
@@ -355,6 +359,16 @@ def roughness_sa(x, y, z) -> float:
         warnings.filterwarnings("ignore", message=".*different pixel size.*")
         surface = Surface(np.where(missing, 0.0, z) / M_PER_UM, step_x / M_PER_UM,
                           step_y / M_PER_UM, mask=missing if missing.any() else None)
-    return float(surface.level().Sa()) * M_PER_UM
+        surface = surface.level()
+        if l_cutoff is not None:
+            if missing.any():
+                raise InputError("Expected a map without NaN samples for an L-filtered Sa",
+                                 key="z")
+            cutoff = float(l_cutoff)
+            if not (cutoff > 0.0) or not np.isfinite(cutoff):
+                raise InputError(f"Expected l_cutoff > 0 (m), got {l_cutoff!r}",
+                                 key="l_cutoff")
+            surface = surface.filter("highpass", cutoff / M_PER_UM)
+    return float(surface.Sa()) * M_PER_UM
 
 

@@ -1,0 +1,216 @@
+"""Paper 004 as an experiment: slow-tool-servo turning with every error factor compensated
+before the cut, the form error predicted and then measured.
+
+`STSTurning` runs paper 004's flow (Fig. 14) on a `machinesim.Lab` with machine ``sts_lathe``
+whose tool carries setting errors dx, dy (``tool.x``, ``tool.y``) and a nose radius error dR
+(``tool_geometry.nose_radius``), and whose axes follow through servo loops
+(`machinesim.servo`):
+
+1. *measure*: a test sphere turned with the tool and read by the white-light interferometer
+   (`sts_plans.TEST_SPHERE`);
+2. *identify*: dx, dR and |dy| from that map (`machinesim.identification.turning_tool`);
+3. *compensate*: the programs of the four cases: Case 1 as found (Table 4 "before", nose
+   compensation for the nominal R); Cases 2-4 compensated for R + dR (eqs 18-19), Cases 3-4
+   with the modified program (Table 4 "after");
+4. *evaluate*: the cases in order on the one lab, as the paper's operator did: Case 1; the
+   tool-workpiece alignment (the tool moved by -dx and -dy with the holder's adjuster, the
+   sign of dy found by a second test cut, the residual read by a third); Cases 2 and 3; the
+   servo tuned to Table 6 "after" (`Lab.tune_servo`); Case 4. Before each cut the form error
+   is predicted from what the lab can know: the program, the identified tool errors, and the
+   follow-up error the control's encoders record for that program (`sts_prediction`); then
+   the part is turned and measured (`sts_plans.MEASURE_LINE`, `SA_WINDOW`).
+
+The truth stays in the lab: the prediction uses the nominal machine, the identified tool
+errors and the encoder recording, never the injected values (docs/procedures/sts_turning.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+from machinesim.cam import spiral as sp
+from machinesim.experiment import Evaluation, Figure, Identified
+from machinesim.identification.turning_tool import TurnedToolErrors, identify_tool_errors
+from machinesim.metrology.fits import roughness_sa
+from machinesim.procedures.sts_plans import (
+    MEASURE_LINE,
+    PAPER,
+    PLANS,
+    SA_L_CUTOFF,
+    SA_WINDOW,
+    TEST_SPHERE,
+    profile_error,
+)
+from machinesim.procedures.sts_prediction import Prediction, predict
+from machinesim.servo import table6_servo
+
+__all__ = ["CASES", "STSTurning", "test_cut"]
+
+NM, UM = 1e-9, 1e-6
+
+#: The cases (section 5.1): what is compensated in each.
+CASES = {"case_1": "none", "case_2": "tool", "case_3": "tool + program",
+         "case_4": "tool + program + servo"}
+
+
+def test_cut(lab, nose_radius: float, tool: str, label: str) -> TurnedToolErrors:
+    """Turn the test sphere with ``tool`` (program compensated for ``nose_radius``) and read
+    the tool errors from the interferometer's map of it."""
+    plan = TEST_SPHERE
+    program = sp.spiral_program(plan.path(nose_radius))
+    part, _ = lab.turn(program, tool, top=1 * UM)
+    w = plan.read_half_width
+    reading = lab.white_light_interferometer(label=label).height_map(part, -w, w, -w, w,
+                                                                     plan.pixel)
+    return identify_tool_errors(sp.sphere(plan.radius), reading.x, reading.y, reading.z,
+                                core_step=plan.core_step, aperture=w)
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    """One case: the prediction before the cut and the measurement after it."""
+
+    name: str
+    prediction: Prediction
+    measured_pv: float
+    measured_r: np.ndarray
+    measured_residual: np.ndarray
+    sa: float
+    points: int
+    machining_time_s: float
+    heights: tuple = field(repr=False, default=())
+
+
+@dataclass(frozen=True)
+class STSTurning:
+    """Paper 004's procedure (module docstring).
+
+    Attributes
+    ----------
+    tool : str
+        The tool as programmed (Table 1: R 1.0 mm).
+    servo_after : str
+        The Table 6 preset the control is tuned to before Case 4.
+    """
+
+    tool: str = "nose:1.0:90"
+    servo_after: str = "after"
+    name: ClassVar[str] = "sts_turning"
+    paper: ClassVar[str] = "004"
+
+    @property
+    def nose_radius(self) -> float:
+        from machinesim.tools import tool_from_spec
+
+        return tool_from_spec(self.tool).nose_radius
+
+    def measure(self, lab) -> dict:
+        """The tool test on the machine as found."""
+        return {"tool_test": test_cut(lab, self.nose_radius, self.tool, "tool_test")}
+
+    def identify(self, measurements) -> Identified:
+        found = measurements["tool_test"]
+        return Identified({"tool.x": found.dx, "tool_geometry.nose_radius": found.d_radius},
+                          detail=found)
+
+    def compensate(self, identified: Identified) -> dict:
+        found = identified.detail
+        design = sp.sine_grid()
+        compensated = self.nose_radius + found.d_radius
+        return {"case_1": PLANS["before"].path(design, self.nose_radius),
+                "case_2": PLANS["before"].path(design, compensated),
+                "case_3": PLANS["after"].path(design, compensated),
+                "case_4": PLANS["after"].path(design, compensated)}
+
+    def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
+        found = identified.detail
+        design = sp.sine_grid()
+        cases, alignment = {}, {}
+        known = found  # the tool errors as the lab knows them before each case
+        for name in CASES:
+            if name == "case_2":
+                known, alignment = self.align(lab, found)
+            if name == "case_4":
+                lab.tune_servo(table6_servo(self.servo_after))
+            radius = self.nose_radius + (0.0 if name == "case_1" else found.d_radius)
+            cases[name] = self.run_case(lab, name, programs[name], design, known, radius)
+        return Evaluation(figures=self.figures(cases), details=details(cases, alignment),
+                          parts={}, programs={})
+
+    def align(self, lab, found: TurnedToolErrors):
+        """The tool-workpiece alignment: move the tool by -dx and by |dy| towards the centre
+        (the sign of dy is not seen: a second test cut tells whether the core shrank), then
+        read what is left with a third."""
+        lab.adjust_tool((-found.dx, found.dy_abs, 0.0), label="align")
+        trial = test_cut(lab, self.nose_radius, self.tool, "tool_test_sign")
+        sign = -1.0
+        if trial.dy_abs > found.dy_abs:  # the core grew: dy was positive, go back twice
+            lab.adjust_tool((0.0, -2.0 * found.dy_abs, 0.0), label="align_back")
+            sign = 1.0
+        residual = test_cut(lab, self.nose_radius, self.tool, "tool_test_aligned")
+        return residual, {"dy_sign": sign, "dy_abs_after_trial_um": trial.dy_abs / UM,
+                          "dx_after_alignment_um": residual.dx / UM,
+                          "dy_abs_after_alignment_um": residual.dy_abs / UM,
+                          "nose_radius_after_alignment_um": residual.d_radius / UM,
+                          "dy_identified_um": sign * found.dy_abs / UM}
+
+    def run_case(self, lab, name: str, path: sp.ToolPath, design, known, radius) -> CaseResult:
+        """Predict, then turn and measure, one case."""
+        program = sp.spiral_program(path)
+        recording = lab.encoders(label=f"{name}_encoders").record_turning(program)
+        prediction = predict(lab.machine, design, recording, known, self.nose_radius, radius)
+        part, report = lab.turn(program, self.tool, top=1 * UM)
+        wli = lab.white_light_interferometer(label=name)
+        start, end, spacing = MEASURE_LINE
+        profile = wli.profile(part, start, end, spacing)
+        r = profile.xy[:, 0]
+        measured = profile_error(r, profile.z, design(r, 0.0 * r))
+        x0, x1, y0, y1, step = SA_WINDOW
+        window = wli.height_map(part, x0, x1, y0, y1, step)
+        gx, gy = np.meshgrid(window.x, window.y)
+        sa = roughness_sa(window.x, window.y, window.z - design(gx, gy), l_cutoff=SA_L_CUTOFF)
+        return CaseResult(name, prediction, measured.pv, r, measured.residual, sa,
+                          report.points, report.machining_time_s,
+                          (window.x, window.y, np.asarray(window.z)))
+
+    def figures(self, cases) -> tuple:
+        one, four = cases["case_1"], cases["case_4"]
+        rows = [
+            Figure("form_error_pv", "nm", one.measured_pv / NM, four.measured_pv / NM,
+                   PAPER["case_1"], PAPER["case_4"],
+                   note="measured, Case 1 -> Case 4; paper prints um for Case 1, read nm"),
+            Figure("form_error_pv_predicted", "nm", one.prediction.total / NM,
+                   four.prediction.total / NM, None, PAPER["predicted_case_4"],
+                   note="predicted before cutting; paper: Case 4 < 10 nm"),
+            Figure("sa", "nm", one.sa / NM, four.sa / NM, None, PAPER["sa"],
+                   note="design removed, L-filter 8 um; paper: Case 4 < 1 nm"),
+            Figure("program_form_error_pv", "nm", one.prediction.program / NM,
+                   four.prediction.program / NM, *PAPER["program"],
+                   note="Table 4 before -> after, predicted"),
+            Figure("servo_form_error_pv", "nm", cases["case_3"].prediction.servo / NM,
+                   four.prediction.servo / NM, *PAPER["servo"],
+                   note="Table 6 before -> after, from the encoders' follow-up error"),
+        ]
+        for name, case in cases.items():
+            rows.append(Figure(f"form_error_pv_{name}", "nm", case.prediction.total / NM,
+                               case.measured_pv / NM, None, PAPER[name],
+                               note="before: predicted, after: measured"))
+        return tuple(rows)
+
+
+def details(cases, alignment) -> dict:
+    """Per case: the prediction's shares and the measurement, in summary.json's units."""
+    out = dict(alignment)
+    for name, case in cases.items():
+        p = case.prediction
+        out[name] = {"compensated": CASES[name], "predicted_pv_nm": p.total / NM,
+                     "predicted_program_pv_nm": p.program / NM,
+                     "predicted_tool_pv_nm": p.tool / NM,
+                     "predicted_servo_pv_nm": p.servo / NM,
+                     "measured_pv_nm": case.measured_pv / NM, "sa_nm": case.sa / NM,
+                     "points_count": case.points,
+                     "machining_time_s": case.machining_time_s}
+    return out
