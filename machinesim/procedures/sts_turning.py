@@ -9,9 +9,9 @@ whose tool carries setting errors dx, dy (``tool.x``, ``tool.y``) and a nose rad
 1. *measure*: a test sphere turned with the tool and read by the white-light interferometer
    (`sts_plans.TEST_SPHERE`);
 2. *identify*: dx, dR and |dy| from that map (`machinesim.identification.turning_tool`);
-3. *compensate*: the programs of the four cases: Case 1 as found (Table 4 "before", nose
-   compensation for the nominal R); Cases 2-4 compensated for R + dR (eqs 18-19), Cases 3-4
-   with the modified program (Table 4 "after");
+3. *compensate*: the programs of the four cases (`PROGRAM_OF`): as found (Table 4
+   "before", nose compensation for the nominal R, Case 1); compensated for R + dR (eqs
+   18-19, Case 2); modified (Table 4 "after", for R + dR, Cases 3 and 4);
 4. *evaluate*: the cases in order on the one lab, as the paper's operator did: Case 1; the
    tool-workpiece alignment (the tool moved by -dx and -dy with the holder's adjuster, the
    sign of dy found by a second test cut, the residual read by a third); Cases 2 and 3; the
@@ -47,13 +47,17 @@ from machinesim.procedures.sts_plans import (
 from machinesim.procedures.sts_prediction import Prediction, predict
 from machinesim.servo import table6_servo
 
-__all__ = ["CASES", "STSTurning", "test_cut"]
+__all__ = ["CASES", "PROGRAM_OF", "STSTurning", "test_cut"]
 
 NM, UM = 1e-9, 1e-6
 
 #: The cases (section 5.1): what is compensated in each.
 CASES = {"case_1": "none", "case_2": "tool", "case_3": "tool + program",
          "case_4": "tool + program + servo"}
+#: The program each case runs (`STSTurning.compensate`): Table 4 "before" compensated for the
+#: nominal nose radius, the same for the measured one, Table 4 "after" for the measured one.
+PROGRAM_OF = {"case_1": "as_found", "case_2": "nose_compensated", "case_3": "modified",
+              "case_4": "modified"}
 
 
 def test_cut(lab, nose_radius: float, tool: str, label: str) -> TurnedToolErrors:
@@ -100,6 +104,9 @@ class STSTurning:
     servo_after: str = "after"
     name: ClassVar[str] = "sts_turning"
     paper: ClassVar[str] = "004"
+    #: The lab's realism switches this procedure's figures depend on (its error budget).
+    realism_sources: ClassVar[tuple[str, ...]] = ("instrument_noise", "lateral_noise",
+                                                  "background_errors")
 
     @property
     def nose_radius(self) -> float:
@@ -120,10 +127,10 @@ class STSTurning:
         found = identified.detail
         design = sp.sine_grid()
         compensated = self.nose_radius + found.d_radius
-        return {"case_1": PLANS["before"].path(design, self.nose_radius),
-                "case_2": PLANS["before"].path(design, compensated),
-                "case_3": PLANS["after"].path(design, compensated),
-                "case_4": PLANS["after"].path(design, compensated)}
+        paths = {"as_found": PLANS["before"].path(design, self.nose_radius),
+                 "nose_compensated": PLANS["before"].path(design, compensated),
+                 "modified": PLANS["after"].path(design, compensated)}
+        return {name: sp.spiral_program(path) for name, path in paths.items()}
 
     def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
         found = identified.detail
@@ -136,7 +143,8 @@ class STSTurning:
             if name == "case_4":
                 lab.tune_servo(table6_servo(self.servo_after))
             radius = self.nose_radius + (0.0 if name == "case_1" else found.d_radius)
-            cases[name] = self.run_case(lab, name, programs[name], design, known, radius)
+            cases[name] = self.run_case(lab, name, programs[PROGRAM_OF[name]], design, known,
+                                        radius)
         return Evaluation(figures=self.figures(cases), details=details(cases, alignment),
                           parts={}, programs={})
 
@@ -151,15 +159,14 @@ class STSTurning:
             lab.adjust_tool((0.0, -2.0 * found.dy_abs, 0.0), label="align_back")
             sign = 1.0
         residual = test_cut(lab, self.nose_radius, self.tool, "tool_test_aligned")
-        return residual, {"dy_sign": sign, "dy_abs_after_trial_um": trial.dy_abs / UM,
+        return residual, {"dy_abs_after_trial_um": trial.dy_abs / UM,
                           "dx_after_alignment_um": residual.dx / UM,
                           "dy_abs_after_alignment_um": residual.dy_abs / UM,
                           "nose_radius_after_alignment_um": residual.d_radius / UM,
                           "dy_identified_um": sign * found.dy_abs / UM}
 
-    def run_case(self, lab, name: str, path: sp.ToolPath, design, known, radius) -> CaseResult:
+    def run_case(self, lab, name: str, program, design, known, radius) -> CaseResult:
         """Predict, then turn and measure, one case."""
-        program = sp.spiral_program(path)
         recording = lab.encoders(label=f"{name}_encoders").record_turning(program)
         prediction = predict(lab.machine, design, recording, known, self.nose_radius, radius)
         part, report = lab.turn(program, self.tool, top=1 * UM)
@@ -212,5 +219,12 @@ def details(cases, alignment) -> dict:
                      "predicted_servo_pv_nm": p.servo / NM,
                      "measured_pv_nm": case.measured_pv / NM, "sa_nm": case.sa / NM,
                      "points_count": case.points,
-                     "machining_time_s": case.machining_time_s}
+                     "machining_time_s": case.machining_time_s,
+                     "profile_r_um": (case.measured_r / UM).tolist(),
+                     "profile_form_error_nm": (case.measured_residual / NM).tolist()}
+    x, y, z = cases["case_4"].heights
+    step = max(1, x.size // 50)  # the 3-D view's map, every 2 um
+    out["case_4"] |= {"window_x_um": (x[::step] / UM).tolist(),
+                      "window_y_um": (y[::step] / UM).tolist(),
+                      "window_height_nm": (z[::step, ::step] / NM).tolist()}
     return out
