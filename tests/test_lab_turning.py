@@ -1,0 +1,183 @@
+"""Turning through the lab: the program's spiral through the servo and the machine's errors
+(tool setting, nose radius) to the turning engine, read by the white-light interferometer;
+the control's encoders; the operator's tool adjustment; the nose radius in the error model."""
+
+import numpy as np
+import pytest
+
+import machinesim
+import machinesim.cam.spiral as sp
+from machinesim.cutting.lathe import turn
+from machinesim.cutting.tool_form_error import alignment_error_x
+from machinesim.cutting.turning import EdgePath, turned_heights
+from machinesim.exceptions import ErrorModelError, InputError
+from machinesim.metrology import WhiteLightInterferometer
+from machinesim.metrology.fits import roughness_sa
+from machinesim.metrology.imperfections import Spot
+from machinesim.nc import parse_program
+from machinesim.procedures.sts_plans import profile_error
+from machinesim.realism import TOOL_ADJUSTER_RESOLUTION_M
+from machinesim.servo import AxisServo, PIDServo
+
+RS, FEED, RADIUS, R, RPM = 0.5e-3, 2e-6, 0.17e-3, 0.2e-3, 600.0
+DESIGN = sp.sphere(RS)
+TOOL = "nose:0.2:90"
+
+
+@pytest.fixture(scope="module")
+def tool_path():
+    spiral = sp.Spiral(RADIUS, FEED)
+    return sp.tool_path(sp.cutting_points(DESIGN, spiral, sp.constant_angle(spiral, 0.01)), R)
+
+
+@pytest.fixture(scope="module")
+def program(tool_path):
+    return sp.spiral_program(tool_path, spindle_rpm=RPM)
+
+
+def _points():
+    x = np.linspace(0.02e-3, 0.15e-3, 40) + 3e-9
+    return x, np.full_like(x, 1e-9)
+
+
+def test_lab_turn_is_the_engine_along_the_erroneous_path(tool_path, program):
+    # a second route: the engine on the edge path written by hand, tool set off by (dx, dy)
+    # and a nose dR larger (eqs 12-20's conventions), against the lab's program -> kinematics
+    dx, dy, dr = 0.7e-6, -1.2e-6, 3e-6
+    errors = {"tool": {"offset_um": [dx * 1e6, dy * 1e6, 0.0]},
+              "tool_geometry": {"nose_radius_um": dr * 1e6}}
+    lab = machinesim.Lab("sts_lathe", errors, noise=False)
+    part, report = lab.turn(program, TOOL, top=1e-6)
+    px, py = _points()
+    expected = turned_heights(EdgePath(tool_path.c, tool_path.x + dx, dy, tool_path.z),
+                              R + dr, px, py, top=1e-6)
+    np.testing.assert_allclose(part.heights_at(px, py), expected, rtol=0, atol=1e-15)
+    assert report.runs == 1 and report.points == len(tool_path)
+    turns = (tool_path.c[-1] - tool_path.c[0]) / (2 * np.pi)
+    assert report.revolutions == pytest.approx(turns, rel=1e-12)
+    assert report.machining_time_s == pytest.approx(turns / RPM * 60.0, rel=1e-6)
+    # the interferometer reads the height field at its samples (noise off: 0.1 nm rounding)
+    profile = lab.white_light_interferometer().profile(part, (0.02e-3, 1e-9), (0.15e-3, 1e-9),
+                                                        1e-6)
+    exact = part.heights_at(profile.xy[:, 0], profile.xy[:, 1])
+    assert np.abs(profile.z - exact).max() <= 0.05e-9 + 1e-18
+
+
+def test_servo_lag_in_the_lab_cuts_the_cone_of_a_radial_offset(tool_path, program):
+    # compensated X on a sphere is a ramp of speed v (1 + R / Rs); a PD loop lags it by
+    # speed c / kp (final-value theorem), from the first point on since the axes enter the
+    # run already moving: the cut is the sphere with the exact form error of that dx
+    kp, kd, c, mass = 2e5, 2e3, 1e4, 4.0
+    servo = PIDServo((AxisServo(kp=kp, ki=0.0, kd=kd, mass=mass, damping=c), None, None))
+    lab = machinesim.Lab("sts_lathe", noise=False, servo=servo)
+    part, report = lab.turn(program, TOOL, top=1e-6)
+    speed = FEED * RPM / 60.0 * (1 + R / RS)
+    lag = speed * c / kp
+    assert report.peak_following_error["X"] == pytest.approx(lag, rel=2e-3)
+    px, py = _points()
+    error = part.heights_at(px, py) - DESIGN(px, py)
+    expected = alignment_error_x(DESIGN, np.hypot(px, py), 0.0, lag)
+    scallop = (FEED * (1 + R / RS)) ** 2 / (8 * R)
+    assert (error - expected).min() > -1e-11
+    assert (error - expected).max() < scallop
+    assert np.abs(expected).max() > 50 * scallop
+    # the control's encoders record that lag (noise off: rounding to the 1 nm resolution);
+    # X runs inwards, so the axis stays behind at larger X: command - position = -lag
+    reading = lab.encoders().record_turning(program)
+    np.testing.assert_array_equal(reading.commanded[:, 0], tool_path.x)
+    assert np.abs(reading.following_error[:, 0] + lag).max() < 0.6e-9 + 2e-3 * lag
+
+
+def test_adjusting_the_tool_moves_the_cut_and_keeps_the_injected_errors(program):
+    injected = {"tool": {"offset_um": [2.0, 0.0, 0.0]}}
+    lab = machinesim.Lab("sts_lathe", injected, noise=False)
+    lab.adjust_tool((-2e-6, 0.0, 0.0))
+    reference = machinesim.Lab("sts_lathe", noise=False)
+    px, py = _points()
+    np.testing.assert_allclose(lab.turn(program, TOOL)[0].heights_at(px, py),
+                               reference.turn(program, TOOL)[0].heights_at(px, py), atol=1e-15)
+    assert lab.reveal().tool.offset[0] == 2e-6
+    np.testing.assert_array_equal(lab.reveal_adjustments(), [-2e-6, 0.0, 0.0])
+    # with noise the adjuster lands within half its resolution of the command
+    noisy = machinesim.Lab("sts_lathe", injected, seed=3)
+    noisy.adjust_tool((-2e-6, 1e-6, 0.0))
+    made = noisy.reveal_adjustments() - np.array([-2e-6, 1e-6, 0.0])
+    assert np.abs(made).max() <= TOOL_ADJUSTER_RESOLUTION_M / 2
+    assert np.abs(made).max() > 0.0
+
+
+def test_nose_radius_error_in_the_error_model():
+    model = machinesim.ErrorModel.from_dict({"tool_geometry": {"nose_radius_um": 12.5}})
+    assert model.tool_geometry.nose_radius == pytest.approx(12.5e-6, rel=1e-15)
+    assert model.parameters()["tool_geometry.nose_radius"] == model.tool_geometry.nose_radius
+    assert machinesim.ErrorModel.from_dict(model.to_dict()) == model
+    assert model.with_parameters({"tool_geometry.nose_radius": 0.0}) == machinesim.ErrorModel()
+    assert "tool_geometry.nose_radius" in machinesim.load_machine("sts_lathe").parameter_names()
+    with pytest.raises(ErrorModelError, match="nose_radius"):
+        machinesim.ErrorModel.from_dict({"tool_geometry": {"nose_radius_um": "big"}})
+    with pytest.raises(ErrorModelError, match="tool_geometry.radius_um"):
+        machinesim.ErrorModel.from_dict({"tool_geometry": {"radius_um": 1.0}})
+
+
+def test_mesh_cut_applies_the_nose_radius_error():
+    # second method: the same groove cut with a ball 10 um larger and no error
+    program = parse_program("G90 G21\nG00 X0 Y0 Z0.1\nG01 Z-0.01 F100\nG01 X1\n")
+    errors = machinesim.ErrorModel.from_dict({"tool_geometry": {"nose_radius_um": 10.0}})
+    with_error, _ = machinesim.cut(program, "grooving_4axis", "ball:0.5", "block:3x3x1", errors)
+    larger, _ = machinesim.cut(program, "grooving_4axis", "ball:0.51", "block:3x3x1")
+    assert with_error.volume == pytest.approx(larger.volume, rel=1e-12)
+    with pytest.raises(InputError, match="no nose radius"):
+        machinesim.cut(program, "grooving_4axis", "v:90", "block:3x3x1", errors)
+
+
+def test_turning_refuses_what_it_cannot_cut(program):
+    lab = machinesim.Lab("sts_lathe", noise=False)
+    with pytest.raises(InputError, match="no feed move turns C"):
+        lab.turn(parse_program("G90 G21\nG00 X1 Z0 C0\nG01 X0 F10\n"))
+    with pytest.raises(InputError, match="round-nose"):
+        lab.turn(program, "v:90")
+    with pytest.raises(InputError, match="X and C"):
+        turn(program, "planer_4axis")
+    part, _ = lab.turn(program, TOOL)
+    with pytest.raises(InputError, match="spot"):
+        WhiteLightInterferometer(
+            noise=False, spot=Spot(0.8e-6, "gaussian")).profile(part, (0, 0), (1e-4, 0))
+
+
+def test_profile_error_removes_piston_and_tilt():
+    r = np.linspace(0.0, 1e-4, 201)
+    wave = 2e-9 * np.sin(2 * np.pi * r / 1e-4)
+    found = profile_error(r, wave + 3e-9 + 5e-6 * r, np.zeros_like(r))
+    # the least-squares line through one period of a sine is not zero: compare with lstsq
+    fitted = np.polyval(np.polyfit(r, wave, 1), r)
+    np.testing.assert_allclose(found.residual, wave - fitted, atol=1e-21)
+    assert found.pv == pytest.approx(np.ptp(wave - fitted), rel=1e-12)
+
+
+def test_l_filtered_sa_keeps_the_feed_marks_and_drops_the_form():
+    x = np.arange(0.0, 100e-6, 0.5e-6)
+    gx, _ = np.meshgrid(x, x)
+    marks = 1e-9 * np.sin(2 * np.pi * gx / 2e-6 + 0.3)
+    form = 20e-9 * np.sin(2 * np.pi * gx / 100e-6)
+    sa = roughness_sa(x, x, marks + form, l_cutoff=8e-6)
+    assert sa == pytest.approx(np.mean(np.abs(marks)), rel=0.02)
+    assert roughness_sa(x, x, marks + form) > 10 * sa
+
+
+def test_alignment_finds_the_sign_of_the_centre_height_error():
+    # a turned sphere shows only |dy| (the uncut core); the alignment tries one way, sees the
+    # core grow, and goes the other: the residual core is then below one pixel's worth
+    # (a positive dy: the trial goes the wrong way first; the scenario's test has dy < 0)
+    from machinesim.procedures.sts_turning import STSTurning
+
+    procedure = STSTurning()
+    for dy in (2e-6,):
+        lab = machinesim.Lab("sts_lathe", {"tool": {"offset_um": [0.3, dy * 1e6, 0.0]}},
+                             noise=False)
+        found = procedure.identify(procedure.measure(lab)).detail
+        assert found.dy_abs == pytest.approx(2e-6, abs=0.3e-6)
+        residual, report = procedure.align(lab, found)
+        assert np.sign(report["dy_identified_um"]) == np.sign(dy)
+        assert residual.dy_abs < 0.3e-6 and abs(residual.dx) < 10e-9
+        # |dy| from the core's area, 0.5 um pixels
+        assert abs(lab.reveal().tool.offset[1] + lab.reveal_adjustments()[1]) < 0.3e-6
