@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from machinesim.cutting.turning import EdgePath, edge_path_from_poses, turned_heights
+from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.exceptions import InputError
 from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.tools import RoundNoseTool, tool_from_spec, with_nose_radius_error
