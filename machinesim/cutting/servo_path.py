@@ -2,8 +2,8 @@
 
 The STS program turns C at a constant spindle speed while X and Z follow the cutting points;
 the axes' servo loops (`machinesim.servo`, or any `ServoModel`) lag behind. Here the whole
-path is one continuous motion, as on the machine (the motion planner applies a servo move by
-move instead, each move starting from rest).
+path is one continuous motion, as on the machine and in `Lab.turn` (the motion planner
+applies a servo move by move instead, each move starting from rest).
 """
 
 from __future__ import annotations
@@ -26,13 +26,13 @@ def path_times(path: ToolPath, spindle_rpm: float = SPINDLE_RPM) -> np.ndarray:
 
 def followed_path(path: ToolPath, servo, spindle_rpm: float = SPINDLE_RPM) -> ToolPath:
     """The (C, X, Z) the axes reach when ``servo`` (``follow(t, q)``, q columns X, Z, C)
-    follows ``path`` at ``spindle_rpm``."""
+    follows ``path`` at ``spindle_rpm``, entering it settled at its first step's speed (as
+    `machinesim.cutting.lathe.followed`, which `Lab.turn` uses)."""
+    from machinesim.cutting.lathe import followed
+
     t = path_times(path, spindle_rpm)
     q = np.column_stack([path.x, path.z, path.c])
-    reached = np.asarray(servo.follow(t, q), dtype=np.float64)
-    if reached.shape != q.shape:
-        raise InputError(f"servo.follow must return shape {q.shape}, got {reached.shape}",
-                         key="servo")
+    reached = followed(servo.follow, t, q)
     return ToolPath(reached[:, 2], reached[:, 0], reached[:, 1])
 
 
