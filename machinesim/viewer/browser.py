@@ -46,6 +46,8 @@ FLAGS = (
 #: Seconds to wait for Chromium to start, for a page to load, and for a condition.
 START_TIMEOUT_S = 30.0
 LOAD_TIMEOUT_S = 60.0
+#: Attempts at removing the temporary profile, 0.1 s apart (`Browser.close`).
+PROFILE_CLEANUP_TRIES = 30
 #: Largest DevTools message (a screenshot of a large window is a few MB of base64).
 MAX_MESSAGE_BYTES = 256 << 20
 #: A page has drawn once two animation frames have passed after its scripts ran.
@@ -195,7 +197,16 @@ class Browser:
                 self._process.kill()
                 self._process.wait()
         self._loop.close()
-        self._profile.cleanup()
+        # Chromium's helper processes can outlive the browser process by a moment and still
+        # write into the profile (seen as "Directory not empty: 'Default'" under load): retry,
+        # then leave what they still hold to the system's temporary-file cleaning.
+        for _ in range(PROFILE_CLEANUP_TRIES):
+            try:
+                self._profile.cleanup()
+                return
+            except OSError:
+                time.sleep(0.1)
+        shutil.rmtree(self._profile.name, ignore_errors=True)
 
     def __enter__(self) -> Browser:
         return self
