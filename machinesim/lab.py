@@ -383,6 +383,10 @@ class Lab:
         if self.realism.registration and "registration" not in options:
             drawn["registration"] = Registration.draw(
                 self._imperfection(kind, label, "registration"), defaults.registration)
+        if self.realism.stage_positioning and "stage_sigma" not in options:
+            given["stage_sigma"] = defaults.stage_sigma
+        if "stage_rng" not in options:
+            given["stage_rng"] = self._imperfection(kind, label, "stage_positioning")
         self.__instruments[f"{kind}/{label}"] = drawn
         return cls(noise=self.noise, rng=stream(self.seed, kind, label), **given, **drawn,
                    **options)

@@ -15,6 +15,8 @@ probe_pretravel        the touch probe's pre-travel varies with the contact dire
 probe_ball_form        the probe's ruby ball is not a perfect sphere
 artefact_errors        reference spheres are off their designed place, size and form
 background_errors      the machine's own residual geometric errors (a well-compensated machine)
+stage_positioning      microscope and white-light interferometer: each reading is taken where
+                       the stage put it, off its commanded place within the stage's accuracy
 =====================  ========================================================================
 
 Each imperfection draws from its own stream (`machinesim.streams.stream` with the
@@ -64,6 +66,7 @@ class Realism:
     probe_ball_form: bool = False
     artefact_errors: bool = False
     background_errors: bool = False
+    stage_positioning: bool = False
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -130,6 +133,7 @@ class OpticalDefaults:
     spot: Spot
     lateral_sigma: float
     registration: RegistrationScatter
+    stage_sigma: float = 0.0
 
 
 #: The laser confocal microscope (Keyence VK-X class; paper 002 names the VK-X50, paper 001
@@ -143,13 +147,20 @@ class OpticalDefaults:
 #: objective to 5 um in x and y, the part's x turned on the stage by 1 mrad (an edge aligned
 #: by eye over a ~1 mm field), the height zero anywhere within 10 um (the focus), the part
 #: tilted by 0.2 mrad (levelled on the stage; procedures level their data anyway).
+#: Stage positioning: 1 um per axis and reading (assumed from the accuracy class of the XY
+#: stages of measuring microscopes, (2.2 + 0.02 L) um with L in mm, e.g. Mitutoyo's MF
+#: series, read as a +-2 sigma band over the sub-millimetre moves between fields; a confocal
+#: microscope's motorised stage is of that class or worse). Each profile or map is one
+#: placement of the stage; a reading longer than one field is taken as one placement too.
 MICROSCOPE = OpticalDefaults(Spot(0.3e-6, "gaussian"), 20 * M_PER_NM,
-                             RegistrationScatter(5 * M_PER_UM, 10 * M_PER_UM, 1e-3, 0.2e-3))
+                             RegistrationScatter(5 * M_PER_UM, 10 * M_PER_UM, 1e-3, 0.2e-3),
+                             1 * M_PER_UM)
 #: The white-light (coherence scanning) interferometer, 20x / 0.4 objective: spot 0.8 um
 #: FWHM (0.61 lambda / NA at 0.55 um, the centre of its white light: 0.84 um); lateral noise
 #: 10 nm (assumed: the camera's pixels are fixed, vibration moves the field between frames);
-#: registration as the microscope's (the same stage practice).
-WHITE_LIGHT = OpticalDefaults(Spot(0.8e-6, "gaussian"), 10 * M_PER_NM, MICROSCOPE.registration)
+#: registration and stage positioning as the microscope's (the same stage practice).
+WHITE_LIGHT = OpticalDefaults(Spot(0.8e-6, "gaussian"), 10 * M_PER_NM, MICROSCOPE.registration,
+                              MICROSCOPE.stage_sigma)
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,10 @@ when `machinesim.realism.Realism` turns them on):
 - ``registration`` (`machinesim.metrology.imperfections.Registration`): the instrument's own
   frame, in which it takes and reports every coordinate and height, sits off the
   workpiece's. The instrument keeps it to itself, as a real stage does not know it.
+- ``stage_sigma``: the stage positions each reading within its accuracy: a profile or a map
+  is read a fresh (dx, dy) away from where it was asked for, and reported where it was
+  asked for (two readings of one feature disagree by the stage's scatter); readings inside
+  ``with instrument.placement():`` share one placement (one field of view).
 
 A part may also be a height field (anything with ``heights_at(px, py)``, e.g. the
 `machinesim.cutting.lathe.TurnedPart` a turn leaves): it is read at the sample points
@@ -28,6 +32,7 @@ The slope limit of a real objective (no light back from steep flanks) is not mod
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -93,8 +98,12 @@ class _Profiler:
 
     def __init__(self, sigma: float, resolution: float, lateral_spacing: float, noise: bool,
                  rng, spot: Spot | None = None, lateral_sigma: float = 0.0,
-                 lateral_rng=None, registration: Registration | None = None) -> None:
+                 lateral_rng=None, registration: Registration | None = None,
+                 stage_sigma: float = 0.0, stage_rng=None) -> None:
         self.readout = Readout.of(sigma, resolution, noise)
+        self.stage_sigma = check_length(stage_sigma, "stage_sigma")
+        self.stage_rng = as_generator(stage_rng) if self.stage_sigma > 0.0 else None
+        self._held = None  # the placement `placement` holds
         self.lateral_spacing = as_positive(lateral_spacing, "lateral_spacing")
         self.rng = as_generator(rng)
         if spot is not None and not isinstance(spot, Spot):
@@ -113,6 +122,8 @@ class _Profiler:
         extra = "" if self.spot is None else f", spot={self.spot.shape}:{self.spot.width:g} m"
         if self.lateral_sigma > 0.0:
             extra += f", lateral_sigma={self.lateral_sigma:g} m"
+        if self.stage_sigma > 0.0:
+            extra += f", stage_sigma={self.stage_sigma:g} m"
         return (f"{type(self).__name__}(sigma={r.sigma:g} m, resolution={r.resolution:g} m, "
                 f"lateral_spacing={self.lateral_spacing:g} m{extra})")
 
@@ -134,19 +145,21 @@ class _Profiler:
         Profile
         """
         spacing = self.lateral_spacing if spacing is None else spacing
+        nominal = as_vector(start, 2, "start"), as_vector(end, 2, "end")
+        shift = self._stage_offset()  # where the stage really put this reading
+        a, b = nominal[0] + shift, nominal[1] + shift
         if _is_field(part):
-            a, b = as_vector(start, 2, "start"), as_vector(end, 2, "end")
             s = _line_samples(a, b, as_positive(spacing, "spacing"))
             ds, across = self._jitter(len(s)), self._jitter(1)[0]
             along = (b - a) / np.hypot(*(b - a))
             points = a + (s + ds)[:, None] * along + across * np.array([-along[1], along[0]])
             z = self._field(part, points[:, 0], points[:, 1])
-            return Profile(frozen(s, copy=False), self._display(z), frozen(a), frozen(b))
+            return Profile(frozen(s, copy=False), self._display(z), frozen(nominal[0]),
+                           frozen(nominal[1]))
         surface = self._surface(part)
         if self.spot is None and self.lateral_sigma == 0.0:
-            s, z = profile(surface, start, end, spacing)
+            s, z = profile(surface, a, b, spacing)
         else:
-            a, b = as_vector(start, 2, "start"), as_vector(end, 2, "end")
             s = _line_samples(a, b, as_positive(spacing, "spacing"))
             ds, across = np.zeros(len(s)), 0.0
             if self.lateral_rng is not None:
@@ -156,8 +169,7 @@ class _Profiler:
             z = line_heights(vertices, triangles, a, (b - a) / np.hypot(*(b - a)), s, ds,
                              across, self.spot)
             s = frozen(s, copy=False)
-        return Profile(s, self._display(z), frozen(as_vector(start, 2, "start")),
-                       frozen(as_vector(end, 2, "end")))
+        return Profile(s, self._display(z), frozen(nominal[0]), frozen(nominal[1]))
 
     def height_map(self, part, x0: float, x1: float, y0: float, y1: float,
                    spacing: float | None = None) -> HeightMap:
@@ -180,20 +192,46 @@ class _Profiler:
         spacing = as_positive(self.lateral_spacing if spacing is None else spacing, "spacing")
         x = _axis(x0, x1, spacing, "x")
         y = _axis(y0, y1, spacing, "y")
+        shift = self._stage_offset()  # where the stage really put this reading
+        rx, ry = x + shift[0], y + shift[1]  # what is read; reported at x, y
         if _is_field(part):
-            px, py = np.meshgrid(x + self._jitter(len(x)), y + self._jitter(len(y)))
+            px, py = np.meshgrid(rx + self._jitter(len(x)), ry + self._jitter(len(y)))
             z = self._field(part, px.ravel(), py.ravel()).reshape(len(y), len(x))
             return HeightMap(x, y, self._display(z))
         surface = self._surface(part)
         if self.spot is None and self.lateral_sigma == 0.0:
-            return HeightMap(x, y, self._display(height_map(surface, x, y)))
+            return HeightMap(x, y, self._display(height_map(surface, rx, ry)))
         dx, dy = np.zeros(len(x)), np.zeros(len(y))
         if self.lateral_rng is not None:
             dx = self.lateral_sigma * self.lateral_rng.standard_normal(len(x))
             dy = self.lateral_sigma * self.lateral_rng.standard_normal(len(y))
         vertices, triangles = mesh_arrays(surface)
-        return HeightMap(x, y, self._display(spot_heights(vertices, triangles, x, y, dx, dy,
+        return HeightMap(x, y, self._display(spot_heights(vertices, triangles, rx, ry, dx, dy,
                                                           self.spot)))
+
+    @contextmanager
+    def placement(self):
+        """Readings inside share one placement of the stage: one field of view (a profile
+        zoomed into, several profiles of one image). Outside, each reading is its own.
+
+        >>> with microscope.placement():  # doctest: +SKIP
+        ...     coarse = microscope.profile(part, a, b)
+        ...     fine = microscope.profile(part, c, d, spacing=1e-9)
+        """
+        self._held = self._stage_offset()
+        try:
+            yield self
+        finally:
+            self._held = None
+
+    def _stage_offset(self) -> np.ndarray:
+        """Where the stage puts this reading off its commanded place (x, y, m): the held
+        placement's, else a fresh draw per reading with stage positioning, zeros without."""
+        if self._held is not None:
+            return self._held
+        if self.stage_rng is None:
+            return np.zeros(2)
+        return self.stage_sigma * self.stage_rng.standard_normal(2)
 
     def _jitter(self, n: int) -> np.ndarray:
         """Lateral noise of ``n`` sample positions (zeros without it), m."""
@@ -254,14 +292,22 @@ class Microscope(_Profiler):
     registration : Registration, optional
         Where the instrument's frame sits on the workpiece; default exactly on it. The lab
         draws one per instrument (5 um, 1 mrad, 10 um, 0.2 mrad scatter, assumed).
+    stage_sigma : float
+        Stage positioning, m: each reading (`profile`, `height_map`) is taken where the
+        stage put it, off its commanded place by a fresh normal draw of this deviation in x
+        and y, and reported at the commanded place. Default 0; the lab's 1 um
+        (`machinesim.realism.MICROSCOPE`).
+    stage_rng : numpy.random.Generator or int or None
+        Source of the stage's draws.
     """
 
     def __init__(self, sigma: float = 12e-9, resolution: float = 1e-9,
                  lateral_spacing: float = 0.3e-6, *, noise: bool = True, rng=None,
                  spot: Spot | None = None, lateral_sigma: float = 0.0, lateral_rng=None,
-                 registration: Registration | None = None) -> None:
+                 registration: Registration | None = None, stage_sigma: float = 0.0,
+                 stage_rng=None) -> None:
         super().__init__(sigma, resolution, lateral_spacing, noise, rng, spot, lateral_sigma,
-                         lateral_rng, registration)
+                         lateral_rng, registration, stage_sigma, stage_rng)
 
 
 class WhiteLightInterferometer(_Profiler):
@@ -281,7 +327,7 @@ class WhiteLightInterferometer(_Profiler):
         False turns the noise off exactly (``sigma`` ignored); rounding stays.
     rng : numpy.random.Generator or int or None
         Noise source, or its seed.
-    spot, lateral_sigma, lateral_rng, registration
+    spot, lateral_sigma, lateral_rng, registration, stage_sigma, stage_rng
         As the `Microscope`'s, all off by default. The lab's: a Gaussian spot of 0.8 um FWHM
         (0.61 lambda / NA of a 20x / 0.4 objective at 0.55 um), 10 nm lateral noise
         (assumed), the microscope's registration scatter (`machinesim.realism.WHITE_LIGHT`).
@@ -290,9 +336,10 @@ class WhiteLightInterferometer(_Profiler):
     def __init__(self, sigma: float = 0.5e-9, resolution: float = 0.1e-9,
                  lateral_spacing: float = 0.5e-6, *, noise: bool = True, rng=None,
                  spot: Spot | None = None, lateral_sigma: float = 0.0, lateral_rng=None,
-                 registration: Registration | None = None) -> None:
+                 registration: Registration | None = None, stage_sigma: float = 0.0,
+                 stage_rng=None) -> None:
         super().__init__(sigma, resolution, lateral_spacing, noise, rng, spot, lateral_sigma,
-                         lateral_rng, registration)
+                         lateral_rng, registration, stage_sigma, stage_rng)
 
 
 def _is_field(part) -> bool:

@@ -151,42 +151,60 @@ def read_window(instrument, part, centre, plan: PyramidPlan = PAPER_PLAN,
     A registered instrument (``Realism.registration``) sees the window off its design, by
     micrometres at the plate's centre and by a few tenths of a millimetre at its corners (a
     stage's rotation of ~1 mrad over 190 mm), so the window is first found as labs find it:
-    its edges on two profiles through the designed centre (`locate_window`). Each set's
-    grooves are then located on the centre profile (`groove_phase`) and the same grooves
-    read on the profiles either side.
+    its edges on two profiles through the designed centre (`locate_window`). The window is
+    then read in one field (one placement of the stage): each set's grooves located on a
+    profile across it (`groove_phase`), then each set read on profiles along the other
+    set's ridges as found, at the centre and either side.
     """
     cx, cy = locate_window(instrument, part, centre, plan.window)
     p = plan.pitch
     k = np.arange(-int(round(0.3 * plan.window / p)), int(round(0.3 * plan.window / p)) + 1)
     nominal = k * p                                  # groove offsets read, inside the window
     half = nominal[-1] + 1.5 * p
-    sets = []
-    for along_x in (True, False):
-        profiles = {}
-        for shift in (0.0, -span, span):
-            # Along the other set's ridge (half a pitch off its grooves), across this set.
-            if along_x:     # set 1 runs along X: profile along Y at fixed x
-                x = cx + shift + 0.5 * p
-                prof = instrument.profile(part, (x, cy - half), (x, cy + half), SPACING)
-            else:
-                y = cy + shift + 0.5 * p
-                prof = instrument.profile(part, (cx - half, y), (cx + half, y), SPACING)
-            profiles[shift] = prof
-        # the grooves' offset from their design, within half a pitch
-        found = groove_phase(profiles[0.0].s, profiles[0.0].z, p)
-        offset = (found - half + 0.5 * p) % p - 0.5 * p
-        base = (cy if along_x else cx) - half
-        positions, ridges = {}, {}
-        for shift, prof in profiles.items():
-            pos, _, lefts, rights = v_flanks(prof.s, prof.z, nominal + half + offset, p)
-            positions[shift] = pos + base
-            ridges[shift] = _ridges(lefts, rights)
-        slope = np.mean((positions[span] - positions[-span]) / (2.0 * span))
-        sets.append((positions[0.0], ridges[0.0], slope))
+    with instrument.placement():  # one field of view holds the window's profiles
+        # where each set's grooves are (the stage put the field off its command): first a
+        # profile across each, then each set read along the other set's ridges
+        phase = [_groove_offset(instrument, part, cx, cy, along_x, half, p)
+                 for along_x in (True, False)]
+        sets = [_read_set(instrument, part, cx, cy, along_x, nominal, half, p, span,
+                          phase[0], phase[1]) for along_x in (True, False)]
     (pos1, r1, m1), (pos2, r2, m2) = sets
     apex = np.minimum(r1[:, None], r2[None, :])
     pitch = float(np.mean(np.concatenate([np.diff(pos1), np.diff(pos2)])))
     return PyramidWindow((cx, cy), apex, pitch, float(-(m1 + m2)))
+
+
+def _across(instrument, part, cx, cy, along_x, half, at):
+    """A profile across one set (``along_x``: the set running along X, read along Y at
+    x = ``at``; else along X at y = ``at``)."""
+    if along_x:
+        return instrument.profile(part, (at, cy - half), (at, cy + half), SPACING)
+    return instrument.profile(part, (cx - half, at), (cx + half, at), SPACING)
+
+
+def _groove_offset(instrument, part, cx, cy, along_x, half, p) -> float:
+    """How far a set's grooves sit from their design across the set, within half a pitch."""
+    prof = _across(instrument, part, cx, cy, along_x, half, (cx if along_x else cy) + 0.25 * p)
+    found = groove_phase(prof.s, prof.z, p)
+    return (found - half + 0.5 * p) % p - 0.5 * p
+
+
+def _read_set(instrument, part, cx, cy, along_x, nominal, half, p, span, offset_1, offset_2):
+    """One groove set of a window: positions and ridge heights on the centre profile, and
+    the grooves' slope from the profiles either side, all along the other set's ridges
+    (half a pitch off its grooves as found: ``offset_1``, ``offset_2`` of sets 1 and 2)."""
+    offset, other = (offset_1, offset_2) if along_x else (offset_2, offset_1)
+    centre = (cx if along_x else cy) + other + 0.5 * p
+    profiles = {shift: _across(instrument, part, cx, cy, along_x, half, centre + shift)
+                for shift in (0.0, -span, span)}
+    base = (cy if along_x else cx) - half
+    positions, ridges = {}, {}
+    for shift, prof in profiles.items():
+        pos, _, lefts, rights = v_flanks(prof.s, prof.z, nominal + half + offset, p)
+        positions[shift] = pos + base
+        ridges[shift] = _ridges(lefts, rights)
+    slope = np.mean((positions[span] - positions[-span]) / (2.0 * span))
+    return positions[0.0], ridges[0.0], slope
 
 
 def cut_and_read(lab, compensation=None, plan: PyramidPlan = PAPER_PLAN,

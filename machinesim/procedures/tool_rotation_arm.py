@@ -211,7 +211,7 @@ class ToolRotationArm:
     #: microscope only: no probe, no reference artefacts), for an error budget.
     realism_sources: ClassVar[tuple[str, ...]] = (
         "instrument_noise", "lateral_resolution", "lateral_noise", "registration",
-        "background_errors")
+        "stage_positioning", "background_errors")
 
     def measure(self, lab) -> Calibration:
         """Cut the calibration ramps with the nominal program and read them (microscope

@@ -232,15 +232,16 @@ def _start_point(part, microscope, points, spot, along) -> np.ndarray:
     direction = line.direction if line.direction @ along > 0 else -line.direction
     foot = line.point + ((np.asarray(spot) - line.point) @ direction) * direction
     p0 = foot - PAIR_WINDOW * direction
-    coarse = microscope.profile(part, p0, foot + PAIR_WINDOW * direction)
-    level = 0.5 * (float(np.nanmin(coarse.z)) + float(np.nanmax(coarse.z)))
-    steps = step_positions(coarse.s, coarse.z, level)
-    if steps.size != 1:
-        raise InputError(f"A axis: expected one start face near "
-                         f"{np.round(foot / M_PER_MM, 4)} mm along the groove, found "
-                         f"{steps.size}")
-    q0 = p0 + (steps[0] - ZOOM) * direction
-    fine = microscope.profile(part, q0, q0 + 2 * ZOOM * direction, spacing=FINE_SPACING)
+    with microscope.placement():  # one field: the zoom is into the same image
+        coarse = microscope.profile(part, p0, foot + PAIR_WINDOW * direction)
+        level = 0.5 * (float(np.nanmin(coarse.z)) + float(np.nanmax(coarse.z)))
+        steps = step_positions(coarse.s, coarse.z, level)
+        if steps.size != 1:
+            raise InputError(f"A axis: expected one start face near "
+                             f"{np.round(foot / M_PER_MM, 4)} mm along the groove, found "
+                             f"{steps.size}")
+        q0 = p0 + (steps[0] - ZOOM) * direction
+        fine = microscope.profile(part, q0, q0 + 2 * ZOOM * direction, spacing=FINE_SPACING)
     return q0 + step_positions(fine.s, fine.z, level)[0] * direction
 
 
@@ -372,7 +373,7 @@ class ToolSetting6Axis:
     #: microscope only: no probe, no reference artefacts), for an error budget.
     realism_sources: ClassVar[tuple[str, ...]] = (
         "instrument_noise", "lateral_resolution", "lateral_noise", "registration",
-        "background_errors")
+        "stage_positioning", "background_errors")
 
     def measure(self, lab) -> Readings:
         """Cut and read the four plates in the paper's order, each cut with what the earlier
