@@ -164,20 +164,20 @@ def test_l_filtered_sa_keeps_the_feed_marks_and_drops_the_form():
     assert roughness_sa(x, x, marks + form) > 10 * sa
 
 
-def test_alignment_finds_the_sign_of_the_centre_height_error():
-    # a turned sphere shows only |dy| (the uncut core); the alignment tries one way, sees the
-    # core grow, and goes the other: the residual core is then below one pixel's worth
-    # (a positive dy: the trial goes the wrong way first; the scenario's test has dy < 0)
+def test_the_tool_test_reads_dy_with_its_sign_and_the_alignment_cancels_it():
+    # a turned sphere shows only |dy| (the uncut core); the tilted plane's twist about the
+    # centre, slope dy y / rho, shows its sign: moved by -dx, -dy the tool is then on centre
     from machinesim.procedures.sts_turning import STSTurning
 
     procedure = STSTurning()
-    for dy in (2e-6,):
+    for dy in (2e-6, -2e-6):
         lab = machinesim.Lab("sts_lathe", {"tool": {"offset_um": [0.3, dy * 1e6, 0.0]}},
                              noise=False)
-        found = procedure.identify(procedure.measure(lab)).detail
-        assert found.dy_abs == pytest.approx(2e-6, abs=0.3e-6)
-        residual, report = procedure.align(lab, found)
-        assert np.sign(report["dy_identified_um"]) == np.sign(dy)
-        assert residual.dy_abs < 0.3e-6 and abs(residual.dx) < 10e-9
-        # |dy| from the core's area, 0.5 um pixels
-        assert abs(lab.reveal().tool.offset[1] + lab.reveal_adjustments()[1]) < 0.3e-6
+        identified = procedure.identify(procedure.measure(lab))
+        assert identified.parameters["tool.y"][0] == pytest.approx(dy, rel=0.05)
+        assert identified.parameters["tool.x"][0] == pytest.approx(0.3e-6, abs=10e-9)
+        residual, report = procedure.align(lab, identified.detail)
+        assert abs(residual.dy) < 0.1e-6 and abs(residual.dx) < 10e-9
+        # what the adjuster made (exact with the noise off) against the injected offset
+        assert abs(lab.reveal().tool.offset[1] + lab.reveal_adjustments()[1]) < 0.1e-6
+        assert report["dy_after_alignment_um"] == pytest.approx(residual.dy / 1e-6)

@@ -49,7 +49,7 @@ __all__ = [
     "SPINDLE_RPM", "WAVELENGTH_M", "CuttingPoints", "Design", "ProgramError", "Spiral",
     "ToolPath", "constant_angle", "constant_arc_length", "cutting_angles", "cutting_points",
     "design_from_height_map", "interpolate", "program_error", "program_error_table",
-    "read_design", "sine_grid", "sphere", "spiral_program", "tool_path",
+    "read_design", "sine_grid", "sphere", "spiral_program", "tilted_plane", "tool_path",
 ]
 
 # --- the paper's conditions (Table 1, section 2.3, Table 4) ---------------------------------
@@ -167,6 +167,23 @@ def sphere(radius: float) -> Design:
         return -sign * x / r, -sign * y / r
 
     return Design(height, gradient, f"sphere R {rs / M_PER_MM:g} mm")
+
+
+def tilted_plane(slope_x: float, slope_y: float = 0.0) -> Design:
+    """The plane z = slope_x x + slope_y y (a test surface: turned, its twist about the
+    centre shows the tool's centre height with its sign)."""
+    kx, ky = float(slope_x), float(slope_y)
+    if not (math.isfinite(kx) and math.isfinite(ky)):
+        raise InputError(f"Expected finite slopes, got {slope_x!r}, {slope_y!r}", key="slope")
+
+    def height(x, y):
+        return kx * x + ky * y
+
+    def gradient(x, y):
+        shape = np.broadcast(x, y).shape
+        return np.full(shape, kx), np.full(shape, ky)
+
+    return Design(height, gradient, f"plane, slopes {kx:g}, {ky:g}")
 
 
 def design_from_height_map(x, y, z, *, name: str = "height map") -> Design:

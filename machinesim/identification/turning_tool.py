@@ -106,4 +106,68 @@ def identify_tool_errors(design: Design, x, y, heights, *, core_step: float,
                             centre=(float(p[0]), float(p[1])), residual_rms=rms)
 
 
-__all__ = ["TurnedToolErrors", "identify_tool_errors"]
+def identify_centre_height(x, y, heights, slope: float, *, aperture: float, core: float,
+                           dx: float = 0.0) -> float:
+    """The signed centre-height error dy from a turned tilted plane z = ``slope`` x.
+
+    The tip at program radius a and spindle angle C sits at (a + dx) u(C) + dy u_perp(C)
+    (`machinesim.cutting.tool_form_error`), so the point (rho, theta) is cut by
+    a = sqrt(rho^2 - dy^2) - dx at C = theta - atan(dy / (a + dx)), where the program's
+    height is slope a cos(C):
+
+        z(rho, theta) = slope a cos(theta - atan(dy / (a + dx))),
+
+    to first order slope (x + dy y / rho - dx x / rho): the plane twisted about the centre,
+    the twist's sign the sign of dy, which a rotationally symmetric test (the sphere) cannot
+    show. Fitted by least squares over dy, a height offset and a tilt (the part as it lies
+    in the instrument), with ``dx`` known (the sphere's), from the first-order estimate.
+
+    Parameters
+    ----------
+    x, y : array-like
+        Grid axes of the map, m, with the spindle axis at the origin.
+    heights : array-like, shape (ny, nx)
+        Measured heights, m; NaN where the instrument saw nothing.
+    slope : float
+        The plane's designed slope dz/dx.
+    aperture : float
+        Only points within this radius (m) are used: the turned area.
+    core : float
+        Points nearer the axis than this (m) are left out: the uncut core and the centre.
+    dx : float
+        The radial tool offset, m (from the sphere).
+    """
+    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    z = np.asarray(heights, dtype=np.float64)
+    if z.shape != (y.size, x.size):
+        raise InputError(f"Expected heights of shape ({y.size}, {x.size}), got {z.shape}",
+                         key="heights")
+    k = float(slope)
+    if not (abs(k) > 0.0) or not np.isfinite(k):
+        raise InputError(f"Expected a tilted plane (finite slope != 0), got {slope!r}",
+                         key="slope")
+    px, py = np.meshgrid(x, y)
+    rho = np.hypot(px, py)
+    use = np.isfinite(z) & (rho < aperture) & (rho > core)
+    if np.count_nonzero(use) < 10:
+        raise InputError("Expected at least 10 measured points between the core and the "
+                         "aperture", key="heights")
+    px, py, rho, z = px[use], py[use], rho[use], z[use]
+    theta = np.arctan2(py, px)
+    basis = np.column_stack([np.ones(px.size), px, py, px / rho, py / rho])
+    first = np.linalg.lstsq(basis, z - k * px, rcond=None)[0]
+
+    def residual(p):
+        dy, piston, tx, ty = p
+        a = np.sqrt(np.maximum(rho * rho - dy * dy, 0.0)) - dx
+        model = k * a * np.cos(theta - np.arctan2(dy, a + dx)) + piston + tx * px + ty * py
+        return (model - z) * 1e9  # nm
+
+    start = np.array([first[4] / k, first[0], first[1], first[2]])
+    result = least_squares(residual, start, x_scale=[1e-6, 1e-8, 1e-4, 1e-4])
+    if not result.success:
+        raise NotConvergedError(f"centre height fit did not converge: {result.message}")
+    return float(result.x[0])
+
+
+__all__ = ["TurnedToolErrors", "identify_centre_height", "identify_tool_errors"]

@@ -11,7 +11,9 @@ and section 5):
   has only G01: `machinesim.cam.spiral.interpolate`);
 * the tool test: a sphere Rs 2 mm turned over r 0.12 mm with the same tool, read by the
   white-light interferometer over 200 x 200 um at 0.5 um; its form shows dx, dR and the
-  uncut core |dy| (`machinesim.identification.turning_tool`);
+  uncut core |dy|; and a plane tilted 0.02 along x, turned and read alike (1 um pixels),
+  whose twist about the centre shows dy with its sign
+  (`machinesim.identification.turning_tool`);
 * the measurement: the white-light interferometer along theta = 0 from r = 150 to 350 um
   (around the paper's r = 250 um) at 0.5 um, best-fitted to the design over piston and tilt;
   Sa over 100 x 100 um about (250, 0) um, the design removed, L-filtered at 8 um.
@@ -27,8 +29,8 @@ import numpy as np
 from machinesim.cam import spiral as sp
 from machinesim.exceptions import InputError
 
-__all__ = ["MEASURE_LINE", "PAPER", "PLANS", "SA_L_CUTOFF", "SA_WINDOW", "TABLE5", "TEST_SPHERE",
-           "ProgramPlan", "ProfileError", "profile_error"]
+__all__ = ["MEASURE_LINE", "PAPER", "PLANS", "SA_L_CUTOFF", "SA_WINDOW", "TABLE5", "TEST_PLANE",
+           "TEST_SPHERE", "ProgramPlan", "ProfileError", "profile_error"]
 
 UM, NM = 1e-6, 1e-9
 
@@ -89,14 +91,47 @@ class TestSphere:
     #: is 0.5 nm: 100 sigma)
     core_step: float = 50 * NM
 
+    #: the stock's top over the test piece, m
+    top: float = 1 * UM
+
+    def design(self) -> sp.Design:
+        return sp.sphere(self.radius)
+
     def path(self, nose_radius: float) -> sp.ToolPath:
         spiral = sp.Spiral(self.turned_radius, self.feed)
-        design = sp.sphere(self.radius)
         theta = sp.constant_angle(spiral, self.angle_step)
-        return sp.tool_path(sp.cutting_points(design, spiral, theta), nose_radius)
+        return sp.tool_path(sp.cutting_points(self.design(), spiral, theta), nose_radius)
+
+
+@dataclass(frozen=True)
+class TestPlane:
+    """The centre-height test: a plane tilted along x turned with the part's tool, read by
+    the interferometer; its twist about the centre gives the signed dy
+    (`machinesim.identification.turning_tool.identify_centre_height`)."""
+
+    slope: float = 0.02
+    turned_radius: float = 0.12e-3
+    feed: float = 1 * UM
+    angle_step: float = 0.02
+    read_half_width: float = 0.1e-3
+    pixel: float = 1 * UM
+    #: points nearer the axis are left out: the uncut core and the centre, where the nose
+    #: reaches across the axis (with 10 um the fit of dy = -3.5 um is 4 % off, with 30 um
+    #: within 0.1 nm, noise off)
+    core: float = 30 * UM
+    top: float = 10 * UM
+
+    def design(self) -> sp.Design:
+        return sp.tilted_plane(self.slope)
+
+    def path(self, nose_radius: float) -> sp.ToolPath:
+        spiral = sp.Spiral(self.turned_radius, self.feed)
+        theta = sp.constant_angle(spiral, self.angle_step)
+        return sp.tool_path(sp.cutting_points(self.design(), spiral, theta), nose_radius)
 
 
 TEST_SPHERE = TestSphere()
+TEST_PLANE = TestPlane()
 
 #: The measured profile: theta = 0, r from 150 to 350 um, every 0.5 um.
 MEASURE_LINE = ((150 * UM, 0.0), (350 * UM, 0.0), 0.5 * UM)

@@ -4,7 +4,7 @@ Fig. 14, and Fig. 16's share of each factor).
 From what the lab can know before it cuts, never from its truth:
 
 * the program (its tool tips, compensated for some nose radius);
-* the tool errors identified from a test cut (dx, |dy|, the nose radius);
+* the tool errors identified from a test cut (dx, dy, the nose radius);
 * the follow-up error the control's encoders recorded for this program
   (`machinesim.metrology.encoders.Encoders.record_turning`);
 * the nominal machine.
@@ -17,11 +17,8 @@ the best fit of piston and tilt, as the measurement is evaluated:
 * ``program``: the engine along the commanded tips with a perfect tool (eqs 10-11 on the
   machined surface: interpolation, point spacing, cusps);
 * ``tool``: the exact forms of eqs 12-20 (`machinesim.cutting.tool_form_error`) of the
-  identified dx, |dy| and the nose radius left uncompensated, added;
+  identified dx, dy and the nose radius left uncompensated, added;
 * ``servo``: the engine along the encoder positions minus the engine along the commands.
-
-At theta = 0 the sign of dy does not matter: the grid's y-term is even in y, and the radial
-part of dy's error is even in dy (docs/procedures/sts_turning.md).
 """
 
 from __future__ import annotations
@@ -87,14 +84,14 @@ def predict(machine, design, recording, known, nose_radius: float,
     commanded = np.asarray(recording.commanded)
     reached = np.asarray(recording.position)
     tool_radius = nose_radius + known.d_radius
-    identified = ErrorModel(tool=ToolSetting([known.dx, known.dy_abs, 0.0]))
+    identified = ErrorModel(tool=ToolSetting([known.dx, known.dy, 0.0]))
     total = profile_error(r, _heights(machine, reached, identified, tool_radius, r), target)
     ideal = _heights(machine, commanded, None, compensated_radius, r)
     program = profile_error(r, ideal, target).pv
     servo = profile_error(r, _heights(machine, reached, None, compensated_radius, r), ideal).pv
     left = tool_radius - compensated_radius
     tool_form = (alignment_error_x(design, r, zero, known.dx)
-                 + alignment_error_y(design, r, zero, known.dy_abs)
+                 + alignment_error_y(design, r, zero, known.dy)
                  + nose_radius_error(design, r, zero, left))
     tool = profile_error(r, target + tool_form, target).pv
     return Prediction(total.pv, program, tool, servo, total.residual)

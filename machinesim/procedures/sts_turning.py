@@ -6,15 +6,16 @@ whose tool carries setting errors dx, dy (``tool.x``, ``tool.y``) and a nose rad
 (``tool_geometry.nose_radius``), and whose axes follow through servo loops
 (`machinesim.servo`):
 
-1. *measure*: a test sphere turned with the tool and read by the white-light interferometer
-   (`sts_plans.TEST_SPHERE`);
-2. *identify*: dx, dR and |dy| from that map (`machinesim.identification.turning_tool`);
+1. *measure*: a test sphere and a tilted test plane turned with the tool and read by the
+   white-light interferometer (`sts_plans.TEST_SPHERE`, `TEST_PLANE`);
+2. *identify*: dx, dR and |dy| from the sphere, the signed dy from the plane
+   (`machinesim.identification.turning_tool`);
 3. *compensate*: the programs of the four cases (`PROGRAM_OF`): as found (Table 4
    "before", nose compensation for the nominal R, Case 1); compensated for R + dR (eqs
    18-19, Case 2); modified (Table 4 "after", for R + dR, Cases 3 and 4);
 4. *evaluate*: the cases in order on the one lab, as the paper's operator did: Case 1; the
    tool-workpiece alignment (the tool moved by -dx and -dy with the holder's adjuster, the
-   sign of dy found by a second test cut, the residual read by a third); Cases 2 and 3; the
+   residual read by a second test cut); Cases 2 and 3; the
    servo tuned to Table 6 "after" (`Lab.tune_servo`); Case 4. Before each cut the form error
    is predicted from what the lab can know: the program, the identified tool errors, and the
    follow-up error the control's encoders record for that program (`sts_prediction`); then
@@ -33,7 +34,7 @@ import numpy as np
 
 from machinesim.cam import spiral as sp
 from machinesim.experiment import Evaluation, Figure, Identified
-from machinesim.identification.turning_tool import TurnedToolErrors, identify_tool_errors
+from machinesim.identification.turning_tool import identify_centre_height, identify_tool_errors
 from machinesim.metrology.fits import roughness_sa
 from machinesim.procedures.sts_plans import (
     MEASURE_LINE,
@@ -41,6 +42,7 @@ from machinesim.procedures.sts_plans import (
     PLANS,
     SA_L_CUTOFF,
     SA_WINDOW,
+    TEST_PLANE,
     TEST_SPHERE,
     profile_error,
 )
@@ -60,17 +62,34 @@ PROGRAM_OF = {"case_1": "as_found", "case_2": "nose_compensated", "case_3": "mod
               "case_4": "modified"}
 
 
-def test_cut(lab, nose_radius: float, tool: str, label: str) -> TurnedToolErrors:
-    """Turn the test sphere with ``tool`` (program compensated for ``nose_radius``) and read
-    the tool errors from the interferometer's map of it."""
-    plan = TEST_SPHERE
-    program = sp.spiral_program(plan.path(nose_radius))
-    part, _ = lab.turn(program, tool, top=1 * UM)
-    w = plan.read_half_width
-    reading = lab.white_light_interferometer(label=label).height_map(part, -w, w, -w, w,
-                                                                     plan.pixel)
-    return identify_tool_errors(sp.sphere(plan.radius), reading.x, reading.y, reading.z,
-                                core_step=plan.core_step, aperture=w)
+@dataclass(frozen=True)
+class ToolTest:
+    """The tool errors as a test cut shows them, m: dx, dR and |dy| from the test sphere,
+    the signed dy from the tilted plane (`sts_plans.TEST_PLANE`)."""
+
+    dx: float
+    dy: float
+    d_radius: float
+    dy_abs: float
+
+
+def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
+    """Turn the test sphere and the tilted test plane with ``tool`` (programs compensated
+    for ``nose_radius``) and read the tool errors from the interferometer's maps."""
+    maps = {}
+    for piece, plan in (("sphere", TEST_SPHERE), ("plane", TEST_PLANE)):
+        part, _ = lab.turn(sp.spiral_program(plan.path(nose_radius)), tool, top=plan.top)
+        w = plan.read_half_width
+        maps[piece] = lab.white_light_interferometer(label=f"{label}_{piece}").height_map(
+            part, -w, w, -w, w, plan.pixel)
+    sphere, plane = maps["sphere"], maps["plane"]
+    found = identify_tool_errors(TEST_SPHERE.design(), sphere.x, sphere.y, sphere.z,
+                                 core_step=TEST_SPHERE.core_step,
+                                 aperture=TEST_SPHERE.read_half_width)
+    dy = identify_centre_height(plane.x, plane.y, plane.z, TEST_PLANE.slope,
+                                aperture=TEST_PLANE.read_half_width, core=TEST_PLANE.core,
+                                dx=found.dx)
+    return ToolTest(found.dx, dy, found.d_radius, found.dy_abs)
 
 
 @dataclass(frozen=True)
@@ -120,8 +139,8 @@ class STSTurning:
 
     def identify(self, measurements) -> Identified:
         found = measurements["tool_test"]
-        return Identified({"tool.x": found.dx, "tool_geometry.nose_radius": found.d_radius},
-                          detail=found)
+        return Identified({"tool.x": found.dx, "tool.y": found.dy,
+                           "tool_geometry.nose_radius": found.d_radius}, detail=found)
 
     def compensate(self, identified: Identified) -> dict:
         found = identified.detail
@@ -148,22 +167,16 @@ class STSTurning:
         return Evaluation(figures=self.figures(cases), details=details(cases, alignment),
                           parts={}, programs={})
 
-    def align(self, lab, found: TurnedToolErrors):
-        """The tool-workpiece alignment: move the tool by -dx and by |dy| towards the centre
-        (the sign of dy is not seen: a second test cut tells whether the core shrank), then
-        read what is left with a third."""
-        lab.adjust_tool((-found.dx, found.dy_abs, 0.0), label="align")
-        trial = test_cut(lab, self.nose_radius, self.tool, "tool_test_sign")
-        sign = -1.0
-        if trial.dy_abs > found.dy_abs:  # the core grew: dy was positive, go back twice
-            lab.adjust_tool((0.0, -2.0 * found.dy_abs, 0.0), label="align_back")
-            sign = 1.0
+    def align(self, lab, found: ToolTest):
+        """The tool-workpiece alignment: move the tool by -dx and -dy with the holder's
+        adjuster, then read what is left with a second test cut."""
+        lab.adjust_tool((-found.dx, -found.dy, 0.0), label="align")
         residual = test_cut(lab, self.nose_radius, self.tool, "tool_test_aligned")
-        return residual, {"dy_abs_after_trial_um": trial.dy_abs / UM,
-                          "dx_after_alignment_um": residual.dx / UM,
+        return residual, {"dx_after_alignment_um": residual.dx / UM,
+                          "dy_after_alignment_um": residual.dy / UM,
                           "dy_abs_after_alignment_um": residual.dy_abs / UM,
                           "nose_radius_after_alignment_um": residual.d_radius / UM,
-                          "dy_identified_um": sign * found.dy_abs / UM}
+                          "dy_abs_identified_um": found.dy_abs / UM}
 
     def run_case(self, lab, name: str, program, design, known, radius) -> CaseResult:
         """Predict, then turn and measure, one case."""
