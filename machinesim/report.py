@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -265,6 +266,18 @@ def _check_budget(rows) -> None:
                     or not math.isfinite(value)):
                 raise InputError(f"summary.json: budget[{i}].{key} must be a finite number, "
                                  f"got {value!r}", key="budget")
+
+
+def run_scenario(report, args) -> None:
+    """Run a scenario's ``report(args)``: a `machinesim.MachineSimError` ends it with its
+    one-line message on stderr and exit status 2, never a traceback."""
+    from machinesim.exceptions import MachineSimError
+
+    try:
+        report(args)
+    except MachineSimError as error:
+        print(f"error: {error}", file=sys.stderr)
+        sys.exit(2)
 
 
 def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentParser:

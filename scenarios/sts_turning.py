@@ -24,7 +24,6 @@ used without the three.
 from __future__ import annotations
 
 import io
-import sys
 import time
 
 import numpy as np
@@ -33,11 +32,16 @@ from machinesim import Lab
 from machinesim._io import write_atomic
 from machinesim.budget import realism_budget
 from machinesim.errors import ErrorModel
-from machinesim.exceptions import MachineSimError
 from machinesim.experiment import run
 from machinesim.procedures.sts_plans import PAPER, TABLE5
 from machinesim.procedures.sts_turning import CASES, STSTurning
-from machinesim.report import ReportFolder, realism_from, realism_options, scenario_arguments
+from machinesim.report import (
+    ReportFolder,
+    realism_from,
+    realism_options,
+    run_scenario,
+    scenario_arguments,
+)
 from machinesim.servo import table6_servo
 
 NM, UM = 1e-9, 1e-6
@@ -53,12 +57,7 @@ def default_errors() -> ErrorModel:
 def main() -> None:
     parser = scenario_arguments(__doc__.splitlines()[0], "reports/sts_turning")
     realism_options(parser)
-    args = parser.parse_args()
-    try:
-        report(args)
-    except MachineSimError as error:
-        print(f"error: {error}", file=sys.stderr)
-        sys.exit(2)
+    run_scenario(report, parser.parse_args())
 
 
 def report(args) -> None:

@@ -22,7 +22,6 @@ those switched off in turn (docs/budget.md). See docs/procedures/tool_rotation_a
 from __future__ import annotations
 
 import math
-import sys
 import time
 
 import numpy as np
@@ -30,7 +29,7 @@ import numpy as np
 from machinesim import Lab, load_machine
 from machinesim.budget import realism_budget
 from machinesim.cam.prisms import CalibrationPlan
-from machinesim.exceptions import InputError, MachineSimError
+from machinesim.exceptions import InputError
 from machinesim.experiment import run
 from machinesim.identification.tool_rotation_arm import (
     arm_radius,
@@ -43,6 +42,7 @@ from machinesim.report import (
     injected_errors,
     realism_from,
     realism_options,
+    run_scenario,
     scenario_arguments,
 )
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
@@ -67,12 +67,7 @@ def main() -> None:
                         help="largest edge offset |(e_ys, r - r0)| the calibration ramps find, "
                         "mm (default 1; the ramps grow with it)")
     realism_options(parser)
-    args = parser.parse_args()
-    try:
-        report(args)
-    except MachineSimError as error:
-        print(f"error: {error}", file=sys.stderr)
-        sys.exit(2)
+    run_scenario(report, parser.parse_args())
 
 
 def report(args) -> None:

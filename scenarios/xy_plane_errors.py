@@ -25,7 +25,6 @@ noise off the laser readings are ideal (no 1 nm display rounding either).
 from __future__ import annotations
 
 import io
-import sys
 import time
 from pathlib import Path
 
@@ -35,7 +34,6 @@ from machinesim import Lab
 from machinesim._io import write_atomic
 from machinesim.budget import realism_budget
 from machinesim.errors import ErrorModel
-from machinesim.exceptions import MachineSimError
 from machinesim.experiment import run
 from machinesim.procedures.pyramid_windows import WINDOWS
 from machinesim.procedures.xy_plane_errors import XYPlaneErrors, compensations
@@ -45,7 +43,13 @@ from machinesim.procedures.xy_plane_measurements import (
     PLATE,
     measure_xy_plane,
 )
-from machinesim.report import ReportFolder, realism_from, realism_options, scenario_arguments
+from machinesim.report import (
+    ReportFolder,
+    realism_from,
+    realism_options,
+    run_scenario,
+    scenario_arguments,
+)
 
 DEFAULT_ERRORS = (Path(__file__).resolve().parents[1] / "models" / "errors"
                   / "xy_plane_grooving_4axis.toml")
@@ -55,12 +59,7 @@ UM = 1e-6
 def main() -> None:
     parser = scenario_arguments(__doc__.splitlines()[0], "reports/xy_plane_errors")
     realism_options(parser)
-    args = parser.parse_args()
-    try:
-        report(args)
-    except MachineSimError as error:
-        print(f"error: {error}", file=sys.stderr)
-        sys.exit(2)
+    run_scenario(report, parser.parse_args())
 
 
 def report(args) -> None:

@@ -78,60 +78,58 @@ TABLE5 = {"before": (-3.5 * UM, -3.5 * UM, 100 * UM), "after": (-0.25 * UM, -0.2
 
 
 @dataclass(frozen=True)
-class TestSphere:
-    """The tool test: a sphere turned with the part's tool, read by the interferometer."""
+class TestPiece:
+    """A tool test piece: a designed surface turned over ``turned_radius`` with the part's
+    tool (Constant Angle points), read by the interferometer over +-``read_half_width``."""
 
-    radius: float = 2e-3
     turned_radius: float = 0.12e-3
     feed: float = 1 * UM
     angle_step: float = 0.02
     read_half_width: float = 0.1e-3
     pixel: float = 0.5 * UM
-    #: a point this far above the fitted surface is uncut core (the interferometer's noise
-    #: is 0.5 nm: 100 sigma)
-    core_step: float = 50 * NM
-
     #: the stock's top over the test piece, m
     top: float = 1 * UM
 
     def design(self) -> sp.Design:
-        return sp.sphere(self.radius)
+        raise NotImplementedError
 
     def path(self, nose_radius: float) -> sp.ToolPath:
+        """The test's tool tips, compensated for ``nose_radius``."""
         spiral = sp.Spiral(self.turned_radius, self.feed)
         theta = sp.constant_angle(spiral, self.angle_step)
         return sp.tool_path(sp.cutting_points(self.design(), spiral, theta), nose_radius)
 
 
 @dataclass(frozen=True)
-class TestPlane:
-    """The centre-height test: a plane tilted along x turned with the part's tool, read by
-    the interferometer; its twist about the centre gives the signed dy
-    (`machinesim.identification.turning_tool.identify_centre_height`)."""
+class TestSphere(TestPiece):
+    """The tool test: a sphere, whose form shows dx and dR and whose uncut core shows |dy|."""
+
+    radius: float = 2e-3
+    #: a point this far above the fitted surface is uncut core (the interferometer's noise
+    #: is 0.5 nm: 100 sigma)
+    core_step: float = 50 * NM
+
+    def design(self) -> sp.Design:
+        return sp.sphere(self.radius)
+
+
+@dataclass(frozen=True)
+class TestPlane(TestPiece):
+    """The centre-height test: a plane tilted along x, whose twist about the centre gives the
+    signed dy (`machinesim.identification.turning_tool.identify_centre_height`)."""
 
     slope: float = 0.02
-    turned_radius: float = 0.12e-3
-    feed: float = 1 * UM
-    angle_step: float = 0.02
-    read_half_width: float = 0.1e-3
-    pixel: float = 1 * UM
     #: points nearer the axis are left out: the uncut core and the centre, where the nose
     #: reaches across the axis (with 10 um the fit of dy = -3.5 um is 4 % off, with 30 um
     #: within 0.1 nm, noise off)
     core: float = 30 * UM
-    top: float = 10 * UM
 
     def design(self) -> sp.Design:
         return sp.tilted_plane(self.slope)
 
-    def path(self, nose_radius: float) -> sp.ToolPath:
-        spiral = sp.Spiral(self.turned_radius, self.feed)
-        theta = sp.constant_angle(spiral, self.angle_step)
-        return sp.tool_path(sp.cutting_points(self.design(), spiral, theta), nose_radius)
-
 
 TEST_SPHERE = TestSphere()
-TEST_PLANE = TestPlane()
+TEST_PLANE = TestPlane(pixel=1 * UM, top=10 * UM)
 
 #: The measured profile: theta = 0, r from 150 to 350 um, every 0.5 um.
 MEASURE_LINE = ((150 * UM, 0.0), (350 * UM, 0.0), 0.5 * UM)
