@@ -113,7 +113,8 @@ class Lab:
             self.machine.check_errors(own)
             self.__background = own
             truth = _realism.add_errors(injected, own)
-        self.__truth = truth
+        self.__truth = truth  # the machine as it is: `adjust_tool` moves its tool
+        self.__set_up = truth  # as it was set up: what `reveal` gives
         self.__adjusted = np.zeros(3)
         if servo is not None and not callable(getattr(servo, "follow", None)):
             raise InputError(f"Expected a servo with follow(t, q) (a ServoModel), got "
@@ -337,15 +338,7 @@ class Lab:
             alone (what a scenario chose). Without background errors the two are the same.
         Tool moves made by `adjust_tool` are not in it (`reveal_adjustments`).
         """
-        if not self.__adjusted.any():
-            return self.__truth if background else self.__injected
-        from machinesim.errors import ToolSetting
-
-        truth = self.__truth if background else self.__injected
-        return truth.__class__(ToolSetting(truth.tool.offset - self.__adjusted
-                                           if background else truth.tool.offset,
-                                           truth.tool.rotation), truth.workpiece,
-                               truth.location, truth.component, truth.tool_geometry)
+        return self.__set_up if background else self.__injected
 
     def reveal_adjustments(self):
         """The sum of the tool moves `adjust_tool` made (tool_mount X, Y, Z, m), as made."""
