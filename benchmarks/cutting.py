@@ -16,12 +16,16 @@ e. Case a end to end: an NC program of the 2000 grooves (each: rapid over its st
    10 x 40 x 2 mm block. Goals (issue 12): >= 10,000 grooves/s end to end, and the whole
    call within twice the engine's own time (`CutReport.engine_s`) in the same run.
 f. Slanted pyramids end to end (issue 14): 500 x 500 crossing grooves, 50 um pitch, 25 um
-   deep, as an NC program cut by `machinesim.cut` on grooving_4axis with a squareness error
-   of Y to X (EC0Y = 100 urad), the first set along X at C = 0.3 deg, the second at
-   C = 90.6 deg: both sets slanted on the block, 90.3 deg apart, so the height field grids
-   them in their own directions. Goal >= 1,000,000 output triangles/s end to end. In the same
-   run the boolean engine and the relief cut a 100 x 100 pattern of the same slants (paths
-   built directly) for comparison.
+   deep, as an NC program cut by `machinesim.cut` on grooving_4axis with the squareness and
+   C-table errors of paper 003's default model (`models/errors/xy_plane_grooving_4axis.toml`:
+   EC0Y, the C table's offsets and tilts EX0C, EY0C, EA0C, EB0C and its wobble EAC(C),
+   EBC(C)), the first set along X at C = 0.3 deg, the second at C = 90.6 deg: both sets
+   slanted on the block, 90.3 deg apart, and sloped along their length by the table's tilt,
+   so the height field grids them in their own directions with a slope term each. Goal
+   >= 1,000,000 output triangles/s end to end. In the same run: the boolean engine and the
+   relief on a 100 x 100 pattern of the same slants (paths built directly, level), and, once,
+   the 500 x 500 program with that model whole (its straightness and yaw tables bend and fan
+   the grooves, which only the boolean engine cuts).
 
 a, b and d are run twice, each in its own process: with the default engine (``method="auto"``,
 which meshes straight grooves across a block as an exact height field,
@@ -55,6 +59,8 @@ import statistics
 import subprocess
 import sys
 import time
+import tomllib
+from pathlib import Path
 
 import manifold3d
 import numpy as np
@@ -188,9 +194,23 @@ def run_end_to_end(repeat: int) -> dict:
             "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
 
 
-#: Case f: C positions of the two groove sets (rad) and the squareness error.
+#: Case f: C positions of the two groove sets (rad).
 SLANT_C = (math.radians(0.3), math.radians(90.6))
-SLANT_ERRORS = {"location": {"Y": {"EC0Y_urad": 100.0}}}
+#: Case f: paper 003's default error model; its squareness and C-table errors slant and
+#: slope the grooves.
+XY_PLANE_ERRORS = (Path(__file__).resolve().parents[1] / "models" / "errors"
+                   / "xy_plane_grooving_4axis.toml")
+
+
+def slant_errors(whole: bool = False):
+    """Case f's errors: the squareness and C-table part of `XY_PLANE_ERRORS`, or all of it."""
+    from machinesim.errors.model import ErrorModel
+
+    with open(XY_PLANE_ERRORS, "rb") as handle:
+        table = tomllib.load(handle)
+    if not whole:
+        table = {"location": table["location"], "component": {"C": table["component"]["C"]}}
+    return ErrorModel.from_dict(table)
 
 
 def pyramid_program(count: int, pitch: float = 50e-6, depth: float = 25e-6,
@@ -234,11 +254,10 @@ def run_slanted(repeat: int) -> dict:
     """Case f: machinesim.cut end to end, and both engines on a smaller pattern."""
     from machinesim import load_machine
     from machinesim.cutting import cut
-    from machinesim.errors.model import ErrorModel
 
     count = 500
     program, machine = pyramid_program(count), load_machine("grooving_4axis")
-    errors = ErrorModel.from_dict(SLANT_ERRORS)
+    errors = slant_errors()
     side = count * 50e-6
     stock = block(side, side, 2e-3, origin=(-side / 2, -side / 2, 0.0))
     times, engine, cpu = [], [], []
@@ -257,12 +276,18 @@ def run_slanted(repeat: int) -> dict:
         small_part, small_report = remove(small_stock, V90, small_paths, method=method)
         small[small_report.method] = (time.perf_counter() - start,
                                       len(small_part.mesh()[1]))
+    start = time.perf_counter()
+    whole_part, whole_report = cut(program, machine, tool=V90, stock=stock,
+                                   errors=slant_errors(whole=True))
+    whole = (whole_report.engine, time.perf_counter() - start, len(whole_part.mesh()[1]))
     return {"scenario": "f", "method": report.engine, "median_s": statistics.median(times),
             "times_s": times, "median_engine_s": statistics.median(engine),
             "median_cpu_s": statistics.median(cpu),
             "triangles": len(part.mesh()[1]), "sweeps_cut": report.sweeps,
             "families": [f.normal.tolist() for f in part.reliefs[0].families]
-            if part.reliefs else [], "small": small,
+            if part.reliefs else [],
+            "slopes": [f.slope for f in part.reliefs[0].families] if part.reliefs else [],
+            "small": small, "whole_model": whole,
             "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
 
 
@@ -376,9 +401,14 @@ def run_slanted_child(args) -> None:
           f"{f['triangles']} triangles: {f['triangles'] / f['median_s']:,.0f} triangles/s "
           f"(cpu median {f['median_cpu_s']:.3f} s: "
           f"{f['triangles'] / f['median_cpu_s']:,.0f} per cpu second); "
-          f"groove normals {[[round(c, 6) for c in n] for n in f['families']]}; "
+          f"groove normals {[[round(c, 6) for c in n] for n in f['families']]}, slopes "
+          f"{', '.join(f'{a * 1e6:.2f} urad' for a in f['slopes'])}; "
           f"100 x 100 of the same slants: boolean {b_s:.2f} s ({b_tri} triangles), relief "
-          f"{r_s:.3f} s ({r_tri} triangles); peak RSS {f['peak_rss_mb']:.0f} MB", flush=True)
+          f"{r_s:.3f} s ({r_tri} triangles); the whole error model (grooves bent and fanned "
+          f"by straightness and yaw), once: {f['whole_model'][0]} {f['whole_model'][1]:.1f} s "
+          f"({f['whole_model'][2]} triangles, "
+          f"{f['whole_model'][2] / f['whole_model'][1]:,.0f} triangles/s); peak RSS "
+          f"{f['peak_rss_mb']:.0f} MB", flush=True)
 
 
 def run_one(name: str, method: str, args, boolean_triangles: dict) -> None:

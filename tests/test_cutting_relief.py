@@ -170,7 +170,7 @@ def test_a_part_too_large_to_build_is_refused_with_advice(monkeypatch):
 
 
 @pytest.mark.parametrize("case", ["short groove", "turned block", "through the bottom",
-                                  "plunge", "descending"])
+                                  "plunge", "two slopes"])
 def test_other_cuts_fall_back_to_the_boolean_engine(case):
     stock = block(3e-3, 3e-3, 0.5e-3)
     paths = [groove(0, 1.5e-3, 10e-6)]
@@ -183,8 +183,9 @@ def test_other_cuts_fall_back_to_the_boolean_engine(case):
     elif case == "plunge":
         paths.append(np.array([pose((1e-3, 1e-3, 1e-6)), pose((1e-3, 1e-3, -5e-6))]))
     else:
-        # Diagonal and deeper at its end: not a groove of one profile (slanted grooves that
-        # stay level are the relief's, tests/test_relief_slanted.py).
-        paths = [np.array([pose((-1e-3, -1e-3, -5e-6)), pose((4e-3, 4e-3, -15e-6))])]
+        # Two grooves along one direction at different slopes: not one extrusion (grooves
+        # of one direction at one slope are the relief's, tests/test_relief_slanted.py).
+        paths = [np.array([pose((-1e-3, -1e-3, -5e-6)), pose((4e-3, 4e-3, -15e-6))]),
+                 np.array([pose((-1e-3, 0.0, -5e-6)), pose((4e-3, 5e-3, -25e-6))])]
     _, report = remove(stock, VTool(math.pi / 2), paths)
     assert report.method == "boolean"

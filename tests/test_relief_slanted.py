@@ -227,3 +227,153 @@ def test_clipping_splits_a_shared_edge_at_one_vertex():
                for k in range(n) if f[k]]
     assert all(points[a, 0] == 0.0 and points[b, 0] == 0.0 for a, b in on_side)
     assert len(on_side) == 2
+
+
+# ------------------------------------------------------------ sloped grooves (tilted table)
+
+def tilted(paths, tilt_x: float, tilt_y: float, about=(1.5e-3, 1.5e-3, 0.0)):
+    """The paths as a table tilted by ``tilt_x`` about X and ``tilt_y`` about Y (rad) leaves
+    them on the block: positions turned about ``about``, the tool turned with them, so every
+    groove of one direction slopes alike and keeps its orientation."""
+    cx, sx, cy, sy = math.cos(tilt_x), math.sin(tilt_x), math.cos(tilt_y), math.sin(tilt_y)
+    turn_xy = (np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+               @ np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]]))
+    centre = np.array(about)
+    out = []
+    for path in paths:
+        moved = path.copy()
+        moved[:, :3, :3] = turn_xy @ path[:, :3, :3]
+        moved[:, :3, 3] = (path[:, :3, 3] - centre) @ turn_xy.T + centre
+        out.append(moved)
+    return out
+
+
+@pytest.mark.parametrize(("first", "second", "tilt"), [
+    (0.3, 0.3 + math.pi / 2 + 0.2, (2e-3, -3e-3)),          # arbitrary, steep tilts
+    (math.radians(0.3), math.radians(90.3) + 1e-4, (8e-6, -6e-6)),  # a C table's tilts
+    (0.0, math.pi / 2, (0.0, 4e-3)),                         # along X and Y, one sloped
+], ids=["arbitrary", "c-table", "axes"])
+def test_sloped_grooves_are_the_boolean_solid(first, second, tilt):
+    stock = block(3e-3, 3e-3, 0.5e-3)
+    paths = tilted(random_pattern(7, first, second), *tilt)
+    relief, by_relief = remove(stock, V90, paths)
+    boolean, by_boolean = remove(stock, V90, paths, method="boolean")
+    assert (by_relief.method, by_boolean.method) == ("relief", "boolean")
+    slopes = [f.slope for f in relief.reliefs[0].families]
+    assert len(slopes) == 2 and any(s != 0.0 for s in slopes)
+    assert_same_solid(relief, boolean)
+    assert by_relief.removed_volume == pytest.approx(by_boolean.removed_volume, rel=1e-9)
+    assert_closed(relief)
+
+
+def test_pyramids_on_a_tilted_table_rise_through_the_top_like_the_boolean_solid():
+    # Ridges exactly at the top when level (pitch = 2 depth): tilted 20 urad, they stand
+    # above the top on one side of the block (cut flat there) and below it on the other,
+    # so the surface is cut at the top along lines across the grid's cells.
+    pitch, depth = 50e-6, 25e-6
+    offsets = pitch * (np.arange(16) - 7.5)
+    level = (grooves(0.01, offsets, [depth] * 16, centre=(0.4e-3, 0.4e-3), half=1.5e-3)
+             + grooves(0.01 + math.pi / 2 + 1e-4, offsets, [depth] * 16,
+                       centre=(0.4e-3, 0.4e-3), half=1.5e-3))
+    paths = tilted(level, 2e-5, 1.5e-5, about=(0.4e-3, 0.4e-3, 0.0))
+    stock = block(0.8e-3, 0.8e-3, 0.2e-3)
+    part, report = remove(stock, V90, paths)
+    boolean, _ = remove(stock, V90, paths, method="boolean")
+    assert report.method == "relief"
+    vertices, _ = part.mesh()
+    top = vertices[vertices[:, 2] > -0.1e-3, 2]
+    assert top.max() == 0.0 and np.sum(top == 0.0) > 100  # flat strips left on the top
+    x = np.linspace(0.0, 0.8e-3, 201)[1:-1] + 1.234e-9
+    ha, hb = height_map(part, x, x), height_map(boolean, x, x)
+    np.testing.assert_allclose(ha, hb, atol=HEIGHT_TOL)
+    assert part.volume == pytest.approx(boolean.volume, rel=VOLUME_REL)
+    assert_closed(part)
+
+
+@pytest.mark.parametrize(("h0", "h1"), [(10e-6, 30e-6), (20e-6, -10e-6)],
+                         ids=["deeper", "out through the top"])
+def test_a_sloped_groove_removes_the_integral_of_its_section(h0, h1):
+    # A 90-deg V groove along X whose depth below the top runs linearly from h0 at x = 0 to
+    # h1 at x = L: the section at x is the V, area h(x)^2 where h > 0, so the removed
+    # volume is the integral of max(h, 0)^2 over [0, L], by hand. Lines ending outside the
+    # block at the same slope.
+    side = 3e-3
+    stock = block(side, side, 0.5e-3)
+    slope = (h0 - h1) / side                      # dz/dx of the tool's edge
+    ends = np.array([-1e-3, side + 1e-3])
+    paths = [np.array([pose_at((x, 1.5e-3, -h0 + slope * x)) for x in ends])]
+    part, report = remove(stock, V90, paths)
+    assert report.method == "relief"
+    a = 0.0 if h1 >= 0.0 else h0 / (h0 - h1) * side  # where the groove leaves the top
+    if h1 >= 0.0:
+        expected = side * (h0**2 + h0 * h1 + h1**2) / 3.0
+    else:
+        expected = a * h0**2 / 3.0
+    assert report.removed_volume == pytest.approx(expected, rel=1e-12)
+    assert stock.volume - part.volume == pytest.approx(expected, rel=1e-9)
+    assert_closed(part)
+
+
+def pose_at(position) -> np.ndarray:
+    pose = np.eye(4)
+    pose[:3, 3] = position
+    return pose
+
+
+def test_grooves_of_one_direction_at_two_slopes_fall_back_to_the_boolean_engine():
+    stock = block(3e-3, 3e-3, 0.5e-3)
+    ends = np.array([-1e-3, 4e-3])
+    paths = [np.array([pose_at((x, y, -10e-6 + slope * x)) for x in ends])
+             for y, slope in ((1e-3, 1e-3), (2e-3, 2e-3))]
+    _, report = remove(stock, V90, paths)
+    assert report.method == "boolean"
+
+
+def test_a_pyramid_window_on_a_tilted_c_table_is_cut_by_relief_as_by_the_boolean_engine(
+        monkeypatch):
+    # The machine's own route: the C table's location errors (tilts EA0C, EB0C, offsets)
+    # and the squareness of Y slope and slant both groove sets; relief against the boolean
+    # engine on the same program.
+    from machinesim import load_machine
+    from machinesim.cam.pyramids import PyramidPlan, pyramid_program
+    from machinesim.cutting import cut
+    from machinesim.cutting import engine
+    from machinesim.errors import ErrorModel
+
+    machine = load_machine("grooving_4axis")
+    errors = ErrorModel.from_dict({"location": {
+        "Y": {"EC0Y_urad": 24.0},
+        "C": {"EX0C_um": 3.0, "EY0C_um": -2.0, "EA0C_urad": 80.0, "EB0C_urad": -60.0}}})
+    plan = PyramidPlan(window=0.4e-3)
+    program = pyramid_program(machine, (0.0, 0.0), plan)
+    stock = "block:0.4x0.4x1@-0.2,-0.2,0"  # top at z = 0
+    part, report = cut(program, machine, "v:90", stock, errors)
+    assert report.engine == "relief"
+    assert any(f.slope != 0.0 for f in part.reliefs[0].families)
+    monkeypatch.setattr(engine, "cut_reliefs", lambda *args, **kwargs: None)
+    boolean, by_boolean = cut(program, machine, "v:90", stock, errors)
+    assert by_boolean.engine == "boolean"
+    assert part.volume == pytest.approx(boolean.volume, rel=VOLUME_REL)
+    x = np.linspace(-0.2e-3, 0.2e-3, 121)[1:-1] + 1.234e-9
+    np.testing.assert_allclose(height_map(part, x, x), height_map(boolean, x, x),
+                               atol=HEIGHT_TOL)
+
+
+def test_a_second_program_on_a_tilted_table_extends_the_sloped_envelopes():
+    stock = block(3e-3, 3e-3, 0.5e-3)
+    first, second = 0.25, 0.25 + math.pi / 2 - 0.1
+    rng = np.random.default_rng(19)
+    a = tilted(grooves(first, rng.uniform(-2e-3, 2e-3, 5), rng.uniform(5e-6, 30e-6, 5)),
+               3e-4, 2e-4)
+    b = tilted(grooves(second, rng.uniform(-2e-3, 2e-3, 5), rng.uniform(5e-6, 30e-6, 5))
+               + grooves(first, rng.uniform(-2e-3, 2e-3, 3), rng.uniform(5e-6, 30e-6, 3)),
+               3e-4, 2e-4)
+    once, _ = remove(stock, V90, a)
+    twice, report = remove(once, V90, b)
+    assert report.method == "relief" and len(twice.reliefs[0].families) == 2
+    boolean, _ = remove(stock, V90, a + b, method="boolean")
+    assert_same_solid(twice, boolean)
+    assert report.removed_volume == pytest.approx(once.volume - twice.volume, rel=1e-9)
+    # The same direction at another slope on that part is the boolean engine's.
+    _, other = remove(twice, V90, tilted(grooves(first, [0.0], [10e-6]), -3e-4, 2e-4))
+    assert other.method == "boolean"

@@ -1,13 +1,15 @@
 """Exact height-field cutting of straight grooves that run right across a block.
 
-A tool translated in a straight line in XY, from wholly before the block to wholly beyond
-it, removes over the block an extrusion of one profile: the lower boundary of the tool's
-shadow on the plane across its travel (`machinesim.cutting.profiles.lower_hull`). Grooves
-that share a direction d form a family; across them, at s = n . (x, y) with
-n = (-d_y, d_x), they leave the lower envelope F(s) of their profiles. With two families in
-any two directions the top of the cut block is
+A tool translated in a straight line, from wholly before the block to wholly beyond it in
+XY, removes over the block an extrusion of one profile: the lower boundary of the tool's
+shadow on the plane across its travel, projected along the travel
+(`machinesim.cutting.profiles.lower_hull`). Grooves that share a direction d in XY and a
+slope a along it (dz/dt, t = d . (x, y); 0 when cut level, non-zero on a tilted table) form
+a family; across them, at s = n . (x, y) with n = (-d_y, d_x), they leave the lower
+envelope F(s) of their profiles, and the family's surface is F(s) + a t. With two families
+in any two directions the top of the cut block is
 
-    z = min(top, F_1(s_1), F_2(s_2)),
+    z = min(top, F_1(s_1) + a_1 t_1, F_2(s_2) + a_2 t_2),
 
 piecewise linear on the affine grid of the two envelopes' breakpoints and meshed exactly,
 cell by cell, with the cells on the block's sides clipped to it
@@ -20,7 +22,7 @@ A cut qualifies when the stock is an axis-aligned box or a part this module made
 sweep that can reach the stock is such a full-span straight groove whose profile rises above
 the top at both ends and stays above the bottom, and the grooves, with those the part was
 cut with before, run in at most two directions (`MAX_FAMILIES`) at least `MIN_FAMILY_SINE`
-apart. Anything else returns None and the caller uses the boolean engine. A relief keeps its
+apart, all grooves of one direction at one slope (within `STRAIGHT_REL`). Anything else returns None and the caller uses the boolean engine. A relief keeps its
 envelopes with the part (`Part.reliefs`), so a second program of grooves on the same part is
 cut the same way.
 """
@@ -36,6 +38,7 @@ from machinesim.cutting.relief_mesh import (
     Family,
     Relief,
     across,
+    along,
     domain,
     grid_families,
     mesh_relief,
@@ -158,11 +161,22 @@ def _orientations(flat: np.ndarray, used: np.ndarray):
     return unique, which
 
 
-def _rebuilt(old: Relief, box, normals, segments) -> Relief:
+def _raised_top(normal, slope: float, box, top: float) -> float:
+    """The level a family's envelope is built under: ``top`` for a level family; for a
+    sloped one high enough that no slope term over ``box`` brings it down to ``top`` (the
+    mesher then cuts the surface at the real top)."""
+    if slope == 0.0:
+        return top
+    t0, t1 = span(np.array([normal[1], -normal[0]]), *box)
+    return top + 2.0 * abs(slope) * max(abs(t0), abs(t1), abs(top))
+
+
+def _rebuilt(old: Relief, box, normals, segments, slopes) -> Relief:
     """Relief over ``box`` (within ``old``) with the old envelopes and new profile segments.
 
-    ``normals`` are the families' normals; ``segments[k]`` lists (u0, z0, u1, z1) pieces of
-    new profiles across family k. An old family's normal is one of ``normals``.
+    ``normals`` and ``slopes`` are the families'; ``segments[k]`` lists (u0, z0, u1, z1)
+    pieces of new profiles across family k, heights at t = 0. An old family's normal is one
+    of ``normals``, at the same slope.
     """
     families = []
     for k, normal in enumerate(normals):
@@ -174,10 +188,41 @@ def _rebuilt(old: Relief, box, normals, segments) -> Relief:
             continue
         u0, z0, u1, z1 = (np.concatenate([np.ravel(p[i]) for p in pieces]) for i in range(4))
         lo, hi = domain(normal, *box)
-        u, z = envelope(u0, z0, u1, z1, lo, hi, old.top)
-        if np.any(z < old.top):
-            families.append(Family(normal, u, z))
+        raised = _raised_top(normal, slopes[k], box, old.top)
+        u, z = envelope(u0, z0, u1, z1, lo, hi, raised)
+        if np.any(z < raised):
+            families.append(Family(normal, u, z, slopes[k]))
     return Relief(*box, old.bottom, old.top, tuple(families))
+
+
+def _lowest_slope_term(family: Family, box) -> float:
+    """Least of slope * t over the rectangle (0 for a level family), m."""
+    t0, t1 = span(np.array([family.normal[1], -family.normal[0]]), *box)
+    return min(family.slope * t0, family.slope * t1)
+
+
+def _family_slopes(normals, chosen, member, move, olds) -> list[float] | None:
+    """Each family's slope along its direction (dz/dt): its old envelope's, or else its
+    first new groove's; a groove within `STRAIGHT_REL` of level counts as level (0). None
+    when a groove's slope differs from it by more than `STRAIGHT_REL`: grooves of one
+    direction at several slopes are not one extrusion."""
+    slopes = []
+    for k, normal in enumerate(normals):
+        d = np.array([normal[1], -normal[0]])
+        known = [float(f.slope) for old in olds for f in old.families
+                 if np.array_equal(f.normal, normal)]
+        mine = chosen[member == k]
+        travel = move[mine, :2] @ d
+        rise = move[mine, 2] / travel
+        rise[np.abs(move[mine, 2]) <= STRAIGHT_REL * np.abs(travel)] = 0.0
+        every = np.concatenate([known, rise])
+        if not len(every):
+            slopes.append(0.0)
+            continue
+        if np.any(np.abs(every - every[0]) > STRAIGHT_REL):
+            return None
+        slopes.append(float(every[0]))
+    return slopes
 
 
 def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.ndarray,
@@ -229,6 +274,18 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
         low, high = pose_bounds()
     sweep_low, sweep_high = np.minimum(low[a], low[b]), np.maximum(high[a], high[b])
     tops = np.array([old.top for old, _ in rects])
+    # Poses where no part of the tool is below the stock's top.
+    above = ~np.isfinite(low[:, 2]) | (low[:, 2] >= tops.max())
+    if pose_bounds is not None:
+        # A sloped sweep's reaching part is not the union of its poses' reaching parts (an
+        # end may lie wholly above the stock while the tool cuts on the way there): it
+        # takes the whole tool's bounds at both ends.
+        sloped = np.flatnonzero(origin[a, 2] != origin[b, 2])
+        if len(sloped):
+            for end in (a[sloped], b[sloped]):
+                body = np.einsum("nij,kj->nki", rotation[end], vertices) + origin[end, None]
+                sweep_low[sloped] = np.minimum(sweep_low[sloped], body.min(axis=1))
+                sweep_high[sloped] = np.maximum(sweep_high[sloped], body.max(axis=1))
     touch = ((sweep_low[:, None, 2] < tops[None, :])
              & (sweep_low[:, None, 0] <= boxes[None, :, 1])
              & (sweep_high[:, None, 0] >= boxes[None, :, 0])
@@ -248,7 +305,7 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
     same = np.abs(flat[b] - flat[a]).max(axis=1) <= SAME_ORIENTATION
     move = origin[b] - origin[a]
     planar = np.hypot(move[:, 0], move[:, 1])
-    straight = same & (planar > 0.0) & (np.abs(move[:, 2]) <= STRAIGHT_REL * planar)
+    straight = same & (planar > 0.0)
     if np.any(relevant & ~straight):
         return None
     chosen = np.flatnonzero(relevant)
@@ -272,6 +329,9 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
     if len(normals) == 2 and abs(normals[0][0] * normals[1][1]
                                  - normals[0][1] * normals[1][0]) < MIN_FAMILY_SINE:
         return None
+    slopes = _family_slopes(normals, chosen, member, move, [old for old, _ in rects])
+    if slopes is None:
+        return None
     segments: list[list[list]] = [[[] for _ in normals] for _ in rects]
     n_cut = n_degenerate = 0
     swept = 0.0
@@ -280,21 +340,27 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
         if not len(mine):
             continue
         d = np.array([normal[1], -normal[0]])  # along the grooves
+        slope = slopes[k]
         forward = move[mine, :2] @ d > 0.0
         # Full span: the tool is wholly before the rectangle at the start of the move and
-        # wholly beyond it at the end, along d (its bounding box's extent along d).
+        # wholly beyond it at the end, along d (its bounding box's extent along d), or, for
+        # a sloped groove, wholly above the stock there: the line goes on rising beyond
+        # that end, so the groove leaves through the top as the extrusion does.
         start, end = np.where(forward, a[mine], b[mine]), np.where(forward, b[mine], a[mine])
         before = _extent(low[start], high[start], d, np.maximum)
         beyond = _extent(low[end], high[end], d, np.minimum)
         for r, (_, box) in enumerate(rects):
             t0, t1 = span(d, *box)
-            spans = (before <= t0) & (beyond >= t1)
+            spans = (((before <= t0) | above[start]) & ((beyond >= t1) | above[end]))
             if np.any(touch[mine, r] & ~spans):
                 return None
         for key in np.unique(which[a[mine]]):
             group = mine[which[a[mine]] == key]
             shape = turned[key]
-            hull = lower_hull(across(normal, shape[:, 0], shape[:, 1]), shape[:, 2])
+            # The shadow projected along the travel: a vertex at t_v along d, z_v, meets
+            # the plane t = 0 at z_v - slope t_v.
+            hull = lower_hull(across(normal, shape[:, 0], shape[:, 1]),
+                              shape[:, 2] - slope * along(normal, shape[:, 0], shape[:, 1]))
             if len(hull) < 2:
                 n_degenerate += len(group)  # every chosen sweep reaches a rectangle
                 continue
@@ -302,21 +368,28 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
                 reach = group[touch[group, r]]
                 if not len(reach):
                     continue
-                if min(hull[0, 1], hull[-1, 1]) + origin[a[reach], 2].min() < old.top:
+                t0, t1 = span(d, *box)
+                # the groove at t = 0 (its profile's height there), and at its lowest over
+                # the rectangle
+                dz = origin[a[reach], 2] - slope * along(normal, origin[a[reach], 0],
+                                                         origin[a[reach], 1])
+                if min(hull[0, 1], hull[-1, 1]) + dz.min() + min(slope * t0, slope * t1) \
+                        < old.top:
                     return None  # a profile end below the top: the groove has a wall there
                 du = across(normal, origin[a[reach], 0], origin[a[reach], 1])[:, None]
-                dz = origin[a[reach], 2][:, None]
+                dz = dz[:, None]
                 piece = (hull[:-1, 0] + du, hull[:-1, 1] + dz, hull[1:, 0] + du,
                          hull[1:, 1] + dz)
                 segments[r][k].append(piece)
-                u0, z0, u1, z1 = clip_to_top(*(np.ravel(p) for p in piece), old.top)
-                t0, t1 = span(d, *box)
-                swept += (t1 - t0) * float(np.sum((u1 - u0) * (old.top - (z0 + z1) / 2.0)))
+                middle = slope * (t0 + t1) / 2.0  # the profile's height change at mid-span
+                u0, z0, u1, z1 = clip_to_top(*(np.ravel(p) for p in piece), old.top - middle)
+                swept += (t1 - t0) * float(np.sum((u1 - u0)
+                                                  * (old.top - middle - (z0 + z1) / 2.0)))
             n_cut += len(group)
     new = []
     for r, (old, box) in enumerate(rects):
-        relief = _rebuilt(old, box, normals, segments[r])
-        if any(f.z.min() <= old.bottom for f in relief.families):
+        relief = _rebuilt(old, box, normals, segments[r], slopes)
+        if any(f.z.min() + _lowest_slope_term(f, box) <= old.bottom for f in relief.families):
             return None  # cut through the bottom: the walls would not close
         new.append(relief)
     cells = 0
@@ -330,7 +403,8 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
             "be measured with roi=[(xmin, xmax, ymin, ymax), ...] (m) or --roi (mm)",
             key="roi")
     part, cut_after = relief_part(tuple(new))
-    before = tuple(_rebuilt(old, box, normals, [[] for _ in normals]) for old, box in rects)
+    before = tuple(_rebuilt(old, box, normals, [[] for _ in normals], slopes)
+                   for old, box in rects)
     uncut = all(not r.families for r in before)
     cut_before = 0.0 if uncut else relief_part(before)[1]
     stock_volume = sum((r.x1 - r.x0) * (r.y1 - r.y0) * (r.top - r.bottom) for r in before)

@@ -4,14 +4,20 @@ Grooves that share a direction d in XY form a family. Across them the coordinate
 s = n . (x, y), n = (-d_y, d_x), and the family leaves the envelope F(s), piecewise linear
 (`machinesim.cutting.profiles`). The cut top of the block is
 
-    z = min(top, F_1(s_1), F_2(s_2)),
+    z = min(top, F_1(s_1) + a_1 t_1, F_2(s_2) + a_2 t_2),
 
-the envelopes already holding the top. The breakpoints of F_1 are lines s_1 = u_i across the
+with t = d . (x, y) along each family and a its grooves' common slope along it (0 for
+grooves cut level; a tilted table, for instance, slopes them). Level families' envelopes
+already hold the top. The breakpoints of F_1 are lines s_1 = u_i across the
 block, those of F_2 lines s_2 = v_j; they cut the plane into the parallelograms of an affine
 grid, and inside each F_1 and F_2 are both linear, so the top there is one plane or two
-planes that meet on the straight line F_1 = F_2. Each cell is meshed exactly as that one or
-two convex polygons, in vectorised numpy, in (s_1, s_2) coordinates mapped back to XY by the
-inverse of the 2 x 2 matrix of normals (exact when the families run along X and Y).
+planes that meet on the straight line F_1 = F_2 (the slope terms are linear everywhere, so
+this holds for sloped families too). Each cell is meshed exactly as that one or two convex
+polygons, in vectorised numpy, in (s_1, s_2) coordinates mapped back to XY by the inverse of
+the 2 x 2 matrix of normals (exact when the families run along X and Y). A sloped family's
+envelope is built under a raised top that its slope term cannot bring below the real one,
+and the meshed surface is then cut at z = top (`_clip_at_top`): every triangle the level
+z = top crosses is split on that line, and what lies above it is laid on the top.
 
 The block is an axis-aligned rectangle R in XY. Cells wholly inside R are meshed directly.
 Cells that cross or touch its sides are clipped to it (Sutherland-Hodgman, vectorised over
@@ -51,11 +57,15 @@ class Family:
     u, z : ndarray
         Breakpoints of the envelope, strictly increasing s over the block's range of s
         (`domain`), and the envelope there (m).
+    slope : float
+        The grooves' common slope along d (dz/dt, t = d . (x, y)): the family's surface is
+        z(s) + slope * t. 0 for grooves cut level.
     """
 
     normal: np.ndarray
     u: np.ndarray
     z: np.ndarray
+    slope: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -82,6 +92,11 @@ class Relief:
 def across(normal, x, y):
     """s = n . (x, y), one formula everywhere (exactly y or -x for the axis normals)."""
     return normal[0] * x + normal[1] * y
+
+
+def along(normal, x, y):
+    """t = d . (x, y) along a family, d = (n_y, -n_x)."""
+    return normal[1] * x - normal[0] * y
 
 
 def span(normal, x0: float, x1: float, y0: float, y1: float) -> tuple[float, float]:
@@ -200,6 +215,59 @@ def _corner_moment(points, p: int, q: int, r: int, top: float) -> np.ndarray:
     return area2 * (top - (z[p] + z[q] + z[r]) / 3.0)
 
 
+def _clip_at_top(vertices, triangles, n_top: int, top: float, cut_volume: float):
+    """The mesh with its top surface (vertices ``[0, n_top)``) cut at z = ``top``.
+
+    The surface is linear on each triangle, so min(top, z) is linear on each side of the
+    line where a triangle crosses z = top: every edge of two top vertices strictly either
+    side of the level gets one new vertex there (shared by the triangles on that edge), each
+    crossed triangle is split on the line (one crossed edge: 2 triangles, a wall under a
+    rim edge; two: 3), and every top vertex above the level is laid on it. Only triangles
+    with a vertex above the level change. Returns the vertices, the triangles and
+    ``cut_volume`` (the integral of top - z over the uncut top) made the cut top's, by the
+    `_moment` of the changed triangles before and after.
+    """
+    z = vertices[:, 2]
+    changed = np.flatnonzero((z[triangles] > top).any(axis=1))
+    kept = np.delete(triangles, changed, axis=0)
+    triangles = triangles[changed]
+    before = _moment(vertices, triangles, top)
+    a, b = triangles, triangles[:, [1, 2, 0]]              # edge k runs from a[k] to b[k]
+    crossed = (a < n_top) & (b < n_top) & ((z[a] > top) & (z[b] < top)
+                                           | (z[a] < top) & (z[b] > top))
+    lo, hi = np.minimum(a, b)[crossed], np.maximum(a, b)[crossed]
+    keys, inverse = np.unique(lo * len(vertices) + hi, return_inverse=True)
+    lo, hi = keys // len(vertices), keys % len(vertices)
+    t = (top - z[lo]) / (z[hi] - z[lo])
+    made = vertices[lo] + t[:, None] * (vertices[hi] - vertices[lo])
+    made[:, 2] = top
+    mid = np.full(triangles.shape, -1, dtype=np.int64)
+    mid[crossed] = len(vertices) + inverse.reshape(-1)
+    count = crossed.sum(axis=1)
+    pieces = [triangles[count == 0]]
+    # One crossed edge, turned to be edge 0 (v0 -> v1, point m): (v0, m, v2), (m, v1, v2).
+    one = np.flatnonzero(count == 1)
+    turn = (np.argmax(crossed[one], axis=1)[:, None] + np.arange(3)[None, :]) % 3
+    v = np.take_along_axis(triangles[one], turn, axis=1)
+    m = np.take_along_axis(mid[one], turn, axis=1)[:, 0]
+    pieces += [np.stack([v[:, 0], m, v[:, 2]], axis=1), np.stack([m, v[:, 1], v[:, 2]], axis=1)]
+    # Two, turned so that edge 1 (v1 -> v2) is the one not crossed, points m0 on edge 0 and
+    # m2 on edge 2: (v0, m0, m2) on one side of the line, (m0, v1, v2), (m0, v2, m2) on the other.
+    two = np.flatnonzero(count == 2)
+    turn = ((np.argmin(crossed[two], axis=1) - 1)[:, None] % 3 + np.arange(3)[None, :]) % 3
+    v = np.take_along_axis(triangles[two], turn, axis=1)
+    m = np.take_along_axis(mid[two], turn, axis=1)
+    pieces += [np.stack([v[:, 0], m[:, 0], m[:, 2]], axis=1),
+               np.stack([m[:, 0], v[:, 1], v[:, 2]], axis=1),
+               np.stack([m[:, 0], v[:, 2], m[:, 2]], axis=1)]
+    vertices = np.concatenate([vertices, made])
+    vertices[:n_top, 2] = np.minimum(vertices[:n_top, 2], top)
+    pieces = np.concatenate(pieces)
+    # Walls and the bottom have no area in XY: their moments are 0 before and after.
+    cut_volume += _moment(vertices, pieces, top) - before
+    return vertices, np.concatenate([kept, pieces]), cut_volume
+
+
 def mesh_relief(relief: Relief, first_vertex: int = 0):
     """Closed, outward-oriented triangle mesh of a relief.
 
@@ -226,22 +294,31 @@ def mesh_relief(relief: Relief, first_vertex: int = 0):
     nu, nv = len(u), len(v)
     scale = max(abs(relief.x0), abs(relief.x1), abs(relief.y0), abs(relief.y1),
                 abs(relief.top), abs(relief.bottom))
-    d = g[None, :] - f[:, None]
-    sign = (np.sign(d) * (np.abs(d) > HEIGHT_TIE_REL * scale)).astype(np.int8)
     cx, cy = to_xy(u[:, None], v[None, :])
-    cz = np.minimum(g[None, :], f[:, None])
+    # Each family's height at the grid's corners: its envelope plus its slope term (which
+    # adds exactly 0.0 for a level family, so F is then f itself on every row).
+    F = f[:, None] + first.slope * along(n1, cx, cy)
+    G = g[None, :] + second.slope * along(n2, cx, cy)
+    d = G - F
+    sign = (np.sign(d) * (np.abs(d) > HEIGHT_TIE_REL * scale)).astype(np.int8)
+    cz = np.minimum(G, F)
     corners = np.stack([cx.ravel(), cy.ravel(), cz.ravel()], axis=1)
     corner_id = np.arange(nu * nv, dtype=np.int64).reshape(nu, nv)
-    # Crossings of F_1 = F_2 on the edges along s_1 (between (i, j) and (i + 1, j)) ...
+    # Crossings of F_1 = F_2 on the edges along s_1 (between (i, j) and (i + 1, j)), where
+    # both are linear (for a level second family G is constant there: t and z as by hand) ...
     hi, hj = np.nonzero(sign[:-1, :].astype(np.int16) * sign[1:, :] < 0)
-    t = (g[hj] - f[hi]) / (f[hi + 1] - f[hi])
-    h_points = np.stack([*to_xy(u[hi] + t * (u[hi + 1] - u[hi]), v[hj]), g[hj]], axis=1)
+    dg = G[hi + 1, hj] - G[hi, hj]
+    t = (G[hi, hj] - F[hi, hj]) / ((F[hi + 1, hj] - F[hi, hj]) - dg)
+    h_points = np.stack([*to_xy(u[hi] + t * (u[hi + 1] - u[hi]), v[hj]), G[hi, hj] + t * dg],
+                        axis=1)
     h_id = np.full((nu - 1, nv), -1, dtype=np.int64)
     h_id[hi, hj] = nu * nv + np.arange(len(hi))
     # ... and along s_2 (between (i, j) and (i, j + 1)).
     vi, vj = np.nonzero(sign[:, :-1].astype(np.int16) * sign[:, 1:] < 0)
-    t = (f[vi] - g[vj]) / (g[vj + 1] - g[vj])
-    v_points = np.stack([*to_xy(u[vi], v[vj] + t * (v[vj + 1] - v[vj])), f[vi]], axis=1)
+    df = F[vi, vj + 1] - F[vi, vj]
+    t = (F[vi, vj] - G[vi, vj]) / ((G[vi, vj + 1] - G[vi, vj]) - df)
+    v_points = np.stack([*to_xy(u[vi], v[vj] + t * (v[vj + 1] - v[vj])), F[vi, vj] + t * df],
+                        axis=1)
     v_id = np.full((nu, nv - 1), -1, dtype=np.int64)
     v_id[vi, vj] = nu * nv + len(hi) + np.arange(len(vi))
     top_vertices = np.concatenate([corners, h_points, v_points])
@@ -317,8 +394,8 @@ def mesh_relief(relief: Relief, first_vertex: int = 0):
     flags = np.zeros(fan.shape, dtype=bool)
     for side in range(4):
         # Slots 2 side, 2 side + 1 and 2 side + 2 (mod 8) lie on that side of the cell.
-        along = ((here - 2 * side) % 8 <= 2) & ((there - 2 * side) % 8 <= 2)
-        flags |= along & border[cell, side][:, None]
+        on_side_k = ((here - 2 * side) % 8 <= 2) & ((there - 2 * side) % 8 <= 2)
+        flags |= on_side_k & border[cell, side][:, None]
     # Cells with every corner in the rectangle (or on its sides) need no clipping.
     within = ((cx >= box[0]) & (cx <= box[1]) & (cy >= box[2]) & (cy <= box[3]))
     within = within[bi, bj] & within[bi + 1, bj] & within[bi + 1, bj + 1] & within[bi, bj + 1]
@@ -363,6 +440,9 @@ def mesh_relief(relief: Relief, first_vertex: int = 0):
                   np.stack([centre_id, b_low, a_low], axis=1)]
     vertices = np.concatenate([top_vertices, under, centre])
     triangles = np.concatenate(triangles)
+    if first.slope != 0.0 or second.slope != 0.0:
+        vertices, triangles, cut_volume = _clip_at_top(vertices, triangles, base, relief.top,
+                                                       cut_volume)
     used = np.zeros(len(vertices), dtype=bool)
     used[triangles.ravel()] = True
     if not used.all():
@@ -389,4 +469,4 @@ def relief_part(reliefs: tuple[Relief, ...]) -> tuple[Part, float]:
 
 
 __all__ = ["AXIS_NORMALS", "CELLS_PER_BLOCK", "DOMAIN_MARGIN_REL", "Family", "Relief", "across",
-           "domain", "grid_families", "mesh_relief", "relief_part", "span"]
+           "along", "domain", "grid_families", "mesh_relief", "relief_part", "span"]
