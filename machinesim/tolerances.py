@@ -39,6 +39,15 @@ CLIP_MARGIN_REL = 1e-6
 #: then the sweep is a translation and its hull edges are known, so clipping needs no pair
 #: search. 1e-12 is the kinematic agreement of two float64 chains (tolerances.POSE_M / 1 m).
 SAME_ORIENTATION = 1e-12
+#: A sweep whose tool turns so little between its poses that no tool vertex moves more than
+#: this (m) from where the start pose's orientation, translated, would put it is cut as that
+#: translation (a prism of the start profile). It then differs from the hull of the two
+#: poses by at most this, and both stand for the tool turning continuously along the move
+#: within it: 1/100 of the planner's chord tolerance (`CHORD_TOLERANCE_M`, 1 nm). A
+#: machine's angular motion errors turn the tool by 1e-9 - 1e-7 rad along a move (1e-12 -
+#: 8e-12 m over a sub-millimetre tool); as hulls, the crown passes of paper 002 on a machine
+#: with such errors cut 13 times slower than as prisms.
+TWIST_M = 1e-11
 #: A non-rotational tool is dragged sideways when its move direction, in the tool frame, has
 #: a Y component above this fraction of the move: 1 urad, i.e. the groove widens by more than
 #: 1 nm per mm of travel, far above float64 round-off of a kinematic chain (~1e-15).

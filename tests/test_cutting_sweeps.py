@@ -17,7 +17,9 @@ from machinesim.cutting.sweeps import (
     prism_mesh,
     vector_area,
 )
+from machinesim.cutting import remove
 from machinesim.tools import BallEndMill, RoundNoseTool, VTool
+from machinesim.workpiece import block
 
 #: Volumes of float64 meshes at mm scale agree to summation round-off (~1e-15 relative).
 VOLUME_REL = 1e-12
@@ -101,3 +103,39 @@ def test_qhull_hulls_are_closed_and_keep_their_volume_after_retriangulation():
     assert solid.status() == manifold3d.Error.NoError
     assert solid.volume() == pytest.approx(volume, rel=1e-12)
     assert hull_mesh(np.concatenate([profile, profile + [0.0, 1e-4, 0.0]])) is None  # flat
+
+
+def _rolled(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+@pytest.mark.parametrize("tool", ["v", "nose"])
+def test_a_tool_turned_within_the_twist_tolerance_cuts_as_translated(tool, monkeypatch):
+    # A tool rolled about its travel (X) along one groove by an angle that moves its farthest
+    # vertex half of `TWIST_M`. Cut as the start pose's translation it is the unturned
+    # groove exactly; cut as the hull of the two poses (tolerance 0) it differs from that by
+    # at most the vertices' displacement, the bound the tolerance stands on.
+    from machinesim.cutting import sweepset
+    from machinesim.metrology.surface import height_map
+    from machinesim.tolerances import TWIST_M
+
+    shape = VTool(math.pi / 2) if tool == "v" else RoundNoseTool(2e-3, math.pi / 2, 50e-6)
+    vertices = shape.vertices()
+    angle = 0.5 * TWIST_M / np.hypot(vertices[:, 1], vertices[:, 2]).max()
+    start, end = np.eye(4), np.eye(4)
+    start[:3, 3], end[:3, 3] = (-1e-3, 0.5e-3, -20e-6), (2e-3, 0.5e-3, -20e-6)
+    end[:3, :3] = _rolled(angle)
+    stock = block(1e-3, 1e-3, 0.2e-3)
+    twisted, _ = remove(stock, shape, [np.array([start, end])], method="boolean")
+    straight_end = end.copy()
+    straight_end[:3, :3] = np.eye(3)
+    straight, _ = remove(stock, shape, [np.array([start, straight_end])], method="boolean")
+    assert twisted.volume == straight.volume
+    monkeypatch.setattr(sweepset, "TWIST_M", 0.0)
+    hull, _ = remove(stock, shape, [np.array([start, end])], method="boolean")
+    assert hull.volume != straight.volume
+    x = np.linspace(0.0, 1e-3, 81)[1:-1] + 1.234e-9
+    gap = np.nanmax(np.abs(height_map(hull, x, x) - height_map(straight, x, x)))
+    reach = np.abs((_rolled(angle) - np.eye(3)) @ vertices.T).max()
+    assert 0.0 < gap <= reach + 1e-15

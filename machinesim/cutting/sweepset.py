@@ -20,7 +20,7 @@ from machinesim.cutting.sweeps import (
     hull_mesh,
     manifold_from,
 )
-from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL
+from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL, TWIST_M
 
 __all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "SweepSet", "dragged"]
 
@@ -212,9 +212,14 @@ class SweepSet:
             r0, r1 = rotation[first], rotation[first + 1]
             move = origin[first + 1] - origin[first]
             p0, p1 = self.world(first), self.world(first + 1)
+            same = np.abs(r1 - r0).reshape(-1, 9).max(axis=1) <= SAME_ORIENTATION
+            # A tool turned by no more than `TWIST_M` at any vertex is cut as translated.
+            turned = ~same & (np.abs(p1 - p0 - move[:, None, :]).max(axis=(1, 2)) <= TWIST_M)
+            if turned.any():
+                same = same | turned
+                p1[turned] = p0[turned] + move[turned, None, :]
             low = np.minimum(p0.min(axis=1), p1.min(axis=1))
             high = np.maximum(p0.max(axis=1), p1.max(axis=1))
-            same = np.abs(r1 - r0).reshape(-1, 9).max(axis=1) <= SAME_ORIENTATION
             if self.planar:
                 # The bounds of the part below the plane: tall bodies beside a window or
                 # a groove are not sweeps that reach it (and sweeps wholly above it, most
