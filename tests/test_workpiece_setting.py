@@ -418,6 +418,33 @@ def test_after_compensation_with_probe_noise_the_crown_is_within_the_papers_erro
     assert edge.max() < 0.1 * UM and tilt.max() < 6e-3
 
 
+def test_the_crown_is_read_pair_by_pair_in_one_placement_so_registration_cancels(
+        crown_stock):
+    """The microscope's registration (its origin 5 um off the part's, turned 1 mrad, the
+    part tilted 0.2 mrad under it) moves every reading of one placement alike, and each pair
+    of opposite faces is read in one placement with the top and the flat: the edge and foot
+    distances come out as with no registration, to the shear's second order (L:
+    (2 x 1.5 mm x 0.2 mrad)^2 / 2 L ~ 0.1 nm), and so do the inclinations to the shear's
+    first order (the tilt is applied as a shear of heights). Reading the faces of a pair in
+    placements turned 180 deg apart (as before) put 2 x 5 um into L."""
+    from machinesim.metrology.imperfections import Registration
+
+    windows, boxes, rows = cam.crown_roi(margin=0.25 * MM, top=0.15 * MM, side=0.1 * MM)
+    program = cam.passes_program(cam.crown_passes(offsets=[0.0], **rows))
+    part, _ = cut_turned(program, MACHINE, cam.crown_tool(), crown_stock, None, roi=boxes,
+                         start=cam.PARK)
+    plain = crown_features(part, Microscope(noise=False), windows)
+    registered = Registration((5 * UM, -4 * UM, 3 * UM), 1e-3, (2e-4, -1e-4))
+    seen = crown_features(part, Microscope(noise=False, registration=registered), windows)
+    np.testing.assert_allclose(seen.edge_distances, plain.edge_distances, atol=1e-9)
+    np.testing.assert_allclose(seen.foot_distances, plain.foot_distances, atol=1e-9)
+    # The tilt is a shear of heights (`Registration`), not a turn: slopes a and 0 sheared by
+    # t meet at an angle changed by t (1 / (1 + a^2) - 1) = -0.038 t for a = 0.2.
+    t = math.hypot(2e-4, 1e-4)
+    np.testing.assert_allclose(seen.inclinations, plain.inclinations, atol=0.04 * t)
+    np.testing.assert_allclose(plain.edge_distances, 2 * cam.CROWN.apothem, atol=2e-9)
+
+
 # ------------------------------------------------------------------------------ inputs
 
 

@@ -136,30 +136,54 @@ def _map_points(part, microscope, box, spacing: float) -> np.ndarray:
     return height_map_points(area.x, area.y, area.z)
 
 
+def _inscribed(box, turn: float):
+    """The axis-aligned box, in a frame turned by ``turn`` (rad) about Z, about the turned
+    centre of ``box`` (x0, x1, y0, y1) that lies inside ``box`` at any turn: half sizes
+    divided by sqrt(2)."""
+    x0, x1, y0, y1 = box
+    c = rot_z(-turn)[:2, :2] @ np.array([(x0 + x1) / 2.0, (y0 + y1) / 2.0])
+    hx, hy = (x1 - x0) / (2.0 * math.sqrt(2.0)), (y1 - y0) / (2.0 * math.sqrt(2.0))
+    return (c[0] - hx, c[0] + hx, c[1] - hy, c[1] + hy)
+
+
 def crown_features(part, microscope, windows, spacing: float = MAP_SPACING) -> CrownFeatures:
     """Read Table 3's quantities with the microscope (paper 002 Fig. 12).
 
     Planes are fitted to height maps in the ``windows`` of `machinesim.cam.crown.crown_roi`:
-    the top face, each side face and four patches of the flat. Each side face is mapped with
-    the part turned so that the face's own axes (r out, v along its edge) are the map's, as a
-    microscope stage turns a sample: a map's cost grows with the triangles' boxes, which the
-    long scallop triangles of a face at 45 deg make large. ``spacing``: see `MAP_SPACING`.
+    the top face, each side face and four patches of the flat. Each pair of opposite faces
+    (k, k + 4) is read in one placement of the sample, turned on the stage by k 45 deg so
+    that the faces' own axes (r out, v along the edge) are the map's: the top, both faces
+    and the flat's patches (their largest boxes that stay inside the windows at any turn,
+    `_inscribed`), so that the edge distance L_k and the foot distance come from one
+    placement, as the paper reads two opposite edges in one image. Read in placements turned
+    apart, they would carry the instrument's registration (its offset from the part's
+    origin, several um) twice, turned: a stage's turn is about its own axis, not the part's.
+    A map's cost grows with the triangles' boxes, which the long scallop triangles of a face
+    at 45 deg make large: hence the turn. ``spacing``: see `MAP_SPACING`.
     """
-    mesh = MeshIndex.from_surface(part)
-    top = fit_plane(_map_points(mesh, microscope, windows["top"], spacing))
-    flat = fit_plane(np.vstack([_map_points(mesh, microscope, box, 4 * spacing)
-                                for box in windows["flat"]]))
-    sides, edges, feet = [], [], []
-    for k in range(8):
-        turned = Part(part.manifold.rotate((0.0, 0.0, -45.0 * k)))
-        local = fit_plane(_map_points(turned, microscope, windows["side"], spacing))
-        back = rot_z(k * math.pi / 4)
-        side = replace(local, point=frozen(back @ local.point),
-                       normal=frozen(back @ local.normal))
-        sides.append(side)
-        edges.append(plane_intersection(top, side))
-        feet.append(plane_intersection(flat, side))
-    inclinations = np.array([plane_angle(side, flat) for side in sides])
+    r0, r1, v0, v1 = windows["side"]
+    sides, flats, edges, feet = [None] * 8, [None] * 8, [None] * 8, [None] * 8
+    for k in range(4):
+        turn = k * math.pi / 4
+        mesh = MeshIndex.from_surface(part if k == 0
+                                      else Part(part.manifold.rotate((0.0, 0.0, -45.0 * k))))
+        back = rot_z(turn)
+
+        def plane(points):
+            local = fit_plane(points)
+            return replace(local, point=frozen(back @ local.point),
+                           normal=frozen(back @ local.normal))
+
+        top = plane(_map_points(mesh, microscope, _inscribed(windows["top"], turn), spacing))
+        flat = plane(np.vstack([_map_points(mesh, microscope, _inscribed(box, turn),
+                                            4 * spacing) for box in windows["flat"]]))
+        for j, box in ((k, (r0, r1, v0, v1)), (k + 4, (-r1, -r0, -v1, -v0))):
+            sides[j] = plane(_map_points(mesh, microscope, box, spacing))
+            flats[j] = flat
+            edges[j] = plane_intersection(top, sides[j])
+            feet[j] = plane_intersection(flat, sides[j])
+    inclinations = np.array([plane_angle(side, flat) for side, flat in zip(sides, flats,
+                                                                           strict=True)])
     return CrownFeatures(frozen([line_distance(edges[k], edges[k + 4]) for k in range(4)]),
                          frozen(inclinations),
                          frozen([line_distance(feet[k], feet[k + 4]) for k in range(4)]))
