@@ -1,8 +1,8 @@
 """Paper 002 replay: a robot-loaded workpiece, its setting errors found and compensated.
 
-Run: ``.venv/bin/python scenarios/workpiece_setting.py`` (``make demo``; times in
-docs/procedures/workpiece_setting.md; ``--quick``: smaller crown windows, as the tests run
-it) with options
+Run: ``.venv/bin/python scenarios/workpiece_setting.py`` (``make demo``, about 5 min on 2
+idle cores; times in docs/procedures/workpiece_setting.md; ``--quick``: smaller crown
+windows, about 70 s, as the tests run it) with options
 
     --robot-repeatability-um R  the robot that loads each workpiece (default 30, the
                                 paper's LR Mate 200iD); its landings are drawn with --seed
@@ -13,10 +13,8 @@ it) with options
                                 when given, set the workpiece setting on top of it
     --realism ideal|noise_only|lab  what the lab has besides the injected errors: lab =
                                 instrument imperfections, artefact errors, the machine's
-                                background errors (`machinesim.realism`). Default
-                                noise_only for now: with the background errors the crown's
-                                cut is too slow in the engine (docs/procedures/
-                                workpiece_setting.md); --noise off without it: ideal
+                                background errors (`machinesim.realism`). Default lab;
+                                --noise off without it: ideal
     --budget on|off             error budget of the crown's "after" figures: each source
                                 switched off in turn (one more crown run each, "after"
                                 only; default off for its cost: about 9 crown runs)
@@ -81,11 +79,8 @@ ROBOT_REPEATABILITY_UM = 30.0
 #: finished ones, less 5 dz for a workpiece dz low, less the landing's shift across the face
 #: and 5 r times its tilt (the robot: 8 um per axis).
 C_CENTRE_UM = (-2.0, 1.0)
-#: The lab without --realism. Meant to be "lab" (the paper's imperfections all on); with the
-#: machine's background errors the crown's boolean cut runs for tens of minutes instead of
-#: seconds (docs/procedures/workpiece_setting.md), so instrument noise only until the engine
-#: handles them.
-DEFAULT_REALISM = "noise_only"
+#: The lab without --realism: the paper's imperfections all on.
+DEFAULT_REALISM = "lab"
 #: Procedure approximation in the error budget: the paper's eq 7 keeps the tip on the path.
 TIP_VS_NOSE = "tip_vs_nose"
 #: Display budget of each HTML view: ~1 MB files, enough for a 3 mm window.
@@ -132,7 +127,7 @@ def main(argv=None) -> int:
     if "--realism" not in parser._option_string_actions:
         parser.add_argument("--realism", choices=("ideal", "noise_only", "lab"),
                             default=None, help="what the lab has besides the injected "
-                            "errors (default noise_only; --noise off without it: ideal)")
+                            "errors (default lab; --noise off without it: ideal)")
     parser.add_argument("--budget", choices=("on", "off"), default="off",
                         help="error budget of the crown's after figures: one more crown "
                         "run per source (default off)")
@@ -189,7 +184,7 @@ def report(args) -> None:
 
 
 def lab_realism(args) -> Realism:
-    """--realism, or without it: instrument noise only (`DEFAULT_REALISM`), or nothing with
+    """--realism, or without it: the lab as labs are (`DEFAULT_REALISM`), or nothing with
     --noise off (as before the realism switches existed)."""
     name = getattr(args, "realism", None) or (DEFAULT_REALISM if args.noise == "on"
                                               else "ideal")

@@ -411,13 +411,16 @@ class RobotLoadedWorkpiece:
         crown = self.crown
         layout = self.layout(found)
         nominal = self.nominal_program(found)
-        scope = lab.microscope(label="crown")
         features, parts, cuts = {}, {}, {}
         runs = (("before", nominal), ("after", programs["crown_compensated"]))
         for name, program in runs[1:] if self.after_only else runs:
             part, report = lab.cut(program, layout.tool, self.workpiece(lab),
                                    roi=layout.boxes,
                                    floor=layout.floor, start=PARK, turn_step=math.pi / 4)
+            # One microscope session per part (each put on the stage anew), so the after
+            # part's readings draw the same whether or not the before part was read (the
+            # error budget's variants read only the after part).
+            scope = lab.microscope(label=f"crown_{name}")
             features[name] = crown_features(part, scope, layout.windows)
             parts[f"crown_{name}"] = part
             cuts[f"crown_{name}"] = _cut_details(report)
