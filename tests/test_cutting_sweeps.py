@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
+from machinesim.cutting import remove
 from machinesim.cutting.sweeps import (
     SolidSweep,
     clip_polygon,
@@ -17,7 +18,6 @@ from machinesim.cutting.sweeps import (
     prism_mesh,
     vector_area,
 )
-from machinesim.cutting import remove
 from machinesim.tools import BallEndMill, RoundNoseTool, VTool
 from machinesim.workpiece import block
 

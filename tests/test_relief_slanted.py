@@ -336,8 +336,7 @@ def test_a_pyramid_window_on_a_tilted_c_table_is_cut_by_relief_as_by_the_boolean
     # engine on the same program.
     from machinesim import load_machine
     from machinesim.cam.pyramids import PyramidPlan, pyramid_program
-    from machinesim.cutting import cut
-    from machinesim.cutting import engine
+    from machinesim.cutting import cut, engine
     from machinesim.errors import ErrorModel
 
     machine = load_machine("grooving_4axis")

@@ -22,9 +22,9 @@ A cut qualifies when the stock is an axis-aligned box or a part this module made
 sweep that can reach the stock is such a full-span straight groove whose profile rises above
 the top at both ends and stays above the bottom, and the grooves, with those the part was
 cut with before, run in at most two directions (`MAX_FAMILIES`) at least `MIN_FAMILY_SINE`
-apart, all grooves of one direction at one slope (within `STRAIGHT_REL`). Anything else returns None and the caller uses the boolean engine. A relief keeps its
-envelopes with the part (`Part.reliefs`), so a second program of grooves on the same part is
-cut the same way.
+apart, all grooves of one direction at one slope (within `STRAIGHT_REL`). Anything else
+returns None and the caller uses the boolean engine. A relief keeps its envelopes with the
+part (`Part.reliefs`), so a second program of grooves on the same part is cut the same way.
 """
 
 from __future__ import annotations

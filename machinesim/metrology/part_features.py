@@ -146,6 +146,13 @@ def _inscribed(box, turn: float):
     return (c[0] - hx, c[0] + hx, c[1] - hy, c[1] + hy)
 
 
+def _turned_back(points, back: np.ndarray):
+    """The plane fitted to ``points`` of a placement turned on the stage, in the part's
+    frame (``back``: the turn back, 3 x 3)."""
+    local = fit_plane(points)
+    return replace(local, point=frozen(back @ local.point), normal=frozen(back @ local.normal))
+
+
 def crown_features(part, microscope, windows, spacing: float = MAP_SPACING) -> CrownFeatures:
     """Read Table 3's quantities with the microscope (paper 002 Fig. 12).
 
@@ -168,17 +175,13 @@ def crown_features(part, microscope, windows, spacing: float = MAP_SPACING) -> C
         mesh = MeshIndex.from_surface(part if k == 0
                                       else Part(part.manifold.rotate((0.0, 0.0, -45.0 * k))))
         back = rot_z(turn)
-
-        def plane(points):
-            local = fit_plane(points)
-            return replace(local, point=frozen(back @ local.point),
-                           normal=frozen(back @ local.normal))
-
-        top = plane(_map_points(mesh, microscope, _inscribed(windows["top"], turn), spacing))
-        flat = plane(np.vstack([_map_points(mesh, microscope, _inscribed(box, turn),
-                                            4 * spacing) for box in windows["flat"]]))
+        top = _turned_back(_map_points(mesh, microscope, _inscribed(windows["top"], turn),
+                                       spacing), back)
+        flat = _turned_back(np.vstack([_map_points(mesh, microscope, _inscribed(box, turn),
+                                                   4 * spacing) for box in windows["flat"]]),
+                            back)
         for j, box in ((k, (r0, r1, v0, v1)), (k + 4, (-r1, -r0, -v1, -v0))):
-            sides[j] = plane(_map_points(mesh, microscope, box, spacing))
+            sides[j] = _turned_back(_map_points(mesh, microscope, box, spacing), back)
             flats[j] = flat
             edges[j] = plane_intersection(top, sides[j])
             feet[j] = plane_intersection(flat, sides[j])
