@@ -277,15 +277,18 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
     # Poses where no part of the tool is below the stock's top.
     above = ~np.isfinite(low[:, 2]) | (low[:, 2] >= tops.max())
     if pose_bounds is not None:
-        # A sloped sweep's reaching part is not the union of its poses' reaching parts (an
-        # end may lie wholly above the stock while the tool cuts on the way there): it
-        # takes the whole tool's bounds at both ends.
-        sloped = np.flatnonzero(origin[a, 2] != origin[b, 2])
-        if len(sloped):
-            for end in (a[sloped], b[sloped]):
-                body = np.einsum("nij,kj->nki", rotation[end], vertices) + origin[end, None]
-                sweep_low[sloped] = np.minimum(sweep_low[sloped], body.min(axis=1))
-                sweep_high[sloped] = np.maximum(sweep_high[sloped], body.max(axis=1))
+        # A sloped sweep with one end wholly above the stock cuts on the way there, where
+        # neither end's reaching part is: it takes the whole tool's bounds at that end.
+        # (Ends that both reach bound the way between; a plunge reaches deepest at its end.)
+        travels = (origin[a, 0] != origin[b, 0]) | (origin[a, 1] != origin[b, 1])
+        for end, other in ((a, b), (b, a)):
+            lost = np.flatnonzero(travels & ~np.isfinite(low[end, 2])
+                                  & np.isfinite(low[other, 2]))
+            if len(lost):
+                body = (np.einsum("nij,kj->nki", rotation[end[lost]], vertices)
+                        + origin[end[lost], None])
+                sweep_low[lost] = np.minimum(sweep_low[lost], body.min(axis=1))
+                sweep_high[lost] = np.maximum(sweep_high[lost], body.max(axis=1))
     touch = ((sweep_low[:, None, 2] < tops[None, :])
              & (sweep_low[:, None, 0] <= boxes[None, :, 1])
              & (sweep_high[:, None, 0] >= boxes[None, :, 0])
