@@ -39,6 +39,7 @@ from machinesim.cutting.relief_mesh import (
     Relief,
     across,
     along,
+    direction,
     domain,
     grid_families,
     mesh_relief,
@@ -167,7 +168,7 @@ def _raised_top(normal, slope: float, box, top: float) -> float:
     mesher then cuts the surface at the real top)."""
     if slope == 0.0:
         return top
-    t0, t1 = span(np.array([normal[1], -normal[0]]), *box)
+    t0, t1 = span(direction(normal), *box)
     return top + 2.0 * abs(slope) * max(abs(t0), abs(t1), abs(top))
 
 
@@ -197,7 +198,7 @@ def _rebuilt(old: Relief, box, normals, segments, slopes) -> Relief:
 
 def _lowest_slope_term(family: Family, box) -> float:
     """Least of slope * t over the rectangle (0 for a level family), m."""
-    t0, t1 = span(np.array([family.normal[1], -family.normal[0]]), *box)
+    t0, t1 = span(direction(family.normal), *box)
     return min(family.slope * t0, family.slope * t1)
 
 
@@ -208,7 +209,7 @@ def _family_slopes(normals, chosen, member, move, olds) -> list[float] | None:
     direction at several slopes are not one extrusion."""
     slopes = []
     for k, normal in enumerate(normals):
-        d = np.array([normal[1], -normal[0]])
+        d = direction(normal)
         known = [float(f.slope) for old in olds for f in old.families
                  if np.array_equal(f.normal, normal)]
         mine = chosen[member == k]
@@ -312,7 +313,7 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
     if np.any(relevant & ~straight):
         return None
     chosen = np.flatnonzero(relevant)
-    direction = move[chosen, :2] / planar[chosen, None]
+    travel_xy = move[chosen, :2] / planar[chosen, None]
     # Families: the part's own directions first (their normals are kept as they are, so a
     # second program extends the same envelopes), then each new direction.
     normals: list[np.ndarray] = []
@@ -322,11 +323,11 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
                 normals.append(family.normal)
     member = np.full(len(chosen), -1)
     for k, normal in enumerate(normals):
-        member[(member < 0) & _same_direction(normal, direction)] = k
+        member[(member < 0) & _same_direction(normal, travel_xy)] = k
     while np.any(member < 0) and len(normals) <= MAX_FAMILIES:
         first = int(np.flatnonzero(member < 0)[0])
         normals.append(_normal(unit_direction(move[chosen[first], :2])))
-        member[(member < 0) & _same_direction(normals[-1], direction)] = len(normals) - 1
+        member[(member < 0) & _same_direction(normals[-1], travel_xy)] = len(normals) - 1
     if len(normals) > MAX_FAMILIES:
         return None
     if len(normals) == 2 and abs(normals[0][0] * normals[1][1]
@@ -342,7 +343,7 @@ def cut_reliefs(stock: Part, vertices: np.ndarray, poses: np.ndarray, pairs: np.
         mine = chosen[member == k]
         if not len(mine):
             continue
-        d = np.array([normal[1], -normal[0]])  # along the grooves
+        d = direction(normal)  # along the grooves
         slope = slopes[k]
         forward = move[mine, :2] @ d > 0.0
         # Full span: the tool is wholly before the rectangle at the start of the move and

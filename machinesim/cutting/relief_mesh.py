@@ -94,8 +94,13 @@ def across(normal, x, y):
     return normal[0] * x + normal[1] * y
 
 
+def direction(normal) -> np.ndarray:
+    """The grooves' direction d = (n_y, -n_x) of a family with unit normal n."""
+    return np.array([normal[1], -normal[0]])
+
+
 def along(normal, x, y):
-    """t = d . (x, y) along a family, d = (n_y, -n_x)."""
+    """t = d . (x, y) along a family, d = `direction` (n)."""
     return normal[1] * x - normal[0] * y
 
 
@@ -469,4 +474,4 @@ def relief_part(reliefs: tuple[Relief, ...]) -> tuple[Part, float]:
 
 
 __all__ = ["AXIS_NORMALS", "CELLS_PER_BLOCK", "DOMAIN_MARGIN_REL", "Family", "Relief", "across",
-           "along", "domain", "grid_families", "mesh_relief", "relief_part", "span"]
+           "along", "direction", "domain", "grid_families", "mesh_relief", "relief_part", "span"]
