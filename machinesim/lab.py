@@ -36,6 +36,7 @@ Lab(robonano_a0ib, noise=on, seed=1, realism=lab)
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -309,13 +310,25 @@ class Lab:
         return RTest(self.machine, self.__truth, noise=self.noise,
                      rng=stream(self.seed, kind, label), **options)
 
-    def microscope(self, *, label: str | None = None, **options):
+    def microscope(self, *, label: str | None = None, objective=None, **options):
         """The laser (confocal) microscope (`machinesim.metrology.Microscope`), with the lab's
         spot, lateral noise and registration when `realism` has them
-        (`machinesim.realism.MICROSCOPE`) and ``options`` do not name their own."""
+        (`machinesim.realism.MICROSCOPE`) and ``options`` do not name their own.
+
+        ``objective`` (a `machinesim.realism.Objective`, e.g. ``OBJECTIVE_10X``): read
+        through it instead of the default 50x: its spot (with lateral resolution), height
+        noise and pixel pitch as the sample spacing."""
         from machinesim.metrology import Microscope
 
-        return self._optical(Microscope, "microscope", _realism.MICROSCOPE, label, options)
+        defaults = _realism.MICROSCOPE
+        if objective is not None:
+            if not isinstance(objective, _realism.Objective):
+                raise InputError(f"Expected objective as a machinesim.realism.Objective, got "
+                                 f"{objective!r}", key="objective")
+            defaults = replace(defaults, spot=objective.spot)
+            options = {"sigma": objective.sigma, "lateral_spacing": objective.pixel,
+                       **options}
+        return self._optical(Microscope, "microscope", defaults, label, options)
 
     def white_light_interferometer(self, *, label: str | None = None, **options):
         """The white-light interferometer (`machinesim.metrology.WhiteLightInterferometer`),

@@ -44,9 +44,10 @@ from machinesim.tolerances import SPHERE_CHORD_M
 from machinesim.units import M_PER_NM, M_PER_UM
 
 __all__ = [
-    "ARTEFACT", "MICROSCOPE", "PROBE", "WHITE_LIGHT", "ActualSpheres", "ArtefactScatter",
-    "OpticalDefaults", "ProbeDefaults", "Realism", "SphereArtefacts", "add_errors",
-    "background_model", "background_path", "draw_spheres", "make_spheres",
+    "ARTEFACT", "MICROSCOPE", "OBJECTIVE_10X", "PROBE", "WHITE_LIGHT", "ActualSpheres",
+    "ArtefactScatter", "Objective", "OpticalDefaults", "ProbeDefaults", "Realism",
+    "SphereArtefacts", "add_errors", "background_model", "background_path", "draw_spheres",
+    "make_spheres",
 ]
 
 
@@ -155,6 +156,50 @@ class OpticalDefaults:
 MICROSCOPE = OpticalDefaults(Spot(0.3e-6, "gaussian"), 20 * M_PER_NM,
                              RegistrationScatter(5 * M_PER_UM, 10 * M_PER_UM, 1e-3, 0.2e-3),
                              1 * M_PER_UM)
+@dataclass(frozen=True)
+class Objective:
+    """A microscope objective other than the lab's default 50x: what changes with it.
+
+    Attributes
+    ----------
+    name : str
+    spot : Spot
+        The lateral resolution at it (with `Realism.lateral_resolution`).
+    sigma : float
+        Height noise per sample, m (with `Realism.instrument_noise`).
+    pixel : float
+        The image's pixel pitch, m: the sample spacing, and where an operator's cursor can
+        sit (`machinesim.metrology.crown_image`).
+    """
+
+    name: str
+    spot: Spot
+    sigma: float
+    pixel: float
+
+
+#: The confocal microscope's 50x / 0.95 height noise (`machinesim.metrology.Microscope`).
+_SIGMA_50X = 12 * M_PER_NM
+
+
+def _axial_width(na: float) -> float:
+    """A confocal microscope's axial response width on a mirror, relative units:
+    lambda / (1 - cos alpha), alpha the objective's half angle (NA = sin alpha, in air)."""
+    return 1.0 / (1.0 - np.sqrt(1.0 - na * na))
+
+
+#: The confocal microscope at a 10x / 0.30 objective, as an operator reads a whole face of
+#: paper 002's crown in one image (section 3.2.3: L from two points on an edge, S from the
+#: face's height and length). Field (assumed, VK-X class at 10x): about 1.35 mm x 1.01 mm
+#: on 1024 x 768 pixels, so one image holds a whole top edge (1.24 mm) and a face with the
+#: top and the flat either side; pixel 1.32 um. Spot: 1.0 um FWHM, between 0.61 lambda / NA
+#: at 408 nm (0.83 um) and at 658 nm (1.34 um). Height noise: the 50x's 12 nm scaled by the
+#: confocal axial response width, lambda / (1 - cos alpha): 15.0 times wider at NA 0.30 than
+#: at 0.95, so 0.18 um (assumed: the peak is found to the same fraction of its width).
+OBJECTIVE_10X = Objective("10x / 0.30", Spot(1.0e-6, "gaussian"),
+                          float(_SIGMA_50X * _axial_width(0.30) / _axial_width(0.95)),
+                          1.35e-3 / 1024)
+
 #: The white-light (coherence scanning) interferometer, 20x / 0.4 objective: spot 0.8 um
 #: FWHM (0.61 lambda / NA at 0.55 um, the centre of its white light: 0.84 um); lateral noise
 #: 10 nm (assumed: the camera's pixels are fixed, vibration moves the field between frames);

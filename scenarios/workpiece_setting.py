@@ -41,6 +41,7 @@ docs/reports.md, tables, plots, PLY parts, NC programs, HTML views).
 from __future__ import annotations
 
 import math
+import re
 import sys
 from dataclasses import replace
 from types import MappingProxyType
@@ -328,17 +329,22 @@ def groove_plot(folder: ReportFolder, details) -> None:
                 title="Depth along each groove", hlines=[(3.0, "programmed 3 um")])
 
 
+#: Table 3's rows: figure name stem -> label prefix. First the paper's readings (edges in
+#: 10x images), then the plane fits and the feet (not in the paper).
+TABLE3_ROWS = {"edge_distance": "", "inclination": "", "edge_distance_planes": "planes: ",
+               "inclination_planes": "planes: ", "foot_distance": "feet: "}
+
+
 def table3_table(folder: ReportFolder, crown) -> str:
     rows = []
     for f in crown.figures:
-        if f.name.startswith(("edge_distance_", "inclination_", "foot_distance_")):
-            label = f.name.split("_", 2)[-1].replace("_", " and ")
-            if f.name.startswith("inclination_"):
-                label = f"{f.name.split('_')[1]} (deg)"
-            elif f.name.startswith("foot_"):
-                label = f"foot {label} (um)"
-            rows.append([label, "" if f.paper_before is None else f.paper_before,
-                         "" if f.paper_after is None else f.paper_after, f.before, f.after])
+        match = re.fullmatch(r"(.+?)_([LS]\d.*)", f.name)
+        if match is None or match[1] not in TABLE3_ROWS:
+            continue
+        unit = "um" if match[2].startswith("L") else "deg"
+        label = f"{TABLE3_ROWS[match[1]]}{match[2].replace('_', ' and ')} ({unit})"
+        rows.append([label, "" if f.paper_before is None else f.paper_before,
+                     "" if f.paper_after is None else f.paper_after, f.before, f.after])
     return folder.write_table(
         "table3", ["measured parameter", "paper before", "paper after", "simulated before",
                    "simulated after"], rows,

@@ -549,6 +549,12 @@ def test_the_scenario_runs_and_meets_the_noise_off_bounds(tmp_path):
     # before): the microscope's 1 nm rounding tilts their fits more (measured 1.9e-5 deg)
     assert np.abs(crown["crown_inclination_error_deg_after"]).max() < 4e-5
     assert np.abs(crown["crown_foot_distance_error_um_after"]).max() < 0.4
+    # read as the paper reads them (edges in 10x profiles, 1.3 um samples; measured 3.8 nm
+    # and 1e-4 deg): the corners of lines fitted to the rounded samples
+    assert np.abs(crown["crown_image_edge_distance_error_um_after"]).max() < 10 * NM / UM
+    assert np.abs(crown["crown_image_inclination_error_deg_after"]).max() < 3e-4
+    assert [f["after"] for f in summary["figures"] if f["name"].startswith("inclination_S")
+            ] == pytest.approx(crown["crown_image_inclination_error_deg_after"], abs=0)
     after = [figures[f"groove_depth_C{90 * k}"]["after"] for k in range(4)]
     before = [figures[f"groove_depth_C{90 * k}"]["before"] for k in range(4)]
     assert np.ptp(after) < 5 * NM / UM

@@ -107,7 +107,7 @@ def test_the_scenario_with_noise_reports_the_c_centre_lengthening_and_a_budget(t
     figures = {f["name"]: f for f in summary["figures"]}
     e_x = scenario.C_CENTRE_UM[0]
     for key in ("L1_L5", "L2_L6", "L3_L7", "L4_L8"):
-        figure = figures[f"edge_distance_{key}"]
+        figure = figures[f"edge_distance_planes_{key}"]
         assert figure["before"] == pytest.approx(-2 * e_x, abs=0.05)
         assert abs(figure["after"]) < 0.02
     rows = summary["budget"]

@@ -453,6 +453,9 @@ def machining_time(machine, groups) -> float:
 
 #: The cut's boxes reach this far past the measuring windows, m.
 ROI_PAD = 20 * UM
+#: A face's image window reaches this far inside its top edge and past its foot, m: the
+#: top either side of the top edge and what lies beyond the foot in its profiles.
+IMAGE_REACH = 100 * UM
 
 
 def crown_roi(plan: CrownPlan = CROWN, margin: float = 0.35 * MM, top: float = 0.4 * MM,
@@ -462,13 +465,15 @@ def crown_roi(plan: CrownPlan = CROWN, margin: float = 0.35 * MM, top: float = 0
     The top window is ``top`` square about the centre (half size, m); each side window runs
     over the middle half of the face's run out along it (at most 0.3 mm) and ``side``
     either side along its edge (m); four flat patches 0.4 mm square sit 4.5 mm out
-    between the faces.
+    between the faces. Each face's image window (the profiles of
+    `machinesim.metrology.crown_image`) runs from `IMAGE_REACH` inside its top edge to as
+    far past its foot, as wide along the edge as the side window.
 
     Returns
     -------
     windows : dict
-        ``"top"``: (x0, x1, y0, y1); ``"side"``: (r0, r1, v0, v1) in each face's own axes;
-        ``"flat"``: list of (x0, x1, y0, y1), m.
+        ``"top"``: (x0, x1, y0, y1); ``"side"``, ``"image"``: (r0, r1, v0, v1) in each
+        face's own axes; ``"flat"``: list of (x0, x1, y0, y1), m.
     roi : list of (x0, x1, y0, y1)
         Axis-aligned boxes holding every window, m.
     rows : dict
@@ -476,6 +481,7 @@ def crown_roi(plan: CrownPlan = CROWN, margin: float = 0.35 * MM, top: float = 0
         window (default 0.35 mm, the R2 mm nose's half width at a 30 um cut).
     """
     middle, reach = plan.apothem + 0.5 * plan.run, min(0.15 * MM, 0.25 * plan.run)
+    image = (plan.apothem - IMAGE_REACH, plan.apothem + plan.run + IMAGE_REACH, -side, side)
     side = (middle - reach, middle + reach, -side, side)
     flat_r, flat_half = 4.5 * MM, 0.2 * MM
     flats = []
@@ -485,13 +491,16 @@ def crown_roi(plan: CrownPlan = CROWN, margin: float = 0.35 * MM, top: float = 0
         flats.append((cx - flat_half, cx + flat_half, cy - flat_half, cy + flat_half))
     boxes = [(-top, top, -top, top), *flats]
     for k in range(8):
-        corners = np.array([_face_point(k, r, v) for r in side[:2] for v in side[2:]])
+        corners = np.array([_face_point(k, r, v) for r in image[:2] for v in image[2:]])
         boxes.append((corners[:, 0].min(), corners[:, 0].max(), corners[:, 1].min(),
                       corners[:, 1].max()))
     # the cut reaches past the windows, so no sample falls on a wall of the clipped part
     roi = [(x0 - ROI_PAD, x1 + ROI_PAD, y0 - ROI_PAD, y1 + ROI_PAD) for x0, x1, y0, y1 in boxes]
-    windows = {"top": (-top, top, -top, top), "side": side, "flat": flats}
-    rows = {"top_rows": (-top - margin, top + margin),
+    windows = {"top": (-top, top, -top, top), "side": side, "image": image, "flat": flats}
+    # the image windows reach the top edges all round: every top row within `margin` of
+    # one (the top face's rows out to its corners)
+    rows = {"top_rows": (-plan.apothem / math.cos(math.pi / 8) - margin,
+                         plan.apothem / math.cos(math.pi / 8) + margin),
             "side_rows": (side[2] - margin, side[3] + margin)}
     return windows, roi, rows
 

@@ -16,12 +16,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from machinesim.arrays import frozen
+from machinesim.metrology.crown_image import turned_placements
 from machinesim.metrology.fits import fit_plane, height_map_points, plane_angle
-from machinesim.metrology.meshindex import MeshIndex
 from machinesim.metrology.planes import line_distance, plane_intersection
 from machinesim.rotations import rot_z
 from machinesim.units import M_PER_MM, M_PER_UM
-from machinesim.workpiece import Part
 
 __all__ = ["MAP_SPACING", "STATIONS", "CrownFeatures", "GrooveDepths", "crown_features",
            "groove_depths"]
@@ -153,7 +152,8 @@ def _turned_back(points, back: np.ndarray):
     return replace(local, point=frozen(back @ local.point), normal=frozen(back @ local.normal))
 
 
-def crown_features(part, microscope, windows, spacing: float = MAP_SPACING) -> CrownFeatures:
+def crown_features(part, microscope, windows, spacing: float = MAP_SPACING, *,
+                   meshes=None) -> CrownFeatures:
     """Read Table 3's quantities with the microscope (paper 002 Fig. 12).
 
     Planes are fitted to height maps in the ``windows`` of `machinesim.cam.crown.crown_roi`:
@@ -166,14 +166,15 @@ def crown_features(part, microscope, windows, spacing: float = MAP_SPACING) -> C
     apart, they would carry the instrument's registration (its offset from the part's
     origin, several um) twice, turned: a stage's turn is about its own axis, not the part's.
     A map's cost grows with the triangles' boxes, which the long scallop triangles of a face
-    at 45 deg make large: hence the turn. ``spacing``: see `MAP_SPACING`.
+    at 45 deg make large: hence the turn. ``spacing``: see `MAP_SPACING`. ``meshes``: the
+    part's `machinesim.metrology.crown_image.turned_placements`, if already built.
     """
+    meshes = turned_placements(part) if meshes is None else meshes
     r0, r1, v0, v1 = windows["side"]
     sides, flats, edges, feet = [None] * 8, [None] * 8, [None] * 8, [None] * 8
     for k in range(4):
         turn = k * math.pi / 4
-        mesh = MeshIndex.from_surface(part if k == 0
-                                      else Part(part.manifold.rotate((0.0, 0.0, -45.0 * k))))
+        mesh = meshes[k]
         back = rot_z(turn)
         top = _turned_back(_map_points(mesh, microscope, _inscribed(windows["top"], turn),
                                        spacing), back)

@@ -80,6 +80,11 @@ from machinesim.identification.workpiece_setting import (
     parameters,
     program_poses,
 )
+from machinesim.metrology.crown_image import (
+    CrownImageReading,
+    crown_image_reading,
+    turned_placements,
+)
 from machinesim.metrology.part_features import CrownFeatures, crown_features, groove_depths
 from machinesim.nc import Program
 from machinesim.procedures.sphere_probing import (
@@ -89,6 +94,7 @@ from machinesim.procedures.sphere_probing import (
     read_sphere,
     read_spheres,
 )
+from machinesim.realism import OBJECTIVE_10X
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 from machinesim.workpiece import Part, stock_from_spec
 
@@ -411,7 +417,7 @@ class RobotLoadedWorkpiece:
         crown = self.crown
         layout = self.layout(found)
         nominal = self.nominal_program(found)
-        features, parts, cuts = {}, {}, {}
+        features, images, parts, cuts = {}, {}, {}, {}
         runs = (("before", nominal), ("after", programs["crown_compensated"]))
         for name, program in runs[1:] if self.after_only else runs:
             part, report = lab.cut(program, layout.tool, self.workpiece(lab),
@@ -421,24 +427,48 @@ class RobotLoadedWorkpiece:
             # part's readings draw the same whether or not the before part was read (the
             # error budget's variants read only the after part).
             scope = lab.microscope(label=f"crown_{name}")
-            features[name] = crown_features(part, scope, layout.windows)
+            meshes = turned_placements(part)
+            features[name] = crown_features(part, scope, layout.windows, meshes=meshes)
+            # Table 3 as the paper reads it: edges picked in 10x images (its own session)
+            images[name] = crown_image_reading(
+                part, lab.microscope(label=f"crown_{name}_image", objective=OBJECTIVE_10X),
+                layout.windows, crown, meshes=meshes)
             parts[f"crown_{name}"] = part
             cuts[f"crown_{name}"] = _cut_details(report)
         parts["crown_design"] = clip_to(crown_design(crown), layout.boxes, layout.floor)
-        errors = {name: _crown_errors(f, crown) for name, f in features.items()}
-        errors.setdefault("before", dict.fromkeys(("edge", "inclination", "foot"),
-                                                  [None] * 8))
+        errors = {name: {**_crown_errors(f, crown), **_image_errors(images[name], crown)}
+                  for name, f in features.items()}
+        errors.setdefault("before", dict.fromkeys(("edge", "inclination", "foot", "edge_image",
+                                                   "inclination_image"), [None] * 8))
         figures = []
         for i, (key, (paper_before, paper_after)) in enumerate(PAPER_L.items()):
-            figures.append(Figure(f"edge_distance_{key}", "um", errors["before"]["edge"][i],
-                                  errors["after"]["edge"][i], paper_before, paper_after,
-                                  note="distance between opposite top edges less its design"))
+            figures.append(Figure(f"edge_distance_{key}", "um",
+                                  errors["before"]["edge_image"][i],
+                                  errors["after"]["edge_image"][i], paper_before, paper_after,
+                                  note="distance between opposite top edges less its design, "
+                                  "as the paper reads it: two points on one edge and one on "
+                                  "the other in 10x images, mean of three readings"))
         for i, (paper_before, paper_after) in enumerate(PAPER_S):
             figures.append(Figure(f"inclination_S{i + 1}", "deg",
-                                  errors["before"]["inclination"][i],
-                                  errors["after"]["inclination"][i], paper_before, paper_after,
+                                  errors["before"]["inclination_image"][i],
+                                  errors["after"]["inclination_image"][i], paper_before,
+                                  paper_after,
                                   note=f"side face at C = {45 * i} deg, angle to the flat "
-                                  "less its design"))
+                                  "less its design, as the paper reads it: height over "
+                                  "length between the edges of a 10x profile"))
+        for i, key in enumerate(PAPER_L):
+            figures.append(Figure(f"edge_distance_planes_{key}", "um",
+                                  errors["before"]["edge"][i], errors["after"]["edge"][i],
+                                  note="distance between the lines where the fitted side "
+                                  "planes meet the fitted top plane, less its design "
+                                  "(not in the paper)"))
+        for i in range(8):
+            figures.append(Figure(f"inclination_planes_S{i + 1}", "deg",
+                                  errors["before"]["inclination"][i],
+                                  errors["after"]["inclination"][i],
+                                  note=f"side face at C = {45 * i} deg: angle between the "
+                                  "fitted side and flat planes less its design (not in the "
+                                  "paper)"))
         for i, key in enumerate(PAPER_L):
             figures.append(Figure(f"foot_distance_{key}", "um", errors["before"]["foot"][i],
                                   errors["after"]["foot"][i],
@@ -457,7 +487,10 @@ class RobotLoadedWorkpiece:
                       if name in features
                       for kind, values in (("edge_distance_error_um", e["edge"]),
                                            ("inclination_error_deg", e["inclination"]),
-                                           ("foot_distance_error_um", e["foot"]))},
+                                           ("foot_distance_error_um", e["foot"]),
+                                           ("image_edge_distance_error_um", e["edge_image"]),
+                                           ("image_inclination_error_deg",
+                                            e["inclination_image"]))},
                    "machining_time": {"finishing_h": finishing / 3600.0,
                                       "cuboid_h": cuboid / 3600.0, "saved_percent": saved,
                                       "setting_h": SETTING_S / 3600.0},
@@ -485,6 +518,11 @@ def _crown_errors(features: CrownFeatures, plan: CrownPlan) -> dict[str, list[fl
     return {"edge": ((features.edge_distances - 2 * plan.apothem) / UM).tolist(),
             "inclination": np.degrees(features.inclinations - plan.slope).tolist(),
             "foot": ((features.foot_distances - plan.foot_distance) / UM).tolist()}
+
+
+def _image_errors(reading: CrownImageReading, plan: CrownPlan) -> dict[str, list[float]]:
+    return {"edge_image": ((reading.edge_distances - 2 * plan.apothem) / UM).tolist(),
+            "inclination_image": np.degrees(reading.inclinations - plan.slope).tolist()}
 
 
 def _cut_details(report) -> dict:

@@ -1,0 +1,253 @@
+"""Paper 002's crown read as the paper reads it: edges picked in microscope images.
+
+Section 3.2.3 of the paper: the distance of two opposite edges is "measured by making one
+line consisting of two points on an edge and another parallel line located on the other
+edge", the measurement "repeated three times to take the average value"; the angle of a
+side face to the bottom surface is "calculated based on measuring the height and length of
+the side surface". `crown_image_reading` does that on a simulated part:
+
+- each face is one image of the microscope at a 10x objective (`machinesim.realism.
+  OBJECTIVE_10X`: one field holds a whole top edge and the face with the top and the flat
+  either side), taken in one placement of the stage (`Microscope.placement`); the part is
+  turned on the stage so the face's own axes are the image's, as `crown_features` does;
+- in it, profiles across the face (at v = -a, 0, +a along the edge) are levelled on the
+  bottom surface (the plane fitted to the flat's patches, as an analysis program's tilt
+  correction) and their edges found as the corners of lines fitted either side of each
+  edge: the top and the face, the face and the flat (`profile_edges`);
+- an operator's cursor sits on a pixel: with the instrument's lateral resolution
+  (``microscope.spot`` set) each edge is the sample nearest that corner and its height the
+  height read there; without, the corner itself on the fitted lines (exact readings);
+- S_k = atan(height / length) between the top and foot cursors of the middle profile;
+  L_k: the distance from face k + 4's top edge point (middle profile) to the line through
+  face k's two top edge points (v = -a, +a), averaged over three readings, each of two
+  images (two placements: the crown is wider than a field, so the stage moves between
+  the edges and its positioning enters L, as in the paper's reading).
+
+Plane fits over windows (`machinesim.metrology.part_features.crown_features`) average the
+same faces over thousands of samples; this reading uses a few pixels, and so carries the
+instrument's height noise and pixel pitch into L and S as a reading in the image does.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from machinesim.arrays import frozen
+from machinesim.metrology.fits import fit_plane, height_map_points
+from machinesim.metrology.meshindex import MeshIndex
+from machinesim.rotations import rot_z
+from machinesim.units import M_PER_UM
+from machinesim.workpiece import Part
+
+__all__ = ["EDGE_GUARD", "REPEATS", "CrownImageReading", "ProfileEdges",
+           "crown_image_reading", "profile_edges", "turned_placements"]
+
+UM = M_PER_UM
+
+#: Samples this close to an edge (m) are left out of the lines fitted either side of it:
+#: the spot (1 um) and the pass scallops blur the corner.
+EDGE_GUARD = 5 * UM
+#: The lines whose corner is an edge are fitted this far either side of it, m.
+EDGE_REACH = 60 * UM
+#: Readings of each edge distance averaged (paper 002 section 3.2.3: three).
+REPEATS = 3
+#: The flat patches are read at this spacing for the levelling plane, m.
+FLAT_SPACING = 10 * UM
+#: A sample keeps to a level or a line if within this many sigmas of the instrument's
+#: height noise plus `BAND_FLOOR` of it.
+BAND_SIGMAS, BAND_FLOOR = 5.0, 0.5 * UM
+
+
+@dataclass(frozen=True)
+class ProfileEdges:
+    """A profile's top and foot edges as read (m; s along the profile from its start,
+    heights above the levelled bottom surface)."""
+
+    s_top: float
+    z_top: float
+    s_foot: float
+    z_foot: float
+
+    @property
+    def inclination(self) -> float:
+        """atan(height / length) of the face between the two edges, rad."""
+        return math.atan2(self.z_top - self.z_foot, self.s_foot - self.s_top)
+
+
+@dataclass(frozen=True, eq=False)
+class CrownImageReading:
+    """Table 3's quantities read in images.
+
+    Attributes
+    ----------
+    edge_distances : ndarray, shape (4,)
+        Pairs (L1, L5) .. (L4, L8), m, each the mean of `REPEATS` readings.
+    inclinations : ndarray, shape (8,)
+        S1..S8 (faces at C = 0, 45, .. deg), rad, from height over length.
+    NaN where a face's profile does not run from a top over the face to the flat.
+    """
+
+    edge_distances: np.ndarray
+    inclinations: np.ndarray
+
+
+def _line(s: np.ndarray, z: np.ndarray, keep: np.ndarray):
+    keep = keep & np.isfinite(z)
+    return np.polyfit(s[keep], z[keep], 1) if np.count_nonzero(keep) >= 3 else None
+
+
+def _corner(a: np.ndarray, b: np.ndarray) -> float:
+    return float((b[1] - a[1]) / (a[0] - b[0]))
+
+
+def _cursor(s: np.ndarray, z: np.ndarray, at: float) -> int:
+    finite = np.flatnonzero(np.isfinite(z))
+    return int(finite[np.argmin(np.abs(s[finite] - at))])
+
+
+def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
+                  reach: float = EDGE_REACH, iterations: int = 4) -> ProfileEdges | None:
+    """The top edge and the foot of the face in a profile across it, levelled on the flat.
+
+    Top edge: from where the profile first leaves the level of its first samples by more
+    than ``band`` (m; a few times the height noise), refined to the corner of two lines
+    fitted to the samples either side of it, ``guard`` to ``reach`` away (the eye judges a
+    corner by what is near it), ``iterations`` times. Foot: where the profile leaves the
+    face's line by more than ``band`` going out; if what follows runs on from the face
+    (a ledge or the flat), the corner of the face's line and its line; if it steps away
+    (an uncut band beyond the finished face), the face's last sample. ``pixel``: each
+    cursor on the sample nearest its edge and the height read there (an operator reading
+    an image); else the edges on the fitted lines. None where the profile does not run
+    from a level top down a face.
+    """
+    s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
+    finite = np.isfinite(z)
+    if np.count_nonzero(finite[:10]) < 5:
+        return None
+    level = float(np.median(z[:10][finite[:10]]))
+    off = np.flatnonzero(~(np.abs(z - level) <= band))
+    if len(off) == 0:
+        return None
+    s_top = float(s[off[0]])
+    for _ in range(iterations):
+        top = _line(s, z, (s > s_top - reach) & (s < s_top - guard))
+        upper = _line(s, z, (s > s_top + guard) & (s < s_top + reach))
+        if top is None or upper is None or top[0] == upper[0]:
+            return None
+        s_top = _corner(top, upper)
+        if not s[0] < s_top < s[-1]:
+            return None
+    # the face: out from the top edge while the profile keeps to the upper line, refitted
+    on = (s > s_top + guard) & ~(np.abs(z - np.polyval(upper, s)) > band)
+    past = np.flatnonzero(~on & (s > s_top + reach))
+    s_end = float(s[past[0]]) if len(past) else float(s[-1])
+    face = _line(s, z, (s > s_top + guard) & (s < s_end - guard))
+    beyond = _line(s, z, (s > s_end + guard) & (s < s_end + reach))
+    if face is None:
+        return None
+    last = float(s[np.flatnonzero((s < s_end) & finite)[-1]])
+    s_foot = last
+    if beyond is not None and beyond[0] != face[0]:
+        corner = _corner(face, beyond)
+        if last - reach < corner < s_end + reach and abs(
+                np.polyval(beyond, corner) - np.polyval(face, corner)) <= band:
+            s_foot = corner
+    if not pixel:
+        return ProfileEdges(s_top, float(np.polyval(top, s_top)), s_foot,
+                            float(np.polyval(face, s_foot)))
+    i, j = _cursor(s, z, s_top), _cursor(s, z, s_foot)
+    return ProfileEdges(float(s[i]), float(z[i]), float(s[j]), float(z[j]))
+
+
+def turned_placements(part) -> list:
+    """The part turned by -k 45 deg, k = 0..3 (MeshIndex each): face k's outward direction
+    along +x, as a stage turns the sample under the objective."""
+    return [MeshIndex.from_surface(part if k == 0
+                                   else Part(part.manifold.rotate((0.0, 0.0, -45.0 * k))))
+            for k in range(4)]
+
+
+def _bottom(mesh, microscope, flats, turn: float):
+    """The plane fitted to the flat's patches read in this placement (the turned frame)."""
+    points = []
+    turned = rot_z(-turn)[:2, :2]
+    for x0, x1, y0, y1 in flats:
+        c = turned @ np.array([(x0 + x1) / 2.0, (y0 + y1) / 2.0])
+        h = min(x1 - x0, y1 - y0) / (2.0 * math.sqrt(2.0))
+        area = microscope.height_map(mesh, c[0] - h, c[0] + h, c[1] - h, c[1] + h,
+                                     spacing=FLAT_SPACING)
+        points.append(height_map_points(area.x, area.y, area.z))
+    return fit_plane(np.vstack(points))
+
+
+def _levelled(read, bottom) -> np.ndarray:
+    """A profile's heights above the bottom plane (its tilt and height taken out)."""
+    xy = read.xy
+    n, p = bottom.normal, bottom.point
+    return read.z - (p[2] - (n[0] * (xy[:, 0] - p[0]) + n[1] * (xy[:, 1] - p[1])) / n[2])
+
+
+def _face_edges(mesh, microscope, bottom, sign: float, vs, image) -> list:
+    """One image of a face (one placement): its profiles at ``vs`` read outward from inside
+    the top edge across the foot; ``sign`` -1 for the face on -x. Returns, per profile,
+    the top edge point (x, y) and the `ProfileEdges` (NaN and None where unreadable)."""
+    r0, r1 = image[0], image[1]
+    pixel = microscope.spot is not None
+    band = BAND_SIGMAS * microscope.readout.sigma + BAND_FLOOR
+    out = []
+    with microscope.placement():
+        for v in vs:
+            start, end = sign * np.array([r0, v]), sign * np.array([r1, v])
+            read = microscope.profile(mesh, start, end)
+            edges = profile_edges(read.s, _levelled(read, bottom), pixel=pixel, band=band)
+            point = (np.full(2, np.nan) if edges is None
+                     else start + (end - start) / (r1 - r0) * edges.s_top)
+            out.append((point, edges))
+    return out
+
+
+def _inclination(edges: ProfileEdges | None) -> float:
+    return np.nan if edges is None else edges.inclination
+
+
+def _point_to_line(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    d = (b - a) / np.hypot(*(b - a))
+    w = q - a
+    return float(abs(w[0] * d[1] - w[1] * d[0]))
+
+
+def crown_image_reading(part, microscope, windows, plan, *, meshes=None,
+                        repeats: int = REPEATS) -> CrownImageReading:
+    """Read L and S of paper 002's crown as the paper does (module docstring).
+
+    Parameters
+    ----------
+    part : Part
+        The machined crown (workpiece frame, m).
+    microscope : Microscope
+        Best the lab's at `machinesim.realism.OBJECTIVE_10X`
+        (``lab.microscope(objective=OBJECTIVE_10X)``).
+    windows : dict
+        `machinesim.cam.crown.crown_roi`'s: ``"image"`` (r0, r1, v0, v1) and ``"flat"``.
+    plan : CrownPlan
+        The designed crown (its apothem: L's design).
+    meshes : list, optional
+        `turned_placements` of ``part``, if already built.
+    """
+    meshes = turned_placements(part) if meshes is None else meshes
+    image = windows["image"]
+    a = 0.8 * min(-image[2], image[3])  # the two points on an edge, v = -a and +a
+    lengths, inclinations = np.zeros((4, repeats)), np.zeros(8)
+    for k in range(4):
+        bottom = _bottom(meshes[k], microscope, windows["flat"], k * math.pi / 4)
+        for n in range(repeats):
+            near = _face_edges(meshes[k], microscope, bottom, 1.0, (-a, 0.0, a), image)
+            far = _face_edges(meshes[k], microscope, bottom, -1.0, (0.0,), image)
+            lengths[k, n] = _point_to_line(far[0][0], near[0][0], near[2][0])
+            if n == 0:
+                inclinations[k] = _inclination(near[1][1])
+                inclinations[k + 4] = _inclination(far[0][1])
+    return CrownImageReading(frozen(lengths.mean(axis=1)), frozen(inclinations))

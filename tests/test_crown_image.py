@@ -1,0 +1,105 @@
+"""Paper 002's crown read as the paper reads it (machinesim.metrology.crown_image).
+
+Known values: the designed crown (edge distance 2 x apothem, faces at atan 0.2); a crown
+made with another apothem and slope; the statistics of a height-over-length reading
+derived by hand; a profile with a step beyond the face, as the windowed cut leaves.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from machinesim import Lab, load_machine
+from machinesim.cam.crown import (
+    CROWN,
+    CROWN_BASE,
+    CROWN_BASE_HEIGHT,
+    crown_design,
+    crown_roi,
+)
+from machinesim.metrology import Microscope
+from machinesim.metrology.crown_image import (
+    crown_image_reading,
+    profile_edges,
+    turned_placements,
+)
+from machinesim.realism import OBJECTIVE_10X, Realism
+from machinesim.workpiece import diamond_crown
+
+UM = 1e-6
+WINDOWS = crown_roi(CROWN)[0]
+EXACT = Microscope(noise=False, lateral_spacing=OBJECTIVE_10X.pixel)
+
+
+def test_the_designed_crown_reads_its_design_without_imperfections():
+    part = crown_design(CROWN)
+    reading = crown_image_reading(part, EXACT, WINDOWS, CROWN)
+    np.testing.assert_allclose(reading.edge_distances, 2 * CROWN.apothem, rtol=0, atol=5e-9)
+    np.testing.assert_allclose(reading.inclinations, CROWN.slope, rtol=0, atol=1e-6)
+
+
+def test_a_crown_of_another_size_and_slope_reads_its_own():
+    """3 um more apothem and faces at atan 0.205: L and S read those, not the plan's."""
+    apothem, slope = CROWN.apothem + 3 * UM, math.atan(0.205)
+    part = diamond_crown(0.0, 2 * apothem, CROWN.height - CROWN.oversize, CROWN_BASE,
+                         CROWN_BASE_HEIGHT, slope)
+    reading = crown_image_reading(part, EXACT, WINDOWS, CROWN)
+    np.testing.assert_allclose(reading.edge_distances, 2 * apothem, rtol=0, atol=5e-9)
+    np.testing.assert_allclose(reading.inclinations, slope, rtol=0, atol=1e-6)
+
+
+def test_the_height_over_length_scatter_is_the_height_noise_carried_by_hand():
+    """S = atan(h / l): a height noise sigma on each of the two cursors gives
+    sd(S) = sqrt(2) sigma l / (l^2 + h^2) (h = 60 um, l = 300 um: 0.0465 deg at the 10x's
+    0.179 um). 64 readings (8 seeds x 8 faces): their sd within 25 % of it (the sd of an
+    sd over 64 draws is 9 %), and the pixel cursor reads shallower on average, never
+    steeper beyond the noise (mean below 0, above -2 sd / sqrt(64) - 0.03 deg)."""
+    part = crown_design(CROWN)
+    meshes = turned_placements(part)
+    errors = []
+    for seed in range(8):
+        scope = Microscope(sigma=OBJECTIVE_10X.sigma, lateral_spacing=OBJECTIVE_10X.pixel,
+                           spot=OBJECTIVE_10X.spot, rng=seed)
+        reading = crown_image_reading(part, scope, WINDOWS, CROWN, meshes=meshes)
+        errors += list(reading.inclinations - CROWN.slope)
+    h, run = CROWN.height - CROWN.oversize, CROWN.run
+    expected = math.sqrt(2.0) * OBJECTIVE_10X.sigma * run / (run**2 + h**2)
+    assert math.degrees(expected) == pytest.approx(0.0465, abs=5e-4)
+    assert np.std(errors) == pytest.approx(expected, rel=0.25)
+    assert -0.03 - 2 * math.degrees(expected) / 8 < math.degrees(np.mean(errors)) < 0.0
+
+
+def test_the_lab_reads_through_the_10x_objective_with_its_switches():
+    machine = load_machine("robonano_a0ib")
+    ideal = Lab(machine, realism=Realism.ideal()).microscope(objective=OBJECTIVE_10X)
+    assert ideal.spot is None and ideal.readout.sigma == 0.0
+    assert ideal.lateral_spacing == OBJECTIVE_10X.pixel
+    lab = Lab(machine, realism=Realism.lab()).microscope(objective=OBJECTIVE_10X)
+    assert lab.spot == OBJECTIVE_10X.spot and lab.readout.sigma == OBJECTIVE_10X.sigma
+    assert lab.stage_sigma == 1e-6
+
+
+def test_a_face_that_ends_in_a_step_has_its_foot_at_the_step():
+    """A top at 60 um, a face at slope 0.2 down to 1 um, then a band standing 10 um above
+    the face's line (the rough stock beyond a windowed cut's last pass), then the flat."""
+    s = np.arange(0.0, 500e-6, 1e-6)
+    top, foot = 100e-6, 395e-6
+    z = np.where(s < top, 60e-6, 60e-6 - 0.2 * (s - top))
+    band = (s >= foot) & (s < foot + 50e-6)
+    z = np.where(band, 60e-6 - 0.2 * (s - top) + 10.2e-6, np.maximum(z, 0.0))
+    z = np.where(s >= foot + 50e-6, 0.0, z)
+    edges = profile_edges(s, z, pixel=False, band=0.5e-6)
+    assert edges.s_top == pytest.approx(top, abs=1e-12)
+    assert edges.s_foot == pytest.approx(foot - 1e-6, abs=1e-12)  # the face's last sample
+    assert edges.inclination == pytest.approx(math.atan(0.2), abs=1e-12)
+    # a face that runs on into the flat: the corner
+    smooth = np.maximum(np.where(s < top, 60e-6, 60e-6 - 0.2 * (s - top)), 0.0)
+    edges = profile_edges(s, smooth, pixel=False, band=0.5e-6)
+    assert edges.s_foot == pytest.approx(top + 300e-6, abs=1e-12)
+    assert edges.inclination == pytest.approx(math.atan(0.2), abs=1e-12)
+
+
+def test_a_profile_without_a_level_top_is_unreadable():
+    s = np.arange(0.0, 400e-6, 1e-6)
+    assert profile_edges(s, 60e-6 - 0.2 * s, pixel=False, band=0.5e-6) is None
