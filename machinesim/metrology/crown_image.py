@@ -170,15 +170,21 @@ def turned_placements(part) -> list:
             for k in range(4)]
 
 
+def inscribed(box, turn: float):
+    """The axis-aligned box, in a frame turned by ``turn`` (rad) about Z, about the turned
+    centre of ``box`` (x0, x1, y0, y1) that lies inside ``box`` at any turn: half sizes
+    divided by sqrt(2)."""
+    x0, x1, y0, y1 = box
+    c = rot_z(-turn)[:2, :2] @ np.array([(x0 + x1) / 2.0, (y0 + y1) / 2.0])
+    hx, hy = (x1 - x0) / (2.0 * math.sqrt(2.0)), (y1 - y0) / (2.0 * math.sqrt(2.0))
+    return (c[0] - hx, c[0] + hx, c[1] - hy, c[1] + hy)
+
+
 def _bottom(mesh, microscope, flats, turn: float):
     """The plane fitted to the flat's patches read in this placement (the turned frame)."""
     points = []
-    turned = rot_z(-turn)[:2, :2]
-    for x0, x1, y0, y1 in flats:
-        c = turned @ np.array([(x0 + x1) / 2.0, (y0 + y1) / 2.0])
-        h = min(x1 - x0, y1 - y0) / (2.0 * math.sqrt(2.0))
-        area = microscope.height_map(mesh, c[0] - h, c[0] + h, c[1] - h, c[1] + h,
-                                     spacing=FLAT_SPACING)
+    for box in flats:
+        area = microscope.height_map(mesh, *inscribed(box, turn), spacing=FLAT_SPACING)
         points.append(height_map_points(area.x, area.y, area.z))
     return fit_plane(np.vstack(points))
 

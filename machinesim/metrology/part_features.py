@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from machinesim.arrays import frozen
-from machinesim.metrology.crown_image import turned_placements
+from machinesim.metrology.crown_image import inscribed, turned_placements
 from machinesim.metrology.fits import fit_plane, height_map_points, plane_angle
 from machinesim.metrology.planes import line_distance, plane_intersection
 from machinesim.rotations import rot_z
@@ -135,16 +135,6 @@ def _map_points(part, microscope, box, spacing: float) -> np.ndarray:
     return height_map_points(area.x, area.y, area.z)
 
 
-def _inscribed(box, turn: float):
-    """The axis-aligned box, in a frame turned by ``turn`` (rad) about Z, about the turned
-    centre of ``box`` (x0, x1, y0, y1) that lies inside ``box`` at any turn: half sizes
-    divided by sqrt(2)."""
-    x0, x1, y0, y1 = box
-    c = rot_z(-turn)[:2, :2] @ np.array([(x0 + x1) / 2.0, (y0 + y1) / 2.0])
-    hx, hy = (x1 - x0) / (2.0 * math.sqrt(2.0)), (y1 - y0) / (2.0 * math.sqrt(2.0))
-    return (c[0] - hx, c[0] + hx, c[1] - hy, c[1] + hy)
-
-
 def _turned_back(points, back: np.ndarray):
     """The plane fitted to ``points`` of a placement turned on the stage, in the part's
     frame (``back``: the turn back, 3 x 3)."""
@@ -176,9 +166,9 @@ def crown_features(part, microscope, windows, spacing: float = MAP_SPACING, *,
         turn = k * math.pi / 4
         mesh = meshes[k]
         back = rot_z(turn)
-        top = _turned_back(_map_points(mesh, microscope, _inscribed(windows["top"], turn),
+        top = _turned_back(_map_points(mesh, microscope, inscribed(windows["top"], turn),
                                        spacing), back)
-        flat = _turned_back(np.vstack([_map_points(mesh, microscope, _inscribed(box, turn),
+        flat = _turned_back(np.vstack([_map_points(mesh, microscope, inscribed(box, turn),
                                                    4 * spacing) for box in windows["flat"]]),
                             back)
         for j, box in ((k, (r0, r1, v0, v1)), (k + 4, (-r1, -r0, -v1, -v0))):
