@@ -234,6 +234,25 @@ def test_identify_finds_a_seeded_robot_placement_and_the_c_centre(groove_stock, 
         assert abs(value - truth_parameters[name]) < bound, name
 
 
+def test_spheres_far_above_the_expected_height_are_found_by_a_bottom_touch_first(
+        groove_stock):
+    """A block set 0.3 mm high and tilted 1 deg: the planned scans run 0.1 mm below the
+    expected surface, so they run into the cavities (stylus over-travel) or miss them. The
+    probing then touches each cavity's bottom first and scans again about it, as an
+    operator would; the setting comes out as for a small one (noise off: 10 nm, 40 nm in
+    z, 0.3 urad as in the test above)."""
+    landed = WorkpieceSetting(np.array([20.0, -10.0, 300.0]) * UM, math.radians(1.0), 0.0,
+                              math.radians(0.3))
+    errors = ErrorModel(workpiece=landed)
+    found = ws.identify(read_spheres(TouchProbe(MACHINE, errors, groove_stock, noise=False),
+                                     cam.GROOVE_SPHERES))
+    np.testing.assert_allclose(found.setting.delta[:2], landed.delta[:2], rtol=0, atol=10 * NM)
+    assert abs(found.setting.delta[2] - landed.delta[2]) < 40 * NM
+    s = found.setting
+    np.testing.assert_allclose([s.alpha, s.beta, s.gamma], [landed.alpha, 0.0, landed.gamma],
+                               rtol=0, atol=0.3e-6)
+
+
 @pytest.mark.parametrize("noise", [False, True])
 def test_the_generic_fit_agrees_with_eqs_1_to_4_and_fig_6(groove_stock, noise):
     """The cross-check (`fit_setting`): the same readings, the six probed centres as probe

@@ -43,7 +43,12 @@ from machinesim.metrology.meshindex import MeshIndex
 from machinesim.metrology.probe import touch_many
 from machinesim.tolerances import PROBE_CHORD_M
 
-__all__ = ["ScanReading", "TouchProbe"]
+__all__ = ["ScanReading", "StylusOverTravel", "TouchProbe"]
+
+
+class StylusOverTravel(InputError):
+    """A scan met the surface more than the stylus's stroke above its path: a real probe
+    would stop the machine there."""
 
 #: Interior points tested on each piece: a smooth path's largest departure from a chord is
 #: near its middle, and a kink anywhere inside a piece moves every interior point.
@@ -238,9 +243,9 @@ class TouchProbe:
         exact = lift - t
         over = np.flatnonzero(exact > stroke)
         if over.size:
-            raise InputError(f"Expected the surface within the stylus stroke ({stroke} m) above "
-                             f"the path, got it {exact[over].max()} m above at points "
-                             f"{over.tolist()[:10]} (over-travel)", key="q_path")
+            raise StylusOverTravel(f"Expected the surface within the stylus stroke ({stroke} "
+                                   f"m) above the path, got it {exact[over].max()} m above at "
+                                   f"points {over.tolist()[:10]} (over-travel)", key="q_path")
         deflection = self.readout.read(exact, self.rng)
         recorded = self._record(q)
         contact = recorded - deflection[:, None] * u

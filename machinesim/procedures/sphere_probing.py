@@ -26,6 +26,7 @@ from machinesim.identification.workpiece_setting import (
     sphere_reading,
 )
 from machinesim.metrology import fit_sphere
+from machinesim.metrology.probe_instrument import StylusOverTravel
 from machinesim.units import M_PER_MM
 
 __all__ = ["PROBE_PLAN", "ProbePlan", "probe_axes", "read_sphere", "read_spheres"]
@@ -138,8 +139,10 @@ def read_sphere(probe, centre, plan: ProbePlan = ProbePlan(), c_angle: float = 0
     ------
     InputError
         When a scan misses the sphere or the bottom touch finds nothing: the sphere lies
-        farther from ``centre`` than the plan reaches (about ``half_width`` / 2 sideways,
-        ``press`` in height).
+        farther from ``centre`` than the plan reaches (about ``half_width`` / 2 sideways).
+        A first scan that misses or over-travels (the sphere more than ``press`` higher or
+        lower than expected) is not yet an error: the bottom is touched first and the scans
+        run again about the height found.
     """
     guess = np.array(centre, dtype=np.float64)
     inner = radius - probe.radius
@@ -147,28 +150,55 @@ def read_sphere(probe, centre, plan: ProbePlan = ProbePlan(), c_angle: float = 0
         raise InputError(f"Expected a scan half width below the ball-centre sphere radius "
                          f"{inner} m, got {plan.half_width} m", key="half_width")
     s = np.linspace(-plan.half_width, plan.half_width, plan.points)
-    for _ in range(plan.passes):
-        points = []
-        for axis in (0, 1):
-            path = np.tile(guess, (plan.points, 1))
-            path[:, axis] += s
-            path[:, 2] = guess[2] - np.sqrt(inner**2 - s**2) - plan.press
-            scan = probe.scan(probe_axes(probe.machine, path, c_angle), stroke=plan.stroke)
-            seen = ~np.isnan(scan.deflection)
-            if np.count_nonzero(seen) < plan.points // 2:
+    located = False
+    passes = 0
+    while passes < plan.passes:
+        points = _scans(probe, guess, s, inner, plan, c_angle)
+        if points is None:
+            if located:
                 raise InputError(f"Expected the scan through {guess.tolist()} m to touch the "
                                  f"sphere at {plan.points // 2} of {plan.points} points or "
-                                 f"more, got {np.count_nonzero(seen)}", key="centre")
-            points.append(_machine_points(probe, scan.contact_q[seen]))
-        points = np.vstack(points)
+                                 f"more, it did not", key="centre")
+            # The cavity is not at the expected height (a workpiece set much higher or
+            # lower, or tilted): find its bottom first, as an operator would, and scan again.
+            bottom = _bottom_touch(probe, guess, radius, plan, c_angle)
+            guess = np.r_[guess[:2], bottom[2] + inner]
+            located = True
+            continue
         guess = np.r_[fit_sphere(points).centre[:2], guess[2]]
+        passes += 1
+    bottom = _bottom_touch(probe, guess, radius, plan, c_angle)
+    return sphere_reading(points, bottom, probe.radius, c_angle)
+
+
+def _scans(probe, guess, s, inner, plan, c_angle):
+    """Contact points (N, 3) of the two orthogonal scans about ``guess``, or None when
+    either touches the sphere at fewer than half its points or runs into it (over-travel)."""
+    points = []
+    for axis in (0, 1):
+        path = np.tile(guess, (plan.points, 1))
+        path[:, axis] += s
+        path[:, 2] = guess[2] - np.sqrt(inner**2 - s**2) - plan.press
+        try:
+            scan = probe.scan(probe_axes(probe.machine, path, c_angle), stroke=plan.stroke)
+        except StylusOverTravel:
+            return None
+        seen = ~np.isnan(scan.deflection)
+        if np.count_nonzero(seen) < plan.points // 2:
+            return None
+        points.append(_machine_points(probe, scan.contact_q[seen]))
+    return np.vstack(points)
+
+
+def _bottom_touch(probe, guess, radius, plan, c_angle) -> np.ndarray:
+    """The ball centre (3,) where a touch down the probe axis under ``guess`` meets the
+    cavity, machine coordinates (Fig. 4c)."""
     start = probe_axes(probe.machine, [guess[0], guess[1], guess[2] + plan.lift], c_angle)
     contact = probe.touch(start, "-Z", plan.lift + radius)
     if contact is None:
         raise InputError(f"Expected the bottom touch under {guess[:2].tolist()} m to meet the "
                          f"sphere within {plan.lift + radius} m, it met nothing", key="centre")
-    bottom = _machine_points(probe, contact[None])[0]
-    return sphere_reading(points, bottom, probe.radius, c_angle)
+    return _machine_points(probe, contact[None])[0]
 
 
 def read_spheres(probe, spheres: ReferenceSpheres, plan: ProbePlan = ProbePlan()
