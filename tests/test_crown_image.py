@@ -103,3 +103,20 @@ def test_a_face_that_ends_in_a_step_has_its_foot_at_the_step():
 def test_a_profile_without_a_level_top_is_unreadable():
     s = np.arange(0.0, 400e-6, 1e-6)
     assert profile_edges(s, 60e-6 - 0.2 * s, pixel=False, band=0.5e-6) is None
+
+
+def test_uncut_stock_above_the_top_puts_the_edge_where_the_cut_face_crosses_the_top():
+    """The face's passes moved out by 130 um (a C centre off by 65 um) on a workpiece set
+    34 um high: the top at 60 um, then the rough face standing 44.2 um above the designed
+    one from the top's edge until the passes begin, an 18.2 um step down to the cut face,
+    which crosses the top's level 130 um out and runs down at slope 0.2. The edge is that
+    crossing, not the top's end."""
+    s = np.arange(0.0, 700e-6, 1e-6)
+    end, shift = 100e-6, 130e-6
+    rough = 60e-6 + 44.2e-6 - 0.2 * (s - end)
+    cut = 60e-6 - 0.2 * (s - end - shift)
+    z = np.where(s < end, 60e-6, np.where(s < end + shift, rough, np.maximum(cut, 0.0)))
+    edges = profile_edges(s, z, pixel=False, band=0.5e-6)
+    assert edges.s_top == pytest.approx(end + shift, abs=1e-12)
+    assert edges.z_top == pytest.approx(60e-6, abs=1e-15)
+    assert edges.inclination == pytest.approx(math.atan(0.2), abs=1e-12)

@@ -112,13 +112,15 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
                   reach: float = EDGE_REACH, iterations: int = 4) -> ProfileEdges | None:
     """The top edge and the foot of the face in a profile across it, levelled on the flat.
 
-    Top edge: from where the profile first leaves the level of its first samples by more
+    Top edge: from where the profile first falls below the level of its first samples by more
     than ``band`` (m; a few times the height noise), refined to the corner of two lines
     fitted to the samples either side of it, ``guard`` to ``reach`` away (the eye judges a
-    corner by what is near it), ``iterations`` times. Foot: where the profile leaves the
-    face's line by more than ``band`` going out; if what follows runs on from the face
-    (a ledge or the flat), the corner of the face's line and its line; if it steps away
-    (an uncut band beyond the finished face), the face's last sample. ``pixel``: each
+    corner by what is near it), ``iterations`` times. Where the level is first left upward
+    (uncut stock standing above the top between it and the cut face), the top's line is
+    fitted just before that and the edge is its corner with the face. Foot: where the
+    profile leaves the face's line by more than ``band`` going out; if what follows runs on
+    from the face (a ledge or the flat), the corner of the face's line and its line; if it
+    steps away (an uncut band beyond the finished face), the face's last sample. ``pixel``: each
     cursor on the sample nearest its edge and the height read there (an operator reading
     an image); else the edges on the fitted lines. None where the profile does not run
     from a level top down a face.
@@ -129,11 +131,17 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
         return None
     level = float(np.median(z[:10][finite[:10]]))
     off = np.flatnonzero(~(np.abs(z - level) <= band))
-    if len(off) == 0:
+    below = np.flatnonzero(z < level - band)
+    if len(off) == 0 or len(below) == 0:
         return None
-    s_top = float(s[off[0]])
+    # Where the top is followed by stock standing above it (a band the face's passes did
+    # not reach), its line is fitted before that band and the edge is where the face
+    # below crosses it; otherwise the line is fitted next to the edge.
+    ridge = below[0] != off[0]
+    s_level_end, s_top = float(s[off[0]]), float(s[below[0]])
     for _ in range(iterations):
-        top = _line(s, z, (s > s_top - reach) & (s < s_top - guard))
+        anchor = s_level_end if ridge else s_top
+        top = _line(s, z, (s > anchor - reach) & (s < anchor - guard))
         upper = _line(s, z, (s > s_top + guard) & (s < s_top + reach))
         if top is None or upper is None or top[0] == upper[0]:
             return None
