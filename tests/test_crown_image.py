@@ -120,3 +120,9 @@ def test_uncut_stock_above_the_top_puts_the_edge_where_the_cut_face_crosses_the_
     assert edges.s_top == pytest.approx(end + shift, abs=1e-12)
     assert edges.z_top == pytest.approx(60e-6, abs=1e-15)
     assert edges.inclination == pytest.approx(math.atan(0.2), abs=1e-12)
+    # the band as the top's pass ends leave it at a diagonal face: rising gently (0.03) for
+    # 60 um, then the cut face; the top's line is taken before the rise, not across it
+    rise = np.where(s < end, 60e-6, np.minimum(60e-6 + 0.03 * (s - end),
+                                               61.8e-6 - 0.2 * (s - end - 60e-6)))
+    edges = profile_edges(s, np.maximum(rise, 0.0), pixel=False, band=0.5e-6)
+    assert edges.s_top == pytest.approx(end + 60e-6 + 9e-6, abs=1e-12)

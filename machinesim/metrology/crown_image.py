@@ -117,13 +117,13 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
     fitted to the samples either side of it, ``guard`` to ``reach`` away (the eye judges a
     corner by what is near it), ``iterations`` times. Where the level is first left upward
     (uncut stock standing above the top between it and the cut face), the top's line is
-    fitted just before that and the edge is its corner with the face. Foot: where the
-    profile leaves the face's line by more than ``band`` going out; if what follows runs on
-    from the face (a ledge or the flat), the corner of the face's line and its line; if it
-    steps away (an uncut band beyond the finished face), the face's last sample. ``pixel``: each
-    cursor on the sample nearest its edge and the height read there (an operator reading
-    an image); else the edges on the fitted lines. None where the profile does not run
-    from a level top down a face.
+    fitted on the top up to ``reach`` before that and the edge is its corner with the face.
+    Foot: where the profile leaves the face's line by more than ``band`` going out; if what
+    follows runs on from the face (a ledge or the flat), the corner of the face's line and
+    its line; if it steps away (an uncut band beyond the finished face), the face's last
+    sample. ``pixel``: each cursor on the sample nearest its edge and the height read there
+    (an operator reading an image); else the edges on the fitted lines. None where the
+    profile does not run from a level top down a face.
     """
     s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
     finite = np.isfinite(z)
@@ -135,13 +135,14 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
     if len(off) == 0 or len(below) == 0:
         return None
     # Where the top is followed by stock standing above it (a band the face's passes did
-    # not reach), its line is fitted before that band and the edge is where the face
-    # below crosses it; otherwise the line is fitted next to the edge.
+    # not reach), its line is fitted on the top well before that band (which rises from
+    # within the band, from the top's pass ends) and the edge is where the face below
+    # crosses it; otherwise the line is fitted next to the edge.
     ridge = below[0] != off[0]
     s_level_end, s_top = float(s[off[0]]), float(s[below[0]])
     for _ in range(iterations):
-        anchor = s_level_end if ridge else s_top
-        top = _line(s, z, (s > anchor - reach) & (s < anchor - guard))
+        top = _line(s, z, (s < s_level_end - reach) if ridge
+                    else (s > s_top - reach) & (s < s_top - guard))
         upper = _line(s, z, (s > s_top + guard) & (s < s_top + reach))
         if top is None or upper is None or top[0] == upper[0]:
             return None
