@@ -90,12 +90,14 @@ def _parse(argv):
 
 
 def test_the_scenario_with_noise_reports_the_c_centre_lengthening_and_a_budget(tmp_path):
-    """Quick windows, instrument noise only, the default C centre e = (-2, 1) um and the
-    seed-0 robot landing: before compensation every top-edge distance is +4 um (-2 e_x;
-    the landing is rigid and leaves top edges alone, its faces all cut); after, within 20 nm
-    (probe 20 nm and microscope 12 nm noise). The budget has one row per measured "after"
-    figure (not the machining times) for the one source that is on, its after_all the
-    figure's after."""
+    """Quick windows, instrument noise only, the default C centre e = (-75, 5) um and the seed-0
+    robot landing (the crown 40 um higher): before compensation every top-edge distance read
+    in the images is +150 um (-2 e_x: the landing is rigid and leaves top edges alone, its
+    faces all cut; within 3 um, the 10x image's height noise on corners drawn across the
+    bands of stock the outward-moved passes leave; 0.51 um measured with the noise off);
+    after, the plane fits within 20 nm (probe 20 nm and microscope 12 nm noise). The budget
+    has one row per measured "after" figure (not the machining times) for the one source
+    that is on, its after_all the figure's after."""
     out = tmp_path / "report"
     result = subprocess.run([sys.executable, str(ROOT / "scenarios" / "workpiece_setting.py"),
                              "--quick", "--realism", "noise_only", "--budget", "on",
@@ -107,9 +109,8 @@ def test_the_scenario_with_noise_reports_the_c_centre_lengthening_and_a_budget(t
     figures = {f["name"]: f for f in summary["figures"]}
     e_x = scenario.C_CENTRE_UM[0]
     for key in ("L1_L5", "L2_L6", "L3_L7", "L4_L8"):
-        figure = figures[f"edge_distance_planes_{key}"]
-        assert figure["before"] == pytest.approx(-2 * e_x, abs=0.05)
-        assert abs(figure["after"]) < 0.02
+        assert figures[f"edge_distance_{key}"]["before"] == pytest.approx(-2 * e_x, abs=3.0)
+        assert abs(figures[f"edge_distance_planes_{key}"]["after"]) < 0.02
     rows = summary["budget"]
     assert {r["source"] for r in rows} == {"instrument_noise"}
     crown_after = [f for f in summary["figures"] if f["after"] is not None

@@ -366,12 +366,16 @@ class RobotLoadedWorkpiece:
         """The crown's tool, windows, cut boxes, pass rows and floor for the found setting.
 
         The deepest cut the misplaced crown can see (stock allowance, height error, the tilt
-        over the crown's 4 mm) sets the tool profile's height and how far from a window a
-        pass still cuts it; the identified setting stands for the actual one (to nm).
+        over the crown's 4 mm, and a face moved inward by the C centre e: face k's passes
+        stand e . n_k - e_x out, at most e_x + |e| in) sets the tool profile's height and
+        how far from a window a pass still cuts it; the identified setting stands for the
+        actual one (to nm).
         """
         crown, s = self.crown, found.setting
+        e = found.c_centre
+        inward = max(0.0, float(e[0]) + math.hypot(*e)) * math.tan(crown.slope)
         deepest = (crown.oversize + abs(s.delta[2]) + 4 * MM * math.hypot(s.alpha, s.beta)
-                   + 5 * UM)
+                   + inward + 5 * UM)
         sizes = {"top": 0.15 * MM, "side": 0.1 * MM} if self.quick else {}
         windows, boxes, rows = crown_roi(crown, margin=math.sqrt(2 * NOSE * deepest), **sizes)
         # the windows are cut and kept below the flat as deep as the deepest cut, and more
