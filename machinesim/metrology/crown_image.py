@@ -135,9 +135,9 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
     if len(off) == 0 or len(below) == 0:
         return None
     # Where the top is followed by stock standing above it (a band the face's passes did
-    # not reach), its line is fitted on the top well before that band (which rises from
-    # within the band, from the top's pass ends) and the edge is where the face below
-    # crosses it; otherwise the line is fitted next to the edge.
+    # not reach), its line is fitted on the top ``reach`` clear of that band (whose rise may
+    # begin below ``band``, as the top's pass ends leave it at a diagonal face) and the edge
+    # is where the face below crosses it; otherwise the line is fitted next to the edge.
     ridge = below[0] != off[0]
     s_level_end, s_top = float(s[off[0]]), float(s[below[0]])
     for _ in range(iterations):
