@@ -126,3 +126,18 @@ def test_uncut_stock_above_the_top_puts_the_edge_where_the_cut_face_crosses_the_
                                                61.8e-6 - 0.2 * (s - end - 60e-6)))
     edges = profile_edges(s, np.maximum(rise, 0.0), pixel=False, band=0.5e-6)
     assert edges.s_top == pytest.approx(end + 60e-6 + 9e-6, abs=1e-12)
+
+
+def test_a_top_not_level_with_the_flat_is_followed_as_a_line():
+    """A crown cut level on a workpiece tilted by 1.93 deg, seen levelled on its flat: the
+    top falls outward at tan 1.93 deg (3.4 um over 100 um, more than the band) and the face
+    at 11.31 + 1.93 deg. The top edge is the corner of the two, and S is the face's angle,
+    not the corner of the top with itself."""
+    s = np.arange(0.0, 700e-6, 1e-6)
+    top_end = 150e-6
+    top = 60e-6 - math.tan(math.radians(1.93)) * s
+    face = top[150] - math.tan(math.atan(0.2) + math.radians(1.93)) * (s - top_end)
+    z = np.maximum(np.where(s < top_end, top, face), 0.0)
+    edges = profile_edges(s, z, pixel=False, band=0.5e-6)
+    assert edges.s_top == pytest.approx(top_end, abs=1e-12)
+    assert edges.inclination == pytest.approx(math.atan(0.2) + math.radians(1.93), abs=1e-12)

@@ -129,7 +129,11 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
     finite = np.isfinite(z)
     if np.count_nonzero(finite[:10]) < 5:
         return None
-    level = float(np.median(z[:10][finite[:10]]))
+    level = np.full_like(z, np.median(z[:10][finite[:10]]))
+    head = _line(s, z, s < s[0] + reach)
+    if head is not None and abs(head[0]) * reach > band:
+        # a top not level with the flat (a crown cut level on a tilted workpiece): its line
+        level = np.polyval(head, s)
     off = np.flatnonzero(~(np.abs(z - level) <= band))
     below = np.flatnonzero(z < level - band)
     if len(off) == 0 or len(below) == 0:
