@@ -8,6 +8,9 @@ windows, about 80 s, as the tests run it) with options
                                 paper's LR Mate 200iD); its landings are drawn with --seed
     --delta-um x,y,z            or give the setting error: position (um) ...
     --rot-deg alpha,beta,gamma  ... and rotations (deg), the same for both workpieces
+    --crown-delta-um, --crown-rot-deg  the same for the crown only (the grooves keep
+                                theirs): e.g. 0,0,60 and 1.93,0,0, the tilt behind the
+                                paper's S before (docs/procedures/workpiece_setting.md)
     --errors FILE.toml          inject this error model in both loads instead of the
                                 default C-axis centre (any ErrorModel); the options above,
                                 when given, set the workpiece setting on top of it
@@ -103,23 +106,32 @@ def setting_parameters(setting: WorkpieceSetting) -> dict[str, float]:
 
 def loads(args) -> dict:
     """The error model of each load: the robot's landings (drawn with --seed, grooves first,
-    as before; the crown's `CROWN_HEIGHT_UM` higher) or --delta-um/--rot-deg, over --errors
-    when given, else over the default C centre `C_CENTRE_UM` (`injected_errors`)."""
+    as before; the crown's `CROWN_HEIGHT_UM` higher) or --delta-um/--rot-deg (the crown's
+    by --crown-delta-um/--crown-rot-deg), over --errors when given, else over the default C
+    centre `C_CENTRE_UM` (`injected_errors`)."""
     robot = RobotLoader((args.robot_repeatability_um or ROBOT_REPEATABILITY_UM) * UM)
     rng = np.random.default_rng(args.seed)
     landed = {load: setting_parameters(robot.land(rng)) for load in EXPERIMENTS}
     landed["crown"]["workpiece.z"] += CROWN_HEIGHT_UM * UM
     centre = {"location.C.EX0C": C_CENTRE_UM[0] * UM, "location.C.EY0C": C_CENTRE_UM[1] * UM}
     if args.delta_um or args.rot_deg:
-        delta = np.array(parse_floats(args.delta_um or "0,0,0", 3, "--delta-um")) * UM
-        angles = np.radians(parse_floats(args.rot_deg or "0,0,0", 3, "--rot-deg"))
-        given = dict.fromkeys(EXPERIMENTS, setting_parameters(WorkpieceSetting(delta, *angles)))
+        given = dict.fromkeys(EXPERIMENTS, _given_setting(args.delta_um, args.rot_deg, ""))
     elif args.robot_repeatability_um is not None:
         given = landed
     else:
         given = dict.fromkeys(EXPERIMENTS, {})
+    if args.crown_delta_um or args.crown_rot_deg:
+        given = {**given, "crown": _given_setting(args.crown_delta_um, args.crown_rot_deg,
+                                                  "crown-")}
     return {load: injected_errors(args, {**landed[load], **centre}, given[load])
             for load in EXPERIMENTS}
+
+
+def _given_setting(delta_um, rot_deg, prefix: str) -> dict[str, float]:
+    """A setting given on the command line (--{prefix}delta-um, --{prefix}rot-deg)."""
+    delta = np.array(parse_floats(delta_um or "0,0,0", 3, f"--{prefix}delta-um")) * UM
+    angles = np.radians(parse_floats(rot_deg or "0,0,0", 3, f"--{prefix}rot-deg"))
+    return setting_parameters(WorkpieceSetting(delta, *angles))
 
 
 def main(argv=None) -> int:
@@ -129,6 +141,9 @@ def main(argv=None) -> int:
                         f"{ROBOT_REPEATABILITY_UM:g})")
     parser.add_argument("--delta-um", help="position error x,y,z (um) instead of a draw")
     parser.add_argument("--rot-deg", help="rotation errors alpha,beta,gamma (deg)")
+    parser.add_argument("--crown-delta-um", help="the crown's position error x,y,z (um) "
+                        "instead of its draw (the grooves keep theirs)")
+    parser.add_argument("--crown-rot-deg", help="the crown's rotation errors (deg)")
     parser.add_argument("--nose-correction", choices=("on", "off"), default="on",
                         help="put the nose arc's lowest point on the path (default on), "
                         "or the tip as the paper's eq 7 (off)")

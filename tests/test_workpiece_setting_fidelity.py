@@ -17,6 +17,8 @@ import pytest
 from machinesim import ErrorModel, load_machine
 from machinesim.cam import crown as cam
 from machinesim.cutting import cut_turned
+from machinesim.exceptions import MachineSimError
+from machinesim.loading import RobotLoader
 from machinesim.metrology import Microscope, crown_features
 from machinesim.report import check_summary
 
@@ -72,6 +74,24 @@ def test_the_realism_options_pick_the_lab():
             assert str(realism) == name
         else:
             assert not realism.instrument_noise and realism.background_errors
+
+
+def test_the_crown_alone_takes_a_given_setting_and_the_grooves_keep_their_landing():
+    """--crown-delta-um/--crown-rot-deg set the crown's load only: its setting is the one
+    given (SI, exactly), the grooves' the robot's seed-0 draw, both over the default C
+    centre; a malformed value names its option."""
+    models = scenario.loads(_parse(["--crown-delta-um", "0,0,60", "--crown-rot-deg",
+                                    "1.93,0,0"]))
+    crown, grooves = models["crown"].parameters(), models["grooves"].parameters()
+    assert crown["workpiece.z"] == 60 * UM and crown["workpiece.x"] == 0.0
+    assert crown["workpiece.alpha"] == math.radians(1.93) and crown["workpiece.gamma"] == 0.0
+    drawn = RobotLoader(scenario.ROBOT_REPEATABILITY_UM * UM).land(np.random.default_rng(0))
+    assert grooves["workpiece.x"] == drawn.delta[0]
+    assert grooves["workpiece.gamma"] == drawn.gamma
+    for model in (crown, grooves):
+        assert model["location.C.EX0C"] == scenario.C_CENTRE_UM[0] * UM
+    with pytest.raises(MachineSimError, match="--crown-rot-deg"):
+        scenario.loads(_parse(["--crown-rot-deg", "1,2"]))
 
 
 def _parse(argv):
