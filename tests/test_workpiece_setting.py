@@ -253,6 +253,17 @@ def test_spheres_far_above_the_expected_height_are_found_by_a_bottom_touch_first
                                rtol=0, atol=0.3e-6)
 
 
+def test_a_sphere_far_aside_is_a_clear_error_after_the_bottom_touch(groove_stock):
+    """Looked for 3 mm aside (beyond the 2 mm cavity): the scans miss, the bottom touch
+    meets the flat, the scans about that height miss again: one InputError naming the
+    expected centre, not a traceback or a wrong reading."""
+    probe = TouchProbe(MACHINE, ErrorModel(), groove_stock, noise=False)
+    centre = cam.GROOVE_SPHERES.centres[0] + np.array([3.0, 0.0, 0.0]) * MM
+    with pytest.raises(InputError, match="bottom touch under") as error:
+        read_sphere(probe, centre)
+    assert error.value.key == "centre"
+
+
 @pytest.mark.parametrize("noise", [False, True])
 def test_the_generic_fit_agrees_with_eqs_1_to_4_and_fig_6(groove_stock, noise):
     """The cross-check (`fit_setting`): the same readings, the six probed centres as probe

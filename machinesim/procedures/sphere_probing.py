@@ -156,9 +156,13 @@ def read_sphere(probe, centre, plan: ProbePlan = ProbePlan(), c_angle: float = 0
         points = _scans(probe, guess, s, inner, plan, c_angle)
         if points is None:
             if located:
-                raise InputError(f"Expected the scan through {guess.tolist()} m to touch the "
-                                 f"sphere at {plan.points // 2} of {plan.points} points or "
-                                 f"more, it did not", key="centre")
+                where = np.asarray(centre, dtype=np.float64).tolist()
+                raise InputError(f"Expected the scans through {guess.tolist()} m (the height "
+                                 f"of a bottom touch under {where} m) to touch the sphere "
+                                 f"at {plan.points // 2} of {plan.points} points or more "
+                                 f"within the stylus stroke, they did not: the sphere lies "
+                                 f"farther sideways than about {plan.half_width / 2} m",
+                                 key="centre")
             # The cavity is not at the expected height (a workpiece set much higher or
             # lower, or tilted): find its bottom first, as an operator would, and scan again.
             bottom = _bottom_touch(probe, guess, radius, plan, c_angle)
