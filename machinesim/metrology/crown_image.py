@@ -99,6 +99,28 @@ def _line(s: np.ndarray, z: np.ndarray, keep: np.ndarray):
     return np.polyfit(s[keep], z[keep], 1) if np.count_nonzero(keep) >= 3 else None
 
 
+def _top_level(s: np.ndarray, z: np.ndarray, band: float, guard: float, reach: float,
+               iterations: int) -> np.ndarray:
+    """The top's line along a profile, from its start as far as the profile keeps to it.
+
+    First the line of the first ``reach``; then refitted, ``iterations`` times, on the
+    samples from the start to ``guard`` before the first that leaves it by more than
+    ``band``. A top need not be level with the flat (a crown cut level on a tilted
+    workpiece), and a gentle slope (1 um over 60, 3 um over 200) leaves a level by more
+    than ``band`` before its edge."""
+    head = _line(s, z, s < s[0] + reach)
+    if head is None:
+        return np.full_like(z, np.median(z[:10][np.isfinite(z[:10])]))
+    level = np.polyval(head, s)
+    for _ in range(iterations):
+        off = np.flatnonzero(~(np.abs(z - level) <= band))
+        line = _line(s, z, s < (float(s[off[0]]) if len(off) else np.inf) - guard)
+        if line is None:
+            break
+        level = np.polyval(line, s)
+    return level
+
+
 def _corner(a: np.ndarray, b: np.ndarray) -> float:
     return float((b[1] - a[1]) / (a[0] - b[0]))
 
@@ -112,28 +134,24 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
                   reach: float = EDGE_REACH, iterations: int = 4) -> ProfileEdges | None:
     """The top edge and the foot of the face in a profile across it, levelled on the flat.
 
-    Top edge: from where the profile first falls below the level of its first samples by more
+    Top edge: from where the profile first falls below the top's line (`_top_level`) by more
     than ``band`` (m; a few times the height noise), refined to the corner of two lines
     fitted to the samples either side of it, ``guard`` to ``reach`` away (the eye judges a
     corner by what is near it), ``iterations`` times. Where the level is first left upward
     (uncut stock standing above the top between it and the cut face), the top's line is
     fitted on the top up to ``reach`` before that and the edge is its corner with the face.
-    Foot: where the profile leaves the face's line by more than ``band`` going out; if what
-    follows runs on from the face (a ledge or the flat), the corner of the face's line and
-    its line; if it steps away (an uncut band beyond the finished face), the face's last
-    sample. ``pixel``: each cursor on the sample nearest its edge and the height read there
+    Foot: where the profile leaves the face's line (refitted on what keeps to it) by more
+    than ``band`` going out; if what follows runs on from the face (a ledge or the flat),
+    the corner of the face's line and its line; if it steps away (an uncut band beyond the
+    finished face), the face's last sample. ``pixel``: each cursor on the sample nearest its edge and the height read there
     (an operator reading an image); else the edges on the fitted lines. None where the
-    profile does not run from a level top down a face.
+    profile does not run from a top down a face.
     """
     s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
     finite = np.isfinite(z)
     if np.count_nonzero(finite[:10]) < 5:
         return None
-    level = np.full_like(z, np.median(z[:10][finite[:10]]))
-    head = _line(s, z, s < s[0] + reach)
-    if head is not None and abs(head[0]) * reach > band:
-        # a top not level with the flat (a crown cut level on a tilted workpiece): its line
-        level = np.polyval(head, s)
+    level = _top_level(s, z, band, guard, reach, iterations)
     off = np.flatnonzero(~(np.abs(z - level) <= band))
     below = np.flatnonzero(z < level - band)
     if len(off) == 0 or len(below) == 0:
@@ -144,29 +162,43 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
     # is where the face below crosses it; otherwise the line is fitted next to the edge.
     ridge = below[0] != off[0]
     s_level_end, s_top = float(s[off[0]]), float(s[below[0]])
+    clear = s < s_level_end - reach
+    if np.count_nonzero(clear & finite) < 3:
+        clear = s < s_level_end - guard
     for _ in range(iterations):
-        top = _line(s, z, (s < s_level_end - reach) if ridge
-                    else (s > s_top - reach) & (s < s_top - guard))
+        top = _line(s, z, clear if ridge else (s > s_top - reach) & (s < s_top - guard))
         upper = _line(s, z, (s > s_top + guard) & (s < s_top + reach))
         if top is None or upper is None or top[0] == upper[0]:
             return None
         s_top = _corner(top, upper)
         if not s[0] < s_top < s[-1]:
             return None
-    # the face: out from the top edge while the profile keeps to the upper line, refitted
-    on = (s > s_top + guard) & ~(np.abs(z - np.polyval(upper, s)) > band)
-    past = np.flatnonzero(~on & (s > s_top + reach))
-    s_end = float(s[past[0]]) if len(past) else float(s[-1])
-    face = _line(s, z, (s > s_top + guard) & (s < s_end - guard))
+    # the face: out from the top edge while the profile keeps to its line, the line refitted
+    # on what keeps to it (a line fitted next to the edge drifts off a long face)
+    face, s_end = upper, float(s[-1])
+    for _ in range(iterations):
+        on = (s > s_top + guard) & ~(np.abs(z - np.polyval(face, s)) > band)
+        past = np.flatnonzero(~on & (s > s_top + reach))
+        s_end = float(s[past[0]]) if len(past) else float(s[-1])
+        face = _line(s, z, (s > s_top + guard) & (s < s_end - guard))
+        if face is None:
+            return None
     beyond = _line(s, z, (s > s_end + guard) & (s < s_end + reach))
-    if face is None:
-        return None
     last = float(s[np.flatnonzero((s < s_end) & finite)[-1]])
     s_foot = last
     if beyond is not None and beyond[0] != face[0]:
         corner = _corner(face, beyond)
         if last - reach < corner < s_end + reach and abs(
                 np.polyval(beyond, corner) - np.polyval(face, corner)) <= band:
+            # the foot's corner, refined as the top's: the face leaves its line by the band
+            # only band / (its slope change) past the corner, more than ``guard`` at a foot
+            # of 11 deg read with the 10x's noise
+            for _ in range(iterations):
+                inner = _line(s, z, (s > s_top + guard) & (s < corner - guard))
+                outer = _line(s, z, (s > corner + guard) & (s < corner + reach))
+                if inner is None or outer is None or inner[0] == outer[0]:
+                    break
+                face, corner = inner, _corner(inner, outer)
             s_foot = corner
     if not pixel:
         return ProfileEdges(s_top, float(np.polyval(top, s_top)), s_foot,
