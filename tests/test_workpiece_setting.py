@@ -41,7 +41,7 @@ from machinesim.procedures.workpiece_setting import (
     read_spheres,
 )
 from machinesim.report import ReportFolder, check_summary
-from machinesim.rotations import rot_z, rotation_xyz
+from machinesim.rotations import rotation_xyz
 from machinesim.workpiece import stock_from_spec
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -402,44 +402,6 @@ def test_cut_turned_makes_the_part_cutting_cut_makes(crown_stock):
     through_lab, _ = lab.cut(program, tool, crown_stock, roi=box, start=cam.PARK,
                              turn_step=math.pi / 4)
     assert through_lab.volume == ours.volume
-
-
-def test_cut_turned_untilts_a_tilted_workpiece_and_makes_the_same_part(crown_stock):
-    """A workpiece tilted 2 deg sees every sweep tilted alike; cut_turned turns it back to the
-    machine's axes (the engine's fast case): in that frame the moves lie in the coordinate
-    planes they lie in on the nominal machine, and the part is the one `cut` makes (volume
-    1e-12 relative, heights 1e-12 m)."""
-    from machinesim.cutting import windows
-
-    alpha, beta = math.radians(2.0), math.radians(-0.5)
-    middle = cam.CROWN.apothem + 0.5 * cam.CROWN.run
-    cx, cy = middle * math.cos(math.pi / 4), middle * math.sin(math.pi / 4)
-    # raised so that the tilted face still meets the passes in the window
-    lift = -(cy * math.sin(alpha) - cx * math.sin(beta)) + 20 * UM
-    errors = ErrorModel(workpiece=WorkpieceSetting([1 * UM, -2 * UM, lift], alpha, beta, 0.0))
-    program = small_crown([0.0], 1, rows=(-25 * UM, 25 * UM))
-    trajectory = motion.plan(program, MACHINE, errors, start=cam.PARK)
-    column = MACHINE.axes.index("C")
-    feeds = [s for s in trajectory.segments if s.kind == "linear"]
-    turn = rot_z(-round(float(feeds[0].q[0, column]) / (math.pi / 4)) * math.pi / 4)
-    tilted = [MACHINE.tool_pose(s.q, errors) for s in feeds]
-    nominal = [MACHINE.tool_pose(s.q) for s in feeds]
-    untilt = windows._untilt(MACHINE, feeds[0].q[0], errors)
-    in_planes = windows._aligned(nominal, turn)
-    assert in_planes > 0
-    assert windows._aligned(tilted, turn) < in_planes
-    assert windows._aligned(tilted, turn @ untilt) == in_planes
-    box = [(cx - 0.05 * MM, cx + 0.05 * MM, cy - 0.05 * MM, cy + 0.05 * MM)]
-    tool = cam.crown_tool()
-    ours, report = cut_turned(program, MACHINE, tool, crown_stock, errors, roi=box,
-                              start=cam.PARK)
-    theirs, _ = cut(program, MACHINE, tool=tool, stock=clip_to(crown_stock, box),
-                    errors=errors, roi=box, start=cam.PARK)
-    assert report.removed_volume_m3 > 0 and report.sweeps > 0
-    assert ours.volume == pytest.approx(theirs.volume, rel=1e-12)
-    x, y = cx + np.linspace(-0.04, 0.04, 9) * MM, cy + np.linspace(-0.04, 0.04, 9) * MM
-    np.testing.assert_allclose(height_map(ours, x, y), height_map(theirs, x, y), rtol=0,
-                               atol=1e-12)
 
 
 def test_machining_time_is_the_planned_time_of_the_whole_program():

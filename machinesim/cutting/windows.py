@@ -45,20 +45,14 @@ def clip_to(stock: Part, boxes, floor: float | None = None) -> Part:
 def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *,
                roi=None, floor: float | None = None, start=None, turn_step: float = math.pi / 4,
                turn_axis: str = "C", chord_tolerance: float = motion.CHORD_TOLERANCE_M,
-               servo=None, allow_overtravel: bool = False, align: bool = True
-               ) -> tuple[Part, CutReport]:
+               servo=None, allow_overtravel: bool = False) -> tuple[Part, CutReport]:
     """Cut ``program`` as `machinesim.cutting.cut` does, each turn group in its own frame.
 
     The feed moves are grouped by the value of ``turn_axis`` at their start, rounded to a
     multiple k of ``turn_step``; each group's sweeps are subtracted from the part turned by
     -k ``turn_step`` about the workpiece Z, with the poses turned alike, and the part turned
-    back. With ``align``, a group whose sweeps the machine's errors tilt alike (a tilted
-    workpiece) is turned further, by the rotation that gives the tool its orientation on
-    the nominal machine (`_untilt`), when that leaves more of its moves in coordinate
-    planes (`_aligned`): the booleans of such sweeps are the fast case (a crown tilted
-    1.93 deg: 6 times faster, benchmarks/crown_cut.py). Rapids are neither cut nor
-    checked against the part (the program must keep them above it; the report says so in
-    its notes).
+    back. Rapids are neither cut nor checked against the part (the program must keep them
+    above it; the report says so in its notes).
 
     Parameters
     ----------
@@ -78,9 +72,6 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         rad, > 0.
     turn_axis : str
         The rotary axis about the workpiece Z whose positions group the feed moves.
-    align : bool
-        Turn a tilted group to the machine's axes (default); False: by its C angle alone
-        (for comparison). The part is the same either way, to round-off.
     chord_tolerance, servo, allow_overtravel
         As `machinesim.cutting.cut` (an axis outside its travel raises `AxisLimitError`
         unless ``allow_overtravel``).
@@ -121,19 +112,12 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     holder: set[int] = set()
     step_deg = math.degrees(turn_step)
     for key, segments in groups.items():
-        poses = [machine.tool_pose(segment.q, errors) for segment in segments]
         turn = np.eye(4)
         turn[:3, :3] = rot_z(-key * turn_step)
-        untilt = _untilt(machine, segments[0].q[0], errors)
-        if align and _aligned(poses, turn[:3, :3] @ untilt) > _aligned(poses, turn[:3, :3]):
-            turn[:3, :3] = turn[:3, :3] @ untilt
-            cut_part, report = remove(Part(part.manifold.transform(turn[:3])), tool,
-                                      [turn @ pose for pose in poses])
-            part = Part(cut_part.manifold.transform(turn.T[:3]))
-        else:
-            turned = Part(part.manifold.rotate((0.0, 0.0, -step_deg * key)))
-            cut_part, report = remove(turned, tool, [turn @ pose for pose in poses])
-            part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
+        turned = Part(part.manifold.rotate((0.0, 0.0, -step_deg * key)))
+        paths = [turn @ machine.tool_pose(segment.q, errors) for segment in segments]
+        cut_part, report = remove(turned, tool, paths)
+        part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
         sweep_line = np.repeat([s.line for s in segments], [len(s.q) - 1 for s in segments])
         holder.update(int(sweep_line[i]) for i in report.holder_contact)
         sweeps += report.n_sweeps_cut
@@ -149,28 +133,3 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         elapsed_s=time.perf_counter() - began,
         notes=(*trajectory.notes, "rapids not cut nor checked against the part (turned groups)"),
         holder_contact=tuple(sorted(holder)), engine_s=engine_s, nc=nc_summary(program))
-
-
-#: A sweep's move counts as lying in a coordinate plane when its component off the plane is
-#: at most this fraction of its length (6 millidegrees: a compensated program's residual
-#: tilt, nm over mm, counts; a robot's landing, 30 um over 20 mm, does not).
-ALIGNED_REL = 1e-4
-
-
-def _untilt(machine, q, errors) -> np.ndarray:
-    """The rotation that turns the tool's orientation at ``q`` on the machine with ``errors``
-    (in the workpiece frame) into its orientation on the nominal machine: a misplaced
-    workpiece (tilted 2 deg, say) sees every sweep tilted alike, and sweeps along the
-    machine's axes are the engine's fast case (module docstring). Turning the part and the
-    poses by it changes nothing but round-off: the cut is the same in any frame."""
-    if errors is None:
-        return np.eye(3)
-    return machine.tool_pose(q)[:3, :3] @ machine.tool_pose(q, errors)[:3, :3].T
-
-
-def _aligned(poses, rotation: np.ndarray) -> int:
-    """How many move components of the sweeps vanish (`ALIGNED_REL`) once turned by
-    ``rotation``: the engine's booleans are fastest on sweeps in coordinate planes."""
-    moves = np.concatenate([np.diff(pose[:, :3, 3], axis=0) for pose in poses]) @ rotation.T
-    length = np.linalg.norm(moves, axis=1, keepdims=True)
-    return int(np.count_nonzero((np.abs(moves) <= ALIGNED_REL * length) & (length > 0)))
