@@ -9,7 +9,7 @@ windows, about 80 s, as the tests run it) with options
     --delta-um x,y,z            or give the setting error: position (um) ...
     --rot-deg alpha,beta,gamma  ... and rotations (deg), the same for both workpieces
     --crown-delta-um, --crown-rot-deg  the same for the crown only (the grooves keep
-                                theirs): e.g. 0,0,60 and 1.93,0,0, the tilt behind the
+                                theirs): e.g. 0,0,100 and 1.93,0,0, the tilt behind the
                                 paper's S before (docs/procedures/workpiece_setting.md)
     --errors FILE.toml          inject this error model in both loads instead of the
                                 default C-axis centre (any ErrorModel); the options above,

@@ -143,9 +143,9 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
     Foot: where the profile leaves the face's line (refitted on what keeps to it) by more
     than ``band`` going out; if what follows runs on from the face (a ledge or the flat),
     the corner of the face's line and its line; if it steps away (an uncut band beyond the
-    finished face), the face's last sample. ``pixel``: each cursor on the sample nearest its edge and the height read there
-    (an operator reading an image); else the edges on the fitted lines. None where the
-    profile does not run from a top down a face.
+    finished face), the face's last sample. ``pixel``: each cursor on the sample nearest
+    its edge and the height read there (an operator reading an image); else the edges on
+    the fitted lines. None where the profile does not run from a top down a face.
     """
     s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
     finite = np.isfinite(z)
