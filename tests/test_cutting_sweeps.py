@@ -139,3 +139,23 @@ def test_a_tool_turned_within_the_twist_tolerance_cuts_as_translated(tool, monke
     gap = np.nanmax(np.abs(height_map(hull, x, x) - height_map(straight, x, x)))
     reach = np.abs((_rolled(angle) - np.eye(3)) @ vertices.T).max()
     assert 0.0 < gap <= reach + 1e-15
+
+
+def test_a_move_within_the_profile_plane_sweeps_no_prism():
+    """A planar profile moved along its own plane (a plunge of paper 002's crown tool,
+    turned 45 deg about Z and tilted, so rounding leaves |area . move| ~1e-26 m^3 of either
+    sign) sweeps volume 0, so no sliver joins the union of the sweeps; 1e-6 rad out of the
+    plane it sweeps |area| |move| 1e-6."""
+    from machinesim.cutting.sweeps import clipped_prisms, prism_mesh
+    from machinesim.rotations import rotation_xyz
+
+    square = np.array([[0.0, 0.0, 0.0], [3e-4, 0.0, 0.0], [3e-4, 0.0, 3e-4], [0.0, 0.0, 3e-4]])
+    turn = rotation_xyz(0.0337, -0.0003, math.pi / 4)
+    polygon = square @ turn.T
+    area = 9e-8
+    for move, volume in ((turn @ np.array([0.0, 0.0, -1e-4]), 0.0),
+                         (turn @ np.array([0.0, 1e-4 * math.sin(1e-6), -1e-4]),
+                          area * 1e-4 * math.sin(1e-6))):
+        assert prism_mesh(polygon, move)[2] == pytest.approx(volume, rel=1e-6, abs=0.0)
+        prisms = clipped_prisms(polygon[None], move[None], np.array([1.0]))
+        assert prisms[0][2] == pytest.approx(volume, rel=1e-6, abs=0.0)
