@@ -180,3 +180,55 @@ def test_a_large_setting_is_found_and_the_nose_put_on_the_path():
         off[nose] = scenario.generating_points(MACHINE, errors, program, wanted, NOSE) - ideal
     assert np.abs(off[NOSE]).max() < 50 * NM
     assert np.linalg.norm(off[0.0], axis=1).max() > 0.5 * UM
+
+
+@pytest.mark.parametrize("plane_move_sine", [None, 0.0])
+def test_a_face_group_cut_turned_by_c_is_the_part_cut_in_the_workpiece_frame(
+        plane_move_sine, monkeypatch):
+    """The default crown's face at C = 45 deg (the scenario's seed-0 load, noise off, quick
+    rows), cut by `engine.remove` in the part turned by -45 deg (as `cut_turned` does) and in
+    the workpiece frame (as `cut` does), in a 0.12 mm window past the face's foot: the same
+    heights to 1e-15 m. Without `sweeps.PLANE_MOVE_SINE` (0: the plunges along the tool's
+    own plane built as slivers and joined) the turned cut stood 22 um deeper there."""
+    import argparse
+
+    from machinesim import Lab, motion
+    from machinesim.cutting import clip_to, remove, sweeps
+    from machinesim.metrology import height_map
+    from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
+    from machinesim.realism import Realism
+    from machinesim.rotations import rot_z
+    from machinesim.workpiece import Part
+
+    if plane_move_sine is not None:
+        monkeypatch.setattr(sweeps, "PLANE_MOVE_SINE", plane_move_sine)
+    args = argparse.Namespace(robot_repeatability_um=None, delta_um=None, rot_deg=None,
+                              crown_delta_um=None, crown_rot_deg=None, errors=None, seed=0,
+                              noise="off", realism=None)
+    errors = scenario.loads(args)["crown"]
+    procedure = RobotLoadedWorkpiece("crown", quick=True)
+    found = procedure.identify(procedure.measure(
+        Lab(MACHINE, errors, realism=Realism.ideal()))).detail.found
+    layout = procedure.layout(found)
+    groups = [g for g in cam.crown_passes(procedure.crown, [0.0], **layout.rows)
+              if math.isclose(g.c, math.pi / 4)]
+    trajectory = motion.plan(cam.passes_program(groups), MACHINE, errors, start=cam.PARK,
+                             tool_points=layout.tool.vertices())
+    paths = [MACHINE.tool_pose(s.q, errors) for s in trajectory.segments
+             if s.kind == "linear"]
+    px, py = 1.1726 * MM, 1.3897 * MM
+    stock = clip_to(procedure.stock, [(px - 60 * UM, px + 60 * UM, py - 60 * UM, py + 60 * UM)],
+                    layout.floor)
+    x, y = px + np.linspace(-10, 10, 5) * UM, py + np.linspace(-10, 10, 5) * UM
+    heights = []
+    for turn in (rot_z(-math.pi / 4), np.eye(3)):
+        frame = np.eye(4)
+        frame[:3, :3] = turn
+        part, _ = remove(Part(stock.manifold.transform(frame[:3])), layout.tool,
+                         [frame @ pose for pose in paths])
+        heights.append(height_map(Part(part.manifold.transform(frame.T[:3])), x, y))
+    gap = np.nanmax(np.abs(heights[0] - heights[1]))
+    if plane_move_sine is None:
+        assert gap < 1e-15
+    else:
+        assert gap > 1 * UM
