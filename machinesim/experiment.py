@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Protocol
@@ -222,13 +222,17 @@ class Result:
         }
 
 
-def run(procedure: Procedure, lab) -> Result:
+def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = None
+        ) -> Result:
     """Drive ``procedure`` on ``lab``: measure, identify, compensate, evaluate.
 
     Parameters
     ----------
     procedure : Procedure
     lab : machinesim.Lab
+    progress : callable(str), optional
+        Told, in one line each, when a step begins and how long it took (for runs of
+        minutes: a scenario passes a printer to stderr).
 
     Returns
     -------
@@ -239,8 +243,12 @@ def run(procedure: Procedure, lab) -> Result:
 
     def step(name, function, *args):
         start = time.perf_counter()
+        if progress is not None:
+            progress(f"{name} ...")
         value = function(*args)
         clock[f"{name}_s"] = time.perf_counter() - start
+        if progress is not None:
+            progress(f"{name} done in {clock[f'{name}_s']:.1f} s")
         return value
 
     measurements = step("measure", procedure.measure, lab)

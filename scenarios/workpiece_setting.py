@@ -1,8 +1,8 @@
 """Paper 002 replay: a robot-loaded workpiece, its setting errors found and compensated.
 
 Run: ``.venv/bin/python scenarios/workpiece_setting.py`` (``make demo``, about 6 min on 2
-idle cores; times in docs/procedures/workpiece_setting.md; ``--quick``: smaller crown
-windows, about 80 s, as the tests run it) with options
+idle cores, each step shown on stderr; times in docs/procedures/workpiece_setting.md;
+``--quick``: smaller crown windows, about 80 s, as the tests run it) with options
 
     --robot-repeatability-um R  the robot that loads each workpiece (default 30, the
                                 paper's LR Mate 200iD); its landings are drawn with --seed
@@ -46,6 +46,7 @@ from __future__ import annotations
 import math
 import re
 import sys
+import time
 from dataclasses import replace
 from types import MappingProxyType
 
@@ -173,15 +174,22 @@ def report(args) -> None:
     labs = {load: Lab(machine, errors[load], seed=args.seed, realism=realism)
             for load in EXPERIMENTS}
     nose = args.nose_correction == "on"
-    results = {load: run(RobotLoadedWorkpiece(load, nose_correction=nose,
-                                              all_layers=args.all_layers, quick=args.quick),
-                         lab) for load, lab in labs.items()}
+    results = {}
+    for load, lab in labs.items():
+        told = progress(f"{load} load")
+        results[load] = run(RobotLoadedWorkpiece(load, nose_correction=nose,
+                                                 all_layers=args.all_layers,
+                                                 quick=args.quick, progress=told),
+                            lab, progress=told)
     budget = None
     if args.budget == "on":
         budget = crown_budget(machine, errors["crown"], args, realism, results["crown"])
     folder = ReportFolder(args.out)
+    told = progress("report")
+    told("checking the compensation routes on the machine with the injected errors ...")
     route_rows, routes = route_check(machine, labs["crown"].reveal(), results["crown"])
     result = combined(results, routes)
+    told("writing the views, tables and plots ...")
     views(folder, result)
     groove_plot(folder, results["grooves"].evaluation.details)
     table3 = table3_table(folder, results["crown"])
@@ -199,11 +207,25 @@ def report(args) -> None:
         title="Compensation routes on the machine with the injected errors (identification "
         "error included)", digits=4)
     summary = folder.write_result(result, budget=budget)
+    told("done")
     for text in (table3, grooves, ident, check, times, route_table, summary):
         print(text)
     print(f"report folder: {folder.path}")
     print(f"views: {folder.path / 'crown_after.html'} (and crown_before, grooves_before, "
           "grooves_after)")
+
+
+_STARTED = time.perf_counter()
+
+
+def progress(stage: str):
+    """A printer of `machinesim.experiment.run`'s steps to stderr, with the time since the
+    scenario started: the default run takes minutes, the crown's cuts most of them."""
+    def show(text: str) -> None:
+        minutes, seconds = divmod(int(time.perf_counter() - _STARTED), 60)
+        print(f"workpiece_setting [{minutes:d}:{seconds:02d}] {stage}: {text}", file=sys.stderr,
+              flush=True)
+    return show
 
 
 def lab_realism(args) -> Realism:
@@ -236,9 +258,10 @@ def crown_budget(machine, errors, args, realism: Realism, crown):
             return measured(crown)
         lab = Lab(machine, errors, seed=args.seed,
                   realism=realism if source == TIP_VS_NOSE else realism.without(source))
+        told = progress(f"budget, {source} off")
         return measured(run(RobotLoadedWorkpiece(
             "crown", nose_correction=nose or source == TIP_VS_NOSE, all_layers=args.all_layers,
-            quick=args.quick, after_only=True), lab))
+            quick=args.quick, after_only=True, progress=told), lab, progress=told))
 
     return error_budget(variant, sources)
 

@@ -188,3 +188,31 @@ def test_the_r_test_reads_the_ball_displacement_of_a_tool_offset_turned_by_b_and
     q[:, 4] = np.radians([0, 90, 180, 270, 33, -120])
     shown = lab.r_test(resolution=0.0).read(q).displacement
     assert np.allclose(np.linalg.norm(shown, axis=1), np.linalg.norm(d), rtol=0, atol=1e-15)
+
+
+def test_run_tells_its_progress_step_by_step_in_order():
+    """`run(..., progress=)` is told each step as it begins and when it ends, in the
+    protocol's order, with the time the step took (as `Result.elapsed_s` records it)."""
+    from machinesim.experiment import Evaluation, Figure, Identified, run
+
+    class Counting:
+        name, paper = "counting", "none"
+
+        def measure(self, lab):
+            return 1.0
+
+        def identify(self, measurements):
+            return Identified({"workpiece.x": (measurements, float("nan"))}, None)
+
+        def compensate(self, identified):
+            return {}
+
+        def evaluate(self, lab, identified, programs):
+            return Evaluation((Figure("x", "um", 1.0, 0.0),))
+
+    told = []
+    result = run(Counting(), Lab("robonano_a0ib", TRUTH, noise=False), progress=told.append)
+    steps = ("measure", "identify", "compensate", "evaluate")
+    assert told[0::2] == [f"{s} ..." for s in steps]
+    assert told[1::2] == [f"{s} done in {result.elapsed_s[f'{s}_s']:.1f} s" for s in steps]
+    assert run(Counting(), Lab("robonano_a0ib", TRUTH, noise=False)).figures == result.figures

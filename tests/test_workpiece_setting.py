@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -388,8 +389,15 @@ def test_cut_turned_makes_the_part_cutting_cut_makes(crown_stock):
     cx, cy = middle * math.cos(math.pi / 4), middle * math.sin(math.pi / 4)
     box = [(cx - 0.05 * MM, cx + 0.05 * MM, cy - 0.05 * MM, cy + 0.05 * MM)]
     tool = cam.crown_tool()
+    told = []
     ours, report = cut_turned(program, MACHINE, tool, crown_stock, errors, roi=box,
-                              start=cam.PARK)
+                              start=cam.PARK, progress=lambda *done: told.append(done))
+    # progress in feed sweeps: from none to all, one call before the groups and one after each
+    total = sum(len(s.q) - 1 for s in motion.plan(program, MACHINE, errors, start=cam.PARK,
+                                                  tool_points=tool.vertices()).segments
+                if s.kind == "linear")
+    assert told[0] == (0, total) and told[-1] == (total, total) and len(told) >= 2
+    assert all(a[0] <= b[0] for a, b in zip(told, told[1:], strict=False))
     theirs, _ = cut(program, MACHINE, tool=tool, stock=clip_to(crown_stock, box),
                     errors=errors, roi=box, start=cam.PARK)
     assert ours.volume == pytest.approx(theirs.volume, rel=1e-12)
@@ -570,6 +578,15 @@ def test_the_scenario_runs_and_meets_the_noise_off_bounds(tmp_path):
                             capture_output=True, text=True, check=False, cwd=ROOT)
     assert result.returncode == 0, result.stderr
     assert "Table 3" in result.stdout and "crown_after.html" in result.stdout
+    # progress on stderr: each step of each load, and the crown's cuts sweep by sweep to the end
+    for load in ("grooves", "crown"):
+        for step in ("measure", "identify", "compensate", "evaluate"):
+            assert re.search(rf"\] {load} load: {step} done in [0-9.]+ s$", result.stderr,
+                             re.MULTILINE)
+    for name in ("before", "after"):
+        cuts = re.findall(rf"crown {name} compensation: cut (\d+) of (\d+) feed sweeps",
+                          result.stderr)
+        assert cuts[0][0] == "0" and cuts[-1][0] == cuts[-1][1] != "0"
     summary = json.loads((out / "summary.json").read_text())
     check_summary(summary)
     crown = summary["details"]["crown"]

@@ -45,7 +45,8 @@ def clip_to(stock: Part, boxes, floor: float | None = None) -> Part:
 def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *,
                roi=None, floor: float | None = None, start=None, turn_step: float = math.pi / 4,
                turn_axis: str = "C", chord_tolerance: float = motion.CHORD_TOLERANCE_M,
-               servo=None, allow_overtravel: bool = False) -> tuple[Part, CutReport]:
+               servo=None, allow_overtravel: bool = False, progress=None
+               ) -> tuple[Part, CutReport]:
     """Cut ``program`` as `machinesim.cutting.cut` does, each turn group in its own frame.
 
     The feed moves are grouped by the value of ``turn_axis`` at their start, rounded to a
@@ -75,6 +76,9 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     chord_tolerance, servo, allow_overtravel
         As `machinesim.cutting.cut` (an axis outside its travel raises `AxisLimitError`
         unless ``allow_overtravel``).
+    progress : callable(done, total), optional
+        Called before the first group and after each, in feed sweeps (a group's sweeps
+        count as done once its cut is).
 
     Returns
     -------
@@ -111,6 +115,10 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     sweeps = sideways = 0
     holder: set[int] = set()
     step_deg = math.degrees(turn_step)
+    total = sum(len(s.q) - 1 for segments in groups.values() for s in segments)
+    done = 0
+    if progress is not None:
+        progress(done, total)
     for key, segments in groups.items():
         turn = np.eye(4)
         turn[:3, :3] = rot_z(-key * turn_step)
@@ -125,6 +133,9 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         removed += report.removed_volume
         swept += report.swept_volume
         engine_s += report.elapsed_s
+        done += sum(len(s.q) - 1 for s in segments)
+        if progress is not None:
+            progress(done, total)
     return part, CutReport(
         removed_volume_m3=float(removed), machining_time_s=trajectory.duration,
         cutting_time_s=trajectory.cutting_time, sweeps=sweeps, substeps=trajectory.substeps,

@@ -258,6 +258,8 @@ class RobotLoadedWorkpiece:
         the variants of an error budget need, at half the cost.
     plan : ProbePlan
     crown : CrownPlan
+    progress : callable(str), optional
+        Told, one line at a time, how the crown's cuts and readings go (they take minutes).
     """
 
     name = "workpiece_setting"
@@ -266,7 +268,7 @@ class RobotLoadedWorkpiece:
     def __init__(self, experiment: str = "crown", *, nose_correction: bool = True,
                  all_layers: bool = False, quick: bool = False, after_only: bool = False,
                  plan: ProbePlan = PROBE_PLAN,
-                 crown: CrownPlan = CROWN) -> None:
+                 crown: CrownPlan = CROWN, progress=None) -> None:
         if experiment not in EXPERIMENTS:
             raise InputError(f"Expected an experiment in {', '.join(EXPERIMENTS)}, got "
                              f"{experiment!r}", key="experiment")
@@ -277,6 +279,7 @@ class RobotLoadedWorkpiece:
         self.after_only = bool(after_only)
         self.plan = plan
         self.crown = crown
+        self.progress = progress
         self._workpieces: dict[int, tuple] = {}
 
     def __repr__(self) -> str:
@@ -352,6 +355,16 @@ class RobotLoadedWorkpiece:
 
     # ----------------------------------------------------------------------- programs
 
+    def _tell(self, text: str) -> None:
+        if self.progress is not None:
+            self.progress(text)
+
+    def _tell_sweeps(self, what: str):
+        """A cutter's ``progress(done, total)`` told as lines, or None without ``progress``."""
+        if self.progress is None:
+            return None
+        return lambda done, total: self._tell(f"{what}: cut {done} of {total} feed sweeps")
+
     def nominal_program(self, found: Identification) -> Program:
         """The experiment's NC program for the ideal workpiece. The crown's passes are those
         that reach its measuring windows, for the deepest cut the identified setting allows
@@ -426,7 +439,9 @@ class RobotLoadedWorkpiece:
         for name, program in runs[1:] if self.after_only else runs:
             part, report = lab.cut(program, layout.tool, self.workpiece(lab),
                                    roi=layout.boxes,
-                                   floor=layout.floor, start=PARK, turn_step=math.pi / 4)
+                                   floor=layout.floor, start=PARK, turn_step=math.pi / 4,
+                                   progress=self._tell_sweeps(f"crown {name} compensation"))
+            self._tell(f"crown {name} compensation: reading it (plane fits, 10x images)")
             # One microscope session per part (each put on the stage anew), so the after
             # part's readings draw the same whether or not the before part was read (the
             # error budget's variants read only the after part).
