@@ -111,10 +111,13 @@ def _parse(argv):
 
 def test_the_scenario_with_noise_reports_the_c_centre_lengthening_and_a_budget(tmp_path):
     """Quick windows, instrument noise only, the default C centre e = (-75, 5) um and the seed-0
-    robot landing (the crown 40 um higher): before compensation every top-edge distance read
-    in the images is +150 um (-2 e_x: the landing is rigid and leaves top edges alone, its
-    faces all cut; within 3 um, the 10x image's height noise on corners drawn across the
-    bands of stock the outward-moved passes leave; 0.51 um measured with the noise off);
+    robot landing (the crown 100 um higher and tilted 1.93 deg about X): before compensation
+    every top-edge distance read in the images is +150 um (-2 e_x: the setting is rigid and
+    leaves top edges alone, its faces all cut; within 3 um, the 10x image's height noise on
+    corners drawn across the bands of stock the outward-moved passes leave, and the tilted
+    top: 2.3 um measured with the noise off); face k, cut at 11.31 deg to the machine's XY
+    plane on a flat tilted t about X, reads S = t sin(45 k deg) (within 0.2 deg: the
+    landing's own 0.03 deg, the image's 0.05 deg noise);
     after, the plane fits within 20 nm (probe 20 nm and microscope 12 nm noise). The budget
     has one row per measured "after" figure (not the machining times) for the one source
     that is on, its after_all the figure's after."""
@@ -131,6 +134,9 @@ def test_the_scenario_with_noise_reports_the_c_centre_lengthening_and_a_budget(t
     for key in ("L1_L5", "L2_L6", "L3_L7", "L4_L8"):
         assert figures[f"edge_distance_{key}"]["before"] == pytest.approx(-2 * e_x, abs=3.0)
         assert abs(figures[f"edge_distance_planes_{key}"]["after"]) < 0.02
+    for k in range(8):
+        tilt = scenario.CROWN_TILT_DEG * math.sin(math.radians(45 * k))
+        assert figures[f"inclination_S{k + 1}"]["before"] == pytest.approx(tilt, abs=0.2)
     rows = summary["budget"]
     assert {r["source"] for r in rows} == {"instrument_noise"}
     crown_after = [f for f in summary["figures"] if f["after"] is not None
@@ -185,11 +191,13 @@ def test_a_large_setting_is_found_and_the_nose_put_on_the_path():
 @pytest.mark.parametrize("plane_move_sine", [None, 0.0])
 def test_a_face_group_cut_turned_by_c_is_the_part_cut_in_the_workpiece_frame(
         plane_move_sine, monkeypatch):
-    """The default crown's face at C = 45 deg (the scenario's seed-0 load, noise off, quick
-    rows), cut by `engine.remove` in the part turned by -45 deg (as `cut_turned` does) and in
-    the workpiece frame (as `cut` does), in a 0.12 mm window past the face's foot: the same
-    heights to 1e-15 m. Without `sweeps.PLANE_MOVE_SINE` (0: the plunges along the tool's
-    own plane built as slivers and joined) the turned cut stood 22 um deeper there."""
+    """The crown's face at C = 45 deg (the scenario's seed-0 load with the crown untilted and
+    40 um high, where the fault showed; noise off, quick rows), cut by `engine.remove` in the
+    part turned by -45 deg (as `cut_turned` does) and in the workpiece frame (as `cut` does),
+    in a 0.12 mm window past the face's foot: the same heights to 1e-15 m. Without
+    `sweeps.PLANE_MOVE_SINE` (0: the plunges along the tool's own plane built as slivers and
+    joined) the turned cut stood 22 um deeper there: turned by C alone, an untilted
+    workpiece's sweeps run along the axes, where the slivers are exactly in-plane."""
     import argparse
 
     from machinesim import Lab, motion
@@ -202,6 +210,8 @@ def test_a_face_group_cut_turned_by_c_is_the_part_cut_in_the_workpiece_frame(
 
     if plane_move_sine is not None:
         monkeypatch.setattr(sweeps, "PLANE_MOVE_SINE", plane_move_sine)
+    monkeypatch.setattr(scenario, "CROWN_TILT_DEG", 0.0)
+    monkeypatch.setattr(scenario, "CROWN_HEIGHT_UM", 40.0)
     args = argparse.Namespace(robot_repeatability_um=None, delta_um=None, rot_deg=None,
                               crown_delta_um=None, crown_rot_deg=None, errors=None, seed=0,
                               noise="off", realism=None)
