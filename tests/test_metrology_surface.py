@@ -203,6 +203,39 @@ def test_tessellated_surface_has_no_cracks_at_vertices_or_edges():
             assert not np.isnan(along).any()
 
 
+def test_long_thin_triangles_across_the_grid_read_their_exact_planes():
+    """Cells 5 um by 1 mm sheared along the grid's diagonal: triangles 1.4 mm long and 3.5 um
+    wide, whose boxes hold some 200 times the samples they cover (the case the grid's row
+    spans are for). Every sample reads the exact rational plane value (or NaN off the part),
+    and each row of the map is bit for bit the profile along it (the line sampler's boxes, a
+    second method)."""
+    rng = np.random.default_rng(4)
+    vertices, triangles = heightfield(rng.uniform(0.0, 20e-6, size=(3, 41)), (5e-6, 1 * MM))
+    vertices = vertices.copy()
+    vertices[:, 0] += vertices[:, 1]  # x + y: the cells' long sides run along (1, 1)
+    x = np.sort(rng.uniform(-0.1 * MM, 2.3 * MM, 17))
+    y = np.sort(rng.uniform(-0.1 * MM, 2.1 * MM, 13))
+    heights = height_map((vertices, triangles), x, y)
+    covered = 0
+    for j in range(len(y)):
+        for i in range(len(x)):
+            exact = exact_height(vertices, triangles, x[i], y[j])
+            if exact is None:
+                assert np.isnan(heights[j, i])
+            else:
+                covered += 1
+                assert abs(Fraction(heights[j, i]) - exact) < HEIGHT_M
+    assert covered >= 10
+    x = np.linspace(-0.1 * MM, 2.3 * MM, 481)
+    y = np.linspace(0.0, 2 * MM, 97)
+    heights = height_map((vertices, triangles), x, y)
+    # each row crosses the part over 0.2 mm, 40 samples at 5 um: about 3900 in 97 rows
+    assert abs(np.isfinite(heights).sum() - 97 * 40) < 97 * 2
+    for j in (0, 1, 17, 48, 95, 96):
+        _, along = profile((vertices, triangles), (x[0], y[j]), (x[-1], y[j]), x[1] - x[0])
+        np.testing.assert_array_equal(along, heights[j])
+
+
 def test_heights_equal_the_exact_rational_plane_value():
     rng = np.random.default_rng(1)
     vertices, triangles = heightfield(rng.uniform(0.0, 2 * MM, size=(4, 4)), 3 * MM)
