@@ -1,8 +1,8 @@
 """Paper 002 replay: a robot-loaded workpiece, its setting errors found and compensated.
 
-Run: ``.venv/bin/python scenarios/workpiece_setting.py`` (``make demo``, about 10 min on 2
+Run: ``.venv/bin/python scenarios/workpiece_setting.py`` (``make demo``, about 7 min on 2
 idle cores, each step shown on stderr; times in docs/procedures/workpiece_setting.md;
-``--quick``: smaller crown windows, about 100 s, as the tests run it) with options
+``--quick``: smaller crown windows, about 2 min, as the tests run it) with options
 
     --robot-repeatability-um R  the robot that loads each workpiece (default 30, the
                                 paper's LR Mate 200iD); its landings are drawn with --seed
