@@ -102,9 +102,10 @@ UNIFORM_GRID = 1e-3
 #: and the round-off of the arithmetic, so that they are a superset of the samples in a
 #: triangle's box whatever the rounding; extra samples are rejected by the exact test.
 INDEX_SLACK = 1e-6
-#: A profile line is taken to pass near a triangle's box when within this fraction of the
-#: largest coordinate: far above the ~1e-16 relative round-off of the line test and of the
-#: sample points, far below any feature; again only a superset for the exact test.
+#: A profile line is taken to pass near a triangle's box, and a grid row's span of a
+#: triangle is widened, by this fraction of the largest coordinate: far above the ~1e-16
+#: relative round-off of the line test, the span's crossings and the sample points, far
+#: below any feature; again only a superset for the exact test.
 LINE_MARGIN = 1e-12
 #: The end of a profile is sampled when the length is a whole number of spacings to within this
 #: fraction of a spacing (round-off of length / spacing).
