@@ -38,6 +38,10 @@ CANDIDATE_BLOCK = 32768
 #: whole boxes: the same heights bit for bit; benchmarks/metrology.py switches it off to
 #: compare (the pyramid field turned 45 deg, and paper 002's crown, read 10-30 times faster).
 ROW_SPANS = True
+#: A triangle that covers less than this share of its xy box (over more than one row) is
+#: binned by row spans: a long thin triangle across the diagonal covers a few percent, one
+#: along the axes half (a right triangle), where whole boxes are cheaper to bin.
+THIN_FILL = 0.125
 
 # Rows of the per-triangle parameter table used by the rasteriser.
 _X0, _Y0, _Z0, _GX, _GY, _ZLO, _ZHI, _EDGES = range(8)
@@ -247,10 +251,9 @@ def _zbuffer(vertices: np.ndarray, triangles: np.ndarray, samples) -> np.ndarray
         # Twice the projected area, > 0 for a triangle counter-clockwise seen from above, i.e.
         # facing up. Vertical (0) and downward faces never carry the top surface of a solid.
         area2 = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0])
-        first_x, count_x, first_y, count_y = samples.ranges(
-            np.minimum(np.minimum(x[0], x[1]), x[2]), np.maximum(np.maximum(x[0], x[1]), x[2]),
-            np.minimum(np.minimum(y[0], y[1]), y[2]), np.maximum(np.maximum(y[0], y[1]), y[2]),
-        )
+        box = (np.minimum(np.minimum(x[0], x[1]), x[2]), np.maximum(np.maximum(x[0], x[1]), x[2]),
+               np.minimum(np.minimum(y[0], y[1]), y[2]), np.maximum(np.maximum(y[0], y[1]), y[2]))
+        first_x, count_x, first_y, count_y = samples.ranges(*box)
         keep = np.flatnonzero((area2 > 0.0) & (count_x > 0) & (count_y > 0))
         if keep.size == 0:
             continue
@@ -258,13 +261,23 @@ def _zbuffer(vertices: np.ndarray, triangles: np.ndarray, samples) -> np.ndarray
         y = tuple(c[keep] for c in y)
         z = (vz[i0[keep]], vz[i1[keep]], vz[i2[keep]])
         table = _triangle_table(x, y, z, area2[keep])
+        first_x, count_x, first_y, count_y = (a[keep] for a in (first_x, count_x, first_y,
+                                                                  count_y))
+        owner = None
         if ROW_SPANS and isinstance(samples, _Grid):
-            owner, first, count, row = _row_spans(x, y, first_y[keep], count_y[keep], samples,
-                                                  margin)
-            _rasterise(table, first, count, row, np.ones_like(count), samples, top, owner)
-        else:
-            _rasterise(table, first_x[keep], count_x[keep], first_y[keep], count_y[keep],
-                       samples, top)
+            # thin: the triangle covers under THIN_FILL of its box, over more than one row
+            box_area = (box[1] - box[0])[keep] * (box[3] - box[2])[keep]
+            thin = np.flatnonzero((count_y > 1) & (area2[keep] < 2.0 * THIN_FILL * box_area))
+            if thin.size:
+                whole = np.flatnonzero(~np.isin(np.arange(keep.size), thin))
+                spans = _row_spans(tuple(c[thin] for c in x), tuple(c[thin] for c in y),
+                                   first_y[thin], count_y[thin], samples, margin)
+                owner = np.concatenate([whole, thin[spans[0]]])
+                first_x = np.concatenate([first_x[whole], spans[1]])
+                count_x = np.concatenate([count_x[whole], spans[2]])
+                first_y = np.concatenate([first_y[whole], spans[3]])
+                count_y = np.concatenate([count_y[whole], np.ones_like(spans[2])])
+        _rasterise(table, first_x, count_x, first_y, count_y, samples, top, owner)
     return top
 
 
