@@ -3,7 +3,7 @@
 A height is the plane of the triangle above the sample, evaluated in float64 at the sample
 point: no interpolation, no ray, no rounding of the geometry. The mesh is rasterised onto the
 samples: each upward-facing triangle is binned to the samples inside its xy bounding box (on
-a grid, row by row to the span of the row the triangle crosses, so that a long thin triangle
+a grid, a thin one row by row to the span each row crosses, so that a long thin triangle
 across the grid's diagonal does not visit its whole box), an edge-function test keeps those
 inside the triangle, and each sample keeps the highest plane value that covers it.
 
@@ -267,9 +267,9 @@ def _zbuffer(vertices: np.ndarray, triangles: np.ndarray, samples) -> np.ndarray
         if ROW_SPANS and isinstance(samples, _Grid):
             # thin: the triangle covers under THIN_FILL of its box, over more than one row
             box_area = (box[1] - box[0])[keep] * (box[3] - box[2])[keep]
-            thin = np.flatnonzero((count_y > 1) & (area2[keep] < 2.0 * THIN_FILL * box_area))
-            if thin.size:
-                whole = np.flatnonzero(~np.isin(np.arange(keep.size), thin))
+            is_thin = (count_y > 1) & (area2[keep] < 2.0 * THIN_FILL * box_area)
+            if is_thin.any():
+                thin, whole = np.flatnonzero(is_thin), np.flatnonzero(~is_thin)
                 spans = _row_spans(tuple(c[thin] for c in x), tuple(c[thin] for c in y),
                                    first_y[thin], count_y[thin], samples, margin)
                 owner = np.concatenate([whole, thin[spans[0]]])
@@ -336,8 +336,8 @@ def _triangle_table(x, y, z, area2) -> np.ndarray:
 def _rasterise(table, first_x, count_x, first_y, count_y, samples, top, owner=None) -> None:
     """Evaluate every (triangle, sample-in-its-box) pair and keep the maximum per sample.
 
-    With ``owner``, the boxes are spans of rows (`_row_spans`) and ``owner[k]`` the column
-    of ``table`` that box k belongs to."""
+    With ``owner``, box k (a triangle's whole box, or one row's span of it, `_row_spans`)
+    belongs to column ``owner[k]`` of ``table``."""
     counts = count_x * count_y
     ends = np.cumsum(counts)
     starts = ends - counts
