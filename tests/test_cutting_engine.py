@@ -316,3 +316,55 @@ def test_stitch_keeps_the_wall_of_an_empty_neighbour():
     joined = stitch(pieces, boxes, (0.0, 1e-3, 0.0, 1e-3), 1e-3)
     assert joined is not None
     assert joined.volume() == pytest.approx(pieces[0].volume(), rel=VOLUME_REL)
+
+
+def test_union_runs_cap_the_overlapping_pairs_and_keep_side_by_side_sweeps_together():
+    from machinesim.cutting.tiling import PAIRS_PER_UNION, union_runs
+
+    # Boxes that all overlap: a run of n holds n (n - 1) / 2 pairs, so runs of 8 (28 pairs).
+    count = 100
+    lower = np.zeros((count, 3)) + 1e-9 * np.arange(count)[:, None]
+    upper = lower + 1e-6
+    runs = union_runs(np.arange(count), lower, upper)
+    longest = max(n for n in range(2, count) if n * (n - 1) // 2 <= PAIRS_PER_UNION)
+    assert [len(r) for r in runs] == [longest] * (count // longest) + [count % longest]
+    np.testing.assert_array_equal(np.concatenate(runs), np.arange(count))
+    # Grooves at their own width's pitch only touch: one union, as before the runs.
+    pitch = 20e-6
+    lower = np.stack([np.zeros(count), pitch * np.arange(count), np.zeros(count)], axis=1)
+    upper = lower + [1e-3, pitch, 10e-6]
+    assert [len(r) for r in union_runs(np.arange(count), lower, upper)] == [count]
+    assert union_runs(np.arange(0), lower, upper) == []
+
+
+def test_passes_stacked_down_a_slope_cut_the_analytic_staircase(monkeypatch):
+    from machinesim.cutting import engine
+    from machinesim.cutting.tiling import union_runs
+    from machinesim.metrology.surface import height_map
+
+    runs = []
+
+    def recorded(*args):
+        found = union_runs(*args)
+        runs.extend(found)
+        return found
+
+    monkeypatch.setattr(engine, "union_runs", recorded)
+    # Finishing passes down an inclined face: each 90-deg V pass is 0.2 um from the last
+    # sideways and 0.1 um deeper, so its tool body overlaps the passes above it and the
+    # engine cuts them in runs (`union_runs`). The top is the lowest of the V's:
+    # z(y) = min_k (|y - y_k| - d_k), exact at every sample.
+    count, step, drop, top_depth = 120, 0.2e-6, 0.1e-6, 1e-6
+    stock = block(2e-3, 1e-3, 0.5e-3)
+    ys = 0.45e-3 + step * np.arange(count)
+    depths = top_depth + drop * np.arange(count)
+    paths = [groove_x(y, d, x0=-0.5e-3, x1=2.5e-3) for y, d in zip(ys, depths, strict=True)]
+    part, report = remove(stock, VTool(math.radians(90.0)), paths, method="boolean")
+    assert report.method == "boolean" and report.n_sweeps_cut == count
+    assert len(runs) > 10
+    np.testing.assert_array_equal(np.concatenate(runs), np.arange(count))
+    y = np.linspace(0.44e-3, 0.48e-3, 801)
+    heights = height_map(part, np.array([0.3e-3, 1.7e-3]), y)
+    expected = np.minimum(np.min(np.abs(y[:, None] - ys) - depths, axis=1), 0.0)
+    np.testing.assert_allclose(heights, np.repeat(expected[:, None], 2, axis=1), rtol=0,
+                               atol=LENGTH_TOL)

@@ -53,6 +53,7 @@ from machinesim.cutting.tiling import (
     members_in,
     overlapping,
     tile_box,
+    union_runs,
 )
 from machinesim.exceptions import InputError
 from machinesim.tolerances import (
@@ -387,11 +388,12 @@ def remove(
             stock_pieces.append(piece)
             uncut = piece
             for key in np.unique(keys[members]):
-                group = [hulls[i] for i in members[keys[members] == key]]
-                piece = piece - manifold3d.Manifold.batch_boolean(group, OpType.Add)
-                # Evaluate now: manifold3d is lazy and would flatten A - B - C into
-                # A - (B + C), the union of crossing groups this loop exists to avoid.
-                piece.num_tri()
+                for run in union_runs(members[keys[members] == key], lower, upper):
+                    piece = piece - manifold3d.Manifold.batch_boolean(
+                        [hulls[i] for i in run], OpType.Add)
+                    # Evaluate now: manifold3d is lazy and would flatten A - B - C into
+                    # A - (B + C), the union this loop exists to avoid.
+                    piece.num_tri()
             if len(members):
                 removed += removed_volume(uncut, piece, sweeps.run_id, top)
             pieces.append(piece)

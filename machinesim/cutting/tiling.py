@@ -18,6 +18,21 @@ SWEEPS_PER_TILE = 256
 #: (measured on 500 x 500 crossing grooves: 3 % more triangles, same time). An irrational
 #: fraction makes such coincidences unlikely.
 WALL_OFFSET = (math.sqrt(5.0) - 2.0) / 10.0
+#: A union of sweeps holds at most this many pairs that overlap each other. manifold3d's
+#: union costs about as much per overlapping pair, so a group of sweeps that all overlap
+#: (finishing passes stacked down an inclined face: the tool body of each reaches the
+#: passes above it) unites in a time that grows as its size squared, while subtracting
+#: costs about the part's size each time. Measured on one crown face, 357 passes each
+#: overlapping ~250 others, cut into a 150,000-triangle part: one union 76 s; runs of 8
+#: (28 pairs) 9.4 s; of 1, 2, 4, 16, 64: 27, 15, 9.8, 10.5, 21 s; the same part within
+#: 6e-18 m. Sweeps side by side (grooves at their own width's pitch) overlap no other, so
+#: they stay in one union, as fast as before.
+PAIRS_PER_UNION = 28
+#: Two sweeps overlap when their boxes do by more than this fraction of the narrower box,
+#: along every axis (grooves that only touch are not counted).
+OVERLAP_FRACTION = 0.1
+#: Most sweeps in one union (bounds the pair bookkeeping, span^2 per run).
+MAX_RUN = 1024
 #: Most tiles per cell: bounds the member bookkeeping (tiles x sweeps).
 MAX_TILES = 4096
 #: A doubling of the tile grid must leave at most this fraction of the fullest tile's sweeps.
@@ -114,3 +129,36 @@ def overlapping(cells: np.ndarray) -> bool:
     both = x & y
     np.fill_diagonal(both, False)
     return bool(both.any())
+
+
+
+def union_runs(members: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> list[np.ndarray]:
+    """Split sweeps into runs, in their order, each with at most `PAIRS_PER_UNION`
+    overlapping pairs (`OVERLAP_FRACTION`) and `MAX_RUN` sweeps: each run is united and
+    subtracted on its own.
+
+    Parameters
+    ----------
+    members : ndarray of int
+        Sweep indices, in program order (neighbours in a run are neighbours on the part).
+    lower, upper : ndarray, shape (s, 3)
+        Bounds of every sweep, m.
+    """
+    runs, start = [], 0
+    while start < len(members):
+        span = 256
+        while True:
+            block = members[start:start + span]
+            low, high = lower[block], upper[block]
+            overlap = (np.minimum(high[:, None], high[None]) - np.maximum(low[:, None], low[None]))
+            extent = high - low
+            narrower = np.minimum(extent[:, None], extent[None])
+            pairs = np.tril((overlap > OVERLAP_FRACTION * narrower).all(axis=2), k=-1)
+            over = np.flatnonzero(np.cumsum(pairs.sum(axis=1)) > PAIRS_PER_UNION)
+            if len(over) or len(block) < span or span >= MAX_RUN:
+                break
+            span *= 2
+        end = int(over[0]) if len(over) else len(block)
+        runs.append(block[:end])
+        start += end
+    return runs
