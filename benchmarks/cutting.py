@@ -26,6 +26,14 @@ f. Slanted pyramids end to end (issue 14): 500 x 500 crossing grooves, 50 um pit
    relief on a 100 x 100 pattern of the same slants (paths built directly, level), and, once,
    the 500 x 500 program with that model whole (its straightness and yaw tables bend and fan
    the grooves, which only the boolean engine cuts).
+g. Paper 002's crown before compensation, as its default run cuts it (``make demo``: the
+   nominal program on robonano_a0ib with the scenario's default errors and lab realism,
+   seed 0; 3806 feed sweeps in 8 C groups, `cut_turned`): each parallel group subtracted
+   in runs of overlapping pairs (`tiling.union_runs`, the engine's default) against one
+   union per group (before), in the same run, and the two parts compared (heights over a
+   grid, and the volume of each part less the other). A face's finishing passes, stacked
+   down it, overlap each other: the case the runs exist for. Once each (``--repeat`` is
+   not used: about 5 min).
 
 a, b and d are run twice, each in its own process: with the default engine (``method="auto"``,
 which meshes straight grooves across a block as an exact height field,
@@ -46,7 +54,7 @@ too.
 Each scenario runs in its own process so that its peak memory (ru_maxrss, which includes
 manifold3d's C++ heap, unlike tracemalloc) is its own. Times are medians of ``--repeat`` runs.
 
-Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcdef] [--repeat 3] [--no-naive]``
+Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcdefg] [--repeat 3] [--no-naive]``
 """
 
 from __future__ import annotations
@@ -348,7 +356,7 @@ def run_child(name: str, repeat: int, with_naive: bool, method: str) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenarios", default="abcdef")
+    parser.add_argument("--scenarios", default="abcdefg")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-naive", action="store_true")
     parser.add_argument("--child", help=argparse.SUPPRESS)
@@ -360,6 +368,9 @@ def main() -> None:
     if args.child == "f":
         print(json.dumps(run_slanted(args.repeat)))
         return
+    if args.child == "g":
+        print(json.dumps(run_crown_before()))
+        return
     if args.child:
         print(json.dumps(run_child(args.child, args.repeat, not args.no_naive, args.method)))
         return
@@ -370,6 +381,9 @@ def main() -> None:
             continue
         if name == "f":
             run_slanted_child(args)
+            continue
+        if name == "g":
+            run_crown_before_child()
             continue
         for method in ("boolean", "auto") if name in "abd" else ("auto",):
             run_one(name, method, args, boolean_triangles)
@@ -409,6 +423,70 @@ def run_slanted_child(args) -> None:
           f"({f['whole_model'][2]} triangles, "
           f"{f['whole_model'][2] / f['whole_model'][1]:,.0f} triangles/s); peak RSS "
           f"{f['peak_rss_mb']:.0f} MB", flush=True)
+
+
+def run_crown_before() -> dict:
+    """Case g: paper 002's crown before compensation, cut with runs and with one union."""
+    import importlib.util
+    from types import SimpleNamespace
+
+    from machinesim import Lab, load_machine
+    from machinesim.cam.crown import PARK
+    from machinesim.cutting import engine
+    from machinesim.metrology.surface import height_map
+    from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
+    from machinesim.realism import Realism
+
+    path = Path(__file__).resolve().parents[1] / "scenarios" / "workpiece_setting.py"
+    spec = importlib.util.spec_from_file_location("workpiece_setting_scenario", path)
+    scenario = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(scenario)
+    defaults = SimpleNamespace(robot_repeatability_um=None, delta_um=None, rot_deg=None,
+                               crown_delta_um=None, crown_rot_deg=None, errors=None, seed=0)
+    lab = Lab(load_machine("robonano_a0ib"), scenario.loads(defaults)["crown"], seed=0,
+              realism=Realism.lab())
+    procedure = RobotLoadedWorkpiece("crown")
+    found = procedure.identify(procedure.measure(lab)).detail.found
+    layout, program = procedure.layout(found), procedure.nominal_program(found)
+
+    def cut():
+        start = time.perf_counter()
+        part, report = lab.cut(program, layout.tool, procedure.workpiece(lab),
+                               roi=layout.boxes, floor=layout.floor, start=PARK,
+                               turn_step=math.pi / 4)
+        return part, report, time.perf_counter() - start
+
+    runs, (runs_part, report, runs_s) = engine.union_runs, cut()
+    engine.union_runs = lambda members, lower, upper: [members]
+    try:
+        one_part, _, one_s = cut()
+    finally:
+        engine.union_runs = runs
+    low, high = runs_part.bounds
+    x, y = (np.linspace(low[a], high[a], 1000) for a in (0, 1))
+    a, b = height_map(runs_part, x, y), height_map(one_part, x, y)
+    return {"runs_s": runs_s, "one_union_s": one_s, "sweeps": report.sweeps,
+            "engine_s": report.engine_s, "max_height_diff_m": float(np.nanmax(np.abs(a - b))),
+            "nan_mismatch": int(np.count_nonzero(np.isnan(a) != np.isnan(b))),
+            "runs_less_one_m3": (runs_part.manifold - one_part.manifold).volume(),
+            "one_less_runs_m3": (one_part.manifold - runs_part.manifold).volume(),
+            "triangles": [runs_part.manifold.num_tri(), one_part.manifold.num_tri()],
+            "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
+
+
+def run_crown_before_child() -> None:
+    """Run case g in a child process and print its line."""
+    command = [sys.executable, __file__, "--child", "g"]
+    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+    f = json.loads(out.strip().splitlines()[-1])
+    print(f"(g, paper 002's crown before compensation, cut_turned) runs "
+          f"{f['runs_s']:.1f} s (engine {f['engine_s']:.1f} s), one union per group "
+          f"{f['one_union_s']:.1f} s: {f['one_union_s'] / f['runs_s']:.1f}x; "
+          f"{f['sweeps']} sweeps cut; the parts: heights over 1000 x 1000 apart by at most "
+          f"{f['max_height_diff_m']:.2e} m ({f['nan_mismatch']} samples on one part only), "
+          f"runs less one union {f['runs_less_one_m3']:.2e} m^3, one union less runs "
+          f"{f['one_less_runs_m3']:.2e} m^3, triangles {f['triangles'][0]} and "
+          f"{f['triangles'][1]}; peak RSS {f['peak_rss_mb']:.0f} MB", flush=True)
 
 
 def run_one(name: str, method: str, args, boolean_triangles: dict) -> None:

@@ -1,6 +1,6 @@
 """Paper 002 replay: a robot-loaded workpiece, its setting errors found and compensated.
 
-Run: ``.venv/bin/python scenarios/workpiece_setting.py`` (``make demo``, about 7 min on 2
+Run: ``.venv/bin/python scenarios/workpiece_setting.py`` (``make demo``, about 3 min on 2
 idle cores, each step shown on stderr; times in docs/procedures/workpiece_setting.md;
 ``--quick``: smaller crown windows, about 2 min, as the tests run it) with options
 

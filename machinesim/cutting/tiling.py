@@ -1,4 +1,5 @@
-"""Tiling a cell into a grid of tiles, each cut with only the sweeps that reach it."""
+"""Tiling a cell into a grid of tiles, each cut with only the sweeps that reach it, and a
+tile's parallel sweeps into runs, each united and subtracted on its own."""
 
 from __future__ import annotations
 
@@ -131,7 +132,6 @@ def overlapping(cells: np.ndarray) -> bool:
     return bool(both.any())
 
 
-
 def union_runs(members: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> list[np.ndarray]:
     """Split sweeps into runs, in their order, each with at most `PAIRS_PER_UNION`
     overlapping pairs (`OVERLAP_FRACTION`) and `MAX_RUN` sweeps: each run is united and
@@ -146,7 +146,7 @@ def union_runs(members: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> lis
     """
     runs, start = [], 0
     while start < len(members):
-        span = 256
+        span = SWEEPS_PER_TILE  # a tile's sweeps: one block, most often
         while True:
             block = members[start:start + span]
             low, high = lower[block], upper[block]
