@@ -389,11 +389,16 @@ def main() -> None:
             run_one(name, method, args, boolean_triangles)
 
 
+def child_figures(name: str, *options: str) -> dict:
+    """Run case ``name`` in a child process (its own peak memory) and return its figures."""
+    command = [sys.executable, __file__, "--child", name, *options]
+    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
 def run_end_to_end_child(args) -> None:
     """Run case e in a child process and print its line: both figures from the same runs."""
-    command = [sys.executable, __file__, "--child", "e", "--repeat", str(args.repeat)]
-    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
-    f = json.loads(out.strip().splitlines()[-1])
+    f = child_figures("e", "--repeat", str(args.repeat))
     print(f"(e, cut end to end, {f['method']}) median {f['median_s']:.3f} s over "
           f"{len(f['times_s'])} runs: {f['grooves'] / f['median_s']:,.0f} grooves/s "
           f"({f['moves']} moves, {f['sweeps_cut']} sweeps cut); the engine's own time in "
@@ -405,9 +410,7 @@ def run_end_to_end_child(args) -> None:
 
 def run_slanted_child(args) -> None:
     """Run case f in a child process and print its line."""
-    command = [sys.executable, __file__, "--child", "f", "--repeat", str(args.repeat)]
-    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
-    f = json.loads(out.strip().splitlines()[-1])
+    f = child_figures("f", "--repeat", str(args.repeat))
     (b_s, b_tri), (r_s, r_tri) = f["small"]["boolean"], f["small"]["relief"]
     print(f"(f, slanted pyramids cut end to end, {f['method']}) median {f['median_s']:.3f} s "
           f"over {len(f['times_s'])} runs (runs {', '.join(f'{t:.3f}' for t in f['times_s'])}; "
@@ -476,9 +479,7 @@ def run_crown_before() -> dict:
 
 def run_crown_before_child() -> None:
     """Run case g in a child process and print its line."""
-    command = [sys.executable, __file__, "--child", "g"]
-    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
-    f = json.loads(out.strip().splitlines()[-1])
+    f = child_figures("g")
     print(f"(g, paper 002's crown before compensation, cut_turned) runs "
           f"{f['runs_s']:.1f} s (engine {f['engine_s']:.1f} s), one union per group "
           f"{f['one_union_s']:.1f} s: {f['one_union_s'] / f['runs_s']:.1f}x; "
@@ -491,12 +492,8 @@ def run_crown_before_child() -> None:
 
 def run_one(name: str, method: str, args, boolean_triangles: dict) -> None:
     """Run one scenario with one engine in a child process and print its line."""
-    command = [sys.executable, __file__, "--child", name, "--repeat", str(args.repeat),
-               "--method", method]
-    if args.no_naive or method == "boolean":
-        command.append("--no-naive")
-    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
-    f = json.loads(out.strip().splitlines()[-1])
+    naive_off = ["--no-naive"] if args.no_naive or method == "boolean" else []
+    f = child_figures(name, "--repeat", str(args.repeat), "--method", method, *naive_off)
     if f["method"] == "boolean":
         boolean_triangles[name] = f["triangles"]
     line = (f"({name}, {f['method']}) median {f['median_s']:.3f} s "
