@@ -19,9 +19,12 @@ never touching the part mesh once per sweep:
    overlap their neighbours, so parallel sweeps stay (almost) disjoint and their union is
    nearly free.
 3. Sweeps are grouped by their direction of travel in XY. Parallel sweeps are unioned in
-   one `batch_boolean`; groups that cross each other are subtracted one after the other,
-   each evaluated before the next, because the union of crossing sweeps costs as much as
-   cutting them (and manifold3d, left lazy, would form exactly that union).
+   one `batch_boolean` when they lie side by side, and in runs of a few overlapping pairs
+   when they overlap each other (passes stacked down a face: `tiling.union_runs`), since
+   a union's cost grows with its overlapping pairs; groups that cross each other are
+   subtracted one after the other, each evaluated before the next, because the union of
+   crossing sweeps costs as much as cutting them (and manifold3d, left lazy, would form
+   exactly that union).
 4. The region is split into cells (ROI windows, and a grid of tiles inside each): a tile is
    cut with only the sweeps that touch it, which keeps manifold3d's faster-than-linear
    boolean cost down, and the tiles of a cell are joined by `stitch` (a mesh merge along
@@ -29,8 +32,10 @@ never touching the part mesh once per sweep:
 
 Subtraction commutes, so the part does not depend on how the sweeps are batched or ordered:
 removing a set of sweeps at once or one by one gives the same solid (to manifold3d's
-round-off, tested on paper 002's groove programs). The removed volume is integrated over the
-cut itself (`removed_volume`), not taken as the difference of two large volumes.
+round-off, tested on paper 002's groove programs), except for sheets under a picometre thick
+between sweeps whose faces coincide exactly, which round-off keeps or not (docs/cutting.md,
+known fault). The removed volume is integrated over the cut itself (`removed_volume`), not
+taken as the difference of two large volumes.
 """
 
 from __future__ import annotations
