@@ -138,11 +138,13 @@ def report_turned(part: Part, x, y) -> None:
     mesh = turned.mesh()
     inside = (x[GRID // 4:3 * GRID // 4], y[GRID // 4:3 * GRID // 4])
     times, maps = {}, {}
-    for spans in (True, False):
-        surface.ROW_SPANS = spans
-        maps[spans] = height_map(mesh, *inside)
-        times[spans] = median_time(lambda: height_map(mesh, *inside))
-    surface.ROW_SPANS = True
+    try:
+        for spans in (True, False):
+            surface.ROW_SPANS = spans
+            maps[spans] = height_map(mesh, *inside)
+            times[spans] = median_time(lambda: height_map(mesh, *inside))
+    finally:
+        surface.ROW_SPANS = True
     n = inside[0].size * inside[1].size
     print(f"height_map {inside[0].size} x {inside[1].size} of the field turned 45 deg "
           f"(median of {REPEATS}):")
