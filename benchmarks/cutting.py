@@ -448,6 +448,7 @@ def run_crown_before() -> dict:
                                crown_delta_um=None, crown_rot_deg=None, errors=None, seed=0)
     lab = Lab(load_machine("robonano_a0ib"), scenario.loads(defaults)["crown"], seed=0,
               realism=Realism.lab())
+    lab.reuse_cuts = False  # the same inputs twice, two engine settings: cut both times
     procedure = RobotLoadedWorkpiece("crown")
     found = procedure.identify(procedure.measure(lab)).detail.found
     layout, program = procedure.layout(found), procedure.nominal_program(found)

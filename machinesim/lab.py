@@ -42,13 +42,17 @@ from pathlib import Path
 import numpy as np
 
 from machinesim import realism as _realism
+from machinesim.cutting.memo import CutMemo
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
 from machinesim.metrology.imperfections import Lobing, Registration, ZonalForm
 from machinesim.realism import Realism, SphereArtefacts
 from machinesim.streams import stream
 
-__all__ = ["Lab"]
+__all__ = ["CUTS", "Lab"]
+
+#: The cuts this process made, for `Lab.cut` to hand back when asked for again.
+CUTS = CutMemo()
 
 
 class Lab:
@@ -80,6 +84,9 @@ class Lab:
         hidden like the errors: `cut` runs every program through them and `encoders`
         records the follow-up error they leave. Default none (axes follow exactly).
     """
+
+    #: Hand back a cut made before with the same inputs (`cut`); False cuts every time.
+    reuse_cuts: bool = True
 
     def __init__(self, machine, errors=None, *, noise: bool = True, seed: int = 0,
                  realism: Realism | None = None, background=None, servo=None) -> None:
@@ -143,6 +150,13 @@ class Lab:
         (the same part, each group of feed moves at one C position cut in its own turned
         frame: faster for faces at many C positions), which also takes ``floor``.
 
+        A cut this process made before with every input the same (program, machine, errors,
+        tool, stock, options; by any lab) is handed back, not cut again
+        (`machinesim.cutting.memo`): an error budget's reruns cut only what changed. Its
+        report carries the note `machinesim.cutting.memo.REUSED_NOTE`; ``progress`` is told
+        once, with every sweep done. ``Lab.reuse_cuts = False`` (on a lab or the class)
+        cuts every time.
+
         Returns
         -------
         (Part, CutReport)
@@ -155,7 +169,19 @@ class Lab:
         cutter = cut_turned if "turn_step" in options else cut
         if self.__servo is not None and "servo" not in options:
             options["servo"] = self.__servo
-        return cutter(program, self.machine, tool, stock, self.__truth, roi=roi, **options)
+        progress = options.pop("progress", None)
+        key = (CUTS.key(cutter.__name__, self.machine.digest, program, tool, stock,
+                        self.__truth, roi, sorted(options.items()))
+               if self.reuse_cuts else None)
+        reused = CUTS.get(key)
+        if reused is not None:
+            if progress is not None:
+                progress(reused[1].sweeps, reused[1].sweeps)
+            return reused
+        part, report = cutter(program, self.machine, tool, stock, self.__truth, roi=roi,
+                              progress=progress, **options)
+        CUTS.put(key, part, report)
+        return part, report
 
     def turn(self, program, tool="nose:1.0:90", *, top: float = 0.0):
         """Turn ``program`` on the lab's lathe: its servo loops, its errors (tool setting,

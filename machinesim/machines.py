@@ -9,6 +9,8 @@
 from __future__ import annotations
 
 import functools
+import hashlib
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -160,6 +162,12 @@ class Machine:
 
     def __repr__(self) -> str:
         return f"Machine({self.name!r}, axes={''.join(self.axes)})"
+
+    @functools.cached_property
+    def digest(self) -> str:
+        """SHA-256 of the URDF this machine was built from, as it was read: two machines
+        with one digest move alike."""
+        return hashlib.sha256(ET.tostring(self._urdf_root)).hexdigest()
 
     # ----------------------------------------------------------------------------- axes
 

@@ -79,11 +79,15 @@ class Part:
             self._manifold = manifold
         return self._manifold
 
+    @property
+    def triangle_count(self) -> int:
+        """How many triangles the part's mesh has."""
+        return len(self._triangles) if self._manifold is None else self._manifold.num_tri()
+
     def __repr__(self) -> str:
-        count = (len(self._triangles) if self._manifold is None
-                 else self._manifold.num_tri())
         low, high = self.bounds
-        return (f"Part({count} triangles, bounds {low.tolist()} .. {high.tolist()} m, "
+        return (f"Part({self.triangle_count} triangles, bounds {low.tolist()} .. "
+                f"{high.tolist()} m, "
                 f"volume {self.volume:.6g} m^3)")
 
     @classmethod

@@ -55,8 +55,8 @@ def test_no_public_attribute_of_the_lab_or_its_instruments_holds_the_truth():
     assert methods == {"adjust_tool", "cut", "encoders", "laser_interferometer", "machine",
                        "make_artefacts", "microscope", "noise", "r_test", "realism", "reveal",
                        "reveal_adjustments", "reveal_artefacts", "reveal_background",
-                       "reveal_instruments", "reveal_servo", "seed", "touch_probe",
-                       "tune_servo", "turn", "white_light_interferometer"}
+                       "reveal_instruments", "reveal_servo", "reuse_cuts", "seed",
+                       "touch_probe", "tune_servo", "turn", "white_light_interferometer"}
 
 
 def test_with_realism_no_public_attribute_holds_the_truth_or_an_imperfection():
