@@ -215,18 +215,21 @@ def _figures(result, what: str) -> dict:
     return {f.name: f for f in figures}
 
 
-def realism_budget(procedure, result, realism, make_lab, enabled: bool = True):
+def realism_budget(procedure, result, realism, make_lab, enabled: bool = True, *,
+                   progress=None):
     """The error budget of a scenario's run over its lab's realism switches: each switch
     that is on and that ``procedure.realism_sources`` lists, turned off in turn on a lab of
     its own (``make_lab(realism)``); ``result`` is the run with every switch on. None when
-    not ``enabled`` or no such switch is on."""
+    not ``enabled`` or no such switch is on. ``progress``: a stage's printer for each rerun,
+    ``progress("budget, <source> off")`` (`machinesim.report.progress_printer`)."""
     from machinesim.experiment import run
 
     sources = [name for name in realism.on if name in procedure.realism_sources]
     if not enabled or not sources:
         return None
     return error_budget(lambda off: result if off is None else run(
-        procedure, make_lab(realism.without(off))), sources)
+        procedure, make_lab(realism.without(off)),
+        progress=None if progress is None else progress(f"budget, {off} off")), sources)
 
 
 def error_budget(run: Callable, sources: Sequence[str]) -> Budget:

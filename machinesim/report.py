@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -266,6 +267,22 @@ def _check_budget(rows) -> None:
                     or not math.isfinite(value)):
                 raise InputError(f"summary.json: budget[{i}].{key} must be a finite number, "
                                  f"got {value!r}", key="budget")
+
+
+def progress_printer(scenario: str):
+    """Printers of a scenario's steps on stderr, with the time since this call:
+    ``stage = progress_printer("name")``; ``told = stage("budget, x off")``; ``told("measure
+    ...")`` prints ``name [m:ss] budget, x off: measure ...``. A ``told`` is what
+    `machinesim.experiment.run` takes as ``progress``; stdout keeps the report alone."""
+    began = time.perf_counter()
+
+    def stage(name: str):
+        def show(text: str) -> None:
+            minutes, seconds = divmod(int(time.perf_counter() - began), 60)
+            print(f"{scenario} [{minutes:d}:{seconds:02d}] {name}: {text}", file=sys.stderr,
+                  flush=True)
+        return show
+    return stage
 
 
 def run_scenario(report, args) -> None:

@@ -37,6 +37,7 @@ from machinesim.procedures.sts_plans import PAPER, TABLE5
 from machinesim.procedures.sts_turning import CASES, STSTurning
 from machinesim.report import (
     ReportFolder,
+    progress_printer,
     realism_from,
     realism_options,
     run_scenario,
@@ -72,8 +73,10 @@ def report(args) -> None:
 
     print(f"Paper 004 on sts_lathe: realism {realism}, seed {args.seed}\n")
     procedure = STSTurning()
-    result = run(procedure, make_lab(realism))
-    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on")
+    stage = progress_printer("sts_turning")
+    result = run(procedure, make_lab(realism), progress=stage("run"))
+    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
+                            progress=stage)
     out = ReportFolder(args.out)
     details = result.evaluation.details
     print(case_table(details))

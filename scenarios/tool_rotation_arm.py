@@ -40,6 +40,7 @@ from machinesim.procedures.tool_rotation_arm import ToolRotationArm
 from machinesim.report import (
     ReportFolder,
     injected_errors,
+    progress_printer,
     realism_from,
     realism_options,
     run_scenario,
@@ -92,8 +93,10 @@ def report(args) -> None:
           f"{r / MM:.3f} mm, e_ys = {e_ys / UM:.1f} um; realism {realism}, seed {args.seed}\n")
 
     procedure = ToolRotationArm(plan=calibration_plan(args.capture_mm))
-    result = run(procedure, lab)
-    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on")
+    stage = progress_printer("tool_rotation_arm")
+    result = run(procedure, lab, progress=stage("run"))
+    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
+                            progress=stage)
     out = ReportFolder(args.out)
     calibration, detail = result.measurements, result.identification.detail
     out.write_part("calibration.ply", calibration.part)

@@ -52,6 +52,7 @@ from machinesim.report import (
     ReportFolder,
     injected_errors,
     parse_floats,
+    progress_printer,
     realism_from,
     realism_options,
     scenario_arguments,
@@ -97,8 +98,10 @@ def report(args, make_lab, realism) -> None:
     """Run the procedure on ``make_lab(realism)``, with the error budget when asked for."""
     procedure = ToolSetting6Axis()
     print(f"Paper 001 on robonano_ui: realism {realism}, seed {args.seed}\n")
-    result = run(procedure, make_lab(realism))
-    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on")
+    stage = progress_printer("tool_setting_6axis")
+    result = run(procedure, make_lab(realism), progress=stage("run"))
+    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
+                            progress=stage)
     folder = ReportFolder(args.out)
     readings = result.measurements
     for name, (program, part, _) in readings.plates.items():

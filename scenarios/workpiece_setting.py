@@ -21,7 +21,9 @@ idle cores, each step shown on stderr; times in docs/procedures/workpiece_settin
                                 --noise off without it: ideal
     --budget on|off             error budget of the crown's "after" figures: each source
                                 switched off in turn (one more crown run each, "after"
-                                only; default off for its cost: about 9 crown runs)
+                                only, cutting again only where the source changes the
+                                program or the machine; default off for its cost: five
+                                more crown cuts, about 7 min with --quick)
     --nose-correction on|off    keep the nose arc's lowest point on the path (default on),
                                 or the tip as the paper's eq 7 does (off)
     --all-layers                cut all ten 1 um finishing layers of the crown, not only the
@@ -47,7 +49,6 @@ from __future__ import annotations
 import math
 import re
 import sys
-import time
 from dataclasses import replace
 from types import MappingProxyType
 
@@ -69,7 +70,13 @@ from machinesim.procedures.workpiece_setting import (
     model_based_program,
 )
 from machinesim.realism import Realism
-from machinesim.report import ReportFolder, injected_errors, parse_floats, scenario_arguments
+from machinesim.report import (
+    ReportFolder,
+    injected_errors,
+    parse_floats,
+    progress_printer,
+    scenario_arguments,
+)
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 from machinesim.viewer import part_scene, write_html
 
@@ -222,17 +229,9 @@ def report(args) -> None:
           "grooves_after)")
 
 
-_STARTED = time.perf_counter()
-
-
-def progress(stage: str):
-    """A printer of `machinesim.experiment.run`'s steps to stderr, with the time since the
-    scenario started: the default run takes minutes, the crown's cuts most of them."""
-    def show(text: str) -> None:
-        minutes, seconds = divmod(int(time.perf_counter() - _STARTED), 60)
-        print(f"workpiece_setting [{minutes:d}:{seconds:02d}] {stage}: {text}", file=sys.stderr,
-              flush=True)
-    return show
+#: Each step of each load, and the budget's, on stderr with the time since the scenario
+#: started: the default run takes minutes, the crown's cuts most of them.
+progress = progress_printer("workpiece_setting")
 
 
 def lab_realism(args) -> Realism:

@@ -45,6 +45,7 @@ from machinesim.procedures.xy_plane_measurements import (
 )
 from machinesim.report import (
     ReportFolder,
+    progress_printer,
     realism_from,
     realism_options,
     run_scenario,
@@ -76,8 +77,10 @@ def report(args) -> None:
           + (" (laser readings ideal: no noise, no 1 nm display rounding)" if ideal else "")
           + "\n")
     procedure = XYPlaneErrors(interferometer_resolution=0.0 if ideal else None)
-    result = run(procedure, lab)
-    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on")
+    stage = progress_printer("xy_plane_errors")
+    result = run(procedure, lab, progress=stage("run"))
+    budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
+                            progress=stage)
     out = ReportFolder(args.out)
     detail = result.identification.detail
     xy = result.measurements["xy"]

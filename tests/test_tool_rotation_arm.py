@@ -362,8 +362,10 @@ def test_the_scenario_ends_a_machinesim_error_with_one_line(tmp_path):
         result = scenario("--realism", "ideal", *options, "--out", str(tmp_path))
         assert result.returncode == 2
         assert "Traceback" not in result.stderr
-        assert result.stderr.startswith("error: ") and result.stderr.count("\n") == 1
-        assert message in result.stderr
+        # the steps begun before it (progress), then the error: one line, last
+        *steps, last = result.stderr.splitlines()
+        assert all(line.startswith("tool_rotation_arm [") for line in steps), steps
+        assert last.startswith("error: ") and message in last
 
 
 # ---------------------------------------------------------------------- the procedure class

@@ -85,3 +85,10 @@ def test_the_scenario_writes_its_error_budget(tmp_path):
         assert row.share == quadrature_share(row.after_all, row.after_without)
         assert abs(row.after_without) < 1e-3  # noise off: below 1 nm
     assert (tmp_path / "budget.png").stat().st_size > 0 and "### Error budget" in result.stdout
+    # stderr tells each step as it begins and ends, the run's then the budget rerun's
+    steps = [line.split("] ", 1)[1] for line in result.stderr.splitlines()]
+    assert all(line.startswith("tool_setting_6axis [") for line in result.stderr.splitlines())
+    expected = [f"{stage}: {step} {when}" for stage in ("run", "budget, instrument_noise off")
+                for step in ("measure", "identify", "compensate", "evaluate")
+                for when in ("...", "done in")]
+    assert [line[:len(want)] for line, want in zip(steps, expected, strict=True)] == expected
