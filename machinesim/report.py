@@ -297,6 +297,18 @@ def run_scenario(report, args) -> None:
         sys.exit(2)
 
 
+def _seed(text: str) -> int:
+    """``--seed``: a non-negative integer (numpy's seeds), refused as the command line's
+    error (argparse: usage and status 2), not deep in the first random draw."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
+    return value
+
+
 def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentParser:
     """The options every scenario takes: --errors FILE.toml, --noise on|off, --seed N,
     --out DIR."""
@@ -307,7 +319,8 @@ def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentP
                         "options, when given, are applied on top")
     parser.add_argument("--noise", choices=("on", "off"), default="on",
                         help="instrument noise (default on, the instruments' stated models)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the noise (default 0)")
+    parser.add_argument("--seed", type=_seed, default=0,
+                        help="seed of the noise, a non-negative integer (default 0)")
     parser.add_argument("--out", type=Path, default=Path(default_out),
                         help=f"report folder (default {default_out})")
     return parser

@@ -66,3 +66,18 @@ def test_sts_turning_predicts_and_measures_the_four_cases(tmp_path):
     assert abs(identified["tool_geometry.nose_radius"]["value"] - nose) < 0.3e-6
     for name in ("profiles.png", "shares.png", "case_4_surface.png", "modified.nc"):
         assert (tmp_path / name).stat().st_size > 0
+
+
+def test_every_paper_scenario_refuses_a_negative_seed_on_its_command_line(tmp_path):
+    # numpy takes no negative seed; paper 002 drew its robot landings with it before its
+    # lab checked the seed, and ended in a traceback
+    for script in ("workpiece_setting.py", "tool_rotation_arm.py", "tool_setting_6axis.py",
+                   "xy_plane_errors.py", "sts_turning.py"):
+        for seed in ("-1", "1.5"):
+            result = subprocess.run([sys.executable, str(ROOT / "scenarios" / script),
+                                     "--seed", seed, "--out", str(tmp_path)],
+                                    capture_output=True, text=True, check=False, cwd=ROOT)
+            assert result.returncode == 2, (script, result.stderr)
+            assert "Traceback" not in result.stderr
+            assert (f"argument --seed: expected a non-negative integer, got '{seed}'"
+                    in result.stderr.splitlines()[-1]), (script, result.stderr)
