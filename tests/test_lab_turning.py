@@ -181,3 +181,22 @@ def test_the_tool_test_reads_dy_with_its_sign_and_the_alignment_cancels_it():
         # what the adjuster made (exact with the noise off) against the injected offset
         assert abs(lab.reveal().tool.offset[1] + lab.reveal_adjustments()[1]) < 0.1e-6
         assert report["dy_after_alignment_um"] == pytest.approx(residual.dy / 1e-6)
+
+
+def test_the_tool_test_refuses_tool_errors_beyond_what_its_sphere_identifies():
+    # +10 um of dx: the tip stays 10 um outside the spindle axis and the nose, not the tip,
+    # cuts the middle of the sphere, which the exact form does not describe: the fit's dR
+    # comes out 8 % off (92 um for 100). The misfit (1.7 nm against 0.6) refuses it; +5 um,
+    # inside the range, is read to 0.6 % (docs/procedures/sts_turning.md)
+    from machinesim.procedures.sts_turning import STSTurning
+
+    procedure = STSTurning()
+    errors = {"tool": {"offset_um": [10.0, -3.5, 0.0]},
+              "tool_geometry": {"nose_radius_um": 100.0}}
+    with pytest.raises(InputError, match=r"does not fit the tool-error model: residual RMS "
+                       r"1\.\d\d nm .* dR 92\.\d\d um"):
+        procedure.measure(machinesim.Lab("sts_lathe", errors, noise=False))
+    errors["tool"]["offset_um"][0] = 5.0
+    found = procedure.measure(machinesim.Lab("sts_lathe", errors, noise=False))["tool_test"]
+    assert found.d_radius == pytest.approx(100e-6, rel=0.01)
+    assert found.dx == pytest.approx(5e-6, abs=0.05e-6)
