@@ -95,3 +95,19 @@ def test_a_registered_instrument_finds_the_window_and_its_grooves():
     assert seen.pitch == pytest.approx(plain.pitch / math.cos(1.5e-3), rel=2e-7)  # 10 pm
     assert seen.angle_error == pytest.approx(plain.angle_error, abs=1e-9)
     np.testing.assert_allclose(seen.apex - 1e-6, plain.apex, atol=1e-10)
+
+
+def test_a_groove_that_is_not_there_is_refused_not_read_as_noise():
+    # a flat, and a V far shallower than the 90 deg tool's, have no flanks of a groove
+    s = np.arange(0.0, 200e-6, 0.1e-6)
+    with pytest.raises(MachineSimError, match="flanks fall at slopes"):
+        v_flanks(s, np.zeros_like(s), [100e-6], P)
+    with pytest.raises(MachineSimError, match="flanks fall at slopes 0.1 and 0.1"):
+        v_flanks(s, 0.1 * np.abs(s - 100e-6), [100e-6], P)
+    # the C axis 3 mm off its place: the set grooved after C turned 90 deg lands millimetres
+    # away from the 1 mm window, which holds one set; it read as 0.66 rad between the sets
+    lab = machinesim.Lab("grooving_4axis", {"location": {"C": {"EX0C_um": 3000.0}}},
+                         noise=False)
+    with pytest.raises(MachineSimError, match=r"pyramid window at \(0\.000, .*the groove set "
+                       "along Y.*no groove of the plan is there"):
+        cut_and_read(lab, windows=((0.0, 0.0),))

@@ -61,13 +61,20 @@ class PyramidWindow:
 LOCATE = 2e-6
 
 
+#: Flank slopes |dz/ds| a fitted V groove must have: 0.3 .. 3 (17 .. 72 deg), about the 1
+#: of a 90 deg V tool read square across its grooves (`v_flanks`).
+FLANK_SLOPES = (0.3, 3.0)
+
+
 def v_flanks(s, z, centres, pitch: float, band=(0.1, 0.35)):
     """Fit each V groove near the given centres: (positions, bottoms, left, right).
 
     For each approximate centre the lowest sample within half a pitch is the groove's
     bottom estimate; each flank is the least-squares line through the samples between
     ``band[0]`` and ``band[1]`` pitches from it. ``left``/``right`` are (a, b) of
-    ``z = a + b s``; positions and bottoms are the flanks' intersections.
+    ``z = a + b s``; positions and bottoms are the flanks' intersections. A groove whose
+    flanks do not fall to its bottom at `FLANK_SLOPES` (a flat, a groove of the other set
+    along the profile, or none) is refused: its "position" would be noise.
     """
     s = np.asarray(s, dtype=np.float64)
     z = np.asarray(z, dtype=np.float64)
@@ -90,6 +97,12 @@ def v_flanks(s, z, centres, pitch: float, band=(0.1, 0.35)):
             b, a = np.polyfit(s[pick], z[pick], 1)
             lines.append((a, b))
         (a1, b1), (a2, b2) = lines
+        lo, hi = FLANK_SLOPES
+        if not (lo <= -b1 <= hi and lo <= b2 <= hi):
+            raise InputError(f"Expected a V groove near {c * 1e3:.4f} mm along the profile: "
+                             f"its flanks fall at slopes {-b1:.3g} and {b2:.3g} to its "
+                             f"lowest point, not {lo:g} .. {hi:g}: no groove of the plan is "
+                             "there (cut elsewhere, or not at all)", key="centres")
         sc = (a2 - a1) / (b1 - b2)
         pos.append(sc)
         bottom.append(a1 + b1 * sc)
@@ -200,7 +213,13 @@ def _read_set(instrument, part, cx, cy, along_x, nominal, half, p, span, offset_
     base = (cy if along_x else cx) - half
     positions, ridges = {}, {}
     for shift, prof in profiles.items():
-        pos, _, lefts, rights = v_flanks(prof.s, prof.z, nominal + half + offset, p)
+        try:
+            pos, _, lefts, rights = v_flanks(prof.s, prof.z, nominal + half + offset, p)
+        except InputError as error:
+            which = "along X" if along_x else "along Y"
+            raise InputError(f"the groove set {which}: {error}",
+                             key=f"pyramid window at ({cx * 1e3:.3f}, {cy * 1e3:.3f}) mm") \
+                from None
         positions[shift] = pos + base
         ridges[shift] = _ridges(lefts, rights)
     slope = np.mean((positions[span] - positions[-span]) / (2.0 * span))
