@@ -96,6 +96,34 @@ def test_a_rapid_back_along_a_groove_just_cut_cuts_nothing():
     assert report.rapids_that_cut == ()
 
 
+def test_rapids_across_many_grooves_are_judged_alike_by_both_unions(monkeypatch):
+    # 70 grooves 5 um deep along X, 20 um apart; then a rapid 3 um deep along Y across all
+    # of them, which cuts the ridges between them (listed), and a rapid 5 um deep back along
+    # groove 35's bottom, over what that groove cut (not listed). Each overlaps 70 earlier
+    # sweeps: judged by one union per rapid, and by the union of every earlier sweep grown
+    # from rapid to rapid (`RAPID_EARLIER_UNION` 0): the same lines.
+    from machinesim.cutting import program as cutting_program
+
+    b = ProgramBuilder(1).rapid(X=0.5 * MM, Y=0.3 * MM, Z=0.1 * MM)
+    for k in range(70):
+        b.rapid(X=-0.5 * MM, Y=0.3 * MM + k * 20 * UM).rapid(Z=-5 * UM)
+        b.linear(X=4.5 * MM, feed_mm_per_min=100.0).rapid(Z=0.1 * MM)
+    b.rapid(X=2 * MM, Y=0.31 * MM).rapid(Z=-3 * UM).rapid(Y=1.69 * MM).rapid(Z=0.1 * MM)
+    b.rapid(X=1 * MM, Y=0.3 * MM + 35 * 20 * UM).rapid(Z=-5 * UM).rapid(X=3 * MM)
+    program = b.rapid(Z=0.1 * MM).build()
+    moves = program.moves
+    across, along = moves[-6].line, moves[-2].line
+    assert moves[-6].target["Y"] == pytest.approx(1.69 * MM)
+    assert moves[-2].target["X"] == pytest.approx(3 * MM)
+    lines = {}
+    for limit in (10_000, 0):
+        monkeypatch.setattr(cutting_program, "RAPID_EARLIER_UNION", limit)
+        _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+        lines[limit] = report.rapids_that_cut
+    assert lines[0] == lines[10_000]
+    assert across in lines[0] and along not in lines[0]
+
+
 def test_the_command_line_cuts_and_writes_part_and_report(tmp_path, capsys):
     program = tmp_path / "grooves.nc"
     write_program(grooves(n=2, pitch=40 * UM), program)

@@ -36,6 +36,10 @@ from machinesim.workpiece import Part, stock_from_spec
 #: from the next start by an ulp (~1e-17 at 0.1 m); 1e-12 is `tolerances.POSE_M`, the
 #: agreement of two float64 kinematic chains, 1000 times below the 1 nm axis resolution.
 JOIN_TOL = 1e-12
+#: A rapid that reaches the stock is checked against the sweeps before it whose boxes overlap
+#: its own; up to this many are united for it alone, more (a rapid across a field of grooves)
+#: are taken from one union of every earlier sweep, grown from rapid to rapid: both exact.
+RAPID_EARLIER_UNION = 64
 
 
 @dataclass(frozen=True)
@@ -199,7 +203,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         before = part
         part, engine = remove(before, section_tool, paths, roi=roi, progress=progress)
         rapids += _rapids_that_cut(before, section_tool, section_poses, section,
-                                   engine.reached)
+                                   engine.reached, roi)
         holder |= {int(section.sweep_line[i]) for i in engine.holder_contact}
         engines.append(engine)
         sections.append({"tool": number, "line": line, "length_m": length,
@@ -391,14 +395,16 @@ def _format(rotary: bool):
 
 
 def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
-                     reached: np.ndarray) -> tuple[int, ...]:
+                     reached: np.ndarray, roi=None) -> tuple[int, ...]:
     """Lines of rapids whose sweep met material still there when they ran.
 
     A zero-thickness edge plunging into material sweeps no volume, so the check thickens a
     profile by `RAPID_EDGE_HALF_THICKNESS_M` along the tool's X (here only). Candidates are
     the rapid sweeps the engine found reaching the stock (``reached``); each is intersected
-    with the stock, less the sweeps before it (feeds and rapids) whose boxes overlap its
-    own: exact, and free for rapids that stay clear.
+    with the stock (inside the ``roi`` windows when given: the part is cut there alone), less
+    the sweeps before it (feeds and rapids) whose boxes overlap its own, or, past
+    `RAPID_EARLIER_UNION` of them, less one union of every earlier sweep whose box meets the
+    material's, grown from rapid to rapid: exact, and free for rapids that stay clear.
     """
     candidates = reached[moves.sweep_rapid[reached]]
     if not len(candidates):
@@ -406,27 +412,62 @@ def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
     shape = _Thick(tool)
     found = []
     boxes = None
-    for sweep in candidates:
+    material = stock.manifold if roi is None else _within(stock, roi)
+    near = None  # the sweeps whose boxes meet the material's
+    covered, upto = None, 0  # the union of those before ``upto``
+    for sweep in np.sort(candidates):
         a = moves.sweep_start[sweep]
         swept = shape.solid(poses[a], poses[a + 1])
         if swept is None:
             continue
-        hit = stock.manifold ^ swept
+        hit = material ^ swept
         if hit.volume() <= RAPID_CUT_VOLUME_M3:
             continue
         if boxes is None:
             boxes = shape.bounds(poses, moves.sweep_start)
+            m_low, m_high = np.array(material.bounding_box()).reshape(2, 3)
+            near = np.flatnonzero(np.all(boxes[1] >= m_low, axis=1)
+                                  & np.all(boxes[0] <= m_high, axis=1))
         box_low, box_high = np.array(swept.bounding_box()).reshape(2, 3)
         earlier = np.flatnonzero(np.all(boxes[1][:sweep] >= box_low, axis=1)
                                  & np.all(boxes[0][:sweep] <= box_high, axis=1))
-        solids = [s for s in (shape.solid(poses[moves.sweep_start[k]],
-                                          poses[moves.sweep_start[k] + 1]) for k in earlier)
-                  if s is not None]
-        if solids:
-            hit = hit - manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+        if len(earlier) <= RAPID_EARLIER_UNION:
+            solids = _solids(shape, poses, moves, earlier)
+            if solids:
+                hit = hit - manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+        else:
+            # A rapid that overlaps many earlier sweeps (one across a field of grooves):
+            # one union of every sweep before it whose box meets the material's (no other
+            # can take away what the rapid met), grown from the last such rapid's, instead
+            # of a union per rapid that grows as the square of the sweeps
+            solids = _solids(shape, poses, moves, near[(near >= upto) & (near < sweep)])
+            if covered is not None:
+                solids.insert(0, covered)
+            covered = (manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+                       if solids else covered)
+            upto = sweep
+            if covered is not None:
+                hit = hit - covered
         if hit.volume() > RAPID_CUT_VOLUME_M3:
             found.append(int(moves.sweep_line[sweep]))
     return tuple(dict.fromkeys(found))
+
+
+def _within(stock: Part, roi) -> manifold3d.Manifold:
+    """The stock inside the roi's windows (x0, x1, y0, y1): the material a rapid can meet
+    where the cut is made."""
+    low, high = stock.bounds
+    pad = 1.0 + float(np.abs(np.concatenate([low, high])).max())
+    boxes = [manifold3d.Manifold.cube((x1 - x0, y1 - y0, high[2] - low[2] + 2 * pad))
+             .translate((x0, y0, low[2] - pad)) for x0, x1, y0, y1 in np.reshape(roi, (-1, 4))]
+    return stock.manifold ^ manifold3d.Manifold.batch_boolean(boxes, manifold3d.OpType.Add)
+
+
+def _solids(shape, poses, moves, sweeps) -> list:
+    """The thickened tool's solids of ``sweeps`` (those that sweep a volume)."""
+    return [s for s in (shape.solid(poses[moves.sweep_start[k]],
+                                    poses[moves.sweep_start[k] + 1]) for k in sweeps)
+            if s is not None]
 
 
 class _Thick:
