@@ -409,10 +409,13 @@ def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
     candidates = reached[moves.sweep_rapid[reached]]
     if not len(candidates):
         return ()
+    from machinesim.cutting.windows import clip_to  # windows builds on this module
+
     shape = _Thick(tool)
     found = []
     boxes = None
-    material = stock.manifold if roi is None else _within(stock, roi)
+    material = (stock.manifold if roi is None
+                else clip_to(stock, np.reshape(roi, (-1, 4))).manifold)
     near = None  # the sweeps whose boxes meet the material's
     covered, upto = None, 0  # the union of those before ``upto``
     for sweep in np.sort(candidates):
@@ -451,16 +454,6 @@ def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
         if hit.volume() > RAPID_CUT_VOLUME_M3:
             found.append(int(moves.sweep_line[sweep]))
     return tuple(dict.fromkeys(found))
-
-
-def _within(stock: Part, roi) -> manifold3d.Manifold:
-    """The stock inside the roi's windows (x0, x1, y0, y1): the material a rapid can meet
-    where the cut is made."""
-    low, high = stock.bounds
-    pad = 1.0 + float(np.abs(np.concatenate([low, high])).max())
-    boxes = [manifold3d.Manifold.cube((x1 - x0, y1 - y0, high[2] - low[2] + 2 * pad))
-             .translate((x0, y0, low[2] - pad)) for x0, x1, y0, y1 in np.reshape(roi, (-1, 4))]
-    return stock.manifold ^ manifold3d.Manifold.batch_boolean(boxes, manifold3d.OpType.Add)
 
 
 def _solids(shape, poses, moves, sweeps) -> list:
