@@ -46,7 +46,6 @@ class CutMemo:
         self.max_cuts = max_cuts
         self.max_triangles = max_triangles
         self._cuts: OrderedDict[str, tuple[Part, object, int]] = OrderedDict()
-        self.hits = 0
 
     def __len__(self) -> int:
         return len(self._cuts)
@@ -79,7 +78,6 @@ class CutMemo:
             return None
         self._cuts.move_to_end(key)
         part, report, _ = self._cuts[key]
-        self.hits += 1
         return part, replace(report, notes=tuple(report.notes) + (REUSED_NOTE,))
 
     def put(self, key: str | None, part: Part, report) -> None:

@@ -86,24 +86,24 @@ class ToolTest:
 def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
     """Turn the test sphere and the tilted test plane with ``tool`` (programs compensated
     for ``nose_radius``) and read the tool errors from the interferometer's maps."""
-    maps = {}
+    maps, stated = {}, {}  # height maps, and the interferometers' stated noise (m)
     for piece, plan in (("sphere", TEST_SPHERE), ("plane", TEST_PLANE)):
         part, _ = lab.turn(sp.spiral_program(plan.path(nose_radius)), tool, top=plan.top)
         w = plan.read_half_width
         interferometer = lab.white_light_interferometer(label=f"{label}_{piece}")
         maps[piece] = interferometer.height_map(part, -w, w, -w, w, plan.pixel)
-        maps[f"{piece}_noise"] = interferometer.readout.std
+        stated[piece] = interferometer.readout.std
     sphere, plane = maps["sphere"], maps["plane"]
     found = identify_tool_errors(TEST_SPHERE.design(), sphere.x, sphere.y, sphere.z,
                                  core_step=TEST_SPHERE.core_step,
                                  aperture=TEST_SPHERE.read_half_width)
-    stated = maps["sphere_noise"]
-    misfit = float(np.sqrt(max(found.residual_rms**2 - stated**2, 0.0)))
+    noise = stated["sphere"]
+    misfit = float(np.sqrt(max(found.residual_rms**2 - noise**2, 0.0)))
     if misfit > SPHERE_MISFIT_LIMIT:
         raise InputError(
             f"{label}: the turned test sphere does not fit the tool-error model: residual "
             f"RMS {found.residual_rms / NM:.2f} nm against the interferometer's stated "
-            f"{stated / NM:.2f} nm, a misfit of {misfit / NM:.2f} nm (at most "
+            f"{noise / NM:.2f} nm, a misfit of {misfit / NM:.2f} nm (at most "
             f"{SPHERE_MISFIT_LIMIT / NM:.2f} nm); the fit reads dx {found.dx / UM:.2f} um, "
             f"dR {found.d_radius / UM:.2f} um. The tool errors are beyond what this test "
             "identifies (dx from about -10 to +5 um, docs/procedures/sts_turning.md): set "
