@@ -415,6 +415,7 @@ class Lab:
         if self.realism.registration and "registration" not in options:
             drawn["registration"] = Registration.draw(
                 self._imperfection(kind, label, "registration"), defaults.registration)
+            given["registration_scatter"] = defaults.registration
         if self.realism.stage_positioning and "stage_sigma" not in options:
             given["stage_sigma"] = defaults.stage_sigma
         if "stage_rng" not in options:

@@ -85,12 +85,13 @@ def test_v_groove_angles_of_a_level_120_degree_groove():
     assert abs(groove.included_angle - math.radians(120.0)) < EXACT_RAD
 
 
-def depth_sigma(s, centre, depth, half_angle, band, noise):
+def depth_sigma(s, centre, depth, half_angle, band, noise, land_noise=None):
     """Standard deviation of the fitted depth of a level symmetric V, derived independently.
 
     To first order the apex height is the mean of the two flank lines' values at the apex
     (the slopes drop out at a symmetric V), and the depth is the reference line's value there
     minus it; each value of a fitted line at t has variance noise^2 (1/n + (t - mean)^2 / Sxx).
+    ``land_noise`` (default ``noise``) is the reference line's.
     """
     def var_at(t, points):
         return 1.0 / points.size + (t - points.mean()) ** 2 / np.sum((points - points.mean())**2)
@@ -100,8 +101,10 @@ def depth_sigma(s, centre, depth, half_angle, band, noise):
     land = s[np.abs(s - centre) > run]
     left = s[(s >= centre - run + lo * run) & (s <= centre - run + hi * run)]
     right = s[(s <= centre + run - lo * run) & (s >= centre + run - hi * run)]
-    variance = var_at(centre, land) + 0.25 * (var_at(centre, left) + var_at(centre, right))
-    return noise * math.sqrt(variance)
+    land_noise = noise if land_noise is None else land_noise
+    variance = (land_noise**2 * var_at(centre, land)
+                + 0.25 * noise**2 * (var_at(centre, left) + var_at(centre, right)))
+    return math.sqrt(variance)
 
 
 def test_v_groove_depth_on_noisy_profiles_within_the_derived_sigma():
@@ -124,6 +127,28 @@ def test_v_groove_depth_on_noisy_profiles_within_the_derived_sigma():
     assert abs(errors.mean()) < 3 * sigma / math.sqrt(errors.size)
     # The fit's own propagated sigma agrees with the derivation (its noise is estimated from
     # ~1000 residuals, so ~2 %; 10 % allows for the first-order derivation).
+    assert abs(np.mean(reported) / sigma - 1.0) < 0.1
+
+
+def test_v_groove_depth_sigma_holds_lateral_jitter_on_the_flanks_only():
+    """Samples read a jittered place (lateral noise), reported at the asked one: on a 45 deg
+    flank each height is off by the slope (1) times the jitter, on the land by nothing. The
+    derived sigma (flanks with that noise, the land exact) explains the depths' scatter, and
+    the fit states it; one noise pooled over land and flanks would state a sixth of it."""
+    rng = np.random.default_rng(1)
+    s = np.arange(3000) * 0.2 * UM
+    centre, depth, half, jitter = 0.3001 * MM, 10 * UM, math.radians(45.0), 20e-9
+    sigma = depth_sigma(s, centre, depth, half, (0.1, 0.9), jitter, land_noise=0.0)
+    errors, reported = [], []
+    for _ in range(100):
+        seen = s + rng.normal(0.0, jitter, s.size)
+        groove = fit_v_groove(s, v_profile(seen, [centre], depth, half))
+        errors.append(groove.depth - depth)
+        reported.append(groove.depth_sigma)
+    errors = np.array(errors)
+    # the spread over 100 profiles estimates sigma to ~7 %: 20 % is ~3 of those
+    assert abs(errors.std() / sigma - 1.0) < 0.2
+    # each flank's noise from its ~40 residuals: ~11 % per profile, ~1 % over 100
     assert abs(np.mean(reported) / sigma - 1.0) < 0.1
 
 

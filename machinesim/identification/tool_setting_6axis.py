@@ -30,7 +30,7 @@ The model-based cross-check (the same readings through the generic
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
@@ -39,7 +39,6 @@ import numpy as np
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.metrology import Line2D, fit_line, groove_crossing
-from machinesim.metrology.prisms import SIGMA_FLOOR_M
 from machinesim.rotations import rot_y, rot_z
 
 __all__ = [
@@ -55,11 +54,6 @@ AXES = ("X", "Y", "Z", "A", "B", "C")
 #: Smallest |den| of eqs 1-2 accepted: there (tilts of +-0.06 deg) a 1 nm depth error already
 #: moves dZ by ~1 mm, so the tilts measure nothing.
 MIN_DETERMINANT = 1e-9
-#: Step (m) of the central differences that propagate the readings' uncertainties through
-#: the paper's formulas: they are linear (A pairs, eqs 1-2) or, for the triangle, curved on
-#: the scale of the 10 mm plate, so a 1 nm step is exact to ~1e-7 relative, far above
-#: float64 round-off (1e-19 m on readings of a few mm, i.e. 1e-10 of the step).
-PROPAGATION_STEP = 1e-9
 
 
 # ---------------------------------------------------------------------------- readings
@@ -209,6 +203,9 @@ class Identification:
         through the paper's formulas.
     check : Estimate, optional
         The model-based cross-check (`fit_check`) on the same readings.
+    check_std : Mapping[str, float]
+        Standard uncertainty (m) of the cross-check's values, propagated as ``std`` (the
+        fit's own covariance holds only the readings' independent errors).
     """
 
     z_touch: float
@@ -218,6 +215,7 @@ class Identification:
     compensation: Compensation
     std: Mapping[str, float] = field(default_factory=dict)
     check: object = None
+    check_std: Mapping[str, float] = field(default_factory=dict)
 
     @property
     def values(self) -> dict[str, float]:
@@ -381,7 +379,7 @@ def b_axis_tilts(depths, theta2: float, theta3: float, commanded_z=None) -> BAxi
 
 def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReading],
              b: Sequence[GrooveReading], programmed_starts, theta2: float,
-             theta3: float, mark_at=None) -> Identification:
+             theta3: float, mark_at=None, registration=None) -> Identification:
     """Paper 001's identification from the readings of its three plates.
 
     Parameters
@@ -402,13 +400,18 @@ def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReadi
     mark_at : array_like, shape (2,), optional
         The programmed crossing of the reference mark with the C = 0 side (m), with a mark
         (`c_axis_triangle`).
+    registration : mapping, optional
+        Plate ("a", "c", "b") -> the stated scatter of its microscope's registration
+        (`machinesim.metrology.imperfections.RegistrationScatter`), for ``std``.
 
     Returns
     -------
     Identification
         ``compensation`` holds d = (dx, dy, dZ) and e with no Z shift; ``std`` the
-        uncertainties propagated from the readings' (`point_sigma`, `depth_sigma`,
-        `start_sigma`) through the same formulas.
+        uncertainties propagated through the same formulas from the readings'
+        (`point_sigma`, `depth_sigma`, `start_sigma`), the plates' registration and the C
+        and B plates' being cut with the A pair's result
+        (`machinesim.identification.tool_setting_6axis_uncertainty`).
     """
     if len(a) != 2 or len(c) not in (3, 4) or len(b) != 3:
         raise InputError(f"Expected 2 A, 3 C (and a mark) and 3 B groove readings, got "
@@ -417,68 +420,24 @@ def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReadi
         raise InputError("Expected the start point of every A groove", key="start")
     programmed = np.asarray(programmed_starts, dtype=np.float64)
 
-    def stages(shift):
-        starts, points, depths = _shifted(a, c, b, shift)
-        return (a_axis_pairs(starts, programmed), c_axis_triangle(points, mark_at),
-                b_axis_tilts([dep.mean() for dep in depths], theta2, theta3,
+    from machinesim.identification.tool_setting_6axis_uncertainty import propagated_std
+
+    def stages(a, c, b):
+        return (a_axis_pairs([g.start for g in a], programmed),
+                c_axis_triangle([g.points for g in c], mark_at),
+                b_axis_tilts([g.depths.mean() for g in b], theta2, theta3,
                              [g.q_start[AXES.index("Z")] for g in b]))
 
-    def values(shift):
-        ra, rc, rb = stages(shift)
+    def values(a, c, b):
+        ra, rc, rb = stages(a, c, b)
         return np.r_[ra.offset, rb.offset_z, rc.centre]
 
-    ra, rc, rb = stages(None)
+    ra, rc, rb = stages(a, c, b)
     compensation = Compensation(tool_offset=[ra.offset[0], ra.offset[1], rb.offset_z],
                                 c_centre=rc.centre)
-    sigma = np.concatenate([_sigmas(g) for g in (*a, *c, *b)])
-    std = _propagate(values, sigma)
+    std = propagated_std(values, a, c, b, programmed, registration)
     return Identification(float(z_touch), ra, rb, rc, compensation,
                           MappingProxyType(dict(zip(PARAMETERS, std.tolist(), strict=True))))
-
-
-def _sigmas(g: GrooveReading) -> np.ndarray:
-    """The readings' standard uncertainties in the order `_shifted` takes their shifts."""
-    start = [max(g.start_sigma, SIGMA_FLOOR_M)] if g.start is not None else []
-    return np.concatenate([start, np.maximum(g.point_sigma, SIGMA_FLOOR_M),
-                           np.maximum(g.depth_sigma, SIGMA_FLOOR_M)])
-
-
-def _shifted(a, c, b, shift):
-    """Start points, centre points and depths of the readings, each moved by its ``shift``
-    (m; start points along the groove, centres across it; None: as read).
-
-    A start point lies on its groove's centre line: moving the centres moves the line and
-    the start point with it (the face is read along the line, the line across it).
-    """
-    if shift is None:
-        return ([g.start for g in a], [g.points for g in c], [g.depths for g in b])
-    shift = iter(shift)
-    starts, points, depths = [], [], []
-    for g in (*a, *c, *b):
-        along = next(shift) if g.start is not None else 0.0
-        line = g.line
-        normal = np.array([-line.direction[1], line.direction[0]])
-        moved = g.points + np.array([next(shift) for _ in g.points])[:, None] * normal
-        depths.append(g.depths + np.array([next(shift) for _ in g.depths]))
-        points.append(moved)
-        if g.start is not None:
-            new = fit_line(moved)
-            t = (g.start - new.point) @ new.direction + along
-            starts.append(new.point + t * new.direction)
-    return starts, points[len(a):len(a) + len(c)], depths[len(a) + len(c):]
-
-
-def _propagate(function: Callable[[np.ndarray], np.ndarray], sigma: np.ndarray) -> np.ndarray:
-    """Standard uncertainties of ``function(shift)`` for independent readings of ``sigma``
-    (first order: central differences of `PROPAGATION_STEP`)."""
-    h = PROPAGATION_STEP
-    columns = []
-    for i in range(sigma.size):
-        step = np.zeros(sigma.size)
-        step[i] = h
-        columns.append((function(step) - function(-step)) / (2.0 * h))
-    jacobian = np.column_stack(columns)
-    return np.sqrt(((jacobian * sigma) ** 2).sum(axis=1))
 
 
 # ---------------------------------------------------------------------------- compensation

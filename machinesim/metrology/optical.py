@@ -40,7 +40,13 @@ import numpy as np
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError, check_length
 from machinesim.metrology._mesh import as_positive, as_vector, mesh_arrays
-from machinesim.metrology.imperfections import Registration, Spot, line_heights, spot_heights
+from machinesim.metrology.imperfections import (
+    Registration,
+    RegistrationScatter,
+    Spot,
+    line_heights,
+    spot_heights,
+)
 from machinesim.metrology.instruments import Readout, as_generator
 from machinesim.metrology.surface import END_SLACK, height_map, profile
 
@@ -99,7 +105,8 @@ class _Profiler:
     def __init__(self, sigma: float, resolution: float, lateral_spacing: float, noise: bool,
                  rng, spot: Spot | None = None, lateral_sigma: float = 0.0,
                  lateral_rng=None, registration: Registration | None = None,
-                 stage_sigma: float = 0.0, stage_rng=None) -> None:
+                 stage_sigma: float = 0.0, stage_rng=None,
+                 registration_scatter: RegistrationScatter | None = None) -> None:
         self.readout = Readout.of(sigma, resolution, noise)
         self.stage_sigma = check_length(stage_sigma, "stage_sigma")
         self.stage_rng = as_generator(stage_rng) if self.stage_sigma > 0.0 else None
@@ -114,7 +121,12 @@ class _Profiler:
         self.spot = spot
         self.lateral_sigma = check_length(lateral_sigma, "lateral_sigma")
         self.lateral_rng = as_generator(lateral_rng) if self.lateral_sigma > 0.0 else None
+        if registration_scatter is not None and not isinstance(registration_scatter,
+                                                               RegistrationScatter):
+            raise InputError(f"Expected registration_scatter as a RegistrationScatter or "
+                             f"None, got {registration_scatter!r}", key="registration_scatter")
         self._registration = registration
+        self.registration_scatter = registration_scatter
         self._seen = None  # (part, its vertices in the instrument frame, triangles)
 
     def __repr__(self) -> str:
@@ -299,15 +311,21 @@ class Microscope(_Profiler):
         (`machinesim.realism.MICROSCOPE`).
     stage_rng : numpy.random.Generator or int or None
         Source of the stage's draws.
+    registration_scatter : RegistrationScatter, optional
+        What the lab states of its registration practice: the scatter its registrations are
+        drawn from, public (`registration_scatter`) for the uncertainty a procedure states;
+        the drawn ``registration`` stays hidden. The lab gives it with its registration.
     """
 
     def __init__(self, sigma: float = 12e-9, resolution: float = 1e-9,
                  lateral_spacing: float = 0.3e-6, *, noise: bool = True, rng=None,
                  spot: Spot | None = None, lateral_sigma: float = 0.0, lateral_rng=None,
                  registration: Registration | None = None, stage_sigma: float = 0.0,
-                 stage_rng=None) -> None:
+                 stage_rng=None, registration_scatter: RegistrationScatter | None = None
+                 ) -> None:
         super().__init__(sigma, resolution, lateral_spacing, noise, rng, spot, lateral_sigma,
-                         lateral_rng, registration, stage_sigma, stage_rng)
+                         lateral_rng, registration, stage_sigma, stage_rng,
+                         registration_scatter)
 
 
 class WhiteLightInterferometer(_Profiler):
@@ -327,7 +345,7 @@ class WhiteLightInterferometer(_Profiler):
         False turns the noise off exactly (``sigma`` ignored); rounding stays.
     rng : numpy.random.Generator or int or None
         Noise source, or its seed.
-    spot, lateral_sigma, lateral_rng, registration, stage_sigma, stage_rng
+    spot, lateral_sigma, lateral_rng, registration, stage_sigma, stage_rng, registration_scatter
         As the `Microscope`'s, all off by default. The lab's: a Gaussian spot of 0.8 um FWHM
         (0.61 lambda / NA of a 20x / 0.4 objective at 0.55 um), 10 nm lateral noise
         (assumed), the microscope's registration scatter (`machinesim.realism.WHITE_LIGHT`).
@@ -337,9 +355,11 @@ class WhiteLightInterferometer(_Profiler):
                  lateral_spacing: float = 0.5e-6, *, noise: bool = True, rng=None,
                  spot: Spot | None = None, lateral_sigma: float = 0.0, lateral_rng=None,
                  registration: Registration | None = None, stage_sigma: float = 0.0,
-                 stage_rng=None) -> None:
+                 stage_rng=None, registration_scatter: RegistrationScatter | None = None
+                 ) -> None:
         super().__init__(sigma, resolution, lateral_spacing, noise, rng, spot, lateral_sigma,
-                         lateral_rng, registration, stage_sigma, stage_rng)
+                         lateral_rng, registration, stage_sigma, stage_rng,
+                         registration_scatter)
 
 
 def _is_field(part) -> bool:

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import lru_cache, partial
 from types import MappingProxyType
 from typing import ClassVar
@@ -68,6 +68,7 @@ from machinesim.identification.tool_setting_6axis import (
     identify,
 )
 from machinesim.identification.tool_setting_6axis_fit import fit_check
+from machinesim.identification.tool_setting_6axis_uncertainty import propagated_std
 from machinesim.machines import load_machine
 from machinesim.metrology import (
     fit_line,
@@ -218,12 +219,16 @@ def _fits(part, microscope, origin, along, stations, half_width, what):
     return out
 
 
-def _reading(fits, block, start=None) -> GrooveReading:
+def _reading(fits, block, stage_sigma: float, start=None) -> GrooveReading:
+    """A groove's reading. Each profile, and the start face's zoom, is its own placement of
+    the stage: its stated positioning (``stage_sigma``, m) moves a centre across the groove
+    and a start point along it, in quadrature with the fit's and the zoom pitch's."""
     return GrooveReading(
         q_start=block[0], q_end=block[1], points=[xy for _, xy in fits],
-        point_sigma=[g.centre_sigma for g, _ in fits], depths=[g.depth for g, _ in fits],
-        depth_sigma=[g.depth_sigma for g, _ in fits], start=start,
-        start_sigma=FINE_SPACING / math.sqrt(12.0) if start is not None else math.nan)
+        point_sigma=[math.hypot(g.centre_sigma, stage_sigma) for g, _ in fits],
+        depths=[g.depth for g, _ in fits], depth_sigma=[g.depth_sigma for g, _ in fits],
+        start=start, start_sigma=(math.hypot(FINE_SPACING / math.sqrt(12.0), stage_sigma)
+                                  if start is not None else math.nan))
 
 
 def _start_point(part, microscope, points, spot, along) -> np.ndarray:
@@ -252,7 +257,7 @@ def _read_a(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
         fits = _fits(part, microscope, spot, along, STATIONS["a"], PAIR_WINDOW,
                      f"A axis, groove at A = {math.degrees(angle):g} deg")
         start = _start_point(part, microscope, [xy for _, xy in fits], spot, along)
-        out.append(_reading(fits, block, start))
+        out.append(_reading(fits, block, microscope.stage_sigma, start))
     return tuple(out)
 
 
@@ -261,7 +266,7 @@ def _read_b(part, microscope, blocks, plan: Plan) -> tuple[GrooveReading, ...]:
     for x, tilt, block in zip(B_GROOVE_X, plan.tilts, blocks, strict=True):
         fits = _fits(part, microscope, (x, 0.0), np.array([0.0, 1.0]), STATIONS["b"],
                      B_WINDOW, f"B axis, groove at B = {math.degrees(tilt):g} deg")
-        out.append(_reading(fits, block))
+        out.append(_reading(fits, block, microscope.stage_sigma))
     return tuple(out)
 
 
@@ -274,10 +279,10 @@ def _read_c(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
         rot = rot_z(turn)[:2, :2]
         fits = _fits(part, microscope, rot @ (0.0, -TRIANGLE_R), rot @ (1.0, 0.0),
                      STATIONS["c"], C_WINDOW, f"C axis, groove at C = {math.degrees(turn):g} deg")
-        out.append(_reading(fits, block))
+        out.append(_reading(fits, block, microscope.stage_sigma))
     fits = _fits(part, microscope, mark_point(), np.array([0.0, 1.0]), STATIONS["mark"],
                  MARK_WINDOW, "C axis, reference mark")
-    return (*out, _reading(fits, blocks[-1]))
+    return (*out, _reading(fits, blocks[-1], microscope.stage_sigma))
 
 
 def _programmed_starts() -> np.ndarray:
@@ -338,6 +343,9 @@ class Readings:
         The A, C and B plates' grooves, in cutting order.
     plates : Mapping[str, tuple]
         File stem (`AS_CUT`) -> (Program, Part, CutReport) of each plate as cut.
+    registration : Mapping[str, RegistrationScatter or None]
+        Plate ("a", "c", "b") -> the stated scatter of its microscope's registration
+        (``registration_scatter``; None: read in the workpiece frame), for the uncertainty.
     """
 
     z_touch: float
@@ -345,6 +353,7 @@ class Readings:
     c: tuple[GrooveReading, ...]
     b: tuple[GrooveReading, ...]
     plates: Mapping[str, tuple]
+    registration: Mapping[str, object] = field(default_factory=dict)
 
 
 @lru_cache(maxsize=4)
@@ -392,12 +401,14 @@ class ToolSetting6Axis:
 
         touch = cut("touch", cuts["touch"].program)
         z_touch = touch_off_z(touch, lab.microscope(label="touch-off"))
-        readings = {}
+        readings, registration = {}, {}
 
         def stage(name, known):
             program = compensate_program(cuts[name].program, machine, known)
-            readings[name] = read_plate(name, cut(name, program), lab.microscope(label=name),
-                                        program, machine, self.plan)
+            microscope = lab.microscope(label=name)
+            readings[name] = read_plate(name, cut(name, program), microscope, program,
+                                        machine, self.plan)
+            registration[name] = microscope.registration_scatter
             return readings[name]
 
         a = a_axis_pairs([g.start for g in stage("a", Compensation(z_shift=z_touch))],
@@ -406,7 +417,7 @@ class ToolSetting6Axis:
         stage("c", known)
         stage("b", known)
         return Readings(z_touch, readings["a"], readings["c"], readings["b"],
-                        MappingProxyType(plates))
+                        MappingProxyType(plates), MappingProxyType(registration))
 
     def identify(self, measurements: Readings) -> Identified:
         """The paper's formulas on the readings (`identify`), with the model-based
@@ -418,8 +429,13 @@ class ToolSetting6Axis:
         """
         m = measurements
         found = identify(m.z_touch, m.a, m.c, m.b, _programmed_starts(), self.plan.theta2,
-                         self.plan.theta3, mark_at=mark_point())
-        found = replace(found, check=fit_check(self._machine(), m.a, m.c, m.b))
+                         self.plan.theta3, mark_at=mark_point(), registration=m.registration)
+        machine = self._machine()
+        check = fit_check(machine, m.a, m.c, m.b)
+        check_std = propagated_std(lambda a, c, b: fit_check(machine, a, c, b).values,
+                                   m.a, m.c, m.b, _programmed_starts(), m.registration)
+        found = replace(found, check=check, check_std=MappingProxyType(
+            dict(zip(check.names, check_std.tolist(), strict=True))))
         return Identified(parameters=found.parameters, detail=found)
 
     def compensate(self, identified: Identified) -> dict[str, Program]:
@@ -529,7 +545,7 @@ def _check_dict(found: Identification) -> dict:
     """The fit cross-check beside the paper's values, per parameter (um and nm)."""
     check = found.check
     fitted = dict(zip(check.names, check.values, strict=True))
-    std = dict(zip(check.names, check.std, strict=True))
+    std = found.check_std
     out = {name: {"paper_um": value / M_PER_UM, "fit_um": fitted[name] / M_PER_UM,
                   "difference_nm": (fitted[name] - value) / M_PER_NM,
                   "paper_std_nm": found.std[name] / M_PER_NM,

@@ -1,0 +1,190 @@
+"""How uncertain paper 001's identified values are: every error of the readings, through the
+formulas that use them.
+
+An identified value is a function of the plates' readings (`GrooveReading`). Three kinds of
+reading error move it, and each is propagated here (first order, central differences of
+`PROPAGATION_STEP`) through the same function the identification uses:
+
+- **each reading's own**: a groove centre across its groove (`point_sigma`: the profile fit,
+  and the stage's positioning of that profile), a depth (`depth_sigma`), a start point along
+  its groove (`start_sigma`). Independent from reading to reading.
+- **each plate's registration**: the microscope reads a whole plate in one frame that sits off
+  the workpiece's by an offset (x, y) and a turn about z (`RegistrationScatter`, the lab's
+  stated practice, never the drawn registration). Common to every reading of the plate:
+  a turn of 1 mrad moves the A pair's start points, 2 mm apart, by 2 um against each other.
+- **the plates cut with an earlier result**: the C and B plates are cut with the A pair's dx,
+  dy compensated, so an error of those moves every groove on them by
+  ``-Rz(C) Ry(B) Rz(A) (delta dx, delta dy, 0)`` (the edge displacement of
+  `corrected_axes`). The triangle's centre does not move (its three sides move alike), but
+  the reference mark that places it does: e is off by (-1, +1) times the error of dy. The B
+  depths move with the commanded Z and are taken back to one command, so dZ does not; the
+  generic fit compares each reading with the program as cut, so it does not either.
+
+`propagated_std` takes any function of the readings, so the model-based cross-check
+(`machinesim.identification.tool_setting_6axis_fit`) gets its uncertainty the same way.
+docs/procedures/tool_setting_6axis.md gives the figures.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.identification.tool_setting_6axis import (
+    AXES,
+    GrooveReading,
+    a_axis_pairs,
+)
+from machinesim.metrology import fit_line
+from machinesim.metrology.imperfections import RegistrationScatter
+from machinesim.metrology.prisms import SIGMA_FLOOR_M
+from machinesim.rotations import rot_y, rot_z
+
+__all__ = ["PLATES", "PROPAGATION_STEP", "propagated_std"]
+
+#: The plates in the order their readings are passed: the A pair, the C triangle (with its
+#: mark), the B grooves. The C and B plates are cut with the A pair's dx, dy compensated.
+PLATES = ("a", "c", "b")
+#: Step of the central differences (m for readings and offsets, rad for the registration's
+#: turn): the formulas are linear (A pairs, eqs 1-2) or, for the triangle, curved on the
+#: scale of the 10 mm plate, so a 1 nm (1 nrad) step is exact to ~1e-7 relative, far above
+#: float64 round-off (1e-19 m on readings of a few mm, i.e. 1e-10 of the step).
+PROPAGATION_STEP = 1e-9
+
+Plates = tuple[Sequence[GrooveReading], Sequence[GrooveReading], Sequence[GrooveReading]]
+
+
+def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReading],
+                   c: Sequence[GrooveReading], b: Sequence[GrooveReading], programmed,
+                   registration: Mapping[str, RegistrationScatter | None] | None = None
+                   ) -> np.ndarray:
+    """Standard uncertainties of ``function(a, c, b)`` from every error of the readings
+    (module docstring).
+
+    Parameters
+    ----------
+    function : callable
+        ``function(a, c, b) -> ndarray``: the identified values from the three plates'
+        readings (tuples of `GrooveReading`).
+    a, c, b : sequence of GrooveReading
+        The A pair (each with its start point), the triangle and its mark, the B grooves.
+    programmed : array_like, shape (2, 2)
+        The A grooves' programmed start points (m): the A result the C and B plates were
+        cut with is `a_axis_pairs` of the start points and these.
+    registration : mapping, optional
+        Plate (`PLATES`) -> the scatter of its microscope's registration, as the lab states
+        it; a plate missing or None is read in the workpiece frame exactly.
+
+    Returns
+    -------
+    ndarray
+        One standard uncertainty per value of ``function``, in its units.
+    """
+    registration = dict(registration or {})
+    unknown = set(registration) - set(PLATES)
+    if unknown:
+        raise InputError(f"Expected registration scatters for plates {PLATES}, got "
+                         f"{sorted(unknown)}", key="registration")
+    for plate, scatter in registration.items():
+        if scatter is not None and not isinstance(scatter, RegistrationScatter):
+            raise InputError(f"Expected plate {plate!r}'s registration as a "
+                             f"RegistrationScatter or None, got {scatter!r}",
+                             key="registration")
+    plates = (tuple(a), tuple(c), tuple(b))
+    programmed = np.asarray(programmed, dtype=np.float64)
+    scatters = [registration.get(plate) for plate in PLATES]
+    sigma = np.concatenate(
+        [_sigmas(g) for g in (*plates[0], *plates[1], *plates[2])]
+        + [[s.offset_xy, s.offset_xy, s.rotation] for s in scatters if s is not None])
+    cut_with = a_axis_pairs([g.start for g in plates[0]], programmed).offset
+
+    def shifted(step):
+        moved = _shifted(plates, iter(step), [s is not None for s in scatters])
+        found = a_axis_pairs([g.start for g in moved[0]], programmed).offset
+        delta = np.r_[found - cut_with, 0.0]
+        return function(moved[0], *(tuple(_displaced(g, delta) for g in plate)
+                                    for plate in moved[1:]))
+
+    h = PROPAGATION_STEP
+    columns = []
+    for i in range(sigma.size):
+        step = np.zeros(sigma.size)
+        step[i] = h
+        columns.append((np.asarray(shifted(step)) - np.asarray(shifted(-step))) / (2.0 * h))
+    jacobian = np.column_stack(columns)
+    return np.sqrt(((jacobian * sigma) ** 2).sum(axis=1))
+
+
+def _sigmas(g: GrooveReading) -> np.ndarray:
+    """A reading's standard uncertainties in the order `_shifted` takes their shifts: start
+    point (if any), centres, depths (floored at `SIGMA_FLOOR_M`)."""
+    start = [max(g.start_sigma, SIGMA_FLOOR_M)] if g.start is not None else []
+    return np.concatenate([start, np.maximum(g.point_sigma, SIGMA_FLOOR_M),
+                           np.maximum(g.depth_sigma, SIGMA_FLOOR_M)])
+
+
+def _shifted(plates: Plates, step, registered: Sequence[bool]) -> Plates:
+    """The plates' readings, each moved by its own shifts from ``step`` (an iterator, in
+    `_sigmas`' order: start points along the groove, centres across it, depths), then each
+    registered plate turned and offset by its next three (x, y, turn about the workpiece
+    origin).
+
+    A start point lies on its groove's centre line: moving the centres moves the line and
+    the start point with it (the face is read along the line, the line across it).
+    """
+    moved = []
+    for plate in plates:
+        out = []
+        for g in plate:
+            along = next(step) if g.start is not None else 0.0
+            line = g.line
+            normal = np.array([-line.direction[1], line.direction[0]])
+            points = g.points + np.array([next(step) for _ in g.points])[:, None] * normal
+            depths = g.depths + np.array([next(step) for _ in g.depths])
+            start = None
+            if g.start is not None:
+                new = fit_line(points)
+                t = (g.start - new.point) @ new.direction + along
+                start = new.point + t * new.direction
+            out.append(replace(g, points=points, depths=depths, start=start))
+        moved.append(out)
+    registered_plates = []
+    for plate, has in zip(moved, registered, strict=True):
+        if has:
+            x, y, turn = next(step), next(step), next(step)
+            plate = [_registered(g, np.array([x, y]), turn) for g in plate]
+        registered_plates.append(tuple(plate))
+    return tuple(registered_plates)
+
+
+def _registered(g: GrooveReading, offset: np.ndarray, turn: float) -> GrooveReading:
+    """``g`` as read in a frame offset by ``offset`` and turned by ``turn`` about the
+    workpiece origin (first order, as the propagation needs)."""
+    def frame(p):
+        p = np.asarray(p)
+        return p + offset + turn * np.stack([-p[..., 1], p[..., 0]], axis=-1)
+
+    return replace(g, points=frame(g.points),
+                   start=None if g.start is None else frame(g.start))
+
+
+def _displaced(g: GrooveReading, delta: np.ndarray) -> GrooveReading:
+    """``g`` had its plate been cut with the tool offset compensated by ``delta`` (m, tool
+    axes) more: the program's X Y Z move by ``-Ry(B) Rz(A) delta`` (`corrected_axes`), the
+    edge with them, so the groove moves by ``Rz(C)`` of that in the workpiece frame and its
+    depth by minus its z."""
+    if not delta.any():
+        return g
+    a, b, c = (float(g.q_start[AXES.index(axis)]) for axis in "ABC")
+    program = -(rot_y(b) @ rot_z(a) @ delta)
+    edge = rot_z(c) @ program
+    xyz = [AXES.index(axis) for axis in "XYZ"]
+    q_start, q_end = g.q_start.copy(), g.q_end.copy()
+    q_start[xyz] += program
+    q_end[xyz] += program
+    return replace(g, q_start=q_start, q_end=q_end, points=g.points + edge[:2],
+                   depths=g.depths - edge[2],
+                   start=None if g.start is None else g.start + edge[:2])
