@@ -59,8 +59,8 @@ Plates = tuple[Sequence[GrooveReading], Sequence[GrooveReading], Sequence[Groove
 
 def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReading],
                    c: Sequence[GrooveReading], b: Sequence[GrooveReading], programmed,
-                   registration: Mapping[str, RegistrationScatter | None] | None = None
-                   ) -> np.ndarray:
+                   registration: Mapping[str, RegistrationScatter | None] | None = None,
+                   *, own_errors: bool = True) -> np.ndarray:
     """Standard uncertainties of ``function(a, c, b)`` from every error of the readings
     (module docstring).
 
@@ -77,6 +77,10 @@ def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReadin
     registration : mapping, optional
         Plate (`PLATES`) -> the scatter of its microscope's registration, as the lab states
         it; a plate missing or None is read in the workpiece frame exactly.
+    own_errors : bool
+        False: leave out each reading's own errors (and with them the plates cut with the
+        A result, which move only with the A readings), for a function whose own covariance
+        holds them already (a least-squares fit weighted by the same sigmas).
 
     Returns
     -------
@@ -96,8 +100,9 @@ def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReadin
     plates = (tuple(a), tuple(c), tuple(b))
     programmed = np.asarray(programmed, dtype=np.float64)
     scatters = [registration.get(plate) for plate in PLATES]
+    own = np.concatenate([_sigmas(g) for g in (*plates[0], *plates[1], *plates[2])])
     sigma = np.concatenate(
-        [_sigmas(g) for g in (*plates[0], *plates[1], *plates[2])]
+        [own if own_errors else np.zeros_like(own)]
         + [[s.offset_xy, s.offset_xy, s.rotation] for s in scatters if s is not None])
     cut_with = a_axis_pairs([g.start for g in plates[0]], programmed).offset
 
@@ -109,13 +114,13 @@ def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReadin
                                     for plate in moved[1:]))
 
     h = PROPAGATION_STEP
-    columns = []
-    for i in range(sigma.size):
+    variance = 0.0
+    for i in np.flatnonzero(sigma):
         step = np.zeros(sigma.size)
         step[i] = h
-        columns.append((np.asarray(shifted(step)) - np.asarray(shifted(-step))) / (2.0 * h))
-    jacobian = np.column_stack(columns)
-    return np.sqrt(((jacobian * sigma) ** 2).sum(axis=1))
+        column = (np.asarray(shifted(step)) - np.asarray(shifted(-step))) / (2.0 * h)
+        variance = variance + (column * sigma[i]) ** 2
+    return np.sqrt(variance) if sigma.any() else np.zeros(np.asarray(function(*plates)).shape)
 
 
 def _sigmas(g: GrooveReading) -> np.ndarray:

@@ -431,9 +431,14 @@ class ToolSetting6Axis:
         found = identify(m.z_touch, m.a, m.c, m.b, _programmed_starts(), self.plan.theta2,
                          self.plan.theta3, mark_at=mark_point(), registration=m.registration)
         machine = self._machine()
+        # the fit's covariance holds the readings' own errors, and the plates cut with the A
+        # result move with the programs the fit reads (docs/procedures): the registration
+        # is what it lacks
         check = fit_check(machine, m.a, m.c, m.b)
-        check_std = propagated_std(lambda a, c, b: fit_check(machine, a, c, b).values,
-                                   m.a, m.c, m.b, _programmed_starts(), m.registration)
+        frames = propagated_std(lambda a, c, b: fit_check(machine, a, c, b).values,
+                                m.a, m.c, m.b, _programmed_starts(), m.registration,
+                                own_errors=False)
+        check_std = np.hypot(check.std, frames)
         found = replace(found, check=check, check_std=MappingProxyType(
             dict(zip(check.names, check_std.tolist(), strict=True))))
         return Identified(parameters=found.parameters, detail=found)
