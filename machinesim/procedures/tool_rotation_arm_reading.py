@@ -189,6 +189,7 @@ class AlignedMicroscope:
         self.microscope = microscope
         self.rotation = float(rotation)
         self.readout = microscope.readout
+        self.stage_sigma = microscope.stage_sigma
 
     def profile(self, part, start, end, spacing=None):
         c, s = math.cos(self.rotation), math.sin(self.rotation)
@@ -261,6 +262,12 @@ def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading
                          key="capture")
     rows = []
     floor = microscope.readout.resolution / math.sqrt(12.0)
+    # Each fine section is its own placement of the stage (its stated positioning, in x and
+    # y): off by ox along the ramp, it reads the groove where the edge stood slope * ox
+    # higher and slope * tan(angle) * ox aside (`plan.edge`); off by oy, its centre by oy.
+    stage = microscope.stage_sigma
+    z_stage = plan.slope * stage
+    y_stage = stage * math.hypot(1.0, plan.slope * math.tan(plan.angles[k]))
     for depth, x in zip(plan.station_depths, x_stations, strict=True):
         y, h = coarse(x)
         inside = y[h < -0.1 * depth]
@@ -273,8 +280,8 @@ def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading
         # A reading is never better than the display's rounding (resolution / sqrt(12)),
         # which a fit with no residual would not show.
         rows.append((x, -groove.depth - z_prog, y0 + groove.centre - y_prog,
-                     max(groove.depth_sigma, floor), max(groove.centre_sigma, floor),
-                     y_prog, z_prog))
+                     math.hypot(max(groove.depth_sigma, floor), z_stage),
+                     math.hypot(max(groove.centre_sigma, floor), y_stage), y_prog, z_prog))
     return AngleReading(plan.angles[k], *(frozen(c) for c in zip(*rows, strict=True)))
 
 
