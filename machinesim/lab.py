@@ -266,6 +266,14 @@ class Lab:
         self.__artefacts[label] = actual
         return _realism.make_spheres(stock, design, actual)
 
+    @property
+    def artefact_scatter(self):
+        """The tolerance the lab's workshop states for the artefacts it makes
+        (`machinesim.realism.ARTEFACT` with ``realism.artefact_errors`` on, None without):
+        what a certificate says, for the uncertainty a procedure states. The spheres as they
+        came out stay the lab's truth (`reveal_artefacts`)."""
+        return _realism.ARTEFACT if self.realism.artefact_errors else None
+
     # -------------------------------------------------------------------------- instruments
 
     def touch_probe(self, part, *, label: str | None = None, **options):
@@ -280,16 +288,19 @@ class Lab:
 
         kind = "touch_probe"
         label = self._label(kind, label)
-        drawn = {}
+        drawn, stated = {}, {}
         if self.realism.probe_pretravel and "pretravel" not in options:
             drawn["pretravel"] = Lobing.draw(self._imperfection(kind, label, "pretravel"),
                                              _realism.PROBE.lobing)
+            stated["lobing_amplitudes"] = _realism.PROBE.lobing
         if self.realism.probe_ball_form and "ball_form" not in options:
             drawn["ball_form"] = ZonalForm.draw(self._imperfection(kind, label, "ball_form"),
                                                 _realism.PROBE.sphericity)
+            stated["sphericity"] = _realism.PROBE.sphericity
         self.__instruments[f"{kind}/{label}"] = drawn
         return TouchProbe(self.machine, self.__truth, part, noise=self.noise,
-                          rng=stream(self.seed, kind, label), **drawn, **options)
+                          rng=stream(self.seed, kind, label), **drawn,
+                          **{**stated, **options})
 
     def laser_interferometer(self, *, label: str | None = None, **options):
         """A laser interferometer on the machine (`machinesim.metrology.LaserInterferometer`).

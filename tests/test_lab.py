@@ -52,7 +52,8 @@ def test_no_public_attribute_of_the_lab_or_its_instruments_holds_the_truth():
         for name, value in _public(thing):
             assert not _holds_truth(value, truth), f"{type(thing).__name__}.{name}"
     methods = {name for name in dir(lab) if not name.startswith("_")}
-    assert methods == {"adjust_tool", "cut", "encoders", "laser_interferometer", "machine",
+    assert methods == {"adjust_tool", "artefact_scatter", "cut", "encoders",
+                       "laser_interferometer", "machine",
                        "make_artefacts", "microscope", "noise", "r_test", "realism", "reveal",
                        "reveal_adjustments", "reveal_artefacts", "reveal_background",
                        "reveal_instruments", "reveal_servo", "reuse_cuts", "seed",

@@ -10,6 +10,7 @@ import math
 import re
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ from machinesim.cutting import clip_to, cut, cut_turned
 from machinesim.exceptions import InputError
 from machinesim.experiment import run
 from machinesim.identification import workpiece_setting as ws
+from machinesim.identification import workpiece_setting_uncertainty as wsu
 from machinesim.identification.workpiece_setting import Identification
 from machinesim.loading import RP_PER_SIGMA, RobotLoader
 from machinesim.metrology import (
@@ -123,6 +125,49 @@ def test_eqs_1_to_4_give_back_the_setting_and_agree_with_a_kabsch_fit():
         kabsch = u @ np.diag([1, 1, np.linalg.det(u @ vt)]) @ vt
         np.testing.assert_allclose(rotation_xyz(found.alpha, found.beta, found.gamma), kabsch,
                                    rtol=0, atol=1e-13)
+
+
+def test_a_first_order_lobing_shifts_every_centre_by_its_amplitude(groove_stock):
+    """A probe stated to lob at first order by a (phase unknown) reads every contact
+    a cos(phi - phi_1) further along its normal: to first order the whole cavity moved by a
+    towards phi_1 (`Lobing`), so every fitted centre, every bottom touch under it and so the
+    C centre and the position move by a in that unknown direction: a / sqrt(2) per
+    coordinate, and no angle (derived by hand; 2000 probes drawn: within ~1.6 %)."""
+    from machinesim.identification import workpiece_setting_uncertainty as wsu
+
+    probe = TouchProbe(MACHINE, ErrorModel(), groove_stock, noise=False)
+    readings = read_spheres(probe, cam.GROOVE_SPHERES)
+    assert probe.lobing_amplitudes == {} and wsu.probe_std(readings)["workpiece.x"] == 0.0
+    a = 20 * NM
+    std = wsu.probe_std(replace(readings, lobing_amplitudes={1: a}), draws=2000)
+    for name in ("workpiece.x", "workpiece.y", "location.C.EX0C", "location.C.EY0C"):
+        assert std[name] == pytest.approx(a / math.sqrt(2.0), rel=0.06), name
+    assert std["workpiece.gamma"] < 1e-3 * a / (12 * MM)
+
+
+def test_the_spheres_tolerance_through_eqs_1_to_4_matches_a_monte_carlo():
+    """Spheres made 1 um (per coordinate) off their design: the linear propagation of
+    `design_std` against 4000 drawn workshops through the same eqs (a second method: no
+    linearisation), to 5 % (the Monte Carlo's own ~1.1 % and the first order's ~1e-4)."""
+    rng = np.random.default_rng(7)
+    designed = cam.GROOVE_SPHERES.centres
+    s = random_setting(rng)
+    r = rotation_xyz(s.alpha, s.beta, s.gamma)
+    centres = s.delta + designed @ r.T
+    found = Identification(centres, 2.0 * MM, s, np.zeros(3), np.zeros(2), np.zeros((3, 2)),
+                           ())
+    std = wsu.design_std(found, designed, 1 * UM)
+    draws = []
+    for _ in range(4000):
+        made = centres + rng.normal(0.0, 1 * UM, (3, 3))
+        got, _ = ws.setting_from_centres(made, designed)
+        draws.append([*got.delta, got.alpha, got.beta, got.gamma])
+    spread = np.std(draws, axis=0)
+    np.testing.assert_allclose([std[n] for n in ws.PARAMETERS[:6]], spread, rtol=0.05)
+    # ~1 um and ~0.1 mrad (1 um over the 12 mm between spheres): the paper's "less than 1-2
+    # um" and ~0.007 deg; the C centre compares each sphere with itself
+    assert 0.5 * UM < std["workpiece.x"] < 2 * UM and 5e-5 < std["workpiece.gamma"] < 2e-4
+    assert std["location.C.EX0C"] == std["location.C.EY0C"] == 0.0
 
 
 def lowest_point(pose, wanted_z, rho):

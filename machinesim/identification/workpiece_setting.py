@@ -37,7 +37,8 @@ probe over the spheres is the procedure's (`machinesim.procedures.workpiece_sett
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -122,6 +123,8 @@ class SphereReading:
         order, from the fit's Jacobian): times the probe's sigma, the centre's uncertainty.
     radius_gain : float
         The same for the fitted radius.
+    points : ndarray, shape (N, 3), optional
+        The scanned ball centres the fit went through (for the stated uncertainty).
     """
 
     xy: np.ndarray
@@ -131,6 +134,7 @@ class SphereReading:
     c_angle: float = 0.0
     xy_gain: np.ndarray = None
     radius_gain: float = math.nan
+    points: np.ndarray = None
 
 
 def sphere_reading(points, bottom, ball_radius: float, c_angle: float = 0.0) -> SphereReading:
@@ -164,7 +168,7 @@ def sphere_reading(points, bottom, ball_radius: float, c_angle: float = 0.0) -> 
     gains = np.sqrt(np.diag(np.linalg.inv(jacobian.T @ jacobian)))
     return SphereReading(frozen(fitted.centre[:2]), frozen(bottom),
                          float(fitted.radius + ball_radius), float(fitted.residual_rms),
-                         float(c_angle), frozen(gains[:2]), float(gains[3]))
+                         float(c_angle), frozen(gains[:2]), float(gains[3]), frozen(points))
 
 
 @dataclass(frozen=True, eq=False)
@@ -184,6 +188,10 @@ class SphereReadings:
     sigma : float
         The probe's standard uncertainty per reading, m (its stated noise; its resolution
         when it reads without noise): weights of the fit cross-check only.
+    lobing_amplitudes : Mapping[int, float]
+        The probe's stated pre-travel, amplitude (m) per lobing order (none: not stated).
+    sphericity : float
+        The probe ball's stated peak-to-valley form, m.
     """
 
     spheres: ReferenceSpheres
@@ -191,6 +199,8 @@ class SphereReadings:
     turned: tuple[SphereReading, ...]
     ball_radius: float
     sigma: float
+    lobing_amplitudes: Mapping[int, float] = field(default_factory=dict)
+    sphericity: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("first", "turned"):

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from machinesim.exceptions import AxisLimitError, InputError
+from machinesim.exceptions import AxisLimitError, InputError, check_length
 from machinesim.metrology._mesh import as_positive
 from machinesim.metrology.imperfections import Lobing, ZonalForm
 from machinesim.metrology.instruments import Readout, as_generator, motion_of
@@ -124,12 +124,19 @@ class TouchProbe:
     ball_form : ZonalForm, optional
         Form error of the ball, in the probe's frame; default a perfect sphere. The lab's:
         0.13 um peak to valley (ISO 3290 grade 5 sphericity, the standard ruby stylus ball).
+    lobing_amplitudes : mapping of int to float, optional
+        What the probe's maker states of its pre-travel: amplitude (m) per lobing order,
+        phases unknown. Public (`lobing_amplitudes`), for the uncertainty a procedure
+        states; the drawn ``pretravel`` stays hidden. The lab gives it with its pre-travel.
+    sphericity : float
+        What is stated of the ball's form: its peak to valley (m), the same way. Default 0.
     """
 
     def __init__(self, machine, errors, part, radius: float = 0.25e-3, sigma: float = 20e-9,
                  resolution: float = 1e-9, *, noise: bool = True, rng=None,
                  frame: str = "probe_tip", pretravel: Lobing | None = None,
-                 ball_form: ZonalForm | None = None) -> None:
+                 ball_form: ZonalForm | None = None, lobing_amplitudes=None,
+                 sphericity: float = 0.0) -> None:
         self.machine = machine
         self._pose = motion_of(machine, errors, frame)
         self.frame = frame
@@ -144,6 +151,10 @@ class TouchProbe:
                                  f"{type(value).__name__}", key=name)
         self._pretravel = pretravel
         self._ball_form = ball_form
+        stated = dict(lobing_amplitudes or {})
+        Lobing(tuple((k, a, 0.0) for k, a in stated.items()))  # the same checks as a lobing
+        self.lobing_amplitudes = {int(k): float(a) for k, a in stated.items()}
+        self.sphericity = check_length(sphericity, "sphericity")
         # The controller records linear axes at the probe's resolution, rotary ones at theirs.
         self._axis_rounding = [Readout(0.0, float(r) if rotary else self.readout.resolution)
                                for r, rotary in zip(machine.resolution, machine.rotary,

@@ -219,4 +219,4 @@ def read_spheres(probe, spheres: ReferenceSpheres, plan: ProbePlan = ProbePlan()
     turned = [read_sphere(probe, np.r_[-r.xy, c[2]], plan, math.pi, spheres.radius)
               for r, c in zip(first, ideal, strict=True)]
     return SphereReadings(spheres, tuple(first), tuple(turned), probe.radius,
-                          probe.readout.std)
+                          probe.readout.std, probe.lobing_amplitudes, probe.sphericity)

@@ -80,6 +80,7 @@ from machinesim.identification.workpiece_setting import (
     parameters,
     program_poses,
 )
+from machinesim.identification.workpiece_setting_uncertainty import design_std, probe_std
 from machinesim.metrology.crown_image import (
     CrownImageReading,
     crown_image_reading,
@@ -197,11 +198,15 @@ class WorkpieceMeasurements:
     machine : Machine
         The machine the probe moved on (its nominal kinematics: the fit cross-check's model).
     readings : SphereReadings
+    artefact_scatter : ArtefactScatter or None
+        The tolerance the lab states for its reference spheres (`Lab.artefact_scatter`;
+        None: made as designed), for the stated uncertainty.
     """
 
     experiment: str
     machine: object
     readings: SphereReadings
+    artefact_scatter: object = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -318,14 +323,24 @@ class RobotLoadedWorkpiece:
         check_machine(lab.machine)
         probe = lab.touch_probe(self.workpiece(lab), label=self.experiment)
         return WorkpieceMeasurements(self.experiment, lab.machine,
-                                     read_spheres(probe, self.spheres, self.plan))
+                                     read_spheres(probe, self.spheres, self.plan),
+                                     lab.artefact_scatter)
 
     def identify(self, measurements: WorkpieceMeasurements) -> Identified:
-        """Eqs 1-4 and Fig. 6; each std is the fit cross-check's (the probe's stated noise
-        propagated to first order through the same readings)."""
-        found = identify(measurements.readings)
-        check = fit_setting(measurements.machine, measurements.readings, found)
+        """Eqs 1-4 and Fig. 6. Each std holds, in quadrature, the fit cross-check's (the
+        probe's stated noise propagated to first order through the same readings), the
+        spheres' stated tolerance through eqs 1-4 (`design_std`) and the probe's stated
+        pre-travel and ball form (`probe_std`)."""
+        readings = measurements.readings
+        found = identify(readings)
+        check = fit_setting(measurements.machine, readings, found)
         std = dict(zip(check.names, check.std.tolist(), strict=True))
+        scatter = measurements.artefact_scatter
+        places = (design_std(found, readings.spheres.centres, scatter.position)
+                  if scatter is not None else dict.fromkeys(std, 0.0))
+        probe = probe_std(readings)
+        std = {name: math.hypot(value, places[name], probe[name])
+               for name, value in std.items()}
         return Identified({name: (value, std[name]) for name, value in
                            parameters(found).items()},
                           SettingIdentification(found, check, measurements.machine))

@@ -1,0 +1,151 @@
+"""How uncertain paper 002's identified setting is: the lab's stated imperfections, through
+eqs 1-4 and Fig. 6.
+
+The probe's noise reaches the identification through the generic fit's covariance
+(`machinesim.identification.workpiece_setting.fit_setting`). Two more sources are stated by
+the lab and propagated here, never taken from what the lab drew:
+
+- **the spheres' places** (`design_std`): eqs 1-4 take the designed centres as where the
+  spheres are, and the workshop states how far it makes them (`Lab.artefact_scatter`, 1 um
+  per coordinate): about 1 um of position and 0.1 mrad of angle, the paper's "less than
+  1-2 um". Linear, by central differences.
+- **the probe's pre-travel and ball form** (`probe_std`): the probe's maker states the
+  lobing's amplitude per order and the ball's sphericity, not their phases and axes. The
+  recorded scan points and bottom touches are moved as such a probe would have moved them,
+  for `PROBE_DRAWS` probes drawn from the statement, and identified again: the RMS of what
+  that moves is the uncertainty. It is what the C centre carries (tens of nanometres:
+  the 180-deg turn takes out the spheres' own errors, not the probe's).
+
+docs/procedures/workpiece_setting.md gives the figures.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.identification.workpiece_setting import (
+    PARAMETERS,
+    Identification,
+    ReferenceSpheres,
+    SphereReading,
+    SphereReadings,
+    identify,
+    parameters,
+    setting_from_centres,
+    sphere_reading,
+)
+from machinesim.metrology import fit_sphere
+from machinesim.metrology.imperfections import Lobing, ZonalForm
+from machinesim.metrology.probe_instrument import GRAZING_COSINE
+
+__all__ = ["DESIGN_STEP_M", "PROBE_DRAWS", "design_std", "probe_std"]
+
+#: Step (m) of the central differences of `design_std`: eqs 1-4 are smooth on the 12 mm
+#: scale of the sphere triangle, so 1 nm is exact to ~1e-7 relative.
+DESIGN_STEP_M = 1e-9
+#: Probes drawn from the stated pre-travel and sphericity (`probe_std`): the RMS of 64 draws
+#: is within ~9 % (1 / sqrt(2 x 64)) of the statement's.
+PROBE_DRAWS = 64
+#: Seed of those draws: the statement's uncertainty, the same for every lab and run.
+PROBE_DRAWS_SEED = 20021
+
+
+def design_std(found: Identification, designed, position_sigma: float) -> dict[str, float]:
+    """Standard uncertainties (SI) of eqs 1-4 from the spheres' places: eqs 1-4 take the
+    designed centres as where the spheres are, and a workshop makes each centre within
+    ``position_sigma`` (m, per coordinate, independent) of its design.
+
+    A sphere made ``e`` off its design is found where the workpiece puts ``design + e``:
+    the measured centre moves by ``R e``, which for an isotropic scatter is a move of the
+    same size. So the tolerance is propagated to first order (central differences of 1 nm
+    on each coordinate) through `setting_from_centres` on the measured centres. The C-axis
+    centre (Fig. 6) compares each sphere with itself turned by 180 deg, so its places do not
+    enter it (0).
+
+    Returns
+    -------
+    dict
+        `PARAMETERS` -> standard uncertainty (m or rad).
+    """
+    designed = ReferenceSpheres(designed).centres
+    sigma = float(position_sigma)
+    if not (math.isfinite(sigma) and sigma >= 0.0):
+        raise InputError(f"Expected position_sigma >= 0 (m), got {position_sigma!r}",
+                         key="position_sigma")
+
+    def values(centres):
+        setting, _ = setting_from_centres(centres, designed)
+        return np.r_[setting.delta, setting.alpha, setting.beta, setting.gamma]
+
+    h = DESIGN_STEP_M
+    variance = np.zeros(6)
+    for i in range(found.centres.size):
+        step = np.zeros(found.centres.size)
+        step[i] = h
+        step = step.reshape(found.centres.shape)
+        variance += ((values(found.centres + step) - values(found.centres - step)) / (2.0 * h)
+                     * sigma) ** 2
+    return dict(zip(PARAMETERS, (*np.sqrt(variance).tolist(), 0.0, 0.0), strict=True))
+
+
+def probe_std(readings: SphereReadings, draws: int = PROBE_DRAWS) -> dict[str, float]:
+    """Standard uncertainties (SI) of eqs 1-4 and Fig. 6 from the probe's stated pre-travel
+    (`SphereReadings.lobing_amplitudes`) and ball form (`SphereReadings.sphericity`).
+
+    A probe with lobing ``p`` and ball form ``f`` reads each contact as if the ball had
+    pressed ``p(n) - f(-n)`` further along the contact normal ``n``
+    (`machinesim.metrology.probe_instrument`): a scan point (moving down -Z) then lies
+    ``(p(n) - f(-n)) / n_z`` lower, a bottom touch (``n`` = +z, no lobing there) ``f(-z)``
+    higher, and under the refitted centre (the touch goes down under the fit). For each of ``draws`` probes drawn from the statement (phases and axes
+    unknown), every reading of both turns is moved so, the spheres refitted and identified
+    again; the result is the RMS of the change of each parameter. ``n`` is the direction from
+    each scanned ball centre to the fitted cavity centre, in machine coordinates: a fixed
+    turn of the probe's frame only turns the unknown phases and axes.
+
+    Returns
+    -------
+    dict
+        `PARAMETERS` -> standard uncertainty (m or rad); zeros when nothing is stated.
+    """
+    amplitudes, sphericity = dict(readings.lobing_amplitudes), float(readings.sphericity)
+    if not amplitudes and sphericity == 0.0:
+        return dict.fromkeys(PARAMETERS, 0.0)
+    if any(r.points is None for r in (*readings.first, *readings.turned)):
+        raise InputError("Expected the scanned points of every sphere reading (sphere_reading "
+                         "keeps them) to propagate the probe's statement", key="points")
+    base = parameters(identify(readings))
+    rng = np.random.default_rng(PROBE_DRAWS_SEED)
+    squares = np.zeros(len(PARAMETERS))
+    for _ in range(int(draws)):
+        lobing = Lobing.draw(rng, amplitudes) if amplitudes else None
+        form = ZonalForm.draw(rng, sphericity) if sphericity > 0.0 else None
+        moved = replace(readings, **{
+            name: tuple(_as_probed(r, lobing, form, readings.ball_radius)
+                        for r in getattr(readings, name)) for name in ("first", "turned")})
+        found = parameters(identify(moved))
+        squares += np.array([found[n] - base[n] for n in PARAMETERS]) ** 2
+    return dict(zip(PARAMETERS, np.sqrt(squares / draws).tolist(), strict=True))
+
+
+def _as_probed(r: SphereReading, lobing, form, ball_radius: float) -> SphereReading:
+    """``r`` as a probe with ``lobing`` and ball ``form`` would have read it."""
+    points = np.array(r.points, dtype=np.float64)
+    normal = fit_sphere(points).centre - points
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    press = np.zeros(len(points))
+    if lobing is not None:
+        press += lobing(normal)
+    if form is not None:
+        press -= form(-normal)
+    points[:, 2] -= press / np.maximum(normal[:, 2], GRAZING_COSINE)
+    moved = sphere_reading(points, r.bottom, ball_radius, r.c_angle)
+    # the bottom touch goes down under the fitted centre (`read_sphere`), so it moves with it
+    bottom = np.array(r.bottom, dtype=np.float64)
+    bottom[:2] += moved.xy - r.xy
+    if form is not None:
+        bottom[2] += float(form(np.array([0.0, 0.0, -1.0])))
+    return replace(moved, bottom=bottom)
