@@ -137,9 +137,9 @@ def test_a_first_order_lobing_shifts_every_centre_by_its_amplitude(groove_stock)
 
     probe = TouchProbe(MACHINE, ErrorModel(), groove_stock, noise=False)
     readings = read_spheres(probe, cam.GROOVE_SPHERES)
-    assert probe.lobing_amplitudes == {} and wsu.probe_std(readings)["workpiece.x"] == 0.0
+    assert probe.lobing_amplitudes == {} and wsu.contact_std(readings)["workpiece.x"] == 0.0
     a = 20 * NM
-    std = wsu.probe_std(replace(readings, lobing_amplitudes={1: a}), draws=2000)
+    std = wsu.contact_std(replace(readings, lobing_amplitudes={1: a}), draws=2000)
     for name in ("workpiece.x", "workpiece.y", "location.C.EX0C", "location.C.EY0C"):
         assert std[name] == pytest.approx(a / math.sqrt(2.0), rel=0.06), name
     assert std["workpiece.gamma"] < 1e-3 * a / (12 * MM)

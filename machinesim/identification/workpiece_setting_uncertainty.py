@@ -9,12 +9,13 @@ the lab and propagated here, never taken from what the lab drew:
   spheres are, and the workshop states how far it makes them (`Lab.artefact_scatter`, 1 um
   per coordinate): about 1 um of position and 0.1 mrad of angle, the paper's "less than
   1-2 um". Linear, by central differences.
-- **the probe's pre-travel and ball form** (`probe_std`): the probe's maker states the
-  lobing's amplitude per order and the ball's sphericity, not their phases and axes. The
-  recorded scan points and bottom touches are moved as such a probe would have moved them,
-  for `PROBE_DRAWS` probes drawn from the statement, and identified again: the RMS of what
-  that moves is the uncertainty. It is what the C centre carries (tens of nanometres:
-  the 180-deg turn takes out the spheres' own errors, not the probe's).
+- **each contact** (`contact_std`): the probe's maker states the lobing's amplitude per
+  order and the ball's sphericity, the workshop the spheres' form (2 um peak to valley),
+  none of them their phases and axes. The recorded scan points and bottom touches are moved
+  as such a probe on such spheres would have moved them, for `CONTACT_DRAWS` labs drawn from
+  the statements, and identified again: the RMS of what that moves is the uncertainty. It
+  is what the C centre carries (tens of nanometres: the 180-deg turn takes out the
+  spheres' places, not the probe's lobing nor the forms, which turn with the table).
 
 docs/procedures/workpiece_setting.md gives the figures.
 """
@@ -41,17 +42,18 @@ from machinesim.identification.workpiece_setting import (
 from machinesim.metrology import fit_sphere
 from machinesim.metrology.imperfections import Lobing, ZonalForm
 from machinesim.metrology.probe_instrument import GRAZING_COSINE
+from machinesim.rotations import rot_z
 
-__all__ = ["DESIGN_STEP_M", "PROBE_DRAWS", "design_std", "probe_std"]
+__all__ = ["CONTACT_DRAWS", "DESIGN_STEP_M", "contact_std", "design_std"]
 
 #: Step (m) of the central differences of `design_std`: eqs 1-4 are smooth on the 12 mm
 #: scale of the sphere triangle, so 1 nm is exact to ~1e-7 relative.
 DESIGN_STEP_M = 1e-9
-#: Probes drawn from the stated pre-travel and sphericity (`probe_std`): the RMS of 64 draws
-#: is within ~9 % (1 / sqrt(2 x 64)) of the statement's.
-PROBE_DRAWS = 64
+#: Labs drawn from the stated pre-travel, sphericity and sphere form (`contact_std`): the
+#: RMS of 64 draws is within ~9 % (1 / sqrt(2 x 64)) of the statement's.
+CONTACT_DRAWS = 64
 #: Seed of those draws: the statement's uncertainty, the same for every lab and run.
-PROBE_DRAWS_SEED = 20021
+CONTACT_DRAWS_SEED = 20021
 
 
 def design_std(found: Identification, designed, position_sigma: float) -> dict[str, float]:
@@ -92,19 +94,25 @@ def design_std(found: Identification, designed, position_sigma: float) -> dict[s
     return dict(zip(PARAMETERS, (*np.sqrt(variance).tolist(), 0.0, 0.0), strict=True))
 
 
-def probe_std(readings: SphereReadings, draws: int = PROBE_DRAWS) -> dict[str, float]:
-    """Standard uncertainties (SI) of eqs 1-4 and Fig. 6 from the probe's stated pre-travel
-    (`SphereReadings.lobing_amplitudes`) and ball form (`SphereReadings.sphericity`).
+def contact_std(readings: SphereReadings, sphere_form: float = 0.0,
+                draws: int = CONTACT_DRAWS) -> dict[str, float]:
+    """Standard uncertainties (SI) of eqs 1-4 and Fig. 6 from what the lab states of each
+    contact: the probe's pre-travel (`SphereReadings.lobing_amplitudes`), its ball's form
+    (`SphereReadings.sphericity`) and the spheres' own form (``sphere_form``, m peak to
+    valley, `Lab.artefact_scatter`).
 
-    A probe with lobing ``p`` and ball form ``f`` reads each contact as if the ball had
-    pressed ``p(n) - f(-n)`` further along the contact normal ``n``
-    (`machinesim.metrology.probe_instrument`): a scan point (moving down -Z) then lies
-    ``(p(n) - f(-n)) / n_z`` lower, a bottom touch (``n`` = +z, no lobing there) ``f(-z)``
-    higher, and under the refitted centre (the touch goes down under the fit). For each of ``draws`` probes drawn from the statement (phases and axes
-    unknown), every reading of both turns is moved so, the spheres refitted and identified
-    again; the result is the RMS of the change of each parameter. ``n`` is the direction from
-    each scanned ball centre to the fitted cavity centre, in machine coordinates: a fixed
-    turn of the probe's frame only turns the unknown phases and axes.
+    A contact of normal ``n`` (surface to ball centre) is read as if the ball had pressed
+    ``p(n) - f(-n) + g(-n)`` further along ``n`` (`machinesim.metrology.probe_instrument`;
+    ``p`` the lobing, ``f`` the ball's form, ``g`` the sphere's, whose wall standing out by
+    ``g`` lets the ball in that much further): a scan point (moving down -Z) then lies that
+    much over ``n_z`` lower, a bottom touch (``n`` = +z, no lobing there) that much higher,
+    under the refitted centre (the touch goes down under the fit). For each of ``draws``
+    labs drawn from the statements (phases and axes unknown; one probe for all readings,
+    one form per sphere, turned with the table for the readings at C = 180 deg), every
+    reading is moved so, the spheres refitted and identified again; the result is the RMS
+    of the change of each parameter. ``n`` is the direction from each scanned ball centre to
+    the fitted cavity centre, in machine coordinates: a fixed turn of the probe's frame only
+    turns the unknown phases and axes.
 
     Returns
     -------
@@ -112,40 +120,55 @@ def probe_std(readings: SphereReadings, draws: int = PROBE_DRAWS) -> dict[str, f
         `PARAMETERS` -> standard uncertainty (m or rad); zeros when nothing is stated.
     """
     amplitudes, sphericity = dict(readings.lobing_amplitudes), float(readings.sphericity)
-    if not amplitudes and sphericity == 0.0:
+    sphere_form = float(sphere_form)
+    if not (math.isfinite(sphere_form) and sphere_form >= 0.0):
+        raise InputError(f"Expected sphere_form >= 0 (m), got {sphere_form!r}",
+                         key="sphere_form")
+    if not amplitudes and sphericity == 0.0 and sphere_form == 0.0:
         return dict.fromkeys(PARAMETERS, 0.0)
     if any(r.points is None for r in (*readings.first, *readings.turned)):
         raise InputError("Expected the scanned points of every sphere reading (sphere_reading "
-                         "keeps them) to propagate the probe's statement", key="points")
+                         "keeps them) to propagate the stated imperfections", key="points")
     base = parameters(identify(readings))
-    rng = np.random.default_rng(PROBE_DRAWS_SEED)
+    rng = np.random.default_rng(CONTACT_DRAWS_SEED)
     squares = np.zeros(len(PARAMETERS))
     for _ in range(int(draws)):
         lobing = Lobing.draw(rng, amplitudes) if amplitudes else None
-        form = ZonalForm.draw(rng, sphericity) if sphericity > 0.0 else None
+        ball = ZonalForm.draw(rng, sphericity) if sphericity > 0.0 else None
+        forms = [ZonalForm.draw(rng, sphere_form) if sphere_form > 0.0 else None
+                 for _ in readings.first]
         moved = replace(readings, **{
-            name: tuple(_as_probed(r, lobing, form, readings.ball_radius)
-                        for r in getattr(readings, name)) for name in ("first", "turned")})
+            name: tuple(_as_read(r, lobing, ball, form, readings.ball_radius)
+                        for r, form in zip(getattr(readings, name), forms, strict=True))
+            for name in ("first", "turned")})
         found = parameters(identify(moved))
         squares += np.array([found[n] - base[n] for n in PARAMETERS]) ** 2
     return dict(zip(PARAMETERS, np.sqrt(squares / draws).tolist(), strict=True))
 
 
-def _as_probed(r: SphereReading, lobing, form, ball_radius: float) -> SphereReading:
-    """``r`` as a probe with ``lobing`` and ball ``form`` would have read it."""
+def _as_read(r: SphereReading, lobing, ball, form, ball_radius: float) -> SphereReading:
+    """``r`` as a probe with ``lobing`` and ``ball`` form would have read a sphere of
+    ``form`` (its own axes, turned with the table by the reading's C)."""
     points = np.array(r.points, dtype=np.float64)
     normal = fit_sphere(points).centre - points
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    press = np.zeros(len(points))
-    if lobing is not None:
-        press += lobing(normal)
-    if form is not None:
-        press -= form(-normal)
-    points[:, 2] -= press / np.maximum(normal[:, 2], GRAZING_COSINE)
+    turn = rot_z(r.c_angle)
+    down = np.array([0.0, 0.0, -1.0])
+
+    def press(n):
+        total = np.zeros(n.shape[:-1])
+        if lobing is not None:
+            total = total + lobing(n)
+        if ball is not None:
+            total = total - ball(-n)
+        if form is not None:
+            total = total + form(-n @ turn)  # machine -> the sphere's own (table) frame
+        return total
+
+    points[:, 2] -= press(normal) / np.maximum(normal[:, 2], GRAZING_COSINE)
     moved = sphere_reading(points, r.bottom, ball_radius, r.c_angle)
     # the bottom touch goes down under the fitted centre (`read_sphere`), so it moves with it
     bottom = np.array(r.bottom, dtype=np.float64)
     bottom[:2] += moved.xy - r.xy
-    if form is not None:
-        bottom[2] += float(form(np.array([0.0, 0.0, -1.0])))
+    bottom[2] -= float(press(-down[None])[0])
     return replace(moved, bottom=bottom)

@@ -80,7 +80,7 @@ from machinesim.identification.workpiece_setting import (
     parameters,
     program_poses,
 )
-from machinesim.identification.workpiece_setting_uncertainty import design_std, probe_std
+from machinesim.identification.workpiece_setting_uncertainty import contact_std, design_std
 from machinesim.metrology.crown_image import (
     CrownImageReading,
     crown_image_reading,
@@ -329,8 +329,9 @@ class RobotLoadedWorkpiece:
     def identify(self, measurements: WorkpieceMeasurements) -> Identified:
         """Eqs 1-4 and Fig. 6. Each std holds, in quadrature, the fit cross-check's (the
         probe's stated noise propagated to first order through the same readings), the
-        spheres' stated tolerance through eqs 1-4 (`design_std`) and the probe's stated
-        pre-travel and ball form (`probe_std`)."""
+        spheres' stated tolerance of place through eqs 1-4 (`design_std`) and what is
+        stated of each contact: the probe's pre-travel and ball form, the spheres' form
+        (`contact_std`)."""
         readings = measurements.readings
         found = identify(readings)
         check = fit_setting(measurements.machine, readings, found)
@@ -338,8 +339,8 @@ class RobotLoadedWorkpiece:
         scatter = measurements.artefact_scatter
         places = (design_std(found, readings.spheres.centres, scatter.position)
                   if scatter is not None else dict.fromkeys(std, 0.0))
-        probe = probe_std(readings)
-        std = {name: math.hypot(value, places[name], probe[name])
+        contacts = contact_std(readings, scatter.form if scatter is not None else 0.0)
+        std = {name: math.hypot(value, places[name], contacts[name])
                for name, value in std.items()}
         return Identified({name: (value, std[name]) for name, value in
                            parameters(found).items()},
