@@ -130,6 +130,8 @@ def contact_std(readings: SphereReadings, sphere_form: float = 0.0,
         raise InputError("Expected the scanned points of every sphere reading (sphere_reading "
                          "keeps them) to propagate the stated imperfections", key="points")
     base = parameters(identify(readings))
+    normals = {name: [_contact_normals(r) for r in getattr(readings, name)]
+               for name in ("first", "turned")}
     rng = np.random.default_rng(CONTACT_DRAWS_SEED)
     squares = np.zeros(len(PARAMETERS))
     for _ in range(int(draws)):
@@ -138,20 +140,28 @@ def contact_std(readings: SphereReadings, sphere_form: float = 0.0,
         forms = [ZonalForm.draw(rng, sphere_form) if sphere_form > 0.0 else None
                  for _ in readings.first]
         moved = replace(readings, **{
-            name: tuple(_as_read(r, lobing, ball, form, readings.ball_radius)
-                        for r, form in zip(getattr(readings, name), forms, strict=True))
+            name: tuple(_as_read(r, normal, lobing, ball, form, readings.ball_radius)
+                        for r, normal, form in zip(getattr(readings, name), normals[name],
+                                                   forms, strict=True))
             for name in ("first", "turned")})
         found = parameters(identify(moved))
         squares += np.array([found[n] - base[n] for n in PARAMETERS]) ** 2
     return dict(zip(PARAMETERS, np.sqrt(squares / draws).tolist(), strict=True))
 
 
-def _as_read(r: SphereReading, lobing, ball, form, ball_radius: float) -> SphereReading:
-    """``r`` as a probe with ``lobing`` and ``ball`` form would have read a sphere of
-    ``form`` (its own axes, turned with the table by the reading's C)."""
+def _contact_normals(r: SphereReading) -> np.ndarray:
+    """Unit contact normals (N, 3) of a reading's scan points: from each scanned ball centre
+    to the fitted cavity centre (surface to ball centre)."""
+    normal = fit_sphere(r.points).centre - r.points
+    return normal / np.linalg.norm(normal, axis=1, keepdims=True)
+
+
+def _as_read(r: SphereReading, normal: np.ndarray, lobing, ball, form,
+             ball_radius: float) -> SphereReading:
+    """``r`` (its scan points' contact ``normal``) as a probe with ``lobing`` and ``ball``
+    form would have read a sphere of ``form`` (its own axes, turned with the table by the
+    reading's C)."""
     points = np.array(r.points, dtype=np.float64)
-    normal = fit_sphere(points).centre - points
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
     turn = rot_z(r.c_angle)
     down = np.array([0.0, 0.0, -1.0])
 
