@@ -418,26 +418,30 @@ def groove_table(folder: ReportFolder, grooves) -> str:
 
 
 def identification_table(folder: ReportFolder, results) -> str:
+    """Injected and identified setting and C centre of each load, the error beside the std
+    the procedure states (docs/procedures/workpiece_setting.md, "Stated uncertainty")."""
     rows = []
     for load, result in results.items():
         truth = result.injected
         found = result.identification.detail.found
+        std = {name: s for name, (_, s) in result.identified.items()}
         s = found.setting
         for i, a in enumerate("xyz"):
             t = truth.get(f"workpiece.{a}", 0.0)
             rows.append([f"{load}: delta {a}", t / UM, s.delta[i] / UM,
-                         (s.delta[i] - t) / M_PER_NM, "nm"])
+                         (s.delta[i] - t) / M_PER_NM, std[f"workpiece.{a}"] / M_PER_NM, "nm"])
         for a in ("alpha", "beta", "gamma"):
             t, g = truth.get(f"workpiece.{a}", 0.0), getattr(s, a)
             rows.append([f"{load}: {a} (deg, urad)", math.degrees(t), math.degrees(g),
-                         (g - t) * 1e6, "urad"])
+                         (g - t) * 1e6, std[f"workpiece.{a}"] * 1e6, "urad"])
         for i, a in enumerate("XY"):
-            t = truth.get(f"location.C.E{a}0C", 0.0)
+            name = f"location.C.E{a}0C"
+            t = truth.get(name, 0.0)
             rows.append([f"{load}: C centre {a.lower()}", t / UM, found.c_centre[i] / UM,
-                         (found.c_centre[i] - t) / M_PER_NM, "nm"])
+                         (found.c_centre[i] - t) / M_PER_NM, std[name] / M_PER_NM, "nm"])
     return folder.write_table(
         "identification", ["quantity (um unless stated)", "injected", "identified", "error",
-                           "error unit"], rows,
+                           "std", "error unit"], rows,
         title="Workpiece setting errors: injected and identified", digits=4)
 
 
