@@ -347,13 +347,14 @@ def test_a_huge_tool_is_refused_cleanly(tmp_path):
 
 
 @pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="needs Linux /proc")
-def test_ctrl_c_while_loading_exits_130_in_one_line(tmp_path):
+def test_ctrl_c_while_loading_exits_130_in_one_line(tmp_path, as_in_a_terminal):
     """SIGINT once the process maps SciPy's own libraries (not numpy's scipy_openblas): only
     the viewer loads SciPy, inside `main`, so the process is importing it or building the
     page."""
     page = tmp_path / "machine.html"
     process = subprocess.Popen([*entry_point(), "view", "robonano_a0ib", "--html", str(page)],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               **as_in_a_terminal)
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and process.poll() is None:

@@ -177,7 +177,8 @@ def test_the_request_log_sees_a_page_reaching_for_a_server(browser, tmp_path):
     assert "http://127.0.0.1:9/x" in browser.requests
 
 
-def test_view_in_live_mode_prints_its_url_and_stops_on_ctrl_c(browser, tmp_path):
+def test_view_in_live_mode_prints_its_url_and_stops_on_ctrl_c(browser, tmp_path,
+                                                              as_in_a_terminal):
     tilted_block(1e-4).export_ply(tmp_path / "part.ply")
     script = ("import argparse, sys\n"
               "from machinesim.viewer.cli import add_view_parser, run_view\n"
@@ -187,7 +188,7 @@ def test_view_in_live_mode_prints_its_url_and_stops_on_ctrl_c(browser, tmp_path)
     process = subprocess.Popen(
         [sys.executable, "-c", script, "view", str(tmp_path / "part.ply"),
          "--max-triangles", str(BUDGET), "--screenshot", str(tmp_path / "live.png")],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **as_in_a_terminal)
     try:
         line = process.stdout.readline()
         assert line.startswith("machinesim viewer at http://127.0.0.1:"), line
