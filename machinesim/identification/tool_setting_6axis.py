@@ -204,8 +204,9 @@ class Identification:
     check : Estimate, optional
         The model-based cross-check (`fit_check`) on the same readings.
     check_std : Mapping[str, float]
-        Standard uncertainty (m) of the cross-check's values, propagated as ``std`` (the
-        fit's own covariance holds only the readings' independent errors).
+        Standard uncertainty (m) of the cross-check's values: the fit's own covariance (the
+        readings' independent errors) and the plates' registration propagated through the
+        fit, in quadrature (`ToolSetting6Axis.identify`).
     """
 
     z_touch: float
