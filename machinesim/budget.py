@@ -27,8 +27,8 @@ from dataclasses import dataclass
 from machinesim._io import write_atomic
 from machinesim.exceptions import InputError
 
-__all__ = ["BUDGET_KEYS", "Budget", "BudgetRow", "error_budget", "quadrature_share",
-           "realism_budget"]
+__all__ = ["BUDGET_KEYS", "Budget", "BudgetRow", "clipped_shares", "error_budget",
+           "quadrature_share", "realism_budget"]
 
 #: Keys of each row of ``budget`` in summary.json (`Budget.to_dict`).
 BUDGET_KEYS = ("source", "figure", "unit", "after_all", "after_without", "share")
@@ -160,9 +160,13 @@ class Budget:
         return [row.as_dict() for row in self.rows]
 
     def plot(self, path) -> None:
-        """A bar plot (PNG) of the shares in percent: one group per figure, a bar per source.
+        """A bar plot (PNG) of the shares in percent: one group per figure, a bar per source,
+        at most `FIGURES_PER_PANEL` figures to a panel, panels one under the other.
 
-        Written whole or not at all (`machinesim._io.write_atomic`).
+        The axis spans -100 .. 100 %: a share beyond (a figure near 0 with every source on,
+        which switching one off moves far) is drawn to the edge, hatched, its value written
+        beside it (`clipped_shares`). Written whole or not at all
+        (`machinesim._io.write_atomic`).
         """
         import matplotlib
 
@@ -170,25 +174,57 @@ class Budget:
         import matplotlib.pyplot as plt
 
         figures, sources = self.figures, self.sources
+        panels = [figures[i:i + FIGURES_PER_PANEL]
+                  for i in range(0, len(figures), FIGURES_PER_PANEL)] or [()]
         width = 0.8 / max(len(sources), 1)
-        figure, axes = plt.subplots(figsize=(max(6.0, 1.6 * len(figures) + 3.0), 4.5),
-                                    dpi=120)
-        for k, source in enumerate(sources):
-            x = [i + (k - (len(sources) - 1) / 2) * width for i in range(len(figures))]
-            y = [100.0 * self.share(source, name) for name in figures]
-            axes.bar(x, y, width=width, label=source)
-        axes.axhline(0.0, color="black", linewidth=0.8)
-        axes.set_xticks(range(len(figures)))
-        axes.set_xticklabels(figures, rotation=20 if len(figures) > 4 else 0)
-        axes.set_ylabel("share of the 'after' figure, % (quadrature)")
-        axes.set_title("Error budget: each source switched off in turn")
-        axes.grid(True, axis="y", alpha=0.3)
-        axes.legend(fontsize="small")
+        colours = plt.get_cmap("tab10" if len(sources) <= 10 else "tab20").colors
+        figure, axes = plt.subplots(len(panels), 1, squeeze=False, dpi=120, figsize=(
+            max(6.0, 1.5 * max(len(p) for p in panels) + 3.5), 0.5 + 3.4 * len(panels)))
+        for axis, names in zip(axes[:, 0], panels, strict=True):
+            for k, source in enumerate(sources):
+                x = [i + (k - (len(sources) - 1) / 2) * width for i in range(len(names))]
+                heights, labels = clipped_shares(
+                    [100.0 * self.share(source, name) for name in names], PLOT_LIMIT_PERCENT)
+                bars = axis.bar(x, heights, width=width, color=colours[k % len(colours)],
+                                label=source)
+                for bar, label in zip(bars, labels, strict=True):
+                    if label:
+                        bar.set_hatch("///")
+                        axis.annotate(label, (bar.get_x() + bar.get_width() / 2,
+                                              bar.get_height()),
+                                      ha="center", va="bottom" if bar.get_height() > 0
+                                      else "top", rotation=90, fontsize=6)
+            axis.axhline(0.0, color="black", linewidth=0.8)
+            axis.set_ylim(-1.35 * PLOT_LIMIT_PERCENT, 1.35 * PLOT_LIMIT_PERCENT)
+            axis.set_xticks(range(len(names)))
+            axis.set_xticklabels(names, rotation=15, fontsize=8, ha="right")
+            axis.set_ylabel("share, % (quadrature)")
+            axis.grid(True, axis="y", alpha=0.3)
+        axes[0, 0].set_title("Error budget: each source switched off in turn (share of the "
+                             "'after' figure; hatched: beyond the axis, value written)")
+        axes[0, 0].legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
         buffer = io.BytesIO()
         figure.tight_layout()
         figure.savefig(buffer, format="png")
         plt.close(figure)
         write_atomic(path, buffer.getvalue())
+
+
+#: The budget plot's axis, percent either way: a share of 100 % is the whole figure.
+PLOT_LIMIT_PERCENT = 100.0
+#: Figures in one panel of the budget plot.
+FIGURES_PER_PANEL = 8
+
+
+def clipped_shares(percent: Sequence[float], limit: float) -> tuple[list[float], list[str]]:
+    """Bar heights within ``-limit .. limit`` and, for each bar cut there, its value as a
+    label (``""`` for the others)."""
+    heights, labels = [], []
+    for value in percent:
+        clipped = min(max(float(value), -limit), limit)
+        heights.append(clipped)
+        labels.append("" if clipped == value else f"{value:.0f} %")
+    return heights, labels
 
 
 def _check_sources(sources) -> tuple[str, ...]:

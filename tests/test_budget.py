@@ -9,7 +9,14 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from machinesim.budget import Budget, BudgetRow, error_budget, quadrature_share
+from machinesim.budget import (
+    FIGURES_PER_PANEL,
+    Budget,
+    BudgetRow,
+    clipped_shares,
+    error_budget,
+    quadrature_share,
+)
 from machinesim.exceptions import InputError, MachineSimError
 from machinesim.experiment import Figure
 from machinesim.report import ReportFolder, check_summary
@@ -64,6 +71,25 @@ def test_table_dict_and_plot_round_trip(tmp_path):
     assert f"{100 * 1.2**2 / total:.1f} %" in lines[0]
     budget.plot(tmp_path / "budget.png")
     assert (tmp_path / "budget.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_plot_clips_shares_beyond_its_axis_and_writes_their_values(tmp_path):
+    """A figure near 0 with every source on gives shares of -40000 % when one source off
+    moves it: drawn to the axis's edge with the value beside it, the other bars readable."""
+    heights, labels = clipped_shares([50.0, -40169.9, 100.0, 250.4, -100.0], 100.0)
+    assert heights == [50.0, -100.0, 100.0, 100.0, -100.0]
+    assert labels == ["", "-40170 %", "", "250 %", ""]
+    # many figures go to panels one under the other: the picture grows down, not across
+    rows = [BudgetRow(source, f"figure_{i}", "um", 1.0, 0.5, 0.75)
+            for i in range(3 * FIGURES_PER_PANEL) for source in SOURCES]
+    sizes = {}
+    for n in (FIGURES_PER_PANEL, 3 * FIGURES_PER_PANEL):
+        path = tmp_path / f"budget_{n}.png"
+        Budget(tuple(r for r in rows if int(r.figure.split("_")[1]) < n)).plot(path)
+        header = path.read_bytes()[16:24]
+        sizes[n] = (int.from_bytes(header[:4], "big"), int.from_bytes(header[4:], "big"))
+    wide, tall = sizes[FIGURES_PER_PANEL], sizes[3 * FIGURES_PER_PANEL]
+    assert tall[0] == wide[0] and tall[1] > 2.5 * wide[1]
 
 
 def test_the_report_writes_the_budget_and_the_summary_accepts_it(tmp_path):
