@@ -98,7 +98,9 @@ class ReportFolder:
         and JSON), the identification table, and summary.json. Returns the Markdown.
 
         With ``budget`` (a `machinesim.budget.Budget`), also its table (``budget.md``), its
-        bar plot (``budget.png``) and its rows under ``budget`` in summary.json."""
+        bar plot (``budget.png``) and its rows under ``budget`` in summary.json (or later,
+        `add_budget`). Without, a budget an earlier run left in the folder is removed: the
+        folder never pairs this result with another run's budget."""
         for name, part in result.evaluation.parts.items():
             self.write_part(f"{name}.ply", part)
         for name, program in {**result.evaluation.programs, **result.programs}.items():
@@ -117,12 +119,20 @@ class ReportFolder:
               value - result.injected.get(name, math.nan)]
              for name, (value, std) in result.identified.items()],
             title="Identified error parameters (m, rad)", digits=12)
-        summary = result.summary()
         text = figures + "\n" + identified
         if budget is not None:
-            text += "\n" + self.write_budget(budget)
-            summary["budget"] = budget.to_dict()
-        self.write_summary(summary)
+            return text + "\n" + self.add_budget(result, budget)
+        for name in ("budget.md", "budget.png"):
+            (self.path / name).unlink(missing_ok=True)
+        self.write_summary(result.summary())
+        return text
+
+    def add_budget(self, result, budget) -> str:
+        """The error budget of ``result`` (written by `write_result` before, or not): its
+        table and plot (`write_budget`) and summary.json again with its rows under
+        ``budget``. Returns the table's Markdown."""
+        text = self.write_budget(budget)
+        self.write_summary({**result.summary(), "budget": budget.to_dict()})
         return text
 
     def write_budget(self, budget, name: str = "budget") -> str:
@@ -285,16 +295,35 @@ def progress_printer(scenario: str):
     return stage
 
 
-def run_scenario(report, args) -> None:
-    """Run a scenario's ``report(args)``: a `machinesim.MachineSimError` ends it with its
-    one-line message on stderr and exit status 2, never a traceback."""
+#: Exit status of a scenario stopped by Ctrl-C (128 + SIGINT, as shells report it).
+EXIT_INTERRUPTED = 130
+
+
+def scenario_status(report, args, name: str | None = None) -> int:
+    """Run a scenario's ``report(args)`` and give its exit status: 0; 2 after a
+    `machinesim.MachineSimError`, its one-line message on stderr (``name: message``, or
+    ``error: message`` without a name); 130 after Ctrl-C, one line saying so. Never a
+    traceback: every file of a report is written whole (`machinesim._io.write_atomic`), so an
+    interrupted run leaves whole files, and summary.json lists those of the run that wrote
+    it."""
     from machinesim.exceptions import MachineSimError
 
     try:
         report(args)
     except MachineSimError as error:
-        print(f"error: {error}", file=sys.stderr)
-        sys.exit(2)
+        print(f"{name or 'error'}: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{name + ': ' if name else ''}interrupted; the files written are whole, and "
+              "summary.json, when there, lists those of the run that wrote it",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return 0
+
+
+def run_scenario(report, args) -> None:
+    """Run a scenario's ``report(args)`` and exit with `scenario_status`'s status."""
+    sys.exit(scenario_status(report, args))
 
 
 def _seed(text: str) -> int:

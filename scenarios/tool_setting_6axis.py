@@ -39,7 +39,6 @@ import numpy as np
 from machinesim import Lab
 from machinesim.budget import realism_budget
 from machinesim.cam.tool_setting_plates import Plan
-from machinesim.exceptions import MachineSimError
 from machinesim.experiment import run
 from machinesim.identification.tool_setting_6axis import PARAMETERS
 from machinesim.procedures.tool_setting_6axis import (
@@ -56,6 +55,7 @@ from machinesim.report import (
     realism_from,
     realism_options,
     scenario_arguments,
+    scenario_status,
 )
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 
@@ -83,21 +83,21 @@ def main(argv=None) -> int:
                         "100,850)")
     realism_options(parser)
     args = parser.parse_args(argv)
-    try:
-        given = {}
-        if args.tool_offset_um is not None:
-            values = parse_floats(args.tool_offset_um, 3, "--tool-offset-um")
-            given.update(zip(PARAMETERS[:3], (v * M_PER_UM for v in values), strict=True))
-        if args.c_offset_um is not None:
-            values = parse_floats(args.c_offset_um, 2, "--c-offset-um")
-            given.update(zip(PARAMETERS[3:], (v * M_PER_UM for v in values), strict=True))
-        errors, realism = injected_errors(args, DEFAULTS, given), realism_from(args)
-        report(args, lambda realism: Lab("robonano_ui", errors, seed=args.seed,
-                                         realism=realism), realism)
-    except MachineSimError as error:
-        print(f"tool_setting_6axis: {error}", file=sys.stderr)
-        return 2
-    return 0
+    return scenario_status(_configured, args, "tool_setting_6axis")
+
+
+def _configured(args) -> None:
+    """The run the command line asks for: its errors, then `report`."""
+    given = {}
+    if args.tool_offset_um is not None:
+        values = parse_floats(args.tool_offset_um, 3, "--tool-offset-um")
+        given.update(zip(PARAMETERS[:3], (v * M_PER_UM for v in values), strict=True))
+    if args.c_offset_um is not None:
+        values = parse_floats(args.c_offset_um, 2, "--c-offset-um")
+        given.update(zip(PARAMETERS[3:], (v * M_PER_UM for v in values), strict=True))
+    errors, realism = injected_errors(args, DEFAULTS, given), realism_from(args)
+    report(args, lambda realism: Lab("robonano_ui", errors, seed=args.seed,
+                                     realism=realism), realism)
 
 
 def report(args, make_lab, realism) -> None:

@@ -1,8 +1,9 @@
 """Paper 002 replay: a robot-loaded workpiece, its setting errors found and compensated.
 
-Run: ``.venv/bin/python scenarios/workpiece_setting.py`` (``make demo``, about 3 min on 2
-idle cores, each step shown on stderr; times in docs/procedures/workpiece_setting.md;
-``--quick``: smaller crown windows, about 2 min, as the tests run it) with options
+Run: ``.venv/bin/python scenarios/workpiece_setting.py`` (``make demo``: the report after
+about 3 min on 2 idle cores, its error budget after about 9; each step shown on stderr;
+times in docs/procedures/workpiece_setting.md; ``--budget off``: 3 min; ``--quick``:
+smaller crown windows, as the tests run it) with options
 
     --robot-repeatability-um R  the robot that loads each workpiece (default 30, the
                                 paper's LR Mate 200iD); its landings are drawn with --seed
@@ -19,11 +20,13 @@ idle cores, each step shown on stderr; times in docs/procedures/workpiece_settin
                                 instrument imperfections, artefact errors, the machine's
                                 background errors (`machinesim.realism`). Default lab;
                                 --noise off without it: ideal
-    --budget on|off             error budget of the crown's "after" figures: each source
-                                switched off in turn (one more crown run each, "after"
-                                only, cutting again only where the source changes the
-                                program or the machine; default off for its cost: five
-                                more crown cuts, about 7 min with --quick)
+    --budget on|off             error budget of the "after" figures (the crown's, the
+                                grooves' spread): each source switched off in turn (one
+                                more run of each load each, the crown "after" only, cut
+                                again only where the source changes the program or the
+                                machine: five more crown cuts, about 5 min on 2 cores;
+                                default on, run after the report is written and printed,
+                                so an interrupted budget leaves it whole)
     --nose-correction on|off    keep the nose arc's lowest point on the path (default on),
                                 or the tip as the paper's eq 7 does (off)
     --all-layers                cut all ten 1 um finishing layers of the crown, not only the
@@ -50,7 +53,7 @@ import math
 import re
 import sys
 from dataclasses import replace
-from types import MappingProxyType
+from types import MappingProxyType, SimpleNamespace
 
 import numpy as np
 
@@ -58,7 +61,6 @@ from machinesim import Lab, WorkpieceSetting, load_machine
 from machinesim.budget import error_budget
 from machinesim.cam.crown import PARK
 from machinesim.compensation import program_axes
-from machinesim.exceptions import MachineSimError
 from machinesim.experiment import run
 from machinesim.identification.workpiece_setting import PARAMETERS, nose_shift
 from machinesim.loading import RobotLoader
@@ -76,6 +78,7 @@ from machinesim.report import (
     parse_floats,
     progress_printer,
     scenario_arguments,
+    scenario_status,
 )
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 from machinesim.viewer import part_scene, write_html
@@ -166,19 +169,14 @@ def main(argv=None) -> int:
         parser.add_argument("--realism", choices=("ideal", "noise_only", "lab"),
                             default=None, help="what the lab has besides the injected "
                             "errors (default lab; --noise off without it: ideal)")
-    parser.add_argument("--budget", choices=("on", "off"), default="off",
-                        help="error budget of the crown's after figures: one more crown "
-                        "run per source (default off)")
+    parser.add_argument("--budget", choices=("on", "off"), default="on",
+                        help="error budget of the after figures: one more run of each "
+                        "load per source, after the report (default on)")
     parser.add_argument("--all-layers", action="store_true",
                         help="cut every finishing layer of the crown, not only the last")
     parser.add_argument("--quick", action="store_true", help="smaller crown windows")
     args = parser.parse_args(argv)
-    try:
-        report(args)
-    except MachineSimError as error:
-        print(f"workpiece_setting: {error}", file=sys.stderr)
-        return 2
-    return 0
+    return scenario_status(report, args, "workpiece_setting")
 
 
 def report(args) -> None:
@@ -195,9 +193,6 @@ def report(args) -> None:
                                                  all_layers=args.all_layers,
                                                  quick=args.quick, progress=told),
                             lab, progress=told)
-    budget = None
-    if args.budget == "on":
-        budget = crown_budget(machine, errors["crown"], args, realism, results["crown"])
     folder = ReportFolder(args.out)
     told = progress("report")
     told("checking the compensation routes on the machine with the injected errors ...")
@@ -220,13 +215,20 @@ def report(args) -> None:
                    "across (nm)"], route_rows,
         title="Compensation routes on the machine with the injected errors (identification "
         "error included)", digits=4)
-    summary = folder.write_result(result, budget=budget)
-    told("done")
+    # The report is whole before the budget's reruns begin: the tables are printed and the
+    # folder written (an older budget in it removed), so an interrupted budget leaves a
+    # complete report without one; the budget then adds its table, plot and summary rows.
+    summary = folder.write_result(result)
     for text in (table3, grooves, ident, check, times, route_table, summary):
-        print(text)
+        print(text, flush=True)
     print(f"report folder: {folder.path}")
     print(f"views: {folder.path / 'crown_after.html'} (and crown_before, grooves_before, "
-          "grooves_after)")
+          "grooves_after)", flush=True)
+    if args.budget == "on":
+        budget = scenario_budget(machine, errors, args, realism, results)
+        if budget is not None:
+            print(folder.add_budget(result, budget))
+    told("done")
 
 
 #: Each step of each load, and the budget's, on stderr with the time since the scenario
@@ -243,31 +245,40 @@ def lab_realism(args) -> Realism:
     return realism.without("instrument_noise") if args.noise == "off" else realism
 
 
-def crown_budget(machine, errors, args, realism: Realism, crown):
-    """The error budget of the crown's "after" figures (`machinesim.budget.error_budget`):
-    each realism switch that is on turned off in turn, on a lab of its own with the same
-    errors and seed, and with the paper's tip route, the tip-versus-nose approximation
-    (only a source when --nose-correction is off). The variants cut only the compensated
-    crown; ``crown`` is the run with everything on."""
+def scenario_budget(machine, errors, args, realism: Realism, results):
+    """The error budget of the "after" figures (`machinesim.budget.error_budget`): the
+    crown's (not the machining times, which come from the feeds alone) and the grooves'
+    spread (their depths are not errors). Each realism switch that is on is turned off in
+    turn, on a lab of its own for each load with the same errors and seed; with
+    --nose-correction off, the tip-versus-nose approximation too (the variant puts the nose
+    on the path). The variants cut only the compensated crown; ``results`` are the runs with
+    everything on, by load."""
     nose = args.nose_correction == "on"
     sources = list(realism.on) + ([] if nose else [TIP_VS_NOSE])
     if not sources:
         return None
+    progress("budget")(f"{len(sources)} sources switched off in turn, a run of each load "
+                       "each; those that change the crown's program or the machine cut it "
+                       "again, about 1 min each on 2 cores (--budget off skips this)")
 
-    def measured(result):
-        # the machining times come from the feeds alone: no source of error moves them
-        return replace(result, figures=tuple(f for f in result.figures
-                                             if not f.name.startswith("machining_time")))
+    def measured(runs):
+        figures = [f for f in runs["crown"].figures if not f.name.startswith("machining_time")]
+        figures += [f for f in runs["grooves"].figures if f.name == "groove_depth_spread"]
+        return SimpleNamespace(figures=tuple(figures))
 
     def variant(source):
         if source is None:
-            return measured(crown)
-        lab = Lab(machine, errors, seed=args.seed,
-                  realism=realism if source == TIP_VS_NOSE else realism.without(source))
-        told = progress(f"budget, {source} off")
-        return measured(run(RobotLoadedWorkpiece(
-            "crown", nose_correction=nose or source == TIP_VS_NOSE, all_layers=args.all_layers,
-            quick=args.quick, after_only=True, progress=told), lab, progress=told))
+            return measured(results)
+        runs = {}
+        for load in EXPERIMENTS:
+            lab = Lab(machine, errors[load], seed=args.seed,
+                      realism=realism if source == TIP_VS_NOSE else realism.without(source))
+            told = progress(f"budget, {source} off, {load} load")
+            runs[load] = run(RobotLoadedWorkpiece(
+                load, nose_correction=nose or source == TIP_VS_NOSE,
+                all_layers=args.all_layers, quick=args.quick, after_only=True, progress=told),
+                lab, progress=told)
+        return measured(runs)
 
     return error_budget(variant, sources)
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -81,3 +83,31 @@ def test_every_paper_scenario_refuses_a_negative_seed_on_its_command_line(tmp_pa
             assert "Traceback" not in result.stderr
             assert (f"argument --seed: expected a non-negative integer, got '{seed}'"
                     in result.stderr.splitlines()[-1]), (script, result.stderr)
+
+
+def test_a_scenario_stopped_by_ctrl_c_exits_130_in_one_line(tmp_path, as_in_a_terminal):
+    """SIGINT while paper 002's first load is measured: status 130, one line on stderr after
+    the progress lines, no traceback, and no report written (its files come after the
+    runs). A summary.json an earlier run left in the folder stays whole."""
+    (tmp_path / "summary.json").write_text('{"kept": true}')
+    process = subprocess.Popen([sys.executable, str(ROOT / "scenarios" / "workpiece_setting.py"),
+                                "--quick", "--out", str(tmp_path)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, cwd=ROOT, **as_in_a_terminal)
+    try:
+        seen = []
+        for line in process.stderr:
+            seen.append(line)
+            if "grooves load: measure ..." in line:
+                break
+        assert process.poll() is None, "".join(seen)
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 130, err
+    assert "Traceback" not in err, err
+    last = [line for line in err.splitlines() if not line.startswith("workpiece_setting [")]
+    assert len(last) == 1 and last[0].startswith("workpiece_setting: interrupted"), err
+    assert out == ""
+    assert json.loads((tmp_path / "summary.json").read_text()) == {"kept": True}

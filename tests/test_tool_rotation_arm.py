@@ -414,6 +414,36 @@ def test_the_procedure_report_follows_the_one_schema(exact_run, tmp_path):
         assert (tmp_path / name).stat().st_size > 0
 
 
+def test_a_budget_added_after_the_report_joins_its_summary_and_a_later_report_drops_it(
+        exact_run, tmp_path):
+    """A scenario may write its report first and its error budget later (`add_budget`): the
+    summary then holds the budget's rows and files; a later report into the same folder
+    without a budget removes the old one, never pairing a result with another run's."""
+    from dataclasses import replace
+
+    from machinesim.budget import Budget, error_budget
+    from machinesim.experiment import Figure
+
+    result, _ = exact_run
+    half = replace(result, figures=tuple(
+        Figure(f.name, f.unit, f.before, None if f.after is None else f.after / 2)
+        for f in result.figures))
+    budget = error_budget(lambda off: result if off is None else half, ["stage_positioning"])
+    folder = ReportFolder(tmp_path)
+    folder.write_result(result)
+    assert "budget" not in json.loads((tmp_path / "summary.json").read_text())
+    text = folder.add_budget(result, budget)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    check_summary(summary)
+    assert Budget.from_dict(summary["budget"]) == budget and budget.table() in text
+    assert all(row.share == pytest.approx(0.75) for row in budget.rows if row.after_all)
+    assert {"budget.md", "budget.png", "pattern_after.ply"} <= set(summary["files"])
+    ReportFolder(tmp_path).write_result(result)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert "budget" not in summary and "budget.md" not in summary["files"]
+    assert not (tmp_path / "budget.md").exists() and not (tmp_path / "budget.png").exists()
+
+
 def test_the_compensated_program_is_the_model_based_one(exact_run):
     """Route 1 (the paper's formulas through map_program) and route 2 (the identified model
     through Machine.axis_values) give the same NC program: every axis on the same 1 nm and

@@ -140,8 +140,8 @@ def test_the_scenario_with_noise_reports_the_c_centre_lengthening_and_a_budget(t
     plane on a flat tilted t about X, reads S = t sin(45 k deg) (within 0.2 deg: the
     landing's own 0.03 deg, the image's 0.05 deg noise);
     after, the plane fits within 20 nm (probe 20 nm and microscope 12 nm noise). The budget
-    has one row per measured "after" figure (not the machining times) for the one source
-    that is on, its after_all the figure's after."""
+    has one row per measured "after" figure of the crown (not the machining times) and the
+    grooves' spread, for the one source that is on, its after_all the figure's after."""
     out = tmp_path / "report"
     result = subprocess.run([sys.executable, str(ROOT / "scenarios" / "workpiece_setting.py"),
                              "--quick", "--realism", "noise_only", "--budget", "on",
@@ -162,12 +162,18 @@ def test_the_scenario_with_noise_reports_the_c_centre_lengthening_and_a_budget(t
     assert {r["source"] for r in rows} == {"instrument_noise"}
     crown_after = [f for f in summary["figures"] if f["after"] is not None
                    and not f["name"].startswith(("groove", "machining_time"))]
-    assert [r["figure"] for r in rows] == [f["name"] for f in crown_after]
+    assert [r["figure"] for r in rows] == [f["name"] for f in crown_after] + [
+        "groove_depth_spread"]
     for r in rows:
         assert r["after_all"] == figures[r["figure"]]["after"]
         a, b = abs(r["after_all"]), abs(r["after_without"])
         assert r["share"] == pytest.approx(0.0 if a == 0 else (a * a - b * b) / (a * a))
     assert (out / "budget.png").stat().st_size > 0
+    assert "budget.md" in summary["files"] and "budget.png" in summary["files"]
+    # the report is printed and written before the budget's reruns begin
+    assert result.stdout.index("Table 3") < result.stdout.index("### Error budget")
+    assert (result.stderr.index("report: writing the views")
+            < result.stderr.index("budget, instrument_noise off, grooves load: measure"))
     times = figures["machining_time"]
     assert times["after"] == pytest.approx(9.5, rel=0.02)
     assert figures["machining_time_saved"]["after"] == pytest.approx(76.0, abs=1.0)
