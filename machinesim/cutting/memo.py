@@ -37,12 +37,14 @@ class CutMemo:
     Parameters
     ----------
     max_cuts : int
-        How many cuts to keep.
+        How many cuts to keep. 64: paper 002's error budget makes about 40 cuts (three of
+        the grooves and one of the crown per source) and must still find the first run's
+        crown at its last source; memory is bounded by ``max_triangles``.
     max_triangles : int
         At most this many triangles over all kept parts (about 50 bytes each).
     """
 
-    def __init__(self, max_cuts: int = 16, max_triangles: int = 20_000_000) -> None:
+    def __init__(self, max_cuts: int = 64, max_triangles: int = 20_000_000) -> None:
         self.max_cuts = max_cuts
         self.max_triangles = max_triangles
         self._cuts: OrderedDict[str, tuple[Part, object, int]] = OrderedDict()
