@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 from collections.abc import Mapping, Sequence
@@ -67,7 +68,15 @@ class ReportFolder:
 
     def __init__(self, path) -> None:
         self.path = Path(path)
-        self.path.mkdir(parents=True, exist_ok=True)
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(f"--out {str(path)!r}: cannot make the report folder there "
+                             f"({exc.strerror or exc}); expected a folder, or a path where "
+                             "one can be made", key="out") from None
+        if not os.access(self.path, os.W_OK | os.X_OK):
+            raise InputError(f"--out {str(path)!r}: the report folder is not writable",
+                             key="out")
         self.files: list[str] = []
 
     def _target(self, name: str) -> Path:
@@ -302,16 +311,23 @@ EXIT_INTERRUPTED = 130
 def scenario_status(report, args, name: str | None = None) -> int:
     """Run a scenario's ``report(args)`` and give its exit status: 0; 2 after a
     `machinesim.MachineSimError`, its one-line message on stderr (``name: message``, or
-    ``error: message`` without a name); 130 after Ctrl-C, one line saying so. Never a
-    traceback: every file of a report is written whole (`machinesim._io.write_atomic`), so an
-    interrupted run leaves whole files, and summary.json lists those of the run that wrote
-    it."""
+    ``error: message`` without a name; also a report folder (``args.out``) that cannot be
+    made or written, checked before the run, and a file that failed to write); 130 after
+    Ctrl-C, one line saying so. Never a traceback: every file of a report is written whole
+    (`machinesim._io.write_atomic`), so an interrupted run leaves whole files, and
+    summary.json lists those of the run that wrote it."""
     from machinesim.exceptions import MachineSimError
 
     try:
+        if getattr(args, "out", None) is not None:
+            ReportFolder(args.out)  # a folder that cannot be written fails now, not after the run
         report(args)
     except MachineSimError as error:
         print(f"{name or 'error'}: {error}", file=sys.stderr)
+        return 2
+    except OSError as error:  # a write that failed on the way (disk full, folder removed)
+        where = f"{error.filename}: " if error.filename else ""
+        print(f"{name or 'error'}: {where}{error.strerror or error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"{name + ': ' if name else ''}interrupted; the files written are whole, and "

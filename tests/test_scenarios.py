@@ -111,3 +111,22 @@ def test_a_scenario_stopped_by_ctrl_c_exits_130_in_one_line(tmp_path, as_in_a_te
     assert len(last) == 1 and last[0].startswith("workpiece_setting: interrupted"), err
     assert out == ""
     assert json.loads((tmp_path / "summary.json").read_text()) == {"kept": True}
+
+
+def test_every_paper_scenario_refuses_a_report_folder_it_cannot_write_before_it_runs(tmp_path):
+    """`--out` naming a file, or a place no folder can be made: status 2 and one line naming
+    the path, at once (it used to end minutes of cutting with a traceback)."""
+    taken = tmp_path / "taken"
+    taken.write_text("a file, not a folder")
+    for script in ("workpiece_setting.py", "tool_rotation_arm.py", "tool_setting_6axis.py",
+                   "xy_plane_errors.py", "sts_turning.py"):
+        for out in (taken, taken / "inside"):
+            result = subprocess.run([sys.executable, str(ROOT / "scenarios" / script),
+                                     "--out", str(out)], capture_output=True, text=True,
+                                    check=False, cwd=ROOT, timeout=60)
+            assert result.returncode == 2, (script, result.stderr)
+            assert "Traceback" not in result.stderr
+            lines = result.stderr.strip().splitlines()
+            assert len(lines) == 1 and f"--out '{out}'" in lines[0], (script, result.stderr)
+            assert "cannot make the report folder" in lines[0]
+    assert taken.read_text() == "a file, not a folder"

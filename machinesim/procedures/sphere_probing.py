@@ -201,7 +201,10 @@ def _bottom_touch(probe, guess, radius, plan, c_angle) -> np.ndarray:
     contact = probe.touch(start, "-Z", plan.lift + radius)
     if contact is None:
         raise InputError(f"Expected the bottom touch under {guess[:2].tolist()} m to meet the "
-                         f"sphere within {plan.lift + radius} m, it met nothing", key="centre")
+                         f"sphere within {plan.lift + radius} m, it met nothing: the "
+                         "workpiece sits farther from its drawing than the probing plan "
+                         "searches (check the setting's size: position, rotations)",
+                         key="centre")
     return _machine_points(probe, contact[None])[0]
 
 
