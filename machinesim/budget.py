@@ -200,8 +200,9 @@ class Budget:
             axis.set_xticklabels(names, rotation=15, fontsize=8, ha="right")
             axis.set_ylabel("share, % (quadrature)")
             axis.grid(True, axis="y", alpha=0.3)
-        axes[0, 0].set_title("Error budget: each source switched off in turn (share of the "
-                             "'after' figure; hatched: beyond the axis, value written)")
+        axes[0, 0].set_title("Error budget: each source switched off in turn\n(share of the "
+                             "'after' figure; hatched: beyond the axis, value written)",
+                             fontsize=10)
         axes[0, 0].legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
         buffer = io.BytesIO()
         figure.tight_layout()
