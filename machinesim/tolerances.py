@@ -68,6 +68,11 @@ RAPID_CUT_VOLUME_M3 = 1e-24
 #: it subtracts) by this much along the tool's X. 0.1 um: a plunge 1 um deep still shows
 #: 1e-19 m^3, a million times the threshold.
 RAPID_EDGE_HALF_THICKNESS_M = 1e-7
+#: Stock thinner than this (m) between two faces of a part is a sheet left by round-off
+#: where two sweeps' faces coincide, and is cut away (`machinesim.cutting.sheets`): 1 pm, a
+#: hundredth of an atom's diameter, a thousandth of the axes' 1 nm resolution, and 4x the
+#: thickest such sheet found (2.6e-13 m, paper 002's crown).
+SHEET_M = 1e-12
 
 # --- tools
 #: Chord tolerance of profile arcs (m): 1 nm, the axis resolution of the machines (1 nm),

@@ -9,6 +9,7 @@ import pytest
 from machinesim.cutting import remove, rotary_substeps
 from machinesim.cutting.stitch import exact_box, stitch
 from machinesim.exceptions import InputError
+from machinesim.metrology import Microscope
 from machinesim.tools import BallEndMill, VTool
 from machinesim.workpiece import block
 
@@ -165,6 +166,34 @@ def test_reports_flag_empty_sideways_and_degenerate_sweeps():
     assert report.sideways == (1,)
     assert report.n_degenerate == 1  # the plunge moves the profile within its own plane
     assert report.n_sweeps == 3 and not report.empty_cut
+
+
+@pytest.mark.parametrize("gap", [2.6e-13, 9e-13])
+def test_a_sheet_thinner_than_a_picometre_between_two_grooves_is_cut_away(gap):
+    # Two grooves along one line, the second run back towards the first and ending `gap`
+    # short of its end: the stock between their end faces is a V-shaped sheet `gap` thick,
+    # standing from the groove bottom to the plate top, which a height map reads as a wall.
+    depth, y0, x0 = 10e-6, 1.5e-3, 2e-3
+    back = np.diag([-1.0, -1.0, 1.0])  # the tool turned to cut along -X
+    first = np.array([pose((-1e-3, y0, -depth)), pose((x0, y0, -depth))])
+    second = np.array([pose((5e-3, y0, -depth), back), pose((x0 + gap, y0, -depth), back)])
+    part, report = remove(block(4e-3, 3e-3, 1e-3), VTool(math.pi / 2), [first, second],
+                          method="boolean")
+    assert report.sheets.count >= 1
+    assert report.sheets.thickness_max == pytest.approx(gap, abs=1e-15)
+    # a profile along the groove through x0 at 0.01 pm spacing sees the bottom all the way
+    along = Microscope(noise=False).profile(part, (x0 - 1e-12, y0), (x0 + 2e-12, y0),
+                                            spacing=1e-14)
+    assert len(along.z) > 250 and np.nanmax(along.z) <= -depth + 2e-12
+    # all else is the two grooves: the removed volume is the V's area along 5 mm (the
+    # groove over the block's 4 mm), to the sheet's volume and the slab's pm notch
+    assert part.volume == pytest.approx(4e-3 * 3e-3 * 1e-3 - depth ** 2 * 4e-3, rel=1e-12)
+    # a gap of 3 pm is kept: that is stock, thin as it is, and the engine leaves it
+    thicker = second.copy()
+    thicker[-1, 0, 3] = x0 + 3e-12
+    _, kept = remove(block(4e-3, 3e-3, 1e-3), VTool(math.pi / 2), [first, thicker],
+                     method="boolean")
+    assert kept.sheets.count == 0
 
 
 @METHODS

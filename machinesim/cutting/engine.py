@@ -32,10 +32,11 @@ never touching the part mesh once per sweep:
 
 Subtraction commutes, so the part does not depend on how the sweeps are batched or ordered:
 removing a set of sweeps at once or one by one gives the same solid (to manifold3d's
-round-off, tested on paper 002's groove programs), except for sheets under a picometre thick
-between sweeps whose faces coincide exactly, which round-off keeps or not (docs/cutting.md,
-known fault). The removed volume is integrated over the cut itself (`removed_volume`), not
-taken as the difference of two large volumes.
+round-off, tested on paper 002's groove programs). Where sweeps' faces coincide exactly,
+round-off can keep a sheet of stock under a picometre thick between them; such sheets are
+cut away after the last union (`machinesim.cutting.sheets`). The removed volume is
+integrated over the cut itself (`removed_volume`), not taken as the difference of two large
+volumes.
 """
 
 from __future__ import annotations
@@ -50,6 +51,7 @@ import numpy as np
 from manifold3d import OpType
 
 from machinesim.cutting.relief import cut_reliefs
+from machinesim.cutting.sheets import SheetReport, remove_sheets
 from machinesim.cutting.stitch import exact_box, stitch
 from machinesim.cutting.sweepset import SweepSet, dragged
 from machinesim.cutting.tiling import (
@@ -127,6 +129,9 @@ class EngineReport:
     reached : ndarray of int
         Indices (over all paths) of the sweeps that reach the stock region (those cut, and
         those with no volume); `machinesim.cutting.cut` checks its rapids among them.
+    sheets : SheetReport
+        Sheets of stock under `tolerances.SHEET_M` thick that round-off left between
+        sweeps whose faces coincide, and which were cut away (`machinesim.cutting.sheets`).
     """
 
     removed_volume: float
@@ -141,6 +146,7 @@ class EngineReport:
     swept_volume: float = 0.0
     holder_contact: tuple[int, ...] = ()
     reached: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    sheets: SheetReport = SheetReport()
 
 
 def rotary_substeps(radius: float, angle: float, chord_tol: float = 1e-9) -> int:
@@ -281,6 +287,7 @@ def remove(
     progress: Callable[[int, int], None] | None = None,
     sweeps_per_tile: int = SWEEPS_PER_TILE,
     method: str = "auto",
+    sheets: bool = True,
 ) -> tuple[Part, EngineReport]:
     """Cut ``stock`` with ``tool`` moved along ``paths``.
 
@@ -307,6 +314,11 @@ def remove(
         most two directions in XY, `machinesim.cutting.relief`, and subtracts sweeps
         otherwise; "boolean" always subtracts. Both are exact; the height field is 10-100
         times faster on groove patterns.
+    sheets : bool
+        Cut away the sheets under `tolerances.SHEET_M` thick that round-off leaves where
+        sweeps' faces coincide (`machinesim.cutting.sheets`), after the last union. A caller
+        that cuts one part in several calls (`machinesim.cutting.cut`, `cut_turned`) does
+        it once, at the end: a sheet one call leaves, the next may cut away.
 
     Returns
     -------
@@ -416,6 +428,10 @@ def remove(
         # Windows that overlap cut their common part twice: count it once, by difference.
         stock_volume = manifold3d.Manifold.batch_boolean(stock_pieces, OpType.Add).volume()
         removed = stock_volume - result.volume()
+    sheets_found = SheetReport()
+    if sheets:
+        result, sheets_found = remove_sheets(result)
+        removed += sheets_found.volume
     report = EngineReport(
         removed_volume=removed,
         n_sweeps=sweeps.count,
@@ -429,5 +445,6 @@ def remove(
         swept_volume=swept,
         holder_contact=holder,
         reached=np.array(reached, dtype=np.int64),
+        sheets=sheets_found,
     )
     return Part(result), report

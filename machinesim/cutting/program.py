@@ -18,6 +18,7 @@ import numpy as np
 
 from machinesim import motion
 from machinesim.cutting.engine import remove
+from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sweeps import SolidSweep, hull_mesh, manifold_from, prism_triangles
 from machinesim.cutting.sweepset import POINTS_PER_CHUNK
 from machinesim.exceptions import AxisLimitError
@@ -81,6 +82,10 @@ class CutReport:
     nc : Mapping
         How the program was read (`nc_summary`): ``integer_input``, the modal ``states``
         seen with their first lines, and the ``tool_table`` path; empty when unknown.
+    thin_sheets : int
+        Sheets of stock under a picometre thick that round-off left where sweeps' faces
+        coincide, found on the finished part and cut away (`machinesim.cutting.sheets`; more
+        than `sheets.MOST_REMOVED` are left, and a note says so).
     tools : tuple of Mapping
         One entry per run of moves cut by one tool (`Program.tool_changes`): ``tool``
         (its number, None for the cut's own tool before any change), ``line`` (where it
@@ -104,6 +109,7 @@ class CutReport:
     engine_s: float = 0.0
     nc: Mapping = field(default_factory=dict, hash=False)
     tools: tuple = field(default=(), hash=False)
+    thin_sheets: int = 0
 
     def to_dict(self) -> dict:
         """JSON-ready dict, every key with its unit."""
@@ -201,7 +207,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         section_poses = poses[lo:hi] if length == 0.0 else poses[lo:hi] @ _beyond_tip(length)
         paths = np.split(section_poses, section.breaks) if len(section_poses) else []
         before = part
-        part, engine = remove(before, section_tool, paths, roi=roi, progress=progress)
+        part, engine = remove(before, section_tool, paths, roi=roi, progress=progress,
+                              sheets=False)
         rapids += _rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)
         holder |= {int(section.sweep_line[i]) for i in engine.holder_contact}
@@ -212,8 +219,11 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     if not engines:  # no tool moved: the stock as it is, and an engine report saying so
         part, engine = remove(stock, tool, [], roi=roi, progress=progress)
         engines.append(engine)
+    sheets, sheet_note = SheetReport(), None
+    if any(e.method == "boolean" for e in engines):
+        part, sheets, sheet_note = trim_sheets(part)
     report = CutReport(
-        removed_volume_m3=float(sum(e.removed_volume for e in engines)),
+        removed_volume_m3=float(sum(e.removed_volume for e in engines) + sheets.volume),
         machining_time_s=trajectory.duration,
         cutting_time_s=trajectory.cutting_time,
         sweeps=sum(int(e.n_sweeps_cut) for e in engines),
@@ -224,11 +234,12 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         empty_cut=all(bool(e.empty_cut) for e in engines),
         engine="+".join(dict.fromkeys(e.method for e in engines)),
         elapsed_s=time.perf_counter() - began,
-        notes=trajectory.notes,
+        notes=(*trajectory.notes, *([sheet_note] if sheet_note else [])),
         holder_contact=tuple(sorted(holder)),
         engine_s=sum(e.elapsed_s for e in engines),
         nc=nc_summary(program),
         tools=tuple(sections),
+        thin_sheets=sheets.count,
     )
     return part, report
 

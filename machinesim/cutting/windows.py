@@ -20,6 +20,7 @@ import numpy as np
 from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
 from machinesim.cutting.program import CutReport, _Moves, _overtravel, nc_summary
+from machinesim.cutting.sheets import trim_sheets
 from machinesim.exceptions import InputError
 from machinesim.rotations import rot_z
 from machinesim.tools import tool_from_spec
@@ -124,7 +125,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         turn[:3, :3] = rot_z(-key * turn_step)
         turned = Part(part.manifold.rotate((0.0, 0.0, -step_deg * key)))
         paths = [turn @ machine.tool_pose(segment.q, errors) for segment in segments]
-        cut_part, report = remove(turned, tool, paths)
+        cut_part, report = remove(turned, tool, paths, sheets=False)
         part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
         sweep_line = np.repeat([s.line for s in segments], [len(s.q) - 1 for s in segments])
         holder.update(int(sweep_line[i]) for i in report.holder_contact)
@@ -136,11 +137,14 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         done += sum(len(s.q) - 1 for s in segments)
         if progress is not None:
             progress(done, total)
+    part, sheets, sheet_note = trim_sheets(part)
     return part, CutReport(
-        removed_volume_m3=float(removed), machining_time_s=trajectory.duration,
+        removed_volume_m3=float(removed + sheets.volume), machining_time_s=trajectory.duration,
         cutting_time_s=trajectory.cutting_time, sweeps=sweeps, substeps=trajectory.substeps,
         rapids_that_cut=(), limit_violations=limits, sideways_sweeps=sideways,
         empty_cut=not removed > EMPTY_SWEPT_REL * swept, engine="boolean, turned groups",
         elapsed_s=time.perf_counter() - began,
-        notes=(*trajectory.notes, "rapids not cut nor checked against the part (turned groups)"),
-        holder_contact=tuple(sorted(holder)), engine_s=engine_s, nc=nc_summary(program))
+        notes=(*trajectory.notes, "rapids not cut nor checked against the part (turned groups)",
+               *([sheet_note] if sheet_note else [])),
+        holder_contact=tuple(sorted(holder)), engine_s=engine_s, nc=nc_summary(program),
+        thin_sheets=sheets.count)

@@ -1,0 +1,110 @@
+"""Sheets thinner than a picometre: found only where nothing lies on either side, cut away."""
+
+import manifold3d
+import numpy as np
+import pytest
+
+from machinesim.cutting.sheets import MOST_REMOVED, find_sheets, remove_sheets
+from machinesim.metrology import Microscope
+from machinesim.tolerances import SHEET_M
+from machinesim.workpiece import Part
+
+MM = 1e-3
+
+
+def box(low, high):
+    """A closed outward mesh (vertices, triangles) of the box low..high (m)."""
+    mesh = manifold3d.Manifold.cube((1.0, 1.0, 1.0)).to_mesh64()
+    unit = np.asarray(mesh.vert_properties)[:, :3]
+    low, high = np.asarray(low, float), np.asarray(high, float)
+    return low + unit * (high - low), np.asarray(mesh.tri_verts, dtype=np.int64)
+
+
+def joined(*meshes):
+    vertices, triangles, count = [], [], 0
+    for v, t in meshes:
+        vertices.append(v)
+        triangles.append(t + count)
+        count += len(v)
+    return np.vstack(vertices), np.vstack(triangles)
+
+
+def turned(mesh, degrees=(13.0, 27.0, 41.0)):
+    """The mesh turned about x, y, z in turn (a sheet off the axes)."""
+    from scipy.spatial.transform import Rotation
+
+    v, t = mesh
+    return Rotation.from_euler("xyz", degrees, degrees=True).apply(v), t
+
+
+@pytest.mark.parametrize("thickness", [2.6e-13, 0.9e-12])
+@pytest.mark.parametrize("turn", [False, True])
+def test_a_free_plate_thinner_than_a_picometre_is_a_sheet_and_a_thicker_one_is_not(
+        thickness, turn):
+    plate = box((0.0, 0.0, 1 * MM), (1 * MM, 2 * MM, 1 * MM + thickness))
+    mesh = turned(plate) if turn else plate
+    pairs, gaps = find_sheets(*mesh)
+    assert gaps == pytest.approx(thickness, abs=1e-16 * (1 + 1000 * turn))
+    # the pairs cover the plate: their top triangles are its whole 1 x 2 mm
+    v, t = mesh
+    top = v[t[np.unique(pairs[:, 0])]]
+    area = 0.5 * np.linalg.norm(np.cross(top[:, 1] - top[:, 0], top[:, 2] - top[:, 0]), axis=1)
+    assert area.sum() == pytest.approx(2 * MM * MM, rel=1e-12)
+    thick = box((0.0, 0.0, 1 * MM), (1 * MM, 2 * MM, 1 * MM + 3 * SHEET_M))
+    assert len(find_sheets(*thick)[0]) == 0
+
+
+def test_a_skin_over_a_crack_and_a_crack_are_not_sheets():
+    # a block with, 0.1 pm above its top, a plate 0.1 pm thick: the plate's faces are 0.1
+    # pm apart, but under it the crack and the block, as on a face cut twice: a height map
+    # reads the same surface, so it is no sheet to remove
+    block = box((0.0, 0.0, 0.0), (1 * MM, 1 * MM, 1 * MM))
+    skin = box((0.0, 0.0, 1 * MM + 1e-13), (1 * MM, 1 * MM, 1 * MM + 2e-13))
+    assert len(find_sheets(*joined(block, skin))[0]) == 0
+    lid = box((0.0, 0.0, 1 * MM + 1e-13), (1 * MM, 1 * MM, 2 * MM))
+    assert len(find_sheets(*joined(block, lid))[0]) == 0
+
+
+def test_a_sheet_standing_on_a_groove_bottom_is_removed_and_nothing_else_moves():
+    stock = manifold3d.Manifold.cube((4 * MM, 4 * MM, 1 * MM)).translate((-2 * MM, -2 * MM,
+                                                                          -1 * MM))
+    gap = 2.6e-13
+    first = manifold3d.Manifold.cube((1 * MM, 2 * MM, 0.5 * MM)).translate(
+        (-1 * MM, -1 * MM, -0.01 * MM))
+    second = manifold3d.Manifold.cube((1 * MM, 2 * MM, 0.5 * MM)).translate(
+        (gap, -1 * MM, -0.01 * MM))
+    part = stock - first - second
+    trimmed, report = remove_sheets(part)
+    assert report.count >= 1 and report.thickness_max == pytest.approx(gap, abs=1e-16)
+    # what went is the sheet, 10 um x 2 mm x gap, and pm notches of no volume to speak of
+    assert part.volume() - trimmed.volume() == pytest.approx(10e-6 * 2 * MM * gap, rel=1e-3)
+    again, second_report = remove_sheets(trimmed)
+    assert second_report.count == 0 and again is trimmed
+    # a profile along y = 0 across the sheet's place, at 0.01 pm, reads the bottom all along
+    along = Microscope(noise=False).profile(Part(trimmed), (-2e-12, 0.0), (3e-12, 0.0),
+                                            spacing=1e-14)
+    assert len(along.z) > 400 and np.nanmax(along.z) <= -0.01 * MM + 2 * SHEET_M
+    before = Microscope(noise=False).profile(Part(part), (-2e-12, 0.0), (3e-12, 0.0),
+                                             spacing=1e-14)
+    assert np.nanmax(before.z) == 0.0  # the sheet's top, at the stock's top
+
+
+def test_an_ordinary_solid_has_no_sheets_and_comes_back_as_it_is():
+    solid = manifold3d.Manifold.cube((1 * MM, 1 * MM, 1 * MM)) - manifold3d.Manifold.sphere(
+        0.3 * MM, 64).translate((0.5 * MM, 0.5 * MM, 1 * MM))
+    same, report = remove_sheets(solid)
+    assert same is solid and report.count == 0 and report.thickness_max == 0.0
+
+
+def test_more_sheets_than_the_engine_removes_are_counted_and_left():
+    # 20 free plates 0.26 pm thick, two overlapping pairs each: 40 sheets, more than the 32
+    # the engine cuts away, so the part comes back as it is and the report says so
+    plates = [box((3 * MM * k, 0.0, 0.0), (3 * MM * k + 1 * MM, 1 * MM, 2.6e-13))
+              for k in range(20)]
+    v, t = joined(*plates)
+    solid = manifold3d.Manifold(manifold3d.Mesh64(
+        vert_properties=np.ascontiguousarray(v), tri_verts=np.ascontiguousarray(t, np.uint64)))
+    assert len(find_sheets(v, t)[0]) == 40 > MOST_REMOVED
+    same, report = remove_sheets(solid)
+    assert same is solid and report.count == 40 and not report.removed
+    assert report.area == pytest.approx(20 * MM * MM, rel=1e-12)
