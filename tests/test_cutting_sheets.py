@@ -108,3 +108,34 @@ def test_more_sheets_than_the_engine_removes_are_counted_and_left():
     same, report = remove_sheets(solid)
     assert same is solid and report.count == 40 and not report.removed
     assert report.area == pytest.approx(20 * MM * MM, rel=1e-12)
+
+
+def test_a_program_cut_looks_for_sheets_once_on_the_finished_part_and_reports_them(
+        monkeypatch):
+    import machinesim.cutting.program as program_module
+    from machinesim.cutting import cut, sheets
+    from machinesim.nc import ProgramBuilder
+
+    searched, engine_calls = [], []
+    real_remove = program_module.remove
+
+    def remove(*args, **kwargs):
+        engine_calls.append(kwargs.get("sheets", True))
+        return real_remove(*args, **kwargs)
+
+    def trim(part):
+        searched.append(part)
+        found = sheets.SheetReport(40, 2e-13, 1e-8, 0.0, removed=False)
+        return part, found, "40 sheets left (a note)"
+
+    monkeypatch.setattr(program_module, "remove", remove)
+    monkeypatch.setattr(program_module, "trim_sheets", trim)
+    # a swing of the planer's arm: a rotary move, cut by the boolean engine
+    program = (ProgramBuilder(1).rapid(X=0.5 * MM, Y=0.0, Z=0.1 * MM, A=-0.005)
+               .rapid(Z=-5e-6).linear(X=4.5 * MM, A=0.005, feed_mm_per_min=100.0)
+               .rapid(Z=0.1 * MM).build())
+    part, report = cut(program, "planer_4axis", tool="v:90", stock="block:5x3x1@0,-1.5,0")
+    assert engine_calls and not any(engine_calls)  # the engine leaves them to the end
+    assert len(searched) == 1 and searched[0] is part
+    assert report.thin_sheets == 40 and "40 sheets left (a note)" in report.notes
+    assert report.to_dict()["thin_sheets"] == 40

@@ -123,6 +123,7 @@ class CutReport:
             "limit_violations": list(self.limit_violations),
             "holder_contact_lines": list(self.holder_contact),
             "sideways_sweeps": self.sideways_sweeps,
+            "thin_sheets": self.thin_sheets,
             "empty_cut": self.empty_cut,
             "engine": self.engine,
             "elapsed_s": self.elapsed_s,
