@@ -128,6 +128,9 @@ def find_sheets(vertices, triangles, thickness: float = SHEET_M) -> tuple[np.nda
     gap = offset[i] - offset[j]
     close = (np.abs(u[i] - u[j]).max(axis=1) <= NORMAL_TOL) & (np.abs(gap) < thickness)
     i, j, gap = i[close], j[close], gap[close]
+    low, high = kept.min(axis=1), kept.max(axis=1)
+    boxed = np.all((low[i] <= high[j] + thickness) & (low[j] <= high[i] + thickness), axis=1)
+    i, j, gap = i[boxed], j[boxed], gap[boxed]
     flat_i, flat_j = _in_plane(kept[i], u[i]), _in_plane(kept[j], u[i])
     common = _overlapping(flat_i, flat_j, thickness)
     i, j, gap, flat_i, flat_j = i[common], j[common], gap[common], flat_i[common], flat_j[common]
