@@ -128,8 +128,10 @@ def find_sheets(vertices, triangles, thickness: float = SHEET_M) -> tuple[np.nda
     gap = offset[i] - offset[j]
     close = (np.abs(u[i] - u[j]).max(axis=1) <= NORMAL_TOL) & (np.abs(gap) < thickness)
     i, j, gap = i[close], j[close], gap[close]
-    low, high = kept.min(axis=1), kept.max(axis=1)
-    boxed = np.all((low[i] <= high[j] + thickness) & (low[j] <= high[i] + thickness), axis=1)
+    low, high = corners.min(axis=1), corners.max(axis=1)
+    kept_low, kept_high = low[keep], high[keep]
+    boxed = np.all((kept_low[i] <= kept_high[j] + thickness)
+                   & (kept_low[j] <= kept_high[i] + thickness), axis=1)
     i, j, gap = i[boxed], j[boxed], gap[boxed]
     flat_i, flat_j = _in_plane(kept[i], u[i]), _in_plane(kept[j], u[i])
     common = _overlapping(flat_i, flat_j, thickness)
@@ -138,7 +140,7 @@ def find_sheets(vertices, triangles, thickness: float = SHEET_M) -> tuple[np.nda
     skin = np.isin(j, j[crack]) | np.isin(i, i[crack])
     candidates = np.flatnonzero(~crack & ~skin)
     found = []
-    boxes = _Boxes(corners)
+    boxes = _Boxes(low, high) if candidates.size else None
     for k in candidates:
         q2 = _clipped(flat_i[k], flat_j[k]).mean(axis=0)
         basis = _basis(u[i[k]])
@@ -218,10 +220,9 @@ def _cross2(a: np.ndarray, b: np.ndarray) -> float:
 
 
 class _Boxes:
-    """Axis-aligned boxes of triangles (corners (m, 3, 3)), each axis's bounds contiguous."""
+    """Axis-aligned boxes (low, high: (m, 3)) of triangles, each axis's bounds contiguous."""
 
-    def __init__(self, corners: np.ndarray) -> None:
-        low, high = corners.min(axis=1), corners.max(axis=1)
+    def __init__(self, low: np.ndarray, high: np.ndarray) -> None:
         self.low = [np.ascontiguousarray(low[:, n]) for n in range(3)]
         self.high = [np.ascontiguousarray(high[:, n]) for n in range(3)]
 
