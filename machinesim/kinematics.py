@@ -24,7 +24,7 @@ rotary axis (``EC0C`` on C) adds to the axis value. The tool setting error sits 
 Poses are evaluated two ways, which tests hold against each other and against an independent
 chain: Pinocchio's ``forwardKinematics`` (one configuration at a time; Jacobians), and a batched
 evaluator that walks the same Pinocchio model (its joint placements and joint types) over many
-configurations at once with numpy.
+configurations at once with numpy, poses and (`Kinematics.pose_jacobians`) axis Jacobians.
 """
 
 from __future__ import annotations
@@ -283,17 +283,19 @@ def _cos_sin(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.cos(x), np.sin(x)
 
 
-def _slope(component, x: float) -> float:
-    """d value / d position of a component error at ``x`` (right slope at a table breakpoint;
-    zero beyond the ends, where the table is held constant)."""
+def _slope(component, x):
+    """d value / d position of a component error at ``x`` (a position or an array of them;
+    right slope at a table breakpoint; zero beyond the ends, where the table is held
+    constant)."""
+    x = np.asarray(x, dtype=np.float64)
     if component.kind == "poly":
-        return float(np.polynomial.polynomial.polyval(
-            x, np.polynomial.polynomial.polyder(component.values)))
+        return np.polynomial.polynomial.polyval(
+            x, np.polynomial.polynomial.polyder(component.values))
     pos, val = component.positions, component.values
-    i = int(np.searchsorted(pos, x, side="right")) - 1
-    if i < 0 or i >= len(pos) - 1:
-        return 0.0
-    return float((val[i + 1] - val[i]) / (pos[i + 1] - pos[i]))
+    i = np.searchsorted(pos, x, side="right") - 1
+    inside = (i >= 0) & (i < len(pos) - 1)
+    j = np.clip(i, 0, len(pos) - 2)
+    return np.where(inside, (val[j + 1] - val[j]) / (pos[j + 1] - pos[j]), 0.0)
 
 
 # ---------------------------------------------------------------------------------- kinematics
@@ -392,7 +394,7 @@ class Kinematics:
         jac = self.relative_jacobian(self.full_q(q, binding), frame)
         out = jac[:, self.axis_v].copy()
         for v in binding.varying:
-            slope = _slope(v.component, q[v.axis])
+            slope = float(_slope(v.component, q[v.axis]))
             out[:, v.axis] += jac[:, self._v_of_q[v.q_index]] * (v.sign * slope)
         return out
 
@@ -485,8 +487,14 @@ class Kinematics:
         return ops
 
     @staticmethod
-    def _run(ops: list, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Batched poses: rotations (3, 3, N) and translations (3, N) of the plan's frame."""
+    def _run(ops: list, q: np.ndarray, joints: list | None = None
+             ) -> tuple[np.ndarray, np.ndarray]:
+        """Batched poses: rotations (3, 3, N) and translations (3, N) of the plan's frame.
+
+        With a list ``joints``, each varying joint on the way appends ``(kind, source, axis,
+        origin)``: its kind ("P" or "R"), value source (as in `_plan`), and its axis
+        direction (3, N) and origin (3, N) in the world frame.
+        """
         n = q.shape[0]
         rot = None
         pos = None
@@ -509,6 +517,8 @@ class Kinematics:
             else:
                 _, var, sign = source
                 value = (sign * var.sign) * var.component.evaluate(q[:, var.axis])
+            if joints is not None:
+                joints.append((kind, source, rot[:, k, :].copy(), pos))
             if kind == "P":
                 pos = pos + rot[:, k, :] * value
             else:
@@ -522,6 +532,48 @@ class Kinematics:
                 rot[:, i1, :] = new1
                 rot[:, i2, :] = new2
         return rot, pos
+
+    def pose_jacobians(self, q: np.ndarray, binding: Binding, frame: str = "tool_tip"
+                       ) -> tuple[np.ndarray, np.ndarray]:
+        """Poses (N, 4, 4) of ``frame`` in the workpiece frame and their axis Jacobians
+        (N, 6, n_axes), for axis values (N, n_axes): `poses` and `axis_jacobian` at once.
+
+        Each varying joint's column is the screw of its axis: along the axis for a slide,
+        axis x (frame origin - axis origin) and the axis for a rotation; a joint on the
+        workpiece's branch moves the frame by minus that. An axis sums the columns of its own
+        joint and of its component errors' joints, those times the error's slope.
+        """
+        n, n_axes = q.shape[0], len(self.axes)
+        tool_joints: list = []
+        wp_joints: list = []
+        rt, pt = self._run(self._plan(frame, binding), q, tool_joints)
+        rw, pw = self._run(self._plan("workpiece", binding), q, wp_joints)
+        poses = np.zeros((n, 4, 4))
+        poses[:, 3, 3] = 1.0
+        poses[:, :3, :3] = np.einsum("kin,kjn->nij", rw, rt)
+        poses[:, :3, 3] = np.einsum("kin,kn->ni", rw, pt - pw)
+        jac = np.zeros((6, n_axes, n))
+        for joints, side in ((tool_joints, 1.0), (wp_joints, -1.0)):
+            for kind, source, axis, origin in joints:
+                if kind == "P":
+                    linear, angular = axis, None
+                else:
+                    linear, angular = np.cross(axis, pt - origin, axis=0), axis
+                if source[0] == "axis":
+                    _, i, _, sign = source
+                    factor = side * sign
+                else:
+                    _, var, sign = source
+                    i = var.axis
+                    factor = (side * sign * var.sign) * _slope(var.component, q[:, i])
+                jac[:3, i] += linear * factor
+                if angular is not None:
+                    jac[3:, i] += angular * factor
+        # world axes -> workpiece axes
+        out = np.empty((n, 6, n_axes))
+        out[:, :3] = np.einsum("kin,kan->nia", rw, jac[:3])
+        out[:, 3:] = np.einsum("kin,kan->nia", rw, jac[3:])
+        return poses, out
 
     def poses(self, q: np.ndarray, binding: Binding, frame: str = "tool_tip") -> np.ndarray:
         """Poses of ``frame`` in the workpiece frame, (N, 4, 4), for axis values (N, n_axes)."""

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["rot_x", "rot_y", "rot_z", "rotation_xyz"]
+__all__ = ["rot_x", "rot_y", "rot_z", "rotation_log", "rotation_xyz"]
 
 
 def _rot(angle, i: int, j: int) -> np.ndarray:
@@ -45,3 +45,32 @@ def rot_z(angle) -> np.ndarray:
 def rotation_xyz(alpha, beta, gamma) -> np.ndarray:
     """``Rx(alpha) Ry(beta) Rz(gamma)`` (rad), shape (3, 3) or (..., 3, 3)."""
     return rot_x(alpha) @ rot_y(beta) @ rot_z(gamma)
+
+
+#: Past this angle (rad) a rotation's axis is taken from Pinocchio's log3, which handles the
+#: half turn, instead of from the skew part of the matrix, whose size sin(angle) vanishes.
+_NEAR_HALF_TURN = np.pi - 1e-2
+
+
+def rotation_log(r) -> np.ndarray:
+    """Rotation vectors (axis times angle, rad) of rotation matrices: (3, 3) -> (3,), or
+    (..., 3, 3) -> (..., 3); Pinocchio's ``log3`` for many at once.
+
+    The angle is ``atan2(sin, cos)`` of the matrix's skew part and trace, exact to round-off
+    down to zero angle, where ``arccos`` of the trace would lose half the digits.
+    """
+    r = np.asarray(r, dtype=np.float64)
+    skew = 0.5 * np.stack([r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0],
+                           r[..., 1, 0] - r[..., 0, 1]], axis=-1)
+    sine = np.linalg.norm(skew, axis=-1)
+    angle = np.arctan2(sine, 0.5 * (np.trace(r, axis1=-2, axis2=-1) - 1.0))
+    factor = np.divide(angle, sine, out=np.ones_like(sine), where=sine > 0.0)
+    out = skew * factor[..., None]
+    wide = angle > _NEAR_HALF_TURN
+    if np.any(wide):
+        import pinocchio as pin
+
+        flat_r, flat_out = r.reshape(-1, 3, 3), out.reshape(-1, 3)
+        for i in np.flatnonzero(wide.reshape(-1)):
+            flat_out[i] = pin.log3(flat_r[i])
+    return out

@@ -290,6 +290,56 @@ def test_axis_jacobian_matches_central_differences():
         np.testing.assert_allclose(jac[:, i], fd, rtol=0, atol=1e-8)
 
 
+@pytest.mark.parametrize("name", MACHINES)
+def test_batched_jacobians_are_pinocchios_one_by_one(name):
+    """The batched screw columns (component errors' slopes included) against Pinocchio's
+    joint Jacobians, pose by pose, and the batched poses against Pinocchio's."""
+    machine = load_machine(name)
+    rng = np.random.default_rng(17)
+    errors = random_errors(machine, rng)
+    qs = random_q(machine, rng, 12)
+    kin, binding = machine.kin, machine.binding(errors)
+    poses, jacs = kin.pose_jacobians(qs, binding)
+    for q, pose, jac in zip(qs, poses, jacs, strict=True):
+        np.testing.assert_allclose(jac, kin.axis_jacobian(q, binding), rtol=0, atol=1e-14)
+        np.testing.assert_allclose(pose, kin.frame_pose(kin.full_q(q, binding), "tool_tip"),
+                                   rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("angle", [0.0, 1e-12, 1e-7, 0.3, 2.0, math.pi - 1e-6, math.pi])
+def test_rotation_log_is_pinocchios_log3(angle):
+    from machinesim.rotations import rotation_log
+
+    rng = np.random.default_rng(3)
+    axes = rng.normal(size=(20, 3))
+    vectors = axes / np.linalg.norm(axes, axis=1)[:, None] * angle
+    rotations = np.array([pin.exp3(v) for v in vectors])
+    logs = rotation_log(rotations)
+    expected = np.array([pin.log3(r) for r in rotations])
+    np.testing.assert_allclose(logs, expected, rtol=0, atol=1e-15 * max(angle, 1.0))
+    if angle < 3.0:  # at a half turn +axis and -axis are one rotation
+        np.testing.assert_allclose(logs, vectors, rtol=0, atol=1e-15 * max(angle, 1.0))
+    np.testing.assert_allclose(rotation_log(rotations[0]), logs[0], rtol=0, atol=0)
+
+
+@pytest.mark.parametrize("name", MACHINES)
+def test_axis_values_in_one_batch_are_the_poses_solved_one_by_one(name):
+    """Independent starts are solved all at once; each pose alone from its own start (the
+    Pinocchio route) lands on the same axis values."""
+    machine = load_machine(name)
+    rng = np.random.default_rng(19)
+    errors = random_errors(machine, rng, tool_rotation=1e-4, workpiece_rotation=1e-4)
+    qs = random_q(machine, rng, 6, fraction=0.5)
+    poses = machine.tool_pose(qs, errors)
+    start = qs + rng.normal(0, 0.01, qs.shape)
+    batch = machine.axis_values(poses, errors, q_start=start)
+    for n in range(len(qs)):
+        one = machine.axis_values(poses[n], errors, q_start=start[n])
+        np.testing.assert_allclose(batch.q[n], one.q, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(batch.position_residual[n], one.position_residual,
+                                   rtol=0, atol=1e-15)
+
+
 def test_jacobian_of_a_linear_setting_parameter_is_exact():
     """The tool offset in tool_mount axes moves the edge by R_mount * d: checks columns."""
     machine = load_machine("robonano_ui")
