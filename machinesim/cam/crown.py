@@ -336,14 +336,14 @@ def _wall_r(k: int, v: np.ndarray, half: float) -> np.ndarray:
 def _groups(c: float, starts: np.ndarray, ends: np.ndarray) -> list[PassGroup]:
     """Rows (in order) split into runs whose starts and ends each move by a constant step."""
     groups, i, n = [], 0, len(starts)
+    steps, end_steps = np.diff(starts, axis=0), np.diff(ends, axis=0)
     while i < n:
         j = i + 1
         if j < n:
-            step, end_step = starts[j] - starts[i], ends[j] - ends[i]
-            while (j + 1 < n and np.allclose(starts[j + 1] - starts[j], step, rtol=0.0,
-                                             atol=1e-12)
-                   and np.allclose(ends[j + 1] - ends[j], end_step, rtol=0.0, atol=1e-12)):
-                j += 1
+            step, end_step = steps[i], end_steps[i]
+            same = (np.all(np.abs(steps[j:] - step) <= 1e-12, axis=1)
+                    & np.all(np.abs(end_steps[j:] - end_step) <= 1e-12, axis=1))
+            j += len(same) if same.all() else int(np.argmin(same))
         else:
             step = end_step = np.zeros(3)
         count = j - i + 1 if j < n else 1
