@@ -101,7 +101,7 @@ def test_rapids_across_many_grooves_are_judged_alike_by_both_unions(monkeypatch)
     # of them, which cuts the ridges between them (listed), and a rapid 5 um deep back along
     # groove 35's bottom, over what that groove cut (not listed). Each overlaps 70 earlier
     # sweeps: judged by one union per rapid, and by the union of every earlier sweep grown
-    # from rapid to rapid (`RAPID_EARLIER_UNION` 0): the same lines.
+    # from rapid to rapid (each forced by `_unite_alone`): the same lines.
     from machinesim.cutting import program as cutting_program
 
     b = ProgramBuilder(1).rapid(X=0.5 * MM, Y=0.3 * MM, Z=0.1 * MM)
@@ -116,12 +116,12 @@ def test_rapids_across_many_grooves_are_judged_alike_by_both_unions(monkeypatch)
     assert moves[-6].target["Y"] == pytest.approx(1.69 * MM)
     assert moves[-2].target["X"] == pytest.approx(3 * MM)
     lines = {}
-    for limit in (10_000, 0):
-        monkeypatch.setattr(cutting_program, "RAPID_EARLIER_UNION", limit)
+    for alone in (True, False):
+        monkeypatch.setattr(cutting_program, "_unite_alone", lambda n, fresh, alone=alone: alone)
         _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
-        lines[limit] = report.rapids_that_cut
-    assert lines[0] == lines[10_000]
-    assert across in lines[0] and along not in lines[0]
+        lines[alone] = report.rapids_that_cut
+    assert lines[True] == lines[False]
+    assert across in lines[True] and along not in lines[True]
 
 
 def test_the_command_line_cuts_and_writes_part_and_report(tmp_path, capsys):

@@ -38,8 +38,9 @@ from machinesim.workpiece import Part, stock_from_spec
 #: agreement of two float64 kinematic chains, 1000 times below the 1 nm axis resolution.
 JOIN_TOL = 1e-12
 #: A rapid that reaches the stock is checked against the sweeps before it whose boxes overlap
-#: its own; up to this many are united for it alone, more (a rapid across a field of grooves)
-#: are taken from one union of every earlier sweep, grown from rapid to rapid: both exact.
+#: its own; up to this many (or up to as many as growing the union below would take) are
+#: united for it alone, more (a rapid across a field of grooves) are taken from one union of
+#: every earlier sweep, grown from rapid to rapid: both exact.
 RAPID_EARLIER_UNION = 64
 
 
@@ -415,8 +416,9 @@ def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
     the rapid sweeps the engine found reaching the stock (``reached``); each is intersected
     with the stock (inside the ``roi`` windows when given: the part is cut there alone), less
     the sweeps before it (feeds and rapids) whose boxes overlap its own, or, past
-    `RAPID_EARLIER_UNION` of them, less one union of every earlier sweep whose box meets the
-    material's, grown from rapid to rapid: exact, and free for rapids that stay clear.
+    `RAPID_EARLIER_UNION` of them and when fewer sweeps would grow it, less one union of
+    every earlier sweep whose box meets the material's, grown from rapid to rapid: exact,
+    and free for rapids that stay clear.
     """
     candidates = reached[moves.sweep_rapid[reached]]
     if not len(candidates):
@@ -446,7 +448,8 @@ def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
         box_low, box_high = np.array(swept.bounding_box()).reshape(2, 3)
         earlier = np.flatnonzero(np.all(boxes[1][:sweep] >= box_low, axis=1)
                                  & np.all(boxes[0][:sweep] <= box_high, axis=1))
-        if len(earlier) <= RAPID_EARLIER_UNION:
+        fresh = near[(near >= upto) & (near < sweep)]  # what growing the union would take
+        if _unite_alone(len(earlier), len(fresh)):
             solids = _solids(shape, poses, moves, earlier)
             if solids:
                 hit = hit - manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
@@ -455,7 +458,7 @@ def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
             # one union of every sweep before it whose box meets the material's (no other
             # can take away what the rapid met), grown from the last such rapid's, instead
             # of a union per rapid that grows as the square of the sweeps
-            solids = _solids(shape, poses, moves, near[(near >= upto) & (near < sweep)])
+            solids = _solids(shape, poses, moves, fresh)
             if covered is not None:
                 solids.insert(0, covered)
             covered = (manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
@@ -466,6 +469,12 @@ def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
         if hit.volume() > RAPID_CUT_VOLUME_M3:
             found.append(int(moves.sweep_line[sweep]))
     return tuple(dict.fromkeys(found))
+
+
+def _unite_alone(n_earlier: int, n_fresh: int) -> bool:
+    """Whether a rapid is judged against the union of the ``n_earlier`` sweeps overlapping
+    it alone, rather than against the running union, which ``n_fresh`` sweeps would grow."""
+    return n_earlier <= max(RAPID_EARLIER_UNION, n_fresh)
 
 
 def _solids(shape, poses, moves, sweeps) -> list:
