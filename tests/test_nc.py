@@ -405,7 +405,7 @@ def test_write_is_whole_or_nothing(tmp_path, monkeypatch):
     write_program(good, path)
     before = path.read_text()
     too_slow = ProgramBuilder().linear(X=0.0, feed_m_per_s=1e-15).build()
-    with pytest.raises(NCProgramError, match="rounds to F0"):
+    with pytest.raises(NCProgramError, match=r"line 1, key .F.: feed 1e-15 m/s rounds to F0"):
         write_program(too_slow, path)
 
     def failing_replace(src, dst):

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-import math
 import os
 from decimal import Decimal
 
+import numpy as np
+
 from machinesim._io import write_atomic
 from machinesim.exceptions import NCProgramError
+from machinesim.nc.moves import AXES, KIND_DWELL, KIND_RAPID
 from machinesim.nc.parser import MAX_INTEGER_DIGITS
-from machinesim.nc.program import PROGRAM_END, ROTARY_AXES, Move, Program
+from machinesim.nc.program import PROGRAM_END, ROTARY_AXES, Program
 from machinesim.units import M_PER_MM, RAD_PER_DEG
 
 #: Decimals of linear axis words in mm: 1 nm, the resolution of the seeds' machines.
@@ -54,42 +56,54 @@ def format_program(program: Program) -> str:
     if program.number is not None:
         lines.append(f"O{program.number:04d}")
     lines.append(HEADER)
+    # every word's text at once, column by column; None where the move leaves it unset
+    axis_texts = [(axis, _axis_texts(program, column, offset.get(axis, 0.0)))
+                  for column, axis in enumerate(AXES)
+                  if not np.all(np.isnan(program.targets[:, column]))]
+    feed_texts = _feed_texts(program)
+    kinds, dwells = program.kinds.tolist(), program.dwells.tolist()
+    blocks, spindles = program.block_numbers.tolist(), program.spindles.tolist()
+    m_codes = dict(program.m_codes)
     written: dict[str, str] = {}
     mode = feed = spindle = None
-    for move in program.moves:
-        words = [] if move.block_number is None else [f"N{move.block_number}"]
-        if move.kind == "dwell":
-            if move.dwell_s != 0.0 or all(c in PROGRAM_END for c in move.m_codes):
-                words += ["G04", _dwell_word(move.dwell_s)]
+    for i, kind in enumerate(kinds):
+        codes = m_codes.get(i, ())
+        words = [] if blocks[i] < 0 else [f"N{blocks[i]}"]
+        if kind == KIND_DWELL:
+            if dwells[i] != 0.0 or all(c in PROGRAM_END for c in codes):
+                words += ["G04", _dwell_word(dwells[i])]
         else:
-            code = "G00" if move.kind == "rapid" else "G01"
+            code = "G00" if kind == KIND_RAPID else "G01"
             if code != mode:
                 words.append(code)
                 mode = code
             axis_words = []
-            for axis, value in move.target.items():
-                text = _axis_text(axis, value - offset.get(axis, 0.0), program, move)
+            first = None
+            for axis, texts in axis_texts:
+                text = texts[i]
+                if text is None:
+                    continue
+                first = first or axis
                 if written.get(axis) != text:
                     axis_words.append(axis + text)
                     written[axis] = text
             if not axis_words:
                 # A move that changes nothing at this resolution still has to be a block.
-                axis = next(iter(move.target))
-                axis_words.append(axis + written[axis])
+                axis_words.append(first + written[first])
             words += axis_words
-            if move.feed_m_per_s is not None:
-                text = _feed_text(move.feed_m_per_s, program, move)
-                if text != feed:
-                    words.append("F" + text)
-                    feed = text
-        if move.spindle_rpm is not None:
-            text = _spindle_text(move.spindle_rpm)
+            text = feed_texts[i]
+            if text is not None and text != feed:
+                words.append("F" + text)
+                feed = text
+        if spindles[i] == spindles[i]:
+            text = _spindle_text(spindles[i])
             if text != spindle:
                 words.append("S" + text)
                 spindle = text
-        words += [f"M{code:02d}" for code in move.m_codes]
+        words += [f"M{code:02d}" for code in codes]
         lines.append(" ".join(words))
-    if not (program.moves and any(c in PROGRAM_END for c in program.moves[-1].m_codes)):
+    last = program.m_codes.get(len(kinds) - 1, ())
+    if not (kinds and any(c in PROGRAM_END for c in last)):
         lines.append("M30")
     lines.append("%")
     return "\n".join(lines) + "\n"
@@ -113,25 +127,43 @@ def _exact(value: float) -> str:
     return text if "." in text else text + "."
 
 
-def _axis_text(axis: str, value: float, program: Program, move: Move) -> str:
-    if not math.isfinite(value):
-        raise NCProgramError(f"axis {axis} relative to G54 is not finite ({value!r})",
-                             source=program.source, line=move.line, key=axis)
+def _axis_texts(program: Program, column: int, offset: float) -> list[str | None]:
+    """The words' texts of one axis column, relative to G54 (None where unset)."""
+    axis = AXES[column]
+    values = program.targets[:, column]
+    rows = np.flatnonzero(~np.isnan(values))
+    relative = values[rows] - offset
+    bad = ~np.isfinite(relative)
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        raise NCProgramError(f"axis {axis} relative to G54 is not finite ({relative[k]!r})",
+                             source=program.source, line=int(program.lines[rows[k]]), key=axis)
     if axis in ROTARY_AXES:
-        return _fixed(value / RAD_PER_DEG, ROTARY_DECIMALS)
-    return _fixed(value / M_PER_MM, LINEAR_DECIMALS)
+        scaled, decimals = relative / RAD_PER_DEG, ROTARY_DECIMALS
+    else:
+        scaled, decimals = relative / M_PER_MM, LINEAR_DECIMALS
+    texts: list[str | None] = [None] * len(values)
+    for row, value in zip(rows.tolist(), scaled.tolist(), strict=True):
+        texts[row] = _fixed(value, decimals)
+    return texts
 
 
-def _feed_text(feed_m_per_s: float, program: Program, move: Move) -> str:
-    text = _fixed(feed_m_per_s * 60.0 / M_PER_MM, FEED_DECIMALS)
-    if float(text) <= 0.0:
-        raise NCProgramError(
-            f"feed {feed_m_per_s!r} m/s rounds to F0 at {FEED_DECIMALS} decimals in mm/min",
-            source=program.source,
-            line=move.line,
-            key="F",
-        )
-    return text
+def _feed_texts(program: Program) -> list[str | None]:
+    """F texts in mm/min of the moves that set a feed (None elsewhere)."""
+    feeds = program.feeds
+    rows = np.flatnonzero(~np.isnan(feeds))
+    values, which = np.unique(feeds[rows], return_inverse=True)  # a program has few feeds
+    distinct = [_fixed(value * 60.0 / M_PER_MM, FEED_DECIMALS) for value in values.tolist()]
+    for k, text in enumerate(distinct):
+        if float(text) <= 0.0:
+            row = rows[np.argmax(which == k)]
+            raise NCProgramError(
+                f"feed {float(values[k])!r} m/s rounds to F0 at {FEED_DECIMALS} decimals in mm/min",
+                source=program.source, line=int(program.lines[row]), key="F")
+    texts: list[str | None] = [None] * len(feeds)
+    for row, k in zip(rows.tolist(), which.reshape(-1).tolist(), strict=True):
+        texts[row] = distinct[k]
+    return texts
 
 
 def _spindle_text(rpm: float) -> str:
