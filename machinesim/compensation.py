@@ -46,7 +46,8 @@ import numpy as np
 from machinesim import tolerances
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.machines import Machine, load_machine
-from machinesim.nc.program import Program
+from machinesim.nc.moves import AXES
+from machinesim.nc.program import Program, modal_values
 from machinesim.nc.writer import LINEAR_DECIMALS, ROTARY_DECIMALS
 from machinesim.units import M_PER_MM, RAD_PER_DEG
 
@@ -128,18 +129,17 @@ def program_axes(program: Program, machine: Machine | str, *, start=None) -> np.
         When the program moves an axis the machine does not have.
     """
     machine = _machine(machine)
-    index = {a: i for i, a in enumerate(machine.axes)}
-    q = start_axes(machine, start)
-    rows = np.empty((len(program.moves), len(q)))
-    for n, move in enumerate(program.moves):
-        for letter, value in move.target.items():
-            if letter not in index:
-                raise NCProgramError(
-                    f"axis {letter} is not on {machine.name} (axes {''.join(machine.axes)})",
-                    source=program.source, line=move.line, key=letter)
-            q[index[letter]] = value
-        rows[n] = q
-    return rows
+    targets = program.targets
+    foreign = [k for k, letter in enumerate(AXES) if letter not in machine.axes]
+    named = ~np.isnan(targets[:, foreign])
+    if np.any(named):
+        row = int(np.argmax(named.any(axis=1)))
+        letter = AXES[foreign[int(np.argmax(named[row]))]]
+        raise NCProgramError(
+            f"axis {letter} is not on {machine.name} (axes {''.join(machine.axes)})",
+            source=program.source, line=int(program.lines[row]), key=letter)
+    columns = [AXES.index(letter) for letter in machine.axes]
+    return modal_values(targets[:, columns], start=start_axes(machine, start))
 
 
 def to_resolution(q, machine: Machine | str, work_offsets=None) -> np.ndarray:

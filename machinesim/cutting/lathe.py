@@ -38,6 +38,7 @@ import numpy as np
 from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.exceptions import InputError
 from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
+from machinesim.nc.program import modal_values
 from machinesim.tools import RoundNoseTool, tool_from_spec, with_nose_radius_error
 
 __all__ = ["TurnedPart", "TurningReport", "followed", "turn", "turning_runs"]
@@ -214,10 +215,7 @@ def _axis_values(program, machine, source: str):
         raise InputError(f"{source}: the program moves {', '.join(extra)}, which "
                          f"{machine.name} does not have (axes {', '.join(machine.axes)})",
                          key="program")
-    q = targets[:, columns].copy()
-    for k in range(1, q.shape[0]):  # modal: an axis not named keeps its value
-        unset = np.isnan(q[k])
-        q[k, unset] = q[k - 1, unset]
+    q = modal_values(targets[:, columns])
     known = np.flatnonzero(~np.isnan(q).any(axis=1))
     if known.size == 0:
         raise InputError(f"{source}: no move sets every axis of {machine.name} "

@@ -88,6 +88,22 @@ class Moves(Sequence):
         return f"Moves({len(self)} moves of {self._program.source!r})"
 
 
+def modal_values(values: np.ndarray, start=None) -> np.ndarray:
+    """Axis values block by block, modal: a NaN (an axis the block does not name) takes the
+    value before it, the first block's from ``start`` (one value per column; default NaN,
+    which stays until the axis is named).
+
+    ``values`` (N, k) are target columns, such as ``Program.targets[:, columns]``."""
+    values = np.asarray(values, dtype=np.float64)
+    if start is not None:
+        values = np.vstack([np.asarray(start, dtype=np.float64)[None], values])
+    named = ~np.isnan(values)
+    last = np.where(named, np.arange(len(values))[:, None], 0)
+    np.maximum.accumulate(last, axis=0, out=last)
+    held = values[last, np.arange(values.shape[1])]
+    return held if start is None else held[1:]
+
+
 def _readonly(array: np.ndarray) -> np.ndarray:
     array.flags.writeable = False
     return array
