@@ -83,17 +83,24 @@ def nose_radius_error(design: Design, rho, theta, d_radius: float, *, form: str 
     interpolation along the radial profile at theta (per point, 1-D Newton on rho').
     """
     rho, theta = _check(design, rho, theta, form)
-    slope = radial_slope(design, rho, theta)
+    c, s = np.cos(theta), np.sin(theta)  # once: the Newton steps below only move rho
+
+    def slope_at(r):
+        gx, gy = design.slope(r * c, r * s)
+        return gx * c + gy * s
+
+    slope = slope_at(rho)
     if form == "paper":
         return -d_radius * (np.sqrt(1.0 + slope * slope) - 1.0)
     source = rho.copy()
     for _ in range(8):  # solve rho' + dR sin phi(rho') = rho
-        tan = radial_slope(design, source, theta)
+        tan = slope_at(source)
         sin = tan / np.sqrt(1.0 + tan * tan)
         source = source - (source + d_radius * sin - rho)
-    tan = radial_slope(design, source, theta)
+    tan = slope_at(source)
     cos = 1.0 / np.sqrt(1.0 + tan * tan)
-    return _z(design, source, theta) - d_radius * cos + d_radius - _z(design, rho, theta)
+    return (design(source * c, source * s) - d_radius * cos + d_radius
+            - design(rho * c, rho * s))
 
 
 __all__ = ["alignment_error_x", "alignment_error_y", "nose_radius_error", "radial_slope"]
