@@ -52,17 +52,16 @@ def chord_deviation(machine, errors, points, q: np.ndarray, dense: int = DENSE) 
     (axis values linear between the segment's samples), from the line of the chord between
     the sub-step's ends: the path's geometric deviation from the straight sweep."""
     f = np.linspace(0.0, 1.0, dense + 1)
-    worst = 0.0
-    for a, b in zip(q[:-1], q[1:], strict=True):
-        poses = machine.tool_pose(a + f[:, None] * (b - a), errors)
-        p = poses[:, :3, :3] @ points.T + poses[:, :3, 3:4]  # (dense + 1, 3, k)
-        r = p - p[0]
-        chord = r[-1]
-        length = np.linalg.norm(chord, axis=0)
-        u = np.divide(chord, length, out=np.zeros_like(chord), where=length > 0)
-        off = r - np.sum(r * u, axis=1, keepdims=True) * u
-        worst = max(worst, float(np.max(np.linalg.norm(off, axis=1))))
-    return worst
+    a, b = q[:-1], q[1:]
+    samples = a[:, None, :] + f[None, :, None] * (b - a)[:, None, :]  # (steps, dense + 1, n)
+    poses = machine.tool_pose(samples.reshape(-1, q.shape[1]), errors)
+    p = (poses[:, :3, :3] @ points.T + poses[:, :3, 3:4]).reshape(len(a), dense + 1, 3, -1)
+    r = p - p[:, :1]
+    chord = r[:, -1:]  # (steps, 1, 3, k)
+    length = np.linalg.norm(chord, axis=2, keepdims=True)
+    u = np.divide(chord, length, out=np.zeros_like(chord), where=length > 0)
+    off = r - np.sum(r * u, axis=2, keepdims=True) * u
+    return float(np.max(np.linalg.norm(off, axis=2)))
 
 
 def assert_same(new: Trajectory, old, *, check=None) -> None:
