@@ -4,7 +4,7 @@ import manifold3d
 import numpy as np
 import pytest
 
-from machinesim.cutting.sheets import MOST_REMOVED, find_sheets, remove_sheets
+from machinesim.cutting.sheets import find_sheets, remove_sheets
 from machinesim.metrology import Microscope
 from machinesim.tolerances import SHEET_M
 from machinesim.workpiece import Part
@@ -96,17 +96,26 @@ def test_an_ordinary_solid_has_no_sheets_and_comes_back_as_it_is():
     assert same is solid and report.count == 0 and report.thickness_max == 0.0
 
 
-def test_more_sheets_than_the_engine_removes_are_counted_and_left():
-    # 20 free plates 0.26 pm thick, two overlapping pairs each: 40 sheets, more than the 32
-    # the engine cuts away, so the part comes back as it is and the report says so
+def test_forty_sheets_go_in_twenty_patches_and_more_patches_than_the_limit_are_left(
+        monkeypatch):
+    # 20 free plates 0.26 pm thick, two overlapping pairs each: 40 sheets, one patch of
+    # faces per plate; every plate goes (its volume, 20 x 1 mm^2 x 0.26 pm), and with a
+    # limit of 19 patches the part comes back as it is and the report says so
+    from machinesim.cutting import sheets
+
     plates = [box((3 * MM * k, 0.0, 0.0), (3 * MM * k + 1 * MM, 1 * MM, 2.6e-13))
               for k in range(20)]
     v, t = joined(*plates)
     solid = manifold3d.Manifold(manifold3d.Mesh64(
         vert_properties=np.ascontiguousarray(v), tri_verts=np.ascontiguousarray(t, np.uint64)))
-    assert len(find_sheets(v, t)[0]) == 40 > MOST_REMOVED
+    assert len(find_sheets(v, t)[0]) == 40
+    trimmed, report = remove_sheets(solid)
+    assert report.count == 40 and report.removed and report.left == 0
+    assert trimmed.is_empty() or trimmed.volume() == pytest.approx(0.0, abs=1e-30)
+    assert report.volume == pytest.approx(20 * MM * MM * 2.6e-13, rel=1e-6)
+    monkeypatch.setattr(sheets, "MOST_REMOVED", 19)
     same, report = remove_sheets(solid)
-    assert same is solid and report.count == 40 and not report.removed
+    assert same is solid and report.count == report.left == 40 and not report.removed
     assert report.area == pytest.approx(20 * MM * MM, rel=1e-12)
 
 

@@ -85,8 +85,9 @@ class CutReport:
         seen with their first lines, and the ``tool_table`` path; empty when unknown.
     thin_sheets : int
         Sheets of stock under a picometre thick that round-off left where sweeps' faces
-        coincide, found on the finished part and cut away (`machinesim.cutting.sheets`; more
-        than `sheets.MOST_REMOVED` are left, and a note says so).
+        coincide, found on the finished part and cut away (`machinesim.cutting.sheets`;
+        when their faces make more than `sheets.MOST_REMOVED` patches they are left, and a
+        note says so).
     tools : tuple of Mapping
         One entry per run of moves cut by one tool (`Program.tool_changes`): ``tool``
         (its number, None for the cut's own tool before any change), ``line`` (where it
