@@ -1,8 +1,11 @@
-"""Poses per second of Machine.tool_pose, with every error family active.
+"""Poses per second of Machine.tool_pose, and axis values solved per second by
+Machine.axis_values, with every error family active.
 
 Run: ``.venv/bin/python benchmarks/kinematics.py`` (prints medians of several runs).
 Compares, in the same run, the batched evaluator with a Python loop over Pinocchio's
-forwardKinematics on the same error-augmented model.
+forwardKinematics on the same error-augmented model; and the inverse kinematics of a
+program's poses (each started from its nominal axis values, as model-based compensation
+does) solved in one batch against the same poses solved one at a time.
 """
 
 from __future__ import annotations
@@ -46,6 +49,32 @@ def main() -> None:
     print(f"  loop over Pinocchio FK:         {loop * 1e3:8.1f} ms  "
           f"{N / loop / 1e6:6.2f} M poses/s  (median of 3 x {n_loop}, scaled)")
     print(f"  speed-up: {loop / batched:.1f}x")
+    inverse(machine, rng)
+
+
+def inverse(machine, rng, n: int = 5_000, n_loop: int = 300) -> None:
+    """Model-based compensation's solve: the nominal poses of ``n`` axis vectors on the
+    machine with errors of a well-set machine, each started from its nominal values."""
+    errors = random_errors(machine, rng, tool_offset=20e-6, tool_rotation=1e-4,
+                           workpiece_delta=5e-6, workpiece_rotation=1e-4)
+    q = random_axis_values(machine, rng, n, fraction=0.5)
+    target = machine.tool_pose(q)
+    batch, loop = [], []
+    for _ in range(3):
+        start = time.perf_counter()
+        machine.axis_values(target, errors, q_start=q, check_limits=False)
+        batch.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        for k in range(n_loop):
+            machine.axis_values(target[k], errors, q_start=q[k], check_limits=False)
+        loop.append((time.perf_counter() - start) / n_loop * n)
+    batched, looped = statistics.median(batch), statistics.median(loop)
+    print(f"robonano_ui, {n} poses solved for axis values (errors of a set-up machine)")
+    print(f"  one batch:                      {batched * 1e3:8.1f} ms  "
+          f"{n / batched / 1e3:6.1f} k poses/s  (median of 3)")
+    print(f"  one pose at a time (Pinocchio): {looped * 1e3:8.1f} ms  "
+          f"{n / looped / 1e3:6.1f} k poses/s  (median of 3 x {n_loop}, scaled)")
+    print(f"  speed-up: {looped / batched:.1f}x")
 
 
 if __name__ == "__main__":
