@@ -38,6 +38,9 @@ from machinesim.rotations import rotation_log
 from machinesim.tolerances import IK_SINGULAR
 from machinesim.urdf import AXIS_ORDER, REQUIRED_FRAMES, check_tree, read_axes, read_urdf
 
+#: Poses solved together by `Machine.axis_values` (its working arrays, ~1 kB a pose, stay
+#: small for programs of a million blocks).
+IK_BATCH = 8192
 #: The tool geometry family's parameter (the nose radius error, m): accepted by every machine,
 #: moves no frame (a zero column in `Machine.error_jacobian`).
 NOSE_RADIUS_PARAM = "tool_geometry.nose_radius"
@@ -432,7 +435,9 @@ class Machine:
                 qs[n] = prev = self._solve(t[None], binding, prev, max_iterations)
         else:  # independent poses: all at once
             rows = np.minimum(np.arange(len(targets)), len(starts) - 1)
-            qs = self._solve(targets, binding, starts[rows], max_iterations)
+            qs = np.concatenate([
+                self._solve(targets[k:k + IK_BATCH], binding, starts[rows[k:k + IK_BATCH]],
+                            max_iterations) for k in range(0, len(targets), IK_BATCH)])
         pres, rres = self._residuals(targets, binding, qs)
         miss = np.linalg.norm(pres, axis=1)
         if np.any(miss > tolerances.UNREACHABLE_M):
