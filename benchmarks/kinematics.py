@@ -57,7 +57,9 @@ def inverse(machine, rng, n: int = 5_000, n_loop: int = 300) -> None:
     machine with errors of a well-set machine, each started from its nominal values."""
     errors = random_errors(machine, rng, tool_offset=20e-6, tool_rotation=1e-4,
                            workpiece_delta=5e-6, workpiece_rotation=1e-4)
-    q = random_axis_values(machine, rng, n, fraction=0.5)
+    q = random_axis_values(machine, rng, 2 * n, fraction=0.5)
+    # away from B = 0, where A and C line up and the tool's roll has no unique solution
+    q = q[np.abs(q[:, machine.axes.index("B")]) > 0.05][:n]
     target = machine.tool_pose(q)
     batch, loop = [], []
     for _ in range(3):
