@@ -148,3 +148,20 @@ def test_a_program_cut_looks_for_sheets_once_on_the_finished_part_and_reports_th
     assert len(searched) == 1 and searched[0] is part
     assert report.thin_sheets == 40 and "40 sheets left (a note)" in report.notes
     assert report.to_dict()["thin_sheets"] == 40
+
+
+@pytest.mark.parametrize(("fold", "patches"), [(0.3, 2), (1e-8, 1)])
+def test_faces_join_one_patch_only_on_one_plane(fold, patches):
+    # a strip of four triangles folded along x = 1 mm by ``fold`` rad: two planes, two
+    # patches (each prism is flat); folded by less than PATCH_NORMAL_TOL, one
+    from machinesim.cutting.sheets import PATCH_NORMAL_TOL, _patches
+
+    assert fold > 10 * PATCH_NORMAL_TOL or fold < PATCH_NORMAL_TOL / 10
+    x2 = 1 * MM + 1 * MM * np.cos(fold)
+    z2 = 1 * MM * np.sin(fold)
+    v = np.array([[0, 0, 0], [1 * MM, 0, 0], [1 * MM, 1 * MM, 0], [0, 1 * MM, 0],
+                  [x2, 0, z2], [x2, 1 * MM, z2]], dtype=float)
+    t = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
+    found = _patches(v, t, np.arange(4))
+    assert len(found) == patches
+    assert sorted(np.concatenate(found).tolist()) == [0, 1, 2, 3]
