@@ -31,9 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import control
 import numpy as np
-from scipy.signal import lfilter
 
 from machinesim.exceptions import InputError, MachineSimError
 
@@ -94,6 +92,8 @@ class AxisServo:
         object.__setattr__(self, "_loops", self._build())
 
     def _build(self):
+        import control  # here: python-control and scipy.signal take 1.6 s to import
+
         ts = self.sample_time_s
         s = control.tf("s")
         plant = control.sample_system(1.0 / (self.mass * s**2 + self.damping * s), ts, "zoh")
@@ -141,6 +141,9 @@ def _simulate(system, u: np.ndarray) -> np.ndarray:
     """Response of the discrete SISO ``system`` from rest to ``u`` (one value per period): the
     same as ``control.forced_response(system, U=u)``, filtered by ``scipy.signal.lfilter``
     from the transfer function's coefficients (compiled: 10^6-10^7 samples in seconds)."""
+    import control
+    from scipy.signal import lfilter
+
     num, den = control.tfdata(system)
     num, den = np.asarray(num[0][0], dtype=np.float64), np.asarray(den[0][0], dtype=np.float64)
     # descending powers of z -> powers of z^-1: align the numerator's end with the denominator's

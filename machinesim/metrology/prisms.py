@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.signal import find_peaks
 
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import frozen, profile_arrays
@@ -58,6 +57,8 @@ def fit_apexes(s, z, count: int, *, prominence: float, flank_band=(0.1, 0.9)):
     land = np.r_[0:below[0], below[-1] + 1:s.size]
     ar, br = np.polyfit(s[land], z[land], 1)[::-1]
     residual = z - (ar + br * s)
+    from scipy.signal import find_peaks  # here: scipy.signal costs 2 s to import
+
     apexes = find_peaks(-residual, prominence=prominence)[0]
     if apexes.size != count:
         raise InputError(f"Expected {count} groove apexes in the profile, found {apexes.size} "
