@@ -283,6 +283,13 @@ def _cos_sin(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.cos(x), np.sin(x)
 
 
+def _relative_pose(rw, pw, rt, pt, out: np.ndarray) -> None:
+    """Write into ``out`` (N, 4, 4) the poses of a frame (rotations (3, 3, N), positions
+    (3, N) in the world: ``rt``, ``pt``) in the workpiece frame (``rw``, ``pw``)."""
+    out[:, :3, :3] = np.einsum("kin,kjn->nij", rw, rt)
+    out[:, :3, 3] = np.einsum("kin,kn->ni", rw, pt - pw)
+
+
 def _slope(component, x):
     """d value / d position of a component error at ``x`` (a position or an array of them;
     right slope at a table breakpoint; zero beyond the ends, where the table is held
@@ -550,8 +557,7 @@ class Kinematics:
         rw, pw = self._run(self._plan("workpiece", binding), q, wp_joints)
         poses = np.zeros((n, 4, 4))
         poses[:, 3, 3] = 1.0
-        poses[:, :3, :3] = np.einsum("kin,kjn->nij", rw, rt)
-        poses[:, :3, 3] = np.einsum("kin,kn->ni", rw, pt - pw)
+        _relative_pose(rw, pw, rt, pt, poses)
         jac = np.zeros((6, n_axes, n))
         for joints, side in ((tool_joints, 1.0), (wp_joints, -1.0)):
             for kind, source, axis, origin in joints:
@@ -586,6 +592,5 @@ class Kinematics:
             block = q[start:start + _BLOCK]
             rt, pt = self._run(tool_ops, block)
             rw, pw = self._run(wp_ops, block)
-            out[start:start + _BLOCK, :3, :3] = np.einsum("kin,kjn->nij", rw, rt)
-            out[start:start + _BLOCK, :3, 3] = np.einsum("kin,kn->ni", rw, pt - pw)
+            _relative_pose(rw, pw, rt, pt, out[start:start + _BLOCK])
         return out
