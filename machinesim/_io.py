@@ -13,12 +13,16 @@ import math
 import os
 import secrets
 import shutil
+import signal
 import tempfile
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from machinesim.exceptions import FileError, InputError, MachineSimError
 
+#: Set by `ctrl_c_remembered`'s handler: a Ctrl-C arrived, even if a library swallowed it.
+_ctrl_c_seen = False
 #: Longest file name component (bytes) where the file system does not say (POSIX NAME_MAX).
 _NAME_MAX = 255
 #: Characters of the final name kept in a temporary file's name, so that it stays short.
@@ -143,6 +147,36 @@ def _write_error(path: Path, exc: OSError) -> FileError:
     return FileError(f"cannot write: {_reason(exc)}", source=str(path))
 
 
+def _on_ctrl_c(signum, frame):
+    global _ctrl_c_seen
+    _ctrl_c_seen = True
+    raise KeyboardInterrupt
+
+
+@contextmanager
+def ctrl_c_remembered() -> Iterator[None]:
+    """Within the block, a Ctrl-C is remembered as well as raised, and nothing is written after it.
+
+    Some libraries import their optional parts inside ``except BaseException`` (trimesh,
+    for one), so a Ctrl-C that lands there is swallowed and the run would go on to write its
+    files and exit 0. With this handler `write_together` refuses to rename anything into
+    place once a Ctrl-C was seen, whoever caught it. Installed only where Python's own
+    handler is (a background job started with SIGINT ignored keeps ignoring it); the old
+    handler is put back on leaving.
+    """
+    global _ctrl_c_seen
+    previous = signal.getsignal(signal.SIGINT)
+    ours = previous is signal.default_int_handler
+    if ours:
+        signal.signal(signal.SIGINT, _on_ctrl_c)
+    try:
+        yield
+    finally:
+        if ours:
+            signal.signal(signal.SIGINT, previous)
+        _ctrl_c_seen = False
+
+
 def _raw(data: bytes | str, encoding: str) -> bytes:
     return data.encode(encoding) if isinstance(data, str) else bytes(data)
 
@@ -193,6 +227,8 @@ def write_together(items: Iterable[tuple[object, bytes | str]], encoding: str = 
                 staged.append((path, _stage(path, raw)))
             except OSError as exc:
                 raise _write_error(path, exc) from None
+        if _ctrl_c_seen:
+            raise KeyboardInterrupt
         _rename_all(staged)
     finally:
         for _, temp in staged:

@@ -21,7 +21,13 @@ import os
 import sys
 from pathlib import Path
 
-from machinesim._io import check_readable_file, check_writable, json_text, write_together
+from machinesim._io import (
+    check_readable_file,
+    check_writable,
+    ctrl_c_remembered,
+    json_text,
+    write_together,
+)
 from machinesim.exceptions import InputError, MachineSimError
 
 EXAMPLES = """examples:
@@ -106,18 +112,8 @@ def main(argv: list[str] | None = None) -> int:
     Usage errors and ``--help`` leave through argparse's ``SystemExit`` (status 2 and 0).
     """
     try:
-        args = _parser().parse_args(argv)
-        if args.command == "machines":
-            return _machines()
-        if args.command == "view":
-            from machinesim.viewer.cli import run_view
-
-            return run_view(args)
-        if args.command == "campaign":
-            from machinesim.campaign.cli import run_campaign
-
-            return run_campaign(args)
-        return _cut(args)
+        with ctrl_c_remembered():
+            return _command(_parser().parse_args(argv))
     except MachineSimError as exc:
         return _fail(f"error: {exc}", EXIT_INPUT)
     except KeyboardInterrupt:
@@ -138,6 +134,20 @@ def main(argv: list[str] | None = None) -> int:
             raise
         return _fail(f"internal error: {type(exc).__name__}: {exc} (a bug in machinesim: "
                      "please report it; MACHINESIM_TRACEBACK=1 shows where)", 1)
+
+
+def _command(args: argparse.Namespace) -> int:
+    if args.command == "machines":
+        return _machines()
+    if args.command == "view":
+        from machinesim.viewer.cli import run_view
+
+        return run_view(args)
+    if args.command == "campaign":
+        from machinesim.campaign.cli import run_campaign
+
+        return run_campaign(args)
+    return _cut(args)
 
 
 def _fail(message: str, status: int) -> int:

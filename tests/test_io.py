@@ -7,7 +7,9 @@ import errno
 import json
 import math
 import os
+import signal
 import struct
+import time
 from pathlib import Path
 
 import numpy as np
@@ -165,6 +167,27 @@ def test_an_interrupt_between_the_renames_leaves_neither_file(tmp_path, monkeypa
     with pytest.raises(KeyboardInterrupt):
         _io.write_together([(part, "part"), (report, "report")])
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_ctrl_c_a_library_swallowed_still_stops_the_write(tmp_path):
+    """A real SIGINT caught by ``except BaseException`` (as trimesh's optional imports do):
+    the handler remembers it, nothing is written, and leaving puts Python's handler back."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with _io.ctrl_c_remembered():
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(1.0)  # the handler raises here, at the latest
+            except BaseException:  # noqa: BLE001 - the library that swallows it
+                pass
+            with pytest.raises(KeyboardInterrupt):
+                _io.write_together([(tmp_path / "part.ply", "part")])
+        assert signal.signal(signal.SIGINT, before) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert list(tmp_path.iterdir()) == []
+    _io.write_together([(tmp_path / "part.ply", "part")])  # outside the block: written
+    assert (tmp_path / "part.ply").read_text() == "part"
 
 
 def test_the_same_file_twice_is_refused_before_writing(tmp_path):

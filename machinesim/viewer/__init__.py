@@ -11,13 +11,32 @@ and converted to single precision for display.
 
 from __future__ import annotations
 
-from machinesim.viewer.browser import Browser, find_chromium, screenshot
-from machinesim.viewer.live import LiveSession, serve
-from machinesim.viewer.machine import cut_by_block, machine_scene
-from machinesim.viewer.maps import Legend, SurfaceMap, legend_for, surface_map
-from machinesim.viewer.meshes import decimate, read_ply
-from machinesim.viewer.scene import Scene, write_html
-from machinesim.viewer.views import part_scene, report_scene
+import importlib
+
+#: Names imported on first use (PEP 562), so that the command line's parser (which imports
+#: ``machinesim.viewer.cli``) does not load meshcat, trimesh and Pinocchio before it parses.
+_LAZY = {
+    "Browser": "browser", "find_chromium": "browser", "screenshot": "browser",
+    "LiveSession": "live", "serve": "live",
+    "cut_by_block": "machine", "machine_scene": "machine",
+    "Legend": "maps", "SurfaceMap": "maps", "legend_for": "maps", "surface_map": "maps",
+    "decimate": "meshes", "read_ply": "meshes",
+    "Scene": "scene", "write_html": "scene",
+    "part_scene": "views", "report_scene": "views",
+}
+
+
+def __getattr__(name: str):
+    if name not in _LAZY:
+        raise AttributeError(f"module 'machinesim.viewer' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"machinesim.viewer.{_LAZY[name]}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "Browser",
