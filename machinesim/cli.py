@@ -280,6 +280,10 @@ def _cut(args) -> int:
         print(f"warning: holder touched the part at line {line}", file=sys.stderr)
     for line in report.rapids_that_cut:
         print(f"warning: rapid cut the part at line {line}", file=sys.stderr)
+    for line in report.sideways_lines:
+        print(f"warning: tool dragged sideways at line {line} (a non-rotational tool cuts "
+              "along its own X only; the part there is not what a real tool would leave)",
+              file=sys.stderr)
     for item in report.limit_violations:
         print(f"warning: outside travel: {item}", file=sys.stderr)
     if report.empty_cut:

@@ -396,6 +396,25 @@ def test_each_holder_contact_and_each_rapid_that_cuts_is_one_warning_line(tmp_pa
                         "warning: rapid cut the part at line 9"], err
 
 
+def test_each_feed_that_drags_a_v_tool_sideways_is_one_warning_line(tmp_path, capsys):
+    # line 4 feeds along X (the V tool's own direction: clean), line 5 at 45 deg in XY and
+    # line 6 along Y (both drag the edge sideways); line 2's rapid starts on the block's
+    # corner at z = 0 and grazes it, which is no cut and no warning
+    program = tmp_path / "drag.nc"
+    program.write_text("G90 G21\nG0 X1. Y1. Z0.1\nG1 Z-0.01 F100.\nX3.\nX4. Y2.\nY2.5\n"
+                       "G0 Z0.1\nM30\n")
+    report = tmp_path / "r.json"
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
+                        "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply",
+                        "--report", report], capsys)
+    assert code == 0, err
+    warnings = [line.split(" (")[0] for line in err.splitlines() if line.startswith("warning:")]
+    assert warnings == ["warning: tool dragged sideways at line 5",
+                        "warning: tool dragged sideways at line 6"], err
+    data = json.loads(report.read_text(), parse_constant=no_nan)
+    assert data["sideways_lines"] == [5, 6]
+
+
 def test_the_report_lists_how_the_program_was_read(tmp_path, capsys):
     # the corpus CAM program, its stock far from the tool: the report says which modal
     # states it set (first line of each, found in the text here), the integer rule and the

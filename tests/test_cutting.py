@@ -124,6 +124,22 @@ def test_rapids_across_many_grooves_are_judged_alike_by_both_unions(monkeypatch)
     assert across in lines[True] and along not in lines[True]
 
 
+def test_a_retract_after_turning_c_in_place_is_judged_by_the_last_sweeps():
+    # the V tool 10 um deep at (1, 1) mm while C turns 90 deg: hundreds of sweeps over one
+    # point, each overlapping the retract. The last of them took away all the retract meets
+    # (not listed, and without a union of all of them); a rapid at that depth along X then
+    # runs through stock the turn never reached (listed).
+    b = ProgramBuilder(1).rapid(X=1 * MM, Y=1 * MM, Z=0.1 * MM, C=0.0)
+    b.linear(Z=-10 * UM, feed_mm_per_min=100.0).linear(C=math.pi / 2, feed_mm_per_min=100.0)
+    b.rapid(Z=0.1 * MM).rapid(C=0.0)
+    b.rapid(X=1 * MM, Y=2.5 * MM).rapid(Z=-10 * UM).rapid(X=4 * MM).rapid(Z=0.1 * MM)
+    program = b.build()
+    _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    assert report.sweeps > 100
+    retract, crash = program.moves[3].line, program.moves[7].line
+    assert crash in report.rapids_that_cut and retract not in report.rapids_that_cut
+
+
 def test_the_command_line_cuts_and_writes_part_and_report(tmp_path, capsys):
     program = tmp_path / "grooves.nc"
     write_program(grooves(n=2, pitch=40 * UM), program)

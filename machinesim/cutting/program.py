@@ -37,11 +37,15 @@ from machinesim.workpiece import Part, stock_from_spec
 #: from the next start by an ulp (~1e-17 at 0.1 m); 1e-12 is `tolerances.POSE_M`, the
 #: agreement of two float64 kinematic chains, 1000 times below the 1 nm axis resolution.
 JOIN_TOL = 1e-12
-#: A rapid that reaches the stock is checked against the sweeps before it whose boxes overlap
-#: its own; up to this many (or up to as many as growing the union below would take) are
-#: united for it alone, more (a rapid across a field of grooves) are taken from one union of
-#: every earlier sweep, grown from rapid to rapid: both exact.
+#: A rapid that reaches the stock is checked against the sweeps before it that could have
+#: taken away what it meets (boxes overlap, and past this many, solids meet); up to this many
+#: (or up to as many as growing the union below would take) are united for it alone, more
+#: (a rapid across a field of grooves) are taken from one union of every earlier sweep,
+#: grown from rapid to rapid: both exact.
 RAPID_EARLIER_UNION = 64
+#: The sweeps just before a rapid are taken away from what it meets first, alone: when they
+#: leave nothing (a retract at the end of a cut), no union of the earlier ones is needed.
+RAPID_RECENT_SWEEPS = 8
 
 
 @dataclass(frozen=True)
@@ -66,6 +70,11 @@ class CutReport:
         otherwise `cut` raises `AxisLimitError`).
     sideways_sweeps : int
         Sweeps that drag a non-rotational tool sideways (across its cutting edge).
+    sideways_lines : tuple of int
+        Source lines of the feed moves among those sweeps: a real V or nose tool does not
+        cut cleanly there (it rubs with its flank), so the part there is not what the
+        machine would leave. (A rapid that cuts is listed in ``rapids_that_cut``; one that
+        only grazes the stock's box is harmless.)
     empty_cut : bool
         True when nothing was removed, judged against the volume the sweeps that reach the
         stock could remove (`EngineReport.swept_volume`), not against the stock.
@@ -112,6 +121,7 @@ class CutReport:
     nc: Mapping = field(default_factory=dict, hash=False)
     tools: tuple = field(default=(), hash=False)
     thin_sheets: int = 0
+    sideways_lines: tuple[int, ...] = field(default=())
 
     def to_dict(self) -> dict:
         """JSON-ready dict, every key with its unit."""
@@ -125,6 +135,7 @@ class CutReport:
             "limit_violations": list(self.limit_violations),
             "holder_contact_lines": list(self.holder_contact),
             "sideways_sweeps": self.sideways_sweeps,
+            "sideways_lines": list(self.sideways_lines),
             "thin_sheets": self.thin_sheets,
             "empty_cut": self.empty_cut,
             "engine": self.engine,
@@ -205,7 +216,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     moves = _Moves(trajectory, len(machine.axes))
     limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
     poses = machine.tool_pose(moves.q, errors) if len(moves.q) else np.zeros((0, 4, 4))
-    part, engines, rapids, holder, sections = stock, [], [], set(), []
+    part, engines, rapids, holder, sideways, sections = stock, [], [], set(), set(), []
     for section_tool, length, section, (lo, hi), (number, line) in tools.split(moves):
         section_poses = poses[lo:hi] if length == 0.0 else poses[lo:hi] @ _beyond_tip(length)
         paths = np.split(section_poses, section.breaks) if len(section_poses) else []
@@ -215,6 +226,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         rapids += _rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)
         holder |= {int(section.sweep_line[i]) for i in engine.holder_contact}
+        sideways |= {int(section.sweep_line[i]) for i in engine.sideways
+                     if not section.sweep_rapid[i]}
         engines.append(engine)
         sections.append({"tool": number, "line": line, "length_m": length,
                          "removed_volume_m3": float(engine.removed_volume),
@@ -239,6 +252,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         elapsed_s=time.perf_counter() - began,
         notes=(*trajectory.notes, *([sheet_note] if sheet_note else [])),
         holder_contact=tuple(sorted(holder)),
+        sideways_lines=tuple(sorted(sideways)),
         engine_s=sum(e.elapsed_s for e in engines),
         nc=nc_summary(program),
         tools=tuple(sections),
@@ -416,10 +430,11 @@ def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
     profile by `RAPID_EDGE_HALF_THICKNESS_M` along the tool's X (here only). Candidates are
     the rapid sweeps the engine found reaching the stock (``reached``); each is intersected
     with the stock (inside the ``roi`` windows when given: the part is cut there alone), less
-    the sweeps before it (feeds and rapids) whose boxes overlap its own, or, past
-    `RAPID_EARLIER_UNION` of them and when fewer sweeps would grow it, less one union of
-    every earlier sweep whose box meets the material's, grown from rapid to rapid: exact,
-    and free for rapids that stay clear.
+    the earlier sweeps that reached the stock and could have taken some of it away (`_Earlier`):
+    first the last `RAPID_RECENT_SWEEPS` of them alone (a retract at the end of a cut is then
+    done), then the rest together, or, past `RAPID_EARLIER_UNION` of them and when fewer
+    sweeps would grow it, one union of every earlier sweep whose box meets the material's,
+    grown from rapid to rapid: exact, and free for rapids that stay clear.
     """
     candidates = reached[moves.sweep_rapid[reached]]
     if not len(candidates):
@@ -427,62 +442,92 @@ def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
     from machinesim.cutting.windows import clip_to  # windows builds on this module
 
     shape = _Thick(tool)
-    found = []
-    boxes = None
     material = (stock.manifold if roi is None
                 else clip_to(stock, np.reshape(roi, (-1, 4))).manifold)
-    near = None  # the sweeps whose boxes meet the material's
-    covered, upto = None, 0  # the union of those before ``upto``
+    sweeps = _Earlier(shape, poses, moves, reached, material)
+    found = []
+    covered, upto = None, 0  # the union of the sweeps in ``sweeps.near`` before ``upto``
     for sweep in np.sort(candidates):
-        a = moves.sweep_start[sweep]
-        swept = shape.solid(poses[a], poses[a + 1])
+        swept = sweeps.solid(sweep)
         if swept is None:
             continue
         hit = material ^ swept
         if hit.volume() <= RAPID_CUT_VOLUME_M3:
             continue
-        if boxes is None:
-            boxes = shape.bounds(poses, moves.sweep_start)
-            m_low, m_high = np.array(material.bounding_box()).reshape(2, 3)
-            near = np.flatnonzero(np.all(boxes[1] >= m_low, axis=1)
-                                  & np.all(boxes[0] <= m_high, axis=1))
-        box_low, box_high = np.array(swept.bounding_box()).reshape(2, 3)
-        earlier = np.flatnonzero(np.all(boxes[1][:sweep] >= box_low, axis=1)
-                                 & np.all(boxes[0][:sweep] <= box_high, axis=1))
-        fresh = near[(near >= upto) & (near < sweep)]  # what growing the union would take
+        earlier = sweeps.overlapping(sweep, hit)
+        hit = hit - sweeps.union(earlier[-RAPID_RECENT_SWEEPS:])
+        if hit.volume() <= RAPID_CUT_VOLUME_M3:
+            continue
+        earlier = earlier[:-RAPID_RECENT_SWEEPS]
+        if len(earlier) > RAPID_EARLIER_UNION:
+            earlier = sweeps.meeting(earlier, hit)
+        fresh = sweeps.near[(sweeps.near >= upto) & (sweeps.near < sweep)]
         if _unite_alone(len(earlier), len(fresh)):
-            solids = _solids(shape, poses, moves, earlier)
-            if solids:
-                hit = hit - manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+            hit = hit - sweeps.union(earlier)
         else:
-            # A rapid that overlaps many earlier sweeps (one across a field of grooves):
-            # one union of every sweep before it whose box meets the material's (no other
-            # can take away what the rapid met), grown from the last such rapid's, instead
-            # of a union per rapid that grows as the square of the sweeps
-            solids = _solids(shape, poses, moves, fresh)
-            if covered is not None:
-                solids.insert(0, covered)
-            covered = (manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
-                       if solids else covered)
+            # A rapid that meets many earlier sweeps (one across a field of grooves): one
+            # union of every sweep before it whose box meets the material's (no other can
+            # take away what the rapid met), grown from the last such rapid's, instead of a
+            # union per rapid that grows as the square of the sweeps
+            covered = sweeps.union(fresh, covered)
             upto = sweep
-            if covered is not None:
-                hit = hit - covered
+            hit = hit - covered
         if hit.volume() > RAPID_CUT_VOLUME_M3:
             found.append(int(moves.sweep_line[sweep]))
     return tuple(dict.fromkeys(found))
+
+
+class _Earlier:
+    """The sweeps a rapid is judged against: those that reached the stock, as thickened
+    solids (each built once), found by box and, where many boxes overlap, by meeting."""
+
+    def __init__(self, shape, poses: np.ndarray, moves: _Moves, reached: np.ndarray,
+                 material) -> None:
+        self.shape, self.poses, self.moves = shape, poses, moves
+        self.reached = np.sort(reached)
+        self.low, self.high = shape.bounds(poses, moves.sweep_start[self.reached])
+        m_low, m_high = np.array(material.bounding_box()).reshape(2, 3)
+        #: sweeps (of those reached) whose boxes meet the material's
+        self.near = self.reached[np.all(self.high >= m_low, axis=1)
+                                 & np.all(self.low <= m_high, axis=1)]
+        self._solids: dict[int, object] = {}
+
+    def solid(self, sweep: int):
+        """The thickened tool's solid of ``sweep``, or None when it sweeps no volume."""
+        if sweep not in self._solids:
+            a = self.moves.sweep_start[sweep]
+            self._solids[sweep] = self.shape.solid(self.poses[a], self.poses[a + 1])
+        return self._solids[sweep]
+
+    def overlapping(self, sweep: int, hit) -> np.ndarray:
+        """Reached sweeps before ``sweep`` whose boxes overlap ``hit``'s, in program order."""
+        low, high = np.array(hit.bounding_box()).reshape(2, 3)
+        before = self.reached < sweep
+        inside = (np.all(self.high[before] >= low, axis=1)
+                  & np.all(self.low[before] <= high, axis=1))
+        return self.reached[before][inside]
+
+    def meeting(self, sweeps: np.ndarray, hit) -> np.ndarray:
+        """Those of ``sweeps`` whose solids share volume with ``hit``: a tall tool's box
+        (a V 10 mm high is 20 mm wide at its top) overlaps far more than its tip cuts."""
+        return np.array([k for k in sweeps
+                         if (solid := self.solid(k)) is not None
+                         and (solid ^ hit).volume() > 0.0], dtype=np.int64)
+
+    def union(self, sweeps: np.ndarray, start=None):
+        """The union of ``sweeps``' solids (and ``start``), or an empty solid."""
+        solids = [s for s in (self.solid(k) for k in sweeps) if s is not None]
+        if start is not None:
+            solids.insert(0, start)
+        if not solids:
+            return manifold3d.Manifold()
+        return manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
 
 
 def _unite_alone(n_earlier: int, n_fresh: int) -> bool:
     """Whether a rapid is judged against the union of the ``n_earlier`` sweeps overlapping
     it alone, rather than against the running union, which ``n_fresh`` sweeps would grow."""
     return n_earlier <= max(RAPID_EARLIER_UNION, n_fresh)
-
-
-def _solids(shape, poses, moves, sweeps) -> list:
-    """The thickened tool's solids of ``sweeps`` (those that sweep a volume)."""
-    return [s for s in (shape.solid(poses[moves.sweep_start[k]],
-                                    poses[moves.sweep_start[k] + 1]) for k in sweeps)
-            if s is not None]
 
 
 class _Thick:

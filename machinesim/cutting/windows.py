@@ -115,6 +115,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     removed = swept = engine_s = 0.0
     sweeps = sideways = 0
     holder: set[int] = set()
+    sideways_lines: set[int] = set()
     step_deg = math.degrees(turn_step)
     total = sum(len(s.q) - 1 for segments in groups.values() for s in segments)
     done = 0
@@ -131,6 +132,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         holder.update(int(sweep_line[i]) for i in report.holder_contact)
         sweeps += report.n_sweeps_cut
         sideways += len(report.sideways)
+        sideways_lines.update(int(sweep_line[i]) for i in report.sideways)
         removed += report.removed_volume
         swept += report.swept_volume
         engine_s += report.elapsed_s
@@ -147,4 +149,4 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         notes=(*trajectory.notes, "rapids not cut nor checked against the part (turned groups)",
                *([sheet_note] if sheet_note else [])),
         holder_contact=tuple(sorted(holder)), engine_s=engine_s, nc=nc_summary(program),
-        thin_sheets=sheets.count)
+        thin_sheets=sheets.count, sideways_lines=tuple(sorted(sideways_lines)))
