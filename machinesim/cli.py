@@ -28,7 +28,7 @@ from machinesim._io import (
     json_text,
     write_together,
 )
-from machinesim.exceptions import InputError, MachineSimError
+from machinesim.exceptions import ErrorModelError, InputError, MachineSimError
 
 EXAMPLES = """examples:
   machinesim machines
@@ -256,6 +256,12 @@ def _cut(args) -> int:
         reading["integer_input"] = args.integer_input
     program = read_program(args.program, **reading)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None
+    if errors is not None:
+        try:
+            machine.check_errors(errors)
+        except ErrorModelError as exc:  # name the user's file first, then the machine's
+            raise ErrorModelError(f"{exc.message} (machine {machine.name}, {exc.source})",
+                                  source=str(args.errors), key=exc.key) from None
     options = {"allow_overtravel": True} if args.allow_overtravel else {}
     part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
                        progress=_progress_bar(args.quiet), **options)

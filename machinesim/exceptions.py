@@ -35,6 +35,7 @@ class InputError(MachineSimError, ValueError):
         column: int | None = None,
         key: str | None = None,
     ) -> None:
+        self.message = message
         self.source = source
         self.line = line
         self.column = column

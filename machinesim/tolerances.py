@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 #: Agreement of two float64 kinematic chains on a ~1 m machine: 1e-12 m is ~4500 ulp of 1 m
 #: (ulp 2.2e-16), room for ~100 compositions of 4x4 transforms, yet 1000x below 1 nm.
 POSE_M = 1e-12
@@ -52,6 +54,12 @@ TWIST_M = 1e-11
 #: a Y component above this fraction of the move: 1 urad, i.e. the groove widens by more than
 #: 1 nm per mm of travel, far above float64 round-off of a kinematic chain (~1e-15).
 SIDEWAYS_REL = 1e-6
+#: A feed is reported by line (`CutReport.sideways_lines`, a warning on the command line)
+#: when it drags a non-rotational tool sideways by more than this angle (rad): 1 deg, below
+#: the several degrees of clearance a tool's flanks are ground with (within which its body
+#: stays inside the cut) and far above a machine's angular errors (urad to mrad), which
+#: skew every groove by their own small angle without spoiling it.
+SIDEWAYS_WARN_RAD = math.radians(1.0)
 #: A sweep whose XY travel is below this fraction of its travel (a plunge, a turn in place)
 #: has no XY direction and joins the group of such sweeps.
 PLANAR_TRAVEL_REL = 1e-3

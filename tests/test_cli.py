@@ -165,6 +165,19 @@ def test_a_bad_roi_is_refused_before_cutting(tmp_path, capsys, roi):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_an_error_model_that_does_not_fit_the_machine_names_its_file_first(tmp_path, capsys):
+    # a table of X errors over -1000 .. 1000 mm: grooving_4axis's X travels -250 .. 250 mm
+    errors = tmp_path / "wide.toml"
+    errors.write_text("[component.X]\nposition_mm = [-1000, 0, 1000]\nEXX_um = [0, 1, 0]\n")
+    code, _, err = run(["cut", GROOVES, *CUT, "--errors", errors, "--out",
+                        tmp_path / "p.ply"], capsys)
+    assert code == 2
+    assert err.startswith(f"machinesim: error: {errors}, key 'component.X.EXX': table "
+                          "positions -1000 .. 1000 mm lie outside the travel of axis X, "
+                          "-250 .. 250 mm (machine grooving_4axis, "), err
+    assert len(err.splitlines()) == 1 and list(tmp_path.iterdir()) == [errors]
+
+
 def test_a_machine_with_zero_rapid_rate_is_refused_not_a_nan_report(tmp_path, capsys):
     urdf = tmp_path / "slow.urdf"
     urdf.write_text(GROOVING.read_text().replace('velocity="0.025"', 'velocity="0"', 1))

@@ -140,6 +140,27 @@ def test_a_retract_after_turning_c_in_place_is_judged_by_the_last_sweeps():
     assert crash in report.rapids_that_cut and retract not in report.rapids_that_cut
 
 
+def test_feeds_are_listed_as_sideways_past_one_degree_not_for_a_machines_small_skew():
+    # three feeds 10 um deep, each 2 mm along X with a Y component of tan(angle) times that:
+    # 0.5 deg (a tool's flank clears it) and 2 deg (listed); then a groove along X on a
+    # machine whose X axis is turned 3 urad about Z (EC0X): the engine's geometric count
+    # sees that drag, the lines do not
+    b = ProgramBuilder(1).rapid(Z=0.1 * MM)  # up first: the start is the block's corner
+    for y, angle in ((0.5, 0.5), (1.5, 2.0)):
+        b.rapid(X=1 * MM, Y=y * MM, Z=0.1 * MM).linear(Z=-10 * UM, feed_mm_per_min=100.0)
+        b.linear(X=3 * MM, Y=(y + 2 * math.tan(math.radians(angle))) * MM,
+                 feed_mm_per_min=100.0).rapid(Z=0.1 * MM)
+    program = b.build()
+    _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    assert report.sideways_sweeps == 2
+    assert report.sideways_lines == (program.moves[7].line,)
+    skew = ErrorModel.from_dict({"location": {"X": {"EC0X_urad": 3.0}}})
+    b = ProgramBuilder(1).rapid(Z=0.1 * MM).rapid(X=1 * MM, Y=1 * MM)
+    b.linear(Z=-10 * UM, feed_mm_per_min=100.0).linear(X=3 * MM).rapid(Z=0.1 * MM)
+    _, report = cut(b.build(), "grooving_4axis", tool="v:90", stock="block:5x3x1", errors=skew)
+    assert report.sideways_sweeps == 1 and report.sideways_lines == ()
+
+
 def test_the_command_line_cuts_and_writes_part_and_report(tmp_path, capsys):
     program = tmp_path / "grooves.nc"
     write_program(grooves(n=2, pitch=40 * UM), program)

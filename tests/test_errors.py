@@ -382,6 +382,14 @@ REFUSALS = [
     (with_("component", {"X": {"EQX_um": [1.0]}}), r"'EQX' is not an ISO 230 component"),
     (with_("component", {"X": {"EXX_um": [1.0], "EXX_poly_um_mm": [1.0]}}), r"EXX is given tw"),
     (with_("location", {"C": 2.0}), r"'location\.C'.*expected a table, got 2\.0"),
+    (with_("workpiece", {"gamma_deg": 1e308}), r"'workpiece\.gamma_deg'.*1e\+308 deg is no "
+     r"angle error: expected at most 180 deg"),
+    (with_("workpiece", {"gamma_deg": -180.5}), r"180\.5 deg is no angle error"),
+    (with_("tool", {"offset_mm": [0, 1001, 0]}), r"'tool\.offset_mm'.*1001 mm is no length "
+     r"error: expected at most 1000 mm"),
+    (with_("location", {"C": {"EB0C_urad": 4e6}}), r"4e\+06 urad is no angle error"),
+    (with_("component", {"X": {"position_mm": [0, 1], "EXX_m": [0, -2]}}),
+     r"'component\.X\.EXX_m'.*2 m is no length error"),
 ]
 
 

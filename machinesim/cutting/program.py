@@ -20,7 +20,7 @@ from machinesim import motion
 from machinesim.cutting.engine import remove
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sweeps import SolidSweep, hull_mesh, manifold_from, prism_triangles
-from machinesim.cutting.sweepset import POINTS_PER_CHUNK
+from machinesim.cutting.sweepset import POINTS_PER_CHUNK, sideways_angle
 from machinesim.exceptions import AxisLimitError
 from machinesim.nc import MOVE_KINDS
 from machinesim.tolerances import (
@@ -28,6 +28,7 @@ from machinesim.tolerances import (
     RAPID_CUT_VOLUME_M3,
     RAPID_EDGE_HALF_THICKNESS_M,
     SAME_ORIENTATION,
+    SIDEWAYS_WARN_RAD,
 )
 from machinesim.tools import tool_from_spec, with_nose_radius_error
 from machinesim.workpiece import Part, stock_from_spec
@@ -71,10 +72,11 @@ class CutReport:
     sideways_sweeps : int
         Sweeps that drag a non-rotational tool sideways (across its cutting edge).
     sideways_lines : tuple of int
-        Source lines of the feed moves among those sweeps: a real V or nose tool does not
-        cut cleanly there (it rubs with its flank), so the part there is not what the
-        machine would leave. (A rapid that cuts is listed in ``rapids_that_cut``; one that
-        only grazes the stock's box is harmless.)
+        Source lines of the feed moves among those sweeps that drag the tool sideways by
+        more than `tolerances.SIDEWAYS_WARN_RAD` (1 deg): a real V or nose tool does not cut
+        cleanly there (it rubs with its flank), so the part there is not what the machine
+        would leave. (A rapid that cuts is listed in ``rapids_that_cut``; one that only
+        grazes the stock's box is harmless.)
     empty_cut : bool
         True when nothing was removed, judged against the volume the sweeps that reach the
         stock could remove (`EngineReport.swept_volume`), not against the stock.
@@ -226,8 +228,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         rapids += _rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)
         holder |= {int(section.sweep_line[i]) for i in engine.holder_contact}
-        sideways |= {int(section.sweep_line[i]) for i in engine.sideways
-                     if not section.sweep_rapid[i]}
+        sideways |= _sideways_lines(section_poses, section, engine.sideways)
         engines.append(engine)
         sections.append({"tool": number, "line": line, "length_m": length,
                          "removed_volume_m3": float(engine.removed_volume),
@@ -414,6 +415,16 @@ def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
             f"{where}{'; '.join(found)}; nothing was cut (allow_overtravel=True, "
             "--allow-overtravel on the command line, cuts it anyway and lists it)")
     return tuple(found)
+
+
+def _sideways_lines(poses: np.ndarray, moves: _Moves, sweeps) -> set[int]:
+    """Lines of the feeds among ``sweeps`` that drag the tool sideways by more than
+    `SIDEWAYS_WARN_RAD` (a rapid that cuts is listed among the rapids)."""
+    sweeps = np.asarray(sweeps, dtype=np.int64)
+    sweeps = sweeps[~moves.sweep_rapid[sweeps]]
+    a = moves.sweep_start[sweeps]
+    angle = sideways_angle(poses[a, :3, :3], poses[a + 1, :3, 3] - poses[a, :3, 3])
+    return {int(line) for line in moves.sweep_line[sweeps[angle > SIDEWAYS_WARN_RAD]]}
 
 
 def _format(rotary: bool):

@@ -310,6 +310,13 @@ class SweepSet:
         return found
 
 
+def sideways_angle(rotation: np.ndarray, move: np.ndarray) -> np.ndarray:
+    """Angle (rad) by which moves (s, 3) leave the XZ plane of a tool at ``rotation``
+    (s, 3, 3): 0 along its cutting direction or a plunge, pi/2 straight across its edge."""
+    local = np.einsum("nji,nj->ni", rotation, move)
+    return np.arctan2(np.abs(local[:, 1]), np.hypot(local[:, 0], local[:, 2]))
+
+
 def dragged(rotation: np.ndarray, move: np.ndarray) -> np.ndarray:
     """Which moves (s, 3) drag a non-rotational tool at ``rotation`` (s, 3, 3) sideways."""
     local = np.einsum("nji,nj->ni", rotation, move)

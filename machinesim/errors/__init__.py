@@ -28,6 +28,9 @@ TOML layout (every key carries its unit: m mm um nm, rad mrad urad deg arcsec)::
 `ErrorModel.to_toml` writes lengths in um, angles in urad, positions of linear axes in mm and
 of rotary axes in deg (polynomials in um or urad per mm**k or deg**k).
 `ErrorModel.to_dict` gives the same structure in m and rad, so that it round trips exactly.
+Every value read must be finite, an angle at most 180 deg and a length at most 1 m either way
+(`_checks.LARGEST`: beyond that it is another setting, not an error of one); a table's
+positions must lie within the machine's travel of its axis.
 """
 
 from machinesim.errors._checks import AXES, LINEAR_AXES

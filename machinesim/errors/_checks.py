@@ -63,6 +63,22 @@ def _numbers(value: Any, source: str | None, key: str | None, size: int | None =
     return array
 
 
+#: Largest error an error model takes, in SI, by quantity: an angle beyond half a turn is a
+#: different setting, not an error of one; a length beyond a metre is beyond any machine here.
+LARGEST = {"angle": math.pi, "length": 1.0}
+
+
+def _check_size(values, quantity: str, unit: str, factor: float, source: str | None,
+                key: str | None) -> None:
+    """Refuse an error value (SI, scalar or array) larger than `LARGEST` for its quantity."""
+    worst = float(np.max(np.abs(values)))
+    if worst > LARGEST[quantity]:
+        limit = LARGEST[quantity] / factor
+        raise _fail(f"{worst / factor:g} {unit} is no {quantity} error: expected at most "
+                    f"{limit:g} {unit} ({LARGEST[quantity]:g} "
+                    f"{'rad' if quantity == 'angle' else 'm'}) either way", source, key)
+
+
 def _check_increasing(positions: np.ndarray, source: str | None, key: str | None) -> None:
     if np.any(not_up := np.diff(positions) <= 0.0):
         i = int(np.argmax(not_up))

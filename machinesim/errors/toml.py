@@ -20,6 +20,7 @@ from machinesim.errors._checks import (
     LINEAR_AXES,
     _check_axis,
     _check_increasing,
+    _check_size,
     _check_symbol,
     _check_unit,
     _describe,
@@ -188,6 +189,7 @@ def _parse_fields(section: Any, name: str, spec: dict, source: str) -> dict[str,
             out[parts[0]] = _number(value, source, path) * factor
         else:
             out[parts[0]] = _numbers(value, source, path, size) * factor
+        _check_size(out[parts[0]], quantity, parts[1], factor, source, path)
     return out
 
 
@@ -214,6 +216,8 @@ def _parse_location(axis: Any, table: Any, source: str) -> dict[str, float]:
         if symbol in out:
             raise _fail(f"{symbol} is given twice", source, f"{path}.{key}")
         out[symbol] = _number(value, source, f"{path}.{key}") * factor
+        _check_size(out[symbol], _quantity(symbol[1]), units[0], factor, source,
+                    f"{path}.{key}")
     return out
 
 
@@ -255,6 +259,7 @@ def _parse_component(axis: Any, table: Any, source: str) -> dict[str, ComponentE
         factor = _check_unit(units[0], quantity, source, key_path)
         out[symbol] = None
         tables[symbol] = (key_path, value, _numbers(value, source, key_path) * factor)
+        _check_size(tables[symbol][2], quantity, units[0], factor, source, key_path)
     for symbol, (key_path, raw, values) in tables.items():
         if positions is None:
             message = f"a table needs positions: no position_<unit> key in [{path}]"
