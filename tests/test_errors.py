@@ -284,8 +284,8 @@ def test_with_parameters_round_trips(seed):
     rng = np.random.default_rng(seed)
     model = random_model(rng)
     assert model.with_parameters(model.parameters()) == model
-    new = {name: float(v) for name, v in zip(model.parameters(),
-                                            rng.normal(size=len(model.parameters())),
+    new = {name: float(v) for name, v in zip(model.parameters(),  # mm and mrad, as errors are
+                                            1e-3 * rng.normal(size=len(model.parameters())),
                                             strict=True)}
     changed = model.with_parameters(new)
     assert changed.parameters() == new

@@ -374,6 +374,12 @@ def test_bad_input_is_refused_with_the_value_named():
     with pytest.raises(NotConvergedError, match="did not converge in 1 Gauss-Newton steps"):
         fit(MACHINE, observations(q, u, read(truth, q, u, np.zeros(3)), SIGMA),
             ["workpiece.gamma"], max_iterations=1)
+    # readings in um given as m (12 um read as 12 m): the first step takes x past 1 m
+    truth = ErrorModel().with_parameters({"workpiece.x": 12 * UM})
+    with pytest.raises(NotConvergedError, match=r"diverged: after 1 Gauss-Newton steps "
+                                                r"workpiece.x = 12 m, beyond any error \(1\)"):
+        fit(MACHINE, observations(q, u, 1e6 * read(truth, q, u, np.zeros(3)), SIGMA),
+            ["workpiece.x"])
 
 
 def test_the_documented_example_runs(capsys):

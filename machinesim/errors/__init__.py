@@ -29,11 +29,11 @@ TOML layout (every key carries its unit: m mm um nm, rad mrad urad deg arcsec)::
 of rotary axes in deg (polynomials in um or urad per mm**k or deg**k).
 `ErrorModel.to_dict` gives the same structure in m and rad, so that it round trips exactly.
 Every value read must be finite, an angle at most 180 deg and a length at most 1 m either way
-(`_checks.LARGEST`: beyond that it is another setting, not an error of one); a table's
+(`LARGEST_ERROR`: beyond that it is another setting, not an error of one); a table's
 positions must lie within the machine's travel of its axis.
 """
 
-from machinesim.errors._checks import AXES, LINEAR_AXES
+from machinesim.errors._checks import AXES, LARGEST_ERROR, LINEAR_AXES
 from machinesim.errors.model import (
     ComponentError,
     ErrorModel,
@@ -44,6 +44,7 @@ from machinesim.errors.model import (
 
 __all__ = [
     "AXES",
+    "LARGEST_ERROR",
     "LINEAR_AXES",
     "ComponentError",
     "ErrorModel",

@@ -65,18 +65,25 @@ def _numbers(value: Any, source: str | None, key: str | None, size: int | None =
 
 #: Largest error an error model takes, in SI, by quantity: an angle beyond half a turn is a
 #: different setting, not an error of one; a length beyond a metre is beyond any machine here.
-LARGEST = {"angle": math.pi, "length": 1.0}
+LARGEST_ERROR = {"angle": math.pi, "length": 1.0}
 
 
 def _check_size(values, quantity: str, unit: str, factor: float, source: str | None,
                 key: str | None) -> None:
-    """Refuse an error value (SI, scalar or array) larger than `LARGEST` for its quantity."""
+    """Refuse an error value (SI, scalar or array) larger than `LARGEST_ERROR` for its quantity."""
     worst = float(np.max(np.abs(values)))
-    if worst > LARGEST[quantity]:
-        limit = LARGEST[quantity] / factor
+    if worst > LARGEST_ERROR[quantity]:
+        si = "rad" if quantity == "angle" else "m"
+        limit = f"{LARGEST_ERROR[quantity] / factor:g} {unit}"
+        if unit != si:
+            limit += f" ({LARGEST_ERROR[quantity]:g} {si})"
         raise _fail(f"{worst / factor:g} {unit} is no {quantity} error: expected at most "
-                    f"{limit:g} {unit} ({LARGEST[quantity]:g} "
-                    f"{'rad' if quantity == 'angle' else 'm'}) either way", source, key)
+                    f"{limit} either way", source, key)
+
+
+def _check_si(values, quantity: str, key: str | None) -> None:
+    """`_check_size` for values already in SI (m or rad)."""
+    _check_size(values, quantity, "rad" if quantity == "angle" else "m", 1.0, None, key)
 
 
 def _check_increasing(positions: np.ndarray, source: str | None, key: str | None) -> None:

@@ -19,11 +19,13 @@ from machinesim.errors._checks import (
     AXES,
     _check_axis,
     _check_increasing,
+    _check_si,
     _check_symbol,
     _describe,
     _fail,
     _number,
     _numbers,
+    _quantity,
 )
 
 _WORKPIECE_ANGLES = ("alpha", "beta", "gamma")
@@ -89,6 +91,8 @@ class ToolSetting(_Value):
     def __post_init__(self) -> None:
         object.__setattr__(self, "offset", _numbers(self.offset, None, "offset", 3))
         object.__setattr__(self, "rotation", _numbers(self.rotation, None, "rotation", 3))
+        _check_si(self.offset, "length", "offset")
+        _check_si(self.rotation, "angle", "rotation")
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,6 +112,7 @@ class ToolGeometry(_Value):
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "nose_radius", _number(self.nose_radius, None, "nose_radius"))
+        _check_si(self.nose_radius, "length", "nose_radius")
 
 
 @dataclass(frozen=True, eq=False)
@@ -131,8 +136,10 @@ class WorkpieceSetting(_Value):
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "delta", _numbers(self.delta, None, "delta", 3))
+        _check_si(self.delta, "length", "delta")
         for name in _WORKPIECE_ANGLES:
             object.__setattr__(self, name, _number(getattr(self, name), None, name))
+            _check_si(getattr(self, name), "angle", name)
 
 
 @dataclass(frozen=True, eq=False)
@@ -252,6 +259,18 @@ def _freeze(errors: Any, name: str, check) -> MappingProxyType:
     return MappingProxyType(out)
 
 
+def _location_value(value: Any, key: str) -> float:
+    number = _number(value, None, key)
+    _check_si(number, _quantity(key.rsplit(".", 1)[1][1]), key)
+    return number
+
+
+def _component_value(error: Any, key: str) -> Any:
+    if isinstance(error, ComponentError) and error.kind == "table":
+        _check_si(error.values, _quantity(key.rsplit(".", 1)[1][1]), key)
+    return error
+
+
 def _check_component(axes: Mapping[str, Mapping[str, Any]]) -> None:
     for axis, table in axes.items():
         grids = {}
@@ -300,8 +319,8 @@ class ErrorModel(_Value):
             if not isinstance(getattr(self, name), kind):
                 message = f"expected a {kind.__name__}, got {_describe(getattr(self, name))}"
                 raise _fail(message, None, name)
-        location = _freeze(self.location, "location", lambda v, key: _number(v, None, key))
-        component = _freeze(self.component, "component", lambda v, key: v)
+        location = _freeze(self.location, "location", _location_value)
+        component = _freeze(self.component, "component", _component_value)
         _check_component(component)
         object.__setattr__(self, "location", location)
         object.__setattr__(self, "component", component)

@@ -31,7 +31,7 @@ import numpy as np
 
 from machinesim import tolerances
 from machinesim.arrays import frozen
-from machinesim.errors import ErrorModel
+from machinesim.errors import LARGEST_ERROR, ErrorModel
 from machinesim.exceptions import ErrorModelError, InputError, NotConvergedError
 from machinesim.identification.observations import (
     Observation,
@@ -438,6 +438,7 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
         values = values + step
         if np.all(np.abs(step) < tolerance):
             break
+        _check_not_diverged(machine, names, values, iterations)
         if iterations == max_iterations:
             worst = int(np.argmax(np.abs(step) / tolerance))
             raise NotConvergedError(
@@ -455,6 +456,20 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
     return Estimate(**figures, values=frozen(values),
                     residual_rms=float(np.sqrt(np.mean(residual ** 2))),
                     normalised_residual_rms=chi, iterations=iterations, errors=errors)
+
+
+def _check_not_diverged(machine, names, values: np.ndarray, iterations: int) -> None:
+    """Raise `NotConvergedError` when a step took a parameter beyond what an error model
+    takes (`errors.LARGEST_ERROR`: 1 m, pi rad): the fit diverged."""
+    size = np.where([is_angle(n) for n in names], LARGEST_ERROR["angle"],
+                    LARGEST_ERROR["length"])
+    if np.any(beyond := np.abs(values) > size):
+        worst = int(np.argmax(beyond))
+        raise NotConvergedError(
+            f"fit on {machine.name} diverged: after {iterations} Gauss-Newton steps "
+            f"{names[worst]} = {values[worst]:.3g} {'rad' if is_angle(names[worst]) else 'm'}, "
+            f"beyond any error ({size[worst]:g}). Check the readings' signs and units (m), "
+            "or give a prior nearer the solution")
 
 
 def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *,
