@@ -503,12 +503,17 @@ class _Earlier:
                                  & np.all(self.low <= m_high, axis=1)]
         self._solids: dict[int, object] = {}
 
-    def solid(self, sweep: int):
-        """The thickened tool's solid of ``sweep``, or None when it sweeps no volume."""
-        if sweep not in self._solids:
-            a = self.moves.sweep_start[sweep]
-            self._solids[sweep] = self.shape.solid(self.poses[a], self.poses[a + 1])
-        return self._solids[sweep]
+    def solid(self, sweep: int, keep: bool = False):
+        """The thickened tool's solid of ``sweep``, or None when it sweeps no volume; kept
+        for the next rapid when ``keep`` (those tested for meeting, which the next rapid
+        across the same grooves tests again), built afresh otherwise (memory)."""
+        if sweep in self._solids:
+            return self._solids[sweep]
+        a = self.moves.sweep_start[sweep]
+        solid = self.shape.solid(self.poses[a], self.poses[a + 1])
+        if keep:
+            self._solids[sweep] = solid
+        return solid
 
     def overlapping(self, sweep: int, hit) -> np.ndarray:
         """Reached sweeps before ``sweep`` whose boxes overlap ``hit``'s, in program order."""
@@ -522,7 +527,7 @@ class _Earlier:
         """Those of ``sweeps`` whose solids share volume with ``hit``: a tall tool's box
         (a V 10 mm high is 20 mm wide at its top) overlaps far more than its tip cuts."""
         return np.array([k for k in sweeps
-                         if (solid := self.solid(k)) is not None
+                         if (solid := self.solid(k, keep=True)) is not None
                          and (solid ^ hit).volume() > 0.0], dtype=np.int64)
 
     def union(self, sweeps: np.ndarray, start=None):
