@@ -282,6 +282,8 @@ def _cut(args) -> int:
               f"{entry['removed_volume_mm3']:.6g} mm^3")
     if args.report is not None:
         print(f"wrote {args.report} (cut report, JSON, units in every key)")
+    for note in report.notes:
+        print(f"note: {note}", file=sys.stderr)
     for line in report.holder_contact:
         print(f"warning: holder touched the part at line {line}", file=sys.stderr)
     for line in report.rapids_that_cut:

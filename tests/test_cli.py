@@ -428,6 +428,31 @@ def test_each_feed_that_drags_a_v_tool_sideways_is_one_warning_line(tmp_path, ca
     assert data["sideways_lines"] == [5, 6]
 
 
+def test_a_table_tool_with_a_radius_and_no_shape_is_noted_when_the_cut_tool_differs(
+        tmp_path, capsys):
+    # T1 is a 2 mm end mill by its radius (1 mm) but the table gives no shape: cut with
+    # v:90 (no radius) it is noted on stderr and in the report; with ball:1.0 it agrees
+    program = tmp_path / "t1.nc"
+    program.write_text("G90 G21\nT1 M06\nG0 X1. Y1. Z0.1\nG1 Z-0.01 F100.\nX3.\n"
+                       "G0 Z0.1\nM30\n")
+    tools = tmp_path / "tools.toml"
+    tools.write_text('[tool.1]\nname = "2 mm end mill"\nlength_mm = 0.0\nradius_mm = 1.0\n')
+    notes = {}
+    for tool in ("v:90", "ball:1.0"):
+        report = tmp_path / f"{tool[0]}.json"
+        code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", tool,
+                            "--stock", "block:5x3x1", "--tools", tools, "--quiet",
+                            "--out", tmp_path / "p.ply", "--report", report], capsys)
+        assert code == 0, err
+        notes[tool] = ([line for line in err.splitlines() if line.startswith("note:")],
+                       json.loads(report.read_text(), parse_constant=no_nan)["notes"])
+    expected = ("T1 (line 2): the tool table gives radius 1 mm and no shape, so the cut's "
+                "own tool (no radius, VTool) cut for it")
+    assert len(notes["v:90"][0]) == 1 and notes["v:90"][0][0].startswith("note: " + expected)
+    assert len(notes["v:90"][1]) == 1 and notes["v:90"][1][0].startswith(expected)
+    assert notes["ball:1.0"] == ([], [])
+
+
 def test_the_report_lists_how_the_program_was_read(tmp_path, capsys):
     # the corpus CAM program, its stock far from the tool: the report says which modal
     # states it set (first line of each, found in the text here), the integer rule and the

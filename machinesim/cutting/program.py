@@ -47,6 +47,8 @@ RAPID_EARLIER_UNION = 64
 #: The sweeps just before a rapid are taken away from what it meets first, alone: when they
 #: leave nothing (a retract at the end of a cut), no union of the earlier ones is needed.
 RAPID_RECENT_SWEEPS = 8
+#: A tool table's radius and the cut tool's agree within this (m): the table's 1 nm digits.
+RADIUS_AGREE_M = 1e-9
 
 
 @dataclass(frozen=True)
@@ -251,7 +253,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         empty_cut=all(bool(e.empty_cut) for e in engines),
         engine="+".join(dict.fromkeys(e.method for e in engines)),
         elapsed_s=time.perf_counter() - began,
-        notes=(*trajectory.notes, *([sheet_note] if sheet_note else [])),
+        notes=(*trajectory.notes, *tools.notes, *([sheet_note] if sheet_note else [])),
         holder_contact=tuple(sorted(holder)),
         sideways_lines=tuple(sorted(sideways)),
         engine_s=sum(e.elapsed_s for e in engines),
@@ -351,6 +353,10 @@ class _ToolSections:
         # (first move, tool, length) of each run of moves between changes, and its name
         self.runs = [(0, tool, 0.0)]
         self.names = [(None, None)]  # (tool number, line of the change)
+        #: what a reader of the part should know about the tools it was cut with
+        self.notes = tuple(dict.fromkeys(
+            _unshaped_note(change, tool) for change in getattr(program, "tool_changes", ())
+            if _unshaped_note(change, tool)))
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
                 built[change.shape] = with_nose_radius_error(tool_from_spec(change.shape),
@@ -378,6 +384,21 @@ class _ToolSections:
             section, (lo, hi) = moves.section(first, stop)
             if hi - lo >= 2:
                 yield tool, length, section, (lo, hi), name
+
+
+def _unshaped_note(change, tool) -> str:
+    """A note when a tool change gives a radius but no shape and the cut's own tool, which
+    then cuts for it, has another radius (a 2 mm end mill cut as a V tool); else ''."""
+    if change.shape is not None or change.radius_m is None:
+        return ""
+    radius = getattr(tool, "radius", getattr(tool, "nose_radius", None))
+    if radius is not None and abs(radius - change.radius_m) <= RADIUS_AGREE_M:
+        return ""
+    own = "no radius" if radius is None else f"radius {radius * 1e3:g} mm"
+    return (f"T{change.number} (line {change.line}): the tool table gives radius "
+            f"{change.radius_m * 1e3:g} mm and no shape, so the cut's own tool ({own}, "
+            f"{type(tool).__name__}) cut for it; give its shape in the table "
+            "(shape = \"ball:R\", \"nose:R:ANGLE\" or \"v:ANGLE\")")
 
 
 def _beyond_tip(length: float) -> np.ndarray:

@@ -68,8 +68,9 @@ class ToolChange:
 
     ``length_m`` (the table's length, 0 when it gives none) places the tool's edge that far
     beyond the model's ``tool_tip`` along the tool axis; ``shape`` (None: the cut's own tool)
-    is its solid. Read by `machinesim.nc.read_program` from T words: at each M06 the last T
-    selected, or, in a program without M06, each T itself.
+    is its solid; ``radius_m`` the table's radius (None: not given), checked against the
+    cut's own tool when there is no shape. Read by `machinesim.nc.read_program` from T
+    words: at each M06 the last T selected, or, in a program without M06, each T itself.
     """
 
     move: int
@@ -77,6 +78,7 @@ class ToolChange:
     line: int
     length_m: float = 0.0
     shape: str | None = None
+    radius_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -143,7 +145,7 @@ class ToolTable:
         tool = self.tools.get(number)
         if tool is None:
             return ToolChange(move, number, line)
-        return ToolChange(move, number, line, tool.length_m or 0.0, tool.shape)
+        return ToolChange(move, number, line, tool.length_m or 0.0, tool.shape, tool.radius_m)
 
     def _value(self, number: int, what: str) -> float:
         if number == 0:
