@@ -102,7 +102,7 @@ def test_rapids_across_many_grooves_are_judged_alike_by_both_unions(monkeypatch)
     # groove 35's bottom, over what that groove cut (not listed). Each overlaps 70 earlier
     # sweeps: judged by one union per rapid, and by the union of every earlier sweep grown
     # from rapid to rapid (each forced by `_unite_alone`): the same lines.
-    from machinesim.cutting import program as cutting_program
+    from machinesim.cutting import rapids
 
     b = ProgramBuilder(1).rapid(X=0.5 * MM, Y=0.3 * MM, Z=0.1 * MM)
     for k in range(70):
@@ -117,7 +117,7 @@ def test_rapids_across_many_grooves_are_judged_alike_by_both_unions(monkeypatch)
     assert moves[-2].target["X"] == pytest.approx(3 * MM)
     lines = {}
     for alone in (True, False):
-        monkeypatch.setattr(cutting_program, "_unite_alone", lambda n, fresh, alone=alone: alone)
+        monkeypatch.setattr(rapids, "_unite_alone", lambda n, fresh, alone=alone: alone)
         _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
         lines[alone] = report.rapids_that_cut
     assert lines[True] == lines[False]

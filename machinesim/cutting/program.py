@@ -13,23 +13,16 @@ import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-import manifold3d
 import numpy as np
 
 from machinesim import motion
 from machinesim.cutting.engine import remove
+from machinesim.cutting.rapids import rapids_that_cut
 from machinesim.cutting.sheets import SheetReport, trim_sheets
-from machinesim.cutting.sweeps import SolidSweep, hull_mesh, manifold_from, prism_triangles
-from machinesim.cutting.sweepset import POINTS_PER_CHUNK, sideways_angle
+from machinesim.cutting.sweepset import sideways_angle
 from machinesim.exceptions import AxisLimitError
 from machinesim.nc import MOVE_KINDS
-from machinesim.tolerances import (
-    LIMIT_SLACK,
-    RAPID_CUT_VOLUME_M3,
-    RAPID_EDGE_HALF_THICKNESS_M,
-    SAME_ORIENTATION,
-    SIDEWAYS_WARN_RAD,
-)
+from machinesim.tolerances import LIMIT_SLACK, SIDEWAYS_WARN_RAD
 from machinesim.tools import tool_from_spec, with_nose_radius_error
 from machinesim.workpiece import Part, stock_from_spec
 
@@ -38,15 +31,6 @@ from machinesim.workpiece import Part, stock_from_spec
 #: from the next start by an ulp (~1e-17 at 0.1 m); 1e-12 is `tolerances.POSE_M`, the
 #: agreement of two float64 kinematic chains, 1000 times below the 1 nm axis resolution.
 JOIN_TOL = 1e-12
-#: A rapid that reaches the stock is checked against the sweeps before it that could have
-#: taken away what it meets (boxes overlap, and past this many, solids meet); up to this many
-#: (or up to as many as growing the union below would take) are united for it alone, more
-#: (a rapid across a field of grooves) are taken from one union of every earlier sweep,
-#: grown from rapid to rapid: both exact.
-RAPID_EARLIER_UNION = 64
-#: The sweeps just before a rapid are taken away from what it meets first, alone: when they
-#: leave nothing (a retract at the end of a cut), no union of the earlier ones is needed.
-RAPID_RECENT_SWEEPS = 8
 #: A tool table's radius and the cut tool's agree within this (m): the table's 1 nm digits.
 RADIUS_AGREE_M = 1e-9
 
@@ -227,7 +211,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         before = part
         part, engine = remove(before, section_tool, paths, roi=roi, progress=progress,
                               sheets=False)
-        rapids += _rapids_that_cut(before, section_tool, section_poses, section,
+        rapids += rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)
         holder |= {int(section.sweep_line[i]) for i in engine.holder_contact}
         sideways |= _sideways_lines(section_poses, section, engine.sideways)
@@ -452,164 +436,3 @@ def _format(rotary: bool):
     if rotary:
         return lambda value: f"{np.degrees(value):.5f} deg"
     return lambda value: f"{value * 1e3:.6f} mm"
-
-
-def _rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
-                     reached: np.ndarray, roi=None) -> tuple[int, ...]:
-    """Lines of rapids whose sweep met material still there when they ran.
-
-    A zero-thickness edge plunging into material sweeps no volume, so the check thickens a
-    profile by `RAPID_EDGE_HALF_THICKNESS_M` along the tool's X (here only). Candidates are
-    the rapid sweeps the engine found reaching the stock (``reached``); each is intersected
-    with the stock (inside the ``roi`` windows when given: the part is cut there alone), less
-    the earlier sweeps that reached the stock and could have taken some of it away (`_Earlier`):
-    first the last `RAPID_RECENT_SWEEPS` of them alone (a retract at the end of a cut is then
-    done), then the rest together, or, past `RAPID_EARLIER_UNION` of them and when fewer
-    sweeps would grow it, one union of every earlier sweep whose box meets the material's,
-    grown from rapid to rapid: exact, and free for rapids that stay clear.
-    """
-    candidates = reached[moves.sweep_rapid[reached]]
-    if not len(candidates):
-        return ()
-    from machinesim.cutting.windows import clip_to  # windows builds on this module
-
-    shape = _Thick(tool)
-    material = (stock.manifold if roi is None
-                else clip_to(stock, np.reshape(roi, (-1, 4))).manifold)
-    sweeps = _Earlier(shape, poses, moves, reached, material)
-    found = []
-    covered, upto = None, 0  # the union of the sweeps in ``sweeps.near`` before ``upto``
-    for sweep in np.sort(candidates):
-        swept = sweeps.solid(sweep)
-        if swept is None:
-            continue
-        hit = material ^ swept
-        if hit.volume() <= RAPID_CUT_VOLUME_M3:
-            continue
-        earlier = sweeps.overlapping(sweep, hit)
-        hit = hit - sweeps.union(earlier[-RAPID_RECENT_SWEEPS:])
-        if hit.volume() <= RAPID_CUT_VOLUME_M3:
-            continue
-        earlier = earlier[:-RAPID_RECENT_SWEEPS]
-        if len(earlier) > RAPID_EARLIER_UNION:
-            earlier = sweeps.meeting(earlier, hit)
-        fresh = sweeps.near[(sweeps.near >= upto) & (sweeps.near < sweep)]
-        if _unite_alone(len(earlier), len(fresh)):
-            hit = hit - sweeps.union(earlier)
-        else:
-            # A rapid that meets many earlier sweeps (one across a field of grooves): one
-            # union of every sweep before it whose box meets the material's (no other can
-            # take away what the rapid met), grown from the last such rapid's, instead of a
-            # union per rapid that grows as the square of the sweeps
-            covered = sweeps.union(fresh, covered)
-            upto = sweep
-            hit = hit - covered
-        if hit.volume() > RAPID_CUT_VOLUME_M3:
-            found.append(int(moves.sweep_line[sweep]))
-    return tuple(dict.fromkeys(found))
-
-
-class _Earlier:
-    """The sweeps a rapid is judged against: those that reached the stock, as thickened
-    solids (each built once), found by box and, where many boxes overlap, by meeting."""
-
-    def __init__(self, shape, poses: np.ndarray, moves: _Moves, reached: np.ndarray,
-                 material) -> None:
-        self.shape, self.poses, self.moves = shape, poses, moves
-        self.reached = np.sort(reached)
-        self.low, self.high = shape.bounds(poses, moves.sweep_start[self.reached])
-        m_low, m_high = np.array(material.bounding_box()).reshape(2, 3)
-        #: sweeps (of those reached) whose boxes meet the material's
-        self.near = self.reached[np.all(self.high >= m_low, axis=1)
-                                 & np.all(self.low <= m_high, axis=1)]
-        self._solids: dict[int, object] = {}
-
-    def solid(self, sweep: int, keep: bool = False):
-        """The thickened tool's solid of ``sweep``, or None when it sweeps no volume; kept
-        for the next rapid when ``keep`` (those tested for meeting, which the next rapid
-        across the same grooves tests again), built afresh otherwise (memory)."""
-        if sweep in self._solids:
-            return self._solids[sweep]
-        a = self.moves.sweep_start[sweep]
-        solid = self.shape.solid(self.poses[a], self.poses[a + 1])
-        if keep:
-            self._solids[sweep] = solid
-        return solid
-
-    def overlapping(self, sweep: int, hit) -> np.ndarray:
-        """Reached sweeps before ``sweep`` whose boxes overlap ``hit``'s, in program order."""
-        low, high = np.array(hit.bounding_box()).reshape(2, 3)
-        before = self.reached < sweep
-        inside = (np.all(self.high[before] >= low, axis=1)
-                  & np.all(self.low[before] <= high, axis=1))
-        return self.reached[before][inside]
-
-    def meeting(self, sweeps: np.ndarray, hit) -> np.ndarray:
-        """Those of ``sweeps`` whose solids share volume with ``hit``: a tall tool's box
-        (a V 10 mm high is 20 mm wide at its top) overlaps far more than its tip cuts."""
-        return np.array([k for k in sweeps
-                         if (solid := self.solid(k, keep=True)) is not None
-                         and (solid ^ hit).volume() > 0.0], dtype=np.int64)
-
-    def union(self, sweeps: np.ndarray, start=None):
-        """The union of ``sweeps``' solids (and ``start``), or an empty solid."""
-        solids = [s for s in (self.solid(k) for k in sweeps) if s is not None]
-        if start is not None:
-            solids.insert(0, start)
-        if not solids:
-            return manifold3d.Manifold()
-        return manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
-
-
-def _unite_alone(n_earlier: int, n_fresh: int) -> bool:
-    """Whether a rapid is judged against the union of the ``n_earlier`` sweeps overlapping
-    it alone, rather than against the running union, which ``n_fresh`` sweeps would grow."""
-    return n_earlier <= max(RAPID_EARLIER_UNION, n_fresh)
-
-
-class _Thick:
-    """The tool as a solid for the rapid check: a profile thickened along its X."""
-
-    def __init__(self, tool) -> None:
-        vertices = np.asarray(tool.vertices(), dtype=np.float64)
-        if getattr(tool, "planar", False):
-            shift = np.array([RAPID_EDGE_HALF_THICKNESS_M, 0.0, 0.0])
-            self.vertices = np.concatenate([vertices - shift, vertices + shift])
-            triangles = prism_triangles(len(vertices)).astype(np.int64)
-            corner = self.vertices[triangles]
-            volume = np.einsum("ij,ij->i", corner[:, 0],
-                               np.cross(corner[:, 1], corner[:, 2])).sum()
-            self.triangles = triangles if volume > 0.0 else triangles[:, ::-1]
-        else:
-            self.vertices, self.triangles = vertices, np.asarray(tool.triangles())
-        self.sweep = SolidSweep(self.vertices, self.triangles)
-        self.run_id = manifold3d.Manifold.reserve_ids(1)
-
-    def bounds(self, poses: np.ndarray, starts: np.ndarray):
-        """Bounds (s, 3) of the sweeps starting at poses ``starts`` (the points of both
-        poses, which contain the hull), m."""
-        low, high = np.empty((len(starts), 3)), np.empty((len(starts), 3))
-        step = max(1, POINTS_PER_CHUNK // (2 * len(self.vertices)))
-        for begin in range(0, len(starts), step):
-            a = starts[begin:begin + step]
-            points = np.concatenate(
-                [np.einsum("nij,kj->nki", poses[i][:, :3, :3], self.vertices)
-                 + poses[i][:, None, :3, 3] for i in (a, a + 1)], axis=1)
-            low[begin:begin + step] = points.min(axis=1)
-            high[begin:begin + step] = points.max(axis=1)
-        return low, high
-
-    def solid(self, start: np.ndarray, end: np.ndarray) -> manifold3d.Manifold | None:
-        """The thickened tool swept from pose ``start`` to ``end`` (4, 4), or None."""
-        rotation = start[:3, :3]
-        if np.abs(end[:3, :3] - rotation).max() <= SAME_ORIENTATION:
-            vertices, triangles = self.sweep.mesh(rotation, start[:3, 3],
-                                                  end[:3, 3] - start[:3, 3])
-        else:
-            points = np.concatenate([self.vertices @ m[:3, :3].T + m[:3, 3]
-                                     for m in (start, end)])
-            hull = hull_mesh(points)
-            if hull is None:
-                return None
-            vertices, triangles = hull[0], hull[1]
-        return manifold_from(vertices, triangles, self.run_id)
