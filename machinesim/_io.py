@@ -15,6 +15,7 @@ import secrets
 import shutil
 import signal
 import tempfile
+import threading
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -161,12 +162,13 @@ def ctrl_c_remembered() -> Iterator[None]:
     for one), so a Ctrl-C that lands there is swallowed and the run would go on to write its
     files and exit 0. With this handler `write_together` refuses to rename anything into
     place once a Ctrl-C was seen, whoever caught it. Installed only where Python's own
-    handler is (a background job started with SIGINT ignored keeps ignoring it); the old
-    handler is put back on leaving.
+    handler is (a background job started with SIGINT ignored keeps ignoring it), and only
+    in the main thread (where signals arrive); the old handler is put back on leaving.
     """
     global _ctrl_c_seen
     previous = signal.getsignal(signal.SIGINT)
-    ours = previous is signal.default_int_handler
+    ours = (previous is signal.default_int_handler
+            and threading.current_thread() is threading.main_thread())
     if ours:
         signal.signal(signal.SIGINT, _on_ctrl_c)
     try:
