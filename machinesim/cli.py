@@ -72,7 +72,8 @@ def _parser() -> argparse.ArgumentParser:
     cut.add_argument("--tool", required=True,
                      help="tool spec in mm/deg: v:ANGLE (V tool, e.g. v:90), "
                           "nose:RADIUS:ANGLE (round nose, e.g. nose:2.0:90), "
-                          "ball:RADIUS (ball end mill, e.g. ball:2.0); optionally :h=HEIGHT, "
+                          "ball:RADIUS (ball end mill, e.g. ball:2.0), flat:RADIUS (flat end "
+                          "mill, e.g. flat:1.0 for 2 mm across); optionally :h=HEIGHT, "
                           "the height to the holder in mm (e.g. v:90:h=5, default 10)")
     cut.add_argument("--stock", required=True,
                      help="stock spec in mm: block:LxWxH (e.g. block:10x10x2, top face at "

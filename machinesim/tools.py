@@ -19,7 +19,8 @@ also leave its shape there. A move inside the profile plane (a sideways drag, a 
 sweeps no volume with a zero-thickness profile: the engine flags those moves.
 
 A ball end mill is modelled by its rotating envelope: a hemisphere of radius R about
-(0, 0, R) under a cylindrical shank of the same radius up to ``height``.
+(0, 0, R) under a cylindrical shank of the same radius up to ``height``; a flat end mill by
+a cylinder of radius R standing on its end face at the origin.
 
 Arcs and spheres are inscribed polygons whose vertices lie on the true surface; the chord
 tolerance (the sagitta between a chord and its arc) is a parameter of each tool. The ball's
@@ -474,9 +475,95 @@ class BallEndMill:
         return replace(self, radius=self.radius + radius_error)
 
 
-Tool = VTool | RoundNoseTool | BallEndMill
+@functools.lru_cache(maxsize=16)
+def _cylinder_mesh(radius: float, chord_tol: float, height: float):
+    """A regular polygon inscribed in the circle of ``radius`` at z = 0 and at ``height``:
+    vertices (2 n, 3), outward triangles (t, 3) int64 and n."""
+    if chord_tol >= radius:
+        segments = 4
+    else:
+        segments = max(4, 4 * math.ceil(math.pi / math.acos(1.0 - chord_tol / radius) / 4.0))
+    _check_count("end mill polygon", 2 * segments, chord_tol)
+    phi = 2.0 * math.pi * np.arange(segments) / segments
+    ring = np.stack([radius * np.cos(phi), radius * np.sin(phi), np.zeros(segments)], axis=1)
+    vertices = np.concatenate([ring, ring + np.array([0.0, 0.0, height])])
+    j = np.arange(segments)
+    nxt = (j + 1) % segments
+    inner = np.arange(1, segments - 1)
+    triangles = np.concatenate([
+        np.stack([np.zeros(len(inner), dtype=np.int64), inner + 1, inner], 1),  # bottom, -z
+        np.stack([np.full(len(inner), segments), segments + inner,
+                  segments + inner + 1], 1),  # top, +z
+        np.stack([j, nxt, segments + nxt], 1),  # sides
+        np.stack([j, segments + nxt, segments + j], 1),
+    ]).astype(np.int64)
+    vertices.flags.writeable = False
+    triangles.flags.writeable = False
+    return vertices, triangles, segments
 
-_SPEC_FORMS = ("'v:ANGLE_DEG', 'nose:RADIUS_MM:ANGLE_DEG' or 'ball:RADIUS_MM', optionally "
+
+@dataclass(frozen=True)
+class FlatEndMill:
+    """Envelope of a rotating flat end mill: a cylinder of radius R from its flat end face at
+    z = 0 (the ``tool_tip`` frame's origin is the face's centre) up to ``height``.
+
+    The circle is a regular polygon with `segments` corners on it (a multiple of 4, one at
+    azimuth 0), so the sagitta between a side and the circle is within ``chord_tol``: the
+    cut is up to that much narrower than the true cylinder's, as a ball's is.
+
+    Parameters
+    ----------
+    radius : float
+        Radius (m): half the end mill's diameter.
+    chord_tol : float
+        Largest distance of a side of the polygon from the circle (m).
+    height : float, optional
+        Length from the end face to the holder (m). Default: `TOOL_HEIGHT_M`.
+    """
+
+    radius: float
+    chord_tol: float = BALL_CHORD_M
+    height: float = TOOL_HEIGHT_M
+    rotational = True
+    planar = False
+
+    def __post_init__(self) -> None:
+        _check_size("radius", self.radius)
+        _check_positive("chord_tol", self.chord_tol)
+        _check_size("height", self.height)
+        self._mesh()
+
+    def _mesh(self):
+        return _cylinder_mesh(self.radius, self.chord_tol, self.height)
+
+    @property
+    def segments(self) -> int:
+        """Corners of the polygon (a multiple of 4)."""
+        return self._mesh()[2]
+
+    def vertices(self) -> np.ndarray:
+        """Polyhedron vertices, shape (2 n, 3) (m): the end face's polygon, then the top's."""
+        return self._mesh()[0]
+
+    def triangles(self) -> np.ndarray:
+        """Outward-oriented triangles of the polyhedron, indices into `vertices`, (t, 3)."""
+        return self._mesh()[1]
+
+    def edges(self) -> np.ndarray:
+        """Index pairs of the polyhedron's edges into `vertices`, shape (e, 2) int64."""
+        triangles = self.triangles()
+        pairs = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+        return np.unique(np.sort(pairs, axis=1), axis=0)
+
+    def with_errors(self, radius_error: float = 0.0) -> FlatEndMill:
+        """The same tool with its radius off by ``radius_error`` (m)."""
+        return replace(self, radius=self.radius + radius_error)
+
+
+Tool = VTool | RoundNoseTool | BallEndMill | FlatEndMill
+
+_SPEC_FORMS = ("'v:ANGLE_DEG', 'nose:RADIUS_MM:ANGLE_DEG', 'ball:RADIUS_MM' or "
+               "'flat:RADIUS_MM', optionally "
                "followed by ':h=HEIGHT_MM' (e.g. 'v:90:h=5')")
 
 
@@ -499,13 +586,14 @@ def tool_from_spec(spec: str) -> Tool:
     ----------
     spec : str
         ``"v:90"`` (included angle, deg), ``"nose:2.0:90"`` (nose radius mm, included angle
-        deg) or ``"ball:2.0"`` (radius mm), optionally followed by ``":h=5"``: the tool's
+        deg), ``"ball:2.0"`` (radius mm) or ``"flat:1.0"`` (a flat end mill, radius mm: 2 mm
+        across), optionally followed by ``":h=5"``: the tool's
         height from its edge to the holder in mm (default `TOOL_HEIGHT_M`, 10 mm; ``"h=5mm"``
         reads the same).
 
     Returns
     -------
-    VTool or RoundNoseTool or BallEndMill
+    VTool or RoundNoseTool or BallEndMill or FlatEndMill
 
     Raises
     ------
@@ -518,7 +606,7 @@ def tool_from_spec(spec: str) -> Tool:
     if len(fields) > 1 and fields[-1].strip().lower().startswith("h="):
         height["height"] = _spec_height(spec, fields.pop().strip())
     kind = fields[0].lower()
-    arity = {"v": 1, "nose": 2, "ball": 1}
+    arity = {"v": 1, "nose": 2, "ball": 1, "flat": 1}
     if kind not in arity or len(fields) != arity[kind] + 1:
         raise InputError(f"tool spec {spec!r}: expected {_SPEC_FORMS}", key="tool")
     try:
@@ -533,6 +621,8 @@ def tool_from_spec(spec: str) -> Tool:
             return VTool(values[0] * RAD_PER_DEG, **height)
         if kind == "nose":
             return RoundNoseTool(values[0] * M_PER_MM, values[1] * RAD_PER_DEG, **height)
+        if kind == "flat":
+            return FlatEndMill(values[0] * M_PER_MM, **height)
         return BallEndMill(values[0] * M_PER_MM, **height)
     except InputError as error:
         raise InputError(f"tool spec {spec!r}: {error}", key="tool") from None
@@ -540,7 +630,8 @@ def tool_from_spec(spec: str) -> Tool:
 
 def with_nose_radius_error(tool: Tool, d_radius: float) -> Tool:
     """The tool as it is with the error model's nose radius error ``d_radius`` (m): a
-    round-nose tool's nose or a ball's radius that much larger, still set by its tip.
+    round-nose tool's nose, a ball's or a flat end mill's radius that much larger, still set
+    by its tip.
 
     Raises
     ------
@@ -551,8 +642,8 @@ def with_nose_radius_error(tool: Tool, d_radius: float) -> Tool:
         return tool
     if isinstance(tool, RoundNoseTool):
         return tool.with_errors(nose_radius_error=d_radius)
-    if isinstance(tool, BallEndMill):
+    if isinstance(tool, BallEndMill | FlatEndMill):
         return tool.with_errors(radius_error=d_radius)
     raise InputError(f"the error model has tool_geometry.nose_radius = {d_radius!r} m, but a "
                      f"{type(tool).__name__} has no nose radius; expected a round-nose "
-                     "('nose:R:ANGLE') or ball tool", key="tool_geometry.nose_radius")
+                     "('nose:R:ANGLE'), ball or flat end mill", key="tool_geometry.nose_radius")

@@ -14,7 +14,7 @@ from machinesim.cutting import cut
 from machinesim.exceptions import AxisLimitError
 from machinesim.metrology import height_map
 from machinesim.nc import ProgramBuilder, write_program
-from machinesim.tools import VTool
+from machinesim.tools import VTool, tool_from_spec
 
 UM, MM = 1e-6, 1e-3
 
@@ -159,6 +159,25 @@ def test_feeds_are_listed_as_sideways_past_one_degree_not_for_a_machines_small_s
     b.linear(Z=-10 * UM, feed_mm_per_min=100.0).linear(X=3 * MM).rapid(Z=0.1 * MM)
     _, report = cut(b.build(), "grooving_4axis", tool="v:90", stock="block:5x3x1", errors=skew)
     assert report.sideways_sweeps == 1 and report.sideways_lines == ()
+
+
+def test_a_flat_end_mill_groove_removes_its_polygon_swept_along_the_feed():
+    # plunge 10 um and feed 3 mm along X: the removed solid is the depth times the
+    # Minkowski sum of the tool's polygon and the feed, whose area is the polygon's (by the
+    # shoelace formula) plus the feed times its width across the feed
+    depth, length = 10 * UM, 3 * MM
+    tool = tool_from_spec("flat:0.5")
+    x, y = tool.vertices()[: tool.segments, :2].T
+    area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    b = ProgramBuilder(1).rapid(Z=0.1 * MM).rapid(X=1 * MM, Y=1.5 * MM)
+    b.linear(Z=-depth, feed_mm_per_min=100.0).linear(X=1 * MM + length).rapid(Z=0.1 * MM)
+    part, report = cut(b.build(), "grooving_4axis", tool=tool, stock="block:5x3x1")
+    expected = depth * (area + length * (y.max() - y.min()))
+    assert report.removed_volume_m3 == pytest.approx(expected, rel=1e-9)
+    assert part.manifold.volume() == pytest.approx(15 * MM**3 - expected, rel=1e-12)
+    assert report.sideways_sweeps == 0  # a rotating tool cuts in any direction
+    h = height_map(part, np.array([2.5 * MM]), np.array([1.5 * MM, 1.9 * MM, 2.1 * MM]))
+    np.testing.assert_allclose(h[:, 0], [-depth, -depth, 0.0], atol=1e-15)
 
 
 def test_the_command_line_cuts_and_writes_part_and_report(tmp_path, capsys):

@@ -72,8 +72,9 @@ def tool_specs(limit: float, smallest: float = 1e-3) -> st.SearchStrategy[str]:
                        st.sampled_from(["h=", "H=", "h", "h==", "height="]),
                        numbers(limit, smallest), st.sampled_from(["", "mm", "MM", " mm", "m"]))
     return st.one_of(
-        specs(["v", "nose", "ball", "V", "Ball", "cone", ""], limit, smallest),
-        st.builds(lambda s, h: f"{s}:{h}", specs(["v", "nose", "ball"], limit, smallest),
+        specs(["v", "nose", "ball", "flat", "V", "Ball", "cone", ""], limit, smallest),
+        st.builds(lambda s, h: f"{s}:{h}", specs(["v", "nose", "ball", "flat"], limit,
+                                                 smallest),
                   height))
 
 

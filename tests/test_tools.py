@@ -10,6 +10,7 @@ from machinesim.tools import (
     MAX_TOOL_SIZE_M,
     TOOL_HEIGHT_M,
     BallEndMill,
+    FlatEndMill,
     RoundNoseTool,
     VTool,
     arc_segments,
@@ -141,6 +142,23 @@ def test_ball_is_a_ring_polyhedron_on_the_sphere_under_its_shank():
                                    rel=1e-13)
 
 
+def test_flat_end_mill_is_a_polygon_prism_on_its_circle():
+    radius, tol = 1e-3, 1e-6
+    tool = FlatEndMill(radius, chord_tol=tol)
+    vertices, triangles, n = tool.vertices(), tool.triangles(), tool.segments
+    assert n % 4 == 0 and len(vertices) == 2 * n
+    np.testing.assert_allclose(np.hypot(*vertices[:, :2].T), radius, rtol=1e-15)
+    assert np.all(vertices[:n, 2] == 0.0) and np.all(vertices[n:, 2] == tool.height)
+    # the sagitta of a side, R (1 - cos(pi / n)), within tol; one corner fewer would not be
+    assert radius * (1 - math.cos(math.pi / n)) <= tol < radius * (1 - math.cos(math.pi / (n - 4)))
+    assert len(vertices) - len(tool.edges()) + len(triangles) == 2  # a closed polyhedron
+    # volume by the divergence theorem: the regular n-gon's area n/2 R^2 sin(2 pi / n) times h
+    corner = vertices[triangles]
+    volume = np.einsum("ij,ij->i", corner[:, 0], np.cross(corner[:, 1], corner[:, 2])).sum() / 6
+    assert volume == pytest.approx(n / 2 * radius**2 * math.sin(2 * math.pi / n) * tool.height,
+                                   rel=1e-13)
+
+
 def test_with_errors_moves_only_the_named_geometry():
     tool = RoundNoseTool(2e-3, math.radians(90.0))
     worse = tool.with_errors(nose_radius_error=1e-6, included_angle_error=1e-3)
@@ -149,6 +167,7 @@ def test_with_errors_moves_only_the_named_geometry():
     assert worse.height == tool.height and worse.chord_tol == tool.chord_tol
     assert VTool(1.0).with_errors(0.1).included_angle == 1.1
     assert BallEndMill(1e-3).with_errors(-1e-6).radius == 1e-3 - 1e-6
+    assert FlatEndMill(1e-3).with_errors(2e-6).radius == 1e-3 + 2e-6
 
 
 def test_arc_segments_meet_the_sagitta_formula():
@@ -165,6 +184,7 @@ def test_arc_segments_meet_the_sagitta_formula():
         ("V:60", VTool(math.pi / 3)),
         ("nose:2.0:90", RoundNoseTool(2e-3, math.pi / 2)),
         ("ball:2.0", BallEndMill(2e-3)),
+        ("flat:1.0", FlatEndMill(1e-3)),
     ],
 )
 def test_tool_from_spec(spec, expected):
@@ -178,7 +198,7 @@ def test_tool_from_spec(spec, expected):
 @pytest.mark.parametrize(
     ("spec", "height_m"),
     [("v:90:h=5", 5e-3), ("v:90:h=5mm", 5e-3), ("ball:0.5:h=20mm", 20e-3),
-     ("nose:2.0:90:H=3", 3e-3), ("V:60", 10e-3)],
+     ("nose:2.0:90:H=3", 3e-3), ("V:60", 10e-3), ("flat:0.5:h=4", 4e-3)],
 )
 def test_a_spec_height_sets_where_the_holder_begins(spec, height_m):
     # the body's highest vertex is the holder plane, at the spec's height (mm -> m)

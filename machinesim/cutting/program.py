@@ -164,7 +164,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     machine : machinesim.Machine or str
         A machine or a machine name.
     tool : str or tool
-        ``"v:90"``, ``"nose:2.0:90"``, ``"ball:2.0"`` (mm, deg) or a tool object.
+        ``"v:90"``, ``"nose:2.0:90"``, ``"ball:2.0"``, ``"flat:1.0"`` (mm, deg) or a tool object.
     stock : str or Part
         ``"block:10x10x2"``, ``"cylinder:5x2"`` (mm), optionally ``@x,y,z``, or a Part.
     errors : ErrorModel, optional
@@ -382,7 +382,7 @@ def _unshaped_note(change, tool) -> str:
     return (f"T{change.number} (line {change.line}): the tool table gives radius "
             f"{change.radius_m * 1e3:g} mm and no shape, so the cut's own tool ({own}, "
             f"{type(tool).__name__}) cut for it; give its shape in the table "
-            "(shape = \"ball:R\", \"nose:R:ANGLE\" or \"v:ANGLE\")")
+            "(shape = \"flat:R\", \"ball:R\", \"nose:R:ANGLE\" or \"v:ANGLE\")")
 
 
 def _beyond_tip(length: float) -> np.ndarray:
