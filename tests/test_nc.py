@@ -125,6 +125,14 @@ def test_read_program_names_the_file_and_accepts_crlf(tmp_path):
     bad.write_text("G00 X0\nG00 X1 Q5\n")
     with pytest.raises(NCProgramError, match=r"bad\.nc, line 2, column 8, key 'Q5'"):
         read_program(bad)
+    # a UTF-8 byte order mark (Windows editors) is no part of line 1: the same moves, and a
+    # problem on line 1 at the column an editor shows
+    marked = tmp_path / "marked.nc"
+    marked.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    assert read_program(marked).moves == program.moves
+    marked.write_bytes(b"\xef\xbb\xbfG00 X1 Q5\n")
+    with pytest.raises(NCProgramError, match=r"marked\.nc, line 1, column 8, key 'Q5'"):
+        read_program(marked)
 
 
 # (text, line, column, word, message): each refusal the language describes.

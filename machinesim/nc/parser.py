@@ -250,9 +250,14 @@ def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, t
         raise NCProgramError(f"chord_tolerance must be a length > 0 (m), got "
                              f"{chord_tolerance!r}", source=source, key="chord_tolerance")
     offsets = work_offsets_si(work_offsets, source=source)
+    data = data.removeprefix(UTF8_BOM)  # Windows editors start UTF-8 files with one
     reader = Reader(data, errors, source, offsets, integer_input, tool_table(tools),
                      tolerance, fast)
     return reader.read()
+
+
+#: The byte order mark some editors write at the start of a UTF-8 file; not part of line 1.
+UTF8_BOM = b"\xef\xbb\xbf"
 
 
 class Reader:
