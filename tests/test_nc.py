@@ -182,6 +182,7 @@ REFUSALS = [
     ("G00 X0 M02 (end)\n%\nN5", 3, 1, "N5", "block after the program end M02"),
     ("G00 X0 (unclosed", 1, 8, "(", "comment '\\(' is not closed"),
     ("G00 X0 )", 1, 8, ")", "without an opening"),
+    ("G00 X0 (a (b) c)", 1, 11, "(", "comments do not nest: .* opened at column 8"),
     ("G00 X0 / Y1", 1, 8, "/", "unexpected character '/'"),
     ("G00 #1", 1, 5, "#", "unexpected character '#'"),
     ("G00 10", 1, 5, "10", "without an address letter"),

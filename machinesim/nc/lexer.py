@@ -50,6 +50,11 @@ def tokenize(raw: str, source: str, line: int) -> tuple[list[Word], list[NCProgr
             if close < 0:
                 fail("comment '(' is not closed on its line", i + 1, "(")
                 break
+            inner = raw.find("(", i + 1, close)
+            if inner >= 0:  # one problem, not one per word of the comment's rest
+                fail("comments do not nest: this '(' is inside the comment opened at "
+                     f"column {i + 1}, which ends at the first ')'", inner + 1, "(")
+                close = max(close, raw.rfind(")"))
             i = close + 1
         elif c == ";":
             break
