@@ -338,9 +338,8 @@ class _ToolSections:
         self.runs = [(0, tool, 0.0)]
         self.names = [(None, None)]  # (tool number, line of the change)
         #: what a reader of the part should know about the tools it was cut with
-        self.notes = tuple(dict.fromkeys(
-            _unshaped_note(change, tool) for change in getattr(program, "tool_changes", ())
-            if _unshaped_note(change, tool)))
+        notes = (_unshaped_note(change, tool) for change in getattr(program, "tool_changes", ()))
+        self.notes = tuple(dict.fromkeys(note for note in notes if note))
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
                 built[change.shape] = with_nose_radius_error(tool_from_spec(change.shape),
