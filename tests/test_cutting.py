@@ -161,6 +161,25 @@ def test_feeds_are_listed_as_sideways_past_one_degree_not_for_a_machines_small_s
     assert report.sideways_sweeps == 1 and report.sideways_lines == ()
 
 
+def test_turned_groups_list_the_same_sideways_feeds_as_the_plain_cut():
+    # grooves at C = 0 and C = 90 deg: along X (clean), at 2 deg (listed), along Y (listed);
+    # cut in turned groups (each in the frame turned back by its C) and plainly: the same
+    # lines, since the drag's angle is the tool's own, whichever frame it is read in
+    from machinesim.cutting.windows import cut_turned
+
+    b = ProgramBuilder(1).rapid(Z=0.1 * MM)
+    for c, (dx, dy) in ((0.0, (2.0, 0.0)), (0.0, (2.0, 2 * math.tan(math.radians(2.0)))),
+                        (math.pi / 2, (0.0, 1.0))):
+        b.rapid(X=-1.5 * MM, Y=-1.0 * MM, C=c).linear(Z=-10 * UM, feed_mm_per_min=100.0)
+        b.linear(X=(-1.5 + dx) * MM, Y=(-1.0 + dy) * MM).rapid(Z=0.1 * MM)
+    program = b.build()
+    listed = [program.moves[k].line for k in (7, 11)]
+    stock = "block:5x5x1@-2.5,-2.5,0"
+    _, plain = cut(program, "grooving_4axis", tool="v:90", stock=stock)
+    _, turned = cut_turned(program, "grooving_4axis", tool="v:90", stock=stock)
+    assert plain.sideways_lines == turned.sideways_lines == tuple(listed)
+
+
 def test_a_flat_end_mill_groove_removes_its_polygon_swept_along_the_feed():
     # plunge 10 um and feed 3 mm along X: the removed solid is the depth times the
     # Minkowski sum of the tool's polygon and the feed, whose area is the polygon's (by the

@@ -19,10 +19,10 @@ from machinesim import motion
 from machinesim.cutting.engine import remove
 from machinesim.cutting.rapids import rapids_that_cut
 from machinesim.cutting.sheets import SheetReport, trim_sheets
-from machinesim.cutting.sweepset import sideways_angle
+from machinesim.cutting.sweepset import dragged_past_clearance
 from machinesim.exceptions import AxisLimitError
 from machinesim.nc import MOVE_KINDS
-from machinesim.tolerances import LIMIT_SLACK, SIDEWAYS_WARN_RAD
+from machinesim.tolerances import LIMIT_SLACK
 from machinesim.tools import tool_from_spec, with_nose_radius_error
 from machinesim.workpiece import Part, stock_from_spec
 
@@ -423,12 +423,11 @@ def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
 
 def _sideways_lines(poses: np.ndarray, moves: _Moves, sweeps) -> set[int]:
     """Lines of the feeds among ``sweeps`` that drag the tool sideways by more than
-    `SIDEWAYS_WARN_RAD` (a rapid that cuts is listed among the rapids)."""
+    `tolerances.SIDEWAYS_WARN_RAD` (a rapid that cuts is listed among the rapids)."""
     sweeps = np.asarray(sweeps, dtype=np.int64)
     sweeps = sweeps[~moves.sweep_rapid[sweeps]]
-    a = moves.sweep_start[sweeps]
-    angle = sideways_angle(poses[a, :3, :3], poses[a + 1, :3, 3] - poses[a, :3, 3])
-    return {int(line) for line in moves.sweep_line[sweeps[angle > SIDEWAYS_WARN_RAD]]}
+    beyond = dragged_past_clearance(poses, moves.sweep_start[sweeps])
+    return {int(line) for line in moves.sweep_line[sweeps[beyond]]}
 
 
 def _format(rotary: bool):

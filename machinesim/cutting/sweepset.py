@@ -20,7 +20,7 @@ from machinesim.cutting.sweeps import (
     hull_mesh,
     manifold_from,
 )
-from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL, TWIST_M
+from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL, SIDEWAYS_WARN_RAD, TWIST_M
 
 __all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "SweepSet", "dragged"]
 
@@ -310,11 +310,13 @@ class SweepSet:
         return found
 
 
-def sideways_angle(rotation: np.ndarray, move: np.ndarray) -> np.ndarray:
-    """Angle (rad) by which moves (s, 3) leave the XZ plane of a tool at ``rotation``
-    (s, 3, 3): 0 along its cutting direction or a plunge, pi/2 straight across its edge."""
-    local = np.einsum("nji,nj->ni", rotation, move)
-    return np.arctan2(np.abs(local[:, 1]), np.hypot(local[:, 0], local[:, 2]))
+def dragged_past_clearance(poses: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """Which sweeps, from poses ``starts`` to the next, leave the XZ plane of the tool at
+    its start pose by more than `SIDEWAYS_WARN_RAD`: a real tool's flank rubs there."""
+    local = np.einsum("nji,nj->ni", poses[starts, :3, :3],
+                      poses[starts + 1, :3, 3] - poses[starts, :3, 3])
+    angle = np.arctan2(np.abs(local[:, 1]), np.hypot(local[:, 0], local[:, 2]))
+    return angle > SIDEWAYS_WARN_RAD
 
 
 def dragged(rotation: np.ndarray, move: np.ndarray) -> np.ndarray:

@@ -21,10 +21,9 @@ from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
 from machinesim.cutting.program import CutReport, _Moves, _overtravel, nc_summary
 from machinesim.cutting.sheets import trim_sheets
-from machinesim.cutting.sweepset import sideways_angle
+from machinesim.cutting.sweepset import dragged_past_clearance
 from machinesim.exceptions import InputError
 from machinesim.rotations import rot_z
-from machinesim.tolerances import SIDEWAYS_WARN_RAD
 from machinesim.tools import tool_from_spec
 from machinesim.units import M_PER_MM
 from machinesim.workpiece import Part, stock_from_spec
@@ -139,10 +138,8 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
             offsets = np.cumsum([0] + [len(path) for path in paths[:-1]])
             starts = np.concatenate([o + np.arange(len(path) - 1)
                                      for o, path in zip(offsets, paths, strict=True)])[drags]
-            poses = np.concatenate(paths)
-            angle = sideways_angle(poses[starts, :3, :3],
-                                   poses[starts + 1, :3, 3] - poses[starts, :3, 3])
-            sideways_lines.update(sweep_line[drags[angle > SIDEWAYS_WARN_RAD]].tolist())
+            beyond = dragged_past_clearance(np.concatenate(paths), starts)
+            sideways_lines.update(sweep_line[drags[beyond]].tolist())
         removed += report.removed_volume
         swept += report.swept_volume
         engine_s += report.elapsed_s
