@@ -406,7 +406,7 @@ def parse_floats(text: str, count: int, option: str) -> list[float]:
     except ValueError:
         values = []
     if len(values) != count or not all(math.isfinite(v) for v in values):
-        raise InputError(f"{option} {text!r}: expected {count} comma-separated numbers")
+        raise InputError(f"{option} {text!r}: expected {count} comma-separated finite numbers")
     return values
 
 

@@ -183,6 +183,7 @@ REFUSALS = [
     ("G00 X0 (unclosed", 1, 8, "(", "comment '\\(' is not closed"),
     ("G00 X0 )", 1, 8, ")", "without an opening"),
     ("G00 X0 (a (b) c)", 1, 11, "(", "comments do not nest: .* opened at column 8"),
+    ("O1\nM98 P1\nM30", 2, 1, "M98", "M98 calls O0001, the main program itself"),
     ("G00 X0 / Y1", 1, 8, "/", "unexpected character '/'"),
     ("G00 #1", 1, 5, "#", "unexpected character '#'"),
     ("G00 10", 1, 5, "10", "without an address letter"),

@@ -308,7 +308,7 @@ def test_the_scenario_reproduces_table_1(tmp_path):
     assert summary["injected"]["tool.x"] == pytest.approx(250e-6, abs=1e-18)
     bad = scenario("--tool-offset-um", "1,2", "--out", str(out))
     assert bad.returncode == 2
-    assert "--tool-offset-um '1,2': expected 3 comma-separated numbers" in bad.stderr
+    assert "--tool-offset-um '1,2': expected 3 comma-separated finite numbers" in bad.stderr
     assert "Traceback" not in bad.stderr
 
 

@@ -485,8 +485,11 @@ class Reader:
         sub = self.layout.subprograms.get(number)
         if sub is None:
             have = " ".join(f"O{n:04d}" for n in self.layout.subprograms) or "none"
-            raise self.fail(f"M98 calls O{number:04d}, which is not in this file "
-                            f"(subprograms: {have})", line, word)
+            where = ("the main program itself, which M98 cannot call (a subprogram starts "
+                     "with its O number after M02/M30)" if number == self.state.number
+                     else "which is not in this file")
+            raise self.fail(f"M98 calls O{number:04d}, {where} (subprograms: {have})",
+                            line, word)
         if depth + 1 > MAX_SUBPROGRAM_DEPTH:
             raise self.fail(f"subprograms nest deeper than {MAX_SUBPROGRAM_DEPTH} levels",
                             line, word)
