@@ -413,8 +413,32 @@ def _ball_mesh(radius: float, chord_tol: float, height: float):
     return vertices, triangles, rings, segments
 
 
+class _RotatingBody:
+    """What a rotating tool's envelope (a closed convex polyhedron from ``_mesh()``, its
+    vertices first, its outward triangles second) offers the engine: vertices, triangles,
+    edges, and the same tool with another radius."""
+
+    def vertices(self) -> np.ndarray:
+        """Polyhedron vertices, shape (k, 3) (m), in the order the class states."""
+        return self._mesh()[0]
+
+    def triangles(self) -> np.ndarray:
+        """Outward-oriented triangles of the polyhedron, indices into `vertices`, (t, 3)."""
+        return self._mesh()[1]
+
+    def edges(self) -> np.ndarray:
+        """Index pairs of the polyhedron's edges into `vertices`, shape (e, 2) int64."""
+        triangles = self.triangles()
+        pairs = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+        return np.unique(np.sort(pairs, axis=1), axis=0)
+
+    def with_errors(self, radius_error: float = 0.0):
+        """The same tool with its radius off by ``radius_error`` (m)."""
+        return replace(self, radius=self.radius + radius_error)
+
+
 @dataclass(frozen=True)
-class BallEndMill:
+class BallEndMill(_RotatingBody):
     """Envelope of a rotating ball end mill: a hemisphere of radius R about (0, 0, R) under a
     cylindrical shank of radius R up to ``height``.
 
@@ -454,26 +478,10 @@ class BallEndMill:
         """(rings, segments): the hemisphere's vertices lie on ``rings`` rings of latitude at
         polar angles k pi / (2 rings), k = 1 .. rings, from the tip, each a regular
         ``segments``-gon at azimuths 2 pi j / segments; the shank's top is the equator's
-        polygon at ``height``. The polyhedron is a stack of frusta of regular pyramids."""
+        polygon at ``height``. The polyhedron is a stack of frusta of regular pyramids; its
+        vertices are the tip, then ring by ring."""
         return self._mesh()[2:]
 
-    def vertices(self) -> np.ndarray:
-        """Polyhedron vertices, shape (k, 3) (m): the tip first, then ring by ring."""
-        return self._mesh()[0]
-
-    def triangles(self) -> np.ndarray:
-        """Outward-oriented triangles of the polyhedron, indices into `vertices`, (t, 3)."""
-        return self._mesh()[1]
-
-    def edges(self) -> np.ndarray:
-        """Index pairs of the polyhedron's edges into `vertices`, shape (e, 2) int64."""
-        triangles = self.triangles()
-        pairs = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
-        return np.unique(np.sort(pairs, axis=1), axis=0)
-
-    def with_errors(self, radius_error: float = 0.0) -> BallEndMill:
-        """The same tool with its radius off by ``radius_error`` (m)."""
-        return replace(self, radius=self.radius + radius_error)
 
 
 @functools.lru_cache(maxsize=16)
@@ -504,7 +512,7 @@ def _cylinder_mesh(radius: float, chord_tol: float, height: float):
 
 
 @dataclass(frozen=True)
-class FlatEndMill:
+class FlatEndMill(_RotatingBody):
     """Envelope of a rotating flat end mill: a cylinder of radius R from its flat end face at
     z = 0 (the ``tool_tip`` frame's origin is the face's centre) up to ``height``.
 
@@ -539,26 +547,10 @@ class FlatEndMill:
 
     @property
     def segments(self) -> int:
-        """Corners of the polygon (a multiple of 4)."""
+        """Corners of the polygon (a multiple of 4): the vertices are the end face's n, then
+        the top's."""
         return self._mesh()[2]
 
-    def vertices(self) -> np.ndarray:
-        """Polyhedron vertices, shape (2 n, 3) (m): the end face's polygon, then the top's."""
-        return self._mesh()[0]
-
-    def triangles(self) -> np.ndarray:
-        """Outward-oriented triangles of the polyhedron, indices into `vertices`, (t, 3)."""
-        return self._mesh()[1]
-
-    def edges(self) -> np.ndarray:
-        """Index pairs of the polyhedron's edges into `vertices`, shape (e, 2) int64."""
-        triangles = self.triangles()
-        pairs = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
-        return np.unique(np.sort(pairs, axis=1), axis=0)
-
-    def with_errors(self, radius_error: float = 0.0) -> FlatEndMill:
-        """The same tool with its radius off by ``radius_error`` (m)."""
-        return replace(self, radius=self.radius + radius_error)
 
 
 Tool = VTool | RoundNoseTool | BallEndMill | FlatEndMill
