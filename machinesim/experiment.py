@@ -67,6 +67,11 @@ class Figure:
         The paper's values; None where the paper gives none.
     note : str
         Optional: what a reader must know (``"paper: > 50"``).
+    after_std : float or None
+        Optional: the standard uncertainty of ``after`` over labs with the same stated
+        instruments (another lab, or this one another day, lands this far from ``after``,
+        one standard deviation): how close to a paper's "after" a faithful replay can be
+        expected to come. None where the procedure does not give it.
     """
 
     name: str
@@ -76,6 +81,7 @@ class Figure:
     paper_before: float | None = None
     paper_after: float | None = None
     note: str = ""
+    after_std: float | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -83,8 +89,11 @@ class Figure:
         if self.unit not in FIGURE_UNITS:
             raise InputError(f"figure {self.name!r}: unit {self.unit!r}; expected one of "
                              f"{', '.join(FIGURE_UNITS)}", key="unit")
-        for name in ("before", "after", "paper_before", "paper_after"):
+        for name in ("before", "after", "paper_before", "paper_after", "after_std"):
             object.__setattr__(self, name, _number(getattr(self, name), f"{self.name}.{name}"))
+        if self.after_std is not None and self.after_std < 0.0:
+            raise InputError(f"figure {self.name!r}: after_std {self.after_std!r}; expected "
+                             "a standard uncertainty >= 0", key="after_std")
 
     def as_dict(self) -> dict:
         """The figure as summary.json holds it."""
@@ -93,6 +102,8 @@ class Figure:
                "paper_after": self.paper_after}
         if self.note:
             out["note"] = self.note
+        if self.after_std is not None:
+            out["after_std"] = self.after_std
         return out
 
 

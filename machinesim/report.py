@@ -116,9 +116,9 @@ class ReportFolder:
             self.write_program(f"{name}.nc", program)
         figures = self.write_table(
             "figures", ["figure", "unit", "paper before", "before", "paper after", "after",
-                        "note"],
+                        "after std", "note"],
             [[f.name, f.unit, _cell(f.paper_before), _cell(f.before), _cell(f.paper_after),
-              _cell(f.after), f.note] for f in result.figures],
+              _cell(f.after), _cell(f.after_std), f.note] for f in result.figures],
             title=f"Paper {result.paper}, {result.procedure} on {result.machine}: before and "
                   "after compensation", digits=digits)
         identified = self.write_table(

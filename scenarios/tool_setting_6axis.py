@@ -141,12 +141,15 @@ def report(args, make_lab, realism) -> None:
 
 
 def table_1(folder, result) -> str:
-    """Table 1 of the paper beside the simulated distances (um)."""
-    rows = [[LABELS[f.name], _cell(f.paper_before), _cell(f.paper_after), f.before, f.after]
+    """Table 1 of the paper beside the simulated distances (um), with the after's standard
+    uncertainty over labs (`Figure.after_std`) and the paper's after in units of it."""
+    rows = [[LABELS[f.name], _cell(f.paper_before), _cell(f.paper_after), f.before, f.after,
+             _cell(f.after_std), _in_stds(f.paper_after, f.after_std)]
             for f in result.figures]
     return folder.write_table(
         "table1", ["distance between grooves", "paper original (um)",
-                   "paper compensated (um)", "simulated before (um)", "simulated after (um)"],
+                   "paper compensated (um)", "simulated before (um)", "simulated after (um)",
+                   "after std over labs (um)", "paper compensated / std"],
         rows, title="Paper 001, Table 1: measured machining errors against A and C axis",
         digits=4)
 
@@ -185,6 +188,11 @@ def check_table(folder, check) -> str:
 
 def _cell(value):
     return math.nan if value is None else value
+
+
+def _in_stds(value, std):
+    """``value`` in units of ``std`` (NaN where either is missing or std is 0)."""
+    return math.nan if value is None or not std else value / std
 
 
 if __name__ == "__main__":

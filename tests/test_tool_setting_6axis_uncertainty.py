@@ -14,7 +14,11 @@ from machinesim.cam.tool_setting_plates import mark_point, pair_grooves
 from machinesim.experiment import run
 from machinesim.identification.tool_setting_6axis import identify
 from machinesim.identification.tool_setting_6axis_fit import fit_check
-from machinesim.identification.tool_setting_6axis_uncertainty import propagated_std
+from machinesim.identification.tool_setting_6axis_uncertainty import (
+    _displaced,
+    after_std,
+    propagated_std,
+)
 from machinesim.metrology.imperfections import RegistrationScatter
 from machinesim.procedures.tool_setting_6axis import DEFAULT_INJECTED, ToolSetting6Axis
 from machinesim.realism import Realism
@@ -123,3 +127,59 @@ def test_with_the_background_on_the_pair_reads_the_edge_from_the_real_a_centre()
     found = np.array([result.identified[n][0] for n in ("tool.x", "tool.y")])
     injected = np.array([result.injected[n] for n in ("tool.x", "tool.y")])
     np.testing.assert_allclose(found - injected, -centre, atol=10e-9)
+
+
+# ---------------------------------------------------------------- the "after" over labs
+
+def table(procedure, plates):
+    return dict(zip(("a_dx", "a_dy", "c_dx", "c_dy", "b2", "b3"),
+                    procedure._table_values(*plates), strict=True))
+
+
+def test_compensating_more_moves_what_is_read_after_by_minus_as_much(readings):
+    """Plates cut with the C centre compensated by de more read a C centre de lower (the
+    programs turn about e + de), and the A pair, cut at C = 0, does not move; cut with the
+    tool offset compensated by dd more, the pair's distance (2 d) is 2 dd lower, and the
+    triangle, placed by its mark, reads (-1, +1) dd_y (the mark test above)."""
+    procedure, m = readings
+    plates = (m.a, m.c, m.b)
+    base = table(procedure, plates)
+
+    def moved(delta, centre):
+        return table(procedure, tuple(tuple(_displaced(g, np.asarray(delta), centre)
+                                            for g in plate) for plate in plates))
+
+    de = np.array([3.0, -1.0]) * UM
+    got = moved([0.0, 0.0, 0.0], de)
+    assert got["c_dx"] - base["c_dx"] == pytest.approx(-3.0, abs=1e-9)
+    assert got["c_dy"] - base["c_dy"] == pytest.approx(1.0, abs=1e-9)
+    for key in ("a_dx", "a_dy", "b2", "b3"):
+        assert got[key] == pytest.approx(base[key], abs=1e-9)
+    dd = np.array([1.0, -2.0, 0.0]) * UM
+    got = moved(dd, None)
+    assert got["a_dx"] - base["a_dx"] == pytest.approx(-2.0, abs=1e-9)
+    assert got["a_dy"] - base["a_dy"] == pytest.approx(4.0, abs=1e-9)
+    assert got["c_dx"] - base["c_dx"] == pytest.approx(2.0, abs=1e-9)
+    assert got["c_dy"] - base["c_dy"] == pytest.approx(-2.0, abs=1e-9)
+
+
+def test_the_after_holds_both_readings_and_the_mark_cancels(readings):
+    """With the same readings before and after, an A figure's after std is sqrt(2) times its
+    reading's (the identification's error, compensated in, and the after's own reading).
+    With only the A pair uncertain, the identified e carries dy's error (the mark) but the C
+    figures after do not: the compensated C plate is cut with the same dy and its mark
+    reads it alike, so the two cancel."""
+    procedure, m = readings
+    a = with_sigma(m.a, point=1 * UM, start=1 * UM)
+    c, b = with_sigma(m.c), with_sigma(m.b)
+    plates = (a, c, b)
+    std = dict(zip(("a_dx", "a_dy", "c_dx", "c_dy", "b2", "b3"), after_std(
+        procedure._table_values, procedure._compensation_values, plates, plates,
+        PROGRAMMED), strict=True))
+    reading = propagated_std(procedure._table_values, *plates, PROGRAMMED)
+    assert reading[0] > 1.0 and reading[1] > 1.0        # um: the pair is uncertain
+    assert std["a_dx"] == pytest.approx(np.sqrt(2.0) * reading[0], rel=1e-6)
+    assert std["a_dy"] == pytest.approx(np.sqrt(2.0) * reading[1], rel=1e-6)
+    assert paper_std(m, a, c, b)["location.C.EX0C"] > 0.5 * UM
+    # um: what is left is the exact C readings' floor (SIGMA_FLOOR_M, picometres)
+    assert std["c_dx"] < 1e-5 and std["c_dy"] < 1e-5

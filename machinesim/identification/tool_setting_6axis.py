@@ -44,7 +44,7 @@ from machinesim.rotations import rot_y, rot_z
 __all__ = [
     "AAxisResult", "BAxisResult", "CAxisResult", "Compensation", "GrooveReading",
     "Identification", "PARAMETERS", "a_axis_pairs", "b_axis_offsets", "b_axis_tilts",
-    "c_axis_triangle", "corrected_axes", "identify",
+    "c_axis_triangle", "corrected_axes", "identify", "read_stages",
 ]
 
 #: The error parameters paper 001 identifies, as `Machine.parameter_names` spells them.
@@ -207,6 +207,9 @@ class Identification:
         Standard uncertainty (m) of the cross-check's values: the fit's own covariance (the
         readings' independent errors) and the plates' registration propagated through the
         fit, in quadrature (`ToolSetting6Axis.identify`).
+    readings : object, optional
+        The readings identified from (a procedure's measurements), for the uncertainty of
+        what is cut with the result (`after_std`).
     """
 
     z_touch: float
@@ -217,6 +220,7 @@ class Identification:
     std: Mapping[str, float] = field(default_factory=dict)
     check: object = None
     check_std: Mapping[str, float] = field(default_factory=dict)
+    readings: object = None
 
     @property
     def values(self) -> dict[str, float]:
@@ -424,10 +428,7 @@ def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReadi
     from machinesim.identification.tool_setting_6axis_uncertainty import propagated_std
 
     def stages(a, c, b):
-        return (a_axis_pairs([g.start for g in a], programmed),
-                c_axis_triangle([g.points for g in c], mark_at),
-                b_axis_tilts([g.depths.mean() for g in b], theta2, theta3,
-                             [g.q_start[AXES.index("Z")] for g in b]))
+        return read_stages(a, c, b, programmed, theta2, theta3, mark_at)
 
     def values(a, c, b):
         ra, rc, rb = stages(a, c, b)
@@ -439,6 +440,18 @@ def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReadi
     std = propagated_std(values, a, c, b, programmed, registration)
     return Identification(float(z_touch), ra, rb, rc, compensation,
                           MappingProxyType(dict(zip(PARAMETERS, std.tolist(), strict=True))))
+
+
+def read_stages(a: Sequence[GrooveReading], c: Sequence[GrooveReading],
+                b: Sequence[GrooveReading], programmed_starts, theta2: float, theta3: float,
+                mark_at=None) -> tuple[AAxisResult, CAxisResult, BAxisResult]:
+    """The three stages' results from the plates' readings (`identify`'s arguments): the A
+    pair (`a_axis_pairs`), the triangle (`c_axis_triangle`) and the B tilts
+    (`b_axis_tilts`, each groove's depth the mean over its profiles)."""
+    return (a_axis_pairs([g.start for g in a], programmed_starts),
+            c_axis_triangle([g.points for g in c], mark_at),
+            b_axis_tilts([g.depths.mean() for g in b], theta2, theta3,
+                         [g.q_start[AXES.index("Z")] for g in b]))
 
 
 # ---------------------------------------------------------------------------- compensation

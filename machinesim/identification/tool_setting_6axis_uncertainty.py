@@ -43,7 +43,7 @@ from machinesim.metrology.imperfections import RegistrationScatter
 from machinesim.metrology.prisms import SIGMA_FLOOR_M
 from machinesim.rotations import rot_y, rot_z
 
-__all__ = ["PLATES", "PROPAGATION_STEP", "propagated_std"]
+__all__ = ["PLATES", "PROPAGATION_STEP", "after_std", "propagated_std"]
 
 #: The plates in the order their readings are passed: the A pair, the C triangle (with its
 #: mark), the B grooves. The C and B plates are cut with the A pair's dx, dy compensated.
@@ -60,7 +60,7 @@ Plates = tuple[Sequence[GrooveReading], Sequence[GrooveReading], Sequence[Groove
 def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReading],
                    c: Sequence[GrooveReading], b: Sequence[GrooveReading], programmed,
                    registration: Mapping[str, RegistrationScatter | None] | None = None,
-                   *, own_errors: bool = True) -> np.ndarray:
+                   *, own_errors: bool = True, staged: bool = True) -> np.ndarray:
     """Standard uncertainties of ``function(a, c, b)`` from every error of the readings
     (module docstring).
 
@@ -81,6 +81,10 @@ def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReadin
         False: leave out each reading's own errors (and with them the plates cut with the
         A result, which move only with the A readings), for a function whose own covariance
         holds them already (a least-squares fit weighted by the same sigmas).
+    staged : bool
+        True (the identification's plates): the C and B plates were cut with the A pair's
+        result, so an error of the A readings moves them too. False (plates all cut with
+        one compensation fixed beforehand, as the compensated plates are): it does not.
 
     Returns
     -------
@@ -108,6 +112,8 @@ def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReadin
 
     def shifted(step):
         moved = _shifted(plates, iter(step), [s is not None for s in scatters])
+        if not staged:
+            return function(*moved)
         found = a_axis_pairs([g.start for g in moved[0]], programmed).offset
         delta = np.r_[found - cut_with, 0.0]
         return function(moved[0], *(tuple(_displaced(g, delta) for g in plate)
@@ -176,15 +182,18 @@ def _registered(g: GrooveReading, offset: np.ndarray, turn: float) -> GrooveRead
                    start=None if g.start is None else frame(g.start))
 
 
-def _displaced(g: GrooveReading, delta: np.ndarray) -> GrooveReading:
+def _displaced(g: GrooveReading, delta: np.ndarray, centre=None) -> GrooveReading:
     """``g`` had its plate been cut with the tool offset compensated by ``delta`` (m, tool
-    axes) more: the program's X Y Z move by ``-Ry(B) Rz(A) delta`` (`corrected_axes`), the
-    edge with them, so the groove moves by ``Rz(C)`` of that in the workpiece frame and its
-    depth by minus its z."""
-    if not delta.any():
+    axes) more, and the C centre line by ``centre`` (m, xy; none by default) more: the
+    program's X Y Z move by ``-Ry(B) Rz(A) delta + (centre - Rz(-C) centre, 0)``
+    (`corrected_axes`), the edge with them, so the groove moves by ``Rz(C)`` of that in the
+    workpiece frame and its depth by minus its z."""
+    centre = np.zeros(2) if centre is None else np.asarray(centre, dtype=np.float64)
+    if not delta.any() and not centre.any():
         return g
     a, b, c = (float(g.q_start[AXES.index(axis)]) for axis in "ABC")
     program = -(rot_y(b) @ rot_z(a) @ delta)
+    program[:2] += centre - rot_z(-c)[:2, :2] @ centre
     edge = rot_z(c) @ program
     xyz = [AXES.index(axis) for axis in "XYZ"]
     q_start, q_end = g.q_start.copy(), g.q_end.copy()
@@ -193,3 +202,62 @@ def _displaced(g: GrooveReading, delta: np.ndarray) -> GrooveReading:
     return replace(g, q_start=q_start, q_end=q_end, points=g.points + edge[:2],
                    depths=g.depths - edge[2],
                    start=None if g.start is None else g.start + edge[:2])
+
+
+def after_std(figures: Callable[..., np.ndarray],
+              identified: Callable[..., tuple[np.ndarray, np.ndarray]], before: Plates,
+              after: Plates, programmed,
+              registration_before: Mapping[str, RegistrationScatter | None] | None = None,
+              registration_after: Mapping[str, RegistrationScatter | None] | None = None,
+              ) -> np.ndarray:
+    """Standard uncertainties of figures read on the compensated plates: how far another lab
+    of the same stated instruments would land from this one's "after".
+
+    An "after" figure is what is left of an error once it is compensated, as read. Two
+    independent sets of reading errors move it:
+
+    - **the identification's**: an error of the plates read before moves the identified d
+      and e, so the compensated plates are cut with a compensation off by as much, and
+      their grooves move (`_displaced`, `corrected_axes`): propagated through the
+      identification, the compensation and the reading of the compensated plates;
+    - **the compensated plates' own readings**: propagated as any reading
+      (`propagated_std`), but not staged: every compensated plate is cut with the one
+      compensation found before.
+
+    Correlations are kept where they arise: the C plates are cut with the A pair's dy
+    before and after, and the reference mark reads it alike both times, so it cancels from
+    the C figures after (it does not from e identified).
+
+    Parameters
+    ----------
+    figures : callable
+        ``figures(a, c, b) -> ndarray``: the figures from one set of plate readings.
+    identified : callable
+        ``identified(a, c, b) -> (d, e)``: the compensation the identification finds from the
+        plates read before (d = tool offset, 3; e = C centre, 2; m).
+    before, after : tuple of 3 sequences of GrooveReading
+        The plates read for the identification (A, C, B) and the compensated plates.
+    programmed : array_like, shape (2, 2)
+        The A grooves' programmed start points (m).
+    registration_before, registration_after : mapping, optional
+        The stated registration scatter of each plate's microscope, as for
+        `propagated_std`.
+
+    Returns
+    -------
+    ndarray
+        One standard uncertainty per figure, in its units.
+    """
+    base_d, base_e = (np.asarray(v, dtype=np.float64) for v in identified(*before))
+    after = tuple(tuple(plate) for plate in after)
+
+    def through_compensation(a, c, b):
+        d, e = identified(a, c, b)
+        return figures(*(tuple(_displaced(g, np.asarray(d) - base_d, np.asarray(e) - base_e)
+                               for g in plate) for plate in after))
+
+    from_before = propagated_std(through_compensation, *before, programmed,
+                                 registration_before)
+    from_after = propagated_std(figures, *after, programmed, registration_after,
+                                staged=False)
+    return np.hypot(from_before, from_after)

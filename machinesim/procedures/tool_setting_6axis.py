@@ -62,13 +62,12 @@ from machinesim.identification.tool_setting_6axis import (
     GrooveReading,
     Identification,
     a_axis_pairs,
-    b_axis_tilts,
-    c_axis_triangle,
     corrected_axes,
     identify,
+    read_stages,
 )
 from machinesim.identification.tool_setting_6axis_fit import fit_check
-from machinesim.identification.tool_setting_6axis_uncertainty import propagated_std
+from machinesim.identification.tool_setting_6axis_uncertainty import after_std, propagated_std
 from machinesim.machines import load_machine
 from machinesim.metrology import (
     fit_line,
@@ -440,7 +439,7 @@ class ToolSetting6Axis:
                                 own_errors=False)
         check_std = np.hypot(check.std, frames)
         found = replace(found, check=check, check_std=MappingProxyType(
-            dict(zip(check.names, check_std.tolist(), strict=True))))
+            dict(zip(check.names, check_std.tolist(), strict=True))), readings=m)
         return Identified(parameters=found.parameters, detail=found)
 
     def compensate(self, identified: Identified) -> dict[str, Program]:
@@ -457,20 +456,25 @@ class ToolSetting6Axis:
         machine = self._machine()
         cuts = plate_cuts(self.plan)
         before: Identification = identified.detail
-        parts, reports, after = {}, {}, {}
+        parts, reports, after, registration = {}, {}, {}, {}
         for s in "acb":
             name = COMPENSATED[s]
             part, report = lab.cut(programs[name], TOOL, cuts[s].stock, start=PARKED)
             parts[name], reports[name] = part, cut_summary(report)
-            after[s] = read_plate(s, part, lab.microscope(label=f"{s}/compensated"),
-                                  programs[name], machine, self.plan)
-        a_after = a_axis_pairs([g.start for g in after["a"]], _programmed_starts())
-        c_after = c_axis_triangle([g.points for g in after["c"]], mark_point())
-        b_after = b_axis_tilts([g.depths.mean() for g in after["b"]], self.plan.theta2,
-                               self.plan.theta3, [g.q_start[2] for g in after["b"]])
+            microscope = lab.microscope(label=f"{s}/compensated")
+            after[s] = read_plate(s, part, microscope, programs[name], machine, self.plan)
+            registration[s] = microscope.registration_scatter
+        a_after, c_after, b_after = self._stages(after["a"], after["c"], after["b"])
         old, new = (_table(before.a, before.b, before.c), _table(a_after, b_after, c_after))
-        figures = tuple(Figure(k, "um", old[k], new[k], *PAPER_TABLE_1.get(k, (None, None)))
-                        for k in old)
+        spread = dict.fromkeys(old)
+        if before.readings is not None:
+            m = before.readings
+            spread = dict(zip(old, after_std(
+                self._table_values, self._compensation_values, (m.a, m.c, m.b),
+                (after["a"], after["c"], after["b"]), _programmed_starts(), m.registration,
+                registration).tolist(), strict=True))
+        figures = tuple(Figure(k, "um", old[k], new[k], *PAPER_TABLE_1.get(k, (None, None)),
+                               after_std=spread[k]) for k in old)
         details = {
             "before": _stage_dict(before.a, before.b, before.c),
             "after": _stage_dict(a_after, b_after, c_after),
@@ -489,6 +493,21 @@ class ToolSetting6Axis:
 
     def _machine(self):
         return _nominal(self.machine)
+
+    def _stages(self, a, c, b):
+        """The A, C and B results from one set of plate readings."""
+        return read_stages(a, c, b, _programmed_starts(), self.plan.theta2, self.plan.theta3,
+                           mark_point())
+
+    def _table_values(self, a, c, b) -> np.ndarray:
+        """Table 1's quantities (um) from one set of plate readings, in `_table`'s order."""
+        ra, rc, rb = self._stages(a, c, b)
+        return np.array(list(_table(ra, rb, rc).values()))
+
+    def _compensation_values(self, a, c, b) -> tuple[np.ndarray, np.ndarray]:
+        """The compensation (d, e) (m) the identification finds from plate readings."""
+        ra, rc, rb = self._stages(a, c, b)
+        return np.r_[ra.offset, rb.offset_z], rc.centre
 
     def _model_based(self, found: Identification, cuts) -> dict:
         """Both routes of `machinesim.compensation` on the identified model: how far the
