@@ -422,6 +422,16 @@ def groove_table(folder: ReportFolder, grooves) -> str:
     spread = grooves.figure("groove_depth_spread")
     rows.append(["spread of the four (nm)", spread.before, spread.after,
                  details["groove_depth_spread_after_model_nm"]])
+    labs = details.get("groove_spread_after_over_labs")
+    if labs is not None:
+        # docs/procedures/workpiece_setting.md: one run is one draw of the lab
+        rows += [["spread over labs of the stated tilts: median (nm)", "", labs["median_nm"],
+                  ""],
+                 ["  10 % and 90 % of labs below (nm)", "",
+                  f"{labs['q10_nm']:.0f} and {labs['q90_nm']:.0f}", ""],
+                 ["  share of labs below this run's spread, the paper's 100 nm", "",
+                  f"{labs['simulated_quantile_ratio']:.0%}, "
+                  f"{labs['paper_quantile_ratio']:.0%}", ""]]
     return folder.write_table(
         "grooves", ["groove", "before (um)", "after, eqs 5-7 (um)", "after, model-based (um)"],
         rows, title="Depth at the end of each groove (3 um programmed; paper Fig. 8b: "

@@ -80,7 +80,12 @@ from machinesim.identification.workpiece_setting import (
     parameters,
     program_poses,
 )
-from machinesim.identification.workpiece_setting_uncertainty import contact_std, design_std
+from machinesim.identification.workpiece_setting_uncertainty import (
+    contact_std,
+    design_std,
+    tilt_spread_quantile,
+    tilt_spread_quantiles,
+)
 from machinesim.metrology.crown_image import (
     CrownImageReading,
     crown_image_reading,
@@ -365,6 +370,7 @@ class RobotLoadedWorkpiece:
                  "nose_correction_mm": self.nose / MM}
         if self.experiment == "grooves":
             evaluation = self._grooves(lab, programs)
+            extra.update(_spread_over_labs(identified, evaluation))
         else:
             evaluation = self._crown(lab, found, programs)
         return replace(evaluation, details={**evaluation.details, **extra})
@@ -565,6 +571,30 @@ def _cut_details(report) -> dict:
             "sideways_sweeps_count": report.sideways_sweeps,
             "rapids_that_cut_count": len(report.rapids_that_cut),
             "removed_volume_mm3": report.removed_volume_m3 * 1e9, "elapsed_s": report.elapsed_s}
+
+
+#: Quantiles of the grooves' spread over labs in the report (`_spread_over_labs`).
+SPREAD_QUANTILES = {"q10": 0.1, "median": 0.5, "q90": 0.9}
+
+
+def _spread_over_labs(identified: Identified, grooves: Evaluation) -> dict:
+    """The grooves' spread after compensation as labs with the stated tilt uncertainty
+    would cut it (`tilt_spread_quantiles`; the ends read farthest out, 2 x the last
+    station, apart), and where the paper's spread falls among them."""
+    sa = identified.parameters["workpiece.alpha"][1]
+    sb = identified.parameters["workpiece.beta"][1]
+    if not (math.isfinite(sa) and math.isfinite(sb)) or (sa == 0.0 and sb == 0.0):
+        return {}
+    span = 2.0 * grooves.details["groove_stations_mm"][-1] * MM
+    found = next(f.after for f in grooves.figures if f.name == "groove_depth_spread")
+    spread = tilt_spread_quantiles(sa, sb, span, list(SPREAD_QUANTILES.values()))
+    over_labs = {f"{name}_nm": value / M_PER_NM
+                 for name, value in zip(SPREAD_QUANTILES, spread.tolist(), strict=True)}
+    over_labs["paper_quantile_ratio"] = tilt_spread_quantile(
+        PAPER_GROOVE_SPREAD_NM * M_PER_NM, sa, sb, span)
+    over_labs["simulated_quantile_ratio"] = tilt_spread_quantile(
+        found * M_PER_NM, sa, sb, span)
+    return {"groove_spread_after_over_labs": over_labs}
 
 
 def _identification_details(identified: Identified) -> dict:
