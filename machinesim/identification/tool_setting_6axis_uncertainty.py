@@ -21,7 +21,9 @@ reading error move it, and each is propagated here (first order, central differe
   generic fit compares each reading with the program as cut, so it does not either.
 
 `propagated_std` takes any function of the readings, so the model-based cross-check
-(`machinesim.identification.tool_setting_6axis_fit`) gets its uncertainty the same way.
+(`machinesim.identification.tool_setting_6axis_fit`) gets its uncertainty the same way, and
+`after_std` carries the same errors on into what the compensated plates read: the spread of
+Table 1's "after" over labs.
 docs/procedures/tool_setting_6axis.md gives the figures.
 """
 
