@@ -62,7 +62,6 @@ from machinesim.cam.crown import (
     machining_time,
     passes_program,
 )
-from machinesim.compensation import map_program, model_based
 from machinesim.cutting import clip_to, cut
 from machinesim.exceptions import InputError
 from machinesim.experiment import Evaluation, Figure, Identified
@@ -72,13 +71,9 @@ from machinesim.identification.workpiece_setting import (
     ReferenceSpheres,
     SphereReadings,
     check_machine,
-    eqs_5_to_7,
     fit_setting,
-    identified_errors,
     identify,
-    nose_shift,
     parameters,
-    program_poses,
 )
 from machinesim.identification.workpiece_setting_uncertainty import (
     contact_std,
@@ -99,6 +94,10 @@ from machinesim.procedures.sphere_probing import (
     probe_axes,
     read_sphere,
     read_spheres,
+)
+from machinesim.procedures.workpiece_setting_programs import (
+    eqs_5_to_7_program,
+    model_based_program,
 )
 from machinesim.realism import OBJECTIVE_10X
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
@@ -127,67 +126,6 @@ PAPER_S = ((-1.73, -0.10), (0.95, 0.05), (2.30, 0.02), (0.93, 0.03), (-1.56, 0.0
 PAPER_TIME = {"finishing_h": 9.5, "cuboid_h": 40.0, "saved_percent": 76.0}
 #: Fig. 8b: the four grooves' depths "within about 100 nm" of each other after.
 PAPER_GROOVE_SPREAD_NM = 100.0
-
-# ------------------------------------------------------------------------- compensation
-
-
-def eqs_5_to_7_program(program: Program, machine, found: Identification,
-                       nose_radius: float = 0.0, *, start=PARK, rounded: bool = True
-                       ) -> Program:
-    """Rewrite ``program`` by eqs 5-7 (`machinesim.compensation.map_program` with
-    `machinesim.identification.workpiece_setting.eqs_5_to_7`).
-
-    Parameters
-    ----------
-    program : Program
-        Written for the ideal workpiece on the nominal machine (axes X Y Z B C).
-    machine : Machine
-    found : Identification
-    nose_radius : float
-        m: keep the nose arc's lowest point on the path (`nose_shift`); 0 keeps the tip, as
-        the paper's eq 7.
-    start : array-like, shape (5,)
-        Axis values before the first block (default `machinesim.cam.crown.PARK`).
-    rounded : bool
-        Round to the machine's resolution (default; the NC text's values).
-    """
-    return map_program(program, machine,
-                       lambda q: eqs_5_to_7(q, found.setting, found.c_centre, nose_radius),
-                       start=start, rounded=rounded)
-
-
-def model_based_program(program: Program, machine, found: Identification,
-                        nose_radius: float = 0.0, *, start=PARK, rounded: bool = True,
-                        iterations: int = 3) -> Program:
-    """Rewrite ``program`` through the identified model (`identified_errors`).
-
-    The tip route is `machinesim.compensation.model_based`. With a nose radius the point to
-    keep on the path is the nose arc's lowest point along the wanted tool axis, which depends
-    on the orientation reached (`nose_shift`) and so is no fixed point of the tool frame, the
-    only kind `model_based` keeps (keeping the nose centre misses by 0.4 nm at 3 mrad
-    settings, docs/procedures/workpiece_setting.md). So that route solves
-    `Machine.axis_values` for the tip moved by `nose_shift`, ``iterations`` times, through
-    `machinesim.compensation.map_program`.
-    """
-    check_machine(machine)
-    errors = identified_errors(found)
-    if nose_radius == 0.0:
-        return model_based(program, machine, errors, start=start, rounded=rounded).program
-
-    def solve(q: np.ndarray) -> np.ndarray:
-        wanted, tip = program_poses(q)
-        target = np.tile(np.eye(4), (len(q), 1, 1))
-        target[:, :3, :3] = wanted
-        target[:, :3, 3] = tip
-        solution = q
-        for _ in range(iterations):
-            solution = machine.axis_values(target, errors, q_start=solution).q
-            reached = machine.tool_pose(solution, errors)[:, :3, :3]
-            target[:, :3, 3] = tip + nose_shift(wanted, reached, nose_radius)
-        return solution
-
-    return map_program(program, machine, solve, start=start, rounded=rounded)
-
 
 # ---------------------------------------------------------------------------- procedure
 
