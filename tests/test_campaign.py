@@ -308,3 +308,37 @@ def test_the_xy_plane_procedure_varies_a_c_location_error_on_its_tables():
     value, std = record["identified"]["location.C.EX0C"]
     assert record["injected"]["location.C.EX0C"] == drawn
     assert abs(value - drawn) < 5 * std and std < 50e-9
+
+
+def test_the_after_is_held_against_its_stated_spread(tmp_path):
+    """Paper 001's figures state their spread over labs (`Figure.after_std`): the campaign
+    keeps it per trial and summarises after / after_std as z-scores, computed here by hand
+    from the Dataset. Two trials of the noisy lab."""
+    from machinesim.campaign.summary import summarise
+
+    ds = run("tool_setting_6axis", 2, seed=3, out=tmp_path, workers=0, progress=False)
+    assert not ds["failed"].values.any()
+    std = ds["after_std"].sel(figure="a_dx").values
+    assert np.all(std > 0.0)
+    z = ds["after"].sel(figure="a_dx").values / std
+    summary = summarise(ds)
+    assert summary["figures"]["a_dx"]["after_z"]["mean"] == pytest.approx(z.mean(), rel=1e-12)
+    assert summary["figures"]["a_dx"]["after_z"]["std"] == pytest.approx(z.std(ddof=1),
+                                                                         rel=1e-12)
+    assert "against its stated spread" in (tmp_path / "summary.md").read_text()
+
+
+def test_trials_written_before_the_after_std_still_assemble():
+    """A trial file from before figures carried after_std (three values) reads as NaN."""
+    from machinesim.campaign.results import assemble
+    from machinesim.campaign.summary import summarise
+
+    record = {"trial": 0, "drawn": {}, "injected": {"tool.y": 1e-6},
+              "identified": {"tool.y": [1.1e-6, 1e-7]}, "figures": {"a_dx": ["um", 5.0, 0.2]},
+              "elapsed_s": 1.0, "error": None}
+    spec = {"procedure": "tool_setting_6axis", "seed": 0, "vary": {}, "noise": True,
+            "identify_only": False}
+    ds = assemble([record], spec, 1)
+    assert math.isnan(float(ds["after_std"].values[0, 0]))
+    assert float(ds["after"].values[0, 0]) == 0.2
+    assert "after_z" not in summarise(ds)["figures"]["a_dx"]

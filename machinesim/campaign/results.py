@@ -17,6 +17,8 @@ variable                      dims                    what
 ``identified``                (trial, parameter)      identified value, SI
 ``identified_std``            (trial, parameter)      the std the identification reported
 ``before``, ``after``         (trial, figure)         each figure before / after compensation
+``after_std``                 (trial, figure)         the after's stated spread over labs
+                                                      (`Figure.after_std`; NaN: none stated)
 ``elapsed_s``                 (trial)                 wall time of the trial, s
 ``failed``                    (trial)                 1 where the trial ended in an error
 ``figure_unit``               (figure)                unit of ``before``/``after`` (coordinate)
@@ -152,8 +154,8 @@ def assemble(records: list[dict], spec: dict, trials: int):
     figures = _names(records, "figures")
     units = {}
     for record in records:
-        for name, (unit, _, _) in record["figures"].items():
-            units.setdefault(name, unit)
+        for name, values in record["figures"].items():
+            units.setdefault(name, values[0])
     n = len(records)
 
     def table(names, value):
@@ -179,6 +181,9 @@ def assemble(records: list[dict], spec: dict, trials: int):
                            table(parameters, lambda r, k: get(r["identified"], k, 1))),
         "before": (("trial", "figure"), table(figures, lambda r, k: get(r["figures"], k, 1))),
         "after": (("trial", "figure"), table(figures, lambda r, k: get(r["figures"], k, 2))),
+        # trials written before figures carried after_std hold three values
+        "after_std": (("trial", "figure"), table(figures, lambda r, k: get(
+            r["figures"], k, 3) if len(r["figures"].get(k) or ()) > 3 else math.nan)),
         "elapsed_s": (("trial",), np.array([r["elapsed_s"] for r in records], dtype=float)),
         "failed": (("trial",), np.array([r["error"] is not None for r in records],
                                         dtype=np.int8)),
@@ -192,7 +197,7 @@ def assemble(records: list[dict], spec: dict, trials: int):
     # figures in an identification-only campaign, nothing varied) is left out
     for dim, names in (("varied", ("drawn",)), ("parameter", ("injected", "identified",
                                                               "identified_std")),
-                       ("figure", ("before", "after"))):
+                       ("figure", ("before", "after", "after_std"))):
         if not len(coords[dim]):
             for name in names:
                 del data[name]

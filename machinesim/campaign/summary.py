@@ -7,7 +7,9 @@ summary.json (every number under a key ending in its unit, as docs/reports.md as
 - ``figures``: per figure, its ``unit`` and ``before``/``after``: `statistics.describe`
   (count, mean, std, min, max, ``shortest_95`` and ``symmetric_95`` coverage intervals) in
   the figure's unit, and ``sensitivity``: varied parameter -> Spearman rank correlation with
-  the after value;
+  the after value; where the procedure states the after's spread over labs
+  (`Figure.after_std`), ``after_z``: the z-scores after / after_std (`statistics.z_summary`;
+  a faithful spread gives std 1, 95 % within +-1.96);
 - ``parameters``: per identified parameter, the identification error (identified - injected)
   described in SI (``error_si``), its z-scores (`statistics.z_summary`) and ``sensitivity``:
   varied parameter -> Spearman rank correlation with the error's magnitude;
@@ -58,6 +60,10 @@ def summarise(dataset) -> dict:
             "sensitivity": {v: spearman(dataset["drawn"].values[:, j], after)
                             for j, v in enumerate(varied)},
         }
+        if "after_std" in dataset:
+            z = z_scores(after, 0.0, dataset["after_std"].values[:, k])
+            if np.isfinite(z).any():
+                figures[str(name)]["after_z"] = z_summary(z)
     parameters = {}
     for k, name in enumerate(_names(dataset, "parameter")):
         found, truth = dataset["identified"].values[:, k], dataset["injected"].values[:, k]
@@ -106,6 +112,15 @@ def _markdown(summary: dict) -> str:
             lines.append(f"| {name} | {f['unit']} | {_g(b['mean'])} | {_g(b['std'])} | "
                          f"{_g(a['mean'])} | {_g(a['std'])} | {_interval(a['shortest_95'])} | "
                          + " | ".join(_g(f["sensitivity"][v], 3) for v in varied) + " |")
+        lines.append("")
+    stated = {name: f["after_z"] for name, f in summary["figures"].items() if "after_z" in f}
+    if stated:
+        lines += ["## The after against its stated spread over labs", "",
+                  "z = after / after_std (the procedure's stated spread, docs/reports.md): a "
+                  "faithful spread gives mean 0, std 1, 95 % within +-1.96.", "",
+                  "| figure | z mean | z std | within +-1.96 |", "|---|---|---|---|"]
+        lines += [f"| {name} | {_g(z['mean'], 3)} | {_g(z['std'], 3)} | "
+                  f"{_g(z['within_1_96_ratio'], 3)} |" for name, z in stated.items()]
         lines.append("")
     if summary["parameters"]:
         lines += ["## Identification: error and z-scores", "",

@@ -311,7 +311,8 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
     dict
         ``trial``, ``drawn`` (varied parameters, SI), ``injected`` (the lab's truth as
         `machinesim.experiment.run` reports it), ``identified`` (name -> [value, std]),
-        ``figures`` (name -> [unit, before, after]), ``elapsed_s``, ``error`` (None, or the
+        ``figures`` (name -> [unit, before, after, after_std]; after_std NaN where the
+        procedure states none), ``elapsed_s``, ``error`` (None, or the
         message of the `MachineSimError` the trial ended with: a failed identification is a
         result too).
     """
@@ -333,8 +334,8 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
         record["injected"] = {n: float(v) for n, v in result.injected.items()}
         record["identified"] = {n: [float(v), float(s)] for n, (v, s)
                                 in result.identified.items()}
-        record["figures"] = {f.name: [f.unit, _float(f.before), _float(f.after)]
-                             for f in result.figures}
+        record["figures"] = {f.name: [f.unit, _float(f.before), _float(f.after),
+                                      _float(f.after_std)] for f in result.figures}
     record["elapsed_s"] = time.perf_counter() - began
     return record
 
