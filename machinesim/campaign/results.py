@@ -166,8 +166,10 @@ def assemble(records: list[dict], spec: dict, trials: int):
         return out
 
     def get(mapping, name, index=None):
+        # NaN for what a record lacks: trials written before figures carried after_std hold
+        # three values
         v = mapping.get(name)
-        if v is None:
+        if v is None or (index is not None and index >= len(v)):
             return math.nan
         return v if index is None else v[index]
 
@@ -181,9 +183,7 @@ def assemble(records: list[dict], spec: dict, trials: int):
                            table(parameters, lambda r, k: get(r["identified"], k, 1))),
         "before": (("trial", "figure"), table(figures, lambda r, k: get(r["figures"], k, 1))),
         "after": (("trial", "figure"), table(figures, lambda r, k: get(r["figures"], k, 2))),
-        # trials written before figures carried after_std hold three values
-        "after_std": (("trial", "figure"), table(figures, lambda r, k: get(
-            r["figures"], k, 3) if len(r["figures"].get(k) or ()) > 3 else math.nan)),
+        "after_std": (("trial", "figure"), table(figures, lambda r, k: get(r["figures"], k, 3))),
         "elapsed_s": (("trial",), np.array([r["elapsed_s"] for r in records], dtype=float)),
         "failed": (("trial",), np.array([r["error"] is not None for r in records],
                                         dtype=np.int8)),
