@@ -257,6 +257,26 @@ def test_a_spot_turns_a_step_into_the_spots_cumulative_weights(step, shape):
                                    atol=ROUND_OFF_M)
 
 
+def test_a_round_spot_reads_a_slanted_edge_as_a_square_one(step):
+    """A Gaussian spot is round: across a step edge turned by 30 deg, read along the edge's
+    normal, each reading is the step height times the weight of the spot's points beyond the
+    edge along that normal, the closed form of the square edge (its quadrature laid along
+    the line; split into the instrument's x and y it would be 7 x 7 different offsets)."""
+    turn = 30.0
+    slanted = Part(step.manifold.rotate((0.0, 0.0, turn)))
+    spot = Spot(2 * UM, "gaussian", samples=7)
+    scope = Microscope(noise=False, resolution=0.0, spot=spot)
+    u = np.array([math.cos(math.radians(turn)), math.sin(math.radians(turn))])
+    n = np.array([-u[1], u[0]])
+    foot = STEP_X * u + 1 * MM * n  # on the turned edge
+    s0 = 3 * UM
+    prof = scope.profile(slanted, foot - s0 * u, foot + s0 * u, spacing=0.1 * UM + 1e-12)
+    offsets, weights = spot.axis()
+    beyond = (prof.s[:, None] - s0 + offsets[None, :]) >= 0.0
+    np.testing.assert_allclose(prof.z, STEP_H * (beyond * weights).sum(axis=1), rtol=0,
+                               atol=1e-14)
+
+
 def test_a_spot_reads_a_plane_unchanged(flat):
     reg = Registration([0.0, 0.0, 1 * UM], 0.0, [2e-4, 1e-4])
     for shape in ("tophat", "gaussian"):

@@ -339,17 +339,22 @@ def line_heights(vertices, triangles, start, direction, s, ds, across: float,
     """Heights along the line ``start + (s + ds) u + across n`` through a spot, shape (k,).
 
     ``u`` is the unit ``direction``, ``n`` its left normal; ``ds`` (k,) and ``across`` are the
-    lateral noise along and across the line (m). The spot's offsets are the instrument's x
-    and y, each split into its parts along and across the line: one exact line is read per
-    distinct across part.
+    lateral noise along and across the line (m). One exact line is read per distinct across
+    offset of the spot's sub-grid. A round (Gaussian) spot lays its sub-grid along ``u`` and
+    ``n``: its weight is the same in every frame, and the rotated Gauss-Hermite grid is exact
+    for the same polynomials, so a line in any direction reads ``samples`` lines. A top-hat
+    is a pixel square to the instrument's x and y: its offsets are split into their parts
+    along and across the line, up to ``samples**2`` lines for a slanted one.
     """
     ox, w = (np.zeros(1), np.ones(1)) if spot is None else spot.axis()
     u = np.asarray(direction, dtype=np.float64)
     normal = np.array([-u[1], u[0]])
     offsets = np.stack(np.meshgrid(ox, ox, indexing="ij"), axis=-1).reshape(-1, 2)
     weights = np.outer(w, w).ravel()
-    along = offsets @ u
-    side = offsets @ normal
+    if spot is not None and spot.shape == "gaussian":
+        along, side = offsets[:, 0], offsets[:, 1]
+    else:
+        along, side = offsets @ u, offsets @ normal
     heights = np.empty((len(s), len(offsets)))
     for value in np.unique(side):
         pick = np.flatnonzero(side == value)
