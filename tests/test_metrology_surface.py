@@ -264,6 +264,23 @@ def test_diagonal_profile_matches_the_closed_form():
                                atol=HEIGHT_M)
 
 
+def test_a_line_reads_the_same_heights_bit_for_bit_with_or_without_triangle_runs(monkeypatch):
+    """A triangle over many samples of a line is evaluated on its run of samples alone
+    (`surface.LINE_RUN`); with the runs off every triangle goes through the batched pass. The
+    two read the same heights bit for bit, on facets large and small, along a slanted line
+    and along x."""
+    from machinesim.metrology import surface
+
+    rng = np.random.default_rng(7)
+    vertices, triangles = heightfield(rng.uniform(0.0, 0.3 * MM, size=(6, 6)), 1 * MM)
+    lines = [((0.1 * MM, 0.2 * MM), (4.9 * MM, 3.7 * MM)), ((0.0, 2.5 * MM), (5 * MM, 2.5 * MM))]
+    with_runs = [profile((vertices, triangles), a, b, 0.37e-6)[1] for a, b in lines]
+    monkeypatch.setattr(surface, "LINE_RUN", 10**12)
+    for (a, b), z in zip(lines, with_runs, strict=True):
+        assert np.isfinite(z).sum() > 10000
+        np.testing.assert_array_equal(profile((vertices, triangles), a, b, 0.37e-6)[1], z)
+
+
 def test_profile_along_a_grid_row_is_that_row_of_the_map():
     part, _ = pyramids(3, 1 * MM, 0.6 * MM)
     spacing = 10e-6
