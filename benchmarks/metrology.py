@@ -3,9 +3,9 @@
 Run: ``.venv/bin/python benchmarks/metrology.py`` (prints medians of several runs; the part
 takes ~40 s to build).
 
-First, profiles on a plate of a few large facets (a V groove in a block, as papers 000 and
-001 read at sub-micrometre pitch), with each large triangle evaluated on its run of samples
-(`surface.LINE_RUN`, the default) against the batched pass alone.
+First, profiles and a height map on a plate of a few large facets (a V groove in a block,
+as papers 000 and 001 read it at sub-micrometre pitch), each large triangle evaluated on its
+own block of samples (`surface.BOX_RUN`, the default) against the batched pass alone.
 
 The part is the 500 x 500 pyramid field of crossing 90-degree V grooves at 50 um pitch, cut
 30 um deep into a 25 x 25 mm block (a box minus two combs of V prisms, one manifold3d
@@ -97,38 +97,41 @@ def median_time(function, repeats: int = REPEATS) -> float:
     return statistics.median(times)
 
 
-def report_line_runs() -> None:
+def report_box_runs() -> None:
     """Profiles at 0.1 um pitch over a 6 mm plate with one V groove (24 triangles), along x
-    and at 30 deg: per-triangle runs against the batched pass, and their heights compared."""
+    and at 30 deg, and a 1200 x 1200 map of it: per-triangle blocks against the batched pass,
+    and their heights compared."""
     from machinesim.metrology import profile, surface
 
     plate = manifold3d.Manifold.cube([6e-3, 6e-3, 1e-3]).translate([0.0, 0.0, -1e-3])
     prism = (manifold3d.Manifold.cube([1e-3, 8e-3, 1e-3], center=True).rotate([0.0, 45.0, 0.0])
              .translate([3e-3, 3e-3, -10e-6 + 1e-3 / np.sqrt(2)]))
     mesh = Part(plate - prism).mesh()
-    lines = {"along x": ((0.0, 2e-3), (6e-3, 2e-3)),
-             "at 30 deg": ((0.5e-3, 1e-3), (0.5e-3 + 5e-3 * np.cos(np.pi / 6),
-                                             1e-3 + 5e-3 * np.sin(np.pi / 6)))}
-    print(f"profiles at 0.1 um pitch over a plate with one V groove ({len(mesh[1])} "
-          f"triangles), median of {REPEATS}:")
-    default = surface.LINE_RUN
+    grid = np.linspace(0.0, 6e-3, 1200)
+    reads = {"profile along x": lambda: profile(mesh, (0.0, 2e-3), (6e-3, 2e-3), 1e-7)[1],
+             "profile at 30 deg": lambda: profile(
+                 mesh, (0.5e-3, 1e-3), (0.5e-3 + 5e-3 * np.cos(np.pi / 6),
+                                        1e-3 + 5e-3 * np.sin(np.pi / 6)), 1e-7)[1],
+             "map 1200 x 1200": lambda: height_map(mesh, grid, grid)}
+    print(f"a plate with one V groove ({len(mesh[1])} triangles), median of {REPEATS}:")
+    default = surface.BOX_RUN
     try:
-        for name, (a, b) in lines.items():
+        for name, read in reads.items():
             times, z = {}, {}
-            for label, run in (("runs", default), ("batched", 10**12)):
-                surface.LINE_RUN = run
-                z[label] = profile(mesh, a, b, 1e-7)[1]
-                times[label] = median_time(lambda a=a, b=b: profile(mesh, a, b, 1e-7))
-            print(f"  {name:9s} {z['runs'].size:6d} samples: runs {times['runs'] * 1e3:6.1f} ms, "
-                  f"batched {times['batched'] * 1e3:6.1f} ms "
-                  f"({times['batched'] / times['runs']:.1f}x); identical heights: "
-                  f"{np.array_equal(z['runs'], z['batched'], equal_nan=True)}")
+            for label, run in (("blocks", default), ("batched", 10**12)):
+                surface.BOX_RUN = run
+                z[label] = read()
+                times[label] = median_time(read)
+            print(f"  {name:18s} {z['blocks'].size:8d} samples: per-triangle blocks "
+                  f"{times['blocks'] * 1e3:6.1f} ms, batched {times['batched'] * 1e3:6.1f} ms "
+                  f"({times['batched'] / times['blocks']:.1f}x); identical heights: "
+                  f"{np.array_equal(z['blocks'], z['batched'], equal_nan=True)}")
     finally:
-        surface.LINE_RUN = default
+        surface.BOX_RUN = default
 
 
 def main() -> None:
-    report_line_runs()
+    report_box_runs()
     start = time.perf_counter()
     part = pyramid_part()
     mesh = part.mesh()  # manifold3d evaluates booleans lazily: this runs them

@@ -264,21 +264,38 @@ def test_diagonal_profile_matches_the_closed_form():
                                atol=HEIGHT_M)
 
 
-def test_a_line_reads_the_same_heights_bit_for_bit_with_or_without_triangle_runs(monkeypatch):
-    """A triangle over many samples of a line is evaluated on its run of samples alone
-    (`surface.LINE_RUN`); with the runs off every triangle goes through the batched pass. The
-    two read the same heights bit for bit, on facets large and small, along a slanted line
-    and along x."""
+def test_large_boxes_read_the_same_heights_bit_for_bit_as_the_batched_pass(monkeypatch):
+    """A box over many samples (a triangle's, or one row's span of a thin one) is evaluated
+    on its own block of samples (`surface.BOX_RUN`, in blocks of `surface.BOX_BLOCK`); with
+    that off every box goes through the batched pass. Both read the same heights bit for
+    bit: profiles along a slanted line and along x, maps over large facets and over long
+    thin triangles across the grid (the row spans)."""
     from machinesim.metrology import surface
 
     rng = np.random.default_rng(7)
-    vertices, triangles = heightfield(rng.uniform(0.0, 0.3 * MM, size=(6, 6)), 1 * MM)
+    large = heightfield(rng.uniform(0.0, 0.3 * MM, size=(6, 6)), 1 * MM)
+    thin_v, thin_t = heightfield(rng.uniform(0.0, 20e-6, size=(3, 41)), (5e-6, 1 * MM))
+    thin_v = thin_v.copy()
+    thin_v[:, 0] += thin_v[:, 1]
+    # both solids in one surface, the thin one beside the large: thin row spans and large
+    # whole boxes in one pass
+    both = (np.vstack([large[0] + [3 * MM, 0.0, 0.0], thin_v]),
+            np.vstack([large[1], thin_t + len(large[0])]))
     lines = [((0.1 * MM, 0.2 * MM), (4.9 * MM, 3.7 * MM)), ((0.0, 2.5 * MM), (5 * MM, 2.5 * MM))]
-    with_runs = [profile((vertices, triangles), a, b, 0.37e-6)[1] for a, b in lines]
-    monkeypatch.setattr(surface, "LINE_RUN", 10**12)
-    for (a, b), z in zip(lines, with_runs, strict=True):
-        assert np.isfinite(z).sum() > 10000
-        np.testing.assert_array_equal(profile((vertices, triangles), a, b, 0.37e-6)[1], z)
+    grid = np.linspace(-0.1 * MM, 5.1 * MM, 900)
+
+    def read():
+        return ([profile(large, a, b, 0.37e-6)[1] for a, b in lines]
+                + [height_map(large, grid, grid[:300]), height_map(both, 1.6 * grid, grid)])
+
+    default = read()
+    assert min(np.isfinite(z).sum() for z in default) > 10000
+    monkeypatch.setattr(surface, "BOX_BLOCK", 1000)  # a box split into many blocks
+    for z, again in zip(default, read(), strict=True):
+        np.testing.assert_array_equal(again, z)
+    monkeypatch.setattr(surface, "BOX_RUN", 10**12)
+    for z, batched in zip(default, read(), strict=True):
+        np.testing.assert_array_equal(batched, z)
 
 
 def test_profile_along_a_grid_row_is_that_row_of_the_map():

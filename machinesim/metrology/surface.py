@@ -43,12 +43,15 @@ ROW_SPANS = True
 #: along the axes half (a right triangle), where whole boxes are cheaper to bin.
 THIN_FILL = 0.125
 
-#: A triangle whose box holds at least this many samples of a line is evaluated on its run of
-#: samples (contiguous along the line) on its own, with its parameters as scalars: the same
-#: arithmetic as the batched pass, so the same heights bit for bit, without gathering the
-#: table per sample. Lines across a few large facets (the plates of papers 000 and 001 read
-#: at sub-micrometre pitch) are where the batched pass spent most of its time.
-LINE_RUN = 256
+#: A box (a triangle's, or one row's span of it) that holds at least this many samples is
+#: evaluated on its own, over its block of samples (a run of a line, a rectangle of a grid)
+#: with the triangle's parameters as scalars: the same arithmetic as the batched pass, so
+#: the same heights bit for bit, without gathering the table per sample. Lines and maps over
+#: a few large facets (the plates of papers 000 and 001 read at sub-micrometre pitch, the
+#: crown's faces) are where the batched pass spent most of its time.
+BOX_RUN = 256
+#: Samples evaluated at once on such a box (bounds the temporaries to a few MB).
+BOX_BLOCK = 65536
 
 # Rows of the per-triangle parameter table used by the rasteriser.
 _X0, _Y0, _Z0, _GX, _GY, _ZLO, _ZHI, _EDGES = range(8)
@@ -345,17 +348,21 @@ def _rasterise(table, first_x, count_x, first_y, count_y, samples, top, owner=No
 
     With ``owner``, box k (a triangle's whole box, or one row's span of it, `_row_spans`)
     belongs to column ``owner[k]`` of ``table``."""
-    if owner is None and isinstance(samples, _Line):
-        run = count_x >= LINE_RUN
-        if run.any():
-            for t in np.flatnonzero(run):
-                _rasterise_run(table[:, t], int(first_x[t]), int(count_x[t]), samples, top)
-            rest = np.flatnonzero(~run)
-            if rest.size == 0:
-                return
-            table, first_x, count_x, first_y, count_y = (
-                a[..., rest] for a in (table, first_x, count_x, first_y, count_y))
     counts = count_x * count_y
+    run = counts >= BOX_RUN
+    if run.any():
+        for k in np.flatnonzero(run):
+            _rasterise_box(table[:, k if owner is None else owner[k]], int(first_x[k]),
+                           int(count_x[k]), int(first_y[k]), int(count_y[k]), samples, top)
+        rest = np.flatnonzero(~run)
+        if rest.size == 0:
+            return
+        if owner is None:
+            table = table[:, rest]
+        else:
+            owner = owner[rest]
+        first_x, count_x, first_y, count_y, counts = (
+            a[rest] for a in (first_x, count_x, first_y, count_y, counts))
     ends = np.cumsum(counts)
     starts = ends - counts
     total = int(ends[-1])
@@ -387,11 +394,28 @@ def _rasterise(table, first_x, count_x, first_y, count_y, samples, top, owner=No
         np.maximum.at(top, samples.flat(i[hit], j[hit]), z)
 
 
-def _rasterise_run(p, first: int, count: int, samples: _Line, top) -> None:
-    """`_rasterise` for one triangle (its table column ``p``) over the samples ``first ..
-    first + count`` of a line: the same edge tests and plane, in the same order."""
-    end = first + count
-    px, py = samples.px[first:end], samples.py[first:end]
+def _rasterise_box(p, i0: int, ni: int, j0: int, nj: int, samples, top) -> None:
+    """`_rasterise` for one triangle (its table column ``p``) over the samples ``i0 .. i0 +
+    ni`` (of a line), or the grid's columns ``i0 .. i0 + ni`` of rows ``j0 .. j0 + nj``: the
+    same edge tests and plane, in the same order, on a view of ``top``, in blocks of at most
+    `BOX_BLOCK` samples (memory stays bounded however large the triangle)."""
+    width = min(ni, BOX_BLOCK)
+    rows = max(1, BOX_BLOCK // width)
+    for i in range(i0, i0 + ni, width):
+        i1 = min(i + width, i0 + ni)
+        if not isinstance(samples, _Grid):
+            _evaluate_block(p, samples.px[i:i1], samples.py[i:i1], top[i:i1])
+            continue
+        grid = top.reshape(samples.shape)
+        for j in range(j0, j0 + nj, rows):
+            j1 = min(j + rows, j0 + nj)
+            _evaluate_block(p, samples.x[i:i1][None, :], samples.y[j:j1][:, None],
+                            grid[j:j1, i:i1])
+
+
+def _evaluate_block(p, px, py, seen) -> None:
+    """Raise ``seen`` (a view of the z-buffer) to triangle ``p``'s plane where the samples
+    ``px``, ``py`` (broadcast to ``seen``'s shape) pass its three edge tests."""
     inside = None
     for e in range(_EDGES, _EDGES + 12, 4):
         ax, ay, dx, dy = p[e], p[e + 1], p[e + 2], p[e + 3]
@@ -399,5 +423,4 @@ def _rasterise_run(p, first: int, count: int, samples: _Line, top) -> None:
         inside = ok if inside is None else inside & ok
     z = p[_Z0] + p[_GX] * (px - p[_X0]) + p[_GY] * (py - p[_Y0])
     np.clip(z, p[_ZLO], p[_ZHI], out=z)
-    seen = top[first:end]
     np.maximum(seen, z, out=seen, where=inside)
