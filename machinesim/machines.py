@@ -34,7 +34,7 @@ from machinesim.kinematics import (
     Binding,
     Kinematics,
 )
-from machinesim.rotations import rotation_log
+from machinesim.rotations import not_rigid, rotation_log
 from machinesim.tolerances import IK_SINGULAR
 from machinesim.urdf import AXIS_ORDER, REQUIRED_FRAMES, check_tree, read_axes, read_urdf
 
@@ -425,6 +425,13 @@ class Machine:
             raise InputError("the requested pose has NaN or inf entries")
         batch = target.ndim == 3
         targets = target if batch else target[None]
+        bad = not_rigid(targets, tolerances.RIGID_TOL)
+        if bad.any():
+            n = int(np.flatnonzero(bad)[0])
+            raise InputError(
+                f"{self.name}: the requested pose {n} is not a rigid motion (expected an "
+                f"orthonormal rotation within {tolerances.RIGID_TOL:g}, no mirror, last row "
+                f"0 0 0 1), got {np.round(targets[n], 12).tolist()}", key="wMt")
         n_axes = len(self.axes)
         starts = None if q_start is None else np.atleast_2d(self._check_q(q_start))
         binding = self.binding(errors)

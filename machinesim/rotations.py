@@ -13,7 +13,20 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["rot_x", "rot_y", "rot_z", "rotation_log", "rotation_xyz"]
+__all__ = ["not_rigid", "rot_x", "rot_y", "rot_z", "rotation_log", "rotation_xyz"]
+
+
+def not_rigid(poses, tolerance: float) -> np.ndarray:
+    """Which of the homogeneous transforms ``poses`` (N, 4, 4) are not rigid motions, (N,)
+    bool: a non-finite entry, a rotation block off orthonormal by more than ``tolerance`` (a
+    scale, a shear), a mirror (determinant -1), or a last row other than 0 0 0 1."""
+    poses = np.asarray(poses, dtype=np.float64)
+    finite = np.isfinite(poses).reshape(len(poses), 16).all(axis=1)
+    rotation = np.where(finite[:, None, None], poses[:, :3, :3], 0.0)
+    error = np.abs(np.einsum("nji,njk->nik", rotation, rotation) - np.eye(3))
+    bottom = np.abs(np.where(finite[:, None], poses[:, 3], 0.0) - [0.0, 0.0, 0.0, 1.0])
+    return (~finite | (error.reshape(len(poses), 9).max(axis=1) > tolerance)
+            | (np.linalg.det(rotation) < 0.0) | (bottom.max(axis=1) > 0.0))
 
 
 def _rot(angle, i: int, j: int) -> np.ndarray:

@@ -278,6 +278,8 @@ def test_progress_reaches_its_total(method, used):
         ([np.eye(4)], None, r"path 0: expected poses of shape \(N, 4, 4\)"),
         ([np.stack([np.eye(4), 2 * np.eye(4)])], None, "path 0: pose 1 is not a rigid"),
         ([np.stack([np.eye(4), np.full((4, 4), np.nan)])], None, "pose 1 is not a rigid"),
+        ([np.stack([np.eye(4), np.diag([1.0, 1.0, -1.0, 1.0])])], None,
+         "pose 1 is not a rigid"),  # a mirror: orthonormal, determinant -1
         ([np.stack([np.eye(4)] * 2)], [(0, 1, 0)], r"roi: expected windows"),
         ([np.stack([np.eye(4)] * 2)], [(1, 0, 0, 1)], "xmin < xmax"),
     ],

@@ -391,6 +391,17 @@ def test_axis_values_errors_are_clear():
         lathe.axis_values(trans([0.0, 80 * MM, 0.0]), max_iterations=1)
     with pytest.raises(InputError, match=r"expected a pose of shape \(4, 4\)"):
         machine.axis_values(np.eye(3))
+    shear = np.eye(4)
+    shear[0, 1] = 1e-6
+    moved = np.eye(4)
+    moved[3] = [5.0, 5.0, 5.0, 7.0]
+    for pose in (np.diag([1.0, 1.0, -1.0, 1.0]), np.diag([2.0, 2.0, 2.0, 1.0]), shear, moved,
+                 np.zeros((4, 4))):
+        with pytest.raises(InputError, match="pose 0 is not a rigid motion"):
+            machine.axis_values(pose)
+    batch = np.stack([np.eye(4), np.eye(4), np.diag([-1.0, -1.0, -1.0, 1.0])])
+    with pytest.raises(InputError, match="pose 2 is not a rigid motion"):
+        machine.axis_values(batch)
 
 
 def test_bad_input_is_refused_with_the_machine_and_shape():

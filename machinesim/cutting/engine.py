@@ -63,6 +63,7 @@ from machinesim.cutting.tiling import (
     union_runs,
 )
 from machinesim.exceptions import InputError
+from machinesim.rotations import not_rigid
 from machinesim.tolerances import (
     CLIP_MARGIN_REL,
     PLANAR_TRAVEL_REL,
@@ -184,17 +185,14 @@ def _check_paths(paths) -> list[np.ndarray]:
     if not arrays:
         return arrays
     poses = np.concatenate(arrays)
-    rotation = poses[:, :3, :3]
-    error = np.abs(np.einsum("nji,njk->nik", rotation, rotation) - np.eye(3)).reshape(-1, 9)
-    bottom = np.abs(poses[:, 3] - [0.0, 0.0, 0.0, 1.0])
-    bad = ~np.isfinite(poses).reshape(-1, 16).all(axis=1)
-    bad |= (error.max(axis=1, initial=0.0) > RIGID_TOL) | (bottom.max(axis=1, initial=0.0) > 0.0)
+    bad = not_rigid(poses, RIGID_TOL)
     if bad.any():
         first = int(np.flatnonzero(bad)[0])
         path = int(np.searchsorted(np.cumsum([len(a) for a in arrays]), first, side="right"))
         raise InputError(
             f"path {path}: pose {first - sum(len(a) for a in arrays[:path])} is not a rigid "
-            f"transform (finite, orthonormal rotation within {RIGID_TOL}, last row 0 0 0 1): "
+            f"transform (finite, orthonormal rotation within {RIGID_TOL}, no mirror, last row "
+            f"0 0 0 1): "
             f"{poses[first].tolist()}",
             key="paths",
         )
