@@ -35,15 +35,13 @@ Lab(robonano_a0ib, noise=on, seed=1, realism=lab)
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 
 from machinesim import realism as _realism
 from machinesim.cutting.memo import CutMemo
-from machinesim.errors import ErrorModel
+from machinesim.errors import ErrorModel, as_error_model
 from machinesim.exceptions import InputError
 from machinesim.metrology.imperfections import Lobing, Registration, ZonalForm
 from machinesim.realism import Realism, SphereArtefacts
@@ -93,7 +91,7 @@ class Lab:
         from machinesim.machines import Machine, load_machine
 
         self.machine = machine if isinstance(machine, Machine) else load_machine(machine)
-        injected = _error_model(errors)
+        injected = as_error_model(errors)
         self.machine.check_errors(injected)
         if not isinstance(noise, bool):
             raise InputError(f"Expected noise as True or False, got {noise!r}", key="noise")
@@ -117,7 +115,7 @@ class Lab:
         truth = injected
         if realism.background_errors:
             own = (_realism.background_model(self.machine) if background is None
-                   else _error_model(background))
+                   else as_error_model(background))
             self.machine.check_errors(own)
             self.__background = own
             truth = _realism.add_errors(injected, own)
@@ -447,16 +445,3 @@ class Lab:
             raise InputError(f"Expected a label as a non-empty string, got {label!r}",
                              key="label")
         return label
-
-
-def _error_model(errors) -> ErrorModel:
-    if errors is None:
-        return ErrorModel()
-    if isinstance(errors, ErrorModel):
-        return errors
-    if isinstance(errors, Mapping):
-        return ErrorModel.from_dict(errors)
-    if isinstance(errors, str | Path):
-        return ErrorModel.from_toml(errors)
-    raise InputError(f"Expected errors as an ErrorModel, a dict or a TOML path, got "
-                     f"{type(errors).__name__}", key="errors")

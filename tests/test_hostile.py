@@ -328,3 +328,30 @@ def test_garbled_report_json_is_read_or_an_input_error(content):
             _io.read_json(path, "cut report")
         except InputError as exc:
             assert exc.source == str(path)
+
+
+def test_cut_takes_its_arguments_as_objects_specs_dicts_or_paths_and_names_a_wrong_one(
+        tmp_path):
+    """`machinesim.cut` reads a program path, an errors dict or TOML path as `Lab` does, and
+    cuts the same part as from the objects; any other type is a MachineSimError naming the
+    argument, never an AttributeError from deep inside."""
+    from machinesim import ErrorModel, cut
+    from machinesim.nc import read_program
+
+    errors = {"tool": {"offset_um": [0.0, 3.0, 0.0]}}
+    toml = tmp_path / "errors.toml"
+    ErrorModel.from_dict(errors).to_toml(toml)
+    reference, _ = cut(read_program(GROOVES), "grooving_4axis", tool="v:90",
+                       stock="block:10x10x2", errors=ErrorModel.from_dict(errors))
+    for program, injected in ((str(GROOVES), errors), (GROOVES, str(toml))):
+        part, _ = cut(program, "grooving_4axis", tool="v:90", stock="block:10x10x2",
+                      errors=injected)
+        assert part.volume == reference.volume
+        np.testing.assert_array_equal(part.mesh()[0], reference.mesh()[0])
+    program = read_program(GROOVES)
+    for bad, key in ((dict(tool=5), "tool"), (dict(stock=None), "stock"),
+                     (dict(errors=3.0), "errors")):
+        with pytest.raises(MachineSimError, match=f"key '{key}'.*got (int|NoneType|float)"):
+            cut(program, "grooving_4axis", **bad)
+    with pytest.raises(MachineSimError, match="key 'program'.*got int"):
+        cut(5, "grooving_4axis")

@@ -9,6 +9,7 @@ would touch the part are listed with their lines.
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -20,10 +21,11 @@ from machinesim.cutting.engine import remove
 from machinesim.cutting.rapids import rapids_that_cut
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance
-from machinesim.exceptions import AxisLimitError
+from machinesim.errors import as_error_model
+from machinesim.exceptions import AxisLimitError, InputError
 from machinesim.nc import MOVE_KINDS
 from machinesim.tolerances import LIMIT_SLACK
-from machinesim.tools import tool_from_spec, with_nose_radius_error
+from machinesim.tools import Tool, tool_from_spec, with_nose_radius_error
 from machinesim.workpiece import Part, stock_from_spec
 
 #: A move continues the previous one when its first axis values equal the previous end to
@@ -153,6 +155,29 @@ def nc_summary(program) -> dict:
             "tool_table": getattr(program, "tool_table", None)}
 
 
+def _arguments(program, tool, stock, errors):
+    """`cut`'s program, tool, stock and errors as the objects it works on, or an InputError
+    naming the argument and what it takes."""
+    from machinesim.nc import Program, read_program
+
+    if isinstance(program, str | os.PathLike):
+        program = read_program(program)
+    elif not isinstance(program, Program):
+        raise InputError(f"Expected program as a machinesim.nc.Program or an NC file's path, "
+                         f"got {type(program).__name__}", key="program")
+    if isinstance(tool, str):
+        tool = tool_from_spec(tool)
+    elif not isinstance(tool, Tool):
+        raise InputError(f"Expected tool as a spec such as 'v:90' or a tool object "
+                         f"(machinesim.tools), got {type(tool).__name__}", key="tool")
+    if isinstance(stock, str):
+        stock = stock_from_spec(stock)
+    elif not isinstance(stock, Part):
+        raise InputError(f"Expected stock as a spec such as 'block:10x10x2' or a Part, got "
+                         f"{type(stock).__name__}", key="stock")
+    return program, tool, stock, None if errors is None else as_error_model(errors)
+
+
 def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, roi=None,
         start=None, chord_tolerance: float = motion.CHORD_TOLERANCE_M, servo=None,
         progress=None, allow_overtravel: bool = False) -> tuple[Part, CutReport]:
@@ -160,15 +185,18 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
 
     Parameters
     ----------
-    program : machinesim.nc.Program
+    program : machinesim.nc.Program or str or Path
+        A program, or the path of an NC file (read with `machinesim.nc.read_program`'s
+        defaults).
     machine : machinesim.Machine or str
         A machine or a machine name.
     tool : str or tool
         ``"v:90"``, ``"nose:2.0:90"``, ``"ball:2.0"``, ``"flat:1.0"`` (mm, deg) or a tool object.
     stock : str or Part
         ``"block:10x10x2"``, ``"cylinder:5x2"`` (mm), optionally ``@x,y,z``, or a Part.
-    errors : ErrorModel, optional
-        The machine's injected errors (None: the nominal machine).
+    errors : ErrorModel, dict or str or Path, optional
+        The machine's injected errors (None: the nominal machine), as a model, a dict in the
+        TOML layout or a TOML file's path (`machinesim.errors.as_error_model`).
     roi : sequence of (xmin, xmax, ymin, ymax), optional
         Windows in the workpiece frame (m): cut only there (see `engine.remove`).
     start : array_like, optional
@@ -192,9 +220,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     from machinesim.machines import Machine, load_machine
 
     began = time.perf_counter()
+    program, tool, stock, errors = _arguments(program, tool, stock, errors)
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
-    tool = tool_from_spec(tool) if isinstance(tool, str) else tool
-    stock = stock_from_spec(stock) if isinstance(stock, str) else stock
     machine.check_errors(errors)
     tools = _ToolSections(program, tool, 0.0 if errors is None
                           else errors.tool_geometry.nose_radius)

@@ -40,6 +40,7 @@ from machinesim.errors.model import (
     ToolGeometry,
     ToolSetting,
     WorkpieceSetting,
+    as_error_model,
 )
 
 __all__ = [
@@ -51,4 +52,5 @@ __all__ = [
     "ToolGeometry",
     "ToolSetting",
     "WorkpieceSetting",
+    "as_error_model",
 ]

@@ -435,3 +435,19 @@ class ErrorModel(_Value):
         ``from_toml(path)`` then gives every SI value back to float64 round-off (two roundings).
         """
         _io().write_toml(self.to_dict(readable=True), path)
+
+
+def as_error_model(errors) -> ErrorModel:
+    """``errors`` as an `ErrorModel`: one already, a dict in the TOML layout (units in every
+    key, `ErrorModel.from_dict`), or the path of a TOML file (`ErrorModel.from_toml`); None
+    is the nominal machine, an empty model."""
+    if errors is None:
+        return ErrorModel()
+    if isinstance(errors, ErrorModel):
+        return errors
+    if isinstance(errors, Mapping):
+        return ErrorModel.from_dict(errors)
+    if isinstance(errors, str | os.PathLike):
+        return ErrorModel.from_toml(errors)
+    raise _fail(f"Expected errors as an ErrorModel, a dict (the TOML layout, units in every "
+                f"key) or a TOML path, got {type(errors).__name__}", None, "errors")
