@@ -30,6 +30,19 @@ def test_times_follow_the_feed_rule_by_hand():
                                rtol=0, atol=1e-18)
 
 
+def test_a_feed_beyond_an_axis_velocity_limit_is_clamped_there():
+    """No axis outruns its velocity limit (25 mm/s for X and Y, 2 rad/s for C on the
+    alpha-0iB): F 1e8 mm/min over 12 mm in X takes 12 / 25 s, not 7.2 us; over 3 mm X and
+    4 mm Y the slower axis, Y, sets it (4 / 25 s); a feed below the limit keeps its time."""
+    machine = load_machine("robonano_a0ib")
+    program = parse_program("G90 G21\nG00 X0 Y0 Z0 C0\nG01 X12. F100000000.\n"
+                            "G01 X15. Y4.\nG01 X3. F300.\nG01 C180. F100000000.\nM30\n")
+    tr = plan(program, machine)
+    expected = [12.0 / 25.0, 4.0 / 25.0, 12.0 / 300.0 * 60.0, math.pi / 2.0]
+    np.testing.assert_allclose([s.duration for s in tr.segments][1:], expected, rtol=1e-14)
+    assert tr.cutting_time == pytest.approx(sum(expected), rel=1e-14)
+
+
 @pytest.mark.parametrize("tolerance", [1e-9, 1e-8])
 def test_a_tool_rotation_is_split_so_the_chord_stays_within_tolerance(tolerance):
     """The planer's edge turns on an arm of r = 120.5 mm: an arc, whose chord over a step

@@ -13,7 +13,9 @@ without such errors, a straight move stays one sweep.
 
 Feed and time (FANUC rule, feed per minute, G94): a move's length is
 ``sqrt(sum(d_linear_mm**2) + sum(d_rotary_deg**2))`` and takes ``length / F`` minutes, so F
-reads as mm/min for linear moves and deg/min for pure rotary moves. A rapid runs every axis
+reads as mm/min for linear moves and deg/min for pure rotary moves, clamped so that no axis
+runs faster than its velocity limit (the URDF's; a feed beyond it takes as long as the
+move's slowest axis at that limit, as a rapid does). A rapid runs every axis
 at its own rapid rate (the URDF velocity limit) and takes as long as its slowest axis. A
 dwell takes its time. Servo follow-up errors enter through a `ServoModel` (ideal by default).
 

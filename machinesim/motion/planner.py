@@ -28,7 +28,8 @@ def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndar
     if length_mm == 0.0:
         return 0.0
     feed_mm_per_s = feed_m_per_s / _M_PER_MM
-    return length_mm / feed_mm_per_s
+    # no axis runs faster than its velocity limit: a feed beyond it is clamped there
+    return max(length_mm / feed_mm_per_s, float(np.max(delta / rapid_rate)))
 
 
 def _program_arrays(program):
@@ -196,13 +197,16 @@ def _durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate) -> np.nda
     n_axes = starts.shape[1]
     if not n_axes:
         return out
-    rapid = np.flatnonzero(kinds == KIND_RAPID)
-    if rapid.size:
+    def slowest_axis(moves):  # s: every axis at its velocity limit
         slowest = None
         for i in range(n_axes):
-            ratio = np.abs(ends[rapid, i] - starts[rapid, i]) / rapid_rate[i]
+            ratio = np.abs(ends[moves, i] - starts[moves, i]) / rapid_rate[i]
             slowest = ratio if slowest is None else np.maximum(slowest, ratio)
-        out[rapid] = slowest
+        return slowest
+
+    rapid = np.flatnonzero(kinds == KIND_RAPID)
+    if rapid.size:
+        out[rapid] = slowest_axis(rapid)
     linear = np.flatnonzero(kinds == KIND_LINEAR)
     if linear.size:
         if n_axes <= 7:
@@ -217,7 +221,9 @@ def _durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate) -> np.nda
             total = np.sum(np.where(rotary, delta / _RAD_PER_DEG, delta / _M_PER_MM)**2, axis=1)
         length_mm = np.sqrt(total)
         moving = length_mm != 0.0
-        out[linear[moving]] = length_mm[moving] / (feeds[linear[moving]] / _M_PER_MM)
+        out[linear[moving]] = np.maximum(
+            length_mm[moving] / (feeds[linear[moving]] / _M_PER_MM),
+            slowest_axis(linear[moving]))
     return out
 
 
