@@ -18,30 +18,23 @@ from machinesim.units import deg, mm, um
 
 def sweep_table(machine, errors, target_mm=(1.0, 1.0, 0.0)) -> str:
     lines = ["  B deg   C deg     dx um     dy um     dz um    |d| um"]
-    target = np.eye(4)
-    target[:3, 3] = mm(np.array(target_mm))
+    target = mm(np.array(target_mm))
     for b in (-30.0, 0.0, 30.0):
         for c in (0.0, 90.0, 180.0, 270.0):
-            # the program: nominal axis values that put the edge on the target at this B, C
-            rot = _rot_y(deg(b)) @ _rot_z(deg(c))
-            pose = target.copy()
-            pose[:3, :3] = rot
+            # the program: nominal axis values that put the edge on the target with the tool
+            # oriented as the nominal machine orients it at this B and C
             start = np.array([0.0, 0.0, 0.0, deg(b), deg(c)])
-            q = machine.axis_values(pose, q_start=start).q
-            d = machine.tool_pose(q, errors)[:3, 3] - target[:3, 3]
+            pose = machine.tool_pose(start)
+            pose[:3, 3] = target
+            solution = machine.axis_values(pose, q_start=start)
+            if solution.unmatched:
+                raise machinesim.MachineSimError(
+                    f"B {b:g}, C {c:g} deg: the orientation was not matched "
+                    f"({solution.unmatched})")
+            d = machine.tool_pose(solution.q, errors)[:3, 3] - target
             lines.append(f"{b:7.1f} {c:7.1f} " + " ".join(f"{v / um(1):9.3f}" for v in d)
                          + f" {np.linalg.norm(d) / um(1):9.3f}")
     return "\n".join(lines)
-
-
-def _rot_y(a):
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-
-
-def _rot_z(a):
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
 def main() -> None:

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import json
+import math
 import signal
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -26,10 +29,13 @@ def test_demo_prints_the_machines_and_the_landing_table():
             if line.strip() and line.split()[0].lstrip("-").replace(".", "").isdigit()]
     assert len(rows) == 12  # B in (-30, 0, 30) x C in (0, 90, 180, 270)
     for b, c, dx, dy, dz, norm in (map(float, r) for r in rows):
-        # a tool offset (10, 0, 5) um keeps its length whatever B and C do
+        # a tool offset (10, 0, 5) um keeps its length whatever B and C do; B turns it in
+        # the Z-X plane, C turns the part under it (by hand: Ry(B) (10, 0, 5), then Rz(C))
         assert abs(norm - (10.0**2 + 5.0**2) ** 0.5) < 1e-3
-        if b == 0.0 and c == 0.0:
-            assert (dx, dy, dz) == (10.0, 0.0, 5.0)
+        tb, tc = math.radians(b), math.radians(c)
+        x = 10.0 * math.cos(tb) + 5.0 * math.sin(tb)
+        z = -10.0 * math.sin(tb) + 5.0 * math.cos(tb)
+        assert (dx, dy, dz) == pytest.approx((x * math.cos(tc), x * math.sin(tc), z), abs=1e-3)
 
 
 def test_xy_plane_errors_writes_the_paper_figures(tmp_path):
