@@ -264,8 +264,13 @@ def _cut(args) -> int:
             raise ErrorModelError(f"{exc.message} (machine {machine.name}, {exc.source})",
                                   source=str(args.errors), key=exc.key) from None
     options = {"allow_overtravel": True} if args.allow_overtravel else {}
-    part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
-                       progress=_progress_bar(args.quiet), **options)
+    try:
+        part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
+                           progress=_progress_bar(args.quiet), **options)
+    except InputError as exc:
+        if not (args.errors and (exc.key or "").startswith("tool_geometry")):
+            raise
+        raise InputError(exc.message, source=str(args.errors), key=exc.key) from None
     summary = report.to_dict()
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]

@@ -42,7 +42,7 @@ import numpy as np
 
 from machinesim.exceptions import InputError
 from machinesim.tolerances import BALL_CHORD_M, PROFILE_CHORD_M
-from machinesim.units import M_PER_MM, RAD_PER_DEG
+from machinesim.units import M_PER_MM, M_PER_UM, RAD_PER_DEG
 
 #: Default length of a tool's body from its edge point to the holder (m). Ten times the
 #: deepest cut of the shipped examples and seed experiments (grooves and face passes of tens
@@ -633,10 +633,15 @@ def with_nose_radius_error(tool: Tool, d_radius: float) -> Tool:
     """
     if d_radius == 0.0:
         return tool
-    if isinstance(tool, RoundNoseTool):
-        return tool.with_errors(nose_radius_error=d_radius)
-    if isinstance(tool, BallEndMill | FlatEndMill):
-        return tool.with_errors(radius_error=d_radius)
+    try:
+        if isinstance(tool, RoundNoseTool):
+            return tool.with_errors(nose_radius_error=d_radius)
+        if isinstance(tool, BallEndMill | FlatEndMill):
+            return tool.with_errors(radius_error=d_radius)
+    except InputError as error:  # name the error model's key the user wrote, and the value
+        raise InputError(f"the error model's tool_geometry.nose_radius_um = "
+                         f"{d_radius / M_PER_UM:g} does not fit the {type(tool).__name__} "
+                         f"({error.message})", key="tool_geometry.nose_radius_um") from None
     raise InputError(f"the error model has tool_geometry.nose_radius = {d_radius!r} m, but a "
                      f"{type(tool).__name__} has no nose radius; expected a round-nose "
                      "('nose:R:ANGLE'), ball or flat end mill", key="tool_geometry.nose_radius")

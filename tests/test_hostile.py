@@ -355,3 +355,17 @@ def test_cut_takes_its_arguments_as_objects_specs_dicts_or_paths_and_names_a_wro
             cut(program, "grooving_4axis", **bad)
     with pytest.raises(MachineSimError, match="key 'program'.*got int"):
         cut(5, "grooving_4axis")
+
+
+def test_a_nose_radius_error_that_does_not_fit_the_tool_names_the_file_key_and_value(
+        tmp_path, capsys):
+    """-5000 um on a ball of radius 1 mm leaves a radius of -4 mm: refused in one
+    line naming the TOML file, tool_geometry.nose_radius_um and -5000; nothing written."""
+    toml = tmp_path / "errors.toml"
+    toml.write_text("[tool_geometry]\nnose_radius_um = -5000.0\n")
+    out = tmp_path / "p.ply"
+    code, err = run_cli(["cut", GROOVES, "--machine", "grooving_4axis", "--tool", "ball:1",
+                         "--stock", "block:10x10x2", "--errors", toml, "--out", out], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert f"{toml}, key 'tool_geometry.nose_radius_um'" in err and "= -5000 " in err, err
+    assert not out.exists()
