@@ -135,6 +135,108 @@ def test_read_program_names_the_file_and_accepts_crlf(tmp_path):
         read_program(marked)
 
 
+def test_lone_cr_is_refused_at_its_line_and_column(tmp_path):
+    # Old Mac line ends after line 3: read as blanks they would join 'X11.', 'G00 Z1.' and
+    # 'M30' into one block (a rapid to X 11 mm, Z 1 mm instead of the G01 cut). Line 4 is
+    # "X11.\rG00 Z1.\rM30\r": its first CR follows the 4 characters 'X11.', column 5.
+    path = tmp_path / "mac.nc"
+    path.write_bytes(b"G90 G21\nG00 X-1. Y2. Z0.1\nG01 Z-0.02 F100.\nX11.\rG00 Z1.\rM30\r")
+    for fast in (True, False):
+        with pytest.raises(NCProgramError, match="line ends must be LF or CRLF") as info:
+            read_program(path, fast=fast)
+        error = info.value
+        assert (error.source, error.line, error.column, error.key) == (str(path), 4, 5, "\\r")
+        assert "lone CR" in str(error)
+        assert str(error).startswith(f"{path}, line 4, column 5, key '\\r': ")
+
+
+# (text, line, column of the first lone CR): in a run of point lines that the fast path
+# reads, at the end of the text, before a CRLF, in a comment, after ';'.
+_POINTS = [f"X{k}. Z-0.{k:03d}" for k in range(20)]  # lines 3..22
+LONE_CRS = [
+    ("G90 G21\nG01 X0 Z0 F10.\n" + "\n".join(_POINTS[:9] + ["X9.\rZ-0.009"] + _POINTS[10:]),
+     12, 4),  # "X9." is 3 characters
+    ("G90 G21\nG01 X0 Z0 F10.\n" + "\n".join(_POINTS) + "\r", 22, 13),  # "X19. Z-0.019"
+    ("G00 X0\r\r\nM30\r\n", 1, 7),  # CR CR LF: the first CR is lone
+    ("G00 X0 (part\rG00 X5.)\nM30\n", 1, 13),
+    ("G00 X0 ; go\rG00 X5.\nM30\n", 1, 12),
+]
+
+
+@pytest.mark.parametrize(("text", "line", "column"), LONE_CRS)
+def test_lone_cr_is_refused_on_both_paths(text, line, column):
+    for fast in (True, False):
+        with pytest.raises(NCProgramError) as info:
+            parse_program(text, "prog.nc", fast=fast)
+        problems = getattr(info.value, "problems", (info.value,))
+        lone = [p for p in problems if p.key == "\\r"]
+        assert [(p.line, p.column) for p in lone] == [(line, column)]
+        assert "CR) not followed by a line feed (LF): line ends must be LF or CRLF" in str(
+            lone[0])
+
+
+def test_crlf_reads_exactly_as_lf():
+    # Blocks, comments, a ';' comment, and a run of point lines long enough for the fast
+    # path; CRLF must give the same program as LF, with and without a final line end.
+    lf = ("%\nO12 (crlf)\nG90 G21 G94 G54 ; setup\nG00 X-1. Y2. Z0.1 S1000 M03\n"
+          "G01 Z-0.02 F100.\n" + "\n".join(_POINTS) + "\nG04 P250\nG00 Z1.\nM30\n%\n")
+    crlf = lf.replace("\n", "\r\n")
+    reference = parse_program(lf, "p.nc", fast=False)
+    assert len(reference) == 1 + 1 + 20 + 1 + 1  # rapid, plunge, points, dwell, rapid
+    for text in (crlf, crlf.removesuffix("\r\n"), lf.removesuffix("\n")):
+        for fast in (True, False):
+            program = parse_program(text, "p.nc", fast=fast)
+            assert np.array_equal(program.targets, reference.targets, equal_nan=True)
+            assert np.array_equal(program.kinds, reference.kinds)
+            assert np.array_equal(program.feeds, reference.feeds, equal_nan=True)
+            assert np.array_equal(program.dwells, reference.dwells)
+            assert np.array_equal(program.lines, reference.lines)
+            assert program == reference
+
+
+def test_words_after_semicolon_are_refused():
+    # ';' as FANUC end of block with several blocks on one line: 'X11.; Y4.; X-1.;' would be
+    # read as a comment. Line 3 is "G01 Z-0.02 F100.; X11.; Y4.; X-1.;": ';' at column 17,
+    # 'X11.' at column 19.
+    text = "G90 G21;\nG00 X-1. Y2. Z0.1;\nG01 Z-0.02 F100.; X11.; Y4.; X-1.;\nG00 Z1.;\nM30;\n"
+    with pytest.raises(NCProgramError, match="';' ends a block in FANUC text") as info:
+        parse_program(text, "prog.nc")
+    error = info.value
+    assert (error.line, error.column, error.key) == (3, 19, "X11.")
+    assert str(error).startswith("prog.nc, line 3, column 19, key 'X11.': word 'X11.' after "
+                                 "the ';' at column 17 would be lost")
+    assert "put each block on its own line (or write the comment in parentheses" in str(error)
+
+
+# (line, column, word): a word after ';' (blanks between letter and number allowed, either
+# case, after more ';'), refused at its letter; 'G01 X1. F100.' is 13 characters.
+SEMICOLON_WORDS = [
+    ("G01 X1. F100. ; T1 tool", 17, "T1"),
+    ("G01 X1. F100.;X2.", 15, "X2."),
+    ("G01 X1. F100.;; z -.5", 17, "Z-.5"),
+    ("G01 X1. F100.;\tG00", 16, "G00"),
+    ("G01 X1. F100. ; a 5-axis part", 17, "A5"),
+]
+
+
+@pytest.mark.parametrize(("text", "column", "word"), SEMICOLON_WORDS)
+def test_word_after_semicolon_is_refused_at_its_column(text, column, word):
+    with pytest.raises(NCProgramError, match="would be lost") as info:
+        parse_program(f"G00 X0\n{text}\n", "p.nc")
+    assert (info.value.line, info.value.column, info.value.key) == (2, column, word)
+
+
+@pytest.mark.parametrize("comment", [
+    "; move to x1", ";", ";  ;; ", "; N.B. slow here", "; 3 passes", "; E5 is no word here",
+    "; (T1) tool", "; G-code from CAM", "(a; X1.) ; cut",
+])
+def test_comment_after_semicolon_reads_as_without_it(comment):
+    bare = "G90 G21\nG00 X-1. Y2. Z0.1\nG01 Z-0.02 F100.\nX11.\nG00 Z1.\nM30\n"
+    lines = bare.split("\n")
+    lines[3] = f"X11. {comment}"
+    assert parse_program("\n".join(lines), "p.nc") == parse_program(bare, "p.nc")
+
+
 # (text, line, column, word, message): each refusal the language describes.
 REFUSALS = [
     ("G00 X0 Y0\nG02 X1. Y1.", 2, 1, "G02", "G02 needs the centre"),

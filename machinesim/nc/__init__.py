@@ -10,9 +10,13 @@ tolerances are in docs/nc.md; the rules in short:
 The language read by `parse_program` / `read_program`
 -----------------------------------------------------
 Lines and blocks
-    One block per line (lines split at ``\\n``; ``\\r`` and tab count as blanks). Lines that
-    are blank, only comments, or a lone ``%`` are skipped. Comments: ``(...)`` closed on the
-    same line (no nesting), and everything after ``;``.
+    One block per line (lines split at ``\\n``; tab counts as a blank). Line ends are LF or
+    CRLF: a CR not followed by LF (a lone CR, as old Mac files end lines) is refused at its
+    line and column. Lines that are blank, only comments, or a lone ``%`` are skipped.
+    Comments: ``(...)`` closed on the same line (no nesting), and everything after ``;``.
+    Text after ``;`` that starts like a word (a letter read here, blanks allowed, a number:
+    ``; X11.``, ``; T1 tool``) is refused, for ``;`` ends a block in FANUC text and that
+    block would be lost; ``; move to x1`` or a ``;`` with nothing after it is a comment.
 Words
     A letter (either case) and a number: optional sign, digits, optional decimal point
     (``X-.5``, ``X10.``, ``x+3``); blanks between words optional, between a letter and its

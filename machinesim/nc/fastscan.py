@@ -11,7 +11,9 @@ A line is simple when it holds only words N G X Y Z A B C F (either case), each 
 once, every letter directly followed by its number (``X 1.`` is read by the word-by-word
 path), numbers of the form ``[+-]digits[.digits]`` or ``[+-].digits`` with at most
 `MAX_DIGITS` digits, G0/G1 without sign or point, N an unsigned integer of at most 9 digits,
-F > 0; blanks are space, tab and carriage return. A line of blanks only is simple and empty.
+F > 0; blanks are space, tab and a carriage return right before the line feed (the CR of
+CRLF). A line of blanks only is simple and empty. A line with a lone CR (not followed by LF,
+as old Mac files end lines) is not simple: the word-by-word path refuses it.
 
 Exactness: a number with at most 15 digits is an integer m < 10^15 < 2^53 over 10^k
 (k <= 15), both exact in float64, so the one IEEE division m / 10^k is the correctly
@@ -142,8 +144,14 @@ def _scan_chunk(a: np.ndarray, line0: int, n_lines: int, simple: np.ndarray,
     sign = (a == _MINUS) | (a == _PLUS)
     numeric = digit | dot | sign
     alpha = ((a | 32) - _LOWER_A) < 26
-    blank = (a == _SPACE) | (a == _TAB) | (a == _CR)
+    cr = a == _CR
+    blank = (a == _SPACE) | (a == _TAB) | cr
     bad[line_of[np.flatnonzero(~(numeric | alpha | blank | newline))]] = True
+    # a lone CR: not followed by LF (a chunk ends after an LF or at the end of the text, so a
+    # CR as its last byte is lone too)
+    lone = cr  # in place: cr is not used after this
+    lone[:-1] &= ~newline[1:]
+    bad[line_of[np.flatnonzero(lone)]] = True
     # numeric runs [start, stop); padded[i + 1] is numeric[i]
     padded = np.zeros(size + 2, dtype=bool)
     padded[1:-1] = numeric

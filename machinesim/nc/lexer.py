@@ -9,8 +9,15 @@ from dataclasses import dataclass
 from machinesim.exceptions import NCProgramError
 
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)")
-_BLANK = " \t\r"
+#: Blanks inside a line. A carriage return is a blank only as the CR of a CRLF line end: the
+#: line's text then ends in it (the text stops before the LF), and `tokenize` drops it; any
+#: other CR is refused (a lone CR, as old Mac files end lines, would join several blocks).
+_BLANK = " \t"
 _LETTERS = frozenset(string.ascii_letters)
+#: What starts like a word after ';': a letter the reader knows, blanks, a number (as
+#: `_NUMBER`). Such text after ';' would be a block lost in a comment.
+_WORD_START = re.compile(r"([NOGMSFPXYZABCIJKRQLHTD])[ \t]*(" + _NUMBER.pattern + ")",
+                         re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -26,8 +33,14 @@ class Word:
         return self.letter + self.text
 
 
-def tokenize(raw: str, source: str, line: int) -> tuple[list[Word], list[NCProgramError]]:
+def tokenize(raw: str, source: str, line: int, *,
+             line_feed: bool = True) -> tuple[list[Word], list[NCProgramError]]:
     """Words of one line and the problems found in it (comments, blanks, '%' give no words).
+
+    ``raw`` is the line without its LF; ``line_feed`` says whether an LF followed it (False
+    for the last line of a text that does not end in one). A CR at the end of ``raw`` is
+    then the CR of a CRLF line end; every other CR is a lone CR and refused, and the line is
+    read only up to it (what follows belongs to other lines the CR was meant to end).
 
     A problem does not stop the line: the reader skips to the next blank, letter or comment
     and goes on, so that one pass lists every malformed word of the line.
@@ -35,11 +48,23 @@ def tokenize(raw: str, source: str, line: int) -> tuple[list[Word], list[NCProgr
     words: list[Word] = []
     problems: list[NCProgramError] = []
     percent = False
-    i, n = 0, len(raw)
 
     def fail(message: str, column: int, key: str) -> None:
         problems.append(NCProgramError(message, source=source, line=line, column=column,
                                        key=key))
+
+    if line_feed and raw.endswith("\r"):
+        raw = raw[:-1]  # the CR of CRLF
+    lone = raw.find("\r")
+    if lone >= 0:
+        count = raw.count("\r")
+        more = f" (this line holds {count} of them)" if count > 1 else ""
+        fail("carriage return (CR) not followed by a line feed (LF): line ends must be LF "
+             "or CRLF; a lone CR, as old Mac files end lines, would join several blocks "
+             f"into one line{more}; convert the file's line ends to LF or CRLF",
+             lone + 1, "\\r")
+        raw = raw[:lone]
+    i, n = 0, len(raw)
 
     while i < n:
         c = raw[i]
@@ -57,6 +82,7 @@ def tokenize(raw: str, source: str, line: int) -> tuple[list[Word], list[NCProgr
                 close = max(close, raw.rfind(")"))
             i = close + 1
         elif c == ";":
+            _after_end_of_block(raw, i, fail)
             break
         elif c == ")":
             fail("')' without an opening '('", i + 1, ")")
@@ -102,6 +128,24 @@ def tokenize(raw: str, source: str, line: int) -> tuple[list[Word], list[NCProgr
             )
             i = max(_end_of_garbage(raw, i + 1), i + 1)
     return words, problems
+
+
+def _after_end_of_block(raw: str, semicolon: int, fail) -> None:
+    """Refuse a word after the ';' at index ``semicolon``: the rest of the line is read as a
+    comment, so in FANUC text with several ';'-ended blocks on one line they would be lost.
+    Blanks and further ';' are skipped; text that does not start like a word stays a
+    comment."""
+    i, n = semicolon + 1, len(raw)
+    while i < n and (raw[i] in _BLANK or raw[i] == ";"):
+        i += 1
+    match = _WORD_START.match(raw, i)
+    if match is None:
+        return
+    key = match.group(1).upper() + match.group(2)
+    fail(f"word {key!r} after the ';' at column {semicolon + 1} would be lost: words after "
+         "';' on the same line are read as a comment, but ';' ends a block in FANUC text; "
+         "put each block on its own line (or write the comment in parentheses, e.g. "
+         "'(T1 tool)')", i + 1, key)
 
 
 def _end_of_garbage(raw: str, i: int) -> int:

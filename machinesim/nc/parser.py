@@ -300,7 +300,8 @@ class Reader:
         """The words of line i (0-based); None when the line has malformed words."""
         if i in self.cache:
             return self.cache[i]
-        words, problems = tokenize(self.text(i), self.source, i + 1)
+        words, problems = tokenize(self.text(i), self.source, i + 1,
+                                   line_feed=bool(self.scan.ends[i] < len(self.data)))
         for problem in problems:
             self.problems.add(problem)
         result = None if problems else words
