@@ -171,6 +171,22 @@ def test_arc_in_increments_and_incremental_end():
 # --- G28, G53, tool length, states
 
 
+def test_g28_returns_to_the_reference_position_it_is_given():
+    """With a reference position (the machine's home, machine coordinates), G28 goes there
+    instead of machine zero: the CAM header's G28 G91 Z0 lifts Z to 100 mm, G28 X Y moves X
+    through 20 mm to 30 mm (its reference) and Y to zero; a bad reference is refused."""
+    text = "G91 G28 Z0\nG90 G00 X10. Y5. Z3.\nG28 X20. Y0\n"
+    program = parse_program(text, reference={"Z": 0.1, "X": 30 * MM})
+    t = program.targets
+    assert t[0, 2] == 0.1
+    assert t[-2, :2].tolist() == [20 * MM, 0.0]  # the intermediate point
+    assert t[-1, :3].tolist() == [30 * MM, 0.0, 3 * MM]
+    with pytest.raises(NCProgramError, match="unknown axis 'W'"):
+        parse_program(text, reference={"W": 0.1})
+    with pytest.raises(NCProgramError, match="reference must be a mapping"):
+        parse_program(text, reference=0.1)
+
+
 def test_g28_goes_through_the_intermediate_point_to_machine_zero():
     offsets = {"G54": {"X": 100 * MM, "Y": 50 * MM, "Z": -20 * MM}}
     text = "G91 G28 Z0\nG90 G00 X10. Y5. Z3.\nG28 X20. Y0\nG91 G28 Z1.\n"

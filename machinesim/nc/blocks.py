@@ -388,7 +388,8 @@ class Block:
                 state.target[axis.letter] = self.machine(axis, machine_coordinates=True)
             self.add("rapid", 0.0, block_number)
             return
-        # G28: through the intermediate point to the reference (machine zero) of these axes.
+        # G28: through the intermediate point to the reference position of these axes (the
+        # reader's `reference`, machine zero where it gives none).
         # An incremental 0 on an axis whose position is not known yet (the CAM header's
         # G28 G91 Z0) is the current position whatever it is: no intermediate move there.
         here = [a for a in axes if not (state.incremental and a.letter not in state.target
@@ -397,7 +398,7 @@ class Block:
             state.target.update({axis.letter: self.machine(axis) for axis in here})
             self.add("rapid", 0.0, block_number)
         for axis in axes:
-            state.target[axis.letter] = 0.0
+            state.target[axis.letter] = self.reader.reference.get(axis.letter, 0.0)
         self.add("rapid", 0.0, block_number)
 
     def arc(self, axes: list[Word], block_number: int | None) -> None:

@@ -31,7 +31,9 @@ from machinesim.nc.program import (
     INTEGER_INPUTS,
     KIND_LINEAR,
     ROTARY_AXES,
+    FrozenMapping,
     Program,
+    axis_values,
     work_offsets_si,
 )
 from machinesim.nc.tooltable import ToolTable, tool_table
@@ -168,6 +170,7 @@ def parse_program(
     source: str = "<string>",
     *,
     work_offsets: Mapping[str, Mapping[str, float]] | None = None,
+    reference: Mapping[str, float] | None = None,
     integer_input: IntegerInput = "calculator",
     tools: Any = None,
     chord_tolerance: float = ARC_CHORD_M,
@@ -183,6 +186,10 @@ def parse_program(
         Name of the program in messages and in `Program.source`.
     work_offsets : mapping, optional
         {"G54": {"X": m, ...}, ...} in SI; absent systems and axes are zero.
+    reference : mapping, optional
+        {"Z": m, ...}: the machine coordinates (SI) of the reference position G28 returns
+        to; absent axes are at machine zero. ``machinesim cut`` gives the machine's home
+        (`Machine.home`): Z at the top of its travel.
     integer_input : {"calculator", "increment"}
         How a length or angle without decimal point reads: "calculator" (X10 is 10 mm, the
         default) or "increment" (X10 is 10 least input increments: 10 nm, 0.0001 deg).
@@ -211,7 +218,7 @@ def parse_program(
         raise NCProgramError(f"NC program text must be str, got {type(text).__name__}",
                              source=source)
     return _parse(text.encode("utf-8", "surrogatepass"), "surrogatepass", source,
-                  work_offsets, integer_input, tools, chord_tolerance, fast)
+                  work_offsets, integer_input, tools, chord_tolerance, fast, reference=reference)
 
 
 def read_program(path: str | os.PathLike, **kwargs) -> Program:
@@ -219,6 +226,9 @@ def read_program(path: str | os.PathLike, **kwargs) -> Program:
 
     Bytes that are not UTF-8 read as U+FFFD and are refused where they stand.
     """
+    if not isinstance(path, str | os.PathLike):
+        raise NCProgramError(f"expected the NC program's path as a str or Path, got "
+                             f"{type(path).__name__}", key="path")
     source = os.fspath(path)
     check_readable_file(path, "NC program")
     try:
@@ -234,11 +244,14 @@ def read_program(path: str | os.PathLike, **kwargs) -> Program:
 
 
 def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, tools,
-           chord_tolerance, fast, **unknown) -> Program:
+           chord_tolerance, fast, reference=None, **unknown) -> Program:
     if unknown:
         raise NCProgramError(f"unknown keyword argument(s) {sorted(unknown)}; expected "
-                             "work_offsets, integer_input, tools, chord_tolerance, fast",
-                             source=source)
+                             "work_offsets, reference, integer_input, tools, chord_tolerance, "
+                             "fast", source=source)
+    if reference is not None and not isinstance(reference, Mapping):
+        raise NCProgramError(f"reference must be a mapping like {{'Z': 0.1}} (m, rad), got "
+                             f"{type(reference).__name__}", source=source, key="reference")
     if integer_input not in INTEGER_INPUTS:
         raise NCProgramError(f"integer_input must be one of {INTEGER_INPUTS}, got "
                              f"{integer_input!r}", source=source, key="integer_input")
@@ -253,6 +266,7 @@ def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, t
     data = data.removeprefix(UTF8_BOM)  # Windows editors start UTF-8 files with one
     reader = Reader(data, errors, source, offsets, integer_input, tool_table(tools),
                      tolerance, fast)
+    reader.reference = axis_values(reference or {}, source=source)
     return reader.read()
 
 
@@ -269,6 +283,7 @@ class Reader:
         self.errors = errors
         self.source = source
         self.offsets = offsets
+        self.reference = FrozenMapping()  # G28's reference position (`parse_program`)
         self.integer_input = integer_input
         self.increment = integer_input == "increment"
         self.tools = tools
