@@ -255,6 +255,8 @@ def _cut(args) -> int:
         reading["tools"] = args.tools
     if args.integer_input is not None:
         reading["integer_input"] = args.integer_input
+    # the machine starts at its home and G28 returns there: Z at the top of its travel
+    reading["reference"] = dict(zip(machine.axes, machine.home.tolist(), strict=True))
     program = read_program(args.program, **reading)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None
     if errors is not None:
@@ -266,7 +268,7 @@ def _cut(args) -> int:
     options = {"allow_overtravel": True} if args.allow_overtravel else {}
     try:
         part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
-                           progress=_progress_bar(args.quiet), **options)
+                           start=machine.home, progress=_progress_bar(args.quiet), **options)
     except InputError as exc:
         if not (args.errors and (exc.key or "").startswith("tool_geometry")):
             raise

@@ -183,6 +183,18 @@ class Machine:
         raise InputError(f"axis {letter!r} is not on {self.name}; it has {''.join(self.axes)}")
 
     @property
+    def home(self) -> np.ndarray:
+        """Axis values of the machine's home, its reference position (n_axes,), m and rad:
+        Z at the top of its travel, every other axis at zero. ``machinesim cut`` starts a
+        program there and G28 returns there, as a real machine's reference return lifts the
+        tool clear rather than onto the work zero."""
+        home = np.zeros(len(self.axes))
+        if "Z" in self.axes:
+            z = self.axes.index("Z")
+            home[z] = self.upper[z]
+        return home
+
+    @property
     def frames(self) -> tuple[str, ...]:
         """Named frames of this machine (base, table, workpiece, tool_mount, tool_tip, ...)."""
         return tuple(self.kin.frame_id)

@@ -252,7 +252,9 @@ def test_tools_and_integer_input_reach_the_nc_reader(tmp_path, capsys, monkeypat
     code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", "--tools", table,
                         "--integer-input", "calculator"], capsys)
     assert code == 0, err
-    assert seen == {"tools": table, "integer_input": "calculator"}
+    # and G28's reference is the machine's home: Z at the top of its travel (100 mm)
+    assert seen == {"tools": table, "integer_input": "calculator",
+                    "reference": {"X": 0.0, "Y": 0.0, "Z": 0.1, "C": 0.0}}
     code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", "--tools",
                         tmp_path / "none.toml"], capsys)
     assert_clean_failure(code, err, "none.toml: no such file; expected the tool table (--tools)")
@@ -481,3 +483,23 @@ def test_the_report_lists_how_the_program_was_read(tmp_path, capsys):
     assert code == 0, err
     nc = json.loads(report.read_text(), parse_constant=no_nan)["nc"]
     assert nc["integer_input"] == "calculator" and nc["tool_table"] is None
+
+
+def test_the_cut_starts_at_the_machines_home_and_g28_returns_there(tmp_path, capsys):
+    """A CAM header's G28 G91 Z0 lifts the tool to the machine's home (Z at the top of its
+    travel, 100 mm on grooving_4axis), as a reference return does, and the program starts
+    there: neither the first rapid nor the G28 touches the block whose top is work zero.
+    The machining time is the rapids' by hand: X, Y, Z at 25 mm/s each."""
+    program = tmp_path / "g28.nc"
+    program.write_text("N10 G90 G21 G17\nN20 G00 X-5. Y5. Z5.\nN30 G28 G91 Z0.\n"
+                       "N40 G90 G00 X15. Y5.\nN50 M30\n")
+    report = tmp_path / "r.json"
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "flat:1",
+                        "--stock", "block:10x10x2", "--quiet", "--out", tmp_path / "p.ply",
+                        "--report", report], capsys)
+    assert code == 0, err
+    data = json.loads(report.read_text(), parse_constant=no_nan)
+    assert data["rapids_that_cut_lines"] == []
+    assert "rapid cut" not in err and data["removed_volume_mm3"] == 0.0
+    # home (0, 0, 100) -> (-5, 5, 5): Z 95 mm; -> Z 100: 95 mm; -> X 15: 20 mm
+    assert data["machining_time_s"] == pytest.approx((95 + 95 + 20) / 25.0, rel=1e-12)

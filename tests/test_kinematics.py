@@ -417,3 +417,14 @@ def test_bad_input_is_refused_with_the_machine_and_shape():
     table = ComponentError("table", np.array([0.0, 0.5]), np.array([0.0, 1e-6]))
     with pytest.raises(ErrorModelError, match=r"outside the travel of axis X, -200 \.\. 200 mm"):
         machine.tool_pose(np.zeros(4), ErrorModel(component={"X": {"EXX": table}}))
+
+
+@pytest.mark.parametrize("name", ["grooving_4axis", "planer_4axis", "robonano_a0ib",
+                                  "robonano_ui", "sts_lathe"])
+def test_home_is_z_at_the_top_of_its_travel_and_every_other_axis_at_zero(name):
+    machine = load_machine(name)
+    z = machine.axes.index("Z")
+    expected = np.zeros(len(machine.axes))
+    expected[z] = machine.upper[z]
+    np.testing.assert_array_equal(machine.home, expected)
+    assert machine.upper[z] > 0.0  # clear of a work zero at machine zero
