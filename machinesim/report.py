@@ -1,13 +1,17 @@
 """Report folders of the scenarios: tables, summary.json, parts, NC programs, plots.
 
-Every file goes through `machinesim._io.write_atomic` (whole or not at all). Keys of JSON
-files carry their unit (``depth_error_um``, ``r_mm``): `check_units` refuses a number whose
-key does not end in a unit, so a report never leaves a reader guessing.
+Every file goes through `machinesim._io.write_atomic` (whole or not at all), and a scenario run
+through `scenario_status` writes its whole folder so: into a staging folder beside it, swapped
+in once every file is written (`machinesim._io.StagedFolder`), so that the folder holds the
+previous report or the new one, never a mix. Keys of JSON files carry their unit
+(``depth_error_um``, ``r_mm``): `check_units` refuses a number whose key does not end in a
+unit, so a report never leaves a reader guessing.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import sys
@@ -15,7 +19,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from machinesim._io import json_text, write_atomic
+from machinesim._io import StagedFolder, ctrl_c_remembered, json_text, write_atomic
 from machinesim.exceptions import InputError
 
 #: Suffixes that name a unit (or say that a number has none).
@@ -57,8 +61,21 @@ def _clean(data):
     return data
 
 
+#: Staged report folders of the running scenarios (`scenario_status`), by real path.
+_staged: dict[str, StagedFolder] = {}
+
+
+def _key(path) -> str:
+    return os.path.realpath(Path(path))
+
+
 class ReportFolder:
     """A scenario's output folder.
+
+    Inside `scenario_status`, the folder of ``args.out`` is staged: ``path`` is then the
+    staging folder beside it, where the files are written, and ``final`` the folder the
+    report becomes once it is whole (what to tell the user). Elsewhere both are ``path``
+    and the files are written into it directly.
 
     Parameters
     ----------
@@ -67,17 +84,37 @@ class ReportFolder:
     """
 
     def __init__(self, path) -> None:
-        self.path = Path(path)
+        self.final = Path(path)
+        self._staged = _staged.get(_key(path))
+        self.files: list[str] = []
+        if self._staged is not None:
+            return
         try:
-            self.path.mkdir(parents=True, exist_ok=True)
+            self.final.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InputError(f"--out {str(path)!r}: cannot make the report folder there "
                              f"({exc.strerror or exc}); expected a folder, or a path where "
                              "one can be made", key="out") from None
-        if not os.access(self.path, os.W_OK | os.X_OK):
+        if not os.access(self.final, os.W_OK | os.X_OK):
             raise InputError(f"--out {str(path)!r}: the report folder is not writable",
                              key="out")
-        self.files: list[str] = []
+
+    @property
+    def path(self) -> Path:
+        """Where the files are written now (the staging folder while one is in use)."""
+        if self._staged is not None and self._staged.path is not None:
+            return self._staged.path
+        return self.final
+
+    def publish(self, last: bool = False) -> None:
+        """Make what is written so far the report folder, whole, now (inside
+        `scenario_status`; nothing to do elsewhere). So a scenario says where its report is
+        only once it is there. What the run writes after goes to a new staging folder (a
+        copy) that replaces the folder again when the run ends: a run that adds to its
+        report later (an error budget), stopped then, leaves the report as published. With
+        ``last``, nothing more is written (no new staging folder)."""
+        if self._staged is not None and self._staged.path is not None:
+            self._staged.commit(keep_going=not last)
 
     def _target(self, name: str) -> Path:
         self.files.append(name)
@@ -313,15 +350,26 @@ def scenario_status(report, args, name: str | None = None) -> int:
     `machinesim.MachineSimError`, its one-line message on stderr (``name: message``, or
     ``error: message`` without a name; also a report folder (``args.out``) that cannot be
     made or written, checked before the run, and a file that failed to write); 130 after
-    Ctrl-C, one line saying so. Never a traceback: every file of a report is written whole
-    (`machinesim._io.write_atomic`), so an interrupted run leaves whole files, and
-    summary.json lists those of the run that wrote it."""
+    Ctrl-C, one line saying so. Never a traceback.
+
+    The report folder is written whole or not at all: every `ReportFolder` of ``args.out``
+    writes into a staging folder beside it, swapped in when ``report`` returns
+    (`machinesim._io.StagedFolder`). Stopped or failed before, the run leaves the folder as
+    it was (the previous report, or none), except what ``report`` made whole earlier with
+    `ReportFolder.publish`. A folder that is not a report (files, but no summary.json
+    listing them) is refused before the run rather than replaced.
+    """
     from machinesim.exceptions import MachineSimError
 
+    out = getattr(args, "out", None)
+    staged = None
     try:
-        if getattr(args, "out", None) is not None:
-            ReportFolder(args.out)  # a folder that cannot be written fails now, not after the run
-        report(args)
+        with ctrl_c_remembered():
+            if out is not None:
+                staged = _stage_report(out)
+            report(args)
+            if staged is not None and staged.path is not None:
+                staged.commit()
     except MachineSimError as error:
         print(f"{name or 'error'}: {error}", file=sys.stderr)
         return 2
@@ -330,11 +378,92 @@ def scenario_status(report, args, name: str | None = None) -> int:
         print(f"{name or 'error'}: {where}{error.strerror or error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"{name + ': ' if name else ''}interrupted; the files written are whole, and "
-              "summary.json, when there, lists those of the run that wrote it",
+        print(f"{name + ': ' if name else ''}interrupted; {_interrupted(out, staged)}",
               file=sys.stderr)
         return EXIT_INTERRUPTED
+    finally:
+        if staged is not None:
+            staged.discard()
+            _staged.pop(_key(out), None)
     return 0
+
+
+def _interrupted(out, staged) -> str:
+    """What an interrupted scenario left in its report folder (true in every case)."""
+    if staged is None:
+        return ("no report folder was touched" if out is not None
+                else "nothing was written")
+    if staged.commits == 0:
+        return (f"this run's report was not written: {str(out)!r} is as it was before "
+                "(the previous report, whole, or nothing)")
+    if staged.path is None:
+        return f"this run's report was written whole to {str(out)!r}"
+    return (f"{str(out)!r} holds this run's report as written whole before the interrupt, "
+            "without what the run was adding to it")
+
+
+def _debris(name: str) -> bool:
+    """A temporary file `machinesim._io.write_atomic` may leave (a killed run): not the
+    user's."""
+    return name.startswith(".") and name.endswith((".tmp", ".old"))
+
+
+def _stage_report(out) -> StagedFolder:
+    """The staged report folder of ``--out``, after checking that it can be made and that
+    what is there now is a report (so replacing it whole loses nothing of the user's)."""
+    path = Path(out)
+    target = Path(os.path.realpath(path))
+
+    def refuse(reason: str):
+        raise InputError(f"--out {str(path)!r}: {reason}", key="out")
+
+    def cannot(reason: str):
+        refuse(f"cannot make the report folder there ({reason}); expected a folder, or a "
+               "path where one can be made")
+
+    if os.path.lexists(target) and not target.is_dir():
+        cannot("a file is there")
+    blocking = next((p for p in target.parents if p.exists()), None)
+    if blocking is not None and not blocking.is_dir():
+        cannot(f"{str(blocking)!r} is a file, not a folder")
+    if target.is_dir():
+        if not os.access(target, os.R_OK | os.W_OK | os.X_OK):
+            refuse("the report folder is not writable")
+        _check_replaceable(target, refuse)
+    try:
+        staged = StagedFolder(path)
+    except OSError as exc:
+        cannot(f"cannot write beside it in {str(target.parent)!r}: {exc.strerror or exc}")
+    _staged[_key(path)] = staged
+    return staged
+
+
+def _check_replaceable(folder: Path, refuse) -> None:
+    """Refuse (``refuse(reason)``) a folder the new report may not replace whole: one that
+    holds files besides a report (summary.json and the files it lists)."""
+    try:
+        names = sorted(n for n in os.listdir(folder) if not _debris(n))
+    except OSError as exc:
+        refuse(f"cannot read the report folder ({exc.strerror or exc})")
+    if not names:
+        return
+    if "summary.json" not in names:
+        refuse("holds files but no summary.json, so it is not a report folder, and a new "
+               "report replaces its folder whole; give a new or empty folder (or one a "
+               "scenario wrote)")
+    try:
+        listed = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+        listed = listed.get("files") if isinstance(listed, dict) else None
+    except (OSError, ValueError):
+        listed = None
+    listed = {str(n) for n in listed} if isinstance(listed, list) else set()
+    foreign = [n for n in names if n != "summary.json" and n not in listed]
+    if foreign:
+        shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more"
+                                          if len(foreign) > 5 else "")
+        refuse(f"holds files its summary.json does not list ({shown}); a new report "
+               "replaces its folder whole, so they would be lost: move them, or give "
+               "another folder")
 
 
 def run_scenario(report, args) -> None:
@@ -410,9 +539,12 @@ def parse_floats(text: str, count: int, option: str) -> list[float]:
     return values
 
 
-def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, float]):
+def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, float],
+                    machine: str | None = None):
     """The error model a scenario injects: ``--errors`` (or ``defaults`` without it), with
     the scenario's own options that were given on the command line (``given``) on top.
+    With ``machine`` (a name), a model that does not fit it is refused naming the
+    ``--errors`` file first, then the machine.
 
     Parameters
     ----------
@@ -424,7 +556,15 @@ def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, flo
         Parameters set by options given explicitly.
     """
     from machinesim.errors import ErrorModel
+    from machinesim.exceptions import ErrorModelError
+    from machinesim.machines import load_machine
 
     base = (ErrorModel.from_toml(args.errors) if args.errors is not None
             else ErrorModel().with_parameters(defaults))
+    if machine is not None and args.errors is not None:
+        try:
+            load_machine(machine).check_errors(base)
+        except ErrorModelError as exc:
+            raise ErrorModelError(f"{exc.message} (machine {machine}, {exc.source})",
+                                  source=str(args.errors), key=exc.key) from None
     return base.with_parameters(given) if given else base

@@ -84,7 +84,8 @@ def report(args) -> None:
     shares(out, "shares.png", details)
     surface_3d(out, "case_4_surface.png", result)
     print(out.write_result(result, budget=budget))
-    print(f"Report written to {out.path} ({time.perf_counter() - began:.1f} s)")
+    out.publish(last=True)
+    print(f"Report written to {out.final} ({time.perf_counter() - began:.1f} s)")
 
 
 def case_table(details) -> str:

@@ -88,7 +88,7 @@ def report(args) -> None:
         given["tool.y"] = args.e_ys_um * UM
     if args.r_mm is not None:
         given["tool.z"] = -(args.r_mm * MM - r0)
-    errors, realism = injected_errors(args, defaults, given), realism_from(args)
+    errors, realism = injected_errors(args, defaults, given, machine.name), realism_from(args)
 
     def make_lab(realism):
         return Lab(machine, errors, seed=args.seed, realism=realism)
@@ -115,7 +115,8 @@ def report(args) -> None:
     print(pattern_tables(out, procedure.pattern, result.evaluation.details))
     print(paper_table(out, result))
     print(out.write_result(result, budget=budget))
-    print(f"Report written to {out.path} ({time.perf_counter() - began:.1f} s)")
+    out.publish(last=True)
+    print(f"Report written to {out.final} ({time.perf_counter() - began:.1f} s)")
 
 
 def calibration_plan(capture_mm) -> CalibrationPlan:

@@ -95,7 +95,7 @@ def _configured(args) -> None:
     if args.c_offset_um is not None:
         values = parse_floats(args.c_offset_um, 2, "--c-offset-um")
         given.update(zip(PARAMETERS[3:], (v * M_PER_UM for v in values), strict=True))
-    errors, realism = injected_errors(args, DEFAULTS, given), realism_from(args)
+    errors, realism = injected_errors(args, DEFAULTS, given, "robonano_ui"), realism_from(args)
     report(args, lambda realism: Lab("robonano_ui", errors, seed=args.seed,
                                      realism=realism), realism)
 
@@ -130,6 +130,7 @@ def report(args, make_lab, realism) -> None:
     ident = identification_table(folder, result, procedure.plan)
     check = check_table(folder, details["fit_check"])
     budget_text = folder.write_result(result, budget=budget).split("### Error budget")
+    folder.publish(last=True)
     print(table)
     print(ident)
     if realism.background_errors:
@@ -137,7 +138,7 @@ def report(args, make_lab, realism) -> None:
     print(check)
     if budget is not None:
         print("### Error budget" + budget_text[-1])
-    print(f"report folder: {folder.path}")
+    print(f"report folder: {folder.final}")
 
 
 def table_1(folder, result) -> str:

@@ -141,7 +141,8 @@ def loads(args) -> dict:
     if args.crown_delta_um or args.crown_rot_deg:
         given = {**given, "crown": _given_setting(args.crown_delta_um, args.crown_rot_deg,
                                                   "crown-")}
-    return {load: injected_errors(args, {**landed[load], **centre}, given[load])
+    return {load: injected_errors(args, {**landed[load], **centre}, given[load],
+                                 "robonano_a0ib")
             for load in EXPERIMENTS}
 
 
@@ -215,19 +216,23 @@ def report(args) -> None:
                    "across (nm)"], route_rows,
         title="Compensation routes on the machine with the injected errors (identification "
         "error included)", digits=4)
-    # The report is whole before the budget's reruns begin: the tables are printed and the
-    # folder written (an older budget in it removed), so an interrupted budget leaves a
-    # complete report without one; the budget then adds its table, plot and summary rows.
+    # The report is whole before the budget's reruns begin: the folder is written (an older
+    # budget in it removed) and swapped in (published), so an interrupted budget leaves a
+    # complete report without one; the budget then adds its table, plot and summary rows,
+    # and the folder is swapped in again.
     summary = folder.write_result(result)
+    folder.publish(last=args.budget != "on")
     for text in (table3, grooves, ident, check, times, route_table, summary):
         print(text, flush=True)
-    print(f"report folder: {folder.path}")
-    print(f"views: {folder.path / 'crown_after.html'} (and crown_before, grooves_before, "
+    print(f"report folder: {folder.final}")
+    print(f"views: {folder.final / 'crown_after.html'} (and crown_before, grooves_before, "
           "grooves_after)", flush=True)
     if args.budget == "on":
         budget = scenario_budget(machine, errors, args, realism, results)
         if budget is not None:
-            print(folder.add_budget(result, budget))
+            text = folder.add_budget(result, budget)
+            folder.publish(last=True)
+            print(text)
     told("done")
 
 

@@ -111,7 +111,8 @@ def report(args) -> None:
           f"Y {after['xy_error_y_model_after_um']:.3f} um, diagonal "
           f"{after['diagonal_model_after_um']:.3f} um")
     print(out.write_result(result, budget=budget))
-    print(f"Report written to {out.path} ({time.perf_counter() - began:.1f} s)")
+    out.publish(last=True)
+    print(f"Report written to {out.final} ({time.perf_counter() - began:.1f} s)")
 
 
 def paper_table(result) -> str:

@@ -3,12 +3,22 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
+from argparse import Namespace
 
 import numpy as np
 import pytest
 
+from machinesim._io import clear_stale_folders
 from machinesim.exceptions import InputError
-from machinesim.report import ReportFolder, check_summary, check_units, parse_floats
+from machinesim.report import (
+    ReportFolder,
+    check_summary,
+    check_units,
+    parse_floats,
+    scenario_status,
+)
 
 
 def test_summary_and_tables_round_trip(tmp_path):
@@ -53,3 +63,128 @@ def test_parse_floats_names_the_option():
     assert parse_floats("1,2.5,-3", 3, "--delta-um") == [1.0, 2.5, -3.0]
     with pytest.raises(InputError, match="--delta-um '1,2': expected 3 comma-separated"):
         parse_floats("1,2", 3, "--delta-um")
+
+
+# ------------------------------------------------------------- a report folder written whole
+
+
+def _snapshot(folder):
+    return {p.relative_to(folder).as_posix(): p.read_bytes()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _report(files, stop_after=None):
+    """A scenario's ``report(args)`` writing ``files`` (name -> text) into ``args.out`` through
+    `ReportFolder`, then summary.json; with ``stop_after``, Ctrl-C after that many files."""
+    def report(args):
+        folder = ReportFolder(args.out)
+        for k, (name, text) in enumerate(files.items()):
+            if k == stop_after:
+                raise KeyboardInterrupt
+            folder.write_text(name, text)
+        folder.write_summary({"paper": "000", "procedure": "p", "machine": "m", "seed": 0,
+                              "noise": False, "injected": {}, "identified": {},
+                              "figures": []})
+        folder.publish(last=True)
+        print(f"Report written to {folder.final}")
+    return report
+
+
+def _siblings(folder):
+    return sorted(p.name for p in folder.parent.iterdir() if p != folder)
+
+
+def test_a_rerun_stopped_midway_leaves_the_previous_report_whole(tmp_path, capsys):
+    out = tmp_path / "report"
+    first = {"a.md": "first a\n", "b.md": "first b\n", "only_first.md": "first\n"}
+    assert scenario_status(_report(first), Namespace(out=out), "s") == 0
+    assert f"Report written to {out}" in capsys.readouterr().out
+    before = _snapshot(out)
+    assert sorted(before) == ["a.md", "b.md", "only_first.md", "summary.json"]
+
+    second = {"a.md": "second a\n", "b.md": "second b\n", "c.md": "second c\n"}
+    status = scenario_status(_report(second, stop_after=2), Namespace(out=out), "s")
+    err = capsys.readouterr().err
+    assert status == 130
+    assert err.strip() == (f"s: interrupted; this run's report was not written: {str(out)!r} "
+                           "is as it was before (the previous report, whole, or nothing)")
+    assert _snapshot(out) == before  # byte for byte the first run's, a.md and b.md included
+    assert _siblings(out) == []  # no staging folder left
+
+    # a run that ends replaces the folder whole: nothing of the first run stays
+    assert scenario_status(_report(second), Namespace(out=out), "s") == 0
+    after = _snapshot(out)
+    assert sorted(after) == ["a.md", "b.md", "c.md", "summary.json"]
+    assert after["a.md"] == b"second a\n"
+    assert json.loads(after["summary.json"])["files"] == ["a.md", "b.md", "c.md",
+                                                          "summary.json"]
+    assert _siblings(out) == []
+
+
+def test_an_error_midway_leaves_the_previous_report_and_no_folder_is_made(tmp_path, capsys):
+    out = tmp_path / "new" / "report"
+
+    def failing(args):
+        ReportFolder(args.out).write_text("a.md", "a\n")
+        raise InputError("bad value")
+
+    assert scenario_status(failing, Namespace(out=out), "s") == 2
+    assert capsys.readouterr().err.strip() == "s: bad value"
+    assert not out.exists() and _siblings(out) == []
+    assert scenario_status(_report({"a.md": "a\n"}, stop_after=0), Namespace(out=out)) == 130
+    assert not out.exists() and _siblings(out) == []
+
+
+def test_a_published_report_survives_an_interrupt_of_what_follows(tmp_path, capsys):
+    """Paper 002 publishes its report before its budget's reruns: stopped there, the folder
+    holds that report whole, without the budget's files."""
+    out = tmp_path / "report"
+
+    def report(args):
+        folder = ReportFolder(args.out)
+        folder.write_text("table.md", "table\n")
+        folder.publish()
+        folder.write_text("budget.md", "budget\n")
+        raise KeyboardInterrupt
+
+    assert scenario_status(report, Namespace(out=out), "s") == 130
+    assert "holds this run's report as written whole" in capsys.readouterr().err
+    assert _snapshot(out) == {"table.md": b"table\n"} and _siblings(out) == []
+
+
+def test_a_stale_staging_folder_of_a_killed_run_is_removed(tmp_path):
+    out = tmp_path / "report"
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    stale = tmp_path / f".report.partial-{dead}.0badf00d"
+    stale.mkdir()
+    (stale / "half.ply").write_text("half")
+    # killed in the middle of a swap: the previous report aside, none under the name
+    aside = tmp_path / f".report.old-{dead}.0badf00d"
+    aside.mkdir()
+    (aside / "summary.json").write_text('{"files": ["summary.json"]}')
+    clear_stale_folders(out)
+    assert _siblings(out) == [] and sorted(p.name for p in out.iterdir()) == ["summary.json"]
+    stale.mkdir()
+    assert scenario_status(_report({"a.md": "a\n"}), Namespace(out=out)) == 0
+    assert _siblings(out) == [] and (out / "a.md").read_text() == "a\n"
+
+
+def test_a_folder_that_is_not_a_report_is_refused_not_replaced(tmp_path, capsys):
+    for content, message in (({"notes.txt": "mine"}, "holds files but no summary.json"),
+                             ({"summary.json": '{"files": ["summary.json"]}',
+                               "notes.txt": "mine"},
+                              "holds files its summary.json does not list (notes.txt)")):
+        out = tmp_path / "report"
+        out.mkdir()
+        for name, text in content.items():
+            (out / name).write_text(text)
+        assert scenario_status(_report({"a.md": "a\n"}), Namespace(out=out), "s") == 2
+        err = capsys.readouterr().err
+        assert len(err.splitlines()) == 1 and f"--out {str(out)!r}: " in err, err
+        assert message in err, err
+        assert {n: t.encode() for n, t in content.items()} == _snapshot(out)
+        assert _siblings(out) == []
+        for path in out.iterdir():
+            path.unlink()
+        out.rmdir()
