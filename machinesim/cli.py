@@ -9,8 +9,9 @@
 
 Exit status: 0 done; 2 the input cannot be used (the message names the file, line, key or
 value; nothing was written); 1 anything else (one line, never a traceback; set
-``MACHINESIM_TRACEBACK=1`` to see it); 130 interrupted (nothing was written). Heavy modules
-are imported inside `main`, so that even an interrupt while they load ends cleanly.
+``MACHINESIM_TRACEBACK=1`` to see it); 130 interrupted (nothing was written; a campaign keeps
+its finished trials, says so, and resumes when run again). Heavy modules are imported inside
+`main`, so that even an interrupt while they load ends cleanly.
 """
 
 from __future__ import annotations
@@ -112,13 +113,15 @@ def main(argv: list[str] | None = None) -> int:
 
     Usage errors and ``--help`` leave through argparse's ``SystemExit`` (status 2 and 0).
     """
+    args = None
     try:
         with ctrl_c_remembered():
-            return _command(_parser().parse_args(argv))
+            args = _parser().parse_args(argv)
+            return _command(args)
     except MachineSimError as exc:
         return _fail(f"error: {exc}", EXIT_INPUT)
     except KeyboardInterrupt:
-        return _fail("interrupted; nothing was written", EXIT_INTERRUPTED)
+        return _fail(f"interrupted; {_interrupted(args)}", EXIT_INTERRUPTED)
     except BrokenPipeError:
         # the reader of our output went away (``machinesim machines | head -1``): not an error
         devnull = os.open(os.devnull, os.O_WRONLY)
@@ -149,6 +152,16 @@ def _command(args: argparse.Namespace) -> int:
 
         return run_campaign(args)
     return _cut(args)
+
+
+def _interrupted(args) -> str:
+    """What a command stopped by Ctrl-C leaves: nothing, but for a campaign its finished
+    trials (kept so that the same command resumes)."""
+    if args is not None and args.command == "campaign":
+        from machinesim.campaign.cli import interrupted
+
+        return interrupted(args.out)
+    return "nothing was written"
 
 
 def _fail(message: str, status: int) -> int:

@@ -17,7 +17,7 @@ from scipy import stats
 import machinesim.campaign.runner as runner
 from machinesim.campaign import CampaignSpec, parse_distribution, parse_vary, run, run_trial
 from machinesim.campaign.statistics import coverage_interval, ranks, spearman, z_scores, z_summary
-from machinesim.campaign.trials import draw, trial_seed
+from machinesim.campaign.trials import MAX_TRIALS, draw, trial_seed
 from machinesim.cli import main as cli_main
 from machinesim.exceptions import InputError, MachineSimError
 
@@ -342,3 +342,60 @@ def test_trials_written_before_the_after_std_still_assemble():
     assert math.isnan(float(ds["after_std"].values[0, 0]))
     assert float(ds["after"].values[0, 0]) == 0.2
     assert "after_z" not in summarise(ds)["figures"]["a_dx"]
+
+
+def test_cli_refuses_an_absurd_trial_count_at_once(tmp_path, capsys):
+    """--trials 1e11 used to leave the command silent for minutes (it looked for that many
+    trial files); it is refused before anything runs or is written."""
+    for trials in ("100000000000", str(MAX_TRIALS + 1), "0"):
+        status = cli_main(["campaign", "tool_rotation_arm", "--trials", trials, "--out",
+                           str(tmp_path / "c")])
+        err = capsys.readouterr().err
+        assert status == 2, err
+        assert len(err.splitlines()) == 1 and "Traceback" not in err
+        assert f"--trials {trials}; expected a whole number from 1 to 100000" in err
+        assert not (tmp_path / "c").exists()
+    with pytest.raises(InputError, match="from 1 to 100000"):
+        CampaignSpec("tool_rotation_arm", MAX_TRIALS + 1)
+    assert CampaignSpec("tool_rotation_arm", MAX_TRIALS).trials == MAX_TRIALS
+
+
+def test_cli_ctrl_c_says_which_trials_are_kept_and_the_rerun_resumes(tmp_path, capsys,
+                                                                      monkeypatch):
+    real, ran = runner.run_trial, []
+
+    def interrupted(spec, i):
+        if ran:
+            raise KeyboardInterrupt
+        ran.append(i)
+        return real(spec, i)
+
+    monkeypatch.setattr(runner, "run_trial", interrupted)
+    command = ["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+               "--identify-only", "--quiet", "--seed", "5", "--out", str(tmp_path)]
+    assert cli_main(command) == 130
+    err = capsys.readouterr().err
+    assert err.strip() == (
+        f"machinesim: interrupted; kept the 1 finished trial file in {tmp_path / 'trials'} "
+        "(trial_000000.json) and campaign.json: run the same command again to resume (only "
+        "the missing trials run)")
+    assert sorted(p.name for p in (tmp_path / "trials").iterdir()) == ["trial_000000.json"]
+
+    ran.clear()
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: ran.append(i) or real(spec, i))
+    assert cli_main(command) == 0
+    assert ran == [1]  # resumed: only the missing trial ran
+    assert "2 trials (0 failed)" in capsys.readouterr().out
+
+
+def test_cli_ctrl_c_before_any_trial_says_so(tmp_path, capsys, monkeypatch):
+    def interrupted(spec, i):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(runner, "run_trial", interrupted)
+    assert cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+                     "--identify-only", "--quiet", "--out", str(tmp_path / "c")]) == 130
+    err = capsys.readouterr().err.strip()
+    assert err == (f"machinesim: interrupted; no trial had finished; kept "
+                   f"{tmp_path / 'c' / 'campaign.json'}: run the same command again to start "
+                   "it over")

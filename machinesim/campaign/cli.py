@@ -11,10 +11,10 @@ import sys
 from pathlib import Path
 
 from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
-from machinesim.campaign.trials import PROCEDURES
+from machinesim.campaign.trials import MAX_TRIALS, PROCEDURES, trials_refused
 from machinesim.exceptions import InputError, MachineSimError
 
-__all__ = ["add_campaign_parser", "main", "run_campaign"]
+__all__ = ["add_campaign_parser", "interrupted", "main", "run_campaign"]
 
 EXAMPLES = """\
 DIST (every number with its unit: m mm um nm rad mrad urad deg arcsec; 0 needs none):
@@ -55,7 +55,7 @@ def _epilog() -> str:
 def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("procedure", help=f"one of {', '.join(PROCEDURES)}")
     parser.add_argument("--trials", type=int, required=True, metavar="N",
-                        help="number of trials")
+                        help=f"number of trials, 1 to {MAX_TRIALS}")
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=None, metavar="K",
                        help="local Dask worker processes (default: the cores; 0: no Dask, "
@@ -95,10 +95,9 @@ def run_campaign(args) -> int:
     propagates to the caller (``machinesim``'s main prints it as one line)."""
     from machinesim.campaign.runner import run
 
+    if not 1 <= args.trials <= MAX_TRIALS:  # before anything else: nothing to wait for
+        raise InputError(trials_refused(args.trials), key="--trials")
     vary = [parse_vary(text) for text in args.vary]
-    if args.trials < 1:
-        raise InputError(f"--trials {args.trials}; expected a whole number >= 1",
-                         key="--trials")
     dataset = run(args.procedure, args.trials, vary=vary, seed=args.seed, out=args.out,
                   workers=args.workers, scheduler=args.scheduler, noise=args.noise == "on",
                   identify_only=args.identify_only, quick=args.quick,
@@ -107,6 +106,27 @@ def run_campaign(args) -> int:
     print(f"campaign: {dataset.sizes['trial']} trials ({failed} failed) in {args.out}: "
           "campaign.nc, summary.md, summary.json")
     return 0
+
+
+def interrupted(out) -> str:
+    """What a campaign stopped by Ctrl-C leaves in ``out`` (after "interrupted; "): the
+    finished trial files, kept so that the same command resumes, or nothing."""
+    from machinesim.campaign.results import finished_trials
+
+    if out is None:
+        return "nothing was written"
+    out = Path(out)
+    trials = finished_trials(out)
+    if trials:
+        shown = (f"trial_{trials[0]:06d}.json" if len(trials) == 1 else
+                 f"trial_{trials[0]:06d}.json .. trial_{trials[-1]:06d}.json")
+        return (f"kept the {len(trials)} finished trial file{'s' * (len(trials) > 1)} in "
+                f"{out / 'trials'} ({shown}) and campaign.json: run the same command again "
+                "to resume (only the missing trials run)")
+    if (out / "campaign.json").is_file():
+        return (f"no trial had finished; kept {out / 'campaign.json'}: run the same command "
+                "again to start it over")
+    return "nothing was written"
 
 
 def main(argv=None) -> int:
@@ -121,8 +141,7 @@ def main(argv=None) -> int:
         print(f"machinesim campaign: error: {error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("machinesim campaign: interrupted; the finished trials are kept in "
-              f"{args.out}/trials (run again to finish)", file=sys.stderr)
+        print(f"machinesim campaign: interrupted; {interrupted(args.out)}", file=sys.stderr)
         return 130
 
 

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import platform
 from importlib import metadata
 from pathlib import Path
@@ -42,7 +43,7 @@ import numpy as np
 from machinesim._io import check_writable, json_text, read_json, write_atomic
 from machinesim.exceptions import FileError, InputError
 
-__all__ = ["CampaignFolder", "assemble", "versions"]
+__all__ = ["CampaignFolder", "assemble", "finished_trials", "versions"]
 
 
 def versions() -> dict:
@@ -116,8 +117,9 @@ class CampaignFolder:
         return self.trials_path / f"trial_{i:06d}.json"
 
     def done(self, trials: int) -> list[int]:
-        """The trials below ``trials`` whose file is there."""
-        return [i for i in range(trials) if self.trial_file(i).exists()]
+        """The trials below ``trials`` whose file is there (one listing of trials/, not a
+        look-up per trial)."""
+        return [i for i in finished_trials(self.path) if i < trials]
 
     def write_trial(self, record: dict) -> None:
         write_atomic(self.trial_file(record["trial"]), json_text(_clean(record), "trial"))
@@ -132,6 +134,21 @@ class CampaignFolder:
         path = self.path / name
         write_atomic(path, bytes(dataset.to_netcdf()))
         return path
+
+
+def finished_trials(path) -> list[int]:
+    """The trials of the campaign folder ``path`` whose file is in its trials/ (sorted;
+    none when there is no such folder)."""
+    try:
+        names = os.listdir(Path(path) / "trials")
+    except OSError:
+        return []
+    found = []
+    for name in names:
+        number = name.removeprefix("trial_").removesuffix(".json")
+        if name.startswith("trial_") and name.endswith(".json") and number.isdigit():
+            found.append(int(number))
+    return sorted(found)
 
 
 def _names(records, key: str) -> list[str]:

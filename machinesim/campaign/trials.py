@@ -34,8 +34,20 @@ from machinesim.experiment import Evaluation, Identified, run
 from machinesim.streams import stream
 from machinesim.units import M_PER_MM, M_PER_UM
 
-__all__ = ["PROCEDURES", "CampaignSpec", "IdentificationOnly", "ProcedureEntry", "run_trial",
-           "trial_seed"]
+__all__ = ["MAX_TRIALS", "PROCEDURES", "CampaignSpec", "IdentificationOnly", "ProcedureEntry",
+           "run_trial", "trial_seed", "trials_refused"]
+
+
+#: Most trials a campaign takes (docs/campaigns.md): a trial is seconds to minutes of CPU and
+#: one file, so 100000 trials are already days on a cluster; a larger N is a typo, refused at
+#: once (it used to leave the command silent for minutes, looking for that many trial files).
+MAX_TRIALS = 100_000
+
+
+def trials_refused(trials) -> str:
+    """The message refusing ``trials`` as a campaign's N."""
+    return (f"--trials {trials!r}; expected a whole number from 1 to {MAX_TRIALS} (the most "
+            "trials a campaign takes, docs/campaigns.md)")
 
 
 # ------------------------------------------------------------------------------ procedures
@@ -189,7 +201,7 @@ class CampaignSpec:
     procedure : str
         A key of `PROCEDURES`.
     trials : int
-        N, the number of trials (>= 1).
+        N, the number of trials (1 .. `MAX_TRIALS`).
     vary : tuple of (str, Distribution)
         Parameters and their distributions, SI; on top of the procedure's defaults.
     seed : int
@@ -215,9 +227,8 @@ class CampaignSpec:
             raise InputError(f"procedure {self.procedure!r}; expected one of "
                              f"{', '.join(PROCEDURES)}", key="procedure")
         if isinstance(self.trials, bool) or not isinstance(self.trials, int | np.integer) \
-                or self.trials < 1:
-            raise InputError(f"--trials {self.trials!r}; expected a whole number >= 1",
-                             key="--trials")
+                or not 1 <= self.trials <= MAX_TRIALS:
+            raise InputError(trials_refused(self.trials), key="--trials")
         object.__setattr__(self, "trials", int(self.trials))
         if isinstance(self.seed, bool) or not isinstance(self.seed, int | np.integer) \
                 or self.seed < 0:
