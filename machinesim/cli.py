@@ -315,7 +315,14 @@ def _cut(args) -> int:
               file=sys.stderr)
     for item in report.limit_violations:
         print(f"warning: outside travel: {item}", file=sys.stderr)
-    if report.empty_cut:
+    if report.empty_cut and report.edge_plane_lines:
+        lines = ", ".join(map(str, report.edge_plane_lines[:5])) + (
+            " ..." if len(report.edge_plane_lines) > 5 else "")
+        print(f"warning: the program removed no material: its feeds into the stock (line "
+              f"{lines}) move the tool within its edge plane (a plunge), where a V or nose "
+              "tool's zero-thickness edge sweeps no volume; it cuts by moving along its own X",
+              file=sys.stderr)
+    elif report.empty_cut:
         print("warning: the program removed no material (does it reach the stock?)",
               file=sys.stderr)
     return 0

@@ -10,6 +10,7 @@ cut's first call loads libraries.
 from __future__ import annotations
 
 import functools
+import json
 import math
 import os
 import subprocess
@@ -369,3 +370,26 @@ def test_a_nose_radius_error_that_does_not_fit_the_tool_names_the_file_key_and_v
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert f"{toml}, key 'tool_geometry.nose_radius_um'" in err and "= -5000 " in err, err
     assert not out.exists()
+
+
+def test_a_v_tool_plunged_into_the_stock_is_said_to_remove_nothing_and_why(tmp_path, capsys):
+    """A V tool fed straight down 50 um into a block removes nothing (its edge is a
+    zero-thickness profile, and a plunge stays in its plane): the report lists the plunge's
+    line, and the warning says why instead of asking whether the program reaches the stock.
+    The same plunge followed by a feed along X cuts, and names no such line as the reason."""
+    program = tmp_path / "plunge.nc"
+    program.write_text("G90 G21\nG00 X5. Y5. Z1.\nG01 Z-0.05 F100.\nG00 Z1.\nM30\n")
+    report = tmp_path / "r.json"
+    argv = ["cut", program, "--machine", "grooving_4axis", "--tool", "v:90", "--stock",
+            "block:10x10x2", "--quiet", "--out", tmp_path / "p.ply", "--report", report]
+    code, err = run_cli(argv, capsys)
+    assert code == 0, err
+    data = json.loads(report.read_text())
+    assert data["removed_volume_mm3"] == 0.0 and data["edge_plane_lines"] == [3]
+    assert "feeds into the stock (line 3) move the tool within its edge plane" in err, err
+    program.write_text("G90 G21\nG00 X5. Y5. Z1.\nG01 Z-0.05 F100.\nX7.\nG00 Z1.\nM30\n")
+    code, err = run_cli(argv, capsys)
+    data = json.loads(report.read_text())
+    # a 90-deg V 50 um deep over 2 mm: d^2 L = 0.005 mm^3
+    assert code == 0 and data["removed_volume_mm3"] == pytest.approx(0.005, rel=1e-9)
+    assert "removed no material" not in err

@@ -20,7 +20,7 @@ from machinesim import motion
 from machinesim.cutting.engine import remove
 from machinesim.cutting.rapids import rapids_that_cut
 from machinesim.cutting.sheets import SheetReport, trim_sheets
-from machinesim.cutting.sweepset import dragged_past_clearance
+from machinesim.cutting.sweepset import dragged_past_clearance, within_edge_plane
 from machinesim.errors import as_error_model
 from machinesim.exceptions import AxisLimitError, InputError
 from machinesim.nc import MOVE_KINDS
@@ -112,6 +112,7 @@ class CutReport:
     tools: tuple = field(default=(), hash=False)
     thin_sheets: int = 0
     sideways_lines: tuple[int, ...] = field(default=())
+    edge_plane_lines: tuple[int, ...] = field(default=())
 
     def to_dict(self) -> dict:
         """JSON-ready dict, every key with its unit."""
@@ -126,6 +127,7 @@ class CutReport:
             "holder_contact_lines": list(self.holder_contact),
             "sideways_sweeps": self.sideways_sweeps,
             "sideways_lines": list(self.sideways_lines),
+            "edge_plane_lines": list(self.edge_plane_lines),
             "thin_sheets": self.thin_sheets,
             "empty_cut": self.empty_cut,
             "engine": self.engine,
@@ -232,6 +234,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
     poses = machine.tool_pose(moves.q, errors) if len(moves.q) else np.zeros((0, 4, 4))
     part, engines, rapids, holder, sideways, sections = stock, [], [], set(), set(), []
+    in_plane: set[int] = set()
     for section_tool, length, section, (lo, hi), (number, line) in tools.split(moves):
         section_poses = poses[lo:hi] if length == 0.0 else poses[lo:hi] @ _beyond_tip(length)
         paths = np.split(section_poses, section.breaks) if len(section_poses) else []
@@ -242,6 +245,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
                                    engine.reached, roi)
         holder |= {int(section.sweep_line[i]) for i in engine.holder_contact}
         sideways |= _sideways_lines(section_poses, section, engine.sideways)
+        if not section_tool.rotational:
+            in_plane |= _edge_plane_lines(section_poses, section, engine.reached)
         engines.append(engine)
         sections.append({"tool": number, "line": line, "length_m": length,
                          "removed_volume_m3": float(engine.removed_volume),
@@ -267,6 +272,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         notes=(*trajectory.notes, *tools.notes, *([sheet_note] if sheet_note else [])),
         holder_contact=tuple(sorted(holder)),
         sideways_lines=tuple(sorted(sideways)),
+        edge_plane_lines=tuple(sorted(in_plane)),
         engine_s=sum(e.elapsed_s for e in engines),
         nc=nc_summary(program),
         tools=tuple(sections),
@@ -446,6 +452,18 @@ def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
             f"{where}{'; '.join(found)}; nothing was cut (allow_overtravel=True, "
             "--allow-overtravel on the command line, cuts it anyway and lists it)")
     return tuple(found)
+
+
+def _edge_plane_lines(poses: np.ndarray, moves: _Moves, sweeps) -> set[int]:
+    """Lines of the feeds among ``sweeps`` (those that reach the stock) that move a V or
+    nose tool within its edge plane (`within_edge_plane`): there its zero-thickness edge
+    removes nothing, where a real tool would leave the imprint of its body."""
+    sweeps = np.asarray(sweeps, dtype=np.int64)
+    sweeps = sweeps[~moves.sweep_rapid[sweeps]]
+    first = moves.sweep_start[sweeps]
+    plane = within_edge_plane(poses[first, :3, :3],
+                              poses[first + 1, :3, 3] - poses[first, :3, 3])
+    return {int(line) for line in moves.sweep_line[sweeps[plane]]}
 
 
 def _sideways_lines(poses: np.ndarray, moves: _Moves, sweeps) -> set[int]:

@@ -319,6 +319,15 @@ def dragged_past_clearance(poses: np.ndarray, starts: np.ndarray) -> np.ndarray:
     return angle > SIDEWAYS_WARN_RAD
 
 
+def within_edge_plane(rotation: np.ndarray, move: np.ndarray) -> np.ndarray:
+    """Which moves (s, 3) keep a non-rotational tool at ``rotation`` (s, 3, 3) within the
+    plane of its edge profile (its Y-Z plane: no component along its cutting direction X),
+    where its zero-thickness edge sweeps no volume: a plunge, a lift, a drag across."""
+    local = np.einsum("nji,nj->ni", rotation, move)
+    length = np.linalg.norm(local, axis=1)
+    return (np.abs(local[:, 0]) <= SIDEWAYS_REL * length) & (length > 0.0)
+
+
 def dragged(rotation: np.ndarray, move: np.ndarray) -> np.ndarray:
     """Which moves (s, 3) drag a non-rotational tool at ``rotation`` (s, 3, 3) sideways."""
     local = np.einsum("nji,nj->ni", rotation, move)
