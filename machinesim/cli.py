@@ -57,6 +57,9 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="machinesim", description="A virtual multi-axis ultraprecision machine tool.",
         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EXAMPLES)
+    from machinesim import __version__
+
+    parser.add_argument("--version", action="version", version=f"machinesim {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("machines", help="list the shipped machines with their axes and travel",
                    description="List the shipped machines with their axes and travel.")

@@ -503,3 +503,12 @@ def test_the_cut_starts_at_the_machines_home_and_g28_returns_there(tmp_path, cap
     assert "rapid cut" not in err and data["removed_volume_mm3"] == 0.0
     # home (0, 0, 100) -> (-5, 5, 5): Z 95 mm; -> Z 100: 95 mm; -> X 15: 20 mm
     assert data["machining_time_s"] == pytest.approx((95 + 95 + 20) / 25.0, rel=1e-12)
+
+
+def test_version_prints_the_installed_packages_version(capsys):
+    from importlib.metadata import version
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    assert capsys.readouterr().out.strip() == f"machinesim {version('machinesim')}"
