@@ -2,7 +2,7 @@
 
 Run: ``.venv/bin/python scenarios/xy_plane_errors.py [--errors FILE.toml] [--noise on|off]
 [--realism ideal|noise_only|lab] [--budget on|off] [--seed N] [--out reports/xy_plane_errors]``
-(about 2 min 10 s with the default lab realism and its error budget; 40 s with
+(about 1 min 20 s with the default lab realism and its error budget; 36 s with
 ``--budget off``).
 
 The grooving_4axis gets the errors of ``models/errors/xy_plane_grooving_4axis.toml`` (chosen
