@@ -193,7 +193,9 @@ def test_resume_runs_only_the_missing_trials(campaign, tmp_path, monkeypatch):
         assert np.array_equal(again[name].values, ds[name].values)
 
 
-def test_interrupted_campaign_keeps_its_finished_trials(tmp_path, monkeypatch):
+def _interrupt_after_one_trial(monkeypatch) -> list[int]:
+    """Make the campaign runner stop with a Ctrl-C when a second trial starts; returns the
+    list the one trial that ran is appended to."""
     real, ran = runner.run_trial, []
 
     def interrupted(spec, i):
@@ -203,6 +205,11 @@ def test_interrupted_campaign_keeps_its_finished_trials(tmp_path, monkeypatch):
         return real(spec, i)
 
     monkeypatch.setattr(runner, "run_trial", interrupted)
+    return ran
+
+
+def test_interrupted_campaign_keeps_its_finished_trials(tmp_path, monkeypatch):
+    _interrupt_after_one_trial(monkeypatch)
     with pytest.raises(KeyboardInterrupt):
         run("tool_rotation_arm", 2, seed=5, out=tmp_path, workers=0, progress=False, **ARM)
     assert sorted(p.name for p in (tmp_path / "trials").iterdir()) == ["trial_000000.json"]
@@ -362,15 +369,8 @@ def test_cli_refuses_an_absurd_trial_count_at_once(tmp_path, capsys):
 
 def test_cli_ctrl_c_says_which_trials_are_kept_and_the_rerun_resumes(tmp_path, capsys,
                                                                       monkeypatch):
-    real, ran = runner.run_trial, []
-
-    def interrupted(spec, i):
-        if ran:
-            raise KeyboardInterrupt
-        ran.append(i)
-        return real(spec, i)
-
-    monkeypatch.setattr(runner, "run_trial", interrupted)
+    real = runner.run_trial
+    ran = _interrupt_after_one_trial(monkeypatch)
     command = ["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
                "--identify-only", "--quiet", "--seed", "5", "--out", str(tmp_path)]
     assert cli_main(command) == 130

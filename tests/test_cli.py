@@ -411,22 +411,27 @@ def test_each_holder_contact_and_each_rapid_that_cuts_is_one_warning_line(tmp_pa
                         "warning: rapid cut the part at line 9"], err
 
 
+def cut_with_report(tmp_path, capsys, text: str, tool: str, stock: str):
+    """Cut the NC ``text`` on grooving_4axis with ``tool`` and ``stock``; (stderr, the
+    report's JSON) of a run that must succeed."""
+    program, report = tmp_path / "program.nc", tmp_path / "r.json"
+    program.write_text(text)
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", tool,
+                        "--stock", stock, "--quiet", "--out", tmp_path / "p.ply",
+                        "--report", report], capsys)
+    assert code == 0, err
+    return err, json.loads(report.read_text(), parse_constant=no_nan)
+
+
 def test_each_feed_that_drags_a_v_tool_sideways_is_one_warning_line(tmp_path, capsys):
     # line 4 feeds along X (the V tool's own direction: clean), line 5 at 45 deg in XY and
     # line 6 along Y (both drag the edge sideways); line 2's rapid starts on the block's
     # corner at z = 0 and grazes it, which is no cut and no warning
-    program = tmp_path / "drag.nc"
-    program.write_text("G90 G21\nG0 X1. Y1. Z0.1\nG1 Z-0.01 F100.\nX3.\nX4. Y2.\nY2.5\n"
-                       "G0 Z0.1\nM30\n")
-    report = tmp_path / "r.json"
-    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
-                        "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply",
-                        "--report", report], capsys)
-    assert code == 0, err
+    err, data = cut_with_report(tmp_path, capsys, "G90 G21\nG0 X1. Y1. Z0.1\nG1 Z-0.01 F100.\n"
+                                "X3.\nX4. Y2.\nY2.5\nG0 Z0.1\nM30\n", "v:90", "block:5x3x1")
     warnings = [line.split(" (")[0] for line in err.splitlines() if line.startswith("warning:")]
     assert warnings == ["warning: tool dragged sideways at line 5",
                         "warning: tool dragged sideways at line 6"], err
-    data = json.loads(report.read_text(), parse_constant=no_nan)
     assert data["sideways_lines"] == [5, 6]
 
 
@@ -490,15 +495,9 @@ def test_the_cut_starts_at_the_machines_home_and_g28_returns_there(tmp_path, cap
     travel, 100 mm on grooving_4axis), as a reference return does, and the program starts
     there: neither the first rapid nor the G28 touches the block whose top is work zero.
     The machining time is the rapids' by hand: X, Y, Z at 25 mm/s each."""
-    program = tmp_path / "g28.nc"
-    program.write_text("N10 G90 G21 G17\nN20 G00 X-5. Y5. Z5.\nN30 G28 G91 Z0.\n"
-                       "N40 G90 G00 X15. Y5.\nN50 M30\n")
-    report = tmp_path / "r.json"
-    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "flat:1",
-                        "--stock", "block:10x10x2", "--quiet", "--out", tmp_path / "p.ply",
-                        "--report", report], capsys)
-    assert code == 0, err
-    data = json.loads(report.read_text(), parse_constant=no_nan)
+    err, data = cut_with_report(tmp_path, capsys, "N10 G90 G21 G17\nN20 G00 X-5. Y5. Z5.\n"
+                                "N30 G28 G91 Z0.\nN40 G90 G00 X15. Y5.\nN50 M30\n", "flat:1",
+                                "block:10x10x2")
     assert data["rapids_that_cut_lines"] == []
     assert "rapid cut" not in err and data["removed_volume_mm3"] == 0.0
     # home (0, 0, 100) -> (-5, 5, 5): Z 95 mm; -> Z 100: 95 mm; -> X 15: 20 mm
