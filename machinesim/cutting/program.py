@@ -244,9 +244,9 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         rapids += rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)
         holder |= {int(section.sweep_line[i]) for i in engine.holder_contact}
-        sideways |= _sideways_lines(section_poses, section, engine.sideways)
+        sideways |= _feed_lines(section, engine.sideways, _dragged(section_poses))
         if not section_tool.rotational:
-            in_plane |= _edge_plane_lines(section_poses, section, engine.reached)
+            in_plane |= _feed_lines(section, engine.reached, _in_edge_plane(section_poses))
         engines.append(engine)
         sections.append({"tool": number, "line": line, "length_m": length,
                          "removed_volume_m3": float(engine.removed_volume),
@@ -454,25 +454,26 @@ def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
     return tuple(found)
 
 
-def _edge_plane_lines(poses: np.ndarray, moves: _Moves, sweeps) -> set[int]:
-    """Lines of the feeds among ``sweeps`` (those that reach the stock) that move a V or
-    nose tool within its edge plane (`within_edge_plane`): there its zero-thickness edge
-    removes nothing, where a real tool would leave the imprint of its body."""
+def _feed_lines(moves: _Moves, sweeps, which) -> set[int]:
+    """Lines of the feeds (a rapid that cuts is listed among the rapids) among ``sweeps``
+    for which ``which(starts)`` holds, ``starts`` the sweeps' first poses."""
     sweeps = np.asarray(sweeps, dtype=np.int64)
     sweeps = sweeps[~moves.sweep_rapid[sweeps]]
-    first = moves.sweep_start[sweeps]
-    plane = within_edge_plane(poses[first, :3, :3],
-                              poses[first + 1, :3, 3] - poses[first, :3, 3])
-    return {int(line) for line in moves.sweep_line[sweeps[plane]]}
+    return {int(line) for line in moves.sweep_line[sweeps[which(moves.sweep_start[sweeps])]]}
 
 
-def _sideways_lines(poses: np.ndarray, moves: _Moves, sweeps) -> set[int]:
-    """Lines of the feeds among ``sweeps`` that drag the tool sideways by more than
-    `tolerances.SIDEWAYS_WARN_RAD` (a rapid that cuts is listed among the rapids)."""
-    sweeps = np.asarray(sweeps, dtype=np.int64)
-    sweeps = sweeps[~moves.sweep_rapid[sweeps]]
-    beyond = dragged_past_clearance(poses, moves.sweep_start[sweeps])
-    return {int(line) for line in moves.sweep_line[sweeps[beyond]]}
+def _dragged(poses: np.ndarray):
+    """``which`` for `_feed_lines`: the sweeps that drag the tool sideways by more than
+    `tolerances.SIDEWAYS_WARN_RAD` (`dragged_past_clearance`)."""
+    return lambda first: dragged_past_clearance(poses, first)
+
+
+def _in_edge_plane(poses: np.ndarray):
+    """``which`` for `_feed_lines`: the sweeps that move a V or nose tool within its edge
+    plane (`within_edge_plane`), where its zero-thickness edge removes nothing and a real
+    tool would leave the imprint of its body."""
+    return lambda first: within_edge_plane(poses[first, :3, :3],
+                                           poses[first + 1, :3, 3] - poses[first, :3, 3])
 
 
 def _format(rotary: bool):

@@ -265,8 +265,7 @@ def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, t
     offsets = work_offsets_si(work_offsets, source=source)
     data = data.removeprefix(UTF8_BOM)  # Windows editors start UTF-8 files with one
     reader = Reader(data, errors, source, offsets, integer_input, tool_table(tools),
-                     tolerance, fast)
-    reader.reference = axis_values(reference or {}, source=source)
+                     tolerance, fast, axis_values(reference or {}, source=source))
     return reader.read()
 
 
@@ -278,12 +277,13 @@ class Reader:
     """Both passes over one file: the layout, then the main program's run."""
 
     def __init__(self, data: bytes, errors: str, source: str, offsets, integer_input: str,
-                 tools: ToolTable | None, chord_tolerance: float, fast: bool) -> None:
+                 tools: ToolTable | None, chord_tolerance: float, fast: bool,
+                 reference: FrozenMapping) -> None:
         self.data = data
         self.errors = errors
         self.source = source
         self.offsets = offsets
-        self.reference = FrozenMapping()  # G28's reference position (`parse_program`)
+        self.reference = reference  # G28's reference position (`parse_program`)
         self.integer_input = integer_input
         self.increment = integer_input == "increment"
         self.tools = tools
