@@ -347,10 +347,11 @@ EXIT_INTERRUPTED = 130
 
 def scenario_status(report, args, name: str | None = None) -> int:
     """Run a scenario's ``report(args)`` and give its exit status: 0; 2 after a
-    `machinesim.MachineSimError`, its one-line message on stderr (``name: message``, or
-    ``error: message`` without a name; also a report folder (``args.out``) that cannot be
-    made or written, checked before the run, and a file that failed to write); 130 after
-    Ctrl-C, one line saying so. Never a traceback.
+    `machinesim.MachineSimError`, its one-line message on stderr (``NAME: error: message``,
+    as ``machinesim: error: ...`` on the command line; ``name`` defaults to the script's
+    name; also a report folder (``args.out``) that cannot be made or written, checked before
+    the run, and a file that failed to write); 130 after Ctrl-C, one line saying so
+    (``NAME: interrupted; ...``). Never a traceback.
 
     The report folder is written whole or not at all: every `ReportFolder` of ``args.out``
     writes into a staging folder beside it, swapped in when ``report`` returns
@@ -361,6 +362,7 @@ def scenario_status(report, args, name: str | None = None) -> int:
     """
     from machinesim.exceptions import MachineSimError
 
+    name = name or Path(sys.argv[0]).stem or "scenario"
     out = getattr(args, "out", None)
     staged = None
     try:
@@ -371,15 +373,14 @@ def scenario_status(report, args, name: str | None = None) -> int:
             if staged is not None and staged.path is not None:
                 staged.commit()
     except MachineSimError as error:
-        print(f"{name or 'error'}: {error}", file=sys.stderr)
+        print(f"{name}: error: {error}", file=sys.stderr)
         return 2
     except OSError as error:  # a write that failed on the way (disk full, folder removed)
         where = f"{error.filename}: " if error.filename else ""
-        print(f"{name or 'error'}: {where}{error.strerror or error}", file=sys.stderr)
+        print(f"{name}: error: {where}{error.strerror or error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"{name + ': ' if name else ''}interrupted; {_interrupted(out, staged)}",
-              file=sys.stderr)
+        print(f"{name}: interrupted; {_interrupted(out, staged)}", file=sys.stderr)
         return EXIT_INTERRUPTED
     finally:
         if staged is not None:

@@ -129,7 +129,7 @@ def test_an_error_midway_leaves_the_previous_report_and_no_folder_is_made(tmp_pa
         raise InputError("bad value")
 
     assert scenario_status(failing, Namespace(out=out), "s") == 2
-    assert capsys.readouterr().err.strip() == "s: bad value"
+    assert capsys.readouterr().err.strip() == "s: error: bad value"
     assert not out.exists() and _siblings(out) == []
     assert scenario_status(_report({"a.md": "a\n"}, stop_after=0), Namespace(out=out)) == 130
     assert not out.exists() and _siblings(out) == []

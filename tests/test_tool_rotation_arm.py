@@ -365,7 +365,7 @@ def test_the_scenario_ends_a_machinesim_error_with_one_line(tmp_path):
         # the steps begun before it (progress), then the error: one line, last
         *steps, last = result.stderr.splitlines()
         assert all(line.startswith("tool_rotation_arm [") for line in steps), steps
-        assert last.startswith("error: ") and message in last
+        assert last.startswith("tool_rotation_arm: error: ") and message in last
 
 
 # ---------------------------------------------------------------------- the procedure class
