@@ -34,6 +34,14 @@ g. Paper 002's crown before compensation, as its default run cuts it (``make dem
    grid, and the volume of each part less the other). A face's finishing passes, stacked
    down it, overlap each other: the case the runs exist for. Once each (``--repeat`` is
    not used: about 5 min).
+h. A ball end mill on arcs, ``machinesim cut`` end to end (what the user waits for, the
+   PLY written): a full circle (two G02 half arcs) of radius 3 mm, 0.2 mm deep, with
+   ``ball:0.5`` on grooving_4axis, with the default chord tolerance (a tenth of the ball's
+   1 um facets: 100 nm, `machinesim.tools.path_chord_tolerance`) against ``--chord-nm 1``
+   (the 1 nm every cut took before) in the same run, and the two parts compared: removed
+   volumes, and the largest height difference over a 10 um grid across the groove
+   (`machinesim.metrology.surface.height_map` on each written PLY). Each in its own
+   process; ``--repeat`` runs each (the 1 nm one takes about 2 min a run).
 
 a, b and d are run twice, each in its own process: with the default engine (``method="auto"``,
 which meshes straight grooves across a block as an exact height field,
@@ -54,7 +62,7 @@ too.
 Each scenario runs in its own process so that its peak memory (ru_maxrss, which includes
 manifold3d's C++ heap, unlike tracemalloc) is its own. Times are medians of ``--repeat`` runs.
 
-Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcdefg] [--repeat 3] [--no-naive]``
+Run: ``.venv/bin/python benchmarks/cutting.py [--scenarios abcdefgh] [--repeat 3] [--no-naive]``
 """
 
 from __future__ import annotations
@@ -356,7 +364,7 @@ def run_child(name: str, repeat: int, with_naive: bool, method: str) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenarios", default="abcdefg")
+    parser.add_argument("--scenarios", default="abcdefgh")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-naive", action="store_true")
     parser.add_argument("--child", help=argparse.SUPPRESS)
@@ -371,6 +379,9 @@ def main() -> None:
     if args.child == "g":
         print(json.dumps(run_crown_before()))
         return
+    if args.child == "h":
+        print(json.dumps(run_ball_arcs(args.repeat, args.method)))
+        return
     if args.child:
         print(json.dumps(run_child(args.child, args.repeat, not args.no_naive, args.method)))
         return
@@ -384,6 +395,9 @@ def main() -> None:
             continue
         if name == "g":
             run_crown_before_child()
+            continue
+        if name == "h":
+            run_ball_arcs_children(args)
             continue
         for method in ("boolean", "auto") if name in "abd" else ("auto",):
             run_one(name, method, args, boolean_triangles)
@@ -489,6 +503,71 @@ def run_crown_before_child() -> None:
           f"runs less one union {f['runs_less_one_m3']:.2e} m^3, one union less runs "
           f"{f['one_less_runs_m3']:.2e} m^3, triangles {f['triangles'][0]} and "
           f"{f['triangles'][1]}; peak RSS {f['peak_rss_mb']:.0f} MB", flush=True)
+
+
+#: Case h: a full circle of radius 3 mm about (5, 5) mm, 0.2 mm deep, as two G02 half arcs.
+BALL_ARCS_NC = ("%\nG90 G21 G94 G17\nG00 X2. Y5. Z1.\nG01 Z-0.2 F200.\n"
+                "G02 X8. Y5. I3. J0. F300.\nG02 X2. Y5. I-3. J0.\nG00 Z1.\nM30\n%\n")
+
+
+def run_ball_arcs(repeat: int, chord_nm: str) -> dict:
+    """Case h, one chord setting (``"default"`` or nm): ``machinesim cut`` run ``repeat``
+    times in this process, timed end to end; the part's heights over a grid across the
+    groove, for the comparison."""
+    import tempfile
+
+    from machinesim.cli import main as cli
+    from machinesim.metrology.surface import height_map
+    from machinesim.viewer.meshes import read_ply
+    from machinesim.workpiece import Part
+
+    folder = Path(tempfile.mkdtemp())
+    program, out, report = folder / "arcs.nc", folder / "part.ply", folder / "report.json"
+    program.write_text(BALL_ARCS_NC)
+    argv = ["cut", str(program), "--machine", "grooving_4axis", "--tool", "ball:0.5",
+            "--stock", "block:10x10x2", "--quiet", "--out", str(out), "--report", str(report)]
+    if chord_nm != "default":
+        argv += ["--chord-nm", chord_nm]
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        if cli(argv) != 0:
+            raise SystemExit("case h: machinesim cut failed")
+        times.append(time.perf_counter() - start)
+    summary = json.loads(report.read_text())
+    vertices, faces = read_ply(out)
+    part = Part(manifold3d.Manifold(manifold3d.Mesh64(vert_properties=vertices,
+                                                      tri_verts=faces.astype(np.uint64))))
+    # across the groove on the +X side of the circle (x 7.5..8.5 mm at y = 5 mm) and at
+    # 45 deg, 10 um apart
+    grid = np.arange(-0.5e-3, 0.5e-3 + 1e-9, 10e-6)
+    heights = [height_map(part, 8e-3 + grid, np.array([5e-3]))[0].tolist()]
+    diagonal = 5e-3 + (3e-3 + grid) / math.sqrt(2.0)
+    heights += [[float(height_map(part, np.array([x]), np.array([x]))[0, 0])
+                 for x in diagonal]]
+    return {"chord": chord_nm, "median_s": statistics.median(times), "times_s": times,
+            "sweeps": summary["sweeps"], "chord_nm": summary["path_chord_tolerance_nm"],
+            "removed_mm3": summary["removed_volume_mm3"], "heights": heights,
+            "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
+
+
+def run_ball_arcs_children(args) -> None:
+    """Case h: the default chord and 1 nm, each in its own process, compared in one run."""
+    runs = [child_figures("h", "--repeat", str(args.repeat), "--method", chord)
+            for chord in ("default", "1")]
+    for f in runs:
+        print(f"(h, ball on arcs end to end, chord {f['chord_nm']:g} nm) median "
+              f"{f['median_s']:.2f} s over {len(f['times_s'])} runs (runs "
+              f"{', '.join(f'{t:.2f}' for t in f['times_s'])}); {f['sweeps']} sweeps; "
+              f"removed {f['removed_mm3']:.9f} mm^3; peak RSS {f['peak_rss_mb']:.0f} MB",
+              flush=True)
+    coarse, fine = runs
+    difference = np.nanmax(np.abs(np.array(coarse["heights"]) - np.array(fine["heights"])))
+    print(f"(h) {fine['median_s'] / coarse['median_s']:.1f}x faster at "
+          f"{coarse['chord_nm']:g} nm; removed volumes differ by "
+          f"{(coarse['removed_mm3'] - fine['removed_mm3']) / fine['removed_mm3']:+.2e} "
+          f"relative; heights across the groove by at most {difference * 1e9:.1f} nm",
+          flush=True)
 
 
 def run_one(name: str, method: str, args, boolean_triangles: dict) -> None:

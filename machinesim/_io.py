@@ -8,6 +8,7 @@ line, the Python API raises it.
 
 from __future__ import annotations
 
+import argparse
 import hashlib
 import json
 import math
@@ -64,6 +65,16 @@ def check_readable_file(path, what: str) -> Path:
     except OSError as exc:
         raise FileError(f"cannot read the {what}: {_reason(exc)}", source=str(path)) from None
     return path
+
+
+def file_name(text: str) -> Path:
+    """An argparse type for an output file: ``text`` as a Path, refused when it ends in a
+    path separator (``Path`` drops it, and a file would be written where a folder was meant).
+    """
+    if text.endswith(("/", os.sep)):
+        raise argparse.ArgumentTypeError(f"{text!r} ends in '/', which names a folder; "
+                                         "expected a file name")
+    return Path(text)
 
 
 def check_writable(path, what: str) -> Path:

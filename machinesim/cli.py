@@ -5,7 +5,7 @@
     machinesim cut PROGRAM --machine NAME --tool SPEC --stock SPEC [--errors ERRORS.toml]
                    --out PART.ply [--report REPORT.json] [--roi X0,X1,Y0,Y1 ...]
                    [--tools TOOLS.toml] [--integer-input calculator|increment]
-                   [--allow-overtravel]
+                   [--chord-nm NM] [--allow-overtravel] [--allow-holder-contact]
 
 Exit status: 0 done; 2 the input cannot be used (the message names the file, line, key or
 value; nothing was written); 1 anything else (one line, never a traceback; set
@@ -26,10 +26,12 @@ from machinesim._io import (
     check_readable_file,
     check_writable,
     ctrl_c_remembered,
+    file_name,
     json_text,
     write_together,
 )
 from machinesim.exceptions import ErrorModelError, InputError, MachineSimError
+from machinesim.tolerances import CHORD_TOLERANCE_M
 
 EXAMPLES = """examples:
   machinesim machines
@@ -86,10 +88,10 @@ def _parser() -> argparse.ArgumentParser:
     cut.add_argument("--errors", type=Path, default=None,
                      help="injected errors, TOML with units in every key "
                           "(e.g. models/errors/example.toml); default: none")
-    cut.add_argument("--out", type=Path, required=True,
+    cut.add_argument("--out", type=file_name, required=True,
                      help="where to write the part: .ply (float64, metres: exact) or "
                           ".stl/.glb (float32, millimetres: display only)")
-    cut.add_argument("--report", type=Path, default=None,
+    cut.add_argument("--report", type=file_name, default=None,
                      help="where to write the cut report as JSON (units in every key)")
     cut.add_argument("--roi", action="append", default=None, metavar="X0,X1,Y0,Y1",
                      help="cut only in this window (mm, workpiece frame); repeatable; "
@@ -100,9 +102,18 @@ def _parser() -> argparse.ArgumentParser:
     cut.add_argument("--integer-input", choices=("calculator", "increment"), default=None,
                      help="how an axis number without decimal point reads: calculator "
                           "(X10 is 10 mm, the default) or increment (X10 is 10 nm)")
+    cut.add_argument("--chord-nm", type=float, default=None, metavar="NM",
+                     help="largest distance of the chords arcs and rotary moves are cut as "
+                          "from the true path, nm; default: a tenth of the finest tool's own "
+                          "facet tolerance, at least 1 nm (1 nm for V and nose tools, 100 nm "
+                          "for ball and flat end mills)")
     cut.add_argument("--allow-overtravel", action="store_true",
                      help="cut even where an axis leaves its travel (listed in the report); "
                           "default: refuse the program and write nothing")
+    cut.add_argument("--allow-holder-contact", action="store_true",
+                     help="cut even where a move takes the tool deeper than its body (the "
+                          "holder would hit the part): the body alone cuts, the lines are "
+                          "listed; default: refuse the program and write nothing")
     cut.add_argument("--quiet", action="store_true", help="no progress bar")
     add_view_parser(sub)
     from machinesim.campaign.cli import add_campaign_parser
@@ -226,6 +237,17 @@ def _progress_bar(quiet: bool):
     return show
 
 
+def _table_tools(path) -> list:
+    """The tools a tool table's ``shape`` entries name (none without a table)."""
+    if path is None:
+        return []
+    from machinesim.nc.tooltable import ToolTable
+    from machinesim.tools import tool_from_spec
+
+    return [tool_from_spec(entry.shape) for entry in ToolTable.from_toml(path).tools.values()
+            if entry.shape is not None]
+
+
 def _cut(args) -> int:
     """``machinesim cut``: every input checked before cutting, both outputs written together.
 
@@ -260,7 +282,7 @@ def _cut(args) -> int:
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
     from machinesim.nc import read_program
-    from machinesim.tools import tool_from_spec
+    from machinesim.tools import path_chord_tolerance, tool_from_spec
     from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
     machine = load_machine(args.machine)
@@ -273,7 +295,13 @@ def _cut(args) -> int:
         reading["integer_input"] = args.integer_input
     # the machine starts at its home and G28 returns there: Z at the top of its travel
     reading["reference"] = dict(zip(machine.axes, machine.home.tolist(), strict=True))
-    program = read_program(args.program, **reading)
+    # arcs and rotary moves as fine as the finest tool is drawn (a tenth of its facets)
+    chord = path_chord_tolerance([tool, *_table_tools(args.tools)])
+    if args.chord_nm is not None:
+        if not (math.isfinite(args.chord_nm) and args.chord_nm > 0.0):
+            raise InputError(f"--chord-nm {args.chord_nm!r}: expected a length in nm above 0")
+        chord = args.chord_nm * 1e-9
+    program = read_program(args.program, chord_tolerance=chord, **reading)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None
     if errors is not None:
         try:
@@ -281,15 +309,19 @@ def _cut(args) -> int:
         except ErrorModelError as exc:  # name the user's file first, then the machine's
             raise ErrorModelError(f"{exc.message} (machine {machine.name}, {exc.source})",
                                   source=str(args.errors), key=exc.key) from None
-    options = {"allow_overtravel": True} if args.allow_overtravel else {}
+    # a flag passed only when given, so that without it the cutter's default (refuse) holds
+    options = {name: True for name in ("allow_overtravel", "allow_holder_contact")
+               if getattr(args, name)}
     try:
         part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
-                           start=machine.home, progress=_progress_bar(args.quiet), **options)
+                           start=machine.home, chord_tolerance=chord,
+                           progress=_progress_bar(args.quiet), **options)
     except InputError as exc:
         if not (args.errors and (exc.key or "").startswith("tool_geometry")):
             raise
         raise InputError(exc.message, source=str(args.errors), key=exc.key) from None
     summary = report.to_dict()
+    summary["path_chord_tolerance_nm"] = chord * 1e9
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
     files = [(args.out, part.encode(file_format))]
@@ -308,6 +340,10 @@ def _cut(args) -> int:
         print(f"wrote {args.report} (cut report, JSON, units in every key)")
     for note in report.notes:
         print(f"note: {note}", file=sys.stderr)
+    if chord > CHORD_TOLERANCE_M and args.chord_nm is None:
+        print(f"note: arcs and rotary moves were split into chords within {chord * 1e9:.4g} nm, "
+              "a tenth of the tool's own facets (--chord-nm sets it; docs/cutting.md)",
+              file=sys.stderr)
     for line in report.holder_contact:
         print(f"warning: holder touched the part at line {line}", file=sys.stderr)
     for line in report.rapids_that_cut:
@@ -325,6 +361,9 @@ def _cut(args) -> int:
               f"{lines}) move the tool within its edge plane (a plunge), where a V or nose "
               "tool's zero-thickness edge sweeps no volume; it cuts by moving along its own X",
               file=sys.stderr)
+    elif report.empty_cut and not program.moves:
+        print(f"warning: the program has no moves ({args.program} holds no G00/G01/G02/G03 "
+              "block that runs), so nothing was removed", file=sys.stderr)
     elif report.empty_cut:
         print("warning: the program removed no material (does it reach the stock?)",
               file=sys.stderr)

@@ -88,6 +88,11 @@ class AxisLimitError(KinematicsError):
     """An axis value lies outside the axis travel."""
 
 
+class HolderContactError(MachineSimError):
+    """A move takes the tool deeper than its body: its holder, which does not cut, would
+    hit the part (a real machine crashes there; the body alone would leave a tunnel)."""
+
+
 def check_length(value, name: str, *, positive: bool = False) -> float:
     """``value`` as a finite float length (m), >= 0 (or > 0 with ``positive``).
 

@@ -41,7 +41,12 @@ import manifold3d
 import numpy as np
 
 from machinesim.exceptions import InputError
-from machinesim.tolerances import BALL_CHORD_M, PROFILE_CHORD_M
+from machinesim.tolerances import (
+    BALL_CHORD_M,
+    CHORD_TOLERANCE_M,
+    PATH_CHORD_SHARE,
+    PROFILE_CHORD_M,
+)
 from machinesim.units import M_PER_MM, M_PER_UM, RAD_PER_DEG
 
 #: Default length of a tool's body from its edge point to the holder (m). Ten times the
@@ -570,6 +575,19 @@ def _spec_height(spec, field: str) -> float:
     except ValueError:
         raise InputError(f"tool spec {spec!r}: {field!r} is not a height; expected "
                          "'h=HEIGHT_MM' with a number in mm, e.g. 'h=5'", key="tool") from None
+
+
+def path_chord_tolerance(tools) -> float:
+    """The chord tolerance (m) of the polygons a cut with ``tools`` makes of its arcs and
+    rotary moves: `PATH_CHORD_SHARE` (a tenth) of the finest facet tolerance (``chord_tol``)
+    among them, and never below `CHORD_TOLERANCE_M` (1 nm, the axes' resolution).
+
+    A V tool, drawn exactly, and a nose, drawn within 1 nm, give 1 nm; a ball or flat end
+    mill drawn within 1 um gives 100 nm, so that the path's polygon never adds more than a
+    tenth to the tool's own and the cut is not split ten times finer than its tool is drawn.
+    """
+    finest = min((getattr(tool, "chord_tol", 0.0) for tool in tools), default=0.0)
+    return max(CHORD_TOLERANCE_M, PATH_CHORD_SHARE * finest)
 
 
 def tool_from_spec(spec: str) -> Tool:

@@ -253,8 +253,10 @@ def test_tools_and_integer_input_reach_the_nc_reader(tmp_path, capsys, monkeypat
                         "--integer-input", "calculator"], capsys)
     assert code == 0, err
     # and G28's reference is the machine's home: Z at the top of its travel (100 mm)
+    # arcs as fine as the V tool (drawn exactly): the axes' 1 nm
     assert seen == {"tools": table, "integer_input": "calculator",
-                    "reference": {"X": 0.0, "Y": 0.0, "Z": 0.1, "C": 0.0}}
+                    "reference": {"X": 0.0, "Y": 0.0, "Z": 0.1, "C": 0.0},
+                    "chord_tolerance": 1e-9}
     code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", "--tools",
                         tmp_path / "none.toml"], capsys)
     assert_clean_failure(code, err, "none.toml: no such file; expected the tool table (--tools)")
@@ -403,7 +405,13 @@ def test_each_holder_contact_and_each_rapid_that_cuts_is_one_warning_line(tmp_pa
                        "G00 Z0.1\nM30\n%\n")
     argv = ["cut", program, "--machine", "grooving_4axis", "--tool", "v:90:h=0.02",
             "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply"]
+    # by default the holder's crash is refused, naming the file and line; nothing written
     code, _, err = run(argv, capsys)
+    assert code == 2
+    assert err.startswith(f"machinesim: error: {program}: line 5 takes the top of the "
+                          "tool's body (0.02 mm"), err
+    assert "--allow-holder-contact" in err and not (tmp_path / "p.ply").exists()
+    code, _, err = run([*argv, "--allow-holder-contact"], capsys)
     assert code == 0, err
     warnings = [line for line in err.splitlines() if line.startswith("warning:")]
     assert warnings == ["warning: holder touched the part at line 5",
@@ -457,7 +465,10 @@ def test_a_table_tool_with_a_radius_and_no_shape_is_noted_when_the_cut_tool_diff
                 "own tool (no radius, VTool) cut for it")
     assert len(notes["v:90"][0]) == 1 and notes["v:90"][0][0].startswith("note: " + expected)
     assert len(notes["v:90"][1]) == 1 and notes["v:90"][1][0].startswith(expected)
-    assert notes["ball:1.0"] == ([], [])
+    # the ball agrees with the table: only the chord its 1 um facets call for is noted
+    assert notes["ball:1.0"][1] == [] and len(notes["ball:1.0"][0]) == 1
+    assert notes["ball:1.0"][0][0].startswith("note: arcs and rotary moves were split into "
+                                              "chords within 100 nm")
 
 
 def test_the_report_lists_how_the_program_was_read(tmp_path, capsys):

@@ -5,16 +5,18 @@ from __future__ import annotations
 import json
 import math
 
+import manifold3d
 import numpy as np
 import pytest
 
 from machinesim import ErrorModel, ToolSetting
 from machinesim.cli import main
 from machinesim.cutting import cut
-from machinesim.exceptions import AxisLimitError
+from machinesim.exceptions import AxisLimitError, HolderContactError
 from machinesim.metrology import height_map
 from machinesim.nc import ProgramBuilder, write_program
 from machinesim.tools import VTool, tool_from_spec
+from machinesim.workpiece import Part, block
 
 UM, MM = 1e-6, 1e-3
 
@@ -247,12 +249,24 @@ def test_overtravel_is_an_error_naming_axis_value_travel_and_line_unless_allowed
     assert report.to_dict()["limit_violations"] == list(report.limit_violations)
 
 
-def test_a_cut_deeper_than_the_tool_reports_its_holder_lines():
+def test_a_cut_deeper_than_the_tool_is_refused_naming_its_line_or_cut_and_listed():
+    # a V 20 um tall fed 30 um deep: the top of its body is 10 um under the stock's top
     tool = VTool(math.pi / 2, height=20 * UM)
     b = ProgramBuilder(1).rapid(X=-0.5 * MM, Y=1 * MM, Z=0.1 * MM).rapid(Z=-30 * UM)
     program = b.linear(X=5.5 * MM, feed_mm_per_min=500.0).rapid(Z=0.1 * MM).build()
-    _, report = cut(program, "grooving_4axis", tool=tool, stock="block:5x3x1")
+    with pytest.raises(HolderContactError) as refused:
+        cut(program, "grooving_4axis", tool=tool, stock="block:5x3x1")
+    message = str(refused.value)
+    assert f"line {program.moves[2].line} takes the top of the tool's body (0.02 mm" in message
+    assert "top of the stock (z = 0 mm)" in message and "nothing was cut" in message
+    part, report = cut(program, "grooving_4axis", tool=tool, stock="block:5x3x1",
+                       allow_holder_contact=True)
     assert report.holder_contact == (program.moves[2].line,)
+    # the body alone cuts its own V, 20 um from tip to top (section (20 um)^2 for a 90 deg
+    # tip), over the block's 5 mm; the 10 um over it stays: the tunnel the refusal prevents
+    assert report.removed_volume_m3 == pytest.approx((20 * UM) ** 2 * 5 * MM, rel=1e-9)
+    assert part.volume == pytest.approx(5 * MM * 3 * MM * 1 * MM - (20 * UM) ** 2 * 5 * MM,
+                                        rel=1e-12)
     assert report.to_dict()["holder_contact_lines"] == [program.moves[2].line]
     _, clear = cut(grooves(n=1), "grooving_4axis", tool="v:90", stock="block:5x3x1")
     assert clear.holder_contact == ()
@@ -267,3 +281,23 @@ def test_a_10_nm_groove_on_a_100_mm_block_is_not_an_empty_cut():
     _, report = cut(b.build(), "grooving_4axis", tool="v:90", stock="block:100x100x2")
     assert not report.empty_cut and report.engine == "boolean"
     assert report.removed_volume_m3 == pytest.approx(depth**2 * 2 * MM, rel=1e-6)
+
+
+def test_a_short_tool_deep_in_an_open_slot_is_cut_and_in_solid_stock_is_refused():
+    # A V 1 mm tall feeds 50 um into the floor of a slot 5 mm deep, right across the block:
+    # its top is 4 mm under the block's top, but over it is the slot's air, not material.
+    # The same feed into the solid block puts its holder into the part.
+    tool = VTool(math.pi / 2, height=1 * MM)
+    b = ProgramBuilder(1).rapid(X=-1 * MM, Y=5 * MM, Z=1 * MM).rapid(Z=-5.05 * MM)
+    program = b.linear(X=11 * MM, feed_mm_per_min=500.0).rapid(Z=1 * MM).build()
+    solid = block(10 * MM, 10 * MM, 6 * MM)
+    slot = manifold3d.Manifold.cube((12 * MM, 4 * MM, 6 * MM)).translate((-1 * MM, 3 * MM,
+                                                                          -5 * MM))
+    slotted = Part(solid.manifold - slot)
+    _, report = cut(program, "grooving_4axis", tool=tool, stock=slotted)
+    # the 90-deg V's section (50 um)^2 over the block's 10 mm; the box test's candidate is
+    # cleared by the material, so nothing is listed
+    assert report.removed_volume_m3 == pytest.approx((50 * UM) ** 2 * 10 * MM, rel=1e-9)
+    assert report.holder_contact == ()
+    with pytest.raises(HolderContactError, match=f"line {program.moves[2].line} takes"):
+        cut(program, "grooving_4axis", tool=tool, stock=solid)

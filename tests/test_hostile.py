@@ -393,3 +393,40 @@ def test_a_v_tool_plunged_into_the_stock_is_said_to_remove_nothing_and_why(tmp_p
     # a 90-deg V 50 um deep over 2 mm: d^2 L = 0.005 mm^3
     assert code == 0 and data["removed_volume_mm3"] == pytest.approx(0.005, rel=1e-9)
     assert "removed no material" not in err
+
+
+@pytest.mark.parametrize(("text", "size"), [(b"", "0 bytes"),
+                                            (b"\xef\xbb\xbf \r\n\t\n", "8 bytes, all white space")])
+def test_an_empty_program_file_is_refused_and_one_without_moves_says_so(tmp_path, capsys,
+                                                                       text, size):
+    """An empty file (or white space, with or without a BOM) is a wrong path far more often
+    than a program: refused, nothing written. A file with a comment and M30 but no move runs
+    and says it has no moves, not that its moves miss the stock."""
+    program = tmp_path / "empty.nc"
+    program.write_bytes(text)
+    out = tmp_path / "p.ply"
+    argv = ["cut", program, "--machine", "grooving_4axis", "--tool", "v:90", "--stock",
+            "block:10x10x2", "--quiet", "--out", out]
+    code, err = run_cli(argv, capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert f"machinesim: error: {program}: the file is empty ({size}" in err, err
+    assert not out.exists()
+    program.write_text("%\n(nothing but a comment)\nM30\n%\n")
+    code, err = run_cli(argv, capsys)
+    assert code == 0 and out.exists(), err
+    assert "the program has no moves" in err and "does it reach the stock" not in err, err
+
+
+@pytest.mark.parametrize("option", ["--out", "--report"])
+def test_an_output_name_ending_in_a_slash_is_refused_not_written_as_a_file(tmp_path, capsys,
+                                                                         option):
+    program = tmp_path / "g.nc"
+    program.write_text("G90 G21\nG00 X-1. Y5. Z1.\nG01 Z-0.01 F100.\nX11.\nG00 Z1.\nM30\n")
+    names = {"--out": tmp_path / "p.ply", "--report": tmp_path / "r.json"}
+    argv = ["cut", program, "--machine", "grooving_4axis", "--tool", "v:90", "--stock",
+            "block:10x10x2", "--quiet", *(item for key, path in names.items()
+                                          for item in (key, f"{path}/" if key == option
+                                                       else path))]
+    code, err = run_cli(argv, capsys)
+    assert code == 2 and "ends in '/', which names a folder; expected a file name" in err, err
+    assert not any(path.exists() for path in names.values())

@@ -50,7 +50,8 @@ def test_a_c_centre_error_moves_every_pair_of_faces_apart_by_minus_two_ex():
                                          side=0.08 * MM)
     program = cam.passes_program(cam.crown_passes(plan, [0.0], **rows))
     part, _ = cut_turned(program, MACHINE, cam.crown_tool(), cam.crown_blank(plan), errors,
-                         roi=boxes, floor=plan.rough_flat - 0.1 * MM, start=cam.PARK)
+                         roi=boxes, floor=plan.rough_flat - 0.1 * MM, start=cam.PARK,
+                         allow_holder_contact=True)
     features = crown_features(part, Microscope(sigma=0.0), windows)
     # the fitted faces lie at their scallops' mean, a third of p^2 / 8R = 9.8 nm below the
     # tip's plane (12.5 um pitch, R2 mm nose): 3.3 nm along a face's normal is 16 nm along

@@ -205,7 +205,9 @@ def crown_tool(height: float = 50 * UM) -> RoundNoseTool:
     """Table 2's tool, R2.0 nose, 90 deg, its profile ``height`` tall (m).
 
     50 um is five times the stock allowance; a deeper cut (setting errors above 40 um) would
-    reach the profile's top. A low profile keeps the side passes' sweeps thin.
+    reach the profile's top. A low profile keeps the side passes' sweeps thin. Its top is
+    not a holder: on a side face the face uphill of a pass rises over it, which the cutter
+    would refuse as a holder crash; cut with ``allow_holder_contact=True``.
     """
     return RoundNoseTool(2.0 * MM, math.radians(90.0), height=height)
 

@@ -125,8 +125,9 @@ class EngineReport:
         engine: the profiles' area below the top times the groove lengths).
     holder_contact : tuple of int
         Indices (over all paths) of sweeps in which the top of the tool's body, where its
-        holder begins (`tools`), comes below the top of the stock over it: the holder, not
-        modelled, would touch the part.
+        holder begins (`tools`), comes below the top of the stock within its box: the
+        holder, not modelled, may touch the part. With ``on_holder_contact``, only those
+        whose holder's room holds material (none when it was called: it refuses).
     reached : ndarray of int
         Indices (over all paths) of the sweeps that reach the stock region (those cut, and
         those with no volume); `machinesim.cutting.cut` checks its rapids among them.
@@ -286,6 +287,7 @@ def remove(
     sweeps_per_tile: int = SWEEPS_PER_TILE,
     method: str = "auto",
     sheets: bool = True,
+    on_holder_contact: Callable[[tuple[int, ...]], None] | None = None,
 ) -> tuple[Part, EngineReport]:
     """Cut ``stock`` with ``tool`` moved along ``paths``.
 
@@ -317,6 +319,12 @@ def remove(
         sweeps' faces coincide (`machinesim.cutting.sheets`), after the last union. A caller
         that cuts one part in several calls (`machinesim.cutting.cut`, `cut_turned`) does
         it once, at the end: a sheet one call leaves, the next may cut away.
+    on_holder_contact : callable(sweeps), optional
+        Called before anything is cut with the sweeps in which the holder meets the stock,
+        when there are any: those whose body top comes below the stock's top within its box
+        (`SweepSet.holder_contact`) and whose holder's room then holds material
+        (`SweepSet.holder_in_material`). A caller that refuses such a cut raises there and
+        wastes no cutting.
 
     Returns
     -------
@@ -349,6 +357,12 @@ def remove(
 
     sweeps = SweepSet(tool, paths, z_high)
     holder = tuple(sweeps.holder_contact(bounds[1, 2], touches))
+    if holder and on_holder_contact is not None:
+        # the stock's box says it may; before refusing, the material says whether it does
+        reach = 2.0 * float(np.linalg.norm(bounds[1] - bounds[0])) + 1.0 * scale
+        holder = tuple(sweeps.holder_in_material(holder, stock.manifold, reach))
+        if holder:
+            on_holder_contact(holder)
     if method == "auto" and sweeps.count:
         relief = cut_reliefs(stock, sweeps.vertices, sweeps.poses, sweeps.pairs,
                              None if roi is None else cells, sweeps.pose_bounds)

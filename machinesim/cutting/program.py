@@ -3,8 +3,9 @@
 Every move removes material, rapids (G00) included: a rapid into the part is a crash, and
 the part shows it. Rapids that met material still there when they ran are listed with their
 lines; blocks outside the travel of an axis stop the cut (`AxisLimitError`) unless
-``allow_overtravel`` is set, when they are cut and listed; sweeps in which the tool's holder
-would touch the part are listed with their lines.
+``allow_overtravel`` is set, when they are cut and listed; a move that takes the tool's
+holder into the part stops the cut (`HolderContactError`) unless ``allow_holder_contact`` is
+set, when the body alone cuts and the lines are listed.
 """
 
 from __future__ import annotations
@@ -22,10 +23,15 @@ from machinesim.cutting.rapids import rapids_that_cut
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance, within_edge_plane
 from machinesim.errors import as_error_model
-from machinesim.exceptions import AxisLimitError, InputError
+from machinesim.exceptions import AxisLimitError, HolderContactError, InputError
 from machinesim.nc import MOVE_KINDS
 from machinesim.tolerances import LIMIT_SLACK
-from machinesim.tools import Tool, tool_from_spec, with_nose_radius_error
+from machinesim.tools import (
+    Tool,
+    path_chord_tolerance,
+    tool_from_spec,
+    with_nose_radius_error,
+)
 from machinesim.workpiece import Part, stock_from_spec
 
 #: A move continues the previous one when its first axis values equal the previous end to
@@ -162,16 +168,16 @@ def _arguments(program, tool, stock, errors):
     naming the argument and what it takes."""
     from machinesim.nc import Program, read_program
 
-    if isinstance(program, str | os.PathLike):
-        program = read_program(program)
-    elif not isinstance(program, Program):
-        raise InputError(f"Expected program as a machinesim.nc.Program or an NC file's path, "
-                         f"got {type(program).__name__}", key="program")
     if isinstance(tool, str):
         tool = tool_from_spec(tool)
     elif not isinstance(tool, Tool):
         raise InputError(f"Expected tool as a spec such as 'v:90' or a tool object "
                          f"(machinesim.tools), got {type(tool).__name__}", key="tool")
+    if isinstance(program, str | os.PathLike):  # its arcs as fine as the tool is drawn
+        program = read_program(program, chord_tolerance=path_chord_tolerance([tool]))
+    elif not isinstance(program, Program):
+        raise InputError(f"Expected program as a machinesim.nc.Program or an NC file's path, "
+                         f"got {type(program).__name__}", key="program")
     if isinstance(stock, str):
         stock = stock_from_spec(stock)
     elif not isinstance(stock, Part):
@@ -181,15 +187,16 @@ def _arguments(program, tool, stock, errors):
 
 
 def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, roi=None,
-        start=None, chord_tolerance: float = motion.CHORD_TOLERANCE_M, servo=None,
-        progress=None, allow_overtravel: bool = False) -> tuple[Part, CutReport]:
+        start=None, chord_tolerance: float | None = None, servo=None,
+        progress=None, allow_overtravel: bool = False, allow_holder_contact: bool = False
+        ) -> tuple[Part, CutReport]:
     """Run ``program`` on ``machine`` (with ``errors``) and return the machined part.
 
     Parameters
     ----------
     program : machinesim.nc.Program or str or Path
         A program, or the path of an NC file (read with `machinesim.nc.read_program`'s
-        defaults).
+        defaults, its arcs split within ``path_chord_tolerance([tool])``).
     machine : machinesim.Machine or str
         A machine or a machine name.
     tool : str or tool
@@ -203,8 +210,10 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         Windows in the workpiece frame (m): cut only there (see `engine.remove`).
     start : array_like, optional
         Axis values before the first block (default zeros).
-    chord_tolerance : float
-        Rotary moves are split so the swept chord stays this close to the path (m).
+    chord_tolerance : float, optional
+        Rotary moves are split so the swept chord stays this close to the path (m). Default:
+        `machinesim.tools.path_chord_tolerance` of the program's tools: 1 nm for a V or nose
+        tool, 100 nm for a ball or flat end mill drawn within 1 um.
     servo : motion.ServoModel, optional
         Axis follow-up model (default ideal).
     progress : callable(done, total), optional
@@ -212,12 +221,21 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     allow_overtravel : bool
         Cut a program that takes an axis outside its travel, listing where, instead of
         refusing it.
+    allow_holder_contact : bool
+        Cut a program that takes the tool deeper than its body (its holder, which is not
+        modelled, would hit the part), the body alone cutting and the lines listed in
+        `CutReport.holder_contact`, instead of refusing it. The part is then not what a
+        real machine leaves: that one crashes.
 
     Raises
     ------
     AxisLimitError
         When an axis leaves its travel (and ``allow_overtravel`` is False): the message names
         the axis, the value, the travel and the program's lines. Nothing is cut.
+    HolderContactError
+        When a move takes the top of the tool's body, where its holder begins, below the top
+        of the stock over it (and ``allow_holder_contact`` is False): the message names the
+        program's lines, the tool's height and the stock's top. Nothing is returned.
     """
     from machinesim.machines import Machine, load_machine
 
@@ -227,6 +245,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     machine.check_errors(errors)
     tools = _ToolSections(program, tool, 0.0 if errors is None
                           else errors.tool_geometry.nose_radius)
+    if chord_tolerance is None:
+        chord_tolerance = path_chord_tolerance(t for _, t, _ in tools.runs)
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tools.points(), chord_tolerance=chord_tolerance,
                              servo=servo)
@@ -239,8 +259,10 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         section_poses = poses[lo:hi] if length == 0.0 else poses[lo:hi] @ _beyond_tip(length)
         paths = np.split(section_poses, section.breaks) if len(section_poses) else []
         before = part
+        refuse = None if allow_holder_contact else _holder_refusal(
+            getattr(program, "source", None), section_tool, before, section.sweep_line)
         part, engine = remove(before, section_tool, paths, roi=roi, progress=progress,
-                              sheets=False)
+                              sheets=False, on_holder_contact=refuse)
         rapids += rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)
         holder |= {int(section.sweep_line[i]) for i in engine.holder_contact}
@@ -441,17 +463,45 @@ def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
         lines = list(dict.fromkeys(int(n) for n in moves.line[bad]))
         worst = bad[np.argmax(np.maximum(low - moves.q[bad, i], moves.q[bad, i] - high))]
         unit = _format(machine.rotary[i])
-        more = f" (lines {', '.join(map(str, lines[:10]))}" + (
-            f" and {len(lines) - 10} more)" if len(lines) > 10 else ")")
         found.append(f"axis {letter} = {unit(moves.q[worst, i])} at line "
                      f"{int(moves.line[worst])} outside its travel {unit(low)} .. "
-                     f"{unit(high)}" + (more if len(lines) > 1 else ""))
+                     f"{unit(high)}{_more_lines(lines)}")
     if found and not allow:
         where = f"{source}: " if source else ""
         raise AxisLimitError(
             f"{where}{'; '.join(found)}; nothing was cut (allow_overtravel=True, "
             "--allow-overtravel on the command line, cuts it anyway and lists it)")
     return tuple(found)
+
+
+def _more_lines(lines: list[int]) -> str:
+    """`` (lines 3, 4, 9)`` after the first of several lines in a message (the first ten,
+    then how many more); nothing for one line."""
+    if len(lines) < 2:
+        return ""
+    tail = f" and {len(lines) - 10} more)" if len(lines) > 10 else ")"
+    return f" (lines {', '.join(map(str, lines[:10]))}{tail}"
+
+
+def _holder_refusal(source, tool, stock: Part, sweep_line: np.ndarray):
+    """An ``on_holder_contact`` for `engine.remove` that refuses the cut: raises
+    `HolderContactError` naming the lines of the sweeps, the tool's height and the top of
+    ``stock``."""
+    def refuse(sweeps) -> None:
+        lines = list(dict.fromkeys(int(sweep_line[i]) for i in sweeps))
+        height = getattr(tool, "height", None)
+        body = ("" if height is None
+                else f" ({height * 1e3:.6g} mm from its edge, where its holder begins)")
+        where = f"{source}: " if source else ""
+        raise HolderContactError(
+            f"{where}line {lines[0]}{_more_lines(lines)} takes the top of the tool's "
+            f"body{body} below the top of the stock (z = {stock.bounds[1, 2] * 1e3:.6g} mm): "
+            "the holder would hit the part, and the body alone would leave material "
+            "standing over a tunnel; nothing was cut. Use a longer tool (--tool ...:h=MM, "
+            "the tool's height) or a shallower cut; allow_holder_contact=True "
+            "(--allow-holder-contact on the command line) cuts the body alone and lists "
+            "the lines")
+    return refuse
 
 
 def _feed_lines(moves: _Moves, sweeps, which) -> set[int]:

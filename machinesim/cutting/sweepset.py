@@ -27,6 +27,10 @@ __all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "SweepSet", "dragged"]
 #: Rotating sweeps clip only when the all-pairs edge search is small: beyond this many tool
 #: vertices their hull is built unclipped (still exact, only slower to union).
 PAIR_CLIP_MAX_VERTICES = 64
+#: Material inside the holder's room over a sweep (m^3) above which the holder meets the part:
+#: 1 um x 1 um x 1 nm. A body cut flush to its top leaves round-off slivers (1e-19 m thick
+#: over a few mm^2: ~1e-25 m^3) far below it; any real contact is far above.
+HOLDER_MATERIAL_M3 = 1e-21
 #: Sweeps whose tool points are processed together: bounds the transient memory (k points
 #: per pose, ~100 bytes each) to ~50 MB whatever the path length.
 POINTS_PER_CHUNK = 1 << 19
@@ -308,6 +312,30 @@ class SweepSet:
             hit = (low[:, 2] < below) & keep(low, high)
             found.extend((begin + np.flatnonzero(hit)).tolist())
         return found
+
+    def holder_in_material(self, sweeps, solid: manifold3d.Manifold, reach: float) -> list[int]:
+        """Those of ``sweeps`` whose holder meets ``solid``: more than `HOLDER_MATERIAL_M3`
+        of it inside the holder's room over the sweep (`holder_room`). The bounding-box test
+        of `holder_contact` finds the candidates; this one reads the material, so that a
+        short profile running down a face (air over its top) is not a crash."""
+        return [int(i) for i in sweeps
+                if (solid ^ self.holder_room(int(i), reach)).volume() > HOLDER_MATERIAL_M3]
+
+    def holder_room(self, sweep: int, reach: float) -> manifold3d.Manifold:
+        """The room the holder takes over sweep ``sweep``: the hull of the body's top face
+        at both poses and of the same face lifted ``reach`` along the tool axis. A top of
+        zero width (a V's or a nose's: a segment) is widened along the tool's X to its own
+        length, as the bar that carries the tool is."""
+        face = self.vertices[self.top]
+        width = float(np.ptp(face[:, 0]))
+        if width <= 0.0:
+            half = 0.5 * max(float(np.ptp(face[:, 1])), float(np.ptp(face[:, 2])))
+            face = np.concatenate([face + [half, 0.0, 0.0], face - [half, 0.0, 0.0]])
+        local = np.concatenate([face, face + [0.0, 0.0, reach]])
+        first = self.pairs[sweep]
+        poses = self.poses[[first, first + 1]]
+        points = (local @ poses[:, :3, :3].transpose(0, 2, 1) + poses[:, None, :3, 3])
+        return manifold3d.Manifold.hull_points(points.reshape(-1, 3))
 
 
 def dragged_past_clearance(poses: np.ndarray, starts: np.ndarray) -> np.ndarray:

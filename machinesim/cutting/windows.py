@@ -19,7 +19,13 @@ import numpy as np
 
 from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
-from machinesim.cutting.program import CutReport, _Moves, _overtravel, nc_summary
+from machinesim.cutting.program import (
+    CutReport,
+    _holder_refusal,
+    _Moves,
+    _overtravel,
+    nc_summary,
+)
 from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance
 from machinesim.exceptions import InputError
@@ -47,7 +53,8 @@ def clip_to(stock: Part, boxes, floor: float | None = None) -> Part:
 def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *,
                roi=None, floor: float | None = None, start=None, turn_step: float = math.pi / 4,
                turn_axis: str = "C", chord_tolerance: float = motion.CHORD_TOLERANCE_M,
-               servo=None, allow_overtravel: bool = False, progress=None
+               servo=None, allow_overtravel: bool = False,
+               allow_holder_contact: bool = False, progress=None
                ) -> tuple[Part, CutReport]:
     """Cut ``program`` as `machinesim.cutting.cut` does, each turn group in its own frame.
 
@@ -75,9 +82,10 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         rad, > 0.
     turn_axis : str
         The rotary axis about the workpiece Z whose positions group the feed moves.
-    chord_tolerance, servo, allow_overtravel
+    chord_tolerance, servo, allow_overtravel, allow_holder_contact
         As `machinesim.cutting.cut` (an axis outside its travel raises `AxisLimitError`
-        unless ``allow_overtravel``).
+        unless ``allow_overtravel``, a holder that would hit the part `HolderContactError`
+        unless ``allow_holder_contact``).
     progress : callable(done, total), optional
         Called before the first group and after each, in feed sweeps (a group's sweeps
         count as done once its cut is).
@@ -127,9 +135,11 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         turn[:3, :3] = rot_z(-key * turn_step)
         turned = Part(part.manifold.rotate((0.0, 0.0, -step_deg * key)))
         paths = [turn @ machine.tool_pose(segment.q, errors) for segment in segments]
-        cut_part, report = remove(turned, tool, paths, sheets=False)
-        part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
         sweep_line = np.repeat([s.line for s in segments], [len(s.q) - 1 for s in segments])
+        refuse = None if allow_holder_contact else _holder_refusal(
+            getattr(program, "source", None), tool, turned, sweep_line)
+        cut_part, report = remove(turned, tool, paths, sheets=False, on_holder_contact=refuse)
+        part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
         holder.update(int(sweep_line[i]) for i in report.holder_contact)
         sweeps += report.n_sweeps_cut
         sideways += len(report.sideways)

@@ -224,7 +224,9 @@ def parse_program(
 def read_program(path: str | os.PathLike, **kwargs) -> Program:
     """Read an NC program file (keyword arguments as `parse_program`; source is the path).
 
-    Bytes that are not UTF-8 read as U+FFFD and are refused where they stand.
+    Bytes that are not UTF-8 read as U+FFFD and are refused where they stand. An empty file
+    (or one of white space only) is refused: it is a wrong path far more often than a
+    program.
     """
     if not isinstance(path, str | os.PathLike):
         raise NCProgramError(f"expected the NC program's path as a str or Path, got "
@@ -237,6 +239,10 @@ def read_program(path: str | os.PathLike, **kwargs) -> Program:
     except OSError as exc:
         raise NCProgramError(f"cannot read the NC program: {exc.strerror or exc}",
                              source=source) from None
+    if not data.removeprefix(UTF8_BOM).strip():
+        raise NCProgramError(
+            f"the file is empty ({len(data)} bytes{', all white space' if data else ''}); "
+            "expected an NC program (blocks such as G01 X1. F100.)", source=source)
     return _parse(data, "replace", source, kwargs.pop("work_offsets", None),
                   kwargs.pop("integer_input", "calculator"), kwargs.pop("tools", None),
                   kwargs.pop("chord_tolerance", ARC_CHORD_M), kwargs.pop("fast", True),

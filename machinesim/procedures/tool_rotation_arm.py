@@ -19,6 +19,7 @@ and cut and read it before (edge touched off at 0 deg only) and after compensati
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import ClassVar
@@ -48,6 +49,7 @@ from machinesim.procedures.tool_rotation_arm_reading import (
     measure_pattern,
     stage_rotation,
 )
+from machinesim.tools import VTool
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, from_si
 
 __all__ = [
@@ -56,8 +58,15 @@ __all__ = [
     "measure_calibration", "measure_pattern", "stage_rotation",
 ]
 
+#: Height of the prism's flanks (m): the tool's V reaches 3 mm from its edge (6 mm across),
+#: a shank goes on up to the holder at 10 mm. Flanks drawn to the full 10 mm (20 mm across)
+#: put, at the 40 deg ramp, the far flank 5 deg from the surface and its top, where the
+#: holder begins, under the stock once the edge is 0.3 mm deep: inside the plan's 1 mm
+#: capture, a crash the cutter refuses (`HolderContactError`) that a real prism never
+#: makes. Every groove the procedure reads lies within 3 mm of the edge, so it is the same.
+PRISM_FLANK_M = 3.0 * M_PER_MM
 #: The tool of paper 000: a 90-deg V (prism) tool.
-TOOL = "v:90"
+TOOL = VTool(math.pi / 2, flank_height=PRISM_FLANK_M)
 
 
 # -------------------------------------------------------------------------- compensation

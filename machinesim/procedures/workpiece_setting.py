@@ -397,8 +397,11 @@ class RobotLoadedWorkpiece:
         features, images, parts, cuts = {}, {}, {}, {}
         runs = (("before", nominal), ("after", programs["crown_compensated"]))
         for name, program in runs[1:] if self.after_only else runs:
+            # The crown tool's profile is cut short above the depths it cuts (`crown_tool`):
+            # its top is not a holder, so a side pass whose top runs under the face uphill
+            # of it is no crash (the cutter lists such passes instead of refusing them).
             part, report = lab.cut(program, layout.tool, self.workpiece(lab),
-                                   roi=layout.boxes,
+                                   roi=layout.boxes, allow_holder_contact=True,
                                    floor=layout.floor, start=PARK, turn_step=math.pi / 4,
                                    progress=self._tell_sweeps(f"crown {name} compensation"))
             self._tell(f"crown {name} compensation: reading it (plane fits, 10x images)")

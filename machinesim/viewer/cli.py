@@ -16,7 +16,7 @@ import math
 import sys
 from pathlib import Path
 
-from machinesim._io import check_readable_file, check_writable, read_json
+from machinesim._io import check_readable_file, check_writable, file_name, read_json
 from machinesim.exceptions import InputError
 
 EXAMPLES = """examples:
@@ -40,10 +40,10 @@ def add_view_parser(sub) -> argparse.ArgumentParser:
     view.add_argument("target", help="a machine name (see 'machinesim machines') or .urdf "
                                      "path, a part .ply, or a report folder (*.ply and "
                                      "summary.json)")
-    view.add_argument("--html", type=Path, default=None,
+    view.add_argument("--html", type=file_name, default=None,
                       help="write one self-contained HTML file (no server, no network) "
                            "instead of serving live")
-    view.add_argument("--screenshot", type=Path, default=None,
+    view.add_argument("--screenshot", type=file_name, default=None,
                       help="also render the view to this PNG with headless Chromium")
     view.add_argument("--port", type=int, default=None,
                       help="live mode: web port on 127.0.0.1 (default: first free from 7000)")
