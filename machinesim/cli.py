@@ -237,15 +237,12 @@ def _progress_bar(quiet: bool):
     return show
 
 
-def _table_tools(path) -> list:
+def _table_tools(table) -> list:
     """The tools a tool table's ``shape`` entries name (none without a table)."""
-    if path is None:
-        return []
-    from machinesim.nc.tooltable import ToolTable
     from machinesim.tools import tool_from_spec
 
-    return [tool_from_spec(entry.shape) for entry in ToolTable.from_toml(path).tools.values()
-            if entry.shape is not None]
+    entries = table.tools.values() if table is not None else ()
+    return [tool_from_spec(entry.shape) for entry in entries if entry.shape is not None]
 
 
 def _cut(args) -> int:
@@ -282,6 +279,7 @@ def _cut(args) -> int:
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
     from machinesim.nc import read_program
+    from machinesim.nc.tooltable import tool_table
     from machinesim.tools import path_chord_tolerance, tool_from_spec
     from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
@@ -289,14 +287,15 @@ def _cut(args) -> int:
     tool = tool_from_spec(args.tool)
     stock = stock_from_spec(args.stock)
     reading = {}
-    if args.tools is not None:
-        reading["tools"] = args.tools
+    table = tool_table(args.tools)  # read once: for the reader and for the chord
+    if table is not None:
+        reading["tools"] = table
     if args.integer_input is not None:
         reading["integer_input"] = args.integer_input
     # the machine starts at its home and G28 returns there: Z at the top of its travel
     reading["reference"] = dict(zip(machine.axes, machine.home.tolist(), strict=True))
     # arcs and rotary moves as fine as the finest tool is drawn (a tenth of its facets)
-    chord = path_chord_tolerance([tool, *_table_tools(args.tools)])
+    chord = path_chord_tolerance([tool, *_table_tools(table)])
     if args.chord_nm is not None:
         if not (math.isfinite(args.chord_nm) and args.chord_nm > 0.0):
             raise InputError(f"--chord-nm {args.chord_nm!r}: expected a length in nm above 0")
