@@ -18,8 +18,9 @@ from machinesim.cutting.sweeps import (
     prism_mesh,
     vector_area,
 )
-from machinesim.tools import BallEndMill, RoundNoseTool, VTool
-from machinesim.workpiece import block
+from machinesim.metrology import height_map
+from machinesim.tools import BallEndMill, FlatEndMill, RoundNoseTool, VTool
+from machinesim.workpiece import Part, block
 
 #: Volumes of float64 meshes at mm scale agree to summation round-off (~1e-15 relative).
 VOLUME_REL = 1e-12
@@ -159,3 +160,29 @@ def test_a_move_within_the_profile_plane_sweeps_no_prism():
         assert prism_mesh(polygon, move)[2] == pytest.approx(volume, rel=1e-6, abs=0.0)
         prisms = clipped_prisms(polygon[None], move[None], np.array([1.0]))
         assert prisms[0][2] == pytest.approx(volume, rel=1e-6, abs=0.0)
+
+
+@pytest.mark.parametrize("tool", [BallEndMill(0.5e-3, chord_tol=2e-6),
+                                  FlatEndMill(0.5e-3, chord_tol=2e-6)])
+def test_the_engine_cuts_a_rotating_tools_move_as_the_hull_of_its_two_places(tool):
+    # The engine builds a rotating tool's translated sweep from its faces (SolidSweep); the
+    # same sweep as Qhull's hull of the tool's points at both places, trimmed at the clip
+    # plane and subtracted, must leave the same part: volume and heights.
+    stock = block(4e-3, 4e-3, 2e-3)
+    turn = np.eye(4)
+    turn[:3, :3] = np.array([[math.cos(0.3), -math.sin(0.3), 0.0],
+                             [math.sin(0.3), math.cos(0.3), 0.0], [0.0, 0.0, 1.0]])
+    start, end = turn.copy(), turn.copy()
+    start[:3, 3], end[:3, 3] = (0.7e-3, 1.1e-3, -0.2e-3), (3.1e-3, 2.6e-3, -0.35e-3)
+    part, report = remove(stock, tool, [np.array([start, end])], method="boolean")
+    vertices = tool.vertices() @ turn[:3, :3].T
+    points = np.concatenate([vertices + start[:3, 3], vertices + end[:3, 3]])
+    hull_vertices, hull_triangles, _ = hull_mesh(points)
+    hull = manifold_from(hull_vertices, hull_triangles, manifold3d.Manifold.reserve_ids(1))
+    expected = stock.manifold - hull
+    assert report.removed_volume == pytest.approx(stock.volume - expected.volume(),
+                                                  rel=1e-9)
+    assert part.volume == pytest.approx(expected.volume(), rel=VOLUME_REL)
+    x, y = np.linspace(0.2e-3, 3.8e-3, 37), np.linspace(0.2e-3, 3.8e-3, 37)
+    np.testing.assert_allclose(height_map(part, x, y), height_map(Part(expected), x, y),
+                               rtol=0, atol=1e-12)

@@ -15,6 +15,7 @@ import manifold3d
 import numpy as np
 
 from machinesim.cutting.sweeps import (
+    SolidSweep,
     clipped_bounds,
     clipped_prisms,
     hull_mesh,
@@ -76,6 +77,10 @@ class SweepSet:
             self.rotation_segments = np.concatenate(
                 [edges, edges + k, np.stack([i.ravel(), j.ravel()], axis=1)]
             )
+        # A rotating tool's body is a closed convex polyhedron: translated, its sweep is the
+        # Minkowski sum with the segment, built from its faces without a hull search.
+        self.solid_sweep = (SolidSweep(self.vertices, tool.triangles())
+                            if self.rotational and hasattr(tool, "triangles") else None)
         top = self.vertices[:, 2]
         self.top = np.flatnonzero(top >= top.max())
         self._world = self._lowest = None
@@ -173,6 +178,15 @@ class SweepSet:
         solid = manifold_from(vertices, triangles, self.run_id)
         return None if solid is None else (solid, volume, vertices)
 
+    def _translated(self, rotation, origin, move, points):
+        """A rotating tool translated by ``move`` from (``rotation``, ``origin``): its exact
+        Minkowski sum with the segment (`SolidSweep`), trimmed by the clip plane; "above"
+        when no point of it comes below the plane."""
+        if points[:, 2].min() + min(move[2], 0.0) > self.clip_z:
+            return "above"
+        vertices, triangles = self.solid_sweep.mesh(rotation, origin, move)
+        return self._solid(vertices, triangles, vertices[:, 2].max() > self.clip_z)
+
     def _hull(self, points: np.ndarray, clipped: bool):
         """The convex hull of a sweep's points by Qhull (`sweeps.hull_mesh`): the clipped
         candidates, or all points (then trimmed by the clip plane where they cross it)."""
@@ -242,8 +256,9 @@ class SweepSet:
             # its clipped candidates, or of all its points, trimmed, where there are too
             # many for the pair search.
             level = same & self.planar
+            minkowski = same & (self.solid_sweep is not None)
             candidates = {}
-            for rows, segments in ((chosen[same[chosen] & ~level[chosen]],
+            for rows, segments in ((chosen[same[chosen] & ~level[chosen] & ~minkowski[chosen]],
                                     self.translation_segments),
                                    (chosen[~same[chosen]], self.rotation_segments)):
                 if len(rows) and segments is not None:
@@ -258,6 +273,8 @@ class SweepSet:
             for row in chosen.tolist():
                 if level[row]:
                     built = self._prism(prisms[row], p0[row], move[row])
+                elif minkowski[row]:
+                    built = self._translated(r0[row], origin[first[row]], move[row], p0[row])
                 elif row in candidates:
                     points = candidates[row]
                     built = "above" if points is None else self._hull(points, clipped=True)
