@@ -274,6 +274,8 @@ def _cut(args) -> int:
             raise InputError(f"the {what} would overwrite an input file; give another name",
                              source=str(path))
     roi = parse_roi(args.roi)
+    if args.chord_nm is not None and not (math.isfinite(args.chord_nm) and args.chord_nm > 0):
+        raise InputError(f"--chord-nm {args.chord_nm!r}: expected a length in nm above 0")
 
     from machinesim.cutting import cut
     from machinesim.errors import ErrorModel
@@ -297,8 +299,6 @@ def _cut(args) -> int:
     # arcs and rotary moves as fine as the finest tool is drawn (a tenth of its facets)
     chord = path_chord_tolerance([tool, *_table_tools(table)])
     if args.chord_nm is not None:
-        if not (math.isfinite(args.chord_nm) and args.chord_nm > 0.0):
-            raise InputError(f"--chord-nm {args.chord_nm!r}: expected a length in nm above 0")
         chord = args.chord_nm * 1e-9
     program = read_program(args.program, chord_tolerance=chord, **reading)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None

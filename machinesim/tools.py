@@ -584,7 +584,8 @@ def path_chord_tolerance(tools) -> float:
 
     A V tool, drawn exactly, and a nose, drawn within 1 nm, give 1 nm; a ball or flat end
     mill drawn within 1 um gives 100 nm, so that the path's polygon never adds more than a
-    tenth to the tool's own and the cut is not split ten times finer than its tool is drawn.
+    tenth to the tool's own and the cut is not split a thousand times finer than its tool
+    is drawn.
     """
     finest = min((getattr(tool, "chord_tol", 0.0) for tool in tools), default=0.0)
     return max(CHORD_TOLERANCE_M, PATH_CHORD_SHARE * finest)

@@ -359,7 +359,7 @@ def remove(
     holder = tuple(sweeps.holder_contact(bounds[1, 2], touches))
     if holder and on_holder_contact is not None:
         # the stock's box says it may; before refusing, the material says whether it does
-        reach = 2.0 * float(np.linalg.norm(bounds[1] - bounds[0])) + 1.0 * scale
+        reach = 2.0 * float(np.linalg.norm(bounds[1] - bounds[0])) + scale  # past it
         holder = tuple(sweeps.holder_in_material(holder, stock.manifold, reach))
         if holder:
             on_holder_contact(holder)
