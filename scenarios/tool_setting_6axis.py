@@ -118,7 +118,7 @@ def report(args, make_lab, realism) -> None:
         **result.evaluation.details["cuts"]})
     details = result.evaluation.details
     for stage, key, title in (
-            ("a", "a_starts_um", "A-axis grooves from their measured start points"),
+            ("a", "a_ends_um", "A-axis grooves back from their measured end points"),
             ("c", "c_vertices_um", "C-axis triangle from the groove crossings")):
         series = [(f"{state}: {what}", xy[:, 0] / M_PER_MM, xy[:, 1] / M_PER_MM)
                   for state in ("before", "after")

@@ -24,6 +24,7 @@ from machinesim.metrology.lines import (
     edge_distance,
     fit_line,
     fit_parallel_edges,
+    fit_parallel_lines,
     groove_crossing,
     intersect_lines,
     profile_points,
@@ -306,6 +307,28 @@ def test_parallel_edges_of_a_rotated_analytic_strip():
     assert abs(edges.distance - (width + 32 * UM)) < 1e-14
     assert edges.parallelism < EXACT_RAD
     assert abs(abs(edges.first.direction @ [math.cos(angle), math.sin(angle)]) - 1) < 1e-15
+
+
+def test_parallel_lines_of_two_turned_point_sets():
+    """Two sets of points on parallel lines 0.3 mm apart, 8 mm along from each other, turned
+    by 0.7 rad: one common direction, the offset across it, and each line through its own
+    centroid; an even zig-zag about each line leaves the direction and offset exact."""
+    turn = 0.7
+    u, n = np.array([math.cos(turn), math.sin(turn)]), np.array([-math.sin(turn),
+                                                                  math.cos(turn)])
+    s = np.linspace(3e-3, 5e-3, 5)
+    wiggle = np.array([1, -1, 0, 1, -1]) * 1e-7
+    first = s[:, None] * u + wiggle[:, None] * n
+    second = -s[:, None] * u + (0.3e-3 + wiggle)[:, None] * n
+    one, two = fit_parallel_lines(first, second)
+    np.testing.assert_allclose(one.direction, u, atol=1e-15)
+    np.testing.assert_allclose(two.direction, u, atol=1e-15)
+    assert (two.point - one.point) @ n == pytest.approx(0.3e-3, abs=1e-18)
+    np.testing.assert_allclose(one.point, first.mean(axis=0), atol=1e-18)
+    with pytest.raises(InputError, match="second with shape"):
+        fit_parallel_lines(first, second[:1])
+    with pytest.raises(InputError, match="each set's points equal"):
+        fit_parallel_lines(np.zeros((3, 2)), np.ones((3, 2)))
 
 
 def test_parallel_edges_input_errors():

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from machinesim import ErrorModel, Lab, ToolSetting, load_machine
-from machinesim.cam.tool_setting_plates import PARKED, Plan, plate_cuts
+from machinesim.cam.tool_setting_plates import PARKED, SET_LENGTH, Plan, a_grooves, plate_cuts
 from machinesim.compensation import program_axes
 from machinesim.exceptions import InputError
 from machinesim.experiment import run
@@ -52,7 +52,7 @@ class After:
 
     def __init__(self, details):
         after = details["after"]
-        self.a_distances = np.array(after["a_pair_distance_um"]) * UM
+        self.a_distances = np.array(after["a_distance_um"]) * UM
         self.c_centre = np.array(after["c_centre_displacement_um"]) * UM
         self.b_depths = np.array(after["b_depths_um"]) * UM
 
@@ -102,6 +102,36 @@ def test_b_axis_equations_follow_from_the_kinematics():
         assert abs(printed_eq2(*depths, t2, t3) - d[2]) > 10 * UM
         result = ident.b_axis_tilts(depths, t2, t3)
         assert (result.offset_x, result.offset_z) == (dx, dz)
+
+
+def test_a_sets_follow_from_the_kinematics():
+    """The A sets' grooves where Machine.tool_pose puts the edge (each groove from the
+    programmed origin, L along the tool's X at A, at C and C + 180 deg): their end points and
+    centre lines give d and e back exactly, whatever the signs, and the relations are
+    2 (d - e) at A = 0 and 2 (d + e) at A = 180 deg."""
+    rng = np.random.default_rng(4)
+    for _ in range(4):
+        d = rng.uniform(-450, 450, 3) * UM
+        e = rng.uniform(-900, 900, 2) * UM
+        grooves = []
+        for angle, turn in a_grooves():
+            q0 = np.array([0.0, 0.0, 0.0, angle, 0.0, turn])
+            q1 = q0 + [SET_LENGTH * math.cos(angle), SET_LENGTH * math.sin(angle), 0, 0, 0, 0]
+            stations = q0 + np.linspace(0.4, 0.6, 5)[:, None] * (q1 - q0)
+            tip = MACHINE.tool_pose(np.vstack([stations, q1]), errors_of(d, e))[:, :2, 3]
+            grooves.append(ident.GrooveReading(q0, q1, tip[:-1], np.full(5, 1e-9),
+                                               np.zeros(5), np.full(5, 1e-9), end=tip[-1]))
+        found = ident.a_axis_sets(grooves, SET_LENGTH)
+        # 1e-13 m: float64 round-off of the chain at the 0.3 m scale of the machine
+        np.testing.assert_allclose(found.offset, d[:2], atol=1e-13)
+        np.testing.assert_allclose(found.centre, e, atol=1e-13)
+        np.testing.assert_allclose(found.relations, [2 * (d[:2] - e), 2 * (d[:2] + e)],
+                                   atol=1e-13)
+        np.testing.assert_allclose(found.distances, [2 * d[:2]], atol=1e-13)
+    with pytest.raises(InputError, match="two or more sets of two A grooves"):
+        ident.a_axis_sets(grooves[:3], SET_LENGTH)
+    with pytest.raises(InputError, match="separate d from e"):
+        ident.a_axis_sets(grooves[:2] * 2, SET_LENGTH)
 
 
 def random_program(rng, n=20):
@@ -157,11 +187,13 @@ def test_seeded_offsets_are_identified_and_compensated_with_noise(seed):
     d, e = paper_offsets(np.random.default_rng(seed))
     result, found, after = replay(d, e, noise=True, seed=seed)
     comp = found.compensation
-    # before: the pair's start points part by 2 (dx, dy), the triangle is centred on e;
-    # 50 nm covers the microscope readings (see the tolerances below)
+    # before: the A sets' half sum is 2 (dx, dy), their half difference 2 e (a second
+    # reading of e); the triangle is centred on e; 50 nm covers the microscope readings
+    # (see the tolerances below)
     np.testing.assert_allclose(found.a.distances, [2 * d[:2]], atol=50e-9)
-    # dx, dy: 20 nm, six sigma of the centre lines (sigma 3 nm over ten seeds with the
-    # 12 nm height noise); dx alone is read on the start faces, to 0.05 nm
+    np.testing.assert_allclose(found.a.centre, e, atol=30e-9)
+    # dx, dy: 20 nm, six sigma of the centre lines (dy: their offset, 8 mm apart; dx: the
+    # end faces, read to 0.05 nm, along the lines)
     np.testing.assert_allclose(comp.tool_offset[:2], d[:2], atol=20e-9)
     # dZ: 0.1 um, six sigma (17 nm) of four depth fits amplified by 1 / (1 - cos 20 deg)
     assert comp.tool_offset[2] == pytest.approx(d[2], abs=0.1 * UM)
@@ -201,7 +233,7 @@ def test_without_noise_the_residuals_stay_below_a_nanometre():
     result, found, after = replay(d, e, noise=False, seed=0)
     comp = found.compensation
     # what is left: the 1 nm height display (spread by the golden-ratio pitch, < 0.1 nm on a
-    # centre) and the 0.05 nm pitch of the start-face zoom; 1 nm for dZ, which divides depth
+    # centre) and the 0.05 nm pitch of the end-face zoom; 1 nm for dZ, which divides depth
     # errors by 1 - cos 20 deg
     np.testing.assert_allclose(comp.tool_offset[:2], d[:2], atol=0.5e-9)
     assert comp.tool_offset[2] == pytest.approx(d[2], abs=1e-9)
@@ -258,10 +290,10 @@ def test_the_summary_fits_the_one_schema(tmp_path):
 
 def test_errors_outside_the_capture_range_are_reported():
     plate = plate_cuts()["a"]
-    lab = Lab(MACHINE, errors_of([0.0, 0.9 * MM, 0.0], [0.0, 0.0]), noise=False)
+    lab = Lab(MACHINE, errors_of([0.0, 3 * MM, 0.0], [0.0, 0.0]), noise=False)
     part, _ = lab.cut(plate.program, "v:90", plate.stock)
     microscope = lab.microscope(label="a")
-    with pytest.raises(InputError, match=r"A axis, groove at A = 0 deg.*plan's range"):
+    with pytest.raises(InputError, match=r"A axis, groove at A = 0, C = 0 deg.*plan's range"):
         read_plate("a", part, microscope, plate.program, MACHINE)
     with pytest.raises(InputError, match="Expected stage 'a', 'b' or 'c', got 'd'"):
         read_plate("d", part, microscope, plate.program, MACHINE)
@@ -290,7 +322,7 @@ def test_the_scenario_reproduces_table_1(tmp_path):
     details = summary["details"]
     # defaults: round values of the paper's order (d = 250, 350, 150 um; e = 100, 850 um);
     # the distances they make come back to 1 nm (noise off): 2 dx, 2 dy and e
-    np.testing.assert_allclose(details["before"]["a_pair_distance_um"], [500.0, 700.0],
+    np.testing.assert_allclose(details["before"]["a_distance_um"], [500.0, 700.0],
                                atol=1e-3)
     np.testing.assert_allclose(details["before"]["c_centre_displacement_um"],
                                [100.0, 850.0], atol=1e-3)
@@ -299,7 +331,7 @@ def test_the_scenario_reproduces_table_1(tmp_path):
         if figure["paper_before"] is not None:
             assert abs(figure["before"] / figure["paper_before"] - 1.0) < 0.25, figure
             assert abs(figure["after"]) < 1e-3, figure  # everything off: below 1 nm
-    assert np.abs(details["after"]["a_pair_distance_um"]).max() < 1e-3
+    assert np.abs(details["after"]["a_distance_um"]).max() < 1e-3
     assert np.abs(details["after"]["c_centre_displacement_um"]).max() < 1e-3
     for name in ("table1.md", "identification.json", "layout_a_axis.png",
                  "04_a_axis_compensated.nc", "05_c_axis_compensated.ply", "fit_check.md",

@@ -13,9 +13,12 @@ Four plates, each its own program, each on a fresh plate of the same workpiece f
 ``touch``
     One groove along X stepping down in Z (a lab's tool-length touch-off).
 ``a``
-    A pair of grooves sharing a start X, cut at A = 0 (along +X) and, with the tool turned,
-    at A = 180 deg (along -X) (paper Fig. 4; 2 mm apart sideways, see
-    docs/procedures/tool_setting_6axis.md).
+    Two sets of two grooves sharing their start point (paper Fig. 4): at A = 0, one groove
+    cut at C = 0 and one at C = 180 deg, both from the programmed origin along the tool's
+    own X, so that they leave the shared start in opposite directions on the plate; then the
+    tool turned by A = 180 deg and the same two grooves, turned a quarter on the plate
+    (C = 90 and 270 deg) so that the two sets cross instead of overlapping
+    (docs/procedures/tool_setting_6axis.md).
 ``c``
     One groove cut at C = 0, 120 and 240 deg: a triangle (paper Fig. 3), and a reference
     mark: a short groove across the C = 0 side, cut at C = 0 and A = 90 deg (along +Y), whose
@@ -36,9 +39,10 @@ from machinesim.nc import Program, ProgramBuilder
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = [
-    "B_GROOVE_X", "CENTRE_RANGE", "C_TURNS", "MARK_HALF", "MARK_X", "OFFSET_RANGE",
-    "PAIR_LENGTH", "PARKED", "Plan", "PlateCut", "TOUCH_COUNT", "TOUCH_SEGMENT", "TOUCH_STEP",
-    "TOUCH_TOP", "TRIANGLE_HALF", "TRIANGLE_R", "mark_point", "pair_grooves", "plate_cuts",
+    "A_REACH", "A_SETS", "B_GROOVE_X", "CENTRE_RANGE", "C_TURNS", "MARK_HALF", "MARK_X",
+    "OFFSET_RANGE", "PARKED", "Plan", "PlateCut", "SET_LENGTH", "TOUCH_COUNT",
+    "TOUCH_SEGMENT", "TOUCH_STEP", "TOUCH_TOP", "TRIANGLE_HALF", "TRIANGLE_R", "a_grooves",
+    "mark_point", "plate_cuts",
 ]
 
 #: Capture range of the plan: the layout below keeps every groove inside its microscope
@@ -57,10 +61,17 @@ PARKED = (0.0, 0.0, SAFE_Z, 0.0, 0.0, 0.0)
 #: always leaves one segment 2..190 um deep for a touch Z in -0.6 .. +0.79 mm.
 TOUCH_SEGMENT, TOUCH_TOP, TOUCH_STEP, TOUCH_COUNT = (1.5 * M_PER_MM, 0.6 * M_PER_MM,
                                                      0.15 * M_PER_MM, 9)
-#: A plate: half the lateral separation of the pair (keeps the two grooves apart for any
-#: offset in range), groove length, and the plate spot of the pair.
-PAIR_HALF_GAP, PAIR_LENGTH = 1.0 * M_PER_MM, 2.0 * M_PER_MM
-PAIR_START = (0.0, -3.0 * M_PER_MM)
+#: A plate: the sets (A; C of the set's two grooves), in cutting order. Each groove is
+#: programmed from the origin (the rotary centres) along the tool's own X at A.
+A_SETS = ((0.0, (0.0, math.pi)), (math.pi, (0.5 * math.pi, 1.5 * math.pi)))
+#: How far (m) a groove of the A plate lands from where the program puts it, at most: a
+#: groove cut at C lands at ``e + Rz(C) (P + Rz(A) d - e)``, off by up to |d| + 2 |e|.
+A_REACH = OFFSET_RANGE + 2.0 * CENTRE_RANGE
+#: Length L (m) of each A-plate groove: its far end lies L + up to `A_REACH` from the shared
+#: start, so with L = 8 mm the far ends and 2 mm of each groove before them (where it is
+#: read) stay clear of the other groove of its set and of the other set, which land
+#: within `A_REACH` (2.5 mm) of the origin across the line.
+SET_LENGTH = 8.0 * M_PER_MM
 #: B plate: x of the grooves at B = 0, theta2, theta3 (1 mm apart: a 0.5 mm dZ moves a
 #: groove tilted by 20 deg by 0.17 mm) and their half length in y.
 B_GROOVE_X, B_HALF = (-1.0 * M_PER_MM, 0.0, 1.0 * M_PER_MM), 2.5 * M_PER_MM
@@ -142,10 +153,9 @@ def plate_cuts(plan: Plan = Plan()) -> dict[str, PlateCut]:
         touch.linear(X=end, feed_mm_per_min=f)
     touch.rapid(Z=SAFE_Z)
     a = _builder(2, "A axis")
-    for angle, start in pair_grooves():
-        direction = np.array([math.cos(angle), math.sin(angle)])
-        _groove(a, start, start + PAIR_LENGTH * direction, -plan.depth, angle, 0.0, 0.0, f,
-                inside=True)
+    for angle, turn in a_grooves():
+        end = SET_LENGTH * np.array([math.cos(angle), math.sin(angle)])
+        _groove(a, (0.0, 0.0), end, -plan.depth, angle, 0.0, turn, f, inside=True)
     b = _builder(3, "B axis")
     for x, tilt in zip(B_GROOVE_X, plan.tilts, strict=True):
         _groove(b, (x, -B_HALF), (x, B_HALF), -plan.b_depth, plan.theta1, tilt, 0.0, f)
@@ -157,7 +167,7 @@ def plate_cuts(plan: Plan = Plan()) -> dict[str, PlateCut]:
             -plan.depth, math.pi / 2.0, 0.0, 0.0, f, inside=True)
     return {"touch": PlateCut(touch.build(),
                               f"block:{TOUCH_COUNT * TOUCH_SEGMENT / mm:g}x3x1@0,-1.5,0"),
-            "a": PlateCut(a.build(), "block:6x6x1@-3,-6,0"),
+            "a": PlateCut(a.build(), "block:24x24x1@-12,-12,0"),
             "b": PlateCut(b.build(), "block:4x3x1@-2,-1.5,0"),
             "c": PlateCut(c.build(), "block:16x16x1@-8,-8,0")}
 
@@ -167,15 +177,11 @@ def mark_point() -> np.ndarray:
     return np.array([MARK_X, -TRIANGLE_R])
 
 
-def pair_grooves() -> list[tuple[float, np.ndarray]]:
-    """(A angle (rad), programmed start point (2,) m) of the two A-plate grooves, A = 0 and
-    180 deg, in cutting order."""
-    out = []
-    for angle, spot in ((0.0, PAIR_START), (math.pi, PAIR_START)):
-        # the pair's two grooves run on either side of the spot, across their direction
-        side = np.array([-math.sin(angle), math.cos(angle)])
-        out.append((angle, np.array(spot) + PAIR_HALF_GAP * side))
-    return out
+def a_grooves() -> list[tuple[float, float]]:
+    """(A, C) (rad) of the four A-plate grooves in cutting order: the two of each set, C and
+    C + 180 deg apart, one after the other. Each runs `SET_LENGTH` from the programmed
+    origin along the tool's own X at A, so on the plate along ``Rz(C + A) x``."""
+    return [(angle, turn) for angle, turns in A_SETS for turn in turns]
 
 
 def _builder(number: int, name: str) -> ProgramBuilder:

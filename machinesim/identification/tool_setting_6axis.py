@@ -13,8 +13,9 @@ and start points read under the microscope, with the axis values each groove was
 and returns identified values; reading the plates is `machinesim.procedures.
 tool_setting_6axis`'s job, their design `machinesim.cam.tool_setting_plates`'.
 
-- `a_axis_pairs`: the A pair (paper Fig. 4): start points of grooves cut at A = 0 and
-  180 deg differ by ``2 d`` (xy), which gives dx and dy.
+- `a_axis_sets`: the A sets (paper Fig. 4): two grooves from one start point, cut at C and
+  C + 180 deg, end ``2 L + 2 (d - Rz(-A) e)`` apart in the set's own frame; at A = 0 and
+  180 deg that gives dx and dy (and e a second time).
 - `c_axis_triangle`: the triangle cut at C = 0, 120, 240 deg is centred on ``e``.
 - `b_axis_offsets` (paper eqs 1-2, eq 2 corrected) and `b_axis_tilts`: the depths of
   grooves cut at B = 0, theta2, theta3 give the edge offset from the B centre.
@@ -38,12 +39,12 @@ import numpy as np
 
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
-from machinesim.metrology import Line2D, fit_line, groove_crossing
+from machinesim.metrology import Line2D, fit_line, fit_parallel_lines, groove_crossing
 from machinesim.rotations import rot_y, rot_z
 
 __all__ = [
     "AAxisResult", "BAxisResult", "CAxisResult", "Compensation", "GrooveReading",
-    "Identification", "PARAMETERS", "a_axis_pairs", "b_axis_offsets", "b_axis_tilts",
+    "Identification", "PARAMETERS", "a_axis_sets", "b_axis_offsets", "b_axis_tilts",
     "c_axis_triangle", "corrected_axes", "identify", "read_stages",
 ]
 
@@ -74,12 +75,12 @@ class GrooveReading:
         Standard uncertainty of each centre across the groove (m).
     depths, depth_sigma : ndarray, shape (k,)
         Apex depth below the plate top in the same profiles, and its uncertainty (m).
-    start : ndarray, shape (2,), optional
-        Where the centre line meets the groove's start face (m), for grooves that start on
-        the plate (the A pairs).
-    start_sigma : float
-        Standard uncertainty of the start point along the groove (m): across, the start
-        point is the centre line's, whose uncertainty comes from the points.
+    end : ndarray, shape (2,), optional
+        Where the centre line meets the groove's end face (m), the face the edge leaves as
+        it is lifted out at the end of the block (the A sets).
+    end_sigma : float
+        Standard uncertainty of the end point along the groove (m): across, the end point is
+        the centre line's, whose uncertainty comes from the points.
     """
 
     q_start: np.ndarray
@@ -88,8 +89,8 @@ class GrooveReading:
     point_sigma: np.ndarray
     depths: np.ndarray
     depth_sigma: np.ndarray
-    start: np.ndarray | None = None
-    start_sigma: float = math.nan
+    end: np.ndarray | None = None
+    end_sigma: float = math.nan
 
     def __post_init__(self) -> None:
         for name in ("q_start", "q_end", "points", "point_sigma", "depths", "depth_sigma"):
@@ -101,8 +102,8 @@ class GrooveReading:
             raise InputError(f"Expected a groove reading of k >= 2 points (k, 2) with k "
                              f"sigmas, depths and depth sigmas, got points "
                              f"{self.points.shape}", key="points")
-        if self.start is not None:
-            object.__setattr__(self, "start", frozen(self.start))
+        if self.end is not None:
+            object.__setattr__(self, "end", frozen(self.end))
 
     @property
     def line(self) -> Line2D:
@@ -142,22 +143,30 @@ class Compensation:
 
 @dataclass(frozen=True, eq=False)
 class AAxisResult:
-    """The A-axis pair: start points (m) and what they give.
+    """The A sets: their grooves' end points and what they give (m).
 
     Attributes
     ----------
-    starts : ndarray, shape (2, 2)
-        Start points of the grooves cut at A = 0 and 180 deg.
+    ends : ndarray, shape (4, 2)
+        End points of the four grooves, in cutting order (as read).
+    relations : ndarray, shape (2, 2)
+        Per set, the end points' displacement in the set's own frame less the programmed
+        2 L: ``2 (d - Rz(-A) e)``, along and across the set (A = 0: ``2 (d - e)``;
+        A = 180 deg: ``2 (d + e)``).
     distances : ndarray, shape (1, 2)
-        Their displacement minus the programmed one, ``2 (dx, dy)`` (Table 1's "distance
-        between grooves" against the A axis).
+        Half their sum, ``2 (dx, dy)``: Table 1's "distance between grooves" against the A
+        axis (the A = 0 set's grooves against the A = 180 deg set's).
     offset : ndarray, shape (2,)
         (dx, dy).
+    centre : ndarray, shape (2,)
+        The C centre line e, a second reading (half the relations' difference, over 2).
     """
 
-    starts: np.ndarray
+    ends: np.ndarray
+    relations: np.ndarray
     distances: np.ndarray
     offset: np.ndarray
+    centre: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -239,32 +248,57 @@ class Identification:
 # ---------------------------------------------------------------------------- the stages
 
 
-def a_axis_pairs(starts, programmed) -> AAxisResult:
-    """dx and dy from the A pair's start points (paper 001, Fig. 4).
+def a_axis_sets(grooves: Sequence[GrooveReading], length: float) -> AAxisResult:
+    """dx and dy from the A sets' grooves (paper 001, Fig. 4).
 
-    A groove cut at A starts where the edge is at the start of its cut: ``S + Rz(A) d`` (xy)
-    for a programmed start ``S``. The pair is cut at A = 0 and, with the tool turned by
-    180 deg, at A = 180 deg, so
+    Each set is two grooves from one programmed start point, the origin, along the tool's
+    own X at A: one cut at C, one at C + 180 deg. A groove cut at (A, C) starts at
+    ``e + Rz(C) (Rz(A) d - e)`` and ends L further along ``Rz(C) Rz(A) x``, so in the set's
+    own frame ``F = Rz(C + A)`` (x along the first groove)
 
-        S(A=0) - S(A=180) - (programmed) = Rz(0) d - Rz(180) d = 2 (dx, dy).
+        F^T (end_1 - end_2) - (2 L, 0) = 2 (d - Rz(-A) e),
+
+    which is ``2 (d - e)`` at A = 0 and ``2 (d + e)`` at A = 180 deg: the sets' half sum is
+    ``2 d``, their half difference ``2 e``. Both components are read between the set's own
+    two lines (`fit_parallel_lines` on the two grooves' centres, one common direction):
+    along it, the end points' distance; across it, the lines' offset. Neither changes with
+    a turn or shift of the frame the plate was read in.
 
     Parameters
     ----------
-    starts : array_like, shape (2, 2)
-        Measured start points of the grooves cut at A = 0 and 180 deg (m).
-    programmed : array_like, shape (2, 2)
-        Their programmed start points (m).
+    grooves : sequence of GrooveReading
+        The sets' grooves in cutting order (first and second of each set), each with its end
+        point and the axis values it was cut at (A from ``q_start``, `AXES` order).
+    length : float
+        The programmed length L of each groove (m).
 
     Returns
     -------
     AAxisResult
     """
-    starts, programmed = np.asarray(starts, float), np.asarray(programmed, float)
-    if starts.shape != (2, 2) or programmed.shape != (2, 2):
-        raise InputError(f"Expected 2 start points (2, 2) and their programmed places, got "
-                         f"{starts.shape} and {programmed.shape}", key="starts")
-    distances = ((starts[0] - starts[1]) - (programmed[0] - programmed[1]))[None, :]
-    return AAxisResult(frozen(starts), frozen(distances), frozen(0.5 * distances[0]))
+    if len(grooves) < 4 or len(grooves) % 2:
+        raise InputError(f"Expected two or more sets of two A grooves, got {len(grooves)}",
+                         key="grooves")
+    if any(g.end is None for g in grooves):
+        raise InputError("Expected the end point of every A groove", key="end")
+    relations, rows = [], []
+    for first, second in zip(grooves[::2], grooves[1::2], strict=True):
+        one, two = fit_parallel_lines(first.points, second.points)
+        along = one.direction if one.direction @ (one.point - two.point) > 0 else -one.direction
+        across = np.array([-along[1], along[0]])
+        relations.append([(first.end - second.end) @ along - 2.0 * length,
+                          (one.point - two.point) @ across])
+        turn = rot_z(-float(first.q_start[AXES.index("A")]))[:2, :2]
+        rows.append(np.hstack([np.eye(2), -turn]))
+    relations, rows = np.array(relations), np.vstack(rows)
+    if np.linalg.matrix_rank(rows) < 4:
+        raise InputError("Expected A sets whose A angles separate d from e (e.g. 0 and 180 "
+                         "deg)", key="grooves")
+    # relation_k / 2 = d - Rz(-A_k) e, every set: least squares for (d, e)
+    solved, *_ = np.linalg.lstsq(rows, 0.5 * relations.reshape(-1), rcond=None)
+    ends = np.array([g.end for g in grooves])
+    return AAxisResult(frozen(ends), frozen(relations), frozen(2.0 * solved[None, :2]),
+                       frozen(solved[:2]), frozen(solved[2:]))
 
 
 def c_axis_triangle(points: Sequence, mark_at=None) -> CAxisResult:
@@ -383,7 +417,7 @@ def b_axis_tilts(depths, theta2: float, theta3: float, commanded_z=None) -> BAxi
 
 
 def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReading],
-             b: Sequence[GrooveReading], programmed_starts, theta2: float,
+             b: Sequence[GrooveReading], length: float, theta2: float,
              theta3: float, mark_at=None, registration=None) -> Identification:
     """Paper 001's identification from the readings of its three plates.
 
@@ -391,15 +425,15 @@ def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReadi
     ----------
     z_touch : float
         The touch-off Z (m).
-    a : sequence of 2 GrooveReading
-        The A pair (A = 0, 180 deg), each with its start point.
+    a : sequence of 4 GrooveReading
+        The A sets' grooves (`a_axis_sets`), each with its end point.
     c : sequence of 3 or 4 GrooveReading
         The triangle's grooves (C = 0, 120, 240 deg), and its reference mark (4th).
     b : sequence of 3 GrooveReading
         The B grooves (B = 0, theta2, theta3); each groove's depth is the mean over its
         profiles, taken back to one commanded Z (`b_axis_tilts`).
-    programmed_starts : array_like, shape (2, 2)
-        The A grooves' programmed start points (m).
+    length : float
+        The A grooves' programmed length (m).
     theta2, theta3 : float
         The B tilts (rad).
     mark_at : array_like, shape (2,), optional
@@ -414,21 +448,18 @@ def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReadi
     Identification
         ``compensation`` holds d = (dx, dy, dZ) and e with no Z shift; ``std`` the
         uncertainties propagated through the same formulas from the readings'
-        (`point_sigma`, `depth_sigma`, `start_sigma`), the plates' registration and the C
-        and B plates' being cut with the A pair's result
+        (`point_sigma`, `depth_sigma`, `end_sigma`), the plates' registration and the C
+        and B plates' being cut with the A sets' result
         (`machinesim.identification.tool_setting_6axis_uncertainty`).
     """
-    if len(a) != 2 or len(c) not in (3, 4) or len(b) != 3:
-        raise InputError(f"Expected 2 A, 3 C (and a mark) and 3 B groove readings, got "
+    if len(a) != 4 or len(c) not in (3, 4) or len(b) != 3:
+        raise InputError(f"Expected 4 A, 3 C (and a mark) and 3 B groove readings, got "
                          f"{len(a)}, {len(c)} and {len(b)}", key="readings")
-    if any(g.start is None for g in a):
-        raise InputError("Expected the start point of every A groove", key="start")
-    programmed = np.asarray(programmed_starts, dtype=np.float64)
 
     from machinesim.identification.tool_setting_6axis_uncertainty import propagated_std
 
     def stages(a, c, b):
-        return read_stages(a, c, b, programmed, theta2, theta3, mark_at)
+        return read_stages(a, c, b, length, theta2, theta3, mark_at)
 
     def values(a, c, b):
         ra, rc, rb = stages(a, c, b)
@@ -437,18 +468,18 @@ def identify(z_touch: float, a: Sequence[GrooveReading], c: Sequence[GrooveReadi
     ra, rc, rb = stages(a, c, b)
     compensation = Compensation(tool_offset=[ra.offset[0], ra.offset[1], rb.offset_z],
                                 c_centre=rc.centre)
-    std = propagated_std(values, a, c, b, programmed, registration)
+    std = propagated_std(values, a, c, b, length, registration)
     return Identification(float(z_touch), ra, rb, rc, compensation,
                           MappingProxyType(dict(zip(PARAMETERS, std.tolist(), strict=True))))
 
 
 def read_stages(a: Sequence[GrooveReading], c: Sequence[GrooveReading],
-                b: Sequence[GrooveReading], programmed_starts, theta2: float, theta3: float,
+                b: Sequence[GrooveReading], length: float, theta2: float, theta3: float,
                 mark_at=None) -> tuple[AAxisResult, CAxisResult, BAxisResult]:
     """The three stages' results from the plates' readings (`identify`'s arguments): the A
-    pair (`a_axis_pairs`), the triangle (`c_axis_triangle`) and the B tilts
+    sets (`a_axis_sets`), the triangle (`c_axis_triangle`) and the B tilts
     (`b_axis_tilts`, each groove's depth the mean over its profiles)."""
-    return (a_axis_pairs([g.start for g in a], programmed_starts),
+    return (a_axis_sets(a, length),
             c_axis_triangle([g.points for g in c], mark_at),
             b_axis_tilts([g.depths.mean() for g in b], theta2, theta3,
                          [g.q_start[AXES.index("Z")] for g in b]))

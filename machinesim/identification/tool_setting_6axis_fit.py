@@ -32,8 +32,8 @@ def fit_observations(machine, a: Sequence[GrooveReading], c: Sequence[GrooveRead
     machine at those axis values) by
 
     - across the groove: the measured centre minus the nominal edge (every groove);
-    - along the groove: the measured start point minus the nominal start (the A pairs: the
-      start face is the edge profile at the start of the cut);
+    - along the groove: the measured end point minus the nominal end (the A sets: the end
+      face is the edge profile at the end of the cut);
     - along +z: minus the measured depth minus the nominal edge height (the B grooves, the
       paper's source of dZ; the plate top is the workpiece's z = 0).
 
@@ -75,11 +75,11 @@ def fit_observations(machine, a: Sequence[GrooveReading], c: Sequence[GrooveRead
                 directions.append(np.tile((0.0, 0.0, 1.0), (len(t), 1)))
                 values.append(seen[:, 2] - nominal[:, 2])
                 sigma.append(np.maximum(g.depth_sigma, SIGMA_FLOOR_M))
-            if g.start is not None:
-                q.append(g.q_start[None, :])
+            if g.end is not None:
+                q.append(g.q_end[None, :])
                 directions.append(along[None, :])
-                values.append([(g.start - ends[0, :2]) @ along[:2]])
-                sigma.append([max(g.start_sigma, SIGMA_FLOOR_M)])
+                values.append([(g.end - ends[1, :2]) @ along[:2]])
+                sigma.append([max(g.end_sigma, SIGMA_FLOOR_M)])
     return observations(np.concatenate(q), np.concatenate(directions),
                         np.concatenate(values), np.concatenate(sigma))
 
@@ -89,7 +89,7 @@ def fit_check(machine, a: Sequence[GrooveReading], c: Sequence[GrooveReading],
     """Cross-check the paper's formulas: `PARAMETERS` by `machinesim.identification.fit` on
     the machine's kinematics, from the same readings (`fit_observations`).
 
-    The paper reads each parameter from one stage (dx, dy from the A pairs, e from the
+    The paper reads each parameter from one stage (dx, dy from the A sets, e from the
     triangle, dZ from the B depths); the fit uses every reading at once, through Pinocchio's
     error Jacobians instead of the closed forms. Both are least squares on the same
     readings, so without noise they agree to the readings' resolution; with noise, within

@@ -6,13 +6,14 @@ reading error move it, and each is propagated here (first order, central differe
 `PROPAGATION_STEP`) through the same function the identification uses:
 
 - **each reading's own**: a groove centre across its groove (`point_sigma`: the profile fit,
-  and the stage's positioning of that profile), a depth (`depth_sigma`), a start point along
-  its groove (`start_sigma`). Independent from reading to reading.
+  and the stage's positioning of that profile), a depth (`depth_sigma`), an end point along
+  its groove (`end_sigma`). Independent from reading to reading.
 - **each plate's registration**: the microscope reads a whole plate in one frame that sits off
   the workpiece's by an offset (x, y) and a turn about z (`RegistrationScatter`, the lab's
-  stated practice, never the drawn registration). Common to every reading of the plate:
-  a turn of 1 mrad moves the A pair's start points, 2 mm apart, by 2 um against each other.
-- **the plates cut with an earlier result**: the C and B plates are cut with the A pair's dx,
+  stated practice, never the drawn registration). Common to every reading of the plate.
+  The A sets are read between lines of one plate and the triangle is placed by its mark,
+  so neither feels it; the generic fit, which compares absolute positions, does.
+- **the plates cut with an earlier result**: the C and B plates are cut with the A sets' dx,
   dy compensated, so an error of those moves every groove on them by
   ``-Rz(C) Ry(B) Rz(A) (delta dx, delta dy, 0)`` (the edge displacement of
   `corrected_axes`). The triangle's centre does not move (its three sides move alike), but
@@ -38,7 +39,7 @@ from machinesim.exceptions import InputError
 from machinesim.identification.tool_setting_6axis import (
     AXES,
     GrooveReading,
-    a_axis_pairs,
+    a_axis_sets,
 )
 from machinesim.metrology import fit_line
 from machinesim.metrology.imperfections import RegistrationScatter
@@ -47,11 +48,11 @@ from machinesim.rotations import rot_y, rot_z
 
 __all__ = ["PLATES", "PROPAGATION_STEP", "after_std", "propagated_std"]
 
-#: The plates in the order their readings are passed: the A pair, the C triangle (with its
-#: mark), the B grooves. The C and B plates are cut with the A pair's dx, dy compensated.
+#: The plates in the order their readings are passed: the A sets, the C triangle (with its
+#: mark), the B grooves. The C and B plates are cut with the A sets' dx, dy compensated.
 PLATES = ("a", "c", "b")
 #: Step of the central differences (m for readings and offsets, rad for the registration's
-#: turn): the formulas are linear (A pairs, eqs 1-2) or, for the triangle, curved on the
+#: turn): the formulas are linear (A sets, eqs 1-2) or, for the triangle, curved on the
 #: scale of the 10 mm plate, so a 1 nm (1 nrad) step is exact to ~1e-7 relative, far above
 #: float64 round-off (1e-19 m on readings of a few mm, i.e. 1e-10 of the step).
 PROPAGATION_STEP = 1e-9
@@ -60,7 +61,7 @@ Plates = tuple[Sequence[GrooveReading], Sequence[GrooveReading], Sequence[Groove
 
 
 def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReading],
-                   c: Sequence[GrooveReading], b: Sequence[GrooveReading], programmed,
+                   c: Sequence[GrooveReading], b: Sequence[GrooveReading], length: float,
                    registration: Mapping[str, RegistrationScatter | None] | None = None,
                    *, own_errors: bool = True, staged: bool = True) -> np.ndarray:
     """Standard uncertainties of ``function(a, c, b)`` from every error of the readings
@@ -72,10 +73,11 @@ def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReadin
         ``function(a, c, b) -> ndarray``: the identified values from the three plates'
         readings (tuples of `GrooveReading`).
     a, c, b : sequence of GrooveReading
-        The A pair (each with its start point), the triangle and its mark, the B grooves.
-    programmed : array_like, shape (2, 2)
-        The A grooves' programmed start points (m): the A result the C and B plates were
-        cut with is `a_axis_pairs` of the start points and these.
+        The A sets (each groove with its end point), the triangle and its mark, the B
+        grooves.
+    length : float
+        The A grooves' programmed length (m): the A result the C and B plates were cut with
+        is `a_axis_sets` of the A readings and it.
     registration : mapping, optional
         Plate (`PLATES`) -> the scatter of its microscope's registration, as the lab states
         it; a plate missing or None is read in the workpiece frame exactly.
@@ -84,7 +86,7 @@ def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReadin
         A result, which move only with the A readings), for a function whose own covariance
         holds them already (a least-squares fit weighted by the same sigmas).
     staged : bool
-        True (the identification's plates): the C and B plates were cut with the A pair's
+        True (the identification's plates): the C and B plates were cut with the A sets'
         result, so an error of the A readings moves them too. False (plates all cut with
         one compensation fixed beforehand, as the compensated plates are): it does not.
 
@@ -104,19 +106,18 @@ def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReadin
                              f"RegistrationScatter or None, got {scatter!r}",
                              key="registration")
     plates = (tuple(a), tuple(c), tuple(b))
-    programmed = np.asarray(programmed, dtype=np.float64)
     scatters = [registration.get(plate) for plate in PLATES]
     own = np.concatenate([_sigmas(g) for g in (*plates[0], *plates[1], *plates[2])])
     sigma = np.concatenate(
         [own if own_errors else np.zeros_like(own)]
         + [[s.offset_xy, s.offset_xy, s.rotation] for s in scatters if s is not None])
-    cut_with = a_axis_pairs([g.start for g in plates[0]], programmed).offset
+    cut_with = a_axis_sets(plates[0], length).offset
 
     def shifted(step):
         moved = _shifted(plates, iter(step), [s is not None for s in scatters])
         if not staged:
             return function(*moved)
-        found = a_axis_pairs([g.start for g in moved[0]], programmed).offset
+        found = a_axis_sets(moved[0], length).offset
         delta = np.r_[found - cut_with, 0.0]
         return function(moved[0], *(tuple(_displaced(g, delta) for g in plate)
                                     for plate in moved[1:]))
@@ -132,37 +133,37 @@ def propagated_std(function: Callable[..., np.ndarray], a: Sequence[GrooveReadin
 
 
 def _sigmas(g: GrooveReading) -> np.ndarray:
-    """A reading's standard uncertainties in the order `_shifted` takes their shifts: start
+    """A reading's standard uncertainties in the order `_shifted` takes their shifts: end
     point (if any), centres, depths (floored at `SIGMA_FLOOR_M`)."""
-    start = [max(g.start_sigma, SIGMA_FLOOR_M)] if g.start is not None else []
-    return np.concatenate([start, np.maximum(g.point_sigma, SIGMA_FLOOR_M),
+    end = [max(g.end_sigma, SIGMA_FLOOR_M)] if g.end is not None else []
+    return np.concatenate([end, np.maximum(g.point_sigma, SIGMA_FLOOR_M),
                            np.maximum(g.depth_sigma, SIGMA_FLOOR_M)])
 
 
 def _shifted(plates: Plates, step, registered: Sequence[bool]) -> Plates:
     """The plates' readings, each moved by its own shifts from ``step`` (an iterator, in
-    `_sigmas`' order: start points along the groove, centres across it, depths), then each
+    `_sigmas`' order: end points along the groove, centres across it, depths), then each
     registered plate turned and offset by its next three (x, y, turn about the workpiece
     origin).
 
-    A start point lies on its groove's centre line: moving the centres moves the line and
-    the start point with it (the face is read along the line, the line across it).
+    An end point lies on its groove's centre line: moving the centres moves the line and
+    the end point with it (the face is read along the line, the line across it).
     """
     moved = []
     for plate in plates:
         out = []
         for g in plate:
-            along = next(step) if g.start is not None else 0.0
+            along = next(step) if g.end is not None else 0.0
             line = g.line
             normal = np.array([-line.direction[1], line.direction[0]])
             points = g.points + np.array([next(step) for _ in g.points])[:, None] * normal
             depths = g.depths + np.array([next(step) for _ in g.depths])
-            start = None
-            if g.start is not None:
+            end = None
+            if g.end is not None:
                 new = fit_line(points)
-                t = (g.start - new.point) @ new.direction + along
-                start = new.point + t * new.direction
-            out.append(replace(g, points=points, depths=depths, start=start))
+                t = (g.end - new.point) @ new.direction + along
+                end = new.point + t * new.direction
+            out.append(replace(g, points=points, depths=depths, end=end))
         moved.append(out)
     registered_plates = []
     for plate, has in zip(moved, registered, strict=True):
@@ -181,7 +182,7 @@ def _registered(g: GrooveReading, offset: np.ndarray, turn: float) -> GrooveRead
         return p + offset + turn * np.stack([-p[..., 1], p[..., 0]], axis=-1)
 
     return replace(g, points=frame(g.points),
-                   start=None if g.start is None else frame(g.start))
+                   end=None if g.end is None else frame(g.end))
 
 
 def _displaced(g: GrooveReading, delta: np.ndarray, centre=None) -> GrooveReading:
@@ -203,12 +204,12 @@ def _displaced(g: GrooveReading, delta: np.ndarray, centre=None) -> GrooveReadin
     q_end[xyz] += program
     return replace(g, q_start=q_start, q_end=q_end, points=g.points + edge[:2],
                    depths=g.depths - edge[2],
-                   start=None if g.start is None else g.start + edge[:2])
+                   end=None if g.end is None else g.end + edge[:2])
 
 
 def after_std(figures: Callable[..., np.ndarray],
               identified: Callable[..., tuple[np.ndarray, np.ndarray]], before: Plates,
-              after: Plates, programmed,
+              after: Plates, length: float,
               registration_before: Mapping[str, RegistrationScatter | None] | None = None,
               registration_after: Mapping[str, RegistrationScatter | None] | None = None,
               ) -> np.ndarray:
@@ -226,7 +227,7 @@ def after_std(figures: Callable[..., np.ndarray],
       (`propagated_std`), but not staged: every compensated plate is cut with the one
       compensation found before.
 
-    Correlations are kept where they arise: the C plates are cut with the A pair's dy
+    Correlations are kept where they arise: the C plates are cut with the A sets' dy
     before and after, and the reference mark reads it alike both times, so it cancels from
     the C figures after (it does not from e identified).
 
@@ -239,8 +240,8 @@ def after_std(figures: Callable[..., np.ndarray],
         plates read before (d = tool offset, 3; e = C centre, 2; m).
     before, after : tuple of 3 sequences of GrooveReading
         The plates read for the identification (A, C, B) and the compensated plates.
-    programmed : array_like, shape (2, 2)
-        The A grooves' programmed start points (m).
+    length : float
+        The A grooves' programmed length (m).
     registration_before, registration_after : mapping, optional
         The stated registration scatter of each plate's microscope, as for
         `propagated_std`.
@@ -258,8 +259,8 @@ def after_std(figures: Callable[..., np.ndarray],
         return figures(*(tuple(_displaced(g, np.asarray(d) - base_d, np.asarray(e) - base_e)
                                for g in plate) for plate in after))
 
-    from_before = propagated_std(through_compensation, *before, programmed,
+    from_before = propagated_std(through_compensation, *before, length,
                                  registration_before)
-    from_after = propagated_std(figures, *after, programmed, registration_after,
+    from_after = propagated_std(figures, *after, length, registration_after,
                                 staged=False)
     return np.hypot(from_before, from_after)

@@ -43,6 +43,7 @@ from machinesim.metrology.lines import (
     edge_distance,
     fit_line,
     fit_parallel_edges,
+    fit_parallel_lines,
     groove_crossing,
     intersect_lines,
     profile_points,
@@ -70,7 +71,8 @@ __all__ += [
 ]
 __all__ += [
     "FormError", "GrooveCrossing", "Line2D", "ParallelEdges", "Pitch", "PlaneFit", "SphereFit",
-    "VGroove", "edge_distance", "export_x3p", "fit_line", "fit_parallel_edges", "fit_plane",
+    "VGroove", "edge_distance", "export_x3p", "fit_line", "fit_parallel_edges",
+    "fit_parallel_lines", "fit_plane",
     "fit_sphere", "fit_v_groove", "fit_v_grooves", "form_error", "groove_crossing", "groove_pitch",
     "height_map_points", "intersect_lines", "length_unit", "plane_angle", "plot_height_map",
     "plot_profile", "profile_points", "roughness_sa", "sphere_centre_from_touch", "step_positions",

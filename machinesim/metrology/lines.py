@@ -24,6 +24,7 @@ __all__ = [
     "edge_distance",
     "fit_line",
     "fit_parallel_edges",
+    "fit_parallel_lines",
     "groove_crossing",
     "intersect_lines",
     "profile_points",
@@ -126,11 +127,7 @@ def fit_line(points) -> Line2D:
     points : array-like, shape (k, 2)
         Points, m, k >= 2, not all equal.
     """
-    points = np.array(points, dtype=np.float64)
-    if points.ndim != 2 or points.shape[1] != 2 or points.shape[0] < 2:
-        raise InputError(f"Expected points with shape (k, 2), k >= 2, got {points.shape}")
-    if not np.isfinite(points).all():
-        raise InputError("Expected finite points, got NaN or infinity")
+    points = _points(points, "points")
     centroid = points.mean(axis=0)
     centred = points - centroid
     _, singular, vt = np.linalg.svd(centred, full_matrices=False)
@@ -252,20 +249,52 @@ def fit_parallel_edges(x, y, z, *, level: float | None = None, along: str = "x")
     pairs = np.array(pairs)
     first, second = (pairs[:, [0, 2]], pairs[:, [1, 2]]) if along == "x" else (
         pairs[:, [2, 0]], pairs[:, [2, 1]])
-    # The common direction is the principal axis of both sets, each centred on its centroid.
-    centroids = first.mean(axis=0), second.mean(axis=0)
-    stacked = np.vstack([first - centroids[0], second - centroids[1]])
-    _, singular, vt = np.linalg.svd(stacked, full_matrices=False)
-    direction = vt[0] if vt[0] @ (first[-1] - first[0]) >= 0.0 else -vt[0]
-    normal = np.array([-direction[1], direction[0]])
-    rms = float(singular[1] / math.sqrt(len(stacked)))
-    parallelism = _angle(fit_line(first).direction, fit_line(second).direction)
+    one, two = fit_parallel_lines(first, second)
+    normal = np.array([-one.direction[1], one.direction[0]])
     return ParallelEdges(
-        distance=abs(float(normal @ (centroids[1] - centroids[0]))),
-        first=Line2D(frozen(centroids[0]), frozen(direction), rms),
-        second=Line2D(frozen(centroids[1]), frozen(direction), rms),
-        parallelism=parallelism,
-    )
+        distance=abs(float(normal @ (two.point - one.point))), first=one, second=two,
+        parallelism=_angle(fit_line(first).direction, fit_line(second).direction))
+
+
+def fit_parallel_lines(first, second) -> tuple[Line2D, Line2D]:
+    """Two lines of one common direction fitted to two sets of points (m).
+
+    The common direction is the principal axis of both sets, each centred on its centroid
+    (total least squares); each line passes through its set's centroid. Their distance and
+    the offset between them are then free of any turn or shift of the frame the points were
+    read in.
+
+    Parameters
+    ----------
+    first, second : array_like, shape (k, 2)
+        At least two points each.
+
+    Returns
+    -------
+    (Line2D, Line2D)
+        Both with the common direction, pointing from ``first``'s first point towards its
+        last; ``residual_rms`` is that of both sets about their lines.
+    """
+    sets = [_points(points, name) for points, name in ((first, "first"), (second, "second"))]
+    centroids = [points.mean(axis=0) for points in sets]
+    stacked = np.vstack([points - c for points, c in zip(sets, centroids, strict=True)])
+    _, singular, vt = np.linalg.svd(stacked, full_matrices=False)
+    direction = vt[0] if vt[0] @ (sets[0][-1] - sets[0][0]) >= 0.0 else -vt[0]
+    if singular[0] == 0.0:
+        raise InputError("Expected points that span two lines, got each set's points equal")
+    rms = float(singular[1] / math.sqrt(len(stacked)))
+    return tuple(Line2D(frozen(c), frozen(direction), rms) for c in centroids)
+
+
+def _points(points, what: str) -> np.ndarray:
+    """``points`` as a finite (k, 2) float64 array, k >= 2."""
+    points = np.array(points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 2 or points.shape[0] < 2:
+        raise InputError(f"Expected {what} with shape (k, 2), k >= 2, got {points.shape}",
+                         key=what)
+    if not np.isfinite(points).all():
+        raise InputError(f"Expected finite {what}, got NaN or infinity", key=what)
+    return points
 
 
 def _angle(first: np.ndarray, second: np.ndarray) -> float:

@@ -6,8 +6,8 @@
 with the lab's confocal microscope only.
 
 0. Touch-off: a groove stepping down in Z finds the Z at which the edge meets the plate.
-1. A plate, cut with the touch-off: the pair's start points give dx, dy
-   (`machinesim.identification.tool_setting_6axis.a_axis_pairs`).
+1. A plate, cut with the touch-off: two sets of two grooves sharing a start point, whose
+   end points give dx, dy (`machinesim.identification.tool_setting_6axis.a_axis_sets`).
 2. C plate, cut with dx, dy compensated: the triangle's centre gives e (`c_axis_triangle`).
 3. B plate, cut with dx, dy compensated: the depths at three B tilts give dZ (eqs 1-2,
    `b_axis_tilts`).
@@ -35,20 +35,21 @@ from typing import ClassVar
 import numpy as np
 
 from machinesim.cam.tool_setting_plates import (
+    A_REACH,
     B_GROOVE_X,
     C_TURNS,
     CENTRE_RANGE,
     OFFSET_RANGE,
-    PAIR_LENGTH,
     PARKED,
+    SET_LENGTH,
     TOUCH_COUNT,
     TOUCH_SEGMENT,
     TOUCH_STEP,
     TOUCH_TOP,
     TRIANGLE_R,
     Plan,
+    a_grooves,
     mark_point,
-    pair_grooves,
     plate_cuts,
 )
 from machinesim.compensation import map_program, model_based, program_axes
@@ -61,7 +62,7 @@ from machinesim.identification.tool_setting_6axis import (
     Compensation,
     GrooveReading,
     Identification,
-    a_axis_pairs,
+    a_axis_sets,
     corrected_axes,
     identify,
     read_stages,
@@ -93,7 +94,7 @@ PAPER_TABLE_1 = {"a_dx": (490.04, 4.06), "a_dy": (680.12, 2.97), "c_dx": (108.97
 #: The errors a replay injects by default (scenario and campaign): round values of the
 #: paper's order (a tool set by hand, a C centre line found to the better part of a
 #: millimetre), chosen so that the "before" distances land within 25 % of Table 1's (2 dx,
-#: 2 dy for the A pairs; e for the triangle), not Table 1 itself; 150 um along the tool (the
+#: 2 dy for the A sets; e for the triangle), not Table 1 itself; 150 um along the tool (the
 #: paper gives no B value). SI, by `Machine.parameter_names`.
 DEFAULT_INJECTED = MappingProxyType({
     "tool.x": 250.0 * M_PER_UM, "tool.y": 350.0 * M_PER_UM, "tool.z": 150.0 * M_PER_UM,
@@ -101,10 +102,23 @@ DEFAULT_INJECTED = MappingProxyType({
 #: Touch-off: only segments this deep (m) are used: 2 um clears the microscope's noise, 190
 #: um keeps the whole 0.2 mm tall V profile visible.
 TOUCH_DEPTHS = (2 * M_PER_UM, 190 * M_PER_UM)
-#: Half width (m) of the windows across the A grooves and the touch-off: the capture range
-#: and a quarter millimetre of plate either side.
-PAIR_WINDOW = OFFSET_RANGE + 0.25 * M_PER_MM
-#: The start face is read on a profile along the centre line at the instrument's spacing,
+#: Half width (m) of the windows across the touch-off: the capture range and a quarter
+#: millimetre of plate either side.
+TOUCH_WINDOW = OFFSET_RANGE + 0.25 * M_PER_MM
+#: Half width (m) of the windows across the A grooves and along them about their programmed
+#: end: how far a groove lands from its programmed place (`A_REACH`), and a quarter
+#: millimetre more.
+A_WINDOW = A_REACH + 0.25 * M_PER_MM
+#: Each A groove is followed out to its end by short profiles across it (half width
+#: TRACK_WINDOW) every TRACK_STEP, each centred where the centres so far put the line: the
+#: five stations alone would place the line 6 mm out only to about 4 um with the stage's
+#: 1 um per profile, a third of the V's 10 um half width. The end face is then read along
+#: the line within TRACK_STEP / 2 + TRACK_MARGIN of the middle of the step where the groove
+#: was last seen. The step is not a round number, so that round settings do not put an end
+#: on a station, where the registration's few micrometres would decide whether the station
+#: sees the groove (and so how many stage draws the later profiles take).
+TRACK_STEP, TRACK_WINDOW, TRACK_MARGIN = 0.47 * M_PER_MM, 40 * M_PER_UM, 0.1 * M_PER_MM
+#: The end face is read on a profile along the centre line at the instrument's spacing,
 #: then zoomed in to +-ZOOM at FINE_SPACING: the face is vertical (zero-thickness edge
 #: profile), so its position is known to half the spacing, 0.025 nm, whatever the height noise.
 ZOOM, FINE_SPACING = 0.5 * M_PER_UM, 0.05e-9
@@ -118,8 +132,10 @@ B_WINDOW, C_WINDOW, MARK_WINDOW = 0.45 * M_PER_MM, 2.0 * M_PER_MM, 0.5 * M_PER_M
 #: whole nanometres; a golden-ratio phase step spreads the rounding evenly over each flank.
 ACROSS_SPACING = 0.3 * M_PER_UM - (1.0 - 0.5 * (math.sqrt(5.0) - 1.0)) * 1e-9
 #: Stations (m along a groove) of the profiles across it.
-STATIONS = {"a": (0.6 * M_PER_MM, 0.8 * M_PER_MM, 1.0 * M_PER_MM, 1.2 * M_PER_MM,
-                  1.4 * M_PER_MM),
+STATIONS = {# each A groove, from the shared start: beyond A_REACH, where neither the other
+            # groove of its set nor the other set can be, and 3 mm short of its end
+            "a": (3.0 * M_PER_MM, 3.5 * M_PER_MM, 4.0 * M_PER_MM, 4.5 * M_PER_MM,
+                  5.0 * M_PER_MM),
             "b": (-1.0 * M_PER_MM, -0.5 * M_PER_MM, 0.0, 0.5 * M_PER_MM, 1.0 * M_PER_MM),
             "c": (-2.0 * M_PER_MM, -1.0 * M_PER_MM, 0.0, 1.0 * M_PER_MM, 2.0 * M_PER_MM),
             # the reference mark, from its crossing with the C = 0 side: clear of that
@@ -145,8 +161,8 @@ def touch_off_z(part, microscope) -> float:
     found = []
     for k in range(TOUCH_COUNT):
         x = (k + 0.5) * TOUCH_SEGMENT
-        p = microscope.profile(part, (x, -PAIR_WINDOW - 0.2 * M_PER_MM),
-                               (x, PAIR_WINDOW + 0.2 * M_PER_MM))
+        p = microscope.profile(part, (x, -TOUCH_WINDOW - 0.2 * M_PER_MM),
+                               (x, TOUCH_WINDOW + 0.2 * M_PER_MM))
         try:
             grooves = fit_v_grooves(p.s, p.z)
         except InputError:
@@ -179,8 +195,8 @@ def read_plate(stage: str, part, microscope, program: Program, machine,
     Returns
     -------
     tuple of GrooveReading
-        In cutting order: A = 0, 180 deg; B = 0, theta2, theta3; C = 0, 120, 240 deg and
-        the reference mark.
+        In cutting order: the A sets' four grooves (`a_grooves`); B = 0, theta2, theta3;
+        C = 0, 120, 240 deg and the reference mark.
     """
     if stage not in ("a", "b", "c"):
         raise InputError(f"Expected stage 'a', 'b' or 'c', got {stage!r}", key="stage")
@@ -218,46 +234,89 @@ def _fits(part, microscope, origin, along, stations, half_width, what):
     return out
 
 
-def _reading(fits, block, stage_sigma: float, start=None) -> GrooveReading:
-    """A groove's reading. Each profile, and the start face's zoom, is its own placement of
+def _reading(fits, block, stage_sigma: float, end=None) -> GrooveReading:
+    """A groove's reading. Each profile, and the end face's zoom, is its own placement of
     the stage: its stated positioning (``stage_sigma``, m) moves a centre across the groove
-    and a start point along it, in quadrature with the fit's and the zoom pitch's."""
+    and an end point along it, in quadrature with the fit's and the zoom pitch's."""
     return GrooveReading(
         q_start=block[0], q_end=block[1], points=[xy for _, xy in fits],
         point_sigma=[math.hypot(g.centre_sigma, stage_sigma) for g, _ in fits],
         depths=[g.depth for g, _ in fits], depth_sigma=[g.depth_sigma for g, _ in fits],
-        start=start, start_sigma=(math.hypot(FINE_SPACING / math.sqrt(12.0), stage_sigma)
-                                  if start is not None else math.nan))
+        end=end, end_sigma=(math.hypot(FINE_SPACING / math.sqrt(12.0), stage_sigma)
+                            if end is not None else math.nan))
 
 
-def _start_point(part, microscope, points, spot, along) -> np.ndarray:
-    """Where the centre line meets the groove's start face: coarse profile, then zoomed."""
+def _end_point(part, microscope, points, spot, along, reach, what) -> np.ndarray:
+    """Where the centre line meets the groove's end face, known to lie within ``reach`` of
+    ``spot``: a profile along the line there, then zoomed."""
     line = fit_line(points)
     direction = line.direction if line.direction @ along > 0 else -line.direction
     foot = line.point + ((np.asarray(spot) - line.point) @ direction) * direction
-    p0 = foot - PAIR_WINDOW * direction
+    p0 = foot - reach * direction
     with microscope.placement():  # one field: the zoom is into the same image
-        coarse = microscope.profile(part, p0, foot + PAIR_WINDOW * direction)
+        coarse = microscope.profile(part, p0, foot + reach * direction)
         level = 0.5 * (float(np.nanmin(coarse.z)) + float(np.nanmax(coarse.z)))
         steps = step_positions(coarse.s, coarse.z, level)
         if steps.size != 1:
-            raise InputError(f"A axis: expected one start face near "
-                             f"{np.round(foot / M_PER_MM, 4)} mm along the groove, found "
+            raise InputError(f"{what}: expected one end face within {reach / M_PER_MM:g} mm "
+                             f"of {np.round(foot / M_PER_MM, 4)} mm along the groove, found "
                              f"{steps.size}")
         q0 = p0 + (steps[0] - ZOOM) * direction
         fine = microscope.profile(part, q0, q0 + 2 * ZOOM * direction, spacing=FINE_SPACING)
     return q0 + step_positions(fine.s, fine.z, level)[0] * direction
 
 
+def _followed(part, microscope, fits, along, depth, what):
+    """Follow a groove from its last profile out to where it ends: a short profile across
+    it every `TRACK_STEP`, each centred where the line through the centres so far predicts,
+    until one finds no groove at least half ``depth`` deep. Returns the fits with the new
+    ones added and the station (m along ``along`` from the origin) halfway between the last
+    profile that found the groove and the first that did not."""
+    fits = list(fits)
+    station = STATIONS["a"][-1]
+    while True:
+        station += TRACK_STEP
+        if station > SET_LENGTH + A_WINDOW:
+            raise InputError(f"{what}: the groove runs on past {station / M_PER_MM:g} mm "
+                             f"from its start; the errors may exceed the plan's range (|d| <= "
+                             f"{OFFSET_RANGE / M_PER_MM} mm, |e| <= "
+                             f"{CENTRE_RANGE / M_PER_MM} mm)")
+        line = fit_line([xy for _, xy in fits])
+        direction = line.direction if line.direction @ along > 0 else -line.direction
+        centre = line.point + ((station * along - line.point) @ direction) * direction
+        across = np.array([-direction[1], direction[0]])
+        p0, p1 = centre - TRACK_WINDOW * across, centre + TRACK_WINDOW * across
+        p = microscope.profile(part, p0, p1, spacing=ACROSS_SPACING)
+        try:
+            g = fit_v_groove(p.s, p.z)
+        except InputError:
+            g = None
+        if g is None or not g.depth > 0.5 * depth:
+            return fits, station - 0.5 * TRACK_STEP
+        fits.append((g, profile_points(p0, p1, [g.centre])[0]))
+
+
 def _read_a(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
+    grooves = a_grooves()
+    if len(blocks) != len(grooves):
+        raise InputError(f"A plate: expected {len(grooves)} grooves in the program, got "
+                         f"{len(blocks)}", key="program")
     out = []
-    for (angle, spot), block in zip(pair_grooves(), blocks, strict=True):
-        along = np.array([math.cos(angle), math.sin(angle)])
-        fits = _fits(part, microscope, spot, along, STATIONS["a"], PAIR_WINDOW,
-                     f"A axis, groove at A = {math.degrees(angle):g} deg")
-        start = _start_point(part, microscope, [xy for _, xy in fits], spot, along)
-        out.append(_reading(fits, block, microscope.stage_sigma, start))
+    for (angle, turn), block in zip(grooves, blocks, strict=True):
+        along = _a_direction(angle, turn)
+        what = f"A axis, groove at A = {math.degrees(angle):g}, C = {math.degrees(turn):g} deg"
+        fits = _fits(part, microscope, (0.0, 0.0), along, STATIONS["a"], A_WINDOW, what)
+        fits, station = _followed(part, microscope, fits, along, plan.depth, what)
+        end = _end_point(part, microscope, [xy for _, xy in fits], station * along, along,
+                         0.5 * TRACK_STEP + TRACK_MARGIN, what)
+        out.append(_reading(fits, block, microscope.stage_sigma, end))
     return tuple(out)
+
+
+def _a_direction(angle: float, turn: float) -> np.ndarray:
+    """Direction (2,) on the plate of the A groove cut at A = ``angle``, C = ``turn``: the
+    tool's own X at A, turned with the plate by C."""
+    return rot_z(turn + angle)[:2, 0]
 
 
 def _read_b(part, microscope, blocks, plan: Plan) -> tuple[GrooveReading, ...]:
@@ -284,10 +343,6 @@ def _read_c(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
     return (*out, _reading(fits, blocks[-1], microscope.stage_sigma))
 
 
-def _programmed_starts() -> np.ndarray:
-    return np.array([spot for _, spot in pair_grooves()])
-
-
 # ---------------------------------------------------------------------------- compensation
 
 
@@ -308,8 +363,9 @@ def layout_lines(stage: str, points) -> list[tuple[str, np.ndarray]]:
     Parameters
     ----------
     stage : str
-        ``"a"``: ``points`` are the A grooves' start points (2, 2), drawn as grooves of the
-        programmed length; ``"c"``: the triangle's vertices (3, 2), with their centroid.
+        ``"a"``: ``points`` are the A grooves' end points (4, 2), each drawn as a groove of
+        the programmed length back from it; ``"c"``: the triangle's vertices (3, 2), with
+        their centroid.
     points : array_like
         m.
     """
@@ -320,10 +376,10 @@ def layout_lines(stage: str, points) -> list[tuple[str, np.ndarray]]:
     if stage != "a":
         raise InputError(f"Expected stage 'a' or 'c', got {stage!r}", key="stage")
     out = []
-    for (angle, _), start, name in zip(pair_grooves(), points,
-                                       ("A=0", "A=180"), strict=True):
-        along = np.array([math.cos(angle), math.sin(angle)])
-        out.append((f"groove {name}", np.vstack([start, start + PAIR_LENGTH * along])))
+    for (angle, turn), end in zip(a_grooves(), points, strict=True):
+        name = f"A={math.degrees(angle):g} C={math.degrees(turn):g}"
+        out.append((f"groove {name}",
+                    np.vstack([end - SET_LENGTH * _a_direction(angle, turn), end])))
     return out
 
 
@@ -410,8 +466,7 @@ class ToolSetting6Axis:
             registration[name] = microscope.registration_scatter
             return readings[name]
 
-        a = a_axis_pairs([g.start for g in stage("a", Compensation(z_shift=z_touch))],
-                         _programmed_starts())
+        a = a_axis_sets(stage("a", Compensation(z_shift=z_touch)), SET_LENGTH)
         known = Compensation(tool_offset=[a.offset[0], a.offset[1], 0.0], z_shift=z_touch)
         stage("c", known)
         stage("b", known)
@@ -427,7 +482,7 @@ class ToolSetting6Axis:
         ``location.C.EY0C`` (e).
         """
         m = measurements
-        found = identify(m.z_touch, m.a, m.c, m.b, _programmed_starts(), self.plan.theta2,
+        found = identify(m.z_touch, m.a, m.c, m.b, SET_LENGTH, self.plan.theta2,
                          self.plan.theta3, mark_at=mark_point(), registration=m.registration)
         machine = self._machine()
         # the fit's covariance holds the readings' own errors, and the plates cut with the A
@@ -435,7 +490,7 @@ class ToolSetting6Axis:
         # is what it lacks
         check = fit_check(machine, m.a, m.c, m.b)
         frames = propagated_std(lambda a, c, b: fit_check(machine, a, c, b).values,
-                                m.a, m.c, m.b, _programmed_starts(), m.registration,
+                                m.a, m.c, m.b, SET_LENGTH, m.registration,
                                 own_errors=False)
         check_std = np.hypot(check.std, frames)
         found = replace(found, check=check, check_std=MappingProxyType(
@@ -471,7 +526,7 @@ class ToolSetting6Axis:
             m = before.readings
             spread = dict(zip(old, after_std(
                 self._table_values, self._compensation_values, (m.a, m.c, m.b),
-                (after["a"], after["c"], after["b"]), _programmed_starts(), m.registration,
+                (after["a"], after["c"], after["b"]), SET_LENGTH, m.registration,
                 registration).tolist(), strict=True))
         figures = tuple(Figure(k, "um", old[k], new[k], *PAPER_TABLE_1.get(k, (None, None)),
                                after_std=spread[k]) for k in old)
@@ -496,7 +551,7 @@ class ToolSetting6Axis:
 
     def _stages(self, a, c, b):
         """The A, C and B results from one set of plate readings."""
-        return read_stages(a, c, b, _programmed_starts(), self.plan.theta2, self.plan.theta3,
+        return read_stages(a, c, b, SET_LENGTH, self.plan.theta2, self.plan.theta3,
                            mark_point())
 
     def _table_values(self, a, c, b) -> np.ndarray:
@@ -557,8 +612,10 @@ def _table(a: AAxisResult, b, c: CAxisResult) -> dict[str, float]:
 
 
 def _stage_dict(a, b, c) -> dict:
-    return {"a_starts_um": a.starts / M_PER_UM,
-            "a_pair_distance_um": a.distances[0] / M_PER_UM,
+    return {"a_ends_um": a.ends / M_PER_UM,
+            "a_set_relations_um": a.relations / M_PER_UM,
+            "a_distance_um": a.distances[0] / M_PER_UM,
+            "a_c_centre_um": a.centre / M_PER_UM,
             "c_centre_displacement_um": c.centre / M_PER_UM,
             "c_vertices_um": c.vertices / M_PER_UM,
             "b_depths_um": b.depths / M_PER_UM,
