@@ -154,10 +154,15 @@ def _shifted(plates: Plates, step, registered: Sequence[bool]) -> Plates:
         out = []
         for g in plate:
             along = next(step) if g.end is not None else 0.0
+            across = np.array([next(step) for _ in g.points])
+            deeper = np.array([next(step) for _ in g.depths])
+            if along == 0.0 and not across.any() and not deeper.any():
+                out.append(g)  # not moved: one shift at a time moves one reading
+                continue
             line = g.line
             normal = np.array([-line.direction[1], line.direction[0]])
-            points = g.points + np.array([next(step) for _ in g.points])[:, None] * normal
-            depths = g.depths + np.array([next(step) for _ in g.depths])
+            points = g.points + across[:, None] * normal
+            depths = g.depths + deeper
             end = None
             if g.end is not None:
                 new = fit_line(points)
