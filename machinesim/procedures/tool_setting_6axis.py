@@ -3,7 +3,7 @@
 `ToolSetting6Axis` runs paper 001's procedure (Nakamoto et al., 6-axis ROBOnano Ui) on a
 `machinesim.Lab` (machine ``robonano_ui``), staged as the paper stages it: each plate
 (`machinesim.cam.tool_setting_plates`) is cut with what the earlier ones found, and read
-with the lab's confocal microscope only.
+with the lab's confocal microscope only (`machinesim.procedures.tool_setting_6axis_reading`).
 
 0. Touch-off: a groove stepping down in Z finds the Z at which the edge meets the plate.
 1. A plate, cut with the touch-off: two sets of two grooves sharing a start point, whose
@@ -35,18 +35,8 @@ from typing import ClassVar
 import numpy as np
 
 from machinesim.cam.tool_setting_plates import (
-    A_REACH,
-    B_GROOVE_X,
-    C_TURNS,
-    CENTRE_RANGE,
-    OFFSET_RANGE,
     PARKED,
     SET_LENGTH,
-    TOUCH_COUNT,
-    TOUCH_SEGMENT,
-    TOUCH_STEP,
-    TOUCH_TOP,
-    TRIANGLE_R,
     Plan,
     a_grooves,
     mark_point,
@@ -70,16 +60,9 @@ from machinesim.identification.tool_setting_6axis import (
 from machinesim.identification.tool_setting_6axis_fit import fit_check
 from machinesim.identification.tool_setting_6axis_uncertainty import after_std, propagated_std
 from machinesim.machines import load_machine
-from machinesim.metrology import (
-    fit_line,
-    fit_v_groove,
-    fit_v_grooves,
-    profile_points,
-    step_positions,
-)
 from machinesim.nc import Program
-from machinesim.rotations import rot_z
-from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, from_si
+from machinesim.procedures.tool_setting_6axis_reading import a_direction, read_plate, touch_off_z
+from machinesim.units import M_PER_NM, M_PER_UM, from_si
 
 __all__ = [
     "DEFAULT_INJECTED", "PAPER_TABLE_1", "Readings", "ToolSetting6Axis", "compensate_program",
@@ -99,248 +82,11 @@ PAPER_TABLE_1 = {"a_dx": (490.04, 4.06), "a_dy": (680.12, 2.97), "c_dx": (108.97
 DEFAULT_INJECTED = MappingProxyType({
     "tool.x": 250.0 * M_PER_UM, "tool.y": 350.0 * M_PER_UM, "tool.z": 150.0 * M_PER_UM,
     "location.C.EX0C": 100.0 * M_PER_UM, "location.C.EY0C": 850.0 * M_PER_UM})
-#: Touch-off: only segments this deep (m) are used: 2 um clears the microscope's noise, 190
-#: um keeps the whole 0.2 mm tall V profile visible.
-TOUCH_DEPTHS = (2 * M_PER_UM, 190 * M_PER_UM)
-#: Half width (m) of the windows across the touch-off: the capture range and a quarter
-#: millimetre of plate either side.
-TOUCH_WINDOW = OFFSET_RANGE + 0.25 * M_PER_MM
-#: Half width (m) of the windows across the A grooves and along them about their programmed
-#: end: how far a groove lands from its programmed place (`A_REACH`), and a quarter
-#: millimetre more.
-A_WINDOW = A_REACH + 0.25 * M_PER_MM
-#: Each A groove is followed out to its end by short profiles across it (half width
-#: TRACK_WINDOW) every TRACK_STEP, each centred where the centres so far put the line: the
-#: five stations alone would place the line 6 mm out only to about 4 um with the stage's
-#: 1 um per profile, a third of the V's 10 um half width. The end face is then read along
-#: the line within TRACK_STEP / 2 + TRACK_MARGIN of the middle of the step where the groove
-#: was last seen. The step is not a round number, so that round settings do not put an end
-#: on a station, where the registration's few micrometres would decide whether the station
-#: sees the groove (and so how many stage draws the later profiles take).
-TRACK_STEP, TRACK_WINDOW, TRACK_MARGIN = 0.47 * M_PER_MM, 40 * M_PER_UM, 0.1 * M_PER_MM
-#: The end face is read on a profile along the centre line at the instrument's spacing,
-#: then zoomed in to +-ZOOM at FINE_SPACING: the face is vertical (zero-thickness edge
-#: profile), so its position is known to half the spacing, 0.025 nm, whatever the height noise.
-ZOOM, FINE_SPACING = 0.5 * M_PER_UM, 0.05e-9
-#: Half windows (m) across the B grooves (1 mm apart), across the triangle's sides and
-#: across the C plate's reference mark (cut with dx, dy compensated: within a few um of its
-#: place, and 3.5 mm from the nearest other groove along its profiles).
-B_WINDOW, C_WINDOW, MARK_WINDOW = 0.45 * M_PER_MM, 2.0 * M_PER_MM, 0.5 * M_PER_MM
-#: Sample pitch of the profiles across grooves: the microscope's 0.3 um less (1 - 0.618) nm.
-#: At a whole number of nanometres every sample of a 45-deg flank would sit at the same phase
-#: of the 1 nm height display, all would round alike and the fitted centre would snap to
-#: whole nanometres; a golden-ratio phase step spreads the rounding evenly over each flank.
-ACROSS_SPACING = 0.3 * M_PER_UM - (1.0 - 0.5 * (math.sqrt(5.0) - 1.0)) * 1e-9
-#: Stations (m along a groove) of the profiles across it.
-STATIONS = {# each A groove, from the shared start: beyond A_REACH, where neither the other
-            # groove of its set nor the other set can be, and 3 mm short of its end
-            "a": (3.0 * M_PER_MM, 3.5 * M_PER_MM, 4.0 * M_PER_MM, 4.5 * M_PER_MM,
-                  5.0 * M_PER_MM),
-            "b": (-1.0 * M_PER_MM, -0.5 * M_PER_MM, 0.0, 0.5 * M_PER_MM, 1.0 * M_PER_MM),
-            "c": (-2.0 * M_PER_MM, -1.0 * M_PER_MM, 0.0, 1.0 * M_PER_MM, 2.0 * M_PER_MM),
-            # the reference mark, from its crossing with the C = 0 side: clear of that
-            # side's 20 um width by 0.3 mm either way
-            "mark": (-1.0 * M_PER_MM, -0.65 * M_PER_MM, -0.3 * M_PER_MM, 0.3 * M_PER_MM,
-                     0.65 * M_PER_MM, 1.0 * M_PER_MM)}
 #: File stems of the plates as the procedure cuts them, and of the compensated re-cuts.
 AS_CUT = {"touch": "00_touch_off_as_cut", "a": "01_a_axis_as_cut", "c": "02_c_axis_as_cut",
           "b": "03_b_axis_as_cut"}
 COMPENSATED = {"a": "04_a_axis_compensated", "c": "05_c_axis_compensated",
                "b": "06_b_axis_compensated"}
-
-
-# ---------------------------------------------------------------------------- reading plates
-
-
-def touch_off_z(part, microscope) -> float:
-    """Z (m) at which the edge meets the plate at B = 0, from the touch-off staircase.
-
-    Each segment k, cut at Z_k, is ``Z_touch - Z_k`` deep where seen; the segments 2..190 um
-    deep give ``Z_touch = Z_k + depth``, averaged.
-    """
-    found = []
-    for k in range(TOUCH_COUNT):
-        x = (k + 0.5) * TOUCH_SEGMENT
-        p = microscope.profile(part, (x, -TOUCH_WINDOW - 0.2 * M_PER_MM),
-                               (x, TOUCH_WINDOW + 0.2 * M_PER_MM))
-        try:
-            grooves = fit_v_grooves(p.s, p.z)
-        except InputError:
-            continue
-        found += [TOUCH_TOP - k * TOUCH_STEP + g.depth for g in grooves
-                  if TOUCH_DEPTHS[0] <= g.depth <= TOUCH_DEPTHS[1]]
-    if not found:
-        raise InputError("touch-off: no staircase segment 2..190 um deep; the edge meets the "
-                         "plate outside the range of Z -0.6 .. +0.79 mm")
-    return float(np.mean(found))
-
-
-def read_plate(stage: str, part, microscope, program: Program, machine,
-               plan: Plan | None = None) -> tuple[GrooveReading, ...]:
-    """Read the grooves of the ``stage`` plate ("a", "b" or "c") under the microscope.
-
-    Parameters
-    ----------
-    stage : str
-    part : Part
-        The plate as cut.
-    microscope : Microscope
-    program : Program
-        The program the plate was cut with (the axis values of each groove come from it).
-    machine : Machine
-        The nominal machine (its axes and their order).
-    plan : Plan, optional
-        Default the paper's.
-
-    Returns
-    -------
-    tuple of GrooveReading
-        In cutting order: the A sets' four grooves (`a_grooves`); B = 0, theta2, theta3;
-        C = 0, 120, 240 deg and the reference mark.
-    """
-    if stage not in ("a", "b", "c"):
-        raise InputError(f"Expected stage 'a', 'b' or 'c', got {stage!r}", key="stage")
-    blocks = _cutting_blocks(program, machine)
-    read = {"a": _read_a, "b": _read_b, "c": _read_c}[stage]
-    return read(part, microscope, blocks, Plan() if plan is None else plan)
-
-
-def _cutting_blocks(program: Program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(axis values at the start, at the end) of each block that cuts a groove: a linear
-    block that moves in X or Y, in program order."""
-    q = program_axes(program, machine, start=PARKED)
-    before = np.vstack([PARKED, q[:-1]])
-    x, y = machine.axes.index("X"), machine.axes.index("Y")
-    return [(before[n], q[n]) for n, move in enumerate(program.moves)
-            if move.kind == "linear" and (q[n, x] != before[n, x] or q[n, y] != before[n, y])]
-
-
-def _fits(part, microscope, origin, along, stations, half_width, what):
-    """Grooves across profiles at ``stations`` along ``along`` from ``origin``: (VGroove, xy)."""
-    across = np.array([-along[1], along[0]])
-    out = []
-    for t in stations:
-        mid = np.asarray(origin) + t * along
-        p0, p1 = mid - half_width * across, mid + half_width * across
-        p = microscope.profile(part, p0, p1, spacing=ACROSS_SPACING)
-        try:
-            g = fit_v_groove(p.s, p.z)
-        except InputError as error:
-            raise InputError(f"{what}, profile {t / M_PER_MM:+.2f} mm along: {error}; the "
-                             f"errors may exceed the plan's range (|d| <= "
-                             f"{OFFSET_RANGE / M_PER_MM} mm, |e| <= {CENTRE_RANGE / M_PER_MM} "
-                             "mm)") from error
-        out.append((g, profile_points(p0, p1, [g.centre])[0]))
-    return out
-
-
-def _reading(fits, block, stage_sigma: float, end=None) -> GrooveReading:
-    """A groove's reading. Each profile, and the end face's zoom, is its own placement of
-    the stage: its stated positioning (``stage_sigma``, m) moves a centre across the groove
-    and an end point along it, in quadrature with the fit's and the zoom pitch's."""
-    return GrooveReading(
-        q_start=block[0], q_end=block[1], points=[xy for _, xy in fits],
-        point_sigma=[math.hypot(g.centre_sigma, stage_sigma) for g, _ in fits],
-        depths=[g.depth for g, _ in fits], depth_sigma=[g.depth_sigma for g, _ in fits],
-        end=end, end_sigma=(math.hypot(FINE_SPACING / math.sqrt(12.0), stage_sigma)
-                            if end is not None else math.nan))
-
-
-def _end_point(part, microscope, points, spot, along, reach, what) -> np.ndarray:
-    """Where the centre line meets the groove's end face, known to lie within ``reach`` of
-    ``spot``: a profile along the line there, then zoomed."""
-    line = fit_line(points)
-    direction = line.direction if line.direction @ along > 0 else -line.direction
-    foot = line.point + ((np.asarray(spot) - line.point) @ direction) * direction
-    p0 = foot - reach * direction
-    with microscope.placement():  # one field: the zoom is into the same image
-        coarse = microscope.profile(part, p0, foot + reach * direction)
-        level = 0.5 * (float(np.nanmin(coarse.z)) + float(np.nanmax(coarse.z)))
-        steps = step_positions(coarse.s, coarse.z, level)
-        if steps.size != 1:
-            raise InputError(f"{what}: expected one end face within {reach / M_PER_MM:g} mm "
-                             f"of {np.round(foot / M_PER_MM, 4)} mm along the groove, found "
-                             f"{steps.size}")
-        q0 = p0 + (steps[0] - ZOOM) * direction
-        fine = microscope.profile(part, q0, q0 + 2 * ZOOM * direction, spacing=FINE_SPACING)
-    return q0 + step_positions(fine.s, fine.z, level)[0] * direction
-
-
-def _followed(part, microscope, fits, along, depth, what):
-    """Follow a groove from its last profile out to where it ends: a short profile across
-    it every `TRACK_STEP`, each centred where the line through the centres so far predicts,
-    until one finds no groove at least half ``depth`` deep. Returns the fits with the new
-    ones added and the station (m along ``along`` from the origin) halfway between the last
-    profile that found the groove and the first that did not."""
-    fits = list(fits)
-    station = STATIONS["a"][-1]
-    while True:
-        station += TRACK_STEP
-        if station > SET_LENGTH + A_WINDOW:
-            raise InputError(f"{what}: the groove runs on past {station / M_PER_MM:g} mm "
-                             f"from its start; the errors may exceed the plan's range (|d| <= "
-                             f"{OFFSET_RANGE / M_PER_MM} mm, |e| <= "
-                             f"{CENTRE_RANGE / M_PER_MM} mm)")
-        line = fit_line([xy for _, xy in fits])
-        direction = line.direction if line.direction @ along > 0 else -line.direction
-        centre = line.point + ((station * along - line.point) @ direction) * direction
-        across = np.array([-direction[1], direction[0]])
-        p0, p1 = centre - TRACK_WINDOW * across, centre + TRACK_WINDOW * across
-        p = microscope.profile(part, p0, p1, spacing=ACROSS_SPACING)
-        try:
-            g = fit_v_groove(p.s, p.z)
-        except InputError:
-            g = None
-        if g is None or not g.depth > 0.5 * depth:
-            return fits, station - 0.5 * TRACK_STEP
-        fits.append((g, profile_points(p0, p1, [g.centre])[0]))
-
-
-def _read_a(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
-    grooves = a_grooves()
-    if len(blocks) != len(grooves):
-        raise InputError(f"A plate: expected {len(grooves)} grooves in the program, got "
-                         f"{len(blocks)}", key="program")
-    out = []
-    for (angle, turn), block in zip(grooves, blocks, strict=True):
-        along = _a_direction(angle, turn)
-        what = f"A axis, groove at A = {math.degrees(angle):g}, C = {math.degrees(turn):g} deg"
-        fits = _fits(part, microscope, (0.0, 0.0), along, STATIONS["a"], A_WINDOW, what)
-        fits, station = _followed(part, microscope, fits, along, plan.depth, what)
-        end = _end_point(part, microscope, [xy for _, xy in fits], station * along, along,
-                         0.5 * TRACK_STEP + TRACK_MARGIN, what)
-        out.append(_reading(fits, block, microscope.stage_sigma, end))
-    return tuple(out)
-
-
-def _a_direction(angle: float, turn: float) -> np.ndarray:
-    """Direction (2,) on the plate of the A groove cut at A = ``angle``, C = ``turn``: the
-    tool's own X at A, turned with the plate by C."""
-    return rot_z(turn + angle)[:2, 0]
-
-
-def _read_b(part, microscope, blocks, plan: Plan) -> tuple[GrooveReading, ...]:
-    out = []
-    for x, tilt, block in zip(B_GROOVE_X, plan.tilts, blocks, strict=True):
-        fits = _fits(part, microscope, (x, 0.0), np.array([0.0, 1.0]), STATIONS["b"],
-                     B_WINDOW, f"B axis, groove at B = {math.degrees(tilt):g} deg")
-        out.append(_reading(fits, block, microscope.stage_sigma))
-    return tuple(out)
-
-
-def _read_c(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
-    if len(blocks) != len(C_TURNS) + 1:
-        raise InputError(f"C plate: expected {len(C_TURNS)} triangle grooves and a reference "
-                         f"mark in the program, got {len(blocks)} grooves", key="program")
-    out = []
-    for turn, block in zip(C_TURNS, blocks, strict=False):
-        rot = rot_z(turn)[:2, :2]
-        fits = _fits(part, microscope, rot @ (0.0, -TRIANGLE_R), rot @ (1.0, 0.0),
-                     STATIONS["c"], C_WINDOW, f"C axis, groove at C = {math.degrees(turn):g} deg")
-        out.append(_reading(fits, block, microscope.stage_sigma))
-    fits = _fits(part, microscope, mark_point(), np.array([0.0, 1.0]), STATIONS["mark"],
-                 MARK_WINDOW, "C axis, reference mark")
-    return (*out, _reading(fits, blocks[-1], microscope.stage_sigma))
 
 
 # ---------------------------------------------------------------------------- compensation
@@ -379,7 +125,7 @@ def layout_lines(stage: str, points) -> list[tuple[str, np.ndarray]]:
     for (angle, turn), end in zip(a_grooves(), points, strict=True):
         name = f"A={math.degrees(angle):g} C={math.degrees(turn):g}"
         out.append((f"groove {name}",
-                    np.vstack([end - SET_LENGTH * _a_direction(angle, turn), end])))
+                    np.vstack([end - SET_LENGTH * a_direction(angle, turn), end])))
     return out
 
 
