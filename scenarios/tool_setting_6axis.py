@@ -20,7 +20,7 @@ default lab realism and its error budget, 10 s with ``--budget off``, 5 s with
     --noise on|off --seed N --out DIR   (default reports/tool_setting_6axis)
 
 On robonano_ui with those errors injected, the procedure
-(`machinesim.procedures.tool_setting_6axis.ToolSetting6Axis`: touch-off, A pairs, C
+(`machinesim.procedures.tool_setting_6axis.ToolSetting6Axis`: touch-off, A sets, C
 triangle, B tilts) identifies them from virtual-microscope readings of the cut grooves,
 rewrites the NC data, re-cuts and re-measures. It prints Table 1 of the paper beside the
 simulated distances before and after compensation, the identified errors, and the

@@ -76,7 +76,7 @@ def test_the_a_sets_read_the_same_in_a_turned_and_shifted_frame(readings):
 
 
 def test_the_mark_carries_the_error_of_dy_into_the_c_centre(readings):
-    """The C plate is cut with the A pair's dx, dy: an error of dy moves its C = 0 side
+    """The C plate is cut with the A sets' dx, dy: an error of dy moves its C = 0 side
     across by that much and its mark (cut at A = 90 deg) along x by minus it; the triangle's
     centre stays (its three sides move out alike). The mark places the triangle, so e is off
     by (-1, +1) times the error of dy: each std of e is dy's, and dx is not in it."""

@@ -9,7 +9,7 @@ so with ``P = (X, Y, Z)`` the edge lands at ``e + Rz(C) (P + Ry(B) Rz(A) d - e)`
 of ``Rz(C) P``.
 
 Everything here takes measured features only (`GrooveReading`: groove centre points, depths
-and start points read under the microscope, with the axis values each groove was cut at)
+and end points read under the microscope, with the axis values each groove was cut at)
 and returns identified values; reading the plates is `machinesim.procedures.
 tool_setting_6axis`'s job, their design `machinesim.cam.tool_setting_plates`'.
 
@@ -159,7 +159,7 @@ class AAxisResult:
     offset : ndarray, shape (2,)
         (dx, dy).
     centre : ndarray, shape (2,)
-        The C centre line e, a second reading (half the relations' difference, over 2).
+        The C centre line e, a second reading (a quarter of the relations' difference).
     """
 
     ends: np.ndarray
