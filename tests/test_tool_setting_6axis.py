@@ -24,6 +24,7 @@ from machinesim.procedures.tool_setting_6axis import (
     ToolSetting6Axis,
     compensate_program,
     read_plate,
+    touch_off_z,
 )
 from machinesim.report import ReportFolder, check_summary
 
@@ -295,6 +296,11 @@ def test_errors_outside_the_capture_range_are_reported():
     microscope = lab.microscope(label="a")
     with pytest.raises(InputError, match=r"A axis, groove at A = 0, C = 0 deg.*plan's range"):
         read_plate("a", part, microscope, plate.program, MACHINE)
+    touch = plate_cuts()["touch"]
+    part, _ = lab.cut(touch.program, "v:90", touch.stock)
+    with pytest.raises(InputError, match=r"touch-off: .* within 0.95 mm of y = 0.*or sits "
+                                         r"more than 0.95 mm off the A centre"):
+        touch_off_z(part, microscope)
     with pytest.raises(InputError, match="Expected stage 'a', 'b' or 'c', got 'd'"):
         read_plate("d", part, microscope, plate.program, MACHINE)
     with pytest.raises(InputError, match="Expected two distinct non-zero B tilts"):

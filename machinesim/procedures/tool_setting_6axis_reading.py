@@ -110,8 +110,11 @@ def touch_off_z(part, microscope) -> float:
         found += [TOUCH_TOP - k * TOUCH_STEP + g.depth for g in grooves
                   if TOUCH_DEPTHS[0] <= g.depth <= TOUCH_DEPTHS[1]]
     if not found:
-        raise InputError("touch-off: no staircase segment 2..190 um deep; the edge meets the "
-                         "plate outside the range of Z -0.6 .. +0.79 mm")
+        reach = (TOUCH_WINDOW + 0.2 * M_PER_MM) / M_PER_MM
+        raise InputError(f"touch-off: no staircase segment 2..190 um deep within {reach:g} mm "
+                         f"of y = 0; the edge meets the plate outside Z -0.6 .. +0.79 mm, or "
+                         f"sits more than {reach:g} mm off the A centre across the groove "
+                         f"(the plan's range: |d| <= {OFFSET_RANGE / M_PER_MM:g} mm)")
     return float(np.mean(found))
 
 
