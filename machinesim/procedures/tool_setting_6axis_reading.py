@@ -82,7 +82,7 @@ B_WINDOW, C_WINDOW, MARK_WINDOW = 0.45 * M_PER_MM, 2.0 * M_PER_MM, 0.5 * M_PER_M
 ACROSS_SPACING = 0.3 * M_PER_UM - (1.0 - 0.5 * (math.sqrt(5.0) - 1.0)) * 1e-9
 #: Stations (m along a groove) of the profiles across it.
 STATIONS = {# each A groove, from the shared start: beyond A_REACH, where neither the other
-            # groove of its set nor the other set can be, and 3 mm short of its end
+            # groove of its set nor the other set can be, and short of its nearest end
             "a": (3.0 * M_PER_MM, 3.5 * M_PER_MM, 4.0 * M_PER_MM, 4.5 * M_PER_MM,
                   5.0 * M_PER_MM),
             "b": (-1.0 * M_PER_MM, -0.5 * M_PER_MM, 0.0, 0.5 * M_PER_MM, 1.0 * M_PER_MM),
@@ -91,6 +91,7 @@ STATIONS = {# each A groove, from the shared start: beyond A_REACH, where neithe
             # side's 20 um width by 0.3 mm either way
             "mark": (-1.0 * M_PER_MM, -0.65 * M_PER_MM, -0.3 * M_PER_MM, 0.3 * M_PER_MM,
                      0.65 * M_PER_MM, 1.0 * M_PER_MM)}
+
 
 def touch_off_z(part, microscope) -> float:
     """Z (m) at which the edge meets the plate at B = 0, from the touch-off staircase.
@@ -192,9 +193,7 @@ def _reading(fits, block, stage_sigma: float, end=None) -> GrooveReading:
 def _end_point(part, microscope, points, spot, along, reach, what) -> np.ndarray:
     """Where the centre line meets the groove's end face, known to lie within ``reach`` of
     ``spot``: a profile along the line there, then zoomed."""
-    line = fit_line(points)
-    direction = line.direction if line.direction @ along > 0 else -line.direction
-    foot = line.point + ((np.asarray(spot) - line.point) @ direction) * direction
+    foot, direction = _on_line(points, spot, along)
     p0 = foot - reach * direction
     with microscope.placement():  # one field: the zoom is into the same image
         coarse = microscope.profile(part, p0, foot + reach * direction)
@@ -207,6 +206,14 @@ def _end_point(part, microscope, points, spot, along, reach, what) -> np.ndarray
         q0 = p0 + (steps[0] - ZOOM) * direction
         fine = microscope.profile(part, q0, q0 + 2 * ZOOM * direction, spacing=FINE_SPACING)
     return q0 + step_positions(fine.s, fine.z, level)[0] * direction
+
+
+def _on_line(points, spot, along) -> tuple[np.ndarray, np.ndarray]:
+    """The foot of ``spot`` on the line fitted to ``points``, and the line's direction
+    pointing along ``along``."""
+    line = fit_line(points)
+    direction = line.direction if line.direction @ along > 0 else -line.direction
+    return line.point + ((np.asarray(spot) - line.point) @ direction) * direction, direction
 
 
 def _followed(part, microscope, fits, along, depth, what):
@@ -224,9 +231,7 @@ def _followed(part, microscope, fits, along, depth, what):
                              f"from its start; the errors may exceed the plan's range (|d| <= "
                              f"{OFFSET_RANGE / M_PER_MM} mm, |e| <= "
                              f"{CENTRE_RANGE / M_PER_MM} mm)")
-        line = fit_line([xy for _, xy in fits])
-        direction = line.direction if line.direction @ along > 0 else -line.direction
-        centre = line.point + ((station * along - line.point) @ direction) * direction
+        centre, direction = _on_line([xy for _, xy in fits], station * along, along)
         across = np.array([-direction[1], direction[0]])
         p0, p1 = centre - TRACK_WINDOW * across, centre + TRACK_WINDOW * across
         p = microscope.profile(part, p0, p1, spacing=ACROSS_SPACING)
