@@ -272,6 +272,43 @@ def test_a_cut_deeper_than_the_tool_is_refused_naming_its_line_or_cut_and_listed
     assert clear.holder_contact == ()
 
 
+def _slot_in_steps(steps, last_y=0.0):
+    """A slot along X cut 1 mm deeper each pass, the last pass at ``last_y`` (m)."""
+    b = ProgramBuilder(1)
+    for k in range(1, steps + 1):
+        y = last_y if k == steps else 0.0
+        b.rapid(X=-3 * MM, Y=y, Z=1 * MM).linear(Z=-k * MM, feed_mm_per_min=300.0)
+        b.linear(X=3 * MM).rapid(Z=1 * MM)
+    return b.build()
+
+
+def test_a_slot_cut_in_steps_deeper_than_the_body_opens_the_way_for_its_holder():
+    # A flat end mill with 2 mm of body cuts a slot 3 mm deep in 1 mm steps: on the last
+    # pass its body's top is 1 mm under the block's top, inside the slot the earlier passes
+    # cut, where its holder finds air. The same tool 20 mm tall cuts the same part; the
+    # slot is the tool's face swept 6 mm along X, 3 mm deep (shoelace area of the facets).
+    stock = "block:10x6x5@-5,-3,0"
+    short = tool_from_spec("flat:1.0:h=2")
+    _, report = cut(_slot_in_steps(3), "grooving_4axis", tool=short, stock=stock)
+    _, tall = cut(_slot_in_steps(3), "grooving_4axis", tool="flat:1.0:h=20", stock=stock)
+    face = np.asarray(short.vertices())
+    face = face[np.abs(face[:, 2]) < 1e-12]
+    face = face[np.argsort(np.arctan2(face[:, 1], face[:, 0]))]
+    area = 0.5 * abs(np.dot(face[:, 0], np.roll(face[:, 1], 1))
+                     - np.dot(face[:, 1], np.roll(face[:, 0], 1)))
+    slot = 3 * MM * (area + 6 * MM * np.ptp(face[:, 1]))
+    assert report.holder_contact == ()
+    assert report.removed_volume_m3 == pytest.approx(slot, rel=1e-9)
+    assert report.removed_volume_m3 == pytest.approx(tall.removed_volume_m3, rel=1e-12)
+    # The last pass 0.5 mm to the side: its holder runs into the slot's wall, which no
+    # earlier pass cut, and only that pass's plunge, feed and lift are named.
+    program = _slot_in_steps(3, last_y=0.5 * MM)
+    lines = [move.line for move in program.moves[-3:]]
+    with pytest.raises(HolderContactError,
+                       match=f"line {lines[0]} \\(lines {', '.join(map(str, lines))}\\)"):
+        cut(program, "grooving_4axis", tool=short, stock=stock)
+
+
 def test_a_10_nm_groove_on_a_100_mm_block_is_not_an_empty_cut():
     # Judged against the tool's swept size, not the stock's; integrated over the cut, so the
     # 2e-19 m^3 come out to 1e-6 although the block holds 2e-5 m^3.

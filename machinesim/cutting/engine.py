@@ -322,9 +322,9 @@ def remove(
     on_holder_contact : callable(sweeps), optional
         Called before anything is cut with the sweeps in which the holder meets the stock,
         when there are any: those whose body top comes below the stock's top within its box
-        (`SweepSet.holder_contact`) and whose holder's room then holds material
-        (`SweepSet.holder_in_material`). A caller that refuses such a cut raises there and
-        wastes no cutting.
+        (`SweepSet.holder_contact`) and whose holder's room then holds material that the
+        earlier sweeps of ``paths`` left (`SweepSet.holder_in_material`). A caller that
+        refuses such a cut raises there and wastes no cutting.
 
     Returns
     -------
@@ -355,12 +355,18 @@ def remove(
                & (high[:, None, 1] >= cell_array[None, :, 2] - margin))
         return inside & hit.any(axis=1)
 
+    def whole(low: np.ndarray, high: np.ndarray) -> np.ndarray:
+        """The stock's whole box, windows or not: what the holder meets lies anywhere."""
+        return ((low[:, 2] <= z_high) & (high[:, 2] >= z_low)
+                & (low[:, 0] <= bounds[1, 0] + margin) & (high[:, 0] >= bounds[0, 0] - margin)
+                & (low[:, 1] <= bounds[1, 1] + margin) & (high[:, 1] >= bounds[0, 1] - margin))
+
     sweeps = SweepSet(tool, paths, z_high)
     holder = tuple(sweeps.holder_contact(bounds[1, 2], touches))
     if holder and on_holder_contact is not None:
         # the stock's box says it may; before refusing, the material says whether it does
         reach = 2.0 * float(np.linalg.norm(bounds[1] - bounds[0])) + scale  # past it
-        holder = tuple(sweeps.holder_in_material(holder, stock.manifold, reach))
+        holder = tuple(sweeps.holder_in_material(holder, stock.manifold, reach, whole))
         if holder:
             on_holder_contact(holder)
     if method == "auto" and sweeps.count:
@@ -391,7 +397,7 @@ def remove(
                 reached=relief.reached,
             )
             return relief.part, report
-    hulls, lower, upper, direction, n_degenerate, sideways, swept, reached = sweeps.hulls(
+    hulls, lower, upper, direction, n_degenerate, sideways, swept, reached, _ = sweeps.hulls(
         touches)
     keys = _direction_keys(direction)
 

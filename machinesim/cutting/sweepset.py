@@ -13,6 +13,7 @@ from collections.abc import Callable
 
 import manifold3d
 import numpy as np
+from manifold3d import OpType
 
 from machinesim.cutting.sweeps import (
     SolidSweep,
@@ -213,8 +214,11 @@ class SweepSet:
             Total volume of the clipped sweeps, m^3.
         reached : list of int
             Sweep indices (over all paths) that reach the stock region, degenerate or not.
+        owners : list of int
+            The sweep index (over all paths) of each of ``hulls``, increasing.
         """
         hulls, lower, upper, direction, sideways, reached = [], [], [], [], [], []
+        owners = []
         n_degenerate, swept = 0, 0.0
         rotation, origin = self.poses[:, :3, :3], self.poses[:, :3, 3]
         k = len(self.vertices)
@@ -294,6 +298,7 @@ class SweepSet:
                     if not keep(box[None, :3], box[None, 3:])[0]:
                         continue  # a solid tool's body only passed by its unclipped bounds
                 reached.append(begin + int(near[row]))
+                owners.append(begin + int(near[row]))
                 hulls.append(solid)
                 lower.append(box[:3])
                 upper.append(box[3:])
@@ -301,7 +306,8 @@ class SweepSet:
                 swept += volume
         shape = (-1, 3)
         return (hulls, np.array(lower).reshape(shape), np.array(upper).reshape(shape),
-                np.array(direction).reshape(shape), n_degenerate, sideways, swept, reached)
+                np.array(direction).reshape(shape), n_degenerate, sideways, swept, reached,
+                owners)
 
     def pose_bounds(self):
         """Bounds (N, 3) of the tool below the clip plane at every pose (+inf / -inf where
@@ -330,13 +336,44 @@ class SweepSet:
             found.extend((begin + np.flatnonzero(hit)).tolist())
         return found
 
-    def holder_in_material(self, sweeps, solid: manifold3d.Manifold, reach: float) -> list[int]:
-        """Those of ``sweeps`` whose holder meets ``solid``: more than `HOLDER_MATERIAL_M3`
-        of it inside the holder's room over the sweep (`holder_room`). The bounding-box test
-        of `holder_contact` finds the candidates; this one reads the material, so that a
-        short profile running down a face (air over its top) is not a crash."""
-        return [int(i) for i in sweeps
-                if (solid ^ self.holder_room(int(i), reach)).volume() > HOLDER_MATERIAL_M3]
+    def holder_in_material(self, sweeps, solid: manifold3d.Manifold, reach: float,
+                           keep=None) -> list[int]:
+        """Those of ``sweeps`` whose holder meets ``solid`` as this tool has cut it by then:
+        more than `HOLDER_MATERIAL_M3` of it inside the holder's room over the sweep
+        (`holder_room`). The bounding-box test of `holder_contact` finds the candidates;
+        this one reads the material, so that a short profile running down a face (air over
+        its top) is not a crash.
+
+        With ``keep`` (the stock's region, as `hulls` takes it), the material a sweep's
+        holder meets is what the earlier sweeps of these paths left of ``solid``: a slot
+        cut in steps down is open to the holder when the steps reach below the body's
+        height. Only the earlier sweeps that reach into a room with material are built.
+        """
+        inside = {}
+        for i in (int(i) for i in sweeps):
+            met = solid ^ self.holder_room(i, reach)
+            if met.volume() > HOLDER_MATERIAL_M3:
+                inside[i] = met
+        if not inside or keep is None:
+            return list(inside)
+        boxes = np.array([met.bounding_box() for met in inside.values()]).reshape(-1, 6)
+
+        def into_a_room(low: np.ndarray, high: np.ndarray) -> np.ndarray:
+            meets = ((low[:, None, :] <= boxes[None, :, 3:])
+                     & (high[:, None, :] >= boxes[None, :, :3])).all(axis=2).any(axis=1)
+            return keep(low, high) & meets
+
+        hulls, lower, upper, *_, owners = self.hulls(into_a_room)
+        found = []
+        for i, met in inside.items():
+            box = np.array(met.bounding_box())
+            earlier = [hull for hull, s, lo, hi in zip(hulls, owners, lower, upper, strict=True)
+                       if s < i and (lo <= box[3:]).all() and (hi >= box[:3]).all()]
+            if earlier:
+                met = met - manifold3d.Manifold.batch_boolean(earlier, OpType.Add)
+            if met.volume() > HOLDER_MATERIAL_M3:
+                found.append(i)
+        return found
 
     def holder_room(self, sweep: int, reach: float) -> manifold3d.Manifold:
         """The room the holder takes over sweep ``sweep``: the hull of the body's top face
