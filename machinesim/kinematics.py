@@ -52,6 +52,9 @@ WORKPIECE_PARAMS = {"workpiece.x": "tx", "workpiece.y": "ty", "workpiece.z": "tz
                     "workpiece.alpha": "rx", "workpiece.beta": "ry", "workpiece.gamma": "rz"}
 #: Error joints are unbounded in practice; URDF wants a limit, Pinocchio ignores it here.
 _ERROR_JOINT_LIMIT = 1.0e3
+#: Travel beyond which a rotary axis is a work spindle rather than a positioning axis, rad
+#: (16 turns; the shipped lathe's C runs to 1e5 rad, every table and tilt axis to 2 turns).
+SPINDLE_TRAVEL_RAD = 100.0
 #: Batch size of the vectorised evaluator: small enough that its working arrays stay in cache.
 _BLOCK = 8192
 
@@ -86,6 +89,13 @@ class Axis:
     upper: float
     velocity: float
     resolution: float
+
+    @property
+    def spindle(self) -> bool:
+        """True for a work spindle: a rotary axis whose travel runs to hundreds of turns
+        (`SPINDLE_TRAVEL_RAD`; a URDF writes a spindle as a revolute joint with wide
+        limits)."""
+        return self.rotary and self.upper > SPINDLE_TRAVEL_RAD
 
     @property
     def own_dof(self) -> str:

@@ -102,7 +102,8 @@ def machines_summary() -> list[str]:
     for name in list_machines():
         m = load_machine(name)
         travel = ", ".join(
-            (f"{a} spindle" if hi > 100 else f"{a} {np.degrees(lo):g}..{np.degrees(hi):g} deg")
+            (f"{a} spindle" if m.axis(a).spindle
+             else f"{a} {np.degrees(lo):g}..{np.degrees(hi):g} deg")
             if m.axis(a).rotary else f"{a} {lo * 1e3:g}..{hi * 1e3:g} mm"
             for a, lo, hi in zip(m.axes, m.lower, m.upper, strict=True))
         lines.append(f"{name:16s} {''.join(m.axes):8s} {travel}")

@@ -12,9 +12,10 @@ import pytest
 from machinesim import ErrorModel, ToolSetting
 from machinesim.cli import main
 from machinesim.cutting import cut
-from machinesim.exceptions import AxisLimitError, HolderContactError
+from machinesim.exceptions import AxisLimitError, HolderContactError, NCProgramError
+from machinesim.machines import load_machine
 from machinesim.metrology import height_map
-from machinesim.nc import ProgramBuilder, write_program
+from machinesim.nc import ProgramBuilder, parse_program, write_program
 from machinesim.tools import VTool, tool_from_spec
 from machinesim.workpiece import Part, block
 
@@ -338,3 +339,20 @@ def test_a_short_tool_deep_in_an_open_slot_is_cut_and_in_solid_stock_is_refused(
     assert report.holder_contact == ()
     with pytest.raises(HolderContactError, match=f"line {program.moves[2].line} takes"):
         cut(program, "grooving_4axis", tool=tool, stock=solid)
+
+
+@pytest.mark.parametrize("text, line, words", [
+    ("G21 G90 G94\nG00 X4. Z1. C0.\nG01 Z-0.01 F100.\nG01 C90. F3600.\nG00 Z1.\n", 4,
+     "turns the work spindle C of sts_lathe \\(0 to 90 deg\\)"),
+    ("G21 G90 G94\nM03 S1000\nG00 X4. Z1. C0.\nG01 Z-0.01 F100.\nX0. F20.\n", 2,
+     "M03 runs the work spindle C"),
+])
+def test_turning_on_a_lathe_is_refused_by_cut_and_named(text, line, words):
+    # `cut` would draw one line of the edge a move (a nose tool turning in its own plane):
+    # scratches with exit 0, or minutes over a quarter turn. It names the line and the way.
+    program = parse_program(text)
+    with pytest.raises(NCProgramError, match=f"line {line}: .*{words}.*lathe.turn"):
+        cut(program, "sts_lathe", tool="nose:0.5:90", stock="cylinder:5x2")
+    # a C that is a table (travel of two turns) turns under a cut; the lathe's is a spindle
+    assert not load_machine("grooving_4axis").axis("C").spindle
+    assert load_machine("sts_lathe").axis("C").spindle

@@ -23,7 +23,7 @@ from machinesim.cutting.rapids import rapids_that_cut
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance, within_edge_plane
 from machinesim.errors import as_error_model
-from machinesim.exceptions import AxisLimitError, HolderContactError, InputError
+from machinesim.exceptions import AxisLimitError, HolderContactError, InputError, NCProgramError
 from machinesim.nc import MOVE_KINDS
 from machinesim.tolerances import LIMIT_SLACK
 from machinesim.tools import (
@@ -243,6 +243,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     program, tool, stock, errors = _arguments(program, tool, stock, errors)
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
     machine.check_errors(errors)
+    _refuse_turning(program, machine, start)
     tools = _ToolSections(program, tool, 0.0 if errors is None
                           else errors.tool_geometry.nose_radius)
     if chord_tolerance is None:
@@ -481,6 +482,44 @@ def _more_lines(lines: list[int]) -> str:
         return ""
     tail = f" and {len(lines) - 10} more)" if len(lines) > 10 else ")"
     return f" (lines {', '.join(map(str, lines[:10]))}{tail}"
+
+
+def _refuse_turning(program, machine, start) -> None:
+    """Refuse a program that turns a work spindle (`Axis.spindle`) while it feeds, or starts
+    one with M03/M04: that is turning, which `cut` does not do. Its engine moves a tool
+    through the part one sweep at a time, and a tool whose edge lies in the plane it turns
+    in cuts only a line per move: the part would come out as scratches, with exit 0."""
+    from machinesim.nc.moves import AXES, KIND_RAPID
+    from machinesim.nc.program import modal_values
+
+    source = getattr(program, "source", None) or "<program>"
+    lines = np.asarray(program.lines)
+    how = ("turn it with the turning engine, in Python: machinesim.cutting.lathe.turn("
+           "program, machine, tool) or Lab.turn (docs/lab.md), whose part is the turned "
+           "face as an exact height field; the command line does not turn")
+    for k, letter in enumerate(machine.axes):
+        if not machine.axis(letter).spindle:
+            continue
+        for index, codes in sorted(program.m_codes.items()):
+            if 3 in codes or 4 in codes:
+                raise NCProgramError(
+                    f"M0{3 if 3 in codes else 4} runs the work spindle {letter} of "
+                    f"{machine.name}, which is turning: a spindle run by M03/M04 at S rpm is "
+                    f"not simulated. Program {letter} as an axis (as a slow-tool-servo "
+                    f"program does) and {how}", source=source, line=int(lines[index]))
+        begin = 0.0 if start is None else float(np.asarray(start, dtype=np.float64)[k])
+        values = modal_values(np.asarray(program.targets)[:, [AXES.index(letter)]],
+                              start=[begin])[:, 0]
+        before = np.concatenate([[begin], values[:-1]])
+        turning = np.flatnonzero((np.asarray(program.kinds) != KIND_RAPID)
+                                 & (values != before) & np.isfinite(values))
+        if turning.size:
+            move = int(turning[0])
+            raise NCProgramError(
+                f"feeds while it turns the work spindle {letter} of {machine.name} "
+                f"({np.degrees(before[move]):.6g} to {np.degrees(values[move]):.6g} deg), "
+                f"which is turning, and `cut` does not turn (its tool would cut one line a "
+                f"move); {how}", source=source, line=int(lines[move]))
 
 
 def _holder_refusal(source, tool, stock: Part, sweep_line: np.ndarray):
