@@ -200,3 +200,26 @@ def test_the_tool_test_refuses_tool_errors_beyond_what_its_sphere_identifies():
     found = procedure.measure(machinesim.Lab("sts_lathe", errors, noise=False))["tool_test"]
     assert found.d_radius == pytest.approx(100e-6, rel=0.01)
     assert found.dx == pytest.approx(5e-6, abs=0.05e-6)
+
+
+def test_a_facing_cut_of_many_turns_in_one_block_turns_as_the_same_cut_in_small_blocks():
+    # G01 X0 C18000 faces the part in 50 turns in one block. The control interpolates it
+    # linearly in X and C, so the same cut written as 2000 blocks along that line is the
+    # same path; before, the angle read back from the poses of the block's two ends, which
+    # know C only modulo a turn, saw no turn at all and left the face uncut.
+    head = "G21 G90 G94\nG00 X5.5 Z1. C0.\nG01 Z-0.01 F100.\n"
+    one = parse_program(head + "G01 X0. C18000. F20.\nG00 Z1.\nM30\n")
+    many = parse_program(head + "".join(
+        f"G01 X{5.5 * (1 - k / 2000):.6f} C{18000 * k / 2000:.4f} F20.\n"
+        for k in range(1, 2001)) + "G00 Z1.\nM30\n")
+    rho = np.linspace(0.5e-3, 5e-3, 37)
+    theta = np.linspace(0.1, 6.0, 37)
+    x, y = rho * np.cos(theta), rho * np.sin(theta)
+    (face, report), (reference, _) = (turn(p, "sts_lathe", "nose:0.5:90") for p in (one, many))
+    assert report.revolutions == pytest.approx(50.0, rel=1e-12)
+    assert np.abs(face.heights_at(x, y) - reference.heights_at(x, y)).max() < 1e-15
+    # a face 10 um deep with the scallops of a 0.11 mm feed per turn on a 0.5 mm nose:
+    # at most (f/2)^2 / (2 R) = 3.0 um above the tip
+    heights = face.heights_at(x, y)
+    assert heights.max() <= -1e-5 + (0.11e-3 / 2) ** 2 / (2 * 0.5e-3) + 1e-12
+    assert heights.min() >= -1e-5 - 1e-12

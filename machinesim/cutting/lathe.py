@@ -49,6 +49,9 @@ STILL_C_RAD = 1e-12
 #: spindle run up before the tool engages. 3 s is a revolution at paper 004's 20 rpm and
 #: ~10 time constants of its loops' integral action.
 LEAD_IN_S = 3.0
+#: Largest turn of C between two points of a run (rad): a quarter turn, well inside the half
+#: turn beyond which an angle read from poses is ambiguous.
+MOST_C_STEP_RAD = 0.5 * math.pi
 LEAD_IN_SAMPLES = 30
 
 
@@ -176,11 +179,32 @@ def turning_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
     source = getattr(program, "source", "<program>")
     q, kinds, feeds, lines = _axis_values(program, machine, source)
     out = []
-    for first, last in _turning_runs(q, kinds, machine.axes.index("C"), lines, source):
+    c_column = machine.axes.index("C")
+    for first, last in _turning_runs(q, kinds, c_column, lines, source):
         points = q[first - 1:last + 1]  # moves first..last: points first-1..last
         durations = _durations(points, feeds[first:last + 1], machine.axes)
-        out.append((np.concatenate([[0.0], np.cumsum(durations)]), points))
+        t = np.concatenate([[0.0], np.cumsum(durations)])
+        out.append(_within_quarter_turns(t, points, c_column))
     return out
+
+
+def _within_quarter_turns(t: np.ndarray, points: np.ndarray, c_column: int):
+    """``(t, points)`` with points added on each move (linearly in time and axis values, as
+    the control interpolates it) so that none turns C by more than `MOST_C_STEP_RAD`.
+
+    The edge path's angle is read back from the tool's poses (`edge_path_from_poses`),
+    which know C only modulo a turn: a move of 50 turns in one block (a facing cut) would
+    read as no turn at all. Added points lie on the move, so the path is the same."""
+    steps = np.ceil(np.abs(np.diff(points[:, c_column])) / MOST_C_STEP_RAD).astype(np.int64)
+    if (steps <= 1).all():
+        return t, points
+    steps = np.maximum(steps, 1)
+    rows = np.repeat(np.arange(len(steps)), steps)
+    fraction = (np.arange(steps.sum()) - np.repeat(np.cumsum(steps) - steps, steps) + 1.0
+                ) / np.repeat(steps, steps)
+    dense = points[rows] + fraction[:, None] * (points[rows + 1] - points[rows])
+    times = t[rows] + fraction * (t[rows + 1] - t[rows])
+    return np.concatenate([t[:1], times]), np.concatenate([points[:1], dense])
 
 
 def followed(follow, t: np.ndarray, points: np.ndarray) -> np.ndarray:

@@ -315,10 +315,11 @@ class _Engine:
                 points.best[active[need]] = np.minimum(points.best[active[need]], height)
             g = np.clip(kk, 0, self.turns - 1) * self.sectors + part.sector
             gap = part.low - a_high[g] if along_next else a_low[g] - part.high
-            certified = ((gap >= 0.0)
-                         & (self.profile.slope(gap) * self.spacing[part.sector]
-                            >= drop[part.sector])
-                         & (low >= points.best[active]))
+            with np.errstate(invalid="ignore"):  # 0 x inf: no certificate (NaN >= x)
+                certified = ((gap >= 0.0)
+                             & (self.profile.slope(gap) * self.spacing[part.sector]
+                                >= drop[part.sector])
+                             & (low >= points.best[active]))
             beyond = (kk >= part.last) if direction > 0 else (kk <= part.first)
             done = certified | beyond
             k[active] += direction
