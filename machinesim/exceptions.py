@@ -48,7 +48,9 @@ class InputError(MachineSimError, ValueError):
         if column is not None:
             where.append(f"column {column}")
         if key is not None:
-            where.append(f"key '{key}'")
+            # a key read from a file may hold control bytes: shown escaped, never raw
+            shown = key if key.isprintable() else key.encode("unicode_escape").decode("ascii")
+            where.append(f"key '{shown}'")
         prefix = ", ".join(where)
         super().__init__(f"{prefix}: {message}" if prefix else message)
 

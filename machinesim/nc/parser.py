@@ -239,6 +239,7 @@ def read_program(path: str | os.PathLike, **kwargs) -> Program:
     except OSError as exc:
         raise NCProgramError(f"cannot read the NC program: {exc.strerror or exc}",
                              source=source) from None
+    _refuse_binary(data, source)
     if not data.removeprefix(UTF8_BOM).strip():
         raise NCProgramError(
             f"the file is empty ({len(data)} bytes{', all white space' if data else ''}); "
@@ -277,6 +278,34 @@ def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, t
 
 #: The byte order mark some editors write at the start of a UTF-8 file; not part of line 1.
 UTF8_BOM = b"\xef\xbb\xbf"
+#: Bytes read to tell text from not, and the share of them that are not text (control bytes
+#: other than white space, or not UTF-8) above which a file is refused whole, in one line,
+#: rather than as a problem at every block.
+TEXT_PROBE_BYTES = 4096
+NOT_TEXT_SHARE = 0.05
+_TEXT_CONTROLS = frozenset(b"\t\n\r\f\v")
+
+
+def _refuse_binary(data: bytes, source: str) -> None:
+    """Refuse, in one message, a file that is UTF-16 or not text at all (a binary picked by
+    mistake); a stray byte in a text program is left to the reader, which names its line."""
+    probe = data[:TEXT_PROBE_BYTES]
+    if probe[:2] in (b"\xff\xfe", b"\xfe\xff") or (
+            len(probe) >= 4 and probe[1::2].count(0) > 0.3 * (len(probe) // 2)):
+        raise NCProgramError(
+            "the file is UTF-16 text (a byte-order mark or a zero byte beside each "
+            "character, as Windows Notepad's 'Unicode' saves it); expected ASCII or UTF-8: "
+            "save it as UTF-8", source=source)
+    text = probe.decode("utf-8", "replace")
+    odd = sum(1 for ch in text if ch == "\ufffd"
+              or (ord(ch) < 32 and ord(ch) not in _TEXT_CONTROLS) or ord(ch) == 127)
+    if odd > NOT_TEXT_SHARE * max(len(text), 1):
+        first = next(i for i, ch in enumerate(text) if ch == "\ufffd"
+                     or (ord(ch) < 32 and ord(ch) not in _TEXT_CONTROLS) or ord(ch) == 127)
+        raise NCProgramError(
+            f"not a text file: {odd} of its first {len(text)} characters are control bytes "
+            f"or not UTF-8 (the first at character {first + 1}); expected an NC program as "
+            "ASCII or UTF-8 text", source=source)
 
 
 class Reader:
