@@ -462,3 +462,33 @@ def test_read_program_file_errors_name_the_path(tmp_path):
         with pytest.raises(MachineSimError, match=message) as info:
             read_program(path)
         assert str(path) in str(info.value)
+
+
+def test_a_peck_typed_in_the_wrong_unit_is_refused_before_it_makes_thousands_of_moves():
+    # 1.5 mm from R to Z in pecks of 0.1 um: 15000 pecks, each a sweep to cut
+    with pytest.raises(NCProgramError, match="makes 15000 pecks in one hole"):
+        parse_program("G00 X2. Y2. Z2.\nG83 X2. Y2. Z-1. R0.5 Q0.0001 F30.\n")
+    # 1000 pecks of 1.5 um are a micro drill's and are read
+    program = parse_program("G00 X2. Y2. Z2.\nG83 X2. Y2. Z-1. R0.5 Q0.0015 F30.\n")
+    assert int(np.sum(np.asarray(program.kinds) == KIND_LINEAR)) == 1000
+
+
+@pytest.mark.parametrize("data, expected", [
+    ("G00 X1. Y1. Z1.\n".encode("utf-16"), "UTF-16 text"),
+    ("G00 X1. Y1. Z1.\n".encode("utf-16-le"), "UTF-16 text"),
+    (bytes(range(256)) * 8, "not a text file"),
+])
+def test_a_file_that_is_not_utf8_text_is_refused_in_one_line(tmp_path, data, expected):
+    path = tmp_path / "prog.nc"
+    path.write_bytes(data)
+    with pytest.raises(NCProgramError, match=expected) as info:
+        read_program(path)
+    assert "\n" not in str(info.value)
+
+
+def test_a_control_byte_in_a_program_is_named_escaped_never_raw(tmp_path):
+    path = tmp_path / "esc.nc"
+    path.write_bytes(b"G00 X1. Y1. Z1.\nG00 X1.\x1b[31m Y5.\n")
+    with pytest.raises(NCProgramError) as info:
+        read_program(path)
+    assert "\x1b" not in str(info.value) and "key '\\x1b'" in str(info.value)

@@ -18,6 +18,11 @@ from machinesim.exceptions import NCProgramError
 PECK_CLEARANCE_M = 1e-4
 
 
+#: Most pecks of one G83 hole. A micro drill pecking 1 um at a time through 1 mm makes
+#: 1000; more is a Q typed in the wrong unit, and each peck is a sweep to cut.
+MOST_PECKS = 1000
+
+
 def drill_steps(
     cycle: str,
     *,
@@ -57,6 +62,13 @@ def drill_steps(
         if peck is None or not peck > 0.0:
             raise NCProgramError("G83 needs a peck depth Q > 0")
         pecks = math.ceil((r_z - bottom_z) / peck)
+        if pecks > MOST_PECKS:
+            raise NCProgramError(
+                f"G83 with Q {peck * 1e3:.6g} mm makes {pecks} pecks in one hole "
+                f"({(r_z - bottom_z) * 1e3:.6g} mm from R to Z), more than {MOST_PECKS} (a "
+                f"micro drill pecking 1 um at a time through 1 mm). Check Q "
+                f"(a Q without a decimal point is read by --integer-input: 'increment' makes "
+                f"Q1 1 nm)")
         if max_steps is not None and 3 * pecks > max_steps:
             raise NCProgramError(f"G83 with Q {peck * 1e3:.6g} mm makes {pecks} pecks, more "
                                  f"than the {max_steps // 3} left; raise Q")
