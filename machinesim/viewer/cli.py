@@ -59,8 +59,8 @@ def add_view_parser(sub) -> argparse.ArgumentParser:
     machine.add_argument("--program", type=Path, default=None,
                          help="NC program to run and animate (mm, deg), e.g. grooves.nc")
     machine.add_argument("--tool", default="v:90",
-                         help="tool spec in mm/deg: v:ANGLE, nose:RADIUS:ANGLE, ball:RADIUS "
-                              "(default v:90)")
+                         help="tool spec in mm/deg: v:ANGLE, nose:RADIUS:ANGLE, ball:RADIUS, "
+                              "flat:RADIUS (default v:90)")
     machine.add_argument("--stock", default="block:10x10x2",
                          help="stock spec in mm, e.g. block:10x10x2@-5,-5,0 (default "
                               "block:10x10x2)")
@@ -154,17 +154,23 @@ def _scene(args, budget: int):
     from machinesim.viewer.machine import machine_scene
 
     _refuse(part_options, "a machine")
-    program = errors = None
+    program = errors = chord = None
     if args.program is not None:
         from machinesim.nc import read_program
+        from machinesim.tools import path_chord_tolerance, tool_from_spec
 
-        program = read_program(check_readable_file(args.program, "NC program (--program)"))
+        # arcs and rotary moves as fine as the tool is drawn, as `machinesim cut` reads them
+        tool = tool_from_spec(args.tool)
+        chord = path_chord_tolerance([tool])
+        program = read_program(check_readable_file(args.program, "NC program (--program)"),
+                               chord_tolerance=chord)
     if args.errors is not None:
         from machinesim.errors import ErrorModel
 
         errors = ErrorModel.from_toml(args.errors)
     return machine_scene(args.target, program, tool=args.tool, stock=args.stock,
-                         errors=errors, duration_s=args.duration, max_triangles=budget)
+                         errors=errors, duration_s=args.duration, max_triangles=budget,
+                         chord_tolerance=chord)
 
 
 def _refuse(options: list[str], what: str) -> None:

@@ -18,7 +18,7 @@ from pinocchio.visualize import MeshcatVisualizer
 from machinesim import motion
 from machinesim.cutting import cut, remove
 from machinesim.exceptions import InputError
-from machinesim.tools import tool_from_spec
+from machinesim.tools import path_chord_tolerance, tool_from_spec
 from machinesim.viewer.maps import legend_for
 from machinesim.viewer.meshes import DISPLAY_TRIANGLES, decimate, tool_mesh
 from machinesim.viewer.scene import Scene, transform_tracks, visibility_track
@@ -49,7 +49,8 @@ NOMINAL_COLOUR, ACTUAL_COLOUR, TOOL_COLOUR = 0x00E5FF, 0xFF3030, 0xF0F0FF
 
 def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", errors=None,
                   start=None, duration_s: float = DURATION_S, max_stages: int = MAX_STAGES,
-                  max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
+                  max_triangles: int = DISPLAY_TRIANGLES,
+                  chord_tolerance: float | None = None) -> Scene:
     """A scene of ``machine``, and of it running ``program`` if one is given.
 
     Parameters
@@ -70,6 +71,9 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
         Most part stages; a program with more feed blocks groups them.
     max_triangles : int
         Display budget of the deviation map.
+    chord_tolerance : float, optional
+        Rotary moves are split within this distance of their path (m), as `cut` splits
+        them; default `machinesim.tools.path_chord_tolerance` of ``tool``.
     """
     from machinesim.machines import Machine, load_machine
 
@@ -91,20 +95,23 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
                                     machine.rotary, strict=True)))
     if program is not None:
         lo, hi = _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi,
-                      duration_s, max_stages, max_triangles)
+                      duration_s, max_stages, max_triangles, chord_tolerance)
     frame_scene(scene, lo, hi)
     return scene
 
 
 def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, duration_s,
-         max_stages, max_triangles):
+         max_stages, max_triangles, chord_tolerance):
     """Animate the program; return the box (m) of everything drawn."""
     if duration_s <= 0.0 or max_stages < 1:
         raise InputError(f"duration_s and max_stages must be positive, got {duration_s} and "
                          f"{max_stages}")
     tool = tool_from_spec(tool) if isinstance(tool, str) else tool
     stock = stock_from_spec(stock) if isinstance(stock, str) else stock
-    trajectory = motion.plan(program, machine, errors, start=q0, tool_points=tool.vertices())
+    if chord_tolerance is None:
+        chord_tolerance = path_chord_tolerance([tool])
+    trajectory = motion.plan(program, machine, errors, start=q0, tool_points=tool.vertices(),
+                             chord_tolerance=chord_tolerance)
     times, qs = _samples(trajectory, q0)
     speed = max(1.0, trajectory.duration / duration_s)
     keys = _key_times(trajectory, times[-1], speed)
@@ -133,7 +140,8 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
             switch, [on[0] <= t < (on[1] if len(on) > 1 else np.inf) for t in switch])]
     scene.animate(tracks)
 
-    nominal, _ = cut(program, machine, tool=tool, stock=stock, errors=None, start=q0)
+    nominal, _ = cut(program, machine, tool=tool, stock=stock, errors=None, start=q0,
+                     chord_tolerance=chord_tolerance)
     part_lo, part_hi = parts[-1].bounds
     size = float(np.max(hi - lo))
     scale = INSPECTION_SIZE * size / float(np.max(part_hi - part_lo))
