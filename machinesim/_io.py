@@ -108,6 +108,8 @@ def check_writable(path, what: str) -> Path:
         handle, temp = tempfile.mkstemp(dir=folder, prefix=_temp_prefix(path), suffix=".tmp")
         os.close(handle)
         os.unlink(temp)
+    except FileError:
+        raise  # an OSError too: said already, not to be wrapped in itself
     except OSError as exc:
         raise FileError(f"cannot write the {what} in the folder {str(folder)!r}: "
                          f"{_reason(exc)}", source=str(path)) from None

@@ -64,8 +64,11 @@ def test_a_missing_folder_a_folder_and_a_file_as_folder_are_input_errors(tmp_pat
         assert raised.value.source == str(path)
         # also an OSError: callers written for open() still catch it
         assert isinstance(raised.value, OSError) and isinstance(raised.value, MachineSimError)
-        with pytest.raises(InputError, match=words):
+        with pytest.raises(InputError, match=words) as checked:
             _io.check_writable(path, "part")
+        # said once: the message is not wrapped in a second "cannot write" of itself
+        assert str(checked.value).count(str(path)) == 1
+        assert str(checked.value).count("cannot write") <= 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "folder"]
     assert list((tmp_path / "folder").iterdir()) == []
 
