@@ -92,8 +92,8 @@ def arc_segments(radius: float, angle: float, chord_tol: float) -> int:
 def _check_positive(name: str, value: float) -> float:
     value = float(value)
     if not math.isfinite(value) or value <= 0.0:
-        raise InputError(f"{name} must be a positive finite number, got {value!r} (m)",
-                         key=name)
+        raise InputError(f"{name} must be a positive finite number, got {value!r} m "
+                         f"({value * 1e3:.6g} mm)", key=name)
     return value
 
 

@@ -220,7 +220,7 @@ def test_a_spec_height_sets_where_the_holder_begins(spec, height_m):
         ("nose:2000:90", "nose_radius must be at most 1 m"),
         ("ball:nan", "radius must be a positive finite"),
         ("v:90:h=2000", "'v:90:h=2000'.*height must be at most 1 m"),
-        ("v:90:h=-1", r"height must be a positive finite number, got -0.001 \(m\)"),
+        ("v:90:h=-1", r"height must be a positive finite number, got -0.001 m \(-1 mm\)"),
         ("v:90:h=abc", "'h=abc' is not a height; expected 'h=HEIGHT_MM'"),
         ("ball:2:h=1", "height \\(0.001 m\\) must be at least the radius \\(0.002 m\\)"),
         ("v:h=5", "expected 'v:ANGLE_DEG'"),
