@@ -165,6 +165,26 @@ def test_stl_and_glb_exports_are_readable(tmp_path):
     assert glb.volume == pytest.approx(6.0, rel=1e-6)  # mm^3
 
 
+def test_a_ply_part_read_by_trimesh_as_the_readme_says_is_the_part(tmp_path):
+    # 10 um V grooves on a block in metres: trimesh's default merge (1e-8, here 10 nm)
+    # would fold their edges; read with process=False the mesh is the part, closed, and
+    # its volume the part's to round-off (README, "Cutting a program")
+    trimesh = pytest.importorskip("trimesh")
+    from machinesim.cutting import cut
+    from machinesim.nc import ProgramBuilder
+
+    b = ProgramBuilder(1)
+    for y in (2e-3, 2.004e-3):
+        b.rapid(X=-1e-3, Y=y, Z=1e-4).rapid(Z=-1e-5).linear(X=6e-3, feed_mm_per_min=100.0)
+        b.rapid(Z=1e-4)
+    part, _ = cut(b.build(), "grooving_4axis", tool="v:90", stock="block:5x5x1")
+    part.export_ply(tmp_path / "part.ply")
+    mesh = trimesh.load(tmp_path / "part.ply", process=False)
+    assert mesh.is_watertight
+    assert len(mesh.vertices) == len(part.mesh()[0])
+    assert mesh.volume == pytest.approx(part.volume, rel=1e-12)
+
+
 @pytest.mark.parametrize(
     ("spec", "message"),
     [
