@@ -371,4 +371,6 @@ def test_cli_refuses_bad_input_with_a_clear_message(tmp_path):
         run(["robonano_a0ib", "--html", str(tmp_path / "x.png")])
     with pytest.raises(ModelError, match="unknown machine 'nosuch'"):
         run(["nosuch", "--html", str(tmp_path / "x.html")])
+    with pytest.raises(InputError, match="reads parts as float64 PLY .*not .stl"):
+        run([str(tmp_path / "part.stl"), "--html", str(tmp_path / "x.html")])
     assert not list(tmp_path.glob("*.html"))

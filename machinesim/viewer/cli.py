@@ -136,6 +136,10 @@ def _scene(args, budget: int):
         if (target / "summary.json").exists():
             read_json(target / "summary.json", "report summary")
         return report_scene(target, budget)
+    if target.suffix.lower() in (".stl", ".glb", ".obj", ".off", ".3mf"):
+        raise InputError(f"{target}: the viewer reads parts as float64 PLY (machinesim cut "
+                         f"--out part.ply), not {target.suffix}: the STL and GLB exports are "
+                         "float32 millimetres, for CAD tools")
     if target.suffix.lower() == ".ply":
         from machinesim.viewer.views import part_scene
 
