@@ -119,9 +119,15 @@ class Lab:
             self.machine.check_errors(own)
             self.__background = own
             truth = _realism.add_errors(injected, own)
+        room = 1.0 - _realism.TOOL_ADJUSTER_STROKE_M  # ErrorModel's 1 m, less the stroke
+        if np.abs(injected.tool.offset).max() > room:
+            raise InputError(f"a tool offset of {np.round(injected.tool.offset * 1e3, 6).tolist()}"
+                             f" mm; expected at most {room * 1e3:g} mm along each axis (1 m "
+                             "less the tool adjuster's stroke)", key="tool.offset_um")
         self.__truth = truth  # the machine as it is: `adjust_tool` moves its tool
         self.__set_up = truth  # as it was set up: what `reveal` gives
-        self.__adjusted = np.zeros(3)
+        self.__adjusted = np.zeros(3)  # the moves as made
+        self.__commanded = np.zeros(3)  # the moves as commanded: the operator's own record
         if servo is not None and not callable(getattr(servo, "follow", None)):
             raise InputError(f"Expected a servo with follow(t, q) (a ServoModel), got "
                              f"{type(servo).__name__}", key="servo")
@@ -209,15 +215,26 @@ class Lab:
         from machinesim.metrology._mesh import as_vector
 
         move = as_vector(offset, 3, "offset")
+        stroke = _realism.TOOL_ADJUSTER_STROKE_M
+        commanded = self.__commanded + move
+        if np.abs(commanded).max() > stroke:
+            # judged on the moves as commanded, which the operator knows: a check of where
+            # the tool lands would answer, by refusing or not, where the hidden tool is
+            raise InputError(f"a tool adjustment of {np.round(move * 1e6, 6).tolist()} um "
+                             f"takes the adjuster to {np.round(commanded * 1e6, 6).tolist()} "
+                             f"um, beyond its stroke of +-{stroke * 1e3:g} mm per axis "
+                             "(machinesim.realism.TOOL_ADJUSTER_STROKE_M)", key="offset")
+        self.__commanded = commanded
         label = self._label("tool_adjuster", label)
         if self.noise:
             half = 0.5 * _realism.TOOL_ADJUSTER_RESOLUTION_M
             move = move + stream(self.seed, "tool_adjuster", label).uniform(-half, half, 3)
-        self.__adjusted = self.__adjusted + move
         truth = self.__truth
-        self.__truth = truth.__class__(
-            ToolSetting(truth.tool.offset + move, truth.tool.rotation), truth.workpiece,
-            truth.location, truth.component, truth.tool_geometry)
+        # within 1 m: the injected offset leaves room for the stroke (checked when made)
+        tool = ToolSetting(truth.tool.offset + move, truth.tool.rotation)
+        self.__adjusted = self.__adjusted + move
+        self.__truth = truth.__class__(tool, truth.workpiece, truth.location, truth.component,
+                                       truth.tool_geometry)
 
     def tune_servo(self, servo) -> None:
         """Set new servo loops on the machine (the operator's tuning of the control's gains);

@@ -276,6 +276,10 @@ ARTEFACT = ArtefactScatter(1 * M_PER_UM, 3 * M_PER_UM, 2 * M_PER_UM)
 #: +-half of it (`machinesim.Lab.adjust_tool`). Chosen from paper 004, Table 5: its
 #: tool-workpiece alignment left dx and dy at 0.25 um, half of a 0.5 um step.
 TOOL_ADJUSTER_RESOLUTION_M = 0.5 * M_PER_UM
+#: Stroke of the adjuster (m): a move of more than this along any axis is refused, judged on
+#: the move alone (assumed: a micrometre-screw tool holder of +-5 mm; resetting a tool
+#: further is a new tool setting, `ErrorModel`'s tool offset, not an adjustment).
+TOOL_ADJUSTER_STROKE_M = 5e-3
 
 
 @dataclass(frozen=True, eq=False)

@@ -151,12 +151,16 @@ def _violations(path: Path) -> list[str]:
                 found.append(f"{path.name}:{node.lineno} reaches the lab's truth")
             elif attr in ("__dict__", "__closure__", "__globals__"):
                 found.append(f"{path.name}:{node.lineno} reaches .{attr}")
+            elif attr == "seed":
+                found.append(f"{path.name}:{node.lineno} reads a seed (the noise replayed)")
         elif isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.args:
             name, args = node.func.id, node.args
             private = (len(args) > 1 and isinstance(args[1], ast.Constant)
                        and str(args[1].value).startswith("_"))
             if name == "vars" or (name in ("getattr", "setattr") and private):
                 found.append(f"{path.name}:{node.lineno} uses {name}() past the public API")
+            elif name in ("stream", "default_rng"):
+                found.append(f"{path.name}:{node.lineno} builds a noise stream ({name})")
         elif isinstance(node, ast.Name) and node.id in ("Lab",):
             found.append(f"{path.name}:{node.lineno} names the Lab")
     return found
@@ -171,9 +175,43 @@ def test_identification_and_compensation_never_reach_the_truth():
 def test_the_honesty_scan_catches_what_it_must(tmp_path):
     bad = tmp_path / "bad.py"
     bad.write_text("def f(lab, probe):\n    t = lab.reveal()\n    e = probe._pose\n"
+                   "    n = stream(lab.seed, 'r_test', 'ball')\n"
                    "    return getattr(lab, '_Lab__truth'), vars(probe), f.__closure__\n")
     found = _violations(bad)
-    assert len(found) == 5, found
+    assert len(found) == 7, found
+
+
+def test_no_instrument_hands_out_its_noise_stream():
+    # With the generator a procedure could draw the noise again and subtract it: the R-test's
+    # fit then came within 0.1 nm of the injected errors instead of its 10-30 nm of noise.
+    from machinesim.realism import Realism
+
+    lab = Lab("robonano_a0ib", TRUTH, seed=3, realism=Realism.lab())
+    part, _ = lab.cut(groove(), "v:90", "block:10x10x2")
+    things = [lab.touch_probe(part), lab.laser_interferometer(), lab.microscope(),
+              lab.white_light_interferometer(), lab.r_test(), lab.encoders()]
+    for thing in things:
+        for name, value in _public(thing):
+            assert not isinstance(value, np.random.Generator), f"{type(thing).__name__}.{name}"
+
+
+def test_whether_a_tool_adjustment_is_taken_does_not_depend_on_the_hidden_tool():
+    # The check is of the move alone, against the adjuster's stroke: a check of where the
+    # tool lands would tell, by refusing or not, where the hidden tool is.
+    from machinesim.realism import TOOL_ADJUSTER_STROKE_M
+
+    messages = set()
+    for offset_um in (-995_000.0, -4000.0, 0.0, 4000.0, 995_000.0):
+        lab = Lab("robonano_a0ib", {"tool": {"offset_um": [offset_um, 0.0, 0.0]}}, seed=1)
+        lab.adjust_tool([0.75 * TOOL_ADJUSTER_STROKE_M, 0.0, 0.0])
+        with pytest.raises(InputError, match="beyond its stroke") as info:
+            lab.adjust_tool([0.25 * TOOL_ADJUSTER_STROKE_M * (1 + 1e-6), 0.0, 0.0])
+        lab.adjust_tool([0.25 * TOOL_ADJUSTER_STROKE_M, 0.0, 0.0])  # to the stroke's end
+        messages.add(str(info.value))
+    assert len(messages) == 1  # word for word the same, wherever the tool is
+    # an injected offset that leaves no room for the stroke is refused when the lab is made
+    with pytest.raises(InputError, match="1 m less the tool adjuster's stroke"):
+        Lab("robonano_a0ib", {"tool": {"offset_um": [995_001.0, 0.0, 0.0]}})
 
 
 def test_the_r_test_reads_the_ball_displacement_of_a_tool_offset_turned_by_b_and_c():

@@ -93,7 +93,7 @@ class Encoders:
         self.readouts = tuple(Readout.of(float(s), float(r), noise)
                               for s, r in zip(sigma, resolution, strict=True))
         self._follow = follow
-        self.rng = as_generator(rng)
+        self._rng = as_generator(rng)
 
     def __repr__(self) -> str:
         return (f"Encoders({self.machine.name}, resolution="
@@ -110,7 +110,7 @@ class Encoders:
         followed = motion.plan(program, self.machine, None, start=start,
                                servo=_Follow(self._follow))
         reached = np.asarray(followed.q, dtype=np.float64)
-        position = np.column_stack([readout.read(reached[:, i], self.rng)
+        position = np.column_stack([readout.read(reached[:, i], self._rng)
                                     for i, readout in enumerate(self.readouts)])
         return EncoderReading(tuple(self.machine.axes), frozen(t), frozen(commanded),
                               frozen(position.reshape(commanded.shape)))
@@ -128,7 +128,7 @@ class Encoders:
             ts.append(t + offset)
             offset = float(ts[-1][-1])
             commands.append(points)
-            positions.append(np.column_stack([readout.read(reached[:, i], self.rng)
+            positions.append(np.column_stack([readout.read(reached[:, i], self._rng)
                                               for i, readout in enumerate(self.readouts)]))
         return EncoderReading(tuple(self.machine.axes), frozen(np.concatenate(ts)),
                               frozen(np.concatenate(commands)),

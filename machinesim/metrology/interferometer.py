@@ -102,7 +102,7 @@ class LaserInterferometer:
         self._pose = motion_of(machine, errors, frame)
         self.frame = frame
         self.readout = Readout.of(sigma, resolution, noise)
-        self.rng = as_generator(rng)
+        self._rng = as_generator(rng)
         self._alignment = None if alignment is None else _vector(alignment, 2, "alignment")
 
     def __repr__(self) -> str:
@@ -135,7 +135,7 @@ class LaserInterferometer:
         x_ref = x[0] if reference is None else _number(reference, "reference")
         q = self._commands(self._base(base), {axis: np.append(x, x_ref)})
         displacement = self._displacement(q, _unit(k))
-        return _reading(x, self.readout.read(displacement, self.rng) - (x - x_ref))
+        return _reading(x, self.readout.read(displacement, self._rng) - (x - x_ref))
 
     def straightness(self, axis: str, positions, direction: str, base=None,
                      reference: str = "least_squares") -> InterferometerReading:
@@ -176,7 +176,7 @@ class LaserInterferometer:
                              key="reference")
         x = _positions(positions, least=2)
         q = self._commands(self._base(base), {axis: np.append(x, x[0])})
-        raw = self.readout.read(self._displacement(q, _unit(lateral)), self.rng)
+        raw = self.readout.read(self._displacement(q, _unit(lateral)), self._rng)
         return _reading(x, _remove_line(x, raw, reference))
 
     def diagonal(self, positions, corner, opposite, axes: Sequence[str] = ("X", "Y"),
@@ -220,7 +220,7 @@ class LaserInterferometer:
         along = np.append(s, 0.0)[:, None] * (span / length) + start
         q = self._commands(self._base(base), {a: along[:, i] for i, a in enumerate(axes)})
         u = sum(span[i] * _unit(d) for i, d in enumerate(dirs)) / length
-        return _reading(s, self.readout.read(self._displacement(q, u), self.rng) - s)
+        return _reading(s, self.readout.read(self._displacement(q, u), self._rng) - s)
 
     # ---------------------------------------------------------------------------- internals
 

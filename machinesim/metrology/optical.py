@@ -109,10 +109,10 @@ class _Profiler:
                  registration_scatter: RegistrationScatter | None = None) -> None:
         self.readout = Readout.of(sigma, resolution, noise)
         self.stage_sigma = check_length(stage_sigma, "stage_sigma")
-        self.stage_rng = as_generator(stage_rng) if self.stage_sigma > 0.0 else None
+        self._stage_rng = as_generator(stage_rng) if self.stage_sigma > 0.0 else None
         self._held = None  # the placement `placement` holds
         self.lateral_spacing = as_positive(lateral_spacing, "lateral_spacing")
-        self.rng = as_generator(rng)
+        self._rng = as_generator(rng)
         if spot is not None and not isinstance(spot, Spot):
             raise InputError(f"Expected spot as a Spot or None, got {spot!r}", key="spot")
         if registration is not None and not isinstance(registration, Registration):
@@ -120,7 +120,7 @@ class _Profiler:
                              f"{type(registration).__name__}", key="registration")
         self.spot = spot
         self.lateral_sigma = check_length(lateral_sigma, "lateral_sigma")
-        self.lateral_rng = as_generator(lateral_rng) if self.lateral_sigma > 0.0 else None
+        self._lateral_rng = as_generator(lateral_rng) if self.lateral_sigma > 0.0 else None
         if registration_scatter is not None and not isinstance(registration_scatter,
                                                                RegistrationScatter):
             raise InputError(f"Expected registration_scatter as a RegistrationScatter or "
@@ -174,9 +174,9 @@ class _Profiler:
         else:
             s = _line_samples(a, b, as_positive(spacing, "spacing"))
             ds, across = np.zeros(len(s)), 0.0
-            if self.lateral_rng is not None:
-                ds = self.lateral_sigma * self.lateral_rng.standard_normal(len(s))
-                across = self.lateral_sigma * float(self.lateral_rng.standard_normal())
+            if self._lateral_rng is not None:
+                ds = self.lateral_sigma * self._lateral_rng.standard_normal(len(s))
+                across = self.lateral_sigma * float(self._lateral_rng.standard_normal())
             vertices, triangles = mesh_arrays(surface)
             z = line_heights(vertices, triangles, a, (b - a) / np.hypot(*(b - a)), s, ds,
                              across, self.spot)
@@ -214,9 +214,9 @@ class _Profiler:
         if self.spot is None and self.lateral_sigma == 0.0:
             return HeightMap(x, y, self._display(height_map(surface, rx, ry)))
         dx, dy = np.zeros(len(x)), np.zeros(len(y))
-        if self.lateral_rng is not None:
-            dx = self.lateral_sigma * self.lateral_rng.standard_normal(len(x))
-            dy = self.lateral_sigma * self.lateral_rng.standard_normal(len(y))
+        if self._lateral_rng is not None:
+            dx = self.lateral_sigma * self._lateral_rng.standard_normal(len(x))
+            dy = self.lateral_sigma * self._lateral_rng.standard_normal(len(y))
         vertices, triangles = mesh_arrays(surface)
         return HeightMap(x, y, self._display(spot_heights(vertices, triangles, rx, ry, dx, dy,
                                                           self.spot)))
@@ -241,15 +241,15 @@ class _Profiler:
         placement's, else a fresh draw per reading with stage positioning, zeros without."""
         if self._held is not None:
             return self._held
-        if self.stage_rng is None:
+        if self._stage_rng is None:
             return np.zeros(2)
-        return self.stage_sigma * self.stage_rng.standard_normal(2)
+        return self.stage_sigma * self._stage_rng.standard_normal(2)
 
     def _jitter(self, n: int) -> np.ndarray:
         """Lateral noise of ``n`` sample positions (zeros without it), m."""
-        if self.lateral_rng is None:
+        if self._lateral_rng is None:
             return np.zeros(n)
-        return self.lateral_sigma * self.lateral_rng.standard_normal(n)
+        return self.lateral_sigma * self._lateral_rng.standard_normal(n)
 
     def _field(self, part, px: np.ndarray, py: np.ndarray) -> np.ndarray:
         """Exact heights of a height-field part (a `TurnedPart`) at the sample points."""
@@ -261,7 +261,7 @@ class _Profiler:
         return np.asarray(part.heights_at(px, py), dtype=np.float64)
 
     def _display(self, exact: np.ndarray) -> np.ndarray:
-        return frozen(self.readout.read(exact, self.rng), copy=False)
+        return frozen(self.readout.read(exact, self._rng), copy=False)
 
     def _surface(self, part):
         """The part as this instrument sees it: itself, or its mesh in the instrument frame

@@ -143,7 +143,7 @@ class TouchProbe:
         self.index = MeshIndex.from_surface(part)
         self.radius = as_positive(radius, "radius")
         self.readout = Readout.of(sigma, resolution, noise)
-        self.rng = as_generator(rng)
+        self._rng = as_generator(rng)
         for name, value, kind in (("pretravel", pretravel, Lobing),
                                   ("ball_form", ball_form, ZonalForm)):
             if value is not None and not isinstance(value, kind):
@@ -204,7 +204,7 @@ class TouchProbe:
             return None
         t = t + self._departure(q_start + t[:, None] * u, normal, velocity) / speed
         if self.readout.sigma > 0.0:
-            t = t + self.readout.sigma * self.rng.standard_normal(1) / speed
+            t = t + self.readout.sigma * self._rng.standard_normal(1) / speed
         contact = q_start + t[:, None] * u
         self._check_limits(contact, "the contact")
         return self._record(contact)[0]
@@ -257,7 +257,7 @@ class TouchProbe:
             raise StylusOverTravel(f"Expected the surface within the stylus stroke ({stroke} "
                                    f"m) above the path, got it {exact[over].max()} m above at "
                                    f"points {over.tolist()[:10]} (over-travel)", key="q_path")
-        deflection = self.readout.read(exact, self.rng)
+        deflection = self.readout.read(exact, self._rng)
         recorded = self._record(q)
         contact = recorded - deflection[:, None] * u
         contact[np.isnan(deflection)] = np.nan
@@ -411,7 +411,7 @@ class TouchProbe:
 
     def _record(self, q: np.ndarray) -> np.ndarray:
         """Axis values (N, n_axes) rounded as the controller records them, read-only."""
-        out = np.column_stack([r.read(q[:, i], self.rng)
+        out = np.column_stack([r.read(q[:, i], self._rng)
                                for i, r in enumerate(self._axis_rounding)])
         out.setflags(write=False)
         return out

@@ -91,7 +91,7 @@ class RTest:
         self.point = frozen(point)
         self.readout = Readout.of(sigma, resolution, noise)
         self.uncertainty = Readout(sigma, resolution).std
-        self.rng = as_generator(rng)
+        self._rng = as_generator(rng)
 
     def __repr__(self) -> str:
         return (f"RTest({self.machine.name}, frame={self.frame!r}, sigma="
@@ -114,7 +114,7 @@ class RTest:
             raise AxisLimitError(f"{self.machine.name}: the R-test plan needs " + "; ".join(bad))
         actual = self._centre(self._pose(self.frame, q))
         nominal = self._centre(self.machine.frame_pose(self.frame, q))
-        shown = self.readout.read(actual - nominal, self.rng)
+        shown = self.readout.read(actual - nominal, self._rng)
         return RTestReading(frozen(q), frozen(shown), self.uncertainty, self.frame, self.point)
 
     def _centre(self, wMf: np.ndarray) -> np.ndarray:
