@@ -262,6 +262,19 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
             progress(f"{name} done in {clock[f'{name}_s']:.1f} s")
         return value
 
+    from machinesim.lab import Lab
+
+    if not isinstance(lab, Lab):
+        raise InputError(f"expected a machinesim.Lab to run on, got {type(lab).__name__} "
+                         f"{lab!r:.60} (make one with Lab(machine, errors, seed=...))",
+                         key="lab")
+    missing = [name for name in ("measure", "identify", "compensate", "evaluate")
+               if not callable(getattr(procedure, name, None))]
+    if missing:
+        raise InputError(f"expected a procedure (measure, identify, compensate, evaluate), "
+                         f"got {type(procedure).__name__} {procedure!r:.60}, without "
+                         f"{', '.join(missing)} (e.g. machinesim.procedures."
+                         "tool_rotation_arm.ToolRotationArm())", key="procedure")
     measurements = step("measure", procedure.measure, lab)
     identified = step("identify", procedure.identify, measurements)
     if not isinstance(identified, Identified):

@@ -113,9 +113,17 @@ class Lab:
         self.__injected = injected
         self.__background = ErrorModel()
         truth = injected
+        if background is not None and not realism.background_errors:
+            raise InputError(f"a background ({type(background).__name__}) was given, but the "
+                             f"realism ({realism}) has no background_errors: it would not be "
+                             "used. Give a realism with background_errors (Realism.lab()) or "
+                             "leave background out", key="background")
         if realism.background_errors:
-            own = (_realism.background_model(self.machine) if background is None
-                   else as_error_model(background))
+            try:
+                own = (_realism.background_model(self.machine) if background is None
+                       else as_error_model(background))
+            except InputError as exc:
+                raise InputError(exc.message, source=exc.source, key="background") from None
             self.machine.check_errors(own)
             self.__background = own
             truth = _realism.add_errors(injected, own)

@@ -227,7 +227,14 @@ class Machine:
     # ------------------------------------------------------------------------ kinematics
 
     def binding(self, errors) -> Binding:
-        """The error-joint values of ``errors`` on this machine (checked; cached per model)."""
+        """The error-joint values of ``errors`` on this machine (checked; cached per model).
+
+        ``errors`` is an `ErrorModel`, None (the nominal machine), or what `as_error_model`
+        reads (a dict in the TOML layout, a TOML path), as `Lab` and `cut` take them."""
+        from machinesim.errors import ErrorModel, as_error_model
+
+        if errors is not None and not isinstance(errors, ErrorModel):
+            errors = as_error_model(errors)
         key = id(errors)
         b = self._bindings.get(key)
         if b is None or b.errors is not errors:
@@ -239,7 +246,7 @@ class Machine:
 
     def check_errors(self, errors) -> None:
         """Raise ErrorModelError when ``errors`` does not fit this machine."""
-        self.kin.bind(errors)
+        self.binding(errors)
 
     def tool_pose(self, q, errors=None) -> np.ndarray:
         """Pose of ``tool_tip`` in the ``workpiece`` frame.
@@ -536,7 +543,12 @@ class Machine:
         return arr
 
     def _check_q(self, q, batch: bool = True) -> np.ndarray:
-        arr = np.asarray(q, dtype=np.float64)
+        try:
+            arr = np.asarray(q, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError(f"expected axis values as numbers (m, rad) in the order "
+                             f"{''.join(self.axes)}, got {type(q).__name__} {q!r:.60}",
+                             key="q") from None
         n = len(self.axes)
         ok = (arr.shape == (n,)) or (batch and arr.ndim == 2 and arr.shape[1] == n)
         if not ok:

@@ -255,3 +255,28 @@ def test_run_tells_its_progress_step_by_step_in_order():
     assert told[0::2] == [f"{s} ..." for s in steps]
     assert told[1::2] == [f"{s} done in {result.elapsed_s[f'{s}_s']:.1f} s" for s in steps]
     assert run(Counting(), Lab("robonano_a0ib", TRUTH, noise=False)).figures == result.figures
+
+
+def test_the_api_refuses_what_it_cannot_use_with_a_machinesim_error():
+    from machinesim.campaign.runner import _vary
+    from machinesim.experiment import run
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+
+    machine = machinesim.load_machine("robonano_a0ib")
+    q = np.array([1e-3, 2e-3, 0.0, 0.3, 1.1])
+    # errors as a dict, as Lab and cut take them, pose the tool as the ErrorModel does
+    as_dict = machine.tool_pose(q, TRUTH)
+    assert np.array_equal(as_dict, machine.tool_pose(q, ErrorModel.from_dict(TRUTH)))
+    assert not np.array_equal(as_dict, machine.tool_pose(q))
+    with pytest.raises(InputError, match="expected axis values as numbers"):
+        machine.tool_pose("abc")
+    with pytest.raises(InputError, match="expected a machinesim.Lab"):
+        run(ToolRotationArm(), "planer_4axis")
+    with pytest.raises(InputError, match="without measure, identify"):
+        run("tool_rotation_arm", Lab("planer_4axis"))
+    # a background the realism would not use is refused, naming it
+    with pytest.raises(InputError, match="key 'background'.*no background_errors"):
+        Lab("planer_4axis", background={})
+    # one "PARAM=DIST" string is one variation, not one per character
+    assert [name for name, _ in _vary("microscope.sigma=uniform:5nm,200nm")] == [
+        "microscope.sigma"]

@@ -53,6 +53,8 @@ class _Progress:
 
 
 def _vary(vary) -> tuple[tuple[str, Distribution], ...]:
+    if isinstance(vary, str):  # one "PARAM=DIST": a list of one, not one per character
+        vary = [vary]
     if isinstance(vary, dict):
         vary = list(vary.items())
     out = []
