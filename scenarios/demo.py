@@ -9,6 +9,8 @@ and C turns; the table gives where the edge really lands relative to that point,
 
 from __future__ import annotations
 
+import argparse
+
 import numpy as np
 
 import machinesim
@@ -38,6 +40,8 @@ def sweep_table(machine, errors, target_mm=(1.0, 1.0, 0.0)) -> str:
 
 
 def main() -> None:
+    # no options: --help says what it shows, and anything else is refused (exit 2)
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     print("machinesim machines\n")
     print("machine          axes     travel")
     print("\n".join(machines_summary()))
