@@ -13,7 +13,6 @@ from collections.abc import Callable
 
 import manifold3d
 import numpy as np
-from manifold3d import OpType
 
 from machinesim.cutting.sweeps import (
     SolidSweep,
@@ -364,14 +363,21 @@ class SweepSet:
             return keep(low, high) & meets
 
         hulls, lower, upper, *_, owners = self.hulls(into_a_room)
+        owners = np.asarray(owners, dtype=np.int64)
         found = []
-        for i, met in inside.items():
-            box = np.array(met.bounding_box())
-            earlier = [hull for hull, s, lo, hi in zip(hulls, owners, lower, upper, strict=True)
-                       if s < i and (lo <= box[3:]).all() and (hi >= box[:3]).all()]
-            if earlier:
-                met = met - manifold3d.Manifold.batch_boolean(earlier, OpType.Add)
-            if met.volume() > HOLDER_MATERIAL_M3:
+        for (i, met), box in zip(inside.items(), boxes, strict=True):
+            earlier = np.flatnonzero((owners < i) & (lower <= box[3:]).all(axis=1)
+                                     & (upper >= box[:3]).all(axis=1))
+            # One earlier sweep at a time, in program order, until nothing is left: the
+            # room's material is small and the first passes over it usually clear it. One
+            # union of all of them (a pocket's every level, stacked) took minutes and GB.
+            left = met.volume()
+            for j in earlier:
+                if left <= HOLDER_MATERIAL_M3:
+                    break
+                met = met - hulls[j]
+                left = met.volume()
+            if left > HOLDER_MATERIAL_M3:
                 found.append(i)
         return found
 
