@@ -297,11 +297,10 @@ def _refuse_binary(data: bytes, source: str) -> None:
             "character, as Windows Notepad's 'Unicode' saves it); expected ASCII or UTF-8: "
             "save it as UTF-8", source=source)
     text = probe.decode("utf-8", "replace")
-    odd = sum(1 for ch in text if ch == "\ufffd"
-              or (ord(ch) < 32 and ord(ch) not in _TEXT_CONTROLS) or ord(ch) == 127)
-    if odd > NOT_TEXT_SHARE * max(len(text), 1):
-        first = next(i for i, ch in enumerate(text) if ch == "\ufffd"
-                     or (ord(ch) < 32 and ord(ch) not in _TEXT_CONTROLS) or ord(ch) == 127)
+    odd = [i for i, ch in enumerate(text) if ch == "\ufffd" or ord(ch) == 127
+           or (ord(ch) < 32 and ord(ch) not in _TEXT_CONTROLS)]
+    if len(odd) > NOT_TEXT_SHARE * max(len(text), 1):
+        odd, first = len(odd), odd[0]
         raise NCProgramError(
             f"not a text file: {odd} of its first {len(text)} characters are control bytes "
             f"or not UTF-8 (the first at character {first + 1}); expected an NC program as "
