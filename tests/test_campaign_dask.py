@@ -4,9 +4,14 @@ same, whichever worker ran it and in whichever order it finished."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
+from machinesim._cores import usable_cores
 from machinesim.campaign import run
 
 pytest.importorskip("distributed")
@@ -24,3 +29,17 @@ def test_two_local_workers_and_one_process_give_the_same_trials(tmp_path):
     assert not two["failed"].values.any()
     # three distinct trials, not one trial three times (a seed shared across trials)
     assert len(set(two["drawn"].sel(varied="tool.y").values)) == 3
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="Linux affinity")
+def test_the_default_worker_count_is_the_cores_the_process_may_use():
+    # pinned to one core (as `taskset -c 0` does), the process has one core, whatever the
+    # machine has: a default pool of cpu_count() workers would share it
+    code = ("import os; os.sched_setaffinity(0, {min(os.sched_getaffinity(0))}); "
+            "from machinesim._cores import usable_cores; "
+            "from machinesim.motion import chords; from machinesim.nc import fastscan; "
+            "print(usable_cores(), chords.WORKERS, fastscan.WORKERS)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    assert done.stdout.split() == ["1", "1", "1"]
+    assert usable_cores() == len(os.sched_getaffinity(0))

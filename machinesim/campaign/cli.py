@@ -58,8 +58,8 @@ def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help=f"number of trials, 1 to {MAX_TRIALS}")
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=None, metavar="K",
-                       help="local Dask worker processes (default: the cores; 0: no Dask, "
-                       "in this process)")
+                       help="local Dask worker processes (default: the cores this process may use; "
+                       "0: no Dask, in this process)")
     where.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="run on this Dask scheduler (e.g. tcp://host:8786)")
     parser.add_argument("--vary", action="append", default=[], metavar="PARAM=DIST",

@@ -16,6 +16,7 @@ import time
 import warnings
 from collections.abc import Iterable
 
+from machinesim._cores import usable_cores
 from machinesim.campaign.distributions import Distribution, parse_vary
 from machinesim.campaign.results import CampaignFolder, assemble
 from machinesim.campaign.summary import write_report
@@ -76,7 +77,7 @@ def _client(workers, scheduler, client):
             raise InputError(f"cannot reach the Dask scheduler {scheduler!r} ({error}); "
                              "expected the address of a running one, e.g. tcp://host:8786",
                              key="--scheduler") from None
-    count = workers if workers is not None else (os.cpu_count() or 1)
+    count = workers if workers is not None else usable_cores()
     with warnings.catch_warnings():
         # the scheduler's HTTP server (health checks; the dashboard is off) moves to a free
         # port when 8787 is taken, by another campaign say: nothing for the user to act on

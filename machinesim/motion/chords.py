@@ -35,12 +35,12 @@ the two rules pick different counts (tests/test_motion_identity.py).
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache
 
 import numpy as np
 
+from machinesim._cores import usable_cores
 from machinesim.kinematics import _BLOCK, _cos_sin
 from machinesim.tolerances import SERIES_MAX_RAD
 
@@ -51,7 +51,7 @@ MAX_SUBSTEPS = 1_000_000
 #: per-call cost vanishes, small enough that the working arrays stay in cache.
 _ROWS_PER_BATCH = 1 << 17
 #: Threads that evaluate batches at once: the cores there are, up to 4.
-WORKERS = min(4, os.cpu_count() or 1)
+WORKERS = min(4, usable_cores())
 #: The first trial number of sub-steps of the rule.
 _FIRST_TRIAL = 8
 

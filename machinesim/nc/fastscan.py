@@ -22,11 +22,12 @@ rounded value of the decimal: exactly what ``float(text)`` gives.
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
+
+from machinesim._cores import usable_cores
 
 #: Letters of simple lines, in the column order of `Scan.values`.
 LETTERS = "NGXYZABCF"
@@ -37,7 +38,7 @@ MAX_DIGITS = 15
 CHUNK_BYTES = 1 << 18
 #: Threads that read chunks at once: the cores there are, up to 4 (beyond that memory
 #: bandwidth, not arithmetic, bounds the scan).
-WORKERS = min(4, os.cpu_count() or 1)
+WORKERS = min(4, usable_cores())
 
 _LF, _CR, _TAB, _SPACE = (np.uint8(ord(c)) for c in "\n\r\t ")
 _ZERO, _DOT, _PLUS, _MINUS, _LOWER_A = (np.uint8(ord(c)) for c in "0.+-a")
