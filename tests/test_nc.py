@@ -576,3 +576,15 @@ def test_fuzz_nc_characters_raise_only_nc_errors(text, integer_input):
 @given(_words_text, st.sampled_from(["calculator", "increment"]))
 def test_fuzz_word_sequences_raise_only_nc_errors(text, integer_input):
     _parse_only_nc_errors(text, integer_input)
+
+
+def test_blanks_between_a_sign_and_its_digits_are_not_read_but_inside_the_digits_refused():
+    # blanks in a block are not read: 'Z - 0.1' is Z-0.1, as 'X 1.' is X1.
+    spaced = parse_program("G01 Z - 0.1 F100\nX + 2.5\nY -\t.25\n", "a.nc")
+    plain = parse_program("G01 Z-0.1 F100\nX+2.5\nY-.25\n", "b.nc")
+    np.testing.assert_array_equal(spaced.targets, plain.targets)
+    assert spaced.targets[-1, :3].tolist() == [2.5e-3, -0.25e-3, -0.1e-3]
+    # a blank inside the digits would make two numbers of one (X1 0. is not X10.)
+    with pytest.raises(NCProgramError, match="without an address letter") as error:
+        parse_program("G01 X1 0. F100\n", "c.nc")
+    assert error.value.line == 1

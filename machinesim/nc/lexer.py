@@ -8,7 +8,9 @@ from dataclasses import dataclass
 
 from machinesim.exceptions import NCProgramError
 
-_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)")
+#: A number: blanks may stand between its sign and its digits (``Z - 0.1``), as between a
+#: letter and its number, since blanks in a block are not read; not inside the digits.
+_NUMBER = re.compile(r"(?:[+-][ \t]*)?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)")
 #: Blanks inside a line. A carriage return is a blank only as the CR of a CRLF line end: the
 #: line's text then ends in it (the text stops before the LF), and `tokenize` drops it; any
 #: other CR is refused (a lone CR, as old Mac files end lines, would join several blocks).
@@ -25,7 +27,7 @@ class Word:
     """One word: an address letter and its number, as written."""
 
     letter: str  # upper case
-    text: str  # the number as written
+    text: str  # the number as written, without blanks after its sign
     column: int  # 1-based column of the letter
 
     @property
@@ -113,7 +115,10 @@ def tokenize(raw: str, source: str, line: int, *,
                 )
                 i = max(stop, i)
                 continue
-            words.append(Word(c.upper(), match.group(), start + 1))
+            number = match.group()
+            if number[0] in "+-":
+                number = number[0] + number[1:].lstrip(_BLANK)
+            words.append(Word(c.upper(), number, start + 1))
             i = end
         elif c in "0123456789+-.":
             stop = _end_of_garbage(raw, i)
