@@ -30,6 +30,11 @@ from machinesim._io import (
     json_text,
     write_together,
 )
+from machinesim._program_options import (
+    add_reading_options,
+    check_reading_options,
+    read_for_machine,
+)
 from machinesim.exceptions import ErrorModelError, InputError, MachineSimError
 from machinesim.tolerances import CHORD_TOLERANCE_M
 
@@ -96,17 +101,7 @@ def _parser() -> argparse.ArgumentParser:
     cut.add_argument("--roi", action="append", default=None, metavar="X0,X1,Y0,Y1",
                      help="cut only in this window (mm, workpiece frame); repeatable; "
                           "e.g. --roi 0,1,0,1")
-    cut.add_argument("--tools", type=Path, default=None, metavar="TOOLS.toml",
-                     help="tool table for T/D/H words and G43/G44 (TOML, units in keys); "
-                          "T/M06 change the cut to a tool's length and shape (docs/nc.md)")
-    cut.add_argument("--integer-input", choices=("calculator", "increment"), default=None,
-                     help="how an axis number without decimal point reads: calculator "
-                          "(X10 is 10 mm, the default) or increment (X10 is 10 nm)")
-    cut.add_argument("--chord-nm", type=float, default=None, metavar="NM",
-                     help="largest distance of the chords arcs and rotary moves are cut as "
-                          "from the true path, nm; default: a tenth of the finest tool's own "
-                          "facet tolerance, at least 1 nm (1 nm for V and nose tools, 100 nm "
-                          "for ball and flat end mills)")
+    add_reading_options(cut)
     cut.add_argument("--allow-overtravel", action="store_true",
                      help="cut even where an axis leaves its travel (listed in the report); "
                           "default: refuse the program and write nothing")
@@ -237,14 +232,6 @@ def _progress_bar(quiet: bool):
     return show
 
 
-def _table_tools(table) -> list:
-    """The tools a tool table's ``shape`` entries name (none without a table)."""
-    from machinesim.tools import tool_from_spec
-
-    entries = table.tools.values() if table is not None else ()
-    return [tool_from_spec(entry.shape) for entry in entries if entry.shape is not None]
-
-
 def _cut(args) -> int:
     """``machinesim cut``: every input checked before cutting, both outputs written together.
 
@@ -257,10 +244,9 @@ def _cut(args) -> int:
         raise InputError(f"--out {args.out}: expected a file name ending in .ply, .stl or .glb")
     file_format, description = PART_FORMATS[suffix]
     check_readable_file(args.program, "NC program")
-    for option, path, what in (("--errors", args.errors, "error model"),
-                               ("--tools", args.tools, "tool table")):
-        if path is not None:
-            check_readable_file(path, f"{what} ({option})")
+    if args.errors is not None:
+        check_readable_file(args.errors, "error model (--errors)")
+    check_reading_options(args)
     outputs = [(args.out, "part (--out)")]
     if args.report is not None:
         outputs.append((args.report, "report (--report)"))
@@ -274,33 +260,17 @@ def _cut(args) -> int:
             raise InputError(f"the {what} would overwrite an input file; give another name",
                              source=str(path))
     roi = parse_roi(args.roi)
-    if args.chord_nm is not None and not (math.isfinite(args.chord_nm) and args.chord_nm > 0):
-        raise InputError(f"--chord-nm {args.chord_nm!r}: expected a length in nm above 0")
 
     from machinesim.cutting import cut
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
-    from machinesim.nc import read_program
-    from machinesim.nc.tooltable import tool_table
-    from machinesim.tools import path_chord_tolerance, tool_from_spec
+    from machinesim.tools import tool_from_spec
     from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
     machine = load_machine(args.machine)
     tool = tool_from_spec(args.tool)
     stock = stock_from_spec(args.stock)
-    reading = {}
-    table = tool_table(args.tools)  # read once: for the reader and for the chord
-    if table is not None:
-        reading["tools"] = table
-    if args.integer_input is not None:
-        reading["integer_input"] = args.integer_input
-    # the machine starts at its home and G28 returns there: Z at the top of its travel
-    reading["reference"] = dict(zip(machine.axes, machine.home.tolist(), strict=True))
-    # arcs and rotary moves as fine as the finest tool is drawn (a tenth of its facets)
-    chord = path_chord_tolerance([tool, *_table_tools(table)])
-    if args.chord_nm is not None:
-        chord = args.chord_nm * 1e-9
-    program = read_program(args.program, chord_tolerance=chord, **reading)
+    program, chord = read_for_machine(args, args.program, machine, tool)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None
     if errors is not None:
         try:

@@ -374,3 +374,39 @@ def test_cli_refuses_bad_input_with_a_clear_message(tmp_path):
     with pytest.raises(InputError, match="reads parts as float64 PLY .*not .stl"):
         run([str(tmp_path / "part.stl"), "--html", str(tmp_path / "x.html")])
     assert not list(tmp_path.glob("*.html"))
+
+
+def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path, monkeypatch):
+    import machinesim.viewer.machine as viewer_machine
+    from machinesim.nc import read_program
+
+    program = tmp_path / "integers.nc"
+    program.write_text("G90 G21\nG00 X-200 Y400 Z100\nG00 Z-20\nG01 X1200 F500\n"
+                       "G02 X1400 Y600 R200\nG00 Z100\nM30\n")
+    seen = {}
+
+    def capture(machine, program, **kwargs):
+        seen.update(program=program, **kwargs)
+        return Scene("captured")
+
+    monkeypatch.setattr(viewer_machine, "machine_scene", capture)
+    assert run(["grooving_4axis", "--program", str(program), "--integer-input", "increment",
+                "--chord-nm", "3", "--stock", STOCK, "--html", str(tmp_path / "m.html")]) == 0
+    # increment input: X1200 is 1.2 um; the arc split within the 3 nm asked for
+    expected = read_program(program, integer_input="increment", chord_tolerance=3 * 1e-9,
+                            reference=dict(zip("XYZC", load_machine("grooving_4axis").home)))
+    assert seen["program"].moves == expected.moves
+    assert seen["chord_tolerance"] == 3 * 1e-9
+    assert expected.targets[2, 0] == pytest.approx(1.2e-6, rel=1e-12)
+
+    tools = tmp_path / "tools.toml"
+    tools.write_text("[tool.1]\nlength_mm = 2.5\n")
+    changed = tmp_path / "changed.nc"
+    changed.write_text("G90 G21\nT1 M06\nG00 G43 H1 Z1.\nG01 X0.5 F500\nM30\n")
+    with pytest.raises(InputError, match="T1 at line 2 .*length 2.5 mm.*machinesim cut --tools"):
+        run(["grooving_4axis", "--program", str(changed), "--tools", str(tools),
+             "--html", str(tmp_path / "t.html")])
+    with pytest.raises(InputError, match="--integer-input read a program: give one"):
+        run(["grooving_4axis", "--integer-input", "increment"])
+    with pytest.raises(InputError, match="--chord-nm do\\(es\\) not apply to a part"):
+        run([str(tmp_path / "missing.ply"), "--chord-nm", "2"])

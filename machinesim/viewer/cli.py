@@ -1,6 +1,7 @@
 """The ``machinesim view`` subcommand: a machine, a part or a report folder in the browser.
 
-    machinesim view MACHINE [--program P.nc --tool SPEC --stock SPEC --errors E.toml]
+    machinesim view MACHINE [--program P.nc --tool SPEC --stock SPEC --errors E.toml
+                            --tools T.toml --integer-input RULE --chord-nm NM]
     machinesim view PART.ply [--report REPORT.json] [--nominal NOMINAL.ply]
     machinesim view REPORT_DIR
     ... [--html FILE.html] [--screenshot FILE.png] [--port PORT] [--max-triangles N]
@@ -17,6 +18,11 @@ import sys
 from pathlib import Path
 
 from machinesim._io import check_readable_file, check_writable, file_name, read_json
+from machinesim._program_options import (
+    add_reading_options,
+    check_reading_options,
+    read_for_machine,
+)
 from machinesim.exceptions import InputError
 
 EXAMPLES = """examples:
@@ -66,6 +72,7 @@ def add_view_parser(sub) -> argparse.ArgumentParser:
                               "block:10x10x2)")
     machine.add_argument("--errors", type=Path, default=None,
                          help="injected errors, TOML (default: none)")
+    add_reading_options(machine)
     machine.add_argument("--duration", type=float, default=20.0,
                          help="longest animation, s: a longer program plays faster "
                               "(default 20)")
@@ -125,7 +132,8 @@ def run_view(args: argparse.Namespace) -> int:
 
 def _scene(args, budget: int):
     target = Path(args.target)
-    machine_options = [f"--{name}" for name in ("program", "errors")
+    machine_options = [f"--{name.replace('_', '-')}" for name in
+                       ("program", "errors", "tools", "integer_input", "chord_nm")
                        if getattr(args, name) is not None]
     part_options = [f"--{name}" for name in ("report", "nominal")
                     if getattr(args, name) is not None]
@@ -155,26 +163,46 @@ def _scene(args, budget: int):
                              f"{type(report).__name__}", source=str(args.report))
         return part_scene(target, nominal=args.nominal, report=report,
                           title=f"part {target.name}", max_triangles=budget)
+    from machinesim.machines import load_machine
     from machinesim.viewer.machine import machine_scene
 
     _refuse(part_options, "a machine")
+    reading = [f"--{name.replace('_', '-')}" for name in ("tools", "integer_input", "chord_nm")
+               if getattr(args, name) is not None]
+    if reading and args.program is None:
+        raise InputError(f"{', '.join(reading)} read a program: give one with --program")
+    check_reading_options(args)
+    machine = load_machine(args.target)
     program = errors = chord = None
     if args.program is not None:
-        from machinesim.nc import read_program
-        from machinesim.tools import path_chord_tolerance, tool_from_spec
+        from machinesim.tools import tool_from_spec
 
-        # arcs and rotary moves as fine as the tool is drawn, as `machinesim cut` reads them
-        tool = tool_from_spec(args.tool)
-        chord = path_chord_tolerance([tool])
-        program = read_program(check_readable_file(args.program, "NC program (--program)"),
-                               chord_tolerance=chord)
+        # read as `machinesim cut` reads it: the same tool table, integer input and chords
+        program, chord = read_for_machine(
+            args, check_readable_file(args.program, "NC program (--program)"), machine,
+            tool_from_spec(args.tool))
+        _refuse_tool_changes(program)
     if args.errors is not None:
         from machinesim.errors import ErrorModel
 
         errors = ErrorModel.from_toml(args.errors)
-    return machine_scene(args.target, program, tool=args.tool, stock=args.stock,
+    return machine_scene(machine, program, tool=args.tool, stock=args.stock,
                          errors=errors, duration_s=args.duration, max_triangles=budget,
                          chord_tolerance=chord)
+
+
+def _refuse_tool_changes(program) -> None:
+    """The animation cuts with one tool (--tool): refuse a program whose tool table changes
+    the tool's shape or length, rather than show a part that tool would not cut."""
+    for change in program.tool_changes:
+        if change.shape is not None or change.length_m != 0.0:
+            what = (f"shape {change.shape}" if change.shape is not None
+                    else f"length {change.length_m * 1e3:g} mm")
+            raise InputError(
+                f"T{change.number} at line {change.line} puts a tool of {what} in the "
+                "spindle; the viewer animates one tool (--tool): cut the program with "
+                "'machinesim cut --tools' and view the part (machinesim view PART.ply)",
+                source=program.source, line=change.line)
 
 
 def _refuse(options: list[str], what: str) -> None:

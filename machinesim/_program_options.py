@@ -1,0 +1,70 @@
+"""How the command line reads an NC program: the options ``cut`` and ``view`` share.
+
+``--tools``, ``--integer-input`` and ``--chord-nm`` mean the same in both commands, and a
+program is read the same way for both (`read_for_machine`): G28 returns to the machine's
+home, arcs are split as finely as the finest tool is drawn unless ``--chord-nm`` says.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from machinesim._io import check_readable_file
+from machinesim.exceptions import InputError
+
+
+def add_reading_options(parser) -> None:
+    """Add ``--tools``, ``--integer-input`` and ``--chord-nm`` to ``parser`` (an argparse
+    parser or argument group)."""
+    parser.add_argument("--tools", type=Path, default=None, metavar="TOOLS.toml",
+                        help="tool table for T/D/H words and G43/G44 (TOML, units in keys); "
+                             "T/M06 change the cut to a tool's length and shape (docs/nc.md)")
+    parser.add_argument("--integer-input", choices=("calculator", "increment"), default=None,
+                        help="how an axis number without decimal point reads: calculator "
+                             "(X10 is 10 mm, the default) or increment (X10 is 10 nm)")
+    parser.add_argument("--chord-nm", type=float, default=None, metavar="NM",
+                        help="largest distance of the chords arcs and rotary moves are cut "
+                             "as from the true path, nm; default: a tenth of the finest "
+                             "tool's own facet tolerance, at least 1 nm (1 nm for V and nose "
+                             "tools, 100 nm for ball and flat end mills)")
+
+
+def check_reading_options(args: argparse.Namespace) -> None:
+    """Refuse a ``--chord-nm`` that is not a length and an unreadable ``--tools`` (before any
+    work)."""
+    if args.chord_nm is not None and not (math.isfinite(args.chord_nm) and args.chord_nm > 0):
+        raise InputError(f"--chord-nm {args.chord_nm!r}: expected a length in nm above 0")
+    if args.tools is not None:
+        check_readable_file(args.tools, "tool table (--tools)")
+
+
+def table_tools(table) -> list:
+    """The tools a tool table's ``shape`` entries name (none without a table)."""
+    from machinesim.tools import tool_from_spec
+
+    entries = table.tools.values() if table is not None else ()
+    return [tool_from_spec(entry.shape) for entry in entries if entry.shape is not None]
+
+
+def read_for_machine(args: argparse.Namespace, path, machine, tool):
+    """(program, chord tolerance in m) of the NC program at ``path``, read with ``args``'s
+    reading options for ``machine`` cutting with ``tool`` (and the table's tools)."""
+    from machinesim.nc import read_program
+    from machinesim.nc.tooltable import tool_table
+    from machinesim.tools import path_chord_tolerance
+
+    reading = {}
+    table = tool_table(args.tools)  # read once: for the reader and for the chord
+    if table is not None:
+        reading["tools"] = table
+    if args.integer_input is not None:
+        reading["integer_input"] = args.integer_input
+    # the machine starts at its home and G28 returns there: Z at the top of its travel
+    reading["reference"] = dict(zip(machine.axes, machine.home.tolist(), strict=True))
+    # arcs and rotary moves as fine as the finest tool is drawn (a tenth of its facets)
+    chord = path_chord_tolerance([tool, *table_tools(table)])
+    if args.chord_nm is not None:
+        chord = args.chord_nm * 1e-9
+    return read_program(path, chord_tolerance=chord, **reading), chord
