@@ -355,6 +355,17 @@ class Kinematics:
                 self.frame_id[name] = self.model.getFrameId(name)
         self._plans: dict[tuple[int, str], tuple[object, list]] = {}
 
+    def __getstate__(self) -> dict:
+        # Pinocchio's Data is a workspace every algorithm here fills before it reads it, and
+        # it pickles to tens of MB (73 MB for grooving_4axis): a copy gets a fresh one
+        state = self.__dict__.copy()
+        del state["data"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self.data = self.model.createData()
+
     # ---------------------------------------------------------------- checks of error models
 
     def axis(self, letter: str, key: str) -> Axis:

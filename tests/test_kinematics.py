@@ -428,3 +428,20 @@ def test_home_is_z_at_the_top_of_its_travel_and_every_other_axis_at_zero(name):
     expected[z] = machine.upper[z]
     np.testing.assert_array_equal(machine.home, expected)
     assert machine.upper[z] > 0.0  # clear of a work zero at machine zero
+
+
+def test_a_pickled_machine_carries_no_pinocchio_workspace_and_computes_the_same():
+    import pickle
+
+    machine = load_machine("robonano_a0ib")
+    errors = random_errors(machine, np.random.default_rng(3))
+    q = random_q(machine, np.random.default_rng(4), 5)
+    raw = pickle.dumps(machine)
+    # the workspace (pin.Data) alone pickles to more than the whole machine does now
+    assert len(raw) < len(pickle.dumps(machine.kin.data))
+    back = pickle.loads(raw)
+    assert isinstance(back.kin.data, pin.Data)
+    np.testing.assert_array_equal(back.tool_pose(q, errors), machine.tool_pose(q, errors))
+    full = machine.kin.full_q(q[0], machine.binding(errors))
+    np.testing.assert_array_equal(back.kin.relative_jacobian(full),
+                                  machine.kin.relative_jacobian(full))
