@@ -52,6 +52,8 @@ PART_FORMATS = {
     ".stl": ("stl", "binary STL, millimetres, float32: display only"),
     ".glb": ("glb", "binary glTF, millimetres, float32: display only"),
 }
+#: Work coordinate systems other than G54, which the command line gives no offsets for.
+WORK_OFFSETS = ("G55", "G56", "G57", "G58", "G59")
 #: Exit status when the input cannot be used.
 EXIT_INPUT = 2
 #: Exit status after Ctrl-C (128 + SIGINT, as shells report it).
@@ -313,6 +315,10 @@ def _cut(args) -> int:
         print(f"note: arcs and rotary moves were split into chords within {chord * 1e9:.4g} nm, "
               "a tenth of the tool's own facets (--chord-nm sets it; docs/cutting.md)",
               file=sys.stderr)
+    for word, line in program.states.items():
+        if word in WORK_OFFSETS:
+            print(f"note: {word} at line {line} selects a work offset this command is not "
+                  "given: taken as zero, the same as G54 (docs/nc.md)", file=sys.stderr)
     for line in report.holder_contact:
         print(f"warning: holder touched the part at line {line}", file=sys.stderr)
     for line in report.rapids_that_cut:

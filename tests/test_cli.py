@@ -523,3 +523,27 @@ def test_version_prints_the_installed_packages_version(capsys):
         main(["--version"])
     assert exit_.value.code == 0
     assert capsys.readouterr().out.strip() == f"machinesim {version('machinesim')}"
+
+
+def test_a_work_offset_the_command_is_not_given_is_taken_as_zero_and_said(tmp_path, capsys):
+    # G55 and G57 select systems machinesim cut has no offsets for: the part is G54's (the
+    # same program without them), and each is named with its line, on stderr and in the report
+    body = "G0 X1. Y1. Z0.1\nG1 Z-0.01 F100.\nX3.\nG0 Z0.1\n"
+    plain, offset = tmp_path / "g54.nc", tmp_path / "g55.nc"
+    plain.write_text(f"G90 G21\n{body}M30\n")
+    offset.write_text(f"G90 G21 G55\n{body}G57\nM30\n")
+    parts = []
+    for program in (plain, offset):
+        out = tmp_path / f"{program.stem}.ply"
+        code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
+                            "--stock", "block:5x3x1", "--quiet", "--out", out,
+                            "--report", tmp_path / f"{program.stem}.json"], capsys)
+        assert code == 0, err
+        parts.append(out.read_bytes())
+    assert parts[0] == parts[1]
+    notes = [line for line in err.splitlines() if "work offset" in line]
+    assert notes == [f"note: {word} at line {line} selects a work offset this command is not "
+                     "given: taken as zero, the same as G54 (docs/nc.md)"
+                     for word, line in (("G55", 1), ("G57", 6))]
+    states = json.loads((tmp_path / "g55.json").read_text(), parse_constant=no_nan)
+    assert {"word": "G55", "line": 1} in states["nc"]["states"]

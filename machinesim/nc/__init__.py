@@ -41,7 +41,8 @@ G codes
     itself). G81/G82/G83 canned cycles along Z in G17 with R, Z, Q, P, K and G98/G99,
     expanded into moves; G80 or a motion code cancels. Accepted as states, no geometric
     effect, listed in `Program.states` with their first line: G40, G61, G64, G80,
-    G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words. Refused: G41/G42 (cutter radius
+    G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words, and G55..G59 selected without
+    offsets given for them (G54's zero). Refused: G41/G42 (cutter radius
     compensation), G95, and every G code not named here.
 Subprograms
     The main program is the file's first program (its O number in the first block, if any);

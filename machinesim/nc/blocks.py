@@ -194,6 +194,9 @@ class Block:
             state.plane = g["plane"][0]
         if "work offset" in g:
             state.work_offset = g["work offset"][0]
+            if state.work_offset != "G54" and state.work_offset not in self.offsets:
+                # a system without offsets is G54's zero: listed, since the program meant one
+                self.reader.note(state.work_offset, line)
         if "return level" in g:
             state.retract = g["return level"][0]
         for group in ("cutter compensation", "path mode"):
