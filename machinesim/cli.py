@@ -52,8 +52,6 @@ PART_FORMATS = {
     ".stl": ("stl", "binary STL, millimetres, float32: display only"),
     ".glb": ("glb", "binary glTF, millimetres, float32: display only"),
 }
-#: Work coordinate systems other than G54, which the command line gives no offsets for.
-WORK_OFFSETS = ("G55", "G56", "G57", "G58", "G59")
 #: Exit status when the input cannot be used.
 EXIT_INPUT = 2
 #: Exit status after Ctrl-C (128 + SIGINT, as shells report it).
@@ -234,6 +232,35 @@ def _progress_bar(quiet: bool):
     return show
 
 
+def _reading_notes(args, program, chord: float) -> list[str]:
+    """What the command line chose in reading the program that the user should know: arcs
+    and rotary moves split coarser than 1 nm by default, work offsets it was not given."""
+    from machinesim.nc.program import WORK_OFFSETS
+
+    notes = []
+    if chord > CHORD_TOLERANCE_M and args.chord_nm is None and _has_chords(program):
+        notes.append(f"arcs and rotary moves were split into chords within {chord * 1e9:.4g} "
+                     "nm, a tenth of the tool's own facets (--chord-nm sets it; "
+                     "docs/cutting.md)")
+    notes += [f"{word} at line {line} selects a work offset this command is not given: "
+              "taken as zero, the same as G54 (docs/nc.md)"
+              for word, line in program.states.items() if word in WORK_OFFSETS]
+    return notes
+
+
+def _has_chords(program) -> bool:
+    """Whether the chord tolerance shaped the cut: the program has arcs, or feed moves that
+    turn a rotary axis."""
+    import numpy as np
+
+    from machinesim.nc.program import AXES, KIND_LINEAR, ROTARY_AXES
+
+    rotary = program.targets[:, [AXES.index(a) for a in ROTARY_AXES]]
+    feeds = program.kinds[1:] == KIND_LINEAR
+    turns = (np.diff(rotary, axis=0) != 0.0) & ~np.isnan(rotary[:-1]) & feeds[:, None]
+    return program.arc_blocks > 0 or bool(turns.any())
+
+
 def _cut(args) -> int:
     """``machinesim cut``: every input checked before cutting, both outputs written together.
 
@@ -293,6 +320,7 @@ def _cut(args) -> int:
         raise InputError(exc.message, source=str(args.errors), key=exc.key) from None
     summary = report.to_dict()
     summary["path_chord_tolerance_nm"] = chord * 1e9
+    summary["notes"] = [*summary["notes"], *_reading_notes(args, program, chord)]
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
     files = [(args.out, part.encode(file_format))]
@@ -309,16 +337,8 @@ def _cut(args) -> int:
               f"{entry['removed_volume_mm3']:.6g} mm^3")
     if args.report is not None:
         print(f"wrote {args.report} (cut report, JSON, units in every key)")
-    for note in report.notes:
+    for note in summary["notes"]:
         print(f"note: {note}", file=sys.stderr)
-    if chord > CHORD_TOLERANCE_M and args.chord_nm is None:
-        print(f"note: arcs and rotary moves were split into chords within {chord * 1e9:.4g} nm, "
-              "a tenth of the tool's own facets (--chord-nm sets it; docs/cutting.md)",
-              file=sys.stderr)
-    for word, line in program.states.items():
-        if word in WORK_OFFSETS:
-            print(f"note: {word} at line {line} selects a work offset this command is not "
-                  "given: taken as zero, the same as G54 (docs/nc.md)", file=sys.stderr)
     for line in report.holder_contact:
         print(f"warning: holder touched the part at line {line}", file=sys.stderr)
     for line in report.rapids_that_cut:

@@ -466,10 +466,8 @@ def test_a_table_tool_with_a_radius_and_no_shape_is_noted_when_the_cut_tool_diff
                 "own tool (no radius, VTool) cut for it")
     assert len(notes["v:90"][0]) == 1 and notes["v:90"][0][0].startswith("note: " + expected)
     assert len(notes["v:90"][1]) == 1 and notes["v:90"][1][0].startswith(expected)
-    # the ball agrees with the table: only the chord its 1 um facets call for is noted
-    assert notes["ball:1.0"][1] == [] and len(notes["ball:1.0"][0]) == 1
-    assert notes["ball:1.0"][0][0].startswith("note: arcs and rotary moves were split into "
-                                              "chords within 100 nm")
+    # the ball agrees with the table, and the program has no arc to split: nothing noted
+    assert notes["ball:1.0"] == ([], [])
 
 
 def test_the_report_lists_how_the_program_was_read(tmp_path, capsys):
@@ -547,3 +545,24 @@ def test_a_work_offset_the_command_is_not_given_is_taken_as_zero_and_said(tmp_pa
                      for word, line in (("G55", 1), ("G57", 6))]
     states = json.loads((tmp_path / "g55.json").read_text(), parse_constant=no_nan)
     assert {"word": "G55", "line": 1} in states["nc"]["states"]
+
+
+@pytest.mark.parametrize("body, noted", [
+    ("G1 Z-0.01 F100.\nX3.\n", False),                      # straight feeds: no chord
+    ("G1 Z-0.01 F100.\nG2 X3. Y1. R1.\n", True),             # an arc
+    ("G1 Z-0.01 F100.\nX3. C10.\n", True),                   # a feed that turns C
+    ("G1 Z-0.01 F100.\nG0 C10.\nG1 X3.\n", False),          # C turned by a rapid only
+])
+def test_the_chord_note_is_given_when_arcs_or_rotary_feeds_were_split(tmp_path, capsys, body,
+                                                                    noted):
+    program = tmp_path / "p.nc"
+    program.write_text(f"G90 G21\nG0 X1. Y1. Z0.1 C0.\n{body}G0 Z0.1\nM30\n")
+    report = tmp_path / "r.json"
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "ball:0.5",
+                        "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply",
+                        "--report", report], capsys)
+    assert code == 0, err
+    note = ("arcs and rotary moves were split into chords within 100 nm, a tenth of the "
+            "tool's own facets (--chord-nm sets it; docs/cutting.md)")
+    assert (f"note: {note}" in err.splitlines()) == noted
+    assert (note in json.loads(report.read_text(), parse_constant=no_nan)["notes"]) == noted

@@ -454,6 +454,13 @@ def test_programs_pickle_and_copy():
         assert back == program
         assert not back.targets.flags.writeable
         assert back.moves[1] == program.moves[1]
+    # the tool changes and the arcs read come back too: a copy cuts with the same tools
+    tools = ToolTable.from_dict({"tool": {"2": {"length_mm": 2.5, "shape": "ball:0.5"}}})
+    changed = parse_program("G00 X0 Y0\nT2 M06\nG01 X1. F10\nG02 X3. R1.\nG03 X1. R1.\n",
+                            tools=tools)
+    assert changed.arc_blocks == 2 and changed.tool_changes[0].length_m == 2.5e-3
+    for back in (pickle.loads(pickle.dumps(changed)), copy.deepcopy(changed)):
+        assert back.tool_changes == changed.tool_changes and back.arc_blocks == 2
 
 
 def test_read_program_file_errors_name_the_path(tmp_path):

@@ -406,6 +406,7 @@ class Block:
 
     def arc(self, axes: list[Word], block_number: int | None) -> None:
         state, single, reader = self.state, self.single, self.reader
+        reader.arc_blocks += 1
         (u, v, normal), centre_letters = PLANES[state.plane]
         word = next(iter(axes), None) or next(single[k] for k in "IJKR" if k in single)
         g_word = self.g_codes.get("motion", (None, word))[1]

@@ -157,6 +157,9 @@ class Program:
     tool_changes : tuple of machinesim.nc.tooltable.ToolChange
         The tools put in the spindle and the moves they cut from (read from T and M06
         with a tool table; empty otherwise, and for programs built from moves).
+    arc_blocks : int
+        How many G02/G03 blocks were read (each run of a subprogram counted): their moves
+        are chords within the reader's ``chord_tolerance``. 0 for programs built from moves.
 
     All arrays are read-only.
 
@@ -170,7 +173,7 @@ class Program:
 
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
-                 "tool_table", "tool_changes", "_moves")
+                 "tool_table", "tool_changes", "arc_blocks", "_moves")
 
     def __init__(
         self,
@@ -279,16 +282,17 @@ class Program:
     @classmethod
     def _from_parts(cls, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, *,
                     number, source, work_offsets, states, integer_input,
-                    tool_table=None, tool_changes=()) -> Program:
+                    tool_table=None, tool_changes=(), arc_blocks=0) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
-                      source, work_offsets, states, integer_input, tool_table, tool_changes)
+                      source, work_offsets, states, integer_input, tool_table, tool_changes,
+                      arc_blocks)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
               source, work_offsets, states, integer_input, tool_table=None,
-              tool_changes=()) -> None:
+              tool_changes=(), arc_blocks=0) -> None:
         set_ = object.__setattr__
         set_(self, "source", source)
         set_(self, "number", number)
@@ -306,6 +310,7 @@ class Program:
         set_(self, "tool_table", tool_table)
         set_(self, "states", _states(states, source))
         set_(self, "tool_changes", tuple(tool_changes))
+        set_(self, "arc_blocks", int(arc_blocks))
         codes = _m_codes(m_codes, len(kinds), source)
         for name, array in (("_targets", targets), ("_kinds", kinds), ("_feeds", feeds),
                             ("_dwells", dwells), ("_lines", lines), ("_spindles", spindles),
@@ -392,7 +397,8 @@ class Program:
         return (_rebuild, (self._targets, self._kinds, self._feeds, self._dwells, self._lines,
                            self._spindles, self._blocks, dict(self._m_codes), self.number,
                            self.source, {k: dict(v) for k, v in self.work_offsets.items()},
-                           dict(self.states), self.integer_input, self.tool_table))
+                           dict(self.states), self.integer_input, self.tool_table,
+                           self.tool_changes, self.arc_blocks))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -406,12 +412,14 @@ class Program:
 
 
 def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number, source,
-             work_offsets, states, integer_input, tool_table=None) -> Program:
+             work_offsets, states, integer_input, tool_table=None, tool_changes=(),
+             arc_blocks=0) -> Program:
     """Unpickle a `Program` (the arrays come back writeable copies: made read-only again)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
                                states=states, integer_input=integer_input,
-                               tool_table=tool_table)
+                               tool_table=tool_table, tool_changes=tool_changes,
+                               arc_blocks=arc_blocks)
 
 
 def _states(states: Mapping[str, int] | None, source: str) -> FrozenMapping:
