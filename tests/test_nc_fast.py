@@ -39,7 +39,8 @@ _motion_line = st.tuples(
 ).map(lambda t: t[4].join(w for w in (t[0], t[1], *t[2], t[3]) if w) + t[5])
 _other_line = st.sampled_from([
     "(comment)", "G91", "G90", "G20", "G21", "M08", "S1000", "G04 P10", "; note", "",
-    "G55", "X 1.", "Z - .5", "X+ 1", "Y -\t2.", "G00 X0 Y0 Z0 A0 B0 C0", "G43 H1", "G49", "%", "M30", "O12",
+    "G55", "X 1.", "Z - .5", "X+ 1", "Y -\t2.", "G00 X0 Y0 Z0 A0 B0 C0", "G43 H1", "G49",
+    "%", "M30", "O12",
 ])
 _program = st.tuples(
     st.sampled_from(["", "G00 X0 Y0 Z0 A0 B0 C0\n", "G01 X0 Z0 C0 F100\n"]),

@@ -393,8 +393,9 @@ def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path
     assert run(["grooving_4axis", "--program", str(program), "--integer-input", "increment",
                 "--chord-nm", "3", "--stock", STOCK, "--html", str(tmp_path / "m.html")]) == 0
     # increment input: X1200 is 1.2 um; the arc split within the 3 nm asked for
+    home = load_machine("grooving_4axis").home
     expected = read_program(program, integer_input="increment", chord_tolerance=3 * 1e-9,
-                            reference=dict(zip("XYZC", load_machine("grooving_4axis").home)))
+                            reference=dict(zip("XYZC", home, strict=True)))
     assert seen["program"].moves == expected.moves
     assert seen["chord_tolerance"] == 3 * 1e-9
     assert expected.targets[2, 0] == pytest.approx(1.2e-6, rel=1e-12)
@@ -410,3 +411,19 @@ def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path
         run(["grooving_4axis", "--integer-input", "increment"])
     with pytest.raises(InputError, match="--chord-nm do\\(es\\) not apply to a part"):
         run([str(tmp_path / "missing.ply"), "--chord-nm", "2"])
+
+
+def test_a_program_that_misses_the_stock_is_warned_on_the_page_and_on_stderr(tmp_path, capsys):
+    # the grooves run at Y 0.4 mm: on a block 0.8 mm wide they cut, moved 5 mm aside they miss
+    program = tmp_path / "grooves.nc"
+    program.write_text("G90 G21\nG00 X-0.2 Y0.4 Z0.1\nG00 Z-0.02\nG01 X1.2 F500\n"
+                       "G00 Z0.1\nM30\n")
+    for stock, missed in ((STOCK, False), ("block:1x0.8x0.5@5,5,-0.5", True)):
+        page = tmp_path / f"{missed}.html"
+        assert run(["grooving_4axis", "--program", str(program), "--stock", stock,
+                    "--tool", "v:150", "--max-triangles", str(BUDGET), "--html",
+                    str(page)]) == 0
+        err = capsys.readouterr().err
+        assert ("warning: the program removed no material" in err) == missed
+        assert ("<b>warning:</b> the program removed no material"
+                in page.read_text(encoding="utf-8")) == missed

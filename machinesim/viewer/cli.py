@@ -104,6 +104,8 @@ def run_view(args: argparse.Namespace) -> int:
         if path is not None:
             check_writable(path, what)
     scene = _scene(args, budget)
+    for line in scene.warnings:
+        print(f"warning: {line}", file=sys.stderr)
     if args.html is not None:
         from machinesim.viewer.scene import write_html
 

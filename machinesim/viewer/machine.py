@@ -128,7 +128,11 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
                     ACTUAL_COLOUR)
     scene.add_mesh("tool", *tool_mesh(tool), colour=TOOL_COLOUR)
 
-    stage_times, parts = cut_by_block(trajectory, machine, tool, stock, errors, max_stages)
+    stage_times, parts, empty = _stages(trajectory, machine, tool, stock, errors, max_stages)
+    if empty:
+        scene.warnings.append("the program removed no material (does it reach the stock? "
+                              "the stock is placed in the workpiece frame: --stock "
+                              "block:LxWxH@x,y,z, mm)")
     for k, part in enumerate(parts):
         scene.add_mesh(f"workpiece/stages/{k}", *decimate(*part.mesh(), STAGE_TRIANGLES),
                        colour=PART_COLOUR)
@@ -186,15 +190,22 @@ def cut_by_block(trajectory, machine, tool, stock, errors=None, max_stages: int 
     parts : list of Part
         The stock, then the part after each block or group (same length as ``times``).
     """
+    times, parts, _ = _stages(trajectory, machine, tool, stock, errors, max_stages)
+    return times, parts
+
+
+def _stages(trajectory, machine, tool, stock, errors, max_stages):
+    """`cut_by_block`'s times and parts, and whether no stage removed any material."""
     feeds = [s for s in trajectory.segments if s.kind == "linear" and len(s.q) > 1]
     groups = np.array_split(np.arange(len(feeds)), min(len(feeds), max_stages)) if feeds else []
-    times, parts = [0.0], [stock]
+    times, parts, empty = [0.0], [stock], True
     for group in groups:
         paths = [machine.tool_pose(feeds[i].q, errors) for i in group]
-        part, _ = remove(parts[-1], tool, paths)
+        part, report = remove(parts[-1], tool, paths)
+        empty = empty and bool(report.empty_cut)
         times.append(float(feeds[group[-1]].t[-1]))
         parts.append(part)
-    return times, parts
+    return times, parts, empty
 
 
 def _feed_count(trajectory) -> int:

@@ -60,6 +60,7 @@ class Scene:
         self._frames: list[tuple[str, str, bytes]] = []
         self.legends: list[Legend] = []
         self.notes: list[str] = []
+        self.warnings: list[str] = []  # shown in the overlay and printed by the command
         self.vis = meshcat.Visualizer(window=_Recorder(self._frames))
         self.vis["/Background"].set_property("top_color", list(BACKGROUND[0]))
         self.vis["/Background"].set_property("bottom_color", list(BACKGROUND[1]))
@@ -184,6 +185,7 @@ def overlay_html(scene: Scene) -> str:
     parts = ['<div id="machinesim-overlay">', '<div class="ms-panel">',
              f'<div class="ms-title">{html.escape(scene.title)}</div>']
     parts += [f"<div>{html.escape(line)}</div>" for line in scene.notes]
+    parts += [f"<div><b>warning:</b> {html.escape(line)}</div>" for line in scene.warnings]
     parts.append("</div>")
     for legend in scene.legends:
         stops = ", ".join(f"{css_colour(c)} {100 * k / (len(legend.stops) - 1):.1f}%"
