@@ -13,7 +13,19 @@ from __future__ import annotations
 
 import importlib
 
-from machinesim.exceptions import MachineSimError
+from machinesim.exceptions import (
+    AxisLimitError,
+    ErrorModelError,
+    FileError,
+    HolderContactError,
+    InputError,
+    KinematicsError,
+    MachineSimError,
+    ModelError,
+    NCProgramError,
+    NotConvergedError,
+    UnreachableError,
+)
 
 #: Names imported on first use (PEP 562), so that ``import machinesim.cli`` costs little:
 #: the command line then catches even a Ctrl-C while numpy and Pinocchio load.
@@ -51,12 +63,22 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, **opt
 
 
 __all__ = [
+    "AxisLimitError",
     "AxisSolution",
     "ComponentError",
     "ErrorModel",
+    "ErrorModelError",
+    "FileError",
+    "HolderContactError",
+    "InputError",
+    "KinematicsError",
     "Lab",
     "Machine",
     "MachineSimError",
+    "ModelError",
+    "NCProgramError",
+    "NotConvergedError",
+    "UnreachableError",
     "Realism",
     "ToolGeometry",
     "ToolSetting",

@@ -280,3 +280,18 @@ def test_the_api_refuses_what_it_cannot_use_with_a_machinesim_error():
     # one "PARAM=DIST" string is one variation, not one per character
     assert [name for name, _ in _vary("microscope.sigma=uniform:5nm,200nm")] == [
         "microscope.sigma"]
+
+
+def test_every_error_kind_the_docs_name_is_importable_from_the_package():
+    import machinesim.exceptions as exceptions
+
+    kinds = {name for name, value in vars(exceptions).items()
+             if isinstance(value, type) and issubclass(value, exceptions.MachineSimError)}
+    assert kinds >= {"InputError", "ModelError", "UnreachableError", "AxisLimitError",
+                     "HolderContactError", "NCProgramError"}
+    for name in kinds:
+        assert getattr(machinesim, name) is getattr(exceptions, name)
+        assert name in machinesim.__all__
+    # the refusals a user meets first are caught by the name the package gives
+    with pytest.raises(machinesim.ModelError):
+        machinesim.load_machine("no_such_machine")
