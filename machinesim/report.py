@@ -448,10 +448,14 @@ def _check_replaceable(folder: Path, refuse) -> None:
         refuse(f"cannot read the report folder ({exc.strerror or exc})")
     if not names:
         return
+
+    def shown(found: list[str]) -> str:
+        return ", ".join(found[:5]) + (f" and {len(found) - 5} more" if len(found) > 5 else "")
+
     if "summary.json" not in names:
-        refuse("holds files but no summary.json, so it is not a report folder, and a new "
-               "report replaces its folder whole; give a new or empty folder (or one a "
-               "scenario wrote)")
+        refuse(f"holds files ({shown(names)}) but no summary.json, so it is not a report "
+               "folder, and a new report replaces its folder whole; give a new or empty "
+               "folder (or one a scenario wrote)")
     try:
         listed = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
         listed = listed.get("files") if isinstance(listed, dict) else None
@@ -460,9 +464,7 @@ def _check_replaceable(folder: Path, refuse) -> None:
     listed = {str(n) for n in listed} if isinstance(listed, list) else set()
     foreign = [n for n in names if n != "summary.json" and n not in listed]
     if foreign:
-        shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more"
-                                          if len(foreign) > 5 else "")
-        refuse(f"holds files its summary.json does not list ({shown}); a new report "
+        refuse(f"holds files its summary.json does not list ({shown(foreign)}); a new report "
                "replaces its folder whole, so they would be lost: move them, or give "
                "another folder")
 

@@ -171,7 +171,7 @@ def test_a_stale_staging_folder_of_a_killed_run_is_removed(tmp_path):
 
 
 def test_a_folder_that_is_not_a_report_is_refused_not_replaced(tmp_path, capsys):
-    for content, message in (({"notes.txt": "mine"}, "holds files but no summary.json"),
+    for content, message in (({"notes.txt": "mine"}, "holds files (notes.txt) but no summary.json"),
                              ({"summary.json": '{"files": ["summary.json"]}',
                                "notes.txt": "mine"},
                               "holds files its summary.json does not list (notes.txt)")):
