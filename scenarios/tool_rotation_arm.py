@@ -86,7 +86,14 @@ def report(args) -> None:
     given = {}
     if args.e_ys_um is not None:
         given["tool.y"] = args.e_ys_um * UM
+    if args.e_ys_um is not None and not math.isfinite(args.e_ys_um):
+        raise InputError(f"--e-ys-um {args.e_ys_um!r}: expected a length in um",
+                         key="e-ys-um")
     if args.r_mm is not None:
+        if not (math.isfinite(args.r_mm) and args.r_mm > 0.0):
+            raise InputError(f"--r-mm {args.r_mm!r}: expected the arm radius, a length in mm "
+                             f"above 0 (the nominal arm is r0 = {r0 / MM:.3f} mm, and the "
+                             "plan finds r within --capture-mm of it)", key="r-mm")
         given["tool.z"] = -(args.r_mm * MM - r0)
     errors, realism = injected_errors(args, defaults, given, machine.name), realism_from(args)
 

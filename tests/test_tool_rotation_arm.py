@@ -358,7 +358,9 @@ def test_the_scenario_ends_a_machinesim_error_with_one_line(tmp_path):
                              (("--r-mm", "121.7", "--capture-mm", "0"),
                               "--capture-mm 0.0: expected a length in mm above 0"),
                              (("--r-mm", "121", "--capture-mm", "0.3"),
-                              "exceeds the plan's capture range 0.3 mm")):
+                              "exceeds the plan's capture range 0.3 mm"),
+                             (("--r-mm", "-5"), "--r-mm -5.0: expected the arm radius, a "
+                              "length in mm above 0 (the nominal arm is r0 = 120.500 mm")):
         result = scenario("--realism", "ideal", *options, "--out", str(tmp_path))
         assert result.returncode == 2
         assert "Traceback" not in result.stderr
