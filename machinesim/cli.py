@@ -38,12 +38,13 @@ from machinesim._program_options import (
 from machinesim.exceptions import ErrorModelError, InputError, MachineSimError
 from machinesim.tolerances import CHORD_TOLERANCE_M
 
-EXAMPLES = """examples:
+EXAMPLES = """examples (from the repository's folder):
   machinesim machines
-  machinesim cut grooves.nc --machine grooving_4axis --tool v:90 --stock block:10x10x2 \\
-      --errors models/errors/example.toml --out part.ply --report report.json
-  machinesim cut prisms.nc --machine planer_4axis --tool v:90 --stock block:40x10x2@-20,-5,0 \\
-      --out prisms.ply --roi 0,1,0,1 --roi 10,11,0,1
+  machinesim cut models/examples/grooves.nc --machine grooving_4axis --tool v:90 \\
+      --stock block:10x10x2 --errors models/errors/example.toml --out part.ply \\
+      --report report.json
+  machinesim cut models/examples/grooves.nc --machine grooving_4axis --tool v:90 \\
+      --stock block:10x10x2 --out window.ply --roi 4,5,1,3
 """
 
 #: Part file formats by suffix: (format, what the CLI says about the file).

@@ -25,12 +25,12 @@ from machinesim._program_options import (
 )
 from machinesim.exceptions import InputError
 
-EXAMPLES = """examples:
+EXAMPLES = """examples (from the repository's folder):
   machinesim view robonano_a0ib
-  machinesim view grooving_4axis --program grooves.nc --tool v:90 --stock block:5x5x1 \\
-      --errors models/errors/example.toml --html grooves.html
+  machinesim view grooving_4axis --program models/examples/grooves.nc --tool v:90 \\
+      --stock block:10x10x2 --errors models/errors/example.toml --html grooves.html
   machinesim view part.ply --report report.json --nominal nominal.ply
-  machinesim view reports/seed003/ --html seed003.html --screenshot seed003.png
+  machinesim view reports/workpiece_setting/ --html report.html   # after make demo
 """
 
 
