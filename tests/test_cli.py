@@ -566,3 +566,19 @@ def test_the_chord_note_is_given_when_arcs_or_rotary_feeds_were_split(tmp_path, 
             "tool's own facets (--chord-nm sets it; docs/cutting.md)")
     assert (f"note: {note}" in err.splitlines()) == noted
     assert (note in json.loads(report.read_text(), parse_constant=no_nan)["notes"]) == noted
+
+
+@pytest.mark.parametrize("argv, hint", [
+    (["cut", "a.nc", "--machine", "grooving_4axis", "--tol", "v:90", "--stock", "block:1x1x1",
+      "--out", "x.ply"], "--tol is not an option here; did you mean --tool?"),
+    (["cut", "a.nc", "--machine", "grooving_4axis", "--tool", "v:90", "--stock", "block:1x1x1",
+      "--out", "x.ply", "--rio", "1"], "--rio is not an option here; did you mean --roi?"),
+    (["view", "grooving_4axis", "--progam", "x.nc"],
+     "--progam is not an option here; did you mean --program?"),
+])
+def test_a_misspelt_option_is_named_with_the_one_meant(argv, hint, capsys):
+    # argparse alone said only "the following arguments are required: --tool", or listed
+    # the word without the option it resembles
+    code, out, err = run(argv, capsys)
+    assert code == 2 and out == ""
+    assert err.splitlines()[-1].endswith(hint), err
