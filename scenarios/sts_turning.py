@@ -74,7 +74,8 @@ def report(args) -> None:
     print(f"Paper 004 on sts_lathe: realism {realism}, seed {args.seed}\n")
     procedure = STSTurning()
     stage = progress_printer("sts_turning")
-    result = run(procedure, make_lab(realism), progress=stage("run"))
+    lab = make_lab(realism)
+    result = run(procedure, lab, progress=stage("run"))
     budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
                             progress=stage)
     out = ReportFolder(args.out)
@@ -83,9 +84,40 @@ def report(args) -> None:
     profiles(out, "profiles.png", result)
     shares(out, "shares.png", details)
     surface_3d(out, "case_4_surface.png", result)
+    against_axis = tool_against_axis(out, lab, result)  # before the summary lists the files
     print(out.write_result(result, budget=budget))
+    print(against_axis)
     out.publish(last=True)
     print(f"Report written to {out.final} ({time.perf_counter() - began:.1f} s)")
+
+
+def tool_against_axis(out: ReportFolder, lab, result) -> str:
+    """The identified tool offsets against the spindle axis where the lab's machine has it.
+
+    The test pieces are turned about the spindle axis, so they show the tool's offset from
+    that axis: the injected offset less where the background puts the axis at the workpiece
+    (docs/procedures/sts_turning.md, "What the tests read"). Read here from the lab's truth,
+    after the run: the tool tip's circle over a turn of C."""
+    machine = lab.machine
+    turn = np.linspace(0.0, 2.0 * np.pi, 73)[:-1]
+    q = np.zeros((turn.size, len(machine.axes)))
+    q[:, machine.axes.index("X")] = 60e-6
+    q[:, machine.axes.index("C")] = turn
+    tips = machine.tool_pose(q, lab.reveal())[:, :3, 3]
+    fit = np.column_stack([2.0 * tips[:, 0], 2.0 * tips[:, 1], np.ones(turn.size)])
+    centre = np.linalg.lstsq(fit, tips[:, 0] ** 2 + tips[:, 1] ** 2, rcond=None)[0][:2]
+    rows = []
+    for name, axis in (("tool.x", centre[0]), ("tool.y", centre[1])):
+        value, std = result.identified[name]
+        expected = result.injected[name] - axis
+        rows.append([name, result.injected[name] / NM, axis / NM, expected / NM, value / NM,
+                     std / NM, (value - expected) / NM, (value - expected) / std])
+    return out.write_table(
+        "tool_against_axis", ["parameter", "injected (nm)", "spindle axis at the workpiece (nm)",
+                              "injected less axis (nm)", "identified (nm)", "std (nm)",
+                              "error against the axis (nm)", "error / std"],
+        rows, title="Tool offsets against the spindle axis (the tests read the tool from it)",
+        digits=2)
 
 
 def case_table(details) -> str:

@@ -14,6 +14,21 @@ docs/procedures/sts_turning.md, "Identifying the tool errors"):
 Only the measured map and the design are used (heights, and the uncut core above the cut
 surface); the fit is a least-squares of the exact forms with the spindle centre (x0, y0) and a
 piston free.
+
+Each fitted error comes with its first-order standard uncertainty, the square root of the
+diagonal of s^2 (J^T J)^-1, J the fit's Jacobian at the solution (`_fit_std`). On the sphere s^2
+is the residuals' sum of squares over n - p: the model fits the sphere (to 0.06 nm RMS with
+the noise off), so the residuals are the map's noise. On the tilted plane it is the
+interferometer's stated noise when given (``noise``): the plane's model leaves out the nose
+radius error's form, -dR k^2 cos^2(theta) / 2 (10 nm of cos 2 theta for dR = 100 um, k = 0.02),
+which is orthogonal to dy's regressor y / rho and would inflate s, and so dy's std, tenfold.
+The instrument's lateral noise, given as ``lateral_sigma``, is added as what it is: each column
+of the map read off in x and each row in y by its own deviate, which moves every pixel of a
+column by the surface's x slope times the shift, correlated along the column. Its covariance
+enters between the fit's inverse normal matrices (the sandwich (J^T J)^-1 J^T S J
+(J^T J)^-1). Taken as independent pixel noise instead, the std of dx and dR came out four
+times below the scatter of re-readings (docs/procedures/sts_turning.md, "Identifying the
+tool errors").
 """
 
 from __future__ import annotations
@@ -44,6 +59,10 @@ class TurnedToolErrors:
         Spindle axis in the map's coordinates, m.
     residual_rms : float
         RMS of the fit's residuals, m.
+    dx_std : float
+        First-order standard uncertainty of ``dx`` from the fit, m (module docstring).
+    d_radius_std : float
+        First-order standard uncertainty of ``d_radius`` from the fit, m.
     """
 
     dx: float
@@ -51,10 +70,75 @@ class TurnedToolErrors:
     d_radius: float
     centre: tuple
     residual_rms: float
+    dx_std: float = float("nan")
+    d_radius_std: float = float("nan")
+
+
+@dataclass(frozen=True)
+class CentreHeight:
+    """The signed centre-height error read from a turned tilted plane, m.
+
+    Attributes
+    ----------
+    dy : float
+        Centre-height error (parameter ``tool.offset_um`` y, in m here).
+    dy_std : float
+        First-order standard uncertainty of ``dy`` from the fit, m (module docstring); the
+        uncertainty of the ``dx`` it was given is not in it (dy's regressor y / rho is
+        orthogonal to dx's x / rho: on paper 004's test plane dy moves by 0.09 nm per nm
+        of dx).
+    residual_rms : float
+        RMS of the fit's residuals, m.
+    """
+
+    dy: float
+    dy_std: float
+    residual_rms: float
+
+
+def _fit_std(result, noise: float | None = None, shifts=()) -> np.ndarray:
+    """Standard uncertainties of a `least_squares` result's parameters, in their units.
+
+    s^2 (J^T J)^-1 with s = ``noise`` (in the residuals' unit) when given, else s^2 =
+    sum(r^2) / (n - p); the residuals and the Jacobian in the fit's units (nm, nm per
+    parameter unit), so the variances come out in the parameters' units squared. J's columns
+    are normalised before the inverse (they differ by orders of magnitude: nm per m of a
+    centre, per m of a piston).
+
+    ``shifts``: (sigma, group, slope) for each family of shifts that move whole groups of
+    residuals together: group k moves by a normal deviate of ``sigma`` (m), which moves
+    residual i of the group by ``slope[i]`` (residual unit per m) times it. Each adds
+    sigma^2 sum_k v_k v_k^T, v_k = sum over group k of J_i slope_i, to J^T S J.
+    """
+    jac, fun = np.asarray(result.jac, dtype=np.float64), np.asarray(result.fun)
+    n, p = jac.shape
+    if n <= p:
+        return np.full(p, np.nan)
+    scale = np.linalg.norm(jac, axis=0)
+    scale[scale == 0.0] = 1.0
+    normed = jac / scale
+    s2 = float(fun @ fun) / (n - p) if noise is None else float(noise) ** 2
+    inverse = np.linalg.pinv(normed.T @ normed)
+    middle = s2 * (normed.T @ normed)
+    for sigma, group, slope in shifts:
+        v = np.zeros((int(group.max()) + 1, p))
+        np.add.at(v, group, normed * np.asarray(slope, dtype=np.float64)[:, None])
+        middle += float(sigma) ** 2 * (v.T @ v)
+    cov = inverse @ middle @ inverse / np.outer(scale, scale)
+    return np.sqrt(np.maximum(np.diag(cov), 0.0))
+
+
+def _check_lateral(lateral_sigma) -> float:
+    if lateral_sigma is None:
+        return 0.0
+    if not (np.isfinite(lateral_sigma) and lateral_sigma >= 0.0):
+        raise InputError(f"Expected lateral_sigma as a finite length >= 0 (m) or None, got "
+                         f"{lateral_sigma!r}", key="lateral_sigma")
+    return float(lateral_sigma)
 
 
 def identify_tool_errors(design: Design, x, y, heights, *, core_step: float,
-                         aperture: float) -> TurnedToolErrors:
+                         aperture: float, lateral_sigma: float | None = None) -> TurnedToolErrors:
     """Fit dx, dR (and read |dy|) from ``heights`` (ny, nx) measured over ``x`` x ``y``.
 
     Parameters
@@ -69,7 +153,12 @@ def identify_tool_errors(design: Design, x, y, heights, *, core_step: float,
         Height (m) above the fitted surface from which a point counts as uncut core.
     aperture : float
         Only points within this distance (m) of the map's origin are used: the turned area.
+    lateral_sigma : float, optional
+        The instrument's stated lateral noise, m: each column of the map off in x and each
+        row in y by its own normal deviate (`machinesim.metrology.optical`). Enters the
+        std (module docstring); None or 0: pixels independent.
     """
+    lateral = _check_lateral(lateral_sigma)
     x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
     z = np.asarray(heights, dtype=np.float64)
     if z.shape != (y.size, x.size):
@@ -93,6 +182,7 @@ def identify_tool_errors(design: Design, x, y, heights, *, core_step: float,
 
     p = np.zeros(5)
     for _ in range(4):  # fit, mark the core (points well above the fit), refit without it
+        fitted = cut
         result = least_squares(residual, p, args=(cut,), x_scale=[1e-6, 1e-6, 1e-8, 1e-6, 1e-5])
         if not result.success:
             raise NotConvergedError(f"tool error fit did not converge: {result.message}")
@@ -102,13 +192,28 @@ def identify_tool_errors(design: Design, x, y, heights, *, core_step: float,
         cut = valid & ~above
         dy_abs = float(np.sqrt(above.sum() * pixel / np.pi))
     rms = float(np.sqrt(np.mean(residual(p, cut) ** 2)) * 1e-9)
+    # of the last fit, the one that gave p; a column read off by s in x moves its pixels by
+    # the surface's x slope times s, which is d(residual)/d(x0) times s (and rows, y0)
+    rows, cols = np.nonzero(fitted)
+    shifts = [(lateral, cols, result.jac[:, 0]), (lateral, rows, result.jac[:, 1])]
+    std = _fit_std(result, shifts=shifts if lateral > 0.0 else ())
     return TurnedToolErrors(dx=float(p[3]), dy_abs=dy_abs, d_radius=float(p[4]),
-                            centre=(float(p[0]), float(p[1])), residual_rms=rms)
+                            centre=(float(p[0]), float(p[1])), residual_rms=rms,
+                            dx_std=float(std[3]), d_radius_std=float(std[4]))
 
 
 def identify_centre_height(x, y, heights, slope: float, *, aperture: float, core: float,
                            dx: float = 0.0) -> float:
-    """The signed centre-height error dy from a turned tilted plane z = ``slope`` x.
+    """The signed centre-height error dy (m) from a turned tilted plane z = ``slope`` x: the
+    ``dy`` of `fit_centre_height` (parameters there)."""
+    return fit_centre_height(x, y, heights, slope, aperture=aperture, core=core, dx=dx).dy
+
+
+def fit_centre_height(x, y, heights, slope: float, *, aperture: float, core: float,
+                      dx: float = 0.0, noise: float | None = None,
+                      lateral_sigma: float | None = None) -> CentreHeight:
+    """The signed centre-height error dy from a turned tilted plane z = ``slope`` x, with
+    its standard uncertainty.
 
     The tip at program radius a and spindle angle C sits at (a + dx) u(C) + dy u_perp(C)
     (`machinesim.cutting.tool_form_error`), so the point (rho, theta) is cut by
@@ -136,12 +241,25 @@ def identify_centre_height(x, y, heights, slope: float, *, aperture: float, core
         Points nearer the axis than this (m) are left out: the uncut core and the centre.
     dx : float
         The radial tool offset, m (from the sphere).
+    noise : float, optional
+        The map's stated height noise per pixel, m: the s of ``dy_std`` (module docstring).
+        None: the residuals' RMS, which counts the model's misfit as noise.
+    lateral_sigma : float, optional
+        The instrument's stated lateral noise, m, as in `identify_tool_errors`.
+
+    Returns
+    -------
+    CentreHeight
     """
     x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
     z = np.asarray(heights, dtype=np.float64)
     if z.shape != (y.size, x.size):
         raise InputError(f"Expected heights of shape ({y.size}, {x.size}), got {z.shape}",
                          key="heights")
+    if noise is not None and not (np.isfinite(noise) and noise >= 0.0):
+        raise InputError(f"Expected noise as a finite height >= 0 (m) or None, got {noise!r}",
+                         key="noise")
+    lateral = _check_lateral(lateral_sigma)
     k = float(slope)
     if not (abs(k) > 0.0) or not np.isfinite(k):
         raise InputError(f"Expected a tilted plane (finite slope != 0), got {slope!r}",
@@ -152,6 +270,7 @@ def identify_centre_height(x, y, heights, slope: float, *, aperture: float, core
     if np.count_nonzero(use) < 10:
         raise InputError("Expected at least 10 measured points between the core and the "
                          "aperture", key="heights")
+    rows, cols = np.nonzero(use)
     px, py, rho, z = px[use], py[use], rho[use], z[use]
     theta = np.arctan2(py, px)
     basis = np.column_stack([np.ones(px.size), px, py, px / rho, py / rho])
@@ -167,7 +286,14 @@ def identify_centre_height(x, y, heights, slope: float, *, aperture: float, core
     result = least_squares(residual, start, x_scale=[1e-6, 1e-8, 1e-4, 1e-4])
     if not result.success:
         raise NotConvergedError(f"centre height fit did not converge: {result.message}")
-    return float(result.x[0])
+    rms = float(np.sqrt(np.mean(result.fun**2)) * 1e-9)
+    # a column read off by s in x moves its pixels by the plane's x slope times s (rows: y)
+    _, _, tx, ty = result.x
+    shifts = [(lateral, cols, np.full(cols.size, (k + tx) * 1e9)),
+              (lateral, rows, np.full(rows.size, ty * 1e9))] if lateral > 0.0 else ()
+    std = _fit_std(result, None if noise is None else noise * 1e9, shifts)  # nm
+    return CentreHeight(dy=float(result.x[0]), dy_std=float(std[0]), residual_rms=rms)
 
 
-__all__ = ["TurnedToolErrors", "identify_centre_height", "identify_tool_errors"]
+__all__ = ["CentreHeight", "TurnedToolErrors", "fit_centre_height", "identify_centre_height",
+           "identify_tool_errors"]

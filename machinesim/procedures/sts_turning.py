@@ -35,7 +35,7 @@ import numpy as np
 from machinesim.cam import spiral as sp
 from machinesim.exceptions import InputError
 from machinesim.experiment import Evaluation, Figure, Identified
-from machinesim.identification.turning_tool import identify_centre_height, identify_tool_errors
+from machinesim.identification.turning_tool import fit_centre_height, identify_tool_errors
 from machinesim.metrology.fits import roughness_sa
 from machinesim.procedures.sts_plans import (
     MEASURE_LINE,
@@ -75,28 +75,36 @@ PROGRAM_OF = {"case_1": "as_found", "case_2": "nose_compensated", "case_3": "mod
 @dataclass(frozen=True)
 class ToolTest:
     """The tool errors as a test cut shows them, m: dx, dR and |dy| from the test sphere,
-    the signed dy from the tilted plane (`sts_plans.TEST_PLANE`)."""
+    the signed dy from the tilted plane (`sts_plans.TEST_PLANE`); each ``*_std`` the fit's
+    first-order standard uncertainty of it, m (`machinesim.identification.turning_tool`),
+    NaN where not given."""
 
     dx: float
     dy: float
     d_radius: float
     dy_abs: float
+    dx_std: float = float("nan")
+    dy_std: float = float("nan")
+    d_radius_std: float = float("nan")
 
 
 def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
     """Turn the test sphere and the tilted test plane with ``tool`` (programs compensated
     for ``nose_radius``) and read the tool errors from the interferometer's maps."""
-    maps, stated = {}, {}  # height maps, and the interferometers' stated noise (m)
+    # height maps, and the interferometers' stated height and lateral noise (m)
+    maps, stated, lateral = {}, {}, {}
     for piece, plan in (("sphere", TEST_SPHERE), ("plane", TEST_PLANE)):
         part, _ = lab.turn(sp.spiral_program(plan.path(nose_radius)), tool, top=plan.top)
         w = plan.read_half_width
         interferometer = lab.white_light_interferometer(label=f"{label}_{piece}")
         maps[piece] = interferometer.height_map(part, -w, w, -w, w, plan.pixel)
         stated[piece] = interferometer.readout.std
+        lateral[piece] = interferometer.lateral_sigma
     sphere, plane = maps["sphere"], maps["plane"]
     found = identify_tool_errors(TEST_SPHERE.design(), sphere.x, sphere.y, sphere.z,
                                  core_step=TEST_SPHERE.core_step,
-                                 aperture=TEST_SPHERE.read_half_width)
+                                 aperture=TEST_SPHERE.read_half_width,
+                                 lateral_sigma=lateral["sphere"])
     noise = stated["sphere"]
     misfit = float(np.sqrt(max(found.residual_rms**2 - noise**2, 0.0)))
     if misfit > SPHERE_MISFIT_LIMIT:
@@ -108,10 +116,12 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
             f"dR {found.d_radius / UM:.2f} um. The tool errors are beyond what this test "
             "identifies (dx from about -10 to +5 um, docs/procedures/sts_turning.md): set "
             "the tool that close first, as the paper's tool was", key="tool_test")
-    dy = identify_centre_height(plane.x, plane.y, plane.z, TEST_PLANE.slope,
-                                aperture=TEST_PLANE.read_half_width, core=TEST_PLANE.core,
-                                dx=found.dx)
-    return ToolTest(found.dx, dy, found.d_radius, found.dy_abs)
+    centre = fit_centre_height(plane.x, plane.y, plane.z, TEST_PLANE.slope,
+                               aperture=TEST_PLANE.read_half_width, core=TEST_PLANE.core,
+                               dx=found.dx, noise=stated["plane"],
+                               lateral_sigma=lateral["plane"])
+    return ToolTest(found.dx, centre.dy, found.d_radius, found.dy_abs, dx_std=found.dx_std,
+                    dy_std=centre.dy_std, d_radius_std=found.d_radius_std)
 
 
 @dataclass(frozen=True)
@@ -161,8 +171,10 @@ class STSTurning:
 
     def identify(self, measurements) -> Identified:
         found = measurements["tool_test"]
-        return Identified({"tool.x": found.dx, "tool.y": found.dy,
-                           "tool_geometry.nose_radius": found.d_radius}, detail=found)
+        return Identified({"tool.x": (found.dx, found.dx_std),
+                           "tool.y": (found.dy, found.dy_std),
+                           "tool_geometry.nose_radius": (found.d_radius, found.d_radius_std)},
+                          detail=found)
 
     def compensate(self, identified: Identified) -> dict:
         found = identified.detail
@@ -198,7 +210,10 @@ class STSTurning:
                           "dy_after_alignment_um": residual.dy / UM,
                           "dy_abs_after_alignment_um": residual.dy_abs / UM,
                           "nose_radius_after_alignment_um": residual.d_radius / UM,
-                          "dy_abs_identified_um": found.dy_abs / UM}
+                          "dy_abs_identified_um": found.dy_abs / UM,
+                          "dx_after_alignment_std_um": residual.dx_std / UM,
+                          "dy_after_alignment_std_um": residual.dy_std / UM,
+                          "nose_radius_after_alignment_std_um": residual.d_radius_std / UM}
 
     def run_case(self, lab, name: str, program, design, known, radius) -> CaseResult:
         """Predict, then turn and measure, one case."""
