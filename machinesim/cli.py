@@ -17,12 +17,12 @@ its finished trials, says so, and resumes when run again). Heavy modules are imp
 from __future__ import annotations
 
 import argparse
-import difflib
 import math
 import os
 import sys
 from pathlib import Path
 
+from machinesim._arguments import ArgumentParser
 from machinesim._io import (
     check_readable_file,
     check_writable,
@@ -60,38 +60,10 @@ EXIT_INPUT = 2
 EXIT_INTERRUPTED = 130
 
 
-class _Parser(argparse.ArgumentParser):
-    """An argument parser whose usage errors name an option the command line misspelt.
-
-    argparse hands an unknown option of a subcommand on, and reports first the required
-    option it then misses: ``--tol v:90`` ended in "the following arguments are required:
-    --tool", naming neither the word typed nor the one meant."""
-
-    argv: tuple[str, ...] = ()
-
-    def error(self, message: str):
-        known = [s for action in self._actions for s in action.option_strings]
-        for action in self._actions:  # the top parser: add the options of the command given
-            if isinstance(action, argparse._SubParsersAction):
-                command = next((w for w in self.argv if w in action.choices), None)
-                if command is not None:
-                    known += [s for a in action.choices[command]._actions
-                              for s in a.option_strings]
-        hints = []
-        for word in self.argv:
-            option = word.split("=", 1)[0]
-            if option.startswith("--") and option not in known:
-                close = difflib.get_close_matches(option, known, n=1, cutoff=0.6)
-                if close:
-                    hints.append(f"{option} is not an option here; did you mean {close[0]}?")
-        super().error("; ".join([message, *hints]))
-
-
-def _parser(argv=()) -> argparse.ArgumentParser:
+def _parser() -> argparse.ArgumentParser:
     from machinesim.viewer.cli import add_view_parser
 
-    _Parser.argv = tuple(argv)
-    parser = _Parser(
+    parser = ArgumentParser(
         prog="machinesim", description="A virtual multi-axis ultraprecision machine tool.",
         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EXAMPLES)
     from machinesim import __version__
@@ -155,8 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     args = None
     try:
         with ctrl_c_remembered():
-            argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
-            args = _parser(argv).parse_args(argv)
+            args = _parser().parse_args(None if argv is None else [str(a) for a in argv])
             return _command(args)
     except MachineSimError as exc:
         return _fail(f"error: {exc}", EXIT_INPUT)

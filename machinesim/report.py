@@ -19,6 +19,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from machinesim._arguments import ArgumentParser
 from machinesim._io import StagedFolder, ctrl_c_remembered, json_text, write_atomic
 from machinesim.exceptions import InputError
 
@@ -489,7 +490,7 @@ def _seed(text: str) -> int:
 def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentParser:
     """The options every scenario takes: --errors FILE.toml, --noise on|off, --seed N,
     --out DIR."""
-    parser = argparse.ArgumentParser(description=description)
+    parser = ArgumentParser(description=description)
     parser.add_argument("--errors", type=Path, metavar="FILE.toml",
                         help="inject this error model (any ErrorModel TOML, units in every "
                         "key) instead of the scenario's default; the scenario's own error "

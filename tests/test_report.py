@@ -17,6 +17,7 @@ from machinesim.report import (
     check_summary,
     check_units,
     parse_floats,
+    scenario_arguments,
     scenario_status,
 )
 
@@ -188,3 +189,12 @@ def test_a_folder_that_is_not_a_report_is_refused_not_replaced(tmp_path, capsys)
         for path in out.iterdir():
             path.unlink()
         out.rmdir()
+
+
+def test_a_scenario_names_a_misspelt_option_with_the_one_meant(capsys):
+    parser = scenario_arguments("a scenario", "reports/x")
+    with pytest.raises(SystemExit) as stop:
+        parser.parse_args(["--sede", "3", "--out", "somewhere"])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1].endswith(
+        "unrecognized arguments: --sede 3; --sede is not an option here; did you mean --seed?")

@@ -10,6 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from machinesim._arguments import ArgumentParser
 from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
 from machinesim.campaign.trials import MAX_TRIALS, PROCEDURES, trials_refused
 from machinesim.exceptions import InputError, MachineSimError
@@ -131,7 +132,7 @@ def interrupted(out) -> str:
 
 def main(argv=None) -> int:
     """``python -m machinesim.campaign.cli``: the subcommand on its own."""
-    parser = _arguments(argparse.ArgumentParser(
+    parser = _arguments(ArgumentParser(
         prog="machinesim campaign", epilog=_epilog(),
         formatter_class=argparse.RawDescriptionHelpFormatter))
     args = parser.parse_args(argv)

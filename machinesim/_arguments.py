@@ -1,0 +1,42 @@
+"""The argument parser of every machinesim command and scenario."""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import sys
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """An argument parser whose usage errors name an option the command line misspelt, with
+    the one it resembles (``--tol is not an option here; did you mean --tool?``).
+
+    argparse hands an unknown option of a subcommand on and reports first the required
+    option it then misses: ``--tol v:90`` ended in "the following arguments are required:
+    --tool", naming neither the word typed nor the one meant. Subparsers made from this
+    parser are of this class too, and each reads the words it was handed."""
+
+    _words: tuple[str, ...] = ()
+
+    def parse_known_args(self, args=None, namespace=None):
+        self._words = tuple(sys.argv[1:] if args is None else map(str, args))
+        return super().parse_known_args(args, namespace)
+
+    def error(self, message: str):
+        words = self._words
+        known = [s for action in self._actions for s in action.option_strings]
+        for action in self._actions:  # the top parser: add the options of the command given
+            if isinstance(action, argparse._SubParsersAction):
+                command = next((w for w in words if w in action.choices), None)
+                if command is not None:
+                    known += [s for a in action.choices[command]._actions
+                              for s in a.option_strings]
+        hints = []
+        for word in words:
+            option = word.split("=", 1)[0]
+            if option.startswith("--") and option not in known:
+                close = difflib.get_close_matches(option, known, n=1, cutoff=0.6)
+                if close:
+                    hints.append(f"{option} is not an option here; did you mean {close[0]}?")
+        super().error("; ".join([message, *hints]))
+
