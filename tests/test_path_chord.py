@@ -64,8 +64,11 @@ def test_a_program_file_cut_with_a_ball_follows_its_arcs_at_a_tenth_of_the_balls
     ("ball:0.5", ["--chord-nm", "5"], 5.0, False)])
 def test_the_command_line_reports_the_chord_it_cut_with(tmp_path, capsys, tool, option,
                                                         chord_nm, noted):
+    # a line with an arc in it: the chord is noted only where something was split by it
+    # (tests/test_cli.py has the cases without arcs)
     program = tmp_path / "line.nc"
-    program.write_text("G90 G21\nG00 X-1. Y5. Z1.\nG01 Z-0.01 F100.\nX11.\nG00 Z1.\nM30\n")
+    program.write_text("G90 G21\nG00 X-1. Y5. Z1.\nG01 Z-0.01 F100.\nX4.\nG02 X6. R1.\n"
+                       "G01 X11.\nG00 Z1.\nM30\n")
     report = tmp_path / "r.json"
     code = main([str(a) for a in ["cut", program, "--machine", "grooving_4axis", "--tool",
                                   tool, "--stock", "block:10x10x2", "--quiet", "--out",
