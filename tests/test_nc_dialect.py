@@ -499,3 +499,61 @@ def test_a_control_byte_in_a_program_is_named_escaped_never_raw(tmp_path):
     with pytest.raises(NCProgramError) as info:
         read_program(path)
     assert "\x1b" not in str(info.value) and "key '\\x1b'" in str(info.value)
+
+
+# ----------------------------------------------------------- what public CAM posts write
+
+
+def _arc_off_by(offset_um: float, inch: bool) -> str:
+    """A quarter arc of radius 10 mm about the origin from (10, 0) to (0, 10 + offset) mm, in
+    the program's unit: its end off the circle by ``offset_um``."""
+    unit = 25.4 if inch else 1.0
+    end = (10.0 + offset_um * 1e-3) / unit
+    return (f"{'G20' if inch else 'G21'} G90 G17\nG00 X{10.0 / unit:.6f} Y0.\n"
+            f"G03 X0. Y{end:.6f} I{-10.0 / unit:.6f} J0. F10.\n")
+
+
+def test_an_inch_arc_is_held_to_what_its_output_increment_allows():
+    # 0.0001 in rounding leaves up to 4 x 0.5 x 2.54 um x sqrt(2) = 7.18 um of radius
+    # difference: 5 um passes under G20 and is refused in mm (3 um there); 26 um (a digit
+    # in the thousandths of an inch) is refused in both
+    inch = parse_program(_arc_off_by(5.0, inch=True), "inch.nc")
+    np.testing.assert_allclose(np.hypot(*inch.targets[-1, :2].T), 10.005e-3, rtol=1e-6)
+    with pytest.raises(NCProgramError, match="expected at most 3 um"):
+        parse_program(_arc_off_by(5.0, inch=False), "mm.nc")
+    with pytest.raises(NCProgramError, match="expected at most 7.5 um"):
+        parse_program(_arc_off_by(26.0, inch=True), "inch.nc")
+
+
+def test_g91_1_is_the_arc_centre_form_read_and_g90_1_is_refused():
+    text = "G90 G17 G91.1\nG00 X10. Y0.\nG03 X0. Y10. I-10. J0. F10.\n"
+    program = parse_program(text, "a.nc")
+    assert program.states["G91.1"] == 1
+    assert program.targets[-1, :2].tolist() == [0.0, 10e-3]
+    with pytest.raises(NCProgramError, match="absolute arc centres \\(G90.1\\) are not read"):
+        parse_program(text.replace("G91.1", "G90.1"), "b.nc")
+
+
+def test_a_bare_g43_takes_the_last_h_and_is_refused_before_any():
+    tools = ToolTable.from_dict({"tool": {"1": {"length_mm": 2.5}}})
+    with pytest.raises(NCProgramError, match="G43 without H, and no H given before it") as e:
+        parse_program("G90\nT1 M06\nG00 G43 Z10.\n", "bare.nc", tools=tools)
+    assert e.value.line == 3
+    # after G43 H1 and G49, a bare G43 is H1 again (FANUC's modal H): Z lifted by 2.5 mm
+    program = parse_program("G90\nG00 G43 H1 Z10.\nG49 Z20.\nG43 Z10.\n", "h.nc",
+                            tools=tools)
+    assert program.targets[:, 2].tolist() == pytest.approx([12.5e-3, 20e-3, 12.5e-3])
+
+
+def test_g53_is_measured_from_the_reference_position():
+    # a post's G53 G0 Z0. goes to machine zero, where G28 goes: with a reference at the top
+    # of Z (the command line's home) it retracts there, not onto the workpiece's zero
+    text = "G90 G00 X1. Y1. Z5.\nG53 G00 Z0.\nG53 Z-10.\n"
+    assert parse_program(text, "a.nc", reference={"Z": 0.1}).targets[1:, 2].tolist() == \
+        pytest.approx([0.1, 0.09])
+    assert parse_program(text, "b.nc").targets[1:, 2].tolist() == pytest.approx([0.0, -0.01])
+
+
+def test_an_arc_in_xz_without_g18_is_told_to_select_it():
+    with pytest.raises(NCProgramError, match="needs G18 first"):
+        parse_program("G90\nG00 X5. Z0.\nG03 X10. Z-2.5 R2.5 F10.\n", "lathe.nc")

@@ -35,12 +35,13 @@ G codes
     G20/G21 inch/mm. G90/G91. G54..G59 work offsets. G94. G28 (rapid through the
     intermediate point to the reference position of the named axes, ``reference`` or machine
     zero; ``G28 G91 Z0`` before Z is known
-    goes straight to zero), G53 (one block in machine coordinates: no work offset, no tool
-    length; absolute only). G43/G44 H (tool length from the tool table added to / taken
-    from absolute Z words; G49 cancels; like a work offset change it moves nothing by
+    goes straight to zero), G53 (one block in machine coordinates measured from the
+    reference position: no work offset, no tool length; absolute only). G43/G44 H (tool
+    length from the tool table added to / taken from absolute Z words; a bare G43 takes the
+    last H, refused before any; G49 cancels; like a work offset change it moves nothing by
     itself). G81/G82/G83 canned cycles along Z in G17 with R, Z, Q, P, K and G98/G99,
     expanded into moves; G80 or a motion code cancels. Accepted as states, no geometric
-    effect, listed in `Program.states` with their first line: G40, G61, G64, G80,
+    effect, listed in `Program.states` with their first line: G40, G61, G64, G80, G91.1,
     G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words, and G55..G59 selected without
     offsets given for them (G54's zero). Refused: G41/G42 (cutter radius
     compensation), G95, and every G code not named here.

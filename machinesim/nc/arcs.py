@@ -37,6 +37,10 @@ ARC_CHORD_M = CHORD_TOLERANCE_M
 #: radius goes linearly from start to end along the arc (a spiral, as FANUC does it), so the
 #: path joins both programmed points.
 ARC_RADIUS_TOLERANCE_M = 3e-6
+#: The same for an inch program (G20): its output increment, 0.0001 in, allows 4 x 0.5 x
+#: 2.54 um x sqrt(2) = 7.18 um; 7.5 um accepts every such arc and still refuses a centre
+#: wrong by one digit in the thousandths of an inch (25.4 um).
+ARC_RADIUS_TOLERANCE_INCH_M = 7.5e-6
 #: End and start closer than this are one point: a full circle (I J K form). POSE_M: the
 #: agreement of two float64 positions on a ~1 m machine.
 FULL_CIRCLE_M = POSE_M

@@ -12,7 +12,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from machinesim.exceptions import NCProgramError
-from machinesim.nc.arcs import PLANES, arc_points
+from machinesim.nc.arcs import (
+    ARC_RADIUS_TOLERANCE_INCH_M,
+    ARC_RADIUS_TOLERANCE_M,
+    PLANES,
+    arc_points,
+)
 from machinesim.nc.cycles import drill_steps
 from machinesim.nc.lexer import Word
 from machinesim.nc.program import AXES, KIND_LINEAR, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
@@ -199,7 +204,7 @@ class Block:
                 self.reader.note(state.work_offset, line)
         if "return level" in g:
             state.retract = g["return level"][0]
-        for group in ("cutter compensation", "path mode"):
+        for group in ("cutter compensation", "path mode", "arc centre"):
             if group in g:
                 self.reader.note(g[group][0], line)
         if "tool length" in g:
@@ -247,6 +252,15 @@ class Block:
                                     f"table {reader.tools.source}", single[letter])
         if "H" in single:
             state.h = self.integer(single["H"], "tool length offset number")
+            state.h_given = True
+        length = self.g_codes.get("tool length")
+        if length is not None and length[0] != "G49" and not state.h_given:
+            name = length[0]
+            raise self.fail(f"{name} without H, and no H given before it: which tool length "
+                            f"is meant is not known; write {name} H<n> (H0 for none). A bare "
+                            f"{name} takes the last H on FANUC and the loaded tool's length "
+                            "on LinuxCNC; read as zero it would cut that length too deep",
+                            length[1])
         if state.length_mode != "G49" and state.h != 0:
             if reader.tools is None:
                 message = (f"{state.length_mode} H{state.h} needs the tool length: give a tool "
@@ -312,8 +326,8 @@ class Block:
         state = self.state
         letter = word.letter
         value = self.real(word) * self.axis_unit(word)
-        if machine_coordinates:
-            return self.finite(value, word)
+        if machine_coordinates:  # measured from the reference position (machine zero)
+            return self.finite(value + self.reader.reference.get(letter, 0.0), word)
         if state.incremental:
             if letter not in state.target:
                 raise self.fail(
@@ -412,8 +426,10 @@ class Block:
         g_word = self.g_codes.get("motion", (None, word))[1]
         for letter in (u, v):
             if letter not in state.target:
+                plane = ("" if state.plane != "G17" else
+                         "; an arc in X and Z (a lathe's) needs G18 first, in Y and Z G19")
                 raise self.fail(f"the arc starts where {letter} is not known yet; move "
-                                f"{u} and {v} before {state.motion}", word)
+                                f"{u} and {v} before {state.motion}{plane}", word)
         start = dict(state.target)
         end = dict(start)
         end.update({axis.letter: self.machine(axis) for axis in axes})
@@ -436,6 +452,8 @@ class Block:
             fractions, points, _, _ = arc_points(
                 (start[u], start[v]), (end[u], end[v]), clockwise=state.motion == "G02",
                 centre=centre, radius=radius, chord_tolerance=reader.chord_tolerance,
+                radius_tolerance=(ARC_RADIUS_TOLERANCE_INCH_M if state.inch
+                                  else ARC_RADIUS_TOLERANCE_M),
                 max_segments=MAX_MOVES - reader.out.count)
         except NCProgramError as error:
             located = single.get("R") or (given[0] if given else word)

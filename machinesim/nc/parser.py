@@ -77,6 +77,7 @@ class _State:
     end: tuple[int, str] | None = None
     length_mode: str = "G49"
     h: int = 0
+    h_given: bool = False  # an H word has been read: a bare G43/G44 then takes it
     cycle: str | None = None
     cycle_z: float | None = None  # machine Z of the hole bottom
     cycle_r: float | None = None  # machine Z of the R plane
@@ -188,8 +189,9 @@ def parse_program(
         {"G54": {"X": m, ...}, ...} in SI; absent systems and axes are zero.
     reference : mapping, optional
         {"Z": m, ...}: the machine coordinates (SI) of the reference position G28 returns
-        to; absent axes are at machine zero. ``machinesim cut`` gives the machine's home
-        (`Machine.home`): Z at the top of its travel.
+        to, and from which G53's words are measured (FANUC's machine zero, where its
+        reference point is by default); absent axes are at machine zero. ``machinesim cut``
+        gives the machine's home (`Machine.home`): Z at the top of its travel.
     integer_input : {"calculator", "increment"}
         How a length or angle without decimal point reads: "calculator" (X10 is 10 mm, the
         default) or "increment" (X10 is 10 least input increments: 10 nm, 0.0001 deg).

@@ -42,6 +42,7 @@ G_GROUPS = {
     "G80": "canned cycle", "G81": "canned cycle", "G82": "canned cycle",
     "G83": "canned cycle",
     "G90": "distance", "G91": "distance",
+    "G91.1": "arc centre",
     "G94": "feed mode",
     "G98": "return level", "G99": "return level",
 }  # fmt: skip
@@ -55,6 +56,9 @@ G_REFUSED = {
     "G41": CUTTER_COMPENSATION.format("G41"),
     "G42": CUTTER_COMPENSATION.format("G42"),
     "G95": "feed per revolution (G95) is not supported; use G94 with F in mm/min",
+    "G90.1": "absolute arc centres (G90.1) are not read: I J K are read as the centre's "
+             "offset from the arc's start (G91.1, FANUC's only form); post incremental "
+             "arc centres",
 }
 SINGLE = frozenset("NOSFPXYZABCIJKRQLHTD")
 MOTION = {"G00": "rapid", "G01": "linear"}
