@@ -304,6 +304,8 @@ def test_every_refusal_is_listed_at_once():
                        (7, 1, "X1.2.3"), (7, 8, "Z--1")]
     message = str(info.value)
     assert message.startswith("cam.nc, line 2, column 5, key 'G95': 10 problems")
+    # a later problem may be a consequence of an earlier refused block: the message says so
+    assert "a later problem may follow from an earlier one: mend them in order" in message
     for line, column, key in located:
         assert f"line {line}, column {column}, key '{key}'" in message
 

@@ -111,8 +111,9 @@ class _Problems:
         tail = f"\n  ... and {more} more (all in .problems)" if more > 0 else ""
         first = errors[0]
         error = NCProgramError(
-            f"{len(errors)} problems in the program (the first at line {first.line}):\n"
-            f"{listed}{tail}",
+            f"{len(errors)} problems in the program (the first at line {first.line}; a "
+            "refused block moves nothing, so a later problem may follow from an earlier "
+            f"one: mend them in order):\n{listed}{tail}",
             source=source, line=first.line, column=first.column, key=first.key,
         )
         error.problems = tuple(errors)
