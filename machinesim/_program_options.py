@@ -68,3 +68,13 @@ def read_for_machine(args: argparse.Namespace, path, machine, tool):
     if args.chord_nm is not None:
         chord = args.chord_nm * 1e-9
     return read_program(path, chord_tolerance=chord, **reading), chord
+
+
+def unit_note(program) -> str | None:
+    """The note for a program read from text that selects neither G20 nor G21 (its lengths
+    are then read in mm, the reader's default: an inch program without G20 comes out 25.4
+    times too small), or None."""
+    if program.unit_words or not len(program):
+        return None
+    return ("the program selects neither G20 (inch) nor G21 (mm): its lengths were read in "
+            "mm; add G20 at its start if it is written in inches")

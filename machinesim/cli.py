@@ -35,6 +35,7 @@ from machinesim._program_options import (
     add_reading_options,
     check_reading_options,
     read_for_machine,
+    unit_note,
 )
 from machinesim.exceptions import ErrorModelError, InputError, MachineSimError
 from machinesim.tolerances import CHORD_TOLERANCE_M
@@ -236,7 +237,8 @@ def _progress_bar(quiet: bool):
 
 def _reading_notes(args, program, chord: float) -> list[str]:
     """What the command line chose in reading the program that the user should know: arcs
-    and rotary moves split coarser than 1 nm by default, work offsets it was not given."""
+    and rotary moves split coarser than 1 nm by default, work offsets it was not given, the
+    unit of a program that selects none."""
     from machinesim.nc.program import WORK_OFFSETS
 
     notes = []
@@ -247,6 +249,7 @@ def _reading_notes(args, program, chord: float) -> list[str]:
     notes += [f"{word} at line {line} selects a work offset this command is not given: "
               "taken as zero, the same as G54 (docs/nc.md)"
               for word, line in program.states.items() if word in WORK_OFFSETS]
+    notes += [note for note in (unit_note(program),) if note]
     return notes
 
 

@@ -492,6 +492,7 @@ def test_the_report_lists_how_the_program_was_read(tmp_path, capsys):
                 ("G05.1 Q1", "N130 "), ("G64", "N135 "), ("G05.1 Q0", "N165 ")]
     assert nc == {"integer_input": "increment",
                   "states": [{"word": w, "line": line_of(b)} for w, b in expected],
+                  "units": [{"word": "G21", "line": line_of("N15 G21")}],
                   "tool_table": str(tools)}
     code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "g.ply", "--report", report],
                        capsys)
@@ -545,6 +546,24 @@ def test_a_work_offset_the_command_is_not_given_is_taken_as_zero_and_said(tmp_pa
                      for word, line in (("G55", 1), ("G57", 6))]
     states = json.loads((tmp_path / "g55.json").read_text(), parse_constant=no_nan)
     assert {"word": "G55", "line": 1} in states["nc"]["states"]
+
+
+@pytest.mark.parametrize("head, units", [("G90 G21", [{"word": "G21", "line": 1}]),
+                                         ("G90", [])])
+def test_a_program_without_g20_or_g21_is_read_in_mm_and_said(tmp_path, capsys, head, units):
+    # an inch program without G20 would come out 25.4 times too small: say how it was read
+    program, report = tmp_path / "p.nc", tmp_path / "r.json"
+    program.write_text(f"{head}\nG0 X1. Y1. Z0.1\nG1 Z-0.01 F100.\nX3.\nG0 Z0.1\nM30\n")
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
+                        "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply",
+                        "--report", report], capsys)
+    assert code == 0, err
+    note = ("the program selects neither G20 (inch) nor G21 (mm): its lengths were read in "
+            "mm; add G20 at its start if it is written in inches")
+    summary = json.loads(report.read_text(), parse_constant=no_nan)
+    assert summary["nc"]["units"] == units
+    assert (f"note: {note}" in err.splitlines()) == (not units)
+    assert (note in summary["notes"]) == (not units)
 
 
 @pytest.mark.parametrize("body, noted", [

@@ -465,6 +465,19 @@ def test_programs_pickle_and_copy():
         assert back.tool_changes == changed.tool_changes and back.arc_blocks == 2
 
 
+def test_the_units_a_program_selects_are_kept_with_their_first_lines():
+    import pickle
+
+    both = parse_program("G90\nG20 G0 X1.\nG21\nX2.\nG20 X3.\n")
+    assert dict(both.unit_words) == {"G20": 2, "G21": 3}
+    assert both.targets[:, 0].tolist() == pytest.approx([25.4e-3, 2e-3, 76.2e-3], rel=1e-15)
+    assert dict(parse_program("G0 X1.\nX2.\n").unit_words) == {}  # read in mm
+    back = pickle.loads(pickle.dumps(both))
+    assert back == both and dict(back.unit_words) == {"G20": 2, "G21": 3}
+    # the same moves with and without G21 are different texts of one part
+    assert parse_program("G21\nG0 X1.\n") != parse_program("\nG0 X1.\n")
+
+
 def test_read_program_file_errors_name_the_path(tmp_path):
     for path, message in [(tmp_path / "missing.nc", "no such file"),
                           (tmp_path, "is a folder")]:

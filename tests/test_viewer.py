@@ -376,7 +376,8 @@ def test_cli_refuses_bad_input_with_a_clear_message(tmp_path):
     assert not list(tmp_path.glob("*.html"))
 
 
-def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path, monkeypatch):
+def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path, monkeypatch,
+                                                                       capsys):
     import machinesim.viewer.machine as viewer_machine
     from machinesim.nc import read_program
 
@@ -398,6 +399,13 @@ def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path
                             reference=dict(zip("XYZC", home, strict=True)))
     assert seen["program"].moves == expected.moves
     assert seen["chord_tolerance"] == 3 * 1e-9
+    # with G21 nothing is noted; without it the unit it was read in is (as cut notes it)
+    assert "G20" not in capsys.readouterr().err
+    program.write_text(program.read_text().replace("G90 G21", "G90"))
+    assert run(["grooving_4axis", "--program", str(program), "--stock", STOCK,
+                "--html", str(tmp_path / "m.html")]) == 0
+    assert ("note: the program selects neither G20 (inch) nor G21 (mm): its lengths were "
+            "read in mm" in capsys.readouterr().err)
     assert expected.targets[2, 0] == pytest.approx(1.2e-6, rel=1e-12)
 
     tools = tmp_path / "tools.toml"

@@ -142,6 +142,7 @@ class CutReport:
             "notes": list(self.notes),
             "nc": {"integer_input": self.nc.get("integer_input"),
                    "states": [dict(state) for state in self.nc.get("states", ())],
+                   "units": [dict(unit) for unit in self.nc.get("units", ())],
                    "tool_table": self.nc.get("tool_table")},
             "tools": [{"tool": t["tool"], "line": t["line"], "length_mm": t["length_m"] * 1e3,
                        "removed_volume_mm3": t["removed_volume_m3"] * 1e9,
@@ -153,13 +154,17 @@ def nc_summary(program) -> dict:
     """How ``program`` was read, for `CutReport.nc`: ``integer_input`` (None when not read
     from text), ``states`` (the words read as modal states without geometric effect, G40,
     G80, G64, G61, G05.1 Q1, G08 P1, T1, ..., as ``{"word", "line"}`` in the order of their
-    first lines) and ``tool_table`` (the path of the table the T, H and D words used, or
-    None). A program that is not a `Program` (moves built in Python) gives Nones and no
-    states."""
-    states = getattr(program, "states", {}) or {}
+    first lines), ``units`` (G20 and G21 as selected, the same way; none when the text
+    selected neither and its lengths were read in mm) and ``tool_table`` (the path of the
+    table the T, H and D words used, or None). A program that is not a `Program` (moves
+    built in Python) gives Nones and no states."""
+    def first_lines(words) -> tuple:
+        return tuple({"word": word, "line": int(line)} for word, line in
+                     sorted(words.items(), key=lambda item: (item[1], item[0])))
+
     return {"integer_input": getattr(program, "integer_input", None),
-            "states": tuple({"word": word, "line": int(line)} for word, line in
-                            sorted(states.items(), key=lambda item: (item[1], item[0]))),
+            "states": first_lines(getattr(program, "states", {}) or {}),
+            "units": first_lines(getattr(program, "unit_words", {}) or {}),
             "tool_table": getattr(program, "tool_table", None)}
 
 

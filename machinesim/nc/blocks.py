@@ -193,6 +193,7 @@ class Block:
         state, g, line = self.state, self.g_codes, self.line
         if "units" in g:
             state.inch = g["units"][0] == "G20"
+            self.reader.unit_words.setdefault(g["units"][0], line)
         if "distance" in g:
             state.incremental = g["distance"][0] == "G91"
         if "plane" in g:

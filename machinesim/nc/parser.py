@@ -335,6 +335,7 @@ class Reader:
         # each M06, in the order they run
         self.tool_events: list[tuple[int, int | None, int]] = []
         self.arc_blocks = 0  # G02/G03 blocks run
+        self.unit_words: dict[str, int] = {}  # G20/G21 -> first line
         self.cache: dict[int, list[Word] | None] = {}
         n = self.scan.simple.size
         # the end of the run of simple lines each line is in (itself when not simple)
@@ -377,7 +378,8 @@ class Reader:
             number=self.state.number, source=self.source, work_offsets=self.offsets,
             states=self.states, integer_input=self.integer_input,
             tool_table=None if self.tools is None else self.tools.source,
-            tool_changes=self.tool_changes(), arc_blocks=self.arc_blocks)
+            tool_changes=self.tool_changes(), arc_blocks=self.arc_blocks,
+            unit_words=self.unit_words)
 
     def tool_changes(self) -> tuple:
         """The tools put in the spindle (`ToolChange`), from the T words and M06: at each

@@ -160,6 +160,10 @@ class Program:
     arc_blocks : int
         How many G02/G03 blocks were read (each run of a subprogram counted): their moves
         are chords within the reader's ``chord_tolerance``. 0 for programs built from moves.
+    unit_words : Mapping[str, int]
+        The length units the text selected (``"G20"`` inch, ``"G21"`` mm) -> the first line
+        each appeared on. Empty when it selected neither: its lengths were read in mm (the
+        reader's default), and for programs built from moves.
 
     All arrays are read-only.
 
@@ -173,7 +177,7 @@ class Program:
 
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
-                 "tool_table", "tool_changes", "arc_blocks", "_moves")
+                 "tool_table", "tool_changes", "arc_blocks", "unit_words", "_moves")
 
     def __init__(
         self,
@@ -282,17 +286,18 @@ class Program:
     @classmethod
     def _from_parts(cls, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, *,
                     number, source, work_offsets, states, integer_input,
-                    tool_table=None, tool_changes=(), arc_blocks=0) -> Program:
+                    tool_table=None, tool_changes=(), arc_blocks=0,
+                    unit_words=None) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
                       source, work_offsets, states, integer_input, tool_table, tool_changes,
-                      arc_blocks)
+                      arc_blocks, unit_words)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
               source, work_offsets, states, integer_input, tool_table=None,
-              tool_changes=(), arc_blocks=0) -> None:
+              tool_changes=(), arc_blocks=0, unit_words=None) -> None:
         set_ = object.__setattr__
         set_(self, "source", source)
         set_(self, "number", number)
@@ -311,6 +316,7 @@ class Program:
         set_(self, "states", _states(states, source))
         set_(self, "tool_changes", tuple(tool_changes))
         set_(self, "arc_blocks", int(arc_blocks))
+        set_(self, "unit_words", _states(unit_words, source, "unit_words"))
         codes = _m_codes(m_codes, len(kinds), source)
         for name, array in (("_targets", targets), ("_kinds", kinds), ("_feeds", feeds),
                             ("_dwells", dwells), ("_lines", lines), ("_spindles", spindles),
@@ -384,9 +390,9 @@ class Program:
             return NotImplemented
         return (
             (self.number, self.source, self.work_offsets, self.states, self.integer_input,
-             self.tool_table)
+             self.tool_table, self.unit_words)
             == (other.number, other.source, other.work_offsets, other.states,
-                other.integer_input, other.tool_table)
+                other.integer_input, other.tool_table, other.unit_words)
             and self._same_moves(other)
         )
 
@@ -398,7 +404,7 @@ class Program:
                            self._spindles, self._blocks, dict(self._m_codes), self.number,
                            self.source, {k: dict(v) for k, v in self.work_offsets.items()},
                            dict(self.states), self.integer_input, self.tool_table,
-                           self.tool_changes, self.arc_blocks))
+                           self.tool_changes, self.arc_blocks, dict(self.unit_words)))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -413,23 +419,24 @@ class Program:
 
 def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number, source,
              work_offsets, states, integer_input, tool_table=None, tool_changes=(),
-             arc_blocks=0) -> Program:
+             arc_blocks=0, unit_words=None) -> Program:
     """Unpickle a `Program` (the arrays come back writeable copies: made read-only again)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
                                states=states, integer_input=integer_input,
                                tool_table=tool_table, tool_changes=tool_changes,
-                               arc_blocks=arc_blocks)
+                               arc_blocks=arc_blocks, unit_words=unit_words)
 
 
-def _states(states: Mapping[str, int] | None, source: str) -> FrozenMapping:
+def _states(states: Mapping[str, int] | None, source: str,
+            name: str = "states") -> FrozenMapping:
     if states is None:
         return FrozenMapping()
     if not isinstance(states, Mapping) or not all(
         isinstance(k, str) and _is_int(v) and v >= 1 for k, v in states.items()
     ):
-        raise NCProgramError(f"states must map words (str) to first lines (int >= 1), got "
-                             f"{states!r}", source=source, key="states")
+        raise NCProgramError(f"{name} must map words (str) to first lines (int >= 1), got "
+                             f"{states!r}", source=source, key=name)
     return FrozenMapping(states.items())
 
 

@@ -22,6 +22,7 @@ from machinesim._program_options import (
     add_reading_options,
     check_reading_options,
     read_for_machine,
+    unit_note,
 )
 from machinesim.exceptions import InputError
 
@@ -184,6 +185,9 @@ def _scene(args, budget: int):
             args, check_readable_file(args.program, "NC program (--program)"), machine,
             tool_from_spec(args.tool))
         _refuse_tool_changes(program)
+        note = unit_note(program)
+        if note:
+            print(f"note: {note}", file=sys.stderr)
     if args.errors is not None:
         from machinesim.errors import ErrorModel
 
