@@ -552,18 +552,24 @@ def test_a_work_offset_the_command_is_not_given_is_taken_as_zero_and_said(tmp_pa
                                          ("G90", [])])
 def test_a_program_without_g20_or_g21_is_read_in_mm_and_said(tmp_path, capsys, head, units):
     # an inch program without G20 would come out 25.4 times too small: say how it was read
-    program, report = tmp_path / "p.nc", tmp_path / "r.json"
-    program.write_text(f"{head}\nG0 X1. Y1. Z0.1\nG1 Z-0.01 F100.\nX3.\nG0 Z0.1\nM30\n")
-    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
-                        "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply",
-                        "--report", report], capsys)
-    assert code == 0, err
+    err, summary = _cut_small(tmp_path, capsys, "v:90",
+                              f"{head}\nG0 X1. Y1. Z0.1\nG1 Z-0.01 F100.\nX3.\nG0 Z0.1\nM30\n")
     note = ("the program selects neither G20 (inch) nor G21 (mm): its lengths were read in "
             "mm; add G20 at its start if it is written in inches")
-    summary = json.loads(report.read_text(), parse_constant=no_nan)
     assert summary["nc"]["units"] == units
     assert (f"note: {note}" in err.splitlines()) == (not units)
     assert (note in summary["notes"]) == (not units)
+
+
+def _cut_small(tmp_path, capsys, tool: str, text: str):
+    """(stderr, report) of ``machinesim cut`` of ``text`` with ``tool`` on a 5 x 3 mm block."""
+    program, report = tmp_path / "p.nc", tmp_path / "r.json"
+    program.write_text(text)
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", tool,
+                        "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply",
+                        "--report", report], capsys)
+    assert code == 0, err
+    return err, json.loads(report.read_text(), parse_constant=no_nan)
 
 
 @pytest.mark.parametrize("body, noted", [
@@ -574,17 +580,12 @@ def test_a_program_without_g20_or_g21_is_read_in_mm_and_said(tmp_path, capsys, h
 ])
 def test_the_chord_note_is_given_when_arcs_or_rotary_feeds_were_split(tmp_path, capsys, body,
                                                                     noted):
-    program = tmp_path / "p.nc"
-    program.write_text(f"G90 G21\nG0 X1. Y1. Z0.1 C0.\n{body}G0 Z0.1\nM30\n")
-    report = tmp_path / "r.json"
-    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "ball:0.5",
-                        "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply",
-                        "--report", report], capsys)
-    assert code == 0, err
+    err, summary = _cut_small(tmp_path, capsys, "ball:0.5",
+                              f"G90 G21\nG0 X1. Y1. Z0.1 C0.\n{body}G0 Z0.1\nM30\n")
     note = ("arcs and rotary moves were split into chords within 100 nm, a tenth of the "
             "tool's own facets (--chord-nm sets it; docs/cutting.md)")
     assert (f"note: {note}" in err.splitlines()) == noted
-    assert (note in json.loads(report.read_text(), parse_constant=no_nan)["notes"]) == noted
+    assert (note in summary["notes"]) == noted
 
 
 @pytest.mark.parametrize("argv, hint", [
