@@ -36,7 +36,14 @@ from machinesim.kinematics import (
 )
 from machinesim.rotations import not_rigid, rotation_log
 from machinesim.tolerances import IK_SINGULAR
-from machinesim.urdf import AXIS_ORDER, REQUIRED_FRAMES, check_tree, read_axes, read_urdf
+from machinesim.urdf import (
+    AXIS_ORDER,
+    REQUIRED_FRAMES,
+    check_tree,
+    check_zero_pose,
+    read_axes,
+    read_urdf,
+)
 
 #: Poses solved together by `Machine.axis_values` (its working arrays, ~1 kB a pose, stay
 #: small for programs of a million blocks).
@@ -158,6 +165,9 @@ class Machine:
         if missing:
             raise ModelError(f"{self.path}: missing frame(s) {', '.join(missing)}; every "
                              f"machine needs {', '.join(REQUIRED_FRAMES)}")
+        nominal, zero = self.kin.bind(None), np.zeros(len(self._axes))
+        check_zero_pose(self.path, self._axes, self.kin.poses(zero[None], nominal)[0],
+                        self.kin.axis_jacobian(zero, nominal))
         self.lower = np.array([a.lower for a in self._axes])
         self.upper = np.array([a.upper for a in self._axes])
         self.resolution = np.array([a.resolution for a in self._axes])

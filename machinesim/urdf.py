@@ -4,8 +4,12 @@ Everything a machinesim URDF must satisfy is checked here, before Pinocchio sees
 so that a bad file is a located `ModelError` (file, joint or link, value, what was
 expected), never a hang or a traceback: the XML must parse; links and joints must form one
 tree (no cycle, no dangling or duplicate name, one root); every axis joint is named by its
-NC letter, has a unit machine direction pointing as ISO 841 asks, finite origins, a
-``<limit>`` with lower < upper and a velocity > 0, and a ``<machinesim:axis>`` resolution.
+NC letter (X Y Z prismatic, A B C revolute), carries the tool or the workpiece, has a unit
+machine direction pointing as ISO 841 asks, finite origins, a ``<limit>`` with lower <
+upper within a machine's travel and a plausible rapid rate, and a ``<machinesim:axis>``
+resolution. Once Pinocchio has the model, `check_zero_pose` checks the nominal machine at
+zero against the conventions of docs/machines.md: the edge at the workpiece origin, each
+axis moving the tool along (or about) its direction.
 """
 
 from __future__ import annotations
@@ -19,13 +23,28 @@ import numpy as np
 from machinesim.exceptions import ModelError
 from machinesim.kinematics import DOFS, Axis
 
-__all__ = ["AXIS_ORDER", "REQUIRED_FRAMES", "check_tree", "read_axes", "read_urdf"]
+__all__ = ["AXIS_ORDER", "REQUIRED_FRAMES", "check_tree", "check_zero_pose", "read_axes",
+           "read_urdf"]
 
 #: NC letters in the order machinesim puts them in a configuration vector.
 AXIS_ORDER = "XYZABC"
 #: Frames every machine has.
 REQUIRED_FRAMES = ("base", "table", "workpiece", "tool_mount", "tool_tip")
 _NS = "{https://machinesim.invalid/urdf}"
+#: How far the nominal machine at zero may be from the conventions (docs/machines.md): the
+#: tool edge at the workpiece origin (m), its frame and each axis's direction parallel to
+#: the workpiece's axes (rad, and the unit axis vectors' components). Round-off of the
+#: origins' sums is ~1e-16.
+ZERO_POSE_TOL = 1e-9
+#: Elements nested deeper than this are not a URDF (one is 5-6 deep).
+MAX_DEPTH = 64
+#: Plausible travel limits and rapid rates: beyond them a value was written in the wrong
+#: unit (100 for 100 mm reads as 100 m) or is not a machine's. Rotary axes may be spindles,
+#: whose travel is many turns.
+MAX_TRAVEL_M = 10.0
+MAX_TRAVEL_RAD = 1e9
+RAPID_RATE_M_PER_S = (1e-6, 100.0)
+RAPID_RATE_RAD_PER_S = (1e-6, 1e5)
 
 
 def read_urdf(path: Path) -> ET.Element:
@@ -38,8 +57,23 @@ def read_urdf(path: Path) -> ET.Element:
         raise ModelError(f"{path}: cannot read the URDF file ({exc.strerror})") from None
     except RecursionError:
         raise ModelError(f"{path}: XML nested too deeply to be a URDF") from None
+    depth = _depth(root)
+    if depth > MAX_DEPTH:
+        raise ModelError(f"{path}: XML nested {depth} elements deep; a URDF is at most a few "
+                         f"(robot, link, visual, geometry, ...), expected at most {MAX_DEPTH}")
     check_tree(root, path)
     return root
+
+
+def _depth(root: ET.Element) -> int:
+    """How many elements deep the tree under ``root`` goes (iteratively: a file nested
+    100,000 deep overflows Python's stack in anything recursive, `ET.tostring` included)."""
+    deepest, stack = 0, [(root, 1)]
+    while stack:
+        element, depth = stack.pop()
+        deepest = max(deepest, depth)
+        stack.extend((child, depth + 1) for child in element)
+    return deepest
 
 
 def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
@@ -73,6 +107,9 @@ def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
         if name not in AXIS_ORDER or len(name) != 1:
             raise ModelError(f"{where}: axis joints are named by their NC letter, one of "
                              f"{', '.join(AXIS_ORDER)}")
+        if (kind == "prismatic") != (name in "XYZ"):
+            raise ModelError(f"{where}: type {kind!r}; X, Y and Z are linear axes (prismatic "
+                             "joints), A, B and C rotary ones (revolute joints)")
         element = joint.find("axis")
         if element is None:
             raise ModelError(f"{where}: no <axis xyz=...>; a machine axis states its direction")
@@ -80,6 +117,13 @@ def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
         k = int(np.argmax(np.abs(axis)))
         if np.count_nonzero(axis) != 1 or abs(abs(axis[k]) - 1.0) > 0:
             raise ModelError(f"{where}: axis {axis.tolist()} must be a unit machine direction")
+        if kind == "prismatic" and "XYZ"[k] != name:
+            raise ModelError(f"{where}: <axis xyz=\"{element.get('xyz')}\"> moves along "
+                             f"{'XYZ'[k]}; the {name} axis moves along {name}")
+        if name in tool_side and name in wp_side:
+            raise ModelError(f"{where}: carries both the tool_tip and the workpiece, so it "
+                             "moves neither relative to the other; an axis joint is on one "
+                             "side only")
         side = 1 if name in tool_side else -1 if name in wp_side else 0
         if side == 0:
             raise ModelError(f"{where}: moves neither the tool_tip nor the workpiece")
@@ -91,12 +135,83 @@ def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
                 "positively relative to the workpiece (ISO 841)")
         if name not in resolution:
             raise ModelError(f"{where}: no <machinesim:axis joint=\"{name}\" resolution=...> "
-                             "element")
+                             f"element{_namespace_hint(root, name)}")
         lower, upper, velocity = _limits(joint, where, kind == "revolute")
         axes.append(Axis(
             letter=name, rotary=kind == "revolute", side=side, direction=k,
             lower=lower, upper=upper, velocity=velocity, resolution=resolution[name]))
+    stray = sorted(set(resolution) - {a.letter for a in axes})
+    if stray:
+        raise ModelError(f"{path}: <machinesim:axis joint={stray[0]!r}> names no axis joint; "
+                         f"the axis joints are {', '.join(sorted(a.letter for a in axes))}")
     return tuple(sorted(axes, key=lambda a: AXIS_ORDER.index(a.letter)))
+
+
+def check_zero_pose(path, axes: tuple[Axis, ...], wMt: np.ndarray,
+                    jacobian: np.ndarray) -> None:
+    """Check the nominal machine at zero axis values against the conventions.
+
+    ``wMt`` (4, 4) is the tool_tip's pose in the workpiece frame at zero, ``jacobian``
+    (6, n_axes) its derivative (linear rows, then angular, in workpiece axes). The edge
+    must sit at the workpiece origin with tool_tip parallel to workpiece; +1 of a linear
+    axis must move the tool +1 along its letter relative to the workpiece (ISO 841), and a
+    rotary axis turn it about the direction its ``<axis>`` names. A joint origin's ``rpy``
+    that turns an axis, or a placement that leaves the edge off the origin, loads as a
+    different machine (X moving along Y, Y mirrored, a part cut shifted), so it is refused.
+    """
+    offset, turned = wMt[:3, 3], _angle(wMt[:3, :3])
+    if np.abs(offset).max() > ZERO_POSE_TOL or turned > ZERO_POSE_TOL:
+        raise ModelError(
+            f"{path}: at zero axis values the tool_tip sits at "
+            f"({_fmt(offset * 1e3, 1e-9)}) mm in the workpiece frame, "
+            f"turned {math.degrees(turned):.6g} deg; expected the tool edge at the workpiece "
+            "origin and tool_tip parallel to workpiece (docs/machines.md, Conventions): "
+            "check the origins (xyz in m, rpy in rad) from workpiece and tool_tip down to "
+            "their common link")
+    for column, axis in zip(jacobian.T, axes, strict=True):
+        unit = np.eye(3)[axis.direction]
+        moved, turns = column[:3], column[3:]
+        if axis.rotary:
+            if np.abs(turns - unit).max() <= ZERO_POSE_TOL:
+                continue
+            got = (f"+1 rad of {axis.letter} turns the tool relative to the workpiece about "
+                   f"({_fmt(turns)})")
+            wanted = f"about +{'XYZ'[axis.direction]}"
+        else:
+            if np.abs(moved - unit).max() <= ZERO_POSE_TOL and np.abs(turns).max() <= \
+                    ZERO_POSE_TOL:
+                continue
+            got = (f"+1 m of {axis.letter} moves the tool relative to the workpiece by "
+                   f"({_fmt(moved)}) m" + (f" and turns it by ({_fmt(turns)}) rad"
+                                          if np.abs(turns).max() > ZERO_POSE_TOL else ""))
+            wanted = f"+1 m along {axis.letter}"
+        raise ModelError(
+            f"{path}: joint {axis.letter!r}: {got}; expected {wanted} (ISO 841, with joint "
+            "frames parallel to the machine axes at zero: check the rpy of this joint's "
+            "origin and of the joints above it, docs/machines.md, Conventions)")
+
+
+def _angle(rotation: np.ndarray) -> float:
+    """The angle (rad) of a rotation matrix, accurate for small angles too."""
+    return float(np.arctan2(np.linalg.norm(rotation - rotation.T) / math.sqrt(8.0),
+                            (np.trace(rotation) - 1.0) / 2.0))
+
+
+def _fmt(vector: np.ndarray, below: float = 1e-12) -> str:
+    """Components to 6 digits, round-off (below ``below``) shown as 0."""
+    return ", ".join(f"{0.0 if abs(v) < below else v:.6g}" for v in vector)
+
+
+def _namespace_hint(root: ET.Element, name: str) -> str:
+    """Where an axis element for joint ``name`` is in another XML namespace: which one, and
+    the one machinesim reads."""
+    for element in root.iter():
+        tag = element.tag if isinstance(element.tag, str) else ""
+        if tag.rpartition("}")[2] == "axis" and element.get("joint") == name:
+            found = tag.rpartition("}")[0].lstrip("{") or "no namespace"
+            return (f" (an <axis joint={name!r}> is there, in {found}; declare "
+                    f"xmlns:machinesim=\"{_NS.strip('{}')}\" on <robot>)")
+    return ""
 
 
 def _limits(joint: ET.Element, where: str, rotary: bool) -> tuple[float, float, float]:
@@ -120,6 +235,15 @@ def _limits(joint: ET.Element, where: str, rotary: bool) -> tuple[float, float, 
     if not velocity > 0.0:
         raise ModelError(f"{where}: <limit velocity={velocity!r}> ({unit}/s); expected a rapid "
                          "rate > 0")
+    most = MAX_TRAVEL_RAD if rotary else MAX_TRAVEL_M
+    if max(abs(lower), abs(upper)) > most:
+        raise ModelError(f"{where}: <limit lower={lower!r} upper={upper!r}> ({unit}); expected "
+                         f"a travel within +-{most:g} {unit} (URDF lengths are metres: "
+                         "100 mm is 0.1)")
+    slowest, fastest = RAPID_RATE_RAD_PER_S if rotary else RAPID_RATE_M_PER_S
+    if not slowest <= velocity <= fastest:
+        raise ModelError(f"{where}: <limit velocity={velocity!r}> ({unit}/s); expected a rapid "
+                         f"rate of {slowest:g} .. {fastest:g} {unit}/s")
     return lower, upper, velocity
 
 

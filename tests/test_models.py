@@ -200,6 +200,46 @@ HOSTILE_URDFS = {
     "not_a_robot": (GROOVING.replace("<robot ", "<robut ").replace("</robot>", "</robut>"),
                     ["root element <robut>", "expected <robot>"]),
     "truncated": (GROOVING[:len(GROOVING) // 2], ["not readable XML"]),
+    # machines that load as another machine unless the conventions are checked at zero
+    "x_along_y": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', '<axis xyz="0.0 1.0 0.0"/>'),
+                  ["joint 'X'", '<axis xyz="0.0 1.0 0.0"> moves along Y',
+                   "the X axis moves along X"]),
+    "x_revolute": (_in_joint("X", 'type="prismatic"', 'type="revolute"'),
+                   ["joint 'X'", "type 'revolute'", "X, Y and Z are linear axes"]),
+    "c_prismatic": (_in_joint("C", 'type="revolute"', 'type="prismatic"'),
+                    ["joint 'C'", "type 'prismatic'", "A, B and C rotary ones"]),
+    "x_frame_turned": (_in_joint("X", 'rpy="0.0 0.0 0.0"', 'rpy="0.0 0.0 1.5707963267948966"'),
+                       ["at zero axis values the tool_tip sits at", "turned 90 deg",
+                        "expected the tool edge at the workpiece origin"]),
+    # X's frame turned a quarter and Z's turned back, Z placed where it was: the tool sits
+    # as designed, but X moves it along +Y
+    "x_moves_along_y": (
+        _in_joint("X", 'rpy="0.0 0.0 0.0"', 'rpy="0.0 0.0 1.5707963267948966"').replace(
+            '<origin xyz="0.0 -0.4 -0.25" rpy="0.0 0.0 0.0"/>',
+            '<origin xyz="-0.4 0.0 -0.25" rpy="0.0 0.0 -1.5707963267948966"/>'),
+        ["joint 'X'", "+1 m of X moves the tool relative to the workpiece by (0, 1, 0) m",
+         "expected +1 m along X"]),
+    "tip_off_origin": (GROOVING.replace('<origin xyz="0.0 0.0 -0.02" rpy="0.0 0.0 0.0"/>',
+                                        '<origin xyz="0.003 0.0 -0.02" rpy="0.0 0.0 0.0"/>'),
+                       ["the tool_tip sits at (3, 0, 0) mm", "turned 0 deg"]),
+    "y_carries_both": (_in_joint("X", '<parent link="base"/>', '<parent link="y_carriage"/>'),
+                       ["joint 'Y'", "carries both the tool_tip and the workpiece"]),
+    "travel_in_mm": (_in_joint("X", 'lower="-0.25" upper="0.25"', 'lower="-250" upper="250"'),
+                     ["joint 'X'", "lower=-250.0 upper=250.0", "within +-10 m",
+                      "100 mm is 0.1"]),
+    "rapid_rate_tiny": (_in_joint("X", 'velocity="0.025"', 'velocity="1e-300"'),
+                        ["joint 'X'", "velocity=1e-300", "rate of 1e-06 .. 100 m/s"]),
+    "stray_resolution": (GROOVING.replace('<machinesim:axis joint="Y"',
+                                          '<machinesim:axis joint="Q" resolution="1e-09"/>'
+                                          '<machinesim:axis joint="Y"'),
+                         ["<machinesim:axis joint='Q'> names no axis joint"]),
+    "other_namespace": (GROOVING.replace('xmlns:machinesim="https://machinesim.invalid/urdf"',
+                                         'xmlns:machinesim="http://example.com/ms"'),
+                        ["no <machinesim:axis", "is there, in http://example.com/ms",
+                         'declare xmlns:machinesim="https://machinesim.invalid/urdf"']),
+    "nested_deep": (GROOVING.replace('<link name="base">', '<link name="base">'
+                                     + "<a>" * 100_000 + "</a>" * 100_000),
+                    ["XML nested 100002 elements deep", "expected at most 64"]),
 }
 
 
@@ -215,6 +255,25 @@ def test_a_hostile_urdf_is_a_located_model_error(case, tmp_path):
     assert message.startswith(str(path)), message
     for word in words:
         assert word in message, f"{word!r} not in {message!r}"
+
+
+def test_the_hand_written_example_machine_cuts_as_the_shipped_one_and_takes_its_errors():
+    # docs/machines.md "Your own machine": the 3-axis example cuts the grooves example as
+    # grooving_4axis does (the same 20 um V grooves), and with the workpiece set 5 um high
+    # each groove is 25 um deep: a V of 90 deg removes depth^2 per length, (25/20)^2 more
+    from machinesim.cutting import cut
+    from machinesim.nc import read_program
+
+    examples = ROOT / "models" / "examples"
+    program = read_program(examples / "grooves.nc")
+    own, shipped = load_machine(examples / "mill3.urdf"), load_machine("grooving_4axis")
+    assert own.axes == ("X", "Y", "Z")
+    volumes = [cut(program, machine, "v:90", "block:10x10x2", errors=errors,
+                   start=machine.home)[1].removed_volume_m3
+               for machine, errors in ((shipped, None), (own, None),
+                                       (own, examples / "mill3_errors.toml"))]
+    assert volumes[1] == pytest.approx(volumes[0], rel=1e-12)
+    assert volumes[2] == pytest.approx(volumes[0] * (25 / 20) ** 2, rel=1e-9)
 
 
 def test_a_cyclic_urdf_fails_fast_instead_of_hanging(tmp_path):
