@@ -214,7 +214,8 @@ def test_machine_scene_draws_every_visual_and_moves_the_tool_as_the_kinematics_s
         pose[:3, 3] = tracks[".position"]
         return pose
 
-    end_q = plan(grooves(), machine, ERRORS).segments[-1].q[-1]
+    # the program runs from the machine's home, as machinesim cut runs it
+    end_q = plan(grooves(), machine, ERRORS, start=machine.home).segments[-1].q[-1]
     wMt = np.linalg.inv(pose_at_end("/meshcat/workpiece")) @ pose_at_end("/meshcat/tool")
     # Pinocchio's forward kinematics vs machinesim's batched chain: tolerances.POSE_M
     np.testing.assert_allclose(wMt, machine.tool_pose(end_q, ERRORS), rtol=0, atol=1e-12)
@@ -231,10 +232,28 @@ def test_machine_scene_draws_every_visual_and_moves_the_tool_as_the_kinematics_s
 
     [nominal] = [c for c in commands if c["path"] == "/meshcat/workpiece/paths/nominal"]
     points = floats(nominal["object"]["geometries"][0]["data"]["attributes"]["position"]["array"])
-    feed_q = np.vstack([s.q for s in plan(grooves(), machine, ERRORS).segments])
+    feed_q = np.vstack([s.q for s in plan(grooves(), machine, ERRORS,
+                                          start=machine.home).segments])
     expected = machine.tool_pose(feed_q, None)[:, :3, 3]
-    # float32 display buffers: 24-bit mantissa on coordinates under 2 mm
-    np.testing.assert_allclose(points.reshape(-1, 3), expected, rtol=0, atol=1e-9)
+    assert expected[0, 2] == pytest.approx(machine.home[2], abs=1e-15)  # from home: Z 100 mm
+    # float32 display buffers: a 24-bit mantissa
+    np.testing.assert_allclose(points.reshape(-1, 3), expected, rtol=2.0**-24, atol=1e-12)
+
+
+def test_a_mesh_the_viewer_cannot_load_is_left_out_with_a_warning(tmp_path):
+    # a ROS file's package:// mesh resolves only inside ROS: the machine is drawn without
+    # it, and the warning names the link and the file (the view ended in a ValueError)
+    text = (Path(load_machine("grooving_4axis").path).read_text()
+            .replace('<link name="base">', '<link name="base"><visual><geometry><mesh '
+                     'filename="package://foo/meshes/base.stl"/></geometry></visual>'))
+    path = tmp_path / "meshed.urdf"
+    path.write_text(text)
+    scene = machine_scene(load_machine(path))
+    assert scene.warnings == [f"{path}: mesh files that could not be loaded, drawn without "
+                              "them: base (package://foo/meshes/base.stl) (package:// paths "
+                              "resolve only inside ROS; give the file's path)"]
+    objects = {c["path"] for c in decoded(scene) if c["type"] == "set_object"}
+    assert "/meshcat/machine/visuals/tool_tip_0" in objects  # the rest is drawn
 
 
 def test_machine_scene_without_program_and_with_bad_settings():

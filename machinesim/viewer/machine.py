@@ -64,7 +64,8 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
     errors : ErrorModel, optional
         The machine's errors; None for the nominal machine.
     start : array-like, shape (n_axes,), optional
-        Axis values before the first block (m, rad); default zeros.
+        Axis values before the first block (m, rad); default the machine's home
+        (`Machine.home`), where ``machinesim cut`` starts a program.
     duration_s : float
         Longest animation, s: a longer program plays faster.
     max_stages : int
@@ -81,12 +82,12 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
     machine.check_errors(errors)
     scene = Scene(f"{machine.name} ({''.join(machine.axes)})")
     model = machine.model
-    geometry = pin.buildGeomFromUrdfString(model, machine.urdf_xml, pin.GeometryType.VISUAL)
+    geometry = _visuals(machine, scene)
     visualizer = MeshcatVisualizer(model, visual_model=geometry)
     visualizer.initViewer(viewer=scene.vis)
     visualizer.loadViewerModel(rootNodeName="machine")
     binding = machine.binding(errors)
-    q0 = np.zeros(len(machine.axes)) if start is None else np.asarray(start, dtype=np.float64)
+    q0 = machine.home if start is None else np.asarray(start, dtype=np.float64)
     visualizer.display(machine.kin.full_q(q0, binding))
     lo, hi = _machine_box(visualizer)
     scene.notes.append("travel: " + ", ".join(
@@ -98,6 +99,34 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
                       duration_s, max_stages, max_triangles, chord_tolerance)
     frame_scene(scene, lo, hi)
     return scene
+
+
+def _visuals(machine, scene: Scene):
+    """The machine's visual geometry. Mesh files the URDF names but that cannot be loaded
+    (a ROS file's ``package://`` paths, resolved only inside ROS) are left out, with a
+    warning naming their links, rather than ending the view: the axes need no drawing."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        return pin.buildGeomFromUrdfString(machine.model, machine.urdf_xml,
+                                           pin.GeometryType.VISUAL)
+    except ValueError:
+        pass
+    root = ET.fromstring(machine.urdf_xml)
+    left_out = []
+    for link in root.iter("link"):
+        for visual in link.findall("visual"):
+            mesh = visual.find("geometry/mesh")
+            if mesh is not None:
+                link.remove(visual)
+                left_out.append(f"{link.get('name')} ({mesh.get('filename')})")
+    scene.warnings.append(f"{machine.path}: mesh files that could not be loaded, drawn "
+                          f"without them: "
+                          f"{', '.join(left_out[:5])}"
+                          f"{f' and {len(left_out) - 5} more' if len(left_out) > 5 else ''}"
+                          " (package:// paths resolve only inside ROS; give the file's path)")
+    return pin.buildGeomFromUrdfString(machine.model, ET.tostring(root, encoding="unicode"),
+                                       pin.GeometryType.VISUAL)
 
 
 def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, duration_s,
