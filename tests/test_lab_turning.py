@@ -52,6 +52,8 @@ def test_lab_turn_is_the_engine_along_the_erroneous_path(tool_path, program):
     expected = turned_heights(EdgePath(tool_path.c, tool_path.x + dx, dy, tool_path.z),
                               R + dr, px, py, top=1e-6)
     np.testing.assert_allclose(part.heights_at(px, py), expected, rtol=0, atol=1e-15)
+    with pytest.raises(InputError, match=r"two arrays of one length, got \d+ and 0 values"):
+        part.heights_at(np.column_stack([px, py]), [])  # an (n, 2) array is two arrays
     assert report.runs == 1 and report.points == len(tool_path)
     turns = (tool_path.c[-1] - tool_path.c[0]) / (2 * np.pi)
     assert report.revolutions == pytest.approx(turns, rel=1e-12)

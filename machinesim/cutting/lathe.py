@@ -77,6 +77,10 @@ class TurnedPart:
         """Heights at the points ``(px[i], py[i])`` (m, workpiece frame), shape (n,)."""
         px = np.asarray(px, dtype=np.float64).ravel()
         py = np.asarray(py, dtype=np.float64).ravel()
+        if px.size != py.size:
+            raise InputError(f"heights_at(px, py) takes the points' x and y as two arrays of "
+                             f"one length, got {px.size} and {py.size} values (an (n, 2) "
+                             "array is heights_at(points[:, 0], points[:, 1]))")
         out = np.full(px.size, self.top)
         for path in self.paths:
             np.minimum(out, turned_heights(path, self.tool, px, py, top=self.top), out=out)
