@@ -297,7 +297,8 @@ def check_tree(root: ET.Element, path) -> None:
     parent and child links exist; each link the child of at most one joint; no cycle (found
     before any walk, so a cyclic file cannot hang the loader); one root link; the frames
     every machine needs (`REQUIRED_FRAMES`), the tool edge and the workpiece on fixed joints;
-    no name taken by machinesim's error joints; every ``<origin>`` finite.
+    no name taken by machinesim's error joints; every ``<origin>`` finite; every visual and
+    collision shape a box, cylinder, sphere or mesh with positive sizes.
 
     Raises
     ------
@@ -367,6 +368,32 @@ def check_tree(root: ET.Element, path) -> None:
             continue
         _vector(element, "xyz", f"{path}: an <origin>", "0 0 0")
         _vector(element, "rpy", f"{path}: an <origin>", "0 0 0")
+    for link in root.findall("link"):
+        for kind in ("visual", "collision"):
+            for element in link.findall(f"{kind}/geometry/*"):
+                _check_shape(element, f"{path}: link {link.get('name')!r} <{kind}>")
+
+
+#: The sizes (m) of URDF's shapes: attribute -> how many numbers.
+_SHAPE_SIZES = {"box": {"size": 3}, "cylinder": {"radius": 1, "length": 1},
+                "sphere": {"radius": 1}, "mesh": {}}
+
+
+def _check_shape(element: ET.Element, where: str) -> None:
+    """A visual or collision shape with its sizes positive and finite (a mesh with a file
+    name), so that a bad one is a located ModelError rather than a C++ message of the URDF
+    parser on stderr and a link drawn without it."""
+    if element.tag not in _SHAPE_SIZES:
+        raise ModelError(f"{where}: <{element.tag}>; expected a box, cylinder, sphere or mesh")
+    if element.tag == "mesh" and not element.get("filename"):
+        raise ModelError(f"{where}: a <mesh> has no filename=...")
+    for attribute, count in _SHAPE_SIZES[element.tag].items():
+        text = element.get(attribute)
+        fields = [] if text is None else text.split()
+        values = [_number(f, f"{where} <{element.tag} {attribute}>") for f in fields]
+        if len(values) != count or not all(v > 0.0 for v in values):
+            raise ModelError(f"{where}: <{element.tag} {attribute}={text!r}>; expected "
+                             f"{'one length' if count == 1 else f'{count} lengths'} > 0 (m)")
 
 
 def _check_acyclic(links, parent_joint, parent_link, path) -> None:
