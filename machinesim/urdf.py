@@ -42,6 +42,9 @@ MAX_DEPTH = 64
 #: unit (100 for 100 mm reads as 100 m) or is not a machine's. Rotary axes may be spindles,
 #: whose travel is many turns.
 MAX_TRAVEL_M = 10.0
+#: The coarsest command resolution a machine axis plausibly has (0.1 mm, 0.01 rad).
+COARSEST_RESOLUTION_M = 1e-4
+COARSEST_RESOLUTION_RAD = 1e-2
 MAX_TRAVEL_RAD = 1e9
 RAPID_RATE_M_PER_S = (1e-6, 100.0)
 RAPID_RATE_RAD_PER_S = (1e-6, 1e5)
@@ -136,6 +139,12 @@ def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
         if name not in resolution:
             raise ModelError(f"{where}: no <machinesim:axis joint=\"{name}\" resolution=...> "
                              f"element{_namespace_hint(root, name)}")
+        coarsest = COARSEST_RESOLUTION_RAD if kind == "revolute" else COARSEST_RESOLUTION_M
+        if resolution[name] > coarsest:
+            unit = "rad" if kind == "revolute" else "m"
+            raise ModelError(f"{path}: <machinesim:axis joint={name!r}> resolution "
+                             f"{resolution[name]!r} ({unit}); expected at most {coarsest:g} "
+                             f"{unit} (SI: 1 nm is 1e-9)")
         lower, upper, velocity = _limits(joint, where, kind == "revolute")
         axes.append(Axis(
             letter=name, rotary=kind == "revolute", side=side, direction=k,

@@ -190,6 +190,9 @@ HOSTILE_URDFS = {
     "resolution_zero": (GROOVING.replace('joint="X" resolution="1e-09"',
                                          'joint="X" resolution="0"'),
                         ["joint='X'", "resolution 0.0", "> 0"]),
+    "resolution_in_um": (GROOVING.replace('joint="X" resolution="1e-09"',
+                                          'joint="X" resolution="1"'),
+                         ["joint='X'", "resolution 1.0 (m)", "expected at most 0.0001 m"]),
     "resolution_missing": (GROOVING.replace('joint="X" resolution="1e-09"', 'joint="X"'),
                            ["joint='X'", "no resolution="]),
     "no_tool_tip": (GROOVING.replace('<link name="tool_tip">', '<link name="tool_tap">')
