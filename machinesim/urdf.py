@@ -110,6 +110,9 @@ def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
         if name not in AXIS_ORDER or len(name) != 1:
             raise ModelError(f"{where}: axis joints are named by their NC letter, one of "
                              f"{', '.join(AXIS_ORDER)}")
+        if joint.find("mimic") is not None:
+            raise ModelError(f"{where}: has a <mimic>; machinesim moves each axis by its own "
+                             "NC letter (a gantry's second drive is one axis joint)")
         if (kind == "prismatic") != (name in "XYZ"):
             raise ModelError(f"{where}: type {kind!r}; X, Y and Z are linear axes (prismatic "
                              "joints), A, B and C rotary ones (revolute joints)")
