@@ -37,7 +37,7 @@ from machinesim._program_options import (
     read_for_machine,
     unit_note,
 )
-from machinesim.exceptions import ErrorModelError, InputError, MachineSimError
+from machinesim.exceptions import InputError, MachineSimError
 from machinesim.tolerances import CHORD_TOLERANCE_M
 
 EXAMPLES = """examples (from the repository's folder):
@@ -306,12 +306,7 @@ def _cut(args) -> int:
     stock = stock_from_spec(args.stock)
     program, chord = read_for_machine(args, args.program, machine, tool)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None
-    if errors is not None:
-        try:
-            machine.check_errors(errors)
-        except ErrorModelError as exc:  # name the user's file first, then the machine's
-            raise ErrorModelError(f"{exc.message} (machine {machine.name}, {exc.source})",
-                                  source=str(args.errors), key=exc.key) from None
+    machine.check_errors(errors)  # a misfit names the user's file first, then the machine
     # a flag passed only when given, so that without it the cutter's default (refuse) holds
     options = {name: True for name in ("allow_overtravel", "allow_holder_contact")
                if getattr(args, name)}

@@ -30,6 +30,7 @@ configurations at once with numpy, poses and (`Kinematics.pose_jacobians`) axis 
 from __future__ import annotations
 
 import copy
+import math
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -274,6 +275,11 @@ class Binding:
                 dof = DOF_OF_LETTER[symbol[1]]
                 varying.append(_Varying(qi[f"{letter}__comp_{dof}"], kin.axes.index(letter),
                                         comp, float(ax.side)))
+            # a rotary axis's errors repeat each turn: over a spindle's many turns a
+            # polynomial is no error model, so it is held to the bound over one turn each way
+            lower, upper = ((max(ax.lower, -2 * math.pi), min(ax.upper, 2 * math.pi))
+                            if ax.rotary else (ax.lower, ax.upper))
+            errors.check_travel(letter, lower, upper, source=kin.source)
         self.varying = tuple(varying)
 
 

@@ -248,7 +248,12 @@ class Machine:
         key = id(errors)
         b = self._bindings.get(key)
         if b is None or b.errors is not errors:
-            b = self.kin.bind(errors)
+            try:
+                b = self.kin.bind(errors)
+            except ErrorModelError as exc:  # name the model's file first, then the machine
+                if errors is None:
+                    raise
+                raise errors.misfit(exc, self.name) from None
             if len(self._bindings) > 32:
                 self._bindings.clear()
             self._bindings[key] = b

@@ -560,15 +560,10 @@ def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, flo
         Parameters set by options given explicitly.
     """
     from machinesim.errors import ErrorModel
-    from machinesim.exceptions import ErrorModelError
     from machinesim.machines import load_machine
 
     base = (ErrorModel.from_toml(args.errors) if args.errors is not None
             else ErrorModel().with_parameters(defaults))
     if machine is not None and args.errors is not None:
-        try:
-            load_machine(machine).check_errors(base)
-        except ErrorModelError as exc:
-            raise ErrorModelError(f"{exc.message} (machine {machine}, {exc.source})",
-                                  source=str(args.errors), key=exc.key) from None
+        load_machine(machine).check_errors(base)  # names the --errors file, then the machine
     return base.with_parameters(given) if given else base

@@ -47,7 +47,7 @@ from machinesim.tolerances import (
     PATH_CHORD_SHARE,
     PROFILE_CHORD_M,
 )
-from machinesim.units import M_PER_MM, M_PER_UM, RAD_PER_DEG
+from machinesim.units import M_PER_MM, RAD_PER_DEG
 
 #: Default length of a tool's body from its edge point to the holder (m). Ten times the
 #: deepest cut of the shipped examples and seed experiments (grooves and face passes of tens
@@ -640,10 +640,11 @@ def tool_from_spec(spec: str) -> Tool:
         raise InputError(f"tool spec {spec!r}: {error}", key="tool") from None
 
 
-def with_nose_radius_error(tool: Tool, d_radius: float) -> Tool:
+def with_nose_radius_error(tool: Tool, d_radius: float, written=None) -> Tool:
     """The tool as it is with the error model's nose radius error ``d_radius`` (m): a
     round-nose tool's nose, a ball's or a flat end mill's radius that much larger, still set
-    by its tip.
+    by its tip. ``written``, the model's (key, value) as its file wrote them
+    (``ErrorModel.written["tool_geometry.nose_radius"]``), is what a refusal names.
 
     Raises
     ------
@@ -652,15 +653,16 @@ def with_nose_radius_error(tool: Tool, d_radius: float) -> Tool:
     """
     if d_radius == 0.0:
         return tool
+    key, shown = (("tool_geometry.nose_radius", f"{d_radius!r} m") if written is None
+                  else (written[0], f"{written[1]:g}"))
     try:
         if isinstance(tool, RoundNoseTool):
             return tool.with_errors(nose_radius_error=d_radius)
         if isinstance(tool, BallEndMill | FlatEndMill):
             return tool.with_errors(radius_error=d_radius)
     except InputError as error:  # name the error model's key the user wrote, and the value
-        raise InputError(f"the error model's tool_geometry.nose_radius_um = "
-                         f"{d_radius / M_PER_UM:g} does not fit the {type(tool).__name__} "
-                         f"({error.message})", key="tool_geometry.nose_radius_um") from None
-    raise InputError(f"the error model has tool_geometry.nose_radius = {d_radius!r} m, but a "
-                     f"{type(tool).__name__} has no nose radius; expected a round-nose "
-                     "('nose:R:ANGLE'), ball or flat end mill", key="tool_geometry.nose_radius")
+        raise InputError(f"the error model's {key} = {shown} does not fit the "
+                         f"{type(tool).__name__} ({error.message})", key=key) from None
+    raise InputError(f"the error model has {key} = {shown}, but a {type(tool).__name__} has "
+                     "no nose radius; expected a round-nose ('nose:R:ANGLE'), ball or flat end "
+                     "mill", key=key)

@@ -214,7 +214,8 @@ def _substeps(machine, errors, start, end, points, tolerance, where) -> int:
         if n > MAX_SUBSTEPS:
             raise NCProgramError(
                 f"a rotary move would need more than {MAX_SUBSTEPS} sub-steps to keep the "
-                f"chord within {tolerance * 1e9:g} nm; raise chord_tolerance",
+                f"chord within {tolerance * 1e9:g} nm; raise chord_tolerance "
+                "(--chord-nm on the command line)",
                 source=where[0], line=where[1])
         if deviation(n) <= tolerance:
             return n

@@ -498,3 +498,247 @@ def test_inputs_are_copied():
     assert error.positions[1] == 1.0 and error.values[1] == 1e-6
     assert model.location["C"]["EX0C"] == 1e-6
     assert offset.flags.writeable
+
+
+# --- the file as written: byte order mark, source, keys --------------------------------------
+
+
+BOM = "\ufeff"
+
+
+def test_a_byte_order_mark_is_dropped(tmp_path):
+    plain, marked = tmp_path / "plain.toml", tmp_path / "marked.toml"
+    text = EXAMPLE.read_text(encoding="utf-8")
+    plain.write_text(text, encoding="utf-8")
+    marked.write_bytes(b"\xef\xbb\xbf" + text.encode("utf-8"))
+    assert marked.read_bytes()[:3] == b"\xef\xbb\xbf"
+    model = ErrorModel.from_toml(marked)
+    assert model == ErrorModel.from_toml(plain) == ErrorModel.from_dict(example_dict())
+    back = tmp_path / "back.toml"
+    model.to_toml(back)
+    assert_same_si(ErrorModel.from_toml(back), model, rtol=1e-15)
+
+
+def test_after_a_byte_order_mark_lines_and_columns_count_as_without(tmp_path):
+    for name, prefix in (("plain.toml", ""), ("marked.toml", BOM)):
+        path = tmp_path / name
+        path.write_text(prefix + "[tool]\noffset_um = [0.0, 0.0 0.0]\n", encoding="utf-8")
+        with pytest.raises(ErrorModelError) as info:
+            ErrorModel.from_toml(path)
+        assert (info.value.line, info.value.column) == (2, 23)  # the 0 after "0.0 "
+        assert "not valid TOML" in info.value.message and "Invalid statement" not in str(
+            info.value)
+
+
+def test_a_model_read_from_a_file_keeps_its_name_and_keys_as_written(tmp_path):
+    path = tmp_path / "nose.toml"
+    path.write_text("[tool_geometry]\nnose_radius_mm = -0.6\n[location.C]\nEX0C_nm = 20\n"
+                    "[component.X]\nposition_mm = [-10, 10]\nEXX_um = [1, 2]\n"
+                    "EBX_poly_urad_mm = [0.5, 0.25]\n")
+    model = ErrorModel.from_toml(path)
+    assert model.source == str(path)
+    assert model.tool_geometry.nose_radius == -0.6 * 1e-3
+    key, value = model.written["tool_geometry.nose_radius"]
+    assert (key, value) == ("tool_geometry.nose_radius_mm", -0.6)
+    assert model.written["location.C.EX0C"] == ("location.C.EX0C_nm", 20.0)
+    assert model.written["component.X.position"][0] == "component.X.position_mm"
+    assert_array_equal(model.written["component.X.EXX"][1], [1.0, 2.0])
+    assert model.written["component.X.EBX"][0] == "component.X.EBX_poly_urad_mm"
+    assert model.key_as_written("component.X.EBX") == "component.X.EBX_poly_urad_mm"
+    assert model.key_as_written("location.C") == "location.C"  # a section: as it is
+    assert ErrorModel().source is None and dict(ErrorModel().written) == {}
+    # equal values are equal models, wherever they came from, and pickle alike (the cut
+    # memo keys on pickles): a pickle holds the values, not the origin
+    same = ErrorModel.from_dict(model.to_dict())
+    assert same == model and same.source == "<dict>"
+    assert pickle.dumps(same) == pickle.dumps(model)
+    back = pickle.loads(pickle.dumps(model))
+    assert back == model and back.source is None and dict(back.written) == {}
+    with pytest.raises(TypeError):
+        model.written["tool.offset"] = ("tool.offset_m", [0.0, 0.0, 0.0])
+    # values set in Python are no longer the file's
+    changed = model.with_parameters({"location.C.EX0C": 1e-6})
+    assert changed.source is None and dict(changed.written) == {}
+
+
+def test_misfit_names_the_model_file_first_then_the_machine(tmp_path):
+    path = tmp_path / "axis_missing.toml"
+    path.write_text("[location.C]\nEX0C_um = 2.0\n[component.X]\nEYX_poly_um_mm = [0.0, 1.0]\n")
+    model = ErrorModel.from_toml(path)
+    found = ErrorModelError("axis 'C' is not on this machine; it has X, Y, Z",
+                            source="m/mill3.urdf", key="location.C")
+    told = model.misfit(found, "mill3")
+    assert isinstance(told, ErrorModelError)
+    assert str(told) == (f"{path}, key 'location.C': axis 'C' is not on this machine; it has "
+                         "X, Y, Z (machine mill3, m/mill3.urdf)")
+    assert (told.source, told.key) == (str(path), "location.C")
+    # a key the file wrote is named as written, unit and all
+    symbol = ErrorModelError("EYX is no good here", source="m/mill3.urdf", key="component.X.EYX")
+    assert model.misfit(symbol, "mill3").key == "component.X.EYX_poly_um_mm"
+    # a model built in Python has no file: the machine's message stands
+    assert ErrorModel.from_dict(model.to_dict()).with_parameters({}).misfit(found, "m") is found
+    assert ErrorModel().misfit(found, "mill3") is found
+
+
+# --- polynomials over an axis travel --------------------------------------------------------
+
+
+def brute_largest(error: ComponentError, lower: float, upper: float) -> tuple[float, float]:
+    """The largest |value| on a dense grid, summed power by power (tables: np.interp): an
+    independent, approximate reference."""
+    x = np.linspace(lower, upper, 2_000_001)
+    if error.kind == "poly":
+        dense = np.sum(error.values[:, None] * x ** np.arange(error.values.size)[:, None], axis=0)
+    else:
+        dense = np.interp(x, error.positions, error.values)
+    i = int(np.argmax(np.abs(dense)))
+    return float(dense[i]), float(x[i])
+
+
+@pytest.mark.parametrize(
+    ("error", "lower", "upper"),
+    [
+        # a maximum inside the travel, off any grid: 1.5 - 100 (x - 0.0123)**2
+        (ComponentError("poly", None, [1.5 - 100 * 0.0123**2, 200 * 0.0123, -100.0]), -0.1, 0.1),
+        (ComponentError("poly", None, [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]), -0.15, 0.1),
+        (ComponentError("poly", None, [1e-6, -3e-5, 2e-4, 5e-3]), -0.05, 0.1),
+        (ComponentError("poly", None, [7e-6]), -1.0, 1.0),
+        (ComponentError("table", [-0.1, 0.0, 0.05, 0.2], [1e-6, -4e-6, 3e-6, 9e-6]), -0.08, 0.1),
+    ],
+)
+def test_largest_agrees_with_a_dense_grid(error, lower, upper):
+    value, where = error.largest(lower, upper)
+    expected, at = brute_largest(error, lower, upper)
+    assert lower <= where <= upper
+    assert value == pytest.approx(expected, rel=1e-9, abs=1e-18)
+    assert where == pytest.approx(at, abs=1e-6 * (upper - lower))
+    assert value == error.evaluate([where])[0]
+
+
+def test_largest_of_the_interior_maximum_is_at_the_root():
+    error = ComponentError("poly", None, [1.5 - 100 * 0.0123**2, 200 * 0.0123, -100.0])
+    value, where = error.largest(-0.1, 0.1)
+    assert where == pytest.approx(0.0123, rel=1e-12)
+    assert value == pytest.approx(1.5, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("text", "axis", "travel", "key", "value", "at", "units"),
+    [
+        # the new user's file: 1e300 um/mm**2 at the end of a +-150 mm travel
+        ("[component.X]\nEYX_poly_um_mm = [0.0, 0.0, 1e300]\n", "X", (-0.15, 0.15),
+         "component.X.EYX_poly_um_mm", 1e300 * 150.0**2, -150.0, ("um", "mm")),
+        # x**8 in um per mm**8: refused here, before the planner's million sub-steps
+        ("[component.X]\nEYX_poly_um_mm = [0, 0, 0, 0, 0, 0, 0, 0, 1.0]\n", "X", (-0.15, 0.15),
+         "component.X.EYX_poly_um_mm", 150.0**8, -150.0, ("um", "mm")),
+        # a rotary axis: 1 urad per deg**3 reaches 5.832 rad at 180 deg, beyond half a turn
+        ("[component.C]\nEBC_poly_urad_deg = [0.0, 0.0, 0.0, 1.0]\n", "C",
+         (-math.pi / 2, math.pi), "component.C.EBC_poly_urad_deg", 180.0**3, 180.0,
+         ("urad", "deg")),
+        # nm per m: the units of the key, whatever they are
+        ("[component.Z]\nEXZ_poly_nm_m = [2e9]\n", "Z", (-0.05, 0.1),
+         "component.Z.EXZ_poly_nm_m", 2e9, -0.05, ("nm", "m")),
+    ],
+)
+def test_a_polynomial_beyond_the_bound_within_the_travel_is_refused(
+        tmp_path, text, axis, travel, key, value, at, units):
+    path = tmp_path / "F.toml"
+    path.write_text(text)
+    model = ErrorModel.from_toml(path)  # every coefficient is a finite number: read
+    with pytest.raises(ErrorModelError) as info:
+        model.check_travel(axis, *travel)
+    factor = {"mm": 1e-3, "m": 1.0, "deg": math.pi / 180}[units[1]]
+    limit = "1e+06 um (1 m)" if units[0] == "um" else (
+        "3.14159e+06 urad (3.14159 rad)" if units[0] == "urad" else "1e+09 nm (1 m)")
+    quantity = "length" if units[0] in ("um", "nm") else "angle"
+    assert str(info.value) == (
+        f"{path}, key '{key}': over the travel of axis {axis}, {travel[0] / factor:g} .. "
+        f"{travel[1] / factor:g} {units[1]}, the polynomial reaches {value:g} {units[0]} at "
+        f"{axis} = {at:g} {units[1]}, no {quantity} error: expected at most {limit} either way")
+    assert (info.value.source, info.value.key) == (str(path), key)
+    # the machine's check names the machine's file; misfit then tells it from the model's side
+    with pytest.raises(ErrorModelError) as info:
+        model.check_travel(axis, *travel, source="m.urdf")
+    assert info.value.source == "m.urdf"
+    assert str(model.misfit(info.value, "m")).startswith(f"{path}, key '{key}': over the travel")
+
+
+def test_a_polynomial_within_the_bound_over_the_travel_passes():
+    model = ErrorModel.from_toml(EXAMPLE)  # EYX = 2e-5 um/mm**2 x**2: 0.39 um at 140 mm
+    model.check_travel("X", -0.14, 0.14)
+    model.check_travel("Y", -1.0, 1.0)  # no component error on Y
+    # just within: 1 m exactly at the end of the travel
+    ErrorModel.from_dict({"component": {"X": {"EYX_poly_m_m": [0.0, 10.0]}}}).check_travel(
+        "X", -0.1, 0.1)
+    beyond = ErrorModel.from_dict({"component": {"X": {"EYX_poly_m_m": [0.0, 10.0 + 1e-9]}}})
+    with pytest.raises(ErrorModelError, match=r"'component\.X\.EYX_poly_m_m'.*reaches -1 m"):
+        beyond.check_travel("X", -0.1, 0.1)
+
+
+def test_a_spindle_polynomial_is_held_to_the_bound_over_one_turn_each_way():
+    # sts_lathe's C turns +-1e5 rad: 1 um/rad is 6.3 um at a turn (and 0.1 m at the travel's
+    # end, which a program turning that far reaches only as an error repeated each turn)
+    from machinesim.machines import load_machine
+
+    lathe = load_machine("sts_lathe")
+    small = ErrorModel.from_dict({"component": {"C": {"EXC_poly_um_rad": [0.0, 1.0]}}})
+    lathe.check_errors(small)
+    large = ErrorModel.from_dict({"component": {"C": {"EXC_poly_m_rad": [0.0, 0.2]}}})
+    with pytest.raises(ErrorModelError, match=r"-6\.28319 \.\. 6\.28319 rad, the polynomial "
+                                              r"reaches -1\.25664 m at C = -6\.28319 rad"):
+        lathe.check_errors(large)  # 0.2 m/rad x 2 pi
+
+
+def test_a_polynomial_built_in_python_is_named_by_its_symbol_in_um_and_mm():
+    model = ErrorModel(component={"X": {"EZX": ComponentError("poly", None, [0.0, 0.0, 200.0])}})
+    with pytest.raises(ErrorModelError) as info:
+        model.check_travel("X", -0.05, 0.1)
+    # 200 m/m**2 at 0.1 m: 2 m
+    assert str(info.value) == (
+        "key 'component.X.EZX': over the travel of axis X, -50 .. 100 mm, the polynomial "
+        "reaches 2e+06 um at X = 100 mm, no length error: expected at most 1e+06 um (1 m) "
+        "either way")
+
+
+def test_a_polynomial_beyond_float64_in_the_units_shown_is_told_so():
+    error = ComponentError("poly", None, [0.0] * 10 + [1e300])  # 1e300 m/rad**10 x**10
+    model = ErrorModel(component={"C": {"EXC": error}})
+    with pytest.raises(ErrorModelError) as info:  # 9.6e307 m is finite, in um it is not
+        model.check_travel("C", -2 * math.pi, 2 * math.pi)
+    assert f"reaches {1e300 * (2 * math.pi) ** 10:g} m at C = -360 deg" in str(info.value)
+    with pytest.raises(ErrorModelError, match=r"reaches more than float64 holds at C = -720 deg"):
+        model.check_travel("C", -4 * math.pi, 4 * math.pi)
+
+
+def test_a_coefficient_beyond_float64_in_si_is_refused_at_its_key(tmp_path):
+    path = tmp_path / "F.toml"
+    path.write_text("[component.X]\nEYX_poly_um_mm = [0, 0, 0, 0, 0, 0, 0, 0, 1e300]\n")
+    with pytest.raises(ErrorModelError) as info:
+        ErrorModel.from_toml(path)
+    # 1 um/mm**8 is 1e-6 / (1e-3)**8 = 1e18 m/m**8: 1e300 of them would be 1e318 m/m**8
+    assert str(info.value) == (
+        f"{path}, key 'component.X.EYX_poly_um_mm': coefficient c_8 = 1e+300 um/mm**8 is "
+        "1e+18 times as large in m/m**8, beyond float64; expected a length error of at most "
+        "1 m over the travel")
+
+
+def test_a_move_bent_into_too_many_sub_steps_names_the_command_line_option():
+    from machinesim.exceptions import NCProgramError
+    from machinesim.machines import load_machine
+    from machinesim.motion import plan
+    from machinesim.nc import ProgramBuilder
+
+    machine = load_machine(Path(__file__).resolve().parents[1] / "models" / "grooving_4axis.urdf")
+    # 1 m/m**2: 10 mm at X = 100 mm, well within the bound, but a parabola's chord of
+    # length h sags h**2 / 4 m: a million sub-steps sag 2.5e-15 m, above 1e-16 m
+    errors = ErrorModel.from_dict({"component": {"X": {"EYX_poly_m_m": [0.0, 0.0, 1.0]}}})
+    x = machine.axes.index("X")
+    errors.check_travel("X", machine.lower[x], machine.upper[x])  # 62.5 mm at most: passes
+    program = ProgramBuilder().rapid(X=0.0, Y=0.0, Z=1e-3, C=0.0).linear(
+        X=0.1, feed_mm_per_min=100).build()
+    with pytest.raises(NCProgramError) as info:
+        plan(program, machine, errors, chord_tolerance=1e-16)
+    assert info.value.line == 2
+    assert info.value.message == (
+        "a move would need more than 1000000 sub-steps to keep the chord within 1e-07 nm; "
+        "raise chord_tolerance (--chord-nm on the command line)")

@@ -160,7 +160,8 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
         raise InputError(f"Expected a finite top (m), got {top!r}", key="top")
     machine.check_errors(errors)
     if errors is not None:
-        tool = with_nose_radius_error(tool, errors.tool_geometry.nose_radius)
+        tool = with_nose_radius_error(tool, errors.tool_geometry.nose_radius,
+                                      errors.written.get("tool_geometry.nose_radius"))
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
     for t, points in turning_runs(program, machine):
         reached = followed(None if servo is None else servo.follow, t, points)

@@ -30,7 +30,12 @@ of rotary axes in deg (polynomials in um or urad per mm**k or deg**k).
 `ErrorModel.to_dict` gives the same structure in m and rad, so that it round trips exactly.
 Every value read must be finite, an angle at most 180 deg and a length at most 1 m either way
 (`LARGEST_ERROR`: beyond that it is another setting, not an error of one); a table's
-positions must lie within the machine's travel of its axis.
+positions must lie within the machine's travel of its axis, and a polynomial must stay
+within the same bound over that travel (`ErrorModel.check_travel`, when the model meets a
+machine). A model read from a file keeps the file's name and its keys as written
+(`ErrorModel.source`, `ErrorModel.written`), so a misfit found on a machine names them
+first (`ErrorModel.misfit`), from Python as from the command line; a TOML file may start
+with a UTF-8 byte order mark.
 """
 
 from machinesim.errors._checks import AXES, LARGEST_ERROR, LINEAR_AXES

@@ -68,17 +68,20 @@ def _numbers(value: Any, source: str | None, key: str | None, size: int | None =
 LARGEST_ERROR = {"angle": math.pi, "length": 1.0}
 
 
+def _limit(quantity: str, unit: str, factor: float) -> str:
+    """`LARGEST_ERROR` of `quantity` in `unit` (`factor` SI per unit), and in SI beside it."""
+    si = "rad" if quantity == "angle" else "m"
+    limit = f"{LARGEST_ERROR[quantity] / factor:g} {unit}"
+    return limit if unit == si else f"{limit} ({LARGEST_ERROR[quantity]:g} {si})"
+
+
 def _check_size(values, quantity: str, unit: str, factor: float, source: str | None,
                 key: str | None) -> None:
     """Refuse an error value (SI, scalar or array) larger than `LARGEST_ERROR` for its quantity."""
     worst = float(np.max(np.abs(values)))
     if worst > LARGEST_ERROR[quantity]:
-        si = "rad" if quantity == "angle" else "m"
-        limit = f"{LARGEST_ERROR[quantity] / factor:g} {unit}"
-        if unit != si:
-            limit += f" ({LARGEST_ERROR[quantity]:g} {si})"
         raise _fail(f"{worst / factor:g} {unit} is no {quantity} error: expected at most "
-                    f"{limit} either way", source, key)
+                    f"{_limit(quantity, unit, factor)} either way", source, key)
 
 
 def _check_si(values, quantity: str, key: str | None) -> None:

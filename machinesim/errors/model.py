@@ -17,16 +17,20 @@ import numpy as np
 
 from machinesim.errors._checks import (
     AXES,
+    LARGEST_ERROR,
     _check_axis,
     _check_increasing,
     _check_si,
     _check_symbol,
     _describe,
     _fail,
+    _limit,
     _number,
     _numbers,
     _quantity,
 )
+from machinesim.exceptions import ErrorModelError
+from machinesim.units import FACTORS
 
 _WORKPIECE_ANGLES = ("alpha", "beta", "gamma")
 _PARAMETER_RE = re.compile(
@@ -60,17 +64,22 @@ def _same(a: Any, b: Any) -> bool:
 
 
 class _Value:
-    """Exact equality and pickling through the constructor (which freezes the copies)."""
+    """Exact equality (of the compared fields) and pickling through the constructor (which
+    freezes the copies). A pickle holds the compared fields only, so equal values pickle
+    alike: the cut memo, which keys a cut on its inputs' pickles, reuses the cut of an equal
+    model read from another file."""
 
     def __eq__(self, other: object) -> bool:
         if type(other) is not type(self):
             return NotImplemented
-        return all(_same(getattr(self, f.name), getattr(other, f.name)) for f in fields(self))
+        return all(_same(getattr(self, f.name), getattr(other, f.name))
+                   for f in fields(self) if f.compare)
 
     __hash__ = None
 
     def __reduce__(self):
-        return type(self), tuple(_plain(getattr(self, f.name)) for f in fields(self))
+        return type(self), tuple(_plain(getattr(self, f.name)) for f in fields(self)
+                                 if f.compare)
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,6 +241,48 @@ class ComponentError(_Value):
         np.put_along_axis(weights, left + 1, t, axis=-1)
         return weights
 
+    def largest(self, lower: float, upper: float) -> tuple[float, float]:
+        """The value of largest magnitude over the positions `lower` .. `upper`, and where.
+
+        A table's extremes lie at its breakpoints or the ends; a polynomial's at the ends or
+        where its derivative vanishes (its real roots, with a grid of 1025 positions besides,
+        should round-off move a root).
+
+        Parameters
+        ----------
+        lower, upper : float, m or rad
+            The range of positions, e.g. an axis travel; ``lower <= upper``.
+
+        Returns
+        -------
+        value : float, m or rad
+            The error of largest magnitude, signed; inf when a polynomial overflows float64.
+        position : float, m or rad
+            A position where it occurs (the lowest, of several).
+        """
+        lower, upper = _number(lower, None, "lower"), _number(upper, None, "upper")
+        if upper < lower:
+            raise _fail(f"expected lower <= upper, got {lower!r} .. {upper!r}", None, "upper")
+        if self.kind == "table":
+            inside = self.positions[(self.positions > lower) & (self.positions < upper)]
+            x = np.concatenate(([lower], inside, [upper]))
+        else:
+            x = np.linspace(lower, upper, 1025)
+            derivative = np.polynomial.polynomial.polytrim(
+                np.polynomial.polynomial.polyder(self.values))
+            if derivative.size > 1:
+                try:
+                    roots = np.polynomial.polynomial.polyroots(derivative)
+                except (np.linalg.LinAlgError, ValueError):  # a companion matrix not finite
+                    roots = np.empty(0)
+                real = roots.real[np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots))]
+                x = np.sort(np.concatenate((x, np.clip(real, lower, upper))))
+        with np.errstate(over="ignore", invalid="ignore"):
+            values = self.evaluate(x)
+        values = np.where(np.isnan(values), np.inf, values)  # inf - inf: an overflow too
+        i = int(np.argmax(np.abs(values)))
+        return float(values[i]), float(x[i])
+
     def span(self) -> tuple[float, float] | None:
         """(first, last) position of a table in m or rad; None for a polynomial."""
         if self.positions is None:
@@ -305,6 +356,16 @@ class ErrorModel(_Value):
         Read-only; the tables of one axis share their positions (one list per axis in TOML).
     tool_geometry : ToolGeometry
         The tool's shape errors (nose radius).
+    source : str or None
+        The file (or ``from_dict``'s source) the model was read from, for messages; None for
+        a model built in Python. Not compared: models of equal values are equal.
+    written : Mapping[str, tuple[str, Any]]
+        What the source wrote: ``<section>.<field>`` (``tool.offset``,
+        ``tool_geometry.nose_radius``, ``workpiece.alpha``), ``location.<axis>.<SYM>`` or
+        ``component.<axis>.<SYM>`` (and ``component.<axis>.position``) -> (the key path as
+        written, unit and all, and its value in that unit), e.g.
+        ``{"tool_geometry.nose_radius": ("tool_geometry.nose_radius_mm", -0.6)}``; empty
+        for a model built in Python. Read-only; not compared.
     """
 
     tool: ToolSetting = field(default_factory=ToolSetting)
@@ -312,6 +373,9 @@ class ErrorModel(_Value):
     location: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
     component: Mapping[str, Mapping[str, ComponentError]] = field(default_factory=dict)
     tool_geometry: ToolGeometry = field(default_factory=ToolGeometry)
+    source: str | None = field(default=None, compare=False, repr=False, kw_only=True)
+    written: Mapping[str, tuple[str, Any]] = field(default_factory=dict, compare=False,
+                                                    repr=False, kw_only=True)
 
     def __post_init__(self) -> None:
         for name, kind in (("tool", ToolSetting), ("workpiece", WorkpieceSetting),
@@ -324,6 +388,11 @@ class ErrorModel(_Value):
         _check_component(component)
         object.__setattr__(self, "location", location)
         object.__setattr__(self, "component", component)
+        if self.source is not None and not isinstance(self.source, str):
+            raise _fail(f"expected a str or None, got {_describe(self.source)}", None, "source")
+        if not isinstance(self.written, Mapping):
+            raise _fail(f"expected a mapping, got {_describe(self.written)}", None, "written")
+        object.__setattr__(self, "written", MappingProxyType(dict(self.written)))
 
     @property
     def is_zero(self) -> bool:
@@ -435,6 +504,92 @@ class ErrorModel(_Value):
         ``from_toml(path)`` then gives every SI value back to float64 round-off (two roundings).
         """
         _io().write_toml(self.to_dict(readable=True), path)
+
+    # ------------------------------------------------------------- the model meets a machine
+
+    def key_as_written(self, key: str | None) -> str | None:
+        """`key` (``component.X.EYX``, ``location.C.EX0C``) as the model's source wrote it,
+        unit and all (``component.X.EYX_poly_um_mm``); `key` itself when the source did not
+        write it (a section, a model built in Python)."""
+        return self.written.get(key, (key,))[0] if isinstance(key, str) else key
+
+    def check_travel(self, axis: str, lower: float, upper: float,
+                     source: str | None = None) -> None:
+        """Refuse a polynomial of `axis` that leaves `LARGEST_ERROR` within its travel.
+
+        A polynomial is bounded by nothing until it meets an axis: it is evaluated over the
+        travel `lower` .. `upper` (`ComponentError.largest`) and held to the bound of a
+        single value (1 m, 180 deg). Tables were checked when read, value by value.
+
+        Parameters
+        ----------
+        axis : str
+            The axis letter (X Y Z A B C); a letter the model has no component error of
+            passes.
+        lower, upper : float, m or rad
+            The axis travel.
+        source : str, optional
+            The source to name (the machine's file, as when a symbol does not fit it);
+            default the model's `source`.
+
+        Raises
+        ------
+        ErrorModelError
+            Naming the key as written, the largest value and where in the travel it occurs,
+            in the units of the key (um or urad, mm or deg for a model built in Python).
+        """
+        linear = _quantity(axis) == "length"
+        for symbol, error in self.component.get(axis, {}).items():
+            if error.kind != "poly":
+                continue
+            quantity = _quantity(symbol[1])
+            value, where = error.largest(lower, upper)
+            if abs(value) <= LARGEST_ERROR[quantity]:
+                continue
+            name = f"component.{axis}.{symbol}"
+            units = self.key_as_written(name).rsplit("_", 2)[1:]
+            if len(units) != 2 or units[0] not in FACTORS or units[1] not in FACTORS:
+                units = ["um" if quantity == "length" else "urad", "mm" if linear else "deg"]
+            position = FACTORS[units[1]]
+            travel = f"{lower / position:g} .. {upper / position:g} {units[1]}"
+            with np.errstate(over="ignore"):
+                shown = value / FACTORS[units[0]]
+            si = "m" if quantity == "length" else "rad"
+            reached = (f"{shown:g} {units[0]}" if np.isfinite(shown) else
+                       f"{value:g} {si}" if np.isfinite(value) else "more than float64 holds")
+            raise _fail(f"over the travel of axis {axis}, {travel}, the polynomial reaches "
+                        f"{reached} at {axis} = {where / position:g} {units[1]}, no {quantity} "
+                        f"error: expected at most {_limit(quantity, units[0], FACTORS[units[0]])}"
+                        " either way", self.source if source is None else source,
+                        self.key_as_written(name))
+
+    def misfit(self, error: ErrorModelError, machine: str) -> ErrorModelError:
+        """`error`, found checking this model against a machine, told from the model's side.
+
+        The one way a misfit is told (command line and Python alike): a model read from a
+        file (`source`) is named first, with the key as written there, then the machine
+        beside it, as in ``F.toml, key 'location.C': axis 'C' is not on this machine; it
+        has X, Y, Z (machine mill3, mill3.urdf)``. A model built in Python has no file:
+        `error` comes back unchanged, naming the machine's file.
+
+        Parameters
+        ----------
+        error : ErrorModelError
+            As the machine raised it: its ``source`` is the machine's file.
+        machine : str
+            The machine's name.
+
+        Returns
+        -------
+        ErrorModelError
+            To raise (``raise model.misfit(exc, name) from None``).
+        """
+        if self.source is None or error.source == self.source:
+            return error
+        where = machine if error.source is None else f"{machine}, {error.source}"
+        return ErrorModelError(f"{error.message} (machine {where})", source=self.source,
+                               line=error.line, column=error.column,
+                               key=self.key_as_written(error.key))
 
 
 def as_error_model(errors) -> ErrorModel:

@@ -60,10 +60,14 @@ def _poly_factors(value_factor: float, position_factor: float, count: int) -> np
 
 
 def read_toml(path: str | os.PathLike) -> dict[str, Any]:
-    """The tables of the TOML file `path`; errors name the file, and the line and column."""
+    """The tables of the TOML file `path`; errors name the file, and the line and column.
+
+    A UTF-8 byte order mark at the start (which some Windows editors write, and TOML does
+    not allow) is dropped, as most tools do: lines and columns count from after it.
+    """
     source = str(path)
     try:
-        data = tomllib.loads(Path(path).read_bytes().decode("utf-8"))
+        data = tomllib.loads(Path(path).read_bytes().decode("utf-8-sig"))
     except OSError as exc:
         raise ErrorModelError(f"cannot read the file: {exc.strerror}", source=source) from exc
     except UnicodeDecodeError as exc:
@@ -133,6 +137,11 @@ def _component_section(axis: str, table: Mapping[str, ComponentError], units: di
     return out
 
 
+def _position_kind(axis: str) -> str:
+    """'linear' or 'rotary': the kind of the positions of `axis` (units of `_SI_UNITS`)."""
+    return "linear" if axis in LINEAR_AXES else "rotary"
+
+
 def _table(value: Any, source: str, key: str | None) -> Mapping:
     if not isinstance(value, Mapping):
         raise _fail(f"expected a table, got {_describe(value)}", source, key)
@@ -140,25 +149,29 @@ def _table(value: Any, source: str, key: str | None) -> Mapping:
 
 
 def model_from_dict(data: Any, source: str) -> ErrorModel:
+    """The model of `data` (the TOML structure), remembering `source` and each key and value
+    as written there (`ErrorModel.source`, `ErrorModel.written`) for later messages."""
     for section in _table(data, source, None):
         if section not in _SECTIONS:
             raise _fail(f"unknown section; expected one of {', '.join(_SECTIONS)}", source, section)
     tool_spec = {"offset": ("length", 3), "rotation": ("angle", 3)}
     workpiece_spec = {"delta": ("length", 3)} | {a: ("angle", None) for a in _WORKPIECE_ANGLES}
-    tool = _parse_fields(data.get("tool", {}), "tool", tool_spec, source)
-    workpiece = _parse_fields(data.get("workpiece", {}), "workpiece", workpiece_spec, source)
+    written: dict[str, tuple[str, Any]] = {}
+    tool = _parse_fields(data.get("tool", {}), "tool", tool_spec, source, written)
+    workpiece = _parse_fields(data.get("workpiece", {}), "workpiece", workpiece_spec, source,
+                              written)
     geometry = _parse_fields(data.get("tool_geometry", {}), "tool_geometry",
-                             {"nose_radius": ("length", None)}, source)
+                             {"nose_radius": ("length", None)}, source, written)
     location = {
-        axis: _parse_location(axis, table, source)
+        axis: _parse_location(axis, table, source, written)
         for axis, table in _table(data.get("location", {}), source, "location").items()
     }
     component = {
-        axis: _parse_component(axis, table, source)
+        axis: _parse_component(axis, table, source, written)
         for axis, table in _table(data.get("component", {}), source, "component").items()
     }
     return ErrorModel(ToolSetting(**tool), WorkpieceSetting(**workpiece), location, component,
-                      ToolGeometry(**geometry))
+                      ToolGeometry(**geometry), source=source, written=written)
 
 
 def _split_key(key: Any, expected: str, source: str, path: str) -> list[str]:
@@ -167,8 +180,10 @@ def _split_key(key: Any, expected: str, source: str, path: str) -> list[str]:
     return key.split("_")
 
 
-def _parse_fields(section: Any, name: str, spec: dict, source: str) -> dict[str, Any]:
-    """The fields of [tool] or [workpiece]: `spec` maps a field to (quantity, size or None)."""
+def _parse_fields(section: Any, name: str, spec: dict, source: str,
+                  written: dict) -> dict[str, Any]:
+    """The fields of [tool], [tool_geometry] or [workpiece]: `spec` maps a field to (quantity,
+    size or None); `written` gets ``<section>.<field>`` -> (key path, value) as written."""
     expected = ", ".join(f"{field_}_<{q} unit>" for field_, (q, _) in spec.items())
     out: dict[str, Any] = {}
     for key, value in _table(section, source, name).items():
@@ -185,11 +200,11 @@ def _parse_fields(section: Any, name: str, spec: dict, source: str) -> dict[str,
         factor = _check_unit(parts[1], quantity, source, path)
         if parts[0] in out:
             raise _fail(f"{parts[0]} is given twice (with two units)", source, path)
-        if size is None:
-            out[parts[0]] = _number(value, source, path) * factor
-        else:
-            out[parts[0]] = _numbers(value, source, path, size) * factor
+        in_file = (_number(value, source, path) if size is None
+                   else _numbers(value, source, path, size))
+        out[parts[0]] = in_file * factor
         _check_size(out[parts[0]], quantity, parts[1], factor, source, path)
+        written[f"{name}.{parts[0]}"] = (path, in_file)
     return out
 
 
@@ -204,7 +219,7 @@ def _symbol_unit(key: Any, axis: str, location: bool, source: str, path: str):
     return parts[0], parts[1:]
 
 
-def _parse_location(axis: Any, table: Any, source: str) -> dict[str, float]:
+def _parse_location(axis: Any, table: Any, source: str, written: dict) -> dict[str, float]:
     path = f"location.{axis}"
     _check_axis(axis, source, path)
     out: dict[str, float] = {}
@@ -215,13 +230,16 @@ def _parse_location(axis: Any, table: Any, source: str) -> dict[str, float]:
         factor = _check_unit(units[0], _quantity(symbol[1]), source, f"{path}.{key}")
         if symbol in out:
             raise _fail(f"{symbol} is given twice", source, f"{path}.{key}")
-        out[symbol] = _number(value, source, f"{path}.{key}") * factor
+        in_file = _number(value, source, f"{path}.{key}")
+        out[symbol] = in_file * factor
         _check_size(out[symbol], _quantity(symbol[1]), units[0], factor, source,
                     f"{path}.{key}")
+        written[f"{path}.{symbol}"] = (f"{path}.{key}", in_file)
     return out
 
 
-def _parse_component(axis: Any, table: Any, source: str) -> dict[str, ComponentError]:
+def _parse_component(axis: Any, table: Any, source: str,
+                     written: dict) -> dict[str, ComponentError]:
     path = f"component.{axis}"
     _check_axis(axis, source, path)
     axis_quantity = _quantity(axis)
@@ -239,6 +257,7 @@ def _parse_component(axis: Any, table: Any, source: str) -> dict[str, ComponentE
             in_file = _numbers(value, source, key_path)
             _check_increasing(in_file, source, key_path)
             positions, position_key = in_file * factor, key
+            written[f"{path}.position"] = (key_path, in_file)
             continue
         symbol, units = _symbol_unit(key, axis, False, source, key_path)
         if symbol in out:
@@ -252,14 +271,27 @@ def _parse_component(axis: Any, table: Any, source: str) -> dict[str, ComponentE
             position_factor = _check_unit(units[2], axis_quantity, source, key_path)
             coefficients = _numbers(value, source, key_path)
             factors = _poly_factors(value_factor, position_factor, coefficients.size)
-            out[symbol] = ComponentError("poly", None, coefficients * factors)
+            with np.errstate(over="ignore"):
+                si = coefficients * factors
+            if not np.all(np.isfinite(si)):
+                k = int(np.argmin(np.isfinite(si)))
+                si_unit = f"{_SI_UNITS[quantity]}/{_SI_UNITS[_position_kind(axis)]}**{k}"
+                raise _fail(f"coefficient c_{k} = {coefficients[k]:g} {units[1]}/{units[2]}**{k}"
+                            f" is {factors[k]:g} times as large in {si_unit}, beyond float64; "
+                            f"expected a {quantity} error of at most "
+                            f"{'1 m' if quantity == 'length' else '180 deg'} over the travel",
+                            source, key_path)
+            out[symbol] = ComponentError("poly", None, si)
+            written[f"{path}.{symbol}"] = (key_path, coefficients)
             continue
         if len(units) != 1:
             raise _fail(f"expected the key {symbol}_<{quantity} unit>", source, key_path)
         factor = _check_unit(units[0], quantity, source, key_path)
         out[symbol] = None
-        tables[symbol] = (key_path, value, _numbers(value, source, key_path) * factor)
+        in_file = _numbers(value, source, key_path)
+        tables[symbol] = (key_path, value, in_file * factor)
         _check_size(tables[symbol][2], quantity, units[0], factor, source, key_path)
+        written[f"{path}.{symbol}"] = (key_path, in_file)
     for symbol, (key_path, raw, values) in tables.items():
         if positions is None:
             message = f"a table needs positions: no position_<unit> key in [{path}]"

@@ -164,7 +164,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                 what = "a rotary move" if np.any(delta[bad, rotary] != 0.0) else "a move"
                 raise NCProgramError(
                     f"{what} would need more than {MAX_SUBSTEPS} sub-steps to keep the "
-                    f"chord within {chord_tolerance * 1e9:g} nm; raise chord_tolerance",
+                    f"chord within {chord_tolerance * 1e9:g} nm; raise chord_tolerance "
+                    "(--chord-nm on the command line)",
                     source=source, line=int(lines[bad]))
             steps[turning] = found
     if error is not None:
