@@ -399,3 +399,62 @@ def test_passes_stacked_down_a_slope_cut_the_analytic_staircase(monkeypatch):
     expected = np.minimum(np.min(np.abs(y[:, None] - ys) - depths, axis=1), 0.0)
     np.testing.assert_allclose(heights, np.repeat(expected[:, None], 2, axis=1), rtol=0,
                                atol=LENGTH_TOL)
+
+
+def _helix_levels(radius, depths, steps=48):
+    """A flat end mill's circle of chords at each depth, one path per level (m)."""
+    angle = np.linspace(0.0, 2.0 * math.pi, steps + 1)
+    return [np.array([pose((2e-3 + radius * math.cos(a), 2e-3 + radius * math.sin(a),
+                            -depth)) for a in angle]) for depth in depths]
+
+
+def test_passes_repeated_deeper_are_dropped_and_the_part_is_the_same(monkeypatch):
+    """A pass repeated over the same path deeper holds the shallower one: those sweeps are
+    dropped (`contained_sweeps`) and the part is the one cut with all of them."""
+    import machinesim.cutting.engine as engine
+    from machinesim.tools import FlatEndMill
+
+    tool = FlatEndMill(0.5e-3, chord_tol=1e-6, height=5e-3)
+    paths = _helix_levels(0.6e-3, [0.2e-3, 0.4e-3, 0.6e-3])
+    stock = block(4e-3, 4e-3, 1e-3)
+    found = []
+    original = engine.contained_sweeps
+
+    def record(*args):
+        found.append(original(*args))
+        return found[-1]
+
+    monkeypatch.setattr(engine, "contained_sweeps", record)
+    part, report = remove(stock, tool, paths, method="boolean")
+    assert int(found[0].sum()) == 2 * 48  # the two upper levels, all inside the lowest
+    monkeypatch.setattr(engine, "contained_sweeps",
+                        lambda hulls, *rest: np.zeros(len(hulls), dtype=bool))
+    every, every_report = remove(stock, tool, paths, method="boolean")
+    assert report.n_sweeps_cut == every_report.n_sweeps_cut == 3 * 48
+    assert report.removed_volume == pytest.approx(every_report.removed_volume, rel=VOLUME_REL)
+    apart = (part.manifold - every.manifold).volume() + (every.manifold - part.manifold).volume()
+    assert apart <= VOLUME_REL * report.removed_volume
+
+
+def test_a_sweep_poking_out_of_another_is_kept(monkeypatch):
+    """Containment is read off the vertices: a pass 1 nm outside the deeper one is cut."""
+    import machinesim.cutting.engine as engine
+    from machinesim.tools import FlatEndMill
+
+    tool = FlatEndMill(0.5e-3, chord_tol=1e-6, height=5e-3)
+    deep = groove_x(2e-3, 0.4e-3)
+    shallow = groove_x(2e-3 + 1e-9, 0.2e-3)
+    stock = block(4e-3, 4e-3, 1e-3)
+    found = []
+    original = engine.contained_sweeps
+
+    def record(*args):
+        found.append(original(*args))
+        return found[-1]
+
+    monkeypatch.setattr(engine, "contained_sweeps", record)
+    remove(stock, tool, [deep, shallow], method="boolean")
+    assert not found[0].any()
+    # at the same place the shallow pass lies inside the deep one: dropped
+    remove(stock, tool, [deep, groove_x(2e-3, 0.2e-3)], method="boolean")
+    assert found[1].tolist() == [False, True]

@@ -246,8 +246,12 @@ class SolidSweep:
     def mesh(self, rotation: np.ndarray, origin: np.ndarray, move: np.ndarray):
         """Vertices (n, 3) and outward triangles (m, 3) of the tool at (rotation, origin)
         swept by ``move`` (3,), m."""
+        return self.mesh_from(self.vertices @ rotation.T + origin, rotation, move)
+
+    def mesh_from(self, start: np.ndarray, rotation: np.ndarray, move: np.ndarray):
+        """`mesh` of the tool's vertices placed at ``start`` (k, 3) (the tool at rotation,
+        or a shape with the same faces and face normals), swept by ``move``."""
         k = len(self.vertices)
-        start = self.vertices @ rotation.T + origin
         back = (self.normals @ rotation.T) @ move < 0.0
         triangles = np.where(back[:, None], self.triangles, self.triangles + k)
         edge = back[self.owner] & ~back[self.across]

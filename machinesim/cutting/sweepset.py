@@ -83,6 +83,9 @@ class SweepSet:
                             if self.rotational and hasattr(tool, "triangles") else None)
         top = self.vertices[:, 2]
         self.top = np.flatnonzero(top >= top.max())
+        # A flat end mill: vertex i + n straight above vertex i (its two rings, `tools`).
+        from machinesim.tools import FlatEndMill
+        self.rings = int(tool.segments) if isinstance(tool, FlatEndMill) else 0
         self._world = self._lowest = None
 
     def lowest(self, index) -> np.ndarray:
@@ -184,6 +187,27 @@ class SweepSet:
         when no point of it comes below the plane."""
         if points[:, 2].min() + min(move[2], 0.0) > self.clip_z:
             return "above"
+        if self.rings:
+            # An upright flat end mill (its top ring straight above its bottom ring) cut at
+            # a plane between them is the same prism with its top ring lowered to it. Every
+            # point of the sweep below the clip plane lies on the path of a tool point at
+            # most max(0, -move z) above it, so the sweep of the tool cut there is the sweep
+            # wherever there is material, built without a trim (a boolean: 16 of 28 s of
+            # building a helix's 9,600 sweeps). Its top, above the clip plane by at most
+            # |move z|, is never part of the cut.
+            level = self.clip_z + max(0.0, -float(move[2]))
+            n = self.rings
+            start = self.vertices @ rotation.T + origin
+            bottom, top = start[:n], start[n:]
+            if (top[:, 2].min() > level > bottom[:, 2].max()
+                    and np.array_equal(top[:, :2], bottom[:, :2])):
+                start[n:, 2] = level
+                vertices, triangles = self.solid_sweep.mesh_from(start, rotation, move)
+                solid = manifold_from(vertices, triangles, self.run_id)
+                if solid is None:
+                    return None
+                volume = solid.volume()
+                return (solid, volume) if volume > 0.0 else None
         vertices, triangles = self.solid_sweep.mesh(rotation, origin, move)
         return self._solid(vertices, triangles, vertices[:, 2].max() > self.clip_z)
 
@@ -294,6 +318,7 @@ class SweepSet:
                     box = np.concatenate([built[2].min(axis=0), built[2].max(axis=0)])
                 else:
                     box = np.array(solid.bounding_box())
+                    box[5] = min(box[5], self.clip_z)  # an untrimmed flat end mill's top
                     if not keep(box[None, :3], box[None, 3:])[0]:
                         continue  # a solid tool's body only passed by its unclipped bounds
                 reached.append(begin + int(near[row]))
