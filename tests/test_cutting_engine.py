@@ -408,6 +408,20 @@ def _helix_levels(radius, depths, steps=48):
                             -depth)) for a in angle]) for depth in depths]
 
 
+def _recorded_containment(monkeypatch) -> list:
+    """The list each call of `engine.contained_sweeps` appends its answer to."""
+    import machinesim.cutting.engine as engine
+
+    found, original = [], engine.contained_sweeps
+
+    def record(*args):
+        found.append(original(*args))
+        return found[-1]
+
+    monkeypatch.setattr(engine, "contained_sweeps", record)
+    return found
+
+
 def test_passes_repeated_deeper_are_dropped_and_the_part_is_the_same(monkeypatch):
     """A pass repeated over the same path deeper holds the shallower one: those sweeps are
     dropped (`contained_sweeps`) and the part is the one cut with all of them."""
@@ -417,14 +431,7 @@ def test_passes_repeated_deeper_are_dropped_and_the_part_is_the_same(monkeypatch
     tool = FlatEndMill(0.5e-3, chord_tol=1e-6, height=5e-3)
     paths = _helix_levels(0.6e-3, [0.2e-3, 0.4e-3, 0.6e-3])
     stock = block(4e-3, 4e-3, 1e-3)
-    found = []
-    original = engine.contained_sweeps
-
-    def record(*args):
-        found.append(original(*args))
-        return found[-1]
-
-    monkeypatch.setattr(engine, "contained_sweeps", record)
+    found = _recorded_containment(monkeypatch)
     part, report = remove(stock, tool, paths, method="boolean")
     assert int(found[0].sum()) == 2 * 48  # the two upper levels, all inside the lowest
     monkeypatch.setattr(engine, "contained_sweeps",
@@ -438,21 +445,13 @@ def test_passes_repeated_deeper_are_dropped_and_the_part_is_the_same(monkeypatch
 
 def test_a_sweep_poking_out_of_another_is_kept(monkeypatch):
     """Containment is read off the vertices: a pass 1 nm outside the deeper one is cut."""
-    import machinesim.cutting.engine as engine
     from machinesim.tools import FlatEndMill
 
     tool = FlatEndMill(0.5e-3, chord_tol=1e-6, height=5e-3)
     deep = groove_x(2e-3, 0.4e-3)
     shallow = groove_x(2e-3 + 1e-9, 0.2e-3)
     stock = block(4e-3, 4e-3, 1e-3)
-    found = []
-    original = engine.contained_sweeps
-
-    def record(*args):
-        found.append(original(*args))
-        return found[-1]
-
-    monkeypatch.setattr(engine, "contained_sweeps", record)
+    found = _recorded_containment(monkeypatch)
     remove(stock, tool, [deep, shallow], method="boolean")
     assert not found[0].any()
     # at the same place the shallow pass lies inside the deep one: dropped
