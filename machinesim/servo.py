@@ -36,6 +36,10 @@ import numpy as np
 from machinesim.exceptions import InputError, MachineSimError
 
 DEFAULT_SAMPLE_TIME_S = 1e-4  # 10 kHz servo loop
+#: Loop periods simulated at a time when a motion is followed: the work arrays of a piece
+#: take about 20 MB, however long the motion (a 60000 s feed move at 10 kHz held 4.5 GB in
+#: one piece).
+FOLLOW_CHUNK = 1 << 18
 
 
 class ServoDivergenceError(MachineSimError):
@@ -76,6 +80,13 @@ class AxisServo:
     _loops: tuple = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        for key in ("kp", "ki", "kd", "mass", "damping", "acc_ff", "bandwidth_hz",
+                    "sample_time_s"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer,
+                                                                 np.floating)):
+                raise InputError(f"servo parameter {key} of axis {self.name} must be a number "
+                                 f"(SI), got {value!r}", key=key)
         for key in ("kp", "ki", "kd", "damping", "acc_ff"):
             value = getattr(self, key)
             if not np.isfinite(value) or value < 0.0:
@@ -99,6 +110,11 @@ class AxisServo:
         plant = control.sample_system(1.0 / (self.mass * s**2 + self.damping * s), ts, "zoh")
         pid = self.kp + self.ki / s + self.kd * s / (ts / 2.0 * s + 1.0)  # proper derivative
         controller = control.sample_system(control.minreal(pid, verbose=False), ts, "tustin")
+        # A gain without integral action can come out of the Tustin rule as (z - 1) / (z - 1):
+        # cancelled, or the pair reads as a closed-loop pole on the unit circle.
+        reduced = control.minreal(controller, verbose=False)
+        if _order(reduced) < _order(controller):
+            controller = reduced
         if np.isfinite(self.bandwidth_hz):
             ff = 1.0 / (s / (2.0 * np.pi * self.bandwidth_hz) + 1.0)
             ff_d = control.sample_system(ff, ts, "tustin")
@@ -109,11 +125,18 @@ class AxisServo:
         poles = control.poles(reference)
         radius = float(np.max(np.abs(poles))) if poles.size else 0.0
         if radius >= 1.0 - 1e-12:
+            gains = (f"at Ts = {ts} s with Kp = {self.kp:g}, Ki = {self.ki:g}, "
+                     f"Kd = {self.kd:g}, mass = {self.mass:g}, damping = {self.damping:g}")
+            if radius > 1.0 + 1e-9:
+                raise ServoDivergenceError(
+                    f"servo loop of axis {self.name} is unstable (largest closed-loop pole "
+                    f"|z| = {radius:.9f} > 1) {gains}: the axis would oscillate; lower the "
+                    "gains")
             raise ServoDivergenceError(
-                f"servo loop of axis {self.name} is unstable (largest closed-loop pole "
-                f"|z| = {radius:.6f} >= 1 at Ts = {ts} s) with Kp = {self.kp:g}, "
-                f"Ki = {self.ki:g}, Kd = {self.kd:g}, mass = {self.mass:g}: the axis would "
-                f"oscillate; lower the gains")
+                f"servo loop of axis {self.name} has a closed-loop pole on the unit circle "
+                f"(|z| = {radius:.12f}) {gains}: a mode that never settles, from an integral "
+                "gain too small to act against Kp (use Ki = 0 for none) or from gains at the "
+                "edge of stability")
         feed = control.minreal(ff_d * sensitivity_plant, verbose=False) * (self.acc_ff
                                                                            * self.mass)
         return reference, feed, radius
@@ -126,29 +149,92 @@ class AxisServo:
     def respond(self, t: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Position reached for the command ``r`` sampled at uniform times ``t`` (the loop's
         period), the axis at rest on ``r[0]`` at ``t[0]``."""
-        reference, feed, _ = self._loops
         r = np.asarray(r, dtype=np.float64)
         if r.size < 2:
             return r.copy()
+        return np.concatenate([y for _, _, y in self._stream(r.size, lambda lo, hi: r[lo:hi])])
+
+    def reach(self, t: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Position reached at the times ``t`` (non-decreasing, s) for the command ``r(t)``,
+        linear between its samples, the axis at rest on ``r[0]`` at ``t[0]``.
+
+        The command is resampled to the loop's period from ``t[0]``, simulated, and read back
+        at ``t`` (linear interpolation), `FOLLOW_CHUNK` periods at a time: a motion of any
+        length needs memory for one piece only.
+        """
+        t = np.asarray(t, dtype=np.float64)
+        r = np.asarray(r, dtype=np.float64)
+        if t.size < 2 or not t[-1] > t[0]:
+            return r.copy()
         ts = self.sample_time_s
-        y = _simulate(reference, r - r[0])
-        if self.acc_ff > 0.0:
-            y = y + _simulate(feed, np.gradient(np.gradient(r, ts), ts))
-        return r[0] + y
+        n = int(np.ceil((t[-1] - t[0]) / ts)) + 1
+
+        def command(lo, hi):
+            return np.interp(t[0] + ts * np.arange(lo, hi), t, r)
+
+        out = np.empty_like(r)
+        done, last = 0, None  # samples of t read back; the last grid point and its value
+        for a, b, y in self._stream(n, command):
+            grid = t[0] + ts * np.arange(a, b)
+            if last is not None:
+                grid, y = np.concatenate([[last[0]], grid]), np.concatenate([[last[1]], y])
+            stop = t.size if b == n else int(np.searchsorted(t, grid[-1], side="left"))
+            out[done:stop] = np.interp(t[done:stop], grid, y)
+            done, last = stop, (grid[-1], y[-1])
+        return out
+
+    def _stream(self, n: int, command):
+        """The loop's output over ``n`` periods, ``(a, b, y[a:b])`` a piece at a time, for the
+        command given on periods ``lo:hi`` by ``command(lo, hi)``; the filters' state carries
+        from piece to piece (`scipy.signal.lfilter`'s ``zi``), so the pieces are the whole
+        run's output (tested bit for bit)."""
+        reference, feed, _ = self._loops
+        ts = self.sample_time_s
+        follow = _Filter(reference)
+        forward = _Filter(feed) if self.acc_ff > 0.0 else None
+        start = None
+        for a in range(0, n, FOLLOW_CHUNK):
+            b = min(n, a + FOLLOW_CHUNK)
+            # two periods either side: the acceleration's central differences at a and b - 1
+            # are then those of the whole run
+            lo, hi = max(0, a - 2), min(n, b + 2)
+            r = command(lo, hi)
+            if start is None:
+                start = r[0]
+            y = follow(r[a - lo:b - lo] - start)
+            if forward is not None:
+                y = y + forward(np.gradient(np.gradient(r, ts), ts)[a - lo:b - lo])
+            yield a, b, start + y
 
 
-def _simulate(system, u: np.ndarray) -> np.ndarray:
-    """Response of the discrete SISO ``system`` from rest to ``u`` (one value per period): the
-    same as ``control.forced_response(system, U=u)``, filtered by ``scipy.signal.lfilter``
-    from the transfer function's coefficients (compiled: 10^6-10^7 samples in seconds)."""
+def _order(system) -> int:
+    """Degree of a SISO transfer function's denominator."""
     import control
-    from scipy.signal import lfilter
 
-    num, den = control.tfdata(system)
-    num, den = np.asarray(num[0][0], dtype=np.float64), np.asarray(den[0][0], dtype=np.float64)
-    # descending powers of z -> powers of z^-1: align the numerator's end with the denominator's
-    num = np.concatenate([np.zeros(den.size - num.size), num])
-    return lfilter(num, den, u)
+    return len(np.trim_zeros(np.asarray(control.tfdata(system)[1][0][0]), "f")) - 1
+
+
+class _Filter:
+    """A discrete SISO system run from rest on an input given a piece at a time: the same as
+    ``control.forced_response(system, U=u)`` on the whole input, by `scipy.signal.lfilter`
+    on the transfer function's coefficients (compiled: 10^6-10^7 samples in seconds)."""
+
+    def __init__(self, system) -> None:
+        import control
+
+        num, den = control.tfdata(system)
+        num = np.asarray(num[0][0], dtype=np.float64)
+        den = np.asarray(den[0][0], dtype=np.float64)
+        # descending powers of z -> powers of z^-1: the numerator's end under the denominator's
+        self.num = np.concatenate([np.zeros(den.size - num.size), num])
+        self.den = den
+        self.state = np.zeros(max(self.num.size, den.size) - 1)
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        from scipy.signal import lfilter
+
+        y, self.state = lfilter(self.num, self.den, u, zi=self.state)
+        return y
 
 
 @dataclass(frozen=True)
@@ -166,15 +252,9 @@ class PIDServo:
             raise InputError(f"PIDServo with {len(self.axes)} axes needs t (N,) and q "
                              f"(N, {len(self.axes)}), got {t.shape} and {q.shape}")
         out = q.copy()
-        if t.size < 2 or t[-1] <= t[0]:
-            return out
         for i, axis in enumerate(self.axes):
-            if axis is None:
-                continue
-            ts = axis.sample_time_s
-            grid = t[0] + ts * np.arange(int(np.ceil((t[-1] - t[0]) / ts)) + 1)
-            y = axis.respond(grid - grid[0], np.interp(grid, t, q[:, i]))
-            out[:, i] = np.interp(t, grid, y)
+            if axis is not None:
+                out[:, i] = axis.reach(t, q[:, i])
         return out
 
     def following_error(self, t: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -226,5 +306,6 @@ def table6_servo(preset: str, axis_order: tuple = ("x", "z", "c"), **kwargs) -> 
                           if a.lower() in TABLE6["before"] else None for a in axis_order))
 
 
-__all__ = ["DEFAULT_SAMPLE_TIME_S", "TABLE6", "TABLE6_DAMPING", "TABLE6_GAIN_SCALE", "AxisServo",
-           "PIDServo", "ServoDivergenceError", "table6_axis", "table6_servo"]
+__all__ = ["DEFAULT_SAMPLE_TIME_S", "FOLLOW_CHUNK", "TABLE6", "TABLE6_DAMPING",
+           "TABLE6_GAIN_SCALE", "AxisServo", "PIDServo", "ServoDivergenceError", "table6_axis",
+           "table6_servo"]

@@ -177,14 +177,38 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         fractions = np.linspace(0.0, 1.0, steps + 1)
         samples = q + fractions[:, None] * (end - q)
         times = t_now + fractions * duration
-        samples = servo.follow(times, samples)
         segments.append(Segment(move.kind, frozen(samples, copy=False),
                                 frozen(times, copy=False), move.line))
         t_now += duration
         if move.kind == "linear":
             cutting += duration
         q = end
-    return Trajectory(tuple(axes), tuple(segments), t_now, cutting)
+    return Trajectory(tuple(axes), tuple(_followed(segments, servo)), t_now, cutting)
+
+
+def _followed(segments, servo):
+    """The segments as the servo reaches them: consecutive feed moves as one motion (each
+    later move's first sample is the one before's last), a rapid or a dwell alone."""
+    if type(servo) is IdealServo:
+        return segments
+    groups = []
+    for segment in segments:
+        if groups and segment.kind == "linear" and groups[-1][-1].kind == "linear":
+            groups[-1].append(segment)
+        else:
+            groups.append([segment])
+    out = []
+    for group in groups:
+        times = np.concatenate([group[0].t] + [g.t[1:] for g in group[1:]])
+        samples = np.concatenate([group[0].q] + [g.q[1:] for g in group[1:]])
+        reached = servo.follow(times, samples)
+        at = 0
+        for g in group:
+            rows = len(g.t)
+            out.append(Segment(g.kind, frozen(reached[at:at + rows]), frozen(g.t, copy=False),
+                               g.line))
+            at += rows - 1
+    return out
 
 
 def _substeps(machine, errors, start, end, points, tolerance, where) -> int:

@@ -156,7 +156,7 @@ def test_tool_points_and_start(machines, name, spec):
 
 
 class LagServo:
-    """A first-order lag over each move (state restarts at the move's first sample)."""
+    """A first-order lag over each motion it is given (state starts at the first sample)."""
 
     def __init__(self, tau: float) -> None:
         self.tau = tau
@@ -169,7 +169,7 @@ class LagServo:
         return out
 
 
-def test_a_servo_model_is_applied_move_by_move(machines):
+def test_a_servo_model_follows_feed_runs_as_one_motion(machines):
     machine = machines["grooving_4axis"]
     program = random_program(machine, np.random.default_rng(7), 25)
     servo = LagServo(0.05)

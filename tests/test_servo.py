@@ -115,3 +115,35 @@ def test_fast_filter_equals_forced_response():
     expected = (r[0] + control.forced_response(reference, T=t, U=r - r[0]).outputs
                 + control.forced_response(feed, T=t, U=a).outputs)
     np.testing.assert_allclose(axis.respond(t, r), expected, rtol=0, atol=1e-15)
+
+
+def test_p_loop_has_the_poles_of_its_continuous_loop_and_the_ramp_error_v_c_over_kp():
+    # m s^2 + c s + kp = s^2 + 100 s + 2000: poles -27.64 and -72.36 1/s, so the sampled
+    # loop's largest |z| is about exp(-27.64 Ts) (the hold shifts it by 0.2 %). Discretising
+    # the bare gain once left a (z - 1) / (z - 1) pair: the loop was refused as on the unit
+    # circle, or drifted.
+    axis = AxisServo(kp=2e3, ki=0.0, kd=0.0, mass=1.0, damping=100.0)
+    slowest = -50.0 + np.sqrt(50.0**2 - 2e3)
+    assert np.log(axis.pole_radius) / axis.sample_time_s == pytest.approx(slowest, rel=5e-3)
+    stiff = AxisServo(kp=2e5, ki=0.0, kd=0.0, mass=10.0, damping=2000.0)
+    assert _ramp_error(stiff, 1e-3, 2.0) == pytest.approx(1e-3 * 2000.0 / 2e5, rel=1e-6)
+
+
+def test_a_long_motion_is_followed_in_pieces_equal_to_one_piece(monkeypatch):
+    # the loops' state carries across pieces: the same numbers bit for bit, feed-forward on
+    from machinesim import servo as servo_module
+    from machinesim.servo import table6_axis
+
+    axis = table6_axis("before", "z")  # acceleration feed-forward and its low-pass
+    assert axis.acc_ff > 0.0
+    t = np.sort(np.random.default_rng(3).uniform(0.0, 0.25, 300))
+    t[0] = 0.0
+    q = (1e-5 * np.sin(2 * np.pi * 9 * t) + 3e-6 * t)[:, None]
+    whole = PIDServo((axis,)).follow(t, q)
+    monkeypatch.setattr(servo_module, "FOLLOW_CHUNK", 7)
+    np.testing.assert_array_equal(PIDServo((axis,)).follow(t, q), whole)
+
+
+def test_a_gain_given_as_text_is_named():
+    with pytest.raises(InputError, match="mass .*must be a number.*'4'"):
+        AxisServo(kp=1.0, ki=0.0, kd=0.0, mass="4")

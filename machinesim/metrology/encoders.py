@@ -7,11 +7,12 @@ paper 004 tunes its servo loops against (section 3.3, Table 6, Fig. 14).
 
 `Encoders` plans a program's commanded trajectory (`machinesim.motion.plan` on the nominal
 machine: the control interpolates without knowing the machine's errors), runs it through the
-lab's servo loops as `Lab.cut` does (the planner's ``servo`` slot, move by move), and reads
-the positions reached through the readout of each axis: Gaussian noise, then rounding to the
-axis' resolution (the machine's URDF ``resolution``). What it records is the motion the
-lab cuts with. Like every instrument it keeps a function (``follow``), not the servo
-model, so nothing it returns exposes the loops' gains (the honesty rule).
+lab's servo loops as `Lab.cut` does (the planner's ``servo`` slot: each run of feed moves
+one continuous motion), and reads the positions reached through the readout of each axis:
+Gaussian noise, then rounding to the axis' resolution (the machine's URDF ``resolution``).
+What it records is the motion the lab cuts with. Like every instrument it keeps a function
+(``follow``), not the servo model, so nothing it returns exposes the loops' gains (the
+honesty rule).
 """
 
 from __future__ import annotations

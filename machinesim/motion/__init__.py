@@ -17,7 +17,9 @@ reads as mm/min for linear moves and deg/min for pure rotary moves, clamped so t
 runs faster than its velocity limit (the URDF's; a feed beyond it takes as long as the
 move's slowest axis at that limit, as a rapid does). A rapid runs every axis
 at its own rapid rate (the URDF velocity limit) and takes as long as its slowest axis. A
-dwell takes its time. Servo follow-up errors enter through a `ServoModel` (ideal by default).
+dwell takes its time. Servo follow-up errors enter through a `ServoModel` (ideal by default):
+each run of consecutive feed moves is followed as one continuous motion (the lag carries from
+block to block, as on an arc's chords), each rapid and each dwell alone, from rest.
 
 `plan` reads the program as arrays (`machinesim.nc.Program.targets`, ``kinds``, ...) and
 works on all moves at once: a program of 10^6 moves is planned in numpy passes, not a

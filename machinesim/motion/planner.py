@@ -84,7 +84,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     chord_tolerance : float
         Largest allowed distance, m, between a sub-step's chord and the true path.
     servo : ServoModel, optional
-        Follow-up model applied to each move's samples (default: ideal).
+        Follow-up model (default: ideal), applied to each run of consecutive feed moves as
+        one continuous motion, and to each rapid and dwell alone (`_follow`).
 
     Raises
     ------
@@ -178,7 +179,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     cutting = float(np.cumsum(np.concatenate([[0.0], durations[kinds == KIND_LINEAR]]))[-1])
     q, t, offsets = _samples(starts, delta, clock[:-1], durations, steps)
     if servo is not None and type(servo) is not IdealServo:
-        _follow(servo, q, t, offsets)
+        _follow(servo, q, t, offsets, kinds)
     q.flags.writeable = False
     t.flags.writeable = False
     offsets.flags.writeable = False
@@ -293,15 +294,40 @@ def _sample_moves(first, last, starts, delta, t0, durations, steps, offsets, q, 
     t[a:b] = column
 
 
-def _follow(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray) -> None:
-    """Apply ``servo.follow`` to each move's samples (one call per move, as it is defined)."""
+def _follow(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray,
+            kinds: np.ndarray) -> None:
+    """Apply ``servo.follow`` to the program's motions, in place.
+
+    A run of consecutive feed moves is one continuous motion: the control passes from block
+    to block without stopping (FANUC's cutting mode, G64), so the loops carry their lag
+    across the blocks, as around the chords of an arc (a circle's radius is then off by
+    ``r (|G(jw)| - 1)``, the loops' closed-loop response at its frequency). The run is
+    followed in one call, entered from rest on its first point; each sample shared by two
+    of its moves (one's end, the next one's start) is given once and reached once. A rapid
+    and a dwell are each followed alone, from rest (a rapid ends in position, and the axes
+    settle in a dwell).
+    """
     bounds = offsets.tolist()
-    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
-        followed = np.asarray(servo.follow(t[a:b].copy(), q[a:b].copy()), dtype=np.float64)
-        if followed.shape != (b - a, q.shape[1]):
+    count = len(kinds)
+    feed = np.asarray(kinds) == KIND_LINEAR
+    first = 0
+    while first < count:
+        last = first + 1
+        if feed[first]:
+            while last < count and feed[last]:
+                last += 1
+        a, b = bounds[first], bounds[last]
+        # the rows of the motion, each shared boundary once (a move's start row is the
+        # previous move's end row)
+        shared = np.asarray(bounds[first + 1:last], dtype=np.int64)
+        rows = np.setdiff1d(np.arange(a, b), shared, assume_unique=True)
+        followed = np.asarray(servo.follow(t[rows].copy(), q[rows].copy()), dtype=np.float64)
+        if followed.shape != (len(rows), q.shape[1]):
             raise InputError(f"servo.follow must return axis values of shape "
-                             f"({b - a}, {q.shape[1]}), got {followed.shape}")
-        q[a:b] = followed
+                             f"({len(rows)}, {q.shape[1]}), got {followed.shape}")
+        q[rows] = followed
+        q[shared] = q[shared - 1]
+        first = last
 
 
 __all__ = ["MAX_SUBSTEPS", "move_duration", "plan"]
