@@ -80,7 +80,10 @@ class Lab:
     servo : ServoModel, optional
         The machine's servo loops (``follow(t, q)``, e.g. `machinesim.servo.PIDServo`), kept
         hidden like the errors: `cut` runs every program through them and `encoders`
-        records the follow-up error they leave. Default none (axes follow exactly).
+        records the follow-up error they leave. Default none (axes follow exactly). A servo
+        with ``axes`` (a `PIDServo`) must have one column per machine axis, in the order of
+        ``machine.axes``, and an `AxisServo` named by an axis letter must sit in that axis'
+        column; else InputError.
     """
 
     #: Hand back a cut made before with the same inputs (`cut`); False cuts every time.
@@ -136,9 +139,8 @@ class Lab:
         self.__set_up = truth  # as it was set up: what `reveal` gives
         self.__adjusted = np.zeros(3)  # the moves as made
         self.__commanded = np.zeros(3)  # the moves as commanded: the operator's own record
-        if servo is not None and not callable(getattr(servo, "follow", None)):
-            raise InputError(f"Expected a servo with follow(t, q) (a ServoModel), got "
-                             f"{type(servo).__name__}", key="servo")
+        if servo is not None:
+            _check_servo(self.machine, servo)
         self.__servo = servo
         self.__issued: dict[str, int] = {}
         self.__instruments: dict[str, dict] = {}
@@ -179,6 +181,8 @@ class Lab:
             raise InputError("a lab cuts with its own errors; pass none to Lab.cut",
                              key="errors")
         cutter = cut_turned if "turn_step" in options else cut
+        if options.get("servo") is not None:
+            _check_servo(self.machine, options["servo"])
         if self.__servo is not None and "servo" not in options:
             options["servo"] = self.__servo
         progress = options.pop("progress", None)
@@ -246,10 +250,9 @@ class Lab:
 
     def tune_servo(self, servo) -> None:
         """Set new servo loops on the machine (the operator's tuning of the control's gains);
-        `cut`, `turn` and `encoders` use them from now on."""
-        if not callable(getattr(servo, "follow", None)):
-            raise InputError(f"Expected a servo with follow(t, q) (a ServoModel), got "
-                             f"{type(servo).__name__}", key="servo")
+        `cut`, `turn` and `encoders` use them from now on. Checked against the machine's
+        axes as the constructor's ``servo`` is."""
+        _check_servo(self.machine, servo)
         self.__servo = servo
 
     def make_artefacts(self, stock, design: SphereArtefacts, *, label: str):
@@ -470,3 +473,54 @@ class Lab:
             raise InputError(f"Expected a label as a non-empty string, got {label!r}",
                              key="label")
         return label
+
+
+#: The axis letters an `AxisServo`'s ``name`` is checked against (`_check_servo`).
+_AXIS_LETTERS = frozenset("XYZABC")
+
+
+def _check_servo(machine, servo) -> None:
+    """Refuse servo loops that do not fit ``machine``: no ``follow(t, q)``; a servo with
+    ``axes`` (a `machinesim.servo.PIDServo`) whose column count is not the machine's axis
+    count; a column whose ``name`` is an axis letter other than the machine's in that column.
+
+    A ServoModel without ``axes`` cannot be checked before it is run. Names that are not a
+    single axis letter (the default "axis", "spindle 1") are not checked.
+    """
+    if not callable(getattr(servo, "follow", None)):
+        raise InputError(f"Expected a servo with follow(t, q) (a ServoModel), got "
+                         f"{type(servo).__name__}", key="servo")
+    columns = getattr(servo, "axes", None)
+    if not isinstance(columns, (tuple, list)):
+        return
+    from machinesim.servo import PIDServo
+
+    axes = tuple(machine.axes)
+    letters = ", ".join(axes)
+    kind = type(servo).__name__
+    if len(columns) != len(axes):
+        if isinstance(servo, PIDServo):
+            ones = ", ".join(a.lower() for a in axes)
+            how = (f": build it with one column per axis in that order, e.g. "
+                   f"table6_servo(\"before\", axis_order={axes!r}) or PIDServo(({ones})), "
+                   "each an AxisServo(..., name=<its letter>) or None (the axis follows "
+                   "exactly)")
+        else:
+            how = ": give one column per axis, in that order"
+        raise InputError(f"a {kind} with {len(columns)} axis columns does not fit "
+                         f"{machine.name}, whose {len(axes)} axes are {letters} (in this "
+                         f"order){how}", key="servo")
+    upper = [a.upper() for a in axes]
+    for i, (axis, column) in enumerate(zip(axes, columns, strict=True)):
+        name = getattr(column, "name", None)
+        if not isinstance(name, str) or name.upper() not in _AXIS_LETTERS:
+            continue
+        other = name.upper()
+        if other != axis.upper():
+            fix = (f"put it in column {upper.index(other) + 1} ({other}) or name it {axis!r}"
+                   if other in upper else
+                   f"{machine.name} has no {other} axis: name it {axis!r} if it is {axis}'s")
+            raise InputError(f"the {kind}'s column {i + 1} is {machine.name}'s {axis} axis "
+                             f"(axes {letters}), but its {type(column).__name__} is named "
+                             f"{name!r}: it would drive {axis} with the loop meant for "
+                             f"{other}; {fix}", key="servo")

@@ -1,0 +1,104 @@
+"""A lab refuses servo loops that do not fit its machine's axes, when they are given."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import machinesim
+from machinesim.nc import ProgramBuilder
+from machinesim.servo import AxisServo, PIDServo, table6_servo
+
+MASS, DAMPING, KP, KD = 12.0, 1600.0, 1.2e6, 3700.0  # a 12 kg slide, about 50 Hz
+
+
+def _loop(name="axis", ki=7.2e7):
+    return AxisServo(kp=KP, ki=ki, kd=KD, mass=MASS, damping=DAMPING, name=name)
+
+
+def test_wrong_column_count_is_refused_naming_the_machines_axes():
+    with pytest.raises(machinesim.InputError) as caught:
+        machinesim.Lab("robonano_a0ib", servo=table6_servo("before"))
+    message = str(caught.value)
+    assert caught.value.key == "servo"
+    for part in ("PIDServo with 3 axis columns", "robonano_a0ib", "5 axes are X, Y, Z, B, C",
+                 "table6_servo(\"before\", axis_order=('X', 'Y', 'Z', 'B', 'C'))",
+                 "PIDServo((x, y, z, b, c))"):
+        assert part in message, (part, message)
+
+
+def test_tune_servo_is_checked_as_the_constructor():
+    lab = machinesim.Lab("sts_lathe", noise=False)
+    with pytest.raises(machinesim.InputError, match=r"sts_lathe, whose 3 axes are X, Z, C"):
+        lab.tune_servo(table6_servo("before", axis_order=("x", "y", "z", "c")))
+    assert lab.reveal_servo() is None  # the refused loops were not set
+
+
+def test_a_servo_handed_to_cut_is_checked():
+    lab = machinesim.Lab("grooving_4axis", noise=False)
+    with pytest.raises(machinesim.InputError, match=r"grooving_4axis, whose 4 axes"):
+        lab.cut(ProgramBuilder(1).linear(X=1e-3, feed_mm_per_min=100).build(),
+                servo=PIDServo((_loop("X"), None, None)))
+
+
+@pytest.mark.parametrize("name", ["Z", "z"])
+def test_a_misnamed_column_is_refused(name):
+    with pytest.raises(machinesim.InputError) as caught:
+        machinesim.Lab("grooving_4axis", servo=PIDServo((_loop("X"), _loop(name), None, None)))
+    message = str(caught.value)
+    for part in ("column 2 is grooving_4axis's Y axis", "(axes X, Y, Z, C)",
+                 f"named {name!r}", "put it in column 3 (Z)"):
+        assert part in message, (part, message)
+
+
+def test_a_name_for_an_axis_the_machine_lacks_is_refused():
+    with pytest.raises(machinesim.InputError, match=r"grooving_4axis has no B axis"):
+        machinesim.Lab("grooving_4axis", servo=PIDServo((None, None, None, _loop("B"))))
+
+
+def test_fitting_servos_are_accepted():
+    assert machinesim.load_machine("sts_lathe").axes == ("X", "Z", "C")
+    for servo in (table6_servo("before"), table6_servo("after", axis_order=("X", "Z", "C"))):
+        lab = machinesim.Lab("sts_lathe", servo=servo)
+        assert lab.reveal_servo() is servo
+    robonano = machinesim.load_machine("robonano_a0ib")
+    machinesim.Lab(robonano, servo=table6_servo("before", axis_order=robonano.axes))
+    mill = PIDServo((_loop("x"), _loop("Y"), None, None))
+    machinesim.Lab("grooving_4axis", servo=mill).tune_servo(mill)
+    # names that are not an axis letter are not checked; neither is a servo without axes
+    machinesim.Lab("grooving_4axis", servo=PIDServo((_loop(), _loop("slide 2"), None, None)))
+
+    class Lagless:
+        def follow(self, t, q):
+            return q
+
+    machinesim.Lab("grooving_4axis", servo=Lagless())
+
+
+def _ramp_error(ki):
+    """Following error (m) at the end of a 1 s line, X 3 mm/s and Y 4 mm/s."""
+    lab = machinesim.Lab("grooving_4axis", noise=False,
+                         servo=PIDServo((_loop("X", ki), _loop("Y", ki), None, None)))
+    program = ProgramBuilder(1).linear(X=3e-3, Y=4e-3, feed_mm_per_min=300).build()
+    reading = lab.encoders().record(program)
+    assert reading.axes == ("X", "Y", "Z", "C")
+    assert reading.t[-1] == pytest.approx(1.0)
+    # the loops' own error, before the encoders round it to 1 nm
+    raw = lab.reveal_servo().following_error(reading.t, reading.commanded)[-1]
+    return reading.following_error[-1], reading.peak("X"), raw
+
+
+def test_a_pid_loop_leaves_no_steady_ramp_error():
+    error, peak, raw = _ramp_error(7.2e7)
+    assert np.all(np.abs(error) < 1e-9), error
+    assert np.all(np.abs(raw) < 1e-12), raw
+    assert peak < 1e-9
+
+
+def test_a_pd_loop_lags_a_ramp_by_v_c_over_kp():
+    error, peak, raw = _ramp_error(0.0)
+    np.testing.assert_allclose(raw[:2], np.array([3e-3, 4e-3]) * DAMPING / KP, rtol=1e-6)
+    # v c / Kp, read to the encoders' 1 nm: 4.000 um on X, 5.333 um on Y
+    np.testing.assert_allclose(error[:2], np.array([3e-3, 4e-3]) * DAMPING / KP, atol=1e-9)
+    assert error[2:].tolist() == [0.0, 0.0]
+    assert peak == pytest.approx(3e-3 * DAMPING / KP, abs=1e-9)
