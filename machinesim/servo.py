@@ -36,6 +36,10 @@ import numpy as np
 from machinesim.exceptions import InputError, MachineSimError
 
 DEFAULT_SAMPLE_TIME_S = 1e-4  # 10 kHz servo loop
+#: The servo loop periods an axis may have, s: a control's loop runs at 10 Hz .. 10 MHz. Far
+#: outside, the sampled loop's coefficients underflow (1e-12 s gave no poles at all).
+MIN_SAMPLE_TIME_S = 1e-7
+MAX_SAMPLE_TIME_S = 0.1
 #: Loop periods simulated at a time when a motion is followed: the work arrays of a piece
 #: take about 20 MB, however long the motion (a 60000 s feed move at 10 kHz held 4.5 GB in
 #: one piece).
@@ -100,7 +104,27 @@ class AxisServo:
                                  f"got {value!r}", key=key)
         if self.kp == 0.0 and self.ki == 0.0 and self.kd == 0.0:
             raise InputError(f"axis {self.name} has no feedback (Kp = Ki = Kd = 0)", key="kp")
-        object.__setattr__(self, "_loops", self._build())
+        if not MIN_SAMPLE_TIME_S <= self.sample_time_s <= MAX_SAMPLE_TIME_S:
+            raise InputError(f"servo loop period of axis {self.name} must lie in "
+                             f"{MIN_SAMPLE_TIME_S:g} .. {MAX_SAMPLE_TIME_S:g} s (a control's "
+                             f"servo loop runs at 10 Hz .. 10 MHz), got {self.sample_time_s!r}",
+                             key="sample_time_s")
+        import warnings
+
+        from scipy.signal import BadCoefficients
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", BadCoefficients)
+            try:
+                loops = self._build()
+            except BadCoefficients:
+                raise InputError(
+                    f"servo loop of axis {self.name} cannot be formed in float64 (its transfer "
+                    f"function's coefficients are badly conditioned) from Kp = {self.kp:g}, "
+                    f"Ki = {self.ki:g}, Kd = {self.kd:g}, mass = {self.mass:g}, damping = "
+                    f"{self.damping:g} at Ts = {self.sample_time_s:g} s: values far from a "
+                    "machine axis' (SI: N/m, kg, N s/m)", key="mass") from None
+        object.__setattr__(self, "_loops", loops)
 
     def _build(self):
         import control  # here: python-control and scipy.signal take 1.6 s to import

@@ -147,3 +147,27 @@ def test_a_long_motion_is_followed_in_pieces_equal_to_one_piece(monkeypatch):
 def test_a_gain_given_as_text_is_named():
     with pytest.raises(InputError, match="mass .*must be a number.*'4'"):
         AxisServo(kp=1.0, ki=0.0, kd=0.0, mass="4")
+
+
+def test_values_no_machine_axis_has_are_refused_not_turned_into_a_silent_loop():
+    # a 1e30 kg mass underflows the loop's coefficients; a 1e-12 s period left no poles
+    with pytest.raises(InputError, match="badly conditioned"):
+        AxisServo(kp=1e6, ki=0.0, kd=1e3, mass=1e30, damping=100.0)
+    with pytest.raises(InputError, match="period .* 1e-07 .. 0.1 s"):
+        AxisServo(kp=1e6, ki=1e7, kd=1e3, mass=10.0, damping=100.0, sample_time_s=1e-12)
+
+
+def test_a_servo_model_returning_nan_is_named_by_the_planner():
+    from machinesim import load_machine
+    from machinesim.motion import plan
+    from machinesim.nc import parse_program
+
+    class Broken:
+        def follow(self, t, q):
+            out = q.copy()
+            out[-1, 0] = np.nan
+            return out
+
+    program = parse_program("G90 G21\nG01 X1.0 Z-0.5 F100\nG01 X2.0\n")
+    with pytest.raises(InputError, match=r"servo.follow returned .*not finite.*Broken"):
+        plan(program, load_machine("sts_lathe"), servo=Broken())

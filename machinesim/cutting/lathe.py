@@ -230,6 +230,9 @@ def followed(follow, t: np.ndarray, points: np.ndarray) -> np.ndarray:
     if reached.shape != q.shape:
         raise InputError(f"servo.follow must return shape {q.shape}, got {reached.shape}",
                          key="servo")
+    if not np.all(np.isfinite(reached)):
+        raise InputError("servo.follow returned axis values that are not finite (NaN or inf): "
+                         "nothing is turned with them", key="servo")
     return reached[LEAD_IN_SAMPLES:]
 
 

@@ -325,6 +325,12 @@ def _follow(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray,
         if followed.shape != (len(rows), q.shape[1]):
             raise InputError(f"servo.follow must return axis values of shape "
                              f"({len(rows)}, {q.shape[1]}), got {followed.shape}")
+        if not np.all(np.isfinite(followed)):
+            bad = int(np.argmax(~np.all(np.isfinite(followed), axis=1)))
+            raise InputError(f"servo.follow returned axis values that are not finite (NaN or "
+                             f"inf) at t = {t[rows][bad]:.6g} s of the program (the servo "
+                             f"model {type(servo).__name__}): nothing is cut with them",
+                             key="servo")
         q[rows] = followed
         q[shared] = q[shared - 1]
         first = last
