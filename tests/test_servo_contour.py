@@ -83,3 +83,23 @@ def test_unequal_loops_make_an_ellipse_at_the_loops_responses():
     # differ by several um
     radius = np.hypot(q[:, 0], q[:, 1])
     assert np.ptp(radius) > 1e-6
+
+
+def test_the_cut_report_gives_each_axis_peak_following_error():
+    # one G01 line at constant speed under a PD loop on X: the lag at its end is v c / Kp
+    import machinesim
+
+    m, c, kp, kd = 4.0, 1e4, 6e7, 2e4
+    servo = PIDServo((AxisServo(kp=kp, ki=0.0, kd=kd, mass=m, damping=c, name="X"),
+                      None, None, None))
+    program = parse_program("G90 G21\nG00 X1. Y5. Z0.1\nG01 Z-0.001 F60.\n"
+                            "G01 X9. F600.\nG00 Z1.\n")
+    part, report = machinesim.cut(program, "grooving_4axis", "v:90", "block:10x10x2",
+                                  servo=servo)
+    v = 600.0 / 60.0 * 1e-3  # m/s
+    assert report.peak_following_error["X"] == pytest.approx(v * c / kp, rel=1e-3)
+    assert report.peak_following_error["Y"] == 0.0
+    assert report.to_dict()["peak_following_error_um_or_urad"]["X"] == pytest.approx(
+        v * c / kp * 1e6, rel=1e-3)
+    _, ideal = machinesim.cut(program, "grooving_4axis", "v:90", "block:10x10x2")
+    assert ideal.peak_following_error == {}

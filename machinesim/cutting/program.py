@@ -98,6 +98,9 @@ class CutReport:
         (its number, None for the cut's own tool before any change), ``line`` (where it
         was put in, None before any change), ``length_m``, ``removed_volume_m3`` and
         ``engine``.
+    peak_following_error : Mapping
+        With servo loops: axis letter -> largest |command - reached| over the program's
+        samples (m, rad for a rotary axis); empty without.
     """
 
     removed_volume_m3: float
@@ -119,6 +122,7 @@ class CutReport:
     thin_sheets: int = 0
     sideways_lines: tuple[int, ...] = field(default=())
     edge_plane_lines: tuple[int, ...] = field(default=())
+    peak_following_error: Mapping = field(default_factory=dict, hash=False)
 
     def to_dict(self) -> dict:
         """JSON-ready dict, every key with its unit."""
@@ -147,7 +151,20 @@ class CutReport:
             "tools": [{"tool": t["tool"], "line": t["line"], "length_mm": t["length_m"] * 1e3,
                        "removed_volume_mm3": t["removed_volume_m3"] * 1e9,
                        "engine": t["engine"]} for t in self.tools],
+            "peak_following_error_um_or_urad": {axis: value * 1e6 for axis, value
+                                                in self.peak_following_error.items()},
         }
+
+
+def peak_following_error(trajectory, servo, program, machine, errors, **options) -> dict:
+    """Axis letter -> largest |command - reached| (m, rad) of ``trajectory``, planned with
+    ``servo`` and ``options``, against the same plan without it; {} without servo loops."""
+    if servo is None:
+        return {}
+    commanded = motion.plan(program, machine, errors, **options)
+    lag = np.abs(np.asarray(commanded.q) - np.asarray(trajectory.q))
+    return {axis: float(lag[:, i].max()) if len(lag) else 0.0
+            for i, axis in enumerate(machine.axes)}
 
 
 def nc_summary(program) -> dict:
@@ -258,6 +275,9 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tools.points(), chord_tolerance=chord_tolerance,
                              servo=servo)
+    following = peak_following_error(trajectory, servo, program, machine, errors, start=start,
+                                     tool_points=tools.points(),
+                                     chord_tolerance=chord_tolerance)
     moves = _Moves(trajectory, len(machine.axes))
     limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
     poses = machine.tool_pose(moves.q, errors) if len(moves.q) else np.zeros((0, 4, 4))
@@ -303,6 +323,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         holder_contact=tuple(sorted(holder)),
         sideways_lines=tuple(sorted(sideways)),
         edge_plane_lines=tuple(sorted(in_plane)),
+        peak_following_error=following,
         engine_s=sum(e.elapsed_s for e in engines),
         nc=nc_summary(program),
         tools=tuple(sections),

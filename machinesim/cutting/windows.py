@@ -25,6 +25,7 @@ from machinesim.cutting.program import (
     _Moves,
     _overtravel,
     nc_summary,
+    peak_following_error,
 )
 from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance
@@ -166,4 +167,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         notes=(*trajectory.notes, "rapids not cut nor checked against the part (turned groups)",
                *([sheet_note] if sheet_note else [])),
         holder_contact=tuple(sorted(holder)), engine_s=engine_s, nc=nc_summary(program),
-        thin_sheets=sheets.count, sideways_lines=tuple(sorted(sideways_lines)))
+        thin_sheets=sheets.count, sideways_lines=tuple(sorted(sideways_lines)),
+        peak_following_error=peak_following_error(
+            trajectory, servo, program, machine, errors, start=start,
+            tool_points=tool.vertices(), chord_tolerance=chord_tolerance))
