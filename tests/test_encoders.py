@@ -69,3 +69,27 @@ def test_the_lab_cuts_through_its_own_servo_and_hides_it():
     assert not any(name in ("servo", "_servo") for name in vars(encoders))
     with pytest.raises(InputError, match="follow"):
         machinesim.Lab("sts_lathe", servo=object())
+
+
+def test_a_trace_at_the_loop_period_follows_the_continuous_ramp_response():
+    # P loop on a 1 kg mass, 100 N s/m, Kp 1e4 N/m: a ramp from rest leaves the error
+    # E(s) = v (s + 100) / (s (s^2 + 100 s + 1e4)), settling to v c / Kp = 100 um at 10 mm/s
+    from scipy.signal import lsim
+
+    loop = AxisServo(kp=1e4, ki=0.0, kd=0.0, mass=1.0, damping=100.0, name="X")
+    lab = machinesim.Lab("grooving_4axis", noise=False,
+                         servo=PIDServo((loop, None, None, None)))
+    program = parse_program("G90 G21\nG01 X5. F600.\n")  # 0.5 s at 10 mm/s
+    assert len(lab.encoders().record(program).t) == 2  # by default the move's ends
+    trace = lab.encoders().record(program, period_s=1e-3)
+    assert np.allclose(np.diff(trace.t), 1e-3)
+    v = 10e-3
+    # E(s) = G(s) / s, G = v (s + 100) / (s^2 + 100 s + 1e4): G's response to a unit step
+    _, expected, _ = lsim(([v, 100.0 * v], [1.0, 100.0, 1e4]), np.ones_like(trace.t), trace.t)
+    error = trace.following_error[:, 0]
+    assert error[-1] == pytest.approx(v * 100.0 / 1e4, rel=1e-3)
+    # the sampled loop (10 kHz, zero-order hold) against the continuous one, and the 1 nm
+    # resolution of the readout
+    assert np.max(np.abs(error - expected)) < 0.01 * v * 100.0 / 1e4
+    with pytest.raises(InputError, match="period_s"):
+        lab.encoders().record(program, period_s=0.0)

@@ -17,6 +17,7 @@ honesty rule).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -26,11 +27,13 @@ from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.metrology.instruments import Readout, as_generator
 
-__all__ = ["ENCODER_SIGMA_OF_RESOLUTION", "EncoderReading", "Encoders"]
+__all__ = ["ENCODER_SIGMA_OF_RESOLUTION", "MAX_RECORDED_SAMPLES", "EncoderReading", "Encoders"]
 
 #: Noise of an encoder reading, as a fraction of the axis' resolution (assumed: the
 #: interpolation jitter of a scale interpolated down to its resolution stays below one step).
 ENCODER_SIGMA_OF_RESOLUTION = 0.3
+#: Most samples `Encoders.record` takes with a ``period_s`` (about 1 GB of arrays).
+MAX_RECORDED_SAMPLES = 20_000_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,22 +103,31 @@ class Encoders:
         return (f"Encoders({self.machine.name}, resolution="
                 f"{[r.resolution for r in self.readouts]})")
 
-    def record(self, program, *, start=None) -> EncoderReading:
-        """Run ``program`` (an NC program) and record commands and encoder positions at the
-        planned samples (every sub-step of a rotary move)."""
+    def record(self, program, *, start=None, period_s: float | None = None) -> EncoderReading:
+        """Run ``program`` (an NC program) and record commands and encoder positions.
+
+        By default at the planned samples: each move's start and end, and every sub-step of a
+        rotary move. With ``period_s`` (s), as a control's servo trace records them: every
+        ``period_s`` from the program's start as well (the command linear between the
+        planned samples, as it is), so what happens inside a move (a loop settling after a
+        corner, a ramp's error building up) is seen. At most `MAX_RECORDED_SAMPLES` samples.
+        """
         from machinesim import motion
+        from machinesim.motion.planner import follow_runs
 
         trajectory = motion.plan(program, self.machine, None, start=start)
         t = np.asarray(trajectory.t, dtype=np.float64)
         commanded = np.asarray(trajectory.q, dtype=np.float64)
-        followed = motion.plan(program, self.machine, None, start=start,
-                               servo=_Follow(self._follow))
-        reached = np.asarray(followed.q, dtype=np.float64)
+        offsets = np.asarray(trajectory.offsets, dtype=np.int64)
+        if period_s is not None:
+            t, commanded, offsets = _at_period(t, commanded, offsets, period_s)
+        reached = commanded.copy()
+        follow_runs(_Follow(self._follow), reached, t, offsets,
+                    np.asarray(trajectory.kinds))
         position = np.column_stack([readout.read(reached[:, i], self._rng)
                                     for i, readout in enumerate(self.readouts)])
         return EncoderReading(tuple(self.machine.axes), frozen(t), frozen(commanded),
                               frozen(position.reshape(commanded.shape)))
-
 
     def record_turning(self, program) -> EncoderReading:
         """Record a turning program (`machinesim.cutting.lathe`): each run of feed moves
@@ -134,6 +146,33 @@ class Encoders:
         return EncoderReading(tuple(self.machine.axes), frozen(np.concatenate(ts)),
                               frozen(np.concatenate(commands)),
                               frozen(np.concatenate(positions)))
+
+
+def _at_period(t: np.ndarray, q: np.ndarray, offsets: np.ndarray, period: float):
+    """The planned samples with, inside each move, every multiple of ``period`` from the
+    program's start; the command linear between the planned samples."""
+    if not (isinstance(period, (int, float)) and math.isfinite(period) and period > 0.0):
+        raise InputError(f"Expected period_s > 0 (s), got {period!r}", key="period_s")
+    duration = float(t[-1] - t[0]) if len(t) else 0.0
+    if duration / period + len(t) > MAX_RECORDED_SAMPLES:
+        raise InputError(f"recording {duration:g} s every {period:g} s takes "
+                         f"{duration / period:.3g} samples, more than {MAX_RECORDED_SAMPLES:g}:"
+                         " give a longer period_s or record part of the program",
+                         key="period_s")
+    times, values, bounds = [], [], [0]
+    for a, b in zip(offsets[:-1].tolist(), offsets[1:].tolist(), strict=True):
+        tm = t[a:b]
+        first = math.floor((tm[0] - t[0]) / period) + 1
+        last = math.ceil((tm[-1] - t[0]) / period)
+        grid = t[0] + period * np.arange(first, last, dtype=np.float64)
+        grid = grid[(grid > tm[0]) & (grid < tm[-1])]
+        at = np.sort(np.concatenate([tm, grid]), kind="stable")
+        times.append(at)
+        values.append(np.column_stack([np.interp(at, tm, tm_q) for tm_q in q[a:b].T])
+                      if len(grid) else q[a:b])
+        bounds.append(bounds[-1] + len(at))
+    return (np.concatenate(times), np.concatenate(values).reshape(-1, q.shape[1]),
+            np.asarray(bounds, dtype=np.int64))
 
 
 class _Follow:

@@ -85,7 +85,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         Largest allowed distance, m, between a sub-step's chord and the true path.
     servo : ServoModel, optional
         Follow-up model (default: ideal), applied to each run of consecutive feed moves as
-        one continuous motion, and to each rapid and dwell alone (`_follow`).
+        one continuous motion, and to each rapid and dwell alone (`follow_runs`).
 
     Raises
     ------
@@ -179,7 +179,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     cutting = float(np.cumsum(np.concatenate([[0.0], durations[kinds == KIND_LINEAR]]))[-1])
     q, t, offsets = _samples(starts, delta, clock[:-1], durations, steps)
     if servo is not None and type(servo) is not IdealServo:
-        _follow(servo, q, t, offsets, kinds)
+        follow_runs(servo, q, t, offsets, kinds)
     q.flags.writeable = False
     t.flags.writeable = False
     offsets.flags.writeable = False
@@ -294,8 +294,8 @@ def _sample_moves(first, last, starts, delta, t0, durations, steps, offsets, q, 
     t[a:b] = column
 
 
-def _follow(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray,
-            kinds: np.ndarray) -> None:
+def follow_runs(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray,
+                kinds: np.ndarray) -> None:
     """Apply ``servo.follow`` to the program's motions, in place.
 
     A run of consecutive feed moves is one continuous motion: the control passes from block
