@@ -24,7 +24,8 @@ The rule
    unprogrammed axis. A dwell (G04, or a block of M codes only) stays where the motion before
    it ended (the mapped target; before the first motion block it keeps its empty target: the
    machine is still at ``start``). Kinds, feeds, dwell times, spindle speeds, block numbers,
-   M codes, source lines, the program number, source and work offsets are kept unchanged.
+   M codes, source lines, tool changes (T words, with the table they were read with), the
+   program number, source and work offsets are kept unchanged.
 
 Incremental mode and work offsets need no special case: a `Program` holds absolute machine
 targets (the parser has already applied G91 and G54..G59), and the writer emits absolute
@@ -39,14 +40,14 @@ compensating when the path between them matters.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from machinesim import tolerances
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.machines import Machine, load_machine
-from machinesim.nc.moves import AXES
+from machinesim.nc.moves import AXES, KIND_DWELL
 from machinesim.nc.program import Program, modal_values
 from machinesim.nc.writer import LINEAR_DECIMALS, ROTARY_DECIMALS
 from machinesim.units import M_PER_MM, RAD_PER_DEG
@@ -212,14 +213,14 @@ def rewrite(program: Program, machine: Machine | str, q, *, rounded: bool = True
                          source=program.source)
     if rounded and len(q):
         q = to_resolution(q, machine, program.work_offsets)
-    rows = iter(q)
-    target: dict[str, float] = {}
-    moves = []
-    for move in program.moves:
-        if move.kind != "dwell":
-            target = {a: float(v) for a, v in zip(machine.axes, next(rows), strict=True)}
-        moves.append(replace(move, target=target))
-    return Program(tuple(moves), program.number, program.source, program.work_offsets)
+    # each motion block's row, and a dwell the row of the motion before it (none before the
+    # first: the machine is still at start)
+    rows = np.cumsum(program.kinds != KIND_DWELL) - 1
+    targets = np.full((len(program), len(AXES)), np.nan)
+    columns = [AXES.index(a) for a in machine.axes]
+    moved = rows >= 0
+    targets[np.ix_(moved, columns)] = q[rows[moved]]
+    return program.with_targets(targets)
 
 
 def map_program(

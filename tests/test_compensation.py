@@ -373,3 +373,56 @@ def test_rewrite_and_point_check_their_input():
         rewrite(grooves(), GROOVING, np.zeros((5, 4)))
     with pytest.raises(InputError, match="point must be 3 finite coordinates"):
         model_based(tilted(), ROBONANO, None, point=[0.0, 1.0])
+
+
+TOOLS_TOML = """
+[tool.1]
+length_mm = 2.5
+shape = "ball:0.5"
+
+[tool.2]
+length_mm = 0.0
+shape = "flat:0.3"
+"""
+
+TOOL_CHANGE_NC = """O7
+G90 G21 G17 G94
+T1 M06
+G00 G43 H1 X-3. Y-2. Z1.
+G01 Z-0.005 F60.
+X3.
+G00 Z1.
+T2
+M06
+G00 G43 H2 X-3. Y2. Z1.
+G01 Z-0.005 F60.
+X3.
+G00 Z1.
+M30
+"""
+
+
+def test_compensation_and_the_writer_keep_the_tool_changes(tmp_path):
+    # A program read with a tool table: T1 (2.5 mm longer, a ball) cuts the first groove,
+    # T2 (a flat end mill) the second. The rewrite kept the moves and dropped the tools, so
+    # the compensated program cut both grooves with the cut's own tool, 2.5 mm off in Z.
+    from machinesim import cut
+
+    table = tmp_path / "tools.toml"
+    table.write_text(TOOLS_TOML)
+    machine = load_machine("grooving_4axis")
+    program = parse_program(TOOL_CHANGE_NC, tools=table)
+    assert [(c.number, c.move, c.length_m) for c in program.tool_changes] == [
+        (1, 1, 2.5 * MM), (2, 6, 0.0)]
+    same = model_based(program, machine, None).program
+    assert same.tool_changes == program.tool_changes and same.tool_table == str(table)
+    # the text carries the T words where the reader finds the same changes again
+    back = parse_program(format_program(same), tools=table)
+    assert [(c.number, c.move, c.length_m, c.shape) for c in back.tool_changes] == [
+        (c.number, c.move, c.length_m, c.shape) for c in program.tool_changes]
+    np.testing.assert_array_equal(back.targets, same.targets)
+    # and cut the same part as the program read from its own text
+    removed = [cut(p, machine, "v:90", "block:10x10x2@-5,-5,0")[1].removed_volume_m3
+               for p in (program, same, back)]
+    assert removed[1] == pytest.approx(removed[0], rel=1e-12)
+    assert removed[2] == pytest.approx(removed[0], rel=1e-12)

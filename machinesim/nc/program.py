@@ -390,11 +390,27 @@ class Program:
             return NotImplemented
         return (
             (self.number, self.source, self.work_offsets, self.states, self.integer_input,
-             self.tool_table, self.unit_words)
+             self.tool_table, self.unit_words, self.tool_changes)
             == (other.number, other.source, other.work_offsets, other.states,
-                other.integer_input, other.tool_table, other.unit_words)
+                other.integer_input, other.tool_table, other.unit_words, other.tool_changes)
             and self._same_moves(other)
         )
+
+    def with_targets(self, targets) -> Program:
+        """The same program with new axis targets, shape (N, 6) in `AXES` order (m, rad; NaN
+        where an axis has no value yet): kinds, feeds, dwells, lines, spindle speeds, block
+        numbers, M codes, tool changes and everything read with the text kept."""
+        targets = np.array(targets, dtype=np.float64)
+        if targets.shape != self._targets.shape:
+            raise NCProgramError(f"expected targets of shape {self._targets.shape}, got "
+                                 f"{targets.shape}", source=self.source, key="targets")
+        return Program._from_parts(
+            targets, self._kinds, self._feeds, self._dwells, self._lines, self._spindles,
+            self._blocks, dict(self._m_codes), number=self.number, source=self.source,
+            work_offsets=self.work_offsets, states=self.states,
+            integer_input=self.integer_input, tool_table=self.tool_table,
+            tool_changes=self.tool_changes, arc_blocks=self.arc_blocks,
+            unit_words=self.unit_words)
 
     def __hash__(self) -> int:
         return hash((self.number, self.source, len(self._kinds)))

@@ -9,6 +9,7 @@ import numpy as np
 
 from machinesim._io import write_atomic
 from machinesim.exceptions import NCProgramError
+from machinesim.nc.blocks import TOOL_CHANGE
 from machinesim.nc.moves import AXES, KIND_DWELL, KIND_RAPID
 from machinesim.nc.parser import MAX_INTEGER_DIGITS
 from machinesim.nc.program import PROGRAM_END, ROTARY_AXES, Program
@@ -64,6 +65,7 @@ def format_program(program: Program) -> str:
     kinds, dwells = program.kinds.tolist(), program.dwells.tolist()
     blocks, spindles = program.block_numbers.tolist(), program.spindles.tolist()
     m_codes = dict(program.m_codes)
+    tool_words = _tool_words(program, m_codes)
     written: dict[str, str] = {}
     mode = feed = spindle = None
     for i, kind in enumerate(kinds):
@@ -100,6 +102,7 @@ def format_program(program: Program) -> str:
             if text != spindle:
                 words.append("S" + text)
                 spindle = text
+        words += tool_words.get(i, [])
         words += [f"M{code:02d}" for code in codes]
         lines.append(" ".join(words))
     last = program.m_codes.get(len(kinds) - 1, ())
@@ -107,6 +110,18 @@ def format_program(program: Program) -> str:
         lines.append("M30")
     lines.append("%")
     return "\n".join(lines) + "\n"
+
+
+def _tool_words(program: Program, m_codes) -> dict[int, list[str]]:
+    """Block index -> the T word of each tool change (`Program.tool_changes`), placed so the
+    reader, given the same tool table, finds the change at the same move: in the M06 block
+    just before the tool's first move, or (a program without M06) in that move's block."""
+    words: dict[int, list[str]] = {}
+    for change in program.tool_changes:
+        block = change.move - 1 if TOOL_CHANGE in m_codes.get(change.move - 1, ()) \
+            else change.move
+        words.setdefault(block, []).append(f"T{change.number}")
+    return words
 
 
 def write_program(program: Program, path: str | os.PathLike) -> None:
