@@ -52,7 +52,7 @@ from manifold3d import OpType
 
 from machinesim.cutting.relief import cut_reliefs
 from machinesim.cutting.sheets import SheetReport, remove_sheets
-from machinesim.cutting.stitch import exact_box, stitch
+from machinesim.cutting.stitch import exact_box, snapped_union, stitch
 from machinesim.cutting.sweepset import SweepSet, dragged
 from machinesim.cutting.tiling import (
     SWEEPS_PER_TILE,
@@ -555,11 +555,14 @@ def remove(
             done += len(members)
             if progress is not None:
                 progress(done, total)
-        joined = None
         if len(pieces) > 1:
-            joined = stitch(pieces, [box for box, _ in tiles], cell, scale)
-        cell_parts.append(joined if joined is not None
-                          else manifold3d.Manifold.batch_boolean(pieces, OpType.Add))
+            boxes = [box for box, _ in tiles]
+            joined = stitch(pieces, boxes, cell, scale)
+            # the walls put on their planes first: else the union leaves a crack of no width
+            cell_parts.append(joined if joined is not None
+                              else snapped_union(pieces, boxes, cell, scale))
+        else:
+            cell_parts.append(manifold3d.Manifold.batch_boolean(pieces, OpType.Add))
     result = (manifold3d.Manifold.batch_boolean(cell_parts, OpType.Add) if cell_parts
               else manifold3d.Manifold())
     if overlapping(cell_array):
