@@ -1,10 +1,14 @@
 """R-test (ISO 10791-6): a precision ball on the tool side, three displacement sensors in a
 nest on the workpiece side, read as the machine moves its axes.
 
-The nest is set up on the table at the ball's nominal place and zeroed there (the
-measurement's reference), so each reading is the displacement of the ball centre from where
-the nominal machine would put it, relative to the workpiece, along the three sensor
-directions (here the workpiece frame's X, Y, Z). This is what a lab uses to identify a
+The nest stands on the table where a workpiece would (its placement on the table is the
+lab's workpiece setting error: an R-test session has no other workpiece) and is zeroed as if
+a perfect ball sat at its nominal place, so each reading is the displacement of the ball
+centre from where the nominal machine would put it, relative to the nest, along the three
+sensor directions (here the workpiece frame's X, Y, Z). That zero is an idealisation: a
+real nest is zeroed on the real ball at a start pose, so a constant offset (a tool offset at
+that pose, the nest's own placement) does not show, and only the changes from pose to pose
+do; here such offsets read in full. This is what a lab uses to identify a
 five-axis machine's location errors (ISO 230-7) and what Heidenhain's KinematicsOpt cycle
 reads with a touch probe on a calibration sphere: the machine's actual motion, never its
 error model.
