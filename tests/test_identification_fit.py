@@ -414,3 +414,54 @@ def test_through_the_lab_an_r_test_plan_identifies_the_injected_errors():
              for i, n in enumerate(estimate.names)]
         # 20 standard normal scores: none beyond 4.5 (a chance of 1e-4 for the set)
         assert np.max(np.abs(z)) < 4.5, z
+
+
+def _a0ib_r_test(injected, noise, seed=0):
+    """An R-test of robonano_a0ib at B -30, 0, 30 deg and C every 90 deg, through a lab."""
+    import machinesim
+    from machinesim.identification import from_r_test
+
+    q = np.array([[0.01, 0.005, 0.002, b * DEG, c * DEG]
+                  for b in (-30, 0, 30) for c in range(0, 360, 90)])
+    lab = machinesim.Lab("robonano_a0ib", injected, noise=noise, seed=seed)
+    return lab.machine, from_r_test(lab.r_test().read(q))
+
+
+def test_a_near_symmetry_and_a_missing_error_are_told_in_the_notes():
+    # C's zero offset EC0C and the workpiece's rotation gamma turn the same way about the
+    # C line: with the line off centre (EX0C, EY0C) they part only by the offset's lever, so
+    # the fit has full rank, std in mrad and a correlation of ~1, which the notes name
+    machine, obs = _a0ib_r_test({"location": {"C": {"EX0C_um": 3.0, "EY0C_um": -2.0}}}, True)
+    estimate = fit(machine, obs, ["location.C.EC0C", "workpiece.gamma", "location.C.EX0C",
+                                  "location.C.EY0C"])
+    assert estimate.rank == 4 and estimate.std[0] > 1e-3
+    assert abs(estimate.correlation[0, 1]) > 0.999
+    assert any("location.C.EC0C and workpiece.gamma are correlated" in n
+               for n in estimate.notes)
+    assert not any("do not fit the model" in n for n in estimate.notes)
+    # the plan at the nominal machine sees them as one: a combination, not a note
+    from machinesim.identification.fit import plan_quality as quality
+    nominal = quality(machine, obs.q, obs.frames, obs.directions, list(estimate.names),
+                      obs.sigma)
+    assert nominal.rank == 3
+    # a tool offset the readings show and the parameters lack: the residual says so
+    machine, obs = _a0ib_r_test({"location": {"C": {"EX0C_um": 3.0}},
+                                 "tool": {"offset_um": [1.0, 0.5, 0.0]}}, False)
+    estimate = fit(machine, obs, ["location.C.EC0C", "location.C.EX0C"])
+    assert estimate.normalised_residual_rms > 10.0
+    assert any("do not fit the model" in n for n in estimate.notes)
+
+
+def test_readings_outside_the_travel_none_and_zero_iterations_are_refused():
+    from machinesim.exceptions import AxisLimitError
+
+    q = np.zeros((3, 5))
+    q[:, 3] = [0.0, 30.0, -30.0]  # B given in degrees: 30 rad is past its travel
+    with pytest.raises(AxisLimitError, match="axis B = .* outside its travel.*m and rad"):
+        plan_quality(load_machine("robonano_a0ib"), q, "tool_tip", np.eye(3), ["tool.x"],
+                     50e-9)
+    with pytest.raises(InputError, match="at least one reading"):
+        observations(np.zeros((0, 5)), np.zeros((0, 3)), np.zeros(0), 50e-9)
+    machine, obs = _a0ib_r_test(None, False)
+    with pytest.raises(InputError, match="max_iterations"):
+        fit(machine, obs, ["tool.x"], max_iterations=0)

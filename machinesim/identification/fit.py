@@ -32,7 +32,7 @@ import numpy as np
 from machinesim import tolerances
 from machinesim.arrays import frozen
 from machinesim.errors import LARGEST_ERROR, ErrorModel
-from machinesim.exceptions import ErrorModelError, InputError, NotConvergedError
+from machinesim.exceptions import AxisLimitError, ErrorModelError, InputError, NotConvergedError
 from machinesim.identification.observations import (
     Observation,
     Observations,
@@ -93,6 +93,14 @@ class Combination:
         return f"Combination({str(self)!r})"
 
 
+#: |correlation| beyond which two parameters are reported as barely separable (`notes`).
+NEARLY_INSEPARABLE = 0.999
+#: Normalised residual RMS beyond which the readings are reported as not fitting the model:
+#: with N - rank degrees of freedom and right sigma it is about 1 (above 1.5 by chance with
+#: probability < 1e-3 from 20 degrees of freedom on).
+MODEL_MISFIT = 3.0
+
+
 @dataclass(frozen=True, eq=False)
 class _Figures:
     """What a plan can identify, from its Jacobian (shared by PlanQuality and Estimate)."""
@@ -116,6 +124,23 @@ class _Figures:
     def combinations(self) -> tuple[Combination, ...]:
         """The named null-space directions (the `Combination` entries of `unidentifiable`)."""
         return tuple(u for u in self.unidentifiable if isinstance(u, Combination))
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """What a person should read before trusting the figures: each pair of parameters
+        correlated beyond `NEARLY_INSEPARABLE` (a near-symmetry of the plan: identifiable in
+        the SVD's sense, yet barely told apart, as their std say)."""
+        out = []
+        k = len(self.names)
+        for i in range(k):
+            for j in range(i + 1, k):
+                r = float(self.correlation[i, j])
+                if math.isfinite(r) and abs(r) > NEARLY_INSEPARABLE:
+                    out.append(f"{self.names[i]} and {self.names[j]} are correlated {r:+.6f}: "
+                               f"the readings barely tell them apart (std {self.std[i]:.3g} "
+                               f"and {self.std[j]:.3g}); fix one, or add readings that "
+                               "separate them")
+        return tuple(out)
 
 
 _FIGURES_DOC = """
@@ -183,6 +208,20 @@ class Estimate(_Figures):
     normalised_residual_rms: float
     iterations: int
     errors: ErrorModel
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """As `PlanQuality.notes`, and when the readings do not fit the model: a normalised
+        residual above `MODEL_MISFIT` (a parameter the readings show but neither ``params``
+        nor the prior holds, or sigma given too small)."""
+        out = list(super().notes)
+        if self.normalised_residual_rms > MODEL_MISFIT:
+            out.append(f"the readings do not fit the model: normalised residual "
+                       f"{self.normalised_residual_rms:.3g} (about 1 when the model holds "
+                       f"every error the readings show and sigma is right; residual RMS "
+                       f"{self.residual_rms:.3g} m): an error missing from the parameters "
+                       "or the prior, or sigma too small; the values may be far off")
+        return tuple(out)
 
     def as_dict(self) -> dict[str, dict[str, float]]:
         """``{name: {"value": v, "std": s}}`` in SI (std NaN when unidentifiable)."""
@@ -305,6 +344,10 @@ class _Plan:
         if unknown:
             raise InputError(f"frame {unknown[0]!r} is not on {machine.name}; it has "
                              f"{', '.join(machine.frames)}", key="frames")
+        outside = machine.limit_violations(obs.q)
+        if outside:
+            raise AxisLimitError(f"{machine.name}: readings at axis values the machine cannot "
+                                 f"take: {'; '.join(outside)} (axis values in m and rad)")
         self.machine = machine
         self.obs = obs
         self.names = names
@@ -420,6 +463,10 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
     NotConvergedError
         When the steps do not fall below the stopping rule within ``max_iterations``.
     """
+    if isinstance(max_iterations, bool) or not isinstance(max_iterations, int) \
+            or max_iterations < 1:
+        raise InputError(f"max_iterations must be an int >= 1, got {max_iterations!r}",
+                         key="max_iterations")
     prior = _prior(machine, prior)
     names = _names(machine, params, prior)
     obs = Observations.of(observations)

@@ -143,6 +143,9 @@ class Observations:
             if arr.ndim > 1:
                 raise InputError(f"expected {key} as a number or shape (N,), got {arr.shape}",
                                  key=key)
+        if n == 0:
+            raise InputError("expected at least one reading, got none (zero-length arrays)",
+                             key=next(iter(given), "q"))
         q = np.broadcast_to(q, (n, q.shape[-1]))
         values = np.broadcast_to(values, (n,))
         directions = np.broadcast_to(directions, (n, 3))
