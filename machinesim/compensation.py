@@ -45,7 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim import tolerances
-from machinesim.exceptions import InputError, NCProgramError
+from machinesim.exceptions import AxisLimitError, InputError, NCProgramError
 from machinesim.machines import Machine, load_machine
 from machinesim.nc.moves import AXES, KIND_DWELL
 from machinesim.nc.program import Program, modal_values
@@ -281,6 +281,7 @@ def map_program(
                          f"{machine.axes[col]} ({len(bad)} value(s) not finite); expected "
                          "finite values", source=program.source,
                          line=program.moves[motion[row]].line, key=machine.axes[col])
+    _check_travel(program, machine, motion, nominal, mapped)
     return rewrite(program, machine, mapped, rounded=rounded)
 
 
@@ -335,13 +336,15 @@ def model_based(
         return Compensated(rewrite(program, machine, nominal, rounded=rounded), "", 0.0, 0.0)
     target = machine.tool_pose(nominal)
     wanted = _points(target, p)
-    solution = machine.axis_values(target, identified, q_start=nominal)
+    solution = machine.axis_values(target, identified, q_start=nominal, check_limits=False)
     for _ in range(POINT_ITERATIONS if np.any(p) else 0):
         miss = wanted - _points(machine.tool_pose(solution.q, identified), p)
         if np.max(np.linalg.norm(miss, axis=1)) < tolerances.IK_POSITION_M:
             break
         target[:, :3, 3] += miss
-        solution = machine.axis_values(target, identified, q_start=solution.q)
+        solution = machine.axis_values(target, identified, q_start=solution.q,
+                                       check_limits=False)
+    _check_travel(program, machine, motion, nominal, solution.q)
     miss = wanted - _points(machine.tool_pose(solution.q, identified), p)
     return Compensated(
         program=rewrite(program, machine, solution.q, rounded=rounded),
@@ -350,6 +353,40 @@ def model_based(
         max_rotation_residual=float(np.max(np.linalg.norm(solution.rotation_residual,
                                                           axis=1))),
     )
+
+
+def _check_travel(program: Program, machine: Machine, motion: list[int], nominal: np.ndarray,
+                  q: np.ndarray) -> None:
+    """Refuse compensated axis values outside the travel where the nominal ones were inside,
+    naming the program's lines (`AxisLimitError`)."""
+    slack = tolerances.LIMIT_SLACK
+    lower, upper = machine.lower - slack, machine.upper + slack
+    outside = ((q < lower) | (q > upper)) & (nominal >= lower) & (nominal <= upper)
+    if not outside.any():
+        return
+    rows = np.flatnonzero(outside.any(axis=1))
+    row = int(rows[0])
+    i = int(np.flatnonzero(outside[row])[0])
+    rotary = bool(machine.rotary[i])
+
+    def shown(value):
+        return f"{np.degrees(value):.5f} deg" if rotary else f"{value * 1e3:.6f} mm"
+
+    at_limit = min(abs(nominal[row, i] - machine.lower[i]),
+                   abs(nominal[row, i] - machine.upper[i])) <= 1e-3
+    hint = ("A correction cannot be made at the end of an axis' travel: a move to the "
+            "reference position (G28) with the axis at its limit, or a start there "
+            "(start=...), is the usual cause" if at_limit else
+            "The correction is larger than the room the axis has there: check the "
+            "identified errors' size and units")
+    lines = sorted({int(program.lines[motion[r]]) for r in rows.tolist()})
+    listed = ", ".join(map(str, lines[:10])) + (" ..." if len(lines) > 10 else "")
+    raise AxisLimitError(
+        f"{program.source}, line {lines[0]}: the compensated program takes axis "
+        f"{machine.axes[i]} to {shown(q[row, i])}, outside "
+        f"its travel {shown(machine.lower[i])} .. {shown(machine.upper[i])} (the program had "
+        f"{shown(nominal[row, i])}); {len(lines)} line(s) need a value past a limit: "
+        f"{listed}. {hint}")
 
 
 def _machine(machine: Machine | str) -> Machine:

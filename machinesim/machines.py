@@ -489,7 +489,7 @@ class Machine:
                 f"{np.round(targets[n, :3, 3] * 1e3, 6).tolist()} mm (pose {n}); the best miss "
                 f"is {miss[n] * 1e9:.3g} nm")
         turned = np.linalg.norm(rres, axis=1) > tolerances.IK_ANGLE_RAD * 1e3
-        unmatched = "; ".join(sorted({self._describe_rotation(dr) for dr in rres[turned]}))
+        unmatched = self._describe_rotations(rres[turned])
         if check_limits:
             bad = self.limit_violations(qs)
             if bad:
@@ -537,11 +537,20 @@ class Machine:
                 break
         return q
 
-    def _describe_rotation(self, dr: np.ndarray) -> str:
-        about = [f"{'XYZ'[k]}" for k in range(3) if abs(dr[k]) > tolerances.IK_ANGLE_RAD * 1e3]
-        return (f"{self.name} ({''.join(self.axes)}) cannot turn the tool about "
-                f"{'/'.join(about)} here: orientation left unmatched by up to "
-                f"{np.degrees(np.max(np.abs(dr))):.6g} deg")
+    def _describe_rotations(self, residuals: np.ndarray) -> str:
+        """What orientation the axes left unmatched (rad residuals, (n, 3)): one sentence
+        per set of directions, with the largest angle and how many poses ("" for none)."""
+        found: dict[str, list] = {}
+        for dr in residuals:
+            about = "/".join("XYZ"[k] for k in range(3)
+                             if abs(dr[k]) > tolerances.IK_ANGLE_RAD * 1e3)
+            largest, count = found.get(about, (0.0, 0))
+            found[about] = (max(largest, float(np.max(np.abs(dr)))), count + 1)
+        return "; ".join(
+            f"{self.name} ({''.join(self.axes)}) cannot turn the tool about {about} "
+            f"{'here' if count == 1 else f'at {count} poses'}: orientation left unmatched by "
+            f"up to {np.degrees(largest):.6g} deg"
+            for about, (largest, count) in sorted(found.items()))
 
     # ------------------------------------------------------------------------------ input
 

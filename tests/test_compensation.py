@@ -426,3 +426,26 @@ def test_compensation_and_the_writer_keep_the_tool_changes(tmp_path):
                for p in (program, same, back)]
     assert removed[1] == pytest.approx(removed[0], rel=1e-12)
     assert removed[2] == pytest.approx(removed[0], rel=1e-12)
+
+
+def test_a_correction_past_the_travel_is_refused_naming_the_lines():
+    # Z at the top of robonano_a0ib's travel (100 mm), where a G28 or the home puts it: a
+    # tool 1 um short needs Z 1 um higher, which the machine cannot give
+    from machinesim.exceptions import AxisLimitError
+
+    machine = load_machine("robonano_a0ib")
+    program = parse_program("G90 G21\nG00 X0. Y0. Z100. B0. C0.\nG00 Z1.\nG01 Z0. F10.\n"
+                            "G00 Z100.\nM30\n")
+    short = ErrorModel.from_dict({"tool": {"offset_um": [0.0, 0.0, -1.0]}})
+    with pytest.raises(AxisLimitError, match=r"line 2: .*axis Z to 100\.001000 mm.*the "
+                                             r"program had 100\.000000 mm.*2 line\(s\).*2, 5"
+                                             r".*reference position \(G28\)"):
+        model_based(program, machine, short)
+    with pytest.raises(AxisLimitError, match=r"axis X to 1000\.000000 mm.*larger than the room"):
+        map_program(program, machine, lambda q: q + [1.0, 0.0, 0.0, 0.0, 0.0])
+    # the poses a five-axis machine cannot turn the tool to are told once per direction
+    tilted = ErrorModel.from_dict({"workpiece": {"alpha_deg": 1.0}})
+    result = model_based(parse_program("G90 G21\nG00 X0. Y0. Z1. B0. C0.\nG01 Z0. F10.\n"
+                                       "G01 X1.\n"), machine, tilted)
+    assert result.unmatched.count("cannot turn the tool about X") == 1
+    assert "at 3 poses" in result.unmatched
