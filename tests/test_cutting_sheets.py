@@ -165,3 +165,20 @@ def test_faces_join_one_patch_only_on_one_plane(fold, patches):
     found = _patches(v, t, np.arange(4))
     assert len(found) == patches
     assert sorted(np.concatenate(found).tolist()) == [0, 1, 2, 3]
+
+
+def test_faces_paired_in_chunks_find_the_same_sheets(monkeypatch):
+    # the +u faces are paired with the -u faces a chunk at a time on a large part (memory);
+    # with chunks of 7 faces the 20 plates' 40 sheets are the same pairs and gaps
+    from machinesim.cutting import sheets
+
+    plates = [box((3 * MM * k, 0.0, 0.0), (3 * MM * k + 1 * MM, 1 * MM, 2.6e-13))
+              for k in range(20)]
+    v, t = joined(*plates)
+    whole = find_sheets(v, t)
+    monkeypatch.setattr(sheets, "FACING_CHUNK", 7)
+    pieces = find_sheets(v, t)
+    assert len(whole[0]) == 40
+    order_whole, order_pieces = np.lexsort(whole[0].T), np.lexsort(pieces[0].T)
+    np.testing.assert_array_equal(whole[0][order_whole], pieces[0][order_pieces])
+    np.testing.assert_array_equal(whole[1][order_whole], pieces[1][order_pieces])

@@ -87,6 +87,31 @@ class SheetReport:
     left: int = 0
 
 
+#: +u faces paired with the -u faces at a time in `find_sheets`: the k-d query's pairs are
+#: kept only when close, so a part of millions of faces stays within memory (4 million
+#: triangles of a pocket cut through bending axes asked for more than 24 GB at once).
+FACING_CHUNK = 1_000_000
+
+
+def _facing(points, plus, minus, u, offset, thickness):
+    """Pairs (i +u, j -u) of faces parallel within `NORMAL_TOL` whose planes lie less than
+    ``thickness`` apart, and the gaps: by a k-d query on (u, scaled offset), `FACING_CHUNK`
+    +u faces at a time."""
+    tree = cKDTree(points[minus])
+    found = []
+    for start in range(0, len(plus), FACING_CHUNK):
+        chunk = plus[start:start + FACING_CHUNK]
+        near = cKDTree(points[chunk]).sparse_distance_matrix(tree, 2.0 * NORMAL_TOL,
+                                                             output_type="ndarray")
+        i, j = chunk[near["i"]], minus[near["j"]]
+        gap = offset[i] - offset[j]
+        close = (np.abs(u[i] - u[j]).max(axis=1) <= NORMAL_TOL) & (np.abs(gap) < thickness)
+        found.append((i[close], j[close], gap[close]))
+    if len(found) == 1:
+        return found[0]
+    return tuple(np.concatenate(parts) for parts in zip(*found, strict=True))
+
+
 def find_sheets(vertices, triangles, thickness: float = SHEET_M) -> tuple[np.ndarray, np.ndarray]:
     """Pairs of triangles bounding a sheet of material thinner than ``thickness`` (m) with
     nothing on either side of it.
@@ -138,13 +163,8 @@ def find_sheets(vertices, triangles, thickness: float = SHEET_M) -> tuple[np.nda
     plus, minus = np.flatnonzero(side > 0), np.flatnonzero(side < 0)
     if not (plus.size and minus.size):
         return empty
-    near = cKDTree(points[plus]).sparse_distance_matrix(
-        cKDTree(points[minus]), 2.0 * NORMAL_TOL, output_type="ndarray")
-    i, j = plus[near["i"]], minus[near["j"]]
     # material lies behind each face: between the planes when the +u face is ahead
-    gap = offset[i] - offset[j]
-    close = (np.abs(u[i] - u[j]).max(axis=1) <= NORMAL_TOL) & (np.abs(gap) < thickness)
-    i, j, gap = i[close], j[close], gap[close]
+    i, j, gap = _facing(points, plus, minus, u, offset, thickness)
     low, high = corners.min(axis=1), corners.max(axis=1)
     kept_low, kept_high = low[keep], high[keep]
     boxed = np.all((kept_low[i] <= kept_high[j] + thickness)
