@@ -1,7 +1,8 @@
 """Cutting: `cut` runs an NC program on a machine; `remove` is the exact material-removal engine."""
 
 from machinesim.cutting.engine import EngineReport, remove, rotary_substeps
-from machinesim.cutting.program import CutReport, cut
+from machinesim.cutting.program import cut
+from machinesim.cutting.report import CutReport
 from machinesim.cutting.windows import clip_to, cut_turned
 
 __all__ = ["CutReport", "EngineReport", "clip_to", "cut", "cut_turned", "remove",

@@ -19,14 +19,8 @@ import numpy as np
 
 from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
-from machinesim.cutting.program import (
-    CutReport,
-    _holder_refusal,
-    _Moves,
-    _overtravel,
-    nc_summary,
-    peak_following_error,
-)
+from machinesim.cutting.program import _holder_refusal, _Moves, _overtravel
+from machinesim.cutting.report import CutReport, nc_summary, peak_following_error
 from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance
 from machinesim.exceptions import InputError

@@ -1,0 +1,157 @@
+"""What a cut reports (`CutReport`), and the pieces of it taken from the program: how it was
+read (`nc_summary`) and the lag of the servo loops it was run through
+(`peak_following_error`)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from machinesim import motion
+
+
+@dataclass(frozen=True)
+class CutReport:
+    """What happened while cutting, for people and for JSON.
+
+    Attributes
+    ----------
+    removed_volume_m3 : float
+        Integrated over the cut (`machinesim.cutting.engine.removed_volume`).
+    machining_time_s, cutting_time_s : float
+        From the feeds (motion's FANUC rule), all moves and feed moves only.
+    sweeps : int
+        Sweeps (sub-steps of any move, rapids included) that reached the stock and were cut.
+    substeps : int
+        Sub-steps of all moves, rapids included.
+    rapids_that_cut : tuple of int
+        Source lines of rapids (G00) whose sweep met material present at that time; they are
+        cut like any move (a crash shows in the part).
+    limit_violations : tuple of str
+        Axis values outside their travel, with their lines (only with ``allow_overtravel``:
+        otherwise `cut` raises `AxisLimitError`).
+    sideways_sweeps : int
+        Sweeps that drag a non-rotational tool sideways (across its cutting edge).
+    sideways_lines : tuple of int
+        Source lines of the feed moves among those sweeps that drag the tool sideways by
+        more than `tolerances.SIDEWAYS_WARN_RAD` (1 deg): a real V or nose tool does not cut
+        cleanly there (it rubs with its flank), so the part there is not what the machine
+        would leave. (A rapid that cuts is listed in ``rapids_that_cut``; one that only
+        grazes the stock's box is harmless.)
+    empty_cut : bool
+        True when nothing was removed, judged against the volume the sweeps that reach the
+        stock could remove (`EngineReport.swept_volume`), not against the stock.
+    engine : str
+        How the material was removed: "relief" (straight grooves across a block, meshed as a
+        height field) or "boolean" (sweeps subtracted); both exact (`engine.remove`).
+    elapsed_s : float
+        Wall time of the simulation.
+    notes : tuple of str
+    holder_contact : tuple of int
+        Source lines of moves in which the top of the tool's body, where its holder begins,
+        came below the top of the stock over it (`EngineReport.holder_contact`).
+    engine_s : float
+        Wall time of the material removal alone (`EngineReport.elapsed_s`).
+    nc : Mapping
+        How the program was read (`nc_summary`): ``integer_input``, the modal ``states``
+        seen with their first lines, and the ``tool_table`` path; empty when unknown.
+    thin_sheets : int
+        Sheets of stock under a picometre thick that round-off left where sweeps' faces
+        coincide, found on the finished part and cut away (`machinesim.cutting.sheets`;
+        when their faces make more than `sheets.MOST_REMOVED` patches they are left, and a
+        note says so).
+    tools : tuple of Mapping
+        One entry per run of moves cut by one tool (`Program.tool_changes`): ``tool``
+        (its number, None for the cut's own tool before any change), ``line`` (where it
+        was put in, None before any change), ``length_m``, ``removed_volume_m3`` and
+        ``engine``.
+    peak_following_error : Mapping
+        With servo loops: axis letter -> largest |command - reached| over the program's
+        samples (m, rad for a rotary axis); empty without.
+    """
+
+    removed_volume_m3: float
+    machining_time_s: float
+    cutting_time_s: float
+    sweeps: int
+    substeps: int
+    rapids_that_cut: tuple[int, ...]
+    limit_violations: tuple[str, ...]
+    sideways_sweeps: int
+    empty_cut: bool
+    engine: str
+    elapsed_s: float
+    notes: tuple[str, ...] = field(default=())
+    holder_contact: tuple[int, ...] = field(default=())
+    engine_s: float = 0.0
+    nc: Mapping = field(default_factory=dict, hash=False)
+    tools: tuple = field(default=(), hash=False)
+    thin_sheets: int = 0
+    sideways_lines: tuple[int, ...] = field(default=())
+    edge_plane_lines: tuple[int, ...] = field(default=())
+    peak_following_error: Mapping = field(default_factory=dict, hash=False)
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict, every key with its unit."""
+        return {
+            "removed_volume_mm3": self.removed_volume_m3 * 1e9,
+            "machining_time_s": self.machining_time_s,
+            "cutting_time_s": self.cutting_time_s,
+            "sweeps": self.sweeps,
+            "substeps": self.substeps,
+            "rapids_that_cut_lines": list(self.rapids_that_cut),
+            "limit_violations": list(self.limit_violations),
+            "holder_contact_lines": list(self.holder_contact),
+            "sideways_sweeps": self.sideways_sweeps,
+            "sideways_lines": list(self.sideways_lines),
+            "edge_plane_lines": list(self.edge_plane_lines),
+            "thin_sheets": self.thin_sheets,
+            "empty_cut": self.empty_cut,
+            "engine": self.engine,
+            "elapsed_s": self.elapsed_s,
+            "engine_s": self.engine_s,
+            "notes": list(self.notes),
+            "nc": {"integer_input": self.nc.get("integer_input"),
+                   "states": [dict(state) for state in self.nc.get("states", ())],
+                   "units": [dict(unit) for unit in self.nc.get("units", ())],
+                   "tool_table": self.nc.get("tool_table")},
+            "tools": [{"tool": t["tool"], "line": t["line"], "length_mm": t["length_m"] * 1e3,
+                       "removed_volume_mm3": t["removed_volume_m3"] * 1e9,
+                       "engine": t["engine"]} for t in self.tools],
+            "peak_following_error_um_or_urad": {axis: value * 1e6 for axis, value
+                                                in self.peak_following_error.items()},
+        }
+
+
+def peak_following_error(trajectory, servo, program, machine, errors, **options) -> dict:
+    """Axis letter -> largest |command - reached| (m, rad) of ``trajectory``, planned with
+    ``servo`` and ``options``, against the same plan without it; {} without servo loops."""
+    if servo is None:
+        return {}
+    commanded = motion.plan(program, machine, errors, **options)
+    lag = np.abs(np.asarray(commanded.q) - np.asarray(trajectory.q))
+    return {axis: float(lag[:, i].max()) if len(lag) else 0.0
+            for i, axis in enumerate(machine.axes)}
+
+
+def nc_summary(program) -> dict:
+    """How ``program`` was read, for `CutReport.nc`: ``integer_input`` (None when not read
+    from text), ``states`` (the words read as modal states without geometric effect, G40,
+    G80, G64, G61, G05.1 Q1, G08 P1, T1, ..., as ``{"word", "line"}`` in the order of their
+    first lines), ``units`` (G20 and G21 as selected, the same way; none when the text
+    selected neither and its lengths were read in mm) and ``tool_table`` (the path of the
+    table the T, H and D words used, or None). A program that is not a `Program` (moves
+    built in Python) gives Nones and no states."""
+    def first_lines(words) -> tuple:
+        return tuple({"word": word, "line": int(line)} for word, line in
+                     sorted(words.items(), key=lambda item: (item[1], item[0])))
+
+    return {"integer_input": getattr(program, "integer_input", None),
+            "states": first_lines(getattr(program, "states", {}) or {}),
+            "units": first_lines(getattr(program, "unit_words", {}) or {}),
+            "tool_table": getattr(program, "tool_table", None)}
+
+
+__all__ = ["CutReport", "nc_summary", "peak_following_error"]
