@@ -2,8 +2,8 @@
 
 The STS program turns C at a constant spindle speed while X and Z follow the cutting points;
 the axes' servo loops (`machinesim.servo`, or any `ServoModel`) lag behind. Here the whole
-path is one continuous motion, as on the machine and in `Lab.turn` (the motion planner
-applies a servo move by move instead, each move starting from rest).
+path is one continuous motion, as on the machine, in `Lab.turn` and in the motion planner
+(which follows each run of consecutive feed moves as one motion).
 """
 
 from __future__ import annotations
