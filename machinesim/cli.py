@@ -3,8 +3,9 @@
     machinesim machines
     machinesim view MACHINE | PART.ply | REPORT_DIR [--html FILE]
     machinesim cut PROGRAM --machine NAME --tool SPEC --stock SPEC [--errors ERRORS.toml]
-                   --out PART.ply [--report REPORT.json] [--roi X0,X1,Y0,Y1 ...]
-                   [--tools TOOLS.toml] [--integer-input calculator|increment]
+                   [--servo SERVO.toml] --out PART.ply [--report REPORT.json]
+                   [--roi X0,X1,Y0,Y1 ...] [--tools TOOLS.toml]
+                   [--integer-input calculator|increment]
                    [--chord-nm NM] [--allow-overtravel] [--allow-holder-contact]
 
 Exit status: 0 done; 2 the input cannot be used (the message names the file, line, key or
@@ -96,6 +97,10 @@ def _parser() -> argparse.ArgumentParser:
     cut.add_argument("--errors", type=Path, default=None,
                      help="injected errors, TOML with units in every key "
                           "(e.g. models/errors/example.toml); default: none")
+    cut.add_argument("--servo", type=Path, default=None, metavar="SERVO.toml",
+                     help="the axes' servo loops, one table per axis letter, SI with the unit "
+                          "in every key (docs/cli.md); the report gives each axis' largest "
+                          "following error")
     cut.add_argument("--out", type=file_name, required=True,
                      help="where to write the part: .ply (float64, metres: exact) or "
                           ".stl/.glb (float32, millimetres: display only)")
@@ -280,6 +285,8 @@ def _cut(args) -> int:
     check_readable_file(args.program, "NC program")
     if args.errors is not None:
         check_readable_file(args.errors, "error model (--errors)")
+    if args.servo is not None:
+        check_readable_file(args.servo, "servo loops (--servo)")
     check_reading_options(args)
     outputs = [(args.out, "part (--out)")]
     if args.report is not None:
@@ -287,7 +294,8 @@ def _cut(args) -> int:
         if os.path.abspath(args.report) == os.path.abspath(args.out):
             raise InputError("--out and --report name the same file; give two file names",
                              source=str(args.out))
-    inputs = [p for p in (args.program, args.errors, args.tools, Path(args.machine)) if p]
+    inputs = [p for p in (args.program, args.errors, args.servo, args.tools,
+                          Path(args.machine)) if p]
     for path, what in outputs:
         check_writable(path, what)
         if any(_same_file(path, source) for source in inputs):
@@ -307,12 +315,17 @@ def _cut(args) -> int:
     program, chord = read_for_machine(args, args.program, machine, tool)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None
     machine.check_errors(errors)  # a misfit names the user's file first, then the machine
+    servo = None
+    if args.servo is not None:
+        from machinesim.servo import servo_from_toml
+
+        servo = servo_from_toml(args.servo, machine)
     # a flag passed only when given, so that without it the cutter's default (refuse) holds
     options = {name: True for name in ("allow_overtravel", "allow_holder_contact")
                if getattr(args, name)}
     try:
         part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
-                           start=machine.home, chord_tolerance=chord,
+                           start=machine.home, chord_tolerance=chord, servo=servo,
                            progress=_progress_bar(args.quiet), **options)
     except InputError as exc:
         if not (args.errors and (exc.key or "").startswith("tool_geometry")):
@@ -335,6 +348,12 @@ def _cut(args) -> int:
                 else f"T{entry['tool']} from line {entry['line']}")
         print(f"  {name}: length {entry['length_mm']:.6g} mm, removed "
               f"{entry['removed_volume_mm3']:.6g} mm^3")
+    if report.peak_following_error:
+        lags = ", ".join(
+            f"{axis} {value * 1e6:.4f} {'urad' if rotary else 'um'}"
+            for (axis, value), rotary in zip(report.peak_following_error.items(),
+                                             machine.rotary, strict=True))
+        print(f"  largest following error: {lags}")
     if args.report is not None:
         print(f"wrote {args.report} (cut report, JSON, units in every key)")
     for note in summary["notes"]:

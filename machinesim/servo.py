@@ -330,6 +330,68 @@ def table6_servo(preset: str, axis_order: tuple = ("x", "z", "c"), **kwargs) -> 
                           if a.lower() in TABLE6["before"] else None for a in axis_order))
 
 
-__all__ = ["DEFAULT_SAMPLE_TIME_S", "FOLLOW_CHUNK", "TABLE6", "TABLE6_DAMPING",
-           "TABLE6_GAIN_SCALE", "AxisServo", "PIDServo", "ServoDivergenceError", "table6_axis",
-           "table6_servo"]
+#: The keys of an axis' table in a servo file (`servo_from_toml`), linear and rotary axes:
+#: ``AxisServo`` field -> key with its unit. ``acc_ff``, ``bandwidth_hz`` and
+#: ``sample_time_s`` are optional (no feed-forward, no filter, 10 kHz).
+SERVO_KEYS = {
+    "linear": {"kp": "kp_N_per_m", "ki": "ki_N_per_m_s", "kd": "kd_N_s_per_m",
+               "mass": "mass_kg", "damping": "damping_N_s_per_m"},
+    "rotary": {"kp": "kp_N_m_per_rad", "ki": "ki_N_m_per_rad_s", "kd": "kd_N_m_s_per_rad",
+               "mass": "inertia_kg_m2", "damping": "damping_N_m_s_per_rad"},
+}
+SERVO_OPTIONAL_KEYS = ("acc_ff", "bandwidth_hz", "sample_time_s")
+
+
+def servo_from_toml(path, machine) -> PIDServo:
+    """The servo loops of a TOML file, one table per axis letter of ``machine`` (``[X]``,
+    ``[C]``), SI with the unit in every key (`SERVO_KEYS`); an axis without a table follows
+    its command exactly. Errors name the file, the table and the key."""
+    from machinesim.errors.toml import read_toml
+
+    source = str(path)
+    data = read_toml(path)
+    axes = tuple(machine.axes)
+    loose = [name for name, value in data.items() if not isinstance(value, dict)]
+    if loose:
+        raise InputError(f"{loose[0]!r} stands outside any table; expected one table per "
+                         f"axis letter of {machine.name} ({', '.join(f'[{a}]' for a in axes)})",
+                         source=source, key=loose[0])
+    unknown = [name for name in data if name not in axes]
+    if unknown:
+        raise InputError(f"table [{unknown[0]}] is not an axis of {machine.name} (axes "
+                         f"{', '.join(axes)}); one table per axis letter", source=source,
+                         key=unknown[0])
+    columns = []
+    for letter, rotary in zip(axes, machine.rotary, strict=True):
+        table = data.get(letter)
+        if table is None:
+            columns.append(None)
+            continue
+        keys = SERVO_KEYS["rotary" if rotary else "linear"]
+        kind = "a rotary" if rotary else "a linear"
+        allowed = [*keys.values(), *SERVO_OPTIONAL_KEYS]
+        extra = [k for k in table if k not in allowed]
+        if extra:
+            raise InputError(f"unknown key {extra[0]!r} in [{letter}], {kind} axis; expected "
+                             f"{', '.join(allowed)}", source=source, key=f"{letter}.{extra[0]}")
+        missing = [k for k in keys.values() if k not in table]
+        if missing:
+            raise InputError(f"[{letter}] lacks {', '.join(missing)} ({kind} axis; SI, the "
+                             "unit in the key)", source=source, key=f"{letter}.{missing[0]}")
+        values = {field: table[key] for field, key in keys.items()}
+        values.update({key: table[key] for key in SERVO_OPTIONAL_KEYS if key in table})
+        try:
+            columns.append(AxisServo(**values, name=letter))
+        except InputError as error:
+            field = error.key
+            key = keys.get(field, field)
+            raise InputError(f"[{letter}] {key}: {error.message}", source=source,
+                             key=f"{letter}.{key}") from None
+        except ServoDivergenceError as error:
+            raise ServoDivergenceError(f"{source}, [{letter}]: {error}") from None
+    return PIDServo(tuple(columns))
+
+
+__all__ = ["DEFAULT_SAMPLE_TIME_S", "FOLLOW_CHUNK", "SERVO_KEYS", "SERVO_OPTIONAL_KEYS",
+           "TABLE6", "TABLE6_DAMPING", "TABLE6_GAIN_SCALE", "AxisServo", "PIDServo",
+           "ServoDivergenceError", "servo_from_toml", "table6_axis", "table6_servo"]

@@ -1,0 +1,51 @@
+"""``machinesim cut --servo``: the axes' servo loops from a TOML file, and the lag they leave."""
+
+import json
+
+import pytest
+from test_cli import CUT, assert_clean_failure, run
+
+PD_X = """# a PD loop on X: a 12 kg slide on a guide of 1600 N s/m
+[X]
+kp_N_per_m = 1.2e6
+ki_N_per_m_s = 0.0
+kd_N_s_per_m = 3700.0
+mass_kg = 12.0
+damping_N_s_per_m = 1600.0
+"""
+LINE = "G90 G21 G17\nG00 X1. Y5. Z0.1\nG01 Z-0.001 F60.\nG01 X9. F600.\nG00 Z1.\nM30\n"
+
+
+def test_a_servo_file_lags_the_cut_by_v_c_over_kp(tmp_path, capsys):
+    # a PD loop's steady ramp error is v c / Kp: 10 mm/s x 1600 / 1.2e6 = 13.333 um
+    servo, program = tmp_path / "servo.toml", tmp_path / "line.nc"
+    servo.write_text(PD_X)
+    program.write_text(LINE)
+    report = tmp_path / "r.json"
+    code, out, err = run(["cut", program, *CUT, "--servo", servo, "--out", tmp_path / "p.ply",
+                          "--report", report], capsys)
+    assert code == 0, err
+    lag = json.loads(report.read_text())["peak_following_error_um_or_urad"]
+    assert lag["X"] == pytest.approx(10e-3 * 1600.0 / 1.2e6 * 1e6, rel=1e-4)
+    assert lag["Y"] == 0.0 and lag["C"] == 0.0  # no loop: they follow exactly
+    assert "largest following error: X 13.3333 um" in out
+
+
+@pytest.mark.parametrize("text, words", [
+    ("kp_N_per_m = 1e6\n", ["stands outside any table", "[X], [Y], [Z], [C]"]),
+    ("[Q]\nkp_N_per_m = 1.0\n", ["table [Q] is not an axis of grooving_4axis"]),
+    (PD_X.replace("mass_kg", "mass"), ["unknown key 'mass' in [X]", "mass_kg"]),
+    (PD_X.replace("damping_N_s_per_m = 1600.0\n", ""), ["[X] lacks damping_N_s_per_m"]),
+    (PD_X.replace("1.2e6", '"1.2e6"'), ["kp_N_per_m", "must be a number"]),
+    (PD_X.replace("[X]", "[C]"), ["unknown key 'kp_N_per_m' in [C], a rotary axis",
+                                   "kp_N_m_per_rad"]),
+    ("[X\n", ["not valid TOML", "line 1"]),
+])
+def test_a_bad_servo_file_is_named(tmp_path, capsys, text, words):
+    servo, program = tmp_path / "servo.toml", tmp_path / "line.nc"
+    servo.write_text(text)
+    program.write_text(LINE)
+    code, _, err = run(["cut", program, *CUT, "--servo", servo, "--out", tmp_path / "p.ply"],
+                       capsys)
+    assert_clean_failure(code, err, "servo.toml", *words)
+    assert not (tmp_path / "p.ply").exists()
