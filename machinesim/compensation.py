@@ -367,10 +367,9 @@ def _check_travel(program: Program, machine: Machine, motion: list[int], nominal
     rows = np.flatnonzero(outside.any(axis=1))
     row = int(rows[0])
     i = int(np.flatnonzero(outside[row])[0])
-    rotary = bool(machine.rotary[i])
 
     def shown(value):
-        return f"{np.degrees(value):.5f} deg" if rotary else f"{value * 1e3:.6f} mm"
+        return machine.format_axis_value(i, value)
 
     at_limit = min(abs(nominal[row, i] - machine.lower[i]),
                    abs(nominal[row, i] - machine.upper[i])) <= 1e-3

@@ -220,6 +220,10 @@ class Machine:
         """URDF text of the error-augmented model (visuals as in the machine's file)."""
         return self.kin.xml
 
+    def format_axis_value(self, index: int, value: float) -> str:
+        """An axis value as messages show it: mm to 1 nm, or deg to 0.00001 deg."""
+        return _fmt(self._axes[index], value)
+
     def limit_violations(self, q) -> list[str]:
         """Descriptions of the axis values in ``q`` (n_axes,) or (N, n_axes) out of travel."""
         q2 = np.atleast_2d(self._check_q(q))
