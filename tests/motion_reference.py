@@ -183,17 +183,23 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         if move.kind == "linear":
             cutting += duration
         q = end
-    return Trajectory(tuple(axes), tuple(_followed(segments, servo)), t_now, cutting)
+    return Trajectory(tuple(axes), tuple(_followed(segments, servo,
+                                                   getattr(program, "exact_stops", ()))),
+                      t_now, cutting)
 
 
-def _followed(segments, servo):
+def _followed(segments, servo, exact_stops=()):
     """The segments as the servo reaches them: consecutive feed moves as one motion (each
-    later move's first sample is the one before's last), a rapid or a dwell alone."""
+    later move's first sample is the one before's last) unless the one before ends in an
+    exact stop, a rapid or a dwell alone; each motion's last sample in position (its
+    command)."""
     if type(servo) is IdealServo:
         return segments
+    stops = set(int(i) for i in exact_stops)
     groups = []
-    for segment in segments:
-        if groups and segment.kind == "linear" and groups[-1][-1].kind == "linear":
+    for i, segment in enumerate(segments):
+        if (groups and segment.kind == "linear" and groups[-1][-1].kind == "linear"
+                and i - 1 not in stops):
             groups[-1].append(segment)
         else:
             groups.append([segment])
@@ -201,7 +207,8 @@ def _followed(segments, servo):
     for group in groups:
         times = np.concatenate([group[0].t] + [g.t[1:] for g in group[1:]])
         samples = np.concatenate([group[0].q] + [g.q[1:] for g in group[1:]])
-        reached = servo.follow(times, samples)
+        reached = np.array(servo.follow(times, samples), dtype=np.float64)
+        reached[-1] = samples[-1]  # the motion ends in position
         at = 0
         for g in group:
             rows = len(g.t)

@@ -31,7 +31,7 @@ from machinesim import load_machine
 from machinesim.exceptions import NCProgramError
 from machinesim.motion import Trajectory, plan
 from machinesim.motion.chords import ToolPaths, deviations
-from machinesim.nc import ProgramBuilder, parse_program
+from machinesim.nc import Program, ProgramBuilder, parse_program
 from machinesim.sampling import random_errors
 from machinesim.tools import tool_from_spec
 
@@ -175,6 +175,19 @@ def test_a_servo_model_follows_feed_runs_as_one_motion(machines):
     servo = LagServo(0.05)
     assert_same(plan(program, machine, servo=servo),
                 reference.plan(program, machine, servo=servo))
+
+
+def test_exact_stops_end_the_servo_s_feed_runs_as_the_reference_does(machines):
+    machine = machines["grooving_4axis"]
+    program = random_program(machine, np.random.default_rng(11), 40)
+    stops = np.flatnonzero(np.random.default_rng(3).random(len(program)) < 0.3)
+    stopped = Program.from_arrays(program.targets, program.kinds, program.feeds,
+                                  program.dwells, program.lines, exact_stops=stops)
+    servo = LagServo(0.05)
+    new = plan(stopped, machine, servo=servo)
+    assert_same(new, reference.plan(stopped, machine, servo=servo))
+    # the stops change the motion: the run no longer carries the lag across them
+    assert not np.array_equal(new.q, plan(program, machine, servo=servo).q)
 
 
 def test_an_sts_point_list_from_nc_text(machines):

@@ -40,6 +40,10 @@ def _followed_circle(servo_x: AxisServo, servo_y: AxisServo):
     q = np.concatenate([s.q for s in lagged.segments[first:] if s.kind == "linear"])
     command = np.concatenate([s.q for s in ideal.segments[first:] if s.kind == "linear"])
     last_turn = t - t0 >= (TURNS - 1) / FREQ_HZ  # transients gone: exp(-50 s^-1 * 2 s)
+    # the motion's last sample is where the axes settle (it ends in position: a rapid
+    # follows), not a point of the steady contour
+    assert np.array_equal(q[-1], command[-1])
+    last_turn[-1] = False
     # where the command stands, as a phasor: the chords, shorter than their arcs, run a
     # turn 3e-7 s early, so the angle is read from the command, not from the clock
     phasor = (command[last_turn, 0] + 1j * command[last_turn, 1]) / R

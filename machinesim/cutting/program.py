@@ -132,9 +132,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tools.points(), chord_tolerance=chord_tolerance,
                              servo=servo)
-    following = peak_following_error(trajectory, servo, program, machine, errors, start=start,
-                                     tool_points=tools.points(),
-                                     chord_tolerance=chord_tolerance)
+    following = peak_following_error(trajectory, machine)
     moves = _Moves(trajectory, len(machine.axes))
     limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
     poses = machine.tool_pose(moves.q, errors) if len(moves.q) else np.zeros((0, 4, 4))
@@ -193,7 +191,8 @@ class _Moves:
     """The trajectory's samples as one array, joined into continuous paths.
 
     Each move starts where the last one ended, so its first sample repeats the last one's
-    end and is dropped; a path breaks only where it does not (a servo model may leave a gap).
+    end and is dropped; a path breaks only where it does not (a servo model leaves none:
+    `motion.plan` ends each motion in position, where the next starts).
 
     Attributes
     ----------

@@ -7,10 +7,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-import numpy as np
-
-from machinesim import motion
-
 
 @dataclass(frozen=True)
 class CutReport:
@@ -125,22 +121,20 @@ class CutReport:
         }
 
 
-def peak_following_error(trajectory, servo, program, machine, errors, **options) -> dict:
-    """Axis letter -> largest |command - reached| (m, rad) of ``trajectory``, planned with
-    ``servo`` and ``options``, against the same plan without it; {} without servo loops."""
-    if servo is None:
+def peak_following_error(trajectory, machine) -> dict:
+    """Axis letter -> largest |command - reached| (m, rad) of ``trajectory``
+    (`Trajectory.peak_lag`); {} when it was planned without servo loops."""
+    if trajectory.peak_lag is None:
         return {}
-    commanded = motion.plan(program, machine, errors, **options)
-    lag = np.abs(np.asarray(commanded.q) - np.asarray(trajectory.q))
-    return {axis: float(lag[:, i].max()) if len(lag) else 0.0
-            for i, axis in enumerate(machine.axes)}
+    return {axis: float(lag) for axis, lag in zip(machine.axes, trajectory.peak_lag.tolist(),
+                                                   strict=True)}
 
 
 def nc_summary(program) -> dict:
     """How ``program`` was read, for `CutReport.nc`: ``integer_input`` (None when not read
     from text), ``states`` (the words read as modal states without geometric effect, G40,
-    G80, G64, G61, G05.1 Q1, G08 P1, T1, ..., as ``{"word", "line"}`` in the order of their
-    first lines), ``units`` (G20 and G21 as selected, the same way; none when the text
+    G80, G05.1 Q1, G08 P1, T1, and G09, G61, G64, ..., as ``{"word", "line"}`` in the order
+    of their first lines), ``units`` (G20 and G21 as selected, the same way; none when the text
     selected neither and its lengths were read in mm) and ``tool_table`` (the path of the
     table the T, H and D words used, or None). A program that is not a `Program` (moves
     built in Python) gives Nones and no states."""

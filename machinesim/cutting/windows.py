@@ -162,6 +162,4 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
                *([sheet_note] if sheet_note else [])),
         holder_contact=tuple(sorted(holder)), engine_s=engine_s, nc=nc_summary(program),
         thin_sheets=sheets.count, sideways_lines=tuple(sorted(sideways_lines)),
-        peak_following_error=peak_following_error(
-            trajectory, servo, program, machine, errors, start=start,
-            tool_points=tool.vertices(), chord_tolerance=chord_tolerance))
+        peak_following_error=peak_following_error(trajectory, machine))

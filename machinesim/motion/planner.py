@@ -85,7 +85,11 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         Largest allowed distance, m, between a sub-step's chord and the true path.
     servo : ServoModel, optional
         Follow-up model (default: ideal), applied to each run of consecutive feed moves as
-        one continuous motion, and to each rapid and dwell alone (`follow_runs`).
+        one continuous motion, and to each rapid and dwell alone (`follow_runs`). A run
+        also ends at an exact stop (`Program.exact_stops`: G09, G61). Each motion ends in
+        position: its last sample is the command's end, so the tool goes on from the last
+        lagged sample to it (the time the axes take to settle is not added to the
+        program's). `Trajectory.peak_lag` keeps each axis' largest lag.
 
     Raises
     ------
@@ -178,8 +182,17 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     clock = np.cumsum(np.concatenate([[0.0], durations]))
     cutting = float(np.cumsum(np.concatenate([[0.0], durations[kinds == KIND_LINEAR]]))[-1])
     q, t, offsets = _samples(starts, delta, clock[:-1], durations, steps)
+    peak_lag = None
     if servo is not None and type(servo) is not IdealServo:
-        follow_runs(servo, q, t, offsets, kinds)
+        commanded = q.copy()
+        settled = follow_runs(servo, q, t, offsets, kinds,
+                              getattr(program, "exact_stops", ()))
+        lag = np.abs(commanded - q)
+        peak_lag = lag.max(axis=0) if len(lag) else np.zeros(n_axes)
+        # each motion ends in position (a rapid or a dwell follows, or an exact stop): the
+        # axes settle onto the command's end, the tool moving on from the lagged point
+        q[settled] = commanded[settled]
+        peak_lag.flags.writeable = False
     q.flags.writeable = False
     t.flags.writeable = False
     offsets.flags.writeable = False
@@ -187,7 +200,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     lines_out = np.array(lines, dtype=np.int64)
     kinds_out.flags.writeable = False
     lines_out.flags.writeable = False
-    return Trajectory(axes, q, t, offsets, kinds_out, lines_out, float(clock[-1]), cutting)
+    return Trajectory(axes, q, t, offsets, kinds_out, lines_out, float(clock[-1]), cutting,
+                      peak_lag=peak_lag)
 
 
 def _durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate) -> np.ndarray:
@@ -295,26 +309,33 @@ def _sample_moves(first, last, starts, delta, t0, durations, steps, offsets, q, 
 
 
 def follow_runs(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray,
-                kinds: np.ndarray) -> None:
-    """Apply ``servo.follow`` to the program's motions, in place.
+                kinds: np.ndarray, exact_stops=()) -> np.ndarray:
+    """Apply ``servo.follow`` to the program's motions, in place; the last row of each motion.
 
     A run of consecutive feed moves is one continuous motion: the control passes from block
     to block without stopping (FANUC's cutting mode, G64), so the loops carry their lag
     across the blocks, as around the chords of an arc (a circle's radius is then off by
-    ``r (|G(jw)| - 1)``, the loops' closed-loop response at its frequency). The run is
-    followed in one call, entered from rest on its first point; each sample shared by two
-    of its moves (one's end, the next one's start) is given once and reached once. A rapid
-    and a dwell are each followed alone, from rest (a rapid ends in position, and the axes
-    settle in a dwell).
+    ``r (|G(jw)| - 1)``, the loops' closed-loop response at its frequency). A run ends after
+    a move that ends in an exact stop (``exact_stops``, move indices: G09, G61), where the
+    control waits for the axes to be in position. The run is followed in one call, entered
+    from rest on its first point; each sample shared by two of its moves (one's end, the
+    next one's start) is given once and reached once. A rapid and a dwell are each followed
+    alone, from rest (a rapid ends in position, and the axes settle in a dwell).
+
+    Returns the row of ``q`` that ends each motion, where the followed value is the lag the
+    axes still have when the command arrives: `plan` puts the axes in position there.
     """
     bounds = offsets.tolist()
     count = len(kinds)
     feed = np.asarray(kinds) == KIND_LINEAR
+    stops = np.zeros(count, dtype=bool)
+    stops[np.asarray(exact_stops, dtype=np.int64)] = True
+    ends = []
     first = 0
     while first < count:
         last = first + 1
         if feed[first]:
-            while last < count and feed[last]:
+            while last < count and feed[last] and not stops[last - 1]:
                 last += 1
         a, b = bounds[first], bounds[last]
         # the rows of the motion, each shared boundary once (a move's start row is the
@@ -333,7 +354,10 @@ def follow_runs(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray,
                              key="servo")
         q[rows] = followed
         q[shared] = q[shared - 1]
+        if b > a:
+            ends.append(b - 1)
         first = last
+    return np.asarray(ends, dtype=np.int64)
 
 
 __all__ = ["MAX_SUBSTEPS", "move_duration", "plan"]

@@ -84,6 +84,10 @@ class Trajectory:
         Time spent in feed (G01) moves, s.
     notes : tuple of str
         What the planner had to say (moves of axes the machine lacks are errors, not notes).
+    peak_lag : ndarray, shape (n_axes,), or None
+        Each axis' largest |command - reached| over the samples, SI, with the lag each
+        motion still has when its command ends (before the axes settle there); None when
+        the axes follow exactly (no servo model).
     """
 
     axes: tuple[str, ...]
@@ -95,6 +99,7 @@ class Trajectory:
     duration: float
     cutting_time: float
     notes: tuple[str, ...] = field(default=())
+    peak_lag: np.ndarray | None = None
 
     @property
     def segments(self) -> Segments:

@@ -40,8 +40,11 @@ G codes
     length from the tool table added to / taken from absolute Z words; a bare G43 takes the
     last H, refused before any; G49 cancels; like a work offset change it moves nothing by
     itself). G81/G82/G83 canned cycles along Z in G17 with R, Z, Q, P, K and G98/G99,
-    expanded into moves; G80 or a motion code cancels. Accepted as states, no geometric
-    effect, listed in `Program.states` with their first line: G40, G61, G64, G80, G91.1,
+    expanded into moves; G80 or a motion code cancels. G09 (this block) and G61 (every
+    block until G64) end a block in an exact stop: `Program.exact_stops`, where the servo
+    loops' lag does not carry into the next block; listed as states too. Accepted as
+    states, no geometric effect, listed in `Program.states` with their first line: G40,
+    G80, G91.1,
     G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words, and G55..G59 selected without
     offsets given for them (G54's zero). Refused: G41/G42 (cutter radius
     compensation), G95, and every G code not named here.

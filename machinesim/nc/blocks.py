@@ -125,6 +125,8 @@ class Block:
         if out.count > first_move:
             if passed:
                 out.m_codes[out.count - 1] = passed
+            if state.exact_stop or "exact stop" in g:  # G61, or G09 in this block
+                out.stops.append(np.array([out.count - 1], dtype=np.int64))
         elif any(c not in PROGRAM_END for c in passed):
             self.add("dwell", 0.0, block_number)
             out.m_codes[out.count - 1] = passed
@@ -205,9 +207,11 @@ class Block:
                 self.reader.note(state.work_offset, line)
         if "return level" in g:
             state.retract = g["return level"][0]
-        for group in ("cutter compensation", "path mode", "arc centre"):
+        for group in ("cutter compensation", "path mode", "arc centre", "exact stop"):
             if group in g:
                 self.reader.note(g[group][0], line)
+        if "path mode" in g:
+            state.exact_stop = g["path mode"][0] == "G61"
         if "tool length" in g:
             state.length_mode = g["tool length"][0]
         if "canned cycle" in g:

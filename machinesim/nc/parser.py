@@ -85,6 +85,7 @@ class _State:
     cycle_p: float = 0.0
     initial_z: float | None = None
     retract: str = "G98"
+    exact_stop: bool = False  # G61 (every block ends in position) until G64
 
 
 class _Problems:
@@ -127,6 +128,7 @@ class _Output:
         self.chunks: list[tuple[np.ndarray, ...]] = []
         self.lists: tuple[list, ...] = tuple([] for _ in range(7))
         self.m_codes: dict[int, tuple[int, ...]] = {}
+        self.stops: list[np.ndarray] = []  # indices of moves that end in an exact stop
         self.count = 0
 
     def add(self, kind: int, target: Mapping[str, float], feed: float | None, dwell: float,
@@ -379,7 +381,8 @@ class Reader:
             states=self.states, integer_input=self.integer_input,
             tool_table=None if self.tools is None else self.tools.source,
             tool_changes=self.tool_changes(), arc_blocks=self.arc_blocks,
-            unit_words=self.unit_words)
+            unit_words=self.unit_words,
+            exact_stops=np.concatenate(self.out.stops) if self.out.stops else ())
 
     def tool_changes(self) -> tuple:
         """The tools put in the spindle (`ToolChange`), from the T words and M06: at each
@@ -503,6 +506,8 @@ class Reader:
         numbers = values[col["N"], rows]
         blocks = np.where(np.isnan(numbers), -1, numbers).astype(np.int64)
         spindle = math.nan if state.spindle is None else state.spindle
+        if state.exact_stop:  # G61: every block ends in position
+            self.out.stops.append(self.out.count + np.arange(n, dtype=np.int64))
         self.out.add_arrays(targets, kinds, feeds, np.zeros(n), rows + (i + 1),
                             np.full(n, spindle), blocks)
         if n:

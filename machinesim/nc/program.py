@@ -164,6 +164,11 @@ class Program:
         The length units the text selected (``"G20"`` inch, ``"G21"`` mm) -> the first line
         each appeared on. Empty when it selected neither: its lengths were read in mm (the
         reader's default), and for programs built from moves.
+    exact_stops : ndarray, shape (K,), int64
+        The moves that end in an exact stop (G09 in their block, or any block under G61):
+        the control waits there until the axes are in position before the next block, so
+        servo lag does not carry across it (`machinesim.motion.plan`). Sorted, unique;
+        empty for programs built from moves.
 
     All arrays are read-only.
 
@@ -177,7 +182,8 @@ class Program:
 
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
-                 "tool_table", "tool_changes", "arc_blocks", "unit_words", "_moves")
+                 "tool_table", "tool_changes", "arc_blocks", "unit_words", "_moves",
+                 "exact_stops")
 
     def __init__(
         self,
@@ -234,11 +240,13 @@ class Program:
         states: Mapping[str, int] | None = None,
         integer_input: str | None = None,
         tool_table: str | None = None,
+        exact_stops: Any = None,
     ) -> Program:
         """A program from its arrays (layout as the attributes), checked like any program.
 
         ``feeds``, ``spindles`` default to NaN (None), ``dwells`` to 0, ``lines`` to
-        1..N, ``block_numbers`` to -1 (None). Arrays are copied.
+        1..N, ``block_numbers`` to -1 (None), ``exact_stops`` (move indices) to none.
+        Arrays are copied.
         """
         def array(values: Any, dtype: type, name: str) -> np.ndarray:
             try:
@@ -280,6 +288,8 @@ class Program:
             column(block_numbers, -1, np.int64, "block_numbers"),
             {} if m_codes is None else m_codes,
             number, source, work_offsets, states, integer_input, tool_table,
+            exact_stops=() if exact_stops is None else array(exact_stops, np.int64,
+                                                             "exact_stops"),
         )
         return program
 
@@ -287,17 +297,17 @@ class Program:
     def _from_parts(cls, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, *,
                     number, source, work_offsets, states, integer_input,
                     tool_table=None, tool_changes=(), arc_blocks=0,
-                    unit_words=None) -> Program:
+                    unit_words=None, exact_stops=()) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
                       source, work_offsets, states, integer_input, tool_table, tool_changes,
-                      arc_blocks, unit_words)
+                      arc_blocks, unit_words, exact_stops)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
               source, work_offsets, states, integer_input, tool_table=None,
-              tool_changes=(), arc_blocks=0, unit_words=None) -> None:
+              tool_changes=(), arc_blocks=0, unit_words=None, exact_stops=()) -> None:
         set_ = object.__setattr__
         set_(self, "source", source)
         set_(self, "number", number)
@@ -323,6 +333,7 @@ class Program:
                             ("_blocks", blocks)):
             set_(self, name, _readonly(array))
         set_(self, "_m_codes", codes)
+        set_(self, "exact_stops", _readonly(_exact_stops(exact_stops, len(kinds), source)))
         set_(self, "_moves", Moves(self))
         _check(self)
 
@@ -383,6 +394,7 @@ class Program:
             and np.array_equal(self._spindles, other._spindles, equal_nan=True)
             and np.array_equal(self._blocks, other._blocks)
             and dict(self._m_codes) == dict(other._m_codes)
+            and np.array_equal(self.exact_stops, other.exact_stops)
         )
 
     def __eq__(self, other: object) -> bool:
@@ -399,7 +411,7 @@ class Program:
     def with_targets(self, targets) -> Program:
         """The same program with new axis targets, shape (N, 6) in `AXES` order (m, rad; NaN
         where an axis has no value yet): kinds, feeds, dwells, lines, spindle speeds, block
-        numbers, M codes, tool changes and everything read with the text kept."""
+        numbers, M codes, tool changes, exact stops and everything read with the text kept."""
         targets = np.array(targets, dtype=np.float64)
         if targets.shape != self._targets.shape:
             raise NCProgramError(f"expected targets of shape {self._targets.shape}, got "
@@ -410,7 +422,7 @@ class Program:
             work_offsets=self.work_offsets, states=self.states,
             integer_input=self.integer_input, tool_table=self.tool_table,
             tool_changes=self.tool_changes, arc_blocks=self.arc_blocks,
-            unit_words=self.unit_words)
+            unit_words=self.unit_words, exact_stops=self.exact_stops)
 
     def __hash__(self) -> int:
         return hash((self.number, self.source, len(self._kinds)))
@@ -420,7 +432,8 @@ class Program:
                            self._spindles, self._blocks, dict(self._m_codes), self.number,
                            self.source, {k: dict(v) for k, v in self.work_offsets.items()},
                            dict(self.states), self.integer_input, self.tool_table,
-                           self.tool_changes, self.arc_blocks, dict(self.unit_words)))
+                           self.tool_changes, self.arc_blocks, dict(self.unit_words),
+                           self.exact_stops))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -435,13 +448,14 @@ class Program:
 
 def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number, source,
              work_offsets, states, integer_input, tool_table=None, tool_changes=(),
-             arc_blocks=0, unit_words=None) -> Program:
+             arc_blocks=0, unit_words=None, exact_stops=()) -> Program:
     """Unpickle a `Program` (the arrays come back writeable copies: made read-only again)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
                                states=states, integer_input=integer_input,
                                tool_table=tool_table, tool_changes=tool_changes,
-                               arc_blocks=arc_blocks, unit_words=unit_words)
+                               arc_blocks=arc_blocks, unit_words=unit_words,
+                               exact_stops=exact_stops)
 
 
 def _states(states: Mapping[str, int] | None, source: str,
@@ -454,6 +468,21 @@ def _states(states: Mapping[str, int] | None, source: str,
         raise NCProgramError(f"{name} must map words (str) to first lines (int >= 1), got "
                              f"{states!r}", source=source, key=name)
     return FrozenMapping(states.items())
+
+
+def _exact_stops(stops: Any, n: int, source: str) -> np.ndarray:
+    """The exact-stop move indices as a sorted, unique int64 array within ``0..n-1``."""
+    try:
+        index = np.asarray(stops, dtype=np.int64).reshape(-1)
+    except (TypeError, ValueError, OverflowError) as error:
+        raise NCProgramError(f"exact_stops must be move indices (int): {error}", source=source,
+                             key="exact_stops") from None
+    index = np.unique(index)
+    if index.size and (index[0] < 0 or index[-1] >= n):
+        bad = int(index[0] if index[0] < 0 else index[-1])
+        raise NCProgramError(f"exact_stops must be move indices 0..{n - 1}, got {bad}",
+                             source=source, key="exact_stops")
+    return index
 
 
 def _m_codes(m_codes: Mapping[int, Iterable[int]], n: int, source: str) -> FrozenMapping:

@@ -38,7 +38,7 @@ G_GROUPS = {
     "G43": "tool length", "G44": "tool length", "G49": "tool length",
     "G54": "work offset", "G55": "work offset", "G56": "work offset",
     "G57": "work offset", "G58": "work offset", "G59": "work offset",
-    "G61": "path mode", "G64": "path mode",
+    "G09": "exact stop", "G61": "path mode", "G64": "path mode",
     "G80": "canned cycle", "G81": "canned cycle", "G82": "canned cycle",
     "G83": "canned cycle",
     "G90": "distance", "G91": "distance",

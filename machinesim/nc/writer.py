@@ -32,8 +32,10 @@ def format_program(program: Program) -> str:
     Emits ``%``, the O number (if any), ``G90 G21 G94 G54``, one block per move with only the
     words that changed, ``M30`` (unless the last move already ends the program) and ``%``.
     Axis words are relative to the program's G54 work offset, rounded to 1 nm (6 decimals in
-    mm) and 0.00001 deg (5 decimals in deg); F in mm/min; a dwell as ``G04 P<ms>`` when the
-    time is a whole number of milliseconds, else as ``G04 X<s>`` with the exact float.
+    mm) and 0.00001 deg (5 decimals in deg); F in mm/min; ``G09`` in the block of each move
+    that ends in an exact stop (`Program.exact_stops`; G61 is written as a G09 in every
+    block); a dwell as ``G04 P<ms>`` when the time is a whole number of milliseconds, else
+    as ``G04 X<s>`` with the exact float.
     Reading the text back (with the same work offsets) gives the moves rounded to that
     resolution, and formatting those gives the same text.
 
@@ -66,11 +68,16 @@ def format_program(program: Program) -> str:
     blocks, spindles = program.block_numbers.tolist(), program.spindles.tolist()
     m_codes = dict(program.m_codes)
     tool_words = _tool_words(program, m_codes)
+    stops = np.zeros(len(program), dtype=bool)
+    stops[program.exact_stops] = True
+    stops = stops.tolist()
     written: dict[str, str] = {}
     mode = feed = spindle = None
     for i, kind in enumerate(kinds):
         codes = m_codes.get(i, ())
         words = [] if blocks[i] < 0 else [f"N{blocks[i]}"]
+        if stops[i]:
+            words.append("G09")  # this block ends in position (`Program.exact_stops`)
         if kind == KIND_DWELL:
             if dwells[i] != 0.0 or all(c in PROGRAM_END for c in codes):
                 words += ["G04", _dwell_word(dwells[i])]
