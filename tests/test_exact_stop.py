@@ -65,6 +65,16 @@ def test_exact_stops_survive_writing_pickling_and_new_targets():
         Program.from_arrays(program.targets, program.kinds, program.feeds, exact_stops=[4])
 
 
+def test_the_builder_marks_an_exact_stop_as_g09_does():
+    from machinesim.nc import ProgramBuilder
+
+    built = (ProgramBuilder(source="<string>").rapid(X=0.0, Y=0.0, Z=0.0)
+             .linear(X=0.01, feed_mm_per_min=600.0, exact_stop=True).linear(Y=0.01).build())
+    read = parse_program("G00 X0. Y0. Z0.\nG01 G09 X10. F600.\nY10.\n")
+    assert built.exact_stops.tolist() == read.exact_stops.tolist() == [1]
+    assert np.array_equal(built.targets, read.targets, equal_nan=True)
+
+
 def test_a_corner_in_cutting_mode_carries_the_lag_and_an_exact_stop_does_not():
     machine = machinesim.load_machine("grooving_4axis")
     servo = _servo()

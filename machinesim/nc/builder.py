@@ -47,6 +47,7 @@ class ProgramBuilder:
         self._target: dict[str, float] = {}
         self._feed: float | None = None
         self._spindle: float | None = None
+        self._stops: list[int] = []
 
     def spindle(self, rpm: float) -> ProgramBuilder:
         """Set the modal spindle speed (rev/min) for the moves that follow."""
@@ -65,9 +66,11 @@ class ProgramBuilder:
         feed_m_per_s: float | None = None,
         block_number: int | None = None,
         m_codes: Iterable[int] = (),
+        exact_stop: bool = False,
         **axes: float,
     ) -> ProgramBuilder:
-        """Append a linear move (G01); the feed (one of the two units) is modal."""
+        """Append a linear move (G01); the feed (one of the two units) is modal. With
+        ``exact_stop`` the move ends in position (G09: `Program.exact_stops`)."""
         if feed_mm_per_min is not None and feed_m_per_s is not None:
             raise NCProgramError("give the feed once: feed_mm_per_min or feed_m_per_s",
                                  source=self._source, key="feed")
@@ -78,7 +81,10 @@ class ProgramBuilder:
             )
         elif feed_m_per_s is not None:
             self._feed = feed_m_per_s
-        return self._motion("linear", self._feed, block_number, m_codes, axes)
+        self._motion("linear", self._feed, block_number, m_codes, axes)
+        if exact_stop:
+            self._stops.append(len(self._moves) - 1)
+        return self
 
     def dwell(self, seconds: float, *, block_number: int | None = None,
               m_codes: Iterable[int] = ()) -> ProgramBuilder:
@@ -104,4 +110,11 @@ class ProgramBuilder:
 
     def build(self) -> Program:
         """The program built so far (the builder can go on)."""
-        return Program(tuple(self._moves), self._number, self._source, self._offsets)
+        program = Program(tuple(self._moves), self._number, self._source, self._offsets)
+        if not self._stops:
+            return program
+        return Program.from_arrays(
+            program.targets, program.kinds, program.feeds, program.dwells, program.lines,
+            spindles=program.spindles, block_numbers=program.block_numbers,
+            m_codes=program.m_codes, number=program.number, source=program.source,
+            work_offsets=program.work_offsets, exact_stops=self._stops)
