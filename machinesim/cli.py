@@ -39,6 +39,7 @@ from machinesim._program_options import (
     unit_note,
 )
 from machinesim.exceptions import InputError, MachineSimError
+from machinesim.report import check_units
 from machinesim.tolerances import CHORD_TOLERANCE_M
 
 EXAMPLES = """examples (from the repository's folder):
@@ -338,6 +339,7 @@ def _cut(args) -> int:
     summary["part_unit"] = EXPORT_UNITS[file_format]
     files = [(args.out, part.encode(file_format))]
     if args.report is not None:
+        check_units(summary)  # units in every key, as --report promises
         files.append((args.report, json_text(summary, "cut report")))
     write_together(files)
     print(f"wrote {args.out} ({description}): removed {summary['removed_volume_mm3']:.6g} mm^3 "

@@ -26,27 +26,41 @@ from machinesim.exceptions import InputError
 #: Suffixes that name a unit (or say that a number has none).
 UNIT_SUFFIXES = ("_m", "_mm", "_um", "_nm", "_rad", "_mrad", "_urad", "_deg", "_arcsec",
                  "_s", "_h", "_min", "_mm3", "_m3", "_percent", "_count", "_ratio", "_index",
-                 "_per_s")
+                 "_per_s", "_lines")
 #: Keys that are not quantities.
 PLAIN_KEYS = {"seed", "noise", "machine", "paper", "program", "scenario", "note", "notes",
-              "name", "files", "version", "units", "procedure"}
+              "name", "files", "version", "units", "procedure", "line", "tool",
+              "rows"}  # a table's rows: its "columns" name the units
 
 
-def check_units(data, path: str = "") -> None:
-    """Raise InputError when a number in ``data`` sits under a key without a unit suffix."""
+def check_units(data, path: str = "", named: bool = False) -> None:
+    """Raise InputError when a number in ``data`` sits under a key without a unit suffix
+    (a number itself, or numbers in a list under it, at any depth of lists), unless a key
+    it sits within names the unit (``"yaw_urad": {"y_mm": [...], "value": [...]}``)."""
     if isinstance(data, Mapping):
         for key, value in data.items():
             where = f"{path}.{key}" if path else str(key)
-            if isinstance(value, (int, float)) and not isinstance(value, bool):
-                if key not in PLAIN_KEYS and not str(key).endswith(UNIT_SUFFIXES):
-                    raise InputError(f"report key {where!r} holds a number but names no unit "
-                                     f"(end it in one of {', '.join(UNIT_SUFFIXES)})")
-            else:
-                check_units(value, where)
+            has_unit = named or key in PLAIN_KEYS or str(key).endswith(UNIT_SUFFIXES)
+            if not has_unit and (_is_number(value) or (isinstance(value, (list, tuple))
+                                                       and _has_number(value))):
+                raise InputError(f"report key {where!r} holds a number but names no unit "
+                                 f"(end it in one of {', '.join(UNIT_SUFFIXES)})")
+            if isinstance(value, (Mapping, list, tuple)):
+                check_units(value, where, has_unit and key not in PLAIN_KEYS or named)
     elif isinstance(data, (list, tuple)):
         for i, value in enumerate(data):
             if isinstance(value, (Mapping, list, tuple)):
-                check_units(value, f"{path}[{i}]")
+                check_units(value, f"{path}[{i}]", named)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _has_number(items) -> bool:
+    """Whether a list (of lists ...) holds a number directly, not inside an object."""
+    return any(_is_number(v) or (isinstance(v, (list, tuple)) and _has_number(v))
+               for v in items)
 
 
 def _clean(data):
@@ -271,32 +285,70 @@ FIGURE_KEYS = ("name", "unit", "before", "after", "paper_before", "paper_after")
 def check_summary(data: Mapping) -> None:
     """Raise InputError when ``data`` is not a summary.json of the documented schema.
 
-    ``injected`` maps error parameter names (`machinesim.ErrorModel.parameters`) to SI values,
-    ``identified`` maps them to ``{"value", "std"}``; ``figures`` is a list of objects with
-    `FIGURE_KEYS` (numbers or null, and a ``unit``); every other numeric key names its unit.
+    ``injected`` maps error parameter names (`machinesim.ErrorModel.parameters`) to finite
+    SI values, ``identified`` maps them to ``{"value", "std"}`` (a number, and a number >= 0
+    or null); ``figures`` is a list of objects with `FIGURE_KEYS` (numbers or null, the
+    ``unit`` one of `machinesim.experiment.FIGURE_UNITS`, an optional ``note`` and an
+    optional ``after_std`` >= 0); ``seed`` >= 0; ``files`` a list of names; every other
+    numeric key names its unit.
     """
     from machinesim.errors.model import _PARAMETER_RE
+    from machinesim.experiment import FIGURE_UNITS
 
+    def refuse(message: str, key: str):
+        raise InputError(f"summary.json: {message}", key=key)
+
+    def number(value, where: str, key: str, *, null: bool = False, least=None) -> None:
+        if value is None and null:
+            return
+        if not _is_number(value) or not math.isfinite(value):
+            refuse(f"{where} must be a finite number{' or null' if null else ''}, got "
+                   f"{value!r}", key)
+        if least is not None and value < least:
+            refuse(f"{where} must be >= {least}, got {value!r}", key)
+
+    if not isinstance(data, Mapping):
+        raise InputError(f"summary.json: expected an object, got {type(data).__name__}")
     for key, kind in SUMMARY_KEYS.items():
         if key not in data or not isinstance(data[key], kind) or (
                 kind is int and isinstance(data[key], bool)):
-            raise InputError(f"summary.json: expected {key!r} as {kind.__name__}, got "
-                             f"{data.get(key)!r}", key=key)
+            refuse(f"expected {key!r} as {kind.__name__}, got {data.get(key)!r}", key)
+    number(data["seed"], "seed", "seed", least=0)
     for section in ("injected", "identified"):
         for name, value in data[section].items():
-            if not _PARAMETER_RE.fullmatch(name):
-                raise InputError(f"summary.json: {section} key {name!r} is not an error "
-                                 "parameter name (tool.x, workpiece.alpha, location.C.EX0C, "
-                                 "component.X.EXX[0])", key=section)
-            if section == "identified" and (not isinstance(value, Mapping)
-                                            or set(value) != {"value", "std"}):
-                raise InputError(f"summary.json: identified[{name!r}] must be "
-                                 f'{{"value": v, "std": s}}, got {value!r}', key=section)
+            if not isinstance(name, str) or not _PARAMETER_RE.fullmatch(name):
+                refuse(f"{section} key {name!r} is not an error parameter name (tool.x, "
+                       "workpiece.alpha, location.C.EX0C, component.X.EXX[0])", section)
+            if section == "injected":
+                number(value, f"injected[{name!r}]", section)
+            elif not isinstance(value, Mapping) or set(value) != {"value", "std"}:
+                refuse(f'identified[{name!r}] must be {{"value": v, "std": s}}, got '
+                       f"{value!r}", section)
+            else:
+                number(value["value"], f"identified[{name!r}].value", section)
+                number(value["std"], f"identified[{name!r}].std", section, null=True,
+                       least=0.0)
     for i, figure in enumerate(data["figures"]):
+        if not isinstance(figure, Mapping):
+            refuse(f"figures[{i}] must be an object, got {figure!r}", "figures")
         missing = [k for k in FIGURE_KEYS if k not in figure]
         if missing:
-            raise InputError(f"summary.json: figures[{i}] lacks {', '.join(missing)}",
-                             key="figures")
+            refuse(f"figures[{i}] lacks {', '.join(missing)}", "figures")
+        if not isinstance(figure["name"], str) or not figure["name"]:
+            refuse(f"figures[{i}].name must be a non-empty string, got {figure['name']!r}",
+                   "figures")
+        if figure["unit"] not in FIGURE_UNITS:
+            refuse(f"figures[{i}] ({figure['name']}): unit {figure['unit']!r}; expected one "
+                   f"of {', '.join(FIGURE_UNITS)}", "figures")
+        for key in ("before", "after", "paper_before", "paper_after", "after_std"):
+            if key in figure:
+                number(figure[key], f"figures[{i}].{key}", "figures", null=True,
+                       least=0.0 if key == "after_std" else None)
+        if not isinstance(figure.get("note", ""), str):
+            refuse(f"figures[{i}].note must be a string, got {figure['note']!r}", "figures")
+    files = data.get("files", [])
+    if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
+        refuse(f"expected 'files' as a list of file names, got {files!r}", "files")
     if "budget" in data:
         _check_budget(data["budget"])
     rest = {k: v for k, v in data.items() if k not in SUMMARY_KEYS and k != "budget"}

@@ -147,7 +147,7 @@ def test_a_program_cut_looks_for_sheets_once_on_the_finished_part_and_reports_th
     assert engine_calls and not any(engine_calls)  # the engine leaves them to the end
     assert len(searched) == 1 and searched[0] is part
     assert report.thin_sheets == 40 and "40 sheets left (a note)" in report.notes
-    assert report.to_dict()["thin_sheets"] == 40
+    assert report.to_dict()["thin_sheets_count"] == 40
 
 
 @pytest.mark.parametrize(("fold", "patches"), [(0.3, 2), (1e-8, 1)])

@@ -44,18 +44,44 @@ def test_summary_and_tables_round_trip(tmp_path):
 def test_the_summary_schema_is_enforced(tmp_path):
     base = {"paper": "001", "procedure": "p", "machine": "m", "seed": 0, "noise": False,
             "injected": {}, "identified": {}, "figures": []}
+    figure = {"name": "a_dx", "unit": "um", "before": 490.0, "after": None,
+              "paper_before": 490.04, "paper_after": 4.06}
     check_summary(base)
     for change, message in (({"seed": True}, "'seed' as int"),
                             ({"injected": {"r_mm": 1.0}}, "not an error parameter name"),
                             ({"identified": {"tool.x": 1.0}}, '"value": v'),
                             ({"figures": [{"name": "a"}]}, "lacks unit"),
-                            ({"details": {"depth": 1.0}}, "names no unit")):
+                            ({"details": {"depth": 1.0}}, "names no unit"),
+                            # what the schema says of each value, not only of its key
+                            ({"seed": -5}, "seed must be >= 0"),
+                            ({"injected": {"tool.x": "big"}}, "must be a finite number"),
+                            ({"identified": {"tool.x": {"value": "x", "std": 1e-9}}},
+                             "value must be a finite number"),
+                            ({"identified": {"tool.x": {"value": 0.0, "std": -1.0}}},
+                             "std must be >= 0"),
+                            ({"figures": [3]}, r"figures\[0\] must be an object"),
+                            ({"figures": [{**figure, "unit": "furlongs"}]},
+                             "unit 'furlongs'; expected one of m, mm"),
+                            ({"figures": [{**figure, "before": "abc"}]},
+                             "before must be a finite number or null"),
+                            ({"figures": [{**figure, "after_std": -0.1}]},
+                             "after_std must be >= 0"),
+                            ({"files": 3}, "'files' as a list of file names"),
+                            ({"details": {"depth": [1.0, 2.0]}}, "'details.depth' holds")):
         with pytest.raises(InputError, match=message):
             check_summary({**base, **change})
+    with pytest.raises(InputError, match="expected an object, got list"):
+        check_summary([])
+    check_summary({**base, "figures": [figure], "identified": {
+        "tool.x": {"value": 1e-6, "std": None}}, "files": ["summary.json"]})
 
 
 def test_a_number_without_a_unit_is_refused():
     check_units({"after": {"depth_error_um": 1.0, "rows": [[1, 2]]}, "seed": 1})
+    # a key names the unit of what it holds: a list, or an object's numbers
+    check_units({"yaw_urad": {"y_mm": [0.0, 20.0], "value": [1.0, 2.0]}})
+    with pytest.raises(InputError, match="'after.depths' holds a number"):
+        check_units({"after": {"depths": [[1.0], [2.0]]}})
     with pytest.raises(InputError, match="'after.depth' holds a number but names no unit"):
         check_units({"after": {"depth": 1.0}})
 
