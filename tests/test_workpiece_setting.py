@@ -637,17 +637,17 @@ def test_the_scenario_runs_and_meets_the_noise_off_bounds(tmp_path):
     check_summary(summary)
     crown = summary["details"]["crown"]
     figures = {f["name"]: f for f in summary["figures"]}
-    assert np.abs(crown["crown_edge_distance_error_um_after"]).max() < 10 * NM / UM
+    assert np.abs(crown["crown_after_edge_distance_error_um"]).max() < 10 * NM / UM
     # the side windows are 0.15 mm along the 0.3 mm faces of the resized crown (0.3 mm
     # before): the microscope's 1 nm rounding tilts their fits more (measured 1.9e-5 deg)
-    assert np.abs(crown["crown_inclination_error_deg_after"]).max() < 4e-5
-    assert np.abs(crown["crown_foot_distance_error_um_after"]).max() < 0.4
+    assert np.abs(crown["crown_after_inclination_error_deg"]).max() < 4e-5
+    assert np.abs(crown["crown_after_foot_distance_error_um"]).max() < 0.4
     # read as the paper reads them (edges in 10x profiles, 1.3 um samples; measured 3.8 nm
     # and 1e-4 deg): the corners of lines fitted to the rounded samples
-    assert np.abs(crown["crown_image_edge_distance_error_um_after"]).max() < 10 * NM / UM
-    assert np.abs(crown["crown_image_inclination_error_deg_after"]).max() < 3e-4
+    assert np.abs(crown["crown_after_image_edge_distance_error_um"]).max() < 10 * NM / UM
+    assert np.abs(crown["crown_after_image_inclination_error_deg"]).max() < 3e-4
     assert [f["after"] for f in summary["figures"] if f["name"].startswith("inclination_S")
-            ] == pytest.approx(crown["crown_image_inclination_error_deg_after"], abs=0)
+            ] == pytest.approx(crown["crown_after_image_inclination_error_deg"], abs=0)
     after = [figures[f"groove_depth_C{90 * k}"]["after"] for k in range(4)]
     before = [figures[f"groove_depth_C{90 * k}"]["before"] for k in range(4)]
     assert np.ptp(after) < 5 * NM / UM

@@ -465,7 +465,7 @@ class RobotLoadedWorkpiece:
                               "robot-loaded rough crown"))
         figures.append(Figure("machining_time_saved", "percent", None, saved, None,
                               PAPER_TIME["saved_percent"]))
-        details = {**{f"crown_{kind}_{name}": values for name, e in errors.items()
+        details = {**{f"crown_{name}_{kind}": values for name, e in errors.items()
                       if name in features
                       for kind, values in (("edge_distance_error_um", e["edge"]),
                                            ("inclination_error_deg", e["inclination"]),
