@@ -358,6 +358,12 @@ class _Plan:
             unique, inverse = np.unique(obs.q[rows], axis=0, return_inverse=True)
             self.groups.append((frame, rows, unique, inverse.ravel()))
         self.nominal = self._positions(None)
+        # readings of sensors set to zero at a pose: less the same reading there
+        self.zeroed = np.flatnonzero(obs.zeroed)
+        self.zero = None if not self.zeroed.size else _Plan(machine, Observations(
+            obs.zero_at[self.zeroed], 0.0, obs.directions[self.zeroed],
+            obs.sigma[self.zeroed], tuple(np.asarray(obs.frames)[self.zeroed].tolist()),
+            obs.points[self.zeroed]), names)
 
     def _positions(self, errors) -> np.ndarray:
         """Positions (N, 3) of the observed points in the workpiece frame, m.
@@ -375,8 +381,12 @@ class _Plan:
         return out
 
     def readings(self, errors) -> np.ndarray:
-        """Model readings (N,), m: u . (x(errors) - x(nominal))."""
-        return np.einsum("ni,ni->n", self.obs.directions, self._positions(errors) - self.nominal)
+        """Model readings (N,), m: u . (x(errors) - x(nominal)), less the same at
+        ``zero_at`` for a zeroed reading."""
+        out = np.einsum("ni,ni->n", self.obs.directions, self._positions(errors) - self.nominal)
+        if self.zero is not None:
+            out[self.zeroed] -= self.zero.readings(errors)
+        return out
 
     def jacobian(self, errors) -> np.ndarray:
         """d readings / d parameters (N, k), m per m or per rad."""
@@ -385,6 +395,8 @@ class _Plan:
             jac = self.machine.error_jacobian(self.obs.q[rows], errors, self.names, frame=frame,
                                               point=self.obs.points[rows])
             out[rows] = np.einsum("ni,nik->nk", self.obs.directions[rows], jac[:, :3, :])
+        if self.zero is not None:
+            out[self.zeroed] -= self.zero.jacobian(errors)
         return out
 
 
@@ -520,7 +532,7 @@ def _check_not_diverged(machine, names, values: np.ndarray, iterations: int) -> 
 
 
 def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *,
-                 prior=None, points=None) -> PlanQuality:
+                 prior=None, points=None, zero_at=None) -> PlanQuality:
     """What a measurement plan can identify, before any reading is taken.
 
     The same figures as `fit` reports (one function computes both), from the Jacobian at
@@ -544,6 +556,9 @@ def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *
         Where to linearise (default: the nominal machine).
     points : array_like, shape (3,) or (N, 3), optional
         Point coordinates in their frames, m (default the frame origins).
+    zero_at : array_like, shape (n_axes,) or (N, n_axes), optional
+        Where the sensors are set to zero (`Observation.zero_at`): what a zeroed plan cannot
+        see (a constant offset) is then named.
 
     Returns
     -------
@@ -551,6 +566,6 @@ def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *
     """
     prior = _prior(machine, prior)
     names = _names(machine, params, prior)
-    obs = Observations(q, 0.0, directions, sigma, frames, points)
+    obs = Observations(q, 0.0, directions, sigma, frames, points, zero_at)
     plan = _Plan(machine, obs, names)
     return PlanQuality(**_figures(_linearise(plan.jacobian(prior), obs.sigma), names))

@@ -48,6 +48,10 @@ class Observation:
         The machine frame the point is fixed in (``tool_tip``, ``probe_tip``, ...).
     point : array_like, shape (3,)
         Coordinates of the point in ``frame``, m (default its origin).
+    zero_at : array_like, shape (n_axes,), optional
+        Axis values where the sensor was set to zero (a dial or an R-test nest zeroed at a
+        start pose): the reading is then the change of the displacement from there to
+        ``q``, which no constant offset moves. None: the displacement itself.
     """
 
     q: np.ndarray
@@ -56,6 +60,7 @@ class Observation:
     sigma: float
     frame: str = "tool_tip"
     point: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    zero_at: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         for key, want in (("q", 1), ("value", 0), ("direction", 1), ("sigma", 0),
@@ -64,8 +69,13 @@ class Observation:
                 raise InputError(f"expected {key} of one observation as "
                                  f"{'a vector' if want else 'a number'}, got shape "
                                  f"{np.shape(getattr(self, key))}", key=key)
+        if self.zero_at is not None and np.ndim(self.zero_at) != 1:
+            raise InputError(f"expected zero_at of one observation as a vector, got shape "
+                             f"{np.shape(self.zero_at)}", key="zero_at")
         batch = Observations(self.q, self.value, self.direction, self.sigma, self.frame,
-                             self.point)
+                             self.point, self.zero_at)
+        object.__setattr__(self, "zero_at", None if self.zero_at is None
+                           else frozen(batch.zero_at[0]))
         object.__setattr__(self, "q", frozen(batch.q[0]))
         object.__setattr__(self, "value", float(batch.values[0]))
         object.__setattr__(self, "direction", frozen(batch.directions[0]))
@@ -94,10 +104,13 @@ class Observations:
         Machine frame of each point.
     points : array_like, shape (3,) or (N, 3), optional
         Point coordinates in their frame, m (default the frame origins).
+    zero_at : array_like, shape (n_axes,) or (N, n_axes), optional
+        Axis values where each reading's sensor was set to zero (`Observation.zero_at`);
+        a row of NaN (and the default, None) for a reading of the displacement itself.
 
     Attributes
     ----------
-    q : ndarray, shape (N, n_axes)
+    q, zero_at : ndarray, shape (N, n_axes)
     values, sigma : ndarray, shape (N,)
     directions, points : ndarray, shape (N, 3)
         Read-only; directions of unit length.
@@ -110,6 +123,7 @@ class Observations:
     sigma: np.ndarray
     frames: tuple[str, ...] | str = "tool_tip"
     points: np.ndarray | None = None
+    zero_at: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         q = np.asarray(self.q, dtype=np.float64)
@@ -121,7 +135,17 @@ class Observations:
         if q.ndim not in (1, 2) or q.shape[-1] == 0:
             raise InputError(f"expected axis values of shape (n_axes,) or (N, n_axes), got "
                              f"{q.shape}", key="q")
+        try:
+            zero_at = (np.full(q.shape[-1], np.nan) if self.zero_at is None
+                       else np.asarray(self.zero_at, dtype=np.float64))
+        except (TypeError, ValueError):
+            raise InputError(f"expected zero_at as axis values (m, rad), got "
+                             f"{self.zero_at!r}", key="zero_at") from None
+        if zero_at.ndim not in (1, 2) or zero_at.shape[-1] != q.shape[-1]:
+            raise InputError(f"expected zero_at of shape ({q.shape[-1]},) or (N, "
+                             f"{q.shape[-1]}) as q, got {zero_at.shape}", key="zero_at")
         sizes = {"q": q.shape[0] if q.ndim == 2 else None,
+                 "zero_at": zero_at.shape[0] if zero_at.ndim == 2 else None,
                  "values": values.shape[0] if values.ndim == 1 else None,
                  "directions": directions.shape[0] if directions.ndim == 2 else None,
                  "sigma": sigma.shape[0] if sigma.ndim == 1 else None,
@@ -151,6 +175,14 @@ class Observations:
         directions = np.broadcast_to(directions, (n, 3))
         sigma = np.broadcast_to(sigma, (n,))
         points = np.broadcast_to(points, (n, 3))
+        zero_at = np.broadcast_to(zero_at, (n, q.shape[1]))
+        given_zero = np.isfinite(zero_at)
+        rows = np.flatnonzero(given_zero.any(axis=1) & ~given_zero.all(axis=1)
+                              | np.isinf(zero_at).any(axis=1))
+        if rows.size:
+            raise InputError(f"reading {rows[0]}: zero_at {zero_at[rows[0]].tolist()}; expected "
+                             "finite axis values, or all NaN for a reading not zeroed",
+                             key="zero_at")
         frames = (frames,) * n if isinstance(frames, str) else tuple(frames)
         for key, arr in (("q", q), ("values", values), ("directions", directions),
                          ("points", points)):
@@ -177,13 +209,20 @@ class Observations:
         object.__setattr__(self, "sigma", frozen(sigma))
         object.__setattr__(self, "frames", frames)
         object.__setattr__(self, "points", frozen(points))
+        object.__setattr__(self, "zero_at", frozen(zero_at))
+
+    @property
+    def zeroed(self) -> np.ndarray:
+        """(N,) bool: the readings taken from a sensor set to zero at `zero_at`."""
+        return np.isfinite(self.zero_at[:, 0])
 
     def __len__(self) -> int:
         return self.values.shape[0]
 
     def __getitem__(self, i: int) -> Observation:
         return Observation(self.q[i], self.values[i], self.directions[i], self.sigma[i],
-                           self.frames[i], self.points[i])
+                           self.frames[i], self.points[i],
+                           self.zero_at[i] if self.zeroed[i] else None)
 
     def __iter__(self):
         return (self[i] for i in range(len(self)))
@@ -199,7 +238,7 @@ class Observations:
         for item in items:
             if isinstance(item, Observation):
                 parts.append(Observations(item.q, item.value, item.direction, item.sigma,
-                                          item.frame, item.point))
+                                          item.frame, item.point, item.zero_at))
             elif isinstance(item, Observations):
                 parts.append(item)
             else:
@@ -216,20 +255,22 @@ class Observations:
                    np.concatenate([p.directions for p in parts]),
                    np.concatenate([p.sigma for p in parts]),
                    tuple(f for p in parts for f in p.frames),
-                   np.concatenate([p.points for p in parts]))
+                   np.concatenate([p.points for p in parts]),
+                   np.concatenate([p.zero_at for p in parts]))
 
 
 def from_r_test(reading) -> Observations:
     """The readings of an R-test (`machinesim.metrology.RTestReading`) as observations: three
-    per position, along the workpiece frame's X, Y and Z, with the reading's uncertainty."""
+    per position, along the workpiece frame's X, Y and Z, with the reading's uncertainty, and
+    the pose where its sensors were set to zero (`RTestReading.zero_at`, if any)."""
     n = len(reading.q)
     return Observations(np.repeat(reading.q, 3, axis=0), reading.displacement.reshape(-1),
                         np.tile(np.eye(3), (n, 1)), reading.sigma, reading.frame,
-                        reading.point)
+                        reading.point, getattr(reading, "zero_at", None))
 
 
 def observations(q, directions, values, sigma, *, frame="tool_tip",
-                 point=None) -> Observations:
+                 point=None, zero_at=None) -> Observations:
     """Readings as one `Observations` batch (each argument one for all, or one per reading).
 
     Parameters
@@ -246,7 +287,9 @@ def observations(q, directions, values, sigma, *, frame="tool_tip",
         Frame of the point(s).
     point : array_like, shape (3,) or (N, 3), optional
         Point coordinates in the frame, m.
+    zero_at : array_like, shape (n_axes,) or (N, n_axes), optional
+        Axis values where the sensors were set to zero (`Observation.zero_at`).
     """
-    return Observations(q, values, directions, sigma, frame, point)
+    return Observations(q, values, directions, sigma, frame, point, zero_at)
 
 

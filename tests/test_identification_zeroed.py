@@ -1,0 +1,72 @@
+"""Readings of sensors set to zero at a pose (an R-test nest zeroed at the start pose): the
+fit models each as its displacement less the displacement where it was zeroed, so constant
+offsets drop out and what changes with the axes is still identified."""
+
+import numpy as np
+import pytest
+
+import machinesim
+from machinesim.exceptions import InputError
+from machinesim.identification import Observations, fit, observations, plan_quality
+
+DEG = np.pi / 180.0
+MACHINE = machinesim.load_machine("robonano_a0ib")
+# an R-test plan: B -30, 0, 30 deg and C every 90 deg, the ball on the tool tip
+Q = np.array([[0.01, 0.005, 0.002, b * DEG, c * DEG]
+              for b in (-30, 0, 30) for c in range(0, 360, 90)])
+Q_ALL = np.repeat(Q, 3, axis=0)
+U = np.tile(np.eye(3), (len(Q), 1))
+SIGMA = 50e-9
+
+
+def _displacement(errors, q):
+    """Ball centre (tool tip) actual minus nominal in the workpiece frame, m (second method:
+    the machine's poses, not the fit's model)."""
+    actual = MACHINE.frame_pose("tool_tip", q, errors)[:, :3, 3]
+    nominal = MACHINE.frame_pose("tool_tip", q)[:, :3, 3]
+    return actual - nominal
+
+
+def test_a_zeroed_reading_is_the_change_of_the_displacement_from_the_zero_pose():
+    truth = machinesim.ErrorModel().with_parameters({
+        "location.C.EX0C": 3e-6, "location.C.EY0C": -2e-6, "workpiece.x": 5e-6,
+        "tool.z": 4e-6})
+    d = _displacement(truth, Q)
+    readings = (d - d[0]).reshape(-1)
+    obs = observations(Q_ALL, U, readings, SIGMA, zero_at=Q[0])
+    names = ["location.C.EX0C", "location.C.EY0C"]
+    # the model at the truth reads the readings (both fitted and held parameters)
+    estimate = fit(MACHINE, obs, names, prior={"workpiece.x": 5e-6, "tool.z": 4e-6})
+    assert estimate.values == pytest.approx([3e-6, -2e-6], abs=1e-12)
+    # a constant offset is not seen: without it in the prior the fit is the same
+    again = fit(MACHINE, obs, names, prior={"tool.z": 4e-6})
+    assert again.values == pytest.approx([3e-6, -2e-6], abs=1e-12)
+    # read as absolute displacements, the same numbers would be misread
+    absolute = fit(MACHINE, observations(Q_ALL, U, readings, SIGMA), names)
+    assert abs(absolute.values[0] - 3e-6) > 1e-7
+
+
+def test_zeroed_readings_cannot_see_the_workpiece_offset_that_absolute_ones_do():
+    names = ["workpiece.x", "workpiece.y", "workpiece.z", "location.C.EX0C"]
+    absolute = plan_quality(MACHINE, Q_ALL, "tool_tip", U, names, SIGMA)
+    assert absolute.rank == 4
+    zeroed = plan_quality(MACHINE, Q_ALL, "tool_tip", U, names, SIGMA, zero_at=Q[0])
+    # the workpiece's offset moves every reading alike: it drops out of each difference
+    assert zeroed.rank == 1
+    assert {"workpiece.x", "workpiece.y", "workpiece.z"} <= set(
+        str(x) for x in zeroed.unidentifiable)
+    # C's location offset turns with C: the differences still carry it
+    assert np.isfinite(zeroed.std[3])
+
+
+def test_zero_at_is_checked_and_kept_through_batches():
+    obs = Observations(Q_ALL[:3], [0.0, 0.0, 0.0], np.eye(3), SIGMA, zero_at=Q[0])
+    assert obs.zeroed.all() and np.array_equal(obs.zero_at[1], Q[0])
+    mixed = Observations.of([obs, observations(Q[1], np.eye(3)[0], 0.0, SIGMA)])
+    assert mixed.zeroed.tolist() == [True, True, True, False]
+    assert mixed[0].zero_at.tolist() == Q[0].tolist() and mixed[3].zero_at is None
+    with pytest.raises(InputError, match="zero_at of shape"):
+        Observations(Q_ALL[:3], 0.0, np.eye(3), SIGMA, zero_at=np.zeros(4))
+    with pytest.raises(InputError, match="or all NaN for a reading not zeroed"):
+        Observations(Q_ALL[:1], 0.0, np.eye(3)[0], SIGMA,
+                     zero_at=[0.0, np.nan, 0.0, 0.0, 0.0])
