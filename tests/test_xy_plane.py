@@ -233,3 +233,25 @@ def test_bad_curves_and_commands_are_refused():
     flat = Curve([-1.0, 1.0], [0.0, 0.0])
     with pytest.raises(MachineSimError):
         CompensationTable(XYPlaneMap(flat, flat, flat, flat, 0.0)).apply([1.0, 2.0])
+
+
+def test_a_diagonal_from_a_compensated_corner_an_ulp_off_is_read_not_refused():
+    # with these errors and seed 1 the compensated command at the diagonal's start differs
+    # from the corner's by 2.8e-17 m: that was taken as a move of zero length and refused
+    # ("Expected a diagonal of non-zero length"), ending the run
+    from machinesim.realism import Realism
+
+    errors = {"location": {"Y": {"EC0Y_urad": -15.0},
+                           "C": {"EX0C_um": -5.0, "EY0C_um": 4.0, "EA0C_urad": -3.0,
+                                 "EB0C_urad": 12.0}},
+              "component": {"X": {"position_mm": KNOTS,
+                                  "EXX_um": [-5.0, -4.0, -2.0, 0.0, 2.0, 4.0, 5.0],
+                                  "EYX_um": [0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0]},
+                            "Y": {"position_mm": KNOTS,
+                                  "EYY_um": [2.5, 2.0, 1.0, 0.0, -1.0, -2.0, -2.5]}}}
+    lab = machinesim.Lab("grooving_4axis", errors, seed=1, realism=Realism.lab())
+    result = run(XYPlaneErrors(), lab)
+    diagonal = result.figure("diagonal")
+    # the run ends, with micrometres before (6.48 um: squareness and scale errors) and
+    # within the paper's 1.44 um after (0.13 um)
+    assert diagonal.before > 1.0 and 0.0 <= diagonal.after < 1.44

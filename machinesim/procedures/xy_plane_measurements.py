@@ -41,6 +41,7 @@ from machinesim.metrology.iso230 import (
     iso230_2_targets,
     squareness_from_diagonals,
 )
+from machinesim.tolerances import POSE_M
 
 __all__ = ["BEAM_FRAME", "BEAM_Z", "DIAGONALS", "PLATE", "XYPlaneMeasurements",
            "measure_xy_plane"]
@@ -250,7 +251,10 @@ class _Reader:
             # A straight move from the compensated corner along the nominal diagonal to the
             # point m nearest the compensated target, then the micrometre rest q - m.
             step = float(np.dot(q[i, :2] - qc[:2], u))
-            if step <= 0.0:
+            # at the corner itself the compensated command can differ from the corner's by
+            # an ulp (1e-17 m): a move that short is no move (it was read as one of zero
+            # length and refused)
+            if step <= POSE_M:
                 out[i] = float(np.dot(q[i, :2] - qc[:2], u)) - s[i]
                 continue
             m = qc[:2] + step * u
