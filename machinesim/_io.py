@@ -9,6 +9,7 @@ line, the Python API raises it.
 from __future__ import annotations
 
 import argparse
+import errno
 import hashlib
 import json
 import math
@@ -154,12 +155,24 @@ def _stage(path: Path, raw: bytes) -> str:
 
 def _write_error(path: Path, exc: OSError) -> FileError:
     folder = path.parent
-    if not folder.is_dir():
-        reason = "is not a folder" if folder.exists() else "does not exist"
+    if exc.errno == errno.ENAMETOOLONG:
+        return FileError(f"cannot write: the file name is longer than this file system allows "
+                         f"({_name_max(folder)} bytes)", source=str(path))
+    if not _asks(folder.is_dir):
+        reason = "is not a folder" if _asks(folder.exists) else "does not exist"
         return FileError(f"cannot write: the folder {str(folder)!r} {reason}", source=str(path))
-    if path.is_dir():
+    if _asks(path.is_dir):
         return FileError("cannot write: it is a folder; expected a file name", source=str(path))
     return FileError(f"cannot write: {_reason(exc)}", source=str(path))
+
+
+def _asks(question) -> bool:
+    """``question()``, False when the file system cannot answer it (a name too long, no
+    permission): the message then falls back to the error's own reason."""
+    try:
+        return question()
+    except OSError:
+        return False
 
 
 def _on_ctrl_c(signum, frame):
@@ -193,8 +206,15 @@ def ctrl_c_remembered() -> Iterator[None]:
         _ctrl_c_seen = False
 
 
-def _raw(data: bytes | str, encoding: str) -> bytes:
-    return data.encode(encoding) if isinstance(data, str) else bytes(data)
+def _raw(path, data: bytes | str, encoding: str) -> bytes:
+    """The bytes to write: ``data`` encoded when text; bytes-like data as it is. Anything else
+    is refused (``bytes(3)`` would write three NUL bytes)."""
+    if isinstance(data, str):
+        return data.encode(encoding)
+    if isinstance(data, bytes | bytearray | memoryview):
+        return bytes(data)
+    raise InputError(f"Expected the data to write as str or bytes, got "
+                     f"{type(data).__name__}", source=str(path))
 
 
 def write_atomic(path, data: bytes | str, encoding: str = "utf-8") -> None:
@@ -232,7 +252,7 @@ def write_together(items: Iterable[tuple[object, bytes | str]], encoding: str = 
     InputError
         Naming the path whose write failed.
     """
-    plan = [(Path(path), _raw(data, encoding)) for path, data in items]
+    plan = [(Path(path), _raw(path, data, encoding)) for path, data in items]
     if len({os.path.abspath(p) for p, _ in plan}) != len(plan):
         raise InputError("the same file is named twice as an output: "
                          + ", ".join(str(p) for p, _ in plan), source=str(plan[0][0]))

@@ -309,10 +309,13 @@ class Lab:
         ``pretravel``, ``ball_form``); the ball moves through the lab's erroneous kinematics.
         With ``realism.probe_pretravel`` / ``probe_ball_form`` the lab gives the probe a drawn
         lobing and ball form (`machinesim.realism.PROBE`) unless ``options`` name their own.
+        The lab sets the machine, its errors, ``noise`` and ``rng`` itself: an option naming
+        one of them, or one the probe does not take, is an InputError.
         """
         from machinesim.metrology import TouchProbe
 
         kind = "touch_probe"
+        _check_options(TouchProbe, kind, options, ("machine", "errors", "part"))
         label = self._label(kind, label)
         drawn, stated = {}, {}
         if self.realism.probe_pretravel and "pretravel" not in options:
@@ -332,11 +335,13 @@ class Lab:
         """A laser interferometer on the machine (`machinesim.metrology.LaserInterferometer`).
 
         With ``realism.registration`` its beam is misaligned by a drawn pair of angles
-        (`machinesim.realism.PROBE`), unless ``options`` give ``alignment``.
+        (`machinesim.realism.PROBE`), unless ``options`` give ``alignment``. The lab sets the
+        machine, its errors, ``noise`` and ``rng`` itself (InputError if ``options`` do).
         """
         from machinesim.metrology import LaserInterferometer
 
         kind = "laser_interferometer"
+        _check_options(LaserInterferometer, kind, options, ("machine", "errors"))
         label = self._label(kind, label)
         drawn = {}
         if self.realism.registration and "alignment" not in options:
@@ -365,10 +370,12 @@ class Lab:
 
     def r_test(self, *, label: str | None = None, **options):
         """An R-test (ISO 10791-6, `machinesim.metrology.RTest`): a ball on the tool side read
-        by three displacement sensors on the table, for the machine's kinematics."""
+        by three displacement sensors on the table, for the machine's kinematics. The lab sets
+        the machine, its errors, ``noise`` and ``rng`` itself (InputError if ``options`` do)."""
         from machinesim.metrology import RTest
 
         kind = "r_test"
+        _check_options(RTest, kind, options, ("machine", "errors"))
         label = self._label(kind, label)
         return RTest(self.machine, self.__truth, noise=self.noise,
                      rng=stream(self.seed, kind, label), **options)
@@ -380,7 +387,9 @@ class Lab:
 
         ``objective`` (a `machinesim.realism.Objective`, e.g. ``OBJECTIVE_10X``): read
         through it instead of the default 50x: its spot (with lateral resolution), height
-        noise and pixel pitch as the sample spacing."""
+        noise and pixel pitch as the sample spacing. The lab sets ``noise`` and ``rng``
+        itself (InputError if ``options`` do, or name an option the microscope does not
+        take)."""
         from machinesim.metrology import Microscope
 
         defaults = _realism.MICROSCOPE
@@ -441,6 +450,7 @@ class Lab:
     # ---------------------------------------------------------------------------- internals
 
     def _optical(self, cls, kind: str, defaults, label, options):
+        _check_options(cls, kind, options)
         label = self._label(kind, label)
         drawn, given = {}, {}
         if self.realism.lateral_resolution and "spot" not in options:
@@ -473,6 +483,35 @@ class Lab:
             raise InputError(f"Expected a label as a non-empty string, got {label!r}",
                              key="label")
         return label
+
+
+#: What the lab sets on every instrument it hands out, and why (`_check_options`).
+_LAB_SETS = {
+    "noise": "from the lab's noise switch (Lab(noise=...) or its realism)",
+    "rng": "from the lab's seed and the instrument's label; give label= for another stream",
+    "machine": "the lab's own machine",
+    "errors": "the lab's hidden errors, which no instrument is handed",
+    "part": "the part given as the first argument",
+}
+
+
+def _check_options(cls, kind: str, options, also: tuple[str, ...] = ()) -> None:
+    """Refuse an option the lab sets itself (``noise``, ``rng`` and ``also``) or one that
+    ``cls`` does not take, naming it and listing those it does take."""
+    import inspect
+
+    sets = ("noise", "rng", *also)
+    what = kind.replace("_", " ")
+    taken = [name for name, p in inspect.signature(cls).parameters.items()
+             if name not in sets and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    for name in options:
+        if name in sets:
+            raise InputError(f"the lab sets the {what}'s {name} itself ({_LAB_SETS[name]}); "
+                             f"leave {name!r} out. Options it takes: {', '.join(taken)}",
+                             key=name)
+        if name not in taken:
+            raise InputError(f"{cls.__name__} has no option {name!r}; the {what} takes "
+                             f"{', '.join(taken)} (and label)", key=name)
 
 
 #: The axis letters an `AxisServo`'s ``name`` is checked against (`_check_servo`).

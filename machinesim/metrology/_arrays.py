@@ -1,6 +1,16 @@
-"""Checks shared by the feature fits: height maps, point sets, regular grids, read-only results."""
+"""Checks shared by the metrology modules: numbers, arrays, height maps, point sets, regular
+grids, read-only results.
+
+Every number and array an instrument or a fit takes goes through `as_number`, `as_flag` or
+`as_floats`: a real number (int, float, numpy scalar) or an array of them, never a string
+(``sigma="1"`` would otherwise be read as 1 m while ``sigma="12nm"`` is refused), a bool
+(``True`` as 1 m) or None; anything else is an `InputError` naming the argument.
+"""
 
 from __future__ import annotations
+
+import math
+import numbers
 
 import numpy as np
 
@@ -11,16 +21,79 @@ from machinesim.exceptions import InputError
 #: fraction of a spacing of the arithmetic progression: 1 pm at a 1 um spacing, far below any
 #: lateral resolution, while linspace grids (~1e-13) pass.
 REGULAR_GRID = 1e-6
+#: The signs `as_number` checks.
+_SIGNS = {"any": None, ">= 0": lambda v: v >= 0.0, "> 0": lambda v: v > 0.0}
 
 
+def shown(value, width: int = 60) -> str:
+    """``repr(value)`` cut to ``width`` characters (an array may be long)."""
+    text = repr(value)
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
+def as_number(value, name: str, *, sign: str = "any", unit: str = "m",
+              limit: float | None = None, why: str = "") -> float:
+    """``value`` as a finite float, or an InputError naming ``name``, the value and the want.
+
+    Parameters
+    ----------
+    value : int, float or numpy scalar (or 0-d numeric array)
+        A str (even ``"1"``), a bool, None or a sequence is refused, not converted.
+    name : str
+        The argument, for the message.
+    sign : {"any", ">= 0", "> 0"}
+        What the value must be.
+    unit : str
+        For the message (``"m"``, ``"rad"``, ...).
+    limit : float, optional
+        Largest value accepted; ``why`` (a phrase) says where that bound comes from.
+    """
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+        value = value.item()
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        raise InputError(f"Expected {name} as a number ({unit}), got {shown(value)}",
+                         key=name)
+    number = float(value)
+    check = _SIGNS[sign]
+    if not math.isfinite(number) or (check is not None and not check(number)):
+        want = f"a finite {name}" if check is None else f"{name} {sign}"
+        raise InputError(f"Expected {want} ({unit}), got {number!r}", key=name)
+    if limit is not None and number > limit:
+        raise InputError(f"Expected {name} <= {limit:g} {unit}{why}, got {number!r}",
+                         key=name)
+    return number
+
+
+def as_flag(value, name: str) -> bool:
+    """``value`` as a bool: True or False only (``"no"`` would otherwise count as True)."""
+    if not isinstance(value, bool | np.bool_):
+        raise InputError(f"Expected {name} as True or False, got {shown(value)}", key=name)
+    return bool(value)
+
+
+def as_floats(value, name: str, what: str = "numbers (m)") -> np.ndarray:
+    """``value`` as a float64 array (a copy) of any shape, or an InputError naming ``name``.
+
+    Numbers only: text (``"abc"``, ``["1", "2"]``), booleans, None and ragged nesting are
+    refused, not converted. NaN and infinity pass: the caller decides on them.
+    """
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError) as error:  # ragged nesting
+        raise InputError(f"Expected {name} as {what} in a regular (non-ragged) array, got "
+                         f"{shown(value)}", key=name) from error
+    kind = array.dtype.kind
+    if kind == "O" and all(isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
+                           for v in array.flat):
+        kind = "f"
+    if kind not in "iuf":
+        raise InputError(f"Expected {name} as {what}, got {shown(value)}", key=name)
+    return np.array(array, dtype=np.float64)
 
 
 def point_rows(points, width: int, name: str) -> np.ndarray:
     """Points as a float64 (N, width) copy without the rows that hold NaN."""
-    try:
-        points = np.array(points, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} as numbers (m), got {points!r}", key=name) from error
+    points = as_floats(points, name)
     if points.ndim != 2 or points.shape[1] != width:
         raise InputError(f"Expected {name} with shape (N, {width}), got {points.shape}", key=name)
     if np.isinf(points).any():
@@ -30,12 +103,7 @@ def point_rows(points, width: int, name: str) -> np.ndarray:
 
 def map_arrays(x, y, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A height map as float64 copies: increasing axes x (nx,), y (ny,); z (ny, nx) or NaN."""
-    try:
-        x = np.array(x, dtype=np.float64)
-        y = np.array(y, dtype=np.float64)
-        z = np.array(z, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected x, y and z as numbers (m): {error}") from error
+    x, y, z = (as_floats(value, name) for value, name in ((x, "x"), (y, "y"), (z, "z")))
     if x.ndim != 1 or y.ndim != 1 or z.shape != (y.size, x.size):
         raise InputError(f"Expected x (nx,), y (ny,) and z (ny, nx), got {x.shape}, {y.shape} "
                          f"and {z.shape}")
@@ -49,11 +117,7 @@ def map_arrays(x, y, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def profile_arrays(s, z, minimum: int) -> tuple[np.ndarray, np.ndarray]:
     """A profile's seen samples as float64 copies: s strictly increasing, NaN heights left out."""
-    try:
-        s = np.array(s, dtype=np.float64)
-        z = np.array(z, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected s and z as numbers (m): {error}") from error
+    s, z = as_floats(s, "s"), as_floats(z, "z")
     if s.ndim != 1 or s.shape != z.shape:
         raise InputError(f"Expected s and z of the same shape (k,), got {s.shape} and {z.shape}")
     if not np.isfinite(s).all() or np.any(np.diff(s) <= 0.0):

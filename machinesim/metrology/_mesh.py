@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_floats, as_number, shown
 
 
 def mesh_arrays(surface) -> tuple[np.ndarray, np.ndarray]:
@@ -37,8 +38,12 @@ def mesh_arrays(surface) -> tuple[np.ndarray, np.ndarray]:
             "Expected a Part, a MeshIndex or a (vertices, triangles) tuple, "
             f"got {type(surface).__name__}"
         )
-    vertices = np.asarray(vertices)
-    triangles = np.asarray(triangles)
+    try:
+        vertices = np.asarray(vertices)
+        triangles = np.asarray(triangles)
+    except (TypeError, ValueError) as error:  # ragged nesting
+        raise InputError(f"Expected vertices (n, 3) and triangles (m, 3) as regular arrays, "
+                         f"got {shown(vertices)} and {shown(triangles)}") from error
     if vertices.ndim != 2 or vertices.shape[1] != 3:
         raise InputError(f"Expected vertices with shape (n, 3), got {vertices.shape}")
     if vertices.dtype != np.float64:
@@ -61,10 +66,7 @@ def mesh_arrays(surface) -> tuple[np.ndarray, np.ndarray]:
 
 def as_vector(value, length: int, name: str) -> np.ndarray:
     """A finite float64 copy of ``value`` with shape (``length``,), or an InputError naming it."""
-    try:
-        array = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} as {length} numbers, got {value!r}", key=name) from error
+    array = as_floats(value, name, f"{length} numbers")
     if array.shape != (length,):
         raise InputError(f"Expected {name} with shape ({length},), got {array.shape}", key=name)
     if not np.isfinite(array).all():
@@ -74,10 +76,4 @@ def as_vector(value, length: int, name: str) -> np.ndarray:
 
 def as_positive(value, name: str) -> float:
     """``value`` as a float when finite and > 0, else an InputError naming it."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} as a number (m), got {value!r}", key=name) from error
-    if not np.isfinite(number) or number <= 0.0:
-        raise InputError(f"Expected {name} > 0 (m), got {number}", key=name)
-    return number
+    return as_number(value, name, sign="> 0")

@@ -15,7 +15,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.exceptions import InputError
-from machinesim.metrology._arrays import frozen, map_arrays, point_rows, regular_step
+from machinesim.metrology._arrays import (
+    as_flag,
+    as_floats,
+    as_number,
+    frozen,
+    map_arrays,
+    point_rows,
+    regular_step,
+    shown,
+)
 from machinesim.units import M_PER_UM
 
 __all__ = [
@@ -40,6 +49,9 @@ MAX_ITERATIONS = 100
 #: truncation ~1e-12 and round-off ~eps / 1e-6 = 2e-10 relative. The gradient only steers
 #: Gauss-Newton: where the residual vanishes the fixed point is exact whatever its error.
 GRADIENT_STEP = 1e-6
+#: Shortest L-filter cut-off of `roughness_sa`, in sample spacings: the Nyquist wavelength,
+#: the shortest a sampled grid holds; a Gaussian high-pass below it passes nothing.
+MIN_CUTOFF_SPACINGS = 2.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,8 +151,8 @@ def fit_sphere(points, radius: float | None = None) -> SphereFit:
     minimum = 4 if radius is None else 3
     if len(points) < minimum:
         raise InputError(f"Expected at least {minimum} points on the sphere, got {len(points)}")
-    if radius is not None and (not math.isfinite(radius) or radius <= 0.0):
-        raise InputError(f"Expected radius > 0 (m), got {radius!r}", key="radius")
+    if radius is not None:
+        radius = as_number(radius, "radius", sign="> 0")
     origin = points.mean(axis=0)
     local = points - origin
     size = float(np.abs(local).max())
@@ -199,16 +211,13 @@ def sphere_centre_from_touch(xy, z_touch: float, radius: float, *, probe_radius:
     ndarray, shape (3,), read-only
         The centre, m.
     """
-    xy = np.array(xy, dtype=np.float64).reshape(-1)
+    xy = as_floats(xy, "xy", "two numbers (m)").reshape(-1)
     if xy.shape != (2,) or not np.isfinite(xy).all():
         raise InputError(f"Expected xy as two finite numbers (m), got {xy!r}", key="xy")
-    if not math.isfinite(radius) or radius <= 0.0:
-        raise InputError(f"Expected radius > 0 (m), got {radius!r}", key="radius")
-    if not math.isfinite(probe_radius) or probe_radius < 0.0:
-        raise InputError(f"Expected probe_radius >= 0 (m), got {probe_radius!r}",
-                         key="probe_radius")
-    if not math.isfinite(z_touch):
-        raise InputError(f"Expected a finite z_touch (m), got {z_touch!r}", key="z_touch")
+    z_touch = as_number(z_touch, "z_touch")
+    radius = as_number(radius, "radius", sign="> 0")
+    probe_radius = as_number(probe_radius, "probe_radius", sign=">= 0")
+    concave = as_flag(concave, "concave")
     surface = z_touch - probe_radius
     return frozen([xy[0], xy[1], surface + radius if concave else surface - radius])
 
@@ -236,6 +245,10 @@ def fit_plane(points) -> PlaneFit:
 
 def plane_angle(first: PlaneFit, second: PlaneFit) -> float:
     """Angle between two planes (rad), in [0, pi/2]: e.g. a side face against the bottom face."""
+    for name, plane in (("first", first), ("second", second)):
+        if not isinstance(plane, PlaneFit):
+            raise InputError(f"Expected {name} as a PlaneFit (from fit_plane), got "
+                             f"{shown(plane)}", key=name)
     n1, n2 = first.normal, second.normal
     return math.atan2(float(np.linalg.norm(np.cross(n1, n2))), abs(float(n1 @ n2)))
 
@@ -271,6 +284,10 @@ def form_error(x, y, z, nominal, *, shift: bool = False) -> FormError:
         Also fit a rigid xy shift.
     """
     x, y, z = map_arrays(x, y, z)
+    if not callable(nominal):
+        raise InputError(f"Expected nominal as a function nominal(X, Y) -> Z (m), got "
+                         f"{shown(nominal)}", key="nominal")
+    shift = as_flag(shift, "shift")
     grid_x, grid_y = np.meshgrid(x, y)
     seen = ~np.isnan(z)
     if np.count_nonzero(seen) < (5 if shift else 3) or x.size < 2 or y.size < 2:
@@ -344,7 +361,9 @@ def roughness_sa(x, y, z, *, l_cutoff: float | None = None) -> float:
     z : array-like, shape (ny, nx)
         Heights, m.
     l_cutoff : float, optional
-        The L-filter's cut-off wavelength, m.
+        The L-filter's cut-off wavelength, m; at least `MIN_CUTOFF_SPACINGS` sample spacings
+        (of the finer axis): no wavelength on the grid is shorter than two spacings, so a
+        high-pass below that would leave nothing and read Sa = 0.
     """
     from surfalize import Surface
 
@@ -354,6 +373,14 @@ def roughness_sa(x, y, z, *, l_cutoff: float | None = None) -> float:
     missing = np.isnan(z)
     if np.count_nonzero(~missing) < 3:
         raise InputError("Expected at least three measured samples for Sa", key="z")
+    if l_cutoff is not None:
+        l_cutoff = as_number(l_cutoff, "l_cutoff", sign="> 0")
+        shortest = MIN_CUTOFF_SPACINGS * min(step_x, step_y)
+        if l_cutoff < shortest:
+            raise InputError(f"Expected l_cutoff >= {MIN_CUTOFF_SPACINGS:g} sample spacings "
+                             f"({shortest:.4g} m, the shortest wavelength the grid holds), got "
+                             f"{l_cutoff!r} m: the L-filter would leave nothing (Sa = 0)",
+                             key="l_cutoff")
     with warnings.catch_warnings():
         # surfalize warns for unequal steps; levelling and Sa do not depend on them.
         warnings.filterwarnings("ignore", message=".*different pixel size.*")
@@ -364,11 +391,7 @@ def roughness_sa(x, y, z, *, l_cutoff: float | None = None) -> float:
             if missing.any():
                 raise InputError("Expected a map without NaN samples for an L-filtered Sa",
                                  key="z")
-            cutoff = float(l_cutoff)
-            if not (cutoff > 0.0) or not np.isfinite(cutoff):
-                raise InputError(f"Expected l_cutoff > 0 (m), got {l_cutoff!r}",
-                                 key="l_cutoff")
-            surface = surface.filter("highpass", cutoff / M_PER_UM)
+            surface = surface.filter("highpass", l_cutoff / M_PER_UM)
     return float(surface.Sa()) * M_PER_UM
 
 

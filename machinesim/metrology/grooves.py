@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.exceptions import InputError
-from machinesim.metrology._arrays import frozen, profile_arrays
+from machinesim.metrology._arrays import as_floats, as_number, frozen, profile_arrays
 
 __all__ = ["Pitch", "VGroove", "fit_v_groove", "fit_v_grooves", "groove_pitch"]
 
@@ -167,8 +167,8 @@ def fit_v_grooves(s, z, *, threshold: float | None = None,
     if threshold is None:
         threshold = max(DETECT_SIGMAS * noise + floor,
                         DETECT_FRACTION * max(0.0, -float(residual.min())))
-    elif not math.isfinite(threshold) or threshold <= 0.0:
-        raise InputError(f"Expected threshold > 0 (m), got {threshold!r}", key="threshold")
+    else:
+        threshold = as_number(threshold, "threshold", sign="> 0")
     runs = _groove_runs(residual, threshold)
     # A groove cut by an end of the profile bounds the land beside it but is not fitted.
     lead = s[runs[0][1]] if runs and runs[0][0] == 0 else -np.inf
@@ -220,7 +220,7 @@ def groove_pitch(centres) -> Pitch:
     centres : array-like, shape (count,)
         Groove centres along a profile, m, strictly increasing, count >= 2.
     """
-    centres = np.array(centres, dtype=np.float64)
+    centres = as_floats(centres, "centres")
     if centres.ndim != 1 or centres.size < 2 or not np.isfinite(centres).all():
         raise InputError(f"Expected at least two finite centres, got {centres!r}", key="centres")
     spacings = np.diff(centres)

@@ -26,7 +26,9 @@ import numpy as np
 from numpy.polynomial import hermite, legendre
 
 from machinesim.arrays import frozen
-from machinesim.exceptions import InputError, check_length
+from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_floats, as_number, shown
+from machinesim.metrology.instruments import OPTICAL_LIMIT
 from machinesim.metrology.surface import _finish, _Line, _zbuffer, height_map
 from machinesim.tolerances import LINE_MARGIN
 
@@ -54,8 +56,9 @@ class Spot:
     Parameters
     ----------
     width : float
-        m, > 0: the full width at half maximum of a ``"gaussian"`` spot (round), or the side
-        of a ``"tophat"`` (a square pixel aligned with the instrument's x and y).
+        m, > 0 and at most `machinesim.metrology.instruments.OPTICAL_LIMIT` (1 mm): the full
+        width at half maximum of a ``"gaussian"`` spot (round), or the side of a ``"tophat"``
+        (a square pixel aligned with the instrument's x and y).
     shape : {"gaussian", "tophat"}
     samples : int
         Points per axis of the sub-grid that stands for the spot (>= 1); the reading is the
@@ -76,7 +79,9 @@ class Spot:
     samples: int = 5
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "width", check_length(self.width, "width", positive=True))
+        object.__setattr__(self, "width", as_number(
+            self.width, "width", sign="> 0", limit=OPTICAL_LIMIT,
+            why=" (OPTICAL_LIMIT: the widest field of view modelled)"))
         if self.shape not in SPOT_SHAPES:
             raise InputError(f"Expected a spot shape in {SPOT_SHAPES}, got {self.shape!r}",
                              key="shape")
@@ -119,8 +124,10 @@ class RegistrationScatter:
     tilt: float
 
     def __post_init__(self) -> None:
-        for name in ("offset_xy", "offset_z", "rotation", "tilt"):
-            object.__setattr__(self, name, check_length(getattr(self, name), name))
+        for name, unit in (("offset_xy", "m"), ("offset_z", "m"), ("rotation", "rad"),
+                           ("tilt", "rad")):
+            object.__setattr__(self, name, as_number(getattr(self, name), name, sign=">= 0",
+                                                     unit=unit))
 
 
 @dataclass(frozen=True, eq=False)
@@ -401,11 +408,8 @@ class _LineSamples(_Line):
 
 
 def _finite(value, shape: tuple, name: str) -> np.ndarray:
-    try:
-        array = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} as numbers, got {value!r}", key=name) from error
+    array = as_floats(value, name, "numbers")
     if array.shape != shape or not np.isfinite(array).all():
         raise InputError(f"Expected {name} as finite numbers of shape {shape}, got "
-                         f"{value!r}", key=name)
+                         f"{shown(value)}", key=name)
     return frozen(array)

@@ -16,9 +16,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from machinesim.exceptions import InputError, check_length
+from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_flag, as_number, shown
 
-__all__ = ["Readout", "as_generator", "motion_of"]
+__all__ = ["OPTICAL_LIMIT", "Readout", "as_generator", "as_machine", "motion_of"]
+
+#: Largest height noise ``sigma``, display ``resolution``, spot width, ``lateral_sigma`` and
+#: ``stage_sigma`` an optical instrument (`Microscope`, `WhiteLightInterferometer`) takes, m.
+#: 1 mm is the field of view of the widest objective modelled (the 10x's 1.35 mm x 1.01 mm,
+#: `machinesim.realism.OBJECTIVE_10X`) and 10^5 times the coarsest height noise of the
+#: objectives (0.18 um): a spot, a scatter or a noise larger than that reads nothing of the
+#: surface in view (a unit slip, mm or um given as m), and a noise of 1e300 m would turn every
+#: height to infinity.
+OPTICAL_LIMIT = 1e-3
 
 
 @dataclass(frozen=True)
@@ -45,13 +55,16 @@ class Readout:
 
     def __post_init__(self) -> None:
         for name in ("sigma", "resolution"):
-            number = check_length(getattr(self, name), name)
+            number = as_number(getattr(self, name), name, sign=">= 0")
             object.__setattr__(self, name, number)
 
     @classmethod
     def of(cls, sigma: float, resolution: float, noise: bool) -> Readout:
-        """The readout of an instrument built with ``noise=False`` (sigma ignored) or True."""
-        return cls(sigma if noise else 0.0, resolution)
+        """The readout of an instrument built with ``noise=False`` (sigma ignored) or True.
+
+        ``sigma`` is checked either way, and ``noise`` must be a bool."""
+        sigma = cls(sigma, resolution).sigma
+        return cls(sigma if as_flag(noise, "noise") else 0.0, resolution)
 
     @property
     def std(self) -> float:
@@ -92,10 +105,34 @@ def as_generator(rng) -> np.random.Generator:
     """
     if isinstance(rng, np.random.Generator):
         return rng
-    if rng is None or (isinstance(rng, int | np.integer) and not isinstance(rng, bool)):
+    if rng is None or (isinstance(rng, int | np.integer) and not isinstance(rng, bool)
+                       and rng >= 0):
         return np.random.default_rng(rng)
-    raise InputError(f"Expected rng as a numpy Generator, an int seed or None, got {rng!r}",
-                     key="rng")
+    raise InputError(f"Expected rng as a numpy Generator, a non-negative int seed or None, got "
+                     f"{shown(rng)}", key="rng")
+
+
+def as_machine(machine):
+    """The machine an instrument stands on: a `machinesim.machines.Machine` as it is, or the
+    name of a shipped one (or a URDF path) loaded with `machinesim.load_machine`.
+
+    Raises
+    ------
+    ModelError
+        For an unknown name or a bad URDF (from `load_machine`).
+    InputError
+        For anything else.
+    """
+    from pathlib import PurePath
+
+    from machinesim.machines import Machine, load_machine
+
+    if isinstance(machine, Machine):
+        return machine
+    if isinstance(machine, str | PurePath):
+        return load_machine(machine)
+    raise InputError(f"Expected machine as a Machine or the name of a shipped one (e.g. "
+                     f"'robonano_a0ib'), got {shown(machine)}", key="machine")
 
 
 def motion_of(machine, errors, frame: str | None = None):

@@ -40,7 +40,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.exceptions import AxisLimitError, InputError
-from machinesim.metrology.instruments import Readout, as_generator, motion_of
+from machinesim.metrology._arrays import as_floats, as_number, shown
+from machinesim.metrology.instruments import Readout, as_generator, as_machine, motion_of
 
 __all__ = ["InterferometerReading", "LaserInterferometer", "squareness_from_diagonal"]
 
@@ -70,8 +71,8 @@ class LaserInterferometer:
 
     Parameters
     ----------
-    machine : Machine
-        The machine under test.
+    machine : Machine or str
+        The machine under test, or the name of a shipped one (`machinesim.load_machine`).
     errors : ErrorModel or None
         Its injected errors: only the machine's kinematics reads them; the interferometer
         keeps no attribute that returns them.
@@ -98,7 +99,7 @@ class LaserInterferometer:
     def __init__(self, machine, errors=None, sigma: float = 2e-9, resolution: float = 1e-9,
                  *, noise: bool = True, rng=None, frame: str = "tool_tip",
                  alignment=None) -> None:
-        self.machine = machine
+        self.machine = machine = as_machine(machine)
         self._pose = motion_of(machine, errors, frame)
         self.frame = frame
         self.readout = Readout.of(sigma, resolution, noise)
@@ -132,7 +133,7 @@ class LaserInterferometer:
         """
         k = self._linear(axis, "axis")
         x = _positions(positions)
-        x_ref = x[0] if reference is None else _number(reference, "reference")
+        x_ref = x[0] if reference is None else as_number(reference, "reference")
         q = self._commands(self._base(base), {axis: np.append(x, x_ref)})
         displacement = self._displacement(q, _unit(k))
         return _reading(x, self.readout.read(displacement, self._rng) - (x - x_ref))
@@ -292,7 +293,7 @@ def squareness_from_diagonal(measured_length: float, x_span: float, y_span: floa
     float
         The squareness error of Y to X, rad (positive: Y tilted towards -X).
     """
-    a, b, pd = (_number(v, n) for v, n in ((x_span, "x_span"), (y_span, "y_span"),
+    a, b, pd = (as_number(v, n) for v, n in ((x_span, "x_span"), (y_span, "y_span"),
                                            (measured_length, "measured_length")))
     if a == 0.0 or b == 0.0:
         raise InputError(f"Expected non-zero spans, got x_span={a}, y_span={b}", key="x_span")
@@ -328,36 +329,19 @@ def _direction_index(direction) -> int:
     return "XYZ".index(direction)
 
 
-def _number(value, name: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} as a number (m), got {value!r}", key=name) from error
-    if not np.isfinite(number):
-        raise InputError(f"Expected a finite {name}, got {number}", key=name)
-    return number
-
-
 def _vector(value, length: int, name: str) -> np.ndarray:
-    try:
-        array = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} as {length} numbers, got {value!r}",
-                         key=name) from error
+    array = as_floats(value, name, f"{length} numbers")
     if array.shape != (length,) or not np.isfinite(array).all():
-        raise InputError(f"Expected {name} as {length} finite numbers, got {value!r}", key=name)
+        raise InputError(f"Expected {name} as {length} finite numbers, got {shown(value)}",
+                         key=name)
     return array
 
 
 def _positions(values, least: int = 1) -> np.ndarray:
-    try:
-        x = np.array(values, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected positions as numbers (m), got {values!r}",
-                         key="positions") from error
+    x = as_floats(values, "positions")
     if x.ndim != 1 or x.size < least or not np.isfinite(x).all():
         raise InputError(f"Expected at least {least} finite positions of shape (N,), got "
-                         f"{values!r}", key="positions")
+                         f"{shown(values)}", key="positions")
     if least >= 2 and np.ptp(x) == 0.0:
         raise InputError("Expected positions that span a distance, got all equal",
                          key="positions")

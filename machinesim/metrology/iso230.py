@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_floats, as_number
 
 __all__ = ["PositioningEvaluation", "evaluate_positioning", "iso230_2_targets",
            "positioning_test", "squareness_from_diagonals"]
@@ -163,8 +164,8 @@ def iso230_2_targets(start: float, end: float, count: int | None = None,
     rng : numpy.random.Generator or int or None
         Source of the offsets ``r_i``; ``None`` gives the uniform spacing (no offsets).
     """
-    a, b = float(start), float(end)
-    if not (math.isfinite(a) and math.isfinite(b) and b > a):
+    a, b = as_number(start, "start"), as_number(end, "end")
+    if not b > a:
         raise InputError(f"Expected a travel start < end (m), got {start!r}, {end!r}",
                          key="end")
     minimum = max(5, math.ceil(5.0 * (b - a)) + 1)
@@ -242,22 +243,19 @@ def squareness_from_diagonals(deviation_same: float, deviation_opposite: float,
     x_span, y_span : float
         The rectangle's sides, m (positive).
     """
-    a, b = abs(_scalar(x_span, "x_span")), abs(_scalar(y_span, "y_span"))
+    a, b = abs(as_number(x_span, "x_span")), abs(as_number(y_span, "y_span"))
     if a == 0.0 or b == 0.0:
         raise InputError(f"Expected non-zero spans, got x_span={x_span}, y_span={y_span}",
                          key="x_span")
-    same = _scalar(deviation_same, "deviation_same")
-    opposite = _scalar(deviation_opposite, "deviation_opposite")
+    same = as_number(deviation_same, "deviation_same")
+    opposite = as_number(deviation_opposite, "deviation_opposite")
     return (opposite - same) * math.hypot(a, b) / (2.0 * a * b)
 
 
 # -------------------------------------------------------------------------------- helpers
 
 def _array(value, name: str, ndim: int) -> np.ndarray:
-    try:
-        array = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} as numbers (m), got {value!r}", key=name) from error
+    array = as_floats(value, name)
     if array.ndim != ndim or not np.isfinite(array).all():
         raise InputError(f"Expected {name} as a finite {ndim}-D array, got shape "
                          f"{array.shape}", key=name)
@@ -270,16 +268,6 @@ def _runs(value, m: int, name: str) -> np.ndarray:
         raise InputError(f"Expected {name} of shape (runs >= 2, {m} targets), got {x.shape}",
                          key=name)
     return x
-
-
-def _scalar(value, name: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} as a number, got {value!r}", key=name) from error
-    if not math.isfinite(number):
-        raise InputError(f"Expected a finite {name}, got {value!r}", key=name)
-    return number
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:

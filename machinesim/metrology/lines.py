@@ -14,7 +14,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.exceptions import InputError
-from machinesim.metrology._arrays import frozen, map_arrays, profile_arrays
+from machinesim.metrology._arrays import (
+    as_floats,
+    as_number,
+    frozen,
+    map_arrays,
+    profile_arrays,
+    shown,
+)
 from machinesim.metrology._mesh import as_vector
 
 __all__ = [
@@ -115,7 +122,7 @@ def profile_points(start, end, s) -> np.ndarray:
     length = float(np.hypot(*direction))
     if length == 0.0:
         raise InputError(f"Expected a profile of non-zero length, got start = end = {start}")
-    s = np.asarray(s, dtype=np.float64).reshape(-1)
+    s = as_floats(s, "s").reshape(-1)
     return start + s[:, None] * (direction / length)
 
 
@@ -142,6 +149,10 @@ def fit_line(points) -> Line2D:
 
 def intersect_lines(first: Line2D, second: Line2D) -> np.ndarray:
     """Intersection (x, y) of two lines in the plane, m; InputError when they are parallel."""
+    for name, line in (("first", first), ("second", second)):
+        if not isinstance(line, Line2D):
+            raise InputError(f"Expected {name} as a Line2D (from fit_line), got "
+                             f"{shown(line)}", key=name)
     d1, d2 = first.direction, second.direction
     cross = d1[0] * d2[1] - d1[1] * d2[0]
     if abs(cross) < PARALLEL_SINE:
@@ -192,6 +203,8 @@ def step_positions(s, z, level: float | None = None) -> np.ndarray:
     s, z = profile_arrays(s, z, 2)
     if level is None:
         level = 0.5 * (float(z.min()) + float(z.max()))
+    else:
+        level = as_number(level, "level")
     d = z - level
     cross = np.flatnonzero(((d[:-1] < 0.0) & (d[1:] >= 0.0)) | ((d[:-1] >= 0.0) & (d[1:] < 0.0)))
     fraction = d[cross] / (d[cross] - d[cross + 1])
@@ -232,6 +245,8 @@ def fit_parallel_edges(x, y, z, *, level: float | None = None, along: str = "x")
         raise InputError(f"Expected along 'x' or 'y', got {along!r}", key="along")
     if level is None:
         level = 0.5 * (float(np.nanmin(z)) + float(np.nanmax(z)))
+    else:
+        level = as_number(level, "level")
     scan, across, heights = (x, y, z) if along == "x" else (y, x, z.T)
     pairs = []
     for position, row in zip(across, heights, strict=True):
@@ -288,7 +303,7 @@ def fit_parallel_lines(first, second) -> tuple[Line2D, Line2D]:
 
 def _points(points, what: str) -> np.ndarray:
     """``points`` as a finite (k, 2) float64 array, k >= 2."""
-    points = np.array(points, dtype=np.float64)
+    points = as_floats(points, what)
     if points.ndim != 2 or points.shape[1] != 2 or points.shape[0] < 2:
         raise InputError(f"Expected {what} with shape (k, 2), k >= 2, got {points.shape}",
                          key=what)

@@ -38,7 +38,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.arrays import frozen
-from machinesim.exceptions import InputError, check_length
+from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_number
 from machinesim.metrology._mesh import as_positive, as_vector, mesh_arrays
 from machinesim.metrology.imperfections import (
     Registration,
@@ -47,8 +48,14 @@ from machinesim.metrology.imperfections import (
     line_heights,
     spot_heights,
 )
-from machinesim.metrology.instruments import Readout, as_generator
-from machinesim.metrology.surface import END_SLACK, height_map, profile
+from machinesim.metrology.instruments import OPTICAL_LIMIT, Readout, as_generator
+from machinesim.metrology.surface import (
+    END_SLACK,
+    check_samples,
+    height_map,
+    line_count,
+    profile,
+)
 
 __all__ = ["HeightMap", "Microscope", "Profile", "WhiteLightInterferometer"]
 
@@ -107,8 +114,9 @@ class _Profiler:
                  lateral_rng=None, registration: Registration | None = None,
                  stage_sigma: float = 0.0, stage_rng=None,
                  registration_scatter: RegistrationScatter | None = None) -> None:
+        sigma, resolution = _setting(sigma, "sigma"), _setting(resolution, "resolution")
         self.readout = Readout.of(sigma, resolution, noise)
-        self.stage_sigma = check_length(stage_sigma, "stage_sigma")
+        self.stage_sigma = _setting(stage_sigma, "stage_sigma")
         self._stage_rng = as_generator(stage_rng) if self.stage_sigma > 0.0 else None
         self._held = None  # the placement `placement` holds
         self.lateral_spacing = as_positive(lateral_spacing, "lateral_spacing")
@@ -119,7 +127,7 @@ class _Profiler:
             raise InputError(f"Expected registration as a Registration or None, got "
                              f"{type(registration).__name__}", key="registration")
         self.spot = spot
-        self.lateral_sigma = check_length(lateral_sigma, "lateral_sigma")
+        self.lateral_sigma = _setting(lateral_sigma, "lateral_sigma")
         self._lateral_rng = as_generator(lateral_rng) if self.lateral_sigma > 0.0 else None
         if registration_scatter is not None and not isinstance(registration_scatter,
                                                                RegistrationScatter):
@@ -161,7 +169,7 @@ class _Profiler:
         shift = self._stage_offset()  # where the stage really put this reading
         a, b = nominal[0] + shift, nominal[1] + shift
         if _is_field(part):
-            s = _line_samples(a, b, as_positive(spacing, "spacing"))
+            s = _line_samples(a, b, as_positive(spacing, "spacing"), 1)
             ds, across = self._jitter(len(s)), self._jitter(1)[0]
             along = (b - a) / np.hypot(*(b - a))
             points = a + (s + ds)[:, None] * along + across * np.array([-along[1], along[0]])
@@ -172,7 +180,8 @@ class _Profiler:
         if self.spot is None and self.lateral_sigma == 0.0:
             s, z = profile(surface, a, b, spacing)
         else:
-            s = _line_samples(a, b, as_positive(spacing, "spacing"))
+            per_sample = 1 if self.spot is None else self.spot.samples**2
+            s = _line_samples(a, b, as_positive(spacing, "spacing"), per_sample)
             ds, across = np.zeros(len(s)), 0.0
             if self._lateral_rng is not None:
                 ds = self.lateral_sigma * self._lateral_rng.standard_normal(len(s))
@@ -202,8 +211,11 @@ class _Profiler:
         HeightMap
         """
         spacing = as_positive(self.lateral_spacing if spacing is None else spacing, "spacing")
-        x = _axis(x0, x1, spacing, "x")
-        y = _axis(y0, y1, spacing, "y")
+        (x0, x1), (y0, y1) = _limits(x0, x1, "x"), _limits(y0, y1, "y")
+        nx, ny = line_count(x1 - x0, spacing), line_count(y1 - y0, spacing)
+        check_samples(nx * ny, spacing, f"{x1 - x0:g} m x {y1 - y0:g} m ({nx:.4g} x {ny:.4g})")
+        x = _axis(x0, x1, spacing)
+        y = _axis(y0, y1, spacing)
         shift = self._stage_offset()  # where the stage really put this reading
         rx, ry = x + shift[0], y + shift[1]  # what is read; reported at x, y
         if _is_field(part):
@@ -367,29 +379,39 @@ def _is_field(part) -> bool:
     return callable(getattr(part, "heights_at", None))
 
 
-def _line_samples(start: np.ndarray, end: np.ndarray, spacing: float) -> np.ndarray:
-    """Distances along a profile, as `machinesim.metrology.profile` takes them."""
+def _setting(value, name: str) -> float:
+    """An optical instrument's noise, step or scatter: >= 0 and at most `OPTICAL_LIMIT`."""
+    return as_number(value, name, sign=">= 0", limit=OPTICAL_LIMIT,
+                     why=" (OPTICAL_LIMIT: the widest field of view modelled; more is a unit "
+                         "slip, e.g. mm given as m)")
+
+
+def _line_samples(start: np.ndarray, end: np.ndarray, spacing: float,
+                  per_sample: int) -> np.ndarray:
+    """Distances along a profile, as `machinesim.metrology.profile` takes them, refused
+    beyond `machinesim.metrology.surface.MAX_SAMPLES` (``per_sample`` points read for each)."""
     length = float(np.hypot(*(end - start)))
     if length == 0.0:
         raise InputError(f"Expected a profile of non-zero length, got start = end = {start}")
-    count = int(np.floor(length / spacing + END_SLACK)) + 1
-    s = np.arange(count) * spacing
+    count = line_count(length, spacing)
+    check_samples(count, spacing, f"a {length:g} m line", per_sample)
+    s = np.arange(int(count)) * spacing
     if abs(s[-1] - length) <= END_SLACK * spacing:
         s[-1] = length
     return s
 
 
-def _axis(lo: float, hi: float, spacing: float, name: str) -> np.ndarray:
+def _limits(lo, hi, name: str) -> tuple[float, float]:
+    """A map's limits along ``name`` as finite floats with lo < hi."""
+    lo, hi = as_number(lo, f"{name}0"), as_number(hi, f"{name}1")
+    if not lo < hi:
+        raise InputError(f"Expected {name}0 < {name}1 (m), got {lo} and {hi}", key=name)
+    return lo, hi
+
+
+def _axis(lo: float, hi: float, spacing: float) -> np.ndarray:
     """lo, lo + spacing, ... up to the last whole step not beyond hi (hi itself when whole)."""
-    try:
-        lo, hi = float(lo), float(hi)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} limits as numbers (m), got {lo!r}, {hi!r}",
-                         key=name) from error
-    if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-        raise InputError(f"Expected finite {name}0 < {name}1 (m), got {lo} and {hi}", key=name)
-    count = int(np.floor((hi - lo) / spacing + END_SLACK)) + 1
-    axis = lo + np.arange(count) * spacing
+    axis = lo + np.arange(int(line_count(hi - lo, spacing))) * spacing
     if abs(axis[-1] - hi) <= END_SLACK * spacing:
         axis[-1] = hi
     return frozen(axis, copy=False)

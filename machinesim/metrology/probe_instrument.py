@@ -31,14 +31,16 @@ for sub-micrometre departures on a 0.25 mm ball).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from machinesim.exceptions import AxisLimitError, InputError, check_length
+from machinesim.exceptions import AxisLimitError, InputError
+from machinesim.metrology._arrays import as_floats, as_number, shown
 from machinesim.metrology._mesh import as_positive
 from machinesim.metrology.imperfections import Lobing, ZonalForm
-from machinesim.metrology.instruments import Readout, as_generator, motion_of
+from machinesim.metrology.instruments import Readout, as_generator, as_machine, motion_of
 from machinesim.metrology.meshindex import MeshIndex
 from machinesim.metrology.probe import touch_many
 from machinesim.tolerances import PROBE_CHORD_M
@@ -77,7 +79,8 @@ class ScanReading:
     contact_q : ndarray, shape (N, n_axes), float64, read-only
         ``q`` with ``deflection`` added to Z: the axis values at which the free ball would
         touch the surface (NaN rows where it hung free). `TouchProbe.nominal_centres` turns
-        them into measured points.
+        them into measured points (NaN rows staying NaN: drop them, or fit with a function
+        that leaves NaN rows out, as `machinesim.metrology.fit_sphere` does).
     """
 
     q: np.ndarray
@@ -90,8 +93,9 @@ class TouchProbe:
 
     Parameters
     ----------
-    machine : Machine
-        The machine carrying the probe; it must have the frame ``frame``.
+    machine : Machine or str
+        The machine carrying the probe, or the name of a shipped one
+        (`machinesim.load_machine`); it must have the frame ``frame``.
     errors : ErrorModel or None
         The machine's injected errors: they move the ball as they move the tool. Only the
         machine's kinematics reads them; the probe keeps no attribute that returns them
@@ -137,7 +141,7 @@ class TouchProbe:
                  frame: str = "probe_tip", pretravel: Lobing | None = None,
                  ball_form: ZonalForm | None = None, lobing_amplitudes=None,
                  sphericity: float = 0.0) -> None:
-        self.machine = machine
+        self.machine = machine = as_machine(machine)
         self._pose = motion_of(machine, errors, frame)
         self.frame = frame
         self.index = MeshIndex.from_surface(part)
@@ -151,10 +155,16 @@ class TouchProbe:
                                  f"{type(value).__name__}", key=name)
         self._pretravel = pretravel
         self._ball_form = ball_form
+        if lobing_amplitudes is not None and not isinstance(lobing_amplitudes, Mapping):
+            raise InputError(f"Expected lobing_amplitudes as a mapping of lobing order to "
+                             f"amplitude (m), e.g. {{3: 1e-7}}, or None, got "
+                             f"{shown(lobing_amplitudes)}", key="lobing_amplitudes")
         stated = dict(lobing_amplitudes or {})
+        for order, amplitude in stated.items():
+            as_number(amplitude, f"lobing_amplitudes[{order!r}]", sign=">= 0")
         Lobing(tuple((k, a, 0.0) for k, a in stated.items()))  # the same checks as a lobing
         self.lobing_amplitudes = {int(k): float(a) for k, a in stated.items()}
-        self.sphericity = check_length(sphericity, "sphericity")
+        self.sphericity = as_number(sphericity, "sphericity", sign=">= 0")
         # The controller records linear axes at the probe's resolution, rotary ones at theirs.
         self._axis_rounding = [Readout(0.0, float(r) if rotary else self.readout.resolution)
                                for r, rotary in zip(machine.resolution, machine.rotary,
@@ -276,18 +286,30 @@ class TouchProbe:
         Returns
         -------
         ndarray, shape (3,) or (N, 3)
-            Ball centre in the workpiece frame of the error-free machine, m.
+            Ball centre in the workpiece frame of the error-free machine, m. A row of ``q``
+            that holds NaN (a `ScanReading.contact_q` row where the ball hung free) gives a
+            NaN row, so ``nominal_centres(probe.scan(path).contact_q)`` keeps one row per
+            path point.
         """
-        return self.machine.frame_pose(self.frame, q)[..., :3, 3]
+        n = len(self.machine.axes)
+        array = as_floats(q, "q", "axis values (m, rad)")
+        if array.shape != (n,) and not (array.ndim == 2 and array.shape[1] == n):
+            raise InputError(f"Expected q with shape ({n},) or (N, {n}) (axes "
+                             f"{''.join(self.machine.axes)}), got {array.shape}", key="q")
+        if np.isinf(array).any():
+            raise InputError("Expected finite q or NaN rows, got infinity", key="q")
+        rows = array.reshape(-1, n)
+        seen = ~np.isnan(rows).any(axis=1)
+        centres = np.full((len(rows), 3), np.nan)
+        if seen.any():
+            centres[seen] = self.machine.frame_pose(self.frame, rows[seen])[..., :3, 3]
+        return centres.reshape(array.shape[:-1] + (3,))
 
     # ---------------------------------------------------------------------------- internals
 
     def _q(self, q, name: str, batch: bool = False) -> np.ndarray:
         n = len(self.machine.axes)
-        try:
-            array = np.array(q, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise InputError(f"Expected {name} as numbers, got {q!r}", key=name) from error
+        array = as_floats(q, name, "axis values (m, rad)")
         shape = (array.ndim == 2 and array.shape[1] == n and len(array) > 0) if batch else (
             array.shape == (n,))
         if not shape:
@@ -314,11 +336,7 @@ class TouchProbe:
             u = np.zeros(len(axes))
             u[axes.index(letter)] = 1.0 if sign == "+" else -1.0
             return u
-        try:
-            u = np.array(direction, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise InputError(f"Expected direction as a string or numbers, got {direction!r}",
-                             key="direction") from error
+        u = as_floats(direction, "direction", "a string or numbers")
         norm = np.linalg.norm(u) if u.shape == (len(axes),) else np.nan
         if not (np.isfinite(norm) and norm > 0.0):
             raise InputError(f"Expected a finite non-zero direction of shape ({len(axes)},), "

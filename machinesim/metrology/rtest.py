@@ -27,7 +27,8 @@ import numpy as np
 
 from machinesim.arrays import frozen
 from machinesim.exceptions import AxisLimitError, InputError
-from machinesim.metrology.instruments import Readout, as_generator, motion_of
+from machinesim.metrology._arrays import as_floats, shown
+from machinesim.metrology.instruments import Readout, as_generator, as_machine, motion_of
 
 __all__ = ["RTest", "RTestReading"]
 
@@ -64,7 +65,8 @@ class RTest:
 
     Parameters
     ----------
-    machine : Machine
+    machine : Machine or str
+        The machine, or the name of a shipped one (`machinesim.load_machine`).
     errors : ErrorModel or None
         The machine's injected errors; only its motion reads them (`Lab.r_test` builds one
         without handing them out).
@@ -85,13 +87,13 @@ class RTest:
     def __init__(self, machine, errors=None, sigma: float = 50e-9, resolution: float = 1e-9,
                  *, noise: bool = True, rng=None, frame: str = "tool_tip",
                  point=(0.0, 0.0, 0.0)) -> None:
-        self.machine = machine
+        self.machine = machine = as_machine(machine)
         self._pose = motion_of(machine, errors, frame)
         self.frame = frame
-        point = np.array(point, dtype=np.float64)
+        point = as_floats(point, "point", "3 coordinates (m) of the ball centre")
         if point.shape != (3,) or not np.isfinite(point).all():
             raise InputError(f"Expected the ball centre as 3 finite coordinates (m), got "
-                             f"{point!r}", key="point")
+                             f"{shown(point)}", key="point")
         self.point = frozen(point)
         self.readout = Readout.of(sigma, resolution, noise)
         self.uncertainty = Readout(sigma, resolution).std
@@ -104,10 +106,7 @@ class RTest:
     def read(self, q) -> RTestReading:
         """Read the ball's displacement at each row of ``q`` (N, n_axes), m and rad."""
         n = len(self.machine.axes)
-        try:
-            q = np.array(q, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise InputError(f"Expected axis values as numbers, got {q!r}", key="q") from error
+        q = as_floats(q, "q", "axis values (m, rad)")
         if q.ndim == 1:
             q = q[None]
         if q.ndim != 2 or q.shape[1] != n or not len(q) or not np.isfinite(q).all():

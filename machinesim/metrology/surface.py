@@ -22,10 +22,20 @@ from __future__ import annotations
 import numpy as np
 
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_floats
 from machinesim.metrology._mesh import as_positive, as_vector, mesh_arrays
 from machinesim.tolerances import END_SLACK, INDEX_SLACK, LINE_MARGIN, UNIFORM_GRID
 
-__all__ = ["height_map", "profile"]
+__all__ = ["MAX_SAMPLES", "height_map", "profile"]
+
+#: Most samples one reading (a profile, a height map) may hold; a profile read through a spot
+#: counts each of the spot's ``samples**2`` sub-samples, which it reads at once. Beyond it the
+#: reading is refused before anything is allocated. Measured peak memory per sample: 33 bytes
+#: for a map (49 with a spot, read in blocks, or lateral noise), 42 for a profile, 106 for a
+#: profile with lateral noise, 36 per sub-sample for a profile through a spot. So a reading at
+#: the cap takes at most ~11 GB, under half of a 24 GB machine: a map of 10^4 x 10^4 samples
+#: is a 3 mm square at the microscope's 0.3 um pitch.
+MAX_SAMPLES = 100_000_000
 
 #: Triangles read per pass: small enough that a pass's arrays stay in the CPU cache
 #: (measured: 8192 is ~1.5x faster than 131072 on the pyramid benchmark).
@@ -81,7 +91,10 @@ def height_map(surface, x, y) -> np.ndarray:
         For a malformed mesh or sample axes that are not 1-D, finite and strictly increasing.
     """
     vertices, triangles = mesh_arrays(surface)
-    grid = _Grid(_axis(x, "x"), _axis(y, "y"))
+    x, y = _axis(x, "x"), _axis(y, "y")
+    check_samples(float(x.size) * y.size, None, f"x {x[0]:g} .. {x[-1]:g} m, y {y[0]:g} .. "
+                  f"{y[-1]:g} m")
+    grid = _Grid(x, y)
     return _finish(_zbuffer(vertices, triangles, grid).reshape(grid.shape))
 
 
@@ -118,8 +131,9 @@ def profile(surface, start, end, spacing: float) -> tuple[np.ndarray, np.ndarray
     length = float(np.hypot(*(end - start)))
     if length == 0.0:
         raise InputError(f"Expected a profile of non-zero length, got start = end = {start}")
-    count = int(np.floor(length / spacing + END_SLACK)) + 1
-    s = np.arange(count) * spacing
+    count = line_count(length, spacing)
+    check_samples(count, spacing, f"a {length:g} m line")
+    s = np.arange(int(count)) * spacing
     if abs(s[-1] - length) <= END_SLACK * spacing:
         s[-1] = length
     line = _Line(start, end, length, s, vertices)
@@ -128,12 +142,28 @@ def profile(surface, start, end, spacing: float) -> tuple[np.ndarray, np.ndarray
     return s, _finish(z)
 
 
+def line_count(length: float, spacing: float) -> float:
+    """Samples from 0 to the last whole ``spacing`` not beyond ``length`` (m, both > 0), as a
+    float: a whole number, possibly far too large to allocate (see `check_samples`)."""
+    return float(np.floor(length / spacing + END_SLACK)) + 1.0
+
+
+def check_samples(count: float, spacing: float | None, window: str,
+                  per_sample: int = 1) -> None:
+    """Refuse a reading of ``count`` samples (``per_sample`` points read for each) over
+    ``window`` beyond `MAX_SAMPLES`, naming the count, the spacing and the window."""
+    if count * per_sample > MAX_SAMPLES:
+        each = f" x {per_sample} spot sub-samples" if per_sample > 1 else ""
+        at = "" if spacing is None else f" at spacing {spacing:g} m"
+        fix = "fewer x or y samples" if spacing is None else "a larger spacing or a smaller window"
+        raise InputError(f"Expected at most {MAX_SAMPLES:.0e} samples in one reading "
+                         f"(MAX_SAMPLES), got {count:.4g}{each}{at} over {window}: "
+                         f"take {fix}", key=None if spacing is None else "spacing")
+
+
 def _axis(values, name: str) -> np.ndarray:
     """A sample axis as a finite, strictly increasing float64 1-D copy."""
-    try:
-        axis = np.array(values, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} as numbers (m), got {values!r}", key=name) from error
+    axis = as_floats(values, name)
     if axis.ndim != 1 or axis.size == 0:
         raise InputError(f"Expected {name} with shape (n,), n >= 1, got {axis.shape}", key=name)
     if not np.isfinite(axis).all():

@@ -1,0 +1,342 @@
+"""Hostile input to the metrology API, the lab's instrument methods and the file writer: each
+refusal is an `InputError` (a `FileError` for the file system) naming the argument, the value
+and what was expected; no bare TypeError, ValueError, numpy error or MemoryError, and no
+silently meaningless number. Plus the documented pipeline of a probe scan through
+`TouchProbe.nominal_centres`, and the Gaussian spot's reading of a step edge."""
+
+import math
+import os
+
+import numpy as np
+import pytest
+
+import machinesim
+from machinesim import _io
+from machinesim.exceptions import FileError, InputError
+from machinesim.metrology import (
+    Line2D,
+    Microscope,
+    RTest,
+    TouchProbe,
+    fit_line,
+    fit_parallel_edges,
+    fit_sphere,
+    fit_v_groove,
+    form_error,
+    groove_pitch,
+    height_map,
+    intersect_lines,
+    plane_angle,
+    roughness_sa,
+    sphere_centre_from_touch,
+    step_positions,
+)
+from machinesim.metrology.imperfections import Spot
+from machinesim.metrology.instruments import OPTICAL_LIMIT
+from machinesim.metrology.surface import MAX_SAMPLES
+from machinesim.workpiece import block
+
+MM, UM, NM = 1e-3, 1e-6, 1e-9
+R = 0.25 * MM
+#: float64 round-off of mm-scale coordinates (~1e-19 m); 1e-15 m fails on any real error.
+ROUND_OFF_M = 1e-15
+
+
+@pytest.fixture(scope="module")
+def a0ib():
+    return machinesim.load_machine("robonano_a0ib")
+
+
+@pytest.fixture(scope="module")
+def flat():
+    """5 x 3 x 1 mm block: x in [0, 5] mm, y in [0, 3] mm, top face at z = 0."""
+    return block(5 * MM, 3 * MM, 1 * MM)
+
+
+def above(machine, x, y, z_centre):
+    """Axis values that put the nominal ball centre at (x, y, z_centre): the probe_tip sits
+    40 mm along +Y and 1 mm above the tool edge (docs/machines.md)."""
+    q = np.zeros(len(machine.axes))
+    q[:3] = x, y - 40 * MM, z_centre - 1 * MM
+    return q
+
+
+def groove_profile():
+    """A 20 um deep, 40 um wide V groove in the middle of a 100 um profile."""
+    s = np.linspace(0.0, 100 * UM, 201)
+    return s, -np.maximum(0.0, 20 * UM - np.abs(s - 50 * UM))
+
+
+def flat_map():
+    x = y = np.arange(11) * UM
+    return x, y, np.zeros((11, 11))
+
+
+# --------------------------------------------------------------------- A: bad types in fits
+
+
+def test_v_groove_threshold_must_be_a_number():
+    s, z = groove_profile()
+    assert fit_v_groove(s, z, threshold=1 * UM).depth == pytest.approx(20 * UM, abs=1e-12)
+    for bad in ("1e-6", [1e-6]):
+        with pytest.raises(InputError, match=r"threshold as a number \(m\), got "):
+            fit_v_groove(s, z, threshold=bad)
+
+
+def test_sphere_fits_refuse_text_none_and_arrays():
+    points = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, -1]], float)
+    with pytest.raises(InputError, match=r"radius as a number \(m\), got '1'"):
+        fit_sphere(points, radius="1")
+    with pytest.raises(InputError, match=r"z_touch as a number \(m\), got '1'"):
+        sphere_centre_from_touch((0, 0), "1", 1.0)
+    with pytest.raises(InputError, match=r"z_touch as a number \(m\), got array"):
+        sphere_centre_from_touch((0, 0), np.array([1.0, 2.0]), 1.0)
+    with pytest.raises(InputError, match=r"radius as a number \(m\), got None"):
+        sphere_centre_from_touch((0, 0), 1.0, None)
+    with pytest.raises(InputError, match=r"probe_radius as a number \(m\), got '0'"):
+        sphere_centre_from_touch((0, 0), 1.0, 1.0, probe_radius="0")
+    with pytest.raises(InputError, match=r"xy as two numbers \(m\), got 'ab'"):
+        sphere_centre_from_touch("ab", 0, 1)
+    with pytest.raises(InputError, match="concave as True or False, got 'no'"):
+        sphere_centre_from_touch((0, 0), 1.0, 1.0, concave="no")
+    # a numpy scalar is a number: the centre 1 m above a bottom touch at z = 0.5 m
+    np.testing.assert_array_equal(
+        sphere_centre_from_touch((0, 0), np.float64(0.5), 1.0), [0.0, 0.0, 1.5])
+
+
+def test_text_in_point_and_centre_arrays_is_refused():
+    with pytest.raises(InputError, match=r"centres as numbers \(m\), got \['a', 'b'\]"):
+        groove_pitch(["a", "b"])
+    with pytest.raises(InputError, match=r"points as numbers \(m\), got 'abc'"):
+        fit_line("abc")
+    with pytest.raises(InputError, match=r"points as numbers \(m\)"):
+        fit_line([["0", "0"], ["1", "1"]])  # numbers spelled as text are not converted
+
+
+def test_roughness_cutoff_must_be_a_number_of_at_least_two_spacings():
+    x, y, z = flat_map()
+    z = z + np.random.default_rng(1).normal(size=z.shape) * NM
+    with pytest.raises(InputError, match=r"l_cutoff as a number \(m\), got 'a'"):
+        roughness_sa(x, y, z, l_cutoff="a")
+    # 1 um spacing: the shortest wavelength the grid holds is 2 um
+    with pytest.raises(InputError, match=r"l_cutoff >= 2 sample spacings \(2e-06 m.*got 1e-12"):
+        roughness_sa(x, y, z, l_cutoff=1e-12)
+    with pytest.raises(InputError, match=r"l_cutoff >= 2 sample spacings"):
+        roughness_sa(x, y, z, l_cutoff=1.999 * UM)
+
+
+def test_levels_must_be_numbers():
+    s, z = groove_profile()
+    np.testing.assert_allclose(step_positions(s, z, level=-10 * UM), [40 * UM, 60 * UM],
+                               rtol=0, atol=1e-18)
+    with pytest.raises(InputError, match=r"level as a number \(m\), got 'x'"):
+        step_positions(s, z, level="x")
+    x, y, zmap = flat_map()
+    with pytest.raises(InputError, match=r"level as a number \(m\), got 'a'"):
+        fit_parallel_edges(x, y, zmap, level="a")
+
+
+def test_fits_refuse_what_is_not_their_input_type():
+    x, y, z = flat_map()
+    with pytest.raises(InputError, match=r"nominal as a function nominal\(X, Y\) -> Z"):
+        form_error(x, y, z, 0.0)
+    with pytest.raises(InputError, match="first as a PlaneFit"):
+        plane_angle("a", "b")
+    with pytest.raises(InputError, match="first as a Line2D"):
+        intersect_lines("a", "b")
+    line = fit_line([[0, 0], [1, 0]])
+    with pytest.raises(InputError, match="second as a Line2D"):
+        intersect_lines(line, "b")
+    crossing = intersect_lines(line, Line2D(np.array([2.0, 3.0]), np.array([0.0, 1.0]), 0.0))
+    np.testing.assert_array_equal(crossing, [2.0, 0.0])
+
+
+def test_a_ragged_vertex_list_is_refused():
+    vertices = [[0.0, 0.0, 0.0], [1.0, 1.0]]
+    with pytest.raises(InputError, match=r"vertices \(n, 3\) and triangles \(m, 3\) as "
+                                          r"regular arrays"):
+        height_map((vertices, [[0, 1, 2]]), [0.0], [0.0])
+
+
+# ------------------------------------------------------------------ A: instruments' set-up
+
+
+def test_rtest_point_must_be_numbers(a0ib):
+    with pytest.raises(InputError, match=r"point as 3 coordinates \(m\) of the ball centre, "
+                                         r"got 'abc'"):
+        RTest(a0ib, point="abc")
+
+
+def test_seed_must_be_non_negative():
+    with pytest.raises(InputError, match="a non-negative int seed or None, got -1"):
+        Microscope(rng=-1)
+
+
+def test_probe_takes_a_machine_by_name_and_refuses_other_things(a0ib, flat):
+    by_name = TouchProbe("robonano_a0ib", None, flat, noise=False, resolution=0.0)
+    assert by_name.machine.name == "robonano_a0ib"
+    # the ball (R = 0.25 mm) touches the top face z = 0 with its centre at z = R
+    q = by_name.touch(above(a0ib, 2.5 * MM, 1.5 * MM, 1 * MM), "-Z", 1 * MM)
+    np.testing.assert_allclose(q, above(a0ib, 2.5 * MM, 1.5 * MM, R), rtol=0, atol=1e-10)
+    with pytest.raises(InputError, match="machine as a Machine or the name of a shipped one"):
+        TouchProbe(42, None, flat)
+    with pytest.raises(machinesim.exceptions.ModelError, match="unknown machine 'no_such'"):
+        TouchProbe("no_such", None, flat)
+
+
+def test_probe_lobing_amplitudes_must_be_a_mapping(a0ib, flat):
+    with pytest.raises(InputError, match=r"lobing_amplitudes as a mapping of lobing order to "
+                                         r"amplitude \(m\), e.g. \{3: 1e-7\}, or None, got "
+                                         r"\[1, 2\]"):
+        TouchProbe(a0ib, None, flat, lobing_amplitudes=[1, 2])
+    with pytest.raises(InputError, match=r"lobing_amplitudes\[3\] as a number"):
+        TouchProbe(a0ib, None, flat, lobing_amplitudes={3: "1e-7"})
+    probe = TouchProbe(a0ib, None, flat, lobing_amplitudes={3: 1e-7})
+    assert probe.lobing_amplitudes == {3: 1e-7}
+
+
+@pytest.fixture(scope="module")
+def lab():
+    return machinesim.Lab("robonano_a0ib")
+
+
+def test_lab_refuses_options_it_sets_itself(lab, flat):
+    with pytest.raises(InputError, match="the lab sets the microscope's rng itself .*seed"):
+        lab.microscope(rng=1)
+    with pytest.raises(InputError, match="the lab sets the white light interferometer's "
+                                         "noise itself"):
+        lab.white_light_interferometer(noise=False)
+    with pytest.raises(InputError, match="the lab sets the laser interferometer's errors "
+                                         "itself"):
+        lab.laser_interferometer(errors=None)
+    with pytest.raises(InputError, match="the lab sets the r test's machine itself"):
+        lab.r_test(machine="robonano_a0ib")
+    with pytest.raises(InputError, match="the lab sets the touch probe's rng itself"):
+        lab.touch_probe(flat, rng=0)
+
+
+def test_lab_refuses_options_the_instrument_does_not_take(lab, flat):
+    with pytest.raises(InputError, match="Microscope has no option 'bogus'; the microscope "
+                                         "takes sigma, resolution, lateral_spacing"):
+        lab.microscope(bogus=1)
+    with pytest.raises(InputError, match="TouchProbe has no option 'radius_mm'"):
+        lab.touch_probe(flat, radius_mm=0.25)
+    assert lab.microscope(sigma=5 * NM).readout.sigma == 5 * NM  # an option it takes
+
+
+# ------------------------------------------------------------------------ A: file writing
+
+
+def test_a_file_name_too_long_is_a_file_error_naming_the_path(tmp_path):
+    path = tmp_path / ("a" * 300)
+    with pytest.raises(FileError, match="file name is longer than this file system allows") \
+            as caught:
+        _io.write_atomic(path, "x")
+    assert caught.value.source == str(path)
+    assert os.listdir(tmp_path) == []  # no temporary file left behind
+
+
+def test_only_text_or_bytes_are_written(tmp_path):
+    path = tmp_path / "out.txt"
+    with pytest.raises(InputError, match="Expected the data to write as str or bytes, got int"):
+        _io.write_atomic(path, 3)
+    assert not path.exists()
+    _io.write_atomic(path, bytearray(b"ok"))
+    assert path.read_bytes() == b"ok"
+
+
+# ---------------------------------------------------------------- B: implausible settings
+
+
+def test_numbers_spelled_as_text_are_refused(flat):
+    with pytest.raises(InputError, match=r"resolution as a number \(m\), got '1'"):
+        Microscope(resolution="1")
+    with pytest.raises(InputError, match=r"width as a number \(m\), got '1'"):
+        Spot(width="1")
+    with pytest.raises(InputError, match=r"sigma as a number \(m\), got True"):
+        Microscope(sigma=True)
+    with pytest.raises(InputError, match=r"spacing as a number \(m\), got '1e-6'"):
+        Microscope().profile(flat, (0, 0), (1 * MM, 0), spacing="1e-6")
+
+
+def test_noise_must_be_a_bool():
+    with pytest.raises(InputError, match="noise as True or False, got 'no'"):
+        Microscope(noise="no")
+
+
+@pytest.mark.parametrize("name", ["sigma", "resolution", "lateral_sigma", "stage_sigma"])
+def test_optical_settings_are_bounded_by_the_field_of_view(name):
+    with pytest.raises(InputError, match=rf"{name} <= 0.001 m \(OPTICAL_LIMIT"):
+        Microscope(**{name: 1e300})
+    with pytest.raises(InputError, match=rf"{name} <= 0.001 m \(OPTICAL_LIMIT.*got 0.0011"):
+        Microscope(**{name: 1.1e-3})
+    at_limit = Microscope(**{name: OPTICAL_LIMIT})  # the bound itself is taken
+    owner = at_limit.readout if name in ("sigma", "resolution") else at_limit
+    assert getattr(owner, name) == 1e-3
+
+
+def test_spot_width_is_bounded_by_the_field_of_view():
+    with pytest.raises(InputError, match=r"width <= 0.001 m \(OPTICAL_LIMIT.*got 0.002"):
+        Spot(width=2e-3)
+    assert Spot(width=OPTICAL_LIMIT).width == 1e-3
+
+
+def test_a_reading_beyond_the_sample_cap_is_refused_before_allocating(flat):
+    with pytest.raises(InputError, match=r"at most 1e\+08 samples in one reading "
+                                         r"\(MAX_SAMPLES\), got 3e\+10 at spacing 1e-13 "
+                                         r"m over a 0.003 m line"):
+        Microscope().profile(flat, (0, 0), (3 * MM, 0), spacing=1e-13)
+    with pytest.raises(InputError, match=r"got 1e\+12 at spacing 1e-09 m over 0.001 m x "
+                                         r"0.001 m"):
+        Microscope().height_map(flat, 0, 1 * MM, 0, 1 * MM, spacing=1e-9)
+    # through a 5 x 5 spot a profile reads 25 points per sample, all at once
+    with pytest.raises(InputError, match=r"got 5e\+06 x 25 spot sub-samples at spacing 2e-10"):
+        Microscope(spot=Spot(1 * UM)).profile(flat, (0, 0), (1 * MM, 0), spacing=2e-10)
+    # the exact core: 20000 x 6000 given samples
+    x, y = np.arange(20000) * 1e-8, np.arange(6000) * 1e-8
+    assert x.size * y.size > MAX_SAMPLES
+    with pytest.raises(InputError, match=r"got 1.2e\+08 over x 0 .. 0.00019999 m"):
+        height_map(flat, x, y)
+
+
+# ---------------------------------------------------- C: scan -> nominal centres with NaN
+
+
+def test_nominal_centres_of_a_scan_keep_nan_rows_where_the_ball_hung_free(a0ib, flat):
+    """Across the edge at x = 5 mm: on the face the ball centre rests at z = R; beyond
+    x = 5 mm + R it hangs free, and its row stays NaN."""
+    x = np.array([1.0, 4.0, 5.3, 2.0]) * MM
+    free = 0.1 * MM
+    probe = TouchProbe(a0ib, None, flat, noise=False, resolution=0.0)
+    scan = probe.scan(np.array([above(a0ib, xi, 1.5 * MM, free) for xi in x]))
+    centres = probe.nominal_centres(scan.contact_q)
+    assert centres.shape == (4, 3)
+    assert np.isnan(centres[2]).all() and not np.isnan(centres[[0, 1, 3]]).any()
+    for i in (0, 1, 3):
+        np.testing.assert_array_equal(centres[i], probe.nominal_centres(scan.contact_q[i]))
+        np.testing.assert_allclose(centres[i], [x[i], 1.5 * MM, R], rtol=0, atol=ROUND_OFF_M)
+    assert np.isnan(probe.nominal_centres([np.nan] * len(a0ib.axes))).all()
+    with pytest.raises(InputError, match="finite q or NaN rows, got infinity"):
+        probe.nominal_centres([np.inf] * len(a0ib.axes))
+
+
+# ------------------------------------------------------- D: the Gaussian spot on a step
+
+
+def test_gaussian_spot_reads_a_step_edge_as_a_staircase():
+    """The 5-node Gauss-Hermite weights are 8/15 and (7 +- 2 sqrt 10) / 60; at the edge the
+    centre node and the two beyond it read the top (the highest surface wins): 23/30 of the
+    step, 4/15 above the 1/2 of a true Gaussian blur (docs/metrology.md)."""
+    height, edge = 5 * UM, 10 * UM
+    vertices = np.array([[0, -5, 0], [10, -5, 0], [10, 5, 0], [0, 5, 0],
+                         [10, -5, 5], [20, -5, 5], [20, 5, 5], [10, 5, 5]], float) * UM
+    triangles = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]])
+    scope = Microscope(noise=False, resolution=0.0, spot=Spot(1 * UM, "gaussian"))
+    read = scope.profile((vertices, triangles), (edge - 2 * UM, 0), (edge + 2 * UM, 0),
+                         spacing=1 * UM)
+    outer = (7 - 2 * math.sqrt(10)) / 60
+    inner = (7 + 2 * math.sqrt(10)) / 60
+    # samples at the edge - 2, -1, 0, +1, +2 um; nodes at 0, +-0.576 and +-1.213 um
+    expected = np.array([0.0, outer, 23 / 30, 1 - outer, 1.0]) * height
+    np.testing.assert_allclose(read.z, expected, rtol=0, atol=1e-12 * height)
+    assert 23 / 30 == pytest.approx(8 / 15 + inner + outer, abs=1e-15)
