@@ -70,3 +70,28 @@ def test_zero_at_is_checked_and_kept_through_batches():
     with pytest.raises(InputError, match="or all NaN for a reading not zeroed"):
         Observations(Q_ALL[:1], 0.0, np.eye(3)[0], SIGMA,
                      zero_at=[0.0, np.nan, 0.0, 0.0, 0.0])
+
+
+def test_an_r_test_zeroed_at_its_first_pose_identifies_c_without_the_constant_offsets():
+    from machinesim.identification import from_r_test
+
+    # C's location offsets, and the nest's placement on the table (the lab's workpiece
+    # setting), which moves every reading alike: not known, and not needed when zeroed
+    injected = {"location": {"C": {"EX0C_um": 3.0, "EY0C_um": -2.0}},
+                "workpiece": {"delta_um": [4.0, -6.0, 2.5]}}
+    lab = machinesim.Lab("robonano_a0ib", injected, noise=False)
+    zeroed = lab.r_test(zero="first", resolution=0.0).read(Q)
+    nominal = lab.r_test(resolution=0.0).read(Q)
+    assert zeroed.displacement[0].tolist() == [0.0, 0.0, 0.0]
+    np.testing.assert_allclose(zeroed.displacement, nominal.displacement
+                               - nominal.displacement[0], rtol=0, atol=1e-18)
+    assert np.array_equal(zeroed.zero_at, Q[0]) and nominal.zero_at is None
+    names = ["location.C.EX0C", "location.C.EY0C"]
+    found = fit(lab.machine, from_r_test(zeroed), names)
+    assert found.values == pytest.approx([3e-6, -2e-6], abs=1e-12)
+    # read against the nominal place, the nest's placement is in every reading and the
+    # same two parameters cannot explain it
+    misread = fit(lab.machine, from_r_test(nominal), names)
+    assert misread.normalised_residual_rms > 10.0
+    with pytest.raises(InputError, match="zero as one of nominal, first"):
+        lab.r_test(zero="start")

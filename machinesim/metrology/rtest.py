@@ -2,13 +2,16 @@
 nest on the workpiece side, read as the machine moves its axes.
 
 The nest stands on the table where a workpiece would (its placement on the table is the
-lab's workpiece setting error: an R-test session has no other workpiece) and is zeroed as if
-a perfect ball sat at its nominal place, so each reading is the displacement of the ball
-centre from where the nominal machine would put it, relative to the nest, along the three
-sensor directions (here the workpiece frame's X, Y, Z). That zero is an idealisation: a
-real nest is zeroed on the real ball at a start pose, so a constant offset (a tool offset at
-that pose, the nest's own placement) does not show, and only the changes from pose to pose
-do; here such offsets read in full. This is what a lab uses to identify a
+lab's workpiece setting error: an R-test session has no other workpiece). Two zeros
+(``zero=``): ``"first"``, as a real nest is zeroed, on the real ball at the plan's first
+pose, so each reading is the change of the ball centre's displacement since that pose and a
+constant offset (a tool offset the rotary axes do not turn, the nest's own placement) does
+not show; and ``"nominal"`` (the default), an idealisation, as if a perfect ball sat at its
+nominal place, so each reading is the displacement of the ball centre from where the nominal
+machine would put it and such offsets read in full. Readings are relative to the nest,
+along the three sensor directions (here the workpiece frame's X, Y, Z); with ``"first"``
+`RTestReading.zero_at` holds the pose, and `machinesim.identification.from_r_test` carries
+it into the fit (`Observation.zero_at`). This is what a lab uses to identify a
 five-axis machine's location errors (ISO 230-7) and what Heidenhain's KinematicsOpt cycle
 reads with a touch probe on a calibration sphere: the machine's actual motion, never its
 error model.
@@ -30,7 +33,10 @@ from machinesim.exceptions import AxisLimitError, InputError
 from machinesim.metrology._arrays import as_floats, shown
 from machinesim.metrology.instruments import Readout, as_generator, as_machine, motion_of
 
-__all__ = ["RTest", "RTestReading"]
+__all__ = ["RTest", "RTestReading", "ZEROS"]
+
+#: Where the R-test's sensors read zero (`RTest`).
+ZEROS = ("nominal", "first")
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,6 +57,9 @@ class RTestReading:
     frame : str
     point : ndarray, shape (3,), read-only
         The ball centre in ``frame``, m.
+    zero_at : ndarray, shape (n_axes,), read-only, or None
+        The pose where the sensors were set to zero (``zero="first"``: the first row of
+        ``q``), or None for readings against the nominal place.
     """
 
     q: np.ndarray
@@ -58,6 +67,7 @@ class RTestReading:
     sigma: float
     frame: str
     point: np.ndarray
+    zero_at: np.ndarray | None = None
 
 
 class RTest:
@@ -82,11 +92,19 @@ class RTest:
         The machine frame carrying the ball. Default ``"tool_tip"``.
     point : array-like, shape (3,)
         The ball centre in ``frame``, m. Default the frame's origin.
+    zero : {"nominal", "first"}
+        Where the sensors read zero (module docstring): at the ball's nominal place
+        (default, an idealisation), or on the real ball at the first pose of each `read`,
+        as a real nest is zeroed (each reading then carries that zero's noise too).
     """
 
     def __init__(self, machine, errors=None, sigma: float = 50e-9, resolution: float = 1e-9,
                  *, noise: bool = True, rng=None, frame: str = "tool_tip",
-                 point=(0.0, 0.0, 0.0)) -> None:
+                 point=(0.0, 0.0, 0.0), zero: str = "nominal") -> None:
+        if zero not in ZEROS:
+            raise InputError(f"Expected zero as one of {', '.join(ZEROS)}, got {shown(zero)}",
+                             key="zero")
+        self.zero = zero
         self.machine = machine = as_machine(machine)
         self._pose = motion_of(machine, errors, frame)
         self.frame = frame
@@ -101,7 +119,8 @@ class RTest:
 
     def __repr__(self) -> str:
         return (f"RTest({self.machine.name}, frame={self.frame!r}, sigma="
-                f"{self.readout.sigma:g} m, resolution={self.readout.resolution:g} m)")
+                f"{self.readout.sigma:g} m, resolution={self.readout.resolution:g} m, "
+                f"zero={self.zero!r})")
 
     def read(self, q) -> RTestReading:
         """Read the ball's displacement at each row of ``q`` (N, n_axes), m and rad."""
@@ -117,8 +136,14 @@ class RTest:
             raise AxisLimitError(f"{self.machine.name}: the R-test plan needs " + "; ".join(bad))
         actual = self._centre(self._pose(self.frame, q))
         nominal = self._centre(self.machine.frame_pose(self.frame, q))
-        shown = self.readout.read(actual - nominal, self._rng)
-        return RTestReading(frozen(q), frozen(shown), self.uncertainty, self.frame, self.point)
+        displayed = self.readout.read(actual - nominal, self._rng)
+        if self.zero == "nominal":
+            return RTestReading(frozen(q), frozen(displayed), self.uncertainty, self.frame,
+                                self.point)
+        # zeroed on the ball at the first pose: every display less the one there (both
+        # counts of the same sensors, so the difference keeps the display's step)
+        return RTestReading(frozen(q), frozen(displayed - displayed[0]), self.uncertainty,
+                            self.frame, self.point, frozen(q[0].copy()))
 
     def _centre(self, wMf: np.ndarray) -> np.ndarray:
         return wMf[:, :3, 3] + wMf[:, :3, :3] @ self.point
