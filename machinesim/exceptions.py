@@ -48,6 +48,7 @@ class InputError(MachineSimError, ValueError):
         if column is not None:
             where.append(f"column {column}")
         if key is not None:
+            key = self.key = str(key)  # a dict's key may be any hashable (an int)
             # a key read from a file may hold control bytes: shown escaped, never raw
             shown = key if key.isprintable() else key.encode("unicode_escape").decode("ascii")
             where.append(f"key '{shown}'")

@@ -430,3 +430,22 @@ def test_an_output_name_ending_in_a_slash_is_refused_not_written_as_a_file(tmp_p
     code, err = run_cli(argv, capsys)
     assert code == 2 and "ends in '/', which names a folder; expected a file name" in err, err
     assert not any(path.exists() for path in names.values())
+
+
+def test_toml_nested_hundreds_deep_and_a_dict_s_int_key_are_named_not_tracebacks(tmp_path):
+    # tomllib recurses once per level: 500 levels ended in a bare RecursionError
+    from machinesim.errors import ErrorModel
+    from machinesim.exceptions import ErrorModelError, NCProgramError
+    from machinesim.nc.tooltable import ToolTable
+
+    deep = tmp_path / "deep.toml"
+    deep.write_text("[tool]\noffset_um = " + "[" * 500 + "]" * 500 + "\n")
+    with pytest.raises(ErrorModelError, match=r"deep\.toml: arrays or tables nested too deep"):
+        ErrorModel.from_toml(deep)
+    tools = tmp_path / "tools.toml"
+    tools.write_text("[tool.1]\nlength_mm = " + "[" * 500 + "]" * 500 + "\n")
+    with pytest.raises(NCProgramError, match="nested too deeply"):
+        ToolTable.from_toml(tools)
+    # a key that is not text ended in AttributeError while the message was being built
+    with pytest.raises(ErrorModelError, match="key '1': unknown section"):
+        ErrorModel.from_dict({1: {}})

@@ -59,8 +59,9 @@ def _poly_factors(value_factor: float, position_factor: float, count: int) -> np
     return value_factor / np.power(position_factor, np.arange(count, dtype=np.float64))
 
 
-def read_toml(path: str | os.PathLike) -> dict[str, Any]:
-    """The tables of the TOML file `path`; errors name the file, and the line and column.
+def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[str, Any]:
+    """The tables of the TOML file `path`; errors (an ``error``, default `ErrorModelError`)
+    name the file, and the line and column.
 
     A UTF-8 byte order mark at the start (which some Windows editors write, and TOML does
     not allow) is dropped, as most tools do: lines and columns count from after it.
@@ -69,14 +70,18 @@ def read_toml(path: str | os.PathLike) -> dict[str, Any]:
     try:
         data = tomllib.loads(Path(path).read_bytes().decode("utf-8-sig"))
     except OSError as exc:
-        raise ErrorModelError(f"cannot read the file: {exc.strerror}", source=source) from exc
+        raise error(f"cannot read the file: {exc.strerror or exc}", source=source) from None
     except UnicodeDecodeError as exc:
-        raise ErrorModelError(f"not UTF-8 text: {exc}", source=source) from exc
+        raise error(f"not UTF-8 text ({exc.reason} at byte {exc.start})",
+                    source=source) from None
     except tomllib.TOMLDecodeError as exc:
         position = _TOML_POSITION_RE.search(str(exc))
         line, column = (int(position[1]), int(position[2])) if position else (None, None)
         message = f"not valid TOML: {_TOML_POSITION_RE.sub('', str(exc))}"
-        raise ErrorModelError(message, source=source, line=line, column=column) from exc
+        raise error(message, source=source, line=line, column=column) from None
+    except RecursionError:  # tomllib recurses once per nesting level of arrays and tables
+        raise error("arrays or tables nested too deeply to read (hundreds of levels); "
+                    "expected numbers or arrays of numbers", source=source) from None
     return data
 
 

@@ -24,10 +24,8 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 from machinesim._io import check_readable_file
@@ -91,18 +89,10 @@ class ToolTable:
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> ToolTable:
         """Read a tool table file (layout in the module docstring)."""
+        from machinesim.errors.toml import read_toml
+
         path = check_readable_file(path, "tool table")
-        try:
-            data = tomllib.loads(Path(path).read_bytes().decode("utf-8"))
-        except OSError as exc:
-            raise NCProgramError(f"cannot read the tool table: {exc.strerror or exc}",
-                                 source=str(path)) from None
-        except UnicodeDecodeError as exc:
-            raise NCProgramError(f"the tool table is not UTF-8 text ({exc.reason} at byte "
-                                 f"{exc.start})", source=str(path)) from None
-        except tomllib.TOMLDecodeError as exc:
-            raise NCProgramError(f"not valid TOML: {exc}", source=str(path)) from None
-        return cls.from_dict(data, source=str(path))
+        return cls.from_dict(read_toml(path, NCProgramError), source=str(path))
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], *, source: str = "<tools>") -> ToolTable:
