@@ -236,6 +236,57 @@ class _Varying:
     sign: float
 
 
+def each_turn(component, axis, name: str, source=None):
+    """``component`` as a rotary ``axis`` moves through it: its errors repeat each turn.
+
+    A table that spans a whole turn or more (a spindle's, a table's over 360 deg) is read
+    at a position beyond it shifted by whole turns into it: the same place of the axis, the
+    same error (held at its end value, a spindle's error 10 turns on was that of the
+    table's last position). A shorter table holds its end values, as on a linear axis. A
+    polynomial in the angle does not repeat, so on an axis that turns more than a turn each
+    way it is refused. Linear axes: ``component`` itself.
+    """
+    if not axis.rotary:
+        return component
+    if component.kind == "poly":
+        if axis.lower < -TURN or axis.upper > TURN:
+            raise ErrorModelError(
+                f"a polynomial in the angle does not repeat each turn, and {axis.letter} "
+                f"turns {axis.lower:g} .. {axis.upper:g} rad; give a table over one turn "
+                "(position_deg from 0 to 360, the same value at both ends)",
+                source=source, key=name)
+        return component
+    span = component.positions[-1] - component.positions[0]
+    return _EachTurn(component) if span >= TURN * (1.0 - 1e-12) else component
+
+
+#: One turn, rad.
+TURN = 2.0 * math.pi
+
+
+class _EachTurn:
+    """A rotary axis's table of a turn or more, read at positions beyond it shifted by
+    whole turns into it (`each_turn`)."""
+
+    def __init__(self, component) -> None:
+        self.component = component
+        self.kind, self.positions, self.values = "table", component.positions, component.values
+
+    def _into(self, x) -> np.ndarray:
+        x = np.asarray(x, dtype=np.float64)
+        first, last = self.positions[0], self.positions[-1]
+        return np.where((x < first) | (x > last), first + np.mod(x - first, TURN), x)
+
+    def evaluate(self, x) -> np.ndarray:
+        return self.component.evaluate(self._into(x))
+
+    def basis(self, x) -> np.ndarray:
+        return self.component.basis(self._into(x))
+
+    def largest(self, lower: float, upper: float):
+        return self.component.largest(lower, upper)
+
+
 class Binding:
     """An error model bound to a machine: the values of every error joint.
 
@@ -274,9 +325,10 @@ class Binding:
                 kin.check_component(ax, symbol, comp)
                 dof = DOF_OF_LETTER[symbol[1]]
                 varying.append(_Varying(qi[f"{letter}__comp_{dof}"], kin.axes.index(letter),
-                                        comp, float(ax.side)))
-            # a rotary axis's errors repeat each turn: over a spindle's many turns a
-            # polynomial is no error model, so it is held to the bound over one turn each way
+                                        each_turn(comp, ax, f"component.{letter}.{symbol}",
+                                                  kin.source), float(ax.side)))
+            # a rotary axis's errors repeat each turn (`each_turn`): its errors are held to
+            # the bound over one turn each way
             lower, upper = ((max(ax.lower, -2 * math.pi), min(ax.upper, 2 * math.pi))
                             if ax.rotary else (ax.lower, ax.upper))
             errors.check_travel(letter, lower, upper, source=kin.source)

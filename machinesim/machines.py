@@ -33,6 +33,7 @@ from machinesim.kinematics import (
     Axis,
     Binding,
     Kinematics,
+    each_turn,
 )
 from machinesim.rotations import not_rigid, rotation_log
 from machinesim.tolerances import IK_SINGULAR
@@ -412,6 +413,7 @@ class Machine:
                     "model; a component parameter needs its table or polynomial there",
                     key=name)
             ax = self.kin.axis(letter, key=name)
+            comp = each_turn(comp, ax, name)
             i, k = self.axes.index(letter), int(index)
             sign = float(ax.side)
             dof = DOF_OF_LETTER[symbol[1]]

@@ -20,7 +20,7 @@ def random_errors(machine, rng: np.random.Generator, *, tool_offset=200 * UM,
     Each argument is a standard deviation in SI (m or rad). Every axis gets all its valid
     location errors, a table of each of its six component errors over its travel (over
     +-10 rad for a spindle), and its first straightness error as a quadratic polynomial
-    instead, so both kinds are exercised.
+    instead, so both kinds are exercised (not on a spindle, whose errors repeat each turn).
     """
     location, component = {}, {}
     for letter in machine.axes:
@@ -35,8 +35,11 @@ def random_errors(machine, rng: np.random.Generator, *, tool_offset=200 * UM,
             scale = component_length if s[1] in "XYZ" else component_angle
             table[s] = ComponentError("table", positions, rng.normal(0, scale, table_points))
         straightness = ax.component_symbols()[(ax.direction + 1) % 3]
-        table[straightness] = ComponentError(
-            "poly", None, rng.normal(0, component_length, 3) * np.array([1.0, 0.4, 0.2]))
+        coefficients = rng.normal(0, component_length, 3) * np.array([1.0, 0.4, 0.2])
+        if not (ax.rotary and (ax.lower < -2 * np.pi or ax.upper > 2 * np.pi)):
+            # a spindle keeps its table: a polynomial in the angle does not repeat each turn
+            # (`machinesim.kinematics.each_turn`); drawn anyway, so later draws stay the same
+            table[straightness] = ComponentError("poly", None, coefficients)
         component[letter] = table
     return ErrorModel(
         tool=ToolSetting(rng.normal(0, tool_offset, 3), rng.normal(0, tool_rotation, 3)),

@@ -675,18 +675,22 @@ def test_a_polynomial_within_the_bound_over_the_travel_passes():
         beyond.check_travel("X", -0.1, 0.1)
 
 
-def test_a_spindle_polynomial_is_held_to_the_bound_over_one_turn_each_way():
-    # sts_lathe's C turns +-1e5 rad: 1 um/rad is 6.3 um at a turn (and 0.1 m at the travel's
-    # end, which a program turning that far reaches only as an error repeated each turn)
+def test_a_polynomial_on_a_rotary_axis_is_held_to_the_bound_and_on_a_spindle_refused():
+    # robonano_a0ib's C turns within a turn each way: a polynomial there is an error model,
+    # held to 1 m over the travel. sts_lathe's C turns +-1e5 rad: a polynomial in the angle
+    # does not repeat each turn (1 um/rad was 0.1 m at the travel's end), so it is refused
     from machinesim.machines import load_machine
 
+    table = load_machine("robonano_a0ib")
+    lower, upper = table.lower[4], table.upper[4]
+    assert -2 * math.pi <= lower and upper <= 2 * math.pi
+    table.check_errors(ErrorModel.from_dict({"component": {"C": {
+        "EXC_poly_um_rad": [0.0, 1.0]}}}))
     lathe = load_machine("sts_lathe")
     small = ErrorModel.from_dict({"component": {"C": {"EXC_poly_um_rad": [0.0, 1.0]}}})
-    lathe.check_errors(small)
-    large = ErrorModel.from_dict({"component": {"C": {"EXC_poly_m_rad": [0.0, 0.2]}}})
-    with pytest.raises(ErrorModelError, match=r"-6\.28319 \.\. 6\.28319 rad, the polynomial "
-                                              r"reaches -1\.25664 m at C = -6\.28319 rad"):
-        lathe.check_errors(large)  # 0.2 m/rad x 2 pi
+    with pytest.raises(ErrorModelError, match=r"component\.C\.EXC.*does not repeat each "
+                                              r"turn, and C turns -100000 \.\. 100000 rad"):
+        lathe.check_errors(small)
 
 
 def test_a_polynomial_built_in_python_is_named_by_its_symbol_in_um_and_mm():
@@ -742,3 +746,34 @@ def test_a_move_bent_into_too_many_sub_steps_names_the_command_line_option():
     assert info.value.message == (
         "a move would need more than 1000000 sub-steps to keep the chord within 1e-07 nm; "
         "raise chord_tolerance (--chord-nm on the command line)")
+
+
+def test_a_rotary_axis_s_table_of_a_turn_repeats_each_turn_and_a_polynomial_is_refused():
+    # sts_lathe's C is a spindle (+-1e5 rad): its error at 45 deg is its error 1, 2 and 10
+    # turns on and one turn back; the end value was held instead (0 at 405 deg)
+    import numpy as np
+
+    import machinesim
+
+    machine = machinesim.load_machine("sts_lathe")
+    wobble = machinesim.ErrorModel.from_dict({"component": {"C": {
+        "position_deg": list(np.arange(0.0, 361.0, 45.0)),
+        "EZC_nm": [0.0, 10.0, 0.0, -10.0, 0.0, 10.0, 0.0, -10.0, 0.0]}}})
+    q = np.zeros((6, 3))
+    q[:, 2] = np.radians([45.0, 405.0, 765.0, 3645.0, -315.0, 90.0])
+    dz = machine.tool_pose(q, wobble)[:, 2, 3] - machine.tool_pose(q)[:, 2, 3]
+    assert dz[:5] == pytest.approx([10e-9] * 5, rel=1e-6) and abs(dz[5]) < 1e-15
+    # the identification's derivative turns the same way
+    jac = machine.error_jacobian(q[:2], wobble, ["component.C.EZC[1]"])
+    assert jac[0, 2, 0] == pytest.approx(jac[1, 2, 0], rel=1e-12) and abs(jac[0, 2, 0]) > 0.5
+    # a table shorter than a turn holds its end value beyond it, as on a linear axis
+    short = machinesim.ErrorModel.from_dict({"component": {"C": {
+        "position_deg": [0.0, 90.0], "EZC_nm": [0.0, 10.0]}}})
+    q[:, 2] = np.radians([90.0, 180.0, 450.0, 0.0, 0.0, 0.0])
+    dz = machine.tool_pose(q[:3], short)[:, 2, 3] - machine.tool_pose(q[:3])[:, 2, 3]
+    assert dz == pytest.approx([10e-9] * 3, rel=1e-6)
+    # a polynomial in the angle grows without end over a spindle's turns: refused
+    growing = machinesim.ErrorModel.from_dict({"component": {"C": {
+        "EZC_poly_mm_deg": [0.0, 0.0, 7e-3]}}})
+    with pytest.raises(ErrorModelError, match="component.C.EZC.*does not repeat each turn"):
+        machine.tool_pose(q[:1], growing)
