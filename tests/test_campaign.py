@@ -332,7 +332,14 @@ def test_the_after_is_held_against_its_stated_spread(tmp_path):
     assert summary["figures"]["a_dx"]["after_z"]["mean"] == pytest.approx(z.mean(), rel=1e-12)
     assert summary["figures"]["a_dx"]["after_z"]["std"] == pytest.approx(z.std(ddof=1),
                                                                          rel=1e-12)
-    assert "against its stated spread" in (tmp_path / "summary.md").read_text()
+    text = (tmp_path / "summary.md").read_text()
+    assert "against its stated spread" in text
+    # nothing varied: every table row has as many cells as its header (a trailing empty
+    # "rho" cell once made the header one longer than its separator)
+    tables = [block.splitlines() for block in text.split("\n\n") if block.startswith("|")]
+    assert len(tables) == 3
+    for table in tables:
+        assert len({line.count("|") for line in table}) == 1, table
 
 
 def test_trials_written_before_the_after_std_still_assemble():

@@ -100,43 +100,41 @@ def _markdown(summary: dict) -> str:
     if summary["vary"]:
         lines += ["Varied: " + ", ".join(f"`{n}={d}`" for n, d in summary["vary"].items()), ""]
     varied = list(summary["vary"])
+    rho = [f"rho {v}" for v in varied]
     if summary["figures"]:
         lines += ["## Figures before and after compensation", "",
                   "95 % coverage intervals from the sorted trials (JCGM 101 7.7.2, the "
                   "shortest); sensitivity: Spearman rank correlation with the after value.",
-                  "", "| figure | unit | before mean | before std | after mean | after std | "
-                  "after 95 % (shortest) | " + " | ".join(f"rho {v}" for v in varied) + " |",
-                  "|---|---|---|---|---|---|---|" + "---|" * len(varied)]
+                  "", *_header(["figure", "unit", "before mean", "before std", "after mean",
+                                "after std", "after 95 % (shortest)", *rho])]
         for name, f in summary["figures"].items():
             b, a = f["before"], f["after"]
-            lines.append(f"| {name} | {f['unit']} | {_g(b['mean'])} | {_g(b['std'])} | "
-                         f"{_g(a['mean'])} | {_g(a['std'])} | {_interval(a['shortest_95'])} | "
-                         + " | ".join(_g(f["sensitivity"][v], 3) for v in varied) + " |")
+            lines.append(_row([name, f["unit"], _g(b["mean"]), _g(b["std"]), _g(a["mean"]),
+                               _g(a["std"]), _interval(a["shortest_95"]),
+                               *(_g(f["sensitivity"][v], 3) for v in varied)]))
         lines.append("")
     stated = {name: f["after_z"] for name, f in summary["figures"].items() if "after_z" in f}
     if stated:
         lines += ["## The after against its stated spread over labs", "",
                   "z = after / after_std (the procedure's stated spread, docs/reports.md): a "
                   "faithful spread gives mean 0, std 1, 95 % within +-1.96.", "",
-                  "| figure | z mean | z std | within +-1.96 |", "|---|---|---|---|"]
-        lines += [f"| {name} | {_g(z['mean'], 3)} | {_g(z['std'], 3)} | "
-                  f"{_g(z['within_1_96_ratio'], 3)} |" for name, z in stated.items()]
+                  *_header(["figure", "z mean", "z std", "within +-1.96"])]
+        lines += [_row([name, _g(z["mean"], 3), _g(z["std"], 3),
+                        _g(z["within_1_96_ratio"], 3)]) for name, z in stated.items()]
         lines.append("")
     if summary["parameters"]:
         lines += ["## Identification: error and z-scores", "",
                   "error = identified - injected (SI); z = error / reported std: honest "
                   "uncertainty gives mean 0, std 1, 95 % within +-1.96; rho: Spearman rank "
                   "correlation with |error|.", "",
-                  "| parameter | error mean | error std | error 95 % (symmetric) | z mean | "
-                  "z std | within +-1.96 | " + " | ".join(f"rho {v}" for v in varied) + " |",
-                  "|---|---|---|---|---|---|---|" + "---|" * len(varied)]
+                  *_header(["parameter", "error mean", "error std", "error 95 % (symmetric)",
+                            "z mean", "z std", "within +-1.96", *rho])]
         for name, p in summary["parameters"].items():
             e, z = p["error_si"], p["z"]
-            lines.append(f"| {name} | {_g(e['mean'])} | {_g(e['std'])} | "
-                         f"{_interval(e['symmetric_95'])} | {_g(z['mean'], 3)} | "
-                         f"{_g(z['std'], 3)} | "
-                         f"{_g(z['within_1_96_ratio'], 3)} | "
-                         + " | ".join(_g(p["sensitivity"][v], 3) for v in varied) + " |")
+            lines.append(_row([name, _g(e["mean"]), _g(e["std"]), _interval(e["symmetric_95"]),
+                               _g(z["mean"], 3), _g(z["std"], 3),
+                               _g(z["within_1_96_ratio"], 3),
+                               *(_g(p["sensitivity"][v], 3) for v in varied)]))
         lines.append("")
     lines += ["Versions: " + ", ".join(f"{k} {v}" for k, v in summary["versions"].items()), ""]
     return "\n".join(lines)
@@ -206,3 +204,13 @@ def write_report(dataset, folder) -> dict:
     write_atomic(folder / "summary.md", _markdown(summary))
     write_atomic(folder / "summary.json", json_text(summary, "campaign summary"))
     return summary
+
+
+def _row(cells) -> str:
+    """One Markdown table row of ``cells``."""
+    return "| " + " | ".join(cells) + " |"
+
+
+def _header(names) -> list[str]:
+    """A Markdown table's header and separator rows, one cell each per name."""
+    return [_row(names), "|" + "---|" * len(names)]
