@@ -103,3 +103,33 @@ def test_bad_plans_are_refused():
         separate(m, q, readings[:, :2], fixed, [readings] * 2)
     with pytest.raises(MachineSimError):                      # one fixed test only
         separate(m, q, readings, fixed[:1], [readings])
+
+
+def test_the_stated_std_is_the_sensors_and_the_scatter_over_labs_matches_it():
+    # the paper's errors, wobble (EAC, EBC twice a turn) included: the residuals hold the
+    # wobble, so a std scaled by them stated 6 to 7 times the scatter (z std 0.14-0.17 over
+    # 40 campaign trials); with the sensors' stated sigma the std is sigma sqrt(diag
+    # ((J^T J)^-1)) and the scatter of EX0C .. EB0C over 100 labs matches it
+    sigma = 10e-9
+    found, stds, residual_stds = [], [], []
+    for seed in range(100):
+        lab = machinesim.Lab("grooving_4axis", PAPER, seed=seed)
+        rt = lab.r_test(sigma=sigma, resolution=0.0, label="c_squareness")
+        m = lab.machine
+        fq = following_axes(m, THETA, R)
+        fixed = [fixed_axes(m, THETA, R, 0.0), fixed_axes(m, THETA, 0.0, R)]
+        reads = (rt.read(fq).displacement, [rt.read(q).displacement for q in fixed])
+        stated = separate(m, fq, reads[0], fixed, reads[1], sigma)
+        found.append([stated.location[n] for n in LOCATION])
+        stds.append([stated.std[n] for n in LOCATION])
+        residual_stds.append([separate(m, fq, reads[0], fixed, reads[1]).std[n]
+                              for n in LOCATION])
+    found, stds = np.array(found), np.array(stds)
+    # the stated std does not depend on the draw
+    np.testing.assert_allclose(stds, np.tile(stds[0], (100, 1)), rtol=1e-12)
+    ratio = found.std(axis=0, ddof=1) / stds[0]
+    # 100 draws: a correct std gives a ratio within 0.77 .. 1.24 (chi-square, 99.9 %)
+    assert np.all((ratio > 0.77) & (ratio < 1.24)), ratio
+    assert np.all(np.array(residual_stds).mean(axis=0) > 3.0 * stds[0])
+    with pytest.raises(MachineSimError, match="sigma as a standard uncertainty > 0"):
+        separate(m, fq, reads[0], fixed, reads[1], -1.0)

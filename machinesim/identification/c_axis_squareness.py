@@ -28,6 +28,7 @@ tilt motion is what remains.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -109,7 +110,8 @@ class CAxisSeparation:
         return ErrorModel().with_parameters(self.location)
 
 
-def separate(machine, follow_q, follow, fixed_q, fixed) -> CAxisSeparation:
+def separate(machine, follow_q, follow, fixed_q, fixed, sigma: float | None = None
+             ) -> CAxisSeparation:
     """Separate the readings (module docstring).
 
     Parameters
@@ -125,6 +127,11 @@ def separate(machine, follow_q, follow, fixed_q, fixed) -> CAxisSeparation:
         The fixed tests at (r, 0) and (0, r) (`fixed_axes`), the same C angles.
     fixed : sequence of two ndarray (N, 3)
         Their readings, m.
+    sigma : float, optional
+        The sensors' stated standard uncertainty, m: the location errors' std is then
+        sigma sqrt(diag((J^T J)^-1)). Without it the residuals' RMS stands in for sigma; they
+        hold the wobble as well (orthogonal to the location errors over a full revolution,
+        so it moves none of them), and that std overstates.
     """
     follow_q, follow = _readings(follow_q, follow, "follow")
     tests = [_readings(q, r, "fixed") for q, r in zip(fixed_q, fixed, strict=True)]
@@ -158,9 +165,14 @@ def separate(machine, follow_q, follow, fixed_q, fixed) -> CAxisSeparation:
     if rank < design.shape[1]:
         raise InputError("The fixed tests do not separate the C location errors (rank "
                          f"{rank} of {design.shape[1]}); use a radius > 0", key="fixed_q")
-    residual = y - design @ solution
-    dof = max(1, y.size - design.shape[1])
-    scale = float(np.sqrt(residual @ residual / dof))
+    if sigma is None:
+        residual = y - design @ solution
+        scale = float(np.sqrt(residual @ residual / max(1, y.size - design.shape[1])))
+    elif not (isinstance(sigma, int | float) and math.isfinite(sigma) and sigma > 0.0):
+        raise InputError(f"Expected sigma as a standard uncertainty > 0 (m), got {sigma!r}",
+                         key="sigma")
+    else:
+        scale = float(sigma)
     cov = np.linalg.inv(design.T @ design) * scale ** 2
     location = {n: float(v) for n, v in zip(LOCATION, solution[:4], strict=True)}
     std = {n: float(np.sqrt(cov[i, i])) for i, n in enumerate(LOCATION)}

@@ -65,6 +65,7 @@ class CTests:
     follow: np.ndarray
     fixed_q: tuple
     fixed: tuple
+    sigma: float  # the sensors' stated standard uncertainty, m
 
 
 @dataclass(frozen=True)
@@ -132,7 +133,8 @@ class XYPlaneErrors:
         knots = _knots(xy.map.position_x.positions)
         estimate = fit_xy_plane(_machine(measurements), curves, diagonals, knots)
         c: CTests = measurements["c"]
-        sep = separate(_machine(measurements), c.follow_q, c.follow, c.fixed_q, c.fixed)
+        sep = separate(_machine(measurements), c.follow_q, c.follow, c.fixed_q, c.fixed,
+                       c.sigma)
         # The XY parameters are reported in the details: their tables sit on the test's
         # knots (not the injected model's) and EC0Y carries the fit's datum (EXY zero at
         # the last knot), so a name-by-name comparison with the injected would mislead.
@@ -163,7 +165,7 @@ class XYPlaneErrors:
         sep: CAxisSeparation = identified.detail["c"]
         c_after = self._c_tests(lab, model)
         sep_after = separate(lab.machine, c_after.follow_q, c_after.follow, c_after.fixed_q,
-                             c_after.fixed)
+                             c_after.fixed, c_after.sigma)
         before_diag = identified.detail["diagonal_before"]
         pyramids_before, _ = cut_and_read(lab, None, label="pyramids_before")
         pyramids_after, _ = cut_and_read(lab, model, label="pyramids_after")
@@ -248,7 +250,8 @@ class XYPlaneErrors:
             commanded = compensation.apply(q)
             return readings_from_commands(m, q, commanded, rt.read(commanded).displacement)
 
-        return CTests(follow_q, read(follow_q), fixed_q, tuple(read(q) for q in fixed_q))
+        return CTests(follow_q, read(follow_q), fixed_q, tuple(read(q) for q in fixed_q),
+                      rt.uncertainty)
 
 
 def _pyramid_figures(windows) -> tuple[float, float]:
