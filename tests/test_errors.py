@@ -777,3 +777,9 @@ def test_a_rotary_axis_s_table_of_a_turn_repeats_each_turn_and_a_polynomial_is_r
         "EZC_poly_mm_deg": [0.0, 0.0, 7e-3]}}})
     with pytest.raises(ErrorModelError, match="component.C.EZC.*does not repeat each turn"):
         machine.tool_pose(q[:1], growing)
+
+
+def test_positions_without_a_table_are_refused_not_dropped():
+    # a [component.X] with positions and no table was read as no error at all
+    with pytest.raises(ErrorModelError, match=r"component\.X\.position_mm.*no table uses it"):
+        ErrorModel.from_dict({"component": {"X": {"position_mm": [-10.0, 0.0, 10.0]}}})

@@ -305,4 +305,8 @@ def _parse_component(axis: Any, table: Any, source: str,
             message = f"the table has {values.size} values, {_describe(raw)}, but {position_key} "
             raise _fail(f"{message}has {positions.size} positions", source, key_path)
         out[symbol] = ComponentError("table", positions, values)
+    if positions is not None and not tables:
+        raise _fail(f"{position_key} is given but no table uses it; expected an error table "
+                    f"beside it (e.g. EX{axis}_um = [...], one value per position)",
+                    source, f"{path}.{position_key}")
     return out
