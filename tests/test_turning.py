@@ -164,6 +164,28 @@ def test_a_centre_height_error_leaves_an_uncut_core_of_its_radius():
     assert (heights[np.abs(x) > 1e-6 + 1e-12] < 5e-9).all()
 
 
+def test_an_offset_of_round_off_is_no_centre_height_error():
+    # the poses of a tool on the centre height leave ~1e-17 m in the offset: within
+    # OFFSET_CONSTANT_M (1e-15 m) of zero it is zero, so the axis point is cut as with an
+    # offset of exactly 0; 2e-15 m is a centre-height error, with its core of that radius
+    alpha, rho, _, z = spiral_path(0.05e-3, 2e-6, math.radians(2.0))
+    x = np.array([0.0, 1e-18, 1e-15, 1e-9, 3e-6])
+    exact = turned_surface(EdgePath(alpha, rho, 0.0, z), R, x, [0.0], top=5e-9)[0]
+    assert (exact < 5e-9).all()
+    for offset in (3e-17, -8e-16):
+        heights = turned_surface(EdgePath(alpha, rho, offset, z), R, x, [0.0], top=5e-9)[0]
+        np.testing.assert_array_equal(heights, exact)
+    # an offset that varies fits a spindle axis ~1e-17 m off the origin: the points beside
+    # it are seen from other directions, where the centre's last revolution leaves other
+    # heights, within the scallop f^2 / 8R
+    noise = 3e-17 * np.sin(7.0 * alpha) + 2e-17
+    heights = turned_surface(EdgePath(alpha, rho, noise, z), R, x, [0.0], top=5e-9)[0]
+    np.testing.assert_allclose(heights, exact, rtol=0, atol=(2e-6) ** 2 / (8 * R))
+    np.testing.assert_allclose(heights[3:], exact[3:], rtol=0, atol=1e-20)
+    core = turned_surface(EdgePath(alpha, rho, 2e-15, z), R, x, [0.0], top=5e-9)[0]
+    assert (core[:3] == 5e-9).all() and (core[3:] < 5e-9).all()
+
+
 def test_an_off_centre_spindle_turns_the_same_surface_about_its_axis():
     # tips about a spindle axis at e: the offset varies as e x u along the path; the engine
     # fits the axis and works about it, so the surface is the centred one shifted by e

@@ -24,6 +24,14 @@ Moves that do not turn C (the plunge to the first point, the retract) are not cu
 spindle angle the edge marks a line, not a surface; a program whose C stands still
 throughout is refused. Rapids are never cut.
 
+A program that takes an axis outside its travel is refused before anything is cut, with
+`AxisLimitError` naming the axis, the value, the travel and the program's lines, as
+`machinesim.cutting.cut` refuses it (the same check, on the program's axis values, move by
+move); ``allow_overtravel=True`` turns it anyway and lists it in
+`TurningReport.limit_violations`. A turn that leaves the stock as it was (the tool's tip
+never below its top: a program above the part, a tool set too high or a workpiece too low)
+is reported, as `cut` reports one: `TurningReport.empty_cut`, with a note saying why.
+
 The result is a `TurnedPart`: a height field evaluated on demand (exactly, at any points),
 which the optical instruments read like a mesh part (`machinesim.metrology.optical`).
 """
@@ -31,11 +39,15 @@ which the optical instruments read like a mesh part (`machinesim.metrology.optic
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import os
+from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 
+from machinesim.cutting.program import _overtravel
 from machinesim.cutting.turning import edge_path_from_poses, turned_heights
+from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
 from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
@@ -112,6 +124,15 @@ class TurningReport:
     peak_following_error : dict
         Axis letter -> largest |command - reached| over the runs (m or rad); zeros without
         servo loops.
+    empty_cut : bool
+        True when nothing was cut: the tool's tip (the nose's lowest point) stays at or
+        above the stock's top over the whole turn, so the part is the stock's top
+        everywhere. ``notes`` says how far above it the tip stayed.
+    limit_violations : tuple of str
+        Axis values outside their travel, with their lines (only with ``allow_overtravel``:
+        otherwise `turn` raises `AxisLimitError`).
+    notes : tuple of str
+        What a reader of the part should know (an empty cut).
     """
 
     points: int
@@ -119,34 +140,56 @@ class TurningReport:
     machining_time_s: float
     revolutions: float
     peak_following_error: dict
+    empty_cut: bool = False
+    limit_violations: tuple[str, ...] = ()
+    notes: tuple[str, ...] = field(default=())
 
 
 def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
-         top: float = 0.0) -> tuple[TurnedPart, TurningReport]:
+         top: float = 0.0, allow_overtravel: bool = False
+         ) -> tuple[TurnedPart, TurningReport]:
     """Cut ``program`` on the lathe ``machine`` with the turning engine (module docstring).
 
     Parameters
     ----------
-    program : Program
-        The NC program (`machinesim.nc`), axis values SI.
+    program : Program or str or Path
+        The NC program (`machinesim.nc`, axis values SI), or an NC file's path (read with
+        `machinesim.nc.read_program`'s defaults).
     machine : Machine or str
         A machine with a C (work spindle) and an X axis, e.g. ``"sts_lathe"``.
     tool : str or RoundNoseTool
         The tool as programmed (``"nose:RADIUS_MM:ANGLE_DEG"``).
-    errors : ErrorModel, optional
-        The machine's errors (tool setting, tool geometry, geometric).
+    errors : ErrorModel, dict or str or Path, optional
+        The machine's errors (tool setting, tool geometry, geometric; None: the nominal
+        machine), as a model, a dict in the TOML layout or a TOML file's path
+        (`machinesim.errors.as_error_model`, as `cut` takes them).
     servo : ServoModel, optional
         Servo loops (``follow(t, q)``, columns in the machine's axis order); None: the axes
         follow exactly.
     top : float
         The stock's top, m (default 0: the face at Z = 0).
+    allow_overtravel : bool
+        Turn a program that takes an axis outside its travel, listing where, instead of
+        refusing it.
 
     Returns
     -------
     (TurnedPart, TurningReport)
+
+    Raises
+    ------
+    AxisLimitError
+        When an axis leaves its travel (and ``allow_overtravel`` is False): the message names
+        the axis, the value, the travel and the program's lines. Nothing is turned.
     """
     from machinesim.machines import Machine, load_machine
+    from machinesim.nc import Program, read_program
 
+    if isinstance(program, str | os.PathLike):
+        program = read_program(program)
+    elif not isinstance(program, Program):
+        raise InputError(f"Expected program as a machinesim.nc.Program or an NC file's path, "
+                         f"got {type(program).__name__}", key="program")
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
     if "C" not in machine.axes or "X" not in machine.axes:
         raise InputError(f"Expected a lathe with X and C axes, {machine.name} has "
@@ -158,10 +201,18 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     top = float(top)
     if not math.isfinite(top):
         raise InputError(f"Expected a finite top (m), got {top!r}", key="top")
+    errors = None if errors is None else as_error_model(errors)
     machine.check_errors(errors)
+    limits = _overtravel(machine, _program_moves(program, machine),
+                         getattr(program, "source", None), allow_overtravel)
     if errors is not None:
-        tool = with_nose_radius_error(tool, errors.tool_geometry.nose_radius,
-                                      errors.written.get("tool_geometry.nose_radius"))
+        try:
+            tool = with_nose_radius_error(tool, errors.tool_geometry.nose_radius,
+                                          errors.written.get("tool_geometry.nose_radius"))
+        except InputError as error:  # a model read from a file: name it, as a misfit is
+            if errors.source is None:
+                raise
+            raise InputError(error.message, source=str(errors.source), key=error.key) from None
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
     for t, points in turning_runs(program, machine):
         reached = followed(None if servo is None else servo.follow, t, points)
@@ -173,8 +224,24 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
         c = points[:, machine.axes.index("C")]
         turns += abs(float(c[-1] - c[0])) / (2.0 * math.pi)
     part = TurnedPart(tuple(paths), tool, top)
-    report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak)
+    lowest = min(float(path.z.min()) for path in paths)
+    empty = not lowest < top  # the nose's lowest point is its tip (`nose_profile`)
+    notes = ((f"nothing was cut: the tool's tip stays {(lowest - top) * 1e6:.6g} um or more "
+              f"above the stock's top (z = {top * 1e6:.6g} um) throughout; does the program "
+              "reach the stock, and do the errors set the tool too high or the workpiece too "
+              "low (tool.z, workpiece.z)?",) if empty else ())
+    report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak,
+                           empty_cut=empty, limit_violations=limits, notes=notes)
     return part, report
+
+
+def _program_moves(program, machine) -> SimpleNamespace:
+    """``program``'s axis values per move (modal; NaN before an axis is first set) and
+    source lines, as `machinesim.cutting.program`'s travel check reads a cut's moves. The
+    moves are straight in axis space, so their ends bound them."""
+    targets = np.asarray(program.targets, dtype=np.float64)
+    q = modal_values(targets[:, [AXES.index(a) for a in machine.axes]])
+    return SimpleNamespace(q=q, line=np.asarray(program.lines))
 
 
 def turning_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -24,7 +24,9 @@ WALK_STEPS = 24
 #: each divides the error by rho / |d'| (>= 10 beyond ten times the offset's amplitude).
 _CROSSING_STEPS = 64
 #: An offset (centre height) that varies by at most this along the path (m), about the
-#: path's fitted spindle axis, is taken as constant: the crossings then move by at most
+#: path's fitted spindle axis, is taken as constant, and one that is then within this of
+#: zero as zero (a tool on the centre height: the poses' round-off, ~1e-17 m, would leave
+#: an uncut core of that radius on the axis): the crossings then move by at most
 #: 1e-15 m / rho rad and the heights by less than 1e-15 m times the surface slope.
 OFFSET_CONSTANT_M = 1e-15
 #: Most path points in one bin of the angle lookup before it falls back to binary search.
@@ -395,19 +397,25 @@ def _spindle_axis(alpha, along, offset):
     over (1, cos, sin). Any e is a mere change of coordinates (the engine then works on
     points minus e); the fit makes the offset constant where the tool's centre height
     does not change, so that the crossings have their closed form. Offsets that then vary
-    by at most `OFFSET_CONSTANT_M` are taken as their median.
+    by at most `OFFSET_CONSTANT_M` are taken as their median, and as zero when that is
+    within `OFFSET_CONSTANT_M` of it.
     """
-    if np.ptp(offset) == 0.0:
-        return (0.0, 0.0), along, offset
-    cos, sin = np.cos(alpha), np.sin(alpha)
-    basis = np.column_stack([np.ones_like(alpha), cos, sin])
-    coefficients = np.linalg.solve(basis.T @ basis, basis.T @ offset)
-    e_x, e_y = -coefficients[2], coefficients[1]
-    along = along - (cos * e_x + sin * e_y)
-    offset = offset - (cos * e_y - sin * e_x)
+    centre = (0.0, 0.0)
+    if np.ptp(offset) > 0.0:
+        cos, sin = np.cos(alpha), np.sin(alpha)
+        basis = np.column_stack([np.ones_like(alpha), cos, sin])
+        coefficients = np.linalg.solve(basis.T @ basis, basis.T @ offset)
+        e_x, e_y = -coefficients[2], coefficients[1]
+        along = along - (cos * e_x + sin * e_y)
+        offset = offset - (cos * e_y - sin * e_x)
+        centre = (float(e_x), float(e_y))
     if np.ptp(offset) <= OFFSET_CONSTANT_M:
-        offset = np.full(offset.size, np.median(offset))
-    return (float(e_x), float(e_y)), along, offset
+        level = float(np.median(offset))
+        # within OFFSET_CONSTANT_M of zero: on the centre height. The uncut core of radius
+        # |d| it would leave is round-off (the poses' ~1e-17 m of a nominal tool), and a
+        # point that near the axis (an interferometer's pixel on it) would read the top
+        offset = np.full(offset.size, 0.0 if abs(level) <= OFFSET_CONSTANT_M else level)
+    return centre, along, offset
 
 
 def _range(values, start, stop, op, fill):

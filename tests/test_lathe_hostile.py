@@ -1,0 +1,140 @@
+"""`lathe.turn` against what a new user throws at it: points on the spindle axis, programs
+beyond the axes' travel, errors that lift the tool off the part, errors as a dict or a TOML
+file, an errors file with a bad value."""
+
+import numpy as np
+import pytest
+
+import machinesim
+import machinesim.cam.spiral as sp
+from machinesim.cutting.lathe import turn
+from machinesim.errors import ErrorModel
+from machinesim.exceptions import AxisLimitError, InputError
+
+RS, R, FEED, TOP = 2e-3, 1e-3, 1e-6, 1e-6
+
+
+@pytest.fixture(scope="module")
+def tool_path():
+    spiral = sp.Spiral(0.12e-3, FEED)
+    return sp.tool_path(sp.cutting_points(sp.sphere(RS), spiral,
+                                          sp.constant_angle(spiral, 0.02)), R)
+
+
+@pytest.fixture(scope="module")
+def program(tool_path):
+    return sp.spiral_program(tool_path)
+
+
+def test_a_nominal_tool_cuts_the_points_on_the_spindle_axis(program):
+    # the poses of a tool on the centre height carry ~1e-17 m of round-off in the edge
+    # plane's offset; taken as a centre-height error it left an uncut core that wide, and a
+    # point at r = 0 or 1e-18 m read the stock's top (1 um) instead of the cut surface
+    part, _ = turn(program, "sts_lathe", "nose:1.0:90", top=TOP)
+    scallop = (FEED * (1 + R / RS)) ** 2 / (8 * R)  # nose centres f (1 + R/Rs) apart
+    near = part.heights_at([1e-9], [1e-9])[0]
+    assert abs(near) < scallop  # the sphere's top, z = 0, plus at most a scallop
+    for r in (0.0, 1e-18, 1e-16):
+        assert abs(part.heights_at([r], [r])[0] - near) <= scallop, r
+
+
+def test_a_nominal_tool_test_reads_no_uncut_core():
+    # the interferometer's maps are symmetric about the origin and have a pixel on the axis:
+    # it read the stock's top, and |dy| came out as one pixel, sqrt(pitch^2 / pi) = 0.28 um
+    from machinesim.procedures.sts_plans import TEST_SPHERE
+    from machinesim.procedures.sts_turning import STSTurning
+
+    found = STSTurning().measure(machinesim.Lab("sts_lathe", noise=False))["tool_test"]
+    assert found.dy_abs < 0.01 * TEST_SPHERE.pixel
+    assert abs(found.dx) < 1e-9 and abs(found.dy) < 1e-9
+
+
+def _line_of_extreme(program, axis: str, largest: bool) -> int:
+    """The program line at which ``axis`` takes its largest (or least) value."""
+    column = program.targets[:, "XYZABC".index(axis)]
+    index = np.nanargmax(column) if largest else np.nanargmin(column)
+    return int(program.lines[index])
+
+
+@pytest.mark.parametrize("start_c", [99990.0, -1e6])
+def test_turn_refuses_a_spindle_angle_beyond_its_travel_naming_the_line(tool_path, start_c):
+    # sts_lathe's C travels +-1e5 rad (5729577.95131 deg); the spiral turns 120 times from
+    # start_c: 99990 + 754 rad ends beyond it, -1e6 starts beyond it
+    program = sp.spiral_program(tool_path, start_c=start_c)
+    worst = _line_of_extreme(program, "C", largest=start_c > 0)
+    value = np.degrees(program.targets[:, 5][program.lines == worst][0])
+    with pytest.raises(AxisLimitError, match=(
+            rf"axis C = {value:.5f} deg at line {worst} outside its travel "
+            r"-5729577\.95131 deg \.\. 5729577\.95131 deg .*nothing was cut")):
+        turn(program, "sts_lathe")
+
+
+def test_turn_refuses_a_radius_beyond_the_x_travel_unless_allowed():
+    # a facing spiral of 150 mm radius on X's +-100 mm travel: refused at its first line
+    # (the rapid to X 150 mm); allowed, it is turned and listed, as `cut` lists it
+    spiral = sp.Spiral(0.15, 1e-3)
+    path = sp.tool_path(sp.cutting_points(sp.tilted_plane(0.0), spiral,
+                                          sp.constant_angle(spiral, 0.5)), R)
+    program = sp.spiral_program(path)
+    first = int(program.lines[0])
+    with pytest.raises(AxisLimitError, match=rf"axis X = 150\.000000 mm at line {first} "
+                                             r"outside its travel -100\.000000 mm \.\. "
+                                             r"100\.000000 mm"):
+        turn(program, "sts_lathe")
+    _, report = turn(program, "sts_lathe", allow_overtravel=True)
+    assert len(report.limit_violations) == 1
+    assert report.limit_violations[0].startswith(f"axis X = 150.000000 mm at line {first}")
+
+
+@pytest.mark.parametrize("lift", [{"tool.z": 0.5}, {"workpiece.z": -1.0}])
+def test_a_turn_that_never_reaches_the_stock_reports_an_empty_cut(program, tool_path, lift):
+    # the tool set 0.5 m up, or the workpiece 1 m down: the tip's lowest point is the
+    # program's lowest Z plus that, far above the stock's top; nothing is cut
+    errors = ErrorModel().with_parameters(lift)
+    for part, report in (turn(program, "sts_lathe", "nose:1.0:90", errors, top=TOP),
+                         machinesim.Lab("sts_lathe", errors, noise=False).turn(program,
+                                                                               top=TOP)):
+        assert report.empty_cut
+        above = (tool_path.z.min() + abs(next(iter(lift.values()))) - TOP) * 1e6
+        assert report.notes == (
+            f"nothing was cut: the tool's tip stays {above:.6g} um or more above the stock's "
+            f"top (z = {TOP * 1e6:.6g} um) throughout; does the program reach the stock, and "
+            "do the errors set the tool too high or the workpiece too low (tool.z, "
+            "workpiece.z)?",)
+        assert (part.heights([-1e-4, 0.0, 5e-5], [0.0, 3e-5]) == TOP).all()
+    _, nominal = turn(program, "sts_lathe", "nose:1.0:90", top=TOP)
+    assert not nominal.empty_cut and nominal.notes == () and nominal.limit_violations == ()
+
+
+def test_turn_takes_errors_as_a_model_a_dict_or_a_toml_file(program, tmp_path):
+    table = {"tool": {"offset_um": [0.7, -1.2, 0.0]}, "tool_geometry": {"nose_radius_um": 3.0}}
+    path = tmp_path / "errors.toml"
+    path.write_text("[tool]\noffset_um = [0.7, -1.2, 0.0]\n\n"
+                    "[tool_geometry]\nnose_radius_um = 3.0\n")
+    x = np.linspace(2e-5, 1e-4, 9)
+    y = np.full_like(x, 3e-6)
+    model, _ = turn(program, "sts_lathe", "nose:1.0:90", ErrorModel.from_dict(table), top=TOP)
+    expected = model.heights_at(x, y)
+    assert model.tool.nose_radius == pytest.approx(R + 3e-6, abs=1e-18)
+    for errors in (table, path, str(path)):
+        part, _ = turn(program, "sts_lathe", "nose:1.0:90", errors, top=TOP)
+        np.testing.assert_array_equal(part.heights_at(x, y), expected)
+
+
+def test_a_bad_nose_radius_in_an_errors_file_names_the_file(program, tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text("[tool_geometry]\nnose_radius_mm = -1.0\n")
+    with pytest.raises(InputError, match=(
+            rf"^{path}, key 'tool_geometry\.nose_radius_mm': the error model's "
+            r"tool_geometry\.nose_radius_mm = -1 does not fit the RoundNoseTool")):
+        turn(program, "sts_lathe", "nose:1.0:90", path)
+    with pytest.raises(InputError, match=r"^key 'tool_geometry\.nose_radius': the error "
+                                         r"model's tool_geometry\.nose_radius = -0\.001 m"):
+        turn(program, "sts_lathe", "nose:1.0:90",
+             ErrorModel().with_parameters({"tool_geometry.nose_radius": -1e-3}))
+
+
+def test_turn_refuses_a_program_that_is_not_one():
+    with pytest.raises(InputError, match="Expected program as a machinesim.nc.Program or an "
+                                         "NC file's path, got int"):
+        turn(3, "sts_lathe")
