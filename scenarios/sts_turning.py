@@ -31,6 +31,7 @@ import numpy as np
 from machinesim import Lab
 from machinesim._io import write_atomic
 from machinesim.budget import realism_budget
+from machinesim.cutting.turning import edge_path_from_poses
 from machinesim.errors import ErrorModel
 from machinesim.experiment import run
 from machinesim.procedures.sts_plans import PAPER, TABLE5
@@ -92,32 +93,47 @@ def report(args) -> None:
 
 
 def tool_against_axis(out: ReportFolder, lab, result) -> str:
-    """The identified tool offsets against the spindle axis where the lab's machine has it.
+    """The identified tool offsets against the tool's offsets from the spindle axis as the
+    lab's machine has them (`tool_from_spindle_axis`, from the lab's truth, after the run).
 
     The test pieces are turned about the spindle axis, so they show the tool's offset from
-    that axis: the injected offset less where the background puts the axis at the workpiece
-    (docs/procedures/sts_turning.md, "What the tests read"). Read here from the lab's truth,
-    after the run: the tool tip's circle over a turn of C."""
-    machine = lab.machine
-    turn = np.linspace(0.0, 2.0 * np.pi, 73)[:-1]
-    q = np.zeros((turn.size, len(machine.axes)))
-    q[:, machine.axes.index("X")] = 60e-6
-    q[:, machine.axes.index("C")] = turn
-    tips = machine.tool_pose(q, lab.reveal())[:, :3, 3]
-    fit = np.column_stack([2.0 * tips[:, 0], 2.0 * tips[:, 1], np.ones(turn.size)])
-    centre = np.linalg.lstsq(fit, tips[:, 0] ** 2 + tips[:, 1] ** 2, rcond=None)[0][:2]
+    that axis: the injected offset plus what the background adds to it (the C axis's
+    location errors, docs/procedures/sts_turning.md, "What the tests read"). A workpiece
+    setting error moves the axis in the workpiece frame, not the tool against it."""
+    truth = tool_from_spindle_axis(lab.machine, lab.reveal(), STSTurning().nose_radius)
     rows = []
-    for name, axis in (("tool.x", centre[0]), ("tool.y", centre[1])):
+    for name, against in zip(("tool.x", "tool.y"), truth, strict=True):
         value, std = result.identified[name]
-        expected = result.injected[name] - axis
-        rows.append([name, result.injected[name] / NM, axis / NM, expected / NM, value / NM,
-                     std / NM, (value - expected) / NM, (value - expected) / std])
+        injected = result.injected[name]
+        rows.append([name, injected / NM, (against - injected) / NM, against / NM, value / NM,
+                     std / NM, (value - against) / NM, (value - against) / std])
     return out.write_table(
-        "tool_against_axis", ["parameter", "injected (nm)", "spindle axis at the workpiece (nm)",
-                              "injected less axis (nm)", "identified (nm)", "std (nm)",
-                              "error against the axis (nm)", "error / std"],
+        "tool_against_axis", ["parameter", "injected (nm)", "added by the machine (nm)",
+                              "tool against the spindle axis (nm)", "identified (nm)",
+                              "std (nm)", "error against the axis (nm)", "error / std"],
         rows, title="Tool offsets against the spindle axis (the tests read the tool from it)",
         digits=2)
+
+
+def tool_from_spindle_axis(machine, errors, nose_radius: float,
+                           radius: float = 60e-6) -> tuple[float, float]:
+    """The tool's offsets from the spindle axis (m): dx, radial (along the tool's X, less
+    the commanded X), and dy, the centre height (along its Y), with ``errors``.
+
+    The tool's poses over a turn of C at X = ``radius``, as the turning engine takes them
+    (`edge_path_from_poses`: the edge plane's direction and the nose's position in it). With
+    the spindle axis at e in the workpiece frame, the path's ``along`` is X + dx + u . e and
+    its ``offset`` dy + u x e, u the edge plane's direction (the tool's X, turned by C): over
+    a whole turn sampled evenly u averages to zero, so the means are X + dx and dy, wherever
+    the axis lies (an `EdgePath` with its tip mostly on -u is stored with u turned by pi:
+    turned back here)."""
+    turn = np.linspace(0.0, 2.0 * np.pi, 73)[:-1]
+    q = np.zeros((turn.size, len(machine.axes)))
+    q[:, machine.axes.index("X")] = radius
+    q[:, machine.axes.index("C")] = turn
+    path = edge_path_from_poses(machine.tool_pose(q, errors), nose_radius)
+    sign = -1.0 if abs(path.angle[0] - turn[0]) > 0.5 * np.pi else 1.0
+    return sign * float(np.mean(path.along)) - radius, sign * float(np.mean(path.offset))
 
 
 def case_table(details) -> str:

@@ -62,6 +62,13 @@ NM, UM = 1e-9, 1e-6
 #: "Identifying the tool errors"): dx -10 .. +5 um misfit 0.06-0.43 nm, dR within 0.6 %;
 #: +7 um 0.78-0.82 nm, dR 2 % off; +10 um 1.7 nm, 8 % off; +-20 um 3.9-7.3 nm, dR 12-88 % off.
 SPHERE_MISFIT_LIMIT = 0.6 * NM
+#: The radial offsets dx (m) within which the test sphere reads dR within 0.6 % (above).
+DX_RANGE = (-10 * UM, 5 * UM)
+#: Largest uncut core (|dy| read from the sphere, m) for which the tool test is taken: the
+#: plane's fit leaves out 30 um about the axis (`TEST_PLANE.core`); through the lab (noise
+#: off) dy = 10 um is read 0.4 % off, 15 and 20 um 1.7-2 %, 30 um 12 %, and at 40 um the
+#: sphere still fits (0.08 nm) but reads dR -1815 um for 100 um.
+CORE_LIMIT = 20 * UM
 
 #: The cases (section 5.1): what is compensated in each.
 CASES = {"case_1": "none", "case_2": "tool", "case_3": "tool + program",
@@ -90,38 +97,86 @@ class ToolTest:
 
 def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
     """Turn the test sphere and the tilted test plane with ``tool`` (programs compensated
-    for ``nose_radius``) and read the tool errors from the interferometer's maps."""
+    for ``nose_radius``) and read the tool errors from the interferometer's maps.
+
+    Refused (`InputError`, key ``tool_test``), saying what the readings show and which
+    settings can cause it: a test piece the tool did not cut (`TurningReport.empty_cut`); a
+    sphere with no cut pixel in the interferometer's window; an uncut core wider than
+    `CORE_LIMIT`; a sphere that does not fit the tool-error model (misfit above
+    `SPHERE_MISFIT_LIMIT`), blamed on dx when the fit reads it outside `DX_RANGE`."""
     # height maps, and the interferometers' stated height and lateral noise (m)
     maps, stated, lateral = {}, {}, {}
     for piece, plan in (("sphere", TEST_SPHERE), ("plane", TEST_PLANE)):
-        part, _ = lab.turn(sp.spiral_program(plan.path(nose_radius)), tool, top=plan.top)
+        part, report = lab.turn(sp.spiral_program(plan.path(nose_radius)), tool, top=plan.top)
+        if report.empty_cut:
+            raise InputError(f"{label}: the test {piece} was not cut; the turn reports "
+                             f"{report.notes[0]}", key="tool_test")
         w = plan.read_half_width
         interferometer = lab.white_light_interferometer(label=f"{label}_{piece}")
         maps[piece] = interferometer.height_map(part, -w, w, -w, w, plan.pixel)
         stated[piece] = interferometer.readout.std
         lateral[piece] = interferometer.lateral_sigma
     sphere, plane = maps["sphere"], maps["plane"]
+    _refuse_unseen_cut(sphere, label)
     found = identify_tool_errors(TEST_SPHERE.design(), sphere.x, sphere.y, sphere.z,
                                  core_step=TEST_SPHERE.core_step,
                                  aperture=TEST_SPHERE.read_half_width,
                                  lateral_sigma=lateral["sphere"])
+    reads = (f"the fit reads dx {found.dx / UM:.2f} um, dR {found.d_radius / UM:.2f} um, "
+             f"|dy| {found.dy_abs / UM:.2f} um")
+    if found.dy_abs > CORE_LIMIT:
+        raise InputError(
+            f"{label}: the turned test sphere has an uncut centre {found.dy_abs / UM:.2f} um "
+            f"in radius (pixels more than {TEST_SPHERE.core_step / NM:g} nm above the fitted "
+            f"sphere; {reads}); the tool test reads an uncut core, |dy|, up to "
+            f"{CORE_LIMIT / UM:g} um. A tool that far off the centre height (tool.y), or set "
+            f"so high that the top of the sphere stays uncut (tool.z more than about "
+            f"{TEST_SPHERE.top / UM:g} um up: the stock's top over the sphere), leaves it: set "
+            "the tool that close first, as the paper's tool was", key="tool_test")
     noise = stated["sphere"]
     misfit = float(np.sqrt(max(found.residual_rms**2 - noise**2, 0.0)))
     if misfit > SPHERE_MISFIT_LIMIT:
+        low, high = DX_RANGE
+        if low <= found.dx <= high:
+            cause = ("The dx, |dy| and dR read are within the test's range, so the misfit is "
+                     "something the tool-error model leaves out: the tool's height (tool.z "
+                     "above the sphere's top leaves a flat uncut top), its rotation (tool.rx, "
+                     "tool.ry, tool.rz), the workpiece's setting (workpiece.*) or the machine's "
+                     "geometric errors; check them, or whether dx itself, read from a "
+                     "misfitting sphere, is off")
+        else:
+            cause = (f"The dx read is outside the range this test identifies (dx from about "
+                     f"{low / UM:+g} to {high / UM:+g} um, docs/procedures/sts_turning.md): "
+                     "set the tool that close first, as the paper's tool was")
         raise InputError(
             f"{label}: the turned test sphere does not fit the tool-error model: residual "
             f"RMS {found.residual_rms / NM:.2f} nm against the interferometer's stated "
             f"{noise / NM:.2f} nm, a misfit of {misfit / NM:.2f} nm (at most "
-            f"{SPHERE_MISFIT_LIMIT / NM:.2f} nm); the fit reads dx {found.dx / UM:.2f} um, "
-            f"dR {found.d_radius / UM:.2f} um. The tool errors are beyond what this test "
-            "identifies (dx from about -10 to +5 um, docs/procedures/sts_turning.md): set "
-            "the tool that close first, as the paper's tool was", key="tool_test")
+            f"{SPHERE_MISFIT_LIMIT / NM:.2f} nm); {reads}. {cause}",
+            key="tool_test")
     centre = fit_centre_height(plane.x, plane.y, plane.z, TEST_PLANE.slope,
                                aperture=TEST_PLANE.read_half_width, core=TEST_PLANE.core,
                                dx=found.dx, noise=stated["plane"],
                                lateral_sigma=lateral["plane"])
     return ToolTest(found.dx, centre.dy, found.d_radius, found.dy_abs, dx_std=found.dx_std,
                     dy_std=centre.dy_std, d_radius_std=found.d_radius_std)
+
+
+def _refuse_unseen_cut(sphere, label: str) -> None:
+    """Refuse a test sphere of which the interferometer's window (within its read radius)
+    shows no cut: every pixel at the stock's top."""
+    gx, gy = np.meshgrid(sphere.x, sphere.y)
+    inside = (np.hypot(gx, gy) < TEST_SPHERE.read_half_width) & np.isfinite(sphere.z)
+    if (sphere.z[inside] < TEST_SPHERE.top - TEST_SPHERE.core_step).any():
+        return
+    raise InputError(
+        f"{label}: the test sphere was turned, but the interferometer's window (r < "
+        f"{TEST_SPHERE.read_half_width / UM:g} um about the workpiece's origin) shows no cut: "
+        f"every pixel reads the stock's top ({TEST_SPHERE.top / UM:g} um). The tool cut "
+        f"elsewhere: its tip is set more than about {TEST_SPHERE.read_half_width / UM:g} um "
+        "off the spindle axis (tool.x, tool.y), or so high that only the sphere's rim, "
+        "outside the window, is cut (tool.z), or the workpiece is set that far off the "
+        "spindle (workpiece.*); set the tool within a few um first", key="tool_test")
 
 
 @dataclass(frozen=True)
