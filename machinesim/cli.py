@@ -324,14 +324,9 @@ def _cut(args) -> int:
     # a flag passed only when given, so that without it the cutter's default (refuse) holds
     options = {name: True for name in ("allow_overtravel", "allow_holder_contact")
                if getattr(args, name)}
-    try:
-        part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
-                           start=machine.home, chord_tolerance=chord, servo=servo,
-                           progress=_progress_bar(args.quiet), **options)
-    except InputError as exc:
-        if not (args.errors and (exc.key or "").startswith("tool_geometry")):
-            raise
-        raise InputError(exc.message, source=str(args.errors), key=exc.key) from None
+    part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
+                       start=machine.home, chord_tolerance=chord, servo=servo,
+                       progress=_progress_bar(args.quiet), **options)
     summary = report.to_dict()
     summary["path_chord_tolerance_nm"] = chord * 1e9
     summary["notes"] = [*summary["notes"], *_reading_notes(args, program, chord)]

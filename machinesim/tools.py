@@ -640,21 +640,25 @@ def tool_from_spec(spec: str) -> Tool:
         raise InputError(f"tool spec {spec!r}: {error}", key="tool") from None
 
 
-def with_nose_radius_error(tool: Tool, d_radius: float, written=None) -> Tool:
-    """The tool as it is with the error model's nose radius error ``d_radius`` (m): a
-    round-nose tool's nose, a ball's or a flat end mill's radius that much larger, still set
-    by its tip. ``written``, the model's (key, value) as its file wrote them
-    (``ErrorModel.written["tool_geometry.nose_radius"]``), is what a refusal names.
+def with_nose_radius_error(tool: Tool, errors) -> Tool:
+    """The tool as it is with the error model's nose radius error (``errors``, an
+    `machinesim.errors.ErrorModel` or None): a round-nose tool's nose, a ball's or a flat end
+    mill's radius that much larger, still set by its tip. A refusal names the key and the
+    value as the model's file wrote them (``ErrorModel.written``), and the file.
 
     Raises
     ------
     InputError
-        When ``d_radius`` is not zero and the tool has no radius (a V tool).
+        When the error is not zero and the tool has no radius (a V tool), or the radius
+        would not be positive.
     """
+    d_radius = 0.0 if errors is None else errors.tool_geometry.nose_radius
     if d_radius == 0.0:
         return tool
+    written = errors.written.get("tool_geometry.nose_radius")
     key, shown = (("tool_geometry.nose_radius", f"{d_radius!r} m") if written is None
                   else (written[0], f"{written[1]:g}"))
+    source = None if errors.source is None else str(errors.source)
     try:
         if isinstance(tool, RoundNoseTool):
             return tool.with_errors(nose_radius_error=d_radius)
@@ -662,7 +666,8 @@ def with_nose_radius_error(tool: Tool, d_radius: float, written=None) -> Tool:
             return tool.with_errors(radius_error=d_radius)
     except InputError as error:  # name the error model's key the user wrote, and the value
         raise InputError(f"the error model's {key} = {shown} does not fit the "
-                         f"{type(tool).__name__} ({error.message})", key=key) from None
+                         f"{type(tool).__name__} ({error.message})", source=source,
+                         key=key) from None
     raise InputError(f"the error model has {key} = {shown}, but a {type(tool).__name__} has "
                      "no nose radius; expected a round-nose ('nose:R:ANGLE'), ball or flat end "
-                     "mill", key=key)
+                     "mill", source=source, key=key)

@@ -370,6 +370,12 @@ def test_a_nose_radius_error_that_does_not_fit_the_tool_names_the_file_key_and_v
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert f"{toml}, key 'tool_geometry.nose_radius_um'" in err and "= -5000 " in err, err
     assert not out.exists()
+    # the Python API names the file too, not only the command line
+    from machinesim import cut
+    from machinesim.errors import ErrorModel
+
+    with pytest.raises(MachineSimError, match=f"{toml}, key 'tool_geometry.nose_radius_um'"):
+        cut(GROOVES, "grooving_4axis", "ball:1", "block:10x10x2", ErrorModel.from_toml(toml))
 
 
 def test_a_v_tool_plunged_into_the_stock_is_said_to_remove_nothing_and_why(tmp_path, capsys):

@@ -205,14 +205,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     machine.check_errors(errors)
     limits = _overtravel(machine, _program_moves(program, machine),
                          getattr(program, "source", None), allow_overtravel)
-    if errors is not None:
-        try:
-            tool = with_nose_radius_error(tool, errors.tool_geometry.nose_radius,
-                                          errors.written.get("tool_geometry.nose_radius"))
-        except InputError as error:  # a model read from a file: name it, as a misfit is
-            if errors.source is None:
-                raise
-            raise InputError(error.message, source=str(errors.source), key=error.key) from None
+    tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
     for t, points in turning_runs(program, machine):
         reached = followed(None if servo is None else servo.follow, t, points)

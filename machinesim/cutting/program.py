@@ -123,10 +123,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
     machine.check_errors(errors)
     _refuse_turning(program, machine, start)
-    tools = _ToolSections(program, tool, 0.0 if errors is None
-                          else errors.tool_geometry.nose_radius,
-                          None if errors is None
-                          else errors.written.get("tool_geometry.nose_radius"))
+    tools = _ToolSections(program, tool, errors)
     if chord_tolerance is None:
         chord_tolerance = path_chord_tolerance(t for _, t, _ in tools.runs)
     trajectory = motion.plan(program, machine, errors, start=start,
@@ -271,8 +268,8 @@ class _ToolSections:
     in the spindle does, while ``G43`` lifted Z by the same length.
     """
 
-    def __init__(self, program, tool, d_radius: float = 0.0, written=None) -> None:
-        tool = with_nose_radius_error(tool, d_radius, written)  # every tool as it is
+    def __init__(self, program, tool, errors=None) -> None:
+        tool = with_nose_radius_error(tool, errors)  # every tool as it is
         built = {None: tool}
         # (first move, tool, length) of each run of moves between changes, and its name
         self.runs = [(0, tool, 0.0)]
@@ -283,7 +280,7 @@ class _ToolSections:
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
                 built[change.shape] = with_nose_radius_error(tool_from_spec(change.shape),
-                                                             d_radius, written)
+                                                             errors)
             self.runs.append((change.move, built[change.shape], float(change.length_m)))
             self.names.append((change.number, change.line))
 
