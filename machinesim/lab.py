@@ -199,10 +199,11 @@ class Lab:
         CUTS.put(key, part, report)
         return part, report
 
-    def turn(self, program, tool="nose:1.0:90", *, top: float = 0.0):
+    def turn(self, program, tool="nose:1.0:90", *, top: float = 0.0,
+             allow_overtravel: bool = False):
         """Turn ``program`` on the lab's lathe: its servo loops, its errors (tool setting,
         the tool's nose radius error, geometry) and the turning engine
-        (`machinesim.cutting.lathe.turn`).
+        (`machinesim.cutting.lathe.turn`; ``allow_overtravel`` as there).
 
         Returns
         -------
@@ -211,7 +212,8 @@ class Lab:
         """
         from machinesim.cutting.lathe import turn
 
-        return turn(program, self.machine, tool, self.__truth, servo=self.__servo, top=top)
+        return turn(program, self.machine, tool, self.__truth, servo=self.__servo, top=top,
+                    allow_overtravel=allow_overtravel)
 
     def adjust_tool(self, offset, *, label: str | None = None) -> None:
         """The operator moves the tool in its holder by ``offset`` (tool_mount X, Y, Z, m),

@@ -84,6 +84,14 @@ def test_turn_refuses_a_radius_beyond_the_x_travel_unless_allowed():
     _, report = turn(program, "sts_lathe", allow_overtravel=True)
     assert len(report.limit_violations) == 1
     assert report.limit_violations[0].startswith(f"axis X = 150.000000 mm at line {first}")
+    # through a lab too
+    import machinesim
+
+    lab = machinesim.Lab("sts_lathe", noise=False)
+    with pytest.raises(AxisLimitError, match="axis X = 150"):
+        lab.turn(program)
+    _, by_lab = lab.turn(program, allow_overtravel=True)
+    assert by_lab.limit_violations == report.limit_violations
 
 
 @pytest.mark.parametrize("lift", [{"tool.z": 0.5}, {"workpiece.z": -1.0}])
