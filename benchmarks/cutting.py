@@ -546,7 +546,7 @@ def run_ball_arcs(repeat: int, chord_nm: str) -> dict:
     heights += [[float(height_map(part, np.array([x]), np.array([x]))[0, 0])
                  for x in diagonal]]
     return {"chord": chord_nm, "median_s": statistics.median(times), "times_s": times,
-            "sweeps": summary["sweeps"], "chord_nm": summary["path_chord_tolerance_nm"],
+            "sweeps": summary["sweeps_count"], "chord_nm": summary["path_chord_tolerance_nm"],
             "removed_mm3": summary["removed_volume_mm3"], "heights": heights,
             "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
 

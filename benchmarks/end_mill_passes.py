@@ -71,7 +71,7 @@ def cut(folder: Path, name: str, text: str, variant: str) -> dict:
     seconds = time.perf_counter() - start
     summary = json.loads(report.read_text())
     return {"seconds": seconds, "removed_mm3": summary["removed_volume_mm3"],
-            "sweeps": summary["sweeps"], "part": out}
+            "sweeps": summary["sweeps_count"], "part": out}
 
 
 def apart_mm3(a: Path, b: Path) -> float:
