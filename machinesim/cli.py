@@ -32,6 +32,7 @@ from machinesim._io import (
     json_text,
     write_together,
 )
+from machinesim._memory import OUT_OF_MEMORY, limit_memory
 from machinesim._program_options import (
     add_reading_options,
     check_reading_options,
@@ -135,6 +136,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with ctrl_c_remembered():
             args = _parser().parse_args(None if argv is None else [str(a) for a in argv])
+            limit_memory()  # past the memory there is: MemoryError, not the OOM killer
             return _command(args)
     except MachineSimError as exc:
         return _fail(f"error: {exc}", EXIT_INPUT)
@@ -149,8 +151,7 @@ def main(argv: list[str] | None = None) -> int:
         where = f"{exc.filename}: " if exc.filename else ""
         return _fail(f"error: {where}{exc.strerror or exc}", EXIT_INPUT)
     except MemoryError:
-        return _fail("error: out of memory (a spec or program asks for more than this "
-                     "machine has)", 1)
+        return _fail(f"error: out of memory: {OUT_OF_MEMORY}", 1)
     except Exception as exc:
         if os.environ.get("MACHINESIM_TRACEBACK"):
             raise

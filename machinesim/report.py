@@ -21,6 +21,7 @@ from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
 from machinesim._io import StagedFolder, ctrl_c_remembered, json_text, write_atomic
+from machinesim._memory import OUT_OF_MEMORY, limit_memory
 from machinesim.exceptions import InputError
 
 #: Suffixes that name a unit (or say that a number has none).
@@ -420,6 +421,7 @@ def scenario_status(report, args, name: str | None = None) -> int:
     staged = None
     try:
         with ctrl_c_remembered():
+            limit_memory()  # past the memory there is: MemoryError, not the OOM killer
             if out is not None:
                 staged = _stage_report(out)
             report(args)
@@ -435,6 +437,9 @@ def scenario_status(report, args, name: str | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{name}: interrupted; {_interrupted(out, staged)}", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except MemoryError:
+        print(f"{name}: error: out of memory: {OUT_OF_MEMORY}", file=sys.stderr)
+        return 1
     finally:
         if staged is not None:
             staged.discard()

@@ -1,0 +1,71 @@
+"""The address-space cap: running out of memory is a MemoryError and one line, not the
+kernel's out-of-memory killer (a 5-level contour on a tilted workpiece took 24 GB and was
+killed with no message)."""
+
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+resource = pytest.importorskip("resource")
+
+
+def _run(code: str, env_gb: str | None) -> subprocess.CompletedProcess:
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "MACHINESIM_MEMORY_GB"}
+    if env_gb is not None:
+        env["MACHINESIM_MEMORY_GB"] = env_gb
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
+                          text=True, env=env, timeout=120)
+
+
+def test_past_the_cap_an_allocation_is_a_memory_error_and_below_it_is_not():
+    done = _run("""
+        import numpy as np
+        from machinesim._memory import limit_memory
+        cap = limit_memory()
+        print(cap)
+        a = np.ones(1 << 27)  # 1 GiB: fits
+        try:
+            b = np.ones(3 << 27)  # 3 GiB more: past 3 GiB of address space
+        except MemoryError:
+            print("MemoryError")
+        """, "3")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == [str(3 << 30), "MemoryError"]
+
+
+def test_the_cap_is_the_memory_there_is_and_never_raises_a_lower_one():
+    from machinesim._memory import FLOOR, usable_memory
+
+    done = _run("""
+        import resource
+        from machinesim._memory import limit_memory
+        print(limit_memory(), resource.getrlimit(resource.RLIMIT_AS)[0])
+        resource.setrlimit(resource.RLIMIT_AS, (5 << 30, resource.getrlimit(
+            resource.RLIMIT_AS)[1]))
+        print(limit_memory())
+        """, None)
+    assert done.returncode == 0, done.stderr
+    first, second = done.stdout.splitlines()
+    cap = max(usable_memory(), FLOOR)
+    assert first.split() == [str(cap), str(cap)]
+    assert second == str(min(cap, 5 << 30))
+
+
+def test_the_command_line_says_out_of_memory_in_one_line():
+    done = _run("""
+        import sys
+        import numpy as np
+        import machinesim.cli as cli
+        def hungry(args):
+            return np.ones(4 << 27).size  # 4 GiB, past the 3 GiB cap
+        cli._command = hungry
+        sys.exit(cli.main(["machines"]))
+        """, "3")
+    assert done.returncode == 1
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("machinesim: error: out of memory: "), lines
+    assert "MACHINESIM_MEMORY_GB" in lines[0]
