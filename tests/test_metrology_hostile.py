@@ -9,6 +9,7 @@ import os
 
 import numpy as np
 import pytest
+from test_metrology_instruments import above
 
 import machinesim
 from machinesim import _io
@@ -34,7 +35,6 @@ from machinesim.metrology import (
 from machinesim.metrology.imperfections import Spot
 from machinesim.metrology.instruments import OPTICAL_LIMIT
 from machinesim.metrology.surface import MAX_SAMPLES
-from machinesim.workpiece import block
 
 MM, UM, NM = 1e-3, 1e-6, 1e-9
 R = 0.25 * MM
@@ -42,23 +42,8 @@ R = 0.25 * MM
 ROUND_OFF_M = 1e-15
 
 
-@pytest.fixture(scope="module")
-def a0ib():
-    return machinesim.load_machine("robonano_a0ib")
 
 
-@pytest.fixture(scope="module")
-def flat():
-    """5 x 3 x 1 mm block: x in [0, 5] mm, y in [0, 3] mm, top face at z = 0."""
-    return block(5 * MM, 3 * MM, 1 * MM)
-
-
-def above(machine, x, y, z_centre):
-    """Axis values that put the nominal ball centre at (x, y, z_centre): the probe_tip sits
-    40 mm along +Y and 1 mm above the tool edge (docs/machines.md)."""
-    q = np.zeros(len(machine.axes))
-    q[:3] = x, y - 40 * MM, z_centre - 1 * MM
-    return q
 
 
 def groove_profile():

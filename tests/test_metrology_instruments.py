@@ -36,20 +36,11 @@ K = 4.0
 N = 2000
 
 
-@pytest.fixture(scope="module")
-def a0ib():
-    return machinesim.load_machine("robonano_a0ib")
-
 
 @pytest.fixture(scope="module")
 def grooving():
     return machinesim.load_machine("grooving_4axis")
 
-
-@pytest.fixture(scope="module")
-def flat():
-    """5 x 3 x 1 mm block: x in [0, 5] mm, y in [0, 3] mm, top face at z = 0."""
-    return block(5 * MM, 3 * MM, 1 * MM)
 
 
 def above(a0ib, x, y, z_centre):

@@ -56,16 +56,6 @@ def groove():
             .linear(X=8e-3, feed_mm_per_min=100).rapid(Z=1e-3).build())
 
 
-@pytest.fixture(scope="module")
-def a0ib():
-    return machinesim.load_machine("robonano_a0ib")
-
-
-@pytest.fixture(scope="module")
-def flat():
-    """5 x 3 x 1 mm block, top face z = 0."""
-    return block(5 * MM, 3 * MM, 1 * MM)
-
 
 @pytest.fixture(scope="module")
 def step():
