@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from machinesim.errors.turns import each_turn
 from machinesim.exceptions import ErrorModelError, ModelError
 from machinesim.tolerances import SERIES_MAX_RAD
 
@@ -234,57 +235,6 @@ class _Varying:
     axis: int  # index of the axis in the machine's axis order
     component: object  # ComponentError
     sign: float
-
-
-def each_turn(component, axis, name: str, source=None):
-    """``component`` as a rotary ``axis`` moves through it: its errors repeat each turn.
-
-    A table that spans a whole turn or more (a spindle's, a table's over 360 deg) is read
-    at a position beyond it shifted by whole turns into it: the same place of the axis, the
-    same error (held at its end value, a spindle's error 10 turns on was that of the
-    table's last position). A shorter table holds its end values, as on a linear axis. A
-    polynomial in the angle does not repeat, so on an axis that turns more than a turn each
-    way it is refused. Linear axes: ``component`` itself.
-    """
-    if not axis.rotary:
-        return component
-    if component.kind == "poly":
-        if axis.lower < -TURN or axis.upper > TURN:
-            raise ErrorModelError(
-                f"a polynomial in the angle does not repeat each turn, and {axis.letter} "
-                f"turns {axis.lower:g} .. {axis.upper:g} rad; give a table over one turn "
-                "(position_deg from 0 to 360, the same value at both ends)",
-                source=source, key=name)
-        return component
-    span = component.positions[-1] - component.positions[0]
-    return _EachTurn(component) if span >= TURN * (1.0 - 1e-12) else component
-
-
-#: One turn, rad.
-TURN = 2.0 * math.pi
-
-
-class _EachTurn:
-    """A rotary axis's table of a turn or more, read at positions beyond it shifted by
-    whole turns into it (`each_turn`)."""
-
-    def __init__(self, component) -> None:
-        self.component = component
-        self.kind, self.positions, self.values = "table", component.positions, component.values
-
-    def _into(self, x) -> np.ndarray:
-        x = np.asarray(x, dtype=np.float64)
-        first, last = self.positions[0], self.positions[-1]
-        return np.where((x < first) | (x > last), first + np.mod(x - first, TURN), x)
-
-    def evaluate(self, x) -> np.ndarray:
-        return self.component.evaluate(self._into(x))
-
-    def basis(self, x) -> np.ndarray:
-        return self.component.basis(self._into(x))
-
-    def largest(self, lower: float, upper: float):
-        return self.component.largest(lower, upper)
 
 
 class Binding:

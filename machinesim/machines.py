@@ -18,6 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from machinesim import tolerances
+from machinesim.errors.turns import each_turn
 from machinesim.exceptions import (
     AxisLimitError,
     ErrorModelError,
@@ -33,7 +34,6 @@ from machinesim.kinematics import (
     Axis,
     Binding,
     Kinematics,
-    each_turn,
 )
 from machinesim.rotations import not_rigid, rotation_log
 from machinesim.tolerances import IK_SINGULAR

@@ -38,7 +38,7 @@ def random_errors(machine, rng: np.random.Generator, *, tool_offset=200 * UM,
         coefficients = rng.normal(0, component_length, 3) * np.array([1.0, 0.4, 0.2])
         if not (ax.rotary and (ax.lower < -2 * np.pi or ax.upper > 2 * np.pi)):
             # a spindle keeps its table: a polynomial in the angle does not repeat each turn
-            # (`machinesim.kinematics.each_turn`); drawn anyway, so later draws stay the same
+            # (`machinesim.errors.turns.each_turn`); drawn anyway, so later draws stay the same
             table[straightness] = ComponentError("poly", None, coefficients)
         component[letter] = table
     return ErrorModel(

@@ -161,7 +161,7 @@ class ComponentError(_Value):
         ``"table"``: linear interpolation of `values` at `positions`, constant (the first or
         last value) beyond the first and last position; on a rotary axis a table of a whole
         turn or more repeats each turn instead (read a whole number of turns back into it,
-        `machinesim.kinematics.each_turn`: its values a turn apart should agree). ``"poly"``:
+        `machinesim.errors.turns.each_turn`: its values a turn apart should agree). ``"poly"``:
         sum c_k x**k (refused on an axis that turns more than a turn each way: it does not
         repeat).
     positions : ndarray, shape (n,), m or rad, or None
