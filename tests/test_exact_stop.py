@@ -110,3 +110,16 @@ def test_a_line_under_lag_is_cut_to_its_end():
     _, ideal = machinesim.cut(program, "grooving_4axis", "v:90", "block:10x10x2")
     assert lagged.peak_following_error["X"] == pytest.approx(LAG, rel=1e-3)
     assert lagged.removed_volume_m3 == pytest.approx(ideal.removed_volume_m3, rel=1e-12)
+
+
+def test_the_encoders_record_an_exact_stop_as_the_cut_follows_it():
+    # the control's trace: under G64 the Y line starts with X still v c / Kp behind; after
+    # G09 it starts from rest at the corner
+    lab = machinesim.Lab("grooving_4axis", noise=False, servo=_servo())
+    lag = {}
+    for mode in ("G64", "G09"):
+        reading = lab.encoders().record(_corner(mode))
+        # samples: the rapid's two, the X line's two, the Y line's two (a start per move)
+        lag[mode] = reading.following_error[4, 0]
+    assert lag["G64"] == pytest.approx(LAG, rel=1e-3)
+    assert abs(lag["G09"]) < 1e-9  # the encoders' 1 nm display step

@@ -123,7 +123,7 @@ class Encoders:
             t, commanded, offsets = _at_period(t, commanded, offsets, period_s)
         reached = commanded.copy()
         follow_runs(_Follow(self._follow), reached, t, offsets,
-                    np.asarray(trajectory.kinds))
+                    np.asarray(trajectory.kinds), getattr(program, "exact_stops", ()))
         position = np.column_stack([readout.read(reached[:, i], self._rng)
                                     for i, readout in enumerate(self.readouts)])
         return EncoderReading(tuple(self.machine.axes), frozen(t), frozen(commanded),
