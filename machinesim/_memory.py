@@ -2,14 +2,21 @@
 
 A cut whose unions grow past the machine's memory (manifold3d's booleans of many
 near-coincident sweeps: passes in levels on a workpiece tilted against Z) was ended by the
-kernel's out-of-memory killer, with no message and with whatever else it chose to kill. Capped
-at the memory there is, the allocation that would pass it fails instead (numpy's and
+kernel's out-of-memory killer, with no message and with whatever else it chose to kill.
+Capped at the memory there is, the allocation that would pass it fails instead (numpy's and
 manifold3d's alike raise MemoryError), and the command line says so in one line.
+
+`memory_capped` holds the cap for a command's or a scenario's work and restores the limit
+after it. A process started meanwhile inherits the cap, so a command that may start a web
+browser (Chromium reserves tens of GB of address space, and does not start under such a
+cap) runs without it.
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 #: Environment variable: the cap in GB instead of the memory there is (for a shared machine,
@@ -62,3 +69,21 @@ def limit_memory() -> int | None:
         return soft
     resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
     return limit
+
+
+@contextmanager
+def memory_capped(apply: bool = True) -> Iterator[None]:
+    """`limit_memory` for the work inside, the limit as it was restored after (nothing with
+    ``apply`` False)."""
+    try:
+        import resource
+    except ImportError:  # Windows
+        yield
+        return
+    before = resource.getrlimit(resource.RLIMIT_AS)
+    if apply:
+        limit_memory()
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_AS, before)

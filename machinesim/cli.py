@@ -32,7 +32,7 @@ from machinesim._io import (
     json_text,
     write_together,
 )
-from machinesim._memory import OUT_OF_MEMORY, limit_memory
+from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._program_options import (
     add_reading_options,
     check_reading_options,
@@ -136,8 +136,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with ctrl_c_remembered():
             args = _parser().parse_args(None if argv is None else [str(a) for a in argv])
-            limit_memory()  # past the memory there is: MemoryError, not the OOM killer
-            return _command(args)
+            # past the memory there is: MemoryError, not the OOM killer (not for a viewer,
+            # which may start a browser: Chromium does not start under such a cap)
+            with memory_capped(args.command != "view"):
+                return _command(args)
     except MachineSimError as exc:
         return _fail(f"error: {exc}", EXIT_INPUT)
     except KeyboardInterrupt:

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
 from machinesim._io import StagedFolder, ctrl_c_remembered, json_text, write_atomic
-from machinesim._memory import OUT_OF_MEMORY, limit_memory
+from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim.exceptions import InputError
 
 #: Suffixes that name a unit (or say that a number has none).
@@ -420,8 +420,8 @@ def scenario_status(report, args, name: str | None = None) -> int:
     out = getattr(args, "out", None)
     staged = None
     try:
-        with ctrl_c_remembered():
-            limit_memory()  # past the memory there is: MemoryError, not the OOM killer
+        # past the memory there is: MemoryError, not the OOM killer
+        with ctrl_c_remembered(), memory_capped():
             if out is not None:
                 staged = _stage_report(out)
             report(args)

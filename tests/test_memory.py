@@ -69,3 +69,21 @@ def test_the_command_line_says_out_of_memory_in_one_line():
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("machinesim: error: out of memory: "), lines
     assert "MACHINESIM_MEMORY_GB" in lines[0]
+
+
+def test_the_cap_is_lifted_after_the_command_and_a_viewer_runs_without_it():
+    # a process started under the cap inherits it: Chromium, which reserves tens of GB of
+    # address space, did not start in the tests after a command had capped the test process
+    done = _run("""
+        import resource
+        import machinesim.cli as cli
+        seen = []
+        cli._command = lambda args: seen.append(resource.getrlimit(resource.RLIMIT_AS)[0]) or 0
+        before = resource.getrlimit(resource.RLIMIT_AS)[0]
+        cli.main(["machines"])
+        cli.main(["view", "x.ply"])
+        print(before == resource.RLIM_INFINITY, seen[0] == 3 << 30, seen[1] == before,
+              resource.getrlimit(resource.RLIMIT_AS)[0] == before)
+        """, "3")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["True"] * 4
