@@ -132,7 +132,7 @@ def tool_from_spindle_axis(machine, errors, nose_radius: float,
     q[:, machine.axes.index("X")] = radius
     q[:, machine.axes.index("C")] = turn
     path = edge_path_from_poses(machine.tool_pose(q, errors), nose_radius)
-    sign = -1.0 if abs(path.angle[0] - turn[0]) > 0.5 * np.pi else 1.0
+    sign = -1.0 if np.cos(path.angle[0] - turn[0]) < 0.0 else 1.0  # stored turned by pi
     return sign * float(np.mean(path.along)) - radius, sign * float(np.mean(path.offset))
 
 
