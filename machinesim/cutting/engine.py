@@ -30,6 +30,11 @@ never touching the part mesh once per sweep:
    boolean cost down, and the tiles of a cell are joined by `stitch` (a mesh merge along
    the walls, with a boolean union as the fallback), the cells by one union.
 
+A tool that stands tilted in the workpiece frame and does not turn (a workpiece set with a
+tilt, a 3-axis program) is cut in its own frame (`machinesim.cutting.frame`): there its
+sweeps' shared faces, an end mill's floor above all, coincide exactly as on an upright
+machine, where in the workpiece frame they coincide only to round-off and break into slivers.
+
 Subtraction commutes, so the part does not depend on how the sweeps are batched or ordered:
 removing a set of sweeps at once or one by one gives the same solid (to manifold3d's
 round-off, tested on paper 002's groove programs). Where sweeps' faces coincide exactly,
@@ -44,12 +49,13 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import manifold3d
 import numpy as np
 from manifold3d import OpType
 
+from machinesim.cutting.frame import into_frame, out_of_frame, tool_frame
 from machinesim.cutting.relief import cut_reliefs
 from machinesim.cutting.sheets import SheetReport, remove_sheets
 from machinesim.cutting.stitch import exact_box, snapped_union, stitch
@@ -504,6 +510,14 @@ def remove(
                 reached=relief.reached,
             )
             return relief.part, report
+    frame = tool_frame(sweeps.poses) if sweeps.count else None
+    if frame is not None and (roi is None or cells):
+        # A tilted tool: cut where it stands upright, so its coinciding faces coincide.
+        framed, framed_paths = into_frame(stock, paths, frame, None if roi is None else cells)
+        part, report = remove(framed, tool, framed_paths, progress=progress,
+                              sweeps_per_tile=sweeps_per_tile, method="boolean", sheets=sheets)
+        return out_of_frame(part, frame), replace(
+            report, holder_contact=holder, elapsed_s=time.perf_counter() - start)
     hulls, lower, upper, direction, n_degenerate, sideways, swept, reached, _ = sweeps.hulls(
         touches)
     keys = _direction_keys(direction)
