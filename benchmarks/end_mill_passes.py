@@ -13,10 +13,19 @@ a. A helical bore: ``flat:0.8`` down a helix of radius 2 mm, 0.25 mm a turn, 8 t
    end mill (100 nm).
 b. A contour in levels: the same circle cut at 5 depths, 0.4 mm apart (G02 full circles).
 
+With ``--tilted`` the same end mill cuts through ``models/errors/example.toml``, whose
+workpiece stands tilted 0.01 and -0.02 deg against the machine's Z: the engine cuts in the
+tool's frame (`machinesim.cutting.frame`, the default) against in the workpiece frame, where
+the end mill's floors coincide only to round-off:
+
+c. one circle of (b), both ways;
+d. the contour in 5 levels, in the tool's frame only (in the workpiece frame it outgrew the
+   machine's 24 GB).
+
 Each variant runs in its own process (``--repeat`` times, median quoted), and the parts are
 compared: removed volumes and the volume of each part less the other.
 
-    .venv/bin/python benchmarks/end_mill_passes.py [--repeat 3]
+    .venv/bin/python benchmarks/end_mill_passes.py [--repeat 3] [--tilted]
 """
 
 from __future__ import annotations
@@ -37,6 +46,8 @@ import machinesim.cutting.engine as engine
 from machinesim.cli import main
 if sys.argv[1] == "all":  # every sweep cut: nothing dropped
     engine.contained_sweeps = lambda hulls, *rest: np.zeros(len(hulls), dtype=bool)
+if sys.argv[1] == "workpiece":  # a tilted tool cut where it stands in the workpiece frame
+    engine.tool_frame = lambda poses: None
 sys.exit(main(sys.argv[2:]))
 """
 
@@ -49,29 +60,34 @@ def helix_program() -> str:
     return "\n".join(lines) + "\n"
 
 
-def levels_program() -> str:
+def levels_program(levels: int = 5) -> str:
     lines = ["%", "O2 (a contour in levels)", "G90 G21 G17 G94", "G00 X2. Y0. Z1."]
-    for level in range(1, 6):
+    for level in range(1, levels + 1):
         lines += [f"G01 Z{-0.4 * level:.3f} F300.", "G02 X2. Y0. I-2. J0. F300."]
     lines += ["G00 Z1.", "M30", "%"]
     return "\n".join(lines) + "\n"
 
 
-def cut(folder: Path, name: str, text: str, variant: str) -> dict:
+def cut(folder: Path, name: str, text: str, variant: str, errors: Path | None = None) -> dict:
     program = folder / f"{name}.nc"
     program.write_text(text)
     out, report = folder / f"{name}_{variant}.ply", folder / f"{name}_{variant}.json"
     command = [sys.executable, "-c", RUNNER, variant, "cut", str(program), "--machine",
                "grooving_4axis", "--tool", "flat:0.8", "--stock", "block:8x8x4@-4,-4,0",
                "--out", str(out), "--report", str(report), "--quiet"]
+    if errors is not None:
+        command += ["--errors", str(errors)]
     start = time.perf_counter()
     done = subprocess.run(command, capture_output=True, text=True)
     if done.returncode:
         raise SystemExit(f"{name} ({variant}) failed:\n{done.stderr}")
     seconds = time.perf_counter() - start
     summary = json.loads(report.read_text())
+    with open(out, "rb") as ply:  # the header names the triangle count
+        header = ply.read(512).decode("latin-1")
+    triangles = int(header.split("element face ")[1].split()[0])
     return {"seconds": seconds, "removed_mm3": summary["removed_volume_mm3"],
-            "sweeps": summary["sweeps_count"], "part": out}
+            "sweeps": summary["sweeps_count"], "part": out, "triangles": triangles}
 
 
 def apart_mm3(a: Path, b: Path) -> float:
@@ -89,27 +105,47 @@ def apart_mm3(a: Path, b: Path) -> float:
     return ((p - q).volume() + (q - p).volume()) * 1e9
 
 
+def compare(folder: Path, name: str, text: str, variants: tuple[str, str], repeat: int,
+            errors: Path | None = None) -> None:
+    """Cut ``text`` both ways ``repeat`` times each and print medians and the parts' gap."""
+    runs = {variant: [cut(folder, name, text, variant, errors) for _ in range(repeat)]
+            for variant in variants}
+    times = {v: [r["seconds"] for r in rs] for v, rs in runs.items()}
+    last = {v: rs[-1] for v, rs in runs.items()}
+    first, second = variants
+    print(f"{name}: {last[second]['sweeps']} sweeps; end to end, median of {repeat}: "
+          + ", ".join(f"{v} {statistics.median(times[v]):.2f} s (runs "
+                      f"{', '.join(f'{t:.2f}' for t in times[v])}; "
+                      f"{last[v]['triangles']:,} triangles)" for v in variants)
+          + f": {statistics.median(times[second]) / statistics.median(times[first]):.2f} times")
+    print(f"  removed {last[first]['removed_mm3']:.12g} against "
+          f"{last[second]['removed_mm3']:.12g} mm^3; the parts apart by "
+          f"{apart_mm3(last[first]['part'], last[second]['part']):.3g} mm^3")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--tilted", action="store_true",
+                        help="cut through models/errors/example.toml (cases c and d)")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
-        for name, text in (("helix", helix_program()), ("levels", levels_program())):
-            runs = {variant: [cut(folder, name, text, variant) for _ in range(args.repeat)]
-                    for variant in ("dropped", "all")}
-            times = {v: [r["seconds"] for r in rs] for v, rs in runs.items()}
-            last = {v: rs[-1] for v, rs in runs.items()}
-            print(f"{name}: {last['all']['sweeps']} sweeps; end to end, median of "
-                  f"{args.repeat}: dropped {statistics.median(times['dropped']):.2f} s "
-                  f"(runs {', '.join(f'{t:.2f}' for t in times['dropped'])}), all "
-                  f"{statistics.median(times['all']):.2f} s "
-                  f"(runs {', '.join(f'{t:.2f}' for t in times['all'])}): "
-                  f"{statistics.median(times['all']) / statistics.median(times['dropped']):.2f}"
-                  " times")
-            print(f"  removed {last['dropped']['removed_mm3']:.12g} against "
-                  f"{last['all']['removed_mm3']:.12g} mm^3; the parts apart by "
-                  f"{apart_mm3(last['dropped']['part'], last['all']['part']):.3g} mm^3")
+        if not args.tilted:
+            for name, text in (("helix", helix_program()), ("levels", levels_program())):
+                compare(folder, name, text, ("dropped", "all"), args.repeat)
+            return
+        errors = Path(__file__).resolve().parents[1] / "models" / "errors" / "example.toml"
+        compare(folder, "circle, tilted", levels_program(1), ("frame", "workpiece"),
+                args.repeat, errors)
+        runs = [cut(folder, "levels, tilted", levels_program(), "frame", errors)
+                for _ in range(args.repeat)]
+        seconds = [r["seconds"] for r in runs]
+        print(f"levels, tilted: {runs[-1]['sweeps']} sweeps; end to end in the tool's frame, "
+              f"median of {args.repeat}: {statistics.median(seconds):.2f} s "
+              f"(runs {', '.join(f'{t:.2f}' for t in seconds)}; "
+              f"{runs[-1]['triangles']:,} triangles), removed {runs[-1]['removed_mm3']:.12g} "
+              "mm^3")
 
 
 if __name__ == "__main__":

@@ -1,8 +1,9 @@
 """The memory this process may use, and a cap on it that turns running out into MemoryError.
 
 A cut whose unions grow past the machine's memory (manifold3d's booleans of many
-near-coincident sweeps: passes in levels on a workpiece tilted against Z) was ended by the
-kernel's out-of-memory killer, with no message and with whatever else it chose to kill.
+near-coincident sweeps: passes of an end mill on a workpiece tilted against Z, before such
+cuts were made in the tool's frame, `machinesim.cutting.frame`) was ended by the kernel's
+out-of-memory killer, with no message and with whatever else it chose to kill.
 Capped at the memory there is, the allocation that would pass it fails instead (numpy's and
 manifold3d's alike raise MemoryError), and the command line says so in one line.
 
@@ -28,9 +29,9 @@ FLOOR = 4 << 30
 #: What the command line and the scenarios say when memory runs out.
 OUT_OF_MEMORY = (
     f"a spec or program asks for more than this machine has (capped at its memory, or at "
-    f"${LIMIT_VARIABLE}); a cut in many passes on a workpiece tilted against Z (a workpiece "
-    "setting error) builds unions of near-coincident sweeps that can grow that large: cut a "
-    "window of it (--roi), or fewer passes")
+    f"${LIMIT_VARIABLE}); a cut of many sweeps whose faces nearly coincide (passes repeated "
+    "while the tool turns) builds unions that can grow that large: cut a window of it "
+    "(--roi), or fewer passes")
 #: Where a cgroup (a container) states its memory limit: v2, then v1.
 CGROUP_LIMITS = ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes")
 

@@ -1,6 +1,6 @@
 """The address-space cap: running out of memory is a MemoryError and one line, not the
 kernel's out-of-memory killer (a 5-level contour on a tilted workpiece took 24 GB and was
-killed with no message)."""
+killed with no message, before such cuts were made in the tool's frame)."""
 
 import subprocess
 import sys
