@@ -8,6 +8,8 @@ circle on the README's example errors: 1.7 million, and two levels ran out of me
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -117,3 +119,28 @@ def test_windows_are_boxes_of_the_workpiece_frame(quarter):
     from machinesim.cutting.windows import clip_to
     clipped = clip_to(whole, [window])
     assert part.volume == pytest.approx(clipped.volume, rel=1e-12)
+
+
+def test_a_retract_from_a_tilted_pass_cuts_nothing_and_is_not_called_a_cut(tmp_path):
+    """A face raster of five rows on a tilted block (`models/errors/example.toml`), then
+    G00 Z1. straight up the tool: the engine removes the same volume with and without the
+    retract (to round-off), and the rapid check, judged where the tool stands, does not call
+    the retract a cut. In the workpiece frame its booleans did (line 15), with and without
+    the engine's frame: the retract's faces meet the last pass's only to round-off."""
+    rows = ["G00 X-3. Y-3. Z1.", "G01 Z-0.01 F300."]
+    for k in range(5):
+        rows.append(f"G01 X{3.0 if k % 2 == 0 else -3.0:.1f} Y{-3.0 + 0.3 * k:.1f}")
+        if k < 4:
+            rows.append(f"G01 Y{-3.0 + 0.3 * (k + 1):.1f}")
+    body = "%\nO1 (facing)\nG90 G21 G17 G94\n" + "\n".join(rows)
+    retract, ends = tmp_path / "retract.nc", tmp_path / "ends.nc"
+    retract.write_text(body + "\nG00 Z1.\nM30\n%\n")
+    ends.write_text(body + "\nM30\n%\n")
+    assert retract.read_text().splitlines()[14] == "G00 Z1."  # line 15
+    example = ErrorModel.from_toml(Path(__file__).resolve().parents[1] / "models" / "errors"
+                                   / "example.toml")
+    kwargs = {"tool": "flat:0.8", "stock": "block:8x8x4@-4,-4,0", "errors": example}
+    part, report = cut(retract, "grooving_4axis", **kwargs)
+    alone, alone_report = cut(ends, "grooving_4axis", **kwargs)
+    assert abs(report.removed_volume_m3 - alone_report.removed_volume_m3) < 1e-21
+    assert 15 not in report.rapids_that_cut

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import manifold3d
 import numpy as np
 
+from machinesim.cutting.frame import into_frame, tool_frame
 from machinesim.cutting.sweeps import SolidSweep, hull_mesh, manifold_from, prism_triangles
 from machinesim.cutting.sweepset import POINTS_PER_CHUNK
 from machinesim.tolerances import (
@@ -57,6 +58,14 @@ def rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
         return ()
     from machinesim.cutting.windows import clip_to  # windows builds on cutting.program
 
+    frame = tool_frame(poses)
+    if frame is not None:
+        # A tilted tool: judged where it stands upright, as the engine cuts it
+        # (`cutting.frame`): in the workpiece frame a retract's faces meet the last pass's
+        # only to round-off, and the booleans took a retract for a cut.
+        windows = None if roi is None else np.reshape(roi, (-1, 4)).tolist()
+        stock, (poses,) = into_frame(stock, [poses], frame, windows)
+        roi = None
     shape = _Thick(tool)
     material = (stock.manifold if roi is None
                 else clip_to(stock, np.reshape(roi, (-1, 4))).manifold)
