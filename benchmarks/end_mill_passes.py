@@ -47,7 +47,7 @@ from machinesim.cli import main
 if sys.argv[1] == "all":  # every sweep cut: nothing dropped
     engine.contained_sweeps = lambda hulls, *rest: np.zeros(len(hulls), dtype=bool)
 if sys.argv[1] == "workpiece":  # a tilted tool cut where it stands in the workpiece frame
-    engine.tool_frame = lambda poses: None
+    engine.tool_frame = lambda poses, tool: None
 sys.exit(main(sys.argv[2:]))
 """
 

@@ -15,9 +15,10 @@ import pytest
 
 import machinesim.cutting.engine as engine
 from machinesim.cutting import cut
-from machinesim.cutting.frame import into_frame, out_of_frame, tool_frame
+from machinesim.cutting.frame import flat_end, into_frame, out_of_frame, tool_frame
 from machinesim.errors import ErrorModel
 from machinesim.rotations import rot_x, rot_y, rot_z
+from machinesim.tools import tool_from_spec
 from machinesim.workpiece import stock_from_spec
 
 #: A quarter circle of a 0.4 mm end mill, 0.2 mm deep, on grooving_4axis (mm).
@@ -50,7 +51,7 @@ def _cut(program, errors):
 def test_a_tilted_cut_is_the_cut_made_where_the_tool_stands(quarter, monkeypatch):
     """Second method: the same cut in the workpiece frame, sweep by sweep as before."""
     part, report = _cut(quarter, TILT)
-    monkeypatch.setattr(engine, "tool_frame", lambda poses: None)
+    monkeypatch.setattr(engine, "tool_frame", lambda poses, tool: None)
     where, where_report = _cut(quarter, TILT)
     assert report.removed_volume_m3 == pytest.approx(where_report.removed_volume_m3, rel=1e-12)
     assert part.volume == pytest.approx(where.volume, rel=1e-12)
@@ -76,20 +77,33 @@ def test_levels_on_a_tilted_block_lie_inside_the_deepest_where_the_tool_stands(t
     assert part.triangle_count <= 2 * alone.triangle_count
 
 
+END_MILL = tool_from_spec("flat:0.4")
+
+
 @pytest.mark.parametrize("turn", [np.eye(3), rot_z(0.3)])
 def test_an_upright_tool_keeps_the_workpiece_frame(turn):
     poses = np.tile(np.eye(4), (3, 1, 1))
     poses[:, :3, :3] = turn
-    assert tool_frame(poses) is None
+    assert tool_frame(poses, END_MILL) is None
 
 
 def test_a_tool_that_turns_keeps_the_workpiece_frame():
     poses = np.tile(np.eye(4), (2, 1, 1))
     poses[0, :3, :3] = rot_x(1e-4)
     poses[1, :3, :3] = rot_x(1e-4) @ rot_y(1e-9)
-    assert tool_frame(poses) is None
+    assert tool_frame(poses, END_MILL) is None
     poses[1, :3, :3] = poses[0, :3, :3]
-    assert np.array_equal(tool_frame(poses), rot_x(1e-4))
+    assert np.array_equal(tool_frame(poses, END_MILL), rot_x(1e-4))
+
+
+@pytest.mark.parametrize("spec", ["ball:0.5", "v:90", "nose:2:60"])
+def test_a_tool_without_a_flat_end_keeps_the_workpiece_frame(spec):
+    """Only an end mill's flat end is shared by every sweep of a level pass; a ball's, a V's
+    or a round nose's lowest point is one vertex (`frame.flat_end`)."""
+    poses = np.tile(np.eye(4), (2, 1, 1))
+    poses[:, :3, :3] = rot_x(1e-4)
+    assert not flat_end(tool_from_spec(spec)) and flat_end(END_MILL)
+    assert tool_frame(poses, tool_from_spec(spec)) is None
 
 
 def test_the_frame_turns_there_and_back():

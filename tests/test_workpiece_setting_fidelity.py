@@ -225,15 +225,11 @@ def test_a_face_group_cut_turned_by_c_is_the_part_cut_in_the_workpiece_frame(
     in a 0.12 mm window past the face's foot: the same heights to 1e-15 m. Without
     `sweeps.PLANE_MOVE_SINE` (0: the plunges along the tool's own plane built as slivers and
     joined) the turned cut stood 22 um deeper there: turned by C alone, an untilted
-    workpiece's sweeps run along the axes, where the slivers are exactly in-plane.
-
-    Both cuts are made where the tool stands in the workpiece frame, as for a tool that turns
-    along its path: a tool tilted by the landing alone is otherwise cut in its own frame
-    (`cutting.frame`), where the slivers are in-plane as well."""
+    workpiece's sweeps run along the axes, where the slivers are exactly in-plane."""
     import argparse
 
     from machinesim import Lab, motion
-    from machinesim.cutting import clip_to, engine, remove, sweeps
+    from machinesim.cutting import clip_to, remove, sweeps
     from machinesim.metrology import height_map
     from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
     from machinesim.realism import Realism
@@ -242,7 +238,6 @@ def test_a_face_group_cut_turned_by_c_is_the_part_cut_in_the_workpiece_frame(
 
     if plane_move_sine is not None:
         monkeypatch.setattr(sweeps, "PLANE_MOVE_SINE", plane_move_sine)
-    monkeypatch.setattr(engine, "tool_frame", lambda poses: None)
     monkeypatch.setattr(scenario, "CROWN_TILT_DEG", 0.0)
     monkeypatch.setattr(scenario, "CROWN_HEIGHT_UM", 40.0)
     args = argparse.Namespace(robot_repeatability_um=None, delta_um=None, rot_deg=None,

@@ -30,8 +30,8 @@ never touching the part mesh once per sweep:
    boolean cost down, and the tiles of a cell are joined by `stitch` (a mesh merge along
    the walls, with a boolean union as the fallback), the cells by one union.
 
-A tool that stands tilted in the workpiece frame and does not turn (a workpiece set with a
-tilt, a 3-axis program) is cut in its own frame (`machinesim.cutting.frame`): there its
+An end mill that stands tilted in the workpiece frame and does not turn (a workpiece set
+with a tilt, a 3-axis program) is cut in its own frame (`machinesim.cutting.frame`): there its
 sweeps' shared faces, an end mill's floor above all, coincide exactly as on an upright
 machine, where in the workpiece frame they coincide only to round-off and break into slivers.
 
@@ -510,7 +510,7 @@ def remove(
                 reached=relief.reached,
             )
             return relief.part, report
-    frame = tool_frame(sweeps.poses) if sweeps.count else None
+    frame = tool_frame(sweeps.poses, tool) if sweeps.count else None
     if frame is not None and (roi is None or cells):
         # A tilted tool: cut where it stands upright, so its coinciding faces coincide.
         framed, framed_paths = into_frame(stock, paths, frame, None if roi is None else cells)

@@ -58,7 +58,7 @@ def rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
         return ()
     from machinesim.cutting.windows import clip_to  # windows builds on cutting.program
 
-    frame = tool_frame(poses)
+    frame = tool_frame(poses, tool)
     if frame is not None:
         # A tilted tool: judged where it stands upright, as the engine cuts it
         # (`cutting.frame`): in the workpiece frame a retract's faces meet the last pass's
