@@ -8,8 +8,8 @@ sweep of a level pass, which covers each point of the floor some twenty times) n
 coincide in float64: each sweep's floor is turned with its own round-off, 1e-19 m apart.
 manifold3d then cuts every floor against every other it overlaps, and the part's floor
 breaks into an arrangement of slivers: a single circle of an end mill, 0.8 mm across, on a
-block tilted 0.02 deg made 1.7 million triangles in 3.5 minutes, and with a second level
-outgrew 24 GB (`benchmarks/end_mill_passes.py`, `--tilt`).
+block tilted 0.02 deg made 1.7 million triangles in about 3 minutes, and with a second
+level outgrew 24 GB (`benchmarks/end_mill_passes.py --tilted`).
 
 When the tool has a flat end and every pose of a cut shares one orientation (a 3-axis cut,
 or any cut whose rotary axes stand still), the cut is exact in a frame turned with the
@@ -32,7 +32,6 @@ from __future__ import annotations
 import manifold3d
 import numpy as np
 
-from machinesim.cutting.stitch import exact_box
 from machinesim.tolerances import SAME_ORIENTATION
 from machinesim.workpiece import Part
 
@@ -76,13 +75,11 @@ def into_frame(stock: Part, paths: list[np.ndarray], frame: np.ndarray,
     to them first, since a window is a box in the workpiece frame and not in the tool's
     (the part the engine returns is the stock inside the windows either way).
     """
-    solid = stock.manifold
     if windows is not None:
-        low, high = stock.bounds
-        pad = float(np.abs(np.asarray([low, high])).max()) or 1.0
-        solid = solid ^ manifold3d.Manifold.batch_boolean(
-            [exact_box(x0, x1, y0, y1, low[2] - pad, high[2] + pad)
-             for x0, x1, y0, y1 in windows], manifold3d.OpType.Add)
+        from machinesim.cutting.windows import clip_to  # windows builds on the engine
+
+        stock = clip_to(stock, windows)
+    solid = stock.manifold
     turn = np.eye(4)
     turn[:3, :3] = frame.T
     turned = []
