@@ -393,9 +393,16 @@ class SweepSet:
         for (i, met), box in zip(inside.items(), boxes, strict=True):
             earlier = np.flatnonzero((owners < i) & (lower <= box[3:]).all(axis=1)
                                      & (upper >= box[:3]).all(axis=1))
-            # One earlier sweep at a time, in program order, until nothing is left: the
-            # room's material is small and the first passes over it usually clear it. One
-            # union of all of them (a pocket's every level, stacked) took minutes and GB.
+            # One earlier sweep at a time until nothing is left, those whose boxes share
+            # most of the room's material box first: the passes right over it (a contour's
+            # levels above, along the same chords) clear it, where in program order the
+            # first level's every neighbouring chord came first (a contour in 5 levels, 3
+            # below the body: more than 10 minutes). One union of all of them (a pocket's
+            # every level, stacked) took minutes and GB. Subtraction commutes: the order
+            # changes only when the loop stops.
+            shared = np.prod(np.clip(np.minimum(upper[earlier], box[3:])
+                                     - np.maximum(lower[earlier], box[:3]), 0.0, None), axis=1)
+            earlier = earlier[np.argsort(-shared, kind="stable")]
             left = met.volume()
             for j in earlier:
                 if left <= HOLDER_MATERIAL_M3:
