@@ -17,6 +17,7 @@ import machinesim.cutting.engine as engine
 from machinesim.cutting import cut
 from machinesim.cutting.frame import flat_end, into_frame, out_of_frame, tool_frame
 from machinesim.errors import ErrorModel
+from machinesim.exceptions import HolderContactError
 from machinesim.rotations import rot_x, rot_y, rot_z
 from machinesim.tools import tool_from_spec
 from machinesim.workpiece import stock_from_spec
@@ -158,3 +159,24 @@ def test_a_retract_from_a_tilted_pass_cuts_nothing_and_is_not_called_a_cut(tmp_p
     alone, alone_report = cut(ends, "grooving_4axis", **kwargs)
     assert abs(report.removed_volume_m3 - alone_report.removed_volume_m3) < 1e-21
     assert 15 not in report.rapids_that_cut
+
+
+def test_a_holder_in_the_slot_its_own_levels_cut_meets_nothing_on_a_tilted_block(tmp_path):
+    """Three levels of a quarter circle, 0.3 mm apart, with a body 0.5 mm long: from the
+    second level down the body's top is below the stock's, but the holder's room (the body's
+    section, lifted along the tool) lies in the slot the levels above cut, where the tool
+    stands (the same path in the machine). Judged in the workpiece frame the booleans left
+    material in it and refused the cut as a crash; a plunge 0.9 mm deep at once is one."""
+    levels = ["G00 X1. Y0. Z1."]
+    for depth in ("-0.3", "-0.6", "-0.9"):
+        levels += [f"G01 Z{depth} F300.", "G03 X0. Y1. I-1. J0.", "G00 Z1.", "G00 X1. Y0."]
+    program = tmp_path / "levels.nc"
+    program.write_text("%\nO1\nG90 G21 G17 G94\n" + "\n".join(levels) + "\nM30\n%\n")
+    kwargs = {"tool": "flat:0.4:h=0.5", "stock": STOCK, "errors": ErrorModel.from_dict(TILT)}
+    part, report = cut(program, "grooving_4axis", **kwargs)
+    assert report.holder_contact == ()
+    alone = tmp_path / "alone.nc"
+    alone.write_text("%\nO1\nG90 G21 G17 G94\n" + "\n".join(levels[:1] + levels[9:])
+                     + "\nM30\n%\n")
+    with pytest.raises(HolderContactError):
+        cut(alone, "grooving_4axis", **kwargs)

@@ -475,6 +475,16 @@ def remove(
                 & (low[:, 1] <= bounds[1, 1] + margin) & (high[:, 1] >= bounds[0, 1] - margin))
 
     sweeps = SweepSet(tool, paths, z_high)
+    frame = tool_frame(sweeps.poses, tool) if sweeps.count else None
+    if frame is not None and (roi is None or cells):
+        # A tilted end mill: cut, and its holder judged, where it stands upright, so that
+        # its coinciding faces coincide (a height field needs a level block: none here).
+        framed, framed_paths = into_frame(stock, paths, frame, None if roi is None else cells)
+        part, report = remove(framed, tool, framed_paths, progress=progress,
+                              sweeps_per_tile=sweeps_per_tile, method="boolean", sheets=sheets,
+                              on_holder_contact=on_holder_contact)
+        return out_of_frame(part, frame), replace(report,
+                                                  elapsed_s=time.perf_counter() - start)
     holder = tuple(sweeps.holder_contact(bounds[1, 2], touches))
     if holder and on_holder_contact is not None:
         # the stock's box says it may; before refusing, the material says whether it does
@@ -510,14 +520,6 @@ def remove(
                 reached=relief.reached,
             )
             return relief.part, report
-    frame = tool_frame(sweeps.poses, tool) if sweeps.count else None
-    if frame is not None and (roi is None or cells):
-        # A tilted tool: cut where it stands upright, so its coinciding faces coincide.
-        framed, framed_paths = into_frame(stock, paths, frame, None if roi is None else cells)
-        part, report = remove(framed, tool, framed_paths, progress=progress,
-                              sweeps_per_tile=sweeps_per_tile, method="boolean", sheets=sheets)
-        return out_of_frame(part, frame), replace(
-            report, holder_contact=holder, elapsed_s=time.perf_counter() - start)
     hulls, lower, upper, direction, n_degenerate, sideways, swept, reached, _ = sweeps.hulls(
         touches)
     keys = _direction_keys(direction)
