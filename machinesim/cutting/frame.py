@@ -18,7 +18,8 @@ exactly the identity), the floors are level and coincide as they do on an uprigh
 and the part is turned back. The turns move the part's vertices by round-off, ~1e-19 m on
 a part of millimetres; the poses' own spread of orientation, at most
 `tolerances.SAME_ORIENTATION` (1e-12), is dropped, which moves a tool point 1 mm from the
-tip by at most 1e-15 m.
+tip by at most 1e-15 m. The holder's check and the rapids' are made in the same frame, for
+the same reason (a retract up the tool, a holder's room in the slot the levels above cut).
 
 Only a flat end is shared so widely: a ball's or a round nose's lowest point is a vertex,
 and their passes' faces meet only along one path. For them the workpiece frame stays, where
