@@ -247,6 +247,9 @@ def test_a_plan_that_cannot_see_a_parameter_names_it():
     assert "workpiece.z" in before.unidentifiable
     assert [str(c) for c in before.combinations] == ["workpiece.z"]
     assert np.isnan(before.std[2]) and np.all(np.isfinite(np.delete(before.std, 2)))
+    # and says so in words, where a person reads before trusting the figures
+    assert [n.split(":")[:2] for n in before.notes] == [
+        ["rank 9 of 10", " the readings cannot see workpiece.z"]]
     truth = ErrorModel().with_parameters({
         "workpiece.x": 30 * UM, "workpiece.y": -20 * UM, "workpiece.z": 10 * UM,
         "workpiece.alpha": 2e-3, "workpiece.beta": -1e-3, "workpiece.gamma": 4e-3,
@@ -259,6 +262,8 @@ def test_a_plan_that_cannot_see_a_parameter_names_it():
     # one combination with workpiece.x and .y (which then lose their own identifiability)
     (c,) = estimate.combinations
     assert set(c.names) == {"workpiece.x", "workpiece.y", "workpiece.z"}
+    (note,) = estimate.notes
+    assert note.startswith(f"rank 9 of 10: the readings cannot see the combination {c}:")
     assert c.coefficients[c.names.index("workpiece.z")] == 1.0
     # it stays near the prior (0) instead of absorbing the readings: the combination's
     # coefficients on x and y (~alpha, beta) are what it costs them
@@ -439,11 +444,13 @@ def test_a_near_symmetry_and_a_missing_error_are_told_in_the_notes():
     assert any("location.C.EC0C and workpiece.gamma are correlated" in n
                for n in estimate.notes)
     assert not any("do not fit the model" in n for n in estimate.notes)
-    # the plan at the nominal machine sees them as one: a combination, not a note
+    assert not any("cannot see" in n for n in estimate.notes)  # full rank
+    # the plan at the nominal machine sees them as one: a combination, and a note of it
     from machinesim.identification.fit import plan_quality as quality
     nominal = quality(machine, obs.q, obs.frames, obs.directions, list(estimate.names),
                       obs.sigma)
     assert nominal.rank == 3
+    assert sum("cannot see the combination" in n for n in nominal.notes) == 1
     # a tool offset the readings show and the parameters lack: the residual says so
     machine, obs = _a0ib_r_test({"location": {"C": {"EX0C_um": 3.0}},
                                  "tool": {"offset_um": [1.0, 0.5, 0.0]}}, False)

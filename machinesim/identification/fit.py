@@ -127,10 +127,12 @@ class _Figures:
 
     @property
     def notes(self) -> tuple[str, ...]:
-        """What a person should read before trusting the figures: each pair of parameters
-        correlated beyond `NEARLY_INSEPARABLE` (a near-symmetry of the plan: identifiable in
-        the SVD's sense, yet barely told apart, as their std say)."""
-        out = []
+        """What a person should read before trusting the figures: each direction the
+        readings cannot see (rank below the number of parameters: the values along it are
+        the prior's, not measured), and each pair of parameters correlated beyond
+        `NEARLY_INSEPARABLE` (a near-symmetry of the plan: identifiable in the SVD's sense,
+        yet barely told apart, as their std say)."""
+        out = [_unseen_note(c, self.rank, len(self.names)) for c in self.combinations]
         k = len(self.names)
         for i in range(k):
             for j in range(i + 1, k):
@@ -141,6 +143,20 @@ class _Figures:
                                f"and {self.std[j]:.3g}); fix one, or add readings that "
                                "separate them")
         return tuple(out)
+
+
+def _unseen_note(c: Combination, rank: int, k: int) -> str:
+    """The note on one direction the readings cannot see (`_Figures.notes`)."""
+    head = f"rank {rank} of {k}: the readings cannot see "
+    if len(c.names) == 1:
+        what = (f"{c}: its value is the prior's, not measured; a compensation through it "
+                "corrects nothing of it")
+    else:
+        what = (f"the combination {c}: its value is the prior's, so {', '.join(c.names)} "
+                "are not identified on their own and their values are one solution among "
+                "many; a compensation through them is right only for what the readings saw")
+    return (head + what + ". Fix a datum (leave a parameter out of the fit) or add readings "
+            "that see it")
 
 
 _FIGURES_DOC = """
