@@ -193,6 +193,23 @@ def test_resume_runs_only_the_missing_trials(campaign, tmp_path, monkeypatch):
         assert np.array_equal(again[name].values, ds[name].values)
 
 
+def test_a_damaged_trial_file_is_refused_before_the_missing_trials_run(campaign, tmp_path,
+                                                                        monkeypatch):
+    source, vary, _ = campaign
+    (tmp_path / "trials").mkdir()
+    for name in ("campaign.json", "trials/trial_000000.json"):
+        (tmp_path / name).write_bytes((source / name).read_bytes())
+    whole = (source / "trials/trial_000002.json").read_bytes()
+    (tmp_path / "trials/trial_000002.json").write_bytes(whole[: len(whole) // 2])
+    ran = []
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: ran.append(i))
+    with pytest.raises(MachineSimError) as info:
+        run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
+            progress=False, report=False, **ARM)
+    assert "trial_000002.json" in str(info.value)
+    assert ran == []  # trial 1, missing, did not run first
+
+
 def _interrupt_after_one_trial(monkeypatch) -> list[int]:
     """Make the campaign runner stop with a Ctrl-C when a second trial starts; returns the
     list the one trial that ran is appended to."""
@@ -295,6 +312,20 @@ def test_cli_runs_a_campaign(tmp_path, capsys):
     ds = xr.open_dataset(tmp_path / "campaign.nc").load()
     assert ds["injected"].sel(parameter="tool.y").item() == pytest.approx(-100 * UM)
     assert "1 trials (0 failed)" in capsys.readouterr().out
+
+
+def test_cli_a_campaign_whose_every_trial_failed_says_why_and_fails(tmp_path, capsys):
+    # a 1 m tool offset leaves the adjuster no stroke: the lab refuses it in every trial
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+                       "--identify-only", "--quiet", "--vary", "tool.y=fixed:1m",
+                       "--out", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert status == 1
+    assert "every trial failed" in err and "a tool offset of [0.0, 1000.0" in err
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    (failure,) = summary["failures"]
+    assert failure["trials"] == [0, 1] and "1 m less the tool adjuster" in failure["message"]
+    assert "- 2 trials (0, 1): InputError" in (tmp_path / "summary.md").read_text()
 
 
 def test_out_that_is_a_file_is_refused(tmp_path):

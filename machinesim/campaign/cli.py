@@ -103,10 +103,18 @@ def run_campaign(args) -> int:
                   workers=args.workers, scheduler=args.scheduler, noise=args.noise == "on",
                   identify_only=args.identify_only, quick=args.quick,
                   progress=not args.quiet)
-    failed = int(dataset["failed"].sum())
-    print(f"campaign: {dataset.sizes['trial']} trials ({failed} failed) in {args.out}: "
+    from machinesim.campaign.summary import failures
+
+    failed, total = int(dataset["failed"].sum()), dataset.sizes["trial"]
+    print(f"campaign: {total} trials ({failed} failed) in {args.out}: "
           "campaign.nc, summary.md, summary.json")
-    return 0
+    if not failed:
+        return 0
+    first = failures(dataset)[0]
+    print(f"campaign: {'every trial' if failed == total else f'{failed} trials'} "
+          f"failed; the most common message ({len(first['trials'])} of them): "
+          f"{first['message']} (summary.md lists every message)", file=sys.stderr)
+    return 1 if failed == total else 0
 
 
 def interrupted(out) -> str:

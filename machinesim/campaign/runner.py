@@ -187,12 +187,16 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
     folder = CampaignFolder(out, spec.describe())
     done = folder.done(spec.trials)
     missing = sorted(set(range(spec.trials)) - set(done))
+    # the trials already there are read first: a damaged file is refused before the missing
+    # trials run, not after
+    records = {i: folder.read_trial(i) for i in done}
     shown = _Progress(spec.trials, len(done), sys.stderr if progress else None)
     try:
         _execute(spec, missing, folder, shown, workers, scheduler, client)
     finally:
         shown.end()
-    records = [folder.read_trial(i) for i in range(spec.trials)]
+    records = [records[i] if i in records else folder.read_trial(i)
+               for i in range(spec.trials)]
     dataset = assemble(records, spec.describe(), spec.trials)
     folder.write_dataset(dataset)
     if report:

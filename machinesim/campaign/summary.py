@@ -13,7 +13,9 @@ summary.json (every number under a key ending in its unit, as docs/reports.md as
 - ``parameters``: per identified parameter, the identification error (identified - injected)
   described in SI (``error_si``), its z-scores (`statistics.z_summary`) and ``sensitivity``:
   varied parameter -> Spearman rank correlation with the error's magnitude;
-- ``coverage_interval``: which intervals are given (JCGM 101 7.7.1 and 7.7.2).
+- ``coverage_interval``: which intervals are given (JCGM 101 7.7.1 and 7.7.2);
+- ``failures``: each distinct message of a failed trial with the trials that ended in it
+  (``{"message": ..., "trials": [...]}``, most trials first).
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ import numpy as np
 from machinesim._io import json_text, write_atomic
 from machinesim.campaign.statistics import describe, spearman, z_scores, z_summary
 
-__all__ = ["summarise", "write_report"]
+__all__ = ["failures", "summarise", "write_report"]
 
 
 def _finite(value):
@@ -82,7 +84,18 @@ def summarise(dataset) -> dict:
         "sensitivity": "Spearman rank correlation of each varied parameter with the figure "
         "after compensation (figures) and with |identified - injected| (parameters)",
         "figures": figures, "parameters": parameters,
+        "failures": failures(dataset),
     })
+
+
+def failures(dataset) -> list[dict]:
+    """The failed trials' messages (the Dataset's ``errors``), each with its trials, most
+    trials first."""
+    by_message: dict[str, list[int]] = {}
+    for trial, message in json.loads(dataset.attrs.get("errors", "{}")).items():
+        by_message.setdefault(str(message), []).append(int(trial))
+    return [{"message": m, "trials": sorted(t)}
+            for m, t in sorted(by_message.items(), key=lambda item: (-len(item[1]), item[1]))]
 
 
 def _g(value, digits: int = 4) -> str:
@@ -135,6 +148,14 @@ def _markdown(summary: dict) -> str:
                                _g(z["mean"], 3), _g(z["std"], 3),
                                _g(z["within_1_96_ratio"], 3),
                                *(_g(p["sensitivity"][v], 3) for v in varied)]))
+        lines.append("")
+    if summary["failures"]:
+        lines += ["## Failed trials", ""]
+        for failure in summary["failures"]:
+            trials = failure["trials"]
+            shown = ", ".join(str(t) for t in trials[:10]) + (" ..." if len(trials) > 10 else "")
+            lines.append(f"- {len(trials)} trial{'s' * (len(trials) > 1)} ({shown}): "
+                         f"{failure['message']}")
         lines.append("")
     lines += ["Versions: " + ", ".join(f"{k} {v}" for k, v in summary["versions"].items()), ""]
     return "\n".join(lines)
