@@ -9,6 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,6 +50,21 @@ def test_xy_plane_errors_writes_the_paper_figures(tmp_path):
     assert figures["xy_error_x"]["after"] < 1e-3
     # ideal lab (ideal readings): the diagonals at the tool tip below 1 nm after the table
     assert figures["diagonal_machining_point"]["after"] < 1e-3
+    # the pyramids are in the folder as cut, each window alone: 1 x 1 mm around its centre
+    # (m: the plate's centre and four corners 190 mm out), with the program that cut it
+    import trimesh
+
+    from machinesim.procedures.pyramid_windows import WINDOWS
+
+    for state in ("before", "after"):
+        for k, (cx, cy) in enumerate(WINDOWS, start=1):
+            name = f"pyramids_{state}_window{k}"
+            mesh = trimesh.load(tmp_path / f"{name}.ply", process=False)
+            assert mesh.is_watertight and name + ".ply" in summary["files"]
+            (x0, y0, _), (x1, y1, _) = mesh.bounds
+            np.testing.assert_allclose([x0, x1, y0, y1],
+                                       [cx - 5e-4, cx + 5e-4, cy - 5e-4, cy + 5e-4], atol=1e-12)
+            assert (tmp_path / f"{name}.nc").stat().st_size > 0
 
 
 def test_sts_turning_predicts_and_measures_the_four_cases(tmp_path):

@@ -229,9 +229,10 @@ def _read_set(instrument, part, cx, cy, along_x, nominal, half, p, span, offset_
 def cut_and_read(lab, compensation=None, plan: PyramidPlan = PAPER_PLAN,
                  windows=WINDOWS, label: str = "pyramids"):
     """Cut the pattern in every window (compensated by ``compensation.program`` when given)
-    and read it; returns the list of `PyramidWindow` and the programs."""
+    and read it; returns the list of `PyramidWindow` and, per window, the program and the
+    part as cut (the window alone)."""
     wli = lab.white_light_interferometer(label=label)
-    out, programs = [], []
+    out, cuts = [], []
     for centre in windows:
         program = pyramid_program(lab.machine, centre, plan)
         if compensation is not None:
@@ -241,5 +242,5 @@ def cut_and_read(lab, compensation=None, plan: PyramidPlan = PAPER_PLAN,
                 cy - 0.5 * plan.window, cy + 0.5 * plan.window)]
         part, _ = lab.cut(program, "v:90", STOCK, roi=roi)
         out.append(read_window(wli, part, centre, plan))
-        programs.append(program)
-    return out, programs
+        cuts.append((program, part))
+    return out, cuts

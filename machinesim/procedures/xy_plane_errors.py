@@ -167,8 +167,11 @@ class XYPlaneErrors:
         sep_after = separate(lab.machine, c_after.follow_q, c_after.follow, c_after.fixed_q,
                              c_after.fixed, c_after.sigma)
         before_diag = identified.detail["diagonal_before"]
-        pyramids_before, _ = cut_and_read(lab, None, label="pyramids_before")
-        pyramids_after, _ = cut_and_read(lab, model, label="pyramids_after")
+        pyramids_before, cuts_before = cut_and_read(lab, None, label="pyramids_before")
+        pyramids_after, cuts_after = cut_and_read(lab, model, label="pyramids_after")
+        cuts = {f"pyramids_{state}_window{k}": cut
+                for state, runs in (("before", cuts_before), ("after", cuts_after))
+                for k, cut in enumerate(runs, start=1)}
         (h_before, a_before), (h_after, a_after) = (
             _pyramid_figures(w) for w in (pyramids_before, pyramids_after))
         um = 1e6
@@ -221,7 +224,8 @@ class XYPlaneErrors:
                 "location.Y.EC0Y"]["value"] * 1e6,
         }
         return Evaluation(figures=figures, details=details,
-                          programs=dict(programs), parts={})
+                          programs={**programs, **{k: p for k, (p, _) in cuts.items()}},
+                          parts={k: part for k, (_, part) in cuts.items()})
 
     # -------------------------------------------------------------------------- internals
 
