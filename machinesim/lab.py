@@ -35,6 +35,7 @@ Lab(robonano_a0ib, noise=on, seed=1, realism=lab)
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 
 import numpy as np
@@ -134,7 +135,9 @@ class Lab:
         if np.abs(injected.tool.offset).max() > room:
             raise InputError(f"a tool offset of {np.round(injected.tool.offset * 1e3, 6).tolist()}"
                              f" mm; expected at most {room * 1e3:g} mm along each axis (1 m "
-                             "less the tool adjuster's stroke)", key="tool.offset_um")
+                             "less the tool adjuster's stroke)", key="[tool] offset",
+                             source=str(errors) if isinstance(errors, str | os.PathLike)
+                             else None)
         self.__truth = truth  # the machine as it is: `adjust_tool` moves its tool
         self.__set_up = truth  # as it was set up: what `reveal` gives
         self.__adjusted = np.zeros(3)  # the moves as made

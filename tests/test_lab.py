@@ -195,7 +195,7 @@ def test_no_instrument_hands_out_its_noise_stream():
             assert not isinstance(value, np.random.Generator), f"{type(thing).__name__}.{name}"
 
 
-def test_whether_a_tool_adjustment_is_taken_does_not_depend_on_the_hidden_tool():
+def test_whether_a_tool_adjustment_is_taken_does_not_depend_on_the_hidden_tool(tmp_path):
     # The check is of the move alone, against the adjuster's stroke: a check of where the
     # tool lands would tell, by refusing or not, where the hidden tool is.
     from machinesim.realism import TOOL_ADJUSTER_STROKE_M
@@ -212,6 +212,13 @@ def test_whether_a_tool_adjustment_is_taken_does_not_depend_on_the_hidden_tool()
     # an injected offset that leaves no room for the stroke is refused when the lab is made
     with pytest.raises(InputError, match="1 m less the tool adjuster's stroke"):
         Lab("robonano_a0ib", {"tool": {"offset_um": [995_001.0, 0.0, 0.0]}})
+    # given in a file (in metres), the message names the file and its table
+    path = tmp_path / "far.toml"
+    path.write_text("[tool]\noffset_m = [0.0, 1.0, 0.0]\n")
+    with pytest.raises(InputError) as info:
+        Lab("robonano_a0ib", path)
+    assert str(info.value).startswith(f"{path}, key '[tool] offset': a tool offset of "
+                                      "[0.0, 1000.0, 0.0] mm")
 
 
 def test_the_r_test_reads_the_ball_displacement_of_a_tool_offset_turned_by_b_and_c():
