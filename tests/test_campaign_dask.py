@@ -43,3 +43,29 @@ def test_the_default_worker_count_is_the_cores_the_process_may_use():
                           check=True)
     assert done.stdout.split() == ["1", "1", "1"]
     assert usable_cores() == len(os.sched_getaffinity(0))
+
+
+def test_ctrl_c_on_a_campaign_with_workers_is_one_line_and_no_worker_traceback(tmp_path):
+    """A Ctrl-C reaches every process of the terminal's group, the workers too; each printed
+    a KeyboardInterrupt traceback while the campaign said what it kept. Sent to the group
+    once a trial has finished (the workers are up), only the campaign's line remains."""
+    import signal
+
+    process = subprocess.Popen(
+        [sys.executable, "-m", "machinesim.cli", "campaign", "tool_rotation_arm", "--trials", "40",
+         "--workers", "1", "--identify-only", "--out", str(tmp_path)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        progress = ""
+        while "campaign: 1/40" not in progress:
+            char = process.stderr.read(1)
+            assert char, "the campaign ended before its first trial"
+            progress += char
+        os.killpg(process.pid, signal.SIGINT)
+        _, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 130
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert "interrupted; kept the" in err and str(tmp_path / "trials") in err

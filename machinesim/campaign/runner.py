@@ -92,7 +92,8 @@ def _client(workers, scheduler, client):
         environ.pop("MALLOC_TRIM_THRESHOLD_", None)
         with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
             cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
+                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                   preload=["machinesim.campaign._worker_setup"])
     client = Client(cluster)
     client.run(_one_core_each)
     return client, cluster
