@@ -180,7 +180,7 @@ class ReportFolder:
             [[name, result.injected.get(name, math.nan), value, std,
               value - result.injected.get(name, math.nan)]
              for name, (value, std) in result.identified.items()],
-            title="Identified error parameters (m, rad)", digits=12)
+            title="Identified error parameters (m, rad)", digits=6, significant=True)
         text = figures + "\n" + identified
         if budget is not None:
             return text + "\n" + self.add_budget(result, budget)
@@ -207,11 +207,15 @@ class ReportFolder:
         return text
 
     def write_table(self, name: str, columns: Sequence[str], rows: Sequence[Sequence],
-                    title: str = "", digits: int = 3) -> str:
-        """A table as ``name.md`` and ``name.json``; returns the Markdown (for printing)."""
+                    title: str = "", digits: int = 3, *, significant: bool = False) -> str:
+        """A table as ``name.md`` and ``name.json``; returns the Markdown (for printing).
+        Numbers are shown with ``digits`` decimals, or with ``significant`` as ``digits + 1``
+        significant digits in scientific notation (SI values from 1e-12 to 1e-3 alike)."""
         def cell(v):
             if isinstance(v, float):
-                return "n/a" if not math.isfinite(v) else f"{v:.{digits}f}"
+                if not math.isfinite(v):
+                    return "n/a"
+                return f"{v:.{digits}e}" if significant else f"{v:.{digits}f}"
             return str(v)
 
         lines = ([f"### {title}", ""] if title else []) + [

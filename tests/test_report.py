@@ -27,6 +27,10 @@ def test_summary_and_tables_round_trip(tmp_path):
     text = folder.write_table("table", ["angle_deg", "depth_um"], [[0, 10.0], [10, 10.25]])
     assert "| angle_deg | depth_um |" in text and "10.250" in text
     assert json.loads((tmp_path / "out" / "table.json").read_text())["rows"][1] == [10, 10.25]
+    # SI values a nanometre apart and a std of picometres keep their digits
+    text = folder.write_table("si", ["value", "std"], [[-2.250339e-06, 7.2e-12]], digits=6,
+                              significant=True)
+    assert "| -2.250339e-06 | 7.200000e-12 |" in text
     folder.write_summary({
         "paper": "000", "procedure": "tool_rotation_arm", "machine": "planer_4axis",
         "seed": 3, "noise": True, "injected": {"tool.y": np.float64(-178e-6)},
@@ -38,7 +42,7 @@ def test_summary_and_tables_round_trip(tmp_path):
     assert summary["injected"]["tool.y"] == -178e-6
     assert summary["figures"][0]["before"] is None
     assert summary["details"]["depth_error_um"] == [None, 60.9]
-    assert summary["files"] == ["summary.json", "table.json", "table.md"]
+    assert summary["files"] == ["si.json", "si.md", "summary.json", "table.json", "table.md"]
 
 
 def test_the_summary_schema_is_enforced(tmp_path):
