@@ -195,6 +195,10 @@ class Result:
     evaluation : Evaluation
     elapsed_s : Mapping[str, float]
         Wall time of each step and in all, s.
+    not_identified : tuple of str
+        Parameters injected into the lab (non-zero; the background apart) that are not
+        among the identified ones: outside the procedure's model, or measured otherwise
+        (a compensation table) without being named.
     """
 
     paper: str
@@ -210,6 +214,7 @@ class Result:
     programs: Mapping[str, Any]
     evaluation: Evaluation
     elapsed_s: Mapping[str, float]
+    not_identified: tuple[str, ...] = ()
 
     def figure(self, name: str) -> Figure:
         """The figure called ``name``."""
@@ -230,6 +235,7 @@ class Result:
             "figures": [f.as_dict() for f in self.figures],
             "details": dict(self.evaluation.details),
             "elapsed_s": dict(self.elapsed_s),
+            **({"not_identified": list(self.not_identified)} if self.not_identified else {}),
         }
 
 
@@ -286,10 +292,13 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
                 if value != 0.0 or name in identified.parameters}
     for name in identified.parameters:
         injected.setdefault(name, 0.0)
+    own = lab.reveal(background=False).parameters()
+    not_identified = tuple(name for name, value in own.items()
+                           if value != 0.0 and name not in identified.parameters)
     return Result(
         paper=procedure.paper, procedure=procedure.name, machine=lab.machine.name,
         seed=lab.seed, noise=lab.noise, injected=MappingProxyType(injected),
         identified=identified.parameters, figures=tuple(evaluation.figures),
         measurements=measurements, identification=identified,
         programs=MappingProxyType(dict(programs)), evaluation=evaluation,
-        elapsed_s=MappingProxyType(clock))
+        elapsed_s=MappingProxyType(clock), not_identified=not_identified)

@@ -181,6 +181,15 @@ class ReportFolder:
               value - result.injected.get(name, math.nan)]
              for name, (value, std) in result.identified.items()],
             title="Identified error parameters (m, rad)", digits=6, significant=True)
+        if result.not_identified:
+            shown = ", ".join(f"{name} ({result.injected[name]:.6e})"
+                              for name in result.not_identified)
+            identified += (f"\nInjected and not among the identified parameters: {shown}. "
+                           "The procedure's model does not hold them as such (or it "
+                           "measures them without naming them, as a compensation table "
+                           "does): what they do shows in the errors above and in the "
+                           "figures after.\n")
+            write_atomic(self._target("identified.md"), identified)
         text = figures + "\n" + identified
         if budget is not None:
             return text + "\n" + self.add_budget(result, budget)

@@ -4,6 +4,7 @@ noise, and a scan that keeps identification and compensation away from the truth
 from __future__ import annotations
 
 import ast
+import json
 from pathlib import Path
 
 import numpy as np
@@ -262,6 +263,49 @@ def test_run_tells_its_progress_step_by_step_in_order():
     assert told[0::2] == [f"{s} ..." for s in steps]
     assert told[1::2] == [f"{s} done in {result.elapsed_s[f'{s}_s']:.1f} s" for s in steps]
     assert run(Counting(), Lab("robonano_a0ib", TRUTH, noise=False)).figures == result.figures
+
+
+def test_injected_parameters_the_procedure_does_not_identify_are_named(tmp_path):
+    """A procedure identifies its model's parameters; what else was injected is listed, in
+    Result, summary.json and identified.md, rather than left out of the report unseen (the
+    machine's background errors apart: they are in ``injected``, not injected by the user)."""
+    from machinesim.experiment import Evaluation, Figure, Identified, run
+    from machinesim.realism import Realism
+    from machinesim.report import ReportFolder
+
+    class WorkpieceX:
+        name, paper = "workpiece_x", "none"
+
+        def measure(self, lab):
+            return 0.0
+
+        def identify(self, measurements):
+            return Identified({"workpiece.x": (measurements, 1e-9)}, None)
+
+        def compensate(self, identified):
+            return {}
+
+        def evaluate(self, lab, identified, programs):
+            return Evaluation((Figure("x", "um", 1.0, 0.0),))
+
+    injected = {"workpiece": {"delta_um": [3.0, 0.0, 0.0]},
+                "location": {"B": {"EX0B_um": 2.0}}, "tool": {"offset_um": [0.0, -1.5, 0.0]}}
+    lab = Lab("robonano_a0ib", injected, seed=1, realism=Realism.lab())
+    result = run(WorkpieceX(), lab)
+    assert result.not_identified == ("tool.y", "location.B.EX0B")
+    assert len(result.injected) > 10  # the background is in injected, not in the list
+    folder = ReportFolder(tmp_path / "report")
+    text = folder.write_result(result)
+    # their values as the table's injected column gives them: the machine's, background in
+    ex0b = result.injected["location.B.EX0B"]
+    assert ex0b != 2e-6 and lab.reveal(background=False).parameters()["location.B.EX0B"] == 2e-6
+    assert ("Injected and not among the identified parameters: tool.y (-1.500000e-06), "
+            f"location.B.EX0B ({ex0b:.6e}).") in text
+    assert text.split("### Identified")[1] in (tmp_path / "report/identified.md").read_text()
+    summary = json.loads((tmp_path / "report/summary.json").read_text())
+    assert summary["not_identified"] == ["tool.y", "location.B.EX0B"]
+    exact = run(WorkpieceX(), Lab("robonano_a0ib", {"workpiece": {"delta_um": [3.0, 0, 0]}}))
+    assert exact.not_identified == () and "not_identified" not in exact.summary()
 
 
 def test_the_api_refuses_what_it_cannot_use_with_a_machinesim_error():
