@@ -193,6 +193,19 @@ def test_resume_runs_only_the_missing_trials(campaign, tmp_path, monkeypatch):
         assert np.array_equal(again[name].values, ds[name].values)
 
 
+def test_a_smaller_trials_says_which_trial_files_it_leaves_out(campaign, tmp_path, capsys):
+    source, vary, ds = campaign
+    (tmp_path / "trials").mkdir()
+    for name in ("campaign.json", *(f"trials/trial_{i:06d}.json" for i in range(3))):
+        (tmp_path / name).write_bytes((source / name).read_bytes())
+    two = run("tool_rotation_arm", 2, vary=vary, seed=11, out=tmp_path, workers=0,
+              report=False, **ARM)
+    assert two.sizes["trial"] == 2
+    assert np.array_equal(two["identified"].values, ds["identified"].values[:2])
+    err = capsys.readouterr().err
+    assert "holds 1 trial file beyond --trials 2 (from trial 2): left out" in err
+
+
 def test_a_damaged_trial_file_is_refused_before_the_missing_trials_run(campaign, tmp_path,
                                                                         monkeypatch):
     source, vary, _ = campaign

@@ -18,7 +18,7 @@ from collections.abc import Iterable
 
 from machinesim._cores import usable_cores
 from machinesim.campaign.distributions import Distribution, parse_vary
-from machinesim.campaign.results import CampaignFolder, assemble
+from machinesim.campaign.results import CampaignFolder, assemble, finished_trials
 from machinesim.campaign.summary import write_report
 from machinesim.campaign.trials import CampaignSpec, run_trial
 from machinesim.exceptions import InputError
@@ -187,6 +187,12 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
                         identify_only=identify_only, quick=quick)
     folder = CampaignFolder(out, spec.describe())
     done = folder.done(spec.trials)
+    beyond = [i for i in finished_trials(folder.path) if i >= spec.trials]
+    if beyond and progress:
+        print(f"campaign: {folder.trials_path} holds {len(beyond)} trial file"
+              f"{'s' * (len(beyond) > 1)} beyond --trials {spec.trials} (from trial "
+              f"{beyond[0]}): left out of this summary, kept for a larger --trials",
+              file=sys.stderr)
     missing = sorted(set(range(spec.trials)) - set(done))
     # the trials already there are read first: a damaged file is refused before the missing
     # trials run, not after
