@@ -262,8 +262,9 @@ def test_a_plan_that_cannot_see_a_parameter_names_it():
     # one combination with workpiece.x and .y (which then lose their own identifiability)
     (c,) = estimate.combinations
     assert set(c.names) == {"workpiece.x", "workpiece.y", "workpiece.z"}
-    (note,) = estimate.notes
+    (note,) = estimate.notes  # the rank is 9 at the prior too: nothing newly seen
     assert note.startswith(f"rank 9 of 10: the readings cannot see the combination {c}:")
+    assert estimate.unseen_at_prior == ()
     assert c.coefficients[c.names.index("workpiece.z")] == 1.0
     # it stays near the prior (0) instead of absorbing the readings: the combination's
     # coefficients on x and y (~alpha, beta) are what it costs them
@@ -444,13 +445,20 @@ def test_a_near_symmetry_and_a_missing_error_are_told_in_the_notes():
     assert any("location.C.EC0C and workpiece.gamma are correlated" in n
                for n in estimate.notes)
     assert not any("do not fit the model" in n for n in estimate.notes)
-    assert not any("cannot see" in n for n in estimate.notes)  # full rank
+    assert not any(n.startswith("rank ") for n in estimate.notes)  # full rank
     # the plan at the nominal machine sees them as one: a combination, and a note of it
     from machinesim.identification.fit import plan_quality as quality
     nominal = quality(machine, obs.q, obs.frames, obs.directions, list(estimate.names),
                       obs.sigma)
     assert nominal.rank == 3
     assert sum("cannot see the combination" in n for n in nominal.notes) == 1
+    # and the fit, which started there, says it sees that symmetry only through its own
+    # estimate's errors (the line's offset): the same combination as the plan names
+    (c,) = estimate.unseen_at_prior
+    assert str(c) == str(nominal.combinations[0])
+    assert set(c.names) == {"location.C.EC0C", "workpiece.gamma"}
+    assert sum(n.startswith(f"at the prior the readings cannot see {c}; the fit, of rank 4")
+               for n in estimate.notes) == 1
     # a tool offset the readings show and the parameters lack: the residual says so
     machine, obs = _a0ib_r_test({"location": {"C": {"EX0C_um": 3.0}},
                                  "tool": {"offset_um": [1.0, 0.5, 0.0]}}, False)

@@ -217,6 +217,10 @@ class Estimate(_Figures):
         Gauss-Newton steps taken.
     errors : ErrorModel
         The prior with the fitted values.
+    unseen_at_prior : tuple of Combination
+        The directions the readings could not see at the prior (the plan's symmetries there,
+        as `plan_quality` at the prior names them), when the fit ended with a higher rank:
+        seen at the estimate only through its own errors' lever (`notes`).
 """)
 
     values: np.ndarray
@@ -224,6 +228,7 @@ class Estimate(_Figures):
     normalised_residual_rms: float
     iterations: int
     errors: ErrorModel
+    unseen_at_prior: tuple = ()
 
     @property
     def notes(self) -> tuple[str, ...]:
@@ -231,6 +236,13 @@ class Estimate(_Figures):
         residual above `MODEL_MISFIT` (a parameter the readings show but neither ``params``
         nor the prior holds, or sigma given too small)."""
         out = list(super().notes)
+        for c in self.unseen_at_prior:
+            stds = ", ".join(f"{n} {self.std[self.names.index(n)]:.3g}" for n in c.names)
+            out.append(f"at the prior the readings cannot see {c}; the fit, of rank "
+                       f"{self.rank}, sees it only through the estimate's own errors, so "
+                       f"these values rest on that small lever (std {stds}) and may be far "
+                       "off (a compensation through them may add error). Fix a datum (leave "
+                       "a parameter out of the fit) or add readings that see it")
         if self.normalised_residual_rms > MODEL_MISFIT:
             out.append(f"the readings do not fit the model: normalised residual "
                        f"{self.normalised_residual_rms:.3g} (about 1 when the model holds "
@@ -504,11 +516,13 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
                          tolerances.FIT_STEP_M)
     values = start.copy()
     iterations = 0
+    at_prior = None
     while True:
         iterations += 1
         errors = prior.with_parameters(dict(zip(names, values.tolist(), strict=True)))
         residual = (obs.values - plan.readings(errors)) / obs.sigma
         lin = _linearise(plan.jacobian(errors), obs.sigma)
+        at_prior = lin if at_prior is None else at_prior
         step = lin.step(residual, start - values)
         values = values + step
         if np.all(np.abs(step) < tolerance):
@@ -528,9 +542,15 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
     figures = _figures(lin, names)
     dof = len(obs) - lin.rank
     chi = math.sqrt(float(np.sum((residual / obs.sigma) ** 2)) / dof) if dof > 0 else math.nan
+    unseen = ()
+    if lin.rank > at_prior.rank:  # those of the prior's symmetries the estimate now sees
+        finite = {n for n, sd in zip(names, figures["std"], strict=True) if math.isfinite(sd)}
+        unseen = tuple(u for u in _figures(at_prior, names)["unidentifiable"]
+                       if isinstance(u, Combination) and set(u.names) <= finite)
     return Estimate(**figures, values=frozen(values),
                     residual_rms=float(np.sqrt(np.mean(residual ** 2))),
-                    normalised_residual_rms=chi, iterations=iterations, errors=errors)
+                    normalised_residual_rms=chi, iterations=iterations, errors=errors,
+                    unseen_at_prior=unseen)
 
 
 def _check_not_diverged(machine, names, values: np.ndarray, iterations: int) -> None:
