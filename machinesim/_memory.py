@@ -29,9 +29,9 @@ FLOOR = 4 << 30
 #: What the command line and the scenarios say when memory runs out.
 OUT_OF_MEMORY = (
     f"a spec or program asks for more than this machine has (capped at its memory, or at "
-    f"${LIMIT_VARIABLE}); a cut of many sweeps whose faces nearly coincide (passes repeated "
-    "while the tool turns) builds unions that can grow that large: cut a window of it "
-    "(--roi), or fewer passes")
+    f"${LIMIT_VARIABLE}). One known cause: a cut of many sweeps whose faces nearly coincide "
+    "(passes repeated while the tool turns), whose unions can grow that large; cut a window "
+    "of it (--roi), or fewer passes")
 #: Where a cgroup (a container) states its memory limit: v2, then v1.
 CGROUP_LIMITS = ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes")
 

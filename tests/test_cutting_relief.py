@@ -73,6 +73,34 @@ def test_envelope_equals_the_pointwise_minimum(seed, count):
                                atol=1e-12)
 
 
+def test_envelope_of_a_dense_raster_splits_into_halves_and_equals_the_one_table(monkeypatch):
+    # 3000 V profiles 1 mm wide stepped by 1 um (a raster's passes), each point under ~1000
+    # of them: one table of every pair over each interval would hold ~4.5e9 entries. Split
+    # between chains and merged, the envelope is the pointwise minimum, and on a part small
+    # enough for one table it is the same, point for point.
+    from machinesim.cutting import profiles
+
+    rng = np.random.default_rng(4)
+    centres = np.arange(3000) * 1e-6
+    depth = 1e-5 + rng.uniform(0.0, 1e-8, len(centres))
+    u0 = np.concatenate([centres - 5e-4, centres])
+    u1 = np.concatenate([centres, centres + 5e-4])
+    z0 = np.concatenate([np.full(len(centres), 1e-6), -depth])
+    z1 = np.concatenate([-depth, np.full(len(centres), 1e-6)])
+    order = np.argsort(np.concatenate([np.arange(3000), np.arange(3000)]), kind="stable")
+    u0, z0, u1, z1 = u0[order], z0[order], u1[order], z1[order]  # chain by chain
+    u, z = envelope(u0, z0, u1, z1, -1e-3, 4e-3, 0.0)
+    at = np.concatenate([rng.uniform(-1e-3, 4e-3, 2000), u])
+    np.testing.assert_allclose(np.interp(at, u, z), brute_envelope(u0, z0, u1, z1, 0.0, at),
+                               rtol=0, atol=1e-18)
+    few = slice(0, 120)  # 60 profiles: one table
+    one = envelope(u0[few], z0[few], u1[few], z1[few], -1e-3, 4e-3, 0.0)
+    monkeypatch.setattr(profiles, "MOST_PAIRS", 10)
+    split = envelope(u0[few], z0[few], u1[few], z1[few], -1e-3, 4e-3, 0.0)
+    np.testing.assert_array_equal(split[0], one[0])
+    np.testing.assert_allclose(split[1], one[1], rtol=0, atol=1e-21)
+
+
 def test_envelope_keeps_only_the_corners():
     # Two V's whose inner flanks cross below the top: corners at the two bottoms, the ridge
     # between them and where the outer flanks meet the top, nothing else.

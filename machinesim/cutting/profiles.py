@@ -47,7 +47,16 @@ def clip_to_top(u0, z0, u1, z1, top):
     return u0, z0, u1, z1
 
 
-def envelope(u0, z0, u1, z1, lo: float, hi: float, top: float):
+#: Most entries of the table of segment pairs `envelope` compares at once (per interval
+#: between segment ends, every pair of the segments over it): 4e6 float64 (32 MB) per array.
+#: Beyond it the segments are split between whole chains and the two halves' envelopes
+#: merged, so that a raster of thousands of overlapping passes (each point under hundreds
+#: of profiles: 31 GB in one table for 25,000 passes of a 1 mm ball at 0.4 um) costs
+#: N log N, not N times the overlap squared.
+MOST_PAIRS = 4_000_000
+
+
+def envelope(u0, z0, u1, z1, lo: float, hi: float, top: float, *, split: bool = True):
     """Lower envelope of segments and the line z = top over [lo, hi], exactly.
 
     The segments must form chains that start and end at or above ``top`` (groove profiles,
@@ -62,6 +71,9 @@ def envelope(u0, z0, u1, z1, lo: float, hi: float, top: float):
         The domain (m).
     top : float
         The uncut height (m).
+    split : bool
+        Split the segments between chains when their table of pairs would pass
+        `MOST_PAIRS` (default); False builds the one table whatever its size.
 
     Returns
     -------
@@ -73,7 +85,6 @@ def envelope(u0, z0, u1, z1, lo: float, hi: float, top: float):
     u0, z0, u1, z1 = clip_to_top(u0, z0, u1, z1, top)
     keep = (u1 > lo) & (u0 < hi) & (u1 > u0)
     u0, z0, u1, z1 = u0[keep], z0[keep], u1[keep], z1[keep]
-    slope = (z1 - z0) / (u1 - u0)
     ends = np.concatenate([u0, u1])
     xs = np.unique(np.concatenate([[lo, hi], ends[(ends > lo) & (ends < hi)]]))
     n = len(xs) - 1
@@ -81,6 +92,36 @@ def envelope(u0, z0, u1, z1, lo: float, hi: float, top: float):
         return np.array([lo, hi]), np.array([top, top])
     first = np.clip(np.searchsorted(xs, u0, side="right") - 1, 0, n - 1)
     last = np.clip(np.searchsorted(xs, u1, side="left"), 1, n)
+    over = np.cumsum(np.bincount(first, minlength=n + 1) - np.bincount(last, minlength=n + 1))
+    width = int(over[:n].max()) + 1
+    if split and n * width * (width - 1) // 2 > MOST_PAIRS:
+        middle = _chain_break_near_middle(u0, z0, u1, z1)
+        if middle is not None:
+            halves = [envelope(u0[part], z0[part], u1[part], z1[part], lo, hi, top)
+                      for part in (slice(None, middle), slice(middle, None))]
+            pieces = [segments_of(u, z) for u, z in halves]
+            # two functions of u: at most two segments and the top over any interval
+            return envelope(*(np.concatenate([p[i] for p in pieces]) for i in range(4)),
+                            lo, hi, top, split=False)
+    return _envelope(u0, z0, u1, z1, xs, first, last, width, top)
+
+
+def _chain_break_near_middle(u0, z0, u1, z1) -> int | None:
+    """The index nearest the middle where one chain of segments ends and the next begins
+    (a segment that does not start where the one before it ended); None for one chain.
+    Each chain starts and ends at the top, so a part of the chains has a continuous
+    envelope of its own."""
+    breaks = np.flatnonzero((u0[1:] != u1[:-1]) | (z0[1:] != z1[:-1])) + 1
+    if not len(breaks):
+        return None
+    return int(breaks[np.argmin(np.abs(breaks - len(u0) / 2))])
+
+
+def _envelope(u0, z0, u1, z1, xs, first, last, width: int, top: float):
+    """`envelope` in one table: every pair of segments over each interval of ``xs``."""
+    n = len(xs) - 1
+    lo, hi = xs[0], xs[-1]
+    slope = (z1 - z0) / (u1 - u0)
     count = last - first
     segment = np.repeat(np.arange(len(u0)), count)
     offsets = np.cumsum(count) - count
@@ -89,7 +130,6 @@ def envelope(u0, z0, u1, z1, lo: float, hi: float, top: float):
     interval, segment = interval[order], segment[order]
     per = np.bincount(interval, minlength=n)
     slot = np.arange(len(interval)) - (np.cumsum(per) - per)[interval]
-    width = int(per.max()) + 1
     # Column `width - 1` stays -1: the top, last so that a segment at the top wins ties.
     table = np.full((n, width), -1, dtype=np.int64)
     table[interval, slot] = segment
