@@ -21,9 +21,12 @@ def add_reading_options(parser) -> None:
     parser.add_argument("--tools", type=Path, default=None, metavar="TOOLS.toml",
                         help="tool table for T/D/H words and G43/G44 (TOML, units in keys); "
                              "T/M06 change the cut to a tool's length and shape (docs/nc.md)")
-    parser.add_argument("--integer-input", choices=("calculator", "increment"), default=None,
+    parser.add_argument("--integer-input", choices=("calculator", "increment", "is-b", "is-c"),
+                        default=None,
                         help="how an axis number without decimal point reads: calculator "
-                             "(X10 is 10 mm, the default) or increment (X10 is 10 nm)")
+                             "(X10 is 10 mm, the default), or in least input increments: "
+                             "increment (X10 is 10 nm), is-b (FANUC IS-B: 0.01 mm), is-c "
+                             "(IS-C: 0.001 mm)")
     parser.add_argument("--chord-nm", type=float, default=None, metavar="NM",
                         help="largest distance of the chords arcs and rotary moves are cut "
                              "as from the true path, nm; default: a tenth of the finest "
@@ -68,6 +71,21 @@ def read_for_machine(args: argparse.Namespace, path, machine, tool):
     if args.chord_nm is not None:
         chord = args.chord_nm * 1e-9
     return read_program(path, chord_tolerance=chord, **reading), chord
+
+
+def integer_note(program) -> str | None:
+    """The note for a program read under calculator-type input whose text wrote non-zero
+    lengths or angles without a decimal point (``Z-1``: 1 mm here, 1 um on a FANUC control
+    without calculator-type input at IS-B), or None."""
+    words = getattr(program, "integer_words", {}) or {}
+    if getattr(program, "integer_input", None) != "calculator" or not words:
+        return None
+    shown = ", ".join(f"{letter} at line {line}" for letter, line in
+                      sorted(words.items(), key=lambda item: (item[1], item[0])))
+    return (f"numbers without a decimal point ({shown}) were read in mm and deg "
+            "(calculator-type input, the default); a FANUC control without it reads them "
+            "in its least input increment: give --integer-input is-b (0.001 mm), is-c "
+            "(0.0001 mm) or increment (1 nm) if the program was written for one")
 
 
 def unit_note(program) -> str | None:

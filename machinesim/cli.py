@@ -5,7 +5,7 @@
     machinesim cut PROGRAM --machine NAME --tool SPEC --stock SPEC [--errors ERRORS.toml]
                    [--servo SERVO.toml] --out PART.ply [--report REPORT.json]
                    [--roi X0,X1,Y0,Y1 ...] [--tools TOOLS.toml]
-                   [--integer-input calculator|increment]
+                   [--integer-input calculator|increment|is-b|is-c]
                    [--chord-nm NM] [--allow-overtravel] [--allow-holder-contact]
 
 Exit status: 0 done; 2 the input cannot be used (the message names the file, line, key or
@@ -36,6 +36,7 @@ from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._program_options import (
     add_reading_options,
     check_reading_options,
+    integer_note,
     read_for_machine,
     unit_note,
 )
@@ -258,7 +259,7 @@ def _reading_notes(args, program, chord: float) -> list[str]:
     notes += [f"{word} at line {line} selects a work offset this command is not given: "
               "taken as zero, the same as G54 (docs/nc.md)"
               for word, line in program.states.items() if word in WORK_OFFSETS]
-    notes += [note for note in (unit_note(program),) if note]
+    notes += [note for note in (unit_note(program), integer_note(program)) if note]
     return notes
 
 

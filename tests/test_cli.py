@@ -100,6 +100,18 @@ def test_integer_input_increment_reads_axis_words_in_nanometres(tmp_path, capsys
     assert code == 0, err
     data = json.loads(report.read_text(), parse_constant=no_nan)
     assert data["removed_volume_mm3"] == pytest.approx(GROOVES_MM3, rel=1e-9)
+    # FANUC's IS-C reads it 100 times deeper (0.0001 mm): 2 mm, and says which words
+    code, _, err = run(["cut", program, *CUT, "--integer-input", "is-c",
+                        "--out", tmp_path / "deep.ply", "--report", report], capsys)
+    nc = json.loads(report.read_text())["nc"]
+    assert nc["integer_input"] == "is-c" and nc["integer_words"][0]["word"] == "Z"
+    assert "note: numbers without a decimal point" not in err  # the rule was chosen
+    # read with the default rule, the 20000 is 20 m: the note names the word and its line
+    code, _, err = run(["cut", program, *CUT, "--out", tmp_path / "deep.ply",
+                        "--allow-overtravel"], capsys)
+    line = nc["integer_words"][0]["line"]
+    assert (f"note: numbers without a decimal point (Z at line {line}) were read in mm"
+            in err)
 
 
 # ------------------------------------------------------------ refusals: one line, no files
@@ -490,7 +502,7 @@ def test_the_report_lists_how_the_program_was_read(tmp_path, capsys):
     nc = json.loads(report.read_text(), parse_constant=no_nan)["nc"]
     expected = [("G40", "N10 "), ("G80", "N10 "), ("T1", "N30 "), ("T2", "N120 "),
                 ("G05.1 Q1", "N130 "), ("G64", "N135 "), ("G05.1 Q0", "N165 ")]
-    assert nc == {"integer_input": "increment",
+    assert nc == {"integer_input": "increment", "integer_words": [],
                   "states": [{"word": w, "line": line_of(b)} for w, b in expected],
                   "units": [{"word": "G21", "line": line_of("N15 G21")}],
                   "tool_table": str(tools)}
@@ -499,6 +511,7 @@ def test_the_report_lists_how_the_program_was_read(tmp_path, capsys):
     assert code == 0, err
     nc = json.loads(report.read_text(), parse_constant=no_nan)["nc"]
     assert nc["integer_input"] == "calculator" and nc["tool_table"] is None
+    assert nc["integer_words"] == []  # the example program writes every number with a point
 
 
 def test_the_cut_starts_at_the_machines_home_and_g28_returns_there(tmp_path, capsys):

@@ -115,6 +115,29 @@ def test_integer_input_rules():
     assert calculator[3].dwell_s == increment[3].dwell_s == 0.5
 
 
+def test_integer_input_in_fanuc_increment_systems_and_the_words_read_so():
+    # IS-B: 0.001 mm, 0.0001 inch, 0.001 deg; IS-C: a tenth of each. The plain lines take the
+    # vectorised path, the arc the block-by-block one: both apply the rule and keep the
+    # letters written without a point, with their first lines (zero and pointed ones not).
+    text = "G00 X0 Z1.\nG01 X10 Y0 A5 F100.\nG02 X0. Y0. R5\nG20 G01 X10\nG04 X500\n"
+    for rule, mm, deg in (("is-b", 1e-6, 1e-3), ("is-c", 1e-7, 1e-4)):
+        program = parse_program(text, integer_input=rule)
+        moves = program.moves
+        assert moves[1].target["X"] == pytest.approx(10 * mm, rel=1e-15)
+        assert moves[1].target["A"] == pytest.approx(5 * deg * DEG, rel=1e-15)
+        assert moves[-2].target["X"] == pytest.approx(10 * mm * 0.1 * 25.4, rel=1e-15)
+        assert moves[-1].dwell_s == 0.5
+        assert program.integer_input == rule
+        assert dict(program.integer_words) == {"X": 2, "A": 2, "R": 3}
+        slow = parse_program(text, integer_input=rule, fast=False)
+        assert dict(slow.integer_words) == dict(program.integer_words) and slow == program
+    # an arc of R5 increments from X10 increments back to X0: a half circle of 5 um at IS-B
+    arc = parse_program(text, integer_input="is-b", chord_tolerance=1e-10).moves
+    middle = [m.target["Y"] for m in arc[2:-2]]
+    assert max(np.abs(middle)) == pytest.approx(5e-6, rel=1e-3)
+    assert dict(parse_program("G01 X1.5 Y0 F100.\n").integer_words) == {}
+
+
 def test_read_program_names_the_file_and_accepts_crlf(tmp_path):
     path = tmp_path / "part.nc"
     path.write_bytes(b"%\r\nO7\r\nG00 X1. (\xc3\x98 5 tool)\r\nG01 X2. F100\r\n%\r\n")

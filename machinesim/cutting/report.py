@@ -110,6 +110,7 @@ class CutReport:
             "engine_s": self.engine_s,
             "notes": list(self.notes),
             "nc": {"integer_input": self.nc.get("integer_input"),
+                   "integer_words": [dict(w) for w in self.nc.get("integer_words", ())],
                    "states": [dict(state) for state in self.nc.get("states", ())],
                    "units": [dict(unit) for unit in self.nc.get("units", ())],
                    "tool_table": self.nc.get("tool_table")},
@@ -132,7 +133,9 @@ def peak_following_error(trajectory, machine) -> dict:
 
 def nc_summary(program) -> dict:
     """How ``program`` was read, for `CutReport.nc`: ``integer_input`` (None when not read
-    from text), ``states`` (the words read as modal states without geometric effect, G40,
+    from text), ``integer_words`` (the letters of non-zero lengths and angles written
+    without a decimal point, read as ``integer_input`` says, with their first lines),
+    ``states`` (the words read as modal states without geometric effect, G40,
     G80, G05.1 Q1, G08 P1, T1, and G09, G61, G64, ..., as ``{"word", "line"}`` in the order
     of their first lines), ``units`` (G20 and G21 as selected, the same way; none when the text
     selected neither and its lengths were read in mm) and ``tool_table`` (the path of the
@@ -143,6 +146,7 @@ def nc_summary(program) -> dict:
                      sorted(words.items(), key=lambda item: (item[1], item[0])))
 
     return {"integer_input": getattr(program, "integer_input", None),
+            "integer_words": first_lines(getattr(program, "integer_words", {}) or {}),
             "states": first_lines(getattr(program, "states", {}) or {}),
             "units": first_lines(getattr(program, "unit_words", {}) or {}),
             "tool_table": getattr(program, "tool_table", None)}

@@ -25,9 +25,6 @@ from machinesim.nc.words import (
     ARC,
     G_GROUPS,
     G_REFUSED,
-    INCREMENT_INCH_M,
-    INCREMENT_M,
-    INCREMENT_RAD,
     M99_IN_MAIN,
     M_PER_INCH,
     MAX_INTEGER_DIGITS,
@@ -373,7 +370,7 @@ class Block:
         elif "X" in single:
             word = single["X"]
             dwell_s = self.real(word)
-            if self.increment and "." not in word.text:
+            if self.increment is not None and "." not in word.text:
                 dwell_s /= 1000.0
             if dwell_s < 0.0:
                 raise self.fail(f"dwell time must be >= 0, got {word.key}", word)
@@ -545,18 +542,28 @@ class Block:
     def length_unit(self) -> float:
         return M_PER_INCH if self.state.inch else M_PER_MM
 
+    def bare(self, word: Word) -> None:
+        """Keep the first line of a non-zero length or angle written without a point, whose
+        reading depends on the integer-input rule (`Program.integer_words`)."""
+        if self.real(word) != 0.0:
+            self.reader.integer_words.setdefault(word.letter, self.line)
+
     def length_of(self, word: Word) -> float:
         """Metres per unit of a length word that is not an axis (I J K R Q)."""
-        if self.increment and "." not in word.text:
-            return INCREMENT_INCH_M if self.state.inch else INCREMENT_M
+        if "." not in word.text:
+            self.bare(word)
+            if self.increment is not None:
+                metric, inch, _ = self.increment
+                return inch if self.state.inch else metric
         return self.length_unit()
 
     def axis_unit(self, word: Word) -> float:
         rotary = word.letter in ROTARY_AXES
-        if self.increment and "." not in word.text:
-            if rotary:
-                return INCREMENT_RAD
-            return INCREMENT_INCH_M if self.state.inch else INCREMENT_M
+        if "." not in word.text:
+            self.bare(word)
+            if self.increment is not None:
+                metric, inch, angle = self.increment
+                return angle if rotary else (inch if self.state.inch else metric)
         return RAD_PER_DEG if rotary else self.length_unit()
 
     def real(self, word: Word) -> float:

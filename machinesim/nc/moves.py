@@ -28,7 +28,7 @@ SUBPROGRAM_CODES = (98, 99)
 MOVE_KINDS = ("rapid", "linear", "dwell")
 KIND_RAPID, KIND_LINEAR, KIND_DWELL = 0, 1, 2
 _KIND_CODE = {name: code for code, name in enumerate(MOVE_KINDS)}
-INTEGER_INPUTS = ("calculator", "increment")
+INTEGER_INPUTS = ("calculator", "increment", "is-b", "is-c")
 
 
 class FrozenMapping(Mapping):

@@ -41,6 +41,7 @@ from machinesim.nc.words import (
     INCREMENT_INCH_M,
     INCREMENT_M,
     INCREMENT_RAD,
+    INCREMENTS,
     M_PER_INCH,
     MAX_BLOCK_RUNS,
     MAX_INTEGER_DIGITS,
@@ -58,7 +59,7 @@ MAX_PROBLEMS = 10_000
 #: per-line Python path is as fast as numpy's per-call overhead).
 FAST_MIN_LINES = 16
 
-IntegerInput = Literal["calculator", "increment"]
+IntegerInput = Literal["calculator", "increment", "is-b", "is-c"]
 
 
 @dataclass
@@ -195,9 +196,12 @@ def parse_program(
         to, and from which G53's words are measured (FANUC's machine zero, where its
         reference point is by default); absent axes are at machine zero. ``machinesim cut``
         gives the machine's home (`Machine.home`): Z at the top of its travel.
-    integer_input : {"calculator", "increment"}
+    integer_input : {"calculator", "increment", "is-b", "is-c"}
         How a length or angle without decimal point reads: "calculator" (X10 is 10 mm, the
-        default) or "increment" (X10 is 10 least input increments: 10 nm, 0.0001 deg).
+        default) or in least input increments (`words.INCREMENTS`): "increment" (the
+        nanometre machines': X10 is 10 nm, A10 0.0001 deg), "is-b" (FANUC IS-B: X10 is
+        0.01 mm, A10 0.01 deg) or "is-c" (IS-C: X10 is 0.001 mm, A10 0.001 deg). Which
+        axis words were read without a point is kept (`Program.integer_words`).
     tools : path, dict or ToolTable, optional
         The tool table for H (tool length, G43/G44), T and D words
         (`machinesim.nc.tooltable`).
@@ -324,7 +328,8 @@ class Reader:
         self.offsets = offsets
         self.reference = reference  # G28's reference position (`parse_program`)
         self.integer_input = integer_input
-        self.increment = integer_input == "increment"
+        self.increment = INCREMENTS.get(integer_input)  # (m, inch in m, rad), or None
+        self.integer_words: dict[str, int] = {}  # letter -> first line read without a point
         self.tools = tools
         self.chord_tolerance = chord_tolerance
         self.fast = fast
@@ -381,7 +386,7 @@ class Reader:
             states=self.states, integer_input=self.integer_input,
             tool_table=None if self.tools is None else self.tools.source,
             tool_changes=self.tool_changes(), arc_blocks=self.arc_blocks,
-            unit_words=self.unit_words,
+            unit_words=self.unit_words, integer_words=self.integer_words,
             exact_stops=np.concatenate(self.out.stops) if self.out.stops else ())
 
     def tool_changes(self) -> tuple:
@@ -470,9 +475,12 @@ class Reader:
                 targets[:, k] = state.target.get(letter, math.nan)
                 continue
             unit = RAD_PER_DEG if letter in ROTARY_AXES else length_unit
+            bare = given & ~point[col[letter]] & (values[col[letter]] != 0.0)
+            if bare.any():
+                self.integer_words.setdefault(letter, i + 1 + int(np.argmax(bare)))
             if self.increment:
-                small = INCREMENT_RAD if letter in ROTARY_AXES else (
-                    INCREMENT_INCH_M if state.inch else INCREMENT_M)
+                metric, inch, angle = self.increment
+                small = angle if letter in ROTARY_AXES else (inch if state.inch else metric)
                 machine = values[col[letter]] * np.where(point[col[letter]], unit, small)
             else:
                 machine = values[col[letter]] * unit

@@ -16,6 +16,15 @@ M_PER_INCH = 0.0254
 INCREMENT_M = 1e-9
 INCREMENT_INCH_M = 1e-7 * M_PER_INCH
 INCREMENT_RAD = 1e-5 * RAD_PER_DEG
+#: Least input increments of each integer-input rule that has them: (metric length, m; inch
+#: length, m; angle, rad). "increment" is the nanometre machines' above; "is-b" and "is-c"
+#: are FANUC's common increment systems (IS-B: 0.001 mm, 0.0001 inch, 0.001 deg; IS-C:
+#: 0.0001 mm, 0.00001 inch, 0.0001 deg), which most conventional controls and posts use.
+INCREMENTS = {
+    "increment": (INCREMENT_M, INCREMENT_INCH_M, INCREMENT_RAD),
+    "is-b": (1e-6, 1e-4 * M_PER_INCH, 1e-3 * RAD_PER_DEG),
+    "is-c": (1e-7, 1e-5 * M_PER_INCH, 1e-4 * RAD_PER_DEG),
+}
 #: Integer words (N O G M P L H T D) longer than this are refused: FANUC takes at most 8
 #: digits, and the bound keeps int() away from Python's digit limit on hostile input.
 MAX_INTEGER_DIGITS = 9
