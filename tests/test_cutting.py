@@ -12,7 +12,7 @@ import pytest
 from machinesim import ErrorModel, ToolSetting
 from machinesim.cli import main
 from machinesim.cutting import cut
-from machinesim.exceptions import AxisLimitError, HolderContactError, NCProgramError
+from machinesim.exceptions import AxisLimitError, HolderContactError, InputError, NCProgramError
 from machinesim.machines import load_machine
 from machinesim.metrology import height_map
 from machinesim.nc import ProgramBuilder, parse_program, write_program
@@ -248,6 +248,24 @@ def test_overtravel_is_an_error_naming_axis_value_travel_and_line_unless_allowed
     assert len(report.limit_violations) == 1
     assert f"axis X = -300.000000 mm at line {line}" in report.limit_violations[0]
     assert report.to_dict()["limit_violations"] == list(report.limit_violations)
+
+
+def test_a_move_a_billion_metres_out_is_refused_even_with_overtravel_allowed():
+    # a feed across the block to X = 1e9 m (1e12 mm, a length in the wrong unit): float64's
+    # spacing there is 1.2e-7 m and the slot came out uncut, exit 0; 900 m out it cuts
+    def slot(x_end):
+        b = ProgramBuilder(1).rapid(X=1 * MM, Y=1 * MM, Z=0.1 * MM).linear(
+            Z=-10 * UM, feed_mm_per_min=100.0)
+        return b.linear(X=x_end, feed_mm_per_min=100.0).rapid(Z=0.1 * MM).build()
+
+    far = slot(1e9)
+    with pytest.raises(InputError, match=r"the move takes the tool 1e\+09 m from the "
+                                         r"workpiece origin; expected within 1000 m") as info:
+        cut(far, "grooving_4axis", tool="v:90", stock="block:5x3x1", allow_overtravel=True)
+    assert info.value.line == far.moves[2].line
+    _, near = cut(slot(900.0), "grooving_4axis", tool="v:90", stock="block:5x3x1",
+                  allow_overtravel=True)  # 900 m out: the V's section over the block's 4 mm
+    assert near.removed_volume_m3 == pytest.approx((10 * UM) ** 2 * 4 * MM, rel=1e-6)
 
 
 def test_a_cut_deeper_than_the_tool_is_refused_naming_its_line_or_cut_and_listed():
