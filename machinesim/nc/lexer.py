@@ -11,6 +11,8 @@ from machinesim.exceptions import NCProgramError
 #: A number: blanks may stand between its sign and its digits (``Z - 0.1``), as between a
 #: letter and its number, since blanks in a block are not read; not inside the digits.
 _NUMBER = re.compile(r"(?:[+-][ \t]*)?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)")
+#: What float() would read as NaN or infinity, where a number belongs (refused by name).
+_NOT_FINITE = re.compile(r"[+-]?[ \t]*(?:nan|inf(?:inity)?)(?![a-z])", re.IGNORECASE)
 #: Blanks inside a line. A carriage return is a blank only as the CR of a CRLF line end: the
 #: line's text then ends in it (the text stops before the LF), and `tokenize` drops it; any
 #: other CR is refused (a lone CR, as old Mac files end lines, would join several blocks).
@@ -104,6 +106,14 @@ def tokenize(raw: str, source: str, line: int, *,
                 i += 1
             match = _NUMBER.match(raw, i)
             end = match.end() if match else i
+            special = _NOT_FINITE.match(raw, i) if match is None else None
+            if special is not None:  # Xnan, X-inf: one problem, not one per letter of it
+                fail(f"{c.upper()}{special.group()} is not a finite number (NaN and infinity "
+                     f"are no lengths, angles or codes); expected digits with an optional "
+                     f"sign and decimal point, e.g. {c.upper()}-12.5", start + 1,
+                     c.upper() + special.group())
+                i = special.end()
+                continue
             if match is None or (end < n and raw[end] in "0123456789.+-"):
                 stop = _end_of_garbage(raw, i)
                 tail = raw[i:stop]
