@@ -55,7 +55,11 @@ def read_urdf(path: Path) -> ET.Element:
     try:
         root = ET.parse(path).getroot()
     except ET.ParseError as exc:
-        raise ModelError(f"{path}: not readable XML ({exc})") from None
+        hint = ""
+        if "unbound prefix" in str(exc):  # machinesim:axis and the like without xmlns
+            hint = (f"; a prefixed tag such as <machinesim:axis> needs its namespace declared "
+                    f"on <robot>: xmlns:machinesim=\"{_NS.strip('{}')}\"")
+        raise ModelError(f"{path}: not readable XML ({exc}){hint}") from None
     except OSError as exc:
         raise ModelError(f"{path}: cannot read the URDF file ({exc.strerror})") from None
     except RecursionError:

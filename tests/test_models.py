@@ -203,6 +203,10 @@ HOSTILE_URDFS = {
     "not_a_robot": (GROOVING.replace("<robot ", "<robut ").replace("</robot>", "</robut>"),
                     ["root element <robut>", "expected <robot>"]),
     "truncated": (GROOVING[:len(GROOVING) // 2], ["not readable XML"]),
+    "namespace_missing": (GROOVING.replace(' xmlns:machinesim="https://machinesim.invalid/urdf"',
+                                           ""),
+                          ["not readable XML (unbound prefix", "namespace declared on "
+                           '<robot>: xmlns:machinesim="https://machinesim.invalid/urdf"']),
     # machines that load as another machine unless the conventions are checked at zero
     "x_along_y": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', '<axis xyz="0.0 1.0 0.0"/>'),
                   ["joint 'X'", '<axis xyz="0.0 1.0 0.0"> moves along Y',
