@@ -15,8 +15,11 @@ Feed and time (FANUC rule, feed per minute, G94): a move's length is
 ``sqrt(sum(d_linear_mm**2) + sum(d_rotary_deg**2))`` and takes ``length / F`` minutes, so F
 reads as mm/min for linear moves and deg/min for pure rotary moves, clamped so that no axis
 runs faster than its velocity limit (the URDF's; a feed beyond it takes as long as the
-move's slowest axis at that limit, as a rapid does). A rapid runs every axis
-at its own rapid rate (the URDF velocity limit) and takes as long as its slowest axis. A
+move's slowest axis at that limit, as a rapid does). A rapid takes as long as its slowest
+axis at its rapid rate (the URDF velocity limit), and its path is the straight line in axis
+space, every axis arriving together: FANUC's linear-interpolation positioning (parameter
+LRP), not the non-linear "dog-leg" positioning in which each axis runs at its own rate and
+the short ones arrive first. The check of rapids that cut judges that path. A
 dwell takes its time. Servo follow-up errors enter through a `ServoModel` (ideal by default):
 each run of consecutive feed moves is followed as one continuous motion (the lag carries from
 block to block, as on an arc's chords), each rapid and each dwell alone, from rest.
