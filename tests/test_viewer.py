@@ -256,6 +256,25 @@ def test_a_mesh_the_viewer_cannot_load_is_left_out_with_a_warning(tmp_path):
     assert "/meshcat/machine/visuals/tool_tip_0" in objects  # the rest is drawn
 
 
+def test_a_machine_without_visual_bodies_is_framed_on_its_stock_and_its_part_copied():
+    # models/examples/mill3.urdf, docs/machines.md's starting machine, has no <visual>: the
+    # view framed a point and scaled the finished part's copy to nothing (a tool path and
+    # a dot on screen)
+    machine = load_machine(Path(__file__).resolve().parents[1] / "models/examples/mill3.urdf")
+    scene = machine_scene(machine, grooves(), tool="v:90", stock="block:10x10x2",
+                          max_triangles=BUDGET)
+    commands = decoded(scene)
+
+    def transform(path):
+        [c] = [c for c in commands if c["type"] == "set_transform" and c["path"] == path]
+        return np.array(c["matrix"], dtype=np.float64).reshape(4, 4).T
+
+    # the framing scales the drawn box to about one unit: the stock and the copy beside it
+    # (at its own size, 10 mm, with a tenth of the box between): 21 mm across
+    assert transform("/meshcat")[0, 0] == pytest.approx(1.0 / 0.021, rel=1e-9)
+    assert transform("/meshcat/inspection")[0, 0] == pytest.approx(1.0, rel=1e-12)
+
+
 def test_machine_scene_without_program_and_with_bad_settings():
     scene = machine_scene("robonano_a0ib")
     assert not [c for c in decoded(scene) if c["type"] == "set_animation"]

@@ -97,6 +97,8 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
     if program is not None:
         lo, hi = _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi,
                       duration_s, max_stages, max_triangles, chord_tolerance)
+    if lo is None:  # no visual bodies and no program: the origin
+        lo = hi = np.zeros(3)
     frame_scene(scene, lo, hi)
     return scene
 
@@ -137,6 +139,9 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
                          f"{max_stages}")
     tool = tool_from_spec(tool) if isinstance(tool, str) else tool
     stock = stock_from_spec(stock) if isinstance(stock, str) else stock
+    # the stock where it stands: a machine without visual bodies has only it to frame (its
+    # box was a point, and the enlarged part beside it came out of size zero)
+    lo, hi = _with_stock(visualizer, machine, errors, q0, stock, lo, hi)
     if chord_tolerance is None:
         chord_tolerance = path_chord_tolerance([tool])
     trajectory = motion.plan(program, machine, errors, start=q0, tool_points=tool.vertices(),
@@ -177,7 +182,9 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
                      chord_tolerance=chord_tolerance)
     part_lo, part_hi = parts[-1].bounds
     size = float(np.max(hi - lo))
-    scale = INSPECTION_SIZE * size / float(np.max(part_hi - part_lo))
+    # at least the part's own size: beside a machine drawn as its stock alone (no visual
+    # bodies) a fraction of the box would be smaller than the part
+    scale = max(1.0, INSPECTION_SIZE * size / float(np.max(part_hi - part_lo)))
     place = np.diag([scale, scale, scale, 1.0])
     anchor = np.array([hi[0] + 0.1 * size, 0.5 * (lo[1] + hi[1]), lo[2]])
     place[:3, 3] = anchor - scale * np.array([part_lo[0], 0.5 * (part_lo[1] + part_hi[1]),
@@ -289,8 +296,21 @@ def _body_tracks(visualizer, machine, errors, times, key_q) -> dict:
     return tracks
 
 
-def _machine_box(visualizer) -> tuple[np.ndarray, np.ndarray]:
-    """World box (m) of the visual bodies where they stand now."""
+def _with_stock(visualizer, machine, errors, q0, stock, lo, hi):
+    """The world box (m) ``lo``, ``hi`` (None: nothing drawn yet) grown by the stock's, the
+    workpiece frame placed at axis values ``q0``."""
+    model, data = visualizer.model, visualizer.data
+    pin.framesForwardKinematics(model, data, machine.kin.full_q(q0, machine.binding(errors)))
+    pose = data.oMf[model.getFrameId("workpiece")]
+    box = np.array(np.meshgrid(*stock.bounds.T)).reshape(3, -1).T
+    corners = box @ pose.rotation.T + pose.translation
+    if lo is None:
+        return corners.min(axis=0), corners.max(axis=0)
+    return np.minimum(lo, corners.min(axis=0)), np.maximum(hi, corners.max(axis=0))
+
+
+def _machine_box(visualizer) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """World box (m) of the visual bodies where they stand now; (None, None) without any."""
     corners = []
     for g_id, g in enumerate(visualizer.visual_model.geometryObjects):
         shape = g.geometry
@@ -303,7 +323,9 @@ def _machine_box(visualizer) -> tuple[np.ndarray, np.ndarray]:
         box = np.array(np.meshgrid(*[(-h, h) for h in half])).reshape(3, -1).T
         pose = visualizer.visual_data.oMg[g_id]
         corners.append(box @ pose.rotation.T + pose.translation)
-    points = np.vstack(corners) if corners else np.zeros((1, 3))
+    if not corners:
+        return None, None
+    points = np.vstack(corners)
     return points.min(axis=0), points.max(axis=0)
 
 
