@@ -18,13 +18,11 @@ resident set. The parts are compared by removed volume and vertex by vertex.
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
+
+from _timed_cut import timed_cut
 
 RUNNER = """
 import resource
@@ -58,16 +56,11 @@ def cut(folder: Path, passes: int, variant: str) -> dict:
     program = folder / f"raster{passes}.nc"
     program.write_text(raster(passes))
     out, report = folder / f"raster{passes}_{variant}.ply", folder / f"r{passes}_{variant}.json"
-    command = [sys.executable, "-c", RUNNER, variant, "cut", str(program), "--machine",
-               "grooving_4axis", "--tool", "ball:0.5", "--stock", "block:10x10x2", "--out",
-               str(out), "--report", str(report), "--quiet"]
-    start = time.perf_counter()
-    done = subprocess.run(command, capture_output=True, text=True)
-    if done.returncode:
-        raise SystemExit(f"{passes} passes ({variant}) failed:\n{done.stderr}")
-    seconds = time.perf_counter() - start
-    summary = json.loads(report.read_text())
-    return {"seconds": seconds, "peak_mb": int(done.stderr.split()[-1]) / 1024,
+    seconds, summary, stderr = timed_cut(
+        RUNNER, variant, [str(program), "--machine", "grooving_4axis", "--tool", "ball:0.5",
+                          "--stock", "block:10x10x2", "--out", str(out), "--report",
+                          str(report), "--quiet"], report, f"{passes} passes")
+    return {"seconds": seconds, "peak_mb": int(stderr.split()[-1]) / 1024,
             "removed_mm3": summary["removed_volume_mm3"], "engine": summary["engine"],
             "part": out}
 

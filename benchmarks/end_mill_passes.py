@@ -31,13 +31,11 @@ compared: removed volumes and the volume of each part less the other.
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
+
+from _timed_cut import timed_cut
 
 RUNNER = """
 import sys
@@ -72,17 +70,11 @@ def cut(folder: Path, name: str, text: str, variant: str, errors: Path | None = 
     program = folder / f"{name}.nc"
     program.write_text(text)
     out, report = folder / f"{name}_{variant}.ply", folder / f"{name}_{variant}.json"
-    command = [sys.executable, "-c", RUNNER, variant, "cut", str(program), "--machine",
-               "grooving_4axis", "--tool", "flat:0.8", "--stock", "block:8x8x4@-4,-4,0",
-               "--out", str(out), "--report", str(report), "--quiet"]
+    arguments = [str(program), "--machine", "grooving_4axis", "--tool", "flat:0.8", "--stock",
+                 "block:8x8x4@-4,-4,0", "--out", str(out), "--report", str(report), "--quiet"]
     if errors is not None:
-        command += ["--errors", str(errors)]
-    start = time.perf_counter()
-    done = subprocess.run(command, capture_output=True, text=True)
-    if done.returncode:
-        raise SystemExit(f"{name} ({variant}) failed:\n{done.stderr}")
-    seconds = time.perf_counter() - start
-    summary = json.loads(report.read_text())
+        arguments += ["--errors", str(errors)]
+    seconds, summary, _ = timed_cut(RUNNER, variant, arguments, report, name)
     with open(out, "rb") as ply:  # the header names the triangle count
         header = ply.read(512).decode("latin-1")
     triangles = int(header.split("element face ")[1].split()[0])
