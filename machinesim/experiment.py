@@ -195,10 +195,10 @@ class Result:
     evaluation : Evaluation
     elapsed_s : Mapping[str, float]
         Wall time of each step and in all, s.
-    not_identified : tuple of str
+    not_identified : Mapping[str, float]
         Parameters injected into the lab (non-zero; the background apart) that are not
-        among the identified ones: outside the procedure's model, or measured otherwise
-        (a compensation table) without being named.
+        among the identified ones, with their injected values (SI): outside the procedure's
+        model, or measured otherwise (a compensation table) without being named.
     """
 
     paper: str
@@ -214,7 +214,7 @@ class Result:
     programs: Mapping[str, Any]
     evaluation: Evaluation
     elapsed_s: Mapping[str, float]
-    not_identified: tuple[str, ...] = ()
+    not_identified: Mapping[str, float] = field(default_factory=dict)
 
     def figure(self, name: str) -> Figure:
         """The figure called ``name``."""
@@ -293,12 +293,12 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
     for name in identified.parameters:
         injected.setdefault(name, 0.0)
     own = lab.reveal(background=False).parameters()
-    not_identified = tuple(name for name, value in own.items()
-                           if value != 0.0 and name not in identified.parameters)
+    not_identified = {name: value for name, value in own.items()
+                      if value != 0.0 and name not in identified.parameters}
     return Result(
         paper=procedure.paper, procedure=procedure.name, machine=lab.machine.name,
         seed=lab.seed, noise=lab.noise, injected=MappingProxyType(injected),
         identified=identified.parameters, figures=tuple(evaluation.figures),
         measurements=measurements, identification=identified,
         programs=MappingProxyType(dict(programs)), evaluation=evaluation,
-        elapsed_s=MappingProxyType(clock), not_identified=not_identified)
+        elapsed_s=MappingProxyType(clock), not_identified=MappingProxyType(not_identified))

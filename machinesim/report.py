@@ -182,8 +182,7 @@ class ReportFolder:
              for name, (value, std) in result.identified.items()],
             title="Identified error parameters (m, rad)", digits=6, significant=True)
         if result.not_identified:
-            shown = ", ".join(f"{name} ({result.injected[name]:.6e})"
-                              for name in result.not_identified)
+            shown = _parameter_list(result.not_identified)
             identified += (f"\nInjected and not among the identified parameters: {shown}. "
                            "The procedure's model does not hold them as such (or it "
                            "measures them without naming them, as a compensation table "
@@ -283,6 +282,23 @@ class ReportFolder:
         target = self._target(name)
         write_atomic(target, buffer.getvalue())
         return target
+
+
+def _parameter_list(values: Mapping[str, float]) -> str:
+    """``name (value)`` for each parameter, SI; a component table's entries as one item,
+    ``component.X.EXX (6 table entries)``."""
+    tables: dict[str, int] = {}
+    items = []
+    for name, value in values.items():
+        if "[" in name:
+            table = name.split("[")[0]
+            if table not in tables:
+                items.append(table)
+            tables[table] = tables.get(table, 0) + 1
+        else:
+            items.append(f"{name} ({value:.6e})")
+    return ", ".join(f"{item} ({tables[item]} table entr{'ies' if tables[item] > 1 else 'y'})"
+                     if item in tables else item for item in items)
 
 
 def _cell(value):
