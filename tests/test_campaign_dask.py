@@ -45,7 +45,8 @@ def test_the_default_worker_count_is_the_cores_the_process_may_use():
     assert usable_cores() == len(os.sched_getaffinity(0))
 
 
-def test_ctrl_c_on_a_campaign_with_workers_is_one_line_and_no_worker_traceback(tmp_path):
+def test_ctrl_c_on_a_campaign_with_workers_is_one_line_and_no_worker_traceback(
+        tmp_path, as_in_a_terminal):
     """A Ctrl-C reaches every process of the terminal's group, the workers too; each printed
     a KeyboardInterrupt traceback while the campaign said what it kept. Sent to the group
     once a trial has finished (the workers are up), only the campaign's line remains."""
@@ -54,7 +55,8 @@ def test_ctrl_c_on_a_campaign_with_workers_is_one_line_and_no_worker_traceback(t
     process = subprocess.Popen(
         [sys.executable, "-m", "machinesim.cli", "campaign", "tool_rotation_arm", "--trials", "40",
          "--workers", "1", "--identify-only", "--out", str(tmp_path)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        **as_in_a_terminal)
     try:
         progress = ""
         while "campaign: 1/40" not in progress:
