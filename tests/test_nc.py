@@ -317,6 +317,8 @@ REFUSALS = [
     ("G00 10", 1, 5, "10", "without an address letter"),
     ("G01 X0 F0", 1, 8, "F0", "feed must be > 0"),
     ("G01 X0 F-5", 1, 8, "F-5", "feed must be > 0"),
+    ("G01 X0 F0." + "0" * 30 + "1", 1, 8, "F0." + "0" * 30 + "1", "below 1 nm a minute"),
+    ("G00 X0\nG01 X1. F0.0000009", 2, 9, "F0.0000009", "below 1 nm a minute"),
     ("S-100", 1, 1, "S-100", "spindle speed must be >= 0"),
     ("M3.5", 1, 1, "M3.5", "M code must be an unsigned integer"),
     ("N1234567890", 1, 1, "N1234567890", "at most 9 digits"),

@@ -32,6 +32,7 @@ from machinesim.nc.words import (
     MOTION,
     NON_MOVING,
     SINGLE,
+    SLOWEST_FEED_M_PER_S,
     call_of,
     g_name,
     integer,
@@ -236,6 +237,10 @@ class Block:
             if feed <= 0.0:
                 raise self.fail(f"feed must be > 0, got {single['F'].key}", single["F"])
             state.feed = self.finite(feed * self.length_unit() / 60.0, single["F"])
+            if state.feed < SLOWEST_FEED_M_PER_S:
+                raise self.fail(f"feed {single['F'].key} is below 1 nm a minute (1e-6 mm/min),"
+                                " slower than any control feeds: a feed in the wrong unit?",
+                                single["F"])
         if "S" in single:
             spindle = self.real(single["S"])
             if spindle < 0.0:

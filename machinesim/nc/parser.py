@@ -47,6 +47,7 @@ from machinesim.nc.words import (
     MAX_INTEGER_DIGITS,
     MAX_MOVES,
     MAX_SUBPROGRAM_DEPTH,
+    SLOWEST_FEED_M_PER_S,
     integer,
 )
 from machinesim.units import M_PER_MM, RAD_PER_DEG
@@ -504,8 +505,8 @@ class Reader:
         feed_before = math.nan if state.feed is None else state.feed
         if has_f.any():
             feed = f * length_unit / 60.0
-            if np.isinf(feed).any():
-                return False
+            if np.isinf(feed).any() or (feed[has_f] < SLOWEST_FEED_M_PER_S).any():
+                return False  # the block-by-block path names the word
             feed = _fill(feed, has_f, feed_before, None)
         else:
             feed = np.full(j - i, feed_before)

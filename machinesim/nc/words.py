@@ -25,6 +25,10 @@ INCREMENTS = {
     "is-b": (1e-6, 1e-4 * M_PER_INCH, 1e-3 * RAD_PER_DEG),
     "is-c": (1e-7, 1e-5 * M_PER_INCH, 1e-4 * RAD_PER_DEG),
 }
+#: The slowest feed a program may ask for, m/s: 1 nm a minute, far below any control's
+#: least feed (FANUC: 0.001 mm/min at IS-B). Below it a feed was typed in the wrong unit
+#: (F0.000...1 took 3e33 s of machining, silently).
+SLOWEST_FEED_M_PER_S = 1e-9 / 60.0
 #: Integer words (N O G M P L H T D) longer than this are refused: FANUC takes at most 8
 #: digits, and the bound keeps int() away from Python's digit limit on hostile input.
 MAX_INTEGER_DIGITS = 9
