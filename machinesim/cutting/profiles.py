@@ -59,9 +59,10 @@ MOST_PAIRS = 4_000_000
 def envelope(u0, z0, u1, z1, lo: float, hi: float, top: float, *, split: bool = True):
     """Lower envelope of segments and the line z = top over [lo, hi], exactly.
 
-    The segments must form chains that start and end at or above ``top`` (groove profiles,
-    or an earlier envelope): their minimum is then continuous, and every corner of it is a
-    segment end or the crossing of two segments within one interval between ends.
+    The segments must form chains, listed one after the other, that start and end at or
+    above ``top`` (groove profiles, or an earlier envelope): their minimum is then
+    continuous, and every corner of it is a segment end or the crossing of two segments
+    within one interval between ends.
 
     Parameters
     ----------
@@ -95,7 +96,7 @@ def envelope(u0, z0, u1, z1, lo: float, hi: float, top: float, *, split: bool = 
     over = np.cumsum(np.bincount(first, minlength=n + 1) - np.bincount(last, minlength=n + 1))
     width = int(over[:n].max()) + 1
     if split and n * width * (width - 1) // 2 > MOST_PAIRS:
-        middle = _chain_break_near_middle(u0, z0, u1, z1)
+        middle = _chain_break_near_middle(u0, z0, u1, z1, lo, hi, top)
         if middle is not None:
             halves = [envelope(u0[part], z0[part], u1[part], z1[part], lo, hi, top)
                       for part in (slice(None, middle), slice(middle, None))]
@@ -106,12 +107,15 @@ def envelope(u0, z0, u1, z1, lo: float, hi: float, top: float, *, split: bool = 
     return _envelope(u0, z0, u1, z1, xs, first, last, width, top)
 
 
-def _chain_break_near_middle(u0, z0, u1, z1) -> int | None:
-    """The index nearest the middle where one chain of segments ends and the next begins
-    (a segment that does not start where the one before it ended); None for one chain.
-    Each chain starts and ends at the top, so a part of the chains has a continuous
-    envelope of its own."""
-    breaks = np.flatnonzero((u0[1:] != u1[:-1]) | (z0[1:] != z1[:-1])) + 1
+def _chain_break_near_middle(u0, z0, u1, z1, lo, hi, top) -> int | None:
+    """The index nearest the middle where one chain of segments ends and the next begins:
+    a segment that does not start where the one before it ended, the one before ending at
+    the top (or past the domain) and this one starting there. The chains on either side
+    then have continuous envelopes of their own. None when there is no such index (one
+    chain, or chains not listed one after the other)."""
+    breaks = np.flatnonzero(((u0[1:] != u1[:-1]) | (z0[1:] != z1[:-1]))
+                            & ((z1[:-1] >= top) | (u1[:-1] >= hi))
+                            & ((z0[1:] >= top) | (u0[1:] <= lo))) + 1
     if not len(breaks):
         return None
     return int(breaks[np.argmin(np.abs(breaks - len(u0) / 2))])
