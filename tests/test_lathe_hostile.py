@@ -38,6 +38,28 @@ def test_a_nominal_tool_cuts_the_points_on_the_spindle_axis(program):
         assert abs(part.heights_at([r], [r])[0] - near) <= scallop, r
 
 
+def test_a_facing_cut_of_many_turns_from_far_out_cuts_the_axis_too():
+    # 500 turns from X = 1 mm to the axis: the poses' round-off in the offset grows with the
+    # angle and the radius (2.2e-15 m here, beyond the absolute 1e-15 m), was read as a
+    # varying centre height, and the axis and the last crossing along the end angle kept the
+    # stock's top (0 nm on the axis for -1000 nm; 15 nm high at r = 3.4 um with dx = 10 um)
+    from machinesim.nc import parse_program
+
+    program = parse_program("G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\n"
+                            "G01 X0 C180000 F36000\nG01 Z0.01\n")
+    part, _ = machinesim.Lab("sts_lathe", noise=False).turn(program, "nose:1.0:90")
+    scallop = 1e-6 ** 2 / (8 * R)  # 1 um a turn under a 1 mm nose: 0.5 nm
+    for r in (0.0, 1e-18, 1e-16, 1e-9):
+        assert -1e-6 <= part.heights_at([r], [0.0])[0] <= -1e-6 + scallop, r
+    # with the tool 10 um past the centre (dx), the lowest point of the nose passes r = 10 um
+    # at the end angle theta = 0: the groove's floor there is the nose circle about it
+    lab = machinesim.Lab("sts_lathe", {"tool": {"offset_um": [10.0, 0.0, 0.0]}}, noise=False)
+    part, _ = lab.turn(program, "nose:1.0:90")
+    r = np.array([3.4e-6, 5e-6])
+    hand = -1e-6 + (R - np.sqrt(R ** 2 - (10e-6 - r) ** 2))
+    np.testing.assert_allclose(part.heights_at(r, np.zeros(2)), hand, rtol=0, atol=1e-12)
+
+
 def test_a_nominal_tool_test_reads_no_uncut_core():
     # the interferometer's maps are symmetric about the origin and have a pixel on the axis:
     # it read the stock's top, and |dy| came out as one pixel, sqrt(pitch^2 / pi) = 0.28 um

@@ -27,7 +27,9 @@ _CROSSING_STEPS = 64
 #: path's fitted spindle axis, is taken as constant, and one that is then within this of
 #: zero as zero (a tool on the centre height: the poses' round-off, ~1e-17 m, would leave
 #: an uncut core of that radius on the axis): the crossings then move by at most
-#: 1e-15 m / rho rad and the heights by less than 1e-15 m times the surface slope.
+#: 1e-15 m / rho rad and the heights by less than 1e-15 m times the surface slope. A path
+#: of many turns far out carries more round-off (the angle's, `_ANGLE_ROUNDOFF` of the
+#: largest angle, times the radius), and the bound grows with it (`_spindle_axis`).
 OFFSET_CONSTANT_M = 1e-15
 #: Most path points in one bin of the angle lookup before it falls back to binary search.
 _BIN_STEPS = 8
@@ -409,12 +411,17 @@ def _spindle_axis(alpha, along, offset):
         along = along - (cos * e_x + sin * e_y)
         offset = offset - (cos * e_y - sin * e_x)
         centre = (float(e_x), float(e_y))
-    if np.ptp(offset) <= OFFSET_CONSTANT_M:
+    # the poses' round-off grows with the spindle angle and the radius: a facing cut of 500
+    # turns from X 1 mm carries 2.2e-15 m (1e-15 m from 0.45 mm out), which read as a
+    # varying centre height left the top standing on the axis
+    tolerance = max(OFFSET_CONSTANT_M, _ANGLE_ROUNDOFF * float(np.max(np.abs(alpha), initial=0.0))
+                    * float(np.max(np.abs(along), initial=0.0)))
+    if np.ptp(offset) <= tolerance:
         level = float(np.median(offset))
-        # within OFFSET_CONSTANT_M of zero: on the centre height. The uncut core of radius
-        # |d| it would leave is round-off (the poses' ~1e-17 m of a nominal tool), and a
+        # within the tolerance of zero: on the centre height. The uncut core of radius |d|
+        # it would leave is round-off (the poses' ~1e-17 m of a nominal tool), and a
         # point that near the axis (an interferometer's pixel on it) would read the top
-        offset = np.full(offset.size, 0.0 if abs(level) <= OFFSET_CONSTANT_M else level)
+        offset = np.full(offset.size, 0.0 if abs(level) <= tolerance else level)
     return centre, along, offset
 
 
