@@ -60,6 +60,24 @@ def test_a_facing_cut_of_many_turns_from_far_out_cuts_the_axis_too():
     np.testing.assert_allclose(part.heights_at(r, np.zeros(2)), hand, rtol=0, atol=1e-12)
 
 
+def test_a_rapid_below_the_stocks_top_is_noted_a_retract_is_not():
+    # the turning engine cuts the runs of feeds that turn C: a rapid across at cutting depth
+    # left no trace and no word (z(0.3 mm) = -246 nm, two runs, notes empty)
+    from machinesim.nc import parse_program
+
+    lab = machinesim.Lab("sts_lathe", noise=False)
+    head = "G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\n"
+    across = parse_program(head + "G01 X0.5 C1800 F36000\nG00 X0.4 C1900\nG01 X0 C3600\n"
+                           "G00 Z0.01\n")
+    _, report = lab.turn(across, "nose:1.0:90")
+    (note,) = report.notes
+    assert note.startswith("rapids with the tip below the stock's top (z = 0 um) at lines 5:")
+    plunge = parse_program("G90 G21\nG00 X1.0 Z0.01 C0\nG00 Z-0.001\nG01 X0 C3600 F36000\n")
+    assert "at lines 3:" in lab.turn(plunge, "nose:1.0:90")[1].notes[0]
+    out = parse_program(head + "G01 X0 C3600 F36000\nG00 Z0.01\nG00 X2.\n")
+    assert lab.turn(out, "nose:1.0:90")[1].notes == ()  # straight up out of the cut, then over
+
+
 def test_a_nominal_tool_test_reads_no_uncut_core():
     # the interferometer's maps are symmetric about the origin and have a pixel on the axis:
     # it read the stock's top, and |dy| came out as one pixel, sqrt(pitch^2 / pi) = 0.28 um

@@ -223,9 +223,33 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
               f"above the stock's top (z = {top * 1e6:.6g} um) throughout; does the program "
               "reach the stock, and do the errors set the tool too high or the workpiece too "
               "low (tool.z, workpiece.z)?",) if empty else ())
+    notes += _rapids_below_top(program, machine, top)
     report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak,
                            empty_cut=empty, limit_violations=limits, notes=notes)
     return part, report
+
+
+def _rapids_below_top(program, machine, top: float) -> tuple[str, ...]:
+    """The note on the rapids the program runs with the tip below the stock's top (as
+    commanded, on the nominal machine): the turning engine cuts the turning runs alone, and
+    on a machine such a rapid is a crash."""
+    source = getattr(program, "source", "<program>")
+    q, kinds, _, lines = _axis_values(program, machine, source)
+    z = machine.tool_pose(q)[:, 2, 3]
+    # ending below the top, or starting there and moving across (a retract straight out of
+    # the cut along Z is none)
+    across = np.any(np.diff(np.delete(q, machine.axes.index("Z"), axis=1), axis=0,
+                            prepend=np.nan) != 0.0, axis=1)
+    below = np.flatnonzero((kinds == KIND_RAPID)
+                           & ((z < top) | ((np.roll(z, 1) < top) & across)))
+    below = below[below > 0]  # the first point is the start, not a move
+    if not below.size:
+        return ()
+    shown = ", ".join(str(int(lines[k])) for k in below[:10])
+    more = f" and {below.size - 10} more" if below.size > 10 else ""
+    return (f"rapids with the tip below the stock's top (z = {top * 1e6:.6g} um) at lines "
+            f"{shown}{more}: the turning engine cuts only the runs of feeds that turn C, so "
+            "they are not in the part; on a machine a rapid there is a crash",)
 
 
 def _program_moves(program, machine) -> SimpleNamespace:
