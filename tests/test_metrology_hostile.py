@@ -282,6 +282,12 @@ def test_a_reading_beyond_the_sample_cap_is_refused_before_allocating(flat):
     assert x.size * y.size > MAX_SAMPLES
     with pytest.raises(InputError, match=r"got 1.2e\+08 over x 0 .. 0.00019999 m"):
         height_map(flat, x, y)
+    # the laser interferometer's tests: 1e7 positions took 3.7 GB, 1e8 ran out of memory
+    laser = machinesim.Lab("grooving_4axis", noise=False).laser_interferometer()
+    with pytest.raises(InputError, match=r"at most 1,000,000 positions in one test, got "
+                                         r"1,000,001"):
+        laser.positioning("X", np.linspace(0.0, 0.05, 1_000_001))
+    assert laser.positioning("X", np.linspace(0.0, 0.05, 11)).deviation.shape == (11,)
 
 
 # ---------------------------------------------------- C: scan -> nominal centres with NaN

@@ -337,8 +337,17 @@ def _vector(value, length: int, name: str) -> np.ndarray:
     return array
 
 
+#: Most target positions one test takes: an ISO 230-2 run has tens; each position costs
+#: about 370 bytes on the way (poses, the beam), so 1e7 took 3.7 GB and 1e8 ran out of memory.
+MOST_POSITIONS = 1_000_000
+
+
 def _positions(values, least: int = 1) -> np.ndarray:
     x = as_floats(values, "positions")
+    if x.size > MOST_POSITIONS:
+        raise InputError(f"Expected at most {MOST_POSITIONS:,} positions in one test, got "
+                         f"{x.size:,} (ISO 230-2 reads tens; a test of more would take about "
+                         f"{x.size * 370 / 1e9:.3g} GB)", key="positions")
     if x.ndim != 1 or x.size < least or not np.isfinite(x).all():
         raise InputError(f"Expected at least {least} finite positions of shape (N,), got "
                          f"{shown(values)}", key="positions")
