@@ -186,3 +186,15 @@ def test_turn_refuses_a_program_that_is_not_one():
     with pytest.raises(InputError, match="Expected program as a machinesim.nc.Program or an "
                                          "NC file's path, got int"):
         turn(3, "sts_lathe")
+
+
+def test_turn_and_heights_refuse_what_is_not_a_number(program):
+    # top=None ended in float()'s TypeError, top="0" was read as 0; text as px in numpy's
+    # ValueError
+    for top in (None, "0", [0.0]):
+        with pytest.raises(InputError, match=r"key 'top': Expected top as a number \(m\)"):
+            turn(program, "sts_lathe", "nose:1.0:90", top=top)
+    part, _ = turn(program, "sts_lathe", "nose:1.0:90", top=TOP)
+    with pytest.raises(InputError, match=r"key 'px': Expected px as numbers \(m\), got \['a'\]"):
+        part.heights_at(["a"], [0.0])
+    assert part.heights_at([1e-9], [0.0])[0] == pytest.approx(0.0, abs=1e-9)

@@ -49,6 +49,7 @@ from machinesim.cutting.program import _overtravel
 from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_floats, as_number
 from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
 from machinesim.tools import RoundNoseTool, tool_from_spec, with_nose_radius_error
@@ -87,8 +88,8 @@ class TurnedPart:
 
     def heights_at(self, px, py) -> np.ndarray:
         """Heights at the points ``(px[i], py[i])`` (m, workpiece frame), shape (n,)."""
-        px = np.asarray(px, dtype=np.float64).ravel()
-        py = np.asarray(py, dtype=np.float64).ravel()
+        px = as_floats(px, "px").ravel()
+        py = as_floats(py, "py").ravel()
         if px.size != py.size:
             raise InputError(f"heights_at(px, py) takes the points' x and y as two arrays of "
                              f"one length, got {px.size} and {py.size} values (an (n, 2) "
@@ -198,9 +199,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     if not isinstance(tool, RoundNoseTool):
         raise InputError(f"Expected a round-nose tool for turning ('nose:R:ANGLE'), got "
                          f"{type(tool).__name__}", key="tool")
-    top = float(top)
-    if not math.isfinite(top):
-        raise InputError(f"Expected a finite top (m), got {top!r}", key="top")
+    top = as_number(top, "top")
     errors = None if errors is None else as_error_model(errors)
     machine.check_errors(errors)
     limits = _overtravel(machine, _program_moves(program, machine),
