@@ -186,6 +186,11 @@ def test_turn_refuses_a_program_that_is_not_one():
     with pytest.raises(InputError, match="Expected program as a machinesim.nc.Program or an "
                                          "NC file's path, got int"):
         turn(3, "sts_lathe")
+    # the program's text where its path belongs: the whole text came back as a missing file
+    with pytest.raises(InputError, match=r"expected the NC program's path, got text of 3 "
+                                         r"lines \('G90 G21' \.\.\.\): read text with "
+                                         r"machinesim.nc.parse_program\(text\)"):
+        turn("G90 G21\nG00 X1.0 Z0.01 C0\n", "sts_lathe")
 
 
 def test_turn_and_heights_refuse_what_is_not_a_number(program):

@@ -242,6 +242,11 @@ def read_program(path: str | os.PathLike, **kwargs) -> Program:
         raise NCProgramError(f"expected the NC program's path as a str or Path, got "
                              f"{type(path).__name__}", key="path")
     source = os.fspath(path)
+    if isinstance(source, str) and "\n" in source:  # the program's text, given as a path
+        first = source.strip().splitlines()[0][:40] if source.strip() else ""
+        raise NCProgramError(f"expected the NC program's path, got text of "
+                             f"{source.count(chr(10)) + 1} lines ({first!r} ...): read text "
+                             "with machinesim.nc.parse_program(text)", key="path")
     check_readable_file(path, "NC program")
     try:
         with open(path, "rb") as file:
