@@ -203,3 +203,15 @@ def test_turn_and_heights_refuse_what_is_not_a_number(program):
     with pytest.raises(InputError, match=r"key 'px': Expected px as numbers \(m\), got \['a'\]"):
         part.heights_at(["a"], [0.0])
     assert part.heights_at([1e-9], [0.0])[0] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_a_spindle_angle_just_past_its_travel_prints_apart_from_the_travel():
+    # C 1e5 rad is 5729577.95131 deg to five decimals: value and travel printed alike
+    from machinesim.nc import parse_program
+
+    program = parse_program("G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\n"
+                            "G01 X0 C5729577.95131 F36000\n")
+    with pytest.raises(AxisLimitError, match=r"axis C = 5729577\.951310 deg at line 4 outside "
+                                             r"its travel -5729577\.951308 deg \.\. "
+                                             r"5729577\.951308 deg"):
+        turn(program, "sts_lathe", "nose:1.0:90")

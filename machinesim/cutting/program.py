@@ -368,7 +368,7 @@ def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
             continue
         lines = list(dict.fromkeys(int(n) for n in moves.line[bad]))
         worst = bad[np.argmax(np.maximum(low - moves.q[bad, i], moves.q[bad, i] - high))]
-        unit = _format(machine.rotary[i])
+        unit = _format(machine.rotary[i], moves.q[worst, i], (low, high))
         found.append(f"axis {letter} = {unit(moves.q[worst, i])} at line "
                      f"{int(moves.line[worst])} outside its travel {unit(low)} .. "
                      f"{unit(high)}{_more_lines(lines)}")
@@ -470,7 +470,13 @@ def _in_edge_plane(poses: np.ndarray):
                                            poses[first + 1, :3, 3] - poses[first, :3, 3])
 
 
-def _format(rotary: bool):
-    if rotary:
-        return lambda value: f"{np.degrees(value):.5f} deg"
-    return lambda value: f"{value * 1e3:.6f} mm"
+def _format(rotary: bool, value: float | None = None, limits=()):
+    """A formatter of axis values in deg or mm: 5 or 6 decimals, more when ``value`` would
+    print as one of ``limits`` (a value just past a travel of 1e5 rad)."""
+    scale, unit = (np.degrees(1.0), "deg") if rotary else (1e3, "mm")
+    decimals = 5 if rotary else 6
+    while decimals < 12 and value is not None and any(
+            f"{value * scale:.{decimals}f}" == f"{limit * scale:.{decimals}f}"
+            for limit in limits):
+        decimals += 1
+    return lambda v: f"{v * scale:.{decimals}f} {unit}"
