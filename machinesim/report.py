@@ -180,15 +180,13 @@ class ReportFolder:
             [[name, result.injected.get(name, math.nan), value, std,
               value - result.injected.get(name, math.nan)]
              for name, (value, std) in result.identified.items()],
-            title="Identified error parameters (m, rad)", digits=6, significant=True)
-        if result.not_identified:
-            shown = _parameter_list(result.not_identified)
-            identified += (f"\nInjected and not among the identified parameters: {shown}. "
-                           "The procedure's model does not hold them as such (or it "
-                           "measures them without naming them, as a compensation table "
-                           "does): what they do shows in the errors above and in the "
-                           "figures after.\n")
-            write_atomic(self._target("identified.md"), identified)
+            title="Identified error parameters (m, rad)", digits=6, significant=True,
+            note="" if not result.not_identified else (
+                "Injected and not among the identified parameters: "
+                f"{_parameter_list(result.not_identified)}. The procedure's model does not "
+                "hold them as such (or it measures them without naming them, as a "
+                "compensation table does): what they do shows in the errors above and in "
+                "the figures after."))
         text = figures + "\n" + identified
         if budget is not None:
             return text + "\n" + self.add_budget(result, budget)
@@ -215,10 +213,12 @@ class ReportFolder:
         return text
 
     def write_table(self, name: str, columns: Sequence[str], rows: Sequence[Sequence],
-                    title: str = "", digits: int = 3, *, significant: bool = False) -> str:
+                    title: str = "", digits: int = 3, *, significant: bool = False,
+                    note: str = "") -> str:
         """A table as ``name.md`` and ``name.json``; returns the Markdown (for printing).
         Numbers are shown with ``digits`` decimals, or with ``significant`` as ``digits + 1``
-        significant digits in scientific notation (SI values from 1e-12 to 1e-3 alike)."""
+        significant digits in scientific notation (SI values from 1e-12 to 1e-3 alike);
+        ``note``, a paragraph under the Markdown table."""
         def cell(v):
             if isinstance(v, float):
                 if not math.isfinite(v):
@@ -229,7 +229,7 @@ class ReportFolder:
         lines = ([f"### {title}", ""] if title else []) + [
             "| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
         lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
-        text = "\n".join(lines) + "\n"
+        text = "\n".join(lines) + "\n" + (f"\n{note}\n" if note else "")
         write_atomic(self._target(f"{name}.md"), text)
         self.write_json(f"{name}.json", {"columns": list(columns),
                                          "rows": [list(r) for r in rows]})
