@@ -39,6 +39,12 @@ __all__ = ["RTest", "RTestReading", "ZEROS"]
 ZEROS = ("nominal", "first")
 
 
+#: Most poses one R-test reads: a plan reads tens to hundreds; each pose costs a few
+#: hundred bytes on the way (two poses, the readout), as the laser interferometer's
+#: positions do (`interferometer.MOST_POSITIONS`).
+MOST_POSES = 1_000_000
+
+
 @dataclass(frozen=True, eq=False)
 class RTestReading:
     """Ball-centre displacements read at a set of axis values.
@@ -126,6 +132,9 @@ class RTest:
         """Read the ball's displacement at each row of ``q`` (N, n_axes), m and rad."""
         n = len(self.machine.axes)
         q = as_floats(q, "q", "axis values (m, rad)")
+        if q.size > MOST_POSES * n:
+            raise InputError(f"Expected at most {MOST_POSES:,} poses in one R-test, got "
+                             f"{q.size // n:,} (a plan reads tens to hundreds)", key="q")
         if q.ndim == 1:
             q = q[None]
         if q.ndim != 2 or q.shape[1] != n or not len(q) or not np.isfinite(q).all():
