@@ -258,7 +258,7 @@ def realism_budget(procedure, result, realism, make_lab, enabled: bool = True, *
     that is on and that ``procedure.realism_sources`` lists, turned off in turn on a lab of
     its own (``make_lab(realism)``); ``result`` is the run with every switch on. None when
     not ``enabled`` or no such switch is on. ``progress``: a stage's printer for each rerun,
-    ``progress("budget, <source> off")`` (`machinesim.report.progress_printer`)."""
+    ``progress("budget, <source> off")`` (`machinesim.scenario_runs.progress_printer`)."""
     from machinesim.experiment import run
 
     sources = [name for name in realism.on if name in procedure.realism_sources]

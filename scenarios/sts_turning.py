@@ -36,8 +36,8 @@ from machinesim.errors import ErrorModel
 from machinesim.experiment import run
 from machinesim.procedures.sts_plans import PAPER, TABLE5
 from machinesim.procedures.sts_turning import CASES, STSTurning
-from machinesim.report import (
-    ReportFolder,
+from machinesim.report import ReportFolder
+from machinesim.scenario_runs import (
     progress_printer,
     realism_from,
     realism_options,

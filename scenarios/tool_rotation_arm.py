@@ -37,8 +37,8 @@ from machinesim.identification.tool_rotation_arm import (
     lateral_change,
 )
 from machinesim.procedures.tool_rotation_arm import ToolRotationArm
-from machinesim.report import (
-    ReportFolder,
+from machinesim.report import ReportFolder
+from machinesim.scenario_runs import (
     injected_errors,
     progress_printer,
     realism_from,

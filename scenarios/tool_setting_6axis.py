@@ -47,8 +47,8 @@ from machinesim.procedures.tool_setting_6axis import (
     cut_summary,
     layout_lines,
 )
-from machinesim.report import (
-    ReportFolder,
+from machinesim.report import ReportFolder
+from machinesim.scenario_runs import (
     injected_errors,
     parse_floats,
     progress_printer,

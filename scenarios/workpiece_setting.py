@@ -72,8 +72,8 @@ from machinesim.procedures.workpiece_setting import (
     model_based_program,
 )
 from machinesim.realism import Realism
-from machinesim.report import (
-    ReportFolder,
+from machinesim.report import ReportFolder
+from machinesim.scenario_runs import (
     injected_errors,
     parse_floats,
     progress_printer,

@@ -44,8 +44,8 @@ from machinesim.procedures.xy_plane_measurements import (
     PLATE,
     measure_xy_plane,
 )
-from machinesim.report import (
-    ReportFolder,
+from machinesim.report import ReportFolder
+from machinesim.scenario_runs import (
     progress_printer,
     realism_from,
     realism_options,

@@ -12,10 +12,8 @@ import pytest
 
 from machinesim._io import clear_stale_folders
 from machinesim.exceptions import InputError
-from machinesim.report import (
-    ReportFolder,
-    check_summary,
-    check_units,
+from machinesim.report import ReportFolder, check_summary, check_units
+from machinesim.scenario_runs import (
     parse_floats,
     scenario_arguments,
     scenario_status,

@@ -1,0 +1,268 @@
+"""How a scenario runs from its command line: its options, its progress on stderr, and its
+report folder written whole or not at all (`scenario_status`), with a clean exit on an error,
+Ctrl-C or a full memory. The folder's contents are `machinesim.report`'s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from collections.abc import Mapping
+from pathlib import Path
+
+from machinesim._arguments import ArgumentParser
+from machinesim._io import StagedFolder, ctrl_c_remembered
+from machinesim._memory import OUT_OF_MEMORY, memory_capped
+from machinesim.exceptions import InputError
+from machinesim.report import STAGED, folder_key
+
+
+def progress_printer(scenario: str):
+    """Printers of a scenario's steps on stderr, with the time since this call:
+    ``stage = progress_printer("name")``; ``told = stage("budget, x off")``; ``told("measure
+    ...")`` prints ``name [m:ss] budget, x off: measure ...``. A ``told`` is what
+    `machinesim.experiment.run` takes as ``progress``; stdout keeps the report alone."""
+    began = time.perf_counter()
+
+    def stage(name: str):
+        def show(text: str) -> None:
+            minutes, seconds = divmod(int(time.perf_counter() - began), 60)
+            print(f"{scenario} [{minutes:d}:{seconds:02d}] {name}: {text}", file=sys.stderr,
+                  flush=True)
+        return show
+    return stage
+
+
+#: Exit status of a scenario stopped by Ctrl-C (128 + SIGINT, as shells report it).
+EXIT_INTERRUPTED = 130
+
+
+def scenario_status(report, args, name: str | None = None) -> int:
+    """Run a scenario's ``report(args)`` and give its exit status: 0; 2 after a
+    `machinesim.MachineSimError`, its one-line message on stderr (``NAME: error: message``,
+    as ``machinesim: error: ...`` on the command line; ``name`` defaults to the script's
+    name; also a report folder (``args.out``) that cannot be made or written, checked before
+    the run, and a file that failed to write); 130 after Ctrl-C, one line saying so
+    (``NAME: interrupted; ...``). Never a traceback.
+
+    The report folder is written whole or not at all: every `ReportFolder` of ``args.out``
+    writes into a staging folder beside it, swapped in when ``report`` returns
+    (`machinesim._io.StagedFolder`). Stopped or failed before, the run leaves the folder as
+    it was (the previous report, or none), except what ``report`` made whole earlier with
+    `ReportFolder.publish`. A folder that is not a report (files, but no summary.json
+    listing them) is refused before the run rather than replaced.
+    """
+    from machinesim.exceptions import MachineSimError
+
+    name = name or Path(sys.argv[0]).stem or "scenario"
+    out = getattr(args, "out", None)
+    staged = None
+    try:
+        # past the memory there is: MemoryError, not the OOM killer
+        with ctrl_c_remembered(), memory_capped():
+            if out is not None:
+                staged = _stage_report(out)
+            report(args)
+            if staged is not None and staged.path is not None:
+                staged.commit()
+    except MachineSimError as error:
+        print(f"{name}: error: {error}", file=sys.stderr)
+        return 2
+    except OSError as error:  # a write that failed on the way (disk full, folder removed)
+        where = f"{error.filename}: " if error.filename else ""
+        print(f"{name}: error: {where}{error.strerror or error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{name}: interrupted; {_interrupted(out, staged)}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except MemoryError:
+        print(f"{name}: error: out of memory: {OUT_OF_MEMORY}", file=sys.stderr)
+        return 1
+    finally:
+        if staged is not None:
+            staged.discard()
+            STAGED.pop(folder_key(out), None)
+    return 0
+
+
+def _interrupted(out, staged) -> str:
+    """What an interrupted scenario left in its report folder (true in every case)."""
+    if staged is None:
+        return ("no report folder was touched" if out is not None
+                else "nothing was written")
+    if staged.commits == 0:
+        return (f"this run's report was not written: {str(out)!r} is as it was before "
+                "(the previous report, whole, or nothing)")
+    if staged.path is None:
+        return f"this run's report was written whole to {str(out)!r}"
+    return (f"{str(out)!r} holds this run's report as written whole before the interrupt, "
+            "without what the run was adding to it")
+
+
+def _debris(name: str) -> bool:
+    """A temporary file `machinesim._io.write_atomic` may leave (a killed run): not the
+    user's."""
+    return name.startswith(".") and name.endswith((".tmp", ".old"))
+
+
+def _stage_report(out) -> StagedFolder:
+    """The staged report folder of ``--out``, after checking that it can be made and that
+    what is there now is a report (so replacing it whole loses nothing of the user's)."""
+    path = Path(out)
+    target = Path(os.path.realpath(path))
+
+    def refuse(reason: str):
+        raise InputError(f"--out {str(path)!r}: {reason}", key="out")
+
+    def cannot(reason: str):
+        refuse(f"cannot make the report folder there ({reason}); expected a folder, or a "
+               "path where one can be made")
+
+    if os.path.lexists(target) and not target.is_dir():
+        cannot("a file is there")
+    blocking = next((p for p in target.parents if p.exists()), None)
+    if blocking is not None and not blocking.is_dir():
+        cannot(f"{str(blocking)!r} is a file, not a folder")
+    if target.is_dir():
+        if not os.access(target, os.R_OK | os.W_OK | os.X_OK):
+            refuse("the report folder is not writable")
+        _check_replaceable(target, refuse)
+    try:
+        staged = StagedFolder(path)
+    except OSError as exc:
+        cannot(f"cannot write beside it in {str(target.parent)!r}: {exc.strerror or exc}")
+    STAGED[folder_key(path)] = staged
+    return staged
+
+
+def _check_replaceable(folder: Path, refuse) -> None:
+    """Refuse (``refuse(reason)``) a folder the new report may not replace whole: one that
+    holds files besides a report (summary.json and the files it lists)."""
+    try:
+        names = sorted(n for n in os.listdir(folder) if not _debris(n))
+    except OSError as exc:
+        refuse(f"cannot read the report folder ({exc.strerror or exc})")
+    if not names:
+        return
+
+    def shown(found: list[str]) -> str:
+        return ", ".join(found[:5]) + (f" and {len(found) - 5} more" if len(found) > 5 else "")
+
+    if "summary.json" not in names:
+        refuse(f"holds files ({shown(names)}) but no summary.json, so it is not a report "
+               "folder, and a new report replaces its folder whole; give a new or empty "
+               "folder (or one a scenario wrote)")
+    try:
+        listed = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+        listed = listed.get("files") if isinstance(listed, dict) else None
+    except (OSError, ValueError):
+        listed = None
+    listed = {str(n) for n in listed} if isinstance(listed, list) else set()
+    foreign = [n for n in names if n != "summary.json" and n not in listed]
+    if foreign:
+        refuse(f"holds files its summary.json does not list ({shown(foreign)}); a new report "
+               "replaces its folder whole, so they would be lost: move them, or give "
+               "another folder")
+
+
+def run_scenario(report, args) -> None:
+    """Run a scenario's ``report(args)`` and exit with `scenario_status`'s status."""
+    sys.exit(scenario_status(report, args))
+
+
+def _seed(text: str) -> int:
+    """``--seed``: a non-negative integer (numpy's seeds), refused as the command line's
+    error (argparse: usage and status 2), not deep in the first random draw."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
+    return value
+
+
+def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentParser:
+    """The options every scenario takes: --errors FILE.toml, --noise on|off, --seed N,
+    --out DIR."""
+    parser = ArgumentParser(description=description)
+    parser.add_argument("--errors", type=Path, metavar="FILE.toml",
+                        help="inject this error model (any ErrorModel TOML, units in every "
+                        "key) instead of the scenario's default; the scenario's own error "
+                        "options, when given, are applied on top")
+    parser.add_argument("--noise", choices=("on", "off"), default="on",
+                        help="instrument noise (default on, the instruments' stated models)")
+    parser.add_argument("--seed", type=_seed, default=0,
+                        help="seed of the noise, a non-negative integer (default 0)")
+    parser.add_argument("--out", type=Path, default=Path(default_out),
+                        help=f"report folder (default {default_out})")
+    return parser
+
+
+#: The presets of `machinesim.realism.Realism` a scenario's ``--realism`` takes.
+REALISM_PRESETS = ("ideal", "noise_only", "lab")
+
+
+def realism_options(parser: argparse.ArgumentParser, default: str = "lab") -> None:
+    """Add ``--realism ideal|noise_only|lab`` and ``--budget on|off`` to a scenario's parser
+    (`scenario_arguments` gives the options every scenario takes; these are for scenarios
+    that build their lab with a `machinesim.realism.Realism`, see `realism_from`)."""
+    parser.add_argument("--realism", choices=REALISM_PRESETS, default=default,
+                        help="how real the lab is (docs/lab.md): ideal (exact readings), "
+                        "noise_only (instrument noise), lab (instruments, artefacts and "
+                        f"machine as real labs have them); default {default}. --noise off "
+                        "takes the instrument noise out of it")
+    parser.add_argument("--budget", choices=("on", "off"), default="on",
+                        help="error budget (docs/budget.md): run again with each source of "
+                        "the realism switched off in turn (default on; one more run per "
+                        "source)")
+
+
+def realism_from(args):
+    """The `machinesim.realism.Realism` of ``--realism``, less the instrument noise with
+    ``--noise off``."""
+    from machinesim.realism import Realism
+
+    realism = getattr(Realism, args.realism)()
+    return realism.without("instrument_noise") if args.noise == "off" else realism
+
+
+def parse_floats(text: str, count: int, option: str) -> list[float]:
+    """``"a,b,c"`` -> floats, with a clear error naming the option."""
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise InputError(f"{option} {text!r}: expected {count} comma-separated finite numbers")
+    return values
+
+
+def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, float],
+                    machine: str | None = None):
+    """The error model a scenario injects: ``--errors`` (or ``defaults`` without it), with
+    the scenario's own options that were given on the command line (``given``) on top.
+    With ``machine`` (a name), a model that does not fit it is refused naming the
+    ``--errors`` file first, then the machine.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        From `scenario_arguments`.
+    defaults : Mapping[str, float]
+        The scenario's default parameters (SI, names as `ErrorModel.parameters`).
+    given : Mapping[str, float]
+        Parameters set by options given explicitly.
+    """
+    from machinesim.errors import ErrorModel
+    from machinesim.machines import load_machine
+
+    base = (ErrorModel.from_toml(args.errors) if args.errors is not None
+            else ErrorModel().with_parameters(defaults))
+    if machine is not None and args.errors is not None:
+        load_machine(machine).check_errors(base)  # names the --errors file, then the machine
+    return base.with_parameters(given) if given else base
