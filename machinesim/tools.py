@@ -97,6 +97,12 @@ def _check_positive(name: str, value: float) -> float:
     return value
 
 
+def _check_shank(value: float) -> None:
+    """A shank radius: 0 (as wide as the tool) or a size (`_check_size`)."""
+    if value != 0.0:
+        _check_size("shank_radius", value)
+
+
 def _check_size(name: str, value: float) -> float:
     """A positive length at most `MAX_TOOL_SIZE_M`, else InputError naming it."""
     value = _check_positive(name, value)
@@ -456,11 +462,15 @@ class BallEndMill(_RotatingBody):
     height : float, optional
         Length from the tip to the holder (m), at least ``radius``. Default: the larger of
         `TOOL_HEIGHT_M` and the diameter.
+    shank_radius : float, optional
+        Radius of the shank or holder above ``height`` (m), for the holder check: 0 (the
+        default) takes it as wide as the tool.
     """
 
     radius: float
     chord_tol: float = BALL_CHORD_M
     height: float | None = None
+    shank_radius: float = 0.0
     rotational = True
     planar = False
 
@@ -473,6 +483,7 @@ class BallEndMill(_RotatingBody):
         if self.height < self.radius:
             raise InputError(f"height ({self.height!r} m) must be at least the radius "
                              f"({self.radius!r} m)", key="height")
+        _check_shank(self.shank_radius)
         self._mesh()
 
     def _mesh(self):
@@ -533,11 +544,15 @@ class FlatEndMill(_RotatingBody):
         Largest distance of a side of the polygon from the circle (m).
     height : float, optional
         Length from the end face to the holder (m). Default: `TOOL_HEIGHT_M`.
+    shank_radius : float, optional
+        Radius of the shank or holder above ``height`` (m), for the holder check: 0 (the
+        default) takes it as wide as the tool.
     """
 
     radius: float
     chord_tol: float = BALL_CHORD_M
     height: float = TOOL_HEIGHT_M
+    shank_radius: float = 0.0
     rotational = True
     planar = False
 
@@ -545,6 +560,7 @@ class FlatEndMill(_RotatingBody):
         _check_size("radius", self.radius)
         _check_positive("chord_tol", self.chord_tol)
         _check_size("height", self.height)
+        _check_shank(self.shank_radius)
         self._mesh()
 
     def _mesh(self):
@@ -562,19 +578,28 @@ Tool = VTool | RoundNoseTool | BallEndMill | FlatEndMill
 
 _SPEC_FORMS = ("'v:ANGLE_DEG', 'nose:RADIUS_MM:ANGLE_DEG', 'ball:RADIUS_MM' or "
                "'flat:RADIUS_MM', optionally "
-               "followed by ':h=HEIGHT_MM' (e.g. 'v:90:h=5')")
+               "followed by ':h=HEIGHT_MM' (e.g. 'v:90:h=5'), and for ball and flat by "
+               "':d=SHANK_DIAMETER_MM' (e.g. 'flat:0.5:h=3:d=4')")
+#: The trailing fields of a spec: the letter, the keyword it sets, what it is, and how a
+#: value in mm becomes it (m).
+_SPEC_FIELDS = {"h": ("height", "a height", "h=HEIGHT_MM", M_PER_MM),
+                "d": ("shank_radius", "a shank diameter", "d=SHANK_DIAMETER_MM",
+                      0.5 * M_PER_MM)}
 
 
-def _spec_height(spec, field: str) -> float:
-    """The height (m) of a spec's ``h=HEIGHT_MM`` field (a trailing ``mm`` is allowed)."""
-    text = field[2:].strip()
+def _spec_field(spec, field: str) -> tuple[str, float]:
+    """The keyword and value (m) of a spec's ``h=HEIGHT_MM`` or ``d=SHANK_DIAMETER_MM`` field
+    (a trailing ``mm`` is allowed)."""
+    name, what, form, scale = _SPEC_FIELDS[field.strip()[0].lower()]
+    text = field.strip()[2:].strip()
     if text.lower().endswith("mm"):
         text = text[:-2]
     try:
-        return float(text) * M_PER_MM
+        return name, float(text) * scale
     except ValueError:
-        raise InputError(f"tool spec {spec!r}: {field!r} is not a height; expected "
-                         "'h=HEIGHT_MM' with a number in mm, e.g. 'h=5'", key="tool") from None
+        raise InputError(f"tool spec {spec!r}: {field!r} is not {what}; expected "
+                         f"'{form}' with a number in mm, e.g. '{form[0]}=5'",
+                         key="tool") from None
 
 
 def path_chord_tolerance(tools) -> float:
@@ -601,7 +626,9 @@ def tool_from_spec(spec: str) -> Tool:
         deg), ``"ball:2.0"`` (radius mm) or ``"flat:1.0"`` (a flat end mill, radius mm: 2 mm
         across), optionally followed by ``":h=5"``: the tool's
         height from its edge to the holder in mm (default `TOOL_HEIGHT_M`, 10 mm; ``"h=5mm"``
-        reads the same).
+        reads the same), and for a ball or flat end mill by ``":d=4"``: the diameter of the
+        shank or holder above that height, mm, for the holder check (default: as wide as
+        the tool).
 
     Returns
     -------
@@ -614,13 +641,19 @@ def tool_from_spec(spec: str) -> Tool:
         the height included, are bounded by `MAX_TOOL_SIZE_M`).
     """
     fields = str(spec).strip().split(":")
-    height = {}
-    if len(fields) > 1 and fields[-1].strip().lower().startswith("h="):
-        height["height"] = _spec_height(spec, fields.pop().strip())
+    extra = {}
+    while len(fields) > 1 and fields[-1].strip().lower()[:2] in ("h=", "d="):
+        name, value = _spec_field(spec, fields.pop())
+        if name in extra:
+            raise InputError(f"tool spec {spec!r}: {name} given twice", key="tool")
+        extra[name] = value
     kind = fields[0].lower()
     arity = {"v": 1, "nose": 2, "ball": 1, "flat": 1}
     if kind not in arity or len(fields) != arity[kind] + 1:
         raise InputError(f"tool spec {spec!r}: expected {_SPEC_FORMS}", key="tool")
+    if "shank_radius" in extra and kind not in ("ball", "flat"):
+        raise InputError(f"tool spec {spec!r}: a shank diameter (d=) is for a ball or flat end "
+                         f"mill; a {kind} tool's holder is its own bar", key="tool")
     try:
         values = [float(field) for field in fields[1:]]
     except ValueError:
@@ -630,12 +663,12 @@ def tool_from_spec(spec: str) -> Tool:
         ) from None
     try:
         if kind == "v":
-            return VTool(values[0] * RAD_PER_DEG, **height)
+            return VTool(values[0] * RAD_PER_DEG, **extra)
         if kind == "nose":
-            return RoundNoseTool(values[0] * M_PER_MM, values[1] * RAD_PER_DEG, **height)
+            return RoundNoseTool(values[0] * M_PER_MM, values[1] * RAD_PER_DEG, **extra)
         if kind == "flat":
-            return FlatEndMill(values[0] * M_PER_MM, **height)
-        return BallEndMill(values[0] * M_PER_MM, **height)
+            return FlatEndMill(values[0] * M_PER_MM, **extra)
+        return BallEndMill(values[0] * M_PER_MM, **extra)
     except InputError as error:
         raise InputError(f"tool spec {spec!r}: {error}", key="tool") from None
 

@@ -268,6 +268,31 @@ def test_a_move_a_billion_metres_out_is_refused_even_with_overtravel_allowed():
     assert near.removed_volume_m3 == pytest.approx((10 * UM) ** 2 * 4 * MM, rel=1e-6)
 
 
+def test_a_shank_wider_than_the_end_mill_crashes_into_a_slot_it_cannot_enter():
+    # a 1 mm end mill with 3 mm of body cuts a slot 1 mm wide down in 0.5 mm levels; its
+    # 4 mm shank cannot follow it below 3 mm: the level at 3.5 mm is the first crash. Taken as
+    # wide as the tool (no d=), the holder follows the body down the slot it cut
+    b = ProgramBuilder(1).rapid(X=3 * MM, Y=5 * MM, Z=1 * MM)
+    for level in range(1, 10):
+        b = b.linear(Z=-0.5 * MM * level, feed_mm_per_min=50.0).linear(
+            X=(7 if level % 2 else 3) * MM, feed_mm_per_min=200.0)
+    program = b.rapid(Z=1 * MM).build()
+    crash = program.moves[1 + 2 * 6].line  # the plunge to Z -3.5 mm
+    stock = "block:10x10x8"  # z from -8 mm to 0
+    with pytest.raises(HolderContactError) as refused:
+        cut(program, "grooving_4axis", tool="flat:0.5:h=3:d=4", stock=stock)
+    message = str(refused.value)
+    assert f"line {crash} " in message and "where its holder begins, 4 mm across" in message
+    _, report = cut(program, "grooving_4axis", tool="flat:0.5:h=3", stock=stock)
+    assert report.holder_contact == ()
+    # the same shank over a slot no deeper than the body: nothing to hit
+    shallow = ProgramBuilder(1).rapid(X=3 * MM, Y=5 * MM, Z=1 * MM).linear(
+        Z=-3 * MM, feed_mm_per_min=50.0).linear(X=7 * MM, feed_mm_per_min=200.0).rapid(
+        Z=1 * MM).build()
+    _, report = cut(shallow, "grooving_4axis", tool="flat:0.5:h=3:d=4", stock=stock)
+    assert report.holder_contact == ()
+
+
 def test_a_cut_deeper_than_the_tool_is_refused_naming_its_line_or_cut_and_listed():
     # a V 20 um tall fed 30 um deep: the top of its body is 10 um under the stock's top
     tool = VTool(math.pi / 2, height=20 * UM)

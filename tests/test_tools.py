@@ -207,6 +207,17 @@ def test_a_spec_height_sets_where_the_holder_begins(spec, height_m):
     assert tool.vertices()[:, 2].max() == pytest.approx(height_m, rel=1e-15)
 
 
+def test_a_spec_shank_diameter_widens_the_holder_not_the_tool():
+    # d= is a diameter in mm: the shank's radius, m; h= and d= in either order
+    for spec in ("flat:0.5:h=3:d=4", "flat:0.5:d=4mm:h=3"):
+        tool = tool_from_spec(spec)
+        assert (tool.height, tool.shank_radius) == (3e-3, 2e-3)
+        # the cutting body is the end mill's own: 1 mm across
+        assert np.ptp(tool.vertices()[:, 0]) == pytest.approx(1e-3, rel=1e-12)
+    assert tool_from_spec("ball:0.5:d=4").shank_radius == 2e-3
+    assert tool_from_spec("ball:0.5").shank_radius == 0.0
+
+
 @pytest.mark.parametrize(
     ("spec", "message"),
     [
@@ -224,6 +235,10 @@ def test_a_spec_height_sets_where_the_holder_begins(spec, height_m):
         ("v:90:h=abc", "'h=abc' is not a height; expected 'h=HEIGHT_MM'"),
         ("ball:2:h=1", "height \\(0.001 m\\) must be at least the radius \\(0.002 m\\)"),
         ("v:h=5", "expected 'v:ANGLE_DEG'"),
+        ("v:90:d=4", "a shank diameter \\(d=\\) is for a ball or flat end mill"),
+        ("flat:0.5:d=abc", "'d=abc' is not a shank diameter; expected 'd=SHANK_DIAMETER_MM'"),
+        ("flat:0.5:h=3:h=4", "height given twice"),
+        ("flat:0.5:d=-4", "shank_radius must be a positive finite number, got -0.002 m"),
     ],
 )
 def test_bad_tool_specs_raise_input_error(spec, message):

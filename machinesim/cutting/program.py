@@ -434,8 +434,10 @@ def _holder_refusal(source, tool, stock: Part, sweep_line: np.ndarray):
     def refuse(sweeps) -> None:
         lines = list(dict.fromkeys(int(sweep_line[i]) for i in sweeps))
         height = getattr(tool, "height", None)
+        shank = float(getattr(tool, "shank_radius", 0.0) or 0.0)
+        across = f", {2e3 * shank:.6g} mm across" if shank else ""
         body = ("" if height is None
-                else f" ({height * 1e3:.6g} mm from its edge, where its holder begins)")
+                else f" ({height * 1e3:.6g} mm from its edge, where its holder begins{across})")
         where = f"{source}: " if source else ""
         raise HolderContactError(
             f"{where}line {lines[0]}{_more_lines(lines)} takes the top of the tool's "

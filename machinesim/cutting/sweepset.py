@@ -32,6 +32,9 @@ PAIR_CLIP_MAX_VERTICES = 64
 #: 1 um x 1 um x 1 nm. A body cut flush to its top leaves round-off slivers (1e-19 m thick
 #: over a few mm^2: ~1e-25 m^3) far below it; any real contact is far above.
 HOLDER_MATERIAL_M3 = 1e-21
+#: Sides of the polygon a shank wider than the tool's body is drawn as in the holder check
+#: (circumscribed about the shank: it errs towards a crash, by at most 0.5 % of its radius).
+HOLDER_SHANK_SIDES = 32
 #: Sweeps whose tool points are processed together: bounds the transient memory (k points
 #: per pose, ~100 bytes each) to ~50 MB whatever the path length.
 POINTS_PER_CHUNK = 1 << 19
@@ -83,6 +86,16 @@ class SweepSet:
                             if self.rotational and hasattr(tool, "triangles") else None)
         top = self.vertices[:, 2]
         self.top = np.flatnonzero(top >= top.max())
+        # Where the holder begins: the body's top face, or a shank wider than the body
+        # (`shank_radius`), a 32-gon about the tool axis at the body's height.
+        self.holder_face = self.vertices[self.top]
+        shank = float(getattr(tool, "shank_radius", 0.0) or 0.0)
+        if shank > float(np.max(np.hypot(*self.holder_face[:, :2].T))):
+            phi = 2.0 * np.pi * np.arange(HOLDER_SHANK_SIDES) / HOLDER_SHANK_SIDES
+            # circumscribed, so that the polygon holds the round shank
+            r = shank / np.cos(np.pi / HOLDER_SHANK_SIDES)
+            self.holder_face = np.stack([r * np.cos(phi), r * np.sin(phi),
+                                         np.full(phi.size, top.max())], axis=1)
         # A flat end mill: vertex i + n straight above vertex i (its two rings, `tools`).
         from machinesim.tools import FlatEndMill
         self.rings = int(tool.segments) if isinstance(tool, FlatEndMill) else 0
@@ -349,11 +362,12 @@ class SweepSet:
         """Sweeps (indices over all paths) in which the top of the tool's body, where the
         holder begins, comes below ``below`` (the stock top) where ``keep`` finds stock."""
         found = []
-        step = max(1, POINTS_PER_CHUNK // (2 * len(self.top)))
+        face = self.holder_face
+        step = max(1, POINTS_PER_CHUNK // (2 * len(face)))
         for begin in range(0, self.count, step):
             first = self.pairs[begin:begin + step]
-            t0 = self.world(first, self.top)
-            t1 = self.world(first + 1, self.top)
+            t0, t1 = (face @ self.poses[k, :3, :3].transpose(0, 2, 1)
+                      + self.poses[k, None, :3, 3] for k in (first, first + 1))
             low = np.minimum(t0.min(axis=1), t1.min(axis=1))
             high = np.maximum(t0.max(axis=1), t1.max(axis=1))
             hit = (low[:, 2] < below) & keep(low, high)
@@ -418,7 +432,7 @@ class SweepSet:
         at both poses and of the same face lifted ``reach`` along the tool axis. A top of
         zero width (a V's or a nose's: a segment) is widened along the tool's X to its own
         length, as the bar that carries the tool is."""
-        face = self.vertices[self.top]
+        face = self.holder_face
         width = float(np.ptp(face[:, 0]))
         if width <= 0.0:
             half = 0.5 * max(float(np.ptp(face[:, 1])), float(np.ptp(face[:, 2])))
