@@ -45,7 +45,7 @@ def check_reading_options(args: argparse.Namespace) -> None:
 
 def table_tools(table) -> list:
     """The tools a tool table's ``shape`` entries name (none without a table)."""
-    from machinesim.tools import tool_from_spec
+    from machinesim.tool_specs import tool_from_spec
 
     entries = table.tools.values() if table is not None else ()
     return [tool_from_spec(entry.shape) for entry in entries if entry.shape is not None]

@@ -311,7 +311,7 @@ def _cut(args) -> int:
     from machinesim.cutting import cut
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
-    from machinesim.tools import tool_from_spec
+    from machinesim.tool_specs import tool_from_spec
     from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
     machine = load_machine(args.machine)

@@ -16,7 +16,8 @@ from machinesim.exceptions import AxisLimitError, HolderContactError, InputError
 from machinesim.machines import load_machine
 from machinesim.metrology import height_map
 from machinesim.nc import ProgramBuilder, parse_program, write_program
-from machinesim.tools import VTool, tool_from_spec
+from machinesim.tool_specs import tool_from_spec
+from machinesim.tools import VTool
 from machinesim.workpiece import Part, block
 
 UM, MM = 1e-6, 1e-3

@@ -114,7 +114,7 @@ def test_paper_002_groove_programs_cut_the_same_part_batched_or_not():
     from machinesim.identification.workpiece_setting import Identification
     from machinesim.loading import RobotLoader
     from machinesim.procedures.workpiece_setting import model_based_program
-    from machinesim.tools import tool_from_spec
+    from machinesim.tool_specs import tool_from_spec
     from machinesim.workpiece import stock_from_spec
 
     machine, tool = load_machine("robonano_a0ib"), tool_from_spec("nose:2.0:90")

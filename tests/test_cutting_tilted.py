@@ -19,7 +19,7 @@ from machinesim.cutting.frame import flat_end, into_frame, out_of_frame, tool_fr
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import HolderContactError
 from machinesim.rotations import rot_x, rot_y, rot_z
-from machinesim.tools import tool_from_spec
+from machinesim.tool_specs import tool_from_spec
 from machinesim.workpiece import stock_from_spec
 
 #: A quarter circle of a 0.4 mm end mill, 0.2 mm deep, on grooving_4axis (mm).

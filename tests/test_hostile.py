@@ -27,7 +27,7 @@ from machinesim import _io, workpiece
 from machinesim.cli import main, parse_roi
 from machinesim.exceptions import InputError, MachineSimError, ModelError
 from machinesim.machines import load_machine
-from machinesim.tools import tool_from_spec
+from machinesim.tool_specs import tool_from_spec
 from machinesim.workpiece import stock_from_spec
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -98,7 +98,7 @@ def test_a_tool_spec_builds_a_tool_or_is_an_input_error(spec):
 def _huge_tools_are_bounded() -> str:
     """'' when ``ball:1e9`` is refused, else what it does; asked in a child process (it used
     to kill the interpreter)."""
-    code = ("from machinesim.tools import tool_from_spec\n"
+    code = ("from machinesim.tool_specs import tool_from_spec\n"
             "from machinesim.exceptions import InputError\n"
             "try:\n    tool_from_spec('ball:1e9').vertices()\n"
             "except InputError:\n    print('bounded')\n")

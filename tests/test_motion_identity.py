@@ -33,7 +33,7 @@ from machinesim.motion import Trajectory, plan
 from machinesim.motion.chords import ToolPaths, deviations
 from machinesim.nc import Program, ProgramBuilder, parse_program
 from machinesim.sampling import random_errors
-from machinesim.tools import tool_from_spec
+from machinesim.tool_specs import tool_from_spec
 
 MACHINES = ("robonano_a0ib", "planer_4axis", "grooving_4axis", "robonano_ui", "sts_lathe")
 

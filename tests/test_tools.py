@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from machinesim.exceptions import InputError
+from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import (
     MAX_TOOL_SIZE_M,
     TOOL_HEIGHT_M,
@@ -14,7 +15,6 @@ from machinesim.tools import (
     RoundNoseTool,
     VTool,
     arc_segments,
-    tool_from_spec,
 )
 
 

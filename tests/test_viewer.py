@@ -23,7 +23,7 @@ from machinesim.exceptions import InputError, ModelError
 from machinesim.metrology import height_map
 from machinesim.motion import plan
 from machinesim.nc import ProgramBuilder
-from machinesim.tools import tool_from_spec
+from machinesim.tool_specs import tool_from_spec
 from machinesim.viewer import (
     cut_by_block,
     decimate,

@@ -52,7 +52,8 @@ from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_floats, as_number
 from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
-from machinesim.tools import RoundNoseTool, tool_from_spec, with_nose_radius_error
+from machinesim.tool_specs import tool_from_spec
+from machinesim.tools import RoundNoseTool, with_nose_radius_error
 
 __all__ = ["TurnedPart", "TurningReport", "followed", "turn", "turning_runs"]
 

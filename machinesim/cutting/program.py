@@ -25,12 +25,8 @@ from machinesim.errors import as_error_model
 from machinesim.exceptions import AxisLimitError, HolderContactError, InputError, NCProgramError
 from machinesim.nc import MOVE_KINDS
 from machinesim.tolerances import LIMIT_SLACK
-from machinesim.tools import (
-    Tool,
-    path_chord_tolerance,
-    tool_from_spec,
-    with_nose_radius_error,
-)
+from machinesim.tool_specs import tool_from_spec
+from machinesim.tools import Tool, path_chord_tolerance, with_nose_radius_error
 from machinesim.workpiece import Part, stock_from_spec
 
 #: A move continues the previous one when its first axis values equal the previous end to

@@ -25,7 +25,7 @@ from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance
 from machinesim.exceptions import InputError
 from machinesim.rotations import rot_z
-from machinesim.tools import tool_from_spec
+from machinesim.tool_specs import tool_from_spec
 from machinesim.units import M_PER_MM
 from machinesim.workpiece import Part, stock_from_spec
 

@@ -5,7 +5,7 @@ A TOML file with one table per tool, units in the keys::
     [tool.1]
     length_mm = 2.5       # tool length, read by H1 under G43/G44 and carried by T1 in the cut
     radius_mm = 0.5       # tool radius, the D1 register (only listed: G41/G42 are refused)
-    shape = "ball:0.5"    # optional: the tool's solid, a `machinesim.tools.tool_from_spec` spec
+    shape = "ball:0.5"    # optional: the tool's solid, a `machinesim.tool_specs.tool_from_spec` spec
     name = "R0.5 ball end mill"   # optional
 
     [tool.2]
@@ -31,7 +31,7 @@ from typing import Any
 from machinesim._io import check_readable_file
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.nc.program import FrozenMapping
-from machinesim.tools import tool_from_spec
+from machinesim.tool_specs import tool_from_spec
 from machinesim.units import LENGTH
 
 #: Largest tool number read: 8 digits, as FANUC's T words (H and D registers are fewer).
@@ -50,7 +50,7 @@ class Tool:
         Tool radius, m (None: not given).
     name : str
     shape : str or None
-        The tool's solid as a `machinesim.tools.tool_from_spec` spec (None: the cut's own
+        The tool's solid as a `machinesim.tool_specs.tool_from_spec` spec (None: the cut's own
         tool, ``--tool`` on the command line).
     """
 

@@ -216,7 +216,7 @@ class STSTurning:
 
     @property
     def nose_radius(self) -> float:
-        from machinesim.tools import tool_from_spec
+        from machinesim.tool_specs import tool_from_spec
 
         return tool_from_spec(self.tool).nose_radius
 

@@ -178,7 +178,7 @@ def _scene(args, budget: int):
     machine = load_machine(args.target)
     program = errors = chord = None
     if args.program is not None:
-        from machinesim.tools import tool_from_spec
+        from machinesim.tool_specs import tool_from_spec
 
         # read as `machinesim cut` reads it: the same tool table, integer input and chords
         program, chord = read_for_machine(

@@ -18,7 +18,8 @@ from pinocchio.visualize import MeshcatVisualizer
 from machinesim import motion
 from machinesim.cutting import cut, remove
 from machinesim.exceptions import InputError
-from machinesim.tools import path_chord_tolerance, tool_from_spec
+from machinesim.tool_specs import tool_from_spec
+from machinesim.tools import path_chord_tolerance
 from machinesim.viewer.maps import legend_for
 from machinesim.viewer.meshes import DISPLAY_TRIANGLES, decimate, tool_mesh
 from machinesim.viewer.scene import Scene, transform_tracks, visibility_track
