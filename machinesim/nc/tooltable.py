@@ -5,7 +5,7 @@ A TOML file with one table per tool, units in the keys::
     [tool.1]
     length_mm = 2.5       # tool length, read by H1 under G43/G44 and carried by T1 in the cut
     radius_mm = 0.5       # tool radius, the D1 register (only listed: G41/G42 are refused)
-    shape = "ball:0.5"    # optional: the tool's solid, a `machinesim.tool_specs.tool_from_spec` spec
+    shape = "ball:0.5"    # optional: the tool's solid, a `tool_specs.tool_from_spec` spec
     name = "R0.5 ball end mill"   # optional
 
     [tool.2]
