@@ -12,6 +12,9 @@ a. A helical bore: ``flat:0.8`` down a helix of radius 2 mm, 0.25 mm a turn, 8 t
    2 mm deep (G02 with Z, I), then a full circle at the bottom, at the default chord of an
    end mill (100 nm).
 b. A contour in levels: the same circle cut at 5 depths, 0.4 mm apart (G02 full circles).
+e. A zigzag pocket: ``flat:1`` 0.2 mm deep, 1000 passes 10 mm long at 10 um step-over (2006
+   lines), its level passes united by their footprints (`machinesim.cutting.footprints`,
+   the default) against in three dimensions.
 
 With ``--tilted`` the same end mill cuts through ``models/errors/example.toml``, whose
 workpiece stands tilted 0.01 and -0.02 deg against the machine's Z: the engine cuts in the
@@ -46,6 +49,9 @@ if sys.argv[1] == "all":  # every sweep cut: nothing dropped
     engine.contained_sweeps = lambda hulls, *rest: np.zeros(len(hulls), dtype=bool)
 if sys.argv[1] == "workpiece":  # a tilted tool cut where it stands in the workpiece frame
     engine.tool_frame = lambda poses, tool: None
+if sys.argv[1] == "solids":  # level passes united in 3-D, not by their footprints
+    import machinesim.cutting.footprints as footprints
+    footprints.FEWEST = 10 ** 9
 sys.exit(main(sys.argv[2:]))
 """
 
@@ -66,12 +72,23 @@ def levels_program(levels: int = 5) -> str:
     return "\n".join(lines) + "\n"
 
 
-def cut(folder: Path, name: str, text: str, variant: str, errors: Path | None = None) -> dict:
+def pocket_program(rows: int = 1000, step_mm: float = 0.01) -> str:
+    lines = ["%", "O3 (a zigzag pocket)", "G90 G21 G17 G94", "G00 X-5. Y-5. Z1.",
+             "G01 Z-0.2 F100."]
+    for row in range(rows):
+        lines += [f"G01 X{5.0 if row % 2 == 0 else -5.0:.4f} Y{-5.0 + row * step_mm:.4f}",
+                  f"G01 Y{-5.0 + (row + 1) * step_mm:.4f}"]
+    lines += ["G00 Z1.", "M30", "%"]
+    return "\n".join(lines) + "\n"
+
+
+def cut(folder: Path, name: str, text: str, variant: str, errors: Path | None = None,
+        tool: str = "flat:0.8", stock: str = "block:8x8x4@-4,-4,0") -> dict:
     program = folder / f"{name}.nc"
     program.write_text(text)
     out, report = folder / f"{name}_{variant}.ply", folder / f"{name}_{variant}.json"
-    arguments = [str(program), "--machine", "grooving_4axis", "--tool", "flat:0.8", "--stock",
-                 "block:8x8x4@-4,-4,0", "--out", str(out), "--report", str(report), "--quiet"]
+    arguments = [str(program), "--machine", "grooving_4axis", "--tool", tool, "--stock",
+                 stock, "--out", str(out), "--report", str(report), "--quiet"]
     if errors is not None:
         arguments += ["--errors", str(errors)]
     seconds, summary, _ = timed_cut(RUNNER, variant, arguments, report, name)
@@ -98,9 +115,9 @@ def apart_mm3(a: Path, b: Path) -> float:
 
 
 def compare(folder: Path, name: str, text: str, variants: tuple[str, str], repeat: int,
-            errors: Path | None = None) -> None:
+            errors: Path | None = None, **where) -> None:
     """Cut ``text`` both ways ``repeat`` times each and print medians and the parts' gap."""
-    runs = {variant: [cut(folder, name, text, variant, errors) for _ in range(repeat)]
+    runs = {variant: [cut(folder, name, text, variant, errors, **where) for _ in range(repeat)]
             for variant in variants}
     times = {v: [r["seconds"] for r in rs] for v, rs in runs.items()}
     last = {v: rs[-1] for v, rs in runs.items()}
@@ -126,6 +143,8 @@ def main() -> None:
         if not args.tilted:
             for name, text in (("helix", helix_program()), ("levels", levels_program())):
                 compare(folder, name, text, ("dropped", "all"), args.repeat)
+            compare(folder, "pocket", pocket_program(), ("footprints", "solids"), args.repeat,
+                    tool="flat:1", stock="block:20x20x5")
             return
         errors = Path(__file__).resolve().parents[1] / "models" / "errors" / "example.toml"
         compare(folder, "circle, tilted", levels_program(1), ("frame", "workpiece"),

@@ -24,7 +24,9 @@ never touching the part mesh once per sweep:
    a union's cost grows with its overlapping pairs; groups that cross each other are
    subtracted one after the other, each evaluated before the next, because the union of
    crossing sweeps costs as much as cutting them (and manifold3d, left lazy, would form
-   exactly that union).
+   exactly that union). An upright flat end mill's level passes are taken first: those on
+   one floor are one prism, over the union of their footprints in the plane
+   (`machinesim.cutting.footprints`).
 4. The region is split into cells (ROI windows, and a grid of tiles inside each): a tile is
    cut with only the sweeps that touch it, which keeps manifold3d's faster-than-linear
    boolean cost down, and the tiles of a cell are joined by `stitch` (a mesh merge along
@@ -55,6 +57,7 @@ import manifold3d
 import numpy as np
 from manifold3d import OpType
 
+from machinesim.cutting.footprints import level_prisms
 from machinesim.cutting.frame import into_frame, out_of_frame, tool_frame
 from machinesim.cutting.relief import cut_reliefs
 from machinesim.cutting.sheets import SheetReport, remove_sheets
@@ -520,8 +523,8 @@ def remove(
                 reached=relief.reached,
             )
             return relief.part, report
-    hulls, lower, upper, direction, n_degenerate, sideways, swept, reached, _ = sweeps.hulls(
-        touches)
+    (hulls, lower, upper, direction, n_degenerate, sideways, swept, reached, footprints,
+     _) = sweeps.hulls(touches)
     keys = _direction_keys(direction)
 
     def planned(cut: np.ndarray):
@@ -558,8 +561,12 @@ def remove(
                                                     bounds, scale))
             stock_pieces.append(piece)
             uncut = piece
-            for key in np.unique(keys[members]):
-                for run in union_runs(members[keys[members] == key], lower, upper):
+            prisms, rest = level_prisms(members, footprints, sweeps.run_id)
+            for prism in prisms:  # level passes, each floor's united in the plane
+                piece = piece - prism
+                piece.num_tri()
+            for key in np.unique(keys[rest]):
+                for run in union_runs(rest[keys[rest] == key], lower, upper):
                     piece = piece - manifold3d.Manifold.batch_boolean(
                         [hulls[i] for i in run], OpType.Add)
                     # Evaluate now: manifold3d is lazy and would flatten A - B - C into

@@ -220,7 +220,14 @@ class SweepSet:
                 if solid is None:
                     return None
                 volume = solid.volume()
-                return (solid, volume) if volume > 0.0 else None
+                if not volume > 0.0:
+                    return None
+                floor = bottom[:, 2]
+                if move[2] == 0.0 and floor.min() == floor.max():
+                    # level, on a level floor: an upright prism (`footprints`)
+                    corners = np.concatenate([bottom[:, :2], bottom[:, :2] + move[:2]])
+                    return solid, volume, None, (float(floor[0]), float(level), corners)
+                return solid, volume
         vertices, triangles = self.solid_sweep.mesh(rotation, origin, move)
         return self._solid(vertices, triangles, vertices[:, 2].max() > self.clip_z)
 
@@ -250,11 +257,15 @@ class SweepSet:
             Total volume of the clipped sweeps, m^3.
         reached : list of int
             Sweep indices (over all paths) that reach the stock region, degenerate or not.
+        footprints : list of Footprint or None
+            For each of ``hulls`` that is an upright prism (a flat end mill moved level on
+            a level floor), its floor, top and footprint's corners
+            (`machinesim.cutting.footprints`); None for the others.
         owners : list of int
             The sweep index (over all paths) of each of ``hulls``, increasing.
         """
         hulls, lower, upper, direction, sideways, reached = [], [], [], [], [], []
-        owners = []
+        owners, footprints = [], []
         n_degenerate, swept = 0, 0.0
         rotation, origin = self.poses[:, :3, :3], self.poses[:, :3, 3]
         k = len(self.vertices)
@@ -327,7 +338,7 @@ class SweepSet:
                     reached.append(begin + int(near[row]))
                     continue
                 solid, volume = built[:2]
-                if len(built) == 3:  # a prism: its bounds are its vertices'
+                if len(built) > 2 and built[2] is not None:  # a prism: its vertices' bounds
                     box = np.concatenate([built[2].min(axis=0), built[2].max(axis=0)])
                 else:
                     box = np.array(solid.bounding_box())
@@ -337,6 +348,7 @@ class SweepSet:
                 reached.append(begin + int(near[row]))
                 owners.append(begin + int(near[row]))
                 hulls.append(solid)
+                footprints.append(built[3] if len(built) > 3 else None)
                 lower.append(box[:3])
                 upper.append(box[3:])
                 direction.append(move[row])
@@ -344,7 +356,7 @@ class SweepSet:
         shape = (-1, 3)
         return (hulls, np.array(lower).reshape(shape), np.array(upper).reshape(shape),
                 np.array(direction).reshape(shape), n_degenerate, sideways, swept, reached,
-                owners)
+                footprints, owners)
 
     def pose_bounds(self):
         """Bounds (N, 3) of the tool below the clip plane at every pose (+inf / -inf where
