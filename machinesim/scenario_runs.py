@@ -56,19 +56,25 @@ def scenario_status(report, args, name: str | None = None) -> int:
     `ReportFolder.publish`. A folder that is not a report (files, but no summary.json
     listing them) is refused before the run rather than replaced.
     """
+    from machinesim.scenario_start import loaded
+
     from machinesim.exceptions import MachineSimError
 
+    loaded()
     name = name or Path(sys.argv[0]).stem or "scenario"
     out = getattr(args, "out", None)
     staged = None
     try:
         # past the memory there is: MemoryError, not the OOM killer
-        with ctrl_c_remembered(), memory_capped():
+        with ctrl_c_remembered(), memory_capped(), _stdout_may_close(name) as stdout:
             if out is not None:
                 staged = _stage_report(out)
             report(args)
             if staged is not None and staged.path is not None:
                 staged.commit()
+            if stdout.closed_early:
+                print(f"{name}: stdout was closed early (a pipe's reader that stopped "
+                      f"reading); {_interrupted(out, staged)}", file=sys.stderr)
     except MachineSimError as error:
         print(f"{name}: error: {error}", file=sys.stderr)
         return 2
@@ -87,6 +93,51 @@ def scenario_status(report, args, name: str | None = None) -> int:
             staged.discard()
             STAGED.pop(folder_key(out), None)
     return 0
+
+
+class _stdout_may_close:
+    """Within: a reader that stops reading stdout (``scenario ... | head -1``) does not stop
+    the run. The first write that meets the closed pipe sends stdout to the null device
+    from then on, as Python's documentation advises (the signal module's notes on SIGPIPE),
+    and the report folder is still written whole; ``closed_early`` says it happened."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.closed_early = False
+
+    def __enter__(self):
+        self.stream = sys.stdout
+        sys.stdout = self
+        return self
+
+    def __exit__(self, *exc) -> None:
+        sys.stdout = self.stream
+        try:
+            self.stream.flush()
+        except BrokenPipeError:
+            self._to_null()
+
+    def write(self, text: str) -> int:
+        try:
+            return self.stream.write(text)
+        except BrokenPipeError:
+            self._to_null()
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self.stream.flush()
+        except BrokenPipeError:
+            self._to_null()
+
+    def _to_null(self) -> None:
+        self.closed_early = True
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, self.stream.fileno())
+        os.close(null)
+
+    def __getattr__(self, attribute: str):  # isatty, encoding, fileno, ...
+        return getattr(self.stream, attribute)
 
 
 def _interrupted(out, staged) -> str:

@@ -226,3 +226,37 @@ def test_a_scenario_names_a_misspelt_option_with_the_one_meant(capsys):
     assert stop.value.code == 2
     assert capsys.readouterr().err.splitlines()[-1].endswith(
         "unrecognized arguments: --sede 3; --sede is not an option here; did you mean --seed?")
+
+
+PRINTING_REPORT = """
+import sys
+from argparse import Namespace
+from machinesim.report import ReportFolder
+from machinesim.scenario_runs import scenario_status
+
+def report(args):
+    folder = ReportFolder(args.out)
+    for k in range(20000):  # far more than a pipe holds (64 KiB)
+        print("table row", k)
+    folder.write_text("a.md", "a\\n")
+    folder.write_summary({"paper": "000", "procedure": "p", "machine": "m", "seed": 0,
+                          "noise": False, "injected": {}, "identified": {}, "figures": []})
+
+sys.exit(scenario_status(report, Namespace(out=sys.argv[1]), "s"))
+"""
+
+
+def test_a_reader_that_stops_reading_stdout_does_not_cost_the_report(tmp_path):
+    """``scenario ... | head -1``: the report folder is written whole, exit 0, one line on
+    stderr saying so (it was lost with 'error: Broken pipe', exit 2)."""
+    out = tmp_path / "report"
+    child = subprocess.Popen([sys.executable, "-c", PRINTING_REPORT, str(out)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert child.stdout.readline() == "table row 0\n"
+    child.stdout.close()  # as head does after its line
+    err = child.stderr.read()
+    assert child.wait(timeout=120) == 0, err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert "stdout was closed early" in err and "written whole" in err, err
+    assert (out / "a.md").read_text() == "a\n"
+    assert json.loads((out / "summary.json").read_text())["files"]
