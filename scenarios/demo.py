@@ -9,6 +9,8 @@ and C turns; the table gives where the edge really lands relative to that point,
 
 from __future__ import annotations
 
+import machinesim.scenario_start  # noqa: F401  (first: Ctrl-C while loading is one line)
+
 import argparse
 
 import numpy as np

@@ -23,6 +23,8 @@ used without the three.
 
 from __future__ import annotations
 
+import machinesim.scenario_start  # noqa: F401  (first: Ctrl-C while loading is one line)
+
 import io
 import time
 

@@ -21,6 +21,8 @@ those switched off in turn (docs/budget.md). See docs/procedures/tool_rotation_a
 
 from __future__ import annotations
 
+import machinesim.scenario_start  # noqa: F401  (first: Ctrl-C while loading is one line)
+
 import math
 import time
 

@@ -31,6 +31,8 @@ the cut reports and groove layout plots. See docs/procedures/tool_setting_6axis.
 
 from __future__ import annotations
 
+import machinesim.scenario_start  # noqa: F401  (first: Ctrl-C while loading is one line)
+
 import math
 import sys
 

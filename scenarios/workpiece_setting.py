@@ -49,6 +49,8 @@ docs/reports.md, tables, plots, PLY parts, NC programs, HTML views).
 
 from __future__ import annotations
 
+import machinesim.scenario_start  # noqa: F401  (first: Ctrl-C while loading is one line)
+
 import math
 import re
 import sys

@@ -25,6 +25,8 @@ noise off the laser readings are ideal (no 1 nm display rounding either).
 
 from __future__ import annotations
 
+import machinesim.scenario_start  # noqa: F401  (first: Ctrl-C while loading is one line)
+
 import io
 import time
 from pathlib import Path

@@ -135,6 +135,35 @@ def test_a_scenario_stopped_by_ctrl_c_exits_130_in_one_line(tmp_path, as_in_a_te
     assert json.loads((tmp_path / "summary.json").read_text()) == {"kept": True}
 
 
+@pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="needs Linux /proc")
+def test_a_scenario_stopped_by_ctrl_c_while_its_libraries_load_says_so_in_one_line(
+        tmp_path, as_in_a_terminal):
+    """SIGINT once numpy's library is mapped, while the script's imports go on (Pinocchio,
+    SciPy): one line, no traceback (it was a traceback of the import it stopped, or numpy's
+    ImportError when it landed in numpy's C loading), status 130."""
+    out = tmp_path / "report"
+    process = subprocess.Popen([sys.executable, str(ROOT / "scenarios" / "sts_turning.py"),
+                                "--out", str(out)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, cwd=ROOT, **as_in_a_terminal)
+    try:
+        maps = ""
+        while process.poll() is None and "site-packages/numpy/" not in maps:
+            try:
+                maps = Path(f"/proc/{process.pid}/maps").read_text()
+            except OSError:
+                maps = ""
+        assert process.poll() is None, "the scenario ended before it could be interrupted"
+        process.send_signal(signal.SIGINT)
+        _, err = process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 130, err
+    assert "Traceback" not in err, err
+    assert err.splitlines() == ["sts_turning: interrupted; nothing was written"], err
+    assert not out.exists()
+
+
 def test_every_paper_scenario_refuses_a_report_folder_it_cannot_write_before_it_runs(tmp_path):
     """`--out` naming a file, or a place no folder can be made: status 2 and one line naming
     the path, at once (it used to end minutes of cutting with a traceback)."""
