@@ -26,7 +26,12 @@ def fit_apexes(s, z, count: int, *, prominence: float, flank_band=(0.1, 0.9)):
 
     Each apex is the intersection of its two flank lines, each fitted over ``flank_band`` of
     the way from the ridge (or land) beside it to the lowest sample; its depth is measured
-    from the line through the land at both ends of the profile.
+    along z from the line through the land at both ends of the profile. The land is found
+    against a line over the grooves (the upper convex hull's edge spanning them, then the
+    line fitted to the land found), so a profile read tilted, as a microscope's stage holds
+    a part, gives the same apexes: a shear moves neither where two flank lines cross in s
+    nor an apex's depth below the land line. Centres and depths are in the profile's own
+    frame (s as given; depth along its z).
 
     Parameters
     ----------
@@ -49,11 +54,15 @@ def fit_apexes(s, z, count: int, *, prominence: float, flank_band=(0.1, 0.9)):
     # noise from second differences (their spread is sqrt(6) sigmas; 1.4826 MAD -> sigma)
     noise = 1.4826 * float(np.median(np.abs(second - np.median(second)))) / math.sqrt(6.0)
     # land within the noise, or within 1 % of the prominence when rounding hides the noise
-    below = np.flatnonzero(z < np.percentile(z, 90) - max(LAND_SIGMAS * noise,
-                                                          0.01 * prominence))
-    if below.size == 0 or below[0] < 2 or below[-1] > s.size - 3:
-        raise InputError("Expected uncut land at both ends of the profile around the grooves",
-                         key="z")
+    tol = max(LAND_SIGMAS * noise, 0.01 * prominence)
+    # Land is found against a line over the grooves, never against the heights themselves:
+    # a stage's tilt of 0.2 mrad (0.08 um over 0.4 mm) would read a whole end as cut. First
+    # the upper hull's edge over the deepest point, then the line fitted to the land found.
+    level = z - _bridge(s, z)
+    below = _cut(level < np.percentile(level, 90) - tol)
+    land = np.r_[0:below[0], below[-1] + 1:s.size]
+    ar, br = np.polyfit(s[land], z[land], 1)[::-1]
+    below = _cut(z - (ar + br * s) < -tol)
     land = np.r_[0:below[0], below[-1] + 1:s.size]
     ar, br = np.polyfit(s[land], z[land], 1)[::-1]
     residual = z - (ar + br * s)
@@ -73,6 +82,36 @@ def fit_apexes(s, z, count: int, *, prominence: float, flank_band=(0.1, 0.9)):
                   (s <= right - lo * (right - apex)) & (s >= right - hi * (right - apex))]
         out.append(_apex(s - apex, z, [land, *flanks], apex))
     return tuple(frozen(column) for column in zip(*out, strict=True))
+
+
+def _bridge(s, z):
+    """Heights of the upper convex hull's edge over the profile's deepest point, at each s.
+
+    The grooves lie below the land at both ends, so the hull spans them by one edge from
+    land to land (or to a ridge as high as the land): a line on the land's noise peaks
+    whatever the profile's tilt.
+    """
+    u, v = s - s[0], z - z.max()
+    hull, uu, vv = [], u.tolist(), v.tolist()
+    for k in range(u.size):
+        while len(hull) >= 2 and ((uu[hull[-1]] - uu[hull[-2]]) * (vv[k] - vv[hull[-2]])
+                                  >= (vv[hull[-1]] - vv[hull[-2]]) * (uu[k] - uu[hull[-2]])):
+            hull.pop()
+        hull.append(k)
+    deepest = int(np.argmin(v - v[0] - (v[-1] - v[0]) * u / u[-1]))
+    k = min(max(int(np.searchsorted(hull, deepest, side="right")), 1), len(hull) - 1)
+    left, right = hull[k - 1], hull[k]
+    slope = (z[right] - z[left]) / (s[right] - s[left])
+    return z[left] + slope * (s - s[left])
+
+
+def _cut(below: np.ndarray) -> np.ndarray:
+    """Indices of the samples below the land, or an InputError when an end is not land."""
+    index = np.flatnonzero(below)
+    if index.size == 0 or index[0] < 2 or index[-1] > below.size - 3:
+        raise InputError("Expected uncut land at both ends of the profile around the grooves",
+                         key="z")
+    return index
 
 
 def _apex(u, z, parts, origin):

@@ -289,10 +289,10 @@ def level_on_land(s, z, land: float) -> np.ndarray:
     """Heights less the line through the first and last ``land`` (m) of a profile.
 
     A microscope's stage holds the part tilted (`Realism`'s registration: 0.2 mrad, 0.2 um
-    over a 1 mm section), which `fit_apexes`'s search for the uncut land (samples within
-    its noise of the highest) would take for cut. A shear changes neither an apex's depth
-    below the land line nor where its two flank lines cross, so levelling first leaves
-    both as they were.
+    over a 1 mm section), as one levels a section by hand before reading it. `fit_apexes`
+    finds the land against a line over the grooves itself, and a shear changes neither an
+    apex's depth below the land line nor where its two flank lines cross, so levelling
+    first leaves both as they were.
     """
     s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
     ends = ((s <= s[0] + land) | (s >= s[-1] - land)) & np.isfinite(z)

@@ -1,0 +1,54 @@
+"""Apexes of grooves that meet in ridges (`fit_apexes`) against profiles built analytically:
+tilted as a microscope's stage holds a part, with and without noise, and its input checks."""
+
+import numpy as np
+import pytest
+
+from machinesim.exceptions import InputError
+from machinesim.metrology import fit_apexes
+
+UM = 1e-6
+CENTRES = np.array([150.0, 200.0, 250.0]) * UM
+DEPTH = 25 * UM
+
+
+def prisms(tilt=0.0, noise=0.0):
+    """Three 90-deg V grooves 25 um deep, 50 um apart (sharing their ridges), between land at
+    both ends of a 0.4 mm section, sheared by ``tilt`` and with normal noise of ``noise`` m."""
+    s = np.arange(0.0, 400 * UM, 0.25 * UM)
+    z = np.zeros_like(s)
+    for centre in CENTRES:
+        z = np.minimum(z, -DEPTH + np.abs(s - centre))
+    return s, z + tilt * s + noise * np.random.default_rng(1).standard_normal(s.size)
+
+
+@pytest.mark.parametrize("tilt", [2e-4, -2e-4, 1e-3, -1e-3])
+def test_apexes_of_a_tilted_exact_profile(tilt):
+    # A shear moves neither the crossing of two flank lines in s nor the apex's depth along z
+    # below the land line: the analytic apexes and depths stand. The old land search (within
+    # the noise of the 90th percentile of the heights) read the tilted ends as cut.
+    centre, depth, _, _ = fit_apexes(*prisms(tilt), 3, prominence=5 * UM)
+    # exact lines: float64 round-off of ~1e-20 m, amplified by the fits (as in
+    # tests/test_tool_rotation_arm.py's exact prism profile)
+    np.testing.assert_allclose(centre, CENTRES, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(depth, DEPTH, rtol=0, atol=1e-17)
+
+
+@pytest.mark.parametrize("tilt", [2e-4, -2e-4, 1e-3, -1e-3])
+def test_apexes_of_a_tilted_noisy_profile_within_their_sigma(tilt):
+    # 12 nm noise: the old search kept part of the left land as groove and put the first
+    # apex 22.6 um off, 2.4 um deep, at tilt 2e-4
+    centre, depth, centre_sigma, depth_sigma = fit_apexes(*prisms(tilt, 12e-9), 3,
+                                                          prominence=5 * UM)
+    # 5 sigma: a miss by chance in ~1e-6 per value (the sigmas are ~2.2 nm and ~3 nm)
+    assert np.all(np.abs(centre - CENTRES) < 5 * centre_sigma)
+    assert np.all(np.abs(depth - DEPTH) < 5 * depth_sigma)
+    assert np.all(centre_sigma < 5e-9) and np.all(depth_sigma < 5e-9)
+
+
+def test_a_profile_cut_at_an_end_is_refused_whatever_its_tilt():
+    s, z = prisms()
+    z = np.minimum(z, -DEPTH + np.abs(s - 5 * UM))
+    for tilt in (0.0, 1e-3):
+        with pytest.raises(InputError, match="uncut land at both ends"):
+            fit_apexes(s, z + tilt * s, 4, prominence=5 * UM)
