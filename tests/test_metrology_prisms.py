@@ -52,3 +52,19 @@ def test_a_profile_cut_at_an_end_is_refused_whatever_its_tilt():
     for tilt in (0.0, 1e-3):
         with pytest.raises(InputError, match="uncut land at both ends"):
             fit_apexes(s, z + tilt * s, 4, prominence=5 * UM)
+
+
+@pytest.mark.parametrize("tilt", [0.0, 2e-4])
+def test_grooves_with_land_between_them_read_from_the_land_beside_each(tilt):
+    # two grooves that share a ridge and a third 0.36 mm away across uncut land: a flank
+    # starts where the land ends, not at the highest land sample between, which took land
+    # into the second groove's right flank (untilted: its apex read 15 um off and 0 deep,
+    # the first's 1.45 um off and 13.55 um deep; tilted: refused as no V)
+    s = np.arange(0.0, 1e-3, 0.25 * UM)
+    centres = np.array([300.0, 340.0, 700.0]) * UM
+    z = np.zeros_like(s)
+    for centre in centres:
+        z = np.minimum(z, -15 * UM + np.abs(s - centre))
+    centre, depth, _, _ = fit_apexes(s, z + tilt * s, 3, prominence=5 * UM)
+    np.testing.assert_allclose(centre, centres, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(depth, 15 * UM, rtol=0, atol=1e-17)

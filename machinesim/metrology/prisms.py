@@ -25,13 +25,13 @@ def fit_apexes(s, z, count: int, *, prominence: float, flank_band=(0.1, 0.9)):
     """Apexes of ``count`` V grooves that may meet in ridges, between uncut land at both ends.
 
     Each apex is the intersection of its two flank lines, each fitted over ``flank_band`` of
-    the way from the ridge (or land) beside it to the lowest sample; its depth is measured
-    along z from the line through the land at both ends of the profile. The land is found
-    against a line over the grooves (the upper convex hull's edge spanning them, then the
-    line fitted to the land found), so a profile read tilted, as a microscope's stage holds
-    a part, gives the same apexes: a shear moves neither where two flank lines cross in s
-    nor an apex's depth below the land line. Centres and depths are in the profile's own
-    frame (s as given; depth along its z).
+    the way from the ridge (or the land, for grooves apart) beside it to the lowest sample;
+    its depth is measured along z from the line through the land at both ends of the
+    profile. The land is found against a line over the grooves (the upper convex hull's edge
+    spanning them, then the line fitted to the land found), so a profile read tilted, as a
+    microscope's stage holds a part, gives the same apexes: a shear moves neither where two
+    flank lines cross in s nor an apex's depth below the land line. Centres and depths are
+    in the profile's own frame (s as given; depth along its z).
 
     Parameters
     ----------
@@ -74,10 +74,16 @@ def fit_apexes(s, z, count: int, *, prominence: float, flank_band=(0.1, 0.9)):
                          f"(prominence {prominence:g} m)", key="count")
     ridges = [a + int(np.argmax(residual[a:b])) for a, b in zip(apexes[:-1], apexes[1:],
                                                                 strict=True)]
-    bounds = s[[below[0] - 1, *ridges, below[-1] + 1]]
+    bounds = [below[0] - 1, *ridges, below[-1] + 1]
+    # Grooves that stand apart have land between them, no ridge: a flank runs from the land
+    # sample nearest its apex (a ridge found on that land would take land into the flank).
+    land_at = np.flatnonzero(residual >= -tol)
+    after = np.searchsorted(land_at, apexes)
+    lefts = s[np.maximum(bounds[:-1], land_at[after - 1])]
+    rights = s[np.minimum(bounds[1:], land_at[after])]
     lo, hi = flank_band
     out = []
-    for apex, left, right in zip(s[apexes], bounds[:-1], bounds[1:], strict=True):
+    for apex, left, right in zip(s[apexes], lefts, rights, strict=True):
         flanks = [(s >= left + lo * (apex - left)) & (s <= left + hi * (apex - left)),
                   (s <= right - lo * (right - apex)) & (s >= right - hi * (right - apex))]
         out.append(_apex(s - apex, z, [land, *flanks], apex))
