@@ -68,3 +68,24 @@ def test_grooves_with_land_between_them_read_from_the_land_beside_each(tilt):
     centre, depth, _, _ = fit_apexes(s, z + tilt * s, 3, prominence=5 * UM)
     np.testing.assert_allclose(centre, centres, rtol=0, atol=1e-15)
     np.testing.assert_allclose(depth, 15 * UM, rtol=0, atol=1e-17)
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"flank_band": (0.5,)}, r"Expected flank_band as two fractions, got \(0.5,\)"),
+    ({"flank_band": (0.9, 0.1)}, r"Expected 0 <= lo < hi <= 1 in flank_band"),
+    ({"prominence": "5e-6"}, r"Expected prominence as a number \(m\), got '5e-6'"),
+    ({"prominence": -1.0}, r"Expected prominence > 0 \(m\), got -1.0"),
+    ({"prominence": 0.0}, r"Expected prominence > 0 \(m\), got 0.0"),
+    ({"count": "3"}, r"Expected count as a whole number >= 1 of grooves, got '3'"),
+    ({"count": 3.0}, r"Expected count as a whole number >= 1 of grooves, got 3.0"),
+    ({"count": True}, r"Expected count as a whole number >= 1 of grooves, got True"),
+    ({"count": 0}, r"Expected count as a whole number >= 1 of grooves, got 0"),
+])
+def test_apex_input_errors_name_the_argument(options, message):
+    # each once a raw ValueError or TypeError, a "found 3 of 3" refusal, a misleading "fewer
+    # than two samples on a flank", or accepted
+    arguments = {"count": 3, "prominence": 5 * UM} | options
+    key = next(iter(options))
+    with pytest.raises(InputError, match=message) as caught:
+        fit_apexes(*prisms(), arguments.pop("count"), **arguments)
+    assert caught.value.key == key

@@ -12,7 +12,8 @@ import math
 import numpy as np
 
 from machinesim.exceptions import InputError
-from machinesim.metrology._arrays import frozen, profile_arrays
+from machinesim.metrology._arrays import as_number, frozen, profile_arrays, shown
+from machinesim.metrology.grooves import _band
 
 #: Lower bound of a fit's standard uncertainty (m): noise-free profiles can fit with a zero
 #: residual; 1 pm, below any instrument resolution here, keeps the uncertainties finite.
@@ -38,18 +39,30 @@ def fit_apexes(s, z, count: int, *, prominence: float, flank_band=(0.1, 0.9)):
     s, z : array-like, shape (k,)
         Profile (m), s increasing; NaN heights are left out.
     count : int
-        Number of grooves expected.
+        Number of grooves expected, >= 1.
     prominence : float
-        Rise (m) from an apex to the lower ridge beside it, at least.
+        Rise (m) from an apex to the lower ridge beside it, at least; > 0.
     flank_band : (float, float)
-        Part of each flank fitted, as fractions of the way from the ridge (0) to the apex (1).
+        Part of each flank fitted, as fractions of the way from the ridge (0) to the apex (1),
+        0 <= lo < hi <= 1.
 
     Returns
     -------
     centre, depth, centre_sigma, depth_sigma : ndarray, shape (count,), read-only
         Apex s and depth (m), with standard uncertainties from the line fits.
+
+    Raises
+    ------
+    InputError
+        For a count, prominence or band not as above (naming it), a profile without land at
+        both ends, another number of apexes than ``count``, or a groove that is no V.
     """
     s, z = profile_arrays(s, z, 10)
+    if isinstance(count, bool) or not isinstance(count, int | np.integer) or count < 1:
+        raise InputError(f"Expected count as a whole number >= 1 of grooves, got {shown(count)}",
+                         key="count")
+    prominence = as_number(prominence, "prominence", sign="> 0")
+    lo, hi = _band(flank_band)
     second = np.diff(z, 2)
     # noise from second differences (their spread is sqrt(6) sigmas; 1.4826 MAD -> sigma)
     noise = 1.4826 * float(np.median(np.abs(second - np.median(second)))) / math.sqrt(6.0)
@@ -81,7 +94,6 @@ def fit_apexes(s, z, count: int, *, prominence: float, flank_band=(0.1, 0.9)):
     after = np.searchsorted(land_at, apexes)
     lefts = s[np.maximum(bounds[:-1], land_at[after - 1])]
     rights = s[np.minimum(bounds[1:], land_at[after])]
-    lo, hi = flank_band
     out = []
     for apex, left, right in zip(s[apexes], lefts, rights, strict=True):
         flanks = [(s >= left + lo * (apex - left)) & (s <= left + hi * (apex - left)),
