@@ -45,6 +45,18 @@ __all__ = [
 STEP_TOL = 4e-15
 #: Gauss-Newton gives up after this many iterations (it takes ~3-6 on a sphere cap).
 MAX_ITERATIONS = 100
+#: `form_error`'s shift has settled when a step no longer shrinks and is within this many of
+#: the shift's standard uncertainties (from the residual): round-off then drives the steps.
+#: The shift's columns nearly match the tilt's (a shifted quadratic is a tilted one), so
+#: on exact data (sphere R 5 mm over 1 mm: residual 4e-19 m, from R - sqrt(R^2 - r^2)'s
+#: cancellation) the steps stay at 0.3-7 of those uncertainties, ~1e-16 m, far above
+#: STEP_TOL times the map's size (4e-18 m), which they never reach.
+SHIFT_SETTLED_STDS = 10.0
+#: Singular values of the shift fit's design (unit columns) below this fraction of the
+#: largest count as zero: the central-difference gradient is good to ~2e-10 (GRADIENT_STEP),
+#: so a shift column that differs from the tilt's by less (a quadratic's: 1e-11) is a tilt.
+#: A sphere of 5 mm radius over 1 mm leaves 1e-3.
+SHIFT_RCOND = 1e-8
 #: Central-difference step of the nominal surface's gradient, as a fraction of the map's size:
 #: truncation ~1e-12 and round-off ~eps / 1e-6 = 2e-10 relative. The gradient only steers
 #: Gauss-Newton: where the residual vanishes the fixed point is exact whatever its error.
@@ -270,7 +282,12 @@ def form_error(x, y, z, nominal, *, shift: bool = False) -> FormError:
     (sx, sy) of the measured surface is fitted as well, nominal(x - sx, y - sy) (Gauss-Newton
     with a central-difference gradient of ``nominal``). The shift is defined only when the
     nominal has terms above second order: a shifted plane or quadratic surface is the same
-    surface tilted and raised, so its shift cannot be told apart (InputError).
+    surface tilted and raised, so its shift cannot be told apart (InputError). The shift has
+    settled when a step moves it by less than `STEP_TOL` of the map's size or, once the steps
+    have shrunk, when they stop shrinking within `SHIFT_SETTLED_STDS` of its standard
+    uncertainties (from the residual): round-off then drives them, ~1e-16 m on an exact
+    sphere cap, where the shift's columns nearly match the tilt's. Steps that do neither in
+    `MAX_ITERATIONS` are an InputError.
 
     Parameters
     ----------
@@ -310,6 +327,7 @@ def form_error(x, y, z, nominal, *, shift: bool = False) -> FormError:
     params = np.linalg.lstsq(plane, pz - values, rcond=None)[0]
     if shift:
         h = GRADIENT_STEP * size
+        last, shrank = math.inf, False
         for _ in range(MAX_ITERATIONS):
             gradient = [(nominal_at(moved[0] - h, moved[1]) - nominal_at(moved[0] + h, moved[1]))
                         / (2.0 * h),
@@ -319,18 +337,28 @@ def form_error(x, y, z, nominal, *, shift: bool = False) -> FormError:
             # Unit columns, so that the rank test compares shapes, not units.
             norms = np.linalg.norm(design, axis=0)
             norms[norms == 0.0] = 1.0
-            step, _, rank, _ = np.linalg.lstsq(design / norms, pz - values - plane @ params,
-                                               rcond=None)
-            step = step / norms
+            unit = design / norms
+            misfit = pz - values - plane @ params
+            step, _, rank, _ = np.linalg.lstsq(unit, misfit, rcond=SHIFT_RCOND)
             if rank < 5:
                 raise InputError("The nominal surface does not fix an xy shift (a shifted "
                                  "plane or quadratic is a tilted one): fit without shift",
                                  key="shift")
+            left = misfit - unit @ step
+            sigma = (math.sqrt(float(left @ left) / max(len(left) - 5, 1))
+                     * np.sqrt(np.diag(np.linalg.inv(unit.T @ unit))[3:]) / norms[3:])
+            step = step / norms
             params = params + step[:3]
             moved = moved + step[3:]
             values = nominal_at(*moved)
-            if np.abs(step[3:]).max() <= STEP_TOL * size:
+            moves = float(np.abs(step[3:]).max())
+            # settled: at the tolerance, or the steps shrank and then stopped shrinking, at
+            # the round-off of a shift that the data fix (within their uncertainty)
+            if moves <= STEP_TOL * size or (
+                    shrank and moves >= last
+                    and np.all(np.abs(step[3:]) <= SHIFT_SETTLED_STDS * sigma)):
                 break
+            shrank, last = shrank or moves < last, moves
         else:
             raise InputError(f"The shift fit did not settle in {MAX_ITERATIONS} steps (last "
                              f"step {np.abs(step[3:]).max():.3g} m)", key="shift")
