@@ -1,13 +1,16 @@
 """Least-squares fits against a second method or hand values: `form_error`'s shift against
 scipy's least_squares on a sphere, `fit_sphere` with its radius held."""
 
+import math
+
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
 from machinesim.exceptions import InputError
-from machinesim.metrology.fits import form_error
+from machinesim.metrology.fits import fit_sphere, form_error
 
+MM = 1e-3
 UM = 1e-6
 RADIUS = 5e-3
 
@@ -92,3 +95,80 @@ def test_form_error_still_refuses_a_shift_that_does_not_settle():
 
     with pytest.raises(InputError, match="The shift fit did not settle in 100 steps"):
         form_error(x, y, z, drifting, shift=True)
+
+
+# ---------------------------------------------------------------- sphere, radius held
+
+#: A 2 mm sphere centred at (1, 2, 3) mm; rings 1.2 mm below (or above) its centre have
+#: radius sqrt(2^2 - 1.2^2) = 1.6 mm.
+CENTRE = np.array([1.0, 2.0, 3.0]) * MM
+R_HELD = 2 * MM
+BELOW = 1.2 * MM
+
+
+def ring(angles_deg, dz=-BELOW):
+    """Points on the sphere at ``dz`` from its centre, at the given angles round its axis."""
+    a = np.radians(angles_deg)
+    rho = math.sqrt(R_HELD**2 - dz * dz)
+    return CENTRE + np.column_stack([rho * np.cos(a), rho * np.sin(a), np.full(a.size, dz)])
+
+
+@pytest.mark.parametrize("angles", [[10.0, 130.0, 250.0], np.arange(20) * 18.0],
+                         ids=["three points", "ring of 20"])
+def test_sphere_with_its_radius_from_points_on_one_circle(angles):
+    # Three points, or a ring of touches at one height, are always on one plane: the old
+    # unconstrained algebraic start refused them ("points on one plane or line") even with
+    # the radius given. By hand: the centre lies 1.2 mm above the ring (a cavity) or, for
+    # the other side, 1.2 mm below it, 2.4 mm below the true centre.
+    cavity = fit_sphere(ring(angles), radius=R_HELD)
+    # exact points: round-off of mm coordinates, ~1e-19 m, through the circle and Gauss-Newton
+    np.testing.assert_allclose(cavity.centre, CENTRE, rtol=0, atol=1e-15)
+    assert cavity.radius == R_HELD and cavity.residual_max < 1e-15
+    bump = fit_sphere(ring(angles), radius=R_HELD, concave=False)
+    np.testing.assert_allclose(bump.centre, CENTRE - [0.0, 0.0, 2 * BELOW], rtol=0, atol=1e-15)
+    # a ring above the centre read as a bump: the centre below it
+    top = fit_sphere(ring(angles, dz=+BELOW), radius=R_HELD, concave=False)
+    np.testing.assert_allclose(top.centre, CENTRE, rtol=0, atol=1e-15)
+
+
+def test_sphere_with_its_radius_from_a_cap_and_from_the_whole_sphere():
+    # points spread over the sphere fix the centre themselves: two orthogonal 60-deg arcs
+    # through a cavity's bottom (seed 002, Fig. 4b) and 50 points all round
+    t = np.radians(np.linspace(-30.0, 30.0, 61))
+    arcs = np.vstack([CENTRE + R_HELD * np.column_stack([np.sin(t), 0 * t, -np.cos(t)]),
+                      CENTRE + R_HELD * np.column_stack([0 * t, np.sin(t), -np.cos(t)])])
+    np.testing.assert_allclose(fit_sphere(arcs, radius=R_HELD).centre, CENTRE, rtol=0,
+                               atol=1e-15)
+    d = np.random.default_rng(0).standard_normal((50, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    for concave in (True, False):
+        np.testing.assert_allclose(fit_sphere(CENTRE + R_HELD * d, radius=R_HELD,
+                                              concave=concave).centre, CENTRE, rtol=0,
+                                   atol=1e-15)
+
+
+def test_sphere_with_its_radius_refuses_what_fixes_no_centre():
+    with pytest.raises(InputError, match=r"circle within the sphere, got its radius 0.0016 m "
+                                         r"> radius 0.0015 m"):
+        fit_sphere(ring([10.0, 130.0, 250.0]), radius=1.5 * MM)
+    with pytest.raises(InputError, match="points on one line"):
+        fit_sphere(np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0]]) * MM,
+                   radius=R_HELD)
+    with pytest.raises(InputError, match="vertical plane"):
+        fit_sphere(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]) * MM,
+                   radius=R_HELD)
+    with pytest.raises(InputError, match="concave as True or False"):
+        fit_sphere(ring([10.0, 130.0, 250.0]), radius=R_HELD, concave="no")
+    with pytest.raises(InputError, match="points on one plane"):
+        fit_sphere(ring(np.arange(20) * 18.0))
+
+
+def test_sphere_with_its_radius_keeps_the_named_side_of_a_noisy_ring():
+    # 20 nm of noise on every coordinate takes the ring off one plane; both mirror centres
+    # then fit it alike, and the side named stands (the noise once chose it)
+    noisy = ring(np.arange(20) * 18.0) + np.random.default_rng(0).normal(0.0, 20e-9, (20, 3))
+    # a centre from 20 points with 20 nm noise: sigma ~10-20 nm per coordinate; 0.1 um
+    np.testing.assert_allclose(fit_sphere(noisy, radius=R_HELD).centre, CENTRE, rtol=0,
+                               atol=0.1 * UM)
+    np.testing.assert_allclose(fit_sphere(noisy, radius=R_HELD, concave=False).centre,
+                               CENTRE - [0.0, 0.0, 2 * BELOW], rtol=0, atol=0.1 * UM)

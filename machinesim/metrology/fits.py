@@ -43,6 +43,18 @@ __all__ = [
 #: Gauss-Newton iterations stop when a step moves the centre (or radius) by less than this
 #: fraction of the point cloud's size: ~20 ulps, where float64 stops improving a fit.
 STEP_TOL = 4e-15
+#: Points whose second singular value is below this fraction of the first lie on one line
+#: (`fit_plane`'s test), and a plane whose normal's z is below it is vertical.
+COLLINEAR = 1e-12
+#: A held radius smaller than the points' circle by more than this many RMS scatters of the
+#: points about the circle is refused; within it (noise on a ring round the equator) the
+#: centre is put in the circle's plane.
+CIRCLE_SCATTERS = 3.0
+#: With the radius held, points off one plane keep their own (algebraic) centre over the
+#: one on the side the caller names only when it fits them with less than this fraction of
+#: that one's RMS residual: on a cap the other side misses by millimetres, on a ring with
+#: noisy heights both sides fit alike and the caller's side stands.
+OTHER_SIDE_RMS = 0.5
 #: Gauss-Newton gives up after this many iterations (it takes ~3-6 on a sphere cap).
 MAX_ITERATIONS = 100
 #: `form_error`'s shift has settled when a step no longer shrinks and is within this many of
@@ -139,7 +151,7 @@ class FormError:
     residual: np.ndarray
 
 
-def fit_sphere(points, radius: float | None = None) -> SphereFit:
+def fit_sphere(points, radius: float | None = None, *, concave: bool = True) -> SphereFit:
     """Least-squares sphere through points (seed 002, Fig. 4b: two orthogonal scans).
 
     The algebraic fit (linear in the centre and radius^2 - |centre|^2) starts Gauss-Newton
@@ -148,51 +160,126 @@ def fit_sphere(points, radius: float | None = None) -> SphereFit:
     error moves both while the xy centre stays put: seed 002 therefore takes xy from this fit
     and z from a bottom touch, see `sphere_centre_from_touch`.
 
+    With ``radius`` held, Gauss-Newton starts from the circle through the points (fitted in
+    their least-squares plane, radius rho) with the centre on its axis, sqrt(R^2 - rho^2)
+    from its plane on the side ``concave`` names. Three points, or a ring of touches at one
+    height, fix the centre only up to that mirror side. Points off one plane also start from
+    the algebraic fit, whose centre is kept when it fits them clearly better (RMS below
+    `OTHER_SIDE_RMS` of the other's: a cap read from its other side); a ring whose heights
+    scatter fits both sides alike and keeps the side named.
+
     Parameters
     ----------
     points : array-like, shape (N, 3)
-        Points on the sphere, m; rows with NaN are left out. N >= 4 (3 with ``radius``).
+        Points on the sphere, m; rows with NaN are left out. N >= 4, not all on one plane
+        (with ``radius``: N >= 3, not all on one line).
     radius : float, optional
         Hold the radius at this value (m) and fit the centre only.
+    concave : bool
+        With ``radius``: True (default) for points on a cavity, the centre above them (on
+        the +z side of their plane, as in `sphere_centre_from_touch`); False for a bump, the
+        centre below. Unused without ``radius``.
 
     Returns
     -------
     SphereFit
+
+    Raises
+    ------
+    InputError
+        Too few points, points on one plane (one line with ``radius``), a held radius
+        smaller than the points' circle, or a vertical plane of points with ``radius`` (no
+        side above or below it).
     """
     points = point_rows(points, 3, "points")
     minimum = 4 if radius is None else 3
     if len(points) < minimum:
         raise InputError(f"Expected at least {minimum} points on the sphere, got {len(points)}")
-    if radius is not None:
-        radius = as_number(radius, "radius", sign="> 0")
+    concave = as_flag(concave, "concave")
     origin = points.mean(axis=0)
     local = points - origin
     size = float(np.abs(local).max())
     design = np.column_stack([2.0 * local, np.ones(len(local))])
     solution, _, rank, _ = np.linalg.lstsq(design, np.einsum("ij,ij->i", local, local),
                                            rcond=None)
-    if rank < 4:
-        raise InputError("Expected points spread over a sphere, got points on one plane or line")
-    centre = solution[:3]
-    fitted = math.sqrt(max(solution[3] + centre @ centre, 0.0)) if radius is None else radius
+    if radius is None:
+        if rank < 4:
+            raise InputError("Expected points spread over a sphere, got points on one plane or "
+                             "line (give the radius to fit a circle of points)")
+        centre, fitted = _settle(local, solution[:3],
+                                 math.sqrt(max(solution[3] + solution[:3] @ solution[:3], 0.0)),
+                                 False, size)
+    else:
+        fitted = radius = as_number(radius, "radius", sign="> 0")
+        if rank < 4:
+            centre = _settle(local, _centre_on_axis(local, radius, concave), radius, True,
+                             size)[0]
+        else:
+            centre = _either_side(local, solution[:3], radius, concave, size)
+    residual = np.linalg.norm(local - centre, axis=1) - fitted
+    return SphereFit(frozen(origin + centre), float(fitted),
+                     float(np.sqrt(np.mean(residual**2))), float(np.abs(residual).max()))
+
+
+def _settle(local, centre, fitted, held: bool, size: float):
+    """Gauss-Newton on the distances |p - c| - R from a start: (centre, radius)."""
     for _ in range(MAX_ITERATIONS):
         offset = local - centre
         distance = np.linalg.norm(offset, axis=1)
         jacobian = -offset / distance[:, None]
-        if radius is None:
+        if not held:
             jacobian = np.column_stack([jacobian, -np.ones(len(local))])
         step = np.linalg.lstsq(jacobian, fitted - distance, rcond=None)[0]
         centre = centre + step[:3]
-        if radius is None:
+        if not held:
             fitted += step[3]
         if np.abs(step).max() <= STEP_TOL * size:
-            break
-    else:
-        raise InputError(f"The sphere fit did not settle in {MAX_ITERATIONS} steps (last step "
-                         f"{np.abs(step).max():.3g} m): are the points on a sphere?")
-    residual = np.linalg.norm(local - centre, axis=1) - fitted
-    return SphereFit(frozen(origin + centre), float(fitted),
-                     float(np.sqrt(np.mean(residual**2))), float(np.abs(residual).max()))
+            return centre, fitted
+    raise InputError(f"The sphere fit did not settle in {MAX_ITERATIONS} steps (last step "
+                     f"{np.abs(step).max():.3g} m): are the points on a sphere?")
+
+
+def _either_side(local, algebraic, radius: float, concave: bool, size: float) -> np.ndarray:
+    """Centre with the radius held, of points off one plane: from the algebraic start, unless
+    the start on the circle's axis on the ``concave`` side fits about as well (RMS within
+    `OTHER_SIDE_RMS`): noise on a ring's heights would otherwise choose the side."""
+
+    def rms(centre):
+        return float(np.sqrt(np.mean((np.linalg.norm(local - centre, axis=1) - radius) ** 2)))
+
+    try:
+        sided = _settle(local, _centre_on_axis(local, radius, concave), radius, True, size)[0]
+    except InputError:  # no circle on that side (a vertical plane, a circle > R): the data's
+        return _settle(local, algebraic, radius, True, size)[0]
+    try:
+        found = _settle(local, algebraic, radius, True, size)[0]
+    except InputError:  # a start far off (noisy heights of a ring) that does not settle
+        return sided
+    return found if rms(found) < OTHER_SIDE_RMS * rms(sided) else sided
+
+
+def _centre_on_axis(local: np.ndarray, radius: float, concave: bool) -> np.ndarray:
+    """Centre (m, about the points' mean) on the axis of the circle through ``local``, at
+    sqrt(R^2 - rho^2) from the points' least-squares plane: above it if ``concave``."""
+    _, singular, vt = np.linalg.svd(local, full_matrices=False)
+    if singular[1] <= COLLINEAR * singular[0]:
+        raise InputError("Expected points spanning a plane, got points on one line")
+    normal = vt[2]
+    if abs(normal[2]) <= COLLINEAR:
+        raise InputError(f"Expected points whose plane has an up side for concave={concave}, "
+                         f"got a vertical plane (normal {normal.round(12).tolist()})",
+                         key="concave")
+    normal = normal if (normal[2] > 0.0) == concave else -normal
+    u, v = local @ vt[0], local @ vt[1]
+    design = np.column_stack([2.0 * u, 2.0 * v, np.ones_like(u)])
+    (a, b, c), *_ = np.linalg.lstsq(design, u * u + v * v, rcond=None)
+    rho = math.sqrt(max(c + a * a + b * b, 0.0))
+    scatter = np.hypot(u - a, v - b) - rho
+    # a circle larger than the sphere by more than the points' scatter about it
+    if rho > radius + CIRCLE_SCATTERS * float(np.sqrt(np.mean(scatter**2))):
+        raise InputError(f"Expected the points' circle within the sphere, got its radius "
+                         f"{rho!r} m > radius {radius!r} m", key="radius")
+    return a * vt[0] + b * vt[1] + math.sqrt(max(radius * radius - rho * rho, 0.0)) * normal
 
 
 def sphere_centre_from_touch(xy, z_touch: float, radius: float, *, probe_radius: float = 0.0,
@@ -247,7 +334,7 @@ def fit_plane(points) -> PlaneFit:
         raise InputError(f"Expected at least 3 points on the plane, got {len(points)}")
     centroid = points.mean(axis=0)
     _, singular, vt = np.linalg.svd(points - centroid, full_matrices=False)
-    if singular[1] <= 1e-12 * singular[0]:
+    if singular[1] <= COLLINEAR * singular[0]:
         raise InputError("Expected points spanning a plane, got points on one line")
     normal = vt[2] if vt[2][2] >= 0.0 else -vt[2]
     distance = (points - centroid) @ normal
