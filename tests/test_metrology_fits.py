@@ -2,13 +2,14 @@
 scipy's least_squares on a sphere, `fit_sphere` with its radius held."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
 from machinesim.exceptions import InputError
-from machinesim.metrology.fits import fit_sphere, form_error
+from machinesim.metrology.fits import fit_sphere, form_error, roughness_sa
 
 MM = 1e-3
 UM = 1e-6
@@ -172,3 +173,15 @@ def test_sphere_with_its_radius_keeps_the_named_side_of_a_noisy_ring():
                                atol=0.1 * UM)
     np.testing.assert_allclose(fit_sphere(noisy, radius=R_HELD, concave=False).centre,
                                CENTRE - [0.0, 0.0, 2 * BELOW], rtol=0, atol=0.1 * UM)
+
+
+# ---------------------------------------------------------------- Sa of a flat map
+
+
+def test_sa_of_a_flat_map_is_zero_without_warnings():
+    # surfalize's Sa computes Ssk and Sku as well, 0 / 0 on a flat map; it printed two
+    # RuntimeWarnings where Sa = 0 (mean |z - plane| of a plane) is right
+    x = np.arange(10) * UM
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert roughness_sa(x, x, np.zeros((10, 10))) == 0.0

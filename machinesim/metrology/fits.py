@@ -507,6 +507,9 @@ def roughness_sa(x, y, z, *, l_cutoff: float | None = None) -> float:
                 raise InputError("Expected a map without NaN samples for an L-filtered Sa",
                                  key="z")
             surface = surface.filter("highpass", l_cutoff / M_PER_UM)
-    return float(surface.Sa()) * M_PER_UM
+        # surfalize's Sa computes Ssk and Sku too, 0 / 0 on a flat map, where Sa = 0 is right
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sa = float(surface.Sa())
+    return sa * M_PER_UM
 
 
