@@ -21,6 +21,7 @@ from machinesim.metrology import (
     TouchProbe,
     fit_line,
     fit_parallel_edges,
+    fit_plane,
     fit_sphere,
     fit_v_groove,
     form_error,
@@ -28,6 +29,7 @@ from machinesim.metrology import (
     height_map,
     intersect_lines,
     plane_angle,
+    plane_intersection,
     roughness_sa,
     sphere_centre_from_touch,
     step_positions,
@@ -127,6 +129,12 @@ def test_fits_refuse_what_is_not_their_input_type():
         form_error(x, y, z, 0.0)
     with pytest.raises(InputError, match="first as a PlaneFit"):
         plane_angle("a", "b")
+    # once a raw AttributeError ('str' object has no attribute 'normal')
+    plane = fit_plane([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    with pytest.raises(InputError, match="first as a plane with a point and a unit normal"):
+        plane_intersection("a", plane)
+    with pytest.raises(InputError, match="second as a plane with a point and a unit normal"):
+        plane_intersection(plane, Line2D(np.zeros(2), np.array([1.0, 0.0]), 0.0))
     with pytest.raises(InputError, match="first as a Line2D"):
         intersect_lines("a", "b")
     line = fit_line([[0, 0], [1, 0]])

@@ -10,6 +10,7 @@ import numpy as np
 
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_floats, shown
 
 __all__ = ["Line3D", "line_distance", "plane_intersection"]
 
@@ -41,8 +42,19 @@ def plane_intersection(first, second) -> Line3D:
     Raises
     ------
     InputError
-        When the planes are parallel (`PARALLEL_SINE`).
+        When either is not a plane (a point and a unit normal of 3 finite numbers each), or
+        the planes are parallel (`PARALLEL_SINE`).
     """
+    for name, plane in (("first", first), ("second", second)):
+        try:
+            values = [as_floats(getattr(plane, k), name) for k in ("point", "normal")]
+        except AttributeError:
+            values = []
+        if (len(values) != 2 or any(v.shape != (3,) or not np.isfinite(v).all() for v in values)
+                or not np.isclose(np.linalg.norm(values[1]), 1.0)):
+            raise InputError(f"Expected {name} as a plane with a point and a unit normal, each "
+                             f"3 finite numbers (a PlaneFit from fit_plane), got "
+                             f"{shown(plane)}", key=name)
     direction = np.cross(first.normal, second.normal)
     norm = np.linalg.norm(direction)
     if not norm > PARALLEL_SINE:
