@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import machinesim
-from machinesim.exceptions import MachineSimError
+from machinesim.exceptions import InputError, MachineSimError
 from machinesim.metrology.iso230 import (
     evaluate_positioning,
     iso230_2_targets,
@@ -89,6 +89,14 @@ def test_targets_follow_the_standard():
     offsets = drawn - (-0.2 + step * np.arange(21))
     assert np.all(np.abs(offsets) <= step / 4 + 1e-15) and np.all(np.diff(drawn) > 0)
     assert np.unique(np.round(offsets[1:-1] / step, 12)).size == 19   # a different r_i each
+
+
+@pytest.mark.parametrize("count", [5.9, "7", True, 7.0])
+def test_a_target_count_that_is_no_whole_number_is_refused(count):
+    # count=5.9 once gave 5 targets, count="7" seven
+    with pytest.raises(InputError, match=f"count as a whole number of targets, got {count!r}"):
+        iso230_2_targets(-0.2, 0.2, count=count)
+    assert iso230_2_targets(-0.2, 0.2, count=np.int64(7)).size == 7
 
 
 @pytest.mark.parametrize("call", [

@@ -160,7 +160,8 @@ def iso230_2_targets(start: float, end: float, count: int | None = None,
     start, end : float
         Ends of the measurement travel, m (``end > start``).
     count : int, optional
-        Number of targets; default the standard's minimum, ``max(5, ceil(5 per metre) + 1)``.
+        Number of targets, a whole number (5.9 or "7" is refused, not rounded); default the
+        standard's minimum, ``max(5, ceil(5 per metre) + 1)``.
     rng : numpy.random.Generator or int or None
         Source of the offsets ``r_i``; ``None`` gives the uniform spacing (no offsets).
     """
@@ -169,6 +170,10 @@ def iso230_2_targets(start: float, end: float, count: int | None = None,
         raise InputError(f"Expected a travel start < end (m), got {start!r}, {end!r}",
                          key="end")
     minimum = max(5, math.ceil(5.0 * (b - a)) + 1)
+    if count is not None and (isinstance(count, bool)
+                              or not isinstance(count, int | np.integer)):
+        raise InputError(f"Expected count as a whole number of targets, got {count!r}",
+                         key="count")
     n = minimum if count is None else int(count)
     if n < minimum:
         raise InputError(f"Expected at least {minimum} targets over {(b - a) * 1e3:g} mm "
