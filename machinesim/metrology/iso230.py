@@ -191,8 +191,10 @@ def positioning_test(interferometer, axis: str, targets, runs: int = 5,
     """Run an ISO 230-2 bidirectional positioning test with a laser interferometer.
 
     Each run approaches every target going up, then every target coming down (the
-    standard's linear cycle); the reading is zeroed at the first target at the start of
-    each pass, as the interferometer is datumed there.
+    standard's linear cycle). Both passes read against one datum, the first target
+    ``targets[0]``: the up pass is zeroed there where it starts, the down pass there where
+    it ends (each pass's reading is the displacement from the axis at ``targets[0]``,
+    `LaserInterferometer.positioning`'s ``reference``).
 
     Parameters
     ----------
