@@ -14,6 +14,7 @@ from machinesim.metrology import (
     LaserInterferometer,
     Microscope,
     Readout,
+    RTest,
     TouchProbe,
     WhiteLightInterferometer,
     squareness_from_diagonal,
@@ -293,3 +294,19 @@ def test_readout_is_seeded_and_rounds():
     np.testing.assert_array_equal(first, again)
     np.testing.assert_allclose(first / NM, np.round(first / NM), rtol=0, atol=1e-9)
     assert Readout.of(2 * NM, 0.0, noise=False).read([1.25 * NM, np.nan], None)[0] == 1.25 * NM
+
+
+@pytest.mark.parametrize("zero, factor", [("nominal", 1.0), ("first", math.sqrt(2.0))])
+def test_r_test_readings_spread_as_their_stated_sigma(a0ib, zero, factor):
+    # A zeroed reading is the difference of two displays, n_i - n_0: its spread over draws
+    # is sqrt(2) x 50 nm = 70.7 nm, where 50 nm was stated. Monte Carlo over 4000 reads of
+    # two poses (the second's three sensors: 12000 independent draws of the error).
+    r_test = RTest(a0ib, rng=np.random.default_rng(5), resolution=0.0, zero=zero)
+    q = np.array([[0.01, 0.005, 0.002, 0.1, 0.2], [0.012, 0.004, 0.003, 0.15, 0.3]])
+    exact = RTest(a0ib, noise=False, resolution=0.0, zero=zero).read(q).displacement[1]
+    readings = [r_test.read(q) for _ in range(4000)]
+    errors = np.array([r.displacement[1] for r in readings]) - exact
+    # the sample std of 12000 normal draws is within 5 x 1 / sqrt(2 x 12000) = 3.2 % of the
+    # true one (a miss by chance ~6e-7); the old stated 50 nm is 29 % below 70.7 nm
+    assert np.std(errors) == pytest.approx(readings[0].sigma, rel=0.032)
+    assert {r.sigma for r in readings} == {factor * 50e-9}

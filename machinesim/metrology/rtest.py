@@ -24,6 +24,7 @@ nominal kinematics, as the controller knows it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,7 +60,10 @@ class RTestReading:
     sigma : float
         Standard uncertainty of each displacement reading as the instrument states it, m
         (its noise and rounding together; stated even when the lab's noise is off, as a
-        data sheet states it, so that a fit can weight the readings).
+        data sheet states it, so that a fit can weight the readings). Zeroed readings
+        (``zero="first"``) are differences of two displays, n_i - n_0, so sqrt(2) times a
+        display's: the n_0 part is common to all readings of one `RTest.read` (correlation
+        1/2 between any two), and the first row, the zero itself, reads exactly 0.
     frame : str
     point : ndarray, shape (3,), read-only
         The ball centre in ``frame``, m.
@@ -101,7 +105,8 @@ class RTest:
     zero : {"nominal", "first"}
         Where the sensors read zero (module docstring): at the ball's nominal place
         (default, an idealisation), or on the real ball at the first pose of each `read`,
-        as a real nest is zeroed (each reading then carries that zero's noise too).
+        as a real nest is zeroed (each reading then carries that zero's noise too: its
+        stated sigma is sqrt(2) times a display's, `RTestReading.sigma`).
     """
 
     def __init__(self, machine, errors=None, sigma: float = 50e-9, resolution: float = 1e-9,
@@ -151,8 +156,9 @@ class RTest:
                                 self.point)
         # zeroed on the ball at the first pose: every display less the one there (both
         # counts of the same sensors, so the difference keeps the display's step)
-        return RTestReading(frozen(q), frozen(displayed - displayed[0]), self.uncertainty,
-                            self.frame, self.point, frozen(q[0].copy()))
+        return RTestReading(frozen(q), frozen(displayed - displayed[0]),
+                            math.sqrt(2.0) * self.uncertainty, self.frame, self.point,
+                            frozen(q[0].copy()))
 
     def _centre(self, wMf: np.ndarray) -> np.ndarray:
         return wMf[:, :3, 3] + wMf[:, :3, :3] @ self.point
