@@ -217,6 +217,22 @@ def test_groove_input_errors():
         groove_pitch([2.0, 1.0])
 
 
+@pytest.mark.parametrize("shape", ["ridge", "bump", "wave"])
+def test_profiles_without_a_v_below_level_land_are_refused(shape):
+    # None of these holds a groove, which the old fit reported all the same: the ridge as
+    # a groove 18.6 um deep (flanks 43.2 and 1.8 deg, the left land taken as a groove cut
+    # by the profile's end), the 2 um bump as one 1.78 um deep, the 2 um wave as three 2.31 um
+    # deep (deeper than its own peak to valley), each on its crests as "land"
+    s = np.arange(0.0, 1 * MM, 0.3 * UM)
+    z = {"ridge": np.maximum(0.0, 20 * UM - np.abs(s - 0.4 * MM)),
+         "bump": 2 * UM * np.exp(-((s - 0.2 * MM) / (50 * UM)) ** 2),
+         "wave": 1 * UM * np.sin(2 * math.pi * s / (0.3 * MM))}[shape]
+    with pytest.raises(InputError, match="expected a V below level land, got a reference"):
+        fit_v_grooves(s, z)
+    with pytest.raises(InputError, match="no V groove"):
+        fit_v_groove(s, z)
+
+
 # ---------------------------------------------------------------- lines and crossings
 
 

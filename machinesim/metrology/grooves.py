@@ -58,6 +58,15 @@ LAND_SIGMAS = 4.0
 #: its own estimate is left to chance: with 3 it stays below 3.1 times the true variance at
 #: 95 %, with 1 below 3.8 times and above 0.004 times).
 OWN_NOISE_DOF = 3
+#: The reference (land) samples of a groove lie on their line within this many noise sigmas
+#: (their RMS about it; fits of the tests' grooves stay below 0.31 of the bound) ...
+LEVEL_LAND_SIGMAS = 3.0
+#: ... plus this fraction of the groove's depth: heights rounded to an instrument's
+#: resolution leave a staircase that second differences do not see (1 nm / sqrt(12) on a
+#: tilted land, 1e-3 of a 0.3 um groove). The crests of a wave, a ridge's top or a bump's
+#: shoulders taken as land bend by up to the reference band, 1 % of the depth (a 2 um sine:
+#: 33 nm RMS against 2.3 nm allowed).
+LEVEL_LAND_FRACTION = 1e-3
 #: Passes of the fit after the first estimate: the second chooses flank points by position,
 #: the third settles the edges that the second moved (by far less than a sample spacing).
 REFINE_PASSES = 2
@@ -154,8 +163,11 @@ def fit_v_grooves(s, z, *, threshold: float | None = None,
     Raises
     ------
     InputError
-        For malformed arrays, a bad band or threshold, or a groove with fewer than two samples
-        on a flank band or on the reference either side.
+        For malformed arrays, a bad band or threshold, a groove with fewer than two samples
+        on a flank band or on the reference, or a "groove" whose reference samples are no
+        level land: they scatter about their line by more than `LEVEL_LAND_SIGMAS` noise
+        sigmas plus `LEVEL_LAND_FRACTION` of its depth (a ridge, a bump or a wave holds no
+        V below level land on both sides).
     """
     s, z = profile_arrays(s, z, 5)
     lo, hi = _band(flank_band)
@@ -189,9 +201,9 @@ def fit_v_grooves(s, z, *, threshold: float | None = None,
         fraction = residual / residual[apex]
         band = (fraction >= lo) & (fraction <= hi)
         grooves.append(_fit(s, z, np.r_[before, after], left[band[left]], right[band[right]],
-                            s[apex], floor))
+                            s[apex], floor, noise))
     for _ in range(REFINE_PASSES):
-        grooves = _refine(s, z, grooves, lo, hi, floor, lead, tail)
+        grooves = _refine(s, z, grooves, lo, hi, floor, noise, lead, tail)
     return tuple(grooves)
 
 
@@ -202,7 +214,8 @@ def fit_v_groove(s, z, *, threshold: float | None = None,
     Raises
     ------
     InputError
-        When the profile holds no whole groove or more than one.
+        When the profile holds no whole groove or more than one, or what dips below its
+        crests is no V below level land (a ridge, a bump, a wave; see `fit_v_grooves`).
     """
     grooves = fit_v_grooves(s, z, threshold=threshold, flank_band=flank_band)
     if len(grooves) != 1:
@@ -284,7 +297,7 @@ def _groove_runs(residual: np.ndarray, threshold: float) -> list[tuple[int, int]
             if -residual[first:stop].min() >= 2.0 * threshold]
 
 
-def _refine(s, z, grooves, lo, hi, floor, lead, tail):
+def _refine(s, z, grooves, lo, hi, floor, noise, lead, tail):
     """Refit each groove with flank samples chosen by s and every land sample outside edges."""
     refined = []
     for k, groove in enumerate(grooves):
@@ -298,11 +311,11 @@ def _refine(s, z, grooves, lo, hi, floor, lead, tail):
                               & (s <= groove.left_edge + hi * left_run))
         right = np.flatnonzero((s <= groove.right_edge - lo * right_run)
                                & (s >= groove.right_edge - hi * right_run))
-        refined.append(_fit(s, z, lands, left, right, groove.centre, floor))
+        refined.append(_fit(s, z, lands, left, right, groove.centre, floor, noise))
     return refined
 
 
-def _fit(s, z, lands, left, right, origin, floor) -> VGroove:
+def _fit(s, z, lands, left, right, origin, floor, noise) -> VGroove:
     """Fit reference and flank lines about ``origin`` and derive the groove with uncertainties."""
     where = f"groove near s = {origin:.9g} m"
     lands = _trim(s, z, lands, floor)
@@ -320,6 +333,16 @@ def _fit(s, z, lands, left, right, origin, floor) -> VGroove:
     t = (a2 - a1) / (b1 - b2)
     apex = a1 + b1 * t
     depth = ar + br * t - apex
+    # A V needs level land beside it: the reference's samples on their line within the
+    # noise. A ridge's top, a bump's shoulders or a wave's crests bend away from it.
+    if lands.size > 2:
+        scatter = math.sqrt(fits[0][1] / (lands.size - 2))
+        level_tol = LEVEL_LAND_SIGMAS * noise + LEVEL_LAND_FRACTION * abs(depth) + floor
+        if scatter > level_tol:
+            raise InputError(f"{where}: expected a V below level land, got a reference whose "
+                             f"{lands.size} samples scatter {scatter:.3g} m about their line "
+                             f"(level land within {level_tol:.3g} m: noise {noise:.3g} m): a "
+                             f"ridge, bump or wave is no V groove")
     left_edge = (ar - a1) / (b1 - br)
     right_edge = (ar - a2) / (b2 - br)
     squares = sum(fit[1] for fit in fits)
