@@ -182,6 +182,8 @@ class Result:
     paper, procedure, machine : str
     seed : int
     noise : bool
+    realism : tuple of str
+        The lab's realism switches that were on (`machinesim.realism.Realism.on`).
     injected : Mapping[str, float]
         The lab's injected parameters, SI: every non-zero one and every identified one.
     identified : Mapping[str, (float, float)]
@@ -215,6 +217,7 @@ class Result:
     evaluation: Evaluation
     elapsed_s: Mapping[str, float]
     not_identified: Mapping[str, float] = field(default_factory=dict)
+    realism: tuple[str, ...] = ()
 
     def figure(self, name: str) -> Figure:
         """The figure called ``name``."""
@@ -229,6 +232,7 @@ class Result:
         return {
             "paper": self.paper, "procedure": self.procedure, "machine": self.machine,
             "seed": self.seed, "noise": self.noise,
+            "realism": {"preset": _preset(self.realism), "on": list(self.realism)},
             "injected": dict(self.injected),
             "identified": {name: {"value": v, "std": s}
                            for name, (v, s) in self.identified.items()},
@@ -237,6 +241,13 @@ class Result:
             "elapsed_s": dict(self.elapsed_s),
             **({"not_identified": list(self.not_identified)} if self.not_identified else {}),
         }
+
+
+def _preset(on: tuple[str, ...]) -> str:
+    """The name of the realism preset with these switches on, or the switches joined by +."""
+    from machinesim.realism import Realism
+
+    return str(Realism.with_only(*on))
 
 
 def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = None
@@ -301,4 +312,5 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
         identified=identified.parameters, figures=tuple(evaluation.figures),
         measurements=measurements, identification=identified,
         programs=MappingProxyType(dict(programs)), evaluation=evaluation,
-        elapsed_s=MappingProxyType(clock), not_identified=MappingProxyType(not_identified))
+        elapsed_s=MappingProxyType(clock), not_identified=MappingProxyType(not_identified),
+        realism=lab.realism.on)

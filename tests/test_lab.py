@@ -303,8 +303,15 @@ def test_injected_parameters_the_procedure_does_not_identify_are_named(tmp_path)
     assert text.split("### Identified")[1] in (tmp_path / "report/identified.md").read_text()
     summary = json.loads((tmp_path / "report/summary.json").read_text())
     assert summary["not_identified"] == ["tool.y", "location.B.EX0B"]
+    # the lab's realism is in the report (noise alone cannot tell "lab" from "noise_only")
+    assert summary["realism"] == {"preset": "lab", "on": list(Realism.names())}
     exact = run(WorkpieceX(), Lab("robonano_a0ib", {"workpiece": {"delta_um": [3.0, 0, 0]}}))
     assert not exact.not_identified and "not_identified" not in exact.summary()
+    assert exact.summary()["realism"] == {"preset": "noise_only", "on": ["instrument_noise"]}
+    some = Realism.with_only("instrument_noise", "stage_positioning")
+    assert run(WorkpieceX(), Lab("robonano_a0ib", seed=1, realism=some)).summary()[
+        "realism"] == {"preset": "instrument_noise+stage_positioning",
+                       "on": ["instrument_noise", "stage_positioning"]}
     # a component table's entries (which the background's table may cancel at a point, so
     # that ``injected`` lacks them: the report ended in a KeyError) are one item
     tables = {"component": {"X": {"position_mm": [-100.0, 0.0, 100.0],
