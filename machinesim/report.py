@@ -82,6 +82,27 @@ def folder_key(path) -> str:
     return os.path.realpath(Path(path))
 
 
+def identified_notes(result) -> str:
+    """The notes under a result's table of identified parameters (identified.md; "" when
+    there are none): what was injected and not identified, and what the std leaves out
+    when the lab's instruments had no noise."""
+    notes = []
+    if result.not_identified:
+        notes.append(
+            "Injected and not among the identified parameters: "
+            f"{_parameter_list(result.not_identified)}. The procedure's model does not "
+            "hold them as such (or it measures them without naming them, as a "
+            "compensation table does): what they do shows in the errors above and in "
+            "the figures after.")
+    if not result.noise:
+        notes.append(
+            "The lab's instruments had no noise: each std holds what the readings' "
+            "rounding leaves, and an error beyond it is the procedure's own approximation "
+            "(its model of the machine and the part) or a bias of the lab, which no std "
+            "holds.")
+    return " ".join(notes)
+
+
 class ReportFolder:
     """A scenario's output folder.
 
@@ -178,12 +199,7 @@ class ReportFolder:
               value - result.injected.get(name, math.nan)]
              for name, (value, std) in result.identified.items()],
             title="Identified error parameters (m, rad)", digits=6, significant=True,
-            note="" if not result.not_identified else (
-                "Injected and not among the identified parameters: "
-                f"{_parameter_list(result.not_identified)}. The procedure's model does not "
-                "hold them as such (or it measures them without naming them, as a "
-                "compensation table does): what they do shows in the errors above and in "
-                "the figures after."))
+            note=identified_notes(result))
         text = figures + "\n" + identified
         if budget is not None:
             return text + "\n" + self.add_budget(result, budget)

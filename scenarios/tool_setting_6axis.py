@@ -49,7 +49,7 @@ from machinesim.procedures.tool_setting_6axis import (
     cut_summary,
     layout_lines,
 )
-from machinesim.report import ReportFolder
+from machinesim.report import ReportFolder, identified_notes
 from machinesim.scenario_runs import (
     injected_errors,
     parse_floats,
@@ -135,6 +135,9 @@ def report(args, make_lab, realism) -> None:
     folder.publish(last=True)
     print(table)
     print(ident)
+    notes = identified_notes(result)  # identified.md's; this script prints its own table
+    if notes:
+        print(notes + "\n")
     if realism.background_errors:
         print(BACKGROUND_NOTE + "\n")
     print(check)

@@ -308,6 +308,12 @@ def test_injected_parameters_the_procedure_does_not_identify_are_named(tmp_path)
     exact = run(WorkpieceX(), Lab("robonano_a0ib", {"workpiece": {"delta_um": [3.0, 0, 0]}}))
     assert not exact.not_identified and "not_identified" not in exact.summary()
     assert exact.summary()["realism"] == {"preset": "noise_only", "on": ["instrument_noise"]}
+    # without the instruments' noise the std holds only rounding: identified.md says so
+    from machinesim.report import identified_notes
+
+    assert "no noise" not in identified_notes(exact)
+    assert identified_notes(run(WorkpieceX(), Lab("robonano_a0ib", noise=False))).startswith(
+        "The lab's instruments had no noise: each std holds what the readings' rounding")
     some = Realism.with_only("instrument_noise", "stage_positioning")
     assert run(WorkpieceX(), Lab("robonano_a0ib", seed=1, realism=some)).summary()[
         "realism"] == {"preset": "instrument_noise+stage_positioning",

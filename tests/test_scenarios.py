@@ -92,6 +92,20 @@ def test_sts_turning_predicts_and_measures_the_four_cases(tmp_path):
         assert (tmp_path / name).stat().st_size > 0
 
 
+def test_paper_001_prints_what_was_injected_and_not_identified(tmp_path):
+    """Paper 001 prints its own tables, and the note identified.md holds under its table
+    (it was in the files only): a workpiece offset and a tool roll are outside its model."""
+    errors = tmp_path / "errors.toml"
+    errors.write_text("[tool]\noffset_um = [245.02, -340.06, 0.0]\n"
+                      "rotation_deg = [0.0, 0.0, 0.01]\n[workpiece]\ndelta_um = [3.0, 0.0, 0.0]\n")
+    out = run("tool_setting_6axis.py", "--budget", "off", "--realism", "noise_only", "--errors",
+              str(errors), "--out", str(tmp_path / "report"))
+    line = ("Injected and not among the identified parameters: tool.rz (1.745329e-04), "
+            "workpiece.x (3.000000e-06).")
+    assert line in out
+    assert line in (tmp_path / "report" / "identified.md").read_text()
+
+
 def test_every_paper_scenario_refuses_a_negative_seed_on_its_command_line(tmp_path):
     # numpy takes no negative seed; paper 002 drew its robot landings with it before its
     # lab checked the seed, and ended in a traceback
