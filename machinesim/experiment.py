@@ -33,7 +33,18 @@ from typing import Any, Protocol
 
 from machinesim.exceptions import InputError
 
-__all__ = ["Evaluation", "Figure", "Identified", "Procedure", "Result", "run"]
+__all__ = ["LAB_USES", "Evaluation", "Figure", "Identified", "Procedure", "Result", "run"]
+
+#: What a procedure may read of its lab beyond the machine's error parameters, as its
+#: ``lab_uses`` names it, step by step (``"measure"``, ``"evaluate"``): the instruments it
+#: reads with at the lab's noise (`machinesim.Lab`'s methods; not one it gives its own
+#: ``sigma``), ``"robot"`` where a robot loads its workpiece (the setting is a landing,
+#: `machinesim.loading.RobotLoader`) and ``"tool_geometry"`` where it cuts with a tool that
+#: has a nose radius for the error model's ``tool_geometry.nose_radius`` to change (a round
+#: nose, a ball or flat end mill; a V tool has none and refuses it). A campaign varies these
+#: only where the procedure declares them (`machinesim.campaign.CampaignSpec`).
+LAB_USES = ("microscope", "white_light_interferometer", "touch_probe", "laser_interferometer",
+            "r_test", "robot", "tool_geometry")
 
 #: Units a figure may be reported in (the report's unit table; see docs/reports.md).
 FIGURE_UNITS = ("m", "mm", "um", "nm", "rad", "mrad", "urad", "deg", "arcsec", "s", "min",
@@ -159,10 +170,12 @@ class Evaluation:
 
 
 class Procedure(Protocol):
-    """What `run` needs of a procedure (see the module docstring)."""
+    """What `run` needs of a procedure (see the module docstring); ``lab_uses`` (by step,
+    names of `LAB_USES`) is what a campaign needs besides."""
 
     name: str
     paper: str
+    lab_uses: Mapping[str, tuple[str, ...]]
 
     def measure(self, lab) -> Any: ...
 

@@ -17,7 +17,7 @@ from scipy import stats
 import machinesim.campaign.runner as runner
 from machinesim.campaign import CampaignSpec, parse_distribution, parse_vary, run, run_trial
 from machinesim.campaign.statistics import coverage_interval, ranks, spearman, z_scores, z_summary
-from machinesim.campaign.trials import MAX_TRIALS, draw, trial_seed
+from machinesim.campaign.trials import MAX_TRIALS, PROCEDURES, draw, trial_seed
 from machinesim.cli import main as cli_main
 from machinesim.exceptions import InputError, MachineSimError
 
@@ -112,6 +112,61 @@ def test_unknown_parameter_and_bad_trials_are_refused():
         CampaignSpec("tool_rotation_arm", 0)
     with pytest.raises(InputError, match="'paper_999'"):
         CampaignSpec("paper_999", 2)
+
+
+def test_a_parameter_the_procedure_never_reads_is_refused():
+    """What may vary follows each procedure's ``lab_uses``: paper 000 reads the microscope
+    only (a V tool, no robot); paper 002 lands with a robot, probes, and cuts with a round
+    nose read by the microscope after; paper 003's R-test states its own sigma."""
+    from machinesim.experiment import LAB_USES
+
+    arm = CampaignSpec("tool_rotation_arm", 1).parameters()
+    assert "microscope.sigma" in arm and "workpiece.x" in arm  # not identified, still cut
+    for name in ("laser_interferometer.sigma", "robot.repeatability",
+                 "tool_geometry.nose_radius", "touch_probe.sigma"):
+        assert name not in arm
+    crown = set(CampaignSpec("workpiece_setting", 1).parameters())
+    assert {"robot.repeatability", "touch_probe.sigma", "microscope.sigma",
+            "tool_geometry.nose_radius", "tool.y"} <= crown
+    probing = set(CampaignSpec("workpiece_setting", 1, identify_only=True).parameters())
+    assert crown - probing == {"microscope.sigma", "tool_geometry.nose_radius"}
+    with pytest.raises(InputError, match=r"--vary microscope.sigma: workpiece_setting "
+                       r"--identify-only never reads it \(it reads with no microscope"):
+        CampaignSpec("workpiece_setting", 1, (parse_vary("microscope.sigma=5nm"),),
+                     identify_only=True)
+    with pytest.raises(InputError, match="--vary r_test.sigma: xy_plane_errors never"):
+        CampaignSpec("xy_plane_errors", 1, (parse_vary("r_test.sigma=5nm"),))
+    # every procedure's defaults are among what it may vary, its uses among LAB_USES
+    for name, entry in PROCEDURES.items():
+        assert set(entry.lab) <= set(CampaignSpec(name, 1).parameters()), name
+        for uses in entry.build({}).lab_uses.values():
+            assert set(uses) <= set(LAB_USES), name
+
+
+def test_the_arm_asks_the_lab_for_what_it_declares():
+    """``lab_uses`` is not a list beside the code: the arm's calibration, run on a lab that
+    records what it is asked for, asks for its declared measuring step's uses alone."""
+    from machinesim.campaign.trials import IdentificationOnly
+    from machinesim.errors import ErrorModel
+    from machinesim.experiment import LAB_USES
+    from machinesim.experiment import run as run_procedure
+    from machinesim.lab import Lab
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+
+    class Recording:
+        def __init__(self, lab):
+            self._lab, self.asked = lab, set()
+
+        def __getattr__(self, name):
+            if name in LAB_USES:
+                self.asked.add(name)
+            return getattr(self._lab, name)
+
+    procedure = ToolRotationArm()
+    errors = ErrorModel().with_parameters({"tool.y": -178 * UM})
+    lab = Recording(Lab("planer_4axis", errors, seed=0))
+    run_procedure(IdentificationOnly(procedure), lab)
+    assert lab.asked == set(procedure.lab_uses["measure"]) == {"microscope"}
 
 
 # ----------------------------------------------------------- trials, determinism, resume
@@ -315,6 +370,39 @@ def test_cli_bad_input_is_one_line_naming_the_value(tmp_path, capsys):
     err = capsys.readouterr().err
     assert status == 2 and "tool.y=uniform:5um" in err and "takes 2" in err
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("vary, why", [
+    # ignored: results bit-identical to the run without it
+    ("laser_interferometer.sigma=1um", "it reads with no laser_interferometer at the lab's noise"),
+    # accepted, then every trial failed with "a VTool has no nose radius"
+    ("tool_geometry.nose_radius=50um", "it cuts with no tool that has a nose radius"),
+    # paper 000 has no robot: it injected a landing's workpiece setting errors
+    ("robot.repeatability=30um", "no robot loads its workpiece"),
+])
+def test_cli_refuses_what_the_procedure_never_reads_before_any_trial(tmp_path, capsys,
+                                                                     vary, why):
+    out = tmp_path / "c"
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+                       "--vary", vary, "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    name = vary.partition("=")[0]
+    assert f"--vary {name}: tool_rotation_arm never reads it ({why})" in err
+    used = err.partition("the parameters tool_rotation_arm uses: ")[2].strip().split(", ")
+    assert "microscope.sigma" in used and "tool.y" in used and name not in used
+    assert not out.exists()  # no campaign.json, no trial file
+
+
+def test_cli_runs_the_documented_variation(tmp_path, capsys):
+    """docs/campaigns.md's paper 000 study, one probing trial of it."""
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "1", "--workers", "0",
+                       "--identify-only", "--quiet", "--vary",
+                       "microscope.sigma=uniform:5nm,200nm", "--out", str(tmp_path)])
+    assert status == 0
+    assert "1 trials (0 failed)" in capsys.readouterr().out
+    assert len(list((tmp_path / "trials").glob("trial_*.json"))) == 1
 
 
 def test_cli_runs_a_campaign(tmp_path, capsys):

@@ -23,7 +23,9 @@ DIST (every number with its unit: m mm um nm rad mrad urad deg arcsec; 0 needs n
   uniform:LOW,HIGH      e.g. uniform:-10um,10um
   fixed:VALUE or VALUE  e.g. 30um
 PARAM: an error parameter of the procedure's machine (tool.y, workpiece.alpha,
-  location.C.EX0C, ...) or a lab parameter: {lab}
+  location.C.EX0C, ...) or a lab parameter: {lab};
+  one the procedure never reads (an instrument it does not use, a robot where none loads
+  the workpiece, tool_geometry.nose_radius for a V tool) is refused before any trial runs
 
 procedures:
 {procedures}

@@ -10,7 +10,8 @@ A distribution is written ``KIND:ARGS`` with every number carrying its unit
 A parameter is an error parameter as `Machine.parameter_names` spells it (``tool.y``,
 ``workpiece.alpha``, ``location.C.EX0C``) or a lab parameter (`LAB_PARAMETERS`): the loading
 robot's repeatability, from which the workpiece setting is drawn
-(`machinesim.loading.RobotLoader`), and an instrument's noise ``sigma``.
+(`machinesim.loading.RobotLoader`), and an instrument's noise ``sigma``; a campaign takes
+those its procedure reads (`machinesim.campaign.CampaignSpec.parameters`).
 
 >>> name, dist = parse_vary("tool.y=normal:-178um,5um")
 >>> name, dist.kind, round(dist.a * 1e6, 6), round(dist.b * 1e6, 6)

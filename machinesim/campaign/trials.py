@@ -155,6 +155,7 @@ class IdentificationOnly:
         self.procedure = procedure
         self.name = f"{procedure.name}/identification"
         self.paper = procedure.paper
+        self.lab_uses = {"measure": tuple(procedure.lab_uses["measure"]), "evaluate": ()}
 
     def measure(self, lab):
         return self.procedure.measure(lab)
@@ -251,6 +252,15 @@ class CampaignSpec:
                 raise InputError(
                     f"--vary {name}: not a parameter of {self.entry.machine} nor of the lab; "
                     f"expected one of {', '.join(sorted(known))}", key="--vary")
+        used = self.parameters()
+        for name in names:
+            if name not in used:
+                what = self.procedure + " --identify-only" * self.identify_only
+                why = _UNUSED.get(_head(name),
+                                  f"it reads with no {_head(name)} at the lab's noise")
+                raise InputError(f"--vary {name}: {what} never reads it ({why}); expected one "
+                                 f"of the parameters {what} uses: {', '.join(used)}",
+                                 key="--vary")
 
     @property
     def entry(self) -> ProcedureEntry:
@@ -262,6 +272,19 @@ class CampaignSpec:
 
         return _machine(self.entry.machine, load_machine)
 
+    def parameters(self) -> tuple[str, ...]:
+        """The parameters this campaign may vary, sorted: every error parameter of the
+        machine the lab sets into its cuts and readings, and of the lab parameters
+        (`LAB_PARAMETERS`) and ``tool_geometry.nose_radius`` those the procedure reads, as
+        its ``lab_uses`` declares them (`machinesim.experiment.LAB_USES`; with
+        ``identify_only``, its measurement's alone)."""
+        from machinesim.experiment import LAB_USES
+
+        uses = {use for step in self.build().lab_uses.values() for use in step}
+        known = [*self.machine.parameter_names(), *LAB_PARAMETERS]
+        return tuple(sorted(name for name in known
+                            if _head(name) not in LAB_USES or _head(name) in uses))
+
     def build(self):
         """The procedure to run (`IdentificationOnly` around it with ``identify_only``)."""
         procedure = self.entry.build({"quick": self.quick})
@@ -272,6 +295,16 @@ class CampaignSpec:
         return {"procedure": self.procedure, "seed": self.seed, "noise": self.noise,
                 "identify_only": self.identify_only, "quick": self.quick,
                 "vary": {n: d.text for n, d in self.vary}}
+
+
+#: Why a procedure that does not declare a use (`machinesim.experiment.LAB_USES`) never
+#: reads its parameter; an instrument's: it reads with no such instrument at the lab's noise.
+_UNUSED = {"robot": "no robot loads its workpiece",
+           "tool_geometry": "it cuts with no tool that has a nose radius"}
+
+
+def _head(name: str) -> str:
+    return name.partition(".")[0]
 
 
 _MACHINES: dict[str, Any] = {}

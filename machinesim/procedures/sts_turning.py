@@ -213,6 +213,12 @@ class STSTurning:
     #: The lab's realism switches this procedure's figures depend on (its error budget).
     realism_sources: ClassVar[tuple[str, ...]] = ("instrument_noise", "lateral_noise",
                                                   "background_errors")
+    #: What it reads of the lab beyond the machine's errors, by step
+    #: (`machinesim.experiment.LAB_USES`): its round-nose tool's radius, the white-light
+    #: interferometer.
+    lab_uses: ClassVar[dict[str, tuple[str, ...]]] = {
+        "measure": ("tool_geometry", "white_light_interferometer"),
+        "evaluate": ("tool_geometry", "white_light_interferometer")}
 
     @property
     def nose_radius(self) -> float:

@@ -184,6 +184,10 @@ class ToolSetting6Axis:
     realism_sources: ClassVar[tuple[str, ...]] = (
         "instrument_noise", "lateral_resolution", "lateral_noise", "registration",
         "stage_positioning", "background_errors")
+    #: What it reads of the lab beyond the machine's errors, by step
+    #: (`machinesim.experiment.LAB_USES`): the microscope; its tool is a V, no robot.
+    lab_uses: ClassVar[dict[str, tuple[str, ...]]] = {"measure": ("microscope",),
+                                                      "evaluate": ("microscope",)}
 
     def measure(self, lab) -> Readings:
         """Cut and read the four plates in the paper's order, each cut with what the earlier

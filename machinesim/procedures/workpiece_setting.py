@@ -212,6 +212,11 @@ class RobotLoadedWorkpiece:
 
     name = "workpiece_setting"
     paper = "002"
+    #: What it reads of the lab beyond the machine's errors, by step
+    #: (`machinesim.experiment.LAB_USES`): a robot lands the workpiece and the touch probe
+    #: reads its spheres; the grooves and the crown are cut with a round nose and read with
+    #: the microscope.
+    lab_uses = {"measure": ("robot", "touch_probe"), "evaluate": ("tool_geometry", "microscope")}
 
     def __init__(self, experiment: str = "crown", *, nose_correction: bool = True,
                  all_layers: bool = False, quick: bool = False, after_only: bool = False,

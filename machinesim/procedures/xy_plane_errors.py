@@ -109,6 +109,13 @@ class XYPlaneErrors:
     #: reading window by window levels each field.
     realism_sources: ClassVar[tuple[str, ...]] = (
         "instrument_noise", "lateral_resolution", "lateral_noise", "background_errors")
+    #: What it reads of the lab beyond the machine's errors, by step
+    #: (`machinesim.experiment.LAB_USES`): the laser interferometer, and the white-light
+    #: interferometer for the pyramids (cut with a V tool). Its R-test reads with the
+    #: sensors' own ``sensor_sigma``, not the lab's.
+    lab_uses: ClassVar[dict[str, tuple[str, ...]]] = {
+        "measure": ("laser_interferometer",),
+        "evaluate": ("laser_interferometer", "white_light_interferometer")}
     paper: str = "003"
 
     def __post_init__(self) -> None:
