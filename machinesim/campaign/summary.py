@@ -6,10 +6,12 @@ summary.json (every number under a key ending in its unit, as docs/reports.md as
   ``versions``;
 - ``figures``: per figure, its ``unit`` and ``before``/``after``: `statistics.describe`
   (count, mean, std, min, max, ``shortest_95`` and ``symmetric_95`` coverage intervals) in
-  the figure's unit, and ``sensitivity``: varied parameter -> Spearman rank correlation with
-  the after value; where the procedure states the after's spread over labs
-  (`Figure.after_std`), ``after_z``: the z-scores after / after_std (`statistics.z_summary`;
-  a faithful spread gives std 1, 95 % within +-1.96);
+  the figure's unit, over the trials that measured it (``count``); ``not_measured``:
+  ``before``/``after`` -> the trials that ran without failing but read no value there (a
+  procedure's None: the grooves not cut, say); ``sensitivity``: varied parameter ->
+  Spearman rank correlation with the after value; where the procedure states the after's
+  spread over labs (`Figure.after_std`), ``after_z``: the z-scores after / after_std
+  (`statistics.z_summary`; a faithful spread gives std 1, 95 % within +-1.96);
 - ``parameters``: per identified parameter, the identification error (identified - injected)
   described in SI (``error_si``), its z-scores (`statistics.z_summary`) and ``sensitivity``:
   varied parameter -> Spearman rank correlation with the error's magnitude;
@@ -51,6 +53,7 @@ def _names(dataset, dim: str) -> list[str]:
 def summarise(dataset) -> dict:
     """summary.json of a campaign Dataset (module docstring)."""
     failed = dataset["failed"].values.astype(bool)
+    trials = dataset["trial"].values
     varied = _names(dataset, "varied")
     figures = {}
     for k, name in enumerate(_names(dataset, "figure")):
@@ -59,6 +62,8 @@ def summarise(dataset) -> dict:
             "unit": str(dataset["figure_unit"].values[k]),
             "before": describe(dataset["before"].values[:, k]),
             "after": describe(after),
+            "not_measured": {which: [int(t) for t in trials[~failed & ~np.isfinite(
+                dataset[which].values[:, k])]] for which in ("before", "after")},
             "sensitivity": {v: spearman(dataset["drawn"].values[:, j], after)
                             for j, v in enumerate(varied)},
         }
@@ -116,23 +121,28 @@ def _markdown(summary: dict) -> str:
     rho = [f"rho {v}" for v in varied]
     if summary["figures"]:
         lines += ["## Figures before and after compensation", "",
-                  "95 % coverage intervals from the sorted trials (JCGM 101 7.7.2, the "
-                  "shortest); sensitivity: Spearman rank correlation with the after value.",
-                  "", *_header(["figure", "unit", "before mean", "before std", "after mean",
-                                "after std", "after 95 % (shortest)", *rho])]
+                  "trials: how many trials measured the figure, those the statistics beside "
+                  "are computed from; 95 % coverage intervals from the sorted trials (JCGM "
+                  "101 7.7.2, the shortest); sensitivity: Spearman rank correlation with the "
+                  "after value.",
+                  "", *_header(["figure", "unit", "before trials", "before mean",
+                                "before std", "after trials", "after mean", "after std",
+                                "after 95 % (shortest)", *rho])]
         for name, f in summary["figures"].items():
             b, a = f["before"], f["after"]
-            lines.append(_row([name, f["unit"], _g(b["mean"]), _g(b["std"]), _g(a["mean"]),
-                               _g(a["std"]), _interval(a["shortest_95"]),
+            lines.append(_row([name, f["unit"], str(b["count"]), _g(b["mean"]), _g(b["std"]),
+                               str(a["count"]), _g(a["mean"]), _g(a["std"]),
+                               _interval(a["shortest_95"]),
                                *(_g(f["sensitivity"][v], 3) for v in varied)]))
         lines.append("")
+        lines += _not_measured(summary["figures"])
     stated = {name: f["after_z"] for name, f in summary["figures"].items() if "after_z" in f}
     if stated:
         lines += ["## The after against its stated spread over labs", "",
                   "z = after / after_std (the procedure's stated spread, docs/reports.md): a "
                   "faithful spread gives mean 0, std 1, 95 % within +-1.96.", "",
-                  *_header(["figure", "z mean", "z std", "within +-1.96"])]
-        lines += [_row([name, _g(z["mean"], 3), _g(z["std"], 3),
+                  *_header(["figure", "trials", "z mean", "z std", "within +-1.96"])]
+        lines += [_row([name, str(z["count"]), _g(z["mean"], 3), _g(z["std"], 3),
                         _g(z["within_1_96_ratio"], 3)]) for name, z in stated.items()]
         lines.append("")
     if summary["parameters"]:
@@ -140,11 +150,13 @@ def _markdown(summary: dict) -> str:
                   "error = identified - injected (SI); z = error / reported std: honest "
                   "uncertainty gives mean 0, std 1, 95 % within +-1.96; rho: Spearman rank "
                   "correlation with |error|.", "",
-                  *_header(["parameter", "error mean", "error std", "error 95 % (symmetric)",
-                            "z mean", "z std", "within +-1.96", *rho])]
+                  *_header(["parameter", "trials", "error mean", "error std",
+                            "error 95 % (symmetric)", "z trials", "z mean", "z std",
+                            "within +-1.96", *rho])]
         for name, p in summary["parameters"].items():
             e, z = p["error_si"], p["z"]
-            lines.append(_row([name, _g(e["mean"]), _g(e["std"]), _interval(e["symmetric_95"]),
+            lines.append(_row([name, str(e["count"]), _g(e["mean"]), _g(e["std"]),
+                               _interval(e["symmetric_95"]), str(z["count"]),
                                _g(z["mean"], 3), _g(z["std"], 3),
                                _g(z["within_1_96_ratio"], 3),
                                *(_g(p["sensitivity"][v], 3) for v in varied)]))
@@ -159,6 +171,26 @@ def _markdown(summary: dict) -> str:
         lines.append("")
     lines += ["Versions: " + ", ".join(f"{k} {v}" for k, v in summary["versions"].items()), ""]
     return "\n".join(lines)
+
+
+def _not_measured(figures: dict) -> list[str]:
+    """summary.md's lines naming the trials that ran but measured a figure not (left out of
+    its statistics), figures with the same trials on one line; none when every trial that
+    ran measured every figure."""
+    by_trials: dict[tuple, list[str]] = {}
+    for name, f in figures.items():
+        for which in ("before", "after"):
+            if f["not_measured"][which]:
+                by_trials.setdefault((which, *f["not_measured"][which]), []).append(name)
+    if not by_trials:
+        return []
+    lines = ["Not measured (the trial ran, but the procedure read no value there; left out "
+             "of the statistics above):", ""]
+    for (which, *trials), names in by_trials.items():
+        shown = ", ".join(str(t) for t in trials[:10]) + (" ..." if len(trials) > 10 else "")
+        lines.append(f"- {which} compensation, {len(trials)} trial{'s' * (len(trials) > 1)} "
+                     f"({shown}): {', '.join(names)}")
+    return [*lines, ""]
 
 
 def _plots(dataset, folder: Path) -> list[str]:
