@@ -257,11 +257,15 @@ def realism_budget(procedure, result, realism, make_lab, enabled: bool = True, *
     """The error budget of a scenario's run over its lab's realism switches: each switch
     that is on and that ``procedure.realism_sources`` lists, turned off in turn on a lab of
     its own (``make_lab(realism)``); ``result`` is the run with every switch on. None when
-    not ``enabled`` or no such switch is on. ``progress``: a stage's printer for each rerun,
-    ``progress("budget, <source> off")`` (`machinesim.scenario_runs.progress_printer`)."""
+    not ``enabled`` or no such switch is on (then, enabled, ``progress("budget")`` says so).
+    ``progress``: a stage's printer for each rerun, ``progress("budget, <source> off")``
+    (`machinesim.scenario_runs.progress_printer`)."""
     from machinesim.experiment import run
 
     sources = [name for name in realism.on if name in procedure.realism_sources]
+    if enabled and not sources and progress is not None:
+        progress("budget")(f"none: no source it shares out is on (realism {realism}), so "
+                           "budget.md and budget.png are not written")
     if not enabled or not sources:
         return None
     return error_budget(lambda off: result if off is None else run(

@@ -128,3 +128,25 @@ def test_bad_sources_and_runs_are_refused_clearly():
         error_budget(loses_a_figure, ["background"])
     with pytest.raises(MachineSimError, match="no row for source 'x'"):
         Budget((BudgetRow("s", "f", "um", 1.0, 0.5, 0.75),)).share("x", "f")
+
+
+def test_a_budget_asked_for_with_no_source_on_says_so():
+    """``--realism ideal`` with the budget on: no budget, and one progress line saying why
+    (the folder had no budget.md and nothing said so)."""
+    from machinesim.budget import realism_budget
+    from machinesim.realism import Realism
+
+    class Procedure:
+        realism_sources = ("instrument_noise",)
+
+    told = []
+
+    def stage(name):
+        return lambda text: told.append((name, text))
+
+    assert realism_budget(Procedure(), None, Realism.ideal(), None, True, progress=stage) is None
+    assert told == [("budget", "none: no source it shares out is on (realism ideal), so "
+                               "budget.md and budget.png are not written")]
+    told.clear()
+    assert realism_budget(Procedure(), None, Realism.ideal(), None, False, progress=stage) is None
+    assert told == []  # not asked for: nothing to say
