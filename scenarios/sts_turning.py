@@ -3,7 +3,8 @@ before the cut, the form error predicted and then measured.
 
 Run: ``.venv/bin/python scenarios/sts_turning.py [--errors FILE.toml] [--noise on|off]
 [--realism ideal|noise_only|lab] [--budget on|off] [--seed N] [--out reports/sts_turning]``
-(about 40 s with ``--budget off``; the budget runs it once more per realism source).
+(about 2 min 10 s with the default lab realism and its error budget, which runs it once
+more per realism source; 37 s with ``--budget off``; on 2 idle cores).
 
 The sts_lathe gets the tool errors of Table 5 "before" (dx = dy = -3.5 um, dR = 100 um) and
 the servo loops of Table 6 "before" (`machinesim.servo.table6_servo`), or the errors of

@@ -1,8 +1,8 @@
 """Paper 001 replay: tool setting errors of a 6-axis ultraprecision machine (A, B, C axes).
 
-Run: ``.venv/bin/python scenarios/tool_setting_6axis.py`` (about 1 min with the
-default lab realism and its error budget, 10 s with ``--budget off``, 5 s with
-``--realism noise_only``) with options
+Run: ``.venv/bin/python scenarios/tool_setting_6axis.py`` (about 45 s with the
+default lab realism and its error budget, 9 s with ``--budget off``, 3 s with
+``--realism noise_only --budget off``, on 2 idle cores) with options
 
     --tool-offset-um dx,dy,dz   edge offset from the A/B centres, tool_mount axes: tool.x,
                                 tool.y, tool.z (default 250,350,150: round values of the

@@ -2,8 +2,8 @@
 
 Run: ``.venv/bin/python scenarios/xy_plane_errors.py [--errors FILE.toml] [--noise on|off]
 [--realism ideal|noise_only|lab] [--budget on|off] [--seed N] [--out reports/xy_plane_errors]``
-(about 1 min 20 s with the default lab realism and its error budget; 36 s with
-``--budget off``).
+(about 37 s with the default lab realism and its error budget; 11 s with
+``--budget off``; on 2 idle cores).
 
 The grooving_4axis gets the errors of ``models/errors/xy_plane_grooving_4axis.toml`` (chosen
 to give paper 003's magnitudes: 2-D errors of 11.59 um in X and 12.33 um in Y over the
