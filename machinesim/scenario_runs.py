@@ -79,8 +79,9 @@ def scenario_status(report, args, name: str | None = None) -> int:
         print(f"{name}: error: {error}", file=sys.stderr)
         return 2
     except OSError as error:  # a write that failed on the way (disk full, folder removed)
-        where = f"{error.filename}: " if error.filename else ""
-        print(f"{name}: error: {where}{error.strerror or error}", file=sys.stderr)
+        where = f"{_as_reported(error.filename, out, staged)}: " if error.filename else ""
+        left = "" if staged is None else f"; {_interrupted(out, staged)}"
+        print(f"{name}: error: {where}{error.strerror or error}{left}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"{name}: interrupted; {_interrupted(out, staged)}", file=sys.stderr)
@@ -138,6 +139,15 @@ class _stdout_may_close:
 
     def __getattr__(self, attribute: str):  # isatty, encoding, fileno, ...
         return getattr(self.stream, attribute)
+
+
+def _as_reported(filename, out, staged) -> str:
+    """A file of the staged report named as it would be in ``--out`` (the staging folder,
+    removed on the way out, is no name the user can look for)."""
+    path = Path(os.fsdecode(filename))
+    if staged is not None and staged.path is not None and path.is_relative_to(staged.path):
+        return str(Path(out) / path.relative_to(staged.path))
+    return str(path)
 
 
 def _interrupted(out, staged) -> str:

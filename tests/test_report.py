@@ -260,3 +260,26 @@ def test_a_reader_that_stops_reading_stdout_does_not_cost_the_report(tmp_path):
     assert "stdout was closed early" in err and "written whole" in err, err
     assert (out / "a.md").read_text() == "a\n"
     assert json.loads((out / "summary.json").read_text())["files"]
+
+
+def test_a_full_disk_names_the_file_as_in_the_report_and_says_the_old_report_is_kept(
+        tmp_path, capsys):
+    """A write that fails midway (disk full) named the staging folder's file, removed on the
+    way out, and not what became of the previous report."""
+    import errno
+
+    out = tmp_path / "report"
+    assert scenario_status(_report({"a.md": "a\n"}), Namespace(out=out), "s") == 0
+    kept = _snapshot(out)
+    capsys.readouterr()
+
+    def full(args):
+        folder = ReportFolder(args.out)
+        folder.write_text("a.md", "b\n")
+        raise OSError(errno.ENOSPC, "No space left on device", str(folder.path / "plot.png"))
+
+    assert scenario_status(full, Namespace(out=out), "s") == 2
+    assert capsys.readouterr().err.strip() == (
+        f"s: error: {out / 'plot.png'}: No space left on device; this run's report was not "
+        f"written: {str(out)!r} is as it was before (the previous report, whole, or nothing)")
+    assert _snapshot(out) == kept and _siblings(out) == []
