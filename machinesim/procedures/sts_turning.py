@@ -40,6 +40,7 @@ from machinesim.metrology.fits import roughness_sa
 from machinesim.procedures.sts_plans import (
     MEASURE_LINE,
     PAPER,
+    PAPER_BOUNDS,
     PLANS,
     SA_L_CUTOFF,
     SA_WINDOW,
@@ -301,10 +302,12 @@ class STSTurning:
                    PAPER["case_1"], PAPER["case_4"],
                    note="measured, Case 1 -> Case 4; paper prints um for Case 1, read nm"),
             Figure("form_error_pv_predicted", "nm", one.prediction.total / NM,
-                   four.prediction.total / NM, None, PAPER["predicted_case_4"],
-                   note="predicted before cutting; paper: Case 4 < 10 nm"),
-            Figure("sa", "nm", one.sa / NM, four.sa / NM, None, PAPER["sa"],
-                   note="design removed, L-filter 8 um; paper: Case 4 < 1 nm"),
+                   four.prediction.total / NM,
+                   note=f"predicted before cutting; paper: Case 4 < "
+                        f"{PAPER_BOUNDS['predicted_case_4']:g} nm"),
+            Figure("sa", "nm", one.sa / NM, four.sa / NM,
+                   note=f"design removed, L-filter 8 um; paper: Case 4 < "
+                        f"{PAPER_BOUNDS['sa']:g} nm"),
             Figure("program_form_error_pv", "nm", one.prediction.program / NM,
                    four.prediction.program / NM, *PAPER["program"],
                    note="Table 4 before -> after, predicted"),
