@@ -47,12 +47,19 @@ def test_the_search_range_and_spacing_follow_from_the_capture_range():
     assert plan.spacing == pytest.approx(expected, abs=1e-12)
     small = CalibrationPlan(capture=0.1 * MM)
     assert small.spacing == 3 * MM  # the old spacing where the capture needs no more
+    # the first ramp in from the block's low-y edge by its window and 0.1 mm of land:
+    # 1.036 + 0.25 + 0.1 = 1.386 mm (it was 1 mm, so a groove moved 0.995 mm towards -y
+    # lay 5 um from the edge, its 16 um half width off the block)
+    assert plan.lead == pytest.approx(1.386 * MM + 8e-9 / 9, abs=1e-15)
+    assert plan.edge(0, plan.ramp[0])[0] - plan.origin[1] == pytest.approx(plan.lead)
+    assert small.lead == 1 * MM
 
 
 @pytest.mark.parametrize("rho, e_ys", [
     (119.8 * MM - R0, -178 * UM),            # the issue's --r-mm 119.8
     (0.0, -0.9 * MM),                         # neighbours' flanks in the search window
     (0.98 * MM * math.sin(2.0), 0.98 * MM * math.cos(2.0)),  # at the capture's edge
+    (0.0, -0.995 * MM),                       # the first groove towards the block's edge
 ])
 def test_any_offset_within_the_capture_range_is_identified(rho, e_ys):
     lab = Lab(MACHINE, arm_errors(rho, e_ys), noise=False)

@@ -91,7 +91,8 @@ class CalibrationPlan:
         Distance between the ramps' starts along Y (m); default (None) 3 mm, or more where
         the capture range needs it (`min_spacing`): a groove's search window across Y
         (`window`) must stay clear of the next ramp's groove, whose low flank (5 deg from
-        the surface at 40 deg) spreads sideways 11 times as far as it is deep.
+        the surface at 40 deg) spreads sideways 11 times as far as it is deep. The first
+        ramp starts `lead` in from the block's low-y edge.
     station_depths : tuple of float
         Groove depths (m) at which the microscope reads each groove.
     origin : (float, float)
@@ -159,6 +160,14 @@ class CalibrationPlan:
         return self.window + self.capture + depth / math.tan(flank) + SPACING_MARGIN_M
 
     @property
+    def lead(self) -> float:
+        """Distance (m) of the first ramp's start from the block's low-y edge: its search
+        window and `SPACING_MARGIN_M` of land, so that a groove moved towards -y by up to
+        the capture range lies on the block with land beside it (as the last ramp's has the
+        `spacing` to the block's other edge). At least 1 mm."""
+        return max(1.0 * M_PER_MM, self.window + SPACING_MARGIN_M)
+
+    @property
     def ramp(self) -> tuple[float, float]:
         """x (m) where the ramps start (edge ``search`` above the surface) and end (below)."""
         x_a = self.origin[0] + 0.5 * M_PER_MM
@@ -170,7 +179,7 @@ class CalibrationPlan:
         z = self.search - self.slope * (np.asarray(x) - x_a)
         # Descending along the tilted tool's axis keeps the move in the tool's X-Z plane: the
         # edge cuts forward, never dragged sideways.
-        y = self.origin[1] + 1.0 * M_PER_MM + k * self.spacing + (self.search - z) * math.tan(
+        y = self.origin[1] + self.lead + k * self.spacing + (self.search - z) * math.tan(
             self.angles[k])
         return y, z
 
@@ -182,7 +191,7 @@ class CalibrationPlan:
     @property
     def stock(self) -> str:
         """Stock spec of the calibration block (mm)."""
-        width = len(self.angles) * self.spacing / M_PER_MM + 1.0
+        width = (self.lead + len(self.angles) * self.spacing) / M_PER_MM
         return (f"block:{self.length / M_PER_MM:.6g}x{width:.6g}x1"
                 f"@{self.origin[0] / M_PER_MM:.6g},{self.origin[1] / M_PER_MM:.6g},0")
 
