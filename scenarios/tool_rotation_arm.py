@@ -38,7 +38,7 @@ from machinesim.identification.tool_rotation_arm import (
     height_change,
     lateral_change,
 )
-from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+from machinesim.procedures.tool_rotation_arm import TOOL, ToolRotationArm, max_capture
 from machinesim.report import ReportFolder
 from machinesim.scenario_runs import (
     injected_errors,
@@ -53,9 +53,11 @@ from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 PAPER = {"r_mm": 120.555, "e_ys_um": -178.0, "depth_error_before_um": "> 50",
          "depth_error_after_um": "< 1"}
 UM, MM = M_PER_UM, M_PER_MM
-#: Largest --capture-mm: ramps 20 x longer than the capture at slope 0.1 (a 10 mm capture
-#: makes them 0.2 m, the planer's X travel).
-MAX_CAPTURE_MM = 8.0
+#: Largest --capture-mm, 2.848 (`max_capture` of the paper's plan and tool): a ramp goes
+#: down to its search range, capture + 36 um, and an offset of length capture can put the
+#: edge that much lower again; at 40 deg the top of the 10 mm tool body, where its holder
+#: begins, stands only 10 cos 40 - 3 sin 40 = 5.732 mm over the edge.
+MAX_CAPTURE_MM = max_capture() / MM
 
 
 #: Printed under the identification when the machine's background errors are on.
@@ -75,13 +77,17 @@ def main() -> None:
                         "the paper's)")
     parser.add_argument("--capture-mm", type=float, default=None,
                         help="largest edge offset |(e_ys, r - r0)| the calibration ramps find, "
-                        "mm (default 1; the ramps grow with it)")
+                        f"mm (default 1; the ramps grow with it; at most {MAX_CAPTURE_MM:.4g}: "
+                        "deeper ramps would take the top of the tool's "
+                        f"{TOOL.height / MM:g} mm body, where its holder begins, under the "
+                        "stock at 40 deg)")
     realism_options(parser)
     run_scenario(report, parser.parse_args())
 
 
 def report(args) -> None:
     began = time.perf_counter()
+    plan = calibration_plan(args.capture_mm)
     machine = load_machine("planer_4axis")
     r0 = arm_radius(machine)
     defaults = {"tool.y": PAPER["e_ys_um"] * UM, "tool.z": -(PAPER["r_mm"] * MM - r0)}
@@ -108,7 +114,7 @@ def report(args) -> None:
     print(f"Paper 000 on planer_4axis (nominal arm r0 = {r0 / MM:.3f} mm): injected r = "
           f"{r / MM:.3f} mm, e_ys = {e_ys / UM:.1f} um; realism {realism}, seed {args.seed}\n")
 
-    procedure = ToolRotationArm(plan=calibration_plan(args.capture_mm))
+    procedure = ToolRotationArm(plan=plan)
     stage = progress_printer("tool_rotation_arm")
     result = run(procedure, lab, progress=stage("run"))
     budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
@@ -134,7 +140,10 @@ def calibration_plan(capture_mm) -> CalibrationPlan:
         return CalibrationPlan()
     if not (math.isfinite(capture_mm) and 0.0 < capture_mm <= MAX_CAPTURE_MM):
         raise InputError(f"--capture-mm {capture_mm!r}: expected a length in mm above 0 and "
-                         f"at most {MAX_CAPTURE_MM:g}", key="capture-mm")
+                         f"at most {MAX_CAPTURE_MM:.4g} (larger ramps go so deep that for an "
+                         "edge offset near the capture the top of the tool's "
+                         f"{TOOL.height / MM:g} mm body, where its holder begins, comes under "
+                         "the stock at 40 deg)", key="capture-mm")
     return CalibrationPlan(capture=capture_mm * MM)
 
 

@@ -16,8 +16,9 @@ import pytest
 from machinesim import ErrorModel, Lab, load_machine
 from machinesim.budget import Budget, quadrature_share
 from machinesim.cam.prisms import SEARCH_MARGIN_M, CalibrationPlan
+from machinesim.exceptions import HolderContactError
 from machinesim.identification.tool_rotation_arm import arm_radius
-from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+from machinesim.procedures.tool_rotation_arm import ToolRotationArm, holder_depth, max_capture
 from machinesim.realism import Realism
 from machinesim.report import check_summary
 
@@ -68,6 +69,65 @@ def test_any_offset_within_the_capture_range_is_identified(rho, e_ys):
     # noise off: the 1 nm display rounding, amplified by the design (test_tool_rotation_arm)
     assert detail.r - R0 == pytest.approx(rho, abs=1.8 * NM)
     assert detail.e_ys == pytest.approx(e_ys, abs=0.65 * NM)
+
+
+def test_the_largest_capture_is_where_the_holder_would_meet_the_stock():
+    """By hand: the top corners of the tool's body (y = +-3 mm, 10 mm up its axis) turned by
+    40 deg stand 10 cos 40 - 3 sin 40 = 5.7321 mm over the edge (less than at 0-30 deg). A
+    ramp goes capture + 16 um (+ 8/9 nm of dither) + 20 um deep, and an offset of length
+    capture puts the edge that much lower again: capture <= (5.7321 - 0.0360) / 2 =
+    2.84804 mm."""
+    by_hand = (10 * math.cos(math.radians(40)) - 3 * math.sin(math.radians(40))) * MM
+    assert holder_depth(CalibrationPlan().angles) == pytest.approx(by_hand, abs=1e-15)
+    assert max_capture() == pytest.approx(0.5 * (by_hand - 16 * UM - 8e-9 / 9 - 20 * UM),
+                                          abs=1e-15)
+    assert max_capture() == pytest.approx(2.84804 * MM, abs=1e-8)
+    # 0 and 10 deg only: 10 cos 10 - 3 sin 10 = 9.3270 mm
+    by_hand = (10 * math.cos(math.radians(10)) - 3 * math.sin(math.radians(10))) * MM
+    assert holder_depth((0.0, math.radians(10))) == pytest.approx(by_hand, abs=1e-15)
+
+
+def down_at_40_deg(length):
+    """(r - r0, e_ys) of an offset ``length`` long that puts the edge ``length`` low at 40
+    deg (dz(40) = e_ys sin 40 - (r - r0) cos 40 = -length), the deepest it can go."""
+    t = math.radians(40)
+    return length * math.cos(t), -length * math.sin(t)
+
+
+def test_the_largest_capture_cuts_its_deepest_offset_and_no_more():
+    # just inside: capture 2.847 mm, the offset 2.846 mm long straight down at 40 deg, cut,
+    # read and identified within 3 of its stated std (seed 0: 1.3 and 1.1)
+    rho, e_ys = down_at_40_deg(2.846 * MM)
+    lab = Lab(MACHINE, arm_errors(rho, e_ys), seed=0, realism=Realism.noise_only())
+    procedure = ToolRotationArm(plan=CalibrationPlan(capture=2.847 * MM))
+    identified = procedure.identify(procedure.measure(lab))
+    for name, truth in (("tool.y", e_ys), ("tool.z", -rho)):
+        value, std = identified.parameters[name]
+        assert abs(value - truth) < 3 * std, (name, value - truth, std)
+    # just outside: capture 2.849 mm, 2.849 mm down: the holder's top under the stock
+    rho, e_ys = down_at_40_deg(2.849 * MM)
+    lab = Lab(MACHINE, arm_errors(rho, e_ys), noise=False)
+    procedure = ToolRotationArm(plan=CalibrationPlan(capture=2.849 * MM))
+    with pytest.raises(HolderContactError, match="top of the tool's body"):
+        procedure.measure(lab)
+
+
+def test_the_scenario_refuses_a_capture_beyond_the_holder(tmp_path):
+    empty = tmp_path / "empty.toml"
+    empty.write_text("")
+    fast = ("--errors", str(empty), "--budget", "off", "--realism", "noise_only")
+    result = scenario(*fast, "--capture-mm", "2.849", "--out", str(tmp_path / "out"))
+    assert result.returncode == 2
+    last = result.stderr.splitlines()[-1]
+    assert last.startswith("tool_rotation_arm: error: ")
+    assert "--capture-mm 2.849: expected a length in mm above 0 and at most 2.848" in last
+    assert "--tool" not in last and "allow-holder-contact" not in last
+    assert not result.stdout  # refused up front, before the lab is built
+    result = scenario(*fast, "--capture-mm", "2.848", "--out", str(tmp_path / "in"))
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "in" / "summary.json").read_text())
+    for name, entry in summary["identified"].items():
+        assert abs(entry["value"]) < 3 * entry["std"], (name, entry)
 
 
 def test_the_stage_rotation_is_found_on_the_block_edge_and_taken_out():

@@ -26,7 +26,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from machinesim.cam.prisms import CalibrationPlan, PrismPattern
+from machinesim.cam.prisms import SEARCH_MARGIN_M, CalibrationPlan, PrismPattern
 from machinesim.compensation import map_program, model_based, program_axes
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
@@ -54,8 +54,8 @@ from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, from_si
 
 __all__ = [
     "AlignedMicroscope", "AngleReading", "ArmIdentification", "Calibration", "PatternReading",
-    "ToolRotationArm", "arm_correction", "compensate_program", "level_on_land",
-    "measure_calibration", "measure_pattern", "stage_rotation",
+    "ToolRotationArm", "arm_correction", "compensate_program", "holder_depth", "level_on_land",
+    "max_capture", "measure_calibration", "measure_pattern", "stage_rotation",
 ]
 
 #: Height of the prism's flanks (m): the tool's V reaches 3 mm from its edge (6 mm across),
@@ -67,6 +67,37 @@ __all__ = [
 PRISM_FLANK_M = 3.0 * M_PER_MM
 #: The tool of paper 000: a 90-deg V (prism) tool.
 TOOL = VTool(math.pi / 2, flank_height=PRISM_FLANK_M)
+
+
+def holder_depth(angles: Sequence[float], tool=TOOL) -> float:
+    """Deepest (m) the edge may go below the stock's top at every one of ``angles`` (tool
+    angles, rad) with the top of ``tool``'s body, where its holder begins, still above it.
+
+    A corner (y, h) of the body's top, turned by A = t about +X, stands y sin t + h cos t
+    over the edge; the least of those over the corners and the angles. `TOOL` (corners at
+    y = +-3 mm, h = 10 mm) at 0-40 deg: 10 cos 40 - 3 sin 40 = 5.732 mm, at 40 deg.
+    """
+    points = np.asarray(tool.vertices())
+    top = points[points[:, 2] == points[:, 2].max()]
+    return float(min((top[:, 1] * math.sin(t) + top[:, 2] * math.cos(t)).min()
+                     for t in angles))
+
+
+def max_capture(plan: CalibrationPlan | None = None, tool=TOOL) -> float:
+    """Largest capture range (m) that ``plan``'s ramps (its angles and stations, the search
+    range derived from the capture) can have and ``tool`` still cut for every edge offset
+    within it with its holder above the stock.
+
+    A ramp's programmed edge goes down to ``search = capture + deepest station +
+    SEARCH_MARGIN_M`` below the surface, and an offset of length ``capture`` can put the
+    real edge up to ``capture`` lower at any angle (the offset vector turned by it), so
+    ``2 capture + deepest station + SEARCH_MARGIN_M <= holder_depth``. The default plan
+    and `TOOL`: (5.7321 - 0.0160 - 0.0200) / 2 = 2.848 mm. ``plan.capture`` is not used;
+    None is the default plan.
+    """
+    plan = CalibrationPlan() if plan is None else plan
+    return 0.5 * (holder_depth(plan.angles, tool) - max(plan.station_depths)
+                  - SEARCH_MARGIN_M)
 
 
 # -------------------------------------------------------------------------- compensation
