@@ -103,6 +103,9 @@ def report(args) -> None:
                              f"above 0 (the nominal arm is r0 = {r0 / MM:.3f} mm, and the "
                              "plan finds r within --capture-mm of it)", key="r-mm")
         given["tool.z"] = -(args.r_mm * MM - r0)
+    base = injected_errors(args, defaults, {}, machine.name).parameters()
+    check_offset(args, plan.capture, r0, given.get("tool.y", base.get("tool.y", 0.0)),
+                 -given.get("tool.z", base.get("tool.z", 0.0)))
     errors, realism = injected_errors(args, defaults, given, machine.name), realism_from(args)
 
     def make_lab(realism):
@@ -145,6 +148,42 @@ def calibration_plan(capture_mm) -> CalibrationPlan:
                          f"{TOOL.height / MM:g} mm body, where its holder begins, comes under "
                          "the stock at 40 deg)", key="capture-mm")
     return CalibrationPlan(capture=capture_mm * MM)
+
+
+def check_offset(args, capture: float, r0: float, e_ys: float, rho: float) -> None:
+    """Refuse, naming the options that set it, an edge offset (e_ys, r - r0) (m) longer than
+    the plan's ``capture`` (m), the length its ramps find: every offset within it is found
+    and cut (up to `MAX_CAPTURE_MM`), so e_ys is admitted within +-sqrt(capture**2 - (r -
+    r0)**2) at the given r, and r within r0 +- sqrt(capture**2 - e_ys**2) at the given e_ys.
+    """
+    length = math.hypot(e_ys, rho)
+    if length <= capture:
+        return
+
+    def room(other):
+        return math.sqrt(capture ** 2 - other ** 2) if abs(other) <= capture else None
+
+    names, ranges = [], []
+    if args.e_ys_um is not None:
+        names.append(f"--e-ys-um {args.e_ys_um!r}")
+        half = room(rho)
+        ranges.append(f"e_ys within +-{math.floor(half / UM * 100) / 100:.2f} um at r - r0 = "
+                      f"{rho / UM:.2f} um" if half is not None else
+                      f"no e_ys at r - r0 = {rho / UM:.6g} um")
+    if args.r_mm is not None:
+        names.append(f"--r-mm {args.r_mm!r}")
+        half = room(e_ys)
+        ranges.append(f"r within {math.ceil((r0 - half) / MM * 1e4) / 1e4:.4f} to "
+                      f"{math.floor((r0 + half) / MM * 1e4) / 1e4:.4f} mm at e_ys = "
+                      f"{e_ys / UM:.2f} um" if half is not None else
+                      f"no r at e_ys = {e_ys / UM:.6g} um")
+    if not names:
+        names.append(f"--errors {args.errors} (tool.y, tool.z)")
+    raise InputError(
+        f"{' with '.join(names)}: the edge offset |(e_ys, r - r0)| = {length / MM:.6g} mm "
+        f"exceeds the plan's capture range {capture / MM:g} mm (--capture-mm, at most "
+        f"{MAX_CAPTURE_MM:.4g}): expected {' or '.join(ranges) or 'a shorter offset'}",
+        key="r-mm" if args.r_mm is not None and args.e_ys_um is None else "e-ys-um")
 
 
 def calibration_table(out, readings, fit) -> str:

@@ -197,3 +197,37 @@ def test_the_scenario_reproduces_the_papers_before_and_writes_a_budget(tmp_path)
     assert "### Error budget" in result.stdout
     assert (tmp_path / "budget.png").read_bytes()[:4] == b"\x89PNG"
     assert np.isfinite([r.share for r in budget.rows]).all()
+
+
+def test_the_scenario_admits_the_edge_offsets_its_capture_finds_and_names_the_option(
+        tmp_path):
+    """By hand, at the default capture of 1 mm: with the paper's r - r0 = 55 um, e_ys within
+    +-sqrt(1 - 0.055**2) = +-0.998487 mm (printed +-998.48 um), either sign alike; with its
+    e_ys = -178 um, r within 120.5 +- sqrt(1 - 0.178**2) = 120.5 +- 0.984031 mm (printed
+    119.5160 to 121.4840 mm). Beyond it the scenario stops before cutting, naming the option
+    and the range; -999 um used to end in a groove fit ("found 0"), 121.485 mm ran, 1e6 um
+    and 1e300 mm named the tool setting's keys."""
+    fast = ("--budget", "off", "--realism", "noise_only")
+    e_range = "expected e_ys within +-998.48 um at r - r0 = 55.00 um"
+    r_range = "expected r within 119.5160 to 121.4840 mm at e_ys = -178.00 um"
+    for option, value, message in (("--e-ys-um", "-999", e_range), ("--e-ys-um", "999", e_range),
+                                   ("--e-ys-um", "1e6", e_range),
+                                   ("--r-mm", "121.485", r_range), ("--r-mm", "119.515", r_range),
+                                   ("--r-mm", "1e300", r_range), ("--r-mm", "125", r_range)):
+        result = scenario(option, value, *fast, "--out", str(tmp_path / "out"))
+        assert result.returncode == 2, (option, value, result.stderr)
+        last = result.stderr.splitlines()[-1]
+        assert last.startswith("tool_rotation_arm: error: ")
+        assert f"{option} {float(value)!r}: the edge offset" in last, last
+        assert "exceeds the plan's capture range 1 mm" in last and message in last, last
+        assert not result.stdout  # refused before the lab is built
+    # just inside, on either side: run, and identify e_ys and r within 3 of their std
+    for option, value in (("--e-ys-um", "-998"), ("--r-mm", "121.484")):
+        out = tmp_path / value
+        result = scenario(option, value, *fast, "--out", str(out))
+        assert result.returncode == 0, result.stderr
+        summary = json.loads((out / "summary.json").read_text())
+        for name in ("tool.y", "tool.z"):
+            entry = summary["identified"][name]
+            error = entry["value"] - summary["injected"][name]
+            assert abs(error) < 3 * entry["std"], (option, name, error, entry["std"])
