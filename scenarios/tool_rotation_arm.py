@@ -2,9 +2,9 @@
 
 Run: ``.venv/bin/python scenarios/tool_rotation_arm.py [--e-ys-um -178] [--r-mm 120.555]
 [--capture-mm 1] [--realism ideal|noise_only|lab] [--budget on|off] [--errors FILE.toml]
-[--noise on|off] [--seed N] [--out reports/tool_rotation_arm]`` (about 50 s with
-the default lab realism and its error budget; 9 s with ``--budget off``; 3 s with
-``--realism noise_only``).
+[--noise on|off] [--seed N] [--out reports/tool_rotation_arm]`` (about 21 s on two idle
+cores with the default lab realism and its error budget; 5 s with ``--budget off``; 3 s
+with ``--realism noise_only``).
 
 The planer_4axis gets the paper's errors (arm radius r = 120.555 mm against the nominal
 120.5 mm, tool setting error e_ys = -0.178 mm: ``tool.y = e_ys``, ``tool.z = -(r - r0)``),
