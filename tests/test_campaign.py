@@ -585,3 +585,17 @@ def test_cli_ctrl_c_before_any_trial_says_so(tmp_path, capsys, monkeypatch):
     assert err == (f"machinesim: interrupted; no trial had finished; kept "
                    f"{tmp_path / 'c' / 'campaign.json'}: run the same command again to start "
                    "it over")
+
+
+def test_a_varied_microscope_noise_leaves_an_objectives_own():
+    """``microscope.sigma`` reaches the default microscope, not a reading through another
+    objective, whose noise is that objective's (paper 002's crown through the 10x read the
+    campaign's draw instead)."""
+    from machinesim import Lab
+    from machinesim.campaign.trials import _LabWithInstruments
+    from machinesim.realism import OBJECTIVE_10X
+
+    lab = _LabWithInstruments(Lab("robonano_a0ib", seed=1), {"microscope": 1e-9})
+    assert lab.microscope().readout.sigma == 1e-9
+    assert lab.microscope(objective=OBJECTIVE_10X).readout.sigma == OBJECTIVE_10X.sigma
+    assert lab.microscope(sigma=2e-9).readout.sigma == 2e-9  # the procedure's own still wins

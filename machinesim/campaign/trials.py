@@ -172,7 +172,9 @@ class IdentificationOnly:
 
 class _LabWithInstruments:
     """The lab, its instruments built with the campaign's noise ``sigma`` (``options`` given
-    by the procedure still win). Everything else is the lab's own."""
+    by the procedure still win, and so does an ``objective``'s own noise: paper 002 reads
+    its crown through the 10x, `machinesim.realism.OBJECTIVE_10X`). Everything else is the
+    lab's own."""
 
     def __init__(self, lab, sigmas: Mapping[str, float]) -> None:
         self._lab = lab
@@ -182,7 +184,8 @@ class _LabWithInstruments:
     @staticmethod
     def _instrument(make, sigma):
         def instrument(*args, **options):
-            options.setdefault("sigma", sigma)
+            if options.get("objective") is None:
+                options.setdefault("sigma", sigma)
             return make(*args, **options)
         return instrument
 
