@@ -599,3 +599,13 @@ def test_a_varied_microscope_noise_leaves_an_objectives_own():
     assert lab.microscope().readout.sigma == 1e-9
     assert lab.microscope(objective=OBJECTIVE_10X).readout.sigma == OBJECTIVE_10X.sigma
     assert lab.microscope(sigma=2e-9).readout.sigma == 2e-9  # the procedure's own still wins
+
+
+def test_paper_003s_table_entries_vary_on_its_base_model():
+    """xy_plane_errors sets every --vary on its tables' model, so their entries are its
+    parameters: they were refused as 'not a parameter of grooving_4axis'."""
+    spec = CampaignSpec("xy_plane_errors", 1, (parse_vary("component.X.EXX[2]=normal:0,1um"),),
+                        identify_only=True)
+    assert "component.X.EXX[2]" in spec.parameters()
+    with pytest.raises(InputError, match=r"--vary component.X.EXX\[99\]: not a parameter"):
+        CampaignSpec("xy_plane_errors", 1, (parse_vary("component.X.EXX[99]=normal:0,1um"),))

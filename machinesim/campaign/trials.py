@@ -249,7 +249,7 @@ class CampaignSpec:
                 raise InputError(f"--vary {name}: expected a Distribution, got "
                                  f"{type(dist).__name__}", key="--vary")
         object.__setattr__(self, "vary", vary)
-        known = set(self.machine.parameter_names()) | set(LAB_PARAMETERS)
+        known = set(self.error_parameters()) | set(LAB_PARAMETERS)
         for name in names:
             if name not in known:
                 raise InputError(
@@ -275,6 +275,11 @@ class CampaignSpec:
 
         return _machine(self.entry.machine, load_machine)
 
+    def error_parameters(self) -> tuple[str, ...]:
+        """The machine's error parameters on the procedure's base model (`ProcedureEntry.base`):
+        its component tables' entries among them (paper 003's)."""
+        return tuple(self.machine.parameter_names(self.entry.base()))
+
     def parameters(self) -> tuple[str, ...]:
         """The parameters this campaign may vary, sorted: every error parameter of the
         machine the lab sets into its cuts and readings, and of the lab parameters
@@ -284,7 +289,7 @@ class CampaignSpec:
         from machinesim.experiment import LAB_USES
 
         uses = {use for step in self.build().lab_uses.values() for use in step}
-        known = [*self.machine.parameter_names(), *LAB_PARAMETERS]
+        known = [*self.error_parameters(), *LAB_PARAMETERS]
         return tuple(sorted(name for name in known
                             if _head(name) not in LAB_USES or _head(name) in uses))
 
