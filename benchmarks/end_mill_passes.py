@@ -1,5 +1,5 @@
 """End mills on passes repeated deeper, ``machinesim cut`` end to end: the boolean engine
-with sweeps inside another sweep dropped (`machinesim.cutting.engine.contained_sweeps`, the
+with sweeps inside another sweep dropped (`machinesim.cutting.containment.contained_sweeps`, the
 default) against every sweep cut, in the same run.
 
 CAM programs go down in levels over one path: a helical bore's turns, a contour's or a
