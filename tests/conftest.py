@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import signal
+import time
+from pathlib import Path
 
 import pytest
 
@@ -18,6 +20,43 @@ def as_in_a_terminal() -> dict:
     starts with SIGINT ignored, and a Python started so installs no KeyboardInterrupt
     handler: a test of Ctrl-C would then see the child go on."""
     return {"preexec_fn": _default_sigint}
+
+
+def _interrupted(process, ready) -> tuple[str, str]:
+    """Ctrl-C to ``process`` (a `subprocess.Popen` with text pipes) once ``ready(process)``
+    returns (a str: once it maps a library whose path holds it, `_mapping`); its stdout and
+    stderr to the end. Fails if it ended before; killed if a check fails."""
+    try:
+        (_mapping(ready) if isinstance(ready, str) else ready)(process)
+        assert process.poll() is None, "the process ended before it could be interrupted"
+        process.send_signal(signal.SIGINT)
+        return process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            process.kill()
+
+
+@pytest.fixture
+def interrupted():
+    """``interrupted(process, ready)``: Ctrl-C once ``ready(process)`` returns, or once the
+    process maps a library whose path holds ``ready`` (a str); then its stdout and
+    stderr."""
+    return _interrupted
+
+
+def _mapping(library: str, timeout: float = 60.0):
+    """A ``ready`` for `interrupted`: until the process maps a file whose path holds
+    ``library`` (/proc/PID/maps), the process ends, or ``timeout`` s pass."""
+    def ready(process) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and process.poll() is None:
+            try:
+                if library in Path(f"/proc/{process.pid}/maps").read_text():
+                    return
+            except OSError:
+                pass
+            time.sleep(0.001)
+    return ready
 
 
 @pytest.fixture(scope="module")

@@ -6,10 +6,8 @@ from __future__ import annotations
 import inspect
 import json
 import os
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -377,7 +375,7 @@ def test_a_huge_tool_is_refused_cleanly(tmp_path):
 
 
 @pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="needs Linux /proc")
-def test_ctrl_c_while_loading_exits_130_in_one_line(tmp_path, as_in_a_terminal):
+def test_ctrl_c_while_loading_exits_130_in_one_line(tmp_path, as_in_a_terminal, interrupted):
     """SIGINT once the process maps SciPy's own libraries (not numpy's scipy_openblas): only
     the viewer loads SciPy, inside `main`, so the process is importing it or building the
     page."""
@@ -385,22 +383,7 @@ def test_ctrl_c_while_loading_exits_130_in_one_line(tmp_path, as_in_a_terminal):
     process = subprocess.Popen([*entry_point(), "view", "robonano_a0ib", "--html", str(page)],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                **as_in_a_terminal)
-    try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and process.poll() is None:
-            try:
-                maps = Path(f"/proc/{process.pid}/maps").read_text()
-            except OSError:
-                maps = ""
-            if "site-packages/scipy/" in maps:
-                break
-            time.sleep(0.01)
-        assert process.poll() is None, "the command ended before it could be interrupted"
-        process.send_signal(signal.SIGINT)
-        _, err = process.communicate(timeout=60)
-    finally:
-        if process.poll() is None:
-            process.kill()
+    _, err = interrupted(process, "site-packages/scipy/")
     assert_clean_failure(process.returncode, err, "interrupted", status=130)
     assert not page.exists()
 

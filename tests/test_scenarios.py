@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -121,7 +120,8 @@ def test_every_paper_scenario_refuses_a_negative_seed_on_its_command_line(tmp_pa
                     in result.stderr.splitlines()[-1]), (script, result.stderr)
 
 
-def test_a_scenario_stopped_by_ctrl_c_exits_130_in_one_line(tmp_path, as_in_a_terminal):
+def test_a_scenario_stopped_by_ctrl_c_exits_130_in_one_line(tmp_path, as_in_a_terminal,
+                                                             interrupted):
     """SIGINT while paper 002's first load is measured: status 130, one line on stderr after
     the progress lines, no traceback, and no report written (its files come after the
     runs). A summary.json an earlier run left in the folder stays whole."""
@@ -129,18 +129,13 @@ def test_a_scenario_stopped_by_ctrl_c_exits_130_in_one_line(tmp_path, as_in_a_te
     process = subprocess.Popen([sys.executable, str(ROOT / "scenarios" / "workpiece_setting.py"),
                                 "--quick", "--out", str(tmp_path)], stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, cwd=ROOT, **as_in_a_terminal)
-    try:
-        seen = []
+
+    def measuring(process) -> None:
         for line in process.stderr:
-            seen.append(line)
             if "grooves load: measure ..." in line:
                 break
-        assert process.poll() is None, "".join(seen)
-        process.send_signal(signal.SIGINT)
-        out, err = process.communicate(timeout=120)
-    finally:
-        if process.poll() is None:
-            process.kill()
+
+    out, err = interrupted(process, measuring)
     assert process.returncode == 130, err
     assert "Traceback" not in err, err
     last = [line for line in err.splitlines() if not line.startswith("workpiece_setting [")]
@@ -151,7 +146,7 @@ def test_a_scenario_stopped_by_ctrl_c_exits_130_in_one_line(tmp_path, as_in_a_te
 
 @pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="needs Linux /proc")
 def test_a_scenario_stopped_by_ctrl_c_while_its_libraries_load_says_so_in_one_line(
-        tmp_path, as_in_a_terminal):
+        tmp_path, as_in_a_terminal, interrupted):
     """SIGINT once numpy's library is mapped, while the script's imports go on (Pinocchio,
     SciPy): one line, no traceback (it was a traceback of the import it stopped, or numpy's
     ImportError when it landed in numpy's C loading), status 130."""
@@ -159,19 +154,7 @@ def test_a_scenario_stopped_by_ctrl_c_while_its_libraries_load_says_so_in_one_li
     process = subprocess.Popen([sys.executable, str(ROOT / "scenarios" / "sts_turning.py"),
                                 "--out", str(out)], stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, cwd=ROOT, **as_in_a_terminal)
-    try:
-        maps = ""
-        while process.poll() is None and "site-packages/numpy/" not in maps:
-            try:
-                maps = Path(f"/proc/{process.pid}/maps").read_text()
-            except OSError:
-                maps = ""
-        assert process.poll() is None, "the scenario ended before it could be interrupted"
-        process.send_signal(signal.SIGINT)
-        _, err = process.communicate(timeout=120)
-    finally:
-        if process.poll() is None:
-            process.kill()
+    _, err = interrupted(process, "site-packages/numpy/")
     assert process.returncode == 130, err
     assert "Traceback" not in err, err
     assert err.splitlines() == ["sts_turning: interrupted; nothing was written"], err
