@@ -14,8 +14,10 @@ Clipper2 rounds to a grid of 1e-8 of its unit and holds coordinates up to about 
 The footprints are scaled by the power of two that takes their farthest coordinate to 2**32
 units (`REACH`): scaling is exact in float64, and the grid is then 2.3e-18 of that
 coordinate, a hundredth of float64's spacing there. Corners the union keeps from a footprint
-come back bit for bit (tested at a millimetre and at 0.7 m), and those it makes where two
-footprints' edges cross, within that grid.
+come back bit for bit where their coordinates are within about a hundredth of the farthest
+(tested at a millimetre and at 0.7 m); smaller ones, and the corners the union makes where
+two footprints' edges cross, within that grid (a corner at y = 0.1 mm on a pocket at x =
+0.5 m moves by up to 5e-19 m).
 """
 
 from __future__ import annotations
