@@ -1,9 +1,9 @@
 """Paper 002 replay: a robot-loaded workpiece, its setting errors found and compensated.
 
 Run: ``.venv/bin/python scenarios/workpiece_setting.py`` (``make demo``: the report after
-about 3 min on 2 idle cores, its error budget after about 9; each step shown on stderr;
-times in docs/procedures/workpiece_setting.md; ``--budget off``: 3 min; ``--quick``:
-smaller crown windows, as the tests run it) with options
+about 2 min on 2 idle cores, its error budget after about 7; each step shown on stderr;
+times in docs/procedures/workpiece_setting.md and docs/budget.md; ``--budget off`` stops
+at the report; ``--quick``: smaller crown windows, as the tests run it) with options
 
     --robot-repeatability-um R  the robot that loads each workpiece (default 30, the
                                 paper's LR Mate 200iD); its landings are drawn with --seed
@@ -63,6 +63,7 @@ from machinesim import Lab, WorkpieceSetting, load_machine
 from machinesim.budget import error_budget
 from machinesim.cam.crown import PARK
 from machinesim.compensation import program_axes
+from machinesim.exceptions import InputError
 from machinesim.experiment import run
 from machinesim.identification.workpiece_setting import PARAMETERS, nose_shift
 from machinesim.loading import RobotLoader
@@ -128,7 +129,16 @@ def loads(args) -> dict:
     as before; the crown's `CROWN_HEIGHT_UM` higher and `CROWN_TILT_DEG` tilted about X)
     or --delta-um/--rot-deg (the crown's by --crown-delta-um/--crown-rot-deg), over
     --errors when given, else over the default C centre `C_CENTRE_UM` (`injected_errors`)."""
-    robot = RobotLoader((args.robot_repeatability_um or ROBOT_REPEATABILITY_UM) * UM)
+    repeatability = (ROBOT_REPEATABILITY_UM if args.robot_repeatability_um is None
+                     else args.robot_repeatability_um)
+    if args.robot_repeatability_um is not None and (args.delta_um or args.rot_deg):
+        raise InputError("--robot-repeatability-um with --delta-um or --rot-deg: the setting "
+                         "is either the robot's landing or the one given; expected one of "
+                         "them", key="robot-repeatability-um")
+    if not (math.isfinite(repeatability) and repeatability >= 0.0):
+        raise InputError(f"--robot-repeatability-um {repeatability!r}: expected a length in "
+                         "um, 0 or more", key="robot-repeatability-um")
+    robot = RobotLoader(repeatability * UM)
     rng = np.random.default_rng(args.seed)
     landed = {load: setting_parameters(robot.land(rng)) for load in EXPERIMENTS}
     landed["crown"]["workpiece.z"] += CROWN_HEIGHT_UM * UM
@@ -152,7 +162,13 @@ def _given_setting(delta_um, rot_deg, prefix: str) -> dict[str, float]:
     """A setting given on the command line (--{prefix}delta-um, --{prefix}rot-deg)."""
     delta = np.array(parse_floats(delta_um or "0,0,0", 3, f"--{prefix}delta-um")) * UM
     angles = np.radians(parse_floats(rot_deg or "0,0,0", 3, f"--{prefix}rot-deg"))
-    return setting_parameters(WorkpieceSetting(delta, *angles))
+    try:
+        return setting_parameters(WorkpieceSetting(delta, *angles))
+    except InputError as error:  # named by the option given, in its units
+        given = [(f"{prefix}{name}", text) for name, text in
+                 (("delta-um", delta_um), ("rot-deg", rot_deg)) if text]
+        raise InputError(", ".join(f"--{name} {text}" for name, text in given) + ": "
+                         + error.message, key=given[0][0]) from None
 
 
 def main(argv=None) -> int:
@@ -263,6 +279,8 @@ def scenario_budget(machine, errors, args, realism: Realism, results):
     nose = args.nose_correction == "on"
     sources = list(realism.on) + ([] if nose else [TIP_VS_NOSE])
     if not sources:
+        progress("budget")(f"none: no source it shares out is on (realism {realism}), so "
+                           "budget.md and budget.png are not written")
         return None
     progress("budget")(f"{len(sources)} sources switched off in turn, a run of each load "
                        "each; those that change the crown's program or the machine cut it "
@@ -413,7 +431,9 @@ def table3_table(folder: ReportFolder, crown) -> str:
         unit = "um" if match[2].startswith("L") else "deg"
         label = f"{TABLE3_ROWS[match[1]]}{match[2].replace('_', ' and ')} ({unit})"
         rows.append([label, "" if f.paper_before is None else f.paper_before,
-                     "" if f.paper_after is None else f.paper_after, f.before, f.after])
+                     "" if f.paper_after is None else f.paper_after,
+                     "n/a" if f.before is None else f.before,
+                     "n/a" if f.after is None else f.after])
     return folder.write_table(
         "table3", ["measured parameter", "paper before", "paper after", "simulated before",
                    "simulated after"], rows,
@@ -435,7 +455,7 @@ def groove_table(folder: ReportFolder, grooves) -> str:
         rows += [["spread over labs of the stated tilts: median (nm)", "", labs["median_nm"],
                   ""],
                  ["  10 % and 90 % of labs below (nm)", "",
-                  f"{labs['q10_nm']:.0f} and {labs['q90_nm']:.0f}", ""],
+                  f"{labs['q10_nm']:.3g} and {labs['q90_nm']:.3g}", ""],
                  ["  share of labs below this run's spread, the paper's 100 nm", "",
                   f"{labs['simulated_quantile_ratio']:.0%}, "
                   f"{labs['paper_quantile_ratio']:.0%}", ""]]

@@ -116,6 +116,24 @@ def test_the_crown_alone_takes_a_given_setting_and_the_grooves_keep_their_landin
         scenario.loads(_parse(["--crown-rot-deg", "1,2"]))
 
 
+def test_a_perfect_robot_lands_the_workpieces_where_designed_and_options_do_not_mix():
+    """--robot-repeatability-um 0 is a perfect robot: no setting error but the crown's
+    designed height and tilt (0 was read as missing, so the 30 um robot drew); with
+    --delta-um it is refused rather than silently dropped, and a setting too large for the
+    model names the option given."""
+    models = scenario.loads(_parse(["--robot-repeatability-um", "0"]))
+    grooves, crown = models["grooves"].parameters(), models["crown"].parameters()
+    for axis in ("x", "y", "z", "alpha", "beta", "gamma"):
+        assert grooves.get(f"workpiece.{axis}", 0.0) == 0.0
+    assert crown["workpiece.z"] == scenario.CROWN_HEIGHT_UM * UM
+    assert crown["workpiece.alpha"] == math.radians(scenario.CROWN_TILT_DEG)
+    assert crown.get("workpiece.x", 0.0) == 0.0
+    with pytest.raises(MachineSimError, match="--robot-repeatability-um with --delta-um"):
+        scenario.loads(_parse(["--robot-repeatability-um", "5", "--delta-um", "1,2,3"]))
+    with pytest.raises(MachineSimError, match=r"--rot-deg 1e9,0,0: .* no angle error"):
+        scenario.loads(_parse(["--rot-deg", "1e9,0,0"]))
+
+
 def _parse(argv):
     captured = {}
 
