@@ -408,6 +408,15 @@ def _link_or_copy(source: str, destination: str) -> None:
         shutil.copy2(source, destination)
 
 
+def stdout_to_null(stream) -> None:
+    """Send ``stream``'s file descriptor (stdout) to the null device: its reader went away
+    (``... | head -1``), and what is still written, or flushed at exit, must not raise
+    BrokenPipeError again (the signal module's notes on SIGPIPE)."""
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, stream.fileno())
+    os.close(null)
+
+
 class StagedFolder:
     """A folder written whole or not at all.
 
@@ -582,5 +591,5 @@ def read_json(path, what: str = "JSON file"):
         raise InputError(f"nested too deeply to be the {what}", source=str(path)) from None
 
 
-__all__ = ["FileError", "StagedFolder", "check_readable_file", "check_writable",
+__all__ = ["FileError", "StagedFolder", "stdout_to_null", "check_readable_file", "check_writable",
            "clear_stale_folders", "json_text", "read_json", "write_atomic", "write_together"]

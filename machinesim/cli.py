@@ -30,6 +30,7 @@ from machinesim._io import (
     ctrl_c_remembered,
     file_name,
     json_text,
+    stdout_to_null,
     write_together,
 )
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
@@ -147,8 +148,7 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(f"interrupted; {_interrupted(args)}", EXIT_INTERRUPTED)
     except BrokenPipeError:
         # the reader of our output went away (``machinesim machines | head -1``): not an error
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        stdout_to_null(sys.stdout)
         return 0
     except OSError as exc:
         where = f"{exc.filename}: " if exc.filename else ""

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
-from machinesim._io import StagedFolder, ctrl_c_remembered
+from machinesim._io import StagedFolder, ctrl_c_remembered, stdout_to_null
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim.exceptions import InputError
 from machinesim.report import STAGED, folder_key
@@ -66,12 +66,13 @@ def scenario_status(report, args, name: str | None = None) -> int:
     staged = None
     try:
         # past the memory there is: MemoryError, not the OOM killer
-        with ctrl_c_remembered(), memory_capped(), _stdout_may_close(name) as stdout:
+        with ctrl_c_remembered(), memory_capped(), _stdout_may_close() as stdout:
             if out is not None:
                 staged = _stage_report(out)
             report(args)
             if staged is not None and staged.path is not None:
                 staged.commit()
+            stdout.flush()  # the last buffered lines meet a closed pipe here, if at all
             if stdout.closed_early:
                 print(f"{name}: stdout was closed early (a pipe's reader that stopped "
                       f"reading); {_interrupted(out, staged)}", file=sys.stderr)
@@ -102,8 +103,7 @@ class _stdout_may_close:
     from then on, as Python's documentation advises (the signal module's notes on SIGPIPE),
     and the report folder is still written whole; ``closed_early`` says it happened."""
 
-    def __init__(self, name: str) -> None:
-        self.name = name
+    def __init__(self) -> None:
         self.closed_early = False
 
     def __enter__(self):
@@ -133,9 +133,7 @@ class _stdout_may_close:
 
     def _to_null(self) -> None:
         self.closed_early = True
-        null = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(null, self.stream.fileno())
-        os.close(null)
+        stdout_to_null(self.stream)
 
     def __getattr__(self, attribute: str):  # isatty, encoding, fileno, ...
         return getattr(self.stream, attribute)
