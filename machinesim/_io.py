@@ -175,10 +175,34 @@ def _asks(question) -> bool:
         return False
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill PID``, a job scheduler's stop, a container's shutdown) within
+    `ctrl_c_remembered`: handled as a Ctrl-C is (nothing half written, staging folders
+    removed), reported as what it is, with status 143 (`exit_status`)."""
+
+
+#: Exit statuses of a run stopped by Ctrl-C or SIGTERM (128 + the signal, as shells say).
+EXIT_INTERRUPTED = 128 + signal.SIGINT
+EXIT_TERMINATED = 128 + signal.SIGTERM
+
+
+def stopped(stop: KeyboardInterrupt) -> tuple[str, int]:
+    """What to call a run ended by ``stop`` and its exit status: ``("interrupted", 130)``
+    after a Ctrl-C, ``("terminated", 143)`` after SIGTERM."""
+    if isinstance(stop, Terminated):
+        return "terminated", EXIT_TERMINATED
+    return "interrupted", EXIT_INTERRUPTED
+
+
 def _on_ctrl_c(signum, frame):
     global _ctrl_c_seen
     _ctrl_c_seen = True
-    raise KeyboardInterrupt
+    raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+
+
+#: The signals `ctrl_c_remembered` handles, each with the handler it replaces (Python's own
+#: for SIGINT, the default action, ending the process at once, for SIGTERM).
+_STOPS = ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, signal.SIG_DFL))
 
 
 @contextmanager
@@ -188,21 +212,24 @@ def ctrl_c_remembered() -> Iterator[None]:
     Some libraries import their optional parts inside ``except BaseException`` (trimesh,
     for one), so a Ctrl-C that lands there is swallowed and the run would go on to write its
     files and exit 0. With this handler `write_together` refuses to rename anything into
-    place once a Ctrl-C was seen, whoever caught it. Installed only where Python's own
-    handler is (a background job started with SIGINT ignored keeps ignoring it), and only
-    in the main thread (where signals arrive); the old handler is put back on leaving.
+    place once a Ctrl-C was seen, whoever caught it. SIGTERM is handled the same way, raised
+    as `Terminated` (a KeyboardInterrupt): without it a ``kill`` ended the process where it
+    stood and left its staging folder and temporary files behind. Each handler is installed
+    only where the usual one is (a background job started with SIGINT ignored keeps
+    ignoring it), and only in the main thread (where signals arrive); the old handlers are
+    put back on leaving.
     """
     global _ctrl_c_seen
-    previous = signal.getsignal(signal.SIGINT)
-    ours = (previous is signal.default_int_handler
-            and threading.current_thread() is threading.main_thread())
-    if ours:
-        signal.signal(signal.SIGINT, _on_ctrl_c)
+    main = threading.current_thread() is threading.main_thread()
+    previous = {number: signal.getsignal(number) for number, _ in _STOPS}
+    ours = [number for number, usual in _STOPS if main and previous[number] is usual]
+    for number in ours:
+        signal.signal(number, _on_ctrl_c)
     try:
         yield
     finally:
-        if ours:
-            signal.signal(signal.SIGINT, previous)
+        for number in ours:
+            signal.signal(number, previous[number])
         _ctrl_c_seen = False
 
 
@@ -319,21 +346,26 @@ _ours: set[str] = set()
 
 @contextmanager
 def _ctrl_c_deferred() -> Iterator[None]:
-    """Within the block a Ctrl-C is held back, and raised (by the handler that was there) on
-    leaving it: a folder swap is never left half done. Only in the main thread, where the
-    handler can be set; elsewhere the block runs as it is."""
-    previous = signal.getsignal(signal.SIGINT)
-    if threading.current_thread() is not threading.main_thread() or not callable(previous):
+    """Within the block a Ctrl-C (or SIGTERM) is held back, and raised (by the handler that
+    was there) on leaving it: a folder swap is never left half done. Only in the main
+    thread, where the handlers can be set, and only for a signal with a Python handler;
+    elsewhere the block runs as it is."""
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
+    previous = {number: signal.getsignal(number) for number, _ in _STOPS}
     held: list[int] = []
-    signal.signal(signal.SIGINT, lambda signum, frame: held.append(signum))
+    for number, handler in previous.items():
+        if callable(handler):
+            signal.signal(number, lambda signum, frame: held.append(signum))
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
-    if held:
-        previous(signal.SIGINT, None)
+        for number, handler in previous.items():
+            if callable(handler):
+                signal.signal(number, handler)
+    for number in dict.fromkeys(held):
+        previous[number](number, None)
 
 
 def _folder_stem(target: Path) -> str:
@@ -591,5 +623,6 @@ def read_json(path, what: str = "JSON file"):
         raise InputError(f"nested too deeply to be the {what}", source=str(path)) from None
 
 
-__all__ = ["FileError", "StagedFolder", "stdout_to_null", "check_readable_file", "check_writable",
-           "clear_stale_folders", "json_text", "read_json", "write_atomic", "write_together"]
+__all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "FileError", "StagedFolder", "Terminated",
+           "stdout_to_null", "check_readable_file", "check_writable", "clear_stale_folders",
+           "json_text", "read_json", "stopped", "write_atomic", "write_together"]

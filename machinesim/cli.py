@@ -31,6 +31,7 @@ from machinesim._io import (
     file_name,
     json_text,
     stdout_to_null,
+    stopped,
     write_together,
 )
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
@@ -62,8 +63,6 @@ PART_FORMATS = {
 }
 #: Exit status when the input cannot be used.
 EXIT_INPUT = 2
-#: Exit status after Ctrl-C (128 + SIGINT, as shells report it).
-EXIT_INTERRUPTED = 130
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -144,8 +143,9 @@ def main(argv: list[str] | None = None) -> int:
                 return _command(args)
     except MachineSimError as exc:
         return _fail(f"error: {exc}", EXIT_INPUT)
-    except KeyboardInterrupt:
-        return _fail(f"interrupted; {_interrupted(args)}", EXIT_INTERRUPTED)
+    except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (`machinesim._io.Terminated`)
+        how, status = stopped(stop)
+        return _fail(f"{how}; {_interrupted(args)}", status)
     except BrokenPipeError:
         # the reader of our output went away (``machinesim machines | head -1``): not an error
         stdout_to_null(sys.stdout)

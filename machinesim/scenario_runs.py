@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
-from machinesim._io import StagedFolder, ctrl_c_remembered, stdout_to_null
+from machinesim._io import StagedFolder, ctrl_c_remembered, stdout_to_null, stopped
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim.exceptions import InputError
 from machinesim.report import STAGED, folder_key
@@ -37,17 +37,14 @@ def progress_printer(scenario: str):
     return stage
 
 
-#: Exit status of a scenario stopped by Ctrl-C (128 + SIGINT, as shells report it).
-EXIT_INTERRUPTED = 130
-
-
 def scenario_status(report, args, name: str | None = None) -> int:
     """Run a scenario's ``report(args)`` and give its exit status: 0; 2 after a
     `machinesim.MachineSimError`, its one-line message on stderr (``NAME: error: message``,
     as ``machinesim: error: ...`` on the command line; ``name`` defaults to the script's
     name; also a report folder (``args.out``) that cannot be made or written, checked before
     the run, and a file that failed to write); 130 after Ctrl-C, one line saying so
-    (``NAME: interrupted; ...``). Never a traceback.
+    (``NAME: interrupted; ...``), 143 after SIGTERM (``NAME: terminated; ...``). Never a
+    traceback.
 
     The report folder is written whole or not at all: every `ReportFolder` of ``args.out``
     writes into a staging folder beside it, swapped in when ``report`` returns
@@ -84,9 +81,10 @@ def scenario_status(report, args, name: str | None = None) -> int:
         left = "" if staged is None else f"; {_interrupted(out, staged)}"
         print(f"{name}: error: {where}{error.strerror or error}{left}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"{name}: interrupted; {_interrupted(out, staged)}", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (`machinesim._io.Terminated`)
+        how, status = stopped(stop)
+        print(f"{name}: {how}; {_interrupted(out, staged)}", file=sys.stderr)
+        return status
     except MemoryError:
         print(f"{name}: error: out of memory: {OUT_OF_MEMORY}", file=sys.stderr)
         return 1

@@ -22,14 +22,15 @@ def as_in_a_terminal() -> dict:
     return {"preexec_fn": _default_sigint}
 
 
-def _interrupted(process, ready) -> tuple[str, str]:
-    """Ctrl-C to ``process`` (a `subprocess.Popen` with text pipes) once ``ready(process)``
-    returns (a str: once it maps a library whose path holds it, `_mapping`); its stdout and
-    stderr to the end. Fails if it ended before; killed if a check fails."""
+def _interrupted(process, ready, sig=signal.SIGINT) -> tuple[str, str]:
+    """Ctrl-C (or ``sig``) to ``process`` (a `subprocess.Popen` with text pipes) once
+    ``ready(process)`` returns (a str: once it maps a library whose path holds it,
+    `_mapping`); its stdout and stderr to the end. Fails if it ended before; killed if a
+    check fails."""
     try:
         (_mapping(ready) if isinstance(ready, str) else ready)(process)
         assert process.poll() is None, "the process ended before it could be interrupted"
-        process.send_signal(signal.SIGINT)
+        process.send_signal(sig)
         return process.communicate(timeout=120)
     finally:
         if process.poll() is None:
@@ -38,9 +39,9 @@ def _interrupted(process, ready) -> tuple[str, str]:
 
 @pytest.fixture
 def interrupted():
-    """``interrupted(process, ready)``: Ctrl-C once ``ready(process)`` returns, or once the
-    process maps a library whose path holds ``ready`` (a str); then its stdout and
-    stderr."""
+    """``interrupted(process, ready, sig=SIGINT)``: Ctrl-C (or ``sig``) once
+    ``ready(process)`` returns, or once the process maps a library whose path holds
+    ``ready`` (a str); then its stdout and stderr."""
     return _interrupted
 
 

@@ -193,6 +193,54 @@ def test_a_ctrl_c_a_library_swallowed_still_stops_the_write(tmp_path):
     assert (tmp_path / "part.ply").read_text() == "part"
 
 
+def test_sigterm_is_raised_as_terminated_and_stops_the_write(tmp_path):
+    """A real SIGTERM within the block: raised as `Terminated` (a KeyboardInterrupt, so every
+    clean-up a Ctrl-C has runs), status 143 and its own word; nothing is written after it,
+    and leaving puts the default action back (the process ended where it stood before)."""
+    before = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        with _io.ctrl_c_remembered():
+            with pytest.raises(_io.Terminated) as stop:
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(1.0)  # the handler raises here, at the latest
+            assert _io.stopped(stop.value) == ("terminated", 128 + 15)
+            assert _io.stopped(KeyboardInterrupt()) == ("interrupted", 128 + 2)
+            with pytest.raises(KeyboardInterrupt):
+                _io.write_together([(tmp_path / "part.ply", "part")])
+        assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+    finally:
+        signal.signal(signal.SIGTERM, before)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_sigterm_during_a_folder_swap_waits_for_the_swap(tmp_path, monkeypatch):
+    """SIGTERM while the staged folder is renamed in: the swap finishes (the new folder in
+    place, no staging or old folder beside it), and `Terminated` is raised after."""
+    target = tmp_path / "report"
+    target.mkdir()
+    (target / "old.txt").write_text("old")
+    before = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    real = os.rename
+
+    def rename_then_term(src, dst):
+        real(src, dst)
+        if Path(dst) == target:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.2)  # a handler that raised would do so here
+
+    try:
+        with _io.ctrl_c_remembered():
+            staged = _io.StagedFolder(target)
+            (staged.path / "new.txt").write_text("new")
+            monkeypatch.setattr(_io.os, "rename", rename_then_term)
+            with pytest.raises(_io.Terminated):
+                staged.commit()
+    finally:
+        signal.signal(signal.SIGTERM, before)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
+    assert sorted(p.name for p in target.iterdir()) == ["new.txt"]
+
+
 def test_the_same_file_twice_is_refused_before_writing(tmp_path):
     with pytest.raises(InputError, match="the same file is named twice"):
         _io.write_together([(tmp_path / "a", "1"), (tmp_path / ".." / tmp_path.name / "a", "2")])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -120,14 +121,20 @@ def test_every_paper_scenario_refuses_a_negative_seed_on_its_command_line(tmp_pa
                     in result.stderr.splitlines()[-1]), (script, result.stderr)
 
 
-def test_a_scenario_stopped_by_ctrl_c_exits_130_in_one_line(tmp_path, as_in_a_terminal,
-                                                             interrupted):
-    """SIGINT while paper 002's first load is measured: status 130, one line on stderr after
-    the progress lines, no traceback, and no report written (its files come after the
-    runs). A summary.json an earlier run left in the folder stays whole."""
-    (tmp_path / "summary.json").write_text('{"kept": true}')
+@pytest.mark.parametrize(("sig", "status", "said"), [(signal.SIGINT, 130, "interrupted"),
+                                                      (signal.SIGTERM, 143, "terminated")])
+def test_a_scenario_stopped_by_ctrl_c_or_sigterm_says_so_in_one_line(
+        tmp_path, as_in_a_terminal, interrupted, sig, status, said):
+    """SIGINT (or SIGTERM, ``kill PID``) while paper 002's first load is measured: status 130
+    (143), one line on stderr after the progress lines, no traceback, no report written (its
+    files come after the runs), and no staging folder left beside the report's. A
+    summary.json an earlier run left in the folder stays whole. (SIGTERM ended the process
+    where it stood: status -15, and the staging folder stayed until the next run.)"""
+    out_folder = tmp_path / "report"
+    out_folder.mkdir()
+    (out_folder / "summary.json").write_text('{"kept": true}')
     process = subprocess.Popen([sys.executable, str(ROOT / "scenarios" / "workpiece_setting.py"),
-                                "--quick", "--out", str(tmp_path)], stdout=subprocess.PIPE,
+                                "--quick", "--out", str(out_folder)], stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, cwd=ROOT, **as_in_a_terminal)
 
     def measuring(process) -> None:
@@ -135,13 +142,14 @@ def test_a_scenario_stopped_by_ctrl_c_exits_130_in_one_line(tmp_path, as_in_a_te
             if "grooves load: measure ..." in line:
                 break
 
-    out, err = interrupted(process, measuring)
-    assert process.returncode == 130, err
+    out, err = interrupted(process, measuring, sig)
+    assert process.returncode == status, err
     assert "Traceback" not in err, err
     last = [line for line in err.splitlines() if not line.startswith("workpiece_setting [")]
-    assert len(last) == 1 and last[0].startswith("workpiece_setting: interrupted"), err
+    assert len(last) == 1 and last[0].startswith(f"workpiece_setting: {said}"), err
     assert out == ""
-    assert json.loads((tmp_path / "summary.json").read_text()) == {"kept": True}
+    assert json.loads((out_folder / "summary.json").read_text()) == {"kept": True}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
 
 
 @pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="needs Linux /proc")

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
+from machinesim._io import ctrl_c_remembered, stopped
 from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
 from machinesim.campaign.trials import MAX_TRIALS, PROCEDURES, trials_refused
 from machinesim.exceptions import InputError, MachineSimError
@@ -147,13 +148,15 @@ def main(argv=None) -> int:
         formatter_class=argparse.RawDescriptionHelpFormatter))
     args = parser.parse_args(argv)
     try:
-        return run_campaign(args)
+        with ctrl_c_remembered():
+            return run_campaign(args)
     except MachineSimError as error:
         print(f"machinesim campaign: error: {error}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"machinesim campaign: interrupted; {interrupted(args.out)}", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM within `ctrl_c_remembered`
+        how, status = stopped(stop)
+        print(f"machinesim campaign: {how}; {interrupted(args.out)}", file=sys.stderr)
+        return status
 
 
 if __name__ == "__main__":
