@@ -114,6 +114,20 @@ def test_unknown_parameter_and_bad_trials_are_refused():
         CampaignSpec("paper_999", 2)
 
 
+def test_quick_is_refused_where_it_changes_nothing():
+    """--quick shrinks the crown's measuring windows (`RobotLoadedWorkpiece._crown_layout`,
+    its only reader): the grooves' campaign, the other procedures and a probing-only trial
+    read no crown, and took it silently (the folder then said quick: true)."""
+    assert CampaignSpec("workpiece_setting", 1, quick=True).quick
+    for name in ("workpiece_setting_grooves", "tool_rotation_arm", "tool_setting_6axis",
+                 "xy_plane_errors"):
+        with pytest.raises(InputError, match=rf"--quick changes nothing here \({name} has no "
+                           r"crown windows to shrink\); it is for workpiece_setting "):
+            CampaignSpec(name, 1, quick=True)
+    with pytest.raises(InputError, match=r"--identify-only reads no crown"):
+        CampaignSpec("workpiece_setting", 1, identify_only=True, quick=True)
+
+
 def test_a_parameter_the_procedure_never_reads_is_refused():
     """What may vary follows each procedure's ``lab_uses``: paper 000 reads the microscope
     only (a V tool, no robot); paper 002 lands with a robot, probes, and cuts with a round

@@ -76,7 +76,8 @@ def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help="measure and identify only (probing-only trial): no "
                         "compensation, no figures")
     parser.add_argument("--quick", action="store_true",
-                        help="the crown's smaller measuring windows (workpiece_setting)")
+                        help="the crown's smaller measuring windows (workpiece_setting only, not "
+                        "with --identify-only)")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR",
                         help="campaign folder (resumed when it holds the same campaign)")
     parser.add_argument("--quiet", action="store_true", help="no progress line")

@@ -111,8 +111,9 @@ def _no_errors():
 @dataclass(frozen=True)
 class ProcedureEntry:
     """A procedure a campaign can run: its machine, how to build it, its default errors
-    (the paper's, SI), default lab parameters (`LAB_PARAMETERS`), and the error model
-    those parameters are set on (`base`: no errors unless the procedure needs tables)."""
+    (the paper's, SI), default lab parameters (`LAB_PARAMETERS`), the error model those
+    parameters are set on (`base`: no errors unless the procedure needs tables), and
+    whether ``--quick`` changes what it measures (`quick`)."""
 
     machine: str
     build: Callable[[Mapping], Any]
@@ -120,6 +121,7 @@ class ProcedureEntry:
     lab: Mapping[str, float] = field(default_factory=dict)
     about: str = ""
     base: Callable[[], Any] = _no_errors
+    quick: bool = False
 
 
 #: Procedures by campaign name (``machinesim campaign NAME``).
@@ -130,8 +132,8 @@ PROCEDURES = {
         "paper's r = 120.555 mm, e_ys = -178 um)"),
     "workpiece_setting": ProcedureEntry(
         "robonano_a0ib", _workpiece("crown"), lab={"robot.repeatability": 30.0 * M_PER_UM},
-        about="paper 002: a robot-loaded workpiece's setting and the C centre, the crown "
-        "before and after (default: the robot's landing, repeatability 30 um)"),
+        quick=True, about="paper 002: a robot-loaded workpiece's setting and the C centre, the "
+        "crown before and after (default: the robot's landing, repeatability 30 um)"),
     "workpiece_setting_grooves": ProcedureEntry(
         "robonano_a0ib", _workpiece("grooves"), lab={"robot.repeatability": 30.0 * M_PER_UM},
         about="paper 002, section 3.1: the same identification, the crossing grooves"),
@@ -215,7 +217,8 @@ class CampaignSpec:
     identify_only : bool
         Run `IdentificationOnly` (a probing-only trial) instead of the whole procedure.
     quick : bool
-        Passed to procedures that have it (the crown's smaller windows).
+        The crown's smaller windows; refused for a procedure it changes nothing in (every
+        one but ``workpiece_setting``), and with ``identify_only`` (no crown is read).
     """
 
     procedure: str
@@ -239,6 +242,12 @@ class CampaignSpec:
             raise InputError(f"--seed {self.seed!r}; expected a whole number >= 0",
                              key="--seed")
         object.__setattr__(self, "seed", int(self.seed))
+        if self.quick and (self.identify_only or not self.entry.quick):
+            takes = ", ".join(name for name, entry in PROCEDURES.items() if entry.quick)
+            why = ("--identify-only reads no crown" if self.identify_only
+                   else f"{self.procedure} has no crown windows to shrink")
+            raise InputError(f"--quick changes nothing here ({why}); it is for {takes} "
+                             "(the crown's smaller measuring windows)", key="--quick")
         vary = tuple((str(n), d) for n, d in self.vary)
         names = [n for n, _ in vary]
         twice = sorted({n for n in names if names.count(n) > 1})
