@@ -61,7 +61,7 @@ import numpy as np
 
 from machinesim import Lab, WorkpieceSetting, load_machine
 from machinesim.budget import error_budget
-from machinesim.cam.crown import PARK
+from machinesim.cam.crown import PARK, groove_rapids_crash
 from machinesim.compensation import program_axes
 from machinesim.exceptions import InputError
 from machinesim.experiment import run
@@ -76,6 +76,7 @@ from machinesim.procedures.workpiece_setting import (
 )
 from machinesim.realism import Realism
 from machinesim.report import ReportFolder
+from machinesim.rotations import rotation_xyz
 from machinesim.scenario_runs import (
     injected_errors,
     parse_floats,
@@ -153,9 +154,39 @@ def loads(args) -> dict:
     if args.crown_delta_um or args.crown_rot_deg:
         given = {**given, "crown": _given_setting(args.crown_delta_um, args.crown_rot_deg,
                                                   "crown-")}
-    return {load: injected_errors(args, {**landed[load], **centre}, given[load],
-                                 "robonano_a0ib")
-            for load in EXPERIMENTS}
+    errors = {load: injected_errors(args, {**landed[load], **centre}, given[load],
+                                    "robonano_a0ib")
+              for load in EXPERIMENTS}
+    _check_grooves_landing(args, errors["grooves"].workpiece, repeatability)
+    return errors
+
+
+def _check_grooves_landing(args, setting: WorkpieceSetting, repeatability: float) -> None:
+    """Refuse a setting of the grooves' block that the groove program's rapids would run
+    into (`groove_rapids_crash`): a crash on a real machine, and here a cut of thousands of
+    tiny sweeps that ran past 5 min (--robot-repeatability-um 3000 landed the block 531 um
+    high)."""
+    crash = groove_rapids_crash(setting)
+    if crash is None:
+        return
+    tilt = math.degrees(math.acos(min(1.0, rotation_xyz(setting.alpha, setting.beta,
+                                                        setting.gamma)[2, 2])))
+    if args.delta_um or args.rot_deg:
+        given = [(name, text) for name, text in (("delta-um", args.delta_um),
+                                                 ("rot-deg", args.rot_deg)) if text]
+        source, key = ", ".join(f"--{n} {t}" for n, t in given), given[0][0]
+    elif args.errors is not None and args.robot_repeatability_um is None:
+        source, key = f"--errors {args.errors}", "errors"
+    else:
+        source = (f"the robot's landing (--robot-repeatability-um {repeatability:g}, --seed "
+                  f"{args.seed})")
+        key = "robot-repeatability-um"
+    raise InputError(
+        f"{source} sets the grooves' block {setting.delta[2] / UM:.1f} um high and tilted "
+        f"{tilt:.3g} deg: {crash}, so the rapids would run into the block (a crash on a "
+        "real machine). Expected a setting "
+        "within that: a smaller repeatability, another seed, or --delta-um/--rot-deg",
+        key=key)
 
 
 def _given_setting(delta_um, rot_deg, prefix: str) -> dict[str, float]:

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from machinesim import ErrorModel, load_machine
+from machinesim import ErrorModel, WorkpieceSetting, load_machine
 from machinesim.cam import crown as cam
 from machinesim.cutting import cut_turned
 from machinesim.exceptions import MachineSimError
@@ -132,6 +132,34 @@ def test_a_perfect_robot_lands_the_workpieces_where_designed_and_options_do_not_
         scenario.loads(_parse(["--robot-repeatability-um", "5", "--delta-um", "1,2,3"]))
     with pytest.raises(MachineSimError, match=r"--rot-deg 1e9,0,0: .* no angle error"):
         scenario.loads(_parse(["--rot-deg", "1e9,0,0"]))
+
+
+def test_a_landing_the_groove_programs_rapids_would_run_into_is_refused_before_the_run():
+    """The groove program comes down at rapid to CLEARANCE (60 um) over the crossing and
+    turns C and returns at SAFE_Z (0.5 mm) over its 1 mm grooves: a block set 60 um high,
+    or tilted so that its top rises to 0.5 mm within 1 mm (Ry(30 deg): sin 30 deg x 1 mm),
+    meets them. --robot-repeatability-um 3000 landed the block 531 um high and ran past
+    5 min cutting the crash; now it is refused at once, naming the option and the seed."""
+    groove_rapids_crash = cam.groove_rapids_crash
+    assert cam.CLEARANCE == 60 * UM and cam.SAFE_Z == 500 * UM
+    assert groove_rapids_crash(WorkpieceSetting(np.array([0.0, 0.0, 59.9 * UM]))) is None
+    assert "60.1 um high at the crossing" in groove_rapids_crash(
+        WorkpieceSetting(np.array([0.0, 0.0, 60.1 * UM])))
+    assert groove_rapids_crash(WorkpieceSetting(beta=math.radians(29.9))) is None
+    tilted = groove_rapids_crash(WorkpieceSetting(beta=math.radians(30.1)))
+    assert f"up to {math.sin(math.radians(30.1)) * 1e3:.1f} um high within 1 mm" in tilted
+    # the same tilt about X, turned about Z: only the slope's size counts
+    assert groove_rapids_crash(WorkpieceSetting(alpha=math.radians(29.9),
+                                                gamma=1.0)) is None
+    with pytest.raises(MachineSimError, match=r"--delta-um 0,0,70 sets the grooves' block "
+                       r"70.0 um high .* the rapids would run into the block"):
+        scenario.loads(_parse(["--delta-um", "0,0,70"]))
+    with pytest.raises(MachineSimError, match=r"robot's landing \(--robot-repeatability-um "
+                       r"3000, --seed 0\) sets the grooves' block 531.3 um high"):
+        scenario.loads(_parse(["--robot-repeatability-um", "3000"]))
+    # the issue's large setting (80 um, 2 deg) clears both heights
+    large = scenario.loads(_parse(["--delta-um", "80,-60,20", "--rot-deg", "0.5,-0.3,2.0"]))
+    assert groove_rapids_crash(large["grooves"].workpiece) is None
 
 
 def _parse(argv):

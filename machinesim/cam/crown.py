@@ -35,6 +35,7 @@ from machinesim.exceptions import InputError
 from machinesim.identification.workpiece_setting import ReferenceSpheres
 from machinesim.nc import Program, ProgramBuilder
 from machinesim.realism import SphereArtefacts, draw_spheres, make_spheres
+from machinesim.rotations import rotation_xyz
 from machinesim.tolerances import SPHERE_CHORD_M
 from machinesim.tools import RoundNoseTool
 from machinesim.units import M_PER_MM, M_PER_UM
@@ -45,7 +46,7 @@ __all__ = [
     "GROOVE_ROI", "GROOVE_SPHERE_DESIGN", "GROOVE_SPHERES", "GROOVE_STOCK", "PARK", "SAFE_Z",
     "SETTING_S", "CrownPlan", "PassGroup", "crown_blank", "crown_design", "crown_passes",
     "crown_roi", "crown_sphere_design", "crown_spheres", "crown_stock", "crown_tool",
-    "groove_program", "machining_time", "passes_program",
+    "groove_program", "groove_rapids_crash", "machining_time", "passes_program",
 ]
 
 MM, UM = M_PER_MM, M_PER_UM
@@ -91,6 +92,30 @@ def groove_program(depth: float = 3 * UM, length: float = 1 * MM,
         b.linear(Z=-depth, feed_mm_per_min=feed_mm_per_min)
         b.linear(X=length).linear(Z=CLEARANCE).rapid(Z=SAFE_Z).rapid(X=0.0)
     return b.build()
+
+
+def groove_rapids_crash(setting, length: float = 1 * MM) -> str | None:
+    """Whether `groove_program`'s rapids run into the block of a workpiece set by
+    ``setting`` (a `WorkpieceSetting`, as a lab's robot landed it): what they meet, or None.
+
+    The program comes down at rapid to `CLEARANCE` over the crossing and turns C and
+    returns along X at `SAFE_Z`, over the grooves' ``length``; the block's top (z = 0 as
+    designed) stands at ``delta_z + R[2, :2] . (x, y)`` there, highest on the circle of
+    radius ``length`` about the crossing. (The tool's nose rises faster than any tilt a
+    probed setting can have, so its tip is what meets the block first; the C centre's
+    offset, micrometres across, is left out.)
+    """
+    rotation = rotation_xyz(setting.alpha, setting.beta, setting.gamma)
+    height = float(setting.delta[2])
+    highest = height + math.hypot(rotation[2, 0], rotation[2, 1]) * length
+    if height >= CLEARANCE:
+        return (f"its top stands {height / UM:.1f} um high at the crossing, where the groove "
+                f"program comes down at rapid to {CLEARANCE / UM:.0f} um (CLEARANCE)")
+    if highest >= SAFE_Z:
+        return (f"its top stands up to {highest / UM:.1f} um high within {length / MM:g} mm "
+                f"of the crossing, where the groove program turns C and returns at "
+                f"{SAFE_Z / UM:.0f} um (SAFE_Z)")
+    return None
 
 
 # -------------------------------------------------------------------------------- crown

@@ -372,7 +372,7 @@ class RobotLoadedWorkpiece:
         for name, program in (("before", nominal), ("after", programs["grooves_compensated"]),
                               ("after_model", programs["grooves_compensated_model"])):
             part, report = lab.cut(program, GROOVE_TOOL, self.workpiece(lab), roi=GROOVE_ROI,
-                                   start=PARK)
+                                   start=PARK, progress=self._tell_sweeps(f"grooves {name}"))
             depths[name] = groove_depths(part, scope)
             cuts[f"grooves_{name}"] = _cut_details(report)
             if name != "after_model":
