@@ -175,6 +175,34 @@ def test_sphere_with_its_radius_keeps_the_named_side_of_a_noisy_ring():
                                CENTRE - [0.0, 0.0, 2 * BELOW], rtol=0, atol=0.1 * UM)
 
 
+def test_sphere_with_its_radius_says_why_a_noisy_equatorial_ring_does_not_settle():
+    """Twelve touches round the equator of a 1 mm sphere, 20 nm of noise: moving the centre
+    along the ring's axis by h changes the distances by h^2 / 2R only (20 nm at h = 6.3 um),
+    so the noise leaves it unsettled (107 of 200 draws). The refusal said "are the points on
+    a sphere?", which they are; it now names the ring and what fixes it. Exact, the same
+    ring settles at the centre; 10 um below the equator the noisy ring settles in 200 of 200
+    draws (h / R = 0.01: the distances then move to first order)."""
+    radius, angles = 1.0 * MM, np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
+
+    def equator(below: float) -> np.ndarray:
+        rho = math.sqrt(radius**2 - below**2)
+        return np.column_stack([rho * np.cos(angles), rho * np.sin(angles),
+                                np.full_like(angles, -below)])
+
+    noise = np.random.default_rng(0).normal(0.0, 20e-9, (12, 3))
+    with pytest.raises(InputError, match=r"did not settle in 100 steps .*: with the radius "
+                       r"held \(0.001 m\) the points are a ring of radius 0.001.* m, 0 m from "
+                       r"the plane of the sphere's great circle .* Touch points off that "
+                       r"circle"):
+        fit_sphere(equator(0.0) + noise, radius=radius)
+    np.testing.assert_allclose(fit_sphere(equator(0.0), radius=radius).centre, 0.0,
+                               rtol=0, atol=1e-18)
+    for seed in range(20):
+        noisy = equator(10 * UM) + np.random.default_rng(seed).normal(0.0, 20e-9, (12, 3))
+        # sigma along the axis ~ 20 nm R / h / sqrt(12) = 0.6 um: within 5 of it
+        assert abs(fit_sphere(noisy, radius=radius).centre[2]) < 3 * UM
+
+
 # ---------------------------------------------------------------- Sa of a flat map
 
 

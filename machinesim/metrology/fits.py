@@ -57,6 +57,11 @@ CIRCLE_SCATTERS = 3.0
 OTHER_SIDE_RMS = 0.5
 #: Gauss-Newton gives up after this many iterations (it takes ~3-6 on a sphere cap).
 MAX_ITERATIONS = 100
+#: A held-radius sphere fit that does not settle on points within this fraction of the
+#: radius of one plane, on a circle whose plane lies within this fraction of the radius of
+#: the centre, is said to be a ring near the equator (`fit_sphere`): moving the centre
+#: along the ring's axis by h changes the distances by about h^2 / 2R only.
+GREAT_CIRCLE = 0.1
 #: `form_error`'s shift has settled when a step no longer shrinks and is within this many of
 #: the shift's standard uncertainties (from the residual): round-off then drives the steps.
 #: The shift's columns nearly match the tilt's (a shifted quadratic is a tilted one), so
@@ -235,8 +240,13 @@ def _settle(local, centre, fitted, held: bool, size: float):
             fitted += step[3]
         if np.abs(step).max() <= STEP_TOL * size:
             return centre, fitted
-    raise InputError(f"The sphere fit did not settle in {MAX_ITERATIONS} steps (last step "
-                     f"{np.abs(step).max():.3g} m): are the points on a sphere?")
+    last = f"The sphere fit did not settle in {MAX_ITERATIONS} steps (last step " \
+           f"{np.abs(step).max():.3g} m)"
+    if held:
+        near = _near_great_circle(local, fitted)
+        if near is not None:
+            raise InputError(f"{last}: {near}")
+    raise InputError(f"{last}: are the points on a sphere?")
 
 
 def _either_side(local, algebraic, radius: float, concave: bool, size: float) -> np.ndarray:
@@ -258,10 +268,36 @@ def _either_side(local, algebraic, radius: float, concave: bool, size: float) ->
     return found if rms(found) < OTHER_SIDE_RMS * rms(sided) else sided
 
 
+def _circle(local: np.ndarray):
+    """The least-squares plane and circle of ``local``: (singular values, plane axes vt,
+    circle centre (a, b) in the plane's first two axes, radius rho, radial scatter)."""
+    _, singular, vt = np.linalg.svd(local, full_matrices=False)
+    u, v = local @ vt[0], local @ vt[1]
+    design = np.column_stack([2.0 * u, 2.0 * v, np.ones_like(u)])
+    (a, b, c), *_ = np.linalg.lstsq(design, u * u + v * v, rcond=None)
+    rho = math.sqrt(max(c + a * a + b * b, 0.0))
+    return singular, vt, a, b, rho, np.hypot(u - a, v - b) - rho
+
+
+def _near_great_circle(local: np.ndarray, radius: float) -> str | None:
+    """Why a held-radius fit of ``local`` cannot settle when its points are a ring near the
+    sphere's equator (`GREAT_CIRCLE`), or None."""
+    singular, _, _, _, rho, _ = _circle(local)
+    height = math.sqrt(max(radius * radius - rho * rho, 0.0))
+    if (singular[2] / math.sqrt(len(local)) > GREAT_CIRCLE * radius
+            or height > GREAT_CIRCLE * radius):
+        return None
+    return (f"with the radius held ({radius:.6g} m) the points are a ring of radius "
+            f"{rho:.6g} m, {height:.3g} m from the plane of the sphere's great circle (near "
+            "its equator), where moving the centre along the ring's axis by h changes the "
+            "distances by about h^2 / 2R only, so their noise leaves it unsettled. Touch "
+            "points off that circle (a cap, or a second ring), or fit without the radius")
+
+
 def _centre_on_axis(local: np.ndarray, radius: float, concave: bool) -> np.ndarray:
     """Centre (m, about the points' mean) on the axis of the circle through ``local``, at
     sqrt(R^2 - rho^2) from the points' least-squares plane: above it if ``concave``."""
-    _, singular, vt = np.linalg.svd(local, full_matrices=False)
+    singular, vt, a, b, rho, scatter = _circle(local)
     if singular[1] <= COLLINEAR * singular[0]:
         raise InputError("Expected points spanning a plane, got points on one line")
     normal = vt[2]
@@ -270,11 +306,6 @@ def _centre_on_axis(local: np.ndarray, radius: float, concave: bool) -> np.ndarr
                          f"got a vertical plane (normal {normal.round(12).tolist()})",
                          key="concave")
     normal = normal if (normal[2] > 0.0) == concave else -normal
-    u, v = local @ vt[0], local @ vt[1]
-    design = np.column_stack([2.0 * u, 2.0 * v, np.ones_like(u)])
-    (a, b, c), *_ = np.linalg.lstsq(design, u * u + v * v, rcond=None)
-    rho = math.sqrt(max(c + a * a + b * b, 0.0))
-    scatter = np.hypot(u - a, v - b) - rho
     # a circle larger than the sphere by more than the points' scatter about it
     if rho > radius + CIRCLE_SCATTERS * float(np.sqrt(np.mean(scatter**2))):
         raise InputError(f"Expected the points' circle within the sphere, got its radius "
