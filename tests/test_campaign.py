@@ -128,6 +128,20 @@ def test_quick_is_refused_where_it_changes_nothing():
         CampaignSpec("workpiece_setting", 1, identify_only=True, quick=True)
 
 
+def test_a_grooves_trial_whose_landing_the_rapids_would_run_into_fails_at_once():
+    """A block landed 70 um high meets the groove program's rapids (CLEARANCE, 60 um, over
+    the crossing): the trial fails with the crash named instead of cutting it (the
+    scenario refuses the same landing, `groove_rapids_crash`); 50 um is cut."""
+    spec = CampaignSpec("workpiece_setting_grooves", 1, (parse_vary("workpiece.z=70um"),))
+    record = run_trial(spec, 0)
+    assert record["error"].startswith("InputError: the drawn landing sets the grooves' block "
+                                      "70.0 um high: its top stands 70.0 um high at the "
+                                      "crossing"), record["error"]
+    assert record["injected"] == {} and record["figures"] == {}
+    spec = CampaignSpec("workpiece_setting_grooves", 1, (parse_vary("workpiece.z=50um"),))
+    spec.entry.check(spec.entry.base().with_parameters(draw(spec, 0)[1]))  # no crash
+
+
 def test_a_parameter_the_procedure_never_reads_is_refused():
     """What may vary follows each procedure's ``lab_uses``: paper 000 reads the microscope
     only (a V tool, no robot); paper 002 lands with a robot, probes, and cuts with a round

@@ -74,6 +74,20 @@ def _workpiece(experiment: str):
     return build
 
 
+def _grooves_rapids_clear(errors) -> None:
+    """Refuse a drawn landing of the grooves' block that the groove program's rapids would
+    run into (`machinesim.cam.crown.groove_rapids_crash`): a crash, and a cut of thousands
+    of tiny sweeps, rather than a trial."""
+    from machinesim.cam.crown import groove_rapids_crash
+
+    crash = groove_rapids_crash(errors.workpiece)
+    if crash is not None:
+        raise InputError(f"the drawn landing sets the grooves' block "
+                         f"{errors.workpiece.delta[2] * 1e6:.1f} um high: {crash}, so the "
+                         "rapids would run into the block (a crash on a real machine); the "
+                         "trial was not cut")
+
+
 def _tool_setting_6axis(options):
     from machinesim.procedures.tool_setting_6axis import ToolSetting6Axis
 
@@ -113,7 +127,9 @@ class ProcedureEntry:
     """A procedure a campaign can run: its machine, how to build it, its default errors
     (the paper's, SI), default lab parameters (`LAB_PARAMETERS`), the error model those
     parameters are set on (`base`: no errors unless the procedure needs tables), and
-    whether ``--quick`` changes what it measures (`quick`)."""
+    whether ``--quick`` changes what it measures (`quick`), and a check of each trial's
+    error model before it runs (`check`: raises `InputError` for a model the procedure's
+    programs cannot cut, which fails that trial at once)."""
 
     machine: str
     build: Callable[[Mapping], Any]
@@ -122,6 +138,7 @@ class ProcedureEntry:
     about: str = ""
     base: Callable[[], Any] = _no_errors
     quick: bool = False
+    check: Callable[[Any], None] | None = None
 
 
 #: Procedures by campaign name (``machinesim campaign NAME``).
@@ -136,6 +153,7 @@ PROCEDURES = {
         "crown before and after (default: the robot's landing, repeatability 30 um)"),
     "workpiece_setting_grooves": ProcedureEntry(
         "robonano_a0ib", _workpiece("grooves"), lab={"robot.repeatability": 30.0 * M_PER_UM},
+        check=_grooves_rapids_clear,
         about="paper 002, section 3.1: the same identification, the crossing grooves"),
     "tool_setting_6axis": ProcedureEntry(
         "robonano_ui", _tool_setting_6axis, _tool_setting_defaults,
@@ -384,8 +402,10 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
     record = {"trial": int(i), "drawn": drawn, "injected": {}, "identified": {},
               "figures": {}, "elapsed_s": math.nan, "error": None}
     try:
-        lab = Lab(spec.machine, spec.entry.base().with_parameters(errors), noise=spec.noise,
-                  seed=trial_seed(spec.seed, i))
+        model = spec.entry.base().with_parameters(errors)
+        if spec.entry.check is not None and not spec.identify_only:
+            spec.entry.check(model)
+        lab = Lab(spec.machine, model, noise=spec.noise, seed=trial_seed(spec.seed, i))
         sigmas = {kind: lab_parameters[f"{kind}.sigma"] for kind in INSTRUMENTS
                   if f"{kind}.sigma" in lab_parameters}
         result = run(spec.build(), _LabWithInstruments(lab, sigmas) if sigmas else lab)
