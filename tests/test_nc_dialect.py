@@ -499,6 +499,11 @@ def test_a_peck_typed_in_the_wrong_unit_is_refused_before_it_makes_thousands_of_
     ("G00 X1. Y1. Z1.\n".encode("utf-16"), "UTF-16 text"),
     ("G00 X1. Y1. Z1.\n".encode("utf-16-le"), "UTF-16 text"),
     (bytes(range(256)) * 8, "not a text file"),
+    # without a byte-order mark, big-endian: the zero before each character
+    ("G00 X1. Y1. Z1.\n".encode("utf-16-be"), "UTF-16 text"),
+    # a binary full of zeros on both sides of each byte pair (little-endian integers, as an
+    # executable or a binary PLY holds) is no UTF-16, and was called so
+    (np.arange(1024, dtype="<i4").tobytes(), "not a text file"),
 ])
 def test_a_file_that_is_not_utf8_text_is_refused_in_one_line(tmp_path, data, expected):
     path = tmp_path / "prog.nc"

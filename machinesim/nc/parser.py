@@ -298,6 +298,9 @@ UTF8_BOM = b"\xef\xbb\xbf"
 #: rather than as a problem at every block.
 TEXT_PROBE_BYTES = 4096
 NOT_TEXT_SHARE = 0.05
+#: UTF-16 without a byte-order mark: more than this share of the bytes on one side of each
+#: character are zero (and almost none on the other side).
+UTF16_ZERO_SHARE = 0.3
 _TEXT_CONTROLS = frozenset(b"\t\n\r\f\v")
 
 
@@ -305,8 +308,7 @@ def _refuse_binary(data: bytes, source: str) -> None:
     """Refuse, in one message, a file that is UTF-16 or not text at all (a binary picked by
     mistake); a stray byte in a text program is left to the reader, which names its line."""
     probe = data[:TEXT_PROBE_BYTES]
-    if probe[:2] in (b"\xff\xfe", b"\xfe\xff") or (
-            len(probe) >= 4 and probe[1::2].count(0) > 0.3 * (len(probe) // 2)):
+    if probe[:2] in (b"\xff\xfe", b"\xfe\xff") or _utf16_zeros(probe):
         raise NCProgramError(
             "the file is UTF-16 text (a byte-order mark or a zero byte beside each "
             "character, as Windows Notepad's 'Unicode' saves it); expected ASCII or UTF-8: "
@@ -320,6 +322,17 @@ def _refuse_binary(data: bytes, source: str) -> None:
             f"not a text file: {odd} of its first {len(text)} characters are control bytes "
             f"or not UTF-8 (the first at character {first + 1}); expected an NC program as "
             "ASCII or UTF-8 text", source=source)
+
+
+def _utf16_zeros(probe: bytes) -> bool:
+    """Whether ``probe`` reads as UTF-16 without a byte-order mark: ASCII saved so has a
+    zero beside each character, on one side only (the high byte). A binary (an executable,
+    a PLY picked by mistake) has zeros on both sides and is no text at all."""
+    if len(probe) < 4:
+        return False
+    half = len(probe) // 2
+    even, odd = probe[0::2].count(0), probe[1::2].count(0)
+    return max(even, odd) > UTF16_ZERO_SHARE * half and min(even, odd) < NOT_TEXT_SHARE * half
 
 
 class Reader:
