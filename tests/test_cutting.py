@@ -100,6 +100,25 @@ def test_a_rapid_back_along_a_groove_just_cut_cuts_nothing():
     assert report.rapids_that_cut == ()
 
 
+def test_a_retract_up_its_own_plunge_far_from_work_zero_cuts_nothing():
+    # A beginner's program (helmancnc.com's simple mill example): plunge at (-75, -75) mm
+    # 20 mm deep, a square at that depth, back to the plunge, G00 Z100. The faces of the
+    # retract and of the plunge coincide; at 75 mm from zero their booleans leave a film
+    # 2.5e-18 m thick (6.6e-24 m^3), which had been listed as a rapid that cut
+    text = ("G90 G21 G17\nG00 X-75. Y-75. Z5.\nG01 Z-20. F100.\nX-40.\nY40.\nX40.\nY-40.\n"
+            "X-75.\nY-75.\nG00 Z100.\nM30\n")
+    program = parse_program(text, "helman.nc")
+    part, report = cut(program, "grooving_4axis", tool="flat:5:h=30",
+                       stock="block:200x200x30@-100,-100,0")
+    assert report.rapids_that_cut == ()
+    # a rapid 1 mm below the square's floor first (G00 Z-21.) meets fresh stock, and is
+    # listed; the retract after it is not
+    deeper = text.replace("G00 Z100.", "G00 Z-21.\nG00 Z100.")
+    _, report = cut(parse_program(deeper, "deeper.nc"), "grooving_4axis", tool="flat:5:h=30",
+                    stock="block:200x200x30@-100,-100,0")
+    assert report.rapids_that_cut == (10,)
+
+
 def test_rapids_across_many_grooves_are_judged_alike_by_both_unions(monkeypatch):
     # 70 grooves 5 um deep along X, 20 um apart; then a rapid 3 um deep along Y across all
     # of them, which cuts the ridges between them (listed), and a rapid 5 um deep back along
