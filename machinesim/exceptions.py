@@ -6,6 +6,18 @@ what was expected, so that a user can fix the input without reading the source.
 
 from __future__ import annotations
 
+#: A key or value longer than this is shown by its ends and its length (`brief`).
+SHOWN_CHARACTERS = 60
+
+
+def brief(text: str) -> str:
+    """``text`` as a message shows it: whole when short, else its first and last characters
+    and its length, so that a 10-million-digit word makes a line, not 20 MB of stderr."""
+    text = str(text)
+    if len(text) <= SHOWN_CHARACTERS:
+        return text
+    return f"{text[:40]}...{text[-12:]} ({len(text)} characters)"
+
 
 class MachineSimError(Exception):
     """Root of every error machinesim raises on purpose."""
@@ -51,6 +63,7 @@ class InputError(MachineSimError, ValueError):
             key = self.key = str(key)  # a dict's key may be any hashable (an int)
             # a key read from a file may hold control bytes: shown escaped, never raw
             shown = key if key.isprintable() else key.encode("unicode_escape").decode("ascii")
+            shown = brief(shown)
             where.append(f"key '{shown}'")
         prefix = ", ".join(where)
         super().__init__(f"{prefix}: {message}" if prefix else message)

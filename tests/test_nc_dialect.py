@@ -577,3 +577,15 @@ def test_g53_is_measured_from_the_reference_position():
 def test_an_arc_in_xz_without_g18_is_told_to_select_it():
     with pytest.raises(NCProgramError, match="needs G18 first"):
         parse_program("G90\nG00 X5. Z0.\nG03 X10. Z-2.5 R2.5 F10.\n", "lathe.nc")
+
+
+@pytest.mark.parametrize("word, shown", [
+    ("X1" + "1" * 1_000_000 + ".", "(1000003 characters)"),  # out of float64's range
+    ("X1." + "1." * 500_000, "(1000003 characters)"),  # malformed
+])
+def test_a_word_a_million_characters_long_is_shown_by_its_ends(word, shown):
+    # its message had held the word twice (key and value): 2 MB on one line of stderr
+    with pytest.raises(NCProgramError) as info:
+        parse_program(f"G00 X0. Y0. Z1.\nG01 F100.\n{word}\n", "long.nc")
+    message = str(info.value)
+    assert len(message) < 400 and shown in message and "line 3, column 1" in message

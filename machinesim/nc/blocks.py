@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from machinesim.exceptions import NCProgramError
+from machinesim.exceptions import NCProgramError, brief
 from machinesim.nc.arcs import (
     ARC_RADIUS_TOLERANCE_INCH_M,
     ARC_RADIUS_TOLERANCE_M,
@@ -576,8 +576,8 @@ class Block:
 
     def finite(self, value: float, word: Word) -> float:
         if not math.isfinite(value):
-            raise self.fail(f"value of {word.key} is out of range (not finite in float64)",
-                            word)
+            raise self.fail(f"value of {brief(word.key)} is out of range (not finite in "
+                            "float64)", word)
         return value
 
     def integer(self, word: Word, what: str) -> int:

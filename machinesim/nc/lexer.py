@@ -6,7 +6,7 @@ import re
 import string
 from dataclasses import dataclass
 
-from machinesim.exceptions import NCProgramError
+from machinesim.exceptions import NCProgramError, brief
 
 #: A number: blanks may stand between its sign and its digits (``Z - 0.1``), as between a
 #: letter and its number, since blanks in a block are not read; not inside the digits.
@@ -118,8 +118,8 @@ def tokenize(raw: str, source: str, line: int, *,
                 stop = _end_of_garbage(raw, i)
                 tail = raw[i:stop]
                 fail(
-                    f"malformed number {tail!r} after {c.upper()!r}; expected digits with an "
-                    f"optional sign and decimal point, e.g. {c.upper()}-12.5",
+                    f"malformed number {brief(tail)!r} after {c.upper()!r}; expected digits "
+                    f"with an optional sign and decimal point, e.g. {c.upper()}-12.5",
                     start + 1,
                     c.upper() + tail,
                 )
@@ -132,7 +132,8 @@ def tokenize(raw: str, source: str, line: int, *,
             i = end
         elif c in "0123456789+-.":
             stop = _end_of_garbage(raw, i)
-            fail(f"number {raw[i:stop]!r} without an address letter", i + 1, raw[i:stop])
+            fail(f"number {brief(raw[i:stop])!r} without an address letter", i + 1,
+                 raw[i:stop])
             i = stop
         else:
             fail(
