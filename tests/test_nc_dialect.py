@@ -589,3 +589,15 @@ def test_a_word_a_million_characters_long_is_shown_by_its_ends(word, shown):
         parse_program(f"G00 X0. Y0. Z1.\nG01 F100.\n{word}\n", "long.nc")
     message = str(info.value)
     assert len(message) < 400 and shown in message and "line 3, column 1" in message
+
+
+def test_one_line_of_repeated_words_stops_at_the_problem_cap():
+    # 2 million 'X1.' on one line (8 MB) made 1,999,999 problems, 2.4 GB and 23 s for one
+    # mistake; reading keeps MAX_PROBLEMS (10,000), within a line as across lines
+    from machinesim.nc.parser import MAX_PROBLEMS
+
+    with pytest.raises(NCProgramError) as info:
+        parse_program("G00 X0. Y0. Z1.\nG01 F100. " + "X1. " * 30_000 + "\n", "long.nc")
+    assert MAX_PROBLEMS == 10_000 and len(info.value.problems) == 10_000
+    assert info.value.problems[0].column == 15  # the second X1. of line 2
+    assert "10000 problems in the program (reading stopped there; " in str(info.value)

@@ -97,6 +97,8 @@ class _Problems:
         self.found: dict[tuple, NCProgramError] = {}
 
     def add(self, error: NCProgramError) -> None:
+        if len(self.found) >= MAX_PROBLEMS:
+            return  # within one line too: a line of 2 million repeated words is one mistake
         key = (error.line, error.column, error.key, str(error))
         self.found.setdefault(key, error)
 
@@ -113,8 +115,9 @@ class _Problems:
         more = len(errors) - MAX_LISTED
         tail = f"\n  ... and {more} more (all in .problems)" if more > 0 else ""
         first = errors[0]
+        stopped = "reading stopped there; " if len(errors) >= MAX_PROBLEMS else ""
         error = NCProgramError(
-            f"{len(errors)} problems in the program (the first at line {first.line}; a "
+            f"{len(errors)} problems in the program ({stopped}the first at line {first.line}; a "
             "refused block moves nothing, so a later problem may follow from an earlier "
             f"one: mend them in order):\n{listed}{tail}",
             source=source, line=first.line, column=first.column, key=first.key,
