@@ -601,3 +601,13 @@ def test_one_line_of_repeated_words_stops_at_the_problem_cap():
     assert MAX_PROBLEMS == 10_000 and len(info.value.problems) == 10_000
     assert info.value.problems[0].column == 15  # the second X1. of line 2
     assert "10000 problems in the program (reading stopped there; " in str(info.value)
+
+
+def test_a_latin1_byte_outside_comments_is_named_as_not_utf8(tmp_path):
+    # a no-break space saved as Latin-1 (0xA0) between two words: it had been called an
+    # "unexpected character '\ufffd'", the replacement the reader decoded it to
+    path = tmp_path / "latin1.nc"
+    path.write_bytes(b"G00 X1.\xa0Y1. Z1.\n" + b"G01 X2. Y1. Z0. F100.\n" * 10)
+    with pytest.raises(NCProgramError, match="a byte that is not UTF-8") as info:
+        read_program(path)
+    assert (info.value.line, info.value.column) == (1, 8)

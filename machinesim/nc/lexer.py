@@ -135,6 +135,12 @@ def tokenize(raw: str, source: str, line: int, *,
             fail(f"number {brief(raw[i:stop])!r} without an address letter", i + 1,
                  raw[i:stop])
             i = stop
+        elif c == "\ufffd":  # what the reader decodes a byte that is not UTF-8 to
+            fail("a byte that is not UTF-8 (a Latin-1 or Windows-1252 character, such as a "
+                 "no-break space, saved by an editor in that encoding); expected ASCII "
+                 "outside comments: save the file as UTF-8 or remove the character",
+                 i + 1, c)
+            i = max(_end_of_garbage(raw, i + 1), i + 1)
         else:
             fail(
                 f"unexpected character {c!r}; expected words (a letter and a number), "
