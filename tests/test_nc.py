@@ -288,7 +288,9 @@ REFUSALS = [
     ("M98 P00002", 1, 1, "M98", "asks for 0 repeats"),
     ("G00 X1e5", 1, 7, "E5", "unknown word letter 'E'"),
     ("G00 X1.2.3", 1, 5, "X1.2.3", "malformed number"),
-    ("G00 X--1", 1, 5, "X--1", "malformed number"),
+    ("G00 X--1", 1, 5, "X--1", "malformed number .* e.g. X-12.5$"),
+    ("G01 X1 F--5", 1, 8, "F--5", "malformed number .* e.g. F12.5$"),  # F-12.5 is refused
+    ("G1.2.3", 1, 1, "G1.2.3", "malformed number .* e.g. G12$"),
     ("G00 Y", 1, 5, "Y", "malformed number"),
     ("G00 Xnan", 1, 5, "Xnan", "Xnan is not a finite number"),
     ("G00 X0\nG01 Z-inf F100.", 2, 5, "Z-inf", "Z-inf is not a finite number"),

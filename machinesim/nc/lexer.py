@@ -110,7 +110,7 @@ def tokenize(raw: str, source: str, line: int, *,
             if special is not None:  # Xnan, X-inf: one problem, not one per letter of it
                 fail(f"{c.upper()}{special.group()} is not a finite number (NaN and infinity "
                      f"are no lengths, angles or codes); expected digits with an optional "
-                     f"sign and decimal point, e.g. {c.upper()}-12.5", start + 1,
+                     f"sign and decimal point, e.g. {_example(c)}", start + 1,
                      c.upper() + special.group())
                 i = special.end()
                 continue
@@ -119,7 +119,7 @@ def tokenize(raw: str, source: str, line: int, *,
                 tail = raw[i:stop]
                 fail(
                     f"malformed number {brief(tail)!r} after {c.upper()!r}; expected digits "
-                    f"with an optional sign and decimal point, e.g. {c.upper()}-12.5",
+                    f"with an optional sign and decimal point, e.g. {_example(c)}",
                     start + 1,
                     c.upper() + tail,
                 )
@@ -174,3 +174,18 @@ def _end_of_garbage(raw: str, i: int) -> int:
     while i < len(raw) and raw[i] not in _BLANK and raw[i] not in _LETTERS and raw[i] not in "(;":
         i += 1
     return i
+
+
+#: Address letters that take a negative value (coordinates, arc centres and radius, a
+#: cycle's R plane); and those that take a whole number (codes, numbers, counts).
+_SIGNED = frozenset("ABCIJKRUVWXYZ")
+_WHOLE = frozenset("DGHLMNOPT")
+
+
+def _example(letter: str) -> str:
+    """A well-formed word for ``letter``: negative only where the letter takes it (F-12.5
+    had been offered for a feed, which is refused), whole where it is a code or count."""
+    letter = letter.upper()
+    if letter in _WHOLE:
+        return f"{letter}12"
+    return f"{letter}-12.5" if letter in _SIGNED else f"{letter}12.5"
