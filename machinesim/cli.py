@@ -336,6 +336,8 @@ def _cut(args) -> int:
     summary["notes"] = [*summary["notes"], *_reading_notes(args, program, chord)]
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
+    pieces, apart = _pieces(part, stock, roi)
+    summary["part_pieces_count"] = len(pieces)
     files = [(args.out, part.encode(file_format))]
     if args.report is not None:
         check_units(summary)  # units in every key, as --report promises
@@ -369,6 +371,14 @@ def _cut(args) -> int:
               file=sys.stderr)
     for item in report.limit_violations:
         print(f"warning: outside travel: {item}", file=sys.stderr)
+    if apart:
+        volumes = ", ".join(f"{v * 1e9:.6g}" for v in pieces[:5]) + (
+            " ..." if len(pieces) > 5 else "")
+        material = "the stock in the --roi window" if roi else "the stock"
+        was = "was one" if apart == 1 else f"had {apart}"
+        print(f"warning: the part is in {len(pieces)} separate pieces ({volumes} mm^3), where "
+              f"{material} {was}: a cut went through it (deeper than the stock, or round a "
+              f"piece); {args.out} holds them all", file=sys.stderr)
     if report.empty_cut and report.edge_plane_lines:
         lines = ", ".join(map(str, report.edge_plane_lines[:5])) + (
             " ..." if len(report.edge_plane_lines) > 5 else "")
@@ -383,6 +393,25 @@ def _cut(args) -> int:
         print("warning: the program removed no material (does it reach the stock?)",
               file=sys.stderr)
     return 0
+
+
+def _pieces(part, stock, roi) -> tuple[list[float], int]:
+    """The volumes (m^3, largest first) of the part's separate pieces, and the number the
+    material it was cut from had (the stock, or the stock in the ``roi`` windows) when the
+    part has more, else 0: a groove across the block deeper than the stock cuts it in two,
+    which the part file holds without a word."""
+    volumes = sorted((p.volume() for p in part.manifold.decompose()), reverse=True)
+    if len(volumes) <= 1:
+        return volumes, 0
+    material = stock if roi is None else _clipped(stock, roi)
+    before = len(material.manifold.decompose())
+    return volumes, (before if len(volumes) > before else 0)
+
+
+def _clipped(stock, roi):
+    from machinesim.cutting.windows import clip_to
+
+    return clip_to(stock, roi)
 
 
 if __name__ == "__main__":

@@ -215,6 +215,27 @@ def test_a_report_that_would_hold_nan_is_refused_and_nothing_is_written(tmp_path
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_groove_through_the_stock_is_said_to_leave_the_part_in_pieces(tmp_path, capsys):
+    """A 0.5 mm ball at Z-3 across a 2 mm block (y = 2 mm on 12 x 12 mm from -1): the part
+    is two blocks, 12 x 2.5 x 2 = 60 and 12 x 8.5 x 2 = 204 mm^3 (the groove, 1 mm
+    wide, took 24), which the part file held with exit 0 and no word; now a warning names
+    them, and the report counts them. The grooves of the example leave one piece."""
+    program = tmp_path / "deep.nc"
+    program.write_text("G90 G21 G17\nG00 X-1. Y2. Z1.\nG01 Z-3. F100.\nX11.\nG00 Z1.\nM30\n")
+    report = tmp_path / "deep.json"
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "ball:0.5",
+                        "--stock", "block:12x12x2@-1,-1,0", "--quiet", "--out",
+                        tmp_path / "deep.ply", "--report", report], capsys)
+    assert code == 0, err
+    assert ("warning: the part is in 2 separate pieces (204, 60 mm^3), where the stock was "
+            "one: a cut went through it") in err, err
+    assert json.loads(report.read_text())["part_pieces_count"] == 2
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "g.ply", "--report",
+                        tmp_path / "g.json"], capsys)
+    assert code == 0 and "separate pieces" not in err, err
+    assert json.loads((tmp_path / "g.json").read_text())["part_pieces_count"] == 1
+
+
 def test_ctrl_c_during_the_cut_exits_130_and_writes_nothing(tmp_path, capsys, monkeypatch):
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
