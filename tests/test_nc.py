@@ -289,6 +289,11 @@ REFUSALS = [
     ("G00 X1e5", 1, 7, "E5", "unknown word letter 'E'"),
     ("G00 X1.2.3", 1, 5, "X1.2.3", "malformed number"),
     ("G00 X--1", 1, 5, "X--1", "malformed number .* e.g. X-12.5$"),
+    ("G00 X2. Y2. Z5.\nG83 X2. Y2. Z-2. R1. Q.5 F50.\nG91 X2. K3", 3, 1, "G91",
+     r"G83 repeated in G91 with R \(line 2\) and Z \(line 2\) given in G90: .* restate R "
+     "and Z after changing G90/G91"),
+    ("G00 X2. Y2. Z5.\nG83 X2. Y2. Z-2. R1. Q.5 F50.\nG91 X2. R-4. K3", 3, 1, "G91",
+     r"with Z \(line 2\) given in G90: .* restate Z after"),
     ("G01 X1 F--5", 1, 8, "F--5", "malformed number .* e.g. F12.5$"),  # F-12.5 is refused
     ("G1.2.3", 1, 1, "G1.2.3", "malformed number .* e.g. G12$"),
     ("G00 Y", 1, 5, "Y", "malformed number"),

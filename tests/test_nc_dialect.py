@@ -351,6 +351,18 @@ def test_incremental_cycle_with_repeats_drills_a_row():
     assert program.targets[-1, 2] == pytest.approx(1 * MM, abs=EXACT_M)  # G99: at R
 
 
+def test_a_cycle_carried_into_g91_drills_with_r_and_z_restated_there():
+    """G81 begun in G90 (R1, Z-2 from Z5) and repeated in G91 with R and Z given again:
+    R-4 from the initial level is the same R plane at 1 mm, Z-3 from it the same bottom at
+    -2 mm, one hole 2 mm further along X. (Left unstated, they are refused: controls differ
+    on what the kept numbers mean in G91.)"""
+    program = parse_program("G00 X2. Y2. Z5.\nG98 G81 X2. Y2. Z-2. R1. F50.\n"
+                            "G91 X2. Z-3. R-4.")
+    bottoms = program.targets[program.kinds == KIND_LINEAR]
+    assert bottoms[:, 0].tolist() == pytest.approx([2 * MM, 4 * MM])
+    assert bottoms[:, 2].tolist() == pytest.approx([-2 * MM, -2 * MM], abs=EXACT_M)
+
+
 def test_a_motion_code_cancels_the_cycle():
     program = parse_program("G00 Z5.\nG81 X1. Z-1. R1. F10\nG00 X2.\nX3.")
     assert program.targets[-2:, 0].tolist() == [2 * MM, 3 * MM]

@@ -227,6 +227,7 @@ class Block:
                                         "yet (the initial level); move Z first", word)
                     state.initial_z = state.target["Z"]
                     state.cycle_z = state.cycle_r = state.cycle_q = None
+                    state.cycle_given = {}
                     state.cycle_p = 0.0
                 state.cycle = name
 
@@ -521,6 +522,18 @@ class Block:
         if state.cycle_z is None or state.cycle_r is None:
             raise self.fail(f"{state.cycle} needs the hole bottom Z and the R plane R",
                             cycle_word)
+        given = state.cycle_given
+        given.update({k: (state.incremental, self.line) for k in "RZ" if k in single})
+        stale = [k for k in "RZ" if given.get(k, (state.incremental,))[0] != state.incremental]
+        if stale:
+            mode = "G91" if state.incremental else "G90"
+            earlier = " and ".join(f"{k} (line {given[k][1]})" for k in stale)
+            raise self.fail(
+                f"{state.cycle} repeated in {mode} with {earlier} given in "
+                f"{'G90' if mode == 'G91' else 'G91'}: controls differ on what a kept R or Z "
+                "means in the new distance mode (LinuxCNC reads the number again in it); "
+                f"restate {' and '.join(stale)} after changing G90/G91",
+                cycle_word)
         return_z = state.initial_z if state.retract == "G98" else state.cycle_r
         try:
             steps = drill_steps(state.cycle, r_z=state.cycle_r, bottom_z=state.cycle_z,

@@ -84,6 +84,8 @@ class _State:
     cycle_z: float | None = None  # machine Z of the hole bottom
     cycle_r: float | None = None  # machine Z of the R plane
     cycle_q: float | None = None
+    #: the distance mode (G91: True) and line each of R and Z was last given in
+    cycle_given: dict = field(default_factory=dict)
     cycle_p: float = 0.0
     initial_z: float | None = None
     retract: str = "G98"
