@@ -178,7 +178,7 @@ def _asks(question) -> bool:
 class Terminated(KeyboardInterrupt):
     """SIGTERM (``kill PID``, a job scheduler's stop, a container's shutdown) within
     `ctrl_c_remembered`: handled as a Ctrl-C is (nothing half written, staging folders
-    removed), reported as what it is, with status 143 (`exit_status`)."""
+    removed), reported as what it is, with status 143 (`stopped`)."""
 
 
 #: Exit statuses of a run stopped by Ctrl-C or SIGTERM (128 + the signal, as shells say).

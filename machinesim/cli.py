@@ -400,18 +400,14 @@ def _pieces(part, stock, roi) -> tuple[list[float], int]:
     material it was cut from had (the stock, or the stock in the ``roi`` windows) when the
     part has more, else 0: a groove across the block deeper than the stock cuts it in two,
     which the part file holds without a word."""
+    from machinesim.cutting.windows import clip_to
+
     volumes = sorted((p.volume() for p in part.manifold.decompose()), reverse=True)
     if len(volumes) <= 1:
         return volumes, 0
-    material = stock if roi is None else _clipped(stock, roi)
+    material = stock if roi is None else clip_to(stock, roi)
     before = len(material.manifold.decompose())
     return volumes, (before if len(volumes) > before else 0)
-
-
-def _clipped(stock, roi):
-    from machinesim.cutting.windows import clip_to
-
-    return clip_to(stock, roi)
 
 
 if __name__ == "__main__":
