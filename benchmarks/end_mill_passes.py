@@ -15,6 +15,10 @@ b. A contour in levels: the same circle cut at 5 depths, 0.4 mm apart (G02 full 
 e. A zigzag pocket: ``flat:1`` 0.2 mm deep, 1000 passes 10 mm long at 10 um step-over (2006
    lines), its level passes united by their footprints (`machinesim.cutting.footprints`,
    the default) against in three dimensions.
+f. A star: ``flat:0.5`` 0.1 mm deep, 180 spokes 8 mm long from one hub, each after the
+   first begun by a rapid down to 0.05 mm into the hub the spokes before cut (1,080 lines):
+   the rapids judged first by whether one earlier sweep holds what they met
+   (`machinesim.cutting.rapids.RAPID_HOLDERS`, the default) against by unions alone.
 
 With ``--tilted`` the same end mill cuts through ``models/errors/example.toml``, whose
 workpiece stands tilted 0.01 and -0.02 deg against the machine's Z: the engine cuts in the
@@ -28,12 +32,13 @@ d. the contour in 5 levels, in the tool's frame only (in the workpiece frame it 
 Each variant runs in its own process (``--repeat`` times, median quoted), and the parts are
 compared: removed volumes and the volume of each part less the other.
 
-    .venv/bin/python benchmarks/end_mill_passes.py [--repeat 3] [--tilted]
+    .venv/bin/python benchmarks/end_mill_passes.py [--repeat 3] [--tilted] [--case star]
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import statistics
 import tempfile
 from pathlib import Path
@@ -49,6 +54,9 @@ if sys.argv[1] == "all":  # every sweep cut: nothing dropped
     engine.contained_sweeps = lambda hulls, *rest: np.zeros(len(hulls), dtype=bool)
 if sys.argv[1] == "workpiece":  # a tilted tool cut where it stands in the workpiece frame
     engine.tool_frame = lambda poses, tool: None
+if sys.argv[1] == "unions":  # rapids judged by unions of the earlier sweeps alone
+    import machinesim.cutting.rapids as rapids
+    rapids.RAPID_HOLDERS = 0
 if sys.argv[1] == "solids":  # level passes united in 3-D, not by their footprints
     import machinesim.cutting.footprints as footprints
     footprints.FEWEST = 10 ** 9
@@ -82,6 +90,19 @@ def pocket_program(rows: int = 1000, step_mm: float = 0.01) -> str:
     return "\n".join(lines) + "\n"
 
 
+def star_program(spokes: int = 180, length_mm: float = 8.0) -> str:
+    lines = ["%", "O4 (a star)", "G90 G21 G17 G94", "G00 X0. Y0. Z2."]
+    for k in range(spokes):
+        angle = 2 * math.pi * k / spokes
+        lines.append("G00 X0. Y0.")
+        if k:
+            lines.append("G00 Z-0.05")  # down into the hub the spokes before cut
+        lines += ["G01 Z-0.1 F100.", f"G01 X{length_mm * math.cos(angle):.4f} "
+                  f"Y{length_mm * math.sin(angle):.4f} F200.", "G00 Z-0.05", "G00 Z2."]
+    lines += ["M30", "%"]
+    return "\n".join(lines) + "\n"
+
+
 def cut(folder: Path, name: str, text: str, variant: str, errors: Path | None = None,
         tool: str = "flat:0.8", stock: str = "block:8x8x4@-4,-4,0") -> dict:
     program = folder / f"{name}.nc"
@@ -96,7 +117,8 @@ def cut(folder: Path, name: str, text: str, variant: str, errors: Path | None = 
         header = ply.read(512).decode("latin-1")
     triangles = int(header.split("element face ")[1].split()[0])
     return {"seconds": seconds, "removed_mm3": summary["removed_volume_mm3"],
-            "sweeps": summary["sweeps_count"], "part": out, "triangles": triangles}
+            "sweeps": summary["sweeps_count"], "part": out, "triangles": triangles,
+            "rapids": summary["rapids_that_cut_lines"]}
 
 
 def apart_mm3(a: Path, b: Path) -> float:
@@ -129,7 +151,8 @@ def compare(folder: Path, name: str, text: str, variants: tuple[str, str], repea
           + f": {statistics.median(times[second]) / statistics.median(times[first]):.2f} times")
     print(f"  removed {last[first]['removed_mm3']:.12g} against "
           f"{last[second]['removed_mm3']:.12g} mm^3; the parts apart by "
-          f"{apart_mm3(last[first]['part'], last[second]['part']):.3g} mm^3")
+          f"{apart_mm3(last[first]['part'], last[second]['part']):.3g} mm^3; rapids that cut "
+          f"at lines {last[first]['rapids']} against {last[second]['rapids']}")
 
 
 def main() -> None:
@@ -137,14 +160,22 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--tilted", action="store_true",
                         help="cut through models/errors/example.toml (cases c and d)")
+    parser.add_argument("--case", action="append", choices=("helix", "levels", "pocket", "star"),
+                        help="only this case (repeatable; default every untilted case)")
     args = parser.parse_args()
+    chosen = set(args.case or ("helix", "levels", "pocket", "star"))
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         if not args.tilted:
             for name, text in (("helix", helix_program()), ("levels", levels_program())):
-                compare(folder, name, text, ("dropped", "all"), args.repeat)
-            compare(folder, "pocket", pocket_program(), ("footprints", "solids"), args.repeat,
-                    tool="flat:1", stock="block:20x20x5")
+                if name in chosen:
+                    compare(folder, name, text, ("dropped", "all"), args.repeat)
+            if "pocket" in chosen:
+                compare(folder, "pocket", pocket_program(), ("footprints", "solids"),
+                        args.repeat, tool="flat:1", stock="block:20x20x5")
+            if "star" in chosen:
+                compare(folder, "star", star_program(), ("holders", "unions"), args.repeat,
+                        tool="flat:0.5", stock="block:20x20x2@-10,-10,0")
             return
         errors = Path(__file__).resolve().parents[1] / "models" / "errors" / "example.toml"
         compare(folder, "circle, tilted", levels_program(1), ("frame", "workpiece"),

@@ -147,6 +147,42 @@ def test_rapids_across_many_grooves_are_judged_alike_by_both_unions(monkeypatch)
     assert across in lines[True] and along not in lines[True]
 
 
+def test_a_rapid_one_earlier_sweep_holds_is_judged_without_a_boolean(monkeypatch):
+    # A star of 12 spokes, flat 0.5 mm end mill 0.1 mm deep, from a hub at (5, 5) mm; the
+    # first spoke is cut in two feeds. Each later spoke begins with a rapid down to 0.05 mm
+    # into the hub the spokes before cut (held whole by the rapid down of the spoke before:
+    # not listed); a rapid back along the first spoke 0.05 mm deep spans its two feeds (no
+    # one sweep holds it: judged by the union, not listed); the last rapid goes down to
+    # 0.15 mm, 0.05 mm below the floor (listed). Asked without the holders (the union
+    # alone): the same lines.
+    from machinesim.cutting import rapids
+
+    b = ProgramBuilder(1).rapid(X=5 * MM, Y=5 * MM, Z=1 * MM)
+    b.linear(Z=-0.1 * MM, feed_mm_per_min=100.0).linear(X=6.5 * MM).linear(X=8 * MM)
+    b.rapid(Z=1 * MM)
+    for k in range(1, 12):
+        a = 2 * math.pi * k / 12
+        b.rapid(X=5 * MM, Y=5 * MM).rapid(Z=-0.05 * MM)
+        b.linear(Z=-0.1 * MM, feed_mm_per_min=100.0)
+        b.linear(X=(5 + 3 * math.cos(a)) * MM, Y=(5 + 3 * math.sin(a)) * MM)
+        b.rapid(Z=1 * MM)
+    b.rapid(X=5 * MM, Y=5 * MM).rapid(Z=-0.05 * MM).rapid(X=8 * MM).rapid(Z=1 * MM)
+    b.rapid(X=5 * MM, Y=5 * MM).rapid(Z=-0.15 * MM).rapid(Z=1 * MM)
+    program = b.build()
+    crash = program.moves[-2].line
+    assert program.moves[-2].target["Z"] == pytest.approx(-0.15 * MM)
+    held = []
+    real = rapids._Earlier.held
+    monkeypatch.setattr(rapids._Earlier, "held",
+                        lambda self, *args: held.append(real(self, *args)) or held[-1])
+    _, report = cut(program, "grooving_4axis", tool="flat:0.5", stock="block:10x10x1")
+    assert report.rapids_that_cut == (crash,)
+    assert held.count(True) >= 11  # the hub's rapids down, each held by the one before
+    monkeypatch.setattr(rapids, "RAPID_HOLDERS", 0)
+    _, alone = cut(program, "grooving_4axis", tool="flat:0.5", stock="block:10x10x1")
+    assert alone.rapids_that_cut == report.rapids_that_cut
+
+
 def test_a_retract_after_turning_c_in_place_is_judged_by_the_last_sweeps():
     # the V tool 10 um deep at (1, 1) mm while C turns 90 deg: hundreds of sweeps over one
     # point, each overlapping the retract. The last of them took away all the retract meets

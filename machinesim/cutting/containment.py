@@ -8,7 +8,7 @@ from __future__ import annotations
 import manifold3d
 import numpy as np
 
-__all__ = ["CONTAINED_REL", "contained_sweeps"]
+__all__ = ["CONTAINED_REL", "contained_sweeps", "vertices_and_planes"]
 
 #: A sweep lies inside another when none of its vertices is farther than this fraction of
 #: the stock's scale outside any face plane of the other (`contained_sweeps`): 1e-15 m on a
@@ -28,7 +28,7 @@ CONTAINED_CANDIDATES = 8
 CONTAINED_PROBE = 32
 
 
-def _vertices_and_planes(solid: manifold3d.Manifold):
+def vertices_and_planes(solid: manifold3d.Manifold):
     """A convex solid's vertices (n, 3) and its faces' unit normals (t, 3) and offsets (t,)."""
     mesh = solid.to_mesh64()
     vertices = np.asarray(mesh.vert_properties)[:, :3]
@@ -104,11 +104,11 @@ def contained_sweeps(hulls, lower: np.ndarray, upper: np.ndarray, tiles,
     for index in order.tolist():
         candidates = [j for j in holders[index].tolist() if not dropped[j]] \
             if index in holders else []
-        vertices = _vertices_and_planes(hulls[index])[0] if candidates else None
+        vertices = vertices_and_planes(hulls[index])[0] if candidates else None
         probe = vertices[::max(1, len(vertices) // CONTAINED_PROBE)] if candidates else None
         for j in candidates:
             if j not in planes:
-                planes[j] = _vertices_and_planes(hulls[j])[1:]
+                planes[j] = vertices_and_planes(hulls[j])[1:]
             normal, offset = planes[j]
             # most candidates fail: a few vertices outside tell so at a fraction of the cost
             if float((probe @ normal.T - offset).max()) > tol:
