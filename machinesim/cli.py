@@ -92,7 +92,10 @@ def _parser() -> argparse.ArgumentParser:
                           "nose:RADIUS:ANGLE (round nose, e.g. nose:2.0:90), "
                           "ball:RADIUS (ball end mill, e.g. ball:2.0), flat:RADIUS (flat end "
                           "mill, e.g. flat:1.0 for 2 mm across); optionally :h=HEIGHT, "
-                          "the height to the holder in mm (e.g. v:90:h=5, default 10)")
+                          "the height to the holder in mm (e.g. v:90:h=5, default 10); for "
+                          "ball and flat also :d=DIAMETER, the shank's diameter above it in "
+                          "mm, for the holder check (e.g. flat:0.5:h=3:d=4, default: as wide "
+                          "as the tool)")
     cut.add_argument("--stock", required=True,
                      help="stock spec in mm: block:LxWxH (e.g. block:10x10x2, top face at "
                           "z = 0) or cylinder:RxH (e.g. cylinder:5x2), optionally placed "

@@ -72,6 +72,7 @@ def test_help_documents_every_cut_option_with_an_example(capsys):
                    "--tools", "--integer-input", "--allow-overtravel"):
         assert option in out
     assert "e.g. block:10x10x2" in out and "e.g. v:90" in out
+    assert ":d=" in out and "flat:0.5:h=3:d=4" in " ".join(out.split())  # docs/cli.md's --tool
     assert "millimetres" in out and "metres" in out
 
 
