@@ -356,6 +356,29 @@ def test_live_server_listens_on_loopback_only_and_serves_the_page():
     assert live.process.poll() is not None
 
 
+def test_a_scripts_wait_ends_quietly_on_ctrl_c_and_ends_the_server():
+    """``live.wait()`` in a script (docs/viewer.md) stopped by Ctrl-C: it returns None
+    (it raised KeyboardInterrupt into the script, a traceback) and the server has ended;
+    left alone it returns the server's exit code."""
+    import signal
+    import threading
+
+    scene = part_scene(tilted_block(1e-4), max_triangles=BUDGET)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with serve(scene) as live:
+            timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+            timer.start()
+            assert live.wait() is None
+            assert live.process.poll() is not None
+            timer.join()
+    finally:
+        signal.signal(signal.SIGINT, before)
+    with serve(scene) as live:
+        live.process.terminate()
+        assert live.wait() == -signal.SIGTERM
+
+
 # --------------------------------------------------------------------------------- cli
 
 def run(argv: list[str]) -> int:

@@ -72,9 +72,15 @@ class LiveSession:
             socket.close(linger=0)
         self.messages = replay_count(scene.frames)
 
-    def wait(self) -> int:
-        """Block until the server process ends; return its exit code."""
-        return self.process.wait()
+    def wait(self) -> int | None:
+        """Block until the server process ends, or until Ctrl-C: its exit code, or None
+        after Ctrl-C, which ends the server (a script's ``live.wait()`` is stopped so, as
+        the command line's viewer is, without a KeyboardInterrupt traceback)."""
+        try:
+            return self.process.wait()
+        except KeyboardInterrupt:
+            self.close()
+            return None
 
     def close(self) -> None:
         """End the server process."""
