@@ -15,7 +15,11 @@ b. A contour in levels: the same circle cut at 5 depths, 0.4 mm apart (G02 full 
 e. A zigzag pocket: ``flat:1`` 0.2 mm deep, 1000 passes 10 mm long at 10 um step-over (2006
    lines), its level passes united by their footprints (`machinesim.cutting.footprints`,
    the default) against in three dimensions.
-f. A star: ``flat:0.5`` 0.1 mm deep, 180 spokes 8 mm long from one hub, each after the
+f. A trochoidal slot: ``flat:0.5`` 0.3 mm deep, 60 loops of G02 (10,982 sweeps, all level
+   passes on one floor): their solids made only when read and left out of the containment
+   test (`machinesim.cutting.sweeps.DeferredSolid`, the default) against every solid made
+   and tested (as before).
+g. A star: ``flat:0.5`` 0.1 mm deep, 180 spokes 8 mm long from one hub, each after the
    first begun by a rapid down to 0.05 mm into the hub the spokes before cut (1,080 lines):
    the rapids judged first by whether one earlier sweep holds what they met
    (`machinesim.cutting.rapids.RAPID_HOLDERS`, the default) against by unions alone.
@@ -54,6 +58,11 @@ if sys.argv[1] == "all":  # every sweep cut: nothing dropped
     engine.contained_sweeps = lambda hulls, *rest: np.zeros(len(hulls), dtype=bool)
 if sys.argv[1] == "workpiece":  # a tilted tool cut where it stands in the workpiece frame
     engine.tool_frame = lambda poses, tool: None
+if sys.argv[1] == "eager":  # every level pass's solid made and tested for containment
+    import machinesim.cutting.sweepset as sweepset
+    from machinesim.cutting.sweeps import manifold_from
+    sweepset.DeferredSolid = manifold_from
+    engine.united_in_plane = lambda footprints: np.zeros(len(footprints), dtype=bool)
 if sys.argv[1] == "unions":  # rapids judged by unions of the earlier sweeps alone
     import machinesim.cutting.rapids as rapids
     rapids.RAPID_HOLDERS = 0
@@ -86,6 +95,18 @@ def pocket_program(rows: int = 1000, step_mm: float = 0.01) -> str:
     for row in range(rows):
         lines += [f"G01 X{5.0 if row % 2 == 0 else -5.0:.4f} Y{-5.0 + row * step_mm:.4f}",
                   f"G01 Y{-5.0 + (row + 1) * step_mm:.4f}"]
+    lines += ["G00 Z1.", "M30", "%"]
+    return "\n".join(lines) + "\n"
+
+
+def trochoid_program(loops: int = 60) -> str:
+    lines = ["%", "O5 (a trochoidal slot)", "G90 G21 G17 G94", "G00 X0. Y0. Z1.",
+             "G01 Z-0.3 F100."]
+    x = 0.0
+    for _ in range(loops):
+        lines.append(f"G02 X{x + 0.1:.4f} Y0. I0.05 J0. F300.")
+        x += 0.1
+        lines += [f"G02 X{x:.4f} Y1.0 I0. J0.5", f"G02 X{x:.4f} Y0. I0. J-0.5"]
     lines += ["G00 Z1.", "M30", "%"]
     return "\n".join(lines) + "\n"
 
@@ -160,10 +181,11 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--tilted", action="store_true",
                         help="cut through models/errors/example.toml (cases c and d)")
-    parser.add_argument("--case", action="append", choices=("helix", "levels", "pocket", "star"),
+    parser.add_argument("--case", action="append",
+                        choices=("helix", "levels", "pocket", "trochoid", "star"),
                         help="only this case (repeatable; default every untilted case)")
     args = parser.parse_args()
-    chosen = set(args.case or ("helix", "levels", "pocket", "star"))
+    chosen = set(args.case or ("helix", "levels", "pocket", "trochoid", "star"))
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         if not args.tilted:
@@ -173,6 +195,9 @@ def main() -> None:
             if "pocket" in chosen:
                 compare(folder, "pocket", pocket_program(), ("footprints", "solids"),
                         args.repeat, tool="flat:1", stock="block:20x20x5")
+            if "trochoid" in chosen:
+                compare(folder, "trochoid", trochoid_program(), ("deferred", "eager"),
+                        args.repeat, tool="flat:0.5", stock="block:10x6x2@-2,-3,0")
             if "star" in chosen:
                 compare(folder, "star", star_program(), ("holders", "unions"), args.repeat,
                         tool="flat:0.5", stock="block:20x20x2@-10,-10,0")

@@ -401,11 +401,14 @@ def test_passes_stacked_down_a_slope_cut_the_analytic_staircase(monkeypatch):
                                atol=LENGTH_TOL)
 
 
-def _helix_levels(radius, depths, steps=48):
-    """A flat end mill's circle of chords at each depth, one path per level (m)."""
+def _helix_levels(radius, depths, steps=48, rise=0.0):
+    """A flat end mill's circle of chords at each depth, one path per level (m); with
+    ``rise``, each a helix's turn going that much down (a level chord is a footprint
+    prism, united in the plane, `machinesim.cutting.footprints`)."""
     angle = np.linspace(0.0, 2.0 * math.pi, steps + 1)
     return [np.array([pose((2e-3 + radius * math.cos(a), 2e-3 + radius * math.sin(a),
-                            -depth)) for a in angle]) for depth in depths]
+                            -depth - rise * a / (2.0 * math.pi))) for a in angle])
+            for depth in depths]
 
 
 def _recorded_containment(monkeypatch) -> list:
@@ -424,12 +427,14 @@ def _recorded_containment(monkeypatch) -> list:
 
 def test_passes_repeated_deeper_are_dropped_and_the_part_is_the_same(monkeypatch):
     """A pass repeated over the same path deeper holds the shallower one: those sweeps are
-    dropped (`contained_sweeps`) and the part is the one cut with all of them."""
+    dropped (`contained_sweeps`) and the part is the one cut with all of them. (The turns
+    of a helix, 50 um down a turn: level passes would be united in the plane instead, and
+    are not tested.)"""
     import machinesim.cutting.engine as engine
     from machinesim.tools import FlatEndMill
 
     tool = FlatEndMill(0.5e-3, chord_tol=1e-6, height=5e-3)
-    paths = _helix_levels(0.6e-3, [0.2e-3, 0.4e-3, 0.6e-3])
+    paths = _helix_levels(0.6e-3, [0.2e-3, 0.4e-3, 0.6e-3], rise=50e-6)
     stock = block(4e-3, 4e-3, 1e-3)
     found = _recorded_containment(monkeypatch)
     part, report = remove(stock, tool, paths, method="boolean")

@@ -186,3 +186,22 @@ def test_the_engine_cuts_a_rotating_tools_move_as_the_hull_of_its_two_places(too
     x, y = np.linspace(0.2e-3, 3.8e-3, 37), np.linspace(0.2e-3, 3.8e-3, 37)
     np.testing.assert_allclose(height_map(part, x, y), height_map(Part(expected), x, y),
                                rtol=0, atol=1e-12)
+
+
+def test_a_deferred_solid_is_made_once_when_read_and_its_mesh_volume_is_the_boxs():
+    """A level pass's solid is made only when read (`Solids`); its volume beforehand comes
+    from the mesh, taken about its first vertex: a 1 x 2 x 3 mm box 0.5 m from zero is
+    6 mm^3 to 1e-12 of it (about the origin the same sum is off by 2.5e-10)."""
+    from machinesim.cutting.sweeps import DeferredSolid, Solids, mesh_volume
+
+    box = manifold3d.Manifold.cube((1e-3, 2e-3, 3e-3)).translate((0.5, -0.5, 0.1))
+    mesh = box.to_mesh64()
+    vertices = np.array(mesh.vert_properties[:, :3], dtype=np.float64)
+    triangles = np.array(mesh.tri_verts)
+    assert mesh_volume(vertices, triangles) == pytest.approx(6e-9, rel=1e-12)
+    solids = Solids([DeferredSolid(vertices, triangles, 7)])
+    assert solids.deferred(0)
+    first = solids[0]
+    assert isinstance(first, manifold3d.Manifold) and not solids.deferred(0)
+    assert solids[0] is first and list(solids) == [first]
+    assert first.volume() == pytest.approx(6e-9, rel=1e-12)

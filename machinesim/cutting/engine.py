@@ -58,7 +58,7 @@ import numpy as np
 from manifold3d import OpType
 
 from machinesim.cutting.containment import CONTAINED_REL, contained_sweeps
-from machinesim.cutting.footprints import level_prisms
+from machinesim.cutting.footprints import level_prisms, united_in_plane
 from machinesim.cutting.frame import into_frame, out_of_frame, tool_frame
 from machinesim.cutting.relief import cut_reliefs
 from machinesim.cutting.sheets import SheetReport, remove_sheets
@@ -431,8 +431,13 @@ def remove(
 
     plan = planned(np.ones(len(hulls), dtype=bool))
     # Sweeps inside another sweep remove nothing more: drop them, then tile what is left.
+    # Level passes of a floor with enough of them are left out: their footprints are united
+    # in the plane, where one inside another costs nothing, and testing them would make
+    # each one's solid (`DeferredSolid`).
+    level = united_in_plane(footprints)
     inside = contained_sweeps(hulls, lower, upper,
-                              [tile for _, tiles in plan for tile in tiles],
+                              [(box, members[~level[members]])
+                               for _, tiles in plan for box, members in tiles],
                               CONTAINED_REL * scale)
     if inside.any():
         plan = planned(~inside)

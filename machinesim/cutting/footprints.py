@@ -32,7 +32,7 @@ from manifold3d import OpType
 
 from machinesim.cutting.sweeps import manifold_from
 
-__all__ = ["Footprint", "level_prisms"]
+__all__ = ["Footprint", "level_prisms", "united_in_plane"]
 
 #: Where the footprints' farthest coordinate is scaled to, in Clipper2's units: a tenth of
 #: the 4.6e10 it holds (2**62 over its 1e8 grid steps a unit).
@@ -86,6 +86,18 @@ def level_prisms(members: np.ndarray, footprints: Sequence[Footprint | None],
             taken.update(group)
     rest = np.array([i for i in members.tolist() if i not in taken], dtype=members.dtype)
     return prisms, rest
+
+
+def united_in_plane(footprints: Sequence[Footprint | None]) -> np.ndarray:
+    """Which sweeps have a footprint on a floor and top that at least `FEWEST` share, over
+    the whole cut (bool, one per sweep): those `level_prisms` unites in the plane (where a
+    tile holds fewer of them, they go the 3-D way there)."""
+    keys = [None if f is None else (f[0], f[1]) for f in footprints]
+    counts: dict[tuple[float, float], int] = defaultdict(int)
+    for key in keys:
+        if key is not None:
+            counts[key] += 1
+    return np.array([key is not None and counts[key] >= FEWEST for key in keys], dtype=bool)
 
 
 def _prism(floor: float, top: float, corners: list[np.ndarray],

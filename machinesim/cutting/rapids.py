@@ -15,7 +15,13 @@ import numpy as np
 
 from machinesim.cutting.containment import CONTAINED_REL, vertices_and_planes
 from machinesim.cutting.frame import into_frame, tool_frame
-from machinesim.cutting.sweeps import SolidSweep, hull_mesh, manifold_from, prism_triangles
+from machinesim.cutting.sweeps import (
+    SolidSweep,
+    hull_mesh,
+    manifold_from,
+    mesh_volume,
+    prism_triangles,
+)
 from machinesim.cutting.sweepset import POINTS_PER_CHUNK
 from machinesim.tolerances import (
     RAPID_CUT_VOLUME_M3,
@@ -217,9 +223,7 @@ class _Thick:
             shift = np.array([RAPID_EDGE_HALF_THICKNESS_M, 0.0, 0.0])
             self.vertices = np.concatenate([vertices - shift, vertices + shift])
             triangles = prism_triangles(len(vertices)).astype(np.int64)
-            corner = self.vertices[triangles]
-            volume = np.einsum("ij,ij->i", corner[:, 0],
-                               np.cross(corner[:, 1], corner[:, 2])).sum()
+            volume = mesh_volume(self.vertices, triangles)
             self.triangles = triangles if volume > 0.0 else triangles[:, ::-1]
         else:
             self.vertices, self.triangles = vertices, np.asarray(tool.triangles())

@@ -15,11 +15,14 @@ import manifold3d
 import numpy as np
 
 from machinesim.cutting.sweeps import (
+    DeferredSolid,
+    Solids,
     SolidSweep,
     clipped_bounds,
     clipped_prisms,
     hull_mesh,
     manifold_from,
+    mesh_volume,
 )
 from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL, SIDEWAYS_WARN_RAD, TWIST_M
 
@@ -216,17 +219,22 @@ class SweepSet:
                     and np.array_equal(top[:, :2], bottom[:, :2])):
                 start[n:, 2] = level
                 vertices, triangles = self.solid_sweep.mesh_from(start, rotation, move)
+                floor = bottom[:, 2]
+                if move[2] == 0.0 and floor.min() == floor.max():
+                    # level, on a level floor: an upright prism (`footprints`), its solid
+                    # made only if it is cut as one (`DeferredSolid`)
+                    volume = mesh_volume(vertices, triangles)
+                    if not volume > 0.0:
+                        return None
+                    corners = np.concatenate([bottom[:, :2], bottom[:, :2] + move[:2]])
+                    return (DeferredSolid(vertices, triangles, self.run_id), volume, vertices,
+                            (float(floor[0]), float(level), corners))
                 solid = manifold_from(vertices, triangles, self.run_id)
                 if solid is None:
                     return None
                 volume = solid.volume()
                 if not volume > 0.0:
                     return None
-                floor = bottom[:, 2]
-                if move[2] == 0.0 and floor.min() == floor.max():
-                    # level, on a level floor: an upright prism (`footprints`)
-                    corners = np.concatenate([bottom[:, :2], bottom[:, :2] + move[:2]])
-                    return solid, volume, None, (float(floor[0]), float(level), corners)
                 return solid, volume
         vertices, triangles = self.solid_sweep.mesh(rotation, origin, move)
         return self._solid(vertices, triangles, vertices[:, 2].max() > self.clip_z)
@@ -244,7 +252,9 @@ class SweepSet:
 
         Returns
         -------
-        hulls : list of manifold3d.Manifold
+        hulls : Solids
+            Each sweep's manifold3d.Manifold, by index (a level pass's is made when first
+            read: `DeferredSolid`).
         lower, upper : ndarray, shape (s, 3)
             Bounds of each clipped sweep, m.
         direction : ndarray, shape (s, 3)
@@ -264,7 +274,7 @@ class SweepSet:
         owners : list of int
             The sweep index (over all paths) of each of ``hulls``, increasing.
         """
-        hulls, lower, upper, direction, sideways, reached = [], [], [], [], [], []
+        hulls, lower, upper, direction, sideways, reached = Solids(), [], [], [], [], []
         owners, footprints = [], []
         n_degenerate, swept = 0, 0.0
         rotation, origin = self.poses[:, :3, :3], self.poses[:, :3, 3]
@@ -339,6 +349,7 @@ class SweepSet:
                     continue
                 solid, volume = built[:2]
                 if len(built) > 2 and built[2] is not None:  # a prism: its vertices' bounds
+                    # (a footprint's top is the clip plane: its move is level)
                     box = np.concatenate([built[2].min(axis=0), built[2].max(axis=0)])
                 else:
                     box = np.array(solid.bounding_box())
