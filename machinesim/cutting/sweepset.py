@@ -348,14 +348,15 @@ class SweepSet:
                     reached.append(begin + int(near[row]))
                     continue
                 solid, volume = built[:2]
+                solid_tool = len(built) < 3 or built[2] is None or len(built) > 3
                 if len(built) > 2 and built[2] is not None:  # a prism: its vertices' bounds
                     # (a footprint's top is the clip plane: its move is level)
                     box = np.concatenate([built[2].min(axis=0), built[2].max(axis=0)])
                 else:
                     box = np.array(solid.bounding_box())
                     box[5] = min(box[5], self.clip_z)  # an untrimmed flat end mill's top
-                    if not keep(box[None, :3], box[None, 3:])[0]:
-                        continue  # a solid tool's body only passed by its unclipped bounds
+                if solid_tool and not keep(box[None, :3], box[None, 3:])[0]:
+                    continue  # a solid tool's body only passed by its unclipped bounds
                 reached.append(begin + int(near[row]))
                 owners.append(begin + int(near[row]))
                 hulls.append(solid)
