@@ -408,6 +408,12 @@ def test_from_dict_refuses_naming_the_key_and_value(data, match):
         ("[location.C]\nEX0C_um = nan\n", r"'location\.C\.EX0C_um'.*nan"),
         ("[tool]\noffset_um = [true, 0.0, 0.0]\n", r"'tool\.offset_um'.*True"),
         ("[workpiece]\nalpha_deg = '0.1'\n", r"'workpiece\.alpha_deg'.*'0\.1'"),
+        # TOML reads an integer of any length exactly; 10**400 has 1329 bits, beyond float64
+        # (it was an internal OverflowError, exit 1 on the command line)
+        ("[tool]\noffset_um = [1" + "0" * 400 + ", 0, 0]\n",
+         r"'tool\.offset_um'.*integer of 1329 bits, beyond float64"),
+        ("[location.C]\nEX0C_um = -1" + "0" * 400 + "\n",
+         r"'location\.C\.EX0C_um'.*integer of 1329 bits"),
     ],
 )
 def test_from_toml_refuses_naming_the_file(tmp_path, text, match):

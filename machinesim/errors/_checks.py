@@ -38,7 +38,12 @@ def _number(value: Any, source: str | None, key: str | None) -> float:
         value, int | float | np.integer | np.floating
     ):
         raise _fail(f"expected a number, got {_describe(value)}", source, key)
-    if not math.isfinite(number := float(value)):
+    try:
+        number = float(value)
+    except OverflowError:  # an integer of hundreds of digits (TOML reads it exactly)
+        raise _fail(f"expected a finite number, got an integer of {value.bit_length()} bits, "
+                    "beyond float64 (about 1.8e308)", source, key) from None
+    if not math.isfinite(number):
         raise _fail(f"expected a finite number, got {number}", source, key)
     return number
 
