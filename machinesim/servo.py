@@ -91,6 +91,12 @@ class AxisServo:
                                                                  np.floating)):
                 raise InputError(f"servo parameter {key} of axis {self.name} must be a number "
                                  f"(SI), got {value!r}", key=key)
+            try:
+                float(value)
+            except OverflowError:  # an integer of hundreds of digits (a TOML file's)
+                raise InputError(f"servo parameter {key} of axis {self.name} must be a finite "
+                                 f"number (SI), got an integer of {value.bit_length()} bits, "
+                                 "beyond float64", key=key) from None
         for key in ("kp", "ki", "kd", "damping", "acc_ff"):
             value = getattr(self, key)
             if not np.isfinite(value) or value < 0.0:

@@ -40,6 +40,9 @@ def test_a_servo_file_lags_the_cut_by_v_c_over_kp(tmp_path, capsys):
     (PD_X.replace("[X]", "[C]"), ["unknown key 'kp_N_per_m' in [C], a rotary axis",
                                    "kp_N_m_per_rad"]),
     ("[X\n", ["not valid TOML", "line 1"]),
+    # 10**400 (1329 bits) is read exactly by TOML; it was an internal error (exit 1)
+    (PD_X.replace("1.2e6", "1" + "0" * 400), ["kp_N_per_m", "integer of 1329 bits",
+                                              "beyond float64"]),
 ])
 def test_a_bad_servo_file_is_named(tmp_path, capsys, text, words):
     servo, program = tmp_path / "servo.toml", tmp_path / "line.nc"
