@@ -245,6 +245,8 @@ def test_tool_table_refusals(tmp_path):
         ({"tool": {"x": {"length_mm": 5.0}}}, "tool number must be an unsigned integer"),
         ({"tool": {"1": {"radius_mm": -1.0}}}, "must be >= 0"),
         ({"tool": {"1": {"length_mm": float("nan")}}}, "must be a finite number"),
+        # TOML reads 10**400 exactly (1329 bits): it was an internal OverflowError
+        ({"tool": {"1": {"length_mm": 10**400}}}, "integer of 1329 bits, beyond float64"),
         ({"tools": {}}, "only \\[tool.<number>\\]"),
         ({"tool": {"1": {"shape": 0.5}}}, "shape must be a tool spec string"),
         ({"tool": {"1": {"shape": "drill:3"}}}, "tool spec 'drill:3': expected"),
