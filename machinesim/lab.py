@@ -46,6 +46,7 @@ from machinesim.errors import ErrorModel, as_error_model
 from machinesim.exceptions import InputError
 from machinesim.metrology.imperfections import Lobing, Registration, ZonalForm
 from machinesim.realism import Realism, SphereArtefacts
+from machinesim.servo import check_servo as _check_servo
 from machinesim.streams import stream
 
 __all__ = ["CUTS", "Lab"]
@@ -519,52 +520,3 @@ def _check_options(cls, kind: str, options, also: tuple[str, ...] = ()) -> None:
                              f"{', '.join(taken)} (and label)", key=name)
 
 
-#: The axis letters an `AxisServo`'s ``name`` is checked against (`_check_servo`).
-_AXIS_LETTERS = frozenset("XYZABC")
-
-
-def _check_servo(machine, servo) -> None:
-    """Refuse servo loops that do not fit ``machine``: no ``follow(t, q)``; a servo with
-    ``axes`` (a `machinesim.servo.PIDServo`) whose column count is not the machine's axis
-    count; a column whose ``name`` is an axis letter other than the machine's in that column.
-
-    A ServoModel without ``axes`` cannot be checked before it is run. Names that are not a
-    single axis letter (the default "axis", "spindle 1") are not checked.
-    """
-    if not callable(getattr(servo, "follow", None)):
-        raise InputError(f"Expected a servo with follow(t, q) (a ServoModel), got "
-                         f"{type(servo).__name__}", key="servo")
-    columns = getattr(servo, "axes", None)
-    if not isinstance(columns, (tuple, list)):
-        return
-    from machinesim.servo import PIDServo
-
-    axes = tuple(machine.axes)
-    letters = ", ".join(axes)
-    kind = type(servo).__name__
-    if len(columns) != len(axes):
-        if isinstance(servo, PIDServo):
-            ones = ", ".join(a.lower() for a in axes)
-            how = (f": build it with one column per axis in that order, e.g. "
-                   f"table6_servo(\"before\", axis_order={axes!r}) or PIDServo(({ones})), "
-                   "each an AxisServo(..., name=<its letter>) or None (the axis follows "
-                   "exactly)")
-        else:
-            how = ": give one column per axis, in that order"
-        raise InputError(f"a {kind} with {len(columns)} axis columns does not fit "
-                         f"{machine.name}, whose {len(axes)} axes are {letters} (in this "
-                         f"order){how}", key="servo")
-    upper = [a.upper() for a in axes]
-    for i, (axis, column) in enumerate(zip(axes, columns, strict=True)):
-        name = getattr(column, "name", None)
-        if not isinstance(name, str) or name.upper() not in _AXIS_LETTERS:
-            continue
-        other = name.upper()
-        if other != axis.upper():
-            fix = (f"put it in column {upper.index(other) + 1} ({other}) or name it {axis!r}"
-                   if other in upper else
-                   f"{machine.name} has no {other} axis: name it {axis!r} if it is {axis}'s")
-            raise InputError(f"the {kind}'s column {i + 1} is {machine.name}'s {axis} axis "
-                             f"(axes {letters}), but its {type(column).__name__} is named "
-                             f"{name!r}: it would drive {axis} with the loop meant for "
-                             f"{other}; {fix}", key="servo")

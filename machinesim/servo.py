@@ -29,6 +29,7 @@ The model itself takes SI gains and does not depend on this reading.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -398,6 +399,57 @@ def servo_from_toml(path, machine) -> PIDServo:
     return PIDServo(tuple(columns))
 
 
+#: The axis letters an `AxisServo`'s ``name`` is checked against (`check_servo`).
+_AXIS_LETTERS = frozenset("XYZABC")
+
+
+def check_servo(machine, servo) -> None:
+    """Refuse servo loops that do not fit ``machine``: no ``follow(t, q)``; a servo with
+    ``axes`` (a `machinesim.servo.PIDServo`) whose column count is not the machine's axis
+    count; a column whose ``name`` is an axis letter other than the machine's in that column.
+
+    A ServoModel without ``axes`` cannot be checked before it is run. Names that are not a
+    single axis letter (the default "axis", "spindle 1") are not checked.
+    """
+    if not callable(getattr(servo, "follow", None)):
+        hint = (": a servo file is read with machinesim.servo.servo_from_toml(path, machine)"
+                if isinstance(servo, str | os.PathLike) else "")
+        raise InputError(f"Expected a servo with follow(t, q) (a ServoModel), got "
+                         f"{type(servo).__name__}{hint}", key="servo")
+    columns = getattr(servo, "axes", None)
+    if not isinstance(columns, (tuple, list)):
+        return
+    axes = tuple(machine.axes)
+    letters = ", ".join(axes)
+    kind = type(servo).__name__
+    if len(columns) != len(axes):
+        if isinstance(servo, PIDServo):
+            ones = ", ".join(a.lower() for a in axes)
+            how = (f": build it with one column per axis in that order, e.g. "
+                   f"table6_servo(\"before\", axis_order={axes!r}) or PIDServo(({ones})), "
+                   "each an AxisServo(..., name=<its letter>) or None (the axis follows "
+                   "exactly)")
+        else:
+            how = ": give one column per axis, in that order"
+        raise InputError(f"a {kind} with {len(columns)} axis columns does not fit "
+                         f"{machine.name}, whose {len(axes)} axes are {letters} (in this "
+                         f"order){how}", key="servo")
+    upper = [a.upper() for a in axes]
+    for i, (axis, column) in enumerate(zip(axes, columns, strict=True)):
+        name = getattr(column, "name", None)
+        if not isinstance(name, str) or name.upper() not in _AXIS_LETTERS:
+            continue
+        other = name.upper()
+        if other != axis.upper():
+            fix = (f"put it in column {upper.index(other) + 1} ({other}) or name it {axis!r}"
+                   if other in upper else
+                   f"{machine.name} has no {other} axis: name it {axis!r} if it is {axis}'s")
+            raise InputError(f"the {kind}'s column {i + 1} is {machine.name}'s {axis} axis "
+                             f"(axes {letters}), but its {type(column).__name__} is named "
+                             f"{name!r}: it would drive {axis} with the loop meant for "
+                             f"{other}; {fix}", key="servo")
+
+
 __all__ = ["DEFAULT_SAMPLE_TIME_S", "FOLLOW_CHUNK", "SERVO_KEYS", "SERVO_OPTIONAL_KEYS",
            "TABLE6", "TABLE6_DAMPING", "TABLE6_GAIN_SCALE", "AxisServo", "PIDServo",
-           "ServoDivergenceError", "servo_from_toml", "table6_axis", "table6_servo"]
+           "ServoDivergenceError", "check_servo", "servo_from_toml", "table6_axis", "table6_servo"]

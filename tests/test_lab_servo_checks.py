@@ -102,3 +102,28 @@ def test_a_pd_loop_lags_a_ramp_by_v_c_over_kp():
     np.testing.assert_allclose(error[:2], np.array([3e-3, 4e-3]) * DAMPING / KP, atol=1e-9)
     assert error[2:].tolist() == [0.0, 0.0]
     assert peak == pytest.approx(3e-3 * DAMPING / KP, abs=1e-9)
+
+
+def test_cut_and_turn_called_directly_check_the_servo_as_a_lab_does(tmp_path):
+    # machinesim.cut and lathe.turn took any servo: a 3-column PIDServo on the 4-axis mill
+    # failed inside the loop with "needs t (N,) and q (N, 3), got (2,) and (2, 4)", and a Z
+    # loop in the lathe's X column was turned with, silently
+    from machinesim.cutting.lathe import turn
+
+    line = ProgramBuilder(1).rapid(X=1e-3, Y=1e-3, Z=1e-3).linear(
+        X=3e-3, feed_mm_per_min=100).build()
+    with pytest.raises(machinesim.InputError, match=r"grooving_4axis, whose 4 axes are X, Y, Z, C"):
+        machinesim.cut(line, "grooving_4axis", servo=table6_servo("before"))
+    face = tmp_path / "face.nc"
+    face.write_text("G90 G21\nG00 X0.5 Z0.1 C0\nG01 Z-0.005 F10\nG01 X0 C3600 F7200\nG00 Z1\n")
+    with pytest.raises(machinesim.InputError, match=r"sts_lathe, whose 3 axes are X, Z, C"):
+        turn(face, "sts_lathe", "nose:0.5:90", servo=table6_servo("before", axis_order="xyzc"))
+    z_loop = table6_servo("before").axes[1]
+    with pytest.raises(machinesim.InputError, match=r"column 1 is sts_lathe's X axis"):
+        turn(face, "sts_lathe", "nose:0.5:90", servo=PIDServo((z_loop, None, None)))
+
+
+def test_a_servo_file_path_handed_to_a_lab_names_the_reader(tmp_path):
+    with pytest.raises(machinesim.InputError, match=r"got str: a servo file is read with "
+                       r"machinesim\.servo\.servo_from_toml\(path, machine\)"):
+        machinesim.Lab("sts_lathe", servo=str(tmp_path / "servo.toml"))

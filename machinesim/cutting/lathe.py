@@ -52,6 +52,7 @@ from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_floats, as_number
 from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
+from machinesim.servo import check_servo
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import RoundNoseTool, with_nose_radius_error
 
@@ -203,6 +204,8 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     top = as_number(top, "top")
     errors = None if errors is None else as_error_model(errors)
     machine.check_errors(errors)
+    if servo is not None:  # as a Lab checks it: one column per axis, each named right
+        check_servo(machine, servo)
     limits = _overtravel(machine, _program_moves(program, machine),
                          getattr(program, "source", None), allow_overtravel)
     tool = with_nose_radius_error(tool, errors)

@@ -24,6 +24,7 @@ from machinesim.cutting.sweepset import dragged_past_clearance, within_edge_plan
 from machinesim.errors import as_error_model
 from machinesim.exceptions import AxisLimitError, HolderContactError, InputError, NCProgramError
 from machinesim.nc import MOVE_KINDS
+from machinesim.servo import check_servo
 from machinesim.tolerances import LIMIT_SLACK
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import Tool, path_chord_tolerance, with_nose_radius_error
@@ -118,6 +119,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     program, tool, stock, errors = _arguments(program, tool, stock, errors)
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
     machine.check_errors(errors)
+    if servo is not None:  # as a Lab checks it: one column per axis, each named right
+        check_servo(machine, servo)
     _refuse_turning(program, machine, start)
     tools = _ToolSections(program, tool, errors)
     if chord_tolerance is None:
