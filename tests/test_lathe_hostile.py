@@ -215,3 +215,19 @@ def test_a_spindle_angle_just_past_its_travel_prints_apart_from_the_travel():
                                              r"its travel -5729577\.951308 deg \.\. "
                                              r"5729577\.951308 deg"):
         turn(program, "sts_lathe", "nose:1.0:90")
+
+
+def test_a_program_that_runs_the_spindle_by_m03_says_that_is_not_simulated(tmp_path):
+    # a conventional lathe program (M03 S500, then X and Z feeds) was refused as "no feed
+    # move turns C: nothing to turn", with no word on why its spindle did not count
+    conventional = tmp_path / "conventional.nc"
+    conventional.write_text("G90 G21\nM03 S500\nG00 X0.5 Z0.1 C0\nG01 Z-0.005 F10\n"
+                            "G01 X0 F10\nG00 Z1\nM30\n")
+    with pytest.raises(InputError, match=r"no feed move turns C: nothing to turn \(M03 at "
+                       r"line 2 runs the spindle at S rpm, which is not simulated: program "
+                       r"C as an axis"):
+        turn(conventional, "sts_lathe", "nose:0.5:90")
+    still = tmp_path / "still.nc"  # no M03: the refusal as before, without the hint
+    still.write_text("G90 G21\nG00 X0.5 Z0.1 C0\nG01 Z-0.005 F10\nG01 X0 F10\nM30\n")
+    with pytest.raises(InputError, match=r"nothing to turn$"):
+        turn(still, "sts_lathe", "nose:0.5:90")

@@ -272,7 +272,7 @@ def turning_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
     q, kinds, feeds, lines = _axis_values(program, machine, source)
     out = []
     c_column = machine.axes.index("C")
-    for first, last in _turning_runs(q, kinds, c_column, lines, source):
+    for first, last in _turning_runs(q, kinds, c_column, lines, source, _spindle_hint(program)):
         points = q[first - 1:last + 1]  # moves first..last: points first-1..last
         durations = _durations(points, feeds[first:last + 1], machine.axes)
         t = np.concatenate([[0.0], np.cumsum(durations)])
@@ -350,7 +350,21 @@ def _axis_values(program, machine, source: str):
     return q[start:], kinds[start:], feeds[start:], lines[start:]
 
 
-def _turning_runs(q, kinds, c_column: int, lines, source: str) -> list[tuple[int, int]]:
+def _spindle_hint(program) -> str:
+    """What a refusal of a program without C turning adds when the program runs the spindle
+    by M03/M04 instead (as a conventional lathe program does): that is not simulated."""
+    codes = getattr(program, "m_codes", {})
+    runs = [k for k, m in sorted(codes.items()) if 3 in m or 4 in m]
+    if not runs:
+        return ""
+    code = 3 if 3 in codes[runs[0]] else 4
+    return (f" (M0{code} at line {int(program.lines[runs[0]])} runs the spindle at S rpm, which "
+            "is not simulated: program C as an axis, as a slow-tool-servo program does, "
+            "e.g. G01 X0 C18000 F7200 for 50 turns)")
+
+
+def _turning_runs(q, kinds, c_column: int, lines, source: str,
+                  hint: str = "") -> list[tuple[int, int]]:
     """(first, last) move index of each run of consecutive feed moves that turn C."""
     c = q[:, c_column]
     dc = np.abs(np.diff(c, prepend=c[0]))
@@ -365,7 +379,8 @@ def _turning_runs(q, kinds, c_column: int, lines, source: str) -> list[tuple[int
             runs.append((first, k))
         k += 1
     if not runs:
-        raise InputError(f"{source}: no feed move turns C: nothing to turn", key="program")
+        raise InputError(f"{source}: no feed move turns C: nothing to turn{hint}",
+                         key="program")
     rapid = np.flatnonzero(kinds == KIND_RAPID)
     for first, last in runs:
         inside = rapid[(rapid >= first) & (rapid <= last)]
