@@ -432,6 +432,20 @@ def test_unreadable_toml_gives_line_and_column(tmp_path):
     assert "not valid TOML" in str(info.value)
 
 
+def test_a_file_not_in_utf8_gives_the_line_and_column_of_the_byte(tmp_path):
+    # a micro sign saved as Latin-1 (0xB5) in a comment: the message gave only "at byte 38"
+    # and no expectation; the byte order mark, allowed, does not count in the column
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(b"\xef\xbb\xbf[tool]\n# \xc3\xa9 um\noffset_um = [1.0, 0.0, 0.0]  # 1 \xb5m\n")
+    with pytest.raises(ErrorModelError) as info:
+        ErrorModel.from_toml(path)
+    assert (info.value.line, info.value.column) == (3, 34)  # 0xb5 follows the 33 characters before it
+    assert "byte 0xb5" in str(info.value) and "expected UTF-8 TOML" in str(info.value)
+    path.write_bytes("[tool]\noffset_um = [1.0, 0.0, 0.0]\n".encode("utf-16"))
+    with pytest.raises(ErrorModelError, match=r"line 1, column 1: .*UTF-16"):
+        ErrorModel.from_toml(path)
+
+
 def test_missing_file_is_named(tmp_path):
     path = tmp_path / "absent.toml"
     with pytest.raises(ErrorModelError, match=re.escape(str(path)) + ".*cannot read"):

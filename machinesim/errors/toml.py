@@ -71,9 +71,16 @@ def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[st
         data = tomllib.loads(Path(path).read_bytes().decode("utf-8-sig"))
     except OSError as exc:
         raise error(f"cannot read the file: {exc.strerror or exc}", source=source) from None
-    except UnicodeDecodeError as exc:
-        raise error(f"not UTF-8 text ({exc.reason} at byte {exc.start})",
-                    source=source) from None
+    except UnicodeDecodeError as exc:  # the line and column of the byte, as an editor shows
+        before = exc.object[:exc.start]  # valid UTF-8, after any byte order mark
+        line = before.count(b"\n") + 1
+        column = len(before[before.rfind(b"\n") + 1:].decode("utf-8")) + 1
+        why = ("UTF-16, as Windows Notepad's 'Unicode' saves it" if b"\x00" in exc.object
+               else "a Latin-1 or Windows-1252 character such as a micro or degree sign, "
+                    "saved in that encoding")
+        raise error(f"not UTF-8 text (byte 0x{exc.object[exc.start]:02x}, {exc.reason}: {why});"
+                    " expected UTF-8 TOML: save the file as UTF-8", source=source, line=line,
+                    column=column) from None
     except tomllib.TOMLDecodeError as exc:
         position = _TOML_POSITION_RE.search(str(exc))
         line, column = (int(position[1]), int(position[2])) if position else (None, None)
