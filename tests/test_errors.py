@@ -439,7 +439,8 @@ def test_a_file_not_in_utf8_gives_the_line_and_column_of_the_byte(tmp_path):
     path.write_bytes(b"\xef\xbb\xbf[tool]\n# \xc3\xa9 um\noffset_um = [1.0, 0.0, 0.0]  # 1 \xb5m\n")
     with pytest.raises(ErrorModelError) as info:
         ErrorModel.from_toml(path)
-    assert (info.value.line, info.value.column) == (3, 34)  # 0xb5 follows the 33 characters before it
+    # 0xb5 follows the 33 characters before it on line 3
+    assert (info.value.line, info.value.column) == (3, 34)
     assert "byte 0xb5" in str(info.value) and "expected UTF-8 TOML" in str(info.value)
     path.write_bytes("[tool]\noffset_um = [1.0, 0.0, 0.0]\n".encode("utf-16"))
     with pytest.raises(ErrorModelError, match=r"line 1, column 1: .*UTF-16"):
