@@ -804,3 +804,22 @@ def test_positions_without_a_table_are_refused_not_dropped():
     # a [component.X] with positions and no table was read as no error at all
     with pytest.raises(ErrorModelError, match=r"component\.X\.position_mm.*no table uses it"):
         ErrorModel.from_dict({"component": {"X": {"position_mm": [-10.0, 0.0, 10.0]}}})
+
+
+@pytest.mark.parametrize("data", [
+    {"workpiece": {"gamma_deg": -180.0}},
+    {"location": {"C": {"EC0C_deg": 180.0}}},
+    {"tool": {"rotation_rad": [math.pi, 0.0, -math.pi]}},
+])
+def test_an_angle_at_the_bound_written_by_to_toml_reads_back(tmp_path, data):
+    # 180 deg is within the bound; to_toml writes it as 3141592.6535897935 urad, which read
+    # back (times 1e-6) is pi + 4.4e-16 and was refused as "no angle error", so a model
+    # machinesim accepted and wrote could not be read again
+    model = ErrorModel.from_dict(data)
+    path = tmp_path / "bound.toml"
+    model.to_toml(path)
+    back = ErrorModel.from_toml(path)
+    for name, value in model.parameters().items():
+        assert back.parameters()[name] == pytest.approx(value, rel=1e-15, abs=0.0)
+    with pytest.raises(ErrorModelError, match="no angle error"):  # a bit more is still refused
+        ErrorModel.from_dict({"workpiece": {"gamma_deg": -180.000001}})
