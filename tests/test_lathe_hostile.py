@@ -231,3 +231,19 @@ def test_a_program_that_runs_the_spindle_by_m03_says_that_is_not_simulated(tmp_p
     still.write_text("G90 G21\nG00 X0.5 Z0.1 C0\nG01 Z-0.005 F10\nG01 X0 F10\nM30\n")
     with pytest.raises(InputError, match=r"nothing to turn$"):
         turn(still, "sts_lathe", "nose:0.5:90")
+
+
+def test_a_turning_move_without_a_feed_is_refused_naming_its_line():
+    """A program built from arrays (`Program.from_arrays`, feeds NaN by default) whose
+    turning move (the facing, line 4) has no feed: refused naming the program and the
+    line, as the reader names an F0 (the message named neither)."""
+    from machinesim.nc import parse_program
+    from machinesim.nc.program import Program
+
+    read = parse_program("G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\nG01 X0 C720 F360\n"
+                         "G01 Z0.01\n", "facing.nc")
+    # no feeds at all (a linear move without one after one with one is refused on building)
+    built = Program.from_arrays(read.targets, read.kinds, lines=read.lines, source="built.nc")
+    with pytest.raises(InputError, match=r"built.nc, line 4: expected a positive feed on "
+                                         r"every turning move, got none"):
+        turn(built, "sts_lathe", "nose:1.0:90")

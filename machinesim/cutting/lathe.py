@@ -274,7 +274,8 @@ def turning_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
     c_column = machine.axes.index("C")
     for first, last in _turning_runs(q, kinds, c_column, lines, source, _spindle_hint(program)):
         points = q[first - 1:last + 1]  # moves first..last: points first-1..last
-        durations = _durations(points, feeds[first:last + 1], machine.axes)
+        durations = _durations(points, feeds[first:last + 1], machine.axes,
+                               lines[first:last + 1], source)
         t = np.concatenate([[0.0], np.cumsum(durations)])
         out.append(_within_quarter_turns(t, points, c_column))
     return out
@@ -390,14 +391,19 @@ def _turning_runs(q, kinds, c_column: int, lines, source: str,
     return runs
 
 
-def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple) -> np.ndarray:
+def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple, lines: np.ndarray,
+               source: str) -> np.ndarray:
     """Time of each move between consecutive ``points`` at ``feeds`` (m/s), s: the length in
-    mm with rotary axes in degrees, over F in mm/s (FANUC)."""
+    mm with rotary axes in degrees, over F in mm/s (FANUC); a move without a positive feed
+    is refused naming its ``lines`` in ``source``."""
     steps = np.diff(points, axis=0)
     scale = np.array([math.degrees(1.0) * 1e-3 if a in ROTARY_AXES else 1.0 for a in axes])
     length = np.sqrt(np.sum((steps * scale) ** 2, axis=1))
     bad = ~(np.isfinite(feeds) & (feeds > 0.0))
     if bad.any():
-        raise InputError(f"Expected a positive feed on every turning move, got "
-                         f"{feeds[np.flatnonzero(bad)[0]]!r}", key="F")
+        first = int(np.flatnonzero(bad)[0])
+        value = float(feeds[first])
+        got = "none" if math.isnan(value) else f"F{value * 6e4:g} (mm/min)"
+        raise InputError(f"{source}, line {int(lines[first])}: expected a positive feed on "
+                         f"every turning move, got {got}", key="F")
     return length / feeds
