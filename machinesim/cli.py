@@ -337,6 +337,9 @@ def _cut(args) -> int:
     summary = report.to_dict()
     summary["path_chord_tolerance_nm"] = chord * 1e9
     summary["notes"] = [*summary["notes"], *_reading_notes(args, program, chord)]
+    if errors is not None and not errors.written:  # an empty file, or sections without keys
+        summary["notes"].append(f"{args.errors} sets no error (no key in any section): cut "
+                                "on the machine as built, every error zero")
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
     pieces, apart = _pieces(part, stock, roi)

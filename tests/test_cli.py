@@ -237,6 +237,23 @@ def test_a_groove_through_the_stock_is_said_to_leave_the_part_in_pieces(tmp_path
     assert json.loads((tmp_path / "g.json").read_text())["part_pieces_count"] == 1
 
 
+def test_an_errors_file_that_sets_nothing_is_noted(tmp_path, capsys):
+    """An errors file with a section and no key (or empty) cuts with every error zero, as
+    the docs say; a note says so, where a file meant to hold errors was taken silently. One
+    that writes zeros on purpose, or the example, gets no note."""
+    empty, zeros = tmp_path / "empty.toml", tmp_path / "zeros.toml"
+    empty.write_text("# to fill in\n[tool]\n")
+    zeros.write_text("[tool]\noffset_um = [0.0, 0.0, 0.0]\n")
+    code, _, err = run(["cut", GROOVES, *CUT, "--errors", empty, "--out",
+                        tmp_path / "a.ply"], capsys)
+    assert code == 0 and (f"note: {empty} sets no error (no key in any section): cut on the "
+                          "machine as built, every error zero") in err, err
+    for errors in (zeros, ROOT / "models" / "errors" / "example.toml"):
+        code, _, err = run(["cut", GROOVES, *CUT, "--errors", errors, "--out",
+                            tmp_path / "b.ply"], capsys)
+        assert code == 0 and "sets no error" not in err, err
+
+
 def test_ctrl_c_during_the_cut_exits_130_and_writes_nothing(tmp_path, capsys, monkeypatch):
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
