@@ -504,6 +504,38 @@ def test_a_table_tool_with_a_radius_and_no_shape_is_noted_when_the_cut_tool_diff
     assert notes["ball:1.0"] == ([], [])
 
 
+def test_a_table_tool_whose_radius_and_shape_disagree_is_noted(tmp_path, capsys):
+    # T1 gives radius 2 mm beside shape ball:0.5: the ball cuts (the volume of the same
+    # program cut with --tool ball:0.5 alone), and a note says the two disagree (it said
+    # nothing); radius 0.5 mm agrees, and nothing is noted
+    program = tmp_path / "t1.nc"
+    program.write_text("G90 G21\nT1 M06\nG0 X1. Y1. Z0.1\nG1 Z-0.01 F100.\nX3.\n"
+                       "G0 Z0.1\nM30\n")
+    removed = {}
+    for radius in (2.0, 0.5):
+        tools = tmp_path / f"tools_{radius}.toml"
+        tools.write_text(f'[tool.1]\nlength_mm = 0.0\nradius_mm = {radius}\n'
+                         'shape = "ball:0.5"\n')
+        report = tmp_path / f"r_{radius}.json"
+        code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
+                            "--stock", "block:5x3x1", "--tools", tools, "--quiet",
+                            "--out", tmp_path / "p.ply", "--report", report], capsys)
+        assert code == 0, err
+        noted = [line for line in err.splitlines() if "the tool table gives radius" in line]
+        removed[radius] = json.loads(report.read_text())["removed_volume_mm3"]
+        if radius == 2.0:
+            assert noted == ["note: T1 (line 2): the tool table gives radius 2 mm and shape "
+                             "'ball:0.5' (radius 0.5 mm); the shape cut (the radius, the D "
+                             "register, is not read: G41/G42 are refused)"], err
+        else:
+            assert noted == [], err
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "ball:0.5",
+                        "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "b.ply",
+                        "--report", tmp_path / "b.json"], capsys)
+    alone = json.loads((tmp_path / "b.json").read_text())["removed_volume_mm3"]
+    assert removed[2.0] == removed[0.5] == pytest.approx(alone, rel=1e-12)
+
+
 def test_the_report_lists_how_the_program_was_read(tmp_path, capsys):
     # the corpus CAM program, its stock far from the tool: the report says which modal
     # states it set (first line of each, found in the text here), the integer rule and the

@@ -275,7 +275,7 @@ class _ToolSections:
         self.runs = [(0, tool, 0.0)]
         self.names = [(None, None)]  # (tool number, line of the change)
         #: what a reader of the part should know about the tools it was cut with
-        notes = (_unshaped_note(change, tool) for change in getattr(program, "tool_changes", ()))
+        notes = (_radius_note(change, tool) for change in getattr(program, "tool_changes", ()))
         self.notes = tuple(dict.fromkeys(note for note in notes if note))
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
@@ -306,11 +306,22 @@ class _ToolSections:
                 yield tool, length, section, (lo, hi), name
 
 
-def _unshaped_note(change, tool) -> str:
-    """A note when a tool change gives a radius but no shape and the cut's own tool, which
-    then cuts for it, has another radius (a 2 mm end mill cut as a V tool); else ''."""
-    if change.shape is not None or change.radius_m is None:
+def _radius_note(change, tool) -> str:
+    """A note when a tool change gives a radius that the tool which cuts for it does not
+    have: its table shape's (a D register of 2 mm beside a ball:0.5, which cuts: perhaps a
+    wear offset, perhaps a slip), or, without a shape, the cut's own tool's (a 2 mm end mill
+    cut as a V tool); else ''."""
+    if change.radius_m is None:
         return ""
+    if change.shape is not None:
+        shaped = tool_from_spec(change.shape)
+        radius = getattr(shaped, "radius", getattr(shaped, "nose_radius", None))
+        if radius is None or abs(radius - change.radius_m) <= RADIUS_AGREE_M:
+            return ""
+        return (f"T{change.number} (line {change.line}): the tool table gives radius "
+                f"{change.radius_m * 1e3:g} mm and shape {change.shape!r} (radius "
+                f"{radius * 1e3:g} mm); the shape cut (the radius, the D register, is not "
+                "read: G41/G42 are refused)")
     radius = getattr(tool, "radius", getattr(tool, "nose_radius", None))
     if radius is not None and abs(radius - change.radius_m) <= RADIUS_AGREE_M:
         return ""
