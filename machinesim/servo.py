@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from machinesim.arrays import beyond_float64
 from machinesim.exceptions import InputError, MachineSimError
 
 DEFAULT_SAMPLE_TIME_S = 1e-4  # 10 kHz servo loop
@@ -92,12 +93,9 @@ class AxisServo:
                                                                  np.floating)):
                 raise InputError(f"servo parameter {key} of axis {self.name} must be a number "
                                  f"(SI), got {value!r}", key=key)
-            try:
-                float(value)
-            except OverflowError:  # an integer of hundreds of digits (a TOML file's)
+            if (huge := beyond_float64(value)) is not None:
                 raise InputError(f"servo parameter {key} of axis {self.name} must be a finite "
-                                 f"number (SI), got an integer of {value.bit_length()} bits, "
-                                 "beyond float64", key=key) from None
+                                 f"number (SI), got {huge}", key=key)
         for key in ("kp", "ki", "kd", "damping", "acc_ff"):
             value = getattr(self, key)
             if not np.isfinite(value) or value < 0.0:

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from machinesim.arrays import beyond_float64
 from machinesim.exceptions import ErrorModelError
 from machinesim.units import ANGLE, FACTORS, LENGTH
 
@@ -38,11 +39,9 @@ def _number(value: Any, source: str | None, key: str | None) -> float:
         value, int | float | np.integer | np.floating
     ):
         raise _fail(f"expected a number, got {_describe(value)}", source, key)
-    try:
-        number = float(value)
-    except OverflowError:  # an integer of hundreds of digits (TOML reads it exactly)
-        raise _fail(f"expected a finite number, got an integer of {value.bit_length()} bits, "
-                    "beyond float64 (about 1.8e308)", source, key) from None
+    if (huge := beyond_float64(value)) is not None:
+        raise _fail(f"expected a finite number, got {huge}", source, key)
+    number = float(value)
     if not math.isfinite(number):
         raise _fail(f"expected a finite number, got {number}", source, key)
     return number

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from machinesim._io import check_readable_file
+from machinesim.arrays import beyond_float64
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.nc.program import FrozenMapping
 from machinesim.tool_specs import tool_from_spec
@@ -171,10 +172,8 @@ def _tool(entry: Mapping[str, Any], source: str, key: str) -> Tool:
                                  f"of {', '.join(LENGTH)}", **where)
         if what in values:
             raise NCProgramError(f"{what} is given twice", **where)
-        if isinstance(value, int) and not isinstance(value, bool) and _beyond_float(value):
-            # TOML reads an integer of any length exactly; math.isfinite overflowed on it
-            raise NCProgramError(f"{field} must be a finite number, got an integer of "
-                                 f"{value.bit_length()} bits, beyond float64", **where)
+        if (huge := beyond_float64(value)) is not None:  # math.isfinite overflowed on it
+            raise NCProgramError(f"{field} must be a finite number, got {huge}", **where)
         if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(
                 value):
             raise NCProgramError(f"{field} must be a finite number, got {value!r}", **where)
@@ -186,15 +185,6 @@ def _tool(entry: Mapping[str, Any], source: str, key: str) -> Tool:
                                  "offset", **where)
         values[what] = si
     return Tool(values.get("length"), values.get("radius"), name, shape)
-
-
-def _beyond_float(value: int) -> bool:
-    """True when the integer ``value`` does not fit a float64."""
-    try:
-        float(value)
-    except OverflowError:
-        return True
-    return False
 
 
 def _shape(value: Any, where: Mapping[str, str]) -> str:
