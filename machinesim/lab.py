@@ -365,6 +365,7 @@ class Lab:
         from machinesim.metrology.encoders import Encoders
 
         kind = "encoders"
+        _check_options(Encoders, kind, options, ("machine", "follow"))
         label = self._label(kind, label)
         servo = self.__servo
 
@@ -498,6 +499,7 @@ _LAB_SETS = {
     "machine": "the lab's own machine",
     "errors": "the lab's hidden errors, which no instrument is handed",
     "part": "the part given as the first argument",
+    "follow": "from the lab's servo loops (Lab(servo=...) or lab.tune_servo)",
 }
 
 
@@ -508,11 +510,12 @@ def _check_options(cls, kind: str, options, also: tuple[str, ...] = ()) -> None:
 
     sets = ("noise", "rng", *also)
     what = kind.replace("_", " ")
+    whose = what + ("'" if what.endswith("s") else "'s")
     taken = [name for name, p in inspect.signature(cls).parameters.items()
              if name not in sets and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
     for name in options:
         if name in sets:
-            raise InputError(f"the lab sets the {what}'s {name} itself ({_LAB_SETS[name]}); "
+            raise InputError(f"the lab sets the {whose} {name} itself ({_LAB_SETS[name]}); "
                              f"leave {name!r} out. Options it takes: {', '.join(taken)}",
                              key=name)
         if name not in taken:

@@ -206,6 +206,10 @@ def test_lab_refuses_options_it_sets_itself(lab, flat):
         lab.r_test(machine="robonano_a0ib")
     with pytest.raises(InputError, match="the lab sets the touch probe's rng itself"):
         lab.touch_probe(flat, rng=0)
+    with pytest.raises(InputError, match="the lab sets the encoders' noise itself"):
+        lab.encoders(noise=False)
+    with pytest.raises(InputError, match="the lab sets the encoders' follow itself .*servo"):
+        lab.encoders(follow=None)
 
 
 def test_lab_refuses_options_the_instrument_does_not_take(lab, flat):
@@ -214,7 +218,12 @@ def test_lab_refuses_options_the_instrument_does_not_take(lab, flat):
         lab.microscope(bogus=1)
     with pytest.raises(InputError, match="TouchProbe has no option 'radius_mm'"):
         lab.touch_probe(flat, radius_mm=0.25)
+    with pytest.raises(InputError, match="Encoders has no option 'sigmaa'; the encoders "
+                                         "takes sigma"):
+        lab.encoders(sigmaa=1e-9)
     assert lab.microscope(sigma=5 * NM).readout.sigma == 5 * NM  # an option it takes
+    sigma = [1e-9, 2e-9, 3e-9, 4e-9, 5e-9]  # one per axis of the A0IB
+    assert [r.sigma for r in lab.encoders(sigma=sigma).readouts] == sigma
 
 
 # ------------------------------------------------------------------------ A: file writing
