@@ -107,6 +107,34 @@ def test_read_ply_refuses_what_it_cannot_read(tmp_path):
         read_ply(tmp_path / "missing.ply")
 
 
+def test_read_ply_names_the_file_of_a_truncated_malformed_or_non_finite_part(tmp_path):
+    # parts from elsewhere: each was a ValueError traceback ("buffer is smaller than requested
+    # size", "invalid literal for int()") or read on to a misleading later error (NaN bounds)
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+    data = (tmp_path / "part.ply").read_bytes()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    vertices, triangles = read_ply(tmp_path / "part.ply")
+    cases = {
+        # 8 vertices of 24 bytes, then 12 faces of 13 bytes: 7 bytes short of the last face
+        "truncated.ply": (data[:-7], rf"the file ends at byte {len(data) - 7}, where its 12 "
+                                     rf"'face' elements need bytes {end + 8 * 24} \.\. "
+                                     rf"{end + 8 * 24 + 12 * 13}"),
+        "short_vertices.ply": (data[:end + 100], "the file ends .* its 8 'vertex' elements"),
+        "bad_count.ply": (data.replace(b"element vertex 8", b"element vertex eight"),
+                          "malformed element line 'element vertex eight'"),
+        "no_faces.ply": (data[:end].replace(b"element face 12", b"element face 0")
+                         + data[end:end + 8 * 24], r"no faces \(8 vertices\)"),
+    }
+    nan = vertices.copy()
+    nan[3, 1] = np.nan
+    cases["nan.ply"] = (data[:end] + nan.astype("<f8").tobytes() + data[end + 8 * 24:],
+                        r"vertex 3 is \[.*nan.*\] \(1 of 8 not finite\)")
+    for name, (content, message) in cases.items():
+        (tmp_path / name).write_bytes(content)
+        with pytest.raises(InputError, match=f"{name}: {message}"):
+            read_ply(tmp_path / name)
+
+
 def test_decimate_meets_the_budget_and_keeps_the_shape():
     radius = 5 * MM
     mesh = manifold3d.Manifold.sphere(radius, 600).to_mesh64()

@@ -47,7 +47,8 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     InputError
-        When the file is missing, not a binary little-endian PLY, or has non-triangle faces.
+        When the file is missing, not a binary little-endian PLY, shorter than its header
+        says (truncated), has non-triangle faces, no faces, or a vertex that is not finite.
     """
     path = Path(path)
     try:
@@ -74,6 +75,7 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
             raise InputError(f"element {name!r} has list properties; only 'face' may",
                              source=str(path))
         dtype = np.dtype([(p, "<" + _PLY_TYPES[kind]) for p, kind, _ in props])
+        _check_length(data, offset, dtype.itemsize * count, name, count, path)
         block = np.frombuffer(data, dtype=dtype, count=count, offset=offset)
         offset += dtype.itemsize * count
         if name == "vertex":
@@ -82,6 +84,15 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
             vertices = np.column_stack([block[c].astype(np.float64) for c in "xyz"])
     if vertices is None or triangles is None:
         raise InputError("expected 'vertex' and 'face' elements", source=str(path))
+    if not len(triangles):
+        raise InputError(f"no faces ({len(vertices)} vertices): expected a part's surface as "
+                         "triangles", source=str(path))
+    finite = np.isfinite(vertices).all(axis=1)
+    if not finite.all():
+        first = int(np.flatnonzero(~finite)[0])
+        raise InputError(f"vertex {first} is {vertices[first].tolist()} ({np.sum(~finite)} of "
+                         f"{len(vertices)} not finite): expected finite coordinates",
+                         source=str(path))
     if triangles.size and (triangles.min() < 0 or triangles.max() >= len(vertices)):
         raise InputError(f"face indices outside [0, {len(vertices)})", source=str(path))
     return vertices, triangles
@@ -94,6 +105,9 @@ def _ply_elements(header: list[str], path: Path):
         if not words:
             continue
         if words[0] == "element":
+            if len(words) != 3 or not words[2].isdigit():
+                raise InputError(f"malformed element line {line!r}: expected 'element NAME "
+                                 "COUNT', COUNT a whole number", source=str(path))
             elements.append((words[1], int(words[2]), []))
         elif words[0] == "property":
             if not elements:
@@ -116,11 +130,22 @@ def _ply_faces(data: bytes, offset: int, count: int, props, path: Path):
     count_type, index_type = props[0][2]
     dtype = np.dtype([("n", "<" + _PLY_TYPES[count_type]),
                       ("i", "<" + _PLY_TYPES[index_type], 3)])
+    _check_length(data, offset, dtype.itemsize * count, "face", count, path)
     faces = np.frombuffer(data, dtype=dtype, count=count, offset=offset)
     if np.any(faces["n"] != 3):
         raise InputError("only triangle faces are supported (every face with 3 indices)",
                          source=str(path))
     return faces["i"].astype(np.int64), offset + dtype.itemsize * count
+
+
+def _check_length(data: bytes, offset: int, size: int, name: str, count: int,
+                  path: Path) -> None:
+    """Refuse a file that ends before the ``size`` bytes of its element ``name`` (a file cut
+    short in a copy or a download)."""
+    if offset + size > len(data):
+        raise InputError(f"the file ends at byte {len(data)}, where its {count} {name!r} "
+                         f"elements need bytes {offset} .. {offset + size}: truncated?",
+                         source=str(path))
 
 
 def triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
