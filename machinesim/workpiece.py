@@ -104,7 +104,8 @@ class Part:
         Raises
         ------
         InputError
-            If the arrays have the wrong shape or the mesh is not a closed 2-manifold.
+            If the arrays have the wrong shape, the mesh is not a closed 2-manifold, or it is
+            inside out (wound clockwise seen from outside: a negative volume).
         """
         # manifold3d accepts only writeable C arrays: copy, which also detaches the caller's.
         vertices = np.array(vertices, dtype=np.float64, order="C")
@@ -125,6 +126,11 @@ class Part:
         manifold = manifold3d.Manifold(mesh)
         if manifold.status() != manifold3d.Error.NoError:
             raise InputError(f"mesh is not a closed oriented 2-manifold: {manifold.status()}")
+        # inside out, every instrument would read the bottom face as the top surface
+        if manifold.volume() < 0.0:
+            raise InputError(f"mesh is inside out: it encloses {manifold.volume():.6g} m^3; "
+                             "expected triangles counter-clockwise seen from outside "
+                             "(reverse each triangle's vertex order)")
         return cls(manifold)
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:

@@ -102,6 +102,15 @@ def test_from_mesh_rejects_an_open_mesh():
         Part.from_mesh(vertices[:, :2], triangles)
 
 
+def test_from_mesh_rejects_an_inside_out_mesh():
+    # a mesh wound clockwise seen from outside (some exporters do) was accepted with a
+    # negative volume, and every instrument then read its bottom as the top surface: a
+    # 1 mm cube's height map read -1 mm everywhere instead of 0
+    vertices, triangles = block(1e-3, 1e-3, 1e-3).mesh()
+    with pytest.raises(InputError, match=r"inside out: it encloses -1e-09 m\^3"):
+        Part.from_mesh(vertices, triangles[:, ::-1])
+
+
 def _read_ply(path):
     """Independent binary PLY reader for the layout written by export_ply."""
     data = open(path, "rb").read()
