@@ -36,6 +36,7 @@ from machinesim.viewer import (
 )
 from machinesim.viewer.cli import add_view_parser, run_view
 from machinesim.viewer.maps import DIVERGING, NO_DATA, colours, legend_for, map_mesh
+from machinesim.viewer.meshes import signed_volume, triangle_normals
 from machinesim.viewer.scene import Scene
 from machinesim.viewer.views import report_notes
 from machinesim.workpiece import Part, block, stock_from_spec
@@ -133,6 +134,32 @@ def test_read_ply_names_the_file_of_a_truncated_malformed_or_non_finite_part(tmp
         (tmp_path / name).write_bytes(content)
         with pytest.raises(InputError, match=f"{name}: {message}"):
             read_ply(tmp_path / name)
+
+
+def ply_bytes(vertices, triangles) -> bytes:
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n"
+              "property double x\nproperty double y\nproperty double z\n"
+              f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
+              "end_header\n").encode("ascii")
+    faces = np.zeros(len(triangles), dtype=[("n", "u1"), ("i", "<i4", 3)])
+    faces["n"], faces["i"] = 3, triangles
+    return header + np.asarray(vertices, dtype="<f8").tobytes() + faces.tobytes()
+
+
+def test_read_ply_refuses_a_closed_part_inside_out_and_reads_an_open_surface(tmp_path):
+    # wound clockwise seen from outside, a 2 mm block's map showed its bottom as its top:
+    # "height z" -2000 um everywhere, P-V 0, with exit 0
+    vertices, triangles = stock_from_spec("block:1x1x2").mesh()
+    (tmp_path / "inside_out.ply").write_bytes(ply_bytes(vertices, triangles[:, ::-1]))
+    with pytest.raises(InputError, match=r"inside_out.ply: the part is inside out: it "
+                                         r"encloses -2 mm\^3"):
+        read_ply(tmp_path / "inside_out.ply")
+    # an open mesh has no inside: its top alone (here reversed too) is read as it is
+    up = triangle_normals(vertices, triangles)[:, 2] > 0.0
+    (tmp_path / "open.ply").write_bytes(ply_bytes(vertices, triangles[up][:, ::-1]))
+    assert len(read_ply(tmp_path / "open.ply")[1]) == 2
+    assert signed_volume(vertices, triangles) == pytest.approx(2e-9, rel=1e-12)
+    assert signed_volume(vertices, triangles[:, ::-1]) == pytest.approx(-2e-9, rel=1e-12)
 
 
 def test_decimate_meets_the_budget_and_keeps_the_shape():
