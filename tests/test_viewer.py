@@ -363,6 +363,21 @@ def test_exported_html_is_self_contained_and_written_whole(tmp_path, monkeypatch
     assert [p.name for p in tmp_path.iterdir()] == ["part.html"]  # no temp file left
 
 
+def test_a_part_file_in_millimetres_is_warned_about(tmp_path):
+    # a 10 x 10 x 2 mm block written in mm reads as a 10 m block: it was shown so, its map's
+    # P-V 1000 times too large, without a word
+    vertices, triangles = stock_from_spec("block:10x10x2").mesh()
+    (tmp_path / "mm.ply").write_bytes(ply_bytes(vertices * 1e3, triangles))
+    (tmp_path / "m.ply").write_bytes(ply_bytes(vertices, triangles))
+    scene = part_scene(tmp_path / "mm.ply", max_triangles=BUDGET)
+    assert scene.warnings == ["the part measures 10 x 10 x 2 m, larger than any machine's "
+                              "travel: PLY coordinates are read as metres; was the file "
+                              "written in millimetres?"]
+    assert part_scene(tmp_path / "m.ply", max_triangles=BUDGET).warnings == []
+    both = part_scene(tmp_path / "m.ply", nominal=tmp_path / "mm.ply", max_triangles=BUDGET)
+    assert [line.split(" measures")[0] for line in both.warnings] == ["the nominal part"]
+
+
 def test_report_notes_flatten_nested_keys():
     lines = report_notes({"volume_mm3": 0.0123456789, "rapid": {"lines": [1, 2]},
                           "big": list(range(10))})

@@ -32,6 +32,10 @@ PART_COLOUR = 0xD9A066
 GAP = 0.25
 #: Lines of a report JSON shown in the overlay (the rest is left out, with a note).
 MAX_NOTE_LINES = 14
+#: A part this large (m) in any direction is noted as perhaps in millimetres: PLY coordinates
+#: are read as metres, and no shipped machine travels more than 0.5 m on an axis, so a part
+#: of a millimetre or more written in millimetres (1000 times too large) shows as 1 m or more.
+UNIT_SLIP_SIZE_M = 1.0
 #: Camera position in the world for a scene scaled to 1 (front right, above): the whole
 #: scene fills about two thirds of the view of meshcat's 75-degree camera.
 CAMERA_POSITION = np.array([0.55, -0.9, 0.65])
@@ -93,8 +97,10 @@ def part_scene(surface, nominal=None, report=None, title: str = "machined part",
     """
     vertices, triangles = mesh_of(_load(surface))
     scene = Scene(title)
-    smap = add_part(scene, "part", (vertices, triangles),
-                    _load(nominal) if nominal is not None else None, max_triangles)
+    nominal = _load(nominal) if nominal is not None else None
+    scene.warnings += size_warnings({"the part": vertices, "the nominal part": (
+        None if nominal is None else mesh_of(nominal)[0])})
+    smap = add_part(scene, "part", (vertices, triangles), nominal, max_triangles)
     scene.notes += _mesh_notes(len(triangles), max_triangles)
     if report is not None:
         scene.notes += report_notes(report)
@@ -132,6 +138,10 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
     if nominal is not None:
         scene.notes.append(f"coloured by deviation from {nominal_path.name}")
     meshes = [read_ply(p) for p in shown]
+    scene.warnings += size_warnings({p.name: mesh[0] for p, mesh in zip(shown, meshes,
+                                                                     strict=True)})
+    if nominal is not None:
+        scene.warnings += size_warnings({nominal_path.name: nominal[0]})
     boxes = [(v.min(axis=0), v.max(axis=0)) for v, _ in meshes]
     step = (1.0 + GAP) * max(float(np.max(hi - lo)) for lo, hi in boxes)
     lo_all, hi_all = np.full(3, math.inf), np.full(3, -math.inf)
@@ -148,6 +158,21 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
         lo_all, hi_all = np.minimum(lo_all, lo + shift), np.maximum(hi_all, hi + shift)
     frame_scene(scene, lo_all, hi_all)
     return scene
+
+
+def size_warnings(vertices_by_name: dict) -> list[str]:
+    """A line for each named part (vertices (n, 3), m; None skipped) that measures at least
+    `UNIT_SLIP_SIZE_M` in x, y or z: perhaps a file in millimetres read as metres."""
+    lines = []
+    for name, vertices in vertices_by_name.items():
+        if vertices is None or not len(vertices):
+            continue
+        size = np.ptp(vertices, axis=0)
+        if size.max() >= UNIT_SLIP_SIZE_M:
+            lines.append(f"{name} measures {size[0]:.6g} x {size[1]:.6g} x {size[2]:.6g} m, "
+                         "larger than any machine's travel: PLY coordinates are read as "
+                         "metres; was the file written in millimetres?")
+    return lines
 
 
 def report_notes(report) -> list[str]:
@@ -186,5 +211,5 @@ def _load(surface):
     return surface
 
 
-__all__ = ["PART_COLOUR", "add_part", "frame_scene", "part_scene", "report_notes",
-           "report_scene"]
+__all__ = ["PART_COLOUR", "UNIT_SLIP_SIZE_M", "add_part", "frame_scene", "part_scene",
+           "report_notes", "report_scene", "size_warnings"]
