@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 
 from machinesim import ErrorModel, ToolSetting, load_machine
 from machinesim.cutting import cut
-from machinesim.exceptions import InputError, ModelError
+from machinesim.exceptions import AxisLimitError, InputError, ModelError
 from machinesim.metrology import height_map
 from machinesim.motion import plan
 from machinesim.nc import ProgramBuilder
@@ -550,6 +550,20 @@ def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path
         run(["grooving_4axis", "--integer-input", "increment"])
     with pytest.raises(InputError, match="--chord-nm do\\(es\\) not apply to a part"):
         run([str(tmp_path / "missing.ply"), "--chord-nm", "2"])
+
+
+def test_a_program_beyond_the_travel_is_refused_naming_the_command_that_cuts_it(tmp_path):
+    # view has no --allow-overtravel: the message sent its user to an option it refuses
+    program = tmp_path / "far.nc"
+    program.write_text("G90 G21\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nG01 X500. F1000.\n"
+                       "G00 Z1.\nM30\n")
+    parser = add_view_parser(argparse.ArgumentParser().add_subparsers())
+    assert "--allow-overtravel" not in parser.format_help()
+    with pytest.raises(AxisLimitError, match=r"axis X = 500\.000000 mm at line 4 outside its "
+                                             r"travel -140\.000000 mm \.\. 140\.000000 mm.*"
+                                             r"machinesim cut --allow-overtravel"):
+        run(["robonano_a0ib", "--program", str(program), "--html", str(tmp_path / "f.html")])
+    assert not (tmp_path / "f.html").exists()
 
 
 def test_a_program_that_misses_the_stock_is_warned_on_the_page_and_on_stderr(tmp_path, capsys):

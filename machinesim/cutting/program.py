@@ -386,7 +386,8 @@ def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
         where = f"{source}: " if source else ""
         raise AxisLimitError(
             f"{where}{'; '.join(found)}; nothing was cut (allow_overtravel=True, "
-            "--allow-overtravel on the command line, cuts it anyway and lists it)")
+            "machinesim cut --allow-overtravel on the command line, cuts it anyway and "
+            "lists it)")
     return tuple(found)
 
 
@@ -455,8 +456,8 @@ def _holder_refusal(source, tool, stock: Part, sweep_line: np.ndarray):
             "the holder would hit the part, and the body alone would leave material "
             "standing over a tunnel; nothing was cut. Use a longer tool (--tool ...:h=MM, "
             "the tool's height) or a shallower cut; allow_holder_contact=True "
-            "(--allow-holder-contact on the command line) cuts the body alone and lists "
-            "the lines")
+            "(machinesim cut --allow-holder-contact on the command line) cuts the body "
+            "alone and lists the lines")
     return refuse
 
 
