@@ -552,6 +552,30 @@ def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path
         run([str(tmp_path / "missing.ply"), "--chord-nm", "2"])
 
 
+def test_a_report_of_another_part_file_is_warned_about(tmp_path, capsys):
+    # a report from another run was shown beside the part without a word
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "nominal.ply")
+    report = tmp_path / "report.json"
+    report.write_text(json.dumps({"removed_volume_mm3": 0.026, "part_file": "part.ply",
+                                  "part_unit": "m"}))
+    assert run([str(tmp_path / "nominal.ply"), "--report", str(report),
+                "--html", str(tmp_path / "n.html")]) == 0
+    err = capsys.readouterr().err
+    assert (f"warning: the report {report} describes the part file 'part.ply', not "
+            "nominal.ply: its figures may be of another cut") in err
+    assert "gives the part in" not in err
+    report.write_text(json.dumps({"part_file": "sub/nominal.stl", "part_unit": "mm"}))
+    assert run([str(tmp_path / "nominal.ply"), "--report", str(report),
+                "--html", str(tmp_path / "n.html")]) == 0
+    err = capsys.readouterr().err
+    assert "'sub/nominal.stl', not nominal.ply" in err
+    assert f"the report {report} gives the part in 'mm'; a PLY part is read in metres" in err
+    report.write_text(json.dumps({"part_file": "sub/nominal.ply", "part_unit": "m"}))
+    assert run([str(tmp_path / "nominal.ply"), "--report", str(report),
+                "--html", str(tmp_path / "n.html")]) == 0
+    assert "warning" not in capsys.readouterr().err
+
+
 def test_a_program_beyond_the_travel_is_refused_naming_the_command_that_cuts_it(tmp_path):
     # view has no --allow-overtravel: the message sent its user to an option it refuses
     program = tmp_path / "far.nc"

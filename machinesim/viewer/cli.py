@@ -164,8 +164,10 @@ def _scene(args, budget: int):
         if report is not None and not isinstance(report, dict):
             raise InputError(f"expected a JSON object (a cut report), got a "
                              f"{type(report).__name__}", source=str(args.report))
-        return part_scene(target, nominal=args.nominal, report=report,
-                          title=f"part {target.name}", max_triangles=budget)
+        scene = part_scene(target, nominal=args.nominal, report=report,
+                           title=f"part {target.name}", max_triangles=budget)
+        scene.warnings += _report_mismatch(report, target, args.report)
+        return scene
     from machinesim.machines import load_machine
     from machinesim.viewer.machine import machine_scene
 
@@ -195,6 +197,24 @@ def _scene(args, budget: int):
     return machine_scene(machine, program, tool=args.tool, stock=args.stock,
                          errors=errors, duration_s=args.duration, max_triangles=budget,
                          chord_tolerance=chord)
+
+
+def _report_mismatch(report, part: Path, path) -> list[str]:
+    """Lines noting a cut report (``machinesim cut --report``) that describes another file
+    than ``part``, or gives it in another unit than metres: a report of another cut, whose
+    figures the page would show beside this part."""
+    if report is None:
+        return []
+    lines = []
+    named = report.get("part_file")
+    if isinstance(named, str) and Path(named).name != part.name:
+        lines.append(f"the report {path} describes the part file {named!r}, not {part.name}: "
+                     "its figures may be of another cut")
+    unit = report.get("part_unit")
+    if isinstance(unit, str) and unit != "m":
+        lines.append(f"the report {path} gives the part in {unit!r}; a PLY part is read in "
+                     "metres")
+    return lines
 
 
 def _refuse_tool_changes(program) -> None:
