@@ -35,7 +35,14 @@ from machinesim.viewer import (
     write_html,
 )
 from machinesim.viewer.cli import add_view_parser, run_view
-from machinesim.viewer.maps import DIVERGING, NO_DATA, colours, legend_for, map_mesh
+from machinesim.viewer.maps import (
+    DIVERGING,
+    NO_DATA,
+    SurfaceMap,
+    colours,
+    legend_for,
+    map_mesh,
+)
 from machinesim.viewer.meshes import signed_volume, triangle_normals
 from machinesim.viewer.scene import Scene
 from machinesim.viewer.views import report_notes
@@ -193,6 +200,15 @@ def test_deviation_map_of_a_tilted_top_is_the_exact_plane_difference():
     assert [label for _, label in legend.ticks] == ["-100 nm", "-50 nm", "+0 nm", "+50 nm",
                                                     "+100 nm"]
     assert legend.notes[0].startswith("P-V 200 nm, RMS")
+
+
+def test_a_legend_tick_at_round_off_of_zero_reads_zero():
+    # heights from -1 um to 1 um but for 1e-22 m: the middle tick read '+2.118e-13 nm'
+    x = y = np.array([0.0, 1e-3])
+    heights = np.array([[-999.8e-9, 0.0], [0.0, 999.8e-9 + 2e-22]])
+    legend = legend_for(SurfaceMap(x, y, heights, heights, "height"))
+    assert [label for _, label in legend.ticks] == ["-999.8 nm", "-499.9 nm", "+0 nm",
+                                                    "+499.9 nm", "+999.8 nm"]
 
 
 def test_map_mesh_faces_up_covers_the_part_and_leaves_out_cells_off_it():

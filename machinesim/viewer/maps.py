@@ -35,6 +35,13 @@ NO_DATA = np.array([0.5, 0.5, 0.5])
 MIN_HALF_RANGE_M = 1e-9
 
 
+#: Where a legend's ticks stand along its colour bar, 0 (bottom) to 1 (top).
+TICKS = (0.0, 0.25, 0.5, 0.75, 1.0)
+#: A tick within this fraction of the bar's span of zero is labelled zero: the labels show
+#: 4 digits, so anything below 1e-6 of the span is round-off of the range's ends.
+TICK_ZERO = 1e-6
+
+
 @dataclass(frozen=True)
 class SurfaceMap:
     """Top-surface heights of a part on a grid, and the values it is coloured by.
@@ -215,8 +222,11 @@ def legend_for(smap: SurfaceMap, title: str | None = None, notes=()) -> Legend:
     RMS)."""
     lo, hi = smap.value_range()
     name, factor = length_unit(max(abs(lo), abs(hi)))
-    ticks = tuple((f, f"{(lo + f * (hi - lo)) / factor:+.4g} {name}")
-                  for f in (0.0, 0.25, 0.5, 0.75, 1.0))
+    values = [lo + f * (hi - lo) for f in TICKS]
+    # a height range symmetric but for round-off has its middle tick at ~1e-22 m, which
+    # '+.4g' printed as '+2.118e-13 nm': a tick that small beside the span is zero
+    values = [0.0 if abs(v) < TICK_ZERO * (hi - lo) else v for v in values]
+    ticks = tuple((f, f"{v / factor:+.4g} {name}") for f, v in zip(TICKS, values, strict=True))
     pv_name, pv_factor = length_unit(smap.peak_to_valley)
     stats = f"P-V {smap.peak_to_valley / pv_factor:.4g} {pv_name}"
     if smap.kind == "deviation":
