@@ -568,6 +568,28 @@ def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path
         run([str(tmp_path / "missing.ply"), "--chord-nm", "2"])
 
 
+def test_a_report_folder_whose_summary_names_a_missing_nominal_is_warned_about(tmp_path):
+    # the parts were coloured by height, as if no nominal had been named, without a word
+    from machinesim.viewer import report_scene
+
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "nom.ply")
+    summary = tmp_path / "summary.json"
+    for named in ("nominal.ply", ["nom.ply"]):
+        summary.write_text(json.dumps({"nominal_ply": named}))
+        scene = report_scene(tmp_path, BUDGET)
+        assert scene.warnings == [f"{summary} names the nominal part {named!r} (nominal_ply), "
+                                  "which is not a file in the folder: each part is coloured "
+                                  "by its height, not by its deviation"]
+        assert [legend.title for legend in scene.legends] == [
+            "nom.ply: height z (workpiece frame)", "part.ply: height z (workpiece frame)"]
+    summary.write_text(json.dumps({"nominal_ply": "nom.ply"}))
+    scene = report_scene(tmp_path, BUDGET)
+    assert scene.warnings == []
+    assert [legend.title for legend in scene.legends] == [
+        "part.ply: deviation from nominal (height, part - nominal)"]
+
+
 def test_a_report_of_another_part_file_is_warned_about(tmp_path, capsys):
     # a report from another run was shown beside the part without a word
     stock_from_spec("block:1x1x1").export_ply(tmp_path / "nominal.ply")

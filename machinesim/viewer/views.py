@@ -131,6 +131,12 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
     # a folder holding only the nominal part shows it by height
     nominal = read_ply(nominal_path) if nominal_path.is_file() and shown != plys else None
     scene = Scene(f"report {folder.name}")
+    named = summary.get("nominal_ply")
+    if named is not None and not (isinstance(named, str) and nominal_path.is_file()):
+        # the parts would be coloured by height, as if the summary named no nominal
+        scene.warnings.append(f"{summary_path} names the nominal part {named!r} "
+                              "(nominal_ply), which is not a file in the folder: each part "
+                              "is coloured by its height, not by its deviation")
     if summary:
         scene.notes += report_notes(summary)
     else:
