@@ -143,14 +143,15 @@ def test_read_ply_names_the_file_of_a_truncated_malformed_or_non_finite_part(tmp
             read_ply(tmp_path / name)
 
 
-def ply_bytes(vertices, triangles) -> bytes:
+def ply_bytes(vertices, triangles, kind="double") -> bytes:
     header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n"
-              "property double x\nproperty double y\nproperty double z\n"
+              f"property {kind} x\nproperty {kind} y\nproperty {kind} z\n"
               f"element face {len(triangles)}\nproperty list uchar int vertex_indices\n"
               "end_header\n").encode("ascii")
     faces = np.zeros(len(triangles), dtype=[("n", "u1"), ("i", "<i4", 3)])
     faces["n"], faces["i"] = 3, triangles
-    return header + np.asarray(vertices, dtype="<f8").tobytes() + faces.tobytes()
+    dtype = {"double": "<f8", "float": "<f4"}[kind]
+    return header + np.asarray(vertices, dtype=dtype).tobytes() + faces.tobytes()
 
 
 def test_read_ply_refuses_a_closed_part_inside_out_and_reads_an_open_surface(tmp_path):
@@ -392,6 +393,25 @@ def test_a_part_file_in_millimetres_is_warned_about(tmp_path):
     assert part_scene(tmp_path / "m.ply", max_triangles=BUDGET).warnings == []
     both = part_scene(tmp_path / "m.ply", nominal=tmp_path / "mm.ply", max_triangles=BUDGET)
     assert [line.split(" measures")[0] for line in both.warnings] == ["the nominal part"]
+
+
+def test_a_part_file_in_single_precision_is_warned_about(tmp_path):
+    # trimesh writes PLY vertices as float32: read widened, the map's legend still said
+    # "exact heights" without a word of the rounding (up to half a float32 step: 0.47 nm at
+    # 10 mm, np.spacing(np.float32(0.01)) / 2 = 4.66e-10 m)
+    vertices, triangles = stock_from_spec("block:10x10x2").mesh()
+    (tmp_path / "f32.ply").write_bytes(ply_bytes(vertices, triangles, "float"))
+    (tmp_path / "f64.ply").write_bytes(ply_bytes(vertices, triangles))
+    widened = read_ply(tmp_path / "f32.ply")[0]
+    assert 0.0 < np.abs(widened - vertices).max() <= 4.66e-10
+    scene = part_scene(tmp_path / "f32.ply", max_triangles=BUDGET)
+    assert scene.warnings == [
+        "the part (f32.ply) stores its vertices as float32: each rounded by up to 0.47 nm "
+        "(half a float32 step at 10 mm from the origin) before it was read, so its heights "
+        "are exact for the rounded mesh only; machinesim cut --out part.ply writes float64"]
+    assert part_scene(tmp_path / "f64.ply", max_triangles=BUDGET).warnings == []
+    both = part_scene(tmp_path / "f64.ply", nominal=tmp_path / "f32.ply", max_triangles=BUDGET)
+    assert [line.split(" (")[0] for line in both.warnings] == ["the nominal part"]
 
 
 def test_report_notes_flatten_nested_keys():

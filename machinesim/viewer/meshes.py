@@ -17,6 +17,8 @@ from machinesim.exceptions import InputError
 #: Triangles of one displayed mesh above which it is decimated: ~200k triangles keep a scene
 #: interactive in a browser without a GPU (swiftshader) and the HTML file under ~10 MB.
 DISPLAY_TRIANGLES = 200_000
+#: The most of a PLY file `ply_single_precision` reads for its header (a part's is ~250 B).
+HEADER_BYTES = 65536
 #: Triangles summed at once by `signed_volume`: its temporaries stay a few MB.
 VOLUME_CHUNK = 65536
 #: Each decimation pass shrinks the clustering cell by this factor beyond the estimate when
@@ -138,6 +140,22 @@ def closed_and_oriented(triangles: np.ndarray) -> bool:
     back = edges[:, 1] * count + edges[:, 0]
     found = np.minimum(np.searchsorted(key, back), len(key) - 1)
     return bool(np.all(key[found] == back))
+
+
+def ply_single_precision(path) -> bool:
+    """Whether a PLY part (read by `read_ply`, which widens them) stores any of its vertex
+    coordinates in single precision, as trimesh and most mesh tools write PLY: rounded to
+    float32 before machinesim reads them, so its heights are exact only for the rounded mesh.
+    """
+    path = Path(path)
+    with path.open("rb") as file:
+        head = file.read(HEADER_BYTES)
+    end = head.find(b"end_header\n")
+    lines = head[:end if end >= 0 else len(head)].decode("ascii", errors="replace").splitlines()
+    for name, _, props in _ply_elements(lines, path):
+        if name == "vertex":
+            return any(_PLY_TYPES[kind] == "f4" for prop, kind, _ in props if prop in "xyz")
+    return False
 
 
 def _ply_elements(header: list[str], path: Path):
@@ -282,4 +300,5 @@ def tool_mesh(tool) -> tuple[np.ndarray, np.ndarray]:
 
 
 __all__ = ["DISPLAY_TRIANGLES", "closed_and_oriented", "compact", "decimate", "display_buffers",
-           "read_ply", "signed_volume", "tool_mesh", "triangle_normals"]
+           "ply_single_precision", "read_ply", "signed_volume", "tool_mesh",
+           "triangle_normals"]

@@ -22,7 +22,13 @@ from machinesim.viewer.maps import (
     mesh_of,
     surface_map,
 )
-from machinesim.viewer.meshes import DISPLAY_TRIANGLES, decimate, read_ply, triangle_normals
+from machinesim.viewer.meshes import (
+    DISPLAY_TRIANGLES,
+    decimate,
+    ply_single_precision,
+    read_ply,
+    triangle_normals,
+)
 from machinesim.viewer.scene import Scene
 
 #: Colour of a part's faces that are not colour-mapped (sides, walls, bottom): pale copper,
@@ -97,7 +103,11 @@ def part_scene(surface, nominal=None, report=None, title: str = "machined part",
     """
     vertices, triangles = mesh_of(_load(surface))
     scene = Scene(title)
-    nominal = _load(nominal) if nominal is not None else None
+    nominal_path, nominal = nominal, _load(nominal) if nominal is not None else None
+    scene.warnings += precision_warnings({"the part": (surface, vertices)})
+    if nominal is not None:
+        scene.warnings += precision_warnings(
+            {"the nominal part": (nominal_path, mesh_of(nominal)[0])})
     scene.warnings += size_warnings({"the part": vertices, "the nominal part": (
         None if nominal is None else mesh_of(nominal)[0])})
     smap = add_part(scene, "part", (vertices, triangles), nominal, max_triangles)
@@ -144,6 +154,10 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
     if nominal is not None:
         scene.notes.append(f"coloured by deviation from {nominal_path.name}")
     meshes = [read_ply(p) for p in shown]
+    scene.warnings += precision_warnings(
+        {p.name: (p, mesh[0]) for p, mesh in zip(shown, meshes, strict=True)})
+    if nominal is not None:
+        scene.warnings += precision_warnings({nominal_path.name: (nominal_path, nominal[0])})
     scene.warnings += size_warnings({p.name: mesh[0] for p, mesh in zip(shown, meshes,
                                                                      strict=True)})
     if nominal is not None:
@@ -164,6 +178,25 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
         lo_all, hi_all = np.minimum(lo_all, lo + shift), np.maximum(hi_all, hi + shift)
     frame_scene(scene, lo_all, hi_all)
     return scene
+
+
+def precision_warnings(parts: dict) -> list[str]:
+    """A line for each named part, ``name: (path, vertices (n, 3) m)`` (a path that is not a
+    str or Path skipped), whose PLY stores its vertices in single precision: rounded before
+    they were read, by up to half a float32 step at the largest coordinate, so the map's
+    heights are exact for the rounded mesh only."""
+    lines = []
+    for name, (path, vertices) in parts.items():
+        if isinstance(path, str | Path) and ply_single_precision(path):
+            largest = float(np.abs(vertices).max())
+            step = float(np.spacing(np.float32(largest))) / 2.0
+            file = "" if name == Path(path).name else f" ({Path(path).name})"
+            lines.append(f"{name}{file} stores its vertices as float32: each "
+                         f"rounded by up to {step * 1e9:.2g} nm (half a float32 step at "
+                         f"{largest * 1e3:.4g} mm from the origin) before it was read, so its "
+                         "heights are exact for the rounded mesh only; machinesim cut --out "
+                         "part.ply writes float64")
+    return lines
 
 
 def size_warnings(vertices_by_name: dict) -> list[str]:
@@ -218,4 +251,4 @@ def _load(surface):
 
 
 __all__ = ["PART_COLOUR", "UNIT_SLIP_SIZE_M", "add_part", "frame_scene", "part_scene",
-           "report_notes", "report_scene", "size_warnings"]
+           "precision_warnings", "report_notes", "report_scene", "size_warnings"]
