@@ -168,8 +168,15 @@ def _scene(args, budget: int):
                            title=f"part {target.name}", max_triangles=budget)
         scene.warnings += _report_mismatch(report, target, args.report)
         return scene
-    from machinesim.machines import load_machine
+    from machinesim.machines import list_machines, load_machine
     from machinesim.viewer.machine import machine_scene
+
+    if (target.is_file() and target.suffix.lower() != ".urdf"
+            and args.target not in list_machines()):
+        # an existing file is no machine name: say what a file may be, not 'unknown machine'
+        raise InputError(f"{target}: expected a part file ending in .ply, a machine's .urdf "
+                         "or a report folder (see 'machinesim view --help'); the viewer goes "
+                         "by the name's ending")
 
     _refuse(part_options, "a machine")
     reading = [f"--{name.replace('_', '-')}" for name in ("tools", "integer_input", "chord_nm")
