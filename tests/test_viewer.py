@@ -395,6 +395,21 @@ def test_a_part_file_in_millimetres_is_warned_about(tmp_path):
     assert [line.split(" measures")[0] for line in both.warnings] == ["the nominal part"]
 
 
+def test_a_nominal_that_lies_under_none_of_the_part_is_warned_about():
+    # a nominal in another frame (here 50 mm along x) left every node without a deviation:
+    # a grey map, a +-1 nm scale and 'P-V nan um', exit 0, with no word why
+    part = stock_from_spec("block:10x10x2")
+    scene = part_scene(part, nominal=stock_from_spec("block:10x10x2@50,0,0"),
+                       max_triangles=BUDGET)
+    assert scene.warnings == ["the nominal part lies under no point of the part's map (x 0 .. "
+                              "10 mm, y 0 .. 10 mm): no deviation to show; are both in the "
+                              "same workpiece frame?"]
+    # overlapping by half, the map shows what it can: no warning
+    half = part_scene(part, nominal=stock_from_spec("block:10x10x2@5,0,0"),
+                      max_triangles=BUDGET)
+    assert half.warnings == []
+
+
 def test_a_part_file_in_single_precision_is_warned_about(tmp_path):
     # trimesh writes PLY vertices as float32: read widened, the map's legend still said
     # "exact heights" without a word of the rounding (up to half a float32 step: 0.47 nm at

@@ -48,7 +48,7 @@ CAMERA_POSITION = np.array([0.55, -0.9, 0.65])
 
 
 def add_part(scene: Scene, path: str, surface, nominal=None,
-             max_triangles: int = DISPLAY_TRIANGLES) -> SurfaceMap:
+             max_triangles: int = DISPLAY_TRIANGLES, name: str = "the part") -> SurfaceMap:
     """Draw a part under ``path`` in its workpiece frame; return the surface map drawn.
 
     Parameters
@@ -63,9 +63,19 @@ def add_part(scene: Scene, path: str, surface, nominal=None,
         Colour by deviation from this part; else by height.
     max_triangles : int
         Display budget of each of the two meshes.
+    name : str
+        What a warning calls the part (a nominal that lies under none of its map is warned
+        about in ``scene.warnings``).
     """
     vertices, triangles = mesh_of(surface)
     smap = surface_map((vertices, triangles), nominal, max_triangles)
+    if smap.kind == "deviation" and not np.isfinite(smap.values).any():
+        # else a grey map, a +-1 nm scale and 'P-V nan um', with no word why
+        lo, hi = smap.x[[0, -1]] * 1e3, smap.y[[0, -1]] * 1e3
+        scene.warnings.append(f"the nominal part lies under no point of {name}'s map (x "
+                              f"{lo[0]:.6g} .. {lo[1]:.6g} mm, y {hi[0]:.6g} .. {hi[1]:.6g} "
+                              "mm): no deviation to show; are both in the same workpiece "
+                              "frame?")
     grid_v, grid_t, rgb = map_mesh(smap)
     scene.add_mesh(f"{path}/map", grid_v, grid_t, rgb=rgb)
     # the map covers every face that faces up; the rest keeps the part's silhouette
@@ -172,7 +182,7 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
         place[:3, 3] = shift
         node = f"parts/{k}"
         scene.set_transform(node, place)
-        smap = add_part(scene, node, mesh, nominal, max_triangles)
+        smap = add_part(scene, node, mesh, nominal, max_triangles, name=p.name)
         scene.legends.append(legend_for(smap, title=f"{p.name}: {map_title(smap.kind)}",
                                         notes=_mesh_notes(len(mesh[1]), max_triangles)))
         lo_all, hi_all = np.minimum(lo_all, lo + shift), np.maximum(hi_all, hi + shift)
