@@ -395,7 +395,7 @@ def test_a_part_file_in_millimetres_is_warned_about(tmp_path):
     assert [line.split(" measures")[0] for line in both.warnings] == ["the nominal part"]
 
 
-def test_a_nominal_that_lies_under_none_of_the_part_is_warned_about():
+def test_a_map_without_heights_or_deviations_is_warned_about():
     # a nominal in another frame (here 50 mm along x) left every node without a deviation:
     # a grey map, a +-1 nm scale and 'P-V nan um', exit 0, with no word why
     part = stock_from_spec("block:10x10x2")
@@ -404,6 +404,14 @@ def test_a_nominal_that_lies_under_none_of_the_part_is_warned_about():
     assert scene.warnings == ["the nominal part lies under no point of the part's map (x 0 .. "
                               "10 mm, y 0 .. 10 mm): no deviation to show; are both in the "
                               "same workpiece frame?"]
+    # an open surface facing down (a scan with its normals down) had an empty map, no word
+    vertices, triangles = part.mesh()
+    up = triangle_normals(vertices, triangles)[:, 2] > 0.0
+    down = part_scene((vertices, triangles[up][:, ::-1]), max_triangles=BUDGET)
+    assert down.warnings == ["the part has no face that faces up over its map, so the map is "
+                             "empty: heights are read from upward-facing triangles "
+                             "(counter-clockwise seen from above); is the surface wound the "
+                             "other way?"]
     # overlapping by half, the map shows what it can: no warning
     half = part_scene(part, nominal=stock_from_spec("block:10x10x2@5,0,0"),
                       max_triangles=BUDGET)

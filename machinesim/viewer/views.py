@@ -69,7 +69,14 @@ def add_part(scene: Scene, path: str, surface, nominal=None,
     """
     vertices, triangles = mesh_of(surface)
     smap = surface_map((vertices, triangles), nominal, max_triangles)
-    if smap.kind == "deviation" and not np.isfinite(smap.values).any():
+    if not np.isfinite(smap.heights).any():
+        # heights come from the faces that face up: an open surface wound the other way
+        # (a scan with its normals down) has none, and the page showed an empty map
+        scene.warnings.append(f"{name} has no face that faces up over its map, so the map "
+                              "is empty: heights are read from upward-facing triangles "
+                              "(counter-clockwise seen from above); is the surface wound "
+                              "the other way?")
+    elif smap.kind == "deviation" and not np.isfinite(smap.values).any():
         # else a grey map, a +-1 nm scale and 'P-V nan um', with no word why
         lo, hi = smap.x[[0, -1]] * 1e3, smap.y[[0, -1]] * 1e3
         scene.warnings.append(f"the nominal part lies under no point of {name}'s map (x "
