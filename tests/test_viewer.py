@@ -559,6 +559,11 @@ def test_cli_refuses_bad_input_with_a_clear_message(tmp_path):
         run([str(tmp_path / "missing.ply"), "--program", "p.nc"])
     with pytest.raises(InputError, match="expected a file name ending in .html"):
         run(["robonano_a0ib", "--html", str(tmp_path / "x.png")])
+    # headless Chromium shows ERR_UNSAFE_PORT for 6000 (X11) and 6665 (IRC): the server
+    # started and the screenshot failed with 'the page raised: Uncaught'
+    for port in ("6000", "6665"):
+        with pytest.raises(InputError, match=f"--port {port}: browsers refuse to open pages"):
+            run(["robonano_a0ib", "--port", port])
     with pytest.raises(ModelError, match="unknown machine 'nosuch'"):
         run(["nosuch", "--html", str(tmp_path / "x.html")])
     with pytest.raises(InputError, match="reads parts as float64 PLY .*not .stl"):

@@ -26,6 +26,16 @@ from machinesim._program_options import (
 )
 from machinesim.exceptions import InputError
 
+#: Ports browsers refuse to load a page from: the Fetch standard's "bad ports" (Chromium shows
+#: ERR_UNSAFE_PORT for all but 4190 and 6679). A live viewer there serves a page no browser
+#: opens, and its --screenshot failed with "the page raised: Uncaught".
+BAD_PORTS = frozenset({
+    1, 7, 9, 11, 13, 15, 17, 19, 20, 21, 22, 23, 25, 37, 42, 43, 53, 69, 77, 79, 87, 95, 101,
+    102, 103, 104, 109, 110, 111, 113, 115, 117, 119, 123, 135, 137, 139, 143, 161, 179, 389,
+    427, 465, 512, 513, 514, 515, 526, 530, 531, 532, 540, 548, 554, 556, 563, 587, 601, 636,
+    989, 990, 993, 995, 1719, 1720, 1723, 2049, 3659, 4045, 4190, 5060, 5061, 6000, 6566,
+    6665, 6666, 6667, 6668, 6669, 6679, 6697, 10080})
+
 EXAMPLES = """examples (from the repository's folder):
   machinesim view robonano_a0ib
   machinesim view grooving_4axis --program models/examples/grooves.nc --tool v:90 \\
@@ -97,6 +107,10 @@ def run_view(args: argparse.Namespace) -> int:
         raise InputError(f"--duration {args.duration}: expected a positive number of seconds")
     if args.port is not None and not 0 < args.port < 65536:
         raise InputError(f"--port {args.port}: expected a TCP port, 1 .. 65535")
+    if args.port in BAD_PORTS and args.html is None:
+        raise InputError(f"--port {args.port}: browsers refuse to open pages on this port (a "
+                         "'bad port' of the Fetch standard; Chromium: ERR_UNSAFE_PORT); "
+                         "expected another, e.g. 7000")
     if args.html is not None and args.html.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"--html {args.html}: expected a file name ending in .html")
     if args.screenshot is not None and args.screenshot.suffix.lower() != ".png":
