@@ -43,10 +43,10 @@ from machinesim.viewer.maps import (
     legend_for,
     map_mesh,
 )
-from machinesim.viewer.meshes import signed_volume, triangle_normals
+from machinesim.viewer.meshes import triangle_normals
 from machinesim.viewer.scene import Scene
 from machinesim.viewer.views import report_notes
-from machinesim.workpiece import Part, block, stock_from_spec
+from machinesim.workpiece import Part, block, mesh_volume, stock_from_spec
 
 UM, MM = 1e-6, 1e-3
 #: A small display budget keeps these scenes fast; the exactness checks do not depend on it.
@@ -166,8 +166,8 @@ def test_read_ply_refuses_a_closed_part_inside_out_and_reads_an_open_surface(tmp
     up = triangle_normals(vertices, triangles)[:, 2] > 0.0
     (tmp_path / "open.ply").write_bytes(ply_bytes(vertices, triangles[up][:, ::-1]))
     assert len(read_ply(tmp_path / "open.ply")[1]) == 2
-    assert signed_volume(vertices, triangles) == pytest.approx(2e-9, rel=1e-12)
-    assert signed_volume(vertices, triangles[:, ::-1]) == pytest.approx(-2e-9, rel=1e-12)
+    assert mesh_volume(vertices, triangles) == pytest.approx(2e-9, rel=1e-12)
+    assert mesh_volume(vertices, triangles[:, ::-1]) == pytest.approx(-2e-9, rel=1e-12)
 
 
 def test_decimate_meets_the_budget_and_keeps_the_shape():

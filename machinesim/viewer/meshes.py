@@ -13,14 +13,13 @@ import manifold3d
 import numpy as np
 
 from machinesim.exceptions import InputError
+from machinesim.workpiece import mesh_volume
 
 #: Triangles of one displayed mesh above which it is decimated: ~200k triangles keep a scene
 #: interactive in a browser without a GPU (swiftshader) and the HTML file under ~10 MB.
 DISPLAY_TRIANGLES = 200_000
 #: The most of a PLY file `ply_single_precision` reads for its header (a part's is ~250 B).
 HEADER_BYTES = 65536
-#: Triangles summed at once by `signed_volume`: its temporaries stay a few MB.
-VOLUME_CHUNK = 65536
 #: Each decimation pass shrinks the clustering cell by this factor beyond the estimate when
 #: the estimate left too many triangles (a few passes at most).
 CELL_GROWTH = 1.25
@@ -100,7 +99,7 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
                          source=str(path))
     if triangles.size and (triangles.min() < 0 or triangles.max() >= len(vertices)):
         raise InputError(f"face indices outside [0, {len(vertices)})", source=str(path))
-    volume = signed_volume(vertices, triangles)
+    volume = mesh_volume(vertices, triangles)
     # an open mesh's signed volume means nothing: only a closed one is known inside out
     if volume < 0.0 and closed_and_oriented(triangles):
         raise InputError(f"the part is inside out: it encloses {volume * 1e9:.6g} mm^3, its "
@@ -108,25 +107,6 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
                          "its top surface; expected counter-clockwise (reverse each face's "
                          "vertex order)", source=str(path))
     return vertices, triangles
-
-
-def signed_volume(vertices: np.ndarray, triangles: np.ndarray,
-                  chunk: int = VOLUME_CHUNK) -> float:
-    """Volume (m^3) a closed mesh encloses, negative when it is wound inside out.
-
-    `machinesim.workpiece.mesh_volume`'s sum (tetrahedra from the centre of the bounds), in
-    chunks and by components: a 3-million-triangle part in 0.3 s where the one-pass sum,
-    through (m, 3, 3) temporaries and np.cross, took 1 s (what a PLY is read in).
-    """
-    centre = (vertices.min(axis=0) + vertices.max(axis=0)) / 2.0
-    x, y, z = np.ascontiguousarray((vertices - centre).T)
-    total = 0.0
-    for start in range(0, len(triangles), chunk):
-        a, b, c = triangles[start:start + chunk].T
-        total += float(np.sum(x[a] * (y[b] * z[c] - z[b] * y[c])
-                              + y[a] * (z[b] * x[c] - x[b] * z[c])
-                              + z[a] * (x[b] * y[c] - y[b] * x[c])))
-    return total / 6.0
 
 
 def closed_and_oriented(triangles: np.ndarray) -> bool:
@@ -300,5 +280,5 @@ def tool_mesh(tool) -> tuple[np.ndarray, np.ndarray]:
 
 
 __all__ = ["DISPLAY_TRIANGLES", "closed_and_oriented", "compact", "decimate", "display_buffers",
-           "ply_single_precision", "read_ply", "signed_volume", "tool_mesh",
+           "ply_single_precision", "read_ply", "tool_mesh",
            "triangle_normals"]
