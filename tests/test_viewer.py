@@ -485,6 +485,61 @@ def test_live_server_listens_on_loopback_only_and_serves_the_page():
     assert live.process.poll() is not None
 
 
+def test_a_live_server_that_cannot_start_or_hangs_is_named_not_waited_for(monkeypatch):
+    """A port in use: the server's own reason is in the message (it went to /dev/null). A
+    server that prints nothing: ended after START_TIMEOUT_S (the command hung on its pipe)."""
+    import socket
+    import sys
+
+    from machinesim.exceptions import MachineSimError
+    from machinesim.viewer import live as live_module
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        with pytest.raises(MachineSimError, match="ended before giving its address: "
+                                                  r"OSError: \[Errno 98\] Address already"):
+            live_module.start_server(port)
+    monkeypatch.setattr(live_module, "START_TIMEOUT_S", 0.5)
+    monkeypatch.setattr(live_module, "server_command", lambda port=None: [
+        sys.executable, "-c", "import time; time.sleep(30)"])
+    with pytest.raises(MachineSimError, match="gave no address within 0.5 s"):
+        live_module.start_server()
+
+
+def test_a_web_port_in_meshcats_zeromq_range_is_left_to_the_web_server():
+    """meshcat binds ZeroMQ to the first free port from 6000 before the web server binds:
+    asked for that very port (6000 busy, 6001 free), the web server found it taken."""
+    import socket
+
+    from machinesim.viewer.live import start_server
+
+    held = socket.socket()
+    try:
+        try:
+            held.bind(("127.0.0.1", 6000))  # busy already is as good
+            held.listen()
+        except OSError:
+            pass
+        port = 6001
+        while True:
+            with socket.socket() as probe:
+                try:
+                    probe.bind(("127.0.0.1", port))
+                    break
+                except OSError:
+                    port += 1
+        session = start_server(port)
+        try:
+            assert session.url == f"http://127.0.0.1:{port}/static/"
+            assert not session.zmq_url.endswith(f":{port}")
+        finally:
+            session.close()
+    finally:
+        held.close()
+
+
 def test_a_scripts_wait_ends_quietly_on_ctrl_c_and_ends_the_server():
     """``live.wait()`` in a script (docs/viewer.md) stopped by Ctrl-C: it returns None
     (it raised KeyboardInterrupt into the script, a traceback) and the server has ended;

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import time
+import threading
 from dataclasses import dataclass
 
 import zmq
@@ -128,24 +128,49 @@ def replay_count(frames) -> int:
                + (n.animation is not None) for n in walk(tree))
 
 
-def start_server(port: int | None = None) -> LiveSession:
-    """Start the loopback server in a new process (nothing shown yet)."""
+def server_command(port: int | None = None) -> list[str]:
+    """The command that runs the loopback server (`machinesim.viewer.server`)."""
     command = [sys.executable, "-u", "-m", "machinesim.viewer.server"]
-    if port is not None:
-        command += ["--port", str(port)]
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                               text=True)
-    urls, deadline = {}, time.monotonic() + START_TIMEOUT_S
-    while len(urls) < 2:
-        line = process.stdout.readline()
-        if not line or time.monotonic() > deadline:
-            process.kill()
-            process.wait()
-            raise MachineSimError("the live viewer server did not start (is the port free? "
-                                  "try --port, or --html FILE to export instead)")
-        key, _, value = line.strip().partition("=")
-        if key in ("zmq_url", "web_url"):
-            urls[key] = value
+    return command if port is None else [*command, "--port", str(port)]
+
+
+def start_server(port: int | None = None) -> LiveSession:
+    """Start the loopback server in a new process (nothing shown yet).
+
+    The server has `START_TIMEOUT_S` to print its two URLs: past it, it is ended (which
+    ends the wait for its next line too) and a MachineSimError says so, where a server that
+    printed nothing hung the command; one that could not start says why (``error=...``).
+    """
+    process = subprocess.Popen(server_command(port), stdout=subprocess.PIPE,
+                               stderr=subprocess.DEVNULL, text=True)
+    late = threading.Event()
+
+    def give_up() -> None:
+        late.set()
+        process.kill()
+
+    timer = threading.Timer(START_TIMEOUT_S, give_up)
+    timer.start()
+    urls, cause = {}, ""
+    try:
+        while len(urls) < 2 and not cause:
+            line = process.stdout.readline()
+            if not line:
+                break
+            key, _, value = line.strip().partition("=")
+            if key in ("zmq_url", "web_url"):
+                urls[key] = value
+            elif key == "error":
+                cause = f": {value}"
+    finally:
+        timer.cancel()
+    if len(urls) < 2:
+        process.kill()
+        process.wait()
+        why = (f"gave no address within {START_TIMEOUT_S:g} s" if late.is_set()
+               else "ended before giving its address")
+        raise MachineSimError(f"the live viewer server did not start (it {why}{cause}; is "
+                              "the port free? try --port, or --html FILE to export instead)")
     return LiveSession(urls["web_url"], urls["zmq_url"], process)
 
 
@@ -172,4 +197,5 @@ def serve(scene: Scene, port: int | None = None) -> LiveSession:
     return session
 
 
-__all__ = ["LOOPBACK", "LiveSession", "replay_count", "serve", "start_server"]
+__all__ = ["LOOPBACK", "LiveSession", "replay_count", "serve", "server_command",
+           "start_server"]

@@ -37,7 +37,16 @@ class LoopbackBridge(ZMQWebSocketBridge):
 
     def __init__(self, port: int | None = None) -> None:
         self.title, self.overlay = "machinesim", ""
+        self._web_port = port
         super().__init__(host=LOOPBACK, port=port)
+
+    def setup_zmq(self, url):
+        # meshcat takes the first free port from 6000 for ZeroMQ before the web server
+        # binds: a web port asked for in that range (--port 6001, 6000 busy) was taken
+        # from under it. Passed over here, as a port in use is.
+        if self._web_port is not None and url.endswith(f":{self._web_port}"):
+            raise OSError(f"port {self._web_port} is kept for the web server")
+        return super().setup_zmq(url)
 
     def make_app(self):
         bridge = self
@@ -72,7 +81,12 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description="meshcat server on 127.0.0.1 only")
     parser.add_argument("--port", type=int, default=None)
     args = parser.parse_args(argv)
-    bridge = LoopbackBridge(port=args.port)
+    try:
+        bridge = LoopbackBridge(port=args.port)
+    except Exception as error:  # said to the command that started us
+        # stderr goes nowhere: the reason the server could not start goes to the pipe
+        print(f"error={type(error).__name__}: {error}", flush=True)
+        sys.exit(1)
     print(f"zmq_url={bridge.zmq_url}")
     print(f"web_url={bridge.web_url}", flush=True)
     # nobody reads the pipe after the URLs: a full pipe would stall the server
