@@ -21,6 +21,7 @@ import argparse
 import math
 import os
 import sys
+import time
 from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
@@ -123,7 +124,8 @@ def _parser() -> argparse.ArgumentParser:
                      help="cut even where a move takes the tool deeper than its body (the "
                           "holder would hit the part): the body alone cuts, the lines are "
                           "listed; default: refuse the program and write nothing")
-    cut.add_argument("--quiet", action="store_true", help="no progress bar")
+    cut.add_argument("--quiet", action="store_true",
+                     help="no progress (a bar on a terminal, lines in a log past 10 s)")
     add_view_parser(sub)
     from machinesim.campaign.cli import add_campaign_parser
 
@@ -232,9 +234,17 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
-def _progress_bar(quiet: bool):
-    if quiet or not sys.stderr.isatty():
+#: Without a terminal (a log, a pipe) a long cut says how far it is: a first line after this
+#: many seconds (short cuts say nothing), then at most one every `LOG_PROGRESS_EVERY_S`.
+LOG_PROGRESS_AFTER_S = 10.0
+LOG_PROGRESS_EVERY_S = 30.0
+
+
+def _progress_bar(quiet: bool, clock=time.monotonic):
+    if quiet:
         return None
+    if not sys.stderr.isatty():
+        return _progress_lines(clock)
 
     def show(done: int, total: int) -> None:
         width = 40
@@ -244,6 +254,24 @@ def _progress_bar(quiet: bool):
         if done >= total:
             sys.stderr.write("\n")
         sys.stderr.flush()
+
+    return show
+
+
+def _progress_lines(clock):
+    """Progress as whole lines for a log: nothing for a cut shorter than
+    `LOG_PROGRESS_AFTER_S`, then a line at most every `LOG_PROGRESS_EVERY_S`, and one at the
+    end once any was written."""
+    start = clock()
+    due = [start + LOG_PROGRESS_AFTER_S, False]  # next line's time, whether any was written
+
+    def show(done: int, total: int) -> None:
+        now = clock()
+        if now >= due[0] or (done >= total and due[1]):
+            sys.stderr.write(f"  cutting: {done}/{total} sweeps "
+                             f"({100 * done // max(total, 1)} %), {now - start:.0f} s\n")
+            sys.stderr.flush()
+            due[0], due[1] = now + LOG_PROGRESS_EVERY_S, True
 
     return show
 

@@ -669,3 +669,25 @@ def test_a_misspelt_option_is_named_with_the_one_meant(argv, hint, capsys):
     code, out, err = run(argv, capsys)
     assert code == 2 and out == ""
     assert err.splitlines()[-1].endswith(hint), err
+
+
+def test_a_long_cut_without_a_terminal_logs_its_progress_as_lines(capsys):
+    """stderr not a terminal (a log): a cut shorter than LOG_PROGRESS_AFTER_S says nothing,
+    a longer one a line once it is due, then at most one per LOG_PROGRESS_EVERY_S, and one
+    at the end (clock by hand: 0, 5, 12, 20, 41, 50 s)."""
+    from machinesim import cli
+
+    times = iter([0.0, 5.0, 9.0])
+    show = cli._progress_bar(False, clock=lambda: next(times))
+    show(0, 100)
+    show(100, 100)  # done at 9 s: shorter than 10 s, nothing said
+    assert capsys.readouterr().err == ""
+    times = iter([0.0, 5.0, 12.0, 20.0, 41.0, 50.0])
+    show = cli._progress_bar(False, clock=lambda: next(times))
+    for done in (0, 10, 30, 60, 100):
+        show(done, 100)
+    assert capsys.readouterr().err.splitlines() == [
+        "  cutting: 10/100 sweeps (10 %), 12 s",   # first due at 10 s
+        "  cutting: 100/100 sweeps (100 %), 50 s",  # 20 and 41 s: before 12 + 30 s
+    ]
+    assert cli._progress_bar(True) is None  # --quiet
