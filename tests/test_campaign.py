@@ -329,6 +329,34 @@ def test_interrupted_campaign_keeps_its_finished_trials(tmp_path, monkeypatch):
     assert not (tmp_path / "campaign.nc").exists()
 
 
+def test_a_stop_while_the_report_is_made_leaves_campaign_nc_and_summary_of_one_run(
+        campaign, tmp_path, monkeypatch):
+    # extending 2 trials to 3, stopped once the trials are done and the report is being
+    # made: campaign.nc was written first, then the summary, so a SIGTERM between them left
+    # a campaign.nc of 3 trials beside a summary.json and summary.md of 2
+    import machinesim.campaign.summary as summary
+
+    source, vary, _ = campaign
+    (tmp_path / "trials").mkdir()
+    for name in ("campaign.json", "trials/trial_000000.json", "trials/trial_000001.json"):
+        (tmp_path / name).write_bytes((source / name).read_bytes())
+    run("tool_rotation_arm", 2, vary=vary, seed=11, out=tmp_path, workers=0, progress=False,
+        **ARM)
+
+    def stopped(summary_data):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(summary, "_markdown", stopped)
+    with pytest.raises(KeyboardInterrupt):
+        run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
+            progress=False, **ARM)
+    with xr.open_dataset(tmp_path / "campaign.nc") as on_disk:
+        trials_in_nc = on_disk.sizes["trial"]
+    written = json.loads((tmp_path / "summary.json").read_text())
+    assert (trials_in_nc, written["trials_count"]) == (2, 2)
+    assert (tmp_path / "trials/trial_000002.json").is_file()  # kept for the rerun
+
+
 def test_another_campaign_in_the_same_folder_is_refused(campaign):
     out, vary, _ = campaign
     with pytest.raises(InputError) as info:

@@ -205,7 +205,8 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
     records = [records[i] if i in records else folder.read_trial(i)
                for i in range(spec.trials)]
     dataset = assemble(records, spec.describe(), spec.trials)
-    folder.write_dataset(dataset)
-    if report:
-        write_report(dataset, folder.path)
+    if report:  # campaign.nc and its report together: never one run's file beside another's
+        write_report(dataset, folder.path, {"campaign.nc": bytes(dataset.to_netcdf())})
+    else:
+        folder.write_dataset(dataset)
     return dataset

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from machinesim._io import json_text, write_atomic
+from machinesim._io import json_text, write_together
 from machinesim.campaign.statistics import describe, spearman, z_scores, z_summary
 
 __all__ = ["failures", "summarise", "write_report"]
@@ -193,13 +193,14 @@ def _not_measured(figures: dict) -> list[str]:
     return [*lines, ""]
 
 
-def _plots(dataset, folder: Path) -> list[str]:
+def _plots(dataset) -> dict[str, bytes]:
+    """The plots as PNG bytes by file name (written with the rest of the report)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    written = []
+    written: dict[str, bytes] = {}
 
     def save(fig, name):
         import io
@@ -207,8 +208,7 @@ def _plots(dataset, folder: Path) -> list[str]:
         buffer = io.BytesIO()
         fig.savefig(buffer, format="png", dpi=100)
         plt.close(fig)
-        write_atomic(folder / name, buffer.getvalue())
-        written.append(name)
+        written[name] = buffer.getvalue()
 
     for k, name in enumerate(_names(dataset, "figure")):
         unit = str(dataset["figure_unit"].values[k])
@@ -248,14 +248,21 @@ def _plots(dataset, folder: Path) -> list[str]:
     return written
 
 
-def write_report(dataset, folder) -> dict:
-    """Write summary.json, summary.md and the plots into ``folder``; return the summary."""
+def write_report(dataset, folder, with_files=None) -> dict:
+    """Write summary.json, summary.md and the plots into ``folder``; return the summary.
+
+    ``with_files`` (file name -> bytes or text; the campaign.nc these are the report of) is
+    written together with them (`machinesim._io.write_together`): every file is made first,
+    then all are renamed into place, so that a Ctrl-C or a full disk leaves the folder's
+    campaign.nc and its summary of the same trials, the old ones or the new ones, never one
+    of each."""
     folder = Path(folder)
     summary = summarise(dataset)
-    summary["files"] = sorted(["campaign.nc", "summary.json", "summary.md",
-                               *_plots(dataset, folder)])
-    write_atomic(folder / "summary.md", _markdown(summary))
-    write_atomic(folder / "summary.json", json_text(summary, "campaign summary"))
+    plots = _plots(dataset)
+    summary["files"] = sorted(["campaign.nc", "summary.json", "summary.md", *plots])
+    files = {**(with_files or {}), **plots, "summary.md": _markdown(summary),
+             "summary.json": json_text(summary, "campaign summary")}
+    write_together([(folder / name, data) for name, data in files.items()])
     return summary
 
 
