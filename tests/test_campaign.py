@@ -306,6 +306,34 @@ def test_a_damaged_trial_file_is_refused_before_the_missing_trials_run(campaign,
     assert ran == []  # trial 1, missing, did not run first
 
 
+@pytest.mark.parametrize(("record", "key"), [
+    ({"trial": 0}, "drawn"),
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {"tool.y": 5e-6},
+      "figures": {}, "elapsed_s": 1.0, "error": None}, "identified"),
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+      "elapsed_s": 1.0, "error": 3}, "error"),
+])
+def test_a_trial_file_that_is_json_but_no_trial_record_is_refused_naming_the_key(
+        campaign, tmp_path, record, key):
+    # valid JSON, the right trial number, not a record: an internal KeyError (or TypeError)
+    # while assembling, after the missing trials had run
+    source, vary, _ = campaign
+    (tmp_path / "trials").mkdir()
+    (tmp_path / "campaign.json").write_bytes((source / "campaign.json").read_bytes())
+    (tmp_path / "trials/trial_000000.json").write_text(json.dumps(record))
+    with pytest.raises(InputError) as info:
+        run("tool_rotation_arm", 1, vary=vary, seed=11, out=tmp_path, workers=0,
+            progress=False, report=False, **ARM)
+    assert "trial_000000.json" in str(info.value) and f"key '{key}'" in str(info.value)
+
+
+def test_a_campaign_json_that_is_not_an_object_is_refused(tmp_path):
+    (tmp_path / "campaign.json").write_text("[]")
+    with pytest.raises(InputError) as info:
+        run("tool_rotation_arm", 1, seed=11, out=tmp_path, workers=0, progress=False, **ARM)
+    assert "campaign.json: []; expected the campaign spec" in str(info.value)
+
+
 def _interrupt_after_one_trial(monkeypatch) -> list[int]:
     """Make the campaign runner stop with a Ctrl-C when a second trial starts; returns the
     list the one trial that ran is appended to."""

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from machinesim._io import check_writable, json_text, read_json, write_atomic
-from machinesim.exceptions import FileError, InputError
+from machinesim.exceptions import FileError, InputError, brief
 
 __all__ = ["CampaignFolder", "assemble", "finished_trials", "versions"]
 
@@ -103,6 +103,9 @@ class CampaignFolder:
         stored = self.path / "campaign.json"
         if stored.exists():
             old = read_json(stored, "campaign spec")
+            if not isinstance(old, dict):
+                raise InputError(f"{brief(repr(old))}; expected the campaign spec, an object "
+                                 "(procedure, seed, noise, vary, ...)", source=str(stored))
             if old != spec:
                 diff = ", ".join(f"{k}: {old.get(k)!r} there, {spec.get(k)!r} now"
                                  for k in sorted(set(old) | set(spec))
@@ -128,12 +131,47 @@ class CampaignFolder:
         raw = read_json(self.trial_file(i), "campaign trial")
         if not isinstance(raw, dict) or raw.get("trial") != i:
             raise InputError(f"expected the record of trial {i}", source=str(self.trial_file(i)))
+        _check_record(raw, self.trial_file(i))
         return {**_nan(raw), "error": raw.get("error")}
 
     def write_dataset(self, dataset, name: str = "campaign.nc") -> Path:
         path = self.path / name
         write_atomic(path, bytes(dataset.to_netcdf()))
         return path
+
+
+def _number(value) -> bool:
+    """A number or null (NaN as JSON writes it)."""
+    return value is None or (isinstance(value, int | float) and not isinstance(value, bool))
+
+
+def _check_record(raw: dict, path: Path) -> None:
+    """Refuse a trial file that is JSON but not a trial's record (`trials.run_trial`), naming
+    the key: ``drawn`` and ``injected`` name -> number, ``identified`` name -> [value, std],
+    ``figures`` name -> [unit, before, after(, after_std)], ``elapsed_s`` a number, ``error``
+    null or a message; assembling it would otherwise fail on the first key it lacks."""
+    def refuse(key: str, what: str) -> None:
+        raise InputError(f"{brief(repr(raw.get(key)))}; expected {what} (a trial record as "
+                         "machinesim campaign writes it): delete the file and run again to "
+                         "compute the trial anew", source=str(path), key=key)
+
+    entry_checks = {
+        "drawn": (lambda v: _number(v), "an object of numbers"),
+        "injected": (lambda v: _number(v), "an object of numbers"),
+        "identified": (lambda v: isinstance(v, list) and len(v) == 2
+                       and all(_number(x) for x in v), "an object of [value, std]"),
+        "figures": (lambda v: isinstance(v, list) and len(v) in (3, 4)
+                    and isinstance(v[0], str) and all(_number(x) for x in v[1:]),
+                    "an object of [unit, before, after, after_std]"),
+    }
+    for key, (good, what) in entry_checks.items():
+        entries = raw.get(key)
+        if not isinstance(entries, dict) or not all(good(v) for v in entries.values()):
+            refuse(key, what)
+    if not _number(raw.get("elapsed_s")):
+        refuse("elapsed_s", "a number of seconds")
+    if not (raw.get("error") is None or isinstance(raw.get("error"), str)):
+        refuse("error", "null or the failed trial's message")
 
 
 def finished_trials(path) -> list[int]:
