@@ -456,6 +456,17 @@ def test_cli_bad_input_is_one_line_naming_the_value(tmp_path, capsys):
     assert "Traceback" not in err
 
 
+def test_cli_an_empty_out_is_refused_not_the_current_folder(tmp_path, monkeypatch, capsys):
+    # --out "$DIR" with DIR unset: Path("") is ".", and the campaign was written there
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as info:
+        cli_main(["campaign", "tool_rotation_arm", "--trials", "1", "--workers", "0",
+                  "--identify-only", "--out", ""])
+    err = capsys.readouterr().err
+    assert info.value.code == 2 and "argument --out: '' is empty" in err
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("vary, why", [
     # ignored: results bit-identical to the run without it
     ("laser_interferometer.sigma=1um", "it reads with no laser_interferometer at the lab's noise"),

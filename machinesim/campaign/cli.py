@@ -56,6 +56,15 @@ def _epilog() -> str:
     return EXAMPLES.format(lab=", ".join(LAB_PARAMETERS), procedures=procedures)
 
 
+def _folder(text: str) -> Path:
+    """An argparse type for the campaign folder: an empty ``--out`` (an unset shell variable)
+    is refused, where ``Path("")`` is the current folder and the campaign's files went there."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"{text!r} is empty; expected the campaign folder "
+                                         "(give . for the current one)")
+    return Path(text)
+
+
 def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("procedure", help=f"one of {', '.join(PROCEDURES)}")
     parser.add_argument("--trials", type=int, required=True, metavar="N",
@@ -78,7 +87,7 @@ def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--quick", action="store_true",
                         help="the crown's smaller measuring windows (workpiece_setting only, not "
                         "with --identify-only)")
-    parser.add_argument("--out", type=Path, required=True, metavar="DIR",
+    parser.add_argument("--out", type=_folder, required=True, metavar="DIR",
                         help="campaign folder (resumed when it holds the same campaign)")
     parser.add_argument("--quiet", action="store_true", help="no progress line")
     return parser
