@@ -71,3 +71,92 @@ def test_ctrl_c_on_a_campaign_with_workers_is_one_line_and_no_worker_traceback(
     assert process.returncode == 130
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert "interrupted; kept the" in err and str(tmp_path / "trials") in err
+
+
+class _NoScheduler:
+    """A TCP server on 127.0.0.1 that accepts and then never answers (``reply`` None: a web
+    server waiting for its request line) or sends ``reply`` (bytes that are no Dask
+    message)."""
+
+    def __init__(self, reply: bytes | None) -> None:
+        import socket
+        import threading
+
+        self.server = socket.create_server(("127.0.0.1", 0))
+        self.address = f"tcp://127.0.0.1:{self.server.getsockname()[1]}"
+        self.reply, self.held = reply, []
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self) -> None:
+        while True:
+            try:
+                connection, _ = self.server.accept()
+            except OSError:
+                return
+            self.held.append(connection)
+            if self.reply is not None:
+                connection.sendall(self.reply)
+
+    def close(self) -> None:
+        self.server.close()
+        for connection in self.held:
+            connection.close()
+
+
+def _run_bounded(tmp_path, scheduler: str, seconds: float):
+    """``run`` on ``scheduler`` in a thread: (the error it raised, seconds taken), or
+    (None, inf) when it had not returned after ``seconds``."""
+    import threading
+    import time
+
+    outcome = []
+
+    def target():
+        began = time.perf_counter()
+        try:
+            run("tool_rotation_arm", 1, out=tmp_path / "c", scheduler=scheduler,
+                progress=False, identify_only=True)
+        except BaseException as error:  # noqa: BLE001 (handed to the test)
+            outcome.append((error, time.perf_counter() - began))
+        else:
+            outcome.append((None, time.perf_counter() - began))
+
+    thread = threading.Thread(target=target, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    return outcome[0] if outcome else (None, float("inf"))
+
+
+@pytest.mark.parametrize("reply, why", [
+    # accepted, never answered: distributed's Client waited for the handshake forever
+    (None, "did not answer as a Dask scheduler within 2 s"),
+    # answered with bytes read as a message length of exabytes: 'out of memory'
+    (b"\xff" * 64, "it answered, but not as a Dask scheduler"),
+], ids=["silent", "no-dask-bytes"])
+def test_a_scheduler_address_where_no_scheduler_answers_is_refused_in_time(
+        tmp_path, monkeypatch, reply, why):
+    import machinesim.campaign.runner as runner
+    from machinesim.exceptions import InputError
+
+    monkeypatch.setattr(runner, "SCHEDULER_TIMEOUT_S", 2.0)
+    server = _NoScheduler(reply)
+    try:
+        error, seconds = _run_bounded(tmp_path, server.address, 30.0)
+    finally:
+        server.close()
+    assert isinstance(error, InputError), error
+    assert why in str(error) and server.address in str(error) and seconds < 15
+    assert not (tmp_path / "c").exists()  # refused before the campaign folder is made
+
+
+def test_a_scheduler_port_where_nothing_listens_is_refused_at_once(tmp_path):
+    import socket
+
+    from machinesim.exceptions import InputError
+
+    with socket.create_server(("127.0.0.1", 0)) as free:
+        port = free.getsockname()[1]
+    # closed: nothing listens there (Dask retried the refused connection for 20 s)
+    error, seconds = _run_bounded(tmp_path, f"tcp://127.0.0.1:{port}", 30.0)
+    assert isinstance(error, InputError) and "connection refused" in str(error)
+    assert seconds < 10

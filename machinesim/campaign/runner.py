@@ -64,6 +64,78 @@ def _vary(vary) -> tuple[tuple[str, Distribution], ...]:
     return tuple(out)
 
 
+#: Seconds a ``--scheduler`` has to accept the connection and answer Dask's handshake.
+SCHEDULER_TIMEOUT_S = 20.0
+
+
+def _scheduler_refused(scheduler: str, why: str) -> InputError:
+    return InputError(f"cannot reach the Dask scheduler {scheduler!r} ({why}); expected the "
+                      "address of a running one, e.g. tcp://host:8786", key="--scheduler")
+
+
+def check_scheduler(scheduler: str, timeout_s: float | None = None) -> None:
+    """Refuse, within ``timeout_s`` (default `SCHEDULER_TIMEOUT_S`), an address where no Dask
+    scheduler answers.
+
+    `distributed.Client`'s timeout bounds the connection but not the handshake after it: a
+    service that accepts and never answers (a web server, say) held the command forever,
+    and one that answers something else had its first bytes read as a message length (an
+    allocation of exabytes, reported as out of memory). A TCP port where nothing listens is
+    refused at once (Dask retries it until its timeout). Run on a thread of its own, so that
+    a caller with an event loop of its own (a notebook) can call it too.
+    """
+    import asyncio
+    import socket
+    import threading
+
+    if timeout_s is None:
+        timeout_s = SCHEDULER_TIMEOUT_S
+    from distributed.comm import connect, parse_address
+    from distributed.comm.addressing import parse_host_port
+    from distributed.comm.registry import get_backend
+
+    try:
+        scheme, location = parse_address(scheduler)
+        get_backend(scheme)  # ValueError naming the schemes there are
+        if scheme == "tcp":
+            host, port = parse_host_port(location)
+            if not 0 < port < 65536:
+                raise ValueError(f"port {port}; expected 1 to 65535")
+            socket.create_connection((host, port), timeout=timeout_s).close()
+    except ConnectionRefusedError:
+        raise _scheduler_refused(scheduler, "nothing listens there: connection refused") \
+            from None
+    except (OSError, ValueError, TypeError) as error:
+        raise _scheduler_refused(scheduler, str(error) or type(error).__name__) from None
+
+    failed: list[BaseException] = []
+
+    async def handshake():
+        comm = await asyncio.wait_for(connect(scheduler, timeout=timeout_s), timeout_s)
+        comm.abort()
+
+    def probe():
+        try:
+            asyncio.run(handshake())
+        except BaseException as error:  # reported below, on the caller's thread
+            failed.append(error)
+
+    thread = threading.Thread(target=probe, name="machinesim-scheduler-check", daemon=True)
+    thread.start()
+    thread.join(timeout_s + 5.0)
+    if thread.is_alive():
+        raise _scheduler_refused(scheduler, f"no answer within {timeout_s:g} s")
+    if failed:
+        error = failed[0]
+        if isinstance(error, TimeoutError):
+            why = f"it did not answer as a Dask scheduler within {timeout_s:g} s"
+        elif isinstance(error, OSError):
+            why = str(error) or type(error).__name__
+        else:  # MemoryError, a decoding error: bytes that are no Dask message
+            why = f"it answered, but not as a Dask scheduler: {type(error).__name__}"
+        raise _scheduler_refused(scheduler, why)
+
+
 def _client(workers, scheduler, client):
     """(client, cluster to close or None)."""
     if client is not None:
@@ -185,6 +257,8 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
                          key="--workers")
     spec = CampaignSpec(procedure, trials, _vary(vary), seed=seed, noise=noise,
                         identify_only=identify_only, quick=quick)
+    if scheduler is not None:  # before the folder is made: nothing written for a wrong address
+        check_scheduler(scheduler)
     folder = CampaignFolder(out, spec.describe())
     done = folder.done(spec.trials)
     beyond = [i for i in finished_trials(folder.path) if i >= spec.trials]
