@@ -385,6 +385,20 @@ def test_a_stop_while_the_report_is_made_leaves_campaign_nc_and_summary_of_one_r
     assert (tmp_path / "trials/trial_000002.json").is_file()  # kept for the rerun
 
 
+def test_trial_files_without_campaign_json_are_not_taken_for_this_campaign(campaign, tmp_path):
+    # the trials of seed 11 with campaign.json gone were taken as trials of seed 12: a
+    # summary of seed 12 over seed 11's draws
+    source, vary, _ = campaign
+    (tmp_path / "trials").mkdir()
+    (tmp_path / "trials/trial_000000.json").write_bytes(
+        (source / "trials/trial_000000.json").read_bytes())
+    with pytest.raises(InputError) as info:
+        run("tool_rotation_arm", 1, vary=vary, seed=12, out=tmp_path, workers=0,
+            progress=False, **ARM)
+    assert "holds 1 trial file" in str(info.value) and "no campaign.json" in str(info.value)
+    assert not (tmp_path / "campaign.json").exists()
+
+
 def test_another_campaign_in_the_same_folder_is_refused(campaign):
     out, vary, _ = campaign
     with pytest.raises(InputError) as info:

@@ -113,6 +113,15 @@ class CampaignFolder:
                 raise InputError(f"holds another campaign ({diff}); give another --out or "
                                  "empty it", source=str(self.path))
         else:
+            # campaign.json is written before any trial: trial files without it are of a
+            # campaign nobody can tell (copied, or its campaign.json deleted), never reused
+            found = finished_trials(self.path)
+            if found:
+                raise InputError(f"holds {len(found)} trial file{'s' * (len(found) > 1)} in "
+                                 f"{self.trials_path} but no campaign.json saying which "
+                                 "campaign they are of; expected a new or empty folder, or a "
+                                 "campaign folder: give another --out or empty it",
+                                 source=str(self.path))
             write_atomic(stored, json_text(spec, "campaign spec"))
         self.spec = spec
 
