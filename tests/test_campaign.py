@@ -256,6 +256,16 @@ def test_dataset_file_holds_the_trials_seed_and_versions(campaign):
     assert (out / "z_scores.png").stat().st_size > 1000
 
 
+def test_a_seed_beyond_32_bits_is_kept_whole_in_campaign_nc_and_the_summary(tmp_path):
+    # netCDF 3 has 32-bit integers: campaign.nc failed to be written (an internal error,
+    # 'could not safely cast array from int64 to int32') once every trial had run
+    seed = 2**64 + 3
+    run("tool_rotation_arm", 1, seed=seed, out=tmp_path, workers=0, progress=False, **ARM)
+    with xr.open_dataset(tmp_path / "campaign.nc") as on_disk:
+        assert int(on_disk.attrs["seed"]) == seed
+    assert json.loads((tmp_path / "summary.json").read_text())["seed"] == seed
+
+
 def test_resume_runs_only_the_missing_trials(campaign, tmp_path, monkeypatch):
     source, vary, ds = campaign
     for name in ("campaign.json", "trials/trial_000000.json", "trials/trial_000002.json"):

@@ -24,7 +24,8 @@ variable                      dims                    what
 ``figure_unit``               (figure)                unit of ``before``/``after`` (coordinate)
 ============================  ======================  ==========================================
 
-Attributes: the campaign's ``seed``, ``procedure``, ``trials``, ``vary`` (JSON), ``noise``,
+Attributes: the campaign's ``seed`` (an integer; one of 2**31 or more, beyond netCDF 3's
+integers, as its decimal digits), ``procedure``, ``trials``, ``vary`` (JSON), ``noise``,
 ``identify_only``, ``versions`` (JSON: machinesim, numpy, xarray, dask, distributed, python),
 ``errors`` (JSON: trial -> message of each failed trial).
 """
@@ -198,6 +199,11 @@ def finished_trials(path) -> list[int]:
     return sorted(found)
 
 
+#: netCDF 3 holds 32-bit integers: a seed from here on is kept as its decimal digits (a
+#: string attribute), where writing campaign.nc failed once every trial had run.
+_NC3_INT_END = 2**31
+
+
 def _names(records, key: str) -> list[str]:
     names: dict[str, None] = {}
     for record in records:
@@ -268,7 +274,9 @@ def assemble(records: list[dict], spec: dict, trials: int):
             del coords[dim]
             if dim == "figure":
                 del coords["figure_unit"]
-    attrs = {"procedure": spec["procedure"], "seed": int(spec["seed"]), "trials": int(trials),
+    seed = int(spec["seed"])
+    attrs = {"procedure": spec["procedure"], "seed": seed if seed < _NC3_INT_END else str(seed),
+             "trials": int(trials),
              "noise": int(bool(spec["noise"])), "identify_only": int(bool(spec["identify_only"])),
              "vary": json.dumps(spec["vary"]), "versions": json.dumps(versions()),
              "errors": json.dumps(errors),
