@@ -51,12 +51,21 @@ def test_distribution_units_are_parsed_to_si():
     ("tool.y=normal:0,1um,", ["takes 2"]),
     ("tool.y", ["PARAM=DIST"]),
     ("robot.repeatability=uniform:-1um,10um", ["below zero"]),
+    # the message said "a normal within 3 std of zero" for a mean that must be 3 std above it
+    ("microscope.sigma=normal:50nm,20nm", ["below zero", "a normal whose MEAN is at least 3 STD"]),
 ])
 def test_bad_distributions_name_the_value(text, words):
     with pytest.raises(InputError) as info:
         parse_vary(text)
     for word in words:
         assert word in str(info.value)
+
+
+@pytest.mark.parametrize("text", ["normal:60nm,20nm", "normal:0.6um,200nm", "normal:30nm,10nm"])
+def test_a_lab_parameters_normal_with_its_mean_3_std_above_zero_is_taken(text):
+    # 0.6um,200nm was refused as reaching below zero: 0.6 * 1e-6 < 3 * (200 * 1e-9) in floats
+    name, d = parse_vary(f"microscope.sigma={text}")
+    assert d.a == pytest.approx(3 * d.b, rel=1e-15)
 
 
 def test_draws_follow_the_distributions():

@@ -156,10 +156,12 @@ def parse_distribution(text: str, name: str = "") -> Distribution:
                          "expected LOW < HIGH", key=where)
     if name in LAB_PARAMETERS and kind == "fixed" and a < 0.0:
         raise InputError(f"{name} {text!r}; expected >= 0", key=where)
+    # a mean of exactly 3 std as written (0.6um,200nm) passes, whatever the units' rounding
     if name in LAB_PARAMETERS and kind != "fixed" and (a < 0.0 if kind == "uniform"
-                                                       else a - 3.0 * b < 0.0):
+                                                       else a < 3.0 * b * (1.0 - 1e-12)):
         raise InputError(f"{name} {text!r} reaches below zero; expected a non-negative "
-                         "range (uniform with LOW >= 0, or a normal within 3 std of zero)",
+                         "range (uniform with LOW >= 0, or a normal whose MEAN is at least 3 "
+                         "STD: a draw in the 0.13 % below zero is then taken as zero)",
                          key=where)
     return Distribution(kind, float(a), float(b), text.strip())
 
