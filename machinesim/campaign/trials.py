@@ -277,15 +277,16 @@ class CampaignSpec:
                                  f"{type(dist).__name__}", key="--vary")
         object.__setattr__(self, "vary", vary)
         known = set(self.error_parameters()) | set(LAB_PARAMETERS)
+        used = self.parameters()
+        what = self.procedure + " --identify-only" * self.identify_only
         for name in names:
-            if name not in known:
+            if name not in known:  # the list: what may vary here, not what is then refused
                 raise InputError(
                     f"--vary {name}: not a parameter of {self.entry.machine} nor of the lab; "
-                    f"expected one of {', '.join(sorted(known))}", key="--vary")
-        used = self.parameters()
+                    f"expected one of the parameters {what} uses: {', '.join(used)}",
+                    key="--vary")
         for name in names:
             if name not in used:
-                what = self.procedure + " --identify-only" * self.identify_only
                 why = _UNUSED.get(_head(name),
                                   f"it reads with no {_head(name)} at the lab's noise")
                 raise InputError(f"--vary {name}: {what} never reads it ({why}); expected one "
