@@ -53,6 +53,10 @@ def test_distribution_units_are_parsed_to_si():
     ("robot.repeatability=uniform:-1um,10um", ["below zero"]),
     # the message said "a normal within 3 std of zero" for a mean that must be 3 std above it
     ("microscope.sigma=normal:50nm,20nm", ["below zero", "a normal whose MEAN is at least 3 STD"]),
+    # a table entry's unit was not checked: 5deg set paper 003's X positioning error to 87 mm
+    ("component.X.EXX[2]=5deg", ["component.X.EXX[2] is a length"]),
+    ("component.C.EAC[3]=normal:0,3um", ["component.C.EAC[3] is an angle"]),
+    ("tool_geometry.nose_radius=50urad", ["tool_geometry.nose_radius is a length"]),
 ])
 def test_bad_distributions_name_the_value(text, words):
     with pytest.raises(InputError) as info:
@@ -740,5 +744,6 @@ def test_paper_003s_table_entries_vary_on_its_base_model():
     spec = CampaignSpec("xy_plane_errors", 1, (parse_vary("component.X.EXX[2]=normal:0,1um"),),
                         identify_only=True)
     assert "component.X.EXX[2]" in spec.parameters()
+    assert parse_vary("component.C.EAC[3]=3urad")[1].a == pytest.approx(3e-6, rel=1e-15)
     with pytest.raises(InputError, match=r"--vary component.X.EXX\[99\]: not a parameter"):
         CampaignSpec("xy_plane_errors", 1, (parse_vary("component.X.EXX[99]=normal:0,1um"),))

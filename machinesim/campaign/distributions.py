@@ -45,17 +45,25 @@ _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-z]*)
 
 
 def parameter_kind(name: str) -> str | None:
-    """``"length"``, ``"angle"`` or None (no fixed unit: a component table's coefficient)
-    of a parameter name."""
+    """``"length"``, ``"angle"`` or None (not a parameter name) of a parameter name.
+
+    An error's symbol says which (ISO 230-1): ``E`` then the direction, X Y Z a length (a
+    positioning, straightness, radial or axial error), A B C an angle; the same for a
+    component table's entry ``component.X.EXX[k]``, the error's value at the table's k-th
+    position (a polynomial's coefficient k >= 1, per metre^k, has no unit of the grammar;
+    a model a campaign varies, paper 003's, has tables).
+    """
     if name in LAB_PARAMETERS:
         return LAB_PARAMETERS[name]
+    if name == "tool_geometry.nose_radius":
+        return "length"
     head, _, tail = name.partition(".")
     if head in ("tool", "workpiece"):
         if tail in ("x", "y", "z"):
             return "length"
         return "angle" if tail in ("rx", "ry", "rz", "alpha", "beta", "gamma") else None
-    if head == "location":
-        symbol = tail.partition(".")[2]
+    if head in ("location", "component"):
+        symbol = tail.partition(".")[2].partition("[")[0]
         if len(symbol) >= 2 and symbol[0] == "E":
             return "length" if symbol[1] in "XYZ" else "angle"
     return None
