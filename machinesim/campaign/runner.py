@@ -262,7 +262,7 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
     folder = CampaignFolder(out, spec.describe())
     done = folder.done(spec.trials)
     beyond = [i for i in finished_trials(folder.path) if i >= spec.trials]
-    if beyond and progress:
+    if beyond:  # not progress: said under --quiet too, the summary is of fewer trials
         print(f"campaign: {folder.trials_path} holds {len(beyond)} trial file"
               f"{'s' * (len(beyond) > 1)} beyond --trials {spec.trials} (from trial "
               f"{beyond[0]}): left out of this summary, kept for a larger --trials",
