@@ -713,6 +713,18 @@ def test_cli_ctrl_c_says_which_trials_are_kept_and_the_rerun_resumes(tmp_path, c
     assert "2 trials (0 failed)" in capsys.readouterr().out
 
 
+def test_the_interrupted_line_says_which_trials_between_the_kept_ones_are_missing(tmp_path):
+    # with workers trials finish out of order: 5 files, 0 .. 5, read as six finished
+    from machinesim.campaign.cli import interrupted
+
+    (tmp_path / "trials").mkdir()
+    for i in (0, 1, 2, 3, 5):
+        (tmp_path / f"trials/trial_{i:06d}.json").write_text("{}")
+    assert (f"kept the 5 finished trial files in {tmp_path / 'trials'} (trial_000000.json .. "
+            "trial_000005.json, 1 between them not finished) and campaign.json"
+            ) in interrupted(tmp_path)
+
+
 def test_cli_ctrl_c_before_any_trial_says_so(tmp_path, capsys, monkeypatch):
     def interrupted(spec, i):
         raise KeyboardInterrupt

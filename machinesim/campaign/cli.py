@@ -142,6 +142,9 @@ def interrupted(out) -> str:
     if trials:
         shown = (f"trial_{trials[0]:06d}.json" if len(trials) == 1 else
                  f"trial_{trials[0]:06d}.json .. trial_{trials[-1]:06d}.json")
+        gaps = trials[-1] - trials[0] + 1 - len(trials)  # workers finish out of order
+        if gaps:
+            shown += f", {gaps} between them not finished"
         return (f"kept the {len(trials)} finished trial file{'s' * (len(trials) > 1)} in "
                 f"{out / 'trials'} ({shown}) and campaign.json: run the same command again "
                 "to resume (only the missing trials run)")
