@@ -160,3 +160,23 @@ def test_a_scheduler_port_where_nothing_listens_is_refused_at_once(tmp_path):
     error, seconds = _run_bounded(tmp_path, f"tcp://127.0.0.1:{port}", 30.0)
     assert isinstance(error, InputError) and "connection refused" in str(error)
     assert seconds < 10
+
+
+def test_a_local_cluster_has_no_more_workers_than_trials_to_run(tmp_path, monkeypatch):
+    # --workers 8 for 1 missing trial started 8 worker processes, 7 of them idle
+    import distributed
+
+    asked = []
+
+    class Started(Exception):
+        pass
+
+    def cluster(*args, n_workers, **options):
+        asked.append(n_workers)
+        raise Started
+
+    monkeypatch.setattr(distributed, "LocalCluster", cluster)
+    with pytest.raises(Started):
+        run("tool_rotation_arm", 1, out=tmp_path, workers=8, progress=False,
+            identify_only=True)
+    assert asked == [1]

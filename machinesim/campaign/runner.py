@@ -136,8 +136,9 @@ def check_scheduler(scheduler: str, timeout_s: float | None = None) -> None:
         raise _scheduler_refused(scheduler, why)
 
 
-def _client(workers, scheduler, client):
-    """(client, cluster to close or None)."""
+def _client(workers, scheduler, client, trials: int | None = None):
+    """(client, cluster to close or None); a local cluster of no more workers than
+    ``trials`` (the trials to run), when given."""
     if client is not None:
         return client, None
     from distributed import Client, LocalCluster
@@ -150,6 +151,8 @@ def _client(workers, scheduler, client):
                              "expected the address of a running one, e.g. tcp://host:8786",
                              key="--scheduler") from None
     count = workers if workers is not None else usable_cores()
+    if trials is not None:  # a worker with no trial to run only costs its start (~2 s, ~0.3 GB)
+        count = max(1, min(count, trials))
     with warnings.catch_warnings():
         # the scheduler's HTTP server (health checks; the dashboard is off) moves to a free
         # port when 8787 is taken, by another campaign say: nothing for the user to act on
@@ -197,7 +200,7 @@ def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder, pro
         return
     from distributed import as_completed
 
-    client, cluster = _client(workers, scheduler, client)
+    client, cluster = _client(workers, scheduler, client, len(missing))
     owned = cluster is not None or scheduler is not None
     try:
         futures = client.map(run_trial, [spec] * len(missing), missing, pure=False)
