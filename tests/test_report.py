@@ -283,3 +283,20 @@ def test_a_full_disk_names_the_file_as_in_the_report_and_says_the_old_report_is_
         f"s: error: {out / 'plot.png'}: No space left on device; this run's report was not "
         f"written: {str(out)!r} is as it was before (the previous report, whole, or nothing)")
     assert _snapshot(out) == kept and _siblings(out) == []
+
+
+def test_every_key_of_the_documented_summary_is_in_the_documented_table():
+    """docs/reports.md's summary.json example against its table of keys: `elapsed_s` and
+    `files`, in every summary.json, were in the example and missing from the table."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "reports.md").read_text()
+    example = json.loads(re.search(r"## summary.json\n\n```json\n(.*?)\n```", text,
+                                   re.DOTALL).group(1))
+    table = set()
+    for line in text.splitlines():
+        first = line.split(" | ")[0]
+        if line.startswith("| `") and " | " in line:
+            table.update(re.findall(r"`([a-z_]+)`", first))
+    assert set(example) <= table, sorted(set(example) - table)
