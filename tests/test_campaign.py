@@ -429,6 +429,18 @@ def test_trial_files_without_campaign_json_are_not_taken_for_this_campaign(campa
     assert not (tmp_path / "campaign.json").exists()
 
 
+def test_a_scenario_report_folder_is_refused_not_written_over(tmp_path):
+    # a campaign given a scenario's report folder wrote its summary.json and summary.md over
+    # the scenario's, and trials/ and campaign.nc among its files
+    report = {"summary.json": '{"paper": "000"}', "figures.md": "| figure |"}
+    for name, text in report.items():
+        (tmp_path / name).write_text(text)
+    with pytest.raises(InputError) as info:
+        run("tool_rotation_arm", 1, seed=11, out=tmp_path, workers=0, progress=False, **ARM)
+    assert "holds figures.md, summary.json but no campaign.json" in str(info.value)
+    assert {p.name: p.read_text() for p in tmp_path.iterdir()} == report
+
+
 def test_another_campaign_in_the_same_folder_is_refused(campaign):
     out, vary, _ = campaign
     with pytest.raises(InputError) as info:

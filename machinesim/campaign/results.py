@@ -95,13 +95,15 @@ class CampaignFolder:
         self.trials_path = self.path / "trials"
         if self.path.exists() and not self.path.is_dir():
             raise FileError("is a file; expected the campaign folder", source=str(path))
+        stored = self.path / "campaign.json"
+        if self.path.is_dir() and not stored.exists():
+            self._refuse_foreign()  # before trials/ is made in it
         try:
             self.trials_path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise FileError(f"cannot make the campaign folder: {exc.strerror or exc}",
                             source=str(path)) from None
         check_writable(self.trials_path / "trial_000000.json", "campaign trial")
-        stored = self.path / "campaign.json"
         if stored.exists():
             old = read_json(stored, "campaign spec")
             if not isinstance(old, dict):
@@ -114,17 +116,31 @@ class CampaignFolder:
                 raise InputError(f"holds another campaign ({diff}); give another --out or "
                                  "empty it", source=str(self.path))
         else:
-            # campaign.json is written before any trial: trial files without it are of a
-            # campaign nobody can tell (copied, or its campaign.json deleted), never reused
-            found = finished_trials(self.path)
-            if found:
-                raise InputError(f"holds {len(found)} trial file{'s' * (len(found) > 1)} in "
-                                 f"{self.trials_path} but no campaign.json saying which "
-                                 "campaign they are of; expected a new or empty folder, or a "
-                                 "campaign folder: give another --out or empty it",
-                                 source=str(self.path))
             write_atomic(stored, json_text(spec, "campaign spec"))
         self.spec = spec
+
+    def _refuse_foreign(self) -> None:
+        """Refuse a folder without campaign.json that holds anything but an empty trials/.
+
+        campaign.json is written before any trial, so trial files without it are of a
+        campaign nobody can tell (copied, or its campaign.json deleted): they were taken
+        for this campaign's. Other files are not a campaign's at all (a scenario's report
+        folder): the campaign wrote its summary.json and summary.md over them.
+        """
+        found = finished_trials(self.path)
+        others = sorted(name for name in os.listdir(self.path)
+                        if name != "trials" or not self.trials_path.is_dir())
+        if self.trials_path.is_dir():
+            others += sorted(f"trials/{name}" for name in os.listdir(self.trials_path)
+                             if not name.startswith("trial_") or not name.endswith(".json"))
+        if not found and not others:
+            return
+        held = ([f"{len(found)} trial file{'s' * (len(found) > 1)} in trials/"] if found
+                else []) + others[:5] + (["..."] if len(others) > 5 else [])
+        raise InputError(f"holds {', '.join(held)} but no campaign.json: not a campaign "
+                         "folder (a scenario's report, or a campaign whose campaign.json is "
+                         "gone); expected a new or empty folder, or a campaign folder: give "
+                         "another --out or empty it", source=str(self.path))
 
     def trial_file(self, i: int) -> Path:
         return self.trials_path / f"trial_{i:06d}.json"
