@@ -132,6 +132,15 @@ def test_unknown_parameter_and_bad_trials_are_refused():
         CampaignSpec("paper_999", 2)
 
 
+def test_an_instruments_sigma_with_noise_off_is_refused():
+    # ignored: two trials at 72 and 183 nm identified the same values to the last bit
+    with pytest.raises(InputError, match="--vary microscope.sigma: with --noise off"):
+        CampaignSpec("tool_rotation_arm", 2, (parse_vary("microscope.sigma=5nm"),),
+                     noise=False)
+    CampaignSpec("workpiece_setting", 2, (parse_vary("robot.repeatability=30um"),),
+                 noise=False)  # the landing is no noise: it stays
+
+
 def test_quick_is_refused_where_it_changes_nothing():
     """--quick shrinks the crown's measuring windows (`RobotLoadedWorkpiece._crown_layout`,
     its only reader): the grooves' campaign, the other procedures and a probing-only trial

@@ -285,6 +285,11 @@ class CampaignSpec:
                     f"--vary {name}: not a parameter of {self.entry.machine} nor of the lab; "
                     f"expected one of the parameters {what} uses: {', '.join(used)}",
                     key="--vary")
+        silent = [name for name in names if name.endswith(".sigma") and not self.noise]
+        if silent:  # noise off: every instrument reads exact values, whatever its sigma
+            raise InputError(f"--vary {', '.join(silent)}: with --noise off no instrument has "
+                             "noise, so its sigma changes nothing; expected --noise on, or no "
+                             "instrument's sigma", key="--vary")
         for name in names:
             if name not in used:
                 why = _UNUSED.get(_head(name),
