@@ -292,7 +292,12 @@ def write_together(items: Iterable[tuple[object, bytes | str]], encoding: str = 
                 raise _write_error(path, exc) from None
         if _ctrl_c_seen:
             raise KeyboardInterrupt
-        _rename_all(staged)
+        # a Ctrl-C or SIGTERM during the renames is held until they and the removal of the
+        # old files' second names are done: one landing between a rename and its record
+        # left the new file without its old one and the first put back (a report beside
+        # another run's part), and one in the removals left .NAME.old files behind
+        with _ctrl_c_deferred():
+            _rename_all(staged)
     finally:
         for _, temp in staged:
             Path(temp).unlink(missing_ok=True)

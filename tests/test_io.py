@@ -172,6 +172,33 @@ def test_an_interrupt_between_the_renames_leaves_neither_file(tmp_path, monkeypa
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_real_ctrl_c_during_the_renames_is_held_until_both_files_are_new(tmp_path,
+                                                                              monkeypatch):
+    """A SIGINT arriving as the last rename returns (a campaign stopped while its
+    campaign.nc and summary were renamed into place): it rolled the first file back and
+    left the second new, its old contents gone, or left .NAME.old files behind."""
+    part, report = tmp_path / "part.ply", tmp_path / "report.json"
+    part.write_text("old part")
+    report.write_text("old report")
+    real = os.replace
+
+    def renamed_then_stopped(src, dst):
+        real(src, dst)
+        if Path(dst) == report:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.5)  # the handler runs here, at the latest
+
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        monkeypatch.setattr(_io.os, "replace", renamed_then_stopped)
+        with pytest.raises(KeyboardInterrupt):
+            _io.write_together([(part, "new part"), (report, "new report")])
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert (part.read_text(), report.read_text()) == ("new part", "new report")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["part.ply", "report.json"]
+
+
 def test_a_ctrl_c_a_library_swallowed_still_stops_the_write(tmp_path):
     """A real SIGINT caught by ``except BaseException`` (as trimesh's optional imports do):
     the handler remembers it, nothing is written, and leaving puts Python's handler back."""
