@@ -107,11 +107,17 @@ def check_scheduler(scheduler: str, timeout_s: float | None = None) -> None:
             from None
     except (OSError, ValueError, TypeError) as error:
         raise _scheduler_refused(scheduler, str(error) or type(error).__name__) from None
+    if scheme != "tcp":  # tls://, ws:// ...: their credentials are the Client's to find
+        return
+
+    from distributed.security import Security
 
     failed: list[BaseException] = []
+    options = Security().get_connection_args("client")  # as dask's config sets them
 
     async def handshake():
-        comm = await asyncio.wait_for(connect(scheduler, timeout=timeout_s), timeout_s)
+        comm = await asyncio.wait_for(connect(scheduler, timeout=timeout_s, **options),
+                                      timeout_s)
         comm.abort()
 
     def probe():
