@@ -48,6 +48,8 @@ def test_distribution_units_are_parsed_to_si():
     ("tool.y=gauss:0,1um", ["'gauss'", "normal, uniform, fixed"]),
     ("tool.y=normal:0,1um,2um", ["takes 2", "got 3"]),
     ("tool.y=normal:0,1furlong", ["unit 'furlong'"]),
+    ("tool.y=normal:0,5\u00b5m", ["unit '\u00b5m'", "m mm um nm"]),  # the micro sign
+    ("tool.y=normal:0,5Um", ["unit 'Um'"]),
     ("tool.y=normal:0,1um,", ["takes 2"]),
     ("tool.y", ["PARAM=DIST"]),
     ("robot.repeatability=uniform:-1um,10um", ["below zero"]),
@@ -561,7 +563,7 @@ def test_cli_runs_the_documented_variation(tmp_path, capsys):
                        "--identify-only", "--quiet", "--vary",
                        "microscope.sigma=uniform:5nm,200nm", "--out", str(tmp_path)])
     assert status == 0
-    assert "1 trials (0 failed)" in capsys.readouterr().out
+    assert "1 trial (0 failed)" in capsys.readouterr().out
     assert len(list((tmp_path / "trials").glob("trial_*.json"))) == 1
 
 
@@ -572,7 +574,7 @@ def test_cli_runs_a_campaign(tmp_path, capsys):
     assert status == 0
     ds = xr.open_dataset(tmp_path / "campaign.nc").load()
     assert ds["injected"].sel(parameter="tool.y").item() == pytest.approx(-100 * UM)
-    assert "1 trials (0 failed)" in capsys.readouterr().out
+    assert "1 trial (0 failed)" in capsys.readouterr().out
 
 
 def test_cli_a_campaign_whose_every_trial_failed_says_why_and_fails(tmp_path, capsys):

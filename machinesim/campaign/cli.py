@@ -119,12 +119,13 @@ def run_campaign(args) -> int:
     from machinesim.campaign.summary import failures
 
     failed, total = int(dataset["failed"].sum()), dataset.sizes["trial"]
-    print(f"campaign: {total} trials ({failed} failed) in {args.out}: "
+    print(f"campaign: {total} trial{'s' * (total != 1)} ({failed} failed) in {args.out}: "
           "campaign.nc, summary.md, summary.json")
     if not failed:
         return 0
     first = failures(dataset)[0]
-    print(f"campaign: {'every trial' if failed == total else f'{failed} trials'} "
+    which = f"{failed} trial{'s' * (failed != 1)}"
+    print(f"campaign: {'every trial' if failed == total else which} "
           f"failed; the most common message ({len(first['trials'])} of them): "
           f"{first['message']} (summary.md lists every message)", file=sys.stderr)
     return 1 if failed == total else 0

@@ -41,7 +41,9 @@ LAB_PARAMETERS = {"robot.repeatability": "length",
 #: Distribution kinds and how many numbers each takes.
 KINDS = {"normal": 2, "uniform": 2, "fixed": 1}
 
-_NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-z]*)\s*")
+#: A number and what follows it as its unit: any letters (5µm, 5Um), so that a unit not in
+#: `FACTORS` is named as such, not as no number at all.
+_NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\W\d_]*)\s*")
 
 
 def parameter_kind(name: str) -> str | None:
