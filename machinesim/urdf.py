@@ -244,6 +244,12 @@ def _limits(joint: ET.Element, where: str, rotary: bool) -> tuple[float, float, 
             raise ModelError(f"{where}: <limit> has no {attribute}=...; an axis needs its "
                              f"travel ({unit}) and rapid rate ({unit}/s)")
         values[attribute] = _number(text, f"{where} <limit {attribute}>")
+    # URDF requires effort on every <limit> (machinesim does not use it): without it the
+    # URDF parser under Pinocchio refuses the whole file without naming the joint
+    if limit.get("effort") is None:
+        raise ModelError(f"{where}: <limit> has no effort=...; URDF requires it on every "
+                         "<limit> (any number: machinesim does not use it)")
+    _number(limit.get("effort"), f"{where} <limit effort>")
     lower, upper, velocity = values["lower"], values["upper"], values["velocity"]
     if not lower < upper:
         raise ModelError(f"{where}: <limit lower={lower!r} upper={upper!r}> ({unit}); "

@@ -164,6 +164,11 @@ HOSTILE_URDFS = {
     "missing_lower": (_in_joint("X", ' lower="-0.25"', ""), ["joint 'X'", "no lower="]),
     "missing_upper": (_in_joint("X", ' upper="0.25"', ""), ["joint 'X'", "no upper="]),
     "missing_velocity": (_in_joint("X", ' velocity="0.025"', ""), ["joint 'X'", "no velocity="]),
+    # a ROS or CAD export may leave effort out; the URDF parser then refused the file with
+    # "The XML stream does not contain a valid URDF model", naming neither joint nor key
+    "missing_effort": (_in_joint("X", ' effort="1000.0"', ""), ["joint 'X'", "no effort="]),
+    "effort_not_a_number": (_in_joint("X", 'effort="1000.0"', 'effort="1kN"'),
+                            ["joint 'X'", "effort", "'1kN' is not a number"]),
     "swapped_limits": (_in_joint("X", 'lower="-0.25" upper="0.25"', 'lower="0.25" upper="-0.25"'),
                        ["joint 'X'", "lower=0.25 upper=-0.25", "expected lower < upper"]),
     "empty_travel": (_in_joint("Z", 'lower="-0.05" upper="0.1"', 'lower="0.1" upper="0.1"'),
