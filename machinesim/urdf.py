@@ -126,7 +126,10 @@ def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
         axis = _vector(element, "xyz", f"{where} <axis>")
         k = int(np.argmax(np.abs(axis)))
         if np.count_nonzero(axis) != 1 or abs(abs(axis[k]) - 1.0) > 0:
-            raise ModelError(f"{where}: axis {axis.tolist()} must be a unit machine direction")
+            raise ModelError(f"{where}: axis {axis.tolist()} must be a unit machine direction: "
+                             "one of 1 0 0, 0 1 0, 0 0 1, either sign, each other number "
+                             "exactly 0 (an axis tilted off them is not modelled; CAD "
+                             "round-off such as 6.1e-17 is written 0)")
         if kind == "prismatic" and "XYZ"[k] != name:
             raise ModelError(f"{where}: <axis xyz=\"{element.get('xyz')}\"> moves along "
                              f"{'XYZ'[k]}; the {name} axis moves along {name}")

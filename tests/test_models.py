@@ -185,6 +185,12 @@ HOSTILE_URDFS = {
                  ["joint 'X'", "<axis> xyz", "'nan'", "finite"]),
     "axis_inf": (_in_joint("Y", '<axis xyz="0.0 -1.0 0.0"/>', '<axis xyz="0.0 -inf 0.0"/>'),
                  ["joint 'Y'", "<axis> xyz", "'-inf'", "finite"]),
+    # a CAD export writes cos(90 deg) as 6.123e-17: the message said "must be a unit machine
+    # direction" of a vector whose length is 1, without saying which directions those are
+    "axis_cad_round_off": (_in_joint("C", '<axis xyz="0.0 0.0 -1.0"/>',
+                                     '<axis xyz="6.123233995736766e-17 0.0 -1.0"/>'),
+                           ["joint 'C'", "axis [6.123233995736766e-17, 0.0, -1.0]",
+                            "one of 1 0 0, 0 1 0, 0 0 1, either sign"]),
     "axis_missing": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', ""), ["joint 'X'", "no <axis"]),
     "axis_two_numbers": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', '<axis xyz="1.0 0.0"/>'),
                          ["joint 'X'", "xyz='1.0 0.0'", "three numbers"]),
