@@ -413,10 +413,14 @@ def _increments_per_step(machine: Machine, unit: np.ndarray, scale: np.ndarray) 
     bad = (steps < 1) | (np.abs(ratio - steps) > 1e-6 * steps)
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
-        word = (f"{10.0 ** -ROTARY_DECIMALS:g} deg" if machine.rotary[i]
+        increment = float(unit[i] / scale[i])
+        si = "rad" if machine.rotary[i] else "m"
+        word = (f"{10.0 ** -ROTARY_DECIMALS:g} deg ({increment!r} rad)" if machine.rotary[i]
                 else f"{10.0 ** -LINEAR_DECIMALS * M_PER_MM:g} m")
-        raise InputError(f"{machine.name}: axis {machine.axes[i]} has resolution "
-                         f"{machine.resolution[i]!r} (SI), not a whole number of the NC "
-                         f"word's increment {word}; an NC program cannot carry it",
-                         key=machine.axes[i])
+        nearest = max(1.0, float(steps[i])) * increment
+        raise InputError(f"{machine.path}: <machinesim:axis joint={machine.axes[i]!r}> "
+                         f"resolution {float(machine.resolution[i])!r} ({si}) is not a whole "
+                         f"number of the NC word's increment {word}, so an NC program cannot "
+                         f"carry it; expected a whole number of increments, e.g. "
+                         f"{nearest!r} {si}", key=machine.axes[i])
     return steps

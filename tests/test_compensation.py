@@ -349,6 +349,27 @@ def test_to_resolution_is_idempotent_and_on_the_grid():
 # --------------------------------------------------------------------- (e) bad input
 
 
+def test_a_resolution_the_nc_text_cannot_carry_names_the_file_joint_and_a_value_it_can(tmp_path):
+    # 0.00001 deg written with four digits, 1.745e-7 rad, as a machine builder writes it:
+    # 0.99983 increments; the message said "np.float64(1.745e-07)" and named neither the
+    # URDF nor the element to mend
+    from machinesim.machines import models_dir
+
+    text = (models_dir() / "grooving_4axis.urdf").read_text()
+    old = 'joint="C" resolution="1.7453292519943297e-07"'
+    assert old in text
+    path = tmp_path / "own.urdf"
+    path.write_text(text.replace(old, 'joint="C" resolution="1.745e-07"'))
+    with pytest.raises(InputError) as raised:
+        to_resolution(np.zeros((1, 4)), load_machine(path))
+    message = str(raised.value)
+    assert f"{path}: <machinesim:axis joint='C'> resolution 1.745e-07 (rad)" in message
+    assert "np.float64" not in message
+    # the value offered is one increment, 0.00001 deg, as the NC text carries it
+    offered = float(message.split("e.g. ")[1].split()[0])
+    assert offered == 1e-5 * DEG
+
+
 def test_a_function_of_the_wrong_shape_is_refused_naming_the_shape():
     with pytest.raises(InputError, match=r"shape \(6, 4\).*got shape \(6, 3\)"):
         map_program(grooves(), GROOVING, lambda q: q[:, :3])
