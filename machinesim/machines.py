@@ -40,6 +40,7 @@ from machinesim.tolerances import IK_SINGULAR
 from machinesim.urdf import (
     AXIS_ORDER,
     REQUIRED_FRAMES,
+    check_tool_mount,
     check_tree,
     check_zero_pose,
     read_axes,
@@ -169,6 +170,8 @@ class Machine:
         nominal, zero = self.kin.bind(None), np.zeros(len(self._axes))
         check_zero_pose(self.path, self._axes, self.kin.poses(zero[None], nominal)[0],
                         self.kin.axis_jacobian(zero, nominal))
+        check_tool_mount(root, self.path, self.kin.frame_pose(
+            self.kin.full_q(zero, nominal), "tool_tip", relative_to="tool_mount"))
         self.lower = np.array([a.lower for a in self._axes])
         self.upper = np.array([a.upper for a in self._axes])
         self.resolution = np.array([a.resolution for a in self._axes])

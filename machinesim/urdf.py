@@ -9,7 +9,8 @@ machine direction pointing as ISO 841 asks, finite origins, a ``<limit>`` with l
 upper within a machine's travel and a plausible rapid rate, and a ``<machinesim:axis>``
 resolution. Once Pinocchio has the model, `check_zero_pose` checks the nominal machine at
 zero against the conventions of docs/machines.md: the edge at the workpiece origin, each
-axis moving the tool along (or about) its direction.
+axis moving the tool along (or about) its direction; and `check_tool_mount` that tool_tip
+sits rigidly on tool_mount and parallel to it, the frame the tool setting error is given in.
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ import numpy as np
 from machinesim.exceptions import ModelError
 from machinesim.kinematics import DOFS, Axis
 
-__all__ = ["AXIS_ORDER", "REQUIRED_FRAMES", "check_tree", "check_zero_pose", "read_axes",
-           "read_urdf"]
+__all__ = ["AXIS_ORDER", "REQUIRED_FRAMES", "check_tool_mount", "check_tree", "check_zero_pose",
+           "read_axes", "read_urdf"]
 
 #: NC letters in the order machinesim puts them in a configuration vector.
 AXIS_ORDER = "XYZABC"
@@ -208,6 +209,41 @@ def check_zero_pose(path, axes: tuple[Axis, ...], wMt: np.ndarray,
             f"{path}: joint {axis.letter!r}: {got}; expected {wanted} (ISO 841, with joint "
             "frames parallel to the machine axes at zero: check the rpy of this joint's "
             "origin and of the joints above it, docs/machines.md, Conventions)")
+
+
+def check_tool_mount(root: ET.Element, path, mMt: np.ndarray) -> None:
+    """Check that ``tool_tip`` sits rigidly on ``tool_mount`` and parallel to it.
+
+    The tool setting error (``[tool]``, ``lab.adjust_tool``) is given in the tool_mount
+    frame and enters the chain just above tool_tip, in tool_tip's axes: the two coincide
+    only when no axis joint lies between the frames and tool_tip is not turned relative to
+    tool_mount. ``mMt`` (4, 4) is tool_tip's nominal pose in tool_mount at zero axis values.
+    A frame turned otherwise (a CAD export's spindle frame with Z along the spindle) would
+    apply an offset along tool_mount Y along another direction, without a word.
+    """
+    parent_of = {j.find("child").get("link"): j for j in root.findall("joint")}
+
+    def axes_above(link: str) -> set[str]:
+        names = set()
+        while link in parent_of:
+            joint = parent_of[link]
+            if joint.get("type") != "fixed":
+                names.add(joint.get("name"))
+            link = joint.find("parent").get("link")
+        return names
+
+    between = sorted(axes_above("tool_tip") ^ axes_above("tool_mount"))
+    if between:
+        raise ModelError(f"{path}: axis joint(s) {', '.join(between)} move tool_tip and not "
+                         "tool_mount, or tool_mount and not tool_tip; expected tool_tip held "
+                         "rigidly by tool_mount (fixed joints between them: the tool setting "
+                         "error is given in the tool_mount frame)")
+    turned = _angle(mMt[:3, :3])
+    if turned > ZERO_POSE_TOL:
+        raise ModelError(f"{path}: tool_tip is turned {math.degrees(turned):.6g} deg relative "
+                         "to tool_mount; expected them parallel (docs/machines.md, "
+                         "Conventions), since the tool setting error is given in the "
+                         "tool_mount frame: check the rpy of the origins between them")
 
 
 def _angle(rotation: np.ndarray) -> float:

@@ -240,6 +240,21 @@ HOSTILE_URDFS = {
             '<origin xyz="-0.4 0.0 -0.25" rpy="0.0 0.0 -1.5707963267948966"/>'),
         ["joint 'X'", "+1 m of X moves the tool relative to the workpiece by (0, 1, 0) m",
          "expected +1 m along X"]),
+    # a spindle frame turned a quarter about Z and the tip turned back: the tool sits as
+    # designed, but a tool setting error along tool_mount Y entered along its X
+    "tool_mount_turned": (
+        _in_joint("tool_mount_fixed", 'rpy="0.0 0.0 0.0"', 'rpy="0.0 0.0 1.5707963267948966"')
+        .replace('<origin xyz="0.0 0.0 -0.02" rpy="0.0 0.0 0.0"/>',
+                 '<origin xyz="0.0 0.0 -0.02" rpy="0.0 0.0 -1.5707963267948966"/>'),
+        ["tool_tip is turned 90 deg relative to tool_mount", "expected them parallel"]),
+    # tool_mount hung from the base, where no axis moves it: X and Z move the tip alone
+    "tool_mount_on_the_base": (
+        _in_joint("tool_mount_fixed", '<parent link="z_carriage"/>', '<parent link="base"/>')
+        .replace('<joint name="tool_tip_fixed" type="fixed">\n    <parent link="tool_mount"/>',
+                 '<joint name="tool_tip_fixed" type="fixed">\n    <parent link="z_carriage"/>')
+        .replace('<origin xyz="0.0 0.0 -0.02" rpy="0.0 0.0 0.0"/>',
+                 '<origin xyz="0.0 0.0 -0.1" rpy="0.0 0.0 0.0"/>'),
+        ["axis joint(s) X, Z move tool_tip and not tool_mount"]),
     "tip_off_origin": (GROOVING.replace('<origin xyz="0.0 0.0 -0.02" rpy="0.0 0.0 0.0"/>',
                                         '<origin xyz="0.003 0.0 -0.02" rpy="0.0 0.0 0.0"/>'),
                        ["the tool_tip sits at (3, 0, 0) mm", "turned 0 deg"]),
