@@ -16,6 +16,7 @@ sits rigidly on tool_mount and parallel to it, the frame the tool setting error 
 from __future__ import annotations
 
 import math
+import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -49,6 +50,11 @@ COARSEST_RESOLUTION_RAD = 1e-2
 MAX_TRAVEL_RAD = 1e9
 RAPID_RATE_M_PER_S = (1e-6, 100.0)
 RAPID_RATE_RAD_PER_S = (1e-6, 1e5)
+#: A number as the URDF parser under Pinocchio (urdfdom, a C++ stream) reads one: ASCII
+#: digits, a point, an exponent, blanks before it only. Python's float() reads more
+#: ("1_000", Arabic-Indic digits, a trailing blank), which the parser then refused without
+#: naming the joint.
+_URDF_NUMBER = re.compile(r"\s*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 
 
 def read_urdf(path: Path) -> ET.Element:
@@ -336,6 +342,9 @@ def _number(text: str, where: str) -> float:
         raise ModelError(f"{where}: {text!r} is not a number") from None
     if not math.isfinite(value):
         raise ModelError(f"{where}: {text!r}; expected a finite number")
+    if not _URDF_NUMBER.fullmatch(text):
+        raise ModelError(f"{where}: {text!r} is not a number as a URDF parser reads one "
+                         "(ASCII digits, '.', an exponent; no '_', no blank after it)")
     return value
 
 

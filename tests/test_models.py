@@ -179,6 +179,16 @@ HOSTILE_URDFS = {
                           ["joint 'C'", "velocity=-2.0", "rapid rate > 0"]),
     "velocity_nan": (_in_joint("X", 'velocity="0.025"', 'velocity="nan"'),
                      ["joint 'X'", "velocity", "'nan'", "finite"]),
+    # Python's float() reads these; the URDF parser under Pinocchio refused the file with
+    # "does not contain a valid URDF model", naming neither joint nor value
+    "limit_with_underscore": (_in_joint("X", 'upper="0.25"', 'upper="0_25"'),
+                              ["joint 'X'", "upper", "'0_25' is not a number as a URDF "
+                               "parser reads one"]),
+    "limit_trailing_blank": (_in_joint("X", 'upper="0.25"', 'upper="0.25 "'),
+                             ["joint 'X'", "'0.25 ' is not a number as a URDF parser"]),
+    "origin_arabic_indic_digit": (_in_joint("X", 'xyz="0.0 0.4 0.55"', 'xyz="0.0 \u0660.4 0.55"'),
+                                  ["joint 'X'", "<origin> xyz", "'\u0660.4' is not a number "
+                                   "as a URDF parser"]),
     "limit_not_a_number": (_in_joint("X", 'upper="0.25"', 'upper="0.25mm"'),
                            ["joint 'X'", "upper", "'0.25mm' is not a number"]),
     "axis_nan": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', '<axis xyz="nan 0.0 0.0"/>'),
