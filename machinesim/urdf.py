@@ -377,6 +377,8 @@ def check_tree(root: ET.Element, path) -> None:
     """
     if root.tag != "robot":
         raise ModelError(f"{path}: root element <{root.tag}>; expected <robot>")
+    if not root.get("name"):
+        raise ModelError(f"{path}: <robot> has no name=...; URDF requires one")
     links: set[str] = set()
     for link in root.findall("link"):
         name = link.get("name")
@@ -418,6 +420,15 @@ def check_tree(root: ET.Element, path) -> None:
         if origin is not None:
             _vector(origin, "xyz", f"{where} <origin>", "0 0 0")
             _vector(origin, "rpy", f"{where} <origin>", "0 0 0")
+        limit = joint.find("limit")
+        if limit is not None and joint.get("type") == "fixed":  # axes: `_limits`
+            for attribute in ("effort", "velocity"):
+                text = limit.get(attribute)
+                if text is None:
+                    raise ModelError(f"{where}: <limit> has no {attribute}=...; URDF requires "
+                                     "effort and velocity on every <limit> (a fixed joint "
+                                     "needs no <limit>)")
+                _number(text, f"{where} <limit {attribute}>")
     _check_acyclic(links, parent_joint, parent_link, path)
     roots = sorted(link for link in links if link not in parent_joint)
     if len(roots) != 1:

@@ -189,6 +189,14 @@ HOSTILE_URDFS = {
     "origin_arabic_indic_digit": (_in_joint("X", 'xyz="0.0 0.4 0.55"', 'xyz="0.0 \u0660.4 0.55"'),
                                   ["joint 'X'", "<origin> xyz", "'\u0660.4' is not a number "
                                    "as a URDF parser"]),
+    # the URDF parser reads a <limit> on a fixed joint too, and refused the file without
+    # naming it; and it requires the robot's name
+    "fixed_joint_limit_without_effort": (
+        _in_joint("tool_tip_fixed", '<origin xyz="0.0 0.0 -0.02" rpy="0.0 0.0 0.0"/>',
+                  '<origin xyz="0.0 0.0 -0.02" rpy="0.0 0.0 0.0"/><limit lower="0" upper="0"/>'),
+        ["joint 'tool_tip_fixed'", "<limit> has no effort="]),
+    "robot_without_name": (GROOVING.replace('<robot name="grooving_4axis"', "<robot"),
+                           ["<robot> has no name="]),
     "limit_not_a_number": (_in_joint("X", 'upper="0.25"', 'upper="0.25mm"'),
                            ["joint 'X'", "upper", "'0.25mm' is not a number"]),
     "axis_nan": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', '<axis xyz="nan 0.0 0.0"/>'),
