@@ -73,6 +73,45 @@ def test_ctrl_c_on_a_campaign_with_workers_is_one_line_and_no_worker_traceback(
     assert "interrupted; kept the" in err and str(tmp_path / "trials") in err
 
 
+#: The command line with a Ctrl-C to its process group 0.3 s after each worker process is
+#: asked to start: while the worker still imports, and the cluster is still being built.
+_CTRL_C_AT_WORKER_START = """
+import os, signal, sys, threading
+import distributed.process as process
+start = process.AsyncProcess.start
+def start_then_ctrl_c(self):
+    started = start(self)
+    threading.Timer(0.3, os.killpg, (os.getpgid(0), signal.SIGINT)).start()
+    return started
+process.AsyncProcess.start = start_then_ctrl_c
+from machinesim.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_ctrl_c_while_the_workers_start_is_one_line_and_no_traceback(tmp_path,
+                                                                     as_in_a_terminal):
+    """A Ctrl-C while the workers still import: each printed a KeyboardInterrupt traceback,
+    and the campaign's process, interrupted inside LocalCluster, an AssertionError at exit
+    (about 100 lines). The workers now start with SIGINT blocked and the campaign's process
+    takes the Ctrl-C once the cluster stands, then closes it."""
+    import signal
+
+    process = subprocess.Popen(
+        [sys.executable, "-c", _CTRL_C_AT_WORKER_START, "campaign", "tool_rotation_arm",
+         "--trials", "4", "--workers", "2", "--identify-only", "--out", str(tmp_path)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        **as_in_a_terminal)
+    try:
+        _, err = process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 130, err
+    assert "Traceback" not in err and "Exception ignored" not in err, err
+    assert err.splitlines()[-1].startswith("machinesim: interrupted; "), err
+
+
 class _NoScheduler:
     """A TCP server on 127.0.0.1 that accepts and then never answers (``reply`` None: a web
     server waiting for its request line) or sends ``reply`` (bytes that are no Dask
