@@ -23,6 +23,11 @@ g. A star: ``flat:0.5`` 0.1 mm deep, 180 spokes 8 mm long from one hub, each aft
    first begun by a rapid down to 0.05 mm into the hub the spokes before cut (1,080 lines):
    the rapids judged first by whether one earlier sweep holds what they met
    (`machinesim.cutting.rapids.RAPID_HOLDERS`, the default) against by unions alone.
+h. Plunge roughing: ``flat:0.5`` plunged 3000 times to 20 um, 1 um apart along X (9,004
+   lines), a slot of overlapping plunges whose floor the booleans leave with slivers facing
+   down: the search for sheets thinner than 1 pm on the finished part with faces no wider
+   than that left out of its pairing (`machinesim.cutting.sheets`, the default) against
+   every face paired.
 
 With ``--tilted`` the same end mill cuts through ``models/errors/example.toml``, whose
 workpiece stands tilted 0.01 and -0.02 deg against the machine's Z: the engine cuts in the
@@ -36,7 +41,7 @@ d. the contour in 5 levels, in the tool's frame only (in the workpiece frame it 
 Each variant runs in its own process (``--repeat`` times, median quoted), and the parts are
 compared: removed volumes and the volume of each part less the other.
 
-    .venv/bin/python benchmarks/end_mill_passes.py [--repeat 3] [--tilted] [--case star]
+    .venv/bin/python benchmarks/end_mill_passes.py [--repeat 3] [--tilted] [--case plunges]
 """
 
 from __future__ import annotations
@@ -69,6 +74,9 @@ if sys.argv[1] == "unions":  # rapids judged by unions of the earlier sweeps alo
 if sys.argv[1] == "solids":  # level passes united in 3-D, not by their footprints
     import machinesim.cutting.footprints as footprints
     footprints.FEWEST = 10 ** 9
+if sys.argv[1] == "slivers":  # every face paired in the search for sheets
+    import machinesim.cutting.sheets as sheets
+    sheets._wide = lambda corners, area, thickness: np.ones(len(corners), dtype=bool)
 sys.exit(main(sys.argv[2:]))
 """
 
@@ -120,6 +128,14 @@ def star_program(spokes: int = 180, length_mm: float = 8.0) -> str:
             lines.append("G00 Z-0.05")  # down into the hub the spokes before cut
         lines += ["G01 Z-0.1 F100.", f"G01 X{length_mm * math.cos(angle):.4f} "
                   f"Y{length_mm * math.sin(angle):.4f} F200.", "G00 Z-0.05", "G00 Z2."]
+    lines += ["M30", "%"]
+    return "\n".join(lines) + "\n"
+
+
+def plunges_program(plunges: int = 3000, step_mm: float = 0.001) -> str:
+    lines = ["%", "O5 (plunge roughing)", "G90 G21 G17 G94", "G00 X0. Y2. Z1."]
+    for k in range(plunges):
+        lines += [f"G00 X{k * step_mm:.4f}", "G01 Z-0.02 F100.", "G00 Z1."]
     lines += ["M30", "%"]
     return "\n".join(lines) + "\n"
 
@@ -182,10 +198,10 @@ def main() -> None:
     parser.add_argument("--tilted", action="store_true",
                         help="cut through models/errors/example.toml (cases c and d)")
     parser.add_argument("--case", action="append",
-                        choices=("helix", "levels", "pocket", "trochoid", "star"),
+                        choices=("helix", "levels", "pocket", "trochoid", "star", "plunges"),
                         help="only this case (repeatable; default every untilted case)")
     args = parser.parse_args()
-    chosen = set(args.case or ("helix", "levels", "pocket", "trochoid", "star"))
+    chosen = set(args.case or ("helix", "levels", "pocket", "trochoid", "star", "plunges"))
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         if not args.tilted:
@@ -201,6 +217,9 @@ def main() -> None:
             if "star" in chosen:
                 compare(folder, "star", star_program(), ("holders", "unions"), args.repeat,
                         tool="flat:0.5", stock="block:20x20x2@-10,-10,0")
+            if "plunges" in chosen:
+                compare(folder, "plunges", plunges_program(), ("wide", "slivers"),
+                        args.repeat, tool="flat:0.5", stock="block:10x10x2")
             return
         errors = Path(__file__).resolve().parents[1] / "models" / "errors" / "example.toml"
         compare(folder, "circle, tilted", levels_program(1), ("frame", "workpiece"),

@@ -182,3 +182,39 @@ def test_faces_paired_in_chunks_find_the_same_sheets(monkeypatch):
     order_whole, order_pieces = np.lexsort(whole[0].T), np.lexsort(pieces[0].T)
     np.testing.assert_array_equal(whole[0][order_whole], pieces[0][order_pieces])
     np.testing.assert_array_equal(whole[1][order_whole], pieces[1][order_pieces])
+
+
+@pytest.mark.parametrize("height, wide", [(2e-12, True), (0.5e-12, False)])
+def test_a_face_no_wider_than_a_sheet_across_an_edge_is_left_out_of_the_pairing(height,
+                                                                                  wide):
+    """A right triangle 1 mm long and ``height`` high: its smallest altitude is ``height``
+    (twice its area over its longest edge, by hand), against SHEET_M = 1 pm."""
+    from machinesim.cutting import sheets
+
+    corners = np.array([[[0.0, 0.0, 0.0], [1 * MM, 0.0, 0.0], [0.0, height, 0.0]]])
+    doubled_area = np.array([1 * MM * height])
+    assert sheets._wide(corners, doubled_area, SHEET_M).tolist() == [wide]
+
+
+def test_leaving_slivers_out_finds_the_same_sheets(monkeypatch):
+    # twenty plates 0.26 pm thick, each top split by a sliver 1e-14 m wide: the same pairs
+    # and gaps as when every face is paired
+    from machinesim.cutting import sheets
+
+    plates = []
+    for k in range(20):
+        v, t = box((3 * MM * k, 0.0, 0.0), (3 * MM * k + 1 * MM, 1 * MM, 2.6e-13))
+        sliver = np.array([[3 * MM * k, 0.5 * MM, 2.6e-13], [3 * MM * k + 1 * MM, 0.5 * MM,
+                                                              2.6e-13],
+                           [3 * MM * k, 0.5 * MM + 1e-14, 2.6e-13]])
+        plates.append((np.vstack([v, sliver]), np.vstack([t, [[len(v), len(v) + 2,
+                                                                len(v) + 1]]])))
+    v, t = joined(*plates)
+    left_out = find_sheets(v, t)
+    monkeypatch.setattr(sheets, "_wide", lambda corners, area, thickness:
+                        np.ones(len(corners), dtype=bool))
+    every = find_sheets(v, t)
+    assert len(left_out[0]) == 40
+    order_a, order_b = np.lexsort(left_out[0].T), np.lexsort(every[0].T)
+    np.testing.assert_array_equal(left_out[0][order_a], every[0][order_b])
+    np.testing.assert_array_equal(left_out[1][order_a], every[1][order_b])

@@ -160,7 +160,8 @@ def find_sheets(vertices, triangles, thickness: float = SHEET_M) -> tuple[np.nda
     offset = np.einsum("ij,ij->i", u, kept.mean(axis=1))
     # a 4-d point per face, its offset scaled so that `thickness` counts as NORMAL_TOL
     points = np.column_stack([u, offset * (NORMAL_TOL / thickness)])
-    plus, minus = np.flatnonzero(side > 0), np.flatnonzero(side < 0)
+    wide = _wide(kept, length[keep], thickness)
+    plus, minus = np.flatnonzero((side > 0) & wide), np.flatnonzero((side < 0) & wide)
     if not (plus.size and minus.size):
         return empty
     # material lies behind each face: between the planes when the +u face is ahead
@@ -193,6 +194,19 @@ def find_sheets(vertices, triangles, thickness: float = SHEET_M) -> tuple[np.nda
     if not found.size:
         return empty
     return np.column_stack([keep[i[found]], keep[j[found]]]), gap[found]
+
+
+def _wide(corners: np.ndarray, doubled_area: np.ndarray, thickness: float) -> np.ndarray:
+    """Whether each triangle (k, 3, 3), of twice the area ``doubled_area`` (k,), is wider
+    than ``thickness`` across every edge: its smallest altitude, twice its area over its
+    longest edge, is more. One that is not cannot overlap another by more than ``thickness``
+    across that edge (`_overlapping`), however it is paired, so it bounds no sheet and is
+    left out before the pairing: the booleans leave such slivers (a slot plunged 1 um at a
+    time: 522 of 1e-29 m^2 facing down in a floor of 123,091 facing up, 64 million pairs
+    and 35 s, where 0.3 s without them)."""
+    edges = np.stack([corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 1],
+                      corners[:, 0] - corners[:, 2]], axis=1)
+    return doubled_area > thickness * np.linalg.norm(edges, axis=2).max(axis=1)
 
 
 def _basis(u: np.ndarray) -> np.ndarray:
