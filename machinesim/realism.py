@@ -262,7 +262,7 @@ class ArtefactScatter:
 #: the workpiece position found from three spheres is off by ~1.7 um (1 um times sqrt 3) and
 #: its inclination by ~0.007 deg (1 um times sqrt 2 over the 12 mm between spheres): the
 #: paper's "less than 1-2 um ... in accordance with the errors obtained in the machining
-#: tests" (section 2.2). That inclination, 0.12 mrad, leaves about 0.2 um between opposite
+#: tests" (section 2.3). That inclination, 0.12 mrad, leaves about 0.2 um between opposite
 #: groove ends 1.9 mm apart: over seeds 0-15 the grooves after spread 127-709 nm (median
 #: 248 nm), where the paper's came within about 100 nm of each other (Fig. 8b), the low
 #: tenth of that spread (docs/procedures/workpiece_setting.md); the scatter is not narrowed
