@@ -140,7 +140,7 @@ SA_WINDOW = (200 * UM, 300 * UM, -50 * UM, 50 * UM, 0.5 * UM)
 #: 100 um and its low harmonics), pass 0.4 % of their amplitude at 100 um, 4 % at 33 um.
 SA_L_CUTOFF = 8 * UM
 
-#: The paper's figures, nm. Measured form error P-V per case (section 5.2, Figs 17-18): the
+#: The paper's figures, nm. Measured form error P-V per case (section 6, Figs 17-18): the
 #: text prints "40 um" and "20 um" for Cases 1 and 2; on a grid of 50 nm amplitude the
 #: Table 5 errors cannot leave more than tens of nanometres (dx 3.5 um times the grid's
 #: largest slope 4.4e-3 is 15 nm a side), and Case 2 "agrees well with" the predicted
