@@ -1,6 +1,6 @@
 """Compensation by re-shaped commands: a control's compensation table applied to a program.
 
-Paper 003 (section III): "each error was corrected by re-shaped command signal. The
+Paper 003 (section III): "each errors were corrected by re-shaped command signal. The
 horizontal motion error was eliminated by small shift of the cross-axis." A CNC keeps such
 tables per axis: the positioning error of X and of Y (pitch-error compensation), the
 straightness of each as a shift of the cross axis (cross compensation), and the squareness
