@@ -190,7 +190,8 @@ class XYPlaneErrors:
             Figure("diagonal", "um", before_diag * um,
                    after_table.diagonal_deviation * um, *PAPER_FIGURES["diagonal"],
                    note="ISO 230-6 E, larger of the two face diagonals, beam 120 mm above "
-                   "the table as in the paper; after: table route (the pitch's Abbe offsets "
+                   "the table as in the paper, 115 mm above this machine's cut, where the "
+                   "paper's is level with its; after: table route (the pitch's Abbe offsets "
                    "remain)"),
             Figure("diagonal_machining_point", "um",
                    identified.detail["work_diagonal_before"] * um,

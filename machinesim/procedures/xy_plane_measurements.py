@@ -4,10 +4,12 @@ The 1-D measurements along the table's centre lines (ISO 230-2 positioning of X 
 straightness of each read across it) at the machining point, and the two ISO 230-6 face
 diagonals of the 400 mm square at the corners with the beam 120 mm above the table (paper
 003 Fig. 3). The beam height is set by reading the optic on the tool mount (``tool_mount``,
-25 mm above the table's top at Z = 0 on ``grooving_4axis``) with Z at 95 mm: the angular
-errors' lever arms between that height and the machining point are the Abbe offsets that
-make the diagonals (corners, beam height) differ from eq 1's estimate (centre lines,
-machining point).
+25 mm above the table's top at Z = 0 on ``grooving_4axis``) with Z at 95 mm. The paper's
+beam is level with its machining point ("average height of the machining point") and it
+puts the diagonals' difference from eq 1's estimate on the corners against the centre lines
+(the yaw term below); this machine cuts 5 mm above the table, so its beam-height diagonals
+also carry the pitch over a 115 mm lever, an Abbe offset the paper did not have
+(docs/procedures/xy_plane_errors.md); the tool-tip diagonals are read beside them.
 
 The yaw of Y (the table turning about Z as it travels) moves a table point at X = x by
 ``x ECY(y)`` in Y: a term in both x and y that eq 1, a sum of 1-D functions, cannot hold,
