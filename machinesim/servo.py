@@ -293,7 +293,8 @@ class PIDServo:
 
 # Paper 004, Table 6 (printed values; see the module docstring for the units read into them).
 # "after" x System BW is printed 1.5; Table 3 (No. 2, the same tuned set) prints 15: a lost
-# digit, and 15 is used.
+# digit, and 15 is used. M as Table 6 prints it, where Table 3 No. 1 prints 1, 1, 0.115 and
+# the text gives the tuned z's as 3.8 (docs/procedures/sts_turning.md, "Units of Table 6").
 TABLE6 = {
     "before": {"x": (60, 7000, 0.9, 12, 4, 0), "z": (100, 7000, 1.2, 12, 4, 0.0009),
                "c": (70, 7000, 0.7, 10, 0.115, 0)},
