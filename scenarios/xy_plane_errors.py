@@ -10,9 +10,11 @@ to give paper 003's magnitudes: 2-D errors of 11.59 um in X and 12.33 um in Y ov
 400 mm plate, a diagonal deviation of 17.3 um), or those of ``--errors``. The procedure
 (`machinesim.procedures.xy_plane_errors.XYPlaneErrors`) measures the plate with the lab's
 laser interferometer (ISO 230-2 positioning and straightness on the centre lines, ISO 230-6
-diagonals with the beam 120 mm above the table), builds eq 1's 2-D map, fits the same
-parameters with `machinesim.identification.fit`, compensates by a control table of
-re-shaped commands and by the identified model, and measures again; it reads the C table's
+diagonals at the corners, read level with the cut as the paper's beam was, and 120 mm above
+the table), builds eq 1's 2-D map, fits the same parameters with
+`machinesim.identification.fit`, compensates by a control table of re-shaped commands (eq
+1's map, as the paper; and with the table's yaw) and by the identified model, and measures
+again; it reads the C table's
 squareness by simultaneous XY + C motion (Figs 7-9) with displacement sensors. Writes
 summary.json (docs/reports.md), the paper's table, the 2-D error maps (Figs 2 and 5), the
 diagonal curves (Figs 4 and 6), h(theta) (Fig. 9) and the pyramid apex heights of five
