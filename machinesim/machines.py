@@ -433,7 +433,7 @@ class Machine:
     # ------------------------------------------------------------------------------ inverse
 
     def axis_values(self, wMt, errors=None, q_start=None, check_limits: bool = True,
-                    max_iterations: int = 50) -> AxisSolution:
+                    max_iterations: int = 50, orientation: str = "whole") -> AxisSolution:
         """Axis values that put the tool edge at the pose ``wMt`` on this model.
 
         The edge position is matched exactly (to `tolerances.IK_POSITION_M`); the orientation
@@ -454,6 +454,14 @@ class Machine:
             row ``min(n, len(q_start) - 1)``), some fifty times quicker per pose.
         check_limits : bool
             Raise AxisLimitError when a solution lies outside the travel.
+        orientation : {"whole", "tool_axis"}
+            ``"whole"``: the tool's whole orientation, in least squares. ``"tool_axis"``:
+            only the direction of its Z axis (a rotating tool, or CL data of position and
+            tool axis), its roll free; a pose left unmatched is tried again from the start
+            with each rotary axis also turned by 90, 180 and 270 deg (from A = 0 on an A-C
+            trunnion, C cannot tilt the tool: a tilt the other way needs C turned first),
+            keeping the solution that matches best, within the travel first, then nearest
+            the start. ``rotation_residual`` is then the tool axis's misalignment.
 
         Raises
         ------
@@ -476,6 +484,10 @@ class Machine:
                 f"{self.name}: the requested pose {n} is not a rigid motion (expected an "
                 f"orthonormal rotation within {tolerances.RIGID_TOL:g}, no mirror, last row "
                 f"0 0 0 1), got {np.round(targets[n], 12).tolist()}", key="wMt")
+        if orientation not in ("whole", "tool_axis"):
+            raise InputError(f"orientation={orientation!r}: expected 'whole' or 'tool_axis'",
+                             key="orientation")
+        axis_only = orientation == "tool_axis"
         n_axes = len(self.axes)
         starts = None if q_start is None else np.atleast_2d(self._check_q(q_start))
         binding = self.binding(errors)
@@ -483,13 +495,18 @@ class Machine:
             qs = np.empty((len(targets), n_axes))
             prev = np.zeros((1, n_axes))
             for n, t in enumerate(targets):
-                qs[n] = prev = self._solve(t[None], binding, prev, max_iterations)
+                qs[n] = prev = self._solve(t[None], binding, prev, max_iterations, axis_only)
+                if axis_only:
+                    qs[n] = prev = self._turned_starts(t[None], binding, prev, prev,
+                                                       max_iterations)
         else:  # independent poses: all at once
             rows = np.minimum(np.arange(len(targets)), len(starts) - 1)
             qs = np.concatenate([
                 self._solve(targets[k:k + IK_BATCH], binding, starts[rows[k:k + IK_BATCH]],
-                            max_iterations) for k in range(0, len(targets), IK_BATCH)])
-        pres, rres = self._residuals(targets, binding, qs)
+                            max_iterations, axis_only) for k in range(0, len(targets), IK_BATCH)])
+            if axis_only:
+                qs = self._turned_starts(targets, binding, qs, starts[rows], max_iterations)
+        pres, rres = self._residuals(targets, binding, qs, axis_only)
         miss = np.linalg.norm(pres, axis=1)
         if np.any(miss > tolerances.UNREACHABLE_M):
             n = int(np.argmax(miss > tolerances.UNREACHABLE_M))
@@ -507,18 +524,52 @@ class Machine:
             return AxisSolution(qs[0], pres[0], rres[0], unmatched)
         return AxisSolution(qs, pres, rres, unmatched)
 
-    def _residuals(self, targets, binding, q) -> tuple[np.ndarray, np.ndarray]:
+    def _residuals(self, targets, binding, q, axis_only: bool = False
+                   ) -> tuple[np.ndarray, np.ndarray]:
         """Position (N, 3, m) and rotation (N, 3, rad) left between the poses ``targets``
-        and those the axis values ``q`` reach."""
+        and those the axis values ``q`` reach (of the tool's Z axis alone: ``axis_only``)."""
         pose = self.kin.poses(q, binding)
         return (targets[:, :3, 3] - pose[:, :3, 3],
+                _turn_between(pose[:, :3, 2], targets[:, :3, 2]) if axis_only else
                 rotation_log(targets[:, :3, :3] @ np.swapaxes(pose[:, :3, :3], 1, 2)))
 
-    def _solve(self, targets, binding, q, max_iterations) -> np.ndarray:
+    def _turned_starts(self, targets, binding, qs, starts, max_iterations) -> np.ndarray:
+        """``qs`` (N, n_axes), with each pose whose tool axis is left unmatched solved again
+        from its start with the rotary axes turned by multiples of 90 deg; the best match
+        kept: the tool axis nearest, within the travel first, then nearest the start."""
+        rotary = np.flatnonzero(self.rotary)
+        pres, rres = self._residuals(targets, binding, qs, True)
+        left = np.flatnonzero(np.linalg.norm(rres, axis=1) > tolerances.IK_ANGLE_RAD * 1e3)
+        if not len(rotary) or not len(left):
+            return qs
+        qs = qs.copy()
+        turns = np.array(np.meshgrid(*[np.arange(4)] * len(rotary))).reshape(len(rotary), -1).T
+        for n in left:
+            tries = np.repeat(starts[n][None], len(turns), axis=0)
+            tries[:, rotary] += turns * (np.pi / 2)
+            found = self._solve(np.repeat(targets[n][None], len(turns), axis=0), binding,
+                                tries, max_iterations, True)
+            found = np.vstack([qs[n][None], found])
+            p, r = self._residuals(np.repeat(targets[n][None], len(found), axis=0), binding,
+                                   found, True)
+            miss = np.where(np.linalg.norm(p, axis=1) <= tolerances.UNREACHABLE_M,
+                            np.linalg.norm(r, axis=1), np.inf)
+            if not np.isfinite(miss.min()):
+                continue
+            matched = miss <= miss.min() + tolerances.IK_ANGLE_RAD * 1e3
+            inside = np.array([not self.limit_violations(q[None]) for q in found])
+            pick = matched & inside if np.any(matched & inside) else matched
+            distance = np.linalg.norm(found - starts[n], axis=1)
+            qs[n] = found[np.flatnonzero(pick)[np.argmin(distance[pick])]]
+        return qs
+
+    def _solve(self, targets, binding, q, max_iterations, axis_only: bool = False
+               ) -> np.ndarray:
         """Newton steps from ``q`` (N, n_axes) towards ``targets`` (N, 4, 4), all at once:
-        position first, orientation in the null space of the position task. A pose stops
-        when its position misses by less than `tolerances.IK_POSITION_M` and its last step
-        was below `tolerances.IK_ANGLE_RAD`."""
+        position first, orientation in the null space of the position task (of the tool's
+        Z axis alone, its roll free: ``axis_only``). A pose stops when its position misses
+        by less than `tolerances.IK_POSITION_M` and its last step was below
+        `tolerances.IK_ANGLE_RAD`."""
         q = np.array(q, dtype=np.float64)
         eye = np.eye(q.shape[1])
         active = np.arange(len(q))
@@ -531,8 +582,13 @@ class Machine:
             else:
                 pose, jac = kin.pose_jacobians(q[active], binding)
             dp = targets[active, :3, 3] - pose[:, :3, 3]
-            dr = rotation_log(targets[active, :3, :3] @ np.swapaxes(pose[:, :3, :3], 1, 2))
             jp, jr = jac[:, :3], jac[:, 3:]
+            if axis_only:  # turns about the tool's own axis neither help nor count
+                z = pose[:, :3, 2]
+                dr = _turn_between(z, targets[active, :3, 2])
+                jr = jr - np.einsum("ni,nj,nja->nia", z, z, jr)
+            else:
+                dr = rotation_log(targets[active, :3, :3] @ np.swapaxes(pose[:, :3, :3], 1, 2))
             jp_pinv = _pinv(jp)
             step = np.einsum("nap,np->na", jp_pinv, dp)
             null = eye - jp_pinv @ jp
@@ -593,6 +649,24 @@ class Machine:
         return arr
 
 
+
+
+def _turn_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotations (N, 3; axis times angle, rad) that turn the unit vectors ``a`` (N, 3)
+    onto ``b`` by the shortest way (about ``a x b``; opposite vectors about an axis normal
+    to ``a``)."""
+    cross = np.cross(a, b)
+    sine = np.linalg.norm(cross, axis=1)
+    angle = np.arctan2(sine, np.einsum("ni,ni->n", a, b))
+    axis = np.zeros_like(cross)
+    turned = sine > 0.0
+    axis[turned] = cross[turned] / sine[turned, None]
+    opposite = ~turned & (angle > np.pi / 2)
+    if np.any(opposite):  # any axis normal to a will do
+        helper = np.where(np.abs(a[opposite, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+        normal = np.cross(a[opposite], helper)
+        axis[opposite] = normal / np.linalg.norm(normal, axis=1, keepdims=True)
+    return axis * angle[:, None]
 
 
 def _pinv(a: np.ndarray) -> np.ndarray:

@@ -381,6 +381,35 @@ def test_axis_values_reports_the_orientation_a_planer_cannot_make():
     assert "cannot turn the tool about Y" in solution.unmatched
 
 
+def test_axis_values_matches_a_tool_axis_whose_tilt_needs_c_turned_first():
+    """On robonano_a0ib (B tilts the tool about Y, C turns the work about Z) a tool axis
+    tilted 30 deg about X is B = +-30 deg with C = -+90 deg (by hand: C about Z turns
+    nothing of the tool axis's angle to Z, which is |B|, and brings the tilt from the X-Z
+    plane to the Y-Z plane). The whole orientation (a pure Rx) no axis values give; from
+    zero, where C cannot tilt the tool, that left the tilt unmatched."""
+    machine = load_machine("robonano_a0ib")
+    target = trans([1 * MM, 2 * MM, -0.5 * MM]) @ rot(0, math.radians(30))
+    whole = machine.axis_values(target)
+    assert "cannot turn the tool about X" in whole.unmatched
+    assert whole.q[3] == whole.q[4] == 0.0
+    for q_start in (None, np.zeros(5), np.array([0.0, 0.0, 0.0, 0.0, math.radians(45)])):
+        solution = machine.axis_values(target, q_start=q_start, orientation="tool_axis")
+        assert abs(math.degrees(solution.q[3])) == pytest.approx(30.0, abs=1e-9)
+        assert abs(math.degrees(solution.q[4])) == pytest.approx(90.0, abs=1e-9)
+        assert solution.unmatched == ""
+        reached = machine.tool_pose(solution.q)  # a second method: the forward chain
+        np.testing.assert_allclose(reached[:3, 2], target[:3, 2], atol=1e-15)
+        np.testing.assert_allclose(reached[:3, 3], target[:3, 3], atol=1e-15)
+        assert np.linalg.norm(solution.rotation_residual) < 1e-15
+    # a batch from one start: every pose its own retry
+    batch = machine.axis_values(np.stack([target, trans([0.0, 0.0, 0.0])]), q_start=np.zeros(5),
+                                orientation="tool_axis")
+    np.testing.assert_allclose(batch.q[1], 0.0, atol=1e-15)
+    assert abs(math.degrees(batch.q[0, 3])) == pytest.approx(30.0, abs=1e-9)
+    with pytest.raises(InputError, match="orientation='axis': expected 'whole' or 'tool_axis'"):
+        machine.axis_values(target, orientation="axis")
+
+
 def test_axis_values_errors_are_clear():
     machine = load_machine("planer_4axis")
     with pytest.raises(AxisLimitError, match="axis X = 300.000000 mm outside its travel"):
