@@ -95,6 +95,24 @@ def test_arc_centre_and_sweep(text, centre_mm, sweep_deg):
 
 
 @pytest.mark.parametrize(
+    ("text", "centre_mm", "radius_mm"),
+    [
+        # an inch half circle: 3 x 0.0254 - 2 x 0.0254 is 8e-18 m short of 0.0254, and
+        # sqrt(r^2 - half^2) made that a centre 0.33 nm off the chord
+        ("G20 G00 X2. Y0.01\nG02 X3. Y0.01 R0.5 F1", (63.5, 0.254), 12.7),
+        # far out in mm, where the round-off of the coordinates is larger: 1.2 nm off before
+        ("G21 G00 X500.048 Y0.763\nG03 X526.468 Y0.763 R13.21 F1", (513.258, 0.763), 13.21),
+        ("G21 G00 X500.002 Y0.511\nG03 X538.956 Y0.511 R19.477 F1", (519.479, 0.511), 19.477),
+    ],
+)
+def test_a_half_circle_by_r_is_centred_on_its_chord(text, centre_mm, radius_mm):
+    program = parse_program(text)
+    pts = _arc_rows(program, 2)[:, :2]
+    centre = np.array(centre_mm) * MM
+    assert np.max(np.abs(np.linalg.norm(pts - centre, axis=1) - radius_mm * MM)) <= ON_CIRCLE_M
+
+
+@pytest.mark.parametrize(
     ("plane", "start", "end", "centre_words", "normal"),
     [
         ("G17", "X10. Y0 Z0", "X0 Y10.", "I-10. J0", "Z"),

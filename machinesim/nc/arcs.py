@@ -50,6 +50,11 @@ MAX_STEP_RAD = math.pi / 2
 #: The step is taken for the tolerance times this, so that float64 rounding of the angles
 #: (~1e-16 relative) never puts a chord's sagitta over the tolerance itself.
 _SAFETY = 1.0 - 1e-9
+#: An arc by R whose half chord comes within this many ulp of the largest coordinate of
+#: its radius is a half circle: the end points' decimal-to-binary rounding (half an ulp
+#: each), the subtraction and the hypot of the chord leave its length uncertain by a few
+#: ulp of the coordinates (`_centre_from_radius`).
+_HALF_CIRCLE_ULPS = 8.0
 
 
 def arc_points(
@@ -163,7 +168,13 @@ def _centre_from_radius(s: np.ndarray, e: np.ndarray, chord: float, radius: floa
             f"the end point is {chord * 1e3:.6f} mm from the start, more than the diameter "
             f"2|R| = {2 * r * 1e3:.6f} mm (beyond the {tolerance * 1e6:g} um tolerance)"
         )
-    h = math.sqrt(max(r * r - half * half, 0.0))
+    # The centre's distance from the chord, sqrt(r^2 - half^2), is ill-conditioned at a half
+    # circle: the chord carries the round-off of its end points (a few ulp of the largest
+    # coordinate), and sqrt turns an error e of r - half into one of sqrt(2 r e), 0.3 nm for
+    # an inch half circle of R0.5 at X2. .. X3. and 1.7 nm at 500 mm. Within that round-off
+    # the arc is the half circle, its centre the chord's midpoint.
+    slack = _HALF_CIRCLE_ULPS * math.ulp(max(float(np.max(np.abs(s))), float(np.max(np.abs(e))), r))
+    h = 0.0 if r - half <= slack else math.sqrt((r - half) * (r + half))
     mid = (s + e) / 2.0
     left = np.array([s[1] - e[1], e[0] - s[0]]) / chord  # the chord turned +90 deg
     # counter-clockwise along the shorter arc keeps the centre on the chord's left
