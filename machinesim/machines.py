@@ -538,7 +538,7 @@ class Machine:
         from its start with the rotary axes turned by multiples of 90 deg; the best match
         kept: the tool axis nearest, within the travel first, then nearest the start."""
         rotary = np.flatnonzero(self.rotary)
-        pres, rres = self._residuals(targets, binding, qs, True)
+        rres = self._residuals(targets, binding, qs, True)[1]
         left = np.flatnonzero(np.linalg.norm(rres, axis=1) > tolerances.IK_ANGLE_RAD * 1e3)
         if not len(rotary) or not len(left):
             return qs
