@@ -228,3 +228,21 @@ def test_a_rotary_groove_ends_on_its_profile_planes_and_keeps_pappus_volume():
     floor = v[(v[:, 2] < 1e-13) & (np.abs(v[:, 0]) < 0.45e-3) & (np.abs(v[:, 1]) < 0.45e-3)]
     assert floor[floor[:, 1] < 0.0, 0].min() >= -1e-15  # the start: no material cut at x < 0
     assert floor[floor[:, 0] > 0.0, 1].max() <= 1e-15  # the end: none at y > 0
+
+
+def test_a_rotary_groove_about_a_tilted_c_axis_is_the_same_for_a_tall_and_a_short_v():
+    """C tilted 8 and -6 urad (its heights change along each sub-step): a v:90 10 mm tall,
+    whose flanks cross the C axis above the stock, and one 0.25 mm tall, whose do not,
+    cut the same groove but for their chords (their sub-steps differ: ~1e-6 of it). The
+    tall V's hull of both poses, clipped after, removed 1.1e-4 more."""
+    import machinesim
+    from machinesim.nc import parse_program
+
+    text = ("G90 G21 G94\nG00 X0 Y-0.3 Z0.1 C0\nG01 Z-0.1 F100.\nG01 C90. F100.\n"
+            "G00 Z0.1\nM30\n")
+    errors = {"location": {"C": {"EA0C_urad": 8.0, "EB0C_urad": -6.0}}}
+    tall, short = (machinesim.cut(parse_program(text, "turn.nc"), "grooving_4axis",
+                                  tool=tool, stock="block:1x1x0.5@-0.5,-0.5,0",
+                                  errors=errors)[1].removed_volume_m3
+                   for tool in ("v:90", "v:90:h=0.25"))
+    assert abs(tall / short - 1.0) < 1e-5

@@ -77,6 +77,8 @@ class SweepSet:
         # the clipped sweep, and their bounds are its bounds.
         ends = np.stack([np.arange(k), np.arange(k) + k], axis=1)
         self.translation_segments = np.concatenate([edges, edges + k, ends])
+        # A turning sweep's poses are clipped one by one (`hulls`): the edges of T0 and T1.
+        self.pose_edges = np.concatenate([edges, edges + k])
         self.rotation_segments = None
         if k <= PAIR_CLIP_MAX_VERTICES:
             i, j = np.meshgrid(np.arange(k), np.arange(k) + k, indexing="ij")
@@ -132,8 +134,9 @@ class SweepSet:
         vertices = self.vertices if columns is None else self.vertices[columns]
         return vertices @ poses[:, :3, :3].transpose(0, 2, 1) + poses[:, None, :3, 3]
 
-    def _clip(self, points: np.ndarray, segments):
-        """Point sets whose hulls are the sweeps' hulls cut by z <= clip_z.
+    def _clip(self, points: np.ndarray, segments, plane=None):
+        """Point sets whose hulls are the sweeps' hulls cut by z <= clip_z (or by z <=
+        ``plane``, one height per sweep).
 
         ``points`` has shape (s, 2k, 3); ``segments`` include every edge of each hull (the
         translation or rotation candidates of `__init__`). Every candidate lies in the
@@ -141,14 +144,15 @@ class SweepSet:
         of a hull edge, so the hull of the candidates is exactly the clipped sweep. None
         where the whole sweep lies above the plane.
         """
-        below = points[:, :, 2] <= self.clip_z
+        plane = np.full(len(points), self.clip_z) if plane is None else plane
+        below = points[:, :, 2] <= plane[:, None]
         a, b = points[:, segments[:, 0]], points[:, segments[:, 1]]
         crossing = below[:, segments[:, 0]] != below[:, segments[:, 1]]
         # Segments that do not cross may divide by zero; only crossing ones are read.
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = (self.clip_z - a[:, :, 2]) / (b[:, :, 2] - a[:, :, 2])
+            t = (plane[:, None] - a[:, :, 2]) / (b[:, :, 2] - a[:, :, 2])
             cut = a + t[:, :, None] * (b - a)
-        cut[:, :, 2] = self.clip_z
+        cut[:, :, 2] = plane[:, None]
         out = []
         for sweep, state in enumerate(below.sum(axis=1)):
             if state == below.shape[1]:
@@ -318,25 +322,27 @@ class SweepSet:
             # many for the pair search.
             level = same & self.planar
             minkowski = same & (self.solid_sweep is not None)
-            # A turn that keeps every height (about the vertical, at one Z: a C move of the
-            # workpiece under an upright tool) moves nothing from above the clip plane to
-            # below it: each pose is clipped before the hull. The hull of the whole body at
-            # both poses, clipped after, reached past the ends of a rotary groove by the
-            # depth times the turn where the V's flanks cross the C axis (78 nm on a v:90
-            # 0.1 mm deep, 0.3 mm off the axis; found by the exactness audit).
-            flat_turn = ~same & (np.abs(r1[:, 2] - r0[:, 2]).max(axis=1) <= SAME_ORIENTATION) \
-                & (move[:, 2] == 0.0)
-            k2 = np.concatenate([self.edges, self.edges + k])
-            candidates = {}
-            for rows, segments in ((chosen[same[chosen] & ~level[chosen] & ~minkowski[chosen]],
-                                    self.translation_segments),
-                                   (chosen[flat_turn[chosen]], k2),
-                                   (chosen[~same[chosen] & ~flat_turn[chosen]],
-                                    self.rotation_segments)):
-                if len(rows) and segments is not None:
-                    points = np.concatenate([p0[rows], p1[rows]], axis=1)
-                    candidates.update(zip(rows.tolist(), self._clip(points, segments),
-                                          strict=True))
+            # A sweep that turns: each vertex's height changes by at most `raise_` along
+            # it (linearly, between the poses the hull joins), so what lies higher than
+            # clip_z + raise_ at either pose never comes below the clip plane. Each pose is
+            # clipped there first (its own edges' crossings), and the hull trimmed at the
+            # plane. The hull of the whole body at both poses, clipped after, reached past
+            # the ends of a rotary groove where a tall V's flanks cross the C axis (78 nm
+            # for a v:90 0.1 mm deep, 0.3 mm off the axis; found by the exactness audit).
+            raise_ = np.abs(p1[:, :, 2] - p0[:, :, 2]).max(axis=1)
+            candidates, raised = {}, set()
+            rows = chosen[same[chosen] & ~level[chosen] & ~minkowski[chosen]]
+            if len(rows):
+                points = np.concatenate([p0[rows], p1[rows]], axis=1)
+                candidates.update(zip(rows.tolist(),
+                                      self._clip(points, self.translation_segments),
+                                      strict=True))
+            rows = chosen[~same[chosen]]
+            if len(rows):
+                points = np.concatenate([p0[rows], p1[rows]], axis=1)
+                candidates.update(zip(rows.tolist(), self._clip(
+                    points, self.pose_edges, self.clip_z + raise_[rows]), strict=True))
+                raised.update(rows[raise_[rows] > 0.0].tolist())
             prisms = {}
             rows = chosen[level[chosen]]
             if len(rows):
@@ -347,11 +353,10 @@ class SweepSet:
                     built = self._prism(prisms[row], p0[row], move[row])
                 elif minkowski[row]:
                     built = self._translated(r0[row], origin[first[row]], move[row], p0[row])
-                elif row in candidates:
-                    points = candidates[row]
-                    built = "above" if points is None else self._hull(points, clipped=True)
                 else:
-                    built = self._hull(np.concatenate([p0[row], p1[row]]), clipped=False)
+                    points = candidates[row]
+                    built = ("above" if points is None
+                             else self._hull(points, clipped=row not in raised))
                 if built == "above":
                     continue
                 if built is None:
