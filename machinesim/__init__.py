@@ -33,7 +33,7 @@ _LAZY = {
     "ComponentError": "machinesim.errors", "ErrorModel": "machinesim.errors",
     "ToolSetting": "machinesim.errors", "WorkpieceSetting": "machinesim.errors",
     "ToolGeometry": "machinesim.errors",
-    "Lab": "machinesim.lab", "Realism": "machinesim.realism", "AxisSolution": "machinesim.machines",
+    "Lab": "machinesim.lab", "Realism": "machinesim.realism", "AxisSolution": "machinesim.inverse",
     "Machine": "machinesim.machines", "list_machines": "machinesim.machines",
     "load_machine": "machinesim.machines",
 }
