@@ -28,6 +28,12 @@ from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL, SIDEWAYS_WARN_
 
 __all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "SweepSet", "dragged"]
 
+#: A turning sweep whose vertices' heights change by no more than this (m) between its
+#: poses is not trimmed at the clip plane after its hull (`SweepSet.hulls`): it reaches at
+#: most that far above the plane, which lies above the stock, where it cuts nothing, and
+#: the trim made a C groove under a C axis tilted by 10 urad 36 % slower (4.07 -> 5.54 s).
+RAISED_UNTRIMMED_M = 1e-9
+
 #: Rotating sweeps clip only when the all-pairs edge search is small: beyond this many tool
 #: vertices their hull is built unclipped (still exact, only slower to union).
 PAIR_CLIP_MAX_VERTICES = 64
@@ -342,7 +348,9 @@ class SweepSet:
                 points = np.concatenate([p0[rows], p1[rows]], axis=1)
                 candidates.update(zip(rows.tolist(), self._clip(
                     points, self.pose_edges, self.clip_z + raise_[rows]), strict=True))
-                raised.update(rows[raise_[rows] > 0.0].tolist())
+                # the hull reaches at most raise_ above the clip plane, itself above the
+                # stock: trimmed only where that is more than `RAISED_UNTRIMMED_M`
+                raised.update(rows[raise_[rows] > RAISED_UNTRIMMED_M].tolist())
             prisms = {}
             rows = chosen[level[chosen]]
             if len(rows):
