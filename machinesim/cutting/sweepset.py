@@ -34,8 +34,8 @@ __all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "SweepSet", "dragged"]
 #: the trim made a C groove under a C axis tilted by 10 urad 36 % slower (4.07 -> 5.54 s).
 RAISED_UNTRIMMED_M = 1e-9
 
-#: Rotating sweeps clip only when the all-pairs edge search is small: beyond this many tool
-#: vertices their hull is built unclipped (still exact, only slower to union).
+#: The bounds of a profile's turning sweep below the clip plane come from the all-pairs edge
+#: search of both poses, when the tool has no more than this many vertices (`hulls`).
 PAIR_CLIP_MAX_VERTICES = 64
 #: Material inside the holder's room over a sweep (m^3) above which the holder meets the part:
 #: 1 um x 1 um x 1 nm. A body cut flush to its top leaves round-off slivers (1e-19 m thick
@@ -80,7 +80,8 @@ class SweepSet:
         # Candidate edges of a sweep's hull, T1 = points k.. 2k-1: for a translation the
         # edges of T0, of T1 and each vertex's own path; for a rotation any T0-T1 pair as
         # well. The hull of the candidates below the plane and of the crossings is exactly
-        # the clipped sweep, and their bounds are its bounds.
+        # the hull clipped, and their bounds are its bounds (a turning sweep itself is the
+        # hull of its poses clipped first, inside these bounds: `hulls`).
         ends = np.stack([np.arange(k), np.arange(k) + k], axis=1)
         self.translation_segments = np.concatenate([edges, edges + k, ends])
         # A turning sweep's poses are clipped one by one (`hulls`): the edges of T0 and T1.
@@ -328,14 +329,14 @@ class SweepSet:
             # many for the pair search.
             level = same & self.planar
             minkowski = same & (self.solid_sweep is not None)
-            # A sweep that turns: each vertex's height changes by at most `raise_` along
+            # A sweep that turns: each vertex's height changes by at most `rise` along
             # it (linearly, between the poses the hull joins), so what lies higher than
-            # clip_z + raise_ at either pose never comes below the clip plane. Each pose is
+            # clip_z + rise at either pose never comes below the clip plane. Each pose is
             # clipped there first (its own edges' crossings), and the hull trimmed at the
             # plane. The hull of the whole body at both poses, clipped after, reached past
             # the ends of a rotary groove where a tall V's flanks cross the C axis (78 nm
             # for a v:90 0.1 mm deep, 0.3 mm off the axis; found by the exactness audit).
-            raise_ = np.abs(p1[:, :, 2] - p0[:, :, 2]).max(axis=1)
+            rise = np.abs(p1[:, :, 2] - p0[:, :, 2]).max(axis=1)
             candidates, raised = {}, set()
             rows = chosen[same[chosen] & ~level[chosen] & ~minkowski[chosen]]
             if len(rows):
@@ -347,10 +348,10 @@ class SweepSet:
             if len(rows):
                 points = np.concatenate([p0[rows], p1[rows]], axis=1)
                 candidates.update(zip(rows.tolist(), self._clip(
-                    points, self.pose_edges, self.clip_z + raise_[rows]), strict=True))
-                # the hull reaches at most raise_ above the clip plane, itself above the
+                    points, self.pose_edges, self.clip_z + rise[rows]), strict=True))
+                # the hull reaches at most rise above the clip plane, itself above the
                 # stock: trimmed only where that is more than `RAISED_UNTRIMMED_M`
-                raised.update(rows[raise_[rows] > RAISED_UNTRIMMED_M].tolist())
+                raised.update(rows[rise[rows] > RAISED_UNTRIMMED_M].tolist())
             prisms = {}
             rows = chosen[level[chosen]]
             if len(rows):
