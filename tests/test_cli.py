@@ -231,10 +231,19 @@ def test_a_groove_through_the_stock_is_said_to_leave_the_part_in_pieces(tmp_path
     assert ("warning: the part is in 2 separate pieces (204, 60 mm^3), where the stock was "
             "one: a cut went through it") in err, err
     assert json.loads(report.read_text())["part_pieces_count"] == 2
+    # the viewer says so too: its overlay shows a report's first 14 keys, not this last one
+    code, _, err = run(["view", tmp_path / "deep.ply", "--report", report, "--html",
+                        tmp_path / "deep.html"], capsys)
+    assert code == 0, err
+    assert ("warning: the report says the part is in 2 separate pieces, where the stock was "
+            "one: a cut went through it") in err, err
     code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "g.ply", "--report",
                         tmp_path / "g.json"], capsys)
     assert code == 0 and "separate pieces" not in err, err
     assert json.loads((tmp_path / "g.json").read_text())["part_pieces_count"] == 1
+    code, _, err = run(["view", tmp_path / "g.ply", "--report", tmp_path / "g.json", "--html",
+                        tmp_path / "g.html"], capsys)
+    assert code == 0 and "separate pieces" not in err, err
 
 
 def test_an_errors_file_that_sets_nothing_is_noted(tmp_path, capsys):

@@ -130,10 +130,23 @@ def part_scene(surface, nominal=None, report=None, title: str = "machined part",
     smap = add_part(scene, "part", (vertices, triangles), nominal, max_triangles)
     scene.notes += _mesh_notes(len(triangles), max_triangles)
     if report is not None:
-        scene.notes += report_notes(report)
+        data = read_json(Path(report), 'report') if isinstance(report, str | Path) else report
+        scene.notes += report_notes(data)
+        scene.warnings += cut_warnings(data)
     scene.legends.append(legend_for(smap))
     frame_scene(scene, vertices.min(axis=0), vertices.max(axis=0))
     return scene
+
+
+def cut_warnings(report: dict) -> list[str]:
+    """Lines for what a cut report says went wrong with the part itself, which its notes
+    (the first `MAX_NOTE_LINES` keys) may leave out: a part in several pieces, where the
+    stock was one (``part_pieces_count``, the last key `machinesim cut` writes)."""
+    pieces = report.get("part_pieces_count")
+    if isinstance(pieces, int) and not isinstance(pieces, bool) and pieces > 1:
+        return [f"the report says the part is in {pieces} separate pieces, where the stock "
+                "was one: a cut went through it"]
+    return []
 
 
 def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
@@ -267,5 +280,5 @@ def _load(surface):
     return surface
 
 
-__all__ = ["PART_COLOUR", "UNIT_SLIP_SIZE_M", "add_part", "frame_scene", "part_scene",
-           "precision_warnings", "report_notes", "report_scene", "size_warnings"]
+__all__ = ["PART_COLOUR", "UNIT_SLIP_SIZE_M", "add_part", "cut_warnings", "frame_scene",
+           "part_scene", "precision_warnings", "report_notes", "report_scene", "size_warnings"]
