@@ -784,3 +784,33 @@ def test_paper_003s_table_entries_vary_on_its_base_model():
     assert parse_vary("component.C.EAC[3]=3urad")[1].a == pytest.approx(3e-6, rel=1e-15)
     with pytest.raises(InputError, match=r"--vary component.X.EXX\[99\]: not a parameter"):
         CampaignSpec("xy_plane_errors", 1, (parse_vary("component.X.EXX[99]=normal:0,1um"),))
+
+
+def test_the_histograms_count_trials_in_whole_numbers(monkeypatch):
+    """Four trials in five bins: the y axis counted them in steps of 0.25 (matplotlib's
+    default locator); a count of trials takes whole numbers only."""
+    from matplotlib.figure import Figure
+
+    from machinesim.campaign.results import assemble
+    from machinesim.campaign.summary import _plots
+
+    records = [{"trial": i, "drawn": {}, "injected": {"tool.y": 1e-6},
+                "identified": {"tool.y": [1e-6 + i * 1e-8, 1e-7]},
+                "figures": {"a_dx": ["um", 5.0 + i, 0.2 + 0.01 * i, 0.01]},
+                "elapsed_s": 1.0, "error": None} for i in range(4)]
+    spec = {"procedure": "tool_setting_6axis", "seed": 0, "vary": {}, "noise": True,
+            "identify_only": False}
+    ticks = {}
+    real = Figure.savefig
+
+    def keep_ticks(figure, *args, **kwargs):
+        for ax in figure.axes:
+            if ax.get_ylabel() == "trials":
+                ticks[ax.get_xlabel()] = ax.get_yticks()
+        return real(figure, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", keep_ticks)
+    _plots(assemble(records, spec, 4))
+    assert set(ticks) == {"a_dx before (um)", "a_dx after (um)"}
+    for values in ticks.values():
+        assert len(values) > 1 and np.all(values == np.round(values)), values

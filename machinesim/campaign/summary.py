@@ -199,6 +199,7 @@ def _plots(dataset) -> dict[str, bytes]:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     written: dict[str, bytes] = {}
 
@@ -219,6 +220,8 @@ def _plots(dataset) -> dict[str, bytes]:
             y = y[np.isfinite(y)]
             if y.size:
                 ax.hist(y, bins=max(5, min(40, y.size // 3)), color=colour)
+                # counts of trials: whole numbers (4 trials had ticks every 0.25)
+                ax.yaxis.set_major_locator(MaxNLocator(integer=True))
             else:
                 ax.text(0.5, 0.5, "not measured", ha="center", transform=ax.transAxes)
             ax.set_xlabel(f"{name} {which} ({unit})")
