@@ -263,6 +263,25 @@ def test_an_errors_file_that_sets_nothing_is_noted(tmp_path, capsys):
         assert code == 0 and "sets no error" not in err, err
 
 
+def test_an_error_written_in_si_in_a_micrometre_key_is_noted(tmp_path, capsys):
+    """EX0C_um = 4e-6 (4 um written in metres) is 4 pm, and tool Y 3e-6 um 3 pm: below a
+    hundredth of the axes' 1 nm, no error a machine shows; each is noted with its size
+    (by hand: 4e-6 um x 1e-6 m/um). 5 urad and the example's values are not."""
+    slip = tmp_path / "slip.toml"
+    slip.write_text("[tool]\noffset_um = [0.0, 3e-6, 0.0]\n[location.C]\nEX0C_um = 4e-6\n"
+                    "EA0C_urad = 5.0\n")
+    code, _, err = run(["cut", GROOVES, *CUT, "--errors", slip, "--out", tmp_path / "a.ply"],
+                       capsys)
+    assert code == 0, err
+    assert (f"note: {slip}: location.C.EX0C_um = 4e-06 is at most 4e-12 m, below anything a "
+            "machine shows: was it written in m, where the key asks um?") in err, err
+    assert f"note: {slip}: tool.offset_um = [0.0, 3e-06, 0.0] is at most 3e-12 m" in err, err
+    assert "EA0C_urad" not in err
+    code, _, err = run(["cut", GROOVES, *CUT, "--errors", ROOT / "models" / "errors" /
+                        "example.toml", "--out", tmp_path / "b.ply"], capsys)
+    assert code == 0 and "below anything a machine shows" not in err, err
+
+
 def test_ctrl_c_during_the_cut_exits_130_and_writes_nothing(tmp_path, capsys, monkeypatch):
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt

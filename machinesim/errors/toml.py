@@ -38,7 +38,7 @@ from machinesim.errors.model import (
     WorkpieceSetting,
 )
 from machinesim.exceptions import ErrorModelError
-from machinesim.units import ANGLE, FACTORS, LENGTH
+from machinesim.units import ANGLE, FACTORS, LENGTH, is_length
 
 _SECTIONS = ("tool", "tool_geometry", "workpiece", "location", "component")
 _TOML_POSITION_RE = re.compile(r"\s*\(at line (\d+), column (\d+)\)")
@@ -57,6 +57,33 @@ def _poly_factors(value_factor: float, position_factor: float, count: int) -> np
     trip through a file costs two roundings per coefficient.
     """
     return value_factor / np.power(position_factor, np.arange(count, dtype=np.float64))
+
+
+#: Below this (m or rad) an error value written in a file is no error any machine shows (a
+#: hundredth of the machines' 1 nm resolution): written in SI where its key asks um or urad,
+#: more likely (`EX0C_um = 4e-6` is 4 pm).
+SMALLEST_WRITTEN_ERROR_SI = 1e-11
+
+
+def below_any_machine(model: ErrorModel) -> list[str]:
+    """Lines naming each value the file wrote (``model.written``) that is not zero and yet
+    below `SMALLEST_WRITTEN_ERROR_SI` in SI, all its entries: perhaps SI in a key in um or
+    urad. A table's positions are left out."""
+    lines = []
+    for field, (key, value) in model.written.items():
+        unit = key.rsplit("_", 1)[-1]
+        if field.endswith(".position") or unit not in FACTORS:
+            continue
+        try:
+            size = np.abs(np.asarray(value, dtype=np.float64)) * FACTORS[unit]
+        except (TypeError, ValueError):  # a polynomial's table, a string: checked elsewhere
+            continue
+        if size.size and size.max() > 0.0 and size.max() < SMALLEST_WRITTEN_ERROR_SI:
+            si = "m" if is_length(unit) else "rad"
+            shown = np.asarray(value, dtype=np.float64).tolist()
+            lines.append(f"{key} = {shown!r} is at most {size.max():.3g} {si}, below anything "
+                         f"a machine shows: was it written in {si}, where the key asks {unit}?")
+    return lines
 
 
 def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[str, Any]:
