@@ -120,13 +120,11 @@ def part_scene(surface, nominal=None, report=None, title: str = "machined part",
     """
     vertices, triangles = mesh_of(_load(surface))
     scene = Scene(title)
-    nominal_path, nominal = nominal, _load(nominal) if nominal is not None else None
-    scene.warnings += precision_warnings({"the part": (surface, vertices)})
+    parts = {"the part": (surface, vertices)}
     if nominal is not None:
-        scene.warnings += precision_warnings(
-            {"the nominal part": (nominal_path, mesh_of(nominal)[0])})
-    scene.warnings += size_warnings({"the part": vertices, "the nominal part": (
-        None if nominal is None else mesh_of(nominal)[0])})
+        path, nominal = nominal, _load(nominal)
+        parts["the nominal part"] = (path, mesh_of(nominal)[0])
+    scene.warnings += file_warnings(parts)
     smap = add_part(scene, "part", (vertices, triangles), nominal, max_triangles)
     scene.notes += _mesh_notes(len(triangles), max_triangles)
     if report is not None:
@@ -184,14 +182,10 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
     if nominal is not None:
         scene.notes.append(f"coloured by deviation from {nominal_path.name}")
     meshes = [read_ply(p) for p in shown]
-    scene.warnings += precision_warnings(
-        {p.name: (p, mesh[0]) for p, mesh in zip(shown, meshes, strict=True)})
+    parts = {p.name: (p, mesh[0]) for p, mesh in zip(shown, meshes, strict=True)}
     if nominal is not None:
-        scene.warnings += precision_warnings({nominal_path.name: (nominal_path, nominal[0])})
-    scene.warnings += size_warnings({p.name: mesh[0] for p, mesh in zip(shown, meshes,
-                                                                     strict=True)})
-    if nominal is not None:
-        scene.warnings += size_warnings({nominal_path.name: nominal[0]})
+        parts[nominal_path.name] = (nominal_path, nominal[0])
+    scene.warnings += file_warnings(parts)
     boxes = [(v.min(axis=0), v.max(axis=0)) for v, _ in meshes]
     step = (1.0 + GAP) * max(float(np.max(hi - lo)) for lo, hi in boxes)
     lo_all, hi_all = np.full(3, math.inf), np.full(3, -math.inf)
@@ -208,6 +202,13 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
         lo_all, hi_all = np.minimum(lo_all, lo + shift), np.maximum(hi_all, hi + shift)
     frame_scene(scene, lo_all, hi_all)
     return scene
+
+
+def file_warnings(parts: dict) -> list[str]:
+    """`precision_warnings` and `size_warnings` of the parts ``name: (path, vertices)``:
+    what a part file from elsewhere may hold that the page would show without a word."""
+    return precision_warnings(parts) + size_warnings(
+        {name: vertices for name, (_, vertices) in parts.items()})
 
 
 def precision_warnings(parts: dict) -> list[str]:
@@ -280,5 +281,6 @@ def _load(surface):
     return surface
 
 
-__all__ = ["PART_COLOUR", "UNIT_SLIP_SIZE_M", "add_part", "cut_warnings", "frame_scene",
-           "part_scene", "precision_warnings", "report_notes", "report_scene", "size_warnings"]
+__all__ = ["PART_COLOUR", "UNIT_SLIP_SIZE_M", "add_part", "cut_warnings", "file_warnings",
+           "frame_scene", "part_scene", "precision_warnings", "report_notes", "report_scene",
+           "size_warnings"]
