@@ -175,6 +175,7 @@ class XYPlaneErrors:
         rx, ry = before_map.ranges(PLATE, PLATE)
         ax, ay = after_table.map.ranges(PLATE, PLATE)
         mx, my = after_model.map.ranges(PLATE, PLATE)
+        yx, yy = after_yaw.map.ranges(PLATE, PLATE)
         sep: CAxisSeparation = identified.detail["c"]
         c_after = self._c_tests(lab, model)
         sep_after = separate(lab.machine, c_after.follow_q, c_after.follow, c_after.fixed_q,
@@ -228,8 +229,7 @@ class XYPlaneErrors:
             "diagonal_table_after_each_um": [d.E * um for d in after_table.work_diagonals],
             "diagonal_model_after_each_um": [d.E * um for d in after_model.work_diagonals],
             "diagonal_beam_120mm_model_after_um": after_model.diagonal_deviation * um,
-            "xy_error_x_yaw_after_um": after_yaw.map.ranges(PLATE, PLATE)[0] * um,
-            "xy_error_y_yaw_after_um": after_yaw.map.ranges(PLATE, PLATE)[1] * um,
+            "xy_error_x_yaw_after_um": yx * um, "xy_error_y_yaw_after_um": yy * um,
             "yaw_y_urad": {"y_mm": (identified.detail["yaw_y"].positions * 1e3).tolist(),
                            "value": (identified.detail["yaw_y"].values * 1e6).tolist()},
             "squareness_diagonals_urad": identified.detail["diagonal_squareness"] * 1e6,
