@@ -43,7 +43,7 @@ from machinesim.viewer.maps import (
     legend_for,
     map_mesh,
 )
-from machinesim.viewer.meshes import triangle_normals
+from machinesim.viewer.meshes import ply_single_precision, triangle_normals
 from machinesim.viewer.scene import Scene
 from machinesim.viewer.views import report_notes
 from machinesim.workpiece import Part, block, mesh_volume, stock_from_spec
@@ -98,11 +98,60 @@ def test_read_ply_gives_back_the_exact_float64_mesh(tmp_path):
     assert np.array_equal(triangles, expected_t)
 
 
+def test_read_ply_reads_the_forms_other_tools_write(tmp_path):
+    # ASCII, big-endian, a CRLF header and faces with a colour and flags were each refused
+    # ("expected 'format binary_little_endian 1.0'", "expected faces with one list property")
+    part = stock_from_spec("cylinder:1.234567x0.5@0.1,0.2,0.3")
+    expected_v, expected_t = part.mesh()
+    head = (f"element vertex {len(expected_v)}\nproperty double x\nproperty double y\n"
+            f"property double z\nelement face {len(expected_t)}\n")
+    text = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in expected_v.tolist())
+    text += "".join(f"3 {a} {b} {c}\n" for a, b, c in expected_t.tolist())
+    (tmp_path / "ascii.ply").write_text(
+        "ply\nformat ascii 1.0\ncomment by hand\n" + head
+        + "property list uchar int vertex_indices\nend_header\n" + text)
+    faces = np.zeros(len(expected_t), dtype=[("flags", ">i4"), ("n", "u1"), ("i", ">i4", 3),
+                                             ("rgb", "u1", 3)])
+    faces["flags"], faces["n"], faces["i"], faces["rgb"] = 7, 3, expected_t, (200, 10, 10)
+    (tmp_path / "big.ply").write_bytes(
+        ("ply\r\nformat binary_big_endian 1.0\r\n" + head.replace("\n", "\r\n")
+         + "property int flags\r\nproperty list uchar int vertex_indices\r\n"
+         "property uchar red\r\nproperty uchar green\r\nproperty uchar blue\r\n"
+         "end_header\r\n").encode() + expected_v.astype(">f8").tobytes() + faces.tobytes())
+    for name in ("ascii.ply", "big.ply"):
+        vertices, triangles = read_ply(tmp_path / name)
+        assert np.array_equal(vertices, expected_v), name  # bit for bit
+        assert np.array_equal(triangles, expected_t), name
+    # trimesh's ASCII export (8 decimals of metres, from float32): within its 1e-8 m
+    trimesh = pytest.importorskip("trimesh")
+    (tmp_path / "trimesh.ply").write_bytes(trimesh.exchange.ply.export_ply(
+        trimesh.Trimesh(expected_v, expected_t, process=False), encoding="ascii"))
+    vertices, triangles = read_ply(tmp_path / "trimesh.ply")
+    assert np.abs(vertices - expected_v).max() < 1e-8
+    assert np.array_equal(triangles, expected_t)
+    assert ply_single_precision(tmp_path / "trimesh.ply")
+    assert not ply_single_precision(tmp_path / "big.ply")
+
+
 def test_read_ply_refuses_what_it_cannot_read(tmp_path):
     ascii_ply = tmp_path / "ascii.ply"
-    ascii_ply.write_text("ply\nformat ascii 1.0\nelement vertex 0\nend_header\n")
-    with pytest.raises(InputError, match="binary_little_endian"):
+    ascii_ply.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\n"
+                         "property double y\nproperty double z\nelement face 2\n"
+                         "property list uchar int vertex_indices\nend_header\n"
+                         "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n4 0 1 2 0\n")
+    with pytest.raises(InputError, match="ascii.ply: face 1 has 4 vertices: only triangle"):
         read_ply(ascii_ply)
+    ascii_ply.write_text(ascii_ply.read_text().replace("4 0 1 2 0\n", "3 0 1\n"))
+    with pytest.raises(InputError, match="ends after 16 numbers, where its 2 'face' elements "
+                                         "need 8 from number 9: truncated"):
+        read_ply(ascii_ply)
+    ascii_ply.write_text(ascii_ply.read_text().replace("0 1 0\n", "0 one 0\n"))
+    with pytest.raises(InputError, match="'vertex' elements hold a word that is not a number"):
+        read_ply(ascii_ply)
+    other = tmp_path / "other.ply"
+    other.write_text("ply\nformat binary_middle_endian 1.0\nend_header\n")
+    with pytest.raises(InputError, match="'format binary_middle_endian 1.0': expected"):
+        read_ply(other)
     quad = tmp_path / "quad.ply"
     header = (b"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty double x\n"
               b"property double y\nproperty double z\nelement face 1\n"

@@ -7,6 +7,7 @@ draws.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import manifold3d
@@ -24,6 +25,9 @@ HEADER_BYTES = 65536
 #: the estimate left too many triangles (a few passes at most).
 CELL_GROWTH = 1.25
 
+#: The PLY formats read, with their byte order (ASCII has none).
+_PLY_FORMATS = {"format binary_little_endian 1.0": "<", "format binary_big_endian 1.0": ">",
+                "format ascii 1.0": ""}
 _PLY_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
     "short": "i2", "int16": "i2", "ushort": "u2", "uint16": "u2",
@@ -34,9 +38,12 @@ _PLY_TYPES = {
 
 
 def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a triangle mesh from a binary little-endian PLY (as `Part.export_ply` writes it).
+    """Read a triangle mesh from a PLY file: binary (either byte order, as `Part.export_ply`
+    and most mesh tools write it) or ASCII, its header's lines ended by LF or CRLF.
 
-    Vertices stored as double come back bit for bit; float ones are widened to float64.
+    Vertices stored as double come back bit for bit (ASCII ones as their decimal text rounds
+    to float64); float ones are widened to float64. Faces may carry other properties beside
+    their vertex list (a colour, flags), which are skipped.
 
     Parameters
     ----------
@@ -50,42 +57,28 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     InputError
-        When the file is missing, not a binary little-endian PLY, shorter than its header
-        says (truncated), has non-triangle faces, no faces, or a vertex that is not finite,
-        or is a closed mesh inside out (wound clockwise seen from outside).
+        When the file is missing, not a PLY, shorter than its header says (truncated), has
+        non-triangle faces, no faces, or a vertex that is not finite, or is a closed mesh
+        inside out (wound clockwise seen from outside).
     """
     path = Path(path)
     try:
         data = path.read_bytes()
     except OSError as exc:
         raise InputError(f"cannot read the PLY file ({exc.strerror})", source=str(path)) from None
-    end = data.find(b"end_header\n")
-    if not data.startswith(b"ply\n") or end < 0:
+    found = re.search(rb"end_header\r?\n", data)
+    if not re.match(rb"ply\r?\n", data) or found is None:
         raise InputError("not a PLY file: expected 'ply' and 'end_header' lines",
                          source=str(path))
-    header = data[:end].decode("ascii", errors="replace").splitlines()
-    if "format binary_little_endian 1.0" not in header:
-        fmt = next((h for h in header if h.startswith("format")), "no format line")
-        raise InputError(f"{fmt!r}: expected 'format binary_little_endian 1.0' (as "
-                         "machinesim writes parts)", source=str(path))
+    header = data[:found.start()].decode("ascii", errors="replace").splitlines()
+    fmt = next((h.strip() for h in header if h.startswith("format")), "no format line")
+    if fmt not in _PLY_FORMATS:
+        raise InputError(f"{fmt!r}: expected 'format binary_little_endian 1.0', "
+                         "'format binary_big_endian 1.0' or 'format ascii 1.0'",
+                         source=str(path))
     elements = _ply_elements(header, path)
-    offset = end + len(b"end_header\n")
-    vertices = triangles = None
-    for name, count, props in elements:
-        if name == "face":
-            triangles, offset = _ply_faces(data, offset, count, props, path)
-            continue
-        if any(kind == "list" for _, kind, _ in props):
-            raise InputError(f"element {name!r} has list properties; only 'face' may",
-                             source=str(path))
-        dtype = np.dtype([(p, "<" + _PLY_TYPES[kind]) for p, kind, _ in props])
-        _check_length(data, offset, dtype.itemsize * count, name, count, path)
-        block = np.frombuffer(data, dtype=dtype, count=count, offset=offset)
-        offset += dtype.itemsize * count
-        if name == "vertex":
-            if not {"x", "y", "z"} <= set(dtype.names):
-                raise InputError("vertex element lacks x, y, z", source=str(path))
-            vertices = np.column_stack([block[c].astype(np.float64) for c in "xyz"])
+    read = _ascii_elements if fmt == "format ascii 1.0" else _binary_elements
+    vertices, triangles = read(data, found.end(), elements, _PLY_FORMATS[fmt], path)
     if vertices is None or triangles is None:
         raise InputError("expected 'vertex' and 'face' elements", source=str(path))
     if not len(triangles):
@@ -130,11 +123,12 @@ def ply_single_precision(path) -> bool:
     path = Path(path)
     with path.open("rb") as file:
         head = file.read(HEADER_BYTES)
-    end = head.find(b"end_header\n")
+    end = head.find(b"end_header")
     lines = head[:end if end >= 0 else len(head)].decode("ascii", errors="replace").splitlines()
     for name, _, props in _ply_elements(lines, path):
         if name == "vertex":
-            return any(_PLY_TYPES[kind] == "f4" for prop, kind, _ in props if prop in "xyz")
+            return any(_PLY_TYPES[kind] == "f4"
+                       for prop, kind, _ in props if prop in ("x", "y", "z"))
     return False
 
 
@@ -163,19 +157,92 @@ def _ply_elements(header: list[str], path: Path):
     return elements
 
 
-def _ply_faces(data: bytes, offset: int, count: int, props, path: Path):
-    if len(props) != 1 or props[0][1] != "list":
-        raise InputError("expected faces with one list property (vertex_indices)",
+def _binary_elements(data: bytes, offset: int, elements, order: str, path: Path):
+    """The vertices and triangles of a binary PLY body from ``offset`` (byte ``order`` '<'
+    or '>'): each element a record array; a face's vertex list read as three indices after
+    checking every face has three (a face of another size would misplace those after it,
+    so the first such is where reading stops)."""
+    vertices = triangles = None
+    for name, count, props in elements:
+        lists = [p for p, kind, _ in props if kind == "list"]
+        if lists and (name != "face" or len(lists) != 1):
+            raise InputError(f"element {name!r} has list properties; only 'face' may, one "
+                             "(its vertex indices)", source=str(path))
+        fields = []
+        for prop, kind, types in props:
+            if kind == "list":
+                fields += [("#n", order + _PLY_TYPES[types[0]]),
+                           ("#i", order + _PLY_TYPES[types[1]], 3)]
+            else:
+                fields.append((prop, order + _PLY_TYPES[kind]))
+        dtype = np.dtype(fields)
+        _check_length(data, offset, dtype.itemsize * count, name, count, path)
+        block = np.frombuffer(data, dtype=dtype, count=count, offset=offset)
+        offset += dtype.itemsize * count
+        if name == "vertex":
+            vertices = _vertex_columns(block, path)
+        elif name == "face":
+            triangles = _face_indices(block["#n"] if lists else None,
+                                      block["#i"] if lists else None, path)
+    return vertices, triangles
+
+
+def _ascii_elements(data: bytes, offset: int, elements, order: str, path: Path):
+    """The vertices and triangles of an ASCII PLY body: whitespace-separated numbers, one
+    element record after another (a face's list: its size, then that many indices)."""
+    del order
+    words = data[offset:].split()
+    at = 0
+    vertices = triangles = None
+    for name, count, props in elements:
+        lists = [p for p, kind, _ in props if kind == "list"]
+        if lists and (name != "face" or len(lists) != 1):
+            raise InputError(f"element {name!r} has list properties; only 'face' may, one "
+                             "(its vertex indices)", source=str(path))
+        width = len(props) + (3 if lists else 0)  # a list: its size and three indices
+        if at + width * count > len(words):
+            raise InputError(f"the file ends after {len(words)} numbers, where its {count} "
+                             f"{name!r} elements need {width * count} from number {at}: "
+                             "truncated?", source=str(path))
+        try:
+            table = np.array(words[at:at + width * count], dtype=np.float64).reshape(count,
+                                                                                      width)
+        except ValueError:
+            raise InputError(f"the {name!r} elements hold a word that is not a number",
+                             source=str(path)) from None
+        at += width * count
+        columns, column = {}, 0
+        for prop, kind, _ in props:
+            if kind == "list":
+                columns["#n"], columns["#i"] = table[:, column], table[:, column + 1:column + 4]
+                column += 4
+            else:
+                columns[prop] = table[:, column]
+                column += 1
+        if name == "vertex":
+            vertices = _vertex_columns(columns, path)
+        elif name == "face":
+            triangles = _face_indices(columns.get("#n"), columns.get("#i"), path)
+    return vertices, triangles
+
+
+def _vertex_columns(block, path: Path) -> np.ndarray:
+    if not {"x", "y", "z"} <= set(block.dtype.names if hasattr(block, "dtype") else block):
+        raise InputError("vertex element lacks x, y, z", source=str(path))
+    return np.column_stack([np.asarray(block[c], dtype=np.float64) for c in "xyz"])
+
+
+def _face_indices(sizes, indices, path: Path) -> np.ndarray:
+    if sizes is None:
+        raise InputError("expected faces with a list property (vertex_indices)",
                          source=str(path))
-    count_type, index_type = props[0][2]
-    dtype = np.dtype([("n", "<" + _PLY_TYPES[count_type]),
-                      ("i", "<" + _PLY_TYPES[index_type], 3)])
-    _check_length(data, offset, dtype.itemsize * count, "face", count, path)
-    faces = np.frombuffer(data, dtype=dtype, count=count, offset=offset)
-    if np.any(faces["n"] != 3):
-        raise InputError("only triangle faces are supported (every face with 3 indices)",
-                         source=str(path))
-    return faces["i"].astype(np.int64), offset + dtype.itemsize * count
+    if np.any(sizes != 3):
+        first = int(np.flatnonzero(sizes != 3)[0])
+        raise InputError(f"face {first} has {sizes[first]:g} vertices: only triangle faces "
+                         "are supported (every face with 3 indices)", source=str(path))
+    if np.any(indices != np.round(indices)):
+        raise InputError("a face's vertex index is not a whole number", source=str(path))
+    return np.asarray(indices, dtype=np.int64).reshape(-1, 3)
 
 
 def _check_length(data: bytes, offset: int, size: int, name: str, count: int,
