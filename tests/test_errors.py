@@ -432,6 +432,15 @@ def test_unreadable_toml_gives_line_and_column(tmp_path):
     assert "not valid TOML" in str(info.value)
 
 
+def test_toml_left_open_at_its_end_gives_the_last_line(tmp_path):
+    # "not valid TOML: Unclosed array (at end of document)" named no line
+    path = tmp_path / "open.toml"
+    path.write_text("[tool]\noffset_um = [0.0,\n  0.0,\n  0.0\n")
+    with pytest.raises(ErrorModelError, match=re.escape(f"{path}, line 4, column 6")) as info:
+        ErrorModel.from_toml(path)
+    assert "Unclosed array (at end of document)" in str(info.value)
+
+
 def test_a_file_not_in_utf8_gives_the_line_and_column_of_the_byte(tmp_path):
     # a micro sign saved as Latin-1 (0xB5) in a comment: the message gave only "at byte 38"
     # and no expectation; the byte order mark, allowed, does not count in the column

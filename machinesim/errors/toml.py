@@ -94,8 +94,10 @@ def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[st
     not allow) is dropped, as most tools do: lines and columns count from after it.
     """
     source = str(path)
+    text = None
     try:
-        data = tomllib.loads(Path(path).read_bytes().decode("utf-8-sig"))
+        text = Path(path).read_bytes().decode("utf-8-sig")
+        data = tomllib.loads(text)
     except OSError as exc:
         raise error(f"cannot read the file: {exc.strerror or exc}", source=source) from None
     except UnicodeDecodeError as exc:  # the line and column of the byte, as an editor shows
@@ -111,6 +113,10 @@ def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[st
     except tomllib.TOMLDecodeError as exc:
         position = _TOML_POSITION_RE.search(str(exc))
         line, column = (int(position[1]), int(position[2])) if position else (None, None)
+        if position is None and "end of document" in str(exc):
+            # an array, table or string left open runs to the last line (where to look)
+            lines = text.splitlines() or [""]
+            line, column = len(lines), len(lines[-1]) + 1
         message = f"not valid TOML: {_TOML_POSITION_RE.sub('', str(exc))}"
         raise error(message, source=source, line=line, column=column) from None
     except RecursionError:  # tomllib recurses once per nesting level of arrays and tables
