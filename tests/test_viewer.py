@@ -131,6 +131,12 @@ def test_read_ply_reads_the_forms_other_tools_write(tmp_path):
     assert np.array_equal(triangles, expected_t)
     assert ply_single_precision(tmp_path / "trimesh.ply")
     assert not ply_single_precision(tmp_path / "big.ply")
+    # its text, not float32's 0.23 nm at 1.2 mm, is what rounded it (5 nm)
+    assert part_scene(tmp_path / "trimesh.ply", max_triangles=BUDGET).warnings == [
+        "the part (trimesh.ply) stores its vertices as text: each as precise as it was printed "
+        "(eight decimals of a metre round by up to 5 nm), so its heights are exact for the "
+        "mesh as printed only; machinesim cut --out part.ply writes float64"]
+    assert part_scene(tmp_path / "big.ply", max_triangles=BUDGET).warnings == []
 
 
 def test_read_ply_refuses_what_it_cannot_read(tmp_path):

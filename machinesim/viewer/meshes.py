@@ -120,16 +120,27 @@ def ply_single_precision(path) -> bool:
     coordinates in single precision, as trimesh and most mesh tools write PLY: rounded to
     float32 before machinesim reads them, so its heights are exact only for the rounded mesh.
     """
+    return any(_PLY_TYPES[kind] == "f4" for kind in _vertex_kinds(_ply_header(path), path))
+
+
+def ply_ascii(path) -> bool:
+    """Whether a PLY part stores its numbers as text (``format ascii 1.0``)."""
+    return any(line.strip() == "format ascii 1.0" for line in _ply_header(path))
+
+
+def _ply_header(path) -> list[str]:
     path = Path(path)
     with path.open("rb") as file:
         head = file.read(HEADER_BYTES)
     end = head.find(b"end_header")
-    lines = head[:end if end >= 0 else len(head)].decode("ascii", errors="replace").splitlines()
-    for name, _, props in _ply_elements(lines, path):
+    return head[:end if end >= 0 else len(head)].decode("ascii", errors="replace").splitlines()
+
+
+def _vertex_kinds(header: list[str], path) -> list[str]:
+    for name, _, props in _ply_elements(header, Path(path)):
         if name == "vertex":
-            return any(_PLY_TYPES[kind] == "f4"
-                       for prop, kind, _ in props if prop in ("x", "y", "z"))
-    return False
+            return [kind for prop, kind, _ in props if prop in ("x", "y", "z")]
+    return []
 
 
 def _ply_elements(header: list[str], path: Path):
@@ -347,5 +358,5 @@ def tool_mesh(tool) -> tuple[np.ndarray, np.ndarray]:
 
 
 __all__ = ["DISPLAY_TRIANGLES", "closed_and_oriented", "compact", "decimate", "display_buffers",
-           "ply_single_precision", "read_ply", "tool_mesh",
+           "ply_ascii", "ply_single_precision", "read_ply", "tool_mesh",
            "triangle_normals"]

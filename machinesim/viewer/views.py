@@ -25,6 +25,7 @@ from machinesim.viewer.maps import (
 from machinesim.viewer.meshes import (
     DISPLAY_TRIANGLES,
     decimate,
+    ply_ascii,
     ply_single_precision,
     read_ply,
     triangle_normals,
@@ -213,15 +214,23 @@ def file_warnings(parts: dict) -> list[str]:
 
 def precision_warnings(parts: dict) -> list[str]:
     """A line for each named part, ``name: (path, vertices (n, 3) m)`` (a path that is not a
-    str or Path skipped), whose PLY stores its vertices in single precision: rounded before
-    they were read, by up to half a float32 step at the largest coordinate, so the map's
-    heights are exact for the rounded mesh only."""
+    str or Path skipped), whose PLY rounded its vertices before they were read: stored in
+    single precision (by up to half a float32 step at the largest coordinate), or as text
+    (as precise as they were printed: a writer's eight decimals of a metre round by up to
+    5 nm), so the map's heights are exact for the rounded mesh only."""
     lines = []
     for name, (path, vertices) in parts.items():
-        if isinstance(path, str | Path) and ply_single_precision(path):
+        if not isinstance(path, str | Path):
+            continue
+        file = "" if name == Path(path).name else f" ({Path(path).name})"
+        if ply_ascii(path):
+            lines.append(f"{name}{file} stores its vertices as text: each as precise as it was "
+                         "printed (eight decimals of a metre round by up to 5 nm), so its "
+                         "heights are exact for the mesh as printed only; machinesim cut --out "
+                         "part.ply writes float64")
+        elif ply_single_precision(path):
             largest = float(np.abs(vertices).max())
             step = float(np.spacing(np.float32(largest))) / 2.0
-            file = "" if name == Path(path).name else f" ({Path(path).name})"
             lines.append(f"{name}{file} stores its vertices as float32: each "
                          f"rounded by up to {step * 1e9:.2g} nm (half a float32 step at "
                          f"{largest * 1e3:.4g} mm from the origin) before it was read, so its "
