@@ -435,6 +435,24 @@ def test_exported_html_is_self_contained_and_written_whole(tmp_path, monkeypatch
     assert [p.name for p in tmp_path.iterdir()] == ["part.html"]  # no temp file left
 
 
+def test_a_page_whose_script_a_browser_cannot_read_is_refused(tmp_path, monkeypatch):
+    # --max-triangles 20000000 wrote a 641 MB page whose scene script was longer than V8's
+    # longest string ((1 << 29) - 24 UTF-16 units): it opened blank, exit 0
+    import machinesim.viewer.scene as scene_module
+
+    assert scene_module.SCRIPT_CHARS_MOST == 536_870_888
+    scene = part_scene(tilted_block(1e-4), max_triangles=BUDGET)
+    text = scene.to_html()
+    script = text[text.rindex("<script>\n") + len("<script>\n"):text.rindex("</script>")]
+    monkeypatch.setattr(scene_module, "SCRIPT_CHARS_MOST", len(script))
+    assert scene.to_html() == text  # at the limit: written
+    monkeypatch.setattr(scene_module, "SCRIPT_CHARS_MOST", len(script) - 1)
+    with pytest.raises(InputError, match=f"a script of {len(script):,} characters, beyond the "
+                                         f"{len(script) - 1:,} a browser's JavaScript engine"):
+        write_html(scene, tmp_path / "part.html")
+    assert not (tmp_path / "part.html").exists()
+
+
 def test_a_part_file_in_millimetres_is_warned_about(tmp_path):
     # a 10 x 10 x 2 mm block written in mm reads as a 10 m block: it was shown so, its map's
     # P-V 1000 times too large, without a word

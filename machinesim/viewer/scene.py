@@ -20,11 +20,16 @@ import umsgpack
 from scipy.spatial.transform import Rotation
 
 from machinesim._io import write_atomic
+from machinesim.exceptions import InputError
 from machinesim.viewer.maps import Legend
 from machinesim.viewer.meshes import display_buffers
 
 #: meshcat's three.js viewer bundle, inlined into exported pages and served in live mode.
 VIEWER_JS = Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
+#: The longest string Chromium's JavaScript engine holds on a 64-bit machine (V8's
+#: ``String::kMaxLength``, v8.h: ``(1 << 29) - 24`` UTF-16 units): a script longer than this
+#: (a page's scene inlined as base64, about 30 characters a triangle) does not run.
+SCRIPT_CHARS_MOST = (1 << 29) - 24
 #: Background gradient (top, bottom), RGB in [0, 1]: dark and neutral, so that neither the
 #: machines' colours nor the colour maps' hues are lost against it.
 BACKGROUND = ((0.23, 0.25, 0.28), (0.07, 0.08, 0.09))
@@ -131,12 +136,17 @@ class Scene:
                        "options": {"play": True, "repetitions": 1_000_000 if loop else 1}})
 
     def to_html(self) -> str:
-        """The whole scene as one page: no server, no network (everything inlined)."""
+        """The whole scene as one page: no server, no network (everything inlined).
+
+        Raises
+        ------
+        InputError
+            When the scene's script would be longer than a browser's JavaScript engine
+            reads (`SCRIPT_CHARS_MOST`): the page would open blank.
+        """
         payload = ",\n".join(f'"{base64.b64encode(data).decode("ascii")}"'
                               for _, _, data in self._frames)
-        script = (
-            f"<script>{VIEWER_JS.read_text(encoding='utf-8')}</script>\n"
-            "<script>\n"
+        commands = (
             'var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));\n'
             f"var commands = [{payload}];\n"
             "for (const text of commands) {\n"
@@ -144,8 +154,15 @@ class Scene:
             "  const bytes = new Uint8Array(binary.length);\n"
             "  for (let i = 0; i < binary.length; i++) bytes[i] = binary.charCodeAt(i);\n"
             "  viewer.handle_command_bytearray(bytes);\n"
-            "}\n"
-            "</script>")
+            "}\n")
+        if len(commands) > SCRIPT_CHARS_MOST:
+            raise InputError(
+                f"the page's scene would be a script of {len(commands):,} characters, beyond "
+                f"the {SCRIPT_CHARS_MOST:,} a browser's JavaScript engine reads (V8's "
+                "String::kMaxLength): it would open blank; show fewer triangles (--max-"
+                f"triangles at least {len(commands) / SCRIPT_CHARS_MOST:.2g} times lower)")
+        script = (f"<script>{VIEWER_JS.read_text(encoding='utf-8')}</script>\n"
+                  f"<script>\n{commands}</script>")
         return page(self.title, overlay_html(self), script)
 
 
@@ -238,6 +255,6 @@ def write_html(scene: Scene, path) -> Path:
     return Path(path)
 
 
-__all__ = ["BACKGROUND", "OVERLAY_WIDTH_PX", "VIEWER_JS", "Scene", "css_colour",
-           "overlay_html", "page", "transform_tracks", "visibility_track",
+__all__ = ["BACKGROUND", "OVERLAY_WIDTH_PX", "SCRIPT_CHARS_MOST", "VIEWER_JS", "Scene",
+           "css_colour", "overlay_html", "page", "transform_tracks", "visibility_track",
            "write_html"]
