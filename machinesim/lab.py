@@ -341,8 +341,11 @@ class Lab:
         """A laser interferometer on the machine (`machinesim.metrology.LaserInterferometer`).
 
         With ``realism.registration`` its beam is misaligned by a drawn pair of angles
-        (`machinesim.realism.PROBE`), unless ``options`` give ``alignment``. The lab sets the
-        machine, its errors, ``noise`` and ``rng`` itself (InputError if ``options`` do).
+        (`machinesim.realism.PROBE`), unless ``options`` give ``alignment``; with
+        ``realism.air_refraction`` it reads on a scale off by a drawn ``scale`` (one per
+        instrument: a set-up, its air compensation's miss), unless ``options`` give it. The
+        lab sets the machine, its errors, ``noise`` and ``rng`` itself (InputError if
+        ``options`` do).
         """
         from machinesim.metrology import LaserInterferometer
 
@@ -353,6 +356,9 @@ class Lab:
         if self.realism.registration and "alignment" not in options:
             rng = self._imperfection(kind, label, "registration")
             drawn["alignment"] = _realism.PROBE.beam_alignment * rng.standard_normal(2)
+        if self.realism.air_refraction and "scale" not in options:
+            rng = self._imperfection(kind, label, "air_refraction")
+            drawn["scale"] = _realism.PROBE.air_scale * float(rng.standard_normal())
         self.__instruments[f"{kind}/{label}"] = drawn
         return LaserInterferometer(self.machine, self.__truth, noise=self.noise,
                                    rng=stream(self.seed, kind, label), **drawn, **options)
@@ -451,7 +457,8 @@ class Lab:
 
     def reveal_instruments(self) -> dict:
         """The imperfections drawn for each instrument handed out, by ``"kind/label"``: a dict
-        of what was drawn (``registration``, ``pretravel``, ``ball_form``, ``alignment``)."""
+        of what was drawn (``registration``, ``pretravel``, ``ball_form``, ``alignment``,
+        ``scale``)."""
         return {name: dict(drawn) for name, drawn in self.__instruments.items()}
 
     # ---------------------------------------------------------------------------- internals

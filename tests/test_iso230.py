@@ -140,6 +140,27 @@ def test_noise_gives_the_repeatability_of_its_sigma():
     assert ev.R >= max(ev.R_up, ev.R_down) > 0.0
 
 
+def test_an_air_compensation_miss_reads_every_travel_on_its_scale():
+    # (1 + s) times each displacement along the beam: s times the travel from the
+    # reference on a positioning test and along a diagonal, nothing across the beam
+    lab = machinesim.Lab("grooving_4axis", noise=False)
+    s = 0.7e-6
+    exact, off = (lab.laser_interferometer(resolution=0.0, scale=k, label=f"s{k}")
+                  for k in (0.0, s))
+    x = np.linspace(-0.2, 0.2, 5)
+    np.testing.assert_allclose(off.positioning("Y", x, reference=0.0).deviation,
+                               exact.positioning("Y", x, reference=0.0).deviation + s * x,
+                               rtol=0, atol=1e-16)
+    d = np.array([0.1, math.hypot(0.4, 0.4)])
+    np.testing.assert_allclose(off.diagonal(d, [-0.2, -0.2], [0.2, 0.2]).deviation,
+                               exact.diagonal(d, [-0.2, -0.2], [0.2, 0.2]).deviation + s * d,
+                               rtol=0, atol=1e-16)
+    np.testing.assert_array_equal(off.straightness("X", x, "Y").deviation,
+                                  exact.straightness("X", x, "Y").deviation)
+    with pytest.raises(InputError, match="scale error below 1e-3"):
+        lab.laser_interferometer(scale=0.01)
+
+
 def test_two_diagonals_give_the_squareness_free_of_scale_errors():
     errors = {"location": {"Y": {"EC0Y_urad": 20.0}},
               "component": {"X": {"position_mm": [-250.0, 250.0], "EXX_um": [-5.0, 5.0]},

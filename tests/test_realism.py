@@ -76,9 +76,9 @@ def cut_part():
 def test_presets_and_variants():
     assert Realism.ideal().on == () and Realism() == Realism.ideal()
     assert Realism.noise_only().on == ("instrument_noise",)
-    assert Realism.lab().on == Realism.names() and len(Realism.names()) == 9
+    assert Realism.lab().on == Realism.names() and len(Realism.names()) == 10
     budget = [Realism.lab().without(name) for name in Realism.names()]
-    assert all(len(r.on) == 8 for r in budget)
+    assert all(len(r.on) == 9 for r in budget)
     assert Realism.with_only("registration", "lateral_noise").on == ("lateral_noise",
                                                                       "registration")
     assert str(Realism.lab()) == "lab" and str(Realism.noise_only()) == "noise_only"
@@ -94,7 +94,7 @@ def test_lab_arguments():
     assert repr(Lab("robonano_a0ib", seed=2, realism=Realism.lab().without("registration"))
                 ).endswith("realism=instrument_noise+lateral_resolution+lateral_noise+"
                            "probe_pretravel+probe_ball_form+artefact_errors+background_errors+"
-                           "stage_positioning)")
+                           "stage_positioning+air_refraction)")
     assert Lab("robonano_a0ib", noise=False).realism == Realism.ideal()
     assert Lab("robonano_a0ib", realism=Realism.ideal()).noise is False
     with pytest.raises(InputError, match="not both"):

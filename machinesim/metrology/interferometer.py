@@ -94,17 +94,26 @@ class LaserInterferometer:
     alignment : array-like, shape (2,), optional
         The beam's misalignment angles (a, b), rad (module docstring); default none. The
         lab's: 0.1 mrad scatter per angle (`machinesim.realism.PROBE`, assumed).
+    scale : float
+        Relative error of the scale displacements along the beam are read on (positioning
+        and diagonal tests): the part of the air's refractive index the instrument's air
+        compensation misses, ``(1 + scale)`` times the displacement; default 0. The lab's:
+        0.5 ppm scatter per set-up (`machinesim.realism.PROBE`, its sources there).
     """
 
     def __init__(self, machine, errors=None, sigma: float = 2e-9, resolution: float = 1e-9,
                  *, noise: bool = True, rng=None, frame: str = "tool_tip",
-                 alignment=None) -> None:
+                 alignment=None, scale: float = 0.0) -> None:
         self.machine = machine = as_machine(machine)
         self._pose = motion_of(machine, errors, frame)
         self.frame = frame
         self.readout = Readout.of(sigma, resolution, noise)
         self._rng = as_generator(rng)
         self._alignment = None if alignment is None else _vector(alignment, 2, "alignment")
+        self._scale = as_number(scale, "scale", unit="relative")
+        if not abs(self._scale) < 1e-3:
+            raise InputError(f"Expected a scale error below 1e-3 (1000 ppm) in size, got "
+                             f"{scale!r}", key="scale")
 
     def __repr__(self) -> str:
         return (f"LaserInterferometer({self.machine.name}, frame={self.frame!r}, "
@@ -135,7 +144,7 @@ class LaserInterferometer:
         x = _positions(positions)
         x_ref = x[0] if reference is None else as_number(reference, "reference")
         q = self._commands(self._base(base), {axis: np.append(x, x_ref)})
-        displacement = self._displacement(q, _unit(k))
+        displacement = self._displacement(q, _unit(k)) * (1.0 + self._scale)
         return _reading(x, self.readout.read(displacement, self._rng) - (x - x_ref))
 
     def straightness(self, axis: str, positions, direction: str, base=None,
@@ -221,7 +230,8 @@ class LaserInterferometer:
         along = np.append(s, 0.0)[:, None] * (span / length) + start
         q = self._commands(self._base(base), {a: along[:, i] for i, a in enumerate(axes)})
         u = sum(span[i] * _unit(d) for i, d in enumerate(dirs)) / length
-        return _reading(s, self.readout.read(self._displacement(q, u), self._rng) - s)
+        displacement = self._displacement(q, u) * (1.0 + self._scale)
+        return _reading(s, self.readout.read(displacement, self._rng) - s)
 
     # ---------------------------------------------------------------------------- internals
 
