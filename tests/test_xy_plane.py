@@ -11,7 +11,7 @@ from machinesim.exceptions import MachineSimError
 from machinesim.experiment import run
 from machinesim.identification.xy_plane import Curve, XYPlaneMap, fit_xy_plane
 from machinesim.nc import ProgramBuilder
-from machinesim.procedures.xy_plane_errors import XYPlaneErrors
+from machinesim.procedures.xy_plane_errors import XYPlaneErrors, compensations
 from machinesim.procedures.xy_plane_measurements import (
     BEAM_FRAME,
     DIAGONALS,
@@ -207,6 +207,31 @@ def test_the_experiment_gives_the_paper_magnitudes_before_and_after():
     truth = lab.reveal().parameters()
     for name, (value, std) in result.identified.items():
         assert abs(value - truth[name]) < 5 * std + 1e-9, name
+
+
+def test_each_session_reads_on_its_own_air_scale():
+    # A perfect machine, read exactly but for the laser's air compensation: each set-up
+    # reads displacements on a scale off by its drawn s, so the map before is s_before x the
+    # 0.4 m plate, the table compensates that, and the tests after, set up again, read
+    # (s_after - s_before) x 0.4 m in both rows (the diagonals' own scale cancels in the
+    # two-diagonal squareness). Before the after tests were set up again they reused the
+    # before's instruments, whose noise and scale they repeated.
+    from machinesim.realism import Realism
+
+    lab = machinesim.Lab("grooving_4axis", seed=5, realism=Realism.with_only("air_refraction"))
+    result = run(XYPlaneErrors(interferometer_resolution=0.0), lab)
+    drawn = lab.reveal_instruments()
+    before, after = (drawn[f"laser_interferometer/centre_lines{s}"]["scale"] for s in
+                     ("", "_after"))
+    assert 0.1e-6 < abs(after - before) < 3e-6  # drawn: 0.5 ppm each
+    for name in ("xy_error_x", "xy_error_y"):
+        figure = result.figure(name)
+        assert figure.before == pytest.approx(0.4 * abs(before) / UM, abs=1e-6), name
+        assert figure.after == pytest.approx(0.4 * abs(after - before) / UM, abs=1e-6), name
+    # the report's map after is the same session's readings, read again
+    again = XYPlaneErrors(interferometer_resolution=0.0).plane_tests(
+        lab, "_after", compensations(result.identification)[0])
+    assert again.map.ranges(PLATE, PLATE)[0] / UM == result.figure("xy_error_x").after
 
 
 def test_compensation_table_rewrites_a_program_so_the_tool_lands():
