@@ -154,6 +154,10 @@ def test_read_ply_refuses_what_it_cannot_read(tmp_path):
     ascii_ply.write_text(ascii_ply.read_text().replace("0 1 0\n", "0 one 0\n"))
     with pytest.raises(InputError, match="'vertex' elements hold a word that is not a number"):
         read_ply(ascii_ply)
+    ascii_ply.write_text("ply\nformat ascii 1.0\nelement vertex 1\n"
+                         "property list uchar double xyz\nend_header\n3 0 0 0\n")
+    with pytest.raises(InputError, match="element 'vertex' has list properties; only 'face'"):
+        read_ply(ascii_ply)
     other = tmp_path / "other.ply"
     other.write_text("ply\nformat binary_middle_endian 1.0\nend_header\n")
     with pytest.raises(InputError, match="'format binary_middle_endian 1.0': expected"):

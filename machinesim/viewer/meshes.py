@@ -165,6 +165,11 @@ def _ply_elements(header: list[str], path: Path):
                 elements[-1][2].append((words[2], words[1], None))
             else:
                 raise InputError(f"unknown property {line!r}", source=str(path))
+    for name, _, props in elements:
+        lists = sum(kind == "list" for _, kind, _ in props)
+        if lists and (name != "face" or lists != 1):
+            raise InputError(f"element {name!r} has list properties; only 'face' may, one "
+                             "(its vertex indices)", source=str(path))
     return elements
 
 
@@ -175,10 +180,7 @@ def _binary_elements(data: bytes, offset: int, elements, order: str, path: Path)
     so the first such is where reading stops)."""
     vertices = triangles = None
     for name, count, props in elements:
-        lists = [p for p, kind, _ in props if kind == "list"]
-        if lists and (name != "face" or len(lists) != 1):
-            raise InputError(f"element {name!r} has list properties; only 'face' may, one "
-                             "(its vertex indices)", source=str(path))
+        lists = any(kind == "list" for _, kind, _ in props)  # a face's (`_ply_elements`)
         fields = []
         for prop, kind, types in props:
             if kind == "list":
@@ -206,10 +208,7 @@ def _ascii_elements(data: bytes, offset: int, elements, order: str, path: Path):
     at = 0
     vertices = triangles = None
     for name, count, props in elements:
-        lists = [p for p, kind, _ in props if kind == "list"]
-        if lists and (name != "face" or len(lists) != 1):
-            raise InputError(f"element {name!r} has list properties; only 'face' may, one "
-                             "(its vertex indices)", source=str(path))
+        lists = any(kind == "list" for _, kind, _ in props)  # a face's (`_ply_elements`)
         width = len(props) + (3 if lists else 0)  # a list: its size and three indices
         if at + width * count > len(words):
             raise InputError(f"the file ends after {len(words)} numbers, where its {count} "
