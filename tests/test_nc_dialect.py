@@ -243,6 +243,31 @@ def test_tool_length_offsets_z_words(tools, tmp_path):
     assert z.tolist() == pytest.approx([100, 12.5, 7.5, 6.5, -40, 10, 10, 60], abs=1e-12)
 
 
+def test_an_incremental_z_after_a_tool_length_change_is_refused():
+    """FANUC (TOS = 0) moves Z by a G43/G44/G49 change in its own block; LinuxCNC carries it
+    with the next absolute Z. After G43 H2 (2.5 mm) from Z10, G91 Z-12 ends at machine
+    Z 0.5 mm on the first and -2 mm on the second: refused, not read as either. An absolute
+    Z, a G28 Z or a G53 Z carries the change, and the incremental moves after it agree."""
+    for text, line, key in [
+        ("G90 G00 X0 Z10.\nG91 G43 H2 Z0\n", 2, "Z0"),
+        ("G90 G00 X0 Z10.\nG43 H2\nG91 G01 Z-12. F100.\n", 3, "Z-12."),
+        ("G90 G00 X0 Y0 Z10.\nG43 H2\nG91 G02 X10. Z-1. I5. F100.\n", 3, "Z-1."),
+        ("G90 G00 X0 Y0 Z10.\nG43 H2\nG91 G81 X1. R-5. Z-2. F100.\n", 3, "R-5."),
+        ("G90 G00 X0 Z10.\nG43 H2 Z10.\nG49\nG91 Z-1.\n", 4, "Z-1."),
+    ]:
+        with pytest.raises(NCProgramError, match="tool length offset by [+-]2.5 mm, before "
+                           "any absolute Z: controls differ") as info:
+            parse_program(text, "tlo.nc", tools=TOOLS)
+        assert (info.value.line, info.value.key) == (line, key)
+    z = [parse_program(text, tools=TOOLS).targets[-1, 2] / MM for text in [
+        "G90 G00 X0 Z10.\nG43 H2\nG01 Z10. F100.\nG91 Z-12.\n",  # absolute Z carries it
+        "G90 G00 X0 Z10.\nG43 H2\nG91 G28 Z0\nZ-12.\n",  # at the reference (0)
+        "G90 G00 X0 Z10.\nG43 H2\nG53 Z20.\nG91 Z-12.\n",  # a machine position
+        "G90 G00 X0 Z10.\nG43 H2\nG49 X1.\nG91 Z-1.\n",  # changed back: nothing waits
+    ]]
+    assert z == pytest.approx([0.5, -12.0, 8.0, 9.0], abs=1e-12)
+
+
 def test_tool_words_are_checked_against_the_table():
     with pytest.raises(NCProgramError, match="H7: tool 7|no length for tool 7") as info:
         parse_program("G00 Z0\nG43 H7 Z1.", tools=TOOLS)

@@ -39,8 +39,9 @@ G codes
     reference position: no work offset, no tool length; absolute only). G43/G44 H (tool
     length from the tool table added to / taken from absolute Z words; a bare G43 takes the
     last H, refused before any; G49 cancels; like a work offset change it moves nothing by
-    itself). G81/G82/G83 canned cycles along Z in G17 with R, Z, Q, P, K and G98/G99,
-    expanded into moves; G80 or a motion code cancels. G09 (this block) and G61 (every
+    itself; an incremental Z before an absolute Z has carried a change is refused, since
+    controls differ there). G81/G82/G83 canned cycles along Z in G17 with R, Z, Q, P, K and
+    G98/G99, expanded into moves; G80 or a motion code cancels. G09 (this block) and G61 (every
     block until G64) end a block in an exact stop: `Program.exact_stops`, where the servo
     loops' lag does not carry into the next block; listed as states too. Accepted as
     states, no geometric effect, listed in `Program.states` with their first line: G40,

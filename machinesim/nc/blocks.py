@@ -87,10 +87,18 @@ class Block:
         if "O" in single:
             raise self.fail("the O number must stand alone in the first block of the program "
                             "or of a subprogram", single["O"])
+        length_before = self.reader.tool_length()
         self.apply_modal()
         block_number = self.integer(single["N"], "block number") if "N" in single else None
         self.feed_and_spindle()
         self.tool_words()
+        length_after = self.reader.tool_length()
+        if length_after != length_before:
+            words = ("G49" if state.length_mode == "G49"
+                     else f"{state.length_mode} H{state.h}")
+            carried = length_before if state.length_change is None else state.length_change[2]
+            state.length_change = (None if length_after == carried
+                                   else (self.line, words, carried))
         if "T" in single:
             self.reader.tool_events.append(
                 (self.reader.out.count, self.integer(single["T"], "tool number"), self.line))
@@ -348,13 +356,35 @@ class Block:
             value += self.offsets.get(state.work_offset, {}).get(letter, 0.0)
             if letter == "Z":
                 value += self.reader.tool_length()
+                state.length_change = None  # carried by this Z
         return self.finite(value, word)
+
+    def check_length_carried(self, word: Word | None) -> None:
+        """Refuse an incremental Z (or a G91 cycle's R: ``word``) while a tool length
+        change waits for an absolute Z: FANUC by default (parameter 5006#6 TOS = 0) moves Z
+        by the change in the G43/G44/G49 block itself, LinuxCNC and a control that shifts
+        coordinates carry it with the next absolute Z only, so the incremental moves after
+        it end the change apart; here they would silently take the second reading."""
+        change = self.state.length_change
+        if word is None or change is None or not self.state.incremental:
+            return
+        line, words, carried = change
+        delta = self.reader.tool_length() - carried
+        raise self.fail(
+            f"incremental {word.key} after {words} at line {line}, which changed the tool "
+            f"length offset by {delta * 1e3:+.6g} mm, before any absolute Z: controls differ "
+            f"on where it ends, {abs(delta) * 1e3:.6g} mm apart (FANUC by default, parameter "
+            "5006#6 TOS = 0, moves Z by the change in that block; LinuxCNC, or a control that "
+            "shifts coordinates, carries it with the next absolute Z); give an absolute Z "
+            "with or after the change (G90 G43 Z.. H..) before incremental moves along Z",
+            word)
 
     def straight(self, axes: list[Word], block_number: int | None) -> None:
         state = self.state
         if state.motion is None:
             raise self.fail(f"axis word {axes[0].letter} without a motion mode; give G00 or "
                             "G01 first", axes[0])
+        self.check_length_carried(self.single.get("Z"))
         values = {word.letter: self.machine(word) for word in axes}
         state.target.update(values)
         self.add(MOTION[state.motion], 0.0, block_number)
@@ -411,6 +441,8 @@ class Block:
                                 "under G91", word)
             for axis in axes:
                 state.target[axis.letter] = self.machine(axis, machine_coordinates=True)
+            if "Z" in single:  # a machine position: every control's Z is the same again
+                state.length_change = None
             self.add("rapid", 0.0, block_number)
             return
         # G28: through the intermediate point to the reference position of these axes (the
@@ -424,6 +456,8 @@ class Block:
             self.add("rapid", 0.0, block_number)
         for axis in axes:
             state.target[axis.letter] = self.reader.reference.get(axis.letter, 0.0)
+        if "Z" in single:  # at the reference, every control's Z is the same again
+            state.length_change = None
         self.add("rapid", 0.0, block_number)
 
     def arc(self, axes: list[Word], block_number: int | None) -> None:
@@ -440,6 +474,7 @@ class Block:
                                 f"{u} and {v} before {state.motion}{plane}", word)
         start = dict(state.target)
         end = dict(start)
+        self.check_length_carried(single.get("Z"))
         end.update({axis.letter: self.machine(axis) for axis in axes})
         given = [single[k] for k in centre_letters if k in single]
         if "R" in single and given:
@@ -495,6 +530,7 @@ class Block:
             if word.letter not in "XYZ":
                 raise self.fail(f"axis word {word.letter} in a canned cycle block; a drilling "
                                 "cycle takes X Y Z R Q P K F", word)
+        self.check_length_carried(single.get("R") or single.get("Z"))
         if "R" in single:
             r = self.real(single["R"]) * self.length_of(single["R"])
             if state.incremental:
@@ -513,6 +549,7 @@ class Block:
             else:
                 z += self.offsets.get(state.work_offset, {}).get("Z", 0.0)
                 z += self.reader.tool_length()
+                state.length_change = None  # the hole's R and Z carry it
             state.cycle_z = self.finite(z, single["Z"])
         if "Q" in single:
             state.cycle_q = abs(self.real(single["Q"]) * self.length_of(single["Q"]))

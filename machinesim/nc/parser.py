@@ -80,6 +80,9 @@ class _State:
     length_mode: str = "G49"
     h: int = 0
     h_given: bool = False  # an H word has been read: a bare G43/G44 then takes it
+    #: (line, words, the length the last absolute Z carried, m) of a tool length change that
+    #: no absolute Z has carried yet: an incremental Z then ends apart on different controls
+    length_change: tuple[int, str, float] | None = None
     cycle: str | None = None
     cycle_z: float | None = None  # machine Z of the hole bottom
     cycle_r: float | None = None  # machine Z of the R plane
@@ -545,6 +548,8 @@ class Reader:
         if n:
             state.target = {a: float(v) for a, v in zip(AXES, targets[-1].tolist(), strict=True)
                             if v == v}
+        if present[AXES.index("Z")].any():  # an absolute Z carries a tool length change
+            state.length_change = None
         if not np.isnan(motion[-1]):
             state.motion = ("G00", "G01")[int(motion[-1])]
         if not np.isnan(feed[-1]):
