@@ -43,7 +43,12 @@ from machinesim._program_options import (
     read_for_machine,
     unit_note,
 )
-from machinesim.exceptions import InputError, MachineSimError
+from machinesim.exceptions import (
+    AxisLimitError,
+    HolderContactError,
+    InputError,
+    MachineSimError,
+)
 from machinesim.report import check_units
 from machinesim.tolerances import CHORD_TOLERANCE_M
 
@@ -359,9 +364,17 @@ def _cut(args) -> int:
     # a flag passed only when given, so that without it the cutter's default (refuse) holds
     options = {name: True for name in ("allow_overtravel", "allow_holder_contact")
                if getattr(args, name)}
-    part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
-                       start=machine.home, chord_tolerance=chord, servo=servo,
-                       progress=_progress_bar(args.quiet), **options)
+    try:
+        part, report = cut(program, machine, tool=tool, stock=stock, errors=errors, roi=roi,
+                           start=machine.home, chord_tolerance=chord, servo=servo,
+                           progress=_progress_bar(args.quiet), **options)
+    except (AxisLimitError, HolderContactError) as error:
+        # a program posted for IS-B read in mm leaves the travel, or goes 1000 times too deep:
+        # the refusal then says how its numbers were read, as a cut's notes would
+        hint = integer_note(program)
+        if hint is None:
+            raise
+        raise type(error)(f"{error}; {hint}") from None
     summary = report.to_dict()
     summary["path_chord_tolerance_nm"] = chord * 1e9
     summary["notes"] = [*summary["notes"], *_reading_notes(args, program, chord)]

@@ -113,6 +113,28 @@ def test_integer_input_increment_reads_axis_words_in_nanometres(tmp_path, capsys
             in err)
 
 
+def test_an_overtravel_refusal_says_how_numbers_without_a_point_were_read(tmp_path, capsys):
+    """A program posted for FANUC IS-B (X11000 is 11 mm) read in mm leaves the travel: the
+    refusal names the words read without a point and the rule to give, since the notes of a
+    cut that is refused are never printed. Read as IS-B it cuts the slot: 2 mm wide (flat
+    1 mm radius), 0.1 mm deep, across the 10 mm block, 2 mm^3."""
+    program = tmp_path / "isb.nc"
+    program.write_text("%\nO0002\nG90 G21 G17\nG00 X-1000 Y5000 Z1000\nG01 Z-100 F100\n"
+                       "X11000\nG00 Z1000\nM30\n%\n")
+    mill = ["--machine", ROOT / "models" / "examples" / "mill3.urdf", "--tool", "flat:1.0",
+            "--stock", "block:10x10x2", "--quiet"]
+    code, _, err = run(["cut", program, *mill, "--out", tmp_path / "p.ply"], capsys)
+    assert_clean_failure(code, err, "axis X = 11000.000000 mm at line 6 outside its travel",
+                         "numbers without a decimal point (X at line 4, Y at line 4, Z at "
+                         "line 4) were read in mm", "--integer-input is-b")
+    report = tmp_path / "r.json"
+    code, _, err = run(["cut", program, *mill, "--integer-input", "is-b", "--out",
+                        tmp_path / "p.ply", "--report", report], capsys)
+    assert code == 0, err
+    # the flat's polygon lies within 1 um inside its circle: the slot at most 1e-3 narrower
+    assert json.loads(report.read_text())["removed_volume_mm3"] == pytest.approx(2.0, rel=1e-3)
+
+
 # ------------------------------------------------------------ refusals: one line, no files
 
 
