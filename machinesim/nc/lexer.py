@@ -135,6 +135,13 @@ def tokenize(raw: str, source: str, line: int, *,
             fail(f"number {brief(raw[i:stop])!r} without an address letter", i + 1,
                  raw[i:stop])
             i = stop
+        elif c == "/":  # block delete (optional block skip), '/' or '/1'..'/9'
+            stop = max(_end_of_garbage(raw, i + 1), i + 1)
+            fail(f"block delete {raw[i:stop]!r} is not read: a FANUC control skips the block "
+                 "from it on when its block-delete switch is on and runs it when off, and "
+                 "the switch is not simulated; remove the '/' to run the block, or the block "
+                 "to skip it", i + 1, raw[i:stop])
+            i = stop
         elif c == "\ufffd":  # what the reader decodes a byte that is not UTF-8 to
             fail("a byte that is not UTF-8 (a Latin-1 or Windows-1252 character, such as a "
                  "no-break space, saved by an editor in that encoding); expected ASCII "
