@@ -65,10 +65,22 @@ CUTTER_COMPENSATION = (
     "simulation would have to guess; post the tool-centre path (compensation 'in computer' "
     "in the CAM) and cancel with G40"
 )
+#: FANUC's canned cycles other than the drilling ones read here, as posts write them for
+#: chip breaking, tapping and boring.
+OTHER_CYCLES = {
+    "G73": "high-speed peck drilling", "G74": "left-hand tapping", "G76": "fine boring",
+    "G84": "tapping", "G85": "boring", "G86": "boring", "G87": "back boring",
+    "G88": "boring", "G89": "boring",
+}
 G_REFUSED = {
     "G41": CUTTER_COMPENSATION.format("G41"),
     "G42": CUTTER_COMPENSATION.format("G42"),
+    "G93": "inverse time feed (G93, F = 1/min per block, as multi-axis posts write it) is "
+           "not supported; post G94 with F in mm/min",
     "G95": "feed per revolution (G95) is not supported; use G94 with F in mm/min",
+    **{code: f"canned cycle {code} ({what}) is not supported: machinesim expands G81, G82 "
+             "and G83 only; post the holes as G81/G82/G83 or as G00/G01 moves"
+       for code, what in OTHER_CYCLES.items()},
     "G90.1": "absolute arc centres (G90.1) are not read: I J K are read as the centre's "
              "offset from the arc's start (G91.1, FANUC's only form); post incremental "
              "arc centres",
