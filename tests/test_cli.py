@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+import machinesim
 import machinesim.cutting
 import machinesim.nc
 from machinesim.cli import main
@@ -451,6 +452,16 @@ def test_the_installed_command_reports_file_errors_in_one_line(tmp_path):
                            "--report", tmp_path / "nowhere" / "r.json"])
     assert_clean_failure(result.returncode, result.stderr, "r.json: cannot write the report")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_python_dash_m_machinesim_is_the_command_line():
+    """``python -m machinesim`` runs the command, as a user without the script on PATH
+    types it (it had said "No module named machinesim.__main__")."""
+    result = subprocess.run([sys.executable, "-m", "machinesim", "machines"], cwd=ROOT,
+                            capture_output=True, text=True, timeout=120, check=False)
+    assert result.returncode == 0, result.stderr
+    assert tuple(line.split()[0] for line in result.stdout.splitlines()) == \
+        machinesim.list_machines()
 
 
 def test_a_huge_tool_is_refused_cleanly(tmp_path):
