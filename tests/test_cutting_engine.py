@@ -272,6 +272,22 @@ def test_progress_reaches_its_total(method, used):
     assert all(a[0] <= b[0] for a, b in zip(calls, calls[1:], strict=False))
 
 
+def test_progress_counts_each_sweep_once_across_tiles():
+    """Crossing grooves in tiles of 8 sweeps: each groove reaches several tiles, and the
+    progress counts it once, so its total is the report's sweeps (it had counted one per
+    tile a sweep reached, more "sweeps" than the cut had)."""
+    calls = []
+    stock = block(1e-3, 1e-3, 0.2e-3)
+    ys = np.linspace(0.05e-3, 0.95e-3, 12)
+    paths = [groove_x(y, 10e-6, x0=-0.1e-3, x1=1.1e-3) for y in ys]
+    paths += [groove_y(x, 10e-6, y0=-0.1e-3, y1=1.1e-3) for x in ys + 0.01e-3]
+    _, report = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=8, method="boolean",
+                       progress=lambda done, total: calls.append((done, total)))
+    assert report.n_sweeps_cut == 24 and report.n_cells == 16  # tiles
+    assert calls[0] == (0, 24) and calls[-1] == (24, 24)
+    assert all(a[0] <= b[0] and a[1] == b[1] for a, b in zip(calls, calls[1:], strict=False))
+
+
 @pytest.mark.parametrize(
     ("paths", "roi", "message"),
     [

@@ -314,7 +314,8 @@ def remove(
         Windows (xmin, xmax, ymin, ymax), m. Only sweeps touching a window are cut and the
         result is the stock clipped to the windows.
     progress : callable(done, total), optional
-        Called as cells are cut, in units of sweep-cell pairs.
+        Called as tiles are cut, in sweeps (`EngineReport.n_sweeps_cut` in all), each
+        counted once, when the first tile it reaches is cut.
     sweeps_per_tile : int
         Cells are split into a grid of tiles until each has at most this many sweeps (or
         splitting stops paying, see `SPLIT_GAIN`); a huge value disables tiling.
@@ -441,8 +442,12 @@ def remove(
                               CONTAINED_REL * scale)
     if inside.any():
         plan = planned(~inside)
-    total = int(sum(len(members) for _, tiles in plan for _, members in tiles))
-    done = 0
+    # progress in sweeps, each counted once (at its first tile), as the report counts them: a
+    # sweep across ten tiles had counted ten times, 96,376 "sweeps" of a cut of 36,902;
+    # those inside another are done from the start
+    counted = inside.copy()
+    total = len(hulls)
+    done = int(np.count_nonzero(counted))
     if progress is not None:
         progress(done, total)
 
@@ -474,7 +479,9 @@ def remove(
             if len(members):
                 removed += removed_volume(uncut, piece, sweeps.run_id, top)
             pieces.append(piece)
-            done += len(members)
+            new = members[~counted[members]]
+            counted[new] = True
+            done += len(new)
             if progress is not None:
                 progress(done, total)
         if len(pieces) > 1:
