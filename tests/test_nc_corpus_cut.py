@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from machinesim.cutting import cut
-from machinesim.nc import AXES, KIND_LINEAR, read_program
+from machinesim.nc import AXES, KIND_LINEAR, parse_program, read_program
 from machinesim.tools import BallEndMill, VTool
 from machinesim.workpiece import Part, cylinder
 
@@ -126,6 +126,25 @@ def test_cam_program_cuts_with_the_tools_it_changes_to(tmp_path):
     assert report.rapids_that_cut == () and report.holder_contact == ()
     same = _cam_cut(tmp_path, 0.0)
     assert same.removed_volume_m3 == pytest.approx(t2, rel=VOLUME_REL)
+
+
+def test_tool_changes_read_without_a_table_are_noted():
+    """T1 M06 and T2 M06 without a tool table: both slots are cut by the cut's own flat end
+    mill, 2 mm wide and 0.1 mm deep across the 10 mm block (2 mm^3 each, the 1 um polygon
+    at most 1e-3 narrower), and the report says so; one T is the cut's own tool, no note."""
+    text = ("G90 G21 G17\nT1 M06\nG00 X-1. Y3. Z1.\nG01 Z-0.1 F100.\nX11.\nG00 Z5.\n"
+            "T2 M06\nG00 X-1. Y7. Z1.\nG01 Z-0.1 F100.\nX11.\nG00 Z5.\nM30\n")
+    _, report = cut(parse_program(text, "two.nc"), "grooving_4axis", tool="flat:1.0",
+                    stock="block:10x10x2")
+    assert report.removed_volume_m3 == pytest.approx(4 * MM**3, rel=1e-3)
+    assert [n for n in report.notes if "read without a tool table" in n] == [
+        "the program selects 2 tools (T1 at line 2, T2 at line 7) but was read without a "
+        "tool table, so the cut's own tool (FlatEndMill) cut every move; give a tool table "
+        "with each tool's shape and length (--tools; read_program(..., tools=...); "
+        "docs/nc.md)"]
+    _, one = cut(parse_program(text.replace("T2 M06", "T1 M06"), "one.nc"), "grooving_4axis",
+                 tool="flat:1.0", stock="block:10x10x2")
+    assert not [n for n in one.notes if "tool table" in n]
 
 
 def test_a_wrong_length_offset_crashes_the_tool_into_the_part(tmp_path):

@@ -276,7 +276,8 @@ class _ToolSections:
         self.names = [(None, None)]  # (tool number, line of the change)
         #: what a reader of the part should know about the tools it was cut with
         notes = (_radius_note(change, tool) for change in getattr(program, "tool_changes", ()))
-        self.notes = tuple(dict.fromkeys(note for note in notes if note))
+        self.notes = tuple(dict.fromkeys(note for note in (*notes, _untabled_note(program, tool))
+                                         if note))
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
                 built[change.shape] = with_nose_radius_error(tool_from_spec(change.shape),
@@ -330,6 +331,23 @@ def _radius_note(change, tool) -> str:
             f"{change.radius_m * 1e3:g} mm and no shape, so the cut's own tool ({own}, "
             f"{type(tool).__name__}) cut for it; give its shape in the table "
             "(shape = \"flat:R\", \"ball:R\", \"nose:R:ANGLE\" or \"v:ANGLE\")")
+
+
+def _untabled_note(program, tool) -> str:
+    """A note when a program read without a tool table selects several tools (T words):
+    its T words are then only listed as states, and the cut's own tool cut every move (a
+    ball finish after a flat roughing, cut as the flat), else ''."""
+    if getattr(program, "tool_table", None) is not None or getattr(program, "tool_changes", ()):
+        return ""
+    selected = [(word, line) for word, line in getattr(program, "states", {}).items()
+                if word[:1] == "T" and word[1:].isdigit() and int(word[1:]) != 0]
+    if len(selected) < 2:
+        return ""
+    shown = ", ".join(f"{word} at line {line}" for word, line in selected)
+    return (f"the program selects {len(selected)} tools ({shown}) but was read without a "
+            f"tool table, so the cut's own tool ({type(tool).__name__}) cut every move; give "
+            "a tool table with each tool's shape and length (--tools; read_program(..., "
+            "tools=...); docs/nc.md)")
 
 
 def _beyond_tip(length: float) -> np.ndarray:
