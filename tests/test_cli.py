@@ -539,6 +539,21 @@ def test_each_feed_that_drags_a_v_tool_sideways_is_one_warning_line(tmp_path, ca
     assert data["sideways_lines"] == [5, 6]
 
 
+def test_many_sideways_feeds_print_twenty_warning_lines_and_a_count(tmp_path, capsys):
+    """A V tool engraving a 45-deg zigzag of 30 feeds, each dragging its edge sideways: 20
+    warning lines, then one that counts the other 10 and names the report's key, which
+    lists all 30 (one line each had flooded stderr with 9,873 lines on a spiral)."""
+    feeds = "".join(f"X{1 + 0.1 * k:.1f} Y{1.5 + 0.1 * (k % 2):.1f}\n" for k in range(1, 31))
+    text = f"G90 G21\nG0 X1. Y1.5 Z0.1\nG1 Z-0.01 F100.\n{feeds}G0 Z0.1\nM30\n"
+    err, data = cut_with_report(tmp_path, capsys, text, "v:90", "block:5x3x1")
+    assert data["sideways_lines"] == list(range(4, 34))
+    warnings = [line for line in err.splitlines() if line.startswith("warning:")]
+    assert [w.split(" (")[0] for w in warnings[:20]] == [
+        f"warning: tool dragged sideways at line {n}" for n in range(4, 24)]
+    assert warnings[20:] == ["warning: ... and 10 more lines as these (lines 24 to 33; the "
+                             "report, --report, lists every one as sideways_lines)"]
+
+
 def test_a_table_tool_with_a_radius_and_no_shape_is_noted_when_the_cut_tool_differs(
         tmp_path, capsys):
     # T1 is a 2 mm end mill by its radius (1 mm) but the table gives no shape: cut with
