@@ -88,6 +88,19 @@ def integer_note(program) -> str | None:
             "(0.0001 mm) or increment (1 nm) if the program was written for one")
 
 
+def end_note(program) -> str | None:
+    """The note for a program read from text whose main program has no M02 or M30 (it ran
+    out at the end of the file: a FANUC control stops there with an alarm, and a file cut
+    short by a transfer or an editor reads so), or None."""
+    if (getattr(program, "integer_input", None) is None or not len(program)
+            or getattr(program, "end_words", None)):
+        return None
+    return (f"the program has no M30 or M02 (its last move is at line "
+            f"{int(program.lines[-1])}): it ran to the end of the file, where a FANUC "
+            "control stops with an alarm; if the file was cut short (a transfer, an "
+            "editor), so is the part")
+
+
 def unit_note(program) -> str | None:
     """The note for a program read from text that selects neither G20 nor G21 (its lengths
     are then read in mm, the reader's default: an inch program without G20 comes out 25.4

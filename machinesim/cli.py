@@ -39,6 +39,7 @@ from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._program_options import (
     add_reading_options,
     check_reading_options,
+    end_note,
     integer_note,
     read_for_machine,
     unit_note,
@@ -284,7 +285,7 @@ def _progress_lines(clock):
 def _reading_notes(args, program, chord: float) -> list[str]:
     """What the command line chose in reading the program that the user should know: arcs
     and rotary moves split coarser than 1 nm by default, work offsets it was not given, the
-    unit of a program that selects none."""
+    unit of a program that selects none, a program that ends without M02/M30."""
     from machinesim.nc.program import WORK_OFFSETS
 
     notes = []
@@ -295,7 +296,8 @@ def _reading_notes(args, program, chord: float) -> list[str]:
     notes += [f"{word} at line {line} selects a work offset this command is not given: "
               "taken as zero, the same as G54 (docs/nc.md)"
               for word, line in program.states.items() if word in WORK_OFFSETS]
-    notes += [note for note in (unit_note(program), integer_note(program)) if note]
+    notes += [note for note in (unit_note(program), integer_note(program), end_note(program))
+              if note]
     return notes
 
 

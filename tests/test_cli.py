@@ -136,6 +136,31 @@ def test_an_overtravel_refusal_says_how_numbers_without_a_point_were_read(tmp_pa
     assert json.loads(report.read_text())["removed_volume_mm3"] == pytest.approx(2.0, rel=1e-3)
 
 
+def test_a_program_without_m30_is_noted_as_perhaps_cut_short(tmp_path, capsys):
+    """A file that ends inside the slot (no retract, no M30), as a transfer cut short leaves
+    it: cut as it stands (the slot 2 mm wide, 0.1 mm deep across the 10 mm block: 2 mm^3,
+    the 1 um polygon at most 1e-3 narrower), and the note says where it ran out. With M30,
+    or M02, no note."""
+    program = tmp_path / "short.nc"
+    program.write_text("%\nO1\nG90 G21\nG00 X-1. Y5. Z1.\nG01 Z-0.1 F100.\nX11.\n")
+    argv = ["cut", program, "--machine", ROOT / "models" / "examples" / "mill3.urdf",
+            "--tool", "flat:1.0", "--stock", "block:10x10x2", "--quiet",
+            "--out", tmp_path / "p.ply", "--report", tmp_path / "r.json"]
+    code, _, err = run(argv, capsys)
+    assert code == 0, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["removed_volume_mm3"] == pytest.approx(2.0, rel=1e-3)
+    note = ("the program has no M30 or M02 (its last move is at line 6): it ran to the end "
+            "of the file, where a FANUC control stops with an alarm")
+    assert f"note: {note}" in err and any(n.startswith(note) for n in report["notes"])
+    for end in ("M30", "M02"):
+        program.write_text(f"%\nO1\nG90 G21\nG00 X-1. Y5. Z1.\nG01 Z-0.1 F100.\nX11.\n"
+                           f"G00 Z1.\n{end}\n%\n")
+        code, _, err = run(argv, capsys)
+        assert code == 0 and "no M30 or M02" not in err, err
+        assert machinesim.nc.read_program(program).end_words == {end: 8}
+
+
 # ------------------------------------------------------------ refusals: one line, no files
 
 

@@ -414,6 +414,7 @@ class Reader:
             tool_table=None if self.tools is None else self.tools.source,
             tool_changes=self.tool_changes(), arc_blocks=self.arc_blocks,
             unit_words=self.unit_words, integer_words=self.integer_words,
+            end_words={} if self.state.end is None else {self.state.end[1]: self.state.end[0]},
             exact_stops=np.concatenate(self.out.stops) if self.out.stops else ())
 
     def tool_changes(self) -> tuple:

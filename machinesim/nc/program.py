@@ -169,6 +169,11 @@ class Program:
         (``X1``, ``R5``) -> the first line each appeared on: they read as
         ``integer_input`` says (mm under "calculator", increments otherwise). Empty for a
         text that wrote every such number with a point, and for programs built from moves.
+    end_words : Mapping[str, int]
+        The program end the text's main program reached (``"M30"`` or ``"M02"``) -> its
+        line. Empty when the main program ran out at the end of the file without one (a
+        FANUC control stops there with an alarm: a file cut short?), and for programs built
+        from moves.
     exact_stops : ndarray, shape (K,), int64
         The moves that end in an exact stop (G09 in their block, or any block under G61):
         the control waits there until the axes are in position before the next block, so
@@ -188,7 +193,7 @@ class Program:
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
                  "tool_table", "tool_changes", "arc_blocks", "unit_words", "_moves",
-                 "exact_stops", "integer_words")
+                 "exact_stops", "integer_words", "end_words")
 
     def __init__(
         self,
@@ -302,18 +307,19 @@ class Program:
     def _from_parts(cls, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, *,
                     number, source, work_offsets, states, integer_input,
                     tool_table=None, tool_changes=(), arc_blocks=0,
-                    unit_words=None, exact_stops=(), integer_words=None) -> Program:
+                    unit_words=None, exact_stops=(), integer_words=None,
+                    end_words=None) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
                       source, work_offsets, states, integer_input, tool_table, tool_changes,
-                      arc_blocks, unit_words, exact_stops, integer_words)
+                      arc_blocks, unit_words, exact_stops, integer_words, end_words)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
               source, work_offsets, states, integer_input, tool_table=None,
               tool_changes=(), arc_blocks=0, unit_words=None, exact_stops=(),
-              integer_words=None) -> None:
+              integer_words=None, end_words=None) -> None:
         set_ = object.__setattr__
         set_(self, "source", source)
         set_(self, "number", number)
@@ -334,6 +340,7 @@ class Program:
         set_(self, "arc_blocks", int(arc_blocks))
         set_(self, "unit_words", _states(unit_words, source, "unit_words"))
         set_(self, "integer_words", _states(integer_words, source, "integer_words"))
+        set_(self, "end_words", _states(end_words, source, "end_words"))
         codes = _m_codes(m_codes, len(kinds), source)
         for name, array in (("_targets", targets), ("_kinds", kinds), ("_feeds", feeds),
                             ("_dwells", dwells), ("_lines", lines), ("_spindles", spindles),
@@ -430,7 +437,7 @@ class Program:
             integer_input=self.integer_input, tool_table=self.tool_table,
             tool_changes=self.tool_changes, arc_blocks=self.arc_blocks,
             unit_words=self.unit_words, exact_stops=self.exact_stops,
-            integer_words=self.integer_words)
+            integer_words=self.integer_words, end_words=self.end_words)
 
     def __hash__(self) -> int:
         return hash((self.number, self.source, len(self._kinds)))
@@ -441,7 +448,8 @@ class Program:
                            self.source, {k: dict(v) for k, v in self.work_offsets.items()},
                            dict(self.states), self.integer_input, self.tool_table,
                            self.tool_changes, self.arc_blocks, dict(self.unit_words),
-                           self.exact_stops, dict(self.integer_words)))
+                           self.exact_stops, dict(self.integer_words),
+                           dict(self.end_words)))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -456,14 +464,16 @@ class Program:
 
 def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number, source,
              work_offsets, states, integer_input, tool_table=None, tool_changes=(),
-             arc_blocks=0, unit_words=None, exact_stops=(), integer_words=None) -> Program:
+             arc_blocks=0, unit_words=None, exact_stops=(), integer_words=None,
+             end_words=None) -> Program:
     """Unpickle a `Program` (the arrays come back writeable copies: made read-only again)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
                                states=states, integer_input=integer_input,
                                tool_table=tool_table, tool_changes=tool_changes,
                                arc_blocks=arc_blocks, unit_words=unit_words,
-                               exact_stops=exact_stops, integer_words=integer_words)
+                               exact_stops=exact_stops, integer_words=integer_words,
+                               end_words=end_words)
 
 
 def _states(states: Mapping[str, int] | None, source: str,
