@@ -156,6 +156,15 @@ def test_read_program_names_the_file_and_accepts_crlf(tmp_path):
     marked.write_bytes(b"\xef\xbb\xbfG00 X1 Q5\n")
     with pytest.raises(NCProgramError, match=r"marked\.nc, line 1, column 8, key 'Q5'"):
         read_program(marked)
+    # a Ctrl-Z after the last line (DOS editors, DNC senders) ends the file: the same moves
+    # (it had been refused as "unexpected character '\x1a'"); elsewhere it is still refused
+    dos = tmp_path / "dos.nc"
+    for tail in (b"\x1a", b"\x1a\x1a\r\n"):
+        dos.write_bytes(path.read_bytes() + tail)
+        assert read_program(dos).moves == program.moves
+    dos.write_bytes(b"G00 X1. (a longer line: the byte is one of many)\n\x1a\nG00 X2.\n")
+    with pytest.raises(NCProgramError, match=r"dos\.nc, line 2, column 1, key '\\x1a'"):
+        read_program(dos)
 
 
 def test_lone_cr_is_refused_at_its_line_and_column(tmp_path):

@@ -294,6 +294,8 @@ def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, t
                              f"{chord_tolerance!r}", source=source, key="chord_tolerance")
     offsets = work_offsets_si(work_offsets, source=source)
     data = data.removeprefix(UTF8_BOM)  # Windows editors start UTF-8 files with one
+    if data.rstrip().endswith(DOS_EOF):  # DOS editors and DNC senders end files with one
+        data = data.rstrip().rstrip(DOS_EOF)
     reader = Reader(data, errors, source, offsets, integer_input, tool_table(tools),
                      tolerance, fast, axis_values(reference or {}, source=source))
     return reader.read()
@@ -301,6 +303,9 @@ def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, t
 
 #: The byte order mark some editors write at the start of a UTF-8 file; not part of line 1.
 UTF8_BOM = b"\xef\xbb\xbf"
+#: Ctrl-Z, the end-of-file mark DOS editors and DNC programs write after a program's last
+#: line; read as the file's end there (anywhere else it is refused as a control byte).
+DOS_EOF = b"\x1a"
 #: Bytes read to tell text from not, and the share of them that are not text (control bytes
 #: other than white space, or not UTF-8) above which a file is refused whole, in one line,
 #: rather than as a problem at every block.
