@@ -334,6 +334,10 @@ REFUSALS = [
      "canned cycle G73 \\(high-speed peck drilling\\) is not supported"),
     ("G00 X0 Y0 Z5.\nG98 G84 X1. Y1. Z-1. R1. F100.", 2, 5, "G84",
      "canned cycle G84 \\(tapping\\) is not supported"),
+    ("G00 X0 Y0 Z5.\nG43.4 H1", 2, 1, "G43.4",
+     "tool centre point control \\(G43.4\\) is not supported: the axis words"),
+    ("G92 X0 Y0 Z50.", 1, 1, "G92", "setting the work coordinates at the current position "
+     "\\(G92\\) is not supported: it would move every later axis word"),
     ("G00 X0\n/G01 X1. F10.", 2, 1, "/", "block delete '/' is not read"),
     ("G00 X0\n/2 G01 X1. F10.", 2, 1, "/2", "block delete '/2' is not read"),
     ("G00 #1", 1, 5, "#", "unexpected character '#'"),

@@ -48,8 +48,9 @@ G codes
     G80, G91.1,
     G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words, and G55..G59 selected without
     offsets given for them (G54's zero). Refused: G41/G42 (cutter radius
-    compensation), G93, G95, the canned cycles G73 G74 G76 G84..G89 (each by name), and
-    every G code not named here.
+    compensation), G93, G95, the canned cycles G73 G74 G76 G84..G89, tool centre point
+    and tilted planes (G43.4 G43.5 G68.2 G53.1), coordinate changes (G92 G52 G68 G51 G51.1
+    G16), each by name, and every G code not named here.
 Subprograms
     The main program is the file's first program (its O number in the first block, if any);
     after its M02/M30, ``O<n>`` blocks start subprograms, each ending in M99. ``M98 P<n>

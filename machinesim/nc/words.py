@@ -72,6 +72,18 @@ OTHER_CYCLES = {
     "G84": "tapping", "G85": "boring", "G86": "boring", "G87": "back boring",
     "G88": "boring", "G89": "boring",
 }
+#: Multi-axis programming that a post writes for a control that computes the machine's
+#: axes itself.
+FIVE_AXIS = {
+    "G43.4": "tool centre point control", "G43.5": "tool centre point control",
+    "G68.2": "a tilted working plane", "G53.1": "tool axis direction control",
+}
+#: Coordinate changes of old and hand-written programs.
+COORDINATE_CHANGES = {
+    "G92": "setting the work coordinates at the current position", "G52": "a local "
+    "coordinate system", "G68": "coordinate rotation", "G51": "scaling",
+    "G51.1": "mirror image", "G16": "polar coordinates",
+}
 G_REFUSED = {
     "G41": CUTTER_COMPENSATION.format("G41"),
     "G42": CUTTER_COMPENSATION.format("G42"),
@@ -84,6 +96,14 @@ G_REFUSED = {
     "G90.1": "absolute arc centres (G90.1) are not read: I J K are read as the centre's "
              "offset from the arc's start (G91.1, FANUC's only form); post incremental "
              "arc centres",
+    **{code: f"{what} ({code}) is not supported: the axis words are read as the machine's "
+             "own axis values; post them so (tool centre point and tilted planes off in the "
+             "post), as the 5-axis machines here are programmed"
+       for code, what in FIVE_AXIS.items()},
+    **{code: f"{what} ({code}) is not supported: it would move every later axis word; "
+             "post the coordinates it would give, or set the work zero with G54..G59 "
+             "(read_program(..., work_offsets=...))"
+       for code, what in COORDINATE_CHANGES.items()},
 }
 SINGLE = frozenset("NOSFPXYZABCIJKRQLHTD")
 MOTION = {"G00": "rapid", "G01": "linear"}
