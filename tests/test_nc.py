@@ -329,6 +329,7 @@ REFUSALS = [
     ("G00 X0 (a (b) c)", 1, 11, "(", "comments do not nest: .* opened at column 8"),
     ("O1\nM98 P1\nM30", 2, 1, "M98", "M98 calls O0001, the main program itself"),
     ("G00 X0 / Y1", 1, 8, "/", "block delete '/' is not read: a FANUC control skips"),
+    ("G00 X12,5 Y0", 1, 8, ",", "decimal comma in 'X12,5': NC numbers take a decimal point"),
     ("G00 X0 Z1.\nG93 G01 X1. F10.", 2, 1, "G93", "inverse time feed \\(G93"),
     ("G00 X0 Y0 Z5.\nG73 X1. Y1. Z-1. R1. Q0.2 F100.", 2, 1, "G73",
      "canned cycle G73 \\(high-speed peck drilling\\) is not supported"),

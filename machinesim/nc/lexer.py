@@ -142,6 +142,12 @@ def tokenize(raw: str, source: str, line: int, *,
                  "the switch is not simulated; remove the '/' to run the block, or the block "
                  "to skip it", i + 1, raw[i:stop])
             i = stop
+        elif c == "," and 0 < i < n - 1 and raw[i - 1].isdigit() and raw[i + 1].isdigit():
+            stop = _end_of_garbage(raw, i + 1)
+            start = words[-1].column - 1 if words else i - 1  # the word the comma ends
+            fail(f"decimal comma in {raw[start:stop]!r}: NC numbers take a decimal point "
+                 "(X1.5, not X1,5); the comma would split the number in two", i + 1, ",")
+            i = stop
         elif c == "\ufffd":  # what the reader decodes a byte that is not UTF-8 to
             fail("a byte that is not UTF-8 (a Latin-1 or Windows-1252 character, such as a "
                  "no-break space, saved by an editor in that encoding); expected ASCII "
