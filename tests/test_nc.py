@@ -274,6 +274,8 @@ REFUSALS = [
     ("G00 X0 Y0\nG02 X1. Y1.", 2, 1, "G02", "G02 needs the centre"),
     ("G03 X1 I1", 1, 5, "X1", "the arc starts where X is not known yet"),
     ("G00 X0\n\nG41 X0", 3, 1, "G41", r"cutter radius compensation \(G41\) is not supp"),
+    ("G00 X0\nG42 D1 G01 X1. F100.", 2, 1, "G42", "compensation 'in wear' .* holds the "
+     "tool-centre path already, its G42 adding only the wear .* without the G42 and D"),
     ("G54.1 X0", 1, 1, "G54.1", "unknown G code G54.1"),
     ("G95", 1, 1, "G95", r"feed per revolution \(G95\)"),
     ("G00 X0 U1", 1, 8, "U1", "unknown word letter 'U'"),

@@ -60,10 +60,12 @@ G_GROUPS = {
     "G98": "return level", "G99": "return level",
 }  # fmt: skip
 CUTTER_COMPENSATION = (
-    "cutter radius compensation ({}) is not supported: it offsets the path by the tool radius "
+    "cutter radius compensation ({code}) is not supported: it offsets the path by the tool radius "
     "along its normal, with start-up, corner and cancel rules (FANUC types A, B, C) that a "
     "simulation would have to guess; post the tool-centre path (compensation 'in computer' "
-    "in the CAM) and cancel with G40"
+    "in the CAM) and cancel with G40. A program posted with compensation 'in wear' (or "
+    "'reverse wear') holds the tool-centre path already, its {code} adding only the wear in "
+    "the D register: without the {code} and D words it cuts that path"
 )
 #: FANUC's canned cycles other than the drilling ones read here, as posts write them for
 #: chip breaking, tapping and boring.
@@ -85,8 +87,8 @@ COORDINATE_CHANGES = {
     "G51.1": "mirror image", "G16": "polar coordinates",
 }
 G_REFUSED = {
-    "G41": CUTTER_COMPENSATION.format("G41"),
-    "G42": CUTTER_COMPENSATION.format("G42"),
+    "G41": CUTTER_COMPENSATION.format(code="G41"),
+    "G42": CUTTER_COMPENSATION.format(code="G42"),
     "G93": "inverse time feed (G93, F = 1/min per block, as multi-axis posts write it) is "
            "not supported; post G94 with F in mm/min",
     "G95": "feed per revolution (G95) is not supported; use G94 with F in mm/min",
