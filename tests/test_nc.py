@@ -296,6 +296,9 @@ REFUSALS = [
     ("O1\nM98 P2\nM30\nO2\nM98 P2\nM99", 5, 1, "M98", "O0002 calls itself"),
     ("O1\nM30\nO2\nG04 P1\nM99\nG04 P2", 6, 1, "G04", "block after M99 on line 5"),
     ("O1\nM30\nO2\nM30\nM99", 4, 1, "M30", "M30 in subprogram O0002"),
+    ("%\nO1000\nG00 X0\nM30\n%\n%\nO2000\nG00 X1.\nM30\n%", 9, 1, "M30",
+     "M30 in subprogram O2000: .* a file of several main programs, each ending in M30, is "
+     "cut one program a file"),
     ("M98 P00002", 1, 1, "M98", "asks for 0 repeats"),
     ("G00 X1e5", 1, 7, "E5", "unknown word letter 'E'"),
     ("G00 X1.2.3", 1, 5, "X1.2.3", "malformed number"),

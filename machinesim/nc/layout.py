@@ -33,6 +33,7 @@ class Subprogram:
     first: int  # 0-based first line of its body
     stop: int  # 0-based line after its body
     ret: int | None = None  # 0-based line of its M99
+    ended: bool = False  # an M02/M30 in it is refused: its missing M99 is the same mistake
 
 
 class Layout:
@@ -99,9 +100,13 @@ class Layout:
                     if current is None:
                         main_end = i if main_end is None else main_end
                     else:
+                        current.ended = True
                         problems.add(reader.fail(
                             f"M{code:02d} in subprogram O{current.number:04d}: a subprogram "
-                            "returns with M99", line, word))
+                            "returns with M99. A file is read as one main program (its first) "
+                            "and the subprograms after its M02/M30; a file of several main "
+                            "programs, each ending in M30, is cut one program a file",
+                            line, word))
             call = call_of(words)
             if isinstance(call, tuple):
                 calls.setdefault(None if current is None else current.number, []).append(
@@ -116,9 +121,10 @@ class Layout:
 
         for sub in self.subprograms.values():
             if sub.ret is None:
-                problems.add(reader.fail(f"subprogram O{sub.number:04d} has no M99 (return) "
-                                         "before the next O number or the end of the file",
-                                         sub.line + 1))
+                if not sub.ended:
+                    problems.add(reader.fail(f"subprogram O{sub.number:04d} has no M99 "
+                                             "(return) before the next O number or the end "
+                                             "of the file", sub.line + 1))
                 continue
             late = between(sub.ret + 1, sub.stop)
             if late.size:
