@@ -76,6 +76,34 @@ def test_a_dx_out_of_range_is_blamed_on_dx():
         _measure([-20.0, -3.5, 0.0])
 
 
+def _measure_nose(nose_radius_um):
+    errors = {"tool": {"offset_um": [-3.5, -3.5, 0.0]},
+              "tool_geometry": {"nose_radius_um": nose_radius_um}}
+    return STSTurning().measure(machinesim.Lab("sts_lathe", errors, noise=False))
+
+
+@pytest.mark.parametrize("nose_radius_um", [350.0, -950.0])
+def test_a_misfit_from_a_nose_radius_out_of_range_is_blamed_on_the_nose_radius(nose_radius_um):
+    # dR +350 um misfits by 1.9 nm (read 342 um), -950 um by 1.65 nm (read -958 um), dx read
+    # -3.5 um in range: the misfit was blamed on tool.z, the rotation, the workpiece or the
+    # machine, never on the nose radius injected
+    with pytest.raises(InputError, match=r"The dR read is outside the range this test "
+                                         r"identifies \(dR from about -850 to \+300 um.*"
+                                         r"tool_geometry\.nose_radius") as error:
+        _measure_nose(nose_radius_um)
+    assert "within the test's range" not in str(error.value)
+
+
+def test_a_nose_radius_far_too_large_is_named_among_the_causes_of_an_uncut_centre():
+    # Table 1's printed 2 mm nose for the 1 mm the programs are compensated for, dR = +1 mm:
+    # the sphere's top reads as an uncut core of 85 um, which named tool.y and tool.z only
+    with pytest.raises(InputError, match=r"uncut centre 8\d\.\d\d um in radius .* a nose "
+                                         r"radius more than about \+300 um larger than the one "
+                                         r"the programs are compensated for "
+                                         r"\(tool_geometry\.nose_radius\)"):
+        _measure_nose(1000.0)
+
+
 def _scenario():
     spec = importlib.util.spec_from_file_location("sts_turning_scenario",
                                                   ROOT / "scenarios" / "sts_turning.py")
