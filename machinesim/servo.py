@@ -22,8 +22,9 @@ them per millimetre: Kp in N/mm, Ki in N/(mm s), Kd in N s/mm (linear axes; per 
 i.e. 1e3 times the printed numbers in SI; M in kg (x, z) and kg m^2 (c); ACCFF x 1000 as the
 fraction of the inertial force fed forward; System BW in Hz. The guide damping is not in the
 paper: one value for X and Z, `TABLE6_DAMPING`, is chosen so that the "before" preset leaves
-the paper's 13 nm P-V of servo form error (Fig. 15(c)) on the Case 4 path; the "after"
-preset's figure is then a prediction (docs/procedures/sts_turning.md, "Units of Table 6").
+the paper's 13 nm P-V of servo form error (Fig. 15(c)) on the program of Cases 1-2 (12.8 nm;
+10.5 nm on the Case 3-4 program); the "after" preset's figure is then a prediction
+(docs/procedures/sts_turning.md, "Units of Table 6").
 The model itself takes SI gains and does not depend on this reading.
 """
 
@@ -304,8 +305,10 @@ TABLE6 = {
 
 
 #: Guide damping, N s/m (x, z) and N m s/rad (c): not in the paper. 1600 N s/m makes the
-#: "before" preset's servo form error over r 150-350 um at theta = 0 on the Case 4 path
-#: 13.0 nm P-V, the paper's 13 nm (Fig. 15(c)); the C value does not change it (< 0.01 nm).
+#: "before" preset's servo form error over r 150-350 um at theta = 0 on the program of Cases
+#: 1-2 (Table 4 "before") 12.8 nm P-V, the paper's 13 nm (Fig. 15(c)); on the Case 3-4
+#: program it is 10.5 nm (docs/procedures/sts_turning.md, "Units of Table 6"). The C value
+#: does not change it (< 0.01 nm).
 TABLE6_DAMPING = {"x": 1600.0, "z": 1600.0, "c": 50.0}
 
 #: SI per printed unit of Kp, Ki and Kd: the gains are read per mm (per mrad for C).
