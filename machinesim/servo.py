@@ -157,19 +157,40 @@ class AxisServo:
         if radius >= 1.0 - 1e-12:
             gains = (f"at Ts = {ts} s with Kp = {self.kp:g}, Ki = {self.ki:g}, "
                      f"Kd = {self.kd:g}, mass = {self.mass:g}, damping = {self.damping:g}")
+            cause = self._continuous_cause()
             if radius > 1.0 + 1e-9:
                 raise ServoDivergenceError(
                     f"servo loop of axis {self.name} is unstable (largest closed-loop pole "
-                    f"|z| = {radius:.9f} > 1) {gains}: the axis would oscillate; lower the "
-                    "gains")
+                    f"|z| = {radius:.9f} > 1) {gains}: the axis would oscillate; "
+                    f"{cause or 'lower the gains'}")
+            edge = ("from an integral gain too small to act against Kp (use Ki = 0 for none) "
+                    "or from gains at the edge of stability")
             raise ServoDivergenceError(
                 f"servo loop of axis {self.name} has a closed-loop pole on the unit circle "
-                f"(|z| = {radius:.12f}) {gains}: a mode that never settles, from an integral "
-                "gain too small to act against Kp (use Ki = 0 for none) or from gains at the "
-                "edge of stability")
+                f"(|z| = {radius:.12f}) {gains}: a mode that never settles"
+                f"{'; ' + cause if cause else ', ' + edge}")
         feed = control.minreal(ff_d * sensitivity_plant, verbose=False) * (self.acc_ff
                                                                            * self.mass)
         return reference, feed, radius
+
+    def _continuous_cause(self) -> str | None:
+        """Why the continuous loop, whatever its period, does not settle, or None when only
+        the sampling makes it unstable (gains too high for the loop period). Its
+        characteristic polynomial is m s^3 + (c + Kd) s^2 + Kp s + Ki, stable (Routh-Hurwitz)
+        iff (c + Kd) Kp > m Ki with every coefficient > 0 (Ki = 0: m s^2 + (c + Kd) s + Kp)."""
+        if self.kp == 0.0 and self.ki == 0.0:
+            return ("there is no position feedback (Kp = Ki = 0): the position drifts "
+                    "whatever Kd; give Kp > 0")
+        left, right = (self.damping + self.kd) * self.kp, self.mass * self.ki
+        if left > right:
+            return None
+        if self.ki == 0.0:
+            return ("nothing damps it (damping = Kd = 0): a P loop on a mass oscillates at "
+                    "any Kp; give Kd > 0 or a damping")
+        lower = f", or lower Ki below (c + Kd) Kp / m = {left / self.mass:g}" if left else ""
+        return (f"(damping + Kd) Kp = {left:g} <= mass Ki = {right:g}: unstable in continuous "
+                "time already (Routh-Hurwitz on m s^3 + (c + Kd) s^2 + Kp s + Ki), so lower "
+                f"gains alike or a shorter period do not help; raise Kp, Kd or the damping{lower}")
 
     @property
     def pole_radius(self) -> float:

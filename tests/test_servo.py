@@ -1,5 +1,7 @@
 """The sampled PID + feed-forward servo against closed forms of continuous linear systems."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -62,6 +64,37 @@ def test_instability_matches_routh_criterion(factor, stable):
             AxisServo(kp=kp, ki=ki, kd=kd, mass=m, sample_time_s=1e-6, name="x")
         assert isinstance(info.value, MachineSimError)
         assert "axis x is unstable" in str(info.value)
+
+
+def test_a_loop_unstable_in_continuous_time_says_what_to_change():
+    # m s^3 + (c + Kd) s^2 + Kp s + Ki is stable iff (c + Kd) Kp > m Ki (Routh-Hurwitz); where
+    # it is not, "lower the gains" (all of them) does not settle it
+    def refusal(**gains):
+        with pytest.raises(ServoDivergenceError) as info:
+            AxisServo(mass=4.0, name="x", **{"damping": 1600.0, **gains})
+        return str(info.value)
+
+    # Table 6 "before" X with Ki 100 times: (1600 + 900) 6e4 = 1.5e8 <= 4 x 7e8 = 2.8e9, and
+    # Ki below 1.5e8 / 4 = 3.75e7 settles it
+    message = refusal(kp=6e4, ki=7e8, kd=900.0)
+    assert re.search(r"\(damping \+ Kd\) Kp = 1\.5e\+08 <= mass Ki = 2\.8e\+09: unstable in "
+                     r"continuous time.*raise Kp, Kd or the damping, or lower Ki below \(c \+ "
+                     r"Kd\) Kp / m = 3\.75e\+07", message)
+    assert "lower the gains" not in message
+    for factor, stable in ((0.9, True), (1.1, False)):
+        assert (AxisServo(kp=6e4, ki=factor * 3.75e7, kd=900.0, mass=4.0, damping=1600.0)
+                .pole_radius < 1.0) if stable else refusal(kp=6e4, ki=factor * 3.75e7, kd=900.0)
+    # Kp = 0 with integral action: no s term, unstable for any Ki > 0
+    message = refusal(kp=0.0, ki=7e6, kd=900.0)
+    assert "Kp = 0 <= mass Ki = 2.8e+07" in message and "lower Ki" not in message
+    # a P loop on an undamped mass: m s^2 + Kp oscillates at any Kp
+    assert "nothing damps it (damping = Kd = 0)" in refusal(kp=6e4, ki=0.0, kd=0.0, damping=0.0)
+    # Kd alone: the position is not fed back (a pole at z = 1 it blamed on "an integral gain
+    # too small to act against Kp" with Ki = 0)
+    message = refusal(kp=0.0, ki=0.0, kd=900.0)
+    assert "no position feedback (Kp = Ki = 0)" in message and "integral gain" not in message
+    # stable in continuous time, unstable sampled at 10 kHz: lowering the gains does help
+    assert refusal(kp=6e9, ki=7e6, kd=900.0).endswith("the axis would oscillate; lower the gains")
 
 
 def test_table6_after_follows_better_than_before():
