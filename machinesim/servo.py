@@ -47,6 +47,11 @@ MAX_SAMPLE_TIME_S = 0.1
 #: take about 20 MB, however long the motion (a 60000 s feed move at 10 kHz held 4.5 GB in
 #: one piece).
 FOLLOW_CHUNK = 1 << 18
+#: Most loop periods one motion is followed for: 1e9, 27.8 h of motion at 10 kHz, about 30 s
+#: of computing per axis (1e8 periods took 3.2 s). A feed far too slow for its move (F0.0001
+#: deg/min on a 9000 deg spiral: 5.4e9 s, 5.4e13 periods) had the loop simulated for days,
+#: without a word.
+MAX_FOLLOW_PERIODS = 10**9
 
 
 class ServoDivergenceError(MachineSimError):
@@ -218,7 +223,15 @@ class AxisServo:
         if t.size < 2 or not t[-1] > t[0]:
             return r.copy()
         ts = self.sample_time_s
-        n = int(np.ceil((t[-1] - t[0]) / ts)) + 1
+        periods = (t[-1] - t[0]) / ts
+        if not periods <= MAX_FOLLOW_PERIODS:
+            raise InputError(
+                f"servo loop of axis {self.name}: a motion of {t[-1] - t[0]:.6g} s is "
+                f"{periods:.3g} loop periods of {ts:g} s, more than the {MAX_FOLLOW_PERIODS:.0e} "
+                f"one motion is followed for ({MAX_FOLLOW_PERIODS * ts / 3600.0:.3g} h; "
+                "machinesim.servo.MAX_FOLLOW_PERIODS); expected motions of hours at most: is "
+                "a feed far too slow (F in another unit), or a dwell that long?")
+        n = int(np.ceil(periods)) + 1
 
         def command(lo, hi):
             return np.interp(t[0] + ts * np.arange(lo, hi), t, r)
@@ -473,6 +486,7 @@ def check_servo(machine, servo) -> None:
                              f"{other}; {fix}", key="servo")
 
 
-__all__ = ["DEFAULT_SAMPLE_TIME_S", "FOLLOW_CHUNK", "SERVO_KEYS", "SERVO_OPTIONAL_KEYS",
-           "TABLE6", "TABLE6_DAMPING", "TABLE6_GAIN_SCALE", "AxisServo", "PIDServo",
-           "ServoDivergenceError", "check_servo", "servo_from_toml", "table6_axis", "table6_servo"]
+__all__ = ["DEFAULT_SAMPLE_TIME_S", "FOLLOW_CHUNK", "MAX_FOLLOW_PERIODS", "SERVO_KEYS",
+           "SERVO_OPTIONAL_KEYS", "TABLE6", "TABLE6_DAMPING", "TABLE6_GAIN_SCALE", "AxisServo",
+           "PIDServo", "ServoDivergenceError", "check_servo", "servo_from_toml", "table6_axis",
+           "table6_servo"]

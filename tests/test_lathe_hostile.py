@@ -247,3 +247,20 @@ def test_a_turning_move_without_a_feed_is_refused_naming_its_line():
     with pytest.raises(InputError, match=r"built.nc, line 4: expected a positive feed on "
                                          r"every turning move, got none"):
         turn(built, "sts_lathe", "nose:1.0:90")
+
+
+def test_a_turning_feed_far_too_slow_is_refused_at_once_not_followed_for_days(tmp_path):
+    # F0.0001 deg/min on a 9000 deg move: 9e7 min = 5.4e9 s, 5.4e13 periods of a 10 kHz
+    # loop, which the servo loops were simulated through without a word (hours per axis)
+    from machinesim.servo import table6_servo
+
+    path = tmp_path / "slow.nc"
+    path.write_text("G90 G21\nG00 X0.05 Z0.01 C0\nG01 Z-0.001 F10\nG01 X0 C9000 F0.0001\nM30\n")
+    _, report = turn(path, "sts_lathe", "nose:1.0:90")  # no servo: a time, not a simulation
+    # the turning move alone, C in degrees as mm (FANUC), at 0.0001 mm/min
+    assert report.machining_time_s == pytest.approx(np.hypot(9000.0, 0.05) / 0.0001 * 60.0,
+                                                    rel=1e-12)
+    with pytest.raises(InputError, match=r"servo loop of axis x: a motion of 5\.4e\+09 s is "
+                                         r"5\.4e\+13 loop periods of 0\.0001 s, more than the "
+                                         r"1e\+09 .*27\.8 h.*feed far too slow"):
+        turn(path, "sts_lathe", "nose:1.0:90", servo=table6_servo("before"))

@@ -97,6 +97,15 @@ def test_a_loop_unstable_in_continuous_time_says_what_to_change():
     assert refusal(kp=6e9, ki=7e6, kd=900.0).endswith("the axis would oscillate; lower the gains")
 
 
+def test_a_motion_longer_than_the_followed_periods_is_refused_before_it_is_simulated():
+    axis = AxisServo(kp=1e4, ki=0.0, kd=0.0, mass=1.0, damping=100.0, name="x")
+    # 1e6 s at 1e-4 s: 1e10 periods, ten times the most (MAX_FOLLOW_PERIODS, 27.8 h at 10 kHz)
+    with pytest.raises(InputError, match=r"axis x: a motion of 1e\+06 s is 1e\+10 loop periods "
+                                         r"of 0\.0001 s, more than the 1e\+09 one motion is "
+                                         r"followed for \(27\.8 h"):
+        axis.reach(np.array([0.0, 1e6]), np.array([0.0, 1e-3]))
+
+
 def test_table6_after_follows_better_than_before():
     # the paper's tuning (Table 6) reduces the follow-up error on a servo sine
     t = np.linspace(0.0, 0.2, 2001)
