@@ -1,5 +1,6 @@
-"""Paper 004 replayed: slow-tool-servo turning of a sine grid, every error factor compensated
-before the cut, the form error predicted and then measured.
+"""Paper 004 replayed: slow-tool-servo turning of a sine grid, its form error predicted.
+
+Every error factor is compensated before the cut, the form error predicted and then measured.
 
 Run: ``.venv/bin/python scenarios/sts_turning.py [--errors FILE.toml] [--noise on|off]
 [--realism ideal|noise_only|lab] [--budget on|off] [--seed N] [--out reports/sts_turning]``

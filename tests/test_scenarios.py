@@ -22,6 +22,15 @@ def run(script: str, *args: str) -> str:
     return result.stdout
 
 
+@pytest.mark.parametrize("script", sorted(p.name for p in (ROOT / "scenarios").glob("*.py")
+                                           if p.name != "demo.py"))  # demo takes no options
+def test_the_help_describes_the_scenario_in_a_whole_sentence(script):
+    # --help shows the docstring's first line: sts_turning's read "... every error factor
+    # compensated", the sentence cut where the line broke
+    description = run(script, "--help").split("\n\n")[1]
+    assert " ".join(description.split()).endswith("."), description
+
+
 def test_demo_prints_the_machines_and_the_landing_table():
     out = run("demo.py")
     for name in ("robonano_ui", "robonano_a0ib", "planer_4axis", "grooving_4axis", "sts_lathe"):
