@@ -249,3 +249,26 @@ def test_bad_inputs_are_refused_with_what_was_expected():
     with pytest.raises(InputError, match="rho_range to meet the spiral"):
         sp.program_error(sp.sine_grid(), PAPER, sp.constant_angle(PAPER, 0.5),
                          rho_range=(1.0, 2.0))
+
+
+def test_a_path_of_more_points_than_memory_holds_is_refused_naming_what_gave_it():
+    # the paper's spiral turns 250 times, 2 pi 250 = 1570.8 rad: a CA step of 1e-12 rad (a
+    # step in another unit) is 1.571e15 points, which asked numpy for 11 PiB; the CAL step of
+    # 1e-15 m over the 0.3927 m spiral 3.927e14; 10^9 sub-steps on the 15,709 points of a
+    # 0.1 rad CA path 1.571e13 samples, which filled memory for minutes
+    def refusal(call):
+        with pytest.raises(InputError, match=r"Expected at most 1e\+08 points on the path "
+                                             r"\(MAX_PATH_POINTS\)") as error:
+            call()
+        return str(error.value)
+
+    assert "got 1.571e+15 from step 1e-12 rad over the spiral's 1570.8 rad" in refusal(
+        lambda: sp.constant_angle(PAPER, 1e-12))
+    assert "got 3.927e+14 from step 1e-15 m over the spiral's 0.3927 m" in refusal(
+        lambda: sp.constant_arc_length(PAPER, 1e-15))
+    assert "got 1e+13 from count 10000000000000" in refusal(
+        lambda: sp.cutting_angles(PAPER, "CA", count=10**13))
+    path = sp.tool_path(sp.cutting_points(sp.sine_grid(), PAPER, sp.constant_angle(PAPER, 0.1)))
+    assert len(path) == math.ceil(2 * math.pi * 250 / 0.1) + 1 == 15709
+    assert "got 1.571e+13 from substeps 1000000000 on 15709 points" in refusal(
+        lambda: sp.interpolate(path, "spline", 10**9))

@@ -45,7 +45,8 @@ from machinesim.nc import AXES, KIND_LINEAR, KIND_RAPID, Program
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, RAD_PER_DEG
 
 __all__ = [
-    "AMPLITUDE_M", "CAL_STEP_M", "CA_STEP_RAD", "FEED_M", "NOSE_RADIUS_M", "PART_RADIUS_M",
+    "AMPLITUDE_M", "CAL_STEP_M", "CA_STEP_RAD", "FEED_M", "MAX_PATH_POINTS", "NOSE_RADIUS_M",
+    "PART_RADIUS_M",
     "SPINDLE_RPM", "WAVELENGTH_M", "CuttingPoints", "Design", "ProgramError", "Spiral",
     "ToolPath", "constant_angle", "constant_arc_length", "cutting_angles", "cutting_points",
     "design_from_height_map", "interpolate", "program_error", "program_error_table",
@@ -75,6 +76,11 @@ CAL_STEP_M = 30 * M_PER_UM
 #: of slope (the tip moves by R times that: 0.2 pm), the round-off eps |z| / h 2e-14 per um
 #: of height.
 GRADIENT_STEP_M = 10 * M_PER_NM
+#: Most points a path may have (cutting points, or samples of an interpolated path): 10^7
+#: take 13 s for points, tool path and program, 10^8 about 2 min and 0.8 GB an array. A
+#: step in the wrong unit (1e-12 rad for CA, 1.6e15 points) asked numpy for petabytes, and
+#: 10^9 sub-steps a step filled memory for minutes.
+MAX_PATH_POINTS = 10**8
 #: Newton steps that invert eq 3 (arc length -> angle); it converges monotonically from the
 #: start used, quadratically at the end: 6-8 steps reach round-off, the rest is a margin.
 _NEWTON_STEPS = 40
@@ -355,8 +361,11 @@ class Spiral:
 
 
 # --- distributions of cutting points ----------------------------------------------------------
-def _steps(total: float, step: float) -> np.ndarray:
-    """0, step, 2 step, ... up to ``total`` inclusive (the last step shorter if need be)."""
+def _steps(total: float, step: float, unit: str, key: str) -> np.ndarray:
+    """0, step, 2 step, ... up to ``total`` inclusive (the last step shorter if need be);
+    more than `MAX_PATH_POINTS` values are refused naming ``key`` (``unit``: of both)."""
+    _check_points(total / step + 1.0, f"step {step:g} {unit} over the spiral's {total:g} {unit}",
+                  key)
     # a total that is a whole number of steps up to round-off ends on a full step
     count = math.floor(total / step * (1.0 + 1e-12))
     values = step * np.arange(count + 1, dtype=np.float64)
@@ -373,7 +382,7 @@ def constant_angle(spiral: Spiral, step: float) -> np.ndarray:
     The last step is shorter unless 2 pi N_t is a whole number of steps.
     """
     step = _positive(step, "step (rad)")
-    return frozen(_steps(spiral.end_angle, step))
+    return frozen(_steps(spiral.end_angle, step, "rad", "step (rad)"))
 
 
 def constant_arc_length(spiral: Spiral, step: float) -> np.ndarray:
@@ -381,7 +390,7 @@ def constant_arc_length(spiral: Spiral, step: float) -> np.ndarray:
     inwards (eq 3 inverted), the last step shorter, as angles theta (rad)."""
     step = check_length(step, "step", positive=True)
     total = spiral.length
-    s = total - _steps(total, step)
+    s = total - _steps(total, step, "m", "step")
     theta = spiral.angle_at(s)
     theta[0], theta[-1] = 0.0, spiral.end_angle
     return frozen(theta)
@@ -400,11 +409,20 @@ def cutting_angles(spiral: Spiral, distribution: str, *, step: float | None = No
     if count is not None:
         if isinstance(count, bool) or not isinstance(count, int | np.integer) or count < 2:
             raise InputError(f"Expected count as an int >= 2, got {count!r}", key="count")
+        _check_points(float(count), f"count {count!r}", "count")
         total = spiral.end_angle if distribution == "CA" else spiral.length
         step = total / (count - 1)
     if distribution == "CA":
         return constant_angle(spiral, step)
     return constant_arc_length(spiral, step)
+
+
+def _check_points(count: float, what: str, key: str) -> None:
+    """Refuse a path of ``count`` points beyond `MAX_PATH_POINTS`, naming ``what`` gave it."""
+    if not count <= MAX_PATH_POINTS:
+        raise InputError(f"Expected at most {MAX_PATH_POINTS:.0e} points on the path "
+                         f"(MAX_PATH_POINTS), got {count:.4g} from {what}: a value in "
+                         "another unit?", key=key)
 
 
 def _positive(value, name: str) -> float:
@@ -529,6 +547,8 @@ def interpolate(path: ToolPath, method: str = "linear", substeps: int = 10) -> T
         raise InputError(f"Expected method 'linear' or 'spline', got {method!r}", key="method")
     if isinstance(substeps, bool) or not isinstance(substeps, int | np.integer) or substeps < 1:
         raise InputError(f"Expected substeps as an int >= 1, got {substeps!r}", key="substeps")
+    _check_points((len(path) - 1.0) * substeps + 1.0,
+                  f"substeps {substeps!r} on {len(path)} points", "substeps")
     c = _substeps(path.c, substeps)
     if method == "linear":
         return ToolPath(frozen(c), frozen(np.interp(c, path.c, path.x)),
