@@ -104,8 +104,11 @@ class Lab:
             realism = Realism.noise_only() if noise else Realism.ideal()
             self.__told = False
         elif not isinstance(realism, Realism):
+            hint = (f" {realism!r}: make one with machinesim.realism.Realism.ideal(), "
+                    ".noise_only() or .lab() (the scenarios' --realism) or Realism.with_only"
+                    "(...)" if isinstance(realism, str) else "")
             raise InputError(f"Expected realism as a machinesim.realism.Realism, got "
-                             f"{type(realism).__name__}", key="realism")
+                             f"{type(realism).__name__}{hint}", key="realism")
         elif not noise:
             raise InputError("Expected either noise=False or a realism, not both: "
                              "Realism.instrument_noise turns the noise off", key="noise")

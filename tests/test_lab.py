@@ -366,3 +366,14 @@ def test_every_error_kind_the_docs_name_is_importable_from_the_package():
     # the refusals a user meets first are caught by the name the package gives
     with pytest.raises(machinesim.ModelError):
         machinesim.load_machine("no_such_machine")
+
+
+def test_a_realism_given_by_its_scenario_name_says_how_to_make_it():
+    # the scenarios take --realism ideal; Lab(..., realism="ideal") said only "got str"
+    from machinesim.realism import Realism
+
+    with pytest.raises(InputError, match=r"got str 'ideal': make one with "
+                                         r"machinesim\.realism\.Realism\.ideal\(\), "
+                                         r"\.noise_only\(\) or \.lab\(\)"):
+        Lab("sts_lathe", realism="ideal")
+    assert Lab("sts_lathe", realism=Realism.ideal()).realism == Realism.ideal()
