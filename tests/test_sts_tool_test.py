@@ -76,6 +76,19 @@ def test_a_dx_out_of_range_is_blamed_on_dx():
         _measure([-20.0, -3.5, 0.0])
 
 
+def test_the_procedure_refuses_a_tool_and_a_servo_preset_it_cannot_use_when_made():
+    # a V tool had the procedure end at its first test cut in AttributeError ('VTool' object
+    # has no attribute 'nose_radius'); an unknown preset was taken and refused at Case 4,
+    # after two test cuts and three cases
+    with pytest.raises(InputError, match=r"Expected a round-nose tool for turning "
+                                         r"\('nose:R:ANGLE'\), got VTool"):
+        STSTurning(tool="v:90")
+    with pytest.raises(InputError, match=r"unknown servo preset 'middle' for servo_after; "
+                                         r"expected one of \['after', 'before'\]"):
+        STSTurning(servo_after="middle")
+    assert STSTurning(tool="nose:2.0:90").nose_radius == 2e-3
+
+
 def _measure_nose(nose_radius_um):
     errors = {"tool": {"offset_um": [-3.5, -3.5, 0.0]},
               "tool_geometry": {"nose_radius_um": nose_radius_um}}

@@ -56,7 +56,7 @@ from machinesim.servo import check_servo
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import RoundNoseTool, with_nose_radius_error
 
-__all__ = ["TurnedPart", "TurningReport", "followed", "turn", "turning_runs"]
+__all__ = ["TurnedPart", "TurningReport", "followed", "turn", "turning_runs", "turning_tool"]
 
 #: Relative change of the spindle angle below which a move counts as not turning, rad.
 STILL_C_RAD = 1e-12
@@ -197,10 +197,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     if "C" not in machine.axes or "X" not in machine.axes:
         raise InputError(f"Expected a lathe with X and C axes, {machine.name} has "
                          f"{', '.join(machine.axes)}", key="machine")
-    tool = tool_from_spec(tool) if isinstance(tool, str) else tool
-    if not isinstance(tool, RoundNoseTool):
-        raise InputError(f"Expected a round-nose tool for turning ('nose:R:ANGLE'), got "
-                         f"{type(tool).__name__}", key="tool")
+    tool = turning_tool(tool)
     top = as_number(top, "top")
     errors = None if errors is None else as_error_model(errors)
     machine.check_errors(errors)
@@ -230,6 +227,16 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak,
                            empty_cut=empty, limit_violations=limits, notes=notes)
     return part, report
+
+
+def turning_tool(tool) -> RoundNoseTool:
+    """``tool`` (a spec, ``"nose:RADIUS_MM:ANGLE_DEG"``, or a tool) as the `RoundNoseTool`
+    the turning engine turns with; any other tool is refused."""
+    tool = tool_from_spec(tool) if isinstance(tool, str) else tool
+    if not isinstance(tool, RoundNoseTool):
+        raise InputError(f"Expected a round-nose tool for turning ('nose:R:ANGLE'), got "
+                         f"{type(tool).__name__}", key="tool")
+    return tool
 
 
 def _rapids_below_top(program, machine, top: float) -> tuple[str, ...]:

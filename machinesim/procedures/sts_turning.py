@@ -33,6 +33,7 @@ from typing import ClassVar
 import numpy as np
 
 from machinesim.cam import spiral as sp
+from machinesim.cutting.lathe import turning_tool
 from machinesim.exceptions import InputError
 from machinesim.experiment import Evaluation, Figure, Identified
 from machinesim.identification.turning_tool import fit_centre_height, identify_tool_errors
@@ -49,7 +50,7 @@ from machinesim.procedures.sts_plans import (
     profile_error,
 )
 from machinesim.procedures.sts_prediction import Prediction, predict
-from machinesim.servo import table6_servo
+from machinesim.servo import TABLE6, table6_servo
 
 __all__ = ["CASES", "PROGRAM_OF", "STSTurning", "test_cut"]
 
@@ -238,11 +239,17 @@ class STSTurning:
         "measure": ("tool_geometry", "white_light_interferometer"),
         "evaluate": ("tool_geometry", "white_light_interferometer")}
 
+    def __post_init__(self) -> None:
+        # here, not after the test cuts and three cases: a V tool ended in an AttributeError
+        # (no nose_radius), an unknown preset at Case 4
+        turning_tool(self.tool)
+        if self.servo_after not in TABLE6:
+            raise InputError(f"unknown servo preset {self.servo_after!r} for servo_after; "
+                             f"expected one of {sorted(TABLE6)} (Table 6)", key="servo_after")
+
     @property
     def nose_radius(self) -> float:
-        from machinesim.tool_specs import tool_from_spec
-
-        return tool_from_spec(self.tool).nose_radius
+        return turning_tool(self.tool).nose_radius
 
     def measure(self, lab) -> dict:
         """The tool test on the machine as found."""
