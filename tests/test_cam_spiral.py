@@ -272,3 +272,25 @@ def test_a_path_of_more_points_than_memory_holds_is_refused_naming_what_gave_it(
     assert len(path) == math.ceil(2 * math.pi * 250 / 0.1) + 1 == 15709
     assert "got 1.571e+13 from substeps 1000000000 on 15709 points" in refusal(
         lambda: sp.interpolate(path, "spline", 10**9))
+
+
+def test_angles_must_increase_within_the_spiral():
+    # past the centre rho (eq 4) turns negative: 2 pi 250 + 100 rad gives
+    # 0.5 mm - 2 um / (2 pi) x 1670.8 rad = -31.8 um, which was taken as a cutting point
+    end = 2 * math.pi * 250
+    assert PAPER.radius_at(end + 100) == pytest.approx(-3.1831e-5, rel=1e-4)
+    with pytest.raises(InputError, match=r"angles within the spiral, 0 \.\. 1570\.79633 rad .*"
+                                         r"got 0 \.\. 1670\.79633 rad"):
+        sp.cutting_points(sp.sine_grid(), PAPER, [0.0, 1.0, end + 100])
+    with pytest.raises(InputError, match=r"got -100 \.\. 0 rad"):
+        sp.cutting_points(sp.sine_grid(), PAPER, [-100.0, 0.0])
+    with pytest.raises(InputError, match=r"theta strictly increasing .* got 1\.0 rad at index 2 "
+                                         r"after 1\.0"):
+        sp.cutting_points(sp.sine_grid(), PAPER, [0.0, 1.0, 1.0, 2.0])
+    # X linear in C through C = 2, 1, 0 at the half steps is 20, 15, 10, 5, 0; numpy.interp,
+    # which needs increasing C, gave 0, 0, 0, 0, 20 without a word
+    backwards = sp.ToolPath(np.array([2.0, 1.0, 0.0]), np.array([20.0, 10.0, 0.0]), np.zeros(3))
+    for method in ("linear", "spline"):
+        with pytest.raises(InputError, match=r"path\.c strictly increasing .* got 1\.0 rad at "
+                                             r"index 1 after 2\.0"):
+            sp.interpolate(backwards, method, 2)

@@ -425,6 +425,19 @@ def _check_points(count: float, what: str, key: str) -> None:
                          "another unit?", key=key)
 
 
+def _check_increasing(angles: np.ndarray, name: str) -> None:
+    """Refuse angles (rad) that do not increase strictly: the spiral is cut turning one way,
+    and the interpolations need it (`numpy.interp` read decreasing angles silently wrong,
+    the spline refused them in scipy's words)."""
+    back = np.flatnonzero(np.diff(angles) <= 0.0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise InputError(f"Expected {name} strictly increasing (the spindle turning one way), "
+                         f"got {float(angles[i])!r} rad at index {i} after "
+                         f"{float(angles[i - 1])!r}",
+                         key=name)
+
+
 def _positive(value, name: str) -> float:
     try:
         number = float(value)
@@ -474,6 +487,12 @@ def cutting_points(design: Design, spiral: Spiral, theta) -> CuttingPoints:
     theta = np.array(theta, dtype=np.float64)
     if theta.ndim != 1 or theta.size < 2 or not np.isfinite(theta).all():
         raise InputError(f"Expected at least 2 finite angles, shape (N,), got {theta.shape}",
+                         key="theta")
+    _check_increasing(theta, "theta")
+    if theta[0] < 0.0 or theta[-1] > spiral.end_angle:
+        raise InputError(f"Expected angles within the spiral, 0 .. {spiral.end_angle:.9g} rad "
+                         f"(its rim to its centre), got {theta[0]:.9g} .. {theta[-1]:.9g} rad: "
+                         "beyond them rho (eq 4) leaves the part or turns negative",
                          key="theta")
     rho = spiral.radius_at(theta)
     cos, sin = np.cos(theta), np.sin(theta)
@@ -549,6 +568,7 @@ def interpolate(path: ToolPath, method: str = "linear", substeps: int = 10) -> T
         raise InputError(f"Expected substeps as an int >= 1, got {substeps!r}", key="substeps")
     _check_points((len(path) - 1.0) * substeps + 1.0,
                   f"substeps {substeps!r} on {len(path)} points", "substeps")
+    _check_increasing(path.c, "path.c")
     c = _substeps(path.c, substeps)
     if method == "linear":
         return ToolPath(frozen(c), frozen(np.interp(c, path.c, path.x)),
