@@ -47,6 +47,10 @@ MAX_SAMPLE_TIME_S = 0.1
 #: take about 20 MB, however long the motion (a 60000 s feed move at 10 kHz held 4.5 GB in
 #: one piece).
 FOLLOW_CHUNK = 1 << 18
+#: Largest acceleration feed-forward fraction (``AxisServo.acc_ff``): 1 feeds the whole
+#: inertial force forward; a control may over-feed a little, twice is beyond any tuning (an
+#: ACCFF of 1e9, accepted, had fed a billion times the force forward without a word).
+MAX_ACC_FF = 2.0
 #: Most loop periods one motion is followed for: 1e9, 27.8 h of motion at 10 kHz, about 30 s
 #: of computing per axis (1e8 periods took 3.2 s). A feed far too slow for its move (F0.0001
 #: deg/min on a 9000 deg spiral: 5.4e9 s, 5.4e13 periods) had the loop simulated for days,
@@ -107,6 +111,11 @@ class AxisServo:
             if not np.isfinite(value) or value < 0.0:
                 raise InputError(f"servo gain of axis {self.name} must be finite and >= 0, "
                                  f"got {value!r}", key=key)
+        if self.acc_ff > MAX_ACC_FF:
+            raise InputError(f"servo parameter acc_ff of axis {self.name} is the fraction of "
+                             f"the inertial force fed forward, 0 (none) to 1 (all), at most "
+                             f"{MAX_ACC_FF:g}; got {self.acc_ff!r} (Table 6's ACCFF is read x "
+                             "1000: 0.001 is 1)", key="acc_ff")
         for key in ("mass", "sample_time_s", "bandwidth_hz"):
             value = getattr(self, key)
             if not (value > 0.0) or np.isnan(value) or (key != "bandwidth_hz"
@@ -486,7 +495,7 @@ def check_servo(machine, servo) -> None:
                              f"{other}; {fix}", key="servo")
 
 
-__all__ = ["DEFAULT_SAMPLE_TIME_S", "FOLLOW_CHUNK", "MAX_FOLLOW_PERIODS", "SERVO_KEYS",
-           "SERVO_OPTIONAL_KEYS", "TABLE6", "TABLE6_DAMPING", "TABLE6_GAIN_SCALE", "AxisServo",
-           "PIDServo", "ServoDivergenceError", "check_servo", "servo_from_toml", "table6_axis",
-           "table6_servo"]
+__all__ = ["DEFAULT_SAMPLE_TIME_S", "FOLLOW_CHUNK", "MAX_ACC_FF", "MAX_FOLLOW_PERIODS",
+           "SERVO_KEYS", "SERVO_OPTIONAL_KEYS", "TABLE6", "TABLE6_DAMPING", "TABLE6_GAIN_SCALE",
+           "AxisServo", "PIDServo", "ServoDivergenceError", "check_servo", "servo_from_toml",
+           "table6_axis", "table6_servo"]

@@ -124,6 +124,12 @@ def test_bad_input_is_named():
         table6_servo("middle")
     with pytest.raises(InputError, match="needs t"):
         PIDServo((None,)).follow(np.zeros(3), np.zeros((3, 2)))
+    # a feed-forward fraction past twice the inertial force (1e9 was taken without a word)
+    assert AxisServo(kp=1.0, ki=0.0, kd=1.0, mass=1.0, acc_ff=2.0).acc_ff == 2.0
+    with pytest.raises(InputError, match="acc_ff of axis z is the fraction of the inertial "
+                                         r"force fed forward, 0 \(none\) to 1 \(all\), at "
+                                         "most 2; got 1000000000.0"):
+        AxisServo(kp=1.0, ki=0.0, kd=1.0, mass=1.0, acc_ff=1e9, name="z")
 
 
 def test_plan_keeps_a_move_s_lag_and_ends_it_in_position():
