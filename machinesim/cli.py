@@ -252,10 +252,10 @@ def _progress_bar(quiet: bool, clock=time.monotonic):
     if not sys.stderr.isatty():
         return _progress_lines(clock)
 
-    def show(done: int, total: int) -> None:
+    def show(done: int, total: int, stage: str = "cutting") -> None:
         width = 40
         filled = width * done // max(total, 1)
-        sys.stderr.write(f"\r  cutting [{'#' * filled}{'.' * (width - filled)}] "
+        sys.stderr.write(f"\r  {stage} [{'#' * filled}{'.' * (width - filled)}] "
                          f"{done}/{total} sweeps")
         if done >= total:
             sys.stderr.write("\n")
@@ -267,14 +267,15 @@ def _progress_bar(quiet: bool, clock=time.monotonic):
 def _progress_lines(clock):
     """Progress as whole lines for a log: nothing for a cut shorter than
     `LOG_PROGRESS_AFTER_S`, then a line at most every `LOG_PROGRESS_EVERY_S`, and one at the
-    end once any was written."""
+    end once any was written; each names the engine's stage ("building" its sweeps, then
+    "cutting")."""
     start = clock()
     due = [start + LOG_PROGRESS_AFTER_S, False]  # next line's time, whether any was written
 
-    def show(done: int, total: int) -> None:
+    def show(done: int, total: int, stage: str = "cutting") -> None:
         now = clock()
         if now >= due[0] or (done >= total and due[1]):
-            sys.stderr.write(f"  cutting: {done}/{total} sweeps "
+            sys.stderr.write(f"  {stage}: {done}/{total} sweeps "
                              f"({100 * done // max(total, 1)} %), {now - start:.0f} s\n")
             sys.stderr.flush()
             due[0], due[1] = now + LOG_PROGRESS_EVERY_S, True

@@ -792,3 +792,20 @@ def test_a_long_cut_without_a_terminal_logs_its_progress_as_lines(capsys):
         "  cutting: 100/100 sweeps (100 %), 50 s",  # 20 and 41 s: before 12 + 30 s
     ]
     assert cli._progress_bar(True) is None  # --quiet
+
+
+def test_a_log_names_the_stage_building_the_sweeps_before_cutting(capsys):
+    """The sweeps of a ball end mill take tens of seconds to build before the cut (a raster
+    of 3,819: 22 s, said nothing): the engine's stage is named in the line."""
+    from machinesim import cli
+
+    times = iter([0.0, 11.0, 20.0, 45.0])
+    show = cli._progress_bar(False, clock=lambda: next(times))
+    show(500, 3848, stage="building")
+    show(3848, 3848, stage="building")
+    show(3819, 3819)
+    assert capsys.readouterr().err.splitlines() == [
+        "  building: 500/3848 sweeps (12 %), 11 s",
+        "  building: 3848/3848 sweeps (100 %), 20 s",
+        "  cutting: 3819/3819 sweeps (100 %), 45 s",
+    ]

@@ -288,6 +288,32 @@ def test_progress_counts_each_sweep_once_across_tiles():
     assert all(a[0] <= b[0] and a[1] == b[1] for a, b in zip(calls, calls[1:], strict=False))
 
 
+def test_progress_tells_a_stage_aware_caller_the_sweeps_being_built_first():
+    """A ball end mill's sweeps take most of a raster's wait to build (3,819 sweeps: 22 s)
+    before the first tile is cut, and nothing was told: a callable that takes ``stage`` is
+    told the building, over every sweep of the paths, then the cut as before; one that
+    takes (done, total) alone only the cut."""
+    calls, plain = [], []
+    stock = block(2e-3, 2e-3, 0.2e-3)
+    tool = BallEndMill(0.2e-3, chord_tol=5e-6)
+    ys = (0.5e-3, 1.0e-3, 1.5e-3)
+    paths = [np.array([pose((x, y, -5e-6)) for x in np.linspace(-0.5e-3, 2.5e-3, 4)])
+             for y in ys]
+    _, report = remove(stock, tool, paths, method="boolean",
+                       progress=lambda done, total, stage="cutting": calls.append(
+                           (stage, done, total)))
+    remove(stock, tool, paths, method="boolean",
+           progress=lambda done, total: plain.append((done, total)))
+    building = [call for call in calls if call[0] == "building"]
+    cutting = [call for call in calls if call[0] == "cutting"]
+    assert calls[:len(building)] == building  # all before the cut
+    assert building[0] == ("building", 0, 9) and building[-1] == ("building", 9, 9)
+    assert len(building) > 2  # told sweep by sweep, not just at both ends
+    assert all(a[1] <= b[1] for a, b in zip(building, building[1:], strict=False))
+    assert cutting[-1] == ("cutting", report.n_sweeps_cut, report.n_sweeps_cut)
+    assert plain == [call[1:] for call in cutting]
+
+
 @pytest.mark.parametrize(
     ("paths", "roi", "message"),
     [

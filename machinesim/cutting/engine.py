@@ -48,6 +48,8 @@ volumes.
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -287,6 +289,19 @@ def removed_volume(before: manifold3d.Manifold, after: manifold3d.Manifold, cut_
     return removed + float(np.sum(change[np.abs(change) > FACE_ROUND_REL * size]))
 
 
+def _building(progress):
+    """``progress`` told the stage "building", when it takes a ``stage`` keyword, else None:
+    a callable of (done, total) alone, as `remove` was documented to call, is left as it
+    was (its counts would run twice, from 0 to the sweeps and again)."""
+    if progress is None:
+        return None
+    try:
+        inspect.signature(progress).bind(0, 0, stage="building")
+    except (TypeError, ValueError):
+        return None
+    return functools.partial(progress, stage="building")
+
+
 def remove(
     stock: Part,
     tool,
@@ -315,7 +330,10 @@ def remove(
         result is the stock clipped to the windows.
     progress : callable(done, total), optional
         Called as tiles are cut, in sweeps (`EngineReport.n_sweeps_cut` in all), each
-        counted once, when the first tile it reaches is cut.
+        counted once, when the first tile it reaches is cut. A callable that also takes a
+        keyword ``stage`` is told the building of the sweeps before that, as
+        ``progress(done, total, stage="building")`` over all `EngineReport.n_sweeps`: for a
+        ball end mill the longer wait before the first tile (`SweepSet.hulls`).
     sweeps_per_tile : int
         Cells are split into a grid of tiles until each has at most this many sweeps (or
         splitting stops paying, see `SPLIT_GAIN`); a huge value disables tiling.
@@ -419,7 +437,7 @@ def remove(
             )
             return relief.part, report
     (hulls, lower, upper, direction, n_degenerate, sideways, swept, reached, footprints,
-     _) = sweeps.hulls(touches)
+     _) = sweeps.hulls(touches, progress=_building(progress))
     keys = _direction_keys(direction)
 
     def planned(cut: np.ndarray):

@@ -258,8 +258,13 @@ class SweepSet:
             return None
         return self._solid(hull[0], hull[1], not clipped and points[:, 2].max() > self.clip_z)
 
-    def hulls(self, keep: Callable[[np.ndarray, np.ndarray], np.ndarray]):
+    def hulls(self, keep: Callable[[np.ndarray, np.ndarray], np.ndarray],
+              progress: Callable[[int, int], None] | None = None):
         """Clipped sweeps whose point bounds pass ``keep``.
+
+        ``progress(done, total)``, optional, is told how many of the `count` sweeps have
+        been looked at, as they are built: building a ball end mill's thousands of sweeps
+        takes tens of seconds (a raster of 3,819: 22 s) before anything is cut.
 
         Returns
         -------
@@ -292,6 +297,8 @@ class SweepSet:
         k = len(self.vertices)
         nseg = 0 if self.rotation_segments is None else len(self.rotation_segments)
         step = max(1, POINTS_PER_CHUNK // (2 * k + nseg))
+        if progress is not None:
+            progress(0, self.count)
         for begin in range(0, self.count, step):
             first = self.pairs[begin:begin + step]
             # Only sweeps that come below the clip plane can reach the stock: find them by
@@ -358,6 +365,8 @@ class SweepSet:
                 prisms = dict(zip(rows.tolist(), clipped_prisms(
                     p0[rows], move[rows], self.clip_z + np.abs(move[rows, 2])), strict=True))
             for row in chosen.tolist():
+                if progress is not None:
+                    progress(begin + int(near[row]), self.count)
                 if level[row]:
                     built = self._prism(prisms[row], p0[row], move[row])
                 elif minkowski[row]:
@@ -390,6 +399,8 @@ class SweepSet:
                 upper.append(box[3:])
                 direction.append(move[row])
                 swept += volume
+        if progress is not None:
+            progress(self.count, self.count)
         shape = (-1, 3)
         return (hulls, np.array(lower).reshape(shape), np.array(upper).reshape(shape),
                 np.array(direction).reshape(shape), n_degenerate, sideways, swept, reached,
