@@ -28,6 +28,11 @@ h. Plunge roughing: ``flat:0.5`` plunged 3000 times to 20 um, 1 um apart along X
    down: the search for sheets thinner than 1 pm on the finished part with faces no wider
    than that left out of its pairing (`machinesim.cutting.sheets`, the default) against
    every face paired.
+i. A ball end mill's raster finish, as Fusion posts one: ``ball:0.5`` over a gently curved
+   floor 0.03-0.08 mm deep, 19 passes along X 12 mm long at 0.5 mm step-over, each of 199
+   lines (3,800 sweeps, every one a line that also moves in Z): each sweep the tool cut at
+   its lowest ring wholly above the clip plane, untrimmed (`SweepSet._ball_cut`, the
+   default) against the whole tool's sweep trimmed by the plane (as before).
 
 With ``--tilted`` the same end mill cuts through ``models/errors/example.toml``, whose
 workpiece stands tilted 0.01 and -0.02 deg against the machine's Z: the engine cuts in the
@@ -38,8 +43,9 @@ c. one circle of (b), both ways;
 d. the contour in 5 levels, in the tool's frame only (in the workpiece frame it outgrew the
    machine's 24 GB).
 
-Each variant runs in its own process (``--repeat`` times, median quoted), and the parts are
-compared: removed volumes and the volume of each part less the other.
+Each variant runs in its own process (``--repeat`` times, median quoted; peak memory is the
+process's maximum resident set), and the parts are compared: removed volumes and the volume
+of each part less the other.
 
     .venv/bin/python benchmarks/end_mill_passes.py [--repeat 3] [--tilted] [--case plunges]
 """
@@ -55,6 +61,7 @@ from pathlib import Path
 from _timed_cut import timed_cut
 
 RUNNER = """
+import resource
 import sys
 import numpy as np
 import machinesim.cutting.engine as engine
@@ -77,7 +84,12 @@ if sys.argv[1] == "solids":  # level passes united in 3-D, not by their footprin
 if sys.argv[1] == "slivers":  # every face paired in the search for sheets
     import machinesim.cutting.sheets as sheets
     sheets._wide = lambda corners, area, thickness: np.ones(len(corners), dtype=bool)
-sys.exit(main(sys.argv[2:]))
+if sys.argv[1] == "trimmed":  # a ball end mill's whole sweep, trimmed by the clip plane
+    from machinesim.cutting.sweepset import SweepSet
+    SweepSet._ball_cut = lambda self, rotation, origin, move: "whole"
+status = main(sys.argv[2:])
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)
+sys.exit(status)
 """
 
 
@@ -140,6 +152,27 @@ def plunges_program(plunges: int = 3000, step_mm: float = 0.001) -> str:
     return "\n".join(lines) + "\n"
 
 
+def raster_program(passes: int = 19, lines: int = 199) -> str:
+    """A Fusion-style finishing raster: each pass plunges, then follows the floor
+    z = -0.03 - 0.02 (x + 1) / 12 - 0.03 sin(pi y / 10) (mm) in ``lines`` lines, and
+    retracts."""
+    text = ["%", "O6 (a ball end mill's raster finish)", "G90 G21 G17 G94", "G00 X-1. Y0.5 Z5."]
+
+    def z(x: float, y: float) -> float:
+        return -0.03 - 0.02 * (x + 1.0) / 12.0 - 0.03 * math.sin(math.pi * y / 10.0)
+
+    for k in range(passes):
+        y = 0.5 + 0.5 * k
+        xs = [-1.0 + 12.0 * i / lines for i in range(lines + 1)]
+        if k % 2:
+            xs.reverse()
+        text += [f"G00 X{xs[0]:.4f} Y{y:.4f}", f"G01 Z{z(xs[0], y):.4f} F500."]
+        text += [f"X{x:.4f} Z{z(x, y):.4f} F1500." for x in xs[1:]]
+        text.append("G00 Z1.")
+    text += ["M30", "%"]
+    return "\n".join(text) + "\n"
+
+
 def cut(folder: Path, name: str, text: str, variant: str, errors: Path | None = None,
         tool: str = "flat:0.8", stock: str = "block:8x8x4@-4,-4,0") -> dict:
     program = folder / f"{name}.nc"
@@ -149,11 +182,12 @@ def cut(folder: Path, name: str, text: str, variant: str, errors: Path | None = 
                  stock, "--out", str(out), "--report", str(report), "--quiet"]
     if errors is not None:
         arguments += ["--errors", str(errors)]
-    seconds, summary, _ = timed_cut(RUNNER, variant, arguments, report, name)
+    seconds, summary, stderr = timed_cut(RUNNER, variant, arguments, report, name)
     with open(out, "rb") as ply:  # the header names the triangle count
         header = ply.read(512).decode("latin-1")
     triangles = int(header.split("element face ")[1].split()[0])
-    return {"seconds": seconds, "removed_mm3": summary["removed_volume_mm3"],
+    return {"seconds": seconds, "peak_mb": int(stderr.split()[-1]) / 1024,
+            "removed_mm3": summary["removed_volume_mm3"],
             "sweeps": summary["sweeps_count"], "part": out, "triangles": triangles,
             "rapids": summary["rapids_that_cut_lines"]}
 
@@ -184,7 +218,8 @@ def compare(folder: Path, name: str, text: str, variants: tuple[str, str], repea
     print(f"{name}: {last[second]['sweeps']} sweeps; end to end, median of {repeat}: "
           + ", ".join(f"{v} {statistics.median(times[v]):.2f} s (runs "
                       f"{', '.join(f'{t:.2f}' for t in times[v])}; "
-                      f"{last[v]['triangles']:,} triangles)" for v in variants)
+                      f"{last[v]['triangles']:,} triangles, peak "
+                      f"{max(r['peak_mb'] for r in runs[v]):.0f} MB)" for v in variants)
           + f": {statistics.median(times[second]) / statistics.median(times[first]):.2f} times")
     print(f"  removed {last[first]['removed_mm3']:.12g} against "
           f"{last[second]['removed_mm3']:.12g} mm^3; the parts apart by "
@@ -198,10 +233,12 @@ def main() -> None:
     parser.add_argument("--tilted", action="store_true",
                         help="cut through models/errors/example.toml (cases c and d)")
     parser.add_argument("--case", action="append",
-                        choices=("helix", "levels", "pocket", "trochoid", "star", "plunges"),
+                        choices=("helix", "levels", "pocket", "trochoid", "star", "plunges",
+                                 "raster"),
                         help="only this case (repeatable; default every untilted case)")
     args = parser.parse_args()
-    chosen = set(args.case or ("helix", "levels", "pocket", "trochoid", "star", "plunges"))
+    chosen = set(args.case or ("helix", "levels", "pocket", "trochoid", "star", "plunges",
+                               "raster"))
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         if not args.tilted:
@@ -220,6 +257,9 @@ def main() -> None:
             if "plunges" in chosen:
                 compare(folder, "plunges", plunges_program(), ("wide", "slivers"),
                         args.repeat, tool="flat:0.5", stock="block:10x10x2")
+            if "raster" in chosen:
+                compare(folder, "raster", raster_program(), ("rings", "trimmed"), args.repeat,
+                        tool="ball:0.5", stock="block:12x10x1@-1,0,0")
             return
         errors = Path(__file__).resolve().parents[1] / "models" / "errors" / "example.toml"
         compare(folder, "circle, tilted", levels_program(1), ("frame", "workpiece"),

@@ -23,6 +23,7 @@ from machinesim.cutting.sweeps import (
     hull_mesh,
     manifold_from,
     mesh_volume,
+    polygon_triangles,
 )
 from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL, SIDEWAYS_WARN_RAD, TWIST_M
 
@@ -109,8 +110,13 @@ class SweepSet:
             self.holder_face = np.stack([r * np.cos(phi), r * np.sin(phi),
                                          np.full(phi.size, top.max())], axis=1)
         # A flat end mill: vertex i + n straight above vertex i (its two rings, `tools`).
-        from machinesim.tools import FlatEndMill
+        from machinesim.tools import BallEndMill, FlatEndMill
         self.rings = int(tool.segments) if isinstance(tool, FlatEndMill) else 0
+        # A ball end mill: its vertices the tip, then rings of latitude of `segments` each,
+        # from the tip up (`BallEndMill.rings`); its shorter sweeps by how many are kept.
+        self.ball = (tool.rings[1] if isinstance(tool, BallEndMill)
+                     and self.solid_sweep is not None else 0)
+        self._ball_sweeps: dict[int, SolidSweep] = {}
         self._world = self._lowest = None
 
     def lowest(self, index) -> np.ndarray:
@@ -247,8 +253,51 @@ class SweepSet:
                 if not volume > 0.0:
                     return None
                 return solid, volume
+        if self.ball:
+            built = self._ball_cut(rotation, origin, move)
+            if built != "whole":
+                return built
         vertices, triangles = self.solid_sweep.mesh(rotation, origin, move)
         return self._solid(vertices, triangles, vertices[:, 2].max() > self.clip_z)
+
+    def _ball_cut(self, rotation, origin, move):
+        """A ball end mill translated by ``move``: the sweep of the tool cut at its lowest
+        ring of latitude that lies wholly above clip_z + max(0, -move z), untrimmed; "whole"
+        when no ring does (the tool's whole sweep is then trimmed, `_translated`).
+
+        Every point of the sweep below the clip plane lies on the path of a tool point at
+        most max(0, -move z) above it, and the tool below such a ring is the hull of the
+        tip and the rings under it (a stack of frusta), so the sweep of that hull is the
+        sweep wherever there is material. Its top, above the clip plane by at most a ring's
+        rise plus |move z| (for R0.5 mm, 44 um), cuts nothing there. Built so, a raster's
+        3,819 sweeps took 5 s instead of 23 s: the whole tool's sweep, 10 mm tall, was
+        imported and then trimmed by the plane (a boolean) for a tip 0.08 mm deep. The part
+        is the trimmed sweeps' to round-off (heights within 3e-17 m on that raster,
+        `tests/test_cutting_sweeps.py`).
+        """
+        n = self.ball
+        start = self.vertices @ rotation.T + origin
+        level = self.clip_z + max(0.0, -float(move[2]))
+        # lowest height of each ring and of everything above it
+        above = np.minimum.accumulate(start[:0:-1, 2])[::-1][::n]
+        rings = np.flatnonzero(above >= level)
+        if not len(rings) or rings[0] == len(above) - 1:
+            return "whole"
+        kept = int(rings[0]) + 1
+        if kept not in self._ball_sweeps:
+            count = 1 + kept * n
+            triangles = self.solid_sweep.triangles
+            top = count - n + polygon_triangles(n)  # counter-clockwise from above: outward
+            self._ball_sweeps[kept] = SolidSweep(
+                self.vertices[:count],
+                np.concatenate([triangles[(triangles < count).all(axis=1)], top]))
+        sweep = self._ball_sweeps[kept]
+        vertices, triangles = sweep.mesh_from(start[:len(sweep.vertices)], rotation, move)
+        solid = manifold_from(vertices, triangles, self.run_id)
+        if solid is None:
+            return None
+        volume = solid.volume()
+        return (solid, volume) if volume > 0.0 else None
 
     def _hull(self, points: np.ndarray, clipped: bool):
         """The convex hull of a sweep's points by Qhull (`sweeps.hull_mesh`): the clipped
