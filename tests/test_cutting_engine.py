@@ -314,6 +314,22 @@ def test_progress_tells_a_stage_aware_caller_the_sweeps_being_built_first():
     assert plain == [call[1:] for call in cutting]
 
 
+def test_building_is_told_at_most_progress_steps_times(monkeypatch):
+    """Told per sweep built, a cut of 10,000 level passes would redraw a terminal's bar
+    10,000 times: the building is told about every `PROGRESS_STEPS`-th of the sweeps, and
+    at both ends."""
+    from machinesim.cutting import sweepset
+
+    monkeypatch.setattr(sweepset, "PROGRESS_STEPS", 3)
+    calls = []
+    stock = block(2e-3, 2e-3, 0.2e-3)
+    path = np.array([pose((x, 1e-3, -5e-6)) for x in np.linspace(-0.5e-3, 2.5e-3, 13)])
+    remove(stock, BallEndMill(0.2e-3, chord_tol=5e-6), [path], method="boolean",
+           progress=lambda done, total, stage="cutting": calls.append((stage, done)))
+    building = [done for stage, done in calls if stage == "building"]
+    assert building[0] == 0 and building[-1] == 12 and len(building) <= 3 + 2
+
+
 @pytest.mark.parametrize(
     ("paths", "roi", "message"),
     [

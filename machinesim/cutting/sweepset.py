@@ -27,7 +27,8 @@ from machinesim.cutting.sweeps import (
 )
 from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL, SIDEWAYS_WARN_RAD, TWIST_M
 
-__all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "SweepSet", "dragged"]
+__all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "PROGRESS_STEPS", "SweepSet",
+           "dragged"]
 
 #: A turning sweep whose vertices' heights change by no more than this (m) between its
 #: poses is not trimmed at the clip plane after its hull (`SweepSet.hulls`): it reaches at
@@ -45,6 +46,8 @@ HOLDER_MATERIAL_M3 = 1e-21
 #: Sides of the polygon a shank wider than the tool's body is drawn as in the holder check
 #: (circumscribed about the shank: it errs towards a crash, by at most 0.5 % of its radius).
 HOLDER_SHANK_SIDES = 32
+#: Times at most that `SweepSet.hulls` tells its progress while it builds the sweeps.
+PROGRESS_STEPS = 200
 #: Sweeps whose tool points are processed together: bounds the transient memory (k points
 #: per pose, ~100 bytes each) to ~50 MB whatever the path length.
 POINTS_PER_CHUNK = 1 << 19
@@ -346,8 +349,12 @@ class SweepSet:
         k = len(self.vertices)
         nseg = 0 if self.rotation_segments is None else len(self.rotation_segments)
         step = max(1, POINTS_PER_CHUNK // (2 * k + nseg))
+        told = 0
         if progress is not None:
             progress(0, self.count)
+        # told about every 1/PROGRESS_STEPS-th of the sweeps: a bar 40 columns wide needs
+        # no more, and a cut of 10,000 level passes would redraw it 10,000 times
+        every = max(1, self.count // PROGRESS_STEPS)
         for begin in range(0, self.count, step):
             first = self.pairs[begin:begin + step]
             # Only sweeps that come below the clip plane can reach the stock: find them by
@@ -414,8 +421,9 @@ class SweepSet:
                 prisms = dict(zip(rows.tolist(), clipped_prisms(
                     p0[rows], move[rows], self.clip_z + np.abs(move[rows, 2])), strict=True))
             for row in chosen.tolist():
-                if progress is not None:
-                    progress(begin + int(near[row]), self.count)
+                if progress is not None and begin + int(near[row]) >= told + every:
+                    told = begin + int(near[row])
+                    progress(told, self.count)
                 if level[row]:
                     built = self._prism(prisms[row], p0[row], move[row])
                 elif minkowski[row]:
