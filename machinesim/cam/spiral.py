@@ -4,7 +4,8 @@ Zhu, Takeuchi, et al., deterministic error compensation in STS turning
 (`shared/seeds/004_3f9e6f9e74319d55.txt`); equation numbers are the paper's. The steps, as
 a CAM system runs them for the ``sts_lathe`` (X Z C, C the work spindle; docs/machines.md):
 
-1. a designed surface z(x, y) in the workpiece frame (`Design`): the 2-D sine grid of eq 2
+1. a designed surface z(x, y) in the workpiece frame (`Design`, `machinesim.cam.designs`,
+   re-exported here): the 2-D sine grid of eq 2
    (`sine_grid`), a sphere (`sphere`), any callable (`Design`), or a height map in memory or
    in a file (`design_from_height_map`, `read_design`);
 2. an Archimedean spiral of pitch f (the feed per revolution) from the outer radius r to the
@@ -30,19 +31,26 @@ forms used: docs/procedures/sts_turning.md.
 from __future__ import annotations
 
 import math
-import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import CubicSpline, RectBivariateSpline
+from scipy.interpolate import CubicSpline
 
-from machinesim._io import check_readable_file
 from machinesim.arrays import frozen
-from machinesim.exceptions import FileError, InputError, check_length
+from machinesim.cam.designs import (
+    AMPLITUDE_M,
+    WAVELENGTH_M,
+    Design,
+    design_from_height_map,
+    read_design,
+    sine_grid,
+    sphere,
+    tilted_plane,
+)
+from machinesim.exceptions import InputError, check_length
 from machinesim.nc import AXES, KIND_LINEAR, KIND_RAPID, Program
-from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, RAD_PER_DEG
+from machinesim.units import M_PER_MM, M_PER_UM, RAD_PER_DEG
 
 __all__ = [
     "AMPLITUDE_M", "CAL_STEP_M", "CA_STEP_RAD", "FEED_M", "MAX_PATH_POINTS", "NOSE_RADIUS_M",
@@ -54,9 +62,6 @@ __all__ = [
 ]
 
 # --- the paper's conditions (Table 1, section 2.3, Table 4) ---------------------------------
-#: Eq 2 and section 2.3: amplitude A = 50 nm and wavelength lambda = 100 um of the sine grid.
-AMPLITUDE_M = 50 * M_PER_NM
-WAVELENGTH_M = 100 * M_PER_UM
 #: Table 1: feed 2 um/rev, spindle 20 rpm.
 FEED_M = 2 * M_PER_UM
 SPINDLE_RPM = 20.0
@@ -71,11 +76,6 @@ CA_STEP_RAD = 2.0 * RAD_PER_DEG
 #: Table 4 "before" (Case 1, 2): Constant Arc Length, 30 um (13,090 cutting points).
 CAL_STEP_M = 30 * M_PER_UM
 
-#: Central-difference step for the gradient of a callable design without one (m): on the
-#: paper's sine grid the truncation h^2 |z'''| / 6 (|z'''| <= A (2 pi / lambda)^3) is 2e-10
-#: of slope (the tip moves by R times that: 0.2 pm), the round-off eps |z| / h 2e-14 per um
-#: of height.
-GRADIENT_STEP_M = 10 * M_PER_NM
 #: Most points a path may have (cutting points, or samples of an interpolated path): 10^7
 #: take 13 s for points, tool path and program, 10^8 about 2 min and 0.8 GB an array. A
 #: step in the wrong unit (1e-12 rad for CA, 1.6e15 points) asked numpy for petabytes, and
@@ -84,205 +84,6 @@ MAX_PATH_POINTS = 10**8
 #: Newton steps that invert eq 3 (arc length -> angle); it converges monotonically from the
 #: start used, quadratically at the end: 6-8 steps reach round-off, the rest is a margin.
 _NEWTON_STEPS = 40
-
-
-# --- designed surfaces -----------------------------------------------------------------------
-@dataclass(frozen=True)
-class Design:
-    """A designed surface z(x, y) in the workpiece frame, m.
-
-    Parameters
-    ----------
-    height : callable
-        ``height(x, y) -> z``, vectorised over arrays of x and y (m).
-    gradient : callable, optional
-        ``gradient(x, y) -> (dz/dx, dz/dy)``; central differences (`GRADIENT_STEP_M`) when
-        None.
-    name : str
-        For reports.
-    """
-
-    height: Callable
-    gradient: Callable | None = None
-    name: str = "design"
-
-    def __call__(self, x, y) -> np.ndarray:
-        return np.asarray(self.height(np.asarray(x, dtype=np.float64),
-                                      np.asarray(y, dtype=np.float64)), dtype=np.float64)
-
-    def slope(self, x, y) -> tuple[np.ndarray, np.ndarray]:
-        """(dz/dx, dz/dy) at (x, y)."""
-        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        if self.gradient is not None:
-            gx, gy = self.gradient(x, y)
-            return np.asarray(gx, dtype=np.float64), np.asarray(gy, dtype=np.float64)
-        h = GRADIENT_STEP_M
-        return ((self(x + h, y) - self(x - h, y)) / (2.0 * h),
-                (self(x, y + h) - self(x, y - h)) / (2.0 * h))
-
-
-def sine_grid(amplitude: float = AMPLITUDE_M, wavelength: float = WAVELENGTH_M, *,
-              amplitude_y: float | None = None, wavelength_y: float | None = None) -> Design:
-    """Eq 2: z = A1 sin(2 pi x / lambda1) + A2 cos(2 pi y / lambda2), m.
-
-    The second amplitude and wavelength default to the first (the paper: both 50 nm and
-    100 um).
-    """
-    a1 = check_length(amplitude, "amplitude")
-    l1 = check_length(wavelength, "wavelength", positive=True)
-    a2 = a1 if amplitude_y is None else check_length(amplitude_y, "amplitude_y")
-    l2 = l1 if wavelength_y is None else check_length(wavelength_y, "wavelength_y",
-                                                      positive=True)
-    k1, k2 = 2.0 * math.pi / l1, 2.0 * math.pi / l2
-
-    def height(x, y):
-        return a1 * np.sin(k1 * x) + a2 * np.cos(k2 * y)
-
-    def gradient(x, y):
-        return a1 * k1 * np.cos(k1 * x), -a2 * k2 * np.sin(k2 * y) + 0.0 * x
-
-    return Design(height, gradient, f"sine grid A {a1 / M_PER_NM:g} nm, lambda "
-                                    f"{l1 / M_PER_UM:g} um")
-
-
-def sphere(radius: float) -> Design:
-    """A sphere cap with its pole at the origin: convex (z = sqrt(Rs^2 - rho^2) - Rs) for
-    ``radius`` > 0, concave (z = |Rs| - sqrt(Rs^2 - rho^2)) for ``radius`` < 0, m.
-
-    Defined for rho < |Rs|; NaN beyond.
-    """
-    try:
-        rs = float(radius)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected radius as a number (m), got {radius!r}",
-                         key="radius") from error
-    if not math.isfinite(rs) or rs == 0.0:
-        raise InputError(f"Expected a finite, non-zero sphere radius (m), got {rs!r}",
-                         key="radius")
-    sign, size = math.copysign(1.0, rs), abs(rs)
-
-    def root(x, y):
-        with np.errstate(invalid="ignore"):
-            return np.sqrt(size * size - (x * x + y * y))
-
-    def height(x, y):
-        return sign * (root(x, y) - size)
-
-    def gradient(x, y):
-        r = root(x, y)
-        return -sign * x / r, -sign * y / r
-
-    return Design(height, gradient, f"sphere R {rs / M_PER_MM:g} mm")
-
-
-def tilted_plane(slope_x: float, slope_y: float = 0.0) -> Design:
-    """The plane z = slope_x x + slope_y y (a test surface: turned, its twist about the
-    centre shows the tool's centre height with its sign)."""
-    kx, ky = float(slope_x), float(slope_y)
-    if not (math.isfinite(kx) and math.isfinite(ky)):
-        raise InputError(f"Expected finite slopes, got {slope_x!r}, {slope_y!r}", key="slope")
-
-    def height(x, y):
-        return kx * x + ky * y
-
-    def gradient(x, y):
-        shape = np.broadcast(x, y).shape
-        return np.full(shape, kx), np.full(shape, ky)
-
-    return Design(height, gradient, f"plane, slopes {kx:g}, {ky:g}")
-
-
-def design_from_height_map(x, y, z, *, name: str = "height map") -> Design:
-    """A design from a height map: bicubic interpolating spline (scipy), m.
-
-    Parameters
-    ----------
-    x : array-like, shape (nx,)
-    y : array-like, shape (ny,)
-        Strictly increasing grid axes, m, at least 4 each.
-    z : array-like, shape (ny, nx)
-        Heights, m, finite (``z[j, i]`` over ``(x[i], y[j])``, as `machinesim.metrology`).
-
-    The design refuses points outside the map's box (InputError naming the first).
-    """
-    gx, gy = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-    gz = np.asarray(z, dtype=np.float64)
-    for axis, values in (("x", gx), ("y", gy)):
-        if values.ndim != 1 or values.size < 4 or not np.isfinite(values).all() or (
-                np.diff(values) <= 0.0).any():
-            raise InputError(f"Expected {axis} as at least 4 finite, strictly increasing "
-                             f"values (m), got shape {values.shape}", key=axis)
-    if gz.shape != (gy.size, gx.size):
-        raise InputError(f"Expected z of shape ({gy.size}, {gx.size}) (ny, nx), got "
-                         f"{gz.shape}", key="z")
-    if not np.isfinite(gz).all():
-        raise InputError(f"Expected finite heights, {np.count_nonzero(~np.isfinite(gz))} are "
-                         "not (fill the holes first)", key="z")
-    spline = RectBivariateSpline(gx, gy, gz.T, kx=3, ky=3, s=0)
-    box = (gx[0], gx[-1], gy[0], gy[-1])
-
-    def check(px, py):
-        outside = (px < box[0]) | (px > box[1]) | (py < box[2]) | (py > box[3])
-        if np.any(outside):
-            i = int(np.flatnonzero(np.ravel(outside))[0])
-            raise InputError(f"design {name!r}: point ({np.ravel(px)[i]!r}, "
-                             f"{np.ravel(py)[i]!r}) m lies outside the height map "
-                             f"[{box[0]!r}, {box[1]!r}] x [{box[2]!r}, {box[3]!r}] m",
-                             key="design")
-
-    def height(px, py):
-        check(px, py)
-        return spline.ev(px, py)
-
-    def gradient(px, py):
-        check(px, py)
-        return spline.ev(px, py, dx=1), spline.ev(px, py, dy=1)
-
-    return Design(height, gradient, name)
-
-
-def read_design(path: str | os.PathLike) -> Design:
-    """A design from a height-map file: ISO 25178-72 ``.x3p`` (as
-    `machinesim.metrology.export_x3p` writes) or ``.npz`` with arrays ``x``, ``y``, ``z``
-    in metres (``z`` of shape (ny, nx))."""
-    file = check_readable_file(path, "height map")
-    suffix = file.suffix.lower()
-    if suffix == ".npz":
-        try:
-            with np.load(file, allow_pickle=False) as data:
-                missing = [key for key in ("x", "y", "z") if key not in data]
-                if missing:
-                    raise InputError(f"missing array(s) {', '.join(missing)}; expected x, y, "
-                                     "z in metres", source=str(file))
-                x, y, z = data["x"], data["y"], data["z"]
-        except (OSError, ValueError) as error:
-            if isinstance(error, InputError):
-                raise
-            raise FileError(f"cannot read the height map: {error}", source=str(file)) from None
-    elif suffix == ".x3p":
-        x, y, z = _read_x3p(file)
-    else:
-        raise InputError(f"Expected a .x3p or .npz height map, got {suffix or 'no suffix'!r}",
-                         source=str(file))
-    return design_from_height_map(x, y, z, name=Path(file).name)
-
-
-def _read_x3p(file: Path):
-    import x3pio
-
-    try:
-        surface = x3pio.read(file)
-    except (OSError, x3pio.X3pError) as error:
-        raise FileError(f"cannot read the height map: {error}", source=str(file)) from None
-    layer = surface.layers[0]
-    rotation = np.asarray(surface.placement.rotation, dtype=np.float64)
-    if not np.allclose(rotation, np.eye(3), rtol=0.0, atol=1e-12):
-        raise InputError("Expected an x3p map without rotation in its placement",
-                         source=str(file))
-    offset = np.asarray(surface.placement.offset, dtype=np.float64)
-    return (np.asarray(layer.x_values, dtype=np.float64) + offset[0],
-            np.asarray(layer.y_values, dtype=np.float64) + offset[1],
-            np.asarray(layer.z, dtype=np.float64) + offset[2])
 
 
 # --- the spiral (eqs 3-6) --------------------------------------------------------------------
