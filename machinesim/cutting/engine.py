@@ -62,6 +62,7 @@ from manifold3d import OpType
 from machinesim.cutting.containment import CONTAINED_REL, contained_sweeps
 from machinesim.cutting.footprints import level_prisms, united_in_plane
 from machinesim.cutting.frame import into_frame, out_of_frame, tool_frame
+from machinesim.cutting.holder import holder_contact, holder_in_material
 from machinesim.cutting.relief import cut_reliefs
 from machinesim.cutting.sheets import SheetReport, remove_sheets
 from machinesim.cutting.stitch import exact_box, snapped_union, stitch
@@ -401,11 +402,11 @@ def remove(
                               on_holder_contact=on_holder_contact)
         return out_of_frame(part, frame), replace(report,
                                                   elapsed_s=time.perf_counter() - start)
-    holder = tuple(sweeps.holder_contact(bounds[1, 2], touches))
+    holder = tuple(holder_contact(sweeps, bounds[1, 2], touches))
     if holder and on_holder_contact is not None:
         # the stock's box says it may; before refusing, the material says whether it does
         reach = 2.0 * float(np.linalg.norm(bounds[1] - bounds[0])) + scale  # past it
-        holder = tuple(sweeps.holder_in_material(holder, stock.manifold, reach, whole))
+        holder = tuple(holder_in_material(sweeps, holder, stock.manifold, reach, whole))
         if holder:
             on_holder_contact(holder)
     if method == "auto" and sweeps.count:

@@ -3,8 +3,9 @@
 `machinesim.cutting.engine.remove` hands its paths to a `SweepSet`, which transforms the
 tool for all poses at once, finds the sweeps that come below a plane just above the stock
 (most rapids do not), and builds each of those as an exact solid (`machinesim.cutting.sweeps`),
-clipped to that plane so tall tool bodies do not overlap their neighbours. It also finds the
-sweeps in which the top of the tool's body, where its holder begins, comes below the stock.
+clipped to that plane so tall tool bodies do not overlap their neighbours. It keeps where
+the holder begins (`SweepSet.holder_face`), which `machinesim.cutting.holder` checks against
+the stock.
 """
 
 from __future__ import annotations
@@ -39,10 +40,6 @@ RAISED_UNTRIMMED_M = 1e-9
 #: The bounds of a profile's turning sweep below the clip plane come from the all-pairs edge
 #: search of both poses, when the tool has no more than this many vertices (`hulls`).
 PAIR_CLIP_MAX_VERTICES = 64
-#: Material inside the holder's room over a sweep (m^3) above which the holder meets the part:
-#: 1 um x 1 um x 1 nm. A body cut flush to its top leaves round-off slivers (1e-19 m thick
-#: over a few mm^2: ~1e-25 m^3) far below it; any real contact is far above.
-HOLDER_MATERIAL_M3 = 1e-21
 #: Sides of the polygon a shank wider than the tool's body is drawn as in the holder check
 #: (circumscribed about the shank: it errs towards a crash, by at most 0.5 % of its radius).
 HOLDER_SHANK_SIDES = 32
@@ -474,91 +471,6 @@ class SweepSet:
             rows = reaching[begin:begin + step]
             low[rows], high[rows] = clipped_bounds(self.world(rows), self.edges, self.clip_z)
         return low, high
-
-    def holder_contact(self, below: float, keep) -> list[int]:
-        """Sweeps (indices over all paths) in which the top of the tool's body, where the
-        holder begins, comes below ``below`` (the stock top) where ``keep`` finds stock."""
-        found = []
-        face = self.holder_face
-        step = max(1, POINTS_PER_CHUNK // (2 * len(face)))
-        for begin in range(0, self.count, step):
-            first = self.pairs[begin:begin + step]
-            t0, t1 = (face @ self.poses[k, :3, :3].transpose(0, 2, 1)
-                      + self.poses[k, None, :3, 3] for k in (first, first + 1))
-            low = np.minimum(t0.min(axis=1), t1.min(axis=1))
-            high = np.maximum(t0.max(axis=1), t1.max(axis=1))
-            hit = (low[:, 2] < below) & keep(low, high)
-            found.extend((begin + np.flatnonzero(hit)).tolist())
-        return found
-
-    def holder_in_material(self, sweeps, solid: manifold3d.Manifold, reach: float,
-                           keep=None) -> list[int]:
-        """Those of ``sweeps`` whose holder meets ``solid`` as this tool has cut it by then:
-        more than `HOLDER_MATERIAL_M3` of it inside the holder's room over the sweep
-        (`holder_room`). The bounding-box test of `holder_contact` finds the candidates;
-        this one reads the material, so that a short profile running down a face (air over
-        its top) is not a crash.
-
-        With ``keep`` (the stock's region, as `hulls` takes it), the material a sweep's
-        holder meets is what the earlier sweeps of these paths left of ``solid``: a slot
-        cut in steps down is open to the holder when the steps reach below the body's
-        height. Only the earlier sweeps that reach into a room with material are built.
-        """
-        inside = {}
-        for i in (int(i) for i in sweeps):
-            met = solid ^ self.holder_room(i, reach)
-            if met.volume() > HOLDER_MATERIAL_M3:
-                inside[i] = met
-        if not inside or keep is None:
-            return list(inside)
-        boxes = np.array([met.bounding_box() for met in inside.values()]).reshape(-1, 6)
-
-        def into_a_room(low: np.ndarray, high: np.ndarray) -> np.ndarray:
-            meets = ((low[:, None, :] <= boxes[None, :, 3:])
-                     & (high[:, None, :] >= boxes[None, :, :3])).all(axis=2).any(axis=1)
-            return keep(low, high) & meets
-
-        hulls, lower, upper, *_, owners = self.hulls(into_a_room)
-        owners = np.asarray(owners, dtype=np.int64)
-        found = []
-        for (i, met), box in zip(inside.items(), boxes, strict=True):
-            earlier = np.flatnonzero((owners < i) & (lower <= box[3:]).all(axis=1)
-                                     & (upper >= box[:3]).all(axis=1))
-            # One earlier sweep at a time until nothing is left, those whose boxes share
-            # most of the room's material box first: the passes right over it (a contour's
-            # levels above, along the same chords) clear it, where in program order the
-            # first level's every neighbouring chord came first (a contour in 5 levels, 3
-            # below the body: more than 10 minutes). One union of all of them (a pocket's
-            # every level, stacked) took minutes and GB. Subtraction commutes: the order
-            # changes only when the loop stops.
-            shared = np.prod(np.clip(np.minimum(upper[earlier], box[3:])
-                                     - np.maximum(lower[earlier], box[:3]), 0.0, None), axis=1)
-            earlier = earlier[np.argsort(-shared, kind="stable")]
-            left = met.volume()
-            for j in earlier:
-                if left <= HOLDER_MATERIAL_M3:
-                    break
-                met = met - hulls[j]
-                left = met.volume()
-            if left > HOLDER_MATERIAL_M3:
-                found.append(i)
-        return found
-
-    def holder_room(self, sweep: int, reach: float) -> manifold3d.Manifold:
-        """The room the holder takes over sweep ``sweep``: the hull of the body's top face
-        at both poses and of the same face lifted ``reach`` along the tool axis. A top of
-        zero width (a V's or a nose's: a segment) is widened along the tool's X to its own
-        length, as the bar that carries the tool is."""
-        face = self.holder_face
-        width = float(np.ptp(face[:, 0]))
-        if width <= 0.0:
-            half = 0.5 * max(float(np.ptp(face[:, 1])), float(np.ptp(face[:, 2])))
-            face = np.concatenate([face + [half, 0.0, 0.0], face - [half, 0.0, 0.0]])
-        local = np.concatenate([face, face + [0.0, 0.0, reach]])
-        first = self.pairs[sweep]
-        poses = self.poses[[first, first + 1]]
-        points = (local @ poses[:, :3, :3].transpose(0, 2, 1) + poses[:, None, :3, 3])
-        return manifold3d.Manifold.hull_points(points.reshape(-1, 3))
 
 
 def dragged_past_clearance(poses: np.ndarray, starts: np.ndarray) -> np.ndarray:
