@@ -302,13 +302,15 @@ def lab_realism(args) -> Realism:
 def scenario_budget(machine, errors, args, realism: Realism, results):
     """The error budget of the "after" figures (`machinesim.budget.error_budget`): the
     crown's (not the machining times, which come from the feeds alone) and the grooves'
-    spread (their depths are not errors). Each realism switch that is on is turned off in
-    turn, on a lab of its own for each load with the same errors and seed; with
+    spread (their depths are not errors). Each realism switch that is on and that the
+    procedure feels (`RobotLoadedWorkpiece.realism_sources`) is turned off in turn, on a
+    lab of its own for each load with the same errors and seed; with
     --nose-correction off, the tip-versus-nose approximation too (the variant puts the nose
     on the path). The variants cut only the compensated crown; ``results`` are the runs with
     everything on, by load."""
     nose = args.nose_correction == "on"
-    sources = list(realism.on) + ([] if nose else [TIP_VS_NOSE])
+    sources = ([name for name in realism.on if name in RobotLoadedWorkpiece.realism_sources]
+               + ([] if nose else [TIP_VS_NOSE]))
     if not sources:
         progress("budget")(f"none: no source it shares out is on (realism {realism}), so "
                            "budget.md and budget.png are not written")

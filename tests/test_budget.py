@@ -150,3 +150,22 @@ def test_a_budget_asked_for_with_no_source_on_says_so():
     told.clear()
     assert realism_budget(Procedure(), None, Realism.ideal(), None, False, progress=stage) is None
     assert told == []  # not asked for: nothing to say
+
+
+def test_a_procedure_budgets_only_the_switches_of_the_instruments_it_reads():
+    # the laser's air (Realism.air_refraction) acts on the laser interferometer alone: paper
+    # 002's budget had run it again and printed a 0.0 % row for every figure
+    from machinesim.procedures.sts_turning import STSTurning
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+    from machinesim.procedures.tool_setting_6axis import ToolSetting6Axis
+    from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
+    from machinesim.procedures.xy_plane_errors import XYPlaneErrors
+    from machinesim.realism import Realism
+
+    for procedure in (STSTurning, ToolRotationArm, ToolSetting6Axis, RobotLoadedWorkpiece,
+                      XYPlaneErrors):
+        sources = set(procedure.realism_sources)
+        assert sources <= set(Realism.names()), procedure
+        reads_a_laser = any("laser_interferometer" in uses
+                            for uses in procedure.lab_uses.values())
+        assert ("air_refraction" in sources) == reads_a_laser, procedure

@@ -217,6 +217,11 @@ class RobotLoadedWorkpiece:
     #: reads its spheres; the grooves and the crown are cut with a round nose and read with
     #: the microscope.
     lab_uses = {"measure": ("robot", "touch_probe"), "evaluate": ("tool_geometry", "microscope")}
+    #: The `machinesim.realism.Realism` switches it feels, for an error budget: every one
+    #: but the laser interferometer's air (it reads no laser).
+    realism_sources = ("instrument_noise", "lateral_resolution", "lateral_noise",
+                       "registration", "probe_pretravel", "probe_ball_form", "artefact_errors",
+                       "background_errors", "stage_positioning")
 
     def __init__(self, experiment: str = "crown", *, nose_correction: bool = True,
                  all_layers: bool = False, quick: bool = False, after_only: bool = False,
