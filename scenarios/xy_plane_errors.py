@@ -2,7 +2,7 @@
 
 Run: ``.venv/bin/python scenarios/xy_plane_errors.py [--errors FILE.toml] [--noise on|off]
 [--realism ideal|noise_only|lab] [--budget on|off] [--seed N] [--out reports/xy_plane_errors]``
-(about 54 s with the default lab realism and its error budget; 16 s with
+(about 75 s with the default lab realism and its error budget; 19 s with
 ``--budget off``; on 2 idle cores).
 
 The grooving_4axis gets the errors of ``models/errors/xy_plane_grooving_4axis.toml`` (chosen
