@@ -77,8 +77,11 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
                          "'format binary_big_endian 1.0' or 'format ascii 1.0'",
                          source=str(path))
     elements = _ply_elements(header, path)
-    read = _ascii_elements if fmt == "format ascii 1.0" else _binary_elements
-    vertices, triangles = read(data, found.end(), elements, _PLY_FORMATS[fmt], path)
+    if fmt == "format ascii 1.0":
+        vertices, triangles = _ascii_elements(data, found.end(), elements, path)
+    else:
+        vertices, triangles = _binary_elements(data, found.end(), elements,
+                                               _PLY_FORMATS[fmt], path)
     if vertices is None or triangles is None:
         raise InputError("expected 'vertex' and 'face' elements", source=str(path))
     if not len(triangles):
@@ -200,10 +203,9 @@ def _binary_elements(data: bytes, offset: int, elements, order: str, path: Path)
     return vertices, triangles
 
 
-def _ascii_elements(data: bytes, offset: int, elements, order: str, path: Path):
+def _ascii_elements(data: bytes, offset: int, elements, path: Path):
     """The vertices and triangles of an ASCII PLY body: whitespace-separated numbers, one
     element record after another (a face's list: its size, then that many indices)."""
-    del order
     words = data[offset:].split()
     at = 0
     vertices = triangles = None
