@@ -133,7 +133,7 @@ def vector_map(out: ReportFolder, name: str, xy_map, title: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    gx, gy, dx, dy = xy_map.grid(PLATE, PLATE, count=11)
+    gx, gy, dx, dy = xy_map.grid(PLATE, PLATE, count=11, reference="y")
     figure, axes = plt.subplots(figsize=(6.5, 6), dpi=120)
     scale = max(float(np.hypot(dx, dy).max()), 1e-12)
     q = axes.quiver(gx * 1e3, gy * 1e3, dx / UM, dy / UM, angles="xy",
@@ -141,7 +141,7 @@ def vector_map(out: ReportFolder, name: str, xy_map, title: str) -> None:
     axes.quiverkey(q, 0.9, -0.09, scale / UM, f"{scale / UM:.3g} um")
     axes.set_xlabel("X (mm)")
     axes.set_ylabel("Y (mm)")
-    rx, ry = xy_map.ranges(PLATE, PLATE)
+    rx, ry = xy_map.ranges(PLATE, PLATE, reference="y")
     axes.set_title(f"{title}\nrange X {rx / UM:.2f} um, Y {ry / UM:.2f} um")
     axes.set_aspect("equal")
     buffer = io.BytesIO()

@@ -16,6 +16,7 @@ from machinesim.procedures.xy_plane_measurements import (
     BEAM_FRAME,
     DIAGONALS,
     PLATE,
+    LaserSetups,
     measure_xy_plane,
 )
 from machinesim.report import check_summary
@@ -31,10 +32,12 @@ EQ1 = {"location": {"Y": {"EC0Y_urad": 20.0}},
                            "EXY_um": [0.5, 0.5, -1, 0, 1.2, -0.4, -0.4]}}}
 
 
-def instruments(lab, resolution=None):
+def instruments(lab, resolution=None, session=""):
     extra = {} if resolution is None else {"resolution": resolution}
-    return (lab.laser_interferometer(label="centre", **extra),
-            lab.laser_interferometer(label="diagonal", frame=BEAM_FRAME, **extra))
+    return LaserSetups(*(lab.laser_interferometer(label=f"{name}{session}", **extra)
+                         for name in ("x", "y", "diagonals")),
+                       lab.laser_interferometer(label=f"beam{session}", frame=BEAM_FRAME,
+                                                **extra))
 
 
 def true_deviation(lab, x, y):
@@ -49,7 +52,7 @@ def true_deviation(lab, x, y):
 def measured_without_noise(errors):
     """A noise-free lab with ``errors`` and its laser tests read exactly (resolution 0)."""
     lab = machinesim.Lab("grooving_4axis", errors, noise=False)
-    return lab, measure_xy_plane(*instruments(lab, resolution=0.0), seed=None)
+    return lab, measure_xy_plane(instruments(lab, resolution=0.0), seed=None)
 
 
 def rigid_rest(truth, dx, dy, x, y) -> float:
@@ -75,11 +78,16 @@ def test_eq1_map_equals_the_kinematics_up_to_a_rigid_move(eq1_lab):
     truth = true_deviation(lab, x, y)
     dx, dy = meas.map.deviation(x, y)
     # The least-squares straightness lines leave a rigid turn and shift no reading sees:
-    # difference = (tx - w y, ty + w x), fitted by least squares, rest below 1e-12 m.
-    assert rigid_rest(truth, dx, dy, x, y) < 1e-12
+    # difference = (tx - w y, ty + w x), fitted by least squares. The rest is eq 2's:
+    # its lengths take each axis' travel as straight along the axis, and the lateral
+    # deviations (~5 um over 0.4 m) enter them at second order, (5e-6)**2 / 0.4 m ~ 6e-11 m
+    # (4.9e-11 m here; the two-diagonal squareness, first order in lengths too, left
+    # 1e-12 m because its second-order terms cancel between the diagonals).
+    assert rigid_rest(truth, dx, dy, x, y) < 1e-10
     # The diagonals (corners, beam height) equal the map's prediction: no angular errors.
+    # (eq 2's second-order rest, above, along the diagonal: 1.4e-10 m)
     for (c, o), d in zip(DIAGONALS, meas.diagonals, strict=True):
-        np.testing.assert_allclose(d.mean, meas.map.diagonal(c, o, d.targets), atol=1e-12)
+        np.testing.assert_allclose(d.mean, meas.map.diagonal(c, o, d.targets), atol=2e-10)
 
 
 def test_squareness_from_the_diagonals_against_the_injected(eq1_lab):
@@ -93,6 +101,24 @@ def test_squareness_from_the_diagonals_against_the_injected(eq1_lab):
     # First-order formulas: the rest is of second order, (deviation / length)**2 * d / (a b)
     # with deviations of ~10 um over 0.4 m, i.e. ~1e-9 rad.
     assert meas.diagonal_squareness == pytest.approx(e - chords, abs=2e-9)
+    # eq 2 (paper 003, one diagonal against the X and Y travels), the map's: the same
+    # chords (the yaw-free EQ1 has no other cross term)
+    assert meas.eq2_squareness == pytest.approx(e - chords, abs=2e-9)
+
+
+def test_the_paper_form_puts_the_squareness_in_the_y_row():
+    # Eq 1 as printed holds the squareness in dPy (Y the reference); ISO 230-1's EC0Y in
+    # dPx. A map of squareness alone, 10 urad: 4 um over the 0.4 m plate in one row only.
+    zero = Curve.zero(*PLATE)
+    only = XYPlaneMap(zero, zero, zero, zero, 10e-6)
+    assert only.ranges(PLATE, PLATE) == pytest.approx((4e-6, 0.0), abs=1e-18)
+    assert only.ranges(PLATE, PLATE, reference="y") == pytest.approx((0.0, 4e-6), abs=1e-18)
+    # the two forms differ by a rigid turn by -e: (dx + e y, dy - e x)
+    x, y = np.array([0.13, -0.2]), np.array([-0.07, 0.19])
+    (dx, dy), (px, py) = only.deviation(x, y), only.deviation(x, y, "y")
+    np.testing.assert_allclose((px, py), (dx + 10e-6 * y, dy - 10e-6 * x), atol=1e-20)
+    with pytest.raises(MachineSimError, match="reference 'x' or 'y'"):
+        only.ranges(PLATE, PLATE, reference="z")
 
 
 def test_the_yaw_is_read_and_taken_out_of_the_diagonal_squareness():
@@ -113,8 +139,9 @@ def test_the_yaw_is_read_and_taken_out_of_the_diagonal_squareness():
     x, y = (a.ravel() for a in np.meshgrid(g, g))
     truth = true_deviation(lab, x, y)
     dx, dy = meas.map.deviation(x, y)
-    # second order: the yaw reading's ~1e-10 rad over the 0.2 m lever
-    assert rigid_rest(truth, dx, dy + x * meas.yaw_y(y), x, y) < 5e-11
+    # second order: the yaw reading's ~1e-10 rad over the 0.2 m lever, and eq 2's lengths
+    # (test_eq1_map_equals_the_kinematics_up_to_a_rigid_move): 6.2e-11 m
+    assert rigid_rest(truth, dx, dy + x * meas.yaw_y(y), x, y) < 1e-10
     assert rigid_rest(truth, dx, dy, x, y) > 1e-7  # eq 1 alone cannot hold the yaw
 
 
@@ -137,13 +164,13 @@ def test_fit_route_identifies_the_injected_tables(eq1_lab):
 
 def test_table_and_model_compensation_leave_below_a_nanometre_without_noise(eq1_lab):
     lab, meas = eq1_lab
-    li, ld = instruments(lab, resolution=0.0)
-    after = measure_xy_plane(li, ld, seed=None, table=CompensationTable(meas.map))
+    setups = instruments(lab, resolution=0.0)
+    after = measure_xy_plane(setups, seed=None, table=CompensationTable(meas.map))
     assert max(after.map.ranges(PLATE, PLATE)) < 1e-9
     assert after.diagonal_deviation < 1e-9
     curves, diagonals = meas.fit_inputs()
     est = fit_xy_plane(lab.machine, curves, diagonals, meas.map.position_x.positions)
-    model = measure_xy_plane(li, ld, seed=None, table=ModelCompensation(lab.machine,
+    model = measure_xy_plane(setups, seed=None, table=ModelCompensation(lab.machine,
                                                                         est.errors))
     assert max(model.map.ranges(PLATE, PLATE)) < 1e-9
     assert model.diagonal_deviation < 1e-9
@@ -160,8 +187,10 @@ def test_the_tables_yaw_is_read_from_two_edge_lines(paper_lab):
     lab, meas = paper_lab
     ecy = lab.reveal().component["Y"]["ECY"]
     y = meas.yaw_y.positions
+    # second order (the yaw times the slides' other errors over the 0.4 m separation):
+    # 1.1e-10 rad at Y = +200 mm with the default errors
     np.testing.assert_allclose(meas.yaw_y.values, ecy.evaluate(y) - ecy.evaluate([0.0])[0],
-                               rtol=0, atol=1e-10)
+                               rtol=0, atol=2e-10)
 
 
 def test_with_the_yaw_the_table_leaves_the_machining_point_below_a_nanometre(paper_lab):
@@ -170,9 +199,9 @@ def test_with_the_yaw_the_table_leaves_the_machining_point_below_a_nanometre(pap
     # takes them below 1 nm. At beam height, 115 mm above the tool tip, the pitch of X and
     # Y still tilts the optic (Abbe): no XY command puts both points right.
     lab, meas = paper_lab
-    li, ld = instruments(lab, resolution=0.0)
-    eq1 = measure_xy_plane(li, ld, seed=None, table=CompensationTable(meas.map))
-    full = measure_xy_plane(li, ld, seed=None, table=CompensationTable(meas.map, meas.yaw_y))
+    setups = instruments(lab, resolution=0.0)
+    eq1 = measure_xy_plane(setups, seed=None, table=CompensationTable(meas.map))
+    full = measure_xy_plane(setups, seed=None, table=CompensationTable(meas.map, meas.yaw_y))
     assert eq1.work_diagonal_deviation > 0.1e-6
     assert full.work_diagonal_deviation < 1e-9
     assert max(full.map.ranges(PLATE, PLATE)) < 1e-9
@@ -209,34 +238,44 @@ def test_the_experiment_gives_the_paper_magnitudes_before_and_after():
         assert abs(value - truth[name]) < 5 * std + 1e-9, name
 
 
-def test_each_session_reads_on_its_own_air_scale():
+def test_each_set_up_reads_on_its_own_air_scale_and_eq2_carries_them_into_y():
     # A perfect machine, read exactly but for the laser's air compensation: each set-up
-    # reads displacements on a scale off by its drawn s, so the map before is s_before x the
-    # 0.4 m plate, the table compensates that, and the tests after, set up again, read
-    # (s_after - s_before) x 0.4 m in both rows (the diagonals' own scale cancels in the
-    # two-diagonal squareness). Before the after tests were set up again they reused the
-    # before's instruments, whose noise and scale they repeated.
+    # (X, Y, the diagonals) reads displacements on a scale off by its drawn s. By hand:
+    # - X's row of eq 1 (the paper's form, no squareness in it) is s_x x over the plate;
+    # - eq 2 from one diagonal of spans (a, a) against the X and Y travels reads
+    #   e = (a dPx + a dPy - d dev) / a**2 = s_x + s_y - 2 s_d (d**2 = 2 a**2), and Y's
+    #   row is s_y y - e x: range 0.4 (|s_y| + |e|);
+    # - the table puts the tool where the map said: the machine is then off by minus the
+    #   map, and the tests after, set up again, read X's row (s_x' - s_x) x and Y's
+    #   (s_y' - s_y) y - e' x, e' = (s_x' + s_y' - 2 s_d') - (s_x + s_y - 2 s_d).
+    # So the squareness, in Y's row only, carries five set-ups' scales: the paper's Y after
+    # above its X. Before the after tests were set up again they reused the before's
+    # instruments, whose noise and scale they repeated.
     from machinesim.realism import Realism
 
     lab = machinesim.Lab("grooving_4axis", seed=5, realism=Realism.with_only("air_refraction"))
     result = run(XYPlaneErrors(interferometer_resolution=0.0), lab)
     drawn = lab.reveal_instruments()
-    before, after = (drawn[f"laser_interferometer/centre_lines{s}"]["scale"] for s in
-                     ("", "_after"))
-    assert 0.1e-6 < abs(after - before) < 3e-6  # drawn: 0.5 ppm each
-    for name in ("xy_error_x", "xy_error_y"):
-        figure = result.figure(name)
-        assert figure.before == pytest.approx(0.4 * abs(before) / UM, abs=1e-6), name
-        assert figure.after == pytest.approx(0.4 * abs(after - before) / UM, abs=1e-6), name
+    (sx, sy, sd), (sx2, sy2, sd2) = (
+        [drawn[f"laser_interferometer/{name}{session}"]["scale"]
+         for name in ("x_axis", "y_axis", "diagonals")] for session in ("", "_after"))
+    assert len({sx, sy, sd, sx2, sy2, sd2}) == 6 and max(map(abs, (sx, sy, sd))) < 3e-6
+    e_before = sx + sy - 2 * sd
+    e_after = (sx2 + sy2 - 2 * sd2) - e_before
+    x, y = result.figure("xy_error_x"), result.figure("xy_error_y")
+    assert x.before == pytest.approx(0.4 * abs(sx) / UM, abs=1e-6)
+    assert x.after == pytest.approx(0.4 * abs(sx2 - sx) / UM, abs=1e-6)
+    assert y.before == pytest.approx(0.4 * (abs(sy) + abs(e_before)) / UM, abs=1e-6)
+    assert y.after == pytest.approx(0.4 * (abs(sy2 - sy) + abs(e_after)) / UM, abs=1e-6)
     # the report's map after is the same session's readings, read again
     again = XYPlaneErrors(interferometer_resolution=0.0).plane_tests(
         lab, "_after", compensations(result.identification)[0])
-    assert again.map.ranges(PLATE, PLATE)[0] / UM == result.figure("xy_error_x").after
+    assert again.map.ranges(PLATE, PLATE, reference="y")[1] / UM == y.after
 
 
 def test_compensation_table_rewrites_a_program_so_the_tool_lands():
     lab = machinesim.Lab("grooving_4axis", EQ1, noise=False)
-    meas = measure_xy_plane(*instruments(lab, resolution=0.0), seed=None)
+    meas = measure_xy_plane(instruments(lab, resolution=0.0), seed=None)
     table = CompensationTable(meas.map)
     program = (ProgramBuilder(1).rapid(X=-0.15, Y=0.12, Z=0.001)
                .linear(X=0.18, Y=-0.1, feed_mm_per_min=500).build())

@@ -3,8 +3,10 @@
 Inputs are interferometer readings only (`machinesim.metrology.LaserInterferometer`, read
 through the lab): the positioning of X along the table's centre line Y = 0 and of Y along
 X = 0 (ISO 230-2 mean bidirectional deviations), the straightness of X read in Y and of Y
-read in X (least-squares reference line removed, ISO 230-1), and the squareness from the two
-face diagonals (ISO 230-6, `machinesim.metrology.iso230.squareness_from_diagonals`).
+read in X (least-squares reference line removed, ISO 230-1), and the squareness from a face
+diagonal: by the paper's eq 2, one diagonal against the X and Y travels
+(`machinesim.metrology.interferometer.squareness_from_diagonal`), or from the two diagonals
+(ISO 230-6, `machinesim.metrology.iso230.squareness_from_diagonals`).
 
 Sign convention (docs/procedures/xy_plane_errors.md): every deviation is the tool's actual
 displacement relative to the table, read along the table's axes, minus the commanded one,
@@ -17,9 +19,13 @@ as ISO 230-1's EC0Y (Y's motion runs along ``(-sin e, cos e)``). Eq 1 of paper 0
 with ``Px``, ``Py`` the positioning deviations, ``Sx(y)`` the straightness of Y in X,
 ``Sy(x)`` that of X in Y. The paper prints the squareness term ``a_x(i) theta_xy`` in the Y
 row (Y taken as the reference, the X motion tilted); the two forms differ by a rigid turn of
-the plate by ``e`` and describe the same machine. Because the straightness lines are
-least-squares lines, the diagonals' squareness is corrected by the chord slopes of the
-straightness curves over the diagonals' spans (`squareness_of_lines`).
+the plate by ``e`` and describe the same machine, but not the same figures: which row's
+range holds the squareness depends on the form. `XYPlaneMap.ranges` gives either
+(``reference="y"``: the paper's); the compensation table applies the X-reference form.
+
+Because the straightness lines are least-squares lines, the diagonal squareness (eq 2 or
+the two diagonals: both read the corner-to-corner chords) is corrected by the chord slopes
+of the straightness curves over the diagonals' spans (`squareness_of_lines`).
 """
 
 from __future__ import annotations
@@ -90,30 +96,45 @@ class XYPlaneMap:
     straightness_y_in_x: Curve
     squareness: float
 
-    def deviation(self, x, y) -> tuple[np.ndarray, np.ndarray]:
-        """(dPx, dPy) at commanded positions (x, y), m; broadcast like numpy."""
+    def deviation(self, x, y, reference: str = "x") -> tuple[np.ndarray, np.ndarray]:
+        """(dPx, dPy) at commanded positions (x, y), m; broadcast like numpy.
+
+        ``reference="x"``: X the reference axis, the squareness in the dPx row (ISO 230-1's
+        EC0Y; the form the compensation table applies). ``"y"``: eq 1 as the paper prints
+        it, Y the reference and the squareness in the dPy row, ``dPy = Py(y) + Sy(x) - e x``
+        (the same machine turned rigidly by -e, module docstring).
+        """
         x, y = np.broadcast_arrays(np.asarray(x, dtype=np.float64),
                                    np.asarray(y, dtype=np.float64))
-        dx = self.position_x(x) + self.straightness_y_in_x(y) - self.squareness * y
+        if reference not in ("x", "y"):
+            raise InputError(f"Expected reference 'x' or 'y', got {reference!r}",
+                             key="reference")
+        dx = self.position_x(x) + self.straightness_y_in_x(y)
         dy = self.position_y(y) + self.straightness_x_in_y(x)
-        return dx, dy
+        if reference == "x":
+            return dx - self.squareness * y, dy
+        return dx, dy - self.squareness * x
 
-    def grid(self, x_range, y_range, count: int = 41):
-        """(X, Y, dPx, dPy) on a count x count grid over the ranges, m (as Figs 2 and 5)."""
+    def grid(self, x_range, y_range, count: int = 41, reference: str = "x"):
+        """(X, Y, dPx, dPy) on a count x count grid over the ranges, m (as Figs 2 and 5);
+        ``reference`` as in `deviation`."""
         xs = np.linspace(*_range(x_range, "x_range"), count)
         ys = np.linspace(*_range(y_range, "y_range"), count)
         gx, gy = np.meshgrid(xs, ys, indexing="xy")
-        dx, dy = self.deviation(gx, gy)
+        dx, dy = self.deviation(gx, gy, reference)
         return gx, gy, dx, dy
 
-    def ranges(self, x_range, y_range, count: int = 41) -> tuple[float, float]:
+    def ranges(self, x_range, y_range, count: int = 41,
+               reference: str = "x") -> tuple[float, float]:
         """Maximum deviation (peak to valley) of dPx and of dPy over the plate, m.
 
         The paper's "maximum deviation of the 2-D position errors" (11.59 um in X, 12.33 um
         in Y before compensation), taken here as the range over the plate, the figure
-        insensitive to where the readings were zeroed.
+        insensitive to where the readings were zeroed. Which row holds the squareness
+        depends on the reference axis (`deviation`); the paper's figures are
+        ``reference="y"``.
         """
-        _, _, dx, dy = self.grid(x_range, y_range, count)
+        _, _, dx, dy = self.grid(x_range, y_range, count, reference)
         return float(np.ptp(dx)), float(np.ptp(dy))
 
     def diagonal(self, corner, opposite, positions) -> np.ndarray:
@@ -136,7 +157,10 @@ def squareness_of_lines(diagonal_squareness: float, straightness_x_in_y: Curve,
     The two-diagonal formula measures the angle between the chords joining the rectangle's
     corners. With the map of the module docstring, opposite minus same diagonal deviation is
     ``(2 a b e - 2 a dSx - 2 b dSy) / d`` (``dSx = Sx(y1) - Sx(y0)``, ``dSy = Sy(x1) -
-    Sy(x0)``), so ``e = e_diagonals + dSx / b + dSy / a``.
+    Sy(x0)``), so ``e = e_diagonals + dSx / b + dSy / a``. Eq 2 from one diagonal of spans
+    (a, b) reads the same chords: its deviation is ``(a (dPx + dSx - e b) + b (dPy + dSy))
+    / d`` and the axes' travels carry ``dPx``, ``dPy``, so ``e_eq2 = e - dSx / b - dSy / a``
+    too.
     """
     x0, x1 = _range(x_range, "x_range")
     y0, y1 = _range(y_range, "y_range")

@@ -47,6 +47,7 @@ from machinesim.procedures.pyramid_windows import cut_and_read
 from machinesim.procedures.xy_plane_measurements import (
     BEAM_FRAME,
     PLATE,
+    LaserSetups,
     XYPlaneMeasurements,
     measure_xy_plane,
 )
@@ -141,7 +142,7 @@ class XYPlaneErrors:
         ``session`` (``""`` before, ``"_after"`` after), with ``table`` active in the control.
         Instruments set up again for the same session read the same draws, so the after
         session's eq-1-table readings of `evaluate` can be read again to be drawn."""
-        return measure_xy_plane(*self._interferometers(lab, session), count=self.count,
+        return measure_xy_plane(self._interferometers(lab, session), count=self.count,
                                 runs=self.runs, seed=self._seed, table=table)
 
     def identify(self, measurements) -> Identified:
@@ -161,7 +162,8 @@ class XYPlaneErrors:
             "diagonals": xy.diagonals, "work_diagonals": xy.work_diagonals,
             "diagonal_before": xy.diagonal_deviation,
             "work_diagonal_before": xy.work_diagonal_deviation,
-            "diagonal_squareness": xy.diagonal_squareness, "yaw_y": xy.yaw_y})
+            "diagonal_squareness": xy.diagonal_squareness,
+            "eq2_squareness": xy.eq2_squareness, "yaw_y": xy.yaw_y})
 
     def compensate(self, identified: Identified):
         table, model = compensations(identified)
@@ -176,19 +178,20 @@ class XYPlaneErrors:
         # streams were the same, and the after readings repeated the before's noise, which
         # the compensation had taken as error (the map after read 0.010 / 0.0078 um where
         # independent noise gives 0.015 / 0.011 um)
-        li, ld = self._interferometers(lab, "_after")
+        setups = self._interferometers(lab, "_after")
         before_map = identified.detail["map"]
         table, model = compensations(identified)
-        after_table = measure_xy_plane(li, ld, count=self.count, runs=self.runs,
+        after_table = measure_xy_plane(setups, count=self.count, runs=self.runs,
                                        seed=self._seed, table=table)
-        after_yaw = measure_xy_plane(li, ld, count=self.count, runs=self.runs,
+        after_yaw = measure_xy_plane(setups, count=self.count, runs=self.runs,
                                      seed=self._seed, table=with_yaw(identified))
-        after_model = measure_xy_plane(li, ld, count=self.count, runs=self.runs,
+        after_model = measure_xy_plane(setups, count=self.count, runs=self.runs,
                                        seed=self._seed, table=model)
-        rx, ry = before_map.ranges(PLATE, PLATE)
-        ax, ay = after_table.map.ranges(PLATE, PLATE)
-        mx, my = after_model.map.ranges(PLATE, PLATE)
-        yx, yy = after_yaw.map.ranges(PLATE, PLATE)
+        # the paper's figures: eq 1 as printed, the squareness in the Y row
+        rx, ry = before_map.ranges(PLATE, PLATE, reference="y")
+        ax, ay = after_table.map.ranges(PLATE, PLATE, reference="y")
+        mx, my = after_model.map.ranges(PLATE, PLATE, reference="y")
+        yx, yy = after_yaw.map.ranges(PLATE, PLATE, reference="y")
         sep: CAxisSeparation = identified.detail["c"]
         c_after = self._c_tests(lab, model)
         sep_after = separate(lab.machine, c_after.follow_q, c_after.follow, c_after.fixed_q,
@@ -246,7 +249,9 @@ class XYPlaneErrors:
             "yaw_y_urad": {"y_mm": (identified.detail["yaw_y"].positions * 1e3).tolist(),
                            "value": (identified.detail["yaw_y"].values * 1e6).tolist()},
             "squareness_diagonals_urad": identified.detail["diagonal_squareness"] * 1e6,
+            "squareness_eq2_urad": identified.detail["eq2_squareness"] * 1e6,
             "squareness_lines_urad": before_map.squareness * 1e6,
+            "squareness_lines_after_urad": after_table.map.squareness * 1e6,
             "c_h_first_harmonic_before_um": first_harmonic(sep.theta, sep.h) * um,
             "c_h_first_harmonic_after_um": first_harmonic(sep_after.theta, sep_after.h) * um,
             "fit_residual_rms_um": identified.detail["fit"].residual_rms * um,
@@ -269,15 +274,19 @@ class XYPlaneErrors:
     def _seed(self):
         return None if self.uniform_targets else 0
 
-    def _interferometers(self, lab, session: str = ""):
-        """The laser set up for one session of tests: the centre lines' and the diagonals'.
-        The after tests are set up again (``session="_after"``): their own noise and, with
-        the lab's ``air_refraction``, their own scale, as a later day's set-up has."""
+    def _interferometers(self, lab, session: str = "") -> LaserSetups:
+        """The laser set up for one session of tests: for X, for Y, for the diagonals at
+        the cut and 120 mm up, each a set-up of its own (`LaserSetups`). The after tests are
+        set up again (``session="_after"``): their own noise and, with the lab's
+        ``air_refraction``, their own scales, as a later day's set-ups have."""
         extra = ({} if self.interferometer_resolution is None
                  else {"resolution": self.interferometer_resolution})
-        return (lab.laser_interferometer(label=f"centre_lines{session}", **extra),
-                lab.laser_interferometer(label=f"diagonals{session}", frame=BEAM_FRAME,
-                                         **extra))
+        return LaserSetups(
+            lab.laser_interferometer(label=f"x_axis{session}", **extra),
+            lab.laser_interferometer(label=f"y_axis{session}", **extra),
+            lab.laser_interferometer(label=f"diagonals{session}", **extra),
+            lab.laser_interferometer(label=f"diagonals_120mm{session}", frame=BEAM_FRAME,
+                                     **extra))
 
     def _c_tests(self, lab, compensation) -> CTests:
         m = lab.machine

@@ -19,8 +19,15 @@ and that the centre-line tests do not see. It is read as an angular interferomet
 at beam height, as the paper did, and at the machining point (the tool tip), where the part
 is cut and where the compensation puts the tool.
 
-`compensated_*` read the same tests with a `machinesim.compensation_table.CompensationTable`
-active in the control: every commanded point goes through the table, as the control's
+The map's squareness is the paper's eq 2: the first diagonal read level with the cut
+against the X and Y travels of the positioning tests. Each test runs on a laser set-up of
+its own (`LaserSetups`), as a lab aligns the optics again for X, for Y and for the
+diagonals; with the lab's air compensation missing part of the air, each reads on a scale
+of its own, and eq 2 carries ``s_x + s_y - 2 s_diagonal`` of them into the squareness, where
+the two-diagonal form (ISO 230-6, kept as ``diagonal_squareness``) cancels them.
+
+With a `machinesim.compensation_table.CompensationTable` (``table=``) the same tests are read
+with it active in the control: every commanded point goes through the table, as the control's
 compensation does, and the interferometer reads the machine's actual motion.
 """
 
@@ -37,6 +44,7 @@ from machinesim.identification.xy_plane import (
     XYPlaneMap,
     squareness_of_lines,
 )
+from machinesim.metrology.interferometer import squareness_from_diagonal
 from machinesim.metrology.iso230 import (
     PositioningEvaluation,
     evaluate_positioning,
@@ -45,8 +53,8 @@ from machinesim.metrology.iso230 import (
 )
 from machinesim.tolerances import POSE_M
 
-__all__ = ["BEAM_FRAME", "BEAM_Z", "DIAGONALS", "PLATE", "XYPlaneMeasurements",
-           "measure_xy_plane"]
+__all__ = ["BEAM_FRAME", "BEAM_Z", "DIAGONALS", "PLATE", "LaserSetups",
+           "XYPlaneMeasurements", "measure_xy_plane"]
 
 PLATE = (-0.2, 0.2)
 """The 400 mm square on the table, machine X and Y, m (table centre at 0)."""
@@ -74,8 +82,12 @@ class XYPlaneMeasurements:
         ISO 230-6 tests of the two diagonals (`DIAGONALS`), positions = distance from the
         start corner.
     diagonal_squareness : float
-        Squareness from the two diagonals' far-end mean deviations, the yaw's part taken
-        out, rad.
+        Squareness from the two diagonals' far-end mean deviations at beam height (ISO
+        230-6), the yaw's part taken out, rad: free of the laser's scale errors.
+    eq2_squareness : float
+        Squareness of the chords by paper 003's eq 2: the first diagonal, read level with
+        the cut, against the X and Y travels of the positioning tests, the yaw's part taken
+        out, rad. The map's squareness is this one, as the paper's was.
     map : XYPlaneMap
         Eq 1's map.
     yaw_y : Curve
@@ -93,6 +105,7 @@ class XYPlaneMeasurements:
     raw_y_in_x: Curve
     diagonals: tuple
     diagonal_squareness: float
+    eq2_squareness: float
     map: XYPlaneMap
     yaw_y: Curve
     work_diagonals: tuple
@@ -116,16 +129,43 @@ class XYPlaneMeasurements:
         return curves, diagonals
 
 
-def measure_xy_plane(interferometer, diagonal_interferometer, *, count: int = 21,
-                     runs: int = 5, seed: int | None = 0, table=None) -> XYPlaneMeasurements:
+@dataclass(frozen=True, eq=False)
+class LaserSetups:
+    """The laser interferometer as a lab sets it up for one session of the tests.
+
+    The optics are aligned again for each axis and for the diagonals, so each is a set-up
+    of its own: its own noise and, with the lab's ``air_refraction``, its own scale (the
+    air its compensation misses that day). Each reads the tool point (``frame="tool_tip"``)
+    but ``diagonals_120mm``, which reads the optic 120 mm above the table (`BEAM_FRAME`).
+
+    Attributes
+    ----------
+    x_axis : LaserInterferometer
+        X's positioning and straightness on the centre line Y = 0.
+    y_axis : LaserInterferometer
+        Y's positioning and straightness on X = 0, and its positioning on the edge lines
+        X = +-200 mm (the yaw's two beams, one set-up).
+    diagonals : LaserInterferometer
+        The two face diagonals level with the cut (the steering mirror turned between
+        them), as the paper's beam was.
+    diagonals_120mm : LaserInterferometer
+        The two face diagonals 120 mm above the table.
+    """
+
+    x_axis: object
+    y_axis: object
+    diagonals: object
+    diagonals_120mm: object
+
+
+def measure_xy_plane(setups: LaserSetups, *, count: int = 21, runs: int = 5,
+                     seed: int | None = 0, table=None) -> XYPlaneMeasurements:
     """Run the laser measurements and build eq 1's map.
 
     Parameters
     ----------
-    interferometer : LaserInterferometer
-        Reading the tool point (``frame="tool_tip"``), for the centre-line tests.
-    diagonal_interferometer : LaserInterferometer
-        Reading the optic at beam height (``frame=BEAM_FRAME``), for the diagonals.
+    setups : LaserSetups
+        The laser as set up for each test.
     count : int
         Targets per test (ISO 230-2 asks at least 5 over 400 mm; paper-like 21).
     runs : int
@@ -135,32 +175,53 @@ def measure_xy_plane(interferometer, diagonal_interferometer, *, count: int = 21
     table : CompensationTable, optional
         A compensation active in the control while measuring (the "after" tests).
     """
-    reader = _Reader(interferometer, table)
+    along_x = _Reader(setups.x_axis, table)
+    along_y = _Reader(setups.y_axis, table)
     targets = iso230_2_targets(*PLATE, count=count, rng=seed)
-    pos_x = _positioning(reader, 0, targets, runs)
-    pos_y = _positioning(reader, 1, targets, runs)
-    raw_xy = Curve(targets, reader.across(0, targets))
-    raw_yx = Curve(targets, reader.across(1, targets))
+    pos_x = _positioning(along_x, 0, targets, runs)
+    pos_y = _positioning(along_y, 1, targets, runs)
+    raw_xy = Curve(targets, along_x.across(0, targets))
+    raw_yx = Curve(targets, along_y.across(1, targets))
     str_xy = Curve(targets, _without_line(targets, raw_xy.values))
     str_yx = Curve(targets, _without_line(targets, raw_yx.values))
-    edges = [_positioning(reader, 1, targets, runs, other=x).mean for x in PLATE]
+    edges = [_positioning(along_y, 1, targets, runs, other=x).mean for x in PLATE]
     yaw = (edges[1] - edges[0]) / (PLATE[1] - PLATE[0])
     yaw_y = Curve(targets, yaw - np.interp(0.0, targets, yaw))
-    beam = _Reader(diagonal_interferometer, table, z=BEAM_Z)
+    beam = _Reader(setups.diagonals_120mm, table, z=BEAM_Z)
     diagonals = tuple(_diagonal(beam, c, o, count, runs) for c, o in DIAGONALS)
-    work = tuple(_diagonal(reader, c, o, count, runs) for c, o in DIAGONALS)
-    # The first diagonal runs (0.2, 0.2) -> (-0.2, -0.2): spans of the same sign; the
-    # second (-0.2, 0.2) -> (0.2, -0.2): opposite signs. The yaw's part of each far-end
-    # reading is taken out (the angular errors' Abbe terms at beam height are functions of
-    # one axis each, like scale errors, and cancel in the difference).
+    at_cut = _Reader(setups.diagonals, table)
+    work = tuple(_diagonal(at_cut, c, o, count, runs) for c, o in DIAGONALS)
+    # ISO 230-6 from the two diagonals at beam height. The first diagonal runs (0.2, 0.2)
+    # -> (-0.2, -0.2): spans of the same sign; the second (-0.2, 0.2) -> (0.2, -0.2):
+    # opposite signs. The yaw's part of each far-end reading is taken out (the angular
+    # errors' Abbe terms at beam height are functions of one axis each, like scale errors,
+    # and cancel in the difference).
     same, opposite = (d.mean[-1] - _yaw_along(yaw_y, c, o)
                       for d, (c, o) in zip(diagonals, DIAGONALS, strict=True))
     e_diag = squareness_from_diagonals(same, opposite, 0.4, 0.4)
-    e_lines = squareness_of_lines(e_diag, str_xy, str_yx, PLATE, PLATE)
+    # The map's squareness as the paper took it (eq 2): one diagonal, read level with the
+    # cut, against the X and Y travels the positioning tests read. It carries the three
+    # set-ups' scales (2 s_diagonal - s_x - s_y), which the two-diagonal form cancels.
+    e_eq2 = _eq2_squareness(work[0], DIAGONALS[0], Curve(targets, pos_x.mean),
+                            Curve(targets, pos_y.mean), yaw_y)
+    e_lines = squareness_of_lines(e_eq2, str_xy, str_yx, PLATE, PLATE)
     xy_map = XYPlaneMap(Curve(targets, pos_x.mean), Curve(targets, pos_y.mean), str_xy,
                         str_yx, e_lines)
     return XYPlaneMeasurements(pos_x, pos_y, str_xy, str_yx, raw_xy, raw_yx, diagonals,
-                               e_diag, xy_map, yaw_y, work)
+                               e_diag, e_eq2, xy_map, yaw_y, work)
+
+
+def _eq2_squareness(diagonal: PositioningEvaluation, ends, position_x: Curve,
+                    position_y: Curve, yaw_y: Curve) -> float:
+    """Paper 003 eq 2 (derived form, `squareness_from_diagonal`): the squareness of the
+    chords from one diagonal's measured length P_d and the measured X and Y travels P_x,
+    P_y between its corners (the positioning tests' mean deviations added to the commanded
+    spans), the yaw's part of the diagonal taken out as for the two-diagonal form, rad."""
+    (x0, y0), (x1, y1) = ends
+    p_x = (x1 - x0) + float(position_x(x1) - position_x(x0))
+    p_y = (y1 - y0) + float(position_y(y1) - position_y(y0))
+    p_d = math.dist(*ends) + float(diagonal.mean[-1]) - _yaw_along(yaw_y, *ends)
+    return squareness_from_diagonal(p_d, p_x, p_y)
 
 
 def _yaw_along(yaw_y: Curve, corner, opposite) -> float:
