@@ -200,32 +200,6 @@ def test_a_parameter_the_procedure_never_reads_is_refused():
             assert set(uses) <= set(LAB_USES), name
 
 
-def test_the_arm_asks_the_lab_for_what_it_declares():
-    """``lab_uses`` is not a list beside the code: the arm's calibration, run on a lab that
-    records what it is asked for, asks for its declared measuring step's uses alone."""
-    from machinesim.campaign.trials import IdentificationOnly
-    from machinesim.errors import ErrorModel
-    from machinesim.experiment import LAB_USES
-    from machinesim.experiment import run as run_procedure
-    from machinesim.lab import Lab
-    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
-
-    class Recording:
-        def __init__(self, lab):
-            self._lab, self.asked = lab, set()
-
-        def __getattr__(self, name):
-            if name in LAB_USES:
-                self.asked.add(name)
-            return getattr(self._lab, name)
-
-    procedure = ToolRotationArm()
-    errors = ErrorModel().with_parameters({"tool.y": -178 * UM})
-    lab = Recording(Lab("planer_4axis", errors, seed=0))
-    run_procedure(IdentificationOnly(procedure), lab)
-    assert lab.asked == set(procedure.lab_uses["measure"]) == {"microscope"}
-
-
 # ----------------------------------------------------------- trials, determinism, resume
 
 
