@@ -24,7 +24,7 @@ from machinesim._io import _ctrl_c_deferred
 from machinesim.campaign.distributions import Distribution, parse_vary
 from machinesim.campaign.results import CampaignFolder, assemble, finished_trials
 from machinesim.campaign.summary import write_report
-from machinesim.campaign.trials import CampaignSpec, run_trial
+from machinesim.campaign.trials import CampaignSpec, check_flag, run_trial
 from machinesim.exceptions import InputError
 
 __all__ = ["run"]
@@ -300,6 +300,8 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
                                 or workers < 0):
         raise InputError(f"--workers {workers!r}; expected a whole number >= 0 (0: no Dask)",
                          key="--workers")
+    for flag, value in (("progress", progress), ("report", report)):
+        check_flag(value, flag)
     spec = CampaignSpec(procedure, trials, _vary(vary), seed=seed, noise=noise,
                         identify_only=identify_only, quick=quick)
     if scheduler is not None:  # before the folder is made: nothing written for a wrong address

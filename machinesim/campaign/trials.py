@@ -35,7 +35,7 @@ from machinesim.streams import stream
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = ["MAX_TRIALS", "PROCEDURES", "CampaignSpec", "IdentificationOnly", "ProcedureEntry",
-           "run_trial", "trial_seed", "trials_refused"]
+           "check_flag", "run_trial", "trial_seed", "trials_refused"]
 
 
 #: Most trials a campaign takes (docs/campaigns.md): a trial is seconds to minutes of CPU and
@@ -48,6 +48,13 @@ def trials_refused(trials) -> str:
     """The message refusing ``trials`` as a campaign's N."""
     return (f"--trials {trials!r}; expected a whole number from 1 to {MAX_TRIALS} (the most "
             "trials a campaign takes, docs/campaigns.md)")
+
+
+def check_flag(value, name: str) -> None:
+    """Refuse a switch given as anything but True or False: ``noise="off"`` (the command's
+    ``--noise off`` written in Python) is a true string, and ran every trial with noise."""
+    if not isinstance(value, bool | np.bool_):
+        raise InputError(f"{name}={value!r}; expected True or False", key=name)
 
 
 # ------------------------------------------------------------------------------ procedures
@@ -260,6 +267,9 @@ class CampaignSpec:
             raise InputError(f"--seed {self.seed!r}; expected a whole number >= 0",
                              key="--seed")
         object.__setattr__(self, "seed", int(self.seed))
+        for flag in ("noise", "identify_only", "quick"):
+            check_flag(getattr(self, flag), flag)
+            object.__setattr__(self, flag, bool(getattr(self, flag)))
         if self.quick and (self.identify_only or not self.entry.quick):
             takes = ", ".join(name for name, entry in PROCEDURES.items() if entry.quick)
             why = ("--identify-only reads no crown" if self.identify_only
