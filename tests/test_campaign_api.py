@@ -36,3 +36,35 @@ def test_noise_false_reads_exact_values(tmp_path):
     two = run("tool_rotation_arm", 1, out=tmp_path / "b", noise=False, seed=2, **ARM)
     assert one.identified.values.tolist() == two.identified.values.tolist()
     assert one.attrs["noise"] == 0
+
+
+@pytest.mark.parametrize("vary, words", [
+    (5, "vary=5; expected PARAM=DIST texts"),
+    ([5], r"vary item 5; expected PARAM=DIST or a \(name, DIST\) pair"),
+    ([("tool.y",)], r"vary item \('tool.y',\); expected PARAM=DIST or a \(name, DIST\)"),
+    ({"tool.y": "normal:0,5"}, "'5' has no unit")])
+def test_a_vary_that_is_no_parameter_and_distribution_is_refused(vary, words, tmp_path):
+    with pytest.raises(InputError, match=words):
+        run("tool_rotation_arm", 1, vary=vary, out=tmp_path / "c", **ARM)
+    assert not (tmp_path / "c").exists()
+
+
+@pytest.mark.parametrize("out", [None, 123, ""])
+def test_an_out_that_is_no_folder_name_is_refused(out):
+    with pytest.raises(InputError, match=rf"out={out!r}; expected the campaign folder"):
+        run("tool_rotation_arm", 1, out=out, **ARM)
+
+
+def test_a_dict_or_pairs_of_dist_texts_vary_as_the_commands_texts(tmp_path):
+    """``{"tool.y": "-170um"}`` and ``[("tool.y", "-170um")]`` draw what
+    ``"tool.y=-170um"`` draws (a fixed -170 um); ``vary=None`` varies nothing; numpy's
+    integers are whole numbers for ``workers`` as for ``trials``."""
+    import numpy as np
+
+    texts = run("tool_rotation_arm", 1, vary=["tool.y=-170um"], out=tmp_path / "a", **ARM)
+    for i, vary in enumerate(({"tool.y": "-170um"}, [("tool.y", "-170um")])):
+        ds = run("tool_rotation_arm", 1, vary=vary, out=tmp_path / f"b{i}", **ARM)
+        assert ds.drawn.values.tolist() == texts.drawn.values.tolist() == [[-170 * 1e-6]]
+    none = run("tool_rotation_arm", 1, vary=None, out=tmp_path / "c",
+               **{**ARM, "workers": np.int64(0)})
+    assert "drawn" not in none and none.attrs["vary"] == "{}"  # nothing varied

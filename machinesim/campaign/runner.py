@@ -19,6 +19,8 @@ import time
 import warnings
 from collections.abc import Iterable
 
+import numpy as np
+
 from machinesim._cores import usable_cores
 from machinesim._io import _ctrl_c_deferred
 from machinesim.campaign.distributions import Distribution, parse_vary
@@ -58,13 +60,27 @@ class _Progress:
 
 
 def _vary(vary) -> tuple[tuple[str, Distribution], ...]:
+    if vary is None:
+        return ()
     if isinstance(vary, str):  # one "PARAM=DIST": a list of one, not one per character
         vary = [vary]
     if isinstance(vary, dict):
         vary = list(vary.items())
+    if not isinstance(vary, Iterable):
+        raise InputError(f"vary={vary!r}; expected PARAM=DIST texts (e.g. "
+                         "['tool.y=normal:-178um,5um']), (name, DIST) pairs or a dict",
+                         key="--vary")
     out = []
     for item in vary:
-        out.append(parse_vary(item) if isinstance(item, str) else tuple(item))
+        if isinstance(item, str):
+            out.append(parse_vary(item))
+            continue
+        pair = tuple(item) if isinstance(item, tuple | list) else ()
+        if len(pair) != 2 or not isinstance(pair[0], str):
+            raise InputError(f"vary item {item!r}; expected PARAM=DIST or a (name, DIST) "
+                             "pair", key="--vary")
+        name, dist = pair  # a DIST text ("normal:0,5um") is parsed as the command's
+        out.append(parse_vary(f"{name}={dist}") if isinstance(dist, str) else (name, dist))
     return tuple(out)
 
 
@@ -269,8 +285,9 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
         A key of `machinesim.campaign.PROCEDURES` (``"tool_rotation_arm"``, ...).
     trials : int
         N.
-    vary : iterable of ``"PARAM=DIST"`` or (name, Distribution); or a dict name -> Distribution
-        On top of the procedure's default errors (`machinesim.campaign.distributions`).
+    vary : iterable of ``"PARAM=DIST"`` or (name, DIST) pairs; or a dict name -> DIST
+        On top of the procedure's default errors (`machinesim.campaign.distributions`); a
+        DIST is a `Distribution` or its text (``"normal:0,5um"``). None: nothing varies.
     seed : int
         The campaign's seed: trial i is ``SeedSequence(seed).spawn(trials)[i]``.
     out : str or Path
@@ -296,10 +313,14 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
     given = sum(x is not None for x in (scheduler, client)) + (workers is not None)
     if given > 1:
         raise InputError("give one of workers, scheduler and client", key="workers")
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
-                                or workers < 0):
+    if workers is not None and (isinstance(workers, bool)
+                                or not isinstance(workers, int | np.integer) or workers < 0):
         raise InputError(f"--workers {workers!r}; expected a whole number >= 0 (0: no Dask)",
                          key="--workers")
+    workers = None if workers is None else int(workers)
+    if not isinstance(out, str | os.PathLike) or not str(out):
+        raise InputError(f"out={out!r}; expected the campaign folder, a str or Path",
+                         key="--out")
     for flag, value in (("progress", progress), ("report", report)):
         check_flag(value, flag)
     spec = CampaignSpec(procedure, trials, _vary(vary), seed=seed, noise=noise,
