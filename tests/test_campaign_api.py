@@ -1,5 +1,6 @@
-"""machinesim.campaign.run called from Python with what a user may pass by mistake: each is
-refused with an InputError naming the value, before a folder is made or a trial runs."""
+"""machinesim.campaign.run given what a user may pass by mistake: refused with an InputError
+naming the value before a folder is made or a trial runs, or, where only a trial's draw
+shows it, that trial failed with its message."""
 
 from __future__ import annotations
 
@@ -68,3 +69,20 @@ def test_a_dict_or_pairs_of_dist_texts_vary_as_the_commands_texts(tmp_path):
     none = run("tool_rotation_arm", 1, vary=None, out=tmp_path / "c",
                **{**ARM, "workers": np.int64(0)})
     assert "drawn" not in none and none.attrs["vary"] == "{}"  # nothing varied
+
+
+def test_a_landing_beyond_the_error_models_range_fails_its_trial_not_the_campaign(tmp_path):
+    """``robot.repeatability=10m`` (m for um) lands the part metres off: trial 0's landing
+    (per-axis s = RP / 3.616) is beyond the error model's 1 m. It was drawn before the
+    trial's guard, so the whole campaign stopped with a bare "key 'delta'" message after
+    making its folder; it is that trial's failure now, naming the repeatability, as a
+    tool.y of 1000 mm is."""
+    import json
+
+    ds = run("workpiece_setting", 1, vary=["robot.repeatability=10m"], out=tmp_path / "c",
+             **ARM)
+    assert ds.failed.values.tolist() == [1]
+    assert ds.drawn.values.tolist() == [[10.0]]
+    error = json.loads(ds.attrs["errors"])["0"]
+    assert error.startswith("InputError: key 'robot.repeatability': the robot's landing at "
+                            "robot.repeatability 1e+07 um: "), error

@@ -376,11 +376,23 @@ def trial_seed(seed: int, i: int) -> np.random.SeedSequence:
 def _landing(repeatability: float, rng) -> dict:
     from machinesim.loading import RobotLoader
 
-    setting = RobotLoader(repeatability).land(rng)
+    try:
+        setting = RobotLoader(repeatability).land(rng)
+    except MachineSimError as error:  # a repeatability of metres lands the part metres off
+        raise InputError(f"the robot's landing at robot.repeatability "
+                         f"{repeatability / M_PER_UM:g} um: {getattr(error, 'message', error)}",
+                         key="robot.repeatability") from None
     out = {f"workpiece.{a}": float(v) for a, v in zip("xyz", setting.delta, strict=True)}
     out.update({f"workpiece.{a}": float(getattr(setting, a))
                 for a in ("alpha", "beta", "gamma")})
     return out
+
+
+def _drawn(spec: CampaignSpec, i: int) -> dict:
+    """Trial ``i``'s draws of the varied parameters, SI (as drawn: a lab parameter's below
+    zero is taken as zero by `draw`)."""
+    child = trial_seed(spec.seed, i)
+    return {name: dist.draw(stream(child, "campaign", name)) for name, dist in spec.vary}
 
 
 def draw(spec: CampaignSpec, i: int) -> tuple[dict, dict, dict]:
@@ -388,7 +400,7 @@ def draw(spec: CampaignSpec, i: int) -> tuple[dict, dict, dict]:
     error parameters injected (defaults, robot landing, drawn: later wins) and the lab
     parameters, all SI."""
     child = trial_seed(spec.seed, i)
-    drawn = {name: dist.draw(stream(child, "campaign", name)) for name, dist in spec.vary}
+    drawn = _drawn(spec, i)
     lab = {**spec.entry.lab, **{n: max(v, 0.0) for n, v in drawn.items()
                                 if n in LAB_PARAMETERS}}
     errors = dict(spec.entry.defaults(spec.machine))
@@ -414,10 +426,10 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
     from machinesim.lab import Lab
 
     began = time.perf_counter()
-    drawn, errors, lab_parameters = draw(spec, i)
-    record = {"trial": int(i), "drawn": drawn, "injected": {}, "identified": {},
+    record = {"trial": int(i), "drawn": _drawn(spec, i), "injected": {}, "identified": {},
               "figures": {}, "elapsed_s": math.nan, "error": None}
-    try:
+    try:  # a landing out of the error model's range fails its trial, not the campaign
+        _, errors, lab_parameters = draw(spec, i)
         model = spec.entry.base().with_parameters(errors)
         if spec.entry.check is not None and not spec.identify_only:
             spec.entry.check(model)
