@@ -86,3 +86,22 @@ def test_a_landing_beyond_the_error_models_range_fails_its_trial_not_the_campaig
     error = json.loads(ds.attrs["errors"])["0"]
     assert error.startswith("InputError: key 'robot.repeatability': the robot's landing at "
                             "robot.repeatability 1e+07 um: "), error
+
+
+def test_a_noise_drawn_below_zero_is_kept_as_the_zero_the_lab_read_with():
+    """``normal:60nm,20nm`` draws below zero in 0.13 % of trials, which the lab takes as
+    zero (docs/campaigns.md); the trial's ``drawn`` (the Dataset's, the sensitivities')
+    held the negative draw: trial 1497 of seed 0 draws 60 nm + 20 nm x -3.02, -0.47 nm."""
+    from machinesim.campaign import parse_vary, run_trial
+    from machinesim.campaign.trials import draw, trial_seed
+    from machinesim.streams import stream
+
+    raw = 60e-9 + 20e-9 * stream(trial_seed(0, 1497), "campaign",
+                                 "microscope.sigma").standard_normal()
+    assert raw == pytest.approx(-0.4728e-9, abs=1e-13)
+    spec = CampaignSpec("tool_rotation_arm", 1500,
+                        (parse_vary("microscope.sigma=normal:60nm,20nm"),), identify_only=True)
+    drawn, _, lab = draw(spec, 1497)
+    assert drawn == {"microscope.sigma": 0.0} and lab == {"microscope.sigma": 0.0}
+    record = run_trial(spec, 1497)
+    assert record["drawn"] == {"microscope.sigma": 0.0} and record["error"] is None

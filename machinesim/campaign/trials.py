@@ -389,10 +389,13 @@ def _landing(repeatability: float, rng) -> dict:
 
 
 def _drawn(spec: CampaignSpec, i: int) -> dict:
-    """Trial ``i``'s draws of the varied parameters, SI (as drawn: a lab parameter's below
-    zero is taken as zero by `draw`)."""
+    """Trial ``i``'s values of the varied parameters, SI: a lab parameter's normal draw in
+    the 0.13 % below zero as the zero the lab takes (the Dataset's ``drawn`` is what the
+    trial ran with, not a negative noise)."""
     child = trial_seed(spec.seed, i)
-    return {name: dist.draw(stream(child, "campaign", name)) for name, dist in spec.vary}
+    drawn = {name: dist.draw(stream(child, "campaign", name)) for name, dist in spec.vary}
+    return {name: max(value, 0.0) if name in LAB_PARAMETERS else value
+            for name, value in drawn.items()}
 
 
 def draw(spec: CampaignSpec, i: int) -> tuple[dict, dict, dict]:
@@ -401,8 +404,7 @@ def draw(spec: CampaignSpec, i: int) -> tuple[dict, dict, dict]:
     parameters, all SI."""
     child = trial_seed(spec.seed, i)
     drawn = _drawn(spec, i)
-    lab = {**spec.entry.lab, **{n: max(v, 0.0) for n, v in drawn.items()
-                                if n in LAB_PARAMETERS}}
+    lab = {**spec.entry.lab, **{n: v for n, v in drawn.items() if n in LAB_PARAMETERS}}
     errors = dict(spec.entry.defaults(spec.machine))
     if "robot.repeatability" in lab:
         errors.update(_landing(lab["robot.repeatability"], stream(child, "campaign", "robot")))
