@@ -26,8 +26,8 @@ variable                      dims                    what
 
 Attributes: the campaign's ``seed`` (an integer; one of 2**31 or more, beyond netCDF 3's
 integers, as its decimal digits), ``procedure``, ``trials``, ``vary`` (JSON), ``noise``,
-``identify_only``, ``versions`` (JSON: machinesim, numpy, xarray, dask, distributed, python),
-``errors`` (JSON: trial -> message of each failed trial).
+``identify_only``, ``versions`` (JSON: machinesim, numpy, scipy, xarray, dask, distributed,
+python), ``errors`` (JSON: trial -> message of each failed trial).
 """
 
 from __future__ import annotations
