@@ -105,3 +105,12 @@ def test_a_noise_drawn_below_zero_is_kept_as_the_zero_the_lab_read_with():
     assert drawn == {"microscope.sigma": 0.0} and lab == {"microscope.sigma": 0.0}
     record = run_trial(spec, 1497)
     assert record["drawn"] == {"microscope.sigma": 0.0} and record["error"] is None
+
+
+def test_a_run_with_every_trial_already_there_prints_no_empty_line(tmp_path, capsys):
+    """The progress line is ended with a newline only where one was shown: resuming a
+    finished campaign printed a blank line before its result."""
+    run("tool_rotation_arm", 1, out=tmp_path / "c", **{**ARM, "progress": True})
+    assert capsys.readouterr().err.endswith(" s left   \n")
+    run("tool_rotation_arm", 1, out=tmp_path / "c", **{**ARM, "progress": True})
+    assert capsys.readouterr().err == ""

@@ -38,6 +38,7 @@ class _Progress:
     def __init__(self, total: int, resumed: int, stream) -> None:
         self.total, self.resumed, self.stream = total, resumed, stream
         self.done, self.failed, self.began = resumed, 0, time.perf_counter()
+        self.shown = False  # a line to end: none when no trial ran (all resumed)
 
     def step(self, record: dict) -> None:
         self.done += 1
@@ -52,9 +53,10 @@ class _Progress:
                           f"resumed, {self.failed} failed), {rate:.2f} trials/s, "
                           f"{left:.0f} s left   ")
         self.stream.flush()
+        self.shown = True
 
     def end(self) -> None:
-        if self.stream is not None:
+        if self.stream is not None and self.shown:
             self.stream.write("\n")
             self.stream.flush()
 
