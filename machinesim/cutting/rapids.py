@@ -8,11 +8,13 @@ found by box, tried latest first, and past `RAPID_EARLIER_UNION` of them by meet
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from typing import TYPE_CHECKING
 
 import manifold3d
 import numpy as np
 
+from machinesim.cutting.boxgrid import BoxGrid
 from machinesim.cutting.containment import CONTAINED_REL, vertices_and_planes
 from machinesim.cutting.frame import into_frame, tool_frame
 from machinesim.cutting.sweeps import (
@@ -52,6 +54,10 @@ RAPID_RECENT_SWEEPS = 8
 #: union took 60 ms a rapid (a star of 180 spokes, each begun by a rapid down into the hub
 #: the spokes before had cut: 34 of its 38 s).
 RAPID_HOLDERS = 16
+#: The solids (and face planes) of this many sweeps last built are kept: a rapid's own
+#: sweep, built to meet the stock, is the first the next rapid asks whether it holds what it
+#: met (a rapid down to a hole, then back up), and the holders are the latest sweeps.
+RAPID_KEPT_SOLIDS = 2 * RAPID_HOLDERS
 
 
 def rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
@@ -104,7 +110,7 @@ def rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
         earlier = earlier[:-RAPID_RECENT_SWEEPS]
         if len(earlier) > RAPID_EARLIER_UNION:
             earlier = sweeps.meeting(earlier, hit)
-        fresh = sweeps.near[(sweeps.near >= upto) & (sweeps.near < sweep)]
+        fresh = sweeps.near_between(upto, sweep)
         if _unite_alone(len(earlier), len(fresh)):
             hit = hit - sweeps.union(earlier)
         else:
@@ -136,7 +142,9 @@ def _material_left(solid) -> bool:
 
 class _Earlier:
     """The sweeps a rapid is judged against: those that reached the stock, as thickened
-    solids (each built once), found by box and, where many boxes overlap, by meeting."""
+    solids (each built once), found by box (through a `BoxGrid` of their boxes: comparing
+    every earlier box for each rapid grew as the square of the rapids) and, where many boxes
+    overlap, by meeting."""
 
     def __init__(self, shape, poses: np.ndarray, moves: _Moves, reached: np.ndarray,
                  material) -> None:
@@ -147,27 +155,81 @@ class _Earlier:
         #: sweeps (of those reached) whose boxes meet the material's
         self.near = self.reached[np.all(self.high >= m_low, axis=1)
                                  & np.all(self.low <= m_high, axis=1)]
+        self.grid = BoxGrid(self.low, self.high)
         self._solids: dict[int, object] = {}
+        self._recent: OrderedDict[int, object] = OrderedDict()
+        self._planes: OrderedDict[int, tuple] = OrderedDict()
 
     def solid(self, sweep: int, keep: bool = False):
         """The thickened tool's solid of ``sweep``, or None when it sweeps no volume; kept
         for the next rapid when ``keep`` (those tested for meeting, which the next rapid
-        across the same grooves tests again), built afresh otherwise (memory)."""
+        across the same grooves tests again), else among the last `RAPID_KEPT_SOLIDS`
+        built (memory)."""
         if sweep in self._solids:
             return self._solids[sweep]
+        if sweep in self._recent:
+            self._recent.move_to_end(sweep)
+            return self._recent[sweep]
         a = self.moves.sweep_start[sweep]
         solid = self.shape.solid(self.poses[a], self.poses[a + 1])
         if keep:
             self._solids[sweep] = solid
+        else:
+            _keep_recent(self._recent, sweep, solid)
         return solid
+
+    def planes(self, sweep: int, solid) -> tuple:
+        """The unit normals and offsets of ``solid``'s (``sweep``'s) faces, the last
+        `RAPID_KEPT_SOLIDS` kept."""
+        if sweep in self._planes:
+            self._planes.move_to_end(sweep)
+            return self._planes[sweep]
+        planes = vertices_and_planes(solid)[1:]
+        _keep_recent(self._planes, sweep, planes)
+        return planes
+
+    def near_between(self, first: int, sweep: int) -> np.ndarray:
+        """The sweeps in ``near`` from ``first`` up to (not with) ``sweep``."""
+        return self.near[np.searchsorted(self.near, first):np.searchsorted(self.near, sweep)]
+
+    def _before(self, sweep: int, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+        """Positions (in ``reached``, ascending) of the reached sweeps before ``sweep`` whose
+        boxes may overlap the box ``low``, ``high``: every one that does, and a few more."""
+        return self.grid.candidates(low, high, int(np.searchsorted(self.reached, sweep)))
 
     def overlapping(self, sweep: int, hit) -> np.ndarray:
         """Reached sweeps before ``sweep`` whose boxes overlap ``hit``'s, in program order."""
         low, high = np.array(hit.bounding_box()).reshape(2, 3)
-        before = self.reached < sweep
-        inside = (np.all(self.high[before] >= low, axis=1)
-                  & np.all(self.low[before] <= high, axis=1))
-        return self.reached[before][inside]
+        near = self._before(sweep, low, high)
+        inside = (np.all(self.high[near] >= low, axis=1)
+                  & np.all(self.low[near] <= high, axis=1))
+        return self.reached[near[inside]]
+
+    def _holding(self, sweep: int, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+        """Positions (in ``reached``) of the last `RAPID_HOLDERS` reached sweeps before
+        ``sweep`` whose boxes reach below ``low`` and above ``high`` on every axis, latest
+        first. When ``low`` <= ``high``, such a box holds the point midway, so it is listed
+        in that point's cell of the grid or among its wide boxes; the cell's are tried back
+        from the latest, in runs that double, until enough hold (retracts and plunges are
+        held by the moves just before them). Otherwise (a box thinner than twice the
+        tolerance) it overlaps the box between them, and those that may are tried."""
+        k = int(np.searchsorted(self.reached, sweep))
+        if np.all(low <= high):
+            listed, wide = self.grid.at(0.5 * (low + high), k)
+        else:
+            listed = self.grid.candidates(np.minimum(low, high), np.maximum(low, high), k)
+            wide = listed[:0]
+
+        def holding(positions):
+            return positions[np.all(self.low[positions] <= low, axis=1)
+                             & np.all(self.high[positions] >= high, axis=1)][::-1]
+
+        found, end, size = [holding(wide)], len(listed), RAPID_HOLDERS
+        while end > 0 and sum(len(f) for f in found[1:]) < RAPID_HOLDERS:
+            begin = max(0, end - size)
+            found.append(holding(listed[begin:end]))
+            end, size = begin, 2 * size
+        return np.sort(np.concatenate(found))[::-1][:RAPID_HOLDERS]
 
     def held(self, sweep: int, hit, tol: float) -> bool:
         """Whether one of the last `RAPID_HOLDERS` reached sweeps before ``sweep`` whose boxes
@@ -175,10 +237,7 @@ class _Earlier:
         every face plane of that sweep's solid (convex: a tool's convex body or thickened
         profile swept along a segment, or a hull)."""
         low, high = np.array(hit.bounding_box()).reshape(2, 3)
-        before = self.reached < sweep
-        holding = (np.all(self.low[before] <= low + tol, axis=1)
-                   & np.all(self.high[before] >= high - tol, axis=1))
-        candidates = self.reached[before][holding][::-1][:RAPID_HOLDERS]
+        candidates = self.reached[self._holding(sweep, low + tol, high - tol)]
         if not len(candidates):
             return False
         vertices = vertices_and_planes(hit)[0]
@@ -186,7 +245,7 @@ class _Earlier:
             solid = self.solid(k)
             if solid is None:
                 continue
-            normal, offset = vertices_and_planes(solid)[1:]
+            normal, offset = self.planes(k, solid)
             if float((vertices @ normal.T - offset).max()) <= tol:
                 return True
         return False
@@ -206,6 +265,14 @@ class _Earlier:
         if not solids:
             return manifold3d.Manifold()
         return manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+
+
+def _keep_recent(kept: OrderedDict, key: int, value) -> None:
+    """Keep ``value`` under ``key``, dropping the least recently used past
+    `RAPID_KEPT_SOLIDS`."""
+    kept[key] = value
+    if len(kept) > RAPID_KEPT_SOLIDS:
+        kept.popitem(last=False)
 
 
 def _unite_alone(n_earlier: int, n_fresh: int) -> bool:
