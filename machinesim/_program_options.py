@@ -101,6 +101,18 @@ def end_note(program) -> str | None:
             "editor), so is the part")
 
 
+def after_end_note(program) -> str | None:
+    """The note for a program read from text with more text after the % that ended it
+    (`machinesim.nc.tape`: a FANUC control stops reading there, and so does the reader),
+    or None."""
+    line = getattr(program, "after_end", None)
+    if line is None:
+        return None
+    return (f"the text from line {line} on, after the % that ends the program, was not read "
+            "(a FANUC control stops reading at that %); put a second program in a file of "
+            "its own, or remove the % before it if it belongs to this one")
+
+
 def unit_note(program) -> str | None:
     """The note for a program read from text that selects neither G20 nor G21 (its lengths
     are then read in mm, the reader's default: an inch program without G20 comes out 25.4

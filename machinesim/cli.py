@@ -38,6 +38,7 @@ from machinesim._io import (
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._program_options import (
     add_reading_options,
+    after_end_note,
     check_reading_options,
     end_note,
     integer_note,
@@ -297,7 +298,8 @@ def _reading_notes(args, program, chord: float) -> list[str]:
     notes += [f"{word} at line {line} selects a work offset this command is not given: "
               "taken as zero, the same as G54 (docs/nc.md)"
               for word, line in program.states.items() if word in WORK_OFFSETS]
-    notes += [note for note in (unit_note(program), integer_note(program), end_note(program))
+    notes += [note for note in (unit_note(program), integer_note(program), end_note(program),
+                                after_end_note(program))
               if note]
     return notes
 

@@ -36,6 +36,7 @@ from machinesim.nc.program import (
     axis_values,
     work_offsets_si,
 )
+from machinesim.nc.tape import end_of_program
 from machinesim.nc.tooltable import ToolTable, tool_table
 from machinesim.nc.words import (
     INCREMENT_INCH_M,
@@ -296,8 +297,10 @@ def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, t
     data = data.removeprefix(UTF8_BOM)  # Windows editors start UTF-8 files with one
     if data.rstrip().endswith(DOS_EOF):  # DOS editors and DNC senders end files with one
         data = data.rstrip().rstrip(DOS_EOF)
+    data, after_end = end_of_program(data)
     reader = Reader(data, errors, source, offsets, integer_input, tool_table(tools),
                      tolerance, fast, axis_values(reference or {}, source=source))
+    reader.after_end = after_end
     return reader.read()
 
 
@@ -376,6 +379,7 @@ class Reader:
         self.arc_blocks = 0  # G02/G03 blocks run
         self.unit_words: dict[str, int] = {}  # G20/G21 -> first line
         self.cache: dict[int, list[Word] | None] = {}
+        self.after_end: int | None = None  # the first line of text after the closing %
         n = self.scan.simple.size
         # the end of the run of simple lines each line is in (itself when not simple)
         index = np.where(self.scan.simple, n, np.arange(n))
@@ -420,7 +424,8 @@ class Reader:
             tool_changes=self.tool_changes(), arc_blocks=self.arc_blocks,
             unit_words=self.unit_words, integer_words=self.integer_words,
             end_words={} if self.state.end is None else {self.state.end[1]: self.state.end[0]},
-            exact_stops=np.concatenate(self.out.stops) if self.out.stops else ())
+            exact_stops=np.concatenate(self.out.stops) if self.out.stops else (),
+            after_end=self.after_end)
 
     def tool_changes(self) -> tuple:
         """The tools put in the spindle (`ToolChange`), from the T words and M06: at each

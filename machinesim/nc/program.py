@@ -179,6 +179,9 @@ class Program:
         the control waits there until the axes are in position before the next block, so
         servo lag does not carry across it (`machinesim.motion.plan`). Sorted, unique;
         empty for programs built from moves.
+    after_end : int or None
+        The first line holding text after the % that ended the program (a FANUC control
+        stops reading there: that text is not read), or None.
 
     All arrays are read-only.
 
@@ -193,7 +196,7 @@ class Program:
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
                  "tool_table", "tool_changes", "arc_blocks", "unit_words", "_moves",
-                 "exact_stops", "integer_words", "end_words")
+                 "exact_stops", "integer_words", "end_words", "after_end")
 
     def __init__(
         self,
@@ -308,19 +311,21 @@ class Program:
                     number, source, work_offsets, states, integer_input,
                     tool_table=None, tool_changes=(), arc_blocks=0,
                     unit_words=None, exact_stops=(), integer_words=None,
-                    end_words=None) -> Program:
+                    end_words=None, after_end=None) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
                       source, work_offsets, states, integer_input, tool_table, tool_changes,
-                      arc_blocks, unit_words, exact_stops, integer_words, end_words)
+                      arc_blocks, unit_words, exact_stops, integer_words, end_words,
+                      after_end)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
               source, work_offsets, states, integer_input, tool_table=None,
               tool_changes=(), arc_blocks=0, unit_words=None, exact_stops=(),
-              integer_words=None, end_words=None) -> None:
+              integer_words=None, end_words=None, after_end=None) -> None:
         set_ = object.__setattr__
+        set_(self, "after_end", None if after_end is None else int(after_end))
         set_(self, "source", source)
         set_(self, "number", number)
         set_(self, "work_offsets", work_offsets_si(work_offsets, source=source))
@@ -437,7 +442,8 @@ class Program:
             integer_input=self.integer_input, tool_table=self.tool_table,
             tool_changes=self.tool_changes, arc_blocks=self.arc_blocks,
             unit_words=self.unit_words, exact_stops=self.exact_stops,
-            integer_words=self.integer_words, end_words=self.end_words)
+            integer_words=self.integer_words, end_words=self.end_words,
+            after_end=self.after_end)
 
     def __hash__(self) -> int:
         return hash((self.number, self.source, len(self._kinds)))
@@ -449,7 +455,7 @@ class Program:
                            dict(self.states), self.integer_input, self.tool_table,
                            self.tool_changes, self.arc_blocks, dict(self.unit_words),
                            self.exact_stops, dict(self.integer_words),
-                           dict(self.end_words)))
+                           dict(self.end_words), self.after_end))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -465,7 +471,7 @@ class Program:
 def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number, source,
              work_offsets, states, integer_input, tool_table=None, tool_changes=(),
              arc_blocks=0, unit_words=None, exact_stops=(), integer_words=None,
-             end_words=None) -> Program:
+             end_words=None, after_end=None) -> Program:
     """Unpickle a `Program` (the arrays come back writeable copies: made read-only again)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
@@ -473,7 +479,7 @@ def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, nu
                                tool_table=tool_table, tool_changes=tool_changes,
                                arc_blocks=arc_blocks, unit_words=unit_words,
                                exact_stops=exact_stops, integer_words=integer_words,
-                               end_words=end_words)
+                               end_words=end_words, after_end=after_end)
 
 
 def _states(states: Mapping[str, int] | None, source: str,

@@ -1,0 +1,43 @@
+"""What a FANUC control reads of a file and how: the closing %, ISO ':' program numbers,
+G04 X without a decimal point per increment system, a tool length change without Z."""
+
+from __future__ import annotations
+
+import pytest
+
+from machinesim._program_options import after_end_note
+from machinesim.nc import parse_program
+
+TOOLS = {"tool": {"1": {"length_mm": 10.0}}}
+
+
+@pytest.mark.parametrize("text, after", [
+    # opened by %: the next % ends it, and the program after it is not read
+    ("%\nG90 G21\nG01 X1. F100.\n%\n\nG01 X5. F100.\n%\n", 6),
+    # not opened by %: the first % ends it
+    ("G90 G21\nG01 X1. F100.\n%\nX5.\n", 4),
+    # only white space after it: nothing to say
+    ("%\nG90 G21\nG01 X1. F100.\n%\n  \n\n", None),
+])
+def test_reading_stops_at_the_percent_that_ends_the_program(text, after):
+    program = parse_program(text)
+    assert len(program) == 1 and program.targets[0, 0] == pytest.approx(1e-3)
+    assert program.after_end == after
+    note = after_end_note(program)
+    assert (note is None) == (after is None)
+    if after is not None:
+        assert f"line {after}" in note and "not read" in note
+
+
+@pytest.mark.parametrize("text, moves, after", [
+    # a second program after the first's closing % (had been refused as an M30 in a
+    # subprogram), and a block after it (had been refused as a block after M02)
+    ("%\nO1000\nG00 X0\nM30\n%\n%\nO2000\nG00 X1.\nM30\n%", 1, 6),
+    ("G00 X0 M02 (end)\n%\nN5", 1, 3),
+    # CRLF line ends: the % line keeps its whole line end
+    ("%\r\nG90 G21\r\nG01 X1. F100.\r\n%\r\nX5.\r\n", 1, 5),
+])
+def test_what_follows_the_closing_percent_is_not_read(text, moves, after):
+    program = parse_program(text)
+    assert len(program) == moves and program.targets[-1, 0] < 2e-3
+    assert program.after_end == after
