@@ -41,3 +41,11 @@ def test_what_follows_the_closing_percent_is_not_read(text, moves, after):
     program = parse_program(text)
     assert len(program) == moves and program.targets[-1, 0] < 2e-3
     assert program.after_end == after
+
+
+def test_an_iso_colon_program_number_reads_as_an_o_number():
+    program = parse_program(":1234\nG90 G21\nM98 P2000\nM30\n:2000\nG01 X1. F100.\nM99\n")
+    assert program.number == 1234
+    assert len(program) == 1 and program.targets[0, 0] == pytest.approx(1e-3)
+    assert program == parse_program(
+        "O1234\nG90 G21\nM98 P2000\nM30\nO2000\nG01 X1. F100.\nM99\n")

@@ -99,7 +99,11 @@ def tokenize(raw: str, source: str, line: int, *,
                     continue
             percent = True
             i += 1
-        elif c in _LETTERS:
+        elif c in _LETTERS or c == ":":
+            # ':' is the ISO-code address of a program number, as O is: FANUC controls read
+            # ':1234' as O1234 (https://en.cncforum.net/t/cnc-program-name-and-number-
+            # identification/382; docs/nc.md)
+            letter = "O" if c == ":" else c.upper()
             start = i
             i += 1
             while i < n and raw[i] in _BLANK:
@@ -108,27 +112,27 @@ def tokenize(raw: str, source: str, line: int, *,
             end = match.end() if match else i
             special = _NOT_FINITE.match(raw, i) if match is None else None
             if special is not None:  # Xnan, X-inf: one problem, not one per letter of it
-                fail(f"{c.upper()}{special.group()} is not a finite number (NaN and infinity "
+                fail(f"{letter}{special.group()} is not a finite number (NaN and infinity "
                      f"are no lengths, angles or codes); expected digits with an optional "
-                     f"sign and decimal point, e.g. {_example(c)}", start + 1,
-                     c.upper() + special.group())
+                     f"sign and decimal point, e.g. {_example(letter)}", start + 1,
+                     letter + special.group())
                 i = special.end()
                 continue
             if match is None or (end < n and raw[end] in "0123456789.+-"):
                 stop = _end_of_garbage(raw, i)
                 tail = raw[i:stop]
                 fail(
-                    f"malformed number {brief(tail)!r} after {c.upper()!r}; expected digits "
-                    f"with an optional sign and decimal point, e.g. {_example(c)}",
+                    f"malformed number {brief(tail)!r} after {letter!r}; expected digits "
+                    f"with an optional sign and decimal point, e.g. {_example(letter)}",
                     start + 1,
-                    c.upper() + tail,
+                    letter + tail,
                 )
                 i = max(stop, i)
                 continue
             number = match.group()
             if number[0] in "+-":
                 number = number[0] + number[1:].lstrip(_BLANK)
-            words.append(Word(c.upper(), number, start + 1))
+            words.append(Word(letter, number, start + 1))
             i = end
         elif c in "0123456789+-.":
             stop = _end_of_garbage(raw, i)
