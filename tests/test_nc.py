@@ -120,13 +120,14 @@ def test_integer_input_in_fanuc_increment_systems_and_the_words_read_so():
     # vectorised path, the arc the block-by-block one: both apply the rule and keep the
     # letters written without a point, with their first lines (zero and pointed ones not).
     text = "G00 X0 Z1.\nG01 X10 Y0 A5 F100.\nG02 X0. Y0. R5\nG20 G01 X10\nG04 X500\n"
-    for rule, mm, deg in (("is-b", 1e-6, 1e-3), ("is-c", 1e-7, 1e-4)):
+    # G04 X500: 500 x 0.001 s under IS-B, 500 x 0.0001 s under IS-C (`words.DWELL_INCREMENT_S`)
+    for rule, mm, deg, s in (("is-b", 1e-6, 1e-3, 1e-3), ("is-c", 1e-7, 1e-4, 1e-4)):
         program = parse_program(text, integer_input=rule)
         moves = program.moves
         assert moves[1].target["X"] == pytest.approx(10 * mm, rel=1e-15)
         assert moves[1].target["A"] == pytest.approx(5 * deg * DEG, rel=1e-15)
         assert moves[-2].target["X"] == pytest.approx(10 * mm * 0.1 * 25.4, rel=1e-15)
-        assert moves[-1].dwell_s == 0.5
+        assert moves[-1].dwell_s == pytest.approx(500 * s, rel=1e-15)
         assert program.integer_input == rule
         assert dict(program.integer_words) == {"X": 2, "A": 2, "R": 3}
         slow = parse_program(text, integer_input=rule, fast=False)

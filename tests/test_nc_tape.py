@@ -49,3 +49,14 @@ def test_an_iso_colon_program_number_reads_as_an_o_number():
     assert len(program) == 1 and program.targets[0, 0] == pytest.approx(1e-3)
     assert program == parse_program(
         "O1234\nG90 G21\nM98 P2000\nM30\nO2000\nG01 X1. F100.\nM99\n")
+
+
+@pytest.mark.parametrize("rule, seconds", [
+    ("calculator", 10.0),  # X10 is 10 s
+    ("increment", 0.010),  # milliseconds, as before
+    ("is-b", 0.010),  # 10 x 0.001 s
+    ("is-c", 0.001),  # 10 x 0.0001 s: not 10 ms
+])
+def test_g04_x_without_a_point_counts_the_increment_systems_time_unit(rule, seconds):
+    program = parse_program("G90 G21\nG04 X10\nG04 X10.\nG04 P10\n", integer_input=rule)
+    assert program.dwells.tolist() == pytest.approx([seconds, 10.0, 0.010], rel=1e-15)

@@ -23,6 +23,7 @@ from machinesim.nc.lexer import Word
 from machinesim.nc.program import AXES, KIND_LINEAR, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
 from machinesim.nc.words import (
     ARC,
+    DWELL_INCREMENT_S,
     G_GROUPS,
     G_REFUSED,
     M99_IN_MAIN,
@@ -407,7 +408,7 @@ class Block:
             word = single["X"]
             dwell_s = self.real(word)
             if self.increment is not None and "." not in word.text:
-                dwell_s /= 1000.0
+                dwell_s *= DWELL_INCREMENT_S[self.reader.integer_input]
             if dwell_s < 0.0:
                 raise self.fail(f"dwell time must be >= 0, got {word.key}", word)
         else:

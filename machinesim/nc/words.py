@@ -25,6 +25,13 @@ INCREMENTS = {
     "is-b": (1e-6, 1e-4 * M_PER_INCH, 1e-3 * RAD_PER_DEG),
     "is-c": (1e-7, 1e-5 * M_PER_INCH, 1e-4 * RAD_PER_DEG),
 }
+#: The dwell time unit of ``G04 X`` without decimal point, s, by integer-input rule: the
+#: least input increment of time. FANUC's ISO tables (as Siemens's ISO dialect manual
+#: reproduces them: SINUMERIK 802D sl/840D ISO Milling 04.07, 3.3.1 "Dwell (G04)", table
+#: 3-7, https://www.easymanua.ls/siemens/sinumerik-802d-sl/manual/592301?p=67): X is in
+#: 0.001 s under IS-B, 0.0001 s under IS-C (X10 is 1 ms there, not 10); P is in ms under
+#: both. The nanometre machines' rule keeps the millisecond (no table for it was found).
+DWELL_INCREMENT_S = {"increment": 1e-3, "is-b": 1e-3, "is-c": 1e-4}
 #: The slowest feed a program may ask for, m/s: 1 nm a minute, far below any control's
 #: least feed (FANUC: 0.001 mm/min at IS-B). Below it a feed was typed in the wrong unit
 #: (F0.000...1 took 3e33 s of machining, silently).
