@@ -6,6 +6,7 @@ from __future__ import annotations
 import pytest
 
 from machinesim._program_options import after_end_note
+from machinesim.exceptions import NCProgramError
 from machinesim.nc import parse_program
 
 TOOLS = {"tool": {"1": {"length_mm": 10.0}}}
@@ -60,3 +61,17 @@ def test_an_iso_colon_program_number_reads_as_an_o_number():
 def test_g04_x_without_a_point_counts_the_increment_systems_time_unit(rule, seconds):
     program = parse_program("G90 G21\nG04 X10\nG04 X10.\nG04 P10\n", integer_input=rule)
     assert program.dwells.tolist() == pytest.approx([seconds, 10.0, 0.010], rel=1e-15)
+
+
+def test_a_move_without_z_after_a_length_change_without_z_is_refused():
+    text = "G90 G21\nG00 Z50.\nG43 H1\nG00 X10. Y5.\nZ2.\nM30\n"
+    with pytest.raises(NCProgramError) as error:
+        parse_program(text, tools=TOOLS)
+    message = str(error.value)
+    assert "line 4" in message and "X10." in message and "G43 H1 at line 3" in message
+    assert "+10 mm" in message and "10 mm higher" in message and "5006#6" in message
+    # with Z in the block of the change, it moves there: XY at 50 mm + 10 mm of tool
+    program = parse_program(text.replace("G43 H1\n", "G43 H1 Z50.\n"), tools=TOOLS)
+    assert program.targets[2, 2] == pytest.approx(0.060)
+    # before Z is known there is no height to be off: read as before
+    assert len(parse_program("G90 G21\nG43 H1\nG00 X10. Y5.\nZ2.\nM30\n", tools=TOOLS)) == 2

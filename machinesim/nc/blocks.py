@@ -19,6 +19,7 @@ from machinesim.nc.arcs import (
     arc_points,
 )
 from machinesim.nc.cycles import drill_steps
+from machinesim.nc.length import check_length_moved
 from machinesim.nc.lexer import Word
 from machinesim.nc.program import AXES, KIND_LINEAR, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
 from machinesim.nc.words import (
@@ -360,14 +361,21 @@ class Block:
                 state.length_change = None  # carried by this Z
         return self.finite(value, word)
 
-    def check_length_carried(self, word: Word | None) -> None:
+    def check_length_carried(self, word: Word | None, axes: list[Word] = ()) -> None:
         """Refuse an incremental Z (or a G91 cycle's R: ``word``) while a tool length
         change waits for an absolute Z: FANUC by default (parameter 5006#6 TOS = 0) moves Z
         by the change in the G43/G44/G49 block itself, LinuxCNC and a control that shifts
         coordinates carry it with the next absolute Z only, so the incremental moves after
-        it end the change apart; here they would silently take the second reading."""
+        it end the change apart; here they would silently take the second reading. A G90
+        move without Z (``axes``, ``word`` None) then is refused too (`check_length_moved`)."""
         change = self.state.length_change
-        if word is None or change is None or not self.state.incremental:
+        if change is None:
+            return
+        if word is None and axes and not self.state.incremental and "Z" in self.state.target:
+            line, words, carried = change
+            check_length_moved(self, axes[0], line, words,
+                               self.reader.tool_length() - carried)
+        if word is None or not self.state.incremental:
             return
         line, words, carried = change
         delta = self.reader.tool_length() - carried
@@ -385,7 +393,7 @@ class Block:
         if state.motion is None:
             raise self.fail(f"axis word {axes[0].letter} without a motion mode; give G00 or "
                             "G01 first", axes[0])
-        self.check_length_carried(self.single.get("Z"))
+        self.check_length_carried(self.single.get("Z"), axes)
         values = {word.letter: self.machine(word) for word in axes}
         state.target.update(values)
         self.add(MOTION[state.motion], 0.0, block_number)
@@ -475,7 +483,7 @@ class Block:
                                 f"{u} and {v} before {state.motion}{plane}", word)
         start = dict(state.target)
         end = dict(start)
-        self.check_length_carried(single.get("Z"))
+        self.check_length_carried(single.get("Z"), axes)
         end.update({axis.letter: self.machine(axis) for axis in axes})
         given = [single[k] for k in centre_letters if k in single]
         if "R" in single and given:
