@@ -324,6 +324,13 @@ class PIDServo:
         if q.ndim != 2 or q.shape[1] != len(self.axes) or t.shape != (q.shape[0],):
             raise InputError(f"PIDServo with {len(self.axes)} axes needs t (N,) and q "
                              f"(N, {len(self.axes)}), got {t.shape} and {q.shape}")
+        for name, values in (("t", t), ("q", q)):
+            bad = np.flatnonzero(~np.isfinite(values).reshape(len(t), -1).all(axis=1))
+            if bad.size:  # NaN had passed through the loops into every later sample
+                raise InputError(
+                    f"PIDServo.follow: {name} at sample {int(bad[0])} holds "
+                    f"{values[bad[0]]!r} ({bad.size} samples not finite); expected finite "
+                    f"{'times, s' if name == 't' else 'axis commands (m, rad)'}", key=name)
         out = q.copy()
         for i, axis in enumerate(self.axes):
             if axis is not None:
