@@ -76,10 +76,9 @@ def sine_grid(amplitude: float = AMPLITUDE_M, wavelength: float = WAVELENGTH_M, 
     100 um).
     """
     a1 = check_length(amplitude, "amplitude")
-    l1 = check_length(wavelength, "wavelength", positive=True)
+    l1 = _wavelength(wavelength, "wavelength")
     a2 = a1 if amplitude_y is None else check_length(amplitude_y, "amplitude_y")
-    l2 = l1 if wavelength_y is None else check_length(wavelength_y, "wavelength_y",
-                                                      positive=True)
+    l2 = l1 if wavelength_y is None else _wavelength(wavelength_y, "wavelength_y")
     k1, k2 = 2.0 * math.pi / l1, 2.0 * math.pi / l2
 
     def height(x, y):
@@ -90,6 +89,22 @@ def sine_grid(amplitude: float = AMPLITUDE_M, wavelength: float = WAVELENGTH_M, 
 
     return Design(height, gradient, f"sine grid A {a1 / M_PER_NM:g} nm, lambda "
                                     f"{l1 / M_PER_UM:g} um")
+
+
+#: The shortest sine-grid wavelength taken, m: 1 nm, the NC writer's resolution. A path
+#: over the grid is sampled along each wavelength, so 1e-300 m (accepted as positive) asked
+#: for some 1e296 points a millimetre.
+MIN_WAVELENGTH_M = 1e-9
+
+
+def _wavelength(value, name: str) -> float:
+    """``value`` as a wavelength, m: positive and at least `MIN_WAVELENGTH_M`."""
+    length = check_length(value, name, positive=True)
+    if length < MIN_WAVELENGTH_M:
+        raise InputError(f"Expected {name} >= {MIN_WAVELENGTH_M:g} m (1 nm, "
+                         f"machinesim.cam.designs.MIN_WAVELENGTH_M), got {length!r} m: a path "
+                         "over the grid samples every wavelength", key=name)
+    return length
 
 
 def sphere(radius: float) -> Design:
