@@ -225,3 +225,16 @@ def test_a_facing_cut_of_many_turns_in_one_block_turns_as_the_same_cut_in_small_
     heights = face.heights_at(x, y)
     assert heights.max() <= -1e-5 + (0.11e-3 / 2) ** 2 / (2 * 0.5e-3) + 1e-12
     assert heights.min() >= -1e-5 - 1e-12
+
+
+def test_a_turning_move_of_more_than_a_day_is_noted():
+    # the facing cut above at F0.0001 for F20.: sqrt(5.5**2 + 18000**2) mm-or-deg over
+    # 0.0001 mm/min is 1.08e10 s, by hand; it was reported without a word
+    head = "G21 G90 G94\nG00 X5.5 Z1. C0.\nG01 Z-0.01 F100.\n"
+    slow, fast = (turn(parse_program(head + f"G01 X0. C18000. F{f}\nG00 Z1.\nM30\n"),
+                       "sts_lathe", "nose:0.5:90")[1] for f in ("0.0001", "20."))
+    assert slow.machining_time_s == pytest.approx(
+        np.hypot(5.5, 18000.0) / 0.0001 * 60.0, rel=1e-12)
+    (note,) = [n for n in slow.notes if "takes" in n]
+    assert "line 4" in note and "1.08e+10 s" in note and "F0.0001" in note
+    assert not [n for n in fast.notes if "takes" in n]

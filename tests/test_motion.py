@@ -82,3 +82,14 @@ def test_linear_moves_are_not_split_and_bad_programs_are_refused():
         plan(parse_program("G01 A10. F100.\n"), machine)
     with pytest.raises(NCProgramError, match="line 1.*no feed rate F"):
         plan(parse_program("G01 X1.\n"), machine)
+
+
+def test_a_move_of_more_than_a_day_is_noted_with_its_line_and_feed():
+    # 10 mm at F0.0001 mm/min: 1e5 min = 6e6 s, by hand; it had been planned without a word
+    machine = load_machine("grooving_4axis")
+    slow = plan(parse_program("G90 G21\nG01 X1. F100.\nG01 X11. F0.0001\nM30\n"), machine)
+    assert slow.duration == pytest.approx(0.6 + 6e6, rel=1e-12)
+    (note,) = slow.notes
+    assert "line 3" in note and "6e+06 s" in note and "F0.0001" in note
+    # an hour-long finishing pass is a plan, not a slip: 100 mm at F1 mm/min
+    assert plan(parse_program("G90 G21\nG01 X100. F1.\nM30\n"), machine).notes == ()

@@ -50,6 +50,7 @@ from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_floats, as_number
+from machinesim.motion.planner import slow_move_note
 from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
 from machinesim.servo import check_servo
@@ -207,7 +208,9 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
                          getattr(program, "source", None), allow_overtravel)
     tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
-    for t, points in turning_runs(program, machine):
+    slow = None
+    for t, points, note in _timed_runs(program, machine):
+        slow = slow or note
         reached = followed(None if servo is None else servo.follow, t, points)
         for k, axis in enumerate(machine.axes):
             peak[axis] = max(peak[axis], float(np.max(np.abs(points[:, k] - reached[:, k]))))
@@ -223,7 +226,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
               f"above the stock's top (z = {top * 1e6:.6g} um) throughout; does the program "
               "reach the stock, and do the errors set the tool too high or the workpiece too "
               "low (tool.z, workpiece.z)?",) if empty else ())
-    notes += _rapids_below_top(program, machine, top)
+    notes += _rapids_below_top(program, machine, top) + ((slow,) if slow else ())
     report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak,
                            empty_cut=empty, limit_violations=limits, notes=notes)
     return part, report
@@ -275,16 +278,23 @@ def turning_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
     """The commanded motion of each turning run of ``program`` on ``machine``: times from
     the run's start (s, shape (n,)) and axis values (SI, shape (n, n_axes), the machine's
     axis order), one row per point, the run's start point first (module docstring)."""
+    return [(t, points) for t, points, _ in _timed_runs(program, machine)]
+
+
+def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray, str | None]]:
+    """`turning_runs`' runs, each with a note on its slowest move when it takes more than
+    a day (`machinesim.motion.planner.slow_move_note`), else None."""
     source = getattr(program, "source", "<program>")
     q, kinds, feeds, lines = _axis_values(program, machine, source)
     out = []
     c_column = machine.axes.index("C")
     for first, last in _turning_runs(q, kinds, c_column, lines, source, _spindle_hint(program)):
         points = q[first - 1:last + 1]  # moves first..last: points first-1..last
-        durations = _durations(points, feeds[first:last + 1], machine.axes,
-                               lines[first:last + 1], source)
+        moves = slice(first, last + 1)
+        durations = _durations(points, feeds[moves], machine.axes, lines[moves], source)
         t = np.concatenate([[0.0], np.cumsum(durations)])
-        out.append(_within_quarter_turns(t, points, c_column))
+        note = slow_move_note(durations, kinds[moves], lines[moves], feeds[moves])
+        out.append((*_within_quarter_turns(t, points, c_column), note))
     return out
 
 

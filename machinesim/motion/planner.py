@@ -11,6 +11,9 @@ from machinesim.nc.program import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOV
 from machinesim.tolerances import CHORD_TOLERANCE_M
 
 _M_PER_MM = 1e-3
+#: A feed move longer than this is noted (`slow_move_note`): a day for one move is a feed
+#: written in the wrong unit (F0.0001 mm/min for 0.1 mm/min), not a machining plan.
+SLOW_MOVE_S = 24 * 3600.0
 _RAD_PER_DEG = np.pi / 180.0
 
 
@@ -200,8 +203,24 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     lines_out = np.array(lines, dtype=np.int64)
     kinds_out.flags.writeable = False
     lines_out.flags.writeable = False
+    notes = slow_move_note(durations, kinds, lines, feeds)
     return Trajectory(axes, q, t, offsets, kinds_out, lines_out, float(clock[-1]), cutting,
-                      peak_lag=peak_lag)
+                      notes=(notes,) if notes else (), peak_lag=peak_lag)
+
+
+def slow_move_note(durations, kinds, lines, feeds) -> str | None:
+    """A note naming the longest feed move when it takes more than `SLOW_MOVE_S`, with its
+    feed: the machining time it gives is then hardly what the program meant."""
+    linear = np.flatnonzero(np.asarray(kinds) == KIND_LINEAR)
+    if not linear.size:
+        return None
+    i = int(linear[np.argmax(durations[linear])])
+    if not durations[i] > SLOW_MOVE_S:
+        return None
+    return (f"the feed move of line {int(lines[i])} takes {durations[i]:.3g} s "
+            f"({durations[i] / 3600.0:.3g} h) at F{feeds[i] * 60e3:.6g} (mm/min or deg/min), "
+            f"more than the {SLOW_MOVE_S / 3600.0:g} h one move of a program takes: is F in "
+            "the program's unit (G94: per minute)?")
 
 
 def _durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate) -> np.ndarray:
@@ -360,4 +379,4 @@ def follow_runs(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray,
     return np.asarray(ends, dtype=np.int64)
 
 
-__all__ = ["MAX_SUBSTEPS", "move_duration", "plan"]
+__all__ = ["MAX_SUBSTEPS", "SLOW_MOVE_S", "move_duration", "plan", "slow_move_note"]
