@@ -376,3 +376,29 @@ def test_a_second_program_on_a_tilted_table_extends_the_sloped_envelopes():
     # The same direction at another slope on that part is the boolean engine's.
     _, other = remove(twice, V90, tilted(grooves(first, [0.0], [10e-6]), -3e-4, 2e-4))
     assert other.method == "boolean"
+
+
+def test_a_sweep_ending_in_the_stock_is_declined_before_the_reaching_bounds(monkeypatch):
+    # A groove right across the block and a pass that stops 1 mm in: the second cannot span
+    # the block, so the height field declines the cut. It is found from the tool's lowest
+    # vertex at the sweeps' ends, before the bounds of the tool's reaching part (seconds on
+    # a raster of thousands of short lines, all to be declined); the part is the boolean
+    # engine's either way.
+    from machinesim.cutting.sweepset import SweepSet
+
+    called = []
+    bounds = SweepSet.pose_bounds
+    monkeypatch.setattr(SweepSet, "pose_bounds",
+                        lambda self: called.append(1) or bounds(self))
+    stock = block(3e-3, 3e-3, 0.5e-3)
+    across = np.array([pose_at((x, 1e-3, -10e-6)) for x in (-1e-3, 4e-3)])
+    stops = np.array([pose_at((x, 2e-3, -10e-6)) for x in (-1e-3, 1e-3)])
+    part, report = remove(stock, V90, [across, stops])
+    assert report.method == "boolean" and not called
+    # the groove alone spans the block: measured by its reaching part, cut by height field
+    _, alone = remove(stock, V90, [across])
+    assert alone.method == "relief" and called
+    # the boolean part holds both grooves, a 90 deg V 10 um deep (section 1e-10 m^2) over
+    # the 3 mm block and over the 1 mm the second runs in before it stops
+    assert stock.volume - part.volume == pytest.approx((3e-3 + 1e-3) * 1e-10, rel=1e-9,
+                                                       abs=0.0)
