@@ -201,7 +201,7 @@ def measure_xy_plane(setups: LaserSetups, *, count: int = 21, runs: int = 5,
     e_diag = squareness_from_diagonals(same, opposite, 0.4, 0.4)
     # The map's squareness as the paper took it (eq 2): one diagonal, read level with the
     # cut, against the X and Y travels the positioning tests read. It carries the three
-    # set-ups' scales (2 s_diagonal - s_x - s_y), which the two-diagonal form cancels.
+    # set-ups' scales (s_x + s_y - 2 s_diagonal), which the two-diagonal form cancels.
     e_eq2 = _eq2_squareness(work[0], DIAGONALS[0], Curve(targets, pos_x.mean),
                             Curve(targets, pos_y.mean), yaw_y)
     e_lines = squareness_of_lines(e_eq2, str_xy, str_yx, PLATE, PLATE)
