@@ -121,6 +121,13 @@ def test_the_paper_form_puts_the_squareness_in_the_y_row():
         only.ranges(PLATE, PLATE, reference="z")
 
 
+def test_the_tests_ask_for_their_set_ups_by_name():
+    # one interferometer for all the tests, as the API took before eq 2's three set-ups
+    lab = machinesim.Lab("grooving_4axis", noise=False)
+    with pytest.raises(MachineSimError, match="LaserSetups.*got LaserInterferometer"):
+        measure_xy_plane(lab.laser_interferometer(label="one"))
+
+
 def test_the_yaw_is_read_and_taken_out_of_the_diagonal_squareness():
     # EQ1 plus a yaw of the table (ECY): x ECY(y) in Y at the corners does not cancel
     # between the two diagonals, so left in it would bias the squareness. Read from the

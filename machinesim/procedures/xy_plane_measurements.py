@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from machinesim.exceptions import InputError
 from machinesim.identification.xy_plane import (
     Curve,
     DiagonalReading,
@@ -175,6 +176,12 @@ def measure_xy_plane(setups: LaserSetups, *, count: int = 21, runs: int = 5,
     table : CompensationTable, optional
         A compensation active in the control while measuring (the "after" tests).
     """
+    if not isinstance(setups, LaserSetups):
+        # the tests read on four set-ups since paper 003's eq 2 took the squareness; one
+        # interferometer (or the earlier pair) would fail deep inside with no word of why
+        raise InputError(f"Expected the laser's set-ups for the tests, LaserSetups(x_axis, "
+                         f"y_axis, diagonals, diagonals_120mm), got "
+                         f"{type(setups).__name__}", key="setups")
     along_x = _Reader(setups.x_axis, table)
     along_y = _Reader(setups.y_axis, table)
     targets = iso230_2_targets(*PLATE, count=count, rng=seed)
