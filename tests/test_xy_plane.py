@@ -13,7 +13,6 @@ from machinesim.identification.xy_plane import Curve, XYPlaneMap, fit_xy_plane
 from machinesim.nc import ProgramBuilder
 from machinesim.procedures.xy_plane_errors import XYPlaneErrors, compensations
 from machinesim.procedures.xy_plane_measurements import (
-    BEAM_FRAME,
     DIAGONALS,
     PLATE,
     LaserSetups,
@@ -32,14 +31,6 @@ EQ1 = {"location": {"Y": {"EC0Y_urad": 20.0}},
                            "EXY_um": [0.5, 0.5, -1, 0, 1.2, -0.4, -0.4]}}}
 
 
-def instruments(lab, resolution=None, session=""):
-    extra = {} if resolution is None else {"resolution": resolution}
-    return LaserSetups(*(lab.laser_interferometer(label=f"{name}{session}", **extra)
-                         for name in ("x", "y", "diagonals")),
-                       lab.laser_interferometer(label=f"beam{session}", frame=BEAM_FRAME,
-                                                **extra))
-
-
 def true_deviation(lab, x, y):
     """The actual XY deviation of the tool point from kinematics with the revealed errors."""
     q = np.zeros((x.size, len(lab.machine.axes)))
@@ -52,7 +43,7 @@ def true_deviation(lab, x, y):
 def measured_without_noise(errors):
     """A noise-free lab with ``errors`` and its laser tests read exactly (resolution 0)."""
     lab = machinesim.Lab("grooving_4axis", errors, noise=False)
-    return lab, measure_xy_plane(instruments(lab, resolution=0.0), seed=None)
+    return lab, measure_xy_plane(LaserSetups.from_lab(lab, resolution=0.0), seed=None)
 
 
 def rigid_rest(truth, dx, dy, x, y) -> float:
@@ -171,7 +162,7 @@ def test_fit_route_identifies_the_injected_tables(eq1_lab):
 
 def test_table_and_model_compensation_leave_below_a_nanometre_without_noise(eq1_lab):
     lab, meas = eq1_lab
-    setups = instruments(lab, resolution=0.0)
+    setups = LaserSetups.from_lab(lab, resolution=0.0)
     after = measure_xy_plane(setups, seed=None, table=CompensationTable(meas.map))
     assert max(after.map.ranges(PLATE, PLATE)) < 1e-9
     assert after.diagonal_deviation < 1e-9
@@ -206,7 +197,7 @@ def test_with_the_yaw_the_table_leaves_the_machining_point_below_a_nanometre(pap
     # takes them below 1 nm. At beam height, 115 mm above the tool tip, the pitch of X and
     # Y still tilts the optic (Abbe): no XY command puts both points right.
     lab, meas = paper_lab
-    setups = instruments(lab, resolution=0.0)
+    setups = LaserSetups.from_lab(lab, resolution=0.0)
     eq1 = measure_xy_plane(setups, seed=None, table=CompensationTable(meas.map))
     full = measure_xy_plane(setups, seed=None, table=CompensationTable(meas.map, meas.yaw_y))
     assert eq1.work_diagonal_deviation > 0.1e-6
@@ -282,7 +273,7 @@ def test_each_set_up_reads_on_its_own_air_scale_and_eq2_carries_them_into_y():
 
 def test_compensation_table_rewrites_a_program_so_the_tool_lands():
     lab = machinesim.Lab("grooving_4axis", EQ1, noise=False)
-    meas = measure_xy_plane(instruments(lab, resolution=0.0), seed=None)
+    meas = measure_xy_plane(LaserSetups.from_lab(lab, resolution=0.0), seed=None)
     table = CompensationTable(meas.map)
     program = (ProgramBuilder(1).rapid(X=-0.15, Y=0.12, Z=0.001)
                .linear(X=0.18, Y=-0.1, feed_mm_per_min=500).build())

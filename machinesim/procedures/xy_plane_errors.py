@@ -45,7 +45,6 @@ from machinesim.identification.xy_plane import fit_xy_plane
 from machinesim.nc import ProgramBuilder
 from machinesim.procedures.pyramid_windows import cut_and_read
 from machinesim.procedures.xy_plane_measurements import (
-    BEAM_FRAME,
     PLATE,
     LaserSetups,
     XYPlaneMeasurements,
@@ -276,17 +275,10 @@ class XYPlaneErrors:
 
     def _interferometers(self, lab, session: str = "") -> LaserSetups:
         """The laser set up for one session of tests: for X, for Y, for the diagonals at
-        the cut and 120 mm up, each a set-up of its own (`LaserSetups`). The after tests are
-        set up again (``session="_after"``): their own noise and, with the lab's
+        the cut and 120 mm up, each a set-up of its own (`LaserSetups.from_lab`). The after
+        tests are set up again (``session="_after"``): their own noise and, with the lab's
         ``air_refraction``, their own scales, as a later day's set-ups have."""
-        extra = ({} if self.interferometer_resolution is None
-                 else {"resolution": self.interferometer_resolution})
-        return LaserSetups(
-            lab.laser_interferometer(label=f"x_axis{session}", **extra),
-            lab.laser_interferometer(label=f"y_axis{session}", **extra),
-            lab.laser_interferometer(label=f"diagonals{session}", **extra),
-            lab.laser_interferometer(label=f"diagonals_120mm{session}", frame=BEAM_FRAME,
-                                     **extra))
+        return LaserSetups.from_lab(lab, session, self.interferometer_resolution)
 
     def _c_tests(self, lab, compensation) -> CTests:
         m = lab.machine

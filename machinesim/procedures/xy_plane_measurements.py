@@ -158,6 +158,19 @@ class LaserSetups:
     diagonals: object
     diagonals_120mm: object
 
+    @classmethod
+    def from_lab(cls, lab, session: str = "", resolution: float | None = None) -> LaserSetups:
+        """The lab's laser set up for each test of one session, labelled by set-up and
+        ``session`` (``""`` before, ``"_after"`` after compensation): set up again for
+        another session, each has its own noise and, with the lab's ``air_refraction``, its
+        own scale; set up again for the same session, the same draws. ``resolution``: the
+        display resolution, m (None: the instrument's own, 1 nm)."""
+        extra = {} if resolution is None else {"resolution": resolution}
+        return cls(*(lab.laser_interferometer(label=f"{name}{session}", **extra)
+                     for name in ("x_axis", "y_axis", "diagonals")),
+                   lab.laser_interferometer(label=f"diagonals_120mm{session}",
+                                            frame=BEAM_FRAME, **extra))
+
 
 def measure_xy_plane(setups: LaserSetups, *, count: int = 21, runs: int = 5,
                      seed: int | None = 0, table=None) -> XYPlaneMeasurements:
@@ -166,7 +179,7 @@ def measure_xy_plane(setups: LaserSetups, *, count: int = 21, runs: int = 5,
     Parameters
     ----------
     setups : LaserSetups
-        The laser as set up for each test.
+        The laser as set up for each test (`LaserSetups.from_lab`).
     count : int
         Targets per test (ISO 230-2 asks at least 5 over 400 mm; paper-like 21).
     runs : int
@@ -187,6 +200,7 @@ def measure_xy_plane(setups: LaserSetups, *, count: int = 21, runs: int = 5,
     targets = iso230_2_targets(*PLATE, count=count, rng=seed)
     pos_x = _positioning(along_x, 0, targets, runs)
     pos_y = _positioning(along_y, 1, targets, runs)
+    position_x, position_y = Curve(targets, pos_x.mean), Curve(targets, pos_y.mean)
     raw_xy = Curve(targets, along_x.across(0, targets))
     raw_yx = Curve(targets, along_y.across(1, targets))
     str_xy = Curve(targets, _without_line(targets, raw_xy.values))
@@ -209,11 +223,9 @@ def measure_xy_plane(setups: LaserSetups, *, count: int = 21, runs: int = 5,
     # The map's squareness as the paper took it (eq 2): one diagonal, read level with the
     # cut, against the X and Y travels the positioning tests read. It carries the three
     # set-ups' scales (s_x + s_y - 2 s_diagonal), which the two-diagonal form cancels.
-    e_eq2 = _eq2_squareness(work[0], DIAGONALS[0], Curve(targets, pos_x.mean),
-                            Curve(targets, pos_y.mean), yaw_y)
+    e_eq2 = _eq2_squareness(work[0], DIAGONALS[0], position_x, position_y, yaw_y)
     e_lines = squareness_of_lines(e_eq2, str_xy, str_yx, PLATE, PLATE)
-    xy_map = XYPlaneMap(Curve(targets, pos_x.mean), Curve(targets, pos_y.mean), str_xy,
-                        str_yx, e_lines)
+    xy_map = XYPlaneMap(position_x, position_y, str_xy, str_yx, e_lines)
     return XYPlaneMeasurements(pos_x, pos_y, str_xy, str_yx, raw_xy, raw_yx, diagonals,
                                e_diag, e_eq2, xy_map, yaw_y, work)
 
