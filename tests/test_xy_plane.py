@@ -69,11 +69,12 @@ def test_eq1_map_equals_the_kinematics_up_to_a_rigid_move(eq1_lab):
     truth = true_deviation(lab, x, y)
     dx, dy = meas.map.deviation(x, y)
     # The least-squares straightness lines leave a rigid turn and shift no reading sees:
-    # difference = (tx - w y, ty + w x), fitted by least squares. The rest is eq 2's:
-    # its lengths take each axis' travel as straight along the axis, and the lateral
-    # deviations (~5 um over 0.4 m) enter them at second order, (5e-6)**2 / 0.4 m ~ 6e-11 m
-    # (4.9e-11 m here; the two-diagonal squareness, first order in lengths too, left
-    # 1e-12 m because its second-order terms cancel between the diagonals).
+    # difference = (tx - w y, ty + w x), fitted by least squares. The rest is eq 2's: the
+    # laser reads displacements along its beam (projections), on which the first-order
+    # forms are exact (the two-diagonal squareness left 1e-12 m, one diagonal's first-order
+    # form 1e-16 m), and eq 2's law of cosines takes them as the triangle's sides, true to
+    # second order: the lateral deviations (~5 um over 0.4 m), (5e-6)**2 / 0.4 m ~ 6e-11 m
+    # (4.9e-11 m here; test_eq2_takes_the_lasers_projections_for_lengths).
     assert rigid_rest(truth, dx, dy, x, y) < 1e-10
     # The diagonals (corners, beam height) equal the map's prediction: no angular errors.
     # (eq 2's second-order rest, above, along the diagonal: 1.4e-10 m)
@@ -95,6 +96,25 @@ def test_squareness_from_the_diagonals_against_the_injected(eq1_lab):
     # eq 2 (paper 003, one diagonal against the X and Y travels), the map's: the same
     # chords (the yaw-free EQ1 has no other cross term)
     assert meas.eq2_squareness == pytest.approx(e - chords, abs=2e-9)
+
+
+def test_eq2_takes_the_lasers_projections_for_lengths():
+    # A squareness alone, e = 5 mrad (absurd, to show the second order), read exactly. The
+    # laser reads along its beam: X travels a, Y's motion b (-sin e, cos e) reads b cos e on
+    # the Y axis, and the diagonal of a square (a = b) reads the projection of
+    # (a - a sin e, a cos e) on (1, 1) / sqrt 2, a (1 + cos e - sin e) / sqrt 2. Eq 2 takes
+    # them as the triangle's sides: sin e2 = (1 + cos e**2 - (1 + cos e - sin e)**2 / 2)
+    # / (2 cos e), about e - e**2 / 4 (-6.2 urad here, -0.14 nrad at 24 urad).
+    e = 5e-3
+    _, meas = measured_without_noise({"location": {"Y": {"EC0Y_urad": e * 1e6}}})
+    c, s = np.cos(e), np.sin(e)
+    by_hand = np.arcsin((1 + c * c - (1 + c - s) ** 2 / 2) / (2 * c))
+    assert by_hand - e == pytest.approx(-6.2188e-6, abs=1e-10)
+    assert meas.eq2_squareness == pytest.approx(by_hand, abs=1e-12)
+    # no straightness to correct for
+    assert meas.map.squareness == pytest.approx(meas.eq2_squareness, abs=1e-15)
+    # the two diagonals' first-order form keeps only sin e for e: 2e-8 rad off
+    assert meas.diagonal_squareness == pytest.approx(e, abs=3e-8)
 
 
 def test_the_paper_form_puts_the_squareness_in_the_y_row():
