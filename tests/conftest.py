@@ -6,7 +6,33 @@ import signal
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
+
+#: pytest.approx compares within an absolute 1e-12 unless told otherwise, whatever ``rel``
+#: says: a removed volume of 3.65e-14 m^3 passed against 3.60e-14 (a test helper's retract
+#: ran the groove on 63 um, tests/test_cutting_batch.py), and 40 comparisons of volumes and
+#: lengths in SI could not fail so. Below this magnitude an expected value must give its
+#: absolute tolerance (``abs=0.0`` to compare by ``rel`` alone).
+APPROX_SMALL = 1e-10
+_approx = pytest.approx
+
+
+def _approx_with_abs(expected, rel=None, abs=None, nan_ok=False):
+    if abs is None:
+        try:
+            values = np.abs(np.asarray(expected, dtype=np.float64))
+        except (TypeError, ValueError):  # a mapping or mixed values: as pytest compares them
+            values = np.zeros(0)
+        small = values[(values > 0.0) & (values < APPROX_SMALL)]
+        if small.size:
+            raise AssertionError(
+                f"pytest.approx of {small.min():.3g} without abs: its default abs of 1e-12 "
+                f"would decide, not rel={rel}; give abs= (abs=0.0: rel alone)")
+    return _approx(expected, rel=rel, abs=abs, nan_ok=nan_ok)
+
+
+pytest.approx = _approx_with_abs
 
 
 def _default_sigint() -> None:

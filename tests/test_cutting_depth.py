@@ -85,7 +85,7 @@ def test_a_holder_that_would_touch_the_part_is_reported(method, used):
     # The holder is not modelled: the tool's 0.1 mm body cuts its V (section 0.1^2 mm^2)
     # and the 0.05 mm above its top stays, which is why the contact is reported.
     assert report.removed_volume == pytest.approx((50e-6**2 + 0.1e-3**2) * 4e-3,
-                                                  rel=VOLUME_REL)
+                                                  rel=VOLUME_REL, abs=0.0)
     # The profile ends below the top (the groove has walls): the boolean engine cuts it.
     assert report.method == "boolean"
 
@@ -105,7 +105,7 @@ def test_a_10_nm_groove_on_a_100_mm_block_is_cut_and_measured_exactly(method, us
     _, report = remove(stock, VTool(math.pi / 2), [path], method=method)
     assert report.method == used
     assert not report.empty_cut
-    assert report.removed_volume == pytest.approx(depth**2 * length, rel=1e-6)
+    assert report.removed_volume == pytest.approx(depth**2 * length, rel=1e-6, abs=0.0)
 
 
 def test_a_profile_moved_a_tenth_of_a_nanometre_out_of_its_plane_removes_its_prism():
@@ -118,4 +118,5 @@ def test_a_profile_moved_a_tenth_of_a_nanometre_out_of_its_plane_removes_its_pri
     path = np.array([pose((2e-3, 2e-3, 10e-6)), pose((2e-3 + drift, 2e-3, -5e-6))])
     _, report = remove(stock, VTool(math.pi / 2), [path])
     assert report.n_degenerate == 0 and not report.empty_cut
-    assert report.removed_volume == pytest.approx(drift * (5e-6) ** 3 / (3 * 15e-6), rel=1e-6)
+    assert report.removed_volume == pytest.approx(drift * (5e-6) ** 3 / (3 * 15e-6), rel=1e-6,
+                                                  abs=0.0)

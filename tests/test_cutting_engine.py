@@ -66,7 +66,7 @@ def test_v_groove_section_is_the_analytic_v(angle_deg, method, used):
         top = notch[(notch[:, 1] == 0.0) & (np.abs(notch[:, 0] - y0) < 2 * half)]
         assert np.sort(top[:, 0]) == pytest.approx([y0 - half, y0 + half], abs=LENGTH_TOL)
     area = depth * half  # the V: depth d, width 2 d tan(included / 2)
-    assert report.removed_volume == pytest.approx(area * length, rel=VOLUME_REL)
+    assert report.removed_volume == pytest.approx(area * length, rel=VOLUME_REL, abs=0.0)
     assert report.n_sweeps == report.n_sweeps_cut == 1
     assert not report.empty_cut and report.sideways == ()
 
@@ -112,7 +112,7 @@ def test_crossing_grooves_leave_pyramids_of_the_analytic_height(method, used):
     assert len(interior) == (n - 1) ** 2
     assert np.sort(np.unique(np.round(interior[:, 0] / pitch))) == pytest.approx(grid / pitch)
     expected = side * side * (height - depth) + n * n * pitch**3 / 6
-    assert part.volume == pytest.approx(expected, rel=VOLUME_REL)
+    assert part.volume == pytest.approx(expected, rel=VOLUME_REL, abs=0.0)
     assert report.n_sweeps_cut == 2 * n
 
 
@@ -128,7 +128,7 @@ def test_tiling_does_not_change_the_solid():
     tiled, report = remove(stock, VTool(math.pi / 2), paths, sweeps_per_tile=4,
                            method="boolean")
     assert report.n_cells > 1
-    assert tiled.volume == pytest.approx(whole.volume, rel=VOLUME_REL)
+    assert tiled.volume == pytest.approx(whole.volume, rel=VOLUME_REL, abs=0.0)
     assert np.array_equal(tiled.bounds, whole.bounds)
 
 
@@ -208,7 +208,7 @@ def test_roi_cuts_only_the_windows(method, used):
     window_volume = (1e-3 * 1e-3 + 0.5e-3 * 1e-3) * 1e-3
     removed = depth * depth * (1e-3 + 0.5e-3)
     assert part.volume == pytest.approx(window_volume - removed, rel=VOLUME_REL)
-    assert report.removed_volume == pytest.approx(removed, rel=1e-9)
+    assert report.removed_volume == pytest.approx(removed, rel=1e-9, abs=0.0)
     np.testing.assert_allclose(part.bounds, [[1e-3, 1e-3, -1e-3], [3.5e-3, 4e-3, 0.0]],
                                atol=LENGTH_TOL)
 
@@ -354,7 +354,7 @@ def test_overlapping_windows_count_their_common_part_once():
     part, report = remove(stock, VTool(math.pi / 2), [groove_x(1.5e-3, depth)], roi=windows)
     removed = depth * depth * 1.5e-3
     assert part.volume == pytest.approx(1.5e-3 * 1e-3 * 1e-3 - removed, rel=VOLUME_REL)
-    assert report.removed_volume == pytest.approx(removed, rel=1e-9)
+    assert report.removed_volume == pytest.approx(removed, rel=1e-9, abs=0.0)
 
 
 def _tile_pieces(walls_x, walls_y, hull):

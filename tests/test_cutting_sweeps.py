@@ -69,7 +69,7 @@ def test_clipped_prisms_are_the_prisms_of_the_clipped_profiles():
         if len(clipped) < 3:
             assert built is None
             continue
-        assert built[2] == pytest.approx(abs(vector_area(clipped) @ move), rel=1e-14)
+        assert built[2] == pytest.approx(abs(vector_area(clipped) @ move), rel=1e-14, abs=0.0)
         np.testing.assert_array_equal(np.sort(built[0], axis=0),
                                       np.sort(prism_mesh(clipped, move)[0], axis=0))
 
@@ -102,7 +102,7 @@ def test_qhull_hulls_are_closed_and_keep_their_volume_after_retriangulation():
     vertices, triangles, volume = hull_mesh(points)
     solid = manifold_from(vertices, triangles, manifold3d.Manifold.reserve_ids(1))
     assert solid.status() == manifold3d.Error.NoError
-    assert solid.volume() == pytest.approx(volume, rel=1e-12)
+    assert solid.volume() == pytest.approx(volume, rel=1e-12, abs=0.0)
     assert hull_mesh(np.concatenate([profile, profile + [0.0, 1e-4, 0.0]])) is None  # flat
 
 

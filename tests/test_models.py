@@ -341,8 +341,9 @@ def test_the_hand_written_example_machine_cuts_as_the_shipped_one_and_takes_its_
                    start=machine.home)[1].removed_volume_m3
                for machine, errors in ((shipped, None), (own, None),
                                        (own, examples / "mill3_errors.toml"))]
-    assert volumes[1] == pytest.approx(volumes[0], rel=1e-12)
-    assert volumes[2] == pytest.approx(volumes[0] * (25 / 20) ** 2, rel=1e-9)
+    # the two kinematic chains round differently: 5e-12 of the volume apart, measured
+    assert volumes[1] == pytest.approx(volumes[0], rel=2e-11, abs=0.0)
+    assert volumes[2] == pytest.approx(volumes[0] * (25 / 20) ** 2, rel=1e-9, abs=0.0)
 
 
 def test_a_cyclic_urdf_fails_fast_instead_of_hanging(tmp_path):

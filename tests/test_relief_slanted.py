@@ -79,7 +79,7 @@ def test_slanted_grooves_are_the_boolean_solid(first, second, tool):
     assert (by_relief.method, by_boolean.method) == ("relief", "boolean")
     assert len(relief.reliefs[0].families) == 2
     assert_same_solid(relief, boolean)
-    assert by_relief.removed_volume == pytest.approx(by_boolean.removed_volume, rel=1e-9)
+    assert by_relief.removed_volume == pytest.approx(by_boolean.removed_volume, rel=1e-9, abs=0.0)
     assert_closed(relief)
 
 
@@ -92,8 +92,8 @@ def test_one_slanted_groove_removes_its_profile_times_its_chord():
     part, report = remove(stock, V90, grooves(phi, [0.0], [depth]))
     assert report.method == "relief"
     expected = depth**2 * side / math.cos(phi)
-    assert report.removed_volume == pytest.approx(expected, rel=1e-12)
-    assert stock.volume - part.volume == pytest.approx(expected, rel=1e-9)
+    assert report.removed_volume == pytest.approx(expected, rel=1e-12, abs=0.0)
+    assert stock.volume - part.volume == pytest.approx(expected, rel=1e-9, abs=0.0)
     assert_closed(part)
 
 
@@ -140,7 +140,7 @@ def test_a_second_program_extends_the_slanted_envelopes():
     assert report.method == "relief" and len(twice.reliefs[0].families) == 2
     boolean, _ = remove(stock, V90, a + b + c, method="boolean")
     assert_same_solid(twice, boolean)
-    assert report.removed_volume == pytest.approx(once.volume - twice.volume, rel=1e-9)
+    assert report.removed_volume == pytest.approx(once.volume - twice.volume, rel=1e-9, abs=0.0)
     # A third direction on that part is the boolean engine's.
     _, third = remove(twice, V90, grooves(1.0, [0.0], [10e-6]))
     assert third.method == "boolean"
@@ -154,7 +154,7 @@ def test_windows_cut_slanted_grooves_like_the_boolean_engine():
     boolean, by_boolean = remove(stock, V90, paths, roi=windows, method="boolean")
     assert report.method == "relief" and report.n_cells == 2
     assert_same_solid(relief, boolean)
-    assert report.removed_volume == pytest.approx(by_boolean.removed_volume, rel=1e-9)
+    assert report.removed_volume == pytest.approx(by_boolean.removed_volume, rel=1e-9, abs=0.0)
     assert_closed(relief)
 
 
@@ -262,7 +262,7 @@ def test_sloped_grooves_are_the_boolean_solid(first, second, tilt):
     slopes = [f.slope for f in relief.reliefs[0].families]
     assert len(slopes) == 2 and any(s != 0.0 for s in slopes)
     assert_same_solid(relief, boolean)
-    assert by_relief.removed_volume == pytest.approx(by_boolean.removed_volume, rel=1e-9)
+    assert by_relief.removed_volume == pytest.approx(by_boolean.removed_volume, rel=1e-9, abs=0.0)
     assert_closed(relief)
 
 
@@ -309,8 +309,8 @@ def test_a_sloped_groove_removes_the_integral_of_its_section(h0, h1):
         expected = side * (h0**2 + h0 * h1 + h1**2) / 3.0
     else:
         expected = a * h0**2 / 3.0
-    assert report.removed_volume == pytest.approx(expected, rel=1e-12)
-    assert stock.volume - part.volume == pytest.approx(expected, rel=1e-9)
+    assert report.removed_volume == pytest.approx(expected, rel=1e-12, abs=0.0)
+    assert stock.volume - part.volume == pytest.approx(expected, rel=1e-9, abs=0.0)
     assert_closed(part)
 
 
@@ -372,7 +372,7 @@ def test_a_second_program_on_a_tilted_table_extends_the_sloped_envelopes():
     assert report.method == "relief" and len(twice.reliefs[0].families) == 2
     boolean, _ = remove(stock, V90, a + b, method="boolean")
     assert_same_solid(twice, boolean)
-    assert report.removed_volume == pytest.approx(once.volume - twice.volume, rel=1e-9)
+    assert report.removed_volume == pytest.approx(once.volume - twice.volume, rel=1e-9, abs=0.0)
     # The same direction at another slope on that part is the boolean engine's.
     _, other = remove(twice, V90, tilted(grooves(first, [0.0], [10e-6]), -3e-4, 2e-4))
     assert other.method == "boolean"

@@ -419,7 +419,7 @@ def test_the_last_layer_alone_cuts_the_part_all_ten_layers_cut(crown_stock):
     parts = [cut_turned(small_crown(offsets, 0), MACHINE, tool, crown_stock, errors, roi=box,
                         start=cam.PARK, allow_holder_contact=True)[0]
              for offsets in (None, [0.0])]
-    assert parts[0].volume == pytest.approx(parts[1].volume, rel=1e-12)
+    assert parts[0].volume == pytest.approx(parts[1].volume, rel=1e-12, abs=0.0)
     x, y = middle + np.linspace(-0.04, 0.04, 9) * MM, np.linspace(-0.02, 0.02, 9) * MM
     np.testing.assert_allclose(height_map(parts[0], x, y), height_map(parts[1], x, y),
                                rtol=0, atol=1e-12)
@@ -446,7 +446,7 @@ def test_cut_turned_makes_the_part_cutting_cut_makes(crown_stock):
     assert all(a[0] <= b[0] for a, b in zip(told, told[1:], strict=False))
     theirs, _ = cut(program, MACHINE, tool=tool, stock=clip_to(crown_stock, box),
                     errors=errors, roi=box, start=cam.PARK, allow_holder_contact=True)
-    assert ours.volume == pytest.approx(theirs.volume, rel=1e-12)
+    assert ours.volume == pytest.approx(theirs.volume, rel=1e-12, abs=0.0)
     assert report.removed_volume_m3 > 0 and report.sweeps == 5
     x, y = cx + np.linspace(-0.04, 0.04, 9) * MM, cy + np.linspace(-0.04, 0.04, 9) * MM
     np.testing.assert_allclose(height_map(ours, x, y), height_map(theirs, x, y), rtol=0,
