@@ -504,3 +504,21 @@ def test_the_check_needs_the_programmed_edge_and_three_angles(machine, r0):
 def test_the_correction_needs_y_z_and_a():
     with pytest.raises(InputError, match="axes Y, Z and A"):
         procedure.arm_correction(arm.ArmEstimate(r0=0.1, r=0.1, e_ys=0.0), ("X", "Y", "Z"))
+
+
+def test_the_procedure_refuses_a_machine_whose_a_axis_is_no_arm():
+    """robonano_ui has an A axis, but it turns the tool about its own axis through the edge
+    (docs/procedures/tool_setting_6axis.md): r0 came out 0 and the ramps were cut and read
+    on a planer's plan as if it were one, the calibration returned as measured."""
+    ui = load_machine("robonano_ui")
+    expected = ("Expected a machine whose A axis turns the tool about +X on an arm, the edge "
+                "r0 > 0 below the axis (paper 000's planer, e.g. planer_4axis); machine "
+                "robonano_ui's A moves the edge by (0, 0, 0) mm at A = -0.5 rad and (0, 0, 0) "
+                "mm at +0.5 rad (r0 = 0 mm)")
+    with pytest.raises(InputError) as refused:
+        arm.arm_radius(ui)
+    assert str(refused.value) == f"key 'machine': {expected}"
+    with pytest.raises(InputError, match="no arm|turns the tool about \\+X on an arm"):
+        ToolRotationArm().measure(Lab(ui, ErrorModel(), noise=False))
+    # the planer's arm: docs/machines.md, 120.5 mm
+    assert arm.arm_radius(load_machine("planer_4axis")) == pytest.approx(120.5 * MM, rel=1e-12)

@@ -57,10 +57,38 @@ def arm_radius(machine) -> float:
     if "A" not in machine.axes:
         raise InputError(f"Expected a machine with a tool-rotation axis A, got axes "
                          f"{machine.axes}", key="machine")
-    q = np.zeros((2, len(machine.axes)))
-    q[:, machine.axes.index("A")] = (-0.5, 0.5)
-    y = machine.tool_pose(q)[:, 1, 3]
-    return float((y[1] - y[0]) / (2.0 * math.sin(0.5)))
+    q = np.zeros((3, len(machine.axes)))
+    q[:, machine.axes.index("A")] = (0.0, -0.5, 0.5)
+    poses = machine.tool_pose(q)
+    y = poses[:, 1, 3]
+    r0 = float((y[2] - y[1]) / (2.0 * math.sin(0.5)))
+    # paper 000's arm: A turns the tool about +X, its edge r0 > 0 below the axis, so that
+    # turning by t moves the edge to (x, r0 sin t, r0 (1 - cos t)) and turns it by Rx(t)
+    # (planer_4axis). A machine whose A passes through the edge (robonano_ui: r0 = 0) or
+    # turns about another direction would give eqs 1-2 nothing to read.
+    swing = np.array([[0.0, -r0 * math.sin(0.5), r0 * (1.0 - math.cos(0.5))],
+                      [0.0, r0 * math.sin(0.5), r0 * (1.0 - math.cos(0.5))]])
+    turns = [_rx(t) @ poses[0, :3, :3] for t in (-0.5, 0.5)]
+    if not (r0 > 0.0 and np.allclose(poses[1:, :3, 3] - poses[0, :3, 3], swing, rtol=0.0,
+                                      atol=1e-9 * max(r0, 1.0))
+            and all(np.allclose(poses[k + 1, :3, :3], turns[k], rtol=0.0, atol=1e-9)
+                    for k in range(2))):
+        raise InputError(
+            f"Expected a machine whose A axis turns the tool about +X on an arm, the edge "
+            f"r0 > 0 below the axis (paper 000's planer, e.g. planer_4axis); machine "
+            f"{machine.name}'s A moves the edge by {_mm(poses[1, :3, 3] - poses[0, :3, 3])} "
+            f"mm at A = -0.5 rad and {_mm(poses[2, :3, 3] - poses[0, :3, 3])} mm at +0.5 rad "
+            f"(r0 = {r0 * 1e3:.6g} mm)", key="machine")
+    return r0
+
+
+def _rx(t: float) -> np.ndarray:
+    c, s = math.cos(t), math.sin(t)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _mm(vector) -> str:
+    return "(" + ", ".join(f"{v * 1e3:.6g}" for v in vector) + ")"
 
 
 def nominal_axes(y, z, angle, r0: float):
