@@ -177,13 +177,23 @@ def check_offset(args, capture: float, r0: float, e_ys: float, rho: float) -> No
                       f"{math.floor((r0 + half) / MM * 1e4) / 1e4:.4f} mm at e_ys = "
                       f"{e_ys / UM:.2f} um" if half is not None else
                       f"no r at e_ys = {e_ys / UM:.6g} um")
+    key = "r-mm" if args.r_mm is not None and args.e_ys_um is None else "e-ys-um"
     if not names:
-        names.append(f"--errors {args.errors} (tool.y, tool.z)")
+        # the offset is the error file's, or the paper's own with a --capture-mm below it
+        names.append(f"--errors {args.errors} (tool.y, tool.z)" if args.errors is not None
+                     else f"--capture-mm {args.capture_mm!r} with the paper's errors (e_ys = "
+                     f"{PAPER['e_ys_um']:g} um, r = {PAPER['r_mm']:g} mm)")
+        key = "errors" if args.errors is not None else "capture-mm"
+        ranges.append(f"--capture-mm at least {math.ceil(length / MM * 1e6) / 1e6:.6f} mm"
+                      if length <= MAX_CAPTURE_MM * MM else
+                      f"an offset of at most {MAX_CAPTURE_MM:.4g} mm, the largest capture")
+    shown = f"{length / MM:.6g}"
+    if shown == f"{capture / MM:.6g}":  # just beyond: as many digits as tell them apart
+        shown = f"{length / MM:.12g}"
     raise InputError(
-        f"{' with '.join(names)}: the edge offset |(e_ys, r - r0)| = {length / MM:.6g} mm "
+        f"{' with '.join(names)}: the edge offset |(e_ys, r - r0)| = {shown} mm "
         f"exceeds the plan's capture range {capture / MM:g} mm (--capture-mm, at most "
-        f"{MAX_CAPTURE_MM:.4g}): expected {' or '.join(ranges) or 'a shorter offset'}",
-        key="r-mm" if args.r_mm is not None and args.e_ys_um is None else "e-ys-um")
+        f"{MAX_CAPTURE_MM:.4g}): expected {' or '.join(ranges)}", key=key)
 
 
 def calibration_table(out, readings, fit) -> str:

@@ -231,3 +231,23 @@ def test_the_scenario_admits_the_edge_offsets_its_capture_finds_and_names_the_op
             entry = summary["identified"][name]
             error = entry["value"] - summary["injected"][name]
             assert abs(error) < 3 * entry["std"], (option, name, error, entry["std"])
+
+
+def test_a_capture_below_the_papers_offset_names_the_capture_and_the_least_one_that_finds_it(
+        tmp_path):
+    """With no --e-ys-um, --r-mm or --errors, the offset is the paper's: |(-178, 55)| um =
+    sqrt(178**2 + 55**2) = 186.3035 um by hand, so --capture-mm must be at least 0.186304.
+    The message used to name "--errors None (tool.y, tool.z)", a file nobody gave, and
+    expect "a shorter offset"; and an offset just beyond the capture read "1 mm exceeds
+    the plan's capture range 1 mm" (998.49 um at r - r0 = 55 um: 1.00000364 mm)."""
+    result = scenario("--capture-mm", "0.18", "--out", str(tmp_path / "out"))
+    assert result.returncode == 2
+    assert result.stderr.splitlines()[-1] == (
+        "tool_rotation_arm: error: key 'capture-mm': --capture-mm 0.18 with the paper's "
+        "errors (e_ys = -178 um, r = 120.555 mm): the edge offset |(e_ys, r - r0)| = 0.186304 "
+        "mm exceeds the plan's capture range 0.18 mm (--capture-mm, at most 2.848): expected "
+        "--capture-mm at least 0.186304 mm")
+    result = scenario("--e-ys-um", "998.49", "--out", str(tmp_path / "out"))
+    assert result.returncode == 2
+    assert ("the edge offset |(e_ys, r - r0)| = 1.00000364004 mm exceeds the plan's capture "
+            "range 1 mm") in result.stderr.splitlines()[-1]
