@@ -41,6 +41,8 @@ import numpy as np
 from machinesim import Lab
 from machinesim.budget import realism_budget
 from machinesim.cam.tool_setting_plates import Plan
+from machinesim.errors import LARGEST_ERROR
+from machinesim.exceptions import InputError
 from machinesim.experiment import run
 from machinesim.identification.tool_setting_6axis import PARAMETERS
 from machinesim.procedures.tool_setting_6axis import (
@@ -92,14 +94,27 @@ def _configured(args) -> None:
     """The run the command line asks for: its errors, then `report`."""
     given = {}
     if args.tool_offset_um is not None:
-        values = parse_floats(args.tool_offset_um, 3, "--tool-offset-um")
+        values = _lengths(args.tool_offset_um, 3, "--tool-offset-um")
         given.update(zip(PARAMETERS[:3], (v * M_PER_UM for v in values), strict=True))
     if args.c_offset_um is not None:
-        values = parse_floats(args.c_offset_um, 2, "--c-offset-um")
+        values = _lengths(args.c_offset_um, 2, "--c-offset-um")
         given.update(zip(PARAMETERS[3:], (v * M_PER_UM for v in values), strict=True))
     errors, realism = injected_errors(args, DEFAULTS, given, "robonano_ui"), realism_from(args)
     report(args, lambda realism: Lab("robonano_ui", errors, seed=args.seed,
                                      realism=realism), realism)
+
+
+def _lengths(text: str, count: int, option: str) -> list[float]:
+    """``option``'s ``count`` lengths (um), refused naming the option beyond the largest
+    length error an error model takes (1 m): the model's own refusal named its key
+    (``key 'offset': 1000 m is no length error``), no option of this command line."""
+    values = parse_floats(text, count, option)
+    largest = LARGEST_ERROR["length"] / M_PER_UM
+    worst = max(values, key=abs)
+    if abs(worst) > largest:
+        raise InputError(f"{option} {text!r}: {worst:g} um is no length error: expected at "
+                         f"most {largest:g} um (1 m) either way", key=option.lstrip("-"))
+    return values
 
 
 def report(args, make_lab, realism) -> None:

@@ -368,3 +368,16 @@ def test_the_scenario_takes_an_error_model_file(tmp_path):
         assert identified[name]["value"] == pytest.approx(value, abs=1e-9), name
     missing = scenario("--errors", str(tmp_path / "none.toml"), "--out", str(out))
     assert missing.returncode == 2 and "Traceback" not in missing.stderr
+
+
+def test_an_offset_option_beyond_a_metre_is_refused_naming_the_option(tmp_path):
+    """1e9 um is 1000 m, beyond the 1 m an error model takes; the refusal came from the tool
+    setting and named its key ("key 'offset': 1000 m is no length error"), not the option
+    the value was given in."""
+    for option, text, worst in (("--tool-offset-um", "1e9,0,0", "1e+09"),
+                                ("--c-offset-um", "0,-2e6", "-2e+06")):
+        bad = scenario(option, text, "--out", str(tmp_path / "out"))
+        assert bad.returncode == 2
+        assert bad.stderr.splitlines()[-1] == (
+            f"tool_setting_6axis: error: key '{option[2:]}': {option} '{text}': {worst} um is "
+            "no length error: expected at most 1e+06 um (1 m) either way")
