@@ -381,3 +381,36 @@ def test_an_offset_option_beyond_a_metre_is_refused_naming_the_option(tmp_path):
         assert bad.stderr.splitlines()[-1] == (
             f"tool_setting_6axis: error: key '{option[2:]}': {option} '{text}': {worst} um is "
             "no length error: expected at most 1e+06 um (1 m) either way")
+
+
+@pytest.mark.parametrize(("fields", "message"), [
+    ({"theta2": 0}, "key 'theta2': Expected a non-zero B tilt: eqs 1-2 of paper 001 take dX "
+     "and dZ from the depth changes at two distinct non-zero tilts, got theta2 = 0 rad "
+     "(0 deg), theta3 = -0.34906585 rad (-20 deg)"),
+    ({"theta3": math.radians(20)}, "key 'theta3': Expected a B tilt other than theta2 (two "
+     "distinct tilts): eqs 1-2 of paper 001 take dX and dZ from the depth changes at two "
+     "distinct non-zero tilts, got theta2 = 0.34906585 rad (20 deg), theta3 = 0.34906585 rad "
+     "(20 deg)"),
+    # degrees where radians are expected: beyond robonano_ui's B travel of +-100 deg (URDF)
+    ({"theta2": 20}, "key 'theta2': Expected theta2 within the B travel of robonano_ui, "
+     "-1.74533 .. 1.74533 rad (-100 .. 100 deg), got 20 rad (1145.92 deg); the angles are in "
+     "rad: 20 deg is math.radians(20) = 0.349066 rad"),
+    ({"theta3": -1.8}, "key 'theta3': Expected theta3 within the B travel of robonano_ui, "
+     "-1.74533 .. 1.74533 rad (-100 .. 100 deg), got -1.8 rad (-103.132 deg)"),
+    ({"theta2": "a"}, "key 'theta2': Expected theta2 as a finite angle in rad (the B axis of "
+     "robonano_ui), got 'a'"),
+    ({"theta1": math.nan}, "key 'theta1': Expected theta1 as a finite angle in rad (the A "
+     "axis of robonano_ui), got nan"),
+])
+def test_a_plan_refuses_tilts_eqs_1_2_or_the_b_axis_cannot_take(fields, message):
+    """Checked when the Plan is made, not after the plates are cut (minutes later)."""
+    with pytest.raises(InputError) as caught:
+        Plan(**fields)
+    assert str(caught.value) == message
+
+
+def test_a_plan_takes_any_two_distinct_tilts_within_the_b_travel():
+    limit = load_machine("robonano_ui").upper[4]  # B, from the URDF
+    plan = Plan(theta2=limit, theta3=-limit, theta1=-math.pi / 2)
+    assert plan.tilts == (0.0, limit, -limit)
+    assert Plan(theta2=np.float64(0.1), theta3=0.2).theta3 == 0.2

@@ -30,17 +30,20 @@ Four plates, each its own program, each on a fresh plate of the same workpiece f
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from machinesim.exceptions import InputError
+from machinesim.identification.tool_setting_6axis import MIN_DETERMINANT, b_tilt_determinant
 from machinesim.nc import Program, ProgramBuilder
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = [
-    "A_REACH", "A_SETS", "B_GROOVE_X", "CENTRE_RANGE", "C_TURNS", "MARK_HALF", "MARK_X",
-    "OFFSET_RANGE", "PARKED", "Plan", "PlateCut", "SET_LENGTH", "TOUCH_COUNT",
+    "A_REACH", "A_SETS", "B_GROOVE_X", "CENTRE_RANGE", "C_TURNS", "MACHINE", "MARK_HALF",
+    "MARK_X", "OFFSET_RANGE", "PARKED", "Plan", "PlateCut", "SET_LENGTH", "TOUCH_COUNT",
     "TOUCH_SEGMENT", "TOUCH_STEP", "TOUCH_TOP", "TRIANGLE_HALF", "TRIANGLE_R", "a_grooves",
     "mark_point", "plate_cuts",
 ]
@@ -82,6 +85,9 @@ C_TURNS = (0.0, 2.0 * math.pi / 3.0, 4.0 * math.pi / 3.0)
 #: C plate's reference mark: x of the groove across the C = 0 side (clear of the side's
 #: profiles at -2 .. 2 mm and 4.5 mm from the other sides) and its half length in y.
 MARK_X, MARK_HALF = 3.5 * M_PER_MM, 1.2 * M_PER_MM
+#: The machine the plates are written for: a `Plan`'s A and B angles must lie within its
+#: travel (its URDF's joint limits).
+MACHINE = "robonano_ui"
 
 
 @dataclass(frozen=True)
@@ -96,7 +102,10 @@ class Plan:
         Depth of cut D of the B-axis grooves (m): a tilt theta adds dZ (1 - cos theta), up to
         33 um at 20 deg, and the low flank of the tilted V ends 120 um above the edge.
     theta1, theta2, theta3 : float
-        A angle that turns the cutting direction onto Y, and the two B tilts (rad).
+        A angle that turns the cutting direction onto Y, and the two B tilts (rad), each
+        within the travel of `MACHINE` (its URDF: A +-360 deg, B +-100 deg). Eqs 1-2 need
+        the tilts non-zero and distinct (`b_tilt_determinant`); all three are checked when
+        the plan is made (`InputError` naming the field).
     feed_mm_per_min : float
         Cutting feed.
 
@@ -117,11 +126,54 @@ class Plan:
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
                 raise InputError(f"Expected {name} > 0, got {value!r}", key=name)
+        for name, axis in (("theta1", "A"), ("theta2", "B"), ("theta3", "B")):
+            _check_angle(name, getattr(self, name), axis)
+        if not abs(b_tilt_determinant(self.theta2, self.theta3)) > MIN_DETERMINANT:
+            zero = min(abs(self.theta2), abs(self.theta3)) < abs(self.theta2 - self.theta3)
+            name = ("theta2" if abs(self.theta2) <= abs(self.theta3) else "theta3") if zero \
+                else "theta3"
+            expected = ("a non-zero B tilt" if zero else
+                        "a B tilt other than theta2 (two distinct tilts)")
+            raise InputError(
+                f"Expected {expected}: eqs 1-2 of paper 001 take dX and dZ from the depth "
+                f"changes at two distinct non-zero tilts, got theta2 = {_angle(self.theta2)}, "
+                f"theta3 = {_angle(self.theta3)}", key=name)
 
     @property
     def tilts(self) -> tuple[float, float, float]:
         """B of the three B-plate grooves: 0, theta2, theta3 (rad)."""
         return (0.0, self.theta2, self.theta3)
+
+
+def _angle(value: float) -> str:
+    return f"{value:.9g} rad ({math.degrees(value):.6g} deg)"
+
+
+@lru_cache(maxsize=1)
+def _travel() -> dict[str, tuple[float, float]]:
+    """(lower, upper) (rad) of `MACHINE`'s rotary axes, from its URDF."""
+    from machinesim.machines import load_machine
+
+    machine = load_machine(MACHINE)
+    return {a: (float(lo), float(hi))
+            for a, lo, hi in zip(machine.axes, machine.lower, machine.upper, strict=True)}
+
+
+def _check_angle(name: str, value, axis: str) -> None:
+    """A `Plan` angle: a finite number of rad within the travel of `MACHINE`'s ``axis``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or not math.isfinite(value):
+        raise InputError(f"Expected {name} as a finite angle in rad (the {axis} axis of "
+                         f"{MACHINE}), got {value!r}", key=name)
+    lower, upper = _travel()[axis]
+    if not lower <= value <= upper:
+        hint = (f"; the angles are in rad: {value:g} deg is math.radians({value:g}) = "
+                f"{math.radians(value):.6g} rad"
+                if abs(value) > 2.0 * math.pi and lower <= math.radians(value) <= upper
+                else "")  # more than a turn: degrees, likely
+        raise InputError(f"Expected {name} within the {axis} travel of {MACHINE}, "
+                         f"{lower:.6g} .. {upper:.6g} rad ({math.degrees(lower):g} .. "
+                         f"{math.degrees(upper):g} deg), got {_angle(value)}{hint}", key=name)
 
 
 @dataclass(frozen=True)

@@ -45,7 +45,7 @@ from machinesim.rotations import rot_y, rot_z
 __all__ = [
     "AAxisResult", "BAxisResult", "CAxisResult", "Compensation", "GrooveReading",
     "Identification", "PARAMETERS", "a_axis_sets", "b_axis_offsets", "b_axis_tilts",
-    "c_axis_triangle", "corrected_axes", "identify", "read_stages",
+    "b_tilt_determinant", "c_axis_triangle", "corrected_axes", "identify", "read_stages",
 ]
 
 #: The error parameters paper 001 identifies, as `Machine.parameter_names` spells them.
@@ -346,6 +346,15 @@ def c_axis_triangle(points: Sequence, mark_at=None) -> CAxisResult:
                        rotation)
 
 
+def b_tilt_determinant(theta2: float, theta3: float) -> float:
+    """The determinant ``sin t2 (1 - cos t3) - sin t3 (1 - cos t2)`` of eqs 1-2
+    (`b_axis_offsets`) for the B tilts theta2, theta3 (rad): it is zero where either tilt is
+    zero or the two are equal (modulo a turn), and eqs 1-2 need its magnitude above
+    `MIN_DETERMINANT`."""
+    return (math.sin(theta2) * (1.0 - math.cos(theta3))
+            - math.sin(theta3) * (1.0 - math.cos(theta2)))
+
+
 def b_axis_offsets(d0: float, d1: float, d2: float, theta2: float, theta3: float):
     """Edge offset from the B centre from three groove depths (paper 001, eqs 1-2).
 
@@ -374,8 +383,7 @@ def b_axis_offsets(d0: float, d1: float, d2: float, theta2: float, theta3: float
     (float, float)
         dX, dZ (m).
     """
-    den = (math.sin(theta2) * (1.0 - math.cos(theta3))
-           - math.sin(theta3) * (1.0 - math.cos(theta2)))
+    den = b_tilt_determinant(theta2, theta3)
     if not abs(den) > MIN_DETERMINANT:
         raise InputError(f"Expected two distinct non-zero B tilts, got theta2 = "
                          f"{math.degrees(theta2):g} deg, theta3 = {math.degrees(theta3):g} deg")
