@@ -31,9 +31,10 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Protocol
 
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, brief
 
-__all__ = ["LAB_USES", "Evaluation", "Figure", "Identified", "Procedure", "Result", "run"]
+__all__ = ["LAB_USES", "Evaluation", "Figure", "Identified", "Procedure", "Result",
+           "check_instance", "check_lab", "run"]
 
 #: What a procedure may read of its lab beyond the machine's error parameters, as its
 #: ``lab_uses`` names it, step by step (``"measure"``, ``"evaluate"``): the instruments it
@@ -263,6 +264,26 @@ def _preset(on: tuple[str, ...]) -> str:
     return str(Realism.with_only(*on))
 
 
+def check_lab(lab) -> None:
+    """Refuse a ``lab`` that is no `machinesim.Lab` (nor a wrapper of one, which has its
+    ``reveal``): `run`'s check, and a procedure's ``measure`` and ``evaluate``'s, each an
+    `InputError` with key ``lab``."""
+    if not callable(getattr(lab, "reveal", None)):  # a Lab, or a wrapper of one
+        raise InputError(f"expected a machinesim.Lab to run on, got {type(lab).__name__} "
+                         f"{lab!r:.60} (make one with Lab(machine, errors, seed=...))",
+                         key="lab")
+
+
+def check_instance(value, expected: type | tuple[type, ...], key: str, what: str) -> None:
+    """Refuse ``value``, the argument ``key``, unless it is an ``expected``: an `InputError`
+    naming the argument, the type and value it got and ``what`` was expected (a procedure's
+    plan, the measurements its ``measure`` returned, the `Identified` of its
+    ``identify``)."""
+    if not isinstance(value, expected):
+        raise InputError(f"expected {what}, got {type(value).__name__} {brief(repr(value))}",
+                         key=key)
+
+
 def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = None
         ) -> Result:
     """Drive ``procedure`` on ``lab``: measure, identify, compensate, evaluate.
@@ -292,10 +313,7 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
             progress(f"{name} done in {clock[f'{name}_s']:.1f} s")
         return value
 
-    if not callable(getattr(lab, "reveal", None)):  # a Lab, or a wrapper of one
-        raise InputError(f"expected a machinesim.Lab to run on, got {type(lab).__name__} "
-                         f"{lab!r:.60} (make one with Lab(machine, errors, seed=...))",
-                         key="lab")
+    check_lab(lab)
     missing = [name for name in ("measure", "identify", "compensate", "evaluate")
                if not callable(getattr(procedure, name, None))]
     if missing:

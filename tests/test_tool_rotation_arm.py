@@ -522,3 +522,33 @@ def test_the_procedure_refuses_a_machine_whose_a_axis_is_no_arm():
         ToolRotationArm().measure(Lab(ui, ErrorModel(), noise=False))
     # the planer's arm: docs/machines.md, 120.5 mm
     assert arm.arm_radius(load_machine("planer_4axis")) == pytest.approx(120.5 * MM, rel=1e-12)
+
+
+LAB_REFUSAL = ("key 'lab': expected a machinesim.Lab to run on, got NoneType None (make one "
+               "with Lab(machine, errors, seed=...))")
+
+
+@pytest.mark.parametrize(("call", "message"), [
+    (lambda: ToolRotationArm().measure(None), LAB_REFUSAL),
+    (lambda: ToolRotationArm().evaluate(None, None, {}), LAB_REFUSAL),
+    (lambda: ToolRotationArm().identify({}), "key 'measurements': expected the Calibration "
+     "ToolRotationArm.measure(lab) returns, got dict {}"),
+    (lambda: ToolRotationArm().compensate(None), "key 'identified': expected the Identified "
+     "ToolRotationArm.identify(measurements) returns, got NoneType None"),
+    (lambda: ToolRotationArm(plan=5), "key 'plan': expected a CalibrationPlan "
+     "(machinesim.cam.prisms), e.g. CalibrationPlan(), got int 5"),
+    (lambda: ToolRotationArm(pattern="prisms"), "key 'pattern': expected a PrismPattern "
+     "(machinesim.cam.prisms), e.g. PrismPattern(), got str 'prisms'"),
+    (lambda: procedure.max_capture("x"), "key 'plan': expected a CalibrationPlan "
+     "(machinesim.cam.prisms), e.g. CalibrationPlan(), got str 'x'"),
+    (lambda: procedure.holder_depth([]), "key 'angles': expected one or more tool angles "
+     "(finite numbers, rad), got []"),
+    (lambda: procedure.holder_depth([0.0, math.nan]), "key 'angles': expected one or more "
+     "tool angles (finite numbers, rad), got [0.0, nan]"),
+])
+def test_the_python_api_refuses_arguments_of_the_wrong_kind(call, message):
+    """Each was a bare AttributeError (or min()'s ValueError) from deep inside; the lab's is
+    the check `run` makes (machinesim.experiment.check_lab)."""
+    with pytest.raises(InputError) as caught:
+        call()
+    assert str(caught.value) == message

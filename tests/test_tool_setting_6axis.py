@@ -17,7 +17,7 @@ from machinesim import ErrorModel, Lab, ToolSetting, load_machine
 from machinesim.cam.tool_setting_plates import PARKED, SET_LENGTH, Plan, a_grooves, plate_cuts
 from machinesim.compensation import program_axes
 from machinesim.exceptions import InputError
-from machinesim.experiment import run
+from machinesim.experiment import Identified, run
 from machinesim.identification import tool_setting_6axis as ident
 from machinesim.nc import Move, Program
 from machinesim.procedures.tool_setting_6axis import (
@@ -414,3 +414,23 @@ def test_a_plan_takes_any_two_distinct_tilts_within_the_b_travel():
     plan = Plan(theta2=limit, theta3=-limit, theta1=-math.pi / 2)
     assert plan.tilts == (0.0, limit, -limit)
     assert Plan(theta2=np.float64(0.1), theta3=0.2).theta3 == 0.2
+
+
+@pytest.mark.parametrize(("call", "message"), [
+    (lambda: ToolSetting6Axis().measure(None), "key 'lab': expected a machinesim.Lab to run "
+     "on, got NoneType None (make one with Lab(machine, errors, seed=...))"),
+    (lambda: ToolSetting6Axis().identify({}), "key 'measurements': expected the Readings "
+     "ToolSetting6Axis.measure(lab) returns, got dict {}"),
+    (lambda: ToolSetting6Axis().compensate(Identified({}, None)), "key 'identified': "
+     "expected an Identified with the Identification of ToolSetting6Axis.identify as its "
+     "detail, got NoneType None"),
+    (lambda: ToolSetting6Axis(plan=None), "key 'plan': expected a Plan "
+     "(machinesim.cam.tool_setting_plates), e.g. Plan(), got NoneType None"),
+    (lambda: ToolSetting6Axis(machine=5), "key 'machine': expected the name of a 6-axis X Y Z "
+     "A B C machine, e.g. 'robonano_ui', got int 5"),
+])
+def test_the_python_api_refuses_arguments_of_the_wrong_kind(call, message):
+    """Each was a bare AttributeError from deep inside."""
+    with pytest.raises(InputError) as caught:
+        call()
+    assert str(caught.value) == message

@@ -29,8 +29,8 @@ import numpy as np
 from machinesim.cam.prisms import SEARCH_MARGIN_M, CalibrationPlan, PrismPattern
 from machinesim.compensation import map_program, model_based, program_axes
 from machinesim.errors import ErrorModel
-from machinesim.exceptions import InputError
-from machinesim.experiment import Evaluation, Figure, Identified
+from machinesim.exceptions import InputError, brief
+from machinesim.experiment import Evaluation, Figure, Identified, check_instance, check_lab
 from machinesim.identification.tool_rotation_arm import (
     ArmCheck,
     ArmEstimate,
@@ -69,6 +69,10 @@ PRISM_FLANK_M = 3.0 * M_PER_MM
 TOOL = VTool(math.pi / 2, flank_height=PRISM_FLANK_M)
 
 
+#: What a plan argument must be (`max_capture`, `ToolRotationArm`).
+PLAN_EXPECTED = "a CalibrationPlan (machinesim.cam.prisms), e.g. CalibrationPlan()"
+
+
 def holder_depth(angles: Sequence[float], tool=TOOL) -> float:
     """Deepest (m) the edge may go below the stock's top at every one of ``angles`` (tool
     angles, rad) with the top of ``tool``'s body, where its holder begins, still above it.
@@ -77,6 +81,14 @@ def holder_depth(angles: Sequence[float], tool=TOOL) -> float:
     over the edge; the least of those over the corners and the angles. `TOOL` (corners at
     y = +-3 mm, h = 10 mm) at 0-40 deg: 10 cos 40 - 3 sin 40 = 5.732 mm, at 40 deg.
     """
+    angles_given = angles
+    try:
+        angles = [float(t) for t in angles]
+    except (TypeError, ValueError):
+        angles = None
+    if not angles or not all(map(math.isfinite, angles)):
+        raise InputError(f"expected one or more tool angles (finite numbers, rad), got "
+                         f"{brief(repr(angles_given))}", key="angles")
     points = np.asarray(tool.vertices())
     top = points[points[:, 2] == points[:, 2].max()]
     return float(min((top[:, 1] * math.sin(t) + top[:, 2] * math.cos(t)).min()
@@ -96,6 +108,7 @@ def max_capture(plan: CalibrationPlan | None = None, tool=TOOL) -> float:
     None is the default plan.
     """
     plan = CalibrationPlan() if plan is None else plan
+    check_instance(plan, CalibrationPlan, "plan", PLAN_EXPECTED)
     return 0.5 * (holder_depth(plan.angles, tool) - max(plan.station_depths)
                   - SEARCH_MARGIN_M)
 
@@ -257,9 +270,15 @@ class ToolRotationArm:
     lab_uses: ClassVar[dict[str, tuple[str, ...]]] = {"measure": ("microscope",),
                                                       "evaluate": ("microscope",)}
 
+    def __post_init__(self) -> None:
+        check_instance(self.plan, CalibrationPlan, "plan", PLAN_EXPECTED)
+        check_instance(self.pattern, PrismPattern, "pattern",
+                       "a PrismPattern (machinesim.cam.prisms), e.g. PrismPattern()")
+
     def measure(self, lab) -> Calibration:
         """Cut the calibration ramps with the nominal program and read them (microscope
         labelled ``"calibration"``)."""
+        check_lab(lab)
         machine = lab.machine
         r0 = arm_radius(machine)
         program = self.plan.program(r0)
@@ -273,6 +292,8 @@ class ToolRotationArm:
         Parameters identified: ``tool.y`` = e_ys and ``tool.z`` = -(r - r0), SI, with the
         fit's standard uncertainties.
         """
+        check_instance(measurements, Calibration, "measurements",
+                       "the Calibration ToolRotationArm.measure(lab) returns")
         readings, r0, machine = measurements.readings, measurements.r0, measurements.machine
         estimate = fit_arm(readings, r0)
         detail = ArmIdentification(
@@ -286,6 +307,7 @@ class ToolRotationArm:
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The pattern program touched off at 0 deg (``pattern_before``, the uncompensated
         state) and rewritten by the identified arm (``pattern_compensated``)."""
+        _check_identified(identified)
         detail = identified.detail
         nominal = self.pattern.program(detail.r0)
         return {"pattern_before": compensate_program(nominal, detail.machine,
@@ -296,6 +318,8 @@ class ToolRotationArm:
     def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
         """Cut the pattern before and after compensation and read its apexes (microscopes
         labelled ``"pattern_before"`` and ``"pattern_after"``)."""
+        check_lab(lab)
+        _check_identified(identified)
         detail = identified.detail
         readings, parts = {}, {}
         for state, program in (("before", programs["pattern_before"]),
@@ -350,6 +374,14 @@ class ToolRotationArm:
                 "depth_um": (reading.depth / M_PER_UM).tolist(),
                 "centre_um": (reading.centre / M_PER_UM).tolist()})
         return out
+
+
+def _check_identified(identified) -> None:
+    check_instance(identified, Identified, "identified",
+                   "the Identified ToolRotationArm.identify(measurements) returns")
+    check_instance(identified.detail, ArmIdentification, "identified",
+                   "an Identified with the ArmIdentification of ToolRotationArm.identify "
+                   "as its detail")
 
 
 def _estimate(estimate: ArmEstimate) -> dict:

@@ -45,7 +45,7 @@ from machinesim.cam.tool_setting_plates import (
 from machinesim.compensation import map_program, model_based, program_axes
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
-from machinesim.experiment import Evaluation, Figure, Identified
+from machinesim.experiment import Evaluation, Figure, Identified, check_instance, check_lab
 from machinesim.identification.tool_setting_6axis import (
     AAxisResult,
     CAxisResult,
@@ -132,6 +132,14 @@ def layout_lines(stage: str, points) -> list[tuple[str, np.ndarray]]:
 # ---------------------------------------------------------------------------- procedure
 
 
+def _check_identified(identified) -> None:
+    check_instance(identified, Identified, "identified",
+                   "the Identified ToolSetting6Axis.identify(measurements) returns")
+    check_instance(identified.detail, Identification, "identified",
+                   "an Identified with the Identification of ToolSetting6Axis.identify as "
+                   "its detail")
+
+
 @dataclass(frozen=True, eq=False)
 class Readings:
     """What `ToolSetting6Axis.measure` returns: the plates as cut and as read.
@@ -189,9 +197,16 @@ class ToolSetting6Axis:
     lab_uses: ClassVar[dict[str, tuple[str, ...]]] = {"measure": ("microscope",),
                                                       "evaluate": ("microscope",)}
 
+    def __post_init__(self) -> None:
+        check_instance(self.plan, Plan, "plan",
+                       "a Plan (machinesim.cam.tool_setting_plates), e.g. Plan()")
+        check_instance(self.machine, str, "machine",
+                       "the name of a 6-axis X Y Z A B C machine, e.g. 'robonano_ui'")
+
     def measure(self, lab) -> Readings:
         """Cut and read the four plates in the paper's order, each cut with what the earlier
         ones found (microscopes labelled ``"touch-off"``, ``"a"``, ``"c"``, ``"b"``)."""
+        check_lab(lab)
         machine = self._machine()
         if lab.machine.name != machine.name:
             raise InputError(f"{self.name} writes its programs for {machine.name}; the lab "
@@ -231,6 +246,8 @@ class ToolSetting6Axis:
         ``tool.y``, ``tool.z`` (d, with dZ from the B tilts), ``location.C.EX0C``,
         ``location.C.EY0C`` (e).
         """
+        check_instance(measurements, Readings, "measurements",
+                       "the Readings ToolSetting6Axis.measure(lab) returns")
         m = measurements
         found = identify(m.z_touch, m.a, m.c, m.b, SET_LENGTH, self.plan.theta2,
                          self.plan.theta3, mark_at=mark_point(), registration=m.registration)
@@ -250,6 +267,7 @@ class ToolSetting6Axis:
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The A, C and B plate programs rewritten by the identified d and e (`COMPENSATED`
         names); no touch-off needed: the tool length is dZ."""
+        _check_identified(identified)
         cuts = plate_cuts(self.plan)
         compensation = identified.detail.compensation
         return {COMPENSATED[s]: compensate_program(cuts[s].program, self._machine(),
@@ -258,6 +276,8 @@ class ToolSetting6Axis:
     def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
         """Cut the compensated plates, read them (microscopes ``"a/compensated"``, ...), and
         give Table 1: before from the identification's own plates, after from these."""
+        check_lab(lab)
+        _check_identified(identified)
         machine = self._machine()
         cuts = plate_cuts(self.plan)
         before: Identification = identified.detail
