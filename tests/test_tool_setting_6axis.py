@@ -294,7 +294,9 @@ def test_errors_outside_the_capture_range_are_reported():
     lab = Lab(MACHINE, errors_of([0.0, 3 * MM, 0.0], [0.0, 0.0]), noise=False)
     part, _ = lab.cut(plate.program, "v:90", plate.stock)
     microscope = lab.microscope(label="a")
-    with pytest.raises(InputError, match=r"A axis, groove at A = 0, C = 0 deg.*plan's range"):
+    with pytest.raises(InputError, match=r"A axis, groove at A = 0, C = 0 deg.*plan's capture "
+                                         r"range \(\|dx\|, \|dy\|, \|dz\| <= 0.5 mm, "
+                                         r"\|e\| <= 1 mm\)"):
         read_plate("a", part, microscope, plate.program, MACHINE)
     touch = plate_cuts()["touch"]
     part, _ = lab.cut(touch.program, "v:90", touch.stock)
@@ -434,3 +436,15 @@ def test_the_python_api_refuses_arguments_of_the_wrong_kind(call, message):
     with pytest.raises(InputError) as caught:
         call()
     assert str(caught.value) == message
+
+
+def test_an_end_face_missed_names_where_it_looked_and_the_capture_range():
+    """dx = 2 mm (the scenario's --tool-offset-um 2000,0,0), four times the plan's range: the
+    message showed numpy's "[5.235 0.   ] mm" and no range."""
+    lab = Lab(MACHINE, errors_of([2 * MM, 0.0, 0.0], [0.0, 0.0]), noise=False)
+    with pytest.raises(InputError) as caught:
+        ToolSetting6Axis().measure(lab)
+    assert str(caught.value) == (
+        "A axis, groove at A = 0, C = 0 deg: expected one end face within 0.335 mm of (x, y) = "
+        "(5.235, 0) mm along the groove, found 0; the errors may exceed the plan's capture "
+        "range (|dx|, |dy|, |dz| <= 0.5 mm, |e| <= 1 mm)")

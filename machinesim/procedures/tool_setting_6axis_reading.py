@@ -54,6 +54,11 @@ TOUCH_DEPTHS = (2 * M_PER_UM, 190 * M_PER_UM)
 #: Half width (m) of the windows across the touch-off: the capture range and a quarter
 #: millimetre of plate either side.
 TOUCH_WINDOW = OFFSET_RANGE + 0.25 * M_PER_MM
+#: What a plate reading that finds no groove, or no end, where the layout puts one adds:
+#: the plan's capture range (`OFFSET_RANGE`, `CENTRE_RANGE`), worded as paper 000's
+#: scenario words its own.
+BEYOND_CAPTURE = (f"the errors may exceed the plan's capture range (|dx|, |dy|, |dz| <= "
+                  f"{OFFSET_RANGE / M_PER_MM:g} mm, |e| <= {CENTRE_RANGE / M_PER_MM:g} mm)")
 #: Half width (m) of the windows across the A grooves and along them about their programmed
 #: end: how far a groove lands from its programmed place (`A_REACH`), and a quarter
 #: millimetre more.
@@ -170,10 +175,8 @@ def _fits(part, microscope, origin, along, stations, half_width, what):
         try:
             g = fit_v_groove(p.s, p.z)
         except InputError as error:
-            raise InputError(f"{what}, profile {t / M_PER_MM:+.2f} mm along: {error}; the "
-                             f"errors may exceed the plan's range (|d| <= "
-                             f"{OFFSET_RANGE / M_PER_MM} mm, |e| <= {CENTRE_RANGE / M_PER_MM} "
-                             "mm)") from error
+            raise InputError(f"{what}, profile {t / M_PER_MM:+.2f} mm along: {error}; "
+                             f"{BEYOND_CAPTURE}") from error
         out.append((g, profile_points(p0, p1, [g.centre])[0]))
     return out
 
@@ -200,9 +203,10 @@ def _end_point(part, microscope, points, spot, along, reach, what) -> np.ndarray
         level = 0.5 * (float(np.nanmin(coarse.z)) + float(np.nanmax(coarse.z)))
         steps = step_positions(coarse.s, coarse.z, level)
         if steps.size != 1:
+            x, y = (round(float(v) / M_PER_MM, 4) + 0.0 for v in foot)  # + 0.0: no -0
             raise InputError(f"{what}: expected one end face within {reach / M_PER_MM:g} mm "
-                             f"of {np.round(foot / M_PER_MM, 4)} mm along the groove, found "
-                             f"{steps.size}")
+                             f"of (x, y) = ({x:g}, {y:g}) mm along the groove, found "
+                             f"{steps.size}; {BEYOND_CAPTURE}")
         q0 = p0 + (steps[0] - ZOOM) * direction
         fine = microscope.profile(part, q0, q0 + 2 * ZOOM * direction, spacing=FINE_SPACING)
     return q0 + step_positions(fine.s, fine.z, level)[0] * direction
@@ -228,9 +232,7 @@ def _followed(part, microscope, fits, along, depth, what):
         station += TRACK_STEP
         if station > SET_LENGTH + A_WINDOW:
             raise InputError(f"{what}: the groove runs on past {station / M_PER_MM:g} mm "
-                             f"from its start; the errors may exceed the plan's range (|d| <= "
-                             f"{OFFSET_RANGE / M_PER_MM} mm, |e| <= "
-                             f"{CENTRE_RANGE / M_PER_MM} mm)")
+                             f"from its start; {BEYOND_CAPTURE}")
         centre, direction = _on_line([xy for _, xy in fits], station * along, along)
         across = np.array([-direction[1], direction[0]])
         p0, p1 = centre - TRACK_WINDOW * across, centre + TRACK_WINDOW * across
