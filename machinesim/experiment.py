@@ -34,7 +34,7 @@ from typing import Any, Protocol
 from machinesim.exceptions import InputError, brief
 
 __all__ = ["LAB_USES", "Evaluation", "Figure", "Identified", "Procedure", "Result",
-           "check_instance", "check_lab", "run"]
+           "check_identified", "check_instance", "check_lab", "run"]
 
 #: What a procedure may read of its lab beyond the machine's error parameters, as its
 #: ``lab_uses`` names it, step by step (``"measure"``, ``"evaluate"``): the instruments it
@@ -282,6 +282,16 @@ def check_instance(value, expected: type | tuple[type, ...], key: str, what: str
     if not isinstance(value, expected):
         raise InputError(f"expected {what}, got {type(value).__name__} {brief(repr(value))}",
                          key=key)
+
+
+def check_identified(identified, detail: type, procedure: str) -> None:
+    """Refuse anything but the `Identified` that ``procedure``'s ``identify`` returns, its
+    ``detail`` a ``detail`` (what `compensate` and `evaluate` read)."""
+    check_instance(identified, Identified, "identified",
+                   f"the Identified {procedure}.identify(measurements) returns")
+    check_instance(identified.detail, detail, "identified",
+                   f"an Identified with the {detail.__name__} of {procedure}.identify as "
+                   "its detail")
 
 
 def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = None

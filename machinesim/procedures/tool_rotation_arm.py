@@ -30,7 +30,14 @@ from machinesim.cam.prisms import SEARCH_MARGIN_M, CalibrationPlan, PrismPattern
 from machinesim.compensation import map_program, model_based, program_axes
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError, brief
-from machinesim.experiment import Evaluation, Figure, Identified, check_instance, check_lab
+from machinesim.experiment import (
+    Evaluation,
+    Figure,
+    Identified,
+    check_identified,
+    check_instance,
+    check_lab,
+)
 from machinesim.identification.tool_rotation_arm import (
     ArmCheck,
     ArmEstimate,
@@ -307,7 +314,7 @@ class ToolRotationArm:
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The pattern program touched off at 0 deg (``pattern_before``, the uncompensated
         state) and rewritten by the identified arm (``pattern_compensated``)."""
-        _check_identified(identified)
+        check_identified(identified, ArmIdentification, "ToolRotationArm")
         detail = identified.detail
         nominal = self.pattern.program(detail.r0)
         return {"pattern_before": compensate_program(nominal, detail.machine,
@@ -319,7 +326,7 @@ class ToolRotationArm:
         """Cut the pattern before and after compensation and read its apexes (microscopes
         labelled ``"pattern_before"`` and ``"pattern_after"``)."""
         check_lab(lab)
-        _check_identified(identified)
+        check_identified(identified, ArmIdentification, "ToolRotationArm")
         detail = identified.detail
         readings, parts = {}, {}
         for state, program in (("before", programs["pattern_before"]),
@@ -374,14 +381,6 @@ class ToolRotationArm:
                 "depth_um": (reading.depth / M_PER_UM).tolist(),
                 "centre_um": (reading.centre / M_PER_UM).tolist()})
         return out
-
-
-def _check_identified(identified) -> None:
-    check_instance(identified, Identified, "identified",
-                   "the Identified ToolRotationArm.identify(measurements) returns")
-    check_instance(identified.detail, ArmIdentification, "identified",
-                   "an Identified with the ArmIdentification of ToolRotationArm.identify "
-                   "as its detail")
 
 
 def _estimate(estimate: ArmEstimate) -> dict:

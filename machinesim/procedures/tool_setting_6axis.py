@@ -45,7 +45,14 @@ from machinesim.cam.tool_setting_plates import (
 from machinesim.compensation import map_program, model_based, program_axes
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
-from machinesim.experiment import Evaluation, Figure, Identified, check_instance, check_lab
+from machinesim.experiment import (
+    Evaluation,
+    Figure,
+    Identified,
+    check_identified,
+    check_instance,
+    check_lab,
+)
 from machinesim.identification.tool_setting_6axis import (
     AAxisResult,
     CAxisResult,
@@ -130,14 +137,6 @@ def layout_lines(stage: str, points) -> list[tuple[str, np.ndarray]]:
 
 
 # ---------------------------------------------------------------------------- procedure
-
-
-def _check_identified(identified) -> None:
-    check_instance(identified, Identified, "identified",
-                   "the Identified ToolSetting6Axis.identify(measurements) returns")
-    check_instance(identified.detail, Identification, "identified",
-                   "an Identified with the Identification of ToolSetting6Axis.identify as "
-                   "its detail")
 
 
 @dataclass(frozen=True, eq=False)
@@ -267,7 +266,7 @@ class ToolSetting6Axis:
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The A, C and B plate programs rewritten by the identified d and e (`COMPENSATED`
         names); no touch-off needed: the tool length is dZ."""
-        _check_identified(identified)
+        check_identified(identified, Identification, "ToolSetting6Axis")
         cuts = plate_cuts(self.plan)
         compensation = identified.detail.compensation
         return {COMPENSATED[s]: compensate_program(cuts[s].program, self._machine(),
@@ -277,7 +276,7 @@ class ToolSetting6Axis:
         """Cut the compensated plates, read them (microscopes ``"a/compensated"``, ...), and
         give Table 1: before from the identification's own plates, after from these."""
         check_lab(lab)
-        _check_identified(identified)
+        check_identified(identified, Identification, "ToolSetting6Axis")
         machine = self._machine()
         cuts = plate_cuts(self.plan)
         before: Identification = identified.detail
