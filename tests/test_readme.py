@@ -11,7 +11,6 @@ so that the files the examples write land there and not in the working tree.
 from __future__ import annotations
 
 import json
-import re
 import shlex
 import shutil
 import subprocess
@@ -21,10 +20,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fenced import ROOT, link_repository_folders
+from fenced import fenced_blocks as blocks_of
 
 from machinesim import ErrorModel, list_machines, load_machine
 
-ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
 EXAMPLE_ERRORS = "models/errors/example.toml"
 #: Seconds one README command may take (the cut and the HTML export take a few seconds).
@@ -33,9 +33,7 @@ COMMAND_TIMEOUT_S = 600
 
 def fenced_blocks(language: str) -> list[tuple[int, str]]:
     """(line number of the opening fence, code) of every ```language block of the README."""
-    text = README.read_text(encoding="utf-8")
-    fence = re.compile(rf"^```{language}[ \t]*\n(.*?)^```[ \t]*$", re.MULTILINE | re.DOTALL)
-    return [(text.count("\n", 0, m.start()) + 1, m.group(1)) for m in fence.finditer(text)]
+    return blocks_of(README, language)
 
 
 def shell_commands() -> list[tuple[int, list[str]]]:
@@ -74,9 +72,7 @@ def machinesim_executable() -> list[str]:
 @pytest.fixture
 def workspace(tmp_path, monkeypatch) -> Path:
     """A fresh current folder holding links to the repository's folders."""
-    for entry in ROOT.iterdir():
-        if entry.is_dir() and not entry.name.startswith((".", "__")):
-            (tmp_path / entry.name).symlink_to(entry, target_is_directory=True)
+    link_repository_folders(tmp_path)
     monkeypatch.chdir(tmp_path)
     return tmp_path
 
