@@ -134,7 +134,10 @@ class Lab:
                 raise InputError(exc.message, source=exc.source, key="background") from None
             self.machine.check_errors(own)
             self.__background = own
-            truth = _realism.add_errors(injected, own)
+            travel = dict(zip(self.machine.axes,
+                              zip(self.machine.lower, self.machine.upper, strict=True),
+                              strict=True))
+            truth = _realism.add_errors(injected, own, travel)
         room = 1.0 - _realism.TOOL_ADJUSTER_STROKE_M  # ErrorModel's 1 m, less the stroke
         if np.abs(injected.tool.offset).max() > room:
             raise InputError(f"a tool offset of {np.round(injected.tool.offset * 1e3, 6).tolist()}"

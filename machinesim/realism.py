@@ -39,7 +39,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from machinesim.arrays import frozen
-from machinesim.errors import ComponentError, ErrorModel
+from machinesim.background import add_errors, background_model, background_path
 from machinesim.exceptions import InputError, check_length
 from machinesim.metrology.imperfections import RegistrationScatter, Spot, ZonalForm
 from machinesim.tolerances import SPHERE_CHORD_M
@@ -397,84 +397,3 @@ def make_spheres(stock, design: SphereArtefacts, actual: ActualSpheres):
         spheres.append(sphere.translate(tuple(float(v) for v in centre)))
     union = manifold3d.Manifold.batch_boolean(spheres, manifold3d.OpType.Add)
     return Part(solid - union if design.cavities else solid + union)
-
-
-# ---------------------------------------------------------------------- background errors
-
-
-def background_path(machine_name: str):
-    """``models/errors/background_<machine>.toml`` (shipped with the machines)."""
-    from machinesim.machines import models_dir
-
-    return models_dir() / "errors" / f"background_{machine_name}.toml"
-
-
-def background_model(machine) -> ErrorModel:
-    """The machine's own residual geometric errors (a well-compensated one), from its file.
-
-    Raises
-    ------
-    InputError
-        When the machine has no background file (a machine loaded from elsewhere): give the
-        lab one with ``background=``.
-    """
-    path = background_path(machine.name)
-    if not path.is_file():
-        raise InputError(f"Expected a background error model for {machine.name} at {path}; "
-                         f"give one with Lab(..., background=...)", key="background")
-    model = ErrorModel.from_toml(path)
-    machine.check_errors(model)
-    return model
-
-
-def add_errors(a: ErrorModel, b: ErrorModel) -> ErrorModel:
-    """The errors of ``a`` and ``b`` together: location errors add, component errors add.
-
-    Component tables of an axis are put on the union of the two models' positions (each
-    table is piecewise linear, so their sum is exactly the table of the sums there, and both
-    hold their end values beyond); polynomials add coefficient by coefficient. ``b`` must
-    carry no tool or workpiece setting (a setting belongs to a set-up, not to the machine).
-
-    Raises
-    ------
-    InputError
-        When ``b`` has a setting, or one symbol is a table in one model and a polynomial in
-        the other (their sum is neither).
-    """
-    if not (b.tool == ErrorModel().tool and b.workpiece == ErrorModel().workpiece
-            and b.tool_geometry == ErrorModel().tool_geometry):
-        raise InputError("Expected a background without tool or workpiece setting errors",
-                         key="background")
-    location = {axis: dict(table) for axis, table in a.location.items()}
-    for axis, table in b.location.items():
-        merged = location.setdefault(axis, {})
-        for symbol, value in table.items():
-            merged[symbol] = merged.get(symbol, 0.0) + value
-    component = {}
-    for axis in sorted(set(a.component) | set(b.component)):
-        ta, tb = a.component.get(axis, {}), b.component.get(axis, {})
-        grids = [e.positions for t in (ta, tb) for e in t.values() if e.kind == "table"]
-        grid = np.unique(np.concatenate(grids)) if grids else None
-        out = {}
-        for symbol in list(ta) + [s for s in tb if s not in ta]:
-            out[symbol] = _add_component(ta.get(symbol), tb.get(symbol), grid, axis, symbol)
-        component[axis] = out
-    return ErrorModel(a.tool, a.workpiece, location, component, a.tool_geometry)
-
-
-def _add_component(ea, eb, grid, axis: str, symbol: str) -> ComponentError:
-    kinds = {e.kind for e in (ea, eb) if e is not None}
-    if kinds == {"table", "poly"}:
-        raise InputError(f"Expected component.{axis}.{symbol} as a table in both models or a "
-                         f"polynomial in both, got one of each", key=f"component.{axis}.{symbol}")
-    if kinds == {"poly"}:
-        size = max(e.values.size for e in (ea, eb) if e is not None)
-        total = np.zeros(size)
-        for e in (ea, eb):
-            if e is not None:
-                total[:e.values.size] += e.values
-        return ComponentError("poly", None, total)
-    present = [e for e in (ea, eb) if e is not None]
-    if len(present) == 1 and np.array_equal(present[0].positions, grid):
-        return present[0]
-    return ComponentError("table", grid, sum(e.evaluate(grid) for e in present))

@@ -21,6 +21,12 @@ UNREACHABLE_M = 1e-12
 #: limit), relative to SI units: 1e-12 m or 1e-12 rad.
 LIMIT_SLACK = 1e-12
 
+#: A polynomial error summed with a table (an injected polynomial on a machine whose
+#: background holds a table, `machinesim.background.add_errors`) is tabulated so that
+#: its linear interpolation is off by at most this, m or rad: 1/10 of `POSE_M`, so the
+#: tabulated machine agrees with the exact sum as two float64 chains agree.
+TABULATED_SUM = 1e-13
+
 # --- kinematics
 #: Below this angle (rad) `_cos_sin` uses its series: the first omitted terms, x**9/9! and
 #: x**10/10!, are then below 3e-24 relative, far under float64's 1.1e-16, and error angles

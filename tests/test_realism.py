@@ -37,6 +37,7 @@ from machinesim.realism import (
     background_model,
 )
 from machinesim.streams import stream
+from machinesim.tolerances import TABULATED_SUM
 from machinesim.workpiece import Part, block, block_with_spheres
 
 MM, UM, NM = 1e-3, 1e-6, 1e-9
@@ -519,3 +520,47 @@ def test_add_errors_is_exact_on_the_union_of_the_tables():
                                                                      [0.0, 1e-7])}}), b)
     with pytest.raises(InputError, match="setting"):
         add_errors(a, ErrorModel.from_dict({"tool": {"offset_um": [1.0, 0.0, 0.0]}}))
+
+
+def test_a_polynomial_plus_a_table_is_tabulated_over_the_travel_within_its_tolerance():
+    """Linear interpolation of c x^2 at spacing h is off by c h^2 / 4 at each midpoint (by
+    hand): the spacing the sum is tabulated at keeps that within TABULATED_SUM, and the other
+    tables of the axis move onto the same positions, to round-off."""
+    c = 2e-5  # 1/m: the README's example EYX, 2e-5 um/mm^2, 0.39 um at 140 mm
+    injected = ErrorModel(component={"X": {"EYX": ComponentError("poly", None, [0.0, 0.0, c])}})
+    background = ErrorModel(component={"X": {
+        "EYX": ComponentError("table", [-0.14, 0.0, 0.14], [-5e-8, 0.0, 3e-8]),
+        "EXX": ComponentError("table", [-0.14, 0.0, 0.14], [2e-8, 0.0, -1e-8])}})
+    total = add_errors(injected, background, {"X": (-0.14, 0.14)})
+    eyx = total.component["X"]["EYX"]
+    assert eyx.kind == "table"
+    assert np.array_equal(total.component["X"]["EXX"].positions, eyx.positions)
+    h = np.diff(eyx.positions).max()
+    assert c * h**2 / 4.0 <= TABULATED_SUM < 1.1 * c * h**2 / 4.0  # not needlessly fine
+    x = np.linspace(-0.14, 0.14, 280_001)
+    off = eyx.evaluate(x) - (c * x**2 + background.component["X"]["EYX"].evaluate(x))
+    assert np.abs(off).max() <= TABULATED_SUM
+    assert np.abs(off).max() > 0.5 * TABULATED_SUM  # the bound is what the midpoints reach
+    np.testing.assert_allclose(total.component["X"]["EXX"].evaluate(x),
+                               background.component["X"]["EXX"].evaluate(x), rtol=0,
+                               atol=1e-22)  # round-off of 2e-8 m values: ulp 3.3e-24
+
+
+def test_a_polynomial_too_curved_to_tabulate_is_refused_naming_it():
+    curved = ErrorModel(component={"X": {"EYX": ComponentError("poly", None, [0.0, 0.0, 1e3])}})
+    table = ErrorModel(component={"X": {"EYX": ComponentError("table", [0.0, 0.1], [0.0, 1e-8])}})
+    with pytest.raises(InputError, match=r"component\.X\.EYX: .* positions .*give it as a table"):
+        add_errors(curved, table, {"X": (-0.14, 0.14)})
+
+
+def test_the_readme_example_errors_run_in_a_lab_with_the_background():
+    """robonano_a0ib's background holds EYX as a table; the example's EYX is a polynomial.
+    Before, Lab(..., realism=Realism.lab()) refused the pair (so did the flagship scenario's
+    --errors models/errors/example.toml); the lab's machine is now their sum."""
+    lab = Lab("robonano_a0ib", "models/errors/example.toml", realism=Realism.lab())
+    injected, own = lab.reveal(background=False), lab.reveal_background()
+    x = np.linspace(-0.14, 0.14, 2801)
+    machine_eyx = lab.reveal().component["X"]["EYX"].evaluate(x)
+    expected = (injected.component["X"]["EYX"].evaluate(x)
+                + own.component["X"]["EYX"].evaluate(x))
+    np.testing.assert_allclose(machine_eyx, expected, rtol=0, atol=TABULATED_SUM)

@@ -340,7 +340,7 @@ def _check_component(axes: Mapping[str, Mapping[str, Any]]) -> None:
         for symbol, grid in grids.items():
             if not np.array_equal(grid, first):
                 message = f"the tables of axis {axis} must share their positions, got "
-                message += f"{grid.tolist()!r}, not {first.tolist()!r}"
+                message += f"{_describe(grid)}, not {_describe(first)}"
                 raise _fail(message, None, f"component.{axis}.{symbol}")
 
 
