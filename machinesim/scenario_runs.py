@@ -11,8 +11,9 @@ import math
 import os
 import sys
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import NoReturn
 
 from machinesim._arguments import ArgumentParser
 from machinesim._io import StagedFolder, ctrl_c_remembered, stdout_to_null, stopped
@@ -323,3 +324,50 @@ def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, flo
     if machine is not None and args.errors is not None:
         load_machine(machine).check_errors(base)  # names the --errors file, then the machine
     return base.with_parameters(given) if given else base
+
+
+def refuse_beyond_capture(args, options: Mapping[str, tuple[object, str]],
+                          keys: Sequence[str], found: str, capture: str, expected: str,
+                          otherwise: tuple[str, str] | None = None) -> NoReturn:
+    """Refuse, before anything is cut, injected errors beyond what a procedure's plan
+    captures, naming what set them: the scenario's own options that were given (with what
+    each is expected within), else ``otherwise`` when there is no ``--errors`` file, else
+    that file and the error model's keys at fault.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        From `scenario_arguments`.
+    options : Mapping[str, tuple]
+        Option (``"--tool-offset-um"``) -> (its value as given, None when not given; what it
+        is expected within), for each option that sets the errors at fault, in the order
+        they are named.
+    keys : sequence of str
+        The errors at fault (`ErrorModel.parameters` names), named with the ``--errors`` file.
+    found : str
+        The quantity beyond the range, with its value.
+    capture : str
+        The plan's capture range.
+    expected : str
+        What the errors are expected within when no option set them.
+    otherwise : (str, str), optional
+        What set them and the option it names when neither an option nor ``--errors`` did
+        (paper 000: a ``--capture-mm`` below the paper's own errors).
+
+    Raises
+    ------
+    InputError
+        Always; its key the first option given, ``errors`` or ``otherwise``'s option.
+    """
+    given = [(f"{option} {value!r}", option, within)
+             for option, (value, within) in options.items() if value is not None]
+    if given:
+        names, key, ranges = [name for name, _, _ in given], given[0][1], [
+            within for _, _, within in given]
+    elif otherwise is not None and args.errors is None:
+        names, key, ranges = [otherwise[0]], otherwise[1], [expected]
+    else:
+        names, key, ranges = [f"--errors {args.errors} ({', '.join(keys)})"], "errors", [
+            expected]
+    raise InputError(f"{' with '.join(names)}: {found} exceeds the plan's capture range "
+                     f"{capture}: expected {' or '.join(ranges)}", key=key.lstrip("-"))

@@ -45,6 +45,7 @@ from machinesim.scenario_runs import (
     progress_printer,
     realism_from,
     realism_options,
+    refuse_beyond_capture,
     run_scenario,
     scenario_arguments,
 )
@@ -163,37 +164,29 @@ def check_offset(args, capture: float, r0: float, e_ys: float, rho: float) -> No
     def room(other):
         return math.sqrt(capture ** 2 - other ** 2) if abs(other) <= capture else None
 
-    names, ranges = [], []
-    if args.e_ys_um is not None:
-        names.append(f"--e-ys-um {args.e_ys_um!r}")
-        half = room(rho)
-        ranges.append(f"e_ys within +-{math.floor(half / UM * 100) / 100:.2f} um at r - r0 = "
-                      f"{rho / UM:.2f} um" if half is not None else
-                      f"no e_ys at r - r0 = {rho / UM:.6g} um")
-    if args.r_mm is not None:
-        names.append(f"--r-mm {args.r_mm!r}")
-        half = room(e_ys)
-        ranges.append(f"r within {math.ceil((r0 - half) / MM * 1e4) / 1e4:.4f} to "
-                      f"{math.floor((r0 + half) / MM * 1e4) / 1e4:.4f} mm at e_ys = "
-                      f"{e_ys / UM:.2f} um" if half is not None else
-                      f"no r at e_ys = {e_ys / UM:.6g} um")
-    key = "r-mm" if args.r_mm is not None and args.e_ys_um is None else "e-ys-um"
-    if not names:
-        # the offset is the error file's, or the paper's own with a --capture-mm below it
-        names.append(f"--errors {args.errors} (tool.y, tool.z)" if args.errors is not None
-                     else f"--capture-mm {args.capture_mm!r} with the paper's errors (e_ys = "
-                     f"{PAPER['e_ys_um']:g} um, r = {PAPER['r_mm']:g} mm)")
-        key = "errors" if args.errors is not None else "capture-mm"
-        ranges.append(f"--capture-mm at least {math.ceil(length / MM * 1e6) / 1e6:.6f} mm"
-                      if length <= MAX_CAPTURE_MM * MM else
-                      f"an offset of at most {MAX_CAPTURE_MM:.4g} mm, the largest capture")
+    half = room(rho)
+    e_ys_range = (f"e_ys within +-{math.floor(half / UM * 100) / 100:.2f} um at r - r0 = "
+                  f"{rho / UM:.2f} um" if half is not None else
+                  f"no e_ys at r - r0 = {rho / UM:.6g} um")
+    half = room(e_ys)
+    r_range = (f"r within {math.ceil((r0 - half) / MM * 1e4) / 1e4:.4f} to "
+               f"{math.floor((r0 + half) / MM * 1e4) / 1e4:.4f} mm at e_ys = "
+               f"{e_ys / UM:.2f} um" if half is not None else
+               f"no r at e_ys = {e_ys / UM:.6g} um")
     shown = f"{length / MM:.6g}"
     if shown == f"{capture / MM:.6g}":  # just beyond: as many digits as tell them apart
         shown = f"{length / MM:.12g}"
-    raise InputError(
-        f"{' with '.join(names)}: the edge offset |(e_ys, r - r0)| = {shown} mm "
-        f"exceeds the plan's capture range {capture / MM:g} mm (--capture-mm, at most "
-        f"{MAX_CAPTURE_MM:.4g}): expected {' or '.join(ranges)}", key=key)
+    # without --e-ys-um or --r-mm the offset is the error file's, or the paper's own with a
+    # --capture-mm below it
+    refuse_beyond_capture(
+        args, {"--e-ys-um": (args.e_ys_um, e_ys_range), "--r-mm": (args.r_mm, r_range)},
+        ("tool.y", "tool.z"), f"the edge offset |(e_ys, r - r0)| = {shown} mm",
+        f"{capture / MM:g} mm (--capture-mm, at most {MAX_CAPTURE_MM:.4g})",
+        f"--capture-mm at least {math.ceil(length / MM * 1e6) / 1e6:.6f} mm"
+        if length <= MAX_CAPTURE_MM * MM else
+        f"an offset of at most {MAX_CAPTURE_MM:.4g} mm, the largest capture",
+        otherwise=(f"--capture-mm {args.capture_mm!r} with the paper's errors (e_ys = "
+                   f"{PAPER['e_ys_um']:g} um, r = {PAPER['r_mm']:g} mm)", "--capture-mm"))
 
 
 def calibration_table(out, readings, fit) -> str:

@@ -40,7 +40,7 @@ import numpy as np
 
 from machinesim import Lab
 from machinesim.budget import realism_budget
-from machinesim.cam.tool_setting_plates import Plan
+from machinesim.cam.tool_setting_plates import CAPTURE_RANGE, CENTRE_RANGE, OFFSET_RANGE, Plan
 from machinesim.errors import LARGEST_ERROR
 from machinesim.exceptions import InputError
 from machinesim.experiment import run
@@ -58,6 +58,7 @@ from machinesim.scenario_runs import (
     progress_printer,
     realism_from,
     realism_options,
+    refuse_beyond_capture,
     scenario_arguments,
     scenario_status,
 )
@@ -81,10 +82,12 @@ def main(argv=None) -> int:
     parser = scenario_arguments(__doc__.splitlines()[0], "reports/tool_setting_6axis")
     parser.add_argument("--tool-offset-um", default=None,
                         help="edge offset dx,dy,dz from the A/B centres (um; default "
-                        "250,350,150)")
+                        f"250,350,150; each within +-{OFFSET_RANGE / M_PER_UM:g}, the plan's "
+                        "capture range)")
     parser.add_argument("--c-offset-um", default=None,
                         help="C-axis centre line x,y from the edge (um; default "
-                        "100,850)")
+                        f"100,850; |(x, y)| <= {CENTRE_RANGE / M_PER_UM:g}, the plan's capture "
+                        "range)")
     realism_options(parser)
     args = parser.parse_args(argv)
     return scenario_status(_configured, args, "tool_setting_6axis")
@@ -100,6 +103,7 @@ def _configured(args) -> None:
         values = _lengths(args.c_offset_um, 2, "--c-offset-um")
         given.update(zip(PARAMETERS[3:], (v * M_PER_UM for v in values), strict=True))
     errors, realism = injected_errors(args, DEFAULTS, given, "robonano_ui"), realism_from(args)
+    _check_capture(args, errors.parameters())
     report(args, lambda realism: Lab("robonano_ui", errors, seed=args.seed,
                                      realism=realism), realism)
 
@@ -115,6 +119,30 @@ def _lengths(text: str, count: int, option: str) -> list[float]:
         raise InputError(f"{option} {text!r}: {worst:g} um is no length error: expected at "
                          f"most {largest:g} um (1 m) either way", key=option.lstrip("-"))
     return values
+
+
+def _check_capture(args, injected: dict[str, float]) -> None:
+    """Refuse, before anything is cut, a tool offset d or C centre line e (``injected``,
+    SI by `ErrorModel.parameters`) beyond the plan's capture range (`CAPTURE_RANGE`: each of
+    dx, dy, dz within `OFFSET_RANGE`, |e| within `CENTRE_RANGE`), naming the option or the
+    ``--errors`` file and key that set it: beyond it a plate reading finds no groove, or no
+    end face, only after the plates are cut (docs/procedures/tool_setting_6axis.md)."""
+    limit = OFFSET_RANGE / M_PER_UM
+    for label, name in zip(("dx", "dy", "dz"), PARAMETERS[:3], strict=True):
+        value = injected.get(name, 0.0)
+        if abs(value) > OFFSET_RANGE:
+            refuse_beyond_capture(
+                args, {"--tool-offset-um": (args.tool_offset_um,
+                                            f"dx, dy, dz each within +-{limit:g} um")},
+                (name,), f"the tool offset {label} = {value / M_PER_UM:.12g} um",
+                f"({CAPTURE_RANGE})", f"{name} within +-{limit:g} um")
+    x, y = (injected.get(name, 0.0) for name in PARAMETERS[3:])
+    if math.hypot(x, y) > CENTRE_RANGE:
+        limit = CENTRE_RANGE / M_PER_UM
+        refuse_beyond_capture(
+            args, {"--c-offset-um": (args.c_offset_um, f"|(x, y)| <= {limit:g} um")},
+            PARAMETERS[3:], f"the C centre line |e| = {math.hypot(x, y) / M_PER_UM:.12g} um",
+            f"({CAPTURE_RANGE})", f"|({', '.join(PARAMETERS[3:])})| <= {limit:g} um")
 
 
 def report(args, make_lab, realism) -> None:

@@ -385,6 +385,46 @@ def test_an_offset_option_beyond_a_metre_is_refused_naming_the_option(tmp_path):
             "no length error: expected at most 1e+06 um (1 m) either way")
 
 
+def test_the_scenario_refuses_errors_beyond_the_capture_range_before_cutting(tmp_path):
+    """The plan's capture range (docs: |dx|, |dy|, |dz| <= 0.5 mm, |e| <= 1 mm): beyond it the
+    scenario used to cut the plates and then fail reading them (dx = 2 mm: "found 1065" end
+    faces); now it stops before the lab is built, naming the option (or the --errors file and
+    key), the value and the range. |(800, 601)| = sqrt(640000 + 361201) = 1000.60031981 um
+    by hand. On the range's edge (d = (500, -500, 500) um, e = (600, -800) um, |e| = 1000
+    um) it runs to the end: the A sets' distances 2 dx, 2 dy and the triangle's centre e."""
+    errors = tmp_path / "errors.toml"
+    errors.write_text("[tool]\noffset_mm = [0.0, 0.6, 0.0]\n")
+    capture = "exceeds the plan's capture range (|dx|, |dy|, |dz| <= 0.5 mm, |e| <= 1 mm)"
+    fast = ("--budget", "off", "--realism", "noise_only", "--out", str(tmp_path / "out"))
+    for options, message in (
+            (("--tool-offset-um=2000,0,0",), "key 'tool-offset-um': --tool-offset-um "
+             f"'2000,0,0': the tool offset dx = 2000 um {capture}: expected dx, dy, dz each "
+             "within +-500 um"),
+            (("--tool-offset-um=0,0,-500.0001",), "key 'tool-offset-um': --tool-offset-um "
+             f"'0,0,-500.0001': the tool offset dz = -500.0001 um {capture}: expected dx, dy, "
+             "dz each within +-500 um"),
+            (("--c-offset-um=800,601",), "key 'c-offset-um': --c-offset-um '800,601': the C "
+             f"centre line |e| = 1000.60031981 um {capture}: expected |(x, y)| <= 1000 um"),
+            (("--errors", str(errors), "--c-offset-um=0,0"), f"key 'errors': --errors {errors} "
+             f"(tool.y): the tool offset dy = 600 um {capture}: expected tool.y within "
+             "+-500 um")):
+        result = scenario(*options, *fast)
+        assert result.returncode == 2, (options, result.stderr)
+        assert result.stderr.splitlines() == [f"tool_setting_6axis: error: {message}"]
+        assert not result.stdout  # nothing run, nothing cut
+    out = tmp_path / "edge"
+    result = scenario("--tool-offset-um=500,-500,500", "--c-offset-um=600,-800", *fast[:-1],
+                      str(out))
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    before = summary["details"]["before"]
+    # noise only: the distances to a few tens of nanometres, each identified within 4 std
+    np.testing.assert_allclose(before["a_distance_um"], [1000.0, -1000.0], atol=0.03)
+    np.testing.assert_allclose(before["c_centre_displacement_um"], [600.0, -800.0], atol=0.03)
+    for name, entry in summary["identified"].items():
+        assert abs(entry["value"] - summary["injected"][name]) < 4 * entry["std"], name
+
+
 @pytest.mark.parametrize(("fields", "message"), [
     ({"theta2": 0}, "key 'theta2': Expected a non-zero B tilt: eqs 1-2 of paper 001 take dX "
      "and dZ from the depth changes at two distinct non-zero tilts, got theta2 = 0 rad "

@@ -42,7 +42,8 @@ from machinesim.nc import Program, ProgramBuilder
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = [
-    "A_REACH", "A_SETS", "B_GROOVE_X", "CENTRE_RANGE", "C_TURNS", "MACHINE", "MARK_HALF",
+    "A_REACH", "A_SETS", "B_GROOVE_X", "CAPTURE_RANGE", "CENTRE_RANGE", "C_TURNS", "MACHINE",
+    "MARK_HALF",
     "MARK_X", "OFFSET_RANGE", "PARKED", "Plan", "PlateCut", "SET_LENGTH", "TOUCH_COUNT",
     "TOUCH_SEGMENT", "TOUCH_STEP", "TOUCH_TOP", "TRIANGLE_HALF", "TRIANGLE_R", "a_grooves",
     "mark_point", "plate_cuts",
@@ -53,6 +54,10 @@ __all__ = [
 #: C centre |e| up to `CENTRE_RANGE`; beyond, a measurement finds no groove and says so.
 OFFSET_RANGE = 0.5 * M_PER_MM
 CENTRE_RANGE = 1.0 * M_PER_MM
+#: The capture range in words, as the refusals of errors beyond it name it (the scenario's
+#: before any cutting, a plate reading's after).
+CAPTURE_RANGE = (f"|dx|, |dy|, |dz| <= {OFFSET_RANGE / M_PER_MM:g} mm, "
+                 f"|e| <= {CENTRE_RANGE / M_PER_MM:g} mm")
 #: Heights of the tool edge above the plate for rotary moves and before a plunge (m): above
 #: the 0.6 mm touch-off range, so rapids never reach the plate.
 SAFE_Z, CLEAR_Z = 2.0 * M_PER_MM, 0.1 * M_PER_MM

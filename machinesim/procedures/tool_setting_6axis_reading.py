@@ -19,7 +19,7 @@ from machinesim.cam.tool_setting_plates import (
     A_REACH,
     B_GROOVE_X,
     C_TURNS,
-    CENTRE_RANGE,
+    CAPTURE_RANGE,
     OFFSET_RANGE,
     PARKED,
     SET_LENGTH,
@@ -55,10 +55,8 @@ TOUCH_DEPTHS = (2 * M_PER_UM, 190 * M_PER_UM)
 #: millimetre of plate either side.
 TOUCH_WINDOW = OFFSET_RANGE + 0.25 * M_PER_MM
 #: What a plate reading that finds no groove, or no end, where the layout puts one adds:
-#: the plan's capture range (`OFFSET_RANGE`, `CENTRE_RANGE`), worded as paper 000's
-#: scenario words its own.
-BEYOND_CAPTURE = (f"the errors may exceed the plan's capture range (|dx|, |dy|, |dz| <= "
-                  f"{OFFSET_RANGE / M_PER_MM:g} mm, |e| <= {CENTRE_RANGE / M_PER_MM:g} mm)")
+#: the plan's capture range (`CAPTURE_RANGE`), worded as paper 000's scenario words its own.
+BEYOND_CAPTURE = f"the errors may exceed the plan's capture range ({CAPTURE_RANGE})"
 #: Half width (m) of the windows across the A grooves and along them about their programmed
 #: end: how far a groove lands from its programmed place (`A_REACH`), and a quarter
 #: millimetre more.
