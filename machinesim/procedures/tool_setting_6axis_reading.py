@@ -44,7 +44,7 @@ from machinesim.metrology import (
 )
 from machinesim.nc import Program
 from machinesim.rotations import rot_z
-from machinesim.units import M_PER_MM, M_PER_UM
+from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 
 __all__ = ["a_direction", "read_plate", "touch_off_z"]
 
@@ -191,20 +191,28 @@ def _reading(fits, block, stage_sigma: float, end=None) -> GrooveReading:
                             if end is not None else math.nan))
 
 
-def _end_point(part, microscope, points, spot, along, reach, what) -> np.ndarray:
+def _end_point(part, microscope, points, spot, along, reach, depth, what) -> np.ndarray:
     """Where the centre line meets the groove's end face, known to lie within ``reach`` of
-    ``spot``: a profile along the line there, then zoomed."""
+    ``spot``: a profile along the line there, then zoomed. A face is a step of the cut
+    ``depth`` (m); a profile whose heights span less than half of it has none."""
     foot, direction = _on_line(points, spot, along)
     p0 = foot - reach * direction
     with microscope.placement():  # one field: the zoom is into the same image
         coarse = microscope.profile(part, p0, foot + reach * direction)
         level = 0.5 * (float(np.nanmin(coarse.z)) + float(np.nanmax(coarse.z)))
         steps = step_positions(coarse.s, coarse.z, level)
-        if steps.size != 1:
+        span = float(np.nanmax(coarse.z)) - float(np.nanmin(coarse.z))
+        if steps.size != 1 or not span > 0.5 * depth:
             x, y = (round(float(v) / M_PER_MM, 4) + 0.0 for v in foot)  # + 0.0: no -0
+            # a profile all plate (or all groove bottom) crosses its mid level wherever the
+            # noise does: its count of "faces" says nothing
+            found = (f"{steps.size}" if span > 0.5 * depth else
+                     f"none: nothing stands out of the surface's noise there (its heights "
+                     f"span {span / M_PER_NM:.3g} nm; an end face is a step of the "
+                     f"{depth / M_PER_UM:g} um cut depth)")
             raise InputError(f"{what}: expected one end face within {reach / M_PER_MM:g} mm "
                              f"of (x, y) = ({x:g}, {y:g}) mm along the groove, found "
-                             f"{steps.size}; {BEYOND_CAPTURE}")
+                             f"{found}; {BEYOND_CAPTURE}")
         q0 = p0 + (steps[0] - ZOOM) * direction
         fine = microscope.profile(part, q0, q0 + 2 * ZOOM * direction, spacing=FINE_SPACING)
     return q0 + step_positions(fine.s, fine.z, level)[0] * direction
@@ -256,7 +264,7 @@ def _read_a(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
         fits = _fits(part, microscope, (0.0, 0.0), along, STATIONS["a"], A_WINDOW, what)
         fits, station = _followed(part, microscope, fits, along, plan.depth, what)
         end = _end_point(part, microscope, [xy for _, xy in fits], station * along, along,
-                         0.5 * TRACK_STEP + TRACK_MARGIN, what)
+                         0.5 * TRACK_STEP + TRACK_MARGIN, plan.depth, what)
         out.append(_reading(fits, block, microscope.stage_sigma, end))
     return tuple(out)
 
