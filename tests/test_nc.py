@@ -356,7 +356,7 @@ REFUSALS = [
     ("G00 X0\nO1", 2, 1, "O1", "must be the first block"),
     ("O1\nM30\nO2\nM99\nO2\nM99", 5, 1, "O2", "subprogram O0002 is defined twice"),
     ("O1 G00", 1, 4, "G00", "must stand alone"),
-    ("% G00", 1, 3, "G", "must stand alone on its line"),
+    ("G00 X0\n% G00", 2, 3, "G", "must stand alone on its line"),
     ("G00 X" + "9" * 400, 1, 5, "X" + "9" * 400, "out of range"),
     ("G00 X1.\nG04 X" + "9" * 400 + ".", 2, 5, "X" + "9" * 400 + ".", "out of range"),
 ]

@@ -44,6 +44,41 @@ def test_what_follows_the_closing_percent_is_not_read(text, moves, after):
     assert program.after_end == after
 
 
+BODY = ("O1234\nG90 G21 G17\nG00 X0 Y0 Z1.\nG01 Z-0.1 F100.\nG02 X2. Y0 I1. J0\n"
+        "G00 Z1.\nM30\n%\n")
+
+
+@pytest.mark.parametrize("leader", [
+    "% TITLE", "%O1234 (PART)", "%   lens mould, rev B: 50% feed ;", "%\tG01 X99. #1=2 /",
+])
+@pytest.mark.parametrize("eol", ["\n", "\r\n"])
+def test_the_leader_section_after_the_opening_percent_is_not_read(leader, eol):
+    # B-64014EN/03, 2.5: from the opening % to the first end of block is the leader section,
+    # which a FANUC ignores; it had been refused as words beside the %
+    program = parse_program((leader + "\n" + BODY).replace("\n", eol), "titled.nc")
+    plain = parse_program(("%\n" + BODY).replace("\n", eol), "titled.nc")
+    assert program == plain
+    assert program.lines.tolist() == plain.lines.tolist()
+    assert program.lines[0] == 4 and program.lines[-1] == 7
+    assert program.number == 1234
+    assert program.targets[1, 2] == pytest.approx(-1e-4, abs=1e-15)
+    assert program.targets[-2, 0] == pytest.approx(2e-3, abs=1e-15)
+
+
+def test_after_a_leader_section_problems_keep_their_line_and_column():
+    with pytest.raises(NCProgramError) as error:
+        parse_program("\n%O1 (TITLE)\nG90 G21\nG00 X0 Q#5\n%\n", "titled.nc")
+    assert (error.value.line, error.value.column) == (4, 8)
+    # only the opening % has a leader: the text beside a later % is still refused
+    with pytest.raises(NCProgramError, match="must stand alone") as error:
+        parse_program("G90 G21\nG00 X0\n% G00\n")
+    assert (error.value.line, error.value.column) == (3, 3)
+    # a lone CR ends the leader too, and is refused, not taken as part of the title
+    with pytest.raises(NCProgramError, match="carriage return") as error:
+        parse_program("% TITLE\rG90 G21\rG00 X1.\r%")
+    assert (error.value.line, error.value.column) == (1, 8)
+
+
 def test_an_iso_colon_program_number_reads_as_an_o_number():
     program = parse_program(":1234\nG90 G21\nM98 P2000\nM30\n:2000\nG01 X1. F100.\nM99\n")
     assert program.number == 1234

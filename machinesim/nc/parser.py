@@ -36,7 +36,7 @@ from machinesim.nc.program import (
     axis_values,
     work_offsets_si,
 )
-from machinesim.nc.tape import end_of_program
+from machinesim.nc.tape import end_of_program, without_leader
 from machinesim.nc.tooltable import ToolTable, tool_table
 from machinesim.nc.words import (
     INCREMENT_INCH_M,
@@ -297,7 +297,7 @@ def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, t
     data = data.removeprefix(UTF8_BOM)  # Windows editors start UTF-8 files with one
     if data.rstrip().endswith(DOS_EOF):  # DOS editors and DNC senders end files with one
         data = data.rstrip().rstrip(DOS_EOF)
-    data, after_end = end_of_program(data)
+    data, after_end = end_of_program(without_leader(data))
     reader = Reader(data, errors, source, offsets, integer_input, tool_table(tools),
                      tolerance, fast, axis_values(reference or {}, source=source))
     reader.after_end = after_end

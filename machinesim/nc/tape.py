@@ -1,4 +1,5 @@
-"""Where a FANUC control stops reading an NC file: at the % that ends the program.
+"""What a FANUC control reads of an NC file: not the leader section after the opening %,
+and nothing after the % that ends the program.
 
 FANUC Series 16i/18i Operator's Manual (B-63524EN/01, 8. "Data input/output", "File
 format", http://cncmanuals.com/fanuc/150/series-16i-18i-160i-180i-tb-operators-manual/page/675):
@@ -6,11 +7,37 @@ format", http://cncmanuals.com/fanuc/150/series-16i-18i-160i-180i-tb-operators-m
 the % that opens a file is the start mark and the next one ends it; in a file that does not
 open with one, the first % ends it. What follows is not read (another program a DNC sender
 appended, an editor's leftovers), and had been read here as more of the program.
+
+FANUC Fast Ethernet / Data Server Operator's Manual (B-64014EN/03, 2.5 "NC program
+format"): the text from the opening % up to the first end of block is the leader section,
+and the control ignores it. Posts and DNC senders put a title there (``% TITLE``,
+``%O1234 (PART)``); it had been refused as words beside the %.
 """
 
 from __future__ import annotations
 
-__all__ = ["end_of_program"]
+__all__ = ["end_of_program", "without_leader"]
+
+
+def without_leader(data: bytes) -> bytes:
+    """``data`` with the text after the opening % on its line (the leader section) blanked,
+    one space a character, so that every line keeps its number and every column its place.
+
+    The opening % is the first character of the first line that holds anything but white
+    space. The leader ends at the line's LF, or at a CR before it: a lone CR (old Mac line
+    ends) is left for the reader to refuse, where taking it for part of the leader would
+    drop a whole program written on one such "line".
+    """
+    start = len(data) - len(data.lstrip())
+    if not data[start:start + 1] == b"%":
+        return data
+    end = len(data)
+    for mark in (b"\n", b"\r"):
+        found = data.find(mark, start)
+        if found >= 0:
+            end = min(end, found)
+    blanks = b" " * len(data[start + 1:end].decode("utf-8", "replace"))
+    return data[:start + 1] + blanks + data[end:]
 
 
 def end_of_program(data: bytes) -> tuple[bytes, int | None]:
