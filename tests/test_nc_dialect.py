@@ -177,6 +177,20 @@ def test_arc_refusals_are_located():
         assert info.value.line == 2 and info.value.column is not None
 
 
+def test_a_centre_word_of_another_plane_is_not_said_to_be_read_in_this_one():
+    # K in a G17 arc had been told it is "only read with G02/G03 in G17 (centre words I J)"
+    with pytest.raises(NCProgramError) as info:
+        parse_program("G17 G00 X0 Y0\nG02 X1. K1.", "p.nc")
+    message = str(info.value)
+    assert "in G17 (centre words" not in message
+    assert "G17: I J, G18: K I, G19: J K; this block is in G17" in message
+    assert message.endswith("and with G81-G83 (repeats)")
+    with pytest.raises(NCProgramError) as info:
+        parse_program("G18 G00 X0 Z0\nG02 X1. J1.", "p.nc")
+    assert any(problem.key == "J1." and "this block is in G18" in str(problem)
+               for problem in info.value.problems)
+
+
 def test_arc_in_increments_and_incremental_end():
     # G91: the end is incremental; I J always are. Integer input: I-10000 = 10 um.
     program = parse_program("G00 X0.01 Y0\nG91 G03 X-10000 Y10000 I-10000 J0 F1",

@@ -308,14 +308,18 @@ class Block:
             "K": (arc and "K" in plane_words) or cycle is not None,
             "L": 98 in codes,
         }
+        # each plane's own centre words: K in a G17 arc had been told it is read "with
+        # G02/G03 in G17 (centre words I J)", where it is not
+        centres = ("G02/G03 as an arc centre word of its plane ("
+                   + ", ".join(f"{name}: {' '.join(words)}" for name, (_, words) in PLANES.items())
+                   + f"; this block is in {state.plane})")
         reads = {
             "P": "G04 (dwell, ms), G82 (dwell at the bottom), G08 (P1/P0) and M98 (program)",
             "Q": "G83 (peck depth) and G05.1 (Q1/Q0)",
             "R": "G02/G03 (radius), G81-G83 (R plane) and G05.1",
-            "I": f"G02/G03 in {state.plane} (centre words {' '.join(plane_words)})",
-            "J": f"G02/G03 in {state.plane} (centre words {' '.join(plane_words)})",
-            "K": f"G02/G03 in {state.plane} (centre words {' '.join(plane_words)}) and "
-                 "G81-G83 (repeats)",
+            "I": centres,
+            "J": centres,
+            "K": f"{centres} and with G81-G83 (repeats)",
             "L": "M98 (repeat count)",
         }
         for letter, ok in allowed.items():
