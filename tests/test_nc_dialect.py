@@ -191,6 +191,17 @@ def test_a_centre_word_of_another_plane_is_not_said_to_be_read_in_this_one():
                for problem in info.value.problems)
 
 
+def test_l_in_a_canned_cycle_is_refused_naming_k():
+    # Smid's "G99 G82 R2.5 Z-3.4 P200 F200.0 L0 (OR K0 ON SOME CONTROLS)": L had been
+    # refused as an M98 word only, without the K that this reader takes for it
+    with pytest.raises(NCProgramError, match="repeat count is K here") as info:
+        parse_program("G21 G90 G00 X7. Y7. Z25.\nG99 G82 R2.5 Z-3.4 P200 F200. L0\nG80", "p.nc")
+    assert (info.value.line, info.value.key) == (2, "L0")
+    with pytest.raises(NCProgramError) as info:
+        parse_program("G21 G90 G00 X0 Y0 Z25.\nG01 X5. F100. L3", "p.nc")
+    assert "K" not in str(info.value).split("key 'L3': ")[1]
+
+
 def test_arc_in_increments_and_incremental_end():
     # G91: the end is incremental; I J always are. Integer input: I-10000 = 10 um.
     program = parse_program("G00 X0.01 Y0\nG91 G03 X-10000 Y10000 I-10000 J0 F1",

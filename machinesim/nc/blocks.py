@@ -320,7 +320,9 @@ class Block:
             "I": centres,
             "J": centres,
             "K": f"{centres} and with G81-G83 (repeats)",
-            "L": "M98 (repeat count)",
+            "L": "M98 (repeat count)" + (
+                "; a canned cycle's repeat count is K here, as on current FANUC controls "
+                "(older ones, and LinuxCNC, write L): write K" if cycle is not None else ""),
         }
         for letter, ok in allowed.items():
             if letter in single and not ok:
