@@ -343,7 +343,12 @@ REFUSALS = [
      "\\(G92\\) is not supported: it would move every later axis word"),
     ("G00 X0\n/G01 X1. F10.", 2, 1, "/", "block delete '/' is not read"),
     ("G00 X0\n/2 G01 X1. F10.", 2, 1, "/2", "block delete '/2' is not read"),
-    ("G00 #1", 1, 5, "#", "unexpected character '#'"),
+    ("G00 #1", 1, 5, "#", "macro variable '#1': macro variables and expressions"),
+    ("#101=[#1*2.] (CUSTOM MACRO B)", 1, 1, "#", "are not read: post the program with"),
+    # one problem for the whole expression: it had been ten, one for each letter of 'sqrt'
+    ("G00 X0 Y0\nG02 X600. I[300 + [100 * [0.00099 * sqrt[2]]]]", 2, 11,
+     "I[300 + [100 * [0.00099 * sqrt[2]]]]", "^[^\n]*is a macro expression: macro"),
+    ("G01 X#146/2+#148 F100.", 1, 5, "X#146/2+#148", r"X#146/2\+#148 is a macro expression"),
     ("G00 10", 1, 5, "10", "without an address letter"),
     ("G01 X0 F0", 1, 8, "F0", "feed must be > 0"),
     ("G01 X0 F-5", 1, 8, "F-5", "feed must be > 0"),

@@ -118,6 +118,13 @@ def tokenize(raw: str, source: str, line: int, *,
                      letter + special.group())
                 i = special.end()
                 continue
+            if match is None and i < n and raw[i] in "#[":
+                stop = _end_of_expression(raw, i)
+                fail(f"{letter}{brief(raw[i:stop])} is a macro expression: {_MACROS}; "
+                     f"expected a number, e.g. {_example(letter)}", start + 1,
+                     letter + raw[i:stop])
+                i = stop
+                continue
             if match is None or (end < n and raw[end] in "0123456789.+-"):
                 stop = _end_of_garbage(raw, i)
                 tail = raw[i:stop]
@@ -152,6 +159,9 @@ def tokenize(raw: str, source: str, line: int, *,
             fail(f"decimal comma in {raw[start:stop]!r}: NC numbers take a decimal point "
                  "(X1.5, not X1,5); the comma would split the number in two", i + 1, ",")
             i = stop
+        elif c == "#":  # a macro variable: '#1=2.', '#101=[#1*2]'
+            fail(f"macro variable {brief(raw[i:].rstrip())!r}: {_MACROS}", i + 1, c)
+            break
         elif c == "\ufffd":  # what the reader decodes a byte that is not UTF-8 to
             fail("a byte that is not UTF-8 (a Latin-1 or Windows-1252 character, such as a "
                  "no-break space, saved by an editor in that encoding); expected ASCII "
@@ -185,6 +195,31 @@ def _after_end_of_block(raw: str, semicolon: int, fail) -> None:
          "';' on the same line are read as a comment, but ';' ends a block in FANUC text; "
          "put each block on its own line (or write the comment in parentheses, e.g. "
          "'(T1 tool)')", i + 1, key)
+
+
+#: Why '#' and '[' are refused where they stand: a program with them computes its numbers
+#: when it runs (FANUC custom macro B; LinuxCNC's expressions), and a reader that does not
+#: evaluate them cannot read them ('I[300 + [100 * sqrt[2]]]' had been ten problems, one for
+#: each letter of 'sqrt', each asking for digits).
+_MACROS = ("macro variables and expressions (#1, [#1 * 2], custom macro B or LinuxCNC's "
+           "expressions) are not read: post the program with their values")
+
+
+def _end_of_expression(raw: str, i: int) -> int:
+    """The end of the macro expression starting at ``raw[i]`` ('#' or '['): its brackets
+    closed (or the line's end), then what is not a blank, letter or comment."""
+    depth = 0
+    while i < len(raw):
+        if raw[i] == "[":
+            depth += 1
+        elif raw[i] == "]":
+            depth -= 1
+        elif raw[i] in "(;" and depth == 0:
+            break
+        if depth == 0 and raw[i] not in "#[]0123456789.+-*/":
+            break
+        i += 1
+    return i
 
 
 def _end_of_garbage(raw: str, i: int) -> int:
