@@ -361,7 +361,12 @@ REFUSALS = [
     ("G00 X0\nO1", 2, 1, "O1", "must be the first block"),
     ("O1\nM30\nO2\nM99\nO2\nM99", 5, 1, "O2", "subprogram O0002 is defined twice"),
     ("O1 G00", 1, 4, "G00", "must stand alone"),
-    ("G00 X0\n% G00", 2, 3, "G", "must stand alone on its line"),
+    ("G00 X0\n% G00", 2, 3, "G00", "must stand alone on its line"),
+    # one problem for the text, not one for each of its letters (MPCNC posts write such
+    # lines as comments): 'vfd enable' had been nine problems
+    ("G00 X0\n% vfd enable (MPCNC)", 2, 3, "vfd enable",
+     "^[^\n]*found 'vfd enable' after it: past the opening one, a '%' ends the program"),
+    ("G00 X0 %", 1, 8, "%", "found it after words"),
     ("G00 X" + "9" * 400, 1, 5, "X" + "9" * 400, "out of range"),
     ("G00 X1.\nG04 X" + "9" * 400 + ".", 2, 5, "X" + "9" * 400 + ".", "out of range"),
 ]

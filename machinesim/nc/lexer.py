@@ -93,10 +93,15 @@ def tokenize(raw: str, source: str, line: int, *,
             i += 1
         elif c == "%" or percent:
             if words or percent:
-                fail("'%' must stand alone on its line (comments aside)", i + 1, c)
-                if c != "%":
-                    i = _end_of_garbage(raw, i + 1)
-                    continue
+                # one problem for the line's text, not one for each of its letters
+                stop = raw.find("(", i + 1)
+                rest = raw[i:stop if stop > i else n].rstrip(_BLANK)
+                found = f"{brief(rest)!r} after it" if percent else "it after words"
+                fail(f"'%' must stand alone on its line (comments aside), found {found}: "
+                     "past the opening one, a '%' ends the "
+                     "program, and a FANUC control reads nothing after it; make the text a "
+                     "comment '(...)' or remove the '%'", i + 1, rest)
+                break
             percent = True
             i += 1
         elif c in _LETTERS or c == ":":
