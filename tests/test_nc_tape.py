@@ -73,6 +73,11 @@ def test_after_a_leader_section_problems_keep_their_line_and_column():
     with pytest.raises(NCProgramError, match="must stand alone") as error:
         parse_program("G90 G21\nG00 X0\n% G00\n")
     assert (error.value.line, error.value.column) == (3, 3)
+    # so does a ';': a program written on the % line after one is refused, not dropped
+    with pytest.raises(NCProgramError, match="would be lost") as error:
+        parse_program("% TITLE;G21 G90;G00 X1.;M30;")
+    assert (error.value.line, error.value.column, error.value.key) == (1, 9, "G21")
+    assert parse_program("% LENS MOULD; REV B\nG00 X1.\n%\n").targets[0, 0] == 1e-3
     # a lone CR ends the leader too, and is refused, not taken as part of the title
     with pytest.raises(NCProgramError, match="carriage return") as error:
         parse_program("% TITLE\rG90 G21\rG00 X1.\r%")

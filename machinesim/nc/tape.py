@@ -24,15 +24,16 @@ def without_leader(data: bytes) -> bytes:
     one space a character, so that every line keeps its number and every column its place.
 
     The opening % is the first character of the first line that holds anything but white
-    space. The leader ends at the line's LF, or at a CR before it: a lone CR (old Mac line
-    ends) is left for the reader to refuse, where taking it for part of the leader would
-    drop a whole program written on one such "line".
+    space. The leader ends at the line's LF, or at a CR or ';' before it: a lone CR (old Mac
+    line ends) and blocks after a ';' (FANUC's end of block as printed) are left for the
+    reader to refuse, where taking them for part of the leader would drop a whole program
+    written on one such "line" and read it as empty.
     """
     start = len(data) - len(data.lstrip())
     if not data[start:start + 1] == b"%":
         return data
     end = len(data)
-    for mark in (b"\n", b"\r"):
+    for mark in (b"\n", b"\r", b";"):
         found = data.find(mark, start)
         if found >= 0:
             end = min(end, found)
