@@ -64,7 +64,8 @@ def add_errors(a: ErrorModel, b: ErrorModel,
     ----------
     a, b : ErrorModel
         ``b`` must carry no tool or workpiece setting (a setting belongs to a set-up, not to
-        the machine).
+        the machine); the sum keeps ``a``'s `ErrorModel.source` and what that source wrote
+        of the settings.
     travel : mapping of axis letter to (lower, upper), m or rad, optional
         The machine's travels, needed only to tabulate a polynomial plus a table.
 
@@ -98,7 +99,13 @@ def add_errors(a: ErrorModel, b: ErrorModel,
         grid = np.unique(np.concatenate(grids)) if grids else None
         component[axis] = {symbol: _add_component(ta.get(symbol), tb.get(symbol), grid)
                            for symbol in symbols}
-    return ErrorModel(a.tool, a.workpiece, location, component, a.tool_geometry)
+    # the settings are a's as its file wrote them: a refusal of one (a nose radius the tool
+    # cannot take) names that file and key; the summed location and component values are not
+    # what any file wrote
+    settings = {k: v for k, v in a.written.items()
+                if k.startswith(("tool.", "tool_geometry.", "workpiece."))}
+    return ErrorModel(a.tool, a.workpiece, location, component, a.tool_geometry,
+                      source=a.source, written=settings)
 
 
 def _add_component(ea, eb, grid) -> ComponentError:

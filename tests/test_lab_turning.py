@@ -238,3 +238,19 @@ def test_a_turning_move_of_more_than_a_day_is_noted():
     (note,) = [n for n in slow.notes if "takes" in n]
     assert "line 4" in note and "1.08e+10 s" in note and "F0.0001" in note
     assert not [n for n in fast.notes if "takes" in n]
+
+
+def test_a_nose_radius_the_tool_cannot_take_names_its_file_in_a_lab_with_background(
+        tmp_path, program):
+    # the lab adds its background to the injected errors: the sum kept neither the file nor
+    # the key as written, so the refusal named neither (the scenario's --errors, default lab)
+    path = tmp_path / "errors.toml"
+    path.write_text("[tool_geometry]\nnose_radius_um = -1000\n", encoding="utf-8")
+    lab = machinesim.Lab("sts_lathe", machinesim.ErrorModel.from_toml(path),
+                         realism=machinesim.Realism.lab())
+    with pytest.raises(InputError) as refused:
+        lab.turn(program, TOOL, top=1e-6)
+    assert str(refused.value) == (
+        f"{path}, key 'tool_geometry.nose_radius_um': the error model's "
+        "tool_geometry.nose_radius_um = -1000 does not fit the RoundNoseTool (nose_radius must "
+        "be a positive finite number, got -0.0008 m (-0.8 mm))")
