@@ -456,6 +456,19 @@ def test_a_file_not_in_utf8_gives_the_line_and_column_of_the_byte(tmp_path):
         ErrorModel.from_toml(path)
 
 
+def test_a_pipe_or_a_device_is_refused_before_it_is_read(tmp_path):
+    # a named pipe with no writer hung the reading for ever, /dev/zero filled the memory
+    # (15 GB in 100 s: scenarios/sts_turning.py --errors /dev/zero) and /dev/null read as
+    # a model without errors
+    fifo = tmp_path / "errors.toml"
+    os.mkfifo(fifo)
+    for path in (Path(os.devnull), fifo):
+        with pytest.raises(ErrorModelError) as info:
+            ErrorModel.from_toml(path)
+        assert str(info.value) == (f"{path}: not a regular file (a pipe, socket or device); "
+                                   "expected a TOML file")
+
+
 def test_missing_file_is_named(tmp_path):
     path = tmp_path / "absent.toml"
     with pytest.raises(ErrorModelError, match=re.escape(str(path)) + ".*cannot read"):

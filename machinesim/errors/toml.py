@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import re
+import stat
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -91,11 +92,18 @@ def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[st
     name the file, and the line and column.
 
     A UTF-8 byte order mark at the start (which some Windows editors write, and TOML does
-    not allow) is dropped, as most tools do: lines and columns count from after it.
+    not allow) is dropped, as most tools do: lines and columns count from after it. A path
+    that is not a regular file (a named pipe, ``/dev/zero``) is refused before it is read.
     """
     source = str(path)
     text = None
     try:
+        mode = os.stat(path).st_mode
+        if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+            # a FIFO with no writer blocks for ever, /dev/zero fills the memory: refuse before
+            # reading (a folder gets the reading's own "Is a directory")
+            raise error("not a regular file (a pipe, socket or device); expected a TOML file",
+                        source=source)
         text = Path(path).read_bytes().decode("utf-8-sig")
         data = tomllib.loads(text)
     except OSError as exc:
