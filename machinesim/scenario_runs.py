@@ -300,6 +300,24 @@ def parse_floats(text: str, count: int, option: str) -> list[float]:
     return values
 
 
+def errors_file(path):
+    """The `machinesim.errors.ErrorModel` of ``--errors`` ``path``, with a note on stderr
+    (``NAME: note: ...``, one line each) where the file reads as no error at all, as
+    ``machinesim cut`` notes it in its report: a file without keys (every error zero), and
+    values below anything a machine shows (`machinesim.errors.toml.below_any_machine`: SI
+    written under a key in um or urad). The run goes on: both can be meant."""
+    from machinesim.errors import ErrorModel
+    from machinesim.errors.toml import below_any_machine
+
+    errors = ErrorModel.from_toml(path)
+    name = Path(sys.argv[0]).stem or "scenario"
+    notes = [] if errors.written else [
+        "sets no error (no key in any section): the machine as built, every error zero"]
+    for line in [*notes, *below_any_machine(errors)]:
+        print(f"{name}: note: {path}: {line}", file=sys.stderr, flush=True)
+    return errors
+
+
 def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, float],
                     machine: str | None = None):
     """The error model a scenario injects: ``--errors`` (or ``defaults`` without it), with

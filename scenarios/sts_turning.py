@@ -42,6 +42,7 @@ from machinesim.procedures.sts_plans import PAPER, TABLE5
 from machinesim.procedures.sts_turning import CASES, STSTurning
 from machinesim.report import ReportFolder
 from machinesim.scenario_runs import (
+    errors_file,
     progress_printer,
     realism_from,
     realism_options,
@@ -68,7 +69,7 @@ def main() -> None:
 
 def report(args) -> None:
     began = time.perf_counter()
-    errors = ErrorModel.from_toml(args.errors) if args.errors is not None else default_errors()
+    errors = errors_file(args.errors) if args.errors is not None else default_errors()
     realism = realism_from(args).without("lateral_resolution", "registration",
                                          "stage_positioning")
 

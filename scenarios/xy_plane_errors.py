@@ -48,6 +48,7 @@ from machinesim.procedures.xy_plane_measurements import (
 )
 from machinesim.report import ReportFolder
 from machinesim.scenario_runs import (
+    errors_file,
     progress_printer,
     realism_from,
     realism_options,
@@ -68,7 +69,8 @@ def main() -> None:
 
 def report(args) -> None:
     began = time.perf_counter()
-    errors = ErrorModel.from_toml(args.errors if args.errors is not None else DEFAULT_ERRORS)
+    errors = (errors_file(args.errors) if args.errors is not None
+              else ErrorModel.from_toml(DEFAULT_ERRORS))
     realism = realism_from(args).without("registration")
     ideal = not realism.instrument_noise
 

@@ -198,3 +198,24 @@ def test_every_paper_scenario_refuses_a_report_folder_it_cannot_write_before_it_
             assert len(lines) == 1 and f"--out '{out}'" in lines[0], (script, result.stderr)
             assert "cannot make the report folder" in lines[0]
     assert taken.read_text() == "a file, not a folder"
+
+
+def test_papers_003_004_note_an_errors_file_that_reads_as_no_error(tmp_path):
+    """An ``--errors`` value in SI under a key in um (4 pm of EX0C) ran as no error without a
+    word, as ``machinesim cut`` notes it; the note comes as the file is read (here before
+    the file's axis A, on neither machine, is refused)."""
+    path = tmp_path / "errors.toml"
+    path.write_text("[location.C]\nEX0C_um = 4e-6\n[location.A]\nEB0A_urad = 1.0\n")
+    for script, machine, axes in (("xy_plane_errors.py", "grooving_4axis", "X, Y, Z, C"),
+                                  ("sts_turning.py", "sts_lathe", "X, Z, C")):
+        result = subprocess.run([sys.executable, str(ROOT / "scenarios" / script), "--errors",
+                                 str(path), "--out", str(tmp_path / "out")],
+                                capture_output=True, text=True, check=False, cwd=ROOT,
+                                timeout=120)
+        name = script.removesuffix(".py")
+        assert result.returncode == 2, result.stderr
+        assert result.stderr.splitlines() == [
+            f"{name}: note: {path}: location.C.EX0C_um = 4e-06 is at most 4e-12 m, below "
+            "anything a machine shows: was it written in m, where the key asks um?",
+            f"{name}: error: {path}, key 'location.A': axis 'A' is not on this machine; it has "
+            f"{axes} (machine {machine}, {ROOT / 'models' / machine}.urdf)"]
