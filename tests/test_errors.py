@@ -454,6 +454,13 @@ def test_a_file_not_in_utf8_gives_the_line_and_column_of_the_byte(tmp_path):
     path.write_bytes("[tool]\noffset_um = [1.0, 0.0, 0.0]\n".encode("utf-16"))
     with pytest.raises(ErrorModelError, match=r"line 1, column 1: .*UTF-16"):
         ErrorModel.from_toml(path)
+    # a PNG given for the TOML (zero bytes, not UTF-16 text) was called UTF-16 from Notepad
+    path.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00\x01\x00")
+    with pytest.raises(ErrorModelError) as info:
+        ErrorModel.from_toml(path)
+    assert str(info.value) == (f"{path}, line 1, column 1: not UTF-8 text (byte 0x89, invalid "
+                               "start byte: binary data, not a text file); expected UTF-8 "
+                               "TOML: save the file as UTF-8")
 
 
 def test_a_pipe_or_a_device_is_refused_before_it_is_read(tmp_path):

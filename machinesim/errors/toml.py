@@ -87,6 +87,16 @@ def below_any_machine(model: ErrorModel) -> list[str]:
     return lines
 
 
+def _utf16_text(data: bytes) -> bool:
+    """True when ``data`` reads as UTF-16 text (printable, tabs and line ends): a file with
+    zero bytes that does not (a PNG, an .npz given for the TOML) is binary, not UTF-16."""
+    try:
+        text = data.decode("utf-16")
+    except UnicodeDecodeError:
+        return False
+    return all(c.isprintable() or c in "\t\r\n" for c in text)
+
+
 def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[str, Any]:
     """The tables of the TOML file `path`; errors (an ``error``, default `ErrorModelError`)
     name the file, and the line and column.
@@ -112,9 +122,13 @@ def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[st
         before = exc.object[:exc.start]  # valid UTF-8, after any byte order mark
         line = before.count(b"\n") + 1
         column = len(before[before.rfind(b"\n") + 1:].decode("utf-8")) + 1
-        why = ("UTF-16, as Windows Notepad's 'Unicode' saves it" if b"\x00" in exc.object
-               else "a Latin-1 or Windows-1252 character such as a micro or degree sign, "
-                    "saved in that encoding")
+        if b"\x00" not in exc.object:  # UTF-16 of ASCII has one in every other byte
+            why = ("a Latin-1 or Windows-1252 character such as a micro or degree sign, saved "
+                   "in that encoding")
+        elif _utf16_text(exc.object):
+            why = "UTF-16, as Windows Notepad's 'Unicode' saves it"
+        else:
+            why = "binary data, not a text file"
         raise error(f"not UTF-8 text (byte 0x{exc.object[exc.start]:02x}, {exc.reason}: {why});"
                     " expected UTF-8 TOML: save the file as UTF-8", source=source, line=line,
                     column=column) from None
