@@ -164,3 +164,20 @@ def test_the_scenario_names_its_errors_file_when_a_value_does_not_fit(tmp_path):
     assert (f"sts_turning: error: {path}, key 'tool_geometry.nose_radius_mm': the error "
             "model's tool_geometry.nose_radius_mm = -1 does not fit the RoundNoseTool"
             ) in result.stderr
+
+
+def test_a_test_sphere_cut_far_deeper_than_programmed_is_refused_naming_the_depth():
+    # the workpiece set 500 um up (scenarios/sts_turning.py --errors with [workpiece]
+    # delta_um = [0, 0, 500]): the fit stepped where its model is NaN and scipy's ValueError
+    # "array must not contain infs or NaNs" ended the scenario in a traceback
+    lab = machinesim.Lab("sts_lathe", {"workpiece": {"delta_um": [0.0, 0.0, 500.0]}},
+                         noise=False)
+    with pytest.raises(InputError) as refused:
+        STSTurning().measure(lab)
+    assert str(refused.value) == (
+        "key 'tool_test': tool_test: tool error fit did not converge: it stepped to where its "
+        "model is not finite (a map far from the design's form); the turned test sphere lies "
+        "-500 um from the design's heights (median over the window; the tool-error model "
+        "takes a sphere cut a few um deep). A tool or workpiece set that far in Z (tool.z, "
+        "workpiece.z) cuts so, or a tool far off the spindle axis (tool.x, tool.y): set them "
+        "within a few um first")

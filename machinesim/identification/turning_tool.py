@@ -183,7 +183,13 @@ def identify_tool_errors(design: Design, x, y, heights, *, core_step: float,
     p = np.zeros(5)
     for _ in range(4):  # fit, mark the core (points well above the fit), refit without it
         fitted = cut
-        result = least_squares(residual, p, args=(cut,), x_scale=[1e-6, 1e-6, 1e-8, 1e-6, 1e-5])
+        try:
+            result = least_squares(residual, p, args=(cut,),
+                                   x_scale=[1e-6, 1e-6, 1e-8, 1e-6, 1e-5])
+        except ValueError:  # scipy's "array must not contain infs or NaNs", from the Jacobian
+            raise NotConvergedError("tool error fit did not converge: it stepped to where its "
+                                    "model is not finite (a map far from the design's "
+                                    "form)") from None
         if not result.success:
             raise NotConvergedError(f"tool error fit did not converge: {result.message}")
         p = result.x

@@ -34,7 +34,7 @@ import numpy as np
 
 from machinesim.cam import spiral as sp
 from machinesim.cutting.lathe import turning_tool
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, NotConvergedError
 from machinesim.experiment import Evaluation, Figure, Identified
 from machinesim.identification.turning_tool import fit_centre_height, identify_tool_errors
 from machinesim.metrology.fits import roughness_sa
@@ -127,10 +127,18 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
         lateral[piece] = interferometer.lateral_sigma
     sphere, plane = maps["sphere"], maps["plane"]
     _refuse_unseen_cut(sphere, label)
-    found = identify_tool_errors(TEST_SPHERE.design(), sphere.x, sphere.y, sphere.z,
-                                 core_step=TEST_SPHERE.core_step,
-                                 aperture=TEST_SPHERE.read_half_width,
-                                 lateral_sigma=lateral["sphere"])
+    try:
+        found = identify_tool_errors(TEST_SPHERE.design(), sphere.x, sphere.y, sphere.z,
+                                     core_step=TEST_SPHERE.core_step,
+                                     aperture=TEST_SPHERE.read_half_width,
+                                     lateral_sigma=lateral["sphere"])
+    except NotConvergedError as exc:
+        raise InputError(f"{label}: {exc}; the turned test sphere lies "
+                         f"{_depth_from_design(sphere) / UM:+.4g} um from the design's heights "
+                         "(median over the window; the tool-error model takes a sphere cut a "
+                         "few um deep). A tool or workpiece set that far in Z (tool.z, "
+                         "workpiece.z) cuts so, or a tool far off the spindle axis (tool.x, "
+                         "tool.y): set them within a few um first", key="tool_test") from None
     reads = (f"the fit reads dx {found.dx / UM:.2f} um, dR {found.d_radius / UM:.2f} um, "
              f"|dy| {found.dy_abs / UM:.2f} um")
     if found.dy_abs > CORE_LIMIT:
@@ -179,6 +187,15 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
                                lateral_sigma=lateral["plane"])
     return ToolTest(found.dx, centre.dy, found.d_radius, found.dy_abs, dx_std=found.dx_std,
                     dy_std=centre.dy_std, d_radius_std=found.d_radius_std)
+
+
+def _depth_from_design(sphere) -> float:
+    """Median height (m) of the test sphere's map less the design's, within its read radius
+    (negative: cut deeper than programmed)."""
+    gx, gy = np.meshgrid(sphere.x, sphere.y)
+    rho = np.hypot(gx, gy)
+    inside = (rho < TEST_SPHERE.read_half_width) & np.isfinite(sphere.z)
+    return float(np.median(sphere.z[inside] - TEST_SPHERE.design()(rho[inside], 0.0)))
 
 
 def _refuse_unseen_cut(sphere, label: str) -> None:
