@@ -337,7 +337,7 @@ def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, flo
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
 
-    base = (ErrorModel.from_toml(args.errors) if args.errors is not None
+    base = (errors_file(args.errors) if args.errors is not None
             else ErrorModel().with_parameters(defaults))
     if machine is not None and args.errors is not None:
         load_machine(machine).check_errors(base)  # names the --errors file, then the machine

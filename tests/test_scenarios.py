@@ -200,6 +200,25 @@ def test_every_paper_scenario_refuses_a_report_folder_it_cannot_write_before_it_
     assert taken.read_text() == "a file, not a folder"
 
 
+def test_papers_000_001_002_note_an_errors_file_that_reads_as_no_error(tmp_path, capsys,
+                                                                        monkeypatch):
+    """Their --errors go through `injected_errors`, which read the file without the note
+    papers 003 and 004 give: an empty file ran the paper with every error zero, no word."""
+    from types import SimpleNamespace
+
+    from machinesim.scenario_runs import injected_errors
+
+    path = tmp_path / "empty.toml"
+    path.write_text("# nothing yet\n")
+    monkeypatch.setattr(sys, "argv", ["workpiece_setting.py"])
+    model = injected_errors(SimpleNamespace(errors=str(path)), {"tool.x": 1e-6}, {},
+                            "robonano_a0ib")
+    assert model.parameters() == {name: 0.0 for name in model.parameters()}
+    assert capsys.readouterr().err.splitlines() == [
+        f"workpiece_setting: note: {path}: sets no error (no key in any section): the machine "
+        "as built, every error zero"]
+
+
 def test_papers_003_004_note_an_errors_file_that_reads_as_no_error(tmp_path):
     """An ``--errors`` value in SI under a key in um (4 pm of EX0C) ran as no error without a
     word, as ``machinesim cut`` notes it; the note comes as the file is read (here before
