@@ -47,7 +47,7 @@ def example_dict() -> dict:
                 "EXX_um": [-3.5, 0.0, 4.1],
                 "EYX_poly_um_mm": [0.0, 0.0, 2e-5],
             },
-            "C": {"position_deg": [-180.0, 0.0, 180.0], "ECC_arcsec": [1.0, 0.0, -1.0]},
+            "C": {"position_deg": [-180.0, 0.0, 180.0], "ECC_arcsec": [1.0, 0.0, 1.0]},
         },
     }
 
@@ -123,7 +123,7 @@ def test_example_gives_the_hand_converted_si_values(load):
     ecc = model.component["C"]["ECC"]
     assert_allclose(ecc.positions, [-math.pi, 0.0, math.pi], rtol=rtol, atol=0.0)
     # 1 arcsec = pi / 648000 rad.
-    assert_allclose(ecc.values, [4.84813681109536e-6, 0.0, -4.84813681109536e-6], rtol=rtol)
+    assert_allclose(ecc.values, [4.84813681109536e-6, 0.0, 4.84813681109536e-6], rtol=rtol)
     assert model.component["C"]["ECC"].span() == (ecc.positions[0], ecc.positions[-1])
     assert eyx.span() is None
     assert not model.is_zero
@@ -827,6 +827,37 @@ def test_a_rotary_axis_s_table_of_a_turn_repeats_each_turn_and_a_polynomial_is_r
         "EZC_poly_mm_deg": [0.0, 0.0, 7e-3]}}})
     with pytest.raises(ErrorModelError, match="component.C.EZC.*does not repeat each turn"):
         machine.tool_pose(q[:1], growing)
+
+
+def test_a_table_of_a_turn_whose_values_a_turn_apart_differ_is_refused():
+    # the README's example had ECC 1 arcsec at -180 deg and -1 arcsec at 180 deg: read each
+    # turn, the error jumped 2 arcsec where C passed 180 deg, ~53 nm at the grooves' tool
+    # points, and the planner raised a C move's sub-steps from 1842 by 10 % a round towards
+    # a million (a chord cannot follow a step), silent for more than 15 minutes
+    import numpy as np
+
+    import machinesim
+
+    machine = machinesim.load_machine("robonano_a0ib")
+    q = np.zeros((1, len(machine.axes)))
+    stepped = ErrorModel.from_dict({"component": {"C": {
+        "position_deg": [-180.0, 0.0, 180.0], "ECC_arcsec": [1.0, 0.0, -1.0]}}})
+    with pytest.raises(ErrorModelError, match=r"component\.C\.ECC.*values a turn apart "
+                       r"differ: 1 arcsec at -180 deg, -1 arcsec at 180 deg"):
+        machine.tool_pose(q, stepped)
+    with pytest.raises(ErrorModelError, match=r"component\.C\.ECC.*a turn apart"):
+        machine.error_jacobian(q, stepped, ["component.C.ECC[0]"])
+    # a table over more than a turn: its values a turn apart inside it are compared (EZC 0
+    # at -360 deg, 5 nm at 0 deg; read at -370 deg as at -10 deg, it stepped 5 nm at -360)
+    longer = ErrorModel.from_dict({"component": {"C": {
+        "position_deg": [-360.0, -260.0, 0.0, 40.0], "EZC_nm": [0.0, 5.0, 5.0, 2.0]}}})
+    with pytest.raises(ErrorModelError, match=r"0 um at -360 deg, 0\.005 um at 0 deg"):
+        machine.tool_pose(q, longer)
+    # values that agree (the example's now), or agree to round-off, are read each turn
+    for ends in ([1.0, 0.0, 1.0], [1.0, 0.0, 1.0 + 1e-9]):
+        closed = ErrorModel.from_dict({"component": {"C": {
+            "position_deg": [-180.0, 0.0, 180.0], "ECC_arcsec": ends}}})
+        machine.tool_pose(q, closed)
 
 
 def test_positions_without_a_table_are_refused_not_dropped():
