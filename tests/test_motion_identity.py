@@ -227,6 +227,27 @@ def test_a_corner_of_an_error_table_is_held_to_the_tolerance(machines):
     assert chord_deviation(machine, errors, np.zeros((1, 3)), turn.q) <= tolerance
 
 
+def test_a_corner_of_a_table_of_a_whole_turn_is_held_each_turn(machines):
+    """The same L in a table of a whole turn (back to 0 at 360 deg), turned a turn later, C
+    from 360 to 374 deg: the table repeats each turn, and so does its corner at 5.85 deg
+    (365.85 deg here). Only the table's own breakpoints were checked, so the midpoints alone
+    left this chord 1.30 nm from the corner, and the rapid from 0 to -720 deg, whose one
+    chord has the table's 0 at its ends and its midpoint, 2.83 um; they hold 1 nm now."""
+    machine = machines["sts_lathe"]
+    errors = machinesim.ErrorModel.from_dict({"component": {"C": {
+        "position_deg": [0.0, 5.85, 14.0, 30.0, 360.0], "EXC_um": [0.0, 2.0, 2.0, 2.0, 0.0],
+        "EYC_um": [0.0, 0.0, 2.0, 2.0, 0.0]}}})
+    tolerance = 1e-9
+    for first in (0.0, 360.0, -720.0):
+        program = ProgramBuilder(source="corner").rapid(
+            X=0.0, Z=0.0, C=math.radians(first)).linear(
+            C=math.radians(first + 14.0), feed_mm_per_min=100.0).build()
+        new = plan(program, machine, errors, chord_tolerance=tolerance)
+        for turn in (s for s in new.segments if s.q[-1, 2] != s.q[0, 2]):
+            worst = chord_deviation(machine, errors, np.zeros((1, 3)), turn.q)
+            assert worst <= tolerance, (first, turn.q[[0, -1], 2], worst)
+
+
 def test_a_straight_move_follows_a_straightness_table(machines):
     """X travelling 300 mm on a machine whose EYX table bends at -100, 0 and +100 mm: the
     tool's path is the table, not the chord between the ends, so the move is split like a

@@ -123,13 +123,17 @@ class ToolPaths:
         self.points = points
         self.k = len(points)
         self._edge_only = self.k == 1 and not np.any(points)
-        # (axis, breakpoints) of every error table: the path has a corner where an axis
-        # crosses one, which the sub-step midpoints may miss
+        # (axis, breakpoints, period) of every error table: the path has a corner where an
+        # axis crosses one, which the sub-step midpoints may miss; a rotary axis's table of a
+        # whole turn repeats each turn (`machinesim.errors.turns.each_turn`), and so do its
+        # breakpoints, its ends among them (period None: the table's own only)
         self.corners = tuple(
-            (var.axis, np.asarray(var.component.positions, dtype=np.float64))
+            (var.axis, np.asarray(var.component.positions, dtype=np.float64),
+             getattr(var.component, "period", None))
             for var in binding.varying
             if getattr(var.component, "kind", None) == "table"
-            and len(var.component.positions) > 2)
+            and (len(var.component.positions) > 2
+                 or getattr(var.component, "period", None) is not None))
 
     def positions(self, q: list[np.ndarray], groups, keep_angles: bool = False):
         """x, y, z of every point at every row (each (N,) or (N, k)).
@@ -430,10 +434,17 @@ def _corner_failures(paths, start, delta, steps, failed, tolerance) -> np.ndarra
     tolerance). Each crossing is evaluated with the ends of its sub-step.
     """
     moves, fractions = [], []
-    for axis, knots in paths.corners:
+    for axis, knots, period in paths.corners:
         d = delta[:, axis]
         live = np.flatnonzero((d != 0.0) & (steps > 0) & ~failed)
         if not live.size:
+            continue
+        if period is not None:
+            move, at = _each_turn(knots, period, start[live, axis], d[live])
+            f = (at - start[live[move], axis]) / d[live[move]]
+            inside = (f > 0.0) & (f < 1.0)
+            moves.append(live[move[inside]])
+            fractions.append(f[inside])
             continue
         f = (knots[None, :] - start[live, axis][:, None]) / d[live][:, None]
         row, col = np.nonzero((f > 0.0) & (f < 1.0))
@@ -445,6 +456,29 @@ def _corner_failures(paths, start, delta, steps, failed, tolerance) -> np.ndarra
     f = np.concatenate(fractions)
     if not move.size:
         return move
+    if len(move) * paths.k > 4 * _ROWS_PER_BATCH:  # many turns of a spindle: in parts
+        per = max(1, 4 * _ROWS_PER_BATCH // paths.k)
+        bad = [_off_chord(paths, start, delta, steps, move[a:a + per], f[a:a + per],
+                          tolerance) for a in range(0, len(move), per)]
+        return np.unique(np.concatenate(bad))
+    return np.unique(_off_chord(paths, start, delta, steps, move, f, tolerance))
+
+
+def _each_turn(knots, period, start, d):
+    """Every breakpoint ``knots + k * period`` inside each move's range [start, start + d]:
+    (move index, axis value) pairs."""
+    low, high = np.minimum(start, start + d), np.maximum(start, start + d)
+    first = np.ceil((low[:, None] - knots[None, :]) / period)
+    count = np.maximum(np.floor((high[:, None] - knots[None, :]) / period) - first + 1, 0)
+    count = count.astype(np.int64).ravel()
+    pair = np.repeat(np.arange(count.size), count)
+    turn = (np.arange(pair.size) - np.repeat(np.cumsum(count) - count, count)
+            + first.ravel()[pair])
+    return pair // len(knots), knots[pair % len(knots)] + turn * period
+
+
+def _off_chord(paths, start, delta, steps, move, f, tolerance) -> np.ndarray:
+    """The moves (with repeats) whose corner at fraction ``f`` lies off its chord."""
     n = steps[move]
     j = np.minimum(np.floor(f * n), n - 1)
     rows = len(move)
@@ -460,7 +494,7 @@ def _corner_failures(paths, start, delta, steps, failed, tolerance) -> np.ndarra
     total = sum((off[i] - along * chord[i]) ** 2 for i in range(3))
     if np.ndim(total) == 2:
         total = total.max(axis=1)
-    return np.unique(move[np.sqrt(total) > tolerance])
+    return move[np.sqrt(total) > tolerance]
 
 
 def _fewest(paths, start, delta, tolerance, moves, lo) -> np.ndarray:
