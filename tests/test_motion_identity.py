@@ -248,6 +248,43 @@ def test_a_corner_of_a_table_of_a_whole_turn_is_held_each_turn(machines):
             assert worst <= tolerance, (first, turn.q[[0, -1], 2], worst)
 
 
+def test_a_table_of_a_whole_turn_that_steps_where_it_wraps_is_refused_at_once(machines):
+    """ECC 1 arcsec at -180 deg and -1 at 180 (the README's example before): repeated each
+    turn, C's error steps 2 arcsec where C passes 180 deg, so the edge 10 mm off the C axis
+    jumps r * 2 sin(dECC / 2) = 96.96 nm, and no chord follows it (the planner raised the
+    sub-steps by 10 % a round towards a million, for more than 15 minutes on the grooves).
+    Refused naming the line and the step; a move that only reaches 180 deg has no step, and
+    the table with its ends equal is planned."""
+    machine = machines["sts_lathe"]
+    arcsec = math.pi / 648000
+
+    def errors(last):
+        return machinesim.ErrorModel.from_dict({"component": {"C": {
+            "position_deg": [-180.0, 0.0, 180.0], "ECC_arcsec": [1.0, 0.0, last]}}})
+
+    def program(*turns):
+        b = ProgramBuilder(source="wrap").rapid(X=0.01, Z=0.0, C=0.0)
+        for c in turns:
+            b.linear(C=math.radians(c), feed_mm_per_min=100.0)
+        return b.build()
+
+    step = 0.01 * 2 * math.sin(2 * arcsec / 2)
+    assert f"{step * 1e9:.3g}" == "97"
+    for turns, line in (((200.0,), 2), ((180.0, 250.0), 3), ((-90.0, -190.0), 3),
+                        ((100.0, 900.0), 3)):
+        with pytest.raises(NCProgramError, match=(
+                r"C passes -?\d+ deg, where component\.C\.ECC, a table of a whole turn "
+                r"repeated each turn, wraps .*\(4\.84814 urad at -180 deg, -4\.84814 urad "
+                r"at 180 deg\): the tool path steps 97 nm there")) as info:
+            plan(program(*turns), machine, errors(-1.0), chord_tolerance=1e-9)
+        assert info.value.line == line, turns
+    reached = plan(program(180.0), machine, errors(-1.0), chord_tolerance=1e-9)
+    closed = plan(program(200.0, 900.0), machine, errors(1.0), chord_tolerance=1e-9)
+    for trajectory, model in ((reached, errors(-1.0)), (closed, errors(1.0))):
+        for turn in (s for s in trajectory.segments if s.q[-1, 2] != s.q[0, 2]):
+            assert chord_deviation(machine, model, np.zeros((1, 3)), turn.q) <= 1e-9
+
+
 def test_a_straight_move_follows_a_straightness_table(machines):
     """X travelling 300 mm on a machine whose EYX table bends at -100, 0 and +100 mm: the
     tool's path is the table, not the chord between the ends, so the move is split like a

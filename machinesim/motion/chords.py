@@ -134,6 +134,14 @@ class ToolPaths:
             if getattr(var.component, "kind", None) == "table"
             and (len(var.component.positions) > 2
                  or getattr(var.component, "period", None) is not None))
+        # (axis, position, side, period, name) where a table of a whole turn whose values a
+        # turn apart differ wraps: the path steps there, and a whole number of turns beyond
+        # (side -1: below the table's first position, +1: above its last; `wrap_steps`)
+        self.wraps = tuple(
+            (var.axis, float(at), side, var.component.period, _name(binding, var))
+            for var in binding.varying
+            if getattr(var.component, "period", None) is not None
+            for at, side in _unclosed(var.component))
 
     def positions(self, q: list[np.ndarray], groups, keep_angles: bool = False):
         """x, y, z of every point at every row (each (N,) or (N, k)).
@@ -208,6 +216,80 @@ class ToolPaths:
                 rot[i][i1] = _add(_mul(col1, c), _mul(col2, s))
                 rot[i][i2] = _sub(_mul(col2, c), _mul(col1, s))
         return rot, pos
+
+
+def _unclosed(component) -> list[tuple[float, int]]:
+    """The ends of a table of a whole turn (or more) whose value differs from the table's a
+    turn inside, with the side beyond them where the repeated table is read (-1 below the
+    first position, +1 above the last): where it steps."""
+    first, last = component.positions[0], component.positions[-1]
+    inside = component.component.evaluate(np.array([first + component.period,
+                                                    last - component.period]))
+    return [(at, side) for at, side, value, there in (
+        (first, -1, component.values[0], inside[0]), (last, 1, component.values[-1], inside[1]))
+        if value != there]
+
+
+def _name(binding, var) -> str:
+    """The error model's name of a bound component error (``component.C.ECC``)."""
+    for letter, symbols in binding.errors.component.items():
+        for symbol, component in symbols.items():
+            if component is var.component.component:
+                return f"component.{letter}.{symbol}"
+    return "a table"
+
+
+def wrap_steps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
+               tolerance: float) -> list[tuple[int, int, float, float, str]]:
+    """Moves on which the path steps by more than ``tolerance``: where a rotary axis passes
+    (or leaves) the place a table of a whole turn wraps with values a turn apart that
+    differ (`machinesim.errors.turns.each_turn` repeats it each turn). No chord follows a
+    step, so no number of sub-steps holds such a move (the README's example, ECC 1 arcsec at
+    -180 deg and -1 at 180, stepped the grooves' path 53 nm at C = 180 deg; the sub-steps
+    were raised by 10 % a round from 1842 towards a million, silent for more than 15 min).
+
+    Returns (move, axis, axis value, step in m, table name) of each, in move order. The step
+    is the largest distance over the tool points between the path just before and just
+    after the place (1e-10 of the angle apart), within the move.
+    """
+    found = []
+    slack = 1e-12
+    for axis, at, side, period, name in paths.wraps:
+        d = delta[:, axis]
+        live = np.flatnonzero(d != 0.0)
+        if not live.size:
+            continue
+        begin, end = start[live, axis], start[live, axis] + d[live]
+        low, high = np.minimum(begin, end), np.maximum(begin, end)
+        first = np.ceil((low - at) / period - slack)
+        last = np.floor((high - at) / period + slack)
+        # only the turns beyond the table's end: inside it the table is read as it is
+        if side < 0:
+            last = np.minimum(last, 0.0)
+        else:
+            first = np.maximum(first, 0.0)
+        count = np.maximum(last - first + 1, 0)
+        count = count.astype(np.int64)
+        which = np.repeat(np.arange(live.size), count)
+        if not which.size:
+            continue
+        turn = np.arange(which.size) - np.repeat(np.cumsum(count) - count, count)
+        x = at + (first[which] + turn) * period
+        step = 1e-10 * np.maximum(1.0, np.abs(x))
+        move = live[which]
+        sides = [np.clip(x + sign * step, low[which], high[which]) for sign in (-1.0, 1.0)]
+        f = np.concatenate([(side - start[move, axis]) / d[move] for side in sides])
+        rows = len(move)
+        q = [np.concatenate([start[move, i], start[move, i]]) + f * np.concatenate(
+            [delta[move, i], delta[move, i]]) for i in range(start.shape[1])]
+        pos = paths.positions(q, _blocks(2 * rows))
+        gap = sum((p[:rows] - p[rows:]) ** 2 for p in pos[:3])
+        if np.ndim(gap) == 2:
+            gap = gap.max(axis=1)
+        gap = np.sqrt(gap)
+        for r in np.flatnonzero(gap > tolerance).tolist():
+            found.append((int(move[r]), axis, float(x[r]), float(gap[r]), name))
+    return sorted(found)
 
 
 def _grouped_cos_sin(value: np.ndarray, groups):

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from machinesim.exceptions import InputError, NCProgramError
-from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps
+from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps, wrap_steps
 from machinesim.motion.trajectory import IdealServo, ServoModel, Trajectory
 from machinesim.nc.program import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
 from machinesim.tolerances import CHORD_TOLERANCE_M
@@ -166,6 +168,23 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         turning = np.flatnonzero(turns & (kinds[:stop] != KIND_DWELL))
         if turning.size:
             paths = ToolPaths(machine, errors, points)
+            stepped = wrap_steps(paths, starts[turning], delta[turning], chord_tolerance)
+            if stepped:
+                move, axis, at, size, name = stepped[0]
+                symbol = name.rpartition(".")[2]
+                table = errors.component[axes[axis]][symbol]
+                unit, per = ("urad", 1e-6) if symbol[1] in "ABC" else ("um", 1e-6)
+                ends = [f"{v / per:.6g} {unit} at {math.degrees(x):g} deg" for x, v in
+                        ((table.positions[0], table.values[0]),
+                         (table.positions[-1], table.values[-1]))]
+                raise NCProgramError(
+                    f"{axes[axis]} passes {math.degrees(at):g} deg, where {name}, a table of a "
+                    f"whole turn repeated each turn, wraps with values a turn apart that "
+                    f"differ ({ends[0]}, {ends[1]}): the tool path steps {size * 1e9:.3g} nm "
+                    f"there, more than the chord "
+                    f"tolerance {chord_tolerance * 1e9:g} nm, and no chord follows a step; give "
+                    "the table the same value a turn apart",
+                    source=source, line=int(lines[turning[move]]))
             found, failed = substeps(paths, starts[turning], delta[turning], chord_tolerance)
             if failed.any():
                 bad = int(turning[np.argmax(failed)])
