@@ -11,16 +11,17 @@ a round from 1842 towards a million, minutes a round. It is refused now, at once
     .venv/bin/python benchmarks/wrapped_tables.py [--repeat 3] [--limit 300]
         [--root SOURCE_TREE ...]   (e.g. an old checkout exported with git archive)
 
-Median of --repeat runs (time inside the process, cut() alone), 2 cores shared with other
-jobs, 2026-11-30, old = 21eaf5d exported with git archive:
+Median of --repeat 5 runs (time inside the process, cut() alone), 2 cores shared with
+other jobs, 2026-11-30, old = 21eaf5d exported with git archive (--limit 60):
 
-    case     old (21eaf5d)                       new (3642c4d)
-    stepped  not done in 120 s (3 of 3 runs)     refused in 0.232 s (line 23, 53 nm step)
-    closed   1.44 s (5 runs; 1.59 s of 3)        3.37 s (5 runs; 2.76 s of 3)
+    case     old (21eaf5d)                      new
+    stepped  not done in 60 s (5 of 5 runs)     refused in 0.063 s (line 23, 53 nm step)
+    closed   1.50 s                             1.54 s
 
-Same removed volume closed (4.94446e6 um^3) and the same sub-step counts (2027 for each of
-the three quarter turns, plan 0.57 s both); where the closed case's extra 1-2 s goes was
-not found before the deadline.
+The same removed volume closed (4.94446e6 um^3) and the same sub-step counts (2027 for each
+of the three quarter turns). A first measurement, on a machine loaded by three other jobs,
+had put the closed case at 1.44 s old and 3.37 s new; profiled warm (0.71 s both, 0.62 s of
+it planning) and re-run cold, the two trees take the same time.
 """
 
 from __future__ import annotations
