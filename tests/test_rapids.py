@@ -138,3 +138,36 @@ def test_the_holders_found_are_the_latest_that_hold_as_a_scan_of_every_box_finds
         found = earlier._holding(int(earlier.reached[k]), q_high, q_low)
         assert found.tolist() == every.tolist()
     assert holders == 0 or max(counts) == holders
+
+
+@pytest.mark.parametrize("few", [False, True])
+def test_the_rapids_listed_in_a_random_plunge_field_are_those_brute_force_finds(
+        monkeypatch, few):
+    # plunges 20 um deep with a flat end mill 0.1 mm across, at random places 50 um apart
+    # or less, each begun by a rapid down to a random depth: above the top, into the cuts
+    # already made around it (what they took, taken away one sweep at a time,
+    # `_Earlier.subtract`) or below them (a crash). With ``few``, the recent sweeps taken
+    # first and the count past which sweeps are sorted by meeting are made small, so the
+    # rapids go through every branch
+    if few:
+        monkeypatch.setattr(rapids, "RAPID_RECENT_SWEEPS", 2)
+        monkeypatch.setattr(rapids, "RAPID_EARLIER_UNION", 3)
+    rng = np.random.default_rng(11)
+    b = ProgramBuilder(1).rapid(X=1.0 * MM, Y=1.0 * MM, Z=50 * UM)
+    for _ in range(24):
+        x, y = rng.uniform(1.0 * MM, 1.15 * MM, 2)
+        b.rapid(X=x, Y=y).rapid(Z=rng.choice([10.0, -15.0, -19.0, -25.0]) * UM)
+        b.linear(Z=-20 * UM, feed_mm_per_min=100.0).rapid(Z=50 * UM)
+    program = b.build()
+    seen = []
+    real = rapids.rapids_that_cut
+
+    def both(*args):
+        seen.append((real(*args), brute_force_lines(*args)))
+        return seen[-1][0]
+
+    monkeypatch.setattr("machinesim.cutting.program.rapids_that_cut", both)
+    _, report = cut(program, "grooving_4axis", tool="flat:0.05", stock="block:3x3x1")
+    fast, slow = seen[0]
+    assert fast == slow == report.rapids_that_cut
+    assert 2 <= len(fast) <= 20  # some crash, some do not

@@ -104,7 +104,7 @@ def rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
         if hit.volume() <= RAPID_CUT_VOLUME_M3 or sweeps.held(sweep, hit, tol):
             continue
         earlier = sweeps.overlapping(sweep, hit)
-        hit = hit - sweeps.union(earlier[-RAPID_RECENT_SWEEPS:])
+        hit = sweeps.subtract(hit, earlier[-RAPID_RECENT_SWEEPS:])
         if hit.volume() <= RAPID_CUT_VOLUME_M3:
             continue
         earlier = earlier[:-RAPID_RECENT_SWEEPS]
@@ -112,7 +112,7 @@ def rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
             earlier = sweeps.meeting(earlier, hit)
         fresh = sweeps.near_between(upto, sweep)
         if _unite_alone(len(earlier), len(fresh)):
-            hit = hit - sweeps.union(earlier)
+            hit = sweeps.subtract(hit, earlier)
         else:
             # A rapid that meets many earlier sweeps (one across a field of grooves): one
             # union of every sweep before it whose box meets the material's (no other can
@@ -256,6 +256,26 @@ class _Earlier:
         return np.array([k for k in sweeps
                          if (solid := self.solid(k, keep=True)) is not None
                          and (solid ^ hit).volume() > 0.0], dtype=np.int64)
+
+    def subtract(self, hit, sweeps: np.ndarray):
+        """``hit`` less the union of ``sweeps``' solids, each taken away in turn (those whose
+        boxes share the most of ``hit``'s first) until no more than `RAPID_CUT_VOLUME_M3` is
+        left, which the rest can only make less. Uniting them first cost more than all the
+        differences: in a field of plunges 0.1 mm apart with a flat:0.2, each rapid down
+        into the cut met some 100 sweeps whose flat ends and walls coincide, and their union
+        took 0.6 s a rapid (benchmarks/rapids.py --case plunge)."""
+        low, high = np.array(hit.bounding_box()).reshape(2, 3)
+        at = np.searchsorted(self.reached, sweeps)
+        shared = np.prod(np.clip(np.minimum(self.high[at], high)
+                                 - np.maximum(self.low[at], low), 0.0, None), axis=1)
+        for k in sweeps[np.argsort(-shared, kind="stable")].tolist():
+            solid = self.solid(k)
+            if solid is None:
+                continue
+            hit = hit - solid
+            if hit.volume() <= RAPID_CUT_VOLUME_M3:
+                break
+        return hit
 
     def union(self, sweeps: np.ndarray, start=None):
         """The union of ``sweeps``' solids (and ``start``), or an empty solid."""
