@@ -119,14 +119,11 @@ def test_a_retract_up_its_own_plunge_far_from_work_zero_cuts_nothing():
     assert report.rapids_that_cut == (10,)
 
 
-def test_rapids_across_many_grooves_are_judged_alike_by_both_unions(monkeypatch):
+def test_rapids_across_many_grooves_are_judged_against_those_they_meet():
     # 70 grooves 5 um deep along X, 20 um apart; then a rapid 3 um deep along Y across all
     # of them, which cuts the ridges between them (listed), and a rapid 5 um deep back along
     # groove 35's bottom, over what that groove cut (not listed). Each overlaps 70 earlier
-    # sweeps: judged by one union per rapid, and by the union of every earlier sweep grown
-    # from rapid to rapid (each forced by `_unite_alone`): the same lines.
-    from machinesim.cutting import rapids
-
+    # sweeps, past `RAPID_EARLIER_UNION`: those whose solids meet it are taken away.
     b = ProgramBuilder(1).rapid(X=0.5 * MM, Y=0.3 * MM, Z=0.1 * MM)
     for k in range(70):
         b.rapid(X=-0.5 * MM, Y=0.3 * MM + k * 20 * UM).rapid(Z=-5 * UM)
@@ -138,13 +135,8 @@ def test_rapids_across_many_grooves_are_judged_alike_by_both_unions(monkeypatch)
     across, along = moves[-6].line, moves[-2].line
     assert moves[-6].target["Y"] == pytest.approx(1.69 * MM)
     assert moves[-2].target["X"] == pytest.approx(3 * MM)
-    lines = {}
-    for alone in (True, False):
-        monkeypatch.setattr(rapids, "_unite_alone", lambda n, fresh, alone=alone: alone)
-        _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
-        lines[alone] = report.rapids_that_cut
-    assert lines[True] == lines[False]
-    assert across in lines[True] and along not in lines[True]
+    _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    assert across in report.rapids_that_cut and along not in report.rapids_that_cut
 
 
 def test_a_rapid_one_earlier_sweep_holds_is_judged_without_a_boolean(monkeypatch):

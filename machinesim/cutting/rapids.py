@@ -39,10 +39,9 @@ if TYPE_CHECKING:
 __all__ = ["rapids_that_cut"]
 
 #: A rapid that reaches the stock is checked against the sweeps before it that could have
-#: taken away what it meets (boxes overlap, and past this many, solids meet); up to this many
-#: (or up to as many as growing the union below would take) are united for it alone, more
-#: (a rapid across a field of grooves) are taken from one union of every earlier sweep,
-#: grown from rapid to rapid: both exact.
+#: taken away what it meets: those whose boxes overlap it, and past this many (a rapid
+#: across a field of grooves, a V tool whose box is far wider than its tip) those whose
+#: solids meet it.
 RAPID_EARLIER_UNION = 64
 #: The sweeps just before a rapid are taken away from what it meets first, alone: when they
 #: leave nothing (a retract at the end of a cut), no union of the earlier ones is needed.
@@ -70,9 +69,9 @@ def rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
     with the stock (inside the ``roi`` windows when given: the part is cut there alone), less
     the earlier sweeps that reached the stock and could have taken some of it away (`_Earlier`):
     first the last `RAPID_RECENT_SWEEPS` of them alone (a retract at the end of a cut is then
-    done), then the rest together, or, past `RAPID_EARLIER_UNION` of them and when fewer
-    sweeps would grow it, one union of every earlier sweep whose box meets the material's,
-    grown from rapid to rapid: exact, and free for rapids that stay clear.
+    done), then the rest (past `RAPID_EARLIER_UNION` of them, those whose solids meet what
+    is left), each taken away in turn (`_Earlier.subtract`): exact, and free for rapids that
+    stay clear.
     """
     candidates = reached[moves.sweep_rapid[reached]]
     if not len(candidates):
@@ -90,12 +89,11 @@ def rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
     shape = _Thick(tool)
     material = (stock.manifold if roi is None
                 else clip_to(stock, np.reshape(roi, (-1, 4))).manifold)
-    sweeps = _Earlier(shape, poses, moves, reached, material)
+    sweeps = _Earlier(shape, poses, moves, reached)
     # a vertex of what a rapid met may stand this far outside a sweep that holds it (the
     # engine's tolerance for a sweep inside another, `containment`)
     tol = CONTAINED_REL * (float(np.abs(np.array(material.bounding_box())).max()) or 1.0)
     found = []
-    covered, upto = None, 0  # the union of the sweeps in ``sweeps.near`` before ``upto``
     for sweep in np.sort(candidates):
         swept = sweeps.solid(sweep)
         if swept is None:
@@ -110,17 +108,7 @@ def rapids_that_cut(stock: Part, tool, poses: np.ndarray, moves: _Moves,
         earlier = earlier[:-RAPID_RECENT_SWEEPS]
         if len(earlier) > RAPID_EARLIER_UNION:
             earlier = sweeps.meeting(earlier, hit)
-        fresh = sweeps.near_between(upto, sweep)
-        if _unite_alone(len(earlier), len(fresh)):
-            hit = sweeps.subtract(hit, earlier)
-        else:
-            # A rapid that meets many earlier sweeps (one across a field of grooves): one
-            # union of every sweep before it whose box meets the material's (no other can
-            # take away what the rapid met), grown from the last such rapid's, instead of a
-            # union per rapid that grows as the square of the sweeps
-            covered = sweeps.union(fresh, covered)
-            upto = sweep
-            hit = hit - covered
+        hit = sweeps.subtract(hit, earlier)
         if _material_left(hit):
             found.append(int(moves.sweep_line[sweep]))
     return tuple(dict.fromkeys(found))
@@ -146,15 +134,10 @@ class _Earlier:
     every earlier box for each rapid grew as the square of the rapids) and, where many boxes
     overlap, by meeting."""
 
-    def __init__(self, shape, poses: np.ndarray, moves: _Moves, reached: np.ndarray,
-                 material) -> None:
+    def __init__(self, shape, poses: np.ndarray, moves: _Moves, reached: np.ndarray) -> None:
         self.shape, self.poses, self.moves = shape, poses, moves
         self.reached = np.sort(reached)
         self.low, self.high = shape.bounds(poses, moves.sweep_start[self.reached])
-        m_low, m_high = np.array(material.bounding_box()).reshape(2, 3)
-        #: sweeps (of those reached) whose boxes meet the material's
-        self.near = self.reached[np.all(self.high >= m_low, axis=1)
-                                 & np.all(self.low <= m_high, axis=1)]
         self.grid = BoxGrid(self.low, self.high)
         self._solids: dict[int, object] = {}
         self._recent: OrderedDict[int, object] = OrderedDict()
@@ -187,10 +170,6 @@ class _Earlier:
         planes = vertices_and_planes(solid)[1:]
         _keep_recent(self._planes, sweep, planes)
         return planes
-
-    def near_between(self, first: int, sweep: int) -> np.ndarray:
-        """The sweeps in ``near`` from ``first`` up to (not with) ``sweep``."""
-        return self.near[np.searchsorted(self.near, first):np.searchsorted(self.near, sweep)]
 
     def _before(self, sweep: int, low: np.ndarray, high: np.ndarray) -> np.ndarray:
         """Positions (in ``reached``, ascending) of the reached sweeps before ``sweep`` whose
@@ -277,11 +256,10 @@ class _Earlier:
                 break
         return hit
 
-    def union(self, sweeps: np.ndarray, start=None):
-        """The union of ``sweeps``' solids (and ``start``), or an empty solid."""
+    def union(self, sweeps: np.ndarray):
+        """The union of ``sweeps``' solids, or an empty solid (`benchmarks/rapids.py` times
+        `subtract` against taking it away)."""
         solids = [s for s in (self.solid(k) for k in sweeps) if s is not None]
-        if start is not None:
-            solids.insert(0, start)
         if not solids:
             return manifold3d.Manifold()
         return manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
@@ -293,12 +271,6 @@ def _keep_recent(kept: OrderedDict, key: int, value) -> None:
     kept[key] = value
     if len(kept) > RAPID_KEPT_SOLIDS:
         kept.popitem(last=False)
-
-
-def _unite_alone(n_earlier: int, n_fresh: int) -> bool:
-    """Whether a rapid is judged against the union of the ``n_earlier`` sweeps overlapping
-    it alone, rather than against the running union, which ``n_fresh`` sweeps would grow."""
-    return n_earlier <= max(RAPID_EARLIER_UNION, n_fresh)
 
 
 class _Thick:
