@@ -25,6 +25,8 @@ NOT_RUN = {
                     "before; tests/test_campaign*.py run campaigns",
     "procedures/tool_setting_6axis.md": "ten seeded runs of the procedure, about 90 s; "
                                         "tests/test_tool_setting_6axis*.py run it",
+    "procedures/workpiece_setting.md": "sixteen seeded runs of the grooves load, 3-10 min; "
+                                       "tests/test_workpiece_setting*.py run the procedure",
     "viewer.md": "serves a page until Ctrl-C; tests/test_viewer.py serves and stops one",
 }
 
