@@ -79,6 +79,22 @@ def brute_force_lines(stock, tool, poses, moves, reached, roi=None):
     return tuple(dict.fromkeys(found))
 
 
+def listed_both_ways(monkeypatch, program, tool: str, stock: str):
+    """The rapids that cut of ``program`` cut on grooving_4axis: as the check lists them, as
+    `brute_force_lines` (the definition) lists them, and as the report gives them."""
+    seen = []
+    real = rapids.rapids_that_cut
+
+    def both(*args):
+        seen.append((real(*args), brute_force_lines(*args)))
+        return seen[-1][0]
+
+    monkeypatch.setattr("machinesim.cutting.program.rapids_that_cut", both)
+    _, report = cut(program, "grooving_4axis", tool=tool, stock=stock)
+    assert len(seen) == 1
+    return (*seen[0], report.rapids_that_cut)
+
+
 def test_the_rapids_listed_are_those_brute_force_finds_in_a_random_program(monkeypatch):
     # short cuts 20 um deep at random places on a 5 mm block, joined by rapids: down to
     # 10 um above the top, or to a random depth (into the cut just made, or below it: a
@@ -95,19 +111,8 @@ def test_the_rapids_listed_are_those_brute_force_finds_in_a_random_program(monke
         if rng.random() < 0.3:
             b.rapid(X=rng.uniform(0.5, 4.5) * MM, Y=rng.uniform(0.5, 4.5) * MM, Z=-5 * UM)
         b.rapid(Z=0.5 * MM)
-    program = b.build()
-    seen = []
-    real = rapids.rapids_that_cut
-
-    def both(*args):
-        seen.append((real(*args), brute_force_lines(*args)))
-        return seen[-1][0]
-
-    monkeypatch.setattr("machinesim.cutting.program.rapids_that_cut", both)
-    _, report = cut(program, "grooving_4axis", tool="ball:0.1", stock="block:5x5x1")
-    assert len(seen) == 1
-    fast, slow = seen[0]
-    assert fast == slow == report.rapids_that_cut
+    fast, slow, listed = listed_both_ways(monkeypatch, b.build(), "ball:0.1", "block:5x5x1")
+    assert fast == slow == listed
     assert 3 <= len(fast) < 14 * 2  # some crash, some do not: the comparison means something
 
 
@@ -158,16 +163,6 @@ def test_the_rapids_listed_in_a_random_plunge_field_are_those_brute_force_finds(
         x, y = rng.uniform(1.0 * MM, 1.15 * MM, 2)
         b.rapid(X=x, Y=y).rapid(Z=rng.choice([10.0, -15.0, -19.0, -25.0]) * UM)
         b.linear(Z=-20 * UM, feed_mm_per_min=100.0).rapid(Z=50 * UM)
-    program = b.build()
-    seen = []
-    real = rapids.rapids_that_cut
-
-    def both(*args):
-        seen.append((real(*args), brute_force_lines(*args)))
-        return seen[-1][0]
-
-    monkeypatch.setattr("machinesim.cutting.program.rapids_that_cut", both)
-    _, report = cut(program, "grooving_4axis", tool="flat:0.05", stock="block:3x3x1")
-    fast, slow = seen[0]
-    assert fast == slow == report.rapids_that_cut
+    fast, slow, listed = listed_both_ways(monkeypatch, b.build(), "flat:0.05", "block:3x3x1")
+    assert fast == slow == listed
     assert 2 <= len(fast) <= 20  # some crash, some do not
