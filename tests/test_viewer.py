@@ -827,3 +827,15 @@ def test_a_program_that_misses_the_stock_is_warned_on_the_page_and_on_stderr(tmp
         assert ("warning: the program removed no material" in err) == missed
         assert ("<b>warning:</b> the program removed no material"
                 in page.read_text(encoding="utf-8")) == missed
+
+
+def test_a_report_folder_not_yet_written_is_no_such_folder(tmp_path):
+    # docs/viewer.md's `machinesim view reports/tool_rotation_arm/` before the scenario ran
+    # said "unknown machine 'reports/tool_rotation_arm/'", as if a machine name were misspelt
+    missing = str(tmp_path / "reports" / "tool_rotation_arm") + "/"
+    with pytest.raises(InputError) as caught:
+        run([missing, "--html", str(tmp_path / "x.html")])
+    assert str(caught.value) == (
+        f"{missing}: no such file or folder; expected a machine name (see 'machinesim "
+        "machines'), a machine's .urdf, a part .ply or a report folder")
+    assert not list(tmp_path.glob("*.html"))

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -185,6 +186,13 @@ def _scene(args, budget: int):
     from machinesim.machines import list_machines, load_machine
     from machinesim.viewer.machine import machine_scene
 
+    if (not target.exists() and target.suffix.lower() != ".urdf"
+            and ("/" in args.target or os.sep in args.target)):
+        # a path is no machine name: `view reports/x/` before the scenario wrote it said
+        # 'unknown machine'
+        raise InputError(f"{args.target}: no such file or folder; expected a machine name "
+                         "(see 'machinesim machines'), a machine's .urdf, a part .ply or a "
+                         "report folder")
     if (target.is_file() and target.suffix.lower() != ".urdf"
             and args.target not in list_machines()):
         # an existing file is no machine name: say what a file may be, not 'unknown machine'
