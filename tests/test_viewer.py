@@ -839,3 +839,27 @@ def test_a_report_folder_not_yet_written_is_no_such_folder(tmp_path):
         f"{missing}: no such file or folder; expected a machine name (see 'machinesim "
         "machines'), a machine's .urdf, a part .ply or a report folder")
     assert not list(tmp_path.glob("*.html"))
+
+
+def test_a_part_with_no_extent_in_x_or_y_is_refused_naming_its_file(tmp_path):
+    # a PLY whose triangles all stand in the plane y = 0 was refused as "the part has no
+    # extent in x or y: bounds [0.0, 0.0] .. [1.0, 0.0] m", naming no file: in a report
+    # folder of several parts, which one?
+    sliver = tmp_path / "sliver.ply"
+    sliver.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\n"
+                      "property double y\nproperty double z\nelement face 1\n"
+                      "property list uchar int vertex_indices\nend_header\n"
+                      "0 0 0\n0.001 0 0\n0 0 0.001\n3 0 1 2\n")
+    expected = (f"{sliver}: the part spans x 0 .. 1 mm, y 0 .. 0 mm: expected an extent in "
+                "both x and y, a top surface to map")
+    with pytest.raises(InputError) as caught:
+        run([str(sliver), "--html", str(tmp_path / "x.html")])
+    assert str(caught.value) == expected
+    folder = tmp_path / "report"
+    folder.mkdir()
+    stock_from_spec("block:1x1x1").export_ply(folder / "a.ply")
+    (folder / "sliver.ply").write_bytes(sliver.read_bytes())
+    with pytest.raises(InputError) as caught:
+        run([str(folder), "--html", str(tmp_path / "x.html")])
+    assert str(caught.value) == expected.replace(str(sliver), str(folder / "sliver.ply"))
+    assert not list(tmp_path.glob("*.html"))

@@ -120,6 +120,7 @@ def part_scene(surface, nominal=None, report=None, title: str = "machined part",
     max_triangles : int
     """
     vertices, triangles = mesh_of(_load(surface))
+    _check_extent(vertices, surface)
     scene = Scene(title)
     parts = {"the part": (surface, vertices)}
     if nominal is not None:
@@ -183,6 +184,8 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
     if nominal is not None:
         scene.notes.append(f"coloured by deviation from {nominal_path.name}")
     meshes = [read_ply(p) for p in shown]
+    for p, (vertices, _) in zip(shown, meshes, strict=True):
+        _check_extent(vertices, p)
     parts = {p.name: (p, mesh[0]) for p, mesh in zip(shown, meshes, strict=True)}
     if nominal is not None:
         parts[nominal_path.name] = (nominal_path, nominal[0])
@@ -282,6 +285,20 @@ def _mesh_notes(count: int, max_triangles: int) -> list[str]:
     if count <= max_triangles:
         return [f"{count:,} triangles"]
     return [f"{count:,} triangles, drawn decimated (display only; measured exact)"]
+
+
+def _check_extent(vertices: np.ndarray, surface) -> None:
+    """Refuse a part with no extent in x or y (a line or a flat sliver standing on edge),
+    naming its file when it came from one: its top surface has no area to map."""
+    if not len(vertices):
+        return  # `surface_map` says so
+    size = np.ptp(vertices, axis=0)
+    if not np.all(size[:2] > 0.0):
+        lo, hi = vertices.min(axis=0) * 1e3, vertices.max(axis=0) * 1e3
+        raise InputError(
+            f"the part spans x {lo[0]:.6g} .. {hi[0]:.6g} mm, y {lo[1]:.6g} .. {hi[1]:.6g} mm: "
+            "expected an extent in both x and y, a top surface to map",
+            source=str(surface) if isinstance(surface, str | Path) else None)
 
 
 def _load(surface):
