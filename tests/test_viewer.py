@@ -863,3 +863,15 @@ def test_a_part_with_no_extent_in_x_or_y_is_refused_naming_its_file(tmp_path):
         run([str(folder), "--html", str(tmp_path / "x.html")])
     assert str(caught.value) == expected.replace(str(sliver), str(folder / "sliver.ply"))
     assert not list(tmp_path.glob("*.html"))
+
+
+def test_read_ply_names_the_face_whose_index_is_outside_the_vertices(tmp_path):
+    # it said "face indices outside [0, 3)": neither which face nor the index that was
+    # wrong, in a file of a million faces
+    bad = tmp_path / "bad.ply"
+    faces = np.array([[0, 1, 2], [0, 2, 1], [0, 7, 1]])
+    bad.write_bytes(ply_bytes(np.eye(3), faces))
+    with pytest.raises(InputError) as caught:
+        read_ply(bad)
+    assert str(caught.value) == (f"{bad}: face 2 is [0, 7, 1] (1 of 9 indices outside): expected "
+                                 "vertex indices 0 .. 2 (the file has 3 vertices)")

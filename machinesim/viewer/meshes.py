@@ -93,8 +93,13 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
         raise InputError(f"vertex {first} is {vertices[first].tolist()} ({np.sum(~finite)} of "
                          f"{len(vertices)} not finite): expected finite coordinates",
                          source=str(path))
-    if triangles.size and (triangles.min() < 0 or triangles.max() >= len(vertices)):
-        raise InputError(f"face indices outside [0, {len(vertices)})", source=str(path))
+    outside = (triangles < 0) | (triangles >= len(vertices))
+    if outside.any():
+        face = int(np.flatnonzero(outside.any(axis=1))[0])
+        raise InputError(f"face {face} is {triangles[face].tolist()} ({np.sum(outside)} of "
+                         f"{outside.size} indices outside): expected vertex indices 0 .. "
+                         f"{len(vertices) - 1} (the file has {len(vertices)} vertices)",
+                         source=str(path))
     volume = mesh_volume(vertices, triangles)
     # an open mesh's signed volume means nothing: only a closed one is known inside out
     if volume < 0.0 and closed_and_oriented(triangles):
