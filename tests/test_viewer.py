@@ -875,3 +875,27 @@ def test_read_ply_names_the_face_whose_index_is_outside_the_vertices(tmp_path):
         read_ply(bad)
     assert str(caught.value) == (f"{bad}: face 2 is [0, 7, 1] (1 of 9 indices outside): expected "
                                  "vertex indices 0 .. 2 (the file has 3 vertices)")
+
+
+def test_read_ply_refuses_elements_the_header_does_not_count(tmp_path):
+    # a header whose face count is too small (a writer that did not update it) was read
+    # without a word: the faces after the count were dropped and the part drawn without them
+    ascii_ply = tmp_path / "ascii.ply"
+    ascii_ply.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\n"
+                         "property double y\nproperty double z\nelement face 1\n"
+                         "property list uchar int vertex_indices\nend_header\n"
+                         "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n \n")
+    with pytest.raises(InputError) as caught:
+        read_ply(ascii_ply)
+    assert str(caught.value) == (f"{ascii_ply}: the file goes on for 4 numbers after its "
+                                 "elements end at number 13: expected as many elements as "
+                                 "the header counts (3 vertex, 1 face)")
+    binary = tmp_path / "binary.ply"
+    data = ply_bytes(np.eye(3), np.array([[0, 1, 2], [0, 2, 1]]))
+    binary.write_bytes(data.replace(b"element face 2", b"element face 1"))
+    end = data.index(b"end_header\n") + len(b"end_header\n") + 3 * 24 + 13
+    with pytest.raises(InputError) as caught:
+        read_ply(binary)
+    assert str(caught.value) == (f"{binary}: the file goes on for 13 bytes after its "
+                                 f"elements end at byte {end}: expected as many elements as "
+                                 "the header counts (3 vertex, 1 face)")

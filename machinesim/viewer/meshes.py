@@ -57,9 +57,10 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     InputError
-        When the file is missing, not a PLY, shorter than its header says (truncated), has
-        non-triangle faces, no faces, or a vertex that is not finite, or is a closed mesh
-        inside out (wound clockwise seen from outside).
+        When the file is missing, not a PLY, shorter than its header says (truncated) or
+        longer (elements it does not count), has non-triangle faces, no faces, or a vertex
+        that is not finite, or is a closed mesh inside out (wound clockwise seen from
+        outside).
     """
     path = Path(path)
     try:
@@ -205,6 +206,11 @@ def _binary_elements(data: bytes, offset: int, elements, order: str, path: Path)
         elif name == "face":
             triangles = _face_indices(block["#n"] if lists else None,
                                       block["#i"] if lists else None, path)
+    if offset < len(data):
+        # elements the header does not count (a count left too small) would be dropped
+        raise InputError(f"the file goes on for {len(data) - offset} bytes after its "
+                         f"elements end at byte {offset}: expected as many elements as the "
+                         f"header counts ({_counts(elements)})", source=str(path))
     return vertices, triangles
 
 
@@ -240,7 +246,17 @@ def _ascii_elements(data: bytes, offset: int, elements, path: Path):
             vertices = _vertex_columns(columns, path)
         elif name == "face":
             triangles = _face_indices(columns.get("#n"), columns.get("#i"), path)
+    if at < len(words):
+        # elements the header does not count (a count left too small) would be dropped
+        raise InputError(f"the file goes on for {len(words) - at} numbers after its "
+                         f"elements end at number {at}: expected as many elements as the "
+                         f"header counts ({_counts(elements)})", source=str(path))
     return vertices, triangles
+
+
+def _counts(elements) -> str:
+    """'3 vertex, 1 face': the elements a PLY header counts."""
+    return ", ".join(f"{count} {name}" for name, count, _ in elements)
 
 
 def _vertex_columns(block, path: Path) -> np.ndarray:
