@@ -64,6 +64,11 @@ def tool_from_spec(spec: str) -> Tool:
         if name in extra:
             raise InputError(f"tool spec {spec!r}: {name} given twice", key="tool")
         extra[name] = value
+    if extra.get("shank_radius", 1.0) == 0.0:
+        # 0 is the API's "as wide as the tool": 'd=0' read so cut with a shank the user did
+        # not give, without a word
+        raise InputError(f"tool spec {spec!r}: a shank diameter of 0 mm; expected a diameter "
+                         "above 0 mm, or no 'd=' for a shank as wide as the tool", key="tool")
     kind = fields[0].lower()
     arity = {"v": 1, "nose": 2, "ball": 1, "flat": 1}
     if kind not in arity or len(fields) != arity[kind] + 1:

@@ -218,6 +218,16 @@ def test_a_spec_shank_diameter_widens_the_holder_not_the_tool():
     assert tool_from_spec("ball:0.5").shank_radius == 0.0
 
 
+def test_a_spec_shank_diameter_of_zero_is_refused():
+    # 'd=0' became shank_radius 0, the API's "as wide as the tool": a cut with a shank the
+    # user did not give, exit 0
+    with pytest.raises(InputError) as caught:
+        tool_from_spec("flat:0.5:d=0")
+    assert str(caught.value) == ("key 'tool': tool spec 'flat:0.5:d=0': a shank diameter of "
+                                 "0 mm; expected a diameter above 0 mm, or no 'd=' for a shank "
+                                 "as wide as the tool")
+
+
 @pytest.mark.parametrize(
     ("spec", "message"),
     [
