@@ -229,7 +229,7 @@ def parse_roi(texts) -> list[tuple[float, float, float, float]] | None:
         if (len(values) != 4 or not all(math.isfinite(v) for v in values)
                 or values[0] >= values[1] or values[2] >= values[3]):
             raise InputError(f"--roi {text!r}: expected X0,X1,Y0,Y1 in mm, four finite numbers "
-                             "with X0 < X1 and Y0 < Y1, e.g. 0,1,0,1", key="--roi")
+                             "with X0 < X1 and Y0 < Y1, e.g. 0,1,0,1")
         windows.append(tuple(values))
     return windows
 

@@ -224,6 +224,17 @@ def test_a_bad_roi_is_refused_before_cutting(tmp_path, capsys, roi):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_reversed_roi_is_named_once(tmp_path, capsys):
+    # the line read "machinesim: error: key '--roi': --roi '5,4,1,3': expected ...", the
+    # option named twice
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", "--roi", "5,4,1,3"],
+                       capsys)
+    assert code == 2
+    assert err == ("machinesim: error: --roi '5,4,1,3': expected X0,X1,Y0,Y1 in mm, four finite "
+                   "numbers with X0 < X1 and Y0 < Y1, e.g. 0,1,0,1\n")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_an_error_model_that_does_not_fit_the_machine_names_its_file_first(tmp_path, capsys):
     # a table of X errors over -1000 .. 1000 mm: grooving_4axis's X travels -250 .. 250 mm
     errors = tmp_path / "wide.toml"
