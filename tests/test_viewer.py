@@ -899,3 +899,31 @@ def test_read_ply_refuses_elements_the_header_does_not_count(tmp_path):
     assert str(caught.value) == (f"{binary}: the file goes on for 13 bytes after its "
                                  f"elements end at byte {end}: expected as many elements as "
                                  "the header counts (3 vertex, 1 face)")
+
+
+def test_a_live_viewer_stopped_by_sigterm_exits_143_and_ends_its_server(tmp_path):
+    # `kill PID` of a live `machinesim view` exited 0 with no word (LiveSession.wait took
+    # SIGTERM for a Ctrl-C), where docs/cli.md gives 143 and 'machinesim: terminated'
+    import signal
+    import subprocess
+    import sys
+
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    process = subprocess.Popen([sys.executable, "-m", "machinesim.cli", "view",
+                                str(tmp_path / "part.ply")], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        line = process.stdout.readline()
+        assert line.startswith("machinesim viewer at http://127.0.0.1:"), line
+        url = line.split()[3]
+        process.send_signal(signal.SIGTERM)
+        _, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 143
+    assert err == "machinesim: terminated; nothing was written\n"
+    with pytest.raises(OSError):
+        urllib.request.urlopen(url, timeout=5)

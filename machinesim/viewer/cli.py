@@ -18,7 +18,13 @@ import os
 import sys
 from pathlib import Path
 
-from machinesim._io import check_readable_file, check_writable, file_name, read_json
+from machinesim._io import (
+    Terminated,
+    check_readable_file,
+    check_writable,
+    file_name,
+    read_json,
+)
 from machinesim._program_options import (
     add_reading_options,
     check_reading_options,
@@ -141,7 +147,9 @@ def run_view(args: argparse.Namespace) -> int:
             _screenshot(session.url, f"viewer.num_messages_received >= {session.messages}",
                         args.screenshot)
         session.wait()
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as stop:
+        if isinstance(stop, Terminated):
+            raise  # exit 143, 'machinesim: terminated', as docs/cli.md says
         print("machinesim viewer stopped", file=sys.stderr)
     finally:
         session.close()

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import zmq
 from meshcat.servers.tree import SceneTree, find_node, walk
 
+from machinesim._io import Terminated
 from machinesim.exceptions import MachineSimError
 from machinesim.viewer.scene import Scene, overlay_html
 
@@ -75,11 +76,14 @@ class LiveSession:
     def wait(self) -> int | None:
         """Block until the server process ends, or until Ctrl-C: its exit code, or None
         after Ctrl-C, which ends the server (a script's ``live.wait()`` is stopped so, as
-        the command line's viewer is, without a KeyboardInterrupt traceback)."""
+        the command line's viewer is, without a KeyboardInterrupt traceback). SIGTERM
+        (`machinesim._io.Terminated`) ends the server too and is raised on."""
         try:
             return self.process.wait()
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as stop:
             self.close()
+            if isinstance(stop, Terminated):
+                raise  # SIGTERM: the caller is stopped, not left to go on as after Ctrl-C
             return None
 
     def close(self) -> None:
