@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 
 from machinesim import ErrorModel, ToolSetting, load_machine
 from machinesim.cutting import cut
-from machinesim.exceptions import AxisLimitError, InputError, ModelError
+from machinesim.exceptions import AxisLimitError, InputError, MachineSimError, ModelError
 from machinesim.metrology import height_map
 from machinesim.motion import plan
 from machinesim.nc import ProgramBuilder
@@ -927,3 +927,24 @@ def test_a_live_viewer_stopped_by_sigterm_exits_143_and_ends_its_server(tmp_path
     assert err == "machinesim: terminated; nothing was written\n"
     with pytest.raises(OSError):
         urllib.request.urlopen(url, timeout=5)
+
+
+def test_a_port_in_use_is_named(tmp_path):
+    # 'machinesim view PART --port 7000' with 7000 taken said "... Address already in use;
+    # is the port free? try --port, ...", not naming the port the user had given
+    import socket
+
+    held = socket.socket()
+    try:
+        held.bind(("127.0.0.1", 0))
+        held.listen()
+        port = held.getsockname()[1]
+        stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+        with pytest.raises(MachineSimError) as caught:
+            run([str(tmp_path / "part.ply"), "--port", str(port)])
+    finally:
+        held.close()
+    assert str(caught.value) == (
+        f"--port {port}: the live viewer server did not start on it (it ended before giving "
+        "its address: OSError: [Errno 98] Address already in use); expected a free port: try "
+        "another, or --html FILE to export instead")

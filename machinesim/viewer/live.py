@@ -173,8 +173,14 @@ def start_server(port: int | None = None) -> LiveSession:
         process.wait()
         why = (f"gave no address within {START_TIMEOUT_S:g} s" if late.is_set()
                else "ended before giving its address")
-        raise MachineSimError(f"the live viewer server did not start (it {why}{cause}; is "
-                              "the port free? try --port, or --html FILE to export instead)")
+        if port is None:
+            raise MachineSimError(f"the live viewer server did not start (it {why}{cause}; "
+                                  "is the port free? try --port, or --html FILE to export "
+                                  "instead)")
+        # the port asked for: name it, not 'try --port' to a user who gave one
+        raise MachineSimError(f"--port {port}: the live viewer server did not start on it (it "
+                              f"{why}{cause}); expected a free port: try another, or --html "
+                              "FILE to export instead")
     return LiveSession(urls["web_url"], urls["zmq_url"], process)
 
 
