@@ -72,6 +72,9 @@ def file_name(text: str) -> Path:
     """An argparse type for an output file: ``text`` as a Path, refused when it ends in a
     path separator (``Path`` drops it, and a file would be written where a folder was meant).
     """
+    if not text:
+        # Path('') is '.': the refusal then quoted a '.' the user never typed
+        raise argparse.ArgumentTypeError("'' is empty; expected a file name")
     if text.endswith(("/", os.sep)):
         raise argparse.ArgumentTypeError(f"{text!r} ends in '/', which names a folder; "
                                          "expected a file name")

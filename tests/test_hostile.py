@@ -424,6 +424,23 @@ def test_an_empty_program_file_is_refused_and_one_without_moves_says_so(tmp_path
 
 
 @pytest.mark.parametrize("option", ["--out", "--report"])
+def test_an_empty_output_name_is_refused_as_empty(tmp_path, capsys, option):
+    # Path('') is '.': the refusal quoted a name the user never typed ("--out .: expected a
+    # file name ending in .ply", ".: expected a file name for the report (--report)")
+    program = tmp_path / "g.nc"
+    program.write_text("G90 G21\nG00 X-1. Y5. Z1.\nG01 Z-0.01 F100.\nX11.\nG00 Z1.\nM30\n")
+    names = {"--out": str(tmp_path / "p.ply"), "--report": str(tmp_path / "r.json")}
+    names[option] = ""
+    argv = ["cut", program, "--machine", "grooving_4axis", "--tool", "v:90", "--stock",
+            "block:10x10x2", "--quiet", *(item for pair in names.items() for item in pair)]
+    code, err = run_cli(argv, capsys)
+    assert code == 2
+    assert err.splitlines()[-1] == (f"machinesim cut: error: argument {option}: '' is empty; "
+                                    "expected a file name")
+    assert sorted(tmp_path.iterdir()) == [program]
+
+
+@pytest.mark.parametrize("option", ["--out", "--report"])
 def test_an_output_name_ending_in_a_slash_is_refused_not_written_as_a_file(tmp_path, capsys,
                                                                          option):
     program = tmp_path / "g.nc"
