@@ -14,6 +14,10 @@ from pathlib import Path
 from machinesim._io import check_readable_file
 from machinesim.exceptions import InputError
 
+#: The largest ``--chord-nm``: 1 m, more than any shipped machine travels on an axis
+#: (as `machinesim.tools.MAX_TOOL_SIZE_M` bounds a tool).
+MAX_CHORD_NM = 1e9
+
 
 def add_reading_options(parser) -> None:
     """Add ``--tools``, ``--integer-input`` and ``--chord-nm`` to ``parser`` (an argparse
@@ -39,6 +43,11 @@ def check_reading_options(args: argparse.Namespace) -> None:
     work)."""
     if args.chord_nm is not None and not (math.isfinite(args.chord_nm) and args.chord_nm > 0):
         raise InputError(f"--chord-nm {args.chord_nm!r}: expected a length in nm above 0")
+    if args.chord_nm is not None and args.chord_nm > MAX_CHORD_NM:
+        # a 4 mm circle at 1e30 nm was cut as a hexagon, exit 0: no arc of any machine's
+        # travel needs chords that far off it
+        raise InputError(f"--chord-nm {args.chord_nm!r}: expected a length in nm above 0 and "
+                         f"at most {MAX_CHORD_NM:.0e} (1 m, more than any machine's travel)")
     if args.tools is not None:
         check_readable_file(args.tools, "tool table (--tools)")
 

@@ -224,6 +224,19 @@ def test_a_bad_roi_is_refused_before_cutting(tmp_path, capsys, roi):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_chord_tolerance_past_any_machines_travel_is_refused(tmp_path, capsys):
+    # --chord-nm 1e30 was taken: an arc's chords allowed 1e21 m off it, exit 0
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", "--chord-nm",
+                        "1e30"], capsys)
+    assert code == 2
+    assert err == ("machinesim: error: --chord-nm 1e+30: expected a length in nm above 0 and "
+                   "at most 1e+09 (1 m, more than any machine's travel)\n")
+    assert list(tmp_path.iterdir()) == []
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", "--chord-nm",
+                        "1e9", "--quiet"], capsys)
+    assert code == 0, err
+
+
 def test_a_reversed_roi_is_named_once(tmp_path, capsys):
     # the line read "machinesim: error: key '--roi': --roi '5,4,1,3': expected ...", the
     # option named twice
