@@ -948,3 +948,15 @@ def test_a_port_in_use_is_named(tmp_path):
         f"--port {port}: the live viewer server did not start on it (it ended before giving "
         "its address: OSError: [Errno 98] Address already in use); expected a free port: try "
         "another, or --html FILE to export instead")
+
+
+def test_a_float32_part_with_a_long_header_is_still_warned_about(tmp_path):
+    # only the first 64 KiB were read for the header: 3000 comments pushed the element lines
+    # past them and the float32 rounding went without its warning
+    part = tmp_path / "long.ply"
+    data = ply_bytes(np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0]]),
+                     np.array([[0, 1, 2]]), kind="float")
+    comments = ("comment " + "x" * 30 + "\n") * 3000
+    at = data.index(b"element vertex")
+    part.write_bytes(data[:at] + comments.encode("ascii") + data[at:])
+    assert ply_single_precision(part)

@@ -19,7 +19,8 @@ from machinesim.workpiece import mesh_volume
 #: Triangles of one displayed mesh above which it is decimated: ~200k triangles keep a scene
 #: interactive in a browser without a GPU (swiftshader) and the HTML file under ~10 MB.
 DISPLAY_TRIANGLES = 200_000
-#: The most of a PLY file `ply_single_precision` reads for its header (a part's is ~250 B).
+#: How much of a PLY file `ply_single_precision` reads at a time for its header (a part's
+#: is ~250 B).
 HEADER_BYTES = 65536
 #: Each decimation pass shrinks the clustering cell by this factor beyond the estimate when
 #: the estimate left too many triangles (a few passes at most).
@@ -139,9 +140,18 @@ def ply_ascii(path) -> bool:
 
 def _ply_header(path) -> list[str]:
     path = Path(path)
+    head = b""
     with path.open("rb") as file:
-        head = file.read(HEADER_BYTES)
-    end = head.find(b"end_header")
+        # read on until the header ends: a header of many comments, longer than one read,
+        # lost its element lines, and with them the float32 warning
+        end = -1
+        while end < 0:
+            chunk = file.read(HEADER_BYTES)
+            if not chunk:
+                break
+            head += chunk
+            # only the new bytes and the tail before them can hold it
+            end = head.find(b"end_header", max(len(head) - len(chunk) - 10, 0))
     return head[:end if end >= 0 else len(head)].decode("ascii", errors="replace").splitlines()
 
 
