@@ -960,3 +960,18 @@ def test_a_float32_part_with_a_long_header_is_still_warned_about(tmp_path):
     at = data.index(b"element vertex")
     part.write_bytes(data[:at] + comments.encode("ascii") + data[at:])
     assert ply_single_precision(part)
+
+
+def test_read_ply_names_an_ascii_face_index_past_any_integer_as_written(tmp_path):
+    # 1e30 was cast to int64's -9223372036854775808 and named so; 2.5 and nan were
+    # "a face's vertex index is not a whole number", naming no face
+    header = ("ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+              "property double z\nelement face 2\nproperty list uchar int vertex_indices\n"
+              "end_header\n0 0 0\n0.001 0 0\n0 0.001 0\n3 0 1 2\n")
+    for index, shown in (("1e30", "1e+30"), ("inf", "inf"), ("2.5", "2.5"), ("nan", "nan")):
+        part = tmp_path / "part.ply"
+        part.write_text(f"{header}3 0 1 {index}\n")
+        with pytest.raises(InputError) as caught:
+            read_ply(part)
+        assert str(caught.value) == (f"{part}: face 1 is [0, 1, {shown}]: expected "
+                                     "whole-number vertex indices")

@@ -283,8 +283,14 @@ def _face_indices(sizes, indices, path: Path) -> np.ndarray:
         first = int(np.flatnonzero(sizes != 3)[0])
         raise InputError(f"face {first} has {sizes[first]:g} vertices: only triangle faces "
                          "are supported (every face with 3 indices)", source=str(path))
-    if np.any(indices != np.round(indices)):
-        raise InputError("a face's vertex index is not a whole number", source=str(path))
+    # an ASCII file's indices arrive as float64: one past int64 (1e30, inf) became
+    # -9223372036854775808 when cast, and was named so
+    bad = (indices != np.round(indices)) | ~(np.abs(indices) < 2.0**62)
+    if np.any(bad):
+        first = int(np.flatnonzero(bad.any(axis=1))[0])
+        shown = ", ".join(f"{value:g}" for value in indices[first])
+        raise InputError(f"face {first} is [{shown}]: expected whole-number vertex indices",
+                         source=str(path))
     return np.asarray(indices, dtype=np.int64).reshape(-1, 3)
 
 
