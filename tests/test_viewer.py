@@ -760,7 +760,11 @@ def test_a_report_folder_whose_summary_names_a_missing_nominal_is_warned_about(t
     stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
     stock_from_spec("block:1x1x1").export_ply(tmp_path / "nom.ply")
     summary = tmp_path / "summary.json"
-    for named in ("nominal.ply", ["nom.ply"]):
+    (tmp_path / "sub").mkdir()
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "sub" / "nom.ply")
+    # a file, but not one of the folder's parts: "sub/nom.ply" and an absolute path were
+    # coloured by height without a word
+    for named in ("nominal.ply", ["nom.ply"], "sub/nom.ply", str(tmp_path / "sub" / "nom.ply")):
         summary.write_text(json.dumps({"nominal_ply": named}))
         scene = report_scene(tmp_path, BUDGET)
         assert scene.warnings == [f"{summary} names the nominal part {named!r} (nominal_ply), "

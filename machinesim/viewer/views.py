@@ -172,7 +172,9 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
     nominal = read_ply(nominal_path) if nominal_path.is_file() and shown != plys else None
     scene = Scene(f"report {folder.name}")
     named = summary.get("nominal_ply")
-    if named is not None and not (isinstance(named, str) and nominal_path.is_file()):
+    # a file outside the folder ('sub/nominal.ply', an absolute path) is no part of it: the
+    # parts were coloured by height without a word
+    if named is not None and not (isinstance(named, str) and nominal_path in plys):
         # the parts would be coloured by height, as if the summary named no nominal
         scene.warnings.append(f"{summary_path} names the nominal part {named!r} "
                               "(nominal_ply), which is not a file in the folder: each part "
