@@ -903,6 +903,18 @@ def test_read_ply_refuses_elements_the_header_does_not_count(tmp_path):
     assert str(caught.value) == (f"{binary}: the file goes on for 13 bytes after its "
                                  f"elements end at byte {end}: expected as many elements as "
                                  "the header counts (3 vertex, 1 face)")
+    # a line end some writers leave after the binary data is no element: read as without it
+    trailing = tmp_path / "trailing.ply"
+    trailing.write_bytes(data + b"\r\n")
+    for got, want in zip(read_ply(trailing), read_ply_bytes(tmp_path, data), strict=True):
+        np.testing.assert_array_equal(got, want)
+
+
+def read_ply_bytes(folder, data: bytes):
+    """`read_ply` of a file holding ``data``."""
+    path = folder / "as_written.ply"
+    path.write_bytes(data)
+    return read_ply(path)
 
 
 def test_a_live_viewer_stopped_by_sigterm_exits_143_and_ends_its_server(tmp_path):

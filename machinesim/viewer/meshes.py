@@ -216,8 +216,9 @@ def _binary_elements(data: bytes, offset: int, elements, order: str, path: Path)
         elif name == "face":
             triangles = _face_indices(block["#n"] if lists else None,
                                       block["#i"] if lists else None, path)
-    if offset < len(data):
-        # elements the header does not count (a count left too small) would be dropped
+    if data[offset:].strip(b" \t\r\n"):
+        # elements the header does not count (a count left too small) would be dropped; a
+        # line end or blanks some writers leave after the data are no element
         raise InputError(f"the file goes on for {len(data) - offset} bytes after its "
                          f"elements end at byte {offset}: expected as many elements as the "
                          f"header counts ({_counts(elements)})", source=str(path))
