@@ -247,7 +247,10 @@ class RoundNoseTool:
     nose_radius : float
         Nose radius (m). A nose-radius error dR is part of it: ``RoundNoseTool(R + dR, ...)``.
     included_angle : float
-        Included angle between the flanks (rad), in (0, pi).
+        The angle the nose arc subtends (rad), in (0, pi): the arc spans +-included_angle/2
+        about -Z. The flanks continue tangent to it, so between them they make pi -
+        included_angle: the same as the arc only at 90 deg, the angle every shipped use
+        takes (a `VTool`'s included angle is the angle between its flanks).
     height : float
         Length of the body from the edge point to the holder (m).
     chord_tol : float
