@@ -104,10 +104,12 @@ def report(args) -> None:
                              f"above 0 (the nominal arm is r0 = {r0 / MM:.3f} mm, and the "
                              "plan finds r within --capture-mm of it)", key="r-mm")
         given["tool.z"] = -(args.r_mm * MM - r0)
-    base = injected_errors(args, defaults, {}, machine.name).parameters()
+    read = injected_errors(args, defaults, {}, machine.name)  # the file read (and noted) once
+    base = read.parameters()
     check_offset(args, plan.capture, r0, given.get("tool.y", base.get("tool.y", 0.0)),
                  -given.get("tool.z", base.get("tool.z", 0.0)))
-    errors, realism = injected_errors(args, defaults, given, machine.name), realism_from(args)
+    errors = read.with_parameters(given) if given else read
+    realism = realism_from(args)
 
     def make_lab(realism):
         return Lab(machine, errors, seed=args.seed, realism=realism)

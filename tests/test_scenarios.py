@@ -219,6 +219,22 @@ def test_papers_000_001_002_note_an_errors_file_that_reads_as_no_error(tmp_path,
         "as built, every error zero"]
 
 
+def test_paper_000_reads_its_errors_file_once_and_notes_it_once(tmp_path):
+    """The scenario read --errors twice (once for the capture check, once for the lab), so
+    the note of an error below anything a machine shows came twice."""
+    path = tmp_path / "errors.toml"
+    path.write_text("[location.A]\nEY0A_um = 4e-6\n")
+    result = subprocess.run([sys.executable, str(ROOT / "scenarios" / "tool_rotation_arm.py"),
+                             "--errors", str(path), "--budget", "off", "--realism", "ideal",
+                             "--out", str(tmp_path / "out")],
+                            capture_output=True, text=True, check=False, cwd=ROOT, timeout=300)
+    assert result.returncode == 0, result.stderr
+    notes = [line for line in result.stderr.splitlines() if ": note: " in line]
+    assert notes == [f"tool_rotation_arm: note: {path}: location.A.EY0A_um = 4e-06 is at most "
+                     "4e-12 m, below anything a machine shows: was it written in m, where the "
+                     "key asks um?"]
+
+
 def test_papers_003_004_note_an_errors_file_that_reads_as_no_error(tmp_path):
     """An ``--errors`` value in SI under a key in um (4 pm of EX0C) ran as no error without a
     word, as ``machinesim cut`` notes it; the note comes as the file is read (here before
