@@ -372,6 +372,51 @@ REFUSALS = [
 ]
 
 
+#: What a word is, in the refusal of text outside parentheses.
+_TEXT_WANTED = ("a word is one letter and a number (X1., M98 P1000); expected a comment in "
+                "parentheses")
+_MACRO_WANTED = ("(custom macro B: IF, GOTO, WHILE/DO/END, DPRNT) is not read: machinesim reads "
+                 "no branches, loops or macro output; post the program with them resolved into "
+                 "plain blocks")
+
+
+@pytest.mark.parametrize(("text", "line", "column", "key", "message"), [
+    # prose outside parentheses: one problem for the text (to the line's end, or a comment),
+    # not one 'malformed number' for each of its letters (14 for ROUGH THE POCKET)
+    ("ROUGH THE POCKET\nG00 X0", 1, 1, "ROUGH THE POCKET",
+     f"text 'ROUGH THE POCKET' outside a comment: {_TEXT_WANTED}, e.g. '(ROUGH THE POCKET)'"),
+    ("G00 X0\nG01 X1. FEED SLOWLY (NOTE)", 2, 9, "FEED SLOWLY",
+     f"text 'FEED SLOWLY' outside a comment: {_TEXT_WANTED}, e.g. '(FEED SLOWLY)'"),
+    ("G00 X0 Y0\nA POCKET", 2, 1, "A POCKET",
+     f"text 'A POCKET' outside a comment: {_TEXT_WANTED}, e.g. '(A POCKET)'"),
+    ("G00 X1.5MM", 1, 9, "MM", f"text 'MM' outside a comment: {_TEXT_WANTED}, e.g. '(MM)'"),
+    ("G00 X0\nEND OF PROGRAM", 2, 1, "END OF PROGRAM",
+     f"text 'END OF PROGRAM' outside a comment: {_TEXT_WANTED}, e.g. '(END OF PROGRAM)'"),
+    # custom macro B statements, refused as macros: each had been one problem per letter
+    ("IF [#1 GT 2] GOTO 10", 1, 1, "IF [#1 GT 2] GOTO 10",
+     f"macro statement 'IF [#1 GT 2] GOTO 10' {_MACRO_WANTED}"),
+    ("G00 X0\nWHILE [#1 LT 3] DO1 (LOOP)", 2, 1, "WHILE [#1 LT 3] DO1",
+     f"macro statement 'WHILE [#1 LT 3] DO1' {_MACRO_WANTED}"),
+    ("GOTO 10", 1, 1, "GOTO 10", f"macro statement 'GOTO 10' {_MACRO_WANTED}"),
+    ("G00 X0\nEND1", 2, 1, "END1", f"macro statement 'END1' {_MACRO_WANTED}"),
+    # a lone letter before a word is still a missing number, not text
+    ("G00 X Y1.", 1, 5, "X",
+     "malformed number '' after 'X'; expected digits with an optional sign and decimal "
+     "point, e.g. X-12.5"),
+])
+def test_text_outside_a_comment_is_one_problem(text, line, column, key, message):
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text, "prog.nc")
+    error = info.value
+    assert (error.line, error.column, error.key) == (line, column, key)
+    assert str(error) == f"prog.nc, line {line}, column {column}, key '{key}': {message}"
+
+
+def test_words_packed_without_blanks_are_no_text():
+    program = parse_program("g90g21\nG01X1.Y2.F100.\nM98P1000\nM30\nO1000\nx3.y-4.\nM99\n")
+    assert program.targets[:, :2].tolist() == [[1e-3, 2e-3], [3e-3, -4e-3]]
+
+
 @pytest.mark.parametrize(("text", "line", "column", "word", "message"), REFUSALS)
 def test_refusals_name_line_column_and_word(text, line, column, word, message):
     with pytest.raises(NCProgramError, match=message) as info:

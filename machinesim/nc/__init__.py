@@ -23,7 +23,9 @@ Words
     number allowed, inside a number not. Letters read: N O G M S F P X Y Z A B C (axes and
     the rest as before) and I J K R Q L H T D where a G or M code reads them (arcs, cycles,
     subprograms, tools). Any other letter, ``/``, ``#``, ``=``, a number without letter,
-    a malformed number is refused. Integer words N O G M P L H T D take at most 9 unsigned
+    a malformed number is refused; so is text outside parentheses (a letter after a
+    letter: ``ROUGH THE POCKET``, one problem for the text) and a macro statement (``IF``,
+    ``GOTO``, ``WHILE``). Integer words N O G M P L H T D take at most 9 unsigned
     digits. Each letter other than G and M at most once a block; G codes one per modal group.
     Within a block: modal G codes, then F S T D H, then the motion, then M codes.
 G codes

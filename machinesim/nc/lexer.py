@@ -130,6 +130,9 @@ def tokenize(raw: str, source: str, line: int, *,
                      letter + raw[i:stop])
                 i = stop
                 continue
+            if match is None and c != ":" and _starts_text(raw, start + 1, i):
+                i = _text_outside_comment(raw, start, fail)
+                continue
             if match is None or (end < n and raw[end] in "0123456789.+-"):
                 stop = _end_of_garbage(raw, i)
                 tail = raw[i:stop]
@@ -200,6 +203,55 @@ def _after_end_of_block(raw: str, semicolon: int, fail) -> None:
          "';' on the same line are read as a comment, but ';' ends a block in FANUC text; "
          "put each block on its own line (or write the comment in parentheses, e.g. "
          "'(T1 tool)')", i + 1, key)
+
+
+def _starts_text(raw: str, after: int, i: int) -> bool:
+    """Whether the letter before ``raw[after]``, which no number follows (the number would
+    start at ``raw[i]``, past blanks), starts text rather than a word: another letter right
+    after it (``ROUGH``, ``FEED``), or blanks and a run of two letters (``A POCKET``).
+    No word of the dialect has a letter after its letter; a lone letter before a word
+    (``X Y1.``) stays a missing number."""
+    if after < len(raw) and raw[after] in _LETTERS:
+        return True
+    return i > after and raw[i:i + 1] in _LETTERS and raw[i + 1:i + 2] in _LETTERS
+
+
+#: Custom macro B's statements (IF [..] GOTO n, WHILE [..] DO1 .. END1, DPRNT[..]), by the
+#: run of letters they start with and what follows it (blanks skipped): a bracket, a '#'
+#: or a digit (``END OF PROGRAM`` is text).
+_MACRO_STATEMENTS = frozenset({"IF", "WHILE", "GOTO", "DO", "END", "THEN", "DPRNT", "BPRNT",
+                               "POPEN", "PCLOS"})
+#: The macro statements that stand alone (open and close the output device).
+_FILE_COMMANDS = frozenset({"POPEN", "PCLOS"})
+
+
+def _text_outside_comment(raw: str, start: int, fail) -> int:
+    """Refuse, as one problem, the text from the letter at ``raw[start]`` to the end of the
+    line (or a comment or ';' after it): prose written outside parentheses (``ROUGH THE
+    POCKET``, ``G01 X1. FEED SLOWLY``) or a macro statement (``IF [#1 GT 2] GOTO 10``).
+    It had been one 'malformed number' problem for each of its letters. Returns the index
+    where reading goes on."""
+    stop = len(raw)
+    for mark in "(;":
+        found = raw.find(mark, start)
+        if 0 <= found < stop:
+            stop = found
+    text = raw[start:stop].rstrip(_BLANK)
+    letters = start
+    while letters < stop and raw[letters] in _LETTERS:
+        letters += 1
+    word = raw[start:letters].upper()
+    after = raw[letters:stop].lstrip(_BLANK)[:1]
+    if word in _MACRO_STATEMENTS and (
+            (after != "" and (after in "#[" or after.isdigit())) or word in _FILE_COMMANDS):
+        fail(f"macro statement {brief(text)!r} (custom macro B: IF, GOTO, WHILE/DO/END, "
+             "DPRNT) is not read: machinesim reads no branches, loops or macro output; post "
+             "the program with them resolved into plain blocks", start + 1, text)
+    else:
+        fail(f"text {brief(text)!r} outside a comment: a word is one letter and a number "
+             "(X1., M98 P1000); expected a comment in parentheses, e.g. "
+             f"{brief('(' + text + ')')!r}", start + 1, text)
+    return stop
 
 
 #: Why '#' and '[' are refused where they stand: a program with them computes its numbers
