@@ -467,6 +467,41 @@ def test_subprograms_with_repeats_and_nesting():
     assert program.lines.tolist() == [2, 7, 7, 7, 7, 12, 7, 12]
 
 
+#: O0100 steps X by 1 mm at line 6 and Y by 2 mm at line 7: each run of it adds 1 to X.
+PACKED_CALL = "O1\nG00 X0 Y0\nM98 P{p}\nM30\nO100\nG91 G00 X1.\nG01 Y2. F100.\nG90\nM99\n"
+
+
+def test_a_p_of_5_to_8_digits_is_repeats_then_program_number():
+    # P30100: O0100 three times (FANUC's P<repeats><4-digit program number>)
+    program = parse_program(PACKED_CALL.format(p="30100"))
+    assert program.lines.tolist() == [2] + [6, 7] * 3
+    assert program.targets[:, 0].tolist() == pytest.approx(
+        [0, 1 * MM, 1 * MM, 2 * MM, 2 * MM, 3 * MM, 3 * MM], abs=EXACT_M)
+    assert program.targets[-1, 1] == pytest.approx(6 * MM, abs=EXACT_M)
+    # 8 digits: 12 repeats (leading zeros) of O0100; P100 alone: once
+    assert len(parse_program(PACKED_CALL.format(p="00120100"))) == 1 + 2 * 12
+    assert len(parse_program(PACKED_CALL.format(p="100"))) == 1 + 2
+
+
+@pytest.mark.parametrize(("p", "message"), [
+    # 9 digits had been read as 12345 repeats of O6789
+    ("123450100", "M98 P123450100 has 9 digits; FANUC's P takes at most 8: a repeat count of "
+     "up to 4 digits, then the 4-digit program number (M98 P30100: O0100 three times)"),
+    # 10 digits had been 'M98 needs P<program number> (an unsigned integer)'
+    ("1234560100", "M98 P1234560100 has 10 digits; FANUC's P takes at most 8: a repeat count "
+     "of up to 4 digits, then the 4-digit program number (M98 P30100: O0100 three times)"),
+    # L beside a P that holds its repeats had called O30100 (not in the file) twice
+    ("30100 L2", "M98 P30100 L2: a P of more than 4 digits holds its own repeat count (3 x "
+     "O0100), so L cannot be given beside it; write M98 P100 L2 or M98 P20100"),
+    ("12340100 L2", "M98 P12340100 L2: a P of more than 4 digits holds its own repeat count "
+     "(1234 x O0100), so L cannot be given beside it; write M98 P100 L2 or M98 P20100"),
+])
+def test_a_p_of_more_than_8_digits_or_with_l_beside_its_repeats_is_refused(p, message):
+    with pytest.raises(NCProgramError) as info:
+        parse_program(PACKED_CALL.format(p=p), "prog.nc")
+    assert str(info.value) == f"prog.nc, line 3, column 1, key 'M98': {message}"
+
+
 def test_subprogram_depth_and_recursion_are_refused_before_running():
     chain = "O1\nM98 P2\nM30\n" + "".join(f"O{k}\nM98 P{k + 1}\nM99\n" for k in range(2, 13))
     chain += "O13\nG00 X0\nM99\n"

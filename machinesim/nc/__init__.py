@@ -56,7 +56,8 @@ G codes
 Subprograms
     The main program is the file's first program (its O number in the first block, if any);
     after its M02/M30, ``O<n>`` blocks start subprograms, each ending in M99. ``M98 P<n>
-    L<count>`` or ``M98 P<count><nnnn>`` calls one; calls nest up to 10 deep; recursion,
+    L<count>`` (n of at most 4 digits) or ``M98 P<count><nnnn>`` (at most 8 digits, no L)
+    calls one; calls nest up to 10 deep; recursion,
     calls to missing programs, M99 in the main program (FANUC loops forever), M02/M30 in a
     subprogram, blocks after a subprogram's M99, and programs that would run more than
     `parser.MAX_BLOCK_RUNS` blocks are refused before anything runs.

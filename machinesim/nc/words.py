@@ -6,6 +6,7 @@ docs/nc.md.
 
 from __future__ import annotations
 
+from machinesim.exceptions import brief
 from machinesim.nc.lexer import Word
 from machinesim.units import RAD_PER_DEG
 
@@ -39,6 +40,11 @@ SLOWEST_FEED_M_PER_S = 1e-9 / 60.0
 #: Integer words (N O G M P L H T D) longer than this are refused: FANUC takes at most 8
 #: digits, and the bound keeps int() away from Python's digit limit on hostile input.
 MAX_INTEGER_DIGITS = 9
+#: Most digits of M98's P: FANUC's M98 P<repeats><program>, a repeat count of up to 4
+#: digits before the 4-digit program number (Series 0i-MC Operator's Manual B-64124EN/01,
+#: 12.3 "Subprogram (M98, M99)": M98 P51002 calls O1002 five times; later controls take
+#: up to 9999 repeats). A P of at most 4 digits is the program number alone, L its repeats.
+MAX_CALL_DIGITS = 8
 #: Subprograms nest at most this deep (FANUC controls allow 4 to 10 levels); a subprogram
 #: that calls itself is refused before it runs.
 MAX_SUBPROGRAM_DEPTH = 10
@@ -146,10 +152,20 @@ def call_of(words: list[Word]) -> tuple[int, int, Word] | str | None:
         return None
     p = next((w for w in words if w.letter == "P"), None)
     count = next((w for w in words if w.letter == "L"), None)
+    if p is not None and p.text.isdigit() and len(p.text) > MAX_CALL_DIGITS:
+        return (f"M98 {brief(p.key)} has {len(p.text)} digits; FANUC's P takes at most "
+                f"{MAX_CALL_DIGITS}: a repeat count of up to 4 digits, then the 4-digit "
+                "program number (M98 P30100: O0100 three times)")
     if p is None or integer(p) is None:
         return "M98 needs P<program number> (an unsigned integer)"
     if count is not None:
         repeats = integer(count)
+        if len(p.text) > 4:
+            packed = (f" or M98 P{repeats}{p.text[-4:]}" if repeats is not None
+                      and 0 < repeats < 10_000 else "")
+            return (f"M98 {p.key} {count.key}: a P of more than 4 digits holds its own repeat "
+                    f"count ({int(p.text[:-4])} x O{p.text[-4:]}), so L cannot be given "
+                    f"beside it; write M98 P{int(p.text[-4:])} {count.key}{packed}")
         if repeats is None:
             return f"M98 L takes an unsigned integer repeat count, got {count.key}"
         return int(p.text), repeats, m98
