@@ -31,6 +31,8 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Protocol
 
+import numpy as np
+
 from machinesim.exceptions import InputError, brief
 
 __all__ = ["LAB_USES", "Evaluation", "Figure", "Identified", "Procedure", "Result",
@@ -199,7 +201,12 @@ class Result:
     realism : tuple of str
         The lab's realism switches that were on (`machinesim.realism.Realism.on`).
     injected : Mapping[str, float]
-        The lab's injected parameters, SI: every non-zero one and every identified one.
+        What was injected, SI: each identified parameter with the value the machine had (the
+        injected errors plus the machine's background, what the identification is compared
+        with; left out for a component parameter whose name means another table entry or
+        coefficient there than in the injected model), and each other non-zero parameter of
+        the injected model as written. The background's own parameters are not listed
+        (``background``).
     identified : Mapping[str, (float, float)]
         (value, std), SI.
     figures : tuple of Figure
@@ -215,6 +222,10 @@ class Result:
         Parameters injected into the lab (non-zero; the background apart) that are not
         among the identified ones, with their injected values (SI): outside the procedure's
         model, or measured otherwise (a compensation table) without being named.
+    background : Mapping
+        Empty without background errors; else ``file``, the background's error model
+        (``models/errors/background_<machine>.toml`` for the shipped one, None for a model
+        given as such), and ``nonzero_count``, how many of its parameters are non-zero.
     """
 
     paper: str
@@ -232,6 +243,7 @@ class Result:
     elapsed_s: Mapping[str, float]
     not_identified: Mapping[str, float] = field(default_factory=dict)
     realism: tuple[str, ...] = ()
+    background: Mapping = field(default_factory=dict)
 
     def figure(self, name: str) -> Figure:
         """The figure called ``name``."""
@@ -254,6 +266,7 @@ class Result:
             "details": dict(self.evaluation.details),
             "elapsed_s": dict(self.elapsed_s),
             **({"not_identified": list(self.not_identified)} if self.not_identified else {}),
+            **({"background": dict(self.background)} if self.background else {}),
         }
 
 
@@ -339,14 +352,7 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
     programs = step("compensate", procedure.compensate, identified)
     evaluation = step("evaluate", procedure.evaluate, lab, identified, programs)
     clock["total_s"] = time.perf_counter() - began
-    truth = lab.reveal().parameters()
-    injected = {name: value for name, value in truth.items()
-                if value != 0.0 or name in identified.parameters}
-    for name in identified.parameters:
-        injected.setdefault(name, 0.0)
-    own = lab.reveal(background=False).parameters()
-    not_identified = {name: value for name, value in own.items()
-                      if value != 0.0 and name not in identified.parameters}
+    injected, not_identified, background = _truth(lab, identified.parameters)
     return Result(
         paper=procedure.paper, procedure=procedure.name, machine=lab.machine.name,
         seed=lab.seed, noise=lab.noise, injected=MappingProxyType(injected),
@@ -354,4 +360,70 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
         measurements=measurements, identification=identified,
         programs=MappingProxyType(dict(programs)), evaluation=evaluation,
         elapsed_s=MappingProxyType(clock), not_identified=MappingProxyType(not_identified),
-        realism=lab.realism.on)
+        realism=lab.realism.on, background=MappingProxyType(background))
+
+
+def _truth(lab, identified: Mapping) -> tuple[dict, dict, dict]:
+    """A `Result`'s ``injected``, ``not_identified`` and ``background``, from the lab's
+    truth, after the procedure has finished.
+
+    Each identified parameter takes the value the machine had (`Lab.reveal`: the injected
+    errors plus the machine's background), what its identification is compared with; every
+    other name is the injected model's own (``reveal(background=False)``), as its file wrote
+    it. The sum of a polynomial and a table is a table of up to thousands of entries
+    (`machinesim.background.add_errors`), whose ``component.X.EYX[2]`` is an entry where the
+    injected model's is a coefficient: neither its entries nor the background's are listed,
+    and an identified component parameter whose name means one thing in the truth and
+    another in the injected or background model has no true value here (the report reads
+    NaN) rather than the wrong one. The background is summarised: its file and how many of
+    its parameters are non-zero.
+    """
+    truth, own, extra = lab.reveal(), lab.reveal(background=False), lab.reveal_background()
+    true, written = truth.parameters(), own.parameters()
+    injected = {}
+    for name in {**dict.fromkeys(written), **dict.fromkeys(identified)}:
+        if name in identified:
+            if _one_meaning(name, truth, (own, extra)):
+                injected[name] = true.get(name, 0.0)
+        elif written[name] != 0.0:
+            injected[name] = written[name]
+    not_identified = {name: value for name, value in written.items()
+                      if value != 0.0 and name not in identified}
+    count = sum(value != 0.0 for value in extra.parameters().values())
+    background = {} if count == 0 else {"file": _file(extra.source), "nonzero_count": count}
+    return injected, not_identified, background
+
+
+def _one_meaning(name: str, truth, models) -> bool:
+    """Whether the parameter ``name`` means in ``truth`` what it means in each of ``models``
+    that holds it: a component parameter is a table entry or a polynomial coefficient, and
+    entry k of a table on other positions is another error."""
+    if not name.startswith("component."):
+        return True
+    axis, rest = name.removeprefix("component.").split(".", 1)
+    symbol = rest.split("[", 1)[0]
+    held = truth.component.get(axis, {}).get(symbol)
+    for model in models:
+        error = model.component.get(axis, {}).get(symbol)
+        if error is None:
+            continue
+        if held is None or error.kind != held.kind or (
+                error.kind == "table" and not np.array_equal(error.positions, held.positions)):
+            return False
+    return True
+
+
+def _file(source: str | None) -> str | None:
+    """A background's file as summary.json names it: a shipped one relative to the project
+    (``models/errors/background_<machine>.toml``), another as given, None for a model given
+    as such."""
+    if source is None:
+        return None
+    from pathlib import Path
+
+    from machinesim.machines import models_dir
+
+    path, shipped = Path(source).resolve(), models_dir().resolve()
+    if path.is_relative_to(shipped):
+        return f"models/{path.relative_to(shipped).as_posix()}"
+    return source

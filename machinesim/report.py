@@ -332,8 +332,9 @@ def check_summary(data: Mapping) -> None:
     SI values, ``identified`` maps them to ``{"value", "std"}`` (a number, and a number >= 0
     or null); ``figures`` is a list of objects with `FIGURE_KEYS` (numbers or null, the
     ``unit`` one of `machinesim.experiment.FIGURE_UNITS`, an optional ``note`` and an
-    optional ``after_std`` >= 0); ``seed`` >= 0; ``files`` a list of names; every other
-    numeric key names its unit.
+    optional ``after_std`` >= 0); ``seed`` >= 0; ``files`` a list of names; the optional
+    ``background`` ``{"file": name or null, "nonzero_count": n >= 1}``; every other numeric
+    key names its unit.
     """
     from machinesim.errors.model import _PARAMETER_RE
     from machinesim.experiment import FIGURE_UNITS
@@ -394,6 +395,15 @@ def check_summary(data: Mapping) -> None:
         refuse(f"expected 'files' as a list of file names, got {files!r}", "files")
     if "budget" in data:
         _check_budget(data["budget"])
+    if "background" in data:
+        background = data["background"]
+        if (not isinstance(background, Mapping) or set(background) != {"file", "nonzero_count"}
+                or not isinstance(background["file"], (str, type(None)))
+                or not isinstance(background["nonzero_count"], int)
+                or isinstance(background["nonzero_count"], bool)
+                or background["nonzero_count"] < 1):
+            refuse('expected \'background\' as {"file": name or null, "nonzero_count": n >= 1}'
+                   f", got {background!r}", "background")
     rest = {k: v for k, v in data.items() if k not in SUMMARY_KEYS and k != "budget"}
     check_units(rest)
 

@@ -268,7 +268,7 @@ def test_run_tells_its_progress_step_by_step_in_order():
 def test_injected_parameters_the_procedure_does_not_identify_are_named(tmp_path):
     """A procedure identifies its model's parameters; what else was injected is listed, in
     Result, summary.json and identified.md, rather than left out of the report unseen (the
-    machine's background errors apart: they are in ``injected``, not injected by the user)."""
+    machine's background errors apart: they are summarised, not injected by the user)."""
     from machinesim.experiment import Evaluation, Figure, Identified, run
     from machinesim.realism import Realism
     from machinesim.report import ReportFolder
@@ -292,10 +292,11 @@ def test_injected_parameters_the_procedure_does_not_identify_are_named(tmp_path)
                 "location": {"B": {"EX0B_um": 2.0}}, "tool": {"offset_um": [0.0, -1.5, 0.0]}}
     lab = Lab("robonano_a0ib", injected, seed=1, realism=Realism.lab())
     result = run(WorkpieceX(), lab)
-    # as injected: the machine's background (in ``injected``) adds to EX0B, and is no part
-    # of the list
+    # as injected: the machine's background adds to EX0B, and is no part of the list nor of
+    # ``injected``, which holds the identified workpiece.x and the rest as the user gave it
     assert dict(result.not_identified) == {"tool.y": -1.5e-6, "location.B.EX0B": 2e-6}
-    assert len(result.injected) > 10 and result.injected["location.B.EX0B"] != 2e-6
+    assert dict(result.injected) == {"tool.y": -1.5e-6, "workpiece.x": 3e-6,
+                                     "location.B.EX0B": 2e-6}
     folder = ReportFolder(tmp_path / "report")
     text = folder.write_result(result)
     assert ("Injected and not among the identified parameters: tool.y (-1.500000e-06), "
@@ -326,6 +327,93 @@ def test_injected_parameters_the_procedure_does_not_identify_are_named(tmp_path)
     text = ReportFolder(tmp_path / "tables").write_result(run(WorkpieceX(), lab))
     assert ("Injected and not among the identified parameters: component.X.EXX "
             "(2 table entries).") in text
+
+
+def test_injected_lists_the_injected_model_as_written_not_the_tabulated_sum(tmp_path):
+    """A polynomial injected on an axis whose background is a table makes the truth a table
+    of thousands of entries (`add_errors`); ``injected`` listed every one (21,316 on
+    grooving_4axis with models/errors/example.toml), and ``component.X.EYX[2]`` there was a
+    table entry where the user's file and ``not_identified`` gave a coefficient. Now it holds
+    the identified parameters' true values and the rest as the file wrote them; the
+    background is a count and its file."""
+    import tomllib
+
+    from machinesim.experiment import Evaluation, Figure, Identified, run
+    from machinesim.realism import Realism
+    from machinesim.report import ReportFolder, check_summary
+
+    class CentreX:
+        name, paper = "centre_x", "none"
+
+        def __init__(self, names=("location.C.EX0C",)):
+            self.names = names
+
+        def measure(self, lab):
+            return 0.0
+
+        def identify(self, measurements):
+            return Identified({name: (measurements, 1e-9) for name in self.names}, None)
+
+        def compensate(self, identified):
+            return {}
+
+        def evaluate(self, lab, identified, programs):
+            return Evaluation((Figure("x", "um", 1.0, 0.0),))
+
+    def errors(curvature_um_mm2):
+        return {"location": {"C": {"EX0C_um": 2.0, "EB0C_urad": 15.0}},
+                "component": {"X": {"EYX_poly_um_mm": [0.0, 0.5, curvature_um_mm2]}}}
+
+    results, sizes = [], []
+    for curvature in (2e-5, 2e-3):
+        lab = Lab("grooving_4axis", errors(curvature), seed=1, realism=Realism.lab())
+        sizes.append(len(lab.reveal().parameters()))
+        results.append(run(CentreX(), lab))
+    # the truth's tabulation grows with the curvature (finer spacing); injected does not
+    assert 1000 < sizes[0] < sizes[1]
+    for result, curvature in zip(results, (2e-5, 2e-3), strict=True):
+        # EX0C identified: 2 um injected + 0.3 um of background_grooving_4axis.toml
+        assert dict(result.injected) == pytest.approx(
+            {"location.C.EX0C": 2.3e-6, "location.C.EB0C": 15e-6,
+             "component.X.EYX[1]": 0.5e-6 / 1e-3, "component.X.EYX[2]": curvature * 1e-6 / 1e-6},
+            rel=1e-15, abs=0.0)
+    # the background, summarised: its file and its non-zero values, counted from the file
+    shipped = tomllib.loads((ROOT / "models/errors/background_grooving_4axis.toml").read_text())
+    nonzero = sum(value != 0.0 for kind in ("location", "component")
+                  for table in shipped[kind].values() for key, values in table.items()
+                  if not key.startswith("position")
+                  for value in (values if isinstance(values, list) else [values]))
+    assert nonzero > 20
+    assert dict(results[0].background) == {
+        "file": "models/errors/background_grooving_4axis.toml", "nonzero_count": nonzero}
+    # the report round-trips: summary.json holds what Result holds, and passes its schema
+    ReportFolder(tmp_path / "report").write_result(results[0])
+    summary = json.loads((tmp_path / "report/summary.json").read_text())
+    check_summary(summary)
+    assert summary["injected"] == dict(results[0].injected)
+    assert summary["background"] == dict(results[0].background)
+    assert summary["not_identified"] == ["location.C.EB0C", "component.X.EYX[1]",
+                                         "component.X.EYX[2]"]
+    rows = json.loads((tmp_path / "report/identified.json").read_text())["rows"]
+    assert rows == [["location.C.EX0C", pytest.approx(2.3e-6, rel=1e-15), 0.0, 1e-9,
+                     pytest.approx(-2.3e-6, rel=1e-15)]]
+    # a procedure naming component.X.EYX[2] (a coefficient in the user's file, a table entry
+    # in the truth) gets no true value rather than one of the other meaning
+    named = run(CentreX(("component.X.EYX[2]", "component.X.EXX[1]")),
+                Lab("grooving_4axis", errors(2e-5), seed=1, realism=Realism.lab()))
+    assert "component.X.EYX[2]" not in named.injected
+    assert "component.X.EXX[1]" not in named.injected  # the background's, on other positions
+    ReportFolder(tmp_path / "named").write_result(named)
+    rows = json.loads((tmp_path / "named/identified.json").read_text())["rows"]
+    assert [row[1] for row in rows] == [None, None]  # NaN: no true value of that meaning
+    # without a background nothing is summarised, and a table entry has one meaning
+    plain = run(CentreX(("component.X.EXX[1]",)),
+                Lab("grooving_4axis", {"component": {"X": {"position_mm": [-100.0, 0.0, 100.0],
+                                                           "EXX_um": [1.0, 0.5, -1.0]}}},
+                    noise=False))
+    assert dict(plain.injected) == {"component.X.EXX[0]": 1e-6, "component.X.EXX[1]": 0.5e-6,
+                                    "component.X.EXX[2]": -1e-6}
+    assert not plain.background and "background" not in plain.summary()
 
 
 def test_the_api_refuses_what_it_cannot_use_with_a_machinesim_error():

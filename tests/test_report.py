@@ -49,7 +49,12 @@ def test_the_summary_schema_is_enforced(tmp_path):
     figure = {"name": "a_dx", "unit": "um", "before": 490.0, "after": None,
               "paper_before": 490.04, "paper_after": 4.06}
     check_summary(base)
+    check_summary({**base, "background": {"file": None, "nonzero_count": 3}})
     for change, message in (({"seed": True}, "'seed' as int"),
+                            # the background is a file and a count, not its parameters
+                            ({"background": {"location.C.EX0C": 3e-7}}, "'background' as"),
+                            ({"background": {"file": None, "nonzero_count": 0}},
+                             "nonzero_count"),
                             ({"injected": {"r_mm": 1.0}}, "not an error parameter name"),
                             ({"identified": {"tool.x": 1.0}}, '"value": v'),
                             ({"figures": [{"name": "a"}]}, "lacks unit"),

@@ -418,8 +418,9 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
     Returns
     -------
     dict
-        ``trial``, ``drawn`` (varied parameters, SI), ``injected`` (the lab's truth as
-        `machinesim.experiment.run` reports it), ``identified`` (name -> [value, std]),
+        ``trial``, ``drawn`` (varied parameters, SI), ``injected`` (`Result.injected`: the
+        identified parameters' true values, the injected model's other non-zero ones),
+        ``identified`` (name -> [value, std]),
         ``figures`` (name -> [unit, before, after, after_std]; after_std NaN where the
         procedure states none), ``elapsed_s``, ``error`` (None, or the
         message of the `MachineSimError` the trial ended with: a failed identification is a
