@@ -226,6 +226,10 @@ class Result:
         Empty without background errors; else ``file``, the background's error model
         (``models/errors/background_<machine>.toml`` for the shipped one, None for a model
         given as such), and ``nonzero_count``, how many of its parameters are non-zero.
+    polynomials : tuple of str
+        The component errors the injected model gives as polynomials (``component.X.EYX``):
+        their parameters in ``injected`` and ``not_identified`` are coefficients, the other
+        component parameters table entries.
     """
 
     paper: str
@@ -244,6 +248,7 @@ class Result:
     not_identified: Mapping[str, float] = field(default_factory=dict)
     realism: tuple[str, ...] = ()
     background: Mapping = field(default_factory=dict)
+    polynomials: tuple[str, ...] = ()
 
     def figure(self, name: str) -> Figure:
         """The figure called ``name``."""
@@ -352,7 +357,7 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
     programs = step("compensate", procedure.compensate, identified)
     evaluation = step("evaluate", procedure.evaluate, lab, identified, programs)
     clock["total_s"] = time.perf_counter() - began
-    injected, not_identified, background = _truth(lab, identified.parameters)
+    injected, not_identified, background, polynomials = _truth(lab, identified.parameters)
     return Result(
         paper=procedure.paper, procedure=procedure.name, machine=lab.machine.name,
         seed=lab.seed, noise=lab.noise, injected=MappingProxyType(injected),
@@ -360,12 +365,13 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
         measurements=measurements, identification=identified,
         programs=MappingProxyType(dict(programs)), evaluation=evaluation,
         elapsed_s=MappingProxyType(clock), not_identified=MappingProxyType(not_identified),
-        realism=lab.realism.on, background=MappingProxyType(background))
+        realism=lab.realism.on, background=MappingProxyType(background),
+        polynomials=polynomials)
 
 
-def _truth(lab, identified: Mapping) -> tuple[dict, dict, dict]:
-    """A `Result`'s ``injected``, ``not_identified`` and ``background``, from the lab's
-    truth, after the procedure has finished.
+def _truth(lab, identified: Mapping) -> tuple[dict, dict, dict, tuple[str, ...]]:
+    """A `Result`'s ``injected``, ``not_identified``, ``background`` and ``polynomials``,
+    from the lab's truth, after the procedure has finished.
 
     Each identified parameter takes the value the machine had (`Lab.reveal`: the injected
     errors plus the machine's background), what its identification is compared with; every
@@ -391,7 +397,9 @@ def _truth(lab, identified: Mapping) -> tuple[dict, dict, dict]:
                       if value != 0.0 and name not in identified}
     count = sum(value != 0.0 for value in extra.parameters().values())
     background = {} if count == 0 else {"file": _file(extra.source), "nonzero_count": count}
-    return injected, not_identified, background
+    polynomials = tuple(f"component.{axis}.{symbol}" for axis, table in own.component.items()
+                        for symbol, error in table.items() if error.kind == "poly")
+    return injected, not_identified, background, polynomials
 
 
 def _one_meaning(name: str, truth, models) -> bool:

@@ -90,10 +90,10 @@ def identified_notes(result) -> str:
     if result.not_identified:
         notes.append(
             "Injected and not among the identified parameters: "
-            f"{_parameter_list(result.not_identified)}. The procedure's model does not "
-            "hold them as such (or it measures them without naming them, as a "
-            "compensation table does): what they do shows in the errors above and in "
-            "the figures after.")
+            f"{_parameter_list(result.not_identified, result.polynomials)}. The procedure's "
+            "model does not hold them as such (or it measures them without naming them, as "
+            "a compensation table does): what they do shows in the errors above and in the "
+            "figures after.")
     if not result.noise:
         notes.append(
             "The lab's instruments had no noise: each std holds what the readings' "
@@ -297,9 +297,10 @@ class ReportFolder:
         return target
 
 
-def _parameter_list(values: Mapping[str, float]) -> str:
+def _parameter_list(values: Mapping[str, float], polynomials=()) -> str:
     """``name (value)`` for each parameter, SI; a component table's entries as one item,
-    ``component.X.EXX (6 table entries)``."""
+    ``component.X.EXX (6 table entries)``, and so a polynomial's coefficients, those of
+    the errors named in ``polynomials``: ``component.X.EYX (2 polynomial coefficients)``."""
     tables: dict[str, int] = {}
     items = []
     for name, value in values.items():
@@ -310,8 +311,13 @@ def _parameter_list(values: Mapping[str, float]) -> str:
             tables[table] = tables.get(table, 0) + 1
         else:
             items.append(f"{name} ({value:.6e})")
-    return ", ".join(f"{item} ({tables[item]} table entr{'ies' if tables[item] > 1 else 'y'})"
-                     if item in tables else item for item in items)
+    def count(item: str) -> str:
+        n = tables[item]
+        if item in polynomials:
+            return f"{n} polynomial coefficient{'s' if n > 1 else ''}"
+        return f"{n} table entr{'ies' if n > 1 else 'y'}"
+
+    return ", ".join(f"{item} ({count(item)})" if item in tables else item for item in items)
 
 
 def _cell(value):

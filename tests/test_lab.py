@@ -394,6 +394,11 @@ def test_injected_lists_the_injected_model_as_written_not_the_tabulated_sum(tmp_
     assert summary["background"] == dict(results[0].background)
     assert summary["not_identified"] == ["location.C.EB0C", "component.X.EYX[1]",
                                          "component.X.EYX[2]"]
+    # identified.md's note names them as what they are: coefficients, not table entries
+    assert results[0].polynomials == ("component.X.EYX",)
+    assert ("Injected and not among the identified parameters: location.C.EB0C "
+            "(1.500000e-05), component.X.EYX (2 polynomial coefficients).") in (
+        tmp_path / "report/identified.md").read_text()
     rows = json.loads((tmp_path / "report/identified.json").read_text())["rows"]
     assert rows == [["location.C.EX0C", pytest.approx(2.3e-6, rel=1e-15), 0.0, 1e-9,
                      pytest.approx(-2.3e-6, rel=1e-15)]]
