@@ -434,6 +434,65 @@ def test_another_campaign_in_the_same_folder_is_refused(campaign):
     assert "seed: 11 there, 12 now" in str(info.value) and str(out) in str(info.value)
 
 
+
+def test_a_distribution_spelt_otherwise_resumes_the_same_campaign(campaign, tmp_path,
+                                                                    monkeypatch):
+    # --vary texts were compared as text: normal:-0.178mm,0.02mm for normal:-178um,20um was
+    # refused as another campaign ("holds another campaign (vary: ... there, ... now)")
+    source, vary, ds = campaign
+    (tmp_path / "trials").mkdir()
+    for name in ("campaign.json", "trials/trial_000000.json", "trials/trial_000001.json"):
+        (tmp_path / name).write_bytes((source / name).read_bytes())
+    stored = (tmp_path / "campaign.json").read_text()
+    ran = []
+    real = runner.run_trial
+
+    def counting(spec, i):
+        ran.append(i)
+        return real(spec, i)
+
+    monkeypatch.setattr(runner, "run_trial", counting)
+    spelt = ["tool.y=normal:-0.178mm,0.02mm", "microscope.sigma = uniform:5 nm,0.06um"]
+    again = run("tool_rotation_arm", 3, vary=spelt, seed=11, out=tmp_path, workers=0,
+                progress=False, report=False, **ARM)
+    assert ran == [2]
+    # trial 2 drew from the texts the campaign began with, in their order: 0.06um is 6e-08
+    # and 60nm 6.000000000000001e-08 in floats, and trial 2's sigma from the new text
+    # 3.846127131519505e-08, not 3.8461271315195055e-08
+    for name in ("drawn", "identified", "identified_std", "injected"):
+        assert np.array_equal(again[name].values, ds[name].values), name
+    assert (tmp_path / "campaign.json").read_text() == stored
+    assert json.loads(again.attrs["vary"]) == json.loads(stored)["vary"]
+    # given in another order, the Dataset keeps the campaign's order (no trial runs)
+    flipped = run("tool_rotation_arm", 3, vary=spelt[::-1], seed=11, out=tmp_path,
+                  workers=0, progress=False, report=False, **ARM)
+    assert list(flipped["varied"].values) == ["tool.y", "microscope.sigma"]
+    assert np.array_equal(flipped["drawn"].values, ds["drawn"].values)
+    # another distribution is still another campaign, both shown
+    with pytest.raises(InputError) as info:
+        run("tool_rotation_arm", 3, vary=["tool.y=normal:-0.178mm,0.021mm", spelt[1]],
+            seed=11, out=tmp_path, workers=0, progress=False, report=False, **ARM)
+    assert "'normal:-178um,20um'" in str(info.value)
+    assert "'normal:-0.178mm,0.021mm'" in str(info.value)
+    assert ran == [2]
+
+
+@pytest.mark.parametrize(("now", "same"), [
+    ({"tool.y": "fixed:0.01 mm"}, True),
+    ({"tool.y": "1e-5m"}, True),
+    ({"tool.y": "10.001um"}, False),
+    ({"tool.y": "normal:10um,1nm"}, False),
+    ({"tool.y": "10um", "tool.z": "0"}, False),
+])
+def test_same_campaign_compares_distributions_by_meaning(now, same):
+    from machinesim.campaign.results import same_campaign
+
+    old = {"procedure": "tool_rotation_arm", "seed": 1, "vary": {"tool.y": "10um"}}
+    assert same_campaign(old, {**old, "vary": now}) is same
+    assert same_campaign(old, {**old, "seed": 2}) is False
+    assert same_campaign({**old, "vary": {"tool.y": "10 furlong"}}, {**old, "vary": now}) \
+        is False
+
 # ------------------------------------------------------------------------------ statistics
 
 

@@ -4,7 +4,8 @@
 one trial's record (`machinesim.campaign.trials.run_trial`), each written atomically as the
 trial completes (`machinesim._io.write_atomic`). Run again on the same DIR, a campaign reads
 the trials already there and computes only the missing ones; a DIR holding another campaign
-(another procedure, seed or distribution) is refused, never mixed.
+(another procedure, seed or distribution) is refused, never mixed; a distribution spelt
+otherwise (``10nm``, ``0.01um``) is the same one (`same_campaign`).
 
 ``DIR/campaign.nc`` (netCDF 3, xarray's scipy engine) is the Dataset `assemble` builds, written
 whole or not at all:
@@ -44,7 +45,8 @@ import numpy as np
 from machinesim._io import check_writable, json_text, read_json, write_atomic
 from machinesim.exceptions import FileError, InputError, brief
 
-__all__ = ["CampaignFolder", "assemble", "finished_trials", "versions"]
+__all__ = ["CampaignFolder", "assemble", "finished_trials", "same_campaign",
+           "versions"]
 
 
 def versions() -> dict:
@@ -87,7 +89,9 @@ class CampaignFolder:
     path : str or Path
         DIR; created when missing.
     spec : dict
-        `CampaignSpec.describe`: written to campaign.json, or checked against it.
+        `CampaignSpec.describe`: written to campaign.json, or checked against it
+        (`same_campaign`: a distribution spelt otherwise is the same); ``self.spec`` is then
+        campaign.json's, with the texts the campaign was begun with.
     """
 
     def __init__(self, path, spec: dict) -> None:
@@ -109,12 +113,13 @@ class CampaignFolder:
             if not isinstance(old, dict):
                 raise InputError(f"{brief(repr(old))}; expected the campaign spec, an object "
                                  "(procedure, seed, noise, vary, ...)", source=str(stored))
-            if old != spec:
+            if not same_campaign(old, spec):
                 diff = ", ".join(f"{k}: {old.get(k)!r} there, {spec.get(k)!r} now"
                                  for k in sorted(set(old) | set(spec))
                                  if old.get(k) != spec.get(k))
                 raise InputError(f"holds another campaign ({diff}); give another --out or "
                                  "empty it", source=str(self.path))
+            spec = old  # the texts the campaign was begun with, when spelt otherwise now
         else:
             write_atomic(stored, json_text(spec, "campaign spec"))
         self.spec = spec
@@ -164,6 +169,33 @@ class CampaignFolder:
         path = self.path / name
         write_atomic(path, bytes(dataset.to_netcdf()))
         return path
+
+
+def same_campaign(old: dict, new: dict) -> bool:
+    """True when the campaign specs ``old`` (campaign.json) and ``new``
+    (`CampaignSpec.describe`) run the same trials: equal but for how each ``vary``
+    distribution is spelt, which is compared by its meaning, the kind and its numbers in SI
+    (``uniform:10nm,20nm``, ``uniform:10 nm,0.02um``; within 1e-12 relative, the rounding
+    of the units' factors). A stored text that no longer parses is not the same."""
+    from machinesim.campaign.distributions import parse_distribution
+
+    if old == new:
+        return True
+    if {k: v for k, v in old.items() if k != "vary"} != \
+            {k: v for k, v in new.items() if k != "vary"}:
+        return False
+    before, now = old.get("vary"), new.get("vary")
+    if not isinstance(before, dict) or not isinstance(now, dict) or set(before) != set(now):
+        return False
+    for name, text in now.items():
+        try:
+            a, b = parse_distribution(before[name], name), parse_distribution(text, name)
+        except (InputError, TypeError):
+            return False
+        if a.kind != b.kind or not all(math.isclose(x, y, rel_tol=1e-12, abs_tol=0.0)
+                                       for x, y in ((a.a, b.a), (a.b, b.b))):
+            return False
+    return True
 
 
 def _number(value) -> bool:

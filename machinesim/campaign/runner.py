@@ -10,6 +10,7 @@ machinesim installed). ``workers=0`` runs the trials here, one after the other, 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import logging
 import os
 import signal
@@ -23,7 +24,7 @@ import numpy as np
 
 from machinesim._cores import usable_cores
 from machinesim._io import _ctrl_c_deferred
-from machinesim.campaign.distributions import Distribution, parse_vary
+from machinesim.campaign.distributions import Distribution, parse_distribution, parse_vary
 from machinesim.campaign.results import CampaignFolder, assemble, finished_trials
 from machinesim.campaign.summary import write_report
 from machinesim.campaign.trials import CampaignSpec, check_flag, run_trial
@@ -330,6 +331,13 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
     if scheduler is not None:  # before the folder is made: nothing written for a wrong address
         check_scheduler(scheduler)
     folder = CampaignFolder(out, spec.describe())
+    stored = folder.spec["vary"]
+    if list(stored.items()) != list(spec.describe()["vary"].items()):
+        # the same distributions spelt otherwise (10nm, 0.01um) or given in another order:
+        # the missing trials draw from the texts the campaign was begun with, to the last
+        # bit as its first trials did, and the Dataset keeps its order of them
+        spec = dataclasses.replace(spec, vary=tuple(
+            (name, parse_distribution(text, name)) for name, text in stored.items()))
     done = folder.done(spec.trials)
     beyond = [i for i in finished_trials(folder.path) if i >= spec.trials]
     if beyond:  # not progress: said under --quiet too, the summary is of fewer trials
