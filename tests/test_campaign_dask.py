@@ -242,3 +242,49 @@ def test_workers_drop_only_the_heartbeat_that_found_the_scheduler_gone():
 
     assert not _worker_setup._not_a_lost_heartbeat(record(f"{_worker_setup.HEARTBEAT_LOST}."))
     assert _worker_setup._not_a_lost_heartbeat(record("Compute Failed"))
+
+
+def test_a_large_campaign_keeps_a_few_trials_per_thread_in_flight(tmp_path, monkeypatch):
+    """client.map sent every trial at once: --trials 100000 held 1.3 GB and 30 s in the
+    client and scheduler before the first trial started, and as long to cancel on a Ctrl-C.
+    The trials are sent as others finish: at most 2 per worker thread, 4 at least."""
+    from distributed import Client
+
+    import machinesim.campaign.runner as runner
+    from machinesim.campaign.results import CampaignFolder
+
+    def trial(spec, i):  # a trial of nothing, in this process's one worker thread
+        return {"trial": i, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+                "elapsed_s": 0.0, "error": None}
+
+    class Counting:
+        def __init__(self, client):
+            self.client, self.sent = client, 0
+
+        def submit(self, *args, **options):
+            self.sent += 1
+            return self.client.submit(*args, **options)
+
+        def map(self, function, *iterables, **options):
+            self.sent += len(iterables[0])
+            return self.client.map(function, *iterables, **options)
+
+        def __getattr__(self, name):
+            return getattr(self.client, name)
+
+    in_flight = []
+    write = CampaignFolder.write_trial
+
+    def written(folder, record):
+        in_flight.append(spy.sent - len(in_flight))
+        write(folder, record)
+
+    monkeypatch.setattr(runner, "run_trial", trial)
+    monkeypatch.setattr(CampaignFolder, "write_trial", written)
+    with Client(processes=False, n_workers=1, threads_per_worker=1,
+                dashboard_address=None) as client:
+        spy = Counting(client)
+        ds = run("tool_rotation_arm", 40, out=tmp_path, client=spy, progress=False,
+                 report=False, identify_only=True)
+    assert ds.sizes["trial"] == 40 and spy.sent == 40
+    assert len(in_flight) == 40 and max(in_flight) == 4  # runner.MIN_IN_FLIGHT

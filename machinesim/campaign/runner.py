@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import itertools
 import logging
+import math
 import os
 import signal
 import sys
@@ -249,6 +251,28 @@ def _one_core_each(dask_worker) -> None:
     chords.WORKERS = fastscan.WORKERS = 1
 
 
+#: Trials a campaign keeps in flight on Dask per worker thread (one running, one waiting
+#: to start as it finishes), and at least (while a cluster's workers join).
+IN_FLIGHT_PER_THREAD, MIN_IN_FLIGHT = 2, 4
+
+
+class _Window:
+    """How many trials to keep in flight on ``client``'s cluster: `IN_FLIGHT_PER_THREAD` per
+    worker thread, `MIN_IN_FLIGHT` at least; the threads counted again every ``every_s``
+    seconds, so that workers joining a cluster (or leaving it) get trials (or not)."""
+
+    def __init__(self, client, every_s: float = 5.0) -> None:
+        self.client, self.every_s = client, every_s
+        self.counted, self.threads = -math.inf, 0
+
+    def size(self) -> int:
+        now = time.monotonic()
+        if now - self.counted >= self.every_s:
+            self.threads = sum(self.client.nthreads().values())
+            self.counted = now
+        return max(MIN_IN_FLIGHT, IN_FLIGHT_PER_THREAD * self.threads)
+
+
 def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder, progress,
              workers, scheduler, client) -> None:
     if not missing:
@@ -264,9 +288,19 @@ def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder, pro
     client, cluster = _client(workers, scheduler, client, len(missing))
     owned = cluster is not None or scheduler is not None
     try:
-        futures = client.map(run_trial, [spec] * len(missing), missing, pure=False)
-        for future in as_completed(futures):
-            record = future.result()
+        # a few trials per thread in flight, the next sent as one finishes: all of them at
+        # once (client.map) held 100000 tasks in the client and the scheduler, 1.3 GB and
+        # 30 s before the first trial started, and as long again to cancel on a Ctrl-C
+        waiting, window = iter(missing), _Window(client)
+        running, in_flight = as_completed(), 0
+        while True:
+            for i in itertools.islice(waiting, max(0, window.size() - in_flight)):
+                running.add(client.submit(run_trial, spec, i, pure=False))
+                in_flight += 1
+            if not in_flight:
+                break
+            record = next(running).result()
+            in_flight -= 1
             folder.write_trial(record)
             progress.step(record)
     finally:
