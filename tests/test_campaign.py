@@ -111,6 +111,37 @@ def test_a_parameter_draws_the_same_whatever_else_varies():
     assert len({draw(one, i)[0]["tool.y"] for i in range(4)}) == 4
 
 
+
+def test_a_trial_draws_its_varied_parameters_once_and_a_spec_reads_its_base_model_once(
+        monkeypatch):
+    # run_trial drew every varied parameter twice (the record's, then the lab's), and a
+    # campaign's spec read and checked its base model (paper 003's tables) twice
+    from machinesim.campaign.distributions import Distribution
+    from machinesim.errors import ErrorModel
+
+    read, real_read = [], ErrorModel.from_toml.__func__
+
+    def reading(cls, *args, **options):
+        read.append(args[0])
+        return real_read(cls, *args, **options)
+
+    monkeypatch.setattr(ErrorModel, "from_toml", classmethod(reading))
+    spec = CampaignSpec("xy_plane_errors", 1,
+                        (parse_vary("laser_interferometer.sigma=uniform:10nm,20nm"),),
+                        identify_only=True)
+    assert len(read) == 1
+    drawn, real_draw = [], Distribution.draw
+
+    def drawing(self, rng):
+        drawn.append(real_draw(self, rng))
+        return drawn[-1]
+
+    monkeypatch.setattr(Distribution, "draw", drawing)
+    record = run_trial(spec, 0)
+    assert record["error"] is None
+    assert drawn == [record["drawn"]["laser_interferometer.sigma"]]
+    assert len(read) == 2  # and the trial's own base model: one more
+
 def test_robot_landing_scatter_matches_the_repeatability():
     # ISO 9283 RP of an isotropic Gaussian scatter: RP = (2 sqrt(2/pi) + 3 sqrt(3 - 8/pi)) s
     spec = CampaignSpec("workpiece_setting", 1, (parse_vary("robot.repeatability=50um"),))

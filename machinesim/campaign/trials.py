@@ -286,8 +286,9 @@ class CampaignSpec:
                 raise InputError(f"--vary {name}: expected a Distribution, got "
                                  f"{type(dist).__name__}", key="--vary")
         object.__setattr__(self, "vary", vary)
-        known = set(self.error_parameters()) | set(LAB_PARAMETERS)
-        used = self.parameters()
+        errors = self.error_parameters()  # the base model read and checked once, not twice
+        known = set(errors) | set(LAB_PARAMETERS)
+        used = self._parameters(errors)
         what = self.procedure + " --identify-only" * self.identify_only
         for name in names:
             if name not in known:  # the list: what may vary here, not what is then refused
@@ -329,10 +330,13 @@ class CampaignSpec:
         (`LAB_PARAMETERS`) and ``tool_geometry.nose_radius`` those the procedure reads, as
         its ``lab_uses`` declares them (`machinesim.experiment.LAB_USES`; with
         ``identify_only``, its measurement's alone)."""
+        return self._parameters(self.error_parameters())
+
+    def _parameters(self, error_parameters: tuple[str, ...]) -> tuple[str, ...]:
         from machinesim.experiment import LAB_USES
 
         uses = {use for step in self.build().lab_uses.values() for use in step}
-        known = [*self.error_parameters(), *LAB_PARAMETERS]
+        known = [*error_parameters, *LAB_PARAMETERS]
         return tuple(sorted(name for name in known
                             if _head(name) not in LAB_USES or _head(name) in uses))
 
@@ -402,14 +406,19 @@ def draw(spec: CampaignSpec, i: int) -> tuple[dict, dict, dict]:
     """Trial ``i``'s draws: ``(drawn, errors, lab)``: the varied parameters' values, the
     error parameters injected (defaults, robot landing, drawn: later wins) and the lab
     parameters, all SI."""
-    child = trial_seed(spec.seed, i)
     drawn = _drawn(spec, i)
+    return (drawn, *_set_up(spec, i, drawn))
+
+
+def _set_up(spec: CampaignSpec, i: int, drawn: dict) -> tuple[dict, dict]:
+    """``(errors, lab)`` of trial ``i`` whose varied parameters drew ``drawn`` (`draw`)."""
+    child = trial_seed(spec.seed, i)
     lab = {**spec.entry.lab, **{n: v for n, v in drawn.items() if n in LAB_PARAMETERS}}
     errors = dict(spec.entry.defaults(spec.machine))
     if "robot.repeatability" in lab:
         errors.update(_landing(lab["robot.repeatability"], stream(child, "campaign", "robot")))
     errors.update({n: v for n, v in drawn.items() if n not in LAB_PARAMETERS})
-    return drawn, errors, lab
+    return errors, lab
 
 
 def run_trial(spec: CampaignSpec, i: int) -> dict:
@@ -429,10 +438,11 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
     from machinesim.lab import Lab
 
     began = time.perf_counter()
-    record = {"trial": int(i), "drawn": _drawn(spec, i), "injected": {}, "identified": {},
+    drawn = _drawn(spec, i)  # once: the record's are the lab's (they were drawn twice)
+    record = {"trial": int(i), "drawn": drawn, "injected": {}, "identified": {},
               "figures": {}, "elapsed_s": math.nan, "error": None}
     try:  # a landing out of the error model's range fails its trial, not the campaign
-        _, errors, lab_parameters = draw(spec, i)
+        errors, lab_parameters = _set_up(spec, i, drawn)
         model = spec.entry.base().with_parameters(errors)
         if spec.entry.check is not None and not spec.identify_only:
             spec.entry.check(model)
