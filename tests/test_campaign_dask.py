@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -288,3 +289,34 @@ def test_a_large_campaign_keeps_a_few_trials_per_thread_in_flight(tmp_path, monk
                  report=False, identify_only=True)
     assert ds.sizes["trial"] == 40 and spy.sent == 40
     assert len(in_flight) == 40 and max(in_flight) == 4  # runner.MIN_IN_FLIGHT
+
+
+def test_the_progress_rate_counts_from_the_first_trial_not_the_clusters_start(
+        tmp_path, monkeypatch, capsys):
+    """The rate and time left counted from before the local cluster started: 8 trials of
+    4 s on 2 workers first showed 0.08 trials/s and 85 s left, some 30 s in truth."""
+    from distributed import Client
+
+    import machinesim.campaign.runner as runner
+
+    def trial(spec, i):
+        return {"trial": i, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+                "elapsed_s": 0.0, "error": None}
+
+    client = Client(processes=False, n_workers=1, threads_per_worker=1,
+                    dashboard_address=None)
+
+    def slow_start(workers, scheduler, given, trials=None):
+        time.sleep(3.0)  # a LocalCluster's start: seconds
+        return client, None
+
+    monkeypatch.setattr(runner, "run_trial", trial)
+    monkeypatch.setattr(runner, "_client", slow_start)
+    try:
+        run("tool_rotation_arm", 2, out=tmp_path, workers=1, report=False,
+            identify_only=True)
+    finally:
+        client.close()
+    first = capsys.readouterr().err.split("\r")[1]
+    rate = float(first.split(" trials/s")[0].rpartition(", ")[2])
+    assert first.startswith("campaign: 1/2 trials") and rate > 1.0, first  # not < 1/3

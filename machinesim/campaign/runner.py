@@ -43,6 +43,12 @@ class _Progress:
         self.done, self.failed, self.began = resumed, 0, time.perf_counter()
         self.shown = False  # a line to end: none when no trial ran (all resumed)
 
+    def start(self) -> None:
+        """The trials begin: the rate and the time left count from here, not from before a
+        local cluster's start (several seconds, which put the first lines' time left at
+        several times the truth)."""
+        self.began = time.perf_counter()
+
     def step(self, record: dict) -> None:
         self.done += 1
         self.failed += record["error"] is not None
@@ -278,6 +284,7 @@ def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder, pro
     if not missing:
         return
     if workers == 0 and scheduler is None and client is None:
+        progress.start()
         for i in missing:
             record = run_trial(spec, i)
             folder.write_trial(record)
@@ -293,6 +300,7 @@ def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder, pro
         # 30 s before the first trial started, and as long again to cancel on a Ctrl-C
         waiting, window = iter(missing), _Window(client)
         running, in_flight = as_completed(), 0
+        progress.start()
         while True:
             for i in itertools.islice(waiting, max(0, window.size() - in_flight)):
                 running.add(client.submit(run_trial, spec, i, pure=False))
