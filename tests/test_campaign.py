@@ -142,6 +142,7 @@ def test_a_trial_draws_its_varied_parameters_once_and_a_spec_reads_its_base_mode
     assert drawn == [record["drawn"]["laser_interferometer.sigma"]]
     assert len(read) == 2  # and the trial's own base model: one more
 
+
 def test_robot_landing_scatter_matches_the_repeatability():
     # ISO 9283 RP of an isotropic Gaussian scatter: RP = (2 sqrt(2/pi) + 3 sqrt(3 - 8/pi)) s
     spec = CampaignSpec("workpiece_setting", 1, (parse_vary("robot.repeatability=50um"),))
@@ -163,6 +164,28 @@ def test_unknown_parameter_and_bad_trials_are_refused():
         CampaignSpec("tool_rotation_arm", 0)
     with pytest.raises(InputError, match="'paper_999'"):
         CampaignSpec("paper_999", 2)
+
+
+def test_an_unknown_parameter_of_paper_003_lists_its_tables_as_ranges_and_a_near_name():
+    # the list offered spelt each of the tables' 104 entries (2500 characters on one line,
+    # the few other names lost among them) and said nothing of a near miss
+    import re
+
+    with pytest.raises(InputError) as info:
+        CampaignSpec("xy_plane_errors", 1, (parse_vary("laser_interferometer.sigm=1nm"),),
+                     identify_only=True)
+    message = str(info.value)
+    assert "(did you mean laser_interferometer.sigma?)" in message
+    offered = message.partition("uses: ")[2].split(", ")
+    assert "component.C.EAC[0..16]" in offered and "component.X.EXX[0..6]" in offered
+    assert len(message) < 1200
+    expanded = []
+    for name in offered:  # the ranges read back are every parameter, each once
+        table = re.fullmatch(r"(.+)\[(\d+)\.\.(\d+)\]", name)
+        expanded += ([f"{table[1]}[{k}]" for k in range(int(table[2]), int(table[3]) + 1)]
+                     if table else [name])
+    used = CampaignSpec("xy_plane_errors", 1, identify_only=True).parameters()
+    assert len(used) == 128 and sorted(expanded) == sorted(used)
 
 
 def test_an_instruments_sigma_with_noise_off_is_refused():

@@ -20,7 +20,9 @@ lives outside a trial).
 
 from __future__ import annotations
 
+import difflib
 import math
+import re
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -292,10 +294,11 @@ class CampaignSpec:
         what = self.procedure + " --identify-only" * self.identify_only
         for name in names:
             if name not in known:  # the list: what may vary here, not what is then refused
+                close = difflib.get_close_matches(name, used, n=1)
                 raise InputError(
-                    f"--vary {name}: not a parameter of {self.entry.machine} nor of the lab; "
-                    f"expected one of the parameters {what} uses: {', '.join(used)}",
-                    key="--vary")
+                    f"--vary {name}: not a parameter of {self.entry.machine} nor of the lab"
+                    f"{f' (did you mean {close[0]}?)' if close else ''}; expected one of the "
+                    f"parameters {what} uses: {_listed(used)}", key="--vary")
         silent = [name for name in names if name.endswith(".sigma") and not self.noise]
         if silent:  # noise off: every instrument reads exact values, whatever its sigma
             raise InputError(f"--vary {', '.join(silent)}: with --noise off no instrument has "
@@ -306,7 +309,7 @@ class CampaignSpec:
                 why = _UNUSED.get(_head(name),
                                   f"it reads with no {_head(name)} at the lab's noise")
                 raise InputError(f"--vary {name}: {what} never reads it ({why}); expected one "
-                                 f"of the parameters {what} uses: {', '.join(used)}",
+                                 f"of the parameters {what} uses: {_listed(used)}",
                                  key="--vary")
 
     @property
@@ -356,6 +359,34 @@ class CampaignSpec:
 #: reads its parameter; an instrument's: it reads with no such instrument at the lab's noise.
 _UNUSED = {"robot": "no robot loads its workpiece",
            "tool_geometry": "it cuts with no tool that has a nose radius"}
+
+
+def _listed(names) -> str:
+    """``names`` for a message, a table's entries as one range each: paper 003's 128
+    parameters read ``component.C.EAC[0..16], ...``, not each of the 17 entries (a message of
+    2500 characters that hid the few other names)."""
+    ranges: dict[str, list[int]] = {}
+    out: list[str] = []
+    for name in names:
+        match = _ENTRY.fullmatch(name)
+        if match is None:
+            out.append(name)
+            continue
+        if match[1] not in ranges:
+            ranges[match[1]] = []
+            out.append(match[1])
+        ranges[match[1]].append(int(match[2]))
+    return ", ".join(_entries(name, ranges[name]) if name in ranges else name for name in out)
+
+
+_ENTRY = re.compile(r"(component\.\w+\.\w+)\[(\d+)\]")
+
+
+def _entries(table: str, indices: list[int]) -> str:
+    indices = sorted(indices)
+    if indices == list(range(indices[0], indices[-1] + 1)) and len(indices) > 1:
+        return f"{table}[{indices[0]}..{indices[-1]}]"
+    return ", ".join(f"{table}[{k}]" for k in indices)
 
 
 def _head(name: str) -> str:
