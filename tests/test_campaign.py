@@ -901,3 +901,46 @@ def test_the_histograms_count_trials_in_whole_numbers(monkeypatch):
     assert set(ticks) == {"a_dx before (um)", "a_dx after (um)"}
     for values in ticks.values():
         assert len(values) > 1 and np.all(values == np.round(values)), values
+
+
+def test_the_histograms_tick_labels_do_not_run_into_each_other(monkeypatch):
+    """Paper 001's a_dx after compensation, 8 trials between -1.5 and 0.5 nm: the default
+    x axis printed 8 labels of 8 characters that ran into one another
+    (-0.0015.0001.25...), and before, 500 um +- 1 nm, read -0.0005 .. 0.001 with +5e2 at the
+    axis' end."""
+    from matplotlib.figure import Figure
+
+    from machinesim.campaign.results import assemble
+    from machinesim.campaign.summary import _plots
+
+    after = np.linspace(-0.0015, 0.0005, 8)
+    records = [{"trial": i, "drawn": {}, "injected": {}, "identified": {},
+                "figures": {"a_dx": ["um", 500.0 + (i - 3) * 0.0003, after[i], math.nan]},
+                "elapsed_s": 1.0, "error": None} for i in range(8)]
+    spec = {"procedure": "tool_setting_6axis", "seed": 0, "vary": {}, "noise": True,
+            "identify_only": False}
+    labels = {}
+    real = Figure.savefig
+
+    def keep_labels(figure, *args, **kwargs):
+        figure.canvas.draw()
+        renderer = figure.canvas.get_renderer()
+        for ax in figure.axes:
+            shown = [t for t in ax.get_xticklabels() if t.get_visible() and t.get_text()]
+            low, high = ax.get_xlim()
+            shown = [t for t in shown if low <= t.get_position()[0] <= high]
+            labels[ax.get_xlabel()] = ([t.get_text() for t in shown],
+                                       [t.get_window_extent(renderer) for t in shown],
+                                       ax.xaxis.get_offset_text().get_text())
+        return real(figure, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", keep_labels)
+    _plots(assemble(records, spec, 8))
+    assert set(labels) == {"a_dx before (um)", "a_dx after (um)"}
+    for name, (texts, boxes, offset) in labels.items():
+        assert len(texts) >= 2, (name, texts)
+        for left, right in zip(boxes, boxes[1:], strict=False):
+            assert left.x1 < right.x0, (name, texts)  # a gap between neighbours
+        assert offset == "", (name, offset)  # no +5e2 to add in one's head
+    assert all(499.99 < float(text) < 500.01 for text in labels["a_dx before (um)"][0]), labels
+

@@ -222,6 +222,11 @@ def _plots(dataset) -> dict[str, bytes]:
                 ax.hist(y, bins=max(5, min(40, y.size // 3)), color=colour)
                 # counts of trials: whole numbers (4 trials had ticks every 0.25)
                 ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+                # a few values as they are: the default's 8 ticks of a spread of nanometres
+                # ran into each other (-0.00150-0.00125...), and its offset (+5e2 at the
+                # axis' end) was read past
+                ax.xaxis.set_major_locator(MaxNLocator(nbins=4))
+                ax.ticklabel_format(axis="x", useOffset=False)
             else:
                 ax.text(0.5, 0.5, "not measured", ha="center", transform=ax.transAxes)
             ax.set_xlabel(f"{name} {which} ({unit})")
