@@ -944,3 +944,22 @@ def test_the_histograms_tick_labels_do_not_run_into_each_other(monkeypatch):
         assert offset == "", (name, offset)  # no +5e2 to add in one's head
     assert all(499.99 < float(text) < 500.01 for text in labels["a_dx before (um)"][0]), labels
 
+
+
+def test_summary_md_gives_each_identification_errors_unit():
+    """The identification's errors are SI, metres and radians in one column: paper 003's
+    location.C.EA0C error of -1.479e-08 (rad) stood beside EX0C's -6.832e-10 (m) unmarked."""
+    from machinesim.campaign.results import assemble
+    from machinesim.campaign.summary import _markdown, summarise
+
+    records = [{"trial": i, "drawn": {},
+                "injected": {"location.C.EX0C": 3e-6, "location.C.EA0C": 2e-5},
+                "identified": {"location.C.EX0C": [3e-6 + i * 1e-9, 1e-9],
+                               "location.C.EA0C": [2e-5 - i * 1e-8, 1e-8]},
+                "figures": {}, "elapsed_s": 1.0, "error": None} for i in range(3)]
+    spec = {"procedure": "xy_plane_errors", "seed": 0, "vary": {}, "noise": True,
+            "identify_only": True}
+    shown = _table(_markdown(summarise(assemble(records, spec, 3))), "parameter")
+    assert {name: row["unit"] for name, row in shown.items()} == \
+        {"location.C.EX0C": "m", "location.C.EA0C": "rad"}
+    assert float(shown["location.C.EA0C"]["error mean"]) == pytest.approx(-1e-8)

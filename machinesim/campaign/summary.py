@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from machinesim._io import json_text, write_together
+from machinesim.campaign.distributions import parameter_kind
 from machinesim.campaign.statistics import describe, spearman, z_scores, z_summary
 
 __all__ = ["failures", "summarise", "write_report"]
@@ -112,6 +113,11 @@ def _interval(pair) -> str:
     return "n/a (too few trials)" if low is None else f"[{_g(low)}, {_g(high)}]"
 
 
+#: The SI unit of a parameter's kind (`machinesim.campaign.distributions.parameter_kind`):
+#: summary.md's identification errors put metres and radians in one column, unmarked.
+_SI = {"length": "m", "angle": "rad"}
+
+
 def _markdown(summary: dict) -> str:
     lines = [f"# Campaign: {summary['procedure']}, {summary['trials_count']} trials "
              f"(seed {summary['seed']}, {summary['failed_count']} failed)", ""]
@@ -147,15 +153,16 @@ def _markdown(summary: dict) -> str:
         lines.append("")
     if summary["parameters"]:
         lines += ["## Identification: error and z-scores", "",
-                  "error = identified - injected (SI); z = error / reported std: honest "
-                  "uncertainty gives mean 0, std 1, 95 % within +-1.96; rho: Spearman rank "
-                  "correlation with |error|.", "",
-                  *_header(["parameter", "trials", "error mean", "error std",
+                  "error = identified - injected (SI: unit m or rad); z = error / reported "
+                  "std: honest uncertainty gives mean 0, std 1, 95 % within +-1.96; rho: "
+                  "Spearman rank correlation with |error|.", "",
+                  *_header(["parameter", "unit", "trials", "error mean", "error std",
                             "error 95 % (symmetric)", "z trials", "z mean", "z std",
                             "within +-1.96", *rho])]
         for name, p in summary["parameters"].items():
             e, z = p["error_si"], p["z"]
-            lines.append(_row([name, str(e["count"]), _g(e["mean"]), _g(e["std"]),
+            lines.append(_row([name, _SI.get(parameter_kind(name), "SI"), str(e["count"]),
+                               _g(e["mean"]), _g(e["std"]),
                                _interval(e["symmetric_95"]), str(z["count"]),
                                _g(z["mean"], 3), _g(z["std"], 3),
                                _g(z["within_1_96_ratio"], 3),
