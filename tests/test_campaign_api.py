@@ -114,3 +114,31 @@ def test_a_run_with_every_trial_already_there_prints_no_empty_line(tmp_path, cap
     assert capsys.readouterr().err.endswith(" s left   \n")
     run("tool_rotation_arm", 1, out=tmp_path / "c", **{**ARM, "progress": True})
     assert capsys.readouterr().err == ""
+
+
+def test_a_distribution_built_in_python_is_checked_and_kept_by_its_values(tmp_path):
+    """A `Distribution` passed as such went past every check of its text (a negative noise
+    taken and drawn as zero, a kind "gauss" drawn as fixed) and campaign.json kept its empty
+    text: extending a folder begun with uniform 10..20 nm with uniform 500..900 nm was taken
+    as the same campaign, trial 2 drawing 554 nm beside 10 and 13 nm."""
+    from machinesim.campaign import Distribution, parse_distribution
+    from machinesim.campaign.results import CampaignFolder
+
+    def spec(dist, name="microscope.sigma"):
+        return CampaignSpec("tool_rotation_arm", 1, ((name, dist),), identify_only=True)
+
+    built = spec(Distribution("uniform", 1e-8, 2e-8))
+    assert built.describe()["vary"] == {"microscope.sigma": "uniform:1e-08m,2e-08m"}
+    again = parse_distribution(built.describe()["vary"]["microscope.sigma"], "microscope.sigma")
+    assert (again.kind, again.a, again.b) == ("uniform", 1e-8, 2e-8)  # exact round trip
+    assert spec(Distribution("fixed", 3e-3), "workpiece.alpha").describe()["vary"] == \
+        {"workpiece.alpha": "fixed:0.003rad"}
+    CampaignFolder(tmp_path, built.describe())
+    with pytest.raises(InputError, match="holds another campaign"):
+        CampaignFolder(tmp_path, spec(Distribution("uniform", 5e-7, 9e-7)).describe())
+    for dist, words in ((Distribution("uniform", -1e-8, 2e-8), "reaches below zero"),
+                        (Distribution("gauss", 1e-8, 2e-8), "distribution 'gauss'"),
+                        (Distribution("normal", 0.0, 1e-6, text="normal:0,2um"),
+                         "text 'normal:0,2um' is not its values")):
+        with pytest.raises(InputError, match=words):
+            spec(dist, "tool.y" if "2um" in dist.text else "microscope.sigma")

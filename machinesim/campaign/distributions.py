@@ -29,7 +29,7 @@ import numpy as np
 from machinesim.exceptions import InputError
 from machinesim.units import ANGLE, FACTORS, LENGTH
 
-__all__ = ["Distribution", "INSTRUMENTS", "LAB_PARAMETERS", "parameter_kind",
+__all__ = ["Distribution", "INSTRUMENTS", "LAB_PARAMETERS", "checked", "parameter_kind",
            "parse_distribution", "parse_vary"]
 
 #: Instruments of a `Lab` whose noise ``sigma`` a campaign can set (``microscope.sigma``).
@@ -174,6 +174,33 @@ def parse_distribution(text: str, name: str = "") -> Distribution:
                          "STD: a draw in the 0.13 % below zero is then taken as zero)",
                          key=where)
     return Distribution(kind, float(a), float(b), text.strip())
+
+
+def checked(name: str, dist: Distribution) -> Distribution:
+    """``dist`` as `parse_distribution` makes it from its text, with the same checks: a
+    `Distribution` built in Python (``Distribution("uniform", 1e-8, 2e-8)``) has no text, so
+    its values are written out in SI (``uniform:1e-08m,2e-08m``) for campaign.json to hold.
+
+    A Distribution went past every check: a negative noise was taken (and drawn as zero), a
+    kind ``"gauss"`` as fixed, and its empty text was what campaign.json kept, so the same
+    folder took another Distribution's trials for its own (``""`` is ``""``).
+
+    Raises
+    ------
+    InputError
+        As `parse_distribution`, or for a text that says other values than the object's.
+    """
+    unit = "rad" if parameter_kind(name) == "angle" else "m"
+    values = f"{float(dist.a)!r}{unit}" + (f",{float(dist.b)!r}{unit}"
+                                          if KINDS.get(dist.kind) == 2 else "")
+    parsed = parse_distribution(dist.text or f"{dist.kind}:{values}", name)
+    if dist.text and (parsed.kind != dist.kind or not all(
+            math.isclose(x, y, rel_tol=1e-12, abs_tol=0.0)
+            for x, y in ((parsed.a, dist.a), (parsed.b, dist.b)))):
+        raise InputError(f"a Distribution whose text {dist.text!r} is not its values "
+                         f"({dist.kind}:{values}); expected one made by parse_distribution, "
+                         "or no text", key=f"--vary {name}")
+    return parsed
 
 
 def parse_vary(text: str) -> tuple[str, Distribution]:

@@ -30,7 +30,12 @@ from typing import Any
 
 import numpy as np
 
-from machinesim.campaign.distributions import INSTRUMENTS, LAB_PARAMETERS, Distribution
+from machinesim.campaign.distributions import (
+    INSTRUMENTS,
+    LAB_PARAMETERS,
+    Distribution,
+    checked,
+)
 from machinesim.exceptions import InputError, MachineSimError
 from machinesim.experiment import Evaluation, Identified, run
 from machinesim.streams import stream
@@ -287,6 +292,8 @@ class CampaignSpec:
             if not isinstance(dist, Distribution):
                 raise InputError(f"--vary {name}: expected a Distribution, got "
                                  f"{type(dist).__name__}", key="--vary")
+        # one built in Python passes parse_distribution's checks too, and gets a text
+        vary = tuple((name, checked(name, dist)) for name, dist in vary)
         object.__setattr__(self, "vary", vary)
         errors = self.error_parameters()  # the base model read and checked once, not twice
         known = set(errors) | set(LAB_PARAMETERS)
