@@ -8,12 +8,12 @@ robot's landing drawn with 30 um repeatability. Each worker count gets its own L
 as the runner makes it (processes, one thread and one core each), started and warmed up
 (one trial per worker, which loads the machine) before the clock starts; the figure is the
 wall time of ``trials`` trials through ``machinesim.campaign.runner``'s own path
-(client.map, as_completed, one file written per trial). The goal on a 2-core machine:
-2 workers >= 1.7 x one worker.
+(`runner.windowed`: a few trials per worker thread in flight, as_completed, one file written
+per trial). The goal on a 2-core machine: 2 workers >= 1.7 x one worker.
 
 The scheduler's per-trial overhead is timed with an empty task (a function returning its
-argument) mapped over 500 keys on the 2-worker cluster: the round trip per task through
-client.map and as_completed, which every trial pays on top of its own work.
+argument) sent for 500 keys on the 2-worker cluster: the round trip per task through
+`runner.windowed`, which every trial pays on top of its own work.
 """
 
 from __future__ import annotations
@@ -22,18 +22,16 @@ import argparse
 import tempfile
 import time
 
-from distributed import as_completed
-
 from machinesim.campaign import CampaignSpec, parse_vary, run_trial
 from machinesim.campaign.results import CampaignFolder
-from machinesim.campaign.runner import _client
+from machinesim.campaign.runner import _client, windowed
 
 SPEC = CampaignSpec("workpiece_setting", 10_000, (parse_vary("robot.repeatability=30um"),),
                     seed=1, identify_only=True)
 
 
-def _identity(x):
-    return x
+def _identity(spec, i):
+    return i
 
 
 def trials_per_second(workers: int, trials: int) -> tuple[float, float]:
@@ -45,14 +43,12 @@ def trials_per_second(workers: int, trials: int) -> tuple[float, float]:
         client.gather(warm)
         store = CampaignFolder(folder, SPEC.describe())
         began = time.perf_counter()
-        futures = client.map(run_trial, [SPEC] * trials, range(trials), pure=False)
-        for future in as_completed(futures):
-            store.write_trial(future.result())
+        for record in windowed(client, run_trial, SPEC, range(trials)):
+            store.write_trial(record)
         rate = trials / (time.perf_counter() - began)
         began = time.perf_counter()
-        empty = client.map(_identity, range(500), pure=False)
-        for future in as_completed(empty):
-            future.result()
+        for _ in windowed(client, _identity, None, range(500)):
+            pass
         overhead = (time.perf_counter() - began) / 500
     return rate, overhead
 

@@ -279,6 +279,28 @@ class _Window:
         return max(MIN_IN_FLIGHT, IN_FLIGHT_PER_THREAD * self.threads)
 
 
+def windowed(client, function, spec, indices):
+    """``function(spec, i)`` for each of ``indices`` on ``client``'s cluster, yielded as
+    they finish, with a few in flight per worker thread (`_Window`), the next sent as one
+    finishes: the path every trial of a campaign takes (benchmarks/campaign.py times it).
+    All of them at once (client.map) held 100000 tasks in the client and the scheduler,
+    1.3 GB and 30 s before the first trial started, and as long again to cancel on a
+    Ctrl-C."""
+    from distributed import as_completed
+
+    waiting, window = iter(indices), _Window(client)
+    running, in_flight = as_completed(), 0
+    while True:
+        for i in itertools.islice(waiting, max(0, window.size() - in_flight)):
+            running.add(client.submit(function, spec, i, pure=False))
+            in_flight += 1
+        if not in_flight:
+            return
+        result = next(running).result()
+        in_flight -= 1
+        yield result
+
+
 def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder, progress,
              workers, scheduler, client) -> None:
     if not missing:
@@ -290,25 +312,11 @@ def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder, pro
             folder.write_trial(record)
             progress.step(record)
         return
-    from distributed import as_completed
-
     client, cluster = _client(workers, scheduler, client, len(missing))
     owned = cluster is not None or scheduler is not None
     try:
-        # a few trials per thread in flight, the next sent as one finishes: all of them at
-        # once (client.map) held 100000 tasks in the client and the scheduler, 1.3 GB and
-        # 30 s before the first trial started, and as long again to cancel on a Ctrl-C
-        waiting, window = iter(missing), _Window(client)
-        running, in_flight = as_completed(), 0
         progress.start()
-        while True:
-            for i in itertools.islice(waiting, max(0, window.size() - in_flight)):
-                running.add(client.submit(run_trial, spec, i, pure=False))
-                in_flight += 1
-            if not in_flight:
-                break
-            record = next(running).result()
-            in_flight -= 1
+        for record in windowed(client, run_trial, spec, missing):
             folder.write_trial(record)
             progress.step(record)
     finally:
