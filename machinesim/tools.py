@@ -27,8 +27,9 @@ tolerance (the sagitta between a chord and its arc) is a parameter of each tool.
 polygon is a stack of rings of latitude, so that its volume has a closed form (a sum of
 frusta of regular pyramids, `BallEndMill.rings`).
 
-Sizes are bounded (`MAX_TOOL_SIZE_M`, `MAX_TOOL_VERTICES`): a tool larger than the machines
-or a polygon of millions of vertices is an input error, refused with `InputError`.
+Sizes are bounded (`MIN_TOOL_SIZE_M`, `MAX_TOOL_SIZE_M`, `MAX_TOOL_VERTICES`): a tool
+smaller than the engine resolves, larger than the machines, or a polygon of millions of
+vertices is an input error, refused with `InputError`.
 """
 
 from __future__ import annotations
@@ -59,6 +60,16 @@ TOOL_HEIGHT_M = 10e-3
 #: (``ball:1e9`` is a kilometre-wide ball); tessellating it within the nm chord tolerances
 #: would need billions of vertices (that spec crashed manifold3d before this bound).
 MAX_TOOL_SIZE_M = 1.0
+#: Smallest tool dimension accepted (m): radius, height, shank radius. The engine's booleans
+#: (manifold3d) merge what lies within 1e-12 of a solid's largest coordinate
+#: (``Manifold.get_tolerance``: 1e-14 m on a 10 mm block), and a tool is cut right only from
+#: about 100 times that. Measured with models/examples/grooves.nc on mill3 and a 10x10x2 mm
+#: block: a ball of 1e-12 m radius removes its hand-derived 1.6e-18 m^3, one of 1e-13 m 3 %
+#: less, one of 2e-14 m 50 times more, one of 1e-14 m nothing ("does it reach the
+#: stock?"). 1e-9 m is 100 times that tolerance on a part 10 m across (the largest travel
+#: a machine file may give, `machinesim.urdf.MAX_TRAVEL_M`), and the machines' 1 nm axis
+#: resolution (`CHORD_TOLERANCE_M`): no real tool is that small.
+MIN_TOOL_SIZE_M = 1e-9
 #: Most vertices of a tool polygon or polyhedron: about 10 MB of float64 points per pose
 #: pair in the engine, far above the defaults (a R2 mm ball at 1 um has ~5,000, a R2 mm
 #: nose at 1 nm ~900). A finer request is refused with advice to loosen ``chord_tol``.
@@ -88,11 +99,16 @@ def arc_segments(radius: float, angle: float, chord_tol: float) -> int:
     return max(1, math.ceil(angle / step - 1e-12))
 
 
+def _length(value: float) -> str:
+    """A length as messages show it: m as given, and mm, the unit of the tool specs."""
+    return f"{value!r} m ({value * 1e3:.6g} mm)"
+
+
 def _check_positive(name: str, value: float) -> float:
     value = float(value)
     if not math.isfinite(value) or value <= 0.0:
-        raise InputError(f"{name} must be a positive finite number, got {value!r} m "
-                         f"({value * 1e3:.6g} mm)", key=name)
+        raise InputError(f"{name} must be a positive finite number, got {_length(value)}",
+                         key=name)
     return value
 
 
@@ -103,13 +119,21 @@ def _check_shank(value: float) -> None:
 
 
 def _check_size(name: str, value: float) -> float:
-    """A positive length at most `MAX_TOOL_SIZE_M`, else InputError naming it."""
+    """A length from `MIN_TOOL_SIZE_M` to `MAX_TOOL_SIZE_M`, else InputError naming it."""
     value = _check_positive(name, value)
     if value > MAX_TOOL_SIZE_M:
         raise InputError(
             f"{name} must be at most {MAX_TOOL_SIZE_M:g} m (MAX_TOOL_SIZE_M: larger than any "
             f"machine's travel, and too many polygon vertices at the nm chord tolerance), "
-            f"got {value!r} m",
+            f"got {_length(value)}",
+            key=name,
+        )
+    if value < MIN_TOOL_SIZE_M:
+        raise InputError(
+            f"{name} must be at least {MIN_TOOL_SIZE_M:g} m ({MIN_TOOL_SIZE_M * 1e3:g} mm; "
+            f"MIN_TOOL_SIZE_M: 100 times the tolerance of the cutting engine's booleans on a "
+            f"part as large as a machine's travel, below which a tool removes nothing or a "
+            f"wrong volume), got {_length(value)}",
             key=name,
         )
     return value

@@ -1,14 +1,17 @@
 """Tools: profile geometry against the analytic shapes, chord tolerances, specs."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from machinesim.cutting import cut
 from machinesim.exceptions import InputError
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import (
     MAX_TOOL_SIZE_M,
+    MIN_TOOL_SIZE_M,
     TOOL_HEIGHT_M,
     BallEndMill,
     FlatEndMill,
@@ -269,3 +272,43 @@ def test_bad_tool_specs_raise_input_error(spec, message):
 def test_tool_sizes_are_bounded(make, message):
     with pytest.raises(InputError, match=message):
         make()
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "models" / "examples"
+
+
+def test_the_smallest_tool_cuts_its_hand_derived_grooves():
+    # A ball of MIN_TOOL_SIZE_M radius, under its 1 um chord_tol, is a square pyramid up to
+    # z = r (corners at +-r) under a square prism: each of grooves.nc's four grooves, 20 um
+    # deep right across the 10 mm block, has the section 2 r (d - r) + r^2. A ball of 1e-14 m
+    # had removed nothing, one of 2e-14 m 50 times this (1e-14 m is manifold3d's tolerance
+    # on the block). 1e-6: float64 on 10 mm coordinates (ulp 1.7e-18 m) against 1 nm.
+    r, depth = MIN_TOOL_SIZE_M, 20e-6
+    _, report = cut(EXAMPLES / "grooves.nc", str(EXAMPLES / "mill3.urdf"), BallEndMill(r),
+                    "block:10x10x2")
+    expected = 4 * 10e-3 * (2.0 * r * (depth - r) + r * r)
+    assert report.removed_volume_m3 == pytest.approx(expected, rel=1e-6, abs=0.0)
+
+
+@pytest.mark.parametrize(
+    ("make", "name"),
+    [
+        (lambda size: BallEndMill(size), "radius"),
+        (lambda size: FlatEndMill(size), "radius"),
+        (lambda size: RoundNoseTool(size, math.pi / 2), "nose_radius"),
+        (lambda size: VTool(math.pi / 2, height=size), "height"),
+        (lambda size: BallEndMill(0.5e-3, shank_radius=size), "shank_radius"),
+    ],
+)
+def test_a_tool_below_what_the_engine_resolves_is_refused(make, name):
+    make(MIN_TOOL_SIZE_M)  # the bound itself is a tool
+    with pytest.raises(InputError, match=f"{name} must be at least 1e-09 m .*MIN_TOOL_SIZE_M"):
+        make(math.nextafter(MIN_TOOL_SIZE_M, 0.0))
+
+
+def test_a_ball_of_10_fm_is_refused_naming_the_bound_not_cut_to_nothing():
+    # 'ball:1e-11' (mm) had cut nothing and warned "does it reach the stock?"
+    with pytest.raises(InputError) as caught:
+        tool_from_spec("ball:1e-11")
+    assert "radius must be at least 1e-09 m (1e-06 mm; MIN_TOOL_SIZE_M: " in str(caught.value)
+    assert str(caught.value).endswith("got 1e-14 m (1e-11 mm)")
