@@ -356,7 +356,7 @@ def _cut(args) -> int:
     from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
     machine = load_machine(args.machine)
-    tool = tool_from_spec(args.tool)
+    tool = tool_from_spec(args.tool, name="--tool")
     stock = stock_from_spec(args.stock)
     program, chord = read_for_machine(args, args.program, machine, tool)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None

@@ -3,7 +3,7 @@ command line, the tool tables and the Python API take them (`tool_from_spec`).""
 
 from __future__ import annotations
 
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, brief
 from machinesim.tools import BallEndMill, FlatEndMill, RoundNoseTool, Tool, VTool
 from machinesim.units import M_PER_MM, RAD_PER_DEG
 
@@ -18,9 +18,9 @@ _SPEC_FIELDS = {"h": ("height", "a height", "h=HEIGHT_MM", M_PER_MM),
                       0.5 * M_PER_MM)}
 
 
-def _spec_field(spec, field: str) -> tuple[str, float]:
+def _spec_field(where: str, field: str) -> tuple[str, float]:
     """The keyword and value (m) of a spec's ``h=HEIGHT_MM`` or ``d=SHANK_DIAMETER_MM`` field
-    (a trailing ``mm`` is allowed)."""
+    (a trailing ``mm`` is allowed); ``where`` begins a refusal (`tool_from_spec`)."""
     name, what, form, scale = _SPEC_FIELDS[field.strip()[0].lower()]
     text = field.strip()[2:].strip()
     if text.lower().endswith("mm"):
@@ -28,12 +28,11 @@ def _spec_field(spec, field: str) -> tuple[str, float]:
     try:
         return name, float(text) * scale
     except ValueError:
-        raise InputError(f"tool spec {spec!r}: {field!r} is not {what}; expected "
-                         f"'{form}' with a number in mm, e.g. '{form[0]}=5'",
-                         key="tool") from None
+        raise InputError(f"{where}: {field!r} is not {what}; expected "
+                         f"'{form}' with a number in mm, e.g. '{form[0]}=5'") from None
 
 
-def tool_from_spec(spec: str) -> Tool:
+def tool_from_spec(spec: str, *, name: str = "tool spec") -> Tool:
     """Build a tool from a text spec in mm and degrees.
 
     Parameters
@@ -46,6 +45,9 @@ def tool_from_spec(spec: str) -> Tool:
         reads the same), and for a ball or flat end mill by ``":d=4"``: the diameter of the
         shank or holder above that height, mm, for the holder check (default: as wide as
         the tool).
+    name : str, optional
+        What a refusal calls the spec: ``"--tool"`` on the command line, so that it reads
+        ``--tool 'ball:-1': radius must be ...``; a caller names the file and key around it.
 
     Returns
     -------
@@ -55,34 +57,37 @@ def tool_from_spec(spec: str) -> Tool:
     ------
     InputError
         If the spec does not have one of these forms or a number is out of range (sizes,
-        the height included, are bounded by `MAX_TOOL_SIZE_M`).
+        the height included, are bounded by `MIN_TOOL_SIZE_M` and `MAX_TOOL_SIZE_M`). The
+        message names the spec once, as ``name``, then what in it is wrong: ``tool spec
+        'ball:-1': radius must be a positive finite number, got -0.001 m (-1 mm)``.
     """
+    where = f"{name} {brief(str(spec))!r}"
     fields = str(spec).strip().split(":")
     extra = {}
     while len(fields) > 1 and fields[-1].strip().lower()[:2] in ("h=", "d="):
-        name, value = _spec_field(spec, fields.pop())
-        if name in extra:
-            raise InputError(f"tool spec {spec!r}: {name} given twice", key="tool")
-        extra[name] = value
-    if extra.get("shank_radius", 1.0) == 0.0:
+        keyword, value = _spec_field(where, fields.pop())
+        if keyword in extra:
+            raise InputError(f"{where}: {keyword} given twice")
+        extra[keyword] = value
+    shank = extra.get("shank_radius", 1.0)
+    if not shank > 0.0:
         # 0 is the API's "as wide as the tool": 'd=0' read so cut with a shank the user did
         # not give, without a word
-        raise InputError(f"tool spec {spec!r}: a shank diameter of 0 mm; expected a diameter "
-                         "above 0 mm, or no 'd=' for a shank as wide as the tool", key="tool")
+        raise InputError(f"{where}: a shank diameter of {2.0 * shank / M_PER_MM:g} mm; "
+                         "expected a diameter above 0 mm, or no 'd=' for a shank as wide as "
+                         "the tool")
     kind = fields[0].lower()
     arity = {"v": 1, "nose": 2, "ball": 1, "flat": 1}
     if kind not in arity or len(fields) != arity[kind] + 1:
-        raise InputError(f"tool spec {spec!r}: expected {_SPEC_FORMS}", key="tool")
+        raise InputError(f"{where}: expected {_SPEC_FORMS}")
     if "shank_radius" in extra and kind not in ("ball", "flat"):
-        raise InputError(f"tool spec {spec!r}: a shank diameter (d=) is for a ball or flat end "
-                         f"mill; a {kind} tool's holder is its own bar", key="tool")
+        raise InputError(f"{where}: a shank diameter (d=) is for a ball or flat end "
+                         f"mill; a {kind} tool's holder is its own bar")
     try:
         values = [float(field) for field in fields[1:]]
     except ValueError:
-        raise InputError(
-            f"tool spec {spec!r}: expected numbers after the kind, as in {_SPEC_FORMS}",
-            key="tool",
-        ) from None
+        raise InputError(f"{where}: expected numbers after the kind, as in {_SPEC_FORMS}"
+                         ) from None
     try:
         if kind == "v":
             return VTool(values[0] * RAD_PER_DEG, **extra)
@@ -92,7 +97,11 @@ def tool_from_spec(spec: str) -> Tool:
             return FlatEndMill(values[0] * M_PER_MM, **extra)
         return BallEndMill(values[0] * M_PER_MM, **extra)
     except InputError as error:
-        raise InputError(f"tool spec {spec!r}: {error}", key="tool") from None
+        # the tool's own message names its parameter (radius, height, ...): not again as a key
+        message = error.message
+        if error.key == "shank_radius":
+            message = message.replace("shank_radius", "shank_radius (half the d= diameter)", 1)
+        raise InputError(f"{where}: {message}") from None
 
 
 __all__ = ["tool_from_spec"]

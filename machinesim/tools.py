@@ -175,8 +175,8 @@ def _flank_height(tool, top_half_width) -> float:
         return height
     value = _check_size("flank_height", tool.flank_height)
     if value > tool.height:
-        raise InputError(f"flank_height ({value!r} m) must not exceed height "
-                         f"({tool.height!r} m)", key="flank_height")
+        raise InputError(f"flank_height {_length(value)} must not exceed the height, "
+                         f"{_length(tool.height)}", key="flank_height")
     if 2.0 * top_half_width(value) > MAX_TOOL_SIZE_M:
         raise InputError(
             f"the flanks are {2.0 * top_half_width(value)!r} m wide at flank_height "
@@ -507,8 +507,8 @@ class BallEndMill(_RotatingBody):
             object.__setattr__(self, "height", max(TOOL_HEIGHT_M, 2.0 * self.radius))
         _check_size("height", self.height)
         if self.height < self.radius:
-            raise InputError(f"height ({self.height!r} m) must be at least the radius "
-                             f"({self.radius!r} m)", key="height")
+            raise InputError(f"height {_length(self.height)} must be at least the radius, "
+                             f"{_length(self.radius)}", key="height")
         _check_shank(self.shank_radius)
         self._mesh()
 

@@ -513,6 +513,24 @@ def test_python_dash_m_machinesim_is_the_command_line():
         machinesim.list_machines()
 
 
+def test_a_bad_tool_is_named_once_by_its_option_or_its_table_key(tmp_path, capsys):
+    # it had read "key 'tool': tool spec 'ball:-1': key 'radius': radius must be ...", and
+    # from a tool table "key 'tool.1.shape': key 'tool': tool spec ...: key 'radius': ..."
+    argv = ["cut", GROOVES, "--machine", "grooving_4axis", "--stock", "block:10x10x2",
+            "--quiet", "--out", tmp_path / "p.ply"]
+    code, _, err = run([*argv, "--tool", "ball:-1"], capsys)
+    assert_clean_failure(code, err)
+    assert err == ("machinesim: error: --tool 'ball:-1': radius must be a positive finite "
+                   "number, got -0.001 m (-1 mm)\n")
+    table = tmp_path / "tools.toml"
+    table.write_text('[tool.1]\nlength_mm = 0.0\nshape = "ball:-1"\n')
+    code, _, err = run([*argv, "--tool", "v:90", "--tools", table], capsys)
+    assert_clean_failure(code, err)
+    assert err == (f"machinesim: error: {table}, key 'tool.1.shape': tool spec 'ball:-1': "
+                   "radius must be a positive finite number, got -0.001 m (-1 mm)\n")
+    assert list(tmp_path.iterdir()) == [table]
+
+
 def test_a_huge_tool_is_refused_cleanly(tmp_path):
     result = _run_process(["cut", GROOVES, "--machine", "grooving_4axis", "--tool", "ball:1e9",
                            "--stock", "block:10x10x2", "--out", tmp_path / "p.ply"])

@@ -226,7 +226,7 @@ def test_a_spec_shank_diameter_of_zero_is_refused():
     # user did not give, exit 0
     with pytest.raises(InputError) as caught:
         tool_from_spec("flat:0.5:d=0")
-    assert str(caught.value) == ("key 'tool': tool spec 'flat:0.5:d=0': a shank diameter of "
+    assert str(caught.value) == ("tool spec 'flat:0.5:d=0': a shank diameter of "
                                  "0 mm; expected a diameter above 0 mm, or no 'd=' for a shank "
                                  "as wide as the tool")
 
@@ -246,12 +246,12 @@ def test_a_spec_shank_diameter_of_zero_is_refused():
         ("v:90:h=2000", "'v:90:h=2000'.*height must be at most 1 m"),
         ("v:90:h=-1", r"height must be a positive finite number, got -0.001 m \(-1 mm\)"),
         ("v:90:h=abc", "'h=abc' is not a height; expected 'h=HEIGHT_MM'"),
-        ("ball:2:h=1", "height \\(0.001 m\\) must be at least the radius \\(0.002 m\\)"),
+        ("ball:2:h=1", r"height 0.001 m \(1 mm\) must be at least the radius, 0.002 m \(2 mm\)"),
         ("v:h=5", "expected 'v:ANGLE_DEG'"),
         ("v:90:d=4", "a shank diameter \\(d=\\) is for a ball or flat end mill"),
         ("flat:0.5:d=abc", "'d=abc' is not a shank diameter; expected 'd=SHANK_DIAMETER_MM'"),
         ("flat:0.5:h=3:h=4", "height given twice"),
-        ("flat:0.5:d=-4", "shank_radius must be a positive finite number, got -0.002 m"),
+        ("flat:0.5:d=-4", r"a shank diameter of -4 mm; expected a diameter above 0 mm"),
     ],
 )
 def test_bad_tool_specs_raise_input_error(spec, message):
@@ -263,7 +263,7 @@ def test_bad_tool_specs_raise_input_error(spec, message):
     ("make", "message"),
     [
         (lambda: VTool(math.pi / 2, height=2.0), "height must be at most 1 m"),
-        (lambda: VTool(math.pi / 2, height=1e-3, flank_height=2e-3), "must not exceed height"),
+        (lambda: VTool(math.pi / 2, height=1e-3, flank_height=2e-3), "must not exceed the height"),
         (lambda: BallEndMill(2e-3, height=1e-3), "at least the radius"),
         (lambda: BallEndMill(0.5, chord_tol=1e-9), "vertices at chord_tol"),
         (lambda: RoundNoseTool(0.5, math.pi / 2, chord_tol=1e-15), "vertices at chord_tol"),
@@ -304,6 +304,22 @@ def test_a_tool_below_what_the_engine_resolves_is_refused(make, name):
     make(MIN_TOOL_SIZE_M)  # the bound itself is a tool
     with pytest.raises(InputError, match=f"{name} must be at least 1e-09 m .*MIN_TOOL_SIZE_M"):
         make(math.nextafter(MIN_TOOL_SIZE_M, 0.0))
+
+
+def test_a_spec_refusal_names_the_spec_once_and_its_parameter_once():
+    # it had read "key 'tool': tool spec 'ball:-1': key 'radius': radius must be ..."
+    with pytest.raises(InputError) as caught:
+        tool_from_spec("ball:-1")
+    assert str(caught.value) == ("tool spec 'ball:-1': radius must be a positive finite "
+                                 "number, got -0.001 m (-1 mm)")
+    assert caught.value.key is None
+    with pytest.raises(InputError) as caught:
+        tool_from_spec("ball:1:h=0.5", name="--tool")
+    assert str(caught.value) == ("--tool 'ball:1:h=0.5': height 0.0005 m (0.5 mm) must be at "
+                                 "least the radius, 0.001 m (1 mm)")
+    with pytest.raises(InputError, match=r"^tool spec 'flat:1:d=1e-11': shank_radius \(half "
+                       r"the d= diameter\) must be at least 1e-09 m .*got 5e-15 m \(5e-12 mm\)$"):
+        tool_from_spec("flat:1:d=1e-11")
 
 
 def test_a_ball_of_10_fm_is_refused_naming_the_bound_not_cut_to_nothing():

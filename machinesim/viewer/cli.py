@@ -215,14 +215,14 @@ def _scene(args, budget: int):
         raise InputError(f"{', '.join(reading)} read a program: give one with --program")
     check_reading_options(args)
     machine = load_machine(args.target)
+    from machinesim.tool_specs import tool_from_spec
+
+    tool = tool_from_spec(args.tool, name="--tool")
     program = errors = chord = None
     if args.program is not None:
-        from machinesim.tool_specs import tool_from_spec
-
         # read as `machinesim cut` reads it: the same tool table, integer input and chords
         program, chord = read_for_machine(
-            args, check_readable_file(args.program, "NC program (--program)"), machine,
-            tool_from_spec(args.tool))
+            args, check_readable_file(args.program, "NC program (--program)"), machine, tool)
         _refuse_tool_changes(program)
         note = unit_note(program)
         if note:
@@ -231,7 +231,7 @@ def _scene(args, budget: int):
         from machinesim.errors import ErrorModel
 
         errors = ErrorModel.from_toml(args.errors)
-    return machine_scene(machine, program, tool=args.tool, stock=args.stock,
+    return machine_scene(machine, program, tool=tool, stock=args.stock,
                          errors=errors, duration_s=args.duration, max_triangles=budget,
                          chord_tolerance=chord)
 
