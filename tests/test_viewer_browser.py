@@ -6,6 +6,7 @@ Chromium and sets it), where they fail."""
 from __future__ import annotations
 
 import io
+import json
 import os
 import signal
 import subprocess
@@ -20,7 +21,7 @@ from machinesim import ErrorModel, ToolSetting, load_machine
 from machinesim.exceptions import MachineSimError
 from machinesim.motion import plan
 from machinesim.nc import ProgramBuilder
-from machinesim.viewer import Browser, machine_scene, part_scene, serve, write_html
+from machinesim.viewer import Browser, machine_scene, part_scene, report_scene, serve, write_html
 from machinesim.viewer.browser import INSTALL_HINT, find_chromium
 from machinesim.viewer.scene import OVERLAY_WIDTH_PX
 from machinesim.workpiece import Part, block
@@ -149,6 +150,44 @@ def test_the_exported_part_page_draws_both_ends_of_the_deviation_scale(browser, 
     flat_view = hue_counts(browser.screenshot(), "view")
     # no deviation: the map is the scale's neutral middle, neither purple nor green
     assert flat_view["purple"] < 100 and flat_view["green"] < 100, flat_view
+
+
+#: The overlay's boxes: the column, then each legend panel, (left, top, right, bottom) CSS px.
+BOXES = ("JSON.stringify(['#machinesim-overlay', '.ms-legend'].flatMap(q => "
+         "[...document.querySelectorAll(q)]).map(e => { const r = e.getBoundingClientRect(); "
+         "return [r.left, r.top, r.right, r.bottom]; }))")
+
+
+def test_every_legend_of_a_report_folder_is_reached_in_an_800_px_window(browser, tmp_path):
+    # Seven plates of a paper 001 report folder made seven legends, 1,860 px of them: in an
+    # 800 x 600 window the first showed and the rest ran off it, out of reach (the overlay
+    # hid its overflow and took no mouse event). Now it is a column within the window that
+    # the wheel over it scrolls. (`browser` only skips, or fails under CI, without Chromium.)
+    folder = tmp_path / "report"
+    folder.mkdir()
+    block(2 * MM, 1 * MM, 0.5 * MM).export_ply(folder / "nominal.ply")
+    for k in range(4):
+        tilted_block((k + 1) * 1e-4).export_ply(folder / f"plate_{k}.ply")
+    (folder / "summary.json").write_text(json.dumps({f"figure_{k}_um": 1.5 * k
+                                                     for k in range(12)}))
+    page = write_html(report_scene(folder, BUDGET), tmp_path / "report.html")
+    width, height = 800, 600
+    with Browser(width, height) as small:
+        small.open(page.as_uri())
+        column, *legends = json.loads(small.evaluate(BOXES))
+        assert len(legends) == 4
+        assert legends[-1][3] > height  # taller than the window: the case in question
+        for left, _, right, _ in (column, *legends):
+            assert 0 <= left and right <= min(width, 8 + OVERLAY_WIDTH_PX), (column, legends)
+        assert 0 <= column[1] and column[3] <= height, column
+        for _ in range(8):  # 3,200 px of wheel over the overlay: past its whole height
+            small.wheel(150, 300, 400)
+        small.wait_for("(() => { const r = [...document.querySelectorAll('.ms-legend')]"
+                       ".pop().getBoundingClientRect(); return r.bottom <= innerHeight; })()",
+                       timeout=10)
+        column, *legends = json.loads(small.evaluate(BOXES))
+    left, top, right, bottom = legends[-1]
+    assert 0 <= left and right <= width and 0 <= top and bottom <= height, legends
 
 
 def test_a_live_session_is_drawn_from_127_0_0_1_only(browser):

@@ -178,6 +178,12 @@ class Browser:
                 raise MachineSimError(f"the page never satisfied {expression!r}")
             time.sleep(0.1)
 
+    def wheel(self, x: float, y: float, delta_y: float) -> None:
+        """Turn the mouse wheel over the point (x, y) of the viewport (CSS px) by
+        ``delta_y`` px (positive: down), as a user's hand would."""
+        self._call("Input.dispatchMouseEvent", session=True, type="mouseWheel", x=x, y=y,
+                   deltaX=0, deltaY=delta_y)
+
     def screenshot(self) -> bytes:
         """PNG of the viewport, after the page has drawn two more frames."""
         self.evaluate(_TWO_FRAMES)

@@ -167,7 +167,14 @@ class Scene:
 
 
 def page(title: str, overlay: str, script: str) -> str:
-    """An HTML page: meshcat's pane, the overlay, and the given viewer script."""
+    """An HTML page: meshcat's pane, the overlay, and the given viewer script.
+
+    The overlay is a column on the left that scrolls (the wheel over it, or its scroll bar)
+    when its panels are taller than the window: a report folder's seven legends, 1,860 px of
+    them, had run off an 800 x 600 window with no way to reach all but the first (the
+    overlay let no mouse event through to itself, and hid what overflowed it). The wheel
+    over the 3D view still zooms it.
+    """
     return f"""<!DOCTYPE html>
 <html>
 <head>
@@ -176,9 +183,11 @@ def page(title: str, overlay: str, script: str) -> str:
 <style>
 body {{ margin: 0; }}
 #meshcat-pane {{ width: 100vw; height: 100vh; overflow: hidden; }}
-#machinesim-overlay {{ position: absolute; left: 8px; top: 8px; max-width: {OVERLAY_WIDTH_PX}px;
-  max-height: calc(100vh - 16px); overflow: hidden; font: 12px/1.35 sans-serif;
-  color: #e8e8e8; pointer-events: none; }}
+#machinesim-overlay {{ position: absolute; left: 8px; top: 8px;
+  max-width: min({OVERLAY_WIDTH_PX}px, calc(100vw - 16px)); max-height: calc(100vh - 16px);
+  overflow-x: hidden; overflow-y: auto; overscroll-behavior: contain;
+  scrollbar-width: thin; scrollbar-color: rgba(255, 255, 255, 0.35) transparent;
+  font: 12px/1.35 sans-serif; color: #e8e8e8; }}
 .ms-panel {{ background: rgba(0, 0, 0, 0.55); border-radius: 4px; padding: 6px 8px;
   margin-bottom: 6px; }}
 .ms-title {{ font-weight: bold; margin-bottom: 4px; }}
