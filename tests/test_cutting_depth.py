@@ -6,11 +6,13 @@ difference of two large volumes), and "empty" is judged against the tool's swept
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from machinesim.cutting import remove
+from machinesim.cutting import cut, remove
+from machinesim.exceptions import HolderContactError
 from machinesim.metrology import height_map
 from machinesim.tools import BallEndMill, VTool
 from machinesim.workpiece import block
@@ -19,6 +21,7 @@ from machinesim.workpiece import block
 #: vertices (~1e-16 relative of the coordinates, divided by the feature's relative size):
 #: 1e-9 is the issue's bound, with margin.
 VOLUME_REL = 1e-9
+EXAMPLES = Path(__file__).resolve().parents[1] / "models" / "examples"
 METHODS = pytest.mark.parametrize(("method", "used"), [("auto", "relief"),
                                                         ("boolean", "boolean")])
 
@@ -88,6 +91,20 @@ def test_a_holder_that_would_touch_the_part_is_reported(method, used):
                                                   rel=VOLUME_REL, abs=0.0)
     # The profile ends below the top (the groove has walls): the boolean engine cuts it.
     assert report.method == "boolean"
+
+
+@pytest.mark.parametrize("radius", [1e-9, 2e-9, 1e-6])
+def test_the_holder_of_a_tool_a_few_nm_wide_is_found_in_the_part(radius):
+    # grooves.nc cuts 20 um deep; a ball as high as its radius has its holder in the part on
+    # each of the four grooves. The holder's room (its top face lifted ~30 mm over the
+    # 10 mm block) was manifold3d's QuickHull, which drops points within ~1e-7 of the
+    # largest coordinate: for a 1 or 2 nm ball it came out empty and the cut went on, exit
+    # 0, a body 2 nm high 20 um deep.
+    program = EXAMPLES / "grooves.nc"
+    with pytest.raises(HolderContactError, match=r"line 6 \(lines 6, 10, 14, 18\) takes the "
+                       "top of the tool's body"):
+        cut(program, str(EXAMPLES / "mill3.urdf"), BallEndMill(radius, height=radius),
+            "block:10x10x2")
 
 
 @METHODS
