@@ -357,7 +357,7 @@ def _cut(args) -> int:
 
     machine = load_machine(args.machine)
     tool = tool_from_spec(args.tool, name="--tool")
-    stock = stock_from_spec(args.stock)
+    stock = stock_from_spec(args.stock, name="--stock")
     program, chord = read_for_machine(args, args.program, machine, tool)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None
     machine.check_errors(errors)  # a misfit names the user's file first, then the machine

@@ -17,7 +17,7 @@ import manifold3d
 import numpy as np
 
 from machinesim._io import write_atomic
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, brief
 from machinesim.tolerances import CYLINDER_CHORD_M, SPHERE_CHORD_M
 from machinesim.tools import arc_segments, sphere_polygon
 from machinesim.units import M_PER_MM, M_PER_UM
@@ -377,8 +377,10 @@ _STOCK_FORMS = (
 STOCK_SIZE_MM = (1e-6, 1e4)
 
 
-def _numbers(spec: str, text: str, count: int, separator: str,
+def _numbers(where: str, text: str, count: int, separator: str,
              sizes: bool = True) -> list[float]:
+    """``count`` numbers of ``text`` between ``separator``s; ``where`` (the spec as the
+    caller names it) begins a refusal."""
     fields = text.split(separator)
     try:
         values = [float(field) for field in fields]
@@ -386,64 +388,65 @@ def _numbers(spec: str, text: str, count: int, separator: str,
         values = []
     if len(values) != count or not all(math.isfinite(v) for v in values):
         raise InputError(
-            f"stock spec {spec!r}: expected {count} numbers separated by {separator!r} in "
-            f"{text!r}; forms: {_STOCK_FORMS}",
-            key="stock",
-        )
+            f"{where}: expected {count} numbers separated by {separator!r} in "
+            f"{text!r}; forms: {_STOCK_FORMS}")
     low, high = STOCK_SIZE_MM
     if sizes and not all(low <= v <= high for v in values):
-        raise InputError(f"stock spec {spec!r}: sizes {text!r} must lie in {low:g} .. "
-                         f"{high:g} mm", key="stock")
+        raise InputError(f"{where}: sizes {text!r} must lie in {low:g} .. {high:g} mm")
     if not sizes and not all(abs(v) <= high for v in values):
-        raise InputError(f"stock spec {spec!r}: placement {text!r} must lie within +-{high:g} "
-                         "mm", key="stock")
+        raise InputError(f"{where}: placement {text!r} must lie within +-{high:g} mm")
     return values
 
 
-def stock_from_spec(spec: str) -> Part:
+def stock_from_spec(spec: str, *, name: str = "stock spec") -> Part:
     """Build stock from a text spec in mm (see the module docstring for the forms).
+
+    ``name`` is what a refusal calls the spec: ``"--stock"`` on the command line, so that
+    it reads ``--stock 'block:10x10': expected 3 numbers ...``.
 
     Raises
     ------
     InputError
-        Naming the spec and the expected forms when it cannot be read.
+        Naming the spec once and the expected forms when it cannot be read.
     """
+    where = f"{name} {brief(str(spec))!r}"
     text = str(spec).strip()
     body, _, placement = text.partition("@")
     origin = (
-        [v * M_PER_MM for v in _numbers(spec, placement, 3, ",", sizes=False)] if placement
+        [v * M_PER_MM for v in _numbers(where, placement, 3, ",", sizes=False)] if placement
         else [0.0] * 3
     )
     fields = body.split(":")
     kind = fields[0].lower()
     try:
         if kind == "block" and len(fields) == 2:
-            size = [v * M_PER_MM for v in _numbers(spec, fields[1], 3, "x")]
+            size = [v * M_PER_MM for v in _numbers(where, fields[1], 3, "x")]
             return block(*size, origin=origin)
         if kind == "cylinder" and len(fields) == 2:
-            radius, height = (v * M_PER_MM for v in _numbers(spec, fields[1], 2, "x"))
+            radius, height = (v * M_PER_MM for v in _numbers(where, fields[1], 2, "x"))
             return cylinder(radius, height, origin=origin)
         if kind == "spheres" and len(fields) in (3, 4):
-            size = [v * M_PER_MM for v in _numbers(spec, fields[1], 3, "x")]
-            radius = _numbers(spec, fields[2], 1, ",")[0] * M_PER_MM
+            size = [v * M_PER_MM for v in _numbers(where, fields[1], 3, "x")]
+            radius = _numbers(where, fields[2], 1, ",")[0] * M_PER_MM
             if len(fields) == 4 and fields[3].lower() != "dimples":
-                raise InputError(f"stock spec {spec!r}: expected 'dimples', got {fields[3]!r}")
+                raise InputError(f"{where}: expected 'dimples', got {fields[3]!r}")
             part = block_with_spheres(*size, radius, dimples=len(fields) == 4)
             return Part(part.manifold.translate(tuple(origin)))
         if kind == "crown" and len(fields) in (1, 2):
             oversize = (
-                _numbers(spec, fields[1], 1, ",", sizes=False)[0] * M_PER_MM
+                _numbers(where, fields[1], 1, ",", sizes=False)[0] * M_PER_MM
                 if len(fields) == 2 else 10.0 * M_PER_UM
             )
             if not 0.0 <= oversize <= 1.0 * M_PER_MM:
-                raise InputError(f"stock spec {spec!r}: crown oversize must lie in 0 .. 1 mm, "
-                                 f"got {oversize / M_PER_MM!r} mm", key="stock")
+                raise InputError(f"{where}: crown oversize must lie in 0 .. 1 mm, "
+                                 f"got {oversize / M_PER_MM!r} mm")
             return Part(diamond_crown(oversize).manifold.translate(tuple(origin)))
     except InputError as error:
-        if str(spec) in str(error):
+        if error.message.startswith(where):
             raise
-        raise InputError(f"stock spec {spec!r}: {error}", key="stock") from None
-    raise InputError(f"stock spec {spec!r}: expected {_STOCK_FORMS}", key="stock")
+        # a size the solid refuses names itself (radius, ...): not again as a key
+        raise InputError(f"{where}: {error.message}") from None
+    raise InputError(f"{where}: expected {_STOCK_FORMS}")
 
 
 __all__ = [

@@ -513,7 +513,7 @@ def test_python_dash_m_machinesim_is_the_command_line():
         machinesim.list_machines()
 
 
-def test_a_bad_tool_is_named_once_by_its_option_or_its_table_key(tmp_path, capsys):
+def test_a_bad_tool_or_stock_is_named_once_by_its_option_or_its_table_key(tmp_path, capsys):
     # it had read "key 'tool': tool spec 'ball:-1': key 'radius': radius must be ...", and
     # from a tool table "key 'tool.1.shape': key 'tool': tool spec ...: key 'radius': ..."
     argv = ["cut", GROOVES, "--machine", "grooving_4axis", "--stock", "block:10x10x2",
@@ -529,6 +529,11 @@ def test_a_bad_tool_is_named_once_by_its_option_or_its_table_key(tmp_path, capsy
     assert err == (f"machinesim: error: {table}, key 'tool.1.shape': tool spec 'ball:-1': "
                    "radius must be a positive finite number, got -0.001 m (-1 mm)\n")
     assert list(tmp_path.iterdir()) == [table]
+    code, _, err = run([*argv[:4], "--tool", "v:90", "--stock", "block:10x10", *argv[6:]],
+                       capsys)
+    assert_clean_failure(code, err)
+    assert err.startswith("machinesim: error: --stock 'block:10x10': expected 3 numbers "
+                          "separated by 'x' in '10x10'; forms: 'block:LxWxH', ")
 
 
 def test_a_huge_tool_is_refused_cleanly(tmp_path):

@@ -211,6 +211,18 @@ def test_bad_stock_specs_raise_input_error(spec, message):
         stock_from_spec(spec)
 
 
+def test_a_stock_spec_refusal_names_the_spec_once():
+    # it read "key 'stock': stock spec 'block:10x10': ..."; the command line names --stock
+    with pytest.raises(InputError) as caught:
+        stock_from_spec("block:10x10x-2")
+    assert str(caught.value) == ("stock spec 'block:10x10x-2': sizes '10x10x-2' must lie in "
+                                 "1e-06 .. 10000 mm")
+    assert caught.value.key is None
+    with pytest.raises(InputError) as caught:
+        stock_from_spec("spheres:10x10x2:1:bumps", name="--stock")
+    assert str(caught.value) == "--stock 'spheres:10x10x2:1:bumps': expected 'dimples', got 'bumps'"
+
+
 def test_cylinder_radius_error():
     with pytest.raises(InputError, match="radius must be positive"):
         cylinder(0.0, 1e-3)

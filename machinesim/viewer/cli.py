@@ -216,8 +216,10 @@ def _scene(args, budget: int):
     check_reading_options(args)
     machine = load_machine(args.target)
     from machinesim.tool_specs import tool_from_spec
+    from machinesim.workpiece import stock_from_spec
 
     tool = tool_from_spec(args.tool, name="--tool")
+    stock = stock_from_spec(args.stock, name="--stock")
     program = errors = chord = None
     if args.program is not None:
         # read as `machinesim cut` reads it: the same tool table, integer input and chords
@@ -231,7 +233,7 @@ def _scene(args, budget: int):
         from machinesim.errors import ErrorModel
 
         errors = ErrorModel.from_toml(args.errors)
-    return machine_scene(machine, program, tool=tool, stock=args.stock,
+    return machine_scene(machine, program, tool=tool, stock=stock,
                          errors=errors, duration_s=args.duration, max_triangles=budget,
                          chord_tolerance=chord)
 
