@@ -86,6 +86,11 @@ def tool_from_spec(spec: str, *, name: str = "tool spec") -> Tool:
     try:
         values = [float(field) for field in fields[1:]]
     except ValueError:
+        if any("," in field for field in fields[1:]):
+            # '0,5' as a German or French keyboard writes a half
+            raise InputError(f"{where}: {next(f for f in fields[1:] if ',' in f)!r} is not a "
+                             "number: the decimal mark is a point, e.g. "
+                             f"{str(spec).strip().replace(',', '.')!r}") from None
         raise InputError(f"{where}: expected numbers after the kind, as in {_SPEC_FORMS}"
                          ) from None
     try:

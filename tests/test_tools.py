@@ -238,6 +238,9 @@ def test_a_spec_shank_diameter_of_zero_is_refused():
         ("nose:2.0", "expected 'v:ANGLE_DEG'"),
         ("drill:3", "'drill:3'.*expected"),
         ("v:abc", "'v:abc'.*expected numbers"),
+        ("ball:0,5", "^tool spec 'ball:0,5': '0,5' is not a number: the decimal mark is a "
+                     "point, e.g. 'ball:0.5'$"),
+        ("nose:0,5:90:h=2", "'0,5' is not a number: .* e.g. 'nose:0.5:90:h=2'$"),
         ("v:200", "'v:200'.*included_angle must lie in"),
         ("ball:-1", "'ball:-1'.*radius must be a positive"),
         ("ball:1e9", "'ball:1e9'.*radius must be at most 1 m"),
