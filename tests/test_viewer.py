@@ -687,8 +687,14 @@ def test_cli_refuses_bad_input_with_a_clear_message(tmp_path):
         run([str(empty), "--html", str(tmp_path / "x.html")])
     with pytest.raises(InputError, match="no such part file"):
         run([str(tmp_path / "missing.ply"), "--html", str(tmp_path / "x.html")])
-    with pytest.raises(InputError, match="--program do\\(es\\) not apply to a part"):
+    with pytest.raises(InputError, match="^--program does not apply to a part; see"):
         run([str(tmp_path / "missing.ply"), "--program", "p.nc"])
+    # it read "--report, --nominal do(es) not apply to a machine"
+    with pytest.raises(InputError, match="^--report and --nominal do not apply to a machine; "):
+        run(["robonano_a0ib", "--report", "r.json", "--nominal", "n.ply"])
+    with pytest.raises(InputError, match="^--program, --report and --nominal do not apply to "
+                       "a report folder; "):
+        run([str(empty), "--program", "p.nc", "--report", "r.json", "--nominal", "n.ply"])
     with pytest.raises(InputError, match="expected a file name ending in .html"):
         run(["robonano_a0ib", "--html", str(tmp_path / "x.png")])
     # headless Chromium shows ERR_UNSAFE_PORT for 6000 (X11) and 6665 (IRC): the server
@@ -749,7 +755,7 @@ def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path
              "--html", str(tmp_path / "t.html")])
     with pytest.raises(InputError, match="--integer-input read a program: give one"):
         run(["grooving_4axis", "--integer-input", "increment"])
-    with pytest.raises(InputError, match="--chord-nm do\\(es\\) not apply to a part"):
+    with pytest.raises(InputError, match="--chord-nm does not apply to a part"):
         run([str(tmp_path / "missing.ply"), "--chord-nm", "2"])
 
 

@@ -272,8 +272,10 @@ def _refuse_tool_changes(program) -> None:
 
 def _refuse(options: list[str], what: str) -> None:
     if options:
-        raise InputError(f"{', '.join(options)} do(es) not apply to {what}; see "
-                         "'machinesim view --help'")
+        names = " and ".join([", ".join(options[:-1]), options[-1]] if len(options) > 1
+                             else options)
+        raise InputError(f"{names} {'do' if len(options) > 1 else 'does'} not apply to "
+                         f"{what}; see 'machinesim view --help'")
 
 
 def _screenshot(url: str, ready: str, path: Path) -> None:
