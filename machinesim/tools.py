@@ -306,12 +306,18 @@ class RoundNoseTool:
         return math.acos(max(-1.0, 1.0 - level / self.nose_radius))
 
     def _half_width(self, level: float) -> float:
-        """Half width of the profile at ``level`` above the edge point (m)."""
+        """Half width of the profile at ``level`` above the edge point (m).
+
+        Above the arc a flank leaves it along its tangent, (cos end, sin end) in (y, z) as
+        `_nose_profile` draws it, so it widens by 1 / tan(end) per unit of height: by
+        tan(end), as this had it, the half width was right at 90 deg only, and the flanks'
+        default top (`MAX_TOOL_SIZE_M`) wrong elsewhere ('nose:1:0.1' made a tool 22.9 m
+        wide, 'nose:0.5:179' stopped its flanks at 4.85 mm, taking them for 1 m wide)."""
         radius, end = self.nose_radius, self.included_angle / 2.0
         arc_top = radius * (1.0 - math.cos(end))
         if level <= arc_top:
             return radius * math.sin(self._arc_end(level))
-        return radius * math.sin(end) + (level - arc_top) * math.tan(end)
+        return radius * math.sin(end) + (level - arc_top) / math.tan(end)
 
     def vertices(self) -> np.ndarray:
         """Profile polygon from the -Y top round to the +Y top, shape (k, 3) (m).

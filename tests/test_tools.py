@@ -103,6 +103,27 @@ def test_a_v_near_180_deg_stops_its_flanks_at_the_size_bound():
     assert np.ptp(top) == pytest.approx(MAX_TOOL_SIZE_M, rel=1e-12)
 
 
+@pytest.mark.parametrize("angle_deg", [60.0, 120.0, 179.0])
+def test_a_nose_is_as_wide_at_its_flanks_top_as_its_tangent_flanks_make_it(angle_deg):
+    # The flanks leave the arc at +-a/2 from -Z along its tangent, pi - a apart, so above
+    # the arc the half width grows by cot(a/2) per unit of height. The flanks' default top
+    # had taken tan(a/2): 'nose:0.5:179' (flanks 1 deg apart, 1.17 mm wide at 10 mm) stopped
+    # them at 4.85 mm, taken for 1 m wide.
+    radius, end, height = 0.5e-3, math.radians(angle_deg) / 2, TOOL_HEIGHT_M
+    tool = tool_from_spec(f"nose:0.5:{angle_deg:g}")
+    half = radius * math.sin(end) + (height - radius * (1 - math.cos(end))) / math.tan(end)
+    assert tool.flank_height == height
+    assert np.ptp(tool.vertices()[:, 1]) == pytest.approx(2 * half, rel=1e-12, abs=0.0)
+
+
+def test_a_nose_of_a_small_angle_stops_its_flanks_at_the_size_bound():
+    # 'nose:1:0.1' (flanks 179.9 deg apart) had made a tool 22.9 m wide
+    for spec in ("nose:1:1", "nose:1:0.1"):
+        tool = tool_from_spec(spec)
+        assert tool.flank_height < tool.height
+        assert np.ptp(tool.vertices()[:, 1]) == pytest.approx(MAX_TOOL_SIZE_M, rel=1e-12)
+
+
 def _frusta_volume(radius, rings, segments, height):
     """Volume of the ring polyhedron from its construction: regular m-gons of circumradius
     R sin(theta_k) at height R (1 - cos(theta_k)), theta_k = k pi / (2 rings), aligned; each
