@@ -160,7 +160,28 @@ def _check_count(what: str, count: int, chord_tol: float) -> None:
 
 def _flank_height(tool, top_half_width) -> float:
     """``tool.flank_height`` checked, or its default: the full height, or lower where the
-    flanks' top would be wider than `MAX_TOOL_SIZE_M` (an included angle near 180 deg)."""
+    flanks' top would be wider than `MAX_TOOL_SIZE_M` (an included angle near 180 deg).
+    The flanks' top must be at least `MIN_TOOL_SIZE_M` wide (`_check_top_width`)."""
+    height = _unchecked_flank_height(tool, top_half_width)
+    _check_top_width(tool, 2.0 * top_half_width(height), height)
+    return height
+
+
+def _check_top_width(tool, width: float, height: float) -> None:
+    """Refuse flanks whose top, at ``height``, is narrower than `MIN_TOOL_SIZE_M`: a V of
+    1e-9 deg (flanks 1.7e-13 m apart 10 mm up) cut nothing of a 6 mm groove inside a 10 mm
+    block, one of 1e-7 deg (1.7e-11 m) 1.4e-5 of it too little."""
+    if width < MIN_TOOL_SIZE_M:
+        angle = tool.included_angle
+        raise InputError(
+            f"included_angle {angle!r} rad ({math.degrees(angle):.6g} deg) leaves the flanks "
+            f"{_length(width)} apart at their top, {_length(height)} up; they must be at "
+            f"least {MIN_TOOL_SIZE_M:g} m ({MIN_TOOL_SIZE_M * 1e3:g} mm) apart "
+            "(MIN_TOOL_SIZE_M, below which a tool removes nothing or a wrong volume): give a "
+            "wider included angle or higher flanks", key="included_angle")
+
+
+def _unchecked_flank_height(tool, top_half_width) -> float:
     if tool.flank_height is None:
         height = tool.height
         if 2.0 * top_half_width(height) > MAX_TOOL_SIZE_M:

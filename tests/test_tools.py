@@ -346,6 +346,23 @@ def test_a_spec_refusal_names_the_spec_once_and_its_parameter_once():
         tool_from_spec("flat:1:d=1e-11")
 
 
+def test_the_narrowest_v_cuts_its_hand_derived_grooves_and_a_narrower_is_refused():
+    # A V whose flanks are MIN_TOOL_SIZE_M apart 10 mm up: each of grooves.nc's grooves has
+    # the section d^2 tan(a/2) (measured 3.2e-7 off: 1e-6). 'v:1e-9' (flanks 1.7e-13 m
+    # apart) had cut nothing of a groove inside a block.
+    angle = 2.0 * math.atan(MIN_TOOL_SIZE_M / (2.0 * TOOL_HEIGHT_M)) * (1.0 + 1e-12)
+    _, report = cut(EXAMPLES / "grooves.nc", str(EXAMPLES / "mill3.urdf"), VTool(angle),
+                    "block:10x10x2")
+    expected = 4 * 10e-3 * 20e-6**2 * math.tan(angle / 2.0)
+    assert report.removed_volume_m3 == pytest.approx(expected, rel=1e-6, abs=0.0)
+    with pytest.raises(InputError, match="leaves the flanks 9.99999999.*e-10 m .* apart at "
+                       "their top, 0.01 m \\(10 mm\\) up; they must be at least 1e-09 m"):
+        VTool(angle * (1.0 - 2e-12))
+    with pytest.raises(InputError, match=r"^tool spec 'v:1e-9': included_angle "
+                       r"1.745329251994\d*e-11 rad \(1e-09 deg\) leaves the flanks"):
+        tool_from_spec("v:1e-9")
+
+
 def test_a_ball_of_10_fm_is_refused_naming_the_bound_not_cut_to_nothing():
     # 'ball:1e-11' (mm) had cut nothing and warned "does it reach the stock?"
     with pytest.raises(InputError) as caught:
