@@ -248,6 +248,25 @@ def test_a_reversed_roi_is_named_once(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_roi_windows_that_miss_the_stock_are_refused_before_cutting(tmp_path, capsys):
+    # the stock clipped to them is nothing: an empty part was written, exit 0, with "does it
+    # reach the stock?"; windows that only touch its side (x 10 .. 11) hold none of it
+    out = tmp_path / "p.ply"
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", out, "--roi", "100,200,100,200",
+                        "--roi", "10,11,0,10"], capsys)
+    assert_clean_failure(code, err)
+    assert err == ("machinesim: error: --roi 100,200,100,200 --roi 10,11,0,10: no window "
+                   "overlaps the stock, which spans x 0 .. 10 mm and y 0 .. 10 mm (workpiece "
+                   "frame): the part, the stock within the windows, would be empty; expected a "
+                   "window over the stock\n")
+    assert list(tmp_path.iterdir()) == []
+    # a window over a corner no groove crosses: cut, and the warning names the windows
+    code, _, err = run(["cut", GROOVES, *CUT, "--out", out, "--roi", "0,1,0,1"], capsys)
+    assert code == 0, err
+    assert err == ("warning: the program removed no material (does it reach the stock in the "
+                   "--roi windows?)\n")
+
+
 def test_an_error_model_that_does_not_fit_the_machine_names_its_file_first(tmp_path, capsys):
     # a table of X errors over -1000 .. 1000 mm: grooving_4axis's X travels -250 .. 250 mm
     errors = tmp_path / "wide.toml"
