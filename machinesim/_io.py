@@ -3,7 +3,8 @@
 Every file-system problem (missing file, a folder given as a file, a folder that is not
 there or cannot be written, a full disk) becomes a `FileError` (an `InputError`, and an
 `OSError`) whose ``source`` is the path the user gave: the command line prints it as one
-line, the Python API raises it.
+line, the Python API raises it. Nothing is renamed into place after a Ctrl-C or SIGTERM,
+and a rename or folder swap under way finishes first (`machinesim._interrupts`).
 """
 
 from __future__ import annotations
@@ -16,17 +17,14 @@ import math
 import os
 import secrets
 import shutil
-import signal
 import tempfile
-import threading
-from collections.abc import Iterable, Iterator
-from contextlib import contextmanager
+from collections.abc import Iterable
 from pathlib import Path
 
+from machinesim import _interrupts
+from machinesim._interrupts import _ctrl_c_deferred
 from machinesim.exceptions import FileError, InputError, MachineSimError
 
-#: Set by `ctrl_c_remembered`'s handler: a Ctrl-C arrived, even if a library swallowed it.
-_ctrl_c_seen = False
 #: Longest file name component (bytes) where the file system does not say (POSIX NAME_MAX).
 _NAME_MAX = 255
 #: Characters of the final name kept in a temporary file's name, so that it stays short.
@@ -178,64 +176,6 @@ def _asks(question) -> bool:
         return False
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM (``kill PID``, a job scheduler's stop, a container's shutdown) within
-    `ctrl_c_remembered`: handled as a Ctrl-C is (nothing half written, staging folders
-    removed), reported as what it is, with status 143 (`stopped`)."""
-
-
-#: Exit statuses of a run stopped by Ctrl-C or SIGTERM (128 + the signal, as shells say).
-EXIT_INTERRUPTED = 128 + signal.SIGINT
-EXIT_TERMINATED = 128 + signal.SIGTERM
-
-
-def stopped(stop: KeyboardInterrupt) -> tuple[str, int]:
-    """What to call a run ended by ``stop`` and its exit status: ``("interrupted", 130)``
-    after a Ctrl-C, ``("terminated", 143)`` after SIGTERM."""
-    if isinstance(stop, Terminated):
-        return "terminated", EXIT_TERMINATED
-    return "interrupted", EXIT_INTERRUPTED
-
-
-def _on_ctrl_c(signum, frame):
-    global _ctrl_c_seen
-    _ctrl_c_seen = True
-    raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
-
-
-#: The signals `ctrl_c_remembered` handles, each with the handler it replaces (Python's own
-#: for SIGINT, the default action, ending the process at once, for SIGTERM).
-_STOPS = ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, signal.SIG_DFL))
-
-
-@contextmanager
-def ctrl_c_remembered() -> Iterator[None]:
-    """Within the block, a Ctrl-C is remembered as well as raised, and nothing is written after it.
-
-    Some libraries import their optional parts inside ``except BaseException`` (trimesh,
-    for one), so a Ctrl-C that lands there is swallowed and the run would go on to write its
-    files and exit 0. With this handler `write_together` refuses to rename anything into
-    place once a Ctrl-C was seen, whoever caught it. SIGTERM is handled the same way, raised
-    as `Terminated` (a KeyboardInterrupt): without it a ``kill`` ended the process where it
-    stood and left its staging folder and temporary files behind. Each handler is installed
-    only where the usual one is (a background job started with SIGINT ignored keeps
-    ignoring it), and only in the main thread (where signals arrive); the old handlers are
-    put back on leaving.
-    """
-    global _ctrl_c_seen
-    main = threading.current_thread() is threading.main_thread()
-    previous = {number: signal.getsignal(number) for number, _ in _STOPS}
-    ours = [number for number, usual in _STOPS if main and previous[number] is usual]
-    for number in ours:
-        signal.signal(number, _on_ctrl_c)
-    try:
-        yield
-    finally:
-        for number in ours:
-            signal.signal(number, previous[number])
-        _ctrl_c_seen = False
-
-
 def _raw(path, data: bytes | str, encoding: str) -> bytes:
     """The bytes to write: ``data`` encoded when text; bytes-like data as it is. Anything else
     is refused (``bytes(3)`` would write three NUL bytes)."""
@@ -293,7 +233,7 @@ def write_together(items: Iterable[tuple[object, bytes | str]], encoding: str = 
                 staged.append((path, _stage(path, raw)))
             except OSError as exc:
                 raise _write_error(path, exc) from None
-        if _ctrl_c_seen:
+        if _interrupts._ctrl_c_seen:
             raise KeyboardInterrupt
         # a Ctrl-C or SIGTERM during the renames is held until they and the removal of the
         # old files' second names are done: one landing between a rename and its record
@@ -350,30 +290,6 @@ def _backup(path: Path) -> str | None:
 
 #: Staging folders of this process that are still being written (not stale).
 _ours: set[str] = set()
-
-
-@contextmanager
-def _ctrl_c_deferred() -> Iterator[None]:
-    """Within the block a Ctrl-C (or SIGTERM) is held back, and raised (by the handler that
-    was there) on leaving it: a folder swap is never left half done. Only in the main
-    thread, where the handlers can be set, and only for a signal with a Python handler;
-    elsewhere the block runs as it is."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = {number: signal.getsignal(number) for number, _ in _STOPS}
-    held: list[int] = []
-    for number, handler in previous.items():
-        if callable(handler):
-            signal.signal(number, lambda signum, frame: held.append(signum))
-    try:
-        yield
-    finally:
-        for number, handler in previous.items():
-            if callable(handler):
-                signal.signal(number, handler)
-    for number in dict.fromkeys(held):
-        previous[number](number, None)
 
 
 def _folder_stem(target: Path) -> str:
@@ -528,7 +444,7 @@ class StagedFolder:
         """
         if self.path is None:
             raise MachineSimError("the staged folder was already committed or discarded")
-        if _ctrl_c_seen:
+        if _interrupts._ctrl_c_seen:
             raise KeyboardInterrupt
         staging = self.path
         with _ctrl_c_deferred():
@@ -631,6 +547,6 @@ def read_json(path, what: str = "JSON file"):
         raise InputError(f"nested too deeply to be the {what}", source=str(path)) from None
 
 
-__all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "FileError", "StagedFolder", "Terminated",
-           "stdout_to_null", "check_readable_file", "check_writable", "clear_stale_folders",
-           "json_text", "read_json", "stopped", "write_atomic", "write_together"]
+__all__ = ["FileError", "StagedFolder", "stdout_to_null", "check_readable_file",
+           "check_writable", "clear_stale_folders", "json_text", "read_json", "write_atomic",
+           "write_together"]

@@ -25,14 +25,13 @@ import time
 from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
+from machinesim._interrupts import ctrl_c_remembered, stopped
 from machinesim._io import (
     check_readable_file,
     check_writable,
-    ctrl_c_remembered,
     file_name,
     json_text,
     stdout_to_null,
-    stopped,
     write_together,
 )
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
@@ -155,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
                 return _command(args)
     except MachineSimError as exc:
         return _fail(f"error: {exc}", EXIT_INPUT)
-    except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (`machinesim._io.Terminated`)
+    except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (`machinesim._interrupts.Terminated`)
         how, status = stopped(stop)
         return _fail(f"{how}; {_interrupted(args)}", status)
     except BrokenPipeError:

@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import NoReturn
 
 from machinesim._arguments import ArgumentParser
-from machinesim._io import StagedFolder, ctrl_c_remembered, stdout_to_null, stopped
+from machinesim._interrupts import ctrl_c_remembered, stopped
+from machinesim._io import StagedFolder, stdout_to_null
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim.exceptions import InputError
 from machinesim.report import STAGED, folder_key
@@ -82,7 +83,7 @@ def scenario_status(report, args, name: str | None = None) -> int:
         left = "" if staged is None else f"; {_interrupted(out, staged)}"
         print(f"{name}: error: {where}{error.strerror or error}{left}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (`machinesim._io.Terminated`)
+    except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (`machinesim._interrupts.Terminated`)
         how, status = stopped(stop)
         print(f"{name}: {how}; {_interrupted(out, staged)}", file=sys.stderr)
         return status

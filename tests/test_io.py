@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from machinesim import _io
+from machinesim import _interrupts, _io
 from machinesim.exceptions import InputError, MachineSimError
 from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
@@ -204,7 +204,7 @@ def test_a_ctrl_c_a_library_swallowed_still_stops_the_write(tmp_path):
     the handler remembers it, nothing is written, and leaving puts Python's handler back."""
     before = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
-        with _io.ctrl_c_remembered():
+        with _interrupts.ctrl_c_remembered():
             try:
                 os.kill(os.getpid(), signal.SIGINT)
                 time.sleep(1.0)  # the handler raises here, at the latest
@@ -226,12 +226,12 @@ def test_sigterm_is_raised_as_terminated_and_stops_the_write(tmp_path):
     and leaving puts the default action back (the process ended where it stood before)."""
     before = signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
-        with _io.ctrl_c_remembered():
-            with pytest.raises(_io.Terminated) as stop:
+        with _interrupts.ctrl_c_remembered():
+            with pytest.raises(_interrupts.Terminated) as stop:
                 os.kill(os.getpid(), signal.SIGTERM)
                 time.sleep(1.0)  # the handler raises here, at the latest
-            assert _io.stopped(stop.value) == ("terminated", 128 + 15)
-            assert _io.stopped(KeyboardInterrupt()) == ("interrupted", 128 + 2)
+            assert _interrupts.stopped(stop.value) == ("terminated", 128 + 15)
+            assert _interrupts.stopped(KeyboardInterrupt()) == ("interrupted", 128 + 2)
             with pytest.raises(KeyboardInterrupt):
                 _io.write_together([(tmp_path / "part.ply", "part")])
         assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
@@ -256,11 +256,11 @@ def test_a_sigterm_during_a_folder_swap_waits_for_the_swap(tmp_path, monkeypatch
             time.sleep(0.2)  # a handler that raised would do so here
 
     try:
-        with _io.ctrl_c_remembered():
+        with _interrupts.ctrl_c_remembered():
             staged = _io.StagedFolder(target)
             (staged.path / "new.txt").write_text("new")
             monkeypatch.setattr(_io.os, "rename", rename_then_term)
-            with pytest.raises(_io.Terminated):
+            with pytest.raises(_interrupts.Terminated):
                 staged.commit()
     finally:
         signal.signal(signal.SIGTERM, before)

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
-from machinesim._io import ctrl_c_remembered, stopped
+from machinesim._interrupts import ctrl_c_remembered, stopped
 from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
 from machinesim.campaign.trials import MAX_TRIALS, PROCEDURES, trials_refused
 from machinesim.exceptions import InputError, MachineSimError

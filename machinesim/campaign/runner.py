@@ -25,7 +25,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from machinesim._cores import usable_cores
-from machinesim._io import _ctrl_c_deferred
+from machinesim._interrupts import _ctrl_c_deferred
 from machinesim.campaign.distributions import Distribution, parse_distribution, parse_vary
 from machinesim.campaign.results import CampaignFolder, assemble, finished_trials
 from machinesim.campaign.summary import write_report

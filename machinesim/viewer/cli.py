@@ -18,8 +18,8 @@ import os
 import sys
 from pathlib import Path
 
+from machinesim._interrupts import Terminated
 from machinesim._io import (
-    Terminated,
     check_readable_file,
     check_writable,
     file_name,

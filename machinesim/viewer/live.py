@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import zmq
 from meshcat.servers.tree import SceneTree, find_node, walk
 
-from machinesim._io import Terminated
+from machinesim._interrupts import Terminated
 from machinesim.exceptions import MachineSimError
 from machinesim.viewer.scene import Scene, overlay_html
 
@@ -77,7 +77,7 @@ class LiveSession:
         """Block until the server process ends, or until Ctrl-C: its exit code, or None
         after Ctrl-C, which ends the server (a script's ``live.wait()`` is stopped so, as
         the command line's viewer is, without a KeyboardInterrupt traceback). SIGTERM
-        (`machinesim._io.Terminated`) ends the server too and is raised on."""
+        (`machinesim._interrupts.Terminated`) ends the server too and is raised on."""
         try:
             return self.process.wait()
         except KeyboardInterrupt as stop:

@@ -1,0 +1,103 @@
+"""How a run stops: Ctrl-C and SIGTERM, remembered, held back where a swap must finish, and told.
+
+A Ctrl-C (SIGINT) or a ``kill`` (SIGTERM) within `ctrl_c_remembered` is raised as a
+KeyboardInterrupt (`Terminated` for SIGTERM) and remembered, so that `machinesim._io`
+writes nothing after it even when a library swallowed it; `_ctrl_c_deferred` holds one back
+until a rename or a folder swap is done; `stopped` names the stop and its exit status.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+#: Set by `ctrl_c_remembered`'s handler: a Ctrl-C arrived, even if a library swallowed it.
+_ctrl_c_seen = False
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill PID``, a job scheduler's stop, a container's shutdown) within
+    `ctrl_c_remembered`: handled as a Ctrl-C is (nothing half written, staging folders
+    removed), reported as what it is, with status 143 (`stopped`)."""
+
+
+#: Exit statuses of a run stopped by Ctrl-C or SIGTERM (128 + the signal, as shells say).
+EXIT_INTERRUPTED = 128 + signal.SIGINT
+EXIT_TERMINATED = 128 + signal.SIGTERM
+
+
+def stopped(stop: KeyboardInterrupt) -> tuple[str, int]:
+    """What to call a run ended by ``stop`` and its exit status: ``("interrupted", 130)``
+    after a Ctrl-C, ``("terminated", 143)`` after SIGTERM."""
+    if isinstance(stop, Terminated):
+        return "terminated", EXIT_TERMINATED
+    return "interrupted", EXIT_INTERRUPTED
+
+
+def _on_ctrl_c(signum, frame):
+    global _ctrl_c_seen
+    _ctrl_c_seen = True
+    raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+
+
+#: The signals `ctrl_c_remembered` handles, each with the handler it replaces (Python's own
+#: for SIGINT, the default action, ending the process at once, for SIGTERM).
+_STOPS = ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, signal.SIG_DFL))
+
+
+@contextmanager
+def ctrl_c_remembered() -> Iterator[None]:
+    """Within the block, a Ctrl-C is remembered as well as raised, and nothing is written after it.
+
+    Some libraries import their optional parts inside ``except BaseException`` (trimesh,
+    for one), so a Ctrl-C that lands there is swallowed and the run would go on to write its
+    files and exit 0. With this handler `write_together` refuses to rename anything into
+    place once a Ctrl-C was seen, whoever caught it. SIGTERM is handled the same way, raised
+    as `Terminated` (a KeyboardInterrupt): without it a ``kill`` ended the process where it
+    stood and left its staging folder and temporary files behind. Each handler is installed
+    only where the usual one is (a background job started with SIGINT ignored keeps
+    ignoring it), and only in the main thread (where signals arrive); the old handlers are
+    put back on leaving.
+    """
+    global _ctrl_c_seen
+    main = threading.current_thread() is threading.main_thread()
+    previous = {number: signal.getsignal(number) for number, _ in _STOPS}
+    ours = [number for number, usual in _STOPS if main and previous[number] is usual]
+    for number in ours:
+        signal.signal(number, _on_ctrl_c)
+    try:
+        yield
+    finally:
+        for number in ours:
+            signal.signal(number, previous[number])
+        _ctrl_c_seen = False
+
+
+@contextmanager
+def _ctrl_c_deferred() -> Iterator[None]:
+    """Within the block a Ctrl-C (or SIGTERM) is held back, and raised (by the handler that
+    was there) on leaving it: a folder swap is never left half done. Only in the main
+    thread, where the handlers can be set, and only for a signal with a Python handler;
+    elsewhere the block runs as it is."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {number: signal.getsignal(number) for number, _ in _STOPS}
+    held: list[int] = []
+    for number, handler in previous.items():
+        if callable(handler):
+            signal.signal(number, lambda signum, frame: held.append(signum))
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            if callable(handler):
+                signal.signal(number, handler)
+    for number in dict.fromkeys(held):
+        previous[number](number, None)
+
+
+__all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "Terminated", "ctrl_c_remembered",
+           "stopped"]
