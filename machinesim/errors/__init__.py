@@ -39,14 +39,13 @@ with a UTF-8 byte order mark.
 """
 
 from machinesim.errors._checks import AXES, LARGEST_ERROR, LINEAR_AXES
-from machinesim.errors.model import (
+from machinesim.errors.families import (
     ComponentError,
-    ErrorModel,
     ToolGeometry,
     ToolSetting,
     WorkpieceSetting,
-    as_error_model,
 )
+from machinesim.errors.model import ErrorModel, as_error_model
 
 __all__ = [
     "AXES",

@@ -30,14 +30,14 @@ from machinesim.errors._checks import (
     _numbers,
     _quantity,
 )
-from machinesim.errors.model import (
+from machinesim.errors.families import (
     _WORKPIECE_ANGLES,
     ComponentError,
-    ErrorModel,
     ToolGeometry,
     ToolSetting,
     WorkpieceSetting,
 )
+from machinesim.errors.model import ErrorModel
 from machinesim.exceptions import ErrorModelError
 from machinesim.units import ANGLE, FACTORS, LENGTH, is_length
 
