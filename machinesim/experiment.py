@@ -33,6 +33,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from machinesim.errors import AXES
+from machinesim.errors.model import _PARAMETER_RE
 from machinesim.exceptions import InputError, brief
 
 __all__ = ["LAB_USES", "Evaluation", "Figure", "Identified", "Procedure", "Result",
@@ -206,7 +208,7 @@ class Result:
         with; left out for a component parameter whose name means another table entry or
         coefficient there than in the injected model), and each other non-zero parameter of
         the injected model as written. The background's own parameters are not listed
-        (``background``).
+        (``background``). In `ErrorModel.parameters`'s order.
     identified : Mapping[str, (float, float)]
         (value, std), SI.
     figures : tuple of Figure
@@ -382,12 +384,13 @@ def _truth(lab, identified: Mapping) -> tuple[dict, dict, dict, tuple[str, ...]]
     and an identified component parameter whose name means one thing in the truth and
     another in the injected or background model has no true value here (the report reads
     NaN) rather than the wrong one. The background is summarised: its file and how many of
-    its parameters are non-zero.
+    its parameters are non-zero. ``injected`` is in `ErrorModel.parameters`'s order, an
+    identified name the injected model does not hold (a location error it has none of) too.
     """
     truth, own, extra = lab.reveal(), lab.reveal(background=False), lab.reveal_background()
     true, written = truth.parameters(), own.parameters()
     injected = {}
-    for name in {**dict.fromkeys(written), **dict.fromkeys(identified)}:
+    for name in _in_parameter_order({**dict.fromkeys(written), **dict.fromkeys(identified)}):
         if name in identified:
             if _one_meaning(name, truth, (own, extra)):
                 injected[name] = true.get(name, 0.0)
@@ -400,6 +403,35 @@ def _truth(lab, identified: Mapping) -> tuple[dict, dict, dict, tuple[str, ...]]
     polynomials = tuple(f"component.{axis}.{symbol}" for axis, table in own.component.items()
                         for symbol, error in table.items() if error.kind == "poly")
     return injected, not_identified, background, polynomials
+
+
+#: `ErrorModel.parameters`'s order of the tool's and the workpiece's parameters.
+_TOOL_ORDER = ("x", "y", "z", "rx", "ry", "rz")
+_WORKPIECE_ORDER = ("x", "y", "z", "alpha", "beta", "gamma")
+
+
+def _in_parameter_order(names) -> list[str]:
+    """``names`` in `ErrorModel.parameters`'s order: tool, tool_geometry, workpiece,
+    location, component, axes and symbols in X Y Z A B C order and a component's k rising;
+    a name of no error-model form after them, in the order given."""
+
+    def place(name: str) -> tuple:
+        match = _PARAMETER_RE.fullmatch(name)
+        if match is None:
+            return (5,)
+        if match["tool"]:
+            return (0, _TOOL_ORDER.index(match["tool"]))
+        if match["geometry"]:
+            return (1,)
+        if match["workpiece"]:
+            return (2, _WORKPIECE_ORDER.index(match["workpiece"]))
+        axis, symbol = (match["laxis"], match["lsym"]) if match["laxis"] else (
+            match["caxis"], match["csym"])
+        k = int(match["k"]) if match["k"] else 0
+        return (3 if match["laxis"] else 4, AXES.find(axis), AXES.find(symbol[1:2] or "?"),
+                symbol, k)
+
+    return sorted(names, key=place)
 
 
 def _one_meaning(name: str, truth, models) -> bool:

@@ -421,6 +421,59 @@ def test_injected_lists_the_injected_model_as_written_not_the_tabulated_sum(tmp_
     assert not plain.background and "background" not in plain.summary()
 
 
+def test_injected_keeps_the_error_models_order_for_identified_names_never_written():
+    """An identified name the injected model does not hold (a location error, a nose radius
+    left at zero) came after the model's own names, so ``injected`` (and summary.json) read
+    component.X.EYX[1] before location.C.EX0C. Every name now stands where
+    `ErrorModel.parameters` puts it: tool, tool_geometry, workpiece, location, component."""
+    from machinesim.experiment import Evaluation, Figure, Identified, run
+
+    class Named:
+        name, paper = "named", "none"
+
+        def measure(self, lab):
+            return 0.0
+
+        def identify(self, measurements):
+            names = ("location.C.EX0C", "tool_geometry.nose_radius", "workpiece.x")
+            return Identified({name: (measurements, 1e-9) for name in names}, None)
+
+        def compensate(self, identified):
+            return {}
+
+        def evaluate(self, lab, identified, programs):
+            return Evaluation((Figure("x", "um", 1.0, 0.0),))
+
+    lab = Lab("grooving_4axis", {"tool": {"offset_um": [0.0, 3.0, 0.0]},
+                                 "component": {"X": {"EYX_poly_um_mm": [0.0, 0.5]}}},
+              noise=False)
+    result = run(Named(), lab)
+    assert list(result.injected) == ["tool.y", "tool_geometry.nose_radius", "workpiece.x",
+                                     "location.C.EX0C", "component.X.EYX[1]"]
+    assert list(result.summary()["injected"]) == list(result.injected)
+    # the order is ErrorModel.parameters' own: a full model's names, shuffled, sort back
+    from machinesim.experiment import _in_parameter_order
+
+    full = ErrorModel.from_dict({
+        "tool": {"offset_um": [1.0, 2.0, 3.0], "rotation_urad": [4.0, 5.0, 6.0]},
+        "tool_geometry": {"nose_radius_um": 7.0},
+        "workpiece": {"delta_um": [1.0, 2.0, 3.0], "alpha_urad": 1.0, "beta_urad": 2.0,
+                      "gamma_urad": 3.0},
+        "location": {"C": {"EY0C_um": 1.0, "EX0C_um": 2.0, "EA0C_urad": 3.0},
+                     "X": {"EC0X_urad": 4.0}},
+        "component": {"Z": {"EXZ_poly_um_mm": [1.0, 2.0]},
+                      "X": {"position_mm": [0.0, 1.0], "EYX_um": [1.0, 2.0],
+                            "EXX_um": [3.0, 4.0], "ECX_urad": [5.0, 6.0]}}})
+    names = list(full.parameters())
+    assert len(names) == 6 + 1 + 6 + 4 + 2 + 6
+    shuffled = [names[i] for i in np.random.default_rng(0).permutation(len(names))]
+    assert shuffled != names
+    assert _in_parameter_order(shuffled) == names
+    # a name of no error-model form keeps its place among such names, after the rest
+    assert _in_parameter_order(["b.other", "component.X.EXX[0]", "a.other", "tool.x"]) == [
+        "tool.x", "component.X.EXX[0]", "b.other", "a.other"]
+
+
 def test_the_api_refuses_what_it_cannot_use_with_a_machinesim_error():
     from machinesim.campaign.runner import _vary
     from machinesim.experiment import run
