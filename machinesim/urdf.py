@@ -40,6 +40,10 @@ _NS = "{https://machinesim.invalid/urdf}"
 ZERO_POSE_TOL = 1e-9
 #: Elements nested deeper than this are not a URDF (one is 5-6 deep).
 MAX_DEPTH = 64
+#: Bytes beyond which a file is not a machine's URDF (one is a few kB, a CAD export with
+#: hundreds of links a few hundred kB; meshes are files of their own). A 200 MB file of
+#: links took 3.6 GB within two minutes and was still growing.
+MAX_URDF_BYTES = 16 * 2**20
 #: Plausible travel limits and rapid rates: beyond them a value was written in the wrong
 #: unit (100 for 100 mm reads as 100 m) or is not a machine's. Rotary axes may be spindles,
 #: whose travel is many turns.
@@ -60,15 +64,24 @@ _URDF_NUMBER = re.compile(r"\s*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9
 def read_urdf(path: Path) -> ET.Element:
     """The checked XML root of the URDF file ``path`` (`check_tree`)."""
     try:
-        root = ET.parse(path).getroot()
+        with open(path, "rb") as file:
+            data = file.read(MAX_URDF_BYTES + 1)
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the URDF file ({exc.strerror})") from None
+    if len(data) > MAX_URDF_BYTES:
+        raise ModelError(f"{path}: larger than {MAX_URDF_BYTES // 2**20} MB; a machine's URDF "
+                         "is a few kB (meshes are files of their own): expected at most "
+                         f"{MAX_URDF_BYTES // 2**20} MB")
+    try:
+        # parsed from one buffer: expat, fed a file in 64 kB pieces, scans a token that
+        # spans them again with each piece (a 200 MB comment took 9 minutes)
+        root = ET.fromstring(data)
     except ET.ParseError as exc:
         hint = ""
         if "unbound prefix" in str(exc):  # machinesim:axis and the like without xmlns
             hint = (f"; a prefixed tag such as <machinesim:axis> needs its namespace declared "
                     f"on <robot>: xmlns:machinesim=\"{_NS.strip('{}')}\"")
         raise ModelError(f"{path}: not readable XML ({exc}){hint}") from None
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read the URDF file ({exc.strerror})") from None
     except RecursionError:
         raise ModelError(f"{path}: XML nested too deeply to be a URDF") from None
     depth = _depth(root)

@@ -375,3 +375,23 @@ def test_a_urdf_edited_after_loading_loads_again(tmp_path):
     path.write_text(_in_joint("X", 'upper="0.25"', 'upper="0.125"'))
     os.utime(path, ns=(path.stat().st_atime_ns, path.stat().st_mtime_ns + 10**9))
     assert load_machine(path).upper[0] == 0.125
+
+
+def test_a_urdf_past_the_size_cap_is_refused_and_one_at_it_loads(tmp_path):
+    """A 200 MB file took 9 minutes to parse (one long comment, which expat scanned again
+    with every 64 kB it was fed) or 3.6 GB of memory (links): a file larger than any
+    machine's URDF is refused before it is parsed; one of exactly the cap still loads."""
+    from machinesim.urdf import MAX_URDF_BYTES
+
+    head, tail = GROOVING.split("<robot", 1)
+    pad = MAX_URDF_BYTES - len(GROOVING.encode()) - len("<!---->")
+    at_cap = tmp_path / "at_cap.urdf"
+    at_cap.write_text(f"{head}<!--{'x' * pad}--><robot{tail}")
+    assert at_cap.stat().st_size == MAX_URDF_BYTES == 16 * 2**20
+    assert load_machine(at_cap).axes == ("X", "Y", "Z", "C")
+    over = tmp_path / "over.urdf"
+    over.write_text(f"{head}<!--{'x' * (pad + 1)}--><robot{tail}")
+    with pytest.raises(ModelError) as raised:
+        load_machine(over)
+    assert str(raised.value) == (f"{over}: larger than 16 MB; a machine's URDF is a few kB "
+                                 "(meshes are files of their own): expected at most 16 MB")
