@@ -441,6 +441,14 @@ class Kinematics:
         b = self.data.oMf[self.frame_id[frame]]
         return (a.actInv(b)).homogeneous
 
+    def axis_frames(self, full: np.ndarray) -> dict[str, np.ndarray]:
+        """Orientation (3, 3) of each axis joint's frame in the workpiece frame, by letter,
+        at the Pinocchio configuration ``full`` (its joint frame before the axis moves)."""
+        pin.framesForwardKinematics(self.model, self.data, full)
+        w_rot = self.data.oMf[self.frame_id["workpiece"]].rotation
+        return {a: w_rot.T @ self.data.oMi[self.model.getJointId(a)].rotation
+                for a in self.axes}
+
     def relative_jacobian(self, full: np.ndarray, frame: str = "tool_tip") -> np.ndarray:
         """Jacobian (6, nv) of ``frame``'s pose in the workpiece frame, expressed there.
 

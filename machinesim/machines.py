@@ -36,6 +36,7 @@ from machinesim.kinematics import (
 from machinesim.urdf import (
     AXIS_ORDER,
     REQUIRED_FRAMES,
+    check_joint_frames,
     check_tool_mount,
     check_tree,
     check_zero_pose,
@@ -142,6 +143,8 @@ class Machine:
                         self.kin.axis_jacobian(zero, nominal))
         check_tool_mount(root, self.path, self.kin.frame_pose(
             self.kin.full_q(zero, nominal), "tool_tip", relative_to="tool_mount"))
+        check_joint_frames(self.path, self._axes,
+                           self.kin.axis_frames(self.kin.full_q(zero, nominal)))
         self.lower = np.array([a.lower for a in self._axes])
         self.upper = np.array([a.upper for a in self._axes])
         self.resolution = np.array([a.resolution for a in self._axes])

@@ -25,8 +25,8 @@ import numpy as np
 from machinesim.exceptions import ModelError
 from machinesim.kinematics import DOFS, Axis
 
-__all__ = ["AXIS_ORDER", "REQUIRED_FRAMES", "check_tool_mount", "check_tree", "check_zero_pose",
-           "read_axes", "read_urdf"]
+__all__ = ["AXIS_ORDER", "REQUIRED_FRAMES", "check_joint_frames", "check_tool_mount",
+           "check_tree", "check_zero_pose", "read_axes", "read_urdf"]
 
 #: NC letters in the order machinesim puts them in a configuration vector.
 AXIS_ORDER = "XYZABC"
@@ -263,6 +263,30 @@ def check_tool_mount(root: ET.Element, path, mMt: np.ndarray) -> None:
                          "to tool_mount; expected them parallel (docs/machines.md, "
                          "Conventions), since the tool setting error is given in the "
                          "tool_mount frame: check the rpy of the origins between them")
+
+
+def check_joint_frames(path, axes: tuple[Axis, ...], rotations: dict[str, np.ndarray]) -> None:
+    """Check that every axis joint's frame is parallel to the workpiece frame at zero.
+
+    ``rotations`` maps each axis letter to its joint frame's orientation (3, 3) in the
+    workpiece frame on the nominal machine at zero axis values. An axis's errors (``EYX``,
+    ``EC0X``, ...) are given along the machine axes and enter the chain in its joint frame
+    (`machinesim.kinematics`). A frame turned about the axis's own direction, the turn
+    undone by the joint below, moves the tool as designed, so `check_zero_pose` passes it;
+    but X's straightness in Y then moved the tool along Z, and its squareness to Y tilted
+    it toward Z, without a word.
+    """
+    for axis in axes:
+        turned = _angle(rotations[axis.letter])
+        if turned > ZERO_POSE_TOL:
+            raise ModelError(
+                f"{path}: joint {axis.letter!r}: its frame is turned "
+                f"{math.degrees(turned):.6g} deg relative to the workpiece at zero axis "
+                f"values; expected it parallel to the machine axes (docs/machines.md, "
+                f"Conventions), since the errors of {axis.letter} "
+                f"({', '.join(axis.component_symbols()[:3])}, ...) are given along them and "
+                "enter in its frame: check the rpy of this joint's origin and of the joints "
+                "above it")
 
 
 def _angle(rotation: np.ndarray) -> float:

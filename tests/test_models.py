@@ -260,6 +260,15 @@ HOSTILE_URDFS = {
          "expected +1 m along X"]),
     # a spindle frame turned a quarter about Z and the tip turned back: the tool sits as
     # designed, but a tool setting error along tool_mount Y entered along its X
+    # X's frame turned a quarter about X itself and Z's turned back: X and Z move the tool as
+    # designed, but X's errors entered in the turned frame (its straightness in Y moved the
+    # tool along Z)
+    "x_frame_turned_about_x": (
+        _in_joint("X", 'rpy="0.0 0.0 0.0"', 'rpy="1.5707963267948966 0.0 0.0"').replace(
+            '<origin xyz="0.0 -0.4 -0.25" rpy="0.0 0.0 0.0"/>',
+            '<origin xyz="0.0 -0.25 0.4" rpy="-1.5707963267948966 0.0 0.0"/>'),
+        ["joint 'X': its frame is turned 90 deg relative to the workpiece",
+         "expected it parallel to the machine axes", "errors of X (EXX, EYX, EZX, ...)"]),
     "tool_mount_turned": (
         _in_joint("tool_mount_fixed", 'rpy="0.0 0.0 0.0"', 'rpy="0.0 0.0 1.5707963267948966"')
         .replace('<origin xyz="0.0 0.0 -0.02" rpy="0.0 0.0 0.0"/>',
@@ -395,3 +404,35 @@ def test_a_urdf_past_the_size_cap_is_refused_and_one_at_it_loads(tmp_path):
         load_machine(over)
     assert str(raised.value) == (f"{over}: larger than 16 MB; a machine's URDF is a few kB "
                                  "(meshes are files of their own): expected at most 16 MB")
+
+
+def test_an_axis_frame_turned_about_its_own_direction_is_refused_a_turned_machine_is_not(
+        tmp_path):
+    """An axis's errors enter in its joint frame. C's frame turned 30 deg about Z, the table
+    turned back: C turns about Z as before and the edge sits at the origin, but EX0C (C's
+    line off in X) moved it 30 deg off X. The whole machine turned under a root link (a CAD
+    export's Y-up world) keeps every frame parallel to the workpiece: it loads, and X's
+    straightness in Y moves the tool along the workpiece's Y by the table's value."""
+    from machinesim.errors import ErrorModel
+
+    turned = tmp_path / "c_turned.urdf"
+    turned.write_text(
+        _in_joint("C", 'rpy="0.0 0.0 0.0"', 'rpy="0.0 0.0 0.5235987755982988"').replace(
+            '<origin xyz="0.0 0.0 0.055" rpy="0.0 0.0 0.0"/>',
+            '<origin xyz="0.0 0.0 0.055" rpy="0.0 0.0 -0.5235987755982988"/>'))
+    with pytest.raises(ModelError) as raised:
+        load_machine(turned)
+    assert str(raised.value).startswith(
+        f"{turned}: joint 'C': its frame is turned 30 deg relative to the workpiece")
+    root = tmp_path / "y_up_world.urdf"
+    root.write_text(GROOVING.replace(
+        '<link name="base">',
+        '<link name="world"/><joint name="to_z_up" type="fixed"><parent link="world"/>'
+        '<child link="base"/><origin xyz="0.0 0.0 0.0" rpy="1.5707963267948966 0.0 0.0"/>'
+        '</joint><link name="base">'))
+    machine = load_machine(root)
+    errors = ErrorModel.from_dict({"component": {"X": {"position_mm": [-250.0, 0.0, 250.0],
+                                                       "EYX_um": [-2.0, 0.0, 2.0]}}})
+    q = np.array([0.125, 0.0, 0.0, 0.0])  # X Y Z C: EYX = 1 um at X = 125 mm
+    moved = machine.tool_pose(q, errors)[:3, 3] - machine.tool_pose(q)[:3, 3]
+    np.testing.assert_allclose(moved, [0.0, 1e-6, 0.0], rtol=0, atol=1e-15)
