@@ -48,6 +48,10 @@ MAX_URDF_BYTES = 16 * 2**20
 #: unit (100 for 100 mm reads as 100 m) or is not a machine's. Rotary axes may be spindles,
 #: whose travel is many turns.
 MAX_TRAVEL_M = 10.0
+#: How far (m, each coordinate) a joint may sit from its parent link: a machine's parts lie
+#: within metres of each other, and a file whose origins are written in mm (its limits in m)
+#: loads with every Abbe offset a thousand times too long.
+MAX_PLACEMENT_M = 10.0
 #: The coarsest command resolution a machine axis plausibly has (0.1 mm, 0.01 rad).
 COARSEST_RESOLUTION_M = 1e-4
 COARSEST_RESOLUTION_RAD = 1e-2
@@ -455,8 +459,12 @@ def check_tree(root: ET.Element, path) -> None:
         parent_link[name] = ends["parent"]
         origin = joint.find("origin")
         if origin is not None:
-            _vector(origin, "xyz", f"{where} <origin>", "0 0 0")
+            xyz = _vector(origin, "xyz", f"{where} <origin>", "0 0 0")
             _vector(origin, "rpy", f"{where} <origin>", "0 0 0")
+            if np.abs(xyz).max() > MAX_PLACEMENT_M:
+                raise ModelError(f"{where} <origin xyz={origin.get('xyz')!r}> (m); expected "
+                                 f"each coordinate within +-{MAX_PLACEMENT_M:g} m of the parent "
+                                 "link (URDF lengths are metres: 100 mm is 0.1)")
         limit = joint.find("limit")
         if limit is not None and joint.get("type") == "fixed":  # axes: `_limits`
             for attribute in ("effort", "velocity"):

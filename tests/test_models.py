@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -290,6 +291,13 @@ HOSTILE_URDFS = {
     "travel_in_mm": (_in_joint("X", 'lower="-0.25" upper="0.25"', 'lower="-250" upper="250"'),
                      ["joint 'X'", "lower=-250.0 upper=250.0", "within +-10 m",
                       "100 mm is 0.1"]),
+    # every origin in mm, the limits in m: the tool still sat at the origin at zero and the
+    # file loaded, but every Abbe offset was 1000 times too long (X's pitch of 10 urad moved
+    # mill3's tool 250 um instead of 0.25 um)
+    "origins_in_mm": (re.sub(r'<origin xyz="([^"]*)"', lambda m: '<origin xyz="{}"'.format(
+                          " ".join(f"{1e3 * float(v):g}" for v in m[1].split())), GROOVING),
+                      ["joint 'Y' <origin xyz='0 0 80'> (m)", "each coordinate within +-10 m",
+                       "100 mm is 0.1"]),
     "rapid_rate_tiny": (_in_joint("X", 'velocity="0.025"', 'velocity="1e-300"'),
                         ["joint 'X'", "velocity=1e-300", "rate of 1e-06 .. 100 m/s"]),
     "stray_resolution": (GROOVING.replace('<machinesim:axis joint="Y"',
