@@ -56,7 +56,9 @@ MAX_PLACEMENT_M = 10.0
 COARSEST_RESOLUTION_M = 1e-4
 COARSEST_RESOLUTION_RAD = 1e-2
 MAX_TRAVEL_RAD = 1e9
-RAPID_RATE_M_PER_S = (1e-6, 100.0)
+#: The fastest machine tools rapid at 2-3 m/s; 10 m/s refuses a rate written in mm/s (a
+#: ROBOnano's 25 mm/s as 25 loaded, its rapids 1000 times too fast).
+RAPID_RATE_M_PER_S = (1e-6, 10.0)
 RAPID_RATE_RAD_PER_S = (1e-6, 1e5)
 #: A number as the URDF parser under Pinocchio (urdfdom, a C++ stream) reads one: ASCII
 #: digits, a point, an exponent, blanks before it only. Python's float() reads more

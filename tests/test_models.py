@@ -299,7 +299,11 @@ HOSTILE_URDFS = {
                       ["joint 'Y' <origin xyz='0 0 80'> (m)", "each coordinate within +-10 m",
                        "100 mm is 0.1"]),
     "rapid_rate_tiny": (_in_joint("X", 'velocity="0.025"', 'velocity="1e-300"'),
-                        ["joint 'X'", "velocity=1e-300", "rate of 1e-06 .. 100 m/s"]),
+                        ["joint 'X'", "velocity=1e-300", "rate of 1e-06 .. 10 m/s"]),
+    # 25 mm/s written as 25 loaded, and the report's machining time took rapids as 25 m/s
+    "rapid_rate_in_mm_per_s": (_in_joint("X", 'velocity="0.025"', 'velocity="25"'),
+                               ["joint 'X'", "<limit velocity=25.0> (m/s)",
+                                "expected a rapid rate of 1e-06 .. 10 m/s"]),
     "stray_resolution": (GROOVING.replace('<machinesim:axis joint="Y"',
                                           '<machinesim:axis joint="Q" resolution="1e-09"/>'
                                           '<machinesim:axis joint="Y"'),
