@@ -381,10 +381,41 @@ def test_a_mesh_the_viewer_cannot_load_is_left_out_with_a_warning(tmp_path):
     path.write_text(text)
     scene = machine_scene(load_machine(path))
     assert scene.warnings == [f"{path}: mesh files that could not be loaded, drawn without "
-                              "them: base (package://foo/meshes/base.stl) (package:// paths "
-                              "resolve only inside ROS; give the file's path)"]
+                              "them: base (package://foo/meshes/base.stl) (a relative path is "
+                              f"looked up in {tmp_path}, package://<package>/... there and in "
+                              "the two folders above it; give the file's path)"]
     objects = {c["path"] for c in decoded(scene) if c["type"] == "set_object"}
     assert "/meshcat/machine/visuals/tool_tip_0" in objects  # the rest is drawn
+
+
+#: One triangle, 10 mm on its sides, as an ASCII STL (m).
+_STL = ("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0.01 0 0\n"
+        "vertex 0 0.01 0\nendloop\nendfacet\nendsolid t\n")
+
+
+@pytest.mark.parametrize(("filename", "where"), [
+    ("meshes/base.stl", "mill/urdf/meshes/base.stl"),
+    ("package://mill/meshes/base.stl", "mill/meshes/base.stl")])
+def test_a_mesh_beside_the_urdf_is_drawn_wherever_the_view_starts(filename, where, tmp_path,
+                                                                  monkeypatch):
+    # a CAD export's meshes/base.STL beside its URDF, or a ROS package's mill/urdf/ and
+    # mill/meshes/: Pinocchio looked a relative path up in the working folder only, and
+    # package:// nowhere, so both were left out with a warning that said to give the path
+    (tmp_path / "ws" / where).parent.mkdir(parents=True)
+    (tmp_path / "ws" / where).write_text(_STL)
+    path = tmp_path / "ws" / "mill" / "urdf" / "mill.urdf"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(Path(load_machine("grooving_4axis").path).read_text().replace(
+        '<link name="base">',
+        f'<link name="base"><visual><geometry><mesh filename="{filename}"/></geometry></visual>'))
+    monkeypatch.chdir(tmp_path)
+    scene = machine_scene(load_machine(path))
+    assert scene.warnings == []
+    (base,) = [c for c in decoded(scene) if c["type"] == "set_object"
+               and c["path"] == "/meshcat/machine/visuals/base_0"]
+    geometry = base["object"]["geometries"][0]
+    assert (geometry["type"], geometry["format"]) == ("_meshfile", "stl")
+    assert geometry["data"].data == _STL.encode()  # the file itself, drawn
 
 
 def test_a_machine_without_visual_bodies_is_framed_on_its_stock_and_its_part_copied():

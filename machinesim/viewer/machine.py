@@ -11,6 +11,8 @@ nominal machine cuts.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
@@ -110,9 +112,14 @@ def _visuals(machine, scene: Scene):
     warning naming their links, rather than ending the view: the axes need no drawing."""
     import xml.etree.ElementTree as ET
 
+    # a mesh's relative path is read from the URDF's folder, as its author (a CAD export's
+    # meshes/base.STL) meant it, wherever the view starts; package://<package>/... from the
+    # folders holding a ROS package's folder (<package>/urdf/machine.urdf)
+    folder = Path(machine.path).resolve().parent
+    dirs = [str(folder), str(folder.parent), str(folder.parent.parent)]
     try:
         return pin.buildGeomFromUrdfString(machine.model, machine.urdf_xml,
-                                           pin.GeometryType.VISUAL)
+                                           pin.GeometryType.VISUAL, package_dirs=dirs)
     except ValueError:
         pass
     root = ET.fromstring(machine.urdf_xml)
@@ -127,9 +134,10 @@ def _visuals(machine, scene: Scene):
                           f"without them: "
                           f"{', '.join(left_out[:5])}"
                           f"{f' and {len(left_out) - 5} more' if len(left_out) > 5 else ''}"
-                          " (package:// paths resolve only inside ROS; give the file's path)")
+                          f" (a relative path is looked up in {folder}, package://<package>/... "
+                          "there and in the two folders above it; give the file's path)")
     return pin.buildGeomFromUrdfString(machine.model, ET.tostring(root, encoding="unicode"),
-                                       pin.GeometryType.VISUAL)
+                                       pin.GeometryType.VISUAL, package_dirs=dirs)
 
 
 def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, duration_s,
