@@ -33,6 +33,8 @@ AXIS_ORDER = "XYZABC"
 #: Frames every machine has.
 REQUIRED_FRAMES = ("base", "table", "workpiece", "tool_mount", "tool_tip")
 _NS = "{https://machinesim.invalid/urdf}"
+#: The joint types URDF has (lower case, as its parser reads them).
+_URDF_JOINT_TYPES = ("fixed", "prismatic", "revolute", "continuous", "floating", "planar")
 #: How far the nominal machine at zero may be from the conventions (docs/machines.md): the
 #: tool edge at the workpiece origin (m), its frame and each axis's direction parallel to
 #: the workpiece's axes (rad, and the unit axis vectors' components). Round-off of the
@@ -134,6 +136,9 @@ def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
             continue
         name = joint.get("name")
         where = f"{path}: joint {name!r}"
+        if kind not in _URDF_JOINT_TYPES:  # a typo or none: the joint may be meant fixed
+            raise ModelError(f"{where}: type {kind!r} is not a URDF joint type; expected "
+                             "fixed, or prismatic or revolute for a machine axis")
         if kind not in ("prismatic", "revolute"):
             raise ModelError(f"{where}: type {kind!r}; machine axes are prismatic or revolute "
                              "(a spindle is a revolute joint with wide limits)")

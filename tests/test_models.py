@@ -244,6 +244,15 @@ HOSTILE_URDFS = {
     "x_mimics_y": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>',
                              '<axis xyz="1.0 0.0 0.0"/><mimic joint="Y"/>'),
                    ["joint 'X'", "has a <mimic>", "by its own NC letter"]),
+    # a fixed joint's type mistyped or left out was taken for an axis: "machine axes are
+    # prismatic or revolute" of a joint meant to be fixed
+    "fixed_type_typo": (_in_joint("table_fixed", 'type="fixed"', 'type="fixd"'),
+                        ["joint 'table_fixed': type 'fixd' is not a URDF joint type",
+                         "expected fixed, or prismatic or revolute for a machine axis"]),
+    "type_missing": (_in_joint("table_fixed", ' type="fixed"', ""),
+                     ["joint 'table_fixed': type None is not a URDF joint type"]),
+    "continuous_x": (_in_joint("X", 'type="prismatic"', 'type="continuous"'),
+                     ["joint 'X': type 'continuous'; machine axes are prismatic or revolute"]),
     "x_revolute": (_in_joint("X", 'type="prismatic"', 'type="revolute"'),
                    ["joint 'X'", "type 'revolute'", "X, Y and Z are linear axes"]),
     "c_prismatic": (_in_joint("C", 'type="revolute"', 'type="prismatic"'),
