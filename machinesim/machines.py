@@ -128,10 +128,11 @@ class Machine:
 
     def __init__(self, path: Path) -> None:
         self.path = Path(path)
-        root = read_urdf(self.path)
+        lines: dict[str, list[int]] = {}
+        root = read_urdf(self.path, lines)
         self.name = root.get("name") or self.path.stem
         self._urdf_root = root
-        self._axes = read_axes(root, self.path)
+        self._axes = read_axes(root, self.path, lines)
         self.axes: tuple[str, ...] = tuple(a.letter for a in self._axes)
         self.kin = Kinematics(root, self._axes, str(self.path))
         missing = [f for f in REQUIRED_FRAMES if f not in self.kin.frame_id]

@@ -1,7 +1,7 @@
 """URDF machine files: read one, check its tree, and find its axes.
 
 Everything a machinesim URDF must satisfy is checked here, before Pinocchio sees the file,
-so that a bad file is a located `ModelError` (file, joint or link, value, what was
+so that a bad file is a located `ModelError` (file, line, joint or link, value, what was
 expected), never a hang or a traceback: the XML must parse; links and joints must form one
 tree (no cycle, no dangling or duplicate name, one root); every axis joint is named by its
 NC letter (X Y Z prismatic, A B C revolute), carries the tool or the workpiece, has a unit
@@ -19,6 +19,7 @@ import math
 import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from xml.parsers import expat
 
 import numpy as np
 
@@ -69,8 +70,12 @@ RAPID_RATE_RAD_PER_S = (1e-6, 1e5)
 _URDF_NUMBER = re.compile(r"\s*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 
 
-def read_urdf(path: Path) -> ET.Element:
-    """The checked XML root of the URDF file ``path`` (`check_tree`)."""
+def read_urdf(path: Path, lines: dict[str, list[int]] | None = None) -> ET.Element:
+    """The checked XML root of the URDF file ``path`` (`check_tree`).
+
+    ``lines``, a dict, is filled with the line of each element a message may name
+    (`_element_lines`), for `read_axes`.
+    """
     try:
         with open(path, "rb") as file:
             data = file.read(MAX_URDF_BYTES + 1)
@@ -96,8 +101,42 @@ def read_urdf(path: Path) -> ET.Element:
     if depth > MAX_DEPTH:
         raise ModelError(f"{path}: XML nested {depth} elements deep; a URDF is at most a few "
                          f"(robot, link, visual, geometry, ...), expected at most {MAX_DEPTH}")
-    check_tree(root, path)
+    found = _element_lines(data)
+    if lines is not None:
+        lines.update(found)
+    check_tree(root, path, found)
     return root
+
+
+def _element_lines(data: bytes) -> dict[str, list[int]]:
+    """The line of each ``<link>`` and ``<joint>`` under ``<robot>`` and of each
+    ``<machinesim:axis>``, in the order of the file, by tag: ``findall`` gives the same
+    elements in the same order, and ElementTree keeps no lines. ``data`` has parsed."""
+    parser = expat.ParserCreate(namespace_separator="}")
+    found: dict[str, list[int]] = {"link": [], "joint": [], "axis": []}
+    depth = 0
+
+    def start(tag, attributes):
+        nonlocal depth
+        depth += 1
+        if depth == 2 and tag in ("link", "joint"):
+            found[tag].append(parser.CurrentLineNumber)
+        elif tag == f"{_NS[1:]}axis":
+            found["axis"].append(parser.CurrentLineNumber)
+
+    def end(tag):
+        nonlocal depth
+        depth -= 1
+
+    parser.StartElementHandler, parser.EndElementHandler = start, end
+    parser.Parse(data, True)
+    return found
+
+
+def _at(path, lines: dict[str, list[int]] | None, tag: str, index: int) -> str:
+    """``path`` and the line of the ``index``-th ``tag`` element when known."""
+    found = (lines or {}).get(tag, ())
+    return f"{path}, line {found[index]}" if index < len(found) else f"{path}"
 
 
 def _depth(root: ET.Element) -> int:
@@ -111,13 +150,14 @@ def _depth(root: ET.Element) -> int:
     return deepest
 
 
-def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
+def read_axes(root: ET.Element, path: Path,
+              lines: dict[str, list[int]] | None = None) -> tuple[Axis, ...]:
     """Axes of a machinesim URDF, in AXIS_ORDER, with side, direction and resolution.
 
     ``root`` has passed `check_tree`: a tree of uniquely named links and joints with finite
-    origins.
+    origins. ``lines`` (`read_urdf`) puts the line of a joint in a message.
     """
-    resolution = _resolutions(root, path)
+    resolution, resolution_at = _resolutions(root, path, lines)
     links_parent = {j.find("child").get("link"): j for j in root.findall("joint")}
 
     def ancestors(link: str) -> set[str]:
@@ -130,12 +170,12 @@ def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
 
     tool_side, wp_side = ancestors("tool_tip"), ancestors("workpiece")
     axes = []
-    for joint in root.findall("joint"):
+    for index, joint in enumerate(root.findall("joint")):
         kind = joint.get("type")
         if kind == "fixed":
             continue
         name = joint.get("name")
-        where = f"{path}: joint {name!r}"
+        where = f"{_at(path, lines, 'joint', index)}: joint {name!r}"
         if kind not in _URDF_JOINT_TYPES:  # a typo or none: the joint may be meant fixed
             raise ModelError(f"{where}: type {kind!r} is not a URDF joint type; expected "
                              "fixed, or prismatic or revolute for a machine axis")
@@ -183,7 +223,7 @@ def read_axes(root: ET.Element, path: Path) -> tuple[Axis, ...]:
         coarsest = COARSEST_RESOLUTION_RAD if kind == "revolute" else COARSEST_RESOLUTION_M
         if resolution[name] > coarsest:
             unit = "rad" if kind == "revolute" else "m"
-            raise ModelError(f"{path}: <machinesim:axis joint={name!r}> resolution "
+            raise ModelError(f"{resolution_at[name]}: <machinesim:axis joint={name!r}> resolution "
                              f"{resolution[name]!r} ({unit}); expected at most {coarsest:g} "
                              f"{unit} (SI: 1 nm is 1e-9)")
         lower, upper, velocity = _limits(joint, where, kind == "revolute")
@@ -362,14 +402,18 @@ def _limits(joint: ET.Element, where: str, rotary: bool) -> tuple[float, float, 
     return lower, upper, velocity
 
 
-def _resolutions(root: ET.Element, path: Path) -> dict[str, float]:
-    """Command resolution (m or rad) of each axis, from the machinesim:axis elements."""
+def _resolutions(root: ET.Element, path: Path, lines: dict[str, list[int]] | None = None
+                 ) -> tuple[dict[str, float], dict[str, str]]:
+    """Command resolution (m or rad) of each axis, from the machinesim:axis elements, and
+    where each is written (the file and its line) for a message."""
     found: dict[str, float] = {}
-    for element in root.iter(f"{_NS}axis"):
+    written: dict[str, str] = {}
+    for index, element in enumerate(root.iter(f"{_NS}axis")):
         joint = element.get("joint")
-        where = f"{path}: <machinesim:axis joint={joint!r}>"
+        at = _at(path, lines, "axis", index)
+        where = f"{at}: <machinesim:axis joint={joint!r}>"
         if not joint:
-            raise ModelError(f"{path}: a <machinesim:axis> has no joint=...")
+            raise ModelError(f"{at}: a <machinesim:axis> has no joint=...")
         if joint in found:
             raise ModelError(f"{where}: given twice; one resolution per axis")
         text = element.get("resolution")
@@ -379,7 +423,8 @@ def _resolutions(root: ET.Element, path: Path) -> dict[str, float]:
         if not value > 0.0:
             raise ModelError(f"{where}: resolution {value!r}; expected > 0 (m or rad)")
         found[joint] = value
-    return found
+        written[joint] = at
+    return found, written
 
 
 def _number(text: str, where: str) -> float:
@@ -408,7 +453,7 @@ def _vector(element: ET.Element, attribute: str, where: str,
     return np.array([_number(f, f"{where} {attribute}") for f in fields])
 
 
-def check_tree(root: ET.Element, path) -> None:
+def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None) -> None:
     """Check a URDF's structure before anything walks it.
 
     Checked: the ``<robot>`` root; every link and joint named, and uniquely; every joint's
@@ -421,33 +466,36 @@ def check_tree(root: ET.Element, path) -> None:
     Raises
     ------
     ModelError
-        Naming ``path``, the joint or link, and the value.
+        Naming ``path``, the line of the joint or link when ``lines`` (`read_urdf`) has
+        it, the joint or link, and the value.
     """
     if root.tag != "robot":
         raise ModelError(f"{path}: root element <{root.tag}>; expected <robot>")
     if not root.get("name"):
         raise ModelError(f"{path}: <robot> has no name=...; URDF requires one")
     links: set[str] = set()
-    for link in root.findall("link"):
+    for index, link in enumerate(root.findall("link")):
         name = link.get("name")
+        at = _at(path, lines, "link", index)
         if not name:
-            raise ModelError(f"{path}: a <link> has no name=...")
+            raise ModelError(f"{at}: a <link> has no name=...")
         if name in links:
-            raise ModelError(f"{path}: link {name!r} is defined twice; link names are unique")
-        _check_reserved(name, "link", path)
+            raise ModelError(f"{at}: link {name!r} is defined twice; link names are unique")
+        _check_reserved(name, "link", at)
         links.add(name)
     joints: dict[str, ET.Element] = {}
     parent_joint: dict[str, str] = {}  # child link -> the joint that carries it
     parent_link: dict[str, str] = {}  # joint -> its parent link
-    for joint in root.findall("joint"):
+    for index, joint in enumerate(root.findall("joint")):
         name = joint.get("name")
+        at = _at(path, lines, "joint", index)
         if not name:
-            raise ModelError(f"{path}: a <joint> has no name=...")
+            raise ModelError(f"{at}: a <joint> has no name=...")
         if name in joints:
-            raise ModelError(f"{path}: joint {name!r} is defined twice; joint names are unique")
-        _check_reserved(name, "joint", path)
+            raise ModelError(f"{at}: joint {name!r} is defined twice; joint names are unique")
+        _check_reserved(name, "joint", at)
         joints[name] = joint
-        where = f"{path}: joint {name!r}"
+        where = f"{at}: joint {name!r}"
         ends = {}
         for end in ("parent", "child"):
             element = joint.find(end)

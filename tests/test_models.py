@@ -457,3 +457,46 @@ def test_an_axis_frame_turned_about_its_own_direction_is_refused_a_turned_machin
     q = np.array([0.125, 0.0, 0.0, 0.0])  # X Y Z C: EYX = 1 um at X = 125 mm
     moved = machine.tool_pose(q, errors)[:3, 3] - machine.tool_pose(q)[:3, 3]
     np.testing.assert_allclose(moved, [0.0, 1e-6, 0.0], rtol=0, atol=1e-15)
+
+
+def _line(text: str, needle: str, occurrence: int = 1) -> int:
+    """The line on which the ``occurrence``-th ``needle`` of ``text`` starts."""
+    at = -1
+    for _ in range(occurrence):
+        at = text.index(needle, at + 1)
+    return text.count("\n", 0, at) + 1
+
+
+# A CAD export's <transmission> names joint X too, and comes before the joints: the line
+# is that of the robot's own <joint name="X">
+_TRANSMISSION = ('<transmission name="t"><type>SimpleTransmission</type>\n'
+                 '<joint name="X"><hardwareInterface>E</hardwareInterface></joint>\n'
+                 '</transmission>\n')
+LINED = GROOVING.replace('<link name="base">', _TRANSMISSION + '<link name="base">', 1)
+
+
+@pytest.mark.parametrize(("case", "text", "needle", "occurrence", "words"), [
+    ("limit", LINED[:LINED.index('<joint name="X" type')]
+     + LINED[LINED.index('<joint name="X" type'):].replace('upper="0.25"', 'upper="-0.25"', 1),
+     '<joint name="X"', 2, "joint 'X': <limit lower=-0.25 upper=-0.25>"),
+    ("origin", LINED.replace('xyz="0.0 -0.4 -0.25"', 'xyz="0.0 -0.4 nan"', 1),
+     '<joint name="Z"', 1, "joint 'Z' <origin> xyz: 'nan'"),
+    ("duplicate_link", LINED.replace('<link name="workpiece">',
+                                     '<link name="table"/>\n<link name="workpiece">', 1),
+     '<link name="table"', 2, "link 'table' is defined twice"),
+    ("resolution", LINED.replace('joint="C" resolution="1.7453292519943297e-07"',
+                                 'joint="C" resolution="0.1"', 1),
+     '<machinesim:axis joint="C"', 1, "<machinesim:axis joint='C'> resolution 0.1 (rad)"),
+])
+def test_a_refusal_names_the_line_of_the_joint_link_or_axis_element(case, text, needle,
+                                                                    occurrence, words,
+                                                                    tmp_path):
+    # ElementTree keeps no lines: a refusal named the joint alone, which a CAD export of
+    # hundreds of elements (and a <transmission> naming the same joint) leaves to search
+    assert text != LINED
+    path = tmp_path / f"{case}.urdf"
+    path.write_text(text)
+    with pytest.raises(ModelError) as raised:
+        load_machine(path)
+    assert str(raised.value).startswith(
+        f"{path}, line {_line(text, needle, occurrence)}: {words}"), str(raised.value)
