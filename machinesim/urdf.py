@@ -230,6 +230,9 @@ def read_axes(root: ET.Element, path: Path,
         axes.append(Axis(
             letter=name, rotary=kind == "revolute", side=side, direction=k,
             lower=lower, upper=upper, velocity=velocity, resolution=resolution[name]))
+    if not axes:  # Pinocchio's model then has no axis to index: an IndexError at load
+        raise ModelError(f"{path}: no axis joint; expected at least one, named by its NC "
+                         "letter: X, Y, Z (prismatic) or A, B, C (revolute)")
     stray = sorted(set(resolution) - {a.letter for a in axes})
     if stray:
         raise ModelError(f"{path}: <machinesim:axis joint={stray[0]!r}> names no axis joint; "

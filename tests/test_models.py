@@ -253,6 +253,12 @@ HOSTILE_URDFS = {
                      ["joint 'table_fixed': type None is not a URDF joint type"]),
     "continuous_x": (_in_joint("X", 'type="prismatic"', 'type="continuous"'),
                      ["joint 'X': type 'continuous'; machine axes are prismatic or revolute"]),
+    # every joint fixed: the load ended in an IndexError inside the kinematics
+    "no_axis": (GROOVING.replace('type="prismatic"', 'type="fixed"')
+                .replace('type="revolute"', 'type="fixed"')
+                .replace(' xmlns:machinesim="https://machinesim.invalid/urdf"', "")
+                .split("  <machinesim:axis")[0] + "</robot>\n",
+                ["no axis joint; expected at least one", "X, Y, Z (prismatic) or A, B, C"]),
     "x_revolute": (_in_joint("X", 'type="prismatic"', 'type="revolute"'),
                    ["joint 'X'", "type 'revolute'", "X, Y and Z are linear axes"]),
     "c_prismatic": (_in_joint("C", 'type="revolute"', 'type="prismatic"'),
