@@ -342,6 +342,18 @@ HOSTILE_URDFS = {
                                               '<cone size="1.2 1.2 0.15"/>'),
                              ["link 'base' <visual>", "<cone>",
                               "expected a box, cylinder, sphere or mesh"]),
+    # entity expansion: a billion laughs (1e9 "lol"s from 1 kB) in the robot's name, and a
+    # file's contents pulled in by an external entity; expat refuses both before it expands
+    "billion_laughs": (GROOVING.replace(
+        '<robot name="grooving_4axis"',
+        '<!DOCTYPE robot [<!ENTITY l0 "lol">' + "".join(
+            f'<!ENTITY l{i} "{f"&l{i - 1};" * 10}">' for i in range(1, 10))
+        + ']>\n<robot name="&l9;"', 1),
+                       ["not readable XML (limit on input amplification factor"]),
+    "external_entity": (GROOVING.replace(
+        '<robot name="grooving_4axis"',
+        '<!DOCTYPE robot [<!ENTITY e SYSTEM "file:///etc/hostname">]>\n<robot name="&e;"', 1),
+                        ["not readable XML (reference to external entity in attribute"]),
     "nested_deep": (GROOVING.replace('<link name="base">', '<link name="base">'
                                      + "<a>" * 100_000 + "</a>" * 100_000),
                     ["XML nested 100002 elements deep", "expected at most 64"]),
