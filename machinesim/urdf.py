@@ -94,6 +94,8 @@ def read_urdf(path: Path, lines: dict[str, list[int]] | None = None) -> ET.Eleme
         if "unbound prefix" in str(exc):  # machinesim:axis and the like without xmlns
             hint = (f"; a prefixed tag such as <machinesim:axis> needs its namespace declared "
                     f"on <robot>: xmlns:machinesim=\"{_NS.strip('{}')}\"")
+        elif "invalid token" in str(exc):
+            hint = _encoding_hint(data)
         raise ModelError(f"{path}: not readable XML ({exc}){hint}") from None
     except RecursionError:
         raise ModelError(f"{path}: XML nested too deeply to be a URDF") from None
@@ -106,6 +108,23 @@ def read_urdf(path: Path, lines: dict[str, list[int]] | None = None) -> ET.Eleme
         lines.update(found)
     check_tree(root, path, found)
     return root
+
+
+def _encoding_hint(data: bytes) -> str:
+    """Why expat found an invalid token, when the file is not the UTF-8 it reads a file
+    without an encoding declaration as (a CAD tool's comment in Latin-1 or Shift-JIS: "1 µm"
+    was "not well-formed (invalid token): line 1, column 28")."""
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")) or re.match(rb"\s*<\?xml[^>]*encoding", data):
+        return ""
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1)
+        return (f"; the file is not UTF-8 (byte 0x{data[exc.start]:02x} at line {line}, column "
+                f"{column}) and declares no encoding: save it as UTF-8, or declare its "
+                "encoding, e.g. <?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>")
+    return ""
 
 
 def _element_lines(data: bytes) -> dict[str, list[int]]:

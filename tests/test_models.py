@@ -233,6 +233,14 @@ HOSTILE_URDFS = {
     "not_a_robot": (GROOVING.replace("<robot ", "<robut ").replace("</robot>", "</robut>"),
                     ["root element <robut>", "expected <robot>"]),
     "truncated": (GROOVING[:len(GROOVING) // 2], ["not readable XML"]),
+    # a CAD tool's comment in Latin-1 (line 4, after the file's 3 header lines) with no
+    # encoding declared: expat, reading UTF-8, said "not well-formed (invalid token)" at a
+    # column, not why
+    "latin1_undeclared": (GROOVING.replace('<robot name=', '<!-- 1 \u00b5m -->\n<robot name=', 1)
+                          .encode("latin-1").decode("utf-8", "surrogateescape"),
+                          ["not readable XML (not well-formed (invalid token)",
+                           "the file is not UTF-8 (byte 0xb5 at line 4, column 7) and "
+                           "declares no encoding: save it as UTF-8, or declare its encoding"]),
     "namespace_missing": (GROOVING.replace(' xmlns:machinesim="https://machinesim.invalid/urdf"',
                                            ""),
                           ["not readable XML (unbound prefix", "namespace declared on "
@@ -365,7 +373,7 @@ def test_a_hostile_urdf_is_a_located_model_error(case, tmp_path):
     text, words = HOSTILE_URDFS[case]
     assert text != GROOVING
     path = tmp_path / f"{case}.urdf"
-    path.write_text(text)
+    path.write_bytes(text.encode("utf-8", "surrogateescape"))  # a case's non-UTF-8 bytes too
     with pytest.raises(ModelError) as raised:
         load_machine(path)
     message = str(raised.value)
