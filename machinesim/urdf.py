@@ -47,6 +47,10 @@ MAX_DEPTH = 64
 #: hundreds of links a few hundred kB; meshes are files of their own). A 200 MB file of
 #: links took 3.6 GB within two minutes and was still growing.
 MAX_URDF_BYTES = 16 * 2**20
+#: Links beyond which a file is not a machine's (one has tens, a CAD export of every part a
+#: few hundred): Pinocchio's URDF reader takes a time growing with the square of their
+#: number (20,000 links: 16 s; 144,000, a 15 MB file: over 10 minutes).
+MAX_LINKS = 2000
 #: Plausible travel limits and rapid rates: beyond them a value was written in the wrong
 #: unit (100 for 100 mm reads as 100 m) or is not a machine's. Rotary axes may be spindles,
 #: whose travel is many turns.
@@ -495,6 +499,10 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
         raise ModelError(f"{path}: root element <{root.tag}>; expected <robot>")
     if not root.get("name"):
         raise ModelError(f"{path}: <robot> has no name=...; URDF requires one")
+    count = len(root.findall("link"))
+    if count > MAX_LINKS:
+        raise ModelError(f"{path}: {count} links; a machine has tens (a CAD export of every "
+                         f"part a few hundred): expected at most {MAX_LINKS}")
     links: set[str] = set()
     for index, link in enumerate(root.findall("link")):
         name = link.get("name")

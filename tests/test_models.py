@@ -526,3 +526,26 @@ def test_a_refusal_names_the_line_of_the_joint_link_or_axis_element(case, text, 
         load_machine(path)
     assert str(raised.value).startswith(
         f"{path}, line {_line(text, needle, occurrence)}: {words}"), str(raised.value)
+
+
+def test_a_urdf_of_more_links_than_a_machine_has_is_refused_before_pinocchio_reads_it(
+        tmp_path):
+    """Pinocchio's URDF reader takes a time growing with the square of the links: 144,000
+    fixed links hung from the base (15 MB, under the size cap) ran over 10 minutes. Past
+    MAX_LINKS the file is refused at once; at it, it loads."""
+    from machinesim.urdf import MAX_LINKS
+
+    def with_links(count: int) -> str:
+        extra = count - GROOVING.count("<link ")
+        return GROOVING.replace("</robot>", "".join(
+            f'<link name="e{i}"/><joint name="f{i}" type="fixed"><parent link="base"/>'
+            f'<child link="e{i}"/></joint>\n' for i in range(extra)) + "</robot>")
+
+    at_cap, over = tmp_path / "at_cap.urdf", tmp_path / "over.urdf"
+    at_cap.write_text(with_links(MAX_LINKS))
+    over.write_text(with_links(MAX_LINKS + 1))
+    assert load_machine(at_cap).axes == ("X", "Y", "Z", "C")
+    with pytest.raises(ModelError) as raised:
+        load_machine(over)
+    assert str(raised.value) == (f"{over}: 2001 links; a machine has tens (a CAD export of "
+                                 "every part a few hundred): expected at most 2000")
