@@ -226,7 +226,8 @@ def read_axes(root: ET.Element, path: Path,
                              "round-off such as 6.1e-17 is written 0)")
         if kind == "prismatic" and "XYZ"[k] != name:
             raise ModelError(f"{where}: <axis xyz=\"{element.get('xyz')}\"> moves along "
-                             f"{'XYZ'[k]}; the {name} axis moves along {name}")
+                             f"{'XYZ'[k]}; the {name} axis moves along {name}"
+                             f"{_turned_frame_hint(joint)}")
         if name in tool_side and name in wp_side:
             raise ModelError(f"{where}: carries both the tool_tip and the workpiece, so it "
                              "moves neither relative to the other; an axis joint is on one "
@@ -239,7 +240,7 @@ def read_axes(root: ET.Element, path: Path,
             raise ModelError(
                 f"{where}: a {'tool' if side > 0 else 'workpiece'}-side axis must point "
                 f"{'+' if side > 0 else '-'}{'XYZ'[k]} so that positive commands move the tool "
-                "positively relative to the workpiece (ISO 841)")
+                f"positively relative to the workpiece (ISO 841){_turned_frame_hint(joint)}")
         if name not in resolution:
             raise ModelError(f"{where}: no <machinesim:axis joint=\"{name}\" resolution=...> "
                              f"element{_namespace_hint(root, name)}")
@@ -364,6 +365,18 @@ def check_joint_frames(path, axes: tuple[Axis, ...], rotations: dict[str, np.nda
                 f"({', '.join(axis.component_symbols()[:3])}, ...) are given along them and "
                 "enter in its frame: check the rpy of this joint's origin and of the joints "
                 "above it")
+
+
+def _turned_frame_hint(joint: ET.Element) -> str:
+    """For a joint whose origin turns its frame (a CAD export's): that ``<axis>`` is read in
+    the turned frame, which machinesim asks to be parallel to the machine axes."""
+    origin = joint.find("origin")
+    rpy = origin.get("rpy") if origin is not None else None
+    if rpy is None or not np.any(_vector(origin, "rpy", "")):
+        return ""
+    return (f" (<axis> is read in the joint's frame, which its <origin rpy=\"{rpy}\"> turns: "
+            "write rpy=\"0 0 0\" on an axis joint and its <axis> along the machine axes, "
+            "docs/machines.md)")
 
 
 def _angle(rotation: np.ndarray) -> float:

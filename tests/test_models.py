@@ -249,6 +249,13 @@ HOSTILE_URDFS = {
     "x_along_y": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', '<axis xyz="0.0 1.0 0.0"/>'),
                   ["joint 'X'", '<axis xyz="0.0 1.0 0.0"> moves along Y',
                    "the X axis moves along X"]),
+    # a CAD export's joint frame turned so that its Z is the motion: the message said "moves
+    # along Z; the X axis moves along X", and <axis xyz="1 0 0"> then moved X along Z
+    "x_cad_frame": (_in_joint("X", 'rpy="0.0 0.0 0.0"', 'rpy="0.0 1.5707963267948966 0.0"')
+                    .replace('<axis xyz="1.0 0.0 0.0"/>', '<axis xyz="0.0 0.0 -1.0"/>', 1),
+                    ["joint 'X'", '<axis xyz="0.0 0.0 -1.0"> moves along Z',
+                     "which its <origin rpy=\"0.0 1.5707963267948966 0.0\"> turns: write "
+                     'rpy="0 0 0" on an axis joint']),
     "x_mimics_y": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>',
                              '<axis xyz="1.0 0.0 0.0"/><mimic joint="Y"/>'),
                    ["joint 'X'", "has a <mimic>", "by its own NC letter"]),
