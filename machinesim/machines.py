@@ -40,6 +40,7 @@ from machinesim.urdf import (
     check_tool_mount,
     check_tree,
     check_zero_pose,
+    joint_places,
     read_axes,
     read_urdf,
 )
@@ -140,12 +141,13 @@ class Machine:
             raise ModelError(f"{self.path}: missing frame(s) {', '.join(missing)}; every "
                              f"machine needs {', '.join(REQUIRED_FRAMES)}")
         nominal, zero = self.kin.bind(None), np.zeros(len(self._axes))
+        places = joint_places(root, self.path, lines)
         check_zero_pose(self.path, self._axes, self.kin.poses(zero[None], nominal)[0],
-                        self.kin.axis_jacobian(zero, nominal))
+                        self.kin.axis_jacobian(zero, nominal), places)
         check_tool_mount(root, self.path, self.kin.frame_pose(
             self.kin.full_q(zero, nominal), "tool_tip", relative_to="tool_mount"))
         check_joint_frames(self.path, self._axes,
-                           self.kin.axis_frames(self.kin.full_q(zero, nominal)))
+                           self.kin.axis_frames(self.kin.full_q(zero, nominal)), places)
         self.lower = np.array([a.lower for a in self._axes])
         self.upper = np.array([a.upper for a in self._axes])
         self.resolution = np.array([a.resolution for a in self._axes])

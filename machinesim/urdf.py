@@ -27,7 +27,7 @@ from machinesim.exceptions import ModelError
 from machinesim.kinematics import DOFS, Axis
 
 __all__ = ["AXIS_ORDER", "REQUIRED_FRAMES", "check_joint_frames", "check_tool_mount",
-           "check_tree", "check_zero_pose", "read_axes", "read_urdf"]
+           "check_tree", "check_zero_pose", "joint_places", "read_axes", "read_urdf"]
 
 #: NC letters in the order machinesim puts them in a configuration vector.
 AXIS_ORDER = "XYZABC"
@@ -264,8 +264,15 @@ def read_axes(root: ET.Element, path: Path,
     return tuple(sorted(axes, key=lambda a: AXIS_ORDER.index(a.letter)))
 
 
+def joint_places(root: ET.Element, path, lines: dict[str, list[int]] | None) -> dict[str, str]:
+    """Each joint's place for a message, by name: the file and the joint's line (`read_urdf`
+    fills ``lines``)."""
+    return {joint.get("name"): _at(path, lines, "joint", index)
+            for index, joint in enumerate(root.findall("joint"))}
+
+
 def check_zero_pose(path, axes: tuple[Axis, ...], wMt: np.ndarray,
-                    jacobian: np.ndarray) -> None:
+                    jacobian: np.ndarray, places: dict[str, str] | None = None) -> None:
     """Check the nominal machine at zero axis values against the conventions.
 
     ``wMt`` (4, 4) is the tool_tip's pose in the workpiece frame at zero, ``jacobian``
@@ -303,7 +310,8 @@ def check_zero_pose(path, axes: tuple[Axis, ...], wMt: np.ndarray,
                                           if np.abs(turns).max() > ZERO_POSE_TOL else ""))
             wanted = f"+1 m along {axis.letter}"
         raise ModelError(
-            f"{path}: joint {axis.letter!r}: {got}; expected {wanted} (ISO 841, with joint "
+            f"{(places or {}).get(axis.letter, path)}: joint {axis.letter!r}: {got}; expected "
+            f"{wanted} (ISO 841, with joint "
             "frames parallel to the machine axes at zero: check the rpy of this joint's "
             "origin and of the joints above it, docs/machines.md, Conventions)")
 
@@ -343,7 +351,8 @@ def check_tool_mount(root: ET.Element, path, mMt: np.ndarray) -> None:
                          "tool_mount frame: check the rpy of the origins between them")
 
 
-def check_joint_frames(path, axes: tuple[Axis, ...], rotations: dict[str, np.ndarray]) -> None:
+def check_joint_frames(path, axes: tuple[Axis, ...], rotations: dict[str, np.ndarray],
+                       places: dict[str, str] | None = None) -> None:
     """Check that every axis joint's frame is parallel to the workpiece frame at zero.
 
     ``rotations`` maps each axis letter to its joint frame's orientation (3, 3) in the
@@ -358,7 +367,8 @@ def check_joint_frames(path, axes: tuple[Axis, ...], rotations: dict[str, np.nda
         turned = _angle(rotations[axis.letter])
         if turned > ZERO_POSE_TOL:
             raise ModelError(
-                f"{path}: joint {axis.letter!r}: its frame is turned "
+                f"{(places or {}).get(axis.letter, path)}: joint {axis.letter!r}: its frame "
+                "is turned "
                 f"{math.degrees(turned):.6g} deg relative to the workpiece at zero axis "
                 f"values; expected it parallel to the machine axes (docs/machines.md, "
                 f"Conventions), since the errors of {axis.letter} "

@@ -476,8 +476,8 @@ def test_an_axis_frame_turned_about_its_own_direction_is_refused_a_turned_machin
             '<origin xyz="0.0 0.0 0.055" rpy="0.0 0.0 -0.5235987755982988"/>'))
     with pytest.raises(ModelError) as raised:
         load_machine(turned)
-    assert str(raised.value).startswith(
-        f"{turned}: joint 'C': its frame is turned 30 deg relative to the workpiece")
+    assert str(raised.value).startswith(  # grooving_4axis.urdf: joint C opens line 43
+        f"{turned}, line 43: joint 'C': its frame is turned 30 deg relative to the workpiece")
     root = tmp_path / "y_up_world.urdf"
     root.write_text(GROOVING.replace(
         '<link name="base">',
@@ -506,6 +506,10 @@ _TRANSMISSION = ('<transmission name="t"><type>SimpleTransmission</type>\n'
                  '<joint name="X"><hardwareInterface>E</hardwareInterface></joint>\n'
                  '</transmission>\n')
 LINED = GROOVING.replace('<link name="base">', _TRANSMISSION + '<link name="base">', 1)
+_LINED_X_ALONG_Y = HOSTILE_URDFS["x_moves_along_y"][0].replace(
+    '<link name="base">', _TRANSMISSION + '<link name="base">', 1)
+_LINED_X_TURNED = HOSTILE_URDFS["x_frame_turned_about_x"][0].replace(
+    '<link name="base">', _TRANSMISSION + '<link name="base">', 1)
 
 
 @pytest.mark.parametrize(("case", "text", "needle", "occurrence", "words"), [
@@ -520,6 +524,11 @@ LINED = GROOVING.replace('<link name="base">', _TRANSMISSION + '<link name="base
     ("resolution", LINED.replace('joint="C" resolution="1.7453292519943297e-07"',
                                  'joint="C" resolution="0.1"', 1),
      '<machinesim:axis joint="C"', 1, "<machinesim:axis joint='C'> resolution 0.1 (rad)"),
+    # found on the Pinocchio model at zero: the joint named by its axis letter
+    ("zero_pose", _LINED_X_ALONG_Y, '<joint name="X"', 2,
+     "joint 'X': +1 m of X moves the tool relative to the workpiece by (0, 1, 0) m"),
+    ("joint_frame", _LINED_X_TURNED, '<joint name="X"', 2,
+     "joint 'X': its frame is turned 90 deg relative to the workpiece"),
 ])
 def test_a_refusal_names_the_line_of_the_joint_link_or_axis_element(case, text, needle,
                                                                     occurrence, words,
