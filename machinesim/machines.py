@@ -82,6 +82,10 @@ def load_machine(name_or_path: str | Path) -> Machine:
     """
     text = str(name_or_path)
     path = Path(text)
+    if text.lower().endswith(".xacro"):  # taken for a machine's name, "unknown machine"
+        urdf = path.stem if path.stem.lower().endswith(".urdf") else f"{path.stem}.urdf"
+        raise ModelError(f"{path}: a xacro file; expand it first (xacro {path.name} > {urdf}) "
+                         "and load the .urdf")
     if not text.lower().endswith(".urdf"):
         path = models_dir() / f"{text}.urdf"
         if not path.is_file():

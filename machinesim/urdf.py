@@ -522,6 +522,7 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
         raise ModelError(f"{path}: root element <{root.tag}>; expected <robot>")
     if not root.get("name"):
         raise ModelError(f"{path}: <robot> has no name=...; URDF requires one")
+    _check_not_xacro(root, path)
     count = len(root.findall("link"))
     if count > MAX_LINKS:
         raise ModelError(f"{path}: {count} links; a machine has tens (a CAD export of every "
@@ -606,6 +607,22 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
         for kind in ("visual", "collision"):
             for element in link.findall(f"{kind}/geometry/*"):
                 _check_shape(element, f"{path}: link {link.get('name')!r} <{kind}>")
+
+
+def _check_not_xacro(root: ET.Element, path) -> None:
+    """Refuse a xacro file (macros, properties, ``${...}``) given for its URDF: its links
+    made by a macro were missing ("child link 'x_carriage' does not exist") and its
+    expressions were not numbers, neither of which said to expand it."""
+    expand = f"expand it first (xacro {Path(str(path)).name} > machine.urdf) and load the URDF"
+    for element in root.iter():
+        tag = element.tag if isinstance(element.tag, str) else ""
+        namespace, _, local = tag.rpartition("}")
+        if namespace.rstrip("/").endswith("xacro"):
+            raise ModelError(f"{path}: <xacro:{local}> is xacro, not URDF: {expand}")
+        for attribute, value in element.attrib.items():
+            if "${" in value or "$(" in value:
+                raise ModelError(f"{path}: <{local} {attribute}={value!r}> is a xacro "
+                                 f"expression, not a value: {expand}")
 
 
 #: The sizes (m) of URDF's shapes: attribute -> how many numbers.

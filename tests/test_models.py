@@ -103,6 +103,16 @@ def test_unknown_machine_and_bad_files_are_refused(tmp_path):
         load_machine(bad)
 
 
+def test_a_xacro_file_is_refused_with_how_to_expand_it(tmp_path):
+    # it was taken for a machine's name: "unknown machine 'mill.urdf.xacro'"
+    path = tmp_path / "mill.urdf.xacro"
+    path.write_text(GROOVING)
+    with pytest.raises(ModelError) as raised:
+        load_machine(path)
+    assert str(raised.value) == (f"{path}: a xacro file; expand it first (xacro "
+                                 "mill.urdf.xacro > mill.urdf) and load the .urdf")
+
+
 def test_a_plain_wheel_install_ships_the_models(tmp_path):
     """Build the wheel, install it (no deps) into a folder, load a model from there."""
     wheel_dir = tmp_path / "wheel"
@@ -241,6 +251,17 @@ HOSTILE_URDFS = {
                           ["not readable XML (not well-formed (invalid token)",
                            "the file is not UTF-8 (byte 0xb5 at line 4, column 7) and "
                            "declares no encoding: save it as UTF-8, or declare its encoding"]),
+    # a xacro file given for its URDF: a link made by a macro was "child link ... does not
+    # exist", a ${...} "not a number"; neither said to expand it
+    "xacro_macro": (GROOVING.replace(
+        '<robot name="grooving_4axis"',
+        '<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="grooving_4axis"', 1)
+        .replace('<link name="base">', '<xacro:property name="h" value="0.1"/><link name="base">'),
+                    ["<xacro:property> is xacro, not URDF: expand it first (xacro "
+                     "xacro_macro.urdf > machine.urdf)"]),
+    "xacro_expression": (_in_joint("X", 'xyz="0.0 0.4 0.55"', 'xyz="0.0 0.4 ${h}"'),
+                         ["<origin xyz='0.0 0.4 ${h}'> is a xacro expression, not a value: "
+                          "expand it first"]),
     "namespace_missing": (GROOVING.replace(' xmlns:machinesim="https://machinesim.invalid/urdf"',
                                            ""),
                           ["not readable XML (unbound prefix", "namespace declared on "
