@@ -480,3 +480,21 @@ def test_readings_outside_the_travel_none_and_zero_iterations_are_refused():
     machine, obs = _a0ib_r_test(None, False)
     with pytest.raises(InputError, match="max_iterations"):
         fit(machine, obs, ["tool.x"], max_iterations=0)
+
+
+@pytest.mark.parametrize("key, bad", [
+    ("values", "abc"), ("values", ["1e-6"] * 20), ("values", None), ("sigma", "50nm"),
+    ("sigma", True), ("q", [[0.0] * 6, [0.0] * 2]), ("q", "zeros"),
+    ("directions", np.eye(3)[[0] * 20] + 0j), ("point", ["0", "0", "0"]),
+    ("zero_at", [[0.0] * 6, [0.0]]),
+])
+def test_readings_that_are_not_numbers_are_refused_naming_the_argument(key, bad):
+    # Text, None, booleans, complex numbers and ragged lists had gone to numpy as they were:
+    # "abc" and a ragged q raised numpy's ValueError (a traceback naming no argument), and
+    # ["1e-6"] * 20 or True were read as numbers
+    q, u = xy_plan()
+    given = {"q": q, "directions": u, "values": np.zeros(len(q)), "sigma": SIGMA,
+             "point": None, "zero_at": None, key: bad}
+    name = {"point": "points"}.get(key, key)
+    with pytest.raises(InputError, match=rf"Expected {name} as .*, got "):
+        observations(**given)

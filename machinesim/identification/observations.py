@@ -15,6 +15,7 @@ import numpy as np
 
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_floats
 
 __all__ = ["Observation", "Observations", "from_r_test", "is_angle", "observations"]
 
@@ -126,21 +127,20 @@ class Observations:
     zero_at: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        q = np.asarray(self.q, dtype=np.float64)
-        values = np.asarray(self.values, dtype=np.float64)
-        directions = np.asarray(self.directions, dtype=np.float64)
-        sigma = np.asarray(self.sigma, dtype=np.float64)
-        points = np.zeros(3) if self.points is None else np.asarray(self.points, np.float64)
+        # numbers only: text ("1e-6", even read as a number), None, booleans, complex values
+        # and ragged nesting are refused, naming the argument, not converted or traced back
+        q = as_floats(self.q, "q", "axis values (m, rad)")
+        values = as_floats(self.values, "values", "readings (m)")
+        directions = as_floats(self.directions, "directions", "direction vectors")
+        sigma = as_floats(self.sigma, "sigma", "standard uncertainties (m)")
+        points = (np.zeros(3) if self.points is None
+                  else as_floats(self.points, "points", "point coordinates (m)"))
         frames = self.frames
         if q.ndim not in (1, 2) or q.shape[-1] == 0:
             raise InputError(f"expected axis values of shape (n_axes,) or (N, n_axes), got "
                              f"{q.shape}", key="q")
-        try:
-            zero_at = (np.full(q.shape[-1], np.nan) if self.zero_at is None
-                       else np.asarray(self.zero_at, dtype=np.float64))
-        except (TypeError, ValueError):
-            raise InputError(f"expected zero_at as axis values (m, rad), got "
-                             f"{self.zero_at!r}", key="zero_at") from None
+        zero_at = (np.full(q.shape[-1], np.nan) if self.zero_at is None
+                   else as_floats(self.zero_at, "zero_at", "axis values (m, rad)"))
         if zero_at.ndim not in (1, 2) or zero_at.shape[-1] != q.shape[-1]:
             raise InputError(f"expected zero_at of shape ({q.shape[-1]},) or (N, "
                              f"{q.shape[-1]}) as q, got {zero_at.shape}", key="zero_at")
