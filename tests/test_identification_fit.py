@@ -498,3 +498,17 @@ def test_readings_that_are_not_numbers_are_refused_naming_the_argument(key, bad)
     name = {"point": "points"}.get(key, key)
     with pytest.raises(InputError, match=rf"Expected {name} as .*, got "):
         observations(**given)
+
+
+def test_the_machine_may_be_named_as_everywhere_else_and_anything_else_is_refused():
+    # fit("robonano_ui", ...) had raised AttributeError: 'str' object has no attribute
+    # 'check_errors', while Lab, cut and the compensation take a shipped machine's name
+    obs = observations(np.zeros((3, 6)), np.eye(3), [1e-6, -2e-6, 0.0], 1e-8)
+    named = fit("robonano_ui", obs, ["workpiece.x", "workpiece.y"])
+    np.testing.assert_allclose(named.values, [-1e-6, 2e-6], rtol=1e-12)
+    quality = plan_quality("robonano_ui", np.zeros((3, 6)), "tool_tip", np.eye(3),
+                           ["workpiece.x"], 1e-8)
+    assert quality.std[0] == pytest.approx(1e-8, rel=1e-12)  # read once along X, sigma 10 nm
+    with pytest.raises(InputError, match="Expected machine as a Machine or the name of a "
+                                         "shipped one .*got 3"):
+        fit(3, obs, ["workpiece.x"])

@@ -39,6 +39,7 @@ from machinesim.identification.observations import (
     is_angle,
     observations,
 )
+from machinesim.metrology.instruments import as_machine
 
 __all__ = [
     "Combination", "Estimate", "NotConvergedError", "Observation", "Observations",
@@ -480,7 +481,8 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
 
     Parameters
     ----------
-    machine : Machine
+    machine : Machine or str
+        The machine, or the name of a shipped one (or a URDF path), as `load_machine` takes.
     observations : Observations, or sequence of Observation / Observations
         The readings.
     params : sequence of str
@@ -497,7 +499,8 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
     Raises
     ------
     InputError
-        Malformed readings (axis count, unknown frame), repeated parameter names.
+        Malformed readings (axis count, unknown frame), repeated parameter names, a machine
+        that is neither a `Machine` nor a name.
     ErrorModelError
         An unknown parameter name, or a prior that does not fit the machine.
     NotConvergedError
@@ -507,6 +510,7 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
             or max_iterations < 1:
         raise InputError(f"max_iterations must be an int >= 1, got {max_iterations!r}",
                          key="max_iterations")
+    machine = as_machine(machine)
     prior = _prior(machine, prior)
     names = _names(machine, params, prior)
     obs = Observations.of(observations)
@@ -577,7 +581,8 @@ def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *
 
     Parameters
     ----------
-    machine : Machine
+    machine : Machine or str
+        As for `fit`.
     q : array_like, shape (N, n_axes)
         Axis values of the readings, m and rad.
     frames : str or sequence of str
@@ -600,6 +605,7 @@ def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *
     -------
     PlanQuality
     """
+    machine = as_machine(machine)
     prior = _prior(machine, prior)
     names = _names(machine, params, prior)
     obs = Observations(q, 0.0, directions, sigma, frames, points, zero_at)
