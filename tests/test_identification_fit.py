@@ -512,3 +512,23 @@ def test_the_machine_may_be_named_as_everywhere_else_and_anything_else_is_refuse
     with pytest.raises(InputError, match="Expected machine as a Machine or the name of a "
                                          "shipped one .*got 3"):
         fit(3, obs, ["workpiece.x"])
+
+
+@pytest.mark.parametrize("name, hint", [
+    # C on robonano_a0ib has no EZ0C (a shift of the C line along itself): its five listed
+    ("location.C.EZ0C", "the location errors of its axis C are location.C.EX0C, "
+                        "location.C.EY0C, location.C.EA0C, location.C.EB0C, location.C.EC0C;"),
+    ("location.c.EX0C", "the location errors of its axis C are location.C.EX0C,"),
+    ("EX0C", r"\(did you mean location.C.EX0C\?\)"),
+    ("EZ0B", r"\(did you mean location.B.EZ0B\?\)"),
+    ("workpiece.gama", r"\(did you mean workpiece.gamma\?\)"),
+    ("component.X.EXX[1]", r"a component error is a parameter only when the prior holds its "
+                           r"table or polynomial"),
+])
+def test_an_unknown_parameter_name_is_told_the_names_it_may_mean(name, hint):
+    # the message had given only the patterns of every name (location.<axis>.<symbol>, ...)
+    a0ib = load_machine("robonano_a0ib")
+    obs = observations(np.zeros((3, 5)), np.eye(3), np.zeros(3), SIGMA)
+    with pytest.raises(ErrorModelError, match=rf"unknown error parameter '{re.escape(name)}' "
+                                              rf"for robonano_a0ib; {hint}"):
+        fit(a0ib, obs, ["tool.x", name])

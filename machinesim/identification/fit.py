@@ -23,6 +23,7 @@ docs/identification.md.
 
 from __future__ import annotations
 
+import difflib
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -450,11 +451,13 @@ def _names(machine, params, prior: ErrorModel) -> tuple[str, ...]:
     names = tuple(params)
     if not names:
         raise InputError("expected at least one parameter name, got none", key="params")
-    accepted = set(machine.parameter_names(prior))
+    listed = machine.parameter_names(prior)
+    accepted = set(listed)
     for name in names:
         if name not in accepted:
             raise ErrorModelError(
-                f"unknown error parameter {name!r} for {machine.name}; expected one of "
+                f"unknown error parameter {name!r} for {machine.name}; "
+                f"{_near_names(str(name), listed, machine)}expected one of "
                 "Machine.parameter_names(prior): tool.x .. tool.rz, workpiece.x .. "
                 f"workpiece.gamma, location.<axis>.<symbol> of axes {''.join(machine.axes)}, "
                 "or component.<axis>.<symbol>[i] of a table or polynomial in the prior",
@@ -463,6 +466,29 @@ def _names(machine, params, prior: ErrorModel) -> tuple[str, ...]:
     if repeated:
         raise InputError(f"parameter {repeated[0]!r} is listed more than once", key="params")
     return names
+
+
+def _near_names(name: str, listed: Sequence[str], machine) -> str:
+    """The accepted names a mistyped ``name`` may have meant, as a phrase to put before the
+    list of what is accepted (empty when none is near): the location errors of the axis it
+    names (``location.C.EZ0C``: C has EX0C, EY0C, EA0C, EB0C, EC0C), the names it ends
+    (``EX0C``), or those spelt most alike (``workpiece.gama``)."""
+    parts = name.split(".")
+    axis = parts[1].upper() if len(parts) == 3 and parts[0] == "location" else None
+    if axis in machine.axes:
+        own = [n for n in listed if n.startswith(f"location.{axis}.")]
+        return f"the location errors of its axis {axis} are {', '.join(own)}; "
+    near = [n for n in listed if n.lower().endswith("." + name.lower())]
+    if not near:  # the best spelt alike (workpiece.gama: gamma, not alpha as well)
+        ratios = {n: difflib.SequenceMatcher(None, name, n).ratio() for n in listed}
+        best = max(ratios.values())
+        near = [n for n, r in ratios.items() if r >= 0.75 and r >= best - 0.05][:3]
+    lowered = {n.lower(): n for n in listed}
+    near = near or ([lowered[name.lower()]] if name.lower() in lowered else [])
+    if name.startswith("component.") and not any(n.startswith("component.") for n in listed):
+        return ("a component error is a parameter only when the prior holds its table or "
+                "polynomial (prior=ErrorModel with [component.<axis>]); ")
+    return f"(did you mean {' or '.join(near)}?) " if near else ""
 
 
 def fit(machine, observations: Observations | Iterable, params: Sequence[str], *,
