@@ -532,3 +532,36 @@ def test_an_unknown_parameter_name_is_told_the_names_it_may_mean(name, hint):
     with pytest.raises(ErrorModelError, match=rf"unknown error parameter '{re.escape(name)}' "
                                               rf"for robonano_a0ib; {hint}"):
         fit(a0ib, obs, ["tool.x", name])
+
+
+def test_readings_in_micrometres_given_as_metres_are_named_in_the_notes():
+    # An R-test of C's line offsets (0.3 and -0.2 um) read in um and handed over as m: the
+    # fit, linear in the readings, returned EX0C = 0.3 m and EY0C = -0.2 m with no note (the
+    # readings fit the model exactly, so no misfit), on a machine whose X travels 280 mm
+    a0ib = load_machine("robonano_a0ib")
+    q = np.zeros((8, 5))
+    q[:, 4] = np.arange(8) * 45 * DEG
+    q[:, :3] = np.random.default_rng(5).uniform(-0.01, 0.01, (8, 3))
+    qs, u = np.repeat(q, 3, axis=0), np.tile(np.eye(3), (8, 1))
+    names = ["location.C.EX0C", "location.C.EY0C"]
+    truth = ErrorModel().with_parameters(dict(zip(names, [0.3 * UM, -0.2 * UM], strict=True)))
+    readings = np.einsum("ni,ni->n", u, a0ib.tool_pose(qs, truth)[:, :3, 3]
+                         - a0ib.tool_pose(qs)[:, :3, 3])
+    right = fit(a0ib, observations(qs, u, readings, SIGMA), names)
+    np.testing.assert_allclose(right.values, [0.3 * UM, -0.2 * UM], rtol=1e-9)
+    assert right.notes == ()
+    as_um = fit(a0ib, observations(qs, u, readings / UM, SIGMA), names)
+    np.testing.assert_allclose(as_um.values, [0.3, -0.2], rtol=1e-3)  # a factor 1e6 off
+    worst = int(np.argmax(np.abs(readings)))
+    assert as_um.notes[0] == (
+        f"reading {worst} is {readings[worst] / UM:.3g} m; location.C.EX0C = 0.3 m; "
+        "location.C.EY0C = -0.2 m: beyond 0.01 m, more than a displacement sensor reads of a "
+        "machine's errors. Readings and sigma are in metres: were they given in um or mm? "
+        "The values are then off by that factor")
+    # a sigma of 50 nm given in um (0.05) is named before anything is measured
+    quality = plan_quality(a0ib, qs, "tool_tip", u, names, 0.05)
+    assert quality.notes == ("sigma 0 is 0.05 m: beyond 0.01 m, more than a displacement "
+                             "sensor reads of a machine's errors. Readings and sigma are in "
+                             "metres: were they given in um or mm? The values are then off "
+                             "by that factor",)
+    assert plan_quality(a0ib, qs, "tool_tip", u, names, SIGMA).notes == ()

@@ -101,6 +101,12 @@ NEARLY_INSEPARABLE = 0.999
 #: with N - rank degrees of freedom and right sigma it is about 1 (above 1.5 by chance with
 #: probability < 1e-3 from 20 degrees of freedom on).
 MODEL_MISFIT = 3.0
+#: A reading, a sigma or an identified length beyond this, m, is no machine error that a
+#: displacement sensor reads (R-test and dial indicator ranges are a few mm; the largest
+#: setting errors these fits meet, 2 degrees seen 50 mm away, read 1.7 mm): the usual cause
+#: is micrometres or millimetres given where metres are expected, which the fit, linear in
+#: the readings, turns into values off by that factor (`notes`).
+IMPLAUSIBLE_LENGTH_M = 0.01
 
 
 @dataclass(frozen=True, eq=False)
@@ -129,12 +135,14 @@ class _Figures:
 
     @property
     def notes(self) -> tuple[str, ...]:
-        """What a person should read before trusting the figures: each direction the
+        """What a person should read before trusting the figures: sizes no machine error has
+        (readings or sigma given in um or mm, `IMPLAUSIBLE_LENGTH_M`), each direction the
         readings cannot see (rank below the number of parameters: the values along it are
         the prior's, not measured), and each pair of parameters correlated beyond
         `NEARLY_INSEPARABLE` (a near-symmetry of the plan: identifiable in the SVD's sense,
         yet barely told apart, as their std say)."""
-        out = [_unseen_note(c, self.rank, len(self.names)) for c in self.combinations]
+        out = list(self.scale_notes)
+        out += [_unseen_note(c, self.rank, len(self.names)) for c in self.combinations]
         k = len(self.names)
         for i in range(k):
             for j in range(i + 1, k):
@@ -198,7 +206,11 @@ class PlanQuality(_Figures):
     becomes in each parameter.
 
     Attributes
-    ----------""" + _FIGURES_DOC)
+    ----------""" + _FIGURES_DOC + """    scale_notes : tuple of str
+        The note on a sigma beyond `IMPLAUSIBLE_LENGTH_M` (given in um or mm?), if any.
+""")
+
+    scale_notes: tuple = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,6 +235,9 @@ class Estimate(_Figures):
         The directions the readings could not see at the prior (the plan's symmetries there,
         as `plan_quality` at the prior names them), when the fit ended with a higher rank:
         seen at the estimate only through its own errors' lever (`notes`).
+    scale_notes : tuple of str
+        The note on readings, sigma or identified lengths beyond `IMPLAUSIBLE_LENGTH_M`
+        (given in um or mm?), if any; first in `notes`.
 """)
 
     values: np.ndarray
@@ -231,6 +246,7 @@ class Estimate(_Figures):
     iterations: int
     errors: ErrorModel
     unseen_at_prior: tuple = ()
+    scale_notes: tuple = ()
 
     @property
     def notes(self) -> tuple[str, ...]:
@@ -580,7 +596,27 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
     return Estimate(**figures, values=frozen(values),
                     residual_rms=float(np.sqrt(np.mean(residual ** 2))),
                     normalised_residual_rms=chi, iterations=iterations, errors=errors,
-                    unseen_at_prior=unseen)
+                    unseen_at_prior=unseen,
+                    scale_notes=_scale_notes(obs.sigma, obs.values, names, values))
+
+
+def _scale_notes(sigma: np.ndarray, readings: np.ndarray | None = None, names=(),
+                 values: np.ndarray | None = None) -> tuple[str, ...]:
+    """One note naming the largest reading, the largest sigma and each identified length
+    beyond `IMPLAUSIBLE_LENGTH_M` (none when all are within it)."""
+    found = []
+    for what, arr in (("reading", readings), ("sigma", sigma)):
+        if arr is not None and np.max(np.abs(arr)) > IMPLAUSIBLE_LENGTH_M:
+            i = int(np.argmax(np.abs(arr)))
+            found.append(f"{what} {i} is {float(arr[i]):.3g} m")
+    if values is not None:
+        found += [f"{n} = {float(v):.3g} m" for n, v in zip(names, values, strict=True)
+                  if not is_angle(n) and abs(v) > IMPLAUSIBLE_LENGTH_M]
+    if not found:
+        return ()
+    return (f"{'; '.join(found)}: beyond {IMPLAUSIBLE_LENGTH_M:g} m, more than a displacement "
+            "sensor reads of a machine's errors. Readings and sigma are in metres: were they "
+            "given in um or mm? The values are then off by that factor",)
 
 
 def _check_not_diverged(machine, names, values: np.ndarray, iterations: int) -> None:
@@ -636,4 +672,5 @@ def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *
     names = _names(machine, params, prior)
     obs = Observations(q, 0.0, directions, sigma, frames, points, zero_at)
     plan = _Plan(machine, obs, names)
-    return PlanQuality(**_figures(_linearise(plan.jacobian(prior), obs.sigma), names))
+    return PlanQuality(**_figures(_linearise(plan.jacobian(prior), obs.sigma), names),
+                       scale_notes=_scale_notes(obs.sigma))
