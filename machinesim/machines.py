@@ -347,16 +347,22 @@ class Machine:
                     const[v_index, c] += coeff
         unique, inverse = np.unique(q2, axis=0, return_inverse=True)
         inverse = inverse.ravel()
-        jacs = np.empty((unique.shape[0], 6, self.kin.model.nv))
+        # Only the velocity columns the parameters use are kept of each pose's (6, nv)
+        # Jacobian: all nv (107 on robonano_a0ib) had taken 5 kB a pose, 0.5 GB for a plan
+        # of 100,000 poses and more than the machine has for a few million.
+        used = np.union1d(np.flatnonzero(np.any(const != 0.0, axis=1)),
+                          [v_index for _, v_index, _ in varying]).astype(int)
+        column = {int(v): j for j, v in enumerate(used)}
+        jacs = np.empty((unique.shape[0], 6, used.size))
         rot = np.empty((unique.shape[0], 3, 3))
         for n, qn in enumerate(unique):
             full = self.kin.full_q(qn, binding)
-            jacs[n] = self.kin.relative_jacobian(full, frame)
+            jacs[n] = self.kin.relative_jacobian(full, frame)[:, used]
             if lever is not None:
                 rot[n] = self.kin.frame_pose(full, frame)[:3, :3]
-        out = (jacs @ const)[inverse]
+        out = (jacs @ const[used])[inverse]
         for c, v_index, values in varying:
-            out[:, :, c] += jacs[inverse, :, v_index] * values[:, None]
+            out[:, :, c] += jacs[inverse, :, column[v_index]] * values[:, None]
         if lever is not None:
             arm = np.einsum("nij,nj->ni", rot[inverse], lever)
             out[:, :3, :] += np.cross(out[:, 3:, :], arm[:, :, None], axis=1)
