@@ -470,3 +470,29 @@ def test_a_correction_past_the_travel_is_refused_naming_the_lines():
                                        "G01 X1.\n"), machine, tilted)
     assert result.unmatched.count("cannot turn the tool about X") == 1
     assert "at 3 poses" in result.unmatched
+
+
+def test_an_estimate_or_values_by_name_given_as_the_identified_model_say_how_to_give_them():
+    # A newcomer hands model_based what fit returns, or its as_dict: the messages had said
+    # only "got Estimate" and "unknown section; expected one of tool, ..."
+    from machinesim.exceptions import ErrorModelError
+    from machinesim.identification import fit, observations
+
+    q = np.zeros((4, 5))
+    q[:, 4] = np.arange(4) * 90 * DEG
+    u = np.tile(np.eye(3), (4, 1))
+    truth = ErrorModel().with_parameters({"location.C.EX0C": 2 * UM})
+    readings = np.einsum("ni,ni->n", u, ROBONANO.tool_pose(np.repeat(q, 3, axis=0), truth)
+                         [:, :3, 3] - ROBONANO.tool_pose(np.repeat(q, 3, axis=0))[:, :3, 3])
+    estimate = fit(ROBONANO, observations(np.repeat(q, 3, axis=0), u, readings, 50 * NM),
+                   ["location.C.EX0C"])
+    with pytest.raises(ErrorModelError, match=r"got Estimate \(its identified model is "
+                                              r"Estimate.errors\)"):
+        model_based(tilted(), ROBONANO, estimate)
+    with pytest.raises(ErrorModelError, match=r"key 'location.C.EX0C': unknown section; .*"
+                                              r"ErrorModel\(\).with_parameters"):
+        model_based(tilted(), ROBONANO, {"location.C.EX0C": 2 * UM})
+    # the way the messages give is the truth's compensation
+    by_name = ErrorModel().with_parameters({"location.C.EX0C": 2 * UM})
+    assert format_program(model_based(tilted(), ROBONANO, estimate.errors).program) == \
+        format_program(model_based(tilted(), ROBONANO, by_name).program)

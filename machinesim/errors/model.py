@@ -374,5 +374,8 @@ def as_error_model(errors) -> ErrorModel:
         return ErrorModel.from_dict(errors)
     if isinstance(errors, str | os.PathLike):
         return ErrorModel.from_toml(errors)
+    hint = ""
+    if isinstance(getattr(errors, "errors", None), ErrorModel):  # an identification's result
+        hint = f" (its identified model is {type(errors).__name__}.errors)"
     raise _fail(f"Expected errors as an ErrorModel, a dict (the TOML layout, units in every "
-                f"key) or a TOML path, got {type(errors).__name__}", None, "errors")
+                f"key) or a TOML path, got {type(errors).__name__}{hint}", None, "errors")

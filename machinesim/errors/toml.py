@@ -220,7 +220,13 @@ def model_from_dict(data: Any, source: str) -> ErrorModel:
     as written there (`ErrorModel.source`, `ErrorModel.written`) for later messages."""
     for section in _table(data, source, None):
         if section not in _SECTIONS:
-            raise _fail(f"unknown section; expected one of {', '.join(_SECTIONS)}", source, section)
+            hint = ""
+            if isinstance(section, str) and section.split(".")[0] in _SECTIONS:
+                hint = ("; a parameter name (SI values by name, as Estimate.as_dict and "
+                        "Machine.parameter_names give them) goes through "
+                        "ErrorModel().with_parameters({name: value})")
+            raise _fail(f"unknown section; expected one of {', '.join(_SECTIONS)}{hint}",
+                        source, section)
     tool_spec = {"offset": ("length", 3), "rotation": ("angle", 3)}
     workpiece_spec = {"delta": ("length", 3)} | {a: ("angle", None) for a in _WORKPIECE_ANGLES}
     written: dict[str, tuple[str, Any]] = {}
