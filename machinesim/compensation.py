@@ -47,6 +47,7 @@ import numpy as np
 from machinesim import tolerances
 from machinesim.exceptions import AxisLimitError, InputError, NCProgramError
 from machinesim.machines import Machine, load_machine
+from machinesim.metrology._arrays import as_floats, shown
 from machinesim.nc.moves import AXES, KIND_DWELL
 from machinesim.nc.program import Program, modal_values
 from machinesim.nc.writer import LINEAR_DECIMALS, ROTARY_DECIMALS
@@ -100,7 +101,7 @@ def start_axes(machine: Machine, start=None) -> np.ndarray:
     The same convention and check as `machinesim.motion.plan`.
     """
     axes = machine.axes
-    q = np.zeros(len(axes)) if start is None else np.array(start, dtype=np.float64)
+    q = np.zeros(len(axes)) if start is None else as_floats(start, "start", "axis values (m, rad)")
     if q.shape != (len(axes),):
         raise InputError(f"start must have shape ({len(axes)},) for axes {''.join(axes)}, "
                          f"got {q.shape}")
@@ -130,6 +131,7 @@ def program_axes(program: Program, machine: Machine | str, *, start=None) -> np.
         When the program moves an axis the machine does not have.
     """
     machine = _machine(machine)
+    _check_program(program)
     targets = program.targets
     foreign = [k for k, letter in enumerate(AXES) if letter not in machine.axes]
     named = ~np.isnan(targets[:, foreign])
@@ -204,6 +206,7 @@ def rewrite(program: Program, machine: Machine | str, q, *, rounded: bool = True
         Every motion block with every machine axis; everything else unchanged.
     """
     machine = _machine(machine)
+    _check_program(program)
     motion = [n for n, move in enumerate(program.moves) if move.kind != "dwell"]
     q = np.asarray(q, dtype=np.float64)
     shape = (len(motion), len(machine.axes))
@@ -327,7 +330,8 @@ def model_based(
     """
     machine = _machine(machine)
     machine.check_errors(identified)
-    p = np.zeros(3) if point is None else np.array(point, dtype=np.float64)
+    p = (np.zeros(3) if point is None
+         else as_floats(point, "point", "3 coordinates (m) in the tool_tip frame"))
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise InputError(f"point must be 3 finite coordinates (m) in the tool_tip frame, got "
                          f"{np.asarray(point).tolist()!r}", key="point")
@@ -386,6 +390,15 @@ def _check_travel(program: Program, machine: Machine, motion: list[int], nominal
         f"its travel {shown(machine.lower[i])} .. {shown(machine.upper[i])} (the program had "
         f"{shown(nominal[row, i])}); {len(lines)} line(s) need a value past a limit: "
         f"{listed}. {hint}")
+
+
+def _check_program(program) -> None:
+    """Refuse anything but a `Program` (a path or NC text is read first, `read_program`)."""
+    if not isinstance(program, Program):
+        raise InputError(f"expected the program as a machinesim.nc.Program, got "
+                         f"{type(program).__name__} {shown(program)}; read an NC file with "
+                         "machinesim.nc.read_program(path) (text: parse_program)",
+                         key="program")
 
 
 def _machine(machine: Machine | str) -> Machine:

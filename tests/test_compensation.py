@@ -496,3 +496,24 @@ def test_an_estimate_or_values_by_name_given_as_the_identified_model_say_how_to_
     by_name = ErrorModel().with_parameters({"location.C.EX0C": 2 * UM})
     assert format_program(model_based(tilted(), ROBONANO, estimate.errors).program) == \
         format_program(model_based(tilted(), ROBONANO, by_name).program)
+
+
+@pytest.mark.parametrize("given, match", [
+    ({"start": "home"}, r"key 'start': Expected start as axis values \(m, rad\), got 'home'"),
+    ({"start": [0.0, "1", 0.0, 0.0, 0.0]}, "Expected start as axis values"),
+    ({"point": "tip"}, r"key 'point': Expected point as 3 coordinates \(m\) in the tool_tip "
+                       r"frame, got 'tip'"),
+    ({"program": "tilted.nc"}, r"key 'program': expected the program as a "
+                               r"machinesim.nc.Program, got str 'tilted.nc'; read an NC file "
+                               r"with machinesim.nc.read_program\(path\)"),
+])
+def test_a_start_point_or_program_of_the_wrong_kind_is_refused_naming_it(given, match):
+    # each had raised numpy's ValueError ("could not convert string to float: 'home'") or
+    # AttributeError ("'str' object has no attribute 'targets'"), tracebacks naming nothing
+    arguments = {"program": tilted(), "start": None, "point": None} | given
+    program = arguments.pop("program")
+    with pytest.raises(InputError, match=match):
+        model_based(program, ROBONANO, None, **arguments)
+    if "point" not in given:
+        with pytest.raises(InputError, match=match):
+            map_program(program, ROBONANO, lambda q: q, start=arguments["start"])
