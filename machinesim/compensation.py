@@ -375,8 +375,11 @@ def _check_travel(program: Program, machine: Machine, motion: list[int], nominal
     def shown(value):
         return machine.format_axis_value(i, value)
 
+    # at the limit: within one resolution step of it, where a G28, the home or a start puts
+    # the axis (1 mm or 1 mrad, as before, took a program running 1 um inside the travel
+    # for one standing at its end, and blamed a G28 for a correction larger than the room)
     at_limit = min(abs(nominal[row, i] - machine.lower[i]),
-                   abs(nominal[row, i] - machine.upper[i])) <= 1e-3
+                   abs(nominal[row, i] - machine.upper[i])) <= machine.resolution[i]
     hint = ("A correction cannot be made at the end of an axis' travel: a move to the "
             "reference position (G28) with the axis at its limit, or a start there "
             "(start=...), is the usual cause" if at_limit else

@@ -517,3 +517,19 @@ def test_a_start_point_or_program_of_the_wrong_kind_is_refused_naming_it(given, 
     if "point" not in given:
         with pytest.raises(InputError, match=match):
             map_program(program, ROBONANO, lambda q: q, start=arguments["start"])
+
+
+def test_a_correction_past_the_room_left_inside_the_travel_blames_the_errors_not_a_g28():
+    # X runs 1 um inside robonano_a0ib's +140 mm end; at C = 90 deg C's line offset EX0C =
+    # 4 um takes X 4 um further out (the offset turned by C), past the end. The message had
+    # said the G28 or a start at the limit was the usual cause (any value within 1 mm of
+    # the end counted as at it); the room is 1 um and the correction 4 um
+    from machinesim.exceptions import AxisLimitError
+
+    program = parse_program("G90 G21\nG00 X0. Y0. Z1. B0. C0.\nG01 X139.999 F100.\nC90.\n"
+                            "M30\n", "edge.nc")
+    offset = ErrorModel().with_parameters({"location.C.EX0C": 4 * UM})
+    with pytest.raises(AxisLimitError, match=r"edge.nc, line 4: .*axis X to 140\.003000 mm.*"
+                                             r"the program had 139\.999000 mm.*larger than "
+                                             r"the room the axis has there"):
+        model_based(program, ROBONANO, offset)
