@@ -348,3 +348,18 @@ def test_gaussian_spot_reads_a_step_edge_as_a_staircase():
     expected = np.array([0.0, outer, 23 / 30, 1 - outer, 1.0]) * height
     np.testing.assert_allclose(read.z, expected, rtol=0, atol=1e-12 * height)
     assert 23 / 30 == pytest.approx(8 / 15 + inner + outer, abs=1e-15)
+
+
+def test_an_r_test_plan_in_degrees_is_told_the_units_and_order_the_axes_take():
+    # C given as 90 deg (90 rad, past robonano_a0ib's +-360 deg): the message had named the
+    # value and the travel only, where fit's own says "axis values in m and rad"
+    from machinesim.exceptions import AxisLimitError
+
+    lab = machinesim.Lab("robonano_a0ib", noise=False)
+    q = np.zeros((2, 5))
+    q[1, 4] = 90.0
+    with pytest.raises(AxisLimitError, match=r"axis C = 5156\.62016 deg outside its travel "
+                                             r".*\(axis values in m and rad, in the order "
+                                             r"XYZBC: a rotary axis given in degrees is the "
+                                             r"usual cause\)"):
+        lab.r_test().read(q)

@@ -147,7 +147,10 @@ class RTest:
                              f"{''.join(self.machine.axes)}), got {q.shape}", key="q")
         bad = self.machine.limit_violations(q)
         if bad:
-            raise AxisLimitError(f"{self.machine.name}: the R-test plan needs " + "; ".join(bad))
+            raise AxisLimitError(f"{self.machine.name}: the R-test plan needs "
+                                 + "; ".join(bad) + " (axis values in m and rad, in the order "
+                                 f"{''.join(self.machine.axes)}: a rotary axis given in degrees "
+                                 "is the usual cause)")
         actual = self._centre(self._pose(self.frame, q))
         nominal = self._centre(self.machine.frame_pose(self.frame, q))
         displayed = self.readout.read(actual - nominal, self._rng)
