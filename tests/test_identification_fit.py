@@ -565,3 +565,31 @@ def test_readings_in_micrometres_given_as_metres_are_named_in_the_notes():
                              "metres: were they given in um or mm? The values are then off "
                              "by that factor",)
     assert plan_quality(a0ib, qs, "tool_tip", u, names, SIGMA).notes == ()
+
+
+@pytest.mark.parametrize("sigma", [1e-30, 1e-200, 5e-324, 50.0, 1e200, 1e308])
+def test_a_sigma_no_sensor_has_is_refused_before_its_weight_leaves_float64(sigma):
+    # 1e-200, 5e-324 and 1e200 and beyond had ended in numpy's LinAlgError "SVD did not
+    # converge" (the weights 1/sigma, squared, overflowed or underflowed), 1e-200 in fit as
+    # "location.C.EX0C: expected a finite number, got nan"; 50 (50 nm given as metres) had
+    # passed
+    q, u = xy_plan()
+    with pytest.raises(InputError, match=rf"reading 0: sigma {re.escape(repr(sigma))} m; "
+                                         r"expected a finite "
+                                         r"standard uncertainty from 1e-18 m to 1 m"):
+        fit(MACHINE, observations(q, u, np.zeros(len(q)), sigma), ["workpiece.x"])
+    with pytest.raises(InputError, match=r"from 1e-18 m to 1 m"):
+        plan_quality(MACHINE, q, "tool_tip", u, ["workpiece.x"], sigma)
+
+
+@pytest.mark.parametrize("scale", [1e300, 1e-320])
+def test_a_direction_of_any_length_is_normalised(scale):
+    # Directions are normalised; one of length 1e300 had a norm of inf (its square overflows)
+    # and came out zero, so every reading was ignored and workpiece.x stayed 0 with a note
+    # that nothing saw it; one of 1e-320 was refused as zero
+    q, u = xy_plan()
+    truth = ErrorModel().with_parameters({"workpiece.x": 3 * UM, "workpiece.y": -2 * UM})
+    readings = read(truth, q, u, np.zeros(3))
+    estimate = fit(MACHINE, observations(q, u * scale, readings, SIGMA),
+                   ["workpiece.x", "workpiece.y"])
+    np.testing.assert_allclose(estimate.values, [3 * UM, -2 * UM], rtol=1e-9)

@@ -17,7 +17,18 @@ from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_floats
 
-__all__ = ["Observation", "Observations", "from_r_test", "is_angle", "observations"]
+__all__ = ["Observation", "Observations", "SIGMA_RANGE_M", "from_r_test", "is_angle",
+           "observations"]
+
+#: The standard uncertainties a reading may have, m: from an attometre, below any sensor
+#: (noise-free readings are given a sigma of 1 pm or more here), to a metre, beyond any
+#: displacement sensor. Outside it the fit's weights 1/sigma leave float64 (1e-200 and
+#: 1e200 had ended in numpy's "SVD did not converge"), or the unit is wrong (50 nm given
+#: as 50).
+SIGMA_RANGE_M = (1e-18, 1.0)
+#: Below this norm a direction's square loses digits (subnormal); normalised from its
+#: largest component instead.
+_SMALLEST_NORM = 1e-150
 
 
 def is_angle(name: str) -> bool:
@@ -190,22 +201,34 @@ class Observations:
             if rows.size:
                 raise InputError(f"reading {rows[0]}: {key} {arr[rows[0]].tolist()} has NaN "
                                  "or inf; expected finite numbers (SI)", key=key)
-        norms = np.linalg.norm(directions, axis=1)
-        rows = np.flatnonzero(~(norms > 0.0))
+        largest = np.max(np.abs(directions), axis=1)
+        rows = np.flatnonzero(~(largest > 0.0))
         if rows.size:
             raise InputError(f"reading {rows[0]}: direction {directions[rows[0]].tolist()} is "
                              "zero; expected a non-zero vector (it is normalised)",
                              key="directions")
-        rows = np.flatnonzero(~((sigma > 0.0) & np.isfinite(sigma)))
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            norms = np.linalg.norm(directions, axis=1)
+            unit = directions / norms[:, None]
+        # a length whose square leaves float64 (1e300: its norm was inf, and the direction
+        # came out zero; 1e-320: refused as zero) is normalised from its largest component
+        odd = ~np.isfinite(norms) | (norms < _SMALLEST_NORM)
+        if odd.any():
+            scaled = directions[odd] / largest[odd, None]
+            unit[odd] = scaled / np.linalg.norm(scaled, axis=1)[:, None]
+        low, high = SIGMA_RANGE_M
+        rows = np.flatnonzero(~((sigma >= low) & (sigma <= high)))
         if rows.size:
             raise InputError(f"reading {rows[0]}: sigma {float(sigma[rows[0]])!r} m; expected a "
-                             "finite standard uncertainty > 0 (m)", key="sigma")
+                             f"finite standard uncertainty from {low:g} m to {high:g} m (a "
+                             "sigma beyond is no displacement sensor's, and its weight 1/sigma "
+                             "leaves float64 in the fit: given in um or nm?)", key="sigma")
         wrong = [f for f in frames if not isinstance(f, str)]
         if wrong:
             raise InputError(f"expected frame names (str), got {wrong[0]!r}", key="frames")
         object.__setattr__(self, "q", frozen(q))
         object.__setattr__(self, "values", frozen(values))
-        object.__setattr__(self, "directions", frozen(directions / norms[:, None]))
+        object.__setattr__(self, "directions", frozen(unit))
         object.__setattr__(self, "sigma", frozen(sigma))
         object.__setattr__(self, "frames", frames)
         object.__setattr__(self, "points", frozen(points))
