@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -508,7 +508,8 @@ def _near_names(name: str, listed: Sequence[str], machine) -> str:
 
 
 def fit(machine, observations: Observations | Iterable, params: Sequence[str], *,
-        prior=None, max_iterations: int = MAX_ITERATIONS) -> Estimate:
+        prior=None, max_iterations: int = MAX_ITERATIONS,
+        progress: Callable[[str], None] | None = None) -> Estimate:
     """Identify the named error parameters from displacement readings.
 
     Model: reading_i = u_i . (x_i(p) - x_i(nominal)), with x_i(p) the observed point's
@@ -533,6 +534,11 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
         The starting point, and the values of every parameter not fitted (default: no error).
     max_iterations : int
         Gauss-Newton steps before `NotConvergedError`.
+    progress : callable(str), optional
+        Told one line per Gauss-Newton step (its number, the RMS of (reading - model) / sigma
+        before it, and its largest step relative to the stopping rule): each step evaluates
+        the model and its Jacobian at every distinct pose, about 0.2 ms a pose, so a plan
+        of 100,000 distinct poses takes some 20 s a step (robonano_a0ib, 4 parameters).
 
     Returns
     -------
@@ -571,6 +577,14 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
         at_prior = lin if at_prior is None else at_prior
         step = lin.step(residual, start - values)
         values = values + step
+        if progress is not None:
+            worst = int(np.argmax(np.abs(step) / tolerance))
+            progress(f"Gauss-Newton step {iterations} on {len(obs):,} readings: RMS of "
+                     f"(reading - model) / sigma before it "
+                     f"{math.sqrt(float(np.mean(residual ** 2))):.4g}, "
+                     f"largest step {names[worst]} {step[worst]:.3g} "
+                     f"{'rad' if is_angle(names[worst]) else 'm'} "
+                     f"({abs(step[worst]) / tolerance[worst]:.3g} x the stopping rule)")
         if np.all(np.abs(step) < tolerance):
             break
         _check_not_diverged(machine, names, values, iterations)
