@@ -47,7 +47,7 @@ import numpy as np
 from machinesim import tolerances
 from machinesim.exceptions import AxisLimitError, InputError, NCProgramError
 from machinesim.machines import Machine, load_machine
-from machinesim.metrology._arrays import as_floats, shown
+from machinesim.metrology._arrays import as_flag, as_floats, shown
 from machinesim.nc.moves import AXES, KIND_DWELL
 from machinesim.nc.program import Program, modal_values
 from machinesim.nc.writer import LINEAR_DECIMALS, ROTARY_DECIMALS
@@ -207,6 +207,7 @@ def rewrite(program: Program, machine: Machine | str, q, *, rounded: bool = True
     """
     machine = _machine(machine)
     _check_program(program)
+    rounded = as_flag(rounded, "rounded")
     motion = [n for n, move in enumerate(program.moves) if move.kind != "dwell"]
     q = np.asarray(q, dtype=np.float64)
     shape = (len(motion), len(machine.axes))

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 
 import numpy as np
 import pinocchio as pin
@@ -533,3 +534,14 @@ def test_a_correction_past_the_room_left_inside_the_travel_blames_the_errors_not
                                              r"the program had 139\.999000 mm.*larger than "
                                              r"the room the axis has there"):
         model_based(program, ROBONANO, offset)
+
+
+@pytest.mark.parametrize("rounded", ["False", "no", 0, None])
+def test_rounded_takes_true_or_false_only(rounded):
+    # rounded="False" (or "no") had been taken as true and the program rounded, the opposite
+    # of what was asked, with nothing said
+    with pytest.raises(InputError, match=rf"key 'rounded': Expected rounded as True or False, "
+                                         rf"got {re.escape(repr(rounded))}"):
+        model_based(tilted(), ROBONANO, None, rounded=rounded)
+    with pytest.raises(InputError, match="Expected rounded as True or False"):
+        map_program(tilted(), ROBONANO, lambda q: q, rounded=rounded)
