@@ -209,12 +209,19 @@ def rewrite(program: Program, machine: Machine | str, q, *, rounded: bool = True
     _check_program(program)
     rounded = as_flag(rounded, "rounded")
     motion = [n for n, move in enumerate(program.moves) if move.kind != "dwell"]
-    q = np.asarray(q, dtype=np.float64)
+    q = as_floats(q, "q", "axis values (m, rad)")
     shape = (len(motion), len(machine.axes))
     if q.shape != shape:
         raise InputError(f"expected axis values of shape {shape} (one row per motion block, "
                          f"axes {''.join(machine.axes)}), got {q.shape}",
                          source=program.source)
+    bad = np.argwhere(~np.isfinite(q))
+    if len(bad):  # NaN is an unprogrammed axis in a target: it had read as a dropped axis
+        row, col = bad[0]
+        raise InputError(f"axis {machine.axes[col]} of this motion block is given as "
+                         f"{float(q[row, col])!r} ({len(bad)} value(s) not finite); expected "
+                         "finite axis values (m, rad)", source=program.source,
+                         line=program.moves[motion[row]].line, key=machine.axes[col])
     if rounded and len(q):
         q = to_resolution(q, machine, program.work_offsets)
     # each motion block's row, and a dwell the row of the motion before it (none before the

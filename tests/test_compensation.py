@@ -545,3 +545,15 @@ def test_rounded_takes_true_or_false_only(rounded):
         model_based(tilted(), ROBONANO, None, rounded=rounded)
     with pytest.raises(InputError, match="Expected rounded as True or False"):
         map_program(tilted(), ROBONANO, lambda q: q, rounded=rounded)
+
+
+def test_rewrite_refuses_values_that_are_not_finite_naming_the_line_and_axis():
+    # NaN in a row had been written as "no word" and refused by the program as "move 1 drops
+    # axis X from its target; targets are modal ...", which names no NaN
+    program = parse_program("G90 G21\nG00 X0. Y0. Z1. B0. C0.\nG01 Z0. F10.\nG01 X5.\nM30\n",
+                            "u.nc")
+    q = np.zeros((3, 5))
+    q[1, 0], q[2, 1] = np.nan, np.inf
+    with pytest.raises(InputError, match=r"u.nc, line 3, key 'X': axis X of this motion block "
+                                         r"is given as nan \(2 value\(s\) not finite\)"):
+        rewrite(program, ROBONANO, q)
