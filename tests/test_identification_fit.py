@@ -609,3 +609,26 @@ def test_progress_is_told_each_gauss_newton_step():
                        "stopping rule)")
     assert re.fullmatch(r"Gauss-Newton step 2 on 3 readings: RMS of \(reading - model\) / "
                         r"sigma before it (0|\S+e-\d\d), .*", told[1])
+
+
+def test_an_r_test_reading_given_where_observations_go_is_told_the_way_in():
+    # fit(machine, lab.r_test().read(q), ...) had raised TypeError "'RTestReading' object is
+    # not iterable", and from_r_test of anything else AttributeError "... has no attribute
+    # 'q'": tracebacks
+    from machinesim import Lab
+    from machinesim.identification import from_r_test
+
+    lab = Lab("robonano_a0ib", noise=False)
+    reading = lab.r_test().read(np.zeros((2, 5)))
+    for given in (reading, [reading]):
+        with pytest.raises(InputError, match=r"key 'observations': expected Observation or "
+                                             r"Observations.*got an RTestReading: an R-test's "
+                                             r"readings go in as from_r_test\(reading\)"):
+            fit(lab.machine, given, ["location.C.EX0C"])
+    with pytest.raises(InputError, match="expected Observation or Observations, or a sequence "
+                                         "of them, got int"):
+        fit(lab.machine, 3, ["location.C.EX0C"])
+    with pytest.raises(InputError, match=r"key 'reading': expected the RTestReading that "
+                                         r"lab.r_test\(\).read\(q\) returns, got ndarray"):
+        from_r_test(np.zeros((2, 3)))
+    assert len(from_r_test(reading)) == 6  # the way in: 2 poses x X, Y, Z

@@ -8,7 +8,7 @@ unit direction of the workpiece frame, with its standard uncertainty. `Observati
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,6 +16,7 @@ import numpy as np
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_floats
+from machinesim.metrology.rtest import RTestReading
 
 __all__ = ["Observation", "Observations", "SIGMA_RANGE_M", "from_r_test", "is_angle",
            "observations"]
@@ -257,6 +258,9 @@ class Observations:
             return items
         if isinstance(items, Observation):
             items = (items,)
+        if not isinstance(items, Iterable) or isinstance(items, str | bytes | Mapping):
+            raise InputError(f"expected Observation or Observations, or a sequence of them, got "
+                             f"{_kind(items)}", key="observations")
         parts = []
         for item in items:
             if isinstance(item, Observation):
@@ -265,8 +269,8 @@ class Observations:
             elif isinstance(item, Observations):
                 parts.append(item)
             else:
-                raise InputError(f"expected Observation or Observations, got "
-                                 f"{type(item).__name__}", key="observations")
+                raise InputError(f"expected Observation or Observations, got {_kind(item)}",
+                                 key="observations")
         if not parts:
             raise InputError("expected at least one observation, got none", key="observations")
         widths = {p.q.shape[1] for p in parts}
@@ -282,10 +286,21 @@ class Observations:
                    np.concatenate([p.zero_at for p in parts]))
 
 
+def _kind(value) -> str:
+    """What arrived instead of observations, and for an R-test's reading the way in."""
+    if isinstance(value, RTestReading):
+        return "an RTestReading: an R-test's readings go in as from_r_test(reading)"
+    return type(value).__name__
+
+
 def from_r_test(reading) -> Observations:
     """The readings of an R-test (`machinesim.metrology.RTestReading`) as observations: three
     per position, along the workpiece frame's X, Y and Z, with the reading's uncertainty, and
     the pose where its sensors were set to zero (`RTestReading.zero_at`, if any)."""
+    if not isinstance(reading, RTestReading):
+        raise InputError(f"expected the RTestReading that lab.r_test().read(q) returns, got "
+                         f"{type(reading).__name__}; readings of other sensors go in as "
+                         "observations(q, directions, values, sigma)", key="reading")
     n = len(reading.q)
     return Observations(np.repeat(reading.q, 3, axis=0), reading.displacement.reshape(-1),
                         np.tile(np.eye(3), (n, 1)), reading.sigma, reading.frame,
