@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import inspect
 import json
+import math
 import os
 import subprocess
 import sys
@@ -224,17 +225,40 @@ def test_a_bad_roi_is_refused_before_cutting(tmp_path, capsys, roi):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_a_chord_tolerance_past_any_machines_travel_is_refused(tmp_path, capsys):
-    # --chord-nm 1e30 was taken: an arc's chords allowed 1e21 m off it, exit 0
+@pytest.mark.parametrize("chord_nm", ["1e30", "1e-6", "0.01", "0.999", "0", "nan"])
+def test_a_chord_tolerance_outside_1_nm_to_1_m_is_refused(tmp_path, capsys, chord_nm):
+    # --chord-nm 1e30 was taken: an arc's chords allowed 1e21 m off it, exit 0; 1e-6 and
+    # 0.01 too: a 3 mm half circle with ball:0.5 was 1.36 million and 13,607 sweeps (1,364
+    # in 40 s at 1 nm), and ran on without a word
     code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", "--chord-nm",
-                        "1e30"], capsys)
+                        chord_nm], capsys)
     assert code == 2
-    assert err == ("machinesim: error: --chord-nm 1e+30: expected a length in nm above 0 and "
-                   "at most 1e+09 (1 m, more than any machine's travel)\n")
+    assert err == (f"machinesim: error: --chord-nm {float(chord_nm)!r}: expected a length in "
+                   "nm from 1, the axes' resolution (no machine follows a path more finely, "
+                   "and the chords grow in number as 1/sqrt(NM): ten times 1 nm's at 0.01), "
+                   "to 1e+09 (1 m, more than any machine's travel)\n")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_chord_tolerances_bounds_are_cut(tmp_path, capsys):
     code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", "--chord-nm",
                         "1e9", "--quiet"], capsys)
     assert code == 0, err
+    # 1 nm on a half circle of R = 0.05 mm, 10 um deep with a 0.05 mm ball: chords of angle
+    # 2 acos(1 - 1 nm / R), so ceil(pi / that) of them (249), plus the plunge and the
+    # retract out of the groove
+    program = tmp_path / "half.nc"
+    program.write_text("G90 G21 G17\nG00 X4.95 Y5. Z0.1\nG01 Z-0.01 F100.\n"
+                       "G02 X5.05 Y5. I0.05 J0.\nG00 Z1.\nM30\n")
+    chords = math.ceil(math.pi / (2.0 * math.acos(1.0 - 1e-9 / 0.05e-3)))
+    report = tmp_path / "r.json"
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "ball:0.05",
+                        "--stock", "block:10x10x2", "--quiet", "--out", tmp_path / "p.ply",
+                        "--report", report, "--chord-nm", "1"], capsys)
+    assert code == 0, err
+    summary = json.loads(report.read_text())
+    assert summary["path_chord_tolerance_nm"] == 1.0
+    assert summary["sweeps_count"] == chords + 2 == 251
 
 
 def test_a_reversed_roi_is_named_once(tmp_path, capsys):
