@@ -233,22 +233,6 @@ def parse_roi(texts) -> list[tuple[float, float, float, float]] | None:
     return windows
 
 
-def check_roi_meets(texts, windows, stock) -> None:
-    """Refuse ``--roi`` windows (m) of which none overlaps the stock in x and y: the cut
-    returns the stock clipped to them, so it had written an empty part, exit 0, with
-    "does it reach the stock?"."""
-    if not windows:
-        return
-    (x0, y0, _), (x1, y1, _) = stock.bounds
-    if any(min(w[1], x1) > max(w[0], x0) and min(w[3], y1) > max(w[2], y0) for w in windows):
-        return
-    given = " ".join(f"--roi {text}" for text in texts)
-    raise InputError(f"{given}: no window overlaps the stock, which spans x {x0 * 1e3:g} .. "
-                     f"{x1 * 1e3:g} mm and y {y0 * 1e3:g} .. {y1 * 1e3:g} mm (workpiece frame): "
-                     "the part, the stock within the windows, would be empty; expected a "
-                     "window over the stock")
-
-
 def _same_file(a: Path, b: Path) -> bool:
     try:
         return os.path.samefile(a, b)
@@ -365,6 +349,7 @@ def _cut(args) -> int:
     roi = parse_roi(args.roi)
 
     from machinesim.cutting import cut
+    from machinesim.cutting.roi import check_roi_meets
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
     from machinesim.tool_specs import tool_from_spec
@@ -373,7 +358,9 @@ def _cut(args) -> int:
     machine = load_machine(args.machine)
     tool = tool_from_spec(args.tool, name="--tool")
     stock = stock_from_spec(args.stock, name="--stock")
-    check_roi_meets(args.roi, roi, stock)
+    # before reading the program; cut() would refuse such windows only after it
+    check_roi_meets(roi, stock, given=" ".join(f"--roi {text}" for text in args.roi or ()),
+                    unit="mm")
     program, chord = read_for_machine(args, args.program, machine, tool)
     errors = ErrorModel.from_toml(args.errors) if args.errors else None
     machine.check_errors(errors)  # a misfit names the user's file first, then the machine

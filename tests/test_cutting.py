@@ -49,6 +49,30 @@ def test_v_grooves_have_the_analytic_section_and_volume():
     assert report.cutting_time_s == pytest.approx(feed, rel=1e-12)
 
 
+def test_roi_windows_that_miss_the_stock_are_refused_by_cut_as_by_the_command_line():
+    # cut() gave back the stock clipped to them, empty, without a word (only the command
+    # line refused them); a window that only touches the block's side (x 5 .. 6 mm) holds
+    # none of it
+    from machinesim.cutting import cut_turned
+
+    roi = [(0.1, 0.2, 0.1, 0.2), (5 * MM, 6 * MM, 0.0, 3 * MM)]
+    expected = ("roi [(0.1, 0.2, 0.1, 0.2), (0.005, 0.006, 0, 0.003)] m: no window overlaps "
+                "the stock, which spans x 0 .. 0.005 m and y 0 .. 0.003 m (workpiece frame): "
+                "the part, the stock within the windows, would be empty; expected a window "
+                "over the stock")
+    for cutter in (cut, cut_turned):
+        with pytest.raises(InputError) as info:
+            cutter(grooves(), "grooving_4axis", tool="v:90", stock="block:5x3x1", roi=roi)
+        assert str(info.value) == expected
+    # one window over the stock is enough: the part is the block's half x < 2.5 mm less
+    # the grooves' V sections (d^2 each) over that half
+    part, report = cut(grooves(), "grooving_4axis", tool="v:90", stock="block:5x3x1",
+                       roi=[*roi, (-1 * MM, 2.5 * MM, -1 * MM, 4 * MM)])
+    half = 2.5 * MM * 3 * MM * 1 * MM
+    assert part.volume == pytest.approx(half - 3 * (10 * UM) ** 2 * 2.5 * MM, rel=1e-9)
+    assert not report.empty_cut
+
+
 def test_a_tool_setting_error_moves_the_groove_by_exactly_the_offset():
     dy, dz = 3 * UM, -2 * UM
     errors = ErrorModel(tool=ToolSetting([0.0, dy, dz], [0.0, 0.0, 0.0]))

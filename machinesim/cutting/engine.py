@@ -64,6 +64,7 @@ from machinesim.cutting.footprints import level_prisms, united_in_plane
 from machinesim.cutting.frame import into_frame, out_of_frame, tool_frame
 from machinesim.cutting.holder import holder_contact, holder_in_material
 from machinesim.cutting.relief import cut_reliefs
+from machinesim.cutting.roi import roi_cells
 from machinesim.cutting.sheets import SheetReport, remove_sheets
 from machinesim.cutting.stitch import exact_box, snapped_union, stitch
 from machinesim.cutting.sweepset import SweepSet, dragged
@@ -213,25 +214,6 @@ def _check_paths(paths) -> list[np.ndarray]:
     return arrays
 
 
-def _check_roi(roi, bounds: np.ndarray) -> list[tuple[float, float, float, float]]:
-    windows = np.asarray(roi, dtype=np.float64)
-    if windows.ndim != 2 or windows.shape[1] != 4 or not np.all(np.isfinite(windows)):
-        raise InputError(
-            f"roi: expected windows (xmin, xmax, ymin, ymax) of shape (n, 4), got "
-            f"{windows.shape}",
-            key="roi",
-        )
-    if np.any(windows[:, 1] <= windows[:, 0]) or np.any(windows[:, 3] <= windows[:, 2]):
-        raise InputError("roi: each window needs xmin < xmax and ymin < ymax", key="roi")
-    cells = []
-    for xmin, xmax, ymin, ymax in windows:
-        box = (max(xmin, bounds[0, 0]), min(xmax, bounds[1, 0]),
-               max(ymin, bounds[0, 1]), min(ymax, bounds[1, 1]))
-        if box[0] < box[1] and box[2] < box[3]:
-            cells.append(box)
-    return cells
-
-
 def _direction_keys(direction: np.ndarray) -> np.ndarray:
     """Group key per sweep: its XY travel direction modulo pi, in bins; -1 for no XY travel."""
     planar = np.hypot(direction[:, 0], direction[:, 1])
@@ -373,7 +355,7 @@ def remove(
         cells = [(bounds[0, 0] - margin, bounds[1, 0] + margin,
                   bounds[0, 1] - margin, bounds[1, 1] + margin)]
     else:
-        cells = _check_roi(roi, bounds)
+        cells = roi_cells(roi, bounds)
     cell_array = np.array(cells).reshape(-1, 4)
     z_low, z_high = bounds[0, 2] - margin, bounds[1, 2] + margin
 

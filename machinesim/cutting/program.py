@@ -19,6 +19,7 @@ from machinesim import motion
 from machinesim.cutting.engine import remove
 from machinesim.cutting.rapids import rapids_that_cut
 from machinesim.cutting.report import CutReport, nc_summary, peak_following_error
+from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance, within_edge_plane
 from machinesim.errors import as_error_model
@@ -117,6 +118,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
 
     began = time.perf_counter()
     program, tool, stock, errors = _arguments(program, tool, stock, errors)
+    check_roi_meets(roi, stock)
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
     machine.check_errors(errors)
     if servo is not None:  # as a Lab checks it: one column per axis, each named right

@@ -21,6 +21,7 @@ from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
 from machinesim.cutting.program import _holder_refusal, _Moves, _overtravel
 from machinesim.cutting.report import CutReport, nc_summary, peak_following_error
+from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance
 from machinesim.exceptions import InputError
@@ -98,6 +99,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
     tool = tool_from_spec(tool) if isinstance(tool, str) else tool
     stock = stock_from_spec(stock) if isinstance(stock, str) else stock
+    check_roi_meets(roi, stock)
     if turn_axis not in machine.axes:
         raise InputError(f"{machine.name} has no axis {turn_axis} (axes "
                          f"{''.join(machine.axes)})", key="turn_axis")
