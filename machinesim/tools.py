@@ -181,6 +181,21 @@ def _check_top_width(tool, width: float, height: float) -> None:
             "wider included angle or higher flanks", key="included_angle")
 
 
+def _refuse_flat_flanks(tool, height: float) -> None:
+    """Refuse an included angle whose flanks are `MAX_TOOL_SIZE_M` apart ``height`` (under
+    `MIN_TOOL_SIZE_M`) above the edge point, where their default top stops them: 'nose:1:1e-9'
+    made a blade 1 m wide and 4.4e-12 m high, though a flank_height that low is refused."""
+    angle = tool.included_angle
+    # a V's flanks open with its angle, a nose's tangent flanks as the arc's angle closes
+    wider = "smaller" if isinstance(tool, VTool) else "larger"
+    raise InputError(
+        f"included_angle {angle!r} rad ({math.degrees(angle):.12g} deg) opens the flanks "
+        f"{MAX_TOOL_SIZE_M:g} m apart (MAX_TOOL_SIZE_M, where their default top stops them) "
+        f"{_length(height)} above the edge point, under MIN_TOOL_SIZE_M ({MIN_TOOL_SIZE_M:g} "
+        f"m, below which a tool removes nothing or a wrong volume): a blade, not a tool; "
+        f"give a {wider} included angle", key="included_angle")
+
+
 def _unchecked_flank_height(tool, top_half_width) -> float:
     if tool.flank_height is None:
         height = tool.height
@@ -193,6 +208,8 @@ def _unchecked_flank_height(tool, top_half_width) -> float:
                 else:
                     low = middle
             height = low
+            if height < MIN_TOOL_SIZE_M:
+                _refuse_flat_flanks(tool, height)
         return height
     value = _check_size("flank_height", tool.flank_height)
     if value > tool.height:

@@ -124,6 +124,31 @@ def test_a_nose_of_a_small_angle_stops_its_flanks_at_the_size_bound():
         assert np.ptp(tool.vertices()[:, 1]) == pytest.approx(MAX_TOOL_SIZE_M, rel=1e-12)
 
 
+def test_flanks_whose_default_top_is_under_the_size_bound_are_refused():
+    # The flanks' default top is where they are MAX_TOOL_SIZE_M apart: for a V of angle
+    # pi - g, MAX / 2 tan(g / 2) up. 'nose:1:1e-9' stopped them 4.4e-12 m up (a blade 1 m
+    # wide), though a flank_height under MIN_TOOL_SIZE_M given is refused.
+    gap = 2.0 * math.atan(2.0 * MIN_TOOL_SIZE_M / MAX_TOOL_SIZE_M)  # the top MIN up
+    tool = VTool(math.pi - 1.01 * gap)
+    assert tool.flank_height == pytest.approx(
+        MAX_TOOL_SIZE_M / 2.0 * math.tan(1.01 * gap / 2.0), rel=1e-6, abs=0.0)
+    assert 1.0e-9 < tool.flank_height < 1.02e-9
+    with pytest.raises(InputError, match=r"included_angle 3.1415926\d* rad \(179.9999997\d* "
+                       r"deg\) opens the flanks 1 m apart .* 9.9\d*e-1[03] .*above the edge "
+                       r"point, under MIN_TOOL_SIZE_M \(1e-09 m.*give a smaller included "
+                       r"angle$"):
+        VTool(math.pi - 0.99 * gap)
+    # a nose's tangent flanks open as its arc's angle closes: 4.36 nm up at 1e-6 deg
+    # (half width R sin(e) + h / tan(e) = 0.5 m, e = 5e-7 deg), 4.4e-12 m at 1e-9 deg
+    end = math.radians(1e-6) / 2.0
+    assert tool_from_spec("nose:1:1e-6").flank_height == pytest.approx(
+        (0.5 - 1e-3 * math.sin(end)) * math.tan(end), rel=1e-6, abs=0.0)
+    with pytest.raises(InputError, match=r"^tool spec 'nose:1:1e-9': included_angle "
+                       r"1.745329\d*e-11 rad \(1e-09 deg\) opens the flanks 1 m apart .*"
+                       r"give a larger included angle$"):
+        tool_from_spec("nose:1:1e-9")
+
+
 def _frusta_volume(radius, rings, segments, height):
     """Volume of the ring polyhedron from its construction: regular m-gons of circumradius
     R sin(theta_k) at height R (1 - cos(theta_k)), theta_k = k pi / (2 rings), aligned; each
