@@ -59,7 +59,7 @@ def tool_from_spec(spec: str, *, name: str = "tool spec") -> Tool:
         If the spec does not have one of these forms or a number is out of range (sizes,
         the height included, are bounded by `MIN_TOOL_SIZE_M` and `MAX_TOOL_SIZE_M`). The
         message names the spec once, as ``name``, then what in it is wrong: ``tool spec
-        'ball:-1': radius must be a positive finite number, got -0.001 m (-1 mm)``.
+        'ball:-1': radius must be a positive finite number, got -1 mm (-0.001 m)``.
     """
     where = f"{name} {brief(str(spec))!r}"
     fields = str(spec).strip().split(":")

@@ -48,6 +48,7 @@ from machinesim.tolerances import (
     PATH_CHORD_SHARE,
     PROFILE_CHORD_M,
 )
+from machinesim.units import M_PER_MM, angle_text, length_text
 
 #: Default length of a tool's body from its edge point to the holder (m). Ten times the
 #: deepest cut of the shipped examples and seed experiments (grooves and face passes of tens
@@ -99,15 +100,25 @@ def arc_segments(radius: float, angle: float, chord_tol: float) -> int:
     return max(1, math.ceil(angle / step - 1e-12))
 
 
-def _length(value: float) -> str:
-    """A length as messages show it: m as given, and mm, the unit of the tool specs."""
-    return f"{value!r} m ({value * 1e3:.6g} mm)"
+#: Why the size bounds are what they are, as refusals say it.
+_MAX_WHY = ("MAX_TOOL_SIZE_M: larger than any machine's travel, and too many polygon vertices "
+            "at the nm chord tolerance")
+_MIN_WHY = ("MIN_TOOL_SIZE_M: 100 times the tolerance of the cutting engine's booleans on a "
+            "part as large as a machine's travel, below which a tool removes nothing or a "
+            "wrong volume")
+_MIN_SHORT = "MIN_TOOL_SIZE_M, below which a tool removes nothing or a wrong volume"
+
+
+def _bound(value: float, why: str) -> str:
+    """A size bound as messages show it, with its name and why: ``1e-06 mm (1e-09 m,
+    MIN_TOOL_SIZE_M: ...)``."""
+    return f"{value / M_PER_MM:g} mm ({value:g} m, {why})"
 
 
 def _check_positive(name: str, value: float) -> float:
     value = float(value)
     if not math.isfinite(value) or value <= 0.0:
-        raise InputError(f"{name} must be a positive finite number, got {_length(value)}",
+        raise InputError(f"{name} must be a positive finite number, got {length_text(value)}",
                          key=name)
     return value
 
@@ -123,17 +134,14 @@ def _check_size(name: str, value: float) -> float:
     value = _check_positive(name, value)
     if value > MAX_TOOL_SIZE_M:
         raise InputError(
-            f"{name} must be at most {MAX_TOOL_SIZE_M:g} m (MAX_TOOL_SIZE_M: larger than any "
-            f"machine's travel, and too many polygon vertices at the nm chord tolerance), "
-            f"got {_length(value)}",
+            f"{name} must be at most {_bound(MAX_TOOL_SIZE_M, _MAX_WHY)}, got "
+            f"{length_text(value)}",
             key=name,
         )
     if value < MIN_TOOL_SIZE_M:
         raise InputError(
-            f"{name} must be at least {MIN_TOOL_SIZE_M:g} m ({MIN_TOOL_SIZE_M * 1e3:g} mm; "
-            f"MIN_TOOL_SIZE_M: 100 times the tolerance of the cutting engine's booleans on a "
-            f"part as large as a machine's travel, below which a tool removes nothing or a "
-            f"wrong volume), got {_length(value)}",
+            f"{name} must be at least {_bound(MIN_TOOL_SIZE_M, _MIN_WHY)}, got "
+            f"{length_text(value)}",
             key=name,
         )
     return value
@@ -143,7 +151,7 @@ def _check_angle(name: str, value: float) -> float:
     value = float(value)
     if not math.isfinite(value) or not 0.0 < value < math.pi:
         raise InputError(
-            f"{name} must lie in (0, pi) rad, got {value!r} rad ({math.degrees(value)!r} deg)",
+            f"{name} must lie between 0 and 180 deg (0 and pi rad), got {angle_text(value)}",
             key=name,
         )
     return value
@@ -172,28 +180,26 @@ def _check_top_width(tool, width: float, height: float) -> None:
     1e-9 deg (flanks 1.7e-13 m apart 10 mm up) cut nothing of a 6 mm groove inside a 10 mm
     block, one of 1e-7 deg (1.7e-11 m) 1.4e-5 of it too little."""
     if width < MIN_TOOL_SIZE_M:
-        angle = tool.included_angle
         raise InputError(
-            f"included_angle {angle!r} rad ({math.degrees(angle):.6g} deg) leaves the flanks "
-            f"{_length(width)} apart at their top, {_length(height)} up; they must be at "
-            f"least {MIN_TOOL_SIZE_M:g} m ({MIN_TOOL_SIZE_M * 1e3:g} mm) apart "
-            "(MIN_TOOL_SIZE_M, below which a tool removes nothing or a wrong volume): give a "
-            "wider included angle or higher flanks", key="included_angle")
+            f"included_angle {angle_text(tool.included_angle)} leaves the flanks "
+            f"{length_text(width)} apart at their top, {length_text(height)} up; they must be "
+            f"at least {_bound(MIN_TOOL_SIZE_M, _MIN_SHORT)} apart: give a wider included "
+            "angle or higher flanks",
+            key="included_angle")
 
 
 def _refuse_flat_flanks(tool, height: float) -> None:
     """Refuse an included angle whose flanks are `MAX_TOOL_SIZE_M` apart ``height`` (under
     `MIN_TOOL_SIZE_M`) above the edge point, where their default top stops them: 'nose:1:1e-9'
     made a blade 1 m wide and 4.4e-12 m high, though a flank_height that low is refused."""
-    angle = tool.included_angle
     # a V's flanks open with its angle, a nose's tangent flanks as the arc's angle closes
     wider = "smaller" if isinstance(tool, VTool) else "larger"
     raise InputError(
-        f"included_angle {angle!r} rad ({math.degrees(angle):.12g} deg) opens the flanks "
-        f"{MAX_TOOL_SIZE_M:g} m apart (MAX_TOOL_SIZE_M, where their default top stops them) "
-        f"{_length(height)} above the edge point, under MIN_TOOL_SIZE_M ({MIN_TOOL_SIZE_M:g} "
-        f"m, below which a tool removes nothing or a wrong volume): a blade, not a tool; "
-        f"give a {wider} included angle", key="included_angle")
+        f"included_angle {angle_text(tool.included_angle)} opens the flanks "
+        f"{_bound(MAX_TOOL_SIZE_M, 'MAX_TOOL_SIZE_M, where their default top stops them')} "
+        f"apart {length_text(height)} above the edge point, under "
+        f"{_bound(MIN_TOOL_SIZE_M, _MIN_SHORT)}: a blade, not a tool; give a {wider} "
+        "included angle", key="included_angle")
 
 
 def _unchecked_flank_height(tool, top_half_width) -> float:
@@ -213,13 +219,13 @@ def _unchecked_flank_height(tool, top_half_width) -> float:
         return height
     value = _check_size("flank_height", tool.flank_height)
     if value > tool.height:
-        raise InputError(f"flank_height {_length(value)} must not exceed the height, "
-                         f"{_length(tool.height)}", key="flank_height")
+        raise InputError(f"flank_height {length_text(value)} must not exceed the height, "
+                         f"{length_text(tool.height)}", key="flank_height")
     if 2.0 * top_half_width(value) > MAX_TOOL_SIZE_M:
         raise InputError(
-            f"the flanks are {2.0 * top_half_width(value)!r} m wide at flank_height "
-            f"{value!r} m, over MAX_TOOL_SIZE_M ({MAX_TOOL_SIZE_M:g} m); give a lower "
-            "flank_height", key="flank_height")
+            f"the flanks are {length_text(2.0 * top_half_width(value))} wide at flank_height "
+            f"{length_text(value)}, over {_bound(MAX_TOOL_SIZE_M, 'MAX_TOOL_SIZE_M')}; give a "
+            "lower flank_height", key="flank_height")
     return value
 
 
@@ -551,8 +557,8 @@ class BallEndMill(_RotatingBody):
             object.__setattr__(self, "height", max(TOOL_HEIGHT_M, 2.0 * self.radius))
         _check_size("height", self.height)
         if self.height < self.radius:
-            raise InputError(f"height {_length(self.height)} must be at least the radius, "
-                             f"{_length(self.radius)}", key="height")
+            raise InputError(f"height {length_text(self.height)} must be at least the "
+                             f"radius, {length_text(self.radius)}", key="height")
         _check_shank(self.shank_radius)
         self._mesh()
 

@@ -29,6 +29,24 @@ M_PER_NM = LENGTH["nm"]
 RAD_PER_DEG = ANGLE["deg"]
 
 
+#: Significant digits of a number in a message (`length_text`, `angle_text`): every number a
+#: user types, clean of the round-off of converting it (9 mm is 0.009000000000000001 m).
+SHOWN_DIGITS = 12
+
+
+def length_text(value_m: float) -> str:
+    """A length (m) as a refusal shows it: in mm, the unit of the tool and stock specs, then
+    in m, the Python API's: ``9 mm (0.009 m)``."""
+    return f"{value_m / M_PER_MM:.{SHOWN_DIGITS}g} mm ({value_m:.{SHOWN_DIGITS}g} m)"
+
+
+def angle_text(value_rad: float) -> str:
+    """An angle (rad) as a refusal shows it: in deg, the unit of the specs, then in rad:
+    ``180 deg (3.14159265359 rad)``."""
+    return (f"{value_rad / RAD_PER_DEG:.{SHOWN_DIGITS}g} deg "
+            f"({value_rad:.{SHOWN_DIGITS}g} rad)")
+
+
 def is_length(unit: str) -> bool:
     """True when ``unit`` names a length unit."""
     return unit in LENGTH

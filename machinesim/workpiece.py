@@ -20,7 +20,7 @@ from machinesim._io import write_atomic
 from machinesim.exceptions import InputError, brief
 from machinesim.tolerances import CYLINDER_CHORD_M, SPHERE_CHORD_M
 from machinesim.tools import arc_segments, sphere_polygon
-from machinesim.units import M_PER_MM, M_PER_UM
+from machinesim.units import M_PER_MM, M_PER_UM, length_text
 
 
 class Part:
@@ -264,7 +264,8 @@ def block(length: float, width: float, height: float, origin=(0.0, 0.0, 0.0)) ->
     """Block occupying [0, L] x [0, W] x [-H, 0] (m), translated by ``origin`` (m)."""
     for name, value in (("length", length), ("width", width), ("height", height)):
         if not math.isfinite(value) or value <= 0.0:
-            raise InputError(f"block {name} must be positive, got {value!r} m", key=name)
+            raise InputError(f"block {name} must be positive, got {length_text(value)}",
+                             key=name)
     solid = manifold3d.Manifold.cube((length, width, height)).translate((0.0, 0.0, -height))
     return Part(solid.translate(tuple(float(v) for v in origin)))
 
@@ -277,7 +278,8 @@ def cylinder(radius: float, height: float, origin=(0.0, 0.0, 0.0),
     """
     for name, value in (("radius", radius), ("height", height)):
         if not math.isfinite(value) or value <= 0.0:
-            raise InputError(f"cylinder {name} must be positive, got {value!r} m", key=name)
+            raise InputError(f"cylinder {name} must be positive, got {length_text(value)}",
+                             key=name)
     segments = arc_segments(radius, 2.0 * math.pi, chord_tol)
     solid = manifold3d.Manifold.cylinder(height, radius, radius, segments)
     return Part(solid.translate((float(origin[0]), float(origin[1]), float(origin[2]) - height)))
@@ -308,8 +310,8 @@ def block_with_spheres(length: float, width: float, height: float, radius: float
     stock = block(length, width, height).manifold
     if radius <= 0.0 or 4.0 * radius >= min(length, width):
         raise InputError(
-            f"sphere radius must be positive and below a quarter of the block's smaller side "
-            f"({min(length, width) / 4!r} m), got {radius!r} m",
+            f"sphere radius must be positive and below a quarter of the block's smaller side, "
+            f"{length_text(min(length, width) / 4)}, got {length_text(radius)}",
             key="radius",
         )
     if centres is None:
@@ -439,7 +441,7 @@ def stock_from_spec(spec: str, *, name: str = "stock spec") -> Part:
             )
             if not 0.0 <= oversize <= 1.0 * M_PER_MM:
                 raise InputError(f"{where}: crown oversize must lie in 0 .. 1 mm, "
-                                 f"got {oversize / M_PER_MM!r} mm")
+                                 f"got {length_text(oversize)}")
             return Part(diamond_crown(oversize).manifold.translate(tuple(origin)))
     except InputError as error:
         if error.message.startswith(where):

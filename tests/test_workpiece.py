@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from machinesim.exceptions import InputError
+from machinesim.tool_specs import tool_from_spec
 from machinesim.workpiece import (
     Part,
     block,
@@ -221,6 +222,26 @@ def test_a_stock_spec_refusal_names_the_spec_once():
     with pytest.raises(InputError) as caught:
         stock_from_spec("spheres:10x10x2:1:bumps", name="--stock")
     assert str(caught.value) == "--stock 'spheres:10x10x2:1:bumps': expected 'dimples', got 'bumps'"
+
+
+def test_spec_refusals_give_lengths_in_mm_first_and_clean():
+    # specs are in mm, but the refusal read "... smaller side (0.0025 m), got
+    # 0.009000000000000001 m": metres first, with the round-off of 9 * 1e-3
+    with pytest.raises(InputError) as caught:
+        stock_from_spec("spheres:10x10x2:9", name="--stock")
+    assert str(caught.value) == ("--stock 'spheres:10x10x2:9': sphere radius must be positive "
+                                 "and below a quarter of the block's smaller side, 2.5 mm "
+                                 "(0.0025 m), got 9 mm (0.009 m)")
+    with pytest.raises(InputError) as caught:
+        stock_from_spec("crown:1.1")
+    assert str(caught.value) == ("stock spec 'crown:1.1': crown oversize must lie in 0 .. 1 "
+                                 "mm, got 1.1 mm (0.0011 m)")
+    # the tool specs' lengths and angles alike: 'v:270' read "got 4.71238898038469 rad
+    # (270.0 deg)"; 3 pi / 2 rad to 12 digits
+    with pytest.raises(InputError) as caught:
+        tool_from_spec("v:270", name="--tool")
+    assert str(caught.value) == ("--tool 'v:270': included_angle must lie between 0 and 180 "
+                                 "deg (0 and pi rad), got 270 deg (4.71238898038 rad)")
 
 
 def test_cylinder_radius_error():
