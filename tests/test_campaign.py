@@ -15,6 +15,7 @@ import xarray as xr
 from scipy import stats
 
 import machinesim.campaign.runner as runner
+import machinesim.campaign.trials as trials_module
 from machinesim.campaign import CampaignSpec, parse_distribution, parse_vary, run, run_trial
 from machinesim.campaign.statistics import coverage_interval, ranks, spearman, z_scores, z_summary
 from machinesim.campaign.trials import MAX_TRIALS, PROCEDURES, draw, trial_seed
@@ -126,6 +127,7 @@ def test_a_trial_draws_its_varied_parameters_once_and_a_spec_reads_its_base_mode
         return real_read(cls, *args, **options)
 
     monkeypatch.setattr(ErrorModel, "from_toml", classmethod(reading))
+    monkeypatch.setattr(trials_module, "_MODEL_FILES", {}, raising=False)  # as in a new process
     spec = CampaignSpec("xy_plane_errors", 1,
                         (parse_vary("laser_interferometer.sigma=uniform:10nm,20nm"),),
                         identify_only=True)
@@ -140,7 +142,35 @@ def test_a_trial_draws_its_varied_parameters_once_and_a_spec_reads_its_base_mode
     record = run_trial(spec, 0)
     assert record["error"] is None
     assert drawn == [record["drawn"]["laser_interferometer.sigma"]]
-    assert len(read) == 2  # and the trial's own base model: one more
+    assert len(read) == 1  # the trial's own base model is the one read (error_model_file)
+
+
+def test_an_error_model_file_is_parsed_once_while_its_bytes_stay_the_same(tmp_path,
+                                                                          monkeypatch):
+    # every trial of paper 003 parsed its base model's TOML anew (2.4 ms a trial)
+    from machinesim.errors import ErrorModel
+    from machinesim.machines import models_dir
+
+    read, real_read = [], ErrorModel.from_toml.__func__
+
+    def reading(cls, path):
+        read.append(path)
+        return real_read(cls, path)
+
+    monkeypatch.setattr(ErrorModel, "from_toml", classmethod(reading))
+    monkeypatch.setattr(trials_module, "_MODEL_FILES", {}, raising=False)
+    first = PROCEDURES["xy_plane_errors"].base()
+    assert PROCEDURES["xy_plane_errors"].base() is first and len(read) == 1
+    shipped = models_dir() / "errors" / "xy_plane_grooving_4axis.toml"
+    assert read == [shipped] and first == real_read(ErrorModel, shipped)
+    # an edited file is read again, even within the file system's time resolution
+    copy = tmp_path / "model.toml"
+    copy.write_text("[location.C]\nEX0C_um = 1.0\n")
+    assert trials_module.error_model_file(copy).parameters()["location.C.EX0C"] == 1e-6
+    copy.write_text("[location.C]\nEX0C_um = 2.0\n")
+    assert trials_module.error_model_file(copy).parameters()["location.C.EX0C"] == 2e-6
+    assert trials_module.error_model_file(copy).parameters()["location.C.EX0C"] == 2e-6
+    assert len(read) == 3
 
 
 def test_robot_landing_scatter_matches_the_repeatability():
