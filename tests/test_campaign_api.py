@@ -4,8 +4,11 @@ shows it, that trial failed with its message."""
 
 from __future__ import annotations
 
+import io
+
 import pytest
 
+import machinesim.campaign.runner as runner
 from machinesim.campaign import CampaignSpec, run
 from machinesim.exceptions import InputError
 
@@ -111,7 +114,8 @@ def test_a_run_with_every_trial_already_there_prints_no_empty_line(tmp_path, cap
     """The progress line is ended with a newline only where one was shown: resuming a
     finished campaign printed a blank line before its result."""
     run("tool_rotation_arm", 1, out=tmp_path / "c", **{**ARM, "progress": True})
-    assert capsys.readouterr().err.endswith(" s left   \n")
+    err = capsys.readouterr().err  # no terminal: a whole line, no '\r'
+    assert err.startswith("campaign: 1/1 trials") and err.endswith(" s left\n") and "\r" not in err
     run("tool_rotation_arm", 1, out=tmp_path / "c", **{**ARM, "progress": True})
     assert capsys.readouterr().err == ""
 
@@ -142,3 +146,53 @@ def test_a_distribution_built_in_python_is_checked_and_kept_by_its_values(tmp_pa
                          "text 'normal:0,2um' is not its values")):
         with pytest.raises(InputError, match=words):
             spec(dist, "tool.y" if "2um" in dist.text else "microscope.sigma")
+
+
+class _Clock:
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def _steps(stream, times, total):
+    """The progress of ``total`` trials, one finished at each of ``times`` (s), on ``stream``."""
+    clock = _Clock()
+    progress = runner._Progress(total, 0, stream, clock=clock)
+    progress.start()
+    for t in times:
+        clock.now = 1000.0 + t
+        progress.step({"error": None})
+    progress.end()
+    return stream.getvalue()
+
+
+def test_progress_into_a_log_is_whole_lines_at_most_one_every_30_s():
+    """Without a terminal the progress line went on writing its '\\r' updates, ~90 bytes a
+    trial into a log file (one 'line' of 9 MB for 100000 trials); now whole lines: the first
+    trial's, then at most one every LOG_EVERY_S (30 s), and the last."""
+    log = _steps(io.StringIO(), [1.0 * k for k in range(1, 101)], 100)  # a trial a second
+    assert "\r" not in log and log.endswith("\n")
+    lines = log.splitlines()
+    # trials 1, 31, 61, 91 (30 s apart), and 100, the last: trial k at k s, 1.00 trials/s
+    assert [line.split(" trials (")[0] for line in lines] == \
+        [f"campaign: {k}/100" for k in (1, 31, 61, 91, 100)]
+    assert lines[1] == "campaign: 31/100 trials (0 resumed, 0 failed), 1.00 trials/s, 69 s left"
+    assert lines[-1].endswith(", 1.00 trials/s, 0 s left")
+    # stopped before the last (a Ctrl-C): the latest state is the last line
+    stopped = _steps(io.StringIO(), [1.0 * k for k in range(1, 46)], 100).splitlines()
+    assert [line.split(" trials (")[0] for line in stopped] == \
+        [f"campaign: {k}/100" for k in (1, 31, 45)]
+
+
+def test_progress_in_a_terminal_is_one_line_rewritten():
+    shown = _steps(_Terminal(), [0.5 * k for k in range(1, 5)], 4)
+    assert shown.count("\r") == 4 and shown.endswith(" s left\n") and shown.count("\n") == 1
+    # updates within TTY_EVERY_S of the one before wait: 100 trials in 1 ms, two rewrites
+    assert _steps(_Terminal(), [1e-5 * k for k in range(1, 101)], 100).count("\r") == 2

@@ -317,6 +317,6 @@ def test_the_progress_rate_counts_from_the_first_trial_not_the_clusters_start(
             identify_only=True)
     finally:
         client.close()
-    first = capsys.readouterr().err.split("\r")[1]
+    first = capsys.readouterr().err.splitlines()[0]  # no terminal: whole lines
     rate = float(first.split(" trials/s")[0].rpartition(", ")[2])
     assert first.startswith("campaign: 1/2 trials") and rate > 1.0, first  # not < 1/3

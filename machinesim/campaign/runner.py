@@ -35,39 +35,94 @@ from machinesim.exceptions import InputError
 __all__ = ["run"]
 
 
-class _Progress:
-    """One line on stderr, rewritten: done / total, rate, time left."""
+#: Without a terminal (a log file, a pipe) progress is whole lines, at most one every this
+#: many seconds (the cut's, machinesim.cli.LOG_PROGRESS_EVERY_S), and the last; in a
+#: terminal the line is rewritten in place, at most every `TTY_EVERY_S`.
+LOG_EVERY_S, TTY_EVERY_S = 30.0, 0.1
 
-    def __init__(self, total: int, resumed: int, stream) -> None:
-        self.total, self.resumed, self.stream = total, resumed, stream
-        self.done, self.failed, self.began = resumed, 0, time.perf_counter()
-        self.shown = False  # a line to end: none when no trial ran (all resumed)
+
+def _is_tty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError, OSError):  # no isatty, or closed
+        return False
+
+
+class _Line:
+    """A progress line on ``stream`` (None: nothing). In a terminal it is rewritten in
+    place ('\r'), at most every `TTY_EVERY_S`; elsewhere each is a whole line, at most one
+    every `LOG_EVERY_S`: every trial's '\r' update had gone into a log file, ~90 bytes a
+    trial, one 'line' of megabytes. Nothing is written before ``after`` seconds (a short
+    phase says nothing); the first line after that at once, the ``last`` always, and `end`
+    writes the latest if it was held back, once any line was written."""
+
+    def __init__(self, stream, after: float = 0.0, clock=time.monotonic) -> None:
+        self.stream, self.clock = stream, clock
+        self.tty = stream is not None and _is_tty(stream)
+        self.every = TTY_EVERY_S if self.tty else LOG_EVERY_S
+        self.quiet_until = clock() + after
+        self.written, self.held, self.width = -math.inf, None, 0
+        self.shown = False  # a line to end: none when nothing was written
+
+    def show(self, text: str, last: bool = False) -> None:
+        if self.stream is None:
+            return
+        now = self.clock()
+        if (last and self.shown) or (now >= self.quiet_until and (
+                not self.shown or last or now - self.written >= self.every)):
+            self._write(text)
+            self.written = now
+        else:
+            self.held = text
+
+    def _write(self, text: str) -> None:
+        if self.tty:  # spaces over what is left of a longer line before
+            self.stream.write(f"\r{text.ljust(self.width)}")
+            self.width = len(text)
+        else:
+            self.stream.write(f"{text}\n")
+        self.stream.flush()
+        self.shown, self.held = True, None
+
+    def end(self) -> None:
+        if self.stream is None or not self.shown:
+            return
+        if self.held is not None:
+            self._write(self.held)
+        if self.tty:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+class _Progress:
+    """The run's progress (`_Line`): done / total, rate, time left."""
+
+    def __init__(self, total: int, resumed: int, stream, clock=time.monotonic) -> None:
+        self.total, self.resumed, self.clock = total, resumed, clock
+        self.line = _Line(stream, clock=clock)
+        self.done, self.failed, self.began = resumed, 0, clock()
 
     def start(self) -> None:
         """The trials begin: the rate and the time left count from here, not from before a
         local cluster's start (several seconds, which put the first lines' time left at
         several times the truth)."""
-        self.began = time.perf_counter()
+        self.began = self.clock()
 
     def step(self, record: dict) -> None:
         self.done += 1
         self.failed += record["error"] is not None
-        if self.stream is None:
+        if self.line.stream is None:
             return
         new = self.done - self.resumed
-        elapsed = time.perf_counter() - self.began
+        elapsed = self.clock() - self.began
         rate = new / elapsed if elapsed > 0 else 0.0
         left = (self.total - self.done) / rate if rate > 0 else float("nan")
-        self.stream.write(f"\rcampaign: {self.done}/{self.total} trials ({self.resumed} "
-                          f"resumed, {self.failed} failed), {rate:.2f} trials/s, "
-                          f"{left:.0f} s left   ")
-        self.stream.flush()
-        self.shown = True
+        self.line.show(f"campaign: {self.done}/{self.total} trials ({self.resumed} resumed, "
+                       f"{self.failed} failed), {rate:.2f} trials/s, {left:.0f} s left",
+                       last=self.done == self.total)
 
     def end(self) -> None:
-        if self.stream is not None and self.shown:
-            self.stream.write("\n")
-            self.stream.flush()
+        self.line.end()
 
 
 def _vary(vary) -> tuple[tuple[str, Distribution], ...]:
