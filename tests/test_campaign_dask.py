@@ -278,7 +278,7 @@ def test_a_large_campaign_keeps_a_few_trials_per_thread_in_flight(tmp_path, monk
 
     def written(folder, record):
         in_flight.append(spy.sent - len(in_flight))
-        write(folder, record)
+        return write(folder, record)
 
     monkeypatch.setattr(runner, "run_trial", trial)
     monkeypatch.setattr(CampaignFolder, "write_trial", written)

@@ -45,7 +45,7 @@ import numpy as np
 from machinesim._io import check_writable, json_text, read_json, write_atomic
 from machinesim.exceptions import FileError, InputError, brief
 
-__all__ = ["CampaignFolder", "assemble", "finished_trials", "same_campaign",
+__all__ = ["Assembly", "CampaignFolder", "assemble", "finished_trials", "same_campaign",
            "versions"]
 
 
@@ -155,8 +155,12 @@ class CampaignFolder:
         look-up per trial)."""
         return [i for i in finished_trials(self.path) if i < trials]
 
-    def write_trial(self, record: dict) -> None:
-        write_atomic(self.trial_file(record["trial"]), json_text(_clean(record), "trial"))
+    def write_trial(self, record: dict) -> dict:
+        """Write ``record``; return it as `read_trial` reads it back (NaN for what JSON
+        holds as null), so that the run need not read it again."""
+        stored = _clean(record)
+        write_atomic(self.trial_file(record["trial"]), json_text(stored, "trial"))
+        return {**_nan(stored), "error": stored.get("error")}
 
     def read_trial(self, i: int) -> dict:
         raw = read_json(self.trial_file(i), "campaign trial")
@@ -252,81 +256,123 @@ def finished_trials(path) -> list[int]:
 _NC3_INT_END = 2**31
 
 
-def _names(records, key: str) -> list[str]:
-    names: dict[str, None] = {}
-    for record in records:
-        names.update(dict.fromkeys(record[key]))
-    return list(names)
+class Assembly:
+    """The Dataset of trials 0 .. trials-1 (`assemble`, module docstring) built as their
+    records come, one at a time and in any order (`add`), holding their numbers, not the
+    records: a resumed campaign of 20000 paper-003 trial files held every record read
+    (~15 kB of dicts each: 460 MB), and would have 1.5 GB at 100000. Each name's values
+    are one float64 column of ``trials``; the parameters and figures come out in the order
+    the records of trials 0, 1, ... first name them, as when the records are read in order.
+    """
 
+    #: record key -> the tables filled from it: (table, index into the record's value or None)
+    _TABLES = {"drawn": (("drawn", None),), "injected": (("injected", None),),
+               "identified": (("identified", 0), ("identified_std", 1)),
+               "figures": (("before", 1), ("after", 2), ("after_std", 3))}
 
-def assemble(records: list[dict], spec: dict, trials: int):
-    """The records of trials 0 .. trials-1 as one `xarray.Dataset` (module docstring)."""
-    import xarray as xr
+    def __init__(self, spec: dict, trials: int) -> None:
+        self.spec, self.trials = spec, int(trials)
+        self.varied = list(spec["vary"])
+        self.columns: dict[str, dict[str, np.ndarray]] = {
+            table: {} for tables in self._TABLES.values() for table, _ in tables}
+        self.first: dict[str, dict[str, tuple[int, int]]] = {"identified": {}, "figures": {}}
+        self.units: dict[str, tuple[int, str]] = {}  # figure -> (trial, unit): the first's
+        self.elapsed = np.full(self.trials, np.nan)
+        self.failed = np.zeros(self.trials, dtype=np.int8)
+        self.errors: dict[int, str] = {}
+        self.added = np.zeros(self.trials, dtype=bool)
 
-    records = sorted(records, key=lambda r: r["trial"])
-    if [r["trial"] for r in records] != list(range(trials)):
-        raise InputError(f"expected the records of trials 0 .. {trials - 1}, got "
-                         f"{len(records)}", key="records")
-    varied = list(spec["vary"])
-    parameters = _names(records, "identified")
-    figures = _names(records, "figures")
-    units = {}
-    for record in records:
-        for name, values in record["figures"].items():
-            units.setdefault(name, values[0])
-    n = len(records)
+    def add(self, record: dict) -> None:
+        """Take trial ``record["trial"]``'s record (`trials.run_trial`, NaN for null)."""
+        t = record["trial"]
+        if not isinstance(t, int) or not 0 <= t < self.trials or self.added[t]:
+            raise InputError(f"trial {t!r}; expected each of the records of trials 0 .. "
+                             f"{self.trials - 1} once", key="records")
+        self.added[t] = True
+        for key, tables in self._TABLES.items():
+            entries = record[key]
+            if key == "drawn":
+                entries = {name: entries[name] for name in self.varied if name in entries}
+            for position, (name, value) in enumerate(entries.items()):
+                if key in self.first:
+                    seen = self.first[key].get(name)
+                    if seen is None or t < seen[0]:
+                        self.first[key][name] = (t, position)
+                if key == "figures" and (name not in self.units or t < self.units[name][0]):
+                    self.units[name] = (t, value[0])
+                for table, index in tables:
+                    column = self.columns[table].get(name)
+                    if column is None:
+                        column = self.columns[table][name] = np.full(self.trials, np.nan)
+                    # NaN for what a record lacks: trials written before figures carried
+                    # after_std hold three values
+                    got = value if index is None else \
+                        (value[index] if index < len(value) else None)
+                    column[t] = np.nan if got is None else got
+        self.elapsed[t] = record["elapsed_s"]
+        if record["error"] is not None:
+            self.failed[t] = 1
+            self.errors[t] = record["error"]
 
-    def table(names, value):
-        out = np.full((n, len(names)), np.nan)
-        for t, record in enumerate(records):
-            for k, name in enumerate(names):
-                out[t, k] = value(record, name)
+    def _names(self, key: str) -> list[str]:
+        return sorted(self.first[key], key=self.first[key].__getitem__)
+
+    def _table(self, table: str, names: list[str]) -> np.ndarray:
+        out = np.full((self.trials, len(names)), np.nan)
+        for k, name in enumerate(names):
+            if name in self.columns[table]:
+                out[:, k] = self.columns[table][name]
         return out
 
-    def get(mapping, name, index=None):
-        # NaN for what a record lacks: trials written before figures carried after_std hold
-        # three values
-        v = mapping.get(name)
-        if v is None or (index is not None and index >= len(v)):
-            return math.nan
-        return v if index is None else v[index]
+    def dataset(self):
+        """The Dataset, once every trial's record was added."""
+        import xarray as xr
 
-    data = {
-        "drawn": (("trial", "varied"), table(varied, lambda r, k: get(r["drawn"], k))),
-        "injected": (("trial", "parameter"),
-                     table(parameters, lambda r, k: get(r["injected"], k))),
-        "identified": (("trial", "parameter"),
-                       table(parameters, lambda r, k: get(r["identified"], k, 0))),
-        "identified_std": (("trial", "parameter"),
-                           table(parameters, lambda r, k: get(r["identified"], k, 1))),
-        "before": (("trial", "figure"), table(figures, lambda r, k: get(r["figures"], k, 1))),
-        "after": (("trial", "figure"), table(figures, lambda r, k: get(r["figures"], k, 2))),
-        "after_std": (("trial", "figure"), table(figures, lambda r, k: get(r["figures"], k, 3))),
-        "elapsed_s": (("trial",), np.array([r["elapsed_s"] for r in records], dtype=float)),
-        "failed": (("trial",), np.array([r["error"] is not None for r in records],
-                                        dtype=np.int8)),
-    }
-    errors = {str(r["trial"]): r["error"] for r in records if r["error"] is not None}
-    coords = {"trial": np.arange(n), "varied": np.array(varied, dtype=object),
-              "parameter": np.array(parameters, dtype=object),
-              "figure": np.array(figures, dtype=object),
-              "figure_unit": ("figure", np.array([units[f] for f in figures], dtype=object))}
-    # netCDF 3 has no zero-length fixed dimension: a dimension with nothing on it (no
-    # figures in an identification-only campaign, nothing varied) is left out
-    for dim, names in (("varied", ("drawn",)), ("parameter", ("injected", "identified",
-                                                              "identified_std")),
-                       ("figure", ("before", "after", "after_std"))):
-        if not len(coords[dim]):
-            for name in names:
-                del data[name]
-            del coords[dim]
-            if dim == "figure":
-                del coords["figure_unit"]
-    seed = int(spec["seed"])
-    attrs = {"procedure": spec["procedure"], "seed": seed if seed < _NC3_INT_END else str(seed),
-             "trials": int(trials),
-             "noise": int(bool(spec["noise"])), "identify_only": int(bool(spec["identify_only"])),
-             "vary": json.dumps(spec["vary"]), "versions": json.dumps(versions()),
-             "errors": json.dumps(errors),
-             "seeding": "trial i: numpy SeedSequence(seed).spawn(trials)[i]"}
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+        got = int(self.added.sum())
+        if got != self.trials:
+            raise InputError(f"expected the records of trials 0 .. {self.trials - 1}, got "
+                             f"{got}", key="records")
+        spec, n, varied = self.spec, self.trials, self.varied
+        parameters, figures = self._names("identified"), self._names("figures")
+        data = {"drawn": (("trial", "varied"), self._table("drawn", varied))}
+        for table in ("injected", "identified", "identified_std"):
+            data[table] = (("trial", "parameter"), self._table(table, parameters))
+        for table in ("before", "after", "after_std"):
+            data[table] = (("trial", "figure"), self._table(table, figures))
+        data["elapsed_s"] = (("trial",), self.elapsed)
+        data["failed"] = (("trial",), self.failed)
+        units = {name: unit for name, (_, unit) in self.units.items()}
+        errors = {str(t): self.errors[t] for t in sorted(self.errors)}
+        coords = {"trial": np.arange(n), "varied": np.array(varied, dtype=object),
+                  "parameter": np.array(parameters, dtype=object),
+                  "figure": np.array(figures, dtype=object),
+                  "figure_unit": ("figure", np.array([units[f] for f in figures], dtype=object))}
+        # netCDF 3 has no zero-length fixed dimension: a dimension with nothing on it (no
+        # figures in an identification-only campaign, nothing varied) is left out
+        for dim, names in (("varied", ("drawn",)), ("parameter", ("injected", "identified",
+                                                                  "identified_std")),
+                           ("figure", ("before", "after", "after_std"))):
+            if not len(coords[dim]):
+                for name in names:
+                    del data[name]
+                del coords[dim]
+                if dim == "figure":
+                    del coords["figure_unit"]
+        seed = int(spec["seed"])
+        attrs = {"procedure": spec["procedure"],
+                 "seed": seed if seed < _NC3_INT_END else str(seed), "trials": n,
+                 "noise": int(bool(spec["noise"])),
+                 "identify_only": int(bool(spec["identify_only"])),
+                 "vary": json.dumps(spec["vary"]), "versions": json.dumps(versions()),
+                 "errors": json.dumps(errors),
+                 "seeding": "trial i: numpy SeedSequence(seed).spawn(trials)[i]"}
+        return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def assemble(records, spec: dict, trials: int):
+    """The records of trials 0 .. trials-1 (any iterable, in any order) as one
+    `xarray.Dataset` (module docstring), through `Assembly`."""
+    assembly = Assembly(spec, trials)
+    for record in records:
+        assembly.add(record)
+    return assembly.dataset()
