@@ -318,6 +318,12 @@ def _alive(pid: int, path: Path) -> bool:
     """Whether the run that named a folder with ``pid`` may still be writing it."""
     if pid == os.getpid():
         return str(path) in _ours
+    return pid_alive(pid)
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` of this machine may still run: False only once it is known
+    to be gone (True for someone else's process, and where one cannot ask harmlessly)."""
     if os.name != "posix":  # no harmless way to ask: leave it alone
         return True
     try:

@@ -196,3 +196,75 @@ def test_progress_in_a_terminal_is_one_line_rewritten():
     assert shown.count("\r") == 4 and shown.endswith(" s left\n") and shown.count("\n") == 1
     # updates within TTY_EVERY_S of the one before wait: 100 trials in 1 ms, two rewrites
     assert _steps(_Terminal(), [1e-5 * k for k in range(1, 101)], 100).count("\r") == 2
+
+
+def _fake_trial(spec, i):
+    return {"trial": i, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+            "elapsed_s": 0.0, "error": None}
+
+
+def test_a_second_campaign_on_a_folder_in_use_is_refused_naming_the_folder_and_pid(
+        tmp_path, monkeypatch):
+    """Two campaigns on one --out at once both ran the same missing trials, each writing
+    every file. A campaign holds DIR/campaign.lock (its pid and host) while it runs; the
+    second is refused, naming the folder and the first's pid, and runs nothing."""
+    import json
+    import socket
+    import subprocess
+    import sys
+
+    ran = []
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: ran.append(i) or _fake_trial(spec, i))
+    out = tmp_path / "c"
+    run("tool_rotation_arm", 1, out=out, report=False, **ARM)  # a campaign there, one trial
+    assert ran == [0] and not (out / "campaign.lock").exists()  # released at the end
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        lock = {"pid": other.pid, "host": socket.gethostname()}
+        (out / "campaign.lock").write_text(json.dumps(lock))
+        with pytest.raises(InputError) as info:
+            run("tool_rotation_arm", 3, out=out, report=False, **ARM)
+        message = str(info.value)
+        assert message.startswith(f"{out}: another campaign is running in this folder "
+                                  f"(pid {other.pid}, holding {out / 'campaign.lock'})")
+        assert ran == [0] and json.loads((out / "campaign.lock").read_text()) == lock
+        # one of another host: no pid here tells whether it runs
+        (out / "campaign.lock").write_text(json.dumps({"pid": 1, "host": "elsewhere"}))
+        with pytest.raises(InputError, match="pid 1 on host elsewhere"):
+            run("tool_rotation_arm", 3, out=out, report=False, **ARM)
+        (out / "campaign.lock").write_text("")  # being written this instant, or damaged
+        with pytest.raises(InputError, match="does not say which process"):
+            run("tool_rotation_arm", 3, out=out, report=False, **ARM)
+    finally:
+        other.kill()
+        other.wait()
+    assert ran == [0]
+
+
+def test_a_lock_left_by_a_killed_campaign_is_taken_over(tmp_path, monkeypatch):
+    """A campaign killed by SIGKILL leaves its lock: the next run on the folder takes it
+    over when its pid is gone, or is this very process's without it holding it (a
+    container started again gives its process the same pid)."""
+    import json
+    import os
+    import socket
+    import subprocess
+    import sys
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    held = []
+
+    def trial(spec, i):
+        held.append(json.loads((out / "campaign.lock").read_text())["pid"])
+        return _fake_trial(spec, i)
+
+    monkeypatch.setattr(runner, "run_trial", trial)
+    out = tmp_path / "c"
+    out.mkdir()
+    for trials, pid in ((1, gone.pid), (2, os.getpid())):
+        (out / "campaign.lock").write_text(json.dumps({"pid": pid,
+                                                       "host": socket.gethostname()}))
+        run("tool_rotation_arm", trials, out=out, report=False, **ARM)
+        assert not (out / "campaign.lock").exists()
+    assert held == [os.getpid(), os.getpid()]  # trials 0, then 1, under this run's lock

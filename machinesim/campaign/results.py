@@ -5,7 +5,8 @@ one trial's record (`machinesim.campaign.trials.run_trial`), each written atomic
 trial completes (`machinesim._io.write_atomic`). Run again on the same DIR, a campaign reads
 the trials already there and computes only the missing ones; a DIR holding another campaign
 (another procedure, seed or distribution) is refused, never mixed; a distribution spelt
-otherwise (``10nm``, ``0.01um``) is the same one (`same_campaign`).
+otherwise (``10nm``, ``0.01um``) is the same one (`same_campaign`). While a campaign runs it
+holds ``DIR/campaign.lock`` (`locked`): a second one on DIR meanwhile is refused.
 
 ``DIR/campaign.nc`` (netCDF 3, xarray's scipy engine) is the Dataset `assemble` builds, written
 whole or not at all:
@@ -33,20 +34,23 @@ python), ``errors`` (JSON: trial -> message of each failed trial).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
 import platform
+import socket
+from collections.abc import Iterator
 from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 
-from machinesim._io import check_writable, json_text, read_json, write_atomic
+from machinesim._io import check_writable, json_text, pid_alive, read_json, write_atomic
 from machinesim.exceptions import FileError, InputError, brief
 
-__all__ = ["Assembly", "CampaignFolder", "assemble", "finished_trials", "same_campaign",
-           "versions"]
+__all__ = ["LOCK_NAME", "Assembly", "CampaignFolder", "assemble", "finished_trials", "locked",
+           "same_campaign", "versions"]
 
 
 def versions() -> dict:
@@ -97,8 +101,7 @@ class CampaignFolder:
     def __init__(self, path, spec: dict) -> None:
         self.path = Path(path)
         self.trials_path = self.path / "trials"
-        if self.path.exists() and not self.path.is_dir():
-            raise FileError("is a file; expected the campaign folder", source=str(path))
+        _make_folder(self.path)
         stored = self.path / "campaign.json"
         if self.path.is_dir() and not stored.exists():
             self._refuse_foreign()  # before trials/ is made in it
@@ -133,8 +136,8 @@ class CampaignFolder:
         folder): the campaign wrote its summary.json and summary.md over them.
         """
         found = finished_trials(self.path)
-        others = sorted(name for name in os.listdir(self.path)
-                        if name != "trials" or not self.trials_path.is_dir())
+        others = sorted(name for name in os.listdir(self.path) if name != LOCK_NAME  # ours
+                        and (name != "trials" or not self.trials_path.is_dir()))
         if self.trials_path.is_dir():
             others += sorted(f"trials/{name}" for name in os.listdir(self.trials_path)
                              if not name.startswith("trial_") or not name.endswith(".json"))
@@ -173,6 +176,106 @@ class CampaignFolder:
         path = self.path / name
         write_atomic(path, bytes(dataset.to_netcdf()))
         return path
+
+
+def _make_folder(path: Path) -> None:
+    """Make the campaign folder ``path`` (not its trials/), refusing a file there."""
+    if path.exists() and not path.is_dir():
+        raise FileError("is a file; expected the campaign folder", source=str(path))
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise FileError(f"cannot make the campaign folder: {exc.strerror or exc}",
+                        source=str(path)) from None
+
+
+@contextlib.contextmanager
+def locked(folder) -> Iterator[None]:
+    """Hold ``folder/campaign.lock`` (this process's pid and host) within the block, the
+    folder made when missing; taken before campaign.json is read or written.
+
+    Two campaigns run on one folder at the same time ran the same missing trials, each
+    writing every one of their files. A second is refused, naming the folder and the
+    first's pid; a lock whose process is gone (killed by SIGKILL, a power loss) is taken
+    over, as `machinesim._io.clear_stale_folders` clears a killed run's folders. A lock of
+    another host (a shared file system) is taken as held: no pid of this machine tells
+    whether it runs. Two runs that both find the same stale lock at the same instant may
+    both take it over (no file system compares and swaps a file).
+    """
+    folder = Path(folder)
+    _make_folder(folder)
+    path = folder / LOCK_NAME
+    me = {"pid": os.getpid(), "host": socket.gethostname()}
+    for _ in range(3):  # a stale lock removed: try again (another run may be quicker)
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        except FileExistsError:
+            holder = _lock_holder(path)
+            if holder is None or _holds(holder, path):
+                raise _busy(folder, holder) from None
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(path)
+            continue
+        except OSError as exc:
+            raise FileError(f"cannot make the campaign's lock {LOCK_NAME}: "
+                            f"{exc.strerror or exc}", source=str(folder)) from None
+        with os.fdopen(fd, "w", encoding="utf-8") as out:
+            out.write(json.dumps(me) + "\n")
+        break
+    else:
+        raise _busy(folder, _lock_holder(path))
+    _held.add(str(path))
+    try:
+        yield
+    finally:
+        _held.discard(str(path))
+        if _lock_holder(path) == (me["pid"], me["host"]):
+            with contextlib.suppress(OSError):
+                os.unlink(path)
+
+
+def _busy(folder: Path, holder: tuple[int, str] | None) -> InputError:
+    lock = folder / LOCK_NAME
+    if holder is None:
+        who = f"its lock {lock} does not say which process (being taken just now, or damaged)"
+    else:
+        pid, host = holder
+        where = "" if host == socket.gethostname() else f" on host {host}"
+        who = f"pid {pid}{where}, holding {lock}"
+    return InputError(f"another campaign is running in this folder ({who}): both would run "
+                      "the same trials; wait for it to end, or give another --out (if no "
+                      f"campaign runs there, delete {lock})", source=str(folder))
+
+
+#: The file a running campaign holds in its folder (`locked`).
+LOCK_NAME = "campaign.lock"
+
+#: The locks this process holds (a lock naming this pid and not here is a previous
+#: process's, of the same pid: a container started again).
+_held: set[str] = set()
+
+
+def _lock_holder(path: Path) -> tuple[int, str] | None:
+    """(pid, host) of the lock ``path``; None when it cannot be read as such."""
+    try:
+        held = json.loads(path.read_text(encoding="utf-8"))
+        pid, host = held["pid"], held["host"]
+    except (OSError, ValueError, TypeError, KeyError):
+        return None
+    if isinstance(pid, bool) or not isinstance(pid, int) or not 0 < pid < 2**31 \
+            or not isinstance(host, str):
+        return None
+    return pid, host
+
+
+def _holds(holder: tuple[int, str], path: Path) -> bool:
+    """Whether the process that wrote the lock ``path`` may still run."""
+    pid, host = holder
+    if host != socket.gethostname():
+        return True
+    if pid == os.getpid():
+        return str(path) in _held
+    return pid_alive(pid)
 
 
 def same_campaign(old: dict, new: dict) -> bool:

@@ -27,7 +27,7 @@ import numpy as np
 from machinesim._cores import usable_cores
 from machinesim._interrupts import _ctrl_c_deferred
 from machinesim.campaign.distributions import Distribution, parse_distribution, parse_vary
-from machinesim.campaign.results import Assembly, CampaignFolder, finished_trials
+from machinesim.campaign.results import Assembly, CampaignFolder, finished_trials, locked
 from machinesim.campaign.summary import write_report
 from machinesim.campaign.trials import CampaignSpec, check_flag, run_trial
 from machinesim.exceptions import InputError
@@ -455,34 +455,35 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
                         identify_only=identify_only, quick=quick)
     if scheduler is not None:  # before the folder is made: nothing written for a wrong address
         check_scheduler(scheduler)
-    folder = CampaignFolder(out, spec.describe())
-    stored = folder.spec["vary"]
-    if list(stored.items()) != list(spec.describe()["vary"].items()):
-        # the same distributions spelt otherwise (10nm, 0.01um) or given in another order:
-        # the missing trials draw from the texts the campaign was begun with, to the last
-        # bit as its first trials did, and the Dataset keeps its order of them
-        spec = dataclasses.replace(spec, vary=tuple(
-            (name, parse_distribution(text, name)) for name, text in stored.items()))
-    done = folder.done(spec.trials)
-    beyond = [i for i in finished_trials(folder.path) if i >= spec.trials]
-    if beyond:  # not progress: said under --quiet too, the summary is of fewer trials
-        print(f"campaign: {folder.trials_path} holds {len(beyond)} trial file"
-              f"{'s' * (len(beyond) > 1)} beyond --trials {spec.trials} (from trial "
-              f"{beyond[0]}): left out of this summary, kept for a larger --trials",
-              file=sys.stderr)
-    missing = sorted(set(range(spec.trials)) - set(done))
-    assembly = Assembly(spec.describe(), spec.trials)  # each record's numbers, not the record
-    # the trials already there are read first: a damaged file is refused before the missing
-    # trials run, not after
-    _read(folder, done, assembly, sys.stderr if progress else None)
-    shown = _Progress(spec.trials, len(done), sys.stderr if progress else None)
-    try:
-        _execute(spec, missing, folder, assembly, shown, workers, scheduler, client)
-    finally:
-        shown.end()
-    dataset = assembly.dataset()
-    if report:  # campaign.nc and its report together: never one run's file beside another's
-        write_report(dataset, folder.path, {"campaign.nc": bytes(dataset.to_netcdf())})
-    else:
-        folder.write_dataset(dataset)
-    return dataset
+    with locked(out):  # a second campaign on DIR meanwhile is refused
+        folder = CampaignFolder(out, spec.describe())
+        stored = folder.spec["vary"]
+        if list(stored.items()) != list(spec.describe()["vary"].items()):
+            # the same distributions spelt otherwise (10nm, 0.01um) or given in another order:
+            # the missing trials draw from the texts the campaign was begun with, to the last
+            # bit as its first trials did, and the Dataset keeps its order of them
+            spec = dataclasses.replace(spec, vary=tuple(
+                (name, parse_distribution(text, name)) for name, text in stored.items()))
+        done = folder.done(spec.trials)
+        beyond = [i for i in finished_trials(folder.path) if i >= spec.trials]
+        if beyond:  # not progress: said under --quiet too, the summary is of fewer trials
+            print(f"campaign: {folder.trials_path} holds {len(beyond)} trial file"
+                  f"{'s' * (len(beyond) > 1)} beyond --trials {spec.trials} (from trial "
+                  f"{beyond[0]}): left out of this summary, kept for a larger --trials",
+                  file=sys.stderr)
+        missing = sorted(set(range(spec.trials)) - set(done))
+        assembly = Assembly(spec.describe(), spec.trials)  # each record's numbers, not the record
+        # the trials already there are read first: a damaged file is refused before the missing
+        # trials run, not after
+        _read(folder, done, assembly, sys.stderr if progress else None)
+        shown = _Progress(spec.trials, len(done), sys.stderr if progress else None)
+        try:
+            _execute(spec, missing, folder, assembly, shown, workers, scheduler, client)
+        finally:
+            shown.end()
+        dataset = assembly.dataset()
+        if report:  # campaign.nc and its report together: never one run's file beside another's
+            write_report(dataset, folder.path, {"campaign.nc": bytes(dataset.to_netcdf())})
+        else:
+            folder.write_dataset(dataset)
+        return dataset
