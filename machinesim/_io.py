@@ -17,6 +17,7 @@ import math
 import os
 import secrets
 import shutil
+import stat
 import tempfile
 from collections.abc import Iterable
 from pathlib import Path
@@ -58,12 +59,30 @@ def check_readable_file(path, what: str) -> Path:
             raise FileError(f"no such file; expected the {what}", source=str(path))
         if not path.is_file():
             # a FIFO or device would block or never end: refuse it before opening
-            raise FileError(f"is not a regular file; expected the {what}", source=str(path))
+            raise FileError(f"{not_a_regular_file(path)}; expected the {what}",
+                            source=str(path))
         with open(path, "rb"):
             pass
+    except FileError:  # an OSError too: not wrapped in "cannot read" a second time
+        raise
     except OSError as exc:
         raise FileError(f"cannot read the {what}: {_reason(exc)}", source=str(path)) from None
     return path
+
+
+def not_a_regular_file(path) -> str:
+    """What ``path``, which exists and is neither a regular file nor a folder, is, for a
+    message: "is a named pipe (FIFO), not a regular file", and where a symbolic link leads
+    ("links to /dev/zero, a character device, ..."), since ``ls`` shows the link only."""
+    path = Path(path)
+    mode = path.stat().st_mode
+    kind = ("a named pipe (FIFO)" if stat.S_ISFIFO(mode)
+            else "a character device" if stat.S_ISCHR(mode)
+            else "a block device" if stat.S_ISBLK(mode)
+            else "a socket" if stat.S_ISSOCK(mode) else "a special file")
+    if path.is_symlink():
+        return f"links to {os.path.realpath(path)}, {kind}, not a regular file"
+    return f"is {kind}, not a regular file"
 
 
 def file_name(text: str) -> Path:
@@ -554,5 +573,5 @@ def read_json(path, what: str = "JSON file"):
 
 
 __all__ = ["FileError", "StagedFolder", "stdout_to_null", "check_readable_file",
-           "check_writable", "clear_stale_folders", "json_text", "read_json", "write_atomic",
-           "write_together"]
+           "check_writable", "clear_stale_folders", "json_text", "not_a_regular_file",
+           "read_json", "write_atomic", "write_together"]

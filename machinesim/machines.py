@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from machinesim import inverse, tolerances
+from machinesim._io import not_a_regular_file
 from machinesim.errors.turns import each_turn
 from machinesim.exceptions import (
     ErrorModelError,
@@ -94,6 +95,8 @@ def load_machine(name_or_path: str | Path) -> Machine:
                 "or the path of a .urdf file")
     elif path.is_dir():
         raise ModelError(f"{path}: is a folder; expected a .urdf file")
+    elif path.exists() and not path.is_file():  # reading a FIFO blocks, /dev/zero never ends
+        raise ModelError(f"{path}: {not_a_regular_file(path)}; expected a .urdf file")
     elif not path.is_file():
         raise ModelError(f"{path}: no such URDF file")
     path = path.resolve()

@@ -469,10 +469,11 @@ def test_a_pipe_or_a_device_is_refused_before_it_is_read(tmp_path):
     # a model without errors
     fifo = tmp_path / "errors.toml"
     os.mkfifo(fifo)
-    for path in (Path(os.devnull), fifo):
+    for path, kind in ((Path(os.devnull), "a character device"),
+                       (fifo, "a named pipe (FIFO)")):
         with pytest.raises(ErrorModelError) as info:
             ErrorModel.from_toml(path)
-        assert str(info.value) == (f"{path}: not a regular file (a pipe, socket or device); "
+        assert str(info.value) == (f"{path}: is {kind}, not a regular file; "
                                    "expected a TOML file")
 
 

@@ -118,12 +118,21 @@ def test_readable_file_checks_name_the_path(tmp_path):
     (tmp_path / "dir").mkdir()
     with pytest.raises(InputError, match="nope.nc: no such file; expected the NC program"):
         _io.check_readable_file(tmp_path / "nope.nc", "NC program")
-    with pytest.raises(InputError, match="dir: is a folder; expected the NC program file"):
+    with pytest.raises(InputError) as raised:  # was wrapped: "cannot read ...: .../dir: is a"
         _io.check_readable_file(tmp_path / "dir", "NC program")
+    assert str(raised.value) == f"{tmp_path / 'dir'}: is a folder; expected the NC program file"
     fifo = tmp_path / "pipe.nc"
     os.mkfifo(fifo)
-    with pytest.raises(InputError, match="pipe.nc: is not a regular file"):
+    with pytest.raises(InputError) as raised:
         _io.check_readable_file(fifo, "NC program")  # opening it would block forever
+    assert str(raised.value) == (f"{fifo}: is a named pipe (FIFO), not a regular file; "
+                                 "expected the NC program")
+    link = tmp_path / "zero.nc"
+    link.symlink_to(os.devnull)
+    with pytest.raises(InputError) as raised:
+        _io.check_readable_file(link, "NC program")
+    assert str(raised.value) == (f"{link}: links to {os.devnull}, a character device, not a "
+                                 "regular file; expected the NC program")
 
 
 # ------------------------------------------------------------------- written together

@@ -452,6 +452,21 @@ def test_a_folder_or_an_unreadable_urdf_is_a_model_error_naming_it(tmp_path):
         load_machine(binary)
 
 
+def test_a_pipe_or_a_device_given_as_the_urdf_says_what_it_is(tmp_path):
+    # both were "no such URDF file", though ls shows them there
+    fifo, link = tmp_path / "pipe.urdf", tmp_path / "zero.urdf"
+    os.mkfifo(fifo)
+    link.symlink_to(os.devnull)
+    with pytest.raises(ModelError) as raised:
+        load_machine(fifo)
+    assert str(raised.value) == (f"{fifo}: is a named pipe (FIFO), not a regular file; "
+                                 "expected a .urdf file")
+    with pytest.raises(ModelError) as raised:
+        load_machine(link)
+    assert str(raised.value) == (f"{link}: links to {os.devnull}, a character device, not a "
+                                 "regular file; expected a .urdf file")
+
+
 def test_a_urdf_edited_after_loading_loads_again(tmp_path):
     path = tmp_path / "edited.urdf"
     path.write_text(GROOVING)

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import tomli_w
 
-from machinesim._io import write_atomic
+from machinesim._io import not_a_regular_file, write_atomic
 from machinesim.errors._checks import (
     LINEAR_AXES,
     _check_axis,
@@ -112,8 +112,7 @@ def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[st
         if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
             # a FIFO with no writer blocks for ever, /dev/zero fills the memory: refuse before
             # reading (a folder gets the reading's own "Is a directory")
-            raise error("not a regular file (a pipe, socket or device); expected a TOML file",
-                        source=source)
+            raise error(f"{not_a_regular_file(path)}; expected a TOML file", source=source)
         text = Path(path).read_bytes().decode("utf-8-sig")
         data = tomllib.loads(text)
     except OSError as exc:
