@@ -430,6 +430,38 @@ def test_the_hand_written_example_machine_cuts_as_the_shipped_one_and_takes_its_
     assert volumes[2] == pytest.approx(volumes[0] * (25 / 20) ** 2, rel=1e-9, abs=0.0)
 
 
+def test_table_and_tool_mount_may_be_the_links_their_axes_move(tmp_path):
+    # docs/machines.md said all four frames hang on fixed joints; only workpiece and
+    # tool_tip must (their setting errors are inserted there). mill3 with X's child the table
+    # and Z's the tool_mount moves as mill3 with both on fixed joints of zero origin: the
+    # same poses under errors of every family (a second chain, compared to the last bit)
+    from machinesim.sampling import random_axis_values, random_errors
+
+    text = (ROOT / "models" / "examples" / "mill3.urdf").read_text()
+    moves = {'xyz="0 0 0.05"': 'xyz="0 0 0.07"', 'xyz="0 0 0.02"': 'xyz="0 0 0"',
+             'xyz="0 0 0.3"': 'xyz="0 0 0.195"', 'xyz="0 0 -0.105"': 'xyz="0 0 0"'}
+    for old, new in moves.items():
+        assert text.count(old) == 1
+        text = text.replace(old, new)
+    fixed = tmp_path / "fixed.urdf"
+    fixed.write_text(text)
+    for carriage, frame in (("x_carriage", "table"), ("z_carriage", "tool_mount")):
+        start = text.index(f'<joint name="{frame}_fixed"')
+        text = (text[:start] + text[text.index("</joint>", start) + len("</joint>"):]) \
+            .replace(f'<link name="{carriage}"/>', "") \
+            .replace(f'<child link="{carriage}"/>', f'<child link="{frame}"/>')
+    moved = tmp_path / "moved.urdf"
+    moved.write_text(text)
+    a, b = load_machine(fixed), load_machine(moved)
+    assert "carriage" not in text.replace('"y_carriage"', "")
+    rng = np.random.default_rng(0)
+    errors = random_errors(a, rng)
+    for q in random_axis_values(a, rng, 20):
+        for frame in ("tool_tip", "table", "tool_mount"):
+            np.testing.assert_array_equal(b.frame_pose(frame, q, errors),
+                                          a.frame_pose(frame, q, errors))
+
+
 def test_a_cyclic_urdf_fails_fast_instead_of_hanging(tmp_path):
     """Every link in one ring: no root to start from, and the walk up never ends."""
     links = "".join(f'<link name="l{i}"/>' for i in range(4))
