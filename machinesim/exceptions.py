@@ -109,6 +109,11 @@ class HolderContactError(MachineSimError):
     hit the part (a real machine crashes there; the body alone would leave a tunnel)."""
 
 
+class MachineSimWarning(UserWarning):
+    """An input machinesim accepts that may not be what was meant (a URDF's rotary limits
+    that read as degrees). The command line shows one as a ``machinesim: warning:`` line."""
+
+
 def check_length(value, name: str, *, positive: bool = False) -> float:
     """``value`` as a finite float length (m), >= 0 (or > 0 with ``positive``).
 

@@ -6,25 +6,27 @@ expected), never a hang or a traceback: the XML must parse; links and joints mus
 tree (no cycle, no dangling or duplicate name, one root); every axis joint is named by its
 NC letter (X Y Z prismatic, A B C revolute), carries the tool or the workpiece, has a unit
 machine direction pointing as ISO 841 asks, finite origins, a ``<limit>`` with lower <
-upper within a machine's travel and a plausible rapid rate, and a ``<machinesim:axis>``
-resolution. Once Pinocchio has the model, `check_zero_pose` checks the nominal machine at
-zero against the conventions of docs/machines.md: the edge at the workpiece origin, each
-axis moving the tool along (or about) its direction; and `check_tool_mount` that tool_tip
-sits rigidly on tool_mount and parallel to it, the frame the tool setting error is given in.
+upper within a machine's travel and a plausible rapid rate (rotary limits that read as
+degrees load with a warning), and a ``<machinesim:axis>`` resolution. Once Pinocchio has
+the model, `check_zero_pose` checks the nominal machine at zero against the conventions of
+docs/machines.md: the edge at the workpiece origin, each axis moving the tool along (or
+about) its direction; and `check_tool_mount` that tool_tip sits rigidly on tool_mount and
+parallel to it, the frame the tool setting error is given in.
 """
 
 from __future__ import annotations
 
 import math
 import re
+import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from xml.parsers import expat
 
 import numpy as np
 
-from machinesim.exceptions import ModelError
-from machinesim.kinematics import DOFS, Axis
+from machinesim.exceptions import MachineSimWarning, ModelError
+from machinesim.kinematics import DOFS, SPINDLE_TRAVEL_RAD, Axis
 
 __all__ = ["AXIS_ORDER", "REQUIRED_FRAMES", "check_joint_frames", "check_tool_mount",
            "check_tree", "check_zero_pose", "joint_places", "read_axes", "read_urdf"]
@@ -67,6 +69,11 @@ MAX_TRAVEL_RAD = 1e9
 #: ROBOnano's 25 mm/s as 25 loaded, its rapids 1000 times too fast).
 RAPID_RATE_M_PER_S = (1e-6, 10.0)
 RAPID_RATE_RAD_PER_S = (1e-6, 1e5)
+#: Rotary limits that may be degrees (`_degree_warning`): beyond one turn (0.1 % over, for a
+#: 2 pi written rounded, 6.2832), where a tilt or table axis written in degrees lands (B
+#: -100 .. 100 deg loads as +-16 turns), and within the travel that, read as degrees, is
+#: still no spindle's (beyond it both readings are a spindle).
+DEGREE_LIKE_RAD = (2.0 * math.pi * 1.001, math.degrees(SPINDLE_TRAVEL_RAD))
 #: A number as the URDF parser under Pinocchio (urdfdom, a C++ stream) reads one: ASCII
 #: digits, a point, an exponent, blanks before it only. Python's float() reads more
 #: ("1_000", Arabic-Indic digits, a trailing blank), which the parser then refused without
@@ -448,7 +455,31 @@ def _limits(joint: ET.Element, where: str, rotary: bool) -> tuple[float, float, 
     if not slowest <= velocity <= fastest:
         raise ModelError(f"{where}: <limit velocity={velocity!r}> ({unit}/s); expected a rapid "
                          f"rate of {slowest:g} .. {fastest:g} {unit}/s")
+    if rotary:
+        _degree_warning(where, lower, upper)
     return lower, upper, velocity
+
+
+def _degree_warning(where: str, lower: float, upper: float) -> None:
+    """Warn (`MachineSimWarning`) of rotary limits that read as degrees (`DEGREE_LIKE_RAD`).
+
+    Loaded as radians, B -100 .. 100 deg is +-16 turns, so its travel check never fires, and
+    C -360 .. 360 deg runs past `SPINDLE_TRAVEL_RAD`, a work spindle, so a program that
+    turns C while it feeds is refused. A warning, not a refusal: a table of several turns
+    (+-4 pi) is a machine too.
+    """
+    most = max(abs(lower), abs(upper))
+    if not DEGREE_LIKE_RAD[0] < most <= DEGREE_LIKE_RAD[1]:
+        return
+    spindle = (f", past {SPINDLE_TRAVEL_RAD:g} rad: a work spindle, which a program may not "
+               "turn while it feeds" if upper > SPINDLE_TRAVEL_RAD else "")
+    warnings.warn(
+        f"{where}: <limit lower={lower!r} upper={upper!r}> is read in rad, as URDF limits "
+        f"are: {lower / (2 * math.pi):.3g} .. {upper / (2 * math.pi):.3g} turns{spindle}. If "
+        f"these are degrees, write lower=\"{math.radians(lower)!r}\" "
+        f"upper=\"{math.radians(upper)!r}\" ({lower:g} .. {upper:g} deg), and the velocity "
+        "in rad/s; an axis that turns without end is written with wide limits (sts_lathe's C: "
+        "-1e5 .. 1e5 rad)", MachineSimWarning, stacklevel=2)
 
 
 def _resolutions(root: ET.Element, path: Path, lines: dict[str, list[int]] | None = None

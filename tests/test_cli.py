@@ -165,6 +165,20 @@ def test_a_program_without_m30_is_noted_as_perhaps_cut_short(tmp_path, capsys):
 # ------------------------------------------------------------ refusals: one line, no files
 
 
+def test_rotary_limits_that_read_as_degrees_are_one_warning_line(tmp_path, capsys):
+    # Python's own form named machinesim's source line and printed it: two lines, neither
+    # the user's
+    urdf = tmp_path / "mill.urdf"
+    urdf.write_text(GROOVING.read_text().replace(
+        'lower="-6.283185307179586" upper="6.283185307179586"', 'lower="-100" upper="100"'))
+    code, _, err = run(["cut", GROOVES, "--machine", urdf, "--tool", "bogus",
+                        "--stock", "block:10x10x2", "--out", tmp_path / "part.ply"], capsys)
+    warning, error = err.strip().splitlines()
+    assert warning.startswith(f"machinesim: warning: {urdf}, line ") and \
+        "joint 'C': <limit lower=-100.0 upper=100.0> is read in rad" in warning
+    assert code == 2 and error.startswith("machinesim: error: --tool 'bogus'")
+
+
 def test_a_missing_or_folder_program_is_one_line_naming_it(tmp_path, capsys):
     out = tmp_path / "part.ply"
     code, _, err = run(["cut", tmp_path / "nope.nc", *CUT, "--out", out], capsys)

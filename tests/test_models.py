@@ -8,6 +8,7 @@ import re
 import shutil
 import subprocess
 import sys
+import warnings
 import zipfile
 from pathlib import Path
 
@@ -15,7 +16,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from machinesim.exceptions import ModelError
+from machinesim.exceptions import MachineSimWarning, ModelError
 from machinesim.machines import list_machines, load_machine, models_dir
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -460,6 +461,53 @@ def test_table_and_tool_mount_may_be_the_links_their_axes_move(tmp_path):
         for frame in ("tool_tip", "table", "tool_mount"):
             np.testing.assert_array_equal(b.frame_pose(frame, q, errors),
                                           a.frame_pose(frame, q, errors))
+
+
+C_LIMIT = 'lower="-6.283185307179586" upper="6.283185307179586"'
+
+
+def _c_limits(tmp_path, lower: str, upper: str) -> Path:
+    path = tmp_path / f"c_{lower}_{upper}.urdf"
+    path.write_text(_in_joint("C", C_LIMIT, f'lower="{lower}" upper="{upper}"'))
+    return path
+
+
+def test_rotary_limits_that_read_as_degrees_warn_naming_the_joint(tmp_path):
+    # written in degrees, C -100 .. 100 loaded as +-16 turns (its travel check never fired)
+    # and C -360 .. 360 as a work spindle (past 100 rad), so a program turning C while it
+    # fed was refused; both loaded without a word
+    line = GROOVING[:GROOVING.index('<joint name="C"')].count("\n") + 1
+    advice = ("and the velocity in rad/s; an axis that turns without end is written with wide "
+              "limits (sts_lathe's C: -1e5 .. 1e5 rad)")
+    for degrees, turns, spindle in ((100, 15.9, ""), (360, 57.3, (
+            ", past 100 rad: a work spindle, which a program may not turn while it feeds"))):
+        path = _c_limits(tmp_path, f"-{degrees}", f"{degrees}")
+        with pytest.warns(MachineSimWarning) as caught:
+            machine = load_machine(path)
+        rad = degrees * np.pi / 180.0  # what the user meant, by hand
+        assert [str(w.message) for w in caught] == [
+            f"{path}, line {line}: joint 'C': <limit lower={-float(degrees)!r} "
+            f"upper={float(degrees)!r}> is read in rad, as URDF limits are: -{turns} .. "
+            f"{turns} turns{spindle}. If these are degrees, write lower=\"{-rad!r}\" "
+            f"upper=\"{rad!r}\" (-{degrees} .. {degrees} deg), {advice}"]
+        assert machine.axis("C").upper == degrees  # loaded as written: a warning, not a refusal
+        assert machine.axis("C").spindle == bool(spindle)
+
+
+def test_rotary_limits_of_a_turn_a_tilt_or_a_spindle_load_without_a_warning(tmp_path):
+    # one turn (as the shipped tables, or 2 pi rounded up), a tilt, a spindle of 1e5 rad; and
+    # 1e4 rad, which read as degrees is a spindle too (past 100 rad)
+    paths = [_c_limits(tmp_path, lower, upper) for lower, upper in (
+        ("-6.2832", "6.2832"), ("-0.7853981633974483", "1.5"), ("-1e5", "1e5"),
+        ("-1e4", "1e4"))]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for path in paths:
+            load_machine(path)
+    # a table of two turns each side is a machine too: it loads, with the warning
+    with pytest.warns(MachineSimWarning, match=r"-2 .. 2 turns"):
+        machine = load_machine(_c_limits(tmp_path, "-12.566370614359172", "12.566370614359172"))
+    assert machine.axis("C").upper == 4 * np.pi
 
 
 def test_a_cyclic_urdf_fails_fast_instead_of_hanging(tmp_path):
