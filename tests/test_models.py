@@ -510,6 +510,28 @@ def test_rotary_limits_of_a_turn_a_tilt_or_a_spindle_load_without_a_warning(tmp_
     assert machine.axis("C").upper == 4 * np.pi
 
 
+def test_a_c_centre_line_off_the_workpiece_origin_moves_as_written(tmp_path):
+    # docs/machines.md, Conventions: not checked on a machine of one's own. The workpiece
+    # origin W = (10, 0) mm from the C line, X's origin with it (the edge at W at zero). C
+    # turns the table by -C about +Z (ISO 841), so the edge at (10 + X, Y) from the line is
+    # at Rz(C) (10 + X, Y) - W in the workpiece frame: (-10, 10) mm at C = 90 deg, X = Y = 0;
+    # (1, 0) mm needs (-Y - 10, 10 + X) = (1, 0): X = -10 mm, Y = -11 mm
+    text = _in_joint("X", '<origin xyz="0.0 0.4 0.55"', '<origin xyz="0.01 0.4 0.55"')
+    old = '<child link="workpiece"/>\n    <origin xyz="0.0 0.0 0.005"'
+    assert text.count(old) == 1
+    path = tmp_path / "off_centre.urdf"
+    path.write_text(text.replace(old, old.replace("0.0 0.0 0.005", "0.01 0.0 0.005")))
+    machine = load_machine(path)
+    turned = np.array([0.0, 0.0, 0.0, np.pi / 2])
+    pose = machine.tool_pose(turned)
+    np.testing.assert_allclose(pose[:3, 3], [-0.010, 0.010, 0.0], rtol=0, atol=1e-15)
+    pose[:3, 3] = [0.001, 0.0, 0.0]
+    solution = machine.axis_values(pose)
+    # Newton steps to round-off (1e-17 m measured): 1e-15 m is a millionth of the 1 nm step
+    np.testing.assert_allclose(solution.q, [-0.010, -0.011, 0.0, np.pi / 2], rtol=0,
+                               atol=1e-15)
+
+
 def test_a_cyclic_urdf_fails_fast_instead_of_hanging(tmp_path):
     """Every link in one ring: no root to start from, and the walk up never ends."""
     links = "".join(f'<link name="l{i}"/>' for i in range(4))
