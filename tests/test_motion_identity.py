@@ -285,6 +285,82 @@ def test_a_table_of_a_whole_turn_that_steps_where_it_wraps_is_refused_at_once(ma
             assert chord_deviation(machine, model, np.zeros((1, 3)), turn.q) <= 1e-9
 
 
+def test_a_path_that_steps_inside_a_table_is_refused_at_the_first_raise(machines, monkeypatch):
+    """EYX steps 1 um between X = 0 and 1 pm: the chord of any sub-step across it sits at
+    half the step, so the move's deviation is 500 nm at every count. From 8 sub-steps the
+    rule raises to ceil(8 sqrt(500 nm / 1 nm)) = 179, where a smooth path's deviation would
+    have fallen 500-fold; the move is refused there, naming the step's place and table. The
+    rule went on raising by 10 % a round towards a million (93 rounds, 2.9 s for the edge
+    alone; with a nose tool's 397 points not done in 10 min) and then blamed the tolerance."""
+    from machinesim.motion import chords
+
+    machine = machines["grooving_4axis"]
+    errors = machinesim.ErrorModel.from_dict({"component": {"X": {
+        "position_mm": [-100.0, 0.0, 1e-9, 100.0], "EYX_um": [0.0, 0.0, 1.0, 1.0]}}})
+    program = ProgramBuilder(source="step").rapid(X=-0.01, Y=0.0, Z=0.0).linear(
+        X=0.0123, feed_mm_per_min=500.0).build()
+    counts = []
+    evaluate = chords.deviations
+
+    def spy(paths, start, delta, ns, index=None):
+        counts.extend(ns.tolist())
+        return evaluate(paths, start, delta, ns, index)
+
+    monkeypatch.setattr(chords, "deviations", spy)
+    assert math.ceil(8 * math.sqrt(500.0)) == 179
+    with pytest.raises(NCProgramError) as info:
+        plan(program, machine, errors, chord_tolerance=1e-9)
+    assert info.value.line == 2
+    message = info.value.message
+    assert message.startswith(
+        "a move whose path steps: its chords do not converge on it (500 nm off at 8 "
+        "sub-steps, still 500 nm at 179, where a smooth path's deviation falls as 1/n**2); "
+        "at X = ")
+    # the piece found: 1/(179 * 64**3) of the 22.3 mm move, about X = 0 (the step), off
+    # its chord by half the step
+    piece = 22.3 / (179 * 64**3)
+    at = float(message.split("at X = ")[1].split(" mm")[0])
+    assert abs(at) <= piece
+    assert (f"a piece of X {piece:.6g} mm (1/{179 * 64**3} of the move, finer than "
+            "1000000 sub-steps split it) by 500 nm, more than the chord tolerance 1 nm. "
+            "The error table component.X.EYX changes from 0 to 1 um between X = 0 mm and "
+            "1e-09 mm there, a step no chord follows") in message
+    assert max(counts) == 179
+
+
+def test_a_dense_table_s_stalled_deviation_is_looked_into_and_the_counts_kept(
+        machines, monkeypatch):
+    """A table every 10 um with 50 nm of noise: the deviation hardly falls while the
+    sub-steps are longer than the table's spacing, which starts the look for a step; none
+    is there (its finest pieces are within 1e-12 m of their chords), so the counts are those
+    of the rule with no look at all, and the chords hold the tolerance."""
+    from machinesim.motion import chords
+
+    machine = machines["grooving_4axis"]
+    knots = np.linspace(-1.0, 1.0, 201)
+    noise = np.random.default_rng(0).normal(0.0, 50.0, knots.size)
+    errors = machinesim.ErrorModel.from_dict({"component": {"X": {
+        "position_mm": knots.tolist(), "EYX_nm": noise.tolist()}}})
+    program = ProgramBuilder(source="dense").rapid(X=-0.0011, Y=0.0, Z=0.0).linear(
+        X=0.00113, feed_mm_per_min=500.0).build()
+    looked = []
+    zoom = chords._zoom
+
+    def spy(*args):
+        looked.append(zoom(*args))
+        return looked[-1]
+
+    monkeypatch.setattr(chords, "_zoom", spy)
+    found = plan(program, machine, errors, chord_tolerance=1e-9)
+    assert looked and max(deviation for _, _, deviation in looked) < 1e-12
+    monkeypatch.setattr(chords, "_zoom", lambda *args: (0.0, 1.0, 0.0))
+    unlooked = plan(program, machine, errors, chord_tolerance=1e-9)
+    assert [len(s.q) for s in found.segments] == [len(s.q) for s in unlooked.segments]
+    for segment, other in zip(found.segments, unlooked.segments, strict=True):
+        assert np.array_equal(segment.q, other.q)
+        assert chord_deviation(machine, errors, np.zeros((1, 3)), segment.q) <= 1e-9
+
+
 def test_a_straight_move_follows_a_straightness_table(machines):
     """X travelling 300 mm on a machine whose EYX table bends at -100, 0 and +100 mm: the
     tool's path is the table, not the chord between the ends, so the move is split like a

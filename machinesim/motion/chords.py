@@ -36,6 +36,7 @@ the two rules pick different counts (tests/test_motion_identity.py).
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -54,6 +55,8 @@ _ROWS_PER_BATCH = 1 << 17
 WORKERS = min(4, usable_cores())
 #: The first trial number of sub-steps of the rule.
 _FIRST_TRIAL = 8
+#: Pieces each level of `_zoom` splits the worst piece into.
+_ZOOM = 64
 
 
 # ------------------------------------------------------------------- folded arithmetic
@@ -142,6 +145,10 @@ class ToolPaths:
             for var in binding.varying
             if getattr(var.component, "period", None) is not None
             for at, side in _unclosed(var.component))
+        # (axis, table, name) of every error table, to name one where the path steps
+        self.tables = tuple(
+            (var.axis, var.component, _name(binding, var)) for var in binding.varying
+            if getattr(var.component, "kind", None) == "table")
 
     def positions(self, q: list[np.ndarray], groups, keep_angles: bool = False):
         """x, y, z of every point at every row (each (N,) or (N, k)).
@@ -232,9 +239,10 @@ def _unclosed(component) -> list[tuple[float, int]]:
 
 def _name(binding, var) -> str:
     """The error model's name of a bound component error (``component.C.ECC``)."""
+    bound = getattr(var.component, "component", var.component)  # a turn's table: its own
     for letter, symbols in binding.errors.component.items():
         for symbol, component in symbols.items():
-            if component is var.component.component:
+            if component is bound:
                 return f"component.{letter}.{symbol}"
     return "a table"
 
@@ -434,9 +442,10 @@ def deviations(paths: ToolPaths, start: np.ndarray, delta: np.ndarray, ns: np.nd
 
 
 def substeps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
-             tolerance: float) -> tuple[np.ndarray, np.ndarray]:
-    """Sub-steps of each rotary move, and which moves would need more than `MAX_SUBSTEPS`
-    (their count is left 0).
+             tolerance: float) -> tuple[np.ndarray, np.ndarray, list[Stall]]:
+    """Sub-steps of each rotary move, which moves would need more than `MAX_SUBSTEPS`
+    (their count is left 0), and where a path steps (`Stall`, in move order; each of those
+    moves is also among the failed).
 
     The deviation ``d1`` of the whole move as one chord (three poses) predicts the count:
     a sub-step of a smooth path deviates from its chord by ``h**2 |p''| / 8`` to leading
@@ -456,12 +465,22 @@ def substeps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
     (`_corner_failures`). Sampled densely (16 points a sub-step) on the random programs of
     tests/test_motion_identity.py, 3 seeds, 5 machines, with and without errors, no chord of
     1388 rotary segments then leaves the tolerance (largest 0.99998 of it).
+
+    A path that steps (an error table whose value changes by more than the tolerance over
+    a span shorter than a sub-step) never holds: the deviation stays at about half the step
+    however many sub-steps, and the 10 % rounds went on towards `MAX_SUBSTEPS` (a 1 um step
+    in a straightness table over 1 pm: 93 rounds, 2.9 s for the edge alone, the time times
+    the tool's points with them). A move whose deviation has not halved while its count
+    grew fourfold (a smooth path's falls 16-fold, one with a corner 4-fold) is looked into
+    (`_zoom`), and refused as soon as its path leaves the chord of a piece of
+    1 / `MAX_SUBSTEPS` of the move by more than the tolerance.
     """
     count = len(start)
     steps = np.zeros(count, dtype=np.int64)
     failed = np.zeros(count, dtype=bool)
+    stalls: list[Stall] = []
     if not count:
-        return steps, failed
+        return steps, failed, stalls
     first = deviations(paths, start, delta, np.ones(count, dtype=np.int64))
     within = first <= tolerance
     steps[within] = 1
@@ -480,30 +499,110 @@ def substeps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
     steps[rest[fine]] = _fewest(paths, start, delta, tolerance, rest[fine], lo[fine])
     todo = rest[~fine]
     n = np.ceil(_FIRST_TRIAL * np.sqrt(d8[~fine] / tolerance))
-    _raise_until_within(paths, start, delta, tolerance, steps, failed, todo, n)
+    _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, todo, n,
+                        (np.full(len(todo), _FIRST_TRIAL), d8[~fine]))
     # corners of the error tables: checked where the path turns them, raised until held
     for _ in range(64):
         bad = _corner_failures(paths, start, delta, steps, failed, tolerance)
         if not bad.size:
             break
-        _raise_until_within(paths, start, delta, tolerance, steps, failed, bad,
+        _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, bad,
                             np.ceil(steps[bad] * 1.25 + 1))
-    return steps, failed
+    return steps, failed, sorted(stalls, key=lambda stall: stall.move)
 
 
-def _raise_until_within(paths, start, delta, tolerance, steps, failed, todo, n) -> None:
+@dataclass(frozen=True)
+class Stall:
+    """A move whose chords do not converge on its path: it leaves the chord of a piece of
+    at most 1 / `MAX_SUBSTEPS` of the move by more than the tolerance (a step).
+
+    Attributes
+    ----------
+    move : int
+        The move, an index into the moves given to `substeps`.
+    low, high : float
+        The piece, as fractions of the move.
+    deviation : float, m
+        The piece's deviation from its chord (the largest over the tool points).
+    tried : tuple of (int, float)
+        (sub-steps, the move's deviation in m) where the deviation was found not to shrink:
+        the earlier count and the later.
+    """
+
+    move: int
+    low: float
+    high: float
+    deviation: float
+    tried: tuple[tuple[int, float], tuple[int, float]]
+
+
+def _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, todo, n,
+                        since=None) -> None:
     """Counts ``n`` for moves ``todo``, raised by 10 % until their midpoints hold (into
-    ``steps``; moves beyond `MAX_SUBSTEPS` into ``failed``)."""
+    ``steps``; moves beyond `MAX_SUBSTEPS` into ``failed``).
+
+    ``since``: (counts, deviations) already tried on the moves (default: their first round
+    here). A move whose deviation has not halved since while its count grew fourfold is
+    looked into (`_zoom`): if its path leaves a piece's chord by more than ``tolerance``
+    where the pieces are 1 / `MAX_SUBSTEPS` of the move, it goes into ``failed`` and
+    ``stalls``; if not, the comparison starts again from this round.
+    """
+    base_n, base_d = (None, None) if since is None else (
+        np.asarray(since[0], dtype=np.int64), np.asarray(since[1], dtype=np.float64))
     while todo.size:
         over = n > MAX_SUBSTEPS
         failed[todo[over]] = True
         todo, n = todo[~over], n[~over]
+        if base_n is not None:
+            base_n, base_d = base_n[~over], base_d[~over]
         if not todo.size:
             break
         trial = n.astype(np.int64)
-        ok = deviations(paths, start, delta, trial, todo) <= tolerance
+        dev = deviations(paths, start, delta, trial, todo)
+        ok = dev <= tolerance
         steps[todo[ok]] = trial[ok]
-        todo, n = todo[~ok], np.ceil(n[~ok] * 1.1)
+        if base_n is None:
+            base_n, base_d = trial.copy(), dev.copy()
+        due = ~ok & (trial >= 4 * base_n)
+        stuck = np.zeros(len(todo), dtype=bool)
+        for i in np.flatnonzero(due & (dev > base_d / 2)).tolist():
+            move = int(todo[i])
+            low, high, worst = _zoom(paths, start[move], delta[move], int(trial[i]))
+            if worst > tolerance:
+                stuck[i] = True
+                failed[move] = True
+                stalls.append(Stall(move, low, high, worst, (
+                    (int(base_n[i]), float(base_d[i])), (int(trial[i]), float(dev[i])))))
+        base_n[due], base_d[due] = trial[due], dev[due]
+        keep = ~ok & ~stuck
+        todo, n = todo[keep], np.ceil(n[keep] * 1.1)
+        base_n, base_d = base_n[keep], base_d[keep]
+
+
+def _zoom(paths, start, delta, n: int) -> tuple[float, float, float]:
+    """The piece of one move where its path leaves the chord most, found down to pieces of
+    at most 1 / `MAX_SUBSTEPS` of the move: its fractions (low, high) and its deviation, m.
+
+    The move's ``n`` sub-steps, then the worst one split into `_ZOOM` pieces, the worst of
+    those split again, and so on: a smooth path's deviation falls as the square of the
+    piece, so only a step in the path (narrower than the piece) keeps it above the
+    tolerance there.
+    """
+    start, delta = start[None, :], delta[None, :]
+    low, width, pieces = 0.0, 1.0, n
+    while True:
+        f = low + width * np.linspace(0.0, 1.0, pieces + 1)
+        nodes = paths.positions(_columns(start, delta, f), _blocks(len(f)))
+        mids = paths.positions(_columns(start, delta, (f[:-1] + f[1:]) / 2),
+                               _blocks(pieces))
+        square = sum((mids[c] - (nodes[c][:-1] + nodes[c][1:]) / 2) ** 2 for c in range(3))
+        if np.ndim(square) == 2:
+            square = square.max(axis=1)
+        j = int(np.argmax(square))
+        low, width = float(f[j]), float(f[j + 1] - f[j])
+        if width * MAX_SUBSTEPS <= 1.0:
+            return low, low + width, float(np.sqrt(square[j]))
+        pieces = _ZOOM
 
 
 def _corner_failures(paths, start, delta, steps, failed, tolerance) -> np.ndarray:

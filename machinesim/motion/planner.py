@@ -185,9 +185,17 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                     f"tolerance {chord_tolerance * 1e9:g} nm, and no chord follows a step; give "
                     "the table the same value a turn apart",
                     source=source, line=int(lines[turning[move]]))
-            found, failed = substeps(paths, starts[turning], delta[turning], chord_tolerance)
+            found, failed, stalls = substeps(paths, starts[turning], delta[turning],
+                                             chord_tolerance)
             if failed.any():
-                bad = int(turning[np.argmax(failed)])
+                first = int(np.argmax(failed))
+                bad = int(turning[first])
+                stall = next((s for s in stalls if s.move == first), None)
+                if stall is not None:
+                    raise NCProgramError(
+                        _stall_message(stall, paths, axes, rotary, starts[bad], delta[bad],
+                                       chord_tolerance),
+                        source=source, line=int(lines[bad]))
                 what = "a rotary move" if np.any(delta[bad, rotary] != 0.0) else "a move"
                 raise NCProgramError(
                     f"{what} would need more than {MAX_SUBSTEPS} sub-steps to keep the "
@@ -225,6 +233,70 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     notes = slow_move_note(durations, kinds, lines, feeds)
     return Trajectory(axes, q, t, offsets, kinds_out, lines_out, float(clock[-1]), cutting,
                       notes=(notes,) if notes else (), peak_lag=peak_lag)
+
+
+def _stall_message(stall, paths, axes, rotary, start, delta, tolerance) -> str:
+    """Why a move's chords do not converge (`chords.Stall`): where its path steps, by how
+    much, and the error table that steps there if one does."""
+    def value(i, x):
+        return f"{math.degrees(x):.6g} deg" if rotary[i] else f"{x / _M_PER_MM:.6g} mm"
+
+    moving = np.flatnonzero(delta != 0.0).tolist()
+    at = start + (stall.low + stall.high) / 2 * delta
+    where = ", ".join(f"{axes[i]} = {value(i, at[i])}" for i in moving)
+    span = ", ".join(f"{axes[i]} {value(i, abs(delta[i]) * (stall.high - stall.low))}"
+                     for i in moving)
+    (n0, d0), (n1, d1) = stall.tried
+    cause = _stepping_table(stall, paths, axes, rotary, start, delta)
+    return (
+        f"a move whose path steps: its chords do not converge on it ({d0 * 1e9:.3g} nm off "
+        f"at {n0} sub-steps, still {d1 * 1e9:.3g} nm at {n1}, where a smooth path's "
+        f"deviation falls as 1/n**2); at {where} the path leaves the chord of a piece of "
+        f"{span} (1/{round(1 / (stall.high - stall.low))} of the move, finer than "
+        f"{MAX_SUBSTEPS} sub-steps split it) by {stall.deviation * 1e9:.3g} nm, more than "
+        f"the chord tolerance {tolerance * 1e9:g} nm. "
+        + (cause or "An error model whose value changes by about that over less than "
+           "that span does this (a step, which no chord follows); smooth it there, or "
+           "raise chord_tolerance above the step (--chord-nm on the command line)"))
+
+
+def _stepping_table(stall, paths, axes, rotary, start, delta) -> str | None:
+    """The steepest segment of an error table on a moving axis around the piece where the
+    path steps, described, or None."""
+    best = None
+    for axis, table, name in paths.tables:
+        if delta[axis] == 0.0:
+            continue
+        ends = sorted(start[axis] + f * delta[axis] for f in (stall.low, stall.high))
+        pad = ends[1] - ends[0]
+        lo, hi = ends[0] - pad, ends[1] + pad
+        p, v = table.positions, table.values
+        period = getattr(table, "period", None)
+        centre = (lo + hi) / 2
+        if period is not None and not p[0] <= centre <= p[-1]:
+            # read a whole number of turns back into the table, as `each_turn` does
+            shift = p[0] + float(np.mod(centre - p[0], period)) - centre
+            lo, hi = lo + shift, hi + shift
+        first = max(int(np.searchsorted(p, lo, side="right")) - 1, 0)
+        last = min(int(np.searchsorted(p, hi, side="left")), len(p) - 1)
+        for j in range(first, last):
+            change = abs(float(v[j + 1] - v[j]))
+            slope = change / float(p[j + 1] - p[j])
+            if best is None or slope > best[0]:
+                best = (slope, axis, name, j, p, v)
+    if best is None:
+        return None
+    _, axis, name, j, p, v = best
+    symbol = name.rpartition(".")[2]
+    unit, per = ("urad", 1e-6) if symbol[1:2] in ("A", "B", "C") else ("um", 1e-6)
+
+    def at(x):
+        return f"{math.degrees(x):.9g} deg" if rotary[axis] else f"{x / _M_PER_MM:.9g} mm"
+
+    return (f"The error table {name} changes from {v[j] / per:.6g} to {v[j + 1] / per:.6g} "
+            f"{unit} between {axes[axis]} = {at(p[j])} and {at(p[j + 1])} there, a step no "
+            "chord follows: give the change a span the sub-steps can follow, or raise "
+            "chord_tolerance above the step (--chord-nm on the command line)")
 
 
 def slow_move_note(durations, kinds, lines, feeds) -> str | None:
