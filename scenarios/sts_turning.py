@@ -38,14 +38,15 @@ from machinesim.budget import realism_budget
 from machinesim.cutting.turning import edge_path_from_poses
 from machinesim.errors import ErrorModel
 from machinesim.experiment import run
-from machinesim.procedures.sts_plans import PAPER, TABLE5
-from machinesim.procedures.sts_turning import CASES, STSTurning
+from machinesim.procedures.sts_plans import PAPER, TABLE5, TEST_SPHERE
+from machinesim.procedures.sts_turning import CASES, DEPTH_RANGE, STSTurning, plan_depths
 from machinesim.report import ReportFolder
 from machinesim.scenario_runs import (
     errors_file,
     progress_printer,
     realism_from,
     realism_options,
+    refuse_beyond_capture,
     run_scenario,
     scenario_arguments,
 )
@@ -81,6 +82,7 @@ def report(args) -> None:
     procedure = STSTurning()
     stage = progress_printer("sts_turning")
     lab = make_lab(realism)
+    refuse_too_deep(args, lab.machine, errors)
     result = run(procedure, lab, progress=stage("run"))
     budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
                             progress=stage)
@@ -95,6 +97,35 @@ def report(args) -> None:
     print(against_axis)
     out.publish(last=True)
     print(f"Report written to {out.final} ({time.perf_counter() - began:.1f} s)")
+
+
+#: The errors that set the tool tip's height against the workpiece, named when it is too low.
+HEIGHT_KEYS = ("tool.z", "workpiece.z", "tool.rx", "tool.ry", "workpiece.alpha",
+               "workpiece.beta")
+
+
+def refuse_too_deep(args, machine, errors) -> None:
+    """Refuse, before anything is cut, injected ``errors`` that put the tool tip more than
+    `DEPTH_RANGE` below the test sphere's programmed tips (the most over its program, through
+    ``machine``'s kinematics), naming the ``--errors`` file and the keys that set the height:
+    the tool test would cut the sphere that much deeper and refuse it only after the cut and
+    a fit of minutes (a workpiece set 50 um high: about 150 s to 'did not converge')."""
+    path = TEST_SPHERE.path(STSTurning().nose_radius)
+    q = np.zeros((path.x.size, len(machine.axes)))
+    for letter, values in (("X", path.x), ("Z", path.z), ("C", path.c)):
+        q[:, machine.axes.index(letter)] = values
+    below = float(np.max(machine.tool_pose(q)[:, 2, 3] - machine.tool_pose(q, errors)[:, 2, 3]))
+    if below <= DEPTH_RANGE:
+        return
+    parameters = errors.parameters()
+    keys = [name for name in HEIGHT_KEYS if parameters.get(name)] or ["its errors"]
+    pole, rim = plan_depths()
+    refuse_beyond_capture(
+        args, {}, keys,
+        f"the tool tip {below / UM:.4g} um below the test sphere's programmed surface",
+        f"(the test sphere is cut {pole / UM:.2g} to {rim / UM:.2g} um deep; the tool-error "
+        f"fit reads dx and dR from a sphere cut at most {DEPTH_RANGE / UM:g} um deeper)",
+        f"the tool tip at most {DEPTH_RANGE / UM:g} um below it (tool.z, workpiece.z)")
 
 
 def tool_against_axis(out: ReportFolder, lab, result) -> str:

@@ -166,18 +166,77 @@ def test_the_scenario_names_its_errors_file_when_a_value_does_not_fit(tmp_path):
             ) in result.stderr
 
 
-def test_a_test_sphere_cut_far_deeper_than_programmed_is_refused_naming_the_depth():
+def test_a_test_sphere_cut_far_deeper_than_programmed_is_refused_before_the_fit(monkeypatch):
     # the workpiece set 500 um up (scenarios/sts_turning.py --errors with [workpiece]
     # delta_um = [0, 0, 500]): the fit stepped where its model is NaN and scipy's ValueError
-    # "array must not contain infs or NaNs" ended the scenario in a traceback
+    # "array must not contain infs or NaNs" ended the scenario in a traceback; 50 um up it
+    # gave up after 250 s. The sphere's depth is read before the fit, which is not run
+    from machinesim.procedures import sts_turning
+
+    def no_fit(*args, **kwargs):
+        raise AssertionError("the tool errors were fitted")
+
+    monkeypatch.setattr(sts_turning, "identify_tool_errors", no_fit)
     lab = machinesim.Lab("sts_lathe", {"workpiece": {"delta_um": [0.0, 0.0, 500.0]}},
                          noise=False)
     with pytest.raises(InputError) as refused:
         STSTurning().measure(lab)
     assert str(refused.value) == (
-        "key 'tool_test': tool_test: tool error fit did not converge: it stepped to where its "
-        "model is not finite (a map far from the design's form); the turned test sphere lies "
-        "-500 um from the design's heights (median over the window; the tool-error model "
-        "takes a sphere cut a few um deep). A tool or workpiece set that far in Z (tool.z, "
-        "workpiece.z) cuts so, or a tool far off the spindle axis (tool.x, tool.y): set them "
-        "within a few um first")
+        "key 'tool_test': tool_test: the turned test sphere lies -500 um from the design's "
+        "heights (median over the window), cut deeper than the 3 um below its programmed "
+        "surface the tool-error fit reads dx and dR from (the plan cuts it 1 to 4.6 um "
+        "deep). A tool or workpiece set that far in Z (tool.z, workpiece.z) cuts so: set "
+        "them within 3 um first")
+
+
+def test_the_plan_s_depths_are_the_stock_s_top_over_the_sphere():
+    from machinesim.procedures.sts_turning import plan_depths
+
+    # 1 um over the pole; at the turned radius 0.12 mm the 2 mm sphere lies
+    # Rs - sqrt(Rs^2 - r^2) = 3.6032 um lower
+    rim = 2e-3 - (2e-3**2 - 0.12e-3**2) ** 0.5
+    assert plan_depths() == pytest.approx((1e-6, 1e-6 + rim), rel=1e-9)
+    assert f"{rim * 1e6:.5g}" == "3.6032"
+
+
+def _args(tmp_path, toml):
+    path = tmp_path / "errors.toml"
+    path.write_text(toml)
+    scenario = _scenario()
+    parser = scenario.scenario_arguments("sts", str(tmp_path / "out"))
+    scenario.realism_options(parser)
+    args = parser.parse_args(["--errors", str(path), "--budget", "off", "--realism", "ideal",
+                              "--out", str(tmp_path / "out")])
+    return scenario, args, path
+
+
+def test_the_scenario_refuses_a_workpiece_set_too_high_before_anything_is_cut(tmp_path,
+                                                                            monkeypatch):
+    # [workpiece] delta_um = [0, 0, 50]: the workpiece frame 50 um up puts the tool tip 50 um
+    # below every programmed tip; the tool test cut the sphere and fitted for about 150 s
+    # before it refused
+    scenario, args, path = _args(tmp_path, "[workpiece]\ndelta_um = [0, 0, 50]\n")
+    turns = []
+    monkeypatch.setattr(machinesim.Lab, "turn", lambda *a, **k: turns.append(a))
+    with pytest.raises(InputError) as refused:
+        scenario.report(args)
+    assert not turns
+    assert str(refused.value) == (
+        f"key 'errors': --errors {path} (workpiece.z): the tool tip 50 um below the test "
+        "sphere's programmed surface exceeds the plan's capture range (the test sphere is cut "
+        "1 to 4.6 um deep; the tool-error fit reads dx and dR from a sphere cut at most 3 "
+        "um deeper): expected the tool tip at most 3 um below it (tool.z, workpiece.z)")
+
+
+def test_a_height_just_inside_the_depth_range_is_taken(tmp_path):
+    # 2.9 um up: within the 3 um; a tool 4 um down (tool.z -4 um: the tip 4 um below, where
+    # the fit read dR -1815 um for 100) is refused naming tool.z
+    scenario = _scenario()
+    machine = machinesim.load_machine("sts_lathe")
+    inside = ErrorModel.from_dict({"workpiece": {"delta_um": [0.0, 0.0, 2.9]},
+                                   "tool": {"offset_um": [-3.5, -3.5, 0.0]}})
+    assert scenario.refuse_too_deep(None, machine, inside) is None
+    _, args, path = _args(tmp_path, "[tool]\noffset_um = [0, 0, -4]\n")
+    with pytest.raises(InputError, match=(
+            rf"--errors {re.escape(str(path))} \(tool\.z\): the tool tip 4 um below")):
+        scenario.refuse_too_deep(args, machine, ErrorModel.from_toml(path))

@@ -77,6 +77,16 @@ D_RADIUS_RANGE = (-850 * UM, 300 * UM)
 #: off) dy = 10 um is read 0.4 % off, 15 and 20 um 1.7-2 %, 30 um 12 %, and at 40 um the
 #: sphere still fits (0.08 nm) but reads dR -1815 um for 100 um.
 CORE_LIMIT = 20 * UM
+#: Deepest (m) the test sphere may be cut below its programmed surface for the tool test:
+#: the plan cuts it 1 to 4.6 um deep (the stock's top `TEST_SPHERE.top` over the sphere's
+#: pole and its rim), and a tool or workpiece set lower in Z cuts it deeper. The fit of the
+#: tool errors starts from the programmed heights (piston 0), and from a sphere cut deeper
+#: it may settle on another minimum: on the engine's turned map (dx = dy = -3.5 um, dR = 100
+#: um, no noise) it read dx and dR alike 0, 1.5, 2.5 and 3 um deeper, but dR = -1815 um 4, 6,
+#: 8 and 20 um deeper (with a residual of 0.083 nm, which the misfit check takes), right
+#: again 5, 7, 10 and 15 um deeper, each in 10-165 s; through the lab, 50 um deeper, it gave
+#: up after 250 s (500 function evaluations).
+DEPTH_RANGE = 3 * UM
 
 #: The cases (section 5.1): what is compensated in each.
 CASES = {"case_1": "none", "case_2": "tool", "case_3": "tool + program",
@@ -127,6 +137,9 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
         lateral[piece] = interferometer.lateral_sigma
     sphere, plane = maps["sphere"], maps["plane"]
     _refuse_unseen_cut(sphere, label)
+    depth = _depth_from_design(sphere)
+    if depth < -DEPTH_RANGE:  # the fit would take minutes to fail, or read nonsense
+        raise InputError(f"{label}: {_too_deep(depth)}", key="tool_test")
     try:
         found = identify_tool_errors(TEST_SPHERE.design(), sphere.x, sphere.y, sphere.z,
                                      core_step=TEST_SPHERE.core_step,
@@ -187,6 +200,24 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
                                lateral_sigma=lateral["plane"])
     return ToolTest(found.dx, centre.dy, found.d_radius, found.dy_abs, dx_std=found.dx_std,
                     dy_std=centre.dy_std, d_radius_std=found.d_radius_std)
+
+
+def _too_deep(depth: float) -> str:
+    """Why a test sphere cut ``depth`` (m, negative) from its design is not read."""
+    return (f"the turned test sphere lies {depth / UM:+.4g} um from the design's heights "
+            f"(median over the window), cut deeper than the {DEPTH_RANGE / UM:g} um below "
+            f"its programmed surface the tool-error fit reads dx and dR from (the plan cuts "
+            f"it {plan_depths()[0] / UM:.2g} to {plan_depths()[1] / UM:.2g} um deep). A tool or "
+            "workpiece set that far in Z (tool.z, workpiece.z) cuts so: set them within "
+            f"{DEPTH_RANGE / UM:g} um first")
+
+
+def plan_depths() -> tuple[float, float]:
+    """How deep (m) the test sphere's plan cuts, at its pole and at its turned radius: the
+    stock's top less the design's heights there."""
+    design = TEST_SPHERE.design()
+    return tuple(TEST_SPHERE.top - float(design(r, 0.0))
+                 for r in (0.0, TEST_SPHERE.turned_radius))
 
 
 def _depth_from_design(sphere) -> float:
