@@ -2,6 +2,7 @@
 readings show; the scenario's tool-against-axis check and its errors file."""
 
 import importlib.util
+import math
 import re
 import subprocess
 import sys
@@ -183,10 +184,22 @@ def test_a_test_sphere_cut_far_deeper_than_programmed_is_refused_before_the_fit(
         STSTurning().measure(lab)
     assert str(refused.value) == (
         "key 'tool_test': tool_test: the turned test sphere lies -500 um from the design's "
-        "heights (median over the window), cut deeper than the 3 um below its programmed "
-        "surface the tool-error fit reads dx and dR from (the plan cuts it 1 to 4.6 um "
-        "deep). A tool or workpiece set that far in Z (tool.z, workpiece.z) cuts so: set "
-        "them within 3 um first")
+        "heights (median over the window), cut deeper than the 15 um below its programmed "
+        "surface the tool-error fit reads dx and dR from, with 1.57 um for what dx and dR "
+        "within the test's ranges move the median (the plan cuts it 1 to 4.6 um deep). A "
+        "tool or workpiece set that far in Z (tool.z, workpiece.z) cuts so: set them within "
+        "15 um first")
+
+
+def test_the_depth_slack_is_the_slope_times_dx_and_the_nose_term_at_the_read_radius():
+    from machinesim.procedures.sts_turning import depth_slack
+
+    # at 0.1 mm on the 2 mm sphere the slope is 0.1 / sqrt(4 - 0.01) = 0.0500626; 10 um of
+    # dx moves the heights by 0.500626 um, 850 um of dR by 850 (1 / cos phi - 1) um
+    slope = 0.1 / (4.0 - 0.01) ** 0.5
+    nose = 850.0 * (1.0 / math.cos(math.atan(slope)) - 1.0)
+    assert depth_slack() == pytest.approx((10.0 * slope + nose) * 1e-6, rel=1e-12)
+    assert f"{10 * slope:.3f} {nose:.3f}" == "0.501 1.064"
 
 
 def test_the_plan_s_depths_are_the_stock_s_top_over_the_sphere():
@@ -224,19 +237,33 @@ def test_the_scenario_refuses_a_workpiece_set_too_high_before_anything_is_cut(tm
     assert str(refused.value) == (
         f"key 'errors': --errors {path} (workpiece.z): the tool tip 50 um below the test "
         "sphere's programmed surface exceeds the plan's capture range (the test sphere is cut "
-        "1 to 4.6 um deep; the tool-error fit reads dx and dR from a sphere cut at most 3 "
-        "um deeper): expected the tool tip at most 3 um below it (tool.z, workpiece.z)")
+        "1 to 4.6 um deep; the tool-error fit reads dx and dR from a sphere cut at most 15 "
+        "um deeper): expected the tool tip at most 15 um below it (tool.z, workpiece.z)")
 
 
 def test_a_height_just_inside_the_depth_range_is_taken(tmp_path):
-    # 2.9 um up: within the 3 um; a tool 4 um down (tool.z -4 um: the tip 4 um below, where
-    # the fit read dR -1815 um for 100) is refused naming tool.z
+    # 14.9 um up: within the 15 um; a tool 16 um down (tool.z -16 um: the tip 16 um below)
+    # is refused naming tool.z
     scenario = _scenario()
     machine = machinesim.load_machine("sts_lathe")
-    inside = ErrorModel.from_dict({"workpiece": {"delta_um": [0.0, 0.0, 2.9]},
+    inside = ErrorModel.from_dict({"workpiece": {"delta_um": [0.0, 0.0, 14.9]},
                                    "tool": {"offset_um": [-3.5, -3.5, 0.0]}})
     assert scenario.refuse_too_deep(None, machine, inside) is None
-    _, args, path = _args(tmp_path, "[tool]\noffset_um = [0, 0, -4]\n")
+    _, args, path = _args(tmp_path, "[tool]\noffset_um = [0, 0, -16]\n")
     with pytest.raises(InputError, match=(
-            rf"--errors {re.escape(str(path))} \(tool\.z\): the tool tip 4 um below")):
+            rf"--errors {re.escape(str(path))} \(tool\.z\): the tool tip 16 um below")):
         scenario.refuse_too_deep(args, machine, ErrorModel.from_toml(path))
+
+
+def test_a_workpiece_set_high_within_the_range_reads_the_tool_errors():
+    # 14.5 um high, Table 5's tool errors: the sphere is cut 14.5 um deeper; started from
+    # the programmed heights the fit read dR = -1815 um for 100 (2.9 um high already), from
+    # the map's median it reads them as with the workpiece set right (dR 99.88 um there)
+    errors = {"tool": {"offset_um": [-3.5, -3.5, 0.0]},
+              "tool_geometry": {"nose_radius_um": 100.0},
+              "workpiece": {"delta_um": [0.0, 0.0, 14.5]}}
+    found = STSTurning().measure(machinesim.Lab("sts_lathe", errors, noise=False))
+    tool = found["tool_test"]
+    assert tool.d_radius == pytest.approx(100e-6, rel=0.01)
+    assert tool.dx == pytest.approx(-3.5e-6, abs=20e-9)
+    assert tool.dy == pytest.approx(-3.5e-6, abs=20e-9)

@@ -35,3 +35,22 @@ def test_bad_map_is_named():
     x = np.linspace(-1e-4, 1e-4, 5)
     with pytest.raises(InputError, match="heights"):
         identify_tool_errors(DESIGN, x, x, np.zeros((4, 5)), core_step=5e-8, aperture=1e-4)
+
+
+def test_a_sphere_cut_deeper_than_programmed_reads_the_same_tool_errors():
+    """Table 5's tool (dx = dy = -3.5 um, dR = 100 um) on paper 004's test sphere (Rs 2 mm,
+    nose 0.5 mm), cut as programmed and 4 um deeper (a workpiece set 4 um high): the map is
+    the same less 4 um but for the uncut core, and the fit reads the same dx and dR. Started
+    from the programmed heights it settled on dR = -1815 um for the deeper one, with a
+    residual (0.083 nm) as small as the right one's."""
+    design = sp.sphere(2e-3)
+    spiral = sp.Spiral(0.12e-3, FEED)
+    tp = sp.tool_path(sp.cutting_points(design, spiral, sp.constant_angle(spiral, 0.02)),
+                      0.5e-3)
+    x = np.linspace(-0.1e-3, 0.1e-3, 401)
+    found = [identify_tool_errors(design, x, x, turned_surface(
+        EdgePath(tp.c, tp.x - 3.5e-6, -3.5e-6, tp.z - depth), 0.6e-3, x, x, top=1e-6),
+        core_step=50e-9, aperture=0.1e-3) for depth in (0.0, 4e-6)]
+    assert found[0].d_radius == pytest.approx(100e-6, rel=1e-3)
+    assert found[1].d_radius == pytest.approx(found[0].d_radius, abs=1e-12)
+    assert found[1].dx == pytest.approx(found[0].dx, abs=1e-12)

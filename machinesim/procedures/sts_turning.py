@@ -27,6 +27,7 @@ errors and the encoder recording, never the injected values (docs/procedures/sts
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -79,14 +80,12 @@ D_RADIUS_RANGE = (-850 * UM, 300 * UM)
 CORE_LIMIT = 20 * UM
 #: Deepest (m) the test sphere may be cut below its programmed surface for the tool test:
 #: the plan cuts it 1 to 4.6 um deep (the stock's top `TEST_SPHERE.top` over the sphere's
-#: pole and its rim), and a tool or workpiece set lower in Z cuts it deeper. The fit of the
-#: tool errors starts from the programmed heights (piston 0), and from a sphere cut deeper
-#: it may settle on another minimum: on the engine's turned map (dx = dy = -3.5 um, dR = 100
-#: um, no noise) it read dx and dR alike 0, 1.5, 2.5 and 3 um deeper, but dR = -1815 um 4, 6,
-#: 8 and 20 um deeper (with a residual of 0.083 nm, which the misfit check takes), right
-#: again 5, 7, 10 and 15 um deeper, each in 10-165 s; through the lab, 50 um deeper, it gave
-#: up after 250 s (500 function evaluations).
-DEPTH_RANGE = 3 * UM
+#: pole and its rim), and a tool or workpiece set lower in Z cuts it deeper, the uncut core
+#: left that much taller. Through the lab (Table 5's tool errors, a workpiece set 2.9, 5, 8,
+#: 10 and 15 um high) the fit read dx and dR as for 0 (99.88 um for 100, each in 14-25 s,
+#: `identification.turning_tool.PISTON_START`); 20 um high it read dR = -1815 um, and 50 um
+#: high it gave up after 250 s.
+DEPTH_RANGE = 15 * UM
 
 #: The cases (section 5.1): what is compensated in each.
 CASES = {"case_1": "none", "case_2": "tool", "case_3": "tool + program",
@@ -138,7 +137,7 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
     sphere, plane = maps["sphere"], maps["plane"]
     _refuse_unseen_cut(sphere, label)
     depth = _depth_from_design(sphere)
-    if depth < -DEPTH_RANGE:  # the fit would take minutes to fail, or read nonsense
+    if depth < -(DEPTH_RANGE + depth_slack()):  # the fit would take minutes to fail
         raise InputError(f"{label}: {_too_deep(depth)}", key="tool_test")
     try:
         found = identify_tool_errors(TEST_SPHERE.design(), sphere.x, sphere.y, sphere.z,
@@ -206,10 +205,24 @@ def _too_deep(depth: float) -> str:
     """Why a test sphere cut ``depth`` (m, negative) from its design is not read."""
     return (f"the turned test sphere lies {depth / UM:+.4g} um from the design's heights "
             f"(median over the window), cut deeper than the {DEPTH_RANGE / UM:g} um below "
-            f"its programmed surface the tool-error fit reads dx and dR from (the plan cuts "
-            f"it {plan_depths()[0] / UM:.2g} to {plan_depths()[1] / UM:.2g} um deep). A tool or "
-            "workpiece set that far in Z (tool.z, workpiece.z) cuts so: set them within "
-            f"{DEPTH_RANGE / UM:g} um first")
+            f"its programmed surface the tool-error fit reads dx and dR from, with "
+            f"{depth_slack() / UM:.2f} um for what dx and dR within the test's ranges move "
+            f"the median (the plan cuts it {plan_depths()[0] / UM:.2g} to "
+            f"{plan_depths()[1] / UM:.2g} um deep). A tool or workpiece set that far in Z "
+            f"(tool.z, workpiece.z) cuts so: set them within {DEPTH_RANGE / UM:g} um first")
+
+
+def depth_slack() -> float:
+    """The most (m) a tool offset dx within `DX_RANGE` and a nose radius error dR within
+    `D_RADIUS_RANGE` move the test sphere's heights within its read radius: dx shifts the
+    sphere sideways, by dx times its slope, and dR lowers it by dR (1 / cos phi - 1)
+    (`machinesim.cutting.tool_form_error.nose_radius_error`, paper 004 eq 20), both largest
+    at the read radius. The map's median depth is taken for the tool's height only beyond
+    `DEPTH_RANGE` by more than this: 0.50 + 1.06 um."""
+    r, rs = TEST_SPHERE.read_half_width, TEST_SPHERE.radius
+    slope = r / math.sqrt(rs * rs - r * r)
+    return (slope * max(abs(v) for v in DX_RANGE)
+            + max(abs(v) for v in D_RADIUS_RANGE) * (math.sqrt(1.0 + slope * slope) - 1.0))
 
 
 def plan_depths() -> tuple[float, float]:
