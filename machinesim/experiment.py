@@ -38,7 +38,7 @@ from machinesim.errors.model import _PARAMETER_RE
 from machinesim.exceptions import InputError, brief
 
 __all__ = ["LAB_USES", "Evaluation", "Figure", "Identified", "Procedure", "Result",
-           "check_identified", "check_instance", "check_lab", "run"]
+           "check_identified", "check_instance", "check_lab", "fit_notes", "run"]
 
 #: What a procedure may read of its lab beyond the machine's error parameters, as its
 #: ``lab_uses`` names it, step by step (``"measure"``, ``"evaluate"``): the instruments it
@@ -145,13 +145,34 @@ class Identified:
         (m, rad); std NaN where the procedure gives none. A bare number means std unknown.
     detail : Any
         The procedure's own result (its paper's quantities), for `compensate` and reports.
+    notes : tuple of str
+        What the identification's fits said a reader should know before trusting the values
+        (`machinesim.identification.fit.Estimate.notes`: a combination the readings cannot
+        see, two parameters they barely tell apart, readings that do not fit the model,
+        lengths given in um or mm), each led by the fit it comes from (`fit_notes`); from
+        the measurements alone, as the rest. identified.md lists them under its table and
+        summary.json under ``notes``.
     """
 
     parameters: Mapping[str, tuple[float, float]]
     detail: Any = None
+    notes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "parameters", _parameters(self.parameters, "parameters"))
+        notes = self.notes
+        if isinstance(notes, str) or not isinstance(notes, tuple | list) or not all(
+                isinstance(n, str) and n.strip() for n in notes):
+            raise InputError(f"Expected Identified's notes as a tuple of non-empty strings, "
+                             f"got {brief(repr(notes))}", key="notes")
+        object.__setattr__(self, "notes", tuple(notes))
+
+
+def fit_notes(fit: str, estimate) -> tuple[str, ...]:
+    """The notes of ``estimate`` (a `machinesim.identification.fit.Estimate`), each led by
+    ``fit``, the fit that made it (``"fit_check (heights)"``): for an `Identified`'s
+    ``notes``."""
+    return tuple(f"{fit}: {note}" for note in estimate.notes)
 
 
 @dataclass(frozen=True)
@@ -252,6 +273,12 @@ class Result:
     background: Mapping = field(default_factory=dict)
     polynomials: tuple[str, ...] = ()
 
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """The identification's notes (`Identified.notes`; none from an ``identification``
+        that is no `Identified`)."""
+        return tuple(getattr(self.identification, "notes", ()))
+
     def figure(self, name: str) -> Figure:
         """The figure called ``name``."""
         for f in self.figures:
@@ -274,6 +301,7 @@ class Result:
             "elapsed_s": dict(self.elapsed_s),
             **({"not_identified": list(self.not_identified)} if self.not_identified else {}),
             **({"background": dict(self.background)} if self.background else {}),
+            **({"notes": list(notes)} if (notes := self.notes) else {}),
         }
 
 

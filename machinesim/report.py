@@ -84,8 +84,9 @@ def folder_key(path) -> str:
 
 def identified_notes(result) -> str:
     """The notes under a result's table of identified parameters (identified.md; "" when
-    there are none): what was injected and not identified, and what the std leaves out
-    when the lab's instruments had no noise."""
+    there are none): what was injected and not identified, what the std leaves out when
+    the lab's instruments had no noise, and a list of what the identification's fits noted
+    (`machinesim.experiment.Identified.notes`)."""
     notes = []
     if result.not_identified:
         notes.append(
@@ -100,7 +101,11 @@ def identified_notes(result) -> str:
             "rounding leaves, and an error beyond it is the procedure's own approximation "
             "(its model of the machine and the part) or a bias of the lab, which no std "
             "holds.")
-    return " ".join(notes)
+    paragraphs = [" ".join(notes)] if notes else []
+    if result.notes:
+        paragraphs.append("The identification's fits noted, from the readings alone:\n\n"
+                          + "\n".join(f"- {note}" for note in result.notes))
+    return "\n\n".join(paragraphs)
 
 
 class ReportFolder:
@@ -339,8 +344,8 @@ def check_summary(data: Mapping) -> None:
     or null); ``figures`` is a list of objects with `FIGURE_KEYS` (numbers or null, the
     ``unit`` one of `machinesim.experiment.FIGURE_UNITS`, an optional ``note`` and an
     optional ``after_std`` >= 0); ``seed`` >= 0; ``files`` a list of names; the optional
-    ``background`` ``{"file": name or null, "nonzero_count": n >= 1}``; every other numeric
-    key names its unit.
+    ``background`` ``{"file": name or null, "nonzero_count": n >= 1}``; the optional
+    ``notes`` a list of non-empty strings; every other numeric key names its unit.
     """
     from machinesim.errors.model import _PARAMETER_RE
     from machinesim.experiment import FIGURE_UNITS
@@ -410,6 +415,11 @@ def check_summary(data: Mapping) -> None:
                 or background["nonzero_count"] < 1):
             refuse('expected \'background\' as {"file": name or null, "nonzero_count": n >= 1}'
                    f", got {background!r}", "background")
+    if "notes" in data:
+        notes = data["notes"]
+        if not isinstance(notes, list) or not all(isinstance(n, str) and n.strip()
+                                                  for n in notes):
+            refuse(f"expected 'notes' as a list of non-empty strings, got {notes!r}", "notes")
     rest = {k: v for k, v in data.items() if k not in SUMMARY_KEYS and k != "budget"}
     check_units(rest)
 

@@ -265,6 +265,67 @@ def test_run_tells_its_progress_step_by_step_in_order():
     assert run(Counting(), Lab("robonano_a0ib", TRUTH, noise=False)).figures == result.figures
 
 
+def test_what_the_identifications_fit_noted_reaches_the_report(tmp_path):
+    """`Identified.notes` (a procedure's fits' `Estimate.notes`, `fit_notes`) go through `run`
+    into summary.json's ``notes`` and under identified.md's table, word for word; a run
+    whose fits noted nothing has neither. Readings along x alone cannot tell workpiece.x
+    from tool.x (both move the tool against the workpiece along x): the fit names the
+    combination it cannot see."""
+    from machinesim.experiment import Evaluation, Figure, Identified, fit_notes, run
+    from machinesim.identification.fit import fit, observations
+    from machinesim.report import ReportFolder, check_summary
+
+    class Both:
+        name, paper = "both", "none"
+
+        def __init__(self, names):
+            self.names = names
+
+        def measure(self, lab):
+            return lab.machine, [3e-6, 3e-6]
+
+        def identify(self, measurements):
+            machine, values = measurements
+            q = np.zeros((2, len(machine.axes)))
+            q[1, 0] = 0.01
+            estimate = fit(machine, observations(q, [1.0, 0.0, 0.0], values, 1e-9),
+                           self.names)
+            return Identified({n: (v, s) for n, v, s in zip(
+                estimate.names, estimate.values, estimate.std, strict=True)}, None,
+                fit_notes("both's fit", estimate))
+
+        def compensate(self, identified):
+            return {}
+
+        def evaluate(self, lab, identified, programs):
+            return Evaluation((Figure("x", "um", 1.0, 0.0),))
+
+    lab = Lab("robonano_a0ib", {"workpiece": {"delta_um": [3.0, 0.0, 0.0]}}, seed=1)
+    result = run(Both(["workpiece.x", "tool.x"]), lab)
+    note = ("both's fit: rank 1 of 2: the readings cannot see the combination workpiece.x + "
+            "tool.x: its value is the prior's, so workpiece.x, tool.x are not identified on "
+            "their own and their values are one solution among many; a compensation through "
+            "them is right only for what the readings saw. Fix a datum (leave a parameter "
+            "out of the fit) or add readings that see it")
+    assert result.identification.notes == result.notes == (note,)
+    folder = ReportFolder(tmp_path / "warned")
+    folder.write_result(result)
+    summary = json.loads((tmp_path / "warned/summary.json").read_text())
+    assert summary["notes"] == [note]
+    check_summary(summary)
+    assert (tmp_path / "warned/identified.md").read_text().endswith(
+        "\n\nThe identification's fits noted, from the readings alone:\n\n- " + note + "\n")
+    # workpiece.x alone is seen: no note, no "notes" key, identified.md as before
+    quiet = run(Both(["workpiece.x"]), lab)
+    assert quiet.notes == () and "notes" not in quiet.summary()
+    ReportFolder(tmp_path / "quiet").write_result(quiet)
+    assert "fits noted" not in (tmp_path / "quiet/identified.md").read_text()
+    assert "notes" not in json.loads((tmp_path / "quiet/summary.json").read_text())
+    for bad in ("a note", [note, ""], (3,)):
+        with pytest.raises(InputError, match="key 'notes'.*tuple of non-empty strings"):
+            Identified({}, None, bad)
+
+
 def test_injected_parameters_the_procedure_does_not_identify_are_named(tmp_path):
     """A procedure identifies its model's parameters; what else was injected is listed, in
     Result, summary.json and identified.md, rather than left out of the report unseen (the

@@ -446,6 +446,58 @@ def test_a_budget_added_after_the_report_joins_its_summary_and_a_later_report_dr
     assert not (tmp_path / "budget.md").exists() and not (tmp_path / "budget.png").exists()
 
 
+def test_a_fit_that_warns_reaches_identified_md_and_summary_json(exact_run, tmp_path):
+    """The notes of the generic fit (`Estimate.notes`) reach the report: a reading the model
+    cannot hold, 1 um more depth at 20 deg alone, makes the heights' cross-check warn that
+    the readings do not fit the model; identified.md lists the warning under its table and
+    summary.json under ``notes``, word for word. Before, a report never said a fit warned."""
+    from dataclasses import replace
+
+    result, _ = exact_run
+    calibration = result.measurements
+    bump = 1 * UM
+    readings = tuple(replace(r, dz=r.dz + bump) if round(math.degrees(r.angle)) == 20 else r
+                     for r in calibration.readings)
+    identified = ToolRotationArm().identify(replace(calibration, readings=readings))
+    # a second way: eq 1 is linear in (1, 1 - cos t, sin t), the same at every station, and
+    # every reading has the same sigma, so ordinary least squares of the depths on that
+    # basis leaves the fit's residual: the bump's part outside the span, and the 1 nm
+    # display's rounding
+    t = np.concatenate([np.full(r.dz.size, r.angle) for r in readings])
+    dz = np.concatenate([r.dz for r in readings])
+    sigma = readings[0].dz_sigma[0]
+    assert all(np.all(r.dz_sigma == sigma) for r in readings)
+    basis = np.column_stack([np.ones_like(t), 1.0 - np.cos(t), np.sin(t)])
+    left = dz - basis @ np.linalg.lstsq(basis, dz, rcond=None)[0]
+    rms = math.sqrt(left @ left / t.size)
+    normalised = math.sqrt(left @ left / sigma**2 / (t.size - 3))
+    heights = identified.detail.check.estimate
+    assert heights.residual_rms == pytest.approx(rms, rel=1e-9)
+    alone = np.where(np.isclose(t, math.radians(20)), bump, 0.0)
+    alone -= basis @ np.linalg.lstsq(basis, alone, rcond=None)[0]
+    assert rms == pytest.approx(math.sqrt(alone @ alone / t.size), abs=0.01 * UM)
+    note = ("fit_check (heights): the readings do not fit the model: normalised residual "
+            f"{normalised:.3g} (about 1 when the model holds every error the readings show "
+            f"and sigma is right; residual RMS {rms:.3g} m): an error missing from the "
+            "parameters or the prior, or sigma too small; the values may be far off")
+    assert identified.notes[0] == note
+    assert identified.notes == (
+        *(f"fit_check (heights): {n}" for n in heights.notes),
+        *(f"fit_check (lateral): {n}" for n in identified.detail.check_lateral.estimate.notes))
+    assert not result.identification.notes and "notes" not in result.summary()  # unbumped
+    warned = replace(result, identification=identified, identified=identified.parameters)
+    ReportFolder(tmp_path).write_result(warned)
+    text = (tmp_path / "identified.md").read_text()
+    assert ("\nThe identification's fits noted, from the readings alone:\n\n"
+            + "\n".join(f"- {n}" for n in identified.notes) + "\n") in text
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["notes"] == list(identified.notes) and summary["notes"][0] == note
+    check_summary(summary)
+    for bad in ("one string", [note, ""], [note, 3]):
+        with pytest.raises(InputError, match="key 'notes'.*list of non-empty strings"):
+            check_summary({**summary, "notes": bad})
+
+
 def test_the_compensated_program_is_the_model_based_one(exact_run):
     """Route 1 (the paper's formulas through map_program) and route 2 (the identified model
     through Machine.axis_values) give the same NC program: every axis on the same 1 nm and

@@ -37,6 +37,7 @@ from machinesim.experiment import (
     check_identified,
     check_instance,
     check_lab,
+    fit_notes,
 )
 from machinesim.identification.tool_rotation_arm import (
     ArmCheck,
@@ -309,7 +310,9 @@ class ToolRotationArm:
             check_lateral=fit_check(readings, machine, r0, lateral=True), machine=machine)
         return Identified(parameters={"tool.y": (estimate.e_ys, estimate.e_ys_sigma),
                                       "tool.z": (-(estimate.r - r0), estimate.r_sigma)},
-                          detail=detail)
+                          detail=detail,
+                          notes=fit_notes("fit_check (heights)", detail.check.estimate)
+                          + fit_notes("fit_check (lateral)", detail.check_lateral.estimate))
 
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The pattern program touched off at 0 deg (``pattern_before``, the uncompensated

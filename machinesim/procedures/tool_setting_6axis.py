@@ -52,6 +52,7 @@ from machinesim.experiment import (
     check_identified,
     check_instance,
     check_lab,
+    fit_notes,
 )
 from machinesim.identification.tool_setting_6axis import (
     AAxisResult,
@@ -261,7 +262,8 @@ class ToolSetting6Axis:
         check_std = np.hypot(check.std, frames)
         found = replace(found, check=check, check_std=MappingProxyType(
             dict(zip(check.names, check_std.tolist(), strict=True))), readings=m)
-        return Identified(parameters=found.parameters, detail=found)
+        return Identified(parameters=found.parameters, detail=found,
+                          notes=fit_notes("fit_check", check))
 
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The A, C and B plate programs rewritten by the identified d and e (`COMPENSATED`

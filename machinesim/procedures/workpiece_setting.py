@@ -64,7 +64,7 @@ from machinesim.cam.crown import (
 )
 from machinesim.cutting import clip_to, cut
 from machinesim.exceptions import InputError
-from machinesim.experiment import Evaluation, Figure, Identified
+from machinesim.experiment import Evaluation, Figure, Identified, fit_notes
 from machinesim.identification.fit import Estimate
 from machinesim.identification.workpiece_setting import (
     Identification,
@@ -297,7 +297,8 @@ class RobotLoadedWorkpiece:
                for name, value in std.items()}
         return Identified({name: (value, std[name]) for name, value in
                            parameters(found).items()},
-                          SettingIdentification(found, check, measurements.machine))
+                          SettingIdentification(found, check, measurements.machine),
+                          notes=fit_notes("fit_setting", check))
 
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The experiment's program rewritten by eqs 5-7 (and, for the grooves, also by the

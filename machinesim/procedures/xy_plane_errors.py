@@ -31,7 +31,7 @@ import numpy as np
 from machinesim.compensation_table import CompensationTable, ModelCompensation
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
-from machinesim.experiment import Evaluation, Figure, Identified
+from machinesim.experiment import Evaluation, Figure, Identified, fit_notes
 from machinesim.identification.c_axis_squareness import (
     LOCATION,
     CAxisSeparation,
@@ -162,7 +162,8 @@ class XYPlaneErrors:
             "diagonal_before": xy.diagonal_deviation,
             "work_diagonal_before": xy.work_diagonal_deviation,
             "diagonal_squareness": xy.diagonal_squareness,
-            "eq2_squareness": xy.eq2_squareness, "yaw_y": xy.yaw_y})
+            "eq2_squareness": xy.eq2_squareness, "yaw_y": xy.yaw_y},
+            notes=fit_notes("fit_xy_plane", estimate))
 
     def compensate(self, identified: Identified):
         table, model = compensations(identified)
