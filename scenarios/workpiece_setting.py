@@ -343,8 +343,9 @@ def scenario_budget(machine, errors, args, realism: Realism, results):
 
 def combined(results, routes):
     """One result for the report: the crown's load (Table 3, the flagship: its injected and
-    identified parameters) with the grooves' figures, parts and programs added, and the
-    grooves' load under ``details.grooves_load``."""
+    identified parameters) with the grooves' figures, parts and programs added, the
+    grooves' load under ``details.grooves_load``, and both loads' fit notes, each led by
+    its load."""
     crown, grooves = results["crown"], results["grooves"]
     details = {"crown": dict(crown.evaluation.details),
                "grooves": dict(grooves.evaluation.details),
@@ -362,9 +363,12 @@ def combined(results, routes):
                          programs=MappingProxyType({**crown.evaluation.programs,
                                                     **grooves.evaluation.programs}))
     elapsed = {**crown.elapsed_s, **{f"grooves_{k}": v for k, v in grooves.elapsed_s.items()}}
+    notes = tuple(f"{load} load, {note}" for load in ("crown", "grooves")
+                  for note in results[load].notes)
     return replace(crown, figures=evaluation.figures, evaluation=evaluation,
                    programs=MappingProxyType({**crown.programs, **grooves.programs}),
-                   elapsed_s=MappingProxyType(elapsed))
+                   elapsed_s=MappingProxyType(elapsed),
+                   identification=replace(crown.identification, notes=notes))
 
 
 def _si(name: str, key: str, value: float) -> dict:

@@ -316,3 +316,43 @@ def test_a_face_group_cut_turned_by_c_is_the_part_cut_in_the_workpiece_frame(
         assert gap < 1e-15
     else:
         assert gap > 1 * UM
+
+
+def test_the_report_of_two_loads_carries_both_loads_fit_notes():
+    """The scenario reports the crown's load with the grooves' added (`combined`): the
+    notes of both identifications' fits reach it, each led by its load (the grooves' were
+    dropped: its default run's fit notes that the grooves' readings do not fit the model,
+    normalised residual 44.5, and the report said nothing of it)."""
+    from machinesim import Lab
+    from machinesim.experiment import Evaluation, Figure, Identified, run
+
+    class Noted:
+        paper = "002"
+
+        def __init__(self, name, notes):
+            self.name, self.notes = name, notes
+
+        def measure(self, lab):
+            return None
+
+        def identify(self, measurements):
+            return Identified({"workpiece.x": (1e-6, 1e-9)}, None, self.notes)
+
+        def compensate(self, identified):
+            return {}
+
+        def evaluate(self, lab, identified, programs):
+            return Evaluation((Figure(f"{self.name}_x", "um", 1.0, 0.0),))
+
+    lab = Lab(MACHINE, seed=0)
+    results = {"crown": run(Noted("crown", ("fit_setting: a", "fit_setting: b")), lab),
+               "grooves": run(Noted("grooves", ("fit_setting: c",)), lab)}
+    result = scenario.combined(results, {})
+    expected = ("crown load, fit_setting: a", "crown load, fit_setting: b",
+                "grooves load, fit_setting: c")
+    assert result.notes == expected
+    summary = json.loads(json.dumps(result.summary()))
+    assert summary["notes"] == list(expected)
+    check_summary(summary)
+    quiet = {load: run(Noted(load, ()), lab) for load in ("crown", "grooves")}
+    assert "notes" not in scenario.combined(quiet, {}).summary()
