@@ -267,3 +267,56 @@ def test_a_workpiece_set_high_within_the_range_reads_the_tool_errors():
     assert tool.d_radius == pytest.approx(100e-6, rel=0.01)
     assert tool.dx == pytest.approx(-3.5e-6, abs=20e-9)
     assert tool.dy == pytest.approx(-3.5e-6, abs=20e-9)
+
+
+def test_a_fit_read_outside_the_test_s_range_is_refused_however_small_its_residual(
+        monkeypatch):
+    # a workpiece set 20 um high, Table 5's tool errors: the fit settles on dR = -1815 um for
+    # 100 with a residual as small as the right one's (0.08 nm), so the misfit check passes
+    # it; the depth check refuses this map before the fit, so it is widened here to reach the
+    # fit's own check, which holds whatever lets such a map through. The nose radius it gives
+    # is 1000 - 1815 = -815 um: no tool has it (and the programs would refuse it later); the
+    # map's median lies the 20 um and the default's 0.2 um below the design
+    from machinesim.procedures import sts_turning
+    monkeypatch.setattr(sts_turning, "DEPTH_RANGE", 40e-6)
+    errors = {"tool": {"offset_um": [-3.5, -3.5, 0.0]},
+              "tool_geometry": {"nose_radius_um": 100.0},
+              "workpiece": {"delta_um": [0.0, 0.0, 20.0]}}
+    with pytest.raises(InputError, match=(
+            r"tool_test: the turned test sphere fits the tool-error model \(a misfit of "
+            r"0\.\d\d nm, at most 0\.60 nm\), but the fit reads dR -1815\.\d\d um, outside the "
+            r"-850 to \+300 um it identifies \(a nose radius of -815\.?\d* um for the 1000 um "
+            r"the programs are compensated for: no tool has one\) \(with 5% for what it "
+            r"reads off at their ends; docs/procedures/sts_turning\.md\): not a tool error to "
+            r"compensate with.*a sphere cut deeper than programmed \(its median lies "
+            r"-20\.\d um from the design's heights; tool\.z, workpiece\.z\), a tool "
+            r"off the centre height \(tool\.y; the uncut core reads \|dy\| "
+            r"3\.\d\d um\)")) as error:
+        STSTurning().measure(machinesim.Lab("sts_lathe", errors, noise=False))
+    assert "dx" not in str(error.value).split("but the fit reads", 1)[1]  # dx is in range
+    assert "nose radius that far" not in str(error.value)  # R + dR <= 0: not the nose
+
+
+def test_a_plane_that_reads_dy_beyond_the_core_limit_is_refused(monkeypatch):
+    # the sphere reads |dy| 3.4 um (Table 5's tool); a plane's fit reading +25 um would have
+    # gone to compensation as the centre height
+    from machinesim.identification.turning_tool import CentreHeight
+    from machinesim.procedures import sts_turning
+    monkeypatch.setattr(sts_turning, "fit_centre_height",
+                        lambda *a, **k: CentreHeight(dy=25e-6, dy_std=1e-9, residual_rms=1e-10))
+    with pytest.raises(InputError, match=(
+            r"the turned test plane reads dy \+25\.00 um, outside the -20 to \+20 um this test "
+            r"identifies \(with 5% for what it reads off at the ends\), while the sphere's "
+            r"uncut core reads \|dy\| 3\.\d\d um")):
+        _measure([-3.5, -3.5, 0.0])
+
+
+def test_the_ends_of_the_ranges_are_taken_as_read():
+    # dR = -850 um, the range's end, reads -852.8 um and dx = -10 um -10.013 um (noise off),
+    # a little beyond the ends: the range check takes them (READ_MARGIN); a sphere that fits
+    # is refused only well beyond, as the -1815 um above
+    errors = {"tool": {"offset_um": [-10.0, -3.5, 0.0]},
+              "tool_geometry": {"nose_radius_um": -850.0}}
+    found = STSTurning().measure(machinesim.Lab("sts_lathe", errors, noise=False))["tool_test"]
+    assert found.d_radius == pytest.approx(-850e-6, rel=0.01)
+    assert found.dx == pytest.approx(-10e-6, abs=0.05e-6)

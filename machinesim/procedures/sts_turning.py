@@ -86,6 +86,12 @@ CORE_LIMIT = 20 * UM
 #: `identification.turning_tool.PISTON_START`); 20 um high it read dR = -1815 um, and 50 um
 #: high it gave up after 250 s.
 DEPTH_RANGE = 15 * UM
+#: How far (a fraction of the end) a reading may lie beyond `DX_RANGE`, `D_RADIUS_RANGE` or
+#: `CORE_LIMIT` and still be taken when the sphere fits (`_refuse_out_of_range`): set at the
+#: ends, the fit reads a little beyond them (through the lab, noise on or off: dx -10 um reads
+#: -10.013, +5 um 4.98; dR -850 um -852.8, +300 um 299.4; the plane reads dy 20 um 1.7-2 %
+#: off).
+READ_MARGIN = 0.05
 
 #: The cases (section 5.1): what is compensated in each.
 CASES = {"case_1": "none", "case_2": "tool", "case_3": "tool + program",
@@ -121,7 +127,9 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
     sphere with no cut pixel in the interferometer's window; an uncut core wider than
     `CORE_LIMIT`; a sphere that does not fit the tool-error model (misfit above
     `SPHERE_MISFIT_LIMIT`), blamed on dx when the fit reads it outside `DX_RANGE`, else on
-    dR when the fit reads it outside `D_RADIUS_RANGE`."""
+    dR when the fit reads it outside `D_RADIUS_RANGE`; a sphere that fits but reads dx or dR
+    outside those ranges (`_refuse_out_of_range`); a plane that reads dy beyond
+    `CORE_LIMIT`."""
     # height maps, and the interferometers' stated height and lateral noise (m)
     maps, stated, lateral = {}, {}, {}
     for piece, plan in (("sphere", TEST_SPHERE), ("plane", TEST_PLANE)):
@@ -193,12 +201,63 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
             f"{noise / NM:.2f} nm, a misfit of {misfit / NM:.2f} nm (at most "
             f"{SPHERE_MISFIT_LIMIT / NM:.2f} nm); {reads}. {cause}",
             key="tool_test")
+    _refuse_out_of_range(found, misfit, depth, nose_radius, label)
     centre = fit_centre_height(plane.x, plane.y, plane.z, TEST_PLANE.slope,
                                aperture=TEST_PLANE.read_half_width, core=TEST_PLANE.core,
                                dx=found.dx, noise=stated["plane"],
                                lateral_sigma=lateral["plane"])
+    if abs(centre.dy) > CORE_LIMIT * (1.0 + READ_MARGIN):
+        raise InputError(
+            f"{label}: the turned test plane reads dy {centre.dy / UM:+.2f} um, outside the "
+            f"-{CORE_LIMIT / UM:g} to +{CORE_LIMIT / UM:g} um this test identifies (with "
+            f"{READ_MARGIN:.0%} for what it reads off at the ends), while the sphere's uncut "
+            f"core reads |dy| {found.dy_abs / UM:.2f} um: not a centre height to compensate "
+            "with. A tool that far off the centre height (tool.y) leaves a wider core, so the "
+            "plane's fit read the form of something else (the plane's setting, tool.z, "
+            "workpiece.*, or the tool's rotation, tool.rx, tool.ry, tool.rz): set them within "
+            "a few um first", key="tool_test")
     return ToolTest(found.dx, centre.dy, found.d_radius, found.dy_abs, dx_std=found.dx_std,
                     dy_std=centre.dy_std, d_radius_std=found.d_radius_std)
+
+
+def _refuse_out_of_range(found, misfit: float, depth: float, nose_radius: float,
+                         label: str) -> None:
+    """Refuse a fit that reads dx outside `DX_RANGE` or dR outside `D_RADIUS_RANGE` (each
+    widened by `READ_MARGIN`) however small its residual: the fit can settle on a wrong
+    minimum that fits as well as the right one (dR = -1815 um for 100, RMS 0.083 nm: a
+    sphere cut 20 um deeper than programmed, or with an uncut core of 40 um, which
+    `CORE_LIMIT` refuses first), and such a reading is no tool error to compensate with (a
+    nose radius of -815 um for the 1 mm one)."""
+    low, high = DX_RANGE
+    smallest, largest = D_RADIUS_RANGE
+    wide = 1.0 + READ_MARGIN
+    out = []
+    if not low * wide <= found.dx <= high * wide:
+        out.append(f"dx {found.dx / UM:+.2f} um, outside the {low / UM:+g} to {high / UM:+g} um "
+                   "it identifies")
+    nose = nose_radius + found.d_radius
+    nose_out = not smallest * wide <= found.d_radius <= largest * wide
+    if nose_out:
+        out.append(f"dR {found.d_radius / UM:+.2f} um, outside the {smallest / UM:+g} to "
+                   f"{largest / UM:+g} um it identifies"
+                   + (f" (a nose radius of {nose / UM:+.4g} um for the {nose_radius / UM:g} "
+                      "um the programs are compensated for: no tool has one)"
+                      if nose <= 0.0 else ""))
+    if not out:
+        return
+    nose_cause = ("" if nose <= 0.0 or not nose_out else
+                  ", or a nose radius that far from the one the programs are compensated for "
+                  "(tool_geometry.nose_radius)")
+    raise InputError(
+        f"{label}: the turned test sphere fits the tool-error model (a misfit of "
+        f"{misfit / NM:.2f} nm, at most {SPHERE_MISFIT_LIMIT / NM:.2f} nm), but the fit reads "
+        f"{'; and '.join(out)} (with {READ_MARGIN:.0%} for what it reads off at their ends; "
+        "docs/procedures/sts_turning.md): not a tool error to compensate with. The fit "
+        "settled on the form of something else: a sphere cut deeper than programmed (its "
+        f"median lies {depth / UM:+.4g} um from the design's heights; tool.z, workpiece.z), "
+        f"a tool off the centre height (tool.y; the uncut core reads |dy| "
+        f"{found.dy_abs / UM:.2f} um){nose_cause}: set the tool and the workpiece within a "
+        "few um first, as the paper's tool was", key="tool_test")
 
 
 def _too_deep(depth: float) -> str:
