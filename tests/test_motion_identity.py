@@ -334,7 +334,7 @@ def test_a_dense_table_s_stalled_deviation_is_looked_into_and_the_counts_kept(
     sub-steps are longer than the table's spacing, which starts the look for a step; none
     is there (its finest pieces are within 1e-12 m of their chords), so the counts are those
     of the rule with no look at all, and the chords hold the tolerance."""
-    from machinesim.motion import chords
+    from machinesim.motion import steps
 
     machine = machines["grooving_4axis"]
     knots = np.linspace(-1.0, 1.0, 201)
@@ -344,16 +344,16 @@ def test_a_dense_table_s_stalled_deviation_is_looked_into_and_the_counts_kept(
     program = ProgramBuilder(source="dense").rapid(X=-0.0011, Y=0.0, Z=0.0).linear(
         X=0.00113, feed_mm_per_min=500.0).build()
     looked = []
-    zoom = chords._zoom
+    zoom = steps._zoom
 
     def spy(*args):
         looked.append(zoom(*args))
         return looked[-1]
 
-    monkeypatch.setattr(chords, "_zoom", spy)
+    monkeypatch.setattr(steps, "_zoom", spy)
     found = plan(program, machine, errors, chord_tolerance=1e-9)
     assert looked and max(deviation for _, _, deviation in looked) < 1e-12
-    monkeypatch.setattr(chords, "_zoom", lambda *args: (0.0, 1.0, 0.0))
+    monkeypatch.setattr(steps, "_zoom", lambda *args: (0.0, 1.0, 0.0))
     unlooked = plan(program, machine, errors, chord_tolerance=1e-9)
     assert [len(s.q) for s in found.segments] == [len(s.q) for s in unlooked.segments]
     for segment, other in zip(found.segments, unlooked.segments, strict=True):

@@ -31,19 +31,24 @@ bisection from 8 sub-steps this replaced took about 36).
 
 The reference planner, kept in the tests, is held to this segment by segment, except where
 the two rules pick different counts (tests/test_motion_identity.py).
+
+Where a path steps, so that no count holds it, is found in `machinesim.motion.steps`.
 """
 
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from machinesim._cores import usable_cores
 from machinesim.kinematics import _BLOCK, _cos_sin
 from machinesim.tolerances import SERIES_MAX_RAD
+
+if TYPE_CHECKING:
+    from machinesim.motion.steps import Stall
 
 #: A move is split into at most this many sub-steps: beyond it the request is unreasonable
 #: (a 1 nm chord over a full turn at 1 m radius needs ~70,000).
@@ -55,8 +60,6 @@ _ROWS_PER_BATCH = 1 << 17
 WORKERS = min(4, usable_cores())
 #: The first trial number of sub-steps of the rule.
 _FIRST_TRIAL = 8
-#: Pieces each level of `_zoom` splits the worst piece into.
-_ZOOM = 64
 
 
 # ------------------------------------------------------------------- folded arithmetic
@@ -139,7 +142,7 @@ class ToolPaths:
                  or getattr(var.component, "period", None) is not None))
         # (axis, position, side, period, name) where a table of a whole turn whose values a
         # turn apart differ wraps: the path steps there, and a whole number of turns beyond
-        # (side -1: below the table's first position, +1: above its last; `wrap_steps`)
+        # (side -1: below the table's first position, +1: above its last; `steps.wrap_steps`)
         self.wraps = tuple(
             (var.axis, float(at), side, var.component.period, _name(binding, var))
             for var in binding.varying
@@ -245,59 +248,6 @@ def _name(binding, var) -> str:
             if component is bound:
                 return f"component.{letter}.{symbol}"
     return "a table"
-
-
-def wrap_steps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
-               tolerance: float) -> list[tuple[int, int, float, float, str]]:
-    """Moves on which the path steps by more than ``tolerance``: where a rotary axis passes
-    (or leaves) the place a table of a whole turn wraps with values a turn apart that
-    differ (`machinesim.errors.turns.each_turn` repeats it each turn). No chord follows a
-    step, so no number of sub-steps holds such a move (the README's example, ECC 1 arcsec at
-    -180 deg and -1 at 180, stepped the grooves' path 53 nm at C = 180 deg; the sub-steps
-    were raised by 10 % a round from 1842 towards a million, silent for more than 15 min).
-
-    Returns (move, axis, axis value, step in m, table name) of each, in move order. The step
-    is the largest distance over the tool points between the path just before and just
-    after the place (1e-10 of the angle apart), within the move.
-    """
-    found = []
-    slack = 1e-12
-    for axis, at, side, period, name in paths.wraps:
-        d = delta[:, axis]
-        live = np.flatnonzero(d != 0.0)
-        if not live.size:
-            continue
-        begin, end = start[live, axis], start[live, axis] + d[live]
-        low, high = np.minimum(begin, end), np.maximum(begin, end)
-        first = np.ceil((low - at) / period - slack)
-        last = np.floor((high - at) / period + slack)
-        # only the turns beyond the table's end: inside it the table is read as it is
-        if side < 0:
-            last = np.minimum(last, 0.0)
-        else:
-            first = np.maximum(first, 0.0)
-        count = np.maximum(last - first + 1, 0)
-        count = count.astype(np.int64)
-        which = np.repeat(np.arange(live.size), count)
-        if not which.size:
-            continue
-        turn = np.arange(which.size) - np.repeat(np.cumsum(count) - count, count)
-        x = at + (first[which] + turn) * period
-        step = 1e-10 * np.maximum(1.0, np.abs(x))
-        move = live[which]
-        sides = [np.clip(x + sign * step, low[which], high[which]) for sign in (-1.0, 1.0)]
-        f = np.concatenate([(side - start[move, axis]) / d[move] for side in sides])
-        rows = len(move)
-        q = [np.concatenate([start[move, i], start[move, i]]) + f * np.concatenate(
-            [delta[move, i], delta[move, i]]) for i in range(start.shape[1])]
-        pos = paths.positions(q, _blocks(2 * rows))
-        gap = sum((p[:rows] - p[rows:]) ** 2 for p in pos[:3])
-        if np.ndim(gap) == 2:
-            gap = gap.max(axis=1)
-        gap = np.sqrt(gap)
-        for r in np.flatnonzero(gap > tolerance).tolist():
-            found.append((int(move[r]), axis, float(x[r]), float(gap[r]), name))
-    return sorted(found)
 
 
 def _grouped_cos_sin(value: np.ndarray, groups):
@@ -444,8 +394,8 @@ def deviations(paths: ToolPaths, start: np.ndarray, delta: np.ndarray, ns: np.nd
 def substeps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
              tolerance: float) -> tuple[np.ndarray, np.ndarray, list[Stall]]:
     """Sub-steps of each rotary move, which moves would need more than `MAX_SUBSTEPS`
-    (their count is left 0), and where a path steps (`Stall`, in move order; each of those
-    moves is also among the failed).
+    (their count is left 0), and where a path steps (`machinesim.motion.steps.Stall`, in
+    move order; each of those moves is also among the failed).
 
     The deviation ``d1`` of the whole move as one chord (three poses) predicts the count:
     a sub-step of a smooth path deviates from its chord by ``h**2 |p''| / 8`` to leading
@@ -472,7 +422,7 @@ def substeps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
     in a straightness table over 1 pm: 93 rounds, 2.9 s for the edge alone, not done in 10
     min with a nose tool's 397 points). A move whose deviation has not halved while its
     count grew fourfold (a smooth path's falls 16-fold, one with a corner 4-fold) is looked
-    into (`_zoom`), and refused (0.04 s there) as soon as its path leaves the chord of a
+    into (`steps._zoom`), and refused (0.04 s there) as soon as its path leaves the chord of a
     piece of 1 / `MAX_SUBSTEPS` of the move by more than the tolerance: no count the cap
     allows follows it. One that only stalls while its sub-steps are longer than a dense
     table's spacing is cleared by the look and raised on as before.
@@ -513,31 +463,6 @@ def substeps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
     return steps, failed, sorted(stalls, key=lambda stall: stall.move)
 
 
-@dataclass(frozen=True)
-class Stall:
-    """A move whose chords do not converge on its path: it leaves the chord of a piece of
-    at most 1 / `MAX_SUBSTEPS` of the move by more than the tolerance (a step).
-
-    Attributes
-    ----------
-    move : int
-        The move, an index into the moves given to `substeps`.
-    low, high : float
-        The piece, as fractions of the move.
-    deviation : float, m
-        The piece's deviation from its chord (the largest over the tool points).
-    tried : tuple of (int, float)
-        (sub-steps, the move's deviation in m) where the deviation was found not to shrink:
-        the earlier count and the later.
-    """
-
-    move: int
-    low: float
-    high: float
-    deviation: float
-    tried: tuple[tuple[int, float], tuple[int, float]]
-
-
 def _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, todo, n,
                         since=None) -> None:
     """Counts ``n`` for moves ``todo``, raised by 10 % until their midpoints hold (into
@@ -545,10 +470,12 @@ def _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, t
 
     ``since``: (counts, deviations) already tried on the moves (default: their first round
     here). A move whose deviation has not halved since while its count grew fourfold is
-    looked into (`_zoom`): if its path leaves a piece's chord by more than ``tolerance``
+    looked into (`steps._zoom`): if its path leaves a piece's chord by more than ``tolerance``
     where the pieces are 1 / `MAX_SUBSTEPS` of the move, it goes into ``failed`` and
     ``stalls``; if not, the comparison starts again from this round.
     """
+    from machinesim.motion.steps import Stall, _zoom  # steps imports this module
+
     base_n, base_d = (None, None) if since is None else (
         np.asarray(since[0], dtype=np.int64), np.asarray(since[1], dtype=np.float64))
     while todo.size:
@@ -579,32 +506,6 @@ def _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, t
         keep = ~ok & ~stuck
         todo, n = todo[keep], np.ceil(n[keep] * 1.1)
         base_n, base_d = base_n[keep], base_d[keep]
-
-
-def _zoom(paths, start, delta, n: int) -> tuple[float, float, float]:
-    """The piece of one move where its path leaves the chord most, found down to pieces of
-    at most 1 / `MAX_SUBSTEPS` of the move: its fractions (low, high) and its deviation, m.
-
-    The move's ``n`` sub-steps, then the worst one split into `_ZOOM` pieces, the worst of
-    those split again, and so on: a smooth path's deviation falls as the square of the
-    piece, so only a step in the path (narrower than the piece) keeps it above the
-    tolerance there.
-    """
-    start, delta = start[None, :], delta[None, :]
-    low, width, pieces = 0.0, 1.0, n
-    while True:
-        f = low + width * np.linspace(0.0, 1.0, pieces + 1)
-        nodes = paths.positions(_columns(start, delta, f), _blocks(len(f)))
-        mids = paths.positions(_columns(start, delta, (f[:-1] + f[1:]) / 2),
-                               _blocks(pieces))
-        square = sum((mids[c] - (nodes[c][:-1] + nodes[c][1:]) / 2) ** 2 for c in range(3))
-        if np.ndim(square) == 2:
-            square = square.max(axis=1)
-        j = int(np.argmax(square))
-        low, width = float(f[j]), float(f[j + 1] - f[j])
-        if width * MAX_SUBSTEPS <= 1.0:
-            return low, low + width, float(np.sqrt(square[j]))
-        pieces = _ZOOM
 
 
 def _corner_failures(paths, start, delta, steps, failed, tolerance) -> np.ndarray:

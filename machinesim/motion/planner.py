@@ -7,7 +7,8 @@ import math
 import numpy as np
 
 from machinesim.exceptions import InputError, NCProgramError
-from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps, wrap_steps
+from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps
+from machinesim.motion.steps import wrap_steps
 from machinesim.motion.trajectory import IdealServo, ServoModel, Trajectory
 from machinesim.nc.program import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
 from machinesim.tolerances import CHORD_TOLERANCE_M
@@ -236,7 +237,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
 
 
 def _stall_message(stall, paths, axes, rotary, start, delta, tolerance) -> str:
-    """Why a move's chords do not converge (`chords.Stall`): where its path steps, by how
+    """Why a move's chords do not converge (`steps.Stall`): where its path steps, by how
     much, and the error table that steps there if one does."""
     def value(i, x):
         return f"{math.degrees(x):.6g} deg" if rotary[i] else f"{x / _M_PER_MM:.6g} mm"
