@@ -320,3 +320,17 @@ def test_the_ends_of_the_ranges_are_taken_as_read():
     found = STSTurning().measure(machinesim.Lab("sts_lathe", errors, noise=False))["tool_test"]
     assert found.d_radius == pytest.approx(-850e-6, rel=0.01)
     assert found.dx == pytest.approx(-10e-6, abs=0.05e-6)
+
+
+def test_a_nose_radius_error_that_leaves_no_nose_is_refused_inside_the_range():
+    # a 0.5 mm nose read 600 um smaller: inside -850 .. +300 um (measured with the 1 mm
+    # nose), but 500 - 600 = -100 um of nose is no tool
+    from types import SimpleNamespace
+
+    from machinesim.procedures import sts_turning
+    found = SimpleNamespace(dx=-3.5e-6, d_radius=-600e-6, dy_abs=3.4e-6)
+    with pytest.raises(InputError, match=r"but the fit reads dR -600\.00 um \(a nose radius of "
+                                         r"-100 um for the 500 um the programs are "
+                                         r"compensated for: no tool has one\)"):
+        sts_turning._refuse_out_of_range(found, 0.06e-9, -0.2e-6, 500e-6, "tool_test")
+    sts_turning._refuse_out_of_range(found, 0.06e-9, -0.2e-6, 1e-3, "tool_test")  # 400 um: taken

@@ -236,13 +236,14 @@ def _refuse_out_of_range(found, misfit: float, depth: float, nose_radius: float,
         out.append(f"dx {found.dx / UM:+.2f} um, outside the {low / UM:+g} to {high / UM:+g} um "
                    "it identifies")
     nose = nose_radius + found.d_radius
+    impossible = (f" (a nose radius of {nose / UM:+.4g} um for the {nose_radius / UM:g} um "
+                  "the programs are compensated for: no tool has one)" if nose <= 0.0 else "")
     nose_out = not smallest * wide <= found.d_radius <= largest * wide
     if nose_out:
         out.append(f"dR {found.d_radius / UM:+.2f} um, outside the {smallest / UM:+g} to "
-                   f"{largest / UM:+g} um it identifies"
-                   + (f" (a nose radius of {nose / UM:+.4g} um for the {nose_radius / UM:g} "
-                      "um the programs are compensated for: no tool has one)"
-                      if nose <= 0.0 else ""))
+                   f"{largest / UM:+g} um it identifies{impossible}")
+    elif impossible:  # a tool of a smaller nose than the 1 mm the ranges were measured with
+        out.append(f"dR {found.d_radius / UM:+.2f} um{impossible}")
     if not out:
         return
     nose_cause = ("" if nose <= 0.0 or not nose_out else
