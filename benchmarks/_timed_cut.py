@@ -15,11 +15,16 @@ def timed_cut(runner: str, variant: str, arguments: list[str], report: Path,
               what: str) -> tuple[float, dict, str]:
     """Run ``python -c runner variant cut *arguments`` (which must write ``report``); return
     the wall time (s), the report's JSON and the process's stderr. A failed run ends the
-    benchmark, naming ``what``."""
+    benchmark, naming ``what`` and how the process ended (a process the kernel killed for
+    memory ends by signal 9 and leaves no stderr)."""
     start = time.perf_counter()
     done = subprocess.run([sys.executable, "-c", runner, variant, "cut", *arguments],
                           capture_output=True, text=True)
     if done.returncode:
-        raise SystemExit(f"{what} ({variant}) failed:\n{done.stderr}")
+        signal = -done.returncode
+        ended = (f"exit status {done.returncode}" if signal < 0 else
+                 f"killed by signal {signal}" + (" (SIGKILL: out of memory?)" if signal == 9
+                                                  else ""))
+        raise SystemExit(f"{what} ({variant}) failed, {ended}:\n{done.stderr}")
     seconds = time.perf_counter() - start
     return seconds, json.loads(report.read_text()), done.stderr

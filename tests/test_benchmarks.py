@@ -183,3 +183,15 @@ def test_wrapped_tables_edits_a_table_of_the_example():
 
     example = tomllib.loads((ROOT / "models" / "errors" / "example.toml").read_text())
     assert len(example["component"]["C"]["ECC_arcsec"]) == 3
+
+
+@pytest.mark.parametrize("end, said", [("os.kill(os.getpid(), signal.SIGKILL)",
+                                         "failed, killed by signal 9 (SIGKILL: out of memory?)"),
+                                        ("sys.exit(3)", "failed, exit status 3")])
+def test_timed_cut_says_how_a_run_ended(end, said, tmp_path):
+    """A variant killed for memory leaves no stderr: the benchmark said only 'failed:'."""
+    timed_cut = benchmark("_timed_cut").timed_cut
+    runner = f"import os, signal, sys\n{end}\n"
+    with pytest.raises(SystemExit) as stopped:
+        timed_cut(runner, "variant", [], tmp_path / "report.json", "case")
+    assert str(stopped.value).startswith(f"case (variant) {said}:")
