@@ -36,6 +36,7 @@ import numpy as np
 from machinesim.errors import AXES
 from machinesim.errors.model import _PARAMETER_RE
 from machinesim.exceptions import InputError, brief
+from machinesim.identification.fit import MODEL_MISFIT
 
 __all__ = ["LAB_USES", "Evaluation", "Figure", "Identified", "Procedure", "Result",
            "check_identified", "check_instance", "check_lab", "fit_notes", "run"]
@@ -168,11 +169,21 @@ class Identified:
         object.__setattr__(self, "notes", tuple(notes))
 
 
-def fit_notes(fit: str, estimate) -> tuple[str, ...]:
+def fit_notes(fit: str, estimate, *, sigma_leaves_out: str | None = None) -> tuple[str, ...]:
     """The notes of ``estimate`` (a `machinesim.identification.fit.Estimate`), each led by
     ``fit``, the fit that made it (``"fit_check (heights)"``): for an `Identified`'s
-    ``notes``."""
-    return tuple(f"{fit}: {note}" for note in estimate.notes)
+    ``notes``.
+
+    ``sigma_leaves_out`` names the errors the procedure's readings carry as it states them
+    (an artefact's made scatter, a stage's registration) that the fit's sigma leaves out
+    and the procedure's std adds: when the readings do not fit the model, a note says so,
+    so that the fit's misfit is read beside what the procedure knows of its readings.
+    """
+    notes = tuple(f"{fit}: {note}" for note in estimate.notes)
+    if sigma_leaves_out and estimate.normalised_residual_rms > MODEL_MISFIT:
+        notes += (f"{fit}: its sigma leaves out {sigma_leaves_out}, which may account for "
+                  "that misfit; the std this report gives includes it",)
+    return notes
 
 
 @dataclass(frozen=True)

@@ -326,6 +326,33 @@ def test_what_the_identifications_fit_noted_reaches_the_report(tmp_path):
             Identified({}, None, bad)
 
 
+def test_a_misfit_is_read_beside_the_errors_the_fits_sigma_leaves_out():
+    """A procedure whose readings carry errors it states but its fit's sigma leaves out (a
+    stage's registration, an artefact's made scatter) adds, to the fit's misfit note, that
+    they may account for it; without a misfit, or without such errors, nothing is added.
+    Two readings of one pose 1 um apart with sigma 1 nm misfit any model (residuals of
+    0.5 um, 500 sigma); two equal ones fit."""
+    from machinesim.experiment import fit_notes
+    from machinesim.identification.fit import MODEL_MISFIT, fit, observations
+
+    machine = machinesim.load_machine("robonano_a0ib")
+    q = np.zeros((2, len(machine.axes)))
+
+    def estimate(values):
+        return fit(machine, observations(q, [1.0, 0.0, 0.0], values, 1e-9), ["workpiece.x"])
+
+    apart = estimate([3e-6, 4e-6])
+    assert apart.normalised_residual_rms > 100 * MODEL_MISFIT
+    plain = fit_notes("stage fit", apart)
+    assert [n.split(": ", 1)[1][:30] for n in plain] == ["the readings do not fit the mo"]
+    added = fit_notes("stage fit", apart, sigma_leaves_out="the stage's registration")
+    assert added == plain + ("stage fit: its sigma leaves out the stage's registration, "
+                             "which may account for that misfit; the std this report "
+                             "gives includes it",)
+    assert fit_notes("stage fit", estimate([3e-6, 3e-6]),
+                     sigma_leaves_out="the stage's registration") == ()
+
+
 def test_injected_parameters_the_procedure_does_not_identify_are_named(tmp_path):
     """A procedure identifies its model's parameters; what else was injected is listed, in
     Result, summary.json and identified.md, rather than left out of the report unseen (the

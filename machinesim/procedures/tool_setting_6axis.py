@@ -263,7 +263,10 @@ class ToolSetting6Axis:
         found = replace(found, check=check, check_std=MappingProxyType(
             dict(zip(check.names, check_std.tolist(), strict=True))), readings=m)
         return Identified(parameters=found.parameters, detail=found,
-                          notes=fit_notes("fit_check", check))
+                          notes=fit_notes("fit_check", check, sigma_leaves_out=(
+                              "the microscope's stated registration of each plate"
+                              if any(r is not None for r in m.registration.values())
+                              else None)))
 
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The A, C and B plate programs rewritten by the identified d and e (`COMPENSATED`

@@ -298,7 +298,9 @@ class RobotLoadedWorkpiece:
         return Identified({name: (value, std[name]) for name, value in
                            parameters(found).items()},
                           SettingIdentification(found, check, measurements.machine),
-                          notes=fit_notes("fit_setting", check))
+                          notes=fit_notes("fit_setting", check, sigma_leaves_out=(
+                              "the spheres' stated place and form scatter"
+                              if scatter is not None else None)))
 
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The experiment's program rewritten by eqs 5-7 (and, for the grooves, also by the
