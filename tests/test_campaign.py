@@ -353,19 +353,19 @@ def test_a_seed_beyond_32_bits_is_kept_whole_in_campaign_nc_and_the_summary(tmp_
     assert json.loads((tmp_path / "summary.json").read_text())["seed"] == seed
 
 
+def trials_run(monkeypatch) -> list[int]:
+    """The indices of the trials the runner runs from now on, in order (each still run)."""
+    ran, real = [], runner.run_trial
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: ran.append(i) or real(spec, i))
+    return ran
+
+
 def test_resume_runs_only_the_missing_trials(campaign, tmp_path, monkeypatch):
     source, vary, ds = campaign
     for name in ("campaign.json", "trials/trial_000000.json", "trials/trial_000002.json"):
         (tmp_path / name).parent.mkdir(exist_ok=True)
         (tmp_path / name).write_bytes((source / name).read_bytes())
-    ran = []
-    real = runner.run_trial
-
-    def counting(spec, i):
-        ran.append(i)
-        return real(spec, i)
-
-    monkeypatch.setattr(runner, "run_trial", counting)
+    ran = trials_run(monkeypatch)
     again = run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
                 progress=False, report=False, **ARM)
     assert ran == [1]
@@ -580,14 +580,7 @@ def test_a_distribution_spelt_otherwise_resumes_the_same_campaign(campaign, tmp_
     for name in ("campaign.json", "trials/trial_000000.json", "trials/trial_000001.json"):
         (tmp_path / name).write_bytes((source / name).read_bytes())
     stored = (tmp_path / "campaign.json").read_text()
-    ran = []
-    real = runner.run_trial
-
-    def counting(spec, i):
-        ran.append(i)
-        return real(spec, i)
-
-    monkeypatch.setattr(runner, "run_trial", counting)
+    ran = trials_run(monkeypatch)
     spelt = ["tool.y=normal:-0.178mm,0.02mm", "microscope.sigma = uniform:5 nm,0.06um"]
     again = run("tool_rotation_arm", 3, vary=spelt, seed=11, out=tmp_path, workers=0,
                 progress=False, report=False, **ARM)
