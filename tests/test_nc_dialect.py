@@ -483,23 +483,31 @@ def test_a_p_of_5_to_8_digits_is_repeats_then_program_number():
     assert len(parse_program(PACKED_CALL.format(p="100"))) == 1 + 2
 
 
-@pytest.mark.parametrize(("p", "message"), [
+# (P and L words, column and key of the word at fault, message): each points at the word
+# it is about, P (column 5, after "M98 ") or L (after "M98 P30100 ": column 12), as other
+# problems do; they had all pointed at M98, column 1
+@pytest.mark.parametrize(("p", "column", "key", "message"), [
     # 9 digits had been read as 12345 repeats of O6789
-    ("123450100", "M98 P123450100 has 9 digits; FANUC's P takes at most 8: a repeat count of "
-     "up to 4 digits, then the 4-digit program number (M98 P30100: O0100 three times)"),
+    ("123450100", 5, "P123450100",
+     "M98 P123450100 has 9 digits; FANUC's P takes at most 8: a repeat count of up to 4 "
+     "digits, then the 4-digit program number (M98 P30100: O0100 three times)"),
     # 10 digits had been 'M98 needs P<program number> (an unsigned integer)'
-    ("1234560100", "M98 P1234560100 has 10 digits; FANUC's P takes at most 8: a repeat count "
-     "of up to 4 digits, then the 4-digit program number (M98 P30100: O0100 three times)"),
+    ("1234560100", 5, "P1234560100",
+     "M98 P1234560100 has 10 digits; FANUC's P takes at most 8: a repeat count of up to 4 "
+     "digits, then the 4-digit program number (M98 P30100: O0100 three times)"),
     # L beside a P that holds its repeats had called O30100 (not in the file) twice
-    ("30100 L2", "M98 P30100 L2: a P of more than 4 digits holds its own repeat count (3 x "
-     "O0100), so L cannot be given beside it; write M98 P100 L2 or M98 P20100"),
-    ("12340100 L2", "M98 P12340100 L2: a P of more than 4 digits holds its own repeat count "
-     "(1234 x O0100), so L cannot be given beside it; write M98 P100 L2 or M98 P20100"),
+    ("30100 L2", 12, "L2",
+     "M98 P30100 L2: a P of more than 4 digits holds its own repeat count (3 x O0100), so L "
+     "cannot be given beside it; write M98 P100 L2 or M98 P20100"),
+    ("12340100 L2", 15, "L2",
+     "M98 P12340100 L2: a P of more than 4 digits holds its own repeat count (1234 x O0100), "
+     "so L cannot be given beside it; write M98 P100 L2 or M98 P20100"),
 ])
-def test_a_p_of_more_than_8_digits_or_with_l_beside_its_repeats_is_refused(p, message):
+def test_a_p_of_more_than_8_digits_or_with_l_beside_its_repeats_is_refused(p, column, key,
+                                                                          message):
     with pytest.raises(NCProgramError) as info:
         parse_program(PACKED_CALL.format(p=p), "prog.nc")
-    assert str(info.value) == f"prog.nc, line 3, column 1, key 'M98': {message}"
+    assert str(info.value) == f"prog.nc, line 3, column {column}, key '{key}': {message}"
 
 
 def test_subprogram_depth_and_recursion_are_refused_before_running():

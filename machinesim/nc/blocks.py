@@ -35,6 +35,7 @@ from machinesim.nc.words import (
     NON_MOVING,
     SINGLE,
     SLOWEST_FEED_M_PER_S,
+    CallProblem,
     call_of,
     g_name,
     integer,
@@ -144,10 +145,9 @@ class Block:
             state.end = (self.line, f"M{ends[0]:02d}")
         if 98 in codes:
             call = call_of(self.words)
-            m98 = dict((c, w) for c, w in self.m_codes)[98]
-            if isinstance(call, str) or call is None:
-                raise self.fail(call or "M98 needs P<program number>", m98)
-            self.reader.call(call[0], call[1], self.depth, self.line, m98)
+            if isinstance(call, CallProblem):
+                raise self.fail(call.message, call.word)
+            self.reader.call(call, self.depth, self.line)
         if 99 in codes:
             if self.depth == 0:
                 raise self.fail(M99_IN_MAIN, dict((c, w) for c, w in self.m_codes)[99])

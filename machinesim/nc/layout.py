@@ -12,12 +12,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from machinesim.exceptions import NCProgramError
-from machinesim.nc.lexer import Word
 from machinesim.nc.program import PROGRAM_END
 from machinesim.nc.words import (
     M99_IN_MAIN,
     MAX_BLOCK_RUNS,
     MAX_SUBPROGRAM_DEPTH,
+    Call,
     call_of,
     integer,
 )
@@ -50,7 +50,7 @@ class Layout:
         self.main_first, self.main_stop = 0, n
         self.subprograms: dict[int, Subprogram] = {}
         self.skip: set[int] = set()  # O lines refused here, not run
-        calls: dict[int | None, list[tuple[int, int, int, Word]]] = {None: []}
+        calls: dict[int | None, list[tuple[Call, int]]] = {None: []}
         current: Subprogram | None = None
         main_end: int | None = None
         blocks: list[int] = []
@@ -108,9 +108,9 @@ class Layout:
                             "programs, each ending in M30, is cut one program a file",
                             line, word))
             call = call_of(words)
-            if isinstance(call, tuple):
+            if isinstance(call, Call):
                 calls.setdefault(None if current is None else current.number, []).append(
-                    (call[0], call[1], i, call[2]))
+                    (call, i))
         is_block = scan.simple & ~scan.empty
         is_block[blocks] = True
         block_lines = np.flatnonzero(is_block)
@@ -147,7 +147,8 @@ class Layout:
             if key in runs:
                 return runs[key]
             count = counts.get(key, 0)
-            for number, repeats, i, word in calls.get(key, []):
+            for call, i in calls.get(key, []):
+                number = call.number
                 if number not in self.subprograms:
                     continue  # refused where it runs
                 if number in chain or len(chain) > MAX_SUBPROGRAM_DEPTH:
@@ -156,12 +157,12 @@ class Layout:
                     what = ("calls itself" if number in chain
                             else f"nests deeper than {MAX_SUBPROGRAM_DEPTH} levels")
                     raise reader.fail(f"subprogram O{number:04d} {what} ({path}); the "
-                                      "program would never end", i + 1, word)
-                count += repeats * total(number, chain + (number,))
+                                      "program would never end", i + 1, call.program_word)
+                count += call.repeats * total(number, chain + (number,))
                 if count > MAX_BLOCK_RUNS:
                     raise reader.fail(f"with its repeats the program runs more than "
                                       f"{MAX_BLOCK_RUNS} blocks; machinesim refuses it before "
-                                      "running it", i + 1, word)
+                                      "running it", i + 1, call.repeats_word)
             runs[key] = count
             return count
 

@@ -49,6 +49,7 @@ from machinesim.nc.words import (
     MAX_MOVES,
     MAX_SUBPROGRAM_DEPTH,
     SLOWEST_FEED_M_PER_S,
+    Call,
     integer,
 )
 from machinesim.units import M_PER_MM, RAD_PER_DEG
@@ -590,7 +591,8 @@ class Reader:
             return
         self.state.number = number
 
-    def call(self, number: int, repeats: int, depth: int, line: int, word: Word) -> None:
+    def call(self, call: Call, depth: int, line: int) -> None:
+        number, word = call.number, call.program_word
         sub = self.layout.subprograms.get(number)
         if sub is None:
             have = " ".join(f"O{n:04d}" for n in self.layout.subprograms) or "none"
@@ -604,7 +606,7 @@ class Reader:
                             line, word)
         if sub.ret is None:
             return  # the layout has refused it already
-        for _ in range(repeats):
+        for _ in range(call.repeats):
             self.run(sub.first, sub.stop, depth + 1)
 
 

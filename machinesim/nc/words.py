@@ -6,6 +6,8 @@ docs/nc.md.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 from machinesim.exceptions import brief
 from machinesim.nc.lexer import Word
 from machinesim.units import RAD_PER_DEG
@@ -144,35 +146,60 @@ def g_name(word: Word) -> str:
     return word.key
 
 
-def call_of(words: list[Word]) -> tuple[int, int, Word] | str | None:
-    """(program number, repeats, M98 word) of an M98 block, a message when malformed, or
-    None when the block has no M98."""
+class Call(NamedTuple):
+    """One M98 call, with the words it was read from: a problem of the program called
+    (not in the file, calling itself) points at ``program_word`` (P), one of its repeats
+    at ``repeats_word`` (L, or P when P holds them)."""
+
+    number: int
+    repeats: int
+    program_word: Word
+    repeats_word: Word
+
+
+class CallProblem(NamedTuple):
+    """A malformed M98 block: the message and the word at fault (P or L; M98 when P is
+    missing)."""
+
+    message: str
+    word: Word
+
+
+def call_of(words: list[Word]) -> Call | CallProblem | None:
+    """The call of an M98 block, its problem when malformed, or None when the block has
+    no M98."""
     m98 = next((w for w in words if w.letter == "M" and integer(w) == 98), None)
     if m98 is None:
         return None
     p = next((w for w in words if w.letter == "P"), None)
     count = next((w for w in words if w.letter == "L"), None)
-    if p is not None and p.text.isdigit() and len(p.text) > MAX_CALL_DIGITS:
-        return (f"M98 {brief(p.key)} has {len(p.text)} digits; FANUC's P takes at most "
-                f"{MAX_CALL_DIGITS}: a repeat count of up to 4 digits, then the 4-digit "
-                "program number (M98 P30100: O0100 three times)")
-    if p is None or integer(p) is None:
-        return "M98 needs P<program number> (an unsigned integer)"
+    if p is None:
+        return CallProblem("M98 needs P<program number> (an unsigned integer)", m98)
+    if p.text.isdigit() and len(p.text) > MAX_CALL_DIGITS:
+        return CallProblem(
+            f"M98 {brief(p.key)} has {len(p.text)} digits; FANUC's P takes at most "
+            f"{MAX_CALL_DIGITS}: a repeat count of up to 4 digits, then the 4-digit "
+            "program number (M98 P30100: O0100 three times)", p)
+    if integer(p) is None:
+        return CallProblem(f"M98 needs P<program number> (an unsigned integer), got "
+                           f"{brief(p.key)}", p)
     if count is not None:
         repeats = integer(count)
         if len(p.text) > 4:
             packed = (f" or M98 P{repeats}{p.text[-4:]}" if repeats is not None
                       and 0 < repeats < 10_000 else "")
-            return (f"M98 {p.key} {count.key}: a P of more than 4 digits holds its own repeat "
-                    f"count ({int(p.text[:-4])} x O{p.text[-4:]}), so L cannot be given "
-                    f"beside it; write M98 P{int(p.text[-4:])} {count.key}{packed}")
+            return CallProblem(
+                f"M98 {p.key} {count.key}: a P of more than 4 digits holds its own repeat "
+                f"count ({int(p.text[:-4])} x O{p.text[-4:]}), so L cannot be given beside "
+                f"it; write M98 P{int(p.text[-4:])} {count.key}{packed}", count)
         if repeats is None:
-            return f"M98 L takes an unsigned integer repeat count, got {count.key}"
-        return int(p.text), repeats, m98
+            return CallProblem(
+                f"M98 L takes an unsigned integer repeat count, got {count.key}", count)
+        return Call(int(p.text), repeats, p, count)
     if len(p.text) > 4:  # FANUC's P<repeats><4-digit program number>
         repeats = int(p.text[:-4])
         if repeats == 0:
-            return (f"M98 {p.key} asks for 0 repeats of O{p.text[-4:]}; write "
-                    f"M98 P{int(p.text[-4:])} for one call or use L")
-        return int(p.text[-4:]), repeats, m98
-    return int(p.text), 1, m98
+            return CallProblem(f"M98 {p.key} asks for 0 repeats of O{p.text[-4:]}; write "
+                               f"M98 P{int(p.text[-4:])} for one call or use L", p)
+        return Call(int(p.text[-4:]), repeats, p, p)
+    return Call(int(p.text), 1, p, p)
