@@ -510,6 +510,49 @@ def test_a_p_of_more_than_8_digits_or_with_l_beside_its_repeats_is_refused(p, co
     assert str(info.value) == f"prog.nc, line 3, column {column}, key '{key}': {message}"
 
 
+#: O12345 (line 8) is above the 4-digit program numbers M98 P calls; O2345 (line 5) is the
+#: number a packed P12345 reads as (1 x O2345). {call} is line 3.
+HIGH_NUMBER = "O1\nG00 X0 Y0\n{call}\nM30\nO2345\nG00 X1.\nM99\nO12345\nG00 X5.\nM99\n"
+
+
+def test_a_subprogram_numbered_above_9999_is_read_when_never_called():
+    # A definition alone changes nothing that runs (a control with 5-digit program numbers,
+    # as Haas's, holds it): the program reads as the same one without O12345.
+    program = parse_program(HIGH_NUMBER.format(call="G00 X2."), "prog.nc")
+    assert program.targets[:, 0].tolist() == [0.0, 2 * MM]
+    without = "O1\nG00 X0 Y0\nG00 X2.\nM30\nO2345\nG00 X1.\nM99\n"
+    assert program == parse_program(without, "prog.nc")
+
+
+@pytest.mark.parametrize(("call", "key", "reading"), [
+    # had silently run O2345 (X1.), not the O12345 (X5.) its author meant
+    ("M98 P12345", "M98 P12345", " (P12345: 1 x O2345)"),
+    ("M98 P00012345", "M98 P00012345", " (P00012345: 1 x O2345)"),
+    # had said to write M98 P2345 L2: a call of the wrong program
+    ("M98 P12345 L2", "M98 P12345 L2", ""),
+])
+def test_a_call_of_a_subprogram_numbered_above_9999_is_refused_at_its_p(call, key, reading):
+    with pytest.raises(NCProgramError) as info:
+        parse_program(HIGH_NUMBER.format(call=call), "prog.nc")
+    p = key.split()[1]
+    assert str(info.value) == (
+        f"prog.nc, line 3, column 5, key '{p}': {key}: O12345, defined on line 8, cannot be "
+        "called: M98 calls programs O1..O9999 (Series 0i-MC Operator's Manual B-64124EN/01, "
+        "12.3), a P of 5 to 8 digits being a repeat count then the 4-digit program "
+        f"number{reading}; a control with longer program numbers (Haas: 5 digits) reads it "
+        "as O12345. Renumber O12345 to at most 4 digits and call it so")
+
+
+def test_a_packed_p_calling_a_missing_program_says_how_it_was_read():
+    # O12345 in another file, say: the message had named only O2345, whose digits the
+    # user never wrote as a program number
+    with pytest.raises(NCProgramError) as info:
+        parse_program("O1\nM98 P12345\nM30\n", "prog.nc")
+    assert str(info.value) == (
+        "prog.nc, line 2, column 5, key 'P12345': M98 P12345 calls O2345 (1 x: FANUC's "
+        "P<repeats><4-digit program number>), which is not in this file (subprograms: none)")
+
+
 def test_subprogram_depth_and_recursion_are_refused_before_running():
     chain = "O1\nM98 P2\nM30\n" + "".join(f"O{k}\nM98 P{k + 1}\nM99\n" for k in range(2, 13))
     chain += "O13\nG00 X0\nM99\n"

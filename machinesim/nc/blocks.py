@@ -144,7 +144,7 @@ class Block:
         if ends and self.depth == 0:  # in a subprogram, refused by the layout
             state.end = (self.line, f"M{ends[0]:02d}")
         if 98 in codes:
-            call = call_of(self.words)
+            call = call_of(self.words, self.reader.layout.defined)
             if isinstance(call, CallProblem):
                 raise self.fail(call.message, call.word)
             self.reader.call(call, self.depth, self.line)

@@ -136,6 +136,8 @@ class Layout:
         counts = {None: between(self.main_first, self.main_stop).size}
         counts.update({s.number: between(s.first, s.stop).size
                        for s in self.subprograms.values()})
+        # subprogram number -> line of its O block (1-based), for the calls' checks
+        self.defined = {s.number: s.line + 1 for s in self.subprograms.values()}
         self.check_calls(calls, counts)
 
     def check_calls(self, calls, counts) -> None:

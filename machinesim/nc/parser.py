@@ -599,8 +599,11 @@ class Reader:
             where = ("the main program itself, which M98 cannot call (a subprogram starts "
                      "with its O number after M02/M30)" if number == self.state.number
                      else "which is not in this file")
-            raise self.fail(f"M98 calls O{number:04d}, {where} (subprograms: {have})",
-                            line, word)
+            # a P of 5 to 8 digits: say how it was read, as O12345 may have been meant
+            what = (f"M98 {word.key} calls O{number:04d} ({call.repeats} x: FANUC's "
+                    "P<repeats><4-digit program number>)" if len(word.text) > 4
+                    else f"M98 calls O{number:04d}")
+            raise self.fail(f"{what}, {where} (subprograms: {have})", line, word)
         if depth + 1 > MAX_SUBPROGRAM_DEPTH:
             raise self.fail(f"subprograms nest deeper than {MAX_SUBPROGRAM_DEPTH} levels",
                             line, word)

@@ -6,6 +6,7 @@ docs/nc.md.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import NamedTuple
 
 from machinesim.exceptions import brief
@@ -47,6 +48,10 @@ MAX_INTEGER_DIGITS = 9
 #: 12.3 "Subprogram (M98, M99)": M98 P51002 calls O1002 five times; later controls take
 #: up to 9999 repeats). A P of at most 4 digits is the program number alone, L its repeats.
 MAX_CALL_DIGITS = 8
+#: The largest program number M98 P can call, its 4 digits (B-64124EN/01, 12.3; FANUC 0i
+#: numbers programs O1..O9999). A subprogram numbered above it may be defined, as a control
+#: with longer program numbers holds it, but a call to it is refused (`call_of`).
+MAX_PROGRAM_NUMBER = 9999
 #: Subprograms nest at most this deep (FANUC controls allow 4 to 10 levels); a subprogram
 #: that calls itself is refused before it runs.
 MAX_SUBPROGRAM_DEPTH = 10
@@ -165,9 +170,12 @@ class CallProblem(NamedTuple):
     word: Word
 
 
-def call_of(words: list[Word]) -> Call | CallProblem | None:
+def call_of(words: list[Word], defined: Mapping[int, int] | None = None,
+            ) -> Call | CallProblem | None:
     """The call of an M98 block, its problem when malformed, or None when the block has
-    no M98."""
+    no M98. ``defined`` maps the file's subprogram numbers to the (1-based) lines of their
+    O blocks: a P that spells one above `MAX_PROGRAM_NUMBER` is refused, since M98 P cannot
+    call it (it reads as repeats and a 4-digit number)."""
     m98 = next((w for w in words if w.letter == "M" and integer(w) == 98), None)
     if m98 is None:
         return None
@@ -175,6 +183,18 @@ def call_of(words: list[Word]) -> Call | CallProblem | None:
     count = next((w for w in words if w.letter == "L"), None)
     if p is None:
         return CallProblem("M98 needs P<program number> (an unsigned integer)", m98)
+    whole = integer(p)
+    if defined and whole is not None and whole > MAX_PROGRAM_NUMBER and whole in defined:
+        keys = p.key if count is None else f"{p.key} {count.key}"
+        reading = (f" ({p.key}: {int(p.text[:-4])} x O{p.text[-4:]})"
+                   if count is None and len(p.text) <= MAX_CALL_DIGITS else "")
+        return CallProblem(
+            f"M98 {keys}: O{whole}, defined on line {defined[whole]}, cannot be called: M98 "
+            f"calls programs O1..O{MAX_PROGRAM_NUMBER} (Series 0i-MC Operator's Manual "
+            "B-64124EN/01, 12.3), a P of 5 to 8 digits being a repeat count then the 4-digit "
+            f"program number{reading}; a control with longer program numbers (Haas: 5 "
+            f"digits) reads it as O{whole}. Renumber O{whole} to at most 4 digits and call "
+            "it so", p)
     if p.text.isdigit() and len(p.text) > MAX_CALL_DIGITS:
         return CallProblem(
             f"M98 {brief(p.key)} has {len(p.text)} digits; FANUC's P takes at most "
