@@ -115,6 +115,30 @@ def test_integer_input_rules():
     assert calculator[3].dwell_s == increment[3].dwell_s == 0.5
 
 
+#: G04 X1500 (no point) in s by rule: 1 s a unit under calculator-type input, the rule's time
+#: increment otherwise (`words.DWELL_INCREMENT_S`: 1 ms, 1 ms, 0.1 ms).
+BARE_DWELL_S = {"calculator": 1500.0, "increment": 1.5, "is-b": 1.5, "is-c": 0.15}
+
+
+@pytest.mark.parametrize("rule", sorted(BARE_DWELL_S))
+@pytest.mark.parametrize("units", ["G21", "G20"])
+def test_a_dwell_under_g91_moves_nothing_and_its_x_is_seconds(rule, units):
+    # FANUC's G04 X<s> (decimal point allowed) or P<ms> (none): under G91 and under every
+    # integer-input rule X is a time, not an axis move, in mm or inch alike; the dwell keeps
+    # X where it was, so the incremental move after it counts from there (1 + 1 = 2 units).
+    text = (f"{units} G00 X1. Y0 Z0\nG91 G04 X1.5\nG04 X1500\nG04 P1500\nG00 X1.\n"
+            "G90 G04 X2.\nX3.\nM30\n")
+    program = parse_program(text, "p.nc", integer_input=rule)
+    unit_m = 25.4e-3 if units == "G20" else 1e-3
+    assert program.kinds.tolist() == [0, 2, 2, 2, 0, 2, 0]
+    assert program.targets[:, 0].tolist() == pytest.approx(
+        [unit_m, unit_m, unit_m, unit_m, 2 * unit_m, 2 * unit_m, 3 * unit_m], rel=1e-15)
+    assert program.dwells.tolist() == [0.0, 1.5, BARE_DWELL_S[rule], 1.5, 0.0, 2.0, 0.0]
+    assert dict(program.integer_words) == {}  # a dwell's X is no length
+    with pytest.raises(NCProgramError, match="G04 P takes integer milliseconds, got P1.5"):
+        parse_program("G00 X1.\nG91 G04 P1.5\n", "p.nc", integer_input=rule)
+
+
 def test_integer_input_in_fanuc_increment_systems_and_the_words_read_so():
     # IS-B: 0.001 mm, 0.0001 inch, 0.001 deg; IS-C: a tenth of each. The plain lines take the
     # vectorised path, the arc the block-by-block one: both apply the rule and keep the
