@@ -19,7 +19,7 @@ from machinesim.nc.arcs import (
     arc_points,
 )
 from machinesim.nc.cycles import drill_steps
-from machinesim.nc.length import check_length_moved
+from machinesim.nc.length import check_length_carried, note_length_change
 from machinesim.nc.lexer import Word
 from machinesim.nc.program import AXES, KIND_LINEAR, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
 from machinesim.nc.words import (
@@ -95,13 +95,7 @@ class Block:
         block_number = self.integer(single["N"], "block number") if "N" in single else None
         self.feed_and_spindle()
         self.tool_words()
-        length_after = self.reader.tool_length()
-        if length_after != length_before:
-            words = ("G49" if state.length_mode == "G49"
-                     else f"{state.length_mode} H{state.h}")
-            carried = length_before if state.length_change is None else state.length_change[2]
-            state.length_change = (None if length_after == carried
-                                   else (self.line, words, carried))
+        note_length_change(self, length_before)
         if "T" in single:
             self.reader.tool_events.append(
                 (self.reader.out.count, self.integer(single["T"], "tool number"), self.line))
@@ -367,39 +361,12 @@ class Block:
                 state.length_change = None  # carried by this Z
         return self.finite(value, word)
 
-    def check_length_carried(self, word: Word | None, axes: list[Word] = ()) -> None:
-        """Refuse an incremental Z (or a G91 cycle's R: ``word``) while a tool length
-        change waits for an absolute Z: FANUC by default (parameter 5006#6 TOS = 0) moves Z
-        by the change in the G43/G44/G49 block itself, LinuxCNC and a control that shifts
-        coordinates carry it with the next absolute Z only, so the incremental moves after
-        it end the change apart; here they would silently take the second reading. A G90
-        move without Z (``axes``, ``word`` None) then is refused too (`check_length_moved`)."""
-        change = self.state.length_change
-        if change is None:
-            return
-        if word is None and axes and not self.state.incremental and "Z" in self.state.target:
-            line, words, carried = change
-            check_length_moved(self, axes[0], line, words,
-                               self.reader.tool_length() - carried)
-        if word is None or not self.state.incremental:
-            return
-        line, words, carried = change
-        delta = self.reader.tool_length() - carried
-        raise self.fail(
-            f"incremental {word.key} after {words} at line {line}, which changed the tool "
-            f"length offset by {delta * 1e3:+.6g} mm, before any absolute Z: controls differ "
-            f"on where it ends, {abs(delta) * 1e3:.6g} mm apart (FANUC by default, parameter "
-            "5006#6 TOS = 0, moves Z by the change in that block; LinuxCNC, or a control that "
-            "shifts coordinates, carries it with the next absolute Z); give an absolute Z "
-            "with or after the change (G90 G43 Z.. H..) before incremental moves along Z",
-            word)
-
     def straight(self, axes: list[Word], block_number: int | None) -> None:
         state = self.state
         if state.motion is None:
             raise self.fail(f"axis word {axes[0].letter} without a motion mode; give G00 or "
                             "G01 first", axes[0])
-        self.check_length_carried(self.single.get("Z"), axes)
+        check_length_carried(self, self.single.get("Z"), axes)
         values = {word.letter: self.machine(word) for word in axes}
         state.target.update(values)
         self.add(MOTION[state.motion], 0.0, block_number)
@@ -489,7 +456,7 @@ class Block:
                                 f"{u} and {v} before {state.motion}{plane}", word)
         start = dict(state.target)
         end = dict(start)
-        self.check_length_carried(single.get("Z"), axes)
+        check_length_carried(self, single.get("Z"), axes)
         end.update({axis.letter: self.machine(axis) for axis in axes})
         given = [single[k] for k in centre_letters if k in single]
         if "R" in single and given:
@@ -545,7 +512,7 @@ class Block:
             if word.letter not in "XYZ":
                 raise self.fail(f"axis word {word.letter} in a canned cycle block; a drilling "
                                 "cycle takes X Y Z R Q P K F", word)
-        self.check_length_carried(single.get("R") or single.get("Z"))
+        check_length_carried(self, single.get("R") or single.get("Z"))
         if "R" in single:
             r = self.real(single["R"]) * self.length_of(single["R"])
             if state.incremental:

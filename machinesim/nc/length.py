@@ -1,12 +1,17 @@
-"""A tool length change (G43/G44 H, G49) in G90 without Z, followed by a move without Z.
+"""A tool length change (G43/G44 H, G49) that waits for a Z to carry it.
 
 FANUC by default (parameter 5006#6 TOS = 0) moves Z by the change in the G43/G44/G49 block
-itself, so the X/Y moves after it run at the new height; LinuxCNC, and controls that shift
-coordinates, carry it with the next Z only (docs/nc.md, "Tool table"), so they run at the
-old one, as machinesim's reader had read them. The two put those moves the change apart in Z,
-so such a move is refused with the line of the change and both heights, as an incremental
-Z after the change is (`Block.check_length_carried`); the fix is to give Z in the block
-of the change (``G43 H1 Z5.``), as CAM posts write it.
+itself; LinuxCNC, and controls that shift coordinates, carry it with the next absolute Z only
+(docs/nc.md, "Tool table"), as machinesim's reader does. Until an absolute Z (or G28 Z,
+G53 Z, a cycle's absolute R and Z) carries the change, the two readings put what follows
+the change apart in Z, so it is refused, naming the line of the change and the difference:
+an incremental Z (or a G91 cycle's R or Z), whose end differs, and a G90 move without Z,
+which runs at the new height on a FANUC and at the old one here. The fix is to give Z in
+the block of the change (``G43 H1 Z5.``), as CAM posts write it.
+
+Internal to the reader: a block (`machinesim.nc.blocks.Block`) notes the change
+(`note_length_change`) and checks its moves against it (`check_length_carried`); the Z
+words that carry it clear ``state.length_change`` where they are read.
 """
 
 from __future__ import annotations
@@ -14,19 +19,49 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from machinesim.nc.blocks import Block
     from machinesim.nc.lexer import Word
 
-__all__ = ["check_length_moved"]
+__all__ = ["check_length_carried", "note_length_change"]
 
 
-def check_length_moved(block, word: Word, line: int, words: str, delta: float) -> None:
-    """Refuse ``word`` (the first axis word of a G90 move without Z in ``block``) after the
-    tool length change ``words`` at ``line`` (by ``delta``, m) that no Z has carried."""
-    side = "higher" if delta > 0.0 else "lower"  # Z targets carry + the length
+def note_length_change(block: Block, length_before: float) -> None:
+    """After ``block``'s G43/G44/G49 and H words: the change of the tool length offset from
+    ``length_before`` (m) waits for a Z, unless it returns to the length a Z last carried."""
+    state = block.state
+    length_after = block.reader.tool_length()
+    if length_after == length_before:
+        return
+    words = "G49" if state.length_mode == "G49" else f"{state.length_mode} H{state.h}"
+    carried = length_before if state.length_change is None else state.length_change[2]
+    state.length_change = None if length_after == carried else (block.line, words, carried)
+
+
+def check_length_carried(block: Block, word: Word | None, axes: list[Word] = ()) -> None:
+    """Refuse an incremental Z (or a G91 cycle's R: ``word``) while a tool length change
+    waits for an absolute Z, and a G90 move without Z (``axes``, ``word`` None) then."""
+    state = block.state
+    change = state.length_change
+    if change is None:
+        return
+    line, words, carried = change
+    delta = block.reader.tool_length() - carried
+    if word is None and axes and not state.incremental and "Z" in state.target:
+        side = "higher" if delta > 0.0 else "lower"  # Z targets carry + the length
+        raise block.fail(
+            f"{axes[0].key} moves without Z after {words} at line {line}, which changed the "
+            f"tool length offset by {delta * 1e3:+.6g} mm, before any Z: FANUC by default "
+            "(parameter 5006#6 TOS = 0) moves Z by the change in that block, so this move "
+            f"runs there {abs(delta) * 1e3:.6g} mm {side} than here, where (as on LinuxCNC) "
+            f"nothing moves until the next Z; give Z in the block of the change (e.g. G90 "
+            f"{words} Z5.) or before this move", axes[0])
+    if word is None or not state.incremental:
+        return
     raise block.fail(
-        f"{word.key} moves without Z after {words} at line {line}, which changed the tool "
-        f"length offset by {delta * 1e3:+.6g} mm, before any Z: FANUC by default (parameter "
-        "5006#6 TOS = 0) moves Z by the change in that block, so this move runs there "
-        f"{abs(delta) * 1e3:.6g} mm {side} than here, where (as on LinuxCNC) nothing moves "
-        f"until the next Z; give Z in the block of the change (e.g. G90 {words} Z5.) or "
-        "before this move", word)
+        f"incremental {word.key} after {words} at line {line}, which changed the tool "
+        f"length offset by {delta * 1e3:+.6g} mm, before any absolute Z: controls differ "
+        f"on where it ends, {abs(delta) * 1e3:.6g} mm apart (FANUC by default, parameter "
+        "5006#6 TOS = 0, moves Z by the change in that block; LinuxCNC, or a control that "
+        "shifts coordinates, carries it with the next absolute Z); give an absolute Z "
+        "with or after the change (G90 G43 Z.. H..) before incremental moves along Z",
+        word)
