@@ -68,7 +68,7 @@ MAX_TOOL_SIZE_M = 1.0
 #: block: a ball of 1e-12 m radius removes its hand-derived 1.6e-18 m^3, one of 1e-13 m 3 %
 #: less, one of 2e-14 m 50 times more, one of 1e-14 m nothing ("does it reach the
 #: stock?"). 1e-9 m is 100 times that tolerance on a part 10 m across (the largest travel
-#: a machine file may give, `machinesim.urdf.MAX_TRAVEL_M`), and the machines' 1 nm axis
+#: a machine file may give, `machinesim.urdf_checks.MAX_TRAVEL_M`), and the machines' 1 nm axis
 #: resolution (`CHORD_TOLERANCE_M`): no real tool is that small.
 MIN_TOOL_SIZE_M = 1e-9
 #: Most vertices of a tool polygon or polyhedron: about 10 MB of float64 points per pose
