@@ -27,9 +27,11 @@ tolerance (the sagitta between a chord and its arc) is a parameter of each tool.
 polygon is a stack of rings of latitude, so that its volume has a closed form (a sum of
 frusta of regular pyramids, `BallEndMill.rings`).
 
-Sizes are bounded (`MIN_TOOL_SIZE_M`, `MAX_TOOL_SIZE_M`, `MAX_TOOL_VERTICES`): a tool
-smaller than the engine resolves, larger than the machines, or a polygon of millions of
-vertices is an input error, refused with `InputError`.
+Ball and flat end mills are in `machinesim.end_mills`; a tool's default height and the
+bounds on its sizes (`MIN_TOOL_SIZE_M`, `MAX_TOOL_SIZE_M`, `MAX_TOOL_VERTICES`) in
+`machinesim.tool_sizes`: a tool smaller than the engine resolves, larger than the machines,
+or a polygon of millions of vertices is an input error, refused with `InputError`. All are
+importable from here.
 """
 
 from __future__ import annotations
@@ -41,40 +43,33 @@ from dataclasses import dataclass, replace
 import manifold3d
 import numpy as np
 
+from machinesim.end_mills import BallEndMill, FlatEndMill, ring_facet_depth
 from machinesim.exceptions import InputError
 from machinesim.tolerances import (
-    BALL_CHORD_M,
     CHORD_TOLERANCE_M,
     PATH_CHORD_SHARE,
     PROFILE_CHORD_M,
 )
-from machinesim.units import M_PER_MM, angle_text, length_text
+from machinesim.tool_sizes import (
+    _MIN_SHORT,
+    MAX_TOOL_SIZE_M,
+    MAX_TOOL_VERTICES,
+    MIN_TOOL_SIZE_M,
+    TOOL_HEIGHT_M,
+    _bound,
+    _check_angle,
+    _check_count,
+    _check_positive,
+    _check_size,
+)
+from machinesim.units import angle_text, length_text
 
-#: Default length of a tool's body from its edge point to the holder (m). Ten times the
-#: deepest cut of the shipped examples and seed experiments (grooves and face passes of tens
-#: of um, the 5 mm deep grooves of the tests stay below it) and of the order of a diamond
-#: tool's overhang from its holder. The engine clips every sweep just above the stock, so a
-#: tall body costs nothing where it does not reach the stock.
-TOOL_HEIGHT_M = 10e-3
-#: Largest tool dimension accepted (m): radius, height, or the width of the flanks' top.
-#: The shipped machines travel at most 0.5 m (+-250 mm), so a larger tool is a unit mix-up
-#: (``ball:1e9`` is a kilometre-wide ball); tessellating it within the nm chord tolerances
-#: would need billions of vertices (that spec crashed manifold3d before this bound).
-MAX_TOOL_SIZE_M = 1.0
-#: Smallest tool dimension accepted (m): radius, height, shank radius. The engine's booleans
-#: (manifold3d) merge what lies within 1e-12 of a solid's largest coordinate
-#: (``Manifold.get_tolerance``: 1e-14 m on a 10 mm block), and a tool is cut right only from
-#: about 100 times that. Measured with models/examples/grooves.nc on mill3 and a 10x10x2 mm
-#: block: a ball of 1e-12 m radius removes its hand-derived 1.6e-18 m^3, one of 1e-13 m 3 %
-#: less, one of 2e-14 m 50 times more, one of 1e-14 m nothing ("does it reach the
-#: stock?"). 1e-9 m is 100 times that tolerance on a part 10 m across (the largest travel
-#: a machine file may give, `machinesim.urdf_checks.MAX_TRAVEL_M`), and the machines' 1 nm axis
-#: resolution (`CHORD_TOLERANCE_M`): no real tool is that small.
-MIN_TOOL_SIZE_M = 1e-9
-#: Most vertices of a tool polygon or polyhedron: about 10 MB of float64 points per pose
-#: pair in the engine, far above the defaults (a R2 mm ball at 1 um has ~5,000, a R2 mm
-#: nose at 1 nm ~900). A finer request is refused with advice to loosen ``chord_tol``.
-MAX_TOOL_VERTICES = 200_000
+# BallEndMill, FlatEndMill and the bounds are defined in end_mills and tool_sizes, and
+# importable from here, where they were until those modules were split off.
+__all__ = ["MAX_TOOL_SIZE_M", "MAX_TOOL_VERTICES", "MIN_TOOL_SIZE_M", "TOOL_HEIGHT_M",
+           "BallEndMill", "FlatEndMill", "RoundNoseTool", "Tool", "VTool", "arc_segments",
+           "path_chord_tolerance", "ring_facet_depth", "sphere_polygon",
+           "with_nose_radius_error"]
 
 
 def arc_segments(radius: float, angle: float, chord_tol: float) -> int:
@@ -98,72 +93,6 @@ def arc_segments(radius: float, angle: float, chord_tol: float) -> int:
         return max(1, math.ceil(angle / math.pi))
     step = 2.0 * math.acos(1.0 - chord_tol / radius)
     return max(1, math.ceil(angle / step - 1e-12))
-
-
-#: Why the size bounds are what they are, as refusals say it.
-_MAX_WHY = ("MAX_TOOL_SIZE_M: larger than any machine's travel, and too many polygon vertices "
-            "at the nm chord tolerance")
-_MIN_WHY = ("MIN_TOOL_SIZE_M: 100 times the tolerance of the cutting engine's booleans on a "
-            "part as large as a machine's travel, below which a tool removes nothing or a "
-            "wrong volume")
-_MIN_SHORT = "MIN_TOOL_SIZE_M, below which a tool removes nothing or a wrong volume"
-
-
-def _bound(value: float, why: str) -> str:
-    """A size bound as messages show it, with its name and why: ``1e-06 mm (1e-09 m,
-    MIN_TOOL_SIZE_M: ...)``."""
-    return f"{value / M_PER_MM:g} mm ({value:g} m, {why})"
-
-
-def _check_positive(name: str, value: float) -> float:
-    value = float(value)
-    if not math.isfinite(value) or value <= 0.0:
-        raise InputError(f"{name} must be a positive finite number, got {length_text(value)}",
-                         key=name)
-    return value
-
-
-def _check_shank(value: float) -> None:
-    """A shank radius: 0 (as wide as the tool) or a size (`_check_size`)."""
-    if value != 0.0:
-        _check_size("shank_radius", value)
-
-
-def _check_size(name: str, value: float) -> float:
-    """A length from `MIN_TOOL_SIZE_M` to `MAX_TOOL_SIZE_M`, else InputError naming it."""
-    value = _check_positive(name, value)
-    if value > MAX_TOOL_SIZE_M:
-        raise InputError(
-            f"{name} must be at most {_bound(MAX_TOOL_SIZE_M, _MAX_WHY)}, got "
-            f"{length_text(value)}",
-            key=name,
-        )
-    if value < MIN_TOOL_SIZE_M:
-        raise InputError(
-            f"{name} must be at least {_bound(MIN_TOOL_SIZE_M, _MIN_WHY)}, got "
-            f"{length_text(value)}",
-            key=name,
-        )
-    return value
-
-
-def _check_angle(name: str, value: float) -> float:
-    value = float(value)
-    if not math.isfinite(value) or not 0.0 < value < math.pi:
-        raise InputError(
-            f"{name} must lie between 0 and 180 deg (0 and pi rad), got {angle_text(value)}",
-            key=name,
-        )
-    return value
-
-
-def _check_count(what: str, count: int, chord_tol: float) -> None:
-    if count > MAX_TOOL_VERTICES:
-        raise InputError(
-            f"the {what} would have {count:,} vertices at chord_tol {chord_tol!r} m, over "
-            f"MAX_TOOL_VERTICES ({MAX_TOOL_VERTICES:,}); give a larger chord_tol",
-            key="chord_tol",
-        )
 
 
 def _flank_height(tool, top_half_width) -> float:
@@ -433,222 +362,6 @@ def sphere_polygon(radius: float, chord_tol: float) -> manifold3d.Manifold:
         if radius - np.min(np.einsum("ij,ij->i", normal, corner[:, 0])) <= chord_tol:
             return sphere
         segments += 4 * math.ceil(segments / 16)
-
-
-def ring_facet_depth(radius: float, rings: int, segments: int) -> float:
-    """Largest facet depth (m) of the ring polygon of a hemisphere.
-
-    The hemisphere's vertices lie on ``rings`` rings of latitude at polar angles
-    k pi / (2 rings) from the pole, each a regular ``segments``-gon at the same azimuths, so
-    each facet is a planar trapezoid (a triangle at the pole). Its plane's distance from the
-    centre follows from the two edge midpoints in its meridian plane; the depth is the radius
-    minus that distance. The shank's faces lie at the equator polygon's apothem.
-    """
-    theta = np.linspace(0.0, math.pi / 2.0, rings + 1)
-    a, b = theta[:-1], theta[1:]
-    c = math.cos(math.pi / segments)
-    distance = c * np.sin(b - a) / np.hypot(c * (np.sin(b) - np.sin(a)), np.cos(b) - np.cos(a))
-    return float(radius * (1.0 - min(distance.min(), c)))
-
-
-@functools.lru_cache(maxsize=16)
-def _ball_mesh(radius: float, chord_tol: float, height: float):
-    """Hemisphere ring polygon under a prism shank: vertices (k, 3), triangles (t, 3) int64,
-    rings and segments (see `BallEndMill.rings`)."""
-    if chord_tol >= radius:
-        rings, segments = 1, 4
-    else:
-        step = 2.0 * math.acos(1.0 - chord_tol / (2.0 * radius))
-        rings = max(1, math.ceil(math.pi / 2.0 / step))
-        segments = max(4, 4 * math.ceil(2.0 * math.pi / step / 4.0))
-    while True:
-        _check_count("ball polygon", rings * segments + segments + 1, chord_tol)
-        if ring_facet_depth(radius, rings, segments) <= chord_tol:
-            break
-        rings += math.ceil(rings / 8)
-        segments += 4 * math.ceil(segments / 32)
-    theta = np.linspace(0.0, math.pi / 2.0, rings + 1)[1:]
-    phi = 2.0 * math.pi * np.arange(segments) / segments
-    ring_radius = radius * np.sin(theta)
-    ring_z = radius * (1.0 - np.cos(theta))
-    ring_radius[-1], ring_z[-1] = radius, radius  # the equator exactly
-    if height > radius:
-        ring_radius = np.append(ring_radius, radius)
-        ring_z = np.append(ring_z, height)
-    count = len(ring_z)
-    vertices = np.zeros((1 + count * segments, 3))
-    vertices[1:, 0] = (ring_radius[:, None] * np.cos(phi)[None, :]).ravel()
-    vertices[1:, 1] = (ring_radius[:, None] * np.sin(phi)[None, :]).ravel()
-    vertices[1:, 2] = np.repeat(ring_z, segments)
-    j = np.arange(segments)
-    nxt = (j + 1) % segments
-
-    def ring(i, k):
-        return 1 + i * segments + k
-
-    triangles = [np.stack([np.zeros(segments, dtype=np.int64), ring(0, nxt), ring(0, j)], 1)]
-    for i in range(count - 1):
-        triangles.append(np.stack([ring(i, j), ring(i, nxt), ring(i + 1, nxt)], 1))
-        triangles.append(np.stack([ring(i, j), ring(i + 1, nxt), ring(i + 1, j)], 1))
-    top = count - 1
-    inner = np.arange(1, segments - 1)
-    triangles.append(np.stack([np.full(len(inner), ring(top, 0)), ring(top, inner),
-                               ring(top, inner + 1)], 1))
-    triangles = np.concatenate(triangles).astype(np.int64)
-    vertices.flags.writeable = False
-    triangles.flags.writeable = False
-    return vertices, triangles, rings, segments
-
-
-class _RotatingBody:
-    """What a rotating tool's envelope (a closed convex polyhedron from ``_mesh()``, its
-    vertices first, its outward triangles second) offers the engine: vertices, triangles,
-    edges, and the same tool with another radius."""
-
-    def vertices(self) -> np.ndarray:
-        """Polyhedron vertices, shape (k, 3) (m), in the order the class states."""
-        return self._mesh()[0]
-
-    def triangles(self) -> np.ndarray:
-        """Outward-oriented triangles of the polyhedron, indices into `vertices`, (t, 3)."""
-        return self._mesh()[1]
-
-    def edges(self) -> np.ndarray:
-        """Index pairs of the polyhedron's edges into `vertices`, shape (e, 2) int64."""
-        triangles = self.triangles()
-        pairs = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
-        return np.unique(np.sort(pairs, axis=1), axis=0)
-
-    def with_errors(self, radius_error: float = 0.0):
-        """The same tool with its radius off by ``radius_error`` (m)."""
-        return replace(self, radius=self.radius + radius_error)
-
-
-@dataclass(frozen=True)
-class BallEndMill(_RotatingBody):
-    """Envelope of a rotating ball end mill: a hemisphere of radius R about (0, 0, R) under a
-    cylindrical shank of radius R up to ``height``.
-
-    Parameters
-    ----------
-    radius : float
-        Ball radius (m).
-    chord_tol : float
-        Largest distance of a facet of the polygon from the true surface (m).
-    height : float, optional
-        Length from the tip to the holder (m), at least ``radius``. Default: the larger of
-        `TOOL_HEIGHT_M` and the diameter.
-    shank_radius : float, optional
-        Radius of the shank or holder above ``height`` (m), for the holder check: 0 (the
-        default) takes it as wide as the tool.
-    """
-
-    radius: float
-    chord_tol: float = BALL_CHORD_M
-    height: float | None = None
-    shank_radius: float = 0.0
-    rotational = True
-    planar = False
-
-    def __post_init__(self) -> None:
-        _check_size("radius", self.radius)
-        _check_positive("chord_tol", self.chord_tol)
-        if self.height is None:
-            object.__setattr__(self, "height", max(TOOL_HEIGHT_M, 2.0 * self.radius))
-        _check_size("height", self.height)
-        if self.height < self.radius:
-            raise InputError(f"height {length_text(self.height)} must be at least the "
-                             f"radius, {length_text(self.radius)}", key="height")
-        _check_shank(self.shank_radius)
-        self._mesh()
-
-    def _mesh(self):
-        return _ball_mesh(self.radius, self.chord_tol, self.height)
-
-    @property
-    def rings(self) -> tuple[int, int]:
-        """(rings, segments): the hemisphere's vertices lie on ``rings`` rings of latitude at
-        polar angles k pi / (2 rings), k = 1 .. rings, from the tip, each a regular
-        ``segments``-gon at azimuths 2 pi j / segments; the shank's top is the equator's
-        polygon at ``height``. The polyhedron is a stack of frusta of regular pyramids; its
-        vertices are the tip, then ring by ring."""
-        return self._mesh()[2:]
-
-
-
-@functools.lru_cache(maxsize=16)
-def _cylinder_mesh(radius: float, chord_tol: float, height: float):
-    """A regular polygon inscribed in the circle of ``radius`` at z = 0 and at ``height``:
-    vertices (2 n, 3), outward triangles (t, 3) int64 and n."""
-    if chord_tol >= radius:
-        segments = 4
-    else:
-        segments = max(4, 4 * math.ceil(math.pi / math.acos(1.0 - chord_tol / radius) / 4.0))
-    _check_count("end mill polygon", 2 * segments, chord_tol)
-    phi = 2.0 * math.pi * np.arange(segments) / segments
-    ring = np.stack([radius * np.cos(phi), radius * np.sin(phi), np.zeros(segments)], axis=1)
-    vertices = np.concatenate([ring, ring + np.array([0.0, 0.0, height])])
-    j = np.arange(segments)
-    nxt = (j + 1) % segments
-    inner = np.arange(1, segments - 1)
-    triangles = np.concatenate([
-        np.stack([np.zeros(len(inner), dtype=np.int64), inner + 1, inner], 1),  # bottom, -z
-        np.stack([np.full(len(inner), segments), segments + inner,
-                  segments + inner + 1], 1),  # top, +z
-        np.stack([j, nxt, segments + nxt], 1),  # sides
-        np.stack([j, segments + nxt, segments + j], 1),
-    ]).astype(np.int64)
-    vertices.flags.writeable = False
-    triangles.flags.writeable = False
-    return vertices, triangles, segments
-
-
-@dataclass(frozen=True)
-class FlatEndMill(_RotatingBody):
-    """Envelope of a rotating flat end mill: a cylinder of radius R from its flat end face at
-    z = 0 (the ``tool_tip`` frame's origin is the face's centre) up to ``height``.
-
-    The circle is a regular polygon with `segments` corners on it (a multiple of 4, one at
-    azimuth 0), so the sagitta between a side and the circle is within ``chord_tol``: the
-    cut is up to that much narrower than the true cylinder's, as a ball's is.
-
-    Parameters
-    ----------
-    radius : float
-        Radius (m): half the end mill's diameter.
-    chord_tol : float
-        Largest distance of a side of the polygon from the circle (m).
-    height : float, optional
-        Length from the end face to the holder (m). Default: `TOOL_HEIGHT_M`.
-    shank_radius : float, optional
-        Radius of the shank or holder above ``height`` (m), for the holder check: 0 (the
-        default) takes it as wide as the tool.
-    """
-
-    radius: float
-    chord_tol: float = BALL_CHORD_M
-    height: float = TOOL_HEIGHT_M
-    shank_radius: float = 0.0
-    rotational = True
-    planar = False
-
-    def __post_init__(self) -> None:
-        _check_size("radius", self.radius)
-        _check_positive("chord_tol", self.chord_tol)
-        _check_size("height", self.height)
-        _check_shank(self.shank_radius)
-        self._mesh()
-
-    def _mesh(self):
-        return _cylinder_mesh(self.radius, self.chord_tol, self.height)
-
-    @property
-    def segments(self) -> int:
-        """Corners of the polygon (a multiple of 4): the vertices are the end face's n, then
-        the top's."""
-        return self._mesh()[2]
-
-
 
 Tool = VTool | RoundNoseTool | BallEndMill | FlatEndMill
 
