@@ -45,6 +45,7 @@ from machinesim.urdf import (
     read_axes,
     read_urdf,
 )
+from machinesim.urdf_checks import check_table
 
 #: The tool geometry family's parameter (the nose radius error, m): accepted by every machine,
 #: moves no frame (a zero column in `Machine.error_jacobian`).
@@ -141,6 +142,7 @@ class Machine:
         self.name = root.get("name") or self.path.stem
         self._urdf_root = root
         self._axes = read_axes(root, self.path, lines)
+        check_table(root, self.path, self._axes, lines)
         self.axes: tuple[str, ...] = tuple(a.letter for a in self._axes)
         self.kin = Kinematics(root, self._axes, str(self.path))
         missing = [f for f in REQUIRED_FRAMES if f not in self.kin.frame_id]

@@ -6,14 +6,15 @@ expected), never a hang or a traceback: `check_tree`, the structure (one tree of
 named links and joints, no cycle, one root, the frames every machine has, finite origins
 within a machine's size, no xacro, URDF's shapes) and the size and link-count limits;
 `_limits`, an axis's travel and a plausible rapid rate (rotary limits that read as degrees
-load with a warning); and, once Pinocchio has the model, `check_zero_pose`, the nominal
-machine at zero against the conventions of docs/machines.md (the edge at the workpiece
-origin, each axis moving the tool along or about its direction), `check_joint_frames`, each
-axis joint's frame parallel to the machine axes, and `check_tool_mount`, tool_tip rigidly
-on tool_mount and parallel to it, the frame the tool setting error is given in. Also the
-readers of URDF numbers (`_number`, `_vector`) that refuse what the URDF parser under
-Pinocchio would. An axis joint's name, type and direction are checked as
-`machinesim.urdf.read_axes` reads them.
+load with a warning); `check_table`, the table on the workpiece's side, moved by its
+linear axes and by no axis of the tool's; and, once Pinocchio has the model,
+`check_zero_pose`, the nominal machine at zero against the conventions of docs/machines.md
+(the edge at the workpiece origin, each axis moving the tool along or about its
+direction), `check_joint_frames`, each axis joint's frame parallel to the machine axes, and
+`check_tool_mount`, tool_tip rigidly on tool_mount and parallel to it, the frame the tool
+setting error is given in. Also the readers of URDF numbers (`_number`, `_vector`) that
+refuse what the URDF parser under Pinocchio would. An axis joint's name, type and
+direction are checked as `machinesim.urdf.read_axes` reads them.
 """
 
 from __future__ import annotations
@@ -29,8 +30,8 @@ import numpy as np
 from machinesim.exceptions import MachineSimWarning, ModelError
 from machinesim.kinematics import DOFS, SPINDLE_TRAVEL_RAD, Axis
 
-__all__ = ["REQUIRED_FRAMES", "check_joint_frames", "check_tool_mount", "check_tree",
-           "check_zero_pose"]
+__all__ = ["REQUIRED_FRAMES", "check_joint_frames", "check_table", "check_tool_mount",
+           "check_tree", "check_zero_pose"]
 
 #: Frames every machine has.
 REQUIRED_FRAMES = ("base", "table", "workpiece", "tool_mount", "tool_tip")
@@ -139,18 +140,7 @@ def check_tool_mount(root: ET.Element, path, mMt: np.ndarray) -> None:
     A frame turned otherwise (a CAD export's spindle frame with Z along the spindle) would
     apply an offset along tool_mount Y along another direction, without a word.
     """
-    parent_of = {j.find("child").get("link"): j for j in root.findall("joint")}
-
-    def axes_above(link: str) -> set[str]:
-        names = set()
-        while link in parent_of:
-            joint = parent_of[link]
-            if joint.get("type") != "fixed":
-                names.add(joint.get("name"))
-            link = joint.find("parent").get("link")
-        return names
-
-    between = sorted(axes_above("tool_tip") ^ axes_above("tool_mount"))
+    between = sorted(_axes_above(root, "tool_tip") ^ _axes_above(root, "tool_mount"))
     if between:
         raise ModelError(f"{path}: axis joint(s) {', '.join(between)} move tool_tip and not "
                          "tool_mount, or tool_mount and not tool_tip; expected tool_tip held "
@@ -162,6 +152,56 @@ def check_tool_mount(root: ET.Element, path, mMt: np.ndarray) -> None:
                          "to tool_mount; expected them parallel (docs/machines.md, "
                          "Conventions), since the tool setting error is given in the "
                          "tool_mount frame: check the rpy of the origins between them")
+
+
+def check_table(root: ET.Element, path, axes: tuple[Axis, ...],
+                lines: dict[str, list[int]] | None = None) -> None:
+    """Check that ``table`` moves with the workpiece: on its side, under its linear axes.
+
+    The laser interferometer reads the tool's motion relative to the table, in the table's
+    axes (`machinesim.metrology.LaserInterferometer`), as its optics ride on the table. A
+    ``table`` moved by an axis that does not move the workpiece (on the tool's chain: the
+    names of ``table`` and ``tool_mount`` swapped), or left behind by a linear axis that
+    does (on the bed under a moving workpiece), loaded without a word, and a positioning
+    test of X read its 10 mm stroke as a 10 mm error. Every linear axis moving the
+    workpiece must move the table, and every axis moving the table must move the
+    workpiece; a rotary table may turn the table or turn above it. ``root`` has passed
+    `check_tree` and ``axes`` are its axis joints (`machinesim.urdf.read_axes`); ``lines``
+    (`machinesim.urdf.read_urdf`) puts the line of ``<link name="table">`` in a message.
+
+    Raises
+    ------
+    ModelError
+        Naming ``path``, the line of the table link, and the axes at fault.
+    """
+    on_table, on_workpiece = _axes_above(root, "table"), _axes_above(root, "workpiece")
+    index = [link.get("name") for link in root.findall("link")].index("table")
+    where = f"{_at(path, lines, 'link', index)}: link 'table'"
+    expected = ("expected the table on the workpiece's side, carried by every linear axis "
+                "that moves the workpiece and by no axis that does not (a rotary table may "
+                "turn it or turn above it; docs/machines.md, Conventions): the laser "
+                "interferometer reads the tool's motion relative to the table")
+    moving = [a.letter for a in axes if a.letter in on_table - on_workpiece]
+    if moving:
+        raise ModelError(f"{where} is moved by axis joint(s) {', '.join(moving)}, which do "
+                         f"not move the workpiece; {expected}")
+    behind = [a.letter for a in axes
+              if not a.rotary and a.letter in on_workpiece - on_table]
+    if behind:
+        raise ModelError(f"{where} is not moved by linear axis joint(s) {', '.join(behind)}, "
+                         f"which move the workpiece; {expected}")
+
+
+def _axes_above(root: ET.Element, link: str) -> set[str]:
+    """The names of the axis (not fixed) joints on the chain from the root link to ``link``."""
+    parent_of = {j.find("child").get("link"): j for j in root.findall("joint")}
+    names = set()
+    while link in parent_of:
+        joint = parent_of[link]
+        if joint.get("type") != "fixed":
+            names.add(joint.get("name"))
+        link = joint.find("parent").get("link")
+    return names
 
 
 def check_joint_frames(path, axes: tuple[Axis, ...], rotations: dict[str, np.ndarray],

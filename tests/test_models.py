@@ -463,6 +463,102 @@ def test_table_and_tool_mount_may_be_the_links_their_axes_move(tmp_path):
                                           a.frame_pose(frame, q, errors))
 
 
+MILL3 = (ROOT / "models" / "examples" / "mill3.urdf").read_text()
+_MILL3_TABLE = ('  <joint name="table_fixed" type="fixed">\n'
+                '    <parent link="x_carriage"/><child link="table"/>\n'
+                '    <origin xyz="0 0 0.02" rpy="0 0 0"/>\n'
+                '  </joint>\n'
+                '  <joint name="workpiece_fixed" type="fixed">\n'
+                '    <parent link="table"/><child link="workpiece"/>\n'
+                '    <origin xyz="0 0 0.005" rpy="0 0 0"/>\n'
+                '  </joint>\n')
+
+
+def _mill3_table_on(parent: str, z: str) -> str:
+    """mill3 with the workpiece on the X carriage and the table a fixed child of ``parent``
+    at ``z`` (m) above it."""
+    assert MILL3.count(_MILL3_TABLE) == 1
+    return MILL3.replace(_MILL3_TABLE, _MILL3_TABLE.replace(
+        '<parent link="x_carriage"/><child link="table"/>',
+        f'<parent link="{parent}"/><child link="table"/>').replace(
+        'xyz="0 0 0.02"', f'xyz="0 0 {z}"').replace(
+        '<parent link="table"/><child link="workpiece"/>',
+        '<parent link="x_carriage"/><child link="workpiece"/>').replace(
+        'xyz="0 0 0.005"', 'xyz="0 0 0.025"'))
+
+
+@pytest.mark.parametrize(("case", "text", "words"), [
+    # the names of table and tool_mount swapped: the table is the Z carriage's
+    ("swapped", MILL3.replace('"table"', '"t"').replace('"tool_mount"', '"table"')
+     .replace('"t"', '"tool_mount"'),
+     "link 'table' is moved by axis joint(s) Z, which do not move the workpiece; expected "
+     "the table on the workpiece's side"),
+    ("on_the_tool_side", _mill3_table_on("z_carriage", "-0.1"),
+     "link 'table' is moved by axis joint(s) Z, which do not move the workpiece"),
+    # on the bed, under the workpiece that Y and X move
+    ("on_the_bed", _mill3_table_on("base", "0.1"),
+     "link 'table' is not moved by linear axis joint(s) X, Y, which move the workpiece"),
+])
+def test_a_table_off_the_workpiece_side_is_refused_naming_its_line(case, text, words,
+                                                                    tmp_path):
+    # The last two loaded without a word, the tool where mill3 puts it, and the laser
+    # interferometer, which reads the tool's motion relative to the table, read X's 10 mm
+    # stroke as a -10 mm error (0 on mill3); the first was refused as tool_tip not held by
+    # tool_mount, naming neither the table nor a line
+    path = tmp_path / f"{case}.urdf"
+    path.write_text(text)
+    with pytest.raises(ModelError) as raised:
+        load_machine(path)
+    line = _line(text, '<link name="table"')
+    assert str(raised.value).startswith(f"{path}, line {line}: {words}"), str(raised.value)
+
+
+def test_a_table_on_the_bed_of_a_gantry_or_under_its_rotary_table_loads(tmp_path):
+    # The check refuses a table that does not move with the workpiece, not a table on the
+    # stem of a machine whose axes all move the tool: there the laser interferometer reads
+    # X's stroke exactly (the nominal machine, no noise), as on mill3
+    from machinesim.metrology import LaserInterferometer
+
+    gantry = MILL3.replace(_MILL3_TABLE, (
+        '  <joint name="table_fixed" type="fixed">\n'
+        '    <parent link="base"/><child link="table"/>\n'
+        '    <origin xyz="0 0 0.17" rpy="0 0 0"/>\n  </joint>\n'
+        + _MILL3_TABLE[_MILL3_TABLE.index('  <joint name="workpiece_fixed"'):]))
+    for old, new in (('<parent link="base"/><child link="y_carriage"/>',
+                      '<parent link="table"/><child link="y_carriage"/>'),
+                     ('xyz="0 0 0.1"', 'xyz="0 0 0"'),
+                     ('<axis xyz="0 -1 0"/>', '<axis xyz="0 1 0"/>'),  # now on the tool side
+                     ('xyz="0 0 0.05"', 'xyz="0 0 0"'),
+                     ('<axis xyz="-1 0 0"/>', '<axis xyz="1 0 0"/>'),
+                     ('<parent link="base"/><child link="z_carriage"/>',
+                      '<parent link="x_carriage"/><child link="z_carriage"/>'),
+                     ('xyz="0 0 0.3"', 'xyz="0 0 0.13"')):
+        assert gantry.count(old) == 1, old
+        gantry = gantry.replace(old, new)
+    path = tmp_path / "gantry.urdf"
+    path.write_text(gantry)
+    stroke = np.array([0.0, 0.01, 0.02])
+    for machine in (load_machine(path), load_machine(ROOT / "models/examples/mill3.urdf")):
+        reading = LaserInterferometer(machine, noise=False).positioning("X", stroke)
+        np.testing.assert_allclose(reading.deviation, 0.0, rtol=0, atol=1e-15)
+    # grooving_4axis with its C table turning above the table rather than turning it: the
+    # same tool poses (the C axis line is the same vertical)
+    under = GROOVING
+    for old, new in (('<parent link="y_carriage"/><child link="c_table"/>',
+                      '<parent link="table"/><child link="c_table"/>'),
+                     ('<parent link="c_table"/><child link="table"/>',
+                      '<parent link="y_carriage"/><child link="table"/>'),
+                     ('<parent link="table"/><child link="workpiece"/>',
+                      '<parent link="c_table"/><child link="workpiece"/>')):
+        assert under.count(old) == 1, old
+        under = under.replace(old, new)
+    path = tmp_path / "c_above_table.urdf"
+    path.write_text(under)
+    machine, shipped = load_machine(path), load_machine("grooving_4axis")
+    q = np.random.default_rng(0).uniform(shipped.lower, shipped.upper, (5, 4))
+    np.testing.assert_allclose(machine.tool_pose(q), shipped.tool_pose(q), rtol=0, atol=1e-15)
+
+
 C_LIMIT = 'lower="-6.283185307179586" upper="6.283185307179586"'
 
 
