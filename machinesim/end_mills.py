@@ -44,7 +44,6 @@ def ring_facet_depth(radius: float, rings: int, segments: int) -> float:
     return float(radius * (1.0 - min(distance.min(), c)))
 
 
-
 @functools.lru_cache(maxsize=16)
 def _ball_mesh(radius: float, chord_tol: float, height: float):
     """Hemisphere ring polygon under a prism shank: vertices (k, 3), triangles (t, 3) int64,
@@ -167,7 +166,6 @@ class BallEndMill(_RotatingBody):
         polygon at ``height``. The polyhedron is a stack of frusta of regular pyramids; its
         vertices are the tip, then ring by ring."""
         return self._mesh()[2:]
-
 
 
 @functools.lru_cache(maxsize=16)

@@ -363,7 +363,9 @@ def sphere_polygon(radius: float, chord_tol: float) -> manifold3d.Manifold:
             return sphere
         segments += 4 * math.ceil(segments / 16)
 
+
 Tool = VTool | RoundNoseTool | BallEndMill | FlatEndMill
+
 
 def path_chord_tolerance(tools) -> float:
     """The chord tolerance (m) of the polygons a cut with ``tools`` makes of its arcs and

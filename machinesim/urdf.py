@@ -144,6 +144,7 @@ def _element_lines(data: bytes) -> dict[str, list[int]]:
     parser.Parse(data, True)
     return found
 
+
 def _depth(root: ET.Element) -> int:
     """How many elements deep the tree under ``root`` goes (iteratively: a file nested
     100,000 deep overflows Python's stack in anything recursive, `ET.tostring` included)."""

@@ -327,6 +327,7 @@ def _degree_warning(where: str, lower: float, upper: float) -> None:
         "in rad/s; an axis that turns without end is written with wide limits (sts_lathe's C: "
         "-1e5 .. 1e5 rad)", MachineSimWarning, stacklevel=2)
 
+
 def _number(text: str, where: str) -> float:
     """A finite float from URDF attribute text, or ModelError naming ``where`` and the text."""
     try:
