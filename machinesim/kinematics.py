@@ -29,7 +29,6 @@ configurations at once with numpy, poses and (`Kinematics.pose_jacobians`) axis 
 
 from __future__ import annotations
 
-import copy
 import math
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
@@ -183,7 +182,13 @@ def augment_urdf(root: ET.Element, axes: Mapping[str, Axis]) -> str:
     axes : mapping of str to Axis
         The machine's axes by letter.
     """
-    root = copy.deepcopy(root)
+    # a new <robot> holding the same links and joints: the original's are not modified
+    # (joints are removed from and appended to this one only, their <origin>, <axis> and
+    # <limit> appended to new joints as they are), and a deep copy of a CAD export's
+    # visuals took 1.5 s of the 7 s load of a 14 MB file of 260,000 of them
+    root, nominal = ET.Element(root.tag, root.attrib), root
+    root.text = nominal.text
+    root.extend(nominal)
     for extra in [e for e in root if e.tag not in ("link", "joint", "material")]:
         root.remove(extra)
     for joint in list(root.findall("joint")):

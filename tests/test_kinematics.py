@@ -496,3 +496,21 @@ def test_error_jacobian_of_many_poses_keeps_only_the_columns_its_parameters_use(
         tracemalloc.stop()
     assert peak < 5e6, f"{peak / 1e6:.1f} MB"
     np.testing.assert_array_equal(many[::1000], few)
+
+
+@pytest.mark.parametrize("name", list_machines())
+def test_the_error_joints_leave_the_urdf_as_read(name):
+    # augment_urdf builds its <robot> from the file's own link and joint elements rather
+    # than a deep copy of them: none of them may change (Machine.digest is taken from the
+    # tree as read), and the same tree gives the same text again
+    import hashlib
+    import xml.etree.ElementTree as ET
+
+    from machinesim.kinematics import augment_urdf
+    from machinesim.urdf import read_urdf
+
+    machine = load_machine(name)
+    as_read = read_urdf(machine.path)
+    assert machine.digest == hashlib.sha256(ET.tostring(as_read)).hexdigest()
+    axes = {a.letter: a for a in machine._axes}
+    assert augment_urdf(as_read, axes) == augment_urdf(as_read, axes) == machine.urdf_xml
