@@ -11,21 +11,6 @@ import argparse
 from pathlib import Path
 
 from machinesim._io import check_readable_file
-from machinesim.exceptions import InputError
-from machinesim.tolerances import CHORD_TOLERANCE_M
-from machinesim.units import M_PER_NM
-
-#: The smallest ``--chord-nm``: the machines' 1 nm axis resolution (`CHORD_TOLERANCE_M`),
-#: the finest any of them follows a path, and the finest the tools are drawn (a nose within
-#: 1 nm, `PROFILE_CHORD_M`). Float64 at 10 m of travel (2e-15 m) and the engine's booleans
-#: (1e-14 m on a 10 mm block) resolve far finer, so the bound is not theirs; but chords
-#: finer than the axes change the part by less than the machine can, while their number
-#: grows as 1 / sqrt(chord): a 3 mm half circle with ball:0.5 is 1,364 sweeps at 1 nm
-#: (40 s), 13,607 at 0.01 nm and 1.36 million at 1e-6 nm, which ran on without a word.
-MIN_CHORD_NM = CHORD_TOLERANCE_M / M_PER_NM
-#: The largest ``--chord-nm``: 1 m, more than any shipped machine travels on an axis
-#: (as `machinesim.tools.MAX_TOOL_SIZE_M` bounds a tool).
-MAX_CHORD_NM = 1e9
 
 
 def add_reading_options(parser) -> None:
@@ -49,16 +34,12 @@ def add_reading_options(parser) -> None:
 
 
 def check_reading_options(args: argparse.Namespace) -> None:
-    """Refuse a ``--chord-nm`` outside `MIN_CHORD_NM` .. `MAX_CHORD_NM` (or not a number)
-    and an unreadable ``--tools`` (before any work)."""
-    # a 4 mm circle at 1e30 nm was cut as a hexagon, exit 0: no arc of any machine's travel
-    # needs chords that far off it; at 1e-6 nm a 3 mm half circle ran for hours unasked
-    if args.chord_nm is not None and not MIN_CHORD_NM <= args.chord_nm <= MAX_CHORD_NM:
-        raise InputError(
-            f"--chord-nm {args.chord_nm!r}: expected a length in nm from {MIN_CHORD_NM:g}, "
-            "the axes' resolution (no machine follows a path more finely, and the chords "
-            "grow in number as 1/sqrt(NM): ten times 1 nm's at 0.01), to "
-            f"{MAX_CHORD_NM:.0e} (1 m, more than any machine's travel)")
+    """Refuse a ``--chord-nm`` outside 1 nm .. 1 m (`machinesim.tools.check_path_chord`, as
+    the Python API's ``chord_tolerance``) and an unreadable ``--tools`` (before any work)."""
+    from machinesim.tools import check_path_chord
+
+    if args.chord_nm is not None:
+        check_path_chord(args.chord_nm, "--chord-nm", "nm", "NM")
     if args.tools is not None:
         check_readable_file(args.tools, "tool table (--tools)")
 

@@ -62,7 +62,7 @@ from machinesim.tool_sizes import (
     _check_positive,
     _check_size,
 )
-from machinesim.units import angle_text, length_text
+from machinesim.units import LENGTH, M_PER_NM, angle_text, length_text
 
 # BallEndMill, FlatEndMill and the bounds are defined in end_mills and tool_sizes, and
 # importable from here, where they were until those modules were split off.
@@ -379,6 +379,44 @@ def path_chord_tolerance(tools) -> float:
     """
     finest = min((getattr(tool, "chord_tol", 0.0) for tool in tools), default=0.0)
     return max(CHORD_TOLERANCE_M, PATH_CHORD_SHARE * finest)
+
+
+#: The finest path chord tolerance a cut takes (m): the machines' 1 nm axis resolution
+#: (`CHORD_TOLERANCE_M`), the finest any of them follows a path, and the finest the tools
+#: are drawn (a nose within 1 nm, `PROFILE_CHORD_M`). Float64 at 10 m of travel (2e-15 m)
+#: and the engine's booleans (1e-14 m on a 10 mm block) resolve far finer, so the bound is
+#: not theirs; but chords finer than the axes change the part by less than the machine can,
+#: while their number grows as 1 / sqrt(chord): a 3 mm half circle with ball:0.5 is 1,364
+#: sweeps at 1 nm (40 s), 13,607 at 0.01 nm and 1.36 million at 1e-6 nm, which ran on
+#: without a word.
+MIN_PATH_CHORD_M = CHORD_TOLERANCE_M
+#: The coarsest path chord tolerance (m): 1 m, more than any shipped machine travels on an
+#: axis (as `MAX_TOOL_SIZE_M` bounds a tool); a 4 mm circle at 1e21 m was cut as a hexagon.
+MAX_PATH_CHORD_M = 1.0
+
+
+def check_path_chord(value, name: str = "chord_tolerance", unit: str = "m",
+                     symbol: str | None = None) -> float:
+    """``value`` (in ``unit``, a `machinesim.units.LENGTH` name) as a path chord tolerance
+    in m, or an InputError naming ``name`` (the argument or option) when it is not a number
+    from `MIN_PATH_CHORD_M` to `MAX_PATH_CHORD_M`.
+
+    The Python API (``chord_tolerance``, m) and the command line (``--chord-nm``, nm,
+    ``symbol`` its metavar ``NM``) refuse with the same words, in their own unit.
+    """
+    factor = LENGTH[unit]
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if not MIN_PATH_CHORD_M <= number * factor <= MAX_PATH_CHORD_M:
+        raise InputError(
+            f"{name} {value!r}: expected a length in {unit} from "
+            f"{MIN_PATH_CHORD_M / factor:g}, the axes' resolution (no machine follows a path "
+            "more finely, and the chords grow in number as "
+            f"1/sqrt({symbol or name}): ten times 1 nm's at {0.01 * M_PER_NM / factor:g}), "
+            f"to {MAX_PATH_CHORD_M / factor:g} (1 m, more than any machine's travel)")
+    return number * factor
 
 
 def with_nose_radius_error(tool: Tool, errors) -> Tool:

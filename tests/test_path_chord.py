@@ -77,3 +77,49 @@ def test_the_command_line_reports_the_chord_it_cut_with(tmp_path, capsys, tool, 
     assert code == 0, err
     assert json.loads(report.read_text())["path_chord_tolerance_nm"] == pytest.approx(chord_nm)
     assert ("note: arcs and rotary moves were split into chords within 100 nm" in err) == noted
+
+
+def _chord_refusal(value) -> str:
+    """The refusal of a ``chord_tolerance`` of ``value`` (m), written out: the words of
+    ``--chord-nm``'s (tests/test_cli.py), in m."""
+    return (f"chord_tolerance {value!r}: expected a length in m from 1e-09, the axes' "
+            "resolution (no machine follows a path more finely, and the chords grow in "
+            "number as 1/sqrt(chord_tolerance): ten times 1 nm's at 1e-11), to 1 (1 m, more "
+            "than any machine's travel)")
+
+
+@pytest.mark.parametrize("chord", [1e-11, 0.999e-9, 0.0, -1e-9, float("nan"), 1.001, "fine"])
+@pytest.mark.parametrize("call", ["cut", "cut_turned", "machine_scene"])
+def test_the_api_refuses_a_chord_tolerance_outside_1_nm_to_1_m_before_any_work(tmp_path, call,
+                                                                               chord):
+    # --chord-nm 0.01 was refused while cut(..., chord_tolerance=1e-11) ran on: a 3 mm half
+    # circle with ball:0.5 is 13,607 sweeps at 0.01 nm (>120 s), 1,364 at 1 nm. Refused
+    # before anything is read: the program file and the machine named here do not exist.
+    from machinesim.cutting import cut_turned
+    from machinesim.exceptions import InputError
+    from machinesim.viewer import machine_scene
+
+    missing = tmp_path / "missing.nc"
+    calls = {"cut": lambda: cut(missing, "no_such_machine", chord_tolerance=chord),
+             "cut_turned": lambda: cut_turned(read_program(_quarter(tmp_path)),
+                                              "no_such_machine", chord_tolerance=chord),
+             "machine_scene": lambda: machine_scene("no_such_machine", chord_tolerance=chord)}
+    with pytest.raises(InputError) as refused:
+        calls[call]()
+    assert str(refused.value) == _chord_refusal(chord)
+
+
+def _quarter(tmp_path):
+    path = tmp_path / "quarter.nc"
+    path.write_text(QUARTER)
+    return path
+
+
+@pytest.mark.parametrize("chord", [1e-9, 1.0])
+def test_the_api_takes_the_chord_tolerances_bounds(tmp_path, chord):
+    # the bounds themselves are taken, as --chord-nm's are (tests/test_cli.py); the quarter
+    # arc read at 1 um, so that 1 nm costs no more sweeps than 1 m
+    program = read_program(_quarter(tmp_path), chord_tolerance=1e-6)
+    _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:10x10x2",
+                       chord_tolerance=chord)
+    assert report.removed_volume_m3 > 0.0

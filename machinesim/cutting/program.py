@@ -28,7 +28,7 @@ from machinesim.nc import MOVE_KINDS
 from machinesim.servo import check_servo
 from machinesim.tolerances import LIMIT_SLACK
 from machinesim.tool_specs import tool_from_spec
-from machinesim.tools import Tool, path_chord_tolerance, with_nose_radius_error
+from machinesim.tools import Tool, check_path_chord, path_chord_tolerance, with_nose_radius_error
 from machinesim.workpiece import Part, stock_from_spec
 
 #: A move continues the previous one when its first axis values equal the previous end to
@@ -88,9 +88,10 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     start : array_like, optional
         Axis values before the first block (default zeros).
     chord_tolerance : float, optional
-        Rotary moves are split so the swept chord stays this close to the path (m). Default:
-        `machinesim.tools.path_chord_tolerance` of the program's tools: 1 nm for a V or nose
-        tool, 100 nm for a ball or flat end mill drawn within 1 um.
+        Rotary moves are split so the swept chord stays this close to the path (m), from
+        1e-9 (the axes' resolution) to 1 (`machinesim.tools.check_path_chord`, as
+        ``--chord-nm``). Default: `machinesim.tools.path_chord_tolerance` of the program's
+        tools: 1 nm for a V or nose tool, 100 nm for a ball or flat end mill drawn within 1 um.
     servo : motion.ServoModel, optional
         Axis follow-up model (default ideal).
     progress : callable(done, total), optional
@@ -117,6 +118,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     from machinesim.machines import Machine, load_machine
 
     began = time.perf_counter()
+    if chord_tolerance is not None:  # as --chord-nm: 1 nm to 1 m, before any work
+        chord_tolerance = check_path_chord(chord_tolerance)
     program, tool, stock, errors = _arguments(program, tool, stock, errors)
     check_roi_meets(roi, stock)
     machine = machine if isinstance(machine, Machine) else load_machine(machine)

@@ -27,6 +27,7 @@ from machinesim.cutting.sweepset import dragged_past_clearance
 from machinesim.exceptions import InputError
 from machinesim.rotations import rot_z
 from machinesim.tool_specs import tool_from_spec
+from machinesim.tools import check_path_chord
 from machinesim.units import M_PER_MM
 from machinesim.workpiece import Part, stock_from_spec
 
@@ -96,6 +97,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     from machinesim.machines import Machine, load_machine
 
     began = time.perf_counter()
+    chord_tolerance = check_path_chord(chord_tolerance)
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
     tool = tool_from_spec(tool) if isinstance(tool, str) else tool
     stock = stock_from_spec(stock) if isinstance(stock, str) else stock

@@ -21,7 +21,7 @@ from machinesim import motion
 from machinesim.cutting import cut, remove
 from machinesim.exceptions import InputError
 from machinesim.tool_specs import tool_from_spec
-from machinesim.tools import path_chord_tolerance
+from machinesim.tools import check_path_chord, path_chord_tolerance
 from machinesim.viewer.maps import legend_for
 from machinesim.viewer.meshes import DISPLAY_TRIANGLES, decimate, tool_mesh
 from machinesim.viewer.scene import Scene, transform_tracks, visibility_track
@@ -81,6 +81,8 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
     """
     from machinesim.machines import Machine, load_machine
 
+    if chord_tolerance is not None:  # as `cut` and --chord-nm take it, before any work
+        chord_tolerance = check_path_chord(chord_tolerance)
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
     machine.check_errors(errors)
     scene = Scene(f"{machine.name} ({''.join(machine.axes)})")
