@@ -245,12 +245,16 @@ def mesh_volume(vertices: np.ndarray, triangles: np.ndarray,
     Tetrahedra are taken from the centre of the bounds, not the origin, so that a small part
     far from the origin does not lose digits to cancellation; they are summed ``chunk``
     triangles at a time, by components (a 3-million-triangle part in 0.3 s, where one pass
-    through (m, 3, 3) temporaries and np.cross took 1 s).
+    through (m, 3, 3) temporaries and np.cross took 1 s). The bounds and the centring are
+    taken on the coordinates' columns: numpy's min and max along the 3-wide rows of an
+    (n, 3) array took 50 ms of a 1.5-million-triangle part's 160 ms, the columns 2 ms, for
+    the same numbers bit for bit.
     """
     if len(triangles) == 0:
         return 0.0
-    centre = (vertices.min(axis=0) + vertices.max(axis=0)) / 2.0
-    x, y, z = np.ascontiguousarray((vertices - centre).T)
+    x, y, z = np.asarray(vertices, dtype=np.float64).T.copy()
+    for column in (x, y, z):
+        column -= (column.min() + column.max()) / 2.0
     total = 0.0
     for start in range(0, len(triangles), chunk):
         a, b, c = np.asarray(triangles[start:start + chunk]).T

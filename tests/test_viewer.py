@@ -229,6 +229,64 @@ def test_read_ply_refuses_a_closed_part_inside_out_and_reads_an_open_surface(tmp
     assert mesh_volume(vertices, triangles[:, ::-1]) == pytest.approx(-2e-9, rel=1e-12)
 
 
+def _searched_closed_and_oriented(triangles) -> bool:
+    """The edge check as first written (539f4c0): each reversed edge searched among the
+    sorted edges, the second method `closed_and_oriented`'s two sorts must agree with."""
+    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    count = int(triangles.max()) + 1
+    key = np.sort(edges[:, 0] * count + edges[:, 1])
+    if np.any(key[1:] == key[:-1]):
+        return False
+    back = edges[:, 1] * count + edges[:, 0]
+    return bool(np.all(key[np.minimum(np.searchsorted(key, back), len(key) - 1)] == back))
+
+
+def _row_volume(vertices, triangles) -> float:
+    """`mesh_volume` as first written: bounds and centring along the (n, 3) rows."""
+    centre = (vertices.min(axis=0) + vertices.max(axis=0)) / 2.0
+    x, y, z = np.ascontiguousarray((vertices - centre).T)
+    total = 0.0
+    for start in range(0, len(triangles), 65536):
+        a, b, c = triangles[start:start + 65536].T
+        total += float(np.sum(x[a] * (y[b] * z[c] - z[b] * y[c])
+                              + y[a] * (z[b] * x[c] - x[b] * z[c])
+                              + z[a] * (x[b] * y[c] - y[b] * x[c])))
+    return total / 6.0
+
+
+def test_the_inside_out_checks_verdicts_are_the_searched_ones_and_known_by_hand(tmp_path):
+    # read_ply's inside-out check was made cheaper (bounds along columns, two sorts for the
+    # edges): the same volumes to the bit and the same verdicts as the first code
+    from machinesim.viewer.meshes import closed_and_oriented
+
+    vertices, triangles = stock_from_spec("block:1x1x2").mesh()
+    n = len(vertices)
+    flipped = triangles.copy()
+    flipped[0] = flipped[0][::-1]
+    big, small = stock_from_spec("block:4x4x4").mesh(), stock_from_spec("block:1x1x1@1,1,-1").mesh()
+    two = np.vstack([big[0], small[0]])
+    ball = manifold3d.Manifold.sphere(3 * MM, 480).translate((1e3, -2e3, 5e2)).to_mesh64()
+    ball_v, ball_t = np.asarray(ball.vert_properties), np.asarray(ball.tri_verts, np.int64)
+    cases = {  # triangles, whether closed and consistently wound, by construction
+        "block": (vertices, triangles, True), "reversed": (vertices, triangles[:, ::-1], True),
+        "one face flipped": (vertices, flipped, False), "open": (vertices, triangles[1:], False),
+        "a face twice": (vertices, np.vstack([triangles, triangles[:1]]), False),
+        "two blocks": (two, np.vstack([big[1], small[1][:, ::-1] + len(big[0])]), True),
+        "far ball": (ball_v, ball_t, True), "far ball reversed": (ball_v, ball_t[:, ::-1], True)}
+    assert n == 8 and len(ball_t) > 100_000  # more than one of mesh_volume's chunks
+    for name, (v, t, closed) in cases.items():
+        assert closed_and_oriented(t) == _searched_closed_and_oriented(t) == closed, name
+        assert mesh_volume(v, t) == _row_volume(v, t), name  # bit for bit
+    # the verdict: the whole volume's sign; a 4 mm cube holding a 1 mm cube wound inside
+    # out (a cavity) encloses 63 mm^3 and is read, reversed it is -63 mm^3 and refused
+    two_t = cases["two blocks"][1]
+    (tmp_path / "cavity.ply").write_bytes(ply_bytes(two, two_t))
+    assert mesh_volume(*read_ply(tmp_path / "cavity.ply")) == pytest.approx(63e-9, rel=1e-12)
+    (tmp_path / "cavity_out.ply").write_bytes(ply_bytes(two, two_t[:, ::-1]))
+    with pytest.raises(InputError, match=r"inside out: it encloses -63 mm\^3"):
+        read_ply(tmp_path / "cavity_out.ply")
+
+
 def test_decimate_meets_the_budget_and_keeps_the_shape():
     radius = 5 * MM
     mesh = manifold3d.Manifold.sphere(radius, 600).to_mesh64()

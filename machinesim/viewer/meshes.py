@@ -89,14 +89,16 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
     if not len(triangles):
         raise InputError(f"no faces ({len(vertices)} vertices): expected a part's surface as "
                          "triangles", source=str(path))
-    finite = np.isfinite(vertices).all(axis=1)
-    if not finite.all():
+    # the flat tests first (1 ms of a 1.5-million-triangle part, where the rows' took 25 ms);
+    # the rows only to name the first offender
+    if not np.isfinite(vertices).all():
+        finite = np.isfinite(vertices).all(axis=1)
         first = int(np.flatnonzero(~finite)[0])
         raise InputError(f"vertex {first} is {vertices[first].tolist()} ({np.sum(~finite)} of "
                          f"{len(vertices)} not finite): expected finite coordinates",
                          source=str(path))
-    outside = (triangles < 0) | (triangles >= len(vertices))
-    if outside.any():
+    if triangles.min() < 0 or triangles.max() >= len(vertices):
+        outside = (triangles < 0) | (triangles >= len(vertices))
         face = int(np.flatnonzero(outside.any(axis=1))[0])
         raise InputError(f"face {face} is {triangles[face].tolist()} ({np.sum(outside)} of "
                          f"{outside.size} indices outside): expected vertex indices 0 .. "
@@ -114,15 +116,19 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
 
 def closed_and_oriented(triangles: np.ndarray) -> bool:
     """Whether every edge of ``triangles`` (m, 3) is shared by exactly two of them, run in
-    opposite directions (a closed, consistently wound mesh; vertices shared by index)."""
+    opposite directions (a closed, consistently wound mesh; vertices shared by index).
+
+    Each directed edge (i, j) is found run back as (j, i) when the edges are distinct and
+    the reversed ones, as many and as distinct, are the same set: both sorted, equal. (With
+    a search of each reversed edge among the sorted ones the check of a
+    1.5-million-triangle part took 0.54 s, with the second sort 0.19 s.)
+    """
     edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
     count = int(triangles.max()) + 1
     key = np.sort(edges[:, 0] * count + edges[:, 1])
     if np.any(key[1:] == key[:-1]):
         return False
-    back = edges[:, 1] * count + edges[:, 0]
-    found = np.minimum(np.searchsorted(key, back), len(key) - 1)
-    return bool(np.all(key[found] == back))
+    return bool(np.array_equal(key, np.sort(edges[:, 1] * count + edges[:, 0])))
 
 
 def ply_single_precision(path) -> bool:
@@ -285,9 +291,12 @@ def _face_indices(sizes, indices, path: Path) -> np.ndarray:
         raise InputError(f"face {first} has {sizes[first]:g} vertices: only triangle faces "
                          "are supported (every face with 3 indices)", source=str(path))
     # an ASCII file's indices arrive as float64: one past int64 (1e30, inf) became
-    # -9223372036854775808 when cast, and was named so
-    bad = (indices != np.round(indices)) | ~(np.abs(indices) < 2.0**62)
-    if np.any(bad):
+    # -9223372036854775808 when cast, and was named so. A binary file's integers (at most 32
+    # bits, `_PLY_TYPES`) are whole and within it: not rounded to see (90 ms of a
+    # 1.5-million-triangle part's 0.3 s)
+    bad = (None if indices.dtype.kind in "iu" else
+           (indices != np.round(indices)) | ~(np.abs(indices) < 2.0**62))
+    if bad is not None and np.any(bad):
         first = int(np.flatnonzero(bad.any(axis=1))[0])
         shown = ", ".join(f"{value:g}" for value in indices[first])
         raise InputError(f"face {first} is [{shown}]: expected whole-number vertex indices",
