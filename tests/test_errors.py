@@ -389,7 +389,8 @@ REFUSALS = [
      r"error: expected at most 1000 mm"),
     (with_("location", {"C": {"EB0C_urad": 4e6}}), r"4e\+06 urad is no angle error"),
     (with_("component", {"X": {"position_mm": [0, 1], "EXX_m": [0, -2]}}),
-     r"'component\.X\.EXX_m'.*2 m is no length error"),
+     r"'component\.X\.EXX_m'.*2000 mm \(2 m\) is no length error: expected at most 1000 mm "
+     r"\(1 m\) either way"),  # a key in SI told as the API's values are: mm first
 ]
 
 
@@ -699,13 +700,21 @@ def test_a_polynomial_beyond_the_bound_within_the_travel_is_refused(
     with pytest.raises(ErrorModelError) as info:
         model.check_travel(axis, *travel)
     factor = {"mm": 1e-3, "m": 1.0, "deg": math.pi / 180}[units[1]]
+
+    def place(value):  # a position in the key's unit; for a key in m, in mm first, m beside
+        return f"{value * 1e3:g} mm ({value:g} m)" if units[1] == "m" else f"{value:g} {units[1]}"
+
+    low, high = travel[0] / factor, travel[1] / factor
+    shown = (f"{place(low)} .. {place(high)}" if units[1] == "m" else
+             f"{low:g} .. {high:g} {units[1]}")
+
     limit = "1e+06 um (1 m)" if units[0] == "um" else (
         "3.14159e+06 urad (3.14159 rad)" if units[0] == "urad" else "1e+09 nm (1 m)")
     quantity = "length" if units[0] in ("um", "nm") else "angle"
     assert str(info.value) == (
-        f"{path}, key '{key}': over the travel of axis {axis}, {travel[0] / factor:g} .. "
-        f"{travel[1] / factor:g} {units[1]}, the polynomial reaches {value:g} {units[0]} at "
-        f"{axis} = {at:g} {units[1]}, no {quantity} error: expected at most {limit} either way")
+        f"{path}, key '{key}': over the travel of axis {axis}, {shown}, the polynomial "
+        f"reaches {value:g} {units[0]} at "
+        f"{axis} = {place(at)}, no {quantity} error: expected at most {limit} either way")
     assert (info.value.source, info.value.key) == (str(path), key)
     # the machine's check names the machine's file; misfit then tells it from the model's side
     with pytest.raises(ErrorModelError) as info:
@@ -722,7 +731,9 @@ def test_a_polynomial_within_the_bound_over_the_travel_passes():
     ErrorModel.from_dict({"component": {"X": {"EYX_poly_m_m": [0.0, 10.0]}}}).check_travel(
         "X", -0.1, 0.1)
     beyond = ErrorModel.from_dict({"component": {"X": {"EYX_poly_m_m": [0.0, 10.0 + 1e-9]}}})
-    with pytest.raises(ErrorModelError, match=r"'component\.X\.EYX_poly_m_m'.*reaches -1 m"):
+    with pytest.raises(ErrorModelError, match=r"'component\.X\.EYX_poly_m_m'.*travel of axis X, "
+                       r"-100 mm \(-0\.1 m\) \.\. 100 mm \(0\.1 m\), the polynomial reaches "
+                       r"-1000\.0000001 mm \(-1\.0000000001 m\) at X = -100 mm \(-0\.1 m\)"):
         beyond.check_travel("X", -0.1, 0.1)
 
 
@@ -740,7 +751,9 @@ def test_a_polynomial_on_a_rotary_axis_is_held_to_the_bound_and_on_a_spindle_ref
     lathe = load_machine("sts_lathe")
     small = ErrorModel.from_dict({"component": {"C": {"EXC_poly_um_rad": [0.0, 1.0]}}})
     with pytest.raises(ErrorModelError, match=r"component\.C\.EXC.*does not repeat each "
-                                              r"turn, and C turns -100000 \.\. 100000 rad"):
+                                              r"turn, and C turns -5729577\.95131 deg "
+                                              r"\(-100000 rad\) \.\. 5729577\.95131 deg "
+                                              r"\(100000 rad\); "):
         lathe.check_errors(small)
 
 
@@ -774,7 +787,7 @@ def test_a_coefficient_beyond_float64_in_si_is_refused_at_its_key(tmp_path):
     assert str(info.value) == (
         f"{path}, key 'component.X.EYX_poly_um_mm': coefficient c_8 = 1e+300 um/mm**8 is "
         "1e+18 times as large in m/m**8, beyond float64; expected a length error of at most "
-        "1 m over the travel")
+        "1000 mm (1 m) over the travel")
 
 
 def test_a_move_bent_into_too_many_sub_steps_names_the_command_line_option():
@@ -863,3 +876,25 @@ def test_an_angle_at_the_bound_written_by_to_toml_reads_back(tmp_path, data):
         assert back.parameters()[name] == pytest.approx(value, rel=1e-15, abs=0.0)
     with pytest.raises(ErrorModelError, match="no angle error"):  # a bit more is still refused
         ErrorModel.from_dict({"workpiece": {"gamma_deg": -180.000001}})
+
+
+@pytest.mark.parametrize(("build", "expected"), [
+    (lambda: ToolSetting([0.0, 1000.0, 0.0], [0.0, 0.0, 0.0]),
+     "key 'offset': 1000000 mm (1000 m) is no length error: expected at most 1000 mm (1 m) "
+     "either way"),
+    (lambda: ToolSetting([0.0, 0.0, 0.0], [0.0, -4.0, 0.0]),  # 4 rad: 229.18... deg by hand
+     f"key 'rotation': {math.degrees(4.0):.12g} deg (4 rad) is no angle error: expected at "
+     "most 180 deg (3.14159265359 rad) either way"),
+    (lambda: ErrorModel(component={"X": {"EZX": ComponentError("table", [0.0, 0.1],
+                                                               [0.0, 1.5])}}),
+     "key 'component.X.EZX': 1500 mm (1.5 m) is no length error: expected at most 1000 mm "
+     "(1 m) either way"),
+])
+def test_a_python_value_beyond_the_bound_is_told_in_mm_or_deg_first_and_si_beside(build,
+                                                                                  expected):
+    # the values of the Python API, in m and rad, were told in metres and radians first
+    # ("1000 m is no length error: expected at most 1 m"), where every other refusal gives
+    # mm or deg first with SI in parentheses (machinesim.units.length_text, angle_text)
+    with pytest.raises(ErrorModelError) as info:
+        build()
+    assert str(info.value) == expected

@@ -231,8 +231,8 @@ def test_paper_000_reads_its_errors_file_once_and_notes_it_once(tmp_path):
     assert result.returncode == 0, result.stderr
     notes = [line for line in result.stderr.splitlines() if ": note: " in line]
     assert notes == [f"tool_rotation_arm: note: {path}: location.A.EY0A_um = 4e-06 is at most "
-                     "4e-12 m, below anything a machine shows: was it written in m, where the "
-                     "key asks um?"]
+                     "4e-09 mm (4e-12 m), below anything a machine shows: was it written in m, "
+                     "where the key asks um?"]
 
 
 def test_papers_003_004_note_an_errors_file_that_reads_as_no_error(tmp_path):
@@ -250,7 +250,7 @@ def test_papers_003_004_note_an_errors_file_that_reads_as_no_error(tmp_path):
         name = script.removesuffix(".py")
         assert result.returncode == 2, result.stderr
         assert result.stderr.splitlines() == [
-            f"{name}: note: {path}: location.C.EX0C_um = 4e-06 is at most 4e-12 m, below "
-            "anything a machine shows: was it written in m, where the key asks um?",
+            f"{name}: note: {path}: location.C.EX0C_um = 4e-06 is at most 4e-09 mm (4e-12 m), "
+            "below anything a machine shows: was it written in m, where the key asks um?",
             f"{name}: error: {path}, key 'location.A': axis 'A' is not on this machine; it has "
             f"{axes} (machine {machine}, {ROOT / 'models' / machine}.urdf)"]

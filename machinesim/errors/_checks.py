@@ -14,7 +14,7 @@ import numpy as np
 
 from machinesim.arrays import beyond_float64
 from machinesim.exceptions import ErrorModelError
-from machinesim.units import ANGLE, FACTORS, LENGTH
+from machinesim.units import ANGLE, FACTORS, LENGTH, angle_text, length_text
 
 #: Axis letters, in the canonical order of sections and symbols.
 AXES = "XYZABC"
@@ -76,11 +76,25 @@ LARGEST_ERROR = {"angle": math.pi, "length": 1.0}
 _BOUND_SLACK = 1e-15
 
 
+def _shown(value: float, unit: str) -> str:
+    """A value (SI: m or rad) as a message shows it: in ``unit``, the unit its key was
+    written in (``um``, ``deg``), or, where that is SI itself (the Python API's values, a
+    key in ``_m``), in mm or deg with the SI value beside it, as every other message of
+    machinesim gives it (`machinesim.units.length_text`, `angle_text`)."""
+    if unit == "m":
+        return length_text(value)
+    if unit == "rad":
+        return angle_text(value)
+    return f"{value / FACTORS[unit]:g} {unit}"
+
+
 def _limit(quantity: str, unit: str, factor: float) -> str:
-    """`LARGEST_ERROR` of `quantity` in `unit` (`factor` SI per unit), and in SI beside it."""
+    """`LARGEST_ERROR` of `quantity` in `unit` (`factor` SI per unit), and in SI beside it:
+    ``1e+06 um (1 m)``; for an SI `unit`, in mm or deg first (`_shown`)."""
+    largest = LARGEST_ERROR[quantity]
     si = "rad" if quantity == "angle" else "m"
-    limit = f"{LARGEST_ERROR[quantity] / factor:g} {unit}"
-    return limit if unit == si else f"{limit} ({LARGEST_ERROR[quantity]:g} {si})"
+    return _shown(largest, unit) if unit == si else (
+        f"{largest / factor:g} {unit} ({largest:g} {si})")
 
 
 def _check_size(values, quantity: str, unit: str, factor: float, source: str | None,
@@ -88,7 +102,7 @@ def _check_size(values, quantity: str, unit: str, factor: float, source: str | N
     """Refuse an error value (SI, scalar or array) larger than `LARGEST_ERROR` for its quantity."""
     worst = float(np.max(np.abs(values)))
     if worst > LARGEST_ERROR[quantity] * (1.0 + _BOUND_SLACK):
-        raise _fail(f"{worst / factor:g} {unit} is no {quantity} error: expected at most "
+        raise _fail(f"{_shown(worst, unit)} is no {quantity} error: expected at most "
                     f"{_limit(quantity, unit, factor)} either way", source, key)
 
 

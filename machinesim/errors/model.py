@@ -29,6 +29,7 @@ from machinesim.errors._checks import (
     _limit,
     _number,
     _quantity,
+    _shown,
 )
 from machinesim.errors.families import (
     _WORKPIECE_ANGLES,
@@ -40,7 +41,7 @@ from machinesim.errors.families import (
     _Value,
 )
 from machinesim.exceptions import ErrorModelError
-from machinesim.units import FACTORS
+from machinesim.units import FACTORS, M_PER_MM, RAD_PER_DEG
 
 _PARAMETER_RE = re.compile(
     r"tool\.(?P<tool>x|y|z|rx|ry|rz)|tool_geometry\.(?P<geometry>nose_radius)|workpiece\.(?P<workpiece>x|y|z|alpha|beta|gamma)"
@@ -321,14 +322,18 @@ class ErrorModel(_Value):
             if len(units) != 2 or units[0] not in FACTORS or units[1] not in FACTORS:
                 units = ["um" if quantity == "length" else "urad", "mm" if linear else "deg"]
             position = FACTORS[units[1]]
-            travel = f"{lower / position:g} .. {upper / position:g} {units[1]}"
-            with np.errstate(over="ignore"):
-                shown = value / FACTORS[units[0]]
+            travel = (f"{lower / position:g} .. {upper / position:g} {units[1]}"
+                      if units[1] not in ("m", "rad") else
+                      f"{_shown(lower, units[1])} .. {_shown(upper, units[1])}")
+            first = {"m": M_PER_MM, "rad": RAD_PER_DEG}.get(units[0], FACTORS[units[0]])
+            with np.errstate(over="ignore"):  # in the unit shown first (`_shown`)
+                shown = value / first
             si = "m" if quantity == "length" else "rad"
-            reached = (f"{shown:g} {units[0]}" if np.isfinite(shown) else
+            # in SI alone where the unit shown would overflow (1e300 m/rad**10 over a turn)
+            reached = (_shown(value, units[0]) if np.isfinite(shown) else
                        f"{value:g} {si}" if np.isfinite(value) else "more than float64 holds")
             raise _fail(f"over the travel of axis {axis}, {travel}, the polynomial reaches "
-                        f"{reached} at {axis} = {where / position:g} {units[1]}, no {quantity} "
+                        f"{reached} at {axis} = {_shown(where, units[1])}, no {quantity} "
                         f"error: expected at most {_limit(quantity, units[0], FACTORS[units[0]])}"
                         " either way", self.source if source is None else source,
                         self.key_as_written(name))

@@ -26,9 +26,11 @@ from machinesim.errors._checks import (
     _check_unit,
     _describe,
     _fail,
+    _limit,
     _number,
     _numbers,
     _quantity,
+    _shown,
 )
 from machinesim.errors.families import (
     _WORKPIECE_ANGLES,
@@ -82,8 +84,9 @@ def below_any_machine(model: ErrorModel) -> list[str]:
         if size.size and size.max() > 0.0 and size.max() < SMALLEST_WRITTEN_ERROR_SI:
             si = "m" if is_length(unit) else "rad"
             shown = np.asarray(value, dtype=np.float64).tolist()
-            lines.append(f"{key} = {shown!r} is at most {size.max():.3g} {si}, below anything "
-                         f"a machine shows: was it written in {si}, where the key asks {unit}?")
+            lines.append(f"{key} = {shown!r} is at most {_shown(float(size.max()), si)}, "
+                         "below anything a machine shows: was it written in "
+                         f"{si}, where the key asks {unit}?")
     return lines
 
 
@@ -348,10 +351,10 @@ def _parse_component(axis: Any, table: Any, source: str,
             if not np.all(np.isfinite(si)):
                 k = int(np.argmin(np.isfinite(si)))
                 si_unit = f"{_SI_UNITS[quantity]}/{_SI_UNITS[_position_kind(axis)]}**{k}"
+                largest = _limit(quantity, _SI_UNITS[quantity], 1.0)
                 raise _fail(f"coefficient c_{k} = {coefficients[k]:g} {units[1]}/{units[2]}**{k}"
                             f" is {factors[k]:g} times as large in {si_unit}, beyond float64; "
-                            f"expected a {quantity} error of at most "
-                            f"{'1 m' if quantity == 'length' else '180 deg'} over the travel",
+                            f"expected a {quantity} error of at most {largest} over the travel",
                             source, key_path)
             out[symbol] = ComponentError("poly", None, si)
             written[f"{path}.{symbol}"] = (key_path, coefficients)

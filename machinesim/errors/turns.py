@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from machinesim.exceptions import ErrorModelError
+from machinesim.units import angle_text
 
 __all__ = ["TURN", "each_turn"]
 
@@ -37,7 +38,8 @@ def each_turn(component, axis, name: str, source=None):
         if axis.lower < -TURN or axis.upper > TURN:
             raise ErrorModelError(
                 f"a polynomial in the angle does not repeat each turn, and {axis.letter} "
-                f"turns {axis.lower:g} .. {axis.upper:g} rad; give a table over one turn "
+                f"turns {angle_text(axis.lower)} .. {angle_text(axis.upper)}; give a table "
+                "over one turn "
                 "(position_deg from 0 to 360, the same value at both ends)",
                 source=source, key=name)
         return component
