@@ -24,7 +24,8 @@ rotary axis (``EC0C`` on C) adds to the axis value. The tool setting error sits 
 Poses are evaluated two ways, which tests hold against each other and against an independent
 chain: Pinocchio's ``forwardKinematics`` (one configuration at a time; Jacobians), and a batched
 evaluator that walks the same Pinocchio model (its joint placements and joint types) over many
-configurations at once with numpy, poses and (`Kinematics.pose_jacobians`) axis Jacobians.
+configurations at once with numpy, poses, (`Kinematics.pose_jacobians`) axis Jacobians and
+(`Kinematics.error_jacobians`) error Jacobians.
 """
 
 from __future__ import annotations
@@ -58,6 +59,10 @@ _ERROR_JOINT_LIMIT = 1.0e3
 SPINDLE_TRAVEL_RAD = 100.0
 #: Batch size of the vectorised evaluator: small enough that its working arrays stay in cache.
 _BLOCK = 8192
+#: Batch size of `Kinematics.error_jacobians`: each pose of a block holds every varying
+#: joint's axis and origin and the screws, some 1 kB on robonano_a0ib; 1024 poses keep that
+#: near 1 MB, whatever the number of poses (as fast as 8192 within the noise).
+_JACOBIAN_BLOCK = 1024
 
 
 @dataclass(frozen=True)
@@ -366,7 +371,7 @@ class Kinematics:
         for name in ("base", "table", "workpiece", "tool_mount", "tool_tip", "probe_tip"):
             if self.model.existFrame(name):
                 self.frame_id[name] = self.model.getFrameId(name)
-        self._plans: dict[tuple[int, str], tuple[object, list]] = {}
+        self._plans: dict[tuple[int, str, frozenset], tuple[object, list]] = {}
 
     def __getstate__(self) -> dict:
         # Pinocchio's Data is a workspace every algorithm here fills before it reads it, and
@@ -478,14 +483,16 @@ class Kinematics:
 
     # ----------------------------------------------------------------- many configurations
 
-    def _plan(self, frame: str, binding: Binding) -> list:
+    def _plan(self, frame: str, binding: Binding, keep: frozenset = frozenset()) -> list:
         """Operations that take the world frame to ``frame``, constants folded.
 
         Each op is ``("C", R, p)`` (a constant transform) or ``("V", kind, k, source)`` (a
         joint whose value varies across configurations: ``source`` is ``("axis", i, offset,
-        sign)`` or ``("comp", varying, sign)``).
+        sign)`` or ``("comp", varying, sign)``). The error joints whose configuration
+        indices are in ``keep`` stay joints of constant value, ``("const", value, sign,
+        q_index)``, for `error_jacobians` to read their screws.
         """
-        key = (id(binding), frame)
+        key = (id(binding), frame, keep)
         cached = self._plans.get(key)
         if cached is not None and cached[0] is binding:
             return cached[1]
@@ -518,6 +525,9 @@ class Kinematics:
             elif qi in varying:
                 flush()
                 ops.append(("V", kind, k, ("comp", varying[qi], sign)))
+            elif qi in keep:
+                flush()
+                ops.append(("V", kind, k, ("const", float(binding.const[qi]), sign, qi)))
             else:
                 value = sign * binding.const[qi]
                 if value != 0.0:
@@ -563,6 +573,8 @@ class Kinematics:
             if source[0] == "axis":
                 _, i, offset, sign = source
                 value = sign * (q[:, i] + offset) if offset else sign * q[:, i]
+            elif source[0] == "const":
+                value = np.float64(source[2] * source[1])
             else:
                 _, var, sign = source
                 value = (sign * var.sign) * var.component.evaluate(q[:, var.axis])
@@ -622,6 +634,57 @@ class Kinematics:
         out[:, :3] = np.einsum("kin,kan->nia", rw, jac[:3])
         out[:, 3:] = np.einsum("kin,kan->nia", rw, jac[3:])
         return poses, out
+
+    def error_jacobians(self, q: np.ndarray, binding: Binding, frame: str,
+                        columns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Columns ``columns`` (velocity indices of one-dof joints) of `relative_jacobian`,
+        (N, 6, len(columns)), and the rotation of ``frame`` in the workpiece frame (N, 3, 3),
+        for axis values (N, n_axes): every configuration at once.
+
+        As `pose_jacobians` does for the axes: each joint's column is the screw of its axis
+        (along it for a slide; axis x (frame origin - axis origin) and the axis for a
+        rotation), times its sign, minus that on the workpiece's branch. The error joints of
+        ``columns`` stay joints of the plan, at their constant values, instead of folding
+        into its constant transforms. A column of a joint on neither branch is zero.
+        """
+        q_of_v = {int(v): qi for qi, v in self._v_of_q.items()}
+        keep = frozenset(q_of_v[int(v)] for v in columns) - set(self.axis_q) \
+            - {v.q_index for v in binding.varying}
+        where = {int(v): c for c, v in enumerate(columns)}
+        tool_ops = self._plan(frame, binding, keep)
+        wp_ops = self._plan("workpiece", binding, keep)
+        n = q.shape[0]
+        jac = np.empty((n, 6, len(columns)))
+        rot = np.empty((n, 3, 3))
+        for start in range(0, n, _JACOBIAN_BLOCK):
+            block = q[start:start + _JACOBIAN_BLOCK]
+            tool_joints: list = []
+            wp_joints: list = []
+            rt, pt = self._run(tool_ops, block, tool_joints)
+            rw, pw = self._run(wp_ops, block, wp_joints)
+            screws = np.zeros((6, len(columns), block.shape[0]))
+            for joints, side in ((tool_joints, 1.0), (wp_joints, -1.0)):
+                for kind, source, axis, origin in joints:
+                    if source[0] == "axis":
+                        v, sign = self.axis_v[source[1]], source[3]
+                    elif source[0] == "const":
+                        v, sign = self._v_of_q[source[3]], source[2]
+                    else:
+                        v, sign = self._v_of_q[source[1].q_index], source[2]
+                    c = where.get(int(v))
+                    if c is None:
+                        continue
+                    if kind == "P":
+                        screws[:3, c] += axis * (side * sign)
+                    else:
+                        screws[:3, c] += np.cross(axis, pt - origin, axis=0) * (side * sign)
+                        screws[3:, c] += axis * (side * sign)
+            # world axes -> workpiece axes
+            stop = start + block.shape[0]
+            jac[start:stop, :3] = np.einsum("kin,kcn->nic", rw, screws[:3])
+            jac[start:stop, 3:] = np.einsum("kin,kcn->nic", rw, screws[3:])
+            rot[start:stop] = np.einsum("kin,kjn->nij", rw, rt)
+        return jac, rot
 
     def poses(self, q: np.ndarray, binding: Binding, frame: str = "tool_tip") -> np.ndarray:
         """Poses of ``frame`` in the workpiece frame, (N, 4, 4), for axis values (N, n_axes)."""

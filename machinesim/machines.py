@@ -327,9 +327,21 @@ class Machine:
 
         Notes
         -----
-        Pinocchio's Jacobian is evaluated once per distinct row of ``q``: rows repeated (one
-        pose read along several directions, several points of one frame) cost nothing more.
+        Evaluated once per distinct row of ``q``, all rows at once by the batched evaluator
+        (`Kinematics.error_jacobians`): rows repeated (one pose read along several
+        directions, several points of one frame) cost nothing more.
+        `pinocchio_error_jacobian` is the same, pose by pose by Pinocchio's joint Jacobians.
         """
+        return self._error_jacobian(q, errors, params, frame, point, batched=True)
+
+    def pinocchio_error_jacobian(self, q, errors=None, params=None, *,
+                                 frame: str = "tool_tip", point=None) -> np.ndarray:
+        """The same Jacobian as `error_jacobian`, one distinct pose at a time by Pinocchio's
+        computeJointJacobians (the reference the batched evaluator is held against; some
+        0.12 ms a pose on robonano_a0ib where the batched one takes some 8 us)."""
+        return self._error_jacobian(q, errors, params, frame, point, batched=False)
+
+    def _error_jacobian(self, q, errors, params, frame: str, point, batched: bool):
         if frame not in self.kin.frame_id:
             raise InputError(f"frame {frame!r} is not on {self.name}; it has "
                              f"{', '.join(self.frames)}")
@@ -358,13 +370,16 @@ class Machine:
         used = np.union1d(np.flatnonzero(np.any(const != 0.0, axis=1)),
                           [v_index for _, v_index, _ in varying]).astype(int)
         column = {int(v): j for j, v in enumerate(used)}
-        jacs = np.empty((unique.shape[0], 6, used.size))
-        rot = np.empty((unique.shape[0], 3, 3))
-        for n, qn in enumerate(unique):
-            full = self.kin.full_q(qn, binding)
-            jacs[n] = self.kin.relative_jacobian(full, frame)[:, used]
-            if lever is not None:
-                rot[n] = self.kin.frame_pose(full, frame)[:3, :3]
+        if batched:
+            jacs, rot = self.kin.error_jacobians(unique, binding, frame, used)
+        else:
+            jacs = np.empty((unique.shape[0], 6, used.size))
+            rot = np.empty((unique.shape[0], 3, 3))
+            for n, qn in enumerate(unique):
+                full = self.kin.full_q(qn, binding)
+                jacs[n] = self.kin.relative_jacobian(full, frame)[:, used]
+                if lever is not None:
+                    rot[n] = self.kin.frame_pose(full, frame)[:3, :3]
         out = (jacs @ const[used])[inverse]
         for c, v_index, values in varying:
             out[:, :, c] += jacs[inverse, :, column[v_index]] * values[:, None]
