@@ -7,8 +7,9 @@ pose-by-pose path at 100,000 readings takes some 30 s a fit, the whole run some 
 for other sizes ``.venv/bin/python benchmarks/fit_speed.py --readings 1000 10000 --repeat 5``.
 Each reading is taken at its own pose (random axis values, a random sensing
 direction of the tool edge), so that every reading costs one pose; the readings are those
-of workpiece.x, workpiece.y, location.C.EX0C and location.B.EC0B set to a few um and urad,
-and the fit starts from no error (two Gauss-Newton steps).
+of workpiece.x, workpiece.y, location.C.EX0C and location.C.EA0C set to a few um and urad,
+all four seen by the readings (rank 4), and the fit starts from no error (three Gauss-Newton
+steps).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from machinesim.identification import fit, observations, plan_quality
 from machinesim.sampling import random_axis_values
 
 MACHINE = "robonano_a0ib"
-PARAMETERS = ("workpiece.x", "workpiece.y", "location.C.EX0C", "location.B.EC0B")
+PARAMETERS = ("workpiece.x", "workpiece.y", "location.C.EX0C", "location.C.EA0C")
 TRUTH = (3e-6, -2e-6, 5e-6, 20e-6)
 SIGMA_M = 10e-9
 
@@ -76,7 +77,8 @@ def main() -> None:
             row[label] = (t_fit, t_plan, estimate)
         (f_new, p_new, e_new), (f_old, p_old, e_old) = row["batched"], row["pose by pose"]
         print(f"  N = {n:>7,}: fit {f_old:8.3f} s pose by pose, {f_new:8.3f} s batched "
-              f"({f_old / f_new:4.1f}x; {e_new.iterations} steps); plan_quality "
+              f"({f_old / f_new:4.1f}x; {e_new.iterations} steps, rank {e_new.rank}); "
+              f"plan_quality "
               f"{p_old:8.3f} s, {p_new:8.3f} s ({p_old / p_new:4.1f}x); values apart by "
               f"{np.max(np.abs(e_new.values - e_old.values)):.1e} (m, rad)")
 

@@ -338,7 +338,7 @@ class Machine:
                                  frame: str = "tool_tip", point=None) -> np.ndarray:
         """The same Jacobian as `error_jacobian`, one distinct pose at a time by Pinocchio's
         computeJointJacobians (the reference the batched evaluator is held against; some
-        0.12 ms a pose on robonano_a0ib where the batched one takes some 8 us)."""
+        0.12 ms a pose on robonano_a0ib where the batched one takes 2-8 us)."""
         return self._error_jacobian(q, errors, params, frame, point, batched=False)
 
     def _error_jacobian(self, q, errors, params, frame: str, point, batched: bool):

@@ -51,7 +51,7 @@ class _Plan:
         """Positions (N, 3) of the observed points in the workpiece frame, m.
 
         One Pinocchio pass per distinct pose (a plan reads several points and directions
-        per pose), some 26 us a pose on robonano_a0ib: with the Jacobian batched
+        per pose), 18-26 us a pose on robonano_a0ib: with the Jacobian batched
         (`Machine.error_jacobian`), most of a fit's time.
         """
         out = np.empty((len(self.obs), 3))
