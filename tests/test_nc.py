@@ -542,6 +542,43 @@ def test_move_refuses_bad_fields(kwargs, message):
         Move(**kwargs)
 
 
+@pytest.mark.parametrize(("kind", "feed", "message"), [
+    ("linear", -1e-3, "feed must be > 0 for a linear move, got -0.001 m/s"),
+    ("linear", 0.0, "feed must be > 0 for a linear move, got 0.0 m/s"),
+    ("rapid", 1e-3, "feed must be None for a rapid move (only a linear move has one), got "
+                    "0.001"),
+])
+def test_a_bad_feed_is_named_for_what_is_wrong_with_it(kind, feed, message):
+    # the message had read "feed must be None for a linear move and > 0 for a linear move"
+    # for a linear move's negative feed; the same from a Move and from Program.from_arrays
+    with pytest.raises(NCProgramError) as error:
+        Move(kind, {"X": 0.0}, feed)
+    assert message in str(error.value)
+    code = {"rapid": 0, "linear": 1}[kind]
+    with pytest.raises(NCProgramError) as error:
+        Program.from_arrays(np.array([[0.0] + [np.nan] * 5]), np.array([code], np.uint8),
+                            np.array([feed]), np.zeros(1), np.ones(1, np.int64))
+    assert message in str(error.value)
+
+
+@pytest.mark.parametrize(("feed", "message"), [
+    ({"feed_mm_per_min": -100.0}, "feed_mm_per_min must be > 0, got -100.0"),
+    ({"feed_mm_per_min": 0.0}, "feed_mm_per_min must be > 0, got 0.0"),
+    ({"feed_m_per_s": -1e-3}, "feed_m_per_s must be > 0, got -0.001"),
+    ({"feed_m_per_s": "fast"}, "feed must be a real number, got 'fast'"),
+])
+def test_the_builder_names_a_bad_feed_as_it_was_given(feed, message):
+    # a builder's feed_mm_per_min=-100 was refused by the move, as key 'feed_m_per_s' of
+    # '<move>' in m/s: neither the argument the caller wrote nor its unit
+    builder = ProgramBuilder().rapid(X=0.0)
+    with pytest.raises(NCProgramError) as error:
+        builder.linear(X=1e-3, **feed)
+    assert message in str(error.value)
+    assert error.value.source == "<builder>"
+    assert error.value.key == next(iter(feed))
+    assert error.value.line == 2
+
+
 def _rounded(value: float, decimals: int) -> float:
     """Round-half-even of the exact binary value with Decimal: a second method to f-strings."""
     quantum = Decimal(1).scaleb(-decimals)

@@ -75,16 +75,24 @@ class ProgramBuilder:
             raise NCProgramError("give the feed once: feed_mm_per_min or feed_m_per_s",
                                  source=self._source, key="feed")
         if feed_mm_per_min is not None:
-            self._feed = _finite(feed_mm_per_min, "feed", source=self._source,
-                                 line=len(self._moves) + 1, key="feed_mm_per_min") * (
-                M_PER_MM / 60.0
-            )
+            self._feed = self._positive(feed_mm_per_min, "feed_mm_per_min") * (M_PER_MM / 60.0)
         elif feed_m_per_s is not None:
-            self._feed = feed_m_per_s
+            self._feed = self._positive(feed_m_per_s, "feed_m_per_s")
         self._motion("linear", self._feed, block_number, m_codes, axes)
         if exact_stop:
             self._stops.append(len(self._moves) - 1)
         return self
+
+    def _positive(self, feed: float, key: str) -> float:
+        """``feed`` as given to `linear`, refused (naming ``key``, in its unit) unless a
+        finite number above zero: it had been refused by the move, in m/s, with a message
+        that named neither the argument nor its unit."""
+        line = len(self._moves) + 1
+        value = _finite(feed, "feed", source=self._source, line=line, key=key)
+        if value <= 0.0:
+            raise NCProgramError(f"{key} must be > 0, got {value!r}", source=self._source,
+                                 line=line, key=key)
+        return value
 
     def dwell(self, seconds: float, *, block_number: int | None = None,
               m_codes: Iterable[int] = ()) -> ProgramBuilder:

@@ -24,6 +24,7 @@ from machinesim.nc.moves import (
     SUBPROGRAM_CODES,
     FrozenMapping,
     _is_int,
+    feed_problem,
 )
 
 if TYPE_CHECKING:
@@ -114,8 +115,7 @@ def _check(program: Program) -> None:
     has_feed = ~np.isnan(feeds)
     linear = kinds == KIND_LINEAR
     first(has_feed & ~(linear & (feeds > 0.0) & (feeds < math.inf)), 4,
-          lambda i: f"feed must be None for a {MOVE_KINDS[kinds[i]]} move and > 0 for a "
-                    f"linear move, got {float(feeds[i])!r}", "feed_m_per_s")
+          lambda i: feed_problem(MOVE_KINDS[kinds[i]], float(feeds[i])), "feed_m_per_s")
     first(~((dwells >= 0.0) & (dwells < math.inf)) | ((dwells != 0.0) & moving), 5,
           lambda i: f"dwell_s must be >= 0 for a dwell and 0.0 otherwise, got "
                     f"{float(dwells[i])!r} for a {MOVE_KINDS[kinds[i]]} move", "dwell_s")

@@ -83,6 +83,14 @@ def _finite(value: Any, what: str, *, source: str, line: int | None, key: str) -
     return number
 
 
+def feed_problem(kind: str, feed: float) -> str:
+    """What is wrong with a move's ``feed`` (m/s): a feed on a move that has none, or a
+    linear move's feed that is not above zero."""
+    if kind != "linear":
+        return f"feed must be None for a {kind} move (only a linear move has one), got {feed!r}"
+    return f"feed must be > 0 for a linear move, got {feed!r} m/s"
+
+
 def axis_values(
     values: Mapping[str, Any] | Iterable[tuple[str, Any]],
     *,
@@ -172,12 +180,8 @@ class Move:
         if self.feed_m_per_s is not None:
             feed = _finite(self.feed_m_per_s, "feed", **where, key="feed_m_per_s")
             if self.kind != "linear" or feed <= 0.0:
-                raise NCProgramError(
-                    f"feed must be None for a {self.kind} move and > 0 for a linear move, "
-                    f"got {feed!r}",
-                    **where,
-                    key="feed_m_per_s",
-                )
+                raise NCProgramError(feed_problem(self.kind, feed), **where,
+                                     key="feed_m_per_s")
             object.__setattr__(self, "feed_m_per_s", feed)
         dwell = _finite(self.dwell_s, "dwell time", **where, key="dwell_s")
         if dwell < 0.0 or (dwell != 0.0 and self.kind != "dwell"):
