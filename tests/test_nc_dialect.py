@@ -357,6 +357,33 @@ def test_states_are_listed_with_their_first_line():
     assert len(program) == 2  # the M06 dwell and the move: states move nothing
 
 
+def test_a_safe_start_line_cancelling_what_is_refused_is_read_as_states():
+    # Haas's safe-start line and a FANUC shop header: G50, G69 and G15 cancel scaling,
+    # coordinate rotation and polar coordinates, whose codes (G51, G68, G16) are refused, so
+    # they set the state the reader keeps. They had been refused as unknown G codes, and with
+    # them the whole program.
+    text = ("O1\nG00 G17 G40 G49 G50 G69 G80 G90\nG15 G21\nG00 X1. Y2. Z3.\n"
+            "G01 X4. F100.\nM30")
+    program = parse_program(text)
+    assert dict(program.states) == {"G40": 2, "G50": 2, "G69": 2, "G80": 2, "G15": 3}
+    assert np.array_equal(program.targets[:, :3], np.array([[1.0, 2.0, 3.0],
+                                                            [4.0, 2.0, 3.0]]) * MM)
+    assert program.kinds.tolist() == [0, 1]
+    # the codes they cancel stay refused, each by name
+    for code in ("G51", "G68", "G16"):
+        with pytest.raises(NCProgramError, match=rf"\({code}\) is not supported"):
+            parse_program(f"G00 X0\n{code}\nM30")
+
+
+def test_g50_with_axis_words_is_a_lathe_coordinate_setting_and_refused():
+    # on a FANUC lathe (G code system A) G50 X Z sets the coordinates, as G92 does on a
+    # mill: read as the milling dialect's scaling cancel, its X Z words would move the tool
+    with pytest.raises(NCProgramError) as info:
+        parse_program("G00 X1. Z1.\nG50 X100. Z50.\nM30", "turn.nc")
+    assert (info.value.line, info.value.column, info.value.key) == (2, 1, "G50")
+    assert "G50 with axis words sets the coordinates" in str(info.value)
+
+
 def test_every_refusal_is_listed_at_once():
     text = ("O1 (a CAM file with what machinesim refuses)\n"
             "G90 G95 G54.1 P1\n"

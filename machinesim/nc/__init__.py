@@ -47,7 +47,9 @@ G codes
     block until G64) end a block in an exact stop: `Program.exact_stops`, where the servo
     loops' lag does not carry into the next block; listed as states too. Accepted as
     states, no geometric effect, listed in `Program.states` with their first line: G40,
-    G80, G91.1,
+    G80, G91.1, G15 G50 G69 (the cancels of polar coordinates, scaling and rotation, as
+    safe-start lines write them; G50 with an axis word, a lathe's coordinate setting, is
+    refused),
     G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words, and G55..G59 selected without
     offsets given for them (G54's zero). Refused: G41/G42 (cutter radius
     compensation), G93, G95, the canned cycles G73 G74 G76 G84..G89, tool centre point

@@ -25,6 +25,7 @@ from machinesim.nc.program import AXES, KIND_LINEAR, MOVE_KINDS, PROGRAM_END, RO
 from machinesim.nc.words import (
     ARC,
     DWELL_INCREMENT_S,
+    G50_SETTING,
     G_GROUPS,
     G_REFUSED,
     M99_IN_MAIN,
@@ -209,7 +210,10 @@ class Block:
                 self.reader.note(state.work_offset, line)
         if "return level" in g:
             state.retract = g["return level"][0]
-        for group in ("cutter compensation", "path mode", "arc centre", "exact stop"):
+        if "scaling" in g and any(a in self.single for a in AXES):
+            raise self.fail(G50_SETTING, g["scaling"][1])
+        for group in ("cutter compensation", "path mode", "arc centre", "exact stop",
+                      "polar coordinates", "scaling", "coordinate rotation"):
             if group in g:
                 self.reader.note(g[group][0], line)
         if "path mode" in g:

@@ -68,6 +68,7 @@ G_GROUPS = {
     "G20": "units", "G21": "units",
     "G28": "one-shot", "G53": "one-shot", "G05.1": "one-shot", "G08": "one-shot",
     "G40": "cutter compensation",
+    "G15": "polar coordinates", "G50": "scaling", "G69": "coordinate rotation",
     "G43": "tool length", "G44": "tool length", "G49": "tool length",
     "G54": "work offset", "G55": "work offset", "G56": "work offset",
     "G57": "work offset", "G58": "work offset", "G59": "work offset",
@@ -100,6 +101,18 @@ FIVE_AXIS = {
     "G43.4": "tool centre point control", "G43.5": "tool centre point control",
     "G68.2": "a tilted working plane", "G53.1": "tool axis direction control",
 }
+#: G15, G50 and G69 (in `G_GROUPS`) cancel polar coordinates, scaling and coordinate
+#: rotation (`COORDINATE_CHANGES`: G16, G51, G68), as a post's or a template's safe-start
+#: line writes them (Haas: ``G00 G17 G40 G49 G50 G69 G80 G90``). Each sets the state the
+#: reader keeps, since those codes are refused, so each is accepted as a state; they had
+#: been refused as unknown G codes, and with them the whole program. G50 with an axis word
+#: is a lathe's coordinate setting (G code system A, as G92 is on a mill): refused so.
+G50_SETTING = (
+    "G50 with axis words sets the coordinates (a lathe's G50, G code system A, as G92 does "
+    "on a mill), which is not supported: in the milling dialect read here G50 cancels "
+    "scaling and takes no axis words; post the coordinates it would give, or set the work "
+    "zero with G54..G59 (read_program(..., work_offsets=...))"
+)
 #: Coordinate changes of old and hand-written programs.
 COORDINATE_CHANGES = {
     "G92": "setting the work coordinates at the current position", "G52": "a local "
