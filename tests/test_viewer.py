@@ -320,6 +320,30 @@ def test_deviation_map_of_a_tilted_top_is_the_exact_plane_difference():
     assert legend.notes[0].startswith("P-V 200 nm, RMS")
 
 
+def test_a_legend_says_its_p_v_is_the_grid_nodes_and_how_far_apart_they_stand():
+    # The README's part: four V grooves 20 um deep and 40 um wide across a 10 mm block. On
+    # the default 317 x 317 nodes (31.65 um apart) no node lies on an apex, so the legend's
+    # P-V read 13.67 um under "exact heights", which a user takes for the part's 20 um.
+    program = ProgramBuilder(1)
+    for i, y in enumerate((2, 4, 6, 8)):
+        program.rapid(X=(-1 if i % 2 == 0 else 11) * MM, Y=y * MM, Z=0.1 * MM)
+        program.rapid(Z=-20 * UM).linear(X=(11 if i % 2 == 0 else -1) * MM,
+                                         feed_mm_per_min=100.0).rapid(Z=0.1 * MM)
+    part, _ = cut(program.build(), "grooving_4axis", tool="v:90", stock="block:10x10x2")
+    smap = surface_map(part)
+    spacing = 10 * MM / (len(smap.x) - 1)
+    assert len(smap.x) == len(smap.y) == 317 and spacing == pytest.approx(31.65 * UM, abs=5e-9)
+    # an exact height map of the same part through the apexes reads the full depth
+    assert np.nanmin(height_map(part, smap.x, np.array([2 * MM]))) == pytest.approx(-20 * UM,
+                                                                                   abs=1e-15)
+    assert smap.peak_to_valley == pytest.approx(13.67 * UM, abs=0.01 * UM)
+    legend = legend_for(smap)
+    assert legend.notes[0] == "P-V 13.67 um"
+    assert legend.notes[1] == ("317 x 317 exact heights (metrology.height_map), 31.65 um "
+                               "apart: the P-V and RMS of these nodes, which a narrower "
+                               "groove or peak can fall between")
+
+
 def test_a_legend_tick_at_round_off_of_zero_reads_zero():
     # heights from -1 um to 1 um but for 1e-22 m: the middle tick read '+2.118e-13 nm'
     x = y = np.array([0.0, 1e-3])

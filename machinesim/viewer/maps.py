@@ -231,9 +231,21 @@ def legend_for(smap: SurfaceMap, title: str | None = None, notes=()) -> Legend:
     stats = f"P-V {smap.peak_to_valley / pv_factor:.4g} {pv_name}"
     if smap.kind == "deviation":
         stats += f", RMS {smap.rms / pv_factor:.4g} {pv_name}"
-    grid = f"{len(smap.x)} x {len(smap.y)} exact heights (metrology.height_map)"
+    # the figures are the nodes': a V groove narrower than their spacing falls between two
+    # (the README's 20 um deep grooves across the 10 mm block read P-V 13.67 um on its
+    # 317 x 317 nodes), so the legend says how far apart they stand, as a measurement would
+    spacing = max(_spacing(smap.x), _spacing(smap.y))
+    sp_name, sp_factor = length_unit(spacing)
+    grid = (f"{len(smap.x)} x {len(smap.y)} exact heights (metrology.height_map), "
+            f"{spacing / sp_factor:.4g} {sp_name} apart: the P-V and RMS of these nodes, "
+            "which a narrower groove or peak can fall between")
     return Legend(title or map_title(smap.kind), stops_for(smap.kind), ticks,
                   (stats, grid, *notes))
+
+
+def _spacing(axis: np.ndarray) -> float:
+    """The largest step between a grid axis's nodes, m (0 for a single node)."""
+    return float(np.diff(axis).max()) if len(axis) > 1 else 0.0
 
 
 def map_title(kind: str) -> str:
