@@ -306,15 +306,17 @@ def errors_file(path):
     (``NAME: note: ...``, one line each) where the file reads as no error at all, as
     ``machinesim cut`` notes it in its report: a file without keys (every error zero), and
     values below anything a machine shows (`machinesim.errors.toml.below_any_machine`: SI
-    written under a key in um or urad). The run goes on: both can be meant."""
+    written under a key in um or urad), and values beyond the errors of any machine
+    (`beyond_any_machine`: um or urad under a key in mm or deg). The run goes on: each can
+    be meant."""
     from machinesim.errors import ErrorModel
-    from machinesim.errors.toml import below_any_machine
+    from machinesim.errors.toml import below_any_machine, beyond_any_machine
 
     errors = ErrorModel.from_toml(path)
     name = Path(sys.argv[0]).stem or "scenario"
     notes = [] if errors.written else [
         "sets no error (no key in any section): the machine as built, every error zero"]
-    for line in [*notes, *below_any_machine(errors)]:
+    for line in [*notes, *below_any_machine(errors), *beyond_any_machine(errors)]:
         print(f"{name}: note: {path}: {line}", file=sys.stderr, flush=True)
     return errors
 

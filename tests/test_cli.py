@@ -414,6 +414,34 @@ def test_an_error_written_in_si_in_a_micrometre_key_is_noted(tmp_path, capsys):
     assert code == 0 and "below anything a machine shows" not in err, err
 
 
+def test_an_error_written_in_micrometres_in_a_millimetre_key_is_noted(tmp_path, capsys):
+    """offset_mm = [0, -178, 0] (the README's 178 um written under mm) sets the tool 178 mm
+    off: the grooves miss the block, and the cut's only word was 'removed no material (does
+    it reach the stock?)', which points at the program. A note names the key and its size
+    (by hand: 178 mm; gamma 0.5 rad is 28.65 deg). 9.99 mm, 9.99 deg and the example's
+    values are not noted."""
+    slip = tmp_path / "slip.toml"
+    slip.write_text("[tool]\noffset_mm = [0.0, -178.0, 0.0]\n[workpiece]\ngamma_rad = 0.5\n")
+    code, _, err = run(["cut", GROOVES, *CUT, "--errors", slip, "--out", tmp_path / "a.ply",
+                        "--report", tmp_path / "a.json"], capsys)
+    assert code == 0, err
+    assert "the program removed no material" in err
+    note = (f"{slip}: tool.offset_mm = [0.0, -178.0, 0.0] reaches 178 mm, beyond the errors "
+            "of any machine (a tool or workpiece set that far off misses its part): was it "
+            "written in um, where the key asks mm?")
+    assert f"note: {note}" in err, err
+    assert note in json.loads((tmp_path / "a.json").read_text())["notes"]
+    assert (f"note: {slip}: workpiece.gamma_rad = 0.5 reaches 28.65 deg, beyond the errors of "
+            "any machine (a part or an axis turned that far is another setting): was it "
+            "written in mrad or urad, where the key asks rad?") in err, err
+    near = tmp_path / "near.toml"
+    near.write_text("[tool]\noffset_mm = [9.99, 0.0, 0.0]\n[workpiece]\ngamma_deg = 9.99\n")
+    for errors in (near, ROOT / "models" / "errors" / "example.toml"):
+        code, _, err = run(["cut", GROOVES, *CUT, "--errors", errors, "--allow-overtravel",
+                            "--out", tmp_path / "b.ply"], capsys)
+        assert code == 0 and "beyond the errors of any machine" not in err, err
+
+
 def test_ctrl_c_during_the_cut_exits_130_and_writes_nothing(tmp_path, capsys, monkeypatch):
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt

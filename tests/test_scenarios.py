@@ -219,6 +219,21 @@ def test_papers_000_001_002_note_an_errors_file_that_reads_as_no_error(tmp_path,
         "as built, every error zero"]
 
 
+def test_a_scenario_notes_an_errors_value_beyond_any_machine(tmp_path, capsys, monkeypatch):
+    """--errors with the paper's 178 um written under offset_mm (178 mm) ran the paper
+    without a word; the note `machinesim cut` gives comes as the file is read."""
+    from machinesim.scenario_runs import errors_file
+
+    path = tmp_path / "slip.toml"
+    path.write_text("[tool]\noffset_mm = [0.0, -178.0, 0.0]\n")
+    monkeypatch.setattr(sys, "argv", ["tool_rotation_arm.py"])
+    assert errors_file(path).parameters()["tool.y"] == pytest.approx(-0.178, abs=1e-15)
+    assert capsys.readouterr().err.splitlines() == [
+        f"tool_rotation_arm: note: {path}: tool.offset_mm = [0.0, -178.0, 0.0] reaches "
+        "178 mm, beyond the errors of any machine (a tool or workpiece set that far off "
+        "misses its part): was it written in um, where the key asks mm?"]
+
+
 def test_paper_000_reads_its_errors_file_once_and_notes_it_once(tmp_path):
     """The scenario read --errors twice (once for the capture check, once for the lab), so
     the note of an error below anything a machine shows came twice."""

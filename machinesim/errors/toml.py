@@ -90,6 +90,49 @@ def below_any_machine(model: ErrorModel) -> list[str]:
     return lines
 
 
+#: At or above these an error value written in a file is no error of any machine's setting
+#: or geometry (10 mm, 10 deg: the papers' largest are 0.85 mm and 0.5 deg), and more likely
+#: written in a smaller unit than its key asks: `offset_mm = [0.0, -178.0, 0.0]` for the
+#: README's 178 um sets the tool 178 mm off, which misses its part. A note, as
+#: `below_any_machine`'s: `LARGEST_ERROR` (1 m, 180 deg) still bounds what is read.
+LARGEST_LIKELY_ERROR_M = 10e-3
+LARGEST_LIKELY_ERROR_RAD = np.radians(10.0)
+
+
+def beyond_any_machine(model: ErrorModel) -> list[str]:
+    """Lines naming each value the file wrote (``model.written``) that reaches
+    `LARGEST_LIKELY_ERROR_M` (a length) or `LARGEST_LIKELY_ERROR_RAD` (an angle) in SI, all
+    its entries: perhaps um or urad in a key in mm or deg. A table's positions and a
+    polynomial's coefficients (whose size depends on the travel) are left out."""
+    lines = []
+    for field, (key, value) in model.written.items():
+        unit = key.rsplit("_", 1)[-1]
+        if field.endswith(".position") or "_poly_" in key or unit not in FACTORS:
+            continue
+        try:
+            size = np.abs(np.asarray(value, dtype=np.float64)) * FACTORS[unit]
+        except (TypeError, ValueError):  # a string: checked elsewhere
+            continue
+        length = is_length(unit)
+        if not size.size or size.max() < (LARGEST_LIKELY_ERROR_M if length
+                                          else LARGEST_LIKELY_ERROR_RAD):
+            continue
+        shown = np.asarray(value, dtype=np.float64).tolist()
+        reach = (f"{size.max() * 1e3:.4g} mm" if length
+                 else f"{np.degrees(size.max()):.4g} deg")
+        what = ("a tool or workpiece set that far off misses its part" if length else
+                "a part or an axis turned that far is another setting")
+        lines.append(f"{key} = {shown!r} reaches {reach}, beyond the errors of any machine "
+                     f"({what}): was it written in {_SMALLER.get(unit, 'a smaller unit')}, "
+                     f"where the key asks {unit}?")
+    return lines
+
+
+#: The units an error value is more likely written in, for a key in each unit.
+_SMALLER = {"m": "mm or um", "mm": "um", "um": "nm", "rad": "mrad or urad", "mrad": "urad",
+            "deg": "urad or arcsec"}
+
+
 def _utf16_text(data: bytes) -> bool:
     """True when ``data`` reads as UTF-16 text (printable, tabs and line ends): a file with
     zero bytes that does not (a PNG, an .npz given for the TOML) is binary, not UTF-16."""
