@@ -270,6 +270,15 @@ def map_program(
         When ``function`` returns something other than a finite (N, n_axes) array.
     """
     machine = _machine(machine)
+    if not callable(function):
+        # an array of compensated values given for the function raised "'numpy.ndarray'
+        # object is not callable" from inside this module
+        raise InputError(f"expected the compensation as a function q -> q_compensated of the "
+                         f"(N, {len(machine.axes)}) axis values of the motion blocks (columns "
+                         f"{' '.join(machine.axes)}, m and rad), got {type(function).__name__}"
+                         f"{f' of shape {np.shape(function)}' if np.ndim(function) else ''}; "
+                         "values computed before are given as lambda q: values",
+                         key="function")
     nominal, motion = _motion_axes(program, machine, start)
     if not len(motion):
         return rewrite(program, machine, nominal, rounded=rounded)

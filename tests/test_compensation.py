@@ -138,6 +138,20 @@ def test_an_axis_the_machine_lacks_is_refused_like_the_planner_does():
         program_axes(grooves(), GROOVING, start=[0.0, 0.0])
 
 
+@pytest.mark.parametrize(("function", "got"), [
+    (np.zeros((16, 4)), "got ndarray of shape (16, 4)"), ("shift", "got str"),
+    (None, "got NoneType")])
+def test_a_compensation_that_is_not_a_function_is_refused_by_name(function, got):
+    # the compensated values given in place of the function (or its name) raised
+    # "TypeError: 'numpy.ndarray' object is not callable" from inside map_program
+    with pytest.raises(InputError) as info:
+        map_program(grooves(), GROOVING, function)
+    assert info.value.key == "function"
+    assert str(info.value).startswith(
+        "key 'function': expected the compensation as a function q -> q_compensated of the "
+        f"(N, 4) axis values of the motion blocks (columns X Y Z C, m and rad), {got}; ")
+
+
 # --------------------------------------------------------------- (a) a tool offset
 
 
