@@ -692,6 +692,36 @@ def test_written_text_looks_as_documented():
     assert len(back) == len(program)
 
 
+def test_writing_what_is_not_a_program_says_what_came(tmp_path):
+    # write_program(model_based(...), path), the result for its .program, ended in
+    # "AttributeError: 'Compensated' object has no attribute 'work_offsets'"; a path that
+    # is not one in "TypeError: expected str, bytes or os.PathLike object, not int"
+    from machinesim.compensation import model_based
+
+    program = ProgramBuilder(1).rapid(X=1e-3, Y=2e-3, Z=1e-3).build()
+    result = model_based(program, "grooving_4axis", {"tool": {"offset_um": [4.0, -2.0, 0.0]}})
+    path = tmp_path / "c.nc"
+    for wrong, message in [
+        (result, "expected a machinesim.nc.Program, got Compensated; write its .program, the "
+                 "rewritten Program (Compensated.program)"),
+        ("part.nc", "expected a machinesim.nc.Program, got str; read an NC file with "
+                    "machinesim.nc.read_program(path)"),
+        (None, "expected a machinesim.nc.Program, got NoneType")]:
+        with pytest.raises(NCProgramError) as info:
+            write_program(wrong, path)
+        assert (info.value.key, str(info.value)) == ("program", f"key 'program': {message}")
+        with pytest.raises(NCProgramError) as info:
+            format_program(wrong)
+        assert info.value.key == "program"
+    with pytest.raises(NCProgramError, match="key 'path': expected the path to write the "
+                                             "program to as a str or Path, got int"):
+        write_program(program, 3)
+    assert not path.exists()
+    write_program(result.program, path)
+    assert read_program(path).targets[0, :2].tolist() == pytest.approx([0.996e-3, 2.002e-3],
+                                                                        abs=1e-15)
+
+
 def test_write_is_whole_or_nothing(tmp_path, monkeypatch):
     path = tmp_path / "p.nc"
     good = ProgramBuilder().rapid(X=0.0).build()

@@ -54,6 +54,7 @@ def format_program(program: Program) -> str:
         When a value cannot be written: a feed that rounds to F0, a coordinate that is not
         finite relative to G54.
     """
+    program = _as_program(program)
     offset = program.work_offsets.get("G54", {})
     lines = ["%"]
     if program.number is not None:
@@ -133,8 +134,26 @@ def _tool_words(program: Program, m_codes) -> dict[int, list[str]]:
 
 def write_program(program: Program, path: str | os.PathLike) -> None:
     """Write the program to ``path`` whole or not at all (`machinesim._io.write_atomic`)."""
+    if not isinstance(path, str | os.PathLike):
+        raise NCProgramError(f"expected the path to write the program to as a str or Path, "
+                             f"got {type(path).__name__}", key="path")
     text = format_program(program)
     write_atomic(path, text, encoding="ascii")
+
+
+def _as_program(program) -> Program:
+    """``program`` when it is a `Program`; else a refusal naming what came, and for a
+    result that holds one (`compensation.model_based`'s `Compensated`) where it is: such a
+    result given to `write_program` had ended in "AttributeError: 'Compensated' object has
+    no attribute 'work_offsets'"."""
+    if isinstance(program, Program):
+        return program
+    name = type(program).__name__
+    hint = (f"; write its .program, the rewritten Program ({name}.program)"
+            if isinstance(getattr(program, "program", None), Program) else
+            "; read an NC file with machinesim.nc.read_program(path)"
+            if isinstance(program, str | os.PathLike) else "")
+    raise NCProgramError(f"expected a machinesim.nc.Program, got {name}{hint}", key="program")
 
 
 def _fixed(value: float, decimals: int) -> str:
