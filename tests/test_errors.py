@@ -478,6 +478,19 @@ def test_a_pipe_or_a_device_is_refused_before_it_is_read(tmp_path):
                                    "expected a TOML file")
 
 
+@pytest.mark.parametrize(("given", "got"), [
+    ({"tool": {"offset_um": [0.0, 1.0, 0.0]}},
+     "got dict; a dict of the TOML layout is read by ErrorModel.from_dict"),
+    (None, "got NoneType"), (3, "got int")])
+def test_from_toml_given_no_path_says_what_came(given, got):
+    # a dict given to from_toml (for from_dict) ended in "TypeError: stat: path should be
+    # string, bytes, os.PathLike or integer, not dict"; 3 was read as file descriptor 3
+    with pytest.raises(ErrorModelError) as info:
+        ErrorModel.from_toml(given)
+    assert info.value.key == "path"
+    assert str(info.value) == f"key 'path': expected the TOML file's path as a str or Path, {got}"
+
+
 def test_missing_file_is_named(tmp_path):
     path = tmp_path / "absent.toml"
     with pytest.raises(ErrorModelError, match=re.escape(str(path)) + ".*cannot read"):

@@ -267,6 +267,13 @@ class ErrorModel(_Value):
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> ErrorModel:
         """Read an error model from a TOML file (layout in the `machinesim.errors` docstring)."""
+        if not isinstance(path, str | os.PathLike):
+            # a dict of the layout given here had ended in "TypeError: stat: path should be
+            # string, bytes, os.PathLike or integer, not dict"
+            hint = ("; a dict of the TOML layout is read by ErrorModel.from_dict"
+                    if isinstance(path, Mapping) else "")
+            raise ErrorModelError(f"expected the TOML file's path as a str or Path, got "
+                                  f"{type(path).__name__}{hint}", key="path")
         return cls.from_dict(_io().read_toml(path), source=str(path))
 
     def to_toml(self, path: str | os.PathLike) -> None:
