@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from machinesim import ErrorModel, ToolSetting, load_machine
-from machinesim.exceptions import NCProgramError
+from machinesim.exceptions import InputError, NCProgramError
 from machinesim.motion import plan
 from machinesim.nc import ProgramBuilder, parse_program
 
@@ -82,6 +82,24 @@ def test_linear_moves_are_not_split_and_bad_programs_are_refused():
         plan(parse_program("G01 A10. F100.\n"), machine)
     with pytest.raises(NCProgramError, match="line 1.*no feed rate F"):
         plan(parse_program("G01 X1.\n"), machine)
+
+
+def test_plan_takes_a_machine_by_name_and_refuses_a_path_for_the_program(tmp_path):
+    # plan(program, "grooving_4axis"), as cut() takes a machine, and plan("grooves.nc", ...)
+    # had ended in AttributeError ('str' object has no attribute 'axes' / 'moves')
+    program = parse_program("G90 G21\nG00 X1.\nG01 X11. F600.\nM30\n")
+    by_name = plan(program, "grooving_4axis")
+    assert by_name.duration == plan(program, load_machine("grooving_4axis")).duration
+    assert by_name.segments[-1].t[-1] - by_name.segments[-1].t[0] == pytest.approx(1.0)
+    path = tmp_path / "p.nc"
+    path.write_text("G00 X1.\nM30\n")
+    for wrong in (path, str(path), [1, 2]):
+        with pytest.raises(InputError) as info:
+            plan(wrong, "grooving_4axis")
+        assert info.value.key == "program"
+        assert str(info.value).startswith("key 'program': expected the program as a "
+                                          "machinesim.nc.Program, got ")
+        assert "read an NC file with machinesim.nc.read_program(path)" in str(info.value)
 
 
 def test_a_move_of_more_than_a_day_is_noted_with_its_line_and_feed():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -78,7 +79,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     Parameters
     ----------
     program : machinesim.nc.Program
-    machine : machinesim.Machine
+    machine : machinesim.Machine or str
+        A machine, or its name or URDF path (`machinesim.load_machine`), as `cut` takes it.
     errors : ErrorModel, optional
         The machine's errors: the chord check follows the real (erroneous) tool path.
     start : array_like, shape (n_axes,), optional
@@ -103,6 +105,17 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         At the first move (in program order) that sets an axis the machine lacks, feeds
         without a feed rate, or would need more than `MAX_SUBSTEPS` sub-steps.
     """
+    if isinstance(program, str | os.PathLike) or not hasattr(program, "moves"):
+        # a path, as `cut` takes one, had ended in "AttributeError: 'str' object has no
+        # attribute 'moves'"
+        raise InputError(f"expected the program as a machinesim.nc.Program, got "
+                         f"{type(program).__name__}; read an NC file with "
+                         "machinesim.nc.read_program(path) (text: parse_program)",
+                         key="program")
+    if isinstance(machine, str | os.PathLike):
+        from machinesim.machines import load_machine
+
+        machine = load_machine(machine)
     axes = tuple(machine.axes)
     n_axes = len(axes)
     q0 = np.zeros(n_axes) if start is None else np.array(start, dtype=np.float64)
