@@ -262,34 +262,27 @@ def test_a_large_setting_is_found_and_the_nose_put_on_the_path():
     assert np.linalg.norm(off[0.0], axis=1).max() > 0.5 * UM
 
 
-@pytest.mark.parametrize("plane_move_sine", [None, 0.0])
-def test_a_face_group_cut_turned_by_c_is_the_part_cut_in_the_workpiece_frame(
-        plane_move_sine, monkeypatch):
-    """The crown's face at C = 45 deg (the scenario's seed-0 load with the crown untilted and
-    40 um high, where the fault showed; noise off, quick rows), cut by `engine.remove` in the
-    part turned by -45 deg (as `cut_turned` does) and in the workpiece frame (as `cut` does),
-    in a 0.12 mm window past the face's foot: the same heights to 1e-15 m. Without
-    `sweeps.PLANE_MOVE_SINE` (0: the plunges along the tool's own plane built as slivers and
-    joined) the turned cut stood 22 um deeper there: turned by C alone, an untilted
-    workpiece's sweeps run along the axes, where the slivers are exactly in-plane."""
+@pytest.fixture(scope="module")
+def face_group_at_45_deg():
+    """The scenario's seed-0 crown load with the crown untilted and 40 um high (noise off,
+    quick rows): the identified layout, the tool poses of the face group at C = 45 deg, the
+    stock in a 0.12 mm window past the face's foot and the 5 x 5 points read there. Measured
+    and planned once for both forms of the cut below: neither the probe, the identification
+    nor the motion planner reads `sweeps.PLANE_MOVE_SINE`, only the cut does."""
     import argparse
 
     from machinesim import Lab, motion
-    from machinesim.cutting import clip_to, remove, sweeps
-    from machinesim.metrology import height_map
+    from machinesim.cutting import clip_to
     from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
     from machinesim.realism import Realism
-    from machinesim.rotations import rot_z
-    from machinesim.workpiece import Part
 
-    if plane_move_sine is not None:
-        monkeypatch.setattr(sweeps, "PLANE_MOVE_SINE", plane_move_sine)
-    monkeypatch.setattr(scenario, "CROWN_TILT_DEG", 0.0)
-    monkeypatch.setattr(scenario, "CROWN_HEIGHT_UM", 40.0)
-    args = argparse.Namespace(robot_repeatability_um=None, delta_um=None, rot_deg=None,
-                              crown_delta_um=None, crown_rot_deg=None, errors=None, seed=0,
-                              noise="off", realism=None)
-    errors = scenario.loads(args)["crown"]
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(scenario, "CROWN_TILT_DEG", 0.0)
+        patch.setattr(scenario, "CROWN_HEIGHT_UM", 40.0)
+        args = argparse.Namespace(robot_repeatability_um=None, delta_um=None, rot_deg=None,
+                                  crown_delta_um=None, crown_rot_deg=None, errors=None,
+                                  seed=0, noise="off", realism=None)
+        errors = scenario.loads(args)["crown"]
     procedure = RobotLoadedWorkpiece("crown", quick=True)
     found = procedure.identify(procedure.measure(
         Lab(MACHINE, errors, realism=Realism.ideal()))).detail.found
@@ -304,6 +297,27 @@ def test_a_face_group_cut_turned_by_c_is_the_part_cut_in_the_workpiece_frame(
     stock = clip_to(procedure.stock, [(px - 60 * UM, px + 60 * UM, py - 60 * UM, py + 60 * UM)],
                     layout.floor)
     x, y = px + np.linspace(-10, 10, 5) * UM, py + np.linspace(-10, 10, 5) * UM
+    return layout, paths, stock, x, y
+
+
+@pytest.mark.parametrize("plane_move_sine", [None, 0.0])
+def test_a_face_group_cut_turned_by_c_is_the_part_cut_in_the_workpiece_frame(
+        plane_move_sine, monkeypatch, face_group_at_45_deg):
+    """The crown's face at C = 45 deg (the scenario's seed-0 load with the crown untilted and
+    40 um high, where the fault showed; noise off, quick rows), cut by `engine.remove` in the
+    part turned by -45 deg (as `cut_turned` does) and in the workpiece frame (as `cut` does),
+    in a 0.12 mm window past the face's foot: the same heights to 1e-15 m. Without
+    `sweeps.PLANE_MOVE_SINE` (0: the plunges along the tool's own plane built as slivers and
+    joined) the turned cut stood 22 um deeper there: turned by C alone, an untilted
+    workpiece's sweeps run along the axes, where the slivers are exactly in-plane."""
+    from machinesim.cutting import remove, sweeps
+    from machinesim.metrology import height_map
+    from machinesim.rotations import rot_z
+    from machinesim.workpiece import Part
+
+    if plane_move_sine is not None:
+        monkeypatch.setattr(sweeps, "PLANE_MOVE_SINE", plane_move_sine)
+    layout, paths, stock, x, y = face_group_at_45_deg
     heights = []
     for turn in (rot_z(-math.pi / 4), np.eye(3)):
         frame = np.eye(4)
