@@ -70,11 +70,19 @@ def test_a_misfit_with_dx_in_range_names_what_the_model_leaves_out():
     assert "dx from about" not in str(error.value)
 
 
-def test_a_dx_out_of_range_is_blamed_on_dx():
+def test_a_dx_out_of_range_is_blamed_on_dx(monkeypatch):
+    # the sphere alone is turned: the plane is turned and read only for a sphere taken (it
+    # had been turned and read before the sphere was looked at)
+    from machinesim.procedures.sts_plans import TEST_SPHERE
+
+    tops, turn = [], machinesim.Lab.turn
+    monkeypatch.setattr(machinesim.Lab, "turn",
+                        lambda lab, *a, **k: tops.append(k["top"]) or turn(lab, *a, **k))
     with pytest.raises(InputError, match=r"the fit reads dx -20\.\d\d um.*The dx read is outside "
                                          r"the range this test identifies \(dx from about -10 "
                                          r"to \+5 um"):
         _measure([-20.0, -3.5, 0.0])
+    assert tops == [TEST_SPHERE.top]
 
 
 def test_the_procedure_refuses_a_tool_and_a_servo_preset_it_cannot_use_when_made():

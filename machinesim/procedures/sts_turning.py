@@ -129,20 +129,25 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
     `SPHERE_MISFIT_LIMIT`), blamed on dx when the fit reads it outside `DX_RANGE`, else on
     dR when the fit reads it outside `D_RADIUS_RANGE`; a sphere that fits but reads dx or dR
     outside those ranges (`_refuse_out_of_range`); a plane that reads dy beyond
-    `CORE_LIMIT`."""
-    # height maps, and the interferometers' stated height and lateral noise (m)
-    maps, stated, lateral = {}, {}, {}
-    for piece, plan in (("sphere", TEST_SPHERE), ("plane", TEST_PLANE)):
+    `CORE_LIMIT`. The plane is turned and read only once the sphere is taken: a refused
+    sphere is refused without it (each instrument draws from its own stream, so the readings
+    do not depend on that order)."""
+    # the interferometers' stated height and lateral noise (m)
+    stated, lateral = {}, {}
+
+    def turned(piece, plan):
+        """The height map of the test ``piece`` turned by ``plan``."""
         part, report = lab.turn(sp.spiral_program(plan.path(nose_radius)), tool, top=plan.top)
         if report.empty_cut:
             raise InputError(f"{label}: the test {piece} was not cut; the turn reports "
                              f"{report.notes[0]}", key="tool_test")
         w = plan.read_half_width
         interferometer = lab.white_light_interferometer(label=f"{label}_{piece}")
-        maps[piece] = interferometer.height_map(part, -w, w, -w, w, plan.pixel)
         stated[piece] = interferometer.readout.std
         lateral[piece] = interferometer.lateral_sigma
-    sphere, plane = maps["sphere"], maps["plane"]
+        return interferometer.height_map(part, -w, w, -w, w, plan.pixel)
+
+    sphere = turned("sphere", TEST_SPHERE)
     _refuse_unseen_cut(sphere, label)
     depth = _depth_from_design(sphere)
     if depth < -(DEPTH_RANGE + depth_slack()):  # the fit would take minutes to fail
@@ -202,6 +207,7 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
             f"{SPHERE_MISFIT_LIMIT / NM:.2f} nm); {reads}. {cause}",
             key="tool_test")
     _refuse_out_of_range(found, misfit, depth, nose_radius, label)
+    plane = turned("plane", TEST_PLANE)
     centre = fit_centre_height(plane.x, plane.y, plane.z, TEST_PLANE.slope,
                                aperture=TEST_PLANE.read_half_width, core=TEST_PLANE.core,
                                dx=found.dx, noise=stated["plane"],
