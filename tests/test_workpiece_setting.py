@@ -590,6 +590,27 @@ def test_the_procedure_identifies_the_injected_load(grooves_run):
     assert all(f.before == 0.0 for f in depths)
 
 
+def test_an_after_only_grooves_run_reads_the_figures_of_the_whole_run(grooves_run,
+                                                                      monkeypatch):
+    """An error budget's variant (`after_only`) on the grooves: the same figures, before and
+    after, as the whole run on a lab alike, from the nominal and the compensated programs
+    cut on the lab alone; the cut on the ideal machine and the model-based route's, which
+    no figure reads, had been made in every variant."""
+    from machinesim.procedures import workpiece_setting as procedure_module
+
+    lab, whole = grooves_run
+    ideal, on_lab, lab_cut = [], [], Lab.cut
+    monkeypatch.setattr(procedure_module, "cut", lambda *a, **k: ideal.append(a) or cut(*a, **k))
+    monkeypatch.setattr(Lab, "cut", lambda self, program, *a, **k: on_lab.append(program)
+                        or lab_cut(self, program, *a, **k))
+    alike = Lab(MACHINE, lab.reveal(), noise=False, seed=3)
+    variant = run(RobotLoadedWorkpiece("grooves", after_only=True), alike)
+    assert ideal == [] and len(on_lab) == 2
+    assert variant.figures == whole.figures
+    assert "grooves_ideal" in whole.evaluation.parts
+    assert "grooves_ideal" not in variant.evaluation.parts
+
+
 def test_the_procedure_report_follows_the_one_schema(grooves_run, tmp_path):
     _, result = grooves_run
     check_summary(json.loads(json.dumps(result.summary())))

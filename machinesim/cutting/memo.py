@@ -37,7 +37,7 @@ class CutMemo:
     Parameters
     ----------
     max_cuts : int
-        How many cuts to keep. 64: paper 002's error budget makes about 40 cuts (three of
+        How many cuts to keep. 64: paper 002's error budget makes about 30 cuts (two of
         the grooves and one of the crown per source) and must still find the first run's
         crown at its last source; memory is bounded by ``max_triangles``.
     max_triangles : int

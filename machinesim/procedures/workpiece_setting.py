@@ -203,7 +203,9 @@ class RobotLoadedWorkpiece:
         Crown: smaller measuring windows.
     after_only : bool
         Crown: cut and read only the compensated crown (the "before" figures None): what
-        the variants of an error budget need, at half the cost.
+        the variants of an error budget need, at half the cost. Grooves: leave out the cut
+        on the ideal machine and the model-based route's cut (its details and the part
+        ``grooves_ideal`` absent); the figures are those of the whole run.
     plan : ProbePlan
     crown : CrownPlan
     progress : callable(str), optional
@@ -374,11 +376,15 @@ class RobotLoadedWorkpiece:
     def _grooves(self, lab, programs) -> Evaluation:
         scope = lab.microscope(label="grooves")
         nominal = groove_program()
-        ideal, _ = cut(nominal, lab.machine, GROOVE_TOOL, self.stock, None, roi=GROOVE_ROI,
-                       start=PARK)
-        parts, depths, cuts = {"grooves_ideal": ideal}, {}, {}
-        for name, program in (("before", nominal), ("after", programs["grooves_compensated"]),
-                              ("after_model", programs["grooves_compensated_model"])):
+        parts, depths, cuts = {}, {}, {}
+        if not self.after_only:
+            parts["grooves_ideal"], _ = cut(nominal, lab.machine, GROOVE_TOOL, self.stock, None,
+                                            roi=GROOVE_ROI, start=PARK)
+        runs = (("before", nominal), ("after", programs["grooves_compensated"]),
+                ("after_model", programs["grooves_compensated_model"]))
+        # after_only: the before part is still read, first, so that the after part's readings
+        # draw from the one microscope session as in the whole run
+        for name, program in runs[:2] if self.after_only else runs:
             part, report = lab.cut(program, GROOVE_TOOL, self.workpiece(lab), roi=GROOVE_ROI,
                                    start=PARK, progress=self._tell_sweeps(f"grooves {name}"))
             depths[name] = groove_depths(part, scope)
@@ -396,10 +402,11 @@ class RobotLoadedWorkpiece:
         details = {"groove_stations_mm": (before.stations / MM).tolist(),
                    **{f"groove_depths_{name}_um": (d.depths / UM).tolist()
                       for name, d in depths.items()},
-                   "groove_depth_spread_after_model_nm": float(np.ptp(
-                       depths["after_model"].ends) / M_PER_NM),
-                   "groove_end_depths_after_model_um": (depths["after_model"].ends / UM)
-                   .tolist(),
+                   **({} if self.after_only else {
+                       "groove_depth_spread_after_model_nm": float(np.ptp(
+                           depths["after_model"].ends) / M_PER_NM),
+                       "groove_end_depths_after_model_um": (depths["after_model"].ends / UM)
+                       .tolist()}),
                    "cuts": cuts}
         return Evaluation(tuple(figures), details, parts, {"grooves_nominal": nominal})
 
