@@ -472,3 +472,35 @@ def test_turning_on_a_lathe_is_refused_by_cut_and_named(text, line, words):
     # a C that is a table (travel of two turns) turns under a cut; the lathe's is a spindle
     assert not load_machine("grooving_4axis").axis("C").spindle
     assert load_machine("sts_lathe").axis("C").spindle
+
+
+@pytest.mark.parametrize(("cutter", "flag"), [
+    (cutter, flag) for cutter in ("cut", "cut_turned", "lab")
+    for flag in ("allow_overtravel", "allow_holder_contact")] + [("turn", "allow_overtravel")])
+def test_a_flag_that_is_not_true_or_false_is_refused_not_read_as_true(flag, cutter):
+    # allow_overtravel="no" (a string, so true) cut a program 60 mm past X's travel and
+    # only listed it in the report, exit 0; a lab's turn did the same with its own flag
+    from machinesim import Lab
+    from machinesim.cutting import cut_turned
+    from machinesim.nc import parse_program
+
+    far = ProgramBuilder(1).rapid(X=1 * MM, Y=1 * MM, Z=0.1 * MM).rapid(X=300 * MM).build()
+    if cutter == "turn":
+        lathe = Lab("sts_lathe", noise=False)
+        program = parse_program("G90 G21\nG00 X150. Z0.01 C0\nG01 Z-0.001 F10\n"
+                                "G01 X0 C3600 F36000\n")  # X's travel is +-100 mm
+        with pytest.raises(InputError, match=r"allow_overtravel as True or False, got 'no'"):
+            lathe.turn(program, allow_overtravel="no")
+        with pytest.raises(AxisLimitError):
+            lathe.turn(program, allow_overtravel=np.bool_(False))
+        return
+    run = {"cut": lambda **o: cut(far, "grooving_4axis", "v:90", "block:5x3x1", **o),
+           "cut_turned": lambda **o: cut_turned(far, "grooving_4axis", "v:90", "block:5x3x1",
+                                                **o),
+           "lab": lambda **o: Lab("grooving_4axis", noise=False).cut(far, "v:90",
+                                                                     "block:5x3x1", **o)}
+    with pytest.raises(InputError, match=rf"{flag} as True or False, got 'no'") as info:
+        run[cutter](**{flag: "no"})
+    assert info.value.key == flag
+    with pytest.raises(AxisLimitError):  # False and numpy's False are False
+        run[cutter](**{flag: np.bool_(False)})

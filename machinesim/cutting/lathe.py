@@ -49,7 +49,7 @@ from machinesim.cutting.program import _overtravel
 from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
-from machinesim.metrology._arrays import as_floats, as_number
+from machinesim.metrology._arrays import as_flag, as_floats, as_number
 from machinesim.motion.planner import slow_move_note
 from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
@@ -200,6 +200,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
                          f"{', '.join(machine.axes)}", key="machine")
     tool = turning_tool(tool)
     top = as_number(top, "top")
+    allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")  # "no" is no True
     errors = None if errors is None else as_error_model(errors)
     machine.check_errors(errors)
     if servo is not None:  # as a Lab checks it: one column per axis, each named right

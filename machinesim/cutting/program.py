@@ -24,6 +24,7 @@ from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance, within_edge_plane
 from machinesim.errors import as_error_model
 from machinesim.exceptions import AxisLimitError, HolderContactError, InputError, NCProgramError
+from machinesim.metrology._arrays import as_flag
 from machinesim.nc import MOVE_KINDS
 from machinesim.servo import check_servo
 from machinesim.tolerances import LIMIT_SLACK
@@ -120,6 +121,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     began = time.perf_counter()
     if chord_tolerance is not None:  # as --chord-nm: 1 nm to 1 m, before any work
         chord_tolerance = check_path_chord(chord_tolerance)
+    allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")  # "no" is no True
+    allow_holder_contact = as_flag(allow_holder_contact, "allow_holder_contact")
     program, tool, stock, errors = _arguments(program, tool, stock, errors)
     check_roi_meets(roi, stock)
     machine = machine if isinstance(machine, Machine) else load_machine(machine)

@@ -25,6 +25,7 @@ from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_flag
 from machinesim.rotations import rot_z
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import check_path_chord
@@ -99,6 +100,8 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     began = time.perf_counter()
     chord_tolerance = check_path_chord(chord_tolerance)
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
+    allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")  # "no" is no True
+    allow_holder_contact = as_flag(allow_holder_contact, "allow_holder_contact")
     tool = tool_from_spec(tool) if isinstance(tool, str) else tool
     stock = stock_from_spec(stock) if isinstance(stock, str) else stock
     check_roi_meets(roi, stock)
