@@ -111,3 +111,31 @@ def test_a_move_of_more_than_a_day_is_noted_with_its_line_and_feed():
     assert "line 3" in note and "6e+06 s" in note and "F0.0001" in note
     # an hour-long finishing pass is a plan, not a slip: 100 mm at F1 mm/min
     assert plan(parse_program("G90 G21\nG01 X100. F1.\nM30\n"), machine).notes == ()
+
+
+def test_a_start_or_program_of_the_wrong_kind_is_refused_naming_it():
+    # a new user's start="home" (or ["0", ...]) ended in numpy's ValueError inside plan, from
+    # Lab.cut, machinesim.cut and the encoders alike; encoders.record(None) or record of a
+    # path in AttributeError: 'NoneType' object has no attribute 'moves'
+    import machinesim
+    from machinesim.exceptions import InputError
+
+    machine = load_machine("robonano_a0ib")
+    program = ProgramBuilder(1).rapid(X=1e-3, Z=1e-3).build()
+    for start in ("home", ["0"] * 5, [True, 0, 0, 0, 0], [None] * 5, {"X": 0.0}):
+        with pytest.raises(InputError, match=r"start as axis values \(m, rad\), one per axis "
+                                             r"of XYZBC") as info:
+            plan(program, machine, start=start)
+        assert info.value.key == "start"
+    lab = machinesim.Lab(machine, noise=False)
+    with pytest.raises(InputError, match="start as axis values"):
+        lab.cut(program, "v:90", "block:10x10x2", start="home")
+    for wrong, shown in ((None, "NoneType"), ("part.nc", "str 'part.nc'")):
+        with pytest.raises(InputError, match=rf"program as a machinesim.nc.Program, got "
+                                             rf"{shown}; read an NC file with "
+                                             r"machinesim.nc.read_program\(path\)") as info:
+            lab.encoders().record(wrong)
+        assert info.value.key == "program"
+    # numbers of any kind pass, as before: ints, numpy floats, a tuple
+    start = (1, np.float64(2e-3), 0, 0, 0)
+    assert plan(program, machine, start=start).segments[0].q[0].tolist() == [1, 2e-3, 0, 0, 0]

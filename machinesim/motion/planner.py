@@ -39,6 +39,33 @@ def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndar
     return max(length_mm / feed_mm_per_s, float(np.max(delta / rapid_rate)))
 
 
+def _check_program(program) -> None:
+    """Refuse, naming it, what is no program (a path, None): `_program_arrays` reads a
+    `machinesim.nc.Program`'s arrays or any object's ``moves``."""
+    arrays = getattr(program, "targets", None), getattr(program, "kinds", None)
+    if not all(isinstance(a, np.ndarray) for a in arrays) and not hasattr(program, "moves"):
+        shown = type(program).__name__ + (f" {program!r:.60}" if isinstance(program, str)
+                                          else "")
+        raise InputError(f"Expected program as a machinesim.nc.Program, got {shown}; read an "
+                         "NC file with machinesim.nc.read_program(path) (text: "
+                         "parse_program)", key="program")
+
+
+def _start_values(start, axes: tuple[str, ...]) -> np.ndarray:
+    """``start`` as float64 axis values: numbers only (``"home"``, ``["0", ...]``, booleans
+    and None are refused, not converted or left to numpy's ValueError)."""
+    try:
+        values = np.asarray(start)
+        flags = any(isinstance(v, bool | np.bool_)  # [True, 0, ...] is int64 to numpy
+                    for v in np.asarray(start, dtype=object).flat)
+    except (TypeError, ValueError):  # ragged
+        values, flags = None, True
+    if values is None or flags or values.dtype.kind not in "iuf":
+        raise InputError(f"Expected start as axis values (m, rad), one per axis of "
+                         f"{''.join(axes)}, got {start!r:.80}", key="start")
+    return values.astype(np.float64)
+
+
 def _program_arrays(program):
     """targets (N, 6) (columns `machinesim.nc.AXES`, NaN: no value yet), kinds (N,) int8
     (index into MOVE_KINDS), feeds (N,) m/s (NaN: none), dwells (N,) s, lines (N,) int64.
@@ -118,7 +145,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         machine = load_machine(machine)
     axes = tuple(machine.axes)
     n_axes = len(axes)
-    q0 = np.zeros(n_axes) if start is None else np.array(start, dtype=np.float64)
+    _check_program(program)
+    q0 = np.zeros(n_axes) if start is None else _start_values(start, axes)
     if q0.shape != (n_axes,):
         raise InputError(f"start must have shape ({n_axes},) for axes {''.join(axes)}, "
                          f"got {q0.shape}")
