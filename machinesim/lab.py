@@ -191,6 +191,7 @@ class Lab:
             raise InputError("a lab cuts with its own errors; pass none to Lab.cut",
                              key="errors")
         cutter = cut_turned if "turn_step" in options else cut
+        _check_cut_options(cutter, options)
         if options.get("servo") is not None:
             _check_servo(self.machine, options["servo"])
         if self.__servo is not None and "servo" not in options:
@@ -535,4 +536,23 @@ def _check_options(cls, kind: str, options, also: tuple[str, ...] = ()) -> None:
             raise InputError(f"{cls.__name__} has no option {name!r}; the {what} takes "
                              f"{', '.join(taken)} (and label)", key=name)
 
+
+def _check_cut_options(cutter, options) -> None:
+    """Refuse an option ``cutter`` (`machinesim.cutting.cut` or ``cut_turned``) does not take,
+    with those it takes, as the instruments refuse theirs, and a ``progress`` that cannot be
+    called (the engine called it after the planning: a TypeError)."""
+    import inspect
+
+    from machinesim.cutting.program import check_progress
+
+    taken = [name for name, p in inspect.signature(cutter).parameters.items()
+             if p.kind is p.KEYWORD_ONLY and name != "roi"]
+    if cutter.__name__ == "cut":
+        taken.append("turn_step")
+    for name in options:
+        if name not in taken:
+            how = "Lab.cut" + (" with turn_step" if "turn_step" in options else "")
+            raise InputError(f"{how} has no option {name!r}; it takes {', '.join(taken)} "
+                             "(and roi)", key=name)
+    check_progress(options.get("progress"))
 

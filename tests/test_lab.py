@@ -611,3 +611,29 @@ def test_a_realism_given_by_its_scenario_name_says_how_to_make_it():
                                          r"\.noise_only\(\) or \.lab\(\)"):
         Lab("sts_lathe", realism="ideal")
     assert Lab("sts_lathe", realism=Realism.ideal()).realism == Realism.ideal()
+
+
+def test_a_cut_option_the_lab_does_not_take_is_refused_with_the_options_it_takes():
+    # lab.cut(..., chord=1e-9) ended in TypeError: cut() got an unexpected keyword argument
+    # 'chord' and progress=5 in TypeError: 'int' object is not callable from the engine,
+    # after the planning; the instruments refuse an option they do not take with a list
+    lab = Lab("robonano_a0ib", noise=False)
+    with pytest.raises(InputError, match=r"Lab.cut has no option 'chord'; it takes start, "
+                                         r"chord_tolerance, servo, progress, allow_overtravel, "
+                                         r"allow_holder_contact, turn_step") as info:
+        lab.cut(groove(), "v:90", "block:10x10x2", chord=1e-9)
+    assert info.value.key == "chord"
+    with pytest.raises(InputError, match=r"Lab.cut with turn_step has no option 'chord'; it "
+                                         r"takes floor, start, turn_step, turn_axis, "
+                                         r"chord_tolerance, servo, allow_overtravel, "
+                                         r"allow_holder_contact, progress"):
+        lab.cut(groove(), "v:90", "block:10x10x2", turn_step=0.5, chord=1e-9)
+    for cutter in (lambda **o: lab.cut(groove(), "v:90", "block:10x10x2", **o),
+                   lambda **o: machinesim.cut(groove(), "robonano_a0ib", **o)):
+        with pytest.raises(InputError, match=r"Expected progress as a callable\(done, total\) "
+                                             r"or None, got 5") as info:
+            cutter(progress=5)
+        assert info.value.key == "progress"
+    told = []
+    _, report = lab.cut(groove(), "v:90", "block:10x10x3", progress=lambda *a: told.append(a))
+    assert told and told[-1] == (report.sweeps, report.sweeps)

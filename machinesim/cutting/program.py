@@ -41,6 +41,14 @@ JOIN_TOL = 1e-12
 RADIUS_AGREE_M = 1e-9
 
 
+def check_progress(progress) -> None:
+    """Refuse a ``progress`` that is neither None nor callable: the engine called it only
+    after the planning, with a TypeError."""
+    if progress is not None and not callable(progress):
+        raise InputError(f"Expected progress as a callable(done, total) or None, got "
+                         f"{progress!r:.60}", key="progress")
+
+
 def _arguments(program, tool, stock, errors):
     """`cut`'s program, tool, stock and errors as the objects it works on, or an InputError
     naming the argument and what it takes."""
@@ -123,6 +131,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         chord_tolerance = check_path_chord(chord_tolerance)
     allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")  # "no" is no True
     allow_holder_contact = as_flag(allow_holder_contact, "allow_holder_contact")
+    check_progress(progress)
     program, tool, stock, errors = _arguments(program, tool, stock, errors)
     check_roi_meets(roi, stock)
     machine = machine if isinstance(machine, Machine) else load_machine(machine)

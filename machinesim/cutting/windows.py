@@ -19,7 +19,7 @@ import numpy as np
 
 from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
-from machinesim.cutting.program import _holder_refusal, _Moves, _overtravel
+from machinesim.cutting.program import _holder_refusal, _Moves, _overtravel, check_progress
 from machinesim.cutting.report import CutReport, nc_summary, peak_following_error
 from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import trim_sheets
@@ -102,6 +102,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
     allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")  # "no" is no True
     allow_holder_contact = as_flag(allow_holder_contact, "allow_holder_contact")
+    check_progress(progress)
     tool = tool_from_spec(tool) if isinstance(tool, str) else tool
     stock = stock_from_spec(stock) if isinstance(stock, str) else stock
     check_roi_meets(roi, stock)
