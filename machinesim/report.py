@@ -11,13 +11,15 @@ a reader guessing.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from collections.abc import Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
-from machinesim._io import StagedFolder, json_text, write_atomic
-from machinesim.exceptions import InputError
+from machinesim._io import StagedFolder, _link_or_copy, json_text, write_atomic
+from machinesim.exceptions import FileError, InputError
 
 #: Suffixes that name a unit (or say that a number has none).
 UNIT_SUFFIXES = ("_m", "_mm", "_um", "_nm", "_rad", "_mrad", "_urad", "_deg", "_arcsec",
@@ -113,8 +115,9 @@ class ReportFolder:
 
     Inside `scenario_status`, the folder of ``args.out`` is staged: ``path`` is then the
     staging folder beside it, where the files are written, and ``final`` the folder the
-    report becomes once it is whole (what to tell the user). Elsewhere both are ``path``
-    and the files are written into it directly.
+    report becomes once it is whole (what to tell the user). Elsewhere both are ``path``:
+    `write_result` and `add_budget` stage the folder themselves (`_whole`), the other
+    methods write their file into it directly (each whole, `write_atomic`).
 
     Parameters
     ----------
@@ -123,6 +126,9 @@ class ReportFolder:
     """
 
     def __init__(self, path) -> None:
+        if not isinstance(path, str | os.PathLike):
+            raise InputError(f"Expected the report folder as a path, got {path!r:.60}",
+                             key="out")
         self.final = Path(path)
         self._staged = STAGED.get(folder_key(path))
         self.files: list[str] = []
@@ -156,8 +162,74 @@ class ReportFolder:
             self._staged.commit(keep_going=not last)
 
     def _target(self, name: str) -> Path:
+        if (not isinstance(name, str) or name in ("", ".", "..")
+                or any(sep and sep in name for sep in ("/", os.sep, os.altsep))):
+            raise InputError(f"report file name {name!r}: expected a file name within the "
+                             "report folder, without a folder part", key="name")
         self.files.append(name)
         return self.path / name
+
+    @contextmanager
+    def _whole(self, *, adding: bool = False):
+        """What is written within reaches the folder whole or not at all. Inside
+        `scenario_status` the folder is staged already. Elsewhere (the Python API) the
+        writing goes to a staging folder beside it, swapped in at the end
+        (`machinesim._io.StagedFolder`), which begins with the files written through this
+        `ReportFolder` before; anything else in the folder must be the previous report (the
+        files its summary.json lists), which the new one replaces, and is refused otherwise,
+        before anything is written. ``adding`` (a budget added to a report): the staging
+        folder begins with every file of the folder, and the summary lists them."""
+        if self._staged is not None:
+            yield
+            return
+        from machinesim.scenario_runs import _debris
+
+        kept = [n for n in dict.fromkeys(self.files) if (self.final / n).is_file()]
+        listed = self._check_replaceable(set(kept) | {"summary.json"}, _debris)
+        if adding:
+            kept += [n for n in sorted(listed) if n not in kept and n != "summary.json"
+                     and (self.final / n).is_file()]
+            self.files += [n for n in kept if n not in self.files]
+        try:
+            staged = StagedFolder(self.final)
+            for name in kept:
+                _link_or_copy(str(self.final / name), str(staged.path / name))
+        except OSError as exc:
+            raise FileError(f"cannot write the report beside it: {exc.strerror or exc}",
+                            source=str(self.final)) from None
+        self._staged = staged
+        try:
+            yield
+            staged.commit()
+        finally:
+            staged.discard()
+            self._staged = None
+
+    def _check_replaceable(self, ours: set[str], debris) -> set[str]:
+        """Refuse a folder holding files besides ``ours`` and those its summary.json lists:
+        replacing the folder whole would lose them. Returns the names it lists."""
+        try:
+            names = sorted(n for n in os.listdir(self.final) if not debris(n))
+        except OSError as exc:
+            raise FileError(f"cannot read the report folder ({exc.strerror or exc})",
+                            source=str(self.final)) from None
+        try:
+            listed = json.loads((self.final / "summary.json").read_text(encoding="utf-8"))
+            listed = listed.get("files") if isinstance(listed, dict) else None
+        except (OSError, ValueError):
+            listed = None
+        listed = {str(n) for n in listed} if isinstance(listed, list) else set()
+        foreign = [n for n in names if n not in ours and n not in listed]
+        if not foreign:
+            return listed
+        shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more"
+                                          if len(foreign) > 5 else "")
+        found = (f"holds files its summary.json does not list ({shown})"
+                 if "summary.json" in names else
+                 f"holds files ({shown}) and no summary.json, so it is not a report folder")
+        raise InputError(f"report folder {str(self.final)!r}: {found}; the new report "
+                         "replaces the folder whole, so they would be lost: move them, or "
+                         "give another folder", key="out")
 
     def write_json(self, name: str, data: Mapping) -> Path:
         """JSON with units in every key (checked)."""
@@ -185,7 +257,22 @@ class ReportFolder:
         With ``budget`` (a `machinesim.budget.Budget`), also its table (``budget.md``), its
         bar plot (``budget.png``) and its rows under ``budget`` in summary.json (or later,
         `add_budget`). Without, a budget an earlier run left in the folder is removed: the
-        folder never pairs this result with another run's budget."""
+        folder never pairs this result with another run's budget.
+
+        Outside a scenario the folder is written whole or not at all, as a scenario's is: it
+        then holds this report (and what was written through this folder before), or, when
+        stopped or failed, what it held before. A folder holding other files than an earlier
+        report's is refused (`InputError`), before anything is written."""
+        from machinesim.experiment import Result
+
+        if not isinstance(result, Result):
+            raise InputError(f"Expected a machinesim.experiment.Result "
+                             f"(experiment.run(procedure, lab)), got {type(result).__name__}",
+                             key="result")
+        with self._whole():
+            return self._write_result(result, digits, budget)
+
+    def _write_result(self, result, digits: int, budget) -> str:
         for name, part in result.evaluation.parts.items():
             self.write_part(f"{name}.ply", part)
         for name, program in {**result.evaluation.programs, **result.programs}.items():
@@ -216,9 +303,11 @@ class ReportFolder:
     def add_budget(self, result, budget) -> str:
         """The error budget of ``result`` (written by `write_result` before, or not): its
         table and plot (`write_budget`) and summary.json again with its rows under
-        ``budget``. Returns the table's Markdown."""
-        text = self.write_budget(budget)
-        self.write_summary({**result.summary(), "budget": budget.to_dict()})
+        ``budget``. Returns the table's Markdown. Outside a scenario, the folder with the
+        budget is swapped in whole, as `write_result`'s."""
+        with self._whole(adding=True):
+            text = self.write_budget(budget)
+            self.write_summary({**result.summary(), "budget": budget.to_dict()})
         return text
 
     def write_budget(self, budget, name: str = "budget") -> str:

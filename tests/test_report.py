@@ -305,3 +305,98 @@ def test_every_key_of_the_documented_summary_is_in_the_documented_table():
         if line.startswith("| `") and " | " in line:
             table.update(re.findall(r"`([a-z_]+)`", first))
     assert set(example) <= table, sorted(set(example) - table)
+
+
+# ------------------------------------------------- a report folder written by the Python API
+
+
+def _toy_result(parts=("before", "after"), after=0.5):
+    """A result of a toy procedure on a noise-free lab: one figure, the given parts."""
+    from machinesim import Lab
+    from machinesim.experiment import Evaluation, Figure, Identified, run
+    from machinesim.workpiece import stock_from_spec
+
+    class Toy:
+        name, paper = "toy", "none"
+
+        def measure(self, lab):
+            return 0.0
+
+        def identify(self, measurements):
+            return Identified({"workpiece.x": (measurements, 1e-9)}, None)
+
+        def compensate(self, identified):
+            return {}
+
+        def evaluate(self, lab, identified, programs):
+            return Evaluation((Figure("x", "um", 1.0, after),),
+                              parts={name: stock_from_spec("block:1x1x1") for name in parts})
+
+    return run(Toy(), Lab("robonano_a0ib", noise=False))
+
+
+def test_write_result_outside_a_scenario_writes_the_folder_whole_or_not_at_all(
+        tmp_path, monkeypatch):
+    # A new user's ReportFolder(DIR).write_result(result), DIR holding an older report of
+    # other parts and a notes.txt of their own, left both beside the new report: its
+    # summary.json's "files" (documented as exactly the folder's files) listed neither; and
+    # a Ctrl-C between two of its files left new tables beside the old summary.json
+    out = tmp_path / "out"
+    ReportFolder(out).write_result(_toy_result(parts=("old_a", "old_b")))
+    (out / "notes.txt").write_text("mine\n")
+    before = _snapshot(out)
+    with pytest.raises(InputError, match=r"report folder .*: holds files its summary.json "
+                                         r"does not list \(notes.txt\)") as info:
+        ReportFolder(out).write_result(_toy_result())
+    assert info.value.key == "out" and _snapshot(out) == before
+    (out / "notes.txt").unlink()
+    previous = _snapshot(out)
+    # stopped between two files: the folder is the previous report, byte for byte
+    calls = []
+
+    def stop_at_the_second_part(self, name, part):
+        calls.append(name)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return write_part(self, name, part)
+
+    write_part = ReportFolder.write_part
+    monkeypatch.setattr(ReportFolder, "write_part", stop_at_the_second_part)
+    with pytest.raises(KeyboardInterrupt):
+        ReportFolder(out).write_result(_toy_result())
+    monkeypatch.setattr(ReportFolder, "write_part", write_part)
+    assert _snapshot(out) == previous and _siblings(out) == []
+    # written: exactly the new report's files, as its summary lists them
+    folder = ReportFolder(out)
+    folder.write_text("extra.md", "written through the folder before the result\n")
+    folder.write_result(_toy_result())
+    listed = json.loads((out / "summary.json").read_text())["files"]
+    assert sorted(p.name for p in out.iterdir()) == listed == [
+        "after.ply", "before.ply", "extra.md", "figures.json", "figures.md",
+        "identified.json", "identified.md", "summary.json"]
+    assert _siblings(out) == []
+    # a budget added later, by another ReportFolder of the folder, keeps the report's files
+    from machinesim.budget import Budget, BudgetRow
+
+    report = _snapshot(out)
+    ReportFolder(out).add_budget(_toy_result(), Budget((BudgetRow("s", "x", "um", 0.5, 0.3,
+                                                                  0.64),)))
+    listed = json.loads((out / "summary.json").read_text())["files"]
+    assert sorted(p.name for p in out.iterdir()) == listed == sorted(
+        [*report, "budget.md", "budget.png"])
+    assert all(_snapshot(out)[name] == report[name] for name in report if name != "summary.json")
+
+
+def test_a_report_file_name_stays_in_its_folder_and_a_result_is_a_result(tmp_path):
+    folder = ReportFolder(tmp_path / "out")
+    for name in ("../escape.json", "sub/x.json", "", ".", "..", "/tmp/x.json"):
+        with pytest.raises(InputError, match=r"report file name .*: expected a file name "
+                                             r"within the report folder"):
+            folder.write_json(name, {"depth_um": 1.0})
+    assert not (tmp_path / "escape.json").exists() and folder.files == []
+    for wrong in (None, {"paper": "000"}):
+        with pytest.raises(InputError, match=r"Expected a machinesim.experiment.Result "
+                                             r"\(experiment.run\(procedure, lab\)\), got"):
+            folder.write_result(wrong)
+    with pytest.raises(InputError, match=r"Expected the report folder as a path, got None"):
+        ReportFolder(None)
