@@ -799,3 +799,24 @@ def test_blanks_between_a_sign_and_its_digits_are_not_read_but_inside_the_digits
     with pytest.raises(NCProgramError, match="without an address letter") as error:
         parse_program("G01 X1 0. F100\n", "c.nc")
     assert error.value.line == 1
+
+
+@pytest.mark.parametrize(("build", "message"), [
+    (lambda b: b.rapid(X="0.001"), r"axis X must be a real number, got '0.001'"),
+    (lambda b: b.rapid(X=True), r"axis X must be a real number, got True"),
+    (lambda b: b.rapid(Z=np.bool_(True)), r"axis Z must be a real number, got "),
+    (lambda b: b.linear(X=1e-3, feed_m_per_s="0.1"), r"feed must be a real number, got '0.1'"),
+    (lambda b: b.linear(X=1e-3, feed_mm_per_min="100"),
+     r"feed must be a real number, got '100'"),
+    (lambda b: b.dwell("2"), r"dwell time must be a real number, got '2'"),
+    (lambda b: b.spindle("1000").rapid(X=0.0), r"spindle speed must be a real number, got "
+                                               r"'1000'"),
+])
+def test_the_builder_takes_numbers_not_text_or_flags(build, message):
+    # ProgramBuilder().rapid(X="0.001") built X = 1 mm from the text and X=True X = 1 m;
+    # a dwell("2"), spindle("1000") and feed_m_per_s="0.1" were converted alike, where
+    # every instrument refuses a number spelt as text (docs/metrology.md)
+    with pytest.raises(NCProgramError, match=message):
+        build(ProgramBuilder(1)).build()
+    exact = ProgramBuilder(1).rapid(X=np.float64(1e-3), Y=2).dwell(np.int64(2)).build()
+    assert exact.targets[0, :2].tolist() == [1e-3, 2.0] and exact.dwells[1] == 2.0

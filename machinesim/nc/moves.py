@@ -12,6 +12,8 @@ from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+import numpy as np
+
 from machinesim.exceptions import NCProgramError
 
 #: Axis letters in their canonical order: linear (m), then rotary (rad); the columns of
@@ -70,7 +72,10 @@ class FrozenMapping(Mapping):
 
 
 def _finite(value: Any, what: str, *, source: str, line: int | None, key: str) -> float:
+    # text and flags are refused, not converted: X="0.001" had built 1 mm, X=True 1 m
     try:
+        if isinstance(value, str | bytes | bool | np.bool_):
+            raise TypeError
         number = float(value)
     except (TypeError, ValueError):
         raise NCProgramError(
