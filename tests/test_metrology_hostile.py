@@ -363,3 +363,40 @@ def test_an_r_test_plan_in_degrees_is_told_the_units_and_order_the_axes_take():
                                              r"XYZBC: a rotary axis given in degrees is the "
                                              r"usual cause\)"):
         lab.r_test().read(q)
+
+
+def test_a_noise_or_step_in_the_wrong_unit_is_refused_by_every_instrument():
+    # A new user's lab.laser_interferometer(sigma=2) (nm meant) read with 2 m of noise,
+    # r_test(sigma=50), touch_probe(part, sigma=20) and encoders(sigma=[1] * 5) alike, exit 0;
+    # only the optical instruments had a bound (OPTICAL_LIMIT). And the microscope's
+    # lateral_spacing=0.3 (um meant) read a 2 mm profile as one sample.
+    import machinesim
+    from machinesim.workpiece import stock_from_spec
+
+    lab = machinesim.Lab("robonano_a0ib", noise=False)
+    part = stock_from_spec("block:10x10x2")
+    made = {"laser_interferometer": lambda **o: lab.laser_interferometer(**o),
+            "r_test": lambda **o: lab.r_test(**o),
+            "touch_probe": lambda **o: lab.touch_probe(part, **o)}
+    for kind, make in made.items():
+        for name, value in (("sigma", 2.0), ("resolution", 1.0)):
+            with pytest.raises(InputError, match=rf"Expected {name} <= 0.001 m or rad "
+                                                 rf"\(READOUT_LIMIT: .*unit slip.*\), got "
+                                                 rf"{value}") as info:
+                make(**{name: value})
+            assert info.value.key == name, kind
+        make(sigma=1e-3, resolution=1e-3)  # the bound itself is taken
+    with pytest.raises(InputError, match=r"Expected sigma <= 0.001 m or rad"):
+        lab.encoders(sigma=[1.0] * 5)
+    # an encoder's step is its machine's, which a URDF may set up to 1e-2 rad
+    # (urdf_checks.COARSEST_RESOLUTION_RAD): its readout and default noise stay unbounded
+    from types import SimpleNamespace
+
+    from machinesim.metrology.encoders import Encoders
+
+    coarse = Encoders(SimpleNamespace(resolution=(1e-9, 8.7e-3), axes=("X", "C")),
+                      lambda t, q: q)
+    assert [r.resolution for r in coarse.readouts] == [1e-9, 8.7e-3]
+    with pytest.raises(InputError, match=r"Expected lateral_spacing <= 0.001 m \(OPTICAL_LIMIT"):
+        lab.microscope(lateral_spacing=0.3)
+    assert lab.microscope(lateral_spacing=1e-3).lateral_spacing == 1e-3

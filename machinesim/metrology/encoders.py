@@ -25,7 +25,7 @@ import numpy as np
 
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
-from machinesim.metrology.instruments import Readout, as_generator
+from machinesim.metrology.instruments import Readout, as_generator, within_readout_limit
 
 __all__ = ["ENCODER_SIGMA_OF_RESOLUTION", "MAX_RECORDED_SAMPLES", "EncoderReading", "Encoders"]
 
@@ -87,14 +87,18 @@ class Encoders:
 
     def __init__(self, machine, follow: Callable, *, noise: bool = True, rng=None,
                  sigma=None) -> None:
+        given = sigma
         resolution = np.asarray(machine.resolution, dtype=np.float64)
         sigma = (ENCODER_SIGMA_OF_RESOLUTION * resolution if sigma is None
                  else np.asarray(sigma, dtype=np.float64))
         if sigma.shape != resolution.shape:
             raise InputError(f"Expected one sigma per axis ({len(resolution)}), got "
                              f"{sigma.shape}", key="sigma")
+        if given is not None:  # the resolution is the machine's: only a given sigma bounded
+            for s in sigma:
+                within_readout_limit(float(s), "sigma")
         self.machine = machine
-        self.readouts = tuple(Readout.of(float(s), float(r), noise)
+        self.readouts = tuple(Readout.of(float(s), float(r), noise, limit=None)
                               for s, r in zip(sigma, resolution, strict=True))
         self._follow = follow
         self._rng = as_generator(rng)

@@ -19,7 +19,7 @@ import numpy as np
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag, as_number, shown
 
-__all__ = ["OPTICAL_LIMIT", "Readout", "as_generator", "as_machine", "motion_of"]
+__all__ = ["OPTICAL_LIMIT", "READOUT_LIMIT", "Readout", "as_generator", "as_machine", "motion_of"]
 
 #: Largest height noise ``sigma``, display ``resolution``, spot width, ``lateral_sigma`` and
 #: ``stage_sigma`` an optical instrument (`Microscope`, `WhiteLightInterferometer`) takes, m.
@@ -29,6 +29,13 @@ __all__ = ["OPTICAL_LIMIT", "Readout", "as_generator", "as_machine", "motion_of"
 #: surface in view (a unit slip, mm or um given as m), and a noise of 1e300 m would turn every
 #: height to infinity.
 OPTICAL_LIMIT = 1e-3
+#: Largest noise ``sigma`` and display ``resolution`` of any reading (`Readout`): the laser
+#: interferometer's, the touch probe's, the R-test's, each encoder's (m or rad). 1 mm (or
+#: 1 mrad) is 10^5 times the noise the lab states of each (2 nm, 20 nm, 50 nm, 0.3 of a 1 nm
+#: step); an instrument read to more measures nothing a procedure here identifies, so a
+#: larger value is a unit slip (nm or um given as m), as `OPTICAL_LIMIT` bounds the optical
+#: instruments'. Before, ``laser_interferometer(sigma=2)`` read with 2 m of noise.
+READOUT_LIMIT = 1e-3
 
 
 @dataclass(frozen=True)
@@ -59,10 +66,16 @@ class Readout:
             object.__setattr__(self, name, number)
 
     @classmethod
-    def of(cls, sigma: float, resolution: float, noise: bool) -> Readout:
+    def of(cls, sigma: float, resolution: float, noise: bool,
+           limit: float | None = READOUT_LIMIT) -> Readout:
         """The readout of an instrument built with ``noise=False`` (sigma ignored) or True.
 
-        ``sigma`` is checked either way, and ``noise`` must be a bool."""
+        ``sigma`` is checked either way, and ``noise`` must be a bool; both ``sigma`` and
+        ``resolution`` at most ``limit`` (`READOUT_LIMIT`; None: no bound, for an encoder
+        whose resolution is the machine's own)."""
+        if limit is not None:
+            for name, value in (("sigma", sigma), ("resolution", resolution)):
+                within_readout_limit(value, name, limit)
         sigma = cls(sigma, resolution).sigma
         return cls(sigma if as_flag(noise, "noise") else 0.0, resolution)
 
@@ -92,6 +105,14 @@ class Readout:
         if self.resolution > 0.0:
             values = np.round(values / self.resolution) * self.resolution
         return values
+
+
+def within_readout_limit(value, name: str, limit: float = READOUT_LIMIT) -> float:
+    """``value``, a reading's noise or step, as a float >= 0 and at most ``limit``, or an
+    InputError naming ``name`` and the bound (`READOUT_LIMIT`)."""
+    return as_number(value, name, sign=">= 0", unit="m or rad", limit=limit,
+                     why=" (READOUT_LIMIT: 10^5 times the lab's instruments' noise; more is "
+                         "a unit slip, e.g. nm given as m)")
 
 
 def as_generator(rng) -> np.random.Generator:

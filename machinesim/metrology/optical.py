@@ -120,6 +120,7 @@ class _Profiler:
         self._stage_rng = as_generator(stage_rng) if self.stage_sigma > 0.0 else None
         self._held = None  # the placement `placement` holds
         self.lateral_spacing = as_positive(lateral_spacing, "lateral_spacing")
+        _setting(self.lateral_spacing, "lateral_spacing")  # a pixel within the field of view
         self._rng = as_generator(rng)
         if spot is not None and not isinstance(spot, Spot):
             raise InputError(f"Expected spot as a Spot or None, got {spot!r}", key="spot")
