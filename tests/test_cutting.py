@@ -504,3 +504,15 @@ def test_a_flag_that_is_not_true_or_false_is_refused_not_read_as_true(flag, cutt
     assert info.value.key == flag
     with pytest.raises(AxisLimitError):  # False and numpy's False are False
         run[cutter](**{flag: np.bool_(False)})
+
+
+@pytest.mark.parametrize(("turn_step", "shown"), [("0.5", "'0.5'"), (True, "True"),
+                                                  (None, "None"), (0.0, "0.0")])
+def test_a_turn_step_that_is_no_positive_angle_is_refused_naming_it(turn_step, shown):
+    # cut_turned(..., turn_step="0.5") (and Lab.cut's) ended in TypeError: must be real
+    # number, not str, from math.isfinite; True was taken as a step of 1 rad
+    from machinesim.cutting import cut_turned
+
+    with pytest.raises(InputError, match=rf"turn_step .*\(rad\), got {shown}") as info:
+        cut_turned(grooves(1), "grooving_4axis", "v:90", "block:5x3x1", turn_step=turn_step)
+    assert info.value.key == "turn_step"

@@ -25,7 +25,7 @@ from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance
 from machinesim.exceptions import InputError
-from machinesim.metrology._arrays import as_flag
+from machinesim.metrology._arrays import as_flag, as_number
 from machinesim.rotations import rot_z
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import check_path_chord
@@ -109,8 +109,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     if turn_axis not in machine.axes:
         raise InputError(f"{machine.name} has no axis {turn_axis} (axes "
                          f"{''.join(machine.axes)})", key="turn_axis")
-    if not (math.isfinite(turn_step) and turn_step > 0.0):
-        raise InputError(f"Expected turn_step > 0 (rad), got {turn_step!r}", key="turn_step")
+    turn_step = as_number(turn_step, "turn_step", sign="> 0", unit="rad")  # not "0.5", True
     machine.check_errors(errors)
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tool.vertices(), chord_tolerance=chord_tolerance,
