@@ -99,6 +99,9 @@ class Budget:
     @classmethod
     def from_dict(cls, rows: Sequence[Mapping]) -> Budget:
         """The inverse of `to_dict` (rows as summary.json holds them)."""
+        if isinstance(rows, str | bytes | Mapping) or not isinstance(rows, Sequence):
+            raise InputError(f"budget: expected a list of rows, got {type(rows).__name__}",
+                             key="budget")
         out = []
         for i, row in enumerate(rows):
             missing = [key for key in BUDGET_KEYS if not isinstance(row, Mapping)
@@ -107,9 +110,16 @@ class Budget:
                 raise InputError(f"budget[{i}]: expected an object with "
                                  f"{', '.join(BUDGET_KEYS)}; lacks {', '.join(missing)}",
                                  key="budget")
+            numbers = []
+            for key in ("after_all", "after_without", "share"):
+                value = row[key]
+                if (not isinstance(value, int | float) or isinstance(value, bool)
+                        or not math.isfinite(value)):
+                    raise InputError(f"budget[{i}].{key} must be a finite number, got "
+                                     f"{value!r}", key="budget")
+                numbers.append(float(value))
             out.append(BudgetRow(str(row["source"]), str(row["figure"]), str(row["unit"]),
-                                 float(row["after_all"]), float(row["after_without"]),
-                                 float(row["share"])))
+                                 *numbers))
         return cls(tuple(out))
 
     @property
@@ -290,6 +300,9 @@ def error_budget(run: Callable, sources: Sequence[str]) -> Budget:
         A row per figure with an "after" value (in the result's order) and per source.
     """
     sources = _check_sources(sources)
+    if not callable(run):
+        raise InputError(f"error_budget: expected run as a callable, run(source or None) -> "
+                         f"Result, got {run!r:.60}", key="run")
     every = _figures(run(None), "None")
     names = [name for name, f in every.items() if f.after is not None]
     rows = {name: [] for name in names}

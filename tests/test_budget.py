@@ -169,3 +169,26 @@ def test_a_procedure_budgets_only_the_switches_of_the_instruments_it_reads():
         reads_a_laser = any("laser_interferometer" in uses
                             for uses in procedure.lab_uses.values())
         assert ("air_refraction" in sources) == reads_a_laser, procedure
+
+
+def test_a_run_that_cannot_be_called_or_rows_that_are_no_numbers_are_refused():
+    # error_budget(5, [...]) ended in TypeError: 'int' object is not callable; a summary's
+    # budget row with "after_all": "x" in ValueError from float(), rows that are no list in
+    # TypeError: 'int' object is not iterable
+    from machinesim.budget import Budget, error_budget
+    from machinesim.exceptions import InputError
+
+    with pytest.raises(InputError, match=r"error_budget: expected run as a callable, "
+                                         r"run\(source or None\) -> Result, got 5") as info:
+        error_budget(5, ["registration"])
+    assert info.value.key == "run"
+    row = {"source": "s", "figure": "f", "unit": "um", "after_all": 0.5,
+           "after_without": 0.3, "share": 0.64}
+    assert Budget.from_dict([row]).rows[0].share == 0.64
+    for bad, message in (([{**row, "after_all": "x"}], r"budget\[0\]\.after_all must be a "
+                                                        r"finite number, got 'x'"),
+                         ([{**row, "share": None}], r"budget\[0\]\.share must be a finite "
+                                                    r"number, got None"),
+                         (5, r"budget: expected a list of rows, got int")):
+        with pytest.raises(InputError, match=message):
+            Budget.from_dict(bad)
