@@ -287,10 +287,15 @@ def map_program(
     expected = (f"an array of shape {shape} (one row per motion block, columns "
                 f"{' '.join(machine.axes)} in m and rad)")
     try:
+        kind = np.asarray(result).dtype  # flags and text are no axis values (True: 1 m)
         mapped = np.asarray(result, dtype=np.float64)
     except (TypeError, ValueError):
         raise InputError(f"the compensation function must return {expected}, got "
                          f"{type(result).__name__}", source=program.source) from None
+    if kind.kind not in "iuf":
+        name = {"b": "bool", "U": "str", "S": "bytes", "O": "object"}.get(kind.kind, kind.name)
+        raise InputError(f"the compensation function must return {expected}, of numbers, got "
+                         f"an array of {name}", source=program.source)
     if mapped.shape != shape:
         raise InputError(f"the compensation function must return {expected}, got shape "
                          f"{mapped.shape}", source=program.source)

@@ -571,3 +571,20 @@ def test_rewrite_refuses_values_that_are_not_finite_naming_the_line_and_axis():
     with pytest.raises(InputError, match=r"u.nc, line 3, key 'X': axis X of this motion block "
                                          r"is given as nan \(2 value\(s\) not finite\)"):
         rewrite(program, ROBONANO, q)
+
+
+def test_a_function_that_cannot_be_called_or_returns_text_or_flags_is_refused():
+    # map_program(program, machine, 5) ended in TypeError: 'int' object is not callable; a
+    # function returning q > 0 (flags) or text was converted, True as 1 m, "1e-3" as 1 mm
+    with pytest.raises(InputError, match=r"expected the compensation function as a callable, "
+                                         r"function\(q\) -> q, got 5") as info:
+        map_program(grooves(), GROOVING, 5)
+    assert info.value.key == "function"
+    with pytest.raises(InputError, match=r"must return an array of shape \(6, 4\).*of "
+                                         r"numbers, got an array of bool"):
+        map_program(grooves(), GROOVING, lambda q: q > 0)
+    with pytest.raises(InputError, match=r"of numbers, got an array of str"):
+        map_program(grooves(), GROOVING, lambda q: q.astype(str))
+    listed = map_program(grooves(), GROOVING, lambda q: q.tolist(), rounded=False)  # a list
+    same = map_program(grooves(), GROOVING, lambda q: q, rounded=False)
+    assert np.array_equal(listed.targets, same.targets, equal_nan=True)
