@@ -443,6 +443,9 @@ class Lab:
             alone (what a scenario chose). Without background errors the two are the same.
         Tool moves made by `adjust_tool` are not in it (`reveal_adjustments`).
         """
+        if not isinstance(background, bool | np.bool_):  # "no" is no True
+            raise InputError(f"Expected background as True or False, got {background!r:.60}",
+                             key="background")
         return self.__set_up if background else self.__injected
 
     def reveal_adjustments(self):

@@ -637,3 +637,14 @@ def test_a_cut_option_the_lab_does_not_take_is_refused_with_the_options_it_takes
     told = []
     _, report = lab.cut(groove(), "v:90", "block:10x10x3", progress=lambda *a: told.append(a))
     assert told and told[-1] == (report.sweeps, report.sweeps)
+
+
+def test_reveal_takes_true_or_false_for_the_background():
+    # lab.reveal(background="no") (a string, so true) gave the injected errors plus the
+    # background, the column a report puts beside the injected ones
+    from machinesim.realism import Realism
+
+    lab = Lab("robonano_a0ib", TRUTH, realism=Realism.lab())
+    assert lab.reveal(background=False) is not lab.reveal()
+    with pytest.raises(InputError, match=r"Expected background as True or False, got 'no'"):
+        lab.reveal(background="no")
