@@ -383,6 +383,9 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
         return value
 
     check_lab(lab)
+    if progress is not None and not callable(progress):
+        raise InputError(f"Expected progress as a callable(text) or None, got {progress!r:.60}",
+                         key="progress")
     missing = [name for name in ("measure", "identify", "compensate", "evaluate")
                if not callable(getattr(procedure, name, None))]
     if missing:

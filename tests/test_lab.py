@@ -648,3 +648,14 @@ def test_reveal_takes_true_or_false_for_the_background():
     assert lab.reveal(background=False) is not lab.reveal()
     with pytest.raises(InputError, match=r"Expected background as True or False, got 'no'"):
         lab.reveal(background="no")
+
+
+def test_run_refuses_a_progress_it_cannot_call_before_measuring():
+    # run(procedure, lab, progress=5) ended in TypeError: 'int' object is not callable
+    from machinesim.experiment import run
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+
+    with pytest.raises(InputError, match=r"Expected progress as a callable\(text\) or None, "
+                                         r"got 5") as info:
+        run(ToolRotationArm(), Lab("planer_4axis", noise=False), progress=5)
+    assert info.value.key == "progress"
