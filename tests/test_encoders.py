@@ -95,3 +95,18 @@ def test_a_trace_at_the_loop_period_follows_the_continuous_ramp_response():
     assert np.max(np.abs(error - expected)) < 0.01 * v * 100.0 / 1e4
     with pytest.raises(InputError, match="period_s"):
         lab.encoders().record(program, period_s=0.0)
+
+
+def test_a_sigma_given_as_text_is_refused_naming_what_arrived():
+    # lab.encoders(sigma="1") said "Expected one sigma per axis (5), got ()": numpy had
+    # read the text as the number 1; ["1e-9"] * 5 was read as numbers
+    import machinesim
+    from machinesim.exceptions import InputError
+
+    lab = machinesim.Lab("robonano_a0ib", noise=False)
+    for sigma in ("1", ["1e-9"] * 5, [True] * 5):
+        with pytest.raises(InputError, match=r"Expected sigma as one noise std per axis "
+                                             r"\(m or rad\), got ") as info:
+            lab.encoders(sigma=sigma)
+        assert info.value.key == "sigma"
+    assert lab.encoders(sigma=[1e-9] * 5).readouts[0].sigma == 0.0  # noise off: sigma unused

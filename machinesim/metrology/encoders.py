@@ -25,6 +25,7 @@ import numpy as np
 
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_floats
 from machinesim.metrology.instruments import Readout, as_generator, within_readout_limit
 
 __all__ = ["ENCODER_SIGMA_OF_RESOLUTION", "MAX_RECORDED_SAMPLES", "EncoderReading", "Encoders"]
@@ -90,7 +91,7 @@ class Encoders:
         given = sigma
         resolution = np.asarray(machine.resolution, dtype=np.float64)
         sigma = (ENCODER_SIGMA_OF_RESOLUTION * resolution if sigma is None
-                 else np.asarray(sigma, dtype=np.float64))
+                 else as_floats(sigma, "sigma", "one noise std per axis (m or rad)"))
         if sigma.shape != resolution.shape:
             raise InputError(f"Expected one sigma per axis ({len(resolution)}), got "
                              f"{sigma.shape}", key="sigma")
