@@ -137,11 +137,11 @@ class ReportFolder:
         try:
             self.final.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise InputError(f"--out {str(path)!r}: cannot make the report folder there "
+            raise InputError(f"report folder {str(path)!r}: cannot make the report folder there "
                              f"({exc.strerror or exc}); expected a folder, or a path where "
                              "one can be made", key="out") from None
         if not os.access(self.final, os.W_OK | os.X_OK):
-            raise InputError(f"--out {str(path)!r}: the report folder is not writable",
+            raise InputError(f"report folder {str(path)!r}: the report folder is not writable",
                              key="out")
 
     @property

@@ -400,3 +400,14 @@ def test_a_report_file_name_stays_in_its_folder_and_a_result_is_a_result(tmp_pat
             folder.write_result(wrong)
     with pytest.raises(InputError, match=r"Expected the report folder as a path, got None"):
         ReportFolder(None)
+
+
+def test_a_report_folder_of_a_script_is_named_as_the_script_gave_it_not_as_an_option(tmp_path):
+    # ReportFolder("afile") from a script of one's own said "--out 'afile': cannot make
+    # the report folder there", naming an option the script's user never typed
+    (tmp_path / "afile").write_text("x")
+    for path in (tmp_path / "afile", tmp_path / "afile" / "sub"):
+        with pytest.raises(InputError, match=r"report folder '.*afile.*': cannot make the "
+                                             r"report folder there") as info:
+            ReportFolder(path)
+        assert "--out" not in str(info.value) and info.value.key == "out"
