@@ -576,8 +576,8 @@ def test_rewrite_refuses_values_that_are_not_finite_naming_the_line_and_axis():
 def test_a_function_that_cannot_be_called_or_returns_text_or_flags_is_refused():
     # map_program(program, machine, 5) ended in TypeError: 'int' object is not callable; a
     # function returning q > 0 (flags) or text was converted, True as 1 m, "1e-3" as 1 mm
-    with pytest.raises(InputError, match=r"expected the compensation function as a callable, "
-                                         r"function\(q\) -> q, got 5") as info:
+    with pytest.raises(InputError, match=r"expected the compensation as a function q -> "
+                                         r"q_compensated .* got int;") as info:
         map_program(grooves(), GROOVING, 5)
     assert info.value.key == "function"
     with pytest.raises(InputError, match=r"must return an array of shape \(6, 4\).*of "
