@@ -97,7 +97,7 @@ def test_plan_takes_a_machine_by_name_and_refuses_a_path_for_the_program(tmp_pat
         with pytest.raises(InputError) as info:
             plan(wrong, "grooving_4axis")
         assert info.value.key == "program"
-        assert str(info.value).startswith("key 'program': expected the program as a "
+        assert str(info.value).startswith("key 'program': Expected program as a "
                                           "machinesim.nc.Program, got ")
         assert "read an NC file with machinesim.nc.read_program(path)" in str(info.value)
 

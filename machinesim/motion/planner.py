@@ -132,20 +132,13 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         At the first move (in program order) that sets an axis the machine lacks, feeds
         without a feed rate, or would need more than `MAX_SUBSTEPS` sub-steps.
     """
-    if isinstance(program, str | os.PathLike) or not hasattr(program, "moves"):
-        # a path, as `cut` takes one, had ended in "AttributeError: 'str' object has no
-        # attribute 'moves'"
-        raise InputError(f"expected the program as a machinesim.nc.Program, got "
-                         f"{type(program).__name__}; read an NC file with "
-                         "machinesim.nc.read_program(path) (text: parse_program)",
-                         key="program")
+    _check_program(program)
     if isinstance(machine, str | os.PathLike):
         from machinesim.machines import load_machine
 
         machine = load_machine(machine)
     axes = tuple(machine.axes)
     n_axes = len(axes)
-    _check_program(program)
     q0 = np.zeros(n_axes) if start is None else _start_values(start, axes)
     if q0.shape != (n_axes,):
         raise InputError(f"start must have shape ({n_axes},) for axes {''.join(axes)}, "
