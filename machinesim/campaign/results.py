@@ -6,7 +6,8 @@ trial completes (`machinesim._io.write_atomic`). Run again on the same DIR, a ca
 the trials already there and computes only the missing ones; a DIR holding another campaign
 (another procedure, seed or distribution) is refused, never mixed; a distribution spelt
 otherwise (``10nm``, ``0.01um``) is the same one (`same_campaign`). While a campaign runs it
-holds ``DIR/campaign.lock`` (`locked`): a second one on DIR meanwhile is refused.
+holds ``DIR/campaign.lock`` (`locked`, a kernel file lock): a second one on DIR meanwhile is
+refused.
 
 ``DIR/campaign.nc`` (netCDF 3, xarray's scipy engine) is the Dataset `assemble` builds, written
 whole or not at all:
@@ -40,6 +41,7 @@ import math
 import os
 import platform
 import socket
+import time
 from collections.abc import Iterator
 from importlib import metadata
 from pathlib import Path
@@ -50,7 +52,7 @@ from machinesim._io import check_writable, json_text, pid_alive, read_json, writ
 from machinesim.exceptions import FileError, InputError, brief
 
 __all__ = ["LOCK_NAME", "Assembly", "CampaignFolder", "assemble", "finished_trials", "locked",
-           "same_campaign", "versions"]
+           "refuse_foreign", "same_campaign", "versions"]
 
 
 def versions() -> dict:
@@ -103,8 +105,7 @@ class CampaignFolder:
         self.trials_path = self.path / "trials"
         _make_folder(self.path)
         stored = self.path / "campaign.json"
-        if self.path.is_dir() and not stored.exists():
-            self._refuse_foreign()  # before trials/ is made in it
+        refuse_foreign(self.path)  # before trials/ is made in it
         try:
             self.trials_path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -126,29 +127,6 @@ class CampaignFolder:
         else:
             write_atomic(stored, json_text(spec, "campaign spec"))
         self.spec = spec
-
-    def _refuse_foreign(self) -> None:
-        """Refuse a folder without campaign.json that holds anything but an empty trials/.
-
-        campaign.json is written before any trial, so trial files without it are of a
-        campaign nobody can tell (copied, or its campaign.json deleted): they were taken
-        for this campaign's. Other files are not a campaign's at all (a scenario's report
-        folder): the campaign wrote its summary.json and summary.md over them.
-        """
-        found = finished_trials(self.path)
-        others = sorted(name for name in os.listdir(self.path) if name != LOCK_NAME  # ours
-                        and (name != "trials" or not self.trials_path.is_dir()))
-        if self.trials_path.is_dir():
-            others += sorted(f"trials/{name}" for name in os.listdir(self.trials_path)
-                             if not name.startswith("trial_") or not name.endswith(".json"))
-        if not found and not others:
-            return
-        held = ([f"{len(found)} trial file{'s' * (len(found) > 1)} in trials/"] if found
-                else []) + others[:5] + (["..."] if len(others) > 5 else [])
-        raise InputError(f"holds {', '.join(held)} but no campaign.json: not a campaign "
-                         "folder (a scenario's report, or a campaign whose campaign.json is "
-                         "gone); expected a new or empty folder, or a campaign folder: give "
-                         "another --out or empty it", source=str(self.path))
 
     def trial_file(self, i: int) -> Path:
         return self.trials_path / f"trial_{i:06d}.json"
@@ -178,6 +156,37 @@ class CampaignFolder:
         return path
 
 
+def refuse_foreign(path) -> None:
+    """Refuse a folder ``path`` without campaign.json that holds anything but an empty
+    trials/ (and a campaign.lock); nothing when there is no such folder.
+
+    campaign.json is written before any trial, so trial files without it are of a
+    campaign nobody can tell (copied, or its campaign.json deleted): they were taken
+    for this campaign's. Other files are not a campaign's at all (a scenario's report
+    folder): the campaign wrote its summary.json and summary.md over them.
+    Called before the lock is taken as well, so that a folder refused is left as it was
+    (the lock's file stays, `locked`).
+    """
+    path = Path(path)
+    trials = path / "trials"
+    if not path.is_dir() or (path / "campaign.json").exists():
+        return
+    found = finished_trials(path)
+    others = sorted(name for name in os.listdir(path) if name != LOCK_NAME  # ours
+                    and (name != "trials" or not trials.is_dir()))
+    if trials.is_dir():
+        others += sorted(f"trials/{name}" for name in os.listdir(trials)
+                         if not name.startswith("trial_") or not name.endswith(".json"))
+    if not found and not others:
+        return
+    held = ([f"{len(found)} trial file{'s' * (len(found) > 1)} in trials/"] if found
+            else []) + others[:5] + (["..."] if len(others) > 5 else [])
+    raise InputError(f"holds {', '.join(held)} but no campaign.json: not a campaign "
+                     "folder (a scenario's report, or a campaign whose campaign.json is "
+                     "gone); expected a new or empty folder, or a campaign folder: give "
+                     "another --out or empty it", source=str(path))
+
+
 def _make_folder(path: Path) -> None:
     """Make the campaign folder ``path`` (not its trials/), refusing a file there."""
     if path.exists() and not path.is_dir():
@@ -191,47 +200,64 @@ def _make_folder(path: Path) -> None:
 
 @contextlib.contextmanager
 def locked(folder) -> Iterator[None]:
-    """Hold ``folder/campaign.lock`` (this process's pid and host) within the block, the
-    folder made when missing; taken before campaign.json is read or written.
+    """Hold ``folder/campaign.lock`` within the block, the folder made when missing; taken
+    before campaign.json is read or written.
 
     Two campaigns run on one folder at the same time ran the same missing trials, each
-    writing every one of their files. A second is refused, naming the folder and the
-    first's pid; a lock whose process is gone (killed by SIGKILL, a power loss) is taken
-    over, as `machinesim._io.clear_stale_folders` clears a killed run's folders. A lock of
-    another host (a shared file system) is taken as held: no pid of this machine tells
-    whether it runs. Two runs that both find the same stale lock at the same instant may
-    both take it over (no file system compares and swaps a file).
+    writing every one of their files. The lock is the kernel's: an exclusive `fcntl.flock`
+    on the open file, held for the block and released when its process ends, however it
+    ends (SIGKILL, a power loss), so a killed campaign's lock is free to the next run, and
+    of two runs that find it at the same instant one takes it (both did when each removed
+    the stale file, or the other's fresh one, and made its own). The file is never removed
+    (it stays after the run, held by nobody); it names the pid and host of the run that
+    took it last, for the message refusing a second run.
     """
     folder = Path(folder)
+    try:
+        import fcntl
+    except ImportError:  # Windows
+        raise FileError("cannot lock the campaign folder: campaigns need POSIX file locks "
+                        "(fcntl.flock), which this Python lacks; run the campaign on Linux "
+                        "or macOS", source=str(folder)) from None
     _make_folder(folder)
     path = folder / LOCK_NAME
-    me = {"pid": os.getpid(), "host": socket.gethostname()}
-    for _ in range(3):  # a stale lock removed: try again (another run may be quicker)
-        try:
-            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
-        except FileExistsError:
-            holder = _lock_holder(path)
-            if holder is None or _holds(holder, path):
-                raise _busy(folder, holder) from None
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(path)
-            continue
-        except OSError as exc:
-            raise FileError(f"cannot make the campaign's lock {LOCK_NAME}: "
-                            f"{exc.strerror or exc}", source=str(folder)) from None
-        with os.fdopen(fd, "w", encoding="utf-8") as out:
-            out.write(json.dumps(me) + "\n")
-        break
-    else:
-        raise _busy(folder, _lock_holder(path))
-    _held.add(str(path))
     try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as exc:
+        raise FileError(f"cannot make the campaign's lock {LOCK_NAME}: "
+                        f"{exc.strerror or exc}", source=str(folder)) from None
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise _busy(folder, _named_holder(path)) from None
+        except OSError as exc:  # ENOLCK: a file system that takes no locks (NFS without)
+            raise FileError(f"cannot lock the campaign's lock {LOCK_NAME}: "
+                            f"{exc.strerror or exc}; expected a folder on a file system "
+                            "that takes file locks (flock)", source=str(folder)) from None
+        os.ftruncate(fd, 0)
+        os.write(fd, (json.dumps({"pid": os.getpid(), "host": socket.gethostname()})
+                      + "\n").encode())
         yield
     finally:
-        _held.discard(str(path))
-        if _lock_holder(path) == (me["pid"], me["host"]):
-            with contextlib.suppress(OSError):
-                os.unlink(path)
+        os.close(fd)  # the kernel releases the lock
+
+
+#: Seconds a run refused the lock gives its file to name the run that has just taken it.
+HOLDER_WAIT_S = 0.5
+
+
+def _named_holder(path: Path) -> tuple[int, str] | None:
+    """The holder the held lock ``path`` names (`_lock_holder`), given `HOLDER_WAIT_S` to
+    name the run that has just taken it: until that run writes it, the file names nobody or
+    the run before, which has ended."""
+    deadline = time.monotonic() + HOLDER_WAIT_S
+    while True:
+        holder = _lock_holder(path)
+        if (holder is not None and (holder[1] != socket.gethostname()
+                                    or pid_alive(holder[0]))) or time.monotonic() > deadline:
+            return holder
+        time.sleep(0.02)
 
 
 def _busy(folder: Path, holder: tuple[int, str] | None) -> InputError:
@@ -243,16 +269,12 @@ def _busy(folder: Path, holder: tuple[int, str] | None) -> InputError:
         where = "" if host == socket.gethostname() else f" on host {host}"
         who = f"pid {pid}{where}, holding {lock}"
     return InputError(f"another campaign is running in this folder ({who}): both would run "
-                      "the same trials; wait for it to end, or give another --out (if no "
-                      f"campaign runs there, delete {lock})", source=str(folder))
+                      "the same trials; wait for it to end, or give another --out",
+                      source=str(folder))
 
 
 #: The file a running campaign holds in its folder (`locked`).
 LOCK_NAME = "campaign.lock"
-
-#: The locks this process holds (a lock naming this pid and not here is a previous
-#: process's, of the same pid: a container started again).
-_held: set[str] = set()
 
 
 def _lock_holder(path: Path) -> tuple[int, str] | None:
@@ -266,16 +288,6 @@ def _lock_holder(path: Path) -> tuple[int, str] | None:
             or not isinstance(host, str):
         return None
     return pid, host
-
-
-def _holds(holder: tuple[int, str], path: Path) -> bool:
-    """Whether the process that wrote the lock ``path`` may still run."""
-    pid, host = holder
-    if host != socket.gethostname():
-        return True
-    if pid == os.getpid():
-        return str(path) in _held
-    return pid_alive(pid)
 
 
 def same_campaign(old: dict, new: dict) -> bool:

@@ -27,7 +27,13 @@ import numpy as np
 from machinesim._cores import usable_cores
 from machinesim._interrupts import _ctrl_c_deferred
 from machinesim.campaign.distributions import Distribution, parse_distribution, parse_vary
-from machinesim.campaign.results import Assembly, CampaignFolder, finished_trials, locked
+from machinesim.campaign.results import (
+    Assembly,
+    CampaignFolder,
+    finished_trials,
+    locked,
+    refuse_foreign,
+)
 from machinesim.campaign.summary import write_report
 from machinesim.campaign.trials import CampaignSpec, check_flag, run_trial
 from machinesim.exceptions import InputError
@@ -455,6 +461,7 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
                         identify_only=identify_only, quick=quick)
     if scheduler is not None:  # before the folder is made: nothing written for a wrong address
         check_scheduler(scheduler)
+    refuse_foreign(out)  # before the lock's file is made in it (checked again under the lock)
     with locked(out):  # a second campaign on DIR meanwhile is refused
         folder = CampaignFolder(out, spec.describe())
         stored = folder.spec["vary"]
