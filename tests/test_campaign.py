@@ -463,6 +463,8 @@ def test_a_damaged_trial_file_is_refused_before_the_missing_trials_run(campaign,
       "figures": {}, "elapsed_s": 1.0, "error": None}, "identified"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
       "elapsed_s": 1.0, "error": 3}, "error"),
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+      "notes": "misfit", "elapsed_s": 1.0, "error": None}, "notes"),
 ])
 def test_a_trial_file_that_is_json_but_no_trial_record_is_refused_naming_the_key(
         campaign, tmp_path, record, key):
@@ -859,6 +861,81 @@ def test_trials_written_before_the_after_std_still_assemble():
     assert math.isnan(float(ds["after_std"].values[0, 0]))
     assert float(ds["after"].values[0, 0]) == 0.2
     assert "after_z" not in summarise(ds)["figures"]["a_dx"]
+
+
+def test_a_campaign_keeps_the_identifications_notes_and_says_how_many_trials_gave_them(
+        tmp_path, capsys):
+    """A fit's notes (`Identified.notes`: readings that do not fit the model, ...) were not
+    kept: a campaign of 1000 trials of which 30 misfit said nothing. Paper 000 does not
+    identify the workpiece's tilt: with workpiece.alpha 1 mrad its heights and its lateral
+    readings both leave the model (normalised residuals of about 26 and 350), with none
+    they fit it. Each trial keeps its notes, the Dataset their count, summary.md and the
+    command say how many trials gave any and which note."""
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+                       "--identify-only", "--quiet", "--vary", "workpiece.alpha=1mrad",
+                       "--out", str(tmp_path / "tilted")])
+    err = capsys.readouterr().err
+    assert status == 0
+    misfit = "the readings do not fit the model: normalised residual "
+    for i in range(2):
+        record = json.loads((tmp_path / f"tilted/trials/trial_00000{i}.json").read_text())
+        assert [note.partition(misfit)[0] for note in record["notes"]] == \
+            ["fit_check (heights): ", "fit_check (lateral): "]
+    ds = xr.open_dataset(tmp_path / "tilted/campaign.nc").load()
+    assert ds["notes_count"].values.tolist() == [2.0, 2.0]
+    summary = json.loads((tmp_path / "tilted/summary.json").read_text())
+    assert summary["noted_count"] == 2
+    assert sorted(note["note"].partition(misfit)[0] for note in summary["notes"]) == \
+        ["fit_check (heights): ", "fit_check (lateral): "]
+    assert [note["trials"] for note in summary["notes"]] == [[0, 1], [0, 1]]
+    text = (tmp_path / "tilted/summary.md").read_text()
+    assert "## Notes of the identification" in text and "2 of 2 trials gave notes" in text
+    assert f"- 2 trials (0, 1): fit_check (heights): {misfit}" in text
+    assert "campaign: 2 trials gave notes of the identification; the most common (2 of " \
+        f"them): fit_check (heights): {misfit}" in err
+    # no tilt: the readings fit, nothing is noted
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+                       "--identify-only", "--quiet", "--out", str(tmp_path / "level")])
+    assert status == 0 and "notes" not in capsys.readouterr().err
+    ds = xr.open_dataset(tmp_path / "level/campaign.nc").load()
+    assert ds["notes_count"].values.tolist() == [0.0, 0.0]
+    summary = json.loads((tmp_path / "level/summary.json").read_text())
+    assert summary["noted_count"] == 0 and summary["notes"] == []
+    assert "Notes of the identification" not in (tmp_path / "level/summary.md").read_text()
+
+
+def test_notes_that_differ_only_in_their_numbers_are_one_in_the_summary():
+    """Counted by hand: trials 0 and 2 misfit (residuals 25.7 and 31.2, one note), trial 2
+    also notes two parameters barely told apart, trial 1 notes nothing, trial 3 failed and
+    trial 4's file is from before notes were kept (neither known: NaN). Parameters that
+    differ only in a digit of their name (EAC[3], EAC[4]) are two notes, not one."""
+    from machinesim.campaign.results import assemble, note_kind
+    from machinesim.campaign.summary import _markdown, summarise
+
+    misfit = "fit: the readings do not fit the model: normalised residual {} (about 1)"
+    pair = "fit: component.C.EAC[{}] and tool.y are correlated +0.999{}: barely told apart"
+    notes = [[misfit.format(25.7)], [], [misfit.format(31.2), pair.format(3, 91)], [], None]
+    records = []
+    for t, noted in enumerate(notes):
+        record = {"trial": t, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+                  "elapsed_s": 1.0, "error": "InputError: no" if t == 3 else None}
+        if noted is not None:
+            record["notes"] = noted
+        records.append(record)
+    spec = {"procedure": "tool_rotation_arm", "seed": 0, "vary": {}, "noise": True,
+            "identify_only": True}
+    ds = assemble(records[::-1], spec, 5)  # in any order
+    assert np.array_equal(ds["notes_count"].values, [1, 0, 2, np.nan, np.nan], equal_nan=True)
+    summary = summarise(ds)
+    assert summary["noted_count"] == 2
+    assert summary["notes"] == [{"note": misfit.format(25.7), "trials": [0, 2]},
+                                {"note": pair.format(3, 91), "trials": [2]}]
+    assert note_kind(pair.format(3, 5)) == note_kind(pair.format(3, 91)) != \
+        note_kind(pair.format(4, 91))
+    text = _markdown(summary)
+    assert "2 of 5 trials gave notes" in text
+    assert f"- 2 trials (0, 2): {misfit.format(25.7)}\n- 1 trial (2): {pair.format(3, 91)}" \
+        in text
 
 
 def test_cli_refuses_an_absurd_trial_count_at_once(tmp_path, capsys):

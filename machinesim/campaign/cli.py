@@ -116,11 +116,17 @@ def run_campaign(args) -> int:
                   workers=args.workers, scheduler=args.scheduler, noise=args.noise == "on",
                   identify_only=args.identify_only, quick=args.quick,
                   progress=not args.quiet)
-    from machinesim.campaign.summary import failures
+    from machinesim.campaign.summary import failures, notes
 
     failed, total = int(dataset["failed"].sum()), dataset.sizes["trial"]
     print(f"campaign: {total} trial{'s' * (total != 1)} ({failed} failed) in {args.out}: "
           "campaign.nc, summary.md, summary.json")
+    noted = int((dataset["notes_count"].values > 0).sum())
+    if noted:  # a fit that misfit in 30 of 1000 trials said nothing
+        first = notes(dataset)[0]
+        print(f"campaign: {noted} trial{'s' * (noted != 1)} gave notes of the "
+              f"identification; the most common ({len(first['trials'])} of them): "
+              f"{first['note']} (summary.md lists them)", file=sys.stderr)
     if not failed:
         return 0
     first = failures(dataset)[0]

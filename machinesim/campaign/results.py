@@ -22,6 +22,10 @@ variable                      dims                    what
 ``before``, ``after``         (trial, figure)         each figure before / after compensation
 ``after_std``                 (trial, figure)         the after's stated spread over labs
                                                       (`Figure.after_std`; NaN: none stated)
+``notes_count``               (trial)                 how many notes the identification gave
+                                                      (`Identified.notes`: readings that do not
+                                                      fit the model, ...); NaN for a failed
+                                                      trial and one written before they were kept
 ``elapsed_s``                 (trial)                 wall time of the trial, s
 ``failed``                    (trial)                 1 where the trial ended in an error
 ``figure_unit``               (figure)                unit of ``before``/``after`` (coordinate)
@@ -30,7 +34,9 @@ variable                      dims                    what
 Attributes: the campaign's ``seed`` (an integer; one of 2**31 or more, beyond netCDF 3's
 integers, as its decimal digits), ``procedure``, ``trials``, ``vary`` (JSON), ``noise``,
 ``identify_only``, ``versions`` (JSON: machinesim, numpy, scipy, xarray, dask, distributed,
-python), ``errors`` (JSON: trial -> message of each failed trial).
+python), ``errors`` (JSON: trial -> message of each failed trial), ``notes`` (JSON: the
+trials' notes as `Assembly.notes` groups them, each ``{"note": ..., "trials": [...]}``, most
+trials first; a trial's own notes are in its file).
 """
 
 from __future__ import annotations
@@ -40,6 +46,7 @@ import json
 import math
 import os
 import platform
+import re
 import socket
 import time
 from collections.abc import Iterator
@@ -52,7 +59,7 @@ from machinesim._io import check_writable, json_text, pid_alive, read_json, writ
 from machinesim.exceptions import FileError, InputError, brief
 
 __all__ = ["LOCK_NAME", "Assembly", "CampaignFolder", "assemble", "finished_trials", "locked",
-           "refuse_foreign", "same_campaign", "versions"]
+           "note_kind", "refuse_foreign", "same_campaign", "versions"]
 
 
 def versions() -> dict:
@@ -325,8 +332,9 @@ def _number(value) -> bool:
 def _check_record(raw: dict, path: Path) -> None:
     """Refuse a trial file that is JSON but not a trial's record (`trials.run_trial`), naming
     the key: ``drawn`` and ``injected`` name -> number, ``identified`` name -> [value, std],
-    ``figures`` name -> [unit, before, after(, after_std)], ``elapsed_s`` a number, ``error``
-    null or a message; assembling it would otherwise fail on the first key it lacks."""
+    ``figures`` name -> [unit, before, after(, after_std)], ``notes`` (when there) a list of
+    texts, ``elapsed_s`` a number, ``error`` null or a message; assembling it would
+    otherwise fail on the first key it lacks."""
     def refuse(key: str, what: str) -> None:
         raise InputError(f"{brief(repr(raw.get(key)))}; expected {what} (a trial record as "
                          "machinesim campaign writes it): delete the file and run again to "
@@ -345,6 +353,9 @@ def _check_record(raw: dict, path: Path) -> None:
         entries = raw.get(key)
         if not isinstance(entries, dict) or not all(good(v) for v in entries.values()):
             refuse(key, what)
+    notes = raw.get("notes", [])  # none in a file written before notes were kept
+    if not isinstance(notes, list) or not all(isinstance(n, str) for n in notes):
+        refuse("notes", "a list of the identification's notes (texts)")
     if not _number(raw.get("elapsed_s")):
         refuse("elapsed_s", "a number of seconds")
     if not (raw.get("error") is None or isinstance(raw.get("error"), str)):
@@ -364,6 +375,17 @@ def finished_trials(path) -> list[int]:
         if name.startswith("trial_") and name.endswith(".json") and number.isdigit():
             found.append(int(number))
     return sorted(found)
+
+
+#: A number in a note (a residual, a correlation, a std), not part of a name (``EX0C``,
+#: ``EAC[3]``): `note_kind` leaves it out.
+_NUMBER = re.compile(r"(?<![\w.\[])[-+]?\d+(?:\.\d*)?(?:e[-+]?\d+)?(?![\w\]])")
+
+
+def note_kind(note: str) -> str:
+    """``note`` with its numbers as ``#``: the same note of two trials (``the readings do not
+    fit the model: normalised residual 25.7 ...`` and ``... 31.2 ...``) is one kind."""
+    return _NUMBER.sub("#", note)
 
 
 #: netCDF 3 holds 32-bit integers: a seed from here on is kept as its decimal digits (a
@@ -395,6 +417,9 @@ class Assembly:
         self.elapsed = np.full(self.trials, np.nan)
         self.failed = np.zeros(self.trials, dtype=np.int8)
         self.errors: dict[int, str] = {}
+        self.notes_count = np.full(self.trials, np.nan)
+        self._notes: dict[str, tuple[int, str, list[int]]] = {}  # `note_kind` -> (first
+        # trial, its note, the trials)
         self.added = np.zeros(self.trials, dtype=bool)
 
     def add(self, record: dict) -> None:
@@ -428,6 +453,20 @@ class Assembly:
         if record["error"] is not None:
             self.failed[t] = 1
             self.errors[t] = record["error"]
+        elif "notes" in record:
+            self.notes_count[t] = len(record["notes"])
+            for note in record["notes"]:
+                kind = note_kind(note)
+                first, text, trials = self._notes.get(kind, (t, note, []))
+                if not trials or trials[-1] != t:  # a kind noted twice in a trial: once
+                    trials.append(t)
+                self._notes[kind] = (t, note, trials) if t < first else (first, text, trials)
+
+    def notes(self) -> list[dict]:
+        """The trials' notes, grouped by `note_kind` (the same note but for its numbers),
+        each ``{"note": the first trial's, "trials": [...]}``, most trials first."""
+        groups = sorted(self._notes.values(), key=lambda g: (-len(g[2]), g[0]))
+        return [{"note": text, "trials": sorted(trials)} for _, text, trials in groups]
 
     def _names(self, key: str) -> list[str]:
         return sorted(self.first[key], key=self.first[key].__getitem__)
@@ -454,6 +493,7 @@ class Assembly:
             data[table] = (("trial", "parameter"), self._table(table, parameters))
         for table in ("before", "after", "after_std"):
             data[table] = (("trial", "figure"), self._table(table, figures))
+        data["notes_count"] = (("trial",), self.notes_count)
         data["elapsed_s"] = (("trial",), self.elapsed)
         data["failed"] = (("trial",), self.failed)
         units = {name: unit for name, (_, unit) in self.units.items()}
@@ -479,7 +519,7 @@ class Assembly:
                  "noise": int(bool(spec["noise"])),
                  "identify_only": int(bool(spec["identify_only"])),
                  "vary": json.dumps(spec["vary"]), "versions": json.dumps(versions()),
-                 "errors": json.dumps(errors),
+                 "errors": json.dumps(errors), "notes": json.dumps(self.notes()),
                  "seeding": "trial i: numpy SeedSequence(seed).spawn(trials)[i]"}
         return xr.Dataset(data, coords=coords, attrs=attrs)
 

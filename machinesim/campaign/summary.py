@@ -17,7 +17,12 @@ summary.json (every number under a key ending in its unit, as docs/reports.md as
   varied parameter -> Spearman rank correlation with the error's magnitude;
 - ``coverage_interval``: which intervals are given (JCGM 101 7.7.1 and 7.7.2);
 - ``failures``: each distinct message of a failed trial with the trials that ended in it
-  (``{"message": ..., "trials": [...]}``, most trials first).
+  (``{"message": ..., "trials": [...]}``, most trials first);
+- ``noted_count``: the trials whose identification gave notes (`Identified.notes`: readings
+  that do not fit the model, parameters the readings barely tell apart, ...), and ``notes``:
+  each note with the trials that gave it, notes that differ only in their numbers taken as
+  one (`machinesim.campaign.results.note_kind`) and the first trial's shown
+  (``{"note": ..., "trials": [...]}``, most trials first).
 """
 
 from __future__ import annotations
@@ -32,7 +37,7 @@ from machinesim._io import json_text, write_together
 from machinesim.campaign.distributions import parameter_kind
 from machinesim.campaign.statistics import describe, spearman, z_scores, z_summary
 
-__all__ = ["failures", "summarise", "write_report"]
+__all__ = ["failures", "notes", "summarise", "write_report"]
 
 
 def _finite(value):
@@ -91,6 +96,9 @@ def summarise(dataset) -> dict:
         "after compensation (figures) and with |identified - injected| (parameters)",
         "figures": figures, "parameters": parameters,
         "failures": failures(dataset),
+        "noted_count": int((dataset["notes_count"].values > 0).sum())
+        if "notes_count" in dataset else 0,
+        "notes": notes(dataset),
     })
 
 
@@ -102,6 +110,12 @@ def failures(dataset) -> list[dict]:
         by_message.setdefault(str(message), []).append(int(trial))
     return [{"message": m, "trials": sorted(t)}
             for m, t in sorted(by_message.items(), key=lambda item: (-len(item[1]), item[1]))]
+
+
+def notes(dataset) -> list[dict]:
+    """The trials' notes (the Dataset's ``notes``), each with its trials, most trials
+    first."""
+    return json.loads(dataset.attrs.get("notes", "[]"))
 
 
 def _g(value, digits: int = 4) -> str:
@@ -176,8 +190,35 @@ def _markdown(summary: dict) -> str:
             lines.append(f"- {len(trials)} trial{'s' * (len(trials) > 1)} ({shown}): "
                          f"{failure['message']}")
         lines.append("")
+    lines += _notes(summary)
     lines += ["Versions: " + ", ".join(f"{k} {v}" for k, v in summary["versions"].items()), ""]
     return "\n".join(lines)
+
+
+#: summary.md lists this many of the notes (summary.json every one).
+NOTES_SHOWN = 10
+
+
+def _notes(summary: dict) -> list[str]:
+    """summary.md's lines on the identification's notes: how many trials gave any, and each
+    note with its trials; none when no trial did."""
+    if not summary["notes"]:
+        return []
+    noted, total = summary["noted_count"], summary["trials_count"]
+    lines = ["## Notes of the identification", "",
+             f"{noted} of {total} trial{'s' * (total > 1)} gave notes: what the "
+             "identification's fits say a reader should know before trusting the values "
+             "(docs/reports.md, `notes`). Each note with its trials, most trials first; a "
+             "note's numbers differ from trial to trial, the first trial's are shown.", ""]
+    for note in summary["notes"][:NOTES_SHOWN]:
+        trials = note["trials"]
+        shown = ", ".join(str(t) for t in trials[:10]) + (" ..." if len(trials) > 10 else "")
+        lines.append(f"- {len(trials)} trial{'s' * (len(trials) > 1)} ({shown}): "
+                     f"{note['note']}")
+    if len(summary["notes"]) > NOTES_SHOWN:
+        lines.append(f"- and {len(summary['notes']) - NOTES_SHOWN} other notes (summary.json "
+                     "lists every one)")
+    return [*lines, ""]
 
 
 def _not_measured(figures: dict) -> list[str]:

@@ -494,7 +494,9 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
         identified parameters' true values, the injected model's other non-zero ones),
         ``identified`` (name -> [value, std]),
         ``figures`` (name -> [unit, before, after, after_std]; after_std NaN where the
-        procedure states none), ``elapsed_s``, ``error`` (None, or the
+        procedure states none), ``notes`` (`Result.notes`: what the identification's fits
+        said a reader should know before trusting the values, such as readings that do not
+        fit the model; empty for a failed trial), ``elapsed_s``, ``error`` (None, or the
         message of the `MachineSimError` the trial ended with: a failed identification is a
         result too).
     """
@@ -503,7 +505,7 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
     began = time.perf_counter()
     drawn = _drawn(spec, i)  # once: the record's are the lab's (they were drawn twice)
     record = {"trial": int(i), "drawn": drawn, "injected": {}, "identified": {},
-              "figures": {}, "elapsed_s": math.nan, "error": None}
+              "figures": {}, "notes": [], "elapsed_s": math.nan, "error": None}
     try:  # a landing out of the error model's range fails its trial, not the campaign
         errors, lab_parameters = _set_up(spec, i, drawn)
         model = spec.entry.base().with_parameters(errors)
@@ -521,6 +523,7 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
                                 in result.identified.items()}
         record["figures"] = {f.name: [f.unit, _float(f.before), _float(f.after),
                                       _float(f.after_std)] for f in result.figures}
+        record["notes"] = [str(note) for note in result.notes]
     record["elapsed_s"] = time.perf_counter() - began
     return record
 
