@@ -35,6 +35,20 @@ def _approx_with_abs(expected, rel=None, abs=None, nan_ok=False):
 pytest.approx = _approx_with_abs
 
 
+@pytest.fixture
+def degree_like_planer(tmp_path) -> str:
+    """The path of planer_4axis with its A limits written as degrees (+-45): it loads with
+    the `MachineSimWarning` of rotary limits that read as degrees (tests of campaigns)."""
+    from machinesim.machines import models_dir
+
+    text = (models_dir() / "planer_4axis.urdf").read_text()
+    rad = 'lower="-0.7853981633974483" upper="0.7853981633974483"'
+    assert text.count(rad) == 1
+    path = tmp_path / "planer_4axis.urdf"
+    path.write_text(text.replace(rad, 'lower="-45" upper="45"'))
+    return str(path)
+
+
 def _default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 

@@ -938,6 +938,41 @@ def test_notes_that_differ_only_in_their_numbers_are_one_in_the_summary():
         in text
 
 
+def test_a_machines_warning_is_shown_once_not_once_per_trial(tmp_path, monkeypatch,
+                                                             degree_like_planer):
+    """The campaign's process loads the machine (its spec's checks), then each worker
+    process loads it again (here each trial, as if each ran in a fresh worker): its warning
+    (rotary limits that read as degrees) was shown by this process and once more by each
+    load. A trial keeps it (`kept_warnings`) and the campaign shows each message once
+    (warnings recorded: 1 of 4 loads; tests/test_campaign_dask.py, the same on workers)."""
+    import warnings
+
+    import machinesim.machines as machines
+    from machinesim.exceptions import MachineSimWarning
+
+    load = machines.load_machine
+    monkeypatch.setattr(machines, "load_machine", lambda name: load(degree_like_planer))
+    monkeypatch.setattr(trials_module, "_MACHINES", {})
+    real = trials_module.run_trial
+
+    def trial(spec, i):  # each trial loads the machine again, as a fresh worker would
+        trials_module._MACHINES.clear()
+        machines._load.cache_clear()
+        return real(spec, i)
+
+    monkeypatch.setattr(runner, "run_trial", trial)
+    with warnings.catch_warnings(record=True) as shown:
+        warnings.simplefilter("always")
+        ds = run("tool_rotation_arm", 3, out=tmp_path / "c", workers=0, progress=False,
+                 report=False, **ARM)
+    assert not ds["failed"].values.any()
+    degrees = [w for w in shown if issubclass(w.category, MachineSimWarning)]
+    assert len(degrees) == 1 and "joint 'A': <limit lower=-45.0 upper=45.0> is read in " \
+        "rad" in str(degrees[0].message)
+    record = json.loads((tmp_path / "c/trials/trial_000000.json").read_text())
+    assert "warnings" not in record  # a trial's result, not where its machine came from
+
+
 def test_cli_refuses_an_absurd_trial_count_at_once(tmp_path, capsys):
     """--trials 1e11 used to leave the command silent for minutes (it looked for that many
     trial files); it is refused before anything runs or is written."""

@@ -320,3 +320,49 @@ def test_the_progress_rate_counts_from_the_first_trial_not_the_clusters_start(
     first = capsys.readouterr().err.splitlines()[0]  # no terminal: whole lines
     rate = float(first.split(" trials/s")[0].rpartition(", ")[2])
     assert first.startswith("campaign: 1/2 trials") and rate > 1.0, first  # not < 1/3
+
+
+def _trial_on_a_planer_that_warns(urdf: str, spec, i: int):
+    """`run_trial` in a worker whose planer_4axis is ``urdf`` (`degree_like_planer`): each
+    worker process loads it, and warns, in its first trial."""
+    import machinesim.machines as machines
+    from machinesim.campaign import trials
+
+    if not getattr(machines.load_machine, "planer_that_warns", False):
+        load = machines.load_machine
+
+        def load_that(name):
+            return load(urdf)
+
+        load_that.planer_that_warns = True
+        machines.load_machine = load_that
+        trials._MACHINES.clear()
+    return trials.run_trial(spec, i)
+
+
+def test_a_machines_warning_on_two_workers_is_one_line(tmp_path, capfd, monkeypatch,
+                                                       degree_like_planer):
+    """The machine's warning (rotary limits that read as degrees) was shown on the command
+    line as one 'machinesim: warning:' line by the campaign's process, then again by each
+    local worker as it loaded the machine, in Python's own form (urdf.py:459:
+    MachineSimWarning: ..., and the source line). The workers keep it with their trial and
+    the campaign's process shows it once: one line in all."""
+    import functools
+
+    import machinesim.campaign.runner as runner
+    import machinesim.campaign.trials as trials
+    import machinesim.machines as machines
+    from machinesim.cli import main as cli_main
+
+    urdf, load = degree_like_planer, machines.load_machine
+    monkeypatch.setattr(machines, "load_machine", lambda name: load(urdf))
+    monkeypatch.setattr(trials, "_MACHINES", {})
+    monkeypatch.setattr(runner, "run_trial",
+                        functools.partial(_trial_on_a_planer_that_warns, urdf))
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "4", "--workers", "2",
+                       "--identify-only", "--quiet", "--out", str(tmp_path / "c")])
+    err = capfd.readouterr().err
+    assert status == 0, err
+    assert "MachineSimWarning" not in err, err
+    warned = [line for line in err.splitlines() if "lower=-45.0 upper=45.0" in line]
+    assert len(warned) == 1 and warned[0].startswith("machinesim: warning: "), err

@@ -36,7 +36,7 @@ from machinesim.campaign.results import (
 )
 from machinesim.campaign.summary import write_report
 from machinesim.campaign.trials import CampaignSpec, check_flag, run_trial
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, MachineSimWarning
 
 __all__ = ["run"]
 
@@ -369,7 +369,7 @@ def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder,
     if workers == 0 and scheduler is None and client is None:
         progress.start()
         for i in missing:
-            record = run_trial(spec, i)
+            record = _warned(run_trial(spec, i))
             assembly.add(folder.write_trial(record))
             progress.step(record)
         return
@@ -378,6 +378,7 @@ def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder,
     try:
         progress.start()
         for record in windowed(client, run_trial, spec, missing):
+            record = _warned(record)
             assembly.add(folder.write_trial(record))
             progress.step(record)
     finally:
@@ -385,6 +386,36 @@ def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder,
             client.close()
             if cluster is not None:
                 cluster.close()
+
+
+def _warned(record: dict) -> dict:
+    """``record`` without its ``warnings`` (`run_trial`: the `MachineSimWarning` s its worker
+    kept), each warned here, in the campaign's process, where `_each_warning_once` shows
+    it as this process's own are shown (one line on the command line), once."""
+    record = dict(record)
+    for message in record.pop("warnings", ()):
+        warnings.warn(message, MachineSimWarning, stacklevel=2)
+    return record
+
+
+@contextlib.contextmanager
+def _each_warning_once():
+    """Within the block, a `MachineSimWarning` whose message was shown already is not shown
+    again: the machine's warning as this process loads it (`CampaignSpec`) and as each
+    trial's worker did (`_warned`) is one line, not one per worker or per trial."""
+    shown_messages: set[str] = set()
+    with warnings.catch_warnings():
+        show = warnings.showwarning
+
+        def once(message, category, filename, lineno, file=None, line=None):
+            if issubclass(category, MachineSimWarning):
+                if str(message) in shown_messages:
+                    return
+                shown_messages.add(str(message))
+            show(message, category, filename, lineno, file, line)
+
+        warnings.showwarning = once
+        yield
 
 
 #: Reading the finished trials says nothing for this many seconds (a few files: nothing
@@ -444,6 +475,14 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
     xarray.Dataset
         Also written to ``out/campaign.nc``.
     """
+    with _each_warning_once():
+        return _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
+                    identify_only, quick, progress, report)
+
+
+def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
+         identify_only, quick, progress, report):
+    """`run`, its warnings shown by `_each_warning_once`."""
     given = sum(x is not None for x in (scheduler, client)) + (workers is not None)
     if given > 1:
         raise InputError("give one of workers, scheduler and client", key="workers")

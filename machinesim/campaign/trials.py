@@ -20,10 +20,12 @@ lives outside a trial).
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import math
 import re
 import time
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,13 +39,13 @@ from machinesim.campaign.distributions import (
     Distribution,
     checked,
 )
-from machinesim.exceptions import InputError, MachineSimError
+from machinesim.exceptions import InputError, MachineSimError, MachineSimWarning
 from machinesim.experiment import Evaluation, Identified, run
 from machinesim.streams import stream
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = ["MAX_TRIALS", "PROCEDURES", "CampaignSpec", "IdentificationOnly", "ProcedureEntry",
-           "check_flag", "run_trial", "trial_seed", "trials_refused"]
+           "check_flag", "kept_warnings", "run_trial", "trial_seed", "trials_refused"]
 
 
 #: Most trials a campaign takes (docs/campaigns.md): a trial is seconds to minutes of CPU and
@@ -498,14 +500,48 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
         said a reader should know before trusting the values, such as readings that do not
         fit the model; empty for a failed trial), ``elapsed_s``, ``error`` (None, or the
         message of the `MachineSimError` the trial ended with: a failed identification is a
-        result too).
+        result too), ``warnings`` (the messages of the `MachineSimWarning` s raised in the
+        trial, kept rather than shown: for the campaign's process to show, `kept_warnings`).
     """
-    from machinesim.lab import Lab
-
     began = time.perf_counter()
     drawn = _drawn(spec, i)  # once: the record's are the lab's (they were drawn twice)
     record = {"trial": int(i), "drawn": drawn, "injected": {}, "identified": {},
-              "figures": {}, "notes": [], "elapsed_s": math.nan, "error": None}
+              "figures": {}, "notes": [], "elapsed_s": math.nan, "error": None,
+              "warnings": []}
+    with kept_warnings(record["warnings"]):
+        _run(spec, i, drawn, record)
+    record["elapsed_s"] = time.perf_counter() - began
+    return record
+
+
+@contextlib.contextmanager
+def kept_warnings(kept: list[str]):
+    """Within the block, the message of each `MachineSimWarning` raised goes into ``kept``
+    (each once) instead of being shown; any other warning is shown as before.
+
+    A Dask worker showed the machine's warning (rotary limits that read as degrees) in
+    Python's own form, file and line of machinesim's source, once per worker process and
+    after the campaign's own one line; the campaign's process shows a trial's ``kept``
+    as it shows its own (`machinesim.campaign.runner`). Not for threads that run trials
+    side by side (a worker of several threads): Python's warning state is the process's.
+    """
+    with warnings.catch_warnings():
+        show = warnings.showwarning
+
+        def keep(message, category, filename, lineno, file=None, line=None):
+            if not issubclass(category, MachineSimWarning):
+                show(message, category, filename, lineno, file, line)
+            elif str(message) not in kept:
+                kept.append(str(message))
+
+        warnings.showwarning = keep
+        yield
+
+
+def _run(spec: CampaignSpec, i: int, drawn: dict, record: dict) -> None:
+    """Run trial ``i`` (`run_trial`), filling ``record``."""
+    from machinesim.lab import Lab
+
     try:  # a landing out of the error model's range fails its trial, not the campaign
         errors, lab_parameters = _set_up(spec, i, drawn)
         model = spec.entry.base().with_parameters(errors)
@@ -524,8 +560,6 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
         record["figures"] = {f.name: [f.unit, _float(f.before), _float(f.after),
                                       _float(f.after_std)] for f in result.figures}
         record["notes"] = [str(note) for note in result.notes]
-    record["elapsed_s"] = time.perf_counter() - began
-    return record
 
 
 def _float(value) -> float:
