@@ -973,6 +973,27 @@ def test_a_machines_warning_is_shown_once_not_once_per_trial(tmp_path, monkeypat
     assert "warnings" not in record  # a trial's result, not where its machine came from
 
 
+def test_the_campaign_command_alone_shows_a_machines_warning_as_one_line(tmp_path,
+                                                                         degree_like_planer):
+    """``python -m machinesim.campaign.cli`` showed the machine's warning in Python's own
+    form (urdf.py:459: MachineSimWarning: ..., then the source line), where ``machinesim
+    campaign`` shows one line."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nimport machinesim.machines as machines\nload = machines.load_machine\n"
+            "machines.load_machine = lambda name: load(sys.argv[1])\n"
+            "from machinesim.campaign.cli import main\nsys.exit(main(sys.argv[2:]))")
+    done = subprocess.run(
+        [sys.executable, "-c", code, degree_like_planer, "tool_rotation_arm", "--trials", "1",
+         "--workers", "0", "--identify-only", "--quiet", "--out", str(tmp_path / "c")],
+        capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert "MachineSimWarning" not in done.stderr, done.stderr
+    (line,) = [x for x in done.stderr.splitlines() if "lower=-45.0 upper=45.0" in x]
+    assert line.startswith("machinesim: warning: ")
+
+
 def test_cli_refuses_an_absurd_trial_count_at_once(tmp_path, capsys):
     """--trials 1e11 used to leave the command silent for minutes (it looked for that many
     trial files); it is refused before anything runs or is written."""

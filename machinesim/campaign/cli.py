@@ -7,7 +7,9 @@ runs it. ``python -m machinesim.campaign.cli ...`` runs it alone.
 from __future__ import annotations
 
 import argparse
+import functools
 import sys
+import warnings
 from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
@@ -167,8 +169,12 @@ def main(argv=None) -> int:
         prog="machinesim campaign", epilog=_epilog(),
         formatter_class=argparse.RawDescriptionHelpFormatter))
     args = parser.parse_args(argv)
+    from machinesim.cli import _show_warning
+
     try:
-        with ctrl_c_remembered():
+        with ctrl_c_remembered(), warnings.catch_warnings():
+            # a MachineSimWarning as one line, as ``machinesim campaign`` shows it
+            warnings.showwarning = functools.partial(_show_warning, warnings.showwarning)
             return run_campaign(args)
     except MachineSimError as error:
         print(f"machinesim campaign: error: {error}", file=sys.stderr)
