@@ -18,12 +18,10 @@ its finished trials, says so, and resumes when run again). Heavy modules are imp
 from __future__ import annotations
 
 import argparse
-import functools
 import math
 import os
 import sys
 import time
-import warnings
 from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
@@ -51,7 +49,7 @@ from machinesim.exceptions import (
     HolderContactError,
     InputError,
     MachineSimError,
-    MachineSimWarning,
+    warnings_as_lines,
 )
 from machinesim.report import check_units
 from machinesim.tolerances import CHORD_TOLERANCE_M
@@ -149,8 +147,7 @@ def main(argv: list[str] | None = None) -> int:
     """
     args = None
     try:
-        with ctrl_c_remembered(), warnings.catch_warnings():
-            warnings.showwarning = functools.partial(_show_warning, warnings.showwarning)
+        with ctrl_c_remembered(), warnings_as_lines():
             args = _parser().parse_args(None if argv is None else [str(a) for a in argv])
             # past the memory there is: MemoryError, not the OOM killer (not for a viewer,
             # which may start a browser: Chromium does not start under such a cap)
@@ -199,16 +196,6 @@ def _interrupted(args) -> str:
 
         return interrupted(args.out)
     return "nothing was written"
-
-
-def _show_warning(python_show, message, category, filename, lineno, file=None,
-                  line=None) -> None:
-    """A `MachineSimWarning` as one line, ``machinesim: warning: ...`` (Python's own form
-    names machinesim's source line and prints it); any other as ``python_show`` shows it."""
-    if issubclass(category, MachineSimWarning):
-        print(f"machinesim: warning: {message}", file=sys.stderr)
-    else:
-        python_show(message, category, filename, lineno, file, line)
 
 
 def _fail(message: str, status: int) -> int:

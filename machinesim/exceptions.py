@@ -6,6 +6,11 @@ what was expected, so that a user can fix the input without reading the source.
 
 from __future__ import annotations
 
+import contextlib
+import sys
+import warnings
+from collections.abc import Iterator
+
 #: A key or value longer than this is shown by its ends and its length (`brief`).
 SHOWN_CHARACTERS = 60
 
@@ -112,6 +117,25 @@ class HolderContactError(MachineSimError):
 class MachineSimWarning(UserWarning):
     """An input machinesim accepts that may not be what was meant (a URDF's rotary limits
     that read as degrees). The command line shows one as a ``machinesim: warning:`` line."""
+
+
+@contextlib.contextmanager
+def warnings_as_lines() -> Iterator[None]:
+    """Within the block, show a `MachineSimWarning` as one line on stderr, ``machinesim:
+    warning: ...`` (Python's own form names machinesim's source line and prints it), and
+    any other warning as before; the command lines' display (``machinesim``, and
+    ``python -m machinesim.campaign.cli`` alone)."""
+    with warnings.catch_warnings():
+        python_show = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None) -> None:
+            if issubclass(category, MachineSimWarning):
+                print(f"machinesim: warning: {message}", file=sys.stderr)
+            else:
+                python_show(message, category, filename, lineno, file, line)
+
+        warnings.showwarning = show
+        yield
 
 
 def check_length(value, name: str, *, positive: bool = False) -> float:

@@ -7,16 +7,14 @@ runs it. ``python -m machinesim.campaign.cli ...`` runs it alone.
 from __future__ import annotations
 
 import argparse
-import functools
 import sys
-import warnings
 from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
 from machinesim._interrupts import ctrl_c_remembered, stopped
 from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
 from machinesim.campaign.trials import MAX_TRIALS, PROCEDURES, trials_refused
-from machinesim.exceptions import InputError, MachineSimError
+from machinesim.exceptions import InputError, MachineSimError, warnings_as_lines
 
 __all__ = ["add_campaign_parser", "interrupted", "main", "run_campaign"]
 
@@ -169,12 +167,9 @@ def main(argv=None) -> int:
         prog="machinesim campaign", epilog=_epilog(),
         formatter_class=argparse.RawDescriptionHelpFormatter))
     args = parser.parse_args(argv)
-    from machinesim.cli import _show_warning
-
     try:
-        with ctrl_c_remembered(), warnings.catch_warnings():
-            # a MachineSimWarning as one line, as ``machinesim campaign`` shows it
-            warnings.showwarning = functools.partial(_show_warning, warnings.showwarning)
+        # a MachineSimWarning as one line, as ``machinesim campaign`` shows it
+        with ctrl_c_remembered(), warnings_as_lines():
             return run_campaign(args)
     except MachineSimError as error:
         print(f"machinesim campaign: error: {error}", file=sys.stderr)
