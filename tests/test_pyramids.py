@@ -1,14 +1,18 @@
 """Pyramids across the plate (paper 003 section IV): the cut pattern read back."""
 
+import argparse
+import importlib.util
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import machinesim
 from machinesim.cam.pyramids import PyramidPlan, pyramid_program, workpiece_axes
+from machinesim.errors import ErrorModel
 from machinesim.exceptions import MachineSimError
-from machinesim.procedures.pyramid_windows import cut_and_read, v_flanks
+from machinesim.procedures.pyramid_windows import capture, cut_and_read, path_errors, v_flanks
 
 CORNER = ((0.19, -0.19),)   # at C = 90 deg it lies at X = -0.19 m
 P = 50e-6
@@ -111,3 +115,44 @@ def test_a_groove_that_is_not_there_is_refused_not_read_as_noise():
     with pytest.raises(MachineSimError, match=r"pyramid window at \(0\.000, .*the groove set "
                        "along Y.*no groove of the plan is there"):
         cut_and_read(lab, windows=((0.0, 0.0),))
+
+
+def _scenario():
+    path = Path(__file__).resolve().parents[1] / "scenarios" / "xy_plane_errors.py"
+    spec = importlib.util.spec_from_file_location("xy_plane_errors_scenario", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_errors_beyond_the_windows_capture_are_refused_before_anything_is_cut():
+    # the paper's plan: the pattern overruns the 1 mm window by 0.1 mm, the profiles reach
+    # 0.3 mm + 1.5 pitch from its centre, half a pitch to find a groove: 0.2 mm; the flanks
+    # are fitted up to 0.35 pitch (17.5 um) above a 25 um deep groove's bottom: 7.5 um
+    plane, above = capture()
+    assert plane == pytest.approx(0.5e-3 + 0.1e-3 - 0.375e-3 - 25e-6, abs=1e-15)
+    assert above == pytest.approx(25e-6 - 17.5e-6, abs=1e-15)
+    machine = machinesim.load_machine("grooving_4axis")
+    # a tool 10 um high is 10 um above every path (by its offset alone); C's centre 0.3 mm
+    # off moves the set cut at C = 90 deg by (1 - Rz(90 deg)) e: 0.3 mm in x and in y
+    _, off = path_errors(machine, ErrorModel.from_dict({"tool": {"offset_um": [0, 0, 10.0]}}))
+    np.testing.assert_allclose(off[:, 2], 10e-6, atol=1e-12)
+    _, off = path_errors(machine, ErrorModel.from_dict({"location": {"C": {"EX0C_um": 300.0}}}))
+    assert np.abs(off[:, :2]).max(axis=0) == pytest.approx([300e-6, 300e-6], abs=1e-12)
+    refuse = _scenario().refuse_off_windows
+    args = argparse.Namespace(errors="high.toml")
+    # a tool 10 um high read its apexes at 8.3 um, exit 0; the paper's errors x 1000 were
+    # refused only at the first window, after the laser tests and its cut
+    for errors, words in (({"tool": {"offset_um": [0, 0, 10.0]}},
+                           r"--errors high.toml \(tool.z\): the tool tip 10 um above its path"),
+                          ({"location": {"C": {"EX0C_um": 300.0}}},
+                           r"\(location.C.EX0C\): the tool tip 300 um off its path in [xy]"),
+                          ({"location": {"C": {"EA0C_urad": 3000.0}}},
+                           r"\(location.C.EA0C\): the tool tip \d+ um above its path")):
+        with pytest.raises(MachineSimError, match=words + r".*within 200 um .* 7.5 um above"):
+            refuse(args, machine, ErrorModel.from_dict(errors))
+    # inside the capture, and the paper's default errors, are run
+    refuse(args, machine, ErrorModel.from_dict({"tool": {"offset_um": [0, 0, 7.4]}}))
+    refuse(args, machine, ErrorModel.from_dict({"location": {"C": {"EX0C_um": 199.0}}}))
+    refuse(args, machine, ErrorModel.from_toml(
+        Path(__file__).resolve().parents[1] / "models/errors/xy_plane_grooving_4axis.toml"))

@@ -18,14 +18,16 @@ lower part (away from the ridges, where the other set may clip them), which give
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from machinesim.cam.pyramids import PAPER_PLAN, PyramidPlan, pyramid_program
+from machinesim.cam.pyramids import PAPER_PLAN, PyramidPlan, pyramid_program, workpiece_axes
 from machinesim.exceptions import InputError
 
-__all__ = ["WINDOWS", "PyramidWindow", "cut_and_read", "read_window", "v_flanks"]
+__all__ = ["WINDOWS", "PyramidWindow", "capture", "cut_and_read", "path_errors", "read_window",
+           "v_flanks"]
 
 WINDOWS = ((0.0, 0.0), (-0.19, -0.19), (0.19, -0.19), (0.19, 0.19), (-0.19, 0.19))
 """Window centres on the 400 mm plate (workpiece frame, m): centre and four corners."""
@@ -64,9 +66,11 @@ LOCATE = 2e-6
 #: Flank slopes |dz/ds| a fitted V groove must have: 0.3 .. 3 (17 .. 72 deg), about the 1
 #: of a 90 deg V tool read square across its grooves (`v_flanks`).
 FLANK_SLOPES = (0.3, 3.0)
+#: Where a groove's flanks are fitted (`v_flanks`): from 0.1 to 0.35 pitch from its bottom.
+FLANK_BAND = (0.1, 0.35)
 
 
-def v_flanks(s, z, centres, pitch: float, band=(0.1, 0.35)):
+def v_flanks(s, z, centres, pitch: float, band=FLANK_BAND):
     """Fit each V groove near the given centres: (positions, bottoms, left, right).
 
     For each approximate centre the lowest sample within half a pitch is the groove's
@@ -171,9 +175,7 @@ def read_window(instrument, part, centre, plan: PyramidPlan = PAPER_PLAN,
     """
     cx, cy = locate_window(instrument, part, centre, plan.window)
     p = plan.pitch
-    k = np.arange(-int(round(0.3 * plan.window / p)), int(round(0.3 * plan.window / p)) + 1)
-    nominal = k * p                                  # groove offsets read, inside the window
-    half = nominal[-1] + 1.5 * p
+    nominal, half = _read_span(plan)
     with instrument.placement():  # one field of view holds the window's profiles
         # where each set's grooves are (the stage put the field off its command): first a
         # profile across each, then each set read along the other set's ridges
@@ -224,6 +226,53 @@ def _read_set(instrument, part, cx, cy, along_x, nominal, half, p, span, offset_
         ridges[shift] = _ridges(lefts, rights)
     slope = np.mean((positions[span] - positions[-span]) / (2.0 * span))
     return positions[0.0], ridges[0.0], slope
+
+
+def _read_span(plan: PyramidPlan) -> tuple[np.ndarray, float]:
+    """The groove offsets read in a window (whole pitches within 0.3 window of its centre)
+    and the half length of the profiles across a set, m."""
+    n = int(round(0.3 * plan.window / plan.pitch))
+    nominal = plan.pitch * np.arange(-n, n + 1)
+    return nominal, float(nominal[-1] + 1.5 * plan.pitch)
+
+
+def capture(plan: PyramidPlan = PAPER_PLAN) -> tuple[float, float]:
+    """How far (m) the tool tip may cut off its programmed path for a window to be read
+    right: (across or along the grooves, in x and in y each; above the path).
+
+    In the plane: the pattern overruns the window by ``plan.margin`` and the profiles reach
+    `_read_span` from its centre, with half a pitch to find a groove: for the paper's plan
+    0.5 + 0.1 - 0.375 - 0.025 = 0.2 mm. Beyond, a profile finds no groove where it looks.
+    Above: a groove cut that much shallower than ``plan.depth`` still has flank where
+    `v_flanks` fits it (up to ``FLANK_BAND[1]`` pitch from its bottom): 25 - 17.5 = 7.5 um.
+    Beyond, the fit takes in the plate's uncut top between the grooves, and the apexes read
+    low without a word (a tool 10 um high read 8.3 um). Below, nothing limits the reading.
+    """
+    _, half = _read_span(plan)
+    return (0.5 * plan.window + plan.margin - half - 0.5 * plan.pitch,
+            plan.depth - FLANK_BAND[1] * plan.pitch)
+
+
+def path_errors(machine, errors, plan: PyramidPlan = PAPER_PLAN, windows=WINDOWS):
+    """Where the tool tip cuts off its programmed path at the ends of each window's outer
+    grooves (both sets), by ``machine``'s kinematics with ``errors``: (axis values (N,
+    n_axes), tool-tip error (N, 3) in the workpiece frame, m). Set against `capture` before
+    anything is cut."""
+    n = len(machine.axes)
+    half = 0.5 * plan.window + plan.margin
+    edge = float(plan.offsets()[-1])
+    q = []
+    for cx, cy in windows:
+        for c in (0.0, 0.5 * math.pi):
+            for along, across in ((-half, -edge), (-half, edge), (half, -edge), (half, edge)):
+                point = (cx + along, cy + across) if c == 0.0 else (cx + across, cy + along)
+                xy = workpiece_axes(machine, *point, c)
+                row = np.zeros(n)
+                for letter, value in zip("XYZC", (xy[0], xy[1], -plan.depth, c), strict=True):
+                    row[machine.axes.index(letter)] = value
+                q.append(row)
+    q = np.array(q)
+    return q, machine.tool_pose(q, errors)[:, :3, 3] - machine.tool_pose(q)[:, :3, 3]
 
 
 def cut_and_read(lab, compensation=None, plan: PyramidPlan = PAPER_PLAN,
