@@ -15,7 +15,14 @@ import numpy as np
 import pytest
 
 from machinesim import ErrorModel, Lab, ToolSetting, load_machine
-from machinesim.cam.tool_setting_plates import PARKED, SET_LENGTH, Plan, a_grooves, plate_cuts
+from machinesim.cam.tool_setting_plates import (
+    A_REACH,
+    PARKED,
+    SET_LENGTH,
+    Plan,
+    a_grooves,
+    plate_cuts,
+)
 from machinesim.compensation import program_axes
 from machinesim.exceptions import InputError
 from machinesim.experiment import Identified, run
@@ -27,6 +34,7 @@ from machinesim.procedures.tool_setting_6axis import (
     read_plate,
     touch_off_z,
 )
+from machinesim.procedures.tool_setting_6axis_reading import A_WINDOW, STATIONS
 from machinesim.realism import Realism
 from machinesim.report import ReportFolder, check_summary
 
@@ -135,6 +143,35 @@ def test_a_sets_follow_from_the_kinematics():
         ident.a_axis_sets(grooves[:3], SET_LENGTH)
     with pytest.raises(InputError, match="separate d from e"):
         ident.a_axis_sets(grooves[:2] * 2, SET_LENGTH)
+
+
+def test_an_a_groove_lands_within_a_reach_and_is_read_at_the_capture_s_worst_corner():
+    # a groove cut at C lands at e + Rz(C) (P + Rz(A) d - e): the start of the C = 180 deg
+    # groove at A = 0 lands at 2 e - (dx, dy), |(dx, dy)| + 2 |e| = sqrt(2) 0.5 + 2 mm from
+    # its place when dx, dy are at the capture's +-0.5 mm and e (1 mm) points against them
+    # (A_REACH was |d| + 2 |e| with |d| taken as 0.5 mm: 2.5 mm)
+    worst = math.sqrt(2.0) * 0.5 * MM + 2.0 * MM
+    assert A_REACH == pytest.approx(worst, abs=1e-15)
+    d = np.array([-0.5, 0.5, -0.5]) * MM
+    e = np.array([1.0, -1.0]) * MM / math.sqrt(2.0)
+    tip = MACHINE.tool_pose(np.array([0.0, 0.0, 0.0, 0.0, 0.0, math.pi]), errors_of(d, e))
+    assert np.hypot(*tip[:2, 3]) == pytest.approx(worst, abs=1e-12)
+    # every groove's start and far end stay within A_REACH of their places, over the
+    # capture's corners (dz turns with A about the tool's Z, out of the plate)
+    for signs in ((1, 1, 1), (1, -1, 1), (-1, 1, -1), (-1, -1, 1)):
+        for turn_e in np.linspace(0.0, 2.0 * math.pi, 16, endpoint=False):
+            d = np.array(signs) * 0.5 * MM
+            e = np.array([math.cos(turn_e), math.sin(turn_e)]) * MM
+            for angle, turn in a_grooves():
+                q0 = np.array([0.0, 0.0, 0.0, angle, 0.0, turn])
+                q1 = q0 + [SET_LENGTH * math.cos(angle), SET_LENGTH * math.sin(angle), 0, 0, 0,
+                           0]
+                got = MACHINE.tool_pose(np.vstack([q0, q1]), errors_of(d, e))[:, :2, 3]
+                want = MACHINE.tool_pose(np.vstack([q0, q1]))[:, :2, 3]
+                assert np.hypot(*(got - want).T).max() <= A_REACH + 1e-12
+    # the windows across the A grooves hold it and a groove's 10 um half width, and the
+    # first station lies beyond it (where neither the other groove nor the other set is)
+    assert A_REACH + 10 * UM < A_WINDOW < STATIONS["a"][0]
 
 
 def random_program(rng, n=20):

@@ -73,12 +73,15 @@ TOUCH_SEGMENT, TOUCH_TOP, TOUCH_STEP, TOUCH_COUNT = (1.5 * M_PER_MM, 0.6 * M_PER
 #: programmed from the origin (the rotary centres) along the tool's own X at A.
 A_SETS = ((0.0, (0.0, math.pi)), (math.pi, (0.5 * math.pi, 1.5 * math.pi)))
 #: How far (m) a groove of the A plate lands from where the program puts it, at most: a
-#: groove cut at C lands at ``e + Rz(C) (P + Rz(A) d - e)``, off by up to |d| + 2 |e|.
-A_REACH = OFFSET_RANGE + 2.0 * CENTRE_RANGE
+#: groove cut at C lands at ``e + Rz(C) (P + Rz(A) d - e)``, off by up to |(dx, dy)| + 2 |e|
+#: (dz turns with A about the tool's Z, out of the plate): with dx, dy each within
+#: `OFFSET_RANGE`, sqrt(2) 0.5 + 2 = 2.707 mm (d = (-0.5, 0.5) mm, e = (0.707, -0.707) mm at
+#: C = 180 deg). It was taken as |d| <= 0.5 mm + 2 |e| = 2.5 mm.
+A_REACH = math.hypot(OFFSET_RANGE, OFFSET_RANGE) + 2.0 * CENTRE_RANGE
 #: Length L (m) of each A-plate groove: its far end lies within `A_REACH` of L from the
 #: shared start, so with L = 8 mm each groove is whole from 3 mm out to at least 5.5 mm,
 #: where it is read, clear of the other groove of its set and of the other set, which stay
-#: within `A_REACH` (2.5 mm) of the origin along the line.
+#: within `A_REACH` (2.707 mm) of the origin along the line.
 SET_LENGTH = 8.0 * M_PER_MM
 #: B plate: x of the grooves at B = 0, theta2, theta3 (1 mm apart: a 0.5 mm dZ moves a
 #: groove tilted by 20 deg by 0.17 mm) and their half length in y.
