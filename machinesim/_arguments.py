@@ -4,7 +4,11 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import re
 import sys
+
+#: A value that starts like a negative number: ``-707,-707``, ``-1e-3``, ``-.5``.
+_NEGATIVE = re.compile(r"-\.?\d")
 
 
 class ArgumentParser(argparse.ArgumentParser):
@@ -20,7 +24,22 @@ class ArgumentParser(argparse.ArgumentParser):
 
     def parse_known_args(self, args=None, namespace=None):
         self._words = tuple(sys.argv[1:] if args is None else map(str, args))
-        return super().parse_known_args(args, namespace)
+        return super().parse_known_args(self._joined(self._words), namespace)
+
+    def _joined(self, words) -> list[str]:
+        """``--option -707,-707`` as ``--option=-707,-707`` for an option that takes one
+        value: argparse takes a word that starts with '-' for an option unless it is a
+        plain negative number (``-178``), so a negative first component (``--c-offset-um
+        -707,-707``, ``--e-ys-um -1e3``) ended in "expected one argument"."""
+        valued = {s for action in self._actions if action.nargs is None
+                  for s in action.option_strings}
+        out: list[str] = []
+        for k, word in enumerate(words):
+            if out and out[-1] in valued and _NEGATIVE.match(word) and "--" not in words[:k]:
+                out[-1] = f"{out[-1]}={word}"
+            else:
+                out.append(word)
+        return out
 
     def error(self, message: str):
         words = self._words

@@ -233,6 +233,26 @@ def test_a_scenario_names_a_misspelt_option_with_the_one_meant(capsys):
         "unrecognized arguments: --sede 3; --sede is not an option here; did you mean --seed?")
 
 
+def test_an_option_takes_a_value_list_that_starts_with_a_minus_sign(capsys):
+    # argparse takes '-707,-707' or '-1e3' for an option (only '-178' looks like a number to
+    # it): "--c-offset-um -707,-707" ended in "expected one argument"
+    parser = scenario_arguments("a scenario", "reports/x")
+    parser.add_argument("--c-offset-um")
+    parser.add_argument("--e-ys-um", type=float)
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args(["--c-offset-um", "-707,-707", "--e-ys-um", "-1e3", "--quick",
+                              "--seed", "3"])
+    assert (args.c_offset_um, args.e_ys_um, args.quick, args.seed) == ("-707,-707", -1000.0,
+                                                                        True, 3)
+    assert parser.parse_args(["--e-ys-um", "-.5"]).e_ys_um == -0.5
+    # a flag's next word is not its value, and a value refused is refused as before
+    with pytest.raises(SystemExit):
+        parser.parse_args(["--quick", "-5"])
+    with pytest.raises(SystemExit):
+        parser.parse_args(["--seed", "-3"])
+    assert "--seed: expected a non-negative integer, got '-3'" in capsys.readouterr().err
+
+
 PRINTING_REPORT = """
 import sys
 from argparse import Namespace
