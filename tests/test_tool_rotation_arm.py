@@ -19,6 +19,7 @@ from machinesim.exceptions import InputError
 from machinesim.experiment import run
 from machinesim.identification import tool_rotation_arm as arm
 from machinesim.metrology import Microscope, fit_apexes
+from machinesim.nc import ProgramBuilder
 from machinesim.procedures import tool_rotation_arm as procedure
 from machinesim.procedures.tool_rotation_arm import (
     AngleReading,
@@ -401,6 +402,26 @@ def test_the_procedure_identifies_the_injected_tool_setting(exact_run, r0):
     assert result.figure("depth_error").before > 50.0
     assert result.figure("depth_error").after < 2e-3  # um; the 1 nm grid, as above
     assert result.figure("depth_variation").after < 2e-3
+
+
+def test_a_pattern_not_read_is_said_before_and_refused_after(exact_run):
+    # the uncompensated pattern may not be cut at all (an edge offset near the capture lifts
+    # it off the surface beyond the first angles): its figures were n/a with no word why
+    # (--e-ys-um -990, exit 0), and a compensated pattern not read was n/a the same way
+    result, lab = exact_run
+    air = ProgramBuilder(1).rapid(Z=5e-3).build()        # cuts nothing: no groove to read
+    programs = dict(result.programs, pattern_before=air)
+    evaluation = ToolRotationArm().evaluate(lab, result.identification, programs)
+    why = evaluation.details["pattern_before"]["why"]
+    assert evaluation.details["pattern_before"]["measured"] is False
+    assert why.startswith("key 'z': Expected uncut land at both ends of the profile")
+    for figure in evaluation.figures:
+        assert figure.before is None and figure.after < 2e-3
+        assert f"before not measured, the uncompensated pattern: {why}" in figure.note
+    with pytest.raises(InputError, match="the compensated pattern could not be read: "
+                                         "key 'z': Expected uncut land"):
+        ToolRotationArm().evaluate(lab, result.identification,
+                                   dict(result.programs, pattern_compensated=air))
 
 
 def test_the_procedure_report_follows_the_one_schema(exact_run, tmp_path):

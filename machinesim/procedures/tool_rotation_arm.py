@@ -331,7 +331,7 @@ class ToolRotationArm:
         check_lab(lab)
         check_identified(identified, ArmIdentification, "ToolRotationArm")
         detail = identified.detail
-        readings, parts = {}, {}
+        readings, parts, unread = {}, {}, ""
         for state, program in (("before", programs["pattern_before"]),
                                ("after", programs["pattern_compensated"])):
             part, _ = lab.cut(program, TOOL, self.pattern.stock)
@@ -339,23 +339,30 @@ class ToolRotationArm:
             try:
                 readings[state] = measure_pattern(part, self.pattern,
                                                   lab.microscope(label=f"pattern_{state}"))
-            except InputError:
-                readings[state] = None  # the uncompensated grooves may not be cut at all
+            except InputError as error:
+                if state == "after":  # compensated, every groove must be there to read
+                    raise InputError(f"the compensated pattern could not be read: {error}",
+                                     key="pattern_after") from None
+                # the uncompensated grooves may not be cut at all: said, not left blank
+                readings[state], unread = None, str(error)
 
         def value(state, attribute):
             reading = readings[state]
             return None if reading is None else getattr(reading, attribute) / M_PER_UM
 
+        why = f"; before not measured, the uncompensated pattern: {unread}" if unread else ""
         figures = (
             Figure("depth_error", "um", value("before", "depth_error"),
-                   value("after", "depth_error"), note="paper: > 50 before, < 1 after"),
+                   value("after", "depth_error"), note="paper: > 50 before, < 1 after" + why),
             Figure("depth_variation", "um", value("before", "depth_variation"),
-                   value("after", "depth_variation")),
+                   value("after", "depth_variation"), note=why[2:]),
             Figure("pitch_error", "um", value("before", "pitch_error"),
-                   value("after", "pitch_error")),
+                   value("after", "pitch_error"), note=why[2:]),
         )
-        return Evaluation(figures=figures, details=self._details(detail, readings, programs),
-                          parts=parts)
+        details = self._details(detail, readings, programs)
+        if unread:
+            details["pattern_before"]["why"] = unread
+        return Evaluation(figures=figures, details=details, parts=parts)
 
     def _details(self, detail: ArmIdentification, readings, programs) -> dict:
         nominal = self.pattern.program(detail.r0)
