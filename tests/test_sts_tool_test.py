@@ -263,6 +263,34 @@ def test_a_height_just_inside_the_depth_range_is_taken(tmp_path):
         scenario.refuse_too_deep(args, machine, ErrorModel.from_toml(path))
 
 
+def test_the_scenario_refuses_a_tool_its_test_does_not_identify_before_anything_is_cut(
+        tmp_path):
+    # dx 11 um cut the sphere and refused its reading after 24 s, -11 um after 13 s blaming
+    # the sphere's depth and centre height; dR 100000 um (um typed for mm) after 78 s; now
+    # the injected tool against the spindle axis is set against the test's ranges first
+    scenario = _scenario()
+    machine = machinesim.load_machine("sts_lathe")
+    for dx, dy, d_radius in ((5.0, -3.5, 100.0), (-10.0, -3.5, 100.0), (-3.5, 20.0, 300.0),
+                             (-3.5, -3.5, -850.0)):
+        inside = ErrorModel.from_dict({"tool": {"offset_um": [dx, dy, 0.0]},
+                                       "tool_geometry": {"nose_radius_um": d_radius}})
+        assert scenario.refuse_unread_tool(None, machine, inside) is None
+    for toml, words in (
+            ("[tool]\noffset_um = [11, -3.5, 0]\n",
+             r"\(tool\.x\): the tool's offset from the spindle axis dx = 11 um exceeds .* "
+             r"expected dx within -10 \.\. 5 um"),
+            ("[tool]\noffset_um = [-11, -3.5, 0]\n", r"\(tool\.x\): .* dx = -11 um"),
+            ("[tool]\noffset_um = [-3.5, 25, 0]\n",
+             r"\(tool\.y\): the tool's centre height \|dy\| = 25 um .* at most 20 um"),
+            ("[tool_geometry]\nnose_radius_um = 350.0\n",
+             r"\(tool_geometry\.nose_radius\): the nose radius error dR = 350 um \(a nose of "
+             r"1350 um for 1000 um\) .* expected dR within -850 \.\. 300 um"),
+            ("[tool_geometry]\nnose_radius_um = 100000.0\n", r".* dR = 100000 um")):
+        _, args, path = _args(tmp_path, toml)
+        with pytest.raises(InputError, match=rf"--errors {re.escape(str(path))} " + words):
+            scenario.refuse_unread_tool(args, machine, ErrorModel.from_toml(path))
+
+
 def test_a_workpiece_set_high_within_the_range_reads_the_tool_errors():
     # 14.5 um high, Table 5's tool errors: the sphere is cut 14.5 um deeper; started from
     # the programmed heights the fit read dR = -1815 um for 100 (2.9 um high already), from
