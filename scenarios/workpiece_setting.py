@@ -67,6 +67,7 @@ from machinesim.exceptions import InputError
 from machinesim.experiment import run
 from machinesim.identification.workpiece_setting import PARAMETERS, nose_shift
 from machinesim.loading import RobotLoader
+from machinesim.procedures.sphere_probing import probing_miss
 from machinesim.procedures.workpiece_setting import (
     EXPERIMENTS,
     NOSE,
@@ -158,6 +159,8 @@ def loads(args) -> dict:
                                     "robonano_a0ib")
               for load in EXPERIMENTS}
     _check_grooves_landing(args, errors["grooves"].workpiece, repeatability)
+    for load in EXPERIMENTS:  # the crown's is probed only after the grooves' whole run
+        _check_probing(args, load, errors[load].workpiece, repeatability)
     return errors
 
 
@@ -171,22 +174,46 @@ def _check_grooves_landing(args, setting: WorkpieceSetting, repeatability: float
         return
     tilt = math.degrees(math.acos(min(1.0, rotation_xyz(setting.alpha, setting.beta,
                                                         setting.gamma)[2, 2])))
-    if args.delta_um or args.rot_deg:
-        given = [(name, text) for name, text in (("delta-um", args.delta_um),
-                                                 ("rot-deg", args.rot_deg)) if text]
-        source, key = ", ".join(f"--{n} {t}" for n, t in given), given[0][0]
-    elif args.errors is not None and args.robot_repeatability_um is None:
-        source, key = f"--errors {args.errors}", "errors"
-    else:
-        source = (f"the robot's landing (--robot-repeatability-um {repeatability:g}, --seed "
-                  f"{args.seed})")
-        key = "robot-repeatability-um"
+    source, key = _setting_source(args, repeatability)
     raise InputError(
         f"{source} sets the grooves' block {setting.delta[2] / UM:.1f} um high and tilted "
         f"{tilt:.3g} deg: {crash}, so the rapids would run into the block (a crash on a "
         "real machine). Expected a setting "
         "within that: a smaller repeatability, another seed, or --delta-um/--rot-deg",
         key=key)
+
+
+def _setting_source(args, repeatability: float, prefix: str = "") -> tuple[str, str]:
+    """What set a load's workpiece setting, in words, and the key of a refusal: the options
+    given (``prefix`` ``"crown-"`` for the crown's own), else the ``--errors`` file, else
+    the robot's landing."""
+    given = [(f"{prefix}{name}", text) for name, text in
+             (("delta-um", getattr(args, f"{prefix}delta_um".replace("-", "_"))),
+              ("rot-deg", getattr(args, f"{prefix}rot_deg".replace("-", "_")))) if text]
+    if given:
+        return ", ".join(f"--{n} {t}" for n, t in given), given[0][0]
+    if prefix:
+        return _setting_source(args, repeatability)
+    if args.errors is not None and args.robot_repeatability_um is None:
+        return f"--errors {args.errors}", "errors"
+    return (f"the robot's landing (--robot-repeatability-um {repeatability:g}, --seed "
+            f"{args.seed})"), "robot-repeatability-um"
+
+
+def _check_probing(args, load: str, setting: WorkpieceSetting, repeatability: float) -> None:
+    """Refuse, before anything is probed or cut, a load whose setting puts a reference
+    sphere beyond the probe's reach (`probing_miss`): the probe refused it after the scans
+    missed, naming a 'centre' in metres and no option (--delta-um 800,0,3 or 12000,-8,3,
+    --rot-deg 0.01,-0.02,28.6: rad taken for deg), and the crown's only after the grooves'
+    whole run."""
+    miss = probing_miss(RobotLoadedWorkpiece(load).spheres, setting)
+    if miss is None:
+        return
+    source, key = _setting_source(args, repeatability, "crown-" if load == "crown" else "")
+    what = "the grooves' block" if load == "grooves" else "the crown"
+    raise InputError(f"{source} sets {what} so that {miss}. Expected a setting "
+                     "within that: a smaller repeatability, another seed, or smaller "
+                     "--delta-um/--rot-deg", key=key)
 
 
 def _given_setting(delta_um, rot_deg, prefix: str) -> dict[str, float]:

@@ -20,6 +20,7 @@ from machinesim.cutting import cut_turned
 from machinesim.exceptions import MachineSimError
 from machinesim.loading import RobotLoader
 from machinesim.metrology import Microscope, crown_features
+from machinesim.procedures import sphere_probing
 from machinesim.report import check_summary
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -160,6 +161,36 @@ def test_a_landing_the_groove_programs_rapids_would_run_into_is_refused_before_t
     # the issue's large setting (80 um, 2 deg) clears both heights
     large = scenario.loads(_parse(["--delta-um", "80,-60,20", "--rot-deg", "0.5,-0.3,2.0"]))
     assert groove_rapids_crash(large["grooves"].workpiece) is None
+
+
+def test_a_setting_that_puts_a_sphere_beyond_the_probe_s_reach_is_refused_before_the_run():
+    """The probe's scans find a sphere at most about 0.33 mm off its designed place in x or
+    y (they reach 1.2 mm either side; farther off, their ends run into the rising wall):
+    --delta-um 800,0,3 or 12000,-8,3 (mm typed as um) and --rot-deg
+    0.01,-0.02,28.6 (0.5 rad typed as deg) were refused by the probe after its scans missed,
+    naming a 'centre' in metres and no option; a crown set so was probed only after the
+    grooves' whole run. Now each is refused at once, naming the option."""
+    probing_miss = sphere_probing.probing_miss
+    spheres = cam.GROOVE_SPHERES
+    assert sphere_probing.SIDEWAYS_REACH == 0.34 * MM  # measured: 330 um found, 340 missed
+    assert probing_miss(spheres, WorkpieceSetting(np.array([339.0 * UM, 0.0, 0.0]))) is None
+    assert "0.341 mm off its place in x" in probing_miss(
+        spheres, WorkpieceSetting(np.array([341.0 * UM, 0.0, 0.0])))
+    # gamma turns S1 at (-6, -6) mm about the origin to x = -6 cos + 6 sin: 6 (1 - cos +
+    # sin) = 3.604 mm off in x at 28.6 deg, the most of the three
+    off = 6.0 * (1.0 - math.cos(math.radians(28.6)) + math.sin(math.radians(28.6)))
+    assert f"S1 (designed at x -6, y -6 mm) {off:.4g} mm off its place in x" in probing_miss(
+        spheres, WorkpieceSetting(gamma=math.radians(28.6)))
+    for argv, words in (
+            (["--delta-um", "800,0,3"], r"--delta-um 800,0,3 sets the grooves' block so that "
+             r"it puts reference sphere S1 \(designed at x -6, y -6 mm\) 0.8 mm off its "
+             r"place in x, where the probe's scans find a sphere at most about 0.34 mm off"),
+            (["--delta-um", "12000,-8,3"], r"--delta-um 12000,-8,3 sets .* 12 mm off"),
+            (["--rot-deg", "0.01,-0.02,28.6"], r"--rot-deg 0.01,-0.02,28.6 sets .* 3.6\d* mm"),
+            (["--crown-delta-um", "0,900,100"], r"--crown-delta-um 0,900,100 sets the crown "
+             r"so that .* 0.9 mm off its place in y")):
+        with pytest.raises(MachineSimError, match=words):
+            scenario.loads(_parse(argv))
 
 
 def _parse(argv):

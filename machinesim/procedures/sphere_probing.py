@@ -27,11 +27,21 @@ from machinesim.identification.workpiece_setting import (
 )
 from machinesim.metrology import fit_sphere
 from machinesim.metrology.probe_instrument import StylusOverTravel
+from machinesim.rotations import rotation_xyz
 from machinesim.units import M_PER_MM
 
-__all__ = ["PROBE_PLAN", "ProbePlan", "probe_axes", "read_sphere", "read_spheres"]
+__all__ = ["PROBE_PLAN", "ProbePlan", "probe_axes", "probing_miss", "read_sphere",
+           "read_spheres"]
 
 MM = M_PER_MM
+
+
+#: How far (m) a reference sphere may sit off its designed place in x or y for the default
+#: plan's scans to find it: measured through the lab (noise off, the grooves' block set
+#: (dx, dy, 3 um)): dx 330 um and -330 um found, 340 and 350 um missed; (290, 290) um found,
+#: (320, 320) missed. `probing_miss` refuses beyond it; within, a diagonal setting can still
+#: be missed, and the probe says so.
+SIDEWAYS_REACH = 0.34 * M_PER_MM
 
 
 @dataclass(frozen=True)
@@ -43,7 +53,8 @@ class ProbePlan:
     half_width : float
         Each scan runs the ball centre this far either side of the centre, m. Default 1.2
         mm: on a R2 mm cavity read with a R0.25 mm ball the contact then stays 0.6 mm inside
-        the rim, room for a workpiece 0.5 mm off.
+        the rim; the scans find a sphere up to about 0.33 mm off (`SIDEWAYS_REACH`: farther,
+        their ends run more than the stroke less the press into the rising wall).
     points : int
         Points per scan line.
     press : float
@@ -161,7 +172,9 @@ def read_sphere(probe, centre, plan: ProbePlan = ProbePlan(), c_angle: float = 0
                                  f"of a bottom touch under {where} m) to touch the sphere "
                                  f"at {plan.points // 2} of {plan.points} points or more "
                                  f"within the stylus stroke, they did not: the sphere lies "
-                                 f"farther sideways than about {plan.half_width / 2} m",
+                                 "farther off its place than they reach (about "
+                                 f"{SIDEWAYS_REACH / M_PER_MM:g} mm in x or y with the default "
+                                 "plan)",
                                  key="centre")
             # The cavity is not at the expected height (a workpiece set much higher or
             # lower, or tilted): find its bottom first, as an operator would, and scan again.
@@ -206,6 +219,30 @@ def _bottom_touch(probe, guess, radius, plan, c_angle) -> np.ndarray:
                          "searches (check the setting's size: position, rotations)",
                          key="centre")
     return _machine_points(probe, contact[None])[0]
+
+
+def probing_miss(spheres: ReferenceSpheres, setting, plan: ProbePlan = ProbePlan()
+                 ) -> str | None:
+    """Whether a workpiece set by ``setting`` (a `WorkpieceSetting`: ``W = T(d) Rx Ry Rz``)
+    puts a reference sphere farther off its designed place in x or y than `read_sphere`'s
+    scans find it with the default plan (`SIDEWAYS_REACH`): what moves, or None (always
+    None for another plan, whose reach is not measured). The scans are made about the
+    designed centres; beyond that reach they run into the cavity's wall (over the stylus's
+    stroke) or miss it, and the reading is refused after the probe has run. The C centre's
+    offset, micrometres across, is left out, as the sphere's height (the bottom touch finds
+    it)."""
+    centres = spheres.centres
+    rotation = rotation_xyz(setting.alpha, setting.beta, setting.gamma)
+    landed = np.asarray(setting.delta, dtype=np.float64) + centres @ rotation.T
+    side = np.abs(landed - centres)[:, :2]
+    k, axis = np.unravel_index(int(np.argmax(side)), side.shape)
+    if plan != PROBE_PLAN or side[k, axis] <= SIDEWAYS_REACH:
+        return None
+    x, y = centres[k, :2] / M_PER_MM
+    return (f"it puts reference sphere S{k + 1} (designed at x {x:g}, y {y:g} mm) "
+            f"{side[k, axis] / M_PER_MM:.4g} mm off its place in {'xy'[axis]}, where the "
+            f"probe's scans find a sphere at most about {SIDEWAYS_REACH / M_PER_MM:g} mm off "
+            "in x or y")
 
 
 def read_spheres(probe, spheres: ReferenceSpheres, plan: ProbePlan = ProbePlan()
