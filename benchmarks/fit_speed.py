@@ -1,9 +1,15 @@
-"""Seconds of identification.fit and plan_quality for N readings on robonano_a0ib, with the
-error Jacobian batched (`Machine.error_jacobian`) and built pose by pose by Pinocchio
-(`Machine.pinocchio_error_jacobian`, the path before), in the same run.
+"""Seconds of identification.fit and plan_quality for N readings on robonano_a0ib, by the
+batched evaluator and by the two pose-by-pose paths it replaced, in the same run.
+
+The variants: ``all batched`` (the model readings by `Machine.frame_pose` and the error
+Jacobian by `Machine.error_jacobian`, each over every pose at once: the code), ``readings
+pose by pose`` (the readings one Pinocchio pass a pose, `Machine.pinocchio_pose`: the code
+before the readings were batched) and ``pose by pose`` (the Jacobian too, by
+`Machine.pinocchio_error_jacobian`: the code before that). Each is set on the machine
+instance the fit reads, then removed.
 
 Run: ``.venv/bin/python benchmarks/fit_speed.py`` (prints medians of 3 runs; the
-pose-by-pose path at 100,000 readings takes some 30 s a fit, the whole run some 3 min), or
+pose-by-pose path at 100,000 readings takes some 40-50 s a fit, the whole run 4-5 min), or
 for other sizes ``.venv/bin/python benchmarks/fit_speed.py --readings 1000 10000 --repeat 5``.
 Each reading is taken at its own pose (random axis values, a random sensing
 direction of the tool edge), so that every reading costs one pose; the readings are those
@@ -63,25 +69,34 @@ def main() -> None:
           f"reading per pose; medians of {args.repeat}")
     for n in args.readings:
         q, u, obs = readings(machine, n, rng)
-        row = {}
-        for label, jacobian in (("batched", None),
-                                ("pose by pose", machine.pinocchio_error_jacobian)):
-            if jacobian is not None:
-                machine.error_jacobian = jacobian  # the instance's, read by the fit's model
+        rows = []
+        for label, patches in variants(machine):
+            vars(machine).update(patches)  # the instance's, read by the fit's model
             try:
                 t_fit, estimate = timed(args.repeat, fit, machine, obs, PARAMETERS)
                 t_plan, _ = timed(args.repeat, plan_quality, machine, q, "tool_tip", u,
                                   PARAMETERS, SIGMA_M)
             finally:
-                vars(machine).pop("error_jacobian", None)
-            row[label] = (t_fit, t_plan, estimate)
-        (f_new, p_new, e_new), (f_old, p_old, e_old) = row["batched"], row["pose by pose"]
-        print(f"  N = {n:>7,}: fit {f_old:8.3f} s pose by pose, {f_new:8.3f} s batched "
-              f"({f_old / f_new:4.1f}x; {e_new.iterations} steps, rank {e_new.rank}); "
-              f"plan_quality "
-              f"{p_old:8.3f} s, {p_new:8.3f} s ({p_old / p_new:4.1f}x); values apart by "
-              f"{np.max(np.abs(e_new.values - e_old.values)):.1e} (m, rad)")
+                for name in patches:
+                    vars(machine).pop(name)
+            rows.append((label, t_fit, t_plan, estimate))
+        new = rows[-1]
+        print(f"  N = {n:,} ({new[3].iterations} steps, rank {new[3].rank}):")
+        for label, t_fit, t_plan, estimate in rows:
+            print(f"    {label:<24} fit {t_fit:8.3f} s ({t_fit / new[1]:4.1f}x), plan_quality "
+                  f"{t_plan:8.3f} s ({t_plan / new[2]:4.1f}x); values apart from all batched "
+                  f"by {np.max(np.abs(estimate.values - new[3].values)):.1e} (m, rad)")
 
+
+def variants(machine) -> tuple[tuple[str, dict], ...]:
+    """(label, instance attributes to set) of each variant, the code last."""
+    def pose_by_pose(frame, q, errors=None):
+        return machine.pinocchio_pose(q, errors, frame)
+
+    return (("pose by pose", {"frame_pose": pose_by_pose,
+                              "error_jacobian": machine.pinocchio_error_jacobian}),
+            ("readings pose by pose", {"frame_pose": pose_by_pose}),
+            ("all batched", {}))
 
 if __name__ == "__main__":
     main()

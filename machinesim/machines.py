@@ -282,9 +282,17 @@ class Machine:
         return out[0] if q.ndim == 1 else out
 
     def pinocchio_pose(self, q, errors=None, frame: str = "tool_tip") -> np.ndarray:
-        """The same pose as `frame_pose`, one configuration, by Pinocchio's forwardKinematics."""
-        q = self._check_q(q, batch=False)
-        return self.kin.frame_pose(self.kin.full_q(q, self.binding(errors)), frame)
+        """The same pose as `frame_pose`, one configuration at a time by Pinocchio's
+        forwardKinematics (the reference the batched evaluator is held against; ``q`` of
+        shape (n_axes,) or (N, n_axes), as there)."""
+        if frame not in self.kin.frame_id:
+            raise InputError(f"frame {frame!r} is not on {self.name}; it has "
+                             f"{', '.join(self.frames)}")
+        q = self._check_q(q)
+        binding = self.binding(errors)
+        out = np.array([self.kin.frame_pose(self.kin.full_q(qn, binding), frame)
+                        for qn in np.atleast_2d(q)])
+        return out[0] if q.ndim == 1 else out
 
     def parameter_names(self, errors=None) -> tuple[str, ...]:
         """Every error parameter name this machine accepts (tables: those in ``errors``)."""

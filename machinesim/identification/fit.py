@@ -223,10 +223,9 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
     progress : callable(str), optional
         Told one line per Gauss-Newton step (its number, the RMS of (reading - model) / sigma
         before it, and its largest step relative to the stopping rule): each step evaluates
-        the model at every distinct pose, one at a time by Pinocchio (18-26 us a pose),
-        and its Jacobian at all of them at once (2-8 us a pose), so a plan of 100,000
-        distinct poses takes a few seconds a step (robonano_a0ib, 4 parameters;
-        benchmarks/fit_speed.py).
+        the model and its Jacobian at every distinct pose, all of them at once (under 1 and
+        2-8 us a pose), so a plan of 100,000 distinct poses takes about a second a step
+        (robonano_a0ib, 4 parameters; benchmarks/fit_speed.py).
 
     Returns
     -------
