@@ -327,6 +327,22 @@ def test_with_parameters_refuses(name, value, match):
         ErrorModel.from_toml(EXAMPLE).with_parameters({name: value})
 
 
+@pytest.mark.parametrize(("given", "got"), [
+    ([("tool.y", 1e-6)], "[('tool.y', 1e-06)] (list); (name, value) pairs are given as "
+                         "dict(pairs)"),
+    ("tool.y", "'tool.y' (str)"), (None, "None (NoneType)")])
+def test_with_parameters_refuses_what_is_no_mapping(given, got):
+    # a list of (name, value) pairs ended in "AttributeError: 'list' object has no
+    # attribute 'items'"; the signature, the docstring and the docs all give a mapping
+    with pytest.raises(ErrorModelError) as info:
+        ErrorModel().with_parameters(given)
+    assert str(info.value) == ("key 'parameters': expected the parameters as a mapping "
+                               "{name: value} (names as ErrorModel.parameters gives them, SI "
+                               f"values), got {got}")
+    # the pairs as a dict set the value named
+    assert ErrorModel().with_parameters(dict([("tool.y", 1e-6)])).tool.offset[1] == 1e-6
+
+
 # --- refusals ------------------------------------------------------------------------------
 
 

@@ -198,8 +198,17 @@ class ErrorModel(_Value):
         """A copy with the named parameters replaced (names as in `parameters`, SI values).
 
         A location error not yet in the model is added (any valid symbol of a valid axis);
-        a component parameter must exist. Any other name raises `ErrorModelError`.
+        a component parameter must exist. Any other name raises `ErrorModelError`, and so
+        does what is no mapping (pairs ``[(name, value)]`` are given as ``dict(pairs)``).
         """
+        if not isinstance(mapping, Mapping):
+            # a list of (name, value) pairs had ended in "AttributeError: 'list' object has
+            # no attribute 'items'"
+            hint = ("; (name, value) pairs are given as dict(pairs)"
+                    if isinstance(mapping, list | tuple) else "")
+            raise _fail(f"expected the parameters as a mapping {{name: value}} (names as "
+                        f"ErrorModel.parameters gives them, SI values), got "
+                        f"{_describe(mapping)}{hint}", None, "parameters")
         offset, rotation = self.tool.offset.copy(), self.tool.rotation.copy()
         delta = self.workpiece.delta.copy()
         nose_radius = self.tool_geometry.nose_radius
