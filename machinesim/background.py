@@ -105,7 +105,7 @@ def add_errors(a: ErrorModel, b: ErrorModel,
     settings = {k: v for k, v in a.written.items()
                 if k.startswith(("tool.", "tool_geometry.", "workpiece."))}
     return ErrorModel(a.tool, a.workpiece, location, component, a.tool_geometry,
-                      source=a.source, written=settings)
+                      source=a.source, written=settings, lines=a.lines)
 
 
 def _add_component(ea, eb, grid) -> ComponentError:

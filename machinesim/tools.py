@@ -446,7 +446,7 @@ def with_nose_radius_error(tool: Tool, errors) -> Tool:
     except InputError as error:  # name the error model's key the user wrote, and the value
         raise InputError(f"the error model's {key} = {shown} does not fit the "
                          f"{type(tool).__name__} ({error.message})", source=source,
-                         key=key) from None
+                         line=errors.line_of(key), key=key) from None
     raise InputError(f"the error model has {key} = {shown}, but a {type(tool).__name__} has "
                      "no nose radius; expected a round-nose ('nose:R:ANGLE'), ball or flat end "
-                     "mill", source=source, key=key)
+                     "mill", source=source, line=errors.line_of(key), key=key)

@@ -312,7 +312,7 @@ def test_an_error_model_that_does_not_fit_the_machine_names_its_file_first(tmp_p
     code, _, err = run(["cut", GROOVES, *CUT, "--errors", errors, "--out",
                         tmp_path / "p.ply"], capsys)
     assert code == 2
-    assert err.startswith(f"machinesim: error: {errors}, key 'component.X.EXX_um': table "
+    assert err.startswith(f"machinesim: error: {errors}, line 3, key 'component.X.EXX_um': table "
                           "positions -1000 .. 1000 mm lie outside the travel of axis X, "
                           "-250 .. 250 mm (machine grooving_4axis, "), err
     assert len(err.splitlines()) == 1 and list(tmp_path.iterdir()) == [errors]

@@ -7,6 +7,7 @@ import math
 import os
 import pickle
 import re
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -642,6 +643,94 @@ def test_a_model_read_from_a_file_keeps_its_name_and_keys_as_written(tmp_path):
     assert changed.source is None and dict(changed.written) == {}
 
 
+# Lines counted by hand in each text (line 1 is the first). tomllib gives no positions: a
+# refusal of a key named the file and the key but not its line.
+KEY_LINE_SHAPES = [
+    # a plain key under its [section] header
+    ("# an error model\n\n[tool]\noffset_um = [0.0, 1.0]\n", 4, "tool.offset_um",
+     "expected 3 values"),
+    # an unknown section: a plain key at the top, after a header of a known one
+    ("[tool]\noffset_um = [0.0, 1.0, 0.0]\n\n[tools]\noffset_um = [0.0, 1.0, 0.0]\n", 4,
+     "tools", "unknown section"),
+    # dotted keys, under a header and at the top (a quoted part among them)
+    ("[workpiece]\nalpha_deg = 0.1\n[location]\nC.EX0C_um = 2.0\nC.'EB0C_urad' = '15'\n", 5,
+     "location.C.EB0C_urad", "expected a number, got '15'"),
+    ("tool.offset_um = [0.0, 0.0, 0.0]\nlocation.C.EX0C_xx = 1.0\n", 2,
+     "location.C.EX0C_xx", "unit 'xx' is not recognised"),
+    # an array spanning lines: its key's line, not the line of the value refused
+    ("[tool]\nrotation_deg = [0.0, 0.0, 0.0]\noffset_um = [  # x, y, z\n  0.0,\n  -178.0,\n"
+     "  'z',\n]\n", 3, "tool.offset_um", "expected a number, got 'z'"),
+    # after a multi-line string holding a header, a '#' and '=' (no key: not counted)
+    ('[tool]\nnote = """\n[location.C]\n# x = 1\n"""\n', 2, "tool.note", "unknown key"),
+    # a key in an inline table
+    ("tool = { offset_um = [0.0,\n  1.0, 0.0], rotation_urad = [1.0, 2.0, 3.0] }\n"
+     "workpiece = {delta_um = [1, 2, 3], gamma_um = 1}\n", 3, "workpiece.gamma_um",
+     "expected an angle unit"),
+    # Windows line ends; a table's header alone
+    ("[component.X]\r\nposition_mm = [0.0, 1.0]\r\nEXX_um = [0, 1]\r\n\r\n[component.Y]\r\n"
+     "position_mm = [0, 1]\r\nEYY_um = [1.0]\r\n", 7, "component.Y.EYY_um",
+     "the table has 1 values"),
+    ("\n[location.W]\nEX0W_um = 1.0\n", 2, "location.W", "'W' is not one of"),
+]
+
+
+@pytest.mark.parametrize(("text", "line", "key", "match"), KEY_LINE_SHAPES)
+def test_a_refused_key_of_a_file_names_its_line(tmp_path, text, line, key, match):
+    path = tmp_path / "errors.toml"
+    path.write_bytes(text.encode())
+    with pytest.raises(ErrorModelError, match=re.escape(match)) as info:
+        ErrorModel.from_toml(path)
+    assert (info.value.source, info.value.line, info.value.key) == (str(path), line, key)
+    assert str(info.value).startswith(f"{path}, line {line}, key '{key}': ")
+    # the same dict given to from_dict names no line (there is no text to count in)
+    with pytest.raises(ErrorModelError) as info:
+        ErrorModel.from_dict(tomllib.loads(text), source="d")
+    assert info.value.line is None and str(info.value).startswith(f"d, key '{key}': ")
+
+
+def test_key_lines_of_every_shape_are_counted_as_by_hand():
+    from machinesim.errors.toml import key_lines
+
+    text = ("# head [tool]\n"                                    # 1
+            "[tool]  # the tool\n"                               # 2
+            "offset_um = [0.0,   # x = 1\n"                      # 3
+            "   -178.0,\n   0.0]\n"                              # 4, 5
+            "s = '''a\n[b]\n'''  # c\n"                          # 6, 7, 8
+            't = "q\\" = ["\n'                                   # 9
+            "[location]\n"                                       # 10
+            "C.EX0C_um = 2.0\n"                                  # 11
+            "\"C\" . 'EB0C_urad' = 1.5\n"                        # 12
+            "[ component . X ]\n"                                # 13
+            "position_mm = [\n  [1, 2], {a = 1},\n]\n"           # 14, 15, 16
+            "[[w]]\n"                                            # 17
+            "q = {a = 1, b.c = [1,\n 2], d = {e = 'x'}}\n")      # 18, 19
+    tomllib.loads(text)  # valid TOML
+    assert key_lines(text) == {
+        "tool": 2, "tool.offset_um": 3, "tool.s": 6, "tool.t": 9, "location": 10,
+        "location.C": 11, "location.C.EX0C_um": 11, "location.C.EB0C_urad": 12,
+        "component": 13, "component.X": 13, "component.X.position_mm": 14, "w": 17,
+        "w.q": 18, "w.q.a": 18, "w.q.b": 18, "w.q.b.c": 18, "w.q.d": 19, "w.q.d.e": 19}
+
+
+def test_a_misfit_on_a_machine_names_the_line_of_the_key(tmp_path):
+    from machinesim.machines import load_machine
+    from machinesim.tool_specs import tool_from_spec
+    from machinesim.tools import with_nose_radius_error
+
+    path = tmp_path / "misfit.toml"
+    path.write_text("[tool]\noffset_um = [0.0, 0.0, 0.0]\n\n[location.B]\nEX0B_um = 2.0\n"
+                    "[tool_geometry]\nnose_radius_um = 1.0\n")
+    model = ErrorModel.from_toml(path)
+    assert model.line_of("location.B") == 4 and model.line_of("tool_geometry.nose_radius") == 7
+    with pytest.raises(ErrorModelError) as info:
+        load_machine("grooving_4axis").check_errors(model)  # X Y Z C: no B
+    assert (info.value.source, info.value.line, info.value.key) == (str(path), 4, "location.B")
+    with pytest.raises(InputError) as info:  # a V tool has no nose radius
+        with_nose_radius_error(tool_from_spec("v:90"), model)
+    assert (info.value.source, info.value.line) == (str(path), 7)
+    assert info.value.key == "tool_geometry.nose_radius_um"
+
+
 def test_misfit_names_the_model_file_first_then_the_machine(tmp_path):
     path = tmp_path / "axis_missing.toml"
     path.write_text("[location.C]\nEX0C_um = 2.0\n[component.X]\nEYX_poly_um_mm = [0.0, 1.0]\n")
@@ -650,8 +739,8 @@ def test_misfit_names_the_model_file_first_then_the_machine(tmp_path):
                             source="m/mill3.urdf", key="location.C")
     told = model.misfit(found, "mill3")
     assert isinstance(told, ErrorModelError)
-    assert str(told) == (f"{path}, key 'location.C': axis 'C' is not on this machine; it has "
-                         "X, Y, Z (machine mill3, m/mill3.urdf)")
+    assert str(told) == (f"{path}, line 1, key 'location.C': axis 'C' is not on this machine; "
+                         "it has X, Y, Z (machine mill3, m/mill3.urdf)")
     assert (told.source, told.key) == (str(path), "location.C")
     # a key the file wrote is named as written, unit and all
     symbol = ErrorModelError("EYX is no good here", source="m/mill3.urdf", key="component.X.EYX")
@@ -749,7 +838,8 @@ def test_a_polynomial_beyond_the_bound_within_the_travel_is_refused(
     with pytest.raises(ErrorModelError) as info:
         model.check_travel(axis, *travel, source="m.urdf")
     assert info.value.source == "m.urdf"
-    assert str(model.misfit(info.value, "m")).startswith(f"{path}, key '{key}': over the travel")
+    assert str(model.misfit(info.value, "m")).startswith(  # the key is on line 2 of each text
+        f"{path}, line 2, key '{key}': over the travel")
 
 
 def test_a_polynomial_within_the_bound_over_the_travel_passes():
@@ -814,7 +904,7 @@ def test_a_coefficient_beyond_float64_in_si_is_refused_at_its_key(tmp_path):
         ErrorModel.from_toml(path)
     # 1 um/mm**8 is 1e-6 / (1e-3)**8 = 1e18 m/m**8: 1e300 of them would be 1e318 m/m**8
     assert str(info.value) == (
-        f"{path}, key 'component.X.EYX_poly_um_mm': coefficient c_8 = 1e+300 um/mm**8 is "
+        f"{path}, line 2, key 'component.X.EYX_poly_um_mm': coefficient c_8 = 1e+300 um/mm**8 is "
         "1e+18 times as large in m/m**8, beyond float64; expected a length error of at most "
         "1000 mm (1 m) over the travel")
 

@@ -368,13 +368,14 @@ def test_a_nose_radius_error_that_does_not_fit_the_tool_names_the_file_key_and_v
     code, err = run_cli(["cut", GROOVES, "--machine", "grooving_4axis", "--tool", "ball:1",
                          "--stock", "block:10x10x2", "--errors", toml, "--out", out], capsys)
     assert code == 2 and len(err.strip().splitlines()) == 1, err
-    assert f"{toml}, key 'tool_geometry.nose_radius_um'" in err and "= -5000 " in err, err
+    assert f"{toml}, line 2, key 'tool_geometry.nose_radius_um'" in err and "= -5000 " in err, err
     assert not out.exists()
     # the Python API names the file too, not only the command line
     from machinesim import cut
     from machinesim.errors import ErrorModel
 
-    with pytest.raises(MachineSimError, match=f"{toml}, key 'tool_geometry.nose_radius_um'"):
+    with pytest.raises(MachineSimError,
+                       match=f"{toml}, line 2, key 'tool_geometry.nose_radius_um'"):
         cut(GROOVES, "grooving_4axis", "ball:1", "block:10x10x2", ErrorModel.from_toml(toml))
 
 

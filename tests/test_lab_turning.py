@@ -251,6 +251,6 @@ def test_a_nose_radius_the_tool_cannot_take_names_its_file_in_a_lab_with_backgro
     with pytest.raises(InputError) as refused:
         lab.turn(program, TOOL, top=1e-6)
     assert str(refused.value) == (
-        f"{path}, key 'tool_geometry.nose_radius_um': the error model's "
+        f"{path}, line 2, key 'tool_geometry.nose_radius_um': the error model's "
         "tool_geometry.nose_radius_um = -1000 does not fit the RoundNoseTool (nose_radius must "
         "be a positive finite number, got -0.8 mm (-0.0008 m))")

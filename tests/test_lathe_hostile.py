@@ -173,7 +173,7 @@ def test_a_bad_nose_radius_in_an_errors_file_names_the_file(program, tmp_path):
     path = tmp_path / "bad.toml"
     path.write_text("[tool_geometry]\nnose_radius_mm = -1.0\n")
     with pytest.raises(InputError, match=(
-            rf"^{path}, key 'tool_geometry\.nose_radius_mm': the error model's "
+            rf"^{path}, line 2, key 'tool_geometry\.nose_radius_mm': the error model's "
             r"tool_geometry\.nose_radius_mm = -1 does not fit the RoundNoseTool")):
         turn(program, "sts_lathe", "nose:1.0:90", path)
     with pytest.raises(InputError, match=r"^key 'tool_geometry\.nose_radius': the error "

@@ -267,5 +267,6 @@ def test_papers_003_004_note_an_errors_file_that_reads_as_no_error(tmp_path):
         assert result.stderr.splitlines() == [
             f"{name}: note: {path}: location.C.EX0C_um = 4e-06 is at most 4e-09 mm (4e-12 m), "
             "below anything a machine shows: was it written in m, where the key asks um?",
-            f"{name}: error: {path}, key 'location.A': axis 'A' is not on this machine; it has "
+            f"{name}: error: {path}, line 3, key 'location.A': axis 'A' is not on this machine; "
+            "it has "
             f"{axes} (machine {machine}, {ROOT / 'models' / machine}.urdf)"]

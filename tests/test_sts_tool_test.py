@@ -170,7 +170,7 @@ def test_the_scenario_names_its_errors_file_when_a_value_does_not_fit(tmp_path):
          "--realism", "ideal", "--errors", str(path), "--out", str(tmp_path / "out")],
         capture_output=True, text=True, check=False, cwd=ROOT)
     assert result.returncode == 2
-    assert (f"sts_turning: error: {path}, key 'tool_geometry.nose_radius_mm': the error "
+    assert (f"sts_turning: error: {path}, line 2, key 'tool_geometry.nose_radius_mm': the error "
             "model's tool_geometry.nose_radius_mm = -1 does not fit the RoundNoseTool"
             ) in result.stderr
 

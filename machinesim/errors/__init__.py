@@ -32,10 +32,12 @@ Every value read must be finite, an angle at most 180 deg and a length at most 1
 (`LARGEST_ERROR`: beyond that it is another setting, not an error of one); a table's
 positions must lie within the machine's travel of its axis, and a polynomial must stay
 within the same bound over that travel (`ErrorModel.check_travel`, when the model meets a
-machine). A model read from a file keeps the file's name and its keys as written
-(`ErrorModel.source`, `ErrorModel.written`), so a misfit found on a machine names them
-first (`ErrorModel.misfit`), from Python as from the command line; a TOML file may start
-with a UTF-8 byte order mark.
+machine). A model read from a file keeps the file's name, its keys as written and the line
+of each (`ErrorModel.source`, `ErrorModel.written`, `ErrorModel.lines`), so a refusal of a
+key names the file, the key's line and the key (``F.toml, line 3, key 'tool.offset_um':
+...``; an array spanning lines is the line of its key), whether found as the file is read
+or when the model meets a machine (`ErrorModel.misfit`), from Python as from the command
+line; a TOML file may start with a UTF-8 byte order mark.
 """
 
 from machinesim.errors._checks import AXES, LARGEST_ERROR, LINEAR_AXES

@@ -137,6 +137,10 @@ class ErrorModel(_Value):
         written, unit and all, and its value in that unit), e.g.
         ``{"tool_geometry.nose_radius": ("tool_geometry.nose_radius_mm", -0.6)}``; empty
         for a model built in Python. Read-only; not compared.
+    lines : Mapping[str, int]
+        The line of each key path of the source file, as written (``tool.offset_um``,
+        ``location.C``), for messages (`line_of`); empty for a model not read from a file.
+        Read-only; not compared.
     """
 
     tool: ToolSetting = field(default_factory=ToolSetting)
@@ -147,6 +151,8 @@ class ErrorModel(_Value):
     source: str | None = field(default=None, compare=False, repr=False, kw_only=True)
     written: Mapping[str, tuple[str, Any]] = field(default_factory=dict, compare=False,
                                                     repr=False, kw_only=True)
+    lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False,
+                                     kw_only=True)
 
     def __post_init__(self) -> None:
         for name, kind in (("tool", ToolSetting), ("workpiece", WorkpieceSetting),
@@ -164,6 +170,9 @@ class ErrorModel(_Value):
         if not isinstance(self.written, Mapping):
             raise _fail(f"expected a mapping, got {_describe(self.written)}", None, "written")
         object.__setattr__(self, "written", MappingProxyType(dict(self.written)))
+        if not isinstance(self.lines, Mapping):
+            raise _fail(f"expected a mapping, got {_describe(self.lines)}", None, "lines")
+        object.__setattr__(self, "lines", MappingProxyType(dict(self.lines)))
 
     @property
     def is_zero(self) -> bool:
@@ -283,7 +292,8 @@ class ErrorModel(_Value):
                     if isinstance(path, Mapping) else "")
             raise ErrorModelError(f"expected the TOML file's path as a str or Path, got "
                                   f"{type(path).__name__}{hint}", key="path")
-        return cls.from_dict(_io().read_toml(path), source=str(path))
+        data, lines = _io().read_toml_lines(path)
+        return _io().model_from_dict(data, str(path), lines)
 
     def to_toml(self, path: str | os.PathLike) -> None:
         """Write the model to `path` in um, urad, mm and deg, whole or not at all.
@@ -299,6 +309,14 @@ class ErrorModel(_Value):
         unit and all (``component.X.EYX_poly_um_mm``); `key` itself when the source did not
         write it (a section, a model built in Python)."""
         return self.written.get(key, (key,))[0] if isinstance(key, str) else key
+
+    def line_of(self, key: str | None) -> int | None:
+        """The line of the source file on which `key` is written (`key_as_written`'s form
+        or the model's own, ``component.X.EYX``); None when the model was not read from a
+        file or the file did not write it."""
+        if not isinstance(key, str):
+            return None
+        return self.lines.get(key, self.lines.get(self.key_as_written(key)))
 
     def check_travel(self, axis: str, lower: float, upper: float,
                      source: str | None = None) -> None:
@@ -358,9 +376,10 @@ class ErrorModel(_Value):
         """`error`, found checking this model against a machine, told from the model's side.
 
         The one way a misfit is told (command line and Python alike): a model read from a
-        file (`source`) is named first, with the key as written there, then the machine
-        beside it, as in ``F.toml, key 'location.C': axis 'C' is not on this machine; it
-        has X, Y, Z (machine mill3, mill3.urdf)``. A model built in Python has no file:
+        file (`source`) is named first, with the line and the key as written there, then the
+        machine beside it, as in ``F.toml, line 4, key 'location.C': axis 'C' is not on this
+        machine; it has X, Y, Z (machine mill3, mill3.urdf)``. A model built in Python has
+        no file:
         `error` comes back unchanged, naming the machine's file.
 
         Parameters
@@ -378,9 +397,10 @@ class ErrorModel(_Value):
         if self.source is None or error.source == self.source:
             return error
         where = machine if error.source is None else f"{machine}, {error.source}"
+        # the line is of the model's file, where the key is (`line_of`): the machine's
+        # error names no line of its own file
         return ErrorModelError(f"{error.message} (machine {where})", source=self.source,
-                               line=error.line, column=error.column,
-                               key=self.key_as_written(error.key))
+                               line=self.line_of(error.key), key=self.key_as_written(error.key))
 
 
 def as_error_model(errors) -> ErrorModel:

@@ -145,7 +145,20 @@ def _utf16_text(data: bytes) -> bool:
 
 def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[str, Any]:
     """The tables of the TOML file `path`; errors (an ``error``, default `ErrorModelError`)
-    name the file, and the line and column.
+    name the file, and the line and column (`_read_toml`)."""
+    return _read_toml(path, error)[1]
+
+
+def read_toml_lines(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, int]]:
+    """The tables of the TOML file `path`, as `read_toml`, and the line of each key path
+    (`key_lines`), for the messages of what the tables hold."""
+    text, data = _read_toml(path, ErrorModelError)
+    return data, key_lines(text)
+
+
+def _read_toml(path: str | os.PathLike, error: type) -> tuple[str, dict[str, Any]]:
+    """The text of the TOML file `path` and its tables; errors (an ``error``) name the file,
+    and the line and column.
 
     A UTF-8 byte order mark at the start (which some Windows editors write, and TOML does
     not allow) is dropped, as most tools do: lines and columns count from after it. A path
@@ -189,7 +202,146 @@ def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[st
     except RecursionError:  # tomllib recurses once per nesting level of arrays and tables
         raise error("arrays or tables nested too deeply to read (hundreds of levels); "
                     "expected numbers or arrays of numbers", source=source) from None
-    return data
+    return text, data
+
+
+_BARE_KEY_RE = re.compile(r"[A-Za-z0-9_-]+")
+
+
+class _KeyLines:
+    """The line of each key of a TOML text that `tomllib` has read (so valid TOML): a small
+    scan of the text, as tomllib gives no positions. ``lines`` maps each key path, its
+    parts joined by '.' as `model_from_dict` names them (``location.C.EX0C_um``), to the
+    line it is written on: a table's header (``[location.C]``), a key's own line, a dotted
+    key's (``C.EX0C_um = 2`` under ``[location]`` gives ``location.C`` and
+    ``location.C.EX0C_um``), a key in an inline table; an array spanning lines is the line
+    of its key. A table defined twice over (a header after a dotted key) keeps its first
+    line."""
+
+    def __init__(self, text: str) -> None:
+        self.text, self.i, self.line = text, 0, 1
+        self.lines: dict[str, int] = {}
+        prefix: list[str] = []
+        while self._space(newlines=True) < len(text):
+            if text[self.i] == "[":
+                brackets = 2 if text.startswith("[[", self.i) else 1
+                line = self.line
+                self._step(brackets)
+                prefix = self._key()
+                self._space()
+                self._step(brackets)
+                self._note(prefix, line)
+            else:
+                self._pair(prefix)
+
+    def _step(self, count: int = 1) -> None:
+        self.line += self.text.count("\n", self.i, self.i + count)
+        self.i += count
+
+    def _space(self, newlines: bool = False) -> int:
+        """Skip blanks and comments (and line ends, with ``newlines``); the index reached."""
+        text = self.text
+        while self.i < len(text):
+            c = text[self.i]
+            if c == "#":
+                end = text.find("\n", self.i)
+                self.i = len(text) if end < 0 else end
+            elif c in " \t" or (newlines and c in "\r\n"):
+                self._step()
+            else:
+                break
+        return self.i
+
+    def _note(self, path: list[str], line: int) -> None:
+        for k in range(1, len(path) + 1):
+            self.lines.setdefault(".".join(path[:k]), line)
+
+    def _key(self) -> list[str]:
+        """A dotted key's parts, quoted parts unquoted."""
+        parts = []
+        while True:
+            self._space()
+            c = self.text[self.i]
+            if c in "\"'":
+                start = self.i
+                self._string()
+                parts.append(tomllib.loads(f"k = {self.text[start:self.i]}")["k"])
+            else:
+                bare = _BARE_KEY_RE.match(self.text, self.i)
+                parts.append(bare[0])
+                self.i = bare.end()
+            self._space()
+            if self.i >= len(self.text) or self.text[self.i] != ".":
+                return parts
+            self._step()
+
+    def _pair(self, prefix: list[str] | None) -> None:
+        """``key = value``; its keys noted under ``prefix`` (None: in an array, not noted)."""
+        line = self.line
+        path = None if prefix is None else prefix + self._key()
+        if path is None:
+            self._key()
+        else:
+            self._note(path, line)
+        self._space()
+        self._step()  # '='
+        self._space()
+        self._value(path)
+
+    def _value(self, path: list[str] | None) -> None:
+        text, c = self.text, self.text[self.i]
+        if c in "\"'":
+            self._string()
+        elif c == "[":  # an array: its elements (and their inline tables) have no key paths
+            self._step()
+            while self._space(newlines=True) < len(text) and text[self.i] != "]":
+                self._value(None)
+                if self._space(newlines=True) < len(text) and text[self.i] == ",":
+                    self._step()
+            self._step()
+        elif c == "{":
+            self._step()
+            while self._space(newlines=True) < len(text) and text[self.i] != "}":
+                self._pair(path)
+                if self._space(newlines=True) < len(text) and text[self.i] == ",":
+                    self._step()
+            self._step()
+        else:  # a number, a date, true or false: up to what ends it
+            while self.i < len(text) and text[self.i] not in ",]}#\r\n":
+                self.i += 1
+
+    def _string(self) -> None:
+        """Past a string, basic or literal, of one line or many."""
+        text = self.text
+        quote = text[self.i]
+        if text.startswith(quote * 3, self.i):
+            end = self.i + 3
+            while True:
+                if quote == '"' and text[end] == "\\":
+                    end += 2
+                elif text.startswith(quote * 3, end):
+                    end += 3
+                    while end < len(text) and text[end] == quote:  # up to 2 quotes inside
+                        end += 1
+                    break
+                else:
+                    end += 1
+        else:
+            end = self.i + 1
+            while text[end] != quote:
+                end += 2 if quote == '"' and text[end] == "\\" else 1
+            end += 1
+        self._step(end - self.i)
+
+
+def key_lines(text: str) -> dict[str, int]:
+    """The line of each key path of the TOML ``text`` (valid TOML: read by tomllib first);
+    see `_KeyLines`. A scan that loses its way gives no lines rather than a traceback: the
+    messages then name the file and key alone, as before."""
+    try:
+        return _KeyLines(text).lines
+    except (IndexError, TypeError, ValueError):
+        return {}
 
 
 def write_toml(data: Mapping[str, Any], path: str | os.PathLike) -> None:
@@ -260,9 +412,27 @@ def _table(value: Any, source: str, key: str | None) -> Mapping:
     return value
 
 
-def model_from_dict(data: Any, source: str) -> ErrorModel:
+def model_from_dict(data: Any, source: str, lines: Mapping[str, int] | None = None
+                    ) -> ErrorModel:
     """The model of `data` (the TOML structure), remembering `source` and each key and value
-    as written there (`ErrorModel.source`, `ErrorModel.written`) for later messages."""
+    as written there (`ErrorModel.source`, `ErrorModel.written`) for later messages.
+
+    ``lines`` (`key_lines` of the file read) gives the line of each key path: a refusal of
+    a key of the file names its line too (``F.toml, line 3, key 'tool.offset_um': ...``),
+    as the model's later messages do (`ErrorModel.lines`).
+    """
+    lines = {} if lines is None else dict(lines)
+    try:
+        return _model_from_dict(data, source, lines)
+    except ErrorModelError as exc:
+        line = lines.get(exc.key) if exc.source == source and exc.line is None else None
+        if line is None:
+            raise
+        raise ErrorModelError(exc.message, source=exc.source, line=line, column=exc.column,
+                              key=exc.key) from None
+
+
+def _model_from_dict(data: Any, source: str, lines: dict[str, int]) -> ErrorModel:
     for section in _table(data, source, None):
         if section not in _SECTIONS:
             hint = ""
@@ -289,7 +459,7 @@ def model_from_dict(data: Any, source: str) -> ErrorModel:
         for axis, table in _table(data.get("component", {}), source, "component").items()
     }
     return ErrorModel(ToolSetting(**tool), WorkpieceSetting(**workpiece), location, component,
-                      ToolGeometry(**geometry), source=source, written=written)
+                      ToolGeometry(**geometry), source=source, written=written, lines=lines)
 
 
 def _split_key(key: Any, expected: str, source: str, path: str) -> list[str]:
