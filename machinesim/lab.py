@@ -144,7 +144,7 @@ class Lab:
                              f" mm; expected at most {room * 1e3:g} mm along each axis (1 m "
                              "less the tool adjuster's stroke)", key="[tool] offset",
                              source=str(errors) if isinstance(errors, str | os.PathLike)
-                             else None)
+                             else None, line=injected.line_of("tool.offset"))
         self.__truth = truth  # the machine as it is: `adjust_tool` moves its tool
         self.__set_up = truth  # as it was set up: what `reveal` gives
         self.__adjusted = np.zeros(3)  # the moves as made

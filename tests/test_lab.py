@@ -215,10 +215,10 @@ def test_whether_a_tool_adjustment_is_taken_does_not_depend_on_the_hidden_tool(t
         Lab("robonano_a0ib", {"tool": {"offset_um": [995_001.0, 0.0, 0.0]}})
     # given in a file (in metres), the message names the file and its table
     path = tmp_path / "far.toml"
-    path.write_text("[tool]\noffset_m = [0.0, 1.0, 0.0]\n")
+    path.write_text("# far off\n[tool]\noffset_m = [0.0, 1.0, 0.0]\n")
     with pytest.raises(InputError) as info:
         Lab("robonano_a0ib", path)
-    assert str(info.value).startswith(f"{path}, key '[tool] offset': a tool offset of "
+    assert str(info.value).startswith(f"{path}, line 3, key '[tool] offset': a tool offset of "
                                       "[0.0, 1000.0, 0.0] mm")
 
 
