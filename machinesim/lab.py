@@ -131,7 +131,8 @@ class Lab:
                 own = (_realism.background_model(self.machine) if background is None
                        else as_error_model(background))
             except InputError as exc:
-                raise InputError(exc.message, source=exc.source, key="background") from None
+                raise InputError(exc.message, source=exc.source, line=exc.line,
+                                 column=exc.column, key="background") from None
             self.machine.check_errors(own)
             self.__background = own
             travel = dict(zip(self.machine.axes,

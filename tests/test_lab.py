@@ -587,6 +587,16 @@ def test_the_api_refuses_what_it_cannot_use_with_a_machinesim_error():
         "microscope.sigma"]
 
 
+def test_a_background_file_refused_names_its_line(tmp_path):
+    # the refusal of a background file's key kept the file but dropped the key's line
+    path = tmp_path / "own.toml"
+    path.write_text("[location.C]\nEX0C_um = 1.0\n[tool]\noffset_um = [1.0, 2.0]\n")
+    with pytest.raises(InputError) as info:
+        Lab("planer_4axis", realism=machinesim.Realism.lab(), background=path)
+    assert str(info.value) == (f"{path}, line 4, key 'background': expected 3 values, got 2: "
+                               "[1.0, 2.0] (list)")
+
+
 def test_every_error_kind_the_docs_name_is_importable_from_the_package():
     import machinesim.exceptions as exceptions
 
