@@ -710,6 +710,9 @@ def test_key_lines_of_every_shape_are_counted_as_by_hand():
         "location.C": 11, "location.C.EX0C_um": 11, "location.C.EB0C_urad": 12,
         "component": 13, "component.X": 13, "component.X.position_mm": 14, "w": 17,
         "w.q": 18, "w.q.a": 18, "w.q.b": 18, "w.q.b.c": 18, "w.q.d": 19, "w.q.d.e": 19}
+    # a scan that loses its way (text tomllib would refuse) gives no lines, not a traceback
+    assert key_lines("[tool]\noffset_um = " + "[" * 5000 + "]" * 5000) == {}
+    assert key_lines("[tool]\noffset_um = '") == {}
 
 
 def test_a_misfit_on_a_machine_names_the_line_of_the_key(tmp_path):

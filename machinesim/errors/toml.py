@@ -340,7 +340,7 @@ def key_lines(text: str) -> dict[str, int]:
     messages then name the file and key alone, as before."""
     try:
         return _KeyLines(text).lines
-    except (IndexError, TypeError, ValueError):
+    except (IndexError, TypeError, ValueError, RecursionError):  # arrays nested too deeply
         return {}
 
 
