@@ -121,19 +121,25 @@ def _encoding_hint(data: bytes) -> str:
 
 
 def _element_lines(data: bytes) -> dict[str, list[int]]:
-    """The line of each ``<link>`` and ``<joint>`` under ``<robot>`` and of each
+    """The line of each ``<link>`` and ``<joint>`` under ``<robot>``, of each element in a
+    joint (key ``"in_joint"``, the joints' children one after the other) and of each
     ``<machinesim:axis>``, in the order of the file, by tag: ``findall`` gives the same
     elements in the same order, and ElementTree keeps no lines. ``data`` has parsed."""
     parser = expat.ParserCreate(namespace_separator="}")
-    found: dict[str, list[int]] = {"link": [], "joint": [], "axis": []}
+    found: dict[str, list[int]] = {"link": [], "joint": [], "in_joint": [], "axis": []}
     depth = 0
+    in_joint = False
 
     def start(tag, attributes):
-        nonlocal depth
+        nonlocal depth, in_joint
         depth += 1
-        if depth == 2 and tag in ("link", "joint"):
-            found[tag].append(parser.CurrentLineNumber)
-        elif tag == f"{_NS[1:]}axis":
+        if depth == 2:
+            in_joint = tag == "joint"
+            if tag in ("link", "joint"):
+                found[tag].append(parser.CurrentLineNumber)
+        elif depth == 3 and in_joint:
+            found["in_joint"].append(parser.CurrentLineNumber)
+        if tag == f"{_NS[1:]}axis":
             found["axis"].append(parser.CurrentLineNumber)
 
     def end(tag):

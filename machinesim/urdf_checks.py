@@ -359,7 +359,10 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
 
     Checked: the ``<robot>`` root; every link and joint named, and uniquely; every joint's
     parent and child links exist; each link the child of at most one joint; no cycle (found
-    before any walk, so a cyclic file cannot hang the loader); one root link; the frames
+    before any walk, so a cyclic file cannot hang the loader); no element given twice where
+    URDF allows one (a joint's ``<axis>``, ``<origin>``, ``<limit>`` ..., a link's
+    ``<inertial>``, a visual's ``<origin>``, ``<geometry>`` and its shape, ...: the parser
+    reads the first); one root link; the frames
     every machine needs (`REQUIRED_FRAMES`), the tool edge and the workpiece on fixed joints;
     no name taken by machinesim's error joints; every ``<origin>`` finite; every visual and
     collision shape a box, cylinder, sphere or mesh with positive sizes.
@@ -388,10 +391,13 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
         if name in links:
             raise ModelError(f"{at}: link {name!r} is defined twice; link names are unique")
         _check_reserved(name, "link", at)
+        _check_link_once(link, f"{at}: link {name!r}")
         links.add(name)
     joints: dict[str, ET.Element] = {}
     parent_joint: dict[str, str] = {}  # child link -> the joint that carries it
     parent_link: dict[str, str] = {}  # joint -> its parent link
+    in_joint = (lines or {}).get("in_joint", [])
+    children = 0  # the joints' children before this joint's, for their lines
     for index, joint in enumerate(root.findall("joint")):
         name = joint.get("name")
         at = _at(path, lines, "joint", index)
@@ -402,6 +408,8 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
         _check_reserved(name, "joint", at)
         joints[name] = joint
         where = f"{at}: joint {name!r}"
+        _check_once(joint, _ONCE_IN_JOINT, where, in_joint[children:children + len(joint)])
+        children += len(joint)
         ends = {}
         for end in ("parent", "child"):
             element = joint.find(end)
@@ -475,6 +483,64 @@ def _check_not_xacro(root: ET.Element, path) -> None:
             if "${" in value or "$(" in value:
                 raise ModelError(f"{path}: <{local} {attribute}={value!r}> is a xacro "
                                  f"expression, not a value: {expand}")
+
+
+#: The elements URDF allows once in a joint, a link, a link's visual or collision and its
+#: inertial: the URDF parser under Pinocchio reads the first and drops the others without a
+#: word, so a joint with two <axis> or <origin> (a CAD export's, or an edit written beside
+#: the old line) loaded with the first.
+_ONCE_IN_JOINT = ("parent", "child", "origin", "axis", "limit", "calibration", "dynamics",
+                  "mimic", "safety_controller")
+_ONCE_IN_LINK = ("inertial",)
+_ONCE_IN_SHAPE = ("origin", "geometry", "material")
+_ONCE_IN_INERTIAL = ("origin", "mass", "inertia")
+
+
+def _check_once(element: ET.Element, tags: tuple[str, ...], where: str,
+                lines: list[int] = ()) -> None:
+    """Refuse a second ``<tag>`` of ``tags`` among the children of ``element``, naming
+    the lines of them all when ``lines`` (one per child, in order) has them."""
+    if len(element) < 2:
+        return
+    seen = [child.tag for child in element]
+    for tag in tags:
+        if seen.count(tag) > 1:
+            on = ""
+            if len(lines) == len(seen):
+                at = [str(line) for line, t in zip(lines, seen, strict=True) if t == tag]
+                on = f" (lines {', '.join(at)})"
+            raise ModelError(f"{where}: {seen.count(tag)} <{tag}> elements{on}; URDF allows "
+                             f"one, and its parser reads the first and drops the others "
+                             f"without a word: keep the one meant")
+
+
+def _check_link_once(link: ET.Element, where: str) -> None:
+    """`_check_once` for a link, its visuals and collisions (and their geometry, which holds
+    one shape) and its inertial, each named by its place among its kind in the link. The
+    message is put together only for a refusal: a CAD export has 100,000s of visuals."""
+    _check_once(link, _ONCE_IN_LINK, where)
+    count = {"visual": 0, "collision": 0, "inertial": 0}
+    for child in link:
+        kind = child.tag
+        if kind not in count:
+            continue
+        count[kind] += 1
+        tags = [part.tag for part in child]
+        twice = len(set(tags)) != len(tags)
+        shapes = [part for part in child if part.tag == "geometry" and len(part) > 1]
+        if not (twice or shapes):
+            continue
+        inner = f"{where} <{kind}> (its {_ordinal(count[kind])})"
+        _check_once(child, _ONCE_IN_INERTIAL if kind == "inertial" else _ONCE_IN_SHAPE, inner)
+        if shapes and kind != "inertial":
+            listed = ", ".join(f"<{shape.tag}>" for shape in shapes[0])
+            raise ModelError(f"{inner}: <geometry> holds {len(shapes[0])} shapes ({listed}); "
+                             "URDF allows one, and its parser reads the first and drops the "
+                             f"others without a word: one shape per <{kind}>")
+
+
+def _ordinal(n: int) -> str:
+    return f"{n}{'th' if 10 <= n % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(n % 10, 'th')}"
 
 
 #: The sizes (m) of URDF's shapes: attribute -> how many numbers.

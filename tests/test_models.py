@@ -799,3 +799,65 @@ def test_a_urdf_of_more_links_than_a_machine_has_is_refused_before_pinocchio_rea
         load_machine(over)
     assert str(raised.value) == (f"{over}: 2001 links; a machine has tens (a CAD export of "
                                  "every part a few hundred): expected at most 2000")
+
+
+# URDF allows one of each in a joint, a link's <inertial> and a visual's or collision's
+# <origin>, <geometry> (of one shape) and <material>; the parser under Pinocchio reads the
+# first and dropped the others without a word, so these loaded with the first.
+_X_AXIS = '<axis xyz="1.0 0.0 0.0"/>'
+_X_ORIGIN = '<origin xyz="0.0 0.4 0.55" rpy="0.0 0.0 0.0"/>'
+_BASE_VISUAL = ('<visual><origin xyz="0.0 0.0 -0.075" rpy="0.0 0.0 0.0"/><geometry>'
+                '<box size="1.2 1.2 0.15"/></geometry><material name="bed"/></visual>')
+_INERTIAL = ('<inertial><origin xyz="0 0 0"/><mass value="1"/>'
+             '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>')
+
+
+@pytest.mark.parametrize(("case", "text", "needle", "words"), [
+    # the second <axis> turns X about Y: the file loaded as a plain X along +X
+    ("two_axes", _in_joint("X", _X_AXIS, _X_AXIS + '\n    <axis xyz="0.0 1.0 0.0"/>'),
+     '<joint name="X"', "joint 'X': 2 <axis> elements (lines 60, 61); URDF allows one"),
+    ("two_origins", _in_joint("X", _X_ORIGIN,
+                              _X_ORIGIN + '\n    <origin xyz="0.0 0.4 0.65" rpy="0.0 0.0 0.0"/>'),
+     '<joint name="X"', "joint 'X': 2 <origin> elements (lines 59, 60); URDF allows one"),
+    ("two_limits", _in_joint("X", X_LIMIT, X_LIMIT + X_LIMIT.replace("0.25", "0.3")),
+     '<joint name="X"', "joint 'X': 2 <limit> elements (lines 61, 61); URDF allows one"),
+    ("two_parents", _in_joint("X", '<parent link="base"/>',
+                              '<parent link="base"/><parent link="y_carriage"/>'),
+     '<joint name="X"', "joint 'X': 2 <parent> elements (lines 58, 58); URDF allows one"),
+    ("two_inertials", GROOVING.replace(_BASE_VISUAL, _BASE_VISUAL + _INERTIAL * 2, 1),
+     '<link name="base"', "link 'base': 2 <inertial> elements; URDF allows one"),
+    ("inertial_two_masses", GROOVING.replace(
+        _BASE_VISUAL, _BASE_VISUAL + _INERTIAL.replace("<mass", '<mass value="2"/><mass'), 1),
+     '<link name="base"', "link 'base' <inertial> (its 1st): 2 <mass> elements"),
+    ("visual_two_origins", GROOVING.replace(
+        _BASE_VISUAL, _BASE_VISUAL + _BASE_VISUAL.replace("<geometry>", '<origin/><geometry>'),
+        1), '<link name="base"', "link 'base' <visual> (its 2nd): 2 <origin> elements"),
+    ("collision_two_shapes", GROOVING.replace(
+        _BASE_VISUAL, _BASE_VISUAL + '<collision><geometry><box size="1 1 1"/>'
+        '<sphere radius="1"/></geometry></collision>', 1),
+     '<link name="base"', "link 'base' <collision> (its 1st): <geometry> holds 2 shapes "
+     "(<box>, <sphere>); URDF allows one"),
+])
+def test_an_element_urdf_allows_once_given_twice_is_refused_naming_it(case, text, needle,
+                                                                      words, tmp_path):
+    path = tmp_path / f"{case}.urdf"
+    path.write_text(text)
+    with pytest.raises(ModelError) as raised:
+        load_machine(path)
+    assert str(raised.value).startswith(f"{path}, line {_line(text, needle)}: {words}"), \
+        str(raised.value)
+
+
+def test_a_joint_line_count_is_not_misled_by_elements_beside_the_joints(tmp_path):
+    # the lines of a joint's children are counted joint by joint: a <transmission> (whose
+    # <joint> holds children of its own) before the joints and a link's children between
+    # them do not shift them
+    text = LINED.replace(_X_AXIS, _X_AXIS + '\n    <axis xyz="0.0 1.0 0.0"/>', 1)
+    path = tmp_path / "lined.urdf"
+    path.write_text(text)
+    with pytest.raises(ModelError) as raised:
+        load_machine(path)
+    first, joint = _line(text, _X_AXIS), _line(text, '<joint name="X"', 2)
+    assert str(raised.value).startswith(
+        f"{path}, line {joint}: joint 'X': 2 <axis> elements "
+        f"(lines {first}, {first + 1})"), str(raised.value)
