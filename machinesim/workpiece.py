@@ -11,6 +11,7 @@ and ``"crown"`` (seed 002's roughly machined diamond crown, 10 um oversize).
 from __future__ import annotations
 
 import math
+import os
 import struct
 
 import manifold3d
@@ -178,15 +179,27 @@ class Part:
         return encoders[key]()
 
     def export_ply(self, path) -> None:
-        """Write a binary little-endian PLY with float64 vertices in metres: exact, bit for bit."""
+        """Write a binary little-endian PLY with float64 vertices in metres: exact, bit for bit.
+
+        ``path`` ends in ``.ply`` (any case); one ending otherwise is refused (`_check_suffix`).
+        """
+        _check_suffix(path, "ply")
         write_atomic(path, self._ply_bytes())
 
     def export_stl(self, path) -> None:
-        """Write a binary STL in millimetres. The format stores float32: for display only."""
+        """Write a binary STL in millimetres. The format stores float32: for display only.
+
+        ``path`` ends in ``.stl`` (any case).
+        """
+        _check_suffix(path, "stl")
         write_atomic(path, self._stl_bytes())
 
     def export_glb(self, path) -> None:
-        """Write a binary glTF in millimetres (float32 inside, via trimesh): for display only."""
+        """Write a binary glTF in millimetres (float32 inside, via trimesh): for display only.
+
+        ``path`` ends in ``.glb`` (any case).
+        """
+        _check_suffix(path, "glb")
         write_atomic(path, self._glb_bytes())
 
     def _ply_bytes(self) -> bytes:
@@ -226,6 +239,30 @@ class Part:
         mesh = trimesh.Trimesh(vertices / M_PER_MM, triangles, process=False)
         return trimesh.exchange.gltf.export_glb(trimesh.Scene(mesh),
                                                 tree_postprocessor=state_unit)
+
+
+#: What each export format is, for a message (`_check_suffix`).
+_FORMAT_TEXT = {"ply": "a PLY file (float64, metres: exact)",
+                "stl": "a binary STL (float32, millimetres: display only)",
+                "glb": "a binary glTF (float32, millimetres: display only)"}
+
+
+def _check_suffix(path, file_format: str) -> None:
+    """Refuse a ``path`` not ending in ``.<file_format>`` (any case): export_ply("part.stl")
+    wrote PLY bytes under an STL's name without a word, which an STL reader then failed on or
+    misread. The message names the export that writes what the ending asks, if one does."""
+    if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
+        return  # not a path: write_atomic says so
+    name = os.fspath(path)
+    suffix = os.path.splitext(name)[1].lower().lstrip(".")
+    if suffix == file_format:
+        return
+    meant = (f"; for {_FORMAT_TEXT[suffix]} call Part.export_{suffix}" if suffix in _FORMAT_TEXT
+             else "")
+    ending = f"ends in .{os.path.splitext(name)[1][1:]}" if suffix else "has no ending"
+    raise InputError(f"Part.export_{file_format} writes {_FORMAT_TEXT[file_format]}, and the "
+                     f"path {ending}: expected a name ending in .{file_format}{meant}",
+                     source=name, key="path")
 
 
 #: Triangles summed at once by `mesh_volume`: its temporaries stay a few MB.

@@ -820,7 +820,7 @@ def test_cli_refuses_bad_input_with_a_clear_message(tmp_path):
     with pytest.raises(InputError, match="reads parts as float64 PLY .*not .stl"):
         run([str(tmp_path / "part.stl"), "--html", str(tmp_path / "x.html")])
     # a part saved under another ending was 'unknown machine', as if a name were misspelt
-    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.dat")
+    (tmp_path / "part.dat").write_bytes(stock_from_spec("block:1x1x1").encode("ply"))
     with pytest.raises(InputError, match=r"part.dat: expected a part file ending in \.ply, a "
                                          r"machine's \.urdf or a report folder"):
         run([str(tmp_path / "part.dat"), "--html", str(tmp_path / "x.html")])

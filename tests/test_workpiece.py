@@ -175,6 +175,32 @@ def test_stl_and_glb_exports_are_readable(tmp_path):
     assert glb.volume == pytest.approx(6.0, rel=1e-6)  # mm^3
 
 
+def test_an_export_refuses_a_path_ending_in_another_format_naming_the_one_that_writes_it(
+        tmp_path):
+    # export_ply("part.stl") wrote the 'ply' header and float64 metres under an STL's name
+    part = stock_from_spec("block:1x2x3")
+    for export, name, words in [
+            (part.export_ply, "part.stl", "Part.export_ply writes a PLY file (float64, "
+             "metres: exact), and the path ends in .stl: expected a name ending in .ply; for "
+             "a binary STL (float32, millimetres: display only) call Part.export_stl"),
+            (part.export_stl, "part.ply", "the path ends in .ply: expected a name ending in "
+             ".stl; for a PLY file (float64, metres: exact) call Part.export_ply"),
+            (part.export_glb, "part.gltf", "the path ends in .gltf: expected a name ending "
+             "in .glb"),
+            (part.export_ply, "part", "the path has no ending: expected a name ending in .ply"),
+    ]:
+        with pytest.raises(InputError) as raised:
+            export(str(tmp_path / name))
+        assert raised.value.source == str(tmp_path / name) and raised.value.key == "path"
+        assert words in str(raised.value), str(raised.value)
+    assert list(tmp_path.iterdir()) == []  # nothing written
+    # the ending in any case: a PLY under .PLY is the one under .ply, byte for byte
+    part.export_ply(tmp_path / "upper.PLY")
+    part.export_stl(tmp_path / "upper.Stl")
+    assert (tmp_path / "upper.PLY").read_bytes() == part.encode("ply")
+    assert (tmp_path / "upper.Stl").read_bytes() == part.encode("stl")
+
+
 def test_a_ply_part_read_by_trimesh_as_the_readme_says_is_the_part(tmp_path):
     # 10 um V grooves on a block in metres: trimesh's default merge (1e-8, here 10 nm)
     # would fold their edges; read with process=False the mesh is the part, closed, and
