@@ -310,3 +310,36 @@ def test_r_test_readings_spread_as_their_stated_sigma(a0ib, zero, factor):
     # true one (a miss by chance ~6e-7); the old stated 50 nm is 29 % below 70.7 nm
     assert np.std(errors) == pytest.approx(readings[0].sigma, rel=0.032)
     assert {r.sigma for r in readings} == {factor * 50e-9}
+
+
+@pytest.mark.parametrize("instrument", [Microscope, WhiteLightInterferometer])
+def test_a_reading_off_the_part_in_mm_for_m_is_refused_saying_the_unit_and_the_part(
+        instrument):
+    # a line across a 10 mm block written in mm: (1, 5) to (9, 5) read 26.7 million NaN
+    # samples in 9 s, and fit_v_groove then said 'Expected at least 5 finite samples, got 0'
+    part = block(10 * MM, 10 * MM, 2 * MM)
+    reader = instrument(noise=False)
+    spans = ("the part spans x 0 .. 10 mm, y 0 .. 10 mm (in m: x 0 .. 0.01, y 0 .. 0.01). "
+             "Expected ")
+    with pytest.raises(InputError) as raised:
+        reader.profile(part, (1, 5), (9, 5), spacing=1 * UM)
+    assert str(raised.value) == (
+        f"key 'start': {instrument.__name__}: the profile from (1, 5) to (9, 5) m (8 m long, "
+        f"8e+06 samples at 1e-06 m) misses the part: every sample would read NaN (no "
+        f"surface); {spans}start and end in m (SI: 5 mm is 0.005)")
+    # x in mm, y in m: 10 mm of the 12 m line over the block, 0.0833 % (10 / 12000)
+    with pytest.raises(InputError, match=r"\(-1, 0\.005\) to \(11, 0\.005\) m \(12 m long, "
+                       r"1\.2e\+07 samples at 1e-06 m\) lies over the part for 0\.08% of it: "
+                       r"the rest would read NaN; the part spans x 0 \.\. 10 mm"):
+        reader.profile(part, (-1, 5 * MM), (11, 5 * MM), spacing=1 * UM)
+    with pytest.raises(InputError, match=r"the map over x 1 \.\. 9 m, y 1 \.\. 9 m \(8 m x 8 m, "
+                       r"6\.4e\+09 samples at 0\.0001 m\) misses the part.*Expected x0, x1, "
+                       r"y0, y1 in m"):
+        reader.height_map(part, 1, 9, 1, 9, spacing=0.1 * MM)
+    # at the bound: a line of which 1/1000 lies over the block is read (10 mm of 9.99 m),
+    # and so is a map 10 times the block's size each way around it (1 % of its area)
+    line = reader.profile(part, (0.0, 5 * MM), (9.99, 5 * MM), spacing=1 * MM)
+    assert np.isfinite(line.z).sum() == 11  # x = 0, 1, ..., 10 mm: on the block
+    area = reader.height_map(part, -44.5 * MM, 54.5 * MM, -44.5 * MM, 54.5 * MM,
+                             spacing=1 * MM)
+    assert np.isfinite(area.z).sum() == 10 * 10  # x and y = 0.5, 1.5, ..., 9.5 mm

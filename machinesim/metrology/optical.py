@@ -56,6 +56,7 @@ from machinesim.metrology.surface import (
     line_count,
     profile,
 )
+from machinesim.units import M_PER_MM
 
 __all__ = ["HeightMap", "Microscope", "Profile", "WhiteLightInterferometer"]
 
@@ -165,8 +166,10 @@ class _Profiler:
         -------
         Profile
         """
-        spacing = self.lateral_spacing if spacing is None else spacing
+        spacing = as_positive(self.lateral_spacing if spacing is None else spacing, "spacing")
         nominal = as_vector(start, 2, "start"), as_vector(end, 2, "end")
+        if not _is_field(part):
+            self._check_on_part(part, *nominal, spacing=spacing)
         shift = self._stage_offset()  # where the stage really put this reading
         a, b = nominal[0] + shift, nominal[1] + shift
         if _is_field(part):
@@ -213,6 +216,9 @@ class _Profiler:
         """
         spacing = as_positive(self.lateral_spacing if spacing is None else spacing, "spacing")
         (x0, x1), (y0, y1) = _limits(x0, x1, "x"), _limits(y0, y1, "y")
+        if not _is_field(part):
+            self._check_on_part(part, np.array([x0, y0]), np.array([x1, y1]), spacing,
+                                window=True)
         nx, ny = line_count(x1 - x0, spacing), line_count(y1 - y0, spacing)
         check_samples(nx * ny, spacing, f"{x1 - x0:g} m x {y1 - y0:g} m ({nx:.4g} x {ny:.4g})")
         x = _axis(x0, x1, spacing)
@@ -233,6 +239,51 @@ class _Profiler:
         vertices, triangles = mesh_arrays(surface)
         return HeightMap(x, y, self._display(spot_heights(vertices, triangles, rx, ry, dx, dy,
                                                           self.spot)))
+
+    def _check_on_part(self, part, a: np.ndarray, b: np.ndarray, spacing: float,
+                       window: bool = False) -> None:
+        """Refuse a profile from ``a`` to ``b`` (a map over the rectangle of corners ``a``,
+        ``b``), as asked, that misses the part's xy extent (as the instrument sees it, in
+        its frame when it has a registration) or of which
+        less than `ON_PART_SHARE` lies over it: a unit slip, mm given as m. Given (1, 5) and
+        (9, 5) for a line across a 10 mm block, the microscope read 26.7 million samples
+        (9 s), all NaN, and fit_v_groove then said 'Expected at least 5 finite samples, got
+        0'. A part given as a height field (a turned face) has heights everywhere."""
+        vertices, _ = mesh_arrays(self._surface(part))
+        if len(vertices) == 0:
+            return
+        lo, hi = vertices[:, :2].min(axis=0), vertices[:, :2].max(axis=0)
+        if window:
+            size = b - a
+            over = np.clip(np.minimum(b, hi) - np.maximum(a, lo), 0.0, None)
+            share = float(np.prod(over) / np.prod(size))
+            missed = bool(np.any(np.minimum(b, hi) < np.maximum(a, lo)))
+            count = line_count(size[0], spacing) * line_count(size[1], spacing)
+            what = (f"the map over x {a[0]:g} .. {b[0]:g} m, y {a[1]:g} .. {b[1]:g} m "
+                    f"({size[0]:g} m x {size[1]:g} m, {count:.3g} samples at {spacing:g} m)")
+            arguments, of = "x0, x1, y0, y1", "of its area"
+        else:
+            length = float(np.hypot(*(b - a)))
+            if length == 0.0:
+                return  # refused as such by the reading
+            inside = _clipped(a, b, lo, hi)
+            missed = inside is None
+            share = 0.0 if missed else inside / length
+            what = (f"the profile from ({a[0]:g}, {a[1]:g}) to ({b[0]:g}, {b[1]:g}) m "
+                    f"({length:g} m long, {line_count(length, spacing):.3g} samples at "
+                    f"{spacing:g} m)")
+            arguments, of = "start and end", "of it"
+        if not missed and share >= ON_PART_SHARE:
+            return
+        mm = (lo / M_PER_MM).tolist(), (hi / M_PER_MM).tolist()
+        spans = (f"the part spans x {mm[0][0]:.6g} .. {mm[1][0]:.6g} mm, y {mm[0][1]:.6g} .. "
+                 f"{mm[1][1]:.6g} mm (in m: x {lo[0]:.6g} .. {hi[0]:.6g}, y {lo[1]:.6g} .. "
+                 f"{hi[1]:.6g})")
+        found = ("misses the part: every sample would read NaN (no surface)" if missed else
+                 f"lies over the part for {share:.2%} {of}: the rest would read NaN")
+        raise InputError(f"{type(self).__name__}: {what} {found}; {spans}. Expected "
+                         f"{arguments} in m (SI: 5 mm is 0.005)",
+                         key="start" if not window else "x0")
 
     @contextmanager
     def placement(self):
@@ -373,6 +424,30 @@ class WhiteLightInterferometer(_Profiler):
         super().__init__(sigma, resolution, lateral_spacing, noise, rng, spot, lateral_sigma,
                          lateral_rng, registration, stage_sigma, stage_rng,
                          registration_scatter)
+
+
+#: Least share of a profile's length (of a map's area) that must lie over the part's xy
+#: extent: below it at least 999 samples in 1000 read NaN. A line across a 10 mm block given
+#: in mm where m are asked for is over it for 0.08 % ((-1, 5) to (11, 5): 12 m, 10 mm of
+#: it over the block) or misses it; a generous line or map around a small part is far above.
+ON_PART_SHARE = 1e-3
+
+
+def _clipped(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float | None:
+    """Length of the segment a-b inside the closed box [lo, hi] (Liang-Barsky), None when it
+    misses the box."""
+    t0, t1 = 0.0, 1.0
+    d = b - a
+    for k in range(2):
+        if d[k] == 0.0:
+            if not lo[k] <= a[k] <= hi[k]:
+                return None
+            continue
+        u, v = (lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]
+        t0, t1 = max(t0, min(u, v)), min(t1, max(u, v))
+    if t0 > t1:
+        return None
+    return (t1 - t0) * float(np.hypot(*d))
 
 
 def _is_field(part) -> bool:
