@@ -579,6 +579,21 @@ def test_the_builder_names_a_bad_feed_as_it_was_given(feed, message):
     assert error.value.line == 2
 
 
+def test_the_builder_refuses_a_linear_move_before_any_feed_naming_the_argument():
+    # it built, and the planner refused it later as 'a feed move (G01) with no feed rate F
+    # given so far', at the move's line: an F the builder's caller never writes
+    builder = ProgramBuilder().rapid(X=0.0).rapid(Z=1e-3)
+    with pytest.raises(NCProgramError) as error:
+        builder.linear(X=1e-3)
+    assert str(error.value).startswith(
+        "<builder>, line 3, key 'feed_mm_per_min': a linear move needs a feed and none was "
+        "given before it: give feed_mm_per_min (or feed_m_per_s) on the first linear move")
+    assert len(builder.build().moves) == 2  # nothing appended
+    # the feed is modal: given once, the next linear moves keep it (100 mm/min in m/s)
+    program = builder.linear(X=1e-3, feed_mm_per_min=100.0).linear(Y=1e-3).build()
+    assert [m.feed_m_per_s for m in program.moves[2:]] == [100.0 * 1e-3 / 60.0] * 2
+
+
 def _rounded(value: float, decimals: int) -> float:
     """Round-half-even of the exact binary value with Decimal: a second method to f-strings."""
     quantum = Decimal(1).scaleb(-decimals)
@@ -591,6 +606,7 @@ def _random_program(rng: np.random.Generator) -> Program:
     builder = ProgramBuilder(number=int(rng.integers(0, 10000)), work_offsets=offsets)
     axes = list(rng.choice(AXES, size=int(rng.integers(1, 7)), replace=False))
     last: dict[str, float] = {}
+    fed = False
     n_moves = 40
     for index in range(n_moves):
         if rng.random() < 0.1:
@@ -614,6 +630,9 @@ def _random_program(rng: np.random.Generator) -> Program:
                 builder.rapid(block_number=number, m_codes=m_codes, **values)
             else:
                 feed = rng.uniform(0.1, 2000.0) if rng.random() < 0.3 else None
+                if feed is None and not fed:  # the first linear move has one
+                    feed = rng.uniform(0.1, 2000.0)
+                fed = True
                 builder.linear(feed_mm_per_min=feed, block_number=number, m_codes=m_codes,
                                **values)
         elif kind == "dwell":

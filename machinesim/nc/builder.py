@@ -69,8 +69,9 @@ class ProgramBuilder:
         exact_stop: bool = False,
         **axes: float,
     ) -> ProgramBuilder:
-        """Append a linear move (G01); the feed (one of the two units) is modal. With
-        ``exact_stop`` the move ends in position (G09: `Program.exact_stops`)."""
+        """Append a linear move (G01); the feed (one of the two units) is modal, and the
+        first linear move is refused without one. With ``exact_stop`` the move ends in
+        position (G09: `Program.exact_stops`)."""
         if feed_mm_per_min is not None and feed_m_per_s is not None:
             raise NCProgramError("give the feed once: feed_mm_per_min or feed_m_per_s",
                                  source=self._source, key="feed")
@@ -78,6 +79,14 @@ class ProgramBuilder:
             self._feed = self._positive(feed_mm_per_min, "feed_mm_per_min") * (M_PER_MM / 60.0)
         elif feed_m_per_s is not None:
             self._feed = self._positive(feed_m_per_s, "feed_m_per_s")
+        elif self._feed is None:
+            # as a G01 before any F: the planner refused it, naming the move's line and
+            # 'no feed rate F', neither of which the builder's caller wrote
+            raise NCProgramError("a linear move needs a feed and none was given before it: "
+                                 "give feed_mm_per_min (or feed_m_per_s) on the first "
+                                 "linear move; the moves after it keep it until given another",
+                                 source=self._source, line=len(self._moves) + 1,
+                                 key="feed_mm_per_min")
         self._motion("linear", self._feed, block_number, m_codes, axes)
         if exact_stop:
             self._stops.append(len(self._moves) - 1)
