@@ -44,10 +44,10 @@ def ring_facet_depth(radius: float, rings: int, segments: int) -> float:
     return float(radius * (1.0 - min(distance.min(), c)))
 
 
-@functools.lru_cache(maxsize=16)
-def _ball_mesh(radius: float, chord_tol: float, height: float):
-    """Hemisphere ring polygon under a prism shank: vertices (k, 3), triangles (t, 3) int64,
-    rings and segments (see `BallEndMill.rings`)."""
+def ball_rings(radius: float, chord_tol: float) -> tuple[int, int]:
+    """(rings, segments) of the hemisphere's polygon within ``chord_tol`` (m) of a ball of
+    ``radius`` (m) (`BallEndMill.rings`), refused (InputError, key chord_tol) when its
+    vertices would pass `MAX_TOOL_VERTICES`."""
     if chord_tol >= radius:
         rings, segments = 1, 4
     else:
@@ -57,9 +57,16 @@ def _ball_mesh(radius: float, chord_tol: float, height: float):
     while True:
         _check_count("ball polygon", rings * segments + segments + 1, chord_tol)
         if ring_facet_depth(radius, rings, segments) <= chord_tol:
-            break
+            return rings, segments
         rings += math.ceil(rings / 8)
         segments += 4 * math.ceil(segments / 32)
+
+
+@functools.lru_cache(maxsize=16)
+def _ball_mesh(radius: float, chord_tol: float, height: float):
+    """Hemisphere ring polygon under a prism shank: vertices (k, 3), triangles (t, 3) int64,
+    rings and segments (see `BallEndMill.rings`)."""
+    rings, segments = ball_rings(radius, chord_tol)
     theta = np.linspace(0.0, math.pi / 2.0, rings + 1)[1:]
     phi = 2.0 * math.pi * np.arange(segments) / segments
     ring_radius = radius * np.sin(theta)

@@ -1,16 +1,28 @@
-"""Tools from text specs in mm and degrees (``"v:90"``, ``"flat:0.5:h=3:d=4"``), as the
-command line, the tool tables and the Python API take them (`tool_from_spec`)."""
+"""Tools from text specs in mm and degrees (``"v:90"``, ``"flat:0.5:h=3:d=4"``,
+``"ball:0.5mm"``), as the command line, the tool tables and the Python API take them
+(`tool_from_spec`)."""
 
 from __future__ import annotations
 
+import functools
+import math
+
+from machinesim.end_mills import ball_rings
 from machinesim.exceptions import InputError, brief
+from machinesim.tolerances import BALL_CHORD_M
+from machinesim.tool_sizes import MAX_TOOL_SIZE_M
 from machinesim.tools import BallEndMill, FlatEndMill, RoundNoseTool, Tool, VTool
 from machinesim.units import M_PER_MM, RAD_PER_DEG
 
 _SPEC_FORMS = ("'v:ANGLE_DEG', 'nose:RADIUS_MM:ANGLE_DEG', 'ball:RADIUS_MM' or "
                "'flat:RADIUS_MM', optionally "
                "followed by ':h=HEIGHT_MM' (e.g. 'v:90:h=5'), and for ball and flat by "
-               "':d=SHANK_DIAMETER_MM' (e.g. 'flat:0.5:h=3:d=4')")
+               "':d=SHANK_DIAMETER_MM' (e.g. 'flat:0.5:h=3:d=4'); a size may end in 'mm' "
+               "and an angle in 'deg' ('ball:0.5mm', 'v:90deg')")
+#: The numbers after each kind: what each is and its unit (mm for a size, deg for an angle).
+_SPEC_VALUES = {"v": (("an included angle", "deg"),),
+                "nose": (("a nose radius", "mm"), ("an included angle", "deg")),
+                "ball": (("a radius", "mm"),), "flat": (("a radius", "mm"),)}
 #: The trailing fields of a spec: the letter, the keyword it sets, what it is, and how a
 #: value in mm becomes it (m).
 _SPEC_FIELDS = {"h": ("height", "a height", "h=HEIGHT_MM", M_PER_MM),
@@ -18,18 +30,31 @@ _SPEC_FIELDS = {"h": ("height", "a height", "h=HEIGHT_MM", M_PER_MM),
                       0.5 * M_PER_MM)}
 
 
-def _spec_field(where: str, field: str) -> tuple[str, float]:
+def _spec_field(where: str, field: str, spec: str) -> tuple[str, float]:
     """The keyword and value (m) of a spec's ``h=HEIGHT_MM`` or ``d=SHANK_DIAMETER_MM`` field
     (a trailing ``mm`` is allowed); ``where`` begins a refusal (`tool_from_spec`)."""
     name, what, form, scale = _SPEC_FIELDS[field.strip()[0].lower()]
-    text = field.strip()[2:].strip()
-    if text.lower().endswith("mm"):
-        text = text[:-2]
+    return name, _spec_number(where, field.strip()[2:], what, "mm",
+                              f"'{form}', e.g. '{form[0]}=5'", spec, field) * scale
+
+
+def _spec_number(where: str, text: str, what: str, unit: str, form: str, spec: str,
+                 field: str | None = None) -> float:
+    """A spec's number in ``unit`` (mm or deg), which it may end in (``0.5mm``, ``90 deg``,
+    as ``h=20mm`` always could); ``form`` shows the field in a refusal, ``spec`` corrected
+    for a decimal comma, ``field`` the whole field (``h=...``) when ``text`` is its value."""
+    text = text.strip()
+    number = text[:-len(unit)] if text.lower().endswith(unit) else text
     try:
-        return name, float(text) * scale
+        return float(number)
     except ValueError:
-        raise InputError(f"{where}: {field!r} is not {what}; expected "
-                         f"'{form}' with a number in mm, e.g. '{form[0]}=5'") from None
+        pass
+    shown = repr(field if field is not None else text)
+    if "," in text:  # '0,5' as a German or French keyboard writes a half
+        raise InputError(f"{where}: {shown} is not a number: the decimal mark is a point, e.g. "
+                         f"{spec.strip().replace(',', '.')!r}") from None
+    raise InputError(f"{where}: {shown} is not {what}; expected {form}: a number in {unit}, "
+                     f"which may end in '{unit}'") from None
 
 
 def tool_from_spec(spec: str, *, name: str = "tool spec") -> Tool:
@@ -41,10 +66,13 @@ def tool_from_spec(spec: str, *, name: str = "tool spec") -> Tool:
         ``"v:90"`` (included angle, deg), ``"nose:2.0:90"`` (nose radius mm, included angle
         deg), ``"ball:2.0"`` (radius mm) or ``"flat:1.0"`` (a flat end mill, radius mm: 2 mm
         across), optionally followed by ``":h=5"``: the tool's
-        height from its edge to the holder in mm (default `TOOL_HEIGHT_M`, 10 mm; ``"h=5mm"``
-        reads the same), and for a ball or flat end mill by ``":d=4"``: the diameter of the
-        shank or holder above that height, mm, for the holder check (default: as wide as
-        the tool).
+        height from its edge to the holder in mm (default `TOOL_HEIGHT_M`, 10 mm), and for a
+        ball or flat end mill by ``":d=4"``: the diameter of the shank or holder above that
+        height, mm, for the holder check (default: as wide as the tool). Every size may end
+        in ``mm`` and every angle in ``deg`` (``"ball:0.5mm:h=5mm"``, ``"v:90deg"``). A
+        ball's facets lie within `BALL_CHORD_M` (1 um), which keeps it to at most 80.6 mm
+        in radius (`MAX_TOOL_VERTICES`); a larger one is a `BallEndMill` built in Python
+        with a coarser ``chord_tol``.
     name : str, optional
         What a refusal calls the spec: ``"--tool"`` on the command line, so that it reads
         ``--tool 'ball:-1': radius must be ...``; a caller names the file and key around it.
@@ -65,7 +93,7 @@ def tool_from_spec(spec: str, *, name: str = "tool spec") -> Tool:
     fields = str(spec).strip().split(":")
     extra = {}
     while len(fields) > 1 and fields[-1].strip().lower()[:2] in ("h=", "d="):
-        keyword, value = _spec_field(where, fields.pop())
+        keyword, value = _spec_field(where, fields.pop(), str(spec))
         if keyword in extra:
             raise InputError(f"{where}: {keyword} given twice")
         extra[keyword] = value
@@ -83,16 +111,8 @@ def tool_from_spec(spec: str, *, name: str = "tool spec") -> Tool:
     if "shank_radius" in extra and kind not in ("ball", "flat"):
         raise InputError(f"{where}: a shank diameter (d=) is for a ball or flat end "
                          f"mill; a {kind} tool's holder is its own bar")
-    try:
-        values = [float(field) for field in fields[1:]]
-    except ValueError:
-        if any("," in field for field in fields[1:]):
-            # '0,5' as a German or French keyboard writes a half
-            raise InputError(f"{where}: {next(f for f in fields[1:] if ',' in f)!r} is not a "
-                             "number: the decimal mark is a point, e.g. "
-                             f"{str(spec).strip().replace(',', '.')!r}") from None
-        raise InputError(f"{where}: expected numbers after the kind, as in {_SPEC_FORMS}"
-                         ) from None
+    values = [_spec_number(where, field, what, unit, f"'{_KIND_FORMS[kind]}'", str(spec))
+              for field, (what, unit) in zip(fields[1:], _SPEC_VALUES[kind], strict=True)]
     try:
         if kind == "v":
             return VTool(values[0] * RAD_PER_DEG, **extra)
@@ -106,7 +126,34 @@ def tool_from_spec(spec: str, *, name: str = "tool spec") -> Tool:
         message = error.message
         if error.key == "shank_radius":
             message = message.replace("shank_radius", "shank_radius (half the d= diameter)", 1)
+        if error.key == "chord_tol":  # a ball too large for its facets: a spec sets no chord_tol
+            message = (f"{message.split('; give')[0]}. A spec's ball keeps its facets within "
+                       f"{BALL_CHORD_M / M_PER_MM * 1e3:g} um and is at most "
+                       f"{_largest_ball_mm():g} mm in radius ({values[0]:g} um would be "
+                       f"ball:{values[0] / 1e3:g}); a larger ball is built in Python, "
+                       "BallEndMill(radius_m, chord_tol=...) with a coarser chord_tol")
         raise InputError(f"{where}: {message}") from None
+
+
+#: Each kind's form, for a refusal of one of its numbers.
+_KIND_FORMS = {"v": "v:ANGLE_DEG", "nose": "nose:RADIUS_MM:ANGLE_DEG", "ball": "ball:RADIUS_MM",
+               "flat": "flat:RADIUS_MM"}
+
+
+@functools.cache
+def _largest_ball_mm() -> float:
+    """The largest ball radius (mm, 3 digits, rounded down) whose polygon at `BALL_CHORD_M`
+    stays within `MAX_TOOL_VERTICES`: what a spec can build."""
+    low, high = 1.0, MAX_TOOL_SIZE_M / M_PER_MM  # mm: 1 mm passes, 1 m does not
+    for _ in range(60):
+        middle = math.sqrt(low * high)
+        try:
+            ball_rings(middle * M_PER_MM, BALL_CHORD_M)
+            low = middle
+        except InputError:
+            high = middle
+    digits = math.floor(math.log10(low)) - 2
+    return round(math.floor(low / 10.0**digits) * 10.0**digits, -digits)
 
 
 __all__ = ["tool_from_spec"]

@@ -11,6 +11,7 @@ and ``"crown"`` (seed 002's roughly machined diamond crown, 10 um oversize).
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import struct
 
@@ -301,8 +302,27 @@ def mesh_volume(vertices: np.ndarray, triangles: np.ndarray,
     return total / 6.0
 
 
+def _sizes(kind: str, form: str, **sizes) -> list[float]:
+    """A solid's sizes (m) as floats, refusing what is no number, naming it: cylinder("5", 2)
+    ended in "TypeError: must be real number, not str", and True read as 1 m. ``form`` is the
+    stock spec of the solid, which takes its sizes in mm as text."""
+    values = []
+    for name, value in sizes.items():
+        if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+            value = value.item()
+        if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+            spec = (f"; a size written as text, in mm, is read by stock_from_spec('{form}')"
+                    if isinstance(value, str) else "")
+            raise InputError(f"{kind} {name} must be a number in m, got {brief(repr(value))} "
+                             f"({type(value).__name__}){spec}", key=name)
+        values.append(float(value))
+    return values
+
+
 def block(length: float, width: float, height: float, origin=(0.0, 0.0, 0.0)) -> Part:
     """Block occupying [0, L] x [0, W] x [-H, 0] (m), translated by ``origin`` (m)."""
+    length, width, height = _sizes("block", "block:LxWxH", length=length, width=width,
+                                   height=height)
     for name, value in (("length", length), ("width", width), ("height", height)):
         if not math.isfinite(value) or value <= 0.0:
             raise InputError(f"block {name} must be positive, got {length_text(value)}",
@@ -317,6 +337,7 @@ def cylinder(radius: float, height: float, origin=(0.0, 0.0, 0.0),
 
     The circle is an inscribed polygon whose sagitta is at most ``chord_tol`` (m).
     """
+    radius, height = _sizes("cylinder", "cylinder:RxH", radius=radius, height=height)
     for name, value in (("radius", radius), ("height", height)):
         if not math.isfinite(value) or value <= 0.0:
             raise InputError(f"cylinder {name} must be positive, got {length_text(value)}",
@@ -348,6 +369,7 @@ def block_with_spheres(length: float, width: float, height: float, radius: float
     chord_tol : float
         Largest facet depth of the sphere polygon.
     """
+    radius, = _sizes("sphere", "spheres:LxWxH:R", radius=radius)
     stock = block(length, width, height).manifold
     if radius <= 0.0 or 4.0 * radius >= min(length, width):
         raise InputError(

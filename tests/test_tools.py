@@ -267,6 +267,35 @@ def test_a_spec_shank_diameter_widens_the_holder_not_the_tool():
     assert tool_from_spec("ball:0.5").shank_radius == 0.0
 
 
+def test_every_size_of_a_spec_may_end_in_mm_and_every_angle_in_deg():
+    # 'ball:0.5mm' was refused ('expected numbers after the kind') where 'ball:0.5:h=20mm'
+    # was read: now a unit may end every number, and reads as the bare number
+    for spec, plain in [("ball:0.5mm", "ball:0.5"), ("ball:0.5 MM:h=20mm", "ball:0.5:h=20"),
+                        ("flat:1mm:h=3mm:d=4mm", "flat:1:h=3:d=4"), ("v:90deg", "v:90"),
+                        ("v:60 deg:h=5", "v:60:h=5"), ("nose:0.2mm:90deg", "nose:0.2:90")]:
+        assert tool_from_spec(spec) == tool_from_spec(plain), spec
+    assert tool_from_spec("ball:0.5mm").radius == 0.5e-3  # mm to m
+    assert tool_from_spec("v:90deg").included_angle == math.pi / 2
+
+
+def test_a_spec_ball_too_large_for_its_facets_says_what_a_spec_can_build():
+    # 'ball:500' said 'give a larger chord_tol', which neither --tool nor a tool table can
+    # set. The largest spec ball: 80.6 mm builds, 80.7 mm passes MAX_TOOL_VERTICES at the
+    # 1 um chord_tol, as BallEndMill itself says
+    assert tool_from_spec("ball:80.6").radius == pytest.approx(80.6e-3, rel=1e-15)
+    with pytest.raises(InputError, match="201,601 vertices at chord_tol 1e-06 m"):
+        BallEndMill(80.7e-3)
+    with pytest.raises(InputError) as caught:
+        tool_from_spec("ball:500", name="--tool")
+    assert str(caught.value) == (
+        "--tool 'ball:500': the ball polygon would have 1,238,769 vertices at chord_tol 1e-06 "
+        "m, over MAX_TOOL_VERTICES (200,000). A spec's ball keeps its facets within 1 um and "
+        "is at most 80.6 mm in radius (500 um would be ball:0.5); a larger ball is built in "
+        "Python, BallEndMill(radius_m, chord_tol=...) with a coarser chord_tol")
+    # as the message says: in Python, with a coarser chord_tol, the 500 mm ball builds
+    assert BallEndMill(0.5, chord_tol=1e-5).radius == 0.5
+
+
 def test_a_spec_shank_diameter_of_zero_is_refused():
     # 'd=0' became shank_radius 0, the API's "as wide as the tool": a cut with a shank the
     # user did not give, exit 0
@@ -283,7 +312,15 @@ def test_a_spec_shank_diameter_of_zero_is_refused():
         ("v", "expected 'v:ANGLE_DEG'"),
         ("nose:2.0", "expected 'v:ANGLE_DEG'"),
         ("drill:3", "'drill:3'.*expected"),
-        ("v:abc", "'v:abc'.*expected numbers"),
+        ("v:abc", "^tool spec 'v:abc': 'abc' is not an included angle; expected "
+                  "'v:ANGLE_DEG': a number in deg, which may end in 'deg'$"),
+        # a size in another unit than mm, an angle in mm
+        ("ball:0.5um", "^tool spec 'ball:0.5um': '0.5um' is not a radius; expected "
+                       "'ball:RADIUS_MM': a number in mm, which may end in 'mm'$"),
+        ("v:90mm", "'90mm' is not an included angle; expected 'v:ANGLE_DEG'"),
+        ("nose:0.5deg:90", "'0.5deg' is not a nose radius; expected 'nose:RADIUS_MM:ANGLE_DEG'"),
+        ("v:90:h=2um", "'h=2um' is not a height; expected 'h=HEIGHT_MM', e.g. 'h=5': a number "
+                       "in mm"),
         ("ball:0,5", "^tool spec 'ball:0,5': '0,5' is not a number: the decimal mark is a "
                      "point, e.g. 'ball:0.5'$"),
         ("nose:0,5:90:h=2", "'0,5' is not a number: .* e.g. 'nose:0.5:90:h=2'$"),

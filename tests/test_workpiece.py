@@ -273,3 +273,27 @@ def test_spec_refusals_give_lengths_in_mm_first_and_clean():
 def test_cylinder_radius_error():
     with pytest.raises(InputError, match="radius must be positive"):
         cylinder(0.0, 1e-3)
+
+
+def test_a_solid_refuses_a_size_that_is_no_number_naming_it():
+    # cylinder("5", 2) ended in "TypeError: must be real number, not str", and True read as
+    # a size of 1 m
+    cases = [
+        (lambda: cylinder("5", 2e-3), "radius", "cylinder radius must be a number in m, got "
+         "'5' (str); a size written as text, in mm, is read by "
+         "stock_from_spec('cylinder:RxH')"),
+        (lambda: cylinder(1e-3, True), "height", "cylinder height must be a number in m, got "
+         "True (bool)"),
+        (lambda: block(1e-3, None, 1e-3), "width", "block width must be a number in m, got "
+         "None (NoneType)"),
+        (lambda: block_with_spheres(0.01, 0.01, 0.002, "1"), "radius", "sphere radius must be "
+         "a number in m, got '1' (str)"),
+    ]
+    for make, key, message in cases:
+        with pytest.raises(InputError) as raised:
+            make()
+        assert raised.value.key == key
+        assert message in str(raised.value), str(raised.value)
+    # numpy numbers are numbers: the cylinder as from floats, pi r^2 h to its chord polygon
+    assert (cylinder(np.float64(1e-3), np.array(2e-3)).volume
+            == cylinder(1e-3, 2e-3).volume == pytest.approx(math.pi * 2e-9, rel=1e-6))
