@@ -431,7 +431,8 @@ def diamond_crown(oversize: float = 10.0 * M_PER_UM, top_across_flats: float = 4
 
 _STOCK_FORMS = (
     "'block:LxWxH', 'cylinder:RxH', 'spheres:LxWxH:R', 'spheres:LxWxH:R:dimples', "
-    "'crown' or 'crown:OVERSIZE' (mm), each optionally followed by '@x,y,z' (mm)"
+    "'crown' or 'crown:OVERSIZE' (mm), each optionally followed by '@x,y,z' (mm); a number "
+    "may end in 'mm' ('block:10x10x2mm')"
 )
 
 
@@ -446,7 +447,9 @@ def _numbers(where: str, text: str, count: int, separator: str,
              sizes: bool = True) -> list[float]:
     """``count`` numbers of ``text`` between ``separator``s; ``where`` (the spec as the
     caller names it) begins a refusal."""
-    fields = text.split(separator)
+    # a number may end in mm, as every size of a tool spec may ('block:10x10x2mm')
+    fields = [f.strip()[:-2] if f.strip().lower().endswith("mm") else f
+              for f in text.split(separator)]
     try:
         values = [float(field) for field in fields]
     except ValueError:

@@ -297,3 +297,16 @@ def test_a_solid_refuses_a_size_that_is_no_number_naming_it():
     # numpy numbers are numbers: the cylinder as from floats, pi r^2 h to its chord polygon
     assert (cylinder(np.float64(1e-3), np.array(2e-3)).volume
             == cylinder(1e-3, 2e-3).volume == pytest.approx(math.pi * 2e-9, rel=1e-6))
+
+
+def test_a_stock_spec_number_may_end_in_mm_as_a_tool_spec_size_may():
+    # 'ball:0.5mm' is read; 'block:10x10x2mm' was refused ('expected 3 numbers')
+    for spec, plain in [("block:10x10x2mm", "block:10x10x2"),
+                        ("block:10mmx20 MMx2mm@-5mm,-5,0.5mm", "block:10x20x2@-5,-5,0.5"),
+                        ("cylinder:5mmx2mm", "cylinder:5x2"), ("crown:0.01mm", "crown:0.01"),
+                        ("spheres:20x20x3:2mm", "spheres:20x20x3:2")]:
+        np.testing.assert_array_equal(stock_from_spec(spec).bounds,
+                                      stock_from_spec(plain).bounds)
+    assert stock_from_spec("block:10x10x2mm").volume == pytest.approx(200e-9, rel=VOLUME_REL)
+    with pytest.raises(InputError, match="expected 3 numbers separated by 'x' in '10x10x2um'"):
+        stock_from_spec("block:10x10x2um")
