@@ -33,6 +33,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from machinesim._frozen import reduce_frozen
 from machinesim.errors import AXES
 from machinesim.errors.model import _PARAMETER_RE
 from machinesim.exceptions import InputError, brief
@@ -168,6 +169,8 @@ class Identified:
                              f"got {brief(repr(notes))}", key="notes")
         object.__setattr__(self, "notes", tuple(notes))
 
+    __reduce__ = reduce_frozen  # pickles (parameters is read-only: a mappingproxy)
+
 
 def fit_notes(fit: str, estimate, *, sigma_leaves_out: str | None = None) -> tuple[str, ...]:
     """The notes of ``estimate`` (a `machinesim.identification.fit.Estimate`), each led by
@@ -204,6 +207,8 @@ class Evaluation:
     details: Mapping = field(default_factory=dict)
     parts: Mapping = field(default_factory=dict)
     programs: Mapping = field(default_factory=dict)
+
+    __reduce__ = reduce_frozen  # pickles, a procedure's read-only mappings too
 
 
 class Procedure(Protocol):
@@ -283,6 +288,10 @@ class Result:
     realism: tuple[str, ...] = ()
     background: Mapping = field(default_factory=dict)
     polynomials: tuple[str, ...] = ()
+
+    #: A result pickles (saved, or sent to a Dask worker and back), its read-only mappings
+    #: as dicts: the pickle holds these fields and nothing more, no lab.
+    __reduce__ = reduce_frozen
 
     @property
     def notes(self) -> tuple[str, ...]:

@@ -375,14 +375,17 @@ class Kinematics:
 
     def __getstate__(self) -> dict:
         # Pinocchio's Data is a workspace every algorithm here fills before it reads it, and
-        # it pickles to tens of MB (73 MB for grooving_4axis): a copy gets a fresh one
+        # it pickles to tens of MB (73 MB for grooving_4axis): a copy gets a fresh one. The
+        # plans are a cache by id() of the error models bound (a lab's truth among them),
+        # ids that mean nothing in another process: a copy starts without
         state = self.__dict__.copy()
-        del state["data"]
+        del state["data"], state["_plans"]
         return state
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
         self.data = self.model.createData()
+        self._plans = {}
 
     # ---------------------------------------------------------------- checks of error models
 

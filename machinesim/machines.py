@@ -167,6 +167,14 @@ class Machine:
     def __repr__(self) -> str:
         return f"Machine({self.name!r}, axes={''.join(self.axes)})"
 
+    def __getstate__(self) -> dict:
+        # the bindings are a cache by id() of the error models bound on this machine (a
+        # lab's truth among them, as a procedure's measurements hold the lab's machine):
+        # a pickle (a Result saved or sent to a worker) leaves them out, a copy starts empty
+        state = self.__dict__.copy()
+        state["_bindings"] = {}
+        return state
+
     @functools.cached_property
     def digest(self) -> str:
         """SHA-256 of the URDF this machine was built from, as it was read: two machines

@@ -67,6 +67,13 @@ class Part:
         part.reliefs = reliefs
         return part
 
+    def __reduce__(self):
+        """A part pickles as its exact float64 mesh (`mesh`; a manifold3d value does not
+        pickle) and its volume, and comes back a meshed part of that volume, its manifold
+        built when first read."""
+        vertices, triangles = self.mesh()
+        return _unpickle_part, (vertices, triangles, self.reliefs, self.volume)
+
     @property
     def manifold(self) -> manifold3d.Manifold:
         """The solid as a `manifold3d.Manifold` (built on first use for a meshed part)."""
@@ -273,6 +280,11 @@ EXPORT_UNITS = {"ply": "m", "stl": "mm", "glb": "mm"}
 _STL_HEADER = b"machinesim part, binary STL, units: mm (float32: display only)".ljust(80, b" ")
 _GLB_NOTE = ("machinesim part in millimetres, as CAD tools read STL; float32: display only "
              "(the exact float64 part in metres is the PLY export)")
+
+
+def _unpickle_part(vertices, triangles, reliefs, volume) -> Part:
+    """A pickled `Part` (`Part.__reduce__`): its mesh, read-only again."""
+    return Part._closed(vertices, triangles, reliefs, volume)
 
 
 def mesh_volume(vertices: np.ndarray, triangles: np.ndarray,

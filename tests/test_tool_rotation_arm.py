@@ -437,6 +437,53 @@ def test_the_procedure_report_follows_the_one_schema(exact_run, tmp_path):
         assert (tmp_path / name).stat().st_size > 0
 
 
+def test_a_result_pickles_and_comes_back_the_same_without_its_lab(exact_run, tmp_path):
+    """A Result pickles (saved, or sent to a Dask worker and back): before, its read-only
+    mappings (injected, identified, ...) and its calibration part (a manifold3d value) made
+    pickle.dumps fail ("cannot pickle 'mappingproxy' object"). The copy has the same figures
+    and identified values, writes the same report byte for byte, and the pickle holds no lab:
+    its only error models are the fits' own estimates."""
+    import io
+    import pickle
+
+    from machinesim.errors.model import ErrorModel as Model
+
+    result, lab = exact_run
+    kept = []
+
+    class Recording(pickle.Pickler):
+        def persistent_id(self, obj):
+            kept.append(obj)
+            return None
+
+    buffer = io.BytesIO()
+    Recording(buffer, protocol=pickle.HIGHEST_PROTOCOL).dump(result)
+    back = pickle.loads(buffer.getvalue())
+    assert back.figures == result.figures and len(back.figures) == 3
+    assert dict(back.identified) == dict(result.identified)
+    assert dict(back.identification.parameters) == dict(result.identified)
+    assert dict(back.injected) == dict(result.injected)
+    with pytest.raises(TypeError):  # read-only again
+        back.identified["tool.y"] = (0.0, 0.0)
+    assert back.identification.detail.estimate == result.identification.detail.estimate
+    part, copy = result.measurements.part, back.measurements.part
+    assert copy.volume == part.volume and copy.manifold.volume() == pytest.approx(part.volume)
+    assert all(np.array_equal(a, b) for a, b in zip(copy.mesh(), part.mesh(), strict=True))
+    ReportFolder(tmp_path / "original").write_result(result)
+    ReportFolder(tmp_path / "copy").write_result(back)
+    names = sorted(p.name for p in (tmp_path / "original").iterdir())
+    assert names == sorted(p.name for p in (tmp_path / "copy").iterdir())
+    assert {"summary.json", "identified.md", "pattern_after.ply"} <= set(names)
+    for name in names:
+        assert ((tmp_path / "copy" / name).read_bytes()
+                == (tmp_path / "original" / name).read_bytes()), name
+    assert not any(isinstance(obj, Lab) for obj in kept)
+    detail = result.identification.detail
+    fitted = {id(detail.check.estimate.errors), id(detail.check_lateral.estimate.errors)}
+    assert {id(obj) for obj in kept if isinstance(obj, Model)} == fitted
+    assert lab.reveal() not in [obj for obj in kept if isinstance(obj, Model)]
+
+
 def test_a_budget_added_after_the_report_joins_its_summary_and_a_later_report_drops_it(
         exact_run, tmp_path):
     """A scenario may write its report first and its error budget later (`add_budget`): the
