@@ -27,11 +27,13 @@ from dataclasses import dataclass
 from machinesim._io import write_atomic
 from machinesim.exceptions import InputError
 
-__all__ = ["BUDGET_KEYS", "Budget", "BudgetRow", "clipped_shares", "error_budget",
-           "quadrature_share", "realism_budget"]
+__all__ = ["BUDGET_KEYS", "BUDGET_OPTIONAL_KEYS", "Budget", "BudgetRow", "clipped_shares",
+           "error_budget", "notes_of_rerun", "quadrature_share", "realism_budget"]
 
 #: Keys of each row of ``budget`` in summary.json (`Budget.to_dict`).
 BUDGET_KEYS = ("source", "figure", "unit", "after_all", "after_without", "share")
+#: Keys a row of ``budget`` in summary.json holds only where it has something to say.
+BUDGET_OPTIONAL_KEYS = ("notes",)
 
 
 def quadrature_share(after_all: float, after_without: float) -> float:
@@ -70,6 +72,11 @@ class BudgetRow:
         The same with only this source off.
     share : float
         ``(a^2 - b^2) / a^2`` with ``a = |after_all|``, ``b = |after_without|``; 0 if a == 0.
+    notes : tuple of str
+        What the identification of the run with this source off noted
+        (`machinesim.experiment.Identified.notes`: readings that do not fit the model, ...)
+        that the run with every source on did not, numbers aside (`notes_of_rerun`): read
+        ``after_without`` with them. The same for every row of the source.
     """
 
     source: str
@@ -78,10 +85,15 @@ class BudgetRow:
     after_all: float
     after_without: float
     share: float
+    notes: tuple[str, ...] = ()
 
     def as_dict(self) -> dict:
-        """The row as summary.json holds it (keys `BUDGET_KEYS`)."""
-        return {key: getattr(self, key) for key in BUDGET_KEYS}
+        """The row as summary.json holds it (keys `BUDGET_KEYS`, and ``notes`` when it has
+        any)."""
+        out = {key: getattr(self, key) for key in BUDGET_KEYS}
+        if self.notes:
+            out["notes"] = list(self.notes)
+        return out
 
 
 @dataclass(frozen=True)
@@ -118,8 +130,13 @@ class Budget:
                     raise InputError(f"budget[{i}].{key} must be a finite number, got "
                                      f"{value!r}", key="budget")
                 numbers.append(float(value))
+            notes = row.get("notes", [])
+            if not isinstance(notes, list) or not all(isinstance(n, str) and n.strip()
+                                                      for n in notes):
+                raise InputError(f"budget[{i}].notes must be a list of non-empty strings, "
+                                 f"got {notes!r}", key="budget")
             out.append(BudgetRow(str(row["source"]), str(row["figure"]), str(row["unit"]),
-                                 *numbers))
+                                 *numbers, tuple(notes)))
         return cls(tuple(out))
 
     @property
@@ -131,6 +148,27 @@ class Budget:
     def figures(self) -> tuple[str, ...]:
         """The figures, in order."""
         return tuple(dict.fromkeys(row.figure for row in self.rows))
+
+    @property
+    def notes(self) -> dict[str, tuple[str, ...]]:
+        """Source -> the notes of its rerun (`BudgetRow.notes`), for each source with any,
+        in order."""
+        out = {}
+        for row in self.rows:
+            if row.notes:
+                out.setdefault(row.source, row.notes)
+        return out
+
+    def notes_text(self) -> str:
+        """`notes` as Markdown for under the table: ``""`` when no rerun noted anything."""
+        if not self.notes:
+            return ""
+        lines = ["The identification of a run with one source off noted what the run with "
+                 "every source on did not (numbers aside): its rows' 'after, source off' "
+                 "rest on that identification.", ""]
+        lines += [f"- {source} off: {note}" for source, notes in self.notes.items()
+                  for note in notes]
+        return "\n".join(lines) + "\n"
 
     def share(self, source: str, figure: str) -> float:
         """The share of ``source`` in ``figure``."""
@@ -297,22 +335,40 @@ def error_budget(run: Callable, sources: Sequence[str]) -> Budget:
     Returns
     -------
     Budget
-        A row per figure with an "after" value (in the result's order) and per source.
+        A row per figure with an "after" value (in the result's order) and per source, each
+        with the notes of its source's rerun that the all-on run has none of
+        (`notes_of_rerun`).
     """
     sources = _check_sources(sources)
     if not callable(run):
         raise InputError(f"error_budget: expected run as a callable, run(source or None) -> "
                          f"Result, got {run!r:.60}", key="run")
-    every = _figures(run(None), "None")
+    everything = run(None)
+    every = _figures(everything, "None")
     names = [name for name, f in every.items() if f.after is not None]
     rows = {name: [] for name in names}
     for source in sources:
-        without = _figures(run(source), repr(source))
+        rerun = run(source)
+        without = _figures(rerun, repr(source))
+        notes = notes_of_rerun(rerun, everything)
         for name in names:
             if name not in without or without[name].after is None:
                 raise InputError(f"error_budget: with {source!r} off the result has no "
                                  f"'after' for figure {name!r}", key=source)
             a, b = every[name].after, without[name].after
             rows[name].append(BudgetRow(source, name, every[name].unit, a, b,
-                                        quadrature_share(a, b)))
+                                        quadrature_share(a, b), notes))
     return Budget(tuple(row for name in names for row in rows[name]))
+
+
+def notes_of_rerun(rerun, everything) -> tuple[str, ...]:
+    """The identification's notes of ``rerun`` (a `machinesim.experiment.Result` with one
+    source off: ``notes``, none for a result without) that ``everything``, the run with every
+    source on, has no note of the same kind: the same words, numbers aside
+    (`machinesim.campaign.assembly.note_kind`; a misfit of normalised residual 3.1 in both
+    runs is one kind whatever its number). The all-on run's own notes are in the report's
+    identified.md."""
+    from machinesim.campaign.assembly import note_kind
+
+    kinds = {note_kind(note) for note in getattr(everything, "notes", ())}
+    return tuple(note for note in getattr(rerun, "notes", ()) if note_kind(note) not in kinds)

@@ -313,8 +313,9 @@ class ReportFolder:
     def write_budget(self, budget, name: str = "budget") -> str:
         """A `machinesim.budget.Budget` as ``name.md`` (table) and ``name.png`` (bar plot);
         returns the Markdown."""
+        notes = budget.notes_text()
         text = ("### Error budget: share of each source in the 'after' figures\n\n"
-                + budget.table())
+                + budget.table() + (f"\n{notes}" if notes else ""))
         write_atomic(self._target(f"{name}.md"), text)
         budget.plot(self._target(f"{name}.png"))
         return text
@@ -514,16 +515,24 @@ def check_summary(data: Mapping) -> None:
 
 
 def _check_budget(rows) -> None:
-    """``budget`` of summary.json: a list of rows with `machinesim.budget.BUDGET_KEYS`."""
-    from machinesim.budget import BUDGET_KEYS
+    """``budget`` of summary.json: a list of rows with `machinesim.budget.BUDGET_KEYS` (and
+    ``notes``, a list of non-empty strings, where a row has any)."""
+    from machinesim.budget import BUDGET_KEYS, BUDGET_OPTIONAL_KEYS
 
     if not isinstance(rows, list):
         raise InputError(f"summary.json: expected 'budget' as a list of rows, got "
                          f"{type(rows).__name__}", key="budget")
     for i, row in enumerate(rows):
-        if not isinstance(row, Mapping) or set(row) != set(BUDGET_KEYS):
+        if (not isinstance(row, Mapping) or not set(BUDGET_KEYS) <= set(row)
+                or not set(row) <= {*BUDGET_KEYS, *BUDGET_OPTIONAL_KEYS}):
             raise InputError(f"summary.json: budget[{i}] must have exactly the keys "
-                             f"{', '.join(BUDGET_KEYS)}, got {row!r}", key="budget")
+                             f"{', '.join(BUDGET_KEYS)} (and optionally "
+                             f"{', '.join(BUDGET_OPTIONAL_KEYS)}), got {row!r}", key="budget")
+        notes = row.get("notes", [])
+        if "notes" in row and (not isinstance(notes, list) or not notes or not all(
+                isinstance(n, str) and n.strip() for n in notes)):
+            raise InputError(f"summary.json: budget[{i}].notes must be a non-empty list of "
+                             f"non-empty strings, got {notes!r}", key="budget")
         for key in ("source", "figure", "unit"):
             if not isinstance(row[key], str) or not row[key]:
                 raise InputError(f"summary.json: budget[{i}].{key} must be a non-empty "

@@ -111,6 +111,59 @@ def test_the_report_writes_the_budget_and_the_summary_accepts_it(tmp_path):
             check_summary({**base, "budget": rows})
 
 
+#: A misfit note as `machinesim.experiment.fit_notes` leads it, with its numbers as {}.
+MISFIT = ("fit_check (heights): the readings do not fit the model: normalised residual {} "
+          "(about 1 when the model holds every error the readings show and sigma is right; "
+          "residual RMS {} m): an error missing from the parameters or the prior, or sigma "
+          "too small; the values may be far off")
+
+
+def test_a_reruns_notes_reach_its_rows_budget_md_and_summary_json(tmp_path):
+    """The identification's notes of a run with one source off (a misfit) reach its budget
+    rows, budget.md under the table and its rows in summary.json; a rerun that notes nothing,
+    or only what the run with every source on notes (numbers aside), adds none. Before, the
+    reruns' notes were dropped: a row resting on a misfit looked as sound as any."""
+    misfit = MISFIT.format(7.25, "3.1e-08")
+    notes = {None: (), "instrument_noise": (), "artefact_errors": (misfit,),
+             "background": ()}
+
+    def noting(off):
+        return SimpleNamespace(figures=synthetic_run(off).figures, notes=notes[off])
+
+    budget = error_budget(noting, list(SOURCES))
+    assert budget.notes == {"artefact_errors": (misfit,)}
+    assert {row.source: row.notes for row in budget.rows} == {
+        "instrument_noise": (), "artefact_errors": (misfit,), "background": ()}
+    rows = budget.to_dict()
+    assert [row["notes"] for row in rows if "notes" in row] == [[misfit]] * 2  # two figures
+    assert all(("notes" in row) == (row["source"] == "artefact_errors") for row in rows)
+    folder = ReportFolder(tmp_path / "out")
+    text = folder.write_budget(budget)
+    assert text == (tmp_path / "out" / "budget.md").read_text()
+    assert text.endswith(budget.table() + "\nThe identification of a run with one source "
+                         "off noted what the run with every source on did not (numbers "
+                         "aside): its rows' 'after, source off' rest on that "
+                         f"identification.\n\n- artefact_errors off: {misfit}\n")
+    base = {"paper": "001", "procedure": "p", "machine": "m", "seed": 0, "noise": False,
+            "injected": {}, "identified": {}, "figures": [], "budget": rows}
+    folder.write_summary(base)
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    check_summary(summary)
+    assert summary["budget"] == rows and Budget.from_dict(summary["budget"]) == budget
+    for bad in ("one", [], [""], [3]):
+        with pytest.raises(InputError, match="notes must be a non-empty list"):
+            check_summary({**base, "budget": [{**rows[1], "notes": bad}]})
+
+    # the run with every source on misfits too: the same kind of note, other numbers, is not
+    # the rerun's own; another kind is
+    apart = "fit_check (heights): tool.y and tool.z are barely told apart (correlation 0.999)"
+    notes.update({None: (MISFIT.format(3.5, "1.2e-08"),), "background": (misfit, apart)})
+    budget = error_budget(noting, list(SOURCES))
+    assert budget.notes == {"background": (apart,)}
+    assert "artefact_errors off" not in budget.notes_text()
+    assert error_budget(synthetic_run, list(SOURCES)).notes_text() == ""  # no notes at all
+
+
 def test_bad_sources_and_runs_are_refused_clearly():
     for sources, message in (("background", "the string"), ([], "non-empty"),
                              (["a", "a"], "given twice"), ([None], "non-empty")):
