@@ -326,6 +326,20 @@ def test_the_summary_fits_the_one_schema(tmp_path):
     assert summary["figures"][4]["paper_before"] is None
     for name in ("04_a_axis_compensated.nc", "06_b_axis_compensated.ply"):
         assert (tmp_path / name).stat().st_size > 0
+    # the result pickles (its identification's std and check_std, its readings' plates and
+    # registration are read-only mappings, which did not), and the copy, without its lab,
+    # writes the same report byte for byte
+    import pickle
+
+    back = pickle.loads(pickle.dumps(result))
+    assert back.figures == result.figures and dict(back.identified) == dict(result.identified)
+    detail = back.identification.detail
+    assert dict(detail.std) == dict(result.identification.detail.std)
+    assert set(detail.readings.plates) == set(result.measurements.plates)
+    ReportFolder(tmp_path / "copy").write_result(back)
+    for path in tmp_path.iterdir():
+        if path.is_file():
+            assert (tmp_path / "copy" / path.name).read_bytes() == path.read_bytes(), path.name
 
 
 def test_errors_outside_the_capture_range_are_reported():

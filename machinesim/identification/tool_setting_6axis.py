@@ -37,6 +37,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from machinesim._frozen import reduce_frozen
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.metrology import Line2D, fit_line, fit_parallel_lines, groove_crossing
@@ -230,6 +231,8 @@ class Identification:
     check: object = None
     check_std: Mapping[str, float] = field(default_factory=dict)
     readings: object = None
+
+    __reduce__ = reduce_frozen  # pickles (a Result holds it), its read-only mappings too
 
     @property
     def values(self) -> dict[str, float]:

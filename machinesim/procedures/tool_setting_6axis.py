@@ -34,6 +34,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from machinesim._frozen import reduce_frozen
 from machinesim.cam.tool_setting_plates import (
     PARKED,
     SET_LENGTH,
@@ -163,6 +164,8 @@ class Readings:
     b: tuple[GrooveReading, ...]
     plates: Mapping[str, tuple]
     registration: Mapping[str, object] = field(default_factory=dict)
+
+    __reduce__ = reduce_frozen  # pickles (a Result holds it), its read-only mappings too
 
 
 @lru_cache(maxsize=4)
