@@ -365,10 +365,10 @@ def notes_of_rerun(rerun, everything) -> tuple[str, ...]:
     """The identification's notes of ``rerun`` (a `machinesim.experiment.Result` with one
     source off: ``notes``, none for a result without) that ``everything``, the run with every
     source on, has no note of the same kind: the same words, numbers aside
-    (`machinesim.campaign.assembly.note_kind`; a misfit of normalised residual 3.1 in both
+    (`machinesim.experiment.note_kind`; a misfit of normalised residual 3.1 in both
     runs is one kind whatever its number). The all-on run's own notes are in the report's
     identified.md."""
-    from machinesim.campaign.assembly import note_kind
+    from machinesim.experiment import note_kind
 
     kinds = {note_kind(note) for note in getattr(everything, "notes", ())}
     return tuple(note for note in getattr(rerun, "notes", ()) if note_kind(note) not in kinds)

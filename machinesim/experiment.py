@@ -25,6 +25,7 @@ in the report. Nothing a procedure receives can reach it.
 from __future__ import annotations
 
 import math
+import re
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -40,7 +41,7 @@ from machinesim.exceptions import InputError, brief
 from machinesim.identification.fit import MODEL_MISFIT
 
 __all__ = ["LAB_USES", "Evaluation", "Figure", "Identified", "Procedure", "Result",
-           "check_identified", "check_instance", "check_lab", "fit_notes", "run"]
+           "check_identified", "check_instance", "check_lab", "fit_notes", "note_kind", "run"]
 
 #: What a procedure may read of its lab beyond the machine's error parameters, as its
 #: ``lab_uses`` names it, step by step (``"measure"``, ``"evaluate"``): the instruments it
@@ -170,6 +171,17 @@ class Identified:
         object.__setattr__(self, "notes", tuple(notes))
 
     __reduce__ = reduce_frozen  # pickles (parameters is read-only: a mappingproxy)
+
+
+#: A number in a note (a residual, a correlation, a std), not part of a name (``EX0C``,
+#: ``EAC[3]``): `note_kind` leaves it out.
+_NUMBER = re.compile(r"(?<![\w.\[])[-+]?\d+(?:\.\d*)?(?:e[-+]?\d+)?(?![\w\]])")
+
+
+def note_kind(note: str) -> str:
+    """``note`` with its numbers as ``#``: the same note of two trials (``the readings do not
+    fit the model: normalised residual 25.7 ...`` and ``... 31.2 ...``) is one kind."""
+    return _NUMBER.sub("#", note)
 
 
 def fit_notes(fit: str, estimate, *, sigma_leaves_out: str | None = None) -> tuple[str, ...]:

@@ -34,14 +34,14 @@ from __future__ import annotations
 
 import json
 import platform
-import re
 from importlib import metadata
 
 import numpy as np
 
 from machinesim.exceptions import InputError
+from machinesim.experiment import note_kind
 
-__all__ = ["Assembly", "assemble", "note_kind", "versions"]
+__all__ = ["Assembly", "assemble", "versions"]
 
 
 def versions() -> dict:
@@ -53,17 +53,6 @@ def versions() -> dict:
         except metadata.PackageNotFoundError:
             out[name] = "not installed"
     return out
-
-
-#: A number in a note (a residual, a correlation, a std), not part of a name (``EX0C``,
-#: ``EAC[3]``): `note_kind` leaves it out.
-_NUMBER = re.compile(r"(?<![\w.\[])[-+]?\d+(?:\.\d*)?(?:e[-+]?\d+)?(?![\w\]])")
-
-
-def note_kind(note: str) -> str:
-    """``note`` with its numbers as ``#``: the same note of two trials (``the readings do not
-    fit the model: normalised residual 25.7 ...`` and ``... 31.2 ...``) is one kind."""
-    return _NUMBER.sub("#", note)
 
 
 #: netCDF 3 holds 32-bit integers: a seed from here on is kept as its decimal digits (a

@@ -25,8 +25,9 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from machinesim._io import check_writable, json_text, pid_alive, read_json, write_atomic
-from machinesim.campaign.assembly import Assembly, assemble, note_kind, versions  # re-exported
+from machinesim.campaign.assembly import Assembly, assemble, versions  # re-exported
 from machinesim.exceptions import FileError, InputError, brief
+from machinesim.experiment import note_kind  # re-exported
 
 __all__ = ["LOCK_NAME", "Assembly", "CampaignFolder", "assemble", "finished_trials", "locked",
            "note_kind", "refuse_foreign", "same_campaign", "versions"]

@@ -21,7 +21,7 @@ summary.json (every number under a key ending in its unit, as docs/reports.md as
 - ``noted_count``: the trials whose identification gave notes (`Identified.notes`: readings
   that do not fit the model, parameters the readings barely tell apart, ...), and ``notes``:
   each note with the trials that gave it, notes that differ only in their numbers taken as
-  one (`machinesim.campaign.assembly.note_kind`) and the first trial's shown
+  one (`machinesim.experiment.note_kind`) and the first trial's shown
   (``{"note": ..., "trials": [...]}``, most trials first).
 """
 
