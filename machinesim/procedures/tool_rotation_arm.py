@@ -331,26 +331,26 @@ class ToolRotationArm:
         check_lab(lab)
         check_identified(identified, ArmIdentification, "ToolRotationArm")
         detail = identified.detail
-        readings, parts, unread = {}, {}, ""
+        readings, parts, unread = {}, {}, {}
         for state, program in (("before", programs["pattern_before"]),
-                               ("after", programs["pattern_compensated"])):
+                                ("after", programs["pattern_compensated"])):
             part, _ = lab.cut(program, TOOL, self.pattern.stock)
             parts[f"pattern_{state}"] = part
             try:
                 readings[state] = measure_pattern(part, self.pattern,
                                                   lab.microscope(label=f"pattern_{state}"))
             except InputError as error:
-                if state == "after":  # compensated, every groove must be there to read
-                    raise InputError(f"the compensated pattern could not be read: {error}",
-                                     key="pattern_after") from None
-                # the uncompensated grooves may not be cut at all: said, not left blank
-                readings[state], unread = None, str(error)
+                # the uncompensated grooves may not be cut at all, and a compensation that
+                # missed may leave the compensated ones as unreadable: said, not left blank
+                readings[state], unread[state] = None, str(error)
 
         def value(state, attribute):
             reading = readings[state]
             return None if reading is None else getattr(reading, attribute) / M_PER_UM
 
-        why = f"; before not measured, the uncompensated pattern: {unread}" if unread else ""
+        why = "".join(f"; {state} not measured, the {what} pattern: {unread[state]}"
+                      for state, what in (("before", "uncompensated"),
+                                          ("after", "compensated")) if state in unread)
         figures = (
             Figure("depth_error", "um", value("before", "depth_error"),
                    value("after", "depth_error"), note="paper: > 50 before, < 1 after" + why),
@@ -360,8 +360,8 @@ class ToolRotationArm:
                    value("after", "pitch_error"), note=why[2:]),
         )
         details = self._details(detail, readings, programs)
-        if unread:
-            details["pattern_before"]["why"] = unread
+        for state, message in unread.items():
+            details[f"pattern_{state}"]["why"] = message
         return Evaluation(figures=figures, details=details, parts=parts)
 
     def _details(self, detail: ArmIdentification, readings, programs) -> dict:
