@@ -13,13 +13,13 @@ each move alone with `Machine.tool_pose`:
 * the axis values of the samples are formed by the same operations (``start + f * delta``,
   ``f`` from `numpy.linspace`);
 * `ToolPaths` walks the machine's kinematic plan with the operations of the batched
-  evaluator of `machinesim.kinematics`, in the same order, so each position is the same
+  evaluator of `machinesim.batched_kinematics`, in the same order, so each position is the same
   float64 number; constants are folded (a product with an exact 0 or 1, a sum with an exact
   0 are skipped), which can only change the sign of a zero;
 * the evaluator picks a series or numpy's ``cos``/``sin`` for a rotation by the largest
-  angle in each batch it is given (`machinesim.kinematics._cos_sin`); the batches of
+  angle in each batch it is given (`machinesim.batched_kinematics._cos_sin`); the batches of
   `Machine.tool_pose` as the rule calls it (a move's nodes or midpoints, in blocks of
-  `kinematics._BLOCK`) are kept as groups here and decided one by one;
+  `batched_kinematics._BLOCK`) are kept as groups here and decided one by one;
 * deviations are summed in numpy's order (x**2 + y**2, then + z**2) and compared as before;
   the largest is the square root of the largest square (sqrt is monotonic and correctly
   rounded, so that is the largest norm, bit for bit).
@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from machinesim._cores import usable_cores
-from machinesim.kinematics import _BLOCK, _cos_sin
+from machinesim.batched_kinematics import _BLOCK, _cos_sin
 from machinesim.tolerances import SERIES_MAX_RAD
 
 if TYPE_CHECKING:
@@ -251,7 +251,7 @@ def _name(binding, var) -> str:
 
 
 def _grouped_cos_sin(value: np.ndarray, groups):
-    """`kinematics._cos_sin` applied to each group of rows on its own.
+    """`batched_kinematics._cos_sin` applied to each group of rows on its own.
 
     ``groups``: an int ``g`` (the rows are ``g`` blocks of ``M``, fraction after fraction,
     and each of the ``M`` columns is a group) or (starts, sizes) of consecutive rows.
