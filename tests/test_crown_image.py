@@ -22,10 +22,11 @@ from machinesim.metrology import Microscope
 from machinesim.metrology.crown_image import (
     crown_image_reading,
     profile_edges,
+    profile_reading,
     turned_placements,
 )
 from machinesim.realism import OBJECTIVE_10X, Realism
-from machinesim.workpiece import diamond_crown
+from machinesim.workpiece import Part, block, diamond_crown
 
 UM = 1e-6
 WINDOWS = crown_roi(CROWN)[0]
@@ -187,3 +188,52 @@ def test_a_long_face_read_through_noise_runs_to_its_foot():
                               band=5 * sigma + 0.5e-6)
         feet.append(edges.s_foot)
     assert np.abs(np.array(feet) - foot).max() < 3e-6
+
+
+def test_a_profile_that_never_falls_from_its_top_says_so():
+    """A face not cut: the profile keeps level (0.5 um band) over its 399 um, or stock
+    stands 40 um above the top from 100 um on; either way no top edge, and why."""
+    s = np.arange(400) * 1e-6
+    assert profile_reading(s, np.full_like(s, 60e-6), pixel=False, band=0.5e-6) == (
+        "no top edge: the profile does not fall from the top down a face; it keeps within "
+        "0.5 um of the top's line over its whole 399 um (the face is not cut there)")
+    stock = np.where(s < 99.5e-6, 60e-6, 100e-6)  # the 101st sample on
+    assert profile_reading(s, stock, pixel=False, band=0.5e-6) == (
+        "no top edge: the profile does not fall from the top down a face; it leaves the "
+        "top's line only upward (stock up to 40 um above it from 100 um along the profile "
+        "on) and never falls 0.5 um below it in its 399 um (the face is not cut there)")
+    assert profile_edges(s, stock, pixel=False, band=0.5e-6) is None
+
+
+def test_a_face_left_uncut_is_n_a_with_the_reason_and_the_rest_reads_its_design():
+    """The designed crown with stock standing 40 um above its top over faces S2 and S6 (C =
+    45 and 225 deg) from their top edges out, as a setting far off leaves faces its passes
+    miss (paper 002 at --delta-um 300,0,55: S2, S8, L2 and L6, L4 and L8 n/a, no word why).
+    S2, S6 and L2 (its edge points: two on S2, one on S6) are NaN, each saying which
+    profiles and what they found; every other figure reads its design, nothing else said."""
+    stock = block(1e-3, 0.8e-3, 0.54e-3, (CROWN.apothem, -0.4e-3, 40 * UM)).manifold
+    part = Part(crown_design(CROWN).manifold + stock.rotate((0.0, 0.0, 45.0))
+                + stock.rotate((0.0, 0.0, 225.0)))
+    reading = crown_image_reading(part, EXACT, WINDOWS, CROWN)
+    assert np.isnan(reading.inclinations[[1, 5]]).all() and np.isnan(reading.edge_distances[1])
+    np.testing.assert_allclose(np.delete(reading.inclinations, [1, 5]), CROWN.slope, rtol=0,
+                               atol=1e-6)
+    np.testing.assert_allclose(np.delete(reading.edge_distances, 1), 2 * CROWN.apothem,
+                               rtol=0, atol=5e-9)
+    found = ("no top edge: the profile does not fall from the top down a face; it leaves "
+             "the top's line only upward (stock up to 40 um above it from 100 um along the "
+             "profile on)")  # the image window starts 100 um inside the top edge
+    assert set(reading.unread) == {"S2", "S6", "L2_L6"}
+    for face in ("S2 (C = 45 deg)", "S6 (C = 225 deg)"):
+        assert reading.unread[face[:2]].startswith(
+            f"face {face}, the profile across its middle: {found}")
+    a = 0.8 * WINDOWS["image"][3] / UM  # the edge's two points, 200 um either side
+    profiles = reading.unread["L2_L6"].split("; face ")
+    assert len(profiles) == 3
+    assert [p.split(": ", 1)[0] for p in profiles] == [
+        f"face S2 (C = 45 deg), the profile across it at {-a:+.0f} um along its edge (not "
+        "read in 3 of 3 readings)",
+        f"S2 (C = 45 deg), the profile across it at {a:+.0f} um along its edge (not read in "
+        "3 of 3 readings)",
+        "S6 (C = 225 deg), the profile across its middle (not read in 3 of 3 readings)"]
+    assert all(p.split(": ", 1)[1].startswith(found) for p in profiles)

@@ -401,3 +401,40 @@ def test_the_report_of_two_loads_carries_both_loads_fit_notes():
     check_summary(summary)
     quiet = {load: run(Noted(load, ()), lab) for load in ("crown", "grooves")}
     assert "notes" not in scenario.combined(quiet, {}).summary()
+
+
+def test_table_3_says_why_a_figure_is_n_a(tmp_path):
+    """An n/a the crown's 10x images could not read gets its reason, the reading's
+    (`CrownImageReading.unread`) by figure name in the evaluation's details
+    (``crown_<state>_image_unread``, `image_unread`), under table3.md (paper 002 at
+    --delta-um 300,0,55 printed n/a for S2, S8, L2 and L6, L4 and L8 before, with no word
+    why); a table with every figure read is as before, without a note."""
+    from types import SimpleNamespace
+
+    from machinesim.experiment import Figure
+    from machinesim.metrology.crown_image import CrownImageReading
+    from machinesim.procedures.workpiece_setting import image_unread
+    from machinesim.report import ReportFolder
+
+    s2 = "face S2 (C = 45 deg), the profile across its middle: no top edge: ..."
+    l2 = "face S2 (C = 45 deg), the profile across it at -80 um along its edge ..."
+    nan = np.full(8, np.nan)
+    unread = image_unread({"before": CrownImageReading(nan[:4], nan, {"S2": s2, "L2_L6": l2}),
+                           "after": CrownImageReading(nan[:4], nan)})
+    assert unread == {"before": {"inclination_S2": s2, "edge_distance_L2_L6": l2},
+                      "after": {}}
+    figures = (Figure("edge_distance_L1_L5", "um", 2.0, 0.5, 149.15, -0.31),
+               Figure("edge_distance_L2_L6", "um", None, 0.25, 152.6, 0.82),
+               Figure("inclination_S2", "deg", None, 0.01, 0.95, 0.05),
+               Figure("inclination_planes_S2", "deg", 0.1, 0.0))
+    crown = SimpleNamespace(figures=figures, evaluation=SimpleNamespace(
+        details={"crown_before_image_unread": unread["before"]}))
+    text = scenario.table3_table(ReportFolder(tmp_path / "unread"), crown)
+    rows = text.splitlines()
+    assert "| S2 (deg) | 0.9500 | 0.0500 | n/a | 0.0100 |" in rows
+    assert rows[-3:] == ["n/a: not read in the 10x images, where",
+                         f"- L2 and L6 (um), simulated before: {l2}",
+                         f"- S2 (deg), simulated before: {s2}"]
+    read = SimpleNamespace(figures=figures[:1], evaluation=SimpleNamespace(details={}))
+    text = scenario.table3_table(ReportFolder(tmp_path / "read"), read)
+    assert text.endswith("| L1 and L5 (um) | 149.1500 | -0.3100 | 2.0000 | 0.5000 |\n")

@@ -31,7 +31,9 @@ instrument's height noise and pixel pitch into L and S as a reading in the image
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 
@@ -43,7 +45,7 @@ from machinesim.units import M_PER_UM
 from machinesim.workpiece import Part
 
 __all__ = ["EDGE_GUARD", "REPEATS", "CrownImageReading", "ProfileEdges",
-           "crown_image_reading", "profile_edges", "turned_placements"]
+           "crown_image_reading", "profile_edges", "profile_reading", "turned_placements"]
 
 UM = M_PER_UM
 
@@ -88,10 +90,14 @@ class CrownImageReading:
     inclinations : ndarray, shape (8,)
         S1..S8 (faces at C = 0, 45, .. deg), rad, from height over length.
     NaN where a face's profile does not run from a top over the face to the flat.
+    unread : Mapping
+        Why, for each NaN (keys ``"L1_L5"`` .. ``"L4_L8"``, ``"S1"`` .. ``"S8"``): which
+        face's profile and what it found instead (`profile_reading`). Empty if all read.
     """
 
     edge_distances: np.ndarray
     inclinations: np.ndarray
+    unread: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
 
 
 def _line(s: np.ndarray, z: np.ndarray, keep: np.ndarray):
@@ -145,17 +151,41 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
     the corner of the face's line and its line; if it steps away (an uncut band beyond the
     finished face), the face's last sample. ``pixel``: each cursor on the sample nearest
     its edge and the height read there (an operator reading an image); else the edges on
-    the fitted lines. None where the profile does not run from a top down a face.
+    the fitted lines. None where the profile does not run from a top down a face
+    (`profile_reading` says why).
     """
+    edges = profile_reading(s, z, pixel=pixel, band=band, guard=guard, reach=reach,
+                            iterations=iterations)
+    return edges if isinstance(edges, ProfileEdges) else None
+
+
+def _um(length: float) -> str:
+    return f"{length / UM:.3g} um"
+
+
+def profile_reading(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
+                    reach: float = EDGE_REACH, iterations: int = 4) -> ProfileEdges | str:
+    """`profile_edges`, or where the profile does not run from a top down a face, what it
+    found instead (a sentence: which edge or line could not be read, and why)."""
     s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
     finite = np.isfinite(z)
     if np.count_nonzero(finite[:10]) < 5:
-        return None
+        return (f"no top: {10 - np.count_nonzero(finite[:10])} of the profile's first 10 "
+                "samples read nothing (no surface under the objective at its start)")
     level = _top_level(s, z, band, guard, reach, iterations)
     off = np.flatnonzero(~(np.abs(z - level) <= band))
     below = np.flatnonzero(z < level - band)
-    if len(off) == 0 or len(below) == 0:
-        return None
+    if len(below) == 0:
+        length = _um(float(s[-1] - s[0]))
+        if len(off) == 0:
+            return (f"no top edge: the profile does not fall from the top down a face; it "
+                    f"keeps within {_um(band)} of the top's line over its whole {length} "
+                    "(the face is not cut there)")
+        return (f"no top edge: the profile does not fall from the top down a face; it "
+                f"leaves the top's line only upward (stock up to "
+                f"{_um(float(np.nanmax(z - level)))} above it from {_um(float(s[off[0]]))} "
+                f"along the profile on) and never falls {_um(band)} below it in its {length} "
+                "(the face is not cut there)")
     # Where the top is followed by stock standing above it (a band the face's passes did
     # not reach), its line is fitted on the top ``reach`` clear of that band (whose rise may
     # begin below ``band``, as the top's pass ends leave it at a diagonal face) and the edge
@@ -169,10 +199,16 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
         top = _line(s, z, clear if ridge else (s > s_top - reach) & (s < s_top - guard))
         upper = _line(s, z, (s > s_top + guard) & (s < s_top + reach))
         if top is None or upper is None or top[0] == upper[0]:
-            return None
+            side = "the top" if top is None else "the face"
+            return (f"no top edge near {_um(s_top)}, where the profile falls below the "
+                    "top's line: "
+                    + (f"{side} has fewer than 3 samples read within {_um(reach)} of it"
+                       if top is None or upper is None else
+                       "the top's line and the face's are parallel"))
         s_top = _corner(top, upper)
         if not s[0] < s_top < s[-1]:
-            return None
+            return (f"no top edge: the top's line and the face's meet at {_um(s_top)}, "
+                    f"outside the profile ({_um(float(s[0]))} .. {_um(float(s[-1]))})")
     # the face: out from the top edge while the profile keeps to its line, the line refitted
     # on what keeps to it (a line fitted next to the edge drifts off a long face)
     face, s_end = upper, float(s[-1])
@@ -182,7 +218,8 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
         s_end = float(s[past[0]]) if len(past) else float(s[-1])
         face = _line(s, z, (s > s_top + guard) & (s < s_end - guard))
         if face is None:
-            return None
+            return (f"no face: the profile leaves the face's line at {_um(s_end)}, "
+                    f"fewer than 3 samples read past the top edge at {_um(s_top)}")
     beyond = _line(s, z, (s > s_end + guard) & (s < s_end + reach))
     last = float(s[np.flatnonzero((s < s_end) & finite)[-1]])
     s_foot = last
@@ -244,7 +281,8 @@ def _levelled(read, bottom) -> np.ndarray:
 def _face_edges(mesh, microscope, bottom, sign: float, vs, image) -> list:
     """One image of a face (one placement): its profiles at ``vs`` read outward from inside
     the top edge across the foot; ``sign`` -1 for the face on -x. Returns, per profile,
-    the top edge point (x, y) and the `ProfileEdges` (NaN and None where unreadable)."""
+    the top edge point (x, y) and the `ProfileEdges` (NaN and why, `profile_reading`, where
+    unreadable)."""
     r0, r1 = image[0], image[1]
     pixel = microscope.spot is not None
     band = BAND_SIGMAS * microscope.readout.sigma + BAND_FLOOR
@@ -253,15 +291,15 @@ def _face_edges(mesh, microscope, bottom, sign: float, vs, image) -> list:
         for v in vs:
             start, end = sign * np.array([r0, v]), sign * np.array([r1, v])
             read = microscope.profile(mesh, start, end)
-            edges = profile_edges(read.s, _levelled(read, bottom), pixel=pixel, band=band)
-            point = (np.full(2, np.nan) if edges is None
+            edges = profile_reading(read.s, _levelled(read, bottom), pixel=pixel, band=band)
+            point = (np.full(2, np.nan) if isinstance(edges, str)
                      else start + (end - start) / (r1 - r0) * edges.s_top)
             out.append((point, edges))
     return out
 
 
-def _inclination(edges: ProfileEdges | None) -> float:
-    return np.nan if edges is None else edges.inclination
+def _face(j: int) -> str:
+    return f"face S{j + 1} (C = {45 * j} deg)"
 
 
 def _point_to_line(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
@@ -291,14 +329,28 @@ def crown_image_reading(part, microscope, windows, plan, *, meshes=None,
     meshes = turned_placements(part) if meshes is None else meshes
     image = windows["image"]
     a = 0.8 * min(-image[2], image[3])  # the two points on an edge, v = -a and +a
-    lengths, inclinations = np.zeros((4, repeats)), np.zeros(8)
+    lengths, inclinations, unread = np.zeros((4, repeats)), np.zeros(8), {}
     for k in range(4):
         bottom = _bottom(meshes[k], microscope, windows["flat"], k * math.pi / 4)
+        missed = {}  # the top edge profiles L_k needs, not read: why, in each reading
         for n in range(repeats):
             near = _face_edges(meshes[k], microscope, bottom, 1.0, (-a, 0.0, a), image)
             far = _face_edges(meshes[k], microscope, bottom, -1.0, (0.0,), image)
             lengths[k, n] = _point_to_line(far[0][0], near[0][0], near[2][0])
-            if n == 0:
-                inclinations[k] = _inclination(near[1][1])
-                inclinations[k + 4] = _inclination(far[0][1])
-    return CrownImageReading(frozen(lengths.mean(axis=1)), frozen(inclinations))
+            for j, v, (_, edges) in ((k, -a, near[0]), (k, a, near[2]), (k + 4, 0.0, far[0])):
+                if isinstance(edges, str):
+                    missed.setdefault((j, v), []).append(edges)
+            for j, (_, edges) in ((k, near[1]), (k + 4, far[0])) if n == 0 else ():
+                if isinstance(edges, str):
+                    inclinations[j] = np.nan
+                    unread[f"S{j + 1}"] = f"{_face(j)}, the profile across its middle: {edges}"
+                else:
+                    inclinations[j] = edges.inclination
+        if missed:
+            unread[f"L{k + 1}_L{k + 5}"] = "; ".join(
+                f"{_face(j)}, the profile across "
+                + ("its middle" if v == 0.0 else f"it at {v / UM:+.0f} um along its edge")
+                + f" (not read in {len(whys)} of {repeats} readings): {whys[0]}"
+                for (j, v), whys in missed.items())
+    return CrownImageReading(frozen(lengths.mean(axis=1)), frozen(inclinations),
+                             MappingProxyType(unread))

@@ -105,7 +105,7 @@ from machinesim.workpiece import Part, stock_from_spec
 
 __all__ = [
     "EXPERIMENTS", "NOSE", "ProbePlan", "RobotLoadedWorkpiece", "SettingIdentification",
-    "crown_times",
+    "crown_times", "image_unread",
     "WorkpieceMeasurements", "eqs_5_to_7_program", "model_based_program", "probe_axes",
     "read_sphere", "read_spheres",
 ]
@@ -442,6 +442,14 @@ class RobotLoadedWorkpiece:
                   for name, f in features.items()}
         errors.setdefault("before", dict.fromkeys(("edge", "inclination", "foot", "edge_image",
                                                    "inclination_image"), [None] * 8))
+        # a figure the images could not read (n/a) says why: which face's profile, what it
+        # found (a face left uncut by a setting far off, its profile never falling from the top)
+        unread = image_unread(images)
+
+        def why(figure: str) -> str:
+            return "".join(f"; {name} not read: {unread[name][figure]}"
+                           for name in images if figure in unread[name])
+
         figures = []
         for i, (key, (paper_before, paper_after)) in enumerate(PAPER_L.items()):
             figures.append(Figure(f"edge_distance_{key}", "um",
@@ -449,7 +457,8 @@ class RobotLoadedWorkpiece:
                                   errors["after"]["edge_image"][i], paper_before, paper_after,
                                   note="distance between opposite top edges less its design, "
                                   "as the paper reads it: two points on one edge and one on "
-                                  "the other in 10x images, mean of three readings"))
+                                  "the other in 10x images, mean of three readings"
+                                  + why(f"edge_distance_{key}")))
         for i, (paper_before, paper_after) in enumerate(PAPER_S):
             figures.append(Figure(f"inclination_S{i + 1}", "deg",
                                   errors["before"]["inclination_image"][i],
@@ -457,7 +466,8 @@ class RobotLoadedWorkpiece:
                                   paper_after,
                                   note=f"side face at C = {45 * i} deg, angle to the flat "
                                   "less its design, as the paper reads it: height over "
-                                  "length between the edges of a 10x profile"))
+                                  "length between the edges of a 10x profile"
+                                  + why(f"inclination_S{i + 1}")))
         for i, key in enumerate(PAPER_L):
             figures.append(Figure(f"edge_distance_planes_{key}", "um",
                                   errors["before"]["edge"][i], errors["after"]["edge"][i],
@@ -496,6 +506,8 @@ class RobotLoadedWorkpiece:
                    "machining_time": {"finishing_h": finishing / 3600.0,
                                       "cuboid_h": cuboid / 3600.0, "saved_percent": saved,
                                       "setting_h": SETTING_S / 3600.0},
+                   **{f"crown_{name}_image_unread": whys
+                      for name, whys in unread.items() if whys},
                    "cuts": cuts,
                    "note": "crown cut in its measuring windows"
                    + (", every layer" if self.all_layers else ", last finishing layer only")}
@@ -514,6 +526,16 @@ def crown_times(machine, crown: CrownPlan = CROWN) -> tuple[float, float]:
         _TIMES[key] = (machining_time(machine, crown_passes(crown)) + SETTING_S,
                        machining_time(machine, crown_passes(crown, cuboid=True)) + SETTING_S)
     return _TIMES[key]
+
+
+def image_unread(images: dict[str, CrownImageReading]) -> dict[str, dict[str, str]]:
+    """Why each Table 3 figure the 10x images could not read is n/a, per reading
+    (``"before"``, ``"after"``), keyed by figure name (``edge_distance_L2_L6``,
+    ``inclination_S2``): `CrownImageReading.unread`'s reasons, read by the crown's figures
+    as their notes and by the scenario under its Table 3."""
+    return {name: {f"{'edge_distance' if key[0] == 'L' else 'inclination'}_{key}": why
+                   for key, why in reading.unread.items()}
+            for name, reading in images.items()}
 
 
 def _crown_errors(features: CrownFeatures, plan: CrownPlan) -> dict[str, list[float]]:
