@@ -159,3 +159,81 @@ def test_sts_point_list_follows_its_formula():
     assert np.max(np.abs(z - 0.001 * np.sin(np.radians(1.5 * k)) * MM)) <= 0.5e-9 + EXACT_M
     assert np.all(program.kinds[rows] == KIND_LINEAR)
     assert np.all(program.feeds[rows] == pytest.approx(10 * MM / 60, rel=1e-15))
+
+
+# Public programs (tests/nc_corpus/public/): CAM output that nobody here wrote, each with a
+# header naming its repository, path, commit and licence. The values below are read off
+# the program text by hand (and the CAM's own header: ZMIN).
+PUBLIC = CORPUS / "public"
+LENGTH_0 = "[tool.1]\nlength_mm = 0.0\nradius_mm = 1.0\n"
+
+
+@pytest.mark.parametrize("path", sorted(PUBLIC.glob("*.nc")), ids=lambda p: p.name)
+def test_public_programs_read_identically_on_both_paths(path, tmp_path):
+    table = tmp_path / "tools.toml"
+    table.write_text(LENGTH_0)
+    program = read_program(path, tools=table)
+    assert program == read_program(path, tools=table, fast=False)
+    assert dict(program.unit_words) == {"G21": _line_of(path, "G21")}
+
+
+def test_fusion_contour_without_tool_length_words():
+    # Fusion 360 'personal use' post: T1 without M6, G54, G0 X Y then Z10, three passes
+    # round a 21.4 mm square (tool centre) at Z -1, -2, -3, back up to Z10
+    path = PUBLIC / "led_floor_1024_block_14bit.nc"
+    program = read_program(path)
+    assert dict(program.states) == {"T1": path.read_text().splitlines().index("T1") + 1}
+    moves = program.targets[:, :3] / MM
+    assert moves[program.lines == _line_of(path, "G0 X-0.7 Y-0.7")][-1].tolist()[:2] == [-0.7, -0.7]
+    assert np.nanmin(moves[:, 2]) == -3.0  # ZMIN=-3 in the CAM's tool line
+    assert moves[-1].tolist() == [-0.7, -0.7, 10.0]
+    corners = moves[program.kinds == KIND_LINEAR]
+    assert sorted({tuple(c[:2]) for c in corners if c[2] == -3.0}) == [
+        (-0.7, -0.7), (-0.7, 20.0), (-0.7, 20.7), (20.0, 20.7), (20.7, -0.7), (20.7, 20.7)]
+
+
+def test_fusion_fanuc_post_with_lead_arcs_in_three_planes(tmp_path):
+    # Fusion 360 generic FANUC-style post: G28 G91 Z0, T1 M6, G43 Z25 H1, each pass
+    # entered by a G18 quarter arc, turned by G17 arcs and left by a G19 one; tabs at Z0.5
+    table = tmp_path / "tools.toml"
+    table.write_text(LENGTH_0)
+    path = PUBLIC / "led_floor_1003_wall_tester.nc"
+    program = read_program(path, tools=table, reference={"Z": 100 * MM})
+    assert [(c.number, c.line) for c in program.tool_changes] == [(1, _line_of(path, "N35 T1 M6"))]
+    z = program.targets[:, 2] / MM
+    assert z[program.lines == _line_of(path, "N25 G28 G91 Z0")][-1] == 100.0  # the reference
+    assert z[program.lines == _line_of(path, "N55 G43 Z25 H1")][-1] == 25.0  # H1: length 0
+    assert np.min(z) == -1.0  # ZMIN=-1 in the CAM's tool line
+    # N75 G18 G2 X-1.4 Z8 I0.2 from (X-1.6, Z8.2): centre (Z8.2, X-1.4) in (Z, X), clockwise
+    # about +Y, a quarter down to the cut's level, tangent to the G1 X-1.2 after it
+    _check_arc(_block(program, path, "N75 ")[:, [2, 0]], (8.2, -1.4), 0.2, -90)
+    # N85 G17 G3 X-1 Y-1 J0.2 from (-1.2, -1.2): centre (-1.2, -1), a counter-clockwise quarter
+    _check_arc(_block(program, path, "N85 ")[:, :2], (-1.2, -1.0), 0.2, 90)
+    # N165 G19 G2 Y-1.6 Z8.2 K0.2 from (Y-1.4, Z8): centre (Y-1.4, Z8.2) in (Y, Z), up and out
+    _check_arc(_block(program, path, "N165 ")[:, [1, 2]], (-1.4, 8.2), 0.2, -90)
+    # the lead-in arcs reach the five levels, then the tabs' last pass: Z8 6 4 2 0 -1
+    ends = [z[program.lines == _line_of(path, f"N{n} G18 G2")][-1]
+            for n in (75, 190, 305, 420, 535)]
+    assert ends == [8.0, 6.0, 4.0, 2.0, 0.0]
+    tabs = program.targets[program.lines == _line_of(path, "N765 Z0.5")][:, :3] / MM
+    assert tabs.tolist() == [[-1.0, 18.0, 0.5]]
+    last = program.targets[-1, :3] / MM  # G28 G91 X0 Y0 after G28 G91 Z0: the reference
+    assert last.tolist() == [0.0, 0.0, 100.0]
+
+
+def test_fusion_helical_bore_descends_a_quarter_mm_a_half_turn():
+    # Fusion 360 bore: G17 G3 half circles about (30, 0) mm, each 0.25 mm deeper, from
+    # X30.3 Y0 at Z0 to Z-12.75 in 51 halves (radius 0.3), then again at radius 0.4
+    path = PUBLIC / "led_floor_1105_bore_test.nc"
+    program = read_program(path)
+    bores = [(_line_of(path, "Z-0.25 I-0.3 J0"), _line_of(path, "Z-12.75 I-0.3"), 0.3),
+             (103, 153, 0.4)]  # lines 103-153: the first of the two bores at 0.4
+    for first, last, radius in bores:
+        rows = np.flatnonzero((program.lines >= first) & (program.lines <= last))
+        helix = program.targets[rows[0] - 1:rows[-1] + 1, :3] / MM  # from the move before
+        _check_arc(helix[:, :2] * MM, (30, 0), radius, 51 * 180)
+        turned = np.unwrap(np.arctan2(helix[:, 1], helix[:, 0] - 30))
+        assert helix[0, 2] == 0.0 and helix[-1, 2] == -12.75
+        assert np.max(np.abs(helix[:, 2] + 0.25 * (turned - turned[0]) / math.pi)) <= 1e-12
+    # ZMIN=-12.8 in the CAM's tool line
+    assert np.nanmin(program.targets[:, 2]) / MM == pytest.approx(-12.8, abs=1e-12)
