@@ -21,7 +21,7 @@ from machinesim.nc import (
     parse_program,
     read_program,
 )
-from machinesim.nc.cycles import PECK_CLEARANCE_M
+from machinesim.nc.cycles import CHIP_BREAK_RETRACT_M, PECK_CLEARANCE_M
 
 MM = 1e-3
 #: Targets are a decimal in mm times 1e-3 (plus offsets): float64 round-off is far below this,
@@ -184,7 +184,7 @@ def test_a_centre_word_of_another_plane_is_not_said_to_be_read_in_this_one():
     message = str(info.value)
     assert "in G17 (centre words" not in message
     assert "G17: I J, G18: K I, G19: J K; this block is in G17" in message
-    assert message.endswith("and with G81-G83 (repeats)")
+    assert message.endswith("and with G73 and G81-G83 (repeats)")
     with pytest.raises(NCProgramError) as info:
         parse_program("G18 G00 X0 Z0\nG02 X1. J1.", "p.nc")
     assert any(problem.key == "J1." and "this block is in G18" in str(problem)
@@ -679,6 +679,24 @@ def test_read_program_file_errors_name_the_path(tmp_path):
         with pytest.raises(MachineSimError, match=message) as info:
             read_program(path)
         assert str(path) in str(info.value)
+
+
+def test_high_speed_peck_drilling_breaks_the_chip_within_the_hole():
+    # G73 (FANUC's high-speed peck, as Fusion 360's and Haas posts write chip breaking):
+    # feed Q, rapid back up by d (parameter 5114; CHIP_BREAK_RETRACT_M), feed Q further from
+    # the last depth, to Z; then G99's R. It had been refused, and with it every program
+    # that drills so. From R1 in pecks of 0.8 to -1: 0.2, -0.6, -1
+    program = parse_program("G00 X0 Y0 Z5.\nG99 G73 X1. Y2. Z-1. R1. Q0.8 F100.\nG80\n")
+    rows = program.lines == 2
+    kinds = [("rapid", "linear")[k] for k in program.kinds[rows]]
+    z = program.targets[rows][:, 2] / MM
+    d = CHIP_BREAK_RETRACT_M / MM
+    assert kinds == ["rapid", "rapid", "linear", "rapid", "linear", "rapid", "linear", "rapid"]
+    assert z == pytest.approx([5, 1, 0.2, 0.2 + d, -0.6, -0.6 + d, -1, 1], abs=1e-12)
+    assert np.max(np.abs(program.targets[rows][:, :2] / MM - [1, 2])) <= 1e-12
+    assert d == 0.1  # within the hole: every retract stays below R and above the bottom
+    with pytest.raises(NCProgramError, match="G73 needs a peck depth Q > 0"):
+        parse_program("G00 X0 Y0 Z5.\nG73 X1. Y2. Z-1. R1. F100.\n")
 
 
 def test_a_peck_typed_in_the_wrong_unit_is_refused_before_it_makes_thousands_of_moves():

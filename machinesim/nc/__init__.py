@@ -42,7 +42,7 @@ G codes
     length from the tool table added to / taken from absolute Z words; a bare G43 takes the
     last H, refused before any; G49 cancels; like a work offset change it moves nothing by
     itself; an incremental Z before an absolute Z has carried a change is refused, since
-    controls differ there). G81/G82/G83 canned cycles along Z in G17 with R, Z, Q, P, K and
+    controls differ there). G81/G82/G83/G73 canned cycles along Z in G17 with R, Z, Q, P, K and
     G98/G99, expanded into moves; G80 or a motion code cancels. G09 (this block) and G61 (every
     block until G64) end a block in an exact stop: `Program.exact_stops`, where the servo
     loops' lag does not carry into the next block; listed as states too. Accepted as
@@ -52,7 +52,7 @@ G codes
     refused),
     G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words, and G55..G59 selected without
     offsets given for them (G54's zero). Refused: G41/G42 (cutter radius
-    compensation), G93, G95, the canned cycles G73 G74 G76 G84..G89, tool centre point
+    compensation), G93, G95, the canned cycles G74 G76 G84..G89, tool centre point
     and tilted planes (G43.4 G43.5 G68.2 G53.1), coordinate changes (G92 G52 G68 G51 G51.1
     G16), each by name, and every G code not named here.
 Subprograms

@@ -299,7 +299,7 @@ class Block:
         plane_words = PLANES[state.plane][1]
         allowed = {
             "P": g04 or cycle == "G82" or 98 in codes or shot == "G08",
-            "Q": cycle == "G83" or shot == "G05.1",
+            "Q": cycle in ("G73", "G83") or shot == "G05.1",
             "R": arc or cycle is not None or shot == "G05.1",
             "I": arc and "I" in plane_words,
             "J": arc and "J" in plane_words,
@@ -313,11 +313,11 @@ class Block:
                    + f"; this block is in {state.plane})")
         reads = {
             "P": "G04 (dwell, ms), G82 (dwell at the bottom), G08 (P1/P0) and M98 (program)",
-            "Q": "G83 (peck depth) and G05.1 (Q1/Q0)",
-            "R": "G02/G03 (radius), G81-G83 (R plane) and G05.1",
+            "Q": "G73 and G83 (peck depth) and G05.1 (Q1/Q0)",
+            "R": "G02/G03 (radius), G73 and G81-G83 (R plane) and G05.1",
             "I": centres,
             "J": centres,
-            "K": f"{centres} and with G81-G83 (repeats)",
+            "K": f"{centres} and with G73 and G81-G83 (repeats)",
             "L": "M98 (repeat count)" + (
                 "; a canned cycle's repeat count is K here, as on current FANUC controls "
                 "(older ones, and LinuxCNC, write L): write K" if cycle is not None else ""),

@@ -73,8 +73,8 @@ G_GROUPS = {
     "G54": "work offset", "G55": "work offset", "G56": "work offset",
     "G57": "work offset", "G58": "work offset", "G59": "work offset",
     "G09": "exact stop", "G61": "path mode", "G64": "path mode",
-    "G80": "canned cycle", "G81": "canned cycle", "G82": "canned cycle",
-    "G83": "canned cycle",
+    "G73": "canned cycle", "G80": "canned cycle", "G81": "canned cycle",
+    "G82": "canned cycle", "G83": "canned cycle",
     "G90": "distance", "G91": "distance",
     "G91.1": "arc centre",
     "G94": "feed mode",
@@ -91,7 +91,7 @@ CUTTER_COMPENSATION = (
 #: FANUC's canned cycles other than the drilling ones read here, as posts write them for
 #: chip breaking, tapping and boring.
 OTHER_CYCLES = {
-    "G73": "high-speed peck drilling", "G74": "left-hand tapping", "G76": "fine boring",
+    "G74": "left-hand tapping", "G76": "fine boring",
     "G84": "tapping", "G85": "boring", "G86": "boring", "G87": "back boring",
     "G88": "boring", "G89": "boring",
 }
@@ -125,8 +125,8 @@ G_REFUSED = {
     "G93": "inverse time feed (G93, F = 1/min per block, as multi-axis posts write it) is "
            "not supported; post G94 with F in mm/min",
     "G95": "feed per revolution (G95) is not supported; use G94 with F in mm/min",
-    **{code: f"canned cycle {code} ({what}) is not supported: machinesim expands G81, G82 "
-             "and G83 only; post the holes as G81/G82/G83 or as G00/G01 moves"
+    **{code: f"canned cycle {code} ({what}) is not supported: machinesim expands G73, G81, "
+             "G82 and G83 only; post the holes as G73/G81/G82/G83 or as G00/G01 moves"
        for code, what in OTHER_CYCLES.items()},
     "G90.1": "absolute arc centres (G90.1) are not read: I J K are read as the centre's "
              "offset from the arc's start (G91.1, FANUC's only form); post incremental "
