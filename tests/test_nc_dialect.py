@@ -699,6 +699,22 @@ def test_high_speed_peck_drilling_breaks_the_chip_within_the_hole():
         parse_program("G00 X0 Y0 Z5.\nG73 X1. Y2. Z-1. R1. F100.\n")
 
 
+@pytest.mark.parametrize("block, code", [
+    ("G99 G85 X1. Y1. Z-1. R0.25 F100.", "G85"),  # a public program's boring cycle
+    ("G98 G84 X1. Y1. Z-1. R1. P200 F100.", "G84"),
+    ("G98 G76 X1. Y1. Z-1. R1. Q0.1 P500 F100.", "G76"),
+    ("G98 G87 X1. Y1. Z-1. R-3. I0.1 J0. Q0.1 F100.", "G87"),
+])
+def test_a_refused_cycle_is_one_problem_not_one_more_for_each_of_its_words(block, code):
+    # the cycle's R, P, Q, I, J had each been a further problem ("word R is only read with
+    # G02/G03 (radius), G81-G83 (R plane)"), as if the block held more than one mistake
+    with pytest.raises(NCProgramError) as info:
+        parse_program(f"G00 X0 Y0 Z5.\n{block}\n")
+    problems = getattr(info.value, "problems", None) or [info.value]
+    assert [(p.line, p.key) for p in problems] == [(2, code)]
+    assert f"canned cycle {code}" in str(info.value)
+
+
 def test_a_peck_typed_in_the_wrong_unit_is_refused_before_it_makes_thousands_of_moves():
     # 1.5 mm from R to Z in pecks of 0.1 um: 15000 pecks, each a sweep to cut
     with pytest.raises(NCProgramError, match="makes 15000 pecks in one hole"):

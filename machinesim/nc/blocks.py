@@ -34,6 +34,7 @@ from machinesim.nc.words import (
     MAX_MOVES,
     MOTION,
     NON_MOVING,
+    OTHER_CYCLES,
     SINGLE,
     SLOWEST_FEED_M_PER_S,
     CallProblem,
@@ -65,6 +66,7 @@ class Block:
         self.single: dict[str, Word] = {}
         self.g_codes: dict[str, tuple[str, Word]] = {}
         self.m_codes: list[tuple[int, Word]] = []
+        self.refused_cycle: str | None = None  # a canned cycle not read (G74, G84..G89)
 
     def fail(self, message: str, word: Word | None) -> NCProgramError:
         return self.reader.fail(message, self.line, word)
@@ -181,6 +183,8 @@ class Block:
         name = g_name(word)
         if name in G_REFUSED:
             self.refuse(G_REFUSED[name], word)
+            if name in OTHER_CYCLES:
+                self.refused_cycle = name
             return
         group = G_GROUPS.get(name)
         if group is None:
@@ -291,6 +295,13 @@ class Block:
     def check_context(self, motion, one_shot) -> None:
         """Refuse P Q R I J K L where nothing reads them."""
         state, single = self.state, self.single
+        if self.refused_cycle is not None:
+            # the cycle's own words (R plane, P dwell, Q shift or peck, I J K, L repeats):
+            # its refusal says what is wrong; "word R is only read with G02/G03 ..., G81-G83"
+            # beside it had read as a second mistake in a block with one
+            for letter in "PQRIJKL":
+                single.pop(letter, None)
+            return
         codes = {code for code, _ in self.m_codes}
         g04 = motion is not None and motion[0] == "G04"
         shot = None if one_shot is None else one_shot[0]
