@@ -308,7 +308,11 @@ REFUSALS = [
     ("G00 X0\nM99", 2, 1, "M99", "M99 in the main program would jump back"),
     ("G00 Z0\nG43 H1 Z5.", 2, 5, "H1", "G43 H1 needs the tool length"),
     ("G00 X0\nG91 G53 X0", 2, 5, "G53", "machine coordinates, which are absolute"),
-    ("G28", 1, 1, "G28", "G28 needs the axes it moves"),
+    # a bare G28 (26 in one public set of Haas-style programs) is read differently by
+    # Haas (every axis home) and FANUC (none): the message had said neither
+    ("G28", 1, 1, "G28", "G28 without axis words: a Haas control returns every axis to "
+     "machine zero, a FANUC moves none; name the axes it moves, Z first"),
+    ("G53", 1, 1, "G53", "G53 needs the axes it moves"),
     ("G05.1 Q2", 1, 1, "G05.1", r"G05.1 needs Q1 \(on\) or Q0 \(off\)"),
     ("G05.1 Q1 X0", 1, 10, "X0", "G05.1 stands in a block of its own"),
     ("G81 X0 Z-1 R1", 1, 1, "G81", "Z is not known yet"),

@@ -430,6 +430,12 @@ class Block:
                 key += f" {single['R'].key}"
             self.reader.note(key, self.line)
             return
+        if not axes and name == "G28":
+            # a bare G28, as hand-written Haas programs start: controls differ
+            raise self.fail("G28 without axis words: a Haas control returns every axis to "
+                            "machine zero, a FANUC moves none; name the axes it moves, Z "
+                            "first to clear the part: G28 G91 Z0, then G28 G91 X0 Y0 (and "
+                            "G90 after)", word)
         if not axes:
             raise self.fail(f"{name} needs the axes it moves, e.g. {name} G91 Z0", word)
         if name == "G53":
