@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from machinesim.cutting import cut
-from machinesim.end_mills import FlatEndMill
 from machinesim.nc import AXES, KIND_LINEAR, parse_program, read_program
 from machinesim.tools import BallEndMill, VTool
 from machinesim.workpiece import Part, cylinder
@@ -207,38 +206,4 @@ def test_slow_tool_servo_points_cut_a_spiral_groove():
     ends = (_ball_below(radius, top - z[feed[0] - 1]) + _ball_below(radius, top - z[feed[-1]]))
     expected = groove + ends / 2
     assert BALL_BAND[0] * expected < report.removed_volume_m3 < BALL_BAND[1] * expected
-    assert report.rapids_that_cut == () and report.holder_contact == ()
-
-
-def test_public_fusion_contour_removes_the_ring_round_its_square():
-    # tests/nc_corpus/public/led_floor_1024_block_14bit.nc: a D1.4 flat end mill's centre
-    # round the square (-0.7, -0.7)..(20.7, 20.7) mm, 3 mm deep into a block with its top at
-    # z = 0. Removed: the square [-1.4, 21.4]^2 with corners rounded to the tool's 0.7 mm,
-    # less the uncut [0, 20]^2, over 3 mm. The end mill is a regular 60-gon, the fewest
-    # corners (a multiple of 4) within its 1 um: 0.7 mm (1 - cos 3 deg) = 0.96 um, 56 give
-    # 1.10 um. A corner on X and on Y makes it 1.4 mm wide along both; the ring's rounded
-    # corners are quarters of it, 15 triangles of r^2 sin(6 deg) / 2 each.
-    program = read_program(CORPUS / "public" / "led_floor_1024_block_14bit.nc")
-    _, report = cut(program, "grooving_4axis", tool="flat:0.7", stock="block:30x30x5@-5,-5,0",
-                    start=[0.0, 0.0, 0.1, 0.0])
-    r = 0.7
-    assert FlatEndMill(r * MM).segments == 60
-    quarter = 15 * r**2 * math.sin(math.radians(6)) / 2
-    area = 22.8**2 - 4 * (r**2 - quarter) - 20.0**2
-    assert report.removed_volume_m3 == pytest.approx(area * 3 * MM**3, rel=VOLUME_REL, abs=0.0)
-    assert report.rapids_that_cut == () and report.holder_contact == ()
-
-
-def test_public_fusion_wall_tester_cuts_its_left_wall_9_mm_deep(tmp_path):
-    # tests/nc_corpus/public/led_floor_1003_wall_tester.nc (G28 G91 Z0 to the machine's
-    # home, G43 Z25 H1 of length 0): the D2 end mill's centre runs up x = -1 mm on every
-    # pass, Z8 (the block's top) to Z-1 (ZMIN), with tabs only at y 18-22 and 58-62. In the
-    # window x -3..1, y 25..55 it removes x -2..0 over 30 mm and 9 mm: 540 mm^3.
-    table = tmp_path / "tools.toml"
-    table.write_text("[tool.1]\nlength_mm = 0.0\nradius_mm = 1.0\n")
-    program = read_program(CORPUS / "public" / "led_floor_1003_wall_tester.nc", tools=table,
-                           reference={"Z": 100 * MM})
-    _, report = cut(program, "grooving_4axis", tool="flat:1", stock="block:64x84x10@-2,-2,8",
-                    start=[0.0, 0.0, 0.1, 0.0], roi=[(-3 * MM, 1 * MM, 25 * MM, 55 * MM)])
-    assert report.removed_volume_m3 == pytest.approx(2 * 30 * 9 * MM**3, rel=VOLUME_REL, abs=0.0)
     assert report.rapids_that_cut == () and report.holder_contact == ()
