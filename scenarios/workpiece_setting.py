@@ -499,15 +499,18 @@ def table3_table(folder: ReportFolder, crown) -> str:
                      "" if f.paper_after is None else f.paper_after,
                      "n/a" if f.before is None else f.before,
                      "n/a" if f.after is None else f.after])
-        # an n/a the 10x images could not read: why (the evaluation's details)
+        # an n/a the 10x images or the plane fits could not read: why (the evaluation's
+        # details)
         unread += [f"- {label}, simulated {state}: {why}" for state in ("before", "after")
-                   if (why := details.get(f"crown_{state}_image_unread", {}).get(f.name))]
+                   for how in ("image", "planes")
+                   if (why := details.get(f"crown_{state}_{how}_unread", {}).get(f.name))]
     return folder.write_table(
         "table3", ["measured parameter", "paper before", "paper after", "simulated before",
                    "simulated after"], rows,
         title="Paper 002, Table 3: machining errors of the crown (edge distances um, "
         "inclinations deg)", digits=4,
-        note="n/a: not read in the 10x images, where\n" + "\n".join(unread) if unread else "")
+        note="n/a: not read (the 10x images, the plane fits), where\n" + "\n".join(unread)
+        if unread else "")
 
 
 def groove_table(folder: ReportFolder, grooves) -> str:

@@ -237,3 +237,41 @@ def test_a_face_left_uncut_is_n_a_with_the_reason_and_the_rest_reads_its_design(
         "3 of 3 readings)",
         "S6 (C = 225 deg), the profile across its middle (not read in 3 of 3 readings)"]
     assert all(p.split(": ", 1)[1].startswith(found) for p in profiles)
+
+
+def test_a_plane_fitted_where_no_face_is_cut_is_n_a_with_the_reason():
+    """The designed crown with stock standing 40 um above its top over face S2 (its window
+    all stock: a plane parallel to the flat) and level with the top over the outer half of
+    face S4's window (a cut face and a step of stock, fitted at 11.57 deg). The plane fits
+    read them as faces and printed nonsense (paper 002 at --delta-um 300,0,55: planes L2 and
+    L6 3440 um, feet 10,230,498 um; S2's plane exactly parallel to the top stopped the
+    reading). Now S2 (slope 0.00 deg, more than 5 deg off 11.31) and S4 (residual RMS
+    some um against a cut face's 0.1 um) are NaN with why, with their pairs' L and feet;
+    the other faces read their design, nothing said."""
+    from machinesim.metrology import crown_features
+
+    stock = block(1e-3, 0.8e-3, 0.54e-3, (CROWN.apothem, -0.4e-3, 40 * UM)).manifold
+    middle = 0.5 * (WINDOWS["side"][0] + WINDOWS["side"][1])
+    step = block(1e-3, 0.8e-3, 0.54e-3, (middle, -0.4e-3, 0.0)).manifold
+    part = Part(crown_design(CROWN).manifold + stock.rotate((0.0, 0.0, 45.0))
+                + step.rotate((0.0, 0.0, 135.0)))
+    features = crown_features(part, Microscope(noise=False), WINDOWS, slope=CROWN.slope)
+    assert np.isnan(features.inclinations[[1, 3]]).all()
+    np.testing.assert_allclose(np.delete(features.inclinations, [1, 3]), CROWN.slope,
+                               rtol=0, atol=1e-7)
+    for values in (features.edge_distances, features.foot_distances):
+        assert np.isnan(values[[1, 3]]).all()
+    np.testing.assert_allclose(features.edge_distances[[0, 2]], 2 * CROWN.apothem, rtol=0,
+                               atol=1e-10)
+    s2 = ("face S2 (C = 45 deg), the plane fitted in its window: fitted slope 0.00 deg, "
+          "designed 11.31 (more than 5 deg off): the face is not cut there")
+    assert dict(features.unread) == {"S2": s2, "S4": features.unread["S4"], "L2_L6": s2,
+                                     "L4_L8": features.unread["S4"]}
+    # S4's window: the face falls 30 um (0.2 x 150 um) from the top's level to the window's
+    # middle, where the stock stands at the top's level: a step of 30-45 um over half the
+    # samples, a residual of a few to ten um, far above the cut faces' (here 0)
+    head, rest = features.unread["S4"].split("residual RMS ")
+    assert head == "face S4 (C = 135 deg), the plane fitted in its window: "
+    assert 3 < float(rest.split(" um")[0]) < 15
+    assert rest.endswith("um, a cut face's 0.1 um or less (fitted slope 11.57 deg): the "
+                         "window holds uncut stock as well")

@@ -413,7 +413,8 @@ def test_table_3_says_why_a_figure_is_n_a(tmp_path):
 
     from machinesim.experiment import Figure
     from machinesim.metrology.crown_image import CrownImageReading
-    from machinesim.procedures.workpiece_setting import image_unread
+    from machinesim.metrology.part_features import CrownFeatures
+    from machinesim.procedures.workpiece_setting import image_unread, planes_unread
     from machinesim.report import ReportFolder
 
     s2 = "face S2 (C = 45 deg), the profile across its middle: no top edge: ..."
@@ -423,18 +424,26 @@ def test_table_3_says_why_a_figure_is_n_a(tmp_path):
                            "after": CrownImageReading(nan[:4], nan)})
     assert unread == {"before": {"inclination_S2": s2, "edge_distance_L2_L6": l2},
                       "after": {}}
+    plane = "face S2 (C = 45 deg), the plane fitted in its window: fitted slope 0.34 deg ..."
+    planes = planes_unread({"before": CrownFeatures(nan[:4], nan, nan[:4],
+                                                    {"S2": plane, "L2_L6": plane})})
+    assert planes == {"before": {"inclination_planes_S2": plane,
+                                 "edge_distance_planes_L2_L6": plane,
+                                 "foot_distance_L2_L6": plane}}
     figures = (Figure("edge_distance_L1_L5", "um", 2.0, 0.5, 149.15, -0.31),
                Figure("edge_distance_L2_L6", "um", None, 0.25, 152.6, 0.82),
                Figure("inclination_S2", "deg", None, 0.01, 0.95, 0.05),
-               Figure("inclination_planes_S2", "deg", 0.1, 0.0))
+               Figure("inclination_planes_S2", "deg", None, 0.0))
     crown = SimpleNamespace(figures=figures, evaluation=SimpleNamespace(
-        details={"crown_before_image_unread": unread["before"]}))
+        details={"crown_before_image_unread": unread["before"],
+                 "crown_before_planes_unread": planes["before"]}))
     text = scenario.table3_table(ReportFolder(tmp_path / "unread"), crown)
     rows = text.splitlines()
     assert "| S2 (deg) | 0.9500 | 0.0500 | n/a | 0.0100 |" in rows
-    assert rows[-3:] == ["n/a: not read in the 10x images, where",
+    assert rows[-4:] == ["n/a: not read (the 10x images, the plane fits), where",
                          f"- L2 and L6 (um), simulated before: {l2}",
-                         f"- S2 (deg), simulated before: {s2}"]
+                         f"- S2 (deg), simulated before: {s2}",
+                         f"- planes: S2 (deg), simulated before: {plane}"]
     read = SimpleNamespace(figures=figures[:1], evaluation=SimpleNamespace(details={}))
     text = scenario.table3_table(ReportFolder(tmp_path / "read"), read)
     assert text.endswith("| L1 and L5 (um) | 149.1500 | -0.3100 | 2.0000 | 0.5000 |\n")

@@ -11,7 +11,9 @@ workpiece_setting` calls them.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from types import MappingProxyType
 
 import numpy as np
 
@@ -109,6 +111,21 @@ def groove_depths(part, microscope, stations=STATIONS) -> GrooveDepths:
 #: deg on one face for a 0.1 nm shift of the cut); here the rounding averages out (1e-7 deg).
 MAP_SPACING = 1.24309 * UM
 
+#: A side plane whose angle to the flat is farther than this from the designed slope is not
+#: a cut face's reading, rad. A cut face reads the design plus the workpiece's tilt against
+#: the flat (the default crown: 11.31 deg + 1.93 deg cos(theta_k - 90 deg), read 10.07 ..
+#: 13.21 deg; the paper's largest "before" error 2.30 deg): 5 deg is more than twice that.
+#: The probe's capture does not bound it more tightly: spheres 8.5 mm out, 0.34 mm of
+#: sideways reach and a bottom touch from 0.3 mm above a 2 mm sphere find a crown tilted up
+#: to 13.8 deg, more than the 11.31 deg that separates a face from the flat. A window on
+#: uncut stock reads 0.0 .. 0.3 deg (--delta-um 300,0,55: S2, S4, S5, S6).
+FACE_SLOPE_TOLERANCE = math.radians(5.0)
+#: A side plane whose residual RMS exceeds this is not a cut face's reading, m: a cut face's
+#: window reads 12-13 nm (its scallops and the microscope's noise), one that takes in a band
+#: of uncut stock 0.25 .. 20 um (the default crown before: S4 1.9, S5 16, S6 2.4, S7 0.25
+#: um; --delta-um 300,0,55: S2 16, S8 21 um).
+FACE_RMS_LIMIT = 0.1 * UM
+
 
 @dataclass(frozen=True, eq=False)
 class CrownFeatures:
@@ -123,11 +140,16 @@ class CrownFeatures:
         Angle of each side face (S1..S8, faces at C = 0, 45, .. deg) to the bottom face, rad.
     foot_distances : ndarray, shape (4,)
         Distances between opposite foot edges (side planes on the flat's plane), m.
+    NaN where a face's window does not hold a cut face (`face_unread`).
+    unread : Mapping
+        Why, for each NaN (keys ``"L1_L5"`` .. ``"L4_L8"`` for the edge and foot distances,
+        ``"S1"`` .. ``"S8"``), as `CrownImageReading.unread`. Empty if all read.
     """
 
     edge_distances: np.ndarray
     inclinations: np.ndarray
     foot_distances: np.ndarray
+    unread: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
 
 
 def _map_points(part, microscope, box, spacing: float) -> np.ndarray:
@@ -142,8 +164,25 @@ def _turned_back(points, back: np.ndarray):
     return replace(local, point=frozen(back @ local.point), normal=frozen(back @ local.normal))
 
 
+def face_unread(j: int, side, flat, slope: float) -> str | None:
+    """Why face S(j + 1)'s fitted plane ``side`` is not a cut face's reading, or None: its
+    angle to ``flat`` more than `FACE_SLOPE_TOLERANCE` off the designed ``slope`` (rad), or
+    its residual RMS above `FACE_RMS_LIMIT` (the window holds uncut stock as well)."""
+    angle = plane_angle(side, flat)
+    where = f"face S{j + 1} (C = {45 * j} deg), the plane fitted in its window"
+    if abs(angle - slope) > FACE_SLOPE_TOLERANCE:
+        return (f"{where}: fitted slope {math.degrees(angle):.2f} deg, designed "
+                f"{math.degrees(slope):.4g} (more than {math.degrees(FACE_SLOPE_TOLERANCE):g} "
+                "deg off): the face is not cut there")
+    if side.residual_rms > FACE_RMS_LIMIT:
+        return (f"{where}: residual RMS {side.residual_rms / UM:.3g} um, a cut face's "
+                f"{FACE_RMS_LIMIT / UM:g} um or less (fitted slope "
+                f"{math.degrees(angle):.2f} deg): the window holds uncut stock as well")
+    return None
+
+
 def crown_features(part, microscope, windows, spacing: float = MAP_SPACING, *,
-                   meshes=None) -> CrownFeatures:
+                   meshes=None, slope: float | None = None) -> CrownFeatures:
     """Read Table 3's quantities with the microscope (paper 002 Fig. 12).
 
     Planes are fitted to height maps in the ``windows`` of `machinesim.cam.crown.crown_roi`:
@@ -158,10 +197,12 @@ def crown_features(part, microscope, windows, spacing: float = MAP_SPACING, *,
     A map's cost grows with the triangles' boxes, which the long scallop triangles of a face
     at 45 deg make large: hence the turn. ``spacing``: see `MAP_SPACING`. ``meshes``: the
     part's `machinesim.metrology.crown_image.turned_placements`, if already built.
+    ``slope``: the faces' designed slope (rad); given, a face whose plane is not a cut face's
+    (`face_unread`) leaves its S, L and foot distance NaN with the reason in ``unread``.
     """
     meshes = turned_placements(part) if meshes is None else meshes
     r0, r1, v0, v1 = windows["side"]
-    sides, flats, edges, feet = [None] * 8, [None] * 8, [None] * 8, [None] * 8
+    sides, flats, tops = [None] * 8, [None] * 8, [None] * 8
     for k in range(4):
         turn = k * math.pi / 4
         mesh = meshes[k]
@@ -173,11 +214,23 @@ def crown_features(part, microscope, windows, spacing: float = MAP_SPACING, *,
                             back)
         for j, box in ((k, (r0, r1, v0, v1)), (k + 4, (-r1, -r0, -v1, -v0))):
             sides[j] = _turned_back(_map_points(mesh, microscope, box, spacing), back)
-            flats[j] = flat
-            edges[j] = plane_intersection(top, sides[j])
-            feet[j] = plane_intersection(flat, sides[j])
+            flats[j], tops[j] = flat, top
+    faces = {} if slope is None else {j: why for j in range(8)
+                                      if (why := face_unread(j, sides[j], flats[j], slope))}
     inclinations = np.array([plane_angle(side, flat) for side, flat in zip(sides, flats,
                                                                            strict=True)])
-    return CrownFeatures(frozen([line_distance(edges[k], edges[k + 4]) for k in range(4)]),
-                         frozen(inclinations),
-                         frozen([line_distance(feet[k], feet[k + 4]) for k in range(4)]))
+    lengths, foot, unread = np.full(4, np.nan), np.full(4, np.nan), {}
+    for j, why in faces.items():
+        inclinations[j] = np.nan
+        unread[f"S{j + 1}"] = why
+    for k in range(4):
+        if whys := [faces[j] for j in (k, k + 4) if j in faces]:
+            # no lines: an uncut face's plane may lie parallel to the top and the flat
+            unread[f"L{k + 1}_L{k + 5}"] = "; ".join(whys)
+            continue
+        lengths[k] = line_distance(*(plane_intersection(tops[j], sides[j])
+                                     for j in (k, k + 4)))
+        foot[k] = line_distance(*(plane_intersection(flats[j], sides[j])
+                                  for j in (k, k + 4)))
+    return CrownFeatures(frozen(lengths), frozen(inclinations), frozen(foot),
+                         MappingProxyType(unread))

@@ -105,7 +105,7 @@ from machinesim.workpiece import Part, stock_from_spec
 
 __all__ = [
     "EXPERIMENTS", "NOSE", "ProbePlan", "RobotLoadedWorkpiece", "SettingIdentification",
-    "crown_times", "image_unread",
+    "crown_times", "image_unread", "planes_unread",
     "WorkpieceMeasurements", "eqs_5_to_7_program", "model_based_program", "probe_axes",
     "read_sphere", "read_spheres",
 ]
@@ -430,7 +430,8 @@ class RobotLoadedWorkpiece:
             # error budget's variants read only the after part).
             scope = lab.microscope(label=f"crown_{name}")
             meshes = turned_placements(part)
-            features[name] = crown_features(part, scope, layout.windows, meshes=meshes)
+            features[name] = crown_features(part, scope, layout.windows, meshes=meshes,
+                                            slope=crown.slope)
             # Table 3 as the paper reads it: edges picked in 10x images (its own session)
             images[name] = crown_image_reading(
                 part, lab.microscope(label=f"crown_{name}_image", objective=OBJECTIVE_10X),
@@ -445,10 +446,14 @@ class RobotLoadedWorkpiece:
         # a figure the images could not read (n/a) says why: which face's profile, what it
         # found (a face left uncut by a setting far off, its profile never falling from the top)
         unread = image_unread(images)
+        # and a plane fit on a window that holds no cut face (a face left uncut, or a band of
+        # stock): the face's fitted slope or residual
+        planes = planes_unread(features)
+        whys = {name: {**unread[name], **planes[name]} for name in images}
 
         def why(figure: str) -> str:
-            return "".join(f"; {name} not read: {unread[name][figure]}"
-                           for name in images if figure in unread[name])
+            return "".join(f"; {name} not read: {whys[name][figure]}"
+                           for name in images if figure in whys[name])
 
         figures = []
         for i, (key, (paper_before, paper_after)) in enumerate(PAPER_L.items()):
@@ -473,19 +478,19 @@ class RobotLoadedWorkpiece:
                                   errors["before"]["edge"][i], errors["after"]["edge"][i],
                                   note="distance between the lines where the fitted side "
                                   "planes meet the fitted top plane, less its design "
-                                  "(not in the paper)"))
+                                  "(not in the paper)" + why(f"edge_distance_planes_{key}")))
         for i in range(8):
             figures.append(Figure(f"inclination_planes_S{i + 1}", "deg",
                                   errors["before"]["inclination"][i],
                                   errors["after"]["inclination"][i],
                                   note=f"side face at C = {45 * i} deg: angle between the "
                                   "fitted side and flat planes less its design (not in the "
-                                  "paper)"))
+                                  "paper)" + why(f"inclination_planes_S{i + 1}")))
         for i, key in enumerate(PAPER_L):
             figures.append(Figure(f"foot_distance_{key}", "um", errors["before"]["foot"][i],
                                   errors["after"]["foot"][i],
                                   note="distance between opposite foot edges less its design "
-                                  "(not in the paper)"))
+                                  "(not in the paper)" + why(f"foot_distance_{key}")))
         finishing, cuboid = crown_times(lab.machine, crown)
         saved = 100.0 * (1.0 - finishing / cuboid)
         figures.append(Figure("machining_time", "h", cuboid / 3600.0, finishing / 3600.0,
@@ -508,6 +513,8 @@ class RobotLoadedWorkpiece:
                                       "setting_h": SETTING_S / 3600.0},
                    **{f"crown_{name}_image_unread": whys
                       for name, whys in unread.items() if whys},
+                   **{f"crown_{name}_planes_unread": whys
+                      for name, whys in planes.items() if whys},
                    "cuts": cuts,
                    "note": "crown cut in its measuring windows"
                    + (", every layer" if self.all_layers else ", last finishing layer only")}
@@ -536,6 +543,16 @@ def image_unread(images: dict[str, CrownImageReading]) -> dict[str, dict[str, st
     return {name: {f"{'edge_distance' if key[0] == 'L' else 'inclination'}_{key}": why
                    for key, why in reading.unread.items()}
             for name, reading in images.items()}
+
+
+def planes_unread(features: dict[str, CrownFeatures]) -> dict[str, dict[str, str]]:
+    """Why each plane-fit figure is n/a, per reading, keyed by figure name
+    (``inclination_planes_S2``, ``edge_distance_planes_L2_L6``, ``foot_distance_L2_L6``):
+    `CrownFeatures.unread`'s reasons, used as `image_unread`'s."""
+    return {name: {figure: why for key, why in reading.unread.items()
+                   for figure in ((f"edge_distance_planes_{key}", f"foot_distance_{key}")
+                                  if key[0] == "L" else (f"inclination_planes_{key}",))}
+            for name, reading in features.items()}
 
 
 def _crown_errors(features: CrownFeatures, plan: CrownPlan) -> dict[str, list[float]]:
