@@ -357,24 +357,11 @@ def test_injected_parameters_the_procedure_does_not_identify_are_named(tmp_path)
     """A procedure identifies its model's parameters; what else was injected is listed, in
     Result, summary.json and identified.md, rather than left out of the report unseen (the
     machine's background errors apart: they are summarised, not injected by the user)."""
-    from machinesim.experiment import Evaluation, Figure, Identified, run
+    from toy_procedure import WorkpieceX
+
+    from machinesim.experiment import run
     from machinesim.realism import Realism
     from machinesim.report import ReportFolder
-
-    class WorkpieceX:
-        name, paper = "workpiece_x", "none"
-
-        def measure(self, lab):
-            return 0.0
-
-        def identify(self, measurements):
-            return Identified({"workpiece.x": (measurements, 1e-9)}, None)
-
-        def compensate(self, identified):
-            return {}
-
-        def evaluate(self, lab, identified, programs):
-            return Evaluation((Figure("x", "um", 1.0, 0.0),))
 
     injected = {"workpiece": {"delta_um": [3.0, 0.0, 0.0]},
                 "location": {"B": {"EX0B_um": 2.0}}, "tool": {"offset_um": [0.0, -1.5, 0.0]}}

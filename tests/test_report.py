@@ -332,27 +332,12 @@ def test_every_key_of_the_documented_summary_is_in_the_documented_table():
 
 def _toy_result(parts=("before", "after"), after=0.5):
     """A result of a toy procedure on a noise-free lab: one figure, the given parts."""
+    from toy_procedure import WorkpieceX
+
     from machinesim import Lab
-    from machinesim.experiment import Evaluation, Figure, Identified, run
-    from machinesim.workpiece import stock_from_spec
+    from machinesim.experiment import run
 
-    class Toy:
-        name, paper = "toy", "none"
-
-        def measure(self, lab):
-            return 0.0
-
-        def identify(self, measurements):
-            return Identified({"workpiece.x": (measurements, 1e-9)}, None)
-
-        def compensate(self, identified):
-            return {}
-
-        def evaluate(self, lab, identified, programs):
-            return Evaluation((Figure("x", "um", 1.0, after),),
-                              parts={name: stock_from_spec("block:1x1x1") for name in parts})
-
-    return run(Toy(), Lab("robonano_a0ib", noise=False))
+    return run(WorkpieceX(after, parts), Lab("robonano_a0ib", noise=False))
 
 
 def test_write_result_outside_a_scenario_writes_the_folder_whole_or_not_at_all(
