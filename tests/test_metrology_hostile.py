@@ -160,6 +160,27 @@ def test_rtest_point_must_be_numbers(a0ib):
         RTest(a0ib, point="abc")
 
 
+def test_an_r_test_ball_given_in_mm_is_refused_naming_it_and_the_machine_reach(a0ib):
+    # r_test(point=[0, 0, 25]) (25 mm meant) set the ball 25 m off the tool, and its lever
+    # multiplied every angular error into the readings, exit 0. The bound is the diagonal
+    # of the machine's linear travel: by hand, sqrt(280**2 + 150**2 + 130**2) = 343.22 mm
+    lab = machinesim.Lab("robonano_a0ib", noise=False)
+    with pytest.raises(InputError, match=r"ball centre at most 343\.22 mm from tool_tip's "
+                                         r"origin \(the diagonal of robonano_a0ib's linear "
+                                         r"travel.*got \[0\.0, 0\.0, 25\.0\], 25000 mm "
+                                         r"\(25 m\) from it") as info:
+        lab.r_test(point=[0, 0, 25])
+    assert info.value.key == "point"
+    from machinesim.metrology.rtest import ball_reach
+
+    reach = ball_reach(a0ib)
+    assert reach == pytest.approx(math.sqrt(0.28**2 + 0.15**2 + 0.13**2), rel=1e-12)
+    assert RTest(a0ib, point=[0.0, 0.0, reach]).point[2] == reach  # the bound itself is taken
+    with pytest.raises(InputError, match="343.22 mm"):
+        RTest(a0ib, point=[0.0, 0.0, reach * (1 + 1e-12)])
+    assert lab.r_test(point=[0.0, 0.0, 0.04]).read(np.zeros((1, 5))).point[2] == 0.04
+
+
 def test_seed_must_be_non_negative():
     with pytest.raises(InputError, match="a non-negative int seed or None, got -1"):
         Microscope(rng=-1)

@@ -33,8 +33,9 @@ from machinesim.arrays import frozen
 from machinesim.exceptions import AxisLimitError, InputError
 from machinesim.metrology._arrays import as_floats, shown
 from machinesim.metrology.instruments import Readout, as_generator, as_machine, motion_of
+from machinesim.units import M_PER_MM, length_text
 
-__all__ = ["RTest", "RTestReading", "ZEROS"]
+__all__ = ["RTest", "RTestReading", "ZEROS", "ball_reach"]
 
 #: Where the R-test's sensors read zero (`RTest`).
 ZEROS = ("nominal", "first")
@@ -80,6 +81,18 @@ class RTestReading:
     zero_at: np.ndarray | None = None
 
 
+def ball_reach(machine) -> float:
+    """Farthest the R-test's ball centre may sit from its frame's origin, m: the diagonal of
+    the machine's linear travel (0.343 m on robonano_a0ib: 280 x 150 x 130 mm).
+
+    A real R-test's ball sits on a stylus tens of mm from the spindle nose; one set farther
+    from the tool than the machine's whole travel could not be brought over a nest on its table as
+    the axes move, so such a ``point`` is a unit slip (``[0, 0, 25]``, mm meant, is 25 m),
+    whose lever would multiply every angular error into the readings."""
+    linear = ~np.asarray(machine.rotary, dtype=bool)
+    return float(np.linalg.norm((machine.upper - machine.lower)[linear]))
+
+
 class RTest:
     """An R-test device on a machine.
 
@@ -101,7 +114,9 @@ class RTest:
     frame : str
         The machine frame carrying the ball. Default ``"tool_tip"``.
     point : array-like, shape (3,)
-        The ball centre in ``frame``, m. Default the frame's origin.
+        The ball centre in ``frame``, m. Default the frame's origin. At most `ball_reach`
+        (the diagonal of the machine's linear travel) from it: farther is refused as a unit
+        slip (mm given as m).
     zero : {"nominal", "first"}
         Where the sensors read zero (module docstring): at the ball's nominal place
         (default, an idealisation), or on the real ball at the first pose of each `read`,
@@ -123,6 +138,14 @@ class RTest:
         if point.shape != (3,) or not np.isfinite(point).all():
             raise InputError(f"Expected the ball centre as 3 finite coordinates (m), got "
                              f"{shown(point)}", key="point")
+        lever, reach = float(np.linalg.norm(point)), ball_reach(machine)
+        if lever > reach:
+            raise InputError(f"Expected the ball centre at most {reach / M_PER_MM:.6g} mm from "
+                             f"{frame}'s origin (the diagonal of {machine.name}'s linear "
+                             "travel: an R-test's ball sits tens of mm from the spindle nose; "
+                             "point is in m, not mm), got "
+                             f"{shown(point.tolist())}, {length_text(lever)} from it",
+                             key="point")
         self.point = frozen(point)
         self.readout = Readout.of(sigma, resolution, noise)
         self.uncertainty = Readout(sigma, resolution).std
