@@ -198,6 +198,23 @@ def test_probe_takes_a_machine_by_name_and_refuses_other_things(a0ib, flat):
         TouchProbe("no_such", None, flat)
 
 
+def test_a_probe_ball_given_in_mm_is_refused_when_the_probe_is_built(a0ib, flat):
+    # lab.touch_probe(part, radius=0.25) (R0.25 mm meant) was built, and refused only at its
+    # first touch, as a 0.25 m ball overlapping the part
+    lab = machinesim.Lab("robonano_a0ib", noise=False)
+    for radius, shown in ((0.25, r"250 mm \(0\.25 m\)"), (0.0100001, r"10\.0001 mm")):
+        with pytest.raises(InputError, match=r"Expected the ball radius <= 10 mm \(0\.01 m\) "
+                                             r"\(BALL_RADIUS_LIMIT: .*unit slip.*\), got "
+                                             + shown) as info:
+            lab.touch_probe(flat, radius=radius)
+        assert info.value.key == "radius"
+    assert TouchProbe(a0ib, None, flat, radius=10 * MM).radius == 10 * MM  # the bound is taken
+    # a 10 mm ball touches the top face z = 0 with its centre at z = 10 mm, by hand
+    probe = TouchProbe(a0ib, None, flat, radius=10 * MM, noise=False, resolution=0.0)
+    q = probe.touch(above(a0ib, 2.5 * MM, 1.5 * MM, 11 * MM), "-Z", 2 * MM)
+    np.testing.assert_allclose(q, above(a0ib, 2.5 * MM, 1.5 * MM, 10 * MM), rtol=0, atol=1e-10)
+
+
 def test_probe_lobing_amplitudes_must_be_a_mapping(a0ib, flat):
     with pytest.raises(InputError, match=r"lobing_amplitudes as a mapping of lobing order to "
                                          r"amplitude \(m\), e.g. \{3: 1e-7\}, or None, got "

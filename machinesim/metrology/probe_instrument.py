@@ -44,8 +44,17 @@ from machinesim.metrology.instruments import Readout, as_generator, as_machine, 
 from machinesim.metrology.meshindex import MeshIndex
 from machinesim.metrology.probe import touch_many
 from machinesim.tolerances import PROBE_CHORD_M
+from machinesim.units import length_text
 
-__all__ = ["ScanReading", "StylusOverTravel", "TouchProbe"]
+__all__ = ["BALL_RADIUS_LIMIT", "ScanReading", "StylusOverTravel", "TouchProbe"]
+
+#: Largest ball ``radius`` a `TouchProbe` takes, m: 10 mm, 40 times paper 002's R0.25 mm ruby
+#: ball and above the balls of machine-tool probe styli (a few mm across). Any real ball's
+#: radius given in mm as m lies above it (the smallest balls, 0.1 mm across, would read
+#: 0.05 m), as would one in um: a unit slip, refused when the probe is built, as the
+#: readings' `READOUT_LIMIT` refuses a noise in nm given as m. Before, ``radius=0.25``
+#: (mm meant) was refused only at the first touch, as a ball overlapping the part.
+BALL_RADIUS_LIMIT = 10e-3
 
 
 class StylusOverTravel(InputError):
@@ -103,7 +112,8 @@ class TouchProbe:
     part : Part or MeshIndex or tuple of (array-like, array-like)
         The part on the machine, in its workpiece frame (m). Indexed once, here.
     radius : float
-        Ball radius, m. Default 0.25 mm (paper 002's R0.25 ruby ball).
+        Ball radius, m. Default 0.25 mm (paper 002's R0.25 ruby ball); > 0 and at most
+        `BALL_RADIUS_LIMIT` (10 mm: more is a unit slip).
     sigma : float
         Standard deviation of the trigger (and deflection) noise, m, along the direction of
         motion of the ball. Default 20 nm: paper 002 gives the probe's 1 nm resolution but no
@@ -146,6 +156,11 @@ class TouchProbe:
         self.frame = frame
         self.index = MeshIndex.from_surface(part)
         self.radius = as_positive(radius, "radius")
+        if self.radius > BALL_RADIUS_LIMIT:
+            raise InputError(f"Expected the ball radius <= {length_text(BALL_RADIUS_LIMIT)} "
+                             "(BALL_RADIUS_LIMIT: 40 times paper 002's R0.25 mm ball, above "
+                             "any probe stylus's; radius is in m: more is a unit slip, e.g. mm "
+                             f"given as m), got {length_text(self.radius)}", key="radius")
         self.readout = Readout.of(sigma, resolution, noise)
         self._rng = as_generator(rng)
         for name, value, kind in (("pretravel", pretravel, Lobing),
