@@ -206,6 +206,23 @@ def _raw(path, data: bytes | str, encoding: str) -> bytes:
                      f"{type(data).__name__}", source=str(path))
 
 
+def check_ending(path, ending: str, writer: str, what: str) -> None:
+    """Refuse a ``path`` whose name does not end in ``.<ending>`` (any case), before anything
+    is written: export_x3p("map.png") wrote x3p bytes under a picture's name without a word,
+    which a viewer then failed on. ``writer`` and ``what`` (the function, what it writes)
+    are for the message, as `machinesim.workpiece.Part.export_ply` words its own. A path
+    that is no path passes: the writing says so."""
+    if not isinstance(path, str | os.PathLike) or isinstance(os.fspath(path), bytes):
+        return
+    name = os.fspath(path)
+    suffix = os.path.splitext(name)[1]
+    if suffix.lower() == f".{ending}":
+        return
+    found = f"ends in {suffix}" if suffix else "has no ending"
+    raise InputError(f"{writer} writes {what}, and the path {found}: expected a name ending "
+                     f"in .{ending}", source=name, key="path")
+
+
 def write_atomic(path, data: bytes | str, encoding: str = "utf-8") -> None:
     """Write ``data`` to ``path`` whole or not at all.
 

@@ -24,7 +24,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
-from machinesim._io import write_atomic
+from machinesim._io import check_ending, write_atomic
 from machinesim.exceptions import InputError
 
 __all__ = ["BUDGET_KEYS", "BUDGET_OPTIONAL_KEYS", "Budget", "BudgetRow", "clipped_shares",
@@ -214,8 +214,10 @@ class Budget:
         The axis spans -100 .. 100 %: a share beyond (a figure near 0 with every source on,
         which switching one off moves far) is drawn to the edge, hatched, its value written
         beside it (`clipped_shares`). Written whole or not at all
-        (`machinesim._io.write_atomic`).
+        (`machinesim._io.write_atomic`); ``path`` ends in ``.png`` (any case: another
+        ending is refused).
         """
+        check_ending(path, "png", "Budget.plot", "a PNG picture")
         import matplotlib
 
         matplotlib.use("Agg")

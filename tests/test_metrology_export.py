@@ -94,6 +94,39 @@ def test_plot_height_map_writes_a_png_on_regular_and_irregular_grids(tmp_path):
     assert not (tmp_path / "empty.png").exists()
 
 
+def test_each_writer_refuses_a_path_not_ending_in_its_format(tmp_path):
+    # export_x3p(tmp_path / "map.png", ...) wrote x3p bytes under a picture's name without a
+    # word (and plot_profile PNG bytes under .x3p, to_toml TOML under .json ...), as
+    # Part.export_ply did under .stl; the ending may be in any case, and nothing is written
+    from machinesim.budget import Budget, BudgetRow
+    from machinesim.errors import ErrorModel
+
+    x, y, z = rough_map()
+    s, profile = x, z[0]
+    budget = Budget((BudgetRow("s", "x", "um", 0.5, 0.3, 0.64),))
+    writers = {"x3p": ("export_x3p", "an ISO 25178-72 x3p height map",
+                       lambda path: export_x3p(path, x, y, z)),
+               "png": ("plot_profile", "a PNG picture",
+                       lambda path: plot_profile(path, s, profile)),
+               "PNG": ("plot_height_map", "a PNG picture",
+                       lambda path: plot_height_map(path, x, y, z)),
+               "Png": ("Budget.plot", "a PNG picture", budget.plot),
+               "toml": ("ErrorModel.to_toml", "a TOML error model", ErrorModel().to_toml)}
+    for ending, (writer, what, write) in writers.items():
+        for wrong, found in (("map.stl", "ends in .stl"), ("map", "has no ending"),
+                             (f"map.{ending}.tmp", "ends in .tmp")):
+            path = tmp_path / wrong
+            with pytest.raises(InputError, match=rf"{writer} writes {what}, and the path "
+                                                 rf"{found}: expected a name ending in "
+                                                 rf"\.{ending.lower()}") as info:
+                write(path)
+            assert info.value.key == "path" and info.value.source == str(path)
+        assert list(tmp_path.iterdir()) == []
+        write(tmp_path / f"map.{ending}")  # its own ending, in any case, is written
+        assert (tmp_path / f"map.{ending}").stat().st_size > 0
+        (tmp_path / f"map.{ending}").unlink()
+
+
 def test_length_unit_follows_the_data_range():
     assert length_unit([0.0, 2 * MM]) == ("mm", 1e-3)
     assert length_unit([-2 * MM, -2 * MM + 3 * UM]) == ("um", 1e-6)

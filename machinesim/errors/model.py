@@ -299,7 +299,12 @@ class ErrorModel(_Value):
         """Write the model to `path` in um, urad, mm and deg, whole or not at all.
 
         ``from_toml(path)`` then gives every SI value back to float64 round-off (two roundings).
+        `path` ends in ``.toml`` (any case): another ending is refused (InputError), nothing
+        written.
         """
+        from machinesim._io import check_ending
+
+        check_ending(path, "toml", "ErrorModel.to_toml", "a TOML error model")
         _io().write_toml(self.to_dict(readable=True), path)
 
     # ------------------------------------------------------------- the model meets a machine

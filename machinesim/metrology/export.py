@@ -19,7 +19,7 @@ import io
 
 import numpy as np
 
-from machinesim._io import write_atomic
+from machinesim._io import check_ending, write_atomic
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import map_arrays, profile_arrays, regular_step
 from machinesim.units import LENGTH
@@ -63,7 +63,7 @@ def export_x3p(path, x, y, z, *, comment: str | None = None) -> None:
     Parameters
     ----------
     path : str or os.PathLike
-        Destination file (conventionally ``*.x3p``).
+        Destination file, ending in ``.x3p`` (any case; another ending is refused).
     x : array-like, shape (nx,)
     y : array-like, shape (ny,)
         Regular grid axes, m (nx, ny >= 2).
@@ -75,8 +75,9 @@ def export_x3p(path, x, y, z, *, comment: str | None = None) -> None:
     Raises
     ------
     InputError
-        For malformed arrays or a grid that is not regular.
+        For a path not ending in ``.x3p``, malformed arrays or a grid that is not regular.
     """
+    check_ending(path, "x3p", "export_x3p", "an ISO 25178-72 x3p height map")
     import x3pio
 
     from machinesim import __version__
@@ -100,7 +101,7 @@ def plot_profile(path, s, z, *, title: str | None = None, label: str = "s") -> N
     Parameters
     ----------
     path : str or os.PathLike
-        Destination PNG file.
+        Destination PNG file, ending in ``.png`` (any case; another ending is refused).
     s : array-like, shape (k,)
         Position along the profile, m, strictly increasing.
     z : array-like, shape (k,)
@@ -110,6 +111,7 @@ def plot_profile(path, s, z, *, title: str | None = None, label: str = "s") -> N
     label : str
         Name of the position axis.
     """
+    check_ending(path, "png", "plot_profile", "a PNG picture")
     s_all = np.array(s, dtype=np.float64)
     z_all = np.array(z, dtype=np.float64)
     profile_arrays(s_all, z_all, 2)
@@ -129,7 +131,7 @@ def plot_height_map(path, x, y, z, *, title: str | None = None, cmap: str = "vir
     Parameters
     ----------
     path : str or os.PathLike
-        Destination PNG file.
+        Destination PNG file, ending in ``.png`` (any case; another ending is refused).
     x : array-like, shape (nx,)
     y : array-like, shape (ny,)
         Sample axes, m, strictly increasing (regular or not).
@@ -140,6 +142,7 @@ def plot_height_map(path, x, y, z, *, title: str | None = None, cmap: str = "vir
     cmap : str
         A matplotlib colour map name.
     """
+    check_ending(path, "png", "plot_height_map", "a PNG picture")
     x, y, z = map_arrays(x, y, z)
     if not np.isfinite(z).any():
         raise InputError("Expected at least one measured height to draw, got only NaN", key="z")
