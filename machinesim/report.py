@@ -132,6 +132,8 @@ class ReportFolder:
         self.final = Path(path)
         self._staged = STAGED.get(folder_key(path))
         self.files: list[str] = []
+        #: Where in ``files`` the names written since the last result begin (`write_result`).
+        self._report_start = 0
         if self._staged is not None:
             return
         try:
@@ -262,15 +264,27 @@ class ReportFolder:
         Outside a scenario the folder is written whole or not at all, as a scenario's is: it
         then holds this report (and what was written through this folder before), or, when
         stopped or failed, what it held before. A folder holding other files than an earlier
-        report's is refused (`InputError`), before anything is written."""
+        report's is refused (`InputError`), before anything is written.
+
+        A second result written through the same folder replaces the first's report whole,
+        as ``ReportFolder(path).write_result`` would: the files of the earlier result (and
+        its budget), and what was written through the folder before it, go; what was written
+        through the folder since (a table of this run's) stays."""
         from machinesim.experiment import Result
 
         if not isinstance(result, Result):
             raise InputError(f"Expected a machinesim.experiment.Result "
                              f"(experiment.run(procedure, lab)), got {type(result).__name__}",
                              key="result")
+        earlier, self.files = self.files[:self._report_start], self.files[self._report_start:]
+        self._report_start = 0
+        if self._staged is not None:  # a staging folder is swapped in as it stands
+            for name in set(earlier) - set(self.files):
+                (self.path / name).unlink(missing_ok=True)
         with self._whole():
-            return self._write_result(result, digits, budget)
+            text = self._write_result(result, digits, budget)
+        self._report_start = len(self.files)
+        return text
 
     def _write_result(self, result, digits: int, budget) -> str:
         for name, part in result.evaluation.parts.items():
@@ -297,6 +311,7 @@ class ReportFolder:
             return text + "\n" + self.add_budget(result, budget)
         for name in ("budget.md", "budget.png"):
             (self.path / name).unlink(missing_ok=True)
+        self.files = [name for name in self.files if name not in ("budget.md", "budget.png")]
         self.write_summary(result.summary())
         return text
 
@@ -308,6 +323,7 @@ class ReportFolder:
         with self._whole(adding=True):
             text = self.write_budget(budget)
             self.write_summary({**result.summary(), "budget": budget.to_dict()})
+        self._report_start = len(self.files)  # the budget belongs to the result's report
         return text
 
     def write_budget(self, budget, name: str = "budget") -> str:

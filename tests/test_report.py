@@ -392,6 +392,49 @@ def test_write_result_outside_a_scenario_writes_the_folder_whole_or_not_at_all(
     assert all(_snapshot(out)[name] == report[name] for name in report if name != "summary.json")
 
 
+def test_a_second_result_through_one_folder_replaces_the_first_report_whole(tmp_path):
+    # folder.write_result(first); folder.write_result(second) left the first's parts
+    # (old_a.ply, old_b.ply) beside the second's report, and its summary.json listed them as
+    # the second's. Now the folder is what ReportFolder(path).write_result(second) makes,
+    # with what was written through the folder since the first result (notes.md)
+    from machinesim.budget import Budget, BudgetRow
+
+    first, second = _toy_result(parts=("old_a", "old_b")), _toy_result(parts=("new",))
+    budget = Budget((BudgetRow("s", "x", "um", 0.5, 0.3, 0.64),))
+    fresh = ReportFolder(tmp_path / "fresh")
+    fresh.write_text("notes.md", "this run\n")
+    fresh.write_result(second)
+    expected = _snapshot(tmp_path / "fresh")
+    assert sorted(expected) == ["figures.json", "figures.md", "identified.json",
+                                "identified.md", "new.ply", "notes.md", "summary.json"]
+    for with_budget in (False, True):
+        out = tmp_path / f"out_{with_budget}"
+        folder = ReportFolder(out)
+        folder.write_text("extra.md", "before the first result\n")
+        folder.write_result(first)
+        if with_budget:
+            folder.add_budget(first, budget)
+            assert (out / "budget.png").is_file()
+        folder.write_text("notes.md", "this run\n")
+        folder.write_result(second)
+        assert _snapshot(out) == expected, with_budget
+        assert json.loads((out / "summary.json").read_text())["files"] == sorted(expected)
+    # inside a scenario (a staged folder) alike
+    def report(args):
+        folder = ReportFolder(args.out)
+        folder.write_result(first)
+        folder.publish()
+        folder.write_text("notes.md", "this run\n")
+        folder.write_result(second)
+        folder.publish(last=True)
+
+    staged = tmp_path / "staged"
+    assert scenario_status(report, Namespace(out=staged), "s") == 0
+    assert _snapshot(staged) == expected
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fresh", "out_False", "out_True",
+                                                          "staged"]  # no staging folder left
+
+
 def test_a_report_file_name_stays_in_its_folder_and_a_result_is_a_result(tmp_path):
     folder = ReportFolder(tmp_path / "out")
     for name in ("../escape.json", "sub/x.json", "", ".", "..", "/tmp/x.json"):
