@@ -393,8 +393,7 @@ def _cut(args) -> int:
     if errors is not None:
         from machinesim.errors.toml import below_any_machine, beyond_any_machine
 
-        summary["notes"] += [f"{args.errors}: {line}" for line in
-                             [*below_any_machine(errors), *beyond_any_machine(errors)]]
+        summary["notes"] += [*below_any_machine(errors), *beyond_any_machine(errors)]
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
     pieces, apart = _pieces(part, stock, roi)

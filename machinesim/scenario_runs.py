@@ -315,9 +315,10 @@ def errors_file(path):
     errors = ErrorModel.from_toml(path)
     name = Path(sys.argv[0]).stem or "scenario"
     notes = [] if errors.written else [
-        "sets no error (no key in any section): the machine as built, every error zero"]
+        f"{path}: sets no error (no key in any section): the machine as built, every error "
+        "zero"]
     for line in [*notes, *below_any_machine(errors), *beyond_any_machine(errors)]:
-        print(f"{name}: note: {path}: {line}", file=sys.stderr, flush=True)
+        print(f"{name}: note: {line}", file=sys.stderr, flush=True)
     return errors
 
 

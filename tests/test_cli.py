@@ -397,17 +397,19 @@ def test_an_errors_file_that_sets_nothing_is_noted(tmp_path, capsys):
 def test_an_error_written_in_si_in_a_micrometre_key_is_noted(tmp_path, capsys):
     """EX0C_um = 4e-6 (4 um written in metres) is 4 pm, and tool Y 3e-6 um 3 pm: below a
     hundredth of the axes' 1 nm, no error a machine shows; each is noted with its size
-    (by hand: 4e-6 um x 1e-6 m/um). 5 urad and the example's values are not."""
+    (by hand: 4e-6 um x 1e-6 m/um) and its line (counted by hand: the notes had named no
+    line, where the refusals do). 5 urad and the example's values are not."""
     slip = tmp_path / "slip.toml"
     slip.write_text("[tool]\noffset_um = [0.0, 3e-6, 0.0]\n[location.C]\nEX0C_um = 4e-6\n"
                     "EA0C_urad = 5.0\n")
     code, _, err = run(["cut", GROOVES, *CUT, "--errors", slip, "--out", tmp_path / "a.ply"],
                        capsys)
     assert code == 0, err
-    assert (f"note: {slip}: location.C.EX0C_um = 4e-06 is at most 4e-09 mm (4e-12 m), below "
-            "anything a machine shows: was it written in m, where the key asks um?") in err, err
-    assert (f"note: {slip}: tool.offset_um = [0.0, 3e-06, 0.0] is at most 3e-09 mm (3e-12 m)"
-            in err), err
+    assert (f"note: {slip}, line 4: location.C.EX0C_um = 4e-06 is at most 4e-09 mm "
+            "(4e-12 m), below anything a machine shows: was it written in m, where the key "
+            "asks um?") in err, err
+    assert (f"note: {slip}, line 2: tool.offset_um = [0.0, 3e-06, 0.0] is at most 3e-09 mm "
+            "(3e-12 m)" in err), err
     assert "EA0C_urad" not in err
     code, _, err = run(["cut", GROOVES, *CUT, "--errors", ROOT / "models" / "errors" /
                         "example.toml", "--out", tmp_path / "b.ply"], capsys)
@@ -426,13 +428,13 @@ def test_an_error_written_in_micrometres_in_a_millimetre_key_is_noted(tmp_path, 
                         "--report", tmp_path / "a.json"], capsys)
     assert code == 0, err
     assert "the program removed no material" in err
-    note = (f"{slip}: tool.offset_mm = [0.0, -178.0, 0.0] reaches 178 mm, beyond the errors "
-            "of any machine (a tool or workpiece set that far off misses its part): was it "
-            "written in um, where the key asks mm?")
+    note = (f"{slip}, line 2: tool.offset_mm = [0.0, -178.0, 0.0] reaches 178 mm, beyond "
+            "the errors of any machine (a tool or workpiece set that far off misses its part): "
+            "was it written in um, where the key asks mm?")
     assert f"note: {note}" in err, err
     assert note in json.loads((tmp_path / "a.json").read_text())["notes"]
-    assert (f"note: {slip}: workpiece.gamma_rad = 0.5 reaches 28.65 deg, beyond the errors of "
-            "any machine (a part or an axis turned that far is another setting): was it "
+    assert (f"note: {slip}, line 4: workpiece.gamma_rad = 0.5 reaches 28.65 deg, beyond the "
+            "errors of any machine (a part or an axis turned that far is another setting): was it "
             "written in mrad or urad, where the key asks rad?") in err, err
     near = tmp_path / "near.toml"
     near.write_text("[tool]\noffset_mm = [9.99, 0.0, 0.0]\n[workpiece]\ngamma_deg = 9.99\n")

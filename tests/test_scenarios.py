@@ -229,8 +229,8 @@ def test_a_scenario_notes_an_errors_value_beyond_any_machine(tmp_path, capsys, m
     monkeypatch.setattr(sys, "argv", ["tool_rotation_arm.py"])
     assert errors_file(path).parameters()["tool.y"] == pytest.approx(-0.178, abs=1e-15)
     assert capsys.readouterr().err.splitlines() == [
-        f"tool_rotation_arm: note: {path}: tool.offset_mm = [0.0, -178.0, 0.0] reaches "
-        "178 mm, beyond the errors of any machine (a tool or workpiece set that far off "
+        f"tool_rotation_arm: note: {path}, line 2: tool.offset_mm = [0.0, -178.0, 0.0] "
+        "reaches 178 mm, beyond the errors of any machine (a tool or workpiece set that far off "
         "misses its part): was it written in um, where the key asks mm?"]
 
 
@@ -245,7 +245,8 @@ def test_paper_000_reads_its_errors_file_once_and_notes_it_once(tmp_path):
                             capture_output=True, text=True, check=False, cwd=ROOT, timeout=300)
     assert result.returncode == 0, result.stderr
     notes = [line for line in result.stderr.splitlines() if ": note: " in line]
-    assert notes == [f"tool_rotation_arm: note: {path}: location.A.EY0A_um = 4e-06 is at most "
+    assert notes == [f"tool_rotation_arm: note: {path}, line 2: location.A.EY0A_um = 4e-06 is "
+                     "at most "
                      "4e-09 mm (4e-12 m), below anything a machine shows: was it written in m, "
                      "where the key asks um?"]
 
@@ -265,7 +266,8 @@ def test_papers_003_004_note_an_errors_file_that_reads_as_no_error(tmp_path):
         name = script.removesuffix(".py")
         assert result.returncode == 2, result.stderr
         assert result.stderr.splitlines() == [
-            f"{name}: note: {path}: location.C.EX0C_um = 4e-06 is at most 4e-09 mm (4e-12 m), "
+            f"{name}: note: {path}, line 2: location.C.EX0C_um = 4e-06 is at most 4e-09 mm "
+            "(4e-12 m), "
             "below anything a machine shows: was it written in m, where the key asks um?",
             f"{name}: error: {path}, line 3, key 'location.A': axis 'A' is not on this machine; "
             "it has "

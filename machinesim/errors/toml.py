@@ -68,10 +68,22 @@ def _poly_factors(value_factor: float, position_factor: float, count: int) -> np
 SMALLEST_WRITTEN_ERROR_SI = 1e-11
 
 
+def _noted_at(model: ErrorModel, field: str) -> str:
+    """Where a note of ``field`` (``tool.offset``) begins, as refusals name it: the file and
+    the key's line (`key_lines`, kept in ``model.lines``), ``F.toml, line 3: ``; nothing for a
+    model not read from a file."""
+    where = [model.source] if model.source is not None else []
+    line = model.line_of(field)
+    if line is not None:
+        where.append(f"line {line}")
+    return f"{', '.join(where)}: " if where else ""
+
+
 def below_any_machine(model: ErrorModel) -> list[str]:
     """Lines naming each value the file wrote (``model.written``) that is not zero and yet
     below `SMALLEST_WRITTEN_ERROR_SI` in SI, all its entries: perhaps SI in a key in um or
-    urad. A table's positions are left out."""
+    urad. A table's positions are left out. Each line begins with the file and the key's line
+    (``F.toml, line 3: location.C.EX0C_um = 4e-06 is at most ...``)."""
     lines = []
     for field, (key, value) in model.written.items():
         unit = key.rsplit("_", 1)[-1]
@@ -84,7 +96,8 @@ def below_any_machine(model: ErrorModel) -> list[str]:
         if size.size and size.max() > 0.0 and size.max() < SMALLEST_WRITTEN_ERROR_SI:
             si = "m" if is_length(unit) else "rad"
             shown = np.asarray(value, dtype=np.float64).tolist()
-            lines.append(f"{key} = {shown!r} is at most {_shown(float(size.max()), si)}, "
+            lines.append(f"{_noted_at(model, field)}{key} = {shown!r} is at most "
+                         f"{_shown(float(size.max()), si)}, "
                          "below anything a machine shows: was it written in "
                          f"{si}, where the key asks {unit}?")
     return lines
@@ -103,7 +116,8 @@ def beyond_any_machine(model: ErrorModel) -> list[str]:
     """Lines naming each value the file wrote (``model.written``) that reaches
     `LARGEST_LIKELY_ERROR_M` (a length) or `LARGEST_LIKELY_ERROR_RAD` (an angle) in SI, all
     its entries: perhaps um or urad in a key in mm or deg. A table's positions and a
-    polynomial's coefficients (whose size depends on the travel) are left out."""
+    polynomial's coefficients (whose size depends on the travel) are left out. Each line
+    begins with the file and the key's line, as `below_any_machine`'s."""
     lines = []
     for field, (key, value) in model.written.items():
         unit = key.rsplit("_", 1)[-1]
@@ -122,7 +136,8 @@ def beyond_any_machine(model: ErrorModel) -> list[str]:
                  else f"{np.degrees(size.max()):.4g} deg")
         what = ("a tool or workpiece set that far off misses its part" if length else
                 "a part or an axis turned that far is another setting")
-        lines.append(f"{key} = {shown!r} reaches {reach}, beyond the errors of any machine "
+        lines.append(f"{_noted_at(model, field)}{key} = {shown!r} reaches {reach}, beyond "
+                     "the errors of any machine "
                      f"({what}): was it written in {_SMALLER.get(unit, 'a smaller unit')}, "
                      f"where the key asks {unit}?")
     return lines
