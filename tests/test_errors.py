@@ -895,7 +895,10 @@ def test_a_polynomial_beyond_float64_in_the_units_shown_is_told_so():
     model = ErrorModel(component={"C": {"EXC": error}})
     with pytest.raises(ErrorModelError) as info:  # 9.6e307 m is finite, in um it is not
         model.check_travel("C", -2 * math.pi, 2 * math.pi)
-    assert f"reaches {1e300 * (2 * math.pi) ** 10:g} m at C = -360 deg" in str(info.value)
+    # told in um, the unit of the key (a Python model's: um), SI beside; it was told in m
+    # alone: (2 pi)**10 = 95895600.6 by hand, so 9.58956e307 m, 9.58956e313 um
+    assert ("reaches 9.58956e+313 um (9.58956e+307 m) at C = -360 deg, no length error: "
+            "expected at most 1e+06 um (1 m)") in str(info.value)
     with pytest.raises(ErrorModelError, match=r"reaches more than float64 holds at C = -720 deg"):
         model.check_travel("C", -4 * math.pi, 4 * math.pi)
 
@@ -909,7 +912,28 @@ def test_a_coefficient_beyond_float64_in_si_is_refused_at_its_key(tmp_path):
     assert str(info.value) == (
         f"{path}, line 2, key 'component.X.EYX_poly_um_mm': coefficient c_8 = 1e+300 um/mm**8 is "
         "1e+18 times as large in m/m**8, beyond float64; expected a length error of at most "
-        "1000 mm (1 m) over the travel")
+        "1e+06 um (1 m) over the travel")  # in um, as the key writes it (was 1000 mm)
+
+
+def test_a_component_error_out_of_order_names_the_unit_its_positions_were_written_in(tmp_path):
+    # positions and a range that do not increase were told as bare numbers, "got 0.1 then
+    # 0.05", whatever unit they were written in
+    with pytest.raises(ErrorModelError, match=r"strictly increasing, got 0\.1 then 0\.05 m or "
+                                              r"rad \(indices 0, 1\)"):
+        ComponentError("table", [0.1, 0.05], [0.0, 0.0])
+    with pytest.raises(ErrorModelError, match=r"expected lower <= upper, got 0\.1 \.\. 0\.05 m "
+                                              r"or rad"):
+        ComponentError("poly", None, [0.0, 1.0]).largest(0.1, 0.05)
+    path = tmp_path / "F.toml"
+    for unit in ("mm", "deg"):
+        axis = "X" if unit == "mm" else "C"
+        path.write_text(f"[component.{axis}]\nposition_{unit} = [0, 100, 50]\n"
+                        f"EX{axis}_um = [0, 1, 2]\n")
+        with pytest.raises(ErrorModelError, match=rf"line 2, key 'component\.{axis}\.position_"
+                                                  rf"{unit}': positions must be strictly "
+                                                  rf"increasing, got 100\.0 then 50\.0 {unit} "
+                                                  r"\(indices 1, 2\)"):
+            ErrorModel.from_toml(path)
 
 
 def test_a_move_bent_into_too_many_sub_steps_names_the_command_line_option():

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import re
+from decimal import Decimal
 from typing import Any
 
 import numpy as np
@@ -88,6 +89,16 @@ def _shown(value: float, unit: str) -> str:
     return f"{value / FACTORS[unit]:g} {unit}"
 
 
+def _in_unit(value: float, factor: float) -> str:
+    """``value`` (SI) over ``factor`` (SI per unit), as ``:g`` shows it, also where the
+    quotient overflows float64 (9.6e307 m is 9.6e313 um): worked out in decimal then."""
+    with np.errstate(over="ignore"):
+        quotient = np.float64(value) / factor
+    if math.isfinite(quotient) or not math.isfinite(value):
+        return f"{quotient:g}"
+    return format(Decimal(value) / Decimal(factor), ".6g")
+
+
 def _limit(quantity: str, unit: str, factor: float) -> str:
     """`LARGEST_ERROR` of `quantity` in `unit` (`factor` SI per unit), and in SI beside it:
     ``1e+06 um (1 m)``; for an SI `unit`, in mm or deg first (`_shown`)."""
@@ -111,12 +122,16 @@ def _check_si(values, quantity: str, key: str | None) -> None:
     _check_size(values, quantity, "rad" if quantity == "angle" else "m", 1.0, None, key)
 
 
-def _check_increasing(positions: np.ndarray, source: str | None, key: str | None) -> None:
+def _check_increasing(positions: np.ndarray, source: str | None, key: str | None,
+                      unit: str) -> None:
+    """Refuse positions that do not increase, naming them in ``unit``, the unit they were
+    written in (``mm`` from a ``position_mm`` key; ``m or rad`` from Python)."""
     if np.any(not_up := np.diff(positions) <= 0.0):
         i = int(np.argmax(not_up))
         raise _fail(
             f"positions must be strictly increasing, got {positions[i].item()!r} then "
-            f"{positions[i + 1].item()!r} (indices {i}, {i + 1}) in {positions.tolist()!r}",
+            f"{positions[i + 1].item()!r} {unit} (indices {i}, {i + 1}) in "
+            f"{positions.tolist()!r}",
             source,
             key,
         )

@@ -157,7 +157,7 @@ class ComponentError(_Value):
             if positions is None:
                 raise _fail("a table needs positions, got None", None, "positions")
             positions = _numbers(positions, None, "positions")
-            _check_increasing(positions, None, "positions")
+            _check_increasing(positions, None, "positions", "m or rad")
             if positions.size != values.size:
                 message = f"got {values.size} values for {positions.size} positions"
                 raise _fail(f"a table needs one value per position, {message}", None, "values")
@@ -241,7 +241,8 @@ class ComponentError(_Value):
         """
         lower, upper = _number(lower, None, "lower"), _number(upper, None, "upper")
         if upper < lower:
-            raise _fail(f"expected lower <= upper, got {lower!r} .. {upper!r}", None, "upper")
+            raise _fail(f"expected lower <= upper, got {lower!r} .. {upper!r} m or rad",
+                        None, "upper")
         if self.kind == "table":
             inside = self.positions[(self.positions > lower) & (self.positions < upper)]
             x = np.concatenate(([lower], inside, [upper]))

@@ -26,6 +26,7 @@ from machinesim.errors._checks import (
     _check_symbol,
     _describe,
     _fail,
+    _in_unit,
     _limit,
     _number,
     _quantity,
@@ -368,9 +369,12 @@ class ErrorModel(_Value):
             with np.errstate(over="ignore"):  # in the unit shown first (`_shown`)
                 shown = value / first
             si = "m" if quantity == "length" else "rad"
-            # in SI alone where the unit shown would overflow (1e300 m/rad**10 over a turn)
+            # where the unit shown overflows float64 (1e300 m/rad**10 over a turn, 9.6e307 m,
+            # is 9.6e313 um), worked out in decimal, SI beside
+            written = {"m": "mm", "rad": "deg"}.get(units[0], units[0])
             reached = (_shown(value, units[0]) if np.isfinite(shown) else
-                       f"{value:g} {si}" if np.isfinite(value) else "more than float64 holds")
+                       f"{_in_unit(value, first)} {written} ({value:g} {si})"
+                       if np.isfinite(value) else "more than float64 holds")
             raise _fail(f"over the travel of axis {axis}, {travel}, the polynomial reaches "
                         f"{reached} at {axis} = {_shown(where, units[1])}, no {quantity} "
                         f"error: expected at most {_limit(quantity, units[0], FACTORS[units[0]])}"

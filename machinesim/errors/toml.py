@@ -558,7 +558,7 @@ def _parse_component(axis: Any, table: Any, source: str,
             if positions is not None:
                 raise _fail(f"positions are given twice (and as {position_key})", source, key_path)
             in_file = _numbers(value, source, key_path)
-            _check_increasing(in_file, source, key_path)
+            _check_increasing(in_file, source, key_path, key.split("_")[1])
             positions, position_key = in_file * factor, key
             written[f"{path}.position"] = (key_path, in_file)
             continue
@@ -579,7 +579,7 @@ def _parse_component(axis: Any, table: Any, source: str,
             if not np.all(np.isfinite(si)):
                 k = int(np.argmin(np.isfinite(si)))
                 si_unit = f"{_SI_UNITS[quantity]}/{_SI_UNITS[_position_kind(axis)]}**{k}"
-                largest = _limit(quantity, _SI_UNITS[quantity], 1.0)
+                largest = _limit(quantity, units[1], value_factor)  # in the unit written
                 raise _fail(f"coefficient c_{k} = {coefficients[k]:g} {units[1]}/{units[2]}**{k}"
                             f" is {factors[k]:g} times as large in {si_unit}, beyond float64; "
                             f"expected a {quantity} error of at most {largest} over the travel",
