@@ -92,6 +92,22 @@ def test_an_iso_colon_program_number_reads_as_an_o_number():
         "O1234\nG90 G21\nM98 P2000\nM30\nO2000\nG01 X1. F100.\nM99\n")
 
 
+@pytest.mark.parametrize("text, key, fix", [
+    (":O1001", ":O1001", "write ':1001' or 'O1001', not both"),
+    (": o 12 (PART)", ": o 12", "write ':12' or 'O12', not both"),
+    (":G01", ":G01", "write the program number's digits after it"),
+])
+def test_an_iso_colon_before_a_letter_is_refused_naming_the_colon(text, key, fix):
+    # ':O1001' (':' and O, the same address twice) had been "malformed number '' after
+    # 'O'" at column 1, where the file holds a ':' and no empty O
+    with pytest.raises(NCProgramError) as error:
+        parse_program(f"{text}\nG90 G21\nM30\n")
+    assert (error.value.line, error.value.column, error.value.key) == (1, 1, key)
+    assert str(error.value).endswith(
+        "':' is the ISO-code address of a program number, as O is, and takes its digits "
+        f"(':1001' reads as O1001); found {key!r}: {fix}")
+
+
 @pytest.mark.parametrize("rule, seconds", [
     ("calculator", 10.0),  # X10 is 10 s
     ("increment", 0.010),  # milliseconds, as before

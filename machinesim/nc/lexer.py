@@ -113,6 +113,10 @@ def tokenize(raw: str, source: str, line: int, *,
             i += 1
             while i < n and raw[i] in _BLANK:
                 i += 1
+            if c == ":" and i < n and raw[i] in _LETTERS:
+                # ':O1001' had been "malformed number '' after 'O'" at the ':' (never written)
+                _colon_before_letter(raw, start, i, fail)
+                continue
             match = _NUMBER.match(raw, i)
             end = match.end() if match else i
             special = _NOT_FINITE.match(raw, i) if match is None else None
@@ -137,10 +141,10 @@ def tokenize(raw: str, source: str, line: int, *,
                 stop = _end_of_garbage(raw, i)
                 tail = raw[i:stop]
                 fail(
-                    f"malformed number {brief(tail)!r} after {letter!r}; expected digits "
+                    f"malformed number {brief(tail)!r} after {c!r}; expected digits "
                     f"with an optional sign and decimal point, e.g. {_example(letter)}",
                     start + 1,
-                    letter + tail,
+                    (c if c == ":" else letter) + tail,
                 )
                 i = max(stop, i)
                 continue
@@ -203,6 +207,22 @@ def _after_end_of_block(raw: str, semicolon: int, fail) -> None:
          "';' on the same line are read as a comment, but ';' ends a block in FANUC text; "
          "put each block on its own line (or write the comment in parentheses, e.g. "
          "'(T1 tool)')", i + 1, key)
+
+
+def _colon_before_letter(raw: str, colon: int, letter: int, fail) -> None:
+    """Refuse the ':' at ``raw[colon]`` followed (past blanks) by the letter at
+    ``raw[letter]``: ':' is the program number's address in ISO code and takes digits, so
+    ':O1001' gives the address twice. Reading goes on at the letter."""
+    digits = letter + 1
+    while digits < len(raw) and raw[digits] in _BLANK:
+        digits += 1
+    number = _NUMBER.match(raw, digits)
+    stop = number.end() if number else _end_of_garbage(raw, letter + 1)
+    found = raw[colon:stop]
+    fix = (f"write ':{number.group()}' or 'O{number.group()}', not both"
+           if number and raw[letter] in "oO" else "write the program number's digits after it")
+    fail(f"':' is the ISO-code address of a program number, as O is, and takes its digits "
+         f"(':1001' reads as O1001); found {brief(found)!r}: {fix}", colon + 1, found)
 
 
 def _starts_text(raw: str, after: int, i: int) -> bool:
