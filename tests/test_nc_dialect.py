@@ -460,6 +460,22 @@ def test_a_cycle_carried_into_g91_drills_with_r_and_z_restated_there():
     assert bottoms[:, 2].tolist() == pytest.approx([-2 * MM, -2 * MM], abs=EXACT_M)
 
 
+def test_p_in_a_g81_block_is_kept_for_the_cycle_and_moves_as_without_it():
+    # 'G81 ... P100' had been refused ("word P is only read with G04, G82 ..."): FANUC keeps
+    # P, as Z R Q, as the cycle's data until G80, and G81 does not dwell. The holes are those
+    # of the block without P; a G82 later in the cycle dwells the kept 100 ms
+    head = "G21 G90 G17\nG00 X0 Y0 Z5.\n"
+    with_p = parse_program(head + "G98 G81 X1. Y1. Z-1. R1. P100 F100.\nX2.\nG80\n")
+    without = parse_program(head + "G98 G81 X1. Y1. Z-1. R1. F100.\nX2.\nG80\n")
+    for name in ("kinds", "targets", "dwells", "lines"):
+        np.testing.assert_array_equal(getattr(with_p, name), getattr(without, name))
+    assert not np.any(with_p.dwells)
+    kept = parse_program(head + "G98 G81 X1. Y1. Z-1. R1. P100 F100.\nG82 X2.\nG80\n")
+    assert kept.dwells.tolist().count(0.1) == 1
+    assert kept.kinds[kept.dwells == 0.1].tolist() == [KIND_DWELL]
+    assert kept.targets[kept.dwells == 0.1, 2] == pytest.approx(-1 * MM, abs=EXACT_M)
+
+
 def test_a_motion_code_cancels_the_cycle():
     program = parse_program("G00 Z5.\nG81 X1. Z-1. R1. F10\nG00 X2.\nX3.")
     assert program.targets[-2:, 0].tolist() == [2 * MM, 3 * MM]

@@ -309,7 +309,9 @@ class Block:
         arc = state.motion in ARC and cycle is None and one_shot is None and not g04
         plane_words = PLANES[state.plane][1]
         allowed = {
-            "P": g04 or cycle == "G82" or 98 in codes or shot == "G08",
+            # G81's P: kept as the cycle's dwell (a later G82 of the cycle dwells it), as
+            # FANUC keeps every hole-machining word until G80; G81 itself does not dwell
+            "P": g04 or cycle in ("G81", "G82") or 98 in codes or shot == "G08",
             "Q": cycle in ("G73", "G83") or shot == "G05.1",
             "R": arc or cycle is not None or shot == "G05.1",
             "I": arc and "I" in plane_words,
@@ -323,7 +325,8 @@ class Block:
                    + ", ".join(f"{name}: {' '.join(words)}" for name, (_, words) in PLANES.items())
                    + f"; this block is in {state.plane})")
         reads = {
-            "P": "G04 (dwell, ms), G82 (dwell at the bottom), G08 (P1/P0) and M98 (program)",
+            "P": "G04 (dwell, ms), G82 (dwell at the bottom; G81 keeps it for a G82), G08 "
+                 "(P1/P0) and M98 (program)",
             "Q": "G73 and G83 (peck depth) and G05.1 (Q1/Q0)",
             "R": "G02/G03 (radius), G73 and G81-G83 (R plane) and G05.1",
             "I": centres,
