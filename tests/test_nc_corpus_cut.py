@@ -63,6 +63,17 @@ def test_drilling_cycles_leave_four_ball_holes():
     assert true * (1 - 1e-2) < expected <= true
 
 
+def test_a_haas_variable_peck_hole_is_a_plain_drill_hole():
+    # G83 with Haas's I J K (1, 0.3, 0.2 mm: pecks 1, 0.7, 0.4, 0.2, ...) only retracts
+    # between pecks, each re-entering the hole it made: the union is one plunge to Z-3
+    tool = BallEndMill(0.5 * MM, chord_tol=5e-6)
+    program = parse_program("G21 G90 G17\nG00 X5. Y5. Z10.\n"
+                            "G98 G83 X5. Y5. Z-3. R0.5 I1. J0.3 K0.2 F100.\nG80\nM30\n")
+    _, report = cut(program, "grooving_4axis", tool=tool, stock="block:10x10x4")
+    assert report.removed_volume_m3 == pytest.approx(_ball_hole(tool, 3 * MM), rel=VOLUME_REL)
+    assert report.rapids_that_cut == ()
+
+
 def _ball_section(radius: float, depth):
     """Area below the top of a ball end mill's section through its axis, its lowest point
     ``depth`` below the top (a circular segment, then the shank's rectangle)."""

@@ -184,7 +184,8 @@ def test_a_centre_word_of_another_plane_is_not_said_to_be_read_in_this_one():
     message = str(info.value)
     assert "in G17 (centre words" not in message
     assert "G17: I J, G18: K I, G19: J K; this block is in G17" in message
-    assert message.endswith("and with G73 and G81-G83 (repeats)")
+    assert message.endswith("and with G73 and G81-G83 (repeats; with G73 and G83 beside I "
+                            "and J, Haas's smallest peck)")
     with pytest.raises(NCProgramError) as info:
         parse_program("G18 G00 X0 Z0\nG02 X1. J1.", "p.nc")
     assert any(problem.key == "J1." and "this block is in G18" in str(problem)
@@ -713,6 +714,56 @@ def test_high_speed_peck_drilling_breaks_the_chip_within_the_hole():
     assert d == 0.1  # within the hole: every retract stays below R and above the bottom
     with pytest.raises(NCProgramError, match="G73 needs a peck depth Q > 0"):
         parse_program("G00 X0 Y0 Z5.\nG73 X1. Y2. Z-1. R1. F100.\n")
+
+
+@pytest.mark.parametrize("code", ["G83", "G73"])
+def test_haas_variable_peck_i_j_k_and_its_dwell_p_are_read(code):
+    # Haas's G73/G83 I (first peck) J (reduction per peck) K (smallest peck) and P (dwell
+    # after the last peck) had been refused ("word I is only read with G02/G03 ..."). From
+    # R1 to Z-1 with I0.5 J0.1 K0.2: pecks 0.5, 0.4, 0.3, then 0.2 on, ending at
+    # 0.5, 0.1, -0.2, -0.4, -0.6, -0.8, -1 mm; then 500 ms at the bottom. The next hole
+    # (X2., no P) pecks and dwells alike: Haas keeps P until the cycle is cancelled
+    program = parse_program(f"G00 X0 Y0 Z5.\nG98 {code} X1. Y1. Z-1. R1. I0.5 J0.1 K0.2 "
+                            "P500 F100.\nX2.\nG80\n")
+    for line in (2, 3):
+        rows = program.lines == line
+        linear = program.targets[rows & (program.kinds == KIND_LINEAR)]
+        assert linear[:, 2] / MM == pytest.approx([0.5, 0.1, -0.2, -0.4, -0.6, -0.8, -1],
+                                                  abs=1e-12)
+        # the dwell follows the last peck, at the bottom, and the hole ends at the
+        # initial level (G98)
+        kinds, z = program.kinds[rows], program.targets[rows][:, 2] / MM
+        assert kinds[-2] == KIND_DWELL and program.dwells[rows][-2] == 0.5
+        assert z[-2:] == pytest.approx([-1, 5], abs=1e-12)
+        assert np.count_nonzero(program.dwells[rows]) == 1
+    # K is the smallest peck here, not a repeat count: one hole per block
+    assert np.count_nonzero(program.kinds[program.lines == 2] == KIND_LINEAR) == 7
+    # a P carried from G82 does not make a peck cycle dwell (FANUC's G73/G83 take no P)
+    carried = parse_program(f"G00 X0 Y0 Z5.\nG82 X1. Z-1. R1. P500 F100.\n{code} X2. "
+                            "I0.5 J0.1 K0.2\nG80\n")
+    assert np.count_nonzero(carried.dwells[carried.lines == 3]) == 0
+
+
+@pytest.mark.parametrize("words, key, message", [
+    ("I0.5", "I0.5", "G83's variable peck takes I (first peck), J (reduction per peck) and K "
+     "(smallest peck) together (Haas); J and K missing"),
+    ("J0.1 K0.2", "J0.1", "I missing"),
+    ("I0.5 J0 K0.2", "J0", "G83's J must be > 0 (a length: Haas's I J K are always "
+     "positive), got J0"),
+    ("I-0.5 J0.1 K0.2", "I-0.5", "G83's I must be > 0"),
+    ("I0.1 J0.1 K0.5", "K0.5", "G83's smallest peck K (K0.5) is larger than its first peck I "
+     "(I0.1); expected K <= I"),
+    ("I0.5 J0.1 K0.2 Q0.1", "Q0.1", "G83 takes a peck Q or I J K (Haas's variable peck), "
+     "not both"),
+])
+def test_a_haas_variable_peck_is_checked(words, key, message):
+    with pytest.raises(NCProgramError) as info:
+        parse_program(f"G00 X0 Y0 Z5.\nG83 X1. Y1. Z-1. R1. {words} F100.\n")
+    assert (info.value.line, info.value.key) == (2, key)
+    assert message in str(info.value)
+    # I and J stay refused with G81 and G82, which have no pecks
+    with pytest.raises(NCProgramError, match="word I is only read with"):
+        parse_program("G00 X0 Y0 Z5.\nG81 X1. Y1. Z-1. R1. I0.5 F100.\n")
 
 
 @pytest.mark.parametrize("block, code", [

@@ -46,6 +46,8 @@ from machinesim.units import M_PER_MM, RAD_PER_DEG
 
 #: M06 puts the tool selected by the last T word in the spindle (FANUC machining centres).
 TOOL_CHANGE = 6
+#: The peck drilling cycles, which take Q or Haas's I J K, and a P of their own.
+PECKING = ("G73", "G83")
 
 if TYPE_CHECKING:
     from machinesim.nc.parser import Reader
@@ -239,8 +241,10 @@ class Block:
                                         "yet (the initial level); move Z first", word)
                     state.initial_z = state.target["Z"]
                     state.cycle_z = state.cycle_r = state.cycle_q = None
+                    state.cycle_pecks = None
                     state.cycle_given = {}
                     state.cycle_p = 0.0
+                    state.peck_dwell = False
                 state.cycle = name
 
     def feed_and_spindle(self) -> None:
@@ -311,11 +315,11 @@ class Block:
         allowed = {
             # G81's P: kept as the cycle's dwell (a later G82 of the cycle dwells it), as
             # FANUC keeps every hole-machining word until G80; G81 itself does not dwell
-            "P": g04 or cycle in ("G81", "G82") or 98 in codes or shot == "G08",
+            "P": g04 or cycle is not None or 98 in codes or shot == "G08",
             "Q": cycle in ("G73", "G83") or shot == "G05.1",
             "R": arc or cycle is not None or shot == "G05.1",
-            "I": arc and "I" in plane_words,
-            "J": arc and "J" in plane_words,
+            "I": (arc and "I" in plane_words) or cycle in PECKING,
+            "J": (arc and "J" in plane_words) or cycle in PECKING,
             "K": (arc and "K" in plane_words) or cycle is not None,
             "L": 98 in codes,
         }
@@ -325,13 +329,14 @@ class Block:
                    + ", ".join(f"{name}: {' '.join(words)}" for name, (_, words) in PLANES.items())
                    + f"; this block is in {state.plane})")
         reads = {
-            "P": "G04 (dwell, ms), G82 (dwell at the bottom; G81 keeps it for a G82), G08 "
-                 "(P1/P0) and M98 (program)",
+            "P": "G04 (dwell, ms), G82, G73 and G83 (dwell at the bottom; G81 keeps it for a "
+                 "G82), G08 (P1/P0) and M98 (program)",
             "Q": "G73 and G83 (peck depth) and G05.1 (Q1/Q0)",
             "R": "G02/G03 (radius), G73 and G81-G83 (R plane) and G05.1",
-            "I": centres,
-            "J": centres,
-            "K": f"{centres} and with G73 and G81-G83 (repeats)",
+            "I": f"{centres} and with G73 and G83 (Haas's first peck I, with J and K)",
+            "J": f"{centres} and with G73 and G83 (Haas's peck reduction J, with I and K)",
+            "K": f"{centres} and with G73 and G81-G83 (repeats; with G73 and G83 beside I "
+                 "and J, Haas's smallest peck)",
             "L": "M98 (repeat count)" + (
                 "; a canned cycle's repeat count is K here, as on current FANUC controls "
                 "(older ones, and LinuxCNC, write L): write K" if cycle is not None else ""),
@@ -535,7 +540,7 @@ class Block:
         for word in axes:
             if word.letter not in "XYZ":
                 raise self.fail(f"axis word {word.letter} in a canned cycle block; a drilling "
-                                "cycle takes X Y Z R Q P K F", word)
+                                "cycle takes X Y Z R Q P K F (G73 and G83: I J too)", word)
         check_length_carried(self, single.get("R") or single.get("Z"))
         if "R" in single:
             r = self.real(single["R"]) * self.length_of(single["R"])
@@ -559,9 +564,18 @@ class Block:
             state.cycle_z = self.finite(z, single["Z"])
         if "Q" in single:
             state.cycle_q = abs(self.real(single["Q"]) * self.length_of(single["Q"]))
+            state.cycle_pecks = None
         if "P" in single:
             state.cycle_p = self.integer(single["P"], "dwell time") / 1000.0
-        repeats = self.integer(single["K"], "repeat count") if "K" in single else 1
+            # Haas's G73/G83 dwell it after the last peck; one kept from a G82 does not
+            # make them dwell (FANUC's sequences, docs/nc.md)
+            state.peck_dwell = state.cycle in PECKING
+        if state.cycle in PECKING and ("I" in single or "J" in single):
+            state.cycle_pecks = self.variable_peck()
+            state.cycle_q = None
+            repeats = 1  # K is the smallest peck here
+        else:
+            repeats = self.integer(single["K"], "repeat count") if "K" in single else 1
         if state.cycle_z is None or state.cycle_r is None:
             raise self.fail(f"{state.cycle} needs the hole bottom Z and the R plane R",
                             cycle_word)
@@ -579,11 +593,13 @@ class Block:
                 cycle_word)
         return_z = state.initial_z if state.retract == "G98" else state.cycle_r
         try:
+            dwell_s = state.cycle_p if state.peck_dwell or state.cycle == "G82" else 0.0
             steps = drill_steps(state.cycle, r_z=state.cycle_r, bottom_z=state.cycle_z,
-                                return_z=return_z, peck=state.cycle_q, dwell_s=state.cycle_p,
+                                return_z=return_z, peck=state.cycle_q,
+                                variable_peck=state.cycle_pecks, dwell_s=dwell_s,
                                 max_steps=MAX_MOVES - self.reader.out.count)
         except NCProgramError as error:
-            word = next((single[k] for k in "ZRQ" if k in single), cycle_word)
+            word = next((single[k] for k in "ZRQIK" if k in single), cycle_word)
             raise self.fail(str(error), word) from None
         self.reserve(repeats * (len(steps) + 1), cycle_word)
         plane = [w for w in axes if w.letter in "XY"]
@@ -597,6 +613,32 @@ class Block:
                 else:
                     state.target["Z"] = value
                     self.add(kind, 0.0, block_number)
+
+    def variable_peck(self) -> tuple[float, float, float]:
+        """Haas's variable peck of a G73 or G83 block, its I J K in m: given together, each
+        > 0, K at most I, and no Q beside them."""
+        single, cycle = self.single, self.state.cycle
+        missing = [k for k in "IJK" if k not in single]
+        word = single.get("I") or single["J"]
+        if missing:
+            raise self.fail(f"{cycle}'s variable peck takes I (first peck), J (reduction per "
+                            f"peck) and K (smallest peck) together (Haas); {' and '.join(missing)}"
+                            " missing", word)
+        if "Q" in single:
+            raise self.fail(f"{cycle} takes a peck Q or I J K (Haas's variable peck), not both",
+                            single["Q"])
+        values = []
+        for letter in "IJK":
+            value = self.finite(self.real(single[letter]) * self.length_of(single[letter]),
+                                single[letter])
+            if not value > 0.0:
+                raise self.fail(f"{cycle}'s {letter} must be > 0 (a length: Haas's I J K are "
+                                f"always positive), got {single[letter].key}", single[letter])
+            values.append(value)
+        if values[2] > values[0]:
+            raise self.fail(f"{cycle}'s smallest peck K ({single['K'].key}) is larger than its "
+                            f"first peck I ({single['I'].key}); expected K <= I", single["K"])
+        return values[0], values[1], values[2]
 
     # --- numbers
 

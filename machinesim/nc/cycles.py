@@ -6,6 +6,10 @@ after each peck a rapid back to the R plane, then a rapid down to a clearance d 
 last depth, and feed on; G73, high-speed peck drilling for chip breaking: after each peck a
 rapid back up by d only, and feed on); then a rapid back to the initial level (G98) or the
 R plane (G99).
+
+Haas's G73 and G83 also take a variable peck, I J K: the first peck I, each next one J
+smaller, none smaller than K; and P, a dwell at the bottom after the last peck (Haas Mill
+Operator's Manual 96-8000, G73 and G83).
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ def drill_steps(
     bottom_z: float,
     return_z: float,
     peck: float | None = None,
+    variable_peck: tuple[float, float, float] | None = None,
     dwell_s: float = 0.0,
     max_steps: int | None = None,
 ) -> list[tuple[str, float]]:
@@ -49,8 +54,11 @@ def drill_steps(
         Machine Z of the R plane, the hole bottom and the level to return to.
     peck : float, m
         G73's and G83's peck depth Q (> 0).
+    variable_peck : (float, float, float), m, optional
+        G73's and G83's variable peck instead of ``peck``, Haas's I J K: the first peck, the
+        reduction of each next one, the smallest (each > 0).
     dwell_s : float, s
-        G82's dwell at the bottom.
+        G82's dwell at the bottom; G73's and G83's after the last peck (Haas's P).
     max_steps : int, optional
         Refuse a hole needing more moves than this.
 
@@ -66,33 +74,75 @@ def drill_steps(
         )
     steps: list[tuple[str, float]] = [("rapid", r_z)]
     if cycle in ("G73", "G83"):
-        if peck is None or not peck > 0.0:
-            raise NCProgramError(f"{cycle} needs a peck depth Q > 0")
-        pecks = math.ceil((r_z - bottom_z) / peck)
-        if pecks > MOST_PECKS:
-            raise NCProgramError(
-                f"{cycle} with Q {peck * 1e3:.6g} mm makes {pecks} pecks in one hole "
-                f"({(r_z - bottom_z) * 1e3:.6g} mm from R to Z), more than {MOST_PECKS} (a "
-                f"micro drill pecking 1 um at a time through 1 mm). Check Q "
-                f"(a Q without a decimal point is read by --integer-input: 'increment' makes "
-                f"Q1 1 nm)")
-        if max_steps is not None and 3 * pecks > max_steps:
-            raise NCProgramError(f"{cycle} with Q {peck * 1e3:.6g} mm makes {pecks} pecks, "
-                                 f"more than the {max_steps // 3} left; raise Q")
-        depth = r_z
-        for k in range(1, pecks + 1):
-            if k > 1 and cycle == "G83":
+        if variable_peck is not None:
+            depths = _variable_pecks(cycle, r_z, bottom_z, variable_peck)
+        else:
+            depths = _pecks(cycle, r_z, bottom_z, peck)
+        if max_steps is not None and 3 * len(depths) > max_steps:
+            raise NCProgramError(f"{cycle} with {_peck_words(peck, variable_peck)} makes "
+                                 f"{len(depths)} pecks, more than the {max_steps // 3} left; "
+                                 f"raise {'Q' if variable_peck is None else 'I and K'}")
+        for k, depth in enumerate(depths):
+            if k > 0 and cycle == "G83":
                 steps.append(("rapid", r_z))
-                steps.append(("rapid", min(depth + PECK_CLEARANCE_M, r_z)))
-            elif k > 1:  # G73: back up by d, breaking the chip, and on
-                steps.append(("rapid", min(depth + CHIP_BREAK_RETRACT_M, r_z)))
-            depth = bottom_z if k == pecks else max(r_z - k * peck, bottom_z)
+                steps.append(("rapid", min(depths[k - 1] + PECK_CLEARANCE_M, r_z)))
+            elif k > 0:  # G73: back up by d, breaking the chip, and on
+                steps.append(("rapid", min(depths[k - 1] + CHIP_BREAK_RETRACT_M, r_z)))
             steps.append(("linear", depth))
-            if depth == bottom_z:
-                break
+        if dwell_s > 0.0:
+            steps.append(("dwell", dwell_s))
     else:
         steps.append(("linear", bottom_z))
         if cycle == "G82" and dwell_s > 0.0:
             steps.append(("dwell", dwell_s))
     steps.append(("rapid", return_z))
     return steps
+
+
+def _pecks(cycle: str, r_z: float, bottom_z: float, peck: float | None) -> list[float]:
+    """Machine Z at the end of each peck of Q ``peck``, the last one at ``bottom_z``."""
+    if peck is None or not peck > 0.0:
+        raise NCProgramError(f"{cycle} needs a peck depth Q > 0 (or Haas's I J K)")
+    pecks = math.ceil((r_z - bottom_z) / peck)
+    if pecks > MOST_PECKS:
+        raise NCProgramError(
+            f"{cycle} with Q {peck * 1e3:.6g} mm makes {pecks} pecks in one hole "
+            f"({(r_z - bottom_z) * 1e3:.6g} mm from R to Z), more than {MOST_PECKS} (a "
+            f"micro drill pecking 1 um at a time through 1 mm). Check Q "
+            f"(a Q without a decimal point is read by --integer-input: 'increment' makes "
+            f"Q1 1 nm)")
+    depths = []
+    for k in range(1, pecks + 1):
+        depths.append(bottom_z if k == pecks else max(r_z - k * peck, bottom_z))
+        if depths[-1] == bottom_z:
+            break
+    return depths
+
+
+def _variable_pecks(cycle: str, r_z: float, bottom_z: float,
+                    variable_peck: tuple[float, float, float]) -> list[float]:
+    """Machine Z at the end of each of Haas's variable pecks: I first, each next one J less,
+    none less than K; the last one at ``bottom_z``."""
+    first, reduction, least = variable_peck
+    depths: list[float] = []
+    depth, size = r_z, first
+    while depth > bottom_z:
+        if len(depths) == MOST_PECKS:
+            raise NCProgramError(
+                f"{cycle} with {_peck_words(None, variable_peck)} makes more than "
+                f"{MOST_PECKS} pecks in one hole "
+                f"({(r_z - bottom_z) * 1e3:.6g} mm from R to Z; a micro drill pecking 1 um at "
+                "a time through 1 mm makes 1000). Check K, the smallest peck (a K without a "
+                "decimal point is read by --integer-input: 'increment' makes K1 1 nm)")
+        depth = max(depth - size, bottom_z)
+        depths.append(depth)
+        size = max(size - reduction, least)
+    return depths
+
+
+def _peck_words(peck: float | None, variable_peck: tuple[float, float, float] | None) -> str:
+    """The peck words as written, in mm: ``Q 0.5 mm`` or ``I 1 mm, J 0.2 mm and K 0.1 mm``."""
+    if variable_peck is None:
+        return f"Q {peck * 1e3:.6g} mm"
+    first, reduction, least = (f"{value * 1e3:.6g} mm" for value in variable_peck)
+    return f"I {first}, J {reduction} and K {least}"

@@ -89,9 +89,12 @@ class _State:
     cycle_z: float | None = None  # machine Z of the hole bottom
     cycle_r: float | None = None  # machine Z of the R plane
     cycle_q: float | None = None
+    #: Haas's variable peck (I first, J reduction, K smallest, m) in place of Q
+    cycle_pecks: tuple[float, float, float] | None = None
     #: the distance mode (G91: True) and line each of R and Z was last given in
     cycle_given: dict = field(default_factory=dict)
     cycle_p: float = 0.0
+    peck_dwell: bool = False  # P given in a G73/G83 block: they dwell it after the last peck
     initial_z: float | None = None
     retract: str = "G98"
     exact_stop: bool = False  # G61 (every block ends in position) until G64
