@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import re
 import xml.etree.ElementTree as ET
+from array import array
 from pathlib import Path
 from xml.parsers import expat
 
@@ -120,25 +121,31 @@ def _encoding_hint(data: bytes) -> str:
     return ""
 
 
-def _element_lines(data: bytes) -> dict[str, list[int]]:
+def _element_lines(data: bytes) -> dict[str, list[int] | array]:
     """The line of each ``<link>`` and ``<joint>`` under ``<robot>``, of each element in a
-    joint (key ``"in_joint"``, the joints' children one after the other) and of each
-    ``<machinesim:axis>``, in the order of the file, by tag: ``findall`` gives the same
-    elements in the same order, and ElementTree keeps no lines. ``data`` has parsed."""
+    joint (key ``"in_joint"``, the joints' children one after the other), of each child and
+    grandchild of a link (key ``"in_link"``, in the order of the file: a visual, then its
+    origin, geometry ...) and of each ``<machinesim:axis>``, in the order of the file, by
+    tag: ``findall`` gives the same elements in the same order, and ElementTree keeps no
+    lines. ``data`` has parsed. The links' lines are 4 bytes each (an ``array``): a CAD
+    export has 100,000s of visuals."""
     parser = expat.ParserCreate(namespace_separator="}")
-    found: dict[str, list[int]] = {"link": [], "joint": [], "in_joint": [], "axis": []}
+    found: dict[str, list[int] | array] = {"link": [], "joint": [], "in_joint": [],
+                                           "axis": [], "in_link": array("I")}
     depth = 0
-    in_joint = False
+    in_joint = in_link = False
 
     def start(tag, attributes):
-        nonlocal depth, in_joint
+        nonlocal depth, in_joint, in_link
         depth += 1
         if depth == 2:
-            in_joint = tag == "joint"
+            in_joint, in_link = tag == "joint", tag == "link"
             if tag in ("link", "joint"):
                 found[tag].append(parser.CurrentLineNumber)
         elif depth == 3 and in_joint:
             found["in_joint"].append(parser.CurrentLineNumber)
+        elif depth in (3, 4) and in_link:
+            found["in_link"].append(parser.CurrentLineNumber)
         if tag == f"{_NS[1:]}axis":
             found["axis"].append(parser.CurrentLineNumber)
 

@@ -383,6 +383,8 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
         raise ModelError(f"{path}: {count} links; a machine has tens (a CAD export of every "
                          f"part a few hundred): expected at most {MAX_LINKS}")
     links: set[str] = set()
+    in_link = (lines or {}).get("in_link", ())
+    inside = 0  # the links' children and grandchildren before this link's, for their lines
     for index, link in enumerate(root.findall("link")):
         name = link.get("name")
         at = _at(path, lines, "link", index)
@@ -391,7 +393,9 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
         if name in links:
             raise ModelError(f"{at}: link {name!r} is defined twice; link names are unique")
         _check_reserved(name, "link", at)
-        _check_link_once(link, f"{at}: link {name!r}")
+        count = len(link) + sum(len(child) for child in link)
+        _check_link_once(link, f"{at}: link {name!r}", in_link[inside:inside + count])
+        inside += count
         links.add(name)
     joints: dict[str, ET.Element] = {}
     parent_joint: dict[str, str] = {}  # child link -> the joint that carries it
@@ -514,13 +518,21 @@ def _check_once(element: ET.Element, tags: tuple[str, ...], where: str,
                              f"without a word: keep the one meant")
 
 
-def _check_link_once(link: ET.Element, where: str) -> None:
+def _check_link_once(link: ET.Element, where: str, lines=()) -> None:
     """`_check_once` for a link, its visuals and collisions (and their geometry, which holds
-    one shape) and its inertial, each named by its place among its kind in the link. The
-    message is put together only for a refusal: a CAD export has 100,000s of visuals."""
-    _check_once(link, _ONCE_IN_LINK, where)
-    count = {"visual": 0, "collision": 0, "inertial": 0}
+    one shape) and its inertial, each named by its place among its kind in the link, with
+    the lines of the elements given twice when ``lines`` has them (the link's children and
+    grandchildren in the order of the file, `read_urdf`'s ``"in_link"``). The message is
+    put together only for a refusal: a CAD export has 100,000s of visuals."""
+    starts, end = [], 0  # where each child's line stands in ``lines``, its children after it
     for child in link:
+        starts.append(end)
+        end += 1 + len(child)
+    known = len(lines) == end
+    twice = known and any(sum(child.tag == tag for child in link) > 1 for tag in _ONCE_IN_LINK)
+    _check_once(link, _ONCE_IN_LINK, where, [lines[k] for k in starts] if twice else ())
+    count = {"visual": 0, "collision": 0, "inertial": 0}
+    for place, child in enumerate(link):
         kind = child.tag
         if kind not in count:
             continue
@@ -531,7 +543,9 @@ def _check_link_once(link: ET.Element, where: str) -> None:
         if not (twice or shapes):
             continue
         inner = f"{where} <{kind}> (its {_ordinal(count[kind])})"
-        _check_once(child, _ONCE_IN_INERTIAL if kind == "inertial" else _ONCE_IN_SHAPE, inner)
+        first = starts[place] + 1
+        _check_once(child, _ONCE_IN_INERTIAL if kind == "inertial" else _ONCE_IN_SHAPE, inner,
+                    lines[first:first + len(child)] if known else ())
         if shapes and kind != "inertial":
             listed = ", ".join(f"<{shape.tag}>" for shape in shapes[0])
             raise ModelError(f"{inner}: <geometry> holds {len(shapes[0])} shapes ({listed}); "

@@ -825,13 +825,14 @@ _INERTIAL = ('<inertial><origin xyz="0 0 0"/><mass value="1"/>'
                               '<parent link="base"/><parent link="y_carriage"/>'),
      '<joint name="X"', "joint 'X': 2 <parent> elements (lines 58, 58); URDF allows one"),
     ("two_inertials", GROOVING.replace(_BASE_VISUAL, _BASE_VISUAL + _INERTIAL * 2, 1),
-     '<link name="base"', "link 'base': 2 <inertial> elements; URDF allows one"),
+     '<link name="base"', "link 'base': 2 <inertial> elements (lines 12, 12); URDF allows one"),
     ("inertial_two_masses", GROOVING.replace(
         _BASE_VISUAL, _BASE_VISUAL + _INERTIAL.replace("<mass", '<mass value="2"/><mass'), 1),
-     '<link name="base"', "link 'base' <inertial> (its 1st): 2 <mass> elements"),
+     '<link name="base"', "link 'base' <inertial> (its 1st): 2 <mass> elements (lines 12, 12)"),
     ("visual_two_origins", GROOVING.replace(
         _BASE_VISUAL, _BASE_VISUAL + _BASE_VISUAL.replace("<geometry>", '<origin/><geometry>'),
-        1), '<link name="base"', "link 'base' <visual> (its 2nd): 2 <origin> elements"),
+        1), '<link name="base"', "link 'base' <visual> (its 2nd): 2 <origin> elements "
+     "(lines 12, 12)"),
     ("collision_two_shapes", GROOVING.replace(
         _BASE_VISUAL, _BASE_VISUAL + '<collision><geometry><box size="1 1 1"/>'
         '<sphere radius="1"/></geometry></collision>', 1),
@@ -845,6 +846,42 @@ def test_an_element_urdf_allows_once_given_twice_is_refused_naming_it(case, text
     with pytest.raises(ModelError) as raised:
         load_machine(path)
     assert str(raised.value).startswith(f"{path}, line {_line(text, needle)}: {words}"), \
+        str(raised.value)
+
+
+@pytest.mark.parametrize("case", ["inertials", "visual_origins", "collision_geometries"])
+def test_an_element_given_twice_in_a_link_is_named_by_its_own_lines(case, tmp_path):
+    # a duplicate inside a link had named only the link's line ("line 33: link
+    # 'tool_mount': 2 <inertial> elements"), where the joint check names each element's
+    # own line. In a link past the <transmission> and the other links' visuals, which the
+    # count of lines goes by, on lines of their own
+    inertial = '<inertial><mass value="1"/></inertial>'
+    visual = '<visual><geometry><box size="1 1 1"/></geometry></visual>'
+    added = {
+        "inertials": f"\n    {inertial}\n    {visual}\n    {inertial}",
+        "visual_origins": f"\n    {visual}\n    <visual>\n      <origin/>\n      "
+                          "<geometry><box size=\"1 1 1\"/></geometry>\n      <origin/>\n"
+                          "    </visual>",
+        "collision_geometries": "\n    <collision>\n      <geometry><box size=\"1 1 1\"/>"
+                                "</geometry>\n      <geometry><sphere radius=\"1\"/>"
+                                "</geometry>\n    </collision>",
+    }[case]
+    text = LINED.replace('<link name="tool_mount">', '<link name="tool_mount">' + added, 1)
+    path = tmp_path / f"{case}.urdf"
+    path.write_text(text)
+    with pytest.raises(ModelError) as raised:
+        load_machine(path)
+    link = _line(text, '<link name="tool_mount"')
+    # the lines of the two, counted from the link's in the text added above
+    what, first, second = {
+        "inertials": ("link 'tool_mount': 2 <inertial>", link + 1, link + 3),
+        "visual_origins": ("link 'tool_mount' <visual> (its 2nd): 2 <origin>", link + 3,
+                           link + 5),
+        "collision_geometries": ("link 'tool_mount' <collision> (its 1st): 2 <geometry>",
+                                 link + 2, link + 3),
+    }[case]
+    assert str(raised.value).startswith(
+        f"{path}, line {link}: {what} elements (lines {first}, {second}); URDF allows one"), \
         str(raised.value)
 
 
