@@ -1036,6 +1036,17 @@ def read_ply_bytes(folder, data: bytes):
     return read_ply(path)
 
 
+def _unused_port() -> int:
+    """A port the system has just given out and taken back: beyond the ports from 7000 that
+    other live viewers (a test running beside this one) take first, so that a closed server's
+    URL is not answered by another's."""
+    import socket
+
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
 def test_a_live_viewer_stopped_by_sigterm_exits_143_and_ends_its_server(tmp_path):
     # `kill PID` of a live `machinesim view` exited 0 with no word (LiveSession.wait took
     # SIGTERM for a Ctrl-C), where docs/cli.md gives 143 and 'machinesim: terminated'
@@ -1046,8 +1057,9 @@ def test_a_live_viewer_stopped_by_sigterm_exits_143_and_ends_its_server(tmp_path
     stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
     process = subprocess.Popen([sys.executable, "-m", "machinesim.cli", "view",
-                                str(tmp_path / "part.ply")], stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, env=env)
+                                str(tmp_path / "part.ply"), "--port", str(_unused_port())],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env=env)
     try:
         line = process.stdout.readline()
         assert line.startswith("machinesim viewer at http://127.0.0.1:"), line
@@ -1062,6 +1074,79 @@ def test_a_live_viewer_stopped_by_sigterm_exits_143_and_ends_its_server(tmp_path
     assert err == "machinesim: terminated; nothing was written\n"
     with pytest.raises(OSError):
         urllib.request.urlopen(url, timeout=5)
+
+
+@pytest.mark.parametrize("group", [False, True], ids=["viewer", "terminal"])
+def test_a_live_viewer_stopped_by_ctrl_c_exits_130_and_ends_its_server(group, tmp_path):
+    # Ctrl-C of a live `machinesim view` exited 0 with no word (LiveSession.wait returned
+    # None, and the command went on to 'return 0'), where every command interrupted exits
+    # 130 with 'machinesim: interrupted; nothing was written' (docs/cli.md; `machinesim cut`
+    # so). SIGINT to the viewer alone, and to its process group as a terminal's Ctrl-C
+    # sends it, to the server too
+    import signal
+    import subprocess
+    import sys
+
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    process = subprocess.Popen([sys.executable, "-m", "machinesim.cli", "view",
+                                str(tmp_path / "part.ply"), "--port", str(_unused_port())],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env=env, start_new_session=group)
+    try:
+        line = process.stdout.readline()
+        assert line.startswith("machinesim viewer at http://127.0.0.1:"), line
+        url = line.split()[3]
+        if group:
+            os.killpg(process.pid, signal.SIGINT)
+        else:
+            process.send_signal(signal.SIGINT)
+        _, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 130
+    assert err == "machinesim: interrupted; nothing was written\n"
+    with pytest.raises(OSError):
+        urllib.request.urlopen(url, timeout=5)
+
+
+def test_a_live_viewer_stopped_after_its_screenshot_says_the_screenshot_stays(tmp_path):
+    # with --screenshot written, 'nothing was written' would be false: the line names it.
+    # Chromium is stood in for by a _screenshot that writes the file (the browser test
+    # runs the real one)
+    import signal
+    import subprocess
+    import sys
+
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+    shot = tmp_path / "live.png"
+    script = ("import sys\n"
+              "import machinesim.viewer.cli as view\n"
+              "def fake(url, ready, path):\n"
+              "    path.write_bytes(b'png')\n"
+              "    print(f'wrote {path}', flush=True)\n"
+              "view._screenshot = fake\n"
+              "from machinesim.cli import main\n"
+              "sys.exit(main(sys.argv[1:]))\n")
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    process = subprocess.Popen([sys.executable, "-c", script, "view", str(tmp_path / "part.ply"),
+                                "--screenshot", str(shot)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        assert process.stdout.readline().startswith("machinesim viewer at http://127.0.0.1:")
+        assert process.stdout.readline() == f"wrote {shot}\n"
+        process.send_signal(signal.SIGINT)
+        _, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 130
+    assert err == (f"machinesim: interrupted; the viewer stopped, its screenshot {shot} "
+                   "written before\n")
+    assert shot.read_bytes() == b"png"
 
 
 def test_a_port_in_use_is_named(tmp_path):

@@ -242,7 +242,11 @@ def test_view_in_live_mode_prints_its_url_and_stops_on_ctrl_c(browser, tmp_path,
         browser.open(url)
         assert browser.evaluate("document.title") == "part part.ply"
         os.kill(process.pid, signal.SIGINT)
-        assert process.wait(timeout=20) == 0
+        # interrupted: 130 (it had been 0), saying the screenshot was written before
+        _, err = process.communicate(timeout=20)
+        assert process.returncode == 130
+        assert err.endswith(f"machinesim: interrupted; the viewer stopped, its screenshot "
+                            f"{tmp_path / 'live.png'} written before\n"), err
     finally:
         if process.poll() is None:
             process.kill()

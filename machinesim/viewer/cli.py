@@ -18,7 +18,7 @@ import os
 import sys
 from pathlib import Path
 
-from machinesim._interrupts import Terminated
+from machinesim._interrupts import stopped
 from machinesim._io import (
     check_readable_file,
     check_writable,
@@ -140,17 +140,23 @@ def run_view(args: argparse.Namespace) -> int:
     from machinesim.viewer.live import serve
 
     session = serve(scene, args.port)
+    shot = None  # the --screenshot PNG once written
     try:
         print(f"machinesim viewer at {session.url} (listening on 127.0.0.1 only); "
               "Ctrl-C to stop", flush=True)
         if args.screenshot is not None:
             _screenshot(session.url, f"viewer.num_messages_received >= {session.messages}",
                         args.screenshot)
-        session.wait()
-    except KeyboardInterrupt as stop:
-        if isinstance(stop, Terminated):
-            raise  # exit 143, 'machinesim: terminated', as docs/cli.md says
-        print("machinesim viewer stopped", file=sys.stderr)
+            shot = args.screenshot
+        if session.wait() is None:  # Ctrl-C, which ended the server: exit 130 (it had been 0)
+            raise KeyboardInterrupt
+    except KeyboardInterrupt as stop:  # SIGTERM too (`Terminated`): 143
+        if shot is None:
+            raise  # 'machinesim: interrupted; nothing was written', as every command
+        how, status = stopped(stop)
+        print(f"machinesim: {how}; the viewer stopped, its screenshot {shot} written before",
+              file=sys.stderr)
+        return status
     finally:
         session.close()
     return 0
