@@ -43,7 +43,8 @@ G codes
     last H, refused before any; G49 cancels; like a work offset change it moves nothing by
     itself; an incremental Z before an absolute Z has carried a change is refused, since
     controls differ there). G81/G82/G83/G73 canned cycles along Z in G17 with R, Z, Q, P, K and
-    G98/G99, expanded into moves; G80 or a motion code cancels. G09 (this block) and G61 (every
+    G98/G99 (G73/G83 also Haas's variable peck I J K), expanded into moves; G80 or a motion
+    code cancels. G09 (this block) and G61 (every
     block until G64) end a block in an exact stop: `Program.exact_stops`, where the servo
     loops' lag does not carry into the next block; listed as states too. Accepted as
     states, no geometric effect, listed in `Program.states` with their first line: G40,
