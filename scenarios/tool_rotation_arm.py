@@ -59,6 +59,9 @@ UM, MM = M_PER_UM, M_PER_MM
 #: edge that much lower again; at 40 deg the top of the 10 mm tool body, where its holder
 #: begins, stands only 10 cos 40 - 3 sin 40 = 5.732 mm over the edge.
 MAX_CAPTURE_MM = max_capture() / MM
+#: Decimals of the identification table (r in mm, e_ys in um) and of the header's injected
+#: r and e_ys, which the table's "injected" column repeats.
+IDENTIFICATION_DIGITS = 6
 
 
 #: Printed under the identification when the machine's background errors are on.
@@ -117,8 +120,7 @@ def report(args) -> None:
     lab = make_lab(realism)
     injected = lab.reveal(background=False).parameters()
     r, e_ys = r0 - injected["tool.z"], injected["tool.y"]
-    print(f"Paper 000 on planer_4axis (nominal arm r0 = {r0 / MM:.3f} mm): injected r = "
-          f"{r / MM:.3f} mm, e_ys = {e_ys / UM:.1f} um; realism {realism}, seed {args.seed}\n")
+    print(header(r0, r, e_ys, realism, args.seed))
 
     procedure = ToolRotationArm(plan=plan)
     stage = progress_printer("tool_rotation_arm")
@@ -213,6 +215,16 @@ def calibration_table(out, readings, fit) -> str:
         title="Calibration ramps: edge rise e_z,total and shift e_y,total from 0 deg", digits=4)
 
 
+def header(r0: float, r: float, e_ys: float, realism, seed: int) -> str:
+    """The run's first lines: the injected r and e_ys (m) with the identification table's
+    `IDENTIFICATION_DIGITS` decimals, so the two show one value (the nominal r0 as the
+    table's title gives it)."""
+    digits = IDENTIFICATION_DIGITS
+    return (f"Paper 000 on planer_4axis (nominal arm r0 = {r0 / MM:.3f} mm): injected r = "
+            f"{r / MM:.{digits}f} mm, e_ys = {e_ys / UM:.{digits}f} um; realism {realism}, "
+            f"seed {seed}\n")
+
+
 def identification_table(out, r0, r, e_ys, detail) -> str:
     paper, joint, check = detail.estimate, detail.lateral, detail.check
     rows = [["r (mm)", PAPER["r_mm"], r / MM, paper.r / MM, paper.r_sigma / MM,
@@ -223,7 +235,7 @@ def identification_table(out, r0, r, e_ys, detail) -> str:
     return out.write_table(
         "identification", ["quantity", "paper", "injected", "eq 1 fit", "sigma",
                            "eqs 1+2 fit", "sigma", "fit() check", "check - eq 1 (nm)"], rows,
-        title=f"Identified arm (nominal r0 = {r0 / MM:.3f} mm)", digits=6)
+        title=f"Identified arm (nominal r0 = {r0 / MM:.3f} mm)", digits=IDENTIFICATION_DIGITS)
 
 
 def pattern_tables(out, pattern, details) -> str:

@@ -251,6 +251,19 @@ def test_paper_000_reads_its_errors_file_once_and_notes_it_once(tmp_path):
                      "where the key asks um?"]
 
 
+def test_paper_000_header_gives_the_injected_values_as_its_table_does(tmp_path):
+    """The header rounded e_ys to 0.1 um and r to 1 um ('r = 120.555 mm, e_ys = -178.4 um')
+    while the identification table gave 120.555100 and -178.370000: two values for one."""
+    out = run("tool_rotation_arm.py", "--e-ys-um", "-178.37", "--r-mm", "120.5551",
+              "--realism", "ideal", "--budget", "off", "--out", str(tmp_path))
+    assert out.splitlines()[0].startswith(
+        "Paper 000 on planer_4axis (nominal arm r0 = 120.500 mm): injected r = 120.555100 mm, "
+        "e_ys = -178.370000 um; ")
+    rows = {cells[1]: cells[3] for cells in (line.split("|") for line in out.splitlines())
+            if len(cells) > 3 and cells[1].strip() in ("r (mm)", "e_ys (um)")}
+    assert rows == {" r (mm) ": " 120.555100 ", " e_ys (um) ": " -178.370000 "}
+
+
 def test_papers_003_004_note_an_errors_file_that_reads_as_no_error(tmp_path):
     """An ``--errors`` value in SI under a key in um (4 pm of EX0C) ran as no error without a
     word, as ``machinesim cut`` notes it; the note comes as the file is read (here before
