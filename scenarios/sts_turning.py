@@ -16,11 +16,12 @@ paper's four cases on the one lab: Case 1 as found, Case 2 after the tool-workpi
 radius), Case 3 with the modified program (Table 4), Case 4 with the servo tuned (Table 6
 "after"). Each case's form error is predicted before the cut (program, tool, servo shares,
 Fig. 16) and measured after it along theta = 0, r 150-350 um (Figs 17-18); Sa over 100 x
-100 um. Writes summary.json (docs/reports.md), the case table, the profiles, the shares and
-a 3-D view of the Case 4 surface. The white-light interferometer reads the turned height
-field without spot or registration (modelled for meshes only), and without stage positioning
-(the profile is evaluated over piston and tilt, not a lateral shift): the lab's realism is
-used without the three.
+100 um. Writes summary.json (docs/reports.md), the case table, the profiles, the shares,
+a 3-D view of the Case 4 surface, the tool against the spindle axis and the errors the tool
+test reads as the tool's (`machinesim.procedures.sts_aliases`). The white-light
+interferometer reads the turned height field without spot or registration (modelled for
+meshes only), and without stage positioning (the profile is evaluated over piston and tilt,
+not a lateral shift): the lab's realism is used without the three.
 """
 
 from __future__ import annotations
@@ -38,6 +39,12 @@ from machinesim.budget import realism_budget
 from machinesim.cutting.turning import edge_path_from_poses
 from machinesim.errors import ErrorModel
 from machinesim.experiment import run
+from machinesim.procedures.sts_aliases import (
+    ALIAS_NOTE,
+    alias_rows,
+    term_model,
+    tool_test_aliases,
+)
 from machinesim.procedures.sts_plans import PAPER, TABLE5, TEST_SPHERE
 from machinesim.procedures.sts_turning import (
     CASES,
@@ -102,8 +109,10 @@ def report(args) -> None:
     shares(out, "shares.png", details)
     surface_3d(out, "case_4_surface.png", result)
     against_axis = tool_against_axis(out, lab, result)  # before the summary lists the files
+    aliases = alias_table(out, lab.machine)
     print(out.write_result(result, budget=budget))
     print(against_axis)
+    print(aliases)
     out.publish(last=True)
     print(f"Report written to {out.final} ({time.perf_counter() - began:.1f} s)")
 
@@ -194,6 +203,29 @@ def tool_against_axis(out: ReportFolder, lab, result) -> str:
                               "std (nm)", "error against the axis (nm)", "error / std"],
         rows, title="Tool offsets against the spindle axis (the tests read the tool from it)",
         digits=2)
+
+
+def alias_table(out: ReportFolder, machine) -> str:
+    """The error terms the tool test reads as the tool's at its poses, from ``machine``'s
+    model (`machinesim.procedures.sts_aliases`), beside how far each moves the tool against
+    the spindle axis (`tool_from_spindle_axis`, the same model): what the test is meant to
+    read where the two agree."""
+    nose = STSTurning().nose_radius
+    size = 1e-9
+
+    def against_axis(alias):
+        if alias.reading not in ("tool.x", "tool.y"):
+            return 0.0  # nothing but the tool's own nose moves the nose radius
+        moved = tool_from_spindle_axis(machine, term_model(machine, alias.term, alias.form,
+                                                           size), nose)
+        return moved[("tool.x", "tool.y").index(alias.reading)] / size
+
+    rows = alias_rows(tool_test_aliases(machine, nose), against_axis)
+    return out.write_table(
+        "tool_test_aliases", ["error", "term", "read as", "nm per unit", "tool against the "
+                              "spindle axis, nm per unit", "unit", "misfit share"], rows,
+        title="Errors the tool test reads as the tool's (the machine's model at its poses)",
+        digits=4, note=ALIAS_NOTE)
 
 
 def tool_from_spindle_axis(machine, errors, nose_radius: float,
