@@ -5,9 +5,10 @@ UTF-8 or the encoding it declares), keeps the line of each element a message may
 has `check_tree` check its structure before anything walks it; `read_axes` reads its axis
 joints, each named by its NC letter (X Y Z prismatic, A B C revolute), carrying the tool or
 the workpiece, with a unit machine direction pointing as ISO 841 asks, a ``<limit>`` and a
-``<machinesim:axis>`` resolution. What a file must satisfy, and the checks of the nominal
+``<machinesim:axis>`` resolution. The file's structure and its size limits are checked in
+`machinesim.urdf_structure`; what the axes must satisfy, and the checks of the nominal
 machine once Pinocchio has the model (`check_zero_pose`, `check_joint_frames`,
-`check_tool_mount`), are in `machinesim.urdf_checks`; they and its limits are importable
+`check_tool_mount`), are in `machinesim.urdf_checks`; they and their limits are importable
 from here as well.
 """
 
@@ -28,30 +29,32 @@ from machinesim.urdf_checks import (
     COARSEST_RESOLUTION_M,
     COARSEST_RESOLUTION_RAD,
     DEGREE_LIKE_RAD,
+    MAX_TRAVEL_M,
+    MAX_TRAVEL_RAD,
+    RAPID_RATE_M_PER_S,
+    RAPID_RATE_RAD_PER_S,
+    ZERO_POSE_TOL,
+    _limits,
+    _namespace_hint,
+    _turned_frame_hint,
+    check_joint_frames,
+    check_tool_mount,
+    check_zero_pose,
+)
+from machinesim.urdf_structure import (
     MAX_DEPTH,
     MAX_LINKS,
     MAX_PLACEMENT_M,
-    MAX_TRAVEL_M,
-    MAX_TRAVEL_RAD,
     MAX_URDF_BYTES,
-    RAPID_RATE_M_PER_S,
-    RAPID_RATE_RAD_PER_S,
     REQUIRED_FRAMES,
-    ZERO_POSE_TOL,
     _at,
-    _limits,
-    _namespace_hint,
     _number,
-    _turned_frame_hint,
     _vector,
-    check_joint_frames,
-    check_tool_mount,
     check_tree,
-    check_zero_pose,
 )
 
-# The checks and limits of `machinesim.urdf_checks` are importable from here, where they were
-# defined until that module was split off.
+# The checks and limits of `machinesim.urdf_checks` and `machinesim.urdf_structure` are
+# importable from here, where they were defined until those modules were split off.
 __all__ = ["AXIS_ORDER", "COARSEST_RESOLUTION_M", "COARSEST_RESOLUTION_RAD", "DEGREE_LIKE_RAD",
            "MAX_DEPTH", "MAX_LINKS", "MAX_PLACEMENT_M", "MAX_TRAVEL_M", "MAX_TRAVEL_RAD",
            "MAX_URDF_BYTES", "RAPID_RATE_M_PER_S", "RAPID_RATE_RAD_PER_S", "REQUIRED_FRAMES",
