@@ -22,8 +22,10 @@ they really came out), read with the lab's laser microscope:
 
 The two experiments are two workpieces, each loaded by the robot: two labs, one per load
 (the robot's landing is part of the truth of that load); `scenarios/workpiece_setting.py`
-runs both and reports them together. docs/procedures/workpiece_setting.md has the geometry,
-the derivations and the figures.
+runs both and reports them together. The figures the readings make, beside the paper's
+(Table 3, Fig. 8b, the machining times: `crown_times`, `image_unread`, `planes_unread`), are
+`machinesim.procedures.workpiece_setting_figures`'s, importable from here as well.
+docs/procedures/workpiece_setting.md has the geometry, the derivations and the figures.
 
 >>> import machinesim
 >>> from machinesim.experiment import run
@@ -38,8 +40,6 @@ import math
 from dataclasses import dataclass, replace
 from functools import cached_property
 
-import numpy as np
-
 from machinesim.cam.crown import (
     CROWN,
     GROOVE_BLANK,
@@ -48,7 +48,6 @@ from machinesim.cam.crown import (
     GROOVE_SPHERES,
     GROOVE_STOCK,
     PARK,
-    SETTING_S,
     CrownPlan,
     crown_blank,
     crown_design,
@@ -59,12 +58,11 @@ from machinesim.cam.crown import (
     crown_stock,
     crown_tool,
     groove_program,
-    machining_time,
     passes_program,
 )
 from machinesim.cutting import clip_to, cut
 from machinesim.exceptions import InputError
-from machinesim.experiment import Evaluation, Figure, Identified, fit_notes
+from machinesim.experiment import Evaluation, Identified, fit_notes
 from machinesim.identification.fit import Estimate
 from machinesim.identification.workpiece_setting import (
     Identification,
@@ -75,18 +73,9 @@ from machinesim.identification.workpiece_setting import (
     identify,
     parameters,
 )
-from machinesim.identification.workpiece_setting_uncertainty import (
-    contact_std,
-    design_std,
-    tilt_spread_quantile,
-    tilt_spread_quantiles,
-)
-from machinesim.metrology.crown_image import (
-    CrownImageReading,
-    crown_image_reading,
-    turned_placements,
-)
-from machinesim.metrology.part_features import CrownFeatures, crown_features, groove_depths
+from machinesim.identification.workpiece_setting_uncertainty import contact_std, design_std
+from machinesim.metrology.crown_image import crown_image_reading, turned_placements
+from machinesim.metrology.part_features import crown_features, groove_depths
 from machinesim.nc import Program
 from machinesim.procedures.sphere_probing import (
     PROBE_PLAN,
@@ -95,12 +84,26 @@ from machinesim.procedures.sphere_probing import (
     read_sphere,
     read_spheres,
 )
+from machinesim.procedures.workpiece_setting_figures import (
+    PAPER_GROOVE_SPREAD_NM,  # noqa: F401 (importable from here, as before the split)
+    PAPER_L,  # noqa: F401 (importable from here, as before the split)
+    PAPER_S,  # noqa: F401 (importable from here, as before the split)
+    PAPER_TIME,  # noqa: F401 (importable from here, as before the split)
+    SPREAD_QUANTILES,  # noqa: F401 (importable from here, as before the split)
+    _identification_details,
+    _spread_over_labs,
+    crown_figures,
+    crown_times,
+    groove_figures,
+    image_unread,
+    planes_unread,
+)
 from machinesim.procedures.workpiece_setting_programs import (
     eqs_5_to_7_program,
     model_based_program,
 )
 from machinesim.realism import OBJECTIVE_10X
-from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
+from machinesim.units import M_PER_MM, M_PER_UM
 from machinesim.workpiece import Part, stock_from_spec
 
 __all__ = [
@@ -117,15 +120,6 @@ EXPERIMENTS = ("grooves", "crown")
 NOSE = 2.0 * MM
 #: The grooves' tool (Table 1).
 GROOVE_TOOL = "nose:2.0:90"
-#: Table 3 of paper 002: errors before and after compensation (um for L, deg for S).
-PAPER_L = {"L1_L5": (149.15, -0.31), "L2_L6": (152.60, 0.82), "L3_L7": (138.43, -1.69),
-           "L4_L8": (163.21, 1.14)}
-PAPER_S = ((-1.73, -0.10), (0.95, 0.05), (2.30, 0.02), (0.93, 0.03), (-1.56, 0.04),
-           (-1.53, 0.03), (-2.06, -0.17), (-1.35, -0.08))
-#: Section 3.2.4: machining time of the finishing, from the cuboid, and the saving.
-PAPER_TIME = {"finishing_h": 9.5, "cuboid_h": 40.0, "saved_percent": 76.0}
-#: Fig. 8b: the four grooves' depths "within about 100 nm" of each other after.
-PAPER_GROOVE_SPREAD_NM = 100.0
 
 # ---------------------------------------------------------------------------- procedure
 
@@ -391,24 +385,9 @@ class RobotLoadedWorkpiece:
             cuts[f"grooves_{name}"] = _cut_details(report)
             if name != "after_model":
                 parts[f"grooves_{name}"] = part
-        before, after = depths["before"], depths["after"]
-        figures = [Figure(f"groove_depth_C{90 * k}", "um", before.ends[k] / UM,
-                          after.ends[k] / UM, note="depth at the end of the groove cut at "
-                          f"C = {90 * k} deg (3 um programmed)") for k in range(4)]
-        figures.append(Figure("groove_depth_spread", "nm", np.ptp(before.ends) / M_PER_NM,
-                              np.ptp(after.ends) / M_PER_NM,
-                              paper_after=PAPER_GROOVE_SPREAD_NM,
-                              note="paper Fig. 8b: within about 100 nm of each other"))
-        details = {"groove_stations_mm": (before.stations / MM).tolist(),
-                   **{f"groove_depths_{name}_um": (d.depths / UM).tolist()
-                      for name, d in depths.items()},
-                   **({} if self.after_only else {
-                       "groove_depth_spread_after_model_nm": float(np.ptp(
-                           depths["after_model"].ends) / M_PER_NM),
-                       "groove_end_depths_after_model_um": (depths["after_model"].ends / UM)
-                       .tolist()}),
-                   "cuts": cuts}
-        return Evaluation(tuple(figures), details, parts, {"grooves_nominal": nominal})
+        figures, details = groove_figures(depths, self.after_only)
+        details = {**details, "cuts": cuts}
+        return Evaluation(figures, details, parts, {"grooves_nominal": nominal})
 
     def _crown(self, lab, found: Identification, programs) -> Evaluation:
         crown = self.crown
@@ -439,131 +418,12 @@ class RobotLoadedWorkpiece:
             parts[f"crown_{name}"] = part
             cuts[f"crown_{name}"] = _cut_details(report)
         parts["crown_design"] = clip_to(crown_design(crown), layout.boxes, layout.floor)
-        errors = {name: {**_crown_errors(f, crown), **_image_errors(images[name], crown)}
-                  for name, f in features.items()}
-        errors.setdefault("before", dict.fromkeys(("edge", "inclination", "foot", "edge_image",
-                                                   "inclination_image"), [None] * 8))
-        # a figure the images could not read (n/a) says why: which face's profile, what it
-        # found (a face left uncut by a setting far off, its profile never falling from the top)
-        unread = image_unread(images)
-        # and a plane fit on a window that holds no cut face (a face left uncut, or a band of
-        # stock): the face's fitted slope or residual
-        planes = planes_unread(features)
-        whys = {name: {**unread[name], **planes[name]} for name in images}
-
-        def why(figure: str) -> str:
-            return "".join(f"; {name} not read: {whys[name][figure]}"
-                           for name in images if figure in whys[name])
-
-        figures = []
-        for i, (key, (paper_before, paper_after)) in enumerate(PAPER_L.items()):
-            figures.append(Figure(f"edge_distance_{key}", "um",
-                                  errors["before"]["edge_image"][i],
-                                  errors["after"]["edge_image"][i], paper_before, paper_after,
-                                  note="distance between opposite top edges less its design, "
-                                  "as the paper reads it: two points on one edge and one on "
-                                  "the other in 10x images, mean of three readings"
-                                  + why(f"edge_distance_{key}")))
-        for i, (paper_before, paper_after) in enumerate(PAPER_S):
-            figures.append(Figure(f"inclination_S{i + 1}", "deg",
-                                  errors["before"]["inclination_image"][i],
-                                  errors["after"]["inclination_image"][i], paper_before,
-                                  paper_after,
-                                  note=f"side face at C = {45 * i} deg, angle to the flat "
-                                  "less its design, as the paper reads it: height over "
-                                  "length between the edges of a 10x profile"
-                                  + why(f"inclination_S{i + 1}")))
-        for i, key in enumerate(PAPER_L):
-            figures.append(Figure(f"edge_distance_planes_{key}", "um",
-                                  errors["before"]["edge"][i], errors["after"]["edge"][i],
-                                  note="distance between the lines where the fitted side "
-                                  "planes meet the fitted top plane, less its design "
-                                  "(not in the paper)" + why(f"edge_distance_planes_{key}")))
-        for i in range(8):
-            figures.append(Figure(f"inclination_planes_S{i + 1}", "deg",
-                                  errors["before"]["inclination"][i],
-                                  errors["after"]["inclination"][i],
-                                  note=f"side face at C = {45 * i} deg: angle between the "
-                                  "fitted side and flat planes less its design (not in the "
-                                  "paper)" + why(f"inclination_planes_S{i + 1}")))
-        for i, key in enumerate(PAPER_L):
-            figures.append(Figure(f"foot_distance_{key}", "um", errors["before"]["foot"][i],
-                                  errors["after"]["foot"][i],
-                                  note="distance between opposite foot edges less its design "
-                                  "(not in the paper)" + why(f"foot_distance_{key}")))
-        finishing, cuboid = crown_times(lab.machine, crown)
-        saved = 100.0 * (1.0 - finishing / cuboid)
-        figures.append(Figure("machining_time", "h", cuboid / 3600.0, finishing / 3600.0,
-                              PAPER_TIME["cuboid_h"], PAPER_TIME["finishing_h"],
-                              note="12 min of setting included; before: the crown cut from "
-                              "the cuboid with the same passes; after: finishing the "
-                              "robot-loaded rough crown"))
-        figures.append(Figure("machining_time_saved", "percent", None, saved, None,
-                              PAPER_TIME["saved_percent"]))
-        details = {**{f"crown_{name}_{kind}": values for name, e in errors.items()
-                      if name in features
-                      for kind, values in (("edge_distance_error_um", e["edge"]),
-                                           ("inclination_error_deg", e["inclination"]),
-                                           ("foot_distance_error_um", e["foot"]),
-                                           ("image_edge_distance_error_um", e["edge_image"]),
-                                           ("image_inclination_error_deg",
-                                            e["inclination_image"]))},
-                   "machining_time": {"finishing_h": finishing / 3600.0,
-                                      "cuboid_h": cuboid / 3600.0, "saved_percent": saved,
-                                      "setting_h": SETTING_S / 3600.0},
-                   **{f"crown_{name}_image_unread": whys
-                      for name, whys in unread.items() if whys},
-                   **{f"crown_{name}_planes_unread": whys
-                      for name, whys in planes.items() if whys},
+        figures, details = crown_figures(lab.machine, crown, features, images)
+        details = {**details,
                    "cuts": cuts,
                    "note": "crown cut in its measuring windows"
                    + (", every layer" if self.all_layers else ", last finishing layer only")}
-        return Evaluation(tuple(figures), details, parts, {"crown_nominal": nominal})
-
-
-_TIMES: dict = {}
-
-
-def crown_times(machine, crown: CrownPlan = CROWN) -> tuple[float, float]:
-    """Section 3.2.4's two times, s, each with the paper's 12 min of setting (`SETTING_S`):
-    finishing the rough crown (Table 2's ten layers) and cutting it from the cuboid with the
-    same passes (`machinesim.cam.crown.machining_time`; remembered per machine and plan)."""
-    key = (machine.name, crown)
-    if key not in _TIMES:
-        _TIMES[key] = (machining_time(machine, crown_passes(crown)) + SETTING_S,
-                       machining_time(machine, crown_passes(crown, cuboid=True)) + SETTING_S)
-    return _TIMES[key]
-
-
-def image_unread(images: dict[str, CrownImageReading]) -> dict[str, dict[str, str]]:
-    """Why each Table 3 figure the 10x images could not read is n/a, per reading
-    (``"before"``, ``"after"``), keyed by figure name (``edge_distance_L2_L6``,
-    ``inclination_S2``): `CrownImageReading.unread`'s reasons, read by the crown's figures
-    as their notes and by the scenario under its Table 3."""
-    return {name: {f"{'edge_distance' if key[0] == 'L' else 'inclination'}_{key}": why
-                   for key, why in reading.unread.items()}
-            for name, reading in images.items()}
-
-
-def planes_unread(features: dict[str, CrownFeatures]) -> dict[str, dict[str, str]]:
-    """Why each plane-fit figure is n/a, per reading, keyed by figure name
-    (``inclination_planes_S2``, ``edge_distance_planes_L2_L6``, ``foot_distance_L2_L6``):
-    `CrownFeatures.unread`'s reasons, used as `image_unread`'s."""
-    return {name: {figure: why for key, why in reading.unread.items()
-                   for figure in ((f"edge_distance_planes_{key}", f"foot_distance_{key}")
-                                  if key[0] == "L" else (f"inclination_planes_{key}",))}
-            for name, reading in features.items()}
-
-
-def _crown_errors(features: CrownFeatures, plan: CrownPlan) -> dict[str, list[float]]:
-    return {"edge": ((features.edge_distances - 2 * plan.apothem) / UM).tolist(),
-            "inclination": np.degrees(features.inclinations - plan.slope).tolist(),
-            "foot": ((features.foot_distances - plan.foot_distance) / UM).tolist()}
-
-
-def _image_errors(reading: CrownImageReading, plan: CrownPlan) -> dict[str, list[float]]:
-    return {"edge_image": ((reading.edge_distances - 2 * plan.apothem) / UM).tolist(),
-            "inclination_image": np.degrees(reading.inclinations - plan.slope).tolist()}
+        return Evaluation(figures, details, parts, {"crown_nominal": nominal})
 
 
 def _cut_details(report) -> dict:
@@ -571,47 +431,3 @@ def _cut_details(report) -> dict:
             "sideways_sweeps_count": report.sideways_sweeps,
             "rapids_that_cut_count": len(report.rapids_that_cut),
             "removed_volume_mm3": report.removed_volume_m3 * 1e9, "elapsed_s": report.elapsed_s}
-
-
-#: Quantiles of the grooves' spread over labs in the report (`_spread_over_labs`).
-SPREAD_QUANTILES = {"q10": 0.1, "median": 0.5, "q90": 0.9}
-
-
-def _spread_over_labs(identified: Identified, grooves: Evaluation) -> dict:
-    """The grooves' spread after compensation as labs with the stated tilt uncertainty
-    would cut it (`tilt_spread_quantiles`; the ends read farthest out, 2 x the last
-    station, apart), and where the paper's spread falls among them."""
-    sa = identified.parameters["workpiece.alpha"][1]
-    sb = identified.parameters["workpiece.beta"][1]
-    if not (math.isfinite(sa) and math.isfinite(sb)) or (sa == 0.0 and sb == 0.0):
-        return {}
-    span = 2.0 * grooves.details["groove_stations_mm"][-1] * MM
-    found = next(f.after for f in grooves.figures if f.name == "groove_depth_spread")
-    spread = tilt_spread_quantiles(sa, sb, span, list(SPREAD_QUANTILES.values()))
-    over_labs = {f"{name}_nm": value / M_PER_NM
-                 for name, value in zip(SPREAD_QUANTILES, spread.tolist(), strict=True)}
-    over_labs["paper_quantile_ratio"] = tilt_spread_quantile(
-        PAPER_GROOVE_SPREAD_NM * M_PER_NM, sa, sb, span)
-    over_labs["simulated_quantile_ratio"] = tilt_spread_quantile(
-        found * M_PER_NM, sa, sb, span)
-    return {"groove_spread_after_over_labs": over_labs}
-
-
-def _identification_details(identified: Identified) -> dict:
-    """The paper's own quantities and the fit's agreement, units in the keys."""
-    detail = identified.detail
-    found, check = detail.found, detail.check
-    s = found.setting
-    agreement = detail.agreement()
-    return {"delta_um": (s.delta / UM).tolist(), "alpha_deg": math.degrees(s.alpha),
-            "beta_deg": math.degrees(s.beta), "gamma_deg": math.degrees(s.gamma),
-            "s1_offset_um": (found.delta / UM).tolist(),
-            "c_centre_um": (found.c_centre / UM).tolist(),
-            "sphere_radius_mm": found.radius / MM,
-            "fit_minus_eqs": {
-                "position_nm": [agreement[f"workpiece.{a}"] / M_PER_NM for a in "xyz"],
-                "angles_urad": [agreement[f"workpiece.{a}"] * 1e6
-                                for a in ("alpha", "beta", "gamma")],
-                "c_centre_nm": [agreement[f"location.C.E{a}0C"] / M_PER_NM for a in "XY"]},
-            "fit_rank_count": check.rank, "fit_condition_ratio": check.condition,
-            "fit_normalised_residual_rms_ratio": check.normalised_residual_rms}
