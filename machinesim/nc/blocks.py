@@ -1,7 +1,7 @@
 """One block of NC: its words checked, the modal state updated, its moves emitted.
 
-Internal to the reader (`machinesim.nc.parser`); arcs and canned cycles come from
-`machinesim.nc.arcs` and `machinesim.nc.cycles`.
+Internal to the reader (`machinesim.nc.parser`); arc blocks read in `machinesim.nc.arc_block`
+and canned-cycle blocks in `machinesim.nc.drilling`.
 """
 
 from __future__ import annotations
@@ -12,16 +12,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from machinesim.exceptions import NCProgramError, brief
-from machinesim.nc.arcs import (
-    ARC_RADIUS_TOLERANCE_INCH_M,
-    ARC_RADIUS_TOLERANCE_M,
-    PLANES,
-    arc_points,
-)
-from machinesim.nc.cycles import drill_steps
+from machinesim.nc.arc_block import read_arc
+from machinesim.nc.arcs import PLANES
+from machinesim.nc.drilling import PECKING, read_cycle
 from machinesim.nc.length import check_length_carried, note_length_change
 from machinesim.nc.lexer import Word
-from machinesim.nc.program import AXES, KIND_LINEAR, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
+from machinesim.nc.program import AXES, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
 from machinesim.nc.words import (
     ARC,
     DWELL_INCREMENT_S,
@@ -46,8 +42,6 @@ from machinesim.units import M_PER_MM, RAD_PER_DEG
 
 #: M06 puts the tool selected by the last T word in the spindle (FANUC machining centres).
 TOOL_CHANGE = 6
-#: The peck drilling cycles, which take Q or Haas's I J K, and a P of their own.
-PECKING = ("G73", "G83")
 
 if TYPE_CHECKING:
     from machinesim.nc.parser import Reader
@@ -123,9 +117,9 @@ class Block:
         elif one_shot is not None:
             self.one_shot(one_shot, axes, block_number)
         elif state.cycle is not None and any(k in single for k in "XYZR"):
-            self.drill(axes, block_number)
+            read_cycle(self, axes, block_number)
         elif state.motion in ARC and (axes or any(k in single for k in "IJKR")):
-            self.arc(axes, block_number)
+            read_arc(self, axes, block_number)
         elif axes:
             self.straight(axes, block_number)
         passed = tuple(c for c in codes if c not in (98, 99))
@@ -470,175 +464,6 @@ class Block:
         if "Z" in single:  # at the reference, every control's Z is the same again
             state.length_change = None
         self.add("rapid", 0.0, block_number)
-
-    def arc(self, axes: list[Word], block_number: int | None) -> None:
-        state, single, reader = self.state, self.single, self.reader
-        reader.arc_blocks += 1
-        (u, v, normal), centre_letters = PLANES[state.plane]
-        word = next(iter(axes), None) or next(single[k] for k in "IJKR" if k in single)
-        g_word = self.g_codes.get("motion", (None, word))[1]
-        for letter in (u, v):
-            if letter not in state.target:
-                plane = ("" if state.plane != "G17" else
-                         "; an arc in X and Z (a lathe's) needs G18 first, in Y and Z G19")
-                raise self.fail(f"the arc starts where {letter} is not known yet; move "
-                                f"{u} and {v} before {state.motion}{plane}", word)
-        start = dict(state.target)
-        end = dict(start)
-        check_length_carried(self, single.get("Z"), axes)
-        end.update({axis.letter: self.machine(axis) for axis in axes})
-        given = [single[k] for k in centre_letters if k in single]
-        if "R" in single and given:
-            raise self.fail(f"an arc takes R or {' '.join(centre_letters)}, not both",
-                            single["R"])
-        if "R" not in single and not given:
-            raise self.fail(f"{state.motion} needs the centre ({' '.join(centre_letters)}) or "
-                            "the radius R", g_word)
-        try:
-            if "R" in single:
-                radius = self.real(single["R"]) * self.length_of(single["R"])
-                centre = None
-            else:
-                offsets = [self.real(single[k]) * self.length_of(single[k]) if k in single
-                           else 0.0 for k in centre_letters]
-                centre = (start[u] + offsets[0], start[v] + offsets[1])
-                radius = None
-            fractions, points, _, _ = arc_points(
-                (start[u], start[v]), (end[u], end[v]), clockwise=state.motion == "G02",
-                centre=centre, radius=radius, chord_tolerance=reader.chord_tolerance,
-                radius_tolerance=(ARC_RADIUS_TOLERANCE_INCH_M if state.inch
-                                  else ARC_RADIUS_TOLERANCE_M),
-                max_segments=MAX_MOVES - reader.out.count)
-        except NCProgramError as error:
-            located = single.get("R") or (given[0] if given else word)
-            raise self.fail(str(error), located) from None
-        n = fractions.size
-        self.reserve(n, word)
-        targets = np.empty((n, len(AXES)))
-        for k, letter in enumerate(AXES):
-            if letter == u:
-                targets[:, k] = points[:, 0]
-            elif letter == v:
-                targets[:, k] = points[:, 1]
-            elif letter in end:
-                a, b = start.get(letter, end[letter]), end[letter]
-                targets[:, k] = a + (b - a) * fractions
-                targets[-1, k] = b
-            else:
-                targets[:, k] = math.nan
-        state.target = end
-        feed = math.nan if state.feed is None else state.feed
-        spindle = math.nan if state.spindle is None else state.spindle
-        reader.out.add_arrays(targets, np.full(n, KIND_LINEAR, dtype=np.int8),
-                              np.full(n, feed), np.zeros(n), np.full(n, self.line, np.int64),
-                              np.full(n, spindle),
-                              np.full(n, -1 if block_number is None else block_number))
-
-    def drill(self, axes: list[Word], block_number: int | None) -> None:
-        state, single = self.state, self.single
-        cycle_word = self.g_codes.get("canned cycle", (None, next(iter(self.words))))[1]
-        for word in axes:
-            if word.letter not in "XYZ":
-                raise self.fail(f"axis word {word.letter} in a canned cycle block; a drilling "
-                                "cycle takes X Y Z R Q P K F (G73 and G83: I J too)", word)
-        check_length_carried(self, single.get("R") or single.get("Z"))
-        if "R" in single:
-            r = self.real(single["R"]) * self.length_of(single["R"])
-            if state.incremental:
-                r += state.initial_z
-            else:
-                r += self.offsets.get(state.work_offset, {}).get("Z", 0.0)
-                r += self.reader.tool_length()
-            state.cycle_r = self.finite(r, single["R"])
-        if "Z" in single:
-            z = self.real(single["Z"]) * self.length_of(single["Z"])
-            if state.incremental:
-                if state.cycle_r is None:
-                    raise self.fail("an incremental hole depth Z counts from the R plane; "
-                                    "give R first", single["Z"])
-                z += state.cycle_r
-            else:
-                z += self.offsets.get(state.work_offset, {}).get("Z", 0.0)
-                z += self.reader.tool_length()
-                state.length_change = None  # the hole's R and Z carry it
-            state.cycle_z = self.finite(z, single["Z"])
-        if "Q" in single:
-            state.cycle_q = abs(self.real(single["Q"]) * self.length_of(single["Q"]))
-            state.cycle_pecks = None
-        if "P" in single:
-            state.cycle_p = self.integer(single["P"], "dwell time") / 1000.0
-            # Haas's G73/G83 dwell it after the last peck; one kept from a G82 does not
-            # make them dwell (FANUC's sequences, docs/nc.md)
-            state.peck_dwell = state.cycle in PECKING
-        if state.cycle in PECKING and ("I" in single or "J" in single):
-            state.cycle_pecks = self.variable_peck()
-            state.cycle_q = None
-            repeats = 1  # K is the smallest peck here
-        else:
-            repeats = self.integer(single["K"], "repeat count") if "K" in single else 1
-        if state.cycle_z is None or state.cycle_r is None:
-            raise self.fail(f"{state.cycle} needs the hole bottom Z and the R plane R",
-                            cycle_word)
-        given = state.cycle_given
-        given.update({k: (state.incremental, self.line) for k in "RZ" if k in single})
-        stale = [k for k in "RZ" if given.get(k, (state.incremental,))[0] != state.incremental]
-        if stale:
-            mode = "G91" if state.incremental else "G90"
-            earlier = " and ".join(f"{k} (line {given[k][1]})" for k in stale)
-            raise self.fail(
-                f"{state.cycle} repeated in {mode} with {earlier} given in "
-                f"{'G90' if mode == 'G91' else 'G91'}: controls differ on what a kept R or Z "
-                "means in the new distance mode (LinuxCNC reads the number again in it); "
-                f"restate {' and '.join(stale)} after changing G90/G91",
-                cycle_word)
-        return_z = state.initial_z if state.retract == "G98" else state.cycle_r
-        try:
-            dwell_s = state.cycle_p if state.peck_dwell or state.cycle == "G82" else 0.0
-            steps = drill_steps(state.cycle, r_z=state.cycle_r, bottom_z=state.cycle_z,
-                                return_z=return_z, peck=state.cycle_q,
-                                variable_peck=state.cycle_pecks, dwell_s=dwell_s,
-                                max_steps=MAX_MOVES - self.reader.out.count)
-        except NCProgramError as error:
-            word = next((single[k] for k in "ZRQIK" if k in single), cycle_word)
-            raise self.fail(str(error), word) from None
-        self.reserve(repeats * (len(steps) + 1), cycle_word)
-        plane = [w for w in axes if w.letter in "XY"]
-        for _ in range(repeats):
-            if plane or repeats > 1:
-                state.target.update({w.letter: self.machine(w) for w in plane})
-            self.add("rapid", 0.0, block_number)
-            for kind, value in steps:
-                if kind == "dwell":
-                    self.add("dwell", value, block_number)
-                else:
-                    state.target["Z"] = value
-                    self.add(kind, 0.0, block_number)
-
-    def variable_peck(self) -> tuple[float, float, float]:
-        """Haas's variable peck of a G73 or G83 block, its I J K in m: given together, each
-        > 0, K at most I, and no Q beside them."""
-        single, cycle = self.single, self.state.cycle
-        missing = [k for k in "IJK" if k not in single]
-        word = single.get("I") or single["J"]
-        if missing:
-            raise self.fail(f"{cycle}'s variable peck takes I (first peck), J (reduction per "
-                            f"peck) and K (smallest peck) together (Haas); {' and '.join(missing)}"
-                            " missing", word)
-        if "Q" in single:
-            raise self.fail(f"{cycle} takes a peck Q or I J K (Haas's variable peck), not both",
-                            single["Q"])
-        values = []
-        for letter in "IJK":
-            value = self.finite(self.real(single[letter]) * self.length_of(single[letter]),
-                                single[letter])
-            if not value > 0.0:
-                raise self.fail(f"{cycle}'s {letter} must be > 0 (a length: Haas's I J K are "
-                                f"always positive), got {single[letter].key}", single[letter])
-            values.append(value)
-        if values[2] > values[0]:
-            raise self.fail(f"{cycle}'s smallest peck K ({single['K'].key}) is larger than its "
-                            f"first peck I ({single['I'].key}); expected K <= I", single["K"])
-        return values[0], values[1], values[2]
 
     # --- numbers
 

@@ -1,0 +1,135 @@
+"""A canned-cycle block (G73, G81, G82, G83): its words, its pecks, its moves.
+
+Internal to the reader: a block (`machinesim.nc.blocks.Block`) with X Y Z or R under a
+canned cycle reads here (`read_cycle`), keeping the cycle's R plane, hole bottom, peck
+(Q, or Haas's variable peck I J K: `variable_peck`) and dwell P in the modal state until
+G80 or a motion code; the steps of one hole come from `machinesim.nc.cycles`.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from machinesim.exceptions import NCProgramError
+from machinesim.nc.cycles import drill_steps
+from machinesim.nc.length import check_length_carried
+from machinesim.nc.words import MAX_MOVES
+
+if TYPE_CHECKING:
+    from machinesim.nc.blocks import Block
+    from machinesim.nc.lexer import Word
+
+__all__ = ["PECKING", "read_cycle", "variable_peck"]
+
+#: The peck drilling cycles, which take Q or Haas's I J K, and a P of their own.
+PECKING = ("G73", "G83")
+
+
+def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None:
+    """The canned-cycle ``block``: its R Z Q P K (or I J K) kept in the modal state, its
+    hole (each of K repeats) added to the reader's moves."""
+    state, single = block.state, block.single
+    cycle_word = block.g_codes.get("canned cycle", (None, next(iter(block.words))))[1]
+    for word in axes:
+        if word.letter not in "XYZ":
+            raise block.fail(f"axis word {word.letter} in a canned cycle block; a drilling "
+                             "cycle takes X Y Z R Q P K F (G73 and G83: I J too)", word)
+    check_length_carried(block, single.get("R") or single.get("Z"))
+    if "R" in single:
+        r = block.real(single["R"]) * block.length_of(single["R"])
+        if state.incremental:
+            r += state.initial_z
+        else:
+            r += block.offsets.get(state.work_offset, {}).get("Z", 0.0)
+            r += block.reader.tool_length()
+        state.cycle_r = block.finite(r, single["R"])
+    if "Z" in single:
+        z = block.real(single["Z"]) * block.length_of(single["Z"])
+        if state.incremental:
+            if state.cycle_r is None:
+                raise block.fail("an incremental hole depth Z counts from the R plane; "
+                                 "give R first", single["Z"])
+            z += state.cycle_r
+        else:
+            z += block.offsets.get(state.work_offset, {}).get("Z", 0.0)
+            z += block.reader.tool_length()
+            state.length_change = None  # the hole's R and Z carry it
+        state.cycle_z = block.finite(z, single["Z"])
+    if "Q" in single:
+        state.cycle_q = abs(block.real(single["Q"]) * block.length_of(single["Q"]))
+        state.cycle_pecks = None
+    if "P" in single:
+        state.cycle_p = block.integer(single["P"], "dwell time") / 1000.0
+        # Haas's G73/G83 dwell it after the last peck; one kept from a G82 does not
+        # make them dwell (FANUC's sequences, docs/nc.md)
+        state.peck_dwell = state.cycle in PECKING
+    if state.cycle in PECKING and ("I" in single or "J" in single):
+        state.cycle_pecks = variable_peck(block)
+        state.cycle_q = None
+        repeats = 1  # K is the smallest peck here
+    else:
+        repeats = block.integer(single["K"], "repeat count") if "K" in single else 1
+    if state.cycle_z is None or state.cycle_r is None:
+        raise block.fail(f"{state.cycle} needs the hole bottom Z and the R plane R",
+                         cycle_word)
+    given = state.cycle_given
+    given.update({k: (state.incremental, block.line) for k in "RZ" if k in single})
+    stale = [k for k in "RZ" if given.get(k, (state.incremental,))[0] != state.incremental]
+    if stale:
+        mode = "G91" if state.incremental else "G90"
+        earlier = " and ".join(f"{k} (line {given[k][1]})" for k in stale)
+        raise block.fail(
+            f"{state.cycle} repeated in {mode} with {earlier} given in "
+            f"{'G90' if mode == 'G91' else 'G91'}: controls differ on what a kept R or Z "
+            "means in the new distance mode (LinuxCNC reads the number again in it); "
+            f"restate {' and '.join(stale)} after changing G90/G91",
+            cycle_word)
+    return_z = state.initial_z if state.retract == "G98" else state.cycle_r
+    try:
+        dwell_s = state.cycle_p if state.peck_dwell or state.cycle == "G82" else 0.0
+        steps = drill_steps(state.cycle, r_z=state.cycle_r, bottom_z=state.cycle_z,
+                            return_z=return_z, peck=state.cycle_q,
+                            variable_peck=state.cycle_pecks, dwell_s=dwell_s,
+                            max_steps=MAX_MOVES - block.reader.out.count)
+    except NCProgramError as error:
+        word = next((single[k] for k in "ZRQIK" if k in single), cycle_word)
+        raise block.fail(str(error), word) from None
+    block.reserve(repeats * (len(steps) + 1), cycle_word)
+    plane = [w for w in axes if w.letter in "XY"]
+    for _ in range(repeats):
+        if plane or repeats > 1:
+            state.target.update({w.letter: block.machine(w) for w in plane})
+        block.add("rapid", 0.0, block_number)
+        for kind, value in steps:
+            if kind == "dwell":
+                block.add("dwell", value, block_number)
+            else:
+                state.target["Z"] = value
+                block.add(kind, 0.0, block_number)
+
+
+def variable_peck(block: Block) -> tuple[float, float, float]:
+    """Haas's variable peck of a G73 or G83 block, its I J K in m: given together, each
+    > 0, K at most I, and no Q beside them."""
+    single, cycle = block.single, block.state.cycle
+    missing = [k for k in "IJK" if k not in single]
+    word = single.get("I") or single["J"]
+    if missing:
+        raise block.fail(f"{cycle}'s variable peck takes I (first peck), J (reduction per "
+                         f"peck) and K (smallest peck) together (Haas); {' and '.join(missing)}"
+                         " missing", word)
+    if "Q" in single:
+        raise block.fail(f"{cycle} takes a peck Q or I J K (Haas's variable peck), not both",
+                         single["Q"])
+    values = []
+    for letter in "IJK":
+        value = block.finite(block.real(single[letter]) * block.length_of(single[letter]),
+                             single[letter])
+        if not value > 0.0:
+            raise block.fail(f"{cycle}'s {letter} must be > 0 (a length: Haas's I J K are "
+                             f"always positive), got {single[letter].key}", single[letter])
+        values.append(value)
+    if values[2] > values[0]:
+        raise block.fail(f"{cycle}'s smallest peck K ({single['K'].key}) is larger than its "
+                         f"first peck I ({single['I'].key}); expected K <= I", single["K"])
+    return values[0], values[1], values[2]
