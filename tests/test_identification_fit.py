@@ -147,7 +147,10 @@ def test_full_set_names_the_symmetries_and_recovers_the_rest():
 
     # the seven symmetries of tool-ball readings (see DATUM)
     assert {"tool.rz"} in members
-    assert named("location.A.EC0A", "tool.x", "tool.y")
+    # no reading moves A's zero offset at the prior (the balls lie on the A line): the fit
+    # holds it at the prior's value, a datum, where it had followed the tool offset it trades
+    # against (EC0A + tool.x + tool.y at the estimate)
+    assert {"location.A.EC0A"} in members
     assert named("location.B.EB0B", "location.A.EB0A", "tool.ry")
     assert named("location.C.EC0C", "workpiece.gamma")
     assert named("tool.x", "workpiece.x", "location.A.EX0A", "location.B.EX0B",
@@ -256,30 +259,40 @@ def test_a_plan_that_cannot_see_a_parameter_names_it():
         "workpiece.alpha": 2e-3, "workpiece.beta": -1e-3, "workpiece.gamma": 4e-3,
         "location.C.EX0C": 5 * UM, "location.C.EY0C": -7 * UM,
         "location.C.EA0C": 30 * URAD, "location.C.EB0C": -20 * URAD})
-    estimate = fit(MACHINE, observations(q, u, read(truth, q, u, np.zeros(3)), SIGMA), names)
+    obs = observations(q, u, read(truth, q, u, np.zeros(3)), SIGMA)
+    estimate = fit(MACHINE, obs, names)
     assert estimate.rank == len(names) - 1
     assert "workpiece.z" in estimate.unidentifiable
-    # Tilted by alpha and beta, the workpiece's Z leans into X and Y: at the estimate it is
-    # one combination with workpiece.x and .y (which then lose their own identifiability)
+    # No reading moves it at the prior, so the fit holds it there, exactly, for good: a datum,
+    # as if left out of the fit (tilted by alpha and beta, the workpiece's Z leans into X and
+    # Y at the estimate, where it would have been one combination with x and y)
     (c,) = estimate.combinations
-    assert set(c.names) == {"workpiece.x", "workpiece.y", "workpiece.z"}
+    assert str(c) == "workpiece.z"
     (note,) = estimate.notes  # the rank is 9 at the prior too: nothing newly seen
-    assert note.startswith(f"rank 9 of 10: the readings cannot see the combination {c}:")
+    assert note.startswith("rank 9 of 10: the readings cannot see workpiece.z: its value is "
+                           "the prior's, not measured")
     assert estimate.unseen_at_prior == ()
-    assert c.coefficients[c.names.index("workpiece.z")] == 1.0
-    # it stays near the prior (0) instead of absorbing the readings: the combination's
-    # coefficients on x and y (~alpha, beta) are what it costs them
-    assert abs(estimate.values[2]) < 0.1 * UM
+    assert estimate.values[2] == 0.0 and np.isnan(estimate.std[2])
     assert_recovered(estimate, truth, names[3:])
-    # plan_quality linearised where the fit ended gives the fit's figures
-    after = plan_quality(MACHINE, q, "tool_tip", u, names, SIGMA, prior=estimate.errors)
+    # x and y take up the truth's 10 um of Z leaning through the tilts: |beta| z = 10 nm and
+    # |alpha| z = 20 nm (to 1e-3 * 10 um * 1e-3, second order), the readings fitted exactly
+    assert abs(estimate.values[0] - 30 * UM) == pytest.approx(1e-3 * 10 * UM, rel=1e-4, abs=0.0)
+    assert abs(estimate.values[1] + 20 * UM) == pytest.approx(2e-3 * 10 * UM, rel=1e-4, abs=0.0)
+    assert estimate.residual_rms < 1e-15
+    # the same as the fit without it (measured 3e-20 m apart, std equal)
+    without = [n for n in names if n != "workpiece.z"]
+    datum = fit(MACHINE, obs, without)
+    np.testing.assert_allclose(np.delete(estimate.values, 2), datum.values, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(np.delete(estimate.std, 2), datum.std, rtol=1e-9)
+    # plan_quality linearised where the fit ended, of what it fitted, gives the fit's figures
+    after = plan_quality(MACHINE, q, "tool_tip", u, without, SIGMA, prior=estimate.errors)
     assert after.rank == estimate.rank
     assert after.condition == pytest.approx(estimate.condition, rel=1e-9)
     r = estimate.rank
     np.testing.assert_allclose(after.singular_values[:r], estimate.singular_values[:r],
                                rtol=1e-9)
-    assert np.all(after.singular_values[r:] < 1e-8 * after.singular_values[0])
-    assert [str(x) for x in after.unidentifiable] == [str(x) for x in estimate.unidentifiable]
+    assert after.unidentifiable == ()
+    assert [str(x) for x in estimate.unidentifiable] == ["workpiece.z", "workpiece.z"]
 
 
 def test_large_setting_errors_converge():

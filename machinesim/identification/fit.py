@@ -79,7 +79,8 @@ class Estimate(_Figures):
     ----------""" + _FIGURES_DOC + """    values : ndarray, shape (k,)
         The estimates, SI. Along the null space they stay as near the prior as the readings
         allow (estimate minus prior is orthogonal, in SI, to every `Combination`); a
-        parameter that moves no reading keeps the prior's value exactly.
+        parameter no reading moves at the prior keeps the prior's value exactly (held there
+        for the whole fit, as if left out of it; std NaN).
     residual_rms : float
         RMS of reading minus model at the estimate, m (unweighted).
     normalised_residual_rms : float
@@ -90,8 +91,9 @@ class Estimate(_Figures):
     errors : ErrorModel
         The prior with the fitted values.
     unseen_at_prior : tuple of Combination
-        The directions the readings could not see at the prior (the plan's symmetries there,
-        as `plan_quality` at the prior names them), when the fit ended with a higher rank:
+        The combinations the readings could not see at the prior (the plan's symmetries
+        there, as `plan_quality` at the prior names them; not a single parameter, which is
+        held at the prior), when the fit ended with a higher rank:
         seen at the estimate only through its own errors' lever (`notes`).
     scale_notes : tuple of str
         The note on readings, sigma or identified lengths beyond `IMPLAUSIBLE_LENGTH_M`
@@ -206,7 +208,8 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
     length step is below `tolerances.FIT_STEP_M` and every angle step below
     `tolerances.FIT_STEP_RAD` (docs/identification.md). What the readings cannot see is
     reported in `Estimate.unidentifiable`; to fix a datum, leave one parameter of each
-    `Combination` out of ``params`` (it keeps the prior's value).
+    `Combination` out of ``params`` (it keeps the prior's value). A parameter no reading
+    moves at the prior is held there so, for the whole fit.
 
     Parameters
     ----------
@@ -260,7 +263,11 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
         iterations += 1
         errors = prior.with_parameters(dict(zip(names, values.tolist(), strict=True)))
         residual = (obs.values - plan.readings(errors)) / obs.sigma
-        lin = _linearise(plan.jacobian(errors), obs.sigma)
+        # A parameter no reading moves at the prior stays there: later, the estimate's own
+        # errors give it a lever (the B line's tilt EC0B through the fitted tool offset),
+        # a direction seen only through the fit's own values, which drove fits to diverge
+        lin = _linearise(plan.jacobian(errors), obs.sigma,
+                         None if at_prior is None else at_prior.zero)
         at_prior = lin if at_prior is None else at_prior
         step = lin.step(residual, start - values)
         values = values + step

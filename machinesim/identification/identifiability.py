@@ -204,13 +204,18 @@ class _Linearisation:
         return step
 
 
-def _linearise(jacobian: np.ndarray, sigma: np.ndarray) -> _Linearisation:
-    """Weight the Jacobian (N, k) by 1 / sigma, scale its columns to unit norm, SVD it."""
+def _linearise(jacobian: np.ndarray, sigma: np.ndarray,
+               held: np.ndarray | None = None) -> _Linearisation:
+    """Weight the Jacobian (N, k) by 1 / sigma, scale its columns to unit norm, SVD it.
+    ``held`` (k,) bool marks parameters taken as moving no reading whatever their column
+    (`fit` holds those no reading moves at the prior)."""
     k = jacobian.shape[1]
     weighted = jacobian / sigma[:, None]
     norms = np.linalg.norm(weighted, axis=0)
     # weighted RMS sensitivity, m per unit of the parameter, whatever the sigma
     zero = norms / np.linalg.norm(1.0 / sigma) <= tolerances.FIT_ZERO_COLUMN
+    if held is not None:
+        zero |= held
     scale = np.where(zero, 1.0, norms)
     live = np.flatnonzero(~zero)
     u, s, vt = np.linalg.svd(weighted[:, live] / scale[live], full_matrices=False)
