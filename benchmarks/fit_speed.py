@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
+from functools import partial
 
 import numpy as np
 
@@ -44,7 +45,8 @@ def readings(machine, n: int, rng):
     truth = ErrorModel().with_parameters(dict(zip(PARAMETERS, TRUTH, strict=True)))
     moved = machine.tool_pose(q, truth)[:, :3, 3] - machine.tool_pose(q)[:, :3, 3]
     u /= np.linalg.norm(u, axis=1)[:, None]
-    return q, u, observations(q, u, np.einsum("ni,ni->n", u, moved), SIGMA_M)
+    return q, u, observations(q, directions=u, values=np.einsum("ni,ni->n", u, moved),
+                              sigma=SIGMA_M)
 
 
 def timed(repeat: int, function, *args) -> tuple[float, object]:
@@ -74,8 +76,8 @@ def main() -> None:
             vars(machine).update(patches)  # the instance's, read by the fit's model
             try:
                 t_fit, estimate = timed(args.repeat, fit, machine, obs, PARAMETERS)
-                t_plan, _ = timed(args.repeat, plan_quality, machine, q, "tool_tip", u,
-                                  PARAMETERS, SIGMA_M)
+                t_plan, _ = timed(args.repeat, partial(plan_quality, directions=u,
+                                                       sigma=SIGMA_M), machine, q, PARAMETERS)
             finally:
                 for name in patches:
                     vars(machine).pop(name)

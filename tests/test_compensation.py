@@ -499,8 +499,8 @@ def test_an_estimate_or_values_by_name_given_as_the_identified_model_say_how_to_
     truth = ErrorModel().with_parameters({"location.C.EX0C": 2 * UM})
     readings = np.einsum("ni,ni->n", u, ROBONANO.tool_pose(np.repeat(q, 3, axis=0), truth)
                          [:, :3, 3] - ROBONANO.tool_pose(np.repeat(q, 3, axis=0))[:, :3, 3])
-    estimate = fit(ROBONANO, observations(np.repeat(q, 3, axis=0), u, readings, 50 * NM),
-                   ["location.C.EX0C"])
+    estimate = fit(ROBONANO, observations(np.repeat(q, 3, axis=0), directions=u,
+                                          values=readings, sigma=50 * NM), ["location.C.EX0C"])
     with pytest.raises(ErrorModelError, match=r"got Estimate \(its identified model is "
                                               r"Estimate.errors\)"):
         model_based(tilted(), ROBONANO, estimate)

@@ -116,7 +116,8 @@ def test_datum_fixed_r_test_identifies_every_parameter():
     rng = np.random.default_rng(1)
     truth = random_truth(rng, FITTED)
     q, u, p = PLAN
-    estimate = fit(MACHINE, observations(q, u, read(truth, q, u, p), SIGMA, point=p), FITTED)
+    estimate = fit(MACHINE, observations(q, directions=u, values=read(truth, q, u, p),
+                                         sigma=SIGMA, point=p), FITTED)
     assert estimate.rank == len(FITTED) == 20
     assert estimate.unidentifiable == ()
     assert np.all(np.isfinite(estimate.std))
@@ -136,7 +137,8 @@ def test_full_set_names_the_symmetries_and_recovers_the_rest():
     rng = np.random.default_rng(2)
     truth = random_truth(rng, FULL)
     q, u, p = PLAN
-    estimate = fit(MACHINE, observations(q, u, read(truth, q, u, p), SIGMA, point=p), FULL)
+    estimate = fit(MACHINE, observations(q, directions=u, values=read(truth, q, u, p),
+                                         sigma=SIGMA, point=p), FULL)
     assert estimate.rank == len(FULL) - 7
     combinations = estimate.combinations
     assert len(combinations) == 7
@@ -187,7 +189,8 @@ def test_full_set_names_the_symmetries_and_recovers_the_rest():
     miss = read(estimate.errors, q_new, u_new, off_axis) - read(truth, q_new, u_new, off_axis)
     assert np.max(np.abs(miss)) > 1 * UM
     # Fixing a datum makes the same readings fully identifiable (rank 20), on the same orbit.
-    datum = fit(MACHINE, observations(q, u, read(truth, q, u, p), SIGMA, point=p), FITTED)
+    datum = fit(MACHINE, observations(q, directions=u, values=read(truth, q, u, p),
+                                      sigma=SIGMA, point=p), FITTED)
     assert datum.rank == len(FITTED) and datum.unidentifiable == ()
     check_indistinguishable(datum.errors, truth)
 
@@ -211,13 +214,14 @@ def test_reported_std_matches_the_scatter_of_noisy_fits():
     noise = np.random.default_rng(2024)
     # A lab recalibrating starts from its previous calibration: one noisy fit from no prior,
     # then the 200 trials from it (3 Gauss-Newton steps each instead of 4: this test's time).
-    previous = fit(MACHINE, observations(q, u, clean + noise.normal(0, SIGMA, len(q)), SIGMA,
-                                         point=p), FITTED)
+    previous = fit(MACHINE, observations(q, directions=u,
+                                         values=clean + noise.normal(0, SIGMA, len(q)),
+                                         sigma=SIGMA, point=p), FITTED)
     estimates, stds = [], []
     for _ in range(200):
         readings = clean + noise.normal(0, SIGMA, len(q))
-        estimate = fit(MACHINE, observations(q, u, readings, SIGMA, point=p), FITTED,
-                       prior=previous.errors)
+        estimate = fit(MACHINE, observations(q, directions=u, values=readings, sigma=SIGMA,
+                                             point=p), FITTED, prior=previous.errors)
         estimates.append(estimate.values)
         stds.append(estimate.std)
     estimates, stds = np.array(estimates), np.array(stds)
@@ -246,7 +250,7 @@ def test_a_plan_that_cannot_see_a_parameter_names_it():
              "workpiece.gamma", "location.C.EX0C", "location.C.EY0C", "location.C.EA0C",
              "location.C.EB0C")
     q, u = xy_plan()
-    before = plan_quality(MACHINE, q, "tool_tip", u, names, SIGMA)
+    before = plan_quality(MACHINE, q, names, directions=u, sigma=SIGMA)
     assert before.rank == len(names) - 1
     assert "workpiece.z" in before.unidentifiable
     assert [str(c) for c in before.combinations] == ["workpiece.z"]
@@ -259,7 +263,7 @@ def test_a_plan_that_cannot_see_a_parameter_names_it():
         "workpiece.alpha": 2e-3, "workpiece.beta": -1e-3, "workpiece.gamma": 4e-3,
         "location.C.EX0C": 5 * UM, "location.C.EY0C": -7 * UM,
         "location.C.EA0C": 30 * URAD, "location.C.EB0C": -20 * URAD})
-    obs = observations(q, u, read(truth, q, u, np.zeros(3)), SIGMA)
+    obs = observations(q, directions=u, values=read(truth, q, u, np.zeros(3)), sigma=SIGMA)
     estimate = fit(MACHINE, obs, names)
     assert estimate.rank == len(names) - 1
     assert "workpiece.z" in estimate.unidentifiable
@@ -285,7 +289,7 @@ def test_a_plan_that_cannot_see_a_parameter_names_it():
     np.testing.assert_allclose(np.delete(estimate.values, 2), datum.values, rtol=0, atol=1e-15)
     np.testing.assert_allclose(np.delete(estimate.std, 2), datum.std, rtol=1e-9)
     # plan_quality linearised where the fit ended, of what it fitted, gives the fit's figures
-    after = plan_quality(MACHINE, q, "tool_tip", u, without, SIGMA, prior=estimate.errors)
+    after = plan_quality(MACHINE, q, without, directions=u, sigma=SIGMA, prior=estimate.errors)
     assert after.rank == estimate.rank
     assert after.condition == pytest.approx(estimate.condition, rel=1e-9)
     r = estimate.rank
@@ -304,7 +308,8 @@ def test_large_setting_errors_converge():
              "tool.z": 250 * UM, "tool.rx": 0.3 * DEG, "tool.ry": -0.2 * DEG}
     truth = ErrorModel().with_parameters(small | large)
     q, u, p = PLAN
-    estimate = fit(MACHINE, observations(q, u, read(truth, q, u, p), SIGMA, point=p), FITTED)
+    estimate = fit(MACHINE, observations(q, directions=u, values=read(truth, q, u, p),
+                                         sigma=SIGMA, point=p), FITTED)
     assert estimate.rank == len(FITTED)
     assert_recovered(estimate, truth, FITTED)
     assert estimate.iterations <= 6  # measured 4
@@ -374,7 +379,7 @@ def test_model_readings_batched_are_pinocchios_pose_by_pose(name, monkeypatch):
     q = random_axis_values(machine, rng, 40)[rng.integers(0, 40, n)]
     zero_at = random_axis_values(machine, rng, n)
     zero_at[rng.random(n) < 0.5] = np.nan  # half the readings absolute
-    obs = observations(q, rng.normal(size=(n, 3)), np.zeros(n), SIGMA,
+    obs = observations(q, directions=rng.normal(size=(n, 3)), values=np.zeros(n), sigma=SIGMA,
                        frame=tuple(rng.choice(machine.frames, n).tolist()),
                        point=rng.normal(0, 0.02, (n, 3)), zero_at=zero_at)
     errors = random_errors(machine, rng)
@@ -408,8 +413,8 @@ def test_a_fit_of_many_poses_asks_pinocchio_for_no_pose(monkeypatch):
     q = random_axis_values(machine, rng, 2000)
     u = rng.normal(size=(2000, 3))
     moved = machine.tool_pose(q, truth)[:, :3, 3] - machine.tool_pose(q)[:, :3, 3]
-    obs = observations(q, u, np.einsum("ni,ni->n", u / np.linalg.norm(u, axis=1)[:, None],
-                                       moved), SIGMA)
+    obs = observations(q, directions=u, sigma=SIGMA, values=np.einsum(
+        "ni,ni->n", u / np.linalg.norm(u, axis=1)[:, None], moved))
     with monkeypatch.context() as patch:
         pose_by_pose(patch, machine)
         reference = fit(machine, obs, names)
@@ -429,9 +434,10 @@ def test_observations_as_objects_or_batches_agree():
     truth = ErrorModel().with_parameters({"workpiece.x": 3 * UM, "location.C.EX0C": 2 * UM})
     q, u = xy_plan()
     values = read(truth, q, u, np.zeros(3))
-    batch = observations(q, 2 * u, values, SIGMA)
+    batch = observations(q, directions=2 * u, values=values, sigma=SIGMA)
     np.testing.assert_array_equal(batch.directions, u)  # normalised
-    singles = [Observation(q[i], values[i], u[i], SIGMA) for i in range(len(values))]
+    singles = [Observation(q[i], value=values[i], direction=u[i], sigma=SIGMA)
+               for i in range(len(values))]
     assert singles[3].frame == "tool_tip" and singles[3].point.tolist() == [0.0, 0.0, 0.0]
     names = ["workpiece.x", "location.C.EX0C"]
     a, b = fit(MACHINE, batch, names), fit(MACHINE, singles, names)
@@ -444,35 +450,62 @@ def test_observations_as_objects_or_batches_agree():
     assert str(Combination(("a", "b"), [-0.25, 1.0])) == "-0.25*a + b"
 
 
+def test_readings_and_sigma_go_by_name_so_a_swap_cannot_pass():
+    # Readings and sigma are both metres: observations(q, u, SIGMA, values), the two swapped
+    # by position, passed when every reading was positive (here 2 and 3 um) and fitted
+    # workpiece.x and .y at -50 nm each (the truth -3 and -2 um), std 0.6-0.9 um, residual
+    # 1.5e-12, no note. No check on the numbers parts the two (readings steadier than
+    # their sigma, or all equal, are real), so each takes them by name after q.
+    q, u = xy_plan()
+    truth = ErrorModel().with_parameters({"workpiece.x": -3 * UM, "workpiece.y": -2 * UM})
+    values = read(truth, q, u, np.zeros(3))
+    assert values.min() > 0.0
+    names = ["workpiece.x", "workpiece.y"]
+    estimate = fit(MACHINE, observations(q, directions=u, values=values, sigma=SIGMA), names)
+    assert estimate.values == pytest.approx([-3 * UM, -2 * UM], abs=1e-15)
+    with pytest.raises(TypeError, match="positional argument"):
+        observations(q, u, SIGMA, values)
+    with pytest.raises(TypeError, match="positional argument"):
+        Observations(q, SIGMA, u, values)
+    with pytest.raises(TypeError, match="positional argument"):
+        Observation(q[0], SIGMA, u[0], values[0])
+    with pytest.raises(TypeError, match="positional argument"):
+        plan_quality(MACHINE, q, "tool_tip", u, names, SIGMA)
+
+
 def test_bad_input_is_refused_with_the_value_named():
     q, u = xy_plan()
     values = np.zeros(len(q))
     with pytest.raises(InputError, match=r"reading 2: direction \[0.0, 0.0, 0.0\] is zero"):
-        observations(q, np.where(np.arange(len(q))[:, None] == 2, 0.0, u), values, SIGMA)
+        observations(q, directions=np.where(np.arange(len(q))[:, None] == 2, 0.0, u),
+                     values=values, sigma=SIGMA)
     with pytest.raises(InputError, match=r"reading 0: sigma -5e-08 m; expected a finite"):
-        observations(q, u, values, -SIGMA)
+        observations(q, directions=u, values=values, sigma=-SIGMA)
     with pytest.raises(InputError, match="disagree on the number of readings"):
-        observations(q, u, values[:5], SIGMA)
+        observations(q, directions=u, values=values[:5], sigma=SIGMA)
     with pytest.raises(ErrorModelError, match="unknown error parameter 'location.C.EZ0C'"):
-        fit(MACHINE, observations(q, u, values, SIGMA), ["workpiece.x", "location.C.EZ0C"])
+        fit(MACHINE, observations(q, directions=u, values=values, sigma=SIGMA),
+            ["workpiece.x", "location.C.EZ0C"])
     with pytest.raises(InputError, match="'workpiece.x' is listed more than once"):
-        fit(MACHINE, observations(q, u, values, SIGMA), ["workpiece.x", "workpiece.x"])
+        fit(MACHINE, observations(q, directions=u, values=values, sigma=SIGMA),
+            ["workpiece.x", "workpiece.x"])
     with pytest.raises(InputError, match=r"expected axis values of shape \(N, 6\), got \(20, 5\)"):
-        fit(MACHINE, observations(q[:, :5], u, values, SIGMA), ["workpiece.x"])
+        fit(MACHINE, observations(q[:, :5], directions=u, values=values, sigma=SIGMA),
+            ["workpiece.x"])
     with pytest.raises(InputError, match="frame 'probe_tip' is not on robonano_ui"):
-        plan_quality(MACHINE, q, "probe_tip", u, ["workpiece.x"], SIGMA)
+        plan_quality(MACHINE, q, ["workpiece.x"], directions=u, sigma=SIGMA, frame="probe_tip")
     with pytest.raises(InputError, match="expected a sequence of parameter names"):
-        fit(MACHINE, observations(q, u, values, SIGMA), "workpiece.x")
+        fit(MACHINE, observations(q, directions=u, values=values, sigma=SIGMA), "workpiece.x")
     truth = ErrorModel().with_parameters({"workpiece.gamma": 2 * DEG})
     with pytest.raises(NotConvergedError, match="did not converge in 1 Gauss-Newton steps"):
-        fit(MACHINE, observations(q, u, read(truth, q, u, np.zeros(3)), SIGMA),
-            ["workpiece.gamma"], max_iterations=1)
+        fit(MACHINE, observations(q, directions=u, values=read(truth, q, u, np.zeros(3)),
+                                  sigma=SIGMA), ["workpiece.gamma"], max_iterations=1)
     # readings in um given as m (12 um read as 12 m): the first step takes x past 1 m
     truth = ErrorModel().with_parameters({"workpiece.x": 12 * UM})
     with pytest.raises(NotConvergedError, match=r"diverged: after 1 Gauss-Newton steps "
                                                 r"workpiece.x = 12 m, beyond any error \(1\)"):
-        fit(MACHINE, observations(q, u, 1e6 * read(truth, q, u, np.zeros(3)), SIGMA),
-            ["workpiece.x"])
+        fit(MACHINE, observations(q, directions=u, values=1e6 * read(truth, q, u, np.zeros(3)),
+                                  sigma=SIGMA), ["workpiece.x"])
 
 
 def test_the_documented_example_runs(capsys):
@@ -535,8 +568,8 @@ def test_a_near_symmetry_and_a_missing_error_are_told_in_the_notes():
     assert not any(n.startswith("rank ") for n in estimate.notes)  # full rank
     # the plan at the nominal machine sees them as one: a combination, and a note of it
     from machinesim.identification.fit import plan_quality as quality
-    nominal = quality(machine, obs.q, obs.frames, obs.directions, list(estimate.names),
-                      obs.sigma)
+    nominal = quality(machine, obs.q, list(estimate.names), directions=obs.directions,
+                      sigma=obs.sigma, frame=obs.frames)
     assert nominal.rank == 3
     assert sum("cannot see the combination" in n for n in nominal.notes) == 1
     # and the fit, which started there, says it sees that symmetry only through its own
@@ -560,10 +593,10 @@ def test_readings_outside_the_travel_none_and_zero_iterations_are_refused():
     q = np.zeros((3, 5))
     q[:, 3] = [0.0, 30.0, -30.0]  # B given in degrees: 30 rad is past its travel
     with pytest.raises(AxisLimitError, match="axis B = .* outside its travel.*m and rad"):
-        plan_quality(load_machine("robonano_a0ib"), q, "tool_tip", np.eye(3), ["tool.x"],
-                     50e-9)
+        plan_quality(load_machine("robonano_a0ib"), q, ["tool.x"], directions=np.eye(3),
+                     sigma=50e-9)
     with pytest.raises(InputError, match="at least one reading"):
-        observations(np.zeros((0, 5)), np.zeros((0, 3)), np.zeros(0), 50e-9)
+        observations(np.zeros((0, 5)), directions=np.zeros((0, 3)), values=np.zeros(0), sigma=50e-9)
     machine, obs = _a0ib_r_test(None, False)
     with pytest.raises(InputError, match="max_iterations"):
         fit(machine, obs, ["tool.x"], max_iterations=0)
@@ -590,11 +623,12 @@ def test_readings_that_are_not_numbers_are_refused_naming_the_argument(key, bad)
 def test_the_machine_may_be_named_as_everywhere_else_and_anything_else_is_refused():
     # fit("robonano_ui", ...) had raised AttributeError: 'str' object has no attribute
     # 'check_errors', while Lab, cut and the compensation take a shipped machine's name
-    obs = observations(np.zeros((3, 6)), np.eye(3), [1e-6, -2e-6, 0.0], 1e-8)
+    obs = observations(np.zeros((3, 6)), directions=np.eye(3), values=[1e-6, -2e-6, 0.0],
+                       sigma=1e-8)
     named = fit("robonano_ui", obs, ["workpiece.x", "workpiece.y"])
     np.testing.assert_allclose(named.values, [-1e-6, 2e-6], rtol=1e-12)
-    quality = plan_quality("robonano_ui", np.zeros((3, 6)), "tool_tip", np.eye(3),
-                           ["workpiece.x"], 1e-8)
+    quality = plan_quality("robonano_ui", np.zeros((3, 6)), ["workpiece.x"],
+                           directions=np.eye(3), sigma=1e-8)
     assert quality.std[0] == pytest.approx(1e-8, rel=1e-12)  # read once along X, sigma 10 nm
     with pytest.raises(InputError, match="Expected machine as a Machine or the name of a "
                                          "shipped one .*got 3"):
@@ -615,7 +649,7 @@ def test_the_machine_may_be_named_as_everywhere_else_and_anything_else_is_refuse
 def test_an_unknown_parameter_name_is_told_the_names_it_may_mean(name, hint):
     # the message had given only the patterns of every name (location.<axis>.<symbol>, ...)
     a0ib = load_machine("robonano_a0ib")
-    obs = observations(np.zeros((3, 5)), np.eye(3), np.zeros(3), SIGMA)
+    obs = observations(np.zeros((3, 5)), directions=np.eye(3), values=np.zeros(3), sigma=SIGMA)
     with pytest.raises(ErrorModelError, match=rf"unknown error parameter '{re.escape(name)}' "
                                               rf"for robonano_a0ib; {hint}"):
         fit(a0ib, obs, ["tool.x", name])
@@ -634,10 +668,10 @@ def test_readings_in_micrometres_given_as_metres_are_named_in_the_notes():
     truth = ErrorModel().with_parameters(dict(zip(names, [0.3 * UM, -0.2 * UM], strict=True)))
     readings = np.einsum("ni,ni->n", u, a0ib.tool_pose(qs, truth)[:, :3, 3]
                          - a0ib.tool_pose(qs)[:, :3, 3])
-    right = fit(a0ib, observations(qs, u, readings, SIGMA), names)
+    right = fit(a0ib, observations(qs, directions=u, values=readings, sigma=SIGMA), names)
     np.testing.assert_allclose(right.values, [0.3 * UM, -0.2 * UM], rtol=1e-9)
     assert right.notes == ()
-    as_um = fit(a0ib, observations(qs, u, readings / UM, SIGMA), names)
+    as_um = fit(a0ib, observations(qs, directions=u, values=readings / UM, sigma=SIGMA), names)
     np.testing.assert_allclose(as_um.values, [0.3, -0.2], rtol=1e-3)  # a factor 1e6 off
     worst = int(np.argmax(np.abs(readings)))
     assert as_um.notes[0] == (
@@ -646,12 +680,12 @@ def test_readings_in_micrometres_given_as_metres_are_named_in_the_notes():
         "machine's errors. Readings and sigma are in metres: were they given in um or mm? "
         "The values are then off by that factor")
     # a sigma of 50 nm given in um (0.05) is named before anything is measured
-    quality = plan_quality(a0ib, qs, "tool_tip", u, names, 0.05)
+    quality = plan_quality(a0ib, qs, names, directions=u, sigma=0.05)
     assert quality.notes == ("sigma 0 is 0.05 m: beyond 0.01 m, more than a displacement "
                              "sensor reads of a machine's errors. Readings and sigma are in "
                              "metres: were they given in um or mm? The values are then off "
                              "by that factor",)
-    assert plan_quality(a0ib, qs, "tool_tip", u, names, SIGMA).notes == ()
+    assert plan_quality(a0ib, qs, names, directions=u, sigma=SIGMA).notes == ()
 
 
 @pytest.mark.parametrize("sigma", [1e-30, 1e-200, 5e-324, 50.0, 1e200, 1e308])
@@ -664,9 +698,10 @@ def test_a_sigma_no_sensor_has_is_refused_before_its_weight_leaves_float64(sigma
     with pytest.raises(InputError, match=rf"reading 0: sigma {re.escape(repr(sigma))} m; "
                                          r"expected a finite "
                                          r"standard uncertainty from 1e-18 m to 1 m"):
-        fit(MACHINE, observations(q, u, np.zeros(len(q)), sigma), ["workpiece.x"])
+        fit(MACHINE, observations(q, directions=u, values=np.zeros(len(q)), sigma=sigma),
+            ["workpiece.x"])
     with pytest.raises(InputError, match=r"from 1e-18 m to 1 m"):
-        plan_quality(MACHINE, q, "tool_tip", u, ["workpiece.x"], sigma)
+        plan_quality(MACHINE, q, ["workpiece.x"], directions=u, sigma=sigma)
 
 
 @pytest.mark.parametrize("scale", [1e300, 1e-320])
@@ -677,7 +712,7 @@ def test_a_direction_of_any_length_is_normalised(scale):
     q, u = xy_plan()
     truth = ErrorModel().with_parameters({"workpiece.x": 3 * UM, "workpiece.y": -2 * UM})
     readings = read(truth, q, u, np.zeros(3))
-    estimate = fit(MACHINE, observations(q, u * scale, readings, SIGMA),
+    estimate = fit(MACHINE, observations(q, directions=u * scale, values=readings, sigma=SIGMA),
                    ["workpiece.x", "workpiece.y"])
     np.testing.assert_allclose(estimate.values, [3 * UM, -2 * UM], rtol=1e-9)
 
@@ -688,7 +723,8 @@ def test_progress_is_told_each_gauss_newton_step():
     # step (reading - model) / sigma is (100, -200, 0), RMS sqrt(50000 / 3) = 129.1; the
     # step is the whole answer, workpiece.y -(-2 um)
     told = []
-    obs = observations(np.zeros((3, 6)), np.eye(3), [1e-6, -2e-6, 0.0], 1e-8)
+    obs = observations(np.zeros((3, 6)), directions=np.eye(3), values=[1e-6, -2e-6, 0.0],
+                       sigma=1e-8)
     estimate = fit(MACHINE, obs, ["workpiece.x", "workpiece.y"], progress=told.append)
     assert len(told) == estimate.iterations == 2
     assert told[0] == ("Gauss-Newton step 1 on 3 readings: RMS of (reading - model) / sigma "

@@ -31,8 +31,8 @@ def test_the_b_line_tilt_moves_no_tool_edge_reading_at_the_nominal_machine():
     moved = (MACHINE.frame_pose("tool_tip", Q, tilted)[:, :3, 3]
              - MACHINE.frame_pose("tool_tip", Q)[:, :3, 3])
     assert np.max(np.abs(moved)) < 1e-18
-    quality = plan_quality(MACHINE, np.repeat(Q, 3, axis=0), "tool_tip",
-                           np.tile(np.eye(3), (len(Q), 1)), FIFTEEN + [EC0B], 50e-9)
+    quality = plan_quality(MACHINE, np.repeat(Q, 3, axis=0), FIFTEEN + [EC0B],
+                           directions=np.tile(np.eye(3), (len(Q), 1)), sigma=50e-9)
     assert EC0B in quality.unidentifiable
 
 

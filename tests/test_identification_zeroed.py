@@ -33,7 +33,7 @@ def test_a_zeroed_reading_is_the_change_of_the_displacement_from_the_zero_pose()
         "tool.z": 4e-6})
     d = _displacement(truth, Q)
     readings = (d - d[0]).reshape(-1)
-    obs = observations(Q_ALL, U, readings, SIGMA, zero_at=Q[0])
+    obs = observations(Q_ALL, directions=U, values=readings, sigma=SIGMA, zero_at=Q[0])
     names = ["location.C.EX0C", "location.C.EY0C"]
     # the model at the truth reads the readings (both fitted and held parameters)
     estimate = fit(MACHINE, obs, names, prior={"workpiece.x": 5e-6, "tool.z": 4e-6})
@@ -42,15 +42,15 @@ def test_a_zeroed_reading_is_the_change_of_the_displacement_from_the_zero_pose()
     again = fit(MACHINE, obs, names, prior={"tool.z": 4e-6})
     assert again.values == pytest.approx([3e-6, -2e-6], abs=1e-12)
     # read as absolute displacements, the same numbers would be misread
-    absolute = fit(MACHINE, observations(Q_ALL, U, readings, SIGMA), names)
+    absolute = fit(MACHINE, observations(Q_ALL, directions=U, values=readings, sigma=SIGMA), names)
     assert abs(absolute.values[0] - 3e-6) > 1e-7
 
 
 def test_zeroed_readings_cannot_see_the_workpiece_offset_that_absolute_ones_do():
     names = ["workpiece.x", "workpiece.y", "workpiece.z", "location.C.EX0C"]
-    absolute = plan_quality(MACHINE, Q_ALL, "tool_tip", U, names, SIGMA)
+    absolute = plan_quality(MACHINE, Q_ALL, names, directions=U, sigma=SIGMA)
     assert absolute.rank == 4
-    zeroed = plan_quality(MACHINE, Q_ALL, "tool_tip", U, names, SIGMA, zero_at=Q[0])
+    zeroed = plan_quality(MACHINE, Q_ALL, names, directions=U, sigma=SIGMA, zero_at=Q[0])
     # the workpiece's offset moves every reading alike: it drops out of each difference
     assert zeroed.rank == 1
     assert {"workpiece.x", "workpiece.y", "workpiece.z"} <= set(
@@ -60,15 +60,17 @@ def test_zeroed_readings_cannot_see_the_workpiece_offset_that_absolute_ones_do()
 
 
 def test_zero_at_is_checked_and_kept_through_batches():
-    obs = Observations(Q_ALL[:3], [0.0, 0.0, 0.0], np.eye(3), SIGMA, zero_at=Q[0])
+    obs = Observations(Q_ALL[:3], values=[0.0, 0.0, 0.0], directions=np.eye(3), sigma=SIGMA,
+                       zero_at=Q[0])
     assert obs.zeroed.all() and np.array_equal(obs.zero_at[1], Q[0])
-    mixed = Observations.of([obs, observations(Q[1], np.eye(3)[0], 0.0, SIGMA)])
+    mixed = Observations.of([obs, observations(Q[1], directions=np.eye(3)[0], values=0.0,
+                                               sigma=SIGMA)])
     assert mixed.zeroed.tolist() == [True, True, True, False]
     assert mixed[0].zero_at.tolist() == Q[0].tolist() and mixed[3].zero_at is None
     with pytest.raises(InputError, match="zero_at of shape"):
-        Observations(Q_ALL[:3], 0.0, np.eye(3), SIGMA, zero_at=np.zeros(4))
+        Observations(Q_ALL[:3], values=0.0, directions=np.eye(3), sigma=SIGMA, zero_at=np.zeros(4))
     with pytest.raises(InputError, match="or all NaN for a reading not zeroed"):
-        Observations(Q_ALL[:1], 0.0, np.eye(3)[0], SIGMA,
+        Observations(Q_ALL[:1], values=0.0, directions=np.eye(3)[0], sigma=SIGMA,
                      zero_at=[0.0, np.nan, 0.0, 0.0, 0.0])
 
 

@@ -288,8 +288,8 @@ def test_what_the_identifications_fit_noted_reaches_the_report(tmp_path):
             machine, values = measurements
             q = np.zeros((2, len(machine.axes)))
             q[1, 0] = 0.01
-            estimate = fit(machine, observations(q, [1.0, 0.0, 0.0], values, 1e-9),
-                           self.names)
+            estimate = fit(machine, observations(q, directions=[1.0, 0.0, 0.0], values=values,
+                                                 sigma=1e-9), self.names)
             return Identified({n: (v, s) for n, v, s in zip(
                 estimate.names, estimate.values, estimate.std, strict=True)}, None,
                 fit_notes("both's fit", estimate))
@@ -339,7 +339,8 @@ def test_a_misfit_is_read_beside_the_errors_the_fits_sigma_leaves_out():
     q = np.zeros((2, len(machine.axes)))
 
     def estimate(values):
-        return fit(machine, observations(q, [1.0, 0.0, 0.0], values, 1e-9), ["workpiece.x"])
+        return fit(machine, observations(q, directions=[1.0, 0.0, 0.0], values=values,
+                                         sigma=1e-9), ["workpiece.x"])
 
     apart = estimate([3e-6, 4e-6])
     assert apart.normalised_residual_rms > 100 * MODEL_MISFIT

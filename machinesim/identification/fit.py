@@ -16,7 +16,7 @@ readings and Jacobian in `observation_model`; every name stays importable from h
 >>> from machinesim.identification.fit import fit, observations
 >>> machine = machinesim.load_machine("robonano_ui")
 >>> q = np.zeros((3, 6)); u = np.eye(3)
->>> obs = observations(q, u, [1e-6, -2e-6, 0.0], 1e-8)
+>>> obs = observations(q, directions=u, values=[1e-6, -2e-6, 0.0], sigma=1e-8)
 >>> estimate = fit(machine, obs, ["workpiece.x", "workpiece.y"])
 >>> np.round(estimate.values * 1e6, 9), estimate.rank
 (array([-1.,  2.]), 2)
@@ -321,13 +321,16 @@ def _check_not_diverged(machine, names, values: np.ndarray, iterations: int) -> 
             "or give a prior nearer the solution")
 
 
-def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *,
-                 prior=None, points=None, zero_at=None) -> PlanQuality:
+def plan_quality(machine, q, params: Sequence[str], *, directions, sigma,
+                 frame="tool_tip", point=None, zero_at=None, prior=None) -> PlanQuality:
     """What a measurement plan can identify, before any reading is taken.
 
     The same figures as `fit` reports (one function computes both), from the Jacobian at
     the prior: per-parameter standard uncertainty (the plan's valuation of each parameter),
     rank, condition, singular values and the unidentifiable parameters and combinations.
+    ``plan_quality(machine, q, params, directions=..., sigma=...)`` takes the plan as
+    `observations` takes readings (q first, the rest by the same keywords, without
+    ``values``) and the parameters as `fit` does.
 
     Parameters
     ----------
@@ -335,21 +338,21 @@ def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *
         As for `fit`.
     q : array_like, shape (N, n_axes)
         Axis values of the readings, m and rad.
-    frames : str or sequence of str
-        The frame of the observed point: one for all readings, or one per reading.
-    directions : array_like, shape (N, 3)
-        Sensing directions in the workpiece frame.
     params : sequence of str
         The parameters to identify.
+    directions : array_like, shape (3,) or (N, 3)
+        Sensing directions in the workpiece frame.
     sigma : float or array_like, shape (N,)
         Standard uncertainty of the readings, m.
-    prior : ErrorModel or mapping of str to float, optional
-        Where to linearise (default: the nominal machine).
-    points : array_like, shape (3,) or (N, 3), optional
+    frame : str or sequence of str
+        The frame of the observed point: one for all readings, or one per reading.
+    point : array_like, shape (3,) or (N, 3), optional
         Point coordinates in their frames, m (default the frame origins).
     zero_at : array_like, shape (n_axes,) or (N, n_axes), optional
         Where the sensors are set to zero (`Observation.zero_at`): what a zeroed plan cannot
         see (a constant offset) is then named.
+    prior : ErrorModel or mapping of str to float, optional
+        Where to linearise (default: the nominal machine).
 
     Returns
     -------
@@ -358,7 +361,8 @@ def plan_quality(machine, q, frames, directions, params: Sequence[str], sigma, *
     machine = as_machine(machine)
     prior = _prior(machine, prior)
     names = _names(machine, params, prior)
-    obs = Observations(q, 0.0, directions, sigma, frames, points, zero_at)
+    obs = Observations(q, values=0.0, directions=directions, sigma=sigma, frames=frame,
+                       points=point, zero_at=zero_at)
     plan = _Plan(machine, obs, names)
     return PlanQuality(**_figures(_linearise(plan.jacobian(prior), obs.sigma), names),
                        scale_notes=_scale_notes(obs.sigma))

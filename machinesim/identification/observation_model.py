@@ -44,9 +44,10 @@ class _Plan:
         # readings of sensors set to zero at a pose: less the same reading there
         self.zeroed = np.flatnonzero(obs.zeroed)
         self.zero = None if not self.zeroed.size else _Plan(machine, Observations(
-            obs.zero_at[self.zeroed], 0.0, obs.directions[self.zeroed],
-            obs.sigma[self.zeroed], tuple(np.asarray(obs.frames)[self.zeroed].tolist()),
-            obs.points[self.zeroed]), names)
+            obs.zero_at[self.zeroed], values=0.0, directions=obs.directions[self.zeroed],
+            sigma=obs.sigma[self.zeroed],
+            frames=tuple(np.asarray(obs.frames)[self.zeroed].tolist()),
+            points=obs.points[self.zeroed]), names)
 
     def _positions(self, errors) -> np.ndarray:
         """Positions (N, 3) of the observed points in the workpiece frame, m.

@@ -3,13 +3,16 @@
 An observation is one reading: how far a point fixed in a machine frame (the centre of a ball
 on the tool, a probe tip) lies from its nominal place, relative to the workpiece, along a
 unit direction of the workpiece frame, with its standard uncertainty. `Observation` is one,
-`Observations` a batch held as arrays; `observations` builds a batch.
+`Observations` a batch held as arrays; `observations` builds a batch. Each takes the axis
+values first and everything else by keyword (``values=``, ``directions=``, ``sigma=``):
+readings and sigma are both lengths in metres, and swapped by position they passed whenever
+every reading was positive (as a sigma must be).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
 
@@ -44,7 +47,7 @@ def is_angle(name: str) -> bool:
 
 @dataclass(frozen=True, eq=False)
 class Observation:
-    """One displacement reading.
+    """One displacement reading: ``Observation(q, value=, direction=, sigma=, ...)``.
 
     Parameters
     ----------
@@ -68,6 +71,7 @@ class Observation:
     """
 
     q: np.ndarray
+    _: KW_ONLY
     value: float
     direction: np.ndarray
     sigma: float
@@ -85,8 +89,9 @@ class Observation:
         if self.zero_at is not None and np.ndim(self.zero_at) != 1:
             raise InputError(f"expected zero_at of one observation as a vector, got shape "
                              f"{np.shape(self.zero_at)}", key="zero_at")
-        batch = Observations(self.q, self.value, self.direction, self.sigma, self.frame,
-                             self.point, self.zero_at)
+        batch = Observations(self.q, values=self.value, directions=self.direction,
+                             sigma=self.sigma, frames=self.frame, points=self.point,
+                             zero_at=self.zero_at)
         object.__setattr__(self, "zero_at", None if self.zero_at is None
                            else frozen(batch.zero_at[0]))
         object.__setattr__(self, "q", frozen(batch.q[0]))
@@ -100,8 +105,10 @@ class Observation:
 class Observations:
     """Many displacement readings as arrays (what `fit` works on).
 
-    Every argument is either one value for all readings or one per reading; the number of
-    readings N comes from those given per reading. See `Observation` for the meaning.
+    ``Observations(q, values=, directions=, sigma=, ...)``: the axis values first, the rest
+    by keyword. Every argument is either one value for all readings or one per reading; the
+    number of readings N comes from those given per reading. See `Observation` for the
+    meaning.
 
     Parameters
     ----------
@@ -131,6 +138,7 @@ class Observations:
     """
 
     q: np.ndarray
+    _: KW_ONLY
     values: np.ndarray
     directions: np.ndarray
     sigma: np.ndarray
@@ -244,9 +252,9 @@ class Observations:
         return self.values.shape[0]
 
     def __getitem__(self, i: int) -> Observation:
-        return Observation(self.q[i], self.values[i], self.directions[i], self.sigma[i],
-                           self.frames[i], self.points[i],
-                           self.zero_at[i] if self.zeroed[i] else None)
+        return Observation(self.q[i], value=self.values[i], direction=self.directions[i],
+                           sigma=self.sigma[i], frame=self.frames[i], point=self.points[i],
+                           zero_at=self.zero_at[i] if self.zeroed[i] else None)
 
     def __iter__(self):
         return (self[i] for i in range(len(self)))
@@ -264,8 +272,10 @@ class Observations:
         parts = []
         for item in items:
             if isinstance(item, Observation):
-                parts.append(Observations(item.q, item.value, item.direction, item.sigma,
-                                          item.frame, item.point, item.zero_at))
+                parts.append(Observations(item.q, values=item.value,
+                                          directions=item.direction, sigma=item.sigma,
+                                          frames=item.frame, points=item.point,
+                                          zero_at=item.zero_at))
             elif isinstance(item, Observations):
                 parts.append(item)
             else:
@@ -278,12 +288,12 @@ class Observations:
             raise InputError(f"observations have axis values of different lengths "
                              f"{sorted(widths)}; expected one machine's n_axes", key="q")
         return cls(np.concatenate([p.q for p in parts]),
-                   np.concatenate([p.values for p in parts]),
-                   np.concatenate([p.directions for p in parts]),
-                   np.concatenate([p.sigma for p in parts]),
-                   tuple(f for p in parts for f in p.frames),
-                   np.concatenate([p.points for p in parts]),
-                   np.concatenate([p.zero_at for p in parts]))
+                   values=np.concatenate([p.values for p in parts]),
+                   directions=np.concatenate([p.directions for p in parts]),
+                   sigma=np.concatenate([p.sigma for p in parts]),
+                   frames=tuple(f for p in parts for f in p.frames),
+                   points=np.concatenate([p.points for p in parts]),
+                   zero_at=np.concatenate([p.zero_at for p in parts]))
 
 
 def _kind(value) -> str:
@@ -300,16 +310,21 @@ def from_r_test(reading) -> Observations:
     if not isinstance(reading, RTestReading):
         raise InputError(f"expected the RTestReading that lab.r_test().read(q) returns, got "
                          f"{type(reading).__name__}; readings of other sensors go in as "
-                         "observations(q, directions, values, sigma)", key="reading")
+                         "observations(q, directions=..., values=..., sigma=...)",
+                         key="reading")
     n = len(reading.q)
-    return Observations(np.repeat(reading.q, 3, axis=0), reading.displacement.reshape(-1),
-                        np.tile(np.eye(3), (n, 1)), reading.sigma, reading.frame,
-                        reading.point, getattr(reading, "zero_at", None))
+    return Observations(np.repeat(reading.q, 3, axis=0),
+                        values=reading.displacement.reshape(-1),
+                        directions=np.tile(np.eye(3), (n, 1)), sigma=reading.sigma,
+                        frames=reading.frame, points=reading.point,
+                        zero_at=getattr(reading, "zero_at", None))
 
 
-def observations(q, directions, values, sigma, *, frame="tool_tip",
+def observations(q, *, directions, values, sigma, frame="tool_tip",
                  point=None, zero_at=None) -> Observations:
-    """Readings as one `Observations` batch (each argument one for all, or one per reading).
+    """Readings as one `Observations` batch (each argument one for all, or one per reading):
+    ``observations(q, directions=u, values=readings, sigma=50e-9)``, the axis values first and
+    the rest by keyword, as `Observations` and `plan_quality` take them.
 
     Parameters
     ----------
@@ -328,6 +343,7 @@ def observations(q, directions, values, sigma, *, frame="tool_tip",
     zero_at : array_like, shape (n_axes,) or (N, n_axes), optional
         Axis values where the sensors were set to zero (`Observation.zero_at`).
     """
-    return Observations(q, values, directions, sigma, frame, point, zero_at)
+    return Observations(q, values=values, directions=directions, sigma=sigma, frames=frame,
+                        points=point, zero_at=zero_at)
 
 

@@ -262,8 +262,8 @@ def fit_observations(readings: Sequence, machine, r0: float, *, lateral: bool = 
                                       (len(reading.x), 1)))
             values.append(np.asarray(getattr(reading, name)))
             sigma.append(np.maximum(getattr(reading, f"{name}_sigma"), SIGMA_FLOOR_M))
-    return Observations(np.concatenate(q), np.concatenate(values), np.concatenate(directions),
-                        np.concatenate(sigma))
+    return Observations(np.concatenate(q), values=np.concatenate(values),
+                        directions=np.concatenate(directions), sigma=np.concatenate(sigma))
 
 
 @dataclass(frozen=True)

@@ -80,8 +80,8 @@ def fit_observations(machine, a: Sequence[GrooveReading], c: Sequence[GrooveRead
                 directions.append(along[None, :])
                 values.append([(g.end - ends[1, :2]) @ along[:2]])
                 sigma.append([max(g.end_sigma, SIGMA_FLOOR_M)])
-    return observations(np.concatenate(q), np.concatenate(directions),
-                        np.concatenate(values), np.concatenate(sigma))
+    return observations(np.concatenate(q), directions=np.concatenate(directions),
+                        values=np.concatenate(values), sigma=np.concatenate(sigma))
 
 
 def fit_check(machine, a: Sequence[GrooveReading], c: Sequence[GrooveReading],

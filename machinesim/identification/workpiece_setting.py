@@ -397,8 +397,9 @@ def fit_setting(machine, readings: SphereReadings, found: Identification | None 
                 values.append(place[axis] - seen[axis])
                 directions.append(np.eye(3)[axis])
                 sigma.append(readings.sigma * gains[axis])
-    return fit(machine, observations(np.array(q), np.array(directions), np.array(values),
-                                     np.array(sigma), frame="probe_tip"), list(PARAMETERS))
+    return fit(machine, observations(np.array(q), directions=np.array(directions),
+                                     values=np.array(values), sigma=np.array(sigma),
+                                     frame="probe_tip"), list(PARAMETERS))
 
 
 # ------------------------------------------------------------------------- compensation

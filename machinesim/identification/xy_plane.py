@@ -235,8 +235,8 @@ def plane_observations(curves, diagonals, sigma: float, n_axes: int, knots) -> O
         points = c + s[:, None] * u
         add(points[:, 0], points[:, 1], d.z, np.append(u, 0.0), d.deviation - mid, d.frame)
     q = np.concatenate(rows_q)
-    return observations(q, np.concatenate(rows_u), np.concatenate(values), sigma,
-                        frame=frames)
+    return observations(q, directions=np.concatenate(rows_u),
+                        values=np.concatenate(values), sigma=sigma, frame=frames)
 
 
 def fit_xy_plane(machine, curves, diagonals, knots, *, sigma: float = 2e-9) -> Estimate:
