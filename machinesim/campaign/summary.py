@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -311,15 +312,38 @@ def write_report(dataset, folder, with_files=None) -> dict:
     written together with them (`machinesim._io.write_together`): every file is made first,
     then all are renamed into place, so that a Ctrl-C or a full disk leaves the folder's
     campaign.nc and its summary of the same trials, the old ones or the new ones, never one
-    of each."""
+    of each. The plots of the earlier report (those its summary.json lists) that this one
+    has none of are then removed: its z-scores when every trial of a shorter ``--trials``
+    failed."""
     folder = Path(folder)
     summary = summarise(dataset)
     plots = _plots(dataset)
     summary["files"] = sorted(["campaign.nc", "summary.json", "summary.md", *plots])
     files = {**(with_files or {}), **plots, "summary.md": _markdown(summary),
              "summary.json": json_text(summary, "campaign summary")}
+    earlier = _listed_plots(folder)
     write_together([(folder / name, data) for name, data in files.items()])
+    # a plot of the earlier report this one has none of (its z-scores, when every trial of
+    # a shorter --trials failed) would show other trials beside this summary, unlisted
+    for name in sorted(earlier - set(plots)):
+        (folder / name).unlink(missing_ok=True)
     return summary
+
+
+#: The names of the plots a campaign's report writes (`_plots`).
+_PLOT = re.compile(r"hist_[^/\\]+\.png|z_scores\.png")
+
+
+def _listed_plots(folder: Path) -> set[str]:
+    """The plots the summary.json in ``folder`` lists (an earlier report's files); none when
+    there is none or it cannot be read."""
+    try:
+        listed = json.loads((folder / "summary.json").read_text(encoding="utf-8"))["files"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return set()
+    if not isinstance(listed, list):
+        return set()
+    return {name for name in listed if isinstance(name, str) and _PLOT.fullmatch(name)}
 
 
 def _row(cells) -> str:

@@ -1,0 +1,58 @@
+"""A campaign's report (summary.json, summary.md, plots) over trials whose records are made
+here (`runner.run_trial` replaced), so that what the report must say follows from them by
+hand; no procedure runs."""
+
+from __future__ import annotations
+
+import json
+
+import machinesim.campaign.runner as runner
+from machinesim.campaign import run
+
+RUN = dict(workers=0, progress=False)
+
+
+def _record(i, error=None):
+    """Trial i's record: a figure and an identified parameter, or a failure with ``error``."""
+    if error is not None:
+        return {"trial": i, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+                "notes": [], "elapsed_s": 0.0, "error": error}
+    return {"trial": i, "drawn": {}, "injected": {"tool.y": 1e-6},
+            "identified": {"tool.y": [1e-6 + 1e-9 * i, 2e-9]},
+            "figures": {"depth_error": ["um", 50.0 + i, 0.1 * i]},
+            "notes": [], "elapsed_s": 0.0, "error": None}
+
+
+def test_a_shorter_summary_leaves_no_plot_of_the_longer_one(tmp_path, monkeypatch):
+    """Trial 0 fails, 1 and 2 run: the report of 3 trials has a histogram and z-scores. The
+    same campaign summarised again with --trials 1 (its one trial failed) has neither, and
+    their files of the 3 trials stayed beside it, unlisted in its summary.json: a
+    z_scores.png of trials 1 and 2 next to a summary whose every trial failed."""
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: _record(
+        i, "InputError: the probe missed the sphere" if i == 0 else None))
+    run("tool_rotation_arm", 3, out=tmp_path, identify_only=True, **RUN)
+    first = json.loads((tmp_path / "summary.json").read_text())["files"]
+    assert {"hist_depth_error.png", "z_scores.png"} <= set(first)
+
+    run("tool_rotation_arm", 1, out=tmp_path, identify_only=True, **RUN)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["failed_count"] == 1 and summary["trials_count"] == 1
+    assert summary["files"] == ["campaign.nc", "summary.json", "summary.md"]
+    made = {"campaign.json", "campaign.lock", "trials"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted({*summary["files"], *made})
+
+    run("tool_rotation_arm", 3, out=tmp_path, identify_only=True, **RUN)  # extended again
+    assert json.loads((tmp_path / "summary.json").read_text())["files"] == first
+    assert {"hist_depth_error.png", "z_scores.png"} <= {p.name for p in tmp_path.iterdir()}
+
+
+def test_a_file_of_ones_own_beside_the_report_is_left_alone(tmp_path, monkeypatch):
+    """Only what the earlier summary.json listed goes: a plot of one's own stays."""
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: _record(i))
+    run("tool_rotation_arm", 2, out=tmp_path, identify_only=True, **RUN)
+    (tmp_path / "hist_mine.png").write_bytes(b"not the campaign's")
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: _record(i, "InputError: x"))
+    (tmp_path / "trials" / "trial_000000.json").unlink()
+    run("tool_rotation_arm", 1, out=tmp_path, identify_only=True, **RUN)
+    assert (tmp_path / "hist_mine.png").read_bytes() == b"not the campaign's"
+    assert not (tmp_path / "z_scores.png").exists()
