@@ -56,3 +56,38 @@ def test_a_file_of_ones_own_beside_the_report_is_left_alone(tmp_path, monkeypatc
     run("tool_rotation_arm", 1, out=tmp_path, identify_only=True, **RUN)
     assert (tmp_path / "hist_mine.png").read_bytes() == b"not the campaign's"
     assert not (tmp_path / "z_scores.png").exists()
+
+
+def _missed(height_m):
+    return ("InputError: key 'centre': Expected the scans through [-0.006, -0.006, "
+            f"{height_m!r}] m to touch the sphere at 20 of 41 points or more, they did not")
+
+
+def test_failures_that_differ_only_in_their_numbers_are_one(tmp_path, monkeypatch, capsys):
+    """Trials 0, 1 and 3 fail as the probe misses its sphere, each at its own height; 2 ends
+    in another error. summary.md listed four messages of one trial each and the command
+    said the most common message was one trial's: the missed sphere is one failure of
+    three trials, shown with trial 0's numbers."""
+    from machinesim.cli import main as cli_main
+
+    messages = {0: _missed(2.889850000000456e-04), 1: _missed(2.3864000000066313e-05),
+                2: "InputError: key 'tool.y': a tool offset of [0.0, 1000.0, 0.0] mm",
+                3: _missed(-1.5e-06)}
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: _record(i, messages[i]))
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "4", "--workers", "0",
+                       "--identify-only", "--quiet", "--out", str(tmp_path)])
+    assert status == 1
+    err = capsys.readouterr().err
+    assert f"the most common message (3 of them): {messages[0]} (summary.md" in err
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["failures"] == [{"message": messages[0], "trials": [0, 1, 3]},
+                                   {"message": messages[2], "trials": [2]}]
+    text = (tmp_path / "summary.md").read_text()
+    assert f"- 3 trials (0, 1, 3): {messages[0]}\n- 1 trial (2): {messages[2]}\n" in text
+
+
+def test_a_message_kind_keeps_an_entrys_index_and_a_words_digits():
+    from machinesim.campaign.summary import message_kind
+
+    assert message_kind("component.X.EXX[2] of 1.5e-3 mm in trial_000002.json, [1, -2.5]") \
+        == "component.X.EXX[2] of # mm in trial_000002.json, [#, #]"

@@ -17,7 +17,8 @@ summary.json (every number under a key ending in its unit, as docs/reports.md as
   varied parameter -> Spearman rank correlation with the error's magnitude;
 - ``coverage_interval``: which intervals are given (JCGM 101 7.7.1 and 7.7.2);
 - ``failures``: each distinct message of a failed trial with the trials that ended in it
-  (``{"message": ..., "trials": [...]}``, most trials first);
+  (``{"message": ..., "trials": [...]}``, most trials first), messages that differ only in
+  their numbers taken as one and the first trial's shown;
 - ``noted_count``: the trials whose identification gave notes (`Identified.notes`: readings
   that do not fit the model, parameters the readings barely tell apart, ...), and ``notes``:
   each note with the trials that gave it, notes that differ only in their numbers taken as
@@ -38,7 +39,7 @@ from machinesim._io import json_text, write_together
 from machinesim.campaign.distributions import parameter_kind
 from machinesim.campaign.statistics import describe, spearman, z_scores, z_summary
 
-__all__ = ["failures", "notes", "summarise", "write_report"]
+__all__ = ["failures", "message_kind", "notes", "summarise", "write_report"]
 
 
 def _finite(value):
@@ -105,12 +106,26 @@ def summarise(dataset) -> dict:
 
 def failures(dataset) -> list[dict]:
     """The failed trials' messages (the Dataset's ``errors``), each with its trials, most
-    trials first."""
-    by_message: dict[str, list[int]] = {}
-    for trial, message in json.loads(dataset.attrs.get("errors", "{}")).items():
-        by_message.setdefault(str(message), []).append(int(trial))
-    return [{"message": m, "trials": sorted(t)}
-            for m, t in sorted(by_message.items(), key=lambda item: (-len(item[1]), item[1]))]
+    trials first; messages that differ only in their numbers are one (`message_kind`: a
+    probe that missed its sphere at another height in each trial), shown with the first
+    trial's numbers."""
+    by_kind: dict[str, tuple[str, list[int]]] = {}
+    errors = json.loads(dataset.attrs.get("errors", "{}"))
+    for trial, message in sorted(((int(t), str(m)) for t, m in errors.items())):
+        by_kind.setdefault(message_kind(message), (message, []))[1].append(trial)
+    return [{"message": m, "trials": t}
+            for m, t in sorted(by_kind.values(), key=lambda item: (-len(item[1]), item[1]))]
+
+
+#: A number of a message, within a list ("[-0.006, 2.4e-05]") too; not an entry's index
+#: ("component.X.EXX[2]") nor a digit of a word ("trial_000002").
+_NUMBER = re.compile(r"(?<![\w.])(?<!\w\[)[-+]?\d+(?:\.\d*)?(?:e[-+]?\d+)?(?![\w.])")
+
+
+def message_kind(message: str) -> str:
+    """``message`` with its numbers as ``#``: the same failure in two trials (``Expected the
+    scans through [-0.006, -0.006, 2.9e-04] m ...`` and ``... 2.4e-05] m ...``) is one kind."""
+    return _NUMBER.sub("#", message)
 
 
 def notes(dataset) -> list[dict]:
@@ -184,7 +199,9 @@ def _markdown(summary: dict) -> str:
                                *(_g(p["sensitivity"][v], 3) for v in varied)]))
         lines.append("")
     if summary["failures"]:
-        lines += ["## Failed trials", ""]
+        lines += ["## Failed trials", "",
+                  "Each message with its trials, most trials first; a message's numbers may "
+                  "differ from trial to trial, the first trial's are shown.", ""]
         for failure in summary["failures"]:
             trials = failure["trials"]
             shown = ", ".join(str(t) for t in trials[:10]) + (" ..." if len(trials) > 10 else "")
