@@ -91,3 +91,14 @@ def test_a_message_kind_keeps_an_entrys_index_and_a_words_digits():
 
     assert message_kind("component.X.EXX[2] of 1.5e-3 mm in trial_000002.json, [1, -2.5]") \
         == "component.X.EXX[2] of # mm in trial_000002.json, [#, #]"
+
+
+def test_the_heading_counts_one_trial_as_one(tmp_path, monkeypatch):
+    """summary.md of a one-trial campaign began '# Campaign: ..., 1 trials'."""
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: _record(i))
+    run("tool_rotation_arm", 1, out=tmp_path, identify_only=True, **RUN)
+    heading = (tmp_path / "summary.md").read_text().splitlines()[0]
+    assert heading == "# Campaign: tool_rotation_arm, 1 trial (seed 0, 0 failed)"
+    run("tool_rotation_arm", 2, out=tmp_path, identify_only=True, **RUN)
+    heading = (tmp_path / "summary.md").read_text().splitlines()[0]
+    assert heading == "# Campaign: tool_rotation_arm, 2 trials (seed 0, 0 failed)"

@@ -149,7 +149,8 @@ _SI = {"length": "m", "angle": "rad"}
 
 
 def _markdown(summary: dict) -> str:
-    lines = [f"# Campaign: {summary['procedure']}, {summary['trials_count']} trials "
+    total = summary["trials_count"]
+    lines = [f"# Campaign: {summary['procedure']}, {total} trial{'s' * (total != 1)} "
              f"(seed {summary['seed']}, {summary['failed_count']} failed)", ""]
     if summary["vary"]:
         lines += ["Varied: " + ", ".join(f"`{n}={d}`" for n, d in summary["vary"].items()), ""]
