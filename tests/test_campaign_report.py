@@ -102,3 +102,36 @@ def test_the_heading_counts_one_trial_as_one(tmp_path, monkeypatch):
     run("tool_rotation_arm", 2, out=tmp_path, identify_only=True, **RUN)
     heading = (tmp_path / "summary.md").read_text().splitlines()[0]
     assert heading == "# Campaign: tool_rotation_arm, 2 trials (seed 0, 0 failed)"
+
+
+def test_a_trial_file_named_otherwise_is_no_trials(tmp_path, monkeypatch):
+    """trials/trial_1.json (a copy renamed by hand) counted as trial 1 done: with
+    trial_000001.json gone the campaign stopped on 'trial_000001.json: no such file' and
+    never ran trial 1; with both there, on 'trial 1; expected each of the records ...
+    once', naming neither file. It is no trial's file: trial 1 runs and is written as
+    trial_000001.json; trial_1.json is left as it is."""
+    ran = []
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: ran.append(i) or _record(i))
+    run("tool_rotation_arm", 2, out=tmp_path, identify_only=True, **RUN)
+    trials = tmp_path / "trials"
+    (trials / "trial_000001.json").rename(trials / "trial_1.json")
+    run("tool_rotation_arm", 2, out=tmp_path, identify_only=True, **RUN)
+    assert ran == [0, 1, 1]
+    (trials / "trial_1.json").write_bytes((trials / "trial_000001.json").read_bytes())
+    ds = run("tool_rotation_arm", 2, out=tmp_path, identify_only=True, **RUN)
+    assert ran == [0, 1, 1] and ds.sizes["trial"] == 2
+    assert sorted(p.name for p in trials.iterdir()) == [
+        "trial_000000.json", "trial_000001.json", "trial_1.json"]
+
+
+def test_trials_without_campaign_json_are_refused_whatever_their_names(tmp_path):
+    """A trials/ folder without campaign.json holding trial_1.json is refused as one with
+    trial_000001.json is, naming it."""
+    import pytest
+
+    from machinesim.exceptions import InputError
+
+    (tmp_path / "trials").mkdir()
+    (tmp_path / "trials" / "trial_1.json").write_text("{}")
+    with pytest.raises(InputError, match=r"holds trials/trial_1\.json but no campaign\.json"):
+        run("tool_rotation_arm", 1, out=tmp_path, identify_only=True, **RUN)

@@ -19,6 +19,7 @@ import contextlib
 import json
 import math
 import os
+import re
 import socket
 import time
 from collections.abc import Iterator
@@ -143,7 +144,7 @@ def refuse_foreign(path) -> None:
                     and (name != "trials" or not trials.is_dir()))
     if trials.is_dir():
         others += sorted(f"trials/{name}" for name in os.listdir(trials)
-                         if not name.startswith("trial_") or not name.endswith(".json"))
+                         if not _TRIAL_FILE.fullmatch(name))
     if not found and not others:
         return
     held = ([f"{len(found)} trial file{'s' * (len(found) > 1)} in trials/"] if found
@@ -324,14 +325,20 @@ def _check_record(raw: dict, path: Path) -> None:
 
 def finished_trials(path) -> list[int]:
     """The trials of the campaign folder ``path`` whose file is in its trials/ (sorted;
-    none when there is no such folder)."""
+    none when there is no such folder). A trial's file is named as `CampaignFolder` writes
+    it, ``trial_NNNNNN.json``: a ``trial_1.json`` (a copy renamed by hand) is no trial's, where
+    it once counted trial 1 as done while trial_000001.json, the file read, was not there."""
     try:
         names = os.listdir(Path(path) / "trials")
     except OSError:
         return []
     found = []
     for name in names:
-        number = name.removeprefix("trial_").removesuffix(".json")
-        if name.startswith("trial_") and name.endswith(".json") and number.isdigit():
-            found.append(int(number))
+        match = _TRIAL_FILE.fullmatch(name)
+        if match:
+            found.append(int(match[1]))
     return sorted(found)
+
+
+#: The name of a trial's file (`CampaignFolder.trial_file`): six digits, ASCII.
+_TRIAL_FILE = re.compile(r"trial_([0-9]{6})\.json")
