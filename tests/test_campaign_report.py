@@ -135,3 +135,21 @@ def test_trials_without_campaign_json_are_refused_whatever_their_names(tmp_path)
     (tmp_path / "trials" / "trial_1.json").write_text("{}")
     with pytest.raises(InputError, match=r"holds trials/trial_1\.json but no campaign\.json"):
         run("tool_rotation_arm", 1, out=tmp_path, identify_only=True, **RUN)
+
+
+def test_a_campaign_nc_written_without_a_report_has_no_earlier_one_beside_it(
+        tmp_path, monkeypatch):
+    """run(report=False) after a report of 2 trials wrote campaign.nc of 3 and left
+    summary.json (trials_count 2, its files naming that campaign.nc), summary.md and the
+    plots of the 2: a summary beside a campaign.nc it is not of."""
+    import xarray as xr
+
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: _record(i))
+    run("tool_rotation_arm", 2, out=tmp_path, identify_only=True, **RUN)
+    assert (tmp_path / "summary.json").is_file() and (tmp_path / "z_scores.png").is_file()
+    (tmp_path / "notes.txt").write_text("mine")
+    run("tool_rotation_arm", 3, out=tmp_path, identify_only=True, report=False, **RUN)
+    with xr.open_dataset(tmp_path / "campaign.nc") as on_disk:
+        assert on_disk.sizes["trial"] == 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "campaign.json", "campaign.lock", "campaign.nc", "notes.txt", "trials"]

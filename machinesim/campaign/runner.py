@@ -34,7 +34,7 @@ from machinesim.campaign.results import (
     locked,
     refuse_foreign,
 )
-from machinesim.campaign.summary import write_report
+from machinesim.campaign.summary import remove_report, write_report
 from machinesim.campaign.trials import CampaignSpec, check_flag, run_trial
 from machinesim.exceptions import InputError, MachineSimWarning
 
@@ -468,7 +468,8 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
     progress : bool
         Show progress on stderr.
     report : bool
-        Write summary.json, summary.md and the plots beside campaign.nc.
+        Write summary.json, summary.md and the plots beside campaign.nc; False: campaign.nc
+        alone, and an earlier report in ``out`` (of the trials then) is removed.
 
     Returns
     -------
@@ -530,6 +531,7 @@ def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
         dataset = assembly.dataset()
         if report:  # campaign.nc and its report together: never one run's file beside another's
             write_report(dataset, folder.path, {"campaign.nc": bytes(dataset.to_netcdf())})
-        else:
+        else:  # nor an earlier report beside this campaign.nc, of which it is not
+            remove_report(folder.path)
             folder.write_dataset(dataset)
         return dataset

@@ -39,7 +39,8 @@ from machinesim._io import json_text, write_together
 from machinesim.campaign.distributions import parameter_kind
 from machinesim.campaign.statistics import describe, spearman, z_scores, z_summary
 
-__all__ = ["failures", "message_kind", "notes", "summarise", "write_report"]
+__all__ = ["failures", "message_kind", "notes", "remove_report", "summarise",
+           "write_report"]
 
 
 def _finite(value):
@@ -346,6 +347,15 @@ def write_report(dataset, folder, with_files=None) -> dict:
     for name in sorted(earlier - set(plots)):
         (folder / name).unlink(missing_ok=True)
     return summary
+
+
+def remove_report(folder) -> None:
+    """Remove the report in ``folder``: summary.md, the plots its summary.json lists, then
+    summary.json; for a campaign.nc written without a report (``run(report=False)``), which
+    an earlier report, of other trials, would otherwise sit beside."""
+    folder = Path(folder)
+    for name in [*sorted(_listed_plots(folder)), "summary.md", "summary.json"]:
+        (folder / name).unlink(missing_ok=True)
 
 
 #: The names of the plots a campaign's report writes (`_plots`).
