@@ -357,6 +357,11 @@ def error_budget(run: Callable, sources: Sequence[str]) -> Budget:
             if name not in without or without[name].after is None:
                 raise InputError(f"error_budget: with {source!r} off the result has no "
                                  f"'after' for figure {name!r}", key=source)
+            if without[name].unit != every[name].unit:  # 1 um against 500 nm: -2.5e7 %
+                raise InputError(f"error_budget: with {source!r} off figure {name!r} is in "
+                                 f"{without[name].unit!r}, with every source on in "
+                                 f"{every[name].unit!r}; expected one unit for both runs",
+                                 key=source)
             a, b = every[name].after, without[name].after
             rows[name].append(BudgetRow(source, name, every[name].unit, a, b,
                                         quadrature_share(a, b), notes))

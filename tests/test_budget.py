@@ -245,3 +245,15 @@ def test_a_run_that_cannot_be_called_or_rows_that_are_no_numbers_are_refused():
                          (5, r"budget: expected a list of rows, got int")):
         with pytest.raises(InputError, match=message):
             Budget.from_dict(bad)
+
+
+def test_a_rerun_giving_a_figure_in_another_unit_is_refused():
+    """A run function whose rerun gave the figure in nm where the all-on run gave um was
+    compared number for number: 1 um against 500 nm, a share of -24999900 %."""
+    def run(off):
+        unit, after = ("um", 1.0) if off is None else ("nm", 500.0)
+        return SimpleNamespace(figures=(Figure("a_dx", unit, 100.0, after),))
+
+    with pytest.raises(InputError, match="figure 'a_dx' is in 'nm', with every source on "
+                                         "in 'um'; expected one unit"):
+        error_budget(run, ["instrument_noise"])
