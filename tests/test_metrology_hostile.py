@@ -181,6 +181,34 @@ def test_an_r_test_ball_given_in_mm_is_refused_naming_it_and_the_machine_reach(a
     assert lab.r_test(point=[0.0, 0.0, 0.04]).read(np.zeros((1, 5))).point[2] == 0.04
 
 
+def test_an_r_test_ball_on_a_machine_of_short_linear_travel_is_bounded_by_the_floor(tmp_path):
+    # a machine of one linear axis of 10 mm stroke (sts_lathe with X fixed and Z cut to
+    # +-5 mm: a rotary table on a short Z) had a reach of 10 mm, its stroke, and refused a
+    # ball 40 mm from the nose ('at most 10 mm'), as real as on any machine; with no linear
+    # axis the reach was 0. The floor, BALL_REACH_FLOOR = 200 mm, holds there
+    import re
+
+    from machinesim.machines import models_dir
+    from machinesim.metrology import rtest
+
+    text = (models_dir() / "sts_lathe.urdf").read_text()
+    text = re.sub(r'<joint name="X" type="prismatic">(.*?)<axis xyz="-1.0 0.0 0.0"/>\s*'
+                  r'<limit[^>]*/>', r'<joint name="x_fixed" type="fixed">\1', text, flags=re.S)
+    text = text.replace('<machinesim:axis joint="X" resolution="1e-09"/>', "")
+    text = text.replace('<limit lower="-0.05" upper="0.1"', '<limit lower="-0.005" upper="0.005"')
+    path = tmp_path / "zc.urdf"
+    path.write_text(text)
+    machine = machinesim.load_machine(path)
+    assert machine.axes == ("Z", "C")
+    assert np.linalg.norm(machine.upper[:1] - machine.lower[:1]) == pytest.approx(0.01)
+    assert RTest(machine, point=[0.0, 0.0, 0.04]).point[2] == 0.04
+    assert rtest.ball_reach(machine) == rtest.BALL_REACH_FLOOR == 0.2
+    with pytest.raises(InputError, match=r"at most 200 mm from tool_tip's origin "
+                                         r"\(BALL_REACH_FLOOR, sts_lathe's linear travel "
+                                         r"being shorter.*got \[0\.0, 0\.0, 25\.0\]"):
+        RTest(machine, point=[0, 0, 25])
+
+
 def test_seed_must_be_non_negative():
     with pytest.raises(InputError, match="a non-negative int seed or None, got -1"):
         Microscope(rng=-1)

@@ -35,7 +35,7 @@ from machinesim.metrology._arrays import as_floats, shown
 from machinesim.metrology.instruments import Readout, as_generator, as_machine, motion_of
 from machinesim.units import M_PER_MM, length_text
 
-__all__ = ["RTest", "RTestReading", "ZEROS", "ball_reach"]
+__all__ = ["BALL_REACH_FLOOR", "RTest", "RTestReading", "ZEROS", "ball_reach"]
 
 #: Where the R-test's sensors read zero (`RTest`).
 ZEROS = ("nominal", "first")
@@ -81,16 +81,33 @@ class RTestReading:
     zero_at: np.ndarray | None = None
 
 
+#: The least `ball_reach`, m: 200 mm, beyond the styli and tool-holder extensions that carry
+#: an R-test's ball (tens of mm, a long one 100-150 mm), whatever the machine's linear travel.
+#: A machine with one short linear axis or none (a rotary table on a 10 mm Z stroke) had a
+#: reach of its stroke alone, or 0, and refused a ball 40 mm from the nose; a ball given in
+#: mm as m still lies beyond it from 0.2 mm on.
+BALL_REACH_FLOOR = 0.2
+
+
 def ball_reach(machine) -> float:
     """Farthest the R-test's ball centre may sit from its frame's origin, m: the diagonal of
-    the machine's linear travel (0.343 m on robonano_a0ib: 280 x 150 x 130 mm).
+    the machine's linear travel (0.343 m on robonano_a0ib: 280 x 150 x 130 mm), at least
+    `BALL_REACH_FLOOR` (a machine with a short linear travel or none).
 
     A real R-test's ball sits on a stylus tens of mm from the spindle nose; one set farther
     from the tool than the machine's whole travel could not be brought over a nest on its table as
     the axes move, so such a ``point`` is a unit slip (``[0, 0, 25]``, mm meant, is 25 m),
     whose lever would multiply every angular error into the readings."""
     linear = ~np.asarray(machine.rotary, dtype=bool)
-    return float(np.linalg.norm((machine.upper - machine.lower)[linear]))
+    diagonal = float(np.linalg.norm((machine.upper - machine.lower)[linear]))
+    return max(diagonal, BALL_REACH_FLOOR)
+
+
+def _reach_text(machine, reach: float) -> str:
+    """What `ball_reach` is on ``machine``, for the refusal."""
+    if reach > BALL_REACH_FLOOR:
+        return f"the diagonal of {machine.name}'s linear travel"
+    return f"BALL_REACH_FLOOR, {machine.name}'s linear travel being shorter"
 
 
 class RTest:
@@ -115,8 +132,8 @@ class RTest:
         The machine frame carrying the ball. Default ``"tool_tip"``.
     point : array-like, shape (3,)
         The ball centre in ``frame``, m. Default the frame's origin. At most `ball_reach`
-        (the diagonal of the machine's linear travel) from it: farther is refused as a unit
-        slip (mm given as m).
+        (the diagonal of the machine's linear travel, at least `BALL_REACH_FLOOR`, 200 mm)
+        from it: farther is refused as a unit slip (mm given as m).
     zero : {"nominal", "first"}
         Where the sensors read zero (module docstring): at the ball's nominal place
         (default, an idealisation), or on the real ball at the first pose of each `read`,
@@ -141,8 +158,8 @@ class RTest:
         lever, reach = float(np.linalg.norm(point)), ball_reach(machine)
         if lever > reach:
             raise InputError(f"Expected the ball centre at most {reach / M_PER_MM:.6g} mm from "
-                             f"{frame}'s origin (the diagonal of {machine.name}'s linear "
-                             "travel: an R-test's ball sits tens of mm from the spindle nose; "
+                             f"{frame}'s origin ({_reach_text(machine, reach)}: an R-test's "
+                             "ball sits tens of mm from the spindle nose; "
                              "point is in m, not mm), got "
                              f"{shown(point.tolist())}, {length_text(lever)} from it",
                              key="point")
