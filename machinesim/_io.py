@@ -211,16 +211,26 @@ def check_ending(path, ending: str, writer: str, what: str) -> None:
     is written: export_x3p("map.png") wrote x3p bytes under a picture's name without a word,
     which a viewer then failed on. ``writer`` and ``what`` (the function, what it writes)
     are for the message, as `machinesim.workpiece.Part.export_ply` words its own. A path
-    that is no path passes: the writing says so."""
-    if not isinstance(path, str | os.PathLike) or isinstance(os.fspath(path), bytes):
-        return
-    name = os.fspath(path)
+    that is no path (a file object, bytes, None) is refused too (`check_path`)."""
+    name = check_path(path, f"{writer} writes {what} to a file name ending in .{ending}")
     suffix = os.path.splitext(name)[1]
     if suffix.lower() == f".{ending}":
         return
     found = f"ends in {suffix}" if suffix else "has no ending"
     raise InputError(f"{writer} writes {what}, and the path {found}: expected a name ending "
                      f"in .{ending}", source=name, key="path")
+
+
+def check_path(path, writer: str = "the writer") -> str:
+    """``path`` (str or os.PathLike of str) as a str; anything else (a file object, bytes, None)
+    refused (InputError, key 'path'): it had gone on to ``Path(path)``, a TypeError traceback
+    (``export_x3p(io.BytesIO(), ...)``: 'expected str, bytes or os.PathLike object, not
+    BytesIO'). ``writer`` says what was to be written, for the message."""
+    name = os.fspath(path) if isinstance(path, str | os.PathLike) else None
+    if not isinstance(name, str):
+        raise InputError(f"{writer}: expected a file name (str or pathlib.Path), got "
+                         f"{type(path).__name__}", key="path")
+    return name
 
 
 def write_atomic(path, data: bytes | str, encoding: str = "utf-8") -> None:
@@ -258,7 +268,8 @@ def write_together(items: Iterable[tuple[object, bytes | str]], encoding: str = 
     InputError
         Naming the path whose write failed.
     """
-    plan = [(Path(path), _raw(path, data, encoding)) for path, data in items]
+    plan = [(Path(check_path(path, "writing a file")), _raw(path, data, encoding))
+            for path, data in items]
     if len({os.path.abspath(p) for p, _ in plan}) != len(plan):
         raise InputError("the same file is named twice as an output: "
                          + ", ".join(str(p) for p, _ in plan), source=str(plan[0][0]))

@@ -127,6 +127,33 @@ def test_each_writer_refuses_a_path_not_ending_in_its_format(tmp_path):
         (tmp_path / f"map.{ending}").unlink()
 
 
+def test_each_writer_refuses_what_is_no_file_name(tmp_path):
+    # a file object, bytes or None given as the path passed check_ending ("the writing says
+    # so") and reached Path(path): a TypeError traceback, 'expected str, bytes or
+    # os.PathLike object, not BytesIO', where every other bad input is an InputError
+    import io
+
+    from machinesim._io import write_atomic
+    from machinesim.errors import ErrorModel
+
+    x, y, z = rough_map()
+    writers = {"export_x3p": lambda path: export_x3p(path, x, y, z),
+               "plot_profile": lambda path: plot_profile(path, x, z[0]),
+               "ErrorModel.to_toml": ErrorModel().to_toml}
+    for writer, write in writers.items():
+        for path, kind in ((io.BytesIO(), "BytesIO"), (io.StringIO(), "StringIO"),
+                           (b"map.png", "bytes"), (None, "NoneType")):
+            with pytest.raises(InputError, match=rf"{writer} writes .* to a file name ending "
+                                                 rf"in \.\w+: expected a file name \(str or "
+                                                 rf"pathlib\.Path\), got {kind}$") as info:
+                write(path)
+            assert info.value.key == "path"
+    with pytest.raises(InputError, match=r"expected a file name \(str or pathlib\.Path\), got "
+                                         r"BytesIO"):
+        write_atomic(io.BytesIO(), b"x")  # every writer's sink (Part.export_ply's too)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_length_unit_follows_the_data_range():
     assert length_unit([0.0, 2 * MM]) == ("mm", 1e-3)
     assert length_unit([-2 * MM, -2 * MM + 3 * UM]) == ("um", 1e-6)
