@@ -132,8 +132,9 @@ class ReportFolder:
         self.final = Path(path)
         self._staged = STAGED.get(folder_key(path))
         self.files: list[str] = []
-        #: Where in ``files`` the names written since the last result begin (`write_result`).
-        self._report_start = 0
+        #: The names the last `write_result` (and `add_budget`) wrote: the report a next
+        #: result replaces, while what was written besides stays.
+        self._report: set[str] = set()
         if self._staged is not None:
             return
         try:
@@ -266,24 +267,24 @@ class ReportFolder:
         stopped or failed, what it held before. A folder holding other files than an earlier
         report's is refused (`InputError`), before anything is written.
 
-        A second result written through the same folder replaces the first's report whole,
-        as ``ReportFolder(path).write_result`` would: the files of the earlier result (and
-        its budget), and what was written through the folder before it, go; what was written
-        through the folder since (a table of this run's) stays."""
+        A second result written through the same folder replaces the first's report whole:
+        the files the earlier result (and its budget) wrote go; what was written through the
+        folder besides (a table, notes), before the earlier result or since, stays."""
         from machinesim.experiment import Result
 
         if not isinstance(result, Result):
             raise InputError(f"Expected a machinesim.experiment.Result "
                              f"(experiment.run(procedure, lab)), got {type(result).__name__}",
                              key="result")
-        earlier, self.files = self.files[:self._report_start], self.files[self._report_start:]
-        self._report_start = 0
+        earlier, self._report = self._report, set()
+        self.files = [name for name in self.files if name not in earlier]
         if self._staged is not None:  # a staging folder is swapped in as it stands
-            for name in set(earlier) - set(self.files):
+            for name in earlier:
                 (self.path / name).unlink(missing_ok=True)
+        start = len(self.files)
         with self._whole():
             text = self._write_result(result, digits, budget)
-        self._report_start = len(self.files)
+        self._report = set(self.files[start:])
         return text
 
     def _write_result(self, result, digits: int, budget) -> str:
@@ -320,10 +321,11 @@ class ReportFolder:
         table and plot (`write_budget`) and summary.json again with its rows under
         ``budget``. Returns the table's Markdown. Outside a scenario, the folder with the
         budget is swapped in whole, as `write_result`'s."""
+        start = len(self.files)
         with self._whole(adding=True):
             text = self.write_budget(budget)
             self.write_summary({**result.summary(), "budget": budget.to_dict()})
-        self._report_start = len(self.files)  # the budget belongs to the result's report
+        self._report |= set(self.files[start:])  # the budget belongs to the result's report
         return text
 
     def write_budget(self, budget, name: str = "budget") -> str:

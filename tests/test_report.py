@@ -396,16 +396,19 @@ def test_a_second_result_through_one_folder_replaces_the_first_report_whole(tmp_
     # folder.write_result(first); folder.write_result(second) left the first's parts
     # (old_a.ply, old_b.ply) beside the second's report, and its summary.json listed them as
     # the second's. Now the folder is what ReportFolder(path).write_result(second) makes,
-    # with what was written through the folder since the first result (notes.md)
+    # with what was written through the folder besides the results: since the first
+    # (notes.md), and before it (extra.md, which had gone too: a file the user wrote,
+    # deleted by a later result without a word)
     from machinesim.budget import Budget, BudgetRow
 
     first, second = _toy_result(parts=("old_a", "old_b")), _toy_result(parts=("new",))
     budget = Budget((BudgetRow("s", "x", "um", 0.5, 0.3, 0.64),))
     fresh = ReportFolder(tmp_path / "fresh")
+    fresh.write_text("extra.md", "before the first result\n")
     fresh.write_text("notes.md", "this run\n")
     fresh.write_result(second)
     expected = _snapshot(tmp_path / "fresh")
-    assert sorted(expected) == ["figures.json", "figures.md", "identified.json",
+    assert sorted(expected) == ["extra.md", "figures.json", "figures.md", "identified.json",
                                 "identified.md", "new.ply", "notes.md", "summary.json"]
     for with_budget in (False, True):
         out = tmp_path / f"out_{with_budget}"
@@ -413,6 +416,7 @@ def test_a_second_result_through_one_folder_replaces_the_first_report_whole(tmp_
         folder.write_text("extra.md", "before the first result\n")
         folder.write_result(first)
         if with_budget:
+            folder.write_text("notes.md", "between the result and its budget\n")
             folder.add_budget(first, budget)
             assert (out / "budget.png").is_file()
         folder.write_text("notes.md", "this run\n")
@@ -422,6 +426,7 @@ def test_a_second_result_through_one_folder_replaces_the_first_report_whole(tmp_
     # inside a scenario (a staged folder) alike
     def report(args):
         folder = ReportFolder(args.out)
+        folder.write_text("extra.md", "before the first result\n")
         folder.write_result(first)
         folder.publish()
         folder.write_text("notes.md", "this run\n")
