@@ -72,8 +72,12 @@ def test_the_scenario_reports_the_aliases(tmp_path):
                                                             line.split("|")[4:-1]]
             for line in text.splitlines() if line.startswith("| component") or
             line.startswith("| location")}
-    # read as dx, while the tool against the spindle axis does not move: the test's error
-    assert rows[("component.X.EZX", "slope", "tool.x")][:3] == ["3003.2138", "-0.0000", "um/mm"]
+    # read as dx, while the tool against the spindle axis does not move: the test's error.
+    # By hand, in the file's units: (Rs + R) = 3 mm of dx per m/m of slope is 3 mm * 1e-3
+    # (m/m per um/mm) = 3 um, 3000 nm per um/mm (to 0.5 %, as the first test)
+    read, against, unit = rows[("component.X.EZX", "slope", "tool.x")][:3]
+    assert float(read) == pytest.approx((TEST_SPHERE.radius + NOSE) * 1e-3 * 1e9, rel=5e-3)
+    assert abs(float(against)) < 5e-5 and unit == "um/mm"
     # read as dx, and the tool against the axis moves as much: what the test reads
     assert rows[("location.C.EX0C", "-", "tool.x")][:3] == ["-1000.0000", "-1000.0000", "um"]
     assert "Computed from the machine's model" in text
