@@ -29,7 +29,13 @@ from machinesim.nc import MOVE_KINDS
 from machinesim.servo import check_servo
 from machinesim.tolerances import LIMIT_SLACK
 from machinesim.tool_specs import tool_from_spec
-from machinesim.tools import Tool, check_path_chord, path_chord_tolerance, with_nose_radius_error
+from machinesim.tools import (
+    Tool,
+    check_path_chord,
+    flat_face_radius,
+    path_chord_tolerance,
+    with_nose_radius_error,
+)
 from machinesim.workpiece import Part, stock_from_spec
 
 #: A move continues the previous one when its first axis values equal the previous end to
@@ -144,7 +150,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         chord_tolerance = path_chord_tolerance(t for _, t, _ in tools.runs)
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tools.points(), chord_tolerance=chord_tolerance,
-                             servo=servo)
+                             servo=servo,
+                             face_radius=flat_face_radius(t for _, t, _ in tools.runs))
     following = peak_following_error(trajectory, machine)
     moves = _Moves(trajectory, len(machine.axes))
     limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)

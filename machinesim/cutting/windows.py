@@ -28,7 +28,7 @@ from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag, as_number
 from machinesim.rotations import rot_z
 from machinesim.tool_specs import tool_from_spec
-from machinesim.tools import check_path_chord
+from machinesim.tools import check_path_chord, flat_face_radius
 from machinesim.units import M_PER_MM
 from machinesim.workpiece import Part, stock_from_spec
 
@@ -113,7 +113,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     machine.check_errors(errors)
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tool.vertices(), chord_tolerance=chord_tolerance,
-                             servo=servo)
+                             servo=servo, face_radius=flat_face_radius([tool]))
     limits = _overtravel(machine, _Moves(trajectory, len(machine.axes)),
                          getattr(program, "source", None), allow_overtravel)
     part = stock if roi is None else clip_to(stock, roi, floor)

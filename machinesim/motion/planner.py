@@ -9,6 +9,7 @@ import numpy as np
 
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps
+from machinesim.motion.faces import face_substeps
 from machinesim.motion.steps import wrap_steps
 from machinesim.motion.trajectory import IdealServo, ServoModel, Trajectory
 from machinesim.nc.program import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
@@ -100,7 +101,7 @@ def _source(program) -> str:
 
 def plan(program, machine, errors=None, *, start=None, tool_points=None,
          chord_tolerance: float = CHORD_TOLERANCE_M, servo: ServoModel | None = None,
-         ) -> Trajectory:
+         face_radius: float = 0.0) -> Trajectory:
     """Sample ``program`` on ``machine`` into a `Trajectory`.
 
     Parameters
@@ -116,6 +117,11 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     tool_points : ndarray, shape (k, 3), optional
         Points of the tool in the tool_tip frame (m) whose paths must stay within the chord
         tolerance; the edge (origin) is always included.
+    face_radius : float
+        Half-width (m) of the tool's widest flat face normal to its axis, a flat end mill's
+        radius (`machinesim.tools.flat_face_radius`): a move that tilts the tool is split
+        further, so that the hull of each sub-step's two poses leaves the face's true sweep
+        by at most the chord tolerance (`machinesim.motion.faces`). 0: no flat face.
     chord_tolerance : float
         Largest allowed distance, m, between a sub-step's chord and the true path.
     servo : ServoModel, optional
@@ -147,6 +153,9 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         raise InputError(f"start must be finite axis values, got {q0.tolist()}")
     if not chord_tolerance > 0.0:
         raise InputError(f"chord_tolerance must be positive, got {chord_tolerance}")
+    if not (isinstance(face_radius, int | float) and 0.0 <= face_radius < math.inf):
+        raise InputError(f"face_radius must be a finite length >= 0 (m), got {face_radius!r}",
+                         key="face_radius")
     points = np.zeros((1, 3)) if tool_points is None else np.vstack(
         [np.zeros((1, 3)), np.asarray(tool_points, dtype=np.float64).reshape(-1, 3)])
     targets, kinds, feeds, dwells, lines = _program_arrays(program)
@@ -235,6 +244,16 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                 raise NCProgramError(
                     f"{what} would need more than {MAX_SUBSTEPS} sub-steps to keep the "
                     f"chord within {chord_tolerance * 1e9:g} nm; raise chord_tolerance "
+                    "(--chord-nm on the command line)",
+                    source=source, line=int(lines[bad]))
+            found = face_substeps(machine, errors, starts[turning], delta[turning],
+                                  np.maximum(found, 1), face_radius, chord_tolerance)
+            if np.any(found > MAX_SUBSTEPS):
+                bad = int(turning[int(np.argmax(found > MAX_SUBSTEPS))])
+                raise NCProgramError(
+                    f"a move that tilts the tool's flat face ({face_radius * 1e3:g} mm across "
+                    f"its axis) would need more than {MAX_SUBSTEPS} sub-steps to keep the "
+                    f"face within {chord_tolerance * 1e9:g} nm; raise chord_tolerance "
                     "(--chord-nm on the command line)",
                     source=source, line=int(lines[bad]))
             steps[turning] = found
