@@ -391,9 +391,14 @@ def _cut(args) -> int:
         summary["notes"].append(f"{args.errors} sets no error (no key in any section): cut "
                                 "on the machine as built, every error zero")
     if errors is not None:
-        from machinesim.errors.toml import below_any_machine, beyond_any_machine
+        from machinesim.errors.toml import (
+            below_any_machine,
+            beyond_any_machine,
+            short_tables,
+        )
 
-        summary["notes"] += [*below_any_machine(errors), *beyond_any_machine(errors)]
+        summary["notes"] += [*below_any_machine(errors), *beyond_any_machine(errors),
+                             *short_tables(errors, machine)]
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
     pieces, apart = _pieces(part, stock, roi)

@@ -11,6 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import machinesim
@@ -442,6 +443,39 @@ def test_an_error_written_in_micrometres_in_a_millimetre_key_is_noted(tmp_path, 
         code, _, err = run(["cut", GROOVES, *CUT, "--errors", errors, "--allow-overtravel",
                             "--out", tmp_path / "b.ply"], capsys)
         assert code == 0 and "beyond the errors of any machine" not in err, err
+
+
+def test_a_table_written_in_micrometres_of_travel_is_noted(tmp_path, capsys):
+    """position_um = [-250, 0, 250] beside EXX_um, for grooving_4axis's X of -250 .. 250 mm
+    (position_mm meant), spans 0.5 mm: the table steps 7.6 um within 0.5 mm of X = 0 and
+    holds 4.1 um beyond, where the grooves are cut (the tool 4.1 um off along X at X = 5 mm,
+    by hand from the table's last value). A note names the key, its span against the
+    travel (by hand: 0.5 of 500 mm) and the unit perhaps meant, after the file and the
+    key's line (2, counted by hand); the same table in mm, and
+    the example's, are not noted."""
+    slip = tmp_path / "slip.toml"
+    slip.write_text("[component.X]\nposition_um = [-250.0, 0.0, 250.0]\n"
+                    "EXX_um = [-3.5, 0.0, 4.1]\n")
+    errors = machinesim.ErrorModel.from_toml(slip)
+    machine = machinesim.load_machine("grooving_4axis")
+    moved = machine.tool_pose(np.array([5e-3, 0.0, 0.0, 0.0]), errors)[:3, 3] - [5e-3, 0, 0]
+    assert np.allclose(moved, [4.1e-6, 0.0, 0.0], rtol=0, atol=1e-15)
+    code, _, err = run(["cut", GROOVES, *CUT, "--errors", slip, "--out", tmp_path / "a.ply",
+                        "--report", tmp_path / "a.json"], capsys)
+    assert code == 0, err
+    note = (f"{slip}, line 2: component.X.position_um = [-250.0, 0.0, 250.0] spans 0.5 mm "
+            "of X's "
+            "500 mm travel, and its tables hold their end values beyond -0.25 mm .. 0.25 mm: "
+            "was it written in mm, where the key asks um?")
+    assert f"note: {note}" in err, err
+    assert note in json.loads((tmp_path / "a.json").read_text())["notes"]
+    meant = tmp_path / "meant.toml"
+    meant.write_text("[component.X]\nposition_mm = [-250.0, 0.0, 250.0]\n"
+                     "EXX_um = [-3.5, 0.0, 4.1]\n")
+    for errors in (meant, ROOT / "models" / "errors" / "example.toml"):
+        code, _, err = run(["cut", GROOVES, *CUT, "--errors", errors, "--out",
+                            tmp_path / "b.ply"], capsys)
+        assert code == 0 and "tables hold their end values" not in err, err
 
 
 def test_ctrl_c_during_the_cut_exits_130_and_writes_nothing(tmp_path, capsys, monkeypatch):

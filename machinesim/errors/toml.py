@@ -143,6 +143,55 @@ def beyond_any_machine(model: ErrorModel) -> list[str]:
     return lines
 
 
+#: Below this share of its axis's travel (a whole turn for a rotary axis that turns
+#: further) a table's positions are noted: `position_um = [-250.0, 0.0, 250.0]` for
+#: grooving_4axis's X, written beside `EXX_um` where `position_mm` was meant, spans 0.5 mm of
+#: its 500 mm, and the table, held at its end values beyond them, put a step of 7.6 um
+#: within 0.5 mm of X = 0 and a constant 4.1 um everywhere else, with exit 0.
+SHORTEST_TABLE_SHARE = 0.01
+
+
+def short_tables(model: ErrorModel, machine) -> list[str]:
+    """Lines naming each axis whose error tables' positions (as the file wrote them) span
+    less than `SHORTEST_TABLE_SHARE` of the axis's travel on ``machine``: perhaps written
+    in a smaller unit than meant (um for mm). Each says what the tables do beyond their
+    positions: hold their end values. Axes the machine lacks are left to the fit check. Each
+    line begins with the file and the key's line, as `below_any_machine`'s."""
+    lines = []
+    for field, (key, value) in model.written.items():
+        if not field.endswith(".position"):
+            continue
+        axis = field.split(".")[1]
+        if axis not in machine.axes:
+            continue
+        i = machine.axes.index(axis)
+        travel = float(machine.upper[i] - machine.lower[i])
+        if machine.rotary[i]:
+            travel = min(travel, 2.0 * np.pi)
+        tables = [error for error in model.component.get(axis, {}).values()
+                  if error.kind == "table"]
+        if not tables:
+            continue
+        positions = tables[0].positions
+        span = float(positions[-1] - positions[0])
+        if not travel > 0.0 or span >= SHORTEST_TABLE_SHARE * travel:
+            continue
+        unit = key.rsplit("_", 1)[-1]
+        linear = not machine.rotary[i]
+        show = (lambda v: f"{v * 1e3:.4g} mm") if linear else (
+            lambda v: f"{np.degrees(v):.4g} deg")
+        shown = np.asarray(value, dtype=np.float64).tolist()
+        larger = {"um": "mm", "nm": "um or mm", "mm": "m"} if linear else {
+            "urad": "mrad or deg", "mrad": "deg", "arcsec": "deg"}
+        guess = (f": was it written in {larger[unit]}, where the key asks {unit}?"
+                 if unit in larger else "")
+        lines.append(f"{_noted_at(model, field)}{key} = {shown!r} spans {show(span)} of "
+                     f"{axis}'s {show(travel)} "
+                     f"travel, and its tables hold their end values beyond "
+                     f"{show(positions[0])} .. {show(positions[-1])}{guess}")
+    return lines
+
+
 #: The units an error value is more likely written in, for a key in each unit.
 _SMALLER = {"m": "mm or um", "mm": "um", "um": "nm", "rad": "mrad or urad", "mrad": "urad",
             "deg": "urad or arcsec"}
