@@ -69,3 +69,23 @@ def test_tilting_move_gets_the_face_rule_count():
     assert plain.segment(1).q.shape[0] - 1 < need
     steps = faced.segment(1).q.shape[0] - 1
     assert need <= steps <= math.ceil(need * 1.02)
+
+
+def test_the_viewer_stages_cut_the_swung_face_as_cut_does(monkeypatch):
+    """The viewer's stages plan the program themselves: their last part, coloured against
+    cut()'s, keeps the face's depth on the B line too (old: 4.27 um under it)."""
+    import machinesim.viewer.machine as viewer
+
+    kept = []
+    stages = viewer._stages
+
+    def keep(*args, **kwargs):
+        out = stages(*args, **kwargs)
+        kept.append(out[1][-1])
+        return out
+
+    monkeypatch.setattr(viewer, "_stages", keep)
+    viewer.machine_scene("robonano_a0ib", parse_program(SWING, "swing.nc"), tool="flat:0.5",
+                         stock="block:10x10x2", chord_tolerance=TOL)
+    height = height_map(kept[0], np.array([5e-3]), np.array([5e-3]))[0, 0]
+    assert -DEPTH - TOL - 1e-12 <= height <= -DEPTH + 1e-12, height + DEPTH

@@ -21,7 +21,7 @@ from machinesim import motion
 from machinesim.cutting import cut, remove
 from machinesim.exceptions import InputError
 from machinesim.tool_specs import tool_from_spec
-from machinesim.tools import check_path_chord, path_chord_tolerance
+from machinesim.tools import check_path_chord, flat_face_radius, path_chord_tolerance
 from machinesim.viewer.maps import legend_for
 from machinesim.viewer.meshes import DISPLAY_TRIANGLES, decimate, tool_mesh
 from machinesim.viewer.scene import Scene, transform_tracks, visibility_track
@@ -155,8 +155,11 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
     lo, hi = _with_stock(visualizer, machine, errors, q0, stock, lo, hi)
     if chord_tolerance is None:
         chord_tolerance = path_chord_tolerance([tool])
+    # sub-steps as cut() takes them (a flat end mill's tilted face: `motion.faces`), so that
+    # the last stage is the part cut() gives and its colours compare like with like
     trajectory = motion.plan(program, machine, errors, start=q0, tool_points=tool.vertices(),
-                             chord_tolerance=chord_tolerance)
+                             chord_tolerance=chord_tolerance,
+                             face_radius=flat_face_radius([tool]))
     times, qs = _samples(trajectory, q0)
     speed = max(1.0, trajectory.duration / duration_s)
     keys = _key_times(trajectory, times[-1], speed)
