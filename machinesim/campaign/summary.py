@@ -1,6 +1,10 @@
 """A campaign's report: summary.json, summary.md and the plots, from its Dataset.
 
-summary.json (every number under a key ending in its unit, as docs/reports.md asks):
+summary.json (docs/campaigns.md). Its numbers are not all keyed by their unit, as a
+scenario's report.json's ``details`` are (docs/reports.md): a `statistics.describe`'s
+``mean``, ``std``, ``min``, ``max`` and intervals are in the unit named beside them (a
+figure's ``unit``) or by the key holding them (``error_si``: m or rad, the parameter's kind);
+z-scores and rank correlations are ratios; ``count`` and the ``_count`` keys count trials.
 
 - ``procedure``, ``seed``, ``trials_count``, ``failed_count``, ``vary`` (name -> DIST text),
   ``versions``;
