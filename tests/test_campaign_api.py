@@ -148,6 +148,21 @@ def test_a_distribution_built_in_python_is_checked_and_kept_by_its_values(tmp_pa
             spec(dist, "tool.y" if "2um" in dist.text else "microscope.sigma")
 
 
+def test_a_refused_python_distribution_shows_both_of_its_numbers():
+    """``Distribution("poisson", 1, 2)`` was refused as ``poisson:1.0m``, its second number
+    dropped; a fixed one with a second number was taken, the number ignored."""
+    from machinesim.campaign import Distribution
+    from machinesim.campaign.distributions import checked
+
+    with pytest.raises(InputError, match=r"tool\.y=poisson:1\.0m,2\.0m'"):
+        checked("tool.y", Distribution("poisson", 1, 2))
+    with pytest.raises(InputError, match=r"fixed takes 1 number\(s\), got 2"):
+        checked("tool.y", Distribution("fixed", 1e-6, 3e-6))
+    with pytest.raises(InputError, match="'x'; expected numbers in SI"):
+        checked("tool.y", Distribution("normal", "x", 1e-6))
+    assert checked("tool.y", Distribution("fixed", 1e-6)).text == "fixed:1e-06m"
+
+
 class _Clock:
     def __init__(self) -> None:
         self.now = 1000.0

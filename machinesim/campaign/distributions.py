@@ -191,8 +191,17 @@ def checked(name: str, dist: Distribution) -> Distribution:
         As `parse_distribution`, or for a text that says other values than the object's.
     """
     unit = "rad" if parameter_kind(name) == "angle" else "m"
-    values = f"{float(dist.a)!r}{unit}" + (f",{float(dist.b)!r}{unit}"
-                                          if KINDS.get(dist.kind) == 2 else "")
+    for number in (dist.a, dist.b):
+        if isinstance(number, bool) or not isinstance(number, (int, float, np.floating,
+                                                               np.integer)):
+            raise InputError(f"a Distribution({dist.kind!r}, {dist.a!r}, {dist.b!r}) with "
+                             f"{number!r}; expected numbers in SI (m or rad)",
+                             key=f"--vary {name}")
+    # b is written whenever the kind takes it, the kind is unknown, or it was given: the
+    # message shows what the user gave (poisson 1, 2 read as poisson:1.0m), and a fixed one
+    # with a second number is refused, not drawn without it
+    values = f"{float(dist.a)!r}{unit}" + (
+        f",{float(dist.b)!r}{unit}" if KINDS.get(dist.kind) != 1 or dist.b != 0 else "")
     parsed = parse_distribution(dist.text or f"{dist.kind}:{values}", name)
     if dist.text and (parsed.kind != dist.kind or not all(
             math.isclose(x, y, rel_tol=1e-12, abs_tol=0.0)
