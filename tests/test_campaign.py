@@ -552,6 +552,42 @@ def test_trial_files_without_campaign_json_are_not_taken_for_this_campaign(campa
     assert not (tmp_path / "campaign.json").exists()
 
 
+def test_a_trial_file_of_another_campaign_is_refused_naming_it(campaign, tmp_path,
+                                                                 monkeypatch):
+    """A trial file held no campaign's identity: seed 11's trial_000001.json copied into a
+    seed 12 folder was taken as seed 12's trial 1 (its draws, its identification)."""
+    from machinesim.campaign.results import campaign_id
+
+    source, vary, ds = campaign
+    stored = json.loads((source / "campaign.json").read_text())
+    record = json.loads((source / "trials/trial_000001.json").read_text())
+    assert record["campaign"] == campaign_id(stored) == campaign_id(dict(reversed(
+        stored.items())))  # of the spec's values, not its keys' order
+    assert campaign_id({**stored, "seed": 12}) != record["campaign"]
+    run("tool_rotation_arm", 1, vary=vary, seed=12, out=tmp_path, workers=0, progress=False,
+        report=False, **ARM)
+    (tmp_path / "trials/trial_000001.json").write_bytes(
+        (source / "trials/trial_000001.json").read_bytes())
+    ran = trials_run(monkeypatch)
+    with pytest.raises(InputError) as info:
+        run("tool_rotation_arm", 2, vary=vary, seed=12, out=tmp_path, workers=0,
+            progress=False, report=False, **ARM)
+    message = str(info.value)
+    assert "trial_000001.json" in message and "of another campaign" in message
+    assert record["campaign"] in message and ran == []
+    # a file written before trial files held the identity is the folder's, as before
+    (tmp_path / "trials/trial_000001.json").unlink()
+    for name in ("campaign.json", "trials/trial_000000.json", "trials/trial_000001.json"):
+        (tmp_path / "old" / name).parent.mkdir(parents=True, exist_ok=True)
+        old = json.loads((source / name).read_text())
+        old.pop("campaign", None)
+        (tmp_path / "old" / name).write_text(json.dumps(old))
+    again = run("tool_rotation_arm", 2, vary=vary, seed=11, out=tmp_path / "old", workers=0,
+                progress=False, report=False, **ARM)
+    assert ran == [] and np.array_equal(again["identified"].values,
+                                        ds["identified"].values[:2])
+
+
 def test_a_scenario_report_folder_is_refused_not_written_over(tmp_path):
     # a campaign given a scenario's report folder wrote its summary.json and summary.md over
     # the scenario's, and trials/ and campaign.nc among its files

@@ -1,8 +1,9 @@
 """A campaign's files: one small file per finished trial, then the whole as an xarray Dataset.
 
 ``DIR/campaign.json`` holds the spec (what the campaign runs); ``DIR/trials/trial_NNNNNN.json``
-one trial's record (`machinesim.campaign.trials.run_trial`), each written atomically as the
-trial completes (`machinesim._io.write_atomic`). Run again on the same DIR, a campaign reads
+one trial's record (`machinesim.campaign.trials.run_trial`) with the campaign's identity
+(`campaign_id`), each written atomically as the trial completes
+(`machinesim._io.write_atomic`). Run again on the same DIR, a campaign reads
 the trials already there and computes only the missing ones; a DIR holding another campaign
 (another procedure, seed or distribution) is refused, never mixed; a distribution spelt
 otherwise (``10nm``, ``0.01um``) is the same one (`same_campaign`). While a campaign runs it
@@ -16,6 +17,7 @@ refused.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import math
 import os
@@ -30,8 +32,9 @@ from machinesim.campaign.assembly import Assembly, assemble, versions  # re-expo
 from machinesim.exceptions import FileError, InputError, brief
 from machinesim.experiment import note_kind  # re-exported
 
-__all__ = ["LOCK_NAME", "Assembly", "CampaignFolder", "assemble", "finished_trials", "locked",
-           "note_kind", "refuse_foreign", "same_campaign", "versions"]
+__all__ = ["LOCK_NAME", "Assembly", "CampaignFolder", "assemble", "campaign_id",
+           "finished_trials", "locked", "note_kind", "refuse_foreign", "same_campaign",
+           "versions"]
 
 
 def _clean(value):
@@ -95,6 +98,7 @@ class CampaignFolder:
         else:
             write_atomic(stored, json_text(spec, "campaign spec"))
         self.spec = spec
+        self.id = campaign_id(spec)
 
     def trial_file(self, i: int) -> Path:
         return self.trials_path / f"trial_{i:06d}.json"
@@ -107,7 +111,7 @@ class CampaignFolder:
     def write_trial(self, record: dict) -> dict:
         """Write ``record``; return it as `read_trial` reads it back (NaN for what JSON
         holds as null), so that the run need not read it again."""
-        stored = _clean(record)
+        stored = _clean({**record, "campaign": self.id})
         write_atomic(self.trial_file(record["trial"]), json_text(stored, "trial"))
         return {**_nan(stored), "error": stored.get("error")}
 
@@ -116,7 +120,19 @@ class CampaignFolder:
         if not isinstance(raw, dict) or raw.get("trial") != i:
             raise InputError(f"expected the record of trial {i}", source=str(self.trial_file(i)))
         _check_record(raw, self.trial_file(i))
+        self._check_campaign(raw.get("campaign"), self.trial_file(i))
         return {**_nan(raw), "error": raw.get("error")}
+
+    def _check_campaign(self, found, path: Path) -> None:
+        """Refuse a trial file written by another campaign (`campaign_id`): one copied from
+        another campaign's folder under the same name was taken as this one's trial. A file
+        without the key, written before trial files held it, is taken as the folder's."""
+        if found is None or found == self.id:
+            return
+        raise InputError(f"{brief(repr(found))}: the trial file of another campaign (this "
+                         f"folder's campaign.json is campaign {self.id}); copied from "
+                         "another campaign's folder? delete it and run again to compute the "
+                         "trial anew", source=str(path), key="campaign")
 
     def write_dataset(self, dataset, name: str = "campaign.nc") -> Path:
         path = self.path / name
@@ -256,6 +272,14 @@ def _lock_holder(path: Path) -> tuple[int, str] | None:
             or not isinstance(host, str):
         return None
     return pid, host
+
+
+def campaign_id(spec: dict) -> str:
+    """The identity of the campaign ``spec`` (campaign.json's): the first 16 hex digits of
+    the SHA-256 of its JSON with sorted keys, which each trial file holds as ``campaign``
+    (procedure, seed, noise, options and DIST texts, as campaign.json spells them)."""
+    text = json.dumps(spec, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def same_campaign(old: dict, new: dict) -> bool:
