@@ -21,7 +21,7 @@ from machinesim.cam.prisms import CalibrationPlan, PrismPattern
 from machinesim.exceptions import InputError
 from machinesim.metrology import MeshIndex, fit_v_groove
 from machinesim.metrology.prisms import SIGMA_FLOOR_M, fit_apexes
-from machinesim.units import M_PER_MM
+from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = [
     "AlignedMicroscope", "AngleReading", "PatternReading", "level_on_land",
@@ -31,6 +31,10 @@ __all__ = [
 #: The coarse search calls a ramp groove found where the section is this deep (m): 160
 #: microscope noise sigmas (12 nm), yet shallow enough to be met early on the ramp.
 FIND_DEPTH_M = 2e-6
+#: Noise of a coarse section whose std times this reaches `FIND_DEPTH_M` reads dips of that
+#: depth where there is no groove: at 6 std, one chance in 1e9 a reading, some 1e-4 over
+#: the 2600 readings of a section and a hundred stations (a 1 mm capture's window).
+NOISE_FINDS = 6.0
 #: Depth step (m) between the coarse sections that look for the start of a ramp groove: the
 #: whole V of a 90-deg tool stays visible up to 24 um deep at 40 deg (its flank top).
 SCAN_DEPTH_M = 10e-6
@@ -224,6 +228,17 @@ def stage_rotation(index, plan: CalibrationPlan, microscope) -> float:
     return -math.atan2(y2 - y1, x2 - x1)
 
 
+def height_scatter(h) -> float:
+    """The robust standard deviation (m) of a section's heights ``h`` about a piecewise
+    straight profile: 1.4826 x the median |second difference| / sqrt(6) (iid noise of std s
+    gives second differences of std sqrt(6) s), which the land and a V's flanks, straight,
+    leave at zero but at their few kinks; NaN with fewer than 3 readings (off the part)."""
+    h = np.asarray(h, dtype=np.float64)
+    d2 = h[:-2] - 2.0 * h[1:-1] + h[2:]
+    d2 = d2[np.isfinite(d2)]
+    return float(1.4826 * np.median(np.abs(d2)) / math.sqrt(6.0)) if d2.size else math.nan
+
+
 def _section(index, microscope, x: float, y0: float, y1: float, spacing=None):
     """A section across Y at ``x``: (y, height below the land's median)."""
     prof = microscope.profile(index, (x, y0), (x, y1), spacing=spacing)
@@ -255,11 +270,22 @@ def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading
     x_stations = x_a + (plan.search + dz_guess + np.array(plan.station_depths)) / plan.slope
     # not found, or already cut at the first station (the edge may start below the surface)
     if first == 0 or x_stations.max() >= x_b:
-        raise InputError(f"{where}: the groove does not start on the ramp; the edge's offset "
-                         f"|(e_ys, r - r0)| exceeds the plan's capture range "
-                         f"{plan.capture / M_PER_MM:g} mm (search range {plan.search:g} m): "
-                         "give a larger CalibrationPlan(capture=...) (scenario: --capture-mm)",
-                         key="capture")
+        beyond = (f"the edge's offset |(e_ys, r - r0)| exceeds the plan's capture range "
+                  f"{plan.capture / M_PER_MM:g} mm (search range {plan.search:g} m): give a "
+                  "larger CalibrationPlan(capture=...) (scenario: --capture-mm)")
+        scatter = height_scatter(coarse(stations[0])[1])
+        if not NOISE_FINDS * scatter >= FIND_DEPTH_M:
+            raise InputError(f"{where}: the groove does not start on the ramp; {beyond}",
+                             key="capture")
+        # a microscope's noise of 1 mm was refused as an offset beyond the capture range:
+        # the first section's noise read as a dip of FIND_DEPTH_M, a groove found at once
+        raise InputError(f"{where}: the groove does not start on the ramp; the section's "
+                         f"heights scatter by {scatter / M_PER_UM:.3g} um (robust std of "
+                         "their second differences, at the ramp's first station), where a "
+                         f"dip of {FIND_DEPTH_M / M_PER_UM:g} um finds a groove: a scatter of "
+                         f"{FIND_DEPTH_M / NOISE_FINDS / M_PER_UM:.2g} um or more reads such "
+                         "dips where there is none, so the microscope's readings are likely "
+                         f"too noisy to find it; else {beyond}", key="microscope")
     rows = []
     floor = microscope.readout.resolution / math.sqrt(12.0)
     # Each fine section is its own placement of the stage (its stated positioning, in x and
