@@ -406,10 +406,10 @@ def test_an_error_written_in_si_in_a_micrometre_key_is_noted(tmp_path, capsys):
     code, _, err = run(["cut", GROOVES, *CUT, "--errors", slip, "--out", tmp_path / "a.ply"],
                        capsys)
     assert code == 0, err
-    assert (f"note: {slip}, line 4: location.C.EX0C_um = 4e-06 is at most 4e-09 mm "
+    assert (f"note: {slip}, line 4: location.C.EX0C_um = 4e-06 is at most 4e-06 um "
             "(4e-12 m), below anything a machine shows: was it written in m, where the key "
             "asks um?") in err, err
-    assert (f"note: {slip}, line 2: tool.offset_um = [0.0, 3e-06, 0.0] is at most 3e-09 mm "
+    assert (f"note: {slip}, line 2: tool.offset_um = [0.0, 3e-06, 0.0] is at most 3e-06 um "
             "(3e-12 m)" in err), err
     assert "EA0C_urad" not in err
     code, _, err = run(["cut", GROOVES, *CUT, "--errors", ROOT / "models" / "errors" /

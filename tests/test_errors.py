@@ -715,6 +715,22 @@ def test_key_lines_of_every_shape_are_counted_as_by_hand():
     assert key_lines("[tool]\noffset_um = '") == {}
 
 
+def test_a_value_below_any_machine_is_noted_in_its_keys_unit_with_si_beside(tmp_path):
+    """A key in um, urad, deg or nm: its note gave the size in mm or deg ('4e-09 mm (4e-12 m)'
+    for EX0C_um = 4e-6), a unit the file never wrote. By hand: 4e-6 um = 4e-12 m, 2e-6 urad =
+    2e-12 rad, 1e-10 deg = 1e-10 pi / 180 = 1.74533e-12 rad, 0.004 nm = 4e-12 m; a key in m
+    keeps mm first, m beside, as every message does for SI."""
+    from machinesim.errors.toml import below_any_machine
+
+    path = tmp_path / "slip.toml"
+    path.write_text("[tool]\noffset_m = [0.0, 3e-12, 0.0]\n[location.C]\nEX0C_um = 4e-6\n"
+                    "EA0C_urad = 2e-6\nEB0C_deg = 1e-10\nEY0C_nm = 0.004\n")
+    sizes = [line.split(" is at most ")[1].split(", below")[0]
+             for line in below_any_machine(ErrorModel.from_toml(path))]
+    assert sizes == ["3e-09 mm (3e-12 m)", "4e-06 um (4e-12 m)", "2e-06 urad (2e-12 rad)",
+                     "1e-10 deg (1.74533e-12 rad)", "0.004 nm (4e-12 m)"]
+
+
 def test_a_misfit_on_a_machine_names_the_line_of_the_key(tmp_path):
     from machinesim.machines import load_machine
     from machinesim.tool_specs import tool_from_spec

@@ -247,7 +247,7 @@ def test_paper_000_reads_its_errors_file_once_and_notes_it_once(tmp_path):
     notes = [line for line in result.stderr.splitlines() if ": note: " in line]
     assert notes == [f"tool_rotation_arm: note: {path}, line 2: location.A.EY0A_um = 4e-06 is "
                      "at most "
-                     "4e-09 mm (4e-12 m), below anything a machine shows: was it written in m, "
+                     "4e-06 um (4e-12 m), below anything a machine shows: was it written in m, "
                      "where the key asks um?"]
 
 
@@ -279,7 +279,7 @@ def test_papers_003_004_note_an_errors_file_that_reads_as_no_error(tmp_path):
         name = script.removesuffix(".py")
         assert result.returncode == 2, result.stderr
         assert result.stderr.splitlines() == [
-            f"{name}: note: {path}, line 2: location.C.EX0C_um = 4e-06 is at most 4e-09 mm "
+            f"{name}: note: {path}, line 2: location.C.EX0C_um = 4e-06 is at most 4e-06 um "
             "(4e-12 m), "
             "below anything a machine shows: was it written in m, where the key asks um?",
             f"{name}: error: {path}, line 3, key 'location.A': axis 'A' is not on this machine; "

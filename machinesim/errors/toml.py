@@ -96,8 +96,10 @@ def below_any_machine(model: ErrorModel) -> list[str]:
         if size.size and size.max() > 0.0 and size.max() < SMALLEST_WRITTEN_ERROR_SI:
             si = "m" if is_length(unit) else "rad"
             shown = np.asarray(value, dtype=np.float64).tolist()
-            lines.append(f"{_noted_at(model, field)}{key} = {shown!r} is at most "
-                         f"{_shown(float(size.max()), si)}, "
+            largest = float(size.max())  # in the key's unit, SI beside (mm or deg first for SI)
+            reach = (_shown(largest, si) if unit == si else
+                     f"{_shown(largest, unit)} ({largest:g} {si})")
+            lines.append(f"{_noted_at(model, field)}{key} = {shown!r} is at most {reach}, "
                          "below anything a machine shows: was it written in "
                          f"{si}, where the key asks {unit}?")
     return lines
