@@ -1149,6 +1149,66 @@ def test_a_live_viewer_stopped_after_its_screenshot_says_the_screenshot_stays(tm
     assert shot.read_bytes() == b"png"
 
 
+#: A stand-in live server: the real one (`machinesim.viewer.server`), which ends by itself half
+#: a second after a browser fetched its page, as a crash (exit status 3) or as the kernel's
+#: out-of-memory killer ends it (SIGKILL), with no Ctrl-C.
+STAND_IN_SERVER = ("import os, signal, sys, threading\n"
+                   "import machinesim.viewer.server as server\n"
+                   "page = server.LoopbackBridge.page\n"
+                   "def served(self):\n"
+                   "    threading.Timer(0.5, lambda: {end}).start()\n"
+                   "    return page(self)\n"
+                   "server.LoopbackBridge.page = served\n"
+                   "server.main(sys.argv[1:])\n")
+
+
+@pytest.mark.parametrize(("end", "said", "shot"), [
+    ("os._exit(3)", "exit status 3", False),
+    ("os.kill(os.getpid(), signal.SIGKILL)", "killed by SIGKILL", False),
+    ("os._exit(3)", "exit status 3", True)], ids=["exit", "killed", "screenshot"])
+def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(end, said, shot,
+                                                                       tmp_path):
+    # a server that died while serving (not by Ctrl-C) left `machinesim view` to exit 0
+    # without a word, its page gone; now one line with the server's exit code, status 1,
+    # naming a --screenshot written before (Chromium stood in for as above)
+    import contextlib
+    import subprocess
+    import sys
+
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+    server = STAND_IN_SERVER.format(end=end)
+    script = ("import sys\n"
+              "import machinesim.viewer.cli as view\n"
+              "view._screenshot = lambda url, ready, path: path.write_bytes(b'png')\n"
+              "import machinesim.viewer.live as live\n"
+              "live.server_command = lambda port=None: [sys.executable, '-u', '-c', "
+              f"{server!r}, *([] if port is None else ['--port', str(port)])]\n"
+              "from machinesim.cli import main\n"
+              "sys.exit(main(sys.argv[1:]))\n")
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    png = tmp_path / "live.png"
+    process = subprocess.Popen([sys.executable, "-c", script, "view", str(tmp_path / "part.ply"),
+                                "--port", str(_unused_port()),
+                                *(["--screenshot", str(png)] if shot else [])],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        line = process.stdout.readline()
+        assert line.startswith("machinesim viewer at http://127.0.0.1:"), line
+        url = line.split()[3]
+        with contextlib.suppress(OSError):  # the page, as a browser fetches it: the end's cue
+            urllib.request.urlopen(url, timeout=10).close()
+        _, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 1
+    kept = f"; its screenshot {png} written before" if shot else ""
+    assert err == (f"machinesim: error: the live viewer server ended without Ctrl-C ({said}); "
+                   f"{url} no longer answers{kept}\n")
+    assert png.exists() == shot
+
+
 def test_a_port_in_use_is_named(tmp_path):
     # 'machinesim view PART --port 7000' with 7000 taken said "... Address already in use;
     # is the port free? try --port, ...", not naming the port the user had given

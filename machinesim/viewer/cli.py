@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import signal
 import sys
 from pathlib import Path
 
@@ -148,7 +149,8 @@ def run_view(args: argparse.Namespace) -> int:
             _screenshot(session.url, f"viewer.num_messages_received >= {session.messages}",
                         args.screenshot)
             shot = args.screenshot
-        if session.wait() is None:  # Ctrl-C, which ended the server: exit 130 (it had been 0)
+        ended = session.wait()
+        if ended is None:  # Ctrl-C, which ended the server: exit 130 (it had been 0)
             raise KeyboardInterrupt
     except KeyboardInterrupt as stop:  # SIGTERM too (`Terminated`): 143
         if shot is None:
@@ -159,7 +161,23 @@ def run_view(args: argparse.Namespace) -> int:
         return status
     finally:
         session.close()
-    return 0
+    # the server ended though nobody stopped it (it crashed, or was killed): the page no
+    # longer answers, and the command had exited 0 without a word
+    kept = "" if shot is None else f"; its screenshot {shot} written before"
+    print(f"machinesim: error: the live viewer server ended without Ctrl-C "
+          f"({_exit_text(ended)}); {session.url} no longer answers{kept}", file=sys.stderr)
+    return 1
+
+
+def _exit_text(code: int) -> str:
+    """A process's exit code (`subprocess.Popen.returncode`) in words: ``exit status 3``,
+    or ``killed by SIGKILL`` for -9 (a signal ended it)."""
+    if code >= 0:
+        return f"exit status {code}"
+    try:
+        return f"killed by {signal.Signals(-code).name}"
+    except ValueError:  # no signal Python names
+        return f"killed by signal {-code}"
 
 
 def _scene(args, budget: int):
