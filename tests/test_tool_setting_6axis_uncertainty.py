@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+import machinesim.identification.tool_setting_6axis_uncertainty as uncertainty
 from machinesim import ErrorModel, Lab
 from machinesim.cam.tool_setting_plates import SET_LENGTH, mark_point
 from machinesim.experiment import run
@@ -103,6 +104,40 @@ def test_the_propagation_through_the_fit_is_its_own_covariance(readings):
     std = propagated_std(lambda a, c, b: fit_check(machine, a, c, b).values, a, c, b,
                          SET_LENGTH)
     np.testing.assert_allclose(std, check.std, rtol=1e-4)
+
+
+def test_the_propagated_std_holds_at_three_times_the_step_either_way(readings, monkeypatch):
+    """The step is on the plateau: the std the procedure states (the fit's own covariance
+    with the registration propagated through the fit, and the paper's) moves neither with a
+    step 3x smaller (round-off) nor 3x larger (truncation). The lab's sigmas (1 um per
+    reading, depths 3-7 nm) and registration (5 um, 1 mrad) give tool.y's fit std 3.4 nm,
+    2.0 nm of it from the registration, mostly through plate a's turn: a small column, off
+    by 1e-3 eps / h with the fit's eps ~ 4e-17 m, so by at most ~7e-13 m over the three turns
+    at h / 3 = 1e-7 (PROPAGATION_STEP's note; here 9e-14 m); from the old step, 1e-9, it
+    moved by 3.3e-12 m at 3e-9 and by 3.4e-11 m at 3.3e-10. The paper's formulas are
+    truncation-limited: 5e4 h^2 relative, 4e-8 at 3h (here 3.7e-8 on C centre y)."""
+    procedure, m = readings
+    machine = procedure._machine()
+    a = with_sigma(m.a, point=1 * UM, end=1 * UM, depth=6e-9)
+    c = with_sigma(m.c, point=1 * UM, depth=7e-9)
+    b = with_sigma(m.b, point=1 * UM, depth=3e-9)
+    registration = dict.fromkeys("acb", RegistrationScatter(5 * UM, 10 * UM, 1e-3, 0.2e-3))
+    own = fit_check(machine, a, c, b).std
+
+    def stated(step):
+        monkeypatch.setattr(uncertainty, "PROPAGATION_STEP", step)
+        frames = propagated_std(lambda a, c, b: fit_check(machine, a, c, b).values, a, c,
+                                b, SET_LENGTH, registration, own_errors=False)
+        paper = paper_std(m, a, c, b, registration)
+        return np.hypot(own, frames), np.array(list(paper.values()))
+
+    h = uncertainty.PROPAGATION_STEP
+    fit, paper = stated(h)
+    assert fit[1] > 3e-9 and paper.min() > 1e-8    # m: the registration's small column
+    for step in (h / 3.0, 3.0 * h):
+        other_fit, other_paper = stated(step)
+        np.testing.assert_allclose(other_fit, fit, rtol=1e-6, atol=1e-12)
+        np.testing.assert_allclose(other_paper, paper, rtol=1e-6)
 
 
 def test_a_lab_with_a_registered_stage_errs_within_the_stated_uncertainty():

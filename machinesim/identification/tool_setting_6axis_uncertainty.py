@@ -52,15 +52,27 @@ __all__ = ["PLATES", "PROPAGATION_STEP", "after_std", "propagated_std"]
 #: mark), the B grooves. The C and B plates are cut with the A sets' dx, dy compensated.
 PLATES = ("a", "c", "b")
 #: Step of the central differences (m for readings and offsets, rad for the registration's
-#: turn): the formulas are linear (A sets, eqs 1-2) or, for the triangle, curved on the
-#: scale of the 10 mm plate, so a 1 nm (1 nrad) step is exact to ~1e-7 relative in
-#: truncation. Round-off is larger than the readings' own (1e-19 m on a few mm): the values
-#: differenced come out of fits, which agree with themselves to ~4e-17 m, so a column is
-#: known to ~4e-8 absolute (m per m), and a small one (the registration's columns of tool.y,
-#: ~1e-5) to ~0.3 %: the std of tool.y moved 3.3261 -> 3.3288 nm when the fit's readings
-#: were batched (bit-near, 3e-19 m apart). A larger step or an analytic propagation would
-#: end it.
-PROPAGATION_STEP = 1e-9
+#: turn), from the plateau where neither round-off nor truncation limits them (scanned
+#: 1e-10 .. 1e-5 in factors of sqrt(10) on the scenario's defaults, `--budget off`):
+#:
+#: - round-off ~ eps / h: the values differenced come out of fits, which agree with
+#:   themselves to eps ~ 4e-17 m (measured: column x h scatters 1e-17 .. 3.5e-17 m at every
+#:   step), so a column is off by eps / h. It matters where a column is small: tool.y's fit
+#:   std (3.344 nm) holds 1.9 nm from the registration, 1.8 nm of it through plate a's turn
+#:   (1.8e-6 m/rad times 1 mrad), which is off by 1e-3 eps / h: 0.016 nm at h = 1e-9 (printed
+#:   3.3288 nm), 1e-4 nm at 1e-7 (3.3445), 2e-5 nm at 3e-7 (3.3444, the limit 3.344395 that
+#:   1e-6 .. 1e-5 give to 1e-6 nm). The paper's formulas (and Table 1's after std) take
+#:   readings, 1e-19 m on mm: there it is below 3e-8 relative at every step.
+#: - truncation ~ h^2 f''' / 6 f': the paper's formulas are curved on a ~2 mm scale (C
+#:   centre y's std grows as 5e4 h^2 relative: +9e-5 nm of 1728.821 at h = 1e-6, +8e-3 nm at
+#:   1e-5; Table 1's after std alike, 5.6e-6 relative at 1e-5); the fit stays within 1e-6
+#:   relative up to 1e-5.
+#:
+#: Both are below the printed 1e-4 nm from 2e-7 to 7e-7; at 3e-7 every printed std is its
+#: limit (the largest moves: tool.y's fit std 2e-5 nm by round-off, C centre y's paper std
+#: 8e-6 nm by truncation); 3x smaller moves tool.y's fit std by 1.3e-4 nm, 3x larger C centre
+#: y's paper std by 6.5e-5 nm (tests/test_tool_setting_6axis_uncertainty.py holds both).
+PROPAGATION_STEP = 3e-7
 
 Plates = tuple[Sequence[GrooveReading], Sequence[GrooveReading], Sequence[GrooveReading]]
 
