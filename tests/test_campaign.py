@@ -284,6 +284,42 @@ def test_a_parameter_the_procedure_never_reads_is_refused():
             assert set(uses) <= set(LAB_USES), name
 
 
+@pytest.mark.parametrize(("vary", "shown"), [
+    ("tool.y=5m", "its value"),
+    ("tool.y=uniform:2m,3m", "every value it draws"),
+    ("tool.y=uniform:-3m,-1.5m", "every value it draws"),
+    ("workpiece.alpha=uniform:200deg,300deg", "every value it draws"),
+    ("tool.y=normal:-2m,1m", "its mean"),  # the centre beyond: refused, tails or not
+])
+def test_a_distribution_the_error_model_refuses_every_draw_of_is_refused_before_trials(
+        vary, shown):
+    # campaign --vary tool.y=5m ran every trial to the same ErrorModelError, then exited 1;
+    # the bound is errors.LARGEST_ERROR: 1 m, 180 deg either way
+    bound = "180 deg" if "deg" in vary else "1000 mm (1 m)"
+    with pytest.raises(InputError, match="error model takes") as info:
+        CampaignSpec("tool_setting_6axis", 2, (parse_vary(vary),))
+    message = str(info.value)
+    assert f"--vary {vary}" in message and shown in message
+    assert f"expected at most {bound}" in message and "either way" in message
+
+
+@pytest.mark.parametrize("vary", ["tool.y=fixed:1m", "tool.y=uniform:-5m,5m",
+                                  "tool.y=normal:0,2m", "tool.y=normal:0.9m,1m"])
+def test_a_distribution_some_of_whose_draws_the_error_model_takes_is_left_to_its_trials(vary):
+    # at the bound (1 m) and across it: some trials may run, those beyond fail one by one
+    spec = CampaignSpec("tool_setting_6axis", 2, (parse_vary(vary),))
+    assert spec.vary[0][0] == "tool.y"
+
+
+def test_cli_a_distribution_beyond_the_error_model_runs_no_trial(tmp_path, capsys):
+    out = tmp_path / "c"
+    status = cli_main(["campaign", "tool_setting_6axis", "--trials", "2", "--workers", "0",
+                       "--quiet", "--vary", "tool.y=5m", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and "key '--vary tool.y=5m'" in err and "(1 m)" in err
+    assert not out.exists()
+
+
 # ----------------------------------------------------------- trials, determinism, resume
 
 

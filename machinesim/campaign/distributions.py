@@ -26,11 +26,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, MachineSimError
 from machinesim.units import ANGLE, FACTORS, LENGTH
 
 __all__ = ["Distribution", "INSTRUMENTS", "LAB_PARAMETERS", "checked", "parameter_kind",
-           "parse_distribution", "parse_vary"]
+           "parse_distribution", "parse_vary", "refuse_beyond_model"]
 
 #: Instruments of a `Lab` whose noise ``sigma`` a campaign can set (``microscope.sigma``).
 INSTRUMENTS = ("microscope", "white_light_interferometer", "touch_probe",
@@ -224,3 +224,45 @@ def parse_vary(text: str) -> tuple[str, Distribution]:
         raise InputError(f"--vary {text!r} names no parameter; expected PARAM=DIST",
                          key="--vary")
     return name, parse_distribution(dist, name)
+
+
+def _nearest(dist: Distribution) -> float | None:
+    """The value a refusal of ``dist`` by the error model looks at: one no draw is nearer
+    zero than, on the side every draw lies on (a fixed value; a uniform's LOW or HIGH, the
+    one nearer zero, when LOW..HIGH leaves zero out), or a normal's mean (its tails reach
+    any value: it is refused when its centre is, not for its tails); None for a uniform
+    across zero, some of whose draws any bound takes."""
+    if dist.kind == "uniform":
+        return dist.a if dist.a > 0.0 else dist.b if dist.b < 0.0 else None
+    return dist.a
+
+
+def refuse_beyond_model(vary, model) -> None:
+    """Refuse a varied error parameter whose every draw the error model refuses
+    (`machinesim.errors.LARGEST_ERROR`, 1 m and 180 deg either way, or the key's own
+    bound: what `ErrorModel.with_parameters` refuses), before any trial runs; a normal
+    whose mean it refuses too. Lab parameters (`LAB_PARAMETERS`) are not the model's.
+
+    ``campaign --vary tool.y=5m`` ran every trial to the same refusal, then exited 1: a
+    campaign of failures, each trial's time spent to learn what the text already said.
+    Draws of a normal whose mean the model takes, or of a uniform across zero, reach
+    within the bound: those beyond it fail their trials one by one, as before.
+
+    Raises
+    ------
+    InputError
+        Naming the ``--vary`` text, and the model's refusal: the bound and its unit.
+    """
+    for name, dist in vary:
+        value = None if name in LAB_PARAMETERS else _nearest(dist)
+        if value is None:
+            continue
+        try:
+            model.with_parameters({name: value})
+        except MachineSimError as error:
+            which = {"fixed": "its value", "normal": "its mean"}.get(
+                dist.kind, "every value it draws")
+            fail = "half its trials or more" if dist.kind == "normal" else "every trial"
+            raise InputError(f"{which} is beyond what the error model takes, so {fail} "
+                             f"would fail: {getattr(error, 'message', error)}",
+                             key=f"--vary {name}={dist.text}") from None

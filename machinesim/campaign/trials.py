@@ -38,6 +38,7 @@ from machinesim.campaign.distributions import (
     LAB_PARAMETERS,
     Distribution,
     checked,
+    refuse_beyond_model,
 )
 from machinesim.exceptions import InputError, MachineSimError, MachineSimWarning
 from machinesim.experiment import Evaluation, Identified, run
@@ -345,6 +346,7 @@ class CampaignSpec:
                 raise InputError(f"--vary {name}: {what} never reads it ({why}); expected one "
                                  f"of the parameters {what} uses: {_listed(used)}",
                                  key="--vary")
+        refuse_beyond_model(vary, self.entry.base())  # before any trial fails on it
 
     @property
     def entry(self) -> ProcedureEntry:
