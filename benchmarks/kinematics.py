@@ -5,7 +5,10 @@ Run: ``.venv/bin/python benchmarks/kinematics.py`` (prints medians of several ru
 Compares, in the same run, the batched evaluator with a Python loop over Pinocchio's
 forwardKinematics on the same error-augmented model; and the inverse kinematics of a
 program's poses (each started from its nominal axis values, as model-based compensation
-does) solved in one batch against the same poses solved one at a time.
+does) solved in one batch against the same poses solved one at a time; and the poses of
+paper 002's crown program as `cut_turned` takes them, one `tool_pose` call per feed segment
+(before) against `Machine.tool_poses` of each C group's segments (now), alternating, checked
+equal bit for bit.
 """
 
 from __future__ import annotations
@@ -50,6 +53,7 @@ def main() -> None:
           f"{N / loop / 1e6:6.2f} M poses/s  (median of 3 x {n_loop}, scaled)")
     print(f"  speed-up: {loop / batched:.1f}x")
     inverse(machine, rng)
+    crown_segments()
 
 
 def inverse(machine, rng, n: int = 5_000, n_loop: int = 300) -> None:
@@ -77,6 +81,58 @@ def inverse(machine, rng, n: int = 5_000, n_loop: int = 300) -> None:
     print(f"  one pose at a time (Pinocchio): {looped * 1e3:8.1f} ms  "
           f"{n / looped / 1e3:6.1f} k poses/s  (median of 3 x {n_loop}, scaled)")
     print(f"  speed-up: {looped / batched:.1f}x")
+
+
+def crown_segments(repeats: int = 5) -> None:
+    """Paper 002's crown after compensation (`make demo`'s default run, seed 0): the poses
+    of its feed segments, grouped by C as `machinesim.cutting.cut_turned` groups them."""
+    import importlib.util
+    import math
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from machinesim import Lab, motion
+    from machinesim.cam.crown import PARK
+    from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
+    from machinesim.realism import Realism
+
+    path = Path(__file__).resolve().parents[1] / "scenarios" / "workpiece_setting.py"
+    spec = importlib.util.spec_from_file_location("workpiece_setting_scenario", path)
+    scenario = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(scenario)
+    defaults = SimpleNamespace(robot_repeatability_um=None, delta_um=None, rot_deg=None,
+                               crown_delta_um=None, crown_rot_deg=None, errors=None, seed=0)
+    machine = load_machine("robonano_a0ib")
+    errors = scenario.loads(defaults)["crown"]
+    procedure = RobotLoadedWorkpiece("crown")
+    identified = procedure.identify(procedure.measure(Lab(machine, errors, seed=0,
+                                                          realism=Realism.lab())))
+    program = procedure.compensate(identified)["crown_compensated"]
+    tool = procedure.layout(identified.detail.found).tool
+    trajectory = motion.plan(program, machine, errors, start=PARK,
+                             tool_points=tool.vertices())
+    column = machine.axes.index("C")
+    groups: dict[int, list] = {}
+    for segment in trajectory.segments:
+        if segment.kind == "linear":
+            key = round(float(segment.q[0, column]) / (math.pi / 4))
+            groups.setdefault(key, []).append(segment.q)
+    count = sum(len(g) for g in groups.values())
+    each, batched = [], []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        one = [machine.tool_pose(q, errors) for g in groups.values() for q in g]
+        each.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        many = [p for g in groups.values() for p in machine.tool_poses(g, errors)]
+        batched.append(time.perf_counter() - start)
+    same = all(np.array_equal(a, b) for a, b in zip(one, many, strict=True))
+    print(f"robonano_a0ib, paper 002's crown after compensation: {count} feed segments in "
+          f"{len(groups)} C groups (cut_turned's poses)")
+    print(f"  tool_pose per segment:          {statistics.median(each) * 1e3:8.1f} ms  "
+          f"(median of {repeats}, alternating)")
+    print(f"  tool_poses per C group:         {statistics.median(batched) * 1e3:8.1f} ms  "
+          f"bit for bit the same: {same}")
 
 
 if __name__ == "__main__":

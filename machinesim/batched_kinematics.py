@@ -60,6 +60,34 @@ def _cos_sin(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.cos(x), np.sin(x)
 
 
+def _grouped_cos_sin(value: np.ndarray, groups):
+    """`batched_kinematics._cos_sin` applied to each group of rows on its own.
+
+    ``groups``: an int ``g`` (the rows are ``g`` blocks of ``M``, fraction after fraction,
+    and each of the ``M`` columns is a group) or (starts, sizes) of consecutive rows.
+    """
+    low, high = float(value.min()), float(value.max())
+    if max(-low, high) < SERIES_MAX_RAD:
+        return _cos_sin(value)  # every group in series range
+    if low >= SERIES_MAX_RAD or high <= -SERIES_MAX_RAD:
+        return np.cos(value), np.sin(value)  # no group in series range
+    size = np.abs(value)
+    if isinstance(groups, int):
+        series = size.reshape(groups, -1).max(axis=0) < SERIES_MAX_RAD
+        rows = np.tile(series, groups)
+    else:
+        starts, sizes = groups
+        series = np.maximum.reduceat(size, starts) < SERIES_MAX_RAD
+        rows = np.repeat(series, sizes)
+    if not series.any():
+        return np.cos(value), np.sin(value)
+    c, s = np.empty_like(value), np.empty_like(value)
+    c[rows], s[rows] = _cos_sin(value[rows])
+    others = ~rows
+    c[others], s[others] = np.cos(value[others]), np.sin(value[others])
+    return c, s
+
+
 def _relative_pose(rw, pw, rt, pt, out: np.ndarray) -> None:
     """Write into ``out`` (N, 4, 4) the poses of a frame (rotations (3, 3, N), positions
     (3, N) in the world: ``rt``, ``pt``) in the workpiece frame (``rw``, ``pw``)."""
@@ -153,13 +181,15 @@ class BatchedKinematics:
         return ops
 
     @staticmethod
-    def _run(ops: list, q: np.ndarray, joints: list | None = None
+    def _run(ops: list, q: np.ndarray, joints: list | None = None, groups=None
              ) -> tuple[np.ndarray, np.ndarray]:
         """Batched poses: rotations (3, 3, N) and translations (3, N) of the plan's frame.
 
         With a list ``joints``, each varying joint on the way appends ``(kind, source, axis,
         origin)``: its kind ("P" or "R"), value source (as in `_plan`), and its axis
-        direction (3, N) and origin (3, N) in the world frame.
+        direction (3, N) and origin (3, N) in the world frame. With ``groups`` (starts,
+        sizes) of consecutive rows, each group's rotations are evaluated as if it were the
+        whole batch (`_grouped_cos_sin`).
         """
         n = q.shape[0]
         rot = None
@@ -191,7 +221,7 @@ class BatchedKinematics:
                 pos = pos + rot[:, k, :] * value
             else:
                 i1, i2 = (k + 1) % 3, (k + 2) % 3
-                c, s = _cos_sin(value)
+                c, s = _cos_sin(value) if groups is None else _grouped_cos_sin(value, groups)
                 col1, col2 = rot[:, i1, :], rot[:, i2, :]
                 new1 = col1 * c
                 new1 += col2 * s
@@ -293,16 +323,41 @@ class BatchedKinematics:
             rot[start:stop] = np.einsum("kin,kjn->nij", rw, rt)
         return jac, rot
 
-    def poses(self, q: np.ndarray, binding: Binding, frame: str = "tool_tip") -> np.ndarray:
-        """Poses of ``frame`` in the workpiece frame, (N, 4, 4), for axis values (N, n_axes)."""
+    def poses(self, q: np.ndarray, binding: Binding, frame: str = "tool_tip",
+              runs=None) -> np.ndarray:
+        """Poses of ``frame`` in the workpiece frame, (N, 4, 4), for axis values (N, n_axes).
+
+        ``runs``: the row counts of consecutive runs of ``q`` (summing to N), each posed as a
+        call of its own would pose it, bit for bit (its blocks of `_BLOCK` rows deciding
+        the series or ``cos``/``sin`` of each rotation, `_grouped_cos_sin`), in batches of
+        about `_BLOCK` rows: many short runs at the cost of one call.
+        """
         tool_ops = self._plan(frame, binding)
         wp_ops = self._plan("workpiece", binding)
         n = q.shape[0]
         out = np.zeros((n, 4, 4))
         out[:, 3, 3] = 1.0
-        for start in range(0, n, _BLOCK):
-            block = q[start:start + _BLOCK]
-            rt, pt = self._run(tool_ops, block)
-            rw, pw = self._run(wp_ops, block)
-            _relative_pose(rw, pw, rt, pt, out[start:start + _BLOCK])
+        if runs is None:
+            for start in range(0, n, _BLOCK):
+                block = q[start:start + _BLOCK]
+                rt, pt = self._run(tool_ops, block)
+                rw, pw = self._run(wp_ops, block)
+                _relative_pose(rw, pw, rt, pt, out[start:start + _BLOCK])
+            return out
+        # the blocks each run's own call would cut it into, then batches of whole blocks
+        sizes = [min(_BLOCK, size - start) for size in runs
+                 for start in range(0, int(size), _BLOCK)]
+        begin = first = 0
+        while begin < len(sizes):
+            end, rows = begin, 0
+            while end < len(sizes) and (end == begin or rows + sizes[end] <= _BLOCK):
+                rows += sizes[end]
+                end += 1
+            block = q[first:first + rows]
+            local = np.array(sizes[begin:end])
+            groups = (np.concatenate(([0], np.cumsum(local[:-1]))), local)
+            rt, pt = self._run(tool_ops, block, groups=groups)
+            rw, pw = self._run(wp_ops, block, groups=groups)
+            _relative_pose(rw, pw, rt, pt, out[first:first + rows])
+            begin, first = end, first + rows
         return out

@@ -555,3 +555,42 @@ def test_error_jacobian_of_many_poses_asks_pinocchio_for_none(monkeypatch):
     monkeypatch.setattr(machine.kin, "frame_pose", per_pose)
     jac = machine.error_jacobian(q, None, names, point=[0.0, 0.0, 0.01])
     np.testing.assert_array_equal(jac, expected)
+
+
+def test_tool_poses_of_runs_are_each_runs_own_call_bit_for_bit(monkeypatch):
+    """`Machine.tool_poses` poses many runs in one batch as a call per run does. The
+    evaluator picks a series or numpy's sin/cos by the largest angle of each call's block:
+    a run turned 3 mrad about C (series) batched naively with one at 1 rad (cos/sin) comes
+    out other bits; tool_poses keeps each run's, also when a run spans several blocks
+    (`_BLOCK` made 4 here: the 6-row run is two calls' blocks, small then large)."""
+    import machinesim.batched_kinematics as bk
+
+    machine = load_machine("robonano_a0ib")
+    errors = random_errors(machine, np.random.default_rng(3))
+    rng = np.random.default_rng(7)
+
+    def run(c_values):
+        q = np.column_stack([rng.uniform(-1e-3, 1e-3, (len(c_values), 3)),
+                             np.zeros(len(c_values)), c_values])
+        return q
+
+    small = run(np.array([5e-3, 3.5e-3, 5e-3]))  # sin(x) not the series' bits
+    large = run(np.full(2, 1.0))
+    spanning = run(np.array([5e-3, 3.5e-3, 5e-3, 3.5e-3, 1.0, 1.2]))
+    runs = [small, large, spanning, small[:1]]
+    monkeypatch.setattr(bk, "_BLOCK", 4)
+    own = [machine.tool_pose(q) for q in runs]  # nominal: C turns by the values given
+    naive = machine.tool_pose(np.concatenate(runs[:2]))
+    assert not np.array_equal(naive[:3], own[0])  # the choice matters at these angles
+    monkeypatch.setattr(bk, "_BLOCK", 8)
+    assert not np.array_equal(machine.tool_pose(spanning)[:4], own[2][:4])
+    monkeypatch.setattr(bk, "_BLOCK", 4)
+    for model in (None, errors):
+        own = [machine.tool_pose(q, model) for q in runs]
+        batched = machine.tool_poses(runs, model)
+        assert [p.shape for p in batched] == [p.shape for p in own]
+        for got, want in zip(batched, own, strict=True):
+            assert np.array_equal(got, want)
+    assert machine.tool_poses([], errors) == []
+    with pytest.raises(InputError):
+        machine.tool_poses([np.zeros(5)], errors)

@@ -136,7 +136,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         turn = np.eye(4)
         turn[:3, :3] = rot_z(-key * turn_step)
         turned = Part(part.manifold.rotate((0.0, 0.0, -step_deg * key)))
-        paths = [turn @ machine.tool_pose(segment.q, errors) for segment in segments]
+        paths = [turn @ poses for poses in machine.tool_poses([s.q for s in segments], errors)]
         sweep_line = np.repeat([s.line for s in segments], [len(s.q) - 1 for s in segments])
         refuse = None if allow_holder_contact else _holder_refusal(
             getattr(program, "source", None), tool, turned, sweep_line)

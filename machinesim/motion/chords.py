@@ -44,8 +44,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from machinesim._cores import usable_cores
-from machinesim.batched_kinematics import _BLOCK, _cos_sin
-from machinesim.tolerances import SERIES_MAX_RAD
+from machinesim.batched_kinematics import _BLOCK, _grouped_cos_sin
 
 if TYPE_CHECKING:
     from machinesim.motion.steps import Stall
@@ -248,34 +247,6 @@ def _name(binding, var) -> str:
             if component is bound:
                 return f"component.{letter}.{symbol}"
     return "a table"
-
-
-def _grouped_cos_sin(value: np.ndarray, groups):
-    """`batched_kinematics._cos_sin` applied to each group of rows on its own.
-
-    ``groups``: an int ``g`` (the rows are ``g`` blocks of ``M``, fraction after fraction,
-    and each of the ``M`` columns is a group) or (starts, sizes) of consecutive rows.
-    """
-    low, high = float(value.min()), float(value.max())
-    if max(-low, high) < SERIES_MAX_RAD:
-        return _cos_sin(value)  # every group in series range
-    if low >= SERIES_MAX_RAD or high <= -SERIES_MAX_RAD:
-        return np.cos(value), np.sin(value)  # no group in series range
-    size = np.abs(value)
-    if isinstance(groups, int):
-        series = size.reshape(groups, -1).max(axis=0) < SERIES_MAX_RAD
-        rows = np.tile(series, groups)
-    else:
-        starts, sizes = groups
-        series = np.maximum.reduceat(size, starts) < SERIES_MAX_RAD
-        rows = np.repeat(series, sizes)
-    if not series.any():
-        return np.cos(value), np.sin(value)
-    c, s = np.empty_like(value), np.empty_like(value)
-    c[rows], s[rows] = _cos_sin(value[rows])
-    others = ~rows
-    c[others], s[others] = np.cos(value[others]), np.sin(value[others])
-    return c, s
 
 
 @lru_cache(maxsize=256)
