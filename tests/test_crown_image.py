@@ -15,6 +15,7 @@ from machinesim.cam.crown import (
     CROWN,
     CROWN_BASE,
     CROWN_BASE_HEIGHT,
+    crown_blank,
     crown_design,
     crown_roi,
 )
@@ -275,3 +276,46 @@ def test_a_plane_fitted_where_no_face_is_cut_is_n_a_with_the_reason():
     assert 3 < float(rest.split(" um")[0]) < 15
     assert rest.endswith("um, a cut face's 0.1 um or less (fitted slope 11.57 deg): the "
                          "window holds uncut stock as well")
+
+
+def test_a_face_left_rough_is_n_a_in_plane_fits_and_images_with_the_reason():
+    """The designed crown with face S6 (C = 225 deg) and the top next to it left as roughed
+    (the drawing's rough crown, `crown_blank`: every face 10 um out along its normal): a
+    perfect plane at the designed slope, so the slope and residual limits pass it, and its
+    profiles run from a top down a face. Paper 002's large setting (--quick --delta-um
+    80,-60,20 --rot-deg 0.5,-0.3,2.0) read such faces as cut: planes S6 -0.0032 deg, images
+    S5 -0.051, S6 -0.097 deg and L2 82.2 um, no word. Now the plane fit's S6, L2 and foot
+    L2 and the images' S6 and L2 are NaN, each saying the face lies 10.000 um out (the
+    allowance, exactly); every other figure reads its design, nothing else said."""
+    from machinesim.metrology import crown_features
+
+    # r 1.2 .. 2.5 mm out along C = 225 deg (the top window ends at 0.57 mm), 0.9 mm wide
+    wedge = block(1.3e-3, 0.9e-3, 1e-3, (1.2e-3, -0.45e-3, 0.5e-3)).manifold
+    part = Part(crown_design(CROWN).manifold
+                + (crown_blank(CROWN).manifold ^ wedge.rotate((0.0, 0.0, 225.0))))
+    out = ("lies 10.000 um out from the design along its normal, the rough face 10 um (a "
+           "cut face lies at or inside the design; 0.5 of the allowance out or more is "
+           "uncut): the face is not cut there")
+    features = crown_features(part, Microscope(noise=False), WINDOWS, plan=CROWN)
+    s6 = f"face S6 (C = 225 deg), the plane fitted in its window: the rough face: it {out}"
+    assert dict(features.unread) == {"S6": s6, "L2_L6": s6}
+    assert np.isnan(features.inclinations[5])
+    assert np.isnan(features.edge_distances[1]) and np.isnan(features.foot_distances[1])
+    np.testing.assert_allclose(np.delete(features.inclinations, 5), CROWN.slope, rtol=0,
+                               atol=1e-7)
+    np.testing.assert_allclose(np.delete(features.edge_distances, 1), 2 * CROWN.apothem,
+                               rtol=0, atol=1e-10)
+    reading = crown_image_reading(part, EXACT, WINDOWS, CROWN)
+    assert set(reading.unread) == {"S6", "L2_L6"}
+    assert np.isnan(reading.inclinations[5]) and np.isnan(reading.edge_distances[1])
+    head, tail = reading.unread["S6"].split(" along the profile, ")
+    assert head.startswith("face S6 (C = 225 deg), the profile across its middle: the rough "
+                           "face: the face's line, read from the top edge at ")
+    assert tail == out
+    assert reading.unread["L2_L6"].startswith(
+        "face S6 (C = 225 deg), the profile across its middle (not read in 3 of 3 "
+        "readings): the rough face: ") and reading.unread["L2_L6"].endswith(out)
+    np.testing.assert_allclose(np.delete(reading.inclinations, 5), CROWN.slope, rtol=0,
+                               atol=1e-6)
+    np.testing.assert_allclose(np.delete(reading.edge_distances, 1), 2 * CROWN.apothem,
+                               rtol=0, atol=5e-9)

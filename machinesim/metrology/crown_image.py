@@ -44,8 +44,9 @@ from machinesim.rotations import rot_z
 from machinesim.units import M_PER_UM
 from machinesim.workpiece import Part
 
-__all__ = ["EDGE_GUARD", "REPEATS", "CrownImageReading", "ProfileEdges",
-           "crown_image_reading", "profile_edges", "profile_reading", "turned_placements"]
+__all__ = ["EDGE_GUARD", "REPEATS", "ROUGH_FACE_FRACTION", "CrownImageReading", "ProfileEdges",
+           "crown_image_reading", "profile_edges", "profile_reading", "rough_face",
+           "turned_placements"]
 
 UM = M_PER_UM
 
@@ -61,6 +62,22 @@ FLAT_SPACING = 10 * UM
 #: A sample keeps to a level or a line if within this many sigmas of the instrument's
 #: height noise plus `BAND_FLOOR` of it.
 BAND_SIGMAS, BAND_FLOOR = 5.0, 0.5 * UM
+#: A face read farther out from its design, along its normal, than this fraction of the
+#: stock allowance (`machinesim.cam.crown.CrownPlan.oversize`, 10 um) is the rough face, not
+#: a cut one. The drawing's rough crown is the design with every face moved out by the
+#: allowance (`machinesim.workpiece.diamond_crown`), so an uncut face reads the allowance
+#: out; a cut face reads at or inside its design (the finishing layers reach it; a setting
+#: off cuts deeper, or leaves a band of stock that the slope and residual limits catch),
+#: within its scallops and the height noise, nm to tens of nm, and the finishing's own
+#: miss. Heights are taken above the flat read in the same placement, so the instrument's
+#: height offset and tilt cancel; its sideways offset (5 um sd, `machinesim.realism.
+#: MICROSCOPE`, one draw a session) moves a face at 11.31 deg by 1 um sd along its normal,
+#: opposite faces oppositely. Read so (seed 0, --quick): the default run's cut faces -136 ..
+#: -20 um before and -0.8 .. +2.3 um after; the large setting's (--delta-um 80,-60,20
+#: --rot-deg 0.5,-0.3,2.0) uncut ones +9.3 .. +10.8 um before, its cut ones -34 .. -3 um
+#: before and -0.7 .. +2.4 um after. Half the allowance, 5 um, lies between with 2.6 um to
+#: spare on the cut side and 4.3 um on the rough side.
+ROUGH_FACE_FRACTION = 0.5
 
 
 @dataclass(frozen=True)
@@ -89,7 +106,8 @@ class CrownImageReading:
         Pairs (L1, L5) .. (L4, L8), m, each the mean of `REPEATS` readings.
     inclinations : ndarray, shape (8,)
         S1..S8 (faces at C = 0, 45, .. deg), rad, from height over length.
-    NaN where a face's profile does not run from a top over the face to the flat.
+    NaN where a face's profile does not run from a top over a cut face to the flat (an
+    uncut one: `rough_face`).
     unread : Mapping
         Why, for each NaN (keys ``"L1_L5"`` .. ``"L4_L8"``, ``"S1"`` .. ``"S8"``): which
         face's profile and what it found instead (`profile_reading`). Empty if all read.
@@ -137,7 +155,8 @@ def _cursor(s: np.ndarray, z: np.ndarray, at: float) -> int:
 
 
 def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
-                  reach: float = EDGE_REACH, iterations: int = 4) -> ProfileEdges | None:
+                  reach: float = EDGE_REACH, iterations: int = 4,
+                  design: tuple[np.ndarray, float] | None = None) -> ProfileEdges | None:
     """The top edge and the foot of the face in a profile across it, levelled on the flat.
 
     Top edge: from where the profile first falls below the top's line (`_top_level`) by more
@@ -151,11 +170,13 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
     the corner of the face's line and its line; if it steps away (an uncut band beyond the
     finished face), the face's last sample. ``pixel``: each cursor on the sample nearest
     its edge and the height read there (an operator reading an image); else the edges on
-    the fitted lines. None where the profile does not run from a top down a face
-    (`profile_reading` says why).
+    the fitted lines. ``design``: the designed face's line along the profile (`np.polyfit`'s
+    coefficients, heights above the flat, m) and the stock allowance (m); given, a face
+    whose line lies where the rough face does is not read (`rough_face`). None where the
+    profile does not run from a top down a cut face (`profile_reading` says why).
     """
     edges = profile_reading(s, z, pixel=pixel, band=band, guard=guard, reach=reach,
-                            iterations=iterations)
+                            iterations=iterations, design=design)
     return edges if isinstance(edges, ProfileEdges) else None
 
 
@@ -163,8 +184,21 @@ def _um(length: float) -> str:
     return f"{length / UM:.3g} um"
 
 
+def rough_face(out: float, allowance: float) -> str | None:
+    """Why a face read ``out`` (m) from its design along its normal, outward positive, is
+    the rough face left ``allowance`` (m) out and not a cut one (`ROUGH_FACE_FRACTION`), or
+    None."""
+    if out < ROUGH_FACE_FRACTION * allowance:
+        return None
+    return (f"lies {out / UM:.3f} um out from the design along its normal, the rough face "
+            f"{_um(allowance)} (a cut face lies at or inside the design; "
+            f"{ROUGH_FACE_FRACTION:g} of the allowance out or more is uncut): the face is not "
+            "cut there")
+
+
 def profile_reading(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
-                    reach: float = EDGE_REACH, iterations: int = 4) -> ProfileEdges | str:
+                    reach: float = EDGE_REACH, iterations: int = 4,
+                    design: tuple[np.ndarray, float] | None = None) -> ProfileEdges | str:
     """`profile_edges`, or where the profile does not run from a top down a face, what it
     found instead (a sentence: which edge or line could not be read, and why)."""
     s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
@@ -237,6 +271,15 @@ def profile_reading(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD
                     break
                 face, corner = inner, _corner(inner, outer)
             s_foot = corner
+    if design is not None:
+        # the face's line against the design's, at the middle of the face as read
+        line, allowance = design
+        mid = 0.5 * (s_top + s_foot)
+        out = float(np.polyval(face, mid) - np.polyval(line, mid)) * math.cos(
+            math.atan(float(line[0])))
+        if (why := rough_face(out, allowance)) is not None:
+            return (f"the rough face: the face's line, read from the top edge at "
+                    f"{_um(s_top)} to the foot at {_um(s_foot)} along the profile, {why}")
     if not pixel:
         return ProfileEdges(s_top, float(np.polyval(top, s_top)), s_foot,
                             float(np.polyval(face, s_foot)))
@@ -278,9 +321,10 @@ def _levelled(read, bottom) -> np.ndarray:
     return read.z - (p[2] - (n[0] * (xy[:, 0] - p[0]) + n[1] * (xy[:, 1] - p[1])) / n[2])
 
 
-def _face_edges(mesh, microscope, bottom, sign: float, vs, image) -> list:
+def _face_edges(mesh, microscope, bottom, sign: float, vs, image, design) -> list:
     """One image of a face (one placement): its profiles at ``vs`` read outward from inside
-    the top edge across the foot; ``sign`` -1 for the face on -x. Returns, per profile,
+    the top edge across the foot; ``sign`` -1 for the face on -x; ``design`` as
+    `profile_reading`'s. Returns, per profile,
     the top edge point (x, y) and the `ProfileEdges` (NaN and why, `profile_reading`, where
     unreadable)."""
     r0, r1 = image[0], image[1]
@@ -291,7 +335,8 @@ def _face_edges(mesh, microscope, bottom, sign: float, vs, image) -> list:
         for v in vs:
             start, end = sign * np.array([r0, v]), sign * np.array([r1, v])
             read = microscope.profile(mesh, start, end)
-            edges = profile_reading(read.s, _levelled(read, bottom), pixel=pixel, band=band)
+            edges = profile_reading(read.s, _levelled(read, bottom), pixel=pixel, band=band,
+                                    design=design)
             point = (np.full(2, np.nan) if isinstance(edges, str)
                      else start + (end - start) / (r1 - r0) * edges.s_top)
             out.append((point, edges))
@@ -322,20 +367,25 @@ def crown_image_reading(part, microscope, windows, plan, *, meshes=None,
     windows : dict
         `machinesim.cam.crown.crown_roi`'s: ``"image"`` (r0, r1, v0, v1) and ``"flat"``.
     plan : CrownPlan
-        The designed crown (its apothem: L's design).
+        The designed crown (its apothem: L's design; its faces and allowance: a face whose
+        profile lies where the rough face does is not read, `rough_face`).
     meshes : list, optional
         `turned_placements` of ``part``, if already built.
     """
     meshes = turned_placements(part) if meshes is None else meshes
     image = windows["image"]
     a = 0.8 * min(-image[2], image[3])  # the two points on an edge, v = -a and +a
+    # the designed face along a profile (s = r - image[0]), above the flat: the top edge at
+    # the apothem, the foot one run farther out
+    rise = math.tan(plan.slope)
+    design = (np.array([-rise, (plan.apothem + plan.run - image[0]) * rise]), plan.oversize)
     lengths, inclinations, unread = np.zeros((4, repeats)), np.zeros(8), {}
     for k in range(4):
         bottom = _bottom(meshes[k], microscope, windows["flat"], k * math.pi / 4)
         missed = {}  # the top edge profiles L_k needs, not read: why, in each reading
         for n in range(repeats):
-            near = _face_edges(meshes[k], microscope, bottom, 1.0, (-a, 0.0, a), image)
-            far = _face_edges(meshes[k], microscope, bottom, -1.0, (0.0,), image)
+            near = _face_edges(meshes[k], microscope, bottom, 1.0, (-a, 0.0, a), image, design)
+            far = _face_edges(meshes[k], microscope, bottom, -1.0, (0.0,), image, design)
             lengths[k, n] = _point_to_line(far[0][0], near[0][0], near[2][0])
             for j, v, (_, edges) in ((k, -a, near[0]), (k, a, near[2]), (k + 4, 0.0, far[0])):
                 if isinstance(edges, str):

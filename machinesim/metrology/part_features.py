@@ -18,7 +18,7 @@ from types import MappingProxyType
 import numpy as np
 
 from machinesim.arrays import frozen
-from machinesim.metrology.crown_image import inscribed, turned_placements
+from machinesim.metrology.crown_image import inscribed, rough_face, turned_placements
 from machinesim.metrology.fits import fit_plane, height_map_points, plane_angle
 from machinesim.metrology.planes import line_distance, plane_intersection
 from machinesim.rotations import rot_z
@@ -164,10 +164,32 @@ def _turned_back(points, back: np.ndarray):
     return replace(local, point=frozen(back @ local.point), normal=frozen(back @ local.normal))
 
 
-def face_unread(j: int, side, flat, slope: float) -> str | None:
+def _height(plane, xy) -> float:
+    """The plane's z over the point ``xy``."""
+    n, p = plane.normal, plane.point
+    return float(p[2] - (n[0] * (xy[0] - p[0]) + n[1] * (xy[1] - p[1])) / n[2])
+
+
+def face_out(j: int, side, flat, plan, centre) -> float:
+    """How far face S(j + 1)'s fitted plane ``side`` lies out from the designed face of
+    ``plan`` (a `machinesim.cam.crown.CrownPlan`) along its normal, m, outward positive: its
+    height above the fitted ``flat`` (the flat left as roughed, the design's too) at the
+    window's ``centre`` (r out from the C axis, v along the edge, m) less the design's
+    there, times cos(slope)."""
+    u = np.array([math.cos(j * math.pi / 4), math.sin(j * math.pi / 4)])
+    xy = centre[0] * u + centre[1] * np.array([-u[1], u[0]])
+    rise = math.tan(plan.slope)
+    designed = (plan.apothem + plan.run - centre[0]) * rise
+    return (_height(side, xy) - _height(flat, xy) - designed) * math.cos(plan.slope)
+
+
+def face_unread(j: int, side, flat, slope: float, *, plan=None,
+                centre=None) -> str | None:
     """Why face S(j + 1)'s fitted plane ``side`` is not a cut face's reading, or None: its
-    angle to ``flat`` more than `FACE_SLOPE_TOLERANCE` off the designed ``slope`` (rad), or
-    its residual RMS above `FACE_RMS_LIMIT` (the window holds uncut stock as well)."""
+    angle to ``flat`` more than `FACE_SLOPE_TOLERANCE` off the designed ``slope`` (rad), its
+    residual RMS above `FACE_RMS_LIMIT` (the window holds uncut stock as well), or, given
+    the ``plan`` and the window's ``centre`` (`face_out`), it lying where the rough face does
+    (`ROUGH_FACE_FRACTION` of the allowance out or more, `rough_face`)."""
     angle = plane_angle(side, flat)
     where = f"face S{j + 1} (C = {45 * j} deg), the plane fitted in its window"
     if abs(angle - slope) > FACE_SLOPE_TOLERANCE:
@@ -178,11 +200,14 @@ def face_unread(j: int, side, flat, slope: float) -> str | None:
         return (f"{where}: residual RMS {side.residual_rms / UM:.3g} um, a cut face's "
                 f"{FACE_RMS_LIMIT / UM:g} um or less (fitted slope "
                 f"{math.degrees(angle):.2f} deg): the window holds uncut stock as well")
+    if plan is not None and (why := rough_face(face_out(j, side, flat, plan, centre),
+                                               plan.oversize)) is not None:
+        return f"{where}: the rough face: it {why}"
     return None
 
 
 def crown_features(part, microscope, windows, spacing: float = MAP_SPACING, *,
-                   meshes=None, slope: float | None = None) -> CrownFeatures:
+                   meshes=None, slope: float | None = None, plan=None) -> CrownFeatures:
     """Read Table 3's quantities with the microscope (paper 002 Fig. 12).
 
     Planes are fitted to height maps in the ``windows`` of `machinesim.cam.crown.crown_roi`:
@@ -199,6 +224,8 @@ def crown_features(part, microscope, windows, spacing: float = MAP_SPACING, *,
     part's `machinesim.metrology.crown_image.turned_placements`, if already built.
     ``slope``: the faces' designed slope (rad); given, a face whose plane is not a cut face's
     (`face_unread`) leaves its S, L and foot distance NaN with the reason in ``unread``.
+    ``plan``: the designed crown (`machinesim.cam.crown.CrownPlan`; its slope if ``slope``
+    is not given); given, so does a face whose plane lies where the rough face does.
     """
     meshes = turned_placements(part) if meshes is None else meshes
     r0, r1, v0, v1 = windows["side"]
@@ -215,8 +242,11 @@ def crown_features(part, microscope, windows, spacing: float = MAP_SPACING, *,
         for j, box in ((k, (r0, r1, v0, v1)), (k + 4, (-r1, -r0, -v1, -v0))):
             sides[j] = _turned_back(_map_points(mesh, microscope, box, spacing), back)
             flats[j], tops[j] = flat, top
-    faces = {} if slope is None else {j: why for j in range(8)
-                                      if (why := face_unread(j, sides[j], flats[j], slope))}
+    slope = plan.slope if slope is None and plan is not None else slope
+    centre = (0.5 * (r0 + r1), 0.5 * (v0 + v1))
+    faces = {} if slope is None else {
+        j: why for j in range(8)
+        if (why := face_unread(j, sides[j], flats[j], slope, plan=plan, centre=centre))}
     inclinations = np.array([plane_angle(side, flat) for side, flat in zip(sides, flats,
                                                                            strict=True)])
     lengths, foot, unread = np.full(4, np.nan), np.full(4, np.nan), {}

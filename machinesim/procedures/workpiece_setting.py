@@ -410,7 +410,7 @@ class RobotLoadedWorkpiece:
             scope = lab.microscope(label=f"crown_{name}")
             meshes = turned_placements(part)
             features[name] = crown_features(part, scope, layout.windows, meshes=meshes,
-                                            slope=crown.slope)
+                                            plan=crown)
             # Table 3 as the paper reads it: edges picked in 10x images (its own session)
             images[name] = crown_image_reading(
                 part, lab.microscope(label=f"crown_{name}_image", objective=OBJECTIVE_10X),

@@ -81,10 +81,11 @@ def crown_figures(machine, crown: CrownPlan, features: dict[str, CrownFeatures],
     errors.setdefault("before", dict.fromkeys(("edge", "inclination", "foot", "edge_image",
                                                "inclination_image"), [None] * 8))
     # a figure the images could not read (n/a) says why: which face's profile, what it
-    # found (a face left uncut by a setting far off, its profile never falling from the top)
+    # found (a face left uncut by a setting far off: its profile never falling from the top,
+    # or lying where the rough face does)
     unread = image_unread(images)
     # and a plane fit on a window that holds no cut face (a face left uncut, or a band of
-    # stock): the face's fitted slope or residual
+    # stock): the face's fitted slope, residual or place (where the rough face lies)
     planes = planes_unread(features)
     whys = {name: {**unread[name], **planes[name]} for name in images}
 
