@@ -1,0 +1,157 @@
+"""The holder check's material step (`machinesim.cutting.holder.holder_in_material`): the
+same sweeps as a straightforward reference, on programs whose earlier passes open the way
+for the holder or leave material in its room, with each sweep's solid read a bounded number
+of times (not once per candidate, as the reference does)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import machinesim.cutting.engine as engine
+from machinesim.cutting import cut
+from machinesim.cutting.holder import HOLDER_MATERIAL_M3, holder_in_material, holder_room
+from machinesim.cutting.sweeps import Solids
+from machinesim.cutting.sweepset import SweepSet
+from machinesim.exceptions import HolderContactError
+from machinesim.nc import ProgramBuilder, parse_program
+
+MM = 1e-3
+
+
+def reference(sweeps, candidates, solid, reach, keep):
+    """Every candidate's room against the solid less every earlier sweep in the stock's
+    box, one candidate at a time (candidates x earlier sweeps booleans)."""
+    hulls, *_, owners = SweepSet.hulls(sweeps, keep)
+    owners = np.asarray(owners)
+    found = []
+    for i in candidates:
+        met = solid ^ holder_room(sweeps, i, reach)
+        for j in np.flatnonzero(owners < i):
+            met = met - hulls[j]
+            met.num_tri()
+        if met.volume() > HOLDER_MATERIAL_M3:
+            found.append(int(i))
+    return found
+
+
+class _Counted(Solids):
+    """Solids that count how often each one is read."""
+
+    def __init__(self, solids):
+        super().__init__(list.__iter__(solids))
+        self.reads = np.zeros(len(self), dtype=np.int64)
+
+    def __getitem__(self, index):
+        self.reads[index] += 1
+        return super().__getitem__(index)
+
+
+@pytest.fixture
+def checked(monkeypatch):
+    """Each call of the engine's material step, checked against `reference`: a list of
+    (candidates, found, largest reads of one sweep's solid, sweeps built) per call."""
+    calls = []
+    built = []
+    original = SweepSet.hulls
+
+    def counted(self, keep, progress=None):
+        result = original(self, keep, progress)
+        built.append(_Counted(result[0]))
+        return (built[-1], *result[1:])
+
+    def both(sweeps, candidates, solid, reach, keep=None):
+        built.clear()
+        monkeypatch.setattr(SweepSet, "hulls", counted)
+        try:
+            found = holder_in_material(sweeps, candidates, solid, reach, keep)
+        finally:
+            monkeypatch.setattr(SweepSet, "hulls", original)
+        reads = int(max((b.reads.max(initial=0) for b in built), default=0))
+        count = sum(len(b) for b in built)
+        assert found == reference(sweeps, candidates, solid, reach, keep)
+        calls.append((list(candidates), found, reads, count))
+        return found
+
+    monkeypatch.setattr(engine, "holder_in_material", both)
+    return calls
+
+
+def _slot_in_steps(steps, last_y=0.0):
+    """A slot along X cut 1 mm deeper each pass, the last pass at ``last_y`` (m)."""
+    b = ProgramBuilder(1)
+    for k in range(1, steps + 1):
+        y = last_y if k == steps else 0.0
+        b.rapid(X=-3 * MM, Y=y, Z=1 * MM).linear(Z=-k * MM, feed_mm_per_min=300.0)
+        b.linear(X=3 * MM).rapid(Z=1 * MM)
+    return b.build()
+
+
+def test_a_stepped_slot_opens_the_way_as_the_reference_finds(checked):
+    # flat end mill, 2 mm of body, a slot 3 mm deep in 1 mm steps: the last pass's holder
+    # is in the slot the earlier passes cut (nothing found); moved 0.5 mm sideways, it
+    # meets the wall: its plunge, feed and lift
+    stock = "block:10x6x5@-5,-3,0"
+    cut(_slot_in_steps(3), "grooving_4axis", tool="flat:1.0:h=2", stock=stock)
+    candidates, found, _, _ = checked[-1]
+    assert candidates and found == []
+    with pytest.raises(HolderContactError):
+        cut(_slot_in_steps(3, last_y=0.5 * MM), "grooving_4axis", tool="flat:1.0:h=2",
+            stock=stock)
+    candidates, found, _, _ = checked[-1]
+    assert len(found) == 3 and found == candidates[-3:]
+
+
+def _bore(depth_mm, radius_mm=0.4, pitch_mm=0.25):
+    """A helical bore: G02 half turns of ``radius_mm`` about the origin, ``pitch_mm`` down
+    each, to ``depth_mm``, then a full circle there."""
+    lines = ["G21 G90 G94", f"G00 X{radius_mm} Y0. Z0.1", "G01 Z0. F100."]
+    z, k = 0.0, 0
+    while z > -depth_mm + 1e-9:
+        z = max(z - pitch_mm, -depth_mm)
+        x = -radius_mm if k % 2 == 0 else radius_mm
+        lines.append(f"G02 X{x:.4f} Y0. Z{z:.4f} I{x:.4f} J0.")
+        k += 1
+    lines += [f"G02 X{x:.4f} Y0. I{-x:.4f} J0.", "G00 Z1."]
+    # chords of 10 um: a few per half turn, and the circle's do not line up with them
+    return parse_program("\n".join(lines) + "\n", chord_tolerance=1e-5)
+
+
+def test_a_bore_deeper_than_the_body_is_refused_for_the_sweeps_the_reference_finds(checked):
+    # 1.5 mm deep with 1 mm of body: the helix's holder is in the bore the turns above it
+    # cut, the bottom circle's chords, not those of the half turns, leave slivers of the
+    # wall in the rooms over them
+    with pytest.raises(HolderContactError):
+        cut(_bore(1.5), "grooving_4axis", tool="flat:1.0:h=1", stock="block:5x5x3@-2.5,-2.5,0")
+    candidates, found, reads, count = checked[-1]
+    assert found and len(found) < len(candidates)
+    # each sweep's solid is read a few times at most (containment, clipping, subtraction),
+    # not once for every candidate after it
+    assert count > 2 * 4 and reads <= 4
+
+
+
+def _pocket(levels, last_wider=0.0):
+    """A pocket in 0.5 mm levels: each a plunge and three passes along X, 0.5 mm apart in
+    Y; the last level's passes reach ``last_wider`` (m) further in Y."""
+    b = ProgramBuilder(1).rapid(X=0.0, Y=0.0, Z=1 * MM)
+    for k in range(1, levels + 1):
+        b.linear(Z=-0.5 * MM * k, feed_mm_per_min=300.0)
+        wider = last_wider if k == levels else 0.0
+        for n, y in enumerate((0.0, 0.5 * MM, 1 * MM + wider)):
+            b.linear(Y=y).linear(X=0.0 if n % 2 else 2 * MM)
+        b.rapid(Z=1 * MM).rapid(X=0.0, Y=0.0)
+    return b.build()
+
+
+def test_a_pocket_in_levels_meets_its_wall_only_when_a_level_reaches_past_it(checked):
+    # 2.5 mm deep with 1 mm of body: the levels below 1 mm find the pocket the levels above
+    # opened; the last level 0.3 mm wider puts the holder into the wall
+    kwargs = {"tool": "flat:0.5:h=1", "stock": "block:4x3x3@-1,-1,0"}
+    _, report = cut(_pocket(5), "grooving_4axis", **kwargs)
+    candidates, found, _, _ = checked[-1]
+    assert report.holder_contact == () and candidates and found == []
+    with pytest.raises(HolderContactError):
+        cut(_pocket(5, last_wider=0.3 * MM), "grooving_4axis", **kwargs)
+    candidates, found, _, _ = checked[-1]
+    assert found and len(found) < len(candidates)
