@@ -731,6 +731,23 @@ def test_a_value_below_any_machine_is_noted_in_its_keys_unit_with_si_beside(tmp_
                      "1e-10 deg (1.74533e-12 rad)", "0.004 nm (4e-12 m)"]
 
 
+def test_a_value_below_any_machine_in_an_si_key_asks_no_unit_question(tmp_path):
+    """A key in m or rad cannot hold SI where a smaller unit was asked: its note asked 'was
+    it written in m, where the key asks m?'. It now asks whether the value was converted to
+    SI twice (3 um as 3e-6 m, then again: 3e-12 m), and a key in um still asks for m."""
+    from machinesim.errors.toml import below_any_machine
+
+    path = tmp_path / "slip.toml"
+    path.write_text("[tool]\noffset_m = [0.0, 3e-12, 0.0]\n[workpiece]\ngamma_rad = 5e-12\n"
+                    "[location.C]\nEX0C_um = 4e-6\n")
+    lines = below_any_machine(ErrorModel.from_toml(path))
+    assert [line.split(", below anything a machine shows")[1] for line in lines] == [
+        ": was it converted to m twice? (the key takes 1 um as 1e-06)",
+        ": was it converted to rad twice? (the key takes 1 urad as 1e-06)",
+        ": was it written in m, where the key asks um?"]
+    assert not any("where the key asks m?" in line or "asks rad?" in line for line in lines)
+
+
 def test_a_misfit_on_a_machine_names_the_line_of_the_key(tmp_path):
     from machinesim.machines import load_machine
     from machinesim.tool_specs import tool_from_spec

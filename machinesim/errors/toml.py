@@ -82,7 +82,8 @@ def _noted_at(model: ErrorModel, field: str) -> str:
 def below_any_machine(model: ErrorModel) -> list[str]:
     """Lines naming each value the file wrote (``model.written``) that is not zero and yet
     below `SMALLEST_WRITTEN_ERROR_SI` in SI, all its entries: perhaps SI in a key in um or
-    urad. A table's positions are left out. Each line begins with the file and the key's line
+    urad, or, in a key in m or rad, a value converted to SI twice. A table's positions are
+    left out. Each line begins with the file and the key's line
     (``F.toml, line 3: location.C.EX0C_um = 4e-06 is at most ...``)."""
     lines = []
     for field, (key, value) in model.written.items():
@@ -97,11 +98,16 @@ def below_any_machine(model: ErrorModel) -> list[str]:
             si = "m" if is_length(unit) else "rad"
             shown = np.asarray(value, dtype=np.float64).tolist()
             largest = float(size.max())  # in the key's unit, SI beside (mm or deg first for SI)
-            reach = (_shown(largest, si) if unit == si else
-                     f"{_shown(largest, unit)} ({largest:g} {si})")
+            if unit == si:  # no smaller-unit slip for a key in SI: a value scaled twice?
+                small = "um" if si == "m" else "urad"
+                reach = _shown(largest, si)
+                guess = (f": was it converted to {si} twice? (the key takes 1 {small} as "
+                         "1e-06)")
+            else:
+                reach = f"{_shown(largest, unit)} ({largest:g} {si})"
+                guess = f": was it written in {si}, where the key asks {unit}?"
             lines.append(f"{_noted_at(model, field)}{key} = {shown!r} is at most {reach}, "
-                         "below anything a machine shows: was it written in "
-                         f"{si}, where the key asks {unit}?")
+                         f"below anything a machine shows{guess}")
     return lines
 
 
