@@ -696,6 +696,14 @@ def test_a_live_server_that_cannot_start_or_hangs_is_named_not_waited_for(monkey
         sys.executable, "-c", "import time; time.sleep(30)"])
     with pytest.raises(MachineSimError, match="gave no address within 0.5 s"):
         live_module.start_server()
+    # one that raised before it could say 'error=' (an import failed): its stderr's last
+    # line is the reason (it had said 'ended before giving its address' alone)
+    monkeypatch.setattr(live_module, "server_command", lambda port=None: [
+        sys.executable, "-c", "import sys; print('warming up', file=sys.stderr); "
+        "raise ImportError('no module named meshcat here')"])
+    with pytest.raises(MachineSimError, match="ended before giving its address: ImportError: "
+                                              "no module named meshcat here; is the port"):
+        live_module.start_server()
 
 
 def test_a_web_port_in_meshcats_zeromq_range_is_left_to_the_web_server():
@@ -1150,33 +1158,53 @@ def test_a_live_viewer_stopped_after_its_screenshot_says_the_screenshot_stays(tm
 
 
 #: A stand-in live server: the real one (`machinesim.viewer.server`), which ends by itself half
-#: a second after a browser fetched its page, as a crash (exit status 3) or as the kernel's
-#: out-of-memory killer ends it (SIGKILL), with no Ctrl-C.
+#: a second after a browser fetched its page, as a crash (exit status 3), as the kernel's
+#: out-of-memory killer ends it (SIGKILL), or with a Python error out of its loop (its loop
+#: stopped, then an exception raised: exit status 1 and a traceback on stderr), with no
+#: Ctrl-C. ``{chat}`` lines of 100 characters go to stderr as the page is served.
 STAND_IN_SERVER = ("import os, signal, sys, threading\n"
+                   "import tornado.ioloop\n"
                    "import machinesim.viewer.server as server\n"
                    "page = server.LoopbackBridge.page\n"
                    "def served(self):\n"
+                   "    loop = tornado.ioloop.IOLoop.current()\n"
+                   "    for i in range({chat}):\n"
+                   "        print(f'chat {{i:06d}} ' + 'x' * 88, file=sys.stderr)\n"
                    "    threading.Timer(0.5, lambda: {end}).start()\n"
                    "    return page(self)\n"
                    "server.LoopbackBridge.page = served\n"
-                   "server.main(sys.argv[1:])\n")
+                   "server.main(sys.argv[1:])\n"
+                   "{after}\n")
+#: The stand-in's crash: an exception after its loop was stopped.
+CRASH = {"end": "loop.add_callback(loop.stop)",
+         "after": "raise RuntimeError('the stand-in server crashed')"}
 
 
-@pytest.mark.parametrize(("end", "said", "shot"), [
-    ("os._exit(3)", "exit status 3", False),
-    ("os.kill(os.getpid(), signal.SIGKILL)", "killed by SIGKILL", False),
-    ("os._exit(3)", "exit status 3", True)], ids=["exit", "killed", "screenshot"])
-def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(end, said, shot,
-                                                                       tmp_path):
+@pytest.mark.parametrize(("end", "said", "shot", "chat", "traceback"), [
+    ("os._exit(3)", "exit status 3", False, 0, False),
+    ("os.kill(os.getpid(), signal.SIGKILL)", "killed by SIGKILL", False, 0, False),
+    ("os._exit(3)", "exit status 3", True, 0, False),
+    (CRASH, "exit status 1; its last line on stderr: RuntimeError: the stand-in server "
+            "crashed", False, 0, False),
+    (CRASH, "exit status 1; its last line on stderr: RuntimeError: the stand-in server "
+            "crashed", False, 20000, True)],
+    ids=["exit", "killed", "screenshot", "raised", "chatty-traceback"])
+def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(
+        end, said, shot, chat, traceback, tmp_path):
     # a server that died while serving (not by Ctrl-C) left `machinesim view` to exit 0
     # without a word, its page gone; now one line with the server's exit code, status 1,
-    # naming a --screenshot written before (Chromium stood in for as above)
+    # naming a --screenshot written before (Chromium stood in for as above). A server that
+    # raised (its stderr had gone to /dev/null) said 'exit status 1' alone: the line now
+    # ends with its exception. 20000 lines (2 MB, 30 times a pipe's 64 KiB) written to
+    # stderr while the page is served stall no server; with MACHINESIM_TRACEBACK=1 the last
+    # STDERR_LINES_KEPT lines of it come first, the traceback whole at their end.
     import contextlib
     import subprocess
     import sys
 
     stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
-    server = STAND_IN_SERVER.format(end=end)
+    ending = end if isinstance(end, dict) else {"end": end, "after": ""}
+    server = STAND_IN_SERVER.format(chat=chat, **ending)
     script = ("import sys\n"
               "import machinesim.viewer.cli as view\n"
               "view._screenshot = lambda url, ready, path: path.write_bytes(b'png')\n"
@@ -1186,6 +1214,9 @@ def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(end, said
               "from machinesim.cli import main\n"
               "sys.exit(main(sys.argv[1:]))\n")
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    env.pop("MACHINESIM_TRACEBACK", None)
+    if traceback:
+        env["MACHINESIM_TRACEBACK"] = "1"
     png = tmp_path / "live.png"
     process = subprocess.Popen([sys.executable, "-c", script, "view", str(tmp_path / "part.ply"),
                                 "--port", str(_unused_port()),
@@ -1204,8 +1235,19 @@ def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(end, said
             process.wait()
     assert process.returncode == 1
     kept = f"; its screenshot {png} written before" if shot else ""
-    assert err == (f"machinesim: error: the live viewer server ended without Ctrl-C ({said}); "
-                   f"{url} no longer answers{kept}\n")
+    told = (f"machinesim: error: the live viewer server ended without Ctrl-C ({said}); "
+            f"{url} no longer answers{kept}\n")
+    if not traceback:
+        assert err == told
+    else:  # the server's own last lines first: the chat's end, then its whole traceback
+        from machinesim.viewer.live import STDERR_LINES_KEPT
+
+        lines = err.splitlines(keepends=True)
+        assert lines[-1] == told and len(lines) == STDERR_LINES_KEPT + 1
+        assert "Traceback (most recent call last):\n" in lines
+        start = lines.index("Traceback (most recent call last):\n")
+        assert lines[start - 1] == f"chat {chat - 1:06d} " + "x" * 88 + "\n"
+        assert lines[-2] == "RuntimeError: the stand-in server crashed\n"
     assert png.exists() == shot
 
 

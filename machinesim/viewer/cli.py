@@ -162,10 +162,18 @@ def run_view(args: argparse.Namespace) -> int:
     finally:
         session.close()
     # the server ended though nobody stopped it (it crashed, or was killed): the page no
-    # longer answers, and the command had exited 0 without a word
+    # longer answers, and the command had exited 0 without a word; its stderr's last line
+    # (a crash's exception) is told, the lines kept before it with MACHINESIM_TRACEBACK=1
     kept = "" if shot is None else f"; its screenshot {shot} written before"
+    said = _exit_text(ended)
+    if session.stderr is not None:
+        if os.environ.get("MACHINESIM_TRACEBACK"):
+            for line in session.stderr.lines():
+                print(line, file=sys.stderr)
+        last = session.stderr.last()
+        said += f"; its last line on stderr: {last}" if last else ""
     print(f"machinesim: error: the live viewer server ended without Ctrl-C "
-          f"({_exit_text(ended)}); {session.url} no longer answers{kept}", file=sys.stderr)
+          f"({said}); {session.url} no longer answers{kept}", file=sys.stderr)
     return 1
 
 

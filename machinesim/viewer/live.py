@@ -9,7 +9,8 @@ from __future__ import annotations
 import subprocess
 import sys
 import threading
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, field
 
 import zmq
 from meshcat.servers.tree import SceneTree, find_node, walk
@@ -26,6 +27,50 @@ START_TIMEOUT_S = 30.0
 REPLY_TIMEOUT_S = 60.0
 #: ZeroMQ command that sets the page's title and overlay (ours, beside meshcat's commands).
 PAGE_COMMAND = b"machinesim_page"
+#: Lines of the server's stderr kept (the last ones: a Python traceback's end, tornado's
+#: warnings); older ones are dropped, so a chatty server costs no more memory.
+STDERR_LINES_KEPT = 200
+#: Characters of one stderr line a message quotes.
+STDERR_LINE_SHOWN = 300
+
+
+class StderrTail:
+    """The last `STDERR_LINES_KEPT` lines ``process`` writes to its stderr (a text pipe),
+    read by a daemon thread as they come: the pipe never fills, so a chatty server is not
+    stalled, and a server that crashed leaves its traceback's end here, where stderr had
+    gone to /dev/null (a crash was told as 'exit status 1' alone)."""
+
+    def __init__(self, process: subprocess.Popen) -> None:
+        self._process = process
+        self._lines: deque[str] = deque(maxlen=STDERR_LINES_KEPT)
+        self._lock = threading.Lock()
+        self._thread = threading.Thread(target=self._drain, args=(process.stderr,),
+                                        daemon=True, name="machinesim-viewer-stderr")
+        self._thread.start()
+
+    def _drain(self, stream) -> None:
+        with stream:
+            for line in stream:
+                with self._lock:
+                    self._lines.append(line.rstrip("\r\n"))
+
+    def lines(self, timeout: float = 5.0) -> list[str]:
+        """The lines kept so far, oldest first; once the process has ended, all it wrote
+        (the last of them), waiting up to ``timeout`` s for the pipe's rest to be read."""
+        if self._process.poll() is not None:
+            self._thread.join(timeout)
+        with self._lock:
+            return list(self._lines)
+
+    def last(self, timeout: float = 5.0) -> str:
+        """The last line that is not blank, stripped and cut to `STDERR_LINE_SHOWN`
+        characters; "" when there is none."""
+        for line in reversed(self.lines(timeout)):
+            if line.strip():
+                line = line.strip()
+                return (line if len(line) <= STDERR_LINE_SHOWN
+                        else line[:STDERR_LINE_SHOWN] + "...")
+        return ""
 
 
 @dataclass
@@ -43,12 +88,16 @@ class LiveSession:
     messages : int
         Messages a browser that connects now receives (meshcat's viewer counts them in
         ``viewer.num_messages_received``): the scene is complete when it has them all.
+    stderr : StderrTail, optional
+        The last lines the server wrote to stderr (`StderrTail.last` after it ended: a
+        crash's exception); None for a process whose stderr is not piped.
     """
 
     url: str
     zmq_url: str
     process: subprocess.Popen
     messages: int = 0
+    stderr: StderrTail | None = field(default=None, repr=False)
 
     def send(self, scene: Scene) -> None:
         """Send ``scene`` (page overlay and commands) to the server, which has shown nothing
@@ -146,7 +195,8 @@ def start_server(port: int | None = None) -> LiveSession:
     printed nothing hung the command; one that could not start says why (``error=...``).
     """
     process = subprocess.Popen(server_command(port), stdout=subprocess.PIPE,
-                               stderr=subprocess.DEVNULL, text=True)
+                               stderr=subprocess.PIPE, text=True, errors="replace")
+    stderr = StderrTail(process)  # drained from now on: stderr never stalls the server
     late = threading.Event()
 
     def give_up() -> None:
@@ -173,6 +223,8 @@ def start_server(port: int | None = None) -> LiveSession:
         process.wait()
         why = (f"gave no address within {START_TIMEOUT_S:g} s" if late.is_set()
                else "ended before giving its address")
+        last = "" if cause else stderr.last()  # a crash before main's 'error=' (an import)
+        cause = cause or (f": {last}" if last else "")
         if port is None:
             raise MachineSimError(f"the live viewer server did not start (it {why}{cause}; "
                                   "is the port free? try --port, or --html FILE to export "
@@ -181,7 +233,7 @@ def start_server(port: int | None = None) -> LiveSession:
         raise MachineSimError(f"--port {port}: the live viewer server did not start on it (it "
                               f"{why}{cause}); expected a free port: try another, or --html "
                               "FILE to export instead")
-    return LiveSession(urls["web_url"], urls["zmq_url"], process)
+    return LiveSession(urls["web_url"], urls["zmq_url"], process, stderr=stderr)
 
 
 def serve(scene: Scene, port: int | None = None) -> LiveSession:
@@ -207,5 +259,5 @@ def serve(scene: Scene, port: int | None = None) -> LiveSession:
     return session
 
 
-__all__ = ["LOOPBACK", "LiveSession", "replay_count", "serve", "server_command",
-           "start_server"]
+__all__ = ["LOOPBACK", "LiveSession", "StderrTail", "replay_count", "serve",
+           "server_command", "start_server"]

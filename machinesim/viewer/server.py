@@ -84,7 +84,7 @@ def main(argv: list[str] | None = None) -> None:
     try:
         bridge = LoopbackBridge(port=args.port)
     except Exception as error:  # said to the command that started us
-        # stderr goes nowhere: the reason the server could not start goes to the pipe
+        # said on the pipe the command reads for the URLs (`live.start_server`), in one line
         print(f"error={type(error).__name__}: {error}", flush=True)
         sys.exit(1)
     print(f"zmq_url={bridge.zmq_url}")
