@@ -323,6 +323,46 @@ def test_a_microscope_too_noisy_to_find_the_ramp_groove_is_named_as_the_likelier
     assert "else the edge's offset" in message and "capture range 1 mm" in message
 
 
+def test_a_microscope_noisy_enough_to_read_a_false_dip_down_the_ramp_is_named(machine, r0):
+    """A microscope noise of 0.5 um (6 x 0.5 = 3 um reaches the 2 um dip that finds a groove)
+    read that dip not at the ramp's first station but some stations down it, 9 mm before the
+    groove starts (its edge 0.9 mm above the surface there): the stations below it hold no
+    groove, and the reading ended in the fit's bare 'Expected one whole V groove in the
+    profile, found 0' (a campaign's --vary microscope.sigma=500nm failed every trial so)."""
+    plan = CalibrationPlan(angles=(0.0,))
+    part, _ = cut(plan.program(r0), machine, tool="v:90", stock=plan.stock,
+                  errors=errors_for(PAPER_R, PAPER_E, r0))
+    with pytest.raises(InputError) as info:
+        measure_calibration(part, plan, Microscope(sigma=0.5e-6, rng=1))
+    message = str(info.value)
+    assert info.value.key == "microscope"
+    assert "Expected one whole V groove in the profile, found 0" in message  # the fit's word
+    assert "microscope's readings are likely too noisy" in message
+    assert "ramp station where the walk down it found the groove" in message
+    scatter = float(message.split("scatter by ")[1].split(" um")[0])
+    assert scatter == pytest.approx(0.5, rel=0.1)  # the microscope's 0.5 um, read back
+
+
+def test_a_failed_ramp_fit_under_a_quiet_microscope_keeps_the_fits_message(
+        machine, r0, monkeypatch):
+    """Where the coarse sections' scatter is below a sixth of the 2 um dip, a fit's refusal is
+    not put on the noise: it passes as the fit raised it (here a stand-in for the fit)."""
+    from machinesim.procedures import tool_rotation_arm_reading as reading
+
+    refusal = InputError("stand-in fit refusal")
+
+    def refuse(s, z):
+        raise refusal
+
+    plan = CalibrationPlan(angles=(0.0,))
+    part, _ = cut(plan.program(r0), machine, tool="v:90", stock=plan.stock,
+                  errors=errors_for(PAPER_R, PAPER_E, r0))
+    monkeypatch.setattr(reading, "fit_v_groove", refuse)
+    with pytest.raises(InputError) as info:
+        measure_calibration(part, plan, Microscope(noise=False))
+    assert info.value is refusal
+
+
 def scenario(*args, cwd=ROOT):
     return subprocess.run([sys.executable, str(ROOT / "scenarios" / "tool_rotation_arm.py"),
                            *args], capture_output=True, text=True, check=False, cwd=cwd)

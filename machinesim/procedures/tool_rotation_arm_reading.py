@@ -239,6 +239,19 @@ def height_scatter(h) -> float:
     return float(1.4826 * np.median(np.abs(d2)) / math.sqrt(6.0)) if d2.size else math.nan
 
 
+def _too_noisy(scatter: float, at: str) -> str | None:
+    """Why a coarse section whose heights scatter by ``scatter`` (m, `height_scatter`, read
+    ``at`` some station) likely read a false groove: noise of `NOISE_FINDS` x its std reaches
+    the `FIND_DEPTH_M` dip that finds one; None where it does not (or NaN, off the part)."""
+    if not NOISE_FINDS * scatter >= FIND_DEPTH_M:
+        return None
+    return (f"the section's heights scatter by {scatter / M_PER_UM:.3g} um (robust std of "
+            f"their second differences, {at}), where a dip of {FIND_DEPTH_M / M_PER_UM:g} um "
+            f"finds a groove: a scatter of {FIND_DEPTH_M / NOISE_FINDS / M_PER_UM:.2g} um or "
+            "more reads such dips where there is none, so the microscope's readings are likely "
+            "too noisy to find it")
+
+
 def _section(index, microscope, x: float, y0: float, y1: float, spacing=None):
     """A section across Y at ``x``: (y, height below the land's median)."""
     prof = microscope.profile(index, (x, y0), (x, y1), spacing=spacing)
@@ -273,19 +286,15 @@ def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading
         beyond = (f"the edge's offset |(e_ys, r - r0)| exceeds the plan's capture range "
                   f"{plan.capture / M_PER_MM:g} mm (search range {plan.search:g} m): give a "
                   "larger CalibrationPlan(capture=...) (scenario: --capture-mm)")
-        scatter = height_scatter(coarse(stations[0])[1])
-        if not NOISE_FINDS * scatter >= FIND_DEPTH_M:
+        noisy = _too_noisy(height_scatter(coarse(stations[0])[1]),
+                           "at the ramp's first station")
+        if noisy is None:
             raise InputError(f"{where}: the groove does not start on the ramp; {beyond}",
                              key="capture")
         # a microscope's noise of 1 mm was refused as an offset beyond the capture range:
         # the first section's noise read as a dip of FIND_DEPTH_M, a groove found at once
-        raise InputError(f"{where}: the groove does not start on the ramp; the section's "
-                         f"heights scatter by {scatter / M_PER_UM:.3g} um (robust std of "
-                         "their second differences, at the ramp's first station), where a "
-                         f"dip of {FIND_DEPTH_M / M_PER_UM:g} um finds a groove: a scatter of "
-                         f"{FIND_DEPTH_M / NOISE_FINDS / M_PER_UM:.2g} um or more reads such "
-                         "dips where there is none, so the microscope's readings are likely "
-                         f"too noisy to find it; else {beyond}", key="microscope")
+        raise InputError(f"{where}: the groove does not start on the ramp; {noisy}; "
+                         f"else {beyond}", key="microscope")
     rows = []
     floor = microscope.readout.resolution / math.sqrt(12.0)
     # Each fine section is its own placement of the stage (its stated positioning, in x and
@@ -301,7 +310,19 @@ def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading
         y0 = float(inside[0] - margin)
         prof = microscope.profile(index, (x, y0), (x, float(inside[-1] + margin)),
                                   spacing=FINE_SPACING_M)
-        groove = fit_v_groove(prof.s, prof.z)
+        try:
+            groove = fit_v_groove(prof.s, prof.z)
+        except InputError as error:
+            # a microscope's noise of 0.5 um read a dip of FIND_DEPTH_M at a later station,
+            # a groove's start where none is, and the stations below it hold no groove
+            noisy = _too_noisy(height_scatter(coarse(stations[first])[1]),
+                               "in the coarse section at the ramp station where the walk "
+                               "down it found the groove")
+            if noisy is None:
+                raise
+            raise InputError(f"{where}: no groove fitted {depth / M_PER_UM:.3g} um below its "
+                             f"start found on the ramp (x = {x:g} m): {error}; {noisy}",
+                             key="microscope") from error
         y_prog, z_prog = plan.edge(k, x)
         # A reading is never better than the display's rounding (resolution / sqrt(12)),
         # which a fit with no residual would not show.
