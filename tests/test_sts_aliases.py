@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -11,9 +12,15 @@ import pytest
 import machinesim
 from machinesim.errors import ComponentError
 from machinesim.machines import load_machine
-from machinesim.procedures.sts_aliases import tool_test_aliases
-from machinesim.procedures.sts_plans import TEST_SPHERE
-from machinesim.procedures.sts_turning import STSTurning
+from machinesim.procedures import sts_turning
+from machinesim.procedures.sts_aliases import (
+    MISFIT_SHARE_LIMIT,
+    near_aliases,
+    term_model,
+    tool_test_aliases,
+)
+from machinesim.procedures.sts_plans import TABLE5, TEST_PLANE, TEST_SPHERE
+from machinesim.procedures.sts_turning import SPHERE_MISFIT_LIMIT, STSTurning
 from machinesim.report import ReportFolder
 
 NOSE = STSTurning().nose_radius
@@ -44,6 +51,50 @@ def test_the_aliases_are_those_derived_by_hand(aliases):
     # own nuisances, not tool errors
     for term in ("tool.z", "workpiece.z", "workpiece.x", "workpiece.y"):
         assert (term, "") not in aliases
+
+
+@pytest.fixture(scope="module")
+def near():
+    return {(a.term, a.form): a for a in near_aliases(load_machine("sts_lathe"), NOSE)}
+
+
+def test_the_spindles_axial_runout_is_a_near_alias_of_dy(aliases, near):
+    """The spindle's axial runout at the first harmonic, z moved by a sin C, turns the plane
+    z = k x into k x + a y / rho (at the contact, C is the point's angle), which is dy's own
+    form k dy y / rho: the plane reads dy = a / k, 50 nm per nm. It is not exact (the
+    sphere shows a third of it), but its plane misfit share (4.3e-3) is under the near limit
+    of dy: 0.6 nm over the RMS of k sin(theta) (k / sqrt 2 over the disc) times 3.5 um."""
+    runout = near[("component.C.EZC", "sin 1")]
+    assert ("component.C.EZC", "sin 1") not in aliases
+    assert runout.reading == "tool.y"
+    assert runout.per_unit == pytest.approx(1.0 / TEST_PLANE.slope, rel=1e-3)
+    limit = SPHERE_MISFIT_LIMIT * math.sqrt(2.0) / (abs(TABLE5["before"][1]) * TEST_PLANE.slope)
+    assert runout.share_limit == pytest.approx(limit, rel=1e-3)
+    assert MISFIT_SHARE_LIMIT < runout.misfit_share <= runout.share_limit
+    assert 0.1 < runout.sphere_misfit < 0.5  # m RMS per m of runout: a third or so
+    # the exact list is unchanged by the near one: no term is in both
+    assert not set(aliases) & set(near)
+
+
+def test_a_cut_with_axial_runout_moves_dy_by_the_predicted_amount(near):
+    """A second method: the lab's test cut (noise off) with 1 nm of EZC sin 1 and without it,
+    Table 5's "after" tool errors (dx = dy = -0.25 um, dR = 10 um). The sphere's misfit of
+    it (0.24 nm) is under the test's check, so the cut is taken, and dy moves by 49.6 nm
+    against 50.0 predicted. (With Table 5's "before" errors, dx = dy = -3.5 um, it moves by
+    44.0 nm: the columns are first order about the nominal tool.)"""
+    machine = load_machine("sts_lathe")
+    dx, dy, d_radius = TABLE5["after"]
+    base = machinesim.ErrorModel().with_parameters(
+        {"tool.x": dx, "tool.y": dy, "tool_geometry.nose_radius": d_radius})
+    runout = 1e-9
+    moved = replace(base, component=term_model(machine, "component.C.EZC", "sin 1",
+                                               runout).component)
+    procedure = STSTurning()
+    found = [sts_turning.test_cut(machinesim.Lab("sts_lathe", errors, noise=False),
+                                  procedure.nose_radius, procedure.tool, "tool_test")
+             for errors in (base, moved)]
+    predicted = near[("component.C.EZC", "sin 1")].per_unit * runout
+    assert found[1].dy - found[0].dy == pytest.approx(predicted, rel=0.02)
 
 
 def test_a_cut_with_a_straightness_slope_moves_dx_by_the_predicted_amount(aliases):
@@ -81,3 +132,11 @@ def test_the_scenario_reports_the_aliases(tmp_path):
     # read as dx, and the tool against the axis moves as much: what the test reads
     assert rows[("location.C.EX0C", "-", "tool.x")][:3] == ["-1000.0000", "-1000.0000", "um"]
     assert "Computed from the machine's model" in text
+    # the near aliases, a table of their own under the exact one: EZC sin 1 read as dy,
+    # 50 nm per nm (50000 nm per um), the tool against the spindle axis not moved
+    near = [line for line in text.split("(near aliases)")[1].splitlines()
+            if line.startswith("| component.C.EZC | sin 1 | tool.y")]
+    assert len(near) == 1
+    read, against, unit, share = [c.strip() for c in near[0].split("|")[4:8]]
+    assert float(read) == pytest.approx(50e3, rel=1e-3) and unit == "um"
+    assert abs(float(against)) < 1e-3 and float(share) > MISFIT_SHARE_LIMIT
