@@ -301,23 +301,26 @@ def parse_floats(text: str, count: int, option: str) -> list[float]:
     return values
 
 
-def errors_file(path):
+def errors_file(path, machine=None):
     """The `machinesim.errors.ErrorModel` of ``--errors`` ``path``, with a note on stderr
     (``NAME: note: ...``, one line each) where the file reads as no error at all, as
     ``machinesim cut`` notes it in its report: a file without keys (every error zero), and
     values below anything a machine shows (`machinesim.errors.toml.below_any_machine`: SI
     written under a key in um or urad), and values beyond the errors of any machine
-    (`beyond_any_machine`: um or urad under a key in mm or deg). The run goes on: each can
-    be meant."""
+    (`beyond_any_machine`: um or urad under a key in mm or deg); and, with the scenario's
+    ``machine`` (a `machinesim.machines.Machine`), tables whose positions span less than 1 %
+    of their axis's travel (`short_tables`: um of travel under position_um, mm meant). The
+    run goes on: each can be meant."""
     from machinesim.errors import ErrorModel
-    from machinesim.errors.toml import below_any_machine, beyond_any_machine
+    from machinesim.errors.toml import below_any_machine, beyond_any_machine, short_tables
 
     errors = ErrorModel.from_toml(path)
     name = Path(sys.argv[0]).stem or "scenario"
     notes = [] if errors.written else [
         f"{path}: sets no error (no key in any section): the machine as built, every error "
         "zero"]
-    for line in [*notes, *below_any_machine(errors), *beyond_any_machine(errors)]:
+    short = short_tables(errors, machine) if machine is not None else []
+    for line in [*notes, *below_any_machine(errors), *beyond_any_machine(errors), *short]:
         print(f"{name}: note: {line}", file=sys.stderr, flush=True)
     return errors
 
@@ -327,7 +330,8 @@ def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, flo
     """The error model a scenario injects: ``--errors`` (or ``defaults`` without it), with
     the scenario's own options that were given on the command line (``given``) on top.
     With ``machine`` (a name), a model that does not fit it is refused naming the
-    ``--errors`` file first, then the machine.
+    ``--errors`` file first, then the machine, and the file's short tables on it are noted
+    (`errors_file`).
 
     Parameters
     ----------
@@ -341,10 +345,14 @@ def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, flo
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
 
-    base = (errors_file(args.errors) if args.errors is not None
-            else ErrorModel().with_parameters(defaults))
-    if machine is not None and args.errors is not None:
-        load_machine(machine).check_errors(base)  # names the --errors file, then the machine
+    if args.errors is None:
+        base = ErrorModel().with_parameters(defaults)
+    elif machine is None:
+        base = errors_file(args.errors)
+    else:
+        loaded = load_machine(machine)
+        base = errors_file(args.errors, loaded)
+        loaded.check_errors(base)  # names the --errors file, then the machine
     return base.with_parameters(given) if given else base
 
 

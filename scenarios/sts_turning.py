@@ -39,6 +39,7 @@ from machinesim.budget import realism_budget
 from machinesim.cutting.turning import edge_path_from_poses
 from machinesim.errors import ErrorModel
 from machinesim.experiment import run
+from machinesim.machines import load_machine
 from machinesim.procedures.sts_aliases import (
     ALIAS_NOTE,
     NEAR_ALIAS_NOTE,
@@ -87,12 +88,13 @@ def main() -> None:
 
 def report(args) -> None:
     began = time.perf_counter()
-    errors = errors_file(args.errors) if args.errors is not None else default_errors()
+    machine = load_machine("sts_lathe")  # for the notes on --errors, and the labs
+    errors = errors_file(args.errors, machine) if args.errors is not None else default_errors()
     realism = realism_from(args).without("lateral_resolution", "registration",
                                          "stage_positioning")
 
     def make_lab(realism):
-        return Lab("sts_lathe", errors, seed=args.seed, realism=realism,
+        return Lab(machine, errors, seed=args.seed, realism=realism,
                    servo=table6_servo("before"))
 
     print(f"Paper 004 on sts_lathe: realism {realism}, seed {args.seed}\n")

@@ -40,6 +40,7 @@ from machinesim._io import write_atomic
 from machinesim.budget import realism_budget
 from machinesim.errors import ErrorModel
 from machinesim.experiment import run
+from machinesim.machines import load_machine
 from machinesim.procedures.pyramid_windows import WINDOWS, capture, path_errors
 from machinesim.procedures.xy_plane_errors import XYPlaneErrors, compensations
 from machinesim.procedures.xy_plane_measurements import (
@@ -70,13 +71,14 @@ def main() -> None:
 
 def report(args) -> None:
     began = time.perf_counter()
-    errors = (errors_file(args.errors) if args.errors is not None
+    machine = load_machine("grooving_4axis")  # for the notes on --errors, and the labs
+    errors = (errors_file(args.errors, machine) if args.errors is not None
               else ErrorModel.from_toml(DEFAULT_ERRORS))
     realism = realism_from(args).without("registration")
     ideal = not realism.instrument_noise
 
     def make_lab(realism):
-        return Lab("grooving_4axis", errors, seed=args.seed, realism=realism)
+        return Lab(machine, errors, seed=args.seed, realism=realism)
 
     lab = make_lab(realism)
     refuse_off_windows(args, lab.machine, errors)

@@ -234,6 +234,53 @@ def test_a_scenario_notes_an_errors_value_beyond_any_machine(tmp_path, capsys, m
         "misses its part): was it written in um, where the key asks mm?"]
 
 
+def test_papers_000_001_002_note_an_errors_table_in_micrometres_of_travel(tmp_path, capsys,
+                                                                         monkeypatch):
+    """position_um = [-50, 0, 50] beside EXX_um (mm meant) is a table over 0.1 mm of
+    robonano_a0ib's 280 mm of X (-140 .. 140 mm), held at its end values beyond: ``machinesim
+    cut`` noted it, the scenarios' --errors (through `injected_errors`) ran it without a
+    word. The note, by hand: span 0.1 mm, travel 280 mm, ends -0.05 .. 0.05 mm, line 2."""
+    from types import SimpleNamespace
+
+    from machinesim.scenario_runs import injected_errors
+
+    path = tmp_path / "slip.toml"
+    path.write_text("[component.X]\nposition_um = [-50.0, 0.0, 50.0]\n"
+                    "EXX_um = [-1.0, 0.0, 1.0]\n")
+    monkeypatch.setattr(sys, "argv", ["workpiece_setting.py"])
+    injected_errors(SimpleNamespace(errors=str(path)), {}, {}, "robonano_a0ib")
+    assert capsys.readouterr().err.splitlines() == [
+        f"workpiece_setting: note: {path}, line 2: component.X.position_um = [-50.0, 0.0, "
+        "50.0] spans 0.1 mm of X's 280 mm travel, and its tables hold their end values beyond "
+        "-0.05 mm .. 0.05 mm: was it written in mm, where the key asks um?"]
+
+
+def test_papers_003_004_note_an_errors_table_in_micrometres_of_travel(tmp_path):
+    """The same slip in papers 003 and 004, whose --errors were read before their machine
+    was made: noted against each machine's X (by hand: 500 mm of grooving_4axis, -250 ..
+    250 mm; 200 mm of sts_lathe, -100 .. 100 mm), before the file's axis A (on neither
+    machine) is refused, so the run stops before anything is cut."""
+    path = tmp_path / "errors.toml"
+    path.write_text("[component.X]\nposition_um = [-50.0, 0.0, 50.0]\n"
+                    "EXX_um = [-1.0, 0.0, 1.0]\n[location.A]\nEB0A_urad = 1.0\n")
+    for script, machine, travel in (("xy_plane_errors.py", "grooving_4axis", 500),
+                                    ("sts_turning.py", "sts_lathe", 200)):
+        result = subprocess.run([sys.executable, str(ROOT / "scenarios" / script), "--errors",
+                                 str(path), "--out", str(tmp_path / "out")],
+                                capture_output=True, text=True, check=False, cwd=ROOT,
+                                timeout=120)
+        name = script.removesuffix(".py")
+        assert result.returncode == 2, result.stderr
+        lines = result.stderr.splitlines()
+        assert lines[0] == (
+            f"{name}: note: {path}, line 2: component.X.position_um = [-50.0, 0.0, 50.0] spans "
+            f"0.1 mm of X's {travel} mm travel, and its tables hold their end values beyond "
+            "-0.05 mm .. 0.05 mm: was it written in mm, where the key asks um?"), result.stderr
+        assert len(lines) == 2 and lines[1].startswith(
+            f"{name}: error: {path}, line 4, key 'location.A': axis 'A' is not on this "
+            "machine") and f"(machine {machine}, " in lines[1], result.stderr
+
+
 def test_paper_000_reads_its_errors_file_once_and_notes_it_once(tmp_path):
     """The scenario read --errors twice (once for the capture check, once for the lab), so
     the note of an error below anything a machine shows came twice."""
