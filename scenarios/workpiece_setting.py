@@ -155,9 +155,14 @@ def loads(args) -> dict:
     if args.crown_delta_um or args.crown_rot_deg:
         given = {**given, "crown": _given_setting(args.crown_delta_um, args.crown_rot_deg,
                                                   "crown-")}
-    errors = {load: injected_errors(args, {**landed[load], **centre}, given[load],
-                                    "robonano_a0ib")
-              for load in EXPERIMENTS}
+    if args.errors is not None:  # the file read (and noted) once, for both loads
+        read = injected_errors(args, {}, {}, "robonano_a0ib")
+        errors = {load: read.with_parameters(given[load]) if given[load] else read
+                  for load in EXPERIMENTS}
+    else:
+        errors = {load: injected_errors(args, {**landed[load], **centre}, given[load],
+                                        "robonano_a0ib")
+                  for load in EXPERIMENTS}
     _check_grooves_landing(args, errors["grooves"].workpiece, repeatability)
     for load in EXPERIMENTS:  # the crown's is probed only after the grooves' whole run
         _check_probing(args, load, errors[load].workpiece, repeatability)

@@ -135,6 +135,24 @@ def test_a_perfect_robot_lands_the_workpieces_where_designed_and_options_do_not_
         scenario.loads(_parse(["--rot-deg", "1e9,0,0"]))
 
 
+def test_the_errors_file_is_read_and_noted_once_for_both_loads(tmp_path, capsys,
+                                                                monkeypatch):
+    """`loads` read --errors once per load (grooves, crown), so each note on the file (a
+    value below anything a machine shows, a table over um of travel) came twice on stderr.
+    The file's values reach both loads all the same, each load's own setting on top."""
+    path = tmp_path / "errors.toml"
+    path.write_text("[location.C]\nEX0C_um = 4e-6\n")
+    monkeypatch.setattr(sys, "argv", ["workpiece_setting.py"])  # the notes' name
+    models = scenario.loads(_parse(["--errors", str(path), "--crown-delta-um", "0,0,60"]))
+    notes = [line for line in capsys.readouterr().err.splitlines() if ": note: " in line]
+    assert notes == [f"workpiece_setting: note: {path}, line 2: location.C.EX0C_um = 4e-06 is "
+                     "at most 4e-09 mm (4e-12 m), below anything a machine shows: was it "
+                     "written in m, where the key asks um?"]
+    grooves, crown = models["grooves"].parameters(), models["crown"].parameters()
+    assert grooves["location.C.EX0C"] == crown["location.C.EX0C"] == 4e-12
+    assert grooves["workpiece.z"] == 0.0 and crown["workpiece.z"] == 60 * UM
+
+
 def test_a_landing_the_groove_programs_rapids_would_run_into_is_refused_before_the_run():
     """The groove program comes down at rapid to CLEARANCE (60 um) over the crossing and
     turns C and returns at SAFE_Z (0.5 mm) over its 1 mm grooves: a block set 60 um high,
