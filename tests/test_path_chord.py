@@ -123,3 +123,53 @@ def test_the_api_takes_the_chord_tolerances_bounds(tmp_path, chord):
     _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:10x10x2",
                        chord_tolerance=chord)
     assert report.removed_volume_m3 > 0.0
+
+
+#: The quarter arc above the block (Z 1 mm): nothing is cut, so a reading of 1 nm is quick.
+QUARTER_ABOVE = QUARTER.replace("G00 Z-0.02\n", "")
+
+
+def test_a_program_keeps_the_chord_tolerance_its_arcs_were_read_with(tmp_path):
+    import pickle
+
+    from machinesim.nc import Move, Program, parse_program
+
+    assert parse_program(QUARTER).arc_chord_tolerance == 1e-9  # parse_program's default
+    assert read_program(_quarter(tmp_path), chord_tolerance=1e-7).arc_chord_tolerance == 1e-7
+    read = parse_program(QUARTER, chord_tolerance=2e-7)
+    assert pickle.loads(pickle.dumps(read)).arc_chord_tolerance == 2e-7
+    assert read.with_targets(read.targets).arc_chord_tolerance == 2e-7  # as compensated
+    # no arc read, or moves built in Python: no chords to speak of
+    assert parse_program("G00 X1.\nG01 Y1. F100.\n", chord_tolerance=1e-7).arc_chord_tolerance \
+        is None
+    assert Program([Move("rapid", {"X": 0.001})]).arc_chord_tolerance is None
+
+
+def test_cut_notes_a_program_whose_arcs_were_read_finer_or_coarser_than_it_cuts():
+    # parse_program splits arcs within 1 nm; cut() follows a ball's path within 100 nm, and
+    # ran the 1 nm chords as given, 10 times as many sweeps (37,964 against 3,836 on a
+    # 12.8 mm helical bore with flat:1.35), without a word. The ratio is sqrt(100 / 1): the
+    # chords' number goes as 1/sqrt(tolerance) (556 against 56 on this quarter arc).
+    from machinesim.nc import parse_program
+
+    ball = BallEndMill(0.2 * MM)
+    fine = parse_program(QUARTER_ABOVE)
+    assert len(fine) - len(parse_program(QUARTER_ABOVE, chord_tolerance=1e-7)) == 556 - 56
+    _, report = cut(fine, "grooving_4axis", tool=ball, stock="block:10x10x2")
+    assert ("the program's 1 arc block was read as chords within 1 nm, finer than the 100 nm "
+            "this cut follows: about 10 times as many sweeps on them, for a part within 100 nm "
+            "of the same; read it with read_program/parse_program(..., chord_tolerance=1e-07) "
+            "(machinesim.tools.path_chord_tolerance([tool])), or give cut() the file's path "
+            "(docs/cutting.md)") in report.notes
+    # read as the cut follows (0.1 * 1e-6 against 1e-7 written: the same), or cut with a V
+    # tool, which follows 1 nm: nothing to say
+    for program, tool in ((parse_program(QUARTER_ABOVE, chord_tolerance=1e-7), ball),
+                          (fine, "v:90")):
+        _, report = cut(program, "grooving_4axis", tool=tool, stock="block:10x10x2")
+        assert not any("arc block" in note for note in report.notes), report.notes
+    # coarser than the cut follows: the part keeps the reading's chords
+    _, report = cut(parse_program(QUARTER_ABOVE, chord_tolerance=1e-6), "grooving_4axis",
+                    tool="v:90", stock="block:10x10x2")
+    assert ("the program's 1 arc block was read as chords within 1000 nm, coarser than the "
+            "1 nm this cut follows: the part follows them only within 1000 nm (read with "
+            "chord_tolerance=1e-09 to follow them as closely)") in report.notes

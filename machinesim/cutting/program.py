@@ -18,7 +18,12 @@ import numpy as np
 from machinesim import motion
 from machinesim.cutting.engine import remove
 from machinesim.cutting.rapids import rapids_that_cut
-from machinesim.cutting.report import CutReport, nc_summary, peak_following_error
+from machinesim.cutting.report import (
+    CutReport,
+    arc_chord_note,
+    nc_summary,
+    peak_following_error,
+)
 from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance, within_edge_plane
@@ -88,7 +93,10 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     ----------
     program : machinesim.nc.Program or str or Path
         A program, or the path of an NC file (read with `machinesim.nc.read_program`'s
-        defaults, its arcs split within ``path_chord_tolerance([tool])``).
+        defaults, its arcs split within ``path_chord_tolerance([tool])``). A `Program`
+        keeps the chords its arcs were read as: read at another tolerance than this cut
+        follows (`parse_program`'s 1 nm under a ball or flat end mill), the report's notes
+        say so (`report.arc_chord_note`).
     machine : machinesim.Machine or str
         A machine or a machine name.
     tool : str or tool
@@ -195,7 +203,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         empty_cut=all(bool(e.empty_cut) for e in engines),
         engine="+".join(dict.fromkeys(e.method for e in engines)),
         elapsed_s=time.perf_counter() - began,
-        notes=(*trajectory.notes, *tools.notes, *([sheet_note] if sheet_note else [])),
+        notes=tuple(note for note in (*trajectory.notes, *tools.notes, sheet_note,
+                                      arc_chord_note(program, chord_tolerance)) if note),
         holder_contact=tuple(sorted(holder)),
         sideways_lines=tuple(sorted(sideways)),
         edge_plane_lines=tuple(sorted(in_plane)),

@@ -1,9 +1,10 @@
 """What a cut reports (`CutReport`), and the pieces of it taken from the program: how it was
-read (`nc_summary`) and the lag of the servo loops it was run through
+read (`nc_summary`, `arc_chord_note`) and the lag of the servo loops it was run through
 (`peak_following_error`)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -152,4 +153,35 @@ def nc_summary(program) -> dict:
             "tool_table": getattr(program, "tool_table", None)}
 
 
-__all__ = ["CutReport", "nc_summary", "peak_following_error"]
+#: Two chord tolerances (m) are the same when they agree to this share: the round-off of
+#: ``0.1 * 1e-6`` against a written ``1e-7``.
+SAME_CHORD_SHARE = 1e-9
+
+
+def arc_chord_note(program, chord_tolerance: float) -> str:
+    """A note when ``program``'s arcs were read as chords within another tolerance than the
+    ``chord_tolerance`` (m) the cut follows (`Program.arc_chord_tolerance`), else ''.
+
+    The cut cannot split them again: finer, it runs sqrt(cut / read) times as many sweeps
+    on them (`parse_program`'s 1 nm under a ball or flat end mill's 100 nm: ten times) for
+    a part that differs by less than the cut's tolerance; coarser, the part follows its
+    arcs only within the tolerance they were read with."""
+    read = getattr(program, "arc_chord_tolerance", None)
+    if read is None or abs(read - chord_tolerance) <= SAME_CHORD_SHARE * chord_tolerance:
+        return ""
+    many = program.arc_blocks != 1
+    blocks = f"{program.arc_blocks} arc block{'s were' if many else ' was'}"
+    said = (f"the program's {blocks} read as chords within {read * 1e9:.4g} nm, "
+            f"{'finer' if read < chord_tolerance else 'coarser'} than the "
+            f"{chord_tolerance * 1e9:.4g} nm this cut follows")
+    if read < chord_tolerance:
+        return (f"{said}: about {math.sqrt(chord_tolerance / read):.3g} times as many sweeps "
+                f"on them, for a part within {chord_tolerance * 1e9:.4g} nm of the same; read "
+                f"it with read_program/parse_program(..., chord_tolerance="
+                f"{chord_tolerance:.4g}) (machinesim.tools.path_chord_tolerance([tool])), or "
+                f"give cut() the file's path (docs/cutting.md)")
+    return (f"{said}: the part follows them only within {read * 1e9:.4g} nm (read with "
+            f"chord_tolerance={chord_tolerance:.4g} to follow them as closely)")
+
+
+__all__ = ["CutReport", "arc_chord_note", "nc_summary", "peak_following_error"]

@@ -220,7 +220,11 @@ def parse_program(
         The tool table for H (tool length, G43/G44), T and D words
         (`machinesim.nc.tooltable`).
     chord_tolerance : float
-        Largest distance, m, between an arc and the straight moves that replace it.
+        Largest distance, m, between an arc and the straight moves that replace it; kept as
+        `Program.arc_chord_tolerance`. The default, 1 nm (the axes' resolution), is what a
+        cut with a V or nose tool follows; one with a ball or flat end mill follows 100 nm
+        (`machinesim.tools.path_chord_tolerance`) and runs ten times fewer sweeps on arcs
+        read so (`machinesim.cutting.cut` notes a program read otherwise).
     fast : bool
         Read runs of plain motion lines with the vectorised path (the same result; False
         is for tests and benchmarks).
@@ -429,7 +433,7 @@ class Reader:
             unit_words=self.unit_words, integer_words=self.integer_words,
             end_words={} if self.state.end is None else {self.state.end[1]: self.state.end[0]},
             exact_stops=np.concatenate(self.out.stops) if self.out.stops else (),
-            after_end=self.after_end)
+            after_end=self.after_end, arc_chord_tolerance=self.chord_tolerance)
 
     def tool_changes(self) -> tuple:
         """The tools put in the spindle (`ToolChange`), from the T words and M06: at each

@@ -161,6 +161,10 @@ class Program:
     arc_blocks : int
         How many G02/G03 blocks were read (each run of a subprogram counted): their moves
         are chords within the reader's ``chord_tolerance``. 0 for programs built from moves.
+    arc_chord_tolerance : float or None
+        That ``chord_tolerance`` (m) when arcs were read (``arc_blocks`` > 0), else None:
+        `machinesim.cutting.cut` notes a program whose arcs are chords finer or coarser than
+        the tolerance it cuts with.
     unit_words : Mapping[str, int]
         The length units the text selected (``"G20"`` inch, ``"G21"`` mm) -> the first line
         each appeared on. Empty when it selected neither: its lengths were read in mm (the
@@ -196,7 +200,8 @@ class Program:
 
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
-                 "tool_table", "tool_changes", "arc_blocks", "unit_words", "_moves",
+                 "tool_table", "tool_changes", "arc_blocks", "arc_chord_tolerance",
+                 "unit_words", "_moves",
                  "exact_stops", "integer_words", "end_words", "after_end")
 
     def __init__(
@@ -312,19 +317,20 @@ class Program:
                     number, source, work_offsets, states, integer_input,
                     tool_table=None, tool_changes=(), arc_blocks=0,
                     unit_words=None, exact_stops=(), integer_words=None,
-                    end_words=None, after_end=None) -> Program:
+                    end_words=None, after_end=None, arc_chord_tolerance=None) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
                       source, work_offsets, states, integer_input, tool_table, tool_changes,
                       arc_blocks, unit_words, exact_stops, integer_words, end_words,
-                      after_end)
+                      after_end, arc_chord_tolerance)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
               source, work_offsets, states, integer_input, tool_table=None,
               tool_changes=(), arc_blocks=0, unit_words=None, exact_stops=(),
-              integer_words=None, end_words=None, after_end=None) -> None:
+              integer_words=None, end_words=None, after_end=None,
+              arc_chord_tolerance=None) -> None:
         set_ = object.__setattr__
         set_(self, "after_end", None if after_end is None else int(after_end))
         set_(self, "source", source)
@@ -344,6 +350,8 @@ class Program:
         set_(self, "states", _states(states, source))
         set_(self, "tool_changes", tuple(tool_changes))
         set_(self, "arc_blocks", int(arc_blocks))
+        set_(self, "arc_chord_tolerance", None if arc_chord_tolerance is None or not arc_blocks
+             else float(arc_chord_tolerance))
         set_(self, "unit_words", _states(unit_words, source, "unit_words"))
         set_(self, "integer_words", _states(integer_words, source, "integer_words"))
         set_(self, "end_words", _states(end_words, source, "end_words"))
@@ -444,7 +452,7 @@ class Program:
             tool_changes=self.tool_changes, arc_blocks=self.arc_blocks,
             unit_words=self.unit_words, exact_stops=self.exact_stops,
             integer_words=self.integer_words, end_words=self.end_words,
-            after_end=self.after_end)
+            after_end=self.after_end, arc_chord_tolerance=self.arc_chord_tolerance)
 
     def __hash__(self) -> int:
         return hash((self.number, self.source, len(self._kinds)))
@@ -456,7 +464,7 @@ class Program:
                            dict(self.states), self.integer_input, self.tool_table,
                            self.tool_changes, self.arc_blocks, dict(self.unit_words),
                            self.exact_stops, dict(self.integer_words),
-                           dict(self.end_words), self.after_end))
+                           dict(self.end_words), self.after_end, self.arc_chord_tolerance))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -472,7 +480,7 @@ class Program:
 def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number, source,
              work_offsets, states, integer_input, tool_table=None, tool_changes=(),
              arc_blocks=0, unit_words=None, exact_stops=(), integer_words=None,
-             end_words=None, after_end=None) -> Program:
+             end_words=None, after_end=None, arc_chord_tolerance=None) -> Program:
     """Unpickle a `Program` (the arrays come back writeable copies: made read-only again)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
@@ -480,4 +488,5 @@ def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, nu
                                tool_table=tool_table, tool_changes=tool_changes,
                                arc_blocks=arc_blocks, unit_words=unit_words,
                                exact_stops=exact_stops, integer_words=integer_words,
-                               end_words=end_words, after_end=after_end)
+                               end_words=end_words, after_end=after_end,
+                               arc_chord_tolerance=arc_chord_tolerance)
