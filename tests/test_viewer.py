@@ -1085,7 +1085,8 @@ def test_a_live_viewer_stopped_by_sigterm_exits_143_and_ends_its_server(tmp_path
 
 
 @pytest.mark.parametrize("group", [False, True], ids=["viewer", "terminal"])
-def test_a_live_viewer_stopped_by_ctrl_c_exits_130_and_ends_its_server(group, tmp_path):
+def test_a_live_viewer_stopped_by_ctrl_c_exits_130_and_ends_its_server(group, tmp_path,
+                                                                       as_in_a_terminal):
     # Ctrl-C of a live `machinesim view` exited 0 with no word (LiveSession.wait returned
     # None, and the command went on to 'return 0'), where every command interrupted exits
     # 130 with 'machinesim: interrupted; nothing was written' (docs/cli.md; `machinesim cut`
@@ -1100,7 +1101,7 @@ def test_a_live_viewer_stopped_by_ctrl_c_exits_130_and_ends_its_server(group, tm
     process = subprocess.Popen([sys.executable, "-m", "machinesim.cli", "view",
                                 str(tmp_path / "part.ply"), "--port", str(_unused_port())],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               env=env, start_new_session=group)
+                               env=env, start_new_session=group, **as_in_a_terminal)
     try:
         line = process.stdout.readline()
         assert line.startswith("machinesim viewer at http://127.0.0.1:"), line
@@ -1120,7 +1121,8 @@ def test_a_live_viewer_stopped_by_ctrl_c_exits_130_and_ends_its_server(group, tm
         urllib.request.urlopen(url, timeout=5)
 
 
-def test_a_live_viewer_stopped_after_its_screenshot_says_the_screenshot_stays(tmp_path):
+def test_a_live_viewer_stopped_after_its_screenshot_says_the_screenshot_stays(tmp_path,
+                                                                           as_in_a_terminal):
     # with --screenshot written, 'nothing was written' would be false: the line names it.
     # Chromium is stood in for by a _screenshot that writes the file (the browser test
     # runs the real one)
@@ -1141,7 +1143,8 @@ def test_a_live_viewer_stopped_after_its_screenshot_says_the_screenshot_stays(tm
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
     process = subprocess.Popen([sys.executable, "-c", script, "view", str(tmp_path / "part.ply"),
                                 "--screenshot", str(shot)], stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, env=env)
+                               stderr=subprocess.PIPE, text=True, env=env,
+                               **as_in_a_terminal)
     try:
         assert process.stdout.readline().startswith("machinesim viewer at http://127.0.0.1:")
         assert process.stdout.readline() == f"wrote {shot}\n"
@@ -1184,11 +1187,12 @@ CRASH = {"end": "loop.add_callback(loop.stop)",
     ("os._exit(3)", "exit status 3", False, 0, False),
     ("os.kill(os.getpid(), signal.SIGKILL)", "killed by SIGKILL", False, 0, False),
     ("os._exit(3)", "exit status 3", True, 0, False),
+    ("os._exit(3)", "exit status 3", False, 3, False),
     (CRASH, "exit status 1; its last line on stderr: RuntimeError: the stand-in server "
             "crashed", False, 0, False),
     (CRASH, "exit status 1; its last line on stderr: RuntimeError: the stand-in server "
             "crashed", False, 20000, True)],
-    ids=["exit", "killed", "screenshot", "raised", "chatty-traceback"])
+    ids=["exit", "killed", "screenshot", "exit-chatty", "raised", "chatty-traceback"])
 def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(
         end, said, shot, chat, traceback, tmp_path):
     # a server that died while serving (not by Ctrl-C) left `machinesim view` to exit 0
@@ -1197,7 +1201,9 @@ def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(
     # raised (its stderr had gone to /dev/null) said 'exit status 1' alone: the line now
     # ends with its exception. 20000 lines (2 MB, 30 times a pipe's 64 KiB) written to
     # stderr while the page is served stall no server; with MACHINESIM_TRACEBACK=1 the last
-    # STDERR_LINES_KEPT lines of it come first, the traceback whole at their end.
+    # STDERR_LINES_KEPT lines of it come first, the traceback whole at their end. Lines
+    # without a traceback are no cause, and are not told (meshcat's 'Port: 6002 in use,
+    # trying another...' had been, beside a server killed, when tests ran side by side).
     import contextlib
     import subprocess
     import sys

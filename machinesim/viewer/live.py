@@ -64,8 +64,13 @@ class StderrTail:
 
     def last(self, timeout: float = 5.0) -> str:
         """The last line that is not blank, stripped and cut to `STDERR_LINE_SHOWN`
-        characters; "" when there is none."""
-        for line in reversed(self.lines(timeout)):
+        characters, when the process wrote a Python traceback (its exception, the cause of a
+        crash); "" otherwise. Without a traceback the last line is no cause: meshcat's
+        "Port: 6002 in use, trying another..." under a server killed or ended by itself."""
+        lines = self.lines(timeout)
+        if not any(line.startswith("Traceback (most recent call last)") for line in lines):
+            return ""
+        for line in reversed(lines):
             if line.strip():
                 line = line.strip()
                 return (line if len(line) <= STDERR_LINE_SHOWN
