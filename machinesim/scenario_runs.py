@@ -301,16 +301,16 @@ def parse_floats(text: str, count: int, option: str) -> list[float]:
     return values
 
 
-def errors_file(path, machine=None):
+def errors_file(path, machine):
     """The `machinesim.errors.ErrorModel` of ``--errors`` ``path``, with a note on stderr
     (``NAME: note: ...``, one line each) where the file reads as no error at all, as
     ``machinesim cut`` notes it in its report: a file without keys (every error zero), and
     values below anything a machine shows (`machinesim.errors.toml.below_any_machine`: SI
     written under a key in um or urad), and values beyond the errors of any machine
-    (`beyond_any_machine`: um or urad under a key in mm or deg); and, with the scenario's
-    ``machine`` (a `machinesim.machines.Machine`), tables whose positions span less than 1 %
-    of their axis's travel (`short_tables`: um of travel under position_um, mm meant). The
-    run goes on: each can be meant."""
+    (`beyond_any_machine`: um or urad under a key in mm or deg); and tables whose positions
+    span less than 1 % of their axis's travel on the scenario's ``machine`` (a
+    `machinesim.machines.Machine`, required: `short_tables`, um of travel under position_um,
+    mm meant). The run goes on: each can be meant."""
     from machinesim.errors import ErrorModel
     from machinesim.errors.toml import below_any_machine, beyond_any_machine, short_tables
 
@@ -319,17 +319,17 @@ def errors_file(path, machine=None):
     notes = [] if errors.written else [
         f"{path}: sets no error (no key in any section): the machine as built, every error "
         "zero"]
-    short = short_tables(errors, machine) if machine is not None else []
-    for line in [*notes, *below_any_machine(errors), *beyond_any_machine(errors), *short]:
+    for line in [*notes, *below_any_machine(errors), *beyond_any_machine(errors),
+                 *short_tables(errors, machine)]:
         print(f"{name}: note: {line}", file=sys.stderr, flush=True)
     return errors
 
 
 def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, float],
-                    machine: str | None = None):
+                    machine: str):
     """The error model a scenario injects: ``--errors`` (or ``defaults`` without it), with
     the scenario's own options that were given on the command line (``given``) on top.
-    With ``machine`` (a name), a model that does not fit it is refused naming the
+    A model that does not fit ``machine`` (the scenario's, by name) is refused naming the
     ``--errors`` file first, then the machine, and the file's short tables on it are noted
     (`errors_file`).
 
@@ -341,14 +341,14 @@ def injected_errors(args, defaults: Mapping[str, float], given: Mapping[str, flo
         The scenario's default parameters (SI, names as `ErrorModel.parameters`).
     given : Mapping[str, float]
         Parameters set by options given explicitly.
+    machine : str
+        The scenario's machine (`machinesim.machines.load_machine` name).
     """
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
 
     if args.errors is None:
         base = ErrorModel().with_parameters(defaults)
-    elif machine is None:
-        base = errors_file(args.errors)
     else:
         loaded = load_machine(machine)
         base = errors_file(args.errors, loaded)

@@ -222,12 +222,14 @@ def test_papers_000_001_002_note_an_errors_file_that_reads_as_no_error(tmp_path,
 def test_a_scenario_notes_an_errors_value_beyond_any_machine(tmp_path, capsys, monkeypatch):
     """--errors with the paper's 178 um written under offset_mm (178 mm) ran the paper
     without a word; the note `machinesim cut` gives comes as the file is read."""
+    from machinesim.machines import load_machine
     from machinesim.scenario_runs import errors_file
 
     path = tmp_path / "slip.toml"
     path.write_text("[tool]\noffset_mm = [0.0, -178.0, 0.0]\n")
     monkeypatch.setattr(sys, "argv", ["tool_rotation_arm.py"])
-    assert errors_file(path).parameters()["tool.y"] == pytest.approx(-0.178, abs=1e-15)
+    errors = errors_file(path, load_machine("planer_4axis"))
+    assert errors.parameters()["tool.y"] == pytest.approx(-0.178, abs=1e-15)
     assert capsys.readouterr().err.splitlines() == [
         f"tool_rotation_arm: note: {path}, line 2: tool.offset_mm = [0.0, -178.0, 0.0] "
         "reaches 178 mm, beyond the errors of any machine (a tool or workpiece set that far off "
@@ -253,6 +255,19 @@ def test_papers_000_001_002_note_an_errors_table_in_micrometres_of_travel(tmp_pa
         f"workpiece_setting: note: {path}, line 2: component.X.position_um = [-50.0, 0.0, "
         "50.0] spans 0.1 mm of X's 280 mm travel, and its tables hold their end values beyond "
         "-0.05 mm .. 0.05 mm: was it written in mm, where the key asks um?"]
+
+
+def test_the_scenarios_errors_file_takes_their_machine():
+    """errors_file(path) without a machine skipped the short-table note with no word (every
+    scenario passed one; a new one leaving it out would not); injected_errors, which loads
+    the machine for it, takes the machine's name as required too."""
+    import inspect
+
+    from machinesim.scenario_runs import errors_file, injected_errors
+
+    for function in (errors_file, injected_errors):
+        machine = inspect.signature(function).parameters["machine"]
+        assert machine.default is inspect.Parameter.empty, function.__name__
 
 
 def test_papers_003_004_note_an_errors_table_in_micrometres_of_travel(tmp_path):
