@@ -363,6 +363,38 @@ def test_a_failed_ramp_fit_under_a_quiet_microscope_keeps_the_fits_message(
     assert info.value is refusal
 
 
+def test_a_ramp_groove_that_does_not_go_on_down_the_ramp_is_refused():
+    """A part whose only dip on ramp 0 is a 5 um pit 60 um long (not the plan's cut): the walk
+    down the ramp finds it, the stations 6-14 um further down read flat land, and the reading
+    ended in a bare IndexError (``inside[-1]`` of no sample). By hand: the pit's tent reaches
+    the 2 um that finds a groove 0.4 x 30 um in from its start, at xm - 18 um, and the first
+    station, 8 um deep, lies (8 - 2) um / 0.1 = 60 um beyond, past the pit's end at xm + 30 um."""
+    plan = CalibrationPlan(angles=(0.0,))
+    xm = plan.ramp[0] + 6 * 10 * UM / plan.slope  # the walk's sixth station
+    yc = float(plan.edge(0, xm)[0])
+    xs = [plan.origin[0], xm - 30 * UM, xm, xm + 30 * UM, plan.origin[0] + plan.length]
+    ys = [plan.origin[1], yc - 10 * UM, yc, yc + 10 * UM,
+          plan.origin[1] + plan.lead + plan.spacing]
+    x, y = np.meshgrid(xs, ys, indexing="ij")
+    z = np.zeros_like(x)
+    z[2, 2] = -5 * UM
+    n = len(ys)
+    corners = [(i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1, i * n + j + 1)
+               for i in range(len(xs) - 1) for j in range(n - 1)]
+    triangles = [t for a, b, c, d in corners for t in ((a, b, c), (a, c, d))]
+    part = (np.column_stack([x.ravel(), y.ravel(), z.ravel()]), np.array(triangles))
+    with pytest.raises(InputError, match="ramp groove at 0 deg: found starting") as info:
+        measure_calibration(part, plan, Microscope(noise=False))
+    assert info.value.key == "part"
+    message = str(info.value)
+    start = float(message.split("starting at x = ")[1].split(" m")[0])
+    assert abs(start - (xm - 18 * UM)) < 1 * UM  # the bisection's step
+    station = float(message.split("ramp at x = ")[1].split(" m")[0])
+    assert station == pytest.approx(start + 60 * UM, abs=1e-9)
+    assert "should be 8 um deep, reads nothing 0.8 um below its land" in message
+    assert "expected the calibration part cut by plan.program" in message
+
+
 def scenario(*args, cwd=ROOT):
     return subprocess.run([sys.executable, str(ROOT / "scenarios" / "tool_rotation_arm.py"),
                            *args], capture_output=True, text=True, check=False, cwd=cwd)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NoReturn
 
 import numpy as np
 
@@ -171,7 +172,8 @@ def measure_calibration(part, plan: CalibrationPlan, microscope) -> tuple[AngleR
     Raises
     ------
     InputError
-        When a groove lies outside the ramp's search range.
+        When a groove lies outside the ramp's search range, or does not go on down the
+        ramp from where it was found (a part not cut by ``plan.program``).
     """
     index = MeshIndex.from_surface(part)
     aligned = AlignedMicroscope(microscope, stage_rotation(index, plan, microscope))
@@ -252,6 +254,17 @@ def _too_noisy(scatter: float, at: str) -> str | None:
             "too noisy to find it")
 
 
+def _no_groove_at(where: str, depth: float, x: float, start: float) -> NoReturn:
+    """Refuse a ramp whose groove, found to start at ``start`` (m), shows no sample
+    ``0.1 x depth`` below the land in the coarse section at the station ``x`` where it
+    should be ``depth`` (m) deep."""
+    raise InputError(f"{where}: found starting at x = {start:g} m, but the section across the "
+                     f"ramp at x = {x:g} m, where it should be {depth / M_PER_UM:.3g} um deep, "
+                     f"reads nothing {0.1 * depth / M_PER_UM:.3g} um below its land: the "
+                     "groove does not go on down the ramp; expected the calibration part cut "
+                     "by plan.program", key="part")
+
+
 def _section(index, microscope, x: float, y0: float, y1: float, spacing=None):
     """A section across Y at ``x``: (y, height below the land's median)."""
     prof = microscope.profile(index, (x, y0), (x, y1), spacing=spacing)
@@ -306,6 +319,13 @@ def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading
     for depth, x in zip(plan.station_depths, x_stations, strict=True):
         y, h = coarse(x)
         inside = y[h < -0.1 * depth]
+        if inside.size == 0:
+            # Found at hi, the groove is not in the section (depth - FIND_DEPTH_M) / slope
+            # further down the ramp: a part not cut by plan.program (a 5 um pit 60 um long
+            # raised a bare IndexError here). Noise does not: a false find of FIND_DEPTH_M
+            # needs a std of ~0.3 um or more, which reads dips of 0.1 x depth (>= 0.8 um) in
+            # every section of 2500 samples.
+            _no_groove_at(where, depth, x, hi)
         margin = max(FINE_LAND_M, 0.25 * (inside[-1] - inside[0]))
         y0 = float(inside[0] - margin)
         prof = microscope.profile(index, (x, y0), (x, float(inside[-1] + margin)),
