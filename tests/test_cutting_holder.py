@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_cutting import _slot_in_steps  # the slot of the holder tests there
 
 import machinesim.cutting.engine as engine
 from machinesim.cutting import cut
@@ -75,16 +76,6 @@ def checked(monkeypatch):
 
     monkeypatch.setattr(engine, "holder_in_material", both)
     return calls
-
-
-def _slot_in_steps(steps, last_y=0.0):
-    """A slot along X cut 1 mm deeper each pass, the last pass at ``last_y`` (m)."""
-    b = ProgramBuilder(1)
-    for k in range(1, steps + 1):
-        y = last_y if k == steps else 0.0
-        b.rapid(X=-3 * MM, Y=y, Z=1 * MM).linear(Z=-k * MM, feed_mm_per_min=300.0)
-        b.linear(X=3 * MM).rapid(Z=1 * MM)
-    return b.build()
 
 
 def test_a_stepped_slot_opens_the_way_as_the_reference_finds(checked):
