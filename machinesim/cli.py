@@ -391,7 +391,7 @@ def _cut(args) -> int:
         summary["notes"].append(f"{args.errors} sets no error (no key in any section): cut "
                                 "on the machine as built, every error zero")
     if errors is not None:
-        from machinesim.errors.toml import (
+        from machinesim.errors.unit_slips import (
             below_any_machine,
             beyond_any_machine,
             short_tables,

@@ -305,14 +305,14 @@ def errors_file(path, machine):
     """The `machinesim.errors.ErrorModel` of ``--errors`` ``path``, with a note on stderr
     (``NAME: note: ...``, one line each) where the file reads as no error at all, as
     ``machinesim cut`` notes it in its report: a file without keys (every error zero), and
-    values below anything a machine shows (`machinesim.errors.toml.below_any_machine`: SI
+    values below anything a machine shows (`machinesim.errors.unit_slips.below_any_machine`: SI
     written under a key in um or urad), and values beyond the errors of any machine
     (`beyond_any_machine`: um or urad under a key in mm or deg); and tables whose positions
     span less than 1 % of their axis's travel on the scenario's ``machine`` (a
     `machinesim.machines.Machine`, required: `short_tables`, um of travel under position_um,
     mm meant). The run goes on: each can be meant."""
     from machinesim.errors import ErrorModel
-    from machinesim.errors.toml import below_any_machine, beyond_any_machine, short_tables
+    from machinesim.errors.unit_slips import below_any_machine, beyond_any_machine, short_tables
 
     errors = ErrorModel.from_toml(path)
     name = Path(sys.argv[0]).stem or "scenario"
