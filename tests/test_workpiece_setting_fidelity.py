@@ -146,7 +146,7 @@ def test_the_errors_file_is_read_and_noted_once_for_both_loads(tmp_path, capsys,
     models = scenario.loads(_parse(["--errors", str(path), "--crown-delta-um", "0,0,60"]))
     notes = [line for line in capsys.readouterr().err.splitlines() if ": note: " in line]
     assert notes == [f"workpiece_setting: note: {path}, line 2: location.C.EX0C_um = 4e-06 is "
-                     "at most 4e-09 mm (4e-12 m), below anything a machine shows: was it "
+                     "at most 4e-06 um (4e-12 m), below anything a machine shows: was it "
                      "written in m, where the key asks um?"]
     grooves, crown = models["grooves"].parameters(), models["crown"].parameters()
     assert grooves["location.C.EX0C"] == crown["location.C.EX0C"] == 4e-12
