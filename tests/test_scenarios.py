@@ -270,6 +270,16 @@ def test_the_scenarios_errors_file_takes_their_machine():
         assert machine.default is inspect.Parameter.empty, function.__name__
 
 
+def _refused_with_errors(script: str, path, tmp_path):
+    """Run ``scenarios/SCRIPT --errors PATH``, which the file's refusal stops (status 2):
+    the scenario's name and the completed process."""
+    result = subprocess.run([sys.executable, str(ROOT / "scenarios" / script), "--errors",
+                             str(path), "--out", str(tmp_path / "out")],
+                            capture_output=True, text=True, check=False, cwd=ROOT, timeout=120)
+    assert result.returncode == 2, result.stderr
+    return script.removesuffix(".py"), result
+
+
 def test_papers_003_004_note_an_errors_table_in_micrometres_of_travel(tmp_path):
     """The same slip in papers 003 and 004, whose --errors were read before their machine
     was made: noted against each machine's X (by hand: 500 mm of grooving_4axis, -250 ..
@@ -280,12 +290,7 @@ def test_papers_003_004_note_an_errors_table_in_micrometres_of_travel(tmp_path):
                     "EXX_um = [-1.0, 0.0, 1.0]\n[location.A]\nEB0A_urad = 1.0\n")
     for script, machine, travel in (("xy_plane_errors.py", "grooving_4axis", 500),
                                     ("sts_turning.py", "sts_lathe", 200)):
-        result = subprocess.run([sys.executable, str(ROOT / "scenarios" / script), "--errors",
-                                 str(path), "--out", str(tmp_path / "out")],
-                                capture_output=True, text=True, check=False, cwd=ROOT,
-                                timeout=120)
-        name = script.removesuffix(".py")
-        assert result.returncode == 2, result.stderr
+        name, result = _refused_with_errors(script, path, tmp_path)
         lines = result.stderr.splitlines()
         assert lines[0] == (
             f"{name}: note: {path}, line 2: component.X.position_um = [-50.0, 0.0, 50.0] spans "
@@ -334,12 +339,7 @@ def test_papers_003_004_note_an_errors_file_that_reads_as_no_error(tmp_path):
     path.write_text("[location.C]\nEX0C_um = 4e-6\n[location.A]\nEB0A_urad = 1.0\n")
     for script, machine, axes in (("xy_plane_errors.py", "grooving_4axis", "X, Y, Z, C"),
                                   ("sts_turning.py", "sts_lathe", "X, Z, C")):
-        result = subprocess.run([sys.executable, str(ROOT / "scenarios" / script), "--errors",
-                                 str(path), "--out", str(tmp_path / "out")],
-                                capture_output=True, text=True, check=False, cwd=ROOT,
-                                timeout=120)
-        name = script.removesuffix(".py")
-        assert result.returncode == 2, result.stderr
+        name, result = _refused_with_errors(script, path, tmp_path)
         assert result.stderr.splitlines() == [
             f"{name}: note: {path}, line 2: location.C.EX0C_um = 4e-06 is at most 4e-06 um "
             "(4e-12 m), "
