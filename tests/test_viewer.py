@@ -1055,10 +1055,10 @@ def _unused_port() -> int:
         return probe.getsockname()[1]
 
 
-def test_a_live_viewer_stopped_by_sigterm_exits_143_and_ends_its_server(tmp_path):
-    # `kill PID` of a live `machinesim view` exited 0 with no word (LiveSession.wait took
-    # SIGTERM for a Ctrl-C), where docs/cli.md gives 143 and 'machinesim: terminated'
-    import signal
+def _stopped_live_view(tmp_path, stop, **popen) -> tuple[int, str, str]:
+    """Run a live `machinesim view` of a 1 mm block, ``stop(process)`` it once it gives its
+    address, and return its exit status, its stderr and the address (it is killed after
+    60 s if it does not end)."""
     import subprocess
     import sys
 
@@ -1067,18 +1067,26 @@ def test_a_live_viewer_stopped_by_sigterm_exits_143_and_ends_its_server(tmp_path
     process = subprocess.Popen([sys.executable, "-m", "machinesim.cli", "view",
                                 str(tmp_path / "part.ply"), "--port", str(_unused_port())],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               env=env)
+                               env=env, **popen)
     try:
         line = process.stdout.readline()
         assert line.startswith("machinesim viewer at http://127.0.0.1:"), line
-        url = line.split()[3]
-        process.send_signal(signal.SIGTERM)
+        stop(process)
         _, err = process.communicate(timeout=60)
     finally:
         if process.poll() is None:
             process.kill()
             process.wait()
-    assert process.returncode == 143
+    return process.returncode, err, line.split()[3]
+
+
+def test_a_live_viewer_stopped_by_sigterm_exits_143_and_ends_its_server(tmp_path):
+    # `kill PID` of a live `machinesim view` exited 0 with no word (LiveSession.wait took
+    # SIGTERM for a Ctrl-C), where docs/cli.md gives 143 and 'machinesim: terminated'
+    import signal
+
+    status, err, url = _stopped_live_view(tmp_path, lambda p: p.send_signal(signal.SIGTERM))
+    assert status == 143
     assert err == "machinesim: terminated; nothing was written\n"
     with pytest.raises(OSError):
         urllib.request.urlopen(url, timeout=5)
@@ -1093,29 +1101,16 @@ def test_a_live_viewer_stopped_by_ctrl_c_exits_130_and_ends_its_server(group, tm
     # so). SIGINT to the viewer alone, and to its process group as a terminal's Ctrl-C
     # sends it, to the server too
     import signal
-    import subprocess
-    import sys
 
-    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
-    process = subprocess.Popen([sys.executable, "-m", "machinesim.cli", "view",
-                                str(tmp_path / "part.ply"), "--port", str(_unused_port())],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               env=env, start_new_session=group, **as_in_a_terminal)
-    try:
-        line = process.stdout.readline()
-        assert line.startswith("machinesim viewer at http://127.0.0.1:"), line
-        url = line.split()[3]
+    def ctrl_c(process):
         if group:
             os.killpg(process.pid, signal.SIGINT)
         else:
             process.send_signal(signal.SIGINT)
-        _, err = process.communicate(timeout=60)
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.wait()
-    assert process.returncode == 130
+
+    status, err, url = _stopped_live_view(tmp_path, ctrl_c, start_new_session=group,
+                                          **as_in_a_terminal)
+    assert status == 130
     assert err == "machinesim: interrupted; nothing was written\n"
     with pytest.raises(OSError):
         urllib.request.urlopen(url, timeout=5)
