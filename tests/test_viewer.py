@@ -1141,7 +1141,6 @@ def test_a_live_viewer_stopped_after_its_screenshot_says_the_screenshot_stays(tm
               "import machinesim.viewer.cli as view\n"
               "def fake(url, ready, path):\n"
               "    path.write_bytes(b'png')\n"
-              "    print(f'wrote {path}', flush=True)\n"
               "view._screenshot = fake\n"
               "from machinesim.cli import main\n"
               "sys.exit(main(sys.argv[1:]))\n")
@@ -1152,7 +1151,7 @@ def test_a_live_viewer_stopped_after_its_screenshot_says_the_screenshot_stays(tm
                                **as_in_a_terminal)
     try:
         assert process.stdout.readline().startswith("machinesim viewer at http://127.0.0.1:")
-        assert process.stdout.readline() == f"wrote {shot}\n"
+        assert process.stdout.readline() == f"wrote {shot} (headless Chromium)\n"
         process.send_signal(signal.SIGINT)
         _, err = process.communicate(timeout=60)
     finally:

@@ -137,6 +137,7 @@ def run_view(args: argparse.Namespace) -> int:
               "open it in any browser, no server needed)")
         if args.screenshot is not None:
             _screenshot(args.html.resolve().as_uri(), "true", args.screenshot)
+            print(f"wrote {args.screenshot} (headless Chromium)")
         return 0
     from machinesim.viewer.live import serve
 
@@ -148,7 +149,8 @@ def run_view(args: argparse.Namespace) -> int:
         if args.screenshot is not None:
             _screenshot(session.url, f"viewer.num_messages_received >= {session.messages}",
                         args.screenshot)
-            shot = args.screenshot
+            shot = args.screenshot  # before the line saying so: a Ctrl-C on reading it
+            print(f"wrote {shot} (headless Chromium)", flush=True)  # keeps the PNG named
         ended = session.wait()
         if ended is None:  # Ctrl-C, which ended the server: exit 130 (it had been 0)
             raise KeyboardInterrupt
@@ -315,7 +317,6 @@ def _screenshot(url: str, ready: str, path: Path) -> None:
     from machinesim.viewer.browser import screenshot
 
     write_atomic(path, screenshot(url, ready))
-    print(f"wrote {path} (headless Chromium)")
 
 
 __all__ = ["add_view_parser", "run_view"]
