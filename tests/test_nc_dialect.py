@@ -744,6 +744,30 @@ def test_haas_variable_peck_i_j_k_and_its_dwell_p_are_read(code):
     assert np.count_nonzero(carried.dwells[carried.lines == 3]) == 0
 
 
+@pytest.mark.parametrize("block, seconds", [
+    ("G83 X1. Z-1. R1. Q0.5 P5. F100.", 5.0),  # Haas's own example's P5.: five seconds
+    ("G73 X1. Z-1. R1. Q0.5 P.25 F100.", 0.25),
+    ("G83 X1. Z-1. R1. I0.5 J0.1 K0.2 P2.5 F100.", 2.5),
+    ("G82 X1. Z-1. R1. P1.5 F100.", 1.5),
+    ("G83 X1. Z-1. R1. Q0.5 P500 F100.", 0.5),  # without a point: ms, as before
+])
+def test_a_cycle_dwell_with_a_decimal_point_is_seconds_as_haas_reads_it(block, seconds):
+    # Haas's G83 'P5.' (96-8000: "dwell for five seconds at the end") had been refused
+    # ("dwell time must be an unsigned integer ..."); a FANUC control takes no point in P
+    program = parse_program(f"G00 X0 Y0 Z5.\nG98 {block}\nX2.\nG80\n")
+    for line in (2, 3):  # kept for the cycle's next hole
+        rows = program.lines == line
+        assert program.dwells[rows].tolist().count(seconds) == 1
+        assert np.count_nonzero(program.dwells[rows]) == 1
+        # at the bottom, after the last peck
+        dwell = np.flatnonzero(program.kinds[rows] == KIND_DWELL)[0]
+        assert program.targets[rows][dwell - 1, 2] / MM == pytest.approx(-1, abs=1e-12)
+    with pytest.raises(NCProgramError) as info:
+        parse_program("G00 X0 Y0 Z5.\nG83 X1. Z-1. R1. Q0.5 P-5. F100.\n")
+    assert (info.value.line, info.value.key) == (2, "P-5.")
+    assert "G83's dwell P-5. must be >= 0 (with a decimal point P is seconds" in str(info.value)
+
+
 @pytest.mark.parametrize("words, key, message", [
     ("I0.5", "I0.5", "G83's variable peck takes I (first peck), J (reduction per peck) and K "
      "(smallest peck) together (Haas); J and K missing"),

@@ -323,8 +323,8 @@ class Block:
                    + ", ".join(f"{name}: {' '.join(words)}" for name, (_, words) in PLANES.items())
                    + f"; this block is in {state.plane})")
         reads = {
-            "P": "G04 (dwell, ms), G82, G73 and G83 (dwell at the bottom; G81 keeps it for a "
-                 "G82), G08 (P1/P0) and M98 (program)",
+            "P": "G04 (dwell, ms), G82, G73 and G83 (dwell at the bottom, ms, or s with a "
+                 "decimal point as Haas; G81 keeps it for a G82), G08 (P1/P0) and M98 (program)",
             "Q": "G73 and G83 (peck depth) and G05.1 (Q1/Q0)",
             "R": "G02/G03 (radius), G73 and G81-G83 (R plane) and G05.1",
             "I": f"{centres} and with G73 and G83 (Haas's first peck I, with J and K)",
