@@ -185,7 +185,8 @@ def test_a_centre_word_of_another_plane_is_not_said_to_be_read_in_this_one():
     assert "in G17 (centre words" not in message
     assert "G17: I J, G18: K I, G19: J K; this block is in G17" in message
     assert message.endswith("and with G73 and G81-G83 (repeats; with G73 and G83 beside I "
-                            "and J, Haas's smallest peck)")
+                            "and J, Haas's smallest peck; with G73's Q and a decimal point, "
+                            "Haas's depth between returns to R)")
     with pytest.raises(NCProgramError) as info:
         parse_program("G18 G00 X0 Z0\nG02 X1. J1.", "p.nc")
     assert any(problem.key == "J1." and "this block is in G18" in str(problem)
@@ -766,6 +767,41 @@ def test_a_cycle_dwell_with_a_decimal_point_is_seconds_as_haas_reads_it(block, s
         parse_program("G00 X0 Y0 Z5.\nG83 X1. Z-1. R1. Q0.5 P-5. F100.\n")
     assert (info.value.line, info.value.key) == (2, "P-5.")
     assert "G83's dwell P-5. must be >= 0 (with a decimal point P is seconds" in str(info.value)
+
+
+def test_haas_g73_with_q_and_a_decimal_k_returns_to_r_after_pecks_adding_up_to_k():
+    # Haas 96-8000, G73: with both K and Q "the tool is returned to the R plane after a
+    # number of passes totals up to the K amount". 'K1.' had been refused as a repeat count
+    # ("repeat count must be an unsigned integer ..., got K1."). From R1 to Z-3 in pecks of
+    # 0.5 with K1.: back to R after the pecks ending at 0, -1 and -2 (each 1 mm below the
+    # last return), then down to PECK_CLEARANCE_M above that depth; a chip break elsewhere
+    program = parse_program("G00 X0 Y0 Z5.\nG98 G73 X1. Z-3. R1. Q0.5 K1. F100.\nX2.\n"
+                            "G80\n")
+    d, c = CHIP_BREAK_RETRACT_M / MM, PECK_CLEARANCE_M / MM
+    expected = [(0, 5), (0, 1), (1, 0.5), (0, 0.5 + d), (1, 0)]
+    for depth in (0, -1, -2):
+        expected += [(0, 1), (0, depth + c), (1, depth - 0.5), (0, depth - 0.5 + d),
+                     (1, depth - 1)]
+    expected.append((0, 5))  # then up to G98's initial level
+    for line in (2, 3):  # modal: the next hole alike, one hole each (K is no repeat here)
+        rows = program.lines == line
+        kinds = [int(k) for k in program.kinds[rows]]
+        z = program.targets[rows][:, 2] / MM
+        assert kinds == [KIND_RAPID if k == 0 else KIND_LINEAR for k, _ in expected]
+        assert z == pytest.approx([v for _, v in expected], abs=1e-12)
+    # a Q without K drills as plain G73 again; K with a point elsewhere is refused by name
+    plain = parse_program("G00 X0 Y0 Z5.\nG73 X1. Z-3. R1. Q0.5 K1. F100.\nX2. Q0.5\n")
+    up = [np.count_nonzero(plain.targets[plain.lines == line][:, 2] / MM > 0.9)
+          for line in (2, 3)]
+    assert up == [6, 3]  # positioning, R, 3 returns to R and the initial level; then none
+    for block, key, message in [
+            ("G83 X1. Z-3. R1. Q0.5 K1.", "K1.", "not in G83"),
+            ("G81 X1. Z-3. R1. K2.", "K2.", "so it is no repeat count"),
+            ("G73 X1. Z-3. R1. Q0.5 K0.", "K0.", "must be > 0, got K0.")]:
+        with pytest.raises(NCProgramError) as info:
+            parse_program(f"G00 X0 Y0 Z5.\n{block} F100.\n")
+        assert (info.value.line, info.value.key) == (2, key)
+        assert message in str(info.value)
 
 
 @pytest.mark.parametrize("words, key, message", [

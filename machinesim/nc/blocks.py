@@ -235,7 +235,7 @@ class Block:
                                         "yet (the initial level); move Z first", word)
                     state.initial_z = state.target["Z"]
                     state.cycle_z = state.cycle_r = state.cycle_q = None
-                    state.cycle_pecks = None
+                    state.cycle_pecks = state.cycle_return = None
                     state.cycle_given = {}
                     state.cycle_p = 0.0
                     state.peck_dwell = False
@@ -330,7 +330,8 @@ class Block:
             "I": f"{centres} and with G73 and G83 (Haas's first peck I, with J and K)",
             "J": f"{centres} and with G73 and G83 (Haas's peck reduction J, with I and K)",
             "K": f"{centres} and with G73 and G81-G83 (repeats; with G73 and G83 beside I "
-                 "and J, Haas's smallest peck)",
+                 "and J, Haas's smallest peck; with G73's Q and a decimal point, Haas's depth "
+                 "between returns to R)",
             "L": "M98 (repeat count)" + (
                 "; a canned cycle's repeat count is K here, as on current FANUC controls "
                 "(older ones, and LinuxCNC, write L): write K" if cycle is not None else ""),

@@ -8,7 +8,8 @@ rapid back up by d only, and feed on); then a rapid back to the initial level (G
 R plane (G99).
 
 Haas's G73 and G83 also take a variable peck, I J K: the first peck I, each next one J
-smaller, none smaller than K; and P, a dwell at the bottom after the last peck (Haas Mill
+smaller, none smaller than K; and P, a dwell at the bottom after the last peck; Haas's G73
+with both Q and K returns to the R plane whenever its pecks add up to K (Haas Mill
 Operator's Manual 96-8000, G73 and G83).
 """
 
@@ -29,6 +30,10 @@ PECK_CLEARANCE_M = 1e-4
 #: is the same for any d; 0.1 mm, as `PECK_CLEARANCE_M`.
 CHIP_BREAK_RETRACT_M = 1e-4
 
+#: Haas's G73 K (with Q) counts as reached this short of it, m: pecks of 0.1 mm add up to
+#: 0.30000000000000004 mm, not 0.3, and far below any axis's resolution.
+RETURN_SLACK_M = 1e-12
+
 #: Most pecks of one G73 or G83 hole. A micro drill pecking 1 um at a time through 1 mm makes
 #: 1000; more is a Q typed in the wrong unit, and each peck is a sweep to cut.
 MOST_PECKS = 1000
@@ -43,6 +48,7 @@ def drill_steps(
     peck: float | None = None,
     variable_peck: tuple[float, float, float] | None = None,
     dwell_s: float = 0.0,
+    return_every: float | None = None,
     max_steps: int | None = None,
 ) -> list[tuple[str, float]]:
     """The Z moves of one hole after positioning, as ``(kind, value)`` pairs.
@@ -59,6 +65,10 @@ def drill_steps(
         reduction of each next one, the smallest (each > 0).
     dwell_s : float, s
         G82's dwell at the bottom; G73's and G83's after the last peck (Haas's P).
+    return_every : float, m, optional
+        G73's K beside Q (Haas): once the pecks since R (or since the last return) add up to
+        this much, the drill rapids back to the R plane and down to `PECK_CLEARANCE_M` above
+        the depth, as G83's, instead of backing off by `CHIP_BREAK_RETRACT_M`.
     max_steps : int, optional
         Refuse a hole needing more moves than this.
 
@@ -82,12 +92,16 @@ def drill_steps(
             raise NCProgramError(f"{cycle} with {_peck_words(peck, variable_peck)} makes "
                                  f"{len(depths)} pecks, more than the {max_steps // 3} left; "
                                  f"raise {'Q' if variable_peck is None else 'I and K'}")
+        top = r_z  # where the pecks since the last return to R began
         for k, depth in enumerate(depths):
-            if k > 0 and cycle == "G83":
+            last = depths[k - 1] if k > 0 else r_z
+            if k > 0 and (cycle == "G83" or (return_every is not None
+                                             and top - last >= return_every - RETURN_SLACK_M)):
                 steps.append(("rapid", r_z))
-                steps.append(("rapid", min(depths[k - 1] + PECK_CLEARANCE_M, r_z)))
+                steps.append(("rapid", min(last + PECK_CLEARANCE_M, r_z)))
+                top = last
             elif k > 0:  # G73: back up by d, breaking the chip, and on
-                steps.append(("rapid", min(depths[k - 1] + CHIP_BREAK_RETRACT_M, r_z)))
+                steps.append(("rapid", min(last + CHIP_BREAK_RETRACT_M, r_z)))
             steps.append(("linear", depth))
         if dwell_s > 0.0:
             steps.append(("dwell", dwell_s))

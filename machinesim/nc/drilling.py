@@ -2,7 +2,8 @@
 
 Internal to the reader: a block (`machinesim.nc.blocks.Block`) with X Y Z or R under a
 canned cycle reads here (`read_cycle`), keeping the cycle's R plane, hole bottom, peck
-(Q, or Haas's variable peck I J K: `variable_peck`) and dwell P in the modal state until
+(Q, or Haas's variable peck I J K: `variable_peck`; with G73's Q, Haas's K of depth between
+returns to R: `return_depth`) and dwell P in the modal state until
 G80 or a motion code; the steps of one hole come from `machinesim.nc.cycles`.
 """
 
@@ -19,7 +20,7 @@ if TYPE_CHECKING:
     from machinesim.nc.blocks import Block
     from machinesim.nc.lexer import Word
 
-__all__ = ["PECKING", "cycle_dwell", "read_cycle", "variable_peck"]
+__all__ = ["PECKING", "cycle_dwell", "read_cycle", "return_depth", "variable_peck"]
 
 #: The peck drilling cycles, which take Q or Haas's I J K, and a P of their own.
 PECKING = ("G73", "G83")
@@ -58,6 +59,7 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
     if "Q" in single:
         state.cycle_q = abs(block.real(single["Q"]) * block.length_of(single["Q"]))
         state.cycle_pecks = None
+        state.cycle_return = None  # a Q without Haas's K. drills without its returns to R
     if "P" in single:
         state.cycle_p = cycle_dwell(block, single["P"])
         # Haas's G73/G83 dwell it after the last peck; one kept from a G82 does not
@@ -65,8 +67,11 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
         state.peck_dwell = state.cycle in PECKING
     if state.cycle in PECKING and ("I" in single or "J" in single):
         state.cycle_pecks = variable_peck(block)
-        state.cycle_q = None
+        state.cycle_q = state.cycle_return = None
         repeats = 1  # K is the smallest peck here
+    elif "K" in single and "." in single["K"].text:
+        state.cycle_return = return_depth(block)
+        repeats = 1  # K is a depth here
     else:
         repeats = block.integer(single["K"], "repeat count") if "K" in single else 1
     if state.cycle_z is None or state.cycle_r is None:
@@ -90,6 +95,7 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
         steps = drill_steps(state.cycle, r_z=state.cycle_r, bottom_z=state.cycle_z,
                             return_z=return_z, peck=state.cycle_q,
                             variable_peck=state.cycle_pecks, dwell_s=dwell_s,
+                            return_every=state.cycle_return,
                             max_steps=MAX_MOVES - block.reader.out.count)
     except NCProgramError as error:
         word = next((single[k] for k in "ZRQIK" if k in single), cycle_word)
@@ -122,6 +128,27 @@ def cycle_dwell(block: Block, word: Word) -> float:
         raise block.fail(f"{block.state.cycle}'s dwell {word.key} must be >= 0 (with a decimal "
                          "point P is seconds, as Haas reads it; without, milliseconds)", word)
     return seconds
+
+
+def return_depth(block: Block) -> float:
+    """Haas's K of a G73 with Q, m: a K with a decimal point, a length, after which the drill
+    goes back to the R plane ("the tool is returned to the R plane after a number of passes
+    totals up to the K amount": Haas Mill Operator's Manual 96-8000, G73). Refused in any
+    other cycle, where K is the repeat count (an integer) or, beside I and J, the smallest
+    peck."""
+    state, word = block.state, block.single["K"]
+    if state.cycle != "G73" or state.cycle_q is None:
+        where = "G73 without a peck Q" if state.cycle == "G73" else state.cycle
+        raise block.fail(
+            f"{word.key} has a decimal point, so it is no repeat count (FANUC's K, an "
+            f"integer: K2); a length K is read only in G73 with Q (Haas: back to the R plane after "
+            f"pecks adding up to K) and in G73/G83 beside I and J (the smallest peck), not in "
+            f"{where}", word)
+    value = block.finite(block.real(word) * block.length_of(word), word)
+    if not value > 0.0:
+        raise block.fail(f"G73's K with Q (Haas's depth drilled between returns to the R "
+                         f"plane) must be > 0, got {word.key}", word)
+    return value
 
 
 def variable_peck(block: Block) -> tuple[float, float, float]:

@@ -91,6 +91,8 @@ class _State:
     cycle_q: float | None = None
     #: Haas's variable peck (I first, J reduction, K smallest, m) in place of Q
     cycle_pecks: tuple[float, float, float] | None = None
+    #: Haas's G73 K beside Q: the depth, m, drilled between returns to the R plane
+    cycle_return: float | None = None
     #: the distance mode (G91: True) and line each of R and Z was last given in
     cycle_given: dict = field(default_factory=dict)
     cycle_p: float = 0.0
