@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from machinesim.exceptions import MachineSimError, NCProgramError
+from machinesim.motion import move_duration
 from machinesim.nc import (
     ARC_RADIUS_TOLERANCE_M,
     AXES,
@@ -802,6 +803,52 @@ def test_haas_g73_with_q_and_a_decimal_k_returns_to_r_after_pecks_adding_up_to_k
             parse_program(f"G00 X0 Y0 Z5.\n{block} F100.\n")
         assert (info.value.line, info.value.key) == (2, key)
         assert message in str(info.value)
+
+
+def _feed_minutes(program: Program) -> list[float]:
+    """Each feed move's time by the planner's rule (`move_duration`, no axis limit), min."""
+    rotary = np.array([a in "ABC" for a in AXES])
+    targets = np.nan_to_num(program.targets)  # every axis is set before the first feed
+    return [move_duration("linear", targets[i - 1], targets[i], rotary,
+                          np.full(len(AXES), 1e9), program.feeds[i], 0.0) / 60.0
+            for i in np.flatnonzero(program.kinds == KIND_LINEAR)]
+
+
+def test_under_g20_a_rotary_axis_degrees_count_as_inches_in_the_feed():
+    # FANUC: F of a move of linear and rotary axes is along the path, degrees counted in the
+    # unit of F (B-63174EN/03 4.2: G91 G01 X20. C40. F300. takes sqrt(20^2 + 40^2) / 300
+    # min); a rotary-only move is fed in deg/min. Under G20 every F had been converted by
+    # inch, so a degree counted as a mm of an F 25.4 times larger: X1. A10. F10. took
+    # sqrt(25.4^2 + 10^2) / 254 min (6.45 s) and A90. F10. 21.26 s, where by hand they take
+    # sqrt(1 + 10^2) / 10 min and 9 min
+    head = "G00 X0 Y0 Z0 A0 B0\n"
+    blocks = "G01 X1. A10. F10.\nA100.\nX3. Y1. B20. F5.\nG02 X4. Y1. I0.5 A190. F10.\nG01 X5.\n"
+    inch = parse_program("G20 " + head + blocks, chord_tolerance=1e-9)
+    arc = math.hypot(math.pi * 0.5, 90.0) / 10.0  # a half circle of 0.5 in with A 90 deg
+    expected = [math.sqrt(101) / 10, 9.0, math.sqrt(4 + 1 + 400) / 5, arc, 0.1]
+    minutes = _feed_minutes(inch)
+    lines = inch.lines[inch.kinds == KIND_LINEAR]
+    by_line = [sum(m for m, n in zip(minutes, lines, strict=True) if n == line)
+               for line in range(2, 7)]
+    assert by_line == pytest.approx(expected, rel=1e-9)
+    # the same numbers in mm under G21 take the same minutes (a degree counts as a mm)
+    metric = parse_program("G21 " + head + blocks, chord_tolerance=1e-9)
+    assert _feed_minutes(metric)[:3] == pytest.approx(expected[:3], rel=1e-12)
+    # a move without rotary motion keeps F converted by inch, to the bit
+    assert inch.feeds[-1] == 10.0 * 25.4e-3 / 60.0
+    # the vectorised path (runs of 16 plain lines and more) keeps the same feeds
+    run = "G20 G00 X0 Y0 Z0 A0\nG01 F10.\n" + "".join(
+        f"X{k * 0.5:.1f} A{k * 3}.\n" for k in range(1, 21))
+    fast, slow = parse_program(run), parse_program(run, fast=False)
+    assert np.array_equal(fast.feeds, slow.feeds, equal_nan=True) and fast == slow
+    assert _feed_minutes(fast) == pytest.approx([math.sqrt(0.25 + 9) / 10] * 20, rel=1e-12)
+    # from where A has no position yet the distance is not known: refused, naming A
+    for text in ("G20 G00 X0 Y0 Z0\nG01 X1. A10. F10.\n",
+                 "G20 G00 X0 Y0 Z0\nG02 X1. Y0 I0.5 A10. F10.\n"):
+        with pytest.raises(NCProgramError) as info:
+            parse_program(text)
+        assert (info.value.line, info.value.key) == (2, "A10.")
+        assert "its degrees count as inches in the feed" in str(info.value)
 
 
 @pytest.mark.parametrize("words, key, message", [

@@ -74,7 +74,9 @@ Integer input (a number without decimal point in a length or angle: X Y Z A B C 
     increments: 1 nm (0.0000001 inch under G20) for lengths, 0.00001 deg for A B C;
     ``G04 X`` counts milliseconds. `Program.integer_input` says which rule was used.
 F, S, M
-    F: feed (mm/min, inch/min under G20), > 0, modal; linear moves carry it (m/s). S:
+    F: feed (mm/min, inch/min under G20), > 0, modal; linear moves carry it (m/s; a move
+    that turns a rotary axis counts its degrees as mm, under G20 as inches: FANUC's rule,
+    `machinesim.nc.rotary_feed`). S:
     spindle speed, passed through. M: passed through on the block's last move (M98/M99 are
     consumed); a block with M codes and no move makes a 0 s dwell carrying them, unless all
     are program ends. Blocks after M02/M30 (outside subprograms) are refused.

@@ -20,7 +20,8 @@ from machinesim.nc.arcs import (
     arc_points,
 )
 from machinesim.nc.length import check_length_carried
-from machinesim.nc.program import AXES, KIND_LINEAR
+from machinesim.nc.program import AXES, KIND_LINEAR, ROTARY_AXES
+from machinesim.nc.rotary_feed import inch_feed_scale
 from machinesim.nc.words import MAX_MOVES
 
 if TYPE_CHECKING:
@@ -87,10 +88,21 @@ def read_arc(block: Block, axes: list[Word], block_number: int | None) -> None:
             targets[-1, k] = b
         else:
             targets[:, k] = math.nan
-    state.target = end
     feed = math.nan if state.feed is None else state.feed
+    feeds = np.full(n, feed)
+    turning = [w for w in axes if w.letter in ROTARY_AXES]
+    if state.feed_inch and turning:  # a rotary axis's degrees count as inches in the feed
+        starts = np.vstack([[start.get(a, math.nan) for a in AXES], targets[:-1]])
+        scale, unknown = inch_feed_scale(starts, targets)
+        if unknown.any():
+            raise block.fail(f"{state.motion} under an F in inch/min turns {turning[0].letter}, "
+                             "which had no position yet: its degrees count as inches in the "
+                             f"feed (FANUC), so its time needs the distance; give "
+                             f"{turning[0].letter} a position first (e.g. with G00)", turning[0])
+        feeds *= scale
+    state.target = end
     spindle = math.nan if state.spindle is None else state.spindle
     reader.out.add_arrays(targets, np.full(n, KIND_LINEAR, dtype=np.int8),
-                          np.full(n, feed), np.zeros(n), np.full(n, block.line, np.int64),
+                          feeds, np.zeros(n), np.full(n, block.line, np.int64),
                           np.full(n, spindle),
                           np.full(n, -1 if block_number is None else block_number))

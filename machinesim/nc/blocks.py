@@ -18,6 +18,7 @@ from machinesim.nc.drilling import PECKING, read_cycle
 from machinesim.nc.length import check_length_carried, note_length_change
 from machinesim.nc.lexer import Word
 from machinesim.nc.program import AXES, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
+from machinesim.nc.rotary_feed import inch_feed_scale
 from machinesim.nc.words import (
     ARC,
     DWELL_INCREMENT_S,
@@ -248,6 +249,7 @@ class Block:
             if feed <= 0.0:
                 raise self.fail(f"feed must be > 0, got {single['F'].key}", single["F"])
             state.feed = self.finite(feed * self.length_unit() / 60.0, single["F"])
+            state.feed_inch = state.inch
             if state.feed < SLOWEST_FEED_M_PER_S:
                 raise self.fail(f"feed {single['F'].key} is below 1 nm a minute (1e-6 mm/min),"
                                 " slower than any control feeds: a feed in the wrong unit?",
@@ -343,14 +345,18 @@ class Block:
 
     # --- moves
 
-    def add(self, kind: str, dwell_s: float, block_number: int | None) -> None:
+    def add(self, kind: str, dwell_s: float, block_number: int | None, *,
+            feed: float | None = None) -> None:
+        """Add a move to the modal target; a linear one at ``feed`` (m/s), the modal feed
+        when None."""
         out, state = self.reader.out, self.state
         if out.count + 1 > MAX_MOVES:
             raise self.fail(f"the program expands to more than {MAX_MOVES} moves",
                             self.words[0])
-        out.add(MOVE_KINDS.index(kind), state.target,
-                state.feed if kind == "linear" else None, dwell_s, self.line, block_number,
-                state.spindle)
+        if kind == "linear" and feed is None:
+            feed = state.feed
+        out.add(MOVE_KINDS.index(kind), state.target, feed if kind == "linear" else None,
+                dwell_s, self.line, block_number, state.spindle)
 
     def reserve(self, n: int, word: Word) -> None:
         if self.reader.out.count + n > MAX_MOVES:
@@ -386,8 +392,30 @@ class Block:
                             "G01 first", axes[0])
         check_length_carried(self, self.single.get("Z"), axes)
         values = {word.letter: self.machine(word) for word in axes}
+        start = dict(state.target)
         state.target.update(values)
-        self.add(MOTION[state.motion], 0.0, block_number)
+        feed = None
+        if (state.motion == "G01" and state.feed_inch and state.feed is not None
+                and any(word.letter in ROTARY_AXES for word in axes)):
+            feed = state.feed * self.inch_feed_scale(start, state.target, axes)
+        self.add(MOTION[state.motion], 0.0, block_number, feed=feed)
+
+    def inch_feed_scale(self, start: dict[str, float], end: dict[str, float],
+                        axes: list[Word]) -> float:
+        """The factor on the feed of a move from ``start`` to ``end`` that turns a rotary
+        axis under an F read in inch/min (`machinesim.nc.rotary_feed`); refused where an
+        axis's start is not known and the factor depends on it."""
+        row = [[values.get(a, math.nan) for a in AXES] for values in (start, end)]
+        scale, unknown = inch_feed_scale(np.array(row[:1]), np.array(row[1:]))
+        if unknown[0]:
+            first = [w for w in axes if w.letter not in start]
+            raise self.fail(
+                f"a feed move under an F in inch/min that turns a rotary axis and moves a "
+                f"linear one, where {' '.join(w.letter for w in first)} had no position yet: "
+                "its degrees count as inches in the feed (FANUC), so its time needs the "
+                f"distance; give {' and '.join(w.letter for w in first)} a position first "
+                "(e.g. with G00)", first[0])
+        return float(scale[0])
 
     def dwell(self, g04: Word, axes: list[Word], block_number: int | None) -> None:
         single = self.single

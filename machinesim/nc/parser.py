@@ -36,6 +36,7 @@ from machinesim.nc.program import (
     axis_values,
     work_offsets_si,
 )
+from machinesim.nc.rotary_feed import inch_feed_scale
 from machinesim.nc.tape import end_of_program, without_leader
 from machinesim.nc.tooltable import ToolTable, tool_table
 from machinesim.nc.words import (
@@ -75,6 +76,9 @@ class _State:
     plane: str = "G17"
     work_offset: str = "G54"
     feed: float | None = None
+    #: the F was read under G20 (inch/min): a move turning a rotary axis counts its degrees
+    #: as inches (`machinesim.nc.rotary_feed`)
+    feed_inch: bool = False
     spindle: float | None = None
     target: dict[str, float] = field(default_factory=dict)
     number: int | None = None
@@ -559,6 +563,16 @@ class Reader:
             feed = np.full(j - i, feed_before)
         kinds = motion[rows].astype(np.int8)
         feeds = np.where(kinds == KIND_LINEAR, feed[rows], math.nan)
+        if any(present[k].any() for k, a in enumerate(AXES) if a in ROTARY_AXES):
+            if has_f.any() and state.inch != state.feed_inch:
+                return False  # Fs in both units in one run: the block-by-block path
+            if state.feed_inch:  # degrees count as inches in the feed (`rotary_feed`)
+                starts = np.vstack([[state.target.get(a, math.nan) for a in AXES],
+                                    targets[:-1]])
+                scale, unknown = inch_feed_scale(starts, targets)
+                if (unknown & (kinds == KIND_LINEAR)).any():
+                    return False  # the block-by-block path names the word
+                feeds *= scale
         numbers = values[col["N"], rows]
         blocks = np.where(np.isnan(numbers), -1, numbers).astype(np.int64)
         spindle = math.nan if state.spindle is None else state.spindle
@@ -575,6 +589,8 @@ class Reader:
             state.motion = ("G00", "G01")[int(motion[-1])]
         if not np.isnan(feed[-1]):
             state.feed = float(feed[-1])
+        if has_f.any():
+            state.feed_inch = state.inch
         return True
 
     def tool_length(self) -> float:

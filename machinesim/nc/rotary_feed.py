@@ -1,0 +1,81 @@
+"""The feed of a move that turns a rotary axis under G20: its degrees count as inches.
+
+FANUC's F of a feed move of linear and rotary axes together is the feed along the path in the
+space of all of them, a rotary axis's degrees counted in the unit of the linear ones: "G91
+G01 X20.0 C40.0 F300.0 ... changes the unit of the C axis from 40.0 deg to 40mm with metric
+input", so the move takes sqrt(20^2 + 40^2) / 300 = 0.14907 min; a rotary-only move is fed in
+deg/min, and rotary axes take no inch/metric switching (Power Mate i-D/H operator's manual
+B-63174EN/03 §4.2; Series 15i-MA B-63324EN §4.3). Under G20 (inch input) the same rule
+counts a degree as an inch, the unit of F there: ``G20 G01 X1. A10. F10.`` takes
+sqrt(1 + 100) / 10 min, ``G20 G01 A90. F10.`` 9 min.
+
+A `Program` keeps one feed per move, m/s, and the planner
+(`machinesim.motion.planner.move_duration`) counts a degree as a millimetre, the metric rule.
+So the reader keeps, for a move under an F read in inch/min that turns a rotary axis, the feed
+that takes the same time by the planner's rule: F converted by inch, times
+``length_mm * M_PER_MM / (length_inch * M_PER_INCH)``, where ``length_mm`` counts degrees as
+millimetres and ``length_inch`` as inches. A move without rotary motion keeps its feed as it
+is (its factor would be 1 but for rounding).
+
+Internal to the reader (`machinesim.nc.blocks`, `machinesim.nc.arc_block` and the vectorised
+path in `machinesim.nc.parser`), which all use `inch_feed_scale`, so the three agree to the
+bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from machinesim.nc.program import AXES, ROTARY_AXES
+from machinesim.nc.words import M_PER_INCH
+from machinesim.units import M_PER_MM, RAD_PER_DEG
+
+__all__ = ["inch_feed_scale"]
+
+#: Factor of a rotary-only move: F inch/min read as F deg/min, which the planner's rule takes
+#: as F mm/min.
+ROTARY_ONLY_SCALE = M_PER_MM / M_PER_INCH
+
+
+def inch_feed_scale(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The factor on the feed of each move from ``starts`` to ``ends`` (each (n, 6), m and
+    rad in `AXES` order, NaN: no value yet) whose F was read in inch/min; and which moves'
+    factor is not known.
+
+    Returns
+    -------
+    scale : ndarray, shape (n,)
+        1 where no rotary axis turns, `ROTARY_ONLY_SCALE` where only rotary axes do, else
+        ``length_mm * M_PER_MM / (length_inch * M_PER_INCH)``.
+    unknown : ndarray of bool, shape (n,)
+        Moves that turn a rotary axis and move a linear one (or may) where an axis's start is
+        not known yet (it gets its first value here): the planner moves it from its start,
+        which the program does not say, so the ratio is not known.
+    """
+    n = ends.shape[0]
+    length_mm, length_inch = np.zeros(n), np.zeros(n)
+    linear, rotary = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)  # moves or may
+    unknown = np.zeros(n, dtype=bool)
+    for k, letter in enumerate(AXES):
+        first = np.isnan(starts[:, k]) & ~np.isnan(ends[:, k])
+        delta = np.abs(ends[:, k] - starts[:, k])
+        delta[np.isnan(delta)] = 0.0
+        unknown |= first
+        moving = (delta > 0.0) | first
+        if letter in ROTARY_AXES:
+            rotary |= moving
+            turned = delta / RAD_PER_DEG
+            turned *= turned
+            length_mm += turned
+            length_inch += turned
+        else:
+            linear |= moving
+            length_mm += (delta / M_PER_MM) ** 2
+            length_inch += (delta / M_PER_INCH) ** 2
+    scale = np.ones(n)
+    scale[rotary & ~linear] = ROTARY_ONLY_SCALE
+    mixed = rotary & linear
+    known = mixed & ~unknown
+    scale[known] = (np.sqrt(length_mm[known]) * M_PER_MM
+                    / (np.sqrt(length_inch[known]) * M_PER_INCH))
+    return scale, mixed & unknown
