@@ -1,6 +1,6 @@
 """One block of NC: its words checked, the modal state updated, its moves emitted.
 
-Internal to the reader (`machinesim.nc.parser`); arc blocks read in `machinesim.nc.arc_block`
+Internal to the reader (`machinesim.nc.reader`); arc blocks read in `machinesim.nc.arc_block`
 and canned-cycle blocks in `machinesim.nc.drilling`.
 """
 
@@ -45,7 +45,7 @@ from machinesim.units import M_PER_MM, RAD_PER_DEG
 TOOL_CHANGE = 6
 
 if TYPE_CHECKING:
-    from machinesim.nc.parser import Reader
+    from machinesim.nc.reader import Reader
 
 
 class Block:

@@ -1,6 +1,6 @@
 """The programs of one NC file: the main program, its subprograms, their calls.
 
-Internal to the reader (`machinesim.nc.parser`): the first pass, which also refuses before
+Internal to the reader (`machinesim.nc.reader`): the first pass, which also refuses before
 anything runs what would never end (recursion, nesting, runaway repeat counts).
 """
 
@@ -23,7 +23,7 @@ from machinesim.nc.words import (
 )
 
 if TYPE_CHECKING:
-    from machinesim.nc.parser import Reader
+    from machinesim.nc.reader import Reader
 
 
 @dataclass

@@ -18,7 +18,7 @@ millimetres and ``length_inch`` as inches. A move without rotary motion keeps it
 is (its factor would be 1 but for rounding).
 
 Internal to the reader (`machinesim.nc.blocks`, `machinesim.nc.arc_block` and the vectorised
-path in `machinesim.nc.parser`), which all use `inch_feed_scale`, so the three agree to the
+path in `machinesim.nc.reader`), which all use `inch_feed_scale`, so the three agree to the
 bit.
 """
 
