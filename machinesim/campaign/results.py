@@ -33,8 +33,8 @@ from machinesim.exceptions import FileError, InputError, brief
 from machinesim.experiment import note_kind  # re-exported
 
 __all__ = ["LOCK_NAME", "Assembly", "CampaignFolder", "assemble", "campaign_id",
-           "finished_trials", "locked", "note_kind", "refuse_foreign", "same_campaign",
-           "versions"]
+           "finished_trials", "legacy_campaign_id", "locked", "note_kind", "refuse_foreign",
+           "same_campaign", "versions"]
 
 
 def _clean(value):
@@ -99,6 +99,7 @@ class CampaignFolder:
             write_atomic(stored, json_text(spec, "campaign spec"))
         self.spec = spec
         self.id = campaign_id(spec)
+        self._ids = {self.id, legacy_campaign_id(spec)}  # the files written before too
 
     def trial_file(self, i: int) -> Path:
         return self.trials_path / f"trial_{i:06d}.json"
@@ -126,8 +127,10 @@ class CampaignFolder:
     def _check_campaign(self, found, path: Path) -> None:
         """Refuse a trial file written by another campaign (`campaign_id`): one copied from
         another campaign's folder under the same name was taken as this one's trial. A file
-        without the key, written before trial files held it, is taken as the folder's."""
-        if found is None or found == self.id:
+        without the key, written before trial files held it, is taken as the folder's, and
+        so is one holding the identity of its campaign.json's DIST texts as spelt
+        (`legacy_campaign_id`, written before the identity took their meaning)."""
+        if found is None or found in self._ids:
             return
         raise InputError(f"{brief(repr(found))}: the trial file of another campaign (this "
                          f"folder's campaign.json is campaign {self.id}); copied from "
@@ -277,9 +280,45 @@ def _lock_holder(path: Path) -> tuple[int, str] | None:
 def campaign_id(spec: dict) -> str:
     """The identity of the campaign ``spec`` (campaign.json's): the first 16 hex digits of
     the SHA-256 of its JSON with sorted keys, which each trial file holds as ``campaign``
-    (procedure, seed, noise, options and DIST texts, as campaign.json spells them)."""
+    (procedure, seed, noise, options, and each ``vary`` distribution by its meaning,
+    `_meaning`: ``10nm`` and ``0.01um`` are one campaign, as `same_campaign` takes them).
+
+    The DIST texts went in as spelt, so the trial file of a campaign begun with ``0.01um``,
+    copied into the folder of one begun with ``10nm``, was refused as another campaign's.
+    A spec whose ``vary`` is empty has the identity it had then; a file written with the
+    identity of the texts is still its folder's (`legacy_campaign_id`)."""
+    vary = spec.get("vary")
+    if isinstance(vary, dict):
+        spec = {**spec, "vary": {name: _meaning(name, text) for name, text in vary.items()}}
+    return legacy_campaign_id(spec)
+
+
+def legacy_campaign_id(spec: dict) -> str:
+    """`campaign_id` as it was before 2026-11-30, of campaign.json's DIST texts as spelt:
+    the identity the trial files written then hold."""
     text = json.dumps(spec, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+#: Significant digits of a distribution's SI numbers in a campaign's identity: the units'
+#: factors leave 60nm and 0.06um a last bit apart (6.000000000000001e-08 and 6e-08), which
+#: these digits do not see; `same_campaign` compares within 1e-12 alike.
+IDENTITY_DIGITS = 12
+
+
+def _meaning(name: str, text):
+    """The distribution ``text`` of ``name`` in `campaign_id`: its kind and SI numbers,
+    ``uniform:1e-08,2e-08`` for ``uniform:10nm,0.02um``; a text that does not parse (a
+    campaign.json edited by hand) as it is, which only its own spelling matches."""
+    from machinesim.campaign.distributions import KINDS, parse_distribution
+
+    try:
+        dist = parse_distribution(text, name)
+    except (InputError, TypeError):
+        return text
+    numbers = (dist.a, dist.b)[:KINDS[dist.kind]]
+    # + 0.0: -0 is 0 ("uniform:-0um,1um")
+    return f"{dist.kind}:" + ",".join(f"{x + 0.0:.{IDENTITY_DIGITS}g}" for x in numbers)
 
 
 def same_campaign(old: dict, new: dict) -> bool:
