@@ -814,16 +814,19 @@ def test_cli_runs_a_campaign(tmp_path, capsys):
 
 
 def test_cli_a_campaign_whose_every_trial_failed_says_why_and_fails(tmp_path, capsys):
-    # a 1 m tool offset leaves the adjuster no stroke: the lab refuses it in every trial
+    # a 3 mm edge offset lies beyond the calibration plan's 1 mm capture range: every trial
+    # cuts its ramps and finds no groove starting on them (a 1 m offset, which the lab's
+    # tool adjuster refuses, is refused before any trial now: test_campaign_folders.py)
     status = cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
-                       "--identify-only", "--quiet", "--vary", "tool.y=fixed:1m",
+                       "--identify-only", "--quiet", "--vary", "tool.y=fixed:3mm",
                        "--out", str(tmp_path)])
     err = capsys.readouterr().err
     assert status == 1
-    assert "every trial failed" in err and "a tool offset of [0.0, 1000.0" in err
+    assert "every trial failed" in err and "exceeds the plan's capture range 1 mm" in err
     summary = json.loads((tmp_path / "summary.json").read_text())
     (failure,) = summary["failures"]
-    assert failure["trials"] == [0, 1] and "1 m less the tool adjuster" in failure["message"]
+    assert failure["trials"] == [0, 1] and "the groove does not start on the ramp" in \
+        failure["message"]
     assert "- 2 trials (0, 1): InputError" in (tmp_path / "summary.md").read_text()
 
 

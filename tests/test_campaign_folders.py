@@ -109,3 +109,65 @@ def test_a_folder_written_with_the_identity_of_the_texts_resumes(begun, tmp_path
         assert np.array_equal(again[name].values[:2], ds[name].values), name
     assert json.loads((old / "trials/trial_000002.json").read_text())["campaign"] \
         == campaign_id(stored)
+
+
+# ------------------------------------------------------------- checks before any trial
+
+
+def test_a_campaign_its_procedure_refuses_fails_before_any_trial(tmp_path, monkeypatch):
+    # paper 002's grooves with the block set 100 um high: the groove program's rapids come
+    # down to 60 um over the crossing, and the procedure's own check (groove_rapids_crash)
+    # failed each trial with that message, one by one, the campaign's folder of failures
+    # written all the same; now refused at once with the same message, nothing written
+    ran = trials_run(monkeypatch)
+    out = tmp_path / "grooves"
+    with pytest.raises(InputError) as info:
+        run("workpiece_setting_grooves", 50, vary=["workpiece.z=100um"], out=out, workers=0,
+            progress=False)
+    message = str(info.value)
+    assert message.startswith("key '--vary': the trials of workpiece_setting_grooves would "
+                              "fail one by one as they start: the errors they are drawn "
+                              "around (workpiece.z=100um; the robot's landing at its mean) "
+                              "are refused: InputError: "), message
+    assert "the drawn landing sets the grooves' block 100.0 um high" in message
+    assert "rapids would run into the block" in message
+    assert ran == [] and not out.exists()
+    # every draw of a uniform 100..200 um crashes too; a normal centred there, half or more
+    for text in ("uniform:100um,200um", "normal:100um,10um"):
+        with pytest.raises(InputError, match="rapids would run into the block"):
+            run("workpiece_setting_grooves", 50, vary=[f"workpiece.z={text}"], out=out,
+                workers=0, progress=False)
+    assert ran == [] and not out.exists()
+
+
+@pytest.mark.parametrize(("procedure", "vary", "options"), [
+    ("workpiece_setting_grooves", ["workpiece.z=50um"], {}),  # below the 60 um: cut
+    ("workpiece_setting_grooves", ["workpiece.z=uniform:0um,100um"], {}),  # some draws cut
+    ("workpiece_setting_grooves", ["workpiece.z=normal:0um,100um"], {}),
+    ("workpiece_setting_grooves", ["workpiece.z=100um"], {"identify_only": True}),  # no cut
+    ("workpiece_setting_grooves", ["robot.repeatability=300um"], {}),  # 23 % of landings
+    ("tool_rotation_arm", VARY, {}),
+    ("xy_plane_errors", ["location.C.EX0C=normal:0,5um"], {}),
+])
+def test_a_campaign_some_of_whose_trials_the_procedure_takes_is_not_refused(
+        procedure, vary, options):
+    from machinesim.campaign.preflight import check_before_trials
+
+    spec = CampaignSpec(procedure, 4, tuple(parse_vary(t) for t in vary), **options)
+    check_before_trials(spec)  # no refusal
+
+
+def test_cli_a_tool_offset_the_lab_refuses_fails_before_any_trial(tmp_path, capsys):
+    # a 1 m tool offset leaves the lab's tool adjuster no stroke: every trial failed at its
+    # start with that message, the command exiting 1 after writing a campaign of failures
+    from machinesim.cli import main as cli_main
+
+    out = tmp_path / "arm"
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+                       "--identify-only", "--quiet", "--vary", "tool.y=fixed:1m",
+                       "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and not out.exists()
+    assert "the errors they are drawn around (tool.y=fixed:1m) are refused" in err
+    assert "a tool offset of [0.0, 1000.0, -0.055] mm" in err
+    assert "1 m less the tool adjuster's stroke" in err

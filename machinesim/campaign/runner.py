@@ -27,6 +27,7 @@ import numpy as np
 from machinesim._cores import usable_cores
 from machinesim._interrupts import _ctrl_c_deferred
 from machinesim.campaign.distributions import Distribution, parse_distribution, parse_vary
+from machinesim.campaign.preflight import check_before_trials
 from machinesim.campaign.results import (
     Assembly,
     CampaignFolder,
@@ -499,6 +500,7 @@ def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
         check_flag(value, flag)
     spec = CampaignSpec(procedure, trials, _vary(vary), seed=seed, noise=noise,
                         identify_only=identify_only, quick=quick)
+    check_before_trials(spec)  # the procedure's own checks: refused now, not in every trial
     if scheduler is not None:  # before the folder is made: nothing written for a wrong address
         check_scheduler(scheduler)
     refuse_foreign(out)  # before the lock's file is made in it (checked again under the lock)
