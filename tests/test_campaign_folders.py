@@ -15,7 +15,7 @@ import pytest
 import machinesim.campaign.runner as runner
 from machinesim.campaign import CampaignSpec, parse_vary, run
 from machinesim.campaign.results import CampaignFolder, campaign_id, legacy_campaign_id
-from machinesim.exceptions import InputError
+from machinesim.exceptions import FileError, InputError
 
 ARM = dict(identify_only=True)
 VARY = ["tool.y=normal:-178um,20um", "microscope.sigma=uniform:5nm,60nm"]
@@ -171,3 +171,80 @@ def test_cli_a_tool_offset_the_lab_refuses_fails_before_any_trial(tmp_path, caps
     assert "the errors they are drawn around (tool.y=fixed:1m) are refused" in err
     assert "a tool offset of [0.0, 1000.0, -0.055] mm" in err
     assert "1 m less the tool adjuster's stroke" in err
+
+
+# ------------------------------------------------------------ folders that cannot be written
+# The suite runs as root, for whom a folder's mode bits stop no write: these folders cannot
+# be written because of what is in their way (a file) or the file system (/proc).
+
+
+def test_a_folder_under_a_file_is_refused_before_any_trial_naming_the_file(tmp_path,
+                                                                           monkeypatch):
+    # 'cannot make the campaign folder: Not a directory' named the folder asked for, not
+    # the file in its way
+    (tmp_path / "file.txt").write_text("a file")
+    ran = trials_run(monkeypatch)
+    for out in (tmp_path / "file.txt/campaign", tmp_path / "file.txt/a/b"):
+        with pytest.raises(FileError) as info:
+            run("tool_rotation_arm", 2, out=out, workers=0, progress=False, **ARM)
+        assert str(info.value) == (
+            f"{out}: cannot make the campaign folder: '{tmp_path / 'file.txt'}' is a file, "
+            "not a folder; expected a folder that can be made and written, or one there")
+    assert ran == [] and (tmp_path / "file.txt").read_text() == "a file"
+    # a campaign folder whose trials/ is a file
+    (tmp_path / "made").mkdir()
+    (tmp_path / "made/campaign.json").write_text(json.dumps(_spec([])))
+    (tmp_path / "made/trials").write_text("not a folder")
+    with pytest.raises(FileError, match=r"'[^']*made/trials' is a file, not a folder"):
+        run("tool_rotation_arm", 2, seed=11, out=tmp_path / "made", workers=0,
+            progress=False, **ARM)
+    assert ran == []
+
+
+@pytest.mark.skipif(not __import__("os").path.isdir("/proc/self"), reason="no /proc")
+def test_a_folder_the_file_system_will_not_make_is_refused_before_any_trial(monkeypatch):
+    # /proc takes no new folder: mkdir says 'No such file or directory' of a folder whose
+    # parent is there, which the message gave as the whole reason
+    ran = trials_run(monkeypatch)
+    out = "/proc/self/machinesim_campaign"
+    with pytest.raises(FileError) as info:
+        run("tool_rotation_arm", 2, out=out, workers=0, progress=False, **ARM)
+    assert str(info.value).startswith(f"{out}: cannot make the campaign folder: '/proc/self' "
+                                      "takes no new folder (")
+    assert ran == []
+
+
+@pytest.mark.parametrize("stop", [OSError(28, "No space left on device"),
+                                  KeyboardInterrupt()])
+def test_a_trial_file_whose_write_is_cut_short_is_not_left(begun, tmp_path, monkeypatch,
+                                                           stop):
+    """A full disk, or a Ctrl-C, while trial 2's file is written: the run stops (a
+    FileError naming the file, or the interrupt), trials 0 and 1 stay whole, trial 2's file
+    is not there, half written or at all, nor its temporary file; the rerun runs trial 2."""
+    import machinesim._io as io_module
+
+    source, ds = begun
+    shutil.copytree(source, tmp_path / "c")
+    out = tmp_path / "c"
+    kept = {p.name: p.read_bytes() for p in (out / "trials").iterdir()}
+    real = io_module.os.fsync
+
+    def cut_short(fd):
+        raise stop
+
+    monkeypatch.setattr(io_module.os, "fsync", cut_short)
+    ran = trials_run(monkeypatch)
+    with pytest.raises(FileError if isinstance(stop, OSError) else KeyboardInterrupt) as info:
+        run("tool_rotation_arm", 3, vary=VARY, seed=11, out=out, workers=0, progress=False,
+            report=False, **ARM)
+    if isinstance(stop, OSError):
+        assert str(info.value) == (f"{out / 'trials/trial_000002.json'}: cannot write: "
+                                   "No space left on device")
+    assert ran == [2]
+    assert {p.name: p.read_bytes() for p in (out / "trials").iterdir()} == kept
+    monkeypatch.setattr(io_module.os, "fsync", real)
+    again = run("tool_rotation_arm", 3, vary=VARY, seed=11, out=out, workers=0,
+                progress=False, report=False, **ARM)
+    assert ran == [2, 2]
+    for name in ("drawn", "identified"):
+        assert np.array_equal(again[name].values[:2], ds[name].values), name

@@ -80,8 +80,7 @@ class CampaignFolder:
         try:
             self.trials_path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise FileError(f"cannot make the campaign folder: {exc.strerror or exc}",
-                            source=str(path)) from None
+            raise _unmade(self.trials_path, exc) from None
         check_writable(self.trials_path / "trial_000000.json", "campaign trial")
         if stored.exists():
             old = read_json(stored, "campaign spec")
@@ -181,8 +180,34 @@ def _make_folder(path: Path) -> None:
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise FileError(f"cannot make the campaign folder: {exc.strerror or exc}",
-                        source=str(path)) from None
+        raise _unmade(path, exc) from None
+
+
+def _unmade(path: Path, exc: OSError) -> FileError:
+    """The refusal of the folder ``path`` that mkdir could not make (``exc``), naming what
+    is in its way: the file ``--out tmp/file.txt/campaign`` meets was told as 'Not a
+    directory' of the folder asked for, and /proc's refusal of a new folder as 'No such file
+    or directory' of a path whose folder is there."""
+    above = path
+    while above != above.parent and not _asks(above.parent.exists):
+        above = above.parent
+    above = above.parent
+    if _asks(above.exists) and not _asks(above.is_dir):
+        why = f"{str(above)!r} is a file, not a folder"
+    elif path.exists() and not _asks(path.is_dir):  # trials/ made a file by hand, say
+        why = f"{str(path)!r} is a file, not a folder"
+    else:
+        why = f"{str(above)!r} takes no new folder ({exc.strerror or exc})"
+    return FileError(f"cannot make the campaign folder: {why}; expected a folder that can be "
+                     "made and written, or one there", source=str(path))
+
+
+def _asks(question) -> bool:
+    """``question()``, False when the file system cannot answer it (no permission)."""
+    try:
+        return question()
+    except OSError:
+        return False
 
 
 @contextlib.contextmanager
