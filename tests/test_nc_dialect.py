@@ -770,6 +770,26 @@ def test_a_cycle_dwell_with_a_decimal_point_is_seconds_as_haas_reads_it(block, s
     assert "G83's dwell P-5. must be >= 0 (with a decimal point P is seconds" in str(info.value)
 
 
+@pytest.mark.parametrize("rule", ["calculator", "increment", "is-b", "is-c"])
+@pytest.mark.parametrize("units", ["G21", "G20"])
+def test_g04_p_with_a_decimal_point_is_seconds_without_milliseconds_as_haas_reads_it(
+        rule, units):
+    # Haas 96-8000, G04: 'G04 P10.' is a dwell of 10 seconds, 'G04 P10' one of 10
+    # milliseconds. 'G04 P10.' had been refused ("G04 P takes integer milliseconds, got
+    # P10.; use G04 X<seconds>") while a cycle's P10. was read as 10 s. Neither the unit
+    # nor the integer-input rule (which scales a bare X) changes a P; under G91 it is a time
+    text = (f"{units} G00 X1.\nG04 P10.\nG04 P10\nG91 G04 P.25\nG04 P1.5\nG04 X1.5\n"
+            "G90 G04 P0.\nM30\n")
+    program = parse_program(text, integer_input=rule)
+    assert program.dwells.tolist() == [0.0, 10.0, 0.010, 0.25, 1.5, 1.5, 0.0]
+    assert program.kinds.tolist() == [KIND_RAPID] + [KIND_DWELL] * 6
+    assert len(set(program.targets[:, 0].tolist())) == 1  # no dwell moves X
+    # the same reading as a cycle's P10.: ten seconds at the bottom of G82
+    cycle = parse_program(f"{units} G00 X0 Y0 Z5.\nG82 X1. Z-1. R1. P10. F100.\nG80\n",
+                          integer_input=rule)
+    assert cycle.dwells[cycle.kinds == KIND_DWELL].tolist() == [10.0]
+
+
 def test_haas_g73_with_q_and_a_decimal_k_returns_to_r_after_pecks_adding_up_to_k():
     # Haas 96-8000, G73: with both K and Q "the tool is returned to the R plane after a
     # number of passes totals up to the K amount". 'K1.' had been refused as a repeat count

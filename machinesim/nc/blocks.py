@@ -325,8 +325,9 @@ class Block:
                    + ", ".join(f"{name}: {' '.join(words)}" for name, (_, words) in PLANES.items())
                    + f"; this block is in {state.plane})")
         reads = {
-            "P": "G04 (dwell, ms), G82, G73 and G83 (dwell at the bottom, ms, or s with a "
-                 "decimal point as Haas; G81 keeps it for a G82), G08 (P1/P0) and M98 (program)",
+            "P": "G04 (dwell), G82, G73 and G83 (dwell at the bottom; G81 keeps it for a "
+                 "G82), each in ms, or s with a decimal point as Haas, G08 (P1/P0) and M98 "
+                 "(program)",
             "Q": "G73 and G83 (peck depth) and G05.1 (Q1/Q0)",
             "R": "G02/G03 (radius), G73 and G81-G83 (R plane) and G05.1",
             "I": f"{centres} and with G73 and G83 (Haas's first peck I, with J and K)",
@@ -426,11 +427,7 @@ class Block:
         if "P" in single and "X" in single:
             raise self.fail("G04 takes one dwell time, got both P and X", single["X"])
         if "P" in single:
-            word = single["P"]
-            if "." in word.text:
-                raise self.fail(f"G04 P takes integer milliseconds, got {word.key}; use "
-                                "G04 X<seconds> for fractions", word)
-            dwell_s = self.integer(word, "dwell time") / 1000.0
+            dwell_s = self.dwell_p(single["P"], "G04")
         elif "X" in single:
             word = single["X"]
             dwell_s = self.real(word)
@@ -531,6 +528,21 @@ class Block:
             raise self.fail(f"value of {brief(word.key)} is out of range (not finite in "
                             "float64)", word)
         return value
+
+    def dwell_p(self, word: Word, code: str) -> float:
+        """The dwell P of G04 or of the canned cycle ``code``, s: integer milliseconds, as
+        FANUC's, or, written with a decimal point, seconds, as Haas reads it (Haas Mill
+        Operator's Manual 96-8000, G04: ``G04 P10.`` is a dwell of 10 seconds, ``G04 P10``
+        one of 10 milliseconds; G83: ``G83 Z-0.62 F15. R0.1 Q0.175 P5.`` "will peck several
+        times and dwell for five seconds at the end"). A FANUC control takes no decimal
+        point in P, so no program it runs reads otherwise here."""
+        if "." not in word.text:
+            return self.integer(word, "dwell time") / 1000.0
+        seconds = self.real(word)
+        if not seconds >= 0.0:
+            raise self.fail(f"{code}'s dwell {word.key} must be >= 0 (with a decimal point P "
+                            "is seconds, as Haas reads it; without, milliseconds)", word)
+        return seconds
 
     def integer(self, word: Word, what: str) -> int:
         number = integer(word)

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from machinesim.nc.blocks import Block
     from machinesim.nc.lexer import Word
 
-__all__ = ["PECKING", "cycle_dwell", "read_cycle", "return_depth", "variable_peck"]
+__all__ = ["PECKING", "read_cycle", "return_depth", "variable_peck"]
 
 #: The peck drilling cycles, which take Q or Haas's I J K, and a P of their own.
 PECKING = ("G73", "G83")
@@ -61,7 +61,7 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
         state.cycle_pecks = None
         state.cycle_return = None  # a Q without Haas's K. drills without its returns to R
     if "P" in single:
-        state.cycle_p = cycle_dwell(block, single["P"])
+        state.cycle_p = block.dwell_p(single["P"], state.cycle)
         # Haas's G73/G83 dwell it after the last peck; one kept from a G82 does not
         # make them dwell (FANUC's sequences, docs/nc.md)
         state.peck_dwell = state.cycle in PECKING
@@ -112,22 +112,6 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
             else:
                 state.target["Z"] = value
                 block.add(kind, 0.0, block_number)
-
-
-def cycle_dwell(block: Block, word: Word) -> float:
-    """The dwell P of a canned-cycle block, s: integer milliseconds, as FANUC's G82 (and
-    Haas's, without a point), or, written with a decimal point, seconds, as Haas reads it
-    (``G83 Z-0.62 F15. R0.1 Q0.175 P5.`` "will peck several times and dwell for five seconds
-    at the end": Haas Mill Operator's Manual 96-8000, G83; its G04 likewise, P with a point
-    in seconds, without in milliseconds). A FANUC control takes no decimal point in P, so
-    no program it runs reads otherwise here."""
-    if "." not in word.text:
-        return block.integer(word, "dwell time") / 1000.0
-    seconds = block.real(word)
-    if not seconds >= 0.0:
-        raise block.fail(f"{block.state.cycle}'s dwell {word.key} must be >= 0 (with a decimal "
-                         "point P is seconds, as Haas reads it; without, milliseconds)", word)
-    return seconds
 
 
 def return_depth(block: Block) -> float:
