@@ -1,7 +1,8 @@
 """One block of NC: its words checked, the modal state updated, its moves emitted.
 
-Internal to the reader (`machinesim.nc.reader`); arc blocks read in `machinesim.nc.arc_block`
-and canned-cycle blocks in `machinesim.nc.drilling`.
+Internal to the reader (`machinesim.nc.reader`); arc blocks read in `machinesim.nc.arc_block`,
+canned-cycle blocks in `machinesim.nc.drilling`, and dwell (G04), G28, G53, G08 and G05.1
+blocks in `machinesim.nc.one_shot`.
 """
 
 from __future__ import annotations
@@ -17,11 +18,11 @@ from machinesim.nc.arcs import PLANES
 from machinesim.nc.drilling import PECKING, read_cycle
 from machinesim.nc.length import check_length_carried, note_length_change
 from machinesim.nc.lexer import Word
+from machinesim.nc.one_shot import read_dwell, read_one_shot
 from machinesim.nc.program import AXES, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
 from machinesim.nc.rotary_feed import inch_feed_scale
 from machinesim.nc.words import (
     ARC,
-    DWELL_INCREMENT_S,
     G50_SETTING,
     G_GROUPS,
     G_REFUSED,
@@ -30,7 +31,6 @@ from machinesim.nc.words import (
     MAX_INTEGER_DIGITS,
     MAX_MOVES,
     MOTION,
-    NON_MOVING,
     OTHER_CYCLES,
     SINGLE,
     SLOWEST_FEED_M_PER_S,
@@ -114,9 +114,9 @@ class Block:
         first_move = self.reader.out.count
         axes = [single[a] for a in AXES if a in single]
         if motion is not None and motion[0] == "G04":
-            self.dwell(motion[1], axes, block_number)
+            read_dwell(self, motion[1], axes, block_number)
         elif one_shot is not None:
-            self.one_shot(one_shot, axes, block_number)
+            read_one_shot(self, one_shot, axes, block_number)
         elif state.cycle is not None and any(k in single for k in "XYZR"):
             read_cycle(self, axes, block_number)
         elif state.motion in ARC and (axes or any(k in single for k in "IJKR")):
@@ -417,79 +417,6 @@ class Block:
                 f"distance; give {' and '.join(w.letter for w in first)} a position first "
                 "(e.g. with G00)", first[0])
         return float(scale[0])
-
-    def dwell(self, g04: Word, axes: list[Word], block_number: int | None) -> None:
-        single = self.single
-        for word in axes:
-            if word.letter != "X":
-                raise self.fail(f"axis word {word.letter} in a dwell block; G04 takes only "
-                                "P<milliseconds> or X<seconds>", word)
-        if "P" in single and "X" in single:
-            raise self.fail("G04 takes one dwell time, got both P and X", single["X"])
-        if "P" in single:
-            dwell_s = self.dwell_p(single["P"], "G04")
-        elif "X" in single:
-            word = single["X"]
-            dwell_s = self.real(word)
-            if self.increment is not None and "." not in word.text:
-                dwell_s *= DWELL_INCREMENT_S[self.reader.integer_input]
-            if dwell_s < 0.0:
-                raise self.fail(f"dwell time must be >= 0, got {word.key}", word)
-        else:
-            raise self.fail("dwell without time: G04 needs P<milliseconds> or X<seconds>", g04)
-        self.add("dwell", dwell_s, block_number)
-
-    def one_shot(self, code: tuple[str, Word], axes: list[Word],
-                 block_number: int | None) -> None:
-        name, word = code
-        state, single = self.state, self.single
-        if name in NON_MOVING:
-            letter = "Q" if name == "G05.1" else "P"
-            extra = [w for w in self.words if w.letter not in ("N", "G", letter, "R")
-                     or (w.letter == "R" and name != "G05.1")]
-            if extra:
-                raise self.fail(f"{name} stands in a block of its own (with {letter}1 or "
-                                f"{letter}0), found {extra[0].key}", extra[0])
-            if letter not in single or single[letter].text not in ("0", "1"):
-                raise self.fail(f"{name} needs {letter}1 (on) or {letter}0 (off)", word)
-            key = f"{name} {single[letter].key}"
-            if "R" in single:
-                self.integer(single["R"], "AI contour precision level")
-                key += f" {single['R'].key}"
-            self.reader.note(key, self.line)
-            return
-        if not axes and name == "G28":
-            # a bare G28, as hand-written Haas programs start: controls differ
-            raise self.fail("G28 without axis words: a Haas control returns every axis to "
-                            "machine zero, a FANUC moves none; name the axes it moves, Z "
-                            "first to clear the part: G28 G91 Z0, then G28 G91 X0 Y0 (and "
-                            "G90 after)", word)
-        if not axes:
-            raise self.fail(f"{name} needs the axes it moves, e.g. {name} G91 Z0", word)
-        if name == "G53":
-            if state.incremental:
-                raise self.fail("G53 moves to machine coordinates, which are absolute; found "
-                                "under G91", word)
-            for axis in axes:
-                state.target[axis.letter] = self.machine(axis, machine_coordinates=True)
-            if "Z" in single:  # a machine position: every control's Z is the same again
-                state.length_change = None
-            self.add("rapid", 0.0, block_number)
-            return
-        # G28: through the intermediate point to the reference position of these axes (the
-        # reader's `reference`, machine zero where it gives none).
-        # An incremental 0 on an axis whose position is not known yet (the CAM header's
-        # G28 G91 Z0) is the current position whatever it is: no intermediate move there.
-        here = [a for a in axes if not (state.incremental and a.letter not in state.target
-                                        and self.real(a) == 0.0)]
-        if here:
-            state.target.update({axis.letter: self.machine(axis) for axis in here})
-            self.add("rapid", 0.0, block_number)
-        for axis in axes:
-            state.target[axis.letter] = self.reader.reference.get(axis.letter, 0.0)
-        if "Z" in single:  # at the reference, every control's Z is the same again
-            state.length_change = None
-        self.add("rapid", 0.0, block_number)
 
     # --- numbers
 

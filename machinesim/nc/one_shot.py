@@ -1,0 +1,98 @@
+"""A block of a one-shot G code: a dwell (G04), a rapid through the intermediate point to the
+reference position (G28) or to machine coordinates (G53), or a setting (G08, G05.1).
+
+Internal to the reader: a block (`machinesim.nc.blocks.Block`) with G04 reads here
+(`read_dwell`), one with G28, G53, G08 or G05.1 in `read_one_shot`; none of them changes
+the modal motion (G00 G01 G02 G03) or cancels a canned cycle.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from machinesim.nc.words import DWELL_INCREMENT_S, NON_MOVING
+
+if TYPE_CHECKING:
+    from machinesim.nc.blocks import Block
+    from machinesim.nc.lexer import Word
+
+__all__ = ["read_dwell", "read_one_shot"]
+
+
+def read_dwell(block: Block, g04: Word, axes: list[Word], block_number: int | None) -> None:
+    """The G04 ``block``: one dwell at the current position, of P (`Block.dwell_p`) or of X
+    (s; without a point, the integer-input rule's unit of time)."""
+    single = block.single
+    for word in axes:
+        if word.letter != "X":
+            raise block.fail(f"axis word {word.letter} in a dwell block; G04 takes only "
+                             "P<milliseconds> or X<seconds>", word)
+    if "P" in single and "X" in single:
+        raise block.fail("G04 takes one dwell time, got both P and X", single["X"])
+    if "P" in single:
+        dwell_s = block.dwell_p(single["P"], "G04")
+    elif "X" in single:
+        word = single["X"]
+        dwell_s = block.real(word)
+        if block.increment is not None and "." not in word.text:
+            dwell_s *= DWELL_INCREMENT_S[block.reader.integer_input]
+        if dwell_s < 0.0:
+            raise block.fail(f"dwell time must be >= 0, got {word.key}", word)
+    else:
+        raise block.fail("dwell without time: G04 needs P<milliseconds> or X<seconds>", g04)
+    block.add("dwell", dwell_s, block_number)
+
+
+def read_one_shot(block: Block, code: tuple[str, Word], axes: list[Word],
+                  block_number: int | None) -> None:
+    """The ``block`` of the one-shot G ``code`` (G28, G53, G08, G05.1): its rapids, or its
+    setting noted."""
+    name, word = code
+    state, single = block.state, block.single
+    if name in NON_MOVING:
+        letter = "Q" if name == "G05.1" else "P"
+        extra = [w for w in block.words if w.letter not in ("N", "G", letter, "R")
+                 or (w.letter == "R" and name != "G05.1")]
+        if extra:
+            raise block.fail(f"{name} stands in a block of its own (with {letter}1 or "
+                             f"{letter}0), found {extra[0].key}", extra[0])
+        if letter not in single or single[letter].text not in ("0", "1"):
+            raise block.fail(f"{name} needs {letter}1 (on) or {letter}0 (off)", word)
+        key = f"{name} {single[letter].key}"
+        if "R" in single:
+            block.integer(single["R"], "AI contour precision level")
+            key += f" {single['R'].key}"
+        block.reader.note(key, block.line)
+        return
+    if not axes and name == "G28":
+        # a bare G28, as hand-written Haas programs start: controls differ
+        raise block.fail("G28 without axis words: a Haas control returns every axis to "
+                         "machine zero, a FANUC moves none; name the axes it moves, Z "
+                         "first to clear the part: G28 G91 Z0, then G28 G91 X0 Y0 (and "
+                         "G90 after)", word)
+    if not axes:
+        raise block.fail(f"{name} needs the axes it moves, e.g. {name} G91 Z0", word)
+    if name == "G53":
+        if state.incremental:
+            raise block.fail("G53 moves to machine coordinates, which are absolute; found "
+                             "under G91", word)
+        for axis in axes:
+            state.target[axis.letter] = block.machine(axis, machine_coordinates=True)
+        if "Z" in single:  # a machine position: every control's Z is the same again
+            state.length_change = None
+        block.add("rapid", 0.0, block_number)
+        return
+    # G28: through the intermediate point to the reference position of these axes (the
+    # reader's `reference`, machine zero where it gives none).
+    # An incremental 0 on an axis whose position is not known yet (the CAM header's
+    # G28 G91 Z0) is the current position whatever it is: no intermediate move there.
+    here = [a for a in axes if not (state.incremental and a.letter not in state.target
+                                    and block.real(a) == 0.0)]
+    if here:
+        state.target.update({axis.letter: block.machine(axis) for axis in here})
+        block.add("rapid", 0.0, block_number)
+    for axis in axes:
+        state.target[axis.letter] = block.reader.reference.get(axis.letter, 0.0)
+    if "Z" in single:  # at the reference, every control's Z is the same again
+        state.length_change = None
+    block.add("rapid", 0.0, block_number)
