@@ -16,7 +16,7 @@ import pytest
 from machinesim import ErrorModel, Lab, load_machine
 from machinesim.budget import Budget, quadrature_share
 from machinesim.cam.prisms import SEARCH_MARGIN_M, CalibrationPlan
-from machinesim.exceptions import HolderContactError
+from machinesim.exceptions import HolderContactError, InputError
 from machinesim.identification.tool_rotation_arm import arm_radius
 from machinesim.procedures.tool_rotation_arm import ToolRotationArm, holder_depth, max_capture
 from machinesim.realism import Realism
@@ -54,6 +54,44 @@ def test_the_search_range_and_spacing_follow_from_the_capture_range():
     assert plan.lead == pytest.approx(1.386 * MM + 8e-9 / 9, abs=1e-15)
     assert plan.edge(0, plan.ramp[0])[0] - plan.origin[1] == pytest.approx(plan.lead)
     assert small.lead == 1 * MM
+
+
+def test_the_calibration_block_holds_the_ramps_deepest_cut():
+    """The ramps end search = 1.036 mm below the top and an edge offset within the 1 mm
+    capture cuts up to 1 mm lower again: 2.036 mm (the block was 1 mm thick, so even the
+    errorless edge cut 36 um out through its bottom). By hand, a 90-deg V at 0 deg whose edge
+    goes down to D at slope 0.1 and climbs back at slope 1 removes D^2 per unit of x:
+    D^3 / 3 x (1 / 0.1 + 1); with the edge 0.3 mm low, D = 1.336 mm, 8.744 mm^3 (the 1 mm
+    block lost 8.605 mm^3: 1.6 % of the groove lay under its bottom)."""
+    from machinesim.cutting import cut
+    from machinesim.procedures.tool_rotation_arm import TOOL
+    from machinesim.workpiece import stock_from_spec
+
+    one = CalibrationPlan(angles=(0.0,))
+    low = 0.3 * MM
+    part, _ = cut(one.program(R0), MACHINE, tool=TOOL, stock=one.stock,
+                  errors=arm_errors(low, 0.0))
+    d = one.search + low
+    block = stock_from_spec(one.stock)
+    assert block.volume - part.volume == pytest.approx(d ** 3 / 3 * (1 / one.slope + 1),
+                                                       rel=1e-9)
+    assert part.bounds[0][2] == block.bounds[0][2]  # its bottom left whole
+    deepest = 1.0 * MM + 16 * UM + 8e-9 / 9 + SEARCH_MARGIN_M + 1.0 * MM
+    assert one.depth == pytest.approx(deepest, abs=1e-15)
+    assert block.bounds[0][2] == pytest.approx(-(deepest + 1.0 * MM), abs=1e-14)  # 12 digits
+
+
+def test_a_block_thinner_than_the_ramps_deepest_cut_is_refused():
+    with pytest.raises(InputError) as info:
+        CalibrationPlan(height=1.0 * MM)
+    assert info.value.key == "height"
+    message = str(info.value)
+    assert "deepest cut 0.002036 m" in message and "got 0.001 m" in message
+    assert "out through the block's bottom" in message
+    for bad in (math.nan, -1.0, "3"):
+        with pytest.raises(InputError, match="thickness height"):
+            CalibrationPlan(height=bad)
+    assert CalibrationPlan(height=2.1 * MM).stock.split("@")[0].endswith("x2.1")
 
 
 @pytest.mark.parametrize("rho, e_ys", [

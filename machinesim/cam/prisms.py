@@ -19,8 +19,8 @@ from machinesim.nc import ProgramBuilder
 from machinesim.nc.program import Program
 from machinesim.units import M_PER_MM, M_PER_UM
 
-__all__ = ["CLEARANCE_MARGIN_M", "SEARCH_MARGIN_M", "SPACING_MARGIN_M", "STATION_DITHER_M",
-           "CalibrationPlan", "PrismPattern"]
+__all__ = ["CLEARANCE_MARGIN_M", "FLOOR_M", "SEARCH_MARGIN_M", "SPACING_MARGIN_M",
+           "STATION_DITHER_M", "CalibrationPlan", "PrismPattern"]
 
 #: Extra depth step between calibration stations (m): 1/9 of the microscope's 1 nm display
 #: step, so the nine stations' apexes fall at nine places on that step and its rounding
@@ -34,6 +34,9 @@ SEARCH_MARGIN_M = 20e-6
 SPACING_MARGIN_M = 0.1 * M_PER_MM
 #: Edge clearance over the ramps' top for rapids (m), beyond the search range.
 CLEARANCE_MARGIN_M = 0.5 * M_PER_MM
+#: Stock kept under the deepest cut of the calibration ramps (m), in the default thickness
+#: of their block (`CalibrationPlan.height`).
+FLOOR_M = 1.0 * M_PER_MM
 
 
 def _groove_program(r0: float, clearance: float, x_out: float, grooves, feed: float,
@@ -100,6 +103,11 @@ class CalibrationPlan:
     tool_angle, clearance, feed_mm_per_min : float
         Included angle of the V tool (rad), edge clearance over the surface for rapids (m;
         default None: ``search + CLEARANCE_MARGIN_M``), feed (the paper's 12,000 mm/min).
+    height : float, optional
+        Thickness of the calibration block (m); default (None) ``depth + FLOOR_M`` (3.036 mm
+        for the default plan). Paper 000 gives no size of its workpiece, and the ramps are
+        this plan's (the paper gives only the tool angles); a thickness not above `depth`
+        is refused: the ramps would cut out through the block's bottom.
     """
 
     angles: tuple[float, ...] = tuple(math.radians(a) for a in (0, 10, 20, 30, 40))
@@ -113,6 +121,7 @@ class CalibrationPlan:
     tool_angle: float = math.pi / 2
     clearance: float | None = None
     feed_mm_per_min: float = 12000.0
+    height: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "angles", _angles(self.angles, self.tool_angle, "angles"))
@@ -134,6 +143,25 @@ class CalibrationPlan:
         if self.clearance <= self.search:
             raise InputError(f"Expected a clearance above the search range {self.search:g} m, "
                              f"got {self.clearance!r}", key="clearance")
+        if self.height is None:
+            object.__setattr__(self, "height", self.depth + FLOOR_M)
+        height = self.height
+        if not (isinstance(height, int | float) and math.isfinite(height)
+                and height > self.depth):
+            raise InputError(
+                f"Expected the calibration block's thickness height above the ramps' deepest "
+                f"cut {self.depth:g} m (the ramps end {self.search:g} m below its top, and an "
+                f"edge offset within the capture range {capture:g} m cuts up to that much "
+                f"lower), got {height!r} m: the ramps would cut out through the block's "
+                "bottom", key="height")
+
+    @property
+    def depth(self) -> float:
+        """Deepest (m) the ramps may cut below the block's top: their programmed end,
+        ``search`` down, and ``capture`` lower again for an edge offset within the capture
+        range (at any angle the edge's height error is the offset turned by it). 2.036 mm
+        for the default plan."""
+        return self.search + self.capture
 
     @property
     def window(self) -> float:
@@ -192,7 +220,7 @@ class CalibrationPlan:
     def stock(self) -> str:
         """Stock spec of the calibration block (mm)."""
         width = (self.lead + len(self.angles) * self.spacing) / M_PER_MM
-        return (f"block:{self.length / M_PER_MM:.6g}x{width:.6g}x1"
+        return (f"block:{self.length / M_PER_MM:.6g}x{width:.6g}x{self.height / M_PER_MM:.12g}"
                 f"@{self.origin[0] / M_PER_MM:.6g},{self.origin[1] / M_PER_MM:.6g},0")
 
     def program(self, r0: float, number: int = 1) -> Program:
