@@ -94,6 +94,44 @@ def test_a_block_thinner_than_the_ramps_deepest_cut_is_refused():
     assert CalibrationPlan(height=2.1 * MM).stock.split("@")[0].endswith("x2.1")
 
 
+@pytest.mark.parametrize("capture, tilt", [(1.5 * MM, 0.6e-3), (1.5 * MM, -0.6e-3),
+                                           (2.8 * MM, 0.7e-3)])
+def test_a_tilted_stage_neither_widens_the_fine_sections_nor_hides_the_groove(capture, tilt):
+    """The stage's tilt across Y (0.2 mrad std, docs/metrology.md) at 3 sigma puts the ends
+    of a coarse section 1.5 mm of capture wide (+-1.786 mm) 1.07 um off its median, past the
+    0.8 um (0.1 x 8 um) that marks the groove at the first station: its land read as groove,
+    and each fine section ran from there (2.4-3.0 mm instead of 34-49 um). At 3.5 sigma and a
+    2.8 mm capture the 2 um that finds a groove was met at the ramp's first station, and
+    the reading refused the offset as beyond the capture range. By hand, levelled: a 90-deg
+    V at 0 deg is 2 D wide at depth D, 1.8 D below 0.1 D, and a fine section adds 10 um
+    either side; the readings are the edge offset (dz = -(r - r0), dy = e_ys)."""
+    from machinesim.cutting import cut
+    from machinesim.metrology import Microscope
+    from machinesim.metrology.imperfections import Registration
+    from machinesim.procedures.tool_rotation_arm import TOOL, measure_calibration
+    from machinesim.procedures.tool_rotation_arm_reading import FINE_SPACING_M
+
+    plan = CalibrationPlan(angles=(0.0,), capture=capture)
+    rho, e_ys = PAPER_R - R0, PAPER_E
+    part, _ = cut(plan.program(R0), MACHINE, tool=TOOL, stock=plan.stock,
+                  errors=arm_errors(rho, e_ys))
+    microscope = Microscope(noise=False, registration=Registration(tilt=[0.0, tilt]))
+    fine, profile = [], microscope.profile
+
+    def recorded(part, start, end, spacing=None):
+        # the fine sections, not the two across the block's edge that find its rotation
+        if spacing == FINE_SPACING_M and abs(start[1] - plan.origin[1]) > 0.2 * MM:
+            fine.append(end[1] - start[1])
+        return profile(part, start, end, spacing=spacing)
+
+    microscope.profile = recorded
+    (reading,) = measure_calibration(part, plan, microscope)
+    expected = 1.8 * np.array(plan.station_depths) + 20 * UM
+    # the groove's extent read on 1 um samples: up to one sample short at each end
+    assert np.all(np.abs(np.array(fine) - expected + 1 * UM) <= 1 * UM + 1e-12), fine
+    # noise off: the 1 nm display rounding, dithered over the nine stations
+    assert reading.mean("dz")[0] == pytest.approx(-rho, abs=0.1 * NM)
+    assert reading.mean("dy")[0] == pytest.approx(e_ys, abs=0.1 * NM)
 @pytest.mark.parametrize("rho, e_ys", [
     (119.8 * MM - R0, -178 * UM),            # the issue's --r-mm 119.8
     (0.0, -0.9 * MM),                         # neighbours' flanks in the search window

@@ -50,6 +50,9 @@ BISECTION_STEP_M = 1e-6
 FINE_SPACING_M = 0.1e-6
 #: Land kept either side of a groove in a fine section (m), at least: 33 samples at 0.3 um.
 FINE_LAND_M = 10e-6
+#: Least land (m) at each end of a coarse section that levels it (`_coarse_land`): 20
+#: samples at 1 um, where the plan leaves no land the groove cannot reach.
+COARSE_LAND_M = 20e-6
 #: A pattern apex is a local minimum rising by at least this fraction of the pattern depth to
 #: the ridges either side. Neighbouring 90-deg grooves at 20 um pitch meet in ridges >= 5 um
 #: above the shallower apex (0-20 deg, depth changes of 3 um per deg), while noise (12 nm)
@@ -265,20 +268,37 @@ def _no_groove_at(where: str, depth: float, x: float, start: float) -> NoReturn:
                      "by plan.program", key="part")
 
 
-def _section(index, microscope, x: float, y0: float, y1: float, spacing=None):
-    """A section across Y at ``x``: (y, height below the land's median)."""
+def _coarse_land(plan: CalibrationPlan, k: int) -> float:
+    """Land (m) at each end of ramp ``k``'s coarse sections that its groove cannot reach: the
+    search window less the groove's lateral offset (up to ``capture``) and the spread of its
+    low flank, ``(pi - tool_angle) / 2 - |angle|`` from the surface, at the deepest station
+    and the `FIND_DEPTH_M` that finds it; at least `COARSE_LAND_M`. The default plan: 268 um
+    at 0 deg, 80 um at 40 deg (1.286 mm - 1 mm - 18 um / tan 5 deg)."""
+    flank = (math.pi - plan.tool_angle) / 2.0 - abs(plan.angles[k])
+    depth = max(plan.station_depths) + FIND_DEPTH_M
+    return max(COARSE_LAND_M, plan.window - plan.capture - depth / math.tan(flank))
+
+
+def _section(index, microscope, x: float, y0: float, y1: float, spacing, land: float):
+    """A section across Y at ``x``: (y, height below its land), levelled on the line fitted
+    to its first and last ``land`` (m, `level_on_land`). Taken from its median, a coarse
+    section (+-1.286 mm for the default plan, more with a larger capture) on a stage tilted
+    by 0.63 mrad (3.15 sigma of `machinesim.realism.MICROSCOPE`'s 0.2 mrad) had one end
+    0.8 um below it, the 0.1 x depth that marks the groove at the first station: land read
+    as groove."""
     prof = microscope.profile(index, (x, y0), (x, y1), spacing=spacing)
-    return y0 + prof.s, prof.z - np.nanmedian(prof.z)
+    return y0 + prof.s, level_on_land(prof.s, prof.z, land)
 
 
 def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading:
     x_a, x_b = plan.ramp
     window = plan.window
     where = f"ramp groove at {math.degrees(plan.angles[k]):g} deg"
+    land = _coarse_land(plan, k)
 
     def coarse(x):
         y = float(plan.edge(k, x)[0])
-        return _section(index, microscope, x, y - window, y + window, COARSE_SPACING_M)
+        return _section(index, microscope, x, y - window, y + window, COARSE_SPACING_M, land)
 
     def found(x):
         return bool(np.nanmin(coarse(x)[1]) < -FIND_DEPTH_M)
