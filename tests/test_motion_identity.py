@@ -31,7 +31,7 @@ from machinesim import load_machine
 from machinesim.exceptions import NCProgramError
 from machinesim.motion import Trajectory, plan
 from machinesim.motion.chords import ToolPaths, deviations
-from machinesim.nc import Program, ProgramBuilder, parse_program
+from machinesim.nc import Move, Program, ProgramBuilder, parse_program
 from machinesim.sampling import random_errors
 from machinesim.tool_specs import tool_from_spec
 
@@ -434,13 +434,16 @@ def errors_of(call):
 
 @pytest.mark.parametrize("text", [
     "G01 X1. F100.\nG01 A10.\nG01 C10.\n",          # A is not on the machine: line 2
-    "G00 X1.\nG01 X2.\nG01 C20. F10.\n",              # no feed: line 2
+    # no feed: line 2 (the reader refuses 'G00 X1.\nG01 X2.\nG01 C20. F10.'; built from moves)
+    Program.from_moves([Move("rapid", {"X": 1e-3}), Move("linear", {"X": 2e-3}, line=2),
+                        Move("linear", {"X": 2e-3, "C": math.radians(20.0)},
+                             feed_m_per_s=10e-3 / 60.0, line=3)]),
     "G01 C180. F100.\nG01 A1.\n",                      # the rotary move fails first: line 1
     "G00 X1.\nG01 Y1. F10\nG01 C359.\nG01 A1.\n",     # the rotary move fails first: line 3
 ])
 def test_errors_name_the_same_move(machines, text):
     machine = machines["grooving_4axis"]
-    program = parse_program(text)
+    program = parse_program(text) if isinstance(text, str) else text
     new = errors_of(lambda: plan(program, machine, chord_tolerance=1e-17))
     old = errors_of(lambda: reference.plan(program, machine, chord_tolerance=1e-17))
     assert new is not None and new == old

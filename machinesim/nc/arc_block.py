@@ -88,8 +88,8 @@ def read_arc(block: Block, axes: list[Word], block_number: int | None) -> None:
             targets[-1, k] = b
         else:
             targets[:, k] = math.nan
-    feed = math.nan if state.feed is None else state.feed
-    feeds = np.full(n, feed)
+    block.check_feed(state.motion, g_word)
+    feeds = np.full(n, state.feed)
     turning = [w for w in axes if w.letter in ROTARY_AXES]
     if state.feed_inch and turning:  # a rotary axis's degrees count as inches in the feed
         starts = np.vstack([[start.get(a, math.nan) for a in AXES], targets[:-1]])

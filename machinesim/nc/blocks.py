@@ -393,6 +393,8 @@ class Block:
                             "G01 first", axes[0])
         check_length_carried(self, self.single.get("Z"), axes)
         values = {word.letter: self.machine(word) for word in axes}
+        if state.motion == "G01":
+            self.check_feed("G01", self.g_codes.get("motion", (None, axes[0]))[1])
         start = dict(state.target)
         state.target.update(values)
         feed = None
@@ -400,6 +402,15 @@ class Block:
                 and any(word.letter in ROTARY_AXES for word in axes)):
             feed = state.feed * self.inch_feed_scale(start, state.target, axes)
         self.add(MOTION[state.motion], 0.0, block_number, feed=feed)
+
+    def check_feed(self, code: str, word: Word) -> None:
+        """Refuse a feed move of ``code`` (G01, G02/G03, a canned cycle's feed to the hole
+        bottom) when no F is in force: it has no time (FANUC stops there with alarm PS0011,
+        "feed zero"); ``word`` locates the refusal."""
+        if self.state.feed is None:
+            raise self.fail(f"{code} feeds with no F in force: no feed rate has been given "
+                            "yet (a FANUC control stops with alarm PS0011, feed zero); give "
+                            "F in this block or before it (mm/min; inch/min under G20)", word)
 
     def inch_feed_scale(self, start: dict[str, float], end: dict[str, float],
                         axes: list[Word]) -> float:

@@ -146,8 +146,9 @@ class Move:
         offset and tool length offset applied; every axis given a value so far in the
         program (modal). Frozen.
     feed_m_per_s : float or None
-        Feed rate in m/s for linear moves (the modal F); None for rapid and dwell, and for a
-        linear move before any F.
+        Feed rate in m/s for linear moves (the modal F); None for rapid and dwell. A linear
+        move built without one is refused by the planner where it moves (the reader refuses
+        its block: no F in force).
     dwell_s : float
         Dwell time in s; 0.0 unless ``kind == "dwell"``.
     line : int

@@ -378,6 +378,8 @@ class Reader:
             feed = np.full(j - i, feed_before)
         kinds = motion[rows].astype(np.int8)
         feeds = np.where(kinds == KIND_LINEAR, feed[rows], math.nan)
+        if np.isnan(feeds[kinds == KIND_LINEAR]).any():
+            return False  # a feed move with no F in force: the block-by-block path names it
         if any(present[k].any() for k, a in enumerate(AXES) if a in ROTARY_AXES):
             if has_f.any() and state.inch != state.feed_inch:
                 return False  # Fs in both units in one run: the block-by-block path
