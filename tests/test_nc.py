@@ -349,13 +349,16 @@ REFUSALS = [
     ("G00 G01 X1", 1, 5, "G01", "two motion G-codes in one block: G00 and G01"),
     ("G00 X0\nG04 G01 X1", 2, 5, "G01", "two motion G-codes in one block: G04 and G01"),
     ("G90 G91", 1, 5, "G91", "two distance G-codes in one block"),
-    ("G04", 1, 1, "G04", "dwell without time"),
+    # P with a decimal point is seconds (Haas): the messages had said P is milliseconds
+    ("G04", 1, 1, "G04", r"dwell without time: G04 needs P<milliseconds> \(with a decimal "
+     r"point, P<seconds>, as Haas reads it\) or X<seconds>$"),
     ("G04 P-1.5", 1, 5, "P-1.5", "G04's dwell P-1.5 must be >= 0 .with a decimal point P is "
      "seconds"),
     ("G04 P-1500", 1, 5, "P-1500", "dwell time must be an unsigned integer"),
     ("G04 P100 X1.", 1, 10, "X1.", "got both P and X"),
     ("G04 X-1.", 1, 5, "X-1.", "dwell time must be >= 0"),
-    ("G04 Y1", 1, 5, "Y1", "axis word Y in a dwell block"),
+    ("G04 Y1", 1, 5, "Y1", r"axis word Y in a dwell block; G04 takes only "
+     r"P<milliseconds> \(with a decimal point, P<seconds>, as Haas reads it\) or X<seconds>$"),
     ("G00 X0 P100", 1, 8, "P100", "P is only read with G04"),
     ("X1", 1, 1, "X1", "without a motion mode"),
     ("G91 G00 X1", 1, 9, "X1", "incremental .G91. move on axis X before its position"),

@@ -18,6 +18,10 @@ if TYPE_CHECKING:
 
 __all__ = ["read_dwell", "read_one_shot"]
 
+#: The words of a dwell time, as the refusals of a G04 block name them (`Block.dwell_p`).
+DWELL_WORDS = ("P<milliseconds> (with a decimal point, P<seconds>, as Haas reads it) or "
+               "X<seconds>")
+
 
 def read_dwell(block: Block, g04: Word, axes: list[Word], block_number: int | None) -> None:
     """The G04 ``block``: one dwell at the current position, of P (`Block.dwell_p`) or of X
@@ -26,7 +30,7 @@ def read_dwell(block: Block, g04: Word, axes: list[Word], block_number: int | No
     for word in axes:
         if word.letter != "X":
             raise block.fail(f"axis word {word.letter} in a dwell block; G04 takes only "
-                             "P<milliseconds> or X<seconds>", word)
+                             f"{DWELL_WORDS}", word)
     if "P" in single and "X" in single:
         raise block.fail("G04 takes one dwell time, got both P and X", single["X"])
     if "P" in single:
@@ -39,7 +43,7 @@ def read_dwell(block: Block, g04: Word, axes: list[Word], block_number: int | No
         if dwell_s < 0.0:
             raise block.fail(f"dwell time must be >= 0, got {word.key}", word)
     else:
-        raise block.fail("dwell without time: G04 needs P<milliseconds> or X<seconds>", g04)
+        raise block.fail(f"dwell without time: G04 needs {DWELL_WORDS}", g04)
     block.add("dwell", dwell_s, block_number)
 
 
