@@ -26,6 +26,7 @@ from machinesim.cutting.sweeps import (
     mesh_volume,
     polygon_triangles,
 )
+from machinesim.cutting.tilted_profiles import split_sweeps
 from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL, SIDEWAYS_WARN_RAD, TWIST_M
 
 __all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "PROGRESS_STEPS", "SweepSet",
@@ -307,6 +308,18 @@ class SweepSet:
             return None
         return self._solid(hull[0], hull[1], not clipped and points[:, 2].max() > self.clip_z)
 
+    def _united(self, pieces, clipped: bool):
+        """`_hull` of each piece of a split profile sweep (`tilted_profiles.halves`), the
+        two united."""
+        built = [self._hull(points, clipped) for points in pieces if points is not None]
+        solids = [b for b in built if isinstance(b, tuple)]
+        if not solids:
+            return "above" if all(b == "above" for b in built) else None
+        if len(solids) == 1:
+            return solids[0]
+        solid = solids[0][0] + solids[1][0]
+        return solid, solid.volume()
+
     def hulls(self, keep: Callable[[np.ndarray, np.ndarray], np.ndarray],
               progress: Callable[[int, int], None] | None = None):
         """Clipped sweeps whose point bounds pass ``keep``.
@@ -397,7 +410,7 @@ class SweepSet:
             # the ends of a rotary groove where a tall V's flanks cross the C axis (78 nm
             # for a v:90 0.1 mm deep, 0.3 mm off the axis; found by the exactness audit).
             rise = np.abs(p1[:, :, 2] - p0[:, :, 2]).max(axis=1)
-            candidates, raised = {}, set()
+            candidates, raised, split = {}, set(), {}
             rows = chosen[same[chosen] & ~level[chosen] & ~minkowski[chosen]]
             if len(rows):
                 points = np.concatenate([p0[rows], p1[rows]], axis=1)
@@ -412,6 +425,9 @@ class SweepSet:
                 # the hull reaches at most rise above the clip plane, itself above the
                 # stock: trimmed only where that is more than `RAISED_UNTRIMMED_M`
                 raised.update(rows[rise[rows] > RAISED_UNTRIMMED_M].tolist())
+                if self.planar:  # a profile tilted across itself: two halves' hulls
+                    split = split_sweeps(self.vertices, rows, p0, p1, r0, r1, origin[first],
+                                         origin[first + 1], self.clip_z + rise)
             prisms = {}
             rows = chosen[level[chosen]]
             if len(rows):
@@ -425,6 +441,8 @@ class SweepSet:
                     built = self._prism(prisms[row], p0[row], move[row])
                 elif minkowski[row]:
                     built = self._translated(r0[row], origin[first[row]], move[row], p0[row])
+                elif row in split:
+                    built = self._united(split[row], clipped=row not in raised)
                 else:
                     points = candidates[row]
                     built = ("above" if points is None
