@@ -173,3 +173,29 @@ def test_cut_notes_a_program_whose_arcs_were_read_finer_or_coarser_than_it_cuts(
     assert ("the program's 1 arc block was read as chords within 1000 nm, coarser than the "
             "1 nm this cut follows: the part follows them only within 1000 nm (read with "
             "chord_tolerance=1e-09 to follow them as closely)") in report.notes
+
+
+def test_cut_turned_and_the_viewer_note_a_program_whose_arcs_were_read_otherwise():
+    # cut() said so (above); cut_turned and the viewer's cut of a program, through the same
+    # arc_chord_note, said nothing. Read at 1 um and cut at cut_turned's 1 nm: coarser; read
+    # at parse_program's 1 nm and drawn with a ball (100 nm, path_chord_tolerance): finer,
+    # sqrt(100 / 1) = 10 times the sweeps.
+    from machinesim.cutting import cut_turned
+    from machinesim.nc import parse_program
+    from machinesim.viewer import machine_scene
+
+    coarse = parse_program(QUARTER_ABOVE, chord_tolerance=1e-6)
+    _, report = cut_turned(coarse, "grooving_4axis", tool="v:90", stock="block:10x10x2")
+    assert ("the program's 1 arc block was read as chords within 1000 nm, coarser than the "
+            "1 nm this cut follows: the part follows them only within 1000 nm (read with "
+            "chord_tolerance=1e-09 to follow them as closely)") in report.notes
+    scene = machine_scene("grooving_4axis", parse_program(QUARTER_ABOVE),
+                          tool=BallEndMill(0.2 * MM), stock="block:10x10x2", max_stages=2)
+    assert ("the program's 1 arc block was read as chords within 1 nm, finer than the 100 nm "
+            "this cut follows: about 10 times as many sweeps on them, for a part within 100 nm "
+            "of the same; read it with read_program/parse_program(..., chord_tolerance=1e-07) "
+            "(machinesim.tools.path_chord_tolerance([tool]))") in scene.notes
+    # read as each cut follows: nothing to say
+    _, report = cut_turned(parse_program(QUARTER_ABOVE), "grooving_4axis", tool="v:90",
+                           stock="block:10x10x2")
+    assert not any("arc block" in note for note in report.notes), report.notes

@@ -158,14 +158,17 @@ def nc_summary(program) -> dict:
 SAME_CHORD_SHARE = 1e-9
 
 
-def arc_chord_note(program, chord_tolerance: float) -> str:
+def arc_chord_note(program, chord_tolerance: float, *, takes_path: bool = True) -> str:
     """A note when ``program``'s arcs were read as chords within another tolerance than the
     ``chord_tolerance`` (m) the cut follows (`Program.arc_chord_tolerance`), else ''.
 
     The cut cannot split them again: finer, it runs sqrt(cut / read) times as many sweeps
     on them (`parse_program`'s 1 nm under a ball or flat end mill's 100 nm: ten times) for
     a part that differs by less than the cut's tolerance; coarser, the part follows its
-    arcs only within the tolerance they were read with."""
+    arcs only within the tolerance they were read with. Every cut of a program says it
+    through this: `machinesim.cutting.cut`, ``cut_turned`` and the viewer's
+    (`machinesim.viewer.machine_scene`); ``takes_path`` False leaves out the advice to give
+    the file's path, which only `cut` reads at its own tolerance."""
     read = getattr(program, "arc_chord_tolerance", None)
     if read is None or abs(read - chord_tolerance) <= SAME_CHORD_SHARE * chord_tolerance:
         return ""
@@ -178,8 +181,8 @@ def arc_chord_note(program, chord_tolerance: float) -> str:
         return (f"{said}: about {math.sqrt(chord_tolerance / read):.3g} times as many sweeps "
                 f"on them, for a part within {chord_tolerance * 1e9:.4g} nm of the same; read "
                 f"it with read_program/parse_program(..., chord_tolerance="
-                f"{chord_tolerance:.4g}) (machinesim.tools.path_chord_tolerance([tool])), or "
-                f"give cut() the file's path (docs/cutting.md)")
+                f"{chord_tolerance:.4g}) (machinesim.tools.path_chord_tolerance([tool]))"
+                + (", or give cut() the file's path (docs/cutting.md)" if takes_path else ""))
     return (f"{said}: the part follows them only within {read * 1e9:.4g} nm (read with "
             f"chord_tolerance={chord_tolerance:.4g} to follow them as closely)")
 

@@ -20,7 +20,12 @@ import numpy as np
 from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
 from machinesim.cutting.program import _holder_refusal, _Moves, _overtravel, check_progress
-from machinesim.cutting.report import CutReport, nc_summary, peak_following_error
+from machinesim.cutting.report import (
+    CutReport,
+    arc_chord_note,
+    nc_summary,
+    peak_following_error,
+)
 from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance
@@ -165,8 +170,9 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         rapids_that_cut=(), limit_violations=limits, sideways_sweeps=sideways,
         empty_cut=not removed > EMPTY_SWEPT_REL * swept, engine="boolean, turned groups",
         elapsed_s=time.perf_counter() - began,
-        notes=(*trajectory.notes, "rapids not cut nor checked against the part (turned groups)",
-               *([sheet_note] if sheet_note else [])),
+        notes=tuple(note for note in (
+            *trajectory.notes, "rapids not cut nor checked against the part (turned groups)",
+            sheet_note, arc_chord_note(program, chord_tolerance, takes_path=False)) if note),
         holder_contact=tuple(sorted(holder)), engine_s=engine_s, nc=nc_summary(program),
         thin_sheets=sheets.count, sideways_lines=tuple(sorted(sideways_lines)),
         peak_following_error=peak_following_error(trajectory, machine))

@@ -19,6 +19,7 @@ from pinocchio.visualize import MeshcatVisualizer
 
 from machinesim import motion
 from machinesim.cutting import cut, remove
+from machinesim.cutting.report import arc_chord_note
 from machinesim.exceptions import InputError
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import check_path_chord, flat_face_radius, path_chord_tolerance
@@ -215,6 +216,9 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
            "groups of feed blocks)"),
         "tool path: cyan nominal, red actual (with errors)",
     ]
+    chords = arc_chord_note(program, chord_tolerance, takes_path=False)
+    if chords:  # as cut() notes it: the stages and the part follow the program's own chords
+        scene.notes.append(chords)
     extent = scale * (part_hi - part_lo)
     return lo, np.maximum(hi, anchor + extent * [1.0, 0.5, 1.0])
 
