@@ -114,6 +114,8 @@ class Figure:
             raise InputError(f"figure {self.name!r}: after_std {self.after_std!r}; expected "
                              "a standard uncertainty >= 0", key="after_std")
 
+    __reduce__ = reduce_frozen  # a loaded copy is checked as a made one (`_frozen`)
+
     def as_dict(self) -> dict:
         """The figure as summary.json holds it."""
         out = {"name": self.name, "unit": self.unit, "before": self.before,
@@ -127,13 +129,20 @@ class Figure:
 
 
 def _parameters(values: Mapping, what: str) -> Mapping[str, tuple[float, float]]:
+    if not isinstance(values, Mapping):
+        raise InputError(f"Expected {what} as a mapping name -> (value, std), got "
+                         f"{type(values).__name__} {brief(repr(values))}", key=what)
     out = {}
     for name, value in values.items():
         pair = value if isinstance(value, tuple | list) else (value, math.nan)
-        if len(pair) != 2:
+        if len(pair) != 2 or any(isinstance(v, str | bytes | bool) for v in pair):
             raise InputError(f"Expected {what}[{name!r}] as (value, std), got {value!r}",
                              key=name)
-        out[str(name)] = (float(pair[0]), float(pair[1]))
+        try:
+            out[str(name)] = (float(pair[0]), float(pair[1]))
+        except (TypeError, ValueError):
+            raise InputError(f"Expected {what}[{name!r}] as numbers (value, std), got "
+                             f"{brief(repr(value))}", key=name) from None
     return MappingProxyType(out)
 
 
@@ -302,8 +311,14 @@ class Result:
     polynomials: tuple[str, ...] = ()
 
     #: A result pickles (saved, or sent to a Dask worker and back), its read-only mappings
-    #: as dicts: the pickle holds these fields and nothing more, no lab.
+    #: as dicts: the pickle holds these fields and nothing more, no lab. A loaded copy is
+    #: checked as a made one (`machinesim.result_file.check_result`).
     __reduce__ = reduce_frozen
+
+    def __post_init__(self) -> None:
+        from machinesim.result_file import check_result
+
+        check_result(self)
 
     @property
     def notes(self) -> tuple[str, ...]:
