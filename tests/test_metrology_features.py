@@ -571,3 +571,10 @@ def test_sa_through_surfalize_equals_the_direct_definition():
     assert 5e-9 < sa < 8e-9  # ~0.8 sigma of the added noise
     with pytest.raises(InputError, match="regular grid along x"):
         roughness_sa(np.r_[x[:-1], x[-1] + 0.1 * UM], y, z)
+
+
+def test_fit_parallel_edges_refuses_a_map_read_nowhere():
+    # all NaN (off the part): nanmin warned, its level was NaN, and the refusal named lines
+    x = y = np.linspace(0.0, 1e-3, 11)
+    with pytest.raises(InputError, match="got all 121 samples NaN"):
+        fit_parallel_edges(x, y, np.full((11, 11), np.nan))

@@ -343,3 +343,37 @@ def test_a_reading_off_the_part_in_mm_for_m_is_refused_saying_the_unit_and_the_p
     area = reader.height_map(part, -44.5 * MM, 54.5 * MM, -44.5 * MM, 54.5 * MM,
                              spacing=1 * MM)
     assert np.isfinite(area.z).sum() == 10 * 10  # x and y = 0.5, 1.5, ..., 9.5 mm
+
+
+def test_an_instrument_marks_the_samples_off_the_part_missing_and_refuses_a_trace_on_none():
+    # A profile half off a 2 x 2 x 1 mm block (x, y 0 .. 2 mm, top 1 mm) keeps the 10
+    # samples over it at the top's height and marks the 11 off it missing; a map likewise,
+    # and a plane fitted to it is the top exactly (the missing samples left out, not NaN).
+    import manifold3d
+
+    from machinesim.metrology import fit_plane, height_map_points
+    from machinesim.metrology.imperfections import Spot
+    from machinesim.workpiece import Part
+
+    mm = 1e-3
+    part = Part(manifold3d.Manifold.cube([2 * mm, 2 * mm, 1 * mm]))
+    microscope = Microscope(noise=False)
+    read = microscope.profile(part, (-1.05 * mm, 1 * mm), (0.95 * mm, 1 * mm), 0.1 * mm)
+    assert read.missing.tolist() == [True] * 11 + [False] * 10
+    np.testing.assert_allclose(read.z[~read.missing], 1 * mm, rtol=0, atol=1e-15)
+    area = microscope.height_map(part, -0.95 * mm, 0.95 * mm, 0.05 * mm, 0.95 * mm, 0.1 * mm)
+    assert area.missing[:, area.x < 0].all() and not area.missing[:, area.x > 0].any()
+    top = fit_plane(height_map_points(area.x, area.y, area.z))
+    np.testing.assert_allclose(top.normal, [0.0, 0.0, 1.0], atol=1e-12)
+    assert top.point[2] == pytest.approx(1 * mm, abs=1e-15)
+    # a trace within the part's extent over a gap between two blocks reads nothing: refused,
+    # the spot's path (read through line_heights / spot_heights) as the exact one
+    two = Part(manifold3d.Manifold.cube([1 * mm, 2 * mm, 1 * mm])
+               + manifold3d.Manifold.cube([1 * mm, 2 * mm, 1 * mm]).translate((2 * mm, 0, 0)))
+    for instrument in (microscope, Microscope(noise=False, spot=Spot(0.3e-6))):
+        with pytest.raises(InputError, match=r"the profile from \(0.0015, 0\) to \(0.0015, "
+                                             r"0.002\) m reads no surface: all 21 of its "
+                                             r"samples lie off the part"):
+            instrument.profile(two, (1.5 * mm, 0.0), (1.5 * mm, 2 * mm), 0.1 * mm)
+        with pytest.raises(InputError, match=r"reads no surface: all 100 of its samples"):
+            instrument.height_map(two, 1.05 * mm, 1.95 * mm, 0.05 * mm, 0.95 * mm, 0.1 * mm)

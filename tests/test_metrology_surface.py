@@ -310,10 +310,37 @@ def test_profile_along_a_grid_row_is_that_row_of_the_map():
         np.testing.assert_allclose(z, row[::-1] if flip else row, rtol=0, atol=HEIGHT_M)
 
 
-def test_profile_off_the_part_is_nan():
+def test_a_profile_half_off_the_part_reads_its_on_part_samples_and_marks_the_rest():
+    # a 2 x 2 x 1 mm block (x, y 0 .. 2 mm, top z = 1 mm); samples at x = -1.05 + 0.1 k mm,
+    # k = 0 .. 20: k >= 11 (x = 0.05 .. 0.95 mm) over it, k <= 10 off it (x < 0)
     part = Part(box([2 * MM, 2 * MM, 1 * MM]))
-    s, z = profile(part, (-1 * MM, -1 * MM), (-1 * MM, 3 * MM), 0.1 * MM)
-    assert s.size == 41 and np.all(np.isnan(z))
+    s, z = profile(part, (-1.05 * MM, 1 * MM), (0.95 * MM, 1 * MM), 0.1 * MM)
+    assert s.size == 21
+    np.testing.assert_allclose(z[11:], 1 * MM, rtol=0, atol=HEIGHT_M)
+    assert np.isnan(z[:11]).all()  # missing: read nothing, as a profilometer off the part
+    x = np.arange(-1.05, 1.0, 0.1) * MM + 0.01 * MM  # a map half off likewise, in x
+    heights = height_map(part, x, [0.5 * MM, 1.5 * MM])
+    assert heights.shape == (2, 21) and np.isnan(heights[:, x < 0]).all()
+    np.testing.assert_allclose(heights[:, x > 0], 1 * MM, rtol=0, atol=HEIGHT_M)
+
+
+def test_a_profile_or_map_wholly_off_the_part_is_refused_naming_it_and_the_part():
+    # before: 41 samples, every one NaN, and the fits failed later naming none of it
+    part = Part(box([2 * MM, 2 * MM, 1 * MM]))
+    with pytest.raises(InputError) as refused:
+        profile(part, (-1 * MM, -1 * MM), (-1 * MM, 3 * MM), 0.1 * MM)
+    assert str(refused.value) == (
+        "key 'start': the profile from (-0.001, -0.001) to (-0.001, 0.003) m reads no "
+        "surface: all 41 of its samples lie off the part (no surface below them); the part "
+        "spans x 0 .. 0.002 m, y 0 .. 0.002 m. Expected a trace over the part, in m (SI: 5 "
+        "mm is 0.005)")
+    with pytest.raises(InputError, match=r"the height map over x 0.003 .. 0.004 m, y 0 .. "
+                                         r"0.001 m reads no surface: all 4 of its samples"):
+        height_map(part, [3 * MM, 4 * MM], [0.0, 1 * MM])
+    # inside the part's extent but over a gap between two blocks: nothing below either
+    two = Part(box([1 * MM, 2 * MM, 1 * MM]) + box([1 * MM, 2 * MM, 1 * MM], (2 * MM, 0, 0)))
+    with pytest.raises(InputError, match=r"the part spans x 0 .. 0.003 m, y 0 .. 0.002 m"):
+        profile(two, (1.5 * MM, 0.0), (1.5 * MM, 2 * MM), 0.1 * MM)
 
 
 @pytest.mark.parametrize(

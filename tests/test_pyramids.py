@@ -156,3 +156,21 @@ def test_errors_beyond_the_windows_capture_are_refused_before_anything_is_cut():
     refuse(args, machine, ErrorModel.from_dict({"location": {"C": {"EX0C_um": 199.0}}}))
     refuse(args, machine, ErrorModel.from_toml(
         Path(__file__).resolve().parents[1] / "models/errors/xy_plane_grooving_4axis.toml"))
+
+
+def test_groove_phase_finds_a_triangle_waves_phase_from_its_read_samples_and_refuses_none():
+    # a V pattern of pitch 1 with bottoms at s0 + k, 8 whole periods: its phase is s0, also
+    # with the first two periods off the part (NaN, left out); a profile read over less than a
+    # pitch, or not at all, was a number (the phase of NaN's mean, a zero coefficient)
+    from machinesim.procedures.pyramid_windows import groove_phase
+
+    s = np.arange(8000) / 1000.0
+    s0 = 0.3
+    z = np.abs((s - s0) - np.round(s - s0))
+    assert groove_phase(s, z, 1.0) == pytest.approx(s0, abs=1e-9)
+    z[:2000] = np.nan
+    assert groove_phase(s, z, 1.0) == pytest.approx(s0, abs=1e-9)
+    for read in (np.full_like(s, np.nan), np.where(s < 0.5, z, np.nan)):
+        with pytest.raises(MachineSimError, match="Expected a profile read over at least one "
+                                                  "pitch"):
+            groove_phase(s, read, 1.0)

@@ -29,7 +29,7 @@ from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_floats, as_number, shown
 from machinesim.metrology.instruments import OPTICAL_LIMIT
-from machinesim.metrology.surface import _finish, _Line, _zbuffer, height_map
+from machinesim.metrology.surface import _finish, _Line, _zbuffer, grid_heights
 from machinesim.tolerances import LINE_MARGIN
 
 __all__ = ["Lobing", "Registration", "RegistrationScatter", "Spot", "ZonalForm",
@@ -333,7 +333,7 @@ def spot_heights(vertices, triangles, x, y, dx, dy, spot: Spot | None) -> np.nda
     for j0 in range(0, len(y), rows):
         block = iy[j0:j0 + rows]
         lo, hi = int(block.min()), int(block.max()) + 1
-        h = height_map((vertices, triangles), xs, ys[lo:hi])
+        h = grid_heights((vertices, triangles), xs, ys[lo:hi])
         # (rows, n_y offsets, nx, n_x offsets) heights of every sub-sample of the block
         sub = h[(block - lo)[:, :, None, None], ix[None, None, :, :]]
         weights = wx[None, :, None, None] * wx[None, None, None, :]

@@ -243,6 +243,9 @@ def fit_parallel_edges(x, y, z, *, level: float | None = None, along: str = "x")
     x, y, z = map_arrays(x, y, z)
     if along not in ("x", "y"):
         raise InputError(f"Expected along 'x' or 'y', got {along!r}", key="along")
+    if not np.isfinite(z).any():  # nanmin would warn and the level be NaN
+        raise InputError(f"Expected a map with measured heights, got all {z.size} samples "
+                         "NaN (off the part)", key="z")
     if level is None:
         level = 0.5 * (float(np.nanmin(z)) + float(np.nanmax(z)))
     else:

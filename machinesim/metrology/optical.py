@@ -51,6 +51,7 @@ from machinesim.metrology.imperfections import (
 from machinesim.metrology.instruments import OPTICAL_LIMIT, Readout, as_generator
 from machinesim.metrology.surface import (
     END_SLACK,
+    check_read,
     check_samples,
     height_map,
     line_count,
@@ -70,15 +71,25 @@ class Profile:
     s : ndarray, shape (k,), float64, read-only
         Distance of each sample from `start` along the line, m.
     z : ndarray, shape (k,), float64, read-only
-        Displayed height at each sample, workpiece frame, m; NaN where no surface lies below.
+        Displayed height at each sample, workpiece frame, m; NaN where the sample is off the
+        part and read nothing (`missing`).
     start, end : ndarray, shape (2,), float64, read-only
         End points (x, y) of the line, m.
+
+    A profile partly off the part keeps its samples there as missing, as a profilometer's
+    data marks its non-measured points (x3p: invalid); the fits leave them out. A profile
+    wholly off the part is refused (`machinesim.metrology.surface.check_read`).
     """
 
     s: np.ndarray
     z: np.ndarray
     start: np.ndarray
     end: np.ndarray
+
+    @property
+    def missing(self) -> np.ndarray:
+        """Shape (k,), bool: True where the sample read nothing (off the part; ``z`` NaN)."""
+        return _flags(np.isnan(self.z))
 
     @property
     def xy(self) -> np.ndarray:
@@ -98,12 +109,19 @@ class HeightMap:
     y : ndarray, shape (ny,), float64, read-only
         Sample y coordinates, m.
     z : ndarray, shape (ny, nx), float64, read-only
-        ``z[j, i]`` is the displayed height at ``(x[i], y[j])``, m; NaN where no surface.
+        ``z[j, i]`` is the displayed height at ``(x[i], y[j])``, m; NaN where the sample is
+        off the part and read nothing (`missing`; as `Profile`'s).
     """
 
     x: np.ndarray
     y: np.ndarray
     z: np.ndarray
+
+    @property
+    def missing(self) -> np.ndarray:
+        """Shape (ny, nx), bool: True where the sample read nothing (off the part; ``z``
+        NaN)."""
+        return _flags(np.isnan(self.z))
 
 
 class _Profiler:
@@ -193,6 +211,8 @@ class _Profiler:
             vertices, triangles = mesh_arrays(surface)
             z = line_heights(vertices, triangles, a, (b - a) / np.hypot(*(b - a)), s, ds,
                              across, self.spot)
+            check_read(z, vertices, f"{type(self).__name__}: the profile from ({a[0]:g}, "
+                                    f"{a[1]:g}) to ({b[0]:g}, {b[1]:g}) m", "start")
             s = frozen(s, copy=False)
         return Profile(s, self._display(z), frozen(nominal[0]), frozen(nominal[1]))
 
@@ -237,8 +257,10 @@ class _Profiler:
             dx = self.lateral_sigma * self._lateral_rng.standard_normal(len(x))
             dy = self.lateral_sigma * self._lateral_rng.standard_normal(len(y))
         vertices, triangles = mesh_arrays(surface)
-        return HeightMap(x, y, self._display(spot_heights(vertices, triangles, rx, ry, dx, dy,
-                                                          self.spot)))
+        z = spot_heights(vertices, triangles, rx, ry, dx, dy, self.spot)
+        check_read(z, vertices, f"{type(self).__name__}: the height map over x {rx[0]:g} .. "
+                                f"{rx[-1]:g} m, y {ry[0]:g} .. {ry[-1]:g} m", "x0")
+        return HeightMap(x, y, self._display(z))
 
     def _check_on_part(self, part, a: np.ndarray, b: np.ndarray, spacing: float,
                        window: bool = False) -> None:
@@ -448,6 +470,12 @@ def _clipped(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> fl
     if t0 > t1:
         return None
     return (t1 - t0) * float(np.hypot(*d))
+
+
+def _flags(mask: np.ndarray) -> np.ndarray:
+    """``mask`` (bool), read-only."""
+    mask.flags.writeable = False
+    return mask
 
 
 def _is_field(part) -> bool:

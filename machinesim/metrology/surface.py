@@ -26,7 +26,7 @@ from machinesim.metrology._arrays import as_floats
 from machinesim.metrology._mesh import as_positive, as_vector, mesh_arrays
 from machinesim.tolerances import END_SLACK, INDEX_SLACK, LINE_MARGIN, UNIFORM_GRID
 
-__all__ = ["MAX_SAMPLES", "height_map", "profile"]
+__all__ = ["MAX_SAMPLES", "check_read", "grid_heights", "height_map", "profile"]
 
 #: Most samples one reading (a profile, a height map) may hold; a profile read through a spot
 #: counts each of the spot's ``samples**2`` sub-samples, which it reads at once. Beyond it the
@@ -83,19 +83,58 @@ def height_map(surface, x, y) -> np.ndarray:
     -------
     heights : ndarray, shape (ny, nx), float64, read-only
         ``heights[j, i]`` is the highest surface point above ``(x[i], y[j])``, m; NaN where no
-        surface lies below.
+        surface lies below: the sample is off the part and read nothing (a missing point, as
+        an x3p file marks it invalid). The fits leave such samples out.
 
     Raises
     ------
     InputError
-        For a malformed mesh or sample axes that are not 1-D, finite and strictly increasing.
+        For a malformed mesh, sample axes that are not 1-D, finite and strictly increasing,
+        or a grid of which no sample lies over the part (`check_read`).
     """
     vertices, triangles = mesh_arrays(surface)
     x, y = _axis(x, "x"), _axis(y, "y")
+    heights = _grid_heights(vertices, triangles, x, y)
+    check_read(heights, vertices, f"the height map over x {x[0]:g} .. {x[-1]:g} m, y "
+                                  f"{y[0]:g} .. {y[-1]:g} m", "x")
+    return heights
+
+
+def grid_heights(surface, x, y) -> np.ndarray:
+    """`height_map` without its refusal of a grid wholly off the part: for a reading put
+    together from blocks (`machinesim.metrology.imperfections.spot_heights`), one of which
+    may lie off the part while the whole does not."""
+    vertices, triangles = mesh_arrays(surface)
+    return _grid_heights(vertices, triangles, _axis(x, "x"), _axis(y, "y"))
+
+
+def _grid_heights(vertices, triangles, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     check_samples(float(x.size) * y.size, None, f"x {x[0]:g} .. {x[-1]:g} m, y {y[0]:g} .. "
                   f"{y[-1]:g} m")
     grid = _Grid(x, y)
     return _finish(_zbuffer(vertices, triangles, grid).reshape(grid.shape))
+
+
+def check_read(heights: np.ndarray, vertices: np.ndarray, what: str, key: str) -> None:
+    """Refuse a reading (``what``: a profile from ... to ..., a map over ...) of which every
+    sample read nothing: no surface of the part (``vertices``, m) lies below any of them.
+
+    A real profilometer off the part reads no point, and a trace that reads none is no
+    measurement: its heights would all be NaN, and a fit of them fails later naming none of
+    this ("Expected at least 5 finite samples, got 0"), or a mean of them is NaN. A trace
+    partly off the part keeps its on-part samples; the rest are NaN (missing).
+    """
+    if heights.size == 0 or not np.isnan(heights).all():
+        return
+    if len(vertices) == 0:
+        spans = "the part has no surface at all (an empty mesh)"
+    else:
+        lo, hi = vertices[:, :2].min(axis=0), vertices[:, :2].max(axis=0)
+        spans = (f"the part spans x {lo[0]:.6g} .. {hi[0]:.6g} m, y {lo[1]:.6g} .. "
+                 f"{hi[1]:.6g} m")
+    raise InputError(f"{what} reads no surface: all {heights.size} of its samples lie off "
+                     f"the part (no surface below them); {spans}. Expected a trace over "
+                     "the part, in m (SI: 5 mm is 0.005)", key=key)
 
 
 def profile(surface, start, end, spacing: float) -> tuple[np.ndarray, np.ndarray]:
@@ -117,12 +156,14 @@ def profile(surface, start, end, spacing: float) -> tuple[np.ndarray, np.ndarray
     s : ndarray, shape (k,), float64, read-only
         Distance of each sample from ``start`` along the line, m.
     z : ndarray, shape (k,), float64, read-only
-        Height of the top surface at each sample, m; NaN where no surface lies below.
+        Height of the top surface at each sample, m; NaN where no surface lies below: the
+        sample is off the part and read nothing (missing). The fits leave such samples out.
 
     Raises
     ------
     InputError
-        For a malformed mesh, a zero-length line or a spacing that is not > 0.
+        For a malformed mesh, a zero-length line, a spacing that is not > 0, or a line of
+        which no sample lies over the part (`check_read`).
     """
     vertices, triangles = mesh_arrays(surface)
     start = as_vector(start, 2, "start")
@@ -137,9 +178,11 @@ def profile(surface, start, end, spacing: float) -> tuple[np.ndarray, np.ndarray
     if abs(s[-1] - length) <= END_SLACK * spacing:
         s[-1] = length
     line = _Line(start, end, length, s, vertices)
-    z = _zbuffer(vertices, triangles, line)
+    z = _finish(_zbuffer(vertices, triangles, line))
+    check_read(z, vertices, f"the profile from ({start[0]:g}, {start[1]:g}) to ({end[0]:g}, "
+                            f"{end[1]:g}) m", "start")
     s.setflags(write=False)
-    return s, _finish(z)
+    return s, z
 
 
 def line_count(length: float, spacing: float) -> float:

@@ -137,6 +137,13 @@ def groove_phase(s, z, pitch: float) -> float:
     z = np.asarray(z, dtype=np.float64)
     ok = np.isfinite(z)
     s, z = s[ok], z[ok]
+    if s.size < 3 or s[-1] - s[0] < pitch:
+        # the fundamental needs a whole period read: the phase of fewer samples (or of none:
+        # NaN's mean, a zero coefficient) is a number that says nothing
+        raise InputError(f"Expected a profile read over at least one pitch ({pitch:g} m) to "
+                         f"find its grooves, got {s.size} samples read"
+                         + (f" over {s[-1] - s[0]:g} m" if s.size else "")
+                         + " (the rest off the part)", key="z")
     c = np.sum((z - z.mean()) * np.exp(-2j * np.pi * s / pitch))
     return float((-np.angle(-c) * pitch / (2.0 * np.pi)) % pitch)
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.exceptions import InputError
-from machinesim.metrology import height_map
+from machinesim.metrology.surface import grid_heights
 from machinesim.viewer.meshes import DISPLAY_TRIANGLES
 from machinesim.workpiece import Part
 
@@ -138,10 +138,11 @@ def surface_map(surface, nominal=None, max_triangles: int = DISPLAY_TRIANGLES) -
         raise InputError("the part has no vertices")
     bounds = np.array([vertices.min(axis=0), vertices.max(axis=0)])
     x, y = grid_for(bounds, max_triangles)
-    heights = height_map((vertices, triangles), x, y)
+    # `height_map` refuses a map that reads nothing; the scene shows it, with a warning why
+    heights = grid_heights((vertices, triangles), x, y)
     if nominal is None:
         return SurfaceMap(x, y, heights, heights, "height")
-    values = heights - height_map(mesh_of(nominal), x, y)
+    values = heights - grid_heights(mesh_of(nominal), x, y)
     values.setflags(write=False)
     return SurfaceMap(x, y, heights, values, "deviation")
 
