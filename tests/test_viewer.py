@@ -1204,8 +1204,8 @@ def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(
     # naming a --screenshot written before (Chromium stood in for as above). A server that
     # raised (its stderr had gone to /dev/null) said 'exit status 1' alone: the line now
     # ends with its exception. 20000 lines (2 MB, 30 times a pipe's 64 KiB) written to
-    # stderr while the page is served stall no server; with MACHINESIM_TRACEBACK=1 the last
-    # STDERR_LINES_KEPT lines of it come first, the traceback whole at their end. Lines
+    # stderr while the page is served stall no server; with MACHINESIM_TRACEBACK=1 the first
+    # and last lines of it come first, the traceback whole at their end. Lines
     # without a traceback are no cause, and are not told (meshcat's 'Port: 6002 in use,
     # trying another...' had been, beside a server killed, when tests ran side by side).
     import contextlib
@@ -1249,11 +1249,16 @@ def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(
             f"{url} no longer answers{kept}\n")
     if not traceback:
         assert err == told
-    else:  # the server's own last lines first: the chat's end, then its whole traceback
-        from machinesim.viewer.live import STDERR_LINES_KEPT
+    else:  # the server's own lines first: the chat's start, a gap, its end, the traceback
+        from machinesim.viewer.live import STDERR_FIRST_LINES, STDERR_LAST_LINES
 
         lines = err.splitlines(keepends=True)
-        assert lines[-1] == told and len(lines) == STDERR_LINES_KEPT + 1
+        assert lines[-1] == told and len(lines) == STDERR_FIRST_LINES + STDERR_LAST_LINES + 2
+        gap = lines[STDERR_FIRST_LINES]  # the lines before it are the chat's (after
+        assert re.fullmatch(r"\.\.\. \d+ lines left out \.\.\.\n", gap)  # meshcat's)
+        before, after = (int(lines[at].split()[1]) for at in (STDERR_FIRST_LINES - 1,
+                                                               STDERR_FIRST_LINES + 1))
+        assert int(gap.split()[1]) == after - before - 1
         assert "Traceback (most recent call last):\n" in lines
         start = lines.index("Traceback (most recent call last):\n")
         assert lines[start - 1] == f"chat {chat - 1:06d} " + "x" * 88 + "\n"

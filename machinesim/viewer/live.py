@@ -27,22 +27,32 @@ START_TIMEOUT_S = 30.0
 REPLY_TIMEOUT_S = 60.0
 #: ZeroMQ command that sets the page's title and overlay (ours, beside meshcat's commands).
 PAGE_COMMAND = b"machinesim_page"
-#: Lines of the server's stderr kept (the last ones: a Python traceback's end, tornado's
-#: warnings); older ones are dropped, so a chatty server costs no more memory.
-STDERR_LINES_KEPT = 200
+#: Lines of the server's stderr kept from its start, and from the start of its first Python
+#: traceback (where 'Traceback (most recent call last):' and the outer frames are, or a
+#: chained exception's root cause): a long traceback kept its end alone.
+STDERR_FIRST_LINES = 50
+#: Lines of the server's stderr kept at its end (a traceback's end, tornado's warnings).
+#: Lines between the first and the last are dropped, so a chatty server costs no more memory.
+STDERR_LAST_LINES = 200
 #: Characters of one stderr line a message quotes.
 STDERR_LINE_SHOWN = 300
+#: The line a traceback starts with.
+TRACEBACK_START = "Traceback (most recent call last)"
 
 
 class StderrTail:
-    """The last `STDERR_LINES_KEPT` lines ``process`` writes to its stderr (a text pipe),
-    read by a daemon thread as they come: the pipe never fills, so a chatty server is not
-    stalled, and a server that crashed leaves its traceback's end here, where stderr had
-    gone to /dev/null (a crash was told as 'exit status 1' alone)."""
+    """What ``process`` writes to its stderr (a text pipe): its first `STDERR_FIRST_LINES`
+    lines, the first as many of its first Python traceback, and its last `STDERR_LAST_LINES`
+    lines, read by a daemon thread as they come: the pipe never fills, so a chatty server is
+    not stalled, and a server that crashed leaves its traceback here, where stderr had gone
+    to /dev/null (a crash was told as 'exit status 1' alone)."""
 
     def __init__(self, process: subprocess.Popen) -> None:
         self._process = process
-        self._lines: deque[str] = deque(maxlen=STDERR_LINES_KEPT)
+        # (number of the line in the stream, line); the three overlap when it is short
+        self._first: list[tuple[int, str]] = []
+        self._traceback: list[tuple[int, str]] = []
+        self._last: deque[tuple[int, str]] = deque(maxlen=STDERR_LAST_LINES)
         self._lock = threading.Lock()
         self._thread = threading.Thread(target=self._drain, args=(process.stderr,),
                                         daemon=True, name="machinesim-viewer-stderr")
@@ -50,27 +60,54 @@ class StderrTail:
 
     def _drain(self, stream) -> None:
         with stream:
-            for line in stream:
-                with self._lock:
-                    self._lines.append(line.rstrip("\r\n"))
+            for number, line in enumerate(stream):
+                self._keep(number, line.rstrip("\r\n"))
 
-    def lines(self, timeout: float = 5.0) -> list[str]:
-        """The lines kept so far, oldest first; once the process has ended, all it wrote
-        (the last of them), waiting up to ``timeout`` s for the pipe's rest to be read."""
+    def _keep(self, number: int, line: str) -> None:
+        with self._lock:
+            if len(self._first) < STDERR_FIRST_LINES:
+                self._first.append((number, line))
+            if self._traceback:
+                if len(self._traceback) < STDERR_FIRST_LINES:
+                    self._traceback.append((number, line))
+            elif line.startswith(TRACEBACK_START):
+                self._traceback.append((number, line))
+            self._last.append((number, line))
+
+    def _wait(self, timeout: float) -> None:
         if self._process.poll() is not None:
             self._thread.join(timeout)
+
+    def lines(self, timeout: float = 5.0) -> list[str]:
+        """The lines kept so far, oldest first, with ``... K lines left out ...`` where lines
+        were dropped between them; once the process has ended, all it wrote (its first
+        lines, its first traceback's and its last), waiting up to ``timeout`` s for the
+        pipe's rest to be read."""
+        self._wait(timeout)
         with self._lock:
-            return list(self._lines)
+            kept = dict(self._first)
+            kept.update(self._traceback)
+            kept.update(self._last)
+        lines, after = [], 0  # after: the number of the line that follows those told
+        for number in sorted(kept):
+            if number > after:
+                lines.append(f"... {number - after} line{'s' * (number - after > 1)} "
+                             "left out ...")
+            lines.append(kept[number])
+            after = number + 1
+        return lines
 
     def last(self, timeout: float = 5.0) -> str:
         """The last line that is not blank, stripped and cut to `STDERR_LINE_SHOWN`
         characters, when the process wrote a Python traceback (its exception, the cause of a
         crash); "" otherwise. Without a traceback the last line is no cause: meshcat's
         "Port: 6002 in use, trying another..." under a server killed or ended by itself."""
-        lines = self.lines(timeout)
-        if not any(line.startswith("Traceback (most recent call last)") for line in lines):
-            return ""
-        for line in reversed(lines):
+        self._wait(timeout)
+        with self._lock:
+            if not self._traceback:
+                return ""
+            last = [line for _, line in self._last]
+        for line in reversed(last):
             if line.strip():
                 line = line.strip()
                 return (line if len(line) <= STDERR_LINE_SHOWN
