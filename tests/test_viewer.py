@@ -1190,13 +1190,16 @@ CRASH = {"end": "loop.add_callback(loop.stop)",
 @pytest.mark.parametrize(("end", "said", "shot", "chat", "traceback"), [
     ("os._exit(3)", "exit status 3", False, 0, False),
     ("os.kill(os.getpid(), signal.SIGKILL)", "killed by SIGKILL", False, 0, False),
+    ("os.kill(os.getpid(), signal.SIGKILL)", "killed by SIGKILL; its last line on stderr: "
+                                             f"chat 000002 {'x' * 88}", False, 3, False),
     ("os._exit(3)", "exit status 3", True, 0, False),
     ("os._exit(3)", "exit status 3", False, 3, False),
     (CRASH, "exit status 1; its last line on stderr: RuntimeError: the stand-in server "
             "crashed", False, 0, False),
     (CRASH, "exit status 1; its last line on stderr: RuntimeError: the stand-in server "
             "crashed", False, 20000, True)],
-    ids=["exit", "killed", "screenshot", "exit-chatty", "raised", "chatty-traceback"])
+    ids=["exit", "killed", "killed-chatty", "screenshot", "exit-chatty", "raised",
+         "chatty-traceback"])
 def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(
         end, said, shot, chat, traceback, tmp_path):
     # a server that died while serving (not by Ctrl-C) left `machinesim view` to exit 0
@@ -1207,7 +1210,9 @@ def test_a_live_viewer_whose_server_ends_by_itself_says_so_and_exits_1(
     # stderr while the page is served stall no server; with MACHINESIM_TRACEBACK=1 the first
     # and last lines of it come first, the traceback whole at their end. Lines
     # without a traceback are no cause, and are not told (meshcat's 'Port: 6002 in use,
-    # trying another...' had been, beside a server killed, when tests ran side by side).
+    # trying another...' had been, beside a server killed, when tests ran side by side),
+    # but for a server killed by a signal, which can leave no traceback: its last line,
+    # which had been lost, is told (meshcat's port line never is).
     import contextlib
     import subprocess
     import sys

@@ -83,3 +83,21 @@ def test_one_line_left_out_is_said_in_the_singular():
                                   "print(f'line {i}', file=sys.stderr)\n")
     assert tail.lines() == [*whole[:STDERR_FIRST_LINES], "... 1 line left out ...",
                             *whole[-STDERR_LAST_LINES:]]
+
+
+def test_a_killed_process_has_its_last_words_quoted_but_not_meshcats_port_search():
+    # a server killed by a signal (the out-of-memory killer's SIGKILL) leaves no traceback:
+    # what it said last was kept and never told; quoted when asked (any_line), past
+    # meshcat's 'Port: N in use, trying another...' of its start
+    script = ("import os, signal, sys\n"
+              "print('WARNING:tornado.access:404 GET /favicon.ico', file=sys.stderr)\n"
+              "print('Port: 6000 in use, trying another...', file=sys.stderr)\n"
+              "print('', file=sys.stderr)\n"
+              "sys.stderr.flush()\n"
+              "os.kill(os.getpid(), signal.SIGKILL)\n")
+    process = subprocess.Popen([sys.executable, "-c", script], stderr=subprocess.PIPE,
+                               text=True)
+    tail = StderrTail(process)
+    assert process.wait(timeout=60) == -9
+    assert tail.last() == ""  # no traceback: no cause, as before
+    assert tail.last(any_line=True) == "WARNING:tornado.access:404 GET /favicon.ico"

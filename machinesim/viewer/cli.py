@@ -165,14 +165,15 @@ def run_view(args: argparse.Namespace) -> int:
         session.close()
     # the server ended though nobody stopped it (it crashed, or was killed): the page no
     # longer answers, and the command had exited 0 without a word; its stderr's last line
-    # (a crash's exception) is told, the lines kept before it with MACHINESIM_TRACEBACK=1
+    # (a crash's exception; anything a server killed by a signal said last, which had been
+    # lost) is told, the lines kept before it with MACHINESIM_TRACEBACK=1
     kept = "" if shot is None else f"; its screenshot {shot} written before"
     said = _exit_text(ended)
     if session.stderr is not None:
         if os.environ.get("MACHINESIM_TRACEBACK"):
             for line in session.stderr.lines():
                 print(line, file=sys.stderr)
-        last = session.stderr.last()
+        last = session.stderr.last(any_line=ended < 0)
         said += f"; its last line on stderr: {last}" if last else ""
     print(f"machinesim: error: the live viewer server ended without Ctrl-C "
           f"({said}); {session.url} no longer answers{kept}", file=sys.stderr)

@@ -6,6 +6,7 @@ meshcat commands over ZeroMQ, and returns a `LiveSession` with the URL to open.
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import threading
@@ -38,6 +39,9 @@ STDERR_LAST_LINES = 200
 STDERR_LINE_SHOWN = 300
 #: The line a traceback starts with.
 TRACEBACK_START = "Traceback (most recent call last)"
+#: meshcat's line for a ZeroMQ port it passed over as it started: chatter of a server that
+#: started, never what it said last before it ended.
+_PORT_SEARCH = re.compile(r"Port: \d+ in use, trying another\.\.\.")
 
 
 class StderrTail:
@@ -97,19 +101,21 @@ class StderrTail:
             after = number + 1
         return lines
 
-    def last(self, timeout: float = 5.0) -> str:
+    def last(self, timeout: float = 5.0, *, any_line: bool = False) -> str:
         """The last line that is not blank, stripped and cut to `STDERR_LINE_SHOWN`
         characters, when the process wrote a Python traceback (its exception, the cause of a
-        crash); "" otherwise. Without a traceback the last line is no cause: meshcat's
-        "Port: 6002 in use, trying another..." under a server killed or ended by itself."""
+        crash); "" otherwise. Without a traceback the last line is no cause (a process that
+        ended by itself had its chance to say why), unless ``any_line``: a process killed by
+        a signal leaves no traceback, and what it said last is all there is. meshcat's
+        "Port: 6002 in use, trying another..." of its start is never quoted."""
         self._wait(timeout)
         with self._lock:
-            if not self._traceback:
+            if not (self._traceback or any_line):
                 return ""
             last = [line for _, line in self._last]
         for line in reversed(last):
-            if line.strip():
-                line = line.strip()
+            line = line.strip()
+            if line and not _PORT_SEARCH.fullmatch(line):
                 return (line if len(line) <= STDERR_LINE_SHOWN
                         else line[:STDERR_LINE_SHOWN] + "...")
         return ""
@@ -131,8 +137,8 @@ class LiveSession:
         Messages a browser that connects now receives (meshcat's viewer counts them in
         ``viewer.num_messages_received``): the scene is complete when it has them all.
     stderr : StderrTail, optional
-        The last lines the server wrote to stderr (`StderrTail.last` after it ended: a
-        crash's exception); None for a process whose stderr is not piped.
+        What the server wrote to stderr (`StderrTail.last` after it ended: a crash's
+        exception, or a killed server's last words); None for a process whose stderr is not piped.
     """
 
     url: str
