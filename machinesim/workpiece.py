@@ -491,9 +491,11 @@ def stock_from_spec(spec: str, *, name: str = "stock spec") -> Part:
     """
     where = f"{name} {brief(str(spec))!r}"
     text = str(spec).strip()
-    body, _, placement = text.partition("@")
+    body, at, placement = text.partition("@")
+    # an '@' with nothing after it (a shell's '@$POS' with POS unset) is refused, not read
+    # as no placement: the stock would stand at the origin where it was meant elsewhere
     origin = (
-        [v * M_PER_MM for v in _numbers(where, placement, 3, ",", sizes=False)] if placement
+        [v * M_PER_MM for v in _numbers(where, placement, 3, ",", sizes=False)] if at
         else [0.0] * 3
     )
     fields = body.split(":")

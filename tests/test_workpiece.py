@@ -228,6 +228,10 @@ def test_a_ply_part_read_by_trimesh_as_the_readme_says_is_the_part(tmp_path):
         ("block:10x10x-2", "'block:10x10x-2'.*sizes '10x10x-2' must lie in 1e-06 .. 10000 mm"),
         ("cylinder:5", "'cylinder:5'.*expected 2 numbers"),
         ("block:10x10x2@1,2", "expected 3 numbers separated by ','"),
+        # an empty placement (a shell's '@$POS' with POS unset) was read as none, the
+        # stock standing at the origin with exit 0
+        ("block:10x10x2@", "'block:10x10x2@'.*expected 3 numbers separated by ',' in ''"),
+        ("cylinder:5x2@ ", "expected 3 numbers separated by ','"),
         ("sphere:1", "'sphere:1'.*expected 'block:LxWxH'"),
         ("spheres:10x10x2:3", "radius must be positive and below"),
         ("spheres:10x10x2:1:bumps", "expected 'dimples'"),
