@@ -404,22 +404,22 @@ SERVO_OPTIONAL_KEYS = ("acc_ff", "bandwidth_hz", "sample_time_s")
 def servo_from_toml(path, machine) -> PIDServo:
     """The servo loops of a TOML file, one table per axis letter of ``machine`` (``[X]``,
     ``[C]``), SI with the unit in every key (`SERVO_KEYS`); an axis without a table follows
-    its command exactly. Errors name the file, the table and the key."""
-    from machinesim.errors.toml import read_toml
+    its command exactly. Errors name the file, the line, the table and the key."""
+    from machinesim.errors.toml import read_toml_lines
 
     source = str(path)
-    data = read_toml(path)
+    data, lines = read_toml_lines(path)
     axes = tuple(machine.axes)
     loose = [name for name, value in data.items() if not isinstance(value, dict)]
     if loose:
         raise InputError(f"{loose[0]!r} stands outside any table; expected one table per "
                          f"axis letter of {machine.name} ({', '.join(f'[{a}]' for a in axes)})",
-                         source=source, key=loose[0])
+                         source=source, line=lines.get(loose[0]), key=loose[0])
     unknown = [name for name in data if name not in axes]
     if unknown:
         raise InputError(f"table [{unknown[0]}] is not an axis of {machine.name} (axes "
                          f"{', '.join(axes)}); one table per axis letter", source=source,
-                         key=unknown[0])
+                         line=lines.get(unknown[0]), key=unknown[0])
     columns = []
     for letter, rotary in zip(axes, machine.rotary, strict=True):
         table = data.get(letter)
@@ -432,11 +432,13 @@ def servo_from_toml(path, machine) -> PIDServo:
         extra = [k for k in table if k not in allowed]
         if extra:
             raise InputError(f"unknown key {extra[0]!r} in [{letter}], {kind} axis; expected "
-                             f"{', '.join(allowed)}", source=source, key=f"{letter}.{extra[0]}")
+                             f"{', '.join(allowed)}", source=source,
+                             line=lines.get(f"{letter}.{extra[0]}"), key=f"{letter}.{extra[0]}")
         missing = [k for k in keys.values() if k not in table]
         if missing:
             raise InputError(f"[{letter}] lacks {', '.join(missing)} ({kind} axis; SI, the "
-                             "unit in the key)", source=source, key=f"{letter}.{missing[0]}")
+                             "unit in the key)", source=source, line=lines.get(letter),
+                             key=f"{letter}.{missing[0]}")
         values = {field: table[key] for field, key in keys.items()}
         values.update({key: table[key] for key in SERVO_OPTIONAL_KEYS if key in table})
         try:
@@ -445,6 +447,7 @@ def servo_from_toml(path, machine) -> PIDServo:
             field = error.key
             key = keys.get(field, field)
             raise InputError(f"[{letter}] {key}: {error.message}", source=source,
+                             line=lines.get(f"{letter}.{key}", lines.get(letter)),
                              key=f"{letter}.{key}") from None
         except ServoDivergenceError as error:
             raise ServoDivergenceError(f"{source}, [{letter}]: {error}") from None

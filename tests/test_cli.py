@@ -650,7 +650,8 @@ def test_a_bad_tool_or_stock_is_named_once_by_its_option_or_its_table_key(tmp_pa
     table.write_text('[tool.1]\nlength_mm = 0.0\nshape = "ball:-1"\n')
     code, _, err = run([*argv, "--tool", "v:90", "--tools", table], capsys)
     assert_clean_failure(code, err)
-    assert err == (f"machinesim: error: {table}, key 'tool.1.shape': tool spec 'ball:-1': "
+    assert err == (f"machinesim: error: {table}, line 3, key 'tool.1.shape': tool spec "
+                   "'ball:-1': "
                    "radius must be a positive finite number, got -1 mm (-0.001 m)\n")
     assert list(tmp_path.iterdir()) == [table]
     code, _, err = run([*argv[:4], "--tool", "v:90", "--stock", "block:10x10", *argv[6:]],

@@ -31,24 +31,29 @@ def test_a_servo_file_lags_the_cut_by_v_c_over_kp(tmp_path, capsys):
     assert "largest following error: X 13.3333 um" in out
 
 
-@pytest.mark.parametrize("text, words", [
-    ("kp_N_per_m = 1e6\n", ["stands outside any table", "[X], [Y], [Z], [C]"]),
-    ("[Q]\nkp_N_per_m = 1.0\n", ["table [Q] is not an axis of grooving_4axis"]),
-    (PD_X.replace("mass_kg", "mass"), ["unknown key 'mass' in [X]", "mass_kg"]),
-    (PD_X.replace("damping_N_s_per_m = 1600.0\n", ""), ["[X] lacks damping_N_s_per_m"]),
-    (PD_X.replace("1.2e6", '"1.2e6"'), ["kp_N_per_m", "must be a number"]),
-    (PD_X.replace("[X]", "[C]"), ["unknown key 'kp_N_per_m' in [C], a rotary axis",
-                                   "kp_N_m_per_rad"]),
-    ("[X\n", ["not valid TOML", "line 1"]),
+@pytest.mark.parametrize("text, line, words", [
+    ("kp_N_per_m = 1e6\n", 1, ["stands outside any table", "[X], [Y], [Z], [C]"]),
+    ("[Q]\nkp_N_per_m = 1.0\n", 1, ["table [Q] is not an axis of grooving_4axis"]),
+    (PD_X.replace("mass_kg", "mass"), 6, ["unknown key 'mass' in [X]", "mass_kg"]),
+    # a key that is missing: the line of its table
+    (PD_X.replace("damping_N_s_per_m = 1600.0\n", ""), 2, ["[X] lacks damping_N_s_per_m"]),
+    (PD_X.replace("1.2e6", '"1.2e6"'), 3, ["kp_N_per_m", "must be a number"]),
+    (PD_X.replace("[X]", "[C]"), 3, ["unknown key 'kp_N_per_m' in [C], a rotary axis",
+                                      "kp_N_m_per_rad"]),
+    (PD_X.replace("damping_N_s_per_m = 1600.0", "damping_N_s_per_m = -1600.0"), 7,
+     ["damping_N_s_per_m", "must be finite and >= 0, got -1600.0"]),
+    ("[X\n", 1, ["not valid TOML"]),
     # 10**400 (1329 bits) is read exactly by TOML; it was an internal error (exit 1)
-    (PD_X.replace("1.2e6", "1" + "0" * 400), ["kp_N_per_m", "integer of 1329 bits",
-                                              "beyond float64"]),
+    (PD_X.replace("1.2e6", "1" + "0" * 400), 3, ["kp_N_per_m", "integer of 1329 bits",
+                                                 "beyond float64"]),
 ])
-def test_a_bad_servo_file_is_named(tmp_path, capsys, text, words):
+def test_a_bad_servo_file_is_named(tmp_path, capsys, text, line, words):
+    # with the line of the key (of its table when it is missing), as an --errors file's
+    # refusals give it: the servo file's named the file and key alone
     servo, program = tmp_path / "servo.toml", tmp_path / "line.nc"
     servo.write_text(text)
     program.write_text(LINE)
     code, _, err = run(["cut", program, *CUT, "--servo", servo, "--out", tmp_path / "p.ply"],
                        capsys)
-    assert_clean_failure(code, err, "servo.toml", *words)
+    assert_clean_failure(code, err, f"servo.toml, line {line}, ", *words)
     assert not (tmp_path / "p.ply").exists()

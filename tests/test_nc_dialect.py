@@ -333,6 +333,30 @@ def test_tool_table_refusals(tmp_path):
         ToolTable.from_toml(tmp_path / "missing.toml")
 
 
+@pytest.mark.parametrize(("text", "line", "key", "message"), [
+    ("# tools\n[tool.1]\nlength_mm = 0.0\n\n[tool.2]\nlength = 5.0\n", 6, "tool.2.length",
+     "unknown key 'length'"),
+    ("[tool.1]\nlength_mm = 0.0\nradius_in = 0.5\n", 3, "tool.1.radius_in",
+     "unknown length unit 'in'"),
+    ("\n[tool.two]\nlength_mm = 0.0\n", 2, "tool.two", "got 'two'"),
+    ('[tool.1]\nlength_mm = 0.0\nshape = "ball:-1"\n', 3, "tool.1.shape",
+     "tool spec 'ball:-1'"),
+    ("[tool.1]\nlength_mm = 0.0\n[tool.01]\nlength_mm = 1.0\n", 3, "tool",
+     "tool 1 is given twice, as [tool.1] and [tool.01]; expected each tool number once"),
+    ("\n\n[tools.1]\nlength_mm = 0.0\n", 3, "tool", "got ['tools']"),
+])
+def test_a_tool_table_file_refusal_names_the_line(tmp_path, text, line, key, message):
+    # a tool table's refusals named the file and key alone, an --errors file's the line too
+    # (the line of the key or table as an editor counts it, here known by hand)
+    table = tmp_path / "tools.toml"
+    table.write_text(text)
+    with pytest.raises(NCProgramError) as caught:
+        ToolTable.from_toml(table)
+    assert (caught.value.source, caught.value.line, caught.value.key) == (str(table), line, key)
+    assert str(caught.value).startswith(f"{table}, line {line}, key '{key}': ")
+    assert message in str(caught.value)
+
+
 def test_tool_changes_follow_t_and_m06():
     # T preselects, M06 puts the last selected tool in (T2 is selected during T1's run and
     # changed at line 4; T3 is selected but never changed); the change starts at the move

@@ -86,10 +86,11 @@ def read_toml(path: str | os.PathLike, error: type = ErrorModelError) -> dict[st
     return _read_toml(path, error)[1]
 
 
-def read_toml_lines(path: str | os.PathLike) -> tuple[dict[str, Any], dict[str, int]]:
+def read_toml_lines(path: str | os.PathLike, error: type = ErrorModelError
+                    ) -> tuple[dict[str, Any], dict[str, int]]:
     """The tables of the TOML file `path`, as `read_toml`, and the line of each key path
     (`key_lines`), for the messages of what the tables hold."""
-    text, data = _read_toml(path, ErrorModelError)
+    text, data = _read_toml(path, error)
     return data, key_lines(text)
 
 

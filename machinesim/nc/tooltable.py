@@ -90,37 +90,47 @@ class ToolTable:
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> ToolTable:
         """Read a tool table file (layout in the module docstring)."""
-        from machinesim.errors.toml import read_toml
+        from machinesim.errors.toml import read_toml_lines
 
         path = check_readable_file(path, "tool table")
-        return cls.from_dict(read_toml(path, NCProgramError), source=str(path))
+        data, lines = read_toml_lines(path, NCProgramError)
+        return cls.from_dict(data, source=str(path), lines=lines)
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any], *, source: str = "<tools>") -> ToolTable:
-        """A tool table from ``{"tool": {"1": {"length_mm": 50.0}, ...}}``."""
+    def from_dict(cls, data: Mapping[str, Any], *, source: str = "<tools>",
+                  lines: Mapping[str, int] | None = None) -> ToolTable:
+        """A tool table from ``{"tool": {"1": {"length_mm": 50.0}, ...}}``; ``lines``, the
+        line of each key path in ``source`` (`machinesim.errors.toml.key_lines`), puts the
+        line in a refusal's message."""
+        lines = lines or {}
         if not isinstance(data, Mapping) or set(data) - {"tool"}:
             extra = sorted(set(data) - {"tool"}) if isinstance(data, Mapping) else data
+            first = extra[0] if isinstance(data, Mapping) else None
             raise NCProgramError(f"a tool table has only [tool.<number>] tables, got {extra!r}",
-                                 source=source, key="tool")
+                                 **_where(source, "tool", lines, first))
         tables = data.get("tool", {})
         if not isinstance(tables, Mapping):
-            raise NCProgramError("'tool' must be tables [tool.<number>]", source=source,
-                                 key="tool")
+            raise NCProgramError("'tool' must be tables [tool.<number>]",
+                                 **_where(source, "tool", lines))
         tools = []
         for name, entry in tables.items():
             key = f"tool.{name}"
             text = str(name)
             if not text.isdigit() or int(text) > MAX_TOOL_NUMBER:
                 raise NCProgramError(f"tool number must be an unsigned integer up to "
-                                     f"{MAX_TOOL_NUMBER}, got {text!r}", source=source, key=key)
+                                     f"{MAX_TOOL_NUMBER}, got {text!r}",
+                                     **_where(source, key, lines))
             if not isinstance(entry, Mapping):
-                raise NCProgramError(f"[{key}] must be a table, got {entry!r}", source=source,
-                                     key=key)
-            tools.append((int(text), _tool(entry, source, key)))
+                raise NCProgramError(f"[{key}] must be a table, got {entry!r}",
+                                     **_where(source, key, lines))
+            tools.append((int(text), _tool(entry, source, key, lines)))
         numbers = [n for n, _ in tools]
         if len(set(numbers)) != len(numbers):
-            raise NCProgramError("a tool number is given twice (e.g. [tool.1] and [tool.01])",
-                                 source=source, key="tool")
+            number = next(n for n in numbers if numbers.count(n) > 1)
+            both = [f"tool.{name}" for name in tables if int(str(name)) == number]
+            raise NCProgramError(f"tool {number} is given twice, as [{both[0]}] and "
+                                 f"[{both[1]}]; expected each tool number once",
+                                 **_where(source, "tool", lines, both[1]))
         return cls(FrozenMapping(sorted(tools)), source)
 
     def length(self, number: int) -> float:
@@ -150,11 +160,19 @@ class ToolTable:
         return value
 
 
-def _tool(entry: Mapping[str, Any], source: str, key: str) -> Tool:
+def _where(source: str, key: str, lines: Mapping[str, int],
+           at: str | None = None) -> dict[str, Any]:
+    """The ``source``, ``line`` and ``key`` of a refusal of ``key``, its line that of the key
+    path ``at`` (default ``key``) when ``lines`` has it."""
+    return {"source": source, "line": lines.get(key if at is None else at), "key": key}
+
+
+def _tool(entry: Mapping[str, Any], source: str, key: str,
+          lines: Mapping[str, int]) -> Tool:
     values: dict[str, float] = {}
     name, shape = "", None
     for field, value in entry.items():
-        where = {"source": source, "key": f"{key}.{field}"}
+        where = _where(source, f"{key}.{field}", lines)
         if field == "name":
             if not isinstance(value, str):
                 raise NCProgramError(f"name must be a string, got {value!r}", **where)
@@ -187,7 +205,7 @@ def _tool(entry: Mapping[str, Any], source: str, key: str) -> Tool:
     return Tool(values.get("length"), values.get("radius"), name, shape)
 
 
-def _shape(value: Any, where: Mapping[str, str]) -> str:
+def _shape(value: Any, where: Mapping[str, Any]) -> str:
     """A tool table's ``shape``, checked by building the tool it names."""
     if not isinstance(value, str):
         raise NCProgramError(f"shape must be a tool spec string such as \"ball:0.5\", got "
