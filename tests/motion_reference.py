@@ -166,7 +166,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                     source=program.source, line=move.line, key=letter)
             end[index[letter]] = value
         if move.kind == "linear" and move.feed_m_per_s is None and np.any(end != q):
-            raise NCProgramError("a feed move (G01) with no feed rate F given so far",
+            raise NCProgramError("a feed move (G01, or an arc: G02/G03) with no feed rate F given "
+                                 "so far; expected an F word in its block or one before it",
                                  source=program.source, line=move.line, key="F")
         duration = move_duration(move.kind, q, end, machine.rotary, machine.rapid_rate,
                                  move.feed_m_per_s, move.dwell_s)

@@ -193,7 +193,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     unfed = np.flatnonzero((kinds[:stop] == KIND_LINEAR) & np.isnan(feeds[:stop]) & moved)
     if unfed.size:
         stop = int(unfed[0])
-        error = NCProgramError("a feed move (G01) with no feed rate F given so far",
+        error = NCProgramError("a feed move (G01, or an arc: G02/G03) with no feed rate F given "
+                               "so far; expected an F word in its block or one before it",
                                source=source, line=int(lines[stop]), key="F")
 
     # rotary moves, and moves of an axis whose errors vary along it (a straightness or
