@@ -495,6 +495,16 @@ def test_a_pipe_or_a_device_is_refused_before_it_is_read(tmp_path):
                                    "expected a TOML file")
 
 
+def test_a_folder_given_as_the_toml_file_is_named_a_folder(tmp_path):
+    # 'scenarios/tool_rotation_arm.py --errors DIR' said 'DIR: cannot read the file: Is a
+    # directory' (the reading's OSError); the command line's checks say 'is a folder'
+    folder = tmp_path / "errors.toml"
+    folder.mkdir()
+    with pytest.raises(ErrorModelError) as info:
+        ErrorModel.from_toml(folder)
+    assert str(info.value) == f"{folder}: is a folder; expected a TOML file"
+
+
 @pytest.mark.parametrize(("given", "got"), [
     ({"tool": {"offset_um": [0.0, 1.0, 0.0]}},
      "got dict; a dict of the TOML layout is read by ErrorModel.from_dict"),

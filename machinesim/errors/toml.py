@@ -106,9 +106,13 @@ def _read_toml(path: str | os.PathLike, error: type) -> tuple[str, dict[str, Any
     text = None
     try:
         mode = os.stat(path).st_mode
-        if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        if stat.S_ISDIR(mode):
+            # said as the command line's own checks say it (the reading's "cannot read the
+            # file: Is a directory" had reached a scenario's --errors)
+            raise error("is a folder; expected a TOML file", source=source)
+        if not stat.S_ISREG(mode):
             # a FIFO with no writer blocks for ever, /dev/zero fills the memory: refuse before
-            # reading (a folder gets the reading's own "Is a directory")
+            # reading
             raise error(f"{not_a_regular_file(path)}; expected a TOML file", source=source)
         text = Path(path).read_bytes().decode("utf-8-sig")
         data = tomllib.loads(text)
