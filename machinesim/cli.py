@@ -49,6 +49,7 @@ from machinesim.exceptions import (
     HolderContactError,
     InputError,
     MachineSimError,
+    printable,
     warnings_as_lines,
 )
 from machinesim.report import check_units
@@ -199,7 +200,9 @@ def _interrupted(args) -> str:
 
 
 def _fail(message: str, status: int) -> int:
-    print(f"machinesim: {message}", file=sys.stderr)
+    # a file name quoted in the message may hold control bytes (an ESC sequence): escaped,
+    # the lines the message itself breaks kept
+    print(f"machinesim: {printable(message, keep=chr(10))}", file=sys.stderr)
     return status
 
 

@@ -24,6 +24,19 @@ def brief(text: str) -> str:
     return f"{text[:40]}...{text[-12:]} ({len(text)} characters)"
 
 
+def printable(text: str, keep: str = "") -> str:
+    """``text`` with each character that is not printable (a control byte such as the ESC
+    that starts a terminal's colour or title sequence, a newline or a tab in a file's name)
+    written as its escape (``\\x1b``, ``\\n``), but those in ``keep``: a message names a
+    file as given, on one line, and never writes raw control bytes to the terminal. Letters
+    of any script (``ü``) and spaces stay as they are."""
+    text = str(text)
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() or c in keep
+                   else c.encode("unicode_escape").decode("ascii") for c in text)
+
+
 class MachineSimError(Exception):
     """Root of every error machinesim raises on purpose."""
 
@@ -59,7 +72,7 @@ class InputError(MachineSimError, ValueError):
         self.key = key
         where = []
         if source is not None:
-            where.append(str(source))
+            where.append(printable(source))  # a file's name may hold any byte but '/
         if line is not None:
             where.append(f"line {line}")
         if column is not None:

@@ -57,7 +57,7 @@ def scenario_status(report, args, name: str | None = None) -> int:
     """
     from machinesim.scenario_start import loaded
 
-    from machinesim.exceptions import MachineSimError
+    from machinesim.exceptions import MachineSimError, printable
 
     loaded()
     name = name or Path(sys.argv[0]).stem or "scenario"
@@ -76,12 +76,13 @@ def scenario_status(report, args, name: str | None = None) -> int:
                 print(f"{name}: stdout was closed early (a pipe's reader that stopped "
                       f"reading); {_interrupted(out, staged)}", file=sys.stderr)
     except MachineSimError as error:
-        print(f"{name}: error: {error}", file=sys.stderr)
+        print(f"{name}: error: {printable(error, keep=chr(10))}", file=sys.stderr)
         return 2
     except OSError as error:  # a write that failed on the way (disk full, folder removed)
         where = f"{_as_reported(error.filename, out, staged)}: " if error.filename else ""
         left = "" if staged is None else f"; {_interrupted(out, staged)}"
-        print(f"{name}: error: {where}{error.strerror or error}{left}", file=sys.stderr)
+        said = printable(f"{where}{error.strerror or error}{left}", keep=chr(10))
+        print(f"{name}: error: {said}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (`machinesim._interrupts.Terminated`)
         how, status = stopped(stop)
