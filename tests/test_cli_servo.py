@@ -57,3 +57,23 @@ def test_a_bad_servo_file_is_named(tmp_path, capsys, text, line, words):
                        capsys)
     assert_clean_failure(code, err, f"servo.toml, line {line}, ", *words)
     assert not (tmp_path / "p.ply").exists()
+
+
+@pytest.mark.parametrize("text", ["", "# [X]\n# kp_N_per_m = 1.2e6\n"])
+def test_a_servo_file_without_a_table_is_noted(tmp_path, capsys, text):
+    # an empty file, or one whose tables are commented out, printed 'largest following
+    # error: X 0.0000 um, ...' with exit 0 and no word that no loop had been read, where an
+    # --errors file that sets nothing is noted
+    servo, program = tmp_path / "servo.toml", tmp_path / "line.nc"
+    servo.write_text(text)
+    program.write_text(LINE)
+    report = tmp_path / "r.json"
+    code, out, err = run(["cut", program, *CUT, "--servo", servo, "--out", tmp_path / "p.ply",
+                          "--report", report], capsys)
+    assert code == 0, err
+    said = (f"{servo} sets no servo loop (no axis table): every axis followed its command "
+            "exactly, a following error of 0")
+    assert err == f"note: {said}\n"
+    assert said in json.loads(report.read_text())["notes"]
+    lags = json.loads(report.read_text())["peak_following_error_um_or_urad"].values()
+    assert max(lags) < 1e-9  # um: float round-off where one move's end meets the next's start
