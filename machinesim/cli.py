@@ -430,8 +430,8 @@ def _cut(args) -> int:
         print(f"  largest following error: {lags}")
     if args.report is not None:
         print(f"wrote {args.report} (cut report, JSON, units in every key)")
-    for note in summary["notes"]:
-        print(f"note: {note}", file=sys.stderr)
+    for note in summary["notes"]:  # a note may quote a file's name: escaped, as in errors
+        print(f"note: {printable(note)}", file=sys.stderr)
     _warn_each(report.holder_contact, "holder touched the part at line {}",
                "holder_contact_lines")
     _warn_each(report.rapids_that_cut, "rapid cut the part at line {}", "rapids_that_cut_lines")
@@ -447,7 +447,7 @@ def _cut(args) -> int:
         was = "was one" if apart == 1 else f"had {apart}"
         print(f"warning: the part is in {len(pieces)} separate pieces ({volumes} mm^3), where "
               f"{material} {was}: a cut went through it (deeper than the stock, or round a "
-              f"piece); {args.out} holds them all", file=sys.stderr)
+              f"piece); {printable(args.out)} holds them all", file=sys.stderr)
     if report.empty_cut and report.edge_plane_lines:
         lines = ", ".join(map(str, report.edge_plane_lines[:5])) + (
             " ..." if len(report.edge_plane_lines) > 5 else "")
@@ -456,8 +456,8 @@ def _cut(args) -> int:
               "tool's zero-thickness edge sweeps no volume; it cuts by moving along its own X",
               file=sys.stderr)
     elif report.empty_cut and not program.moves:
-        print(f"warning: the program has no moves ({args.program} holds no G00/G01/G02/G03 "
-              "block that runs), so nothing was removed", file=sys.stderr)
+        print(f"warning: the program has no moves ({printable(args.program)} holds no "
+              "G00/G01/G02/G03 block that runs), so nothing was removed", file=sys.stderr)
     elif report.empty_cut:
         where = "the stock in the --roi windows" if roi else "the stock"
         print(f"warning: the program removed no material (does it reach {where}?)",

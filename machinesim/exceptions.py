@@ -143,7 +143,7 @@ def warnings_as_lines() -> Iterator[None]:
 
         def show(message, category, filename, lineno, file=None, line=None) -> None:
             if issubclass(category, MachineSimWarning):
-                print(f"machinesim: warning: {message}", file=sys.stderr)
+                print(f"machinesim: warning: {printable(message)}", file=sys.stderr)
             else:
                 python_show(message, category, filename, lineno, file, line)
 

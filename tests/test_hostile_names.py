@@ -81,3 +81,45 @@ def test_a_name_that_is_not_utf8_is_named_escaped(tmp_path, capsys):
     code, err = _err(["cut", name, *CUT, "--out", tmp_path / "p.ply"], capsys)
     assert code == 2 and err == (f"machinesim: error: {tmp_path}/\\udcff.nc: no such file; "
                                  "expected the NC program\n")
+
+
+def test_notes_and_warnings_that_quote_a_name_are_escaped(tmp_path, capsys):
+    # a cut that succeeds prints its notes and warnings, which quote the files: the name's
+    # ESC had reached the terminal raw there, as in the refusals
+    program = tmp_path / "p\x1b[31m.nc"
+    program.write_text("(nothing to run)\n")
+    errors = tmp_path / "e\x1b[31m.toml"
+    errors.write_text("")
+    code = main([str(a) for a in ["cut", program, *CUT, "--errors", errors,
+                                  "--out", tmp_path / "p.ply", "--quiet"]])
+    err = capsys.readouterr().err
+    assert code == 0 and "\x1b" not in err, err
+    assert (f"note: {tmp_path}/e\\x1b[31m.toml sets no error (no key in any section)"
+            in err), err
+    assert f"warning: the program has no moves ({tmp_path}/p\\x1b[31m.nc holds no" in err, err
+
+
+def test_a_viewer_warning_that_quotes_a_name_is_escaped(tmp_path, capsys):
+    from machinesim.workpiece import stock_from_spec
+
+    part = tmp_path / "part.ply"
+    stock_from_spec("block:1x1x1").export_ply(part)
+    report = tmp_path / "r\x1b[31m.json"
+    report.write_text('{"part_file": "other.ply"}')  # another cut's report: warned about
+    code = main(["view", str(part), "--report", str(report), "--html",
+                 str(tmp_path / "v.html")])
+    err = capsys.readouterr().err
+    assert code == 0 and "\x1b" not in err, err
+    assert f"warning: the report {tmp_path}/r\\x1b[31m.json describes the part file" in err
+
+
+def test_a_machine_warning_line_is_escaped(capsys):
+    import warnings
+
+    from machinesim.exceptions import MachineSimWarning, warnings_as_lines
+
+    with warnings_as_lines():
+        warnings.warn("m\x1b[31m.urdf: joint 'B' limits read as degrees", MachineSimWarning,
+                      stacklevel=1)
+    assert capsys.readouterr().err == ("machinesim: warning: m\\x1b[31m.urdf: joint 'B' "
+                                       "limits read as degrees\n")

@@ -32,7 +32,7 @@ from machinesim._program_options import (
     read_for_machine,
     unit_note,
 )
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, printable
 
 #: Ports browsers refuse to load a page from: the Fetch standard's "bad ports" (Chromium shows
 #: ERR_UNSAFE_PORT for all but 4190 and 6679). A live viewer there serves a page no browser
@@ -127,8 +127,8 @@ def run_view(args: argparse.Namespace) -> int:
         if path is not None:
             check_writable(path, what)
     scene = _scene(args, budget)
-    for line in scene.warnings:
-        print(f"warning: {line}", file=sys.stderr)
+    for line in scene.warnings:  # a warning may quote a file's name: escaped, as in errors
+        print(f"warning: {printable(line)}", file=sys.stderr)
     if args.html is not None:
         from machinesim.viewer.scene import write_html
 
@@ -263,7 +263,7 @@ def _scene(args, budget: int):
         _refuse_tool_changes(program)
         note = unit_note(program)
         if note:
-            print(f"note: {note}", file=sys.stderr)
+            print(f"note: {printable(note)}", file=sys.stderr)
     if args.errors is not None:
         from machinesim.errors import ErrorModel
 
