@@ -174,6 +174,23 @@ def test_read_ply_refuses_what_it_cannot_read(tmp_path):
         read_ply(tmp_path / "missing.ply")
 
 
+def test_read_ply_says_an_empty_file_or_a_folder_is_one(tmp_path):
+    # both were named for what they lack ('not a PLY file: expected 'ply' and 'end_header'
+    # lines'; 'cannot read the PLY file (Is a directory)', a folder named *.ply in a report
+    # folder)
+    for data, size in ((b"", "0 bytes"), (b"\n \n", "3 bytes, all white space")):
+        (tmp_path / "empty.ply").write_bytes(data)
+        with pytest.raises(InputError) as caught:
+            read_ply(tmp_path / "empty.ply")
+        assert str(caught.value) == (f"{tmp_path / 'empty.ply'}: the file is empty ({size}); "
+                                     "expected a PLY part (a 'ply' line, its header and its "
+                                     "elements)")
+    (tmp_path / "folder.ply").mkdir()
+    with pytest.raises(InputError) as caught:
+        read_ply(tmp_path / "folder.ply")
+    assert str(caught.value) == f"{tmp_path / 'folder.ply'}: is a folder; expected a PLY part file"
+
+
 def test_read_ply_names_the_file_of_a_truncated_malformed_or_non_finite_part(tmp_path):
     # parts from elsewhere: each was a ValueError traceback ("buffer is smaller than requested
     # size", "invalid literal for int()") or read on to a misleading later error (NaN bounds)

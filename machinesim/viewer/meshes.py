@@ -64,10 +64,16 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
         outside).
     """
     path = Path(path)
+    if path.is_dir():  # a folder named *.ply in a report folder: 'cannot read (Is a directory)'
+        raise InputError("is a folder; expected a PLY part file", source=str(path))
     try:
         data = path.read_bytes()
     except OSError as exc:
         raise InputError(f"cannot read the PLY file ({exc.strerror})", source=str(path)) from None
+    if not data.strip():  # 'not a PLY file: expected 'ply' and 'end_header' lines' had said
+        raise InputError(f"the file is empty ({len(data)} bytes"
+                         f"{', all white space' if data else ''}); expected a PLY part "
+                         "(a 'ply' line, its header and its elements)", source=str(path))
     found = re.search(rb"end_header\r?\n", data)
     if not re.match(rb"ply\r?\n", data) or found is None:
         raise InputError("not a PLY file: expected 'ply' and 'end_header' lines",
