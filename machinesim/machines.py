@@ -91,9 +91,19 @@ def load_machine(name_or_path: str | Path) -> Machine:
     if not text.lower().endswith(".urdf"):
         path = models_dir() / f"{text}.urdf"
         if not path.is_file():
+            shipped = ", ".join(list_machines())
+            given = Path(text)
+            # a path that is there was called an 'unknown machine', as if a name were misspelt
+            if given.is_dir():
+                raise ModelError(f"{given}: is a folder; expected a machine's name ({shipped}) "
+                                 "or the path of a .urdf file")
+            if given.is_file():
+                raise ModelError(f"{given}: a file whose name does not end in .urdf; expected "
+                                 f"a machine's name ({shipped}) or the path of a .urdf file "
+                                 "(a URDF saved under another ending: rename it to .urdf)")
             raise ModelError(
-                f"unknown machine {text!r}; expected one of {', '.join(list_machines())} "
-                "or the path of a .urdf file")
+                f"unknown machine {text!r}; expected one of {shipped} or the path of a .urdf "
+                "file")
     elif path.is_dir():
         raise ModelError(f"{path}: is a folder; expected a .urdf file")
     elif path.exists() and not path.is_file():  # reading a FIFO blocks, /dev/zero never ends

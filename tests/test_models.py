@@ -104,6 +104,29 @@ def test_unknown_machine_and_bad_files_are_refused(tmp_path):
         load_machine(bad)
 
 
+def test_a_folder_or_a_file_not_ending_in_urdf_is_not_an_unknown_machine(tmp_path):
+    # 'cut ... --machine DIR' or '--machine mill.xml' (a URDF saved as .xml) said "unknown
+    # machine 'DIR'; expected one of ...", as if a shipped machine's name were misspelt
+    from machinesim.machines import list_machines
+
+    shipped = ", ".join(list_machines())
+    folder = tmp_path / "mill"
+    folder.mkdir()
+    with pytest.raises(ModelError) as raised:
+        load_machine(folder)
+    assert str(raised.value) == (f"{folder}: is a folder; expected a machine's name "
+                                 f"({shipped}) or the path of a .urdf file")
+    xml = tmp_path / "mill.xml"
+    xml.write_text(GROOVING)
+    with pytest.raises(ModelError) as raised:
+        load_machine(xml)
+    assert str(raised.value) == (f"{xml}: a file whose name does not end in .urdf; expected "
+                                 f"a machine's name ({shipped}) or the path of a .urdf file "
+                                 "(a URDF saved under another ending: rename it to .urdf)")
+    with pytest.raises(ModelError, match="unknown machine 'mill'"):
+        load_machine("mill")  # not there (the folder is in tmp_path, not here)
+
+
 def test_a_xacro_file_is_refused_with_how_to_expand_it(tmp_path):
     # it was taken for a machine's name: "unknown machine 'mill.urdf.xacro'"
     path = tmp_path / "mill.urdf.xacro"
