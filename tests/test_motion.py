@@ -88,14 +88,12 @@ def test_linear_moves_are_not_split_and_bad_programs_are_refused():
 
 def test_an_arc_without_a_feed_is_not_called_a_g01():
     # 'G02 X1. Y0. R0.5' with no F so far was refused as 'a feed move (G01) with no feed
-    # rate F given so far', naming a G01 the program does not hold
-    machine = load_machine("grooving_4axis")
+    # rate F given so far', naming a G01 the program does not hold; the reader now refuses
+    # it at its line, naming the G02 (test_nc_feed.py), before the planner sees it
     with pytest.raises(NCProgramError) as caught:
-        plan(parse_program("G90 G21 G17\nG00 X0. Y0. Z1.\nG02 X1. Y0. R0.5\nM30\n"), machine)
-    assert (caught.value.line, caught.value.key) == (3, "F")
-    assert caught.value.message == ("a feed move (G01, or an arc: G02/G03) with no feed rate F "
-                                    "given so far; expected an F word in its block or one "
-                                    "before it")
+        parse_program("G90 G21 G17\nG00 X0. Y0. Z1.\nG02 X1. Y0. R0.5\nM30\n")
+    assert (caught.value.line, caught.value.key) == (3, "G02")
+    assert caught.value.message.startswith("G02 feeds with no F in force")
 
 
 def test_plan_takes_a_machine_by_name_and_refuses_a_path_for_the_program(tmp_path):
