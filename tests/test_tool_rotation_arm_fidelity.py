@@ -48,10 +48,11 @@ def test_the_search_range_and_spacing_follow_from_the_capture_range():
     assert plan.spacing == pytest.approx(expected, abs=1e-12)
     small = CalibrationPlan(capture=0.1 * MM)
     assert small.spacing == 3 * MM  # the old spacing where the capture needs no more
-    # the first ramp in from the block's low-y edge by its window and 0.1 mm of land:
-    # 1.036 + 0.25 + 0.1 = 1.386 mm (it was 1 mm, so a groove moved 0.995 mm towards -y
-    # lay 5 um from the edge, its 16 um half width off the block)
-    assert plan.lead == pytest.approx(1.386 * MM + 8e-9 / 9, abs=1e-15)
+    # the first ramp in from the block's low-y edge by at least its window and 0.1 mm of
+    # land: 1.036 + 0.25 + 0.1 = 1.386 mm (it was 1 mm, so a groove moved 0.995 mm towards
+    # -y lay 5 um from the edge, its 16 um half width off the block); the 0 deg ramp's
+    # deepest cut needs more (test_the_calibration_block_holds_every_ramps_deepest_cut)
+    assert plan.window + 0.1 * MM == pytest.approx(1.386 * MM + 8e-9 / 9, abs=1e-15)
     assert plan.edge(0, plan.ramp[0])[0] - plan.origin[1] == pytest.approx(plan.lead)
     assert small.lead == 1 * MM
 
@@ -79,6 +80,48 @@ def test_the_calibration_block_holds_the_ramps_deepest_cut():
     deepest = 1.0 * MM + 16 * UM + 8e-9 / 9 + SEARCH_MARGIN_M + 1.0 * MM
     assert one.depth == pytest.approx(deepest, abs=1e-15)
     assert block.bounds[0][2] == pytest.approx(-(deepest + 1.0 * MM), abs=1e-14)  # 12 digits
+
+
+@pytest.mark.parametrize("rho, e_ys", [
+    (0.5 * MM, 0.0),                        # the edge 0.5 mm low
+    (0.7 * MM, -0.7 * MM),                  # 0.99 mm low and towards -y: the widest reach
+])
+def test_the_calibration_block_holds_every_ramps_deepest_cut(rho, e_ys):
+    """A 90-deg V at 0 deg ends D = search + rho deep, D either side of its apex, the apex
+    e_ys aside: with the first ramp 1.386 mm in from the block's low-y edge, the edge 0.5 mm
+    low cut 0.150 mm past it near the ramp's end (0.05 % of the groove off the block), and
+    0.7 mm low and -0.7 mm aside 1.06 mm. The most over offsets within the 1 mm capture is
+    search + sqrt(2) mm; with 0.1 mm of land, lead = 2.550 mm. By hand the groove removes
+    D^3 / 3 x (1 / 0.1 + 1), all of it from the block."""
+    from machinesim.cutting import cut
+    from machinesim.procedures.tool_rotation_arm import TOOL
+    from machinesim.workpiece import stock_from_spec
+
+    one = CalibrationPlan(angles=(0.0,))
+    part, _ = cut(one.program(R0), MACHINE, tool=TOOL, stock=one.stock,
+                  errors=arm_errors(rho, e_ys))
+    d = one.search + rho
+    block = stock_from_spec(one.stock)
+    assert block.volume - part.volume == pytest.approx(d ** 3 / 3 * (1 / one.slope + 1),
+                                                       rel=1e-9)
+    assert one.lead + e_ys - d > 0.1 * MM  # the groove ends on the block, with land beside
+    assert one.lead == pytest.approx(one.search + math.sqrt(2.0) * MM + 0.1 * MM, abs=1e-15)
+    assert one.lead == CalibrationPlan().lead  # the five ramps': the 0 deg one's the most
+
+
+def test_the_calibration_block_is_wide_enough_for_the_last_ramps_deepest_cut():
+    """The +y side by hand: a single -40 deg ramp (its low flank, 5 deg from the surface,
+    towards +y, its end 2 search tan 40 deg towards -y) reaches search / tan 5 deg + capture
+    / sin 5 deg - 2 search tan 40 deg beyond its start; the block is that and 0.1 mm wider
+    than lead: 21.67 mm (spacing alone, 3 mm, left it 18.67 mm short)."""
+    plan = CalibrationPlan(angles=(math.radians(-40.0),))
+    five, forty = math.radians(5.0), math.radians(40.0)
+    reach = (plan.search / math.tan(five) + plan.capture / math.sin(five)
+             - 2.0 * plan.search * math.tan(forty))
+    assert plan.reach(0)[1] == pytest.approx(reach, rel=1e-12)
+    assert plan.width == pytest.approx(plan.lead + reach + 0.1 * MM, rel=1e-12)
+    assert plan.width > plan.lead + plan.spacing
+    assert plan.stock.split("x")[1] == f"{plan.width / MM:.6g}"
 
 
 def test_a_block_thinner_than_the_ramps_deepest_cut_is_refused():

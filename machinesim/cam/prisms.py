@@ -187,13 +187,46 @@ class CalibrationPlan:
                  + SEARCH_MARGIN_M)
         return self.window + self.capture + depth / math.tan(flank) + SPACING_MARGIN_M
 
+    def reach(self, k: int) -> tuple[float, float]:
+        """How far (m) ramp ``k``'s groove may reach towards -y and towards +y of the ramp's
+        start (its programmed edge's y there), for any edge offset within the capture range.
+
+        The deepest cut is the ramp's end (deeper, a V spreads faster than the tool's axis
+        moves aside): the programmed edge ``search`` below the top and ``2 search tan t``
+        towards +y, the offset (dy, dz) of length up to ``capture`` moving the apex. A flank
+        ``phi`` from the surface (``(pi - tool_angle) / 2 -+ t`` on the -y / +y side) spreads
+        ``search + dz`` by ``1 / tan phi``; the most of ``-+dy + dz / tan phi`` over the
+        offsets is ``capture / sin phi``. The V is drawn to any depth: a real tool's shank,
+        parallel to its axis, is steeper than its flanks and reaches less. The default
+        plan's 0 deg ramp: 1.036 + 1.414 = 2.450 mm either side.
+        """
+        t = self.angles[k]
+        shift = 2.0 * self.search * math.tan(t)
+        ends = []
+        for sign in (-1.0, 1.0):
+            phi = (math.pi - self.tool_angle) / 2.0 + sign * t
+            spread = (self.search / math.tan(phi) + self.capture / math.sin(phi)
+                      if phi < math.pi / 2.0 else self.capture)  # overhung: the apex
+            ends.append(spread + sign * shift)
+        return ends[0], ends[1]
+
     @property
     def lead(self) -> float:
-        """Distance (m) of the first ramp's start from the block's low-y edge: its search
-        window and `SPACING_MARGIN_M` of land, so that a groove moved towards -y by up to
-        the capture range lies on the block with land beside it (as the last ramp's has the
-        `spacing` to the block's other edge). At least 1 mm."""
-        return max(1.0 * M_PER_MM, self.window + SPACING_MARGIN_M)
+        """Distance (m) of the first ramp's start from the block's low-y edge, at least 1 mm:
+        its search window and `SPACING_MARGIN_M` of land, so that a groove moved towards -y
+        by up to the capture range lies on the block with land beside it, and room for
+        every ramp's deepest cut (`reach`) with that land: 2.55 mm for the default plan,
+        its 0 deg ramp's 2.45 mm reach and 0.1 mm."""
+        room = max(self.reach(k)[0] - k * self.spacing for k in range(len(self.angles)))
+        return max(1.0 * M_PER_MM, self.window + SPACING_MARGIN_M, room + SPACING_MARGIN_M)
+
+    @property
+    def width(self) -> float:
+        """Width of the calibration block along Y (m): `lead`, then `spacing` per ramp or
+        more where a ramp's deepest cut (`reach`) needs it, with `SPACING_MARGIN_M` of land."""
+        tail = max(k * self.spacing + self.reach(k)[1] + SPACING_MARGIN_M
+                   for k in range(len(self.angles)))
+        return self.lead + max(len(self.angles) * self.spacing, tail)
 
     @property
     def ramp(self) -> tuple[float, float]:
@@ -219,7 +252,7 @@ class CalibrationPlan:
     @property
     def stock(self) -> str:
         """Stock spec of the calibration block (mm)."""
-        width = (self.lead + len(self.angles) * self.spacing) / M_PER_MM
+        width = self.width / M_PER_MM
         return (f"block:{self.length / M_PER_MM:.6g}x{width:.6g}x{self.height / M_PER_MM:.12g}"
                 f"@{self.origin[0] / M_PER_MM:.6g},{self.origin[1] / M_PER_MM:.6g},0")
 
