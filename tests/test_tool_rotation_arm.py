@@ -395,6 +395,32 @@ def test_a_ramp_groove_that_does_not_go_on_down_the_ramp_is_refused():
     assert "expected the calibration part cut by plan.program" in message
 
 
+def test_a_coarse_section_whose_land_is_off_the_part_names_the_ramp():
+    """A part whose low-y edge is where the plan puts the block's (so the stage's rotation is
+    found) but which holds, about the ramp's start, only a strip 1 mm wide: the coarse
+    section across the ramp (+-1.286 mm) has no sample on the part in its first and last
+    268 um of land, and the refusal was level_on_land's bare 'Expected land over the first
+    and last ... of the section', naming neither the ramp nor the part."""
+    plan = CalibrationPlan(angles=(0.0,))
+    x0, x1 = plan.origin[0], plan.origin[0] + plan.length
+    y = float(plan.edge(0, plan.ramp[0])[0])
+    strips = [(plan.origin[1], plan.origin[1] + 0.2 * MM), (y - 0.5 * MM, y + 0.5 * MM)]
+    vertices, triangles = [], []
+    for a, b in strips:
+        n = len(vertices)
+        vertices += [(x0, a, 0.0), (x1, a, 0.0), (x1, b, 0.0), (x0, b, 0.0)]
+        triangles += [(n, n + 1, n + 2), (n, n + 2, n + 3)]
+    part = (np.array(vertices), np.array(triangles))
+    with pytest.raises(InputError) as info:
+        measure_calibration(part, plan, Microscope(noise=False))
+    assert info.value.key == "part"
+    message = str(info.value)
+    assert "ramp groove at 0 deg (ramp 0 of the plan): the section across it at x" in message
+    assert "reads 0 samples on the part in its first and last" in message
+    assert f"on plan.stock ({plan.stock})" in message
+    assert "Expected land over" not in message
+
+
 def scenario(*args, cwd=ROOT):
     return subprocess.run([sys.executable, str(ROOT / "scenarios" / "tool_rotation_arm.py"),
                            *args], capture_output=True, text=True, check=False, cwd=cwd)

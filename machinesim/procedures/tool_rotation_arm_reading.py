@@ -69,6 +69,8 @@ LEVEL_LAND_FRACTION = 0.5
 #: offset and its rotation over the block's length: 5 um and 1 mrad x 25 mm, a few
 #: sigmas), at this spacing.
 EDGE_INSET_M, EDGE_WINDOW_M, EDGE_SPACING_M = 0.25 * M_PER_MM, 0.1 * M_PER_MM, 0.1e-6
+#: Fewest samples on the part in a section's land that level it (`level_on_land`).
+LAND_SAMPLES = 4
 
 
 # ---------------------------------------------------------------------------- readings
@@ -279,14 +281,25 @@ def _coarse_land(plan: CalibrationPlan, k: int) -> float:
     return max(COARSE_LAND_M, plan.window - plan.capture - depth / math.tan(flank))
 
 
-def _section(index, microscope, x: float, y0: float, y1: float, spacing, land: float):
+def _section(index, microscope, x: float, y0: float, y1: float, spacing, land: float,
+             where: str, plan: CalibrationPlan):
     """A section across Y at ``x``: (y, height below its land), levelled on the line fitted
     to its first and last ``land`` (m, `level_on_land`). Taken from its median, a coarse
     section (+-1.286 mm for the default plan, more with a larger capture) on a stage tilted
     by 0.63 mrad (3.15 sigma of `machinesim.realism.MICROSCOPE`'s 0.2 mrad) had one end
     0.8 um below it, the 0.1 x depth that marks the groove at the first station: land read
-    as groove."""
+    as groove. A section with no land on the part is refused naming ``where`` (the ramp)."""
     prof = microscope.profile(index, (x, y0), (x, y1), spacing=spacing)
+    found = np.count_nonzero(_land_samples(prof.s, prof.z, land))
+    if found < LAND_SAMPLES:
+        raise InputError(
+            f"{where}: the section across it at x = {x:g} m, from y = {y0:g} to {y1:g} m (its "
+            f"search window about the programmed edge), reads {found} samples on the part in "
+            f"its first and last {land:g} m, where its land should be (at least "
+            f"{LAND_SAMPLES}): the section runs off the part. Expected the part cut by "
+            f"plan.program on plan.stock ({plan.stock}); a part cut on another stock, or for "
+            "another plan (its origin, capture, spacing and angles place the ramps), leaves "
+            "the ramp's window off it", key="part")
     return y0 + prof.s, level_on_land(prof.s, prof.z, land)
 
 
@@ -298,7 +311,8 @@ def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading
 
     def coarse(x):
         y = float(plan.edge(k, x)[0])
-        return _section(index, microscope, x, y - window, y + window, COARSE_SPACING_M, land)
+        return _section(index, microscope, x, y - window, y + window, COARSE_SPACING_M, land,
+                        f"{where} (ramp {k} of the plan)", plan)
 
     def found(x):
         return bool(np.nanmin(coarse(x)[1]) < -FIND_DEPTH_M)
@@ -372,6 +386,13 @@ def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading
     return AngleReading(plan.angles[k], *(frozen(c) for c in zip(*rows, strict=True)))
 
 
+def _land_samples(s, z, land: float) -> np.ndarray:
+    """Which samples of a profile (``s``, ``z``) lie in its first or last ``land`` (m) and on
+    the part (a finite height)."""
+    s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
+    return ((s <= s[0] + land) | (s >= s[-1] - land)) & np.isfinite(z)
+
+
 def level_on_land(s, z, land: float) -> np.ndarray:
     """Heights less the line through the first and last ``land`` (m) of a profile.
 
@@ -382,8 +403,8 @@ def level_on_land(s, z, land: float) -> np.ndarray:
     first leaves both as they were.
     """
     s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
-    ends = ((s <= s[0] + land) | (s >= s[-1] - land)) & np.isfinite(z)
-    if np.count_nonzero(ends) < 4:
+    ends = _land_samples(s, z, land)
+    if np.count_nonzero(ends) < LAND_SAMPLES:
         raise InputError(f"Expected land over the first and last {land:g} m of the section, "
                          f"got {np.count_nonzero(ends)} samples there", key="land")
     slope, intercept = np.polyfit(s[ends], z[ends], 1)
