@@ -395,6 +395,24 @@ def test_a_ramp_groove_that_does_not_go_on_down_the_ramp_is_refused():
     assert "expected the calibration part cut by plan.program" in message
 
 
+@pytest.mark.parametrize("depth, height", [(0.5 * MM, None), (0.7 * MM, None),
+                                           (0.3 * MM, 0.2 * MM)])
+def test_a_pattern_as_deep_as_its_block_is_refused(depth, height):
+    """The pattern's block was 0.5 mm thick whatever its depth, unchecked: a 0.5 or 0.7 mm
+    deep pattern would cut through its bottom. Refused naming both; a thicker block is the
+    pattern's height, written into its stock."""
+    kwargs = {} if height is None else {"height": height}
+    with pytest.raises(InputError) as info:
+        PrismPattern(depth=depth, **kwargs)
+    assert info.value.key == "depth"
+    message = str(info.value)
+    assert f"height {height or 0.5 * MM:g} m, got depth {depth:g} m" in message
+    assert "PrismPattern(height=...)" in message
+    deep = PrismPattern(depth=depth, height=depth + 0.5 * MM)
+    assert deep.stock.split("@")[0].split("x")[-1] == f"{(depth + 0.5 * MM) / MM:.12g}"
+    assert PrismPattern().stock.split("@")[0].endswith("x0.5")  # the default as it was
+
+
 def test_a_coarse_section_whose_land_is_off_the_part_names_the_ramp():
     """A part whose low-y edge is where the plan puts the block's (so the stage's rotation is
     found) but which holds, about the ramp's start, only a strip 1 mm wide: the coarse

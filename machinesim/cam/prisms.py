@@ -285,6 +285,9 @@ class PrismPattern:
         Corner (x, y) of the stock (m).
     tool_angle, clearance, feed_mm_per_min : float
         As in `CalibrationPlan`.
+    height : float
+        Thickness of the pattern's block (m), 0.5 mm by default; a `depth` at or beyond it
+        is refused (the grooves would cut through the block's bottom).
     """
 
     angles: tuple[float, ...] = tuple(math.radians(a) for a in range(21))
@@ -296,13 +299,20 @@ class PrismPattern:
     tool_angle: float = math.pi / 2
     clearance: float = 1.0 * M_PER_MM
     feed_mm_per_min: float = 12000.0
+    height: float = 0.5 * M_PER_MM
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "angles", _angles(self.angles, self.tool_angle, "angles"))
-        for name in ("depth", "pitch", "length", "margin"):
+        for name in ("depth", "pitch", "length", "margin", "height"):
             value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0.0):
                 raise InputError(f"Expected {name} > 0, got {value!r}", key=name)
+        if self.depth >= self.height:
+            raise InputError(
+                f"Expected the pattern's depth below the thickness of its block, "
+                f"height {self.height:g} m, got depth {self.depth:g} m: the grooves would cut "
+                "through the block's bottom; give a shallower depth or a thicker "
+                "PrismPattern(height=...)", key="depth")
 
     @property
     def centres(self) -> np.ndarray:
@@ -317,7 +327,8 @@ class PrismPattern:
     @property
     def stock(self) -> str:
         """Stock spec of the pattern block (mm)."""
-        return (f"block:{self.length / M_PER_MM:.9g}x{self.width / M_PER_MM:.9g}x0.5"
+        return (f"block:{self.length / M_PER_MM:.9g}x{self.width / M_PER_MM:.9g}"
+                f"x{self.height / M_PER_MM:.12g}"
                 f"@{self.origin[0] / M_PER_MM:.9g},{self.origin[1] / M_PER_MM:.9g},0")
 
     def program(self, r0: float, number: int = 2) -> Program:
