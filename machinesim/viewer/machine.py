@@ -11,8 +11,6 @@ nominal machine cuts.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
@@ -27,6 +25,7 @@ from machinesim.viewer.maps import legend_for
 from machinesim.viewer.meshes import DISPLAY_TRIANGLES, decimate, tool_mesh
 from machinesim.viewer.scene import Scene, transform_tracks, visibility_track
 from machinesim.viewer.views import PART_COLOUR, add_part, frame_scene
+from machinesim.viewer.visuals import machine_visuals
 from machinesim.workpiece import stock_from_spec
 
 #: Longest animation (s) before the program's time is compressed to fit: a minute-long
@@ -88,7 +87,7 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
     machine.check_errors(errors)
     scene = Scene(f"{machine.name} ({''.join(machine.axes)})")
     model = machine.model
-    geometry = _visuals(machine, scene)
+    geometry = machine_visuals(machine, scene)
     visualizer = MeshcatVisualizer(model, visual_model=geometry)
     visualizer.initViewer(viewer=scene.vis)
     visualizer.loadViewerModel(rootNodeName="machine")
@@ -107,40 +106,6 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
         lo = hi = np.zeros(3)
     frame_scene(scene, lo, hi)
     return scene
-
-
-def _visuals(machine, scene: Scene):
-    """The machine's visual geometry. Mesh files the URDF names but that cannot be loaded
-    (a ROS file's ``package://`` paths, resolved only inside ROS) are left out, with a
-    warning naming their links, rather than ending the view: the axes need no drawing."""
-    import xml.etree.ElementTree as ET
-
-    # a mesh's relative path is read from the URDF's folder, as its author (a CAD export's
-    # meshes/base.STL) meant it, wherever the view starts; package://<package>/... from the
-    # folders holding a ROS package's folder (<package>/urdf/machine.urdf)
-    folder = Path(machine.path).resolve().parent
-    dirs = [str(folder), str(folder.parent), str(folder.parent.parent)]
-    try:
-        return pin.buildGeomFromUrdfString(machine.model, machine.urdf_xml,
-                                           pin.GeometryType.VISUAL, package_dirs=dirs)
-    except ValueError:
-        pass
-    root = ET.fromstring(machine.urdf_xml)
-    left_out = []
-    for link in root.iter("link"):
-        for visual in link.findall("visual"):
-            mesh = visual.find("geometry/mesh")
-            if mesh is not None:
-                link.remove(visual)
-                left_out.append(f"{link.get('name')} ({mesh.get('filename')})")
-    scene.warnings.append(f"{machine.path}: mesh files that could not be loaded, drawn "
-                          f"without them: "
-                          f"{', '.join(left_out[:5])}"
-                          f"{f' and {len(left_out) - 5} more' if len(left_out) > 5 else ''}"
-                          f" (a relative path is looked up in {folder}, package://<package>/... "
-                          "there and in the two folders above it; give the file's path)")
-    return pin.buildGeomFromUrdfString(machine.model, ET.tostring(root, encoding="unicode"),
-                                       pin.GeometryType.VISUAL, package_dirs=dirs)
 
 
 def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, duration_s,

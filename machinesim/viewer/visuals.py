@@ -1,0 +1,146 @@
+"""A machine's visual geometry for the viewer, its STL meshes read by the browser only.
+
+Loading a machine (`machinesim.machines.Machine`, ``machinesim cut``) builds its kinematics
+from the URDF text and opens no mesh file. The view draws the visuals: Pinocchio's
+`MeshcatVisualizer` sends an STL, OBJ or DAE mesh to the page as the file's own bytes, so
+the triangles Pinocchio reads (through coal and assimp) and the collision tree it builds
+of them are never used; for a CAD export's STL visuals that is most of the view's time (a
+500,000-triangle STL: 8.5 s to build, 37 ms for trimesh to read). `machine_visuals` hands
+Pinocchio a placeholder box for each STL mesh and puts the file's path and scale on the
+geometry object it makes, which the visualizer then sends as before.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+try:
+    import coal
+except ImportError:  # Pinocchio before 3.4 is built on hpp-fcl, coal's former name
+    import hppfcl as coal
+
+from machinesim.urdf_structure import _URDF_NUMBER
+from machinesim.viewer.scene import Scene
+
+#: Mesh files whose geometry object keeps only the path (the visualizer sends the file
+#: itself). OBJ and DAE meshes are sent as files too, but are read by Pinocchio as before:
+#: a file that Pinocchio cannot read is then left out with a warning, and `_stl_readable`
+#: is the check that stands in for that read for an STL.
+DEFERRED_SUFFIXES = (".stl",)
+
+
+def machine_visuals(machine, scene: Scene) -> pin.GeometryModel:
+    """The machine's visual geometry model. Mesh files the URDF names but that cannot be
+    found or read (a ROS file's ``package://`` paths, resolved only inside ROS) are left out,
+    with a warning naming their links, rather than ending the view: the axes need no
+    drawing."""
+    # a mesh's relative path is read from the URDF's folder, as its author (a CAD export's
+    # meshes/base.STL) meant it, wherever the view starts; package://<package>/... from the
+    # folders holding a ROS package's folder (<package>/urdf/machine.urdf)
+    folder = Path(machine.path).resolve().parent
+    dirs = [str(folder), str(folder.parent), str(folder.parent.parent)]
+    root = ET.fromstring(machine.urdf_xml)
+    deferred: dict[int, tuple[str, np.ndarray]] = {}  # id of a <visual>: its file, scale
+    left_out = []
+    for link in root.iter("link"):
+        for visual in link.findall("visual"):
+            mesh = visual.find("geometry/mesh")
+            if mesh is None or Path(mesh.get("filename")).suffix.lower() not in \
+                    DEFERRED_SUFFIXES or _scale(mesh) is None:
+                continue
+            found = resource_path(mesh.get("filename"), dirs)
+            if found is None or not _stl_readable(found):
+                link.remove(visual)
+                left_out.append(f"{link.get('name')} ({mesh.get('filename')})")
+                continue
+            deferred[id(visual)] = (found, _scale(mesh))
+            geometry = visual.find("geometry")
+            geometry.remove(mesh)
+            ET.SubElement(geometry, "box", size="1 1 1")
+    try:
+        model = pin.buildGeomFromUrdfString(machine.model, ET.tostring(root, encoding="unicode"),
+                                            pin.GeometryType.VISUAL, package_dirs=dirs)
+    except ValueError:  # an OBJ or DAE mesh Pinocchio cannot find or read: every such mesh
+        for link in root.iter("link"):  # is left out, as all meshes were before
+            for visual in link.findall("visual"):
+                mesh = visual.find("geometry/mesh")
+                if mesh is not None:
+                    link.remove(visual)
+                    left_out.append(f"{link.get('name')} ({mesh.get('filename')})")
+        model = pin.buildGeomFromUrdfString(machine.model, ET.tostring(root, encoding="unicode"),
+                                            pin.GeometryType.VISUAL, package_dirs=dirs)
+    files = {}
+    for link in root.iter("link"):  # Pinocchio names a link's visuals <link>_0, <link>_1, ...
+        for index, visual in enumerate(link.findall("visual")):
+            if id(visual) in deferred:
+                files[f"{link.get('name')}_{index}"] = deferred[id(visual)]
+    for g in model.geometryObjects:
+        if g.name in files:
+            g.geometry = coal.BVHModelOBBRSS()  # no primitive: drawn from its meshPath
+            g.meshPath, g.meshScale = files[g.name]
+    if left_out:
+        scene.warnings.append(
+            f"{machine.path}: mesh files that could not be loaded, drawn without them: "
+            f"{', '.join(left_out[:5])}"
+            f"{f' and {len(left_out) - 5} more' if len(left_out) > 5 else ''}"
+            f" (a relative path is looked up in {folder}, package://<package>/... there and "
+            "in the two folders above it; give the file's path)")
+    return model
+
+
+def resource_path(filename: str, dirs: list[str]) -> str | None:
+    """The file a URDF mesh's ``filename`` names, found as Pinocchio finds it (its
+    ``retrieveResourcePath``): ``package://`` and ``model://`` paths, and relative ones, in
+    the first of ``dirs`` holding them; ``file://`` and absolute paths as they are. None
+    when there is no such file."""
+    scheme, separator, rest = filename.partition("://")
+    if separator:
+        if scheme == "file":
+            return rest if os.path.isfile(rest) else None
+        if scheme not in ("package", "model"):
+            return None
+        filename = rest
+    elif os.path.isabs(filename):
+        return filename if os.path.isfile(filename) else None
+    for folder in dirs:
+        candidate = f"{folder}/{filename}"
+        if os.path.exists(candidate):
+            return candidate if os.path.isfile(candidate) else None
+    return None
+
+
+def _stl_readable(path: str) -> bool:
+    """Whether ``path`` is an STL that Pinocchio's reader (assimp) takes, from its first
+    bytes and its size: binary (84 bytes of header and count, 50 a triangle, at least one)
+    or text (``solid`` after any blanks)."""
+    try:
+        size = os.path.getsize(path)
+        with open(path, "rb") as file:
+            head = file.read(84)
+    except OSError:
+        return False
+    if len(head) == 84:
+        (count,) = struct.unpack("<I", head[80:84])
+        if count > 0 and size == 84 + 50 * count:
+            return True
+    return head.lstrip().lower().startswith(b"solid")
+
+
+def _scale(mesh: ET.Element) -> np.ndarray | None:
+    """A mesh's ``scale`` (1 1 1 when not given), or None when it is not three finite
+    numbers as the URDF parser reads them: that parser then takes 1 1 1 without a word,
+    so such a mesh is left to Pinocchio, as before."""
+    text = mesh.get("scale")
+    if text is None:
+        return np.ones(3)
+    fields = text.split()
+    if len(fields) != 3 or not all(_URDF_NUMBER.fullmatch(f) for f in fields):
+        return None
+    scale = np.array([float(f) for f in fields], dtype=np.float64)
+    return scale if np.isfinite(scale).all() else None
