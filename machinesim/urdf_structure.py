@@ -293,12 +293,24 @@ _SHAPE_SIZES = {"box": {"size": 3}, "cylinder": {"radius": 1, "length": 1},
 
 def _check_shape(element: ET.Element, where: str) -> None:
     """A visual or collision shape with its sizes positive and finite (a mesh with a file
-    name), so that a bad one is a located ModelError rather than a C++ message of the URDF
-    parser on stderr and a link drawn without it."""
+    name, and a scale of three numbers if it has one), so that a bad one is a located
+    ModelError rather than a C++ message of the URDF parser on stderr and a link drawn
+    without it."""
     if element.tag not in _SHAPE_SIZES:
         raise ModelError(f"{where}: <{element.tag}>; expected a box, cylinder, sphere or mesh")
     if element.tag == "mesh" and not element.get("filename"):
         raise ModelError(f"{where}: a <mesh> has no filename=...")
+    if element.tag == "mesh" and element.get("scale") is not None:
+        # the URDF parser drops the whole visual of a scale it cannot read, saying so on
+        # stderr only (or takes 1 1 1), so a mesh in mm scaled "0.001 0.001" was not drawn
+        text = element.get("scale")
+        fields = text.split()
+        for field in fields:
+            _number(field, f"{where} <mesh scale>")
+        if len(fields) != 3:
+            raise ModelError(f"{where}: <mesh scale={text!r}>; expected three numbers, the "
+                             "factor along each axis of the file's coordinates (0.001 0.001 "
+                             "0.001 for a mesh in mm)")
     for attribute, count in _SHAPE_SIZES[element.tag].items():
         text = element.get(attribute)
         fields = [] if text is None else text.split()

@@ -398,6 +398,18 @@ HOSTILE_URDFS = {
                                                   '<cylinder radius="-0.0015"'),
                                  ["link 'tool_tip' <visual>", "<cylinder radius='-0.0015'>",
                                   "expected one length > 0 (m)"]),
+    # the URDF parser dropped the visual of a scale it could not read (a C++ message on
+    # stderr), and read 'nan' as 1 1 1: the machine loaded and was drawn without that mesh
+    "mesh_scale_two_numbers": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
+                                                '<mesh filename="base.stl" scale="1e-3 1e-3"/>'),
+                               ["link 'base' <visual>", "<mesh scale='1e-3 1e-3'>",
+                                "expected three numbers", "0.001 0.001 0.001 for a mesh in mm"]),
+    "mesh_scale_not_finite": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
+                                               '<mesh filename="base.stl" scale="nan 1 1"/>'),
+                              ["link 'base' <visual> <mesh scale>", "'nan'; expected a finite"]),
+    "mesh_scale_commas": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
+                                           '<mesh filename="base.stl" scale="1,1,1"/>'),
+                          ["link 'base' <visual> <mesh scale>", "'1,1,1' is not a number"]),
     "visual_unknown_shape": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
                                               '<cone size="1.2 1.2 0.15"/>'),
                              ["link 'base' <visual>", "<cone>",

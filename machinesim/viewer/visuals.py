@@ -134,8 +134,8 @@ def _stl_readable(path: str) -> bool:
 
 def _scale(mesh: ET.Element) -> np.ndarray | None:
     """A mesh's ``scale`` (1 1 1 when not given), or None when it is not three finite
-    numbers as the URDF parser reads them: that parser then takes 1 1 1 without a word,
-    so such a mesh is left to Pinocchio, as before."""
+    numbers as the URDF parser reads them (which a machine's load refuses): that parser
+    drops such a visual, so it is left to Pinocchio, as before."""
     text = mesh.get("scale")
     if text is None:
         return np.ones(3)
