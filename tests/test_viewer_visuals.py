@@ -12,6 +12,7 @@ import umsgpack
 
 import machinesim.viewer.visuals as visuals
 from machinesim import load_machine
+from machinesim.exceptions import InputError
 from machinesim.viewer import machine_scene
 from machinesim.viewer.scene import Scene
 
@@ -151,3 +152,33 @@ def test_loading_a_machine_reads_no_mesh_file(tmp_path):
     machine, plain = load_machine(path), load_machine("grooving_4axis")
     q = np.random.default_rng(3).uniform(plain.lower, plain.upper, (50, len(plain.axes)))
     assert np.array_equal(machine.tool_pose(q), plain.tool_pose(q))
+
+
+def test_a_page_too_long_for_its_stl_visuals_says_so_not_to_show_fewer_triangles(
+        tmp_path, monkeypatch):
+    # five 100 MB STLs made a 666,681,453-character script, refused as "show fewer triangles
+    # (--max-triangles at least 1.2 times lower)", which budgets the part's map, not them
+    import machinesim.viewer.scene as scene_module
+
+    (tmp_path / "mill/urdf/meshes").mkdir(parents=True)
+    (tmp_path / "mill/urdf/meshes/base.stl").write_bytes(binary_stl(2000))  # 100,084 bytes
+    path = meshed_machine(tmp_path, {"base": mesh_visual("meshes/base.stl"),
+                                     "table": mesh_visual("meshes/base.stl")})
+    scene = machine_scene(load_machine(path))
+    assert scene.mesh_file_bytes == 2 * 100_084
+    files = 4 * -(-2 * 100_084 // 3)  # as base64: 266,892 characters
+    monkeypatch.setattr(scene_module, "SCRIPT_CHARS_MOST", files)
+    with pytest.raises(InputError, match=re.escape(
+            "it would open blank; the machine's STL visuals alone are 0.2 MB (266,892 "
+            "characters), which no --max-triangles makes smaller: give it STL files of at "
+            "most 0.2 MB in all (fewer triangles, decimated in a mesh tool)")):
+        scene.to_html()
+    monkeypatch.setattr(scene_module, "SCRIPT_CHARS_MOST", 536_870_888)
+    text = scene.to_html()
+    script = len(text[text.rindex("<script>\n") + len("<script>\n"):text.rindex("</script>")])
+    rest = script - files  # the commands but the files: lowering the budget shrinks these
+    monkeypatch.setattr(scene_module, "SCRIPT_CHARS_MOST", files + rest // 2)
+    with pytest.raises(InputError, match=re.escape(
+            f"show fewer triangles (--max-triangles at least {rest / (rest // 2):.2g} times "
+            "lower)")):
+        scene.to_html()

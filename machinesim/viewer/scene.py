@@ -66,6 +66,9 @@ class Scene:
         self.legends: list[Legend] = []
         self.notes: list[str] = []
         self.warnings: list[str] = []  # shown in the overlay and printed by the command
+        #: Bytes of the mesh files sent as they are (a machine's STL visuals,
+        #: `machinesim.viewer.visuals`): no triangle budget makes them smaller.
+        self.mesh_file_bytes = 0
         self.vis = meshcat.Visualizer(window=_Recorder(self._frames))
         self.vis["/Background"].set_property("top_color", list(BACKGROUND[0]))
         self.vis["/Background"].set_property("bottom_color", list(BACKGROUND[1]))
@@ -156,11 +159,20 @@ class Scene:
             "  viewer.handle_command_bytearray(bytes);\n"
             "}\n")
         if len(commands) > SCRIPT_CHARS_MOST:
-            raise InputError(
-                f"the page's scene would be a script of {len(commands):,} characters, beyond "
-                f"the {SCRIPT_CHARS_MOST:,} a browser's JavaScript engine reads (V8's "
-                "String::kMaxLength): it would open blank; show fewer triangles (--max-"
-                f"triangles at least {len(commands) / SCRIPT_CHARS_MOST:.2g} times lower)")
+            too_long = (f"the page's scene would be a script of {len(commands):,} characters, "
+                        f"beyond the {SCRIPT_CHARS_MOST:,} a browser's JavaScript engine "
+                        "reads (V8's String::kMaxLength): it would open blank; ")
+            files = 4 * -(-self.mesh_file_bytes // 3)  # their characters, as base64
+            if files >= SCRIPT_CHARS_MOST:
+                raise InputError(
+                    f"{too_long}the machine's STL visuals alone are "
+                    f"{self.mesh_file_bytes / 2**20:,.1f} MB ({files:,} characters), which "
+                    f"no --max-triangles makes smaller: give it STL files of at most "
+                    f"{3 * SCRIPT_CHARS_MOST / 4 / 2**20:,.1f} MB in all (fewer triangles, "
+                    "decimated in a mesh tool)")
+            raise InputError(f"{too_long}show fewer triangles (--max-triangles at least "
+                             f"{(len(commands) - files) / (SCRIPT_CHARS_MOST - files):.2g} "
+                             "times lower)")
         script = (f"<script>{VIEWER_JS.read_text(encoding='utf-8')}</script>\n"
                   f"<script>\n{commands}</script>")
         return page(self.title, overlay_html(self), script)

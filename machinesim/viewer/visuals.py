@@ -60,6 +60,7 @@ def machine_visuals(machine, scene: Scene) -> pin.GeometryModel:
                 left_out.append(f"{link.get('name')} ({mesh.get('filename')})")
                 continue
             deferred[id(visual)] = (found, _scale(mesh))
+            scene.mesh_file_bytes += os.path.getsize(found)
             geometry = visual.find("geometry")
             geometry.remove(mesh)
             ET.SubElement(geometry, "box", size="1 1 1")
