@@ -101,3 +101,16 @@ def test_a_long_run_after_its_f_reads_alike_in_both_paths():
     fast, slow = parse_program(text), parse_program(text, fast=False)
     assert fast == slow
     assert all(math.isclose(f, 100e-3 / 60.0, rel_tol=0.0) for f in fast.feeds[1:])
+
+
+def test_a_cycle_block_with_k0_drills_nothing_so_needs_no_f():
+    # FANUC's K0 keeps the hole data and drills no hole: the block has no feed move, so no
+    # F need be in force there (it had been refused as 'G81 feeds with no F in force'); the
+    # next block, which drills, is where F is needed
+    program = parse_program(START + "G81 X1. Z-1. R1. K0\nX2. F100.\nG80\nM30\n")
+    linear = program.kinds == KIND_LINEAR
+    assert program.lines[linear].tolist() == [4]  # the one feed move: line 4's hole
+    assert program.feeds[linear][0] == pytest.approx(100.0 / 60e3, rel=1e-15)
+    assert not (program.lines == 3).any()  # K0's block added no move
+    error = _refusal(START + "G81 X1. Z-1. R1. K0\nX2.\nG80\nM30\n")
+    assert (error.line, error.key) == (4, "X2.")

@@ -100,7 +100,8 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
     except NCProgramError as error:
         word = next((single[k] for k in "ZRQIK" if k in single), cycle_word)
         raise block.fail(str(error), word) from None
-    block.check_feed(state.cycle, cycle_word)
+    if repeats:  # K0 keeps the cycle's data and drills nothing: no feed move to refuse
+        block.check_feed(state.cycle, cycle_word)
     block.reserve(repeats * (len(steps) + 1), cycle_word)
     plane = [w for w in axes if w.letter in "XY"]
     for _ in range(repeats):
