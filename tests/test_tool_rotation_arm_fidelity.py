@@ -131,9 +131,18 @@ def test_a_block_thinner_than_the_ramps_deepest_cut_is_refused():
     message = str(info.value)
     assert "deepest cut 0.002036 m" in message and "got 0.001 m" in message
     assert "out through the block's bottom" in message
-    for bad in (math.nan, -1.0, "3"):
-        with pytest.raises(InputError, match="thickness height"):
+    with pytest.raises(InputError, match="thickness height above .* got -1.0 m"):
+        CalibrationPlan(height=-1.0)
+    # no number is no thickness, not one the ramps cut through (nan and '3' had been told
+    # 'the ramps would cut out through the block's bottom'), and True no 1 m block (it had
+    # made the stock 'block:...x1000')
+    for bad in (math.nan, math.inf, "3", "3mm", True):
+        with pytest.raises(InputError) as info:
             CalibrationPlan(height=bad)
+        assert info.value.key == "height"
+        assert str(info.value) == (f"key 'height': Expected height, the calibration block's "
+                                   f"thickness, as a finite number of m (default None: "
+                                   f"0.003036 m), got {bad!r}"), str(info.value)
     assert CalibrationPlan(height=2.1 * MM).stock.split("@")[0].endswith("x2.1")
 
 

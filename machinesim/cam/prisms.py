@@ -146,8 +146,12 @@ class CalibrationPlan:
         if self.height is None:
             object.__setattr__(self, "height", self.depth + FLOOR_M)
         height = self.height
-        if not (isinstance(height, int | float) and math.isfinite(height)
-                and height > self.depth):
+        if isinstance(height, bool) or not (isinstance(height, int | float)
+                                            and math.isfinite(height)):
+            raise InputError(f"Expected height, the calibration block's thickness, as a finite "
+                             f"number of m (default None: {self.depth + FLOOR_M:g} m), got "
+                             f"{height!r}", key="height")
+        if not height > self.depth:
             raise InputError(
                 f"Expected the calibration block's thickness height above the ramps' deepest "
                 f"cut {self.depth:g} m (the ramps end {self.search:g} m below its top, and an "
