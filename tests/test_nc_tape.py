@@ -131,3 +131,23 @@ def test_a_move_without_z_after_a_length_change_without_z_is_refused():
     assert program.targets[2, 2] == pytest.approx(0.060)
     # before Z is known there is no height to be off: read as before
     assert len(parse_program("G90 G21\nG43 H1\nG00 X10. Y5.\nZ2.\nM30\n", tools=TOOLS)) == 2
+
+
+@pytest.mark.parametrize("text, end, at", [
+    # the subprogram after the main program's closing % (had been 'not in this file')
+    ("O0001\nG90 G21\nM98 P1000\nM30\n%\nO1000\nG0 X1.\nM99\n%\n", 5, 6),
+    # each program between its own pair of %: the second pair is not read either
+    ("%\nO0001\nG90 G21\nM98 P1000\nM30\n%\n%\n:1000\nG0 X1.\nM99\n%\n", 6, 8),
+])
+def test_a_subprogram_after_the_closing_percent_is_named_there(text, end, at):
+    with pytest.raises(NCProgramError) as caught:
+        parse_program(text, "two.nc")
+    message = str(caught.value)
+    assert caught.value.line == (4 if text.startswith("%") else 3)
+    assert f"O1000, which is at line {at}, after the '%' on line {end}" in message
+    assert "not in this file" not in message
+    # with the % between them removed both programs are read, and the call runs O1000
+    lines = text.splitlines()
+    joined = "\n".join(lines[:end - 1] + [x for x in lines[end - 1:-1] if x != "%"] + ["%"])
+    program = parse_program(joined, "one.nc")
+    assert len(program) == 1 and program.targets[0, 0] == pytest.approx(1e-3)

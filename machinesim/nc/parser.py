@@ -28,7 +28,7 @@ from machinesim.nc.reader import FAST_MIN_LINES as FAST_MIN_LINES  # defined her
 from machinesim.nc.reader import MAX_LISTED as MAX_LISTED
 from machinesim.nc.reader import MAX_PROBLEMS as MAX_PROBLEMS
 from machinesim.nc.reader import Reader
-from machinesim.nc.tape import end_of_program, without_leader
+from machinesim.nc.tape import end_of_program, programs_after_end, without_leader
 from machinesim.nc.tooltable import tool_table
 from machinesim.nc.words import (
     INCREMENT_INCH_M,
@@ -165,10 +165,13 @@ def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, t
     data = data.removeprefix(UTF8_BOM)  # Windows editors start UTF-8 files with one
     if data.rstrip().endswith(DOS_EOF):  # DOS editors and DNC senders end files with one
         data = data.rstrip().rstrip(DOS_EOF)
-    data, after_end = end_of_program(without_leader(data))
+    whole = without_leader(data)
+    data, after_end = end_of_program(whole)
     reader = Reader(data, errors, source, offsets, integer_input, tool_table(tools),
                      tolerance, fast, axis_values(reference or {}, source=source))
     reader.after_end = after_end
+    if after_end is not None:
+        reader.end_mark, reader.unread_programs = programs_after_end(whole, data)
     return reader.read()
 
 

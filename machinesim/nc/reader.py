@@ -209,6 +209,8 @@ class Reader:
         self.unit_words: dict[str, int] = {}  # G20/G21 -> first line
         self.cache: dict[int, list[Word] | None] = {}
         self.after_end: int | None = None  # the first line of text after the closing %
+        self.end_mark: int | None = None  # the line of that %, when text follows it
+        self.unread_programs: dict[int, int] = {}  # O number after that % -> its line
         n = self.scan.simple.size
         # the end of the run of simple lines each line is in (itself when not simple)
         index = np.where(self.scan.simple, n, np.arange(n))
@@ -441,6 +443,12 @@ class Reader:
             where = ("the main program itself, which M98 cannot call (a subprogram starts "
                      "with its O number after M02/M30)" if number == self.state.number
                      else "which is not in this file")
+            if number in self.unread_programs and number != self.state.number:
+                where = (f"which is at line {self.unread_programs[number]}, after the '%' on "
+                         f"line {self.end_mark} that ends the program: a FANUC control stops "
+                         "reading at that '%' and so does the reader; remove the '%' lines "
+                         f"between the M30 and O{number:04d}, so that both programs stand "
+                         "before the file's closing '%'")
             # a P of 5 to 8 digits: say how it was read, as O12345 may have been meant
             what = (f"M98 {word.key} calls O{number:04d} ({call.repeats} x: FANUC's "
                     "P<repeats><4-digit program number>)" if len(word.text) > 4

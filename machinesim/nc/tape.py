@@ -16,7 +16,12 @@ and the control ignores it. Posts and DNC senders put a title there (``% TITLE``
 
 from __future__ import annotations
 
-__all__ = ["end_of_program", "without_leader"]
+import re
+
+__all__ = ["end_of_program", "programs_after_end", "without_leader"]
+
+#: A program number at a line's start (after white space): O, or ':' as ISO tapes write it.
+_PROGRAM_NUMBER = re.compile(rb"^[ \t]*[Oo:][ \t]*([0-9]+)")
 
 
 def without_leader(data: bytes) -> bytes:
@@ -56,3 +61,21 @@ def end_of_program(data: bytes) -> tuple[bytes, int | None]:
         return data, None
     after = next((i + 1 for i in range(end + 1, len(lines)) if lines[i].strip()), None)
     return data[:sum(len(line) + 1 for line in lines[:end + 1])], after
+
+
+def programs_after_end(data: bytes, kept: bytes) -> tuple[int, dict[int, int]]:
+    """The line (1-based) of the % that ends the program (``kept`` being what
+    `end_of_program` kept of ``data``), and the program numbers that start a line after it,
+    each with its first line: programs a FANUC control does not read, named when the
+    program calls one of them. A main program and its subprograms are loaded from one file
+    by reading it up to its closing % (CNC Concepts, "Controlling when the machine stops
+    reading a program", https://www.cncci.com/post/controlling-when-the-machine-stops-reading-a-program:
+    with the control set to stop at the %, the programs before it are all loaded), and
+    that % ends the file (B-63524EN/01 above): one after it is not loaded."""
+    mark = kept.count(b"\n") + (0 if kept.endswith(b"\n") else 1)
+    numbers: dict[int, int] = {}
+    for i, line in enumerate(data[len(kept):].split(b"\n")):
+        found = _PROGRAM_NUMBER.match(line)
+        if found:
+            numbers.setdefault(int(found.group(1)), mark + 1 + i)
+    return mark, numbers
