@@ -43,8 +43,8 @@ def test_a_program_read_from_a_name_with_an_esc_is_named_escaped(tmp_path, capsy
     name.write_text("G90 G21\nG01 X1.\nM30\n")  # no feed: refused at line 2
     code, err = _err(["cut", name, *CUT, "--out", tmp_path / "p.ply"], capsys)
     assert code == 2
-    assert err.startswith(f"machinesim: error: {tmp_path}/y\\x1b]0;title\\x07.nc, line 2, "
-                          "key 'F': ")
+    assert err.startswith(f"machinesim: error: {tmp_path}/y\\x1b]0;title\\x07.nc, line 2, ")
+    assert "key 'G01': G01 feeds with no F in force" in err
     assert "\x1b" not in err and "\x07" not in err and err.count("\n") == 1
 
 
