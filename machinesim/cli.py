@@ -50,6 +50,7 @@ from machinesim.exceptions import (
     InputError,
     MachineSimError,
     printable,
+    say,
     warnings_as_lines,
 )
 from machinesim.report import check_units
@@ -200,9 +201,7 @@ def _interrupted(args) -> str:
 
 
 def _fail(message: str, status: int) -> int:
-    # a file name quoted in the message may hold control bytes (an ESC sequence): escaped,
-    # the lines the message itself breaks kept
-    print(f"machinesim: {printable(message, keep=chr(10))}", file=sys.stderr)
+    say("machinesim", message)
     return status
 
 

@@ -37,6 +37,14 @@ def printable(text: str, keep: str = "") -> str:
                    else c.encode("unicode_escape").decode("ascii") for c in text)
 
 
+def say(program: str, message: str) -> None:
+    """Write ``program: message`` to stderr as one of machinesim's commands ends (an error,
+    an interruption): what the message quotes of a file's name or a key goes through
+    `printable`, the lines the message itself breaks kept. Every command line prints its
+    last line here (``machinesim``, ``python -m machinesim.campaign.cli``, scenarios)."""
+    print(f"{program}: {printable(message, keep=chr(10))}", file=sys.stderr)
+
+
 class MachineSimError(Exception):
     """Root of every error machinesim raises on purpose."""
 

@@ -57,7 +57,7 @@ def scenario_status(report, args, name: str | None = None) -> int:
     """
     from machinesim.scenario_start import loaded
 
-    from machinesim.exceptions import MachineSimError, printable
+    from machinesim.exceptions import MachineSimError, say
 
     loaded()
     name = name or Path(sys.argv[0]).stem or "scenario"
@@ -73,23 +73,22 @@ def scenario_status(report, args, name: str | None = None) -> int:
                 staged.commit()
             stdout.flush()  # the last buffered lines meet a closed pipe here, if at all
             if stdout.closed_early:
-                print(f"{name}: stdout was closed early (a pipe's reader that stopped "
-                      f"reading); {_interrupted(out, staged)}", file=sys.stderr)
+                say(name, "stdout was closed early (a pipe's reader that stopped "
+                    f"reading); {_interrupted(out, staged)}")
     except MachineSimError as error:
-        print(f"{name}: error: {printable(error, keep=chr(10))}", file=sys.stderr)
+        say(name, f"error: {error}")
         return 2
     except OSError as error:  # a write that failed on the way (disk full, folder removed)
         where = f"{_as_reported(error.filename, out, staged)}: " if error.filename else ""
         left = "" if staged is None else f"; {_interrupted(out, staged)}"
-        said = printable(f"{where}{error.strerror or error}{left}", keep=chr(10))
-        print(f"{name}: error: {said}", file=sys.stderr)
+        say(name, f"error: {where}{error.strerror or error}{left}")
         return 2
     except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (`machinesim._interrupts.Terminated`)
         how, status = stopped(stop)
-        print(f"{name}: {how}; {_interrupted(out, staged)}", file=sys.stderr)
+        say(name, f"{how}; {_interrupted(out, staged)}")
         return status
     except MemoryError:
-        print(f"{name}: error: out of memory: {OUT_OF_MEMORY}", file=sys.stderr)
+        say(name, f"error: out of memory: {OUT_OF_MEMORY}")
         return 1
     finally:
         if staged is not None:

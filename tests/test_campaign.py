@@ -1246,3 +1246,35 @@ def test_summary_md_gives_each_identification_errors_unit():
     assert {name: row["unit"] for name, row in shown.items()} == \
         {"location.C.EX0C": "m", "location.C.EA0C": "rad"}
     assert float(shown["location.C.EA0C"]["error mean"]) == pytest.approx(-1e-8)
+
+
+def test_the_campaign_command_alone_escapes_its_last_line_as_machinesim_does(tmp_path, capsys,
+                                                                            monkeypatch):
+    """``python -m machinesim.campaign.cli`` printed its error and interrupted lines itself,
+    a folder's ESC sequence raw (red text from there on), where ``machinesim campaign`` escapes them
+    (`machinesim.exceptions.say`, the one path both now take)."""
+    import shutil
+
+    from machinesim.campaign.cli import main as campaign_main
+
+    out = tmp_path / "c\x1b[31mx"
+    ran = _interrupt_after_one_trial(monkeypatch)
+    command = ["tool_rotation_arm", "--trials", "2", "--workers", "0", "--identify-only",
+               "--quiet", "--out", str(out)]
+    assert campaign_main(command) == 130
+    alone = capsys.readouterr().err
+    shutil.rmtree(out)
+    ran.clear()
+    assert cli_main(["campaign", *command]) == 130
+    together = capsys.readouterr().err
+    assert "\x1b" not in alone and alone.count("\n") == 1
+    assert "c\\x1b[31mx" in alone and "interrupted; kept the 1 finished trial" in alone
+    assert alone.replace("machinesim campaign: ", "machinesim: ", 1) == together
+
+    def refused(args):
+        raise MachineSimError(f"{out}.urdf: not a URDF file")  # a path in a message's text
+
+    monkeypatch.setattr("machinesim.campaign.cli.run_campaign", refused)
+    assert campaign_main(command) == 2
+    assert capsys.readouterr().err == (f"machinesim campaign: error: "
+                                       f"{tmp_path}/c\\x1b[31mx.urdf: not a URDF file\n")

@@ -14,7 +14,7 @@ from machinesim._arguments import ArgumentParser
 from machinesim._interrupts import ctrl_c_remembered, stopped
 from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
 from machinesim.campaign.trials import MAX_TRIALS, PROCEDURES, trials_refused
-from machinesim.exceptions import InputError, MachineSimError, warnings_as_lines
+from machinesim.exceptions import InputError, MachineSimError, printable, say, warnings_as_lines
 
 __all__ = ["add_campaign_parser", "interrupted", "main", "run_campaign"]
 
@@ -119,21 +119,22 @@ def run_campaign(args) -> int:
     from machinesim.campaign.summary import failures, notes
 
     failed, total = int(dataset["failed"].sum()), dataset.sizes["trial"]
-    print(f"campaign: {total} trial{'s' * (total != 1)} ({failed} failed) in {args.out}: "
+    print(f"campaign: {total} trial{'s' * (total != 1)} ({failed} failed) in "
+          f"{printable(args.out)}: "
           "campaign.nc, summary.md, summary.json")
     noted = int((dataset["notes_count"].values > 0).sum())
     if noted:  # a fit that misfit in 30 of 1000 trials said nothing
         first = notes(dataset)[0]
-        print(f"campaign: {noted} trial{'s' * (noted != 1)} gave notes of the "
-              f"identification; the most common ({len(first['trials'])} of them): "
-              f"{first['note']} (summary.md lists them)", file=sys.stderr)
+        say("campaign", f"{noted} trial{'s' * (noted != 1)} gave notes of the "
+            f"identification; the most common ({len(first['trials'])} of them): "
+            f"{first['note']} (summary.md lists them)")
     if not failed:
         return 0
     first = failures(dataset)[0]
     which = f"{failed} trial{'s' * (failed != 1)}"
-    print(f"campaign: {'every trial' if failed == total else which} "
-          f"failed; the most common message ({len(first['trials'])} of them): "
-          f"{first['message']} (summary.md lists every message)", file=sys.stderr)
+    say("campaign", f"{'every trial' if failed == total else which} "
+        f"failed; the most common message ({len(first['trials'])} of them): "
+        f"{first['message']} (summary.md lists every message)")
     return 1 if failed == total else 0
 
 
@@ -172,11 +173,11 @@ def main(argv=None) -> int:
         with ctrl_c_remembered(), warnings_as_lines():
             return run_campaign(args)
     except MachineSimError as error:
-        print(f"machinesim campaign: error: {error}", file=sys.stderr)
+        say("machinesim campaign", f"error: {error}")
         return 2
     except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM within `ctrl_c_remembered`
         how, status = stopped(stop)
-        print(f"machinesim campaign: {how}; {interrupted(args.out)}", file=sys.stderr)
+        say("machinesim campaign", f"{how}; {interrupted(args.out)}")
         return status
 
 
