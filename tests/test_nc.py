@@ -304,7 +304,7 @@ REFUSALS = [
     ("G00 X0 U1", 1, 8, "U1", "unknown word letter 'U'"),
     ("G00 X0 I5", 1, 8, "I5", "word I is only read with G02/G03"),
     ("G00 X0\nM99", 2, 1, "M99", "M99 in the main program would jump back"),
-    ("G00 Z0\nG43 H1 Z5.", 2, 5, "H1", "G43 H1 needs the tool length"),
+    ("G00 Z0\nG43 H1 Z5.", 2, 5, "H1", "G43 H1 needs tool 1's length"),
     ("G00 X0\nG91 G53 X0", 2, 5, "G53", "machine coordinates, which are absolute"),
     # a bare G28 (26 in one public set of Haas-style programs) is read differently by
     # Haas (every axis home) and FANUC (none): the message had said neither

@@ -4,6 +4,7 @@ subprograms, integer input, and every refusal at once; expected values worked ou
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -302,7 +303,7 @@ def test_tool_words_are_checked_against_the_table():
     assert (info.value.line, info.value.key) == (2, "H7")
     with pytest.raises(NCProgramError, match="T9: tool 9 is not in the tool table"):
         parse_program("T9 M06", tools=TOOLS)
-    with pytest.raises(NCProgramError, match="needs the tool length: give a tool table"):
+    with pytest.raises(NCProgramError, match="needs tool 1's length, and no tool table"):
         parse_program("G43 H1")
     program = parse_program("T9 M06\nD4\nG43 H0 G00 Z1.")  # no table: T D listed, H0 = 0
     assert dict(program.states) == {"T9": 1, "D4": 2}
@@ -1058,3 +1059,20 @@ def test_a_latin1_byte_outside_comments_is_named_as_not_utf8(tmp_path):
     with pytest.raises(NCProgramError, match="a byte that is not UTF-8") as info:
         read_program(path)
     assert (info.value.line, info.value.column) == (1, 8)
+
+
+def test_a_length_offset_without_a_tool_table_says_what_table_to_write(tmp_path):
+    # 'G43 H3 needs the tool length: give a tool table (..., CLI --tools)' left a new user
+    # to find the file's format; the table the message gives, pasted, reads the program
+    text = "G90 G21\nG00 Z0\nG43 H3 Z5.\nM30\n"
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text)
+    message = str(info.value)
+    assert (info.value.line, info.value.key) == (3, "H3")
+    pasted = re.findall(r"'(\[tool\.\d+\]|length_mm = [0-9.]+)'", message)
+    assert pasted == ["[tool.3]", "length_mm = 0.0"]
+    assert "--tools tools.toml" in message and "docs/nc.md, 'Tool table'" in message
+    table = tmp_path / "tools.toml"
+    table.write_text("\n".join(pasted) + "\n")
+    program = parse_program(text, tools=str(table))
+    assert program.targets[-1, 2] == pytest.approx(5 * MM, abs=EXACT_M)  # length 0

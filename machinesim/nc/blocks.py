@@ -283,8 +283,13 @@ class Block:
                             length[1])
         if state.length_mode != "G49" and state.h != 0:
             if reader.tools is None:
-                message = (f"{state.length_mode} H{state.h} needs the tool length: give a tool "
-                           "table (read_program(..., tools=...), CLI --tools)")
+                message = (f"{state.length_mode} H{state.h} needs tool {state.h}'s length, "
+                           "and no tool table was given: write one, a TOML file such as "
+                           f"tools.toml holding the two lines '[tool.{state.h}]' and "
+                           "'length_mm = 0.0' (the tool's length beyond the machine model's "
+                           "tool: 0 for the tool the model carries; docs/nc.md, 'Tool table'), "
+                           "and give it: machinesim cut ... --tools tools.toml, or "
+                           "read_program(..., tools='tools.toml')")
                 state.h = 0
                 raise self.fail(message, self.tool_word())
             reader.tools.length(state.h)  # refuses a tool the table lacks
