@@ -48,6 +48,7 @@ from machinesim.urdf_structure import (
     MAX_URDF_BYTES,
     REQUIRED_FRAMES,
     _at,
+    _in_joint_at,
     _number,
     _vector,
     check_tree,
@@ -192,6 +193,7 @@ def read_axes(root: ET.Element, path: Path,
         return names
 
     tool_side, wp_side = ancestors("tool_tip"), ancestors("workpiece")
+    element_at = _in_joint_at(root, path, lines)
     axes = []
     for index, joint in enumerate(root.findall("joint")):
         kind = joint.get("type")
@@ -217,15 +219,17 @@ def read_axes(root: ET.Element, path: Path,
         element = joint.find("axis")
         if element is None:
             raise ModelError(f"{where}: no <axis xyz=...>; a machine axis states its direction")
-        axis = _vector(element, "xyz", f"{where} <axis>")
+        joint_at = _at(path, lines, "joint", index)
+        at_axis = f"{element_at.get(id(element), joint_at)}: joint {name!r}"  # its own line
+        axis = _vector(element, "xyz", f"{at_axis} <axis>")
         k = int(np.argmax(np.abs(axis)))
         if np.count_nonzero(axis) != 1 or abs(abs(axis[k]) - 1.0) > 0:
-            raise ModelError(f"{where}: axis {axis.tolist()} must be a unit machine direction: "
+            raise ModelError(f"{at_axis}: axis {axis.tolist()} must be a unit machine direction: "
                              "one of 1 0 0, 0 1 0, 0 0 1, either sign, each other number "
                              "exactly 0 (an axis tilted off them is not modelled; CAD "
                              "round-off such as 6.1e-17 is written 0)")
         if kind == "prismatic" and "XYZ"[k] != name:
-            raise ModelError(f"{where}: <axis xyz=\"{element.get('xyz')}\"> moves along "
+            raise ModelError(f"{at_axis}: <axis xyz=\"{element.get('xyz')}\"> moves along "
                              f"{'XYZ'[k]}; the {name} axis moves along {name}"
                              f"{_turned_frame_hint(joint)}")
         if name in tool_side and name in wp_side:
@@ -238,7 +242,7 @@ def read_axes(root: ET.Element, path: Path,
         expected_sign = 1.0 if side > 0 else -1.0
         if np.sign(axis[k]) != expected_sign:
             raise ModelError(
-                f"{where}: a {'tool' if side > 0 else 'workpiece'}-side axis must point "
+                f"{at_axis}: a {'tool' if side > 0 else 'workpiece'}-side axis must point "
                 f"{'+' if side > 0 else '-'}{'XYZ'[k]} so that positive commands move the tool "
                 f"positively relative to the workpiece (ISO 841){_turned_frame_hint(joint)}")
         if name not in resolution:

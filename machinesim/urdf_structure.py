@@ -57,6 +57,37 @@ def _at(path, lines: dict[str, list[int]] | None, tag: str, index: int) -> str:
     return f"{path}, line {found[index]}" if index < len(found) else f"{path}"
 
 
+def _in_joint_at(root: ET.Element, path, lines: dict[str, list[int]] | None
+                 ) -> dict[int, str]:
+    """``path`` and the line of each element in a joint (its ``<origin>``, ``<axis>`` ...),
+    by ``id`` of the element, when ``lines`` (`read_urdf`'s ``"in_joint"``) has them all:
+    a bad ``<axis>`` or ``<origin>`` is named at its own line, not its joint's."""
+    found = (lines or {}).get("in_joint", ())
+    children = [child for joint in root.findall("joint") for child in joint]
+    if len(children) != len(found):
+        return {}
+    return {id(child): f"{path}, line {line}"
+            for child, line in zip(children, found, strict=True)}
+
+
+def _link_origin_at(root: ET.Element, path, lines: dict[str, list[int]] | None,
+                    origin: ET.Element) -> str:
+    """Where ``origin`` (not a joint's) is, for a message: ``path``, its line and its link
+    (a visual's, a collision's or the inertial's origin) when `read_urdf`'s ``"in_link"``
+    has its line; else ``path`` alone (an origin outside the links)."""
+    found = (lines or {}).get("in_link", ())
+    count = 0
+    for link in root.findall("link"):
+        for child in link:
+            for element in (child, *child):
+                if element is origin:
+                    at = f"{path}, line {found[count]}" if count < len(found) else f"{path}"
+                    inside = "" if element is child else f" <{child.tag}>"
+                    return f"{at}: link {link.get('name')!r}{inside} <origin>"
+                count += 1
+    return f"{path}: an <origin>"
+
+
 def _number(text: str, where: str) -> float:
     """A finite float from URDF attribute text, or ModelError naming ``where`` and the text."""
     try:
@@ -131,6 +162,7 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
     parent_link: dict[str, str] = {}  # joint -> its parent link
     in_joint = (lines or {}).get("in_joint", [])
     children = 0  # the joints' children before this joint's, for their lines
+    element_at = _in_joint_at(root, path, lines)
     for index, joint in enumerate(root.findall("joint")):
         name = joint.get("name")
         at = _at(path, lines, "joint", index)
@@ -161,10 +193,11 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
         parent_link[name] = ends["parent"]
         origin = joint.find("origin")
         if origin is not None:
-            xyz = _vector(origin, "xyz", f"{where} <origin>", "0 0 0")
-            _vector(origin, "rpy", f"{where} <origin>", "0 0 0")
+            named = f"{element_at.get(id(origin), at)}: joint {name!r}"
+            xyz = _vector(origin, "xyz", f"{named} <origin>", "0 0 0")
+            _vector(origin, "rpy", f"{named} <origin>", "0 0 0")
             if np.abs(xyz).max() > MAX_PLACEMENT_M:
-                raise ModelError(f"{where} <origin xyz={origin.get('xyz')!r}> (m); expected "
+                raise ModelError(f"{named} <origin xyz={origin.get('xyz')!r}> (m); expected "
                                  f"each coordinate within +-{MAX_PLACEMENT_M:g} m of the parent "
                                  "link (URDF lengths are metres: 100 mm is 0.1)")
         limit = joint.find("limit")
@@ -194,8 +227,14 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
     for element in root.iter("origin"):
         if id(element) in checked:
             continue
-        _vector(element, "xyz", f"{path}: an <origin>", "0 0 0")
-        _vector(element, "rpy", f"{path}: an <origin>", "0 0 0")
+        try:
+            _vector(element, "xyz", f"{path}: an <origin>", "0 0 0")
+            _vector(element, "rpy", f"{path}: an <origin>", "0 0 0")
+        except ModelError:  # refused again naming its line and link, looked up only now
+            where = _link_origin_at(root, path, lines, element)
+            _vector(element, "xyz", where, "0 0 0")
+            _vector(element, "rpy", where, "0 0 0")
+            raise
     for link in root.findall("link"):
         for kind in ("visual", "collision"):
             for element in link.findall(f"{kind}/geometry/*"):
