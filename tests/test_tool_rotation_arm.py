@@ -439,6 +439,28 @@ def test_a_coarse_section_whose_land_is_off_the_part_names_the_ramp():
     assert "Expected land over" not in message
 
 
+def test_a_pattern_section_whose_land_is_off_the_part_names_the_pattern():
+    """A part narrower than the pattern's block (y from 1.2 to 1.8 mm, the block 1 to 2 mm):
+    the section across the pattern (y from 1.03 to 1.97 mm) has no sample on the part in its
+    first and last 0.15 mm of land, and the refusal was level_on_land's bare 'Expected land
+    over the first and last 0.00015 m of the section, got 0 samples there' (key land),
+    naming neither the pattern nor the part."""
+    pattern = PrismPattern()
+    x0, x1 = pattern.origin[0], pattern.origin[0] + pattern.length
+    a, b = pattern.origin[1] + 0.2 * MM, pattern.origin[1] + 0.8 * MM
+    part = (np.array([(x0, a, 0.0), (x1, a, 0.0), (x1, b, 0.0), (x0, b, 0.0)]),
+            np.array([(0, 1, 2), (0, 2, 3)]))
+    with pytest.raises(InputError) as info:
+        measure_pattern(part, pattern, Microscope(noise=False))
+    assert info.value.key == "part"
+    message = str(info.value)
+    assert ("prism pattern 0 to 20 deg (21 grooves): the section across it at x = 0.0015 m, "
+            "from y = 0.00103 to 0.00197 m") in message
+    assert "reads 0 samples on the part in its first and last 0.00015 m" in message
+    assert f"on pattern.stock ({pattern.stock})" in message
+    assert "Expected land over" not in message
+
+
 def scenario(*args, cwd=ROOT):
     return subprocess.run([sys.executable, str(ROOT / "scenarios" / "tool_rotation_arm.py"),
                            *args], capture_output=True, text=True, check=False, cwd=cwd)

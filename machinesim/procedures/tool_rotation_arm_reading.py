@@ -290,17 +290,12 @@ def _section(index, microscope, x: float, y0: float, y1: float, spacing, land: f
     0.8 um below it, the 0.1 x depth that marks the groove at the first station: land read
     as groove. A section with no land on the part is refused naming ``where`` (the ramp)."""
     prof = microscope.profile(index, (x, y0), (x, y1), spacing=spacing)
-    found = np.count_nonzero(_land_samples(prof.s, prof.z, land))
-    if found < LAND_SAMPLES:
-        raise InputError(
-            f"{where}: the section across it at x = {x:g} m, from y = {y0:g} to {y1:g} m (its "
-            f"search window about the programmed edge), reads {found} samples on the part in "
-            f"its first and last {land:g} m, where its land should be (at least "
-            f"{LAND_SAMPLES}): the section runs off the part. Expected the part cut by "
-            f"plan.program on plan.stock ({plan.stock}); a part cut on another stock, or for "
-            "another plan (its origin, capture, spacing and angles place the ramps), leaves "
-            "the ramp's window off it", key="part")
-    return y0 + prof.s, level_on_land(prof.s, prof.z, land)
+    return y0 + prof.s, _levelled(
+        prof.s, prof.z, land, f"{where}: the section across it at x = {x:g} m, from y = "
+        f"{y0:g} to {y1:g} m (its search window about the programmed edge)",
+        f"Expected the part cut by plan.program on plan.stock ({plan.stock}); a part cut on "
+        "another stock, or for another plan (its origin, capture, spacing and angles place "
+        "the ramps), leaves the ramp's window off it")
 
 
 def _read_ramp(index, plan: CalibrationPlan, k: int, microscope) -> AngleReading:
@@ -393,6 +388,18 @@ def _land_samples(s, z, land: float) -> np.ndarray:
     return ((s <= s[0] + land) | (s >= s[-1] - land)) & np.isfinite(z)
 
 
+def _levelled(s, z, land: float, section: str, expected: str) -> np.ndarray:
+    """`level_on_land`, refusing a section with fewer than `LAND_SAMPLES` samples on the part
+    in its land (key ``part``) by what it is, ``section`` (the piece, the section's x and its
+    ends), and what part was ``expected``, where level_on_land names neither."""
+    found = np.count_nonzero(_land_samples(s, z, land))
+    if found < LAND_SAMPLES:
+        raise InputError(f"{section}, reads {found} samples on the part in its first and last "
+                         f"{land:g} m, where its land should be (at least {LAND_SAMPLES}): the "
+                         f"section runs off the part. {expected}", key="part")
+    return level_on_land(s, z, land)
+
+
 def level_on_land(s, z, land: float) -> np.ndarray:
     """Heights less the line through the first and last ``land`` (m) of a profile.
 
@@ -421,14 +428,24 @@ def measure_pattern(part, pattern: PrismPattern, microscope, x: float | None = N
     Raises
     ------
     InputError
-        When the section does not show one apex per groove (grooves not cut, or merged).
+        When the section does not show one apex per groove (grooves not cut, or merged), or
+        has no land on the part at its ends (key ``part``: a part not cut on
+        ``pattern.stock``).
     """
     x = pattern.origin[0] + 0.5 * pattern.length if x is None else float(x)
     guard = 0.1 * pattern.margin
-    y0 = pattern.origin[1] + guard
-    prof = microscope.profile(part, (x, y0), (x, pattern.origin[1] + pattern.width - guard))
+    y0, y1 = pattern.origin[1] + guard, pattern.origin[1] + pattern.width - guard
+    prof = microscope.profile(part, (x, y0), (x, y1))
+    degrees = [round(math.degrees(a), 6) for a in (pattern.angles[0], pattern.angles[-1])]
+    level = _levelled(
+        prof.s, prof.z, LEVEL_LAND_FRACTION * pattern.margin,
+        f"prism pattern {degrees[0]:g} to {degrees[1]:g} deg ({len(pattern.angles)} grooves): "
+        f"the section across it at x = {x:g} m, from y = {y0:g} to {y1:g} m (its block less "
+        f"{guard:g} m at each end)",
+        f"Expected the part cut by pattern.program on pattern.stock ({pattern.stock}); a part "
+        "cut on another stock, or for another pattern (its origin, length, margin, pitch and "
+        "angles place the block), leaves the section's ends off it")
     centre, depth, centre_sigma, depth_sigma = fit_apexes(
-        prof.s, level_on_land(prof.s, prof.z, LEVEL_LAND_FRACTION * pattern.margin),
-        len(pattern.angles), prominence=APEX_PROMINENCE * pattern.depth)
+        prof.s, level, len(pattern.angles), prominence=APEX_PROMINENCE * pattern.depth)
     return PatternReading(np.array(pattern.angles), depth, depth_sigma, y0 + centre,
                           centre_sigma, pattern.depth, pattern.pitch)
