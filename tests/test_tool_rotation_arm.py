@@ -413,6 +413,73 @@ def test_a_pattern_as_deep_as_its_block_is_refused(depth, height):
     assert PrismPattern().stock.split("@")[0].endswith("x0.5")  # the default as it was
 
 
+def test_the_pattern_block_holds_the_uncompensated_grooves_of_a_large_capture(machine, r0):
+    """Touched off at 0 deg, the pattern's 20 deg groove goes deeper than programmed by eq 1's
+    rise off, up to 2 x capture x sin 10 deg: at a 2.8 mm capture 0.972 mm, through the 0.5 mm
+    block the pattern was always cut on (the section's deepest reading was 0.49992 mm, the
+    block's bottom, with 0.006 of its 0.5 mm^3 left). ToolRotationArm now sizes the block
+    from the plan's capture: 10 um + 0.972 mm + 0.1 mm of floor, up to the um."""
+    capture, half = 2.8 * MM, math.radians(10)
+    procedure = ToolRotationArm(plan=CalibrationPlan(capture=capture))
+    pattern = procedure.pattern
+    deepest = 10 * UM + 2 * capture * math.sin(half)  # 0.98243 mm
+    # the offset of length capture that sinks the edge most at 20 deg: (r - r0, e_ys) against
+    # (1 - cos 20, sin 20), whose direction is (sin 10, cos 10)
+    rho, e_ys = -capture * math.sin(half), -capture * math.cos(half)
+    assert arm.height_change(2 * half, r0 + rho, e_ys, r0) == pytest.approx(
+        10 * UM - deepest, abs=1e-15)
+    before = arm.ArmEstimate(r0=r0, r=r0, e_ys=0.0, z_offset=-rho, y_offset=e_ys)
+    program = compensate_program(pattern.program(r0), machine, before)
+    part, _ = cut(program, machine, tool="v:90", stock=pattern.stock,
+                  errors=errors_for(r0 + rho, e_ys, r0))
+    x = pattern.origin[0] + 0.5 * pattern.length
+    y0 = pattern.origin[1] + 1 * UM
+    prof = Microscope(noise=False).profile(part, (x, y0), (x, y0 + pattern.width - 2 * UM),
+                                           spacing=1 * UM)
+    assert np.isfinite(prof.z).all()  # stock under the whole section
+    # the deepest apex, the 20 deg groove's where it was programmed (eq 2: this offset moves
+    # it by (r - r0) sin 20 + e_ys (cos 20 - 1) = 0), its full depth to the 1 nm display step
+    deepest_at = int(np.argmin(prof.z))
+    assert y0 + prof.s[deepest_at] == pytest.approx(pattern.centres[-1], abs=1 * UM)
+    assert -prof.z[deepest_at] == pytest.approx(deepest, abs=1 * NM)
+    assert part.bounds[0, 2] == pytest.approx(-pattern.height, abs=1e-15)  # bottom whole
+    assert pattern.height == pytest.approx(1.083 * MM, abs=1e-15)
+    assert pattern.stock == "block:1x1x1.083@1,1,0"
+
+
+@pytest.mark.parametrize("capture, angles, height", [
+    (1.0 * MM, None, 0.458 * MM),  # 10 + 347.296 + 100 um: the default block holds it
+    (2.8 * MM, None, 1.083 * MM),  # 10 + 972.430 + 100 um
+    (1.0 * MM, (math.radians(-30),), 0.628 * MM),  # 10 + 1000 x 2 sin 15 + 100 = 627.6 um
+])
+def test_a_pattern_block_too_thin_for_the_plans_capture_is_refused(capture, angles, height):
+    """Least block = depth + 2 capture sin(|largest angle| / 2) + 0.1 mm, up to the um; the
+    default pattern is sized to it (never below its 0.5 mm), a given one below it refused
+    naming the values; before, any pattern was cut on whatever block it had."""
+    kwargs = {} if angles is None else {"angles": angles}
+    plan = CalibrationPlan(capture=capture)
+    assert procedure.pattern_height(plan, PrismPattern(**kwargs)) == pytest.approx(
+        height, abs=1e-15)
+    given = PrismPattern(height=height, **kwargs)
+    assert ToolRotationArm(plan=plan, pattern=given).pattern is given
+    if angles is None:
+        assert ToolRotationArm(plan=plan).pattern.height == max(height, 0.5 * MM)
+    thin = PrismPattern(height=height - 1 * UM, **kwargs)
+    with pytest.raises(InputError) as info:
+        ToolRotationArm(plan=plan, pattern=thin)
+    assert info.value.key == "pattern"
+    message = str(info.value)
+    assert f"the pattern's block is {height - 1 * UM:g} m thick" in message
+    assert f"the plan's capture {capture:g} m" in message
+    assert f"expected a block at least {height:g} m thick" in message
+    assert f"give the pattern height={height:g}" in message
+
+
+def test_the_default_pattern_is_the_papers_block():
+    assert ToolRotationArm().pattern == PrismPattern()  # 0.5 mm: the scenario's figures stay
+    assert ToolRotationArm() == ToolRotationArm(pattern=PrismPattern())
+
+
 def test_a_coarse_section_whose_land_is_off_the_part_names_the_ramp():
     """A part whose low-y edge is where the plan puts the block's (so the stage's rotation is
     found) but which holds, about the ramp's start, only a strip 1 mm wide: the coarse

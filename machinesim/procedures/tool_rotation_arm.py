@@ -62,8 +62,9 @@ from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, from_si
 
 __all__ = [
     "AlignedMicroscope", "AngleReading", "ArmIdentification", "Calibration", "PatternReading",
-    "ToolRotationArm", "arm_correction", "compensate_program", "holder_depth", "level_on_land",
-    "max_capture", "measure_calibration", "measure_pattern", "stage_rotation",
+    "ToolRotationArm", "arm_correction", "compensate_program", "deepest_before", "holder_depth",
+    "level_on_land", "max_capture", "measure_calibration", "measure_pattern", "pattern_height",
+    "stage_rotation",
 ]
 
 #: Height of the prism's flanks (m): the tool's V reaches 3 mm from its edge (6 mm across),
@@ -79,6 +80,10 @@ TOOL = VTool(math.pi / 2, flank_height=PRISM_FLANK_M)
 
 #: What a plan argument must be (`max_capture`, `ToolRotationArm`).
 PLAN_EXPECTED = "a CalibrationPlan (machinesim.cam.prisms), e.g. CalibrationPlan()"
+#: Stock kept under the uncompensated pattern's deepest groove (m) in the block
+#: `ToolRotationArm` sizes for it (`pattern_height`): the default plan's 1 mm capture cuts
+#: down to 0.357 mm, which the default 0.5 mm block holds with this to spare.
+PATTERN_FLOOR_M = 0.1 * M_PER_MM
 
 
 def holder_depth(angles: Sequence[float], tool=TOOL) -> float:
@@ -119,6 +124,30 @@ def max_capture(plan: CalibrationPlan | None = None, tool=TOOL) -> float:
     check_instance(plan, CalibrationPlan, "plan", PLAN_EXPECTED)
     return 0.5 * (holder_depth(plan.angles, tool) - max(plan.station_depths)
                   - SEARCH_MARGIN_M)
+
+
+def deepest_before(plan: CalibrationPlan, pattern: PrismPattern) -> tuple[float, float]:
+    """How deep (m) the uncompensated ``pattern`` may cut below its block's top, for an edge
+    offset within ``plan.capture``, and the tool angle (rad) where it does.
+
+    Touched off at 0 deg (`touch_off`), the edge at angle t stands eq 1's rise from 0 deg,
+    ``(r - r0) (1 - cos t) + e_ys sin t``, above where the program puts it: the offset
+    vector (r - r0, e_ys) dotted with (1 - cos t, sin t), of length 2 sin(|t| / 2); over
+    offsets of length up to the capture c its least value is ``-2 c sin(|t| / 2)``, the
+    groove that much deeper than programmed, at the pattern's largest |t|. The default plan
+    and pattern: 10 um + 1 mm x 2 sin 10 deg = 0.357 mm at 20 deg.
+    """
+    angle = max(pattern.angles, key=abs)
+    return pattern.depth + 2.0 * plan.capture * math.sin(abs(angle) / 2.0), angle
+
+
+def pattern_height(plan: CalibrationPlan, pattern: PrismPattern) -> float:
+    """Least thickness (m) of ``pattern``'s block that holds its uncompensated grooves for
+    ``plan``'s capture (`deepest_before`) with `PATTERN_FLOOR_M` under them, rounded up to
+    the micrometre: 0.458 mm for the default plan and pattern (their 0.5 mm block holds it),
+    1.083 mm at a 2.8 mm capture."""
+    deepest, _ = deepest_before(plan, pattern)
+    return math.ceil(round((deepest + PATTERN_FLOOR_M) / M_PER_UM, 6)) * M_PER_UM
 
 
 # -------------------------------------------------------------------------- compensation
@@ -260,12 +289,16 @@ class ToolRotationArm:
     ----------
     plan : CalibrationPlan
         The calibration ramps (default: the paper's 0-40 deg by 10 deg).
-    pattern : PrismPattern
-        The angle-variable prism pattern (default: the paper's 0-20 deg by 1 deg).
+    pattern : PrismPattern, optional
+        The angle-variable prism pattern (default: the paper's 0-20 deg by 1 deg, on a block
+        sized for the plan's capture: its 0.5 mm, or `pattern_height` where that is more).
+        Cut before compensation, its grooves go down to `deepest_before` (10 um
+        programmed; 1 mm capture: 0.357 mm; 2.8 mm: 0.982 mm); a pattern whose
+        ``height`` is below `pattern_height` is refused, naming both.
     """
 
     plan: CalibrationPlan = CalibrationPlan()
-    pattern: PrismPattern = PrismPattern()
+    pattern: PrismPattern | None = None
     name: ClassVar[str] = "tool_rotation_arm"
     paper: ClassVar[str] = "000"
     #: The `machinesim.realism.Realism` switches this procedure feels (it reads with the
@@ -280,8 +313,29 @@ class ToolRotationArm:
 
     def __post_init__(self) -> None:
         check_instance(self.plan, CalibrationPlan, "plan", PLAN_EXPECTED)
+        if self.pattern is None:
+            pattern = PrismPattern()
+            height = pattern_height(self.plan, pattern)
+            if height > pattern.height:
+                pattern = PrismPattern(height=height)
+            object.__setattr__(self, "pattern", pattern)
         check_instance(self.pattern, PrismPattern, "pattern",
                        "a PrismPattern (machinesim.cam.prisms), e.g. PrismPattern()")
+        height = pattern_height(self.plan, self.pattern)
+        if self.pattern.height < height:
+            deepest, angle = deepest_before(self.plan, self.pattern)
+            raise InputError(
+                f"the pattern's block is {self.pattern.height:g} m thick "
+                f"(PrismPattern(height=...)), and cut before compensation (the edge touched "
+                f"off at 0 deg) its grooves go down to {deepest:g} m: the depth "
+                f"{self.pattern.depth:g} m and up to {deepest - self.pattern.depth:g} m more at "
+                f"{math.degrees(angle):g} deg (2 x capture x sin(angle / 2)) for an edge offset "
+                f"within the plan's capture {self.plan.capture:g} m; expected a block at least "
+                f"{height:g} m thick ({PATTERN_FLOOR_M:g} m of stock under the deepest "
+                f"groove): give the pattern height={height:g} (PrismPattern(..., height=...)), or "
+                "no pattern (ToolRotationArm sizes the default's block), or a smaller "
+                "CalibrationPlan(capture=...)",
+                key="pattern")
 
     def measure(self, lab) -> Calibration:
         """Cut the calibration ramps with the nominal program and read them (microscope
