@@ -19,6 +19,7 @@ from machinesim.procedures.sts_aliases import (
     term_model,
     tool_test_aliases,
 )
+from machinesim.procedures.sts_plane_check import PLANE_MISFIT_LIMIT, plane_misfit
 from machinesim.procedures.sts_plans import TABLE5, TEST_PLANE, TEST_SPHERE
 from machinesim.procedures.sts_turning import SPHERE_MISFIT_LIMIT, STSTurning
 from machinesim.report import ReportFolder
@@ -97,7 +98,8 @@ def test_a_cut_with_axial_runout_moves_dy_by_the_predicted_amount(near):
     assert found[1].dy - found[0].dy == pytest.approx(predicted, rel=0.02)
 
 
-def test_a_cut_with_a_straightness_slope_moves_dx_by_the_predicted_amount(aliases):
+def test_a_cut_with_a_straightness_slope_moves_dx_by_the_predicted_amount(aliases,
+                                                                          monkeypatch):
     """A straightness slope of X in Z (EZX, 0.05 um/mm) put the identified tool.x about 150
     nm off against a std of 3.4 nm, with no word: the test reads it as dx. A second method:
     the lab's cut and fit of the test pieces with the slope and without it."""
@@ -106,11 +108,26 @@ def test_a_cut_with_a_straightness_slope_moves_dx_by_the_predicted_amount(aliase
         {"tool.x": -3.5e-6, "tool.y": -3.5e-6, "tool_geometry.nose_radius": 100e-6})
     sloped = replace(base, component={"X": {"EZX": ComponentError("poly", None,
                                                                   [0.0, slope])}})
+    # the plane's residual check now shows it: the slope lifts the plane by c1 X, a cone
+    # c1 rho about the axis its model has no column for; by hand its RMS over the read
+    # annulus (30 to 100 um) less its mean is c1 sqrt((b^2 + a^2) / 2 - (2 (b^3 - a^3) /
+    # (3 (b^2 - a^2)))^2) = 0.05e-3 x 19.2 um = 0.96 nm, above the limit: the test is refused.
+    # Its misfit is recorded, and the reading let through, to see what the sphere read
+    misfits = []
+
+    def record(centre, found, noise, lateral, label):
+        misfits.append(plane_misfit(centre.residual_rms_known_radius, noise, lateral,
+                                    TEST_PLANE.slope))
+        return misfits[-1]
+
+    monkeypatch.setattr(sts_turning, "refuse_plane_misfit", record)
     found = [STSTurning().measure(machinesim.Lab("sts_lathe", errors, noise=False))[
         "tool_test"] for errors in (base, sloped)]
     predicted = aliases[("component.X.EZX", "slope")].per_unit * slope
     assert predicted == pytest.approx(150e-9, rel=5e-3)
     assert found[1].dx - found[0].dx == pytest.approx(predicted, abs=1e-9)
+    assert misfits[0] < PLANE_MISFIT_LIMIT < misfits[1]
+    assert misfits[1] == pytest.approx(0.96e-9, rel=0.1)
 
 
 def test_the_scenario_reports_the_aliases(tmp_path):

@@ -101,11 +101,18 @@ class CentreHeight:
         of dx).
     residual_rms : float
         RMS of the fit's residuals, m.
+    residual_rms_known_radius : float
+        RMS of the residuals the fit leaves once the nose radius error's form on the plane
+        (the ``d_radius`` given, the sphere's) is a known term of its model, m: the fit's
+        residuals plus that form, least squares of the sum on the fit's columns removed (to
+        first order about its solution, the refit's residuals). With the right dR, what the
+        instrument's noise and what the model leaves out put on the map. NaN where not given.
     """
 
     dy: float
     dy_std: float
     residual_rms: float
+    residual_rms_known_radius: float = float("nan")
 
 
 def _fit_std(result, noise: float | None = None, shifts=()) -> np.ndarray:
@@ -232,7 +239,8 @@ def identify_centre_height(x, y, heights, slope: float, *, aperture: float, core
 
 def fit_centre_height(x, y, heights, slope: float, *, aperture: float, core: float,
                       dx: float = 0.0, noise: float | None = None,
-                      lateral_sigma: float | None = None) -> CentreHeight:
+                      lateral_sigma: float | None = None,
+                      d_radius: float = 0.0) -> CentreHeight:
     """The signed centre-height error dy from a turned tilted plane z = ``slope`` x, with
     its standard uncertainty.
 
@@ -267,6 +275,12 @@ def fit_centre_height(x, y, heights, slope: float, *, aperture: float, core: flo
         None: the residuals' RMS, which counts the model's misfit as noise.
     lateral_sigma : float, optional
         The instrument's stated lateral noise, m, as in `identify_tool_errors`.
+    d_radius : float
+        The nose radius error, m (from the sphere): its form on the plane, left out of the
+        fit, is taken as known for ``residual_rms_known_radius`` only (dy, its std and
+        ``residual_rms`` are the fit's without it). On the plane the radial slope is
+        tan phi = k cos C along the whole ray, so eq 20's form is exact there:
+        -dR (sqrt(1 + k^2 cos^2 C) - 1) ~ -dR k^2 (1 + cos 2C) / 4.
 
     Returns
     -------
@@ -282,6 +296,9 @@ def fit_centre_height(x, y, heights, slope: float, *, aperture: float, core: flo
                          key="noise")
     lateral = _check_lateral(lateral_sigma)
     k = float(slope)
+    if not np.isfinite(d_radius):
+        raise InputError(f"Expected d_radius as a finite length (m), got {d_radius!r}",
+                         key="d_radius")
     if not (abs(k) > 0.0) or not np.isfinite(k):
         raise InputError(f"Expected a tilted plane (finite slope != 0), got {slope!r}",
                          key="slope")
@@ -313,7 +330,27 @@ def fit_centre_height(x, y, heights, slope: float, *, aperture: float, core: flo
     shifts = [(lateral, cols, np.full(cols.size, (k + tx) * 1e9)),
               (lateral, rows, np.full(rows.size, ty * 1e9))] if lateral > 0.0 else ()
     std = _fit_std(result, None if noise is None else noise * 1e9, shifts)  # nm
-    return CentreHeight(dy=float(result.x[0]), dy_std=float(std[0]), residual_rms=rms)
+    return CentreHeight(dy=float(result.x[0]), dy_std=float(std[0]), residual_rms=rms,
+                        residual_rms_known_radius=_known_radius_rms(result, rho, theta, k,
+                                                                    dx, d_radius))
+
+
+def _known_radius_rms(result, rho, theta, k: float, dx: float, d_radius: float) -> float:
+    """RMS (m) of the plane fit's residuals with the nose radius error's form (eq 20, exact on
+    a plane) a known term of its model, refitted to first order about ``result``: the model
+    plus the form, less z, is result.fun + form; the fit's columns (J) take their least-squares
+    share of it, and what stays is the refit's residual (`fit_centre_height`)."""
+    dy = result.x[0]
+    a = np.sqrt(np.maximum(rho * rho - dy * dy, 0.0)) - dx
+    cos = np.cos(theta - np.arctan2(dy, a + dx))  # the program's angle C at each point
+    form = -d_radius * (np.sqrt(1.0 + (k * cos) ** 2) - 1.0) * 1e9  # nm, as result.fun
+    total = result.fun + form
+    jac = np.asarray(result.jac, dtype=np.float64)
+    scale = np.linalg.norm(jac, axis=0)
+    scale[scale == 0.0] = 1.0
+    step = np.linalg.lstsq(jac / scale, total, rcond=None)[0]
+    left = total - (jac / scale) @ step
+    return float(np.sqrt(np.mean(left**2)) * 1e-9)
 
 
 __all__ = ["CentreHeight", "TurnedToolErrors", "fit_centre_height", "identify_centre_height",

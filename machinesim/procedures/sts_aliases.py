@@ -45,6 +45,7 @@ import numpy as np
 from machinesim.cam import spiral as sp
 from machinesim.cutting.tool_form_error import nose_radius_error
 from machinesim.errors import ComponentError, ErrorModel
+from machinesim.procedures.sts_plane_check import PLANE_MISFIT_LIMIT
 from machinesim.procedures.sts_plans import TABLE5, TEST_PLANE, TEST_SPHERE
 from machinesim.procedures.sts_turning import SPHERE_MISFIT_LIMIT
 
@@ -79,10 +80,10 @@ READINGS = {"tool.x": "dx", "tool.y": "dy", "tool_geometry.nose_radius": "dR"}
 #: A near alias (`near_aliases`) is a term whose misfit share lies above
 #: `MISFIT_SHARE_LIMIT` yet below the share at which a term moving its reading by as much as
 #: the tool error the test is built for (Table 5 "before": |dx| = |dy| = 3.5 um, dR = 100 um)
-#: leaves `SPHERE_MISFIT_LIMIT` (0.6 nm RMS, the residual check the tool test applies) on the
-#: map its reading comes from. Such a term shifts a reading by as much as the paper's tool
-#: errors with less misfit than the check refuses. The plane's residual is not checked at all,
-#: so the sphere's limit stands for it. On sts_lathe the limits are 4.8e-3 (dx), 8.3e-3 (dR)
+#: leaves the misfit the tool test refuses on the map its reading comes from: on the sphere
+#: (dx, dR) `SPHERE_MISFIT_LIMIT`, on the plane (dy) `sts_plane_check.PLANE_MISFIT_LIMIT`,
+#: both 0.6 nm RMS. Such a term shifts a reading by as much as the paper's tool errors with
+#: less misfit than the check refuses. On sts_lathe the limits are 4.8e-3 (dx), 8.3e-3 (dR)
 #: and 1.2e-2 (dy). The exact limit `MISFIT_SHARE_LIMIT` is about the same rule at the ends
 #: of the readings' ranges: dx 10 um gives 1.7e-3, dy 20 um 2.1e-3, dR 850 um 9.8e-4.
 NEAR_READING_SIZE = {"tool.x": abs(TABLE5["before"][0]), "tool.y": abs(TABLE5["before"][1]),
@@ -261,12 +262,13 @@ def alias_lists(machine, nose_radius: float) -> tuple[tuple[Alias, ...], tuple[N
                              small) / small
     sphere_fit = np.column_stack([np.ones(rho.size), sphere.grad, dx_s, dr_s])
     plane_fit = np.column_stack([np.ones(plane.x.size), plane.x, plane.y, dy_p])
-    # the near limit of each reading: SPHERE_MISFIT_LIMIT over the RMS movement its own
-    # column gives at the paper's tool error (NEAR_READING_SIZE)
-    near_limit = {reading: SPHERE_MISFIT_LIMIT / (NEAR_READING_SIZE[reading] * _rms(own, w))
-                  for reading, own, w in (("tool.x", dx_s, sphere.weight),
-                                          ("tool.y", dy_p, plane.weight),
-                                          ("tool_geometry.nose_radius", dr_s, sphere.weight))}
+    # the near limit of each reading: the misfit limit of the map it is read from over the
+    # RMS movement its own column gives there at the paper's tool error (NEAR_READING_SIZE)
+    near_limit = {reading: limit / (NEAR_READING_SIZE[reading] * _rms(own, w))
+                  for reading, own, w, limit in (
+                      ("tool.x", dx_s, sphere.weight, SPHERE_MISFIT_LIMIT),
+                      ("tool.y", dy_p, plane.weight, PLANE_MISFIT_LIMIT),
+                      ("tool_geometry.nose_radius", dr_s, sphere.weight, SPHERE_MISFIT_LIMIT))}
     aliases, near = [], []
     for name, form, make, cap in _terms(machine):
         moved = sphere.moved(make(cap)) / cap  # the nose's movement per unit of the term
@@ -352,8 +354,9 @@ NEAR_ALIAS_NOTE = (
     f"Each term listed leaves more than {MISFIT_SHARE_LIMIT:g} of its movement as misfit on "
     "the map its reading comes from (sphere: dx, dR; plane: dy), but at most the near limit: "
     "the share at which a term moving the reading by the paper's tool error (Table 5 before: "
-    "3.5 um for dx and dy, 100 um for dR) leaves the misfit the tool test refuses on the "
-    f"sphere ({SPHERE_MISFIT_LIMIT * 1e9:g} nm RMS; the plane's residual is not checked). "
+    "3.5 um for dx and dy, 100 um for dR) leaves the misfit the tool test refuses on that "
+    f"map (sphere {SPHERE_MISFIT_LIMIT * 1e9:g} nm RMS, plane {PLANE_MISFIT_LIMIT * 1e9:g} nm "
+    "RMS with the nose radius error's form known). "
     "The test reads it as the tool error named, by the amount given per unit, and its misfit "
     "stays under the check up to about that size. The last column is what the sphere shows of "
     "it (nm RMS per unit): the sphere check refuses the cut from "

@@ -39,6 +39,7 @@ from machinesim.exceptions import InputError, NotConvergedError
 from machinesim.experiment import Evaluation, Figure, Identified
 from machinesim.identification.turning_tool import fit_centre_height, identify_tool_errors
 from machinesim.metrology.fits import roughness_sa
+from machinesim.procedures.sts_plane_check import refuse_plane_misfit
 from machinesim.procedures.sts_plans import (
     MEASURE_LINE,
     PAPER,
@@ -76,7 +77,8 @@ D_RADIUS_RANGE = (-850 * UM, 300 * UM)
 #: Largest uncut core (|dy| read from the sphere, m) for which the tool test is taken: the
 #: plane's fit leaves out 30 um about the axis (`TEST_PLANE.core`); through the lab (noise
 #: off) dy = 10 um is read 0.4 % off, 15 and 20 um 1.7-2 %, 30 um 12 %, and at 40 um the
-#: sphere still fits (0.08 nm) but reads dR -1815 um for 100 um.
+#: sphere still fits (0.08 nm) but reads dR -1815 um for 100 um. The plane's residual check
+#: (`sts_plane_check`) refuses |dy| from about 10 um and dx below about -6 um (its core).
 CORE_LIMIT = 20 * UM
 #: Deepest (m) the test sphere may be cut below its programmed surface for the tool test:
 #: the plan cuts it 1 to 4.6 um deep (the stock's top `TEST_SPHERE.top` over the sphere's
@@ -129,9 +131,10 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
     `SPHERE_MISFIT_LIMIT`), blamed on dx when the fit reads it outside `DX_RANGE`, else on
     dR when the fit reads it outside `D_RADIUS_RANGE`; a sphere that fits but reads dx or dR
     outside those ranges (`_refuse_out_of_range`); a plane that reads dy beyond
-    `CORE_LIMIT`. The plane is turned and read only once the sphere is taken: a refused
-    sphere is refused without it (each instrument draws from its own stream, so the readings
-    do not depend on that order)."""
+    `CORE_LIMIT`, or that does not fit its model with the sphere's dR known (misfit above
+    `sts_plane_check.PLANE_MISFIT_LIMIT`). The plane is turned and read only once the sphere
+    is taken: a refused sphere is refused without it (each instrument draws from its own
+    stream, so the readings do not depend on that order)."""
     # the interferometers' stated height and lateral noise (m)
     stated, lateral = {}, {}
 
@@ -211,7 +214,7 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
     centre = fit_centre_height(plane.x, plane.y, plane.z, TEST_PLANE.slope,
                                aperture=TEST_PLANE.read_half_width, core=TEST_PLANE.core,
                                dx=found.dx, noise=stated["plane"],
-                               lateral_sigma=lateral["plane"])
+                               lateral_sigma=lateral["plane"], d_radius=found.d_radius)
     if abs(centre.dy) > CORE_LIMIT * (1.0 + READ_MARGIN):
         raise InputError(
             f"{label}: the turned test plane reads dy {centre.dy / UM:+.2f} um, outside the "
@@ -222,6 +225,7 @@ def test_cut(lab, nose_radius: float, tool: str, label: str) -> ToolTest:
             "plane's fit read the form of something else (the plane's setting, tool.z, "
             "workpiece.*, or the tool's rotation, tool.rx, tool.ry, tool.rz): set them within "
             "a few um first", key="tool_test")
+    refuse_plane_misfit(centre, found, stated["plane"], lateral["plane"], label)
     return ToolTest(found.dx, centre.dy, found.d_radius, found.dy_abs, dx_std=found.dx_std,
                     dy_std=centre.dy_std, d_radius_std=found.d_radius_std)
 
