@@ -162,6 +162,81 @@ def test_plans_refuse_angles_where_a_flank_turns_flat_and_bad_sizes():
         CalibrationPlan(capture=-1 * MM)
 
 
+@pytest.mark.parametrize("plan, field, value, message", [
+    # True passed isinstance(int) as 1 m (1 rad, 1 mm/min): taken
+    (CalibrationPlan, "capture", True, "Expected capture as a number (m), got True"),
+    (CalibrationPlan, "search", True, "Expected search as a number (m), got True"),
+    (CalibrationPlan, "slope", True, "Expected slope as a number (m per m of x), got True"),
+    (CalibrationPlan, "spacing", True, "Expected spacing as a number (m), got True"),
+    (CalibrationPlan, "clearance", True, "Expected clearance as a number (m), got True"),
+    (PrismPattern, "pitch", True, "Expected pitch as a number (m), got True"),
+    (PrismPattern, "length", True, "Expected length as a number (m), got True"),
+    (PrismPattern, "margin", True, "Expected margin as a number (m), got True"),
+    (PrismPattern, "clearance", True, "Expected clearance as a number (m), got True"),
+    (PrismPattern, "depth", True, "Expected depth as a number (m), got True"),  # 'depth 1 m'
+    (CalibrationPlan, "tool_angle", True, "Expected tool_angle as a number (rad), got True"),
+    # tool_angle and feed were not checked at all
+    (PrismPattern, "tool_angle", -1.0, "Expected tool_angle > 0 (rad), got -1.0"),
+    (CalibrationPlan, "tool_angle", math.pi,
+     "Expected tool_angle, the V tool's included angle, below pi rad (180 deg), got "
+     f"{math.pi!r}"),
+    (CalibrationPlan, "tool_angle", "1.5", "Expected tool_angle as a number (rad), got '1.5'"),
+    (CalibrationPlan, "tool_angle", math.nan, "Expected tool_angle > 0 (rad), got nan"),
+    (CalibrationPlan, "feed_mm_per_min", math.nan,
+     "Expected feed_mm_per_min > 0 (mm/min), got nan"),
+    (PrismPattern, "feed_mm_per_min", 0.0, "Expected feed_mm_per_min > 0 (mm/min), got 0.0"),
+    (PrismPattern, "feed_mm_per_min", "100",
+     "Expected feed_mm_per_min as a number (mm/min), got '100'"),
+    # a str angle was float()ed, a bare number or a bool a TypeError, a bool in it 1 rad
+    (CalibrationPlan, "angles", ("0.1",), "Expected angles as tool angles (rad), got ('0.1',)"),
+    (PrismPattern, "angles", 0.1,
+     "Expected angles as a sequence of one or more tool angles (rad), got 0.1"),
+    (PrismPattern, "angles", (True, 0.1), "Expected angles as tool angles (rad), got (True, 0.1)"),
+    # station depths and the origin were not checked: TypeError, max() of nothing, taken
+    (CalibrationPlan, "station_depths", ("1e-5",),
+     "Expected station_depths as groove depths (m), got ('1e-5',)"),
+    (CalibrationPlan, "station_depths", (),
+     "Expected station_depths as a sequence of one or more groove depths (m), got ()"),
+    (CalibrationPlan, "station_depths", (True,),
+     "Expected station_depths as groove depths (m), got (True,)"),
+    (CalibrationPlan, "station_depths", (math.nan,),
+     "Expected station_depths as finite groove depths (m), got (nan,)"),
+    (CalibrationPlan, "station_depths", (-1e-5,),
+     "Expected station_depths > 0 (m, below the surface), got (-1e-05,)"),
+    (CalibrationPlan, "origin", (math.nan, 0.0),
+     "Expected origin as finite lengths (x, y) (m), got (nan, 0.0)"),
+    (PrismPattern, "origin", (1.0,),
+     "Expected origin as a sequence of 2 lengths (x, y) (m), got (1.0,)"),
+    (PrismPattern, "origin", ("1", "1"), "Expected origin as lengths (x, y) (m), got ('1', '1')"),
+    (PrismPattern, "origin", (True, 0.0), "Expected origin as lengths (x, y) (m), got (True, 0.0)"),
+])
+def test_every_plan_field_refuses_what_is_no_number_of_it(plan, field, value, message):
+    """Each field of CalibrationPlan and PrismPattern goes through one check (`as_number`,
+    `as_floats`): a bool, a str, a non-finite value or a wrong shape is refused naming the
+    field, where some were taken (True as 1 m, feed nan, origin (nan, 0)) or failed as a
+    TypeError (``'float' object is not iterable``)."""
+    with pytest.raises(InputError) as info:
+        plan(**{field: value})
+    assert info.value.key == field
+    assert str(info.value) == f"key '{field}': {message}"
+
+
+def test_plan_fields_take_numpy_numbers_as_the_floats_they_are():
+    """np.float32 and np.int64 are numbers: they were refused as 'Expected capture > 0 (m),
+    got np.float32(0.001)'. They are kept as Python floats of the same value."""
+    plan = CalibrationPlan(capture=np.float32(0.5e-3), slope=np.float32(0.25),
+                           height=np.int64(1), tool_angle=np.float64(math.pi / 2),
+                           angles=np.radians([0.0, 10.0, 20.0]).astype(np.float32))
+    assert plan.capture == float(np.float32(0.5e-3)) and type(plan.capture) is float
+    assert plan.slope == 0.25 and plan.height == 1.0 and type(plan.height) is float
+    assert plan.angles == tuple(float(a) for a in np.radians([0.0, 10.0, 20.0])
+                                .astype(np.float32))
+    pattern = PrismPattern(depth=np.float32(2 ** -17), clearance=np.int64(1),
+                           origin=np.array([0.0, 1e-3]))
+    assert pattern.depth == 2 ** -17 and pattern.clearance == 1.0
+    assert pattern.origin == (0.0, 1e-3) and type(pattern.origin) is tuple
+
+
 def v_profile(apexes, depths, left_slopes, right_slopes, s):
     """Grooves that meet in ridges: the surface is the lowest of the V's and the top z = 0."""
     z = np.zeros_like(s)

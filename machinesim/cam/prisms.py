@@ -15,6 +15,7 @@ import numpy as np
 
 from machinesim.exceptions import InputError
 from machinesim.identification.tool_rotation_arm import nominal_axes
+from machinesim.metrology._arrays import as_floats, as_number, shown
 from machinesim.nc import ProgramBuilder
 from machinesim.nc.program import Program
 from machinesim.units import M_PER_MM, M_PER_UM
@@ -60,10 +61,52 @@ def _groove_program(r0: float, clearance: float, x_out: float, grooves, feed: fl
     return b.rapid(X=x_out).build()
 
 
+def _number(value, name: str, *, sign: str = "> 0", unit: str = "m",
+            refusal: str | None = None) -> float:
+    """A plan's number field as a float (`as_number`: a bool, a str, None or a non-finite
+    value is refused naming ``name``); ``refusal``, where given, is the message's text for
+    a value that is no finite number, and the sign is then the caller's to check."""
+    try:
+        return as_number(value, name, sign="any" if refusal else sign, unit=unit)
+    except InputError:
+        if refusal is None:
+            raise
+        raise InputError(f"{refusal}, got {shown(value)}", key=name) from None
+
+
+def _numbers(values, name: str, what: str, size: int | None = None) -> tuple[float, ...]:
+    """A plan's tuple field as floats: a sequence of ``size`` (default one or more) finite
+    numbers (`as_floats`: no str, no bool)."""
+    if isinstance(values, list | tuple) and any(isinstance(v, bool | np.bool_) for v in values):
+        # numpy reads (True, 0.1) as floats: as_floats sees no bool in it
+        raise InputError(f"Expected {name} as {what}, got {shown(values)}", key=name)
+    array = as_floats(values, name, what)
+    count = "one or more" if size is None else str(size)
+    if array.ndim != 1 or array.size == 0 or (size is not None and array.size != size):
+        raise InputError(f"Expected {name} as a sequence of {count} {what}, got "
+                         f"{shown(values)}", key=name)
+    if not np.isfinite(array).all():
+        raise InputError(f"Expected {name} as finite {what}, got {shown(values)}", key=name)
+    return tuple(float(v) for v in array)
+
+
+def _tool(plan) -> float:
+    """Check the plan's ``tool_angle`` (between 0 and 180 deg) and ``feed_mm_per_min``
+    (> 0), set them as floats; return the tool angle."""
+    tool_angle = _number(plan.tool_angle, "tool_angle", unit="rad")
+    if not tool_angle < math.pi:
+        raise InputError(f"Expected tool_angle, the V tool's included angle, below pi rad "
+                         f"(180 deg), got {tool_angle!r}", key="tool_angle")
+    object.__setattr__(plan, "tool_angle", tool_angle)
+    object.__setattr__(plan, "feed_mm_per_min",
+                       _number(plan.feed_mm_per_min, "feed_mm_per_min", unit="mm/min"))
+    return tool_angle
+
+
 def _angles(angles, tool_angle: float, name: str) -> tuple[float, ...]:
-    values = tuple(float(a) for a in angles)
+    values = _numbers(angles, name, "tool angles (rad)")
     limit = (math.pi - tool_angle) / 2.0
-    if not values or not all(math.isfinite(a) and abs(a) < limit for a in values):
+    if not all(abs(a) < limit for a in values):
         raise InputError(f"Expected tool angles within +-{math.degrees(limit):g} deg (a flank "
                          f"of the {math.degrees(tool_angle):g}-deg tool turns flat there), got "
                          f"{[round(math.degrees(a), 6) for a in values]} deg", key=name)
@@ -124,33 +167,37 @@ class CalibrationPlan:
     height: float | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "angles", _angles(self.angles, self.tool_angle, "angles"))
-        capture = self.capture
-        if not (isinstance(capture, int | float) and math.isfinite(capture) and capture > 0.0):
-            raise InputError(f"Expected capture > 0 (m), got {capture!r}", key="capture")
+        tool_angle = _tool(self)
+        object.__setattr__(self, "angles", _angles(self.angles, tool_angle, "angles"))
+        object.__setattr__(self, "station_depths", _numbers(
+            self.station_depths, "station_depths", "groove depths (m)"))
+        if min(self.station_depths) <= 0.0:
+            raise InputError(f"Expected station_depths > 0 (m, below the surface), got "
+                             f"{shown(self.station_depths)}", key="station_depths")
+        object.__setattr__(self, "origin", _numbers(self.origin, "origin", "lengths (x, y) (m)",
+                                                    size=2))
+        capture = _number(self.capture, "capture")
+        object.__setattr__(self, "capture", capture)
         if self.search is None:
             object.__setattr__(self, "search", capture + max(self.station_depths)
                                + SEARCH_MARGIN_M)
-        if isinstance(self.search, int | float):
-            if self.clearance is None:
-                object.__setattr__(self, "clearance", self.search + CLEARANCE_MARGIN_M)
-            if self.spacing is None:
-                object.__setattr__(self, "spacing", max(3.0 * M_PER_MM, self.min_spacing))
-        for name in ("search", "slope", "spacing", "clearance"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0.0):
-                raise InputError(f"Expected {name} > 0, got {value!r}", key=name)
+        object.__setattr__(self, "search", _number(self.search, "search"))
+        object.__setattr__(self, "slope", _number(self.slope, "slope", unit="m per m of x"))
+        if self.clearance is None:
+            object.__setattr__(self, "clearance", self.search + CLEARANCE_MARGIN_M)
+        object.__setattr__(self, "clearance", _number(self.clearance, "clearance"))
+        if self.spacing is None:
+            object.__setattr__(self, "spacing", max(3.0 * M_PER_MM, self.min_spacing))
+        object.__setattr__(self, "spacing", _number(self.spacing, "spacing"))
         if self.clearance <= self.search:
             raise InputError(f"Expected a clearance above the search range {self.search:g} m, "
                              f"got {self.clearance!r}", key="clearance")
         if self.height is None:
             object.__setattr__(self, "height", self.depth + FLOOR_M)
-        height = self.height
-        if isinstance(height, bool) or not (isinstance(height, int | float)
-                                            and math.isfinite(height)):
-            raise InputError(f"Expected height, the calibration block's thickness, as a finite "
-                             f"number of m (default None: {self.depth + FLOOR_M:g} m), got "
-                             f"{height!r}", key="height")
+        height = _number(self.height, "height", refusal=(
+            f"Expected height, the calibration block's thickness, as a finite number of m "
+            f"(default None: {self.depth + FLOOR_M:g} m)"))
+        object.__setattr__(self, "height", height)
         if not height > self.depth:
             raise InputError(
                 f"Expected the calibration block's thickness height above the ramps' deepest "
@@ -306,11 +353,12 @@ class PrismPattern:
     height: float = 0.5 * M_PER_MM
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "angles", _angles(self.angles, self.tool_angle, "angles"))
-        for name in ("depth", "pitch", "length", "margin", "height"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0.0):
-                raise InputError(f"Expected {name} > 0, got {value!r}", key=name)
+        tool_angle = _tool(self)
+        object.__setattr__(self, "angles", _angles(self.angles, tool_angle, "angles"))
+        object.__setattr__(self, "origin", _numbers(self.origin, "origin", "lengths (x, y) (m)",
+                                                    size=2))
+        for name in ("depth", "pitch", "length", "margin", "height", "clearance"):
+            object.__setattr__(self, name, _number(getattr(self, name), name))
         if self.depth >= self.height:
             raise InputError(
                 f"Expected the pattern's depth below the thickness of its block, "
