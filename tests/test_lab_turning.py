@@ -240,6 +240,22 @@ def test_a_turning_move_of_more_than_a_day_is_noted():
     assert not [n for n in fast.notes if "takes" in n]
 
 
+def test_a_turning_move_of_more_than_a_day_under_g20_is_noted_with_its_f_in_inch():
+    # X 0.2 inch and C 1 deg at F0.00001 inch/min (a degree counts as an inch): sqrt(0.04 +
+    # 1) / 1e-5 min; it was noted as 'F5.07695e-05 (mm/min or deg/min)', the planner's
+    # equivalent 1e-5 * sqrt(5.08**2 + 1) / sqrt(0.04 + 1). The first move sets Z alone, so
+    # the lathe's runs start a move later than the program's moves: the note reads the
+    # slow move, not the F4. plunge before it.
+    program = parse_program("G20 G90 G94\nG00 Z0.04\nG00 X0.2 C0.\nG01 Z-0.0004 F4.\n"
+                            "G01 X0. C1. F0.00001\nG00 Z0.04\nM30\n")
+    report = turn(program, "sts_lathe", "nose:0.5:90")[1]
+    (note,) = [n for n in report.notes if "takes" in n]
+    seconds = 1.04 ** 0.5 / 1e-5 * 60
+    assert f"the feed move of line 5 takes {seconds:.3g} s" in note
+    equivalent = 1e-5 * (5.08 ** 2 + 1) ** 0.5 / 1.04 ** 0.5
+    assert f"at F1e-05 (inch/min under G20; {equivalent:.6g} mm/min or deg/min)," in note
+
+
 def test_a_nose_radius_the_tool_cannot_take_names_its_file_in_a_lab_with_background(
         tmp_path, program):
     # the lab adds its background to the injected errors: the sum kept neither the file nor

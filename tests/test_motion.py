@@ -125,6 +125,34 @@ def test_a_move_of_more_than_a_day_is_noted_with_its_line_and_feed():
     assert plan(parse_program("G90 G21\nG01 X100. F1.\nM30\n"), machine).notes == ()
 
 
+@pytest.mark.parametrize("text, duration, feed", [
+    # 0.4 inch at F0.0001 inch/min: 4000 min; it was noted as 'F0.00254 (mm/min or deg/min)'
+    ("G90 G20\nG01 X0.1 F10.\nG01 X0.5 F0.0001\nM30\n", 0.1 / 10 * 60 + 4000 * 60,
+     "F0.0001 (inch/min under G20; 0.00254 mm/min or deg/min)"),
+    # C alone: F in deg/min under G20 too (FANUC), 90 deg at F0.001: 90,000 min
+    ("G90 G20\nG00 X0. C0.\nG01 C90. F0.001\nM30\n", 90000 * 60,
+     "F0.001 (deg/min under G20; 0.001 mm/min or deg/min)"),
+    # X and C: a degree counts as an inch, sqrt(1 + 10**2) / 0.001 min; the planner's
+    # equivalent counts it as a mm: 0.001 * sqrt(25.4**2 + 10**2) / sqrt(1 + 10**2)
+    ("G90 G20\nG00 X0. C0.\nG01 X1. C10. F0.001\nM30\n", 101 ** 0.5 / 0.001 * 60,
+     f"F0.001 (inch/min under G20; {0.001 * 745.16 ** 0.5 / 101 ** 0.5:.6g} mm/min or "
+     "deg/min)"),
+    # G21 and G20 both before the move: Program.unit_words keeps their first lines only, so
+    # which is in force is not known; both readings (37.1 mm at 0.00254 mm/min)
+    ("G90 G21\nG01 X1. F100.\nG20\nG01 X1.5 F0.0001\nM30\n", 0.6 + 37.1 / 0.00254 * 60,
+     "F0.00254 (mm/min or deg/min), or F0.0001 (inch/min) if written under G20"),
+])
+def test_a_slow_move_under_g20_is_noted_with_its_f_as_the_program_wrote_it(text, duration,
+                                                                           feed):
+    slow = plan(parse_program(text), load_machine("grooving_4axis"))
+    assert slow.duration == pytest.approx(duration, rel=1e-12)
+    (note,) = slow.notes
+    line = text.count("\n") - 1
+    assert note == (f"the feed move of line {line} takes {duration:.3g} s "
+                    f"({duration / 3600:.3g} h) at {feed}, more than the 24 h one move of a "
+                    "program takes: is F in the program's unit (G94: per minute)?")
+
+
 def test_a_start_or_program_of_the_wrong_kind_is_refused_naming_it():
     # a new user's start="home" (or ["0", ...]) ended in numpy's ValueError inside plan, from
     # Lab.cut, machinesim.cut and the encoders alike; encoders.record(None) or record of a

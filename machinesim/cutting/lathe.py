@@ -287,6 +287,7 @@ def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray, str | No
     a day (`machinesim.motion.planner.slow_move_note`), else None."""
     source = getattr(program, "source", "<program>")
     q, kinds, feeds, lines = _axis_values(program, machine, source)
+    skipped = len(program.kinds) - len(kinds)  # moves before every axis had a value
     out = []
     c_column = machine.axes.index("C")
     for first, last in _turning_runs(q, kinds, c_column, lines, source, _spindle_hint(program)):
@@ -294,7 +295,8 @@ def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray, str | No
         moves = slice(first, last + 1)
         durations = _durations(points, feeds[moves], machine.axes, lines[moves], source)
         t = np.concatenate([[0.0], np.cumsum(durations)])
-        note = slow_move_note(durations, kinds[moves], lines[moves], feeds[moves])
+        note = slow_move_note(durations, kinds[moves], lines[moves], feeds[moves], program,
+                              skipped + first)
         out.append((*_within_quarter_turns(t, points, c_column), note))
     return out
 

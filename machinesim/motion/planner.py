@@ -13,6 +13,7 @@ from machinesim.motion.faces import face_substeps
 from machinesim.motion.steps import wrap_steps
 from machinesim.motion.trajectory import IdealServo, ServoModel, Trajectory
 from machinesim.nc.program import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
+from machinesim.nc.rotary_feed import inch_feed_as_written
 from machinesim.tolerances import CHORD_TOLERANCE_M
 
 _M_PER_MM = 1e-3
@@ -285,7 +286,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     lines_out = np.array(lines, dtype=np.int64)
     kinds_out.flags.writeable = False
     lines_out.flags.writeable = False
-    notes = slow_move_note(durations, kinds, lines, feeds)
+    notes = slow_move_note(durations, kinds, lines, feeds, program)
     return Trajectory(axes, q, t, offsets, kinds_out, lines_out, float(clock[-1]), cutting,
                       notes=(notes,) if notes else (), peak_lag=peak_lag)
 
@@ -354,19 +355,35 @@ def _stepping_table(stall, paths, axes, rotary, start, delta) -> str | None:
             "chord_tolerance above the step (--chord-nm on the command line)")
 
 
-def slow_move_note(durations, kinds, lines, feeds) -> str | None:
+def slow_move_note(durations, kinds, lines, feeds, program=None, first: int = 0) -> str | None:
     """A note naming the longest feed move when it takes more than `SLOW_MOVE_S`, with its
-    feed: the machining time it gives is then hardly what the program meant."""
+    feed: the machining time it gives is then hardly what the program meant. The feed is
+    the F as ``program`` (these moves from its move ``first`` on) wrote it: in inch/min
+    where G20 is in force at the move's line (`Program.unit_words`), with the mm/min the
+    planner used beside it, and both where the program selected G20 and G21 before it."""
     linear = np.flatnonzero(np.asarray(kinds) == KIND_LINEAR)
     if not linear.size:
         return None
     i = int(linear[np.argmax(durations[linear])])
     if not durations[i] > SLOW_MOVE_S:
         return None
+    feed = _feed_text(feeds[i], int(lines[i]), program, first + i)
     return (f"the feed move of line {int(lines[i])} takes {durations[i]:.3g} s "
-            f"({durations[i] / 3600.0:.3g} h) at F{feeds[i] * 60e3:.6g} (mm/min or deg/min), "
+            f"({durations[i] / 3600.0:.3g} h) at {feed}, "
             f"more than the {SLOW_MOVE_S / 3600.0:g} h one move of a program takes: is F in "
             "the program's unit (G94: per minute)?")
+
+
+def _feed_text(feed: float, line: int, program, move: int) -> str:
+    """The feed (m/s; of `slow_move_note`'s move) as its program wrote it."""
+    metric = f"F{feed * 60e3:.6g} (mm/min or deg/min)"
+    inch = None if program is None else inch_feed_as_written(program, move)
+    if inch is None:
+        return metric
+    units = program.unit_words
+    if units["G20"] <= line < units.get("G21", math.inf):  # G20 in force, never G21 before
+        return f"F{inch[0]:.6g} ({inch[1]} under G20; {feed * 60e3:.6g} mm/min or deg/min)"
+    return f"{metric}, or F{inch[0]:.6g} ({inch[1]}) if written under G20"
 
 
 def _durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate) -> np.ndarray:

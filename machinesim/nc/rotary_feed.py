@@ -19,7 +19,8 @@ is (its factor would be 1 but for rounding).
 
 Internal to the reader (`machinesim.nc.blocks`, `machinesim.nc.arc_block` and the vectorised
 path in `machinesim.nc.reader`), which all use `inch_feed_scale`, so the three agree to the
-bit.
+bit; `inch_feed_as_written` undoes it for the planner's note on a slow move
+(`machinesim.motion.planner.slow_move_note`), which names the F as the program wrote it.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from machinesim.nc.program import AXES, ROTARY_AXES
 from machinesim.nc.words import M_PER_INCH
 from machinesim.units import M_PER_MM, RAD_PER_DEG
 
-__all__ = ["inch_feed_scale"]
+__all__ = ["inch_feed_as_written", "inch_feed_scale"]
 
 #: Factor of a rotary-only move: F inch/min read as F deg/min, which the planner's rule takes
 #: as F mm/min.
@@ -79,3 +80,24 @@ def inch_feed_scale(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, n
     scale[known] = (np.sqrt(length_mm[known]) * M_PER_MM
                     / (np.sqrt(length_inch[known]) * M_PER_INCH))
     return scale, mixed & unknown
+
+
+def inch_feed_as_written(program, move: int) -> tuple[float, str] | None:
+    """The F that a program under G20 writes for the feed of its move ``move``, and its
+    unit: ``"deg/min"`` for a move of rotary axes alone, else ``"inch/min"`` (a rotary
+    axis's degrees counted as inches): the inverse of the reader's rule, so a move read
+    from ``G20 G01 X1. A10. F10.`` gives (10.0, "inch/min") back. None where the program
+    selected no G20 (`Program.unit_words`), has no feed there, or the rule's factor is not
+    known (an axis without a start)."""
+    if "G20" not in getattr(program, "unit_words", {}):
+        return None
+    targets = program.targets
+    end = targets[move]
+    start = targets[move - 1] if move > 0 else np.full(len(AXES), np.nan)
+    scale, unknown = inch_feed_scale(start[np.newaxis], end[np.newaxis])
+    feed = float(program.feeds[move])
+    if unknown[0] or not np.isfinite(feed):
+        return None
+    moving = ~np.isnan(end) & (np.isnan(start) | (start != end))
+    linear = any(moving[k] for k, a in enumerate(AXES) if a not in ROTARY_AXES)
+    return feed / float(scale[0]) * 60.0 / M_PER_INCH, "inch/min" if linear else "deg/min"
