@@ -537,7 +537,7 @@ def test_bad_inputs_are_refused(groove_stock):
         ws.ReferenceSpheres(np.array([[0, 0, 0], [0, 1, 0], [1, 0, 0]]) * MM)
     with pytest.raises(InputError, match="shape \\(3, 3\\)"):
         ws.ReferenceSpheres(np.zeros((2, 3)))
-    with pytest.raises(InputError, match="points an int >= 5"):
+    with pytest.raises(InputError, match="points as a whole number >= 5"):
         ProbePlan(points=3)
     with pytest.raises(InputError, match="press > 0"):
         ProbePlan(press=-1.0)

@@ -38,6 +38,7 @@ import numpy as np
 
 from machinesim.exceptions import InputError
 from machinesim.identification.tool_setting_6axis import MIN_DETERMINANT, b_tilt_determinant
+from machinesim.metrology._arrays import as_number
 from machinesim.nc import Program, ProgramBuilder
 from machinesim.units import M_PER_MM, M_PER_UM
 
@@ -130,10 +131,9 @@ class Plan:
     feed_mm_per_min: float = 200.0
 
     def __post_init__(self) -> None:
-        for name in ("depth", "b_depth", "feed_mm_per_min"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise InputError(f"Expected {name} > 0, got {value!r}", key=name)
+        for name, unit in (("depth", "m"), ("b_depth", "m"), ("feed_mm_per_min", "mm/min")):
+            object.__setattr__(self, name, as_number(getattr(self, name), name, sign="> 0",
+                                                     unit=unit))
         for name, axis in (("theta1", "A"), ("theta2", "B"), ("theta3", "B")):
             _check_angle(name, getattr(self, name), axis)
         if not abs(b_tilt_determinant(self.theta2, self.theta3)) > MIN_DETERMINANT:

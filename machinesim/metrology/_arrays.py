@@ -1,10 +1,11 @@
 """Checks shared by the metrology modules: numbers, arrays, height maps, point sets, regular
 grids, read-only results.
 
-Every number and array an instrument or a fit takes goes through `as_number`, `as_flag` or
-`as_floats`: a real number (int, float, numpy scalar) or an array of them, never a string
-(``sigma="1"`` would otherwise be read as 1 m while ``sigma="12nm"`` is refused), a bool
-(``True`` as 1 m) or None; anything else is an `InputError` naming the argument.
+Every number and array an instrument or a fit takes goes through `as_number`, `as_count`,
+`as_flag` or `as_floats`: a real number (int, float, numpy scalar) or an array of them,
+never a string (``sigma="1"`` would otherwise be read as 1 m while ``sigma="12nm"`` is
+refused), a bool (``True`` as 1 m) or None; anything else is an `InputError` naming the
+argument.
 """
 
 from __future__ import annotations
@@ -62,6 +63,16 @@ def as_number(value, name: str, *, sign: str = "any", unit: str = "m",
         raise InputError(f"Expected {name} <= {limit:g} {unit}{why}, got {number!r}",
                          key=name)
     return number
+
+
+def as_count(value, name: str, *, least: int = 1) -> int:
+    """``value`` as an int of at least ``least``: an int or numpy integer (``np.int64(41)``
+    is 41), never a bool (True is no 1), a float (``41.0``) or a str."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | np.integer) \
+            or value < least:
+        raise InputError(f"Expected {name} as a whole number >= {least}, got {shown(value)}",
+                         key=name)
+    return int(value)
 
 
 def as_flag(value, name: str) -> bool:

@@ -26,6 +26,7 @@ from machinesim.identification.workpiece_setting import (
     sphere_reading,
 )
 from machinesim.metrology import fit_sphere
+from machinesim.metrology._arrays import as_count, as_number
 from machinesim.metrology.probe_instrument import StylusOverTravel
 from machinesim.rotations import rotation_xyz
 from machinesim.units import M_PER_MM
@@ -78,13 +79,9 @@ class ProbePlan:
 
     def __post_init__(self) -> None:
         for name in ("half_width", "press", "stroke", "lift"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0.0):
-                raise InputError(f"Expected {name} > 0 (m), got {value!r}", key=name)
+            object.__setattr__(self, name, as_number(getattr(self, name), name, sign="> 0"))
         for name, least in (("points", 5), ("passes", 1)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < least:
-                raise InputError(f"Expected {name} an int >= {least}, got {value!r}", key=name)
+            object.__setattr__(self, name, as_count(getattr(self, name), name, least=least))
 
 
 #: The default plan.

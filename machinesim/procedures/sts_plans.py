@@ -23,11 +23,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from machinesim.cam import spiral as sp
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_count, as_number, shown
 
 __all__ = ["MEASURE_LINE", "PAPER", "PLANS", "SA_L_CUTOFF", "SA_WINDOW", "TABLE5", "TEST_PLANE",
            "TEST_SPHERE", "ProgramPlan", "ProfileError", "profile_error"]
@@ -53,6 +55,16 @@ class ProgramPlan:
     step: float
     interpolation: str = "spline"
     substeps: int = 10
+
+    def __post_init__(self) -> None:
+        for name, allowed in (("distribution", ("CA", "CAL")),
+                              ("interpolation", ("linear", "spline"))):
+            if getattr(self, name) not in allowed:
+                raise InputError(f"Expected {name} {' or '.join(map(repr, allowed))}, got "
+                                 f"{shown(getattr(self, name))}", key=name)
+        unit = "rad" if self.distribution == "CA" else "m"
+        object.__setattr__(self, "step", as_number(self.step, "step", sign="> 0", unit=unit))
+        object.__setattr__(self, "substeps", as_count(self.substeps, "substeps"))
 
     def path(self, design, nose_radius: float, *, spiral=None) -> sp.ToolPath:
         """Tool tips for ``design``, compensated for ``nose_radius`` (eqs 18-19), joined as
@@ -89,6 +101,15 @@ class TestPiece:
     pixel: float = 0.5 * UM
     #: the stock's top over the test piece, m
     top: float = 1 * UM
+    #: Each number field: (name, sign, unit), checked when the piece is made (`as_number`).
+    NUMBERS: ClassVar[tuple[tuple[str, str, str], ...]] = (
+        ("turned_radius", "> 0", "m"), ("feed", "> 0", "m"), ("angle_step", "> 0", "rad"),
+        ("read_half_width", "> 0", "m"), ("pixel", "> 0", "m"), ("top", ">= 0", "m"))
+
+    def __post_init__(self) -> None:
+        for name, sign, unit in self.NUMBERS:
+            object.__setattr__(self, name, as_number(getattr(self, name), name, sign=sign,
+                                                     unit=unit))
 
     def design(self) -> sp.Design:
         raise NotImplementedError
@@ -108,6 +129,8 @@ class TestSphere(TestPiece):
     #: a point this far above the fitted surface is uncut core (the interferometer's noise
     #: is 0.5 nm: 100 sigma)
     core_step: float = 50 * NM
+    NUMBERS: ClassVar[tuple[tuple[str, str, str], ...]] = TestPiece.NUMBERS + (
+        ("radius", "any", "m"), ("core_step", "> 0", "m"))
 
     def design(self) -> sp.Design:
         return sp.sphere(self.radius)
@@ -123,6 +146,8 @@ class TestPlane(TestPiece):
     #: reaches across the axis (with 10 um the fit of dy = -3.5 um is 4 % off, with 30 um
     #: within 0.1 nm, noise off)
     core: float = 30 * UM
+    NUMBERS: ClassVar[tuple[tuple[str, str, str], ...]] = TestPiece.NUMBERS + (
+        ("slope", "any", "m per m"), ("core", ">= 0", "m"))
 
     def design(self) -> sp.Design:
         return sp.tilted_plane(self.slope)
