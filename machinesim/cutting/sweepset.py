@@ -27,6 +27,7 @@ from machinesim.cutting.sweeps import (
     polygon_triangles,
 )
 from machinesim.cutting.tilted_profiles import split_sweeps
+from machinesim.cutting.tilted_solids import SolidSplitter
 from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL, SIDEWAYS_WARN_RAD, TWIST_M
 
 __all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "PROGRESS_STEPS", "SweepSet",
@@ -98,6 +99,9 @@ class SweepSet:
         # Minkowski sum with the segment, built from its faces without a hull search.
         self.solid_sweep = (SolidSweep(self.vertices, tool.triangles())
                             if self.rotational and hasattr(tool, "triangles") else None)
+        # ... and where a turn tilts it across its sides, it is cut in pieces
+        self.splitter = (SolidSplitter(self.vertices, np.asarray(tool.triangles()))
+                         if self.solid_sweep is not None else None)
         top = self.vertices[:, 2]
         self.top = np.flatnonzero(top >= top.max())
         # Where the holder begins: the body's top face, or a shank wider than the body
@@ -309,15 +313,17 @@ class SweepSet:
         return self._solid(hull[0], hull[1], not clipped and points[:, 2].max() > self.clip_z)
 
     def _united(self, pieces, clipped: bool):
-        """`_hull` of each piece of a split profile sweep (`tilted_profiles.halves`), the
-        two united."""
+        """`_hull` of each piece of a split sweep (`tilted_profiles.halves`,
+        `tilted_solids.SolidSplitter.pieces`), united."""
         built = [self._hull(points, clipped) for points in pieces if points is not None]
         solids = [b for b in built if isinstance(b, tuple)]
         if not solids:
             return "above" if all(b == "above" for b in built) else None
         if len(solids) == 1:
             return solids[0]
-        solid = solids[0][0] + solids[1][0]
+        solid = solids[0][0]
+        for other in solids[1:]:
+            solid = solid + other[0]
         return solid, solid.volume()
 
     def hulls(self, keep: Callable[[np.ndarray, np.ndarray], np.ndarray],
@@ -428,6 +434,14 @@ class SweepSet:
                 if self.planar:  # a profile tilted across itself: two halves' hulls
                     split = split_sweeps(self.vertices, rows, p0, p1, r0, r1, origin[first],
                                          origin[first + 1], self.clip_z + rise)
+                elif self.splitter is not None:  # a solid tilted across its sides
+                    ends = origin[first + 1]
+                    for row in rows[self.splitter.crossing(rows, r0, r1, origin[first], ends,
+                                                           self.clip_z + rise)].tolist():
+                        pieces = self.splitter.pieces(r0[row], origin[first[row]], r1[row],
+                                                      ends[row], self.clip_z + rise[row])
+                        if pieces is not None:
+                            split[row] = pieces
             prisms = {}
             rows = chosen[level[chosen]]
             if len(rows):
