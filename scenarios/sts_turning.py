@@ -36,9 +36,11 @@ import numpy as np
 from machinesim import Lab
 from machinesim._io import write_atomic
 from machinesim.budget import realism_budget
+from machinesim.cam.spiral import spiral_program
 from machinesim.cutting.turning import edge_path_from_poses
 from machinesim.errors import ErrorModel
 from machinesim.experiment import run
+from machinesim.identification.turning_tool import fit_centre_height
 from machinesim.machines import load_machine
 from machinesim.procedures.sts_aliases import (
     ALIAS_NOTE,
@@ -48,7 +50,8 @@ from machinesim.procedures.sts_aliases import (
     near_alias_rows,
     term_model,
 )
-from machinesim.procedures.sts_plans import PAPER, TABLE5, TEST_SPHERE
+from machinesim.procedures.sts_plane_check import PLANE_MISFIT_LIMIT, plane_misfit
+from machinesim.procedures.sts_plans import PAPER, TABLE5, TEST_PLANE, TEST_SPHERE
 from machinesim.procedures.sts_turning import (
     CASES,
     CORE_LIMIT,
@@ -103,6 +106,7 @@ def report(args) -> None:
     lab = make_lab(realism)
     refuse_too_deep(args, lab.machine, errors)
     refuse_unread_tool(args, lab.machine, errors)
+    refuse_unfit_plane(args, make_lab(realism.without(*NOISE)), errors)
     result = run(procedure, lab, progress=stage("run"))
     budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
                             progress=stage)
@@ -182,8 +186,59 @@ def refuse_unread_tool(args, machine, errors) -> None:
     given = errors.parameters()
     refuse_beyond_capture(
         args, {}, [k for k in keys if given.get(k)] or ["its errors"], found,
-        "(the tool test identifies dx from about -10 to +5 um, |dy| up to 20 um and dR from "
-        "about -850 to +300 um: docs/procedures/sts_turning.md)", expected)
+        "(the test sphere identifies dx from about -10 to +5 um, |dy| up to 20 um and dR from "
+        "about -850 to +300 um, and the tilted test plane less: dx below about -6 um, or "
+        "|dy| from about 8 um at dx = -3.5 um, is refused by its residual check, "
+        "refuse_unfit_plane; docs/procedures/sts_turning.md)", expected)
+
+
+#: The realism switches of the interferometer's noise, off for `refuse_unfit_plane`'s turn.
+NOISE = ("instrument_noise", "lateral_noise")
+
+
+def refuse_unfit_plane(args, quiet_lab, errors) -> None:
+    """Refuse, before the tool test cuts anything, injected ``errors`` whose tilted test
+    plane (`sts_plans.TEST_PLANE`) the plane's residual check (`sts_plane_check`) would
+    refuse after both test pieces are cut: the plane turned on ``quiet_lab`` (the scenario's
+    lab with the interferometer's noise off, `NOISE`), read, and fitted with the tool's dx
+    against the spindle axis (`tool_from_spindle_axis` of ``errors``, as `refuse_unread_tool`
+    takes it: without the lab's background, whose 75 nm move the misfit by about 0.03 nm)
+    and dR as injected, its misfit set against `PLANE_MISFIT_LIMIT`. A tool far enough
+    across the axis (dx < 0) or off the centre height (dy), for its nose radius error, cuts
+    the plane across the axis beyond the fit's 30 um core; no range of dx and dy alone says
+    where (docs/procedures/sts_turning.md, "The plane's residual check"). About 2 s; the
+    noise adds to the misfit only what the check subtracts (0.19-0.23 nm with it, 0.20 nm
+    without, Table 5's tool)."""
+    nose = STSTurning().nose_radius
+    dx, dy = tool_from_spindle_axis(quiet_lab.machine, errors, nose)
+    d_radius = errors.parameters().get("tool_geometry.nose_radius", 0.0)
+    part, _ = quiet_lab.turn(spiral_program(TEST_PLANE.path(nose)), STSTurning().tool,
+                             top=TEST_PLANE.top)
+    w = TEST_PLANE.read_half_width
+    interferometer = quiet_lab.white_light_interferometer(label="plane_check")
+    plane = interferometer.height_map(part, -w, w, -w, w, TEST_PLANE.pixel)
+    noise, lateral = interferometer.readout.std, interferometer.lateral_sigma
+    centre = fit_centre_height(plane.x, plane.y, plane.z, TEST_PLANE.slope, aperture=w,
+                               core=TEST_PLANE.core, dx=dx, noise=noise,
+                               lateral_sigma=lateral, d_radius=d_radius)
+    misfit = plane_misfit(centre.residual_rms_known_radius, noise, lateral, TEST_PLANE.slope)
+    if not misfit > PLANE_MISFIT_LIMIT:
+        return
+    given = errors.parameters()
+    keys = [k for k in ("tool.x", "tool.y", "tool_geometry.nose_radius", "location.C.EX0C",
+                        "location.C.EY0C") if given.get(k)]
+    refuse_beyond_capture(
+        args, {}, keys or ["its errors"],
+        f"the tool's offsets from the spindle axis dx = {dx / UM:.4g} um, dy = {dy / UM:.4g} "
+        f"um with dR = {d_radius / UM:.4g} um, whose tilted test plane (turned before the "
+        f"cut with the noise off) misfits its model by {misfit / NM:.2f} nm",
+        f"(the plane's fit leaves out {TEST_PLANE.core / UM:g} um about the spindle axis, "
+        "and a nose cutting across the axis beyond it is refused by the plane's residual "
+        "check after both test pieces are cut: with dR = 100 um, dx below about -6 um at dy "
+        "= 0, -5 um at |dy| = 6 um, -1.5 um at 10 um; docs/procedures/sts_turning.md, "
+        "\"The plane's residual check\")",
+        f"a misfit of at most {PLANE_MISFIT_LIMIT / NM:g} nm: set the tool nearer the axis "
+        "(tool.x less negative, |tool.y| smaller)")
 
 
 def tool_against_axis(out: ReportFolder, lab, result) -> str:

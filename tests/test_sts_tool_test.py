@@ -291,6 +291,59 @@ def test_the_scenario_refuses_a_tool_its_test_does_not_identify_before_anything_
             scenario.refuse_unread_tool(args, machine, ErrorModel.from_toml(path))
 
 
+def test_the_scenario_refuses_a_tool_whose_plane_the_residual_check_refuses_before_any_cut(
+        tmp_path):
+    # inside the ranges refuse_unread_tool checks (dx -10 .. +5 um, |dy| up to 20 um), the
+    # tool test cut the sphere and the plane and then refused the plane: (-6, -3.5) um
+    # misfits by 0.68 nm noise off (0.86 nm with the scenario's realism less its noise),
+    # (-3.5, +8) um by 0.58 nm noise off and 0.75 nm with the realism. The scenario now turns
+    # the plane alone first, on its lab with the noise off, and refuses them before any cut
+    from machinesim.realism import Realism
+    from machinesim.servo import table6_servo
+    scenario = _scenario()
+    machine = machinesim.load_machine("sts_lathe")
+    realism = Realism.lab().without("lateral_resolution", "registration", "stage_positioning",
+                                    *scenario.NOISE)
+
+    def quiet(errors):
+        return machinesim.Lab(machine, errors, seed=0, realism=realism,
+                              servo=table6_servo("before"))
+
+    scenario.refuse_unfit_plane(None, quiet(scenario.default_errors()), scenario.default_errors())
+    for toml, words in (
+            ("[tool]\noffset_um = [-6, -3.5, 0]\n[tool_geometry]\nnose_radius_um = 100.0\n",
+             r"\(tool\.x, tool\.y, tool_geometry\.nose_radius\): the tool's offsets from the "
+             r"spindle axis dx = -6 um, dy = -3\.5 um with dR = 100 um, whose tilted "
+             r"test plane \(turned before the cut with the noise off\) misfits its model by "
+             r"0\.8\d nm exceeds"),
+            ("[tool]\noffset_um = [-3.5, 8, 0]\n[tool_geometry]\nnose_radius_um = 100.0\n",
+             r".* dy = 8 um .* misfits its model by 0\.7\d nm .* expected a misfit of at "
+             r"most 0\.6 nm")):
+        _, args, path = _args(tmp_path, toml)
+        errors = ErrorModel.from_toml(path)
+        scenario.refuse_unread_tool(args, machine, errors)  # inside its ranges
+        with pytest.raises(InputError, match=rf"--errors {re.escape(str(path))} " + words):
+            scenario.refuse_unfit_plane(args, quiet(errors), errors)
+
+
+def test_the_plane_check_before_the_cut_reads_the_misfit_the_tool_test_refuses_after_it():
+    # the same tool through the tool test (noise off): its plane check, after the sphere and
+    # the plane are cut, refuses a misfit of 0.68 nm (dx read from the sphere); the scenario's
+    # check before any cut turns the plane alone with dx from the kinematics and finds the
+    # same misfit
+    from types import SimpleNamespace
+    scenario = _scenario()
+    errors = {"tool": {"offset_um": [-6.0, -3.5, 0.0]},
+              "tool_geometry": {"nose_radius_um": 100.0}}
+    with pytest.raises(InputError, match=r"a misfit of (\d\.\d\d) nm") as after:
+        STSTurning().measure(machinesim.Lab("sts_lathe", errors, noise=False))
+    lab = machinesim.Lab("sts_lathe", errors, noise=False)
+    with pytest.raises(InputError, match=r"misfits its model by (\d\.\d\d) nm") as before:
+        scenario.refuse_unfit_plane(SimpleNamespace(errors="e.toml"), lab, lab.reveal())
+    assert re.search(r"a misfit of (\d\.\d\d) nm", str(after.value)).group(1) == re.search(
+        r"misfits its model by (\d\.\d\d) nm", str(before.value)).group(1)
+
+
 def test_a_workpiece_set_high_within_the_range_reads_the_tool_errors():
     # 14.5 um high, Table 5's tool errors: the sphere is cut 14.5 um deeper; started from
     # the programmed heights the fit read dR = -1815 um for 100 (2.9 um high already), from
@@ -359,7 +412,7 @@ def test_the_ends_of_the_ranges_are_taken_as_read():
                                          r"residual RMS \d+\.\d\d nm with the nose radius "
                                          r"error's form \(dR -85[23]\.\d\d um, the sphere's\).*"
                                          r"\(the sphere reads dx -10\.0[01] um, \|dy\| 3\.\d\d "
-                                         r"um\)\. .*\(tool\.x below about -6 um"):
+                                         r"um\)\. .*\(with dR 100 um, tool\.x below about -6 um"):
         STSTurning().measure(machinesim.Lab("sts_lathe", errors, noise=False))
 
 

@@ -78,7 +78,9 @@ D_RADIUS_RANGE = (-850 * UM, 300 * UM)
 #: plane's fit leaves out 30 um about the axis (`TEST_PLANE.core`); through the lab (noise
 #: off) dy = 10 um is read 0.4 % off, 15 and 20 um 1.7-2 %, 30 um 12 %, and at 40 um the
 #: sphere still fits (0.08 nm) but reads dR -1815 um for 100 um. The plane's residual check
-#: (`sts_plane_check`) refuses |dy| from about 10 um and dx below about -6 um (its core).
+#: (`sts_plane_check`) takes less: with dR 100 um, dx down to about -6 um at dy 0 and |dy| up
+#: to about 8 um at dx -3.5 um, less with a larger |dR|; scenarios/sts_turning.py refuses the
+#: rest before the cut (`refuse_unfit_plane`).
 CORE_LIMIT = 20 * UM
 #: Deepest (m) the test sphere may be cut below its programmed surface for the tool test:
 #: the plan cuts it 1 to 4.6 um deep (the stock's top `TEST_SPHERE.top` over the sphere's
