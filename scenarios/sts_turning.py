@@ -231,7 +231,7 @@ def refuse_unfit_plane(args, quiet_lab, errors) -> None:
         args, {}, keys or ["its errors"],
         f"the tool's offsets from the spindle axis dx = {dx / UM:.4g} um, dy = {dy / UM:.4g} "
         f"um with dR = {d_radius / UM:.4g} um, whose tilted test plane (turned before the "
-        f"cut with the noise off) misfits its model by {misfit / NM:.2f} nm",
+        f"cut with the noise off) misfits its model by {misfit / NM:.2f} nm; that",
         f"(the plane's fit leaves out {TEST_PLANE.core / UM:g} um about the spindle axis, "
         "and a nose cutting across the axis beyond it is refused by the plane's residual "
         "check after both test pieces are cut: with dR = 100 um, dx below about -6 um at dy "

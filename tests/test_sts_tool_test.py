@@ -315,9 +315,9 @@ def test_the_scenario_refuses_a_tool_whose_plane_the_residual_check_refuses_befo
              r"\(tool\.x, tool\.y, tool_geometry\.nose_radius\): the tool's offsets from the "
              r"spindle axis dx = -6 um, dy = -3\.5 um with dR = 100 um, whose tilted "
              r"test plane \(turned before the cut with the noise off\) misfits its model by "
-             r"0\.8\d nm exceeds"),
+             r"0\.8\d nm; that exceeds"),
             ("[tool]\noffset_um = [-3.5, 8, 0]\n[tool_geometry]\nnose_radius_um = 100.0\n",
-             r".* dy = 8 um .* misfits its model by 0\.7\d nm .* expected a misfit of at "
+             r".* dy = 8 um .* misfits its model by 0\.7\d nm; that .* expected a misfit of at "
              r"most 0\.6 nm")):
         _, args, path = _args(tmp_path, toml)
         errors = ErrorModel.from_toml(path)
