@@ -15,21 +15,13 @@ from __future__ import annotations
 
 import argparse
 import math
-import statistics
-import sys
-import time
-from pathlib import Path
 from unittest import mock
 
 import numpy as np
+from _tilted import alternate, nearest_material, swept_cut, swing
 
-from machinesim.cutting.engine import remove
 from machinesim.cutting.tilted_solids import SolidSplitter
 from machinesim.end_mills import BallEndMill
-from machinesim.workpiece import block
-
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-from test_cutting_tilted_profiles import _nearest_material  # noqa: E402
 
 RADIUS = 0.5e-3
 HALF = math.radians(1.0)
@@ -38,25 +30,14 @@ UNDER_TOP = 50e-6
 
 def _poses(n: int) -> np.ndarray:
     tip = np.array([5e-3, 5e-3, -(RADIUS + 2 * UNDER_TOP)])
-    pivot = np.array([5e-3, 5e-3, -UNDER_TOP])
-    poses = np.zeros((n + 1, 4, 4))
-    for i, angle in enumerate(np.linspace(-HALF, HALF, n + 1)):
-        c, s = math.cos(angle), math.sin(angle)
-        rotation = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-        poses[i, :3, :3] = rotation
-        poses[i, :3, 3] = pivot - rotation @ (pivot - tip)
-        poses[i, 3, 3] = 1.0
-    return poses
+    return swing(n, tip, np.array([5e-3, 5e-3, -UNDER_TOP]), HALF)
 
 
 def _cut(poses, split: bool):
-    began = time.perf_counter()
     if split:
-        part, report = remove(block(10e-3, 10e-3, 2e-3), BallEndMill(RADIUS), [poses])
-    else:
-        with mock.patch.object(SolidSplitter, "pieces", lambda self, *args: None):
-            part, report = remove(block(10e-3, 10e-3, 2e-3), BallEndMill(RADIUS), [poses])
-    return part, report, time.perf_counter() - began
+        return swept_cut(BallEndMill(RADIUS), poses)
+    with mock.patch.object(SolidSplitter, "pieces", lambda self, *args: None):
+        return swept_cut(BallEndMill(RADIUS), poses)
 
 
 def main() -> None:
@@ -65,15 +46,11 @@ def main() -> None:
     parser.add_argument("--sweeps", type=int, default=20)
     args = parser.parse_args()
     poses = _poses(args.sweeps)
-    runs = {True: [], False: []}
-    for _ in range(args.repeat):
-        for split in (True, False):
-            runs[split].append(_cut(poses, split))
     level = np.array([5e-3, 5e-3, -UNDER_TOP])
-    for split, name in ((True, "split pieces (default)"), (False, "one hull (before)")):
-        part, report, _ = runs[split][-1]
-        gap = _nearest_material(part, level, [0.0, math.pi])
-        engine = statistics.median(r[2] for r in runs[split])
+    for name, results, engine in alternate(lambda split: _cut(poses, split), args.repeat,
+                                           "split pieces (default)"):
+        part, report = results[-1]
+        gap = nearest_material(part, level, [0.0, math.pi])
         print(f"{name:24s} sweeps {args.sweeps:5d}  engine {engine:6.2f} s  past the side "
               f"{(gap - RADIUS / math.cos(HALF)) * 1e9:7.3f} nm  removed "
               f"{report.removed_volume * 1e18:.6g} um^3")

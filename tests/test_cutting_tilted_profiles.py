@@ -4,40 +4,14 @@ tolerance of its true sweep (`machinesim.cutting.tilted_profiles`)."""
 import math
 
 import numpy as np
+from tilted_cuts import nearest_material, swept_cut, swing
 
 import machinesim
-from machinesim.cutting.engine import remove
 from machinesim.cutting.tilted_profiles import clip_halfspace, halves
 from machinesim.nc import parse_program
 from machinesim.tools import VTool
-from machinesim.workpiece import block
 
 DEPTH = 50e-6
-
-
-def _nearest_material(part, origin, angles) -> float:
-    """The shortest distance (m) from ``origin`` along horizontal rays at ``angles`` (rad) to
-    the part's surface; 0 where the origin lies inside the part (the ray leaves it through
-    the block's far wall, more than 1 mm away) or on its surface."""
-    vertices, triangles = part.mesh()
-    tri = vertices[np.asarray(triangles, dtype=np.int64)] - origin
-    low, high = tri[:, :, 2].min(axis=1), tri[:, :, 2].max(axis=1)
-    a, b, c = (tri[(low <= 0.0) & (high >= 0.0), i] for i in range(3))
-    e1, e2 = b - a, c - a
-    best = math.inf
-    for angle in angles:
-        d = np.array([math.cos(angle), math.sin(angle), 0.0])
-        p = np.cross(d, e2)
-        det = np.einsum("ij,ij->i", e1, p)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            u = np.einsum("ij,ij->i", -a, p) / det
-            q = np.cross(-a, e1)
-            v = (q @ d) / det
-            t = np.einsum("ij,ij->i", e2, q) / det
-            hit = (det != 0.0) & (u >= 0.0) & (v >= 0.0) & (u + v <= 1.0) & (t >= 0.0)
-        first = float(t[hit].min()) if hit.any() else math.inf
-        best = min(best, 0.0 if first > 1e-3 else first)
-    return best
 
 
 def test_a_spun_v_leaves_the_wedges_it_never_swept():
@@ -64,24 +38,16 @@ def test_a_spun_v_leaves_the_wedges_it_never_swept():
     # opposite are never swept
     angles = np.radians(np.linspace(111.0, 269.0, 80))
     for z in (-0.01e-6, -DEPTH / 2):
-        gap = _nearest_material(part, np.array([5e-3, 5e-3, z]), angles)
+        gap = nearest_material(part, np.array([5e-3, 5e-3, z]), angles)
         assert gap <= tolerance, (z, gap)
 
 
-def _swing(n: int, pivot_height: float, swing: float):
+def _swing(n: int, pivot_height: float, swing_angle: float):
     """Poses (n + 1, 4, 4) of a profile whose edge point stands DEPTH * 2 under the stock's
-    top at (5, 5) mm, turned about the Y line ``pivot_height`` above it from -swing / 2 to
-    +swing / 2 (rad)."""
+    top at (5, 5) mm, turned about the Y line ``pivot_height`` above it from
+    -swing_angle / 2 to +swing_angle / 2 (rad)."""
     tip = np.array([5e-3, 5e-3, -2 * DEPTH])
-    pivot = tip + np.array([0.0, 0.0, pivot_height])
-    poses = np.zeros((n + 1, 4, 4))
-    for i, angle in enumerate(np.linspace(-swing / 2, swing / 2, n + 1)):
-        c, s = math.cos(angle), math.sin(angle)
-        rotation = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-        poses[i, :3, :3] = rotation
-        poses[i, :3, 3] = pivot - rotation @ (pivot - tip)
-        poses[i, 3, 3] = 1.0
-    return poses
+    return swing(n, tip, tip + np.array([0.0, 0.0, pivot_height]), swing_angle / 2)
 
 
 def test_a_flank_swung_about_a_line_inside_the_stock_keeps_its_waist():
@@ -94,15 +60,15 @@ def test_a_flank_swung_about_a_line_inside_the_stock_keeps_its_waist():
     (50 um * d**2 / 8)."""
     tool = VTool(math.radians(90.0))
     poses = _swing(20, DEPTH, math.radians(4.0))
-    part, _ = remove(block(10e-3, 10e-3, 2e-3), tool, [poses])
+    part, _ = swept_cut(tool, poses)
     level = np.array([5e-3, 5e-3, -DEPTH])
     for angle in (0.0, math.pi):
-        gap = _nearest_material(part, level, [angle])
+        gap = nearest_material(part, level, [angle])
         assert gap <= 1e-10, (angle, gap)
     # and it cut: 10 um below the line the profile's centre line, turned 2 deg, reaches
     # 10 um tan 2 deg = 349 nm to either side
     for angle in (0.0, math.pi):
-        below = _nearest_material(part, level - np.array([0.0, 0.0, 10e-6]), [angle])
+        below = nearest_material(part, level - np.array([0.0, 0.0, 10e-6]), [angle])
         assert math.isclose(below, 10e-6 * math.tan(math.radians(2.0)), rel_tol=1e-6), below
 
 

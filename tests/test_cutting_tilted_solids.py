@@ -5,12 +5,10 @@ import math
 
 import numpy as np
 import pytest
-from test_cutting_tilted_profiles import _nearest_material
+from tilted_cuts import nearest_material, swept_cut, swing, turned_about_y
 
-from machinesim.cutting.engine import remove
 from machinesim.cutting.tilted_solids import SolidSplitter
 from machinesim.end_mills import BallEndMill, FlatEndMill
-from machinesim.workpiece import block
 
 RADIUS = 0.5e-3
 HALF_SWING = math.radians(1.0)
@@ -23,15 +21,7 @@ def _swing(n: int, tip_depth: float, pivot_height: float):
     (5, 5) mm, turned about the Y line ``pivot_height`` above the tip from -HALF_SWING to
     +HALF_SWING."""
     tip = np.array([5e-3, 5e-3, -tip_depth])
-    pivot = tip + np.array([0.0, 0.0, pivot_height])
-    poses = np.zeros((n + 1, 4, 4))
-    for i, angle in enumerate(np.linspace(-HALF_SWING, HALF_SWING, n + 1)):
-        c, s = math.cos(angle), math.sin(angle)
-        rotation = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-        poses[i, :3, :3] = rotation
-        poses[i, :3, 3] = pivot - rotation @ (pivot - tip)
-        poses[i, 3, 3] = 1.0
-    return poses
+    return swing(n, tip, tip + np.array([0.0, 0.0, pivot_height]), HALF_SWING)
 
 
 @pytest.mark.parametrize("kind", ["flat", "ball"])
@@ -46,17 +36,15 @@ def test_a_side_swung_about_a_line_inside_the_stock_keeps_its_waist(kind):
     else:
         tool, pivot_height = BallEndMill(RADIUS, chord_tol=1e-5), RADIUS + ABOVE
     depth = pivot_height + UNDER_TOP
-    part, _ = remove(block(10e-3, 10e-3, 2e-3), tool, [_swing(4, depth, pivot_height)])
+    part, _ = swept_cut(tool, _swing(4, depth, pivot_height))
     level = np.array([5e-3, 5e-3, -UNDER_TOP])
     for angle in (0.0, math.pi):
-        gap = _nearest_material(part, level, [angle])
+        gap = nearest_material(part, level, [angle])
         assert abs(gap - RADIUS / math.cos(HALF_SWING)) <= 1e-10, (angle, gap)
 
 
 def _pose(angle: float, pivot: np.ndarray):
-    c, s = math.cos(angle), math.sin(angle)
-    rotation = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-    return rotation, pivot - rotation @ pivot
+    return turned_about_y(angle, pivot, np.zeros(3))
 
 
 def test_the_plane_is_the_line_the_tilt_crosses():
