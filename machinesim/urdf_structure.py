@@ -146,13 +146,8 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
     in_link = (lines or {}).get("in_link", ())
     inside = 0  # the links' children and grandchildren before this link's, for their lines
     for index, link in enumerate(root.findall("link")):
-        name = link.get("name")
         at = _at(path, lines, "link", index)
-        if not name:
-            raise ModelError(f"{at}: a <link> has no name=...")
-        if name in links:
-            raise ModelError(f"{at}: link {name!r} is defined twice; link names are unique")
-        _check_reserved(name, "link", at)
+        name = _unique_name(link, "link", at, links)
         count = len(link) + sum(len(child) for child in link)
         _check_link_once(link, f"{at}: link {name!r}", in_link[inside:inside + count])
         inside += count
@@ -164,13 +159,8 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
     children = 0  # the joints' children before this joint's, for their lines
     element_at = _in_joint_at(root, path, lines)
     for index, joint in enumerate(root.findall("joint")):
-        name = joint.get("name")
         at = _at(path, lines, "joint", index)
-        if not name:
-            raise ModelError(f"{at}: a <joint> has no name=...")
-        if name in joints:
-            raise ModelError(f"{at}: joint {name!r} is defined twice; joint names are unique")
-        _check_reserved(name, "joint", at)
+        name = _unique_name(joint, "joint", at, joints)
         joints[name] = joint
         where = f"{at}: joint {name!r}"
         _check_once(joint, _ONCE_IN_JOINT, where, in_joint[children:children + len(joint)])
@@ -380,6 +370,18 @@ def _check_acyclic(links, parent_joint, parent_link, path) -> None:
 
 #: Suffixes of the error joints machinesim inserts (`kinematics.augment_urdf`).
 _RESERVED = {f"{prefix}_{dof}" for prefix in ("tool", "workpiece") for dof in DOFS}
+
+
+def _unique_name(element: ET.Element, kind: str, at: str, seen) -> str:
+    """The name of a <link> or <joint> (``kind``) at ``at``: refused when it has none, when
+    ``seen`` (the names before it) holds it, or when it is reserved (`_check_reserved`)."""
+    name = element.get("name")
+    if not name:
+        raise ModelError(f"{at}: a <{kind}> has no name=...")
+    if name in seen:
+        raise ModelError(f"{at}: {kind} {name!r} is defined twice; {kind} names are unique")
+    _check_reserved(name, kind, at)
+    return name
 
 
 def _check_reserved(name: str, kind: str, path) -> None:
