@@ -89,7 +89,8 @@ class SolidSplitter:
         order = np.argsort(face.reshape(-1), kind="stable")
         face = face.reshape(-1)[order]
         self.corners = corner[order]
-        self.starts = np.flatnonzero(np.r_[True, face[1:] != face[:-1]])
+        # (a tool with no straight side, a ball as high as its radius, has no face)
+        self.starts = np.flatnonzero(np.r_[len(face) > 0, face[1:] != face[:-1]])
         self.normals = normal[order][self.starts]
         mesh = manifold3d.Mesh64(vert_properties=np.array(vertices, dtype=np.float64),
                                  tri_verts=np.array(triangles, dtype=np.uint64))
