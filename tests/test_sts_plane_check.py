@@ -132,3 +132,16 @@ def test_a_turned_plane_with_a_bump_is_refused_by_the_tool_test(monkeypatch):
                                          r"0\.60 nm\)"):
         sts_turning.test_cut(_lab(None), 1e-3, "nose:1.0:90", "tool_test")
     assert TEST_PLANE.slope == K
+
+
+@pytest.mark.parametrize("value, shown", [("1e-4", "'1e-4'"), (True, "True"), (None, "None"),
+                                          (float("nan"), None)])
+def test_a_nose_radius_error_that_is_no_number_is_refused_by_name(value, shown):
+    """d_radius (the sphere's dR) is a finite number of m: a str or None was a numpy
+    TypeError, True was taken as a 1 m radius error (a residual of 70.7 um)."""
+    with pytest.raises(InputError, match="d_radius") as caught:
+        fit_centre_height(GRID, GRID, _turned_plane(), K, aperture=100 * UM, core=30 * UM,
+                          dx=DX, d_radius=value)
+    assert caught.value.key == "d_radius"
+    if shown is not None:
+        assert str(caught.value).endswith(f"got {shown}")

@@ -41,6 +41,7 @@ from scipy.optimize import least_squares
 from machinesim.cam.spiral import Design
 from machinesim.cutting.tool_form_error import nose_radius_error
 from machinesim.exceptions import InputError, NotConvergedError
+from machinesim.metrology._arrays import as_number
 
 #: A map whose median lies deeper (m) below the design's heights than this is fitted from
 #: that median as its piston, not from 0: from 0 the fit settled on dR = -1815 um (for 100,
@@ -296,9 +297,8 @@ def fit_centre_height(x, y, heights, slope: float, *, aperture: float, core: flo
                          key="noise")
     lateral = _check_lateral(lateral_sigma)
     k = float(slope)
-    if not np.isfinite(d_radius):
-        raise InputError(f"Expected d_radius as a finite length (m), got {d_radius!r}",
-                         key="d_radius")
+    # a number, not a str or a bool (True is no 1 m radius error)
+    d_radius = as_number(d_radius, "d_radius")
     if not (abs(k) > 0.0) or not np.isfinite(k):
         raise InputError(f"Expected a tilted plane (finite slope != 0), got {slope!r}",
                          key="slope")
