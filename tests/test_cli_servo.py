@@ -16,14 +16,20 @@ damping_N_s_per_m = 1600.0
 LINE = "G90 G21 G17\nG00 X1. Y5. Z0.1\nG01 Z-0.001 F60.\nG01 X9. F600.\nG00 Z1.\nM30\n"
 
 
-def test_a_servo_file_lags_the_cut_by_v_c_over_kp(tmp_path, capsys):
-    # a PD loop's steady ramp error is v c / Kp: 10 mm/s x 1600 / 1.2e6 = 13.333 um
+
+def _cut_line(tmp_path, capsys, servo_text: str):
+    """`machinesim cut` of LINE with a --servo file holding ``servo_text`` and a --report:
+    the servo file's path, the report's, and the command's (status, stdout, stderr)."""
     servo, program = tmp_path / "servo.toml", tmp_path / "line.nc"
-    servo.write_text(PD_X)
+    servo.write_text(servo_text)
     program.write_text(LINE)
     report = tmp_path / "r.json"
-    code, out, err = run(["cut", program, *CUT, "--servo", servo, "--out", tmp_path / "p.ply",
-                          "--report", report], capsys)
+    return servo, report, run(["cut", program, *CUT, "--servo", servo, "--out",
+                               tmp_path / "p.ply", "--report", report], capsys)
+
+def test_a_servo_file_lags_the_cut_by_v_c_over_kp(tmp_path, capsys):
+    # a PD loop's steady ramp error is v c / Kp: 10 mm/s x 1600 / 1.2e6 = 13.333 um
+    servo, report, (code, out, err) = _cut_line(tmp_path, capsys, PD_X)
     assert code == 0, err
     lag = json.loads(report.read_text())["peak_following_error_um_or_urad"]
     assert lag["X"] == pytest.approx(10e-3 * 1600.0 / 1.2e6 * 1e6, rel=1e-4)
@@ -64,12 +70,7 @@ def test_a_servo_file_without_a_table_is_noted(tmp_path, capsys, text):
     # an empty file, or one whose tables are commented out, printed 'largest following
     # error: X 0.0000 um, ...' with exit 0 and no word that no loop had been read, where an
     # --errors file that sets nothing is noted
-    servo, program = tmp_path / "servo.toml", tmp_path / "line.nc"
-    servo.write_text(text)
-    program.write_text(LINE)
-    report = tmp_path / "r.json"
-    code, out, err = run(["cut", program, *CUT, "--servo", servo, "--out", tmp_path / "p.ply",
-                          "--report", report], capsys)
+    servo, report, (code, out, err) = _cut_line(tmp_path, capsys, text)
     assert code == 0, err
     said = (f"{servo} sets no servo loop (no axis table): every axis followed its command "
             "exactly, a following error of 0")

@@ -386,16 +386,22 @@ def test_a_microscope_too_noisy_to_find_the_ramp_groove_is_named_as_the_likelier
     assert height_scatter(1e-6 * rng.standard_normal(4000)) == pytest.approx(1e-6, rel=0.05)
     v = np.abs(np.linspace(-50e-6, 50e-6, 1001)) - 20e-6  # a V and its land, straight
     assert height_scatter(np.minimum(v, 0.0)) == 0.0
-    plan = CalibrationPlan(angles=(0.0,))
-    part, _ = cut(plan.program(r0), machine, tool="v:90", stock=plan.stock,
-                  errors=errors_for(PAPER_R, PAPER_E, r0))
-    with pytest.raises(InputError) as info:
-        measure_calibration(part, plan, Microscope(sigma=1e-6, rng=1))
-    message = str(info.value)
+    message = str(_read_noisy(machine, r0, 1e-6))
     assert "microscope's readings are likely too noisy" in message
     scatter = float(message.split("scatter by ")[1].split(" um")[0])
     assert scatter == pytest.approx(1.0, rel=0.1)  # the microscope's 1 um, read back
     assert "else the edge's offset" in message and "capture range 1 mm" in message
+
+
+def _read_noisy(machine, r0, sigma: float) -> InputError:
+    """The refusal of a one-ramp calibration part (cut on paper 000's errors) read by a
+    microscope of height noise ``sigma`` (m); fails the test when it is read."""
+    plan = CalibrationPlan(angles=(0.0,))
+    part, _ = cut(plan.program(r0), machine, tool="v:90", stock=plan.stock,
+                  errors=errors_for(PAPER_R, PAPER_E, r0))
+    with pytest.raises(InputError) as info:
+        measure_calibration(part, plan, Microscope(sigma=sigma, rng=1))
+    return info.value
 
 
 def test_a_microscope_noisy_enough_to_read_a_false_dip_down_the_ramp_is_named(machine, r0):
@@ -404,13 +410,9 @@ def test_a_microscope_noisy_enough_to_read_a_false_dip_down_the_ramp_is_named(ma
     groove starts (its edge 0.9 mm above the surface there): the stations below it hold no
     groove, and the reading ended in the fit's bare 'Expected one whole V groove in the
     profile, found 0' (a campaign's --vary microscope.sigma=500nm failed every trial so)."""
-    plan = CalibrationPlan(angles=(0.0,))
-    part, _ = cut(plan.program(r0), machine, tool="v:90", stock=plan.stock,
-                  errors=errors_for(PAPER_R, PAPER_E, r0))
-    with pytest.raises(InputError) as info:
-        measure_calibration(part, plan, Microscope(sigma=0.5e-6, rng=1))
-    message = str(info.value)
-    assert info.value.key == "microscope"
+    refused = _read_noisy(machine, r0, 0.5e-6)
+    message = str(refused)
+    assert refused.key == "microscope"
     assert "Expected one whole V groove in the profile, found 0" in message  # the fit's word
     assert "microscope's readings are likely too noisy" in message
     assert "ramp station where the walk down it found the groove" in message
