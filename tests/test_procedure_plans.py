@@ -14,6 +14,7 @@ from machinesim.exceptions import InputError
 from machinesim.procedures import sts_plans as sts
 from machinesim.procedures.sphere_probing import ProbePlan
 from machinesim.procedures.sts_plans import ProgramPlan
+from machinesim.procedures.tool_rotation_arm import CalibrationPlan
 
 CA = {"distribution": "CA", "step": 0.01}
 # sts.TestSphere, not imported by its name: pytest would collect a class named Test*
@@ -70,3 +71,21 @@ def test_numpy_numbers_are_numbers_of_the_plans():
     assert sts.TestSphere(radius=np.float32(0.5)).radius == 0.5
     with pytest.raises(InputError, match=r"points as a whole number >= 5, got 41\.0"):
         ProbePlan(points=41.0)
+
+
+@pytest.mark.parametrize("make, key, message", [
+    (lambda: ProbePlan(half_width=10**400), "half_width",
+     "Expected a finite half_width (m), got an int of 1329 bits, beyond float64"),
+    (lambda: Plan(depth=-10**400), "depth",
+     "Expected a finite depth (m), got an int of 1329 bits, beyond float64"),
+    (lambda: CalibrationPlan(angles=(0.0, 10**400)), "angles",
+     "Expected angles as tool angles (rad) within float64's range, got an int too large to "
+     "convert"),
+])
+def test_an_int_beyond_float64_is_refused_naming_its_field(make, key, message):
+    """A Python int has no bound: 10**400 (1329 bits) went to float() and raised Python's
+    OverflowError ('int too large to convert to float'), a traceback naming no field."""
+    with pytest.raises(InputError) as info:
+        make()
+    assert info.value.key == key
+    assert str(info.value) == f"key '{key}': {message}"

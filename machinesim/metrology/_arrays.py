@@ -54,7 +54,11 @@ def as_number(value, name: str, *, sign: str = "any", unit: str = "m",
     if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
         raise InputError(f"Expected {name} as a number ({unit}), got {shown(value)}",
                          key=name)
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond float64 (10**400): no finite float
+        raise InputError(f"Expected a finite {name} ({unit}), got an int of "
+                         f"{int(value).bit_length()} bits, beyond float64", key=name) from None
     check = _SIGNS[sign]
     if not math.isfinite(number) or (check is not None and not check(number)):
         want = f"a finite {name}" if check is None else f"{name} {sign}"
@@ -99,7 +103,11 @@ def as_floats(value, name: str, what: str = "numbers (m)") -> np.ndarray:
         kind = "f"
     if kind not in "iuf":
         raise InputError(f"Expected {name} as {what}, got {shown(value)}", key=name)
-    return np.array(array, dtype=np.float64)
+    try:
+        return np.array(array, dtype=np.float64)
+    except OverflowError:  # an int beyond float64 (10**400), held as an object
+        raise InputError(f"Expected {name} as {what} within float64's range, got an int "
+                         "too large to convert", key=name) from None
 
 
 def point_rows(points, width: int, name: str) -> np.ndarray:
