@@ -60,7 +60,7 @@ def load_result(path) -> Result:
         raise InputError(f"the saved result: {error.message}", source=str(path),
                          key=error.key) from None
     except (pickle.UnpicklingError, EOFError, ValueError, TypeError, AttributeError,
-            ImportError, IndexError, KeyError, MemoryError) as error:
+            ImportError, IndexError, KeyError, MemoryError, OverflowError) as error:
         raise InputError(f"not a whole saved result ({type(error).__name__}: "
                          f"{brief(str(error))}): cut short, damaged, or written by another "
                          "version of machinesim; expected what save_result writes",
