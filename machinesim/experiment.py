@@ -64,8 +64,8 @@ def _number(value, name: str) -> float | None:
         return None
     try:
         number = float(value)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected {name} as a number or None, got {value!r}",
+    except (TypeError, ValueError, OverflowError) as error:  # 10**400: beyond float64
+        raise InputError(f"Expected {name} as a number or None, got {brief(repr(value))}",
                          key=name) from error
     return number if math.isfinite(number) else None
 
@@ -140,7 +140,7 @@ def _parameters(values: Mapping, what: str) -> Mapping[str, tuple[float, float]]
                              key=name)
         try:
             out[str(name)] = (float(pair[0]), float(pair[1]))
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):  # 10**400: beyond float64
             raise InputError(f"Expected {what}[{name!r}] as numbers (value, std), got "
                              f"{brief(repr(value))}", key=name) from None
     return MappingProxyType(out)

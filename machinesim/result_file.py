@@ -97,7 +97,7 @@ def check_result(result: Result) -> None:
     identified = result.identified
     if not isinstance(identified, Mapping) or not all(
             isinstance(k, str) and isinstance(v, tuple) and len(v) == 2 and _finite(v[0])
-            and _real(v[1]) and not v[1] < 0.0 for k, v in identified.items()):
+            and _float(v[1]) is not None and not v[1] < 0.0 for k, v in identified.items()):
         refuse("identified", "a mapping of parameter names to (value, std): a finite number "
                              "and a number >= 0 or NaN (SI)")
     elapsed = result.elapsed_s
@@ -120,9 +120,17 @@ def check_result(result: Result) -> None:
             refuse(key, "a tuple of names")
 
 
-def _real(value) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_)
+def _float(value) -> float | None:
+    """``value`` as a float: a real number (no bool) within float64's range, else None (an
+    int of 10**400 is a number float() refuses: 'int too large to convert')."""
+    if not isinstance(value, numbers.Real) or isinstance(value, bool | np.bool_):
+        return None
+    try:
+        return float(value)
+    except OverflowError:
+        return None
 
 
 def _finite(value) -> bool:
-    return _real(value) and math.isfinite(value)
+    number = _float(value)
+    return number is not None and math.isfinite(number)
