@@ -132,8 +132,9 @@ def test_a_campaign_its_procedure_refuses_fails_before_any_trial(tmp_path, monke
     assert "the drawn landing sets the grooves' block 100.0 um high" in message
     assert "rapids would run into the block" in message
     assert ran == [] and not out.exists()
-    # every draw of a uniform 100..200 um crashes too; a normal centred there, half or more
-    for text in ("uniform:100um,200um", "normal:100um,10um"):
+    # every draw of a uniform 100..200 um crashes too, and all but 0.13 % of a normal whose
+    # 3 sigma below its mean (70 um, 61 um) still crash
+    for text in ("uniform:100um,200um", "normal:100um,10um", "normal:70um,3um"):
         with pytest.raises(InputError, match="rapids would run into the block"):
             run("workpiece_setting_grooves", 50, vary=[f"workpiece.z={text}"], out=out,
                 workers=0, progress=False)
@@ -144,6 +145,10 @@ def test_a_campaign_its_procedure_refuses_fails_before_any_trial(tmp_path, monke
     ("workpiece_setting_grooves", ["workpiece.z=50um"], {}),  # below the 60 um: cut
     ("workpiece_setting_grooves", ["workpiece.z=uniform:0um,100um"], {}),  # some draws cut
     ("workpiece_setting_grooves", ["workpiece.z=normal:0um,100um"], {}),
+    # centred on the 60 um where the rapids crash, half its trials below it cut: it was
+    # refused at its mean; now checked at 60 - 3 x 30 um, below zero, so at 0
+    ("workpiece_setting_grooves", ["workpiece.z=normal:60um,30um"], {}),
+    ("workpiece_setting_grooves", ["workpiece.z=normal:80um,9um"], {}),  # 53 um, cut
     ("workpiece_setting_grooves", ["workpiece.z=100um"], {"identify_only": True}),  # no cut
     ("workpiece_setting_grooves", ["robot.repeatability=300um"], {}),  # 23 % of landings
     ("tool_rotation_arm", VARY, {}),

@@ -20,10 +20,22 @@ from machinesim.exceptions import InputError, MachineSimError
 __all__ = ["check_before_trials"]
 
 
+#: A normal is checked at its draw nearest zero within this many standard deviations of its
+#: mean: a refusal there is one of all but 0.13 % of its trials (for a check that refuses
+#: values beyond a bound), where one at its mean was one of half of them, or more.
+NORMAL_REACH = 3.0
+
+
 def _around(dist: Distribution) -> float:
     """The value of ``dist`` the check takes: the draw nearest zero (a fixed value; a
-    uniform's LOW or HIGH, or zero for one across it), a normal's mean (`_nearest`): a
-    refusal there is one of every trial (half of them for a normal, or more)."""
+    uniform's LOW or HIGH, or zero for one across it; a normal's within `NORMAL_REACH`
+    standard deviations of its mean, zero for one whose reach crosses it). A refusal there
+    is one of every trial (of all but 0.13 % for a normal). A normal's mean
+    (`_nearest`, which `refuse_beyond_model` takes) is no such value: ``workpiece.z=normal:
+    60um,30um``, half of whose trials the grooves take, was refused at its 60 um."""
+    if dist.kind == "normal":
+        low, high = dist.a - NORMAL_REACH * dist.b, dist.a + NORMAL_REACH * dist.b
+        return low if low > 0.0 else high if high < 0.0 else 0.0
     value = _nearest(dist)
     return 0.0 if value is None else value
 
@@ -56,7 +68,8 @@ def check_before_trials(spec) -> None:
             spec.entry.check(model)
         Lab(spec.machine, model, noise=spec.noise, seed=0)
     except MachineSimError as error:
-        at = {"normal": " at its mean", "uniform": " at its draw nearest zero"}
+        at = {"normal": f" at its draw nearest zero within {NORMAL_REACH:g} sigma of its mean",
+              "uniform": " at its draw nearest zero"}
         shown = [f"{name}={dist.text}{at.get(dist.kind, '')}"
                  for name, dist in varied.items() if name not in LAB_PARAMETERS]
         if "robot.repeatability" in lab:
