@@ -145,3 +145,40 @@ def test_a_nose_radius_error_that_is_no_number_is_refused_by_name(value, shown):
     assert caught.value.key == "d_radius"
     if shown is not None:
         assert str(caught.value).endswith(f"got {shown}")
+
+
+@pytest.mark.parametrize("field, value, message", [
+    # taken before: True a slope of 1 (dy -0.086 um for -3.5), a 1 m dx, a 1 m noise and
+    # lateral noise, a slope '0.02' float()ed
+    ("slope", True, "Expected slope as a number (m per m), got True"),
+    ("slope", "0.02", "Expected slope as a number (m per m), got '0.02'"),
+    ("dx", True, "Expected dx as a number (m), got True"),
+    ("noise", True, "Expected noise as a number (m), got True"),
+    ("lateral_sigma", True, "Expected lateral_sigma as a number (m), got True"),
+    # numpy's UFuncTypeError / TypeError, scipy's ValueError or LinAlgError before
+    ("dx", "1e-6", "Expected dx as a number (m), got '1e-6'"),
+    ("dx", math.nan, "Expected a finite dx (m), got nan"),
+    ("aperture", "1e-4", "Expected aperture as a number (m), got '1e-4'"),
+    ("core", None, "Expected core as a number (m), got None"),
+    ("core", -1.0, "Expected core >= 0 (m), got -1.0"),
+    ("noise", "1e-9", "Expected noise as a number (m), got '1e-9'"),
+])
+def test_the_plane_fit_s_other_numbers_are_refused_by_name_as_d_radius_is(field, value,
+                                                                            message):
+    arguments = {"slope": K, "aperture": 100 * UM, "core": 30 * UM, "dx": DX,
+                 "d_radius": DR, field: value}
+    slope = arguments.pop("slope")
+    with pytest.raises(InputError) as caught:
+        fit_centre_height(GRID, GRID, _turned_plane(), slope, **arguments)
+    assert caught.value.key == field
+    assert str(caught.value) == f"key '{field}': {message}"
+
+
+def test_numpy_numbers_fit_the_plane_as_the_floats_they_are():
+    z = _turned_plane(noise=0.5 * NM)
+    plain = _fit(z, noise=0.5 * NM)
+    numpy = fit_centre_height(GRID, GRID, z, np.float64(K), aperture=np.float64(100 * UM),
+                              core=np.float64(30 * UM), dx=np.float64(DX),
+                              noise=np.float64(0.5 * NM), lateral_sigma=np.float64(0.0),
+                              d_radius=np.float64(DR))
+    assert numpy == plain

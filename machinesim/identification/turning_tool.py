@@ -149,12 +149,11 @@ def _fit_std(result, noise: float | None = None, shifts=()) -> np.ndarray:
 
 
 def _check_lateral(lateral_sigma) -> float:
+    """The stated lateral noise (m), 0 for None: a number >= 0, not a str or a bool (True
+    is no 1 m)."""
     if lateral_sigma is None:
         return 0.0
-    if not (np.isfinite(lateral_sigma) and lateral_sigma >= 0.0):
-        raise InputError(f"Expected lateral_sigma as a finite length >= 0 (m) or None, got "
-                         f"{lateral_sigma!r}", key="lateral_sigma")
-    return float(lateral_sigma)
+    return as_number(lateral_sigma, "lateral_sigma", sign=">= 0")
 
 
 def identify_tool_errors(design: Design, x, y, heights, *, core_step: float,
@@ -292,14 +291,16 @@ def fit_centre_height(x, y, heights, slope: float, *, aperture: float, core: flo
     if z.shape != (y.size, x.size):
         raise InputError(f"Expected heights of shape ({y.size}, {x.size}), got {z.shape}",
                          key="heights")
-    if noise is not None and not (np.isfinite(noise) and noise >= 0.0):
-        raise InputError(f"Expected noise as a finite height >= 0 (m) or None, got {noise!r}",
-                         key="noise")
+    if noise is not None:
+        noise = as_number(noise, "noise", sign=">= 0")
     lateral = _check_lateral(lateral_sigma)
-    k = float(slope)
-    # a number, not a str or a bool (True is no 1 m radius error)
+    # numbers, not a str or a bool (True is no 1 m radius error, nor a slope of 1)
+    k = as_number(slope, "slope", unit="m per m")
+    aperture = as_number(aperture, "aperture", sign="> 0")
+    core = as_number(core, "core", sign=">= 0")
+    dx = as_number(dx, "dx")
     d_radius = as_number(d_radius, "d_radius")
-    if not (abs(k) > 0.0) or not np.isfinite(k):
+    if not (abs(k) > 0.0):
         raise InputError(f"Expected a tilted plane (finite slope != 0), got {slope!r}",
                          key="slope")
     px, py = np.meshgrid(x, y)
