@@ -49,9 +49,10 @@ def check_readable_file(path, what: str) -> Path:
     Raises
     ------
     InputError
-        Naming ``path`` when it does not exist, is a folder or a device, or cannot be opened.
+        Naming ``path`` when it does not exist, is a folder or a device, or cannot be opened;
+        key 'path' when it is no file name (None, bytes, a number: `check_path`).
     """
-    path = Path(path)
+    path = Path(check_path(path, f"reading the {what}"))
     try:
         if path.is_dir():
             raise FileError(f"is a folder; expected the {what} file", source=str(path))

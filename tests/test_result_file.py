@@ -172,3 +172,13 @@ def test_an_int_beyond_float64_is_no_figure_nor_identified_value():
     with pytest.raises(InputError, match=r"as numbers \(value, std\)") as refused:
         Identified({"workpiece.x": (0.0, -10**400)})
     assert refused.value.key == "workpiece.x"
+
+
+@pytest.mark.parametrize("path", [None, b"run.pkl", 5])
+def test_a_saved_result_named_by_no_file_name_is_refused_as_such(path):
+    # save_result refused these (check_path); load_result's check_readable_file gave them
+    # to Path(), a TypeError traceback ('expected str, bytes or os.PathLike object')
+    with pytest.raises(InputError, match=r"reading the saved result: expected a file name "
+                                         r"\(str or pathlib.Path\), got ") as refused:
+        load_result(path)
+    assert refused.value.key == "path"
