@@ -169,9 +169,10 @@ def test_a_page_too_long_for_its_stl_visuals_says_so_not_to_show_fewer_triangles
     files = 4 * -(-2 * 100_084 // 3)  # as base64: 266,892 characters
     monkeypatch.setattr(scene_module, "SCRIPT_CHARS_MOST", files)
     with pytest.raises(InputError, match=re.escape(
-            "it would open blank; the machine's STL visuals alone are 0.2 MB (266,892 "
-            "characters), which no --max-triangles makes smaller: give it STL files of at "
-            "most 0.2 MB in all (fewer triangles, decimated in a mesh tool)")):
+            "it would open blank; the machine's mesh files (STL, OBJ, DAE visuals) alone are "
+            "0.2 MB (266,892 characters), which no --max-triangles makes smaller: give it "
+            "mesh files of at most 0.2 MB in all (fewer triangles, decimated in a mesh "
+            "tool)")):
         scene.to_html()
     monkeypatch.setattr(scene_module, "SCRIPT_CHARS_MOST", 536_870_888)
     text = scene.to_html()
@@ -181,4 +182,30 @@ def test_a_page_too_long_for_its_stl_visuals_says_so_not_to_show_fewer_triangles
     with pytest.raises(InputError, match=re.escape(
             f"show fewer triangles (--max-triangles at least {rest / (rest // 2):.2g} times "
             "lower)")):
+        scene.to_html()
+
+
+def test_an_obj_visual_s_file_counts_in_the_page_as_an_stl_s_does(tmp_path, monkeypatch):
+    # Pinocchio reads an OBJ, and its visualizer sends the file's text to the page all the
+    # same (4/3 of its bytes as base64, as an STL's): it was not counted, so a page too long
+    # for OBJ or DAE visuals was told to lower --max-triangles, which cannot shorten it
+    (tmp_path / "mill/urdf/meshes").mkdir(parents=True)
+    n = 500
+    fan = ["o fan", *(f"v {0.02 * np.cos(2 * np.pi * k / n):.6f} "
+                      f"{0.02 * np.sin(2 * np.pi * k / n):.6f} 0" for k in range(n)), "v 0 0 0",
+           *(f"f {n + 1} {k + 1} {(k + 1) % n + 1}" for k in range(n))]
+    obj = tmp_path / "mill/urdf/meshes/base.obj"
+    obj.write_text("\n".join(fan) + "\n")
+    (tmp_path / "mill/urdf/meshes/table.stl").write_bytes(binary_stl(10))  # 584 bytes
+    path = meshed_machine(tmp_path, {"base": mesh_visual("meshes/base.obj"),
+                                     "table": mesh_visual("meshes/table.stl")})
+    scene = machine_scene(load_machine(path))
+    assert scene.warnings == []
+    assert scene.mesh_file_bytes == obj.stat().st_size + 584
+    assert machine_scene(load_machine("grooving_4axis")).mesh_file_bytes == 0  # boxes only
+    import machinesim.viewer.scene as scene_module
+
+    monkeypatch.setattr(scene_module, "SCRIPT_CHARS_MOST", 4 * -(-scene.mesh_file_bytes // 3))
+    with pytest.raises(InputError, match=r"the machine's mesh files \(STL, OBJ, DAE visuals\) "
+                                         r"alone are .* no --max-triangles makes smaller"):
         scene.to_html()

@@ -66,7 +66,7 @@ class Scene:
         self.legends: list[Legend] = []
         self.notes: list[str] = []
         self.warnings: list[str] = []  # shown in the overlay and printed by the command
-        #: Bytes of the mesh files sent as they are (a machine's STL visuals,
+        #: Bytes of the mesh files sent as they are (a machine's STL, OBJ and DAE visuals,
         #: `machinesim.viewer.visuals`): no triangle budget makes them smaller.
         self.mesh_file_bytes = 0
         self.vis = meshcat.Visualizer(window=_Recorder(self._frames))
@@ -165,9 +165,9 @@ class Scene:
             files = 4 * -(-self.mesh_file_bytes // 3)  # their characters, as base64
             if files >= SCRIPT_CHARS_MOST:
                 raise InputError(
-                    f"{too_long}the machine's STL visuals alone are "
+                    f"{too_long}the machine's mesh files (STL, OBJ, DAE visuals) alone are "
                     f"{self.mesh_file_bytes / 2**20:,.1f} MB ({files:,} characters), which "
-                    f"no --max-triangles makes smaller: give it STL files of at most "
+                    f"no --max-triangles makes smaller: give it mesh files of at most "
                     f"{3 * SCRIPT_CHARS_MOST / 4 / 2**20:,.1f} MB in all (fewer triangles, "
                     "decimated in a mesh tool)")
             raise InputError(f"{too_long}show fewer triangles (--max-triangles at least "

@@ -33,6 +33,8 @@ from machinesim.viewer.scene import Scene
 #: a file that Pinocchio cannot read is then left out with a warning, and `_stl_readable`
 #: is the check that stands in for that read for an STL.
 DEFERRED_SUFFIXES = (".stl",)
+#: Mesh files Pinocchio's `MeshcatVisualizer` sends to the page as the file's own bytes.
+SENT_SUFFIXES = (".stl", ".obj", ".dae")
 
 
 def machine_visuals(machine, scene: Scene) -> pin.GeometryModel:
@@ -60,7 +62,6 @@ def machine_visuals(machine, scene: Scene) -> pin.GeometryModel:
                 left_out.append(f"{link.get('name')} ({mesh.get('filename')})")
                 continue
             deferred[id(visual)] = (found, _scale(mesh))
-            scene.mesh_file_bytes += os.path.getsize(found)
             geometry = visual.find("geometry")
             geometry.remove(mesh)
             ET.SubElement(geometry, "box", size="1 1 1")
@@ -85,6 +86,10 @@ def machine_visuals(machine, scene: Scene) -> pin.GeometryModel:
         if g.name in files:
             g.geometry = coal.BVHModelOBBRSS()  # no primitive: drawn from its meshPath
             g.meshPath, g.meshScale = files[g.name]
+        # every mesh file goes to the page as it is, an OBJ or DAE (read by Pinocchio) too:
+        # no triangle budget makes it smaller (`Scene.to_html`'s refusal of a long page)
+        if Path(g.meshPath).suffix.lower() in SENT_SUFFIXES and os.path.isfile(g.meshPath):
+            scene.mesh_file_bytes += os.path.getsize(g.meshPath)
     if left_out:
         scene.warnings.append(
             f"{machine.path}: mesh files that could not be loaded, drawn without them: "
