@@ -191,6 +191,33 @@ def test_read_ply_says_an_empty_file_or_a_folder_is_one(tmp_path):
     assert str(caught.value) == f"{tmp_path / 'folder.ply'}: is a folder; expected a PLY part file"
 
 
+def test_read_ply_refuses_a_pipe_or_a_device_named_as_a_part(tmp_path):
+    # a report folder's *.ply that is a named pipe blocked `machinesim view DIR` for ever
+    # (its read waits for a writer), one linking to /dev/zero read until memory ran out;
+    # /dev/null read as an empty file
+    import os
+    import threading
+
+    (tmp_path / "null.ply").symlink_to("/dev/null")
+    with pytest.raises(InputError, match=r"links to /dev/null, a character device, .*"
+                                         r"expected a PLY part file"):
+        read_ply(tmp_path / "null.ply")
+    os.mkfifo(tmp_path / "pipe.ply")
+    refused = []
+
+    def read():
+        try:
+            read_ply(tmp_path / "pipe.ply")
+        except InputError as error:
+            refused.append(str(error))
+
+    reader = threading.Thread(target=read, daemon=True)  # on the old code: blocked for ever
+    reader.start()
+    reader.join(timeout=20.0)
+    assert not reader.is_alive() and len(refused) == 1
+    assert "is a named pipe (FIFO), not a regular file; expected a PLY part file" in refused[0]
+
+
 def test_read_ply_names_the_file_of_a_truncated_malformed_or_non_finite_part(tmp_path):
     # parts from elsewhere: each was a ValueError traceback ("buffer is smaller than requested
     # size", "invalid literal for int()") or read on to a misleading later error (NaN bounds)

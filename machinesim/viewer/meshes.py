@@ -13,7 +13,8 @@ from pathlib import Path
 import manifold3d
 import numpy as np
 
-from machinesim.exceptions import InputError
+from machinesim._io import not_a_regular_file
+from machinesim.exceptions import FileError, InputError
 from machinesim.workpiece import mesh_volume
 
 #: Triangles of one displayed mesh above which it is decimated: ~200k triangles keep a scene
@@ -66,6 +67,10 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
     path = Path(path)
     if path.is_dir():  # a folder named *.ply in a report folder: 'cannot read (Is a directory)'
         raise InputError("is a folder; expected a PLY part file", source=str(path))
+    if path.exists() and not path.is_file():
+        # a named pipe would block the read for ever, a device (/dev/zero) never end it
+        raise FileError(f"{not_a_regular_file(path)}; expected a PLY part file",
+                        source=str(path))
     try:
         data = path.read_bytes()
     except OSError as exc:
