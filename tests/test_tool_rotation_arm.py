@@ -537,7 +537,9 @@ def test_a_pattern_block_too_thin_for_the_plans_capture_is_refused(capture, angl
     plan = CalibrationPlan(capture=capture)
     assert procedure.pattern_height(plan, PrismPattern(**kwargs)) == pytest.approx(
         height, abs=1e-15)
-    given = PrismPattern(height=height, **kwargs)
+    # its rapids as high as the capture needs (test_tool_rotation_arm_clearance.py)
+    clearance = max(1.0 * MM, procedure.pattern_clearance(plan, PrismPattern(**kwargs)))
+    given = PrismPattern(height=height, clearance=clearance, **kwargs)
     assert ToolRotationArm(plan=plan, pattern=given).pattern is given
     if angles is None:
         assert ToolRotationArm(plan=plan).pattern.height == max(height, 0.5 * MM)

@@ -17,11 +17,12 @@ from machinesim.exceptions import InputError
 from machinesim.identification.tool_rotation_arm import nominal_axes
 from machinesim.metrology._arrays import as_floats, as_number, shown
 from machinesim.nc import ProgramBuilder
+from machinesim.nc.cycles import PECK_CLEARANCE_M
 from machinesim.nc.program import Program
 from machinesim.units import M_PER_MM, M_PER_UM
 
-__all__ = ["CLEARANCE_MARGIN_M", "FLOOR_M", "SEARCH_MARGIN_M", "SPACING_MARGIN_M",
-           "STATION_DITHER_M", "CalibrationPlan", "PrismPattern"]
+__all__ = ["APPROACH_MARGIN_M", "CLEARANCE_MARGIN_M", "FLOOR_M", "SEARCH_MARGIN_M",
+           "SPACING_MARGIN_M", "STATION_DITHER_M", "CalibrationPlan", "PrismPattern"]
 
 #: Extra depth step between calibration stations (m): 1/9 of the microscope's 1 nm display
 #: step, so the nine stations' apexes fall at nine places on that step and its rounding
@@ -38,11 +39,19 @@ CLEARANCE_MARGIN_M = 0.5 * M_PER_MM
 #: Stock kept under the deepest cut of the calibration ramps (m), in the default thickness
 #: of their block (`CalibrationPlan.height`).
 FLOOR_M = 1.0 * M_PER_MM
+#: Height (m) the edge keeps over the stock's top in every rapid, beyond the worst height
+#: error of the edge a plan accepts (`CalibrationPlan.approach`; the pattern's
+#: `machinesim.procedures.tool_rotation_arm.pattern_clearance`): 0.1 mm, the distance the
+#: control's own G83 cycle stops a rapid short of the material (`machinesim.nc.cycles.
+#: PECK_CLEARANCE_M`, FANUC parameter No. 5115). Closer to the stock the program feeds.
+APPROACH_MARGIN_M = PECK_CLEARANCE_M
 
 
 def _groove_program(r0: float, clearance: float, x_out: float, grooves, feed: float,
-                    number: int) -> Program:
-    """Grooves along +X: ``grooves`` of (angle, edge points (x, y, z)), the first by rapids."""
+                    number: int, approach: float | None = None) -> Program:
+    """Grooves along +X: ``grooves`` of (angle, edge points (x, y, z)), the first by rapids;
+    with ``approach`` given, rapids keep the edge that high over the surface at least, and
+    the program feeds between it and a path's ends."""
     b, current = ProgramBuilder(number), 0.0
 
     def axes(y, z, angle):
@@ -54,10 +63,16 @@ def _groove_program(r0: float, clearance: float, x_out: float, grooves, feed: fl
         # of mm on its arm, far below a straight-line interpolation of Y and Z.
         b.rapid(Z=float(nominal_axes(0.0, clearance, current, r0)[1])).rapid(X=x_out)
         (x0, y0, z0), current = path[0], angle
-        b.rapid(**axes(y0, clearance, angle)).rapid(X=x0).rapid(Z=axes(y0, z0, angle)["Z"])
+        stop = z0 if approach is None else max(z0, approach)
+        b.rapid(**axes(y0, clearance, angle)).rapid(X=x0).rapid(Z=axes(y0, stop, angle)["Z"])
+        if stop > z0:
+            b.linear(Z=axes(y0, z0, angle)["Z"], feed_mm_per_min=feed)
         for x, y, z in path[1:]:
             b.linear(X=x, **axes(y, z, angle), feed_mm_per_min=feed)
-        b.rapid(Z=axes(path[-1][1], clearance, angle)["Z"])
+        (_, y1, z1) = path[-1]
+        if approach is not None and z1 < approach:
+            b.linear(Z=axes(y1, approach, angle)["Z"], feed_mm_per_min=feed)
+        b.rapid(Z=axes(y1, clearance, angle)["Z"])
     return b.rapid(X=x_out).build()
 
 
@@ -145,7 +160,10 @@ class CalibrationPlan:
         Corner (x, y) of the stock (m), away from the workpiece origin where the edge starts.
     tool_angle, clearance, feed_mm_per_min : float
         Included angle of the V tool (rad), edge clearance over the surface for rapids (m;
-        default None: ``search + CLEARANCE_MARGIN_M``), feed (the paper's 12,000 mm/min).
+        default None: ``search + CLEARANCE_MARGIN_M``, or `approach` where that is more; a
+        given one at least `approach`, the capture and `APPROACH_MARGIN_M`), feed (the
+        paper's 12,000 mm/min). Rapids keep the edge `approach` over the block at least;
+        the program feeds down to a ramp and back up from it.
     height : float, optional
         Thickness of the calibration block (m); default (None) ``depth + FLOOR_M`` (3.036 mm
         for the default plan). Paper 000 gives no size of its workpiece, and the ramps are
@@ -178,26 +196,31 @@ class CalibrationPlan:
                                                     size=2))
         capture = _number(self.capture, "capture")
         object.__setattr__(self, "capture", capture)
-        if self.search is None:
-            object.__setattr__(self, "search", capture + max(self.station_depths)
-                               + SEARCH_MARGIN_M)
-        object.__setattr__(self, "search", _number(self.search, "search"))
+
+        def derived(name, value, **checks):
+            given = getattr(self, name)
+            value = value() if given is None else _number(given, name, **checks)
+            object.__setattr__(self, name, value)
+            return value
+
+        search = derived("search", lambda: capture + max(self.station_depths)
+                         + SEARCH_MARGIN_M)
         object.__setattr__(self, "slope", _number(self.slope, "slope", unit="m per m of x"))
-        if self.clearance is None:
-            object.__setattr__(self, "clearance", self.search + CLEARANCE_MARGIN_M)
-        object.__setattr__(self, "clearance", _number(self.clearance, "clearance"))
-        if self.spacing is None:
-            object.__setattr__(self, "spacing", max(3.0 * M_PER_MM, self.min_spacing))
-        object.__setattr__(self, "spacing", _number(self.spacing, "spacing"))
-        if self.clearance <= self.search:
-            raise InputError(f"Expected a clearance above the search range {self.search:g} m, "
-                             f"got {self.clearance!r}", key="clearance")
-        if self.height is None:
-            object.__setattr__(self, "height", self.depth + FLOOR_M)
-        height = _number(self.height, "height", refusal=(
+        clearance = derived("clearance", lambda: max(search + CLEARANCE_MARGIN_M,
+                                                     self.approach))
+        derived("spacing", lambda: max(3.0 * M_PER_MM, self.min_spacing))
+        if clearance <= search:
+            raise InputError(f"Expected a clearance above the search range {search:g} m, "
+                             f"got {clearance!r}", key="clearance")
+        if clearance < self.approach:
+            raise InputError(
+                f"Expected a clearance at least {self.approach:g} m, the capture range "
+                f"{capture:g} m and {APPROACH_MARGIN_M:g} m (an edge offset within the capture "
+                f"sinks the edge by up to that much at any angle, and the rapids cross the "
+                f"block at the clearance), got {clearance!r} m", key="clearance")
+        height = derived("height", lambda: self.depth + FLOOR_M, refusal=(
             f"Expected height, the calibration block's thickness, as a finite number of m "
             f"(default None: {self.depth + FLOOR_M:g} m)"))
-        object.__setattr__(self, "height", height)
         if not height > self.depth:
             raise InputError(
                 f"Expected the calibration block's thickness height above the ramps' deepest "
@@ -213,6 +236,18 @@ class CalibrationPlan:
         range (at any angle the edge's height error is the offset turned by it). 2.036 mm
         for the default plan."""
         return self.search + self.capture
+
+    @property
+    def approach(self) -> float:
+        """Height (m) of the programmed edge over the block's top down to which a rapid
+        comes over the block: ``capture + APPROACH_MARGIN_M``. An edge offset within the
+        capture range sinks the edge by up to ``capture`` at any angle, so the real edge
+        stays `APPROACH_MARGIN_M` over the top. A ramp starts lower (``search`` up: capture
+        + 36 um by default, and its climb out ends there), so the program feeds between it
+        and here: a rapid down to it, and the retract up from its end, came within 36 um of
+        the top for an offset at the capture's edge, whatever the capture. 1.1 mm for the
+        default plan."""
+        return self.capture + APPROACH_MARGIN_M
 
     @property
     def window(self) -> float:
@@ -315,7 +350,7 @@ class CalibrationPlan:
                             (x_b + 2.0 * self.search, *self.edge(k, x_a))])
                    for k, angle in enumerate(self.angles)]
         return _groove_program(r0, self.clearance, self.origin[0] - 0.5 * M_PER_MM, grooves,
-                               self.feed_mm_per_min, number)
+                               self.feed_mm_per_min, number, approach=self.approach)
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,12 @@ from typing import ClassVar
 
 import numpy as np
 
-from machinesim.cam.prisms import SEARCH_MARGIN_M, CalibrationPlan, PrismPattern
+from machinesim.cam.prisms import (
+    APPROACH_MARGIN_M,
+    SEARCH_MARGIN_M,
+    CalibrationPlan,
+    PrismPattern,
+)
 from machinesim.compensation import map_program, model_based, program_axes
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError, brief
@@ -63,8 +68,8 @@ from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, from_si
 __all__ = [
     "AlignedMicroscope", "AngleReading", "ArmIdentification", "Calibration", "PatternReading",
     "ToolRotationArm", "arm_correction", "compensate_program", "deepest_before", "holder_depth",
-    "level_on_land", "max_capture", "measure_calibration", "measure_pattern", "pattern_height",
-    "stage_rotation",
+    "level_on_land", "max_capture", "measure_calibration", "measure_pattern",
+    "pattern_clearance", "pattern_height", "stage_rotation",
 ]
 
 #: Height of the prism's flanks (m): the tool's V reaches 3 mm from its edge (6 mm across),
@@ -148,6 +153,22 @@ def pattern_height(plan: CalibrationPlan, pattern: PrismPattern) -> float:
     1.083 mm at a 2.8 mm capture."""
     deepest, _ = deepest_before(plan, pattern)
     return math.ceil(round((deepest + PATTERN_FLOOR_M) / M_PER_UM, 6)) * M_PER_UM
+
+
+def pattern_clearance(plan: CalibrationPlan, pattern: PrismPattern) -> float:
+    """Least rapid clearance (m) of ``pattern``'s program that keeps the edge
+    `APPROACH_MARGIN_M` over its block's top when cut before compensation for an edge
+    offset within ``plan``'s capture, rounded up to the micrometre.
+
+    Touched off at 0 deg the edge at angle t stands up to ``2 c sin(|t| / 2)`` lower than
+    programmed (`deepest_before`), rapids included: a rapid back over the block at the
+    pattern's 1 mm sank to 10.9 um over its top at the largest capture (its own groove,
+    0.999 mm deep, under it). 0.448 mm for the default plan (the pattern's 1 mm holds it),
+    1.090 mm at the largest capture (2.848 mm).
+    """
+    deepest, _ = deepest_before(plan, pattern)
+    return (math.ceil(round((deepest - pattern.depth + APPROACH_MARGIN_M) / M_PER_UM, 6))
+            * M_PER_UM)
 
 
 # -------------------------------------------------------------------------- compensation
@@ -291,10 +312,12 @@ class ToolRotationArm:
         The calibration ramps (default: the paper's 0-40 deg by 10 deg).
     pattern : PrismPattern, optional
         The angle-variable prism pattern (default: the paper's 0-20 deg by 1 deg, on a block
-        sized for the plan's capture: its 0.5 mm, or `pattern_height` where that is more).
-        Cut before compensation, its grooves go down to `deepest_before` (10 um
-        programmed; 1 mm capture: 0.357 mm; 2.8 mm: 0.982 mm); a pattern whose
-        ``height`` is below `pattern_height` is refused, naming both.
+        sized for the plan's capture: its 0.5 mm, or `pattern_height` where that is more,
+        and its rapids 1 mm up, or `pattern_clearance` where that is more). Cut before
+        compensation, its grooves go down to `deepest_before` (10 um programmed; 1 mm
+        capture: 0.357 mm; 2.8 mm: 0.982 mm); a pattern whose ``height`` is below
+        `pattern_height`, or whose ``clearance`` is below `pattern_clearance`, is refused,
+        naming both.
     """
 
     plan: CalibrationPlan = CalibrationPlan()
@@ -315,9 +338,11 @@ class ToolRotationArm:
         check_instance(self.plan, CalibrationPlan, "plan", PLAN_EXPECTED)
         if self.pattern is None:
             pattern = PrismPattern()
-            height = pattern_height(self.plan, pattern)
-            if height > pattern.height:
-                pattern = PrismPattern(height=height)
+            sizes = {"height": pattern_height(self.plan, pattern),
+                     "clearance": pattern_clearance(self.plan, pattern)}
+            sizes = {name: value for name, value in sizes.items()
+                     if value > getattr(pattern, name)}
+            pattern = PrismPattern(**sizes) if sizes else pattern
             object.__setattr__(self, "pattern", pattern)
         check_instance(self.pattern, PrismPattern, "pattern",
                        "a PrismPattern (machinesim.cam.prisms), e.g. PrismPattern()")
@@ -336,6 +361,18 @@ class ToolRotationArm:
                 "no pattern (ToolRotationArm sizes the default's block), or a smaller "
                 "CalibrationPlan(capture=...)",
                 key="pattern")
+        clearance = pattern_clearance(self.plan, self.pattern)
+        if self.pattern.clearance < clearance:
+            deepest, angle = deepest_before(self.plan, self.pattern)
+            raise InputError(
+                f"the pattern's rapids cross its block {self.pattern.clearance:g} m up "
+                f"(PrismPattern(clearance=...)), and cut before compensation (the edge touched "
+                f"off at 0 deg) the edge sinks by up to {deepest - self.pattern.depth:g} m at "
+                f"{math.degrees(angle):g} deg (2 x capture x sin(angle / 2)) for an edge offset "
+                f"within the plan's capture {self.plan.capture:g} m; expected a clearance at "
+                f"least {clearance:g} m ({APPROACH_MARGIN_M:g} m over the block's top): give "
+                f"the pattern clearance={clearance:g}, or no pattern (ToolRotationArm sizes the "
+                "default's), or a smaller CalibrationPlan(capture=...)", key="pattern")
 
     def measure(self, lab) -> Calibration:
         """Cut the calibration ramps with the nominal program and read them (microscope
