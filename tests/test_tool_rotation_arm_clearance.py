@@ -1,10 +1,12 @@
 """Paper 000's programs at the edge of their capture: how far over the work their rapids
-pass (measured from the planned motion on the erroneous machine and the cut part)."""
+pass (measured from the planned motion on the erroneous machine and the cut part), and
+plans copied with another capture sized for it."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import pickle
 
 import pytest
 from rapid_clearance import rapid_clearances
@@ -14,6 +16,7 @@ from machinesim.cam.prisms import APPROACH_MARGIN_M, CalibrationPlan, PrismPatte
 from machinesim.cutting import cut
 from machinesim.exceptions import InputError
 from machinesim.identification.tool_rotation_arm import ArmEstimate, arm_radius
+from machinesim.nc import format_program
 from machinesim.procedures.tool_rotation_arm import (
     TOOL,
     ToolRotationArm,
@@ -128,3 +131,38 @@ def test_a_calibration_clearance_below_the_capture_and_margin_is_refused():
             in str(info.value))
     assert CalibrationPlan(clearance=1.1 * MM).clearance == 1.1 * MM
 
+
+def test_a_plan_copied_with_another_capture_is_derived_for_it():
+    """dataclasses.replace hands every field back as given: a copy of the default plan with
+    a 2.8 mm capture kept the 1 mm capture's search and block and was refused ('got
+    0.003036000888888889 m: the ramps would cut out through the block's bottom', a height
+    never given), and one with 0.1 mm kept search 1.036 mm and spacing 4.79 mm. What the
+    plan derived is derived again; what was given stays."""
+    for capture in (0.1 * MM, 2.8 * MM):
+        copy = dataclasses.replace(CalibrationPlan(), capture=capture)
+        fresh = CalibrationPlan(capture=capture)
+        assert copy == fresh
+        assert (copy.search, copy.clearance, copy.spacing, copy.height) == (
+            fresh.search, fresh.clearance, fresh.spacing, fresh.height)
+        assert format_program(copy.program(R0)) == format_program(fresh.program(R0))
+    given = CalibrationPlan(spacing=6 * MM, height=5 * MM)
+    copy = dataclasses.replace(given, capture=0.5 * MM)
+    assert (copy.spacing, copy.height) == (6 * MM, 5 * MM)
+    assert copy.search == CalibrationPlan(capture=0.5 * MM).search
+    assert "search=0.001036000888888889, " in repr(CalibrationPlan())  # a float as before
+    again = pickle.loads(pickle.dumps(CalibrationPlan()))
+    assert again == CalibrationPlan() and repr(again) == repr(CalibrationPlan())
+    assert dataclasses.replace(again, capture=2.8 * MM) == CalibrationPlan(capture=2.8 * MM)
+
+
+def test_a_procedure_copied_with_another_plan_sizes_its_pattern_for_it():
+    """ToolRotationArm sizes its default pattern from the plan's capture; dataclasses.replace
+    handed that pattern to the copy as given: a 2.8 mm arm copied with the default plan kept
+    its 1.083 mm block (and 1.073 mm clearance), the default arm copied with a 2.8 mm plan
+    was refused as a block too thin for it. A pattern given stays as given."""
+    small, big = CalibrationPlan(), CalibrationPlan(capture=2.8 * MM)
+    assert dataclasses.replace(ToolRotationArm(plan=big), plan=small).pattern == PrismPattern()
+    assert (dataclasses.replace(ToolRotationArm(), plan=big).pattern
+            == ToolRotationArm(plan=big).pattern)
+    given = PrismPattern(height=2 * MM, clearance=2 * MM)
+    assert dataclasses.replace(ToolRotationArm(pattern=given), plan=big).pattern is given

@@ -47,6 +47,19 @@ FLOOR_M = 1.0 * M_PER_MM
 APPROACH_MARGIN_M = PECK_CLEARANCE_M
 
 
+class _Derived(float):
+    """A plan's length it derived itself (`CalibrationPlan`'s search, clearance, spacing and
+    height, from its capture): `dataclasses.replace` hands every field back as given, so a
+    copy with another capture would keep the old capture's values; given back as this, it
+    is derived again. The same float otherwise (value, repr, arithmetic)."""
+
+    __slots__ = ()
+
+
+#: `CalibrationPlan`'s fields derived from the others when None.
+_DERIVED_FIELDS = ("search", "clearance", "spacing", "height")
+
+
 def _groove_program(r0: float, clearance: float, x_out: float, grooves, feed: float,
                     number: int, approach: float | None = None) -> Program:
     """Grooves along +X: ``grooves`` of (angle, edge points (x, y, z)), the first by rapids;
@@ -169,6 +182,10 @@ class CalibrationPlan:
         for the default plan). Paper 000 gives no size of its workpiece, and the ramps are
         this plan's (the paper gives only the tool angles); a thickness not above `depth`
         is refused: the ramps would cut out through the block's bottom.
+
+    A field left None (search, clearance, spacing, height) is derived again in a copy:
+    ``dataclasses.replace(plan, capture=...)`` gets the new capture's, a field given keeps
+    its value.
     """
 
     angles: tuple[float, ...] = tuple(math.radians(a) for a in (0, 10, 20, 30, 40))
@@ -196,10 +213,13 @@ class CalibrationPlan:
                                                     size=2))
         capture = _number(self.capture, "capture")
         object.__setattr__(self, "capture", capture)
+        for name in _DERIVED_FIELDS:  # derived from the fields a copy was made from: again
+            if isinstance(getattr(self, name), _Derived):
+                object.__setattr__(self, name, None)
 
         def derived(name, value, **checks):
             given = getattr(self, name)
-            value = value() if given is None else _number(given, name, **checks)
+            value = _Derived(value()) if given is None else _number(given, name, **checks)
             object.__setattr__(self, name, value)
             return value
 

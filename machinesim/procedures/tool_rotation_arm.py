@@ -85,6 +85,9 @@ TOOL = VTool(math.pi / 2, flank_height=PRISM_FLANK_M)
 
 #: What a plan argument must be (`max_capture`, `ToolRotationArm`).
 PLAN_EXPECTED = "a CalibrationPlan (machinesim.cam.prisms), e.g. CalibrationPlan()"
+#: Set on the pattern `ToolRotationArm` sized itself (its ``pattern`` left None), so that a
+#: copy with another plan sizes it again.
+_SIZED = "_sized_by_tool_rotation_arm"
 #: Stock kept under the uncompensated pattern's deepest groove (m) in the block
 #: `ToolRotationArm` sizes for it (`pattern_height`): the default plan's 1 mm capture cuts
 #: down to 0.357 mm, which the default 0.5 mm block holds with this to spare.
@@ -313,7 +316,8 @@ class ToolRotationArm:
     pattern : PrismPattern, optional
         The angle-variable prism pattern (default: the paper's 0-20 deg by 1 deg, on a block
         sized for the plan's capture: its 0.5 mm, or `pattern_height` where that is more,
-        and its rapids 1 mm up, or `pattern_clearance` where that is more). Cut before
+        and its rapids 1 mm up, or `pattern_clearance` where that is more; sized again in
+        a copy with another plan, `dataclasses.replace(arm, plan=...)`). Cut before
         compensation, its grooves go down to `deepest_before` (10 um programmed; 1 mm
         capture: 0.357 mm; 2.8 mm: 0.982 mm); a pattern whose ``height`` is below
         `pattern_height`, or whose ``clearance`` is below `pattern_clearance`, is refused,
@@ -336,13 +340,16 @@ class ToolRotationArm:
 
     def __post_init__(self) -> None:
         check_instance(self.plan, CalibrationPlan, "plan", PLAN_EXPECTED)
-        if self.pattern is None:
+        if self.pattern is None or getattr(self.pattern, _SIZED, False):
+            # sized here (again, in a copy with another plan: dataclasses.replace hands it
+            # back as given, and it kept the old capture's block and clearance)
             pattern = PrismPattern()
             sizes = {"height": pattern_height(self.plan, pattern),
                      "clearance": pattern_clearance(self.plan, pattern)}
             sizes = {name: value for name, value in sizes.items()
                      if value > getattr(pattern, name)}
             pattern = PrismPattern(**sizes) if sizes else pattern
+            object.__setattr__(pattern, _SIZED, True)
             object.__setattr__(self, "pattern", pattern)
         check_instance(self.pattern, PrismPattern, "pattern",
                        "a PrismPattern (machinesim.cam.prisms), e.g. PrismPattern()")
