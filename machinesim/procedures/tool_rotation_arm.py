@@ -61,6 +61,7 @@ from machinesim.procedures.tool_rotation_arm_reading import (
     measure_calibration,
     measure_pattern,
     stage_rotation,
+    unread_before,
 )
 from machinesim.tools import VTool
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM, from_si
@@ -439,8 +440,11 @@ class ToolRotationArm:
                                                   lab.microscope(label=f"pattern_{state}"))
             except InputError as error:
                 # the uncompensated grooves may not be cut at all, and a compensation that
-                # missed may leave the compensated ones as unreadable: said, not left blank
-                readings[state], unread[state] = None, str(error)
+                # missed may leave the compensated ones as unreadable: said, not left blank,
+                # with what the identified arm says of the uncompensated ones
+                why = unread_before(detail.estimate, self.pattern) if state == "before" else None
+                readings[state] = None
+                unread[state] = str(error) + ("" if why is None else f" ({why})")
 
         def value(state, attribute):
             reading = readings[state]

@@ -20,13 +20,14 @@ import numpy as np
 from machinesim.arrays import frozen
 from machinesim.cam.prisms import CalibrationPlan, PrismPattern
 from machinesim.exceptions import InputError
+from machinesim.identification.tool_rotation_arm import height_change, lateral_change
 from machinesim.metrology import MeshIndex, fit_v_groove
 from machinesim.metrology.prisms import SIGMA_FLOOR_M, fit_apexes
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = [
     "AlignedMicroscope", "AngleReading", "PatternReading", "level_on_land",
-    "measure_calibration", "measure_pattern", "stage_rotation",
+    "measure_calibration", "measure_pattern", "stage_rotation", "unread_before",
 ]
 
 #: The coarse search calls a ramp groove found where the section is this deep (m): 160
@@ -449,3 +450,70 @@ def measure_pattern(part, pattern: PrismPattern, microscope, x: float | None = N
         prof.s, level, len(pattern.angles), prominence=APEX_PROMINENCE * pattern.depth)
     return PatternReading(np.array(pattern.angles), depth, depth_sigma, y0 + centre,
                           centre_sigma, pattern.depth, pattern.pitch)
+
+
+def unread_before(estimate, pattern: PrismPattern) -> str | None:
+    """Why the uncompensated ``pattern`` is no pattern to read, as the arm ``estimate`` (the
+    identified one, an `ArmEstimate`) predicts its grooves; None where it finds no reason.
+
+    Touched off at 0 deg, the groove at angle t is eq 1's rise off 0 deg shallower than
+    programmed and eq 2's shift aside: depth ``D = depth - rise(t)`` at ``y + shift(t)``,
+    its flanks ``(pi - tool_angle) / 2 -+ t`` from the surface towards -y and +y. Reasons,
+    each as `fit_apexes` and `measure_pattern` need it: a groove at least `APEX_PROMINENCE`
+    x depth deep (not cut at all where D <= 0); two neighbours' flanks crossing between
+    their apexes, that much above the shallower (else the deeper one takes the other's
+    apex away); every groove clear of the land the section is levelled on.
+    """
+    angles, half = np.asarray(pattern.angles), (math.pi - pattern.tool_angle) / 2.0
+    args = (estimate.r, estimate.e_ys, estimate.r0)
+    depth = pattern.depth - height_change(angles, *args)
+    y = pattern.centres + lateral_change(angles, *args)
+    least = APEX_PROMINENCE * pattern.depth
+    degrees = np.round(np.degrees(angles), 6)
+    um = 1.0 / M_PER_UM
+    reasons = []
+    if (depth <= 0.0).any():
+        reasons.append(f"the edge stays above the block's top at {_angles(degrees, depth <= 0.0)}"
+                       " (not cut)")
+    shallow = (depth > 0.0) & (depth < least)
+    if shallow.any():
+        reasons.append(f"the grooves at {_angles(degrees, shallow)} are less than the "
+                       f"{least * um:g} um deep an apex must rise to its ridges")
+    a, b = np.tan(half + angles[:-1]), np.tan(half - angles[1:])  # k's +y, k+1's -y flank
+    ridge_y = (depth[:-1] - depth[1:] + a * y[:-1] + b * y[1:]) / (a + b)
+    ridge = np.minimum(0.0, -depth[:-1] + a * (ridge_y - y[:-1]))
+    rise = ridge + np.minimum(depth[:-1], depth[1:])
+    bad = (depth[:-1] >= least) & (depth[1:] >= least) & (
+        (rise < least) | (ridge_y < y[:-1]) | (ridge_y > y[1:]))
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        reasons.append(
+            f"neighbours meet too low, or one takes the other's apex away ({np.count_nonzero(bad)}"
+            f" of {len(bad)} pairs), first the {degrees[k]:g} and {degrees[k + 1]:g} deg grooves, "
+            f"{depth[k] * um:.2f} and {depth[k + 1] * um:.2f} um deep and "
+            f"{(y[k + 1] - y[k]) * um:.2f} um apart: their flanks cross {rise[k] * um:.2f} um "
+            f"over the shallower apex (at least {least * um:g} um, between the two apexes)")
+    guard = 0.1 * pattern.margin  # the section's ends (`measure_pattern`)
+    ends = pattern.origin[1] + guard, pattern.origin[1] + pattern.width - guard
+    cut = depth > 0.0
+    if cut.any():
+        low = (y - depth / np.tan(half - angles))[cut].min()
+        high = (y + depth / np.tan(half + angles))[cut].max()
+        if low < ends[0] or high > ends[1]:
+            reasons.append(f"the grooves span y = {low:.6g} to {high:.6g} m, beyond an end of "
+                           f"the section across them ({ends[0]:.6g} to {ends[1]:.6g} m): no "
+                           "land left there to level it on")
+    if not reasons:
+        return None
+    return (f"by the identified arm (r - r0 = {(estimate.r - estimate.r0) * um:.2f} um, e_ys = "
+            f"{estimate.e_ys * um:.2f} um) the uncompensated grooves run {depth[0] * um:.2f} to "
+            f"{depth[-1] * um:.2f} um deep (a groove's depth less eq 1's rise off 0 deg): "
+            + "; ".join(reasons))
+
+
+def _angles(degrees: np.ndarray, chosen: np.ndarray) -> str:
+    """The chosen tool angles (deg) as text: 'a to b deg' for a run of neighbours."""
+    index = np.flatnonzero(chosen)
+    if len(index) > 2 and index[-1] - index[0] + 1 == len(index):
+        return f"{degrees[index[0]]:g} to {degrees[index[-1]]:g} deg"
+    return ", ".join(f"{d:g}" for d in degrees[index]) + " deg"
