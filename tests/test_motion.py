@@ -153,6 +153,39 @@ def test_a_slow_move_under_g20_is_noted_with_its_f_as_the_program_wrote_it(text,
                     "program takes: is F in the program's unit (G94: per minute)?")
 
 
+@pytest.mark.parametrize("dwell, word, seconds", [
+    # a billion seconds (31 years) with no word: P with a decimal point counts seconds
+    ("G04 P1000000000.", " (P1000000000.)", 1e9),
+    ("G04 X5000", " (X5000)", 5000.0),  # X counts seconds: 5000 ms meant?
+    ("G82 X2. Z-0.1 R1. P4000000. F10.", " (P4000000.)", 4e6),  # a cycle's dwell
+])
+def test_a_dwell_longer_than_an_hour_is_noted_with_its_word_and_seconds(dwell, word,
+                                                                        seconds):
+    import pickle
+
+    text = f"G90 G21\nG00 X1. Z1.\n{dwell}\nG80\nM30\n"
+    program = parse_program(text)
+    trajectory = plan(program, load_machine("grooving_4axis"))
+    (note,) = trajectory.notes
+    assert note == (f"the dwell of line 3{word} waits {seconds:.6g} s ({seconds / 3600:.3g} "
+                    "h), more than the 1 h a dwell of a program waits: is its time in the unit "
+                    "meant (P counts milliseconds without a decimal point, seconds with one; X "
+                    "seconds)?")
+    assert pickle.loads(pickle.dumps(program)).dwell_words == {3: word[2:-1]}
+
+
+def test_a_dwell_of_an_hour_is_not_noted_and_a_built_one_is_noted_without_a_word():
+    machine = load_machine("grooving_4axis")
+    # 3,600,000 ms is the hour itself: a long settling, not a slip
+    assert plan(parse_program("G00 X1. Z1.\nG04 P3600000\nM30\n"), machine).notes == ()
+    built = ProgramBuilder(1).rapid(X=1e-3, Z=1e-3).dwell(1e9).build()
+    assert built.dwell_words == {}
+    assert plan(built, machine).notes == (
+        "the dwell of line 2 waits 1e+09 s (2.78e+05 h), more than the 1 h a dwell of a "
+        "program waits: is its time in the unit meant (P counts milliseconds without a "
+        "decimal point, seconds with one; X seconds)?",)
+
+
 def test_a_start_or_program_of_the_wrong_kind_is_refused_naming_it():
     # a new user's start="home" (or ["0", ...]) ended in numpy's ValueError inside plan, from
     # Lab.cut, machinesim.cut and the encoders alike; encoders.record(None) or record of a

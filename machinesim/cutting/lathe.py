@@ -50,7 +50,7 @@ from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag, as_floats, as_number
-from machinesim.motion.planner import slow_move_note
+from machinesim.motion.planner import slow_move_notes
 from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
 from machinesim.servo import check_servo
@@ -209,7 +209,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
                          getattr(program, "source", None), allow_overtravel)
     tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
-    slow = None
+    slow = ()
     for t, points, note in _timed_runs(program, machine):
         slow = slow or note
         reached = followed(None if servo is None else servo.follow, t, points)
@@ -227,7 +227,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
               f"above the stock's top (z = {top * 1e6:.6g} um) throughout; does the program "
               "reach the stock, and do the errors set the tool too high or the workpiece too "
               "low (tool.z, workpiece.z)?",) if empty else ())
-    notes += _rapids_below_top(program, machine, top) + ((slow,) if slow else ())
+    notes += _rapids_below_top(program, machine, top) + slow
     report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak,
                            empty_cut=empty, limit_violations=limits, notes=notes)
     return part, report
@@ -282,9 +282,9 @@ def turning_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
     return [(t, points) for t, points, _ in _timed_runs(program, machine)]
 
 
-def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray, str | None]]:
+def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray, tuple[str, ...]]]:
     """`turning_runs`' runs, each with a note on its slowest move when it takes more than
-    a day (`machinesim.motion.planner.slow_move_note`), else None."""
+    a day (`machinesim.motion.planner.slow_move_notes`), else ()."""
     source = getattr(program, "source", "<program>")
     q, kinds, feeds, lines = _axis_values(program, machine, source)
     skipped = len(program.kinds) - len(kinds)  # moves before every axis had a value
@@ -295,7 +295,7 @@ def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray, str | No
         moves = slice(first, last + 1)
         durations = _durations(points, feeds[moves], machine.axes, lines[moves], source)
         t = np.concatenate([[0.0], np.cumsum(durations)])
-        note = slow_move_note(durations, kinds[moves], lines[moves], feeds[moves], program,
+        note = slow_move_notes(durations, kinds[moves], lines[moves], feeds[moves], program,
                               skipped + first)
         out.append((*_within_quarter_turns(t, points, c_column), note))
     return out

@@ -17,9 +17,15 @@ from machinesim.nc.rotary_feed import inch_feed_as_written
 from machinesim.tolerances import CHORD_TOLERANCE_M
 
 _M_PER_MM = 1e-3
-#: A feed move longer than this is noted (`slow_move_note`): a day for one move is a feed
+#: A feed move longer than this is noted (`slow_move_notes`): a day for one move is a feed
 #: written in the wrong unit (F0.0001 mm/min for 0.1 mm/min), not a machining plan.
 SLOW_MOVE_S = 24 * 3600.0
+#: A dwell longer than this is noted (`slow_move_notes`). A dwell in a part program waits
+#: seconds (a spindle coming up to speed, a chip clearing, a spark-out); a time in the wrong
+#: unit is 1000 times what was meant (P counts milliseconds without a decimal point and
+#: seconds with one, X seconds: ``G04 X5000`` for 5 s, ``P5000.`` for 5000 ms), so a dwell
+#: of more than a few seconds becomes more than an hour, which no machining step waits.
+LONG_DWELL_S = 3600.0
 _RAD_PER_DEG = np.pi / 180.0
 
 
@@ -286,9 +292,9 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     lines_out = np.array(lines, dtype=np.int64)
     kinds_out.flags.writeable = False
     lines_out.flags.writeable = False
-    notes = slow_move_note(durations, kinds, lines, feeds, program)
+    notes = slow_move_notes(durations, kinds, lines, feeds, program)
     return Trajectory(axes, q, t, offsets, kinds_out, lines_out, float(clock[-1]), cutting,
-                      notes=(notes,) if notes else (), peak_lag=peak_lag)
+                      notes=notes, peak_lag=peak_lag)
 
 
 def _stall_message(stall, paths, axes, rotary, start, delta, tolerance) -> str:
@@ -355,27 +361,42 @@ def _stepping_table(stall, paths, axes, rotary, start, delta) -> str | None:
             "chord_tolerance above the step (--chord-nm on the command line)")
 
 
-def slow_move_note(durations, kinds, lines, feeds, program=None, first: int = 0) -> str | None:
-    """A note naming the longest feed move when it takes more than `SLOW_MOVE_S`, with its
-    feed: the machining time it gives is then hardly what the program meant. The feed is
-    the F as ``program`` (these moves from its move ``first`` on) wrote it: in inch/min
-    where G20 is in force at the move's line (`Program.unit_words`), with the mm/min the
-    planner used beside it, and both where the program selected G20 and G21 before it."""
-    linear = np.flatnonzero(np.asarray(kinds) == KIND_LINEAR)
-    if not linear.size:
-        return None
-    i = int(linear[np.argmax(durations[linear])])
-    if not durations[i] > SLOW_MOVE_S:
-        return None
-    feed = _feed_text(feeds[i], int(lines[i]), program, first + i)
-    return (f"the feed move of line {int(lines[i])} takes {durations[i]:.3g} s "
-            f"({durations[i] / 3600.0:.3g} h) at {feed}, "
-            f"more than the {SLOW_MOVE_S / 3600.0:g} h one move of a program takes: is F in "
-            "the program's unit (G94: per minute)?")
+def slow_move_notes(durations, kinds, lines, feeds, program=None,
+                    first: int = 0) -> tuple[str, ...]:
+    """Notes on the moves whose time is hardly what the program meant: the longest feed
+    move when it takes more than `SLOW_MOVE_S`, and the longest dwell when it waits more
+    than `LONG_DWELL_S`, each with its line, time and the word that set it.
+
+    The feed is the F as ``program`` (these moves from its move ``first`` on) wrote it: in
+    inch/min where G20 is in force at the move's line (`Program.unit_words`), with the
+    mm/min the planner used beside it, and both where the program selected G20 and G21
+    before it. The dwell's P or X is the word its line wrote (`Program.dwell_words`; none
+    for a program built from moves, or a canned cycle's P kept from an earlier block)."""
+    kinds = np.asarray(kinds)
+    notes = []
+    linear = np.flatnonzero(kinds == KIND_LINEAR)
+    i = int(linear[np.argmax(durations[linear])]) if linear.size else None
+    if i is not None and durations[i] > SLOW_MOVE_S:
+        feed = _feed_text(feeds[i], int(lines[i]), program, first + i)
+        notes.append(f"the feed move of line {int(lines[i])} takes {durations[i]:.3g} s "
+                     f"({durations[i] / 3600.0:.3g} h) at {feed}, "
+                     f"more than the {SLOW_MOVE_S / 3600.0:g} h one move of a program takes: "
+                     "is F in the program's unit (G94: per minute)?")
+    dwell = np.flatnonzero(kinds == KIND_DWELL)
+    i = int(dwell[np.argmax(durations[dwell])]) if dwell.size else None
+    if i is not None and durations[i] > LONG_DWELL_S:
+        line = int(lines[i])
+        word = getattr(program, "dwell_words", {}).get(line)
+        notes.append(f"the dwell of line {line}{f' ({word})' if word else ''} waits "
+                     f"{durations[i]:.6g} s ({durations[i] / 3600.0:.3g} h), more than the "
+                     f"{LONG_DWELL_S / 3600.0:g} h a dwell of a program waits: is its time "
+                     "in the unit meant (P counts milliseconds without a decimal point, "
+                     "seconds with one; X seconds)?")
+    return tuple(notes)
 
 
 def _feed_text(feed: float, line: int, program, move: int) -> str:
-    """The feed (m/s; of `slow_move_note`'s move) as its program wrote it."""
+    """The feed (m/s; of `slow_move_notes`' move) as its program wrote it."""
     metric = f"F{feed * 60e3:.6g} (mm/min or deg/min)"
     inch = None if program is None else inch_feed_as_written(program, move)
     if inch is None:
@@ -542,4 +563,5 @@ def follow_runs(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray,
     return np.asarray(ends, dtype=np.int64)
 
 
-__all__ = ["MAX_SUBSTEPS", "SLOW_MOVE_S", "move_duration", "plan", "slow_move_note"]
+__all__ = ["LONG_DWELL_S", "MAX_SUBSTEPS", "SLOW_MOVE_S", "move_duration", "plan",
+           "slow_move_notes"]

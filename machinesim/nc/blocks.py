@@ -479,6 +479,7 @@ class Block:
         one of 10 milliseconds; G83: ``G83 Z-0.62 F15. R0.1 Q0.175 P5.`` "will peck several
         times and dwell for five seconds at the end"). A FANUC control takes no decimal
         point in P, so no program it runs reads otherwise here."""
+        self.reader.dwell_words[self.line] = word.key
         if "." not in word.text:
             return self.integer(word, "dwell time") / 1000.0
         seconds = self.real(word)

@@ -43,6 +43,18 @@ def _states(states: Mapping[str, int] | None, source: str,
     return FrozenMapping(states.items())
 
 
+def _line_words(words: Mapping[int, str] | None, source: str, name: str) -> FrozenMapping:
+    """``words`` (line -> a word as written) checked, as a read-only mapping."""
+    if words is None:
+        return FrozenMapping()
+    if not isinstance(words, Mapping) or not all(
+        _is_int(k) and k >= 1 and isinstance(v, str) for k, v in words.items()
+    ):
+        raise NCProgramError(f"{name} must map lines (int >= 1) to words (str), got "
+                             f"{words!r:.200}", source=source, key=name)
+    return FrozenMapping(words.items())
+
+
 def _exact_stops(stops: Any, n: int, source: str) -> np.ndarray:
     """The exact-stop move indices as a sorted, unique int64 array within ``0..n-1``."""
     try:

@@ -37,6 +37,7 @@ def read_dwell(block: Block, g04: Word, axes: list[Word], block_number: int | No
         dwell_s = block.dwell_p(single["P"], "G04")
     elif "X" in single:
         word = single["X"]
+        block.reader.dwell_words[block.line] = word.key
         dwell_s = block.real(word)
         if block.increment is not None and "." not in word.text:
             dwell_s *= DWELL_INCREMENT_S[block.reader.integer_input]

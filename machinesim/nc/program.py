@@ -18,7 +18,7 @@ from typing import Any, overload
 import numpy as np
 
 from machinesim.exceptions import NCProgramError
-from machinesim.nc.checks import _check, _exact_stops, _m_codes, _states
+from machinesim.nc.checks import _check, _exact_stops, _line_words, _m_codes, _states
 from machinesim.nc.moves import (  # noqa: F401  (re-exported: the names of this module before)
     _KIND_CODE,
     AXES,
@@ -169,6 +169,10 @@ class Program:
         The length units the text selected (``"G20"`` inch, ``"G21"`` mm) -> the first line
         each appeared on. Empty when it selected neither: its lengths were read in mm (the
         reader's default), and for programs built from moves.
+    dwell_words : Mapping[int, str]
+        The line of each dwell word the text wrote (G04's P or X, a canned cycle's P) -> that
+        word as written (``"P1500"``, ``"X2."``), for notes on a dwell (its time is
+        `dwells`). Empty for programs built from moves.
     integer_words : Mapping[str, int]
         The letters of the non-zero lengths and angles written without a decimal point
         (``X1``, ``R5``) -> the first line each appeared on: they read as
@@ -201,7 +205,7 @@ class Program:
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
                  "tool_table", "tool_changes", "arc_blocks", "arc_chord_tolerance",
-                 "unit_words", "_moves",
+                 "unit_words", "dwell_words", "_moves",
                  "exact_stops", "integer_words", "end_words", "after_end")
 
     def __init__(
@@ -317,20 +321,21 @@ class Program:
                     number, source, work_offsets, states, integer_input,
                     tool_table=None, tool_changes=(), arc_blocks=0,
                     unit_words=None, exact_stops=(), integer_words=None,
-                    end_words=None, after_end=None, arc_chord_tolerance=None) -> Program:
+                    end_words=None, after_end=None, arc_chord_tolerance=None,
+                    dwell_words=None) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
                       source, work_offsets, states, integer_input, tool_table, tool_changes,
                       arc_blocks, unit_words, exact_stops, integer_words, end_words,
-                      after_end, arc_chord_tolerance)
+                      after_end, arc_chord_tolerance, dwell_words)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
               source, work_offsets, states, integer_input, tool_table=None,
               tool_changes=(), arc_blocks=0, unit_words=None, exact_stops=(),
               integer_words=None, end_words=None, after_end=None,
-              arc_chord_tolerance=None) -> None:
+              arc_chord_tolerance=None, dwell_words=None) -> None:
         set_ = object.__setattr__
         set_(self, "after_end", None if after_end is None else int(after_end))
         set_(self, "source", source)
@@ -355,6 +360,7 @@ class Program:
         set_(self, "unit_words", _states(unit_words, source, "unit_words"))
         set_(self, "integer_words", _states(integer_words, source, "integer_words"))
         set_(self, "end_words", _states(end_words, source, "end_words"))
+        set_(self, "dwell_words", _line_words(dwell_words, source, "dwell_words"))
         codes = _m_codes(m_codes, len(kinds), source)
         for name, array in (("_targets", targets), ("_kinds", kinds), ("_feeds", feeds),
                             ("_dwells", dwells), ("_lines", lines), ("_spindles", spindles),
@@ -452,7 +458,8 @@ class Program:
             tool_changes=self.tool_changes, arc_blocks=self.arc_blocks,
             unit_words=self.unit_words, exact_stops=self.exact_stops,
             integer_words=self.integer_words, end_words=self.end_words,
-            after_end=self.after_end, arc_chord_tolerance=self.arc_chord_tolerance)
+            after_end=self.after_end, arc_chord_tolerance=self.arc_chord_tolerance,
+            dwell_words=self.dwell_words)
 
     def __hash__(self) -> int:
         return hash((self.number, self.source, len(self._kinds)))
@@ -464,7 +471,8 @@ class Program:
                            dict(self.states), self.integer_input, self.tool_table,
                            self.tool_changes, self.arc_blocks, dict(self.unit_words),
                            self.exact_stops, dict(self.integer_words),
-                           dict(self.end_words), self.after_end, self.arc_chord_tolerance))
+                           dict(self.end_words), self.after_end, self.arc_chord_tolerance,
+                           dict(self.dwell_words)))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -480,7 +488,8 @@ class Program:
 def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number, source,
              work_offsets, states, integer_input, tool_table=None, tool_changes=(),
              arc_blocks=0, unit_words=None, exact_stops=(), integer_words=None,
-             end_words=None, after_end=None, arc_chord_tolerance=None) -> Program:
+             end_words=None, after_end=None, arc_chord_tolerance=None,
+             dwell_words=None) -> Program:
     """Unpickle a `Program` (the arrays come back writeable copies: made read-only again)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
@@ -489,4 +498,5 @@ def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, nu
                                arc_blocks=arc_blocks, unit_words=unit_words,
                                exact_stops=exact_stops, integer_words=integer_words,
                                end_words=end_words, after_end=after_end,
-                               arc_chord_tolerance=arc_chord_tolerance)
+                               arc_chord_tolerance=arc_chord_tolerance,
+                               dwell_words=dwell_words)

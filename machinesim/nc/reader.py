@@ -207,6 +207,7 @@ class Reader:
         self.tool_events: list[tuple[int, int | None, int]] = []
         self.arc_blocks = 0  # G02/G03 blocks run
         self.unit_words: dict[str, int] = {}  # G20/G21 -> first line
+        self.dwell_words: dict[int, str] = {}  # line -> its dwell's P or X, as written
         self.cache: dict[int, list[Word] | None] = {}
         self.after_end: int | None = None  # the first line of text after the closing %
         self.end_mark: int | None = None  # the line of that %, when text follows it
@@ -254,6 +255,7 @@ class Reader:
             tool_table=None if self.tools is None else self.tools.source,
             tool_changes=self.tool_changes(), arc_blocks=self.arc_blocks,
             unit_words=self.unit_words, integer_words=self.integer_words,
+            dwell_words=self.dwell_words,
             end_words={} if self.state.end is None else {self.state.end[1]: self.state.end[0]},
             exact_stops=np.concatenate(self.out.stops) if self.out.stops else (),
             after_end=self.after_end, arc_chord_tolerance=self.chord_tolerance)

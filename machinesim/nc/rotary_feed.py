@@ -20,7 +20,7 @@ is (its factor would be 1 but for rounding).
 Internal to the reader (`machinesim.nc.blocks`, `machinesim.nc.arc_block` and the vectorised
 path in `machinesim.nc.reader`), which all use `inch_feed_scale`, so the three agree to the
 bit; `inch_feed_as_written` undoes it for the planner's note on a slow move
-(`machinesim.motion.planner.slow_move_note`), which names the F as the program wrote it.
+(`machinesim.motion.planner.slow_move_notes`), which names the F as the program wrote it.
 """
 
 from __future__ import annotations
