@@ -54,3 +54,35 @@ def test_a_sphere_cut_deeper_than_programmed_reads_the_same_tool_errors():
     assert found[0].d_radius == pytest.approx(100e-6, rel=1e-3)
     assert found[1].d_radius == pytest.approx(found[0].d_radius, abs=1e-12)
     assert found[1].dx == pytest.approx(found[0].dx, abs=1e-12)
+
+
+@pytest.mark.parametrize("key, value, message", [
+    # each of these raised numpy's UFuncTypeError or a TypeError, or was taken: aperture True
+    # as 1 m (dx -46.5 um for 0.8), -1e-4 and NaN (no point within it) as dx = dR = 0, core
+    # step 0 (every point above the fit a core: dx -60.3 um), NaN as no core at all
+    ("aperture", "1e-4", "Expected aperture as a number (m), got '1e-4'"),
+    ("aperture", True, "Expected aperture as a number (m), got True"),
+    ("aperture", None, "Expected aperture as a number (m), got None"),
+    ("aperture", -1e-4, "Expected aperture > 0 (m), got -0.0001"),
+    ("aperture", np.nan, "Expected aperture > 0 (m), got nan"),
+    ("aperture", 1e-9, "Expected the map to hold at least 5 finite heights within aperture "
+                       "1e-09 m of its origin (the fit's unknowns), got 1 of 1681"),
+    ("core_step", "5e-8", "Expected core_step as a number (m), got '5e-8'"),
+    ("core_step", True, "Expected core_step as a number (m), got True"),
+    ("core_step", None, "Expected core_step as a number (m), got None"),
+    ("core_step", np.nan, "Expected core_step > 0 (m), got nan"),
+    ("core_step", 0.0, "Expected core_step > 0 (m), got 0.0"),
+    ("core_step", -5e-8, "Expected core_step > 0 (m), got -5e-08"),
+])
+def test_an_aperture_or_core_step_that_is_no_length_is_refused_by_name(key, value, message):
+    x = np.linspace(-0.1e-3, 0.1e-3, 41)
+    spiral = sp.Spiral(RADIUS, FEED)
+    tp = sp.tool_path(sp.cutting_points(DESIGN, spiral, sp.constant_angle(spiral, 0.02)), R)
+    heights = turned_surface(EdgePath(tp.c, tp.x + 0.8e-6, -3e-6, tp.z), R + 15e-6, x, x,
+                             top=1e-6)
+    arguments = {"core_step": 50e-9, "aperture": 0.1e-3}
+    arguments[key] = value
+    with pytest.raises(InputError) as info:
+        identify_tool_errors(DESIGN, x, x, heights, **arguments)
+    assert info.value.key == key
+    assert str(info.value) == f"key {key!r}: {message}"

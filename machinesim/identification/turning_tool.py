@@ -169,15 +169,19 @@ def identify_tool_errors(design: Design, x, y, heights, *, core_step: float,
     heights : array-like, shape (ny, nx)
         Measured heights, m; NaN where the instrument saw nothing.
     core_step : float
-        Height (m) above the fitted surface from which a point counts as uncut core.
+        Height (m) above the fitted surface from which a point counts as uncut core; > 0
+        (at 0, every point the noise lifts above the fit would count as core).
     aperture : float
-        Only points within this distance (m) of the map's origin are used: the turned area.
+        Only points within this distance (m) of the map's origin are used: the turned area;
+        > 0, and holding at least as many finite heights as the fit has unknowns (5).
     lateral_sigma : float, optional
         The instrument's stated lateral noise, m: each column of the map off in x and each
         row in y by its own normal deviate (`machinesim.metrology.optical`). Enters the
         std (module docstring); None or 0: pixels independent.
     """
     lateral = _check_lateral(lateral_sigma)
+    core_step = as_number(core_step, "core_step", sign="> 0")
+    aperture = as_number(aperture, "aperture", sign="> 0")
     x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
     z = np.asarray(heights, dtype=np.float64)
     if z.shape != (y.size, x.size):
@@ -187,6 +191,10 @@ def identify_tool_errors(design: Design, x, y, heights, *, core_step: float,
         raise InputError(f"Expected a Design, got {type(design).__name__}", key="design")
     px, py = np.meshgrid(x, y)
     valid = np.isfinite(z) & (np.hypot(px, py) < aperture)
+    if valid.sum() < 5:  # x0, y0, piston, dx, dR
+        raise InputError(f"Expected the map to hold at least 5 finite heights within aperture "
+                         f"{aperture!r} m of its origin (the fit's unknowns), got "
+                         f"{int(valid.sum())} of {int(np.isfinite(z).sum())}", key="aperture")
     cut = valid.copy()
     pixel = abs(x[1] - x[0]) * abs(y[1] - y[0]) if x.size > 1 and y.size > 1 else 0.0
     dy_abs = 0.0
