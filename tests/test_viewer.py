@@ -139,6 +139,17 @@ def test_read_ply_reads_the_forms_other_tools_write(tmp_path):
     assert part_scene(tmp_path / "big.ply", max_triangles=BUDGET).warnings == []
 
 
+@pytest.mark.parametrize("path", [None, b"part.ply", 5])
+def test_read_ply_refuses_what_is_no_file_name_as_load_result_does(path):
+    # it gave the path to Path(): 'TypeError: expected str, bytes or os.PathLike object, not
+    # NoneType', where load_result and the writers refuse it by _io.check_path
+    with pytest.raises(InputError) as info:
+        read_ply(path)
+    assert info.value.key == "path"
+    assert str(info.value) == ("key 'path': reading the PLY part: expected a file name (str or "
+                               f"pathlib.Path), got {type(path).__name__}")
+
+
 def test_read_ply_refuses_what_it_cannot_read(tmp_path):
     ascii_ply = tmp_path / "ascii.ply"
     ascii_ply.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\n"

@@ -13,7 +13,7 @@ from pathlib import Path
 import manifold3d
 import numpy as np
 
-from machinesim._io import not_a_regular_file
+from machinesim._io import check_path, not_a_regular_file
 from machinesim.exceptions import FileError, InputError
 from machinesim.workpiece import mesh_volume
 
@@ -59,12 +59,12 @@ def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
     Raises
     ------
     InputError
-        When the file is missing, not a PLY, shorter than its header says (truncated) or
-        longer (elements it does not count), has non-triangle faces, no faces, or a vertex
-        that is not finite, or is a closed mesh inside out (wound clockwise seen from
-        outside).
+        When ``path`` is no file name (None, bytes: key 'path'), the file is missing, not a
+        PLY, shorter than its header says (truncated) or longer (elements it does not
+        count), has non-triangle faces, no faces, or a vertex that is not finite, or is a
+        closed mesh inside out (wound clockwise seen from outside).
     """
-    path = Path(path)
+    path = Path(check_path(path, "reading the PLY part"))  # None, bytes: no file name
     if path.is_dir():  # a folder named *.ply in a report folder: 'cannot read (Is a directory)'
         raise InputError("is a folder; expected a PLY part file", source=str(path))
     if path.exists() and not path.is_file():
