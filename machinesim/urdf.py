@@ -254,7 +254,9 @@ def read_axes(root: ET.Element, path: Path,
             raise ModelError(f"{resolution_at[name]}: <machinesim:axis joint={name!r}> resolution "
                              f"{resolution[name]!r} ({unit}); expected at most {coarsest:g} "
                              f"{unit} (SI: 1 nm is 1e-9)")
-        lower, upper, velocity = _limits(joint, where, kind == "revolute")
+        # a bad <limit> at its own line; no <limit> at the joint's
+        at_limit = f"{element_at.get(id(joint.find('limit')), joint_at)}: joint {name!r}"
+        lower, upper, velocity = _limits(joint, at_limit, kind == "revolute")
         axes.append(Axis(
             letter=name, rotary=kind == "revolute", side=side, direction=k,
             lower=lower, upper=upper, velocity=velocity, resolution=resolution[name]))

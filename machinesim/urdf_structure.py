@@ -192,13 +192,14 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
                                  "link (URDF lengths are metres: 100 mm is 0.1)")
         limit = joint.find("limit")
         if limit is not None and joint.get("type") == "fixed":  # axes: `_limits`
+            named = f"{element_at.get(id(limit), at)}: joint {name!r}"  # its own line
             for attribute in ("effort", "velocity"):
                 text = limit.get(attribute)
                 if text is None:
-                    raise ModelError(f"{where}: <limit> has no {attribute}=...; URDF requires "
+                    raise ModelError(f"{named}: <limit> has no {attribute}=...; URDF requires "
                                      "effort and velocity on every <limit> (a fixed joint "
                                      "needs no <limit>)")
-                _number(text, f"{where} <limit {attribute}>")
+                _number(text, f"{named} <limit {attribute}>")
     _check_acyclic(links, parent_joint, parent_link, path)
     roots = sorted(link for link in links if link not in parent_joint)
     if len(roots) != 1:

@@ -607,7 +607,8 @@ def test_rotary_limits_that_read_as_degrees_warn_naming_the_joint(tmp_path):
     # written in degrees, C -100 .. 100 loaded as +-16 turns (its travel check never fired)
     # and C -360 .. 360 as a work spindle (past 100 rad), so a program turning C while it
     # fed was refused; both loaded without a word
-    line = GROOVING[:GROOVING.index('<joint name="C"')].count("\n") + 1
+    # the <limit>'s own line (it had been its joint's)
+    line = GROOVING[:GROOVING.index('<limit', GROOVING.index('<joint name="C"'))].count("\n") + 1
     advice = ("and the velocity in rad/s; an axis that turns without end is written with wide "
               "limits (sts_lathe's C: -1e5 .. 1e5 rad)")
     for degrees, turns, spindle in ((100, 15.9, ""), (360, 57.3, (
@@ -781,11 +782,31 @@ _LINED_X_TURNED = HOSTILE_URDFS["x_frame_turned_about_x"][0].replace(
     '<link name="base">', _TRANSMISSION + '<link name="base">', 1)
 
 
+def _in_lined_joint(name: str, old: str, new: str) -> str:
+    """LINED with ``old`` replaced by ``new`` inside the robot's joint ``name`` only."""
+    start = LINED.index(f'<joint name="{name}" type')
+    end = LINED.index("</joint>", start)
+    assert old in LINED[start:end], f"{old!r} is not in joint {name}"
+    return LINED[:start] + LINED[start:end].replace(old, new, 1) + LINED[end:]
+
+
 @pytest.mark.parametrize(("case", "text", "needle", "occurrence", "words"), [
-    ("limit", LINED[:LINED.index('<joint name="X" type')]
-     + LINED[LINED.index('<joint name="X" type'):].replace('upper="0.25"', 'upper="-0.25"', 1),
-     '<joint name="X"', 2, "joint 'X': <limit lower=-0.25 upper=-0.25>"),
-    # an element of a joint is named at its own line (it had been its joint's)
+    # an element of a joint is named at its own line (it had been its joint's): the <limit>
+    # (since 3d65c24 the <axis> and <origin> were, the <limit> not)
+    ("limit", _in_lined_joint("X", 'upper="0.25"', 'upper="-0.25"'),
+     'upper="-0.25"', 1, "joint 'X': <limit lower=-0.25 upper=-0.25>"),
+    ("limit_number", _in_lined_joint("X", 'velocity="0.025"', 'velocity="fast"'),
+     'velocity="fast"', 1, "joint 'X' <limit velocity>: 'fast' is not a number"),
+    ("limit_effort", _in_lined_joint("X", 'effort="1000.0" ', ''),
+     'upper="0.25" velocity="0.025"', 1, "joint 'X': <limit> has no effort=..."),
+    ("limit_rate", _in_lined_joint("X", 'velocity="0.025"', 'velocity="25.0"'),
+     'velocity="25.0"', 1, "joint 'X': <limit velocity=25.0> (m/s); expected a rapid rate"),
+    ("fixed_limit", _in_lined_joint("tool_tip_fixed", 'rpy="0.0 0.0 0.0"/>',
+                                    'rpy="0.0 0.0 0.0"/>\n    <limit lower="0" upper="0"/>'),
+     '<limit lower="0" upper="0"/>', 1, "joint 'tool_tip_fixed': <limit> has no effort=..."),
+    # no <limit>: the joint's line, as before
+    ("no_limit", _in_lined_joint("X", X_LIMIT, ""), '<joint name="X"', 2,
+     "joint 'X': no <limit lower=... upper=... velocity=...>"),
     ("origin", LINED.replace('xyz="0.0 -0.4 -0.25"', 'xyz="0.0 -0.4 nan"', 1),
      'xyz="0.0 -0.4 nan"', 1, "joint 'Z' <origin> xyz: 'nan'"),
     ("origin_rpy", LINED.replace('xyz="0.0 -0.4 -0.25" rpy="0.0 0.0 0.0"',
