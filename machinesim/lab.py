@@ -156,6 +156,7 @@ class Lab:
         self.__issued: dict[str, int] = {}
         self.__instruments: dict[str, dict] = {}
         self.__artefacts: dict[str, object] = {}
+        self.__workpieces: dict[str, tuple] = {}  # label -> (digest of stock and design, part)
 
     def __repr__(self) -> str:
         told = f", realism={self.realism}" if self.__told else ""
@@ -286,7 +287,9 @@ class Lab:
             The spheres as designed (what CAM and the procedure know).
         label : str
             Names the workpiece: the same label gives the same actual spheres (one physical
-            workpiece, made once), whatever else the lab did before.
+            workpiece, made once), whatever else the lab did before. Asked for again with the
+            same stock and design, the lab hands back the very part it made (a procedure
+            keeps no workpiece, nor the lab, between its steps: `measure` and `evaluate` ask).
 
         Returns
         -------
@@ -296,6 +299,10 @@ class Lab:
             raise InputError(f"Expected design as a machinesim.realism.SphereArtefacts, got "
                              f"{type(design).__name__}", key="design")
         label = self._label("artefact", label, numbered=False)
+        key = CUTS.key(stock, design)  # None (made every time) for a stock that won't pickle
+        made = self.__workpieces.get(label)
+        if key is not None and made is not None and made[0] == key:
+            return made[1]
         if self.realism.artefact_errors:
             actual = _realism.draw_spheres(
                 design, _realism.ARTEFACT,
@@ -304,7 +311,9 @@ class Lab:
         else:
             actual = _realism.draw_spheres(design, None)
         self.__artefacts[label] = actual
-        return _realism.make_spheres(stock, design, actual)
+        part = _realism.make_spheres(stock, design, actual)
+        self.__workpieces[label] = (key, part)
+        return part
 
     @property
     def artefact_scatter(self):

@@ -462,6 +462,25 @@ def test_artefacts_on_are_drawn_per_workpiece_and_cut_where_they_are(flat):
         assert np.linalg.norm(fitted.centre - c) < ARTEFACT.form
 
 
+def test_a_workpiece_asked_for_again_is_the_one_the_lab_made(flat):
+    # A procedure asks the lab in measure and again in evaluate, keeping no lab between them
+    # (RobotLoadedWorkpiece had kept every lab it met, and the workpiece, in _workpieces:
+    # its identify could reach lab.reveal()). Made twice, a workpiece came back with its
+    # triangles in another order (manifold3d), a stock its cuts' memo keys apart.
+    centres = np.array([[1.2, 1.0, 0.0], [3.8, 1.0, 0.0], [1.2, 2.0, 0.0]]) * MM
+    design = SphereArtefacts(centres, 0.4 * MM)
+    lab = Lab("robonano_a0ib", seed=2, realism=Realism.with_only("artefact_errors"))
+    first = lab.make_artefacts(flat, design, label="crown")
+    actual = lab.reveal_artefacts()["crown"]
+    again = lab.make_artefacts(Part(flat.manifold), design, label="crown")  # an equal stock
+    assert again is first and lab.reveal_artefacts()["crown"] is actual
+    # another design under the label is another workpiece, drawn from the label's stream
+    bumps = SphereArtefacts(centres, 0.4 * MM, cavities=False)
+    other = lab.make_artefacts(flat, bumps, label="crown")
+    assert other is not first and other.volume > first.volume
+    assert np.array_equal(lab.reveal_artefacts()["crown"].centres, actual.centres)
+
+
 # -------------------------------------------------------------------------------- background
 
 

@@ -102,7 +102,7 @@ from machinesim.procedures.workpiece_setting_programs import (
     eqs_5_to_7_program,
     model_based_program,
 )
-from machinesim.realism import OBJECTIVE_10X
+from machinesim.realism import OBJECTIVE_10X, SphereArtefacts
 from machinesim.units import M_PER_MM, M_PER_UM
 from machinesim.workpiece import Part, stock_from_spec
 
@@ -234,7 +234,6 @@ class RobotLoadedWorkpiece:
         self.plan = plan
         self.crown = crown
         self.progress = progress
-        self._workpieces: dict[int, tuple] = {}
 
     def __repr__(self) -> str:
         return (f"RobotLoadedWorkpiece({self.experiment!r}, nose_correction="
@@ -251,19 +250,22 @@ class RobotLoadedWorkpiece:
         return (stock_from_spec(GROOVE_STOCK) if self.experiment == "grooves"
                 else crown_stock(self.crown))
 
+    @cached_property
+    def blank(self) -> tuple[Part, SphereArtefacts]:
+        """The loaded workpiece's blank (without its spheres) and its spheres' design: what
+        the lab's workshop is asked to make (`workpiece`)."""
+        if self.experiment == "grooves":
+            return stock_from_spec(GROOVE_BLANK), GROOVE_SPHERE_DESIGN
+        return crown_blank(self.crown), crown_sphere_design(self.crown)
+
     def workpiece(self, lab) -> Part:
         """The loaded workpiece as the lab's workshop made it: the blank with its spheres
         cut where they really came out (`machinesim.Lab.make_artefacts`, labelled by the
-        experiment: one workpiece per lab, made once)."""
-        made = self._workpieces.get(id(lab))
-        if made is None or made[0] is not lab:
-            if self.experiment == "grooves":
-                blank, design = stock_from_spec(GROOVE_BLANK), GROOVE_SPHERE_DESIGN
-            else:
-                blank, design = crown_blank(self.crown), crown_sphere_design(self.crown)
-            made = (lab, lab.make_artefacts(blank, design, label=self.experiment))
-            self._workpieces[id(lab)] = made
-        return made[1]
+        experiment: one workpiece per lab, made once, and handed back by the lab when asked
+        again). The procedure keeps neither the lab nor its workpiece: nothing its
+        `identify` can reach leads to them."""
+        blank, design = self.blank
+        return lab.make_artefacts(blank, design, label=self.experiment)
 
     # ------------------------------------------------------------------------- the steps
 
