@@ -129,7 +129,6 @@ def report(args) -> None:
                             progress=stage)
     out = ReportFolder(args.out)
     calibration, detail = result.measurements, result.identification.detail
-    out.write_part("calibration.ply", calibration.part)
     out.write_program("calibration.nc", calibration.program)
     print(calibration_table(out, calibration.readings, detail.estimate))
     print(identification_table(out, r0, r, e_ys, detail))

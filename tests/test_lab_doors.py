@@ -52,7 +52,8 @@ def _sts():
 
 #: name -> (procedure, machine, injected errors), and the realism each runs with (the lathe's
 #: turned parts are read without spot and registration: noise alone).
-PROCEDURES = {"workpiece_setting_grooves": (_grooves, Realism.lab()),
+PROCEDURES = {"tool_rotation_arm": (_arm, Realism.lab()),
+              "workpiece_setting_grooves": (_grooves, Realism.lab()),
               "xy_plane_errors": (_xy, Realism.lab()),
               "sts_turning": (_sts, Realism.noise_only())}
 

@@ -784,7 +784,7 @@ def test_a_result_pickles_and_comes_back_the_same_without_its_lab(exact_run, tmp
     with pytest.raises(TypeError):  # read-only again
         back.identified["tool.y"] = (0.0, 0.0)
     assert back.identification.detail.estimate == result.identification.detail.estimate
-    part, copy = result.measurements.part, back.measurements.part
+    part, copy = (r.evaluation.parts["calibration"] for r in (result, back))
     assert copy.volume == part.volume and copy.manifold.volume() == pytest.approx(part.volume)
     assert all(np.array_equal(a, b) for a, b in zip(copy.mesh(), part.mesh(), strict=True))
     ReportFolder(tmp_path / "original").write_result(result)

@@ -229,7 +229,11 @@ def compensate_program(program: Program, machine, estimate: ArmEstimate, *,
 
 @dataclass(frozen=True)
 class Calibration:
-    """What `ToolRotationArm.measure` returns: the calibration part, as cut and as read.
+    """What `ToolRotationArm.measure` returns: the calibration part as read.
+
+    The part itself is not here: its exact mesh read no instrument, and the identification
+    gets only what the microscope read (docs/lab.md, the honesty rule). `evaluate` asks the
+    lab for it again, for the report (``Evaluation.parts["calibration"]``).
 
     Attributes
     ----------
@@ -241,15 +245,12 @@ class Calibration:
         One per calibration angle.
     program : Program
         The calibration program as cut.
-    part : Part
-        The calibration part.
     """
 
     machine: object
     r0: float
     readings: tuple[AngleReading, ...]
     program: Program
-    part: object
 
 
 @dataclass(frozen=True)
@@ -391,7 +392,7 @@ class ToolRotationArm:
         program = self.plan.program(r0)
         part, _ = lab.cut(program, TOOL, self.plan.stock)
         readings = measure_calibration(part, self.plan, lab.microscope(label="calibration"))
-        return Calibration(machine, r0, readings, program, part)
+        return Calibration(machine, r0, readings, program)
 
     def identify(self, measurements: Calibration) -> Identified:
         """Eq 1 fitted to the readings (`fit_arm`), with `fit_check` beside it.
@@ -426,11 +427,14 @@ class ToolRotationArm:
 
     def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
         """Cut the pattern before and after compensation and read its apexes (microscopes
-        labelled ``"pattern_before"`` and ``"pattern_after"``)."""
+        labelled ``"pattern_before"`` and ``"pattern_after"``). The parts: the calibration
+        part `measure` cut (the same cut, asked for again: the lab hands it back,
+        `machinesim.Lab.cut`) and the two patterns."""
         check_lab(lab)
         check_identified(identified, ArmIdentification, "ToolRotationArm")
         detail = identified.detail
-        readings, parts, unread = {}, {}, {}
+        calibration, _ = lab.cut(self.plan.program(detail.r0), TOOL, self.plan.stock)
+        readings, parts, unread = {}, {"calibration": calibration}, {}
         for state, program in (("before", programs["pattern_before"]),
                                 ("after", programs["pattern_compensated"])):
             part, _ = lab.cut(program, TOOL, self.pattern.stock)
