@@ -48,7 +48,6 @@ from machinesim.identification.tool_setting_6axis import PARAMETERS
 from machinesim.procedures.tool_setting_6axis import (
     DEFAULT_INJECTED,
     ToolSetting6Axis,
-    cut_summary,
     layout_lines,
 )
 from machinesim.report import ReportFolder, identified_notes
@@ -154,13 +153,7 @@ def report(args, make_lab, realism) -> None:
     budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
                             progress=stage)
     folder = ReportFolder(args.out)
-    readings = result.measurements
-    for name, (program, part, _) in readings.plates.items():
-        folder.write_program(f"{name}.nc", program)
-        folder.write_part(f"{name}.ply", part)
-    folder.write_json("cuts.json", {
-        **{name: cut_summary(report) for name, (_, _, report) in readings.plates.items()},
-        **result.evaluation.details["cuts"]})
+    folder.write_json("cuts.json", result.evaluation.details["cuts"])
     details = result.evaluation.details
     for stage, key, title in (
             ("a", "a_ends_um", "A-axis grooves back from their measured end points"),

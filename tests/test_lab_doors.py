@@ -53,6 +53,7 @@ def _sts():
 #: name -> (procedure, machine, injected errors), and the realism each runs with (the lathe's
 #: turned parts are read without spot and registration: noise alone).
 PROCEDURES = {"tool_rotation_arm": (_arm, Realism.lab()),
+              "tool_setting_6axis": (_six, Realism.lab()),
               "workpiece_setting_grooves": (_grooves, Realism.lab()),
               "xy_plane_errors": (_xy, Realism.lab()),
               "sts_turning": (_sts, Realism.noise_only())}

@@ -143,7 +143,12 @@ def layout_lines(stage: str, points) -> list[tuple[str, np.ndarray]]:
 
 @dataclass(frozen=True, eq=False)
 class Readings:
-    """What `ToolSetting6Axis.measure` returns: the plates as cut and as read.
+    """What `ToolSetting6Axis.measure` returns: the plates as commanded and as read.
+
+    The plates themselves are not here: their exact meshes and cut reports (the volume
+    removed, to the last bit, gives the tool's Z setting) read no instrument, and the
+    identification gets only what the microscopes read (docs/lab.md, the honesty rule).
+    `evaluate` asks the lab for them again, for the report.
 
     Attributes
     ----------
@@ -151,8 +156,8 @@ class Readings:
         The touch-off Z (m).
     a, c, b : tuple of GrooveReading
         The A, C and B plates' grooves, in cutting order.
-    plates : Mapping[str, tuple]
-        File stem (`AS_CUT`) -> (Program, Part, CutReport) of each plate as cut.
+    programs : Mapping[str, Program]
+        File stem (`AS_CUT`) -> the program each plate was cut with.
     registration : Mapping[str, RegistrationScatter or None]
         Plate ("a", "c", "b") -> the stated scatter of its microscope's registration
         (``registration_scatter``; None: read in the workpiece frame), for the uncertainty.
@@ -162,7 +167,7 @@ class Readings:
     a: tuple[GrooveReading, ...]
     c: tuple[GrooveReading, ...]
     b: tuple[GrooveReading, ...]
-    plates: Mapping[str, tuple]
+    programs: Mapping[str, Program]
     registration: Mapping[str, object] = field(default_factory=dict)
 
     __reduce__ = reduce_frozen  # pickles (a Result holds it), its read-only mappings too
@@ -218,8 +223,8 @@ class ToolSetting6Axis:
         plates = {}
 
         def cut(stage, program):
-            part, report = lab.cut(program, TOOL, cuts[stage].stock, start=PARKED)
-            plates[AS_CUT[stage]] = (program, part, report)
+            part, _ = lab.cut(program, TOOL, cuts[stage].stock, start=PARKED)
+            plates[AS_CUT[stage]] = program
             return part
 
         touch = cut("touch", cuts["touch"].program)
@@ -282,13 +287,22 @@ class ToolSetting6Axis:
 
     def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
         """Cut the compensated plates, read them (microscopes ``"a/compensated"``, ...), and
-        give Table 1: before from the identification's own plates, after from these."""
+        give Table 1: before from the identification's own plates, after from these.
+
+        The parts and cut reports: the plates `measure` cut (the same cuts, asked for again:
+        the lab hands them back, `machinesim.Lab.cut`), with their programs, then the
+        compensated ones."""
         check_lab(lab)
         check_identified(identified, Identification, "ToolSetting6Axis")
         machine = self._machine()
         cuts = plate_cuts(self.plan)
         before: Identification = identified.detail
-        parts, reports, after, registration = {}, {}, {}, {}
+        parts, reports, after, registration, as_cut = {}, {}, {}, {}, {}
+        if before.readings is not None:
+            for stage, name in AS_CUT.items():
+                as_cut[name] = before.readings.programs[name]
+                part, report = lab.cut(as_cut[name], TOOL, cuts[stage].stock, start=PARKED)
+                parts[name], reports[name] = part, cut_summary(report)
         for s in "acb":
             name = COMPENSATED[s]
             part, report = lab.cut(programs[name], TOOL, cuts[s].stock, start=PARKED)
@@ -321,7 +335,7 @@ class ToolSetting6Axis:
                      "theta3_deg": math.degrees(self.plan.theta3)},
             "cuts": reports,
         }
-        return Evaluation(figures=figures, details=details, parts=parts)
+        return Evaluation(figures=figures, details=details, parts=parts, programs=as_cut)
 
     def _machine(self):
         return _nominal(self.machine)
