@@ -5,7 +5,8 @@ instrument) and none of the lab's truth is reachable by any attribute, public or
 item or closure cell; a Machine's private caches apart, the door docs/lab.md names. And the
 identification runs as well with the lab's truth poisoned.
 
-Each procedure is measured once (module fixture: the slow part), then walked and identified.
+Each procedure is measured once (the slow part), then walked, then identified and
+compensated with the truth poisoned: one test per procedure, so that xdist measures it once.
 """
 
 from __future__ import annotations
@@ -59,21 +60,129 @@ PROCEDURES = {"tool_rotation_arm": (_arm, Realism.lab()),
               "sts_turning": (_sts, Realism.noise_only())}
 
 
-@pytest.fixture(scope="module", params=sorted(PROCEDURES))
-def measured(request):
-    make, realism = PROCEDURES[request.param]
+@pytest.mark.parametrize("name", sorted(PROCEDURES))
+def test_identification_reaches_nothing_of_the_lab_and_runs_with_its_truth_poisoned(name):
+    make, realism = PROCEDURES[name]
     procedure, machine, errors = make()
     lab = Lab(machine, errors, seed=5, realism=realism)
     handing = HandingLab(lab)
     measurements = procedure.measure(handing)
-    return request.param, procedure, lab, handing, measurements
-
-
-def test_nothing_identification_holds_leads_to_the_lab_what_it_handed_out_or_its_truth(
-        measured):
-    name, procedure, lab, handing, measurements = measured
     identified = procedure.identify(measurements)
+    # no door: nothing identify and compensate hold leads to the lab, to what it handed out
+    # (parts, reports, workpieces, instruments) or to its truth
     forbidden = {**handing.handed, id(handing): "the lab", **truth_of(lab)}
     found = doors({"procedure": procedure, "measurements": measurements,
                    "identified": identified}, forbidden)
     assert not found, f"{name}:\n" + "\n".join(found)
+    # and no read: with the truth poisoned the identification finds the same values
+    restore = _poisoned(lab)
+    try:
+        poisoned = procedure.identify(measurements)
+        programs = procedure.compensate(poisoned)
+    finally:
+        restore()
+    assert dict(poisoned.parameters) == dict(identified.parameters)
+    assert set(programs) == set(procedure.compensate(identified))
+
+
+class Poison:
+    """Stands in for the lab's truth: any use of it (an attribute, an item, a comparison, a
+    truth value, an isinstance through ``__class__``) fails the test."""
+
+    def __getattribute__(self, name):
+        raise AssertionError(f"the identification read the lab's truth (.{name})")
+
+    def _read(self, *args):
+        raise AssertionError("the identification read the lab's truth")
+
+    __getitem__ = __iter__ = __len__ = __bool__ = __eq__ = __hash__ = __array__ = _read
+    __float__ = __index__ = __add__ = __sub__ = __mul__ = __call__ = _read
+
+    def __repr__(self) -> str:
+        return "Poison()"
+
+
+def _poisoned(lab):
+    """Put `Poison` where the lab keeps its truth, and where the machine's caches bind it
+    (by id() of the lab's models, which no other object has while the lab lives); returns
+    how to put everything back (the machine is shared by every test of the process)."""
+    truth = {id(model) for model in (lab.reveal(), lab.reveal(background=False),
+                                     lab.reveal_background())}
+    undo = []
+    for name in ("truth", "set_up", "injected", "background", "servo", "artefacts",
+                 "instruments", "adjusted"):
+        attribute = f"_Lab__{name}"
+        undo.append((lab, attribute, getattr(lab, attribute)))
+        setattr(lab, attribute, Poison())
+    machine = lab.machine
+    for owner, name in ((machine, "_bindings"), (machine.kin, "_plans")):
+        cache = getattr(owner, name)
+        undo.append((owner, name, cache))
+        setattr(owner, name, {key: Poison() if _binds(value, truth) else value
+                              for key, value in cache.items()})
+
+    def restore():
+        for owner, name, value in undo:
+            setattr(owner, name, value)
+    return restore
+
+
+def _binds(value, truth) -> bool:
+    """Whether a cache entry (a Binding, or a plan led by one) binds one of ``truth``."""
+    from machinesim.kinematics import Binding
+
+    if isinstance(value, tuple) and value:
+        value = value[0]
+    return isinstance(value, Binding) and id(value.errors) in truth
+
+
+
+class _Cheat:
+    """A procedure that keeps its lab (``keep``) or reads the machine's binding cache
+    (``peek``): what the walk and the poison must catch."""
+
+    def __init__(self, how: str) -> None:
+        self.how = how
+
+    def measure(self, lab):
+        from machinesim.nc import ProgramBuilder
+
+        program = ProgramBuilder(1).rapid(X=1e-3, Y=1e-3, Z=1e-3).build()
+        lab.encoders().record(program)  # the machine binds nothing yet: the probe does
+        lab.touch_probe(lab.cut(program, "v:90", "block:10x10x2")[0])
+        if self.how == "keep":
+            self.lab = lab
+        return {"machine": lab.machine}
+
+    def identify(self, measurements):
+        from machinesim.experiment import Identified
+
+        value = 0.0
+        if self.how == "peek":
+            value = max(float(b.errors.tool.offset[0]) for b in
+                        measurements["machine"]._bindings.values() if b.errors is not None)
+        return Identified({"tool.x": (value, 1e-9)})
+
+    def compensate(self, identified):
+        return {}
+
+
+def test_the_walk_and_the_poison_catch_what_they_must():
+    lab = Lab("robonano_a0ib", {"tool": {"offset_um": [5.0, 0.0, 0.0]}}, seed=1)
+    keep, peek = _Cheat("keep"), _Cheat("peek")
+    handing = HandingLab(lab)
+    measurements = keep.measure(handing)
+    found = doors({"procedure": keep, "measurements": measurements},
+                  {**handing.handed, id(handing): "the lab", **truth_of(lab)})
+    assert found == ["procedure.lab -> the lab"]
+    peek.measure(lab)  # the door the poison covers: the machine's cache binds the truth
+    assert any(b.errors is lab.reveal() for b in lab.machine._bindings.values())
+    restore = _poisoned(lab)
+    try:
+        with pytest.raises(AssertionError, match="read the lab's truth"):
+            peek.identify({"machine": lab.machine})
+        with pytest.raises(AssertionError, match="read the lab's truth"):
+            lab.reveal().parameters()
+    finally:
+        restore()
+    assert lab.reveal().tool.offset[0] == pytest.approx(5e-6, rel=1e-12)  # put back
