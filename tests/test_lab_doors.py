@@ -11,10 +11,12 @@ compensated with the truth poisoned: one test per procedure, so that xdist measu
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from honesty_walk import HandingLab, doors, truth_of
 
 from machinesim import Lab
+from machinesim.exceptions import InputError
 from machinesim.realism import Realism
 
 
@@ -186,3 +188,45 @@ def test_the_walk_and_the_poison_catch_what_they_must():
     finally:
         restore()
     assert lab.reveal().tool.offset[0] == pytest.approx(5e-6, rel=1e-12)  # put back
+
+
+# ------------------------------------------------------------- what a refusal tells of the lab
+
+
+def test_a_refused_reading_names_the_place_asked_for_not_where_the_stage_put_it():
+    # Two blocks, 4 mm and a 2 mm gap: a profile over the gap lies within the part's extent
+    # and reads nothing. Its message gave the line where the stage had put it, to 6 digits:
+    # the hidden stage offset (1 um sigma) to 10 nm.
+    from machinesim.metrology import Microscope
+    from machinesim.workpiece import Part, block
+
+    left = block(4e-3, 3e-3, 1e-3)
+    part = Part(left.manifold + left.manifold.translate((6e-3, 0.0, 0.0)))
+    scope = Microscope(noise=False, stage_sigma=1e-6, stage_rng=1)
+    with pytest.raises(InputError) as refused:
+        scope.profile(part, (4.2e-3, 1.5e-3), (5.8e-3, 1.5e-3), spacing=1e-5)
+    assert "the profile from (0.0042, 0.0015) to (0.0058, 0.0015) m reads no" in str(
+        refused.value)
+    with pytest.raises(InputError) as refused:
+        scope.height_map(part, 4.2e-3, 5.8e-3, 1e-3, 2e-3, spacing=1e-4)
+    assert "the height map over x 0.0042 .. 0.0058 m, y 0.001 .. 0.002 m reads no" in str(
+        refused.value)
+
+
+def test_whether_a_reading_is_refused_does_not_depend_on_the_hidden_registration():
+    # A line 10 mm long with 10.5 um of it over the block (a share of 1.05e-3, above
+    # ON_PART_SHARE) was judged on the block as the registration placed it: 3 um one way it
+    # read, the other way it was refused, and bisecting that threshold finds the registration.
+    # The part's extent in the message was the registered one too.
+    from machinesim.metrology import Microscope
+    from machinesim.metrology.imperfections import Registration
+    from machinesim.workpiece import block
+
+    flat = block(5e-3, 3e-3, 1e-3)
+    for dx in (-3e-6, 3e-6):
+        scope = Microscope(noise=False, registration=Registration([dx, 0.0, 0.0]))
+        read = scope.profile(flat, (-9.9895e-3, 1.5e-3), (10.5e-6, 1.5e-3), spacing=1e-6)
+        assert 3 <= np.count_nonzero(~read.missing) <= 20
+        with pytest.raises(InputError) as refused:
+            scope.profile(flat, (6e-3, 1e-3), (7e-3, 1e-3))
+        assert "the part spans x 0 .. 5 mm, y 0 .. 3 mm" in str(refused.value)

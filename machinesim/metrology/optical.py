@@ -53,7 +53,7 @@ from machinesim.metrology.surface import (
     END_SLACK,
     check_read,
     check_samples,
-    height_map,
+    grid_heights,
     line_count,
     profile,
 )
@@ -200,7 +200,7 @@ class _Profiler:
                            frozen(nominal[1]))
         surface = self._surface(part)
         if self.spot is None and self.lateral_sigma == 0.0:
-            s, z = profile(surface, a, b, spacing)
+            s, z = profile(surface, a, b, spacing, refuse=False)
         else:
             per_sample = 1 if self.spot is None else self.spot.samples**2
             s = _line_samples(a, b, as_positive(spacing, "spacing"), per_sample)
@@ -211,9 +211,12 @@ class _Profiler:
             vertices, triangles = mesh_arrays(surface)
             z = line_heights(vertices, triangles, a, (b - a) / np.hypot(*(b - a)), s, ds,
                              across, self.spot)
-            check_read(z, vertices, f"{type(self).__name__}: the profile from ({a[0]:g}, "
-                                    f"{a[1]:g}) to ({b[0]:g}, {b[1]:g}) m", "start")
             s = frozen(s, copy=False)
+        # named as asked, over the part as given: where the stage and the registration
+        # really put them is the lab's (the stage's offset had read here to 10 nm)
+        check_read(z, mesh_arrays(part)[0], f"{type(self).__name__}: the profile from "
+                   f"({nominal[0][0]:g}, {nominal[0][1]:g}) to ({nominal[1][0]:g}, "
+                   f"{nominal[1][1]:g}) m", "start")
         return Profile(s, self._display(z), frozen(nominal[0]), frozen(nominal[1]))
 
     def height_map(self, part, x0: float, x1: float, y0: float, y1: float,
@@ -251,27 +254,31 @@ class _Profiler:
             return HeightMap(x, y, self._display(z))
         surface = self._surface(part)
         if self.spot is None and self.lateral_sigma == 0.0:
-            return HeightMap(x, y, self._display(height_map(surface, rx, ry)))
-        dx, dy = np.zeros(len(x)), np.zeros(len(y))
-        if self._lateral_rng is not None:
-            dx = self.lateral_sigma * self._lateral_rng.standard_normal(len(x))
-            dy = self.lateral_sigma * self._lateral_rng.standard_normal(len(y))
-        vertices, triangles = mesh_arrays(surface)
-        z = spot_heights(vertices, triangles, rx, ry, dx, dy, self.spot)
-        check_read(z, vertices, f"{type(self).__name__}: the height map over x {rx[0]:g} .. "
-                                f"{rx[-1]:g} m, y {ry[0]:g} .. {ry[-1]:g} m", "x0")
+            z = grid_heights(surface, rx, ry)
+        else:
+            dx, dy = np.zeros(len(x)), np.zeros(len(y))
+            if self._lateral_rng is not None:
+                dx = self.lateral_sigma * self._lateral_rng.standard_normal(len(x))
+                dy = self.lateral_sigma * self._lateral_rng.standard_normal(len(y))
+            vertices, triangles = mesh_arrays(surface)
+            z = spot_heights(vertices, triangles, rx, ry, dx, dy, self.spot)
+        check_read(z, mesh_arrays(part)[0], f"{type(self).__name__}: the height map over x "
+                   f"{x[0]:g} .. {x[-1]:g} m, y {y[0]:g} .. {y[-1]:g} m", "x0")  # as asked
         return HeightMap(x, y, self._display(z))
 
     def _check_on_part(self, part, a: np.ndarray, b: np.ndarray, spacing: float,
                        window: bool = False) -> None:
         """Refuse a profile from ``a`` to ``b`` (a map over the rectangle of corners ``a``,
-        ``b``), as asked, that misses the part's xy extent (as the instrument sees it, in
-        its frame when it has a registration) or of which
-        less than `ON_PART_SHARE` lies over it: a unit slip, mm given as m. Given (1, 5) and
-        (9, 5) for a line across a 10 mm block, the microscope read 26.7 million samples
-        (9 s), all NaN, and fit_v_groove then said 'Expected at least 5 finite samples, got
-        0'. A part given as a height field (a turned face) has heights everywhere."""
-        vertices, _ = mesh_arrays(self._surface(part))
+        ``b``), as asked, that misses the part's xy extent or of which less than
+        `ON_PART_SHARE` lies over it: a unit slip, mm given as m. Given (1, 5) and (9, 5)
+        for a line across a 10 mm block, the microscope read 26.7 million samples (9 s), all
+        NaN, and fit_v_groove then said 'Expected at least 5 finite samples, got 0'. A part
+        given as a height field (a turned face) has heights everywhere.
+
+        Judged on the part as given (the workpiece frame), not as the instrument's hidden
+        registration places it, and said so: judged there, whether a line at the threshold
+        was refused, and the extent the message gave, told where the registration was."""
+        vertices, _ = mesh_arrays(part)
         if len(vertices) == 0:
             return
         lo, hi = vertices[:, :2].min(axis=0), vertices[:, :2].max(axis=0)
