@@ -230,3 +230,26 @@ def test_whether_a_reading_is_refused_does_not_depend_on_the_hidden_registration
         with pytest.raises(InputError) as refused:
             scope.profile(flat, (6e-3, 1e-3), (7e-3, 1e-3))
         assert "the part spans x 0 .. 5 mm, y 0 .. 3 mm" in str(refused.value)
+
+
+def test_a_stylus_over_travel_says_how_far_to_two_digits_not_the_exact_distance():
+    # The message gave the surface's distance above the path exactly: with the workpiece
+    # 3.21 um high, 0.000553209999999951 m, a reading with neither noise nor rounding.
+    from machinesim.errors import ErrorModel
+    from machinesim.machines import load_machine
+    from machinesim.metrology import TouchProbe
+    from machinesim.metrology.probe_instrument import StylusOverTravel
+    from machinesim.workpiece import block
+
+    a0ib = load_machine("robonano_a0ib")
+
+    def above(x, y, z):  # the probe_tip 40 mm along +Y and 1 mm above the tool edge
+        q = np.zeros(len(a0ib.axes))
+        q[:3] = x, y - 40e-3, z - 1e-3
+        return q
+
+    errors = ErrorModel.from_dict({"workpiece": {"delta_um": [0.0, 0.0, 3.21]}})
+    probe = TouchProbe(a0ib, errors, block(5e-3, 3e-3, 1e-3), noise=False)
+    with pytest.raises(StylusOverTravel) as refused:
+        probe.scan([above(1e-3, 1.5e-3, 1e-3), above(2.5e-3, 1.5e-3, -0.3e-3)], stroke=0.5e-3)
+    assert "got it about 0.00055 m above at points [1]" in str(refused.value)

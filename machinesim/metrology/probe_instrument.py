@@ -279,9 +279,12 @@ class TouchProbe:
         exact = lift - t
         over = np.flatnonzero(exact > stroke)
         if over.size:
+            # the amount to 2 digits, as an alarm says it: given exactly, it was a reading
+            # without noise or rounding (a workpiece 3.21 um high read 0.000553209999999951)
             raise StylusOverTravel(f"Expected the surface within the stylus stroke ({stroke} "
-                                   f"m) above the path, got it {exact[over].max()} m above at "
-                                   f"points {over.tolist()[:10]} (over-travel)", key="q_path")
+                                   f"m) above the path, got it about {exact[over].max():.2g} m "
+                                   f"above at points {over.tolist()[:10]} (over-travel)",
+                                   key="q_path")
         deflection = self.readout.read(exact, self._rng)
         recorded = self._record(q)
         contact = recorded - deflection[:, None] * u
