@@ -341,3 +341,56 @@ def test_a_diagonal_from_a_compensated_corner_an_ulp_off_is_read_not_refused():
     # the run ends, with micrometres before (6.48 um: squareness and scale errors) and
     # within the paper's 1.44 um after (0.13 um)
     assert diagonal.before > 1.0 and 0.0 <= diagonal.after < 1.44
+
+
+def test_the_printed_figures_by_hand_from_the_revealed_errors():
+    # Each figure the scenario prints, derived from the lab's reveal() alone (no reading):
+    # EQ1's tables with C tilts, a noise-free lab and ideal laser readings. A deviation of the
+    # tool from the table is (EXX(x) + EXY(y) - e y, EYY(y) + EYX(x)) (e = EC0Y, the signs
+    # of grooving_4axis's kinematics). The map removes the least-squares lines L of the
+    # straightness readings on the 21 targets and is eq 1 in the paper's form, Y the
+    # reference: the rigid turn that leaves dPx = EXX(x) + EXY(y) - L_XY(y) puts
+    # (slope(L_XY) - e) x in dPy. The figures are ranges over the 41 x 41 grid of the plate
+    # (10 mm apart, the tables' knots on it), a sum of functions of x and of y adding their
+    # ranges; ISO 230-6's E of a diagonal is the range of (dP(p) - dP(corner)) . u over its
+    # 21 points (no reversal error). The rest is of second order, the laser's projections
+    # taken for lengths in eq 2: 0.2 nm, 0.2 nrad here.
+    errors = {**EQ1, "location": {**EQ1["location"],
+                                  "C": {"EA0C_urad": 3.0, "EB0C_urad": -4.0}}}
+    lab = machinesim.Lab("grooving_4axis", errors, noise=False)
+    result = run(XYPlaneErrors(runs=2, interferometer_resolution=0.0), lab)
+    fig = {f.name: f for f in result.figures}
+    truth = lab.reveal()
+    exx, eyx = (truth.component["X"][s].evaluate for s in ("EXX", "EYX"))
+    eyy, exy = (truth.component["Y"][s].evaluate for s in ("EYY", "EXY"))
+    e = truth.location["Y"]["EC0Y"]
+    targets, grid = np.linspace(-0.2, 0.2, 21), np.linspace(-0.2, 0.2, 41)
+    line_xy, line_yx = (np.polyfit(targets, f(targets), 1) for f in (exy, eyx))
+    x_range = np.ptp(exx(grid)) + np.ptp(exy(grid) - np.polyval(line_xy, grid))
+    y_range = np.ptp(eyy(grid)) + np.ptp(eyx(grid) + (line_xy[0] - e) * grid)
+    assert x_range == pytest.approx(10.805195 * UM, abs=1e-12)   # EQ1's, to the pm
+    assert fig["xy_error_x"].before == pytest.approx(x_range / UM, abs=1e-3)
+    assert fig["xy_error_y"].before == pytest.approx(y_range / UM, abs=1e-3)
+    # the squareness of the map's lines: e less both lines' slopes
+    squareness = e - line_xy[0] - line_yx[0]
+    assert result.evaluation.details["squareness_lines_urad"] == pytest.approx(
+        squareness * 1e6, abs=1e-3)
+
+    def deviation(x, y):
+        return np.stack([exx(x) + exy(y) - e * y, eyy(y) + eyx(x)], axis=-1)
+
+    diagonals = []
+    for corner, opposite in DIAGONALS:
+        c, o = np.array(corner), np.array(opposite)
+        u = (o - c) / np.linalg.norm(o - c)
+        p = c + np.linspace(0.0, np.linalg.norm(o - c), 21)[:, None] * u
+        diagonals.append(np.ptp((deviation(p[:, 0], p[:, 1]) - deviation(*c)) @ u))
+    np.testing.assert_allclose(result.evaluation.details["diagonal_before_each_um"],
+                               np.array(diagonals) / UM, rtol=0, atol=1e-3)
+    assert fig["diagonal"].before == pytest.approx(max(diagonals) / UM, abs=1e-3)
+    # and the C table's tilt, hypot(EA0C, EB0C) = 5 urad
+    assert fig["c_perpendicularity"].before == pytest.approx(
+        np.hypot(truth.location["C"]["EA0C"], truth.location["C"]["EB0C"]) * 1e6, abs=1e-3)
+    # compensated by eq 1's table, nothing of eq 1's form is left
+    assert fig["xy_error_x"].after < 1e-3 and fig["xy_error_y"].after < 1e-3
+    assert fig["diagonal"].after < 1e-3
