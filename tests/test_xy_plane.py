@@ -1,5 +1,6 @@
 """Paper 003's XY plane: eq 1's map, the fit route, compensation by re-shaped commands."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -319,6 +320,32 @@ def test_bad_curves_and_commands_are_refused():
     flat = Curve([-1.0, 1.0], [0.0, 0.0])
     with pytest.raises(MachineSimError):
         CompensationTable(XYPlaneMap(flat, flat, flat, flat, 0.0)).apply([1.0, 2.0])
+
+
+@pytest.mark.parametrize(("options", "key"), [
+    ({"c_step_deg": float("nan")}, "c_step_deg"),   # was a bare ValueError from round()
+    ({"c_step_deg": "10"}, "c_step_deg"),           # a TypeError
+    ({"c_step_deg": True}, "c_step_deg"),           # ran C by 1 deg (True is 1)
+    ({"c_radius": "0.1"}, "c_radius"),              # a TypeError
+    ({"c_radius": True}, "c_radius"),
+    ({"runs": 1.5}, "runs"),                        # a TypeError in range()
+    ({"runs": 0}, "runs"),                          # refused as ISO 230-2's 'up', not runs
+    ({"runs": 1}, "runs"),
+    ({"runs": True}, "runs"),
+])
+def test_bad_parameters_are_refused_by_name_before_anything_runs(options, key):
+    with pytest.raises(MachineSimError, match=f"key '{key}': Expected .*got "
+                       f"{re.escape(repr(next(iter(options.values()))))}"):
+        XYPlaneErrors(**options)
+    XYPlaneErrors(runs=2, c_step_deg=np.float64(45.0), c_radius=np.float64(0.05))  # taken
+
+
+def test_the_steps_refuse_what_is_no_lab():
+    # measure read lab.laser_interferometer of a str: an AttributeError
+    with pytest.raises(MachineSimError, match="key 'lab': expected a machinesim.Lab"):
+        XYPlaneErrors().measure("a lab")
+    with pytest.raises(MachineSimError, match="key 'lab': expected a machinesim.Lab"):
+        XYPlaneErrors().evaluate(None, None, {})
 
 
 def test_a_diagonal_from_a_compensated_corner_an_ulp_off_is_read_not_refused():

@@ -23,6 +23,8 @@ docs/procedures/xy_plane_errors.md has the derivations and sign conventions.
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -31,7 +33,7 @@ import numpy as np
 from machinesim.compensation_table import CompensationTable, ModelCompensation
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
-from machinesim.experiment import Evaluation, Figure, Identified, fit_notes
+from machinesim.experiment import Evaluation, Figure, Identified, check_lab, fit_notes
 from machinesim.identification.c_axis_squareness import (
     LOCATION,
     CAxisSeparation,
@@ -78,7 +80,7 @@ class XYPlaneErrors:
     count : int
         Targets per laser test (20 mm apart over 400 mm by default).
     runs : int
-        ISO 230-2 runs per direction.
+        ISO 230-2 runs per direction (at least 2: the evaluation's spread needs two).
     c_radius : float
         Radius of the followed table point in the C test, m.
     c_step_deg : float
@@ -122,17 +124,26 @@ class XYPlaneErrors:
     paper: str = "003"
 
     def __post_init__(self) -> None:
-        steps = 360.0 / self.c_step_deg
-        if self.c_step_deg <= 0 or abs(steps - round(steps)) > 1e-9 or steps < 8:
-            raise InputError(f"Expected a C step dividing 360 deg into >= 8 steps, got "
-                             f"{self.c_step_deg!r}", key="c_step_deg")
-        if not 0.0 < self.c_radius <= 0.2:
-            raise InputError(f"Expected a C test radius in (0, 0.2] m, got {self.c_radius!r}",
-                             key="c_radius")
+        # a NaN step raised a bare ValueError from round(), a string a TypeError, and True
+        # ran a 1 deg step; runs=1.5 a TypeError in range(), runs=0 or 1 a refusal naming
+        # the ISO 230-2 array 'up' after the first laser test, not runs
+        step, radius = self.c_step_deg, self.c_radius
+        steps = 360.0 / step if _real(step) and step > 0.0 else math.nan
+        if not (math.isfinite(steps) and abs(steps - round(steps)) <= 1e-9 and steps >= 8):
+            raise InputError(f"Expected a C step (deg, a number) dividing 360 deg into >= 8 "
+                             f"steps, got {step!r}", key="c_step_deg")
+        if not (_real(radius) and 0.0 < radius <= 0.2):
+            raise InputError(f"Expected a C test radius (m, a number) in (0, 0.2] m, got "
+                             f"{radius!r}", key="c_radius")
+        if isinstance(self.runs, bool) or not isinstance(self.runs, int | np.integer) \
+                or self.runs < 2:
+            raise InputError(f"Expected runs as a whole number >= 2 of runs per direction "
+                             f"(ISO 230-2 asks 5), got {self.runs!r}", key="runs")
 
     # ------------------------------------------------------------------------------ steps
 
     def measure(self, lab):
+        check_lab(lab)
         return {"xy": self.plane_tests(lab), "c": self._c_tests(lab, None),
                 "machine": lab.machine}
 
@@ -174,6 +185,7 @@ class XYPlaneErrors:
                 "corners_model": model.program(program)}
 
     def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
+        check_lab(lab)
         # set up again, not the before tests' instruments: with the same labels their noise
         # streams were the same, and the after readings repeated the before's noise, which
         # the compensation had taken as error (the map after read 0.010 / 0.0078 um where
@@ -298,6 +310,11 @@ class XYPlaneErrors:
 
         return CTests(follow_q, read(follow_q), fixed_q, tuple(read(q) for q in fixed_q),
                       rt.uncertainty)
+
+
+def _real(value) -> bool:
+    """A real number, not a bool (True is 1), NaN allowed (the caller's range refuses it)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 def _pyramid_figures(windows) -> tuple[float, float]:
