@@ -348,6 +348,26 @@ def test_the_steps_refuse_what_is_no_lab():
         XYPlaneErrors().evaluate(None, None, {})
 
 
+def test_the_steps_refuse_what_the_step_before_did_not_give():
+    # identify({}) raised KeyError 'xy', compensate(None) AttributeError, compensate of an
+    # Identified with another detail KeyError 'machine'
+    from machinesim.experiment import Identified
+
+    procedure = XYPlaneErrors()
+    with pytest.raises(MachineSimError, match="key 'measurements': expected the measurements "
+                       r"XYPlaneErrors.measure\(lab\) returns .*got dict \{\}"):
+        procedure.identify({})
+    with pytest.raises(MachineSimError, match="key 'identified': expected the Identified "
+                       r"XYPlaneErrors.identify\(measurements\) returns, got NoneType"):
+        procedure.compensate(None)
+    with pytest.raises(MachineSimError, match="key 'identified': .*got a detail dict without "
+                       "c, diagonal_before"):
+        procedure.compensate(Identified({}, detail={}))
+    lab = machinesim.Lab("grooving_4axis", noise=False)
+    with pytest.raises(MachineSimError, match="key 'identified'"):
+        procedure.evaluate(lab, Identified({}, detail={"map": None}), {})
+
+
 def test_a_diagonal_from_a_compensated_corner_an_ulp_off_is_read_not_refused():
     # with these errors and seed 1 the compensated command at the diagonal's start differs
     # from the corner's by 2.8e-17 m: that was taken as a move of zero length and refused
