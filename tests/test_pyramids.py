@@ -174,3 +174,25 @@ def test_groove_phase_finds_a_triangle_waves_phase_from_its_read_samples_and_ref
         with pytest.raises(MachineSimError, match="Expected a profile read over at least one "
                                                   "pitch"):
             groove_phase(s, read, 1.0)
+
+
+@pytest.mark.parametrize(("windows", "words"), [
+    # over the plate's edge by 0.4 mm: cut, then refused by the reading ("the groove set
+    # along X: key 'centres': Expected flank samples beside the groove ...")
+    (((0.0, -0.1999),), r"the 1 mm window at \(0, -199\.9\) mm runs off the plate \(-200 \.\. "
+                        r"200 mm in x and y, block:400x400x5@-200,-200,0\); expected its "
+                        r"centre within 199\.5 mm"),
+    (((0.3, 0.3),), r"the 1 mm window at \(300, 300\) mm runs off the plate"),
+    (((0.0,),), r"Expected each window centre as \(x, y\), two finite numbers in m, got "
+                r"\(0\.0,\)"),                 # a bare ValueError (unpacking)
+    ((("0", float("nan")),), r"Expected each window centre as \(x, y\), two finite numbers "
+                             r"in m, got \('0', nan\)"),
+])
+def test_windows_off_the_plate_or_no_xy_pairs_are_refused_before_any_cut(windows, words):
+    lab = machinesim.Lab("grooving_4axis", noise=False)
+    cuts = []
+    lab_cut = lab.cut
+    lab.cut = lambda *a, **k: cuts.append(a) or lab_cut(*a, **k)
+    with pytest.raises(MachineSimError, match=f"key 'windows': {words}"):
+        cut_and_read(lab, windows=windows)
+    assert cuts == []

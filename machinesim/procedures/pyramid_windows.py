@@ -33,6 +33,8 @@ WINDOWS = ((0.0, 0.0), (-0.19, -0.19), (0.19, -0.19), (0.19, 0.19), (-0.19, 0.19
 """Window centres on the 400 mm plate (workpiece frame, m): centre and four corners."""
 STOCK = "block:400x400x5@-200,-200,0"
 """The 400 x 400 mm plate, top at z = 0, centred on the C axis."""
+STOCK_XY = (-0.2, 0.2)
+"""`STOCK`'s extent in x and in y, m: a window's square must lie within it."""
 SPACING = 0.1e-6
 """Profile sample spacing, m."""
 
@@ -287,6 +289,7 @@ def cut_and_read(lab, compensation=None, plan: PyramidPlan = PAPER_PLAN,
     """Cut the pattern in every window (compensated by ``compensation.program`` when given)
     and read it; returns the list of `PyramidWindow` and, per window, the program and the
     part as cut (the window alone)."""
+    windows = _check_windows(windows, plan)
     wli = lab.white_light_interferometer(label=label)
     out, cuts = [], []
     for centre in windows:
@@ -300,3 +303,29 @@ def cut_and_read(lab, compensation=None, plan: PyramidPlan = PAPER_PLAN,
         out.append(read_window(wli, part, centre, plan))
         cuts.append((program, part))
     return out, cuts
+
+
+def _check_windows(windows, plan: PyramidPlan) -> list[tuple[float, float]]:
+    """The window centres as (x, y) pairs of finite numbers (m) whose ``plan.window``
+    squares lie on the plate (`STOCK_XY`). A window over its edge was refused, if at all,
+    only after its cut and by the reading ('the groove set along X: key 'centres': Expected
+    flank samples ...', 'the profile ... misses the part'), and a centre of one number
+    raised a bare ValueError."""
+    half, (low, high) = 0.5 * plan.window, STOCK_XY
+    out = []
+    for centre in windows:
+        try:
+            cx, cy = (float(c) for c in centre)
+        except (TypeError, ValueError):
+            cx = cy = math.nan
+        if not (math.isfinite(cx) and math.isfinite(cy)):
+            raise InputError(f"Expected each window centre as (x, y), two finite numbers in m, "
+                             f"got {centre!r}", key="windows")
+        if not (low + half <= cx <= high - half and low + half <= cy <= high - half):
+            raise InputError(
+                f"the {plan.window * 1e3:g} mm window at ({cx * 1e3:g}, {cy * 1e3:g}) mm runs "
+                f"off the plate ({low * 1e3:g} .. {high * 1e3:g} mm in x and y, {STOCK}); "
+                f"expected its centre within {(high - half) * 1e3:g} mm of the plate's centre "
+                "in x and y", key="windows")
+        out.append((cx, cy))
+    return out
