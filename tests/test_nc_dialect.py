@@ -1039,16 +1039,26 @@ def test_a_word_a_million_characters_long_is_shown_by_its_ends(word, shown):
     assert len(message) < 400 and shown in message and "line 3, column 1" in message
 
 
-def test_one_line_of_repeated_words_stops_at_the_problem_cap():
+def test_one_line_of_repeated_words_is_one_problem_read_to_its_cap():
     # 2 million 'X1.' on one line (8 MB) made 1,999,999 problems, 2.4 GB and 23 s for one
-    # mistake; reading keeps MAX_PROBLEMS (10,000), within a line as across lines
-    from machinesim.nc.parser import MAX_PROBLEMS
+    # mistake; reading then kept MAX_PROBLEMS (10,000), but still read every word of the
+    # line and built a problem for each (one million: 65 s; a 48 MB line of 'G01 X1.': 256 s
+    # and 3.6 GB). A line is now read for MAX_LINE_ITEMS words and problems: beyond them it
+    # is one problem at the first character not read, and the line's words are not run
+    from machinesim.nc.lexer import MAX_LINE_ITEMS
 
+    line = "G01 F100. " + "X1. " * 30_000
     with pytest.raises(NCProgramError) as info:
-        parse_program("G00 X0. Y0. Z1.\nG01 F100. " + "X1. " * 30_000 + "\n", "long.nc")
-    assert MAX_PROBLEMS == 10_000 and len(info.value.problems) == 10_000
-    assert info.value.problems[0].column == 15  # the second X1. of line 2
-    assert "10000 problems in the program (reading stopped there; " in str(info.value)
+        parse_program("G00 X0. Y0. Z1.\n" + line + "\n", "long.nc")
+    assert MAX_LINE_ITEMS == 10_000 and not hasattr(info.value, "problems")
+    # G01 and F100. are two words, so the cap falls on the 9,999th 'X1.' (0-based 9,998),
+    # which starts at column 11 + 4 x 9,998
+    assert info.value.line == 2 and info.value.column == 11 + 4 * 9_998 == 40_003
+    assert info.value.key == "X1. X1. X1. X1. X1. "
+    assert f"({len(line) - 40_002} characters not read)" in str(info.value)
+    # 20,000 M codes in one block had been read as one block passing them all through
+    with pytest.raises(NCProgramError, match="more than 10000 words and problems"):
+        parse_program("G00 X0. Y0. Z1.\n" + "M08 " * 20_000 + "\nM30\n", "long.nc")
 
 
 def test_a_latin1_byte_outside_comments_is_named_as_not_utf8(tmp_path):

@@ -22,6 +22,11 @@ _LETTERS = frozenset(string.ascii_letters)
 #: `_NUMBER`). Such text after ';' would be a block lost in a comment.
 _WORD_START = re.compile(r"([NOGMSFPXYZABCIJKRQLHTD])[ \t]*(" + _NUMBER.pattern + ")",
                          re.IGNORECASE)
+#: The most words and problems one line is read for. A block holds one word per address
+#: letter, one G code per modal group and a few M codes (FANUC: at most 3), so a line with
+#: more is blocks whose line ends were lost, or no program; reading on had cost about 60 us
+#: a word (one million 'X1. ' on a line: 65 s for a refusal that keeps 10,000 problems).
+MAX_LINE_ITEMS = 10_000
 
 
 @dataclass(frozen=True)
@@ -74,6 +79,12 @@ def tokenize(raw: str, source: str, line: int, *,
         c = raw[i]
         if c in _BLANK:
             i += 1
+        elif len(words) + len(problems) >= MAX_LINE_ITEMS:
+            fail(f"more than {MAX_LINE_ITEMS} words and problems on one line, so reading of "
+                 "the line stopped here: a block holds one word per address letter, one G "
+                 "code per group and a few M codes; was it many blocks whose line ends were "
+                 f"lost? ({len(raw) - i} characters not read)", i + 1, brief(raw[i:i + 20]))
+            break
         elif c == "(":
             close = raw.find(")", i + 1)
             if close < 0:
