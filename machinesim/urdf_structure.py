@@ -75,17 +75,29 @@ def _link_origin_at(root: ET.Element, path, lines: dict[str, list[int]] | None,
     """Where ``origin`` (not a joint's) is, for a message: ``path``, its line and its link
     (a visual's, a collision's or the inertial's origin) when `read_urdf`'s ``"in_link"``
     has its line; else ``path`` alone (an origin outside the links)."""
+    found = _in_link_at(root, path, lines, origin)
+    if found is None:
+        return f"{path}: an <origin>"
+    at, link, child = found
+    inside = "" if origin is child else f" <{child.tag}>"
+    return f"{at}: link {link.get('name')!r}{inside} <origin>"
+
+
+def _in_link_at(root: ET.Element, path, lines: dict[str, list[int]] | None,
+                wanted: ET.Element) -> tuple[str, ET.Element, ET.Element] | None:
+    """``path`` with the line of ``wanted``, a child or grandchild of a link, when
+    `read_urdf`'s ``"in_link"`` has it (else ``path`` alone), its link and the link's child
+    that holds it; None when no link holds it."""
     found = (lines or {}).get("in_link", ())
     count = 0
     for link in root.findall("link"):
         for child in link:
             for element in (child, *child):
-                if element is origin:
+                if element is wanted:
                     at = f"{path}, line {found[count]}" if count < len(found) else f"{path}"
-                    inside = "" if element is child else f" <{child.tag}>"
-                    return f"{at}: link {link.get('name')!r}{inside} <origin>"
+                    return at, link, child
                 count += 1
-    return f"{path}: an <origin>"
+    return None
 
 
 def _number(text: str, where: str) -> float:
@@ -228,8 +240,14 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
             raise
     for link in root.findall("link"):
         for kind in ("visual", "collision"):
-            for element in link.findall(f"{kind}/geometry/*"):
-                _check_shape(element, f"{path}: link {link.get('name')!r} <{kind}>")
+            for geometry in link.findall(f"{kind}/geometry"):
+                for element in geometry:
+                    try:
+                        _check_shape(element, f"{path}: link {link.get('name')!r} <{kind}>")
+                    except ModelError:  # refused again at its <geometry>'s line, found now
+                        at = _in_link_at(root, path, lines, geometry)[0]
+                        _check_shape(element, f"{at}: link {link.get('name')!r} <{kind}>")
+                        raise
 
 
 def _check_not_xacro(root: ET.Element, path) -> None:

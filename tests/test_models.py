@@ -389,15 +389,16 @@ HOSTILE_URDFS = {
                          'declare xmlns:machinesim="https://machinesim.invalid/urdf"']),
     "visual_box_not_a_number": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
                                                  '<box size="a 1.2 0.15"/>'),
-                                ["link 'base' <visual> <box size>", "'a' is not a number"]),
+                                [", line 12: link 'base' <visual> <box size>",
+                                 "'a' is not a number"]),
     "visual_box_two_sizes": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
                                               '<box size="1.2 0.15"/>'),
-                             ["link 'base' <visual>", "<box size='1.2 0.15'>",
+                             [", line 12: link 'base' <visual>", "<box size='1.2 0.15'>",
                               "expected 3 lengths > 0 (m)"]),
     "visual_cylinder_negative": (GROOVING.replace('<cylinder radius="0.0015"',
                                                   '<cylinder radius="-0.0015"'),
-                                 ["link 'tool_tip' <visual>", "<cylinder radius='-0.0015'>",
-                                  "expected one length > 0 (m)"]),
+                                 [", line 35: link 'tool_tip' <visual>",
+                                  "<cylinder radius='-0.0015'>", "expected one length > 0 (m)"]),
     # the URDF parser dropped the visual of a scale it could not read (a C++ message on
     # stderr), and read 'nan' as 1 1 1: the machine loaded and was drawn without that mesh
     "mesh_scale_two_numbers": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
@@ -410,6 +411,14 @@ HOSTILE_URDFS = {
     "mesh_scale_commas": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
                                            '<mesh filename="base.stl" scale="1,1,1"/>'),
                           ["link 'base' <visual> <mesh scale>", "'1,1,1' is not a number"]),
+    # a shape's message named no line (every other refusal of a link's element did): it now
+    # names its <geometry>'s, here on the line after the visual's
+    "collision_box_own_line": (GROOVING.replace(
+        '<material name="bed"/></visual>',
+        '<material name="bed"/></visual>\n    <collision>\n      <geometry>\n'
+        '        <box size="1.2 -1.2 0.15"/>\n      </geometry>\n    </collision>', 1),
+                               [", line 14: link 'base' <collision>: <box size='1.2 -1.2 0.15'>",
+                                "expected 3 lengths > 0 (m)"]),
     "visual_unknown_shape": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
                                               '<cone size="1.2 1.2 0.15"/>'),
                              ["link 'base' <visual>", "<cone>",
