@@ -366,3 +366,30 @@ def test_a_machines_warning_on_two_workers_is_one_line(tmp_path, capfd, monkeypa
     assert "MachineSimWarning" not in err, err
     warned = [line for line in err.splitlines() if "lower=-45.0 upper=45.0" in line]
     assert len(warned) == 1 and warned[0].startswith("machinesim: warning: "), err
+
+
+def test_a_script_that_runs_a_campaign_without_the_main_guard_is_told_to_add_it(tmp_path):
+    # docs/campaigns.md's example pasted into a file without `if __name__ == "__main__":`
+    # ran the campaign again in each worker Dask started (a spawned Python imports the
+    # script), which found the folder locked ("another campaign is running in this
+    # folder"), and the script ended in Dask's "RuntimeError: Nanny failed to start."
+    call = (f"campaign.run('tool_rotation_arm', 1, out={str(tmp_path / 'c')!r}, workers=1, "
+            "identify_only=True, progress=False, report=False)\n")
+    script = tmp_path / "unguarded.py"
+    script.write_text("import machinesim.campaign as campaign\n" + call)
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300)
+    last = done.stderr.strip().splitlines()[-1]
+    assert done.returncode == 1 and last.startswith("machinesim.exceptions.InputError: ")
+    assert str(script) in last and "the local Dask workers did not start" in last
+    assert "under 'if __name__ == \"__main__\":'" in last
+    # each worker's own refusal names the script it was importing, not a lock
+    assert f"campaign.run was called while a Dask worker imported {script}" in done.stderr
+    assert "another campaign is running" not in done.stderr
+    # under the guard, as the docs now show it, the same call runs its trial
+    script.write_text("import machinesim.campaign as campaign\n"
+                      "if __name__ == '__main__':\n    " + call)
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "c" / "campaign.nc").is_file()

@@ -270,9 +270,18 @@ def _client(workers, scheduler, client, trials: int | None = None):
             # closes it (below); the workers start with SIGINT blocked, so that the
             # terminal's Ctrl-C, which reaches its whole process group, reaches none of them
             # while it imports (a traceback each), nor later (their preload ignores it too).
-            cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR,
-                                   preload=["machinesim.campaign._worker_setup"])
+            try:
+                cluster = LocalCluster(n_workers=count, threads_per_worker=1,
+                                       processes=True, dashboard_address=None,
+                                       silence_logs=logging.ERROR,
+                                       preload=["machinesim.campaign._worker_setup"])
+            except RuntimeError as exc:  # each worker's own message is on stderr above
+                main = sys.modules.get("__main__")
+                if getattr(main, "__spec__", True) is not None:
+                    raise  # python -m ..., or no script: not a script's missing guard
+                raise InputError(f"the local Dask workers did not start ({exc}); "
+                                 f"{GUARD}", source=getattr(main, "__file__", None),
+                                 key="workers") from exc
     try:
         client = Client(cluster)
         client.run(_one_core_each)
@@ -477,9 +486,31 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
     xarray.Dataset
         Also written to ``out/campaign.nc``.
     """
+    _refuse_in_a_starting_worker()
     with _each_warning_once():
         return _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
                     identify_only, quick, progress, report)
+
+
+#: What a script that runs a campaign needs, said where a worker's start met its call.
+GUARD = ("a script that calls campaign.run must call it under 'if __name__ == \"__main__\":' "
+         "(Dask starts each local worker as a new Python, which imports the script again "
+         "as '__mp_main__'), as docs/campaigns.md shows")
+
+
+def _refuse_in_a_starting_worker() -> None:
+    """Refuse a call made while a local worker imports the script that made it. A call at a
+    script's top level ran again in every worker Dask started (multiprocessing's spawn
+    imports the main script as ``__mp_main__``), found the campaign folder locked by the
+    script itself ("another campaign is running in this folder"), and the cluster ended in
+    Dask's "RuntimeError: Nanny failed to start."."""
+    # multiprocessing names the main module '__mp_main__' too; only while a spawned
+    # process imports the parent's script are they two modules (measured on 3.11)
+    script = sys.modules.get("__mp_main__")
+    if script is not None and script is not sys.modules.get("__main__"):
+        raise InputError(f"campaign.run was called while a Dask worker imported "
+                         f"{getattr(script, '__file__', 'the main script')}: {GUARD}",
+                         key="campaign.run")
 
 
 def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
