@@ -148,6 +148,7 @@ def main(argv: list[str] | None = None) -> int:
     Usage errors and ``--help`` leave through argparse's ``SystemExit`` (status 2 and 0).
     """
     args = None
+    _closed_streams_to_null()
     try:
         with ctrl_c_remembered(), warnings_as_lines():
             args = _parser().parse_args(None if argv is None else [str(a) for a in argv])
@@ -174,6 +175,17 @@ def main(argv: list[str] | None = None) -> int:
             raise
         return _fail(f"internal error: {type(exc).__name__}: {exc} (a bug in machinesim: "
                      "please report it; MACHINESIM_TRACEBACK=1 shows where)", 1)
+
+
+def _closed_streams_to_null() -> None:
+    """Give a standard stream the process was started without (``2>&-``, a daemon's closed
+    descriptor: Python then sets ``sys.stderr`` to None) the null device, so that what would
+    be said there is dropped: a cut started so had ended at its first progress or note in
+    "internal error: AttributeError: 'NoneType' object has no attribute 'isatty'", exit 1,
+    nothing written."""
+    for name in ("stdout", "stderr"):
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(os.devnull, "w", encoding="utf-8"))
 
 
 def _command(args: argparse.Namespace) -> int:

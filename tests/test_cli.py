@@ -93,6 +93,20 @@ def test_a_cut_writes_part_and_report_with_units_and_no_nan(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["part.stl", "report.json"]
 
 
+@pytest.mark.parametrize("closed", [(2,), (1, 2)], ids=["stderr", "stdout and stderr"])
+def test_a_cut_started_with_closed_output_streams_writes_its_files(tmp_path, closed):
+    # `machinesim cut ... 2>&-` (a daemon's or a cron line's closed descriptors): Python sets
+    # sys.stderr to None, and the cut ended in "internal error: AttributeError: 'NoneType'
+    # object has no attribute 'isatty'", exit 1, nothing written
+    out, report = tmp_path / "part.ply", tmp_path / "report.json"
+    done = subprocess.run(
+        [*entry_point(), "cut", str(GROOVES), *CUT[:-1], "--out", str(out), "--report",
+         str(report)], preexec_fn=lambda: [os.close(fd) for fd in closed], timeout=300)
+    assert done.returncode == 0 and out.is_file()
+    assert json.loads(report.read_text())["removed_volume_mm3"] == pytest.approx(
+        GROOVES_MM3, rel=1e-9)
+
+
 def test_integer_input_increment_reads_axis_words_in_nanometres(tmp_path, capsys):
     program = tmp_path / "increment.nc"
     program.write_text(GROOVES.read_text().replace("Z-0.02", "Z-20000"))  # 20000 nm = 20 um
