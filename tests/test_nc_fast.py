@@ -134,3 +134,18 @@ def test_big_files_use_threads_with_the_same_result(monkeypatch):
     assert np.array_equal(threaded.values, single.values, equal_nan=True)
     assert np.array_equal(threaded.simple, single.simple)
     assert threaded.simple[1:-1].all()
+
+
+def test_a_line_longer_than_a_chunk_is_left_to_the_word_by_word_path(monkeypatch):
+    # one 48 MB line was scanned as one chunk, its per-character arrays 50 bytes a character
+    # (2.6 GB and 16 s before the reader refused it); a line longer than a chunk is not
+    # simple now, and the word-by-word path reads it as the scan would have
+    monkeypatch.setattr(fastscan, "CHUNK_BYTES", 4096)
+    text = ("G00 X0. Y0. Z1.\nG01 F100.\nG01 X1." + " " * 5000 + "Y2.\n"
+            + "X3. Y4.\n" * 2000 + "M30\n")
+    scan = fastscan.scan(text.encode())
+    assert not scan.simple[2] and scan.simple[3:2003].all()
+    fast = parse_program(text, "long.nc")
+    assert fast == parse_program(text, "long.nc", fast=False)
+    assert fast.targets[1, :2].tolist() == [0.001, 0.002]  # the long line's X1. Y2. (m)
+    assert fast.targets[2, :2].tolist() == [0.003, 0.004]

@@ -7,6 +7,10 @@ number of each word; the parser applies the modal state to runs of simple lines 
 hands every other line to its word-by-word path. Both paths give bit-identical moves
 (tests/test_nc_fast.py compares them on the corpus and on generated programs).
 
+A line longer than `CHUNK_BYTES` is not simple, whatever it holds: its per-character arrays
+had cost 50 bytes a character (a 48 MB line: 2.6 GB and 16 s here alone, where 48 MB of
+short lines take 0.6 GB).
+
 A line is simple when it holds only words N G X Y Z A B C F (either case), each at most
 once, every letter directly followed by its number (``X 1.`` is read by the word-by-word
 path), numbers of the form ``[+-]digits[.digits]`` or ``[+-].digits`` with at most
@@ -105,18 +109,25 @@ def scan(data: bytes) -> Scan:
     position = 0
     while position < size:
         stop = min(size, position + CHUNK_BYTES)
+        long_line = False
         if stop < size:
             cut = data.rfind(b"\n", position, stop)
-            if cut < 0:
+            if cut < 0:  # one line longer than a chunk (no simple line is that long)
                 cut = data.find(b"\n", stop)
+                long_line = True
             stop = size if cut < 0 else cut + 1
         lines = int(np.searchsorted(newlines, stop)) - line + (stop == size)
-        jobs.append((everything[position:stop], line, lines))
+        jobs.append((None if long_line else everything[position:stop], line, lines))
         line += lines
         position = stop
 
-    def run(job: tuple[np.ndarray, int, int]) -> None:
-        _scan_chunk(*job, simple, words, values, point)
+    def run(job: tuple[np.ndarray | None, int, int]) -> None:
+        chunk, first, count = job
+        if chunk is None:  # left to the word-by-word path, which reads any line alike
+            rows = slice(first, first + count)
+            simple[rows], words[rows], values[:, rows], point[:, rows] = False, 0, np.nan, False
+        else:
+            _scan_chunk(chunk, first, count, simple, words, values, point)
 
     if not jobs:  # empty text: one empty line
         jobs.append((everything, 0, 1))
