@@ -277,11 +277,11 @@ def _client(workers, scheduler, client, trials: int | None = None):
                                        preload=["machinesim.campaign._worker_setup"])
             except RuntimeError as exc:  # each worker's own message is on stderr above
                 main = sys.modules.get("__main__")
-                if getattr(main, "__spec__", True) is not None:
-                    raise  # python -m ..., or no script: not a script's missing guard
-                raise InputError(f"the local Dask workers did not start ({exc}); "
-                                 f"{GUARD}", source=getattr(main, "__file__", None),
-                                 key="workers") from exc
+                script = getattr(main, "__file__", None)
+                if script is None or getattr(main, "__spec__", True) is not None:
+                    raise  # python -m ..., an interactive session: no script's guard missing
+                raise InputError(f"the local Dask workers did not start ({exc}); {GUARD}",
+                                 source=script, key="workers") from exc
     try:
         client = Client(cluster)
         client.run(_one_core_each)
