@@ -240,6 +240,29 @@ def test_a_turning_move_of_more_than_a_day_is_noted():
     assert not [n for n in fast.notes if "takes" in n]
 
 
+def test_a_turning_programs_dwells_are_timed_and_a_dwell_of_more_than_an_hour_is_noted():
+    # the facing cut above at F20. split by a dwell: its time is sqrt(2.75**2 + 9000**2) mm-
+    # or-deg twice at 20 mm/min plus the dwell, by hand; the dwell was left out of the time
+    # (the same 54000.0 s with a 2 s or a 31-year dwell) and never noted, as plan notes it
+    half = np.hypot(2.75, 9000.0) / 20.0 * 60.0
+    for dwell, seconds in (("G04 X2.", 2.0), ("G04 P1000000000.", 1e9), ("G04 P3600000", 3600.0)):
+        program = parse_program("G21 G90 G94\nG00 X5.5 Z1. C0.\nG01 Z-0.01 F100.\n"
+                                f"G01 X2.75 C9000. F20.\n{dwell}\nG01 X0. C18000.\nG00 Z1.\nM30\n")
+        report = turn(program, "sts_lathe", "nose:0.5:90")[1]
+        assert report.machining_time_s == pytest.approx(2 * half + seconds, rel=1e-12)
+        noted = [n for n in report.notes if "dwell" in n]
+        assert noted == ([] if seconds <= 3600.0 else [
+            "the dwell of line 5 (P1000000000.) waits 1e+09 s (2.78e+05 h), more than the 1 h "
+            "a dwell of a program waits: is its time in the unit meant (P counts milliseconds "
+            "without a decimal point, seconds with one; X seconds)?"]), dwell
+    # a dwell before the cut (the spindle run up) is the program's time too
+    program = parse_program("G21 G90 G94\nG00 X5.5 Z1. C0.\nG04 X5000\nG01 Z-0.01 F100.\n"
+                            "G01 X0. C18000. F20.\nG00 Z1.\nM30\n")
+    report = turn(program, "sts_lathe", "nose:0.5:90")[1]
+    assert report.machining_time_s == pytest.approx(2 * half + 5000.0, rel=1e-12)
+    assert [n[:45] for n in report.notes] == ["the dwell of line 3 (X5000) waits 5000 s (1.3"]
+
+
 def test_a_turning_move_of_more_than_a_day_under_g20_is_noted_with_its_f_in_inch():
     # X 0.2 inch and C 1 deg at F0.00001 inch/min (a degree counts as an inch): sqrt(0.04 +
     # 1) / 1e-5 min; it was noted as 'F5.07695e-05 (mm/min or deg/min)', the planner's

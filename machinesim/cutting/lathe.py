@@ -51,7 +51,7 @@ from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag, as_floats, as_number
 from machinesim.motion.planner import slow_move_notes
-from machinesim.nc.moves import AXES, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
+from machinesim.nc.moves import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
 from machinesim.servo import check_servo
 from machinesim.tool_specs import tool_from_spec
@@ -122,7 +122,9 @@ class TurningReport:
     runs : int
         Runs of feed moves that turn C.
     machining_time_s : float
-        Time of the turning runs at the programmed feeds, s.
+        Time of the turning runs at the programmed feeds and of the program's dwells (G04,
+        a canned cycle's P), s; the moves that do not turn C (a plunge, a retract) and the
+        rapids are not timed.
     revolutions : float
         Spindle revolutions cut.
     peak_following_error : dict
@@ -227,7 +229,9 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
               f"above the stock's top (z = {top * 1e6:.6g} um) throughout; does the program "
               "reach the stock, and do the errors set the tool too high or the workpiece too "
               "low (tool.z, workpiece.z)?",) if empty else ())
-    notes += _rapids_below_top(program, machine, top) + slow
+    waits, long_dwell = _dwells(program)
+    seconds += waits
+    notes += _rapids_below_top(program, machine, top) + slow + long_dwell
     report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak,
                            empty_cut=empty, limit_violations=limits, notes=notes)
     return part, report
@@ -264,6 +268,17 @@ def _rapids_below_top(program, machine, top: float) -> tuple[str, ...]:
     return (f"rapids with the tip below the stock's top (z = {top * 1e6:.6g} um) at lines "
             f"{shown}{more}: the turning engine cuts only the runs of feeds that turn C, so "
             "they are not in the part; on a machine a rapid there is a crash",)
+
+
+def _dwells(program) -> tuple[float, tuple[str, ...]]:
+    """The time ``program``'s dwells wait (s), and the note on the longest when it waits
+    more than an hour (`machinesim.motion.planner.slow_move_notes`, as `plan` notes it):
+    a dwell is no turning run, so `_timed_runs` never sees one."""
+    kinds = np.asarray(program.kinds)
+    waits = np.where(kinds == KIND_DWELL, np.asarray(program.dwells, dtype=np.float64), 0.0)
+    # the durations are the dwells' alone: no feed move takes time here, so no feed note
+    return float(waits.sum()), slow_move_notes(waits, kinds, np.asarray(program.lines),
+                                               np.asarray(program.feeds), program)
 
 
 def _program_moves(program, machine) -> SimpleNamespace:
