@@ -162,10 +162,16 @@ def warnings_as_lines() -> Iterator[None]:
 def check_length(value, name: str, *, positive: bool = False) -> float:
     """``value`` as a finite float length (m), >= 0 (or > 0 with ``positive``).
 
-    Raises InputError naming ``name``, the value that arrived and what was expected.
+    Raises InputError naming ``name``, the value that arrived and what was expected. A bool
+    or a str is refused, not converted (True is no 1 m, ``"5e-5"`` no number), as
+    `machinesim.metrology._arrays.as_number` refuses them.
     """
     import math
 
+    import numpy as np
+
+    if isinstance(value, bool | np.bool_ | str | bytes):
+        raise InputError(f"Expected {name} as a number (m), got {value!r}", key=name)
     try:
         number = float(value)
     except (TypeError, ValueError) as error:

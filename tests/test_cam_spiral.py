@@ -9,7 +9,7 @@ from scipy.integrate import quad
 from machinesim.cam import spiral as sp
 from machinesim.exceptions import FileError, InputError
 from machinesim.metrology import export_x3p
-from machinesim.nc import format_program, parse_program, read_program, write_program
+from machinesim.nc import AXES, format_program, parse_program, read_program, write_program
 
 PAPER = sp.Spiral(sp.PART_RADIUS_M, sp.FEED_M)
 
@@ -249,6 +249,36 @@ def test_bad_inputs_are_refused_with_what_was_expected():
     with pytest.raises(InputError, match="rho_range to meet the spiral"):
         sp.program_error(sp.sine_grid(), PAPER, sp.constant_angle(PAPER, 0.5),
                          rho_range=(1.0, 2.0))
+
+
+@pytest.mark.parametrize("call, key, value", [
+    # sine_grid(True) was a grid of 1 m amplitude ('sine grid A 1e+09 nm'), clearance True
+    # lifted the rapid 1 m, spindle_rpm True turned at 1 rpm (F 360 deg/min), plunge True fed
+    # at 1 mm/min, start_c True started at 1 rad; the strings were float()ed and taken, and
+    # start_c None raised TypeError
+    (lambda p: sp.sine_grid(True), "amplitude", "True"),
+    (lambda p: sp.sine_grid(50e-9, "1e-4"), "wavelength", "'1e-4'"),
+    (lambda p: sp.Spiral(True, 1e-6), "radius", "True"),
+    (lambda p: sp.spiral_program(p, clearance=True), "clearance", "True"),
+    (lambda p: sp.spiral_program(p, spindle_rpm=True), "spindle_rpm", "True"),
+    (lambda p: sp.spiral_program(p, spindle_rpm="20"), "spindle_rpm", "'20'"),
+    (lambda p: sp.spiral_program(p, plunge_mm_per_min=np.True_), "plunge_mm_per_min", "np.True_"),
+    (lambda p: sp.spiral_program(p, start_c=True), "start_c", "True"),
+    (lambda p: sp.spiral_program(p, start_c="5"), "start_c", "'5'"),
+    (lambda p: sp.spiral_program(p, start_c=None), "start_c", "None"),
+])
+def test_the_spiral_cam_takes_no_bool_or_str_for_a_number(call, key, value):
+    spiral = sp.Spiral(0.12e-3, 1e-6)
+    path = sp.tool_path(sp.cutting_points(sp.sphere(2e-3), spiral,
+                                          sp.constant_angle(spiral, 0.5)), 1e-3)
+    with pytest.raises(InputError) as caught:
+        call(path)
+    assert caught.value.key == key
+    assert f"Expected {key} as a number" in str(caught.value)
+    assert str(caught.value).endswith(f"got {value}")
+    # numbers as before: a numpy float is a float, a C start of 1 rad is 1 rad
+    program = sp.spiral_program(path, clearance=np.float64(1e-5), start_c=np.float64(1.0))
+    assert program.targets[0][AXES.index("C")] == 1.0 + path.c[0]
 
 
 def test_a_path_of_more_points_than_memory_holds_is_refused_naming_what_gave_it():

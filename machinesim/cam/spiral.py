@@ -49,6 +49,7 @@ from machinesim.cam.designs import (
     tilted_plane,
 )
 from machinesim.exceptions import InputError, check_length
+from machinesim.metrology._arrays import as_number
 from machinesim.nc import AXES, KIND_LINEAR, KIND_RAPID, Program
 from machinesim.units import M_PER_MM, M_PER_UM, RAD_PER_DEG
 
@@ -240,6 +241,8 @@ def _check_increasing(angles: np.ndarray, name: str) -> None:
 
 
 def _positive(value, name: str) -> float:
+    if isinstance(value, bool | np.bool_ | str | bytes):
+        raise InputError(f"Expected {name} as a number, got {value!r}", key=name)  # no 1
     try:
         number = float(value)
     except (TypeError, ValueError) as error:
@@ -482,9 +485,7 @@ def spiral_program(path: ToolPath, *, spindle_rpm: float = SPINDLE_RPM,
     rpm = _positive(spindle_rpm, "spindle_rpm")
     lift = check_length(clearance, "clearance", positive=True)
     plunge = _positive(plunge_mm_per_min, "plunge_mm_per_min") * M_PER_MM / 60.0
-    c0 = float(start_c)
-    if not math.isfinite(c0):
-        raise InputError(f"Expected a finite start_c (rad), got {c0!r}", key="start_c")
+    c0 = as_number(start_c, "start_c", unit="rad")  # True is no 1 rad, None no traceback
     # rows: rapid above the first point, feed down to it, the path, feed up
     x = np.concatenate([path.x[:1], path.x, path.x[-1:]])
     z = np.concatenate([path.z[:1] + lift, path.z, path.z[-1:] + lift])
