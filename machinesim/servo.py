@@ -368,10 +368,13 @@ TABLE6_GAIN_SCALE = 1e3
 def table6_axis(preset: str, axis: str, *, damping: float | None = None,
                 sample_time_s: float = DEFAULT_SAMPLE_TIME_S) -> AxisServo:
     """The `AxisServo` of ``axis`` ("x", "z", "c") for Table 6's ``preset`` ("before", "after")."""
-    if preset not in TABLE6:
-        raise InputError(f"unknown servo preset {preset!r}; expected one of {sorted(TABLE6)}")
-    if axis not in TABLE6[preset]:
-        raise InputError(f"unknown axis {axis!r}; expected one of {sorted(TABLE6[preset])}")
+    # a name, not any key: a list or a dict is unhashable, and `in` raised TypeError on it
+    if not isinstance(preset, str) or preset not in TABLE6:
+        raise InputError(f"unknown servo preset {preset!r}; expected one of {sorted(TABLE6)}",
+                         key="preset")
+    if not isinstance(axis, str) or axis not in TABLE6[preset]:
+        raise InputError(f"unknown axis {axis!r}; expected one of {sorted(TABLE6[preset])}",
+                         key="axis")
     kp, ki, kd, bw, mass, accff = TABLE6[preset][axis]
     scale = TABLE6_GAIN_SCALE
     if damping is None:
@@ -385,6 +388,10 @@ def table6_axis(preset: str, axis: str, *, damping: float | None = None,
 def table6_servo(preset: str, axis_order: tuple = ("x", "z", "c"), **kwargs) -> PIDServo:
     """A `PIDServo` for Table 6's ``preset``, one column per name in ``axis_order`` (names in
     either case; a name not in the table, e.g. "y", follows exactly)."""
+    if not isinstance(axis_order, tuple | list | str) or not all(isinstance(a, str)
+                                                                 for a in axis_order):
+        raise InputError(f"Expected axis_order as axis names, e.g. ('x', 'z', 'c'), got "
+                         f"{axis_order!r}", key="axis_order")
     return PIDServo(tuple(table6_axis(preset, a.lower(), **kwargs)
                           if a.lower() in TABLE6["before"] else None for a in axis_order))
 

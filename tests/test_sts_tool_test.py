@@ -14,6 +14,7 @@ import machinesim
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
 from machinesim.procedures.sts_turning import STSTurning
+from machinesim.servo import table6_axis, table6_servo
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -96,6 +97,27 @@ def test_the_procedure_refuses_a_tool_and_a_servo_preset_it_cannot_use_when_made
                                          r"expected one of \['after', 'before'\]"):
         STSTurning(servo_after="middle")
     assert STSTurning(tool="nose:2.0:90").nose_radius == 2e-3
+
+
+@pytest.mark.parametrize("call, key, words", [
+    # a list or a dict is unhashable: 'in TABLE6' raised TypeError ('unhashable type:
+    # 'list''), a name of no str (1 for an axis) AttributeError ('int' object has no
+    # attribute 'lower')
+    (lambda: STSTurning(servo_after=["after"]), "servo_after",
+     "unknown servo preset ['after'] for servo_after; expected one of ['after', 'before']"),
+    (lambda: STSTurning(servo_after={"after": 1}), "servo_after", "unknown servo preset {"),
+    (lambda: table6_servo(["after"]), "preset", "unknown servo preset ['after']; expected"),
+    (lambda: table6_axis("after", ["x"]), "axis", "unknown axis ['x']; expected one of"),
+    (lambda: table6_servo("after", ("x", 1, "c")), "axis_order",
+     "Expected axis_order as axis names, e.g. ('x', 'z', 'c'), got ('x', 1, 'c')"),
+    (lambda: table6_servo("after", None), "axis_order", "got None"),
+])
+def test_a_servo_preset_or_axis_that_is_no_name_is_refused_by_name(call, key, words):
+    with pytest.raises(InputError) as caught:
+        call()
+    assert caught.value.key == key
+    assert words in str(caught.value)
+    assert table6_servo("after", "XZC").axes == table6_servo("after").axes  # names as before
 
 
 def _measure_nose(nose_radius_um):

@@ -376,7 +376,7 @@ class STSTurning:
         # here, not after the test cuts and three cases: a V tool ended in an AttributeError
         # (no nose_radius), an unknown preset at Case 4
         turning_tool(self.tool)
-        if self.servo_after not in TABLE6:
+        if not isinstance(self.servo_after, str) or self.servo_after not in TABLE6:
             raise InputError(f"unknown servo preset {self.servo_after!r} for servo_after; "
                              f"expected one of {sorted(TABLE6)} (Table 6)", key="servo_after")
 
