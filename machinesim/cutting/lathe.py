@@ -8,11 +8,13 @@ the machine does with it, in order:
 1. **Axis values.** Every move's target (modal: an axis not named keeps its value), from
    the first move that sets every axis of the machine.
 2. **Times.** The control runs each feed move in length / F, the length with rotary axes in
-   degrees counted as millimetres (FANUC, as `machinesim.motion` plans it).
+   degrees counted as millimetres (FANUC, as `machinesim.motion` plans it); a dwell waits
+   its time (counted in the report's time, noted beyond an hour, not cut).
 3. **Servo.** Each run of feed moves that turn C is one continuous motion: the servo loops
    (`machinesim.servo`, any ``follow(t, q)``) follow it, entering it settled at its first
    step's speed (the spindle is run up before the tool engages: `followed`), and the axes
-   reach the followed values, not the commanded ones.
+   reach the followed values, not the commanded ones. A dwell ends a run; the run after it
+   is entered settled too, not from the rest the dwell leaves the axes in.
 4. **Kinematics and errors.** The tool tip's pose for the reached axis values, through the
    machine's errors (tool setting dx, dy, dz and any geometric error), gives the edge plane
    of each point (`edge_path_from_poses`); the tool's nose is its nominal radius plus the
