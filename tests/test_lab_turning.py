@@ -240,6 +240,22 @@ def test_a_turning_move_of_more_than_a_day_is_noted():
     assert not [n for n in fast.notes if "takes" in n]
 
 
+def test_a_plunge_of_more_than_a_day_is_noted_though_it_turns_no_c():
+    # the facing cut above plunging its 1.01 mm at F0.000001 (a week and more): 1.01 mm over
+    # 1e-6 mm/min is 6.06e7 s, by hand; the lathe noted slow moves inside turning runs only,
+    # and the plunge is none, so it passed without a word (plan notes it)
+    program = parse_program("G21 G90 G94\nG00 X5.5 Z1. C0.\nG01 Z-0.01 F0.000001\n"
+                            "G01 X0. C18000. F20.\nG00 Z1.\nM30\n")
+    report = turn(program, "sts_lathe", "nose:0.5:90")[1]
+    assert report.notes == (
+        f"the feed move of line 3 takes {1.01 / 1e-6 * 60:.3g} s (1.68e+04 h) at F1e-06 "
+        "(mm/min or deg/min), more than the 24 h one move of a program takes: is F in the "
+        "program's unit (G94: per minute)?",)
+    # it is not cut, so not in the turning time: the facing run's alone
+    assert report.machining_time_s == pytest.approx(np.hypot(5.5, 18000.0) / 20.0 * 60.0,
+                                                    rel=1e-12)
+
+
 def test_a_turning_programs_dwells_are_timed_and_a_dwell_of_more_than_an_hour_is_noted():
     # the facing cut above at F20. split by a dwell: its time is sqrt(2.75**2 + 9000**2) mm-
     # or-deg twice at 20 mm/min plus the dwell, by hand; the dwell was left out of the time

@@ -213,9 +213,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
                          getattr(program, "source", None), allow_overtravel)
     tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
-    slow = ()
-    for t, points, note in _timed_runs(program, machine):
-        slow = slow or note
+    for t, points in _timed_runs(program, machine):
         reached = followed(None if servo is None else servo.follow, t, points)
         for k, axis in enumerate(machine.axes):
             peak[axis] = max(peak[axis], float(np.max(np.abs(points[:, k] - reached[:, k]))))
@@ -231,9 +229,9 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
               f"above the stock's top (z = {top * 1e6:.6g} um) throughout; does the program "
               "reach the stock, and do the errors set the tool too high or the workpiece too "
               "low (tool.z, workpiece.z)?",) if empty else ())
-    waits, long_dwell = _dwells(program)
+    waits, slow = _untimed_moves(program, machine)
     seconds += waits
-    notes += _rapids_below_top(program, machine, top) + slow + long_dwell
+    notes += _rapids_below_top(program, machine, top) + slow
     report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak,
                            empty_cut=empty, limit_violations=limits, notes=notes)
     return part, report
@@ -272,15 +270,25 @@ def _rapids_below_top(program, machine, top: float) -> tuple[str, ...]:
             "they are not in the part; on a machine a rapid there is a crash",)
 
 
-def _dwells(program) -> tuple[float, tuple[str, ...]]:
-    """The time ``program``'s dwells wait (s), and the note on the longest when it waits
-    more than an hour (`machinesim.motion.planner.slow_move_notes`, as `plan` notes it):
-    a dwell is no turning run, so `_timed_runs` never sees one."""
+def _untimed_moves(program, machine) -> tuple[float, tuple[str, ...]]:
+    """The time ``program``'s dwells wait (s), and the notes on its moves whose time is
+    hardly what it meant (`machinesim.motion.planner.slow_move_notes`, as `plan` notes
+    them): the longest feed move when it takes more than a day, turning or not (a plunge
+    at F0.000001), and the longest dwell beyond an hour. Neither a plunge nor a dwell is
+    in a turning run, which `_timed_runs` times."""
     kinds = np.asarray(program.kinds)
-    waits = np.where(kinds == KIND_DWELL, np.asarray(program.dwells, dtype=np.float64), 0.0)
-    # the durations are the dwells' alone: no feed move takes time here, so no feed note
-    return float(waits.sum()), slow_move_notes(waits, kinds, np.asarray(program.lines),
-                                               np.asarray(program.feeds), program)
+    feeds = np.asarray(program.feeds, dtype=np.float64)
+    durations = np.where(kinds == KIND_DWELL, np.asarray(program.dwells, dtype=np.float64),
+                         0.0)
+    source = getattr(program, "source", "<program>")
+    q, moved, _, _ = _axis_values(program, machine, source)
+    first = len(kinds) - len(moved)  # a move from a point of known axis values: later ones
+    linear = np.flatnonzero(kinds[first + 1:] == KIND_LINEAR) + first + 1
+    with np.errstate(divide="ignore", invalid="ignore"):  # F none or 0: no time, no note
+        times = _lengths(q[linear - first - 1], q[linear - first], machine.axes) / feeds[linear]
+    durations[linear] = np.where(np.isfinite(times), times, 0.0)
+    return float(durations[kinds == KIND_DWELL].sum()), slow_move_notes(
+        durations, kinds, np.asarray(program.lines), feeds, program)
 
 
 def _program_moves(program, machine) -> SimpleNamespace:
@@ -296,15 +304,13 @@ def turning_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
     """The commanded motion of each turning run of ``program`` on ``machine``: times from
     the run's start (s, shape (n,)) and axis values (SI, shape (n, n_axes), the machine's
     axis order), one row per point, the run's start point first (module docstring)."""
-    return [(t, points) for t, points, _ in _timed_runs(program, machine)]
+    return _timed_runs(program, machine)
 
 
-def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray, tuple[str, ...]]]:
-    """`turning_runs`' runs, each with a note on its slowest move when it takes more than
-    a day (`machinesim.motion.planner.slow_move_notes`), else ()."""
+def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
+    """`turning_runs`' runs (``(t, points)``), with points added within quarter turns."""
     source = getattr(program, "source", "<program>")
     q, kinds, feeds, lines = _axis_values(program, machine, source)
-    skipped = len(program.kinds) - len(kinds)  # moves before every axis had a value
     out = []
     c_column = machine.axes.index("C")
     for first, last in _turning_runs(q, kinds, c_column, lines, source, _spindle_hint(program)):
@@ -312,9 +318,7 @@ def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray, tuple[st
         moves = slice(first, last + 1)
         durations = _durations(points, feeds[moves], machine.axes, lines[moves], source)
         t = np.concatenate([[0.0], np.cumsum(durations)])
-        note = slow_move_notes(durations, kinds[moves], lines[moves], feeds[moves], program,
-                              skipped + first)
-        out.append((*_within_quarter_turns(t, points, c_column), note))
+        out.append(_within_quarter_turns(t, points, c_column))
     return out
 
 
@@ -433,9 +437,7 @@ def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple, lines: np.nda
     """Time of each move between consecutive ``points`` at ``feeds`` (m/s), s: the length in
     mm with rotary axes in degrees, over F in mm/s (FANUC); a move without a positive feed
     is refused naming its ``lines`` in ``source``."""
-    steps = np.diff(points, axis=0)
-    scale = np.array([math.degrees(1.0) * 1e-3 if a in ROTARY_AXES else 1.0 for a in axes])
-    length = np.sqrt(np.sum((steps * scale) ** 2, axis=1))
+    length = _lengths(points[:-1], points[1:], axes)
     bad = ~(np.isfinite(feeds) & (feeds > 0.0))
     if bad.any():
         first = int(np.flatnonzero(bad)[0])
@@ -444,3 +446,10 @@ def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple, lines: np.nda
         raise InputError(f"{source}, line {int(lines[first])}: expected a positive feed on "
                          f"every turning move, got {got}", key="F")
     return length / feeds
+
+
+def _lengths(starts: np.ndarray, ends: np.ndarray, axes: tuple) -> np.ndarray:
+    """The length of each move from ``starts`` to ``ends`` (rows, SI) as F measures it, in
+    mm with rotary axes in degrees (FANUC)."""
+    scale = np.array([math.degrees(1.0) * 1e-3 if a in ROTARY_AXES else 1.0 for a in axes])
+    return np.sqrt(np.sum(((ends - starts) * scale) ** 2, axis=1))
