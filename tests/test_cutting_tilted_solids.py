@@ -2,12 +2,13 @@
 chord tolerance of its true sweep (`machinesim.cutting.tilted_solids`)."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
 from tilted_cuts import nearest_material, swept_cut, swing, turned_about_y
 
-from machinesim.cutting.tilted_solids import SolidSplitter
+from machinesim.cutting.tilted_solids import SolidSplitter, tilt_only
 from machinesim.end_mills import BallEndMill, FlatEndMill
 
 RADIUS = 0.5e-3
@@ -68,3 +69,61 @@ def test_the_plane_is_the_line_the_tilt_crosses():
     splitter = SolidSplitter(ball.vertices(), ball.triangles())
     r1, o1 = _pose(math.radians(0.5), np.array([0.0, 0.0, 2e-3]))
     assert splitter.pieces(r0, np.zeros(3), r1, o1, level=1e-3) is None
+
+
+@pytest.mark.parametrize("kind", ["flat", "ball"])
+def test_a_turn_about_the_tools_own_axis_is_not_split(kind):
+    """A turn about the tool's own axis (A on robonano_ui) moves no point of the round tool:
+    its polygon's sides tilt across their middles (the hull of each fills s d / 4 of a
+    notch the polygon leaves, s the side's width, inside the round tool's sweep), and were
+    cut by 4 planes into 8 pieces a sweep for nothing. With a tilt, only the tilt is split."""
+    tool = (FlatEndMill(RADIUS, chord_tol=1e-5) if kind == "flat"
+            else BallEndMill(RADIUS, chord_tol=1e-5))
+    splitter = SolidSplitter(tool.vertices(), tool.triangles())
+    d = math.radians(0.5)
+    c, s = math.cos(d), math.sin(d)
+    spin = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    r0, origin = np.eye(3), np.zeros(3)
+    assert splitter.planes(r0, origin, spin, origin, level=1e-3) == []
+    assert not splitter.crossing([0], r0[None], spin[None], origin[None], origin[None],
+                                 np.array([1e-3]))[0]
+    assert np.allclose(tilt_only(r0, spin), r0, rtol=0.0, atol=1e-15)
+    # the tilt about a Y line 50 um up the flat's side (the ball's equator), spun as well,
+    # is cut by the tilt's one plane at that height, as without the spin
+    pivot = np.array([0.0, 0.0, ABOVE if kind == "flat" else RADIUS + ABOVE])
+    r1, o1 = _pose(d, pivot)
+    planes = splitter.planes(r0, origin, r1 @ spin, o1, level=1e-3)
+    assert len(planes) == 1
+    assert math.isclose(abs(planes[0][1]), pivot[2], rel_tol=1e-9)
+
+
+def test_a_half_turn_in_one_sweep_is_not_split():
+    """A half turn of the tool's axis in one sweep (a chord tolerance as coarse as the tool:
+    its points' chords are their whole half circles) has no shortest turn and no mean
+    normal: the sweep is the hull of its two poses, unsplit, without a warning."""
+    tool = FlatEndMill(RADIUS, chord_tol=1e-5)
+    splitter = SolidSplitter(tool.vertices(), tool.triangles())
+    pivot = np.array([0.0, 0.0, ABOVE])
+    r1, o1 = _pose(math.pi, pivot)
+    r0, o0 = np.eye(3), np.zeros(3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert not splitter.crossing([0], r0[None], r1[None], o0[None], o1[None],
+                                     np.array([1e-3]))[0]
+        assert splitter.pieces(r0, o0, r1, o1, level=1e-3) is None
+    assert np.array_equal(tilt_only(r0, r1), r1)
+    # turned about a line across a side's normal, that side is turned right over (its mean
+    # normal some 1e-16 long, by round-off): its round-off over that was taken for an
+    # excess, and the sweep split by a plane at random
+    normal = splitter.normals[0]
+    axis = np.cross(normal, [0.0, 0.0, 1.0])
+    axis /= np.linalg.norm(axis)
+    cross = np.cross(np.eye(3), axis)  # (its cross-product matrix, transposed)
+    # the half turn about it by Rodrigues, sin(pi) = 1.2e-16 in float64
+    r1 = np.eye(3) - math.sin(math.pi) * cross + (1.0 - math.cos(math.pi)) * cross @ cross
+    o1 = pivot - r1 @ pivot
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert not splitter.crossing([0], r0[None], r1[None], o0[None], o1[None],
+                                     np.array([1e-3]))[0]
+        assert splitter.planes(r0, o0, r1, o1, level=1e-3) == []

@@ -28,6 +28,12 @@ planner's sub-steps (`machinesim.motion.faces`): split here instead, a turn abou
 axis (a 4th axis under the tool) leaves each half's hull rho d**2 / 2 under the face's
 sweep, rho the face's distance from that axis, four times a point's chord, more than the
 vertices' chord tolerance where rho is large beside the tool.
+
+A turn's part about the tool's own axis is a symmetry of the round tool: it is taken out
+before the planes are sought (`tilt_only`). On the polygon it tilts every side across its
+middle, by a first-order amount (the hull of a side fills s d / 4 of a notch the turning
+polygon leaves, s the side's width) that stays inside the round tool's sweep, and such a
+sweep was cut into 8 pieces for nothing (a spin about the axis, A on robonano_ui).
 """
 
 from __future__ import annotations
@@ -37,7 +43,7 @@ import numpy as np
 
 from machinesim.cutting.tilted_profiles import SPLIT_M, clip_halfspace
 
-__all__ = ["MAX_PLANES", "SolidSplitter"]
+__all__ = ["MAX_PLANES", "SolidSplitter", "tilt_only"]
 
 #: Planes at most that one sweep's tool is cut by: a tilt about a line across the tool
 #: needs one; a tilt combined with a move along the line it turns about gives each side its
@@ -46,15 +52,38 @@ MAX_PLANES = 4
 #: A face is straight along the tool's axis (a side) when its normal's axial part is within
 #: this of 0.
 _AXIAL_TOLERANCE = 1e-9
+#: A face whose normals at the two poses add up to less than this (2 cos of half the
+#: angle it turns by: within 1e-6 rad of a half turn) is turned right over, has no mean
+#: normal to measure an excess along, and is not split for (its sweep in one sub-step is no
+#: hull's, whatever the pieces).
+_TURNED_OVER = 1e-6
 #: Faces' offsets from the tool frame's origin are told apart to this (m, times
 #: `_AXIAL_TOLERANCE`: 1e-12 m) when the triangles are grouped into faces.
 _FACE_ROUND_M = 1e-3
 
 
+def tilt_only(r0: np.ndarray, r1: np.ndarray) -> np.ndarray:
+    """The orientation (..., 3, 3) the tool at ``r0`` (..., 3, 3) takes when it is turned
+    the shortest way to the axis (third column) of ``r1``: ``r1`` less its turn about the
+    tool's own axis, which moves no point of a round tool. ``r1`` itself where the axis
+    turns by a half turn or within 1.4e-9 rad of one (no shortest way)."""
+    a0, a1 = r0[..., :, 2], r1[..., :, 2]
+    k = np.cross(a0, a1)
+    c = np.einsum("...i,...i->...", a0, a1)
+    zero = np.zeros_like(c)
+    skew = np.stack([np.stack([zero, -k[..., 2], k[..., 1]], -1),
+                     np.stack([k[..., 2], zero, -k[..., 0]], -1),
+                     np.stack([-k[..., 1], k[..., 0], zero], -1)], -2)
+    flip = 1.0 + c <= 1e-18
+    with np.errstate(divide="ignore", invalid="ignore"):
+        turn = np.eye(3) + skew + skew @ skew / np.where(flip, 1.0, 1.0 + c)[..., None, None]
+    return np.where(flip[..., None, None], r1, turn @ r0)
+
+
 def _excess(values: np.ndarray, scale: float) -> float:
     """How far the hull of a face at two poses leaves its sweep (m), its normal displacement
     ``values`` (times 1 / ``scale``) reaching both signs: A B / (A + B), else 0."""
-    if not len(values):
+    if not len(values) or not scale > _TURNED_OVER:
         return 0.0
     low, high = float(values.min()) / scale, float(values.max()) / scale
     if not low < 0.0 < high:
@@ -103,7 +132,8 @@ class SolidSplitter:
         rows = np.asarray(rows, dtype=np.int64)
         if not len(self.normals) or not len(rows):
             return np.zeros(len(rows), dtype=bool)
-        a, b = r0[rows], r1[rows]
+        a = r0[rows]
+        b = tilt_only(a, r1[rows])
         total = a + b
         k = np.einsum("nji,njk->nik", b - a, total)  # (r1 - r0)^T (r0 + r1)
         shift = np.einsum("nji,nj->ni", total, o1[rows] - o0[rows])
@@ -124,17 +154,19 @@ class SolidSplitter:
         scale = np.linalg.norm(np.einsum("nij,tj->nti", total, self.normals), axis=2)
         with np.errstate(divide="ignore", invalid="ignore"):
             excess = np.where((low < 0.0) & (high > 0.0), -low * high / (high - low), 0.0)
-        return ((excess / scale > SPLIT_M) & reaches).any(axis=1)
+            excess = np.where(scale > _TURNED_OVER, excess / scale, 0.0)
+        return ((excess > SPLIT_M) & reaches).any(axis=1)
 
     def planes(self, r0, o0, r1, o1, level: float) -> list[tuple[np.ndarray, float]]:
         """The planes (unit normal, offset: ``normal . p = offset``, tool frame) the tool is
         cut by for the sweep from (``r0``, ``o0``) to (``r1``, ``o1``), largest excess
         first: empty when no straight face's part below ``level`` (world z) at either pose
         leaves its sweep by more than `SPLIT_M`."""
-        total = r0 + r1
-        k = (r1 - r0).T @ total
+        turned = tilt_only(r0, r1)
+        total = r0 + turned
+        k = (turned - r0).T @ total
         shift = total.T @ (o1 - o0)
-        below = [(r0[2], level - o0[2]), (r1[2], level - o1[2])]
+        below = [(r0[2], level - o0[2]), (turned[2], level - o1[2])]
         pending = []
         ends = np.r_[self.starts[1:], len(self.corners)]
         for begin, end, normal in zip(self.starts, ends, self.normals, strict=True):
