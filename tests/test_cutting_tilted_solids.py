@@ -71,6 +71,61 @@ def test_the_plane_is_the_line_the_tilt_crosses():
     assert splitter.pieces(r0, np.zeros(3), r1, o1, level=1e-3) is None
 
 
+def _side_zeros(tool, r0, o0, r1, o1, level):
+    """The height (tool frame) where each side's centre line moves neither way along the
+    side's mean normal between the poses, for the sides where it lies inside (0, level):
+    the displacement is affine in the height, so two heights give it (a second way to the
+    planes, from the poses alone)."""
+    segments = len(tool.vertices()) // 2
+    apothem = RADIUS * math.cos(math.pi / segments)
+    zeros = []
+    for j in range(segments):
+        phi = (j + 0.5) * 2.0 * math.pi / segments
+        normal = np.array([math.cos(phi), math.sin(phi), 0.0])
+        mean = r0 @ normal + r1 @ normal
+        mean /= np.linalg.norm(mean)
+
+        def moved(z, normal=normal, mean=mean):
+            point = apothem * normal + np.array([0.0, 0.0, z])
+            return mean @ ((r1 - r0) @ point + o1 - o0)
+
+        low, high = moved(0.0), moved(level)
+        if low * high < 0.0:
+            zeros.append(level * low / (low - high))
+    zeros = np.sort(zeros)
+    return zeros[np.r_[True, np.diff(zeros) > 1e-12]]
+
+
+def test_a_swing_with_a_move_along_its_line_cuts_every_side_at_its_own_zero():
+    """Swung d = 0.5 deg about a Y line 50 um up its axis while moving t = 0.1 um along Y
+    (a B swing with Y on a 5-axis machine), a side at azimuth phi moves neither way along
+    its normal at the height 50 um - t tan(phi) / d (by hand, to first order): the 16-sided
+    flat end mill's sides at +-11.25, +-33.75 and +-56.25 deg have it inside the cut
+    (47.7, 42.3, 32.9 um and 52.3, 57.7, 67.1 um), those at +-78.75 deg do not. Each
+    needs its own plane: at most 4 left the sides of the other 2 heights 24.9 nm past their
+    sweep (first order), and flat:0.5 of 52 sides swung 2 deg in 4 sweeps with 2 um along Y
+    cut 52 nm past the sweep of the same move in 40."""
+    tool = FlatEndMill(RADIUS, chord_tol=1e-5)
+    splitter = SolidSplitter(tool.vertices(), tool.triangles())
+    pivot = np.array([0.0, 0.0, ABOVE])
+    d, t, level = math.radians(0.5), 0.1e-6, 100e-6
+    r0, o0 = _pose(-d / 2, pivot)
+    r1, o1 = _pose(d / 2, pivot)
+    o1 = o1 + np.array([0.0, t, 0.0])
+    planes = splitter.planes(r0, o0, r1, o1, level)
+    heights = []
+    for normal, offset in planes:
+        assert np.allclose(normal, [0.0, 0.0, np.sign(normal[2])], rtol=0.0, atol=1e-12)
+        heights.append(offset * np.sign(normal[2]))
+    heights.sort()
+    by_hand = sorted(ABOVE - t * math.tan(math.radians(a)) / d
+                     for a in (11.25, 33.75, 56.25, -11.25, -33.75, -56.25))
+    assert len(heights) == 6, heights
+    assert np.allclose(heights, by_hand, rtol=0.0, atol=0.05e-6), np.subtract(heights, by_hand)
+    assert np.allclose(heights, _side_zeros(tool, r0, o0, r1, o1, level), rtol=0.0,
+                       atol=1e-12)
+
+
 @pytest.mark.parametrize("kind", ["flat", "ball"])
 def test_a_turn_about_the_tools_own_axis_is_not_split(kind):
     """A turn about the tool's own axis (A on robonano_ui) moves no point of the round tool:

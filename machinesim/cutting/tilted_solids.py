@@ -29,6 +29,19 @@ axis (a 4th axis under the tool) leaves each half's hull rho d**2 / 2 under the 
 sweep, rho the face's distance from that axis, four times a point's chord, more than the
 vertices' chord tolerance where rho is large beside the tool.
 
+A tilt combined with a move along the line it turns about (a B swing with Y on a 5-axis
+machine) gives each side its own plane, where the move and the tilt cancel along the side's
+normal: for a side at azimuth phi from the tilt's plane, at the height h* = -t tan(phi) / d
+from the line, t the move. The tool is cut by every such plane that crosses a side's part
+below the clip plane (as many as the sides whose h* falls there: 22 of a 52-sided flat
+end mill's for d = 0.5 deg, t = 0.1 um; the sides half a turn apart share one). With at
+most 4 planes, flat:0.5 of 52 sides swung 2 deg in 4 sweeps about a Y line 50 um up while
+moving 2 um along Y cut 52 nm past the sweep of the same move in 40 sweeps (78 um^3 more);
+now 17 nm (0.23 um^3). What is left lies at the polygon's corners: between two sides' planes
+a corner's own zero, for the normals between theirs, is not cut, and its hull leaves its
+sweep by up to about t (2 pi / n) / (4 cos phi) for n sides (20 nm here), first order in the
+move t a sweep and not in the tilt.
+
 A turn's part about the tool's own axis is a symmetry of the round tool: it is taken out
 before the planes are sought (`tilt_only`). On the polygon it tilts every side across its
 middle, by a first-order amount (the hull of a side fills s d / 4 of a notch the turning
@@ -43,12 +56,8 @@ import numpy as np
 
 from machinesim.cutting.tilted_profiles import SPLIT_M, clip_halfspace
 
-__all__ = ["MAX_PLANES", "SolidSplitter", "tilt_only"]
+__all__ = ["SolidSplitter", "tilt_only"]
 
-#: Planes at most that one sweep's tool is cut by: a tilt about a line across the tool
-#: needs one; a tilt combined with a move along the line it turns about gives each side its
-#: own plane, and the largest excesses are cut first.
-MAX_PLANES = 4
 #: A face is straight along the tool's axis (a side) when its normal's axial part is within
 #: this of 0.
 _AXIAL_TOLERANCE = 1e-9
@@ -180,7 +189,9 @@ class SolidSplitter:
             if excess > SPLIT_M:
                 pending.append((excess, parts, g, c, scale))
         chosen = []
-        while pending and len(chosen) < MAX_PLANES:
+        # each plane is one face's own zero: none of that face's parts is left with an
+        # excess, so there are at most as many planes as faces
+        while pending:
             _, _, g, c, _ = max(pending, key=lambda item: item[0])
             size = float(np.linalg.norm(g))
             unit, offset = g / size, -c / size
