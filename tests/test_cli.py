@@ -339,8 +339,8 @@ def test_a_machine_with_zero_rapid_rate_is_refused_not_a_nan_report(tmp_path, ca
     code, _, err = run(["cut", GROOVES, "--machine", urdf, "--tool", "v:90", "--stock",
                         "block:10x10x2", "--out", tmp_path / "p.ply", "--report",
                         tmp_path / "r.json"], capsys)
-    # grooving_4axis.urdf's joint Y opens on line 37
-    assert_clean_failure(code, err, "slow.urdf, line 37: joint 'Y'", "velocity=0.0",
+    # grooving_4axis.urdf's joint Y has its <limit> on line 41 (named at its own line)
+    assert_clean_failure(code, err, "slow.urdf, line 41: joint 'Y'", "velocity=0.0",
                          "rapid rate > 0")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["slow.urdf"]
 
