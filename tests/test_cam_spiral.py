@@ -1,13 +1,14 @@
 """STS tool paths (machinesim.cam.spiral): paper 004's eqs 3-11 and 18-19, the program."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
 from scipy.integrate import quad
 
 from machinesim.cam import spiral as sp
-from machinesim.exceptions import FileError, InputError
+from machinesim.exceptions import FileError, InputError, MachineSimWarning
 from machinesim.metrology import export_x3p
 from machinesim.nc import AXES, format_program, parse_program, read_program, write_program
 
@@ -95,6 +96,46 @@ def test_nose_compensation_puts_the_nose_centre_on_the_offset_surface():
     # the tips as workpiece positions of sts_lathe: (X cos C, X sin C, Z)
     tips = path.tips()
     np.testing.assert_allclose(np.hypot(tips[:, 0], tips[:, 1]), np.abs(path.x), rtol=1e-15)
+
+
+def test_a_nose_wider_than_a_concave_curvature_is_noted_naming_design_radius_and_place():
+    # z = A sin(k x) along x only: at its valleys (sin = -1) the radius of curvature is
+    # 1 / (A k^2) (slope 0 there), 5.06606 mm for 50 nm and 100 um; across the part the
+    # radial profile at angle theta bends by cos^2(theta) of that, never more. A spiral of
+    # 0.75 wavelengths starts (C = 0, on +x) at a valley.
+    amplitude, wavelength = 50e-9, 100e-6
+    least = 1.0 / (amplitude * (2 * math.pi / wavelength) ** 2)
+    assert least == pytest.approx(5.06606e-3, rel=1e-6)
+    design = sp.sine_grid(amplitude, wavelength, amplitude_y=0.0)
+    spiral = sp.Spiral(0.75 * wavelength, 2e-6)
+    points = sp.cutting_points(design, spiral, sp.constant_angle(spiral, 0.05))
+    with pytest.warns(MachineSimWarning) as noted:
+        gouging = sp.tool_path(points, least * (1 + 1e-4))
+    assert len(noted) == 1
+    text = str(noted[0].message)
+    assert text.startswith(f"design {design.name!r}: its least concave radius of curvature "
+                           "in the nose's (radial) plane, 5.06606 mm at the cutting point "
+                           "(0.075, 0) mm (C 0 rad), is below the nose radius 5.06657 mm")
+    assert "gouging" in text
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        clear = sp.tool_path(points, least * (1 - 1e-4))
+        sp.tool_path(points)  # uncompensated: no nose, no note
+    # the path is made as before either way (the cut is the physical one)
+    phi = np.arctan(points.slope)
+    np.testing.assert_allclose(gouging.x, points.rho - least * (1 + 1e-4) * np.sin(phi),
+                               rtol=1e-15)
+    assert len(clear) == len(gouging) == len(points)
+    # a concave sphere: its radius |Rs| everywhere, by a second method (its own radius)
+    bowl = sp.cutting_points(sp.sphere(-2e-3), sp.Spiral(1e-4, 5e-6), [0.0, 1.0])
+    with pytest.warns(MachineSimWarning,
+                      match=r"plane, 2 mm at .* nose radius 2.1 mm \(at 2 of 2 "):
+        sp.tool_path(bowl, 2.1e-3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sp.tool_path(bowl, 1.9e-3)
+        sp.tool_path(sp.cutting_points(sp.sphere(2e-3), sp.Spiral(1e-4, 5e-6), [0.0, 1.0]),
+                     2.1e-3)  # convex: no limit
 
 
 def rotational(coefficients):

@@ -31,8 +31,9 @@ forms used: docs/procedures/sts_turning.md.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -43,12 +44,13 @@ from machinesim.cam.designs import (
     WAVELENGTH_M,
     Design,
     design_from_height_map,
+    radial_curvature,
     read_design,
     sine_grid,
     sphere,
     tilted_plane,
 )
-from machinesim.exceptions import InputError, check_length
+from machinesim.exceptions import InputError, MachineSimWarning, check_length
 from machinesim.metrology._arrays import as_number
 from machinesim.nc import AXES, KIND_LINEAR, KIND_RAPID, Program
 from machinesim.units import M_PER_MM, M_PER_UM, RAD_PER_DEG
@@ -266,12 +268,15 @@ class CuttingPoints:
         Designed height, m.
     slope : ndarray, shape (N,)
         Radial slope dz/drho = tan(phi) (eq 13).
+    design : Design, optional
+        The design they were taken from (`cutting_points`), for `tool_path`'s gouging check.
     """
 
     theta: np.ndarray
     rho: np.ndarray
     z: np.ndarray
     slope: np.ndarray
+    design: Design | None = field(default=None, compare=False, repr=False)
 
     @property
     def x(self) -> np.ndarray:
@@ -308,7 +313,7 @@ def cutting_points(design: Design, spiral: Spiral, theta) -> CuttingPoints:
         i = int(np.flatnonzero(~(np.isfinite(z) & np.isfinite(slope)))[0])
         raise InputError(f"design {design.name!r} is not defined at the cutting point "
                          f"({x[i]!r}, {y[i]!r}) m", key="design")
-    return CuttingPoints(*(frozen(v) for v in (theta, rho, z, slope)))
+    return CuttingPoints(*(frozen(v) for v in (theta, rho, z, slope)), design=design)
 
 
 # --- tool path (eqs 18-19) and interpolation (eqs 7-9) -----------------------------------------
@@ -350,13 +355,39 @@ def tool_path(points: CuttingPoints, nose_radius: float | None = None) -> ToolPa
     The paper's eq 18 is this X; its eq 19, z_t = z - R cos(phi), is the nose centre with Z
     counted into the part (docs/procedures/sts_turning.md). ``nose_radius`` None or 0: the
     tip on the cutting point, uncompensated.
+
+    Where the design's profile in the radial plane is concave with a radius of curvature
+    below R, the nose touching it at one point cuts into it beside (gouges): the path is
+    made all the same (the cut it leaves is the physical one), with a `MachineSimWarning`
+    naming the design, its least concave radius, the cutting point and R (`_note_gouging`).
     """
     if nose_radius is None or nose_radius == 0.0:
         return ToolPath(points.theta, points.rho, points.z)
     radius = check_length(nose_radius, "nose_radius", positive=True)
+    _note_gouging(points, radius)
     phi = np.arctan(points.slope)
     return ToolPath(points.theta, frozen(points.rho - radius * np.sin(phi)),
                     frozen(points.z - radius * (1.0 - np.cos(phi))))
+
+
+def _note_gouging(points: CuttingPoints, nose_radius: float) -> None:
+    """Warn when the least concave radius of curvature of the design's radial profile at
+    the cutting points (`radial_curvature`) is below ``nose_radius`` (m)."""
+    if points.design is None:
+        return
+    curvature = radial_curvature(points.design, points.x, points.y)
+    concave = np.isfinite(curvature) & (curvature * nose_radius > 1.0)
+    if not concave.any():
+        return
+    i = int(np.argmax(np.where(concave, curvature, -np.inf)))
+    warnings.warn(
+        f"design {points.design.name!r}: its least concave radius of curvature in the nose's "
+        f"(radial) plane, {1.0 / curvature[i] / M_PER_MM:.6g} mm at the cutting point "
+        f"({points.x[i] / M_PER_MM:.6g}, {points.y[i] / M_PER_MM:.6g}) mm (C "
+        f"{points.theta[i]:.6g} rad), is below the nose radius {nose_radius / M_PER_MM:.6g} "
+        f"mm (at {np.count_nonzero(concave)} of {len(points)} cutting points): the nose "
+        "touching the profile there cuts into it beside the point (gouging), and the cut "
+        "leaves the nose's wider valley", MachineSimWarning, stacklevel=3)
 
 
 def interpolate(path: ToolPath, method: str = "linear", substeps: int = 10) -> ToolPath:
