@@ -322,6 +322,31 @@ def test_the_spiral_cam_takes_no_bool_or_str_for_a_number(call, key, value):
     assert program.targets[0][AXES.index("C")] == 1.0 + path.c[0]
 
 
+def test_a_spindle_faster_than_the_lathes_c_axis_is_refused_naming_the_bound():
+    # spindle_rpm 1e300 was taken: F = 360 x 1e300 deg/min, 6e297 m/s of the feed array
+    from machinesim.machines import load_machine
+
+    lathe = load_machine("sts_lathe")
+    c_rate = lathe.rapid_rate[lathe.axes.index("C")]
+    assert c_rate == 150.0  # rad/s, models/sts_lathe.urdf
+    assert sp.MAX_SPINDLE_RPM == pytest.approx(c_rate * 60.0 / (2 * math.pi), rel=1e-15)
+    spiral = sp.Spiral(0.12e-3, 1e-6)
+    path = sp.tool_path(sp.cutting_points(sp.sphere(2e-3), spiral,
+                                          sp.constant_angle(spiral, 0.5)), 1e-3)
+    for rpm in (1e300, 1433.0):
+        with pytest.raises(InputError) as caught:
+            sp.spiral_program(path, spindle_rpm=rpm)
+        assert caught.value.key == "spindle_rpm"
+        assert str(caught.value) == (
+            "key 'spindle_rpm': Expected spindle_rpm <= 1432.39 rpm (sts_lathe's C rapid rate, "
+            'models/sts_lathe.urdf <limit velocity="150.0"> rad/s; '
+            f"machinesim.cam.spiral.MAX_SPINDLE_RPM), got {rpm!r}")
+    # at the bound, F = 360 x 1432.39 deg/min (8594 mm/min of C) is taken as before
+    program = sp.spiral_program(path, spindle_rpm=sp.MAX_SPINDLE_RPM)
+    assert program.feeds[2] == pytest.approx(360.0 * sp.MAX_SPINDLE_RPM * 1e-3 / 60.0,
+                                             rel=1e-15)
+
+
 def test_a_path_of_more_points_than_memory_holds_is_refused_naming_what_gave_it():
     # the paper's spiral turns 250 times, 2 pi 250 = 1570.8 rad: a CA step of 1e-12 rad (a
     # step in another unit) is 1.571e15 points, which asked numpy for 11 PiB; the CAL step of

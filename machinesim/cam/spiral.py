@@ -56,7 +56,8 @@ from machinesim.nc import AXES, KIND_LINEAR, KIND_RAPID, Program
 from machinesim.units import M_PER_MM, M_PER_UM, RAD_PER_DEG
 
 __all__ = [
-    "AMPLITUDE_M", "CAL_STEP_M", "CA_STEP_RAD", "FEED_M", "MAX_PATH_POINTS", "NOSE_RADIUS_M",
+    "AMPLITUDE_M", "CAL_STEP_M", "CA_STEP_RAD", "FEED_M", "MAX_PATH_POINTS", "MAX_SPINDLE_RPM",
+    "NOSE_RADIUS_M",
     "PART_RADIUS_M",
     "SPINDLE_RPM", "WAVELENGTH_M", "CuttingPoints", "Design", "ProgramError", "Spiral",
     "ToolPath", "constant_angle", "constant_arc_length", "cutting_angles", "cutting_points",
@@ -79,6 +80,10 @@ CA_STEP_RAD = 2.0 * RAD_PER_DEG
 #: Table 4 "before" (Case 1, 2): Constant Arc Length, 30 um (13,090 cutting points).
 CAL_STEP_M = 30 * M_PER_UM
 
+#: The fastest spindle a program is written for, rpm: the rapid rate of ``sts_lathe``'s C
+#: (models/sts_lathe.urdf, ``<limit velocity="150.0">`` rad/s, 1432.39 rpm), the machine
+#: `spiral_program` writes for. 1e300 rpm was taken (F 6e297 m/s).
+MAX_SPINDLE_RPM = 150.0 * 60.0 / (2.0 * math.pi)
 #: Most points a path may have (cutting points, or samples of an interpolated path): 10^7
 #: take 13 s for points, tool path and program, 10^8 about 2 min and 0.8 GB an array. A
 #: step in the wrong unit (1e-12 rad for CA, 1.6e15 points) asked numpy for petabytes, and
@@ -502,7 +507,8 @@ def spiral_program(path: ToolPath, *, spindle_rpm: float = SPINDLE_RPM,
     ``spindle_rpm`` deg/min: with the FANUC feed of a move that turns C (the move length
     counts degrees as millimetres; `machinesim.motion`) the spindle then turns at
     ``spindle_rpm`` up to (dX^2 + dZ^2) / (2 dC^2) relative (X, Z in mm, C in deg), below
-    1e-9 for the paper's paths. ``start_c`` (rad) is added to C (the spindle's position at
+    1e-9 for the paper's paths; ``spindle_rpm`` at most `MAX_SPINDLE_RPM`. ``start_c`` (rad)
+    is added to C (the spindle's position at
     the start; ``sts_lathe`` allows |C| <= 1e5 rad, i.e. 15,915 revolutions).
 
     Returns
@@ -514,6 +520,11 @@ def spiral_program(path: ToolPath, *, spindle_rpm: float = SPINDLE_RPM,
     if not isinstance(path, ToolPath):
         raise InputError(f"Expected a ToolPath, got {type(path).__name__}", key="path")
     rpm = _positive(spindle_rpm, "spindle_rpm")
+    if rpm > MAX_SPINDLE_RPM:
+        raise InputError(f"Expected spindle_rpm <= {MAX_SPINDLE_RPM:.6g} rpm (sts_lathe's C "
+                         "rapid rate, models/sts_lathe.urdf <limit velocity=\"150.0\"> rad/s; "
+                         f"machinesim.cam.spiral.MAX_SPINDLE_RPM), got {rpm!r}",
+                         key="spindle_rpm")
     lift = check_length(clearance, "clearance", positive=True)
     plunge = _positive(plunge_mm_per_min, "plunge_mm_per_min") * M_PER_MM / 60.0
     c0 = as_number(start_c, "start_c", unit="rad")  # True is no 1 rad, None no traceback
