@@ -1,7 +1,9 @@
-"""How a run stops: Ctrl-C and SIGTERM, remembered, held back where a swap must finish, and told.
+"""How a run stops: Ctrl-C, SIGTERM and SIGHUP, remembered, held back where a swap must finish,
+and told.
 
-A Ctrl-C (SIGINT) or a ``kill`` (SIGTERM) within `ctrl_c_remembered` is raised as a
-KeyboardInterrupt (`Terminated` for SIGTERM) and remembered, so that `machinesim._io`
+A Ctrl-C (SIGINT), a ``kill`` (SIGTERM) or a closed terminal (SIGHUP) within
+`ctrl_c_remembered` is raised as a KeyboardInterrupt (`Terminated` for SIGTERM, `HungUp` for
+SIGHUP) and remembered, so that `machinesim._io`
 writes nothing after it even when a library swallowed it; `_ctrl_c_deferred` holds one back
 until a rename or a folder swap is done; `stopped` names the stop and its exit status.
 """
@@ -23,14 +25,26 @@ class Terminated(KeyboardInterrupt):
     removed), reported as what it is, with status 143 (`stopped`)."""
 
 
-#: Exit statuses of a run stopped by Ctrl-C or SIGTERM (128 + the signal, as shells say).
+class HungUp(Terminated):
+    """SIGHUP (the terminal the run was started from closed, an ssh session dropped) within
+    `ctrl_c_remembered`: handled as SIGTERM is, reported as what it is, with status 129.
+    Its default action had ended the process where it stood, leaving the temporary file of
+    an output being written (``.part.ply.*.tmp``) behind for good."""
+
+
+#: Exit statuses of a run stopped by Ctrl-C, SIGTERM or SIGHUP (128 + the signal, as shells
+#: say). SIGHUP's number is POSIX's (1): Windows has no such signal.
 EXIT_INTERRUPTED = 128 + signal.SIGINT
 EXIT_TERMINATED = 128 + signal.SIGTERM
+EXIT_HUNG_UP = 128 + 1
 
 
 def stopped(stop: KeyboardInterrupt) -> tuple[str, int]:
     """What to call a run ended by ``stop`` and its exit status: ``("interrupted", 130)``
-    after a Ctrl-C, ``("terminated", 143)`` after SIGTERM."""
+    after a Ctrl-C, ``("terminated", 143)`` after SIGTERM, ``("hung up", 129)`` after
+    SIGHUP."""
+    if isinstance(stop, HungUp):
+        return "hung up", EXIT_HUNG_UP
     if isinstance(stop, Terminated):
         return "terminated", EXIT_TERMINATED
     return "interrupted", EXIT_INTERRUPTED
@@ -39,12 +53,17 @@ def stopped(stop: KeyboardInterrupt) -> tuple[str, int]:
 def _on_ctrl_c(signum, frame):
     global _ctrl_c_seen
     _ctrl_c_seen = True
-    raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+    if signum == signal.SIGTERM:
+        raise Terminated
+    if signum == getattr(signal, "SIGHUP", None):
+        raise HungUp
+    raise KeyboardInterrupt
 
 
 #: The signals `ctrl_c_remembered` handles, each with the handler it replaces (Python's own
-#: for SIGINT, the default action, ending the process at once, for SIGTERM).
-_STOPS = ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, signal.SIG_DFL))
+#: for SIGINT, the default action, ending the process at once, for SIGTERM and SIGHUP).
+_STOPS = ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, signal.SIG_DFL),
+          *(((signal.SIGHUP, signal.SIG_DFL),) if hasattr(signal, "SIGHUP") else ()))
 
 
 @contextmanager
@@ -56,7 +75,8 @@ def ctrl_c_remembered() -> Iterator[None]:
     files and exit 0. With this handler `write_together` refuses to rename anything into
     place once a Ctrl-C was seen, whoever caught it. SIGTERM is handled the same way, raised
     as `Terminated` (a KeyboardInterrupt): without it a ``kill`` ended the process where it
-    stood and left its staging folder and temporary files behind. Each handler is installed
+    stood and left its staging folder and temporary files behind; and so is SIGHUP, raised as
+    `HungUp` (a `Terminated`), for the same reason. Each handler is installed
     only where the usual one is (a background job started with SIGINT ignored keeps
     ignoring it), and only in the main thread (where signals arrive); the old handlers are
     put back on leaving.
@@ -99,5 +119,5 @@ def _ctrl_c_deferred() -> Iterator[None]:
         previous[number](number, None)
 
 
-__all__ = ["EXIT_INTERRUPTED", "EXIT_TERMINATED", "Terminated", "ctrl_c_remembered",
-           "stopped"]
+__all__ = ["EXIT_HUNG_UP", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "HungUp", "Terminated",
+           "ctrl_c_remembered", "stopped"]

@@ -51,12 +51,14 @@ def degree_like_planer(tmp_path) -> str:
 
 def _default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)  # as a terminal's job has it (not nohup's)
 
 
 @pytest.fixture
 def as_in_a_terminal() -> dict:
-    """`subprocess.Popen` keywords that give the child the SIGINT a terminal's Ctrl-C meets:
-    the default disposition, whatever the test runner inherited. A shell's background job
+    """`subprocess.Popen` keywords that give the child the SIGINT a terminal's Ctrl-C meets
+    (and the SIGHUP its closing sends): the default disposition, whatever the test runner
+    inherited. A shell's background job
     starts with SIGINT ignored, and a Python started so installs no KeyboardInterrupt
     handler: a test of Ctrl-C would then see the child go on."""
     return {"preexec_fn": _default_sigint}

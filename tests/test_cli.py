@@ -502,6 +502,35 @@ def test_ctrl_c_during_the_cut_exits_130_and_writes_nothing(tmp_path, capsys, mo
     assert list(tmp_path.iterdir()) == []
 
 
+def _cut_with_a_hook(tmp_path, hook: str, terminal: dict) -> subprocess.CompletedProcess:
+    """``machinesim cut`` of the grooves to tmp_path's part.ply and report.json (each holding
+    "old" before), in a process that first runs ``hook`` (Python, which may wrap ``os`` calls
+    to send the process a signal at a known point), with a terminal's signal dispositions."""
+    for name in ("part.ply", "report.json"):
+        (tmp_path / name).write_text("old")
+    code = f"{hook}\nimport sys\nfrom machinesim.cli import main\nsys.exit(main())\n"
+    return subprocess.run([sys.executable, "-c", code, "cut", str(GROOVES), *CUT,
+                           "--out", str(tmp_path / "part.ply"),
+                           "--report", str(tmp_path / "report.json")],
+                          capture_output=True, text=True, cwd=ROOT, timeout=120, **terminal)
+
+
+def test_a_closed_terminal_while_the_part_is_written_leaves_the_old_files_and_no_temporary(
+        tmp_path, as_in_a_terminal):
+    """SIGHUP (the terminal closed, an ssh session dropped) once the part's bytes are in its
+    temporary file: handled as SIGTERM is, status 129 and one line; the old part and report
+    stay and no temporary file is left. (SIGHUP's default action ended the process there:
+    status -1, and .part.ply.*.tmp stayed beside the part for good.)"""
+    hook = ("import os, signal, time\nreal = os.fsync\n"
+            "def fsync(fd):\n    real(fd)\n    os.kill(os.getpid(), signal.SIGHUP)\n"
+            "    time.sleep(5)\nos.fsync = fsync")
+    result = _cut_with_a_hook(tmp_path, hook, as_in_a_terminal)
+    assert_clean_failure(result.returncode, result.stderr, "machinesim: hung up; nothing was "
+                         "written", status=129)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["part.ply", "report.json"]
+    assert {p.read_text() for p in tmp_path.iterdir()} == {"old"}
+
+
 def test_a_binary_or_malformed_view_report_is_one_line(tmp_path, capsys):
     part = tmp_path / "part.ply"
     assert run(["cut", GROOVES, *CUT, "--out", part], capsys)[0] == 0

@@ -249,6 +249,26 @@ def test_sigterm_is_raised_as_terminated_and_stops_the_write(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_sighup_is_raised_as_hung_up_and_stops_the_write(tmp_path):
+    """A real SIGHUP (the terminal closed) within the block: raised as `HungUp` (a
+    `Terminated`, so a live viewer's caller stops too), status 129 and its own word; nothing
+    is written after it, and leaving puts the default action back."""
+    before = signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    try:
+        with _interrupts.ctrl_c_remembered():
+            with pytest.raises(_interrupts.HungUp) as stop:
+                os.kill(os.getpid(), signal.SIGHUP)
+                time.sleep(1.0)  # the handler raises here, at the latest
+            assert isinstance(stop.value, _interrupts.Terminated)
+            assert _interrupts.stopped(stop.value) == ("hung up", 128 + 1)
+            with pytest.raises(KeyboardInterrupt):
+                _io.write_together([(tmp_path / "part.ply", "part")])
+        assert signal.getsignal(signal.SIGHUP) is signal.SIG_DFL
+    finally:
+        signal.signal(signal.SIGHUP, before)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_sigterm_during_a_folder_swap_waits_for_the_swap(tmp_path, monkeypatch):
     """SIGTERM while the staged folder is renamed in: the swap finishes (the new folder in
     place, no staging or old folder beside it), and `Terminated` is raised after."""

@@ -134,14 +134,16 @@ def test_every_paper_scenario_refuses_a_negative_seed_on_its_command_line(tmp_pa
 
 
 @pytest.mark.parametrize(("sig", "status", "said"), [(signal.SIGINT, 130, "interrupted"),
-                                                      (signal.SIGTERM, 143, "terminated")])
+                                                      (signal.SIGTERM, 143, "terminated"),
+                                                      (signal.SIGHUP, 129, "hung up")])
 def test_a_scenario_stopped_by_ctrl_c_or_sigterm_says_so_in_one_line(
         tmp_path, as_in_a_terminal, interrupted, sig, status, said):
-    """SIGINT (or SIGTERM, ``kill PID``) while paper 002's first load is measured: status 130
-    (143), one line on stderr after the progress lines, no traceback, no report written (its
-    files come after the runs), and no staging folder left beside the report's. A
-    summary.json an earlier run left in the folder stays whole. (SIGTERM ended the process
-    where it stood: status -15, and the staging folder stayed until the next run.)"""
+    """SIGINT (or SIGTERM, ``kill PID``, or SIGHUP, its terminal closed) while paper 002's
+    first load is measured: status 130 (143, 129), one line on stderr after the progress
+    lines, no traceback, no report written (its files come after the runs), and no staging
+    folder left beside the report's. A summary.json an earlier run left in the folder stays
+    whole. (SIGTERM and SIGHUP ended the process where it stood: status -15 or -1, and the
+    staging folder stayed until the next run.)"""
     out_folder = tmp_path / "report"
     out_folder.mkdir()
     (out_folder / "summary.json").write_text('{"kept": true}')
