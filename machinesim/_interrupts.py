@@ -17,6 +17,10 @@ from contextlib import contextmanager
 
 #: Set by `ctrl_c_remembered`'s handler: a Ctrl-C arrived, even if a library swallowed it.
 _ctrl_c_seen = False
+#: Within `ctrl_c_remembered`, the files `machinesim._io` has put in place whole so far (a
+#: stop held back until a rename was done is raised after it: the command must not then say
+#: that nothing was written), given to the stop as it leaves; None outside.
+_written: list[str] | None = None
 
 
 class Terminated(KeyboardInterrupt):
@@ -81,18 +85,37 @@ def ctrl_c_remembered() -> Iterator[None]:
     ignoring it), and only in the main thread (where signals arrive); the old handlers are
     put back on leaving.
     """
-    global _ctrl_c_seen
+    global _ctrl_c_seen, _written
     main = threading.current_thread() is threading.main_thread()
     previous = {number: signal.getsignal(number) for number, _ in _STOPS}
     ours = [number for number, usual in _STOPS if main and previous[number] is usual]
     for number in ours:
         signal.signal(number, _on_ctrl_c)
+    written, _written = _written, []
     try:
         yield
+    except KeyboardInterrupt as stop:
+        stop.written = tuple(dict.fromkeys(_written))  # for `written_before`, past the block
+        raise
     finally:
         for number in ours:
             signal.signal(number, previous[number])
         _ctrl_c_seen = False
+        _written = written
+
+
+def written_before(stop: KeyboardInterrupt, nothing: str = "nothing was written") -> str:
+    """What a command ended by ``stop`` (raised out of `ctrl_c_remembered`) had written, for
+    its last line: ``nothing`` when it put no file in place, else which files it wrote whole
+    before the stop (``"a.html was written whole before it; nothing else was written"``). A
+    stop that arrives during a rename is held until the renames are done, and a page is
+    written before its screenshot is taken: "nothing was written" was then untrue."""
+    names = getattr(stop, "written", ())
+    if not names:
+        return nothing
+    listed = names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+    return (f"{listed} {'was' if len(names) == 1 else 'were'} written whole before it; "
+            "nothing else was written")
 
 
 @contextmanager
@@ -120,4 +143,4 @@ def _ctrl_c_deferred() -> Iterator[None]:
 
 
 __all__ = ["EXIT_HUNG_UP", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "HungUp", "Terminated",
-           "ctrl_c_remembered", "stopped"]
+           "ctrl_c_remembered", "stopped", "written_before"]

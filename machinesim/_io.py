@@ -289,6 +289,8 @@ def write_together(items: Iterable[tuple[object, bytes | str]], encoding: str = 
         # another run's part), and one in the removals left .NAME.old files behind
         with _ctrl_c_deferred():
             _rename_all(staged)
+            if _interrupts._written is not None:  # within: a stop held till now is told so
+                _interrupts._written.extend(str(path) for path, _ in staged)
     finally:
         for _, temp in staged:
             Path(temp).unlink(missing_ok=True)

@@ -10,9 +10,10 @@
 
 Exit status: 0 done; 2 the input cannot be used (the message names the file, line, key or
 value; nothing was written); 1 anything else (one line, never a traceback; set
-``MACHINESIM_TRACEBACK=1`` to see it); 130 interrupted (nothing was written; a campaign keeps
-its finished trials, says so, and resumes when run again). Heavy modules are imported inside
-`main`, so that even an interrupt while they load ends cleanly.
+``MACHINESIM_TRACEBACK=1`` to see it); 130 interrupted (nothing was written, or the line names
+the files written whole before the stop; a campaign keeps its finished trials, says so, and
+resumes when run again). Heavy modules are imported inside `main`, so that even an interrupt
+while they load ends cleanly.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import time
 from pathlib import Path
 
 from machinesim._arguments import ArgumentParser
-from machinesim._interrupts import ctrl_c_remembered, stopped
+from machinesim._interrupts import ctrl_c_remembered, stopped, written_before
 from machinesim._io import (
     check_readable_file,
     check_writable,
@@ -160,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(f"error: {exc}", EXIT_INPUT)
     except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (`machinesim._interrupts.Terminated`)
         how, status = stopped(stop)
-        return _fail(f"{how}; {_interrupted(args)}", status)
+        return _fail(f"{how}; {_interrupted(args, stop)}", status)
     except BrokenPipeError:
         # the reader of our output went away (``machinesim machines | head -1``): not an error
         stdout_to_null(sys.stdout)
@@ -202,14 +203,16 @@ def _command(args: argparse.Namespace) -> int:
     return _cut(args)
 
 
-def _interrupted(args) -> str:
-    """What a command stopped by Ctrl-C leaves: nothing, but for a campaign its finished
-    trials (kept so that the same command resumes)."""
+def _interrupted(args, stop: KeyboardInterrupt) -> str:
+    """What a command stopped by Ctrl-C leaves: nothing, or the files it had written whole
+    before (a cut's part and report when the stop came as they were renamed in, a page
+    whose screenshot was being taken: `machinesim._interrupts.written_before`), but for a
+    campaign its finished trials (kept so that the same command resumes)."""
     if args is not None and args.command == "campaign":
         from machinesim.campaign.cli import interrupted
 
         return interrupted(args.out)
-    return "nothing was written"
+    return written_before(stop)
 
 
 def _fail(message: str, status: int) -> int:

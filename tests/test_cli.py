@@ -512,7 +512,8 @@ def _cut_with_a_hook(tmp_path, hook: str, terminal: dict) -> subprocess.Complete
     return subprocess.run([sys.executable, "-c", code, "cut", str(GROOVES), *CUT,
                            "--out", str(tmp_path / "part.ply"),
                            "--report", str(tmp_path / "report.json")],
-                          capture_output=True, text=True, cwd=ROOT, timeout=120, **terminal)
+                          capture_output=True, text=True, cwd=ROOT, timeout=120,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)}, **terminal)
 
 
 def test_a_closed_terminal_while_the_part_is_written_leaves_the_old_files_and_no_temporary(
@@ -529,6 +530,31 @@ def test_a_closed_terminal_while_the_part_is_written_leaves_the_old_files_and_no
                          "written", status=129)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["part.ply", "report.json"]
     assert {p.read_text() for p in tmp_path.iterdir()} == {"old"}
+
+
+def test_a_ctrl_c_as_the_outputs_are_renamed_in_says_they_were_written(tmp_path,
+                                                                        as_in_a_terminal):
+    """SIGINT just as the report is renamed over the old one: the renames finish (the stop is
+    held back until then: part and report are this run's, whole), and the line says so. It
+    said 'interrupted; nothing was written' (status 130) beside this run's part and report,
+    the old ones gone."""
+    hook = ("import os, signal, time\nreal = os.replace\n"
+            "def replace(src, dst):\n    real(src, dst)\n"
+            "    if str(dst).endswith('report.json'):\n"
+            "        os.kill(os.getpid(), signal.SIGINT)\n        time.sleep(0.5)\n"
+            "os.replace = replace")
+    result = _cut_with_a_hook(tmp_path, hook, as_in_a_terminal)
+    part, report = tmp_path / "part.ply", tmp_path / "report.json"
+    assert_clean_failure(result.returncode, result.stderr, status=130)
+    assert result.stderr == (f"machinesim: interrupted; {part} and {report} were written "
+                             "whole before it; nothing else was written\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["part.ply", "report.json"]
+    data = json.loads(report.read_text())
+    assert data["part_file"] == str(part)
+    assert data["removed_volume_mm3"] == pytest.approx(GROOVES_MM3, rel=1e-9)
+    from machinesim.viewer.meshes import read_ply
+
+    assert len(read_ply(part)[1]) > 0  # a whole PLY (a torn one is refused)
 
 
 def test_a_binary_or_malformed_view_report_is_one_line(tmp_path, capsys):

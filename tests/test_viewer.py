@@ -1219,6 +1219,30 @@ def test_a_live_viewer_stopped_after_its_screenshot_says_the_screenshot_stays(tm
     assert shot.read_bytes() == b"png"
 
 
+def test_a_page_written_before_its_screenshot_is_named_when_a_ctrl_c_stops_the_screenshot(
+        tmp_path, capsys, monkeypatch):
+    """``view --html P --screenshot S`` stopped while Chromium renders S: the page was written
+    whole first (its 'wrote' line is on stdout), and the last line names it. It said
+    'interrupted; nothing was written' beside the page. Chromium is stood in for by a
+    _screenshot that is interrupted."""
+    import machinesim.viewer.cli as view
+    from machinesim.cli import main
+
+    def interrupted(url, ready, path):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(view, "_screenshot", interrupted)
+    page, shot = tmp_path / "v.html", tmp_path / "v.png"
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+    assert main(["view", str(tmp_path / "part.ply"), "--html", str(page), "--screenshot",
+                 str(shot)]) == 130
+    out, err = capsys.readouterr()
+    assert out.startswith(f"wrote {page} (")
+    assert err == (f"machinesim: interrupted; {page} was written whole before it; nothing "
+                   "else was written\n")
+    assert page.read_text().startswith("<!DOCTYPE html>") and not shot.exists()
+
+
 #: A stand-in live server: the real one (`machinesim.viewer.server`), which ends by itself half
 #: a second after a browser fetched its page, as a crash (exit status 3), as the kernel's
 #: out-of-memory killer ends it (SIGKILL), or with a Python error out of its loop (its loop

@@ -156,7 +156,7 @@ def run_view(args: argparse.Namespace) -> int:
             raise KeyboardInterrupt
     except KeyboardInterrupt as stop:  # SIGTERM too (`Terminated`): 143
         if shot is None:
-            raise  # 'machinesim: interrupted; nothing was written', as every command
+            raise  # 'machinesim: interrupted; nothing was written' (or what was)
         how, status = stopped(stop)
         print(f"machinesim: {how}; the viewer stopped, its screenshot {shot} written before",
               file=sys.stderr)
