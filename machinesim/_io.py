@@ -145,8 +145,39 @@ def _name_max(folder: Path) -> int:
         return _NAME_MAX
 
 
-def _temp_prefix(path: Path) -> str:
+def _temp_head(path: Path) -> str:
     return f".{path.name[:_TEMP_STEM]}."
+
+
+def _temp_prefix(path: Path) -> str:
+    """The start of a temporary file's name beside ``path``: ``.NAME.PID-`` (the name cut to
+    `_TEMP_STEM` characters), so that a later write can tell those of a killed run."""
+    return f"{_temp_head(path)}{os.getpid()}-"
+
+
+#: Characters `tempfile.mkstemp` puts between a prefix and a suffix.
+_TEMP_RANDOM = 8
+
+
+def _clear_stale_temps(path: Path) -> None:
+    """Remove the temporary files a killed run (SIGKILL, a power loss: nothing could run)
+    left beside ``path``: ``.NAME.PID-XXXXXXXX.tmp`` of a process that is gone
+    (`pid_alive`). They were never renamed into place, so no reader took them for ``path``,
+    but they stayed for good, one per killed write. Those of live runs are left alone."""
+    head = _temp_head(path)
+    try:
+        names = [e.name for e in os.scandir(path.parent) if e.name.startswith(head)]
+    except OSError:
+        return
+    for name in names:
+        pid, dash, rest = name[len(head):].partition("-")
+        if (dash and pid.isdigit() and rest.endswith(".tmp")
+                and len(rest) == _TEMP_RANDOM + len(".tmp") and int(pid) != os.getpid()
+                and not pid_alive(int(pid))):
+            try:
+                os.unlink(path.parent / name)
+            except OSError:
+                pass
 
 
 def _mode(path: Path) -> int:
@@ -160,7 +191,9 @@ def _mode(path: Path) -> int:
 
 
 def _stage(path: Path, raw: bytes) -> str:
-    """Write ``raw`` to a flushed temporary file beside ``path``; return its name."""
+    """Write ``raw`` to a flushed temporary file beside ``path``; return its name. Those a
+    killed run left beside ``path`` are removed first (`_clear_stale_temps`)."""
+    _clear_stale_temps(path)
     handle, temp = tempfile.mkstemp(dir=path.parent, prefix=_temp_prefix(path), suffix=".tmp")
     try:
         with os.fdopen(handle, "wb") as file:

@@ -269,6 +269,35 @@ def test_sighup_is_raised_as_hung_up_and_stops_the_write(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_write_removes_the_temporary_files_of_killed_runs_and_only_theirs(tmp_path):
+    """SIGKILL (nothing can run) while a part is staged leaves its temporary file: never
+    renamed, so no reader takes it for the part, but it stayed for good, one per killed
+    run. The next write of the same file removes it; a live run's is left alone."""
+    import subprocess
+    import sys
+
+    part = tmp_path / "part.ply"
+    part.write_text("old")
+    code = ("import os, sys, time\nfrom machinesim import _io\nreal = os.fsync\n"
+            "def fsync(fd):\n    real(fd)\n    print('staged', flush=True)\n"
+            "    time.sleep(60)\nos.fsync = fsync\n_io.write_atomic(sys.argv[1], 'killed')\n")
+    root = Path(__file__).resolve().parents[1]
+    killed = subprocess.Popen([sys.executable, "-c", code, str(part)], stdout=subprocess.PIPE,
+                              text=True, env={**os.environ, "PYTHONPATH": str(root)})
+    try:
+        assert killed.stdout.readline() == "staged\n"
+    finally:
+        killed.kill()
+        killed.wait()
+    left = [p.name for p in tmp_path.iterdir() if p.name != "part.ply"]
+    assert len(left) == 1 and left[0].startswith(".part.ply.") and left[0].endswith(".tmp")
+    live = tmp_path / f".part.ply.{os.getppid()}-abcd1234.tmp"  # pytest's parent: running
+    live.write_text("being written")
+    _io.write_atomic(part, "new")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["part.ply", live.name])
+    assert part.read_text() == "new"
+
+
 def test_a_sigterm_during_a_folder_swap_waits_for_the_swap(tmp_path, monkeypatch):
     """SIGTERM while the staged folder is renamed in: the swap finishes (the new folder in
     place, no staging or old folder beside it), and `Terminated` is raised after."""
