@@ -41,8 +41,14 @@ def say(program: str, message: str) -> None:
     """Write ``program: message`` to stderr as one of machinesim's commands ends (an error,
     an interruption): what the message quotes of a file's name or a key goes through
     `printable`, the lines the message itself breaks kept. Every command line prints its
-    last line here (``machinesim``, ``python -m machinesim.campaign.cli``, scenarios)."""
-    print(f"{program}: {printable(message, keep=chr(10))}", file=sys.stderr)
+    last line here (``machinesim``, ``python -m machinesim.campaign.cli``, scenarios). A
+    stderr that cannot be written (its terminal closed: EIO, the usual SIGHUP) is left
+    unsaid: the error had replaced the command's exit status (1 for 129) and printed a
+    traceback nobody could read."""
+    try:
+        print(f"{program}: {printable(message, keep=chr(10))}", file=sys.stderr)
+    except OSError:
+        pass
 
 
 class MachineSimError(Exception):

@@ -502,6 +502,31 @@ def test_ctrl_c_during_the_cut_exits_130_and_writes_nothing(tmp_path, capsys, mo
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_stop_whose_terminal_is_gone_still_exits_with_its_status(tmp_path, monkeypatch):
+    """SIGHUP as the terminal closes: the last line cannot be written (EIO, as a pty whose
+    other end closed answers). The status is still 129 and nothing is written. The failed
+    write had raised out of the handler: status 1, after a traceback to the same dead
+    terminal (seen with the cut's stderr on a pty closed before SIGHUP)."""
+    import errno
+
+    from machinesim._interrupts import HungUp
+
+    class Closed:
+        def write(self, text):
+            raise OSError(errno.EIO, "Input/output error")
+
+        def flush(self):
+            raise OSError(errno.EIO, "Input/output error")
+
+    def hung_up(*args, **kwargs):
+        raise HungUp
+
+    monkeypatch.setattr(machinesim.cutting, "cut", hung_up)
+    monkeypatch.setattr(sys, "stderr", Closed())
+    assert main([str(a) for a in ["cut", GROOVES, *CUT, "--out", tmp_path / "part.ply"]]) == 129
+    assert list(tmp_path.iterdir()) == []
+
+
 def _cut_with_a_hook(tmp_path, hook: str, terminal: dict) -> subprocess.CompletedProcess:
     """``machinesim cut`` of the grooves to tmp_path's part.ply and report.json (each holding
     "old" before), in a process that first runs ``hook`` (Python, which may wrap ``os`` calls
