@@ -350,22 +350,33 @@ def test_the_steps_refuse_what_is_no_lab():
 
 def test_the_steps_refuse_what_the_step_before_did_not_give():
     # identify({}) raised KeyError 'xy', compensate(None) AttributeError, compensate of an
-    # Identified with another detail KeyError 'machine'
+    # Identified with another detail KeyError 'machine'; each refusal names its step
+    # (machinesim.procedures.step_inputs, shared by every procedure's steps)
     from machinesim.experiment import Identified
 
     procedure = XYPlaneErrors()
-    with pytest.raises(MachineSimError, match="key 'measurements': expected the measurements "
-                       r"XYPlaneErrors.measure\(lab\) returns .*got dict \{\}"):
-        procedure.identify({})
-    with pytest.raises(MachineSimError, match="key 'identified': expected the Identified "
-                       r"XYPlaneErrors.identify\(measurements\) returns, got NoneType"):
+    measured = ("key 'measurements': XYPlaneErrors.identify expects the measurements "
+                "XYPlaneErrors.measure(lab) returned (a dict of 'xy' (an XYPlaneMeasurements), "
+                "'c' (a CTests) and 'machine'), got ")
+    for given, got in (({}, "a dict without 'xy', 'c' and 'machine'"),
+                       ({"xy": 1, "c": 2, "machine": 3}, "a dict whose 'xy' is int 1"),
+                       (None, "NoneType None")):
+        with pytest.raises(MachineSimError) as refused:
+            procedure.identify(given)
+        assert str(refused.value) == measured + got
+    with pytest.raises(MachineSimError) as refused:
         procedure.compensate(None)
-    with pytest.raises(MachineSimError, match="key 'identified': .*got a detail dict without "
-                       "c, diagonal_before"):
-        procedure.compensate(Identified({}, detail={}))
+    assert str(refused.value) == ("key 'identified': XYPlaneErrors.compensate expects the "
+                                  "Identified XYPlaneErrors.identify(measurements) returned, "
+                                  "got NoneType None")
+    with pytest.raises(MachineSimError, match="key 'identified': XYPlaneErrors.compensate "
+                       "expects .* its detail a dict of 'map', 'fit', .*got an Identified "
+                       "whose detail is a dict without 'fit', 'c', .*'yaw_y'$"):
+        procedure.compensate(Identified({}, detail={"map": None}))
     lab = machinesim.Lab("grooving_4axis", noise=False)
-    with pytest.raises(MachineSimError, match="key 'identified'"):
-        procedure.evaluate(lab, Identified({}, detail={"map": None}), {})
+    with pytest.raises(MachineSimError, match="key 'identified': XYPlaneErrors.evaluate "
+                       "expects .*got an Identified whose detail is NoneType None"):
+        procedure.evaluate(lab, Identified({}, detail=None), {})
 
 
 def test_a_diagonal_from_a_compensated_corner_an_ulp_off_is_read_not_refused():

@@ -32,15 +32,8 @@ import numpy as np
 
 from machinesim.compensation_table import CompensationTable, ModelCompensation
 from machinesim.errors import ErrorModel
-from machinesim.exceptions import InputError, brief
-from machinesim.experiment import (
-    Evaluation,
-    Figure,
-    Identified,
-    check_instance,
-    check_lab,
-    fit_notes,
-)
+from machinesim.exceptions import InputError
+from machinesim.experiment import Evaluation, Figure, Identified, check_lab, fit_notes
 from machinesim.identification.c_axis_squareness import (
     LOCATION,
     CAxisSeparation,
@@ -53,6 +46,7 @@ from machinesim.identification.c_axis_squareness import (
 from machinesim.identification.xy_plane import fit_xy_plane
 from machinesim.nc import ProgramBuilder
 from machinesim.procedures.pyramid_windows import cut_and_read
+from machinesim.procedures.step_inputs import check_identified, check_measurements
 from machinesim.procedures.xy_plane_measurements import (
     PLATE,
     LaserSetups,
@@ -163,7 +157,7 @@ class XYPlaneErrors:
                                 runs=self.runs, seed=self._seed, table=table)
 
     def identify(self, measurements) -> Identified:
-        _check_measurements(measurements)
+        check_measurements(measurements, "XYPlaneErrors", _MEASUREMENTS)
         xy: XYPlaneMeasurements = measurements["xy"]
         curves, diagonals = xy.fit_inputs()
         knots = _knots(xy.map.position_x.positions)
@@ -185,7 +179,7 @@ class XYPlaneErrors:
             notes=fit_notes("fit_xy_plane", estimate))
 
     def compensate(self, identified: Identified):
-        _check_identified(identified)
+        check_identified(identified, "XYPlaneErrors", "compensate", _DETAIL)
         table, model = compensations(identified)
         program = _corners_program()
         machine = identified.detail["machine"]
@@ -195,7 +189,7 @@ class XYPlaneErrors:
 
     def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
         check_lab(lab)
-        _check_identified(identified)
+        check_identified(identified, "XYPlaneErrors", "evaluate", _DETAIL)
         # set up again, not the before tests' instruments: with the same labels their noise
         # streams were the same, and the after readings repeated the before's noise, which
         # the compensation had taken as error (the map after read 0.010 / 0.0078 um where
@@ -323,35 +317,12 @@ class XYPlaneErrors:
 
 
 #: What `XYPlaneErrors.identify` puts in its `Identified.detail`, which `compensate`,
-#: `evaluate`, `compensations` and `with_yaw` read.
-_DETAIL = frozenset({"map", "fit", "c", "machine", "diagonals", "work_diagonals",
-                     "diagonal_before", "work_diagonal_before", "diagonal_squareness",
-                     "eq2_squareness", "yaw_y"})
-
-
-def _check_measurements(measurements) -> None:
-    """Refuse anything but what `XYPlaneErrors.measure` returns (a KeyError or TypeError
-    deep in `identify` before)."""
-    if not (isinstance(measurements, dict)
-            and isinstance(measurements.get("xy"), XYPlaneMeasurements)
-            and isinstance(measurements.get("c"), CTests) and "machine" in measurements):
-        raise InputError(f"expected the measurements XYPlaneErrors.measure(lab) returns (a "
-                         f"dict of 'xy', 'c' and 'machine'), got {type(measurements).__name__} "
-                         f"{brief(repr(measurements))}", key="measurements")
-
-
-def _check_identified(identified) -> None:
-    """Refuse anything but the `Identified` of `XYPlaneErrors.identify` (its detail a dict
-    of `_DETAIL`)."""
-    check_instance(identified, Identified, "identified",
-                   "the Identified XYPlaneErrors.identify(measurements) returns")
-    detail = identified.detail
-    missing = sorted(_DETAIL - set(detail)) if isinstance(detail, dict) else sorted(_DETAIL)
-    if missing:
-        raise InputError(f"expected the Identified of XYPlaneErrors.identify, whose detail "
-                         f"holds {', '.join(sorted(_DETAIL))}; got a detail "
-                         f"{type(detail).__name__} without {', '.join(missing)}",
-                         key="identified")
+#: `evaluate`, `compensations` and `with_yaw` read (any value under each key).
+_DETAIL = dict.fromkeys(("map", "fit", "c", "machine", "diagonals", "work_diagonals",
+                         "diagonal_before", "work_diagonal_before", "diagonal_squareness",
+                         "eq2_squareness", "yaw_y"), object)
+#: What `XYPlaneErrors.measure` returns, which `identify` reads.
+_MEASUREMENTS = {"xy": XYPlaneMeasurements, "c": CTests, "machine": object}
 
 
 def _real(value) -> bool:
