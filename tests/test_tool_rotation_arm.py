@@ -8,6 +8,7 @@ import math
 import subprocess
 import sys
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ from machinesim import ErrorModel, Lab, ToolSetting, load_machine
 from machinesim.cam.prisms import CalibrationPlan, PrismPattern
 from machinesim.cutting import cut
 from machinesim.exceptions import InputError
-from machinesim.experiment import run
+from machinesim.experiment import Identified, run
 from machinesim.identification import tool_rotation_arm as arm
 from machinesim.metrology import Microscope, fit_apexes
 from machinesim.nc import ProgramBuilder
@@ -969,10 +970,12 @@ LAB_REFUSAL = ("key 'lab': expected a machinesim.Lab to run on, got NoneType Non
 @pytest.mark.parametrize(("call", "message"), [
     (lambda: ToolRotationArm().measure(None), LAB_REFUSAL),
     (lambda: ToolRotationArm().evaluate(None, None, {}), LAB_REFUSAL),
-    (lambda: ToolRotationArm().identify({}), "key 'measurements': expected the Calibration "
-     "ToolRotationArm.measure(lab) returns, got dict {}"),
-    (lambda: ToolRotationArm().compensate(None), "key 'identified': expected the Identified "
-     "ToolRotationArm.identify(measurements) returns, got NoneType None"),
+    (lambda: ToolRotationArm().identify({}), "key 'measurements': ToolRotationArm.identify "
+     "expects the measurements ToolRotationArm.measure(lab) returned (a Calibration), got "
+     "dict {}"),
+    (lambda: ToolRotationArm().compensate(None), "key 'identified': ToolRotationArm.compensate "
+     "expects the Identified ToolRotationArm.identify(measurements) returned, got NoneType "
+     "None"),
     (lambda: ToolRotationArm(plan=5), "key 'plan': expected a CalibrationPlan "
      "(machinesim.cam.prisms), e.g. CalibrationPlan(), got int 5"),
     (lambda: ToolRotationArm(pattern="prisms"), "key 'pattern': expected a PrismPattern "
@@ -987,6 +990,46 @@ LAB_REFUSAL = ("key 'lab': expected a machinesim.Lab to run on, got NoneType Non
 def test_the_python_api_refuses_arguments_of_the_wrong_kind(call, message):
     """Each was a bare AttributeError (or min()'s ValueError) from deep inside; the lab's is
     the check `run` makes (machinesim.experiment.check_lab)."""
+    with pytest.raises(InputError) as caught:
+        call()
+    assert str(caught.value) == message
+
+
+ARM_PROGRAMS = ("key 'programs': ToolRotationArm.evaluate expects the programs "
+                "ToolRotationArm.compensate(identified) returned (a dict of 'pattern_before' "
+                "(a Program) and 'pattern_compensated' (a Program)), got ")
+
+
+def _evaluate(detail, programs):
+    """ToolRotationArm's evaluate on a planer lab, ``detail`` in the Identified (None: the
+    kind identify gives, its fields empty)."""
+    detail = procedure.ArmIdentification(*[None] * 6) if detail is None else detail
+    lab = Lab(load_machine("planer_4axis"), ErrorModel(), noise=False)
+    return ToolRotationArm().evaluate(lab, Identified({}, detail), programs)
+
+
+@pytest.mark.parametrize(("call", "message"), [
+    (lambda: ToolRotationArm().compensate(Identified({}, {})), "key 'identified': "
+     "ToolRotationArm.compensate expects the Identified ToolRotationArm.identify(measurements) "
+     "returned, its detail an ArmIdentification, got an Identified whose detail is dict {}"),
+    (lambda: _evaluate(5, {}), "key 'identified': ToolRotationArm.evaluate expects the "
+     "Identified ToolRotationArm.identify(measurements) returned, its detail an "
+     "ArmIdentification, got an Identified whose detail is int 5"),
+    (lambda: _evaluate(None, {}), ARM_PROGRAMS + "a dict without 'pattern_before' and "
+     "'pattern_compensated'"),
+    (lambda: _evaluate(None, None), ARM_PROGRAMS + "NoneType None"),
+    (lambda: _evaluate(None, {"pattern_before": ProgramBuilder(1).build(),
+                              "pattern_compensated": "G1 Z0"}),
+     ARM_PROGRAMS + "a dict whose 'pattern_compensated' is str 'G1 Z0'"),
+    (lambda: _evaluate(None, MappingProxyType({"pattern_before": ProgramBuilder(1).build()})),
+     ARM_PROGRAMS + "a mappingproxy without 'pattern_compensated'"),
+])
+def test_each_step_refuses_what_the_step_before_did_not_give(call, message):
+    """Another detail was refused in words that named no step; evaluate without the programs
+    compensate returned cut the calibration part again and then raised KeyError
+    'pattern_before' (None: a TypeError): now each is refused, naming the step, before
+    anything is cut (machinesim.procedures.step_inputs). A Result's programs (a
+    mappingproxy) are a mapping as good as compensate's dict."""
     with pytest.raises(InputError) as caught:
         call()
     assert str(caught.value) == message

@@ -9,8 +9,9 @@ argument, naming the step, what it expected and what it got, where a KeyError or
 AttributeError came from deep inside it before. What the step before gives passes
 untouched (the checks read types and keys, never values).
 
-A shape is a type (the value is one of it) or a mapping of key -> type (the value a dict
-holding each key, its value of that type; ``object``: any value).
+A shape is a type (the value is one of it) or a mapping of key -> type (the value a dict,
+or another mapping such as a `machinesim.experiment.Result`'s ``programs``, holding each
+key, its value of that type; ``object``: any value).
 """
 
 from __future__ import annotations
@@ -70,14 +71,15 @@ def _mismatch(value, shape: Shape) -> str | None:
     """What ``value`` is, where it does not have ``shape``; None where it does."""
     if isinstance(shape, type):
         return None if isinstance(value, shape) else _value(value)
-    if not isinstance(value, dict):
+    if not isinstance(value, Mapping):
         return _value(value)
+    kind_of = "a dict" if isinstance(value, dict) else _article(type(value).__name__)
     missing = [repr(key) for key in shape if key not in value]
     if missing:
-        return f"a dict without {_listed(missing)}"
+        return f"{kind_of} without {_listed(missing)}"
     for key, kind in shape.items():
         if not isinstance(value[key], kind):
-            return f"a dict whose {key!r} is {_value(value[key])}"
+            return f"{kind_of} whose {key!r} is {_value(value[key])}"
     return None
 
 

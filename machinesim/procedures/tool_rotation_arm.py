@@ -35,7 +35,6 @@ from machinesim.experiment import (
     Evaluation,
     Figure,
     Identified,
-    check_identified,
     check_instance,
     check_lab,
     fit_notes,
@@ -49,6 +48,11 @@ from machinesim.identification.tool_rotation_arm import (
     touch_off,
 )
 from machinesim.nc.program import Program
+from machinesim.procedures.step_inputs import (
+    check_identified,
+    check_measurements,
+    check_programs,
+)
 from machinesim.procedures.tool_rotation_arm_reading import (
     AlignedMicroscope,
     AngleReading,
@@ -310,8 +314,7 @@ class ToolRotationArm:
         Parameters identified: ``tool.y`` = e_ys and ``tool.z`` = -(r - r0), SI, with the
         fit's standard uncertainties.
         """
-        check_instance(measurements, Calibration, "measurements",
-                       "the Calibration ToolRotationArm.measure(lab) returns")
+        check_measurements(measurements, "ToolRotationArm", Calibration)
         readings, r0, machine = measurements.readings, measurements.r0, measurements.machine
         estimate = fit_arm(readings, r0)
         detail = ArmIdentification(
@@ -327,7 +330,7 @@ class ToolRotationArm:
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The pattern program touched off at 0 deg (``pattern_before``, the uncompensated
         state) and rewritten by the identified arm (``pattern_compensated``)."""
-        check_identified(identified, ArmIdentification, "ToolRotationArm")
+        check_identified(identified, "ToolRotationArm", "compensate", ArmIdentification)
         detail = identified.detail
         nominal = self.pattern.program(detail.r0)
         return {"pattern_before": compensate_program(nominal, detail.machine,
@@ -341,7 +344,8 @@ class ToolRotationArm:
         part `measure` cut (the same cut, asked for again: the lab hands it back,
         `machinesim.Lab.cut`) and the two patterns."""
         check_lab(lab)
-        check_identified(identified, ArmIdentification, "ToolRotationArm")
+        check_identified(identified, "ToolRotationArm", "evaluate", ArmIdentification)
+        check_programs(programs, "ToolRotationArm", ("pattern_before", "pattern_compensated"))
         detail = identified.detail
         calibration, _ = lab.cut(self.plan.program(detail.r0), TOOL, self.plan.stock)
         readings, parts, unread = {}, {"calibration": calibration}, {}
