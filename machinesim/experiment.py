@@ -41,7 +41,7 @@ from machinesim.exceptions import InputError, brief
 from machinesim.identification.fit import MODEL_MISFIT
 
 __all__ = ["LAB_USES", "Evaluation", "Figure", "Identified", "Procedure", "Result",
-           "check_identified", "check_instance", "check_lab", "fit_notes", "note_kind", "run"]
+           "check_instance", "check_lab", "fit_notes", "note_kind", "run"]
 
 #: What a procedure may read of its lab beyond the machine's error parameters, as its
 #: ``lab_uses`` names it, step by step (``"measure"``, ``"evaluate"``): the instruments it
@@ -372,21 +372,11 @@ def check_lab(lab) -> None:
 def check_instance(value, expected: type | tuple[type, ...], key: str, what: str) -> None:
     """Refuse ``value``, the argument ``key``, unless it is an ``expected``: an `InputError`
     naming the argument, the type and value it got and ``what`` was expected (a procedure's
-    plan, the measurements its ``measure`` returned, the `Identified` of its
-    ``identify``)."""
+    plan, a tool); what a step takes from the step before is checked by
+    `machinesim.procedures.step_inputs`."""
     if not isinstance(value, expected):
         raise InputError(f"expected {what}, got {type(value).__name__} {brief(repr(value))}",
                          key=key)
-
-
-def check_identified(identified, detail: type, procedure: str) -> None:
-    """Refuse anything but the `Identified` that ``procedure``'s ``identify`` returns, its
-    ``detail`` a ``detail`` (what `compensate` and `evaluate` read)."""
-    check_instance(identified, Identified, "identified",
-                   f"the Identified {procedure}.identify(measurements) returns")
-    check_instance(identified.detail, detail, "identified",
-                   f"an Identified with the {detail.__name__} of {procedure}.identify as "
-                   "its detail")
 
 
 def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = None

@@ -510,11 +510,13 @@ def test_a_plan_takes_any_two_distinct_tilts_within_the_b_travel():
 @pytest.mark.parametrize(("call", "message"), [
     (lambda: ToolSetting6Axis().measure(None), "key 'lab': expected a machinesim.Lab to run "
      "on, got NoneType None (make one with Lab(machine, errors, seed=...))"),
-    (lambda: ToolSetting6Axis().identify({}), "key 'measurements': expected the Readings "
-     "ToolSetting6Axis.measure(lab) returns, got dict {}"),
+    (lambda: ToolSetting6Axis().identify({}), "key 'measurements': ToolSetting6Axis.identify "
+     "expects the measurements ToolSetting6Axis.measure(lab) returned (a Readings), got dict "
+     "{}"),
     (lambda: ToolSetting6Axis().compensate(Identified({}, None)), "key 'identified': "
-     "expected an Identified with the Identification of ToolSetting6Axis.identify as its "
-     "detail, got NoneType None"),
+     "ToolSetting6Axis.compensate expects the Identified ToolSetting6Axis.identify"
+     "(measurements) returned, its detail an Identification, got an Identified whose detail "
+     "is NoneType None"),
     (lambda: ToolSetting6Axis(plan=None), "key 'plan': expected a Plan "
      "(machinesim.cam.tool_setting_plates), e.g. Plan(), got NoneType None"),
     (lambda: ToolSetting6Axis(machine=5), "key 'machine': expected the name of a 6-axis X Y Z "
@@ -524,6 +526,37 @@ def test_the_python_api_refuses_arguments_of_the_wrong_kind(call, message):
     """Each was a bare AttributeError from deep inside."""
     with pytest.raises(InputError) as caught:
         call()
+    assert str(caught.value) == message
+
+
+SIX_PROGRAMS = ("key 'programs': ToolSetting6Axis.evaluate expects the programs "
+                "ToolSetting6Axis.compensate(identified) returned (a dict of "
+                "'04_a_axis_compensated' (a Program), '05_c_axis_compensated' (a Program) and "
+                "'06_b_axis_compensated' (a Program)), got ")
+
+
+@pytest.mark.parametrize(("detail", "programs", "message"), [
+    ("found", {}, "key 'identified': ToolSetting6Axis.evaluate expects the Identified "
+     "ToolSetting6Axis.identify(measurements) returned, its detail an Identification, got an "
+     "Identified whose detail is str 'found'"),
+    (None, {}, SIX_PROGRAMS + "a dict without '04_a_axis_compensated', "
+     "'05_c_axis_compensated' and '06_b_axis_compensated'"),
+    (None, [], SIX_PROGRAMS + "list []"),
+    (None, {"04_a_axis_compensated": None, "05_c_axis_compensated": None,
+            "06_b_axis_compensated": None},
+     SIX_PROGRAMS + "a dict whose '04_a_axis_compensated' is NoneType None"),
+])
+def test_evaluate_refuses_what_identify_and_compensate_did_not_give(detail, programs, message):
+    """evaluate without compensate's programs raised KeyError '04_a_axis_compensated' (after
+    cutting the plates measure cut again, when the detail holds them), a list a TypeError,
+    None in place of a program the cutter's refusal (key 'program', no step named), another
+    detail a refusal naming no step: now each names the step and is refused before anything
+    is cut (machinesim.procedures.step_inputs)."""
+    if detail is None:  # the kind identify gives, with no readings
+        detail = ident.Identification(0.0, None, None, None, None)
+    lab = Lab(MACHINE, ErrorModel(), noise=False)
+    with pytest.raises(InputError) as caught:
+        ToolSetting6Axis().evaluate(lab, Identified({}, detail), programs)
     assert str(caught.value) == message
 
 

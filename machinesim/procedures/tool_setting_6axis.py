@@ -50,7 +50,6 @@ from machinesim.experiment import (
     Evaluation,
     Figure,
     Identified,
-    check_identified,
     check_instance,
     check_lab,
     fit_notes,
@@ -70,6 +69,11 @@ from machinesim.identification.tool_setting_6axis_fit import fit_check
 from machinesim.identification.tool_setting_6axis_uncertainty import after_std, propagated_std
 from machinesim.machines import load_machine
 from machinesim.nc import Program
+from machinesim.procedures.step_inputs import (
+    check_identified,
+    check_measurements,
+    check_programs,
+)
 from machinesim.procedures.tool_setting_6axis_reading import a_direction, read_plate, touch_off_z
 from machinesim.units import M_PER_NM, M_PER_UM, from_si
 
@@ -254,8 +258,7 @@ class ToolSetting6Axis:
         ``tool.y``, ``tool.z`` (d, with dZ from the B tilts), ``location.C.EX0C``,
         ``location.C.EY0C`` (e).
         """
-        check_instance(measurements, Readings, "measurements",
-                       "the Readings ToolSetting6Axis.measure(lab) returns")
+        check_measurements(measurements, "ToolSetting6Axis", Readings)
         m = measurements
         found = identify(m.z_touch, m.a, m.c, m.b, SET_LENGTH, self.plan.theta2,
                          self.plan.theta3, mark_at=mark_point(), registration=m.registration)
@@ -279,7 +282,7 @@ class ToolSetting6Axis:
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The A, C and B plate programs rewritten by the identified d and e (`COMPENSATED`
         names); no touch-off needed: the tool length is dZ."""
-        check_identified(identified, Identification, "ToolSetting6Axis")
+        check_identified(identified, "ToolSetting6Axis", "compensate", Identification)
         cuts = plate_cuts(self.plan)
         compensation = identified.detail.compensation
         return {COMPENSATED[s]: compensate_program(cuts[s].program, self._machine(),
@@ -293,7 +296,8 @@ class ToolSetting6Axis:
         the lab hands them back, `machinesim.Lab.cut`), with their programs, then the
         compensated ones."""
         check_lab(lab)
-        check_identified(identified, Identification, "ToolSetting6Axis")
+        check_identified(identified, "ToolSetting6Axis", "evaluate", Identification)
+        check_programs(programs, "ToolSetting6Axis", COMPENSATED.values())
         machine = self._machine()
         cuts = plate_cuts(self.plan)
         before: Identification = identified.detail
