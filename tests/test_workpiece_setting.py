@@ -21,7 +21,7 @@ from machinesim.cam import crown as cam
 from machinesim.compensation import program_axes
 from machinesim.cutting import clip_to, cut, cut_turned
 from machinesim.exceptions import InputError
-from machinesim.experiment import run
+from machinesim.experiment import Identified, run
 from machinesim.identification import workpiece_setting as ws
 from machinesim.identification import workpiece_setting_uncertainty as wsu
 from machinesim.identification.workpiece_setting import Identification
@@ -38,6 +38,8 @@ from machinesim.nc import ProgramBuilder
 from machinesim.procedures.workpiece_setting import (
     ProbePlan,
     RobotLoadedWorkpiece,
+    SettingIdentification,
+    WorkpieceMeasurements,
     eqs_5_to_7_program,
     model_based_program,
     read_sphere,
@@ -700,3 +702,72 @@ def test_the_scenario_ends_a_machinesim_error_with_one_line(tmp_path):
     assert result.stderr.startswith("workpiece_setting: error: "), result.stderr
     assert "Traceback" not in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+def _grooves() -> Identified:
+    """An Identified of the grooves workpiece (its other fields unread by the refusals)."""
+    return Identified({}, SettingIdentification(None, None, None, "grooves"))
+
+
+WP_PROGRAMS = ("key 'programs': RobotLoadedWorkpiece.evaluate expects the programs "
+               "RobotLoadedWorkpiece.compensate(identified) returned (a dict of ")
+
+
+@pytest.mark.parametrize(("call", "message"), [
+    (lambda: RobotLoadedWorkpiece().measure(None), "key 'lab': expected a machinesim.Lab to "
+     "run on, got NoneType None (make one with Lab(machine, errors, seed=...))"),
+    (lambda: RobotLoadedWorkpiece().identify({}), "key 'measurements': RobotLoadedWorkpiece."
+     "identify expects the measurements RobotLoadedWorkpiece.measure(lab) returned (a "
+     "WorkpieceMeasurements), got dict {}"),
+    (lambda: RobotLoadedWorkpiece().identify(WorkpieceMeasurements("grooves", None, None)),
+     "key 'measurements': RobotLoadedWorkpiece.identify expects the measurements of the "
+     "'crown' workpiece (RobotLoadedWorkpiece('crown').measure(lab) returned), got those of "
+     "the 'grooves' workpiece"),
+    (lambda: RobotLoadedWorkpiece().compensate(None), "key 'identified': RobotLoadedWorkpiece."
+     "compensate expects the Identified RobotLoadedWorkpiece.identify(measurements) returned, "
+     "got NoneType None"),
+    (lambda: RobotLoadedWorkpiece().compensate(Identified({}, {})), "key 'identified': "
+     "RobotLoadedWorkpiece.compensate expects the Identified RobotLoadedWorkpiece.identify"
+     "(measurements) returned, its detail a SettingIdentification, got an Identified whose "
+     "detail is dict {}"),
+    (lambda: RobotLoadedWorkpiece().evaluate(None, None, {}), "key 'lab': expected a "
+     "machinesim.Lab to run on, got NoneType None (make one with Lab(machine, errors, "
+     "seed=...))"),
+    (lambda: RobotLoadedWorkpiece().evaluate(Lab(MACHINE, noise=False),
+                                             _grooves(), {}),
+     "key 'identified': RobotLoadedWorkpiece.evaluate expects the Identified of the 'crown' "
+     "workpiece (RobotLoadedWorkpiece('crown').identify(measurements) returned), got one of "
+     "the 'grooves' workpiece"),
+    (lambda: RobotLoadedWorkpiece("grooves").evaluate(Lab(MACHINE, noise=False),
+                                                      _grooves(), {}),
+     WP_PROGRAMS + "'grooves_compensated' (a Program) and 'grooves_compensated_model' (a "
+     "Program)), got a dict without 'grooves_compensated' and 'grooves_compensated_model'"),
+    (lambda: RobotLoadedWorkpiece("grooves", after_only=True).evaluate(
+        Lab(MACHINE, noise=False), _grooves(),
+        {"grooves_compensated": None}),
+     WP_PROGRAMS + "'grooves_compensated' (a Program)), got a dict whose "
+     "'grooves_compensated' is NoneType None"),
+])
+def test_each_step_refuses_what_the_step_before_did_not_give(call, message):
+    """Each was an AttributeError or a KeyError from inside the step ('NoneType' object has
+    no attribute 'machine', 'dict' object has no attribute 'readings', ...), and the grooves'
+    measurements or setting went through a crown procedure's steps unremarked (a setting is
+    one load's: it compensated the crown's program with the grooves workpiece's). Now each
+    step names itself and what it expected (machinesim.procedures.step_inputs), before
+    anything is probed or cut."""
+    with pytest.raises(InputError) as caught:
+        call()
+    assert str(caught.value) == message
+
+
+def test_a_setting_found_on_the_grooves_compensates_the_grooves_only():
+    """The detail keeps the workpiece its readings came from: the grooves' setting gives
+    the grooves' two programs, and a crown procedure refuses it."""
+    procedure = RobotLoadedWorkpiece("grooves")
+    identified = procedure.identify(procedure.measure(Lab(MACHINE, noise=False)))
+    assert identified.detail.experiment == "grooves"
+    assert set(procedure.compensate(identified)) == {"grooves_compensated",
+                                                      "grooves_compensated_model"}
+    with pytest.raises(InputError, match="expects the Identified of the 'crown' workpiece .*"
+                       "got one of the 'grooves' workpiece$"):
+        RobotLoadedWorkpiece("crown").compensate(identified)

@@ -62,7 +62,7 @@ from machinesim.cam.crown import (
 )
 from machinesim.cutting import clip_to, cut
 from machinesim.exceptions import InputError
-from machinesim.experiment import Evaluation, Identified, fit_notes
+from machinesim.experiment import Evaluation, Identified, check_lab, fit_notes
 from machinesim.identification.fit import Estimate
 from machinesim.identification.workpiece_setting import (
     Identification,
@@ -83,6 +83,12 @@ from machinesim.procedures.sphere_probing import (
     probe_axes,
     read_sphere,
     read_spheres,
+)
+from machinesim.procedures.step_inputs import (
+    check_identified,
+    check_measurements,
+    check_programs,
+    refuse,
 )
 from machinesim.procedures.workpiece_setting_figures import (
     PAPER_GROOVE_SPREAD_NM,  # noqa: F401 (importable from here, as before the split)
@@ -158,11 +164,15 @@ class SettingIdentification:
         The same parameters by `machinesim.identification.fit` on the same readings.
     machine : Machine
         The machine the probe moved on (nominal kinematics), for the compensation.
+    experiment : str
+        Which workpiece's readings it came from (``"grooves"`` or ``"crown"``): a setting
+        is one load's, and compensates that workpiece's program only.
     """
 
     found: Identification
     check: Estimate
     machine: object
+    experiment: str
 
     def agreement(self) -> dict[str, float]:
         """Fit minus eqs for each parameter, SI."""
@@ -271,6 +281,7 @@ class RobotLoadedWorkpiece:
 
     def measure(self, lab) -> WorkpieceMeasurements:
         """Probe the three spheres at C = 0 and 180 deg (`read_spheres`)."""
+        check_lab(lab)
         check_machine(lab.machine)
         probe = lab.touch_probe(self.workpiece(lab), label=self.experiment)
         return WorkpieceMeasurements(self.experiment, lab.machine,
@@ -283,6 +294,8 @@ class RobotLoadedWorkpiece:
         spheres' stated tolerance of place through eqs 1-4 (`design_std`) and what is
         stated of each contact: the probe's pre-travel and ball form, the spheres' form
         (`contact_std`)."""
+        check_measurements(measurements, "RobotLoadedWorkpiece", WorkpieceMeasurements)
+        self._check_experiment("identify", "measurements", measurements.experiment)
         readings = measurements.readings
         found = identify(readings)
         check = fit_setting(measurements.machine, readings, found)
@@ -295,7 +308,8 @@ class RobotLoadedWorkpiece:
                for name, value in std.items()}
         return Identified({name: (value, std[name]) for name, value in
                            parameters(found).items()},
-                          SettingIdentification(found, check, measurements.machine),
+                          SettingIdentification(found, check, measurements.machine,
+                                                measurements.experiment),
                           notes=fit_notes("fit_setting", check, sigma_leaves_out=(
                               "the spheres' stated place and form scatter"
                               if scatter is not None else None)))
@@ -303,6 +317,7 @@ class RobotLoadedWorkpiece:
     def compensate(self, identified: Identified) -> dict[str, Program]:
         """The experiment's program rewritten by eqs 5-7 (and, for the grooves, also by the
         model-based route, which the paper does not have)."""
+        self._check_identified("compensate", identified)
         found, machine = identified.detail.found, identified.detail.machine
         nominal = self.nominal_program(found)
         programs = {f"{self.experiment}_compensated":
@@ -314,6 +329,9 @@ class RobotLoadedWorkpiece:
 
     def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
         """Cut before and after compensation, read with the lab's microscope."""
+        check_lab(lab)
+        self._check_identified("evaluate", identified)
+        check_programs(programs, "RobotLoadedWorkpiece", self._compensated_names())
         found = identified.detail.found
         extra = {"identification": _identification_details(identified),
                  "nose_correction_mm": self.nose / MM}
@@ -323,6 +341,29 @@ class RobotLoadedWorkpiece:
         else:
             evaluation = self._crown(lab, found, programs)
         return replace(evaluation, details={**evaluation.details, **extra})
+
+    def _check_identified(self, step: str, identified) -> None:
+        check_identified(identified, "RobotLoadedWorkpiece", step, SettingIdentification)
+        self._check_experiment(step, "identified", identified.detail.experiment)
+
+    def _check_experiment(self, step: str, key: str, experiment) -> None:
+        """Refuse in ``step`` what ``key`` holds of another workpiece (``experiment``) than
+        this procedure's: its setting is another load's, its spheres other spheres."""
+        if experiment != self.experiment:
+            what, made = {"measurements": ("measurements", "measure(lab)"),
+                          "identified": ("Identified", "identify(measurements)")}[key]
+            refuse("RobotLoadedWorkpiece", step, key,
+                   f"the {what} of the {self.experiment!r} workpiece (RobotLoadedWorkpiece("
+                   f"{self.experiment!r}).{made} returned)",
+                   f"{'those' if key == 'measurements' else 'one'} of the {experiment!r} "
+                   "workpiece")
+
+    def _compensated_names(self) -> tuple[str, ...]:
+        """The programs of `compensate` that `evaluate` cuts."""
+        if self.experiment == "crown":
+            return ("crown_compensated",)
+        return ("grooves_compensated",) + (() if self.after_only
+                                           else ("grooves_compensated_model",))
 
     # ----------------------------------------------------------------------- programs
 
