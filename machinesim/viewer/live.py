@@ -192,6 +192,8 @@ class LiveSession:
             except subprocess.TimeoutExpired:
                 self.process.kill()
                 self.process.wait()
+        if self.process.stdin is not None:
+            self.process.stdin.close()  # the pipe that told the server this process lives
 
     def __enter__(self) -> LiveSession:
         return self
@@ -230,8 +232,9 @@ def replay_count(frames) -> int:
 
 
 def server_command(port: int | None = None) -> list[str]:
-    """The command that runs the loopback server (`machinesim.viewer.server`)."""
-    command = [sys.executable, "-u", "-m", "machinesim.viewer.server"]
+    """The command that runs the loopback server (`machinesim.viewer.server`), which ends
+    when its stdin does (`start_server` keeps the pipe's write end)."""
+    command = [sys.executable, "-u", "-m", "machinesim.viewer.server", "--until-stdin-ends"]
     return command if port is None else [*command, "--port", str(port)]
 
 
@@ -241,9 +244,15 @@ def start_server(port: int | None = None) -> LiveSession:
     The server has `START_TIMEOUT_S` to print its two URLs: past it, it is ended (which
     ends the wait for its next line too) and a MachineSimError says so, where a server that
     printed nothing hung the command; one that could not start says why (``error=...``).
+
+    The server's stdin is a pipe whose write end only this process holds (the session's
+    ``process.stdin``; Python's descriptors are not inherited, PEP 446): when this process
+    ends, by SIGTERM or SIGKILL too, the server reads end of file and ends
+    (`machinesim.viewer.server.end_with_stdin`), where it had lived on, holding its port.
     """
-    process = subprocess.Popen(server_command(port), stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, errors="replace")
+    process = subprocess.Popen(server_command(port), stdin=subprocess.PIPE,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               errors="replace")
     stderr = StderrTail(process)  # drained from now on: stderr never stalls the server
     late = threading.Event()
 
@@ -269,6 +278,7 @@ def start_server(port: int | None = None) -> LiveSession:
     if len(urls) < 2:
         process.kill()
         process.wait()
+        process.stdin.close()
         why = (f"gave no address within {START_TIMEOUT_S:g} s" if late.is_set()
                else "ended before giving its address")
         last = "" if cause else stderr.last()  # a crash before main's 'error=' (an import)

@@ -4,7 +4,9 @@ meshcat's own server binds its ZeroMQ socket to 127.0.0.1 but its web server (to
 ``listen(port)``) to every interface. This one binds both to the loopback interface and
 serves the scene's page (meshcat's viewer plus the overlay with notes and legends) at the
 URL it prints. Run as ``python -m machinesim.viewer.server [--port PORT]`` (`live.serve`
-does); it prints ``zmq_url=...`` and ``web_url=...`` and runs until interrupted.
+does); it prints ``zmq_url=...`` and ``web_url=...`` and runs until interrupted, or, with
+``--until-stdin-ends`` (`live.serve` passes it), until its standard input reaches its end:
+the process that started it, holding the pipe's other end, has ended (see `end_with_stdin`).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import threading
 
 import tornado.web
 from meshcat.servers.zmqserver import (
@@ -77,9 +80,40 @@ class LoopbackBridge(ZMQWebSocketBridge):
         super().handle_zmq(frames)
 
 
+def end_with_stdin(loop) -> threading.Thread:
+    """Stop ``loop`` (the bridge's tornado IOLoop) once standard input reaches its end.
+
+    `live.start_server` gives the server a pipe for stdin and keeps its write end: when the
+    starting process ends, however it ends (SIGTERM's default action, SIGKILL, a crash, or
+    simply returning), the system closes that end and the read here returns end of file.
+    A server left running had gone on holding its port (7000) as an orphan. This is chosen
+    over Linux's PR_SET_PDEATHSIG, which exists on Linux alone, fires when the *thread* that
+    started the child ends (prctl(2)) and needs a ``preexec_fn`` (not safe with threads,
+    per the subprocess docs); and over polling ``os.getppid()``, which waits a poll
+    interval and on Windows keeps the dead parent's id. A pipe's end of file once no
+    process holds its write end is POSIX read()'s documented rule and holds on Windows too.
+    A process forked from the starter after the server started holds a copy of the write
+    end, and the server lasts until it too has ended.
+    """
+    def watch() -> None:
+        try:
+            while os.read(0, 65536):
+                pass
+        except OSError:
+            pass  # stdin unreadable is as good as ended
+        loop.add_callback(loop.stop)  # the one IOLoop method safe from another thread
+
+    thread = threading.Thread(target=watch, daemon=True, name="machinesim-viewer-stdin")
+    thread.start()
+    return thread
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description="meshcat server on 127.0.0.1 only")
     parser.add_argument("--port", type=int, default=None)
+    parser.add_argument("--until-stdin-ends", action="store_true",
+                        help="end when standard input reaches its end (the process that "
+                             "started the server, holding its other end, has ended)")
     args = parser.parse_args(argv)
     try:
         bridge = LoopbackBridge(port=args.port)
@@ -91,13 +125,15 @@ def main(argv: list[str] | None = None) -> None:
     print(f"web_url={bridge.web_url}", flush=True)
     # nobody reads the pipe after the URLs: a full pipe would stall the server
     sys.stdout = open(os.devnull, "w")
+    if args.until_stdin_ends:
+        end_with_stdin(bridge.ioloop)
     try:
         bridge.run()
     except KeyboardInterrupt:
         pass
 
 
-__all__ = ["LoopbackBridge", "main"]
+__all__ = ["LoopbackBridge", "end_with_stdin", "main"]
 
 if __name__ == "__main__":
     main()
