@@ -379,6 +379,26 @@ def check_instance(value, expected: type | tuple[type, ...], key: str, what: str
                          key=key)
 
 
+def _check_unadjusted(lab) -> None:
+    """Refuse a lab whose tool `Lab.adjust_tool` has moved (an earlier run's alignment:
+    paper 004's `evaluate` does it): `run` compares what a procedure identifies with the
+    errors the lab was made with (`Lab.reveal`, which keeps them as injected), and the
+    machine no longer has those. sts_turning run twice on one lab, or any procedure run on
+    a lab moved by 3 um in Y, identified the tool's Y offset as 0 and reported it against the
+    3 um injected, an error the identification had not made."""
+    moved = getattr(lab, "reveal_adjustments", None)
+    if not callable(moved):  # no Lab (a stand-in of one), or one without an adjuster
+        return
+    moved = np.asarray(moved(), dtype=float)
+    if np.any(moved != 0.0):
+        raise InputError("this lab's tool has been moved by lab.adjust_tool since it was made "
+                         "(an earlier run's alignment, e.g. sts_turning's evaluate): a run "
+                         "compares what it identifies with the errors the lab was made with, "
+                         "which the machine no longer has; expected a lab as made: run each "
+                         "procedure on a new Lab(machine, errors, seed=...) with the same "
+                         "arguments", key="lab")
+
+
 def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = None
         ) -> Result:
     """Drive ``procedure`` on ``lab``: measure, identify, compensate, evaluate.
@@ -387,6 +407,10 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
     ----------
     procedure : Procedure
     lab : machinesim.Lab
+        As made: a lab run on before is run on again as it was (the same labels read the
+        same noise), but one whose tool `Lab.adjust_tool` moved (paper 004's alignment) is
+        refused, an `InputError`: its machine no longer has the errors the result is
+        compared with.
     progress : callable(str), optional
         Told, in one line each, when a step begins and how long it took (for runs of
         minutes: a scenario passes a printer to stderr).
@@ -409,6 +433,7 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
         return value
 
     check_lab(lab)
+    _check_unadjusted(lab)
     if progress is not None and not callable(progress):
         raise InputError(f"Expected progress as a callable(text) or None, got {progress!r:.60}",
                          key="progress")

@@ -659,3 +659,23 @@ def test_run_refuses_a_progress_it_cannot_call_before_measuring():
                                          r"got 5") as info:
         run(ToolRotationArm(), Lab("planer_4axis", noise=False), progress=5)
     assert info.value.key == "progress"
+
+
+def test_run_refuses_a_lab_whose_tool_an_earlier_run_moved():
+    # sts_turning's evaluate aligns the tool (lab.adjust_tool); a second run on that lab, or
+    # any run on a lab so moved, identified what the machine then had (tool.y 0) and
+    # reported it against the 3 um the lab was made with: a 3 um error nobody made
+    from machinesim.experiment import run
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+
+    arm = ToolRotationArm()
+    lab = Lab("planer_4axis", {"tool": {"offset_um": [0.0, 3.0, 2.0]}}, noise=False)
+    first = run(arm, lab)
+    assert first.identified["tool.y"][0] == pytest.approx(3e-6, abs=1e-9)
+    again = run(arm, lab)  # a lab no run moved is run on again as made: the same readings
+    assert again.identified == first.identified
+    lab.adjust_tool((0.0, -3e-6, 0.0))  # as paper 004's alignment moves it
+    with pytest.raises(InputError, match=r"this lab's tool has been moved by lab\.adjust_tool "
+                                         r".*run each procedure on a new Lab") as info:
+        run(arm, lab)
+    assert info.value.key == "lab"
