@@ -437,6 +437,9 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
     if progress is not None and not callable(progress):
         raise InputError(f"Expected progress as a callable(text) or None, got {progress!r:.60}",
                          key="progress")
+    if isinstance(procedure, type):  # its methods are callable, unbound: measure(lab) failed
+        raise InputError(f"expected a procedure, got the class {procedure.__name__} itself; "
+                         f"make one: run({procedure.__name__}(), lab)", key="procedure")
     missing = [name for name in ("measure", "identify", "compensate", "evaluate")
                if not callable(getattr(procedure, name, None))]
     if missing:

@@ -679,3 +679,16 @@ def test_run_refuses_a_lab_whose_tool_an_earlier_run_moved():
                                          r".*run each procedure on a new Lab") as info:
         run(arm, lab)
     assert info.value.key == "lab"
+
+
+def test_run_refuses_a_procedures_class_for_a_procedure():
+    # run(ToolRotationArm, lab), the class for its instance, passed the check (its methods
+    # are callable) and ended in TypeError: measure() missing 1 required positional argument
+    from machinesim.experiment import run
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+
+    with pytest.raises(InputError) as info:
+        run(ToolRotationArm, Lab("planer_4axis", noise=False))
+    assert str(info.value) == ("key 'procedure': expected a procedure, got the class "
+                               "ToolRotationArm itself; make one: run(ToolRotationArm(), lab)")
+    assert info.value.key == "procedure"
