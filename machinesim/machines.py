@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -82,6 +83,13 @@ def load_machine(name_or_path: str | Path) -> Machine:
     ModelError
         For an unknown name, a path that is not a readable file, or a malformed model.
     """
+    if isinstance(name_or_path, Machine):  # str() of it was an 'unknown machine' name
+        raise ModelError(f"got a Machine ({name_or_path.name}), loaded already: use it as it "
+                         "is; expected a machine's name or the path of a .urdf file")
+    if not isinstance(name_or_path, (str, os.PathLike)) or isinstance(name_or_path, bytes):
+        raise ModelError(f"expected a machine's name ({', '.join(list_machines())}) or the "
+                         f"path of a .urdf file, got {type(name_or_path).__name__} "
+                         f"{name_or_path!r:.60}")
     text = str(name_or_path)
     path = Path(text)
     if text.lower().endswith(".xacro"):  # taken for a machine's name, "unknown machine"

@@ -137,6 +137,25 @@ def test_a_xacro_file_is_refused_with_how_to_expand_it(tmp_path):
                                  "mill.urdf.xacro > mill.urdf) and load the .urdf")
 
 
+def test_a_machine_or_no_name_is_refused_as_what_it_is():
+    # str() of each was taken for a name: "unknown machine "Machine('robonano_a0ib',
+    # axes=XYZBC)"" for a machine loaded already, "unknown machine 'None'"
+    machine = load_machine("robonano_a0ib")
+    with pytest.raises(ModelError) as raised:
+        load_machine(machine)
+    assert str(raised.value) == ("got a Machine (robonano_a0ib), loaded already: use it as it "
+                                 "is; expected a machine's name or the path of a .urdf file")
+    shipped = ", ".join(list_machines())
+    for given, shown in ((None, "NoneType None"), (7, "int 7"),
+                         (b"sts_lathe", "bytes b'sts_lathe'")):
+        with pytest.raises(ModelError) as raised:
+            load_machine(given)
+        assert str(raised.value) == (f"expected a machine's name ({shipped}) or the path of a "
+                                     f".urdf file, got {shown}")
+    # a name as str or as a Path is the same machine
+    assert load_machine(Path("sts_lathe")).name == load_machine("sts_lathe").name == "sts_lathe"
+
+
 def test_a_plain_wheel_install_ships_the_models(tmp_path):
     """Build the wheel, install it (no deps) into a folder, load a model from there."""
     wheel_dir = tmp_path / "wheel"
