@@ -229,44 +229,41 @@ def test_a_ctrl_c_a_library_swallowed_still_stops_the_write(tmp_path):
     assert (tmp_path / "part.ply").read_text() == "part"
 
 
+def _a_real_signal_stops_the_write(tmp_path, signum, raised):
+    """Send the process `signum` within `ctrl_c_remembered`: it is raised as `raised`, and
+    a write after it is stopped (nothing written); leaving puts the default action back.
+    Gives what was raised."""
+    before = signal.signal(signum, signal.SIG_DFL)
+    try:
+        with _interrupts.ctrl_c_remembered():
+            with pytest.raises(raised) as stop:
+                os.kill(os.getpid(), signum)
+                time.sleep(1.0)  # the handler raises here, at the latest
+            with pytest.raises(KeyboardInterrupt):
+                _io.write_together([(tmp_path / "part.ply", "part")])
+        assert signal.getsignal(signum) is signal.SIG_DFL
+    finally:
+        signal.signal(signum, before)
+    assert list(tmp_path.iterdir()) == []
+    return stop.value
+
+
 def test_sigterm_is_raised_as_terminated_and_stops_the_write(tmp_path):
     """A real SIGTERM within the block: raised as `Terminated` (a KeyboardInterrupt, so every
     clean-up a Ctrl-C has runs), status 143 and its own word; nothing is written after it,
     and leaving puts the default action back (the process ended where it stood before)."""
-    before = signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    try:
-        with _interrupts.ctrl_c_remembered():
-            with pytest.raises(_interrupts.Terminated) as stop:
-                os.kill(os.getpid(), signal.SIGTERM)
-                time.sleep(1.0)  # the handler raises here, at the latest
-            assert _interrupts.stopped(stop.value) == ("terminated", 128 + 15)
-            assert _interrupts.stopped(KeyboardInterrupt()) == ("interrupted", 128 + 2)
-            with pytest.raises(KeyboardInterrupt):
-                _io.write_together([(tmp_path / "part.ply", "part")])
-        assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
-    finally:
-        signal.signal(signal.SIGTERM, before)
-    assert list(tmp_path.iterdir()) == []
+    stop = _a_real_signal_stops_the_write(tmp_path, signal.SIGTERM, _interrupts.Terminated)
+    assert _interrupts.stopped(stop) == ("terminated", 128 + 15)
+    assert _interrupts.stopped(KeyboardInterrupt()) == ("interrupted", 128 + 2)
 
 
 def test_sighup_is_raised_as_hung_up_and_stops_the_write(tmp_path):
     """A real SIGHUP (the terminal closed) within the block: raised as `HungUp` (a
     `Terminated`, so a live viewer's caller stops too), status 129 and its own word; nothing
     is written after it, and leaving puts the default action back."""
-    before = signal.signal(signal.SIGHUP, signal.SIG_DFL)
-    try:
-        with _interrupts.ctrl_c_remembered():
-            with pytest.raises(_interrupts.HungUp) as stop:
-                os.kill(os.getpid(), signal.SIGHUP)
-                time.sleep(1.0)  # the handler raises here, at the latest
-            assert isinstance(stop.value, _interrupts.Terminated)
-            assert _interrupts.stopped(stop.value) == ("hung up", 128 + 1)
-            with pytest.raises(KeyboardInterrupt):
-                _io.write_together([(tmp_path / "part.ply", "part")])
-        assert signal.getsignal(signal.SIGHUP) is signal.SIG_DFL
-    finally:
-        signal.signal(signal.SIGHUP, before)
-    assert list(tmp_path.iterdir()) == []
+    stop = _a_real_signal_stops_the_write(tmp_path, signal.SIGHUP, _interrupts.HungUp)
+    assert isinstance(stop, _interrupts.Terminated)
+    assert _interrupts.stopped(stop) == ("hung up", 128 + 1)
 
 
 def test_a_write_removes_the_temporary_files_of_killed_runs_and_only_theirs(tmp_path):
