@@ -20,14 +20,13 @@ the tool and the sizes of the plan and pattern in `machinesim.procedures.tool_ro
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
-from machinesim.cam.prisms import APPROACH_MARGIN_M, CalibrationPlan, PrismPattern
+from machinesim.cam.prisms import CalibrationPlan, PrismPattern
 from machinesim.compensation import map_program, model_based, program_axes
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
@@ -68,6 +67,7 @@ from machinesim.procedures.tool_rotation_arm_sizing import (
     PLAN_EXPECTED,
     PRISM_FLANK_M,
     TOOL,
+    check_pattern_fits,
     deepest_before,
     holder_depth,
     max_capture,
@@ -269,33 +269,7 @@ class ToolRotationArm:
             object.__setattr__(self, "pattern", pattern)
         check_instance(self.pattern, PrismPattern, "pattern",
                        "a PrismPattern (machinesim.cam.prisms), e.g. PrismPattern()")
-        height = pattern_height(self.plan, self.pattern)
-        if self.pattern.height < height:
-            deepest, angle = deepest_before(self.plan, self.pattern)
-            raise InputError(
-                f"the pattern's block is {self.pattern.height:g} m thick "
-                f"(PrismPattern(height=...)), and cut before compensation (the edge touched "
-                f"off at 0 deg) its grooves go down to {deepest:g} m: the depth "
-                f"{self.pattern.depth:g} m and up to {deepest - self.pattern.depth:g} m more at "
-                f"{math.degrees(angle):g} deg (2 x capture x sin(angle / 2)) for an edge offset "
-                f"within the plan's capture {self.plan.capture:g} m; expected a block at least "
-                f"{height:g} m thick ({PATTERN_FLOOR_M:g} m of stock under the deepest "
-                f"groove): give the pattern height={height:g} (PrismPattern(..., height=...)), or "
-                "no pattern (ToolRotationArm sizes the default's block), or a smaller "
-                "CalibrationPlan(capture=...)",
-                key="pattern")
-        clearance = pattern_clearance(self.plan, self.pattern)
-        if self.pattern.clearance < clearance:
-            deepest, angle = deepest_before(self.plan, self.pattern)
-            raise InputError(
-                f"the pattern's rapids cross its block {self.pattern.clearance:g} m up "
-                f"(PrismPattern(clearance=...)), and cut before compensation (the edge touched "
-                f"off at 0 deg) the edge sinks by up to {deepest - self.pattern.depth:g} m at "
-                f"{math.degrees(angle):g} deg (2 x capture x sin(angle / 2)) for an edge offset "
-                f"within the plan's capture {self.plan.capture:g} m; expected a clearance at "
-                f"least {clearance:g} m ({APPROACH_MARGIN_M:g} m over the block's top): give "
-                f"the pattern clearance={clearance:g}, or no pattern (ToolRotationArm sizes the "
-                "default's), or a smaller CalibrationPlan(capture=...)", key="pattern")
+        check_pattern_fits(self.plan, self.pattern)
 
     def measure(self, lab) -> Calibration:
         """Cut the calibration ramps with the nominal program and read them (microscope

@@ -1,7 +1,7 @@
 """Paper 000's tool and the sizes its plan and pattern need: how deep a ramp may go with the
 holder above the stock (`holder_depth`, `max_capture`) and what block and rapid clearance the
 uncompensated prism pattern needs for an edge offset within the plan's capture
-(`deepest_before`, `pattern_height`, `pattern_clearance`).
+(`deepest_before`, `pattern_height`, `pattern_clearance`, `check_pattern_fits`).
 
 The procedure that uses them is `machinesim.procedures.tool_rotation_arm` (which re-exports
 them); docs/procedures/tool_rotation_arm.md gives the geometry.
@@ -21,8 +21,8 @@ from machinesim.tools import VTool
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = [
-    "PATTERN_FLOOR_M", "PLAN_EXPECTED", "PRISM_FLANK_M", "TOOL", "deepest_before",
-    "holder_depth", "max_capture", "pattern_clearance", "pattern_height",
+    "PATTERN_FLOOR_M", "PLAN_EXPECTED", "PRISM_FLANK_M", "TOOL", "check_pattern_fits",
+    "deepest_before", "holder_depth", "max_capture", "pattern_clearance", "pattern_height",
 ]
 
 #: Height of the prism's flanks (m): the tool's V reaches 3 mm from its edge (6 mm across),
@@ -122,3 +122,35 @@ def pattern_clearance(plan: CalibrationPlan, pattern: PrismPattern) -> float:
     deepest, _ = deepest_before(plan, pattern)
     return (math.ceil(round((deepest - pattern.depth + APPROACH_MARGIN_M) / M_PER_UM, 6))
             * M_PER_UM)
+
+
+def check_pattern_fits(plan: CalibrationPlan, pattern: PrismPattern) -> None:
+    """Refuse a ``pattern`` whose block is thinner than `pattern_height` or whose rapids
+    are lower than `pattern_clearance` for ``plan``'s capture (`InputError`, key
+    ``pattern``), the block first; each message gives the depth the uncompensated cut may
+    reach (`deepest_before`), the size needed and what to give instead."""
+    height = pattern_height(plan, pattern)
+    clearance = pattern_clearance(plan, pattern)
+    if pattern.height >= height and pattern.clearance >= clearance:
+        return
+    deepest, angle = deepest_before(plan, pattern)
+    before = "and cut before compensation (the edge touched off at 0 deg)"
+    offset = (f"at {math.degrees(angle):g} deg (2 x capture x sin(angle / 2)) for an edge "
+              f"offset within the plan's capture {plan.capture:g} m")
+    smaller = "or a smaller CalibrationPlan(capture=...)"
+    if pattern.height < height:
+        raise InputError(
+            f"the pattern's block is {pattern.height:g} m thick (PrismPattern(height=...)), "
+            f"{before} its grooves go down to {deepest:g} m: the depth {pattern.depth:g} m "
+            f"and up to {deepest - pattern.depth:g} m more {offset}; expected a block at "
+            f"least {height:g} m thick ({PATTERN_FLOOR_M:g} m of stock under the deepest "
+            f"groove): give the pattern height={height:g} (PrismPattern(..., height=...)), or "
+            f"no pattern (ToolRotationArm sizes the default's block), {smaller}",
+            key="pattern")
+    raise InputError(
+        f"the pattern's rapids cross its block {pattern.clearance:g} m up "
+        f"(PrismPattern(clearance=...)), {before} the edge sinks by up to "
+        f"{deepest - pattern.depth:g} m {offset}; expected a clearance at least "
+        f"{clearance:g} m ({APPROACH_MARGIN_M:g} m over the block's top): give the pattern "
+        f"clearance={clearance:g}, or no pattern (ToolRotationArm sizes the default's), "
+        f"{smaller}", key="pattern")
