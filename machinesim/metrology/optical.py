@@ -275,13 +275,19 @@ class _Profiler:
         NaN, and fit_v_groove then said 'Expected at least 5 finite samples, got 0'. A part
         given as a height field (a turned face) has heights everywhere.
 
-        Judged on the part as given (the workpiece frame), not as the instrument's hidden
-        registration places it, and said so: judged there, whether a line at the threshold
-        was refused, and the extent the message gave, told where the registration was."""
-        vertices, _ = mesh_arrays(part)
-        if len(vertices) == 0:
+        Judged on the part as the instrument sees it (in its frame when it has a
+        registration): "every sample would read NaN" is then what the reading would do. A
+        line over the part as really placed reads, as on a real stage, where one judged on
+        the part as given was refused: paper 003's profiles put on ridges found in the
+        instrument's frame lie up to tens of um off the given corner window under the
+        registration's 1 mrad at 190 mm. Whether a line reads is a measurement a real
+        instrument gives too (an edge found by reading across it); the message names the
+        part's extent as given, in the workpiece frame, not where the hidden registration put
+        it (which it had printed to 0.1 um)."""
+        seen, _ = mesh_arrays(self._surface(part))
+        if len(seen) == 0:
             return
-        lo, hi = vertices[:, :2].min(axis=0), vertices[:, :2].max(axis=0)
+        lo, hi = seen[:, :2].min(axis=0), seen[:, :2].max(axis=0)
         if window:
             size = b - a
             over = np.clip(np.minimum(b, hi) - np.maximum(a, lo), 0.0, None)
@@ -304,6 +310,8 @@ class _Profiler:
             arguments, of = "start and end", "of it"
         if not missed and share >= ON_PART_SHARE:
             return
+        given = mesh_arrays(part)[0]
+        lo, hi = given[:, :2].min(axis=0), given[:, :2].max(axis=0)
         mm = (lo / M_PER_MM).tolist(), (hi / M_PER_MM).tolist()
         spans = (f"the part spans x {mm[0][0]:.6g} .. {mm[1][0]:.6g} mm, y {mm[0][1]:.6g} .. "
                  f"{mm[1][1]:.6g} mm (in m: x {lo[0]:.6g} .. {hi[0]:.6g}, y {lo[1]:.6g} .. "
