@@ -142,5 +142,28 @@ def _ctrl_c_deferred() -> Iterator[None]:
         previous[number](number, None)
 
 
+@contextmanager
+def sigint_blocked() -> Iterator[None]:
+    """SIGINT blocked in this thread within the block, and so in every thread and process
+    started from it (a signal mask is inherited by new threads, and across fork and exec):
+    a local cluster's nannies and workers, a budget's rerun processes. Signals the process
+    is sent meanwhile stay pending, and reach it as the block ends. Elsewhere than the main
+    thread on POSIX, the block runs as it is."""
+    if not hasattr(signal, "pthread_sigmask") or \
+            threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    from multiprocessing import resource_tracker
+
+    # its first start (in the first worker's spawn) unblocks SIGINT in the thread that
+    # starts it, and so in every thread started from that one: started here, before
+    resource_tracker.ensure_running()
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
 __all__ = ["EXIT_HUNG_UP", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "HungUp", "Terminated",
-           "ctrl_c_remembered", "stopped", "written_before"]
+           "ctrl_c_remembered", "sigint_blocked", "stopped", "written_before"]

@@ -15,9 +15,7 @@ import itertools
 import logging
 import math
 import os
-import signal
 import sys
-import threading
 import time
 import warnings
 from collections.abc import Iterable
@@ -25,7 +23,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from machinesim._cores import usable_cores
-from machinesim._interrupts import _ctrl_c_deferred
+from machinesim._interrupts import _ctrl_c_deferred, sigint_blocked
 from machinesim.campaign.distributions import Distribution, parse_distribution, parse_vary
 from machinesim.campaign.preflight import check_before_trials
 from machinesim.campaign.results import (
@@ -265,7 +263,7 @@ def _client(workers, scheduler, client, trials: int | None = None):
         environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
         environ.pop("MALLOC_TRIM_THRESHOLD_", None)
         with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}), \
-                _ctrl_c_deferred(), _sigint_blocked():
+                _ctrl_c_deferred(), sigint_blocked():
             # A Ctrl-C while the workers start waits until the cluster stands, and then
             # closes it (below); the workers start with SIGINT blocked, so that the
             # terminal's Ctrl-C, which reaches its whole process group, reaches none of them
@@ -289,29 +287,6 @@ def _client(workers, scheduler, client, trials: int | None = None):
         cluster.close()
         raise
     return client, cluster
-
-
-@contextlib.contextmanager
-def _sigint_blocked():
-    """SIGINT blocked in this thread within the block, and so in every thread and process
-    started from it (a signal mask is inherited by new threads, and across fork and exec):
-    a local cluster's nannies and workers. Signals the process is sent meanwhile stay
-    pending, and reach it as the block ends. Elsewhere than the main thread on POSIX, the
-    block runs as it is."""
-    if not hasattr(signal, "pthread_sigmask") or \
-            threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    from multiprocessing import resource_tracker
-
-    # its first start (in the first worker's spawn) unblocks SIGINT in the thread that
-    # starts it, and so in every thread started from that one: started here, before
-    resource_tracker.ensure_running()
-    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, before)
 
 
 def _one_core_each(dask_worker) -> None:
