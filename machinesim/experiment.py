@@ -379,24 +379,45 @@ def check_instance(value, expected: type | tuple[type, ...], key: str, what: str
                          key=key)
 
 
-def _check_unadjusted(lab) -> None:
-    """Refuse a lab whose tool `Lab.adjust_tool` has moved (an earlier run's alignment:
-    paper 004's `evaluate` does it): `run` compares what a procedure identifies with the
-    errors the lab was made with (`Lab.reveal`, which keeps them as injected), and the
-    machine no longer has those. sts_turning run twice on one lab, or any procedure run on
-    a lab moved by 3 um in Y, identified the tool's Y offset as 0 and reported it against the
-    3 um injected, an error the identification had not made."""
+def _check_as_made(lab) -> None:
+    """Refuse a lab that is no longer as it was made: its tool moved by `Lab.adjust_tool`, or
+    its servo loops set by `Lab.tune_servo` to others than it was made with (an earlier run's
+    doing: paper 004's `evaluate` aligns the tool, then tunes the servo before Case 4).
+
+    `run` compares what a procedure identifies with the errors the lab was made with
+    (`Lab.reveal`, which keeps them as injected), and the machine no longer has those when its
+    tool was moved: sts_turning run twice on one lab, or any procedure run on a lab moved by
+    3 um in Y, identified the tool's Y offset as 0 and reported it against the 3 um injected,
+    an error the identification had not made. And a run cuts each case with the loops the lab
+    has then: on a tuned lab sts_turning's Case 1 ("before", the control as found) was cut
+    with the "after" loops. Moves summing to zero, or loops set back to those it was made
+    with (the same, or an equal `PIDServo`), leave the lab as made.
+    """
+    from machinesim.servo import PIDServo
+
+    changed, why = [], []
     moved = getattr(lab, "reveal_adjustments", None)
-    if not callable(moved):  # no Lab (a stand-in of one), or one without an adjuster
-        return
-    moved = np.asarray(moved(), dtype=float)
-    if np.any(moved != 0.0):
-        raise InputError("this lab's tool has been moved by lab.adjust_tool since it was made "
-                         "(an earlier run's alignment, e.g. sts_turning's evaluate): a run "
-                         "compares what it identifies with the errors the lab was made with, "
-                         "which the machine no longer has; expected a lab as made: run each "
-                         "procedure on a new Lab(machine, errors, seed=...) with the same "
-                         "arguments", key="lab")
+    # not callable: no Lab (a stand-in of one), or one without an adjuster or servo loops
+    if callable(moved) and np.any(np.asarray(moved(), dtype=float) != 0.0):
+        changed.append("tool has been moved by lab.adjust_tool")
+        why.append("a run compares what it identifies with the errors the lab was made "
+                   "with, which the machine no longer has")
+    servo = getattr(lab, "reveal_servo", None)
+    if callable(servo):
+        now, made = servo(), servo(as_made=True)
+        same = now is made or (isinstance(now, PIDServo) and isinstance(made, PIDServo)
+                               and now == made)
+        if not same:
+            changed.append("servo loops have been tuned by lab.tune_servo" if not changed
+                           else "its servo loops tuned by lab.tune_servo")
+            why.append("a run cuts its cases on the control as the lab was made (a "
+                       "'before' case with the loops as found), which it no longer has")
+    if changed:
+        raise InputError(f"this lab's {' and '.join(changed)} since it was made (an earlier "
+                         f"run's doing, e.g. sts_turning's evaluate): {'; and '.join(why)}; "
+                         "expected a lab as made: run each procedure on a new "
+                         "Lab(machine, errors, seed=..., servo=...) with the same arguments",
+                         key="lab")
 
 
 def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = None
@@ -408,9 +429,10 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
     procedure : Procedure
     lab : machinesim.Lab
         As made: a lab run on before is run on again as it was (the same labels read the
-        same noise), but one whose tool `Lab.adjust_tool` moved (paper 004's alignment) is
-        refused, an `InputError`: its machine no longer has the errors the result is
-        compared with.
+        same noise), but one whose tool `Lab.adjust_tool` moved (paper 004's alignment) or
+        whose servo loops `Lab.tune_servo` set to others (paper 004's Case 4) is refused, an
+        `InputError`: its machine no longer has the errors the result is compared with, nor
+        the control its cases are cut on.
     progress : callable(str), optional
         Told, in one line each, when a step begins and how long it took (for runs of
         minutes: a scenario passes a printer to stderr).
@@ -433,7 +455,7 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
         return value
 
     check_lab(lab)
-    _check_unadjusted(lab)
+    _check_as_made(lab)
     if progress is not None and not callable(progress):
         raise InputError(f"Expected progress as a callable(text) or None, got {progress!r:.60}",
                          key="progress")

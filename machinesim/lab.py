@@ -153,6 +153,7 @@ class Lab:
         if servo is not None:
             _check_servo(self.machine, servo)
         self.__servo = servo
+        self.__servo_as_made = servo  # `tune_servo` sets others; `reveal_servo(as_made=True)`
         self.__issued: dict[str, int] = {}
         self.__instruments: dict[str, dict] = {}
         self.__artefacts: dict[str, object] = {}
@@ -462,10 +463,14 @@ class Lab:
         """The sum of the tool moves `adjust_tool` made (tool_mount X, Y, Z, m), as made."""
         return self.__adjusted.copy()
 
-    def reveal_servo(self):
-        """The lab's servo loops (None: ideal axes). For tests and reports, never for
-        identification."""
-        return self.__servo
+    def reveal_servo(self, *, as_made: bool = False):
+        """The lab's servo loops (None: ideal axes): those set now (default), or with
+        ``as_made`` those the lab was made with (before any `tune_servo`). For tests and
+        reports, never for identification."""
+        if not isinstance(as_made, bool | np.bool_):  # "no" is no True
+            raise InputError(f"Expected as_made as True or False, got {as_made!r:.60}",
+                             key="as_made")
+        return self.__servo_as_made if as_made else self.__servo
 
     def reveal_background(self) -> ErrorModel:
         """The machine's own residual errors the lab added (none with the switch off)."""

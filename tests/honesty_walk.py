@@ -50,6 +50,8 @@ def truth_of(lab) -> dict[int, str]:
         if value is not None:
             found[id(value)] = f"lab.{name}()"
     found[id(lab.reveal(background=False))] = "lab.reveal(background=False)"
+    if lab.reveal_servo(as_made=True) is not None:
+        found[id(lab.reveal_servo(as_made=True))] = "lab.reveal_servo(as_made=True)"
     for label, actual in lab.reveal_artefacts().items():
         found[id(actual)] = f"lab.reveal_artefacts()[{label!r}]"
     return found

@@ -692,3 +692,49 @@ def test_run_refuses_a_procedures_class_for_a_procedure():
     assert str(info.value) == ("key 'procedure': expected a procedure, got the class "
                                "ToolRotationArm itself; make one: run(ToolRotationArm(), lab)")
     assert info.value.key == "procedure"
+
+
+def test_run_refuses_a_lab_whose_servo_an_earlier_run_tuned():
+    # sts_turning's evaluate tunes the servo to Table 6 "after" before Case 4; run again on
+    # that lab (noise off, no tool error: no tool move to refuse), its Case 1, the control
+    # "as found", was cut with the "after" loops. A lab set back to the loops it was made
+    # with (the very ones, or equal ones) is as made: run stops here only at its first step
+    from machinesim.experiment import run
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+    from machinesim.servo import table6_servo
+
+    class Started(Exception):
+        pass
+
+    def stop(text):
+        raise Started(text)
+
+    axes = ("x", "y", "z", "a")
+    before = table6_servo("before", axis_order=axes)
+    lab = Lab("planer_4axis", noise=False, servo=before)
+    with pytest.raises(Started, match="measure"):
+        run(ToolRotationArm(), lab, progress=stop)
+    lab.tune_servo(table6_servo("after", axis_order=axes))
+    assert lab.reveal_servo(as_made=True) is before
+    with pytest.raises(InputError, match=r"this lab's servo loops have been tuned by "
+                                         r"lab\.tune_servo since it was made .*'before' case "
+                                         r".*run each procedure on a new Lab") as info:
+        run(ToolRotationArm(), lab, progress=stop)
+    assert info.value.key == "lab"
+    lab.tune_servo(table6_servo("before", axis_order=axes))  # equal to those it was made with
+    with pytest.raises(Started, match="measure"):
+        run(ToolRotationArm(), lab, progress=stop)
+    lab.tune_servo(before)
+    with pytest.raises(Started, match="measure"):
+        run(ToolRotationArm(), lab, progress=stop)
+    lab.adjust_tool((1e-6, 0.0, 0.0))
+    lab.tune_servo(table6_servo("after", axis_order=axes))
+    with pytest.raises(InputError, match=r"this lab's tool has been moved by lab\.adjust_tool "
+                                         r"and its servo loops tuned by lab\.tune_servo since"):
+        run(ToolRotationArm(), lab, progress=stop)
+    ideal = Lab("planer_4axis", noise=False)  # no loops as made: any set is a tuning
+    ideal.tune_servo(table6_servo("before", axis_order=axes))
+    with pytest.raises(InputError, match=r"servo loops have been tuned"):
+        run(ToolRotationArm(), ideal, progress=stop)
+    with pytest.raises(InputError, match=r"Expected as_made as True or False, got 'no'"):
+        ideal.reveal_servo(as_made="no")
