@@ -392,6 +392,15 @@ def _check_as_made(lab) -> None:
     has then: on a tuned lab sts_turning's Case 1 ("before", the control as found) was cut
     with the "after" loops. Moves summing to zero, or loops set back to those it was made
     with (the same, or an equal `PIDServo`), leave the lab as made.
+
+    Nothing else a lab's methods change needs refusing, as each leaves the machine as made
+    and a labelled reading as it was: `make_artefacts` draws a label's spheres from streams
+    of (seed, label) alone, so a label asked for again, even after another design under it,
+    gives the same spheres; an instrument draws its noise and imperfections from
+    (seed, kind, label), afresh each time it is handed out, and only an unlabelled one is
+    numbered in the order asked for ("microscope/1" on a second run: another draw of the
+    same noise, not another machine; the shipped procedures label theirs); `cut` hands back
+    a cut made before only for the same errors, servo and inputs (`machinesim.cutting.memo`).
     """
     from machinesim.servo import PIDServo
 
