@@ -771,3 +771,27 @@ def test_a_setting_found_on_the_grooves_compensates_the_grooves_only():
     with pytest.raises(InputError, match="expects the Identified of the 'crown' workpiece .*"
                        "got one of the 'grooves' workpiece$"):
         RobotLoadedWorkpiece("crown").compensate(identified)
+
+
+def test_a_setting_saved_before_it_named_its_workpiece_still_compensates():
+    """A SettingIdentification pickled before 17fd31d kept ``experiment`` (a saved result's
+    detail) holds no such attribute: every step's workpiece check raised AttributeError
+    ('SettingIdentification' object has no attribute 'experiment'). Loaded now it names
+    no workpiece (None) and compensates as it did then: the same programs as the setting
+    made today."""
+    import pickle
+
+    from machinesim.nc import format_program
+
+    procedure = RobotLoadedWorkpiece("grooves")
+    identified = procedure.identify(procedure.measure(Lab(MACHINE, noise=False)))
+    old = SettingIdentification.__new__(SettingIdentification)  # the old class's state
+    old.__dict__.update({k: v for k, v in vars(identified.detail).items()
+                         if k != "experiment"})
+    loaded = pickle.loads(pickle.dumps(Identified(identified.parameters, old,
+                                                  identified.notes)))
+    assert loaded.detail.experiment is None
+    programs = procedure.compensate(loaded)
+    assert {name: format_program(p) for name, p in programs.items()} == {
+        name: format_program(p) for name, p in procedure.compensate(identified).items()}
+    assert pickle.loads(pickle.dumps(identified)).detail.experiment == "grooves"

@@ -166,13 +166,20 @@ class SettingIdentification:
         The machine the probe moved on (nominal kinematics), for the compensation.
     experiment : str
         Which workpiece's readings it came from (``"grooves"`` or ``"crown"``): a setting
-        is one load's, and compensates that workpiece's program only.
+        is one load's, and compensates that workpiece's program only. None in one saved
+        (pickled) before this field was kept: which workpiece it was is not known, and each
+        workpiece's steps take it, as they did then.
     """
 
     found: Identification
     check: Estimate
     machine: object
-    experiment: str
+    experiment: str | None
+
+    def __setstate__(self, state: dict) -> None:
+        # a detail pickled before `experiment` was kept holds no such key; without it every
+        # step that checks the workpiece raised AttributeError on an old saved result
+        self.__dict__.update({"experiment": None, **state})
 
     def agreement(self) -> dict[str, float]:
         """Fit minus eqs for each parameter, SI."""
@@ -348,8 +355,9 @@ class RobotLoadedWorkpiece:
 
     def _check_experiment(self, step: str, key: str, experiment) -> None:
         """Refuse in ``step`` what ``key`` holds of another workpiece (``experiment``) than
-        this procedure's: its setting is another load's, its spheres other spheres."""
-        if experiment != self.experiment:
+        this procedure's: its setting is another load's, its spheres other spheres. None (a
+        setting saved before it named its workpiece) is taken: nothing says whose it is."""
+        if experiment is not None and experiment != self.experiment:
             what, made = {"measurements": ("measurements", "measure(lab)"),
                           "identified": ("Identified", "identify(measurements)")}[key]
             refuse("RobotLoadedWorkpiece", step, key,
