@@ -1061,6 +1061,22 @@ def test_one_line_of_repeated_words_is_one_problem_read_to_its_cap():
         parse_program("G00 X0. Y0. Z1.\n" + "M08 " * 20_000 + "\nM30\n", "long.nc")
 
 
+def test_a_line_of_as_many_words_as_the_cap_and_a_comment_is_read_whole():
+    # 501e290's cap was checked before a comment was: 10,000 words (not more) and a
+    # '(comment)' or ';comment' were refused as "more than 10000 words and problems" at
+    # the comment; a comment adds no word, so only a word or problem beyond the cap stops it
+    from machinesim.nc.lexer import MAX_LINE_ITEMS, tokenize
+
+    line = "X1. " * MAX_LINE_ITEMS
+    for tail in ("(end)", ";end", "(a) (b)", ""):
+        words, problems = tokenize(line + tail, "long.nc", 1)
+        assert (len(words), problems) == (MAX_LINE_ITEMS, []), tail
+    words, problems = tokenize(line + "(end) Y2.", "long.nc", 1)
+    assert len(words) == MAX_LINE_ITEMS and len(problems) == 1
+    assert problems[0].column == 4 * MAX_LINE_ITEMS + 7 and problems[0].key == "Y2."
+    assert "more than 10000 words and problems" in problems[0].message
+
+
 def test_a_latin1_byte_outside_comments_is_named_as_not_utf8(tmp_path):
     # a no-break space saved as Latin-1 (0xA0) between two words: it had been called an
     # "unexpected character '\ufffd'", the replacement the reader decoded it to

@@ -79,12 +79,6 @@ def tokenize(raw: str, source: str, line: int, *,
         c = raw[i]
         if c in _BLANK:
             i += 1
-        elif len(words) + len(problems) >= MAX_LINE_ITEMS:
-            fail(f"more than {MAX_LINE_ITEMS} words and problems on one line, so reading of "
-                 "the line stopped here: a block holds one word per address letter, one G "
-                 "code per group and a few M codes; was it many blocks whose line ends were "
-                 f"lost? ({len(raw) - i} characters not read)", i + 1, brief(raw[i:i + 20]))
-            break
         elif c == "(":
             close = raw.find(")", i + 1)
             if close < 0:
@@ -98,6 +92,14 @@ def tokenize(raw: str, source: str, line: int, *,
             i = close + 1
         elif c == ";":
             _after_end_of_block(raw, i, fail)
+            break
+        # after the comments, which add no word: a line of MAX_LINE_ITEMS words and its
+        # comment is read whole, and only a word or problem beyond them stops the reading
+        elif len(words) + len(problems) >= MAX_LINE_ITEMS:
+            fail(f"more than {MAX_LINE_ITEMS} words and problems on one line, so reading of "
+                 "the line stopped here: a block holds one word per address letter, one G "
+                 "code per group and a few M codes; was it many blocks whose line ends were "
+                 f"lost? ({len(raw) - i} characters not read)", i + 1, brief(raw[i:i + 20]))
             break
         elif c == ")":
             fail("')' without an opening '('", i + 1, ")")
