@@ -187,6 +187,11 @@ def test_groove_phase_finds_a_triangle_waves_phase_from_its_read_samples_and_ref
                 r"\(0\.0,\)"),                 # a bare ValueError (unpacking)
     ((("0", float("nan")),), r"Expected each window centre as \(x, y\), two finite numbers "
                              r"in m, got \('0', nan\)"),
+    # a str or a bool had been float()ed and cut: ('0.1', '0') at (100, 0) mm, True as 1 m
+    ((("0.1", "0"),), r"Expected each window centre as \(x, y\), two finite numbers in m, "
+                      r"got \('0\.1', '0'\)"),
+    (((0.0, False),), r"Expected each window centre as \(x, y\), two finite numbers in m, "
+                      r"got \(0\.0, False\)"),
 ])
 def test_windows_off_the_plate_or_no_xy_pairs_are_refused_before_any_cut(windows, words):
     lab = machinesim.Lab("grooving_4axis", noise=False)

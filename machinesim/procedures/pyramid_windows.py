@@ -25,6 +25,7 @@ import numpy as np
 
 from machinesim.cam.pyramids import PAPER_PLAN, PyramidPlan, pyramid_program, workpiece_axes
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_number
 
 __all__ = ["WINDOWS", "PyramidWindow", "capture", "cut_and_read", "path_errors", "read_window",
            "v_flanks"]
@@ -314,9 +315,9 @@ def _check_windows(windows, plan: PyramidPlan) -> list[tuple[float, float]]:
     half, (low, high) = 0.5 * plan.window, STOCK_XY
     out = []
     for centre in windows:
-        try:
-            cx, cy = (float(c) for c in centre)
-        except (TypeError, ValueError):
+        try:  # numbers as every length is taken (as_number): no str, no bool
+            cx, cy = (as_number(c, "windows") for c in centre)
+        except (TypeError, ValueError, InputError):
             cx = cy = math.nan
         if not (math.isfinite(cx) and math.isfinite(cy)):
             raise InputError(f"Expected each window centre as (x, y), two finite numbers in m, "
