@@ -150,9 +150,25 @@ def _temp_head(path: Path) -> str:
 
 
 def _temp_prefix(path: Path) -> str:
-    """The start of a temporary file's name beside ``path``: ``.NAME.PID-`` (the name cut to
-    `_TEMP_STEM` characters), so that a later write can tell those of a killed run."""
-    return f"{_temp_head(path)}{os.getpid()}-"
+    """The start of a temporary file's name beside ``path``: ``.NAME.PID@HOST-`` (the name
+    cut to `_TEMP_STEM` characters, HOST `_process_space`), so that a later write can tell
+    those of a killed run."""
+    return f"{_temp_head(path)}{os.getpid()}@{_process_space()}-"
+
+
+def _process_space() -> str:
+    """Eight hex digits naming the space this process's id is counted in: the host's name
+    and, on Linux, the PID namespace (``/proc/self/ns/pid``). A folder shared by another
+    host (NFS) or another container holds temporary files whose PID means nothing here: a
+    live run's there is no process here, and was removed as a killed run's."""
+    import socket
+
+    try:
+        namespace = os.readlink("/proc/self/ns/pid")
+    except OSError:
+        namespace = ""
+    name = f"{socket.gethostname()}\0{namespace}"
+    return hashlib.sha1(name.encode("utf-8", "surrogateescape")).hexdigest()[:8]
 
 
 #: Characters `tempfile.mkstemp` puts between a prefix and a suffix.
@@ -161,17 +177,21 @@ _TEMP_RANDOM = 8
 
 def _clear_stale_temps(path: Path) -> None:
     """Remove the temporary files a killed run (SIGKILL, a power loss: nothing could run)
-    left beside ``path``: ``.NAME.PID-XXXXXXXX.tmp`` of a process that is gone
+    left beside ``path``: ``.NAME.PID@HOST-XXXXXXXX.tmp`` of a process that is gone
     (`pid_alive`). They were never renamed into place, so no reader took them for ``path``,
-    but they stayed for good, one per killed write. Those of live runs are left alone."""
+    but they stayed for good, one per killed write. Those of live runs are left alone, and
+    those of another host or PID namespace (HOST not this process's `_process_space`),
+    whose process this one cannot ask about."""
     head = _temp_head(path)
     try:
         names = [e.name for e in os.scandir(path.parent) if e.name.startswith(head)]
     except OSError:
         return
+    space = f"@{_process_space()}"
     for name in names:
         pid, dash, rest = name[len(head):].partition("-")
-        if (dash and pid.isdigit() and rest.endswith(".tmp")
+        pid, at, host = pid.partition("@")
+        if (dash and pid.isdigit() and f"{at}{host}" == space and rest.endswith(".tmp")
                 and len(rest) == _TEMP_RANDOM + len(".tmp") and int(pid) != os.getpid()
                 and not pid_alive(int(pid))):
             try:

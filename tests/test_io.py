@@ -288,11 +288,36 @@ def test_a_write_removes_the_temporary_files_of_killed_runs_and_only_theirs(tmp_
         killed.wait()
     left = [p.name for p in tmp_path.iterdir() if p.name != "part.ply"]
     assert len(left) == 1 and left[0].startswith(".part.ply.") and left[0].endswith(".tmp")
-    live = tmp_path / f".part.ply.{os.getppid()}-abcd1234.tmp"  # pytest's parent: running
+    # pytest's parent: running
+    live = tmp_path / f".part.ply.{os.getppid()}@{_io._process_space()}-abcd1234.tmp"
     live.write_text("being written")
     _io.write_atomic(part, "new")
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["part.ply", live.name])
     assert part.read_text() == "new"
+
+
+def test_a_write_leaves_the_temporary_files_of_another_hosts_runs(tmp_path, monkeypatch):
+    """A folder shared with another host (NFS) or container holds its live runs' temporary
+    files, whose PID is no process here: the cleaner of killed runs' files removed them,
+    and that run's rename then failed. Another host's staged file is left alone."""
+    import socket
+    import subprocess
+    import sys
+
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended.wait()
+    dead = ended.pid  # no process here (unless reused within this test)
+    assert not _io.pid_alive(dead)
+    part = tmp_path / "part.ply"
+    with monkeypatch.context() as other_host:  # the other host's run, staging part.ply
+        other_host.setattr(socket, "gethostname", lambda: "another-host")
+        other_host.setattr(os, "getpid", lambda: dead)
+        staged = Path(_io._stage(part, b"the other host's part"))
+    _io.write_atomic(part, "ours")
+    assert staged.read_bytes() == b"the other host's part"
+    assert part.read_text() == "ours"
+    os.replace(staged, part)  # the other host's rename goes through
+    assert part.read_bytes() == b"the other host's part"
 
 
 def test_a_sigterm_during_a_folder_swap_waits_for_the_swap(tmp_path, monkeypatch):
