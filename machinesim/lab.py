@@ -157,7 +157,7 @@ class Lab:
         self.__issued: dict[str, int] = {}
         self.__instruments: dict[str, dict] = {}
         self.__artefacts: dict[str, object] = {}
-        self.__workpieces: dict[str, tuple] = {}  # label -> (digest of stock and design, part)
+        self.__workpieces: dict[str, tuple] = {}  # label -> (digest of what made it, part)
 
     def __repr__(self) -> str:
         told = f", realism={self.realism}" if self.__told else ""
@@ -289,8 +289,9 @@ class Lab:
         label : str
             Names the workpiece: the same label gives the same actual spheres (one physical
             workpiece, made once), whatever else the lab did before. Asked for again with the
-            same stock and design, the lab hands back the very part it made (a procedure
-            keeps no workpiece, nor the lab, between its steps: `measure` and `evaluate` ask).
+            same stock and design (and seed and realism), the lab hands back the very part
+            it made (a procedure keeps no workpiece, nor the lab, between its steps:
+            `measure` and `evaluate` ask).
 
         Returns
         -------
@@ -300,7 +301,9 @@ class Lab:
             raise InputError(f"Expected design as a machinesim.realism.SphereArtefacts, got "
                              f"{type(design).__name__}", key="design")
         label = self._label("artefact", label, numbered=False)
-        key = CUTS.key(stock, design)  # None (made every time) for a stock that won't pickle
+        # None (made every time) for a stock that won't pickle; the seed and the realism
+        # decide the spheres too, and both are the lab's plain attributes, set anew at will
+        key = CUTS.key(stock, design, self.seed, self.realism.artefact_errors)
         made = self.__workpieces.get(label)
         if key is not None and made is not None and made[0] == key:
             return made[1]

@@ -583,3 +583,25 @@ def test_the_readme_example_errors_run_in_a_lab_with_the_background():
     expected = (injected.component["X"]["EYX"].evaluate(x)
                 + own.component["X"]["EYX"].evaluate(x))
     np.testing.assert_allclose(machine_eyx, expected, rtol=0, atol=TABULATED_SUM)
+
+
+def test_artefacts_asked_again_after_the_seed_or_realism_changed_are_made_again(flat):
+    """make_artefacts hands back the part it made for the same label, stock and design; the
+    seed and the realism decide the spheres too, and a lab whose seed or realism was set
+    anew handed back the part drawn under the old ones (reveal_artefacts likewise)."""
+    design = SphereArtefacts(np.array([[1.2, 1.0, 0.0], [3.8, 1.0, 0.0]]) * MM, 0.4 * MM)
+    errors = Realism.with_only("artefact_errors")
+    lab = Lab("robonano_a0ib", seed=2, realism=errors)
+    first = lab.make_artefacts(flat, design, label="crown")
+    assert lab.make_artefacts(flat, design, label="crown") is first  # asked again: the same
+    lab.seed = 3
+    fresh = Lab("robonano_a0ib", seed=3, realism=errors)
+    expected = fresh.make_artefacts(flat, design, label="crown")
+    assert _same_mesh(lab.make_artefacts(flat, design, label="crown"), expected)
+    assert np.array_equal(lab.reveal_artefacts()["crown"].centres,
+                          fresh.reveal_artefacts()["crown"].centres)
+    lab.realism = Realism.ideal()
+    assert np.array_equal(lab.make_artefacts(flat, design, label="crown").mesh()[0],
+                          Lab("robonano_a0ib", seed=3).make_artefacts(
+                              flat, design, label="crown").mesh()[0])
+    assert np.array_equal(lab.reveal_artefacts()["crown"].centres, design.centres)
