@@ -407,12 +407,15 @@ def _folder_stem(target: Path) -> str:
 
 def _sibling_kind(entry: str, stem: str) -> tuple[str, int] | None:
     """(``"partial"`` or ``"old"``, pid) when ``entry`` is a staging or swapped-out folder
-    of ``stem`` (``.STEM.partial-PID.TOKEN``, ``.STEM.old-PID.TOKEN``), else None."""
+    of ``stem`` made in this process's PID space (``.STEM.partial-PID@HOST.TOKEN``,
+    ``.STEM.old-PID@HOST.TOKEN``, HOST `_process_space`), else None: another host's or
+    container's PID is no process here, and its live run's folder was removed as stale."""
     for kind in ("partial", "old"):
         head = f".{stem}.{kind}-"
         if entry.startswith(head):
-            pid, _, _ = entry[len(head):].partition(".")
-            if pid.isdigit():
+            marked, _, _ = entry[len(head):].partition(".")
+            pid, at, host = marked.partition("@")
+            if pid.isdigit() and at and host == _process_space():
                 return kind, int(pid)
     return None
 
@@ -485,7 +488,7 @@ def stdout_to_null(stream) -> None:
 class StagedFolder:
     """A folder written whole or not at all.
 
-    Its files are written into a staging folder beside it (``.NAME.partial-PID.TOKEN``, in
+    Its files are written into a staging folder beside it (``.NAME.partial-PID@HOST.TOKEN``, in
     the same parent, so on the same file system); `commit` swaps that folder in: the old
     folder is renamed aside, the staging folder renamed to the name, the old one removed. A
     Ctrl-C during the swap is held back until it is done. `discard` removes the staging
@@ -523,8 +526,8 @@ class StagedFolder:
         self._begin(seed=False)
 
     def _sibling(self, kind: str) -> Path:
-        return self.target.parent / (f".{_folder_stem(self.target)}.{kind}-{os.getpid()}."
-                                     f"{secrets.token_hex(4)}")
+        return self.target.parent / (f".{_folder_stem(self.target)}.{kind}-{os.getpid()}@"
+                                     f"{_process_space()}.{secrets.token_hex(4)}")
 
     def _begin(self, seed: bool) -> None:
         path = self._sibling("partial")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from argparse import Namespace
@@ -10,7 +11,7 @@ from argparse import Namespace
 import numpy as np
 import pytest
 
-from machinesim._io import clear_stale_folders
+from machinesim._io import StagedFolder, _process_space, clear_stale_folders
 from machinesim.exceptions import InputError
 from machinesim.report import ReportFolder, check_summary, check_units
 from machinesim.scenario_runs import (
@@ -190,11 +191,11 @@ def test_a_stale_staging_folder_of_a_killed_run_is_removed(tmp_path):
     out = tmp_path / "report"
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                           capture_output=True, text=True, check=True).stdout.strip()
-    stale = tmp_path / f".report.partial-{dead}.0badf00d"
+    stale = tmp_path / f".report.partial-{dead}@{_process_space()}.0badf00d"
     stale.mkdir()
     (stale / "half.ply").write_text("half")
     # killed in the middle of a swap: the previous report aside, none under the name
-    aside = tmp_path / f".report.old-{dead}.0badf00d"
+    aside = tmp_path / f".report.old-{dead}@{_process_space()}.0badf00d"
     aside.mkdir()
     (aside / "summary.json").write_text('{"files": ["summary.json"]}')
     clear_stale_folders(out)
@@ -202,6 +203,23 @@ def test_a_stale_staging_folder_of_a_killed_run_is_removed(tmp_path):
     stale.mkdir()
     assert scenario_status(_report({"a.md": "a\n"}), Namespace(out=out)) == 0
     assert _siblings(out) == [] and (out / "a.md").read_text() == "a\n"
+
+
+def test_another_hosts_live_staging_folder_is_left_alone(tmp_path, monkeypatch):
+    """A report folder shared with another host (NFS) or container: its live run's staging
+    folder carries a PID that is no process here, and was removed as a killed run's."""
+    import socket
+
+    out = tmp_path / "report"
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended.wait()
+    with monkeypatch.context() as other_host:  # the other host's run begins its report
+        other_host.setattr(socket, "gethostname", lambda: "another-host")
+        other_host.setattr(os, "getpid", lambda: ended.pid)
+        theirs = StagedFolder(out)
+    (theirs.path / "half.ply").write_text("being written")
+    clear_stale_folders(out)
+    assert (theirs.path / "half.ply").read_text() == "being written"
 
 
 def test_a_folder_that_is_not_a_report_is_refused_not_replaced(tmp_path, capsys):
