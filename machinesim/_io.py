@@ -156,18 +156,27 @@ def _temp_prefix(path: Path) -> str:
     return f"{_temp_head(path)}{os.getpid()}@{_process_space()}-"
 
 
+#: The host's id, stable across reboots (systemd's machine-id(5); the D-Bus copy is the same).
+MACHINE_ID_FILE = "/etc/machine-id"
+
+
 def _process_space() -> str:
-    """Eight hex digits naming the space this process's id is counted in: the host's name
-    and, on Linux, the PID namespace (``/proc/self/ns/pid``). A folder shared by another
-    host (NFS) or another container holds temporary files whose PID means nothing here: a
-    live run's there is no process here, and was removed as a killed run's."""
+    """Eight hex digits naming the space this process's id is counted in: the host's name,
+    its machine id (`MACHINE_ID_FILE`, where there is one: two hosts may share a name, a
+    distribution's default one) and, on Linux, the PID namespace
+    (``/proc/self/ns/pid``; the first one's number is the same on every host). A folder
+    shared by another host (NFS) or another container holds temporary files whose PID means
+    nothing here: a live run's there is no process here, and was removed as a killed run's."""
     import socket
 
-    try:
-        namespace = os.readlink("/proc/self/ns/pid")
-    except OSError:
-        namespace = ""
-    name = f"{socket.gethostname()}\0{namespace}"
+    parts = [socket.gethostname()]
+    for read in (lambda: Path(MACHINE_ID_FILE).read_text(encoding="ascii").strip(),
+                 lambda: os.readlink("/proc/self/ns/pid")):
+        try:
+            parts.append(read())
+        except (OSError, ValueError):
+            parts.append("")
+    name = "\0".join(parts)
     return hashlib.sha1(name.encode("utf-8", "surrogateescape")).hexdigest()[:8]
 
 

@@ -320,6 +320,25 @@ def test_a_write_leaves_the_temporary_files_of_another_hosts_runs(tmp_path, monk
     assert part.read_bytes() == b"the other host's part"
 
 
+def test_a_write_leaves_the_temporary_files_of_a_host_of_the_same_name(tmp_path, monkeypatch):
+    """Two hosts may share a name (a distribution's default) and the first PID namespace's
+    number (the same on every Linux host): their machine ids tell them apart."""
+    import subprocess
+    import sys
+
+    other_id = tmp_path / "machine-id"
+    other_id.write_text("0123456789abcdef0123456789abcdef\n")
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended.wait()
+    part = tmp_path / "part.ply"
+    with monkeypatch.context() as other_host:
+        other_host.setattr(_io, "MACHINE_ID_FILE", str(other_id), raising=False)
+        other_host.setattr(os, "getpid", lambda: ended.pid)
+        staged = Path(_io._stage(part, b"theirs"))
+    _io.write_atomic(part, "ours")
+    assert staged.read_bytes() == b"theirs" and part.read_text() == "ours"
+
+
 def test_a_sigterm_during_a_folder_swap_waits_for_the_swap(tmp_path, monkeypatch):
     """SIGTERM while the staged folder is renamed in: the swap finishes (the new folder in
     place, no staging or old folder beside it), and `Terminated` is raised after."""
