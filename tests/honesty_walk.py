@@ -10,6 +10,7 @@ procedure's ``identify`` and ``compensate`` hold (the procedure itself, the meas
 
 from __future__ import annotations
 
+import functools
 import types
 from collections import deque
 
@@ -58,9 +59,17 @@ def truth_of(lab) -> dict[int, str]:
 
 
 def _children(obj):
-    if isinstance(obj, str | bytes | int | float | complex | bool | type(None) | type
+    if isinstance(obj, type):
+        if obj.__module__ != "builtins":  # a class's own attributes: a cache kept there
+            yield from ((f".{name}", value) for name, value in vars(obj).items())
+        return
+    if isinstance(obj, str | bytes | int | float | complex | bool | type(None)
                   | types.ModuleType | Machine):
         return  # a Machine's private caches: the door docs/lab.md names and leaves
+    if isinstance(obj, functools.partial):
+        yield ".func", obj.func
+        yield ".args", obj.args
+        yield ".keywords", obj.keywords
     if isinstance(obj, np.ndarray):
         if obj.dtype == object:
             yield from ((f"[{i}]", v) for i, v in enumerate(obj.ravel()))
@@ -84,6 +93,7 @@ def _children(obj):
     if isinstance(obj, list | tuple | set | frozenset | deque):
         yield from ((f"[{i}]", v) for i, v in enumerate(obj))
         return
+    yield ".__class__", type(obj)
     for name, value in getattr(obj, "__dict__", {}).items():
         yield f".{name}", value
     for cls in type(obj).__mro__:

@@ -139,6 +139,16 @@ def _binds(value, truth) -> bool:
 
 
 
+def _probed():
+    from machinesim.nc import ProgramBuilder
+
+    return ProgramBuilder(1).rapid(X=1e-3, Y=1e-3, Z=1e-3).build(), "v:90", "block:10x10x2"
+
+
+#: The cut the cheats measure: (program, tool, stock).
+PROBED = _probed()
+
+
 class _Cheat:
     """A procedure that keeps its lab (``keep``) or reads the machine's binding cache
     (``peek``): what the walk and the poison must catch."""
@@ -147,11 +157,9 @@ class _Cheat:
         self.how = how
 
     def measure(self, lab):
-        from machinesim.nc import ProgramBuilder
-
-        program = ProgramBuilder(1).rapid(X=1e-3, Y=1e-3, Z=1e-3).build()
+        program = PROBED[0]
         lab.encoders().record(program)  # the machine binds nothing yet: the probe does
-        lab.touch_probe(lab.cut(program, "v:90", "block:10x10x2")[0])
+        lab.touch_probe(lab.cut(*PROBED)[0])
         if self.how == "keep":
             self.lab = lab
         return {"machine": lab.machine}
@@ -177,6 +185,25 @@ def test_the_walk_and_the_poison_catch_what_they_must():
     found = doors({"procedure": keep, "measurements": measurements},
                   {**handing.handed, id(handing): "the lab", **truth_of(lab)})
     assert found == ["procedure.lab -> the lab"]
+    # kept where an instance's attributes do not show: in its class, or in a partial
+    import functools
+
+    class Stash(_Cheat):
+        parts: list = []
+
+        def measure(self, lab):
+            measured = super().measure(lab)
+            self.later = functools.partial(print, lab.microscope())
+            Stash.parts.append(lab.cut(*PROBED)[0])  # the cut measure made, handed back
+            return measured
+
+    stash = Stash("stash")
+    measurements = stash.measure(handing)
+    found = doors({"procedure": stash, "measurements": measurements},
+                  {**handing.handed, id(handing): "the lab", **truth_of(lab)})
+    assert sorted(found) == sorted([
+        "procedure.later.args[0] -> lab.microscope(...)[0] (Microscope)",
+        "procedure.__class__.parts[0] -> lab.cut(...)[0] (Part)"]), found
     peek.measure(lab)  # the door the poison covers: the machine's cache binds the truth
     assert any(b.errors is lab.reveal() for b in lab.machine._bindings.values())
     restore = _poisoned(lab)
