@@ -185,7 +185,10 @@ class CalibrationPlan:
 
     A field left None (search, clearance, spacing, height) is derived again in a copy:
     ``dataclasses.replace(plan, capture=...)`` gets the new capture's, a field given keeps
-    its value.
+    its value. A copy cannot tell a derived value handed back by ``replace`` from one
+    passed by hand, so a value another plan derived, passed on as it is
+    (``CalibrationPlan(capture=0.5e-3, height=plan.height)``), is derived again too: pass
+    ``float(plan.height)`` to keep it.
     """
 
     angles: tuple[float, ...] = tuple(math.radians(a) for a in (0, 10, 20, 30, 40))
