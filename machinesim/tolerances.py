@@ -44,6 +44,16 @@ CHORD_TOLERANCE_M = 1e-9
 PATH_CHORD_SHARE = 0.1
 
 # --- cutting.engine
+#: Largest turn of the tool (rad) between two poses of a path, the turn of its axis for a
+#: round tool (a spin about its own axis moves none of its points): a quarter turn. A sweep
+#: is the hull of its two poses, cut in pieces where the turn tilts the tool across its
+#: straight faces (`machinesim.cutting.tilted_solids`, `tilted_profiles`), each face
+#: measured along its mean normal n0 + n1; that normal stands for the face at both poses
+#: only while the face looks the same way at both (n0 . n1 > 0), a turn under a quarter
+#: turn for every face. Beyond it a point's arc leaves its chord by over 0.29 of its
+#: distance from the axis (1 - cos 45 deg), and at a half turn no face has a mean normal at
+#: all: the hull is then no sweep, not even a rough one.
+MAX_STEP_TURN_RAD = math.pi / 2.0
 #: Sweeps are clipped at z = stock top + CLIP_MARGIN_REL * (largest stock coordinate). The
 #: margin is 10^6 times manifold3d's own tolerance (1e-12 relative), so the clip plane never
 #: merges with the top face, and small enough (10 nm on a 10 mm part) that the slivers by

@@ -80,6 +80,7 @@ from machinesim.exceptions import InputError
 from machinesim.rotations import not_rigid
 from machinesim.tolerances import (
     CLIP_MARGIN_REL,
+    MAX_STEP_TURN_RAD,
     PLANAR_TRAVEL_REL,
     RIGID_TOL,
 )
@@ -214,6 +215,38 @@ def _check_paths(paths) -> list[np.ndarray]:
     return arrays
 
 
+def _check_turns(paths: list[np.ndarray], rotational: bool) -> None:
+    """InputError naming the first pair of consecutive poses between which the tool turns
+    by more than `MAX_STEP_TURN_RAD` (its axis, for a ``rotational`` tool)."""
+    for index, poses in enumerate(paths):
+        if len(poses) < 2:
+            continue
+        r0, r1 = poses[:-1, :3, :3], poses[1:, :3, :3]
+        if rotational:
+            a0, a1 = r0[:, :, 2], r1[:, :, 2]
+            turn = np.arctan2(np.linalg.norm(np.cross(a0, a1), axis=1),
+                              np.einsum("ni,ni->n", a0, a1))
+            what = "the tool's axis tilts"
+        else:
+            # the angle of r1 r0^T, from its trace
+            cosine = (np.einsum("nij,nij->n", r0, r1) - 1.0) / 2.0
+            turn = np.arccos(np.clip(cosine, -1.0, 1.0))
+            what = "the tool turns"
+        far = np.flatnonzero(turn > MAX_STEP_TURN_RAD)
+        if far.size:
+            at = int(far[0])
+            raise InputError(
+                f"path {index}: {what} by {math.degrees(float(turn[at])):.6g} deg from pose "
+                f"{at} to pose {at + 1} in one step, more than "
+                f"{math.degrees(MAX_STEP_TURN_RAD):g} deg: a sweep is cut as the hull of its "
+                "two poses, which stands for the tool's path only while each straight face "
+                "looks the same way at both (its mean normal, by which a tilt is split, "
+                "vanishes at a half turn); give the turn in sub-steps (the NC planner does, "
+                "to its chord tolerance)",
+                key="paths",
+            )
+
+
 def _direction_keys(direction: np.ndarray) -> np.ndarray:
     """Group key per sweep: its XY travel direction modulo pi, in bins; -1 for no XY travel."""
     planar = np.hypot(direction[:, 0], direction[:, 1])
@@ -346,6 +379,7 @@ def remove(
     """
     start = time.perf_counter()
     paths = _check_paths(paths)
+    _check_turns(paths, bool(tool.rotational))
     if method not in ("auto", "boolean"):
         raise InputError(f"method must be 'auto' or 'boolean', got {method!r}", key="method")
     bounds = stock.bounds
