@@ -65,3 +65,18 @@ def test_a_half_turn_about_a_round_tool_s_own_axis_is_no_turn():
     part, _ = remove(stock, FlatEndMill(0.5e-3, chord_tol=1e-5), [spun])
     assert part.volume < stock.volume
 
+
+@pytest.mark.parametrize(("words", "steps"), [("C180.", 4), ("B90. C-180.", 6)])
+def test_a_coarse_chord_tolerance_still_sub_steps_a_turn_by_an_eighth_turn(words, steps):
+    """At a chord tolerance of 1 m (--chord-nm 1e9, the largest taken) every chord rule
+    passes a turn in one step; the planner still cuts it into steps of at most 45 deg, half
+    the engine's quarter turn, counted on the rotary axes' turns added up: 180 / 45 = 4,
+    (90 + 180) / 45 = 6."""
+    from machinesim.motion import plan
+    from machinesim.nc import parse_program
+
+    program = parse_program(f"G90 G21\nG00 X5. Y0. Z0. B0. C0.\nG01 {words} F36000.\nM30\n")
+    q = plan(program, "robonano_ui", chord_tolerance=1.0).segments[1].q
+    assert len(q) - 1 == steps
+    turns = np.abs(np.diff(q, axis=0)).max(axis=0)
+    assert np.all(turns <= math.pi / 4.0 + 1e-12)

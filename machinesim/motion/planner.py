@@ -14,7 +14,7 @@ from machinesim.motion.steps import wrap_steps
 from machinesim.motion.trajectory import IdealServo, ServoModel, Trajectory
 from machinesim.nc.program import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
 from machinesim.nc.rotary_feed import inch_feed_as_written
-from machinesim.tolerances import CHORD_TOLERANCE_M
+from machinesim.tolerances import CHORD_TOLERANCE_M, MAX_STEP_TURN_RAD
 
 _M_PER_MM = 1e-3
 #: A feed move longer than this is noted (`slow_move_notes`): a day for one move is a feed
@@ -254,6 +254,22 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                     f"chord within {chord_tolerance * 1e9:g} nm; raise chord_tolerance "
                     "(--chord-nm on the command line)",
                     source=source, line=int(lines[bad]))
+            # a sub-step turns the tool by at most its rotary axes' turns added up; the
+            # cutting engine takes a sweep for the hull of its two poses only up to
+            # MAX_STEP_TURN_RAD (a quarter turn), which a chord tolerance as coarse as the
+            # tool would pass (--chord-nm 1e9, a C180. in one step): half of it, the
+            # machine's angular errors far inside the rest
+            turn = np.abs(delta[turning][:, rotary]).sum(axis=1)
+            least = np.ceil(turn / (MAX_STEP_TURN_RAD / 2.0))
+            if np.any(least > MAX_SUBSTEPS):
+                bad = int(turning[int(np.argmax(least > MAX_SUBSTEPS))])
+                raise NCProgramError(
+                    f"a rotary move of {math.degrees(float(turn.max())):.6g} deg would need "
+                    f"more than {MAX_SUBSTEPS} sub-steps of at most "
+                    f"{math.degrees(MAX_STEP_TURN_RAD / 2.0):g} deg (what a sweep's hull "
+                    "stands for, with room for the machine's errors); split it into moves",
+                    source=source, line=int(lines[bad]))
+            found = np.maximum(found, least.astype(np.int64))
             found = face_substeps(machine, errors, starts[turning], delta[turning],
                                   np.maximum(found, 1), face_radius, chord_tolerance)
             if np.any(found > MAX_SUBSTEPS):
