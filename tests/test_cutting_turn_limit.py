@@ -80,3 +80,18 @@ def test_a_coarse_chord_tolerance_still_sub_steps_a_turn_by_an_eighth_turn(words
     assert len(q) - 1 == steps
     turns = np.abs(np.diff(q, axis=0)).max(axis=0)
     assert np.all(turns <= math.pi / 4.0 + 1e-12)
+
+
+def test_a_turn_past_a_million_eighth_turns_is_refused_at_its_line():
+    """A block turning C by more than MAX_SUBSTEPS eighth turns (45e6 deg) would need more
+    sub-steps than the planner makes: refused naming that block's turn and line, not the
+    largest turn of the program (here the later, larger one)."""
+    from machinesim.exceptions import NCProgramError
+    from machinesim.motion import plan
+    from machinesim.nc import parse_program
+
+    program = parse_program("G90 G21\nG00 X5. Y0. Z0. B0. C0.\nG01 C45000045. F36000.\n"
+                            "G01 C0.\nG01 C90000000.\nM30\n")
+    with pytest.raises(NCProgramError, match=r"line 3: a rotary move of 4\.5e\+07 deg would "
+                       r"need more than 1000000 sub-steps of at most 45 deg"):
+        plan(program, "robonano_ui", chord_tolerance=1.0)

@@ -261,19 +261,20 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
             # machine's angular errors far inside the rest
             turn = np.abs(delta[turning][:, rotary]).sum(axis=1)
             least = np.ceil(turn / (MAX_STEP_TURN_RAD / 2.0))
-            if np.any(least > MAX_SUBSTEPS):
-                bad = int(turning[int(np.argmax(least > MAX_SUBSTEPS))])
+            bad = _first_beyond(least, turning)
+            if bad is not None:
+                turned = math.degrees(float(turn[np.argmax(least > MAX_SUBSTEPS)]))
                 raise NCProgramError(
-                    f"a rotary move of {math.degrees(float(turn.max())):.6g} deg would need "
-                    f"more than {MAX_SUBSTEPS} sub-steps of at most "
+                    f"a rotary move of {turned:.6g} deg would need more than {MAX_SUBSTEPS} "
+                    "sub-steps of at most "
                     f"{math.degrees(MAX_STEP_TURN_RAD / 2.0):g} deg (what a sweep's hull "
                     "stands for, with room for the machine's errors); split it into moves",
                     source=source, line=int(lines[bad]))
             found = np.maximum(found, least.astype(np.int64))
             found = face_substeps(machine, errors, starts[turning], delta[turning],
                                   np.maximum(found, 1), face_radius, chord_tolerance)
-            if np.any(found > MAX_SUBSTEPS):
-                bad = int(turning[int(np.argmax(found > MAX_SUBSTEPS))])
+            bad = _first_beyond(found, turning)
+            if bad is not None:
                 raise NCProgramError(
                     f"a move that tilts the tool's flat face ({face_radius * 1e3:g} mm across "
                     f"its axis) would need more than {MAX_SUBSTEPS} sub-steps to keep the "
@@ -311,6 +312,13 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     notes = slow_move_notes(durations, kinds, lines, feeds, program)
     return Trajectory(axes, q, t, offsets, kinds_out, lines_out, float(clock[-1]), cutting,
                       notes=notes, peak_lag=peak_lag)
+
+
+def _first_beyond(counts: np.ndarray, moves: np.ndarray) -> int | None:
+    """The first of ``moves`` (indices of blocks) whose sub-step ``counts`` pass
+    `MAX_SUBSTEPS`, for its line in a refusal; None when none does."""
+    over = counts > MAX_SUBSTEPS
+    return int(moves[int(np.argmax(over))]) if np.any(over) else None
 
 
 def _stall_message(stall, paths, axes, rotary, start, delta, tolerance) -> str:
