@@ -179,8 +179,7 @@ class SettingIdentification:
     def __setstate__(self, state: dict) -> None:
         # a detail pickled before `experiment` was kept holds no such key; without it every
         # step that checks the workpiece raised AttributeError on an old saved result
-        for name, value in {"experiment": None, **state}.items():
-            object.__setattr__(self, name, value)
+        self.__dict__.update({"experiment": None, **state})
 
     def agreement(self) -> dict[str, float]:
         """Fit minus eqs for each parameter, SI."""
