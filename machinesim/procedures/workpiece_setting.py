@@ -179,7 +179,8 @@ class SettingIdentification:
     def __setstate__(self, state: dict) -> None:
         # a detail pickled before `experiment` was kept holds no such key; without it every
         # step that checks the workpiece raised AttributeError on an old saved result
-        self.__dict__.update({"experiment": None, **state})
+        for name, value in {"experiment": None, **state}.items():
+            object.__setattr__(self, name, value)
 
     def agreement(self) -> dict[str, float]:
         """Fit minus eqs for each parameter, SI."""
