@@ -205,6 +205,21 @@ def test_turn_and_heights_refuse_what_is_not_a_number(program):
     assert part.heights_at([1e-9], [0.0])[0] == pytest.approx(0.0, abs=1e-9)
 
 
+def test_turn_refuses_a_top_not_finite_or_a_metre_away(program):
+    # top=1e300 was turned without a word: every point the edge never reached read a stock
+    # 1e300 m high; a top in um given as m (5 for 5e-6) likewise
+    for top in (1e300, -1e300, 5.0, -1.5, float("inf"), float("nan")):
+        with pytest.raises(InputError, match=r"key 'top': Expected (a finite top|top within "
+                                             r"\+-1 m .*was it given in mm or um\?\), got)"):
+            turn(program, "sts_lathe", "nose:1.0:90", top=top)
+    lab = machinesim.Lab("sts_lathe", noise=False)
+    with pytest.raises(InputError, match=r"key 'top': Expected top within \+-1 m"):
+        lab.turn(program, top=1e300)
+    # a metre is still a top (the bound itself), a part the tool never reaches: empty
+    _, report = turn(program, "sts_lathe", "nose:1.0:90", top=-1.0)
+    assert report.empty_cut
+
+
 def test_a_spindle_angle_just_past_its_travel_prints_apart_from_the_travel():
     # C 1e5 rad is 5729577.95131 deg to five decimals: value and travel printed alike
     from machinesim.nc import parse_program

@@ -71,6 +71,10 @@ LEAD_IN_S = 3.0
 #: turn beyond which an angle read from poses is ambiguous.
 MOST_C_STEP_RAD = 0.5 * math.pi
 LEAD_IN_SAMPLES = 30
+#: Largest stock top accepted either way (m, workpiece frame): the shipped machines travel
+#: at most 0.5 m, so a top a metre or more from the workpiece's origin is a unit mix-up (a
+#: top in um given as m), as a tool of a metre is (`machinesim.tool_sizes.MAX_TOOL_SIZE_M`).
+MOST_TOP_M = 1.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -175,7 +179,8 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
         Servo loops (``follow(t, q)``, columns in the machine's axis order); None: the axes
         follow exactly.
     top : float
-        The stock's top, m (default 0: the face at Z = 0).
+        The stock's top, m (default 0: the face at Z = 0); finite and within `MOST_TOP_M`
+        (1 m) of 0 either way, else InputError.
     allow_overtravel : bool
         Turn a program that takes an axis outside its travel, listing where, instead of
         refusing it.
@@ -204,6 +209,10 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
                          f"{', '.join(machine.axes)}", key="machine")
     tool = turning_tool(tool)
     top = as_number(top, "top")
+    if abs(top) > MOST_TOP_M:
+        raise InputError(f"Expected top within +-{MOST_TOP_M:g} m (the stock's top in the "
+                         f"workpiece frame, m; the machines travel at most 0.5 m: was it "
+                         f"given in mm or um?), got {top!r}", key="top")
     allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")  # "no" is no True
     errors = None if errors is None else as_error_model(errors)
     machine.check_errors(errors)
