@@ -637,6 +637,38 @@ def test_subprogram_depth_and_recursion_are_refused_before_running():
         parse_program(runaway)
 
 
+#: O0100 selects {code}, then moves X by 1 unit; the main program moves X by 1 after M99.
+UNITS_CALL = ("O1\n{main}G90 G00 X0 Y0\nM98 P100\nG01 X2. F100.\nM30\n"
+              "O100\n{code}\nG91 G01 X1. F10.\nG90\nM99\n")
+
+
+@pytest.mark.parametrize(("main", "code", "was", "now"), [
+    ("G21\n", "G20", "mm", "inch"),
+    ("", "G20", "mm", "inch"),  # no units selected: mm, the reader's default
+    ("G20\n", "G21", "inch", "mm"),
+])
+def test_a_subprogram_switching_g20_g21_is_refused_naming_its_line(main, code, was, now):
+    # the switch had been taken: the main program's X2. after the M99 read as 2 inch
+    # (50.8 mm), in the subprogram's units; FANUC forbids switching within a program
+    text = UNITS_CALL.format(main=main, code=code)
+    line = text.splitlines().index(code) + 1
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text, "prog.nc")
+    assert str(info.value) == (
+        f"prog.nc, line {line}, column 1, key '{code}': {code} in a subprogram switches the "
+        f"units from {was} to {now}: FANUC forbids switching G20/G21 within a program, and "
+        f"the blocks after the M99 would be read in {now}; select the units once, at the "
+        "head of the main program")
+
+
+@pytest.mark.parametrize(("main", "code", "unit"), [("G21\n", "G21", MM), ("", "G21", MM),
+                                                    ("G20\n", "G20", 25.4 * MM)])
+def test_a_subprogram_restating_the_units_in_force_is_read(main, code, unit):
+    program = parse_program(UNITS_CALL.format(main=main, code=code))
+    assert program.targets[:, 0].tolist() == pytest.approx([0.0, unit, 2 * unit],
+                                                           abs=EXACT_M)
+
+
 def test_subprogram_layout_refusals():
     with pytest.raises(NCProgramError, match="has no M99"):
         parse_program("O1\nM30\nO2\nG00 X0\n")

@@ -34,6 +34,7 @@ from machinesim.nc.words import (
     OTHER_CYCLES,
     SINGLE,
     SLOWEST_FEED_M_PER_S,
+    UNITS_IN_SUBPROGRAM,
     CallProblem,
     call_of,
     g_name,
@@ -198,7 +199,11 @@ class Block:
     def apply_modal(self) -> None:
         state, g, line = self.state, self.g_codes, self.line
         if "units" in g:
-            state.inch = g["units"][0] == "G20"
+            code, word = g["units"]
+            if self.depth and state.inch != (code == "G20"):
+                was, now = ("inch", "mm") if state.inch else ("mm", "inch")
+                raise self.fail(UNITS_IN_SUBPROGRAM.format(code=code, was=was, now=now), word)
+            state.inch = code == "G20"
             self.reader.unit_words.setdefault(g["units"][0], line)
         if "distance" in g:
             state.incremental = g["distance"][0] == "G91"

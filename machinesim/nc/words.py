@@ -146,6 +146,13 @@ ARC = ("G02", "G03")
 NON_MOVING = ("G05.1", "G08")
 M99_IN_MAIN = ("M99 in the main program would jump back to its start forever (FANUC); end "
                 "the main program with M30 or M02")
+#: A subprogram's G20/G21 that switches the units in force (`Block.apply_modal`): FANUC
+#: forbids the switch within a program (B-63944EN/02, 8.2: "G20 and G21 must not be switched
+#: during a program"), and a subprogram's units stay in force after its M99.
+UNITS_IN_SUBPROGRAM = ("{code} in a subprogram switches the units from {was} to {now}: FANUC "
+                       "forbids switching G20/G21 within a program, and the blocks after the "
+                       "M99 would be read in {now}; select the units once, at the head of the "
+                       "main program")
 
 
 def integer(word: Word) -> int | None:
