@@ -174,6 +174,44 @@ def test_a_dwell_longer_than_an_hour_is_noted_with_its_word_and_seconds(dwell, w
     assert pickle.loads(pickle.dumps(program)).dwell_words == {3: word[2:-1]}
 
 
+#: A note on the dwell of line {line}, {word} as the note names it, of {seconds} s.
+DWELL_NOTE = ("the dwell of line {line} ({word}) waits {seconds:.6g} s ({hours:.3g} h), more "
+              "than the 1 h a dwell of a program waits: is its time in the unit meant (P "
+              "counts milliseconds without a decimal point, seconds with one; X seconds)?")
+
+
+@pytest.mark.parametrize("holes, line, word, seconds", [
+    # G81 keeps its P for a G82: line 4 writes no P, and the note had named no word at all
+    ("G81 X1. Z-0.1 R1. P5000000 F10.\nG82 X2.\n", 4, "P5000000 of line 3", 5000.0),
+    # a G83's P kept by the G82 after it (Haas's peck dwell of line 3 waits it too: 5000 s)
+    ("G83 X1. Z-0.1 R1. Q0.05 P7000000 F10.\nG82 X2.\n", 3, "P7000000", 7000.0),
+    # a G82 repeated with the P written: its first hole, the P's own line, as before
+    ("G82 X1. Z-0.1 R1. P100 F10.\nX2. P7000000\nX3.\n", 4, "P7000000", 7000.0),
+    # a P given to a G81 (no dwell) between two G82s: the hole after it dwells it
+    ("G82 X1. Z-0.1 R1. P100 F10.\nG81 X2. P6000000\nG82 X3.\n", 5,
+     "P6000000 of line 4", 6000.0),
+])
+def test_a_long_dwell_of_a_kept_cycle_p_names_the_p_and_the_line_it_was_written_on(
+        holes, line, word, seconds):
+    text = f"G90 G21\nG00 X1. Z1.\n{holes}G80\nM30\n"
+    notes = plan(parse_program(text), load_machine("grooving_4axis")).notes
+    assert notes == (DWELL_NOTE.format(line=line, word=word, seconds=seconds,
+                                       hours=seconds / 3600),)
+
+
+def test_a_subprograms_hole_under_two_kept_ps_names_the_p_of_its_longest_dwell():
+    # O100's line 10 drills under the P of line 4 (5000 s), then under that of line 6 (2 s):
+    # its note names P5000000 of line 4, the dwell it is about, not the last P kept
+    text = ("O1\nG90 G21\nG00 X1. Z1.\nG81 X1. Z-0.1 R1. P5000000 F10.\nM98 P100\n"
+            "G81 X1. P2000\nM98 P100\nG80\nM30\nO100\nG82 X2.\nM99\n")
+    program = parse_program(text)
+    assert [float(d) for d in program.dwells if d > 0] == [5000.0, 2.0]
+    assert program.dwell_words[11] == "P5000000 of line 4"
+    assert plan(program, load_machine("grooving_4axis")).notes == (
+        DWELL_NOTE.format(line=11, word="P5000000 of line 4", seconds=5000.0,
+                          hours=5000 / 3600),)
+
+
 def test_a_dwell_of_an_hour_is_not_noted_and_a_built_one_is_noted_without_a_word():
     machine = load_machine("grooving_4axis")
     # 3,600,000 ms is the hour itself: a long settling, not a slip

@@ -394,8 +394,9 @@ def slow_move_notes(durations, kinds, lines, feeds, program=None,
     The feed is the F as ``program`` (these moves from its move ``first`` on) wrote it: in
     inch/min where G20 is in force at the move's line (`Program.unit_words`), with the
     mm/min the planner used beside it, and both where the program selected G20 and G21
-    before it. The dwell's P or X is the word its line wrote (`Program.dwell_words`; none
-    for a program built from moves, or a canned cycle's P kept from an earlier block)."""
+    before it. The dwell's P or X is the word its line wrote (`Program.dwell_words`: a
+    canned cycle's P kept from an earlier block with that block's line; none for a program
+    built from moves)."""
     kinds = np.asarray(kinds)
     notes = []
     linear = np.flatnonzero(kinds == KIND_LINEAR)

@@ -62,6 +62,7 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
         state.cycle_return = None  # a Q without Haas's K. drills without its returns to R
     if "P" in single:
         state.cycle_p = block.dwell_p(single["P"], state.cycle)
+        state.cycle_p_word = f"{single['P'].key} of line {block.line}"
         # Haas's G73/G83 dwell it after the last peck; one kept from a G82 does not
         # make them dwell (FANUC's sequences, docs/nc.md)
         state.peck_dwell = state.cycle in PECKING
@@ -92,6 +93,8 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
     return_z = state.initial_z if state.retract == "G98" else state.cycle_r
     try:
         dwell_s = state.cycle_p if state.peck_dwell or state.cycle == "G82" else 0.0
+        if dwell_s > 0.0 and "P" not in single:
+            _note_kept_p(block, dwell_s)
         steps = drill_steps(state.cycle, r_z=state.cycle_r, bottom_z=state.cycle_z,
                             return_z=return_z, peck=state.cycle_q,
                             variable_peck=state.cycle_pecks, dwell_s=dwell_s,
@@ -114,6 +117,17 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
             else:
                 state.target["Z"] = value
                 block.add(kind, 0.0, block_number)
+
+
+def _note_kept_p(block: Block, dwell_s: float) -> None:
+    """Name, for the dwell note of ``block``'s line (`Program.dwell_words`), the P kept from
+    an earlier block that its hole dwells: ``"P5000000 of line 3"``. A line read more than
+    once (a subprogram) under other kept Ps names the one of its longest dwell, the dwell
+    the note is about."""
+    reader, line = block.reader, block.line
+    if dwell_s > reader.kept_dwells.get(line, 0.0):
+        reader.kept_dwells[line] = dwell_s
+        reader.dwell_words[line] = block.state.cycle_p_word
 
 
 def return_depth(block: Block) -> float:

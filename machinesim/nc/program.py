@@ -171,8 +171,10 @@ class Program:
         reader's default), and for programs built from moves.
     dwell_words : Mapping[int, str]
         The line of each dwell word the text wrote (G04's P or X, a canned cycle's P) -> that
-        word as written (``"P1500"``, ``"X2."``), for notes on a dwell (its time is
-        `dwells`). Empty for programs built from moves.
+        word as written (``"P1500"``, ``"X2."``), and of each hole that dwells a canned
+        cycle's P kept from an earlier block -> that P and its line (``"P1500 of line 3"``;
+        on a line read more than once, the P of its longest dwell), for notes on a dwell
+        (its time is `dwells`). Empty for programs built from moves.
     integer_words : Mapping[str, int]
         The letters of the non-zero lengths and angles written without a decimal point
         (``X1``, ``R5``) -> the first line each appeared on: they read as

@@ -91,6 +91,7 @@ class _State:
     #: the distance mode (G91: True) and line each of R and Z was last given in
     cycle_given: dict = field(default_factory=dict)
     cycle_p: float = 0.0
+    cycle_p_word: str = ""  # that P as written and its line, for a later block's dwell note
     peck_dwell: bool = False  # P given in a G73/G83 block: they dwell it after the last peck
     initial_z: float | None = None
     retract: str = "G98"
@@ -208,6 +209,7 @@ class Reader:
         self.arc_blocks = 0  # G02/G03 blocks run
         self.unit_words: dict[str, int] = {}  # G20/G21 -> first line
         self.dwell_words: dict[int, str] = {}  # line -> its dwell's P or X, as written
+        self.kept_dwells: dict[int, float] = {}  # line -> its longest dwell of a kept P, s
         self.cache: dict[int, list[Word] | None] = {}
         self.after_end: int | None = None  # the first line of text after the closing %
         self.end_mark: int | None = None  # the line of that %, when text follows it
