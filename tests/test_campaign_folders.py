@@ -60,6 +60,25 @@ def test_an_identity_is_of_the_distributions_meaning_not_their_spelling():
     assert campaign_id(bare) == legacy_campaign_id(bare)
 
 
+@pytest.mark.parametrize(("one", "other", "same"), [
+    # 4e-12 apart: one identity (12 digits), yet refused as another campaign on resume,
+    # while each folder took the other's trial files for its own
+    ("tool.y=fixed:1um", "tool.y=fixed:1.000000000004um", True),
+    # 2e-13 apart across a 12th digit: resumed as the same campaign (within 1e-12), yet two
+    # identities, each folder refusing the other's trial files
+    ("tool.y=fixed:1.0000000000049um", "tool.y=fixed:1.0000000000051um", False),
+    ("microscope.sigma=uniform:5nm,60nm", "microscope.sigma=uniform:5 nm,0.06um", True),
+    ("microscope.sigma=10nm", "microscope.sigma=10.00000001nm", False),
+])
+def test_a_folder_resumes_exactly_the_campaigns_whose_trial_files_it_takes(one, other,
+                                                                           same):
+    from machinesim.campaign.results import same_campaign
+
+    a, b = _spec([one]), _spec([other])
+    assert same_campaign(a, b) is same_campaign(b, a) is same
+    assert (campaign_id(a) == campaign_id(b)) is same
+
+
 def test_a_trial_file_of_the_same_campaign_spelt_otherwise_is_this_campaigns(
         begun, tmp_path, monkeypatch):
     # a trial file of the campaign begun with VARY, copied into the folder of the one begun

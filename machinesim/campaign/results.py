@@ -325,35 +325,46 @@ def legacy_campaign_id(spec: dict) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-#: Significant digits of a distribution's SI numbers in a campaign's identity: the units'
-#: factors leave 60nm and 0.06um a last bit apart (6.000000000000001e-08 and 6e-08), which
-#: these digits do not see; `same_campaign` compares within 1e-12 alike.
+#: Significant digits of a distribution's SI numbers in a campaign's meaning (`_parsed`),
+#: which both `campaign_id` and `same_campaign` go by: the units' factors leave 60nm and
+#: 0.06um a last bit apart (6.000000000000001e-08 and 6e-08), which these digits do not see.
 IDENTITY_DIGITS = 12
 
 
-def _meaning(name: str, text):
-    """The distribution ``text`` of ``name`` in `campaign_id`: its kind and SI numbers,
-    ``uniform:1e-08,2e-08`` for ``uniform:10nm,0.02um``; a text that does not parse (a
-    campaign.json edited by hand) as it is, which only its own spelling matches."""
+def _parsed(name: str, text) -> str | None:
+    """The meaning of the distribution ``text`` of ``name``: its kind and SI numbers to
+    `IDENTITY_DIGITS` significant digits, ``uniform:1e-08,2e-08`` for ``uniform:10nm,0.02um``;
+    None for a text that does not parse (a campaign.json edited by hand)."""
     from machinesim.campaign.distributions import KINDS, parse_distribution
 
     try:
         dist = parse_distribution(text, name)
     except (InputError, TypeError):
-        return text
+        return None
     numbers = (dist.a, dist.b)[:KINDS[dist.kind]]
     # + 0.0: -0 is 0 ("uniform:-0um,1um")
     return f"{dist.kind}:" + ",".join(f"{x + 0.0:.{IDENTITY_DIGITS}g}" for x in numbers)
 
 
+def _meaning(name: str, text):
+    """The distribution ``text`` of ``name`` in `campaign_id`: its meaning (`_parsed`), or a
+    text that does not parse as it is, which only its own spelling matches."""
+    meaning = _parsed(name, text)
+    return text if meaning is None else meaning
+
+
 def same_campaign(old: dict, new: dict) -> bool:
     """True when the campaign specs ``old`` (campaign.json) and ``new``
     (`CampaignSpec.describe`) run the same trials: equal but for how each ``vary``
-    distribution is spelt, which is compared by its meaning, the kind and its numbers in SI
-    (``uniform:10nm,20nm``, ``uniform:10 nm,0.02um``; within 1e-12 relative, the rounding
-    of the units' factors). A stored text that no longer parses is not the same."""
-    from machinesim.campaign.distributions import parse_distribution
+    distribution is spelt, which is compared by its meaning (`_parsed`: the kind and its
+    numbers in SI to `IDENTITY_DIGITS` significant digits, which the units' rounding does
+    not reach: ``uniform:10nm,20nm``, ``uniform:10 nm,0.02um``), the same meaning
+    `campaign_id` hashes, so that a folder resumes exactly the campaigns whose trial files
+    it takes for its own. A stored text that no longer parses is not the same.
 
+    They had compared within 1e-12 relative while the identity rounds to 12 digits: 1um
+    and 1.000000000004um were refused as two campaigns, yet each took the other's trial
+    files (one identity); 1.0000000000049um and 1.0000000000051um the other way round."""
     if old == new:
         return True
     if {k: v for k, v in old.items() if k != "vary"} != \
@@ -363,12 +374,8 @@ def same_campaign(old: dict, new: dict) -> bool:
     if not isinstance(before, dict) or not isinstance(now, dict) or set(before) != set(now):
         return False
     for name, text in now.items():
-        try:
-            a, b = parse_distribution(before[name], name), parse_distribution(text, name)
-        except (InputError, TypeError):
-            return False
-        if a.kind != b.kind or not all(math.isclose(x, y, rel_tol=1e-12, abs_tol=0.0)
-                                       for x, y in ((a.a, b.a), (a.b, b.b))):
+        meaning = _parsed(name, text)
+        if meaning is None or meaning != _parsed(name, before[name]):
             return False
     return True
 
