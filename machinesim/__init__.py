@@ -25,6 +25,7 @@ from machinesim.exceptions import (
     ModelError,
     NCProgramError,
     NotConvergedError,
+    ReadOnlyError,
     UnreachableError,
 )
 
@@ -80,6 +81,7 @@ __all__ = [
     "ModelError",
     "NCProgramError",
     "NotConvergedError",
+    "ReadOnlyError",
     "UnreachableError",
     "Realism",
     "ToolGeometry",

@@ -141,6 +141,12 @@ class HolderContactError(MachineSimError):
     hit the part (a real machine crashes there; the body alone would leave a tunnel)."""
 
 
+class ReadOnlyError(MachineSimError, AttributeError):
+    """An attribute fixed when its object was made was set or deleted (a `Lab`'s machine,
+    seed, noise, realism): a `MachineSimError`, and an `AttributeError` as Python's own
+    read-only attributes raise."""
+
+
 class MachineSimWarning(UserWarning):
     """An input machinesim accepts that may not be what was meant (a URDF's rotary limits
     that read as degrees). The command line shows one as a ``machinesim: warning:`` line."""

@@ -43,7 +43,7 @@ import numpy as np
 from machinesim import realism as _realism
 from machinesim.cutting.memo import CutMemo
 from machinesim.errors import ErrorModel, as_error_model
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, ReadOnlyError, brief
 from machinesim.metrology.imperfections import Lobing, Registration, ZonalForm
 from machinesim.realism import Realism, SphereArtefacts
 from machinesim.servo import check_servo as _check_servo
@@ -53,6 +53,30 @@ __all__ = ["CUTS", "Lab"]
 
 #: The cuts this process made, for `Lab.cut` to hand back when asked for again.
 CUTS = CutMemo()
+
+
+class _Fixed:
+    """An attribute a `Lab` is made with, read as a plain one and refused when set or deleted
+    (`ReadOnlyError`): its instruments' streams and imperfections, the artefacts it made and
+    its errors, checked against its machine, all come from it, and a value set anew had left
+    them from the old one (or failed later: ``lab.machine = "sts_lathe"``). Kept in the
+    lab's ``__dict__`` under its own name (a pickle or copy carries it)."""
+
+    def __init__(self, why: str) -> None:
+        self.why = why
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.name = name
+
+    def __get__(self, lab, owner=None):
+        return self if lab is None else lab.__dict__[self.name]
+
+    def __set__(self, lab, value) -> None:
+        raise ReadOnlyError(f"Lab.{self.name} cannot be set (to {brief(repr(value))}): "
+                            f"{self.why}; make another Lab with the {self.name} wanted")
+
+    def __delete__(self, lab) -> None:
+        raise ReadOnlyError(f"Lab.{self.name} cannot be deleted: {self.why}")
 
 
 class Lab:
@@ -86,16 +110,29 @@ class Lab:
         with ``axes`` (a `PIDServo`) must have one column per machine axis, in the order of
         ``machine.axes``, and an `AxisServo` named by an axis letter must sit in that axis'
         column; else InputError.
+
+    Its ``machine``, ``seed``, ``noise`` and ``realism`` read as given (``noise`` as the
+    realism's) and stay so for the lab's life: setting one is a `ReadOnlyError` (its
+    instruments, artefacts and checked errors all come from them); make another Lab.
     """
 
     #: Hand back a cut made before with the same inputs (`cut`); False cuts every time.
     reuse_cuts: bool = True
 
+    machine = _Fixed("the lab's errors were checked against its machine, its cuts made on it")
+    seed = _Fixed("every instrument's stream and imperfections, and the artefacts the lab "
+                  "made, were drawn from its seed")
+    noise = _Fixed("the lab's instruments read with its noise, which follows its realism "
+                   "(realism.instrument_noise)")
+    realism = _Fixed("the instruments the lab handed out and the artefacts it made have the "
+                     "imperfections its realism switched on")
+
     def __init__(self, machine, errors=None, *, noise: bool = True, seed: int = 0,
                  realism: Realism | None = None, background=None, servo=None) -> None:
         from machinesim.machines import Machine, load_machine
 
-        self.machine = machine if isinstance(machine, Machine) else load_machine(machine)
+        fixed = self.__dict__  # what `_Fixed` reads
+        fixed["machine"] = machine if isinstance(machine, Machine) else load_machine(machine)
         injected = as_error_model(errors)
         self.machine.check_errors(injected)
         if not isinstance(noise, bool):
@@ -115,9 +152,7 @@ class Lab:
         else:
             self.__told = True
         stream(seed)  # refuses a bad seed here, not at the first reading
-        self.realism = realism
-        self.noise = realism.instrument_noise
-        self.seed = seed
+        fixed.update(realism=realism, noise=realism.instrument_noise, seed=seed)
         self.__injected = injected
         self.__background = ErrorModel()
         truth = injected
@@ -302,7 +337,7 @@ class Lab:
                              f"{type(design).__name__}", key="design")
         label = self._label("artefact", label, numbered=False)
         # None (made every time) for a stock that won't pickle; the seed and the realism
-        # decide the spheres too, and both are the lab's plain attributes, set anew at will
+        # decide the spheres too, fixed for the lab's life (`_Fixed`)
         key = CUTS.key(stock, design, self.seed, self.realism.artefact_errors)
         made = self.__workpieces.get(label)
         if key is not None and made is not None and made[0] == key:

@@ -602,6 +602,46 @@ def test_every_error_kind_the_docs_name_is_importable_from_the_package():
         machinesim.load_machine("no_such_machine")
 
 
+def test_a_labs_machine_seed_noise_and_realism_are_fixed_when_it_is_made():
+    # each was a plain attribute: lab.seed = 3 after an instrument had left the next one
+    # numbered on from the old lab (neither the old lab's reading nor a fresh Lab(seed=3)'s),
+    # lab.seed = -5 was refused only at the next instrument, lab.machine = "sts_lathe" failed
+    # in repr with "'str' object has no attribute 'name'", and lab.noise = False on a realism
+    # with instrument noise left the two saying otherwise
+    from machinesim.exceptions import ReadOnlyError, brief
+    from machinesim.realism import Realism
+
+    lab = Lab("robonano_a0ib", TRUTH, seed=1, realism=Realism.lab())
+    machine = lab.machine
+    lab.laser_interferometer()
+    for name, value in (("seed", 3), ("seed", -5), ("machine", "sts_lathe"), ("noise", False),
+                        ("realism", Realism.ideal())):
+        with pytest.raises(ReadOnlyError) as info:
+            setattr(lab, name, value)
+        assert str(info.value).startswith(f"Lab.{name} cannot be set (to "
+                                          f"{brief(repr(value))}): ")
+        assert str(info.value).endswith(f"; make another Lab with the {name} wanted")
+        assert isinstance(info.value, machinesim.MachineSimError | AttributeError)
+        assert isinstance(info.value, AttributeError)
+        with pytest.raises(ReadOnlyError, match=rf"^Lab\.{name} cannot be deleted: "):
+            delattr(lab, name)
+    assert (lab.machine, lab.seed, lab.noise, lab.realism) == (machine, 1, True, Realism.lab())
+    assert repr(lab) == "Lab(robonano_a0ib, noise=on, seed=1, realism=lab)"
+    # the lab reads on as made: its next instrument is the one a fresh lab hands out second
+    fresh = Lab("robonano_a0ib", TRUTH, seed=1, realism=Realism.lab())
+    fresh.laser_interferometer()
+    assert lab.laser_interferometer()._rng.random() == fresh.laser_interferometer()._rng.random()
+    # a pickle and a copy carry them; reuse_cuts stays the lab's switch to set
+    import copy
+    import pickle
+
+    again = pickle.loads(pickle.dumps(Lab("robonano_a0ib", seed=7, noise=False)))
+    assert (again.machine.name, again.seed, again.noise) == ("robonano_a0ib", 7, False)
+    assert copy.copy(again).seed == 7
+    again.reuse_cuts = False
+    assert again.reuse_cuts is False
+
+
 def test_a_realism_given_by_its_scenario_name_says_how_to_make_it():
     # the scenarios take --realism ideal; Lab(..., realism="ideal") said only "got str"
     from machinesim.realism import Realism
