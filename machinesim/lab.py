@@ -5,7 +5,8 @@ programs on the machine that has them, and hands out instruments bound to it. No
 procedure can call returns the truth: a lab answers only by cutting and by measuring, as a
 real one does (the honesty rule of DESIGN.md). The truth comes out through one named call,
 `Lab.reveal`, meant for reports and tests; the identification and compensation code never
-calls it, and a test scans them to keep it so.
+calls it, and a test scans them to keep it so. The checks of what a lab's calls are given,
+and of its attributes fixed when made, are in `machinesim.lab_checks`.
 
 Noise. Each instrument draws its noise from its own stream, derived from the lab's seed, the
 instrument's kind and its label (`machinesim.streams.stream`). A reading therefore depends on
@@ -43,7 +44,8 @@ import numpy as np
 from machinesim import realism as _realism
 from machinesim.cutting.memo import CutMemo
 from machinesim.errors import ErrorModel, as_error_model
-from machinesim.exceptions import InputError, ReadOnlyError, brief
+from machinesim.exceptions import InputError
+from machinesim.lab_checks import Fixed, check_cut_options, check_options
 from machinesim.metrology.imperfections import Lobing, Registration, ZonalForm
 from machinesim.realism import Realism, SphereArtefacts
 from machinesim.servo import check_servo as _check_servo
@@ -53,30 +55,6 @@ __all__ = ["CUTS", "Lab"]
 
 #: The cuts this process made, for `Lab.cut` to hand back when asked for again.
 CUTS = CutMemo()
-
-
-class _Fixed:
-    """An attribute a `Lab` is made with, read as a plain one and refused when set or deleted
-    (`ReadOnlyError`): its instruments' streams and imperfections, the artefacts it made and
-    its errors, checked against its machine, all come from it, and a value set anew had left
-    them from the old one (or failed later: ``lab.machine = "sts_lathe"``). Kept in the
-    lab's ``__dict__`` under its own name (a pickle or copy carries it)."""
-
-    def __init__(self, why: str) -> None:
-        self.why = why
-
-    def __set_name__(self, owner, name: str) -> None:
-        self.name = name
-
-    def __get__(self, lab, owner=None):
-        return self if lab is None else lab.__dict__[self.name]
-
-    def __set__(self, lab, value) -> None:
-        raise ReadOnlyError(f"Lab.{self.name} cannot be set (to {brief(repr(value))}): "
-                            f"{self.why}; make another Lab with the {self.name} wanted")
-
-    def __delete__(self, lab) -> None:
-        raise ReadOnlyError(f"Lab.{self.name} cannot be deleted: {self.why}")
 
 
 class Lab:
@@ -119,19 +97,19 @@ class Lab:
     #: Hand back a cut made before with the same inputs (`cut`); False cuts every time.
     reuse_cuts: bool = True
 
-    machine = _Fixed("the lab's errors were checked against its machine, its cuts made on it")
-    seed = _Fixed("every instrument's stream and imperfections, and the artefacts the lab "
-                  "made, were drawn from its seed")
-    noise = _Fixed("the lab's instruments read with its noise, which follows its realism "
-                   "(realism.instrument_noise)")
-    realism = _Fixed("the instruments the lab handed out and the artefacts it made have the "
-                     "imperfections its realism switched on")
+    machine = Fixed("the lab's errors were checked against its machine, its cuts made on it")
+    seed = Fixed("every instrument's stream and imperfections, and the artefacts the lab "
+                 "made, were drawn from its seed")
+    noise = Fixed("the lab's instruments read with its noise, which follows its realism "
+                  "(realism.instrument_noise)")
+    realism = Fixed("the instruments the lab handed out and the artefacts it made have the "
+                    "imperfections its realism switched on")
 
     def __init__(self, machine, errors=None, *, noise: bool = True, seed: int = 0,
                  realism: Realism | None = None, background=None, servo=None) -> None:
         from machinesim.machines import Machine, load_machine
 
-        fixed = self.__dict__  # what `_Fixed` reads
+        fixed = self.__dict__  # what `Fixed` reads
         fixed["machine"] = machine if isinstance(machine, Machine) else load_machine(machine)
         injected = as_error_model(errors)
         self.machine.check_errors(injected)
@@ -229,7 +207,7 @@ class Lab:
             raise InputError("a lab cuts with its own errors; pass none to Lab.cut",
                              key="errors")
         cutter = cut_turned if "turn_step" in options else cut
-        _check_cut_options(cutter, options)
+        check_cut_options(cutter, options)
         if options.get("servo") is not None:
             _check_servo(self.machine, options["servo"])
         if self.__servo is not None and "servo" not in options:
@@ -337,7 +315,7 @@ class Lab:
                              f"{type(design).__name__}", key="design")
         label = self._label("artefact", label, numbered=False)
         # None (made every time) for a stock that won't pickle; the seed and the realism
-        # decide the spheres too, fixed for the lab's life (`_Fixed`)
+        # decide the spheres too, fixed for the lab's life (`Fixed`)
         key = CUTS.key(stock, design, self.seed, self.realism.artefact_errors)
         made = self.__workpieces.get(label)
         if key is not None and made is not None and made[0] == key:
@@ -377,7 +355,7 @@ class Lab:
         from machinesim.metrology import TouchProbe
 
         kind = "touch_probe"
-        _check_options(TouchProbe, kind, options, ("machine", "errors", "part"))
+        check_options(TouchProbe, kind, options, ("machine", "errors", "part"))
         label = self._label(kind, label)
         drawn, stated = {}, {}
         if self.realism.probe_pretravel and "pretravel" not in options:
@@ -406,7 +384,7 @@ class Lab:
         from machinesim.metrology import LaserInterferometer
 
         kind = "laser_interferometer"
-        _check_options(LaserInterferometer, kind, options, ("machine", "errors"))
+        check_options(LaserInterferometer, kind, options, ("machine", "errors"))
         label = self._label(kind, label)
         drawn = {}
         if self.realism.registration and "alignment" not in options:
@@ -427,7 +405,7 @@ class Lab:
         from machinesim.metrology.encoders import Encoders
 
         kind = "encoders"
-        _check_options(Encoders, kind, options, ("machine", "follow"))
+        check_options(Encoders, kind, options, ("machine", "follow"))
         label = self._label(kind, label)
         servo = self.__servo
 
@@ -444,7 +422,7 @@ class Lab:
         from machinesim.metrology import RTest
 
         kind = "r_test"
-        _check_options(RTest, kind, options, ("machine", "errors"))
+        check_options(RTest, kind, options, ("machine", "errors"))
         label = self._label(kind, label)
         return RTest(self.machine, self.__truth, noise=self.noise,
                      rng=stream(self.seed, kind, label), **options)
@@ -527,7 +505,7 @@ class Lab:
     # ---------------------------------------------------------------------------- internals
 
     def _optical(self, cls, kind: str, defaults, label, options):
-        _check_options(cls, kind, options)
+        check_options(cls, kind, options)
         label = self._label(kind, label)
         drawn, given = {}, {}
         if self.realism.lateral_resolution and "spot" not in options:
@@ -560,55 +538,3 @@ class Lab:
             raise InputError(f"Expected a label as a non-empty string, got {label!r}",
                              key="label")
         return label
-
-
-#: What the lab sets on every instrument it hands out, and why (`_check_options`).
-_LAB_SETS = {
-    "noise": "from the lab's noise switch (Lab(noise=...) or its realism)",
-    "rng": "from the lab's seed and the instrument's label; give label= for another stream",
-    "machine": "the lab's own machine",
-    "errors": "the lab's hidden errors, which no instrument is handed",
-    "part": "the part given as the first argument",
-    "follow": "from the lab's servo loops (Lab(servo=...) or lab.tune_servo)",
-}
-
-
-def _check_options(cls, kind: str, options, also: tuple[str, ...] = ()) -> None:
-    """Refuse an option the lab sets itself (``noise``, ``rng`` and ``also``) or one that
-    ``cls`` does not take, naming it and listing those it does take."""
-    import inspect
-
-    sets = ("noise", "rng", *also)
-    what = kind.replace("_", " ")
-    whose = what + ("'" if what.endswith("s") else "'s")
-    taken = [name for name, p in inspect.signature(cls).parameters.items()
-             if name not in sets and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-    for name in options:
-        if name in sets:
-            raise InputError(f"the lab sets the {whose} {name} itself ({_LAB_SETS[name]}); "
-                             f"leave {name!r} out. Options it takes: {', '.join(taken)}",
-                             key=name)
-        if name not in taken:
-            raise InputError(f"{cls.__name__} has no option {name!r}; the {what} takes "
-                             f"{', '.join(taken)} (and label)", key=name)
-
-
-def _check_cut_options(cutter, options) -> None:
-    """Refuse an option ``cutter`` (`machinesim.cutting.cut` or ``cut_turned``) does not take,
-    with those it takes, as the instruments refuse theirs, and a ``progress`` that cannot be
-    called (the engine called it after the planning: a TypeError)."""
-    import inspect
-
-    from machinesim.cutting.program import check_progress
-
-    taken = [name for name, p in inspect.signature(cutter).parameters.items()
-             if p.kind is p.KEYWORD_ONLY and name != "roi"]
-    if cutter.__name__ == "cut":
-        taken.append("turn_step")
-    for name in options:
-        if name not in taken:
-            how = "Lab.cut" + (" with turn_step" if "turn_step" in options else "")
-            raise InputError(f"{how} has no option {name!r}; it takes {', '.join(taken)} "
-                             "(and roi)", key=name)
-    check_progress(options.get("progress"))
-
