@@ -13,7 +13,8 @@ import pytest
 import machinesim
 from machinesim.errors import ErrorModel
 from machinesim.exceptions import InputError
-from machinesim.procedures.sts_turning import STSTurning
+from machinesim.experiment import Identified
+from machinesim.procedures.sts_turning import STSTurning, ToolTest
 from machinesim.servo import table6_axis, table6_servo
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -118,6 +119,58 @@ def test_a_servo_preset_or_axis_that_is_no_name_is_refused_by_name(call, key, wo
     assert caught.value.key == key
     assert words in str(caught.value)
     assert table6_servo("after", "XZC").axes == table6_servo("after").axes  # names as before
+
+
+class _Reached(Exception):
+    """Raised by a lab's turn: the step got past its door to the first cut."""
+
+
+def _lab_that_stops_at_the_first_cut():
+    lab = machinesim.Lab("sts_lathe", noise=False)
+
+    def stop(*args, **kwargs):
+        raise _Reached
+
+    lab.turn = lab.encoders = lab.adjust_tool = stop
+    return lab
+
+
+STS_PROGRAMS = ("key 'programs': STSTurning.evaluate expects the programs "
+                "STSTurning.compensate(identified) returned (a dict of 'as_found' (a Program), "
+                "'nose_compensated' (a Program) and 'modified' (a Program)), got ")
+
+
+@pytest.mark.parametrize(("call", "message"), [
+    (lambda p, lab, found, programs: p.identify({}), "key 'measurements': STSTurning.identify "
+     "expects the measurements STSTurning.measure(lab) returned (a dict of 'tool_test' (a "
+     "ToolTest)), got a dict without 'tool_test'"),
+    (lambda p, lab, found, programs: p.compensate(None), "key 'identified': "
+     "STSTurning.compensate expects the Identified STSTurning.identify(measurements) "
+     "returned, got NoneType None"),
+    (lambda p, lab, found, programs: p.compensate(Identified({}, {})), "key 'identified': "
+     "STSTurning.compensate expects the Identified STSTurning.identify(measurements) "
+     "returned, its detail a ToolTest, got an Identified whose detail is dict {}"),
+    (lambda p, lab, found, programs: p.measure(None), "key 'lab': expected a machinesim.Lab to "
+     "run on, got NoneType None (make one with Lab(machine, errors, seed=...))"),
+    (lambda p, lab, found, programs: p.evaluate(
+        lab, found, {k: v for k, v in programs.items() if k != "modified"}),
+     STS_PROGRAMS + "a dict without 'modified'"),
+    (lambda p, lab, found, programs: p.evaluate(lab, found, None), STS_PROGRAMS + "NoneType None"),
+])
+def test_each_sts_step_refuses_what_the_step_before_did_not_give(call, message):
+    """identify({}) was a KeyError, compensate(None) an AttributeError, measure(None) an
+    AttributeError from the turn; evaluate without 'modified' turned Case 1, aligned the tool
+    (the lab moved) and turned Case 2 before its KeyError at Case 3. Each is now refused at
+    the door (machinesim.procedures.step_inputs), before any cut; what the steps give passes
+    on to the first cut."""
+    procedure = STSTurning()
+    found = procedure.identify({"tool_test": ToolTest(-3.5e-6, -3.5e-6, 100e-6, 3.5e-6)})
+    programs = procedure.compensate(found)
+    with pytest.raises(InputError) as caught:
+        call(procedure, _lab_that_stops_at_the_first_cut(), found, programs)
+    assert str(caught.value) == message
+    with pytest.raises(_Reached):
+        procedure.evaluate(_lab_that_stops_at_the_first_cut(), found, programs)
 
 
 def _measure_nose(nose_radius_um):

@@ -36,9 +36,14 @@ import numpy as np
 from machinesim.cam import spiral as sp
 from machinesim.cutting.lathe import turning_tool
 from machinesim.exceptions import InputError, NotConvergedError
-from machinesim.experiment import Evaluation, Figure, Identified
+from machinesim.experiment import Evaluation, Figure, Identified, check_lab
 from machinesim.identification.turning_tool import fit_centre_height, identify_tool_errors
 from machinesim.metrology.fits import roughness_sa
+from machinesim.procedures.step_inputs import (
+    check_identified,
+    check_measurements,
+    check_programs,
+)
 from machinesim.procedures.sts_plane_check import refuse_plane_misfit
 from machinesim.procedures.sts_plans import (
     MEASURE_LINE,
@@ -386,9 +391,11 @@ class STSTurning:
 
     def measure(self, lab) -> dict:
         """The tool test on the machine as found."""
+        check_lab(lab)
         return {"tool_test": test_cut(lab, self.nose_radius, self.tool, "tool_test")}
 
     def identify(self, measurements) -> Identified:
+        check_measurements(measurements, "STSTurning", {"tool_test": ToolTest})
         found = measurements["tool_test"]
         return Identified({"tool.x": (found.dx, found.dx_std),
                            "tool.y": (found.dy, found.dy_std),
@@ -396,6 +403,7 @@ class STSTurning:
                           detail=found)
 
     def compensate(self, identified: Identified) -> dict:
+        check_identified(identified, "STSTurning", "compensate", ToolTest)
         found = identified.detail
         design = sp.sine_grid()
         compensated = self.nose_radius + found.d_radius
@@ -405,6 +413,11 @@ class STSTurning:
         return {name: sp.spiral_program(path) for name, path in paths.items()}
 
     def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
+        # at the door: a program missing was a KeyError at its case, after the cases before
+        # it were turned and the tool aligned (the lab moved)
+        check_lab(lab)
+        check_identified(identified, "STSTurning", "evaluate", ToolTest)
+        check_programs(programs, "STSTurning", dict.fromkeys(PROGRAM_OF.values()))
         found = identified.detail
         design = sp.sine_grid()
         cases, alignment = {}, {}
