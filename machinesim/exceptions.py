@@ -188,6 +188,11 @@ def check_length(value, name: str, *, positive: bool = False) -> float:
         number = float(value)
     except (TypeError, ValueError) as error:
         raise InputError(f"Expected {name} as a number (m), got {value!r}", key=name) from error
+    except OverflowError:  # an int beyond float64 (10**400), as as_number says it
+        what = (f"an int of {value.bit_length()} bits" if isinstance(value, int)
+                else brief(repr(value)))
+        raise InputError(f"Expected a finite {name} (m), got {what}, beyond float64",
+                         key=name) from None
     if not math.isfinite(number) or number < 0.0 or (positive and number == 0.0):
         want = "> 0" if positive else ">= 0"
         raise InputError(f"Expected {name} {want} (m), got {number!r}", key=name)

@@ -322,6 +322,25 @@ def test_the_spiral_cam_takes_no_bool_or_str_for_a_number(call, key, value):
     assert program.targets[0][AXES.index("C")] == 1.0 + path.c[0]
 
 
+@pytest.mark.parametrize("call, key, unit", [
+    # float(10**400) raised 'OverflowError: int too large to convert to float', a traceback
+    # naming no argument, in check_length (every length of the CAM) and spiral's _positive
+    (lambda p: sp.sine_grid(10**400), "amplitude", " (m)"),
+    (lambda p: sp.Spiral(-10**400, 1e-6), "radius", " (m)"),
+    (lambda p: sp.spiral_program(p, clearance=10**400), "clearance", " (m)"),
+    (lambda p: sp.spiral_program(p, spindle_rpm=10**400), "spindle_rpm", ""),
+    (lambda p: sp.constant_angle(sp.Spiral(0.12e-3, 1e-6), 10**400), "step (rad)", ""),
+])
+def test_an_int_beyond_float64_is_refused_by_name_not_overflowing(call, key, unit):
+    spiral = sp.Spiral(0.12e-3, 1e-6)
+    path = sp.tool_path(sp.cutting_points(sp.sphere(2e-3), spiral,
+                                          sp.constant_angle(spiral, 0.5)), 1e-3)
+    with pytest.raises(InputError) as caught:
+        call(path)
+    assert str(caught.value) == (f"key '{key}': Expected a finite {key}{unit}, got an int of "
+                                 "1329 bits, beyond float64")  # (10**400).bit_length()
+
+
 def test_a_spindle_faster_than_the_lathes_c_axis_is_refused_naming_the_bound():
     # spindle_rpm 1e300 was taken: F = 360 x 1e300 deg/min, 6e297 m/s of the feed array
     from machinesim.machines import load_machine

@@ -50,7 +50,7 @@ from machinesim.cam.designs import (
     sphere,
     tilted_plane,
 )
-from machinesim.exceptions import InputError, MachineSimWarning, check_length
+from machinesim.exceptions import InputError, MachineSimWarning, brief, check_length
 from machinesim.metrology._arrays import as_number
 from machinesim.nc import AXES, KIND_LINEAR, KIND_RAPID, Program
 from machinesim.units import M_PER_MM, M_PER_UM, RAD_PER_DEG
@@ -254,6 +254,11 @@ def _positive(value, name: str) -> float:
         number = float(value)
     except (TypeError, ValueError) as error:
         raise InputError(f"Expected {name} as a number, got {value!r}", key=name) from error
+    except OverflowError:  # an int beyond float64 (10**400)
+        what = (f"an int of {value.bit_length()} bits" if isinstance(value, int)
+                else brief(repr(value)))
+        raise InputError(f"Expected a finite {name}, got {what}, beyond float64",
+                         key=name) from None
     if not math.isfinite(number) or number <= 0.0:
         raise InputError(f"Expected {name} > 0, got {number!r}", key=name)
     return number
