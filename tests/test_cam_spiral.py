@@ -322,6 +322,27 @@ def test_the_spiral_cam_takes_no_bool_or_str_for_a_number(call, key, value):
     assert program.targets[0][AXES.index("C")] == 1.0 + path.c[0]
 
 
+@pytest.mark.parametrize("call, message", [
+    # float() took them: sphere(True) was a 1 m sphere ('sphere R 1000 mm'), '2e-3' a 2 mm
+    # one; tilted_plane(True) a slope of 1, '0.1' one of 0.1, None a TypeError
+    (lambda: sp.sphere(True), "key 'radius': Expected radius as a number (m), got True"),
+    (lambda: sp.sphere("2e-3"), "key 'radius': Expected radius as a number (m), got '2e-3'"),
+    (lambda: sp.tilted_plane(True),
+     "key 'slope_x': Expected slope_x as a number (m per m), got True"),
+    (lambda: sp.tilted_plane(0.0, "0.1"),
+     "key 'slope_y': Expected slope_y as a number (m per m), got '0.1'"),
+    (lambda: sp.tilted_plane(None),
+     "key 'slope_x': Expected slope_x as a number (m per m), got None"),
+])
+def test_the_test_designs_take_no_bool_or_str_for_a_number(call, message):
+    with pytest.raises(InputError) as caught:
+        call()
+    assert str(caught.value) == message
+    # numbers as before: a concave 2 mm sphere 1 mm off its pole, a plane of slope 0.02
+    assert sp.sphere(np.float64(-2e-3))(1e-3, 0.0) == 2e-3 - math.sqrt(3e-6)
+    assert sp.tilted_plane(0.02)(1e-3, 5e-3) == 0.02 * 1e-3
+
+
 @pytest.mark.parametrize("call, key, unit", [
     # float(10**400) raised 'OverflowError: int too large to convert to float', a traceback
     # naming no argument, in check_length (every length of the CAM) and spiral's _positive

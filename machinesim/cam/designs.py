@@ -18,6 +18,7 @@ from scipy.interpolate import RectBivariateSpline
 
 from machinesim._io import check_readable_file
 from machinesim.exceptions import FileError, InputError, check_length
+from machinesim.metrology._arrays import as_number
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 
 __all__ = ["AMPLITUDE_M", "GRADIENT_STEP_M", "WAVELENGTH_M", "Design", "design_from_height_map",
@@ -114,12 +115,8 @@ def sphere(radius: float) -> Design:
 
     Defined for rho < |Rs|; NaN beyond.
     """
-    try:
-        rs = float(radius)
-    except (TypeError, ValueError) as error:
-        raise InputError(f"Expected radius as a number (m), got {radius!r}",
-                         key="radius") from error
-    if not math.isfinite(rs) or rs == 0.0:
+    rs = as_number(radius, "radius")  # True is no 1 m sphere, "2e-3" no number
+    if rs == 0.0:
         raise InputError(f"Expected a finite, non-zero sphere radius (m), got {rs!r}",
                          key="radius")
     sign, size = math.copysign(1.0, rs), abs(rs)
@@ -141,9 +138,9 @@ def sphere(radius: float) -> Design:
 def tilted_plane(slope_x: float, slope_y: float = 0.0) -> Design:
     """The plane z = slope_x x + slope_y y (a test surface: turned, its twist about the
     centre shows the tool's centre height with its sign)."""
-    kx, ky = float(slope_x), float(slope_y)
-    if not (math.isfinite(kx) and math.isfinite(ky)):
-        raise InputError(f"Expected finite slopes, got {slope_x!r}, {slope_y!r}", key="slope")
+    # True is no slope of 1, "0.02" no number (as_number refuses both, and NaN, by name)
+    kx = as_number(slope_x, "slope_x", unit="m per m")
+    ky = as_number(slope_y, "slope_y", unit="m per m")
 
     def height(x, y):
         return kx * x + ky * y
