@@ -7,7 +7,7 @@ import pytest
 
 import machinesim
 import machinesim.cam.spiral as sp
-from machinesim.cutting.lathe import turn
+from machinesim.cutting.lathe import turn, turning_runs
 from machinesim.cutting.tool_form_error import alignment_error_x
 from machinesim.cutting.turning import EdgePath, turned_heights
 from machinesim.exceptions import ErrorModelError, InputError
@@ -277,6 +277,27 @@ def test_a_turning_programs_dwells_are_timed_and_a_dwell_of_more_than_an_hour_is
     report = turn(program, "sts_lathe", "nose:0.5:90")[1]
     assert report.machining_time_s == pytest.approx(2 * half + 5000.0, rel=1e-12)
     assert [n[:45] for n in report.notes] == ["the dwell of line 3 (X5000) waits 5000 s (1.3"]
+
+
+def test_a_feed_faster_than_an_axis_can_go_is_clamped_at_its_limit_as_the_planner_does():
+    # the facing cut above at F1000000. would turn C at 1e6 / 60 deg/s (291 rad/s): sts_lathe's
+    # C goes 150 rad/s at most (its rapid rate), so its 18000 deg take pi * 100 / 150 s, by
+    # hand, as motion.plan times the move; the lathe took length / F, 1.08 s, a spindle of
+    # 2778 rpm the machine cannot turn. At F20. nothing is clamped (the time as before).
+    lathe = machinesim.load_machine("sts_lathe")
+    c_limit = lathe.rapid_rate[lathe.axes.index("C")]
+    assert c_limit == 150.0
+    head = "G21 G90 G94\nG00 X5.5 Z1. C0.\nG01 Z-0.01 F100.\n"
+    fast, slow = (turn(parse_program(head + f"G01 X0. C18000. F{f}\nG00 Z1.\nM30\n"),
+                       "sts_lathe", "nose:0.5:90")[1] for f in ("1000000.", "20."))
+    assert fast.machining_time_s == pytest.approx(100.0 * np.pi / c_limit, rel=1e-12)
+    assert slow.machining_time_s == pytest.approx(np.hypot(5.5, 18000.0) / 20.0 * 60.0,
+                                                  rel=1e-12)
+    # the commanded motion the servo follows runs C at its limit, not beyond
+    (t, points), = turning_runs(
+        parse_program(head + "G01 X0. C18000. F1000000.\nG00 Z1.\nM30\n"), lathe)
+    speed = np.abs(np.diff(points[:, lathe.axes.index("C")])) / np.diff(t)
+    assert speed.max() == pytest.approx(c_limit, rel=1e-12)
 
 
 def test_a_turning_move_of_more_than_a_day_under_g20_is_noted_with_its_f_in_inch():

@@ -8,8 +8,10 @@ the machine does with it, in order:
 1. **Axis values.** Every move's target (modal: an axis not named keeps its value), from
    the first move that sets every axis of the machine.
 2. **Times.** The control runs each feed move in length / F, the length with rotary axes in
-   degrees counted as millimetres (FANUC, as `machinesim.motion` plans it); a dwell waits
-   its time (counted in the report's time, noted beyond an hour, not cut).
+   degrees counted as millimetres (FANUC, as `machinesim.motion` plans it), and no axis
+   faster than its velocity limit (the machine's rapid rate, ``sts_lathe``'s C 150 rad/s):
+   a feed beyond it is clamped there, as the planner clamps it; a dwell waits its time
+   (counted in the report's time, noted beyond an hour, not cut).
 3. **Servo.** Each run of feed moves that turn C is one continuous motion: the servo loops
    (`machinesim.servo`, any ``follow(t, q)``) follow it, entering it settled at its first
    step's speed (the spindle is run up before the tool engages: `followed`), and the axes
@@ -294,7 +296,9 @@ def _untimed_moves(program, machine) -> tuple[float, tuple[str, ...]]:
     first = len(kinds) - len(moved)  # a move from a point of known axis values: later ones
     linear = np.flatnonzero(kinds[first + 1:] == KIND_LINEAR) + first + 1
     with np.errstate(divide="ignore", invalid="ignore"):  # F none or 0: no time, no note
-        times = _lengths(q[linear - first - 1], q[linear - first], machine.axes) / feeds[linear]
+        times = np.maximum(
+            _lengths(q[linear - first - 1], q[linear - first], machine.axes) / feeds[linear],
+            _at_limits(q[linear - first - 1], q[linear - first], machine.rapid_rate))
     durations[linear] = np.where(np.isfinite(times), times, 0.0)
     return float(durations[kinds == KIND_DWELL].sum()), slow_move_notes(
         durations, kinds, np.asarray(program.lines), feeds, program)
@@ -325,7 +329,8 @@ def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
     for first, last in _turning_runs(q, kinds, c_column, lines, source, _spindle_hint(program)):
         points = q[first - 1:last + 1]  # moves first..last: points first-1..last
         moves = slice(first, last + 1)
-        durations = _durations(points, feeds[moves], machine.axes, lines[moves], source)
+        durations = _durations(points, feeds[moves], machine.axes, lines[moves], source,
+                               machine.rapid_rate)
         t = np.concatenate([[0.0], np.cumsum(durations)])
         out.append(_within_quarter_turns(t, points, c_column))
     return out
@@ -442,10 +447,12 @@ def _turning_runs(q, kinds, c_column: int, lines, source: str,
 
 
 def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple, lines: np.ndarray,
-               source: str) -> np.ndarray:
+               source: str, rapid_rate) -> np.ndarray:
     """Time of each move between consecutive ``points`` at ``feeds`` (m/s), s: the length in
-    mm with rotary axes in degrees, over F in mm/s (FANUC); a move without a positive feed
-    is refused naming its ``lines`` in ``source``."""
+    mm with rotary axes in degrees, over F in mm/s (FANUC), or the time its slowest axis
+    takes at its velocity limit ``rapid_rate`` (per axis, SI) where that is longer (a feed
+    beyond it is clamped, `machinesim.motion.planner.move_duration`); a move without a
+    positive feed is refused naming its ``lines`` in ``source``."""
     length = _lengths(points[:-1], points[1:], axes)
     bad = ~(np.isfinite(feeds) & (feeds > 0.0))
     if bad.any():
@@ -454,7 +461,13 @@ def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple, lines: np.nda
         got = "none" if math.isnan(value) else f"F{value * 6e4:g} (mm/min)"
         raise InputError(f"{source}, line {int(lines[first])}: expected a positive feed on "
                          f"every turning move, got {got}", key="F")
-    return length / feeds
+    return np.maximum(length / feeds, _at_limits(points[:-1], points[1:], rapid_rate))
+
+
+def _at_limits(starts: np.ndarray, ends: np.ndarray, rapid_rate) -> np.ndarray:
+    """The time (s) of each move from ``starts`` to ``ends`` (rows, SI) with its slowest
+    axis at its velocity limit (``rapid_rate``, per axis, SI): no feed runs it faster."""
+    return (np.abs(ends - starts) / np.asarray(rapid_rate, dtype=np.float64)).max(axis=1)
 
 
 def _lengths(starts: np.ndarray, ends: np.ndarray, axes: tuple) -> np.ndarray:
