@@ -379,6 +379,36 @@ def test_the_steps_refuse_what_the_step_before_did_not_give():
         procedure.evaluate(lab, Identified({}, detail=None), {})
 
 
+def test_evaluate_refuses_programs_compensate_did_not_give_before_any_test():
+    # evaluate read its programs only at its end, handing them on in the evaluation: None
+    # ran every after test and cut the pyramids, then raised TypeError ('NoneType' object
+    # is not a mapping); a dict without compensate's programs was taken and reported none
+    from machinesim.experiment import Identified
+    from machinesim.procedures.xy_plane_errors import _DETAIL
+
+    class Reached(Exception):
+        pass
+
+    def stop(*args, **kwargs):
+        raise Reached
+
+    lab = machinesim.Lab("grooving_4axis", noise=False)
+    lab.laser_interferometer = lab.r_test = lab.cut = stop
+    identified = Identified({}, detail=dict.fromkeys(_DETAIL))
+    expected = ("key 'programs': XYPlaneErrors.evaluate expects the programs "
+                "XYPlaneErrors.compensate(identified) returned (a dict of 'corners_table' (a "
+                "Program), 'corners_table_yaw' (a Program) and 'corners_model' (a Program)), "
+                "got ")
+    program = ProgramBuilder(1).build()
+    for given, got in ((None, "NoneType None"), ({}, "a dict without 'corners_table', "
+                                                     "'corners_table_yaw' and 'corners_model'"),
+                       ({"corners_table": program, "corners_table_yaw": program},
+                        "a dict without 'corners_model'")):
+        with pytest.raises(MachineSimError) as refused:
+            XYPlaneErrors().evaluate(lab, identified, given)
+        assert str(refused.value) == expected + got
+
+
 def test_a_diagonal_from_a_compensated_corner_an_ulp_off_is_read_not_refused():
     # with these errors and seed 1 the compensated command at the diagonal's start differs
     # from the corner's by 2.8e-17 m: that was taken as a move of zero length and refused

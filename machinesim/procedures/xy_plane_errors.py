@@ -46,7 +46,11 @@ from machinesim.identification.c_axis_squareness import (
 from machinesim.identification.xy_plane import fit_xy_plane
 from machinesim.nc import ProgramBuilder
 from machinesim.procedures.pyramid_windows import cut_and_read
-from machinesim.procedures.step_inputs import check_identified, check_measurements
+from machinesim.procedures.step_inputs import (
+    check_identified,
+    check_measurements,
+    check_programs,
+)
 from machinesim.procedures.xy_plane_measurements import (
     PLATE,
     LaserSetups,
@@ -183,13 +187,15 @@ class XYPlaneErrors:
         table, model = compensations(identified)
         program = _corners_program()
         machine = identified.detail["machine"]
-        return {"corners_table": table.program(program, machine),
+        return {"corners_table": table.program(program, machine),  # the keys of _PROGRAMS
                 "corners_table_yaw": with_yaw(identified).program(program, machine),
                 "corners_model": model.program(program)}
 
     def evaluate(self, lab, identified: Identified, programs) -> Evaluation:
         check_lab(lab)
         check_identified(identified, "XYPlaneErrors", "evaluate", _DETAIL)
+        # the programs are handed on in the evaluation, after every test: checked here
+        check_programs(programs, "XYPlaneErrors", _PROGRAMS)
         # set up again, not the before tests' instruments: with the same labels their noise
         # streams were the same, and the after readings repeated the before's noise, which
         # the compensation had taken as error (the map after read 0.010 / 0.0078 um where
@@ -321,6 +327,8 @@ class XYPlaneErrors:
 _DETAIL = dict.fromkeys(("map", "fit", "c", "machine", "diagonals", "work_diagonals",
                          "diagonal_before", "work_diagonal_before", "diagonal_squareness",
                          "eq2_squareness", "yaw_y"), object)
+#: What `XYPlaneErrors.compensate` returns, which `evaluate` hands on in its evaluation.
+_PROGRAMS = ("corners_table", "corners_table_yaw", "corners_model")
 #: What `XYPlaneErrors.measure` returns, which `identify` reads.
 _MEASUREMENTS = {"xy": XYPlaneMeasurements, "c": CTests, "machine": object}
 
