@@ -138,6 +138,22 @@ def test_a_nose_wider_than_a_concave_curvature_is_noted_naming_design_radius_and
                      2.1e-3)  # convex: no limit
 
 
+def test_cutting_points_pickle_as_before_without_their_design():
+    # since the points kept their design for the gouging check, pickling them raised
+    # "Can't pickle local object 'sine_grid.<locals>.height'" (a design is closures); they
+    # pickle again, their arrays to the bit, the design left behind
+    import pickle
+
+    spiral = sp.Spiral(0.12e-3, 1e-6)
+    points = sp.cutting_points(sp.sine_grid(), spiral, sp.constant_angle(spiral, 0.5))
+    assert points.design is not None
+    back = pickle.loads(pickle.dumps(points))
+    for name in ("theta", "rho", "z", "slope"):
+        assert np.array_equal(getattr(back, name), getattr(points, name))
+    assert back.design is None and points.design is not None
+    np.testing.assert_array_equal(sp.tool_path(back, 1e-3).x, sp.tool_path(points, 1e-3).x)
+
+
 def rotational(coefficients):
     """z = sum c_k rho^k: along the spiral (rho linear in theta) a polynomial in theta."""
     def height(x, y):

@@ -280,6 +280,9 @@ class CuttingPoints:
         Radial slope dz/drho = tan(phi) (eq 13).
     design : Design, optional
         The design they were taken from (`cutting_points`), for `tool_path`'s gouging check.
+        Not pickled (a design's height and slope are closures, which pickle cannot take):
+        unpickled (or `copy`-ed) points hold None, and `tool_path` makes their path without
+        the check.
     """
 
     theta: np.ndarray
@@ -298,6 +301,10 @@ class CuttingPoints:
 
     def __len__(self) -> int:
         return self.theta.size
+
+    def __getstate__(self) -> dict:
+        # the points pickled as they did before they kept their design
+        return {**self.__dict__, "design": None}
 
 
 def cutting_points(design: Design, spiral: Spiral, theta) -> CuttingPoints:
