@@ -347,6 +347,18 @@ def test_bad_inputs_raise_input_error(paths, roi, message):
         remove(block(1e-3, 1e-3, 1e-3), VTool(math.pi / 2), paths, roi=roi)
 
 
+@pytest.mark.parametrize(("tool", "got"), [("v:90", "str 'v:90'"), (None, "NoneType None")])
+def test_a_tool_that_is_no_tool_object_is_refused_by_name(tool, got):
+    # remove read tool.rotational first: AttributeError 'str' object has no attribute
+    # 'rotational' (cut() takes the spec; remove, the engine, a tool object)
+    with pytest.raises(InputError) as caught:
+        remove(block(1e-3, 1e-3, 1e-3), tool, [np.stack([np.eye(4)] * 2)])
+    assert str(caught.value) == (
+        "key 'tool': Expected tool as a tool object (machinesim.tools: VTool, RoundNoseTool, "
+        f"BallEndMill, FlatEndMill), got {got}; a spec such as 'v:90' is made one by "
+        "machinesim.tool_specs.tool_from_spec")
+
+
 def test_overlapping_windows_count_their_common_part_once():
     depth = 6e-6
     stock = block(4e-3, 4e-3, 1e-3)

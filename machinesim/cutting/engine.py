@@ -76,7 +76,7 @@ from machinesim.cutting.tiling import (
     tile_box,
     union_runs,
 )
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, brief
 from machinesim.rotations import not_rigid
 from machinesim.tolerances import (
     CLIP_MARGIN_REL,
@@ -84,7 +84,7 @@ from machinesim.tolerances import (
     PLANAR_TRAVEL_REL,
     RIGID_TOL,
 )
-from machinesim.tools import arc_segments
+from machinesim.tools import Tool, arc_segments
 from machinesim.workpiece import Part
 
 #: Sweeps travelling within this angle (rad) in XY are cut together as one parallel group.
@@ -378,6 +378,11 @@ def remove(
     report : EngineReport
     """
     start = time.perf_counter()
+    if not isinstance(tool, Tool):  # a spec or None read .rotational: an AttributeError
+        raise InputError(f"Expected tool as a tool object (machinesim.tools: VTool, "
+                         f"RoundNoseTool, BallEndMill, FlatEndMill), got "
+                         f"{type(tool).__name__} {brief(repr(tool))}; a spec such as 'v:90' "
+                         "is made one by machinesim.tool_specs.tool_from_spec", key="tool")
     paths = _check_paths(paths)
     _check_turns(paths, bool(tool.rotational))
     if method not in ("auto", "boolean"):
