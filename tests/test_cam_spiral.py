@@ -138,6 +138,23 @@ def test_a_nose_wider_than_a_concave_curvature_is_noted_naming_design_radius_and
                      2.1e-3)  # convex: no limit
 
 
+@pytest.mark.parametrize(("theta", "message"), [
+    # np.array(theta, dtype=float) took the strings as angles and raised numpy's ValueError
+    # ('setting an array element with a sequence') on a ragged list
+    (["0", "1"], "key 'theta': Expected theta as angles (rad), got ['0', '1']"),
+    ([[0.0, 1.0], [2.0]], "key 'theta': Expected theta as angles (rad) in a regular "
+                          "(non-ragged) array, got [[0.0, 1.0], [2.0]]"),
+])
+def test_cutting_points_take_no_text_or_ragged_angles(theta, message):
+    spiral = sp.Spiral(0.12e-3, 1e-6)
+    with pytest.raises(InputError) as caught:
+        sp.cutting_points(sp.sine_grid(), spiral, theta)
+    assert str(caught.value) == message
+    # numbers as before: rho by eq 4 at 0 and 1 rad
+    points = sp.cutting_points(sp.sine_grid(), spiral, (0, np.float32(1.0)))
+    assert points.rho.tolist() == [0.12e-3, 0.12e-3 - 1e-6 / (2 * math.pi)]
+
+
 def test_cutting_points_pickle_as_before_without_their_design():
     # since the points kept their design for the gouging check, pickling them raised
     # "Can't pickle local object 'sine_grid.<locals>.height'" (a design is closures); they

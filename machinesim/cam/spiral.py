@@ -51,7 +51,7 @@ from machinesim.cam.designs import (
     tilted_plane,
 )
 from machinesim.exceptions import InputError, MachineSimWarning, brief, check_length
-from machinesim.metrology._arrays import as_number
+from machinesim.metrology._arrays import as_floats, as_number
 from machinesim.nc import AXES, KIND_LINEAR, KIND_RAPID, Program
 from machinesim.units import M_PER_MM, M_PER_UM, RAD_PER_DEG
 
@@ -310,7 +310,7 @@ class CuttingPoints:
 def cutting_points(design: Design, spiral: Spiral, theta) -> CuttingPoints:
     """The designed surface at the spiral's points ``theta`` (rad): z(rho, theta) and the
     radial slope (eq 13) for the nose compensation."""
-    theta = np.array(theta, dtype=np.float64)
+    theta = as_floats(theta, "theta", "angles (rad)")  # ["0", "1"] are no angles
     if theta.ndim != 1 or theta.size < 2 or not np.isfinite(theta).all():
         raise InputError(f"Expected at least 2 finite angles, shape (N,), got {theta.shape}",
                          key="theta")
