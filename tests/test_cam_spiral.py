@@ -155,6 +155,26 @@ def test_cutting_points_take_no_text_or_ragged_angles(theta, message):
     assert points.rho.tolist() == [0.12e-3, 0.12e-3 - 1e-6 / (2 * math.pi)]
 
 
+@pytest.mark.parametrize(("arrays", "message"), [
+    # spiral_program raised numpy's 'could not broadcast input array from shape (5,) into
+    # shape (4,)' for a short X, an NCProgramError 'move 2 drops axis Z' for a NaN Z, and
+    # interpolate 'list' object has no attribute 'size' for lists
+    ((np.arange(3.0), np.ones(2), np.zeros(3)), "key 'path': Expected path.c, path.x and "
+     "path.z as 1-D arrays of one length, got shapes (3,), (2,), (3,)"),
+    ((np.arange(3.0), np.ones(3), np.array([0.0, np.nan, 0.0])),
+     "key 'path.z': Expected finite path.z, got a NaN or infinity at index 1"),
+    (("abc", [1.0], [2.0]), "key 'path.c': Expected path.c as numbers (rad, m), got 'abc'"),
+])
+def test_a_tool_path_made_by_hand_is_checked_when_made(arrays, message):
+    with pytest.raises(InputError) as caught:
+        sp.ToolPath(*arrays)
+    assert str(caught.value) == message
+    # lists of numbers are taken as the arrays they hold, read-only as tool_path's
+    path = sp.ToolPath([0.0, 1.0, 2.0], [1e-3] * 3, [0.0] * 3)
+    assert path.x.tolist() == [1e-3] * 3 and not path.x.flags.writeable
+    assert len(sp.interpolate(path, "spline", 2)) == 5
+
+
 def test_cutting_points_pickle_as_before_without_their_design():
     # since the points kept their design for the gouging check, pickling them raised
     # "Can't pickle local object 'sine_grid.<locals>.height'" (a design is closures); they

@@ -352,6 +352,22 @@ class ToolPath:
     x: np.ndarray
     z: np.ndarray
 
+    def __post_init__(self) -> None:
+        # a path made by hand: each a finite float64 array, all of one length (a short X
+        # was numpy's broadcast ValueError in spiral_program, a NaN a modal-axis refusal)
+        arrays = [as_floats(getattr(self, name), f"path.{name}", "numbers (rad, m)")
+                  for name in ("c", "x", "z")]
+        if any(a.ndim != 1 for a in arrays) or len({a.size for a in arrays}) != 1:
+            raise InputError(f"Expected path.c, path.x and path.z as 1-D arrays of one "
+                             f"length, got shapes {', '.join(str(a.shape) for a in arrays)}",
+                             key="path")
+        for name, array in zip(("c", "x", "z"), arrays, strict=True):
+            if not np.isfinite(array).all():
+                raise InputError(f"Expected finite path.{name}, got a NaN or infinity at "
+                                 f"index {int(np.flatnonzero(~np.isfinite(array))[0])}",
+                                 key=f"path.{name}")
+            object.__setattr__(self, name, frozen(array, copy=False))
+
     def tips(self) -> np.ndarray:
         """Tip positions in the workpiece frame, (X cos C, X sin C, Z), shape (N, 3), m."""
         return np.column_stack([self.x * np.cos(self.c), self.x * np.sin(self.c), self.z])
