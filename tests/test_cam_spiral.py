@@ -1,6 +1,7 @@
 """STS tool paths (machinesim.cam.spiral): paper 004's eqs 3-11 and 18-19, the program."""
 
 import math
+import re
 import warnings
 
 import numpy as np
@@ -483,3 +484,31 @@ def test_angles_must_increase_within_the_spiral():
         with pytest.raises(InputError, match=r"path\.c strictly increasing .* got 1\.0 rad at "
                                              r"index 1 after 2\.0"):
             sp.interpolate(backwards, method, 2)
+
+
+def test_spiral_program_takes_c_increasing_as_interpolate_does():
+    # the CAM cuts the spiral turning C one way, C = theta increasing (ToolPath); the
+    # program of a path turning back was written without a word: a repeated C made a block
+    # that turns no C (the lathe leaves it uncut, ending the run there), a C going back was
+    # refused only when turned ('turns back between points 1 and 2', naming no block), and
+    # servo_path.path_times ran the time backwards, so the loops lagged nothing
+    from machinesim.cutting.servo_path import path_times
+
+    backwards = sp.ToolPath(np.array([2.0, 1.0, 0.0]), np.array([20.0, 10.0, 0.0]) * 1e-6,
+                            np.zeros(3))
+    words = ("Expected path.c strictly increasing (the spindle turning one way), got 1.0 rad "
+             "at index 1 after 2.0")
+    for call in (sp.spiral_program, sp.interpolate, path_times):
+        with pytest.raises(InputError, match=re.escape(words)) as caught:
+            call(backwards)
+        assert caught.value.key == "path.c"
+    still = sp.ToolPath(np.array([0.0, 1.0, 1.0, 2.0]), np.full(4, 1e-4), np.zeros(4))
+    with pytest.raises(InputError, match=re.escape("got 1.0 rad at index 2 after 1.0")):
+        sp.spiral_program(still)
+    # C increasing: the program as before, its C the path's, at 360 x 20 deg/min
+    ahead = sp.ToolPath(np.array([0.0, 1.0, 2.0]), np.array([20.0, 10.0, 0.0]) * 1e-6,
+                        np.zeros(3))
+    program = sp.spiral_program(ahead)
+    assert np.array_equal(program.targets[1:-1, AXES.index("C")], [0.0, 1.0, 2.0])
+    assert program.feeds[2] == pytest.approx(7200.0 * 1e-3 / 60.0)
+    assert np.array_equal(path_times(ahead), np.array([0.0, 1.0, 2.0]) / (40.0 * math.pi / 60.0))

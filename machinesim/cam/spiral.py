@@ -236,8 +236,10 @@ def _check_points(count: float, what: str, key: str) -> None:
 
 def _check_increasing(angles: np.ndarray, name: str) -> None:
     """Refuse angles (rad) that do not increase strictly: the spiral is cut turning one way,
-    and the interpolations need it (`numpy.interp` read decreasing angles silently wrong,
-    the spline refused them in scipy's words)."""
+    C = theta increasing, as `ToolPath` holds it, and each step of the CAM needs it
+    (`numpy.interp` read decreasing angles silently wrong, the spline refused them in
+    scipy's words, `spiral_program` made a block of a repeated C that the lathe does not
+    cut, `machinesim.cutting.servo_path.path_times` ran the time backwards)."""
     back = np.flatnonzero(np.diff(angles) <= 0.0)
     if back.size:
         i = int(back[0]) + 1
@@ -535,7 +537,9 @@ def spiral_program(path: ToolPath, *, spindle_rpm: float = SPINDLE_RPM,
     ``spindle_rpm`` deg/min: with the FANUC feed of a move that turns C (the move length
     counts degrees as millimetres; `machinesim.motion`) the spindle then turns at
     ``spindle_rpm`` up to (dX^2 + dZ^2) / (2 dC^2) relative (X, Z in mm, C in deg), below
-    1e-9 for the paper's paths; ``spindle_rpm`` at most `MAX_SPINDLE_RPM`. ``start_c`` (rad)
+    1e-9 for the paper's paths; ``spindle_rpm`` at most `MAX_SPINDLE_RPM`. The path's C
+    increases strictly, as `interpolate` takes it (InputError naming the first step back).
+    ``start_c`` (rad)
     is added to C (the spindle's position at
     the start; ``sts_lathe`` allows |C| <= 1e5 rad, i.e. 15,915 revolutions).
 
@@ -547,6 +551,7 @@ def spiral_program(path: ToolPath, *, spindle_rpm: float = SPINDLE_RPM,
     """
     if not isinstance(path, ToolPath):
         raise InputError(f"Expected a ToolPath, got {type(path).__name__}", key="path")
+    _check_increasing(path.c, "path.c")
     rpm = _positive(spindle_rpm, "spindle_rpm")
     if rpm > MAX_SPINDLE_RPM:
         raise InputError(f"Expected spindle_rpm <= {MAX_SPINDLE_RPM:.6g} rpm (sts_lathe's C "

@@ -12,15 +12,17 @@ import math
 
 import numpy as np
 
-from machinesim.cam.spiral import SPINDLE_RPM, ToolPath
+from machinesim.cam.spiral import SPINDLE_RPM, ToolPath, _check_increasing
 from machinesim.cutting.turning import EdgePath
 from machinesim.exceptions import InputError
 
 
 def path_times(path: ToolPath, spindle_rpm: float = SPINDLE_RPM) -> np.ndarray:
-    """Time of each point of ``path`` (s) at a constant spindle speed, from 0."""
+    """Time of each point of ``path`` (s) at a constant spindle speed, from 0; its C
+    increases strictly (as `machinesim.cam.spiral.interpolate` takes it)."""
     if not (spindle_rpm > 0.0) or not math.isfinite(spindle_rpm):
         raise InputError(f"Expected spindle_rpm > 0, got {spindle_rpm!r}", key="spindle_rpm")
+    _check_increasing(path.c, "path.c")  # times running backwards: a servo lags nothing
     return (path.c - path.c[0]) / (2.0 * math.pi * spindle_rpm / 60.0)
 
 
