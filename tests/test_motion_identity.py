@@ -173,8 +173,13 @@ def test_a_servo_model_follows_feed_runs_as_one_motion(machines):
     machine = machines["grooving_4axis"]
     program = random_program(machine, np.random.default_rng(7), 25)
     servo = LagServo(0.05)
-    assert_same(plan(program, machine, servo=servo),
-                reference.plan(program, machine, servo=servo))
+    # at 1 um the followed steps keep the chord rule (at 1 nm the lag's catch-up after a
+    # rapid breaks it, and the planner follows those runs again on a finer sampling, which
+    # the reference, move by move, does not: tests/test_servo_following.py); the three
+    # motions whose settling step (the lag at their end) the planner splits still start and
+    # end on the command
+    assert_same(plan(program, machine, servo=servo, chord_tolerance=1e-6),
+                reference.plan(program, machine, servo=servo, chord_tolerance=1e-6))
 
 
 def test_exact_stops_end_the_servo_s_feed_runs_as_the_reference_does(machines):

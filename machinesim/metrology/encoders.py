@@ -118,7 +118,7 @@ class Encoders:
         corner, a ramp's error building up) is seen. At most `MAX_RECORDED_SAMPLES` samples.
         """
         from machinesim import motion
-        from machinesim.motion.planner import follow_runs
+        from machinesim.motion.following import follow_runs
 
         trajectory = motion.plan(program, self.machine, None, start=start)
         t = np.asarray(trajectory.t, dtype=np.float64)

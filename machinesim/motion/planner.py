@@ -10,6 +10,7 @@ import numpy as np
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps
 from machinesim.motion.faces import face_substeps
+from machinesim.motion.following import StepRule, follow_plan
 from machinesim.motion.steps import wrap_steps
 from machinesim.motion.trajectory import IdealServo, ServoModel, Trajectory
 from machinesim.nc.program import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
@@ -137,13 +138,17 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         also ends at an exact stop (`Program.exact_stops`: G09, G61). Each motion ends in
         position: its last sample is the command's end, so the tool goes on from the last
         lagged sample to it (the time the axes take to settle is not added to the
-        program's). `Trajectory.peak_lag` keeps each axis' largest lag.
+        program's). `Trajectory.peak_lag` keeps each axis' largest lag. The followed
+        samples keep the commanded sub-steps' rules (the chord tolerance, at most 45 deg a
+        step): a motion is followed again on a finer sampling where they do not, and its
+        settling step split (`machinesim.motion.following`).
 
     Raises
     ------
     NCProgramError
         At the first move (in program order) that sets an axis the machine lacks, feeds
-        without a feed rate, or would need more than `MAX_SUBSTEPS` sub-steps.
+        without a feed rate, or would need more than `MAX_SUBSTEPS` sub-steps; at a move
+        whose followed path (``servo``) would, naming the servo model.
     """
     _check_program(program)
     if isinstance(machine, str | os.PathLike):
@@ -290,18 +295,15 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     # times add up move after move from 0.0, as a running sum does (np.cumsum is sequential)
     clock = np.cumsum(np.concatenate([[0.0], durations]))
     cutting = float(np.cumsum(np.concatenate([[0.0], durations[kinds == KIND_LINEAR]]))[-1])
-    q, t, offsets = _samples(starts, delta, clock[:-1], durations, steps)
     peak_lag = None
     if servo is not None and type(servo) is not IdealServo:
-        commanded = q.copy()
-        settled = follow_runs(servo, q, t, offsets, kinds,
-                              getattr(program, "exact_stops", ()))
-        lag = np.abs(commanded - q)
-        peak_lag = lag.max(axis=0) if len(lag) else np.zeros(n_axes)
-        # each motion ends in position (a rapid or a dwell follows, or an exact stop): the
-        # axes settle onto the command's end, the tool moving on from the lagged point
-        q[settled] = commanded[settled]
-        peak_lag.flags.writeable = False
+        # the followed path held to the rules the commanded sub-steps keep (`following`)
+        rule = StepRule(machine, errors, points, bending, chord_tolerance, face_radius)
+        q, t, offsets, peak_lag = follow_plan(
+            servo, lambda split: _samples(starts, delta, clock[:-1], durations, split),
+            steps, kinds, getattr(program, "exact_stops", ()), rule, lines, source)
+    else:
+        q, t, offsets = _samples(starts, delta, clock[:-1], durations, steps)
     q.flags.writeable = False
     t.flags.writeable = False
     offsets.flags.writeable = False
@@ -534,58 +536,6 @@ def _sample_moves(first, last, starts, delta, t0, durations, steps, offsets, q, 
     column *= fraction
     column += t0[move]
     t[a:b] = column
-
-
-def follow_runs(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray,
-                kinds: np.ndarray, exact_stops=()) -> np.ndarray:
-    """Apply ``servo.follow`` to the program's motions, in place; the last row of each motion.
-
-    A run of consecutive feed moves is one continuous motion: the control passes from block
-    to block without stopping (FANUC's cutting mode, G64), so the loops carry their lag
-    across the blocks, as around the chords of an arc (a circle's radius is then off by
-    ``r (|G(jw)| - 1)``, the loops' closed-loop response at its frequency). A run ends after
-    a move that ends in an exact stop (``exact_stops``, move indices: G09, G61), where the
-    control waits for the axes to be in position. The run is followed in one call, entered
-    from rest on its first point; each sample shared by two of its moves (one's end, the
-    next one's start) is given once and reached once. A rapid and a dwell are each followed
-    alone, from rest (a rapid ends in position, and the axes settle in a dwell).
-
-    Returns the row of ``q`` that ends each motion, where the followed value is the lag the
-    axes still have when the command arrives: `plan` puts the axes in position there.
-    """
-    bounds = offsets.tolist()
-    count = len(kinds)
-    feed = np.asarray(kinds) == KIND_LINEAR
-    stops = np.zeros(count, dtype=bool)
-    stops[np.asarray(exact_stops, dtype=np.int64)] = True
-    ends = []
-    first = 0
-    while first < count:
-        last = first + 1
-        if feed[first]:
-            while last < count and feed[last] and not stops[last - 1]:
-                last += 1
-        a, b = bounds[first], bounds[last]
-        # the rows of the motion, each shared boundary once (a move's start row is the
-        # previous move's end row)
-        shared = np.asarray(bounds[first + 1:last], dtype=np.int64)
-        rows = np.setdiff1d(np.arange(a, b), shared, assume_unique=True)
-        followed = np.asarray(servo.follow(t[rows].copy(), q[rows].copy()), dtype=np.float64)
-        if followed.shape != (len(rows), q.shape[1]):
-            raise InputError(f"servo.follow must return axis values of shape "
-                             f"({len(rows)}, {q.shape[1]}), got {followed.shape}")
-        if not np.all(np.isfinite(followed)):
-            bad = int(np.argmax(~np.all(np.isfinite(followed), axis=1)))
-            raise InputError(f"servo.follow returned axis values that are not finite (NaN or "
-                             f"inf) at t = {t[rows][bad]:.6g} s of the program (the servo "
-                             f"model {type(servo).__name__}): nothing is cut with them",
-                             key="servo")
-        q[rows] = followed
-        q[shared] = q[shared - 1]
-        if b > a:
-            ends.append(b - 1)
-        first = last
-    return np.asarray(ends, dtype=np.int64)
 
 
 __all__ = ["LONG_DWELL_S", "MAX_SUBSTEPS", "SLOW_MOVE_S", "move_duration", "plan",
