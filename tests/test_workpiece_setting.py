@@ -556,6 +556,14 @@ def test_bad_inputs_are_refused(groove_stock):
         cam.crown_passes(top_rows=(1.0, 0.0))
     with pytest.raises(InputError, match="experiment in grooves, crown"):
         RobotLoadedWorkpiece("prism")
+    # bool("off") is True: the nose stayed on the path, "no" cut the quick windows
+    for flag in ("nose_correction", "all_layers", "quick", "after_only"):
+        for value in ("off", "no", 0, None):
+            with pytest.raises(InputError, match=f"key '{flag}': Expected {flag} as True or "
+                               "False, got "):
+                RobotLoadedWorkpiece("grooves", **{flag: value})
+    assert RobotLoadedWorkpiece("crown", nose_correction=False).nose == 0.0
+    assert RobotLoadedWorkpiece("crown", nose_correction=np.bool_(True)).nose > 0.0
     with pytest.raises(InputError, match="no axis A"):
         cut_turned(program, MACHINE, turn_axis="A")
 

@@ -74,6 +74,7 @@ from machinesim.identification.workpiece_setting import (
     parameters,
 )
 from machinesim.identification.workpiece_setting_uncertainty import contact_std, design_std
+from machinesim.metrology._arrays import as_flag
 from machinesim.metrology.crown_image import crown_image_reading, turned_placements
 from machinesim.metrology.part_features import crown_features, groove_depths
 from machinesim.nc import Program
@@ -245,10 +246,12 @@ class RobotLoadedWorkpiece:
             raise InputError(f"Expected an experiment in {', '.join(EXPERIMENTS)}, got "
                              f"{experiment!r}", key="experiment")
         self.experiment = experiment
-        self.nose = NOSE if nose_correction else 0.0
-        self.all_layers = bool(all_layers)
-        self.quick = bool(quick)
-        self.after_only = bool(after_only)
+        # True or False only: bool("off") is True, so nose_correction="off" kept the nose on
+        # the path and quick="no" cut the small windows
+        self.nose = NOSE if as_flag(nose_correction, "nose_correction") else 0.0
+        self.all_layers = as_flag(all_layers, "all_layers")
+        self.quick = as_flag(quick, "quick")
+        self.after_only = as_flag(after_only, "after_only")
         self.plan = plan
         self.crown = crown
         self.progress = progress
