@@ -332,12 +332,21 @@ def test_bad_curves_and_commands_are_refused():
     ({"runs": 0}, "runs"),                          # refused as ISO 230-2's 'up', not runs
     ({"runs": 1}, "runs"),
     ({"runs": True}, "runs"),
+    ({"uniform_targets": "no"}, "uniform_targets"),  # ran uniform targets ("no" is true)
+    ({"uniform_targets": 0}, "uniform_targets"),
+    ({"sensor_sigma": float("nan")}, "sensor_sigma"),  # refused in measure as 'sigma'
+    ({"sensor_sigma": -1e-9}, "sensor_sigma"),
+    ({"sensor_sigma": "1e-8"}, "sensor_sigma"),
+    ({"interferometer_resolution": -1e-9}, "interferometer_resolution"),  # 'resolution'
+    ({"interferometer_resolution": float("inf")}, "interferometer_resolution"),
 ])
 def test_bad_parameters_are_refused_by_name_before_anything_runs(options, key):
     with pytest.raises(MachineSimError, match=f"key '{key}': Expected .*got "
                        f"{re.escape(repr(next(iter(options.values()))))}"):
         XYPlaneErrors(**options)
     XYPlaneErrors(runs=2, c_step_deg=np.float64(45.0), c_radius=np.float64(0.05))  # taken
+    XYPlaneErrors(uniform_targets=np.bool_(False), sensor_sigma=0.0,
+                  interferometer_resolution=np.float64(0.0))  # taken
 
 
 def test_the_steps_refuse_what_is_no_lab():

@@ -144,6 +144,19 @@ class XYPlaneErrors:
                 or self.runs < 2:
             raise InputError(f"Expected runs as a whole number >= 2 of runs per direction "
                              f"(ISO 230-2 asks 5), got {self.runs!r}", key="runs")
+        # uniform_targets="no" ran uniform targets (a str is true); a bad sensor_sigma or
+        # interferometer_resolution was refused only inside measure, named 'sigma' or
+        # 'resolution', the instruments' words, not the procedure's field
+        if not isinstance(self.uniform_targets, bool | np.bool_):
+            raise InputError(f"Expected uniform_targets as True or False, got "
+                             f"{self.uniform_targets!r}", key="uniform_targets")
+        for name, value in (("sensor_sigma", self.sensor_sigma),
+                            ("interferometer_resolution", self.interferometer_resolution)):
+            if value is None and name == "interferometer_resolution":
+                continue
+            if not (_real(value) and math.isfinite(value) and value >= 0.0):
+                raise InputError(f"Expected {name} as a length >= 0 (m, a number), got "
+                                 f"{value!r}", key=name)
 
     # ------------------------------------------------------------------------------ steps
 
