@@ -492,6 +492,14 @@ def test_the_scenario_refuses_errors_beyond_the_capture_range_before_cutting(tmp
      "robonano_ui), got 'a'"),
     ({"theta1": math.nan}, "key 'theta1': Expected theta1 as a finite angle in rad (the A "
      "axis of robonano_ui), got nan"),
+    # the tool's X at A = 0 runs along the B grooves' Y path in its own edge plane: the B
+    # plate was cut empty (0 mm^3) and read as errors beyond the capture range
+    ({"theta1": 0.0}, "key 'theta1': Expected theta1 turning the tool's cutting direction "
+     "(its own X) onto Y, +-90 or +-270 deg within 1 deg (the B grooves run along Y), got "
+     "0 rad (0 deg): the V tool would be dragged 90 deg sideways"),
+    ({"theta1": math.radians(60)}, "key 'theta1': Expected theta1 turning the tool's cutting "
+     "direction (its own X) onto Y, +-90 or +-270 deg within 1 deg (the B grooves run along "
+     "Y), got 1.04719755 rad (60 deg): the V tool would be dragged 30 deg sideways"),
 ])
 def test_a_plan_refuses_tilts_eqs_1_2_or_the_b_axis_cannot_take(fields, message):
     """Checked when the Plan is made, not after the plates are cut (minutes later)."""
@@ -505,6 +513,8 @@ def test_a_plan_takes_any_two_distinct_tilts_within_the_b_travel():
     plan = Plan(theta2=limit, theta3=-limit, theta1=-math.pi / 2)
     assert plan.tilts == (0.0, limit, -limit)
     assert Plan(theta2=np.float64(0.1), theta3=0.2).theta3 == 0.2
+    for theta1 in (-0.5, 0.5, 1.5, -1.5, 0.5 + 0.99 / 180):  # turns, the last 0.99 deg off
+        assert Plan(theta1=theta1 * math.pi).theta1 == theta1 * math.pi
 
 
 @pytest.mark.parametrize(("call", "message"), [

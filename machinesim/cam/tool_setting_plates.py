@@ -40,6 +40,7 @@ from machinesim.exceptions import InputError
 from machinesim.identification.tool_setting_6axis import MIN_DETERMINANT, b_tilt_determinant
 from machinesim.metrology._arrays import as_number
 from machinesim.nc import Program, ProgramBuilder
+from machinesim.tolerances import SIDEWAYS_WARN_RAD
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = [
@@ -111,8 +112,9 @@ class Plan:
         Depth of cut D of the B-axis grooves (m): a tilt theta adds dZ (1 - cos theta), up to
         33 um at 20 deg, and the low flank of the tilted V ends 120 um above the edge.
     theta1, theta2, theta3 : float
-        A angle that turns the cutting direction onto Y, and the two B tilts (rad), each
-        within the travel of `MACHINE` (its URDF: A +-360 deg, B +-100 deg). Eqs 1-2 need
+        A angle that turns the cutting direction onto Y (+-90 or +-270 deg, within
+        `tolerances.SIDEWAYS_WARN_RAD`), and the two B tilts (rad), each within the travel
+        of `MACHINE` (its URDF: A +-360 deg, B +-100 deg). Eqs 1-2 need
         the tilts non-zero and distinct (`b_tilt_determinant`); all three are checked when
         the plan is made (`InputError` naming the field).
     feed_mm_per_min : float
@@ -136,6 +138,17 @@ class Plan:
                                                      unit=unit))
         for name, axis in (("theta1", "A"), ("theta2", "B"), ("theta3", "B")):
             _check_angle(name, getattr(self, name), axis)
+        # The B grooves run along Y and the V tool cuts along its own X, Rz(theta1) x at A =
+        # theta1: any other theta1 drags the edge sideways (at 0 along its own plane, which
+        # removes nothing: the B plate was then read as "the errors may exceed the capture
+        # range" after the A and C plates had been cut)
+        drag = math.asin(min(1.0, abs(math.cos(self.theta1))))
+        if drag > SIDEWAYS_WARN_RAD:
+            raise InputError(f"Expected theta1 turning the tool's cutting direction (its own X) "
+                             f"onto Y, +-90 or +-270 deg within "
+                             f"{math.degrees(SIDEWAYS_WARN_RAD):g} deg (the B grooves run "
+                             f"along Y), got {_angle(self.theta1)}: the V tool would be "
+                             f"dragged {math.degrees(drag):.6g} deg sideways", key="theta1")
         if not abs(b_tilt_determinant(self.theta2, self.theta3)) > MIN_DETERMINANT:
             zero = min(abs(self.theta2), abs(self.theta3)) < abs(self.theta2 - self.theta3)
             name = ("theta2" if abs(self.theta2) <= abs(self.theta3) else "theta3") if zero \
