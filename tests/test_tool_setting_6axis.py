@@ -592,3 +592,19 @@ def test_an_end_face_missed_names_where_it_looked_and_the_capture_range():
     # the microscope's noise: tens to hundreds of nanometres, far below the 10 um face
     assert span is not None and 10 <= int(span[1]) <= 1000, str(caught.value)
     assert str(caught.value) == where.format(y=-0.0008, span=span[1])
+
+
+def test_a_plate_read_past_a_plan_names_the_plan_beside_the_capture_range():
+    """Plan(depth=40 um) with the default errors (well inside the capture range): its V is
+    80 um wide, as wide as the profiles that follow the A grooves, which then lose them at
+    5.5 mm. The refusal said only 'the errors may exceed the plan's capture range'; it now
+    names the plan's fields that are not the paper's (depth 35 um is read: tested by hand)."""
+    lab = Lab(MACHINE, errors_of([250 * UM, 350 * UM, 150 * UM], [100 * UM, 850 * UM]),
+              noise=False)
+    with pytest.raises(InputError) as caught:
+        ToolSetting6Axis(plan=Plan(depth=40 * UM)).measure(lab)
+    assert str(caught.value).endswith(
+        "an end face is a step of the 40 um cut depth); the errors may exceed the plan's "
+        "capture range (|dx|, |dy|, |dz| <= 0.5 mm, |e| <= 1 mm), or the plan's depth = 40 "
+        "um (not the paper's) beyond what the plates' layout and reading windows are sized "
+        "for"), str(caught.value)

@@ -56,6 +56,8 @@ TOUCH_WINDOW = OFFSET_RANGE + 0.25 * M_PER_MM
 #: What a plate reading that finds no groove, or no end, where the layout puts one adds:
 #: the plan's capture range (`CAPTURE_RANGE`), worded as paper 000's scenario words its own.
 BEYOND_CAPTURE = f"the errors may exceed the plan's capture range ({CAPTURE_RANGE})"
+#: The paper's plan, for which the plates' layout and the reading windows are sized.
+PAPER_PLAN = Plan()
 #: Half width (m) of the windows across the A grooves and along them about their programmed
 #: end: how far a groove lands from its programmed place (`A_REACH`, 2.707 mm) and 43 um
 #: more, a landed groove's 10 um half width and flat plate beside it (set as A_REACH + 0.25
@@ -163,8 +165,27 @@ def _cutting_blocks(program: Program, machine) -> list[tuple[np.ndarray, np.ndar
             if move.kind == "linear" and (q[n, x] != before[n, x] or q[n, y] != before[n, y])]
 
 
-def _fits(part, microscope, origin, along, stations, half_width, what):
-    """Grooves across profiles at ``stations`` along ``along`` from ``origin``: (VGroove, xy)."""
+def _beyond(plan: Plan) -> str:
+    """What a plate reading that finds no groove, or no end, adds: the capture range, and
+    the plan's fields that are not the paper's (the layout and the windows are sized for
+    the paper's: a V 40 um deep is 80 um wide, the A grooves' tracking profiles 80 um)."""
+    changed = []
+    for name in ("depth", "b_depth", "theta1", "theta2", "theta3", "feed_mm_per_min"):
+        value = getattr(plan, name)
+        if value != getattr(PAPER_PLAN, name):
+            changed.append(f"{name} = {value / M_PER_UM:g} um" if "depth" in name else
+                           f"{name} = {math.degrees(value):g} deg" if "theta" in name else
+                           f"{name} = {value:g}")
+    if not changed:
+        return BEYOND_CAPTURE
+    return (f"{BEYOND_CAPTURE}, or the plan's {', '.join(changed)} (not the paper's) beyond "
+            f"what the plates' layout and reading windows are sized for")
+
+
+def _fits(part, microscope, origin, along, stations, half_width, what,
+          beyond: str = BEYOND_CAPTURE):
+    """Grooves across profiles at ``stations`` along ``along`` from ``origin``: (VGroove, xy).
+    ``beyond``: what a profile without a groove adds to its refusal (`_beyond`)."""
     across = np.array([-along[1], along[0]])
     out = []
     for t in stations:
@@ -175,7 +196,7 @@ def _fits(part, microscope, origin, along, stations, half_width, what):
             g = fit_v_groove(p.s, p.z)
         except InputError as error:
             raise InputError(f"{what}, profile {t / M_PER_MM:+.2f} mm along: {error}; "
-                             f"{BEYOND_CAPTURE}") from error
+                             f"{beyond}") from error
         out.append((g, profile_points(p0, p1, [g.centre])[0]))
     return out
 
@@ -192,7 +213,8 @@ def _reading(fits, block, stage_sigma: float, end=None) -> GrooveReading:
                             if end is not None else math.nan))
 
 
-def _end_point(part, microscope, points, spot, along, reach, depth, what) -> np.ndarray:
+def _end_point(part, microscope, points, spot, along, reach, depth, what,
+               beyond: str = BEYOND_CAPTURE) -> np.ndarray:
     """Where the centre line meets the groove's end face, known to lie within ``reach`` of
     ``spot``: a profile along the line there, then zoomed. A face is a step of the cut
     ``depth`` (m); a profile whose heights span less than half of it has none."""
@@ -213,7 +235,7 @@ def _end_point(part, microscope, points, spot, along, reach, depth, what) -> np.
                      f"{depth / M_PER_UM:g} um cut depth)")
             raise InputError(f"{what}: expected one end face within {reach / M_PER_MM:g} mm "
                              f"of (x, y) = ({x:g}, {y:g}) mm along the groove, found "
-                             f"{found}; {BEYOND_CAPTURE}")
+                             f"{found}; {beyond}")
         q0 = p0 + (steps[0] - ZOOM) * direction
         fine = microscope.profile(part, q0, q0 + 2 * ZOOM * direction, spacing=FINE_SPACING)
     return q0 + step_positions(fine.s, fine.z, level)[0] * direction
@@ -227,7 +249,7 @@ def _on_line(points, spot, along) -> tuple[np.ndarray, np.ndarray]:
     return line.point + ((np.asarray(spot) - line.point) @ direction) * direction, direction
 
 
-def _followed(part, microscope, fits, along, depth, what):
+def _followed(part, microscope, fits, along, depth, what, beyond: str = BEYOND_CAPTURE):
     """Follow a groove from its last profile out to where it ends: a short profile across
     it every `TRACK_STEP`, each centred where the line through the centres so far predicts,
     until one finds no groove at least half ``depth`` deep. Returns the fits with the new
@@ -239,7 +261,7 @@ def _followed(part, microscope, fits, along, depth, what):
         station += TRACK_STEP
         if station > SET_LENGTH + A_WINDOW:
             raise InputError(f"{what}: the groove runs on past {station / M_PER_MM:g} mm "
-                             f"from its start; {BEYOND_CAPTURE}")
+                             f"from its start; {beyond}")
         centre, direction = _on_line([xy for _, xy in fits], station * along, along)
         across = np.array([-direction[1], direction[0]])
         p0, p1 = centre - TRACK_WINDOW * across, centre + TRACK_WINDOW * across
@@ -262,10 +284,12 @@ def _read_a(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
     for (angle, turn), block in zip(grooves, blocks, strict=True):
         along = a_direction(angle, turn)
         what = f"A axis, groove at A = {math.degrees(angle):g}, C = {math.degrees(turn):g} deg"
-        fits = _fits(part, microscope, (0.0, 0.0), along, STATIONS["a"], A_WINDOW, what)
-        fits, station = _followed(part, microscope, fits, along, plan.depth, what)
+        fits = _fits(part, microscope, (0.0, 0.0), along, STATIONS["a"], A_WINDOW, what,
+                     _beyond(plan))
+        fits, station = _followed(part, microscope, fits, along, plan.depth, what,
+                                  _beyond(plan))
         end = _end_point(part, microscope, [xy for _, xy in fits], station * along, along,
-                         0.5 * TRACK_STEP + TRACK_MARGIN, plan.depth, what)
+                         0.5 * TRACK_STEP + TRACK_MARGIN, plan.depth, what, _beyond(plan))
         out.append(_reading(fits, block, microscope.stage_sigma, end))
     return tuple(out)
 
@@ -280,7 +304,8 @@ def _read_b(part, microscope, blocks, plan: Plan) -> tuple[GrooveReading, ...]:
     out = []
     for x, tilt, block in zip(B_GROOVE_X, plan.tilts, blocks, strict=True):
         fits = _fits(part, microscope, (x, 0.0), np.array([0.0, 1.0]), STATIONS["b"],
-                     B_WINDOW, f"B axis, groove at B = {math.degrees(tilt):g} deg")
+                     B_WINDOW, f"B axis, groove at B = {math.degrees(tilt):g} deg",
+                     _beyond(plan))
         out.append(_reading(fits, block, microscope.stage_sigma))
     return tuple(out)
 
@@ -293,8 +318,9 @@ def _read_c(part, microscope, blocks, plan) -> tuple[GrooveReading, ...]:
     for turn, block in zip(C_TURNS, blocks, strict=False):
         rot = rot_z(turn)[:2, :2]
         fits = _fits(part, microscope, rot @ (0.0, -TRIANGLE_R), rot @ (1.0, 0.0),
-                     STATIONS["c"], C_WINDOW, f"C axis, groove at C = {math.degrees(turn):g} deg")
+                     STATIONS["c"], C_WINDOW, f"C axis, groove at C = {math.degrees(turn):g} deg",
+                     _beyond(plan))
         out.append(_reading(fits, block, microscope.stage_sigma))
     fits = _fits(part, microscope, mark_point(), np.array([0.0, 1.0]), STATIONS["mark"],
-                 MARK_WINDOW, "C axis, reference mark")
+                 MARK_WINDOW, "C axis, reference mark", _beyond(plan))
     return (*out, _reading(fits, blocks[-1], microscope.stage_sigma))
