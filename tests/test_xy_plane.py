@@ -118,6 +118,25 @@ def test_eq2_takes_the_lasers_projections_for_lengths():
     assert meas.diagonal_squareness == pytest.approx(e, abs=3e-8)
 
 
+def test_the_ranges_take_the_peaks_between_the_grid_lines():
+    # A positioning spike of 1 um at x = 13 mm (a knot of ISO 230-2's offset targets) and
+    # a straightness dip of -0.5 um at y = -47 mm: the ranges are 1 um in X and 0.5 um in Y
+    # by hand. The 41 x 41 grid (10 mm) read 0.986 um (the spike cut at 10 and 20 mm) and
+    # 0.490 um.
+    zero = Curve.zero(*PLATE)
+    spike = Curve([-0.2, 0.013, 0.2], [0.0, 1e-6, 0.0])
+    dip = Curve([-0.2, -0.047, 0.2], [0.0, -0.5e-6, 0.0])
+    plate = XYPlaneMap(spike, zero, zero, zero, 0.0)
+    assert plate.ranges(PLATE, PLATE) == pytest.approx((1e-6, 0.0), abs=1e-20)
+    plate = XYPlaneMap(zero, zero, dip, zero, 0.0)   # X's straightness, read in Y
+    assert plate.ranges(PLATE, PLATE, reference="y") == pytest.approx((0.0, 0.5e-6),
+                                                                      abs=1e-20)
+    # knots beyond the plate are not read: the curves hold their end values there
+    wide = Curve([-0.3, 0.25], [0.0, 5.5e-6])
+    assert XYPlaneMap(wide, zero, zero, zero, 0.0).ranges(PLATE, PLATE)[0] == pytest.approx(
+        4e-6, abs=1e-18)
+
+
 def test_the_paper_form_puts_the_squareness_in_the_y_row():
     # Eq 1 as printed holds the squareness in dPy (Y the reference); ISO 230-1's EC0Y in
     # dPx. A map of squareness alone, 10 urad: 4 um over the 0.4 m plate in one row only.

@@ -133,8 +133,17 @@ class XYPlaneMap:
         insensitive to where the readings were zeroed. Which row holds the squareness
         depends on the reference axis (`deviation`); the paper's figures are
         ``reference="y"``.
+
+        Read on the count x count grid and on every knot of the curves within the ranges:
+        each row is a sum of piecewise-linear curves of x and of y (and a plane), whose
+        extremes lie on the knots, which a grid between them cuts off.
         """
-        _, _, dx, dy = self.grid(x_range, y_range, count, reference)
+        (x0, x1), (y0, y1) = _range(x_range, "x_range"), _range(y_range, "y_range")
+        xs = _with_knots(np.linspace(x0, x1, count), (self.position_x,
+                                                      self.straightness_x_in_y), x0, x1)
+        ys = _with_knots(np.linspace(y0, y1, count), (self.position_y,
+                                                      self.straightness_y_in_x), y0, y1)
+        dx, dy = self.deviation(*np.meshgrid(xs, ys, indexing="xy"), reference)
         return float(np.ptp(dx)), float(np.ptp(dy))
 
     def diagonal(self, corner, opposite, positions) -> np.ndarray:
@@ -255,6 +264,12 @@ def fit_xy_plane(machine, curves, diagonals, knots, *, sigma: float = 2e-9) -> E
                       "Y": {**table, "EYY_um": zeros, "EXY_um": zeros}}})
     obs = plane_observations(curves, diagonals, sigma, len(machine.axes), k)
     return fit(machine, obs, fit_parameters(k), prior=prior)
+
+
+def _with_knots(points: np.ndarray, curves, start: float, end: float) -> np.ndarray:
+    """``points`` and the curves' knots within [start, end], sorted, each once."""
+    knots = np.concatenate([c.positions for c in curves])
+    return np.union1d(points, knots[(knots >= start) & (knots <= end)])
 
 
 def _knots(knots) -> np.ndarray:
