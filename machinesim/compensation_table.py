@@ -58,6 +58,24 @@ class CompensationTable:
     x_index: int = 0
     y_index: int = 1
 
+    def __post_init__(self) -> None:
+        # x_index = y_index wrote the compensated Y over the compensated X in one column, a
+        # negative index took a column from the end and True was column 1, each without a word
+        if not isinstance(self.map, XYPlaneMap):
+            raise InputError(f"Expected map as an XYPlaneMap, got {type(self.map).__name__}",
+                             key="map")
+        if self.yaw_y is not None and not isinstance(self.yaw_y, Curve):
+            raise InputError(f"Expected yaw_y as a Curve or None, got "
+                             f"{type(self.yaw_y).__name__}", key="yaw_y")
+        for name in ("x_index", "y_index"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
+                raise InputError(f"Expected {name} as a column number >= 0 of the axis "
+                                 f"values, got {value!r}", key=name)
+        if self.x_index == self.y_index:
+            raise InputError(f"Expected X and Y in two columns, got x_index = y_index = "
+                             f"{self.x_index}", key="y_index")
+
     def deviation(self, x, y) -> tuple[np.ndarray, np.ndarray]:
         """The deviations (dPx, dPy) the table removes at commanded (x, y), m."""
         dx, dy = self.map.deviation(x, y)

@@ -339,6 +339,18 @@ def test_bad_curves_and_commands_are_refused():
     flat = Curve([-1.0, 1.0], [0.0, 0.0])
     with pytest.raises(MachineSimError):
         CompensationTable(XYPlaneMap(flat, flat, flat, flat, 0.0)).apply([1.0, 2.0])
+    plate = XYPlaneMap(flat, flat, flat, flat, 0.0)
+    # x_index = y_index wrote Y's compensation over X's, -1 took the last column, True the
+    # second: each without a word
+    for fields, key in (({"x_index": 1}, "y_index"), ({"y_index": -1}, "y_index"),
+                        ({"x_index": True}, "x_index"), ({"y_index": 1.0}, "y_index"),
+                        ({"yaw_y": 0.0}, "yaw_y")):
+        with pytest.raises(MachineSimError, match=f"key '{key}': Expected "):
+            CompensationTable(plate, **fields)
+    with pytest.raises(MachineSimError, match="key 'map': Expected map as an XYPlaneMap"):
+        CompensationTable(None)
+    table = CompensationTable(plate, x_index=np.int64(1), y_index=0)  # taken
+    np.testing.assert_array_equal(table.apply([[1.0, 2.0]]), [[1.0, 2.0]])
 
 
 @pytest.mark.parametrize(("options", "key"), [
