@@ -563,6 +563,15 @@ def test_bad_inputs_are_refused(groove_stock):
                                "False, got "):
                 RobotLoadedWorkpiece("grooves", **{flag: value})
     assert RobotLoadedWorkpiece("crown", nose_correction=False).nose == 0.0
+    # bare AttributeErrors at measure ('NoneType' object has no attribute 'half_width')
+    for fields, message in (({"plan": None}, "key 'plan': expected a ProbePlan"),
+                            ({"plan": {"points": 41}}, "key 'plan': expected a ProbePlan"),
+                            ({"crown": None}, "key 'crown': expected a CrownPlan"),
+                            ({"progress": "yes"}, "key 'progress': expected progress as a "
+                             "callable")):
+        with pytest.raises(InputError, match=re.escape(message)):
+            RobotLoadedWorkpiece("crown", **fields)
+    RobotLoadedWorkpiece("grooves", plan=ProbePlan(points=31), progress=print)  # taken
     assert RobotLoadedWorkpiece("crown", nose_correction=np.bool_(True)).nose > 0.0
     with pytest.raises(InputError, match="no axis A"):
         cut_turned(program, MACHINE, turn_axis="A")

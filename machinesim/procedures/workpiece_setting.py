@@ -62,7 +62,7 @@ from machinesim.cam.crown import (
 )
 from machinesim.cutting import clip_to, cut
 from machinesim.exceptions import InputError
-from machinesim.experiment import Evaluation, Identified, check_lab, fit_notes
+from machinesim.experiment import Evaluation, Identified, check_instance, check_lab, fit_notes
 from machinesim.identification.fit import Estimate
 from machinesim.identification.workpiece_setting import (
     Identification,
@@ -252,6 +252,15 @@ class RobotLoadedWorkpiece:
         self.all_layers = as_flag(all_layers, "all_layers")
         self.quick = as_flag(quick, "quick")
         self.after_only = as_flag(after_only, "after_only")
+        # plan=None, crown=None failed at measure as bare AttributeErrors ('NoneType' object
+        # has no attribute 'half_width', 'oversize'), progress="yes" as a TypeError mid-run
+        check_instance(plan, ProbePlan, "plan",
+                       "a ProbePlan (machinesim.procedures.sphere_probing), e.g. ProbePlan()")
+        check_instance(crown, CrownPlan, "crown",
+                       "a CrownPlan (machinesim.cam.crown), e.g. machinesim.cam.crown.CROWN")
+        if progress is not None and not callable(progress):
+            raise InputError(f"expected progress as a callable taking one str, or None, got "
+                             f"{type(progress).__name__} {progress!r}", key="progress")
         self.plan = plan
         self.crown = crown
         self.progress = progress
