@@ -494,6 +494,25 @@ def stdout_to_null(stream) -> None:
     os.close(null)
 
 
+def _refuse_working_folder(given: Path, target: Path) -> None:
+    """Refuse a folder to be replaced whole (`StagedFolder`) that is the working directory
+    or holds it: ``scenario --out .`` swapped the working directory out and removed it, then
+    ended in a FileNotFoundError traceback (exit 1) once it looked up the now missing
+    working directory, and the shell it ran in stood in the removed folder, seeing none of
+    the report."""
+    try:
+        here = Path(os.path.realpath(os.getcwd()))
+    except OSError:  # the working directory is gone already: nothing to protect
+        return
+    if here == target or target in here.parents:
+        where = "is" if here == target else "holds"
+        raise InputError(f"{str(given)!r} {where} the working directory "
+                         f"({str(here)!r}); the report replaces its folder whole, "
+                         "which would remove the folder this command and its shell stand "
+                         "in: expected a folder apart from it, e.g. --out report",
+                         key="out")
+
+
 class StagedFolder:
     """A folder written whole or not at all.
 
@@ -523,11 +542,15 @@ class StagedFolder:
     ------
     OSError
         When the parent or the staging folder cannot be made.
+    InputError
+        When the folder is the process's working directory or holds it (``--out .``): the
+        swap would remove the folder the process, and the shell it runs in, stand in.
     """
 
     def __init__(self, path) -> None:
         self.final = Path(path)
         self.target = Path(os.path.realpath(self.final))
+        _refuse_working_folder(self.final, self.target)
         self.commits = 0
         self.path: Path | None = None
         self.target.parent.mkdir(parents=True, exist_ok=True)

@@ -205,6 +205,38 @@ def test_a_stale_staging_folder_of_a_killed_run_is_removed(tmp_path):
     assert _siblings(out) == [] and (out / "a.md").read_text() == "a\n"
 
 
+def test_a_report_folder_that_is_the_working_directory_is_refused_before_the_run(
+        tmp_path, monkeypatch, capsys):
+    """``scenario --out .`` in an empty folder swapped the working directory out and removed
+    it, then ended in a FileNotFoundError traceback (exit 1), the shell standing in the
+    removed folder; a report folder holding the working directory is refused alike."""
+    from pathlib import Path
+
+    out = tmp_path / "report"
+    out.mkdir()
+    monkeypatch.chdir(out)
+    ran = []
+    for given in (Path("."), Path(str(out))):
+        assert scenario_status(lambda args: ran.append(1), Namespace(out=given), "s") == 2
+        err = capsys.readouterr().err
+        assert err.strip() == (
+            f"s: error: key 'out': {str(given)!r} is the working directory ({str(out)!r}); "
+            "the report replaces its folder whole, which would remove the folder this "
+            "command and its shell stand in: expected a folder apart from it, e.g. --out "
+            "report"), err
+    assert ran == [] and os.getcwd() == str(out) and list(out.iterdir()) == []
+    assert _siblings(out) == []
+    # in Python too, and for a folder that holds the working directory
+    (out / "sub").mkdir()
+    monkeypatch.chdir(out / "sub")
+    with pytest.raises(InputError, match=r"'\.\.' holds the working directory") as info:
+        StagedFolder("..")
+    assert info.value.key == "out" and [p.name for p in out.iterdir()] == ["sub"]
+    # a folder beside it is written as before
+    assert scenario_status(_report({"a.md": "a\n"}), Namespace(out=Path("../r")), "s") == 0
+    assert (tmp_path / "report" / "r" / "a.md").read_text() == "a\n"
+
+
 def test_another_hosts_live_staging_folder_is_left_alone(tmp_path, monkeypatch):
     """A report folder shared with another host (NFS) or container: its live run's staging
     folder carries a PID that is no process here, and was removed as a killed run's."""
