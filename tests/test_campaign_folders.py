@@ -197,6 +197,37 @@ def test_cli_a_tool_offset_the_lab_refuses_fails_before_any_trial(tmp_path, caps
     assert "1 m less the tool adjuster's stroke" in err
 
 
+@pytest.mark.parametrize(("procedure", "vary", "limit"), [
+    ("tool_rotation_arm", "microscope.sigma=2mm", "OPTICAL_LIMIT"),
+    ("tool_rotation_arm", "microscope.sigma=uniform:2mm,3mm", "OPTICAL_LIMIT"),
+    ("tool_rotation_arm", "microscope.sigma=normal:3mm,0.5mm", "OPTICAL_LIMIT"),
+    ("xy_plane_errors", "laser_interferometer.sigma=2m", "READOUT_LIMIT"),
+    ("workpiece_setting", "touch_probe.sigma=2m", "READOUT_LIMIT"),
+])
+def test_an_instruments_noise_beyond_what_it_takes_fails_before_any_trial(
+        tmp_path, monkeypatch, procedure, vary, limit):
+    # an instrument's noise every draw of which lies beyond its 1 mm limit (a unit slip)
+    # failed every trial with the instrument's message, the command exiting 1 after writing
+    # a campaign of failures; now refused at once, nothing written
+    ran = trials_run(monkeypatch)
+    out = tmp_path / "noise"
+    with pytest.raises(InputError) as info:
+        run(procedure, 3, vary=[vary], out=out, workers=0, progress=False, identify_only=True)
+    message = str(info.value)
+    name, text = vary.split("=")
+    assert message.startswith(f"key '--vary': the trials of {procedure} --identify-only "
+                              f"would fail one by one as they start: the errors they are "
+                              f"drawn around ({name}={text}"), message
+    assert "key 'sigma': Expected sigma <= 0.001 m" in message and limit in message
+    assert ran == [] and not out.exists()
+    # a noise some of whose draws the instrument takes runs
+    spec = CampaignSpec(procedure, 3, (parse_vary(f"{name}=uniform:0.5mm,3mm"),),
+                        identify_only=True)
+    from machinesim.campaign.preflight import check_before_trials
+
+    check_before_trials(spec)
+
+
 # ------------------------------------------------------------ folders that cannot be written
 # The suite runs as root, for whom a folder's mode bits stop no write: these folders cannot
 # be written because of what is in their way (a file) or the file system (/proc).

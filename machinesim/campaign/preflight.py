@@ -14,7 +14,12 @@ their message before anything is written.
 
 from __future__ import annotations
 
-from machinesim.campaign.distributions import LAB_PARAMETERS, Distribution, _nearest
+from machinesim.campaign.distributions import (
+    INSTRUMENTS,
+    LAB_PARAMETERS,
+    Distribution,
+    _nearest,
+)
 from machinesim.exceptions import InputError, MachineSimError
 
 __all__ = ["check_before_trials"]
@@ -38,6 +43,20 @@ def _around(dist: Distribution) -> float:
         return low if low > 0.0 else high if high < 0.0 else 0.0
     value = _nearest(dist)
     return 0.0 if value is None else value
+
+
+def _instrument(lab, kind: str, sigma: float) -> None:
+    """Build ``lab``'s instrument ``kind`` with the noise ``sigma``, as a trial's lab does
+    (`machinesim.campaign.trials._LabWithInstruments`), for its checks of ``sigma``: a
+    noise beyond what the instrument takes (1 mm, `OPTICAL_LIMIT` or `READOUT_LIMIT`, a
+    unit slip) failed every trial. A touch probe needs a part; its noise is checked as it
+    checks it (`Readout.of`)."""
+    if kind == "touch_probe":
+        from machinesim.metrology.instruments import Readout
+
+        Readout.of(sigma, 0.0, True)
+    else:
+        getattr(lab, kind)(sigma=sigma)
 
 
 def check_before_trials(spec) -> None:
@@ -66,12 +85,16 @@ def check_before_trials(spec) -> None:
         model = spec.entry.base().with_parameters(errors)
         if spec.entry.check is not None and not spec.identify_only:
             spec.entry.check(model)
-        Lab(spec.machine, model, noise=spec.noise, seed=0)
+        built = Lab(spec.machine, model, noise=spec.noise, seed=0)
+        for kind in INSTRUMENTS:  # each varied noise as its instrument takes it
+            if f"{kind}.sigma" in lab:
+                _instrument(built, kind, lab[f"{kind}.sigma"])
     except MachineSimError as error:
         at = {"normal": f" at its draw nearest zero within {NORMAL_REACH:g} sigma of its mean",
               "uniform": " at its draw nearest zero"}
         shown = [f"{name}={dist.text}{at.get(dist.kind, '')}"
-                 for name, dist in varied.items() if name not in LAB_PARAMETERS]
+                 for name, dist in varied.items()
+                 if name not in LAB_PARAMETERS or name.endswith(".sigma")]
         if "robot.repeatability" in lab:
             shown.append("the robot's landing at its mean")
         what = spec.procedure + " --identify-only" * spec.identify_only
