@@ -99,6 +99,32 @@ def file_name(text: str) -> Path:
     return Path(text)
 
 
+def input_path(text: str) -> Path:
+    """An argparse type for a file or folder to read (a program, an error model, a tool
+    table): ``text`` as a Path, refused when empty (an unset shell variable). ``Path("")`` is
+    the current folder, and the refusal quoted a '.' the user never typed (``cut '' ...``:
+    "'.': is a folder; expected the NC program file")."""
+    if not text:
+        raise argparse.ArgumentTypeError("'' is empty; expected a file name")
+    return Path(text)
+
+
+def named(text: str) -> str:
+    """An argparse type for a name or a path (``--machine``, ``view``'s target), refused
+    when empty, which read as the current folder (``view ''`` showed the folder)."""
+    if not text:
+        raise argparse.ArgumentTypeError("'' is empty; expected a name or a path")
+    return text
+
+
+def folder_path(text: str) -> Path:
+    """An argparse type for a folder to write (a scenario's ``--out``), refused when empty,
+    which read as the current folder."""
+    if not text:
+        raise argparse.ArgumentTypeError("'' is empty; expected a folder name")
+    return Path(text)
+
+
 def check_writable(path, what: str) -> Path:
     """``path`` as a Path, after checking a file can be written there (nothing is left behind).
 

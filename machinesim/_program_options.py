@@ -8,15 +8,14 @@ home, arcs are split as finely as the finest tool is drawn unless ``--chord-nm``
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from machinesim._io import check_readable_file
+from machinesim._io import check_readable_file, input_path
 
 
 def add_reading_options(parser) -> None:
     """Add ``--tools``, ``--integer-input`` and ``--chord-nm`` to ``parser`` (an argparse
     parser or argument group)."""
-    parser.add_argument("--tools", type=Path, default=None, metavar="TOOLS.toml",
+    parser.add_argument("--tools", type=input_path, default=None, metavar="TOOLS.toml",
                         help="tool table for T/D/H words and G43/G44 (TOML, units in keys); "
                              "T/M06 change the cut to a tool's length and shape (docs/nc.md)")
     parser.add_argument("--integer-input", choices=("calculator", "increment", "is-b", "is-c"),

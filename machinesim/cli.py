@@ -31,7 +31,9 @@ from machinesim._io import (
     check_readable_file,
     check_writable,
     file_name,
+    input_path,
     json_text,
+    named,
     stdout_to_null,
     write_together,
 )
@@ -93,9 +95,9 @@ def _parser() -> argparse.ArgumentParser:
         description="Run an NC program on a machine (with injected errors) and write the "
                     "machined part, and its report, together or not at all.",
         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EXAMPLES)
-    cut.add_argument("program", type=Path,
+    cut.add_argument("program", type=input_path,
                      help="FANUC-style NC program (mm, deg), e.g. grooves.nc")
-    cut.add_argument("--machine", required=True,
+    cut.add_argument("--machine", type=named, required=True,
                      help="machine name (see 'machinesim machines') or a .urdf path, "
                           "e.g. robonano_a0ib")
     cut.add_argument("--tool", required=True,
@@ -111,10 +113,10 @@ def _parser() -> argparse.ArgumentParser:
                      help="stock spec in mm: block:LxWxH (e.g. block:10x10x2, top face at "
                           "z = 0) or cylinder:RxH (e.g. cylinder:5x2), optionally placed "
                           "with @x,y,z (e.g. block:10x10x2@-5,-5,0)")
-    cut.add_argument("--errors", type=Path, default=None,
+    cut.add_argument("--errors", type=input_path, default=None,
                      help="injected errors, TOML with units in every key "
                           "(e.g. models/errors/example.toml); default: none")
-    cut.add_argument("--servo", type=Path, default=None, metavar="SERVO.toml",
+    cut.add_argument("--servo", type=input_path, default=None, metavar="SERVO.toml",
                      help="the axes' servo loops, one table per axis letter, SI with the unit "
                           "in every key (docs/cli.md); the report gives each axis' largest "
                           "following error")

@@ -17,7 +17,7 @@ from typing import NoReturn
 
 from machinesim._arguments import ArgumentParser
 from machinesim._interrupts import ctrl_c_remembered, stopped
-from machinesim._io import StagedFolder, stdout_to_null
+from machinesim._io import StagedFolder, folder_path, input_path, stdout_to_null
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim.exceptions import InputError
 from machinesim.report import STAGED, folder_key
@@ -249,7 +249,7 @@ def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentP
     """The options every scenario takes: --errors FILE.toml, --noise on|off, --seed N,
     --out DIR."""
     parser = ArgumentParser(description=description)
-    parser.add_argument("--errors", type=Path, metavar="FILE.toml",
+    parser.add_argument("--errors", type=input_path, metavar="FILE.toml",
                         help="inject this error model (any ErrorModel TOML, units in every "
                         "key) instead of the scenario's default; the scenario's own error "
                         "options, when given, are applied on top")
@@ -257,7 +257,7 @@ def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentP
                         help="instrument noise (default on, the instruments' stated models)")
     parser.add_argument("--seed", type=_seed, default=0,
                         help="seed of the noise, a non-negative integer (default 0)")
-    parser.add_argument("--out", type=Path, default=Path(default_out),
+    parser.add_argument("--out", type=folder_path, default=Path(default_out),
                         help=f"report folder (default {default_out})")
     return parser
 

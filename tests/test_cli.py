@@ -203,6 +203,43 @@ def test_a_missing_or_folder_program_is_one_line_naming_it(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_an_empty_file_or_machine_name_is_refused_as_empty_not_as_the_current_folder(
+        tmp_path, capsys):
+    # Path('') is '.': `cut '' ...` said "'.': is a folder; expected the NC program file",
+    # quoting a '.' never typed, `view ''` showed the current folder, and a scenario's
+    # --out '' wrote its report over the current folder (an unset shell variable each)
+    from machinesim.scenario_runs import scenario_arguments
+
+    out = ["--out", tmp_path / "part.ply"]
+    cases = [
+        (["cut", "", *CUT, *out], "cut", "program", "a file name"),
+        (["cut", GROOVES, *CUT, *out, "--machine", ""], "cut", "--machine", "a name or a path"),
+        (["cut", GROOVES, *CUT, *out, "--errors", ""], "cut", "--errors", "a file name"),
+        (["cut", GROOVES, *CUT, *out, "--servo", ""], "cut", "--servo", "a file name"),
+        (["cut", GROOVES, *CUT, *out, "--tools", ""], "cut", "--tools", "a file name"),
+        (["view", "", "--html", tmp_path / "v.html"], "view", "target", "a name or a path"),
+        (["view", "part.ply", "--report", ""], "view", "--report", "a file name"),
+        (["view", "part.ply", "--nominal", ""], "view", "--nominal", "a file name"),
+        (["view", "grooving_4axis", "--program", ""], "view", "--program", "a file name"),
+        (["view", "grooving_4axis", "--errors", ""], "view", "--errors", "a file name"),
+        (["view", "grooving_4axis", "--program", GROOVES, "--tools", ""], "view", "--tools",
+         "a file name"),
+    ]
+    for argv, command, option, expected in cases:
+        code, _, err = run(argv, capsys)
+        assert code == 2, (argv, err)
+        assert err.splitlines()[-1] == (f"machinesim {command}: error: argument {option}: "
+                                        f"'' is empty; expected {expected}"), (argv, err)
+        assert "'.'" not in err and "Traceback" not in err, err
+    for option, expected in (("--out", "a folder name"), ("--errors", "a file name")):
+        with pytest.raises(SystemExit) as stop:
+            scenario_arguments("a scenario", "reports/x").parse_args([option, ""])
+        assert stop.value.code == 2
+        assert capsys.readouterr().err.splitlines()[-1].endswith(
+            f"error: argument {option}: '' is empty; expected {expected}")
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("bad", ["out", "report"])
 def test_an_unwritable_output_leaves_neither_file(tmp_path, capsys, bad):
     paths = {"out": tmp_path / "part.ply", "report": tmp_path / "report.json"}

@@ -24,6 +24,8 @@ from machinesim._io import (
     check_readable_file,
     check_writable,
     file_name,
+    input_path,
+    named,
     read_json,
 )
 from machinesim._program_options import (
@@ -62,9 +64,9 @@ def add_view_parser(sub) -> argparse.ArgumentParser:
                     "browser (a meshcat server on 127.0.0.1) or as one self-contained HTML "
                     "file.",
         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EXAMPLES)
-    view.add_argument("target", help="a machine name (see 'machinesim machines') or .urdf "
-                                     "path, a part .ply, or a report folder (*.ply and "
-                                     "summary.json)")
+    view.add_argument("target", type=named,
+                      help="a machine name (see 'machinesim machines') or .urdf path, a part "
+                           ".ply, or a report folder (*.ply and summary.json)")
     view.add_argument("--html", type=file_name, default=None,
                       help="write one self-contained HTML file (no server, no network) "
                            "instead of serving live")
@@ -76,12 +78,12 @@ def add_view_parser(sub) -> argparse.ArgumentParser:
                       help="display budget per mesh; larger parts are decimated for display "
                            "only (default 200000)")
     part = view.add_argument_group("a part (PART.ply)")
-    part.add_argument("--report", type=Path, default=None,
+    part.add_argument("--report", type=input_path, default=None,
                       help="cut report JSON (from 'machinesim cut --report') shown beside it")
-    part.add_argument("--nominal", type=Path, default=None,
+    part.add_argument("--nominal", type=input_path, default=None,
                       help="nominal part .ply: colour by deviation from it (else by height)")
     machine = view.add_argument_group("a machine (MACHINE)")
-    machine.add_argument("--program", type=Path, default=None,
+    machine.add_argument("--program", type=input_path, default=None,
                          help="NC program to run and animate (mm, deg), e.g. grooves.nc")
     machine.add_argument("--tool", default="v:90",
                          help="tool spec in mm/deg: v:ANGLE, nose:RADIUS:ANGLE, ball:RADIUS, "
@@ -89,7 +91,7 @@ def add_view_parser(sub) -> argparse.ArgumentParser:
     machine.add_argument("--stock", default="block:10x10x2",
                          help="stock spec in mm, e.g. block:10x10x2@-5,-5,0 (default "
                               "block:10x10x2)")
-    machine.add_argument("--errors", type=Path, default=None,
+    machine.add_argument("--errors", type=input_path, default=None,
                          help="injected errors, TOML (default: none)")
     add_reading_options(machine)
     machine.add_argument("--duration", type=float, default=20.0,
