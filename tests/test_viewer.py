@@ -945,6 +945,26 @@ def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path
         run([str(tmp_path / "missing.ply"), "--chord-nm", "2"])
 
 
+def test_cli_refuses_tool_stock_and_duration_where_no_program_runs(tmp_path):
+    # `view robonano_a0ib --tool v:90 --stock block:1x1x1 --duration 5`, and the same on a
+    # part or a report folder, took the three and ignored them: the page showed the machine
+    # (or the part) alone and the command exited 0
+    page = str(tmp_path / "x.html")
+    for given in (["--tool", "v:90"], ["--stock", "block:1x1x1", "--duration", "5"]):
+        names, joined = ", ".join(given[::2]), " and ".join(given[::2])
+        with pytest.raises(InputError, match=f"^{names} (is|are) for the program the machine "
+                                             "runs .*: give one with --program$"):
+            run(["robonano_a0ib", *given, "--html", page])
+        with pytest.raises(InputError, match=f"^{joined} do(es)? not apply to a part"):
+            run([str(tmp_path / "part.ply"), *given, "--html", page])
+        with pytest.raises(InputError, match=f"^{joined} do(es)? not apply to a report folder"):
+            run([str(tmp_path), *given, "--html", page])
+    assert list(tmp_path.iterdir()) == []
+    # the machine alone, and with its errors, is shown as before
+    errors = Path(__file__).resolve().parents[1] / "models" / "errors" / "example.toml"
+    assert run(["robonano_a0ib", "--errors", str(errors), "--html", page]) == 0
+
+
 def test_a_report_folder_whose_summary_names_a_missing_nominal_is_warned_about(tmp_path):
     # the parts were coloured by height, as if no nominal had been named, without a word
     from machinesim.viewer import report_scene

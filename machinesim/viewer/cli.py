@@ -46,6 +46,9 @@ BAD_PORTS = frozenset({
     989, 990, 993, 995, 1719, 1720, 1723, 2049, 3659, 4045, 4190, 5060, 5061, 6000, 6566,
     6665, 6666, 6667, 6668, 6669, 6679, 6697, 10080})
 
+#: What a program is cut with and animated over when --tool, --stock, --duration are not given.
+DEFAULT_TOOL, DEFAULT_STOCK, DEFAULT_DURATION_S = "v:90", "block:10x10x2", 20.0
+
 EXAMPLES = """examples (from the repository's folder):
   machinesim view robonano_a0ib
   machinesim view grooving_4axis --program models/examples/grooves.nc --tool v:90 \\
@@ -85,16 +88,16 @@ def add_view_parser(sub) -> argparse.ArgumentParser:
     machine = view.add_argument_group("a machine (MACHINE)")
     machine.add_argument("--program", type=input_path, default=None,
                          help="NC program to run and animate (mm, deg), e.g. grooves.nc")
-    machine.add_argument("--tool", default="v:90",
+    machine.add_argument("--tool", default=None,
                          help="tool spec in mm/deg: v:ANGLE, nose:RADIUS:ANGLE, ball:RADIUS, "
                               "flat:RADIUS (default v:90)")
-    machine.add_argument("--stock", default="block:10x10x2",
+    machine.add_argument("--stock", default=None,
                          help="stock spec in mm, e.g. block:10x10x2@-5,-5,0 (default "
                               "block:10x10x2)")
     machine.add_argument("--errors", type=input_path, default=None,
                          help="injected errors, TOML (default: none)")
     add_reading_options(machine)
-    machine.add_argument("--duration", type=float, default=20.0,
+    machine.add_argument("--duration", type=float, default=None,
                          help="longest animation, s: a longer program plays faster "
                               "(default 20)")
     return view
@@ -113,7 +116,7 @@ def run_view(args: argparse.Namespace) -> int:
     budget = DISPLAY_TRIANGLES if args.max_triangles is None else args.max_triangles
     if budget < 1:
         raise InputError(f"--max-triangles {budget}: expected a positive count")
-    if not (math.isfinite(args.duration) and args.duration > 0.0):
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0.0):
         raise InputError(f"--duration {args.duration}: expected a positive number of seconds")
     if args.port is not None and not 0 < args.port < 65536:
         raise InputError(f"--port {args.port}: expected a TCP port, 1 .. 65535")
@@ -196,7 +199,8 @@ def _exit_text(code: int) -> str:
 def _scene(args, budget: int):
     target = Path(args.target)
     machine_options = [f"--{name.replace('_', '-')}" for name in
-                       ("program", "errors", "tools", "integer_input", "chord_nm")
+                       ("program", "errors", "tool", "stock", "tools", "integer_input",
+                        "chord_nm", "duration")
                        if getattr(args, name) is not None]
     part_options = [f"--{name}" for name in ("report", "nominal")
                     if getattr(args, name) is not None]
@@ -246,17 +250,26 @@ def _scene(args, budget: int):
                          "by the name's ending")
 
     _refuse(part_options, "a machine")
-    reading = [f"--{name.replace('_', '-')}" for name in ("tools", "integer_input", "chord_nm")
-               if getattr(args, name) is not None]
-    if reading and args.program is None:
-        raise InputError(f"{', '.join(reading)} read a program: give one with --program")
+    # without a program nothing is cut or animated: --tool, --stock and --duration had been
+    # taken and ignored, the page showing the machine alone and the command exiting 0
+    if args.program is None:
+        cutting = [f"--{name}" for name in ("tool", "stock", "duration")
+                   if getattr(args, name) is not None]
+        reading = [f"--{name.replace('_', '-')}" for name in
+                   ("tools", "integer_input", "chord_nm") if getattr(args, name) is not None]
+        if reading:
+            raise InputError(f"{', '.join(reading)} read a program: give one with --program")
+        if cutting:
+            raise InputError(f"{', '.join(cutting)} {'are' if len(cutting) > 1 else 'is'} "
+                             "for the program the machine runs (the tool it cuts with, the "
+                             "stock, the animation's length): give one with --program")
     check_reading_options(args)
     machine = load_machine(args.target)
     from machinesim.tool_specs import tool_from_spec
     from machinesim.workpiece import stock_from_spec
 
-    tool = tool_from_spec(args.tool, name="--tool")
-    stock = stock_from_spec(args.stock, name="--stock")
+    tool = tool_from_spec(DEFAULT_TOOL if args.tool is None else args.tool, name="--tool")
+    stock = stock_from_spec(DEFAULT_STOCK if args.stock is None else args.stock, name="--stock")
     program = errors = chord = None
     if args.program is not None:
         # read as `machinesim cut` reads it: the same tool table, integer input and chords
@@ -271,7 +284,8 @@ def _scene(args, budget: int):
 
         errors = ErrorModel.from_toml(args.errors)
     return machine_scene(machine, program, tool=tool, stock=stock,
-                         errors=errors, duration_s=args.duration, max_triangles=budget,
+                         errors=errors, max_triangles=budget,
+                         duration_s=DEFAULT_DURATION_S if args.duration is None else args.duration,
                          chord_tolerance=chord)
 
 
