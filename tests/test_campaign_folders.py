@@ -256,6 +256,24 @@ def test_a_folder_under_a_file_is_refused_before_any_trial_naming_the_file(tmp_p
     assert ran == []
 
 
+def test_a_folder_through_a_symbolic_link_to_nothing_is_refused_naming_the_link(
+        tmp_path, monkeypatch):
+    # --out LINK (or LINK/sub), LINK a symbolic link whose target is gone: mkdir meets the
+    # link ('File exists'), told as "'.' takes no new folder (File exists)", naming a
+    # folder that was never the problem
+    link = tmp_path / "link"
+    link.symlink_to(tmp_path / "gone" / "campaign")
+    ran = trials_run(monkeypatch)
+    for out in (link, link / "sub"):
+        with pytest.raises(FileError) as info:
+            run("tool_rotation_arm", 2, out=out, workers=0, progress=False, **ARM)
+        assert str(info.value) == (
+            f"{out}: cannot make the campaign folder: '{link}' is a symbolic link to "
+            f"'{tmp_path / 'gone' / 'campaign'}', which does not exist; expected a folder "
+            "that can be made and written, or one there")
+    assert ran == [] and not (tmp_path / "gone").exists()
+
+
 @pytest.mark.skipif(not __import__("os").path.isdir("/proc/self"), reason="no /proc")
 def test_a_folder_the_file_system_will_not_make_is_refused_before_any_trial(monkeypatch):
     # /proc takes no new folder: mkdir says 'No such file or directory' of a folder whose

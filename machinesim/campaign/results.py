@@ -192,7 +192,14 @@ def _unmade(path: Path, exc: OSError) -> FileError:
     while above != above.parent and not _asks(above.parent.exists):
         above = above.parent
     above = above.parent
-    if _asks(above.exists) and not _asks(above.is_dir):
+    # a symbolic link to nothing (its target moved or not yet made): mkdir meets the link
+    # ('File exists'), which had been told as "'.' takes no new folder"
+    dangling = next((p for p in (path, *path.parents)
+                     if _asks(p.is_symlink) and not _asks(p.exists)), None)
+    if dangling is not None:
+        why = (f"{str(dangling)!r} is a symbolic link to {os.readlink(dangling)!r}, which "
+               "does not exist")
+    elif _asks(above.exists) and not _asks(above.is_dir):
         why = f"{str(above)!r} is a file, not a folder"
     elif path.exists() and not _asks(path.is_dir):  # trials/ made a file by hand, say
         why = f"{str(path)!r} is a file, not a folder"
