@@ -493,6 +493,29 @@ def test_a_damaged_trial_file_is_refused_before_the_missing_trials_run(campaign,
     assert ran == []  # trial 1, missing, did not run first
 
 
+def test_a_trial_file_holding_another_trial_says_what_it_holds(campaign, tmp_path,
+                                                                monkeypatch):
+    # trial 2's file copied over trial 1's (or a '{}', a list) said "expected the record of
+    # trial 1" alone: neither what the file held nor what to do
+    source, vary, _ = campaign
+    (tmp_path / "trials").mkdir()
+    (tmp_path / "campaign.json").write_bytes((source / "campaign.json").read_bytes())
+    path = tmp_path / "trials/trial_000001.json"
+    ran = []
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: ran.append(i))
+    for text, found in (((source / "trials/trial_000002.json").read_text(),
+                         "the record of trial 2"),
+                        ("{}", "no trial number ('trial')"), ("[1, 2]", "a JSON list")):
+        path.write_text(text)
+        with pytest.raises(InputError) as info:
+            run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
+                progress=False, report=False, **ARM)
+        assert str(info.value) == (f"{path}, key 'trial': holds {found}; expected the record "
+                                   "of trial 1: delete it and run again to compute the trial "
+                                   "anew")
+    assert ran == []
+
+
 @pytest.mark.parametrize(("record", "key"), [
     ({"trial": 0}, "drawn"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {"tool.y": 5e-6},

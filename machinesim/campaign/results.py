@@ -118,7 +118,14 @@ class CampaignFolder:
     def read_trial(self, i: int) -> dict:
         raw = read_json(self.trial_file(i), "campaign trial")
         if not isinstance(raw, dict) or raw.get("trial") != i:
-            raise InputError(f"expected the record of trial {i}", source=str(self.trial_file(i)))
+            # it said "expected the record of trial 3" alone, of a copy of trial 4's file as
+            # of a '{}' or a list: what the file holds, and what to do, are told too
+            found = (f"a JSON {type(raw).__name__}" if not isinstance(raw, dict) else
+                     "no trial number ('trial')" if "trial" not in raw else
+                     f"the record of trial {brief(repr(raw['trial']))}")
+            raise InputError(f"holds {found}; expected the record of trial {i}: delete it and "
+                             "run again to compute the trial anew",
+                             source=str(self.trial_file(i)), key="trial")
         _check_record(raw, self.trial_file(i))
         self._check_campaign(raw.get("campaign"), self.trial_file(i))
         return {**_nan(raw), "error": raw.get("error")}
