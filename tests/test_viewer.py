@@ -989,6 +989,14 @@ def test_a_report_folder_whose_summary_names_a_missing_nominal_is_warned_about(t
     assert scene.warnings == []
     assert [legend.title for legend in scene.legends] == [
         "part.ply: deviation from nominal (height, part - nominal)"]
+    # the nominal a folder under a part's name: refused as such a part is, where the parts
+    # had been coloured by height without a word
+    for name in ("nominal_dir.ply", "nominal.ply"):
+        (tmp_path / name).mkdir()
+        summary.write_text(json.dumps({"nominal_ply": name} if name != "nominal.ply" else {}))
+        with pytest.raises(InputError, match=f"{name}: is a folder; expected a PLY part file"):
+            report_scene(tmp_path, BUDGET)
+        (tmp_path / name).rmdir()
 
 
 def test_a_report_of_another_part_file_is_warned_about(tmp_path, capsys):

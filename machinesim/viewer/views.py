@@ -169,7 +169,10 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
     nominal_path = folder / str(summary.get("nominal_ply", "nominal.ply"))
     shown = [p for p in plys if p != nominal_path] or plys
     # a folder holding only the nominal part shows it by height
-    nominal = read_ply(nominal_path) if nominal_path.is_file() and shown != plys else None
+    # a nominal among the folder's *.ply is read as a part is (a folder or a link to nothing
+    # under its name is refused as one of the parts is; it had been passed over, and the parts
+    # coloured by height without a word)
+    nominal = read_ply(nominal_path) if nominal_path in plys and shown != plys else None
     scene = Scene(f"report {folder.name}")
     named = summary.get("nominal_ply")
     # a file outside the folder ('sub/nominal.ply', an absolute path) is no part of it: the
