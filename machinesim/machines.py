@@ -109,6 +109,9 @@ def load_machine(name_or_path: str | Path) -> Machine:
                 raise ModelError(f"{given}: a file whose name does not end in .urdf; expected "
                                  f"a machine's name ({shipped}) or the path of a .urdf file "
                                  "(a URDF saved under another ending: rename it to .urdf)")
+            if given.exists():  # /dev/null, a FIFO: a path, no misspelt machine's name
+                raise ModelError(f"{given}: {not_a_regular_file(given)}; expected a machine's "
+                                 f"name ({shipped}) or the path of a .urdf file")
             raise ModelError(
                 f"unknown machine {text!r}; expected one of {shipped} or the path of a .urdf "
                 "file")

@@ -125,6 +125,14 @@ def test_a_folder_or_a_file_not_ending_in_urdf_is_not_an_unknown_machine(tmp_pat
                                  "(a URDF saved under another ending: rename it to .urdf)")
     with pytest.raises(ModelError, match="unknown machine 'mill'"):
         load_machine("mill")  # not there (the folder is in tmp_path, not here)
+    # '--machine /dev/null' (or a FIFO) was an "unknown machine '/dev/null'" too
+    fifo = tmp_path / "mill.fifo"
+    os.mkfifo(fifo)
+    for path, kind in (("/dev/null", "a character device"), (fifo, "a named pipe (FIFO)")):
+        with pytest.raises(ModelError) as raised:
+            load_machine(path)
+        assert str(raised.value) == (f"{path}: is {kind}, not a regular file; expected a "
+                                     f"machine's name ({shipped}) or the path of a .urdf file")
 
 
 def test_a_xacro_file_is_refused_with_how_to_expand_it(tmp_path):
