@@ -68,6 +68,21 @@ def test_bad_distributions_name_the_value(text, words):
         assert word in str(info.value)
 
 
+@pytest.mark.parametrize("text", [
+    "A" * 100_000 + "=5nm", "tool.y=" + "a" * 100_000, "tool.y=5" + "a" * 100_000,
+    "tool.y=" + "a" * 100_000 + ":1,2", "tool.y=uniform:" + "1" * 100_000 + ",2nm",
+    "tool.y=normal:0nm," + "1" * 100_000, "a" * 100_000])
+def test_a_huge_vary_is_quoted_by_its_ends_and_length(text):
+    # a 100,000-character --vary was quoted whole in its refusal: a 100 kB line on stderr
+    # (the key was already shown by its ends, the value not)
+    from machinesim.campaign import CampaignSpec
+
+    with pytest.raises(InputError) as info:
+        CampaignSpec("tool_rotation_arm", 1, (parse_vary(text),))
+    message = str(info.value)
+    assert len(message) < 2_000 and "characters)" in message, message[:300]
+
+
 @pytest.mark.parametrize("text", ["normal:60nm,20nm", "normal:0.6um,200nm", "normal:30nm,10nm"])
 def test_a_lab_parameters_normal_with_its_mean_3_std_above_zero_is_taken(text):
     # 0.6um,200nm was refused as reaching below zero: 0.6 * 1e-6 < 3 * (200 * 1e-9) in floats

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from machinesim.exceptions import InputError, MachineSimError
+from machinesim.exceptions import InputError, MachineSimError, brief
 from machinesim.units import ANGLE, FACTORS, LENGTH
 
 __all__ = ["Distribution", "INSTRUMENTS", "LAB_PARAMETERS", "checked", "parameter_kind",
@@ -44,6 +44,12 @@ KINDS = {"normal": 2, "uniform": 2, "fixed": 1}
 #: A number and what follows it as its unit: any letters (5µm, 5Um), so that a unit not in
 #: `FACTORS` is named as such, not as no number at all.
 _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\W\d_]*)\s*")
+
+
+def _shown(text) -> str:
+    """A text the user gave, quoted as a message shows it (`brief`): a 100,000-character
+    --vary was quoted whole, a line of 100 kB on stderr."""
+    return brief(repr(text))
 
 
 def parameter_kind(name: str) -> str | None:
@@ -109,16 +115,16 @@ class Distribution:
 def _number(text: str, where: str) -> tuple[float, str | None]:
     match = _NUMBER.fullmatch(text)
     if match is None:
-        raise InputError(f"{text!r} is not a number with a unit; expected e.g. 5um, -0.2deg, "
-                         "0", key=where)
+        raise InputError(f"{_shown(text)} is not a number with a unit; expected e.g. 5um, "
+                         "-0.2deg, 0", key=where)
     value, unit = float(match.group(1)), match.group(2) or None
     if unit is not None and unit not in FACTORS:
-        raise InputError(f"unit {unit!r} in {text!r}; expected one of "
+        raise InputError(f"unit {_shown(unit)} in {_shown(text)}; expected one of "
                          f"{' '.join(FACTORS)}", key=where)
     if not math.isfinite(value):
-        raise InputError(f"{text!r} is not a finite number", key=where)
+        raise InputError(f"{_shown(text)} is not a finite number", key=where)
     if unit is None and value != 0.0:
-        raise InputError(f"{text!r} has no unit; expected one of {' '.join(FACTORS)} "
+        raise InputError(f"{_shown(text)} has no unit; expected one of {' '.join(FACTORS)} "
                          "(e.g. 5um): only 0 may go without", key=where)
     return value * (FACTORS[unit] if unit else 1.0), unit
 
@@ -142,34 +148,35 @@ def parse_distribution(text: str, name: str = "") -> Distribution:
     if not colon:
         kind, args = "fixed", text.strip()
     if kind not in KINDS:
-        raise InputError(f"distribution {kind!r}; expected one of {', '.join(KINDS)} "
+        raise InputError(f"distribution {_shown(kind)}; expected one of {', '.join(KINDS)} "
                          "(normal:MEAN,STD, uniform:LOW,HIGH, fixed:VALUE)", key=where)
     parts = args.split(",")
     if len(parts) != KINDS[kind]:
         raise InputError(f"{kind} takes {KINDS[kind]} number(s), got {len(parts)} in "
-                         f"{args!r}", key=where)
+                         f"{_shown(args)}", key=where)
     values, units = zip(*(_number(p, where) for p in parts), strict=True)
     kinds = {("length" if u in LENGTH else "angle") for u in units if u is not None}
     if len(kinds) > 1:
-        raise InputError(f"{text!r} mixes lengths and angles", key=where)
+        raise InputError(f"{_shown(text)} mixes lengths and angles", key=where)
     wanted = parameter_kind(name) if name else None
     if wanted is not None and kinds and kinds != {wanted}:
         raise InputError(f"{name} is {'a length' if wanted == 'length' else 'an angle'}; "
-                         f"{text!r} gives {'an angle' if wanted == 'length' else 'a length'} "
+                         f"{_shown(text)} gives "
+                         f"{'an angle' if wanted == 'length' else 'a length'} "
                          f"(units: {' '.join(LENGTH if wanted == 'length' else ANGLE)})",
                          key=where)
     a, b = (values[0], values[1]) if len(values) == 2 else (values[0], 0.0)
     if kind == "normal" and not b > 0.0:
-        raise InputError(f"normal std {parts[1].strip()!r}; expected > 0", key=where)
+        raise InputError(f"normal std {_shown(parts[1].strip())}; expected > 0", key=where)
     if kind == "uniform" and not b > a:
-        raise InputError(f"uniform low {parts[0].strip()!r} >= high {parts[1].strip()!r}; "
-                         "expected LOW < HIGH", key=where)
+        raise InputError(f"uniform low {_shown(parts[0].strip())} >= high "
+                         f"{_shown(parts[1].strip())}; expected LOW < HIGH", key=where)
     if name in LAB_PARAMETERS and kind == "fixed" and a < 0.0:
-        raise InputError(f"{name} {text!r}; expected >= 0", key=where)
+        raise InputError(f"{name} {_shown(text)}; expected >= 0", key=where)
     # a mean of exactly 3 std as written (0.6um,200nm) passes, whatever the units' rounding
     if name in LAB_PARAMETERS and kind != "fixed" and (a < 0.0 if kind == "uniform"
                                                        else a < 3.0 * b * (1.0 - 1e-12)):
-        raise InputError(f"{name} {text!r} reaches below zero; expected a non-negative "
+        raise InputError(f"{name} {_shown(text)} reaches below zero; expected a non-negative "
                          "range (uniform with LOW >= 0, or a normal whose MEAN is at least 3 "
                          "STD: a draw in the 0.13 % below zero is then taken as zero)",
                          key=where)
@@ -216,12 +223,12 @@ def parse_vary(text: str) -> tuple[str, Distribution]:
     """``PARAM=DIST`` as ``(name, Distribution)``; the name is checked for its form here and
     against the machine when the campaign is built."""
     if not isinstance(text, str) or "=" not in text:
-        raise InputError(f"--vary {text!r}; expected PARAM=DIST, e.g. "
+        raise InputError(f"--vary {_shown(text)}; expected PARAM=DIST, e.g. "
                          "tool.y=normal:-178um,5um", key="--vary")
     name, _, dist = text.partition("=")
     name = name.strip()
     if not name:
-        raise InputError(f"--vary {text!r} names no parameter; expected PARAM=DIST",
+        raise InputError(f"--vary {_shown(text)} names no parameter; expected PARAM=DIST",
                          key="--vary")
     return name, parse_distribution(dist, name)
 

@@ -40,7 +40,7 @@ from machinesim.campaign.distributions import (
     checked,
     refuse_beyond_model,
 )
-from machinesim.exceptions import InputError, MachineSimError, MachineSimWarning
+from machinesim.exceptions import InputError, MachineSimError, MachineSimWarning, brief
 from machinesim.experiment import Evaluation, Identified, run
 from machinesim.streams import stream
 from machinesim.units import M_PER_MM, M_PER_UM
@@ -318,7 +318,7 @@ class CampaignSpec:
             raise InputError(f"--vary {', '.join(twice)} given more than once", key="--vary")
         for name, dist in vary:
             if not isinstance(dist, Distribution):
-                raise InputError(f"--vary {name}: expected a Distribution, got "
+                raise InputError(f"--vary {brief(name)}: expected a Distribution, got "
                                  f"{type(dist).__name__}", key="--vary")
         # one built in Python passes parse_distribution's checks too, and gets a text
         vary = tuple((name, checked(name, dist)) for name, dist in vary)
@@ -331,8 +331,8 @@ class CampaignSpec:
             if name not in known:  # the list: what may vary here, not what is then refused
                 close = difflib.get_close_matches(name, used, n=1)
                 raise InputError(
-                    f"--vary {name}: not a parameter of {self.entry.machine} nor of the lab"
-                    f"{f' (did you mean {close[0]}?)' if close else ''}; expected one of the "
+                    f"--vary {brief(name)}: not a parameter of {self.entry.machine} nor of the "
+                    f"lab{f' (did you mean {close[0]}?)' if close else ''}; expected one of the "
                     f"parameters {what} uses: {_listed(used)}", key="--vary")
         silent = [name for name in names if name.endswith(".sigma") and not self.noise]
         if silent:  # noise off: every instrument reads exact values, whatever its sigma
