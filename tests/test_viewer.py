@@ -945,6 +945,23 @@ def test_view_reads_a_program_as_cut_reads_it_and_refuses_a_second_tool(tmp_path
         run([str(tmp_path / "missing.ply"), "--chord-nm", "2"])
 
 
+def test_cli_refuses_a_display_budget_no_page_holds_naming_the_option(tmp_path):
+    # --max-triangles 1000000000 ended in the height map's "Expected at most 1e+08 samples in
+    # one reading (MAX_SAMPLES) ... take fewer x or y samples", and 10**20 in "out of memory:
+    # ... a cut of many sweeps whose faces nearly coincide", neither naming the option
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+    most = ((1 << 29) - 24) // 30  # V8's longest string, ~30 characters a triangle
+    for budget in (0, most + 1, 10**9, 10**20):
+        with pytest.raises(InputError) as info:
+            run([str(tmp_path / "part.ply"), "--max-triangles", str(budget),
+                 "--html", str(tmp_path / "p.html")])
+        assert str(info.value) == (
+            f"--max-triangles {budget}: expected a count from 1 to {most:,} (a page holds "
+            "about 30 characters a triangle, and a browser's JavaScript engine reads at most "
+            "536,870,888: more opens blank)")
+    assert not (tmp_path / "p.html").exists()
+
+
 def test_cli_refuses_tool_stock_and_duration_where_no_program_runs(tmp_path):
     # `view robonano_a0ib --tool v:90 --stock block:1x1x1 --duration 5`, and the same on a
     # part or a report folder, took the three and ignored them: the page showed the machine

@@ -46,6 +46,10 @@ BAD_PORTS = frozenset({
     989, 990, 993, 995, 1719, 1720, 1723, 2049, 3659, 4045, 4190, 5060, 5061, 6000, 6566,
     6665, 6666, 6667, 6668, 6669, 6679, 6697, 10080})
 
+#: About how many characters of an exported page's script a triangle takes (docs/viewer.md):
+#: --max-triangles takes at most `machinesim.viewer.scene.SCRIPT_CHARS_MOST` over it, as a
+#: mesh of more fits in no page.
+CHARS_PER_TRIANGLE = 30
 #: What a program is cut with and animated over when --tool, --stock, --duration are not given.
 DEFAULT_TOOL, DEFAULT_STOCK, DEFAULT_DURATION_S = "v:90", "block:10x10x2", 20.0
 
@@ -112,10 +116,18 @@ def run_view(args: argparse.Namespace) -> int:
         For input the command cannot show (the caller prints it).
     """
     from machinesim.viewer.meshes import DISPLAY_TRIANGLES
+    from machinesim.viewer.scene import SCRIPT_CHARS_MOST
 
     budget = DISPLAY_TRIANGLES if args.max_triangles is None else args.max_triangles
-    if budget < 1:
-        raise InputError(f"--max-triangles {budget}: expected a positive count")
+    most = SCRIPT_CHARS_MOST // CHARS_PER_TRIANGLE
+    if not 1 <= budget <= most:
+        # 1e9 ended in the height map's 'Expected at most 1e+08 samples in one reading
+        # (MAX_SAMPLES) ...: take fewer x or y samples', 1e20 in 'out of memory: ... a cut of
+        # many sweeps', neither naming the option
+        raise InputError(f"--max-triangles {budget}: expected a count from 1 to "
+                         f"{most:,} (a page holds about {CHARS_PER_TRIANGLE} "
+                         "characters a triangle, and a browser's JavaScript engine reads at "
+                         f"most {SCRIPT_CHARS_MOST:,}: more opens blank)")
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0.0):
         raise InputError(f"--duration {args.duration}: expected a positive number of seconds")
     if args.port is not None and not 0 < args.port < 65536:
