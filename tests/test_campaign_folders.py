@@ -274,6 +274,33 @@ def test_a_folder_through_a_symbolic_link_to_nothing_is_refused_naming_the_link(
     assert ran == [] and not (tmp_path / "gone").exists()
 
 
+def test_a_lock_file_that_is_a_link_or_a_fifo_is_refused_and_nothing_is_overwritten(
+        tmp_path, monkeypatch):
+    # campaign.lock a symbolic link to another file: the run wrote its pid over that file
+    # ('precious' became '{"pid": ..., "host": ...}'); a FIFO (or a link to /dev/null):
+    # "machinesim: error: Invalid argument", naming no file
+    import os
+
+    ran = trials_run(monkeypatch)
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious\n")
+    for k, (make, said) in enumerate((
+            (lambda lock: lock.symlink_to(victim),
+             f"campaign.lock is a symbolic link (to '{victim}'); expected the campaign's own "
+             "lock file, which each run writes its pid into: remove the link"),
+            (lambda lock: os.mkfifo(lock),
+             "campaign.lock is a named pipe (FIFO), not a regular file; expected the "
+             "campaign's own lock file: remove it"))):
+        out = tmp_path / f"campaign{k}"
+        out.mkdir()
+        make(out / "campaign.lock")
+        with pytest.raises(FileError) as info:
+            run("tool_rotation_arm", 2, out=out, workers=0, progress=False, **ARM)
+        assert str(info.value) == f"{out}: {said}"
+        assert sorted(p.name for p in out.iterdir()) == ["campaign.lock"]
+    assert ran == [] and victim.read_text() == "precious\n"
+
+
 @pytest.mark.skipif(not __import__("os").path.isdir("/proc/self"), reason="no /proc")
 def test_a_folder_the_file_system_will_not_make_is_refused_before_any_trial(monkeypatch):
     # /proc takes no new folder: mkdir says 'No such file or directory' of a folder whose

@@ -23,11 +23,19 @@ import math
 import os
 import re
 import socket
+import stat
 import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from machinesim._io import check_writable, json_text, pid_alive, read_json, write_atomic
+from machinesim._io import (
+    check_writable,
+    json_text,
+    not_a_regular_file,
+    pid_alive,
+    read_json,
+    write_atomic,
+)
 from machinesim.campaign.assembly import Assembly, assemble, versions  # re-exported
 from machinesim.exceptions import FileError, InputError, brief
 from machinesim.experiment import note_kind  # re-exported
@@ -248,10 +256,20 @@ def locked(folder) -> Iterator[None]:
     _make_folder(folder)
     path = folder / LOCK_NAME
     try:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        # not through a symbolic link: the run writes its pid into the file, and a
+        # campaign.lock linked to another file overwrote that file (it is no lock of ours)
+        fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
     except OSError as exc:
+        if path.is_symlink():
+            raise FileError(f"{LOCK_NAME} is a symbolic link (to {os.readlink(path)!r}); "
+                            "expected the campaign's own lock file, which each run writes "
+                            "its pid into: remove the link", source=str(folder)) from None
         raise FileError(f"cannot make the campaign's lock {LOCK_NAME}: "
                         f"{exc.strerror or exc}", source=str(folder)) from None
+    if not stat.S_ISREG(os.fstat(fd).st_mode):  # a FIFO: its truncation failed as a bare
+        os.close(fd)                            # 'Invalid argument', naming no file
+        raise FileError(f"{LOCK_NAME} {not_a_regular_file(path)}; expected the campaign's "
+                        "own lock file: remove it", source=str(folder))
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
