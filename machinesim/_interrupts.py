@@ -3,9 +3,9 @@ and told.
 
 A Ctrl-C (SIGINT), a ``kill`` (SIGTERM) or a closed terminal (SIGHUP) within
 `ctrl_c_remembered` is raised as a KeyboardInterrupt (`Terminated` for SIGTERM, `HungUp` for
-SIGHUP) and remembered, so that `machinesim._io`
-writes nothing after it even when a library swallowed it; `_ctrl_c_deferred` holds one back
-until a rename or a folder swap is done; `stopped` names the stop and its exit status.
+SIGHUP) and remembered, so that `machinesim._io` and `machinesim._staged` write nothing
+after it even when a library swallowed it; `_ctrl_c_deferred` holds one back until a rename
+or a folder swap is done; `stopped` names the stop and its exit status.
 """
 
 from __future__ import annotations

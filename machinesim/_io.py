@@ -4,7 +4,8 @@ Every file-system problem (missing file, a folder given as a file, a folder that
 there or cannot be written, a full disk) becomes a `FileError` (an `InputError`, and an
 `OSError`) whose ``source`` is the path the user gave: the command line prints it as one
 line, the Python API raises it. Nothing is renamed into place after a Ctrl-C or SIGTERM,
-and a rename or folder swap under way finishes first (`machinesim._interrupts`).
+and a rename under way finishes first (`machinesim._interrupts`). A folder written whole
+is `machinesim._staged`'s; JSON text, written and read, is `machinesim._json`'s.
 """
 
 from __future__ import annotations
@@ -12,8 +13,6 @@ from __future__ import annotations
 import argparse
 import errno
 import hashlib
-import json
-import math
 import os
 import secrets
 import shutil
@@ -24,7 +23,7 @@ from pathlib import Path
 
 from machinesim import _interrupts
 from machinesim._interrupts import _ctrl_c_deferred
-from machinesim.exceptions import FileError, InputError, MachineSimError
+from machinesim.exceptions import FileError, InputError
 
 #: Longest file name component (bytes) where the file system does not say (POSIX NAME_MAX).
 _NAME_MAX = 255
@@ -235,6 +234,20 @@ def _clear_stale_temps(path: Path) -> None:
                 pass
 
 
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` of this machine may still run: False only once it is known
+    to be gone (True for someone else's process, and where one cannot ask harmlessly)."""
+    if os.name != "posix":  # no harmless way to ask: leave it alone
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # someone else's process
+        return True
+    return True
+
+
 def _mode(path: Path) -> int:
     """Permissions for a new version of ``path``: the old file's, else 0666 less the umask."""
     try:
@@ -424,93 +437,6 @@ def _backup(path: Path) -> str | None:
     return name
 
 
-# ------------------------------------------------------------------- folders written whole
-
-#: Staging folders of this process that are still being written (not stale).
-_ours: set[str] = set()
-
-
-def _folder_stem(target: Path) -> str:
-    """The part of a staging folder's name that names ``target`` (shortened with a hash when
-    its name is long, so that the sibling's name stays within the file system's limit)."""
-    name = target.name
-    if len(os.fsencode(name)) <= 160:
-        return name
-    digest = hashlib.sha1(os.fsencode(name)).hexdigest()[:12]
-    return f"{name[:_TEMP_STEM]}~{digest}"
-
-
-def _sibling_kind(entry: str, stem: str) -> tuple[str, int] | None:
-    """(``"partial"`` or ``"old"``, pid) when ``entry`` is a staging or swapped-out folder
-    of ``stem`` made in this process's PID space (``.STEM.partial-PID@HOST.TOKEN``,
-    ``.STEM.old-PID@HOST.TOKEN``, HOST `_process_space`), else None: another host's or
-    container's PID is no process here, and its live run's folder was removed as stale."""
-    for kind in ("partial", "old"):
-        head = f".{stem}.{kind}-"
-        if entry.startswith(head):
-            marked, _, _ = entry[len(head):].partition(".")
-            pid, at, host = marked.partition("@")
-            if pid.isdigit() and at and host == _process_space():
-                return kind, int(pid)
-    return None
-
-
-def _alive(pid: int, path: Path) -> bool:
-    """Whether the run that named a folder with ``pid`` may still be writing it."""
-    if pid == os.getpid():
-        return str(path) in _ours
-    return pid_alive(pid)
-
-
-def pid_alive(pid: int) -> bool:
-    """Whether process ``pid`` of this machine may still run: False only once it is known
-    to be gone (True for someone else's process, and where one cannot ask harmlessly)."""
-    if os.name != "posix":  # no harmless way to ask: leave it alone
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:  # someone else's process
-        return True
-    return True
-
-
-def clear_stale_folders(target) -> None:
-    """Remove the staging folders a killed run (SIGKILL, power loss) left beside ``target``.
-
-    A run killed in the middle of a swap may have left the previous folder under its
-    swapped-out name and none under ``target``: it is put back. Folders of runs that are
-    still alive are left alone.
-    """
-    target = Path(target)
-    stem = _folder_stem(target)
-    try:
-        entries = list(os.scandir(target.parent))
-    except OSError:
-        return
-    for entry in entries:
-        found = _sibling_kind(entry.name, stem)
-        if found is None or _alive(found[1], Path(entry.path)):
-            continue
-        if found[0] == "old" and not os.path.lexists(target):
-            try:
-                os.rename(entry.path, target)
-                continue
-            except OSError:
-                pass
-        shutil.rmtree(entry.path, ignore_errors=True)
-
-
-def _link_or_copy(source: str, destination: str) -> None:
-    # every file of a report is replaced by renaming a new one over it (`write_atomic`), so
-    # a hard link is never written through; a copy where links are not possible
-    try:
-        os.link(source, destination)
-    except OSError:
-        shutil.copy2(source, destination)
-
-
 def stdout_to_null(stream) -> None:
     """Send ``stream``'s file descriptor (stdout) to the null device: its reader went away
     (``... | head -1``), and what is still written, or flushed at exit, must not raise
@@ -520,203 +446,5 @@ def stdout_to_null(stream) -> None:
     os.close(null)
 
 
-def _refuse_working_folder(given: Path, target: Path) -> None:
-    """Refuse a folder to be replaced whole (`StagedFolder`) that is the working directory
-    or holds it: ``scenario --out .`` swapped the working directory out and removed it, then
-    ended in a FileNotFoundError traceback (exit 1) once it looked up the now missing
-    working directory, and the shell it ran in stood in the removed folder, seeing none of
-    the report."""
-    try:
-        here = Path(os.path.realpath(os.getcwd()))
-    except OSError:  # the working directory is gone already: nothing to protect
-        return
-    if here == target or target in here.parents:
-        where = "is" if here == target else "holds"
-        raise InputError(f"{str(given)!r} {where} the working directory "
-                         f"({str(here)!r}); the report replaces its folder whole, "
-                         "which would remove the folder this command and its shell stand "
-                         "in: expected a folder apart from it, e.g. --out report",
-                         key="out")
-
-
-class StagedFolder:
-    """A folder written whole or not at all.
-
-    Its files are written into a staging folder beside it (``.NAME.partial-PID@HOST.TOKEN``, in
-    the same parent, so on the same file system); `commit` swaps that folder in: the old
-    folder is renamed aside, the staging folder renamed to the name, the old one removed. A
-    Ctrl-C during the swap is held back until it is done. `discard` removes the staging
-    folder and leaves the old folder as it was. Staging folders of killed runs are removed
-    when the next one begins (`clear_stale_folders`).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The folder (its parent is made when missing). A symbolic link is followed: the
-        folder it names is the one replaced.
-
-    Attributes
-    ----------
-    final : Path
-        ``path`` as given.
-    path : Path or None
-        Where the files go now (None once committed for good, or discarded).
-    commits : int
-        How many times the staged folder was swapped in.
-
-    Raises
-    ------
-    OSError
-        When the parent or the staging folder cannot be made.
-    InputError
-        When the folder is the process's working directory or holds it (``--out .``): the
-        swap would remove the folder the process, and the shell it runs in, stand in.
-    """
-
-    def __init__(self, path) -> None:
-        self.final = Path(path)
-        self.target = Path(os.path.realpath(self.final))
-        _refuse_working_folder(self.final, self.target)
-        self.commits = 0
-        self.path: Path | None = None
-        self.target.parent.mkdir(parents=True, exist_ok=True)
-        clear_stale_folders(self.target)
-        self._begin(seed=False)
-
-    def _sibling(self, kind: str) -> Path:
-        return self.target.parent / (f".{_folder_stem(self.target)}.{kind}-{os.getpid()}@"
-                                     f"{_process_space()}.{secrets.token_hex(4)}")
-
-    def _begin(self, seed: bool) -> None:
-        path = self._sibling("partial")
-        self.path = path
-        _ours.add(str(path))
-        if seed and self.target.is_dir():
-            shutil.copytree(self.target, path, symlinks=True, copy_function=_link_or_copy)
-        else:
-            path.mkdir()
-        try:
-            os.chmod(path, self.target.stat().st_mode & 0o7777)
-        except OSError:
-            pass
-
-    def commit(self, keep_going: bool = False) -> None:
-        """Swap the staged folder in. With ``keep_going``, the writing goes on in a new
-        staging folder that starts as a copy of the folder just committed (hard links),
-        for a run that adds to a report it has already made whole.
-
-        Raises
-        ------
-        KeyboardInterrupt
-            Without swapping anything, when a Ctrl-C was seen (`ctrl_c_remembered`).
-        FileError
-            When the swap fails; the old folder is then in place.
-        """
-        if self.path is None:
-            raise MachineSimError("the staged folder was already committed or discarded")
-        if _interrupts._ctrl_c_seen:
-            raise KeyboardInterrupt
-        staging = self.path
-        with _ctrl_c_deferred():
-            aside = None
-            try:
-                if os.path.lexists(self.target):
-                    aside = self._sibling("old")
-                    os.rename(self.target, aside)
-                try:
-                    os.rename(staging, self.target)
-                except BaseException:
-                    if aside is not None:
-                        os.rename(aside, self.target)
-                    raise
-            except OSError as exc:
-                raise FileError(f"cannot put the new folder in place: {_reason(exc)}",
-                                source=str(self.final)) from None
-            _ours.discard(str(staging))
-            self.commits += 1
-            self.path = None
-            if aside is not None:
-                shutil.rmtree(aside, ignore_errors=True)
-        if keep_going:
-            self._begin(seed=True)
-
-    def discard(self) -> None:
-        """Remove the staging folder (the folder itself stays as it was); idempotent."""
-        if self.path is not None:
-            shutil.rmtree(self.path, ignore_errors=True)
-            _ours.discard(str(self.path))
-            self.path = None
-
-
-def json_text(data, what: str = "report") -> str:
-    """``data`` as indented JSON text, refusing NaN and infinity (JSON has neither).
-
-    Raises
-    ------
-    MachineSimError
-        Naming the key whose value is not a finite number; nothing should then be written.
-    """
-    try:
-        return json.dumps(data, indent=2, allow_nan=False) + "\n"
-    except ValueError:
-        bad = ", ".join(f"{key} = {value!r}" for key, value in _non_finite(data))
-        if not bad:
-            raise
-        raise MachineSimError(f"the {what} has values that are not finite numbers ({bad}); "
-                              "JSON has no NaN or infinity, so nothing was written") from None
-
-
-def _non_finite(value, key: str = ""):
-    if isinstance(value, float) and not math.isfinite(value):
-        yield key or "<value>", value
-    elif isinstance(value, dict):
-        for k, v in value.items():
-            yield from _non_finite(v, f"{key}.{k}" if key else str(k))
-    elif isinstance(value, list | tuple):
-        for i, v in enumerate(value):
-            yield from _non_finite(v, f"{key}[{i}]")
-
-
-def read_json(path, what: str = "JSON file"):
-    """The JSON value in the file ``path`` (UTF-8), with errors naming the path and position.
-
-    NaN and Infinity, which Python's json would accept, are refused: they are not JSON.
-
-    Raises
-    ------
-    InputError
-        When the file cannot be read, is not UTF-8 text, or is not valid JSON.
-    """
-    path = check_readable_file(path, what)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise FileError(f"cannot read the {what}: {_reason(exc)}", source=str(path)) from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise InputError(f"not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start}); "
-                         f"expected the {what} as JSON", source=str(path)) from None
-
-    def refuse(constant: str):
-        raise InputError(f"{constant} is not a finite number, which JSON requires; expected "
-                         f"the {what} as JSON", source=str(path))
-
-    def number(literal: str) -> float:
-        value = float(literal)
-        if not math.isfinite(value):
-            refuse(literal)
-        return value
-
-    try:
-        return json.loads(text, parse_constant=refuse, parse_float=number)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"not valid JSON ({exc.msg}); expected the {what}", source=str(path),
-                         line=exc.lineno, column=exc.colno) from None
-    except RecursionError:
-        raise InputError(f"nested too deeply to be the {what}", source=str(path)) from None
-
-
-__all__ = ["FileError", "StagedFolder", "stdout_to_null", "check_readable_file",
-           "check_writable", "clear_stale_folders", "json_text", "not_a_regular_file",
-           "read_json", "write_atomic", "write_together"]
+__all__ = ["FileError", "stdout_to_null", "check_readable_file", "check_writable",
+           "not_a_regular_file", "write_atomic", "write_together"]

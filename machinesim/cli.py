@@ -32,11 +32,11 @@ from machinesim._io import (
     check_writable,
     file_name,
     input_path,
-    json_text,
     named,
     stdout_to_null,
     write_together,
 )
+from machinesim._json import json_text
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._program_options import (
     add_reading_options,

@@ -3,7 +3,7 @@
 Every file goes through `machinesim._io.write_atomic` (whole or not at all), and a scenario
 run through `machinesim.scenario_runs.scenario_status` writes its whole folder so: into a
 staging folder beside it, swapped in once every file is written
-(`machinesim._io.StagedFolder`), so that the folder holds the previous report or the new
+(`machinesim._staged.StagedFolder`), so that the folder holds the previous report or the new
 one, never a mix. Keys of JSON files carry their unit (``depth_error_um``, ``r_mm``):
 `check_units` refuses a number whose key does not end in a unit, so a report never leaves
 a reader guessing.
@@ -18,7 +18,9 @@ from collections.abc import Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-from machinesim._io import StagedFolder, _link_or_copy, json_text, write_atomic
+from machinesim._io import write_atomic
+from machinesim._json import json_text
+from machinesim._staged import StagedFolder, _link_or_copy
 from machinesim.exceptions import FileError, InputError
 
 #: Suffixes that name a unit (or say that a number has none).
@@ -177,7 +179,7 @@ class ReportFolder:
         """What is written within reaches the folder whole or not at all. Inside
         `scenario_status` the folder is staged already. Elsewhere (the Python API) the
         writing goes to a staging folder beside it, swapped in at the end
-        (`machinesim._io.StagedFolder`), which begins with the files written through this
+        (`machinesim._staged.StagedFolder`), which begins with the files written through this
         `ReportFolder` before; anything else in the folder must be the previous report (the
         files its summary.json lists), which the new one replaces, and is refused otherwise,
         before anything is written. ``adding`` (a budget added to a report): the staging

@@ -17,8 +17,9 @@ from typing import NoReturn
 
 from machinesim._arguments import ArgumentParser
 from machinesim._interrupts import ctrl_c_remembered, stopped
-from machinesim._io import StagedFolder, folder_path, input_path, stdout_to_null
+from machinesim._io import folder_path, input_path, stdout_to_null
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
+from machinesim._staged import StagedFolder
 from machinesim.exceptions import InputError
 from machinesim.report import STAGED, folder_key
 
@@ -50,7 +51,7 @@ def scenario_status(report, args, name: str | None = None) -> int:
 
     The report folder is written whole or not at all: every `ReportFolder` of ``args.out``
     writes into a staging folder beside it, swapped in when ``report`` returns
-    (`machinesim._io.StagedFolder`). Stopped or failed before, the run leaves the folder as
+    (`machinesim._staged.StagedFolder`). Stopped or failed before, the run leaves the folder as
     it was (the previous report, or none), except what ``report`` made whole earlier with
     `ReportFolder.publish`. A folder that is not a report (files, but no summary.json
     listing them) is refused before the run rather than replaced.

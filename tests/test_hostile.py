@@ -23,7 +23,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from machinesim import _io, workpiece
+from machinesim import _io, _json, workpiece
 from machinesim.cli import main, parse_roi
 from machinesim.exceptions import InputError, MachineSimError, ModelError
 from machinesim.machines import load_machine
@@ -259,7 +259,7 @@ def test_every_file_problem_through_the_api_is_a_machinesim_error(name, kind):
                 with pytest.raises(InputError) as raised:
                     write(path)
                 assert raised.value.source == str(path)
-        for read in (ErrorModel.from_toml, read_ply, _io.read_json,
+        for read in (ErrorModel.from_toml, read_ply, _json.read_json,
                      lambda p: load_machine(Path(str(p) + ".urdf"))):
             with pytest.raises(MachineSimError):
                 read(path)
@@ -326,7 +326,7 @@ def test_garbled_report_json_is_read_or_an_input_error(content):
         path = Path(folder) / "report.json"
         path.write_bytes(content)
         try:
-            _io.read_json(path, "cut report")
+            _json.read_json(path, "cut report")
         except InputError as exc:
             assert exc.source == str(path)
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from machinesim import _interrupts, _io
+from machinesim import _interrupts, _io, _json, _staged
 from machinesim.exceptions import InputError, MachineSimError
 from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
@@ -356,7 +356,7 @@ def test_a_sigterm_during_a_folder_swap_waits_for_the_swap(tmp_path, monkeypatch
 
     try:
         with _interrupts.ctrl_c_remembered():
-            staged = _io.StagedFolder(target)
+            staged = _staged.StagedFolder(target)
             (staged.path / "new.txt").write_text("new")
             monkeypatch.setattr(_io.os, "rename", rename_then_term)
             with pytest.raises(_interrupts.Terminated):
@@ -381,10 +381,10 @@ def _no_constants(name):
 
 
 def test_json_text_refuses_nan_and_infinity_naming_the_key():
-    text = _io.json_text({"a": 1.5, "b": [0.0, 2.0]})
+    text = _json.json_text({"a": 1.5, "b": [0.0, 2.0]})
     assert json.loads(text, parse_constant=_no_constants) == {"a": 1.5, "b": [0.0, 2.0]}
     with pytest.raises(MachineSimError, match=r"machining_time_s = nan.*b\.c\[1\] = inf"):
-        _io.json_text({"machining_time_s": math.nan, "b": {"c": [1.0, math.inf]}})
+        _json.json_text({"machining_time_s": math.nan, "b": {"c": [1.0, math.inf]}})
 
 
 @pytest.mark.parametrize(("content", "words"), [
@@ -398,7 +398,7 @@ def test_read_json_names_the_file_and_what_is_wrong(tmp_path, content, words):
     path = tmp_path / "report.json"
     path.write_bytes(content)
     with pytest.raises(InputError, match=words) as raised:
-        _io.read_json(path, "cut report")
+        _json.read_json(path, "cut report")
     assert raised.value.source == str(path)
 
 

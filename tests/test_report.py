@@ -11,7 +11,8 @@ from argparse import Namespace
 import numpy as np
 import pytest
 
-from machinesim._io import StagedFolder, _process_space, clear_stale_folders
+from machinesim._io import _process_space
+from machinesim._staged import StagedFolder, clear_stale_folders
 from machinesim.exceptions import InputError
 from machinesim.report import ReportFolder, check_summary, check_units
 from machinesim.scenario_runs import (

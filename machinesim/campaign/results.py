@@ -30,12 +30,11 @@ from pathlib import Path
 
 from machinesim._io import (
     check_writable,
-    json_text,
     not_a_regular_file,
     pid_alive,
-    read_json,
     write_atomic,
 )
+from machinesim._json import json_text, read_json
 from machinesim.campaign.assembly import Assembly, assemble, versions  # re-exported
 from machinesim.exceptions import FileError, InputError, brief
 from machinesim.experiment import note_kind  # re-exported

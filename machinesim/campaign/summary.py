@@ -39,7 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
-from machinesim._io import json_text, write_together
+from machinesim._io import write_together
+from machinesim._json import json_text
 from machinesim.campaign.distributions import parameter_kind
 from machinesim.campaign.statistics import describe, spearman, z_scores, z_summary
 

@@ -26,8 +26,8 @@ from machinesim._io import (
     file_name,
     input_path,
     named,
-    read_json,
 )
+from machinesim._json import read_json
 from machinesim._program_options import (
     add_reading_options,
     check_reading_options,

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from machinesim._io import read_json
+from machinesim._json import read_json
 from machinesim.exceptions import InputError
 from machinesim.viewer.maps import (
     SurfaceMap,
