@@ -97,6 +97,20 @@ def test_a_trace_at_the_loop_period_follows_the_continuous_ramp_response():
         lab.encoders().record(program, period_s=0.0)
 
 
+def test_a_period_is_a_number_of_seconds_not_a_bool_and_numpy_scalars_are_taken():
+    # period_s=True was taken as 1 s (the 0.5 s move then read at its two ends only), and
+    # np.float32(1e-3), np.int64(1) were refused as "Expected period_s > 0, got 0.001"
+    lab = machinesim.Lab("grooving_4axis", noise=False)
+    program = parse_program("G90 G21\nG01 X5. F600.\n")  # 0.5 s at 10 mm/s
+    for flag in (True, np.True_):
+        with pytest.raises(InputError, match="period_s as a number"):
+            lab.encoders().record(program, period_s=flag)
+    # every ms of the 0.5 s: 499 inner samples and the move's two ends
+    assert len(lab.encoders().record(program, period_s=np.float64(1e-3)).t) == 501
+    assert len(lab.encoders().record(program, period_s=np.float32(0.25)).t) == 3
+    assert len(lab.encoders().record(program, period_s=np.int64(1)).t) == 2
+
+
 def test_a_sigma_given_as_text_is_refused_naming_what_arrived():
     # lab.encoders(sigma="1") said "Expected one sigma per axis (5), got ()": numpy had
     # read the text as the number 1; ["1e-9"] * 5 was read as numbers

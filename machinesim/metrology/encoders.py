@@ -25,7 +25,7 @@ import numpy as np
 
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
-from machinesim.metrology._arrays import as_floats
+from machinesim.metrology._arrays import as_floats, as_number
 from machinesim.metrology.instruments import Readout, as_generator, within_readout_limit
 
 __all__ = ["ENCODER_SIGMA_OF_RESOLUTION", "MAX_RECORDED_SAMPLES", "EncoderReading", "Encoders"]
@@ -156,8 +156,7 @@ class Encoders:
 def _at_period(t: np.ndarray, q: np.ndarray, offsets: np.ndarray, period: float):
     """The planned samples with, inside each move, every multiple of ``period`` from the
     program's start; the command linear between the planned samples."""
-    if not (isinstance(period, (int, float)) and math.isfinite(period) and period > 0.0):
-        raise InputError(f"Expected period_s > 0 (s), got {period!r}", key="period_s")
+    period = as_number(period, "period_s", sign="> 0", unit="s")
     duration = float(t[-1] - t[0]) if len(t) else 0.0
     if duration / period + len(t) > MAX_RECORDED_SAMPLES:
         raise InputError(f"recording {duration:g} s every {period:g} s takes "
