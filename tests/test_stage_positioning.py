@@ -63,3 +63,22 @@ def test_readings_of_one_placement_share_the_stage_offset():
     after = wli.profile(Plane(), (0.0, 0.0), (1e-4, 0.0), 5e-5)
     for reading, shift in ((first, draws[0]), (second, draws[0]), (after, draws[1])):
         np.testing.assert_allclose(reading.z, (reading.xy + shift) @ SLOPE, atol=1e-15)
+
+
+@pytest.mark.parametrize("part", [Plane(), plane_mesh()], ids=["field", "mesh"])
+def test_a_placement_inside_another_is_the_same_and_the_outer_holds_on_after_it(part):
+    # the inner placement's end had let go of the outer one: a reading after it, inside the
+    # outer placement, was taken at a fresh draw of the stage (draws[1]), 1 um off
+    sigma = 1e-6
+    wli = WhiteLightInterferometer(noise=False, resolution=1e-15, stage_sigma=sigma,
+                                   stage_rng=np.random.default_rng(8))
+    draws = sigma * np.random.default_rng(8).standard_normal((3, 2))
+    with wli.placement():
+        before = wli.profile(part, (0.0, 0.0), (1e-4, 0.0), 5e-5)
+        with wli.placement():
+            inner = wli.profile(part, (0.0, 1e-4), (1e-4, 1e-4), 5e-5)
+        after = wli.profile(part, (0.0, -1e-4), (1e-4, -1e-4), 5e-5)
+    alone = wli.profile(part, (0.0, 0.0), (1e-4, 0.0), 5e-5)
+    for reading, shift in ((before, draws[0]), (inner, draws[0]), (after, draws[0]),
+                           (alone, draws[1])):
+        np.testing.assert_allclose(reading.z, (reading.xy + shift) @ SLOPE, atol=1e-15)

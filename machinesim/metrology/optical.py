@@ -330,12 +330,16 @@ class _Profiler:
         >>> with microscope.placement():  # doctest: +SKIP
         ...     coarse = microscope.profile(part, a, b)
         ...     fine = microscope.profile(part, c, d, spacing=1e-9)
+
+        One placed inside another is the same placement (the stage does not move), and the
+        outer one holds on after it.
         """
-        self._held = self._stage_offset()
+        outer = self._held
+        self._held = self._stage_offset()  # the outer placement's, if one is held
         try:
             yield self
         finally:
-            self._held = None
+            self._held = outer
 
     def _stage_offset(self) -> np.ndarray:
         """Where the stage puts this reading off its commanded place (x, y, m): the held
