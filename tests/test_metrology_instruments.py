@@ -239,6 +239,17 @@ def test_interferometer_straightness_and_its_reference_lines(grooving):
     np.testing.assert_allclose(ends, TABLE_E - chord, rtol=0, atol=ROUND_OFF_M)
     flat_z = laser.straightness("X", TABLE_X, "Z", reference="none").deviation
     np.testing.assert_allclose(flat_z, 0.0, rtol=0, atol=ROUND_OFF_M)
+    # a run there and back has no end-point line (its slope was 0 / 0: every deviation
+    # NaN, with noise on +-inf between NaN ends, under a RuntimeWarning only); the
+    # least-squares line reads it
+    there_and_back = np.r_[TABLE_X, TABLE_X[-2::-1]]
+    with pytest.raises(InputError, match="positions.*end-point reference"):
+        laser.straightness("X", there_and_back, "Y", reference="end_points")
+    both = laser.straightness("X", there_and_back, "Y").deviation
+    line = np.polyval(np.polyfit(there_and_back, np.r_[TABLE_E, TABLE_E[-2::-1]], 1),
+                      there_and_back)
+    np.testing.assert_allclose(both, np.r_[TABLE_E, TABLE_E[-2::-1]] - line, rtol=0,
+                               atol=ROUND_OFF_M)
 
 
 @pytest.mark.parametrize("corner, opposite", [((-200 * MM, -150 * MM), (200 * MM, 150 * MM)),

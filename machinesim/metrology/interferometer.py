@@ -165,7 +165,8 @@ class LaserInterferometer:
         reference : {"least_squares", "end_points", "none"}
             The reference straight line removed from the reading (ISO 230-1): the
             least-squares line (default, ISO 230-1's reference straight line), the line
-            through the first and last readings, or none. A real straightness optic is
+            through the first and last readings (their positions apart: a run there and
+            back is refused), or none. A real straightness optic is
             aligned only up to a slope, so only the first two are measurable in practice;
             ``"none"`` gives the virtual optic's reading aligned exactly to the nominal axis
             (zeroed at the first position), slope included (squareness, misalignment).
@@ -185,6 +186,12 @@ class LaserInterferometer:
             raise InputError(f"Expected reference in {_REFERENCES}, got {reference!r}",
                              key="reference")
         x = _positions(positions, least=2)
+        if reference == "end_points" and x[-1] == x[0]:
+            # no line through two readings at one position: its slope was 0 / 0 (NaN)
+            raise InputError(f"Expected the first and last positions apart for the end-point "
+                             f"reference line, got both {x[0]!r} m (a run there and back): "
+                             "read each direction on its own, or take "
+                             "reference='least_squares'", key="positions")
         q = self._commands(self._base(base), {axis: np.append(x, x[0])})
         raw = self.readout.read(self._displacement(q, _unit(lateral)), self._rng)
         return _reading(x, _remove_line(x, raw, reference))
