@@ -99,6 +99,23 @@ def test_a_target_count_that_is_no_whole_number_is_refused(count):
     assert iso230_2_targets(-0.2, 0.2, count=np.int64(7)).size == 7
 
 
+@pytest.mark.parametrize("rng", [True, -1, "7", 2.5])
+def test_a_target_seed_that_is_no_seed_is_refused_by_name(rng):
+    # rng=True drew the offsets of seed 1 without a word; -1, "7" and 2.5 ended in numpy's
+    # ValueError / TypeError ("SeedSequence expects int or sequence of ints")
+    with pytest.raises(InputError, match="rng as a numpy Generator, a non-negative int"):
+        iso230_2_targets(-0.2, 0.2, rng=rng)
+    # a seed, a numpy integer and a Generator draw the same offsets as before
+    drawn = iso230_2_targets(-0.2, 0.2, count=9, rng=3)
+    step = 0.4 / 8
+    expected = -0.2 + step * np.arange(9)
+    expected[1:-1] += np.random.default_rng(3).uniform(-0.25, 0.25, 7) * step
+    np.testing.assert_array_equal(drawn, expected)
+    np.testing.assert_array_equal(iso230_2_targets(-0.2, 0.2, count=9, rng=np.int64(3)), drawn)
+    np.testing.assert_array_equal(
+        iso230_2_targets(-0.2, 0.2, count=9, rng=np.random.default_rng(3)), drawn)
+
+
 @pytest.mark.parametrize("call", [
     lambda: iso230_2_targets(0.0, 0.4, count=3),
     lambda: iso230_2_targets(0.4, 0.0),

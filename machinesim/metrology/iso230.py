@@ -39,6 +39,7 @@ import numpy as np
 
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_floats, as_number
+from machinesim.metrology.instruments import as_generator
 
 __all__ = ["PositioningEvaluation", "evaluate_positioning", "iso230_2_targets",
            "positioning_test", "squareness_from_diagonals"]
@@ -181,8 +182,8 @@ def iso230_2_targets(start: float, end: float, count: int | None = None,
                          key="count")
     pitch = (b - a) / (n - 1)
     p = a + pitch * np.arange(n, dtype=np.float64)
-    if rng is not None:
-        p[1:-1] += np.random.default_rng(rng).uniform(-0.25, 0.25, n - 2) * pitch
+    if rng is not None:  # checked as an instrument's: a bool, -1 or "7" is refused by name
+        p[1:-1] += as_generator(rng).uniform(-0.25, 0.25, n - 2) * pitch
     return p
 
 
