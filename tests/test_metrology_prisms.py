@@ -73,6 +73,11 @@ def test_grooves_with_land_between_them_read_from_the_land_beside_each(tilt):
 @pytest.mark.parametrize("options, message", [
     ({"flank_band": (0.5,)}, r"Expected flank_band as two fractions, got \(0.5,\)"),
     ({"flank_band": (0.9, 0.1)}, r"Expected 0 <= lo < hi <= 1 in flank_band"),
+    # text and bools were converted: "01" read as (0, 1), ("0.1", "0.9") and (False, True)
+    ({"flank_band": "01"}, r"Expected flank_band as two fractions, got '01'"),
+    ({"flank_band": ("0.1", "0.9")}, r"flank_band as a number \(fraction of the flank\), got '0.1"),
+    ({"flank_band": (False, True)}, r"flank_band as a number \(fraction of the flank\), got False"),
+    ({"flank_band": 0.5}, r"Expected flank_band as two fractions, got 0.5"),
     ({"prominence": "5e-6"}, r"Expected prominence as a number \(m\), got '5e-6'"),
     ({"prominence": -1.0}, r"Expected prominence > 0 \(m\), got -1.0"),
     ({"prominence": 0.0}, r"Expected prominence > 0 \(m\), got 0.0"),

@@ -243,11 +243,16 @@ def groove_pitch(centres) -> Pitch:
 
 
 def _band(flank_band) -> tuple[float, float]:
+    """``flank_band`` as two numbers (never text, whose characters "01" had read as (0, 1),
+    nor bools) with 0 <= lo < hi <= 1."""
     try:
-        lo, hi = (float(v) for v in flank_band)
-    except (TypeError, ValueError) as error:
+        values = () if isinstance(flank_band, str | bytes) else tuple(flank_band)
+    except TypeError:
+        values = ()
+    if len(values) != 2:
         raise InputError(f"Expected flank_band as two fractions, got {flank_band!r}",
-                         key="flank_band") from error
+                         key="flank_band")
+    lo, hi = (as_number(v, "flank_band", unit="fraction of the flank") for v in values)
     if not 0.0 <= lo < hi <= 1.0:
         raise InputError(f"Expected 0 <= lo < hi <= 1 in flank_band, got {flank_band!r}",
                          key="flank_band")
