@@ -387,6 +387,17 @@ def test_drawn_forms_have_the_stated_peak_to_valley():
         ZonalForm((1,), [1e-7], [[0, 0, 1]])
 
 
+@pytest.mark.parametrize("degrees", [(2.7,), ("3",), "2", (True,), 2])
+def test_a_form_degree_is_a_whole_number(degrees):
+    # int() read 2.7 as degree 2 and "3" (or the text "2") as a degree without a word; a
+    # bare 2 ended in a TypeError ('int' object is not iterable)
+    with pytest.raises(InputError, match="form degrees as whole numbers >= 2"):
+        ZonalForm(degrees, [1e-7], [[0, 0, 1]])
+    # a numpy integer is a degree: P2(v . z) on the pole is the amplitude itself
+    form = ZonalForm((np.int64(2),), [1e-7], [[0, 0, 1]])
+    assert form.degrees == (2,) and form([0.0, 0.0, 1.0]) == pytest.approx(1e-7, rel=1e-15)
+
+
 # --------------------------------------------------------------------- laser interferometer
 
 

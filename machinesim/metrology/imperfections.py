@@ -270,10 +270,16 @@ class ZonalForm:
     axes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def __post_init__(self) -> None:
-        degrees = tuple(int(d) for d in self.degrees)
-        if any(d < 2 for d in degrees):
-            raise InputError(f"Expected form degrees >= 2, got {list(degrees)}",
-                             key="degrees")
+        try:  # whole numbers: int() had read 2.7 as degree 2 and "3" as 3
+            given = None if isinstance(self.degrees, str | bytes) else tuple(self.degrees)
+        except TypeError:
+            given = None
+        if given is None or any(isinstance(d, bool | np.bool_)
+                                or not isinstance(d, int | np.integer) or d < 2
+                                for d in given):
+            raise InputError(f"Expected form degrees as whole numbers >= 2, got "
+                             f"{shown(self.degrees)}", key="degrees")
+        degrees = tuple(int(d) for d in given)
         k = len(degrees)
         amplitudes = _finite(self.amplitudes, (k,), "amplitudes")
         axes = np.array(_finite(self.axes, (k, 3), "axes"))
