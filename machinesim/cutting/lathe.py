@@ -16,7 +16,9 @@ the machine does with it, in order:
    (`machinesim.servo`, any ``follow(t, q)``) follow it, entering it settled at its first
    step's speed (the spindle is run up before the tool engages: `followed`), and the axes
    reach the followed values, not the commanded ones. A dwell ends a run; the run after it
-   is entered settled too, not from the rest the dwell leaves the axes in.
+   is entered settled too, not from the rest the dwell leaves the axes in. The followed
+   samples keep the command's quarter turn of C a step: where a slow loop's catch-up turns
+   more, the run is sampled finer and followed again (`machinesim.cutting.lathe_following`).
 4. **Kinematics and errors.** The tool tip's pose for the reached axis values, through the
    machine's errors (tool setting dx, dy, dz and any geometric error), gives the edge plane
    of each point (`edge_path_from_poses`); the tool's nose is its nominal radius plus the
@@ -49,6 +51,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from machinesim.cutting.lathe_following import follow_run
 from machinesim.cutting.program import _overtravel
 from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
@@ -224,8 +227,9 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
                          getattr(program, "source", None), allow_overtravel)
     tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
-    for t, points in _timed_runs(program, machine):
-        reached = followed(None if servo is None else servo.follow, t, points)
+    for t, points, lines in _timed_runs(program, machine, with_lines=True):
+        t, points, reached = follow_run(servo, t, points, lines, machine,
+                                        getattr(program, "source", "<program>"))
         for k, axis in enumerate(machine.axes):
             peak[axis] = max(peak[axis], float(np.max(np.abs(points[:, k] - reached[:, k]))))
         poses = machine.tool_pose(reached, errors)
@@ -320,8 +324,9 @@ def turning_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
     return _timed_runs(program, machine)
 
 
-def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
-    """`turning_runs`' runs (``(t, points)``), with points added within quarter turns."""
+def _timed_runs(program, machine, *, with_lines: bool = False) -> list[tuple]:
+    """`turning_runs`' runs (``(t, points)``), with points added within quarter turns; with
+    ``with_lines``, each step's program line too (``(t, points, lines)``)."""
     source = getattr(program, "source", "<program>")
     q, kinds, feeds, lines = _axis_values(program, machine, source)
     out = []
@@ -332,27 +337,33 @@ def _timed_runs(program, machine) -> list[tuple[np.ndarray, np.ndarray]]:
         durations = _durations(points, feeds[moves], machine.axes, lines[moves], source,
                                machine.rapid_rate)
         t = np.concatenate([[0.0], np.cumsum(durations)])
-        out.append(_within_quarter_turns(t, points, c_column))
+        t, points, rows = _within_quarter_turns(t, points, _c_steps(points[:, c_column]))
+        out.append((t, points, lines[moves][rows]) if with_lines else (t, points))
     return out
 
 
-def _within_quarter_turns(t: np.ndarray, points: np.ndarray, c_column: int):
-    """``(t, points)`` with points added on each move (linearly in time and axis values, as
-    the control interpolates it) so that none turns C by more than `MOST_C_STEP_RAD`.
+def _c_steps(c: np.ndarray) -> np.ndarray:
+    """Pieces each step of ``c`` (rad) takes to turn at most `MOST_C_STEP_RAD` a piece."""
+    return np.ceil(np.abs(np.diff(c)) / MOST_C_STEP_RAD).astype(np.int64)
+
+
+def _within_quarter_turns(t: np.ndarray, points: np.ndarray, steps: np.ndarray):
+    """``(t, points, rows)``: points added on each step (linearly in time and axis values, as
+    the control interpolates a move) to split it into ``steps`` pieces (`_c_steps`: none
+    turns C by more than `MOST_C_STEP_RAD`), and the step each piece lies on.
 
     The edge path's angle is read back from the tool's poses (`edge_path_from_poses`),
     which know C only modulo a turn: a move of 50 turns in one block (a facing cut) would
     read as no turn at all. Added points lie on the move, so the path is the same."""
-    steps = np.ceil(np.abs(np.diff(points[:, c_column])) / MOST_C_STEP_RAD).astype(np.int64)
     if (steps <= 1).all():
-        return t, points
+        return t, points, np.arange(len(steps))
     steps = np.maximum(steps, 1)
     rows = np.repeat(np.arange(len(steps)), steps)
     fraction = (np.arange(steps.sum()) - np.repeat(np.cumsum(steps) - steps, steps) + 1.0
                 ) / np.repeat(steps, steps)
     dense = points[rows] + fraction[:, None] * (points[rows + 1] - points[rows])
     times = t[rows] + fraction * (t[rows + 1] - t[rows])
-    return np.concatenate([t[:1], times]), np.concatenate([points[:1], dense])
+    return np.concatenate([t[:1], times]), np.concatenate([points[:1], dense]), rows
 
 
 def followed(follow, t: np.ndarray, points: np.ndarray) -> np.ndarray:

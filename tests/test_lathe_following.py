@@ -1,0 +1,86 @@
+"""The lathe's followed path keeps its command's quarter turn of C a step, its samples on
+the servo's own motion (`machinesim.cutting.lathe_following`)."""
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from machinesim import load_machine
+from machinesim.cutting.lathe import followed, turn, turning_runs
+from machinesim.cutting.lathe_following import follow_run
+from machinesim.cutting.turning import edge_path_from_poses
+from machinesim.exceptions import NCProgramError
+from machinesim.nc import parse_program
+from machinesim.servo import AxisServo, PIDServo, table6_axis
+
+# ten turns of C facing in from X 1 mm to 0.5 mm, 1 um deep: 40 quarter-turn steps
+FACING = ("G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\nG01 X0.5 C3600. F36000\n"
+          "G00 Z0.01\n")
+
+
+def _slow_c(machine, scale: float) -> PIDServo:
+    """Table 6 "after"'s C loop with its gains times ``scale``, the other axes exact."""
+    c = table6_axis("after", "c")
+    slow = AxisServo(kp=c.kp * scale, ki=c.ki * scale, kd=c.kd * scale, mass=c.mass,
+                     damping=c.damping, name="c")
+    return PIDServo(tuple(slow if a == "C" else None for a in machine.axes))
+
+
+def test_a_slow_spindle_loop_is_followed_in_quarter_turns_on_its_own_motion():
+    machine = load_machine("sts_lathe")
+    program = parse_program(FACING)
+    servo = _slow_c(machine, 1e-4)
+    c = machine.axes.index("C")
+    part, _ = turn(program, machine, servo=servo)
+    # the old turn followed the command's 41 samples: steps of 166.6 deg of C
+    assert np.degrees(np.diff(part.paths[0].angle)).max() <= 90.0
+    (t, q), = turning_runs(program, machine)
+    fine_t, fine_q, reached = follow_run(servo, t, q, np.full(len(t) - 1, 4), machine, "f")
+    assert len(fine_t) == len(part.paths[0].angle) > len(t)
+    assert np.degrees(np.abs(np.diff(reached[:, c]))).max() <= 90.0
+    # the added samples lie on the command, and the followed values on the servo's own
+    # motion: the command sampled 64 times finer (and at these times), followed by the
+    # same loops, reads the same there
+    assert np.allclose(fine_q[:, c], np.interp(fine_t, t, q[:, c]), rtol=0.0, atol=1e-12)
+    k = 64
+    dense = np.interp(np.arange((len(t) - 1) * k + 1) / k, np.arange(len(t)), t)
+    both = np.union1d(dense, fine_t)
+    command = np.column_stack([np.interp(both, t, q[:, j]) for j in range(q.shape[1])])
+    reference = followed(servo.follow, both, command)[np.searchsorted(both, fine_t)]
+    assert np.abs(reached[:, c] - reference[:, c]).max() < 1e-9
+
+
+def test_a_loop_that_keeps_the_rules_is_followed_on_the_command_s_samples():
+    machine = load_machine("sts_lathe")
+    program = parse_program(FACING)
+    servo = _slow_c(machine, 1.0)  # Table 6 "after": 90.00000002 deg a step at most
+    part, report = turn(program, machine, servo=servo)
+    (t, q), = turning_runs(program, machine)
+    assert report.points == len(t) == 41
+    path = edge_path_from_poses(machine.tool_pose(followed(servo.follow, t, q), None),
+                                part.tool.nose_radius)
+    assert np.array_equal(part.paths[0].angle, path.angle)
+    assert np.array_equal(part.paths[0].z, path.z)
+
+
+class _Jump:
+    """A servo model whose C jumps by a quarter turn halfway through the motion: no
+    sampling follows that."""
+
+    def follow(self, t, q):
+        out = np.array(q, dtype=np.float64)
+        out[t > (t[0] + t[-1]) / 2.0, 2] += math.pi / 2.0
+        return out
+
+
+def test_a_followed_run_that_jumps_is_refused_naming_the_line_and_the_servo():
+    machine = load_machine("sts_lathe")
+    with pytest.raises(NCProgramError, match=re.escape(
+            "line 4: the spindle C as the servo model _Jump follows this move turns ")) as err:
+        turn(parse_program(FACING), machine, servo=_Jump())
+    assert re.search(r"turns 9\d\.\d+ deg between two samples \(at \d+\.\d+ s into the "
+                     r"turning run\), more than the 90 deg a step the turning engine takes, "
+                     r"still after 8 rounds of sampling the move finer: its output jumps; "
+                     r"check the servo loops' gains", str(err.value))
