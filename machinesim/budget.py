@@ -23,6 +23,7 @@ import io
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import partial
 
 from machinesim._io import check_ending, write_atomic
 from machinesim.exceptions import InputError
@@ -323,7 +324,8 @@ def realism_budget(procedure, result, realism, make_lab, enabled: bool = True, *
         progress=None if progress is None else progress(f"budget, {off} off")), sources)
 
 
-def error_budget(run: Callable, sources: Sequence[str]) -> Budget:
+def error_budget(run: Callable, sources: Sequence[str], *, everything=None, jobs: int = 1,
+                 done: Callable[[str, float], None] | None = None) -> Budget:
     """The error budget of a procedure: each source switched off in turn.
 
     Parameters
@@ -333,6 +335,20 @@ def error_budget(run: Callable, sources: Sequence[str]) -> Budget:
         ``run(source)`` -> the same with that one source off.
     sources : sequence of str
         The sources, in the order of the table.
+    everything : Result, optional
+        The run with every source on, when it is already there: then ``run(None)`` is not
+        called (and ``run`` need not take None).
+    jobs : int
+        Reruns at a time: 1 (default) runs them here, one after the other; more runs
+        ``run(source)`` for each source on that many worker processes
+        (`machinesim._processes.in_processes`; no more than there are sources), so ``run``
+        must pickle (a module-level function or a `functools.partial` of one; see
+        `crown_rerun` in `machinesim.procedures.workpiece_setting_budget`) and what it
+        returns too. ``run(None)``, when called, runs here. Each worker starts with the cuts
+        this process made (`machinesim.lab.CUTS`), so a rerun hands back the parts it would
+        here; the budget is the same to the bit, the rows in the sources' order.
+    done : callable(str, float), optional
+        With ``jobs`` above 1: told here, as each rerun finishes, its source and seconds.
 
     Returns
     -------
@@ -345,12 +361,21 @@ def error_budget(run: Callable, sources: Sequence[str]) -> Budget:
     if not callable(run):
         raise InputError(f"error_budget: expected run as a callable, run(source or None) -> "
                          f"Result, got {run!r:.60}", key="run")
-    everything = run(None)
+    if everything is None:
+        everything = run(None)
     every = _figures(everything, "None")
     names = [name for name, f in every.items() if f.after is not None]
     rows = {name: [] for name in names}
-    for source in sources:
-        rerun = run(source)
+    if jobs == 1:
+        reruns = (run(source) for source in sources)  # lazily: each checked as it comes
+    else:
+        from machinesim._processes import in_processes
+        from machinesim.lab import CUTS
+
+        reruns = in_processes(run, sources, jobs, what="budget rerun", done=None
+                              if done is None else lambda i, s: done(sources[i], s),
+                              setup=partial(_remember_cuts, CUTS))
+    for source, rerun in zip(sources, reruns, strict=True):
         without = _figures(rerun, repr(source))
         notes = notes_of_rerun(rerun, everything)
         for name in names:
@@ -366,6 +391,16 @@ def error_budget(run: Callable, sources: Sequence[str]) -> Budget:
             rows[name].append(BudgetRow(source, name, every[name].unit, a, b,
                                         quadrature_share(a, b), notes))
     return Budget(tuple(row for name in names for row in rows[name]))
+
+
+def _remember_cuts(cuts) -> None:
+    """In a rerun's worker process: the cuts the budget's own process made
+    (`machinesim.lab.CUTS`), so that a rerun whose source leaves a cut as it was (one that
+    acts on an instrument alone) hands back the first run's part, as it does there, rather
+    than cutting it again."""
+    from machinesim.lab import CUTS
+
+    CUTS.update(cuts)
 
 
 def notes_of_rerun(rerun, everything) -> tuple[str, ...]:

@@ -74,6 +74,12 @@ class CutMemo:
             digest.update(b"\x00")
         return digest.hexdigest()
 
+    def update(self, other: CutMemo) -> None:
+        """Keep ``other``'s cuts too, as if put here in its order (an error budget's worker
+        process is handed the cuts its parent made, `machinesim.budget.error_budget`)."""
+        for key, (part, report, _) in other._cuts.items():
+            self.put(key, part, report)
+
     def get(self, key: str | None):
         """(Part, report) cut under ``key`` before, its report noted as reused; or None."""
         if key is None or key not in self._cuts:

@@ -1,0 +1,198 @@
+"""The error budget's reruns on worker processes (`machinesim.budget.error_budget` ``jobs``,
+`machinesim._processes.in_processes`): the same budget to the bit, Ctrl-C and errors end
+every worker."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from functools import partial
+from pathlib import Path
+
+import psutil
+import pytest
+
+from machinesim._processes import in_processes
+from machinesim.budget import error_budget
+from machinesim.exceptions import InputError
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _workers(parent: psutil.Process) -> list[psutil.Process]:
+    """``parent``'s worker processes (multiprocessing's spawned ones; not its resource
+    tracker, one per process, which ends with it)."""
+    return [p for p in parent.children() if "spawn_main" in " ".join(p.cmdline())]
+
+
+def _arm_lab(realism):
+    """Paper 000's lab (docs/budget.md): planer_4axis, e_ys = -178 um, r = 120.555 mm."""
+    from machinesim import Lab, load_machine
+    from machinesim.errors import ErrorModel
+    from machinesim.identification.tool_rotation_arm import arm_radius
+
+    machine = load_machine("planer_4axis")
+    errors = ErrorModel().with_parameters({"tool.y": -178.0e-6,
+                                           "tool.z": -(120.555e-3 - arm_radius(machine))})
+    return Lab(machine, errors, seed=0, realism=realism)
+
+
+def _arm_rerun(source, realism):
+    """Module level, so that a partial of it pickles: the worker imports this file."""
+    from machinesim.experiment import run
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+
+    return run(ToolRotationArm(), _arm_lab(realism.without(source)))
+
+
+def test_reruns_on_two_worker_processes_give_the_serial_budget_to_the_bit():
+    from machinesim.experiment import run
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+    from machinesim.realism import Realism
+
+    realism = Realism.lab()
+    everything = run(ToolRotationArm(), _arm_lab(realism))
+    sources = ("registration", "lateral_noise")
+    rerun = partial(_arm_rerun, realism=realism)
+    serial = error_budget(rerun, sources, everything=everything)
+    told = []
+    parallel = error_budget(rerun, sources, everything=everything, jobs=2,
+                            done=lambda source, seconds: told.append((source, seconds)))
+    assert parallel.to_dict() == serial.to_dict()  # floats compared exactly
+    assert parallel.table() == serial.table()
+    assert sorted(source for source, _ in told) == sorted(sources)  # one line each
+    assert all(seconds > 0.0 for _, seconds in told)
+    # docs/budget.md's table of this lab: registration is 98.6 % of the depth error after
+    depth = {row.source: row for row in serial.rows if row.figure == "depth_error"}
+    assert round(depth["registration"].after_all, 4) == 0.3490
+    assert round(depth["registration"].after_without, 5) == 0.04187
+    assert round(100.0 * depth["registration"].share, 1) == 98.6
+
+
+def _figures_of(source):
+    from types import SimpleNamespace
+
+    from machinesim.experiment import Figure
+
+    if source == "broken":
+        raise InputError(f"rerun of {source!r}: refused here", key=source)
+    return SimpleNamespace(figures=(Figure("dx", "um", 1.0, 0.5 if source == "a" else 0.3),))
+
+
+def test_a_rerun_that_does_not_pickle_is_refused_before_any_worker_starts():
+    everything = _figures_of("all")
+    with pytest.raises(InputError, match=r"must pickle .*jobs 1"):
+        error_budget(lambda source: everything, ["a", "b"], everything=everything, jobs=2)
+    with pytest.raises(InputError, match=r"expected 1 or more worker processes, got jobs=0"):
+        error_budget(_figures_of, ["a", "b"], everything=everything, jobs=0)
+    assert not _workers(psutil.Process())
+
+
+def test_a_workers_error_reaches_the_caller_and_every_worker_ends():
+    everything = _figures_of("all")
+    budget = error_budget(_figures_of, ["a", "b"], everything=everything, jobs=2)
+    assert [row.after_without for row in budget.rows] == [0.5, 0.3]
+    with pytest.raises(InputError, match=r"rerun of 'broken': refused here"):
+        error_budget(_figures_of, ["a", "broken", "b"], everything=everything, jobs=2)
+    assert not _workers(psutil.Process())
+
+
+#: A parent whose two workers sleep: stopped by Ctrl-C (or SIGTERM), it says so in one line.
+SLEEPING_PARENT = textwrap.dedent("""
+    import sys, time
+    from machinesim._interrupts import ctrl_c_remembered, stopped
+    from machinesim._processes import in_processes
+    try:
+        with ctrl_c_remembered():
+            in_processes(time.sleep, [60.0, 60.0, 60.0], 2)
+    except KeyboardInterrupt as stop:
+        print("parent:", stopped(stop)[0], flush=True)
+        sys.exit(stopped(stop)[1])
+""")
+
+
+@pytest.mark.parametrize("how", ["ctrl_c_to_the_group", "sigterm_to_the_parent"])
+def test_a_stop_ends_every_worker_and_no_worker_says_anything(how):
+    parent = subprocess.Popen([sys.executable, "-c", SLEEPING_PARENT], cwd=ROOT,
+                              env={**os.environ, "PYTHONPATH": str(ROOT)},
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              start_new_session=True)  # its own group, as a terminal's job
+    try:
+        deadline = time.monotonic() + 60.0
+        workers = []
+        while time.monotonic() < deadline:  # both workers up
+            workers = _workers(psutil.Process(parent.pid))
+            if len(workers) == 2:
+                break
+            time.sleep(0.2)
+        assert len(workers) == 2
+        time.sleep(3.0)  # their imports done, each sleeping in a call
+        if how == "ctrl_c_to_the_group":
+            os.killpg(parent.pid, signal.SIGINT)
+        else:
+            parent.send_signal(signal.SIGTERM)
+        out, err = parent.communicate(timeout=30)
+    finally:
+        if parent.poll() is None:
+            os.killpg(parent.pid, signal.SIGKILL)
+    expected = ("interrupted", 130) if how == "ctrl_c_to_the_group" else ("terminated", 143)
+    assert (out.strip(), parent.returncode) == (f"parent: {expected[0]}", expected[1])
+    assert err == ""  # no worker's traceback
+    gone, alive = psutil.wait_procs(workers, timeout=10)
+    assert not alive
+
+
+def test_results_come_back_in_the_order_given_whatever_order_they_finish():
+    told = []
+    assert in_processes(abs, [-3, 2, -1], 2, done=lambda i, s: told.append(i)) == [3, 2, 1]
+    assert sorted(told) == [0, 1, 2]
+
+
+def test_jobs_of_the_scenario_is_checked():
+    result = subprocess.run([sys.executable, str(ROOT / "scenarios" / "workpiece_setting.py"),
+                             "--jobs", "0", "--budget", "off"], capture_output=True,
+                            text=True, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert result.returncode == 2
+    assert "argument --jobs: '0': expected a whole number of worker processes, 1 or more" \
+        in result.stderr
+
+
+def _cut_keys(_):
+    from machinesim.lab import CUTS
+
+    return sorted(CUTS._cuts)
+
+
+def test_each_worker_starts_with_the_cuts_this_process_made():
+    """A rerun whose source acts on an instrument alone hands back the first run's part in
+    a worker as it does here (`machinesim.lab.CUTS`), not a part cut again."""
+    from machinesim import Lab
+    from machinesim.budget import _remember_cuts
+    from machinesim.cutting.memo import CutMemo
+    from machinesim.lab import CUTS
+    from machinesim.nc import ProgramBuilder
+
+    memo = CutMemo()
+    groove = (ProgramBuilder(1).rapid(X=1e-3, Y=1e-3, Z=1e-3)
+              .linear(Z=-1e-5, feed_mm_per_min=100).linear(X=8e-3, feed_mm_per_min=100)
+              .rapid(Z=1e-3).build())
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr("machinesim.lab.CUTS", memo)
+        Lab("robonano_a0ib", seed=0).cut(groove, "v:90", "block:10x10x2")
+        assert len(memo) == 1
+        keys = in_processes(_cut_keys, [0, 1], 2, setup=partial(_remember_cuts, memo))
+    assert keys == [sorted(memo._cuts)] * 2
+    assert CUTS is not memo
+
+
+def test_a_worker_that_dies_is_a_clear_error_and_the_others_end():
+    from machinesim._processes import WorkerDied
+
+    with pytest.raises(WorkerDied, match=r"ended without an answer \(killed: out of memory"):
+        in_processes(os._exit, [3, 3], 2, what="budget rerun")
+    assert not _workers(psutil.Process())
+
