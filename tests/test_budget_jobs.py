@@ -5,6 +5,7 @@ every worker."""
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -196,3 +197,49 @@ def test_a_worker_that_dies_is_a_clear_error_and_the_others_end():
         in_processes(os._exit, [3, 3], 2, what="budget rerun")
     assert not _workers(psutil.Process())
 
+
+def test_realism_budget_builds_each_labs_rerun_on_a_worker_from_its_inputs():
+    """`realism_budget(..., jobs=2)` with a `LabInputs` (which pickles; a scenario's nested
+    make_lab does not, and is refused by name): the budget of the serial path to the bit,
+    and one progress line per rerun."""
+    from machinesim import load_machine
+    from machinesim.budget import LabInputs, realism_budget
+    from machinesim.errors import ErrorModel
+    from machinesim.experiment import run
+    from machinesim.identification.tool_rotation_arm import arm_radius
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+    from machinesim.realism import Realism
+
+    machine = load_machine("planer_4axis")
+    errors = ErrorModel().with_parameters({"tool.y": -178.0e-6,
+                                           "tool.z": -(120.555e-3 - arm_radius(machine))})
+    make_lab = LabInputs(machine, errors, seed=0)
+    realism = Realism.lab().without("instrument_noise", "artefact_errors",
+                                    "background_errors", "stage_positioning",
+                                    "lateral_resolution", "probe_pretravel",
+                                    "probe_ball_form", "air_refraction")
+    procedure = ToolRotationArm()
+    assert set(realism.on) & set(procedure.realism_sources) == {"registration",
+                                                                 "lateral_noise"}
+    everything = run(procedure, make_lab(realism))
+    # the lab LabInputs builds is the one a scenario's make_lab built
+    assert run(procedure, _arm_lab(realism)).figures == everything.figures
+    serial = realism_budget(procedure, everything, realism, make_lab)
+    told = []
+
+    def stage(name):
+        return lambda text: told.append((name, text))
+
+    parallel = realism_budget(procedure, everything, realism, make_lab, progress=stage,
+                              jobs=2)
+    assert parallel.to_dict() == serial.to_dict()  # floats compared exactly
+    assert sorted(name for name, _ in told) == ["budget, lateral_noise off",
+                                                "budget, registration off"]
+    assert all(re.fullmatch(r"done in \d+ s \([12] of 2\)", text) for _, text in told)
+
+    def nested(realism):
+        return make_lab(realism)
+
+    with pytest.raises(InputError, match=r"must pickle .*jobs 1"):
+        realism_budget(procedure, everything, realism, nested, jobs=2)
+    assert not _workers(psutil.Process())
