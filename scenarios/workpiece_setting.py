@@ -27,6 +27,9 @@ at the report; ``--quick``: smaller crown windows, as the tests run it) with opt
                                 machine: five more crown cuts, about 5 min on 2 cores;
                                 default on, run after the report is written and printed,
                                 so an interrupted budget leaves it whole)
+    --jobs N                    the budget's reruns at a time, each on a worker process
+                                (default: the cores this process may use; 1: one after
+                                the other, in this process; the same budget either way)
     --nose-correction on|off    keep the nose arc's lowest point on the path (default on),
                                 or the tip as the paper's eq 7 does (off)
     --all-layers                cut all ten 1 um finishing layers of the crown, not only the
@@ -51,15 +54,18 @@ from __future__ import annotations
 
 import machinesim.scenario_start  # noqa: F401  (first: Ctrl-C while loading is one line)
 
+import argparse
 import math
 import re
 import sys
 from dataclasses import replace
-from types import MappingProxyType, SimpleNamespace
+from functools import partial
+from types import MappingProxyType
 
 import numpy as np
 
 from machinesim import Lab, WorkpieceSetting, load_machine
+from machinesim._cores import usable_cores
 from machinesim.budget import error_budget
 from machinesim.cam.crown import PARK, groove_rapids_crash
 from machinesim.compensation import program_axes
@@ -74,6 +80,11 @@ from machinesim.procedures.workpiece_setting import (
     RobotLoadedWorkpiece,
     eqs_5_to_7_program,
     model_based_program,
+)
+from machinesim.procedures.workpiece_setting_budget import (
+    TIP_VS_NOSE,
+    budget_figures,
+    crown_rerun,
 )
 from machinesim.realism import Realism
 from machinesim.report import ReportFolder
@@ -113,8 +124,6 @@ CROWN_HEIGHT_UM = 100.0
 CROWN_TILT_DEG = 1.93
 #: The lab without --realism: the paper's imperfections all on.
 DEFAULT_REALISM = "lab"
-#: Procedure approximation in the error budget: the paper's eq 7 keeps the tip on the path.
-TIP_VS_NOSE = "tip_vs_nose"
 #: Display budget of each HTML view: ~1 MB files, enough for a 3 mm window.
 VIEW_TRIANGLES = 40_000
 
@@ -257,8 +266,24 @@ def main(argv=None) -> int:
     parser.add_argument("--all-layers", action="store_true",
                         help="cut every finishing layer of the crown, not only the last")
     parser.add_argument("--quick", action="store_true", help="smaller crown windows")
+    parser.add_argument("--jobs", type=_jobs, default=None, metavar="N",
+                        help="the budget's reruns at a time, each on a worker process "
+                        f"(default: the cores this process may use, {usable_cores()} here; "
+                        "1: one after the other in this process)")
     args = parser.parse_args(argv)
     return scenario_status(report, args, "workpiece_setting")
+
+
+def _jobs(text: str) -> int:
+    """--jobs: a whole number, 1 or more."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of worker "
+                                         "processes, 1 or more")
+    return value
 
 
 def report(args) -> None:
@@ -347,30 +372,30 @@ def scenario_budget(machine, errors, args, realism: Realism, results):
         progress("budget")(f"none: no source it shares out is on (realism {realism}), so "
                            "budget.md and budget.png are not written")
         return None
+    jobs = min(args.jobs or usable_cores(), len(sources))
+    rerun = partial(crown_rerun, machine=machine, errors=errors, seed=args.seed,
+                    realism=realism, nose_correction=nose, all_layers=args.all_layers,
+                    quick=args.quick)
+    if jobs == 1:
+        progress("budget")(f"{len(sources)} sources switched off in turn, a run of each "
+                           "load each; those that change the crown's program or the machine "
+                           "cut it again, about 1 min each on 2 cores (--budget off skips "
+                           "this)")
+        return error_budget(partial(rerun, progress=progress), sources,
+                            everything=budget_figures(results))
     progress("budget")(f"{len(sources)} sources switched off in turn, a run of each load "
-                       "each; those that change the crown's program or the machine cut it "
-                       "again, about 1 min each on 2 cores (--budget off skips this)")
+                       f"each, {jobs} at a time on worker processes (--jobs); those that "
+                       "change the crown's program or the machine cut it again, about 1 min "
+                       "each on a core (--budget off skips this)")
+    finished = []
 
-    def measured(runs):
-        figures = [f for f in runs["crown"].figures if not f.name.startswith("machining_time")]
-        figures += [f for f in runs["grooves"].figures if f.name == "groove_depth_spread"]
-        return SimpleNamespace(figures=tuple(figures))
+    def done(source, seconds):
+        finished.append(source)
+        progress(f"budget, {source} off")(f"done in {seconds:.0f} s ({len(finished)} of "
+                                          f"{len(sources)})")
 
-    def variant(source):
-        if source is None:
-            return measured(results)
-        runs = {}
-        for load in EXPERIMENTS:
-            lab = Lab(machine, errors[load], seed=args.seed,
-                      realism=realism if source == TIP_VS_NOSE else realism.without(source))
-            told = progress(f"budget, {source} off, {load} load")
-            runs[load] = run(RobotLoadedWorkpiece(
-                load, nose_correction=nose or source == TIP_VS_NOSE,
-                all_layers=args.all_layers, quick=args.quick, after_only=True, progress=told),
-                lab, progress=told)
-        return measured(runs)
-
-    return error_budget(variant, sources)
+    return error_budget(rerun, sources, everything=budget_figures(results), jobs=jobs,
+                        done=done)
 
 
 def combined(results, routes):
