@@ -28,8 +28,8 @@ at the report; ``--quick``: smaller crown windows, as the tests run it) with opt
                                 default on, run after the report is written and printed,
                                 so an interrupted budget leaves it whole)
     --jobs N                    the budget's reruns at a time, each on a worker process
-                                (default: the cores this process may use; 1: one after
-                                the other, in this process; the same budget either way)
+                                (default 1: one after the other, in this process; the
+                                same budget to the bit either way)
     --nose-correction on|off    keep the nose arc's lowest point on the path (default on),
                                 or the tip as the paper's eq 7 does (off)
     --all-layers                cut all ten 1 um finishing layers of the crown, not only the
@@ -268,8 +268,8 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="smaller crown windows")
     parser.add_argument("--jobs", type=_jobs, default=None, metavar="N",
                         help="the budget's reruns at a time, each on a worker process "
-                        f"(default: the cores this process may use, {usable_cores()} here; "
-                        "1: one after the other in this process)")
+                        "(default 1: one after the other in this process; the cores this "
+                        f"process may use: {usable_cores()})")
     args = parser.parse_args(argv)
     return scenario_status(report, args, "workpiece_setting")
 
@@ -372,7 +372,7 @@ def scenario_budget(machine, errors, args, realism: Realism, results):
         progress("budget")(f"none: no source it shares out is on (realism {realism}), so "
                            "budget.md and budget.png are not written")
         return None
-    jobs = min(args.jobs or usable_cores(), len(sources))
+    jobs = min(args.jobs or 1, len(sources))
     rerun = partial(crown_rerun, machine=machine, errors=errors, seed=args.seed,
                     realism=realism, nose_correction=nose, all_layers=args.all_layers,
                     quick=args.quick)
