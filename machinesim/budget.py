@@ -395,7 +395,7 @@ def error_budget(run: Callable, sources: Sequence[str], *, everything=None, jobs
         ``run(source)`` for each source on that many worker processes
         (`machinesim._processes.in_processes`; no more than there are sources), so ``run``
         must pickle (a module-level function or a `functools.partial` of one; see
-        `crown_rerun` in `machinesim.procedures.workpiece_setting_budget`) and what it
+        `crown_rerun` in `machinesim.workpiece_setting_budget`) and what it
         returns too. ``run(None)``, when called, runs here. Each worker starts with the cuts
         this process made (`machinesim.lab.CUTS`), so a rerun hands back the parts it would
         here; the budget is the same to the bit, the rows in the sources' order.

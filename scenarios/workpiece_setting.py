@@ -81,11 +81,6 @@ from machinesim.procedures.workpiece_setting import (
     eqs_5_to_7_program,
     model_based_program,
 )
-from machinesim.procedures.workpiece_setting_budget import (
-    TIP_VS_NOSE,
-    budget_figures,
-    crown_rerun,
-)
 from machinesim.realism import Realism
 from machinesim.report import ReportFolder
 from machinesim.rotations import rotation_xyz
@@ -98,6 +93,11 @@ from machinesim.scenario_runs import (
 )
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 from machinesim.viewer import part_scene, write_html
+from machinesim.workpiece_setting_budget import (
+    TIP_VS_NOSE,
+    budget_figures,
+    crown_rerun,
+)
 
 UM, MM = M_PER_UM, M_PER_MM
 #: Default repeatability of the loading robot, um (paper 002's LR Mate 200iD).
