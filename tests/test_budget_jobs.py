@@ -26,8 +26,17 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def _workers(parent: psutil.Process) -> list[psutil.Process]:
     """``parent``'s worker processes (multiprocessing's spawned ones; not its resource
-    tracker, one per process, which ends with it)."""
-    return [p for p in parent.children() if "spawn_main" in " ".join(p.cmdline())]
+    tracker, one per process, which ends with it). A child that has ended and not been
+    reaped (a zombie: another test's, under a PID 1 that reaps none) has no command line and
+    is no worker: psutil raised ZombieProcess for it in CI."""
+    found = []
+    for child in parent.children():
+        try:
+            if "spawn_main" in " ".join(child.cmdline()):
+                found.append(child)
+        except (psutil.ZombieProcess, psutil.NoSuchProcess):
+            continue
+    return found
 
 
 def _arm_lab(realism):
