@@ -126,11 +126,12 @@ SLEEPING_PARENT = textwrap.dedent("""
 
 
 @pytest.mark.parametrize("how", ["ctrl_c_to_the_group", "sigterm_to_the_parent"])
-def test_a_stop_ends_every_worker_and_no_worker_says_anything(how):
+def test_a_stop_ends_every_worker_and_no_worker_says_anything(how, as_in_a_terminal):
     parent = subprocess.Popen([sys.executable, "-c", SLEEPING_PARENT], cwd=ROOT,
                               env={**os.environ, "PYTHONPATH": str(ROOT)},
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              start_new_session=True)  # its own group, as a terminal's job
+                              start_new_session=True,  # its own group, as a terminal's job
+                              **as_in_a_terminal)  # and SIGINT as a terminal's job has it
     try:
         deadline = time.monotonic() + 60.0
         workers = []
