@@ -33,11 +33,13 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 
+import numpy as np
+
 from machinesim._cores import usable_cores
 from machinesim._interrupts import _ctrl_c_deferred, sigint_blocked
 from machinesim.exceptions import InputError, MachineSimError
 
-__all__ = ["WorkerDied", "in_processes"]
+__all__ = ["WorkerDied", "check_jobs", "in_processes"]
 
 #: Seconds a worker has to end after SIGTERM before it is killed.
 STOP_WAIT_S = 5.0
@@ -45,6 +47,15 @@ STOP_WAIT_S = 5.0
 
 class WorkerDied(MachineSimError):
     """A worker process ended without an answer (killed: out of memory, ``kill -9``)."""
+
+
+def check_jobs(jobs, what: str = "call") -> int:
+    """``jobs`` as an int, 1 or more (a numpy integer taken; a bool, a float, text refused
+    by name: ``jobs=True`` is no count). ``what``: what a call is, for the message."""
+    if isinstance(jobs, bool) or not isinstance(jobs, int | np.integer) or jobs < 1:
+        raise InputError(f"{what}s: expected 1 or more worker processes, got jobs={jobs!r}",
+                         key="jobs")
+    return int(jobs)
 
 
 def _worker_start(cores, setup) -> None:
@@ -104,9 +115,7 @@ def in_processes(function: Callable, items: Sequence, jobs: int, *,
     WorkerDied
         A worker that ended without an answer.
     """
-    if not isinstance(jobs, int) or isinstance(jobs, bool) or jobs < 1:
-        raise InputError(f"{what}s: expected 1 or more worker processes, got jobs={jobs!r}",
-                         key="jobs")
+    jobs = check_jobs(jobs, what)
     for name, value in (("function", function), ("items", list(items)), ("setup", setup)):
         try:
             pickle.dumps(value)

@@ -317,8 +317,10 @@ def realism_budget(procedure, result, realism, make_lab, enabled: bool = True, *
     does; a function defined inside another does not, and is refused by name), and
     ``progress`` is told one line per rerun as it finishes,
     ``budget, <source> off: done in 12 s (1 of 3)``, rather than its steps."""
+    from machinesim._processes import check_jobs
     from machinesim.experiment import run
 
+    jobs = check_jobs(jobs, "budget rerun")  # before any rerun, as error_budget
     sources = [name for name in realism.on if name in procedure.realism_sources]
     if enabled and not sources and progress is not None:
         progress("budget")(f"none: no source it shares out is on (realism {realism}), so "
@@ -409,7 +411,12 @@ def error_budget(run: Callable, sources: Sequence[str], *, everything=None, jobs
         with the notes of its source's rerun that the all-on run has none of
         (`notes_of_rerun`).
     """
+    from machinesim._processes import check_jobs
+
     sources = _check_sources(sources)
+    # before the run with every source on (minutes): jobs=0 was refused only after it, and
+    # jobs=True (== 1) taken as one job
+    jobs = check_jobs(jobs, "budget rerun")
     if not callable(run):
         raise InputError(f"error_budget: expected run as a callable, run(source or None) -> "
                          f"Result, got {run!r:.60}", key="run")

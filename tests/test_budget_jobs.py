@@ -14,6 +14,7 @@ import time
 from functools import partial
 from pathlib import Path
 
+import numpy as np
 import psutil
 import pytest
 
@@ -253,3 +254,33 @@ def test_realism_budget_builds_each_labs_rerun_on_a_worker_from_its_inputs():
     with pytest.raises(InputError, match=r"must pickle .*jobs 1"):
         realism_budget(procedure, everything, realism, nested, jobs=2)
     assert not _workers(psutil.Process())
+
+
+def test_jobs_is_checked_before_the_run_with_every_source_on():
+    """A budget's ``jobs`` is refused before any run: 0 had been refused only after the
+    run with every source on (minutes on a real procedure), and True (== 1) taken as one
+    job; a numpy integer is a count."""
+    from types import SimpleNamespace
+
+    from machinesim.budget import realism_budget
+    from machinesim.experiment import Figure
+    from machinesim.realism import Realism
+
+    calls = []
+
+    def run(off):
+        calls.append(off)
+        return SimpleNamespace(figures=(Figure("f", "um", 3.0, 2.0 if off is None else 1.0),))
+
+    for jobs in (0, True, 1.0, "2"):
+        with pytest.raises(InputError, match=re.escape(
+                f"budget reruns: expected 1 or more worker processes, got jobs={jobs!r}")):
+            error_budget(run, ["a"], jobs=jobs)
+        with pytest.raises(InputError, match="got jobs="):
+            realism_budget(SimpleNamespace(realism_sources=()), None, Realism.lab(),
+                           None, jobs=jobs)
+    assert calls == []
+    # np.int64(1) is one job, here: the all-on run and the rerun, 1 - 2 in quadrature
+    budget = error_budget(run, ["a"], jobs=np.int64(1))
+    assert calls == [None, "a"]
+    assert budget.share("a", "f") == pytest.approx(1.0 - 1.0 / 4.0)
