@@ -74,7 +74,22 @@ def _worker_start(cores, setup) -> None:
         setup()
 
 
-def _timed(function: Callable, item):
+def _timed(call: bytes, what: str):
+    """In a worker: ``function(item)`` of the pickled ``(function, item)`` and its seconds.
+    Loaded here rather than by the pool, so that one the worker cannot load is an error of
+    that call, not a worker dying: a function defined under ``if __name__ == "__main__":``
+    (or in ``python -c``) pickles by its name in the parent, but a spawned worker imports
+    the main script as ``__mp_main__``, without that block, and finds no such name; the
+    pool's own loading failed, killing the worker with a traceback on stderr, and the call
+    was told as a worker 'killed: out of memory, or by a signal'."""
+    try:
+        function, item = pickle.loads(call)
+    except Exception as error:  # AttributeError, ModuleNotFoundError, ...: all say why
+        raise InputError(f"{what}s on worker processes: a worker process could not load the "
+                         f"function or its item ({type(error).__name__}: {error}); define "
+                         "it at the top level of a module the worker can import (not under "
+                         "'if __name__ == \"__main__\":', nor in python -c), or run them in "
+                         "this process instead (jobs 1)", key="jobs") from None
     began = time.perf_counter()
     result = function(item)
     return time.perf_counter() - began, result
@@ -138,7 +153,7 @@ def in_processes(function: Callable, items: Sequence, jobs: int, *,
         pool = ProcessPoolExecutor(jobs, mp_context=context, initializer=_worker_start,
                                    initargs=(cores, setup))
         try:
-            running = {pool.submit(_timed, function, item): i
+            running = {pool.submit(_timed, pickle.dumps((function, item)), what): i
                        for i, item in enumerate(items)}
         except BaseException:
             _stop(pool)

@@ -284,3 +284,35 @@ def test_jobs_is_checked_before_the_run_with_every_source_on():
     budget = error_budget(run, ["a"], jobs=np.int64(1))
     assert calls == [None, "a"]
     assert budget.share("a", "f") == pytest.approx(1.0 - 1.0 / 4.0)
+
+
+def test_a_function_the_workers_cannot_load_is_named_not_a_worker_killed(tmp_path):
+    """A function defined under ``if __name__ == "__main__":`` pickles by its name in the
+    parent, but a spawned worker imports the script as ``__mp_main__`` without that block:
+    the pool's loading had killed each worker (a traceback on stderr each) and the call
+    was told as a worker 'killed: out of memory, or by a signal'."""
+    script = tmp_path / "budget_script.py"
+    script.write_text(textwrap.dedent("""
+        from machinesim._processes import in_processes
+        from machinesim.exceptions import InputError
+
+        if __name__ == "__main__":
+            def halved(x):
+                return x / 2
+
+            try:
+                in_processes(halved, [1.0, 2.0], 2, what="budget rerun")
+            except InputError as error:
+                print("refused:", error)
+    """))
+    result = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                            cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                            timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith(
+        "refused: key 'jobs': budget reruns on worker processes: a worker process could "
+        "not load the "
+        "function or its item (AttributeError: Can't get attribute 'halved' on <module "
+        "'__mp_main__'")
+    assert "or run them in this process instead (jobs 1)" in result.stdout
+    assert "Traceback" not in result.stderr
