@@ -30,11 +30,15 @@ import numpy as np
 from machinesim.errors import WorkpieceSetting
 from machinesim.exceptions import InputError, check_length
 
-__all__ = ["RP_PER_SIGMA", "RobotLoader"]
+__all__ = ["LANDING_REACH", "RP_PER_SIGMA", "RobotLoader"]
 
 #: RP / s for an isotropic 3-D Gaussian scatter (module docstring): mean plus three standard
 #: deviations of the Maxwell-distributed distance, in units of the per-axis s.
 RP_PER_SIGMA = 2.0 * math.sqrt(2.0 / math.pi) + 3.0 * math.sqrt(3.0 - 8.0 / math.pi)
+#: Standard deviations of its scatter within which a robot's landing must be a setting that
+#: `WorkpieceSetting` takes (`RobotLoader`): beyond it a campaign's landings were refused
+#: one trial at a time (2 m, a unit slip, failed every trial).
+LANDING_REACH = 3.0
 
 
 @dataclass(frozen=True)
@@ -57,6 +61,36 @@ class RobotLoader:
         for name in ("repeatability", "lever"):
             number = check_length(getattr(self, name), name, positive=name == "lever")
             object.__setattr__(self, name, number)
+        self._check_reach()
+
+    def _check_reach(self) -> None:
+        """Refuse a robot whose landing `LANDING_REACH` standard deviations out on every
+        axis is no setting `WorkpieceSetting` takes (its check, the one rule for how far a
+        setting may be off: 1 m, 180 deg), so that the robot is refused once, here, rather
+        than each landing drawn beyond it. Such a robot lands the part off by metres or
+        turned by half a turn: repeatability 2 m (a unit slip for 2 mm) failed every trial
+        of a campaign, each at its landing."""
+        position = LANDING_REACH * self.position_sigma
+        angle = LANDING_REACH * self.angle_sigma
+        try:
+            WorkpieceSetting(np.full(3, position), angle, angle, angle)
+        except InputError as error:
+            raise InputError(
+                f"a robot of repeatability {self.repeatability:g} m and lever "
+                f"{self.lever:g} m lands the part {LANDING_REACH:g} standard deviations out "
+                f"({position:g} m, {angle:g} rad) beyond what a workpiece setting takes: "
+                f"{getattr(error, 'message', error)}; expected a repeatability of at most "
+                f"{self.largest_repeatability(self.lever):g} m for this lever",
+                key="repeatability") from None
+
+    @staticmethod
+    def largest_repeatability(lever: float) -> float:
+        """The largest repeatability, m, whose landing `LANDING_REACH` standard deviations
+        out a `WorkpieceSetting` takes with the gripper's ``lever``, m."""
+        from machinesim.errors._checks import LARGEST_ERROR
+
+        sigma = min(LARGEST_ERROR["length"], LARGEST_ERROR["angle"] * lever) / LANDING_REACH
+        return RP_PER_SIGMA * sigma
 
     @property
     def position_sigma(self) -> float:

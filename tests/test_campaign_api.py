@@ -79,16 +79,19 @@ def test_a_landing_beyond_the_error_models_range_fails_its_trial_not_the_campaig
     (per-axis s = RP / 3.616) is beyond the error model's 1 m. It was drawn before the
     trial's guard, so the whole campaign stopped with a bare "key 'delta'" message after
     making its folder; it is that trial's failure now, naming the repeatability, as a
-    tool.y of 1000 mm is."""
+    tool.y of 1000 mm is. (A fixed 10m is refused before any trial now, test_campaign_folders;
+    a uniform from 10 um, which the robot takes at its LOW, draws trial 0's beyond it.)"""
     import json
 
-    ds = run("workpiece_setting", 1, vary=["robot.repeatability=10m"], out=tmp_path / "c",
-             **ARM)
+    ds = run("workpiece_setting", 1, vary=["robot.repeatability=uniform:10um,10m"],
+             out=tmp_path / "c", **ARM)
     assert ds.failed.values.tolist() == [1]
-    assert ds.drawn.values.tolist() == [[10.0]]
+    assert ds.drawn.values[0, 0] > 75.8e-3  # beyond the robot's 75.7 mm (20 mm lever)
     error = json.loads(ds.attrs["errors"])["0"]
+    drawn = ds.drawn.values[0, 0]
     assert error.startswith("InputError: key 'robot.repeatability': the robot's landing at "
-                            "robot.repeatability 1e+07 um: "), error
+                            f"robot.repeatability {drawn * 1e6:g} um: a robot of "
+                            f"repeatability {drawn:g} m"), error
 
 
 def test_a_noise_drawn_below_zero_is_kept_as_the_zero_the_lab_read_with():

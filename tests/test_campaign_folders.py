@@ -228,6 +228,31 @@ def test_an_instruments_noise_beyond_what_it_takes_fails_before_any_trial(
     check_before_trials(spec)
 
 
+def test_a_robot_repeatability_whose_landings_no_setting_takes_fails_before_any_trial(
+        tmp_path, monkeypatch):
+    # robot.repeatability=2m (a unit slip for 2 mm) ran every trial to its landing's refusal
+    # ('... is no angle error'), writing a campaign of failures, exit 1; the robot refuses it
+    # now (RobotLoader, its landings' reach), once, before any trial
+    ran = trials_run(monkeypatch)
+    out = tmp_path / "robot"
+    with pytest.raises(InputError) as info:
+        run("workpiece_setting", 3, vary=["robot.repeatability=2m"], out=out, workers=0,
+            progress=False, identify_only=True)
+    message = str(info.value)
+    assert message.startswith("key '--vary': the trials of workpiece_setting --identify-only "
+                              "would fail one by one as they start: the errors they are "
+                              "drawn around (robot.repeatability=2m; "), message
+    assert "key 'repeatability': a robot of repeatability 2 m" in message
+    assert "expected a repeatability of at most 0.0757352 m" in message
+    assert ran == [] and not out.exists()
+    # one some of whose draws the robot takes runs
+    from machinesim.campaign.preflight import check_before_trials
+
+    check_before_trials(CampaignSpec("workpiece_setting", 3,
+                                     (parse_vary("robot.repeatability=uniform:10um,2m"),),
+                                     identify_only=True))
+
+
 # ------------------------------------------------------------ folders that cannot be written
 # The suite runs as root, for whom a folder's mode bits stop no write: these folders cannot
 # be written because of what is in their way (a file) or the file system (/proc).

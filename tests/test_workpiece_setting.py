@@ -105,6 +105,23 @@ def test_robot_refuses_bad_parameters():
         RobotLoader().land("seed")
 
 
+def test_robot_refuses_a_repeatability_whose_landings_no_setting_takes():
+    # its landing 3 standard deviations out must be a setting WorkpieceSetting takes (1 m,
+    # 180 deg). By hand: RP = 3.6161 s; with a 20 mm lever the angle binds first,
+    # 3 s / 20 mm = pi rad at RP = 3.6161 * pi * 20 mm / 3 = 75.74 mm; with a 1 m lever the
+    # length does, 3 s = 1 m at RP = 3.6161 / 3 m = 1.2054 m. 2 m (a unit slip for 2 mm)
+    # failed each landing one at a time
+    assert RobotLoader.largest_repeatability(20 * MM) == pytest.approx(75.74 * MM, rel=1e-3)
+    assert RobotLoader.largest_repeatability(1.0) == pytest.approx(1.2054, rel=1e-3)
+    RobotLoader(75.7 * MM, lever=20 * MM)
+    with pytest.raises(InputError, match=r"key 'repeatability': a robot of repeatability "
+                       r"0\.0758 m and lever 0\.02 m .* is no angle error"):
+        RobotLoader(75.8 * MM, lever=20 * MM)
+    RobotLoader(1.2, lever=1.0)
+    with pytest.raises(InputError, match=r"is no length error.*at most 1\.205\d* m"):
+        RobotLoader(2.0, lever=1.0)
+
+
 # ------------------------------------------------------------------ eqs 1-7, exactly
 
 

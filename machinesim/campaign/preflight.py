@@ -64,7 +64,8 @@ def check_before_trials(spec) -> None:
     its errors (the procedure's defaults, each varied one at `_around`, the robot's landing
     at its mean: none) set into the base model, the procedure's check of that model
     (`ProcedureEntry.check`, as a trial that cuts runs it), the lab built on it, and the
-    robot of its repeatability.
+    robot of its repeatability (`RobotLoader`, which refuses one whose landings would be
+    refused: ``robot.repeatability=2m`` failed every trial at its landing).
 
     Raises
     ------
@@ -93,8 +94,7 @@ def check_before_trials(spec) -> None:
         at = {"normal": f" at its draw nearest zero within {NORMAL_REACH:g} sigma of its mean",
               "uniform": " at its draw nearest zero"}
         shown = [f"{name}={dist.text}{at.get(dist.kind, '')}"
-                 for name, dist in varied.items()
-                 if name not in LAB_PARAMETERS or name.endswith(".sigma")]
+                 for name, dist in varied.items()]
         if "robot.repeatability" in lab:
             shown.append("the robot's landing at its mean")
         what = spec.procedure + " --identify-only" * spec.identify_only
