@@ -326,6 +326,52 @@ def test_a_lock_file_that_is_a_link_or_a_fifo_is_refused_and_nothing_is_overwrit
     assert ran == [] and victim.read_text() == "precious\n"
 
 
+def test_a_lock_that_is_a_folder_or_a_link_to_nothing_is_refused_naming_what_it_is(
+        tmp_path, monkeypatch):
+    # campaign.lock a folder was refused as "cannot make the campaign's lock campaign.lock:
+    # Is a directory", an open that failed for another reason ('No such file or directory':
+    # the folder removed meanwhile) alike, each with no "expected"
+    import errno
+    import os
+
+    ran = trials_run(monkeypatch)
+    expected = "expected the campaign's own lock file, which each run writes its pid into"
+    out = tmp_path / "folder"
+    (out / "campaign.lock").mkdir(parents=True)
+    with pytest.raises(FileError) as info:
+        run("tool_rotation_arm", 2, out=out, workers=0, progress=False, **ARM)
+    assert str(info.value) == (f"{out}: campaign.lock is a folder, not a regular file; "
+                               f"{expected}: move the folder away or remove it")
+    assert sorted(p.name for p in out.iterdir()) == ["campaign.lock"]
+    # a link to nothing: the link, its target named
+    out = tmp_path / "dangling"
+    out.mkdir()
+    (out / "campaign.lock").symlink_to(tmp_path / "nowhere" / "lock")
+    with pytest.raises(FileError) as info:
+        run("tool_rotation_arm", 2, out=out, workers=0, progress=False, **ARM)
+    assert str(info.value) == (f"{out}: campaign.lock is a symbolic link (to "
+                               f"'{tmp_path / 'nowhere' / 'lock'}'); {expected}: remove the "
+                               "link")
+    assert not (tmp_path / "nowhere").exists()
+    # any other refusal of the open names what is (not) there and what was expected
+    real_open = os.open
+
+    def refused(path, *args, **kwargs):
+        if str(path).endswith("campaign.lock"):
+            raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path))
+        return real_open(path, *args, **kwargs)
+
+    out = tmp_path / "gone"
+    monkeypatch.setattr(os, "open", refused)
+    with pytest.raises(FileError) as info:
+        run("tool_rotation_arm", 2, out=out, workers=0, progress=False, **ARM)
+    monkeypatch.setattr(os, "open", real_open)
+    assert str(info.value) == (f"{out}: cannot open or make the campaign's lock campaign.lock, "
+                               "which does not exist: No such file or directory; "
+                               f"{expected}, in a folder this run can write")
+    assert ran == []
+
+
 @pytest.mark.skipif(not __import__("os").path.isdir("/proc/self"), reason="no /proc")
 def test_a_folder_the_file_system_will_not_make_is_refused_before_any_trial(monkeypatch):
     # /proc takes no new folder: mkdir says 'No such file or directory' of a folder whose

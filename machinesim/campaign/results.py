@@ -259,12 +259,7 @@ def locked(folder) -> Iterator[None]:
         # campaign.lock linked to another file overwrote that file (it is no lock of ours)
         fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
     except OSError as exc:
-        if path.is_symlink():
-            raise FileError(f"{LOCK_NAME} is a symbolic link (to {os.readlink(path)!r}); "
-                            "expected the campaign's own lock file, which each run writes "
-                            "its pid into: remove the link", source=str(folder)) from None
-        raise FileError(f"cannot make the campaign's lock {LOCK_NAME}: "
-                        f"{exc.strerror or exc}", source=str(folder)) from None
+        raise _lock_refused(folder, exc) from None
     if not stat.S_ISREG(os.fstat(fd).st_mode):  # a FIFO: its truncation failed as a bare
         os.close(fd)                            # 'Invalid argument', naming no file
         raise FileError(f"{LOCK_NAME} {not_a_regular_file(path)}; expected the campaign's "
@@ -284,6 +279,25 @@ def locked(folder) -> Iterator[None]:
         yield
     finally:
         os.close(fd)  # the kernel releases the lock
+
+
+def _lock_refused(folder: Path, exc: OSError) -> FileError:
+    """The refusal of ``folder``'s lock file, which ``os.open`` could not open or make
+    (``exc``), naming what is at its path: a folder there was told as 'cannot make the
+    campaign's lock campaign.lock: Is a directory', naming no remedy."""
+    path = folder / LOCK_NAME
+    expected = "expected the campaign's own lock file, which each run writes its pid into"
+    if _asks(path.is_symlink):
+        return FileError(f"{LOCK_NAME} is a symbolic link (to {os.readlink(path)!r}); "
+                         f"{expected}: remove the link", source=str(folder))
+    if _asks(path.is_dir):
+        return FileError(f"{LOCK_NAME} is a folder, not a regular file; {expected}: move "
+                         "the folder away or remove it", source=str(folder))
+    there = ("is a regular file" if _asks(path.is_file) else "exists"
+             if _asks(path.exists) else "does not exist")
+    return FileError(f"cannot open or make the campaign's lock {LOCK_NAME}, which {there}: "
+                     f"{exc.strerror or exc}; {expected}, in a folder this run can write",
+                     source=str(folder))
 
 
 #: Seconds a run refused the lock gives its file to name the run that has just taken it.
