@@ -1,5 +1,6 @@
-"""The lathe's followed path keeps its command's quarter turn of C a step, its samples on
-the servo's own motion (`machinesim.cutting.lathe_following`)."""
+"""The lathe's followed path keeps its command's rules, its samples on the servo's own
+motion: a quarter turn of C a step, and each straight join within the chord tolerance of
+that motion, so it cuts the surface the motion cuts (`machinesim.cutting.lathe_following`)."""
 
 import math
 import re
@@ -8,7 +9,7 @@ import numpy as np
 import pytest
 
 from machinesim import load_machine
-from machinesim.cutting.lathe import followed, turn, turning_runs
+from machinesim.cutting.lathe import TurnedPart, followed, turn, turning_runs
 from machinesim.cutting.lathe_following import follow_run
 from machinesim.cutting.turning import edge_path_from_poses
 from machinesim.exceptions import NCProgramError
@@ -18,6 +19,7 @@ from machinesim.servo import AxisServo, PIDServo, table6_axis
 # ten turns of C facing in from X 1 mm to 0.5 mm, 1 um deep: 40 quarter-turn steps
 FACING = ("G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\nG01 X0.5 C3600. F36000\n"
           "G00 Z0.01\n")
+SLOWER = FACING.replace("F36000", "F3600")
 
 
 def _slow_c(machine, scale: float) -> PIDServo:
@@ -42,14 +44,44 @@ def test_a_slow_spindle_loop_is_followed_in_quarter_turns_on_its_own_motion():
     assert np.degrees(np.abs(np.diff(reached[:, c]))).max() <= 90.0
     # the added samples lie on the command, and the followed values on the servo's own
     # motion: the command sampled 64 times finer (and at these times), followed by the
-    # same loops, reads the same there
+    # same loops, reads the same there, within what these slow loops make of the
+    # command's round-off (7e-15 rad of C moves their output by 3.6e-7 rad; a sample off
+    # the motion would be degrees off)
     assert np.allclose(fine_q[:, c], np.interp(fine_t, t, q[:, c]), rtol=0.0, atol=1e-12)
     k = 64
     dense = np.interp(np.arange((len(t) - 1) * k + 1) / k, np.arange(len(t)), t)
     both = np.union1d(dense, fine_t)
     command = np.column_stack([np.interp(both, t, q[:, j]) for j in range(q.shape[1])])
     reference = followed(servo.follow, both, command)[np.searchsorted(both, fine_t)]
-    assert np.abs(reached[:, c] - reference[:, c]).max() < 1e-9
+    assert np.abs(reached[:, c] - reference[:, c]).max() < 1e-6
+
+
+def _finely_followed(machine, program, servo, tool, k: int = 64) -> TurnedPart:
+    """The reference: the same command sampled ``k`` times finer (on its moves), followed
+    by the same loops, its edge path joined straight from those samples."""
+    (t, q), = turning_runs(program, machine)
+    fine_t = np.interp(np.arange((len(t) - 1) * k + 1) / k, np.arange(len(t)), t)
+    fine_q = np.column_stack([np.interp(fine_t, t, q[:, j]) for j in range(q.shape[1])])
+    reached = followed(servo.follow, fine_t, fine_q)
+    path = edge_path_from_poses(machine.tool_pose(reached, None), tool.nose_radius)
+    return TurnedPart((path,), tool, 0.0)
+
+
+@pytest.mark.parametrize(("text", "scale"), [(FACING, 1e-4), (SLOWER, 1e-6)],
+                         ids=["F36000 x1e-4", "F3600 x1e-6"])
+def test_a_slow_spindle_loop_turns_the_surface_its_own_motion_cuts(text, scale):
+    machine = load_machine("sts_lathe")
+    program = parse_program(text)
+    servo = _slow_c(machine, scale)
+    part, _ = turn(program, machine, servo=servo)
+    # the old turn joined its followed samples straight where the motion bends between
+    # them: 40.9 nm (F36000, x 1e-4) and 100.4 nm (F3600, x 1e-6) off the reference; now
+    # 0.03 and 0.05 nm
+    radius = np.linspace(0.5e-3, 1.0e-3, 51)[:, None]
+    angle = np.linspace(0.0, 2.0 * math.pi, 73)[None, :]
+    x, y = (radius * np.cos(angle)).ravel(), (radius * np.sin(angle)).ravel()
+    reference = _finely_followed(machine, program, servo, part.tool)
+    assert np.abs(part.heights_at(x, y) - reference.heights_at(x, y)).max() < 0.2e-9
 
 
 def test_a_loop_that_keeps_the_rules_is_followed_on_the_command_s_samples():
@@ -78,9 +110,11 @@ class _Jump:
 def test_a_followed_run_that_jumps_is_refused_naming_the_line_and_the_servo():
     machine = load_machine("sts_lathe")
     with pytest.raises(NCProgramError, match=re.escape(
-            "line 4: the spindle C as the servo model _Jump follows this move turns ")) as err:
+            "line 4: the axes as the servo model _Jump follows this move (C turns ")) as err:
         turn(parse_program(FACING), machine, servo=_Jump())
-    assert re.search(r"turns 9\d\.\d+ deg between two samples \(at \d+\.\d+ s into the "
-                     r"turning run\), more than the 90 deg a step the turning engine takes, "
-                     r"still after 8 rounds of sampling the move finer: its output jumps; "
-                     r"check the servo loops' gains", str(err.value))
+    assert re.search(r"turns 9\d\.\d+ deg between two samples, at \d+\.\d+ s into the "
+                     r"turning run\) ", str(err.value))
+    assert str(err.value).endswith(
+        "break the rules of a commanded step (at most 90 deg of C, the straight join within "
+        "1 nm of the path) still after 8 rounds of sampling the move finer: its output "
+        "jumps; check the servo loops' gains")

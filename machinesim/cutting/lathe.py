@@ -17,8 +17,9 @@ the machine does with it, in order:
    step's speed (the spindle is run up before the tool engages: `followed`), and the axes
    reach the followed values, not the commanded ones. A dwell ends a run; the run after it
    is entered settled too, not from the rest the dwell leaves the axes in. The followed
-   samples keep the command's quarter turn of C a step: where a slow loop's catch-up turns
-   more, the run is sampled finer and followed again (`machinesim.cutting.lathe_following`).
+   samples keep the command's rules (a quarter turn of C a step, each straight join within
+   the chord tolerance of the servo's own motion): where they break them, the run is sampled
+   finer and followed again (`machinesim.cutting.lathe_following`).
 4. **Kinematics and errors.** The tool tip's pose for the reached axis values, through the
    machine's errors (tool setting dx, dy, dz and any geometric error), gives the edge plane
    of each point (`edge_path_from_poses`); the tool's nose is its nominal radius plus the
