@@ -30,6 +30,7 @@ from machinesim.cutting.sweepset import dragged_past_clearance, within_edge_plan
 from machinesim.errors import as_error_model
 from machinesim.exceptions import AxisLimitError, HolderContactError, InputError, NCProgramError
 from machinesim.metrology._arrays import as_flag
+from machinesim.motion.faces import ProfileEdges
 from machinesim.nc import MOVE_KINDS
 from machinesim.servo import check_servo
 from machinesim.tolerances import LIMIT_SLACK
@@ -159,7 +160,9 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tools.points(), chord_tolerance=chord_tolerance,
                              servo=servo,
-                             face_radius=flat_face_radius(t for _, t, _ in tools.runs))
+                             face_radius=flat_face_radius(t for _, t, _ in tools.runs),
+                             profile=ProfileEdges(tools.profile_edges(),
+                                                  float(stock.bounds[1, 2])))
     following = peak_following_error(trajectory, machine)
     moves = _Moves(trajectory, len(machine.axes))
     limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
@@ -325,6 +328,17 @@ class _ToolSections:
         tools = {id(t): t for _, t, _ in self.runs}
         return np.concatenate([np.asarray(tools[key].vertices(), dtype=np.float64)
                                - np.array([0.0, 0.0, length]) for key, length in setups])
+
+    def profile_edges(self) -> np.ndarray:
+        """The planar tools' profile edges where they cut, in the ``tool_tip`` frame, shape
+        (k, 2, 3) (m): for the waist of a profile tilting while it moves
+        (`machinesim.motion.faces.edge_substeps`)."""
+        setups = dict.fromkeys((id(t), length) for _, t, length in self.runs)
+        tools = {id(t): t for _, t, _ in self.runs}
+        edges = [np.asarray(tools[key].vertices(), dtype=np.float64)[tools[key].edges()]
+                 - np.array([0.0, 0.0, length]) for key, length in setups
+                 if getattr(tools[key], "planar", False)]
+        return np.concatenate(edges) if edges else np.zeros((0, 2, 3))
 
     def split(self, moves: _Moves):
         """(tool, length, section moves, sample range, (number, line)) of each run with

@@ -16,9 +16,17 @@ a * d / 2 within the tolerance.
 The tilt is that of the tool's axis (the face's normal), the great-circle angle between
 its directions at consecutive sub-steps: a turn about the tool's own axis (C under an
 upright end mill) tilts nothing and adds no sub-step.
+
+A planar tool's profile (a V, a nose) has straight edges with the same first-order error
+when it tilts while it moves (docs/cutting.md, "A tilt with a move"): `edge_substeps`
+bounds each edge's waist, |D . n| / 4 (derived there), within the tolerance. Moves that
+turn no rotary axis keep their count to the bit (`profile_substeps`).
 """
 
 from __future__ import annotations
+
+import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -82,3 +90,127 @@ def _largest_tilt(machine, errors, starts, delta, steps) -> np.ndarray:
     tilt = np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b))
     tilt[first[1:] - 1] = 0.0  # from one move's end to the next move's start: no sub-step
     return np.maximum.reduceat(np.append(tilt, 0.0), first)
+
+
+@dataclass(frozen=True)
+class ProfileEdges:
+    """A planar tool's straight edges where they cut, for `edge_substeps`.
+
+    Attributes
+    ----------
+    edges : ndarray, shape (k, 2, 3)
+        Each edge's two ends in the ``tool_tip`` frame (m): a V's flanks, a nose's
+        flanks and its arc's chords.
+    top : float
+        Height (m, workpiece frame) above which the engine clips the tool before it takes a
+        sweep's hull: the stock's top. Only an edge's part below it is held; ``inf``: all.
+    """
+
+    edges: np.ndarray
+    top: float = math.inf
+
+
+def edge_substeps(machine, errors, starts: np.ndarray, delta: np.ndarray,
+                  steps: np.ndarray, profile: ProfileEdges | None,
+                  tolerance: float) -> np.ndarray:
+    """Sub-steps of each move (``steps`` raised where needed) so that the hull of each
+    sub-step's two poses leaves no straight edge of a planar tool's profile's true sweep by
+    more than ``tolerance`` (docs/cutting.md, "A tilt with a move").
+
+    The bound, by hand. An edge from a to b (length L) at the sub-step's two poses has the
+    corners a0, b0 and a1, b1. Its true sweep over the sub-step is, to first order in the
+    sub-step (the chord rule holds the second), the bilinear patch
+    S(t, s) = (1 - t) (a0 + s (b0 - a0)) + t (a1 + s (b1 - a1)), t, s in [0, 1], while the
+    hull holds the tetrahedron of the four corners. With the twist
+    D = (b1 - a1) - (b0 - a0) (L times the change of the edge's direction), the patch's
+    centre S(1/2, 1/2) = (a0 + b1) / 2 - D / 4 = (b0 + a1) / 2 + D / 4 lies halfway between
+    the tetrahedron's two opposite edges, the diagonals a0-b1 and b0-a1, which stand
+    w = |D . n| / 2 apart (n the unit normal to both diagonals). The tetrahedron's faces
+    through either diagonal pass the centre at w / 2 = |D . n| / 4, on either side of the
+    patch: the hull reaches that far past the edge's sweep, first order in the sub-step
+    (D and the diagonals' normal's share of it both scale with the sub-step's tilt times
+    its move's direction), where a point's chord leaves its arc by second order. A tilt
+    alone (a0 = a1, a turn about the edge point) makes the corners coplanar (w = 0); a
+    move alone (D = 0) too. Hence for each sub-step the largest |D . n| / 4 over the
+    edges, each cut at ``profile.top`` (its part below it at either pose, the same share
+    of the edge at both), and the count raised to its share of ``tolerance`` times
+    `_MARGIN`. For v:90 50 um deep swung to B10 while moving 0.1 mm along X in 196
+    sub-steps (0.051 deg each) about its edge point, the flank (L = 70.7 um, its direction
+    turning by d / sqrt(2) at 45 deg to the B axis) gives
+    |D . n| / 4 = h d sin(B) / (4 sqrt(1 + cos(B)^2)) = 1.38 nm at the end (h = 50 um its
+    depth; measured 1.16 nm past a reference cut in 8 times the sub-steps, which keeps
+    1/8 of it: 1.21 nm predicted), and at B30 4.2 nm (measured 4.0 nm).
+
+    ``profile`` None or without edges: ``steps`` returned as they are.
+    """
+    steps = np.asarray(steps, dtype=np.int64)
+    if profile is None or not len(profile.edges) or not len(steps):
+        return steps
+    edges = np.asarray(profile.edges, dtype=np.float64).reshape(-1, 2, 3)
+    largest = np.zeros(len(steps))
+    ends = np.cumsum(steps + 1)
+    per = max(1, _SAMPLES_PER_BLOCK // max(1, len(edges)))
+    lo = 0
+    while lo < len(steps):
+        hi = max(lo + 1, int(np.searchsorted(ends, ends[lo] + per)))
+        largest[lo:hi] = _largest_waist(machine, errors, starts[lo:hi], delta[lo:hi],
+                                        steps[lo:hi], edges, float(profile.top))
+        lo = hi
+    need = np.ceil(steps * largest / tolerance * _MARGIN).astype(np.int64)
+    return np.maximum(steps, need)
+
+
+def _samples(steps, starts, delta):
+    """Axis values of every sub-step's ends, and the first sample of each move."""
+    counts = steps + 1
+    move = np.repeat(np.arange(len(steps)), counts)
+    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    fraction = (np.arange(int(counts.sum())) - first[move]) / steps[move]
+    return starts[move] + fraction[:, None] * delta[move], first
+
+
+def _largest_waist(machine, errors, starts, delta, steps, edges, top) -> np.ndarray:
+    """The largest |D . n| / 4 (m, `edge_substeps`) over one sub-step of each move."""
+    q, first = _samples(steps, starts, delta)
+    poses = machine.tool_pose(q, errors)
+    rotation, origin = poses[:, :3, :3], poses[:, :3, 3]
+    a = np.einsum("nij,kj->nki", rotation, edges[:, 0]) + origin[:, None]
+    b = np.einsum("nij,kj->nki", rotation, edges[:, 1]) + origin[:, None]
+    # the share [lo, hi] of each edge (from a) below the top at each pose
+    za, zb = a[..., 2], b[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cross = np.clip((top - za) / (zb - za), 0.0, 1.0)
+    below_a, below_b = za <= top, zb <= top
+    lo = np.where(below_a, 0.0, np.where(below_b, cross, 1.0))
+    hi = np.where(below_b, 1.0, np.where(below_a, cross, 0.0))
+    lo = np.minimum(lo[:-1], lo[1:])  # either pose's part: the same share at both
+    hi = np.maximum(hi[:-1], hi[1:])
+    span = np.maximum(hi - lo, 0.0)[..., None]
+    e0, e1 = b[:-1] - a[:-1], b[1:] - a[1:]
+    a0 = a[:-1] + lo[..., None] * e0
+    a1 = a[1:] + lo[..., None] * e1
+    b0, b1 = a0 + span * e0, a1 + span * e1
+    twist = (b1 - a1) - (b0 - a0)
+    normal = np.cross(b1 - a0, a1 - b0)
+    size = np.linalg.norm(normal, axis=-1)
+    dot = np.abs(np.einsum("nki,nki->nk", twist, normal))
+    waist = np.where(size > 0.0, dot / np.where(size > 0.0, size, 1.0), 0.0) / 4.0
+    waist = waist.max(axis=1)
+    waist[first[1:] - 1] = 0.0  # from one move's end to the next move's start: no sub-step
+    return np.maximum.reduceat(np.append(waist, 0.0), first)
+
+
+def profile_substeps(machine, errors, starts: np.ndarray, delta: np.ndarray,
+                     found: np.ndarray, rotary: np.ndarray, profile: ProfileEdges | None,
+                     tolerance: float) -> np.ndarray:
+    """``found`` raised by `edge_substeps` for the moves that turn a rotary axis (``rotary``
+    the machine's rotary axes); a profile that only moves, or bends by the errors of a
+    linear axis, keeps its count, to the bit."""
+    rotary = np.asarray(rotary, dtype=bool)
+    tilting = np.flatnonzero(np.any(delta[:, rotary] != 0.0, axis=1))
+    if profile is None or not tilting.size:
+        return found
+    found = np.array(found, dtype=np.int64)
+    found[tilting] = edge_substeps(machine, errors, starts[tilting], delta[tilting],
+                                   found[tilting], profile, tolerance)
+    return found

@@ -32,7 +32,7 @@ import numpy as np
 
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps
-from machinesim.motion.faces import face_substeps
+from machinesim.motion.faces import face_substeps, profile_substeps
 from machinesim.nc.program import KIND_LINEAR
 from machinesim.tolerances import MAX_STEP_TURN_RAD
 
@@ -46,16 +46,18 @@ class StepRule:
     """The rules a commanded move's sub-steps keep, for straight steps in axis space: the
     chord tolerance for every tool point (`machinesim.motion.chords.substeps`), at most half
     of `MAX_STEP_TURN_RAD` of the rotary axes' turns added up, and a flat face's tilt
-    (`machinesim.motion.faces.face_substeps`). Steps that change no bending axis (rotary, or
+    (`machinesim.motion.faces.face_substeps`) and, for a step that turns a rotary axis, a
+    planar profile's edges (`profile_substeps`). Steps that change no bending axis (rotary, or
     one whose errors vary along it) move the tool straight and need one sub-step."""
 
     def __init__(self, machine, errors, points: np.ndarray, bending: np.ndarray,
-                 tolerance: float, face_radius: float) -> None:
+                 tolerance: float, face_radius: float, profile=None) -> None:
         self.machine, self.errors = machine, errors
         self.points = points
         self.bending = np.asarray(bending, dtype=bool)
         self.rotary = np.asarray(machine.rotary, dtype=bool)
         self.tolerance, self.face_radius = tolerance, face_radius
+        self.profile = profile
         self._paths = None
 
     def counts(self, starts: np.ndarray, delta: np.ndarray) -> np.ndarray:
@@ -73,6 +75,8 @@ class StepRule:
         found = np.maximum(found, np.minimum(least, MAX_SUBSTEPS + 1).astype(np.int64))
         found = face_substeps(self.machine, self.errors, starts[bends], delta[bends],
                               np.maximum(found, 1), self.face_radius, self.tolerance)
+        found = profile_substeps(self.machine, self.errors, starts[bends], delta[bends],
+                                 found, self.rotary, self.profile, self.tolerance)
         found[failed | (found > MAX_SUBSTEPS)] = 0
         need[bends] = found
         return need

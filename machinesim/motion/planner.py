@@ -9,7 +9,7 @@ import numpy as np
 
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps
-from machinesim.motion.faces import face_substeps
+from machinesim.motion.faces import ProfileEdges, face_substeps, profile_substeps
 from machinesim.motion.following import StepRule, follow_plan
 from machinesim.motion.steps import wrap_steps
 from machinesim.motion.trajectory import IdealServo, ServoModel, Trajectory
@@ -109,7 +109,7 @@ def _source(program) -> str:
 
 def plan(program, machine, errors=None, *, start=None, tool_points=None,
          chord_tolerance: float = CHORD_TOLERANCE_M, servo: ServoModel | None = None,
-         face_radius: float = 0.0) -> Trajectory:
+         face_radius: float = 0.0, profile: ProfileEdges | None = None) -> Trajectory:
     """Sample ``program`` on ``machine`` into a `Trajectory`.
 
     Parameters
@@ -130,6 +130,11 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         radius (`machinesim.tools.flat_face_radius`): a move that tilts the tool is split
         further, so that the hull of each sub-step's two poses leaves the face's true sweep
         by at most the chord tolerance (`machinesim.motion.faces`). 0: no flat face.
+    profile : machinesim.motion.faces.ProfileEdges, optional
+        A planar tool's straight edges (and the stock's top): a move that turns a rotary
+        axis is split further, so that the hull of each sub-step's two poses leaves no
+        edge's true sweep by more than the chord tolerance (`edge_substeps`: the first-order
+        waist of a profile tilting while it moves). None: no such rule.
     chord_tolerance : float
         Largest allowed distance, m, between a sub-step's chord and the true path.
     servo : ServoModel, optional
@@ -168,6 +173,9 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     if not (isinstance(face_radius, int | float) and 0.0 <= face_radius < math.inf):
         raise InputError(f"face_radius must be a finite length >= 0 (m), got {face_radius!r}",
                          key="face_radius")
+    if profile is not None and not isinstance(profile, ProfileEdges):
+        raise InputError(f"profile must be a machinesim.motion.faces.ProfileEdges or None, "
+                         f"got {type(profile).__name__}", key="profile")
     points = np.zeros((1, 3)) if tool_points is None else np.vstack(
         [np.zeros((1, 3)), np.asarray(tool_points, dtype=np.float64).reshape(-1, 3)])
     targets, kinds, feeds, dwells, lines = _program_arrays(program)
@@ -278,13 +286,16 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
             found = np.maximum(found, least.astype(np.int64))
             found = face_substeps(machine, errors, starts[turning], delta[turning],
                                   np.maximum(found, 1), face_radius, chord_tolerance)
+            found = profile_substeps(machine, errors, starts[turning], delta[turning], found,
+                                     rotary, profile, chord_tolerance)
             bad = _first_beyond(found, turning)
             if bad is not None:
+                what = (f"the tool's flat face ({face_radius * 1e3:g} mm across its axis)"
+                        if face_radius > 0.0 else "the tool's profile while it moves")
                 raise NCProgramError(
-                    f"a move that tilts the tool's flat face ({face_radius * 1e3:g} mm across "
-                    f"its axis) would need more than {MAX_SUBSTEPS} sub-steps to keep the "
-                    f"face within {chord_tolerance * 1e9:g} nm; raise chord_tolerance "
-                    "(--chord-nm on the command line)",
+                    f"a move that tilts {what} would need more than {MAX_SUBSTEPS} "
+                    f"sub-steps to keep the face within {chord_tolerance * 1e9:g} nm; raise "
+                    "chord_tolerance (--chord-nm on the command line)",
                     source=source, line=int(lines[bad]))
             steps[turning] = found
     if error is not None:
@@ -298,7 +309,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     peak_lag = None
     if servo is not None and type(servo) is not IdealServo:
         # the followed path held to the rules the commanded sub-steps keep (`following`)
-        rule = StepRule(machine, errors, points, bending, chord_tolerance, face_radius)
+        rule = StepRule(machine, errors, points, bending, chord_tolerance, face_radius,
+                        profile)
         q, t, offsets, peak_lag = follow_plan(
             servo, lambda split: _samples(starts, delta, clock[:-1], durations, split),
             steps, kinds, getattr(program, "exact_stops", ()), rule, lines, source)

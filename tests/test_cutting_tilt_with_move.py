@@ -1,0 +1,81 @@
+"""A V tool tilting while it moves cuts within the chord tolerance of its true sweep: the
+profile's edges get the sub-steps of `machinesim.motion.faces.edge_substeps`."""
+
+import math
+
+import numpy as np
+from tilted_cuts import sliver
+
+import machinesim
+from machinesim import motion
+from machinesim.cutting.engine import remove
+from machinesim.nc import parse_program
+from machinesim.tool_specs import tool_from_spec
+from machinesim.workpiece import stock_from_spec
+
+TOL = 1e-9  # the V's default chord
+STOCK = "block:10x10x2"  # its top at z = 0
+# on robonano_a0ib (B about the Y line through the edge point), 50 um deep, the last 2 deg
+# of benchmarks/tilt_with_move.py's swing to B10 over about as many sub-steps a micron
+TILT = "G21 G90\nG00 X4. Y5. Z1. B8.\nG01 Z-0.05 F10.\nX4.02 B10. F100.\nM30\n"
+START = [4e-3, 5e-3, 1e-3, math.radians(8.0), 0.0]
+
+
+def _v_profile(tool):
+    """The V's edges, below the stock's top (z = 0)."""
+    from machinesim.motion.faces import ProfileEdges  # here: the first test runs without it
+
+    return ProfileEdges(np.asarray(tool.vertices())[tool.edges()], 0.0)
+
+
+def test_tilting_flank_stays_within_the_chord_of_a_finer_cut():
+    """The default cut against the same trajectory planned at a 64 times finer chord (the
+    vertices' rule, second order: 8 times the sub-steps, so 1/8 of the first-order waist),
+    measured on the default's faces (`tilted_cuts.sliver`). The vertices' rule alone cut
+    it in 41 sweeps, 1.16 nm past it (the hull of a sub-step's two poses across the tilted
+    flank, the waist of `edge_substeps`); the edges' rule in 54, 0.87 nm past it."""
+    machine = machinesim.load_machine("robonano_a0ib")
+    tool = tool_from_spec("v:90")
+    program = parse_program(TILT, "tilt.nc")
+    part, report = machinesim.cut(program, machine, tool=tool, stock=STOCK, start=START)
+    fine = motion.plan(program, machine, tool_points=tool.vertices(),
+                       chord_tolerance=TOL / 64, start=START)
+    reference, _ = remove(stock_from_spec(STOCK), tool, [machine.tool_pose(fine.q)])
+    _, over = sliver(reference, part)
+    assert 0.0 < over <= TOL, over
+
+
+def test_untilted_moves_and_a_tilt_alone_keep_their_substeps():
+    """A move that turns no rotary axis keeps the vertices' count to the bit; a B swing
+    about the edge point alone keeps each edge in one plane (its corners at both poses
+    coplanar: no waist) and adds no sub-step either."""
+    machine = machinesim.load_machine("robonano_a0ib")
+    tool = tool_from_spec("v:90")
+    profile = _v_profile(tool)
+    for text in ("G21 G90\nG00 X4. Y5. Z1. B10.\nG01 Z-0.05 F10.\nX4.1 Y5.05 F100.\nM30\n",
+                 "G21 G90\nG00 X4. Y5. Z1.\nG01 Z-0.05 F10.\nB10. F100.\nM30\n"):
+        program = parse_program(text, "move.nc")
+        plain = motion.plan(program, machine, tool_points=tool.vertices(),
+                            chord_tolerance=TOL)
+        ruled = motion.plan(program, machine, tool_points=tool.vertices(),
+                            chord_tolerance=TOL, profile=profile)
+        assert np.array_equal(plain.q, ruled.q)
+
+
+def test_waist_of_one_substep_by_hand():
+    """One sub-step of the swing's end, B10 - d to B10 while X moves t, the flank 50 um deep
+    (L = 50 um sqrt(2) below the top, at 45 deg to the B axis): to first order the waist
+    |D . n| / 4 = h' d sin(B) / (4 sqrt(1 + cos(B)^2)) when the move dominates the edge's
+    own turn (h' = 50 um / cos(B), the flank's reach below the top along the axis), so the
+    count the rule gives one such move is that waist over the tolerance, times 1.01 (a
+    tolerance of 1e-15 m, for a count of some 16,000 to resolve it by)."""
+    machine = machinesim.load_machine("robonano_a0ib")
+    tool = tool_from_spec("v:90")
+    b, d, t = math.radians(10.0), 1e-5, 1e-5  # 10 um of X to 0.57 mdeg: the move dominates
+    start = np.array([[4e-3, 5e-3, -50e-6, b - d, 0.0]])
+    delta = np.array([[t, 0.0, 0.0, d, 0.0]])
+    found = motion.faces.edge_substeps(machine, None, start, delta, np.array([1]),
+                                       _v_profile(tool), 1e-15)
+    reach = 50e-6 / math.cos(b)
+    waist = reach * d * math.sin(b) / (4.0 * math.sqrt(1.0 + math.cos(b) ** 2))
+    assert abs(found[0] / (waist / 1e-15 * 1.01) - 1.0) < 1e-3, (found, waist)
