@@ -4,9 +4,9 @@ Every error factor is compensated before the cut, the form error predicted and t
 
 Run: ``.venv/bin/python scenarios/sts_turning.py [--errors FILE.toml] [--noise on|off]
 [--realism ideal|noise_only|lab] [--budget on|off] [--seed N] [--out reports/sts_turning]``
-(about 2 min 30 s with the default lab realism and its error budget, which runs it once
-more per realism source; 43 s with ``--budget off``; on 2 idle cores, before the lathe's
-chord rule about doubled it: docs/procedures/sts_turning.md, "Results").
+(about 3 min with the default lab realism and its error budget, which runs it once
+more per realism source, 1.55 times the time before the lathe's chord rule; 43 s with
+``--budget off`` before it; on 2 idle cores: docs/procedures/sts_turning.md, "Results").
 
 The sts_lathe gets the tool errors of Table 5 "before" (dx = dy = -3.5 um, dR = 100 um) and
 the servo loops of Table 6 "before" (`machinesim.servo.table6_servo`), or the errors of
