@@ -7,6 +7,7 @@ import re
 
 import numpy as np
 import pytest
+from slow_loops import slow_c
 
 from machinesim import load_machine
 from machinesim.cutting.lathe import TurnedPart, followed, turn, turning_runs
@@ -14,7 +15,6 @@ from machinesim.cutting.lathe_following import follow_run
 from machinesim.cutting.turning import edge_path_from_poses
 from machinesim.exceptions import NCProgramError
 from machinesim.nc import parse_program
-from machinesim.servo import AxisServo, PIDServo, table6_axis
 
 # ten turns of C facing in from X 1 mm to 0.5 mm, 1 um deep: 40 quarter-turn steps
 FACING = ("G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\nG01 X0.5 C3600. F36000\n"
@@ -22,18 +22,11 @@ FACING = ("G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\nG01 X0.5 C3600. F36000\n
 SLOWER = FACING.replace("F36000", "F3600")
 
 
-def _slow_c(machine, scale: float) -> PIDServo:
-    """Table 6 "after"'s C loop with its gains times ``scale``, the other axes exact."""
-    c = table6_axis("after", "c")
-    slow = AxisServo(kp=c.kp * scale, ki=c.ki * scale, kd=c.kd * scale, mass=c.mass,
-                     damping=c.damping, name="c")
-    return PIDServo(tuple(slow if a == "C" else None for a in machine.axes))
-
 
 def test_a_slow_spindle_loop_is_followed_in_quarter_turns_on_its_own_motion():
     machine = load_machine("sts_lathe")
     program = parse_program(FACING)
-    servo = _slow_c(machine, 1e-4)
+    servo = slow_c(machine, 1e-4)
     c = machine.axes.index("C")
     part, _ = turn(program, machine, servo=servo)
     # the old turn followed the command's 41 samples: steps of 166.6 deg of C
@@ -72,7 +65,7 @@ def _finely_followed(machine, program, servo, tool, k: int = 64) -> TurnedPart:
 def test_a_slow_spindle_loop_turns_the_surface_its_own_motion_cuts(text, scale):
     machine = load_machine("sts_lathe")
     program = parse_program(text)
-    servo = _slow_c(machine, scale)
+    servo = slow_c(machine, scale)
     part, _ = turn(program, machine, servo=servo)
     # the old turn joined its followed samples straight where the motion bends between
     # them: 40.9 nm (F36000, x 1e-4) and 100.4 nm (F3600, x 1e-6) off the reference; now
@@ -87,7 +80,7 @@ def test_a_slow_spindle_loop_turns_the_surface_its_own_motion_cuts(text, scale):
 def test_a_loop_that_keeps_the_rules_is_followed_on_the_command_s_samples():
     machine = load_machine("sts_lathe")
     program = parse_program(FACING)
-    servo = _slow_c(machine, 1.0)  # Table 6 "after": 90.00000002 deg a step at most
+    servo = slow_c(machine, 1.0)  # Table 6 "after": 90.00000002 deg a step at most
     part, report = turn(program, machine, servo=servo)
     (t, q), = turning_runs(program, machine)
     assert report.points == len(t) == 41

@@ -7,32 +7,24 @@ import re
 
 import numpy as np
 import pytest
+from slow_loops import slow_c
 
 from machinesim import load_machine
 from machinesim.cutting import cut
 from machinesim.exceptions import NCProgramError
 from machinesim.motion import plan
 from machinesim.nc import parse_program
-from machinesim.servo import AxisServo, PIDServo, table6_axis
 
 # a half turn of C at X 3 mm, 50 um deep, in one feed run with the plunge before it
 HALF_TURN = ("G90 G21\nG00 X3. Y0. Z0.5 C0.\nG01 Z-0.05 F100.\nG01 C180. F36000.\n"
              "G00 Z1.\nM30\n")
 
 
-def _slow_c(machine, scale: float) -> PIDServo:
-    """Table 6 "after"'s C loop with its gains times ``scale`` (lagging tens of degrees at
-    1e-4), the other axes exact."""
-    c = table6_axis("after", "c")
-    slow = AxisServo(kp=c.kp * scale, ki=c.ki * scale, kd=c.kd * scale, mass=c.mass,
-                     damping=c.damping, name="c")
-    return PIDServo(tuple(slow if a == "C" else None for a in machine.axes))
-
 
 def test_a_followed_half_turn_steps_at_most_45_deg_on_the_servo_s_own_motion():
     machine = load_machine("grooving_4axis")
     program = parse_program(HALF_TURN)
-    servo = _slow_c(machine, 1e-4)
+    servo = slow_c(machine, 1e-4)
     # chord 1 m: the 45 deg sub-step alone splits the move (4 commanded steps)
     lagged = plan(program, machine, servo=servo, chord_tolerance=1.0)
     c = machine.axes.index("C")
@@ -64,7 +56,7 @@ def test_a_lag_beyond_45_deg_settles_in_steps_of_45_deg_at_most():
     # from it to C180 in one step (and 125 deg in one followed step before it, which the
     # engine refused naming poses 5 and 6); now straight in steps of at most 45 deg
     machine = load_machine("grooving_4axis")
-    lagged = plan(parse_program(HALF_TURN), machine, servo=_slow_c(machine, 1e-5),
+    lagged = plan(parse_program(HALF_TURN), machine, servo=slow_c(machine, 1e-5),
                   chord_tolerance=1.0)
     c = machine.axes.index("C")
     move = lagged.segments[2]  # G01 C180.
@@ -84,7 +76,7 @@ def test_a_cut_through_lagging_loops_removes_what_the_commanded_half_turn_does()
     program = parse_program(HALF_TURN)
     _, exact = cut(program, machine, "ball:1.0", "block:10x10x2", chord_tolerance=1e-6)
     _, lagged = cut(program, machine, "ball:1.0", "block:10x10x2",
-                    servo=_slow_c(machine, 1e-6), chord_tolerance=1e-6)
+                    servo=slow_c(machine, 1e-6), chord_tolerance=1e-6)
     assert math.degrees(lagged.peak_following_error["C"]) > 160.0
     # the two sample the arc at other angles: the ball's mesh (1 um) and the chords (1 um)
     assert lagged.removed_volume_m3 == pytest.approx(exact.removed_volume_m3, rel=1e-3, abs=0.0)
