@@ -149,16 +149,17 @@ def in_processes(function: Callable, items: Sequence, jobs: int, *,
         cores = context.SimpleQueue()
         for k in range(jobs):
             cores.put(sorted(os.sched_getaffinity(0))[k % usable_cores()])
-    with sigint_blocked():  # the workers start (in submit) with SIGINT blocked
-        pool = ProcessPoolExecutor(jobs, mp_context=context, initializer=_worker_start,
-                                   initargs=(cores, setup))
-        try:
-            running = {pool.submit(_timed, pickle.dumps((function, item)), what): i
-                       for i, item in enumerate(items)}
-        except BaseException:
-            _stop(pool)
-            raise
+    pool = None
+    running: dict = {}
     try:
+        # the workers start (in submit) with SIGINT blocked; a Ctrl-C meanwhile is raised
+        # as the block ends, here, where the workers it started are stopped: raised outside
+        # this try, it left them running the calls, the parent gone
+        with sigint_blocked():
+            pool = ProcessPoolExecutor(jobs, mp_context=context, initializer=_worker_start,
+                                       initargs=(cores, setup))
+            for i, item in enumerate(items):
+                running[pool.submit(_timed, pickle.dumps((function, item)), what)] = i
         while running:
             finished, _ = wait(running, return_when=FIRST_COMPLETED)
             for future in finished:
@@ -172,8 +173,9 @@ def in_processes(function: Callable, items: Sequence, jobs: int, *,
                 if done is not None:
                     done(i, seconds)
     except BaseException:  # Ctrl-C, SIGTERM (Terminated), a worker's error
-        with _ctrl_c_deferred():  # a second Ctrl-C waits until every worker is gone
-            _stop(pool)
+        if pool is not None:
+            with _ctrl_c_deferred():  # a second Ctrl-C waits until every worker is gone
+                _stop(pool)
         raise
     pool.shutdown(wait=True)
     return results

@@ -158,6 +158,50 @@ def test_a_stop_ends_every_worker_and_no_worker_says_anything(how, as_in_a_termi
     assert not alive
 
 
+#: A parent given a Ctrl-C while its workers start (sent from the pool's submit, so pending
+#: while SIGINT is blocked there), with no thread of its own that could take it meanwhile
+#: (single-thread BLAS, as the campaign's workers run): the KeyboardInterrupt is raised as
+#: the block ends. It says how many workers are left, then ends those itself.
+CTRL_C_WHILE_STARTING = textwrap.dedent("""
+    import os, signal, time
+    from concurrent.futures import ProcessPoolExecutor
+    import psutil
+    from machinesim._processes import in_processes
+    real = ProcessPoolExecutor.submit
+    def submit(self, *args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)
+        return real(self, *args, **kwargs)
+    ProcessPoolExecutor.submit = submit
+    try:
+        in_processes(time.sleep, [60.0, 60.0, 60.0], 2)
+    except KeyboardInterrupt:
+        left = [c for c in psutil.Process().children()
+                if c.status() != psutil.STATUS_ZOMBIE and "spawn_main" in " ".join(c.cmdline())]
+        print("workers left:", len(left), flush=True)
+        for c in left:
+            c.kill()
+        psutil.wait_procs(left, timeout=10)
+""")
+
+
+def test_a_ctrl_c_while_the_workers_start_ends_them(as_in_a_terminal):
+    one_thread = {name: "1" for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
+                                         "MKL_NUM_THREADS")}
+    parent = subprocess.Popen([sys.executable, "-c", CTRL_C_WHILE_STARTING], cwd=ROOT,
+                              env={**os.environ, **one_thread, "PYTHONPATH": str(ROOT)},
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              start_new_session=True, **as_in_a_terminal)
+    try:
+        out, err = parent.communicate(timeout=30)
+    finally:
+        if parent.poll() is None:
+            os.killpg(parent.pid, signal.SIGKILL)
+    # the old code raised it outside its stop: 'workers left: 2', and the parent, its
+    # workers killed, then hung at its exit (90 s, spinning) in the pool's exit handler
+    assert (out.strip(), parent.returncode) == ("workers left: 0", 0), err
+    assert err == ""
+
+
 def test_results_come_back_in_the_order_given_whatever_order_they_finish():
     told = []
     assert in_processes(abs, [-3, 2, -1], 2, done=lambda i, s: told.append(i)) == [3, 2, 1]
