@@ -79,3 +79,36 @@ def test_waist_of_one_substep_by_hand():
     reach = 50e-6 / math.cos(b)
     waist = reach * d * math.sin(b) / (4.0 * math.sqrt(1.0 + math.cos(b) ** 2))
     assert abs(found[0] / (waist / 1e-15 * 1.01) - 1.0) < 1e-3, (found, waist)
+
+
+def test_a_long_move_is_read_a_block_at_a_time_with_the_same_count(monkeypatch):
+    """A move of more samples than a block holds is read in pieces of a block: it was taken
+    whole, each sample costing 24 bytes per edge in a dozen arrays (three turns of C under
+    nose:1.0:90, 559 edges, 23,504 samples: 5 GB). Here blocks of 300 edge-samples (100
+    samples of the V's 3 edges) against a swing of 150 sub-steps (B8 to B18 over 0.1 mm of
+    X, raised to 496): no call reads more than 100 poses, and the count is the one read
+    whole (the default block, which holds the move), to the bit."""
+    from machinesim.motion import faces
+
+    machine = machinesim.load_machine("robonano_a0ib")
+    profile = _v_profile(tool_from_spec("v:90"))
+    start = np.array([[4e-3, 5e-3, -50e-6, math.radians(8.0), 0.0],
+                      [4e-3, 5e-3, -50e-6, math.radians(9.0), 0.1]])
+    delta = np.array([[1e-4, 0.0, 0.0, math.radians(10.0), 0.0],
+                      [1e-5, 0.0, 0.0, math.radians(-1.0), 0.3]])
+    steps = np.array([150, 7])
+    whole = faces.edge_substeps(machine, None, start, delta, steps, profile, TOL)
+    read = []
+    pose = type(machine).tool_pose
+
+    def counted(self, q, errors=None):
+        read.append(len(q))
+        return pose(self, q, errors)
+
+    monkeypatch.setattr(type(machine), "tool_pose", counted)
+    monkeypatch.setattr(faces, "_SAMPLES_PER_BLOCK", 300)
+    blocks = faces.edge_substeps(machine, None, start, delta, steps, profile, TOL)
+    assert max(read) <= 100, read  # the old code: 159 at once
+    assert sum(read) > 159  # each piece's end read again as the next one's start
+    np.testing.assert_array_equal(blocks, whole)
+    assert whole[0] > steps[0]  # the swing is raised: the pieces' waists are read

@@ -148,30 +148,51 @@ def edge_substeps(machine, errors, starts: np.ndarray, delta: np.ndarray,
         return steps
     edges = np.asarray(profile.edges, dtype=np.float64).reshape(-1, 2, 3)
     largest = np.zeros(len(steps))
-    ends = np.cumsum(steps + 1)
-    per = max(1, _SAMPLES_PER_BLOCK // max(1, len(edges)))
+    # each move's samples in pieces, and the pieces in blocks, of about `per` samples: a
+    # sample takes 24 bytes per edge in each of a dozen arrays, and a move was taken whole
+    # (a C turn of three turns under nose:1.0:90, 559 edges, 23,504 samples: 5 GB)
+    per = max(2, _SAMPLES_PER_BLOCK // len(edges))
+    move, first, last = _pieces(steps, per - 1)
+    ends = np.cumsum(last - first + 1)
     lo = 0
-    while lo < len(steps):
-        hi = max(lo + 1, int(np.searchsorted(ends, ends[lo] + per)))
-        largest[lo:hi] = _largest_waist(machine, errors, starts[lo:hi], delta[lo:hi],
-                                        steps[lo:hi], edges, float(profile.top))
+    while lo < len(move):
+        hi = max(lo + 1, int(np.searchsorted(ends, ends[lo] - (last[lo] - first[lo] + 1) + per,
+                                             side="right")))
+        np.maximum.at(largest, move[lo:hi], _largest_waist(
+            machine, errors, starts, delta, steps, (move[lo:hi], first[lo:hi], last[lo:hi]),
+            edges, float(profile.top)))
         lo = hi
     need = np.ceil(steps * largest / tolerance * _MARGIN).astype(np.int64)
     return np.maximum(steps, need)
 
 
-def _samples(steps, starts, delta):
-    """Axis values of every sub-step's ends, and the first sample of each move."""
-    counts = steps + 1
-    move = np.repeat(np.arange(len(steps)), counts)
-    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    fraction = (np.arange(int(counts.sum())) - first[move]) / steps[move]
-    return starts[move] + fraction[:, None] * delta[move], first
+def _pieces(steps, most: int):
+    """``(move, first, last)``: each move's samples (its sub-steps' ends, 0 to ``steps``) in
+    pieces of at most ``most`` sub-steps, sample ``first`` to ``last`` of move ``move``;
+    consecutive pieces of a move share their end sample."""
+    count = np.maximum(-(-steps // most), 1)
+    move = np.repeat(np.arange(len(steps)), count)
+    first = (np.arange(len(move)) - np.repeat(np.cumsum(count) - count, count)) * most
+    return move, first, np.minimum(first + most, steps[move])
 
 
-def _largest_waist(machine, errors, starts, delta, steps, edges, top) -> np.ndarray:
-    """The largest |D . n| / 4 (m, `edge_substeps`) over one sub-step of each move."""
-    q, first = _samples(steps, starts, delta)
+def _samples(steps, starts, delta, pieces):
+    """Axis values of the samples of each of ``pieces`` (`_pieces`), and each piece's first
+    row."""
+    move, first, last = pieces
+    counts = last - first + 1
+    piece = np.repeat(np.arange(len(move)), counts)
+    head = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    at = move[piece]
+    fraction = (np.arange(int(counts.sum())) - head[piece] + first[piece]) / steps[at]
+    return starts[at] + fraction[:, None] * delta[at], head
+
+
+def _largest_waist(machine, errors, starts, delta, steps, pieces, edges,
+                   top) -> np.ndarray:
+    """The largest |D . n| / 4 (m, `edge_substeps`) over one sub-step of each of ``pieces``
+    (`_pieces`) of the moves."""
+    q, first = _samples(steps, starts, delta, pieces)
     poses = machine.tool_pose(q, errors)
     rotation, origin = poses[:, :3, :3], poses[:, :3, 3]
     a = np.einsum("nij,kj->nki", rotation, edges[:, 0]) + origin[:, None]
@@ -196,7 +217,7 @@ def _largest_waist(machine, errors, starts, delta, steps, edges, top) -> np.ndar
     dot = np.abs(np.einsum("nki,nki->nk", twist, normal))
     waist = np.where(size > 0.0, dot / np.where(size > 0.0, size, 1.0), 0.0) / 4.0
     waist = waist.max(axis=1)
-    waist[first[1:] - 1] = 0.0  # from one move's end to the next move's start: no sub-step
+    waist[first[1:] - 1] = 0.0  # from one piece's end to the next one's start: no sub-step
     return np.maximum.reduceat(np.append(waist, 0.0), first)
 
 
