@@ -7,7 +7,7 @@ import re
 
 import numpy as np
 import pytest
-from slow_loops import slow_c
+from slow_loops import Jump, slow_c
 
 from machinesim import load_machine
 from machinesim.cutting.lathe import TurnedPart, followed, turn, turning_runs
@@ -90,21 +90,11 @@ def test_a_loop_that_keeps_the_rules_is_followed_on_the_command_s_samples():
     assert np.array_equal(part.paths[0].z, path.z)
 
 
-class _Jump:
-    """A servo model whose C jumps by a quarter turn halfway through the motion: no
-    sampling follows that."""
-
-    def follow(self, t, q):
-        out = np.array(q, dtype=np.float64)
-        out[t > (t[0] + t[-1]) / 2.0, 2] += math.pi / 2.0
-        return out
-
-
 def test_a_followed_run_that_jumps_is_refused_naming_the_line_and_the_servo():
     machine = load_machine("sts_lathe")
     with pytest.raises(NCProgramError, match=re.escape(
-            "line 4: the axes as the servo model _Jump follows this move (C turns ")) as err:
-        turn(parse_program(FACING), machine, servo=_Jump())
+            "line 4: the axes as the servo model Jump follows this move (C turns ")) as err:
+        turn(parse_program(FACING), machine, servo=Jump(2))
     assert re.search(r"turns 9\d\.\d+ deg between two samples, at \d+\.\d+ s into the "
                      r"turning run\) ", str(err.value))
     assert str(err.value).endswith(

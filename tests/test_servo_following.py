@@ -7,7 +7,7 @@ import re
 
 import numpy as np
 import pytest
-from slow_loops import slow_c
+from slow_loops import Jump, slow_c
 
 from machinesim import load_machine
 from machinesim.cutting import cut
@@ -82,22 +82,12 @@ def test_a_cut_through_lagging_loops_removes_what_the_commanded_half_turn_does()
     assert lagged.removed_volume_m3 == pytest.approx(exact.removed_volume_m3, rel=1e-3, abs=0.0)
 
 
-class _Jump:
-    """A servo model whose output jumps by a quarter turn of C halfway through each
-    motion: no sampling follows that."""
-
-    def follow(self, t, q):
-        out = np.array(q, dtype=np.float64)
-        out[t > (t[0] + t[-1]) / 2.0, 3] += math.pi / 2.0
-        return out
-
-
 def test_a_followed_path_that_jumps_is_refused_naming_the_line_and_the_servo():
     machine = load_machine("grooving_4axis")
     program = parse_program(HALF_TURN)
     with pytest.raises(NCProgramError, match=re.escape(
-            "line 4: the axes' path as the servo model _Jump follows this move does not keep "
+            "line 4: the axes' path as the servo model Jump follows this move does not keep "
             "the rules of a commanded move's sub-steps (chords within 1e+09 nm, at most 45 "
             "deg a sub-step): it still breaks them after 8 rounds of finer sampling (its "
             "path jumps); check the servo loops' gains")):
-        plan(program, machine, servo=_Jump(), chord_tolerance=1.0)
+        plan(program, machine, servo=Jump(3), chord_tolerance=1.0)
