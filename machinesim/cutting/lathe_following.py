@@ -4,8 +4,9 @@ The turning engine joins consecutive points of a run straight (linear in C and t
 and reads C back from the poses modulo a turn; the command's points are split into quarter
 turns, and a commanded move is straight, so its join is exact. The servo's path is neither:
 a slow loop lags and catches up, turning C by more than the command between two samples
-and not linearly in time while the slides move on. `follow_run` samples it finely enough,
-as `machinesim.motion.following` does the mill's.
+and not linearly in time while the slides move on. `follow_held` samples it finely enough,
+as `machinesim.motion.following` does the mill's: for `Lab.turn`'s runs (`follow_run`) and
+for a CAM tool path run through a servo (`machinesim.cutting.servo_path`).
 """
 
 from __future__ import annotations
@@ -27,57 +28,77 @@ FOLLOWED_SLACK = 1e-6
 
 def follow_run(servo, t, points, lines, machine, source: str):
     """``(t, points, reached)``: the run followed by ``servo`` (None: exact), its followed
-    steps held to the rules the command's keep: C turns at most a quarter turn a step
-    (`machinesim.cutting.lathe.MOST_C_STEP_RAD`), and the engine's straight join of two
-    samples (linear in C and the slides) stays within `CHORD_TOLERANCE_M` of the servo's
-    own motion (a commanded move is straight, its join exact). A slow loop lags and
-    catches up, turning C by more than the command between samples (Table 6 "after" C
+    steps held to the rules the command's keep (`follow_held`); a run that still breaks
+    them (a servo whose output jumps) is an `NCProgramError` naming the line and the servo
+    model. A run that keeps them is followed as before, bit for bit."""
+    from machinesim.cutting.lathe import followed
+
+    if servo is None:
+        return t, points, followed(None, t, points)
+
+    def refuse(step: int, why: str) -> NCProgramError:
+        return NCProgramError(why, source=source, line=int(lines[step]))
+
+    t, points, reached, _ = follow_held(servo, t, points, machine.axes, machine.rotary,
+                                        refuse)
+    return t, points, reached
+
+
+def follow_held(servo, t, points, axes, rotary, refuse):
+    """``(t, points, reached, rows)``: ``points`` (a run at times ``t``, one column per name
+    in ``axes``, among them X and C; ``rotary`` marks the rotary columns) followed by
+    ``servo``, its followed steps held to the rules the command's keep: C turns at most a
+    quarter turn a step (`machinesim.cutting.lathe.MOST_C_STEP_RAD`), and the engine's
+    straight join of two samples (linear in C and the slides) stays within
+    `CHORD_TOLERANCE_M` of the servo's own motion (a commanded move is straight, its join
+    exact); ``rows``: the step of the given run each returned step lies on. A slow loop lags
+    and catches up, turning C by more than the command between samples (Table 6 "after" C
     gains x 1e-4: 166.6 deg where the command turns 90) and not linearly in time, while the
     slides move on: joined straight, the edge was 1.46 um off its own path mid-step (at the
     same C). Where a step breaks a rule, its step of the command is split into the pieces
     it needs (a chord's error falls with the square of the step) and the run is followed
     again (the loops are simulated at their own period and read back at the samples, so
     the new samples lie on the servo's own motion), up to `FOLLOW_ROUNDS` rounds; a run
-    that still breaks them (a servo whose output jumps) is refused naming the line and the
-    servo model. A run that keeps them is followed as before, bit for bit: the check
-    follows a second sampling, with the mid-points, and only reads it."""
+    that still breaks them (a servo whose output jumps) is refused: ``refuse(step, why)``
+    gives the error to raise, ``step`` the given run's step, ``why`` the words. A run that
+    keeps them is followed once, its samples unchanged: the check follows a second
+    sampling, with the mid-points, and only reads it."""
     from machinesim.cutting.lathe import MOST_C_STEP_RAD, _c_steps, _within_quarter_turns, followed
 
-    reached = followed(None if servo is None else servo.follow, t, points)
-    if servo is None:
-        return t, points, reached
-    c_column = machine.axes.index("C")
+    reached = followed(servo.follow, t, points)
+    c_column = axes.index("C")
+    rows = np.arange(len(t) - 1)
     for round_ in range(FOLLOW_ROUNDS + 1):
         turns = np.abs(np.diff(reached[:, c_column]))
         steps = np.where(turns > MOST_C_STEP_RAD * (1.0 + FOLLOWED_SLACK), _c_steps(
             reached[:, c_column]), 1)
-        chord = chord_errors(servo, t, points, reached, machine)
+        chord = chord_errors(servo, t, points, reached, axes, rotary)
         steps = np.maximum(steps, np.ceil(np.sqrt(np.minimum(
             chord / CHORD_TOLERANCE_M, 4.0 * float(MAX_SUBSTEPS) ** 2)))).astype(np.int64)
         bad = int(np.argmax(steps))
         if steps[bad] <= 1:
-            return t, points, reached
+            return t, points, reached, rows
         if round_ == FOLLOW_ROUNDS or steps[bad] > MAX_SUBSTEPS:
             break
-        t, points, rows = _within_quarter_turns(t, points, steps)
-        lines = lines[rows]
+        t, points, pieces = _within_quarter_turns(t, points, steps)
+        rows = rows[pieces]
         reached = followed(servo.follow, t, points)
     why = (f"and would take more than {MAX_SUBSTEPS} pieces" if steps[bad] > MAX_SUBSTEPS else
            f"still after {FOLLOW_ROUNDS} rounds of sampling the move finer")
     turned = math.degrees(abs(float(reached[bad + 1, c_column] - reached[bad, c_column])))
-    raise NCProgramError(
+    raise refuse(int(rows[bad]), (
         f"the axes as the servo model {type(servo).__name__} follows this move (C turns "
         f"{turned:.6g} deg between two samples, at {t[bad]:.6g} s into the turning run) "
         f"break the rules of a commanded step (at most {math.degrees(MOST_C_STEP_RAD):g} deg "
         f"of C, the straight join within {CHORD_TOLERANCE_M * 1e9:g} nm of the path) {why}: "
-        "its output jumps; check the servo loops' gains", source=source,
-        line=int(lines[bad]))
+        "its output jumps; check the servo loops' gains"))
 
 
-def chord_errors(servo, t, points, reached, machine) -> np.ndarray:
+def chord_errors(servo, t, points, reached, axes, rotary) -> np.ndarray:
     """Per step of ``reached``: how far (m) the servo's motion at the step's mid-time lies
     from the straight join of its ends at the same C (the slides' offsets, and the C
-    overshoot times the radius where C leaves the step's span)."""
+    overshoot times the radius where C leaves the step's span); ``axes`` and ``rotary`` as
+    `follow_held` takes them."""
     from machinesim.cutting.lathe import followed
 
     mid_t = np.empty(2 * len(t) - 1)
@@ -85,7 +106,7 @@ def chord_errors(servo, t, points, reached, machine) -> np.ndarray:
     mid_q = np.empty((len(mid_t), points.shape[1]))
     mid_q[0::2], mid_q[1::2] = points, 0.5 * (points[1:] + points[:-1])
     mid = followed(servo.follow, mid_t, mid_q)[1::2]
-    c_column = machine.axes.index("C")
+    c_column = axes.index("C")
     start, delta = reached[:-1], np.diff(reached, axis=0)
     dc = delta[:, c_column]
     turning = dc != 0.0
@@ -93,10 +114,10 @@ def chord_errors(servo, t, points, reached, machine) -> np.ndarray:
     s[turning] = np.clip((mid[turning, c_column] - start[turning, c_column]) / dc[turning],
                          0.0, 1.0)
     off = mid - (start + s[:, None] * delta)
-    off[:, c_column] *= np.abs(mid[:, machine.axes.index("X")])  # the radius
-    keep = ~np.asarray(machine.rotary, dtype=bool)
+    off[:, c_column] *= np.abs(mid[:, axes.index("X")])  # the radius
+    keep = ~np.asarray(rotary, dtype=bool)
     keep[c_column] = True
     return np.sqrt(np.sum(off[:, keep] ** 2, axis=1))
 
 
-__all__ = ["FOLLOWED_SLACK", "chord_errors", "follow_run"]
+__all__ = ["FOLLOWED_SLACK", "chord_errors", "follow_held", "follow_run"]

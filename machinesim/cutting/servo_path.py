@@ -29,12 +29,23 @@ def path_times(path: ToolPath, spindle_rpm: float = SPINDLE_RPM) -> np.ndarray:
 def followed_path(path: ToolPath, servo, spindle_rpm: float = SPINDLE_RPM) -> ToolPath:
     """The (C, X, Z) the axes reach when ``servo`` (``follow(t, q)``, q columns X, Z, C)
     follows ``path`` at ``spindle_rpm``, entering it settled at its first step's speed (as
-    `machinesim.cutting.lathe.followed`, which `Lab.turn` uses)."""
-    from machinesim.cutting.lathe import followed
+    `machinesim.cutting.lathe.followed`, which `Lab.turn` uses), sampled by the rule
+    `Lab.turn` samples its runs by (`machinesim.cutting.lathe_following.follow_held`):
+    where the straight join of two followed points strays more than 1 nm
+    (`machinesim.tolerances.CHORD_TOLERANCE_M`) from the servo's own motion at mid-step, or
+    C turns more than a quarter turn, that step of the path is sampled finer (the added
+    points on the path's straight step) and the path followed again. The turning engine
+    joins the points straight; on the Case 4 path (Constant Angle 2 deg, 45,001 points)
+    Table 6 "before" had been joined up to 519 nm off that motion. A servo whose output
+    jumps is refused (`InputError`, key ``servo``, naming the path's step)."""
+    from machinesim.cutting.lathe_following import follow_held
+
+    def refuse(step: int, why: str) -> InputError:
+        return InputError(f"path step {step} (points {step} to {step + 1}): {why}", key="servo")
 
     t = path_times(path, spindle_rpm)
     q = np.column_stack([path.x, path.z, path.c])
-    reached = followed(servo.follow, t, q)
+    _, _, reached, _ = follow_held(servo, t, q, ("X", "Z", "C"), (False, False, True), refuse)
     return ToolPath(reached[:, 2], reached[:, 0], reached[:, 1])
 
 
