@@ -31,38 +31,32 @@ def follow_run(servo, t, points, lines, machine, source: str):
     steps held to the rules the command's keep (`follow_held`); a run that still breaks
     them (a servo whose output jumps) is an `NCProgramError` naming the line and the servo
     model. A run that keeps them is followed as before, bit for bit."""
-    from machinesim.cutting.lathe import followed
-
     if servo is None:
-        return t, points, followed(None, t, points)
+        return t, points, points
 
     def refuse(step: int, why: str) -> NCProgramError:
         return NCProgramError(why, source=source, line=int(lines[step]))
 
-    t, points, reached, _ = follow_held(servo, t, points, machine.axes, machine.rotary,
-                                        refuse)
-    return t, points, reached
+    return follow_held(servo, t, points, machine.axes, machine.rotary, refuse)
 
 
 def follow_held(servo, t, points, axes, rotary, refuse):
-    """``(t, points, reached, rows)``: ``points`` (a run at times ``t``, one column per name
-    in ``axes``, among them X and C; ``rotary`` marks the rotary columns) followed by
-    ``servo``, its followed steps held to the rules the command's keep: C turns at most a
-    quarter turn a step (`machinesim.cutting.lathe.MOST_C_STEP_RAD`), and the engine's
-    straight join of two samples (linear in C and the slides) stays within
-    `CHORD_TOLERANCE_M` of the servo's own motion (a commanded move is straight, its join
-    exact); ``rows``: the step of the given run each returned step lies on. A slow loop lags
-    and catches up, turning C by more than the command between samples (Table 6 "after" C
-    gains x 1e-4: 166.6 deg where the command turns 90) and not linearly in time, while the
-    slides move on: joined straight, the edge was 1.46 um off its own path mid-step (at the
-    same C). Where a step breaks a rule, its step of the command is split into the pieces
-    it needs (a chord's error falls with the square of the step) and the run is followed
-    again (the loops are simulated at their own period and read back at the samples, so
-    the new samples lie on the servo's own motion), up to `FOLLOW_ROUNDS` rounds; a run
-    that still breaks them (a servo whose output jumps) is refused: ``refuse(step, why)``
-    gives the error to raise, ``step`` the given run's step, ``why`` the words. A run that
-    keeps them is followed once, its samples unchanged: the check follows a second
-    sampling, with the mid-points, and only reads it."""
+    """``(t, points, reached)``: ``points`` (a run at times ``t``, one column per name in
+    ``axes``, among them X and C; ``rotary`` marks the rotary columns) followed by ``servo``,
+    its followed steps held to the rules the command's keep: C turns at most a quarter turn a
+    step (`machinesim.cutting.lathe.MOST_C_STEP_RAD`), and the engine's straight join of two
+    samples (linear in C and the slides) stays within `CHORD_TOLERANCE_M` of the servo's own
+    motion (a commanded move is straight, its join exact). A slow loop lags and catches up,
+    turning C by more than the command between samples (Table 6 "after" C gains x 1e-4: 166.6
+    deg where the command turns 90) and not linearly in time, while the slides move on: joined
+    straight, the edge was 1.46 um off its own path mid-step (at the same C). Where a step
+    breaks a rule, its step of the command is split into the pieces it needs (a chord's error
+    falls with the square of the step) and the run is followed again (the loops are simulated at
+    their own period and read back at the samples, so the new samples lie on the servo's own
+    motion), up to `FOLLOW_ROUNDS` rounds; a run that still breaks them (a servo whose output
+    jumps) is refused: ``refuse(step, why)`` gives the error to raise, ``step`` the given run's
+    step, ``why`` the words. A run that keeps them is followed once, its samples unchanged: the
+    check follows a second sampling, with the mid-points, and only reads it."""
     from machinesim.cutting.lathe import MOST_C_STEP_RAD, _c_steps, _within_quarter_turns, followed
 
     reached = followed(servo.follow, t, points)
@@ -77,7 +71,7 @@ def follow_held(servo, t, points, axes, rotary, refuse):
             chord / CHORD_TOLERANCE_M, 4.0 * float(MAX_SUBSTEPS) ** 2)))).astype(np.int64)
         bad = int(np.argmax(steps))
         if steps[bad] <= 1:
-            return t, points, reached, rows
+            return t, points, reached
         if round_ == FOLLOW_ROUNDS or steps[bad] > MAX_SUBSTEPS:
             break
         t, points, pieces = _within_quarter_turns(t, points, steps)

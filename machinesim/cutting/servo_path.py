@@ -45,7 +45,7 @@ def followed_path(path: ToolPath, servo, spindle_rpm: float = SPINDLE_RPM) -> To
 
     t = path_times(path, spindle_rpm)
     q = np.column_stack([path.x, path.z, path.c])
-    _, _, reached, _ = follow_held(servo, t, q, ("X", "Z", "C"), (False, False, True), refuse)
+    _, _, reached = follow_held(servo, t, q, ("X", "Z", "C"), (False, False, True), refuse)
     return ToolPath(reached[:, 2], reached[:, 0], reached[:, 1])
 
 
