@@ -327,6 +327,12 @@ def realism_budget(procedure, result, realism, make_lab, enabled: bool = True, *
                            "budget.md and budget.png are not written")
     if not enabled or not sources:
         return None
+    if getattr(result, "figures", None) is None:
+        # jobs=2 had handed the missing result on to error_budget, whose worker's run(None)
+        # was refused as a realism switch None
+        raise InputError(f"realism_budget: expected result, the run with every switch on (a "
+                         f"machinesim.experiment.Result), got {type(result).__name__}",
+                         key="result")
     if jobs == 1:
         return error_budget(lambda off: result if off is None else run(
             procedure, make_lab(realism.without(off)),

@@ -205,6 +205,25 @@ def test_a_budget_asked_for_with_no_source_on_says_so():
     assert told == []  # not asked for: nothing to say
 
 
+def test_a_budget_without_the_all_on_result_names_the_result_before_any_rerun():
+    """``result=None`` with a source on: refused by its name before any lab is built (with
+    jobs=2 the refusal had named a realism switch None, from the worker's run(None))."""
+    from machinesim.budget import realism_budget
+    from machinesim.realism import Realism
+
+    class Procedure:
+        realism_sources = ("instrument_noise",)
+
+    def make_lab(realism):
+        raise AssertionError("no rerun before the result is checked")
+
+    for jobs in (1, 2):
+        with pytest.raises(InputError, match=r"realism_budget: expected result, the run with "
+                           r"every switch on .*got NoneType") as raised:
+            realism_budget(Procedure(), None, Realism.lab(), make_lab, jobs=jobs)
+        assert raised.value.key == "result"
+
+
 def test_a_procedure_budgets_only_the_switches_of_the_instruments_it_reads():
     # the laser's air (Realism.air_refraction) acts on the laser interferometer alone: paper
     # 002's budget had run it again and printed a 0.0 % row for every figure
