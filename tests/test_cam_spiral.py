@@ -176,20 +176,42 @@ def test_a_tool_path_made_by_hand_is_checked_when_made(arrays, message):
     assert len(sp.interpolate(path, "spline", 2)) == 5
 
 
-def test_cutting_points_pickle_as_before_without_their_design():
-    # since the points kept their design for the gouging check, pickling them raised
-    # "Can't pickle local object 'sine_grid.<locals>.height'" (a design is closures); they
-    # pickle again, their arrays to the bit, the design left behind
+def test_cutting_points_copied_or_pickled_keep_their_design_and_its_gouging_note():
+    # the points had left their design behind when copied (copy.copy, copy.deepcopy) or
+    # pickled, so a copy's tool_path made a gouging path without a word: each of the
+    # designs made here now pickles (module-level surfaces), and a copy warns the same
+    import copy
     import pickle
 
-    spiral = sp.Spiral(0.12e-3, 1e-6)
-    points = sp.cutting_points(sp.sine_grid(), spiral, sp.constant_angle(spiral, 0.5))
-    assert points.design is not None
-    back = pickle.loads(pickle.dumps(points))
-    for name in ("theta", "rho", "z", "slope"):
-        assert np.array_equal(getattr(back, name), getattr(points, name))
-    assert back.design is None and points.design is not None
-    np.testing.assert_array_equal(sp.tool_path(back, 1e-3).x, sp.tool_path(points, 1e-3).x)
+    amplitude, wavelength = 50e-9, 100e-6
+    least = 1.0 / (amplitude * (2 * math.pi / wavelength) ** 2)  # as the test above
+    spiral = sp.Spiral(0.75 * wavelength, 2e-6)
+    theta = sp.constant_angle(spiral, 0.05)
+    x, y = np.meshgrid(np.linspace(-1e-4, 1e-4, 9), np.linspace(-1e-4, 1e-4, 9))
+    bowl_map = sp.design_from_height_map(x[0], y[:, 0], 2e-3 - np.sqrt(4e-6 - x * x - y * y))
+    for design, nose in ((sp.sine_grid(amplitude, wavelength, amplitude_y=0.0),
+                          least * (1 + 1e-4)), (sp.sphere(-2e-3), 2.1e-3),
+                         (sp.tilted_plane(0.01), None), (bowl_map, 2.1e-3)):
+        points = sp.cutting_points(design, spiral, theta)
+        with warnings.catch_warnings(record=True) as first:
+            warnings.simplefilter("always")
+            path = sp.tool_path(points, nose or 1e-3)
+        assert (len(first) == 1) == (nose is not None), design.name
+        for back in (copy.copy(points), copy.deepcopy(points),
+                     pickle.loads(pickle.dumps(points))):
+            assert back.design is not None and back.design.name == design.name
+            for name in ("theta", "rho", "z", "slope"):
+                assert np.array_equal(getattr(back, name), getattr(points, name))
+            with warnings.catch_warnings(record=True) as again:
+                warnings.simplefilter("always")
+                np.testing.assert_array_equal(sp.tool_path(back, nose or 1e-3).x, path.x)
+            assert [str(w.message) for w in again] == [str(w.message) for w in first]
+    # a design of a local function copies (itself), and refuses pickling by its name
+    flat = sp.cutting_points(sp.Design(lambda x, y: 0 * x, name="flat"), spiral, theta)
+    assert copy.deepcopy(flat).design is flat.design
+    with pytest.raises(InputError, match=r"design 'flat' cannot be pickled: its height is "
+                       r".*<lambda>, a local function or a lambda"):
+        pickle.dumps(flat)
 
 
 def rotational(coefficients):

@@ -49,11 +49,36 @@ class Design:
         None.
     name : str
         For reports.
+
+    A design is a value: `copy.copy` and `copy.deepcopy` give it back itself (its callables
+    are shared as deepcopy shares functions). It pickles when its callables do: the designs
+    made here (`sine_grid`, `sphere`, `tilted_plane`, `design_from_height_map`,
+    `read_design`) do, their surfaces being module-level classes; a local function or a
+    lambda is refused by name (`__getstate__`).
     """
 
     height: Callable
     gradient: Callable | None = None
     name: str = "design"
+
+    def __copy__(self) -> Design:
+        return self
+
+    def __deepcopy__(self, memo) -> Design:
+        return self
+
+    def __getstate__(self) -> dict:
+        # pickle's own words for a closure ("Can't pickle local object") name neither the
+        # design nor the way out
+        for role in ("height", "gradient"):
+            function = getattr(self, role)
+            qualname = getattr(function, "__qualname__", "")
+            if "<locals>" in qualname or "<lambda>" in qualname:
+                raise InputError(f"design {self.name!r} cannot be pickled: its {role} is "
+                                 f"{qualname}, a local function or a lambda, which pickle "
+                                 "cannot take; define it at a module's top level (or a "
+                                 "method of a module-level class)", key="design")
+        return dict(self.__dict__)
 
     def __call__(self, x, y) -> np.ndarray:
         return np.asarray(self.height(np.asarray(x, dtype=np.float64),
@@ -81,16 +106,27 @@ def sine_grid(amplitude: float = AMPLITUDE_M, wavelength: float = WAVELENGTH_M, 
     l1 = _wavelength(wavelength, "wavelength")
     a2 = a1 if amplitude_y is None else check_length(amplitude_y, "amplitude_y")
     l2 = l1 if wavelength_y is None else _wavelength(wavelength_y, "wavelength_y")
-    k1, k2 = 2.0 * math.pi / l1, 2.0 * math.pi / l2
+    grid = _SineGrid(a1, 2.0 * math.pi / l1, a2, 2.0 * math.pi / l2)
+    return Design(grid.height, grid.gradient, f"sine grid A {a1 / M_PER_NM:g} nm, lambda "
+                                              f"{l1 / M_PER_UM:g} um")
 
-    def height(x, y):
-        return a1 * np.sin(k1 * x) + a2 * np.cos(k2 * y)
 
-    def gradient(x, y):
-        return a1 * k1 * np.cos(k1 * x), -a2 * k2 * np.sin(k2 * y) + 0.0 * x
+@dataclass(frozen=True)
+class _SineGrid:
+    """`sine_grid`'s surface (a class, not closures, so that its design pickles): amplitudes,
+    m, and wave numbers, rad/m."""
 
-    return Design(height, gradient, f"sine grid A {a1 / M_PER_NM:g} nm, lambda "
-                                    f"{l1 / M_PER_UM:g} um")
+    a1: float
+    k1: float
+    a2: float
+    k2: float
+
+    def height(self, x, y):
+        return self.a1 * np.sin(self.k1 * x) + self.a2 * np.cos(self.k2 * y)
+
+    def gradient(self, x, y):
+        return (self.a1 * self.k1 * np.cos(self.k1 * x),
+                -self.a2 * self.k2 * np.sin(self.k2 * y) + 0.0 * x)
 
 
 #: The shortest sine-grid wavelength taken, m: 1 nm, the NC writer's resolution. A path
@@ -119,20 +155,27 @@ def sphere(radius: float) -> Design:
     if rs == 0.0:
         raise InputError(f"Expected a finite, non-zero sphere radius (m), got {rs!r}",
                          key="radius")
-    sign, size = math.copysign(1.0, rs), abs(rs)
+    cap = _SphereCap(math.copysign(1.0, rs), abs(rs))
+    return Design(cap.height, cap.gradient, f"sphere R {rs / M_PER_MM:g} mm")
 
-    def root(x, y):
+
+@dataclass(frozen=True)
+class _SphereCap:
+    """`sphere`'s surface: ``sign`` +1 convex, -1 concave; ``size`` = |Rs|, m."""
+
+    sign: float
+    size: float
+
+    def _root(self, x, y):
         with np.errstate(invalid="ignore"):
-            return np.sqrt(size * size - (x * x + y * y))
+            return np.sqrt(self.size * self.size - (x * x + y * y))
 
-    def height(x, y):
-        return sign * (root(x, y) - size)
+    def height(self, x, y):
+        return self.sign * (self._root(x, y) - self.size)
 
-    def gradient(x, y):
-        r = root(x, y)
-        return -sign * x / r, -sign * y / r
-
-    return Design(height, gradient, f"sphere R {rs / M_PER_MM:g} mm")
+    def gradient(self, x, y):
+        r = self._root(x, y)
+        return -self.sign * x / r, -self.sign * y / r
 
 
 def tilted_plane(slope_x: float, slope_y: float = 0.0) -> Design:
@@ -141,15 +184,23 @@ def tilted_plane(slope_x: float, slope_y: float = 0.0) -> Design:
     # True is no slope of 1, "0.02" no number (as_number refuses both, and NaN, by name)
     kx = as_number(slope_x, "slope_x", unit="m per m")
     ky = as_number(slope_y, "slope_y", unit="m per m")
+    plane = _Plane(kx, ky)
+    return Design(plane.height, plane.gradient, f"plane, slopes {kx:g}, {ky:g}")
 
-    def height(x, y):
-        return kx * x + ky * y
 
-    def gradient(x, y):
+@dataclass(frozen=True)
+class _Plane:
+    """`tilted_plane`'s surface: its slopes, m per m."""
+
+    kx: float
+    ky: float
+
+    def height(self, x, y):
+        return self.kx * x + self.ky * y
+
+    def gradient(self, x, y):
         shape = np.broadcast(x, y).shape
-        return np.full(shape, kx), np.full(shape, ky)
-
-    return Design(height, gradient, f"plane, slopes {kx:g}, {ky:g}")
+        return np.full(shape, self.kx), np.full(shape, self.ky)
 
 
 def design_from_height_map(x, y, z, *, name: str = "height map") -> Design:
@@ -179,26 +230,36 @@ def design_from_height_map(x, y, z, *, name: str = "height map") -> Design:
         raise InputError(f"Expected finite heights, {np.count_nonzero(~np.isfinite(gz))} are "
                          "not (fill the holes first)", key="z")
     spline = RectBivariateSpline(gx, gy, gz.T, kx=3, ky=3, s=0)
-    box = (gx[0], gx[-1], gy[0], gy[-1])
+    surface = _HeightMap(spline, (gx[0], gx[-1], gy[0], gy[-1]), name)
+    return Design(surface.height, surface.gradient, name)
 
-    def check(px, py):
+
+@dataclass(frozen=True, eq=False)
+class _HeightMap:
+    """`design_from_height_map`'s surface: the spline, its box (x0, x1, y0, y1), m, and
+    the design's name for the refusal of a point outside it."""
+
+    spline: RectBivariateSpline
+    box: tuple
+    name: str
+
+    def _check(self, px, py):
+        box = self.box
         outside = (px < box[0]) | (px > box[1]) | (py < box[2]) | (py > box[3])
         if np.any(outside):
             i = int(np.flatnonzero(np.ravel(outside))[0])
-            raise InputError(f"design {name!r}: point ({np.ravel(px)[i]!r}, "
+            raise InputError(f"design {self.name!r}: point ({np.ravel(px)[i]!r}, "
                              f"{np.ravel(py)[i]!r}) m lies outside the height map "
                              f"[{box[0]!r}, {box[1]!r}] x [{box[2]!r}, {box[3]!r}] m",
                              key="design")
 
-    def height(px, py):
-        check(px, py)
-        return spline.ev(px, py)
+    def height(self, px, py):
+        self._check(px, py)
+        return self.spline.ev(px, py)
 
-    def gradient(px, py):
-        check(px, py)
-        return spline.ev(px, py, dx=1), spline.ev(px, py, dy=1)
-
-    return Design(height, gradient, name)
+    def gradient(self, px, py):
+        self._check(px, py)
+        return self.spline.ev(px, py, dx=1), self.spline.ev(px, py, dy=1)
 
 
 def read_design(path: str | os.PathLike) -> Design:

@@ -281,10 +281,11 @@ class CuttingPoints:
     slope : ndarray, shape (N,)
         Radial slope dz/drho = tan(phi) (eq 13).
     design : Design, optional
-        The design they were taken from (`cutting_points`), for `tool_path`'s gouging check.
-        Not pickled (a design's height and slope are closures, which pickle cannot take):
-        unpickled (or `copy`-ed) points hold None, and `tool_path` makes their path without
-        the check.
+        The design they were taken from (`cutting_points`), for `tool_path`'s gouging check;
+        points made by hand may leave it None (then the path is made without the check).
+        Copies (`copy.copy`, `copy.deepcopy`) and pickled points keep it, so a copy warns
+        of the same gouging; points whose design does not pickle (a local function) are
+        refused by `Design`, naming it.
     """
 
     theta: np.ndarray
@@ -303,10 +304,6 @@ class CuttingPoints:
 
     def __len__(self) -> int:
         return self.theta.size
-
-    def __getstate__(self) -> dict:
-        # the points pickled as they did before they kept their design
-        return {**self.__dict__, "design": None}
 
 
 def cutting_points(design: Design, spiral: Spiral, theta) -> CuttingPoints:
