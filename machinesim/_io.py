@@ -28,10 +28,11 @@ from machinesim.exceptions import FileError, InputError
 #: Longest file name component (bytes) where the file system does not say (POSIX NAME_MAX).
 _NAME_MAX = 255
 #: Characters of the final name kept in a temporary file's name, so that it stays short.
-_TEMP_STEM = 64
+TEMP_STEM = 64
 
 
-def _reason(exc: OSError) -> str:
+def os_reason(exc: OSError) -> str:
+    """What an OSError says went wrong, for a message ("No space left on device")."""
     return exc.strerror or str(exc) or type(exc).__name__
 
 
@@ -66,7 +67,7 @@ def check_readable_file(path, what: str) -> Path:
     except FileError:  # an OSError too: not wrapped in "cannot read" a second time
         raise
     except OSError as exc:
-        raise FileError(f"cannot read the {what}: {_reason(exc)}", source=str(path)) from None
+        raise FileError(f"cannot read the {what}: {os_reason(exc)}", source=str(path)) from None
     return path
 
 
@@ -159,7 +160,7 @@ def check_writable(path, what: str) -> Path:
         raise  # an OSError too: said already, not to be wrapped in itself
     except OSError as exc:
         raise FileError(f"cannot write the {what} in the folder {str(folder)!r}: "
-                         f"{_reason(exc)}", source=str(path)) from None
+                         f"{os_reason(exc)}", source=str(path)) from None
     return path
 
 
@@ -171,21 +172,21 @@ def _name_max(folder: Path) -> int:
 
 
 def _temp_head(path: Path) -> str:
-    return f".{path.name[:_TEMP_STEM]}."
+    return f".{path.name[:TEMP_STEM]}."
 
 
 def _temp_prefix(path: Path) -> str:
     """The start of a temporary file's name beside ``path``: ``.NAME.PID@HOST-`` (the name
-    cut to `_TEMP_STEM` characters, HOST `_process_space`), so that a later write can tell
+    cut to `TEMP_STEM` characters, HOST `process_space`), so that a later write can tell
     those of a killed run."""
-    return f"{_temp_head(path)}{os.getpid()}@{_process_space()}-"
+    return f"{_temp_head(path)}{os.getpid()}@{process_space()}-"
 
 
 #: The host's id, stable across reboots (systemd's machine-id(5); the D-Bus copy is the same).
 MACHINE_ID_FILE = "/etc/machine-id"
 
 
-def _process_space() -> str:
+def process_space() -> str:
     """Eight hex digits naming the space this process's id is counted in: the host's name,
     its machine id (`MACHINE_ID_FILE`, where there is one: two hosts may share a name, a
     distribution's default one) and, on Linux, the PID namespace
@@ -214,14 +215,14 @@ def _clear_stale_temps(path: Path) -> None:
     left beside ``path``: ``.NAME.PID@HOST-XXXXXXXX.tmp`` of a process that is gone
     (`pid_alive`). They were never renamed into place, so no reader took them for ``path``,
     but they stayed for good, one per killed write. Those of live runs are left alone, and
-    those of another host or PID namespace (HOST not this process's `_process_space`),
+    those of another host or PID namespace (HOST not this process's `process_space`),
     whose process this one cannot ask about."""
     head = _temp_head(path)
     try:
         names = [e.name for e in os.scandir(path.parent) if e.name.startswith(head)]
     except OSError:
         return
-    space = f"@{_process_space()}"
+    space = f"@{process_space()}"
     for name in names:
         pid, dash, rest = name[len(head):].partition("-")
         pid, at, host = pid.partition("@")
@@ -285,7 +286,7 @@ def _write_error(path: Path, exc: OSError) -> FileError:
         return FileError(f"cannot write: the folder {str(folder)!r} {reason}", source=str(path))
     if _asks(path.is_dir):
         return FileError("cannot write: it is a folder; expected a file name", source=str(path))
-    return FileError(f"cannot write: {_reason(exc)}", source=str(path))
+    return FileError(f"cannot write: {os_reason(exc)}", source=str(path))
 
 
 def _asks(question) -> bool:

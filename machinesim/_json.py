@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import math
 
-from machinesim._io import _reason, check_readable_file
+from machinesim._io import check_readable_file, os_reason
 from machinesim.exceptions import FileError, InputError, MachineSimError
 
 
@@ -56,7 +56,7 @@ def read_json(path, what: str = "JSON file"):
     try:
         raw = path.read_bytes()
     except OSError as exc:
-        raise FileError(f"cannot read the {what}: {_reason(exc)}", source=str(path)) from None
+        raise FileError(f"cannot read the {what}: {os_reason(exc)}", source=str(path)) from None
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:

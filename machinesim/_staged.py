@@ -16,7 +16,7 @@ from pathlib import Path
 
 from machinesim import _interrupts
 from machinesim._interrupts import _ctrl_c_deferred
-from machinesim._io import _TEMP_STEM, _process_space, _reason, pid_alive
+from machinesim._io import TEMP_STEM, os_reason, pid_alive, process_space
 from machinesim.exceptions import FileError, InputError, MachineSimError
 
 #: Staging folders of this process that are still being written (not stale).
@@ -30,20 +30,20 @@ def _folder_stem(target: Path) -> str:
     if len(os.fsencode(name)) <= 160:
         return name
     digest = hashlib.sha1(os.fsencode(name)).hexdigest()[:12]
-    return f"{name[:_TEMP_STEM]}~{digest}"
+    return f"{name[:TEMP_STEM]}~{digest}"
 
 
 def _sibling_kind(entry: str, stem: str) -> tuple[str, int] | None:
     """(``"partial"`` or ``"old"``, pid) when ``entry`` is a staging or swapped-out folder
     of ``stem`` made in this process's PID space (``.STEM.partial-PID@HOST.TOKEN``,
-    ``.STEM.old-PID@HOST.TOKEN``, HOST `_process_space`), else None: another host's or
+    ``.STEM.old-PID@HOST.TOKEN``, HOST `process_space`), else None: another host's or
     container's PID is no process here, and its live run's folder was removed as stale."""
     for kind in ("partial", "old"):
         head = f".{stem}.{kind}-"
         if entry.startswith(head):
             marked, _, _ = entry[len(head):].partition(".")
             pid, at, host = marked.partition("@")
-            if pid.isdigit() and at and host == _process_space():
+            if pid.isdigit() and at and host == process_space():
                 return kind, int(pid)
     return None
 
@@ -154,7 +154,7 @@ class StagedFolder:
 
     def _sibling(self, kind: str) -> Path:
         return self.target.parent / (f".{_folder_stem(self.target)}.{kind}-{os.getpid()}@"
-                                     f"{_process_space()}.{secrets.token_hex(4)}")
+                                     f"{process_space()}.{secrets.token_hex(4)}")
 
     def _begin(self, seed: bool) -> None:
         path = self._sibling("partial")
@@ -199,7 +199,7 @@ class StagedFolder:
                         os.rename(aside, self.target)
                     raise
             except OSError as exc:
-                raise FileError(f"cannot put the new folder in place: {_reason(exc)}",
+                raise FileError(f"cannot put the new folder in place: {os_reason(exc)}",
                                 source=str(self.final)) from None
             _ours.discard(str(staging))
             self.commits += 1

@@ -289,7 +289,7 @@ def test_a_write_removes_the_temporary_files_of_killed_runs_and_only_theirs(tmp_
     left = [p.name for p in tmp_path.iterdir() if p.name != "part.ply"]
     assert len(left) == 1 and left[0].startswith(".part.ply.") and left[0].endswith(".tmp")
     # pytest's parent: running
-    live = tmp_path / f".part.ply.{os.getppid()}@{_io._process_space()}-abcd1234.tmp"
+    live = tmp_path / f".part.ply.{os.getppid()}@{_io.process_space()}-abcd1234.tmp"
     live.write_text("being written")
     _io.write_atomic(part, "new")
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["part.ply", live.name])

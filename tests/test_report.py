@@ -11,7 +11,7 @@ from argparse import Namespace
 import numpy as np
 import pytest
 
-from machinesim._io import _process_space
+from machinesim._io import process_space
 from machinesim._staged import StagedFolder, clear_stale_folders
 from machinesim.exceptions import InputError
 from machinesim.report import ReportFolder, check_summary, check_units
@@ -192,11 +192,11 @@ def test_a_stale_staging_folder_of_a_killed_run_is_removed(tmp_path):
     out = tmp_path / "report"
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                           capture_output=True, text=True, check=True).stdout.strip()
-    stale = tmp_path / f".report.partial-{dead}@{_process_space()}.0badf00d"
+    stale = tmp_path / f".report.partial-{dead}@{process_space()}.0badf00d"
     stale.mkdir()
     (stale / "half.ply").write_text("half")
     # killed in the middle of a swap: the previous report aside, none under the name
-    aside = tmp_path / f".report.old-{dead}@{_process_space()}.0badf00d"
+    aside = tmp_path / f".report.old-{dead}@{process_space()}.0badf00d"
     aside.mkdir()
     (aside / "summary.json").write_text('{"files": ["summary.json"]}')
     clear_stale_folders(out)
