@@ -138,8 +138,8 @@ def test_a_move_of_more_than_a_day_is_noted_with_its_line_and_feed():
      f"F0.001 (inch/min under G20; {0.001 * 745.16 ** 0.5 / 101 ** 0.5:.6g} mm/min or "
      "deg/min)"),
     # G21 and G20 both before the move: Program.unit_words keeps their first lines only, so
-    # which is in force is not known; both readings (37.1 mm at 0.00254 mm/min)
-    ("G90 G21\nG01 X1. F100.\nG20\nG01 X1.5 F0.0001\nM30\n", 0.6 + 37.1 / 0.00254 * 60,
+    # which is in force is not known; both readings (38.1 mm at 0.00254 mm/min)
+    ("G90 G21\nG20\nG01 X1.5 F0.0001\nM30\n", 38.1 / 0.00254 * 60,
      "F0.00254 (mm/min or deg/min), or F0.0001 (inch/min) if written under G20"),
 ])
 def test_a_slow_move_under_g20_is_noted_with_its_f_as_the_program_wrote_it(text, duration,

@@ -43,7 +43,7 @@ N5 G91 X-0.5 C45.
 N6 G04 P1500
 N7 G4 X0.25 (seconds)
 N8 G90 G55 G00 X0 C0
-N9 G20 G01 Y1. F10.
+N9 G01 Y1. F10.
 N10 M09
 N11 G21 G91 Z -1 M05
 N12 M30
@@ -63,7 +63,7 @@ def test_hand_written_program_gives_hand_computed_si_values():
     cut = (0.0225, -0.00325, 0.0055, 0.0)
     turned = (0.022, -0.00325, 0.0055, 45 * DEG)
     g55 = (-0.020, -0.00325, 0.0055, 90 * DEG)
-    inch = (-0.020, 0.0254, 0.0055, 90 * DEG)
+    y1 = (-0.020, 0.001, 0.0055, 90 * DEG)
     expected = [
         ("rapid", start, None, 0.0, 5, 2, (3,)),
         ("linear", (0.010, 0.0, 0.0055, 0.0), 60 * MM_PER_MIN, 0.0, 6, 3, ()),
@@ -72,9 +72,9 @@ def test_hand_written_program_gives_hand_computed_si_values():
         ("dwell", turned, None, 1.5, 9, 6, ()),
         ("dwell", turned, None, 0.25, 10, 7, ()),
         ("rapid", g55, None, 0.0, 11, 8, ()),
-        ("linear", inch, 10 * INCH_PER_MIN, 0.0, 12, 9, ()),
-        ("dwell", inch, None, 0.0, 13, 10, (9,)),
-        ("linear", (-0.020, 0.0254, 0.0045, 90 * DEG), 10 * INCH_PER_MIN, 0.0, 14, 11, (5,)),
+        ("linear", y1, 10 * MM_PER_MIN, 0.0, 12, 9, ()),
+        ("dwell", y1, None, 0.0, 13, 10, (9,)),  # G21 again after the moves: the same unit
+        ("linear", (-0.020, 0.001, 0.0045, 90 * DEG), 10 * MM_PER_MIN, 0.0, 14, 11, (5,)),
     ]
     assert len(program) == len(expected)
     assert program.number == 100
@@ -95,19 +95,24 @@ def test_hand_written_program_gives_hand_computed_si_values():
 
 
 def test_integer_input_rules():
-    text = "G00 X10 Z1. A5 C2.\nG20 X10 Y.5\nG04 X500\nG04 X0.5\n"
+    text = "G00 X10 Z1. A5 C2.\nX12 Y.5\nG04 X500\nG04 X0.5\n"
     calculator = parse_program(text).moves
     increment = parse_program(text, integer_input="increment").moves
+    inch = "G20\nG00 X10 Y.5\n"  # the units at the head: a switch after a move is refused
     # Calculator: X10 is 10 mm, A5 is 5 deg, X10 under G20 is 10 inch, G04 X500 is 500 s.
     assert calculator[0].target["X"] == pytest.approx(0.010, abs=EXACT_M)
     assert calculator[0].target["A"] == pytest.approx(5 * DEG, abs=EXACT_RAD)
-    assert calculator[1].target["X"] == pytest.approx(0.254, abs=EXACT_M)
+    assert calculator[1].target["X"] == pytest.approx(0.012, abs=EXACT_M)
+    assert parse_program(inch).moves[0].target["X"] == pytest.approx(0.254, abs=EXACT_M)
     assert calculator[2].dwell_s == 500.0
     # Increment: 10 x 1 nm, 5 x 0.00001 deg, 10 x 0.0000001 inch, 500 ms; words with a
     # decimal point read the same in both modes.
     assert increment[0].target["X"] == pytest.approx(10e-9, abs=1e-20)
     assert increment[0].target["A"] == pytest.approx(5e-5 * DEG, abs=1e-20)
-    assert increment[1].target["X"] == pytest.approx(10 * 1e-7 * 0.0254, abs=1e-20)
+    assert increment[1].target["X"] == pytest.approx(12e-9, abs=1e-20)
+    inch_increment = parse_program(inch, integer_input="increment").moves[0].target
+    assert inch_increment["X"] == pytest.approx(10 * 1e-7 * 0.0254, abs=1e-20)
+    assert inch_increment["Y"] == pytest.approx(0.5 * 0.0254, abs=EXACT_M)
     assert increment[2].dwell_s == 0.5
     for a, b in zip(calculator, increment, strict=True):
         for axis in ("Z", "C", "Y"):
@@ -141,14 +146,18 @@ def test_integer_input_in_fanuc_increment_systems_and_the_words_read_so():
     # IS-B: 0.001 mm, 0.0001 inch, 0.001 deg; IS-C: a tenth of each. The plain lines take the
     # vectorised path, the arc the block-by-block one: both apply the rule and keep the
     # letters written without a point, with their first lines (zero and pointed ones not).
-    text = "G00 X0 Z1.\nG01 X10 Y0 A5 F100.\nG02 X0. Y0. R5\nG20 G01 X10\nG04 X500\n"
+    text = "G00 X0 Z1.\nG01 X10 Y0 A5 F100.\nG02 X0. Y0. R5\nG01 X10\nG04 X500\n"
     # G04 X500: 500 x 0.001 s under IS-B, 500 x 0.0001 s under IS-C (`words.DWELL_INCREMENT_S`)
     for rule, mm, deg, s in (("is-b", 1e-6, 1e-3, 1e-3), ("is-c", 1e-7, 1e-4, 1e-4)):
         program = parse_program(text, integer_input=rule)
         moves = program.moves
         assert moves[1].target["X"] == pytest.approx(10 * mm, rel=1e-15)
         assert moves[1].target["A"] == pytest.approx(5 * deg * DEG, rel=1e-15)
-        assert moves[-2].target["X"] == pytest.approx(10 * mm * 0.1 * 25.4, rel=1e-15)
+        assert moves[-2].target["X"] == pytest.approx(10 * mm, rel=1e-15)
+        # the inch increment a tenth of the mm one in inches (G20 at the head: after a move
+        # the switch is refused)
+        inch = parse_program("G20\nG01 X10 F1.\n", integer_input=rule).moves[0]
+        assert inch.target["X"] == pytest.approx(10 * mm * 0.1 * 25.4, rel=1e-15)
         assert moves[-1].dwell_s == pytest.approx(500 * s, rel=1e-15)
         assert program.integer_input == rule
         assert dict(program.integer_words) == {"X": 2, "A": 2, "R": 3}

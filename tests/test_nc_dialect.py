@@ -669,6 +669,44 @@ def test_a_subprogram_restating_the_units_in_force_is_read(main, code, unit):
                                                            abs=EXACT_M)
 
 
+#: The main program's unit switches after its first motion, each with its line, column, the
+#: line of that motion and the units from and to.
+SWITCHES_AFTER_MOTION = [
+    ("G21\nG01 X1. F100.\nG20\nG01 X1.\nM30\n", 3, 1, 2, "G20", "mm", "inch"),
+    ("G20\nG00 X1.\nG21 G01 X2. F10.\nM30\n", 3, 1, 2, "G21", "inch", "mm"),
+    ("G04 P100\nG00 X1.\nG20\nM30\n", 3, 1, 2, "G20", "mm", "inch"),  # a dwell no motion
+    # the first motion in a subprogram the main program called
+    ("O1\nM98 P100\nG20\nM30\nO100\nG00 X1.\nM99\n", 3, 1, 6, "G20", "mm", "inch"),
+    # the first motions on the vectorised path (a run of simple lines)
+    ("G00 X0\n" + "".join(f"G01 X{k}. F100.\n" for k in range(20)) + "N5 G20\n", 22,
+     4, 1, "G20", "mm", "inch"),
+]
+
+
+@pytest.mark.parametrize(("text", "line", "column", "moved", "code", "was", "now"),
+                         SWITCHES_AFTER_MOTION)
+def test_a_main_program_switching_g20_g21_after_a_motion_is_refused_naming_its_line(
+        text, line, column, moved, code, was, now):
+    # the switch had been taken: the moves before it read in one unit, those after in the
+    # other (G21 X1. then G20 X1.: 1 mm, then 25.4 mm); FANUC wants the units at the head
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text, "prog.nc")
+    assert str(info.value) == (
+        f"prog.nc, line {line}, column {column}, key '{code}': {code} switches the units from "
+        f"{was} to {now} after the first motion (line {moved}), whose moves were read in "
+        f"{was}: FANUC forbids switching G20/G21 within a program; select the units once, at "
+        "the head of the program, before any motion")
+
+
+def test_units_selected_before_any_motion_or_restated_after_it_are_read():
+    # switched and repeated before the first motion (after a dwell), restated after it
+    text = "G21\nG04 P100\nG20\nG20\nG01 X1. F10.\nG20 X2.\nM30\n"
+    program = parse_program(text)
+    assert program.targets[1:, 0].tolist() == pytest.approx([25.4 * MM, 50.8 * MM],
+                                                            abs=EXACT_M)
+    assert dict(program.unit_words) == {"G21": 1, "G20": 3}
+
+
 def test_subprogram_layout_refusals():
     with pytest.raises(NCProgramError, match="has no M99"):
         parse_program("O1\nM30\nO2\nG00 X0\n")
@@ -739,12 +777,13 @@ def test_programs_pickle_and_copy():
 def test_the_units_a_program_selects_are_kept_with_their_first_lines():
     import pickle
 
-    both = parse_program("G90\nG20 G0 X1.\nG21\nX2.\nG20 X3.\n")
-    assert dict(both.unit_words) == {"G20": 2, "G21": 3}
-    assert both.targets[:, 0].tolist() == pytest.approx([25.4e-3, 2e-3, 76.2e-3], rel=1e-15)
+    # before the first motion (a switch after it is refused: the test above)
+    both = parse_program("G90\nG21\nG20\nG20 G0 X1.\nG20 X3.\n")
+    assert dict(both.unit_words) == {"G21": 2, "G20": 3}
+    assert both.targets[:, 0].tolist() == pytest.approx([25.4e-3, 76.2e-3], rel=1e-15)
     assert dict(parse_program("G0 X1.\nX2.\n").unit_words) == {}  # read in mm
     back = pickle.loads(pickle.dumps(both))
-    assert back == both and dict(back.unit_words) == {"G20": 2, "G21": 3}
+    assert back == both and dict(back.unit_words) == {"G21": 2, "G20": 3}
     # the same moves with and without G21 are different texts of one part
     assert parse_program("G21\nG0 X1.\n") != parse_program("\nG0 X1.\n")
 

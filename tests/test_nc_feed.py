@@ -40,7 +40,7 @@ def _refusal(text: str, **options) -> NCProgramError:
     ("G73 X1. Z-1. R1. Q0.5", "G73", 1),
     ("G83 X1. Z-1. R1. Q0.5", "G83", 1),
     ("G98 G83 X1. Z-1. R1. I0.5 J0.1 K0.2", "G83", 5),
-    ("G20 G82 X1. Z-1. R1. P10", "G82", 5),
+    ("G21 G82 X1. Z-1. R1. P10", "G82", 5),
 ])
 def test_a_feed_move_with_no_f_in_force_is_refused_naming_line_and_code(block, code, column):
     error = _refusal(START + block + "\nM30\n")

@@ -34,6 +34,7 @@ from machinesim.nc.words import (
     OTHER_CYCLES,
     SINGLE,
     SLOWEST_FEED_M_PER_S,
+    UNITS_AFTER_MOTION,
     UNITS_IN_SUBPROGRAM,
     CallProblem,
     call_of,
@@ -200,9 +201,15 @@ class Block:
         state, g, line = self.state, self.g_codes, self.line
         if "units" in g:
             code, word = g["units"]
-            if self.depth and state.inch != (code == "G20"):
+            if state.inch != (code == "G20"):
                 was, now = ("inch", "mm") if state.inch else ("mm", "inch")
-                raise self.fail(UNITS_IN_SUBPROGRAM.format(code=code, was=was, now=now), word)
+                if self.depth:
+                    raise self.fail(UNITS_IN_SUBPROGRAM.format(code=code, was=was, now=now),
+                                    word)
+                moved = self.reader.out.first_motion
+                if moved is not None:
+                    raise self.fail(UNITS_AFTER_MOTION.format(code=code, was=was, now=now,
+                                                              moved=moved), word)
             state.inch = code == "G20"
             self.reader.unit_words.setdefault(g["units"][0], line)
         if "distance" in g:

@@ -27,6 +27,7 @@ from machinesim.nc.layout import Layout
 from machinesim.nc.lexer import Word, tokenize
 from machinesim.nc.program import (
     AXES,
+    KIND_DWELL,
     KIND_LINEAR,
     ROTARY_AXES,
     FrozenMapping,
@@ -143,6 +144,7 @@ class _Output:
         self.m_codes: dict[int, tuple[int, ...]] = {}
         self.stops: list[np.ndarray] = []  # indices of moves that end in an exact stop
         self.count = 0
+        self.first_motion: int | None = None  # the line of the first move that is no dwell
 
     def add(self, kind: int, target: Mapping[str, float], feed: float | None, dwell: float,
             line: int, block: int | None, spindle: float | None) -> None:
@@ -155,11 +157,17 @@ class _Output:
         spindles.append(math.nan if spindle is None else spindle)
         blocks.append(-1 if block is None else block)
         self.count += 1
+        if self.first_motion is None and kind != KIND_DWELL:
+            self.first_motion = line
 
     def add_arrays(self, *arrays: np.ndarray) -> None:
         self.flush()
         self.chunks.append(arrays)
         self.count += len(arrays[1])
+        if self.first_motion is None:
+            motion = np.flatnonzero(arrays[1] != KIND_DWELL)
+            if motion.size:
+                self.first_motion = int(arrays[4][motion[0]])
 
     def flush(self) -> None:
         rows, kinds, feeds, dwells, lines, spindles, blocks = self.lists

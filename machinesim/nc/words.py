@@ -153,6 +153,12 @@ UNITS_IN_SUBPROGRAM = ("{code} in a subprogram switches the units from {was} to 
                        "forbids switching G20/G21 within a program, and the blocks after the "
                        "M99 would be read in {now}; select the units once, at the head of the "
                        "main program")
+#: The main program's G20/G21 that switches the units after its first motion: the moves
+#: before it were read in the other unit (the same FANUC rule; the switch had been taken).
+UNITS_AFTER_MOTION = ("{code} switches the units from {was} to {now} after the first motion "
+                      "(line {moved}), whose moves were read in {was}: FANUC forbids "
+                      "switching G20/G21 within a program; select the units once, at the "
+                      "head of the program, before any motion")
 
 
 def integer(word: Word) -> int | None:
