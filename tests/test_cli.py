@@ -213,7 +213,9 @@ def test_an_empty_file_or_machine_name_is_refused_as_empty_not_as_the_current_fo
     out = ["--out", tmp_path / "part.ply"]
     cases = [
         (["cut", "", *CUT, *out], "cut", "program", "a file name"),
-        (["cut", GROOVES, *CUT, *out, "--machine", ""], "cut", "--machine", "a name or a path"),
+        # (CUT without its own --machine: an option given twice is refused as such)
+        (["cut", GROOVES, *CUT[2:], *out, "--machine", ""], "cut", "--machine",
+         "a name or a path"),
         (["cut", GROOVES, *CUT, *out, "--errors", ""], "cut", "--errors", "a file name"),
         (["cut", GROOVES, *CUT, *out, "--servo", ""], "cut", "--servo", "a file name"),
         (["cut", GROOVES, *CUT, *out, "--tools", ""], "cut", "--tools", "a file name"),
@@ -1073,6 +1075,53 @@ def test_a_misspelt_option_is_named_with_the_one_meant(argv, hint, capsys):
     code, out, err = run(argv, capsys)
     assert code == 2 and out == ""
     assert err.splitlines()[-1].endswith(hint), err
+
+
+CUT_WORDS = ["cut", "a.nc", "--machine", "grooving_4axis", "--tool", "v:90", "--stock",
+       "block:1x1x1", "--out", "x.ply"]
+CAMPAIGN_WORDS = ["campaign", "tool_rotation_arm", "--trials", "2", "--out", "c"]
+
+
+@pytest.mark.parametrize("argv, refusal", [
+    (CUT_WORDS + ["--tool", "ball:2"], "argument --tool: given 2 times (--tool v:90, "
+     "--tool ball:2); give it once: only the last would count"),
+    (CUT_WORDS + ["--report=r.json", "--repo", "s.json"], "argument --report: given 2 times "
+     "(--report=r.json, --repo s.json); give it once: only the last would count"),
+    (CAMPAIGN_WORDS + ["--seed", "1", "--vary", "a=1", "--seed", "2"], "argument --seed: "
+     "given 2 times (--seed 1, --seed 2); give it once: only the last would count"),
+])
+def test_an_option_given_twice_is_refused_naming_both(argv, refusal, capsys):
+    # argparse kept the last and dropped the others without a word: --seed 1 --seed 2 ran
+    # seed 2
+    code, out, err = run(argv, capsys)
+    assert code == 2 and out == ""
+    assert err.splitlines()[-1].endswith(f"error: {refusal}"), err
+
+
+def test_options_that_add_up_and_switches_may_be_repeated_and_after_double_dash_none():
+    from machinesim.cli import _parser
+
+    args = _parser().parse_args(CUT_WORDS + ["--roi", "0,1,0,1", "--roi", "1,2,1,2",
+                                             "--quiet", "--quiet"])  # a switch: once or twice
+    assert args.roi == ["0,1,0,1", "1,2,1,2"] and args.tool == "v:90" and args.quiet
+    args = _parser().parse_args(CAMPAIGN_WORDS + ["--vary", "a=1", "--vary", "b=2", "--seed", "3"])
+    assert args.vary == ["a=1", "b=2"] and args.seed == 3
+    # a word after -- is no option: a program named --out
+    args = _parser().parse_args(["cut", *CUT_WORDS[2:], "--", "--out"])
+    assert args.program.name == "--out" and args.out.name == "x.ply"
+
+
+def test_a_scenario_refuses_its_seed_given_twice(capsys):
+    from machinesim.scenario_runs import scenario_arguments
+
+    parser = scenario_arguments("a scenario", "out")
+    assert parser.parse_args(["--seed", "1", "--noise", "off"]).seed == 1
+    with pytest.raises(SystemExit) as exited:
+        parser.parse_args(["--seed", "1", "--seed", "2"])
+    assert exited.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1].endswith(
+        "error: argument --seed: given 2 times (--seed 1, --seed 2); give it once: only the "
+        "last would count")
 
 
 def test_a_long_cut_without_a_terminal_logs_its_progress_as_lines(capsys):
