@@ -21,6 +21,8 @@ from machinesim.cam.tool_setting_plates import (
     SET_LENGTH,
     Plan,
     a_grooves,
+    b_depth_range,
+    b_tilt_limit,
     plate_cuts,
 )
 from machinesim.compensation import program_axes
@@ -508,8 +510,8 @@ def test_a_plan_refuses_tilts_eqs_1_2_or_the_b_axis_cannot_take(fields, message)
     assert str(caught.value) == message
 
 
-def test_a_plan_takes_any_two_distinct_tilts_within_the_b_travel():
-    limit = load_machine("robonano_ui").upper[4]  # B, from the URDF
+def test_a_plan_takes_any_two_distinct_tilts_its_b_plate_reads():
+    limit = b_tilt_limit(Plan().b_depth) * (1.0 - 1e-9)
     plan = Plan(theta2=limit, theta3=-limit, theta1=-math.pi / 2)
     assert plan.tilts == (0.0, limit, -limit)
     assert Plan(theta2=np.float64(0.1), theta3=0.2).theta3 == 0.2
@@ -595,16 +597,84 @@ def test_an_end_face_missed_names_where_it_looked_and_the_capture_range():
 
 
 def test_a_plate_read_past_a_plan_names_the_plan_beside_the_capture_range():
-    """Plan(depth=40 um) with the default errors (well inside the capture range): its V is
-    80 um wide, as wide as the profiles that follow the A grooves, which then lose them at
-    5.5 mm. The refusal said only 'the errors may exceed the plan's capture range'; it now
-    names the plan's fields that are not the paper's (depth 35 um is read: tested by hand)."""
-    lab = Lab(MACHINE, errors_of([250 * UM, 350 * UM, 150 * UM], [100 * UM, 850 * UM]),
-              noise=False)
+    """A plan that is not the paper's, with errors beyond the capture range (dx = 2 mm):
+    the refusal names the plan's fields that are not the paper's beside the range (it had
+    said only 'the errors may exceed the plan's capture range'). A plan the layout cannot
+    read within the range (depth 40 um, whose V is as wide as the profiles that follow the
+    A grooves: they lost it at 5.5 mm) is now refused when it is made
+    (test_a_plan_refuses_what_its_plates_cannot_read_naming_the_range)."""
+    lab = Lab(MACHINE, errors_of([2 * MM, 0.0, 0.0], [0.0, 0.0]), noise=False)
     with pytest.raises(InputError) as caught:
-        ToolSetting6Axis(plan=Plan(depth=40 * UM)).measure(lab)
+        ToolSetting6Axis(plan=Plan(depth=39 * UM)).measure(lab)
     assert str(caught.value).endswith(
-        "an end face is a step of the 40 um cut depth); the errors may exceed the plan's "
-        "capture range (|dx|, |dy|, |dz| <= 0.5 mm, |e| <= 1 mm), or the plan's depth = 40 "
+        "an end face is a step of the 39 um cut depth); the errors may exceed the plan's "
+        "capture range (|dx|, |dy|, |dz| <= 0.5 mm, |e| <= 1 mm), or the plan's depth = 39 "
         "um (not the paper's) beyond what the plates' layout and reading windows are sized "
         "for"), str(caught.value)
+
+
+CAPTURE = ("over the capture range |dx|, |dy|, |dz| <= 0.5 mm, |e| <= 1 mm")
+
+
+@pytest.mark.parametrize(("fields", "message"), [
+    # robonano_ui's linear axes: velocity 0.025 m/s in its URDF, 1500 mm/min; F1e7 had been
+    # written into the programs and run at the limit without a word
+    ({"feed_mm_per_min": 1500.001}, "key 'feed_mm_per_min': Expected feed_mm_per_min up to "
+     "1500 mm/min, the velocity limit of robonano_ui's linear axes (its URDF), got 1500 "
+     "mm/min"),
+    ({"depth": 40 * UM}, "key 'depth': Expected depth below 40 um, got 40 um: the 90-deg V of "
+     "depth D is 2 D wide and the profiles that follow the A grooves to their ends are 80 um "
+     "wide (TRACK_WINDOW)"),
+    ({"b_depth": 460 * UM}, "key 'b_depth': Expected b_depth below 450 um, got 460 um: the "
+     "B = 0 groove, 2 D wide, would fill the 0.9 mm profiles across it (B_WINDOW)"),
+    # the B travel is +-100 deg, and 60 deg had been taken; from 45 deg on the V's lower
+    # flank lies on the plate
+    ({"theta2": math.radians(60)}, "key 'theta2': Expected theta2 within +-23.07 deg for "
+     f"b_depth = 40 um (at 60 deg no b_depth, {CAPTURE}), got 1.04719755 rad (60 deg): the "
+     "tilted V reaches beyond the profiles across it where dz = +0.5 mm"),
+    ({"theta3": math.radians(-25)}, "key 'theta3': Expected theta3 within +-23.07 deg for "
+     f"b_depth = 40 um (at 25 deg no b_depth, {CAPTURE}), got -0.436332313 rad (-25 deg): the "
+     "groove is not cut where dz = -0.5 mm"),
+    ({"b_depth": 110 * UM}, "key 'theta2': Expected theta2 within +-19.22 deg for b_depth = "
+     f"110 um (at 20 deg b_depth 30.15 .. 99.94 um, {CAPTURE}), got 0.34906585 rad (20 deg): "
+     "the tilted V reaches beyond the profiles across it where dz = +0.5 mm"),
+])
+def test_a_plan_refuses_what_its_plates_cannot_read_naming_the_range(fields, message):
+    """Depths, tilts and feed had been taken up to the B travel (+-100 deg) and any size:
+    the plates were cut and then a reading found no groove, naming the plan without a
+    bound. Each is refused when the plan is made, with the range that works."""
+    with pytest.raises(InputError) as caught:
+        Plan(**fields)
+    assert str(caught.value) == message
+    assert Plan(feed_mm_per_min=1500.0).feed_mm_per_min == 1500.0
+
+
+def test_the_b_plates_bounds_are_its_grooves_geometry():
+    """By hand, R = 0.5 mm of dz and the 0.45 mm half window: at 20 deg the groove is cut
+    where dz = -R from D = R (1 - cos 20) = 30.154 um, and the tilted V, D + that deep, with
+    its edge R sin 20 = 171.0 um off, reaches D + 30.154 um times tan 65 deg to one side:
+    within 450 um up to D = (450 - 171.01) / 2.1445 - 30.154 = 99.94 um. At D = 40 um the
+    lower bound binds: cos t = 1 - 40 / 500, t = 23.0739 deg (the bisection's)."""
+    lower, upper = b_depth_range(math.radians(20))
+    assert lower == pytest.approx(500 * UM * (1 - math.cos(math.radians(20))), rel=1e-12)
+    assert lower / UM == pytest.approx(30.154, abs=1e-3)
+    assert upper / UM == pytest.approx(99.94, abs=1e-2)
+    assert b_tilt_limit(40 * UM) == pytest.approx(math.acos(1 - 40 / 500), abs=1e-11)
+    assert b_depth_range(math.radians(45)) == (0.0, 0.0) and b_tilt_limit(450 * UM) == 0.0
+
+
+@pytest.mark.parametrize("fields", [
+    {"theta2": math.radians(22), "theta3": math.radians(-22)},  # 23.07 deg the bound
+    {"b_depth": 90 * UM},  # 99.94 um the bound at 20 deg
+    {"depth": 39 * UM},  # below 40 um
+])
+def test_a_plan_within_its_bounds_is_read_at_the_capture_ranges_corners(fields):
+    """The bounds hold over the capture range, not only for the default errors: at its
+    corner (d = (500, -500, +-500) um, e = (600, -800) um, noise off) each of these plans
+    is read. Past them it was not: at 25 deg with dz = -0.5 mm the B plate 'found 0'
+    grooves, at b_depth 110 um with dz = +0.5 mm too (old code, by hand)."""
+    for dz in (500 * UM, -500 * UM):
+        lab = Lab(MACHINE, errors_of([500 * UM, -500 * UM, dz], [600 * UM, -800 * UM]),
+                  noise=False)
+        readings = ToolSetting6Axis(plan=Plan(**fields)).measure(lab)
+        assert len(readings.b) == 3

@@ -44,11 +44,11 @@ from machinesim.tolerances import SIDEWAYS_WARN_RAD
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = [
-    "A_REACH", "A_SETS", "B_GROOVE_X", "CAPTURE_RANGE", "CENTRE_RANGE", "C_TURNS", "MACHINE",
-    "MARK_HALF",
+    "A_REACH", "A_SETS", "B_GROOVE_X", "B_WINDOW", "CAPTURE_RANGE", "CENTRE_RANGE", "C_TURNS",
+    "MACHINE", "MARK_HALF",
     "MARK_X", "OFFSET_RANGE", "PARKED", "Plan", "PlateCut", "SET_LENGTH", "TOUCH_COUNT",
-    "TOUCH_SEGMENT", "TOUCH_STEP", "TOUCH_TOP", "TRIANGLE_HALF", "TRIANGLE_R", "a_grooves",
-    "mark_point", "plate_cuts",
+    "TOUCH_SEGMENT", "TOUCH_STEP", "TOUCH_TOP", "TRACK_WINDOW", "TRIANGLE_HALF", "TRIANGLE_R",
+    "a_grooves", "b_depth_range", "b_tilt_limit", "mark_point", "plate_cuts",
 ]
 
 #: Capture range of the plan: the layout below keeps every groove inside its microscope
@@ -96,8 +96,16 @@ C_TURNS = (0.0, 2.0 * math.pi / 3.0, 4.0 * math.pi / 3.0)
 #: profiles at -2 .. 2 mm and 4.5 mm from the other sides) and its half length in y.
 MARK_X, MARK_HALF = 3.5 * M_PER_MM, 1.2 * M_PER_MM
 #: The machine the plates are written for: a `Plan`'s A and B angles must lie within its
-#: travel (its URDF's joint limits).
+#: travel (its URDF's joint limits), its feed within its linear axes' velocity limit.
 MACHINE = "robonano_ui"
+#: Half width (m) of the profiles that follow each A groove out to its end (read by
+#: `machinesim.procedures.tool_setting_6axis_reading`): a 90-deg V of depth D is 2 D wide,
+#: so a `Plan`'s ``depth`` must stay below it (with the default errors 39 um is read, 40 um,
+#: as wide as these profiles, is not).
+TRACK_WINDOW = 40 * M_PER_UM
+#: Half width (m) of the profiles across the B grooves (1 mm apart): the room a groove has
+#: there, whatever its tilt (`b_depth_range`).
+B_WINDOW = 0.45 * M_PER_MM
 
 
 @dataclass(frozen=True)
@@ -107,22 +115,28 @@ class Plan:
     Attributes
     ----------
     depth : float
-        Depth of cut D of the A- and C-axis grooves (m).
+        Depth of cut D of the A- and C-axis grooves (m), below `TRACK_WINDOW` (40 um).
     b_depth : float
-        Depth of cut D of the B-axis grooves (m): a tilt theta adds dZ (1 - cos theta), up to
-        33 um at 20 deg, and the low flank of the tilted V ends 120 um above the edge.
+        Depth of cut D of the B-axis grooves (m): with each tilt, within `b_depth_range`
+        (30.2 .. 99.9 um at +-20 deg; below `B_WINDOW` at B = 0).
     theta1, theta2, theta3 : float
         A angle that turns the cutting direction onto Y (+-90 or +-270 deg, within
         `tolerances.SIDEWAYS_WARN_RAD`), and the two B tilts (rad), each within the travel
-        of `MACHINE` (its URDF: A +-360 deg, B +-100 deg). Eqs 1-2 need
-        the tilts non-zero and distinct (`b_tilt_determinant`); all three are checked when
-        the plan is made (`InputError` naming the field).
+        of `MACHINE` (its URDF: A +-360 deg, B +-100 deg) and within `b_tilt_limit` of
+        ``b_depth`` (+-23.07 deg at 40 um). Eqs 1-2 need the tilts non-zero and distinct
+        (`b_tilt_determinant`).
     feed_mm_per_min : float
-        Cutting feed.
+        Cutting feed, up to the velocity limit of `MACHINE`'s linear axes (its URDF: 0.025
+        m/s, 1500 mm/min).
+
+    Every field is checked when the plan is made (`InputError` naming the field and the
+    range that works), not when a plate is read minutes later.
 
     Notes
     -----
-    The plate layout (module constants) is sized for the defaults and the capture range.
+    The plate layout (module constants) is sized for the defaults and the capture range;
+    the bounds on depths and tilts are what keeps every groove cut and within its reading
+    window over the whole capture range (|dz| <= `OFFSET_RANGE`).
     """
 
     depth: float = 10 * M_PER_UM
@@ -138,6 +152,7 @@ class Plan:
                                                      unit=unit))
         for name, axis in (("theta1", "A"), ("theta2", "B"), ("theta3", "B")):
             _check_angle(name, getattr(self, name), axis)
+        _check_sizes(self)
         # The B grooves run along Y and the V tool cuts along its own X, Rz(theta1) x at A =
         # theta1: any other theta1 drags the edge sideways (at 0 along its own plane, which
         # removes nothing: the B plate was then read as "the errors may exceed the capture
@@ -159,6 +174,8 @@ class Plan:
                 f"Expected {expected}: eqs 1-2 of paper 001 take dX and dZ from the depth "
                 f"changes at two distinct non-zero tilts, got theta2 = {_angle(self.theta2)}, "
                 f"theta3 = {_angle(self.theta3)}", key=name)
+        for name in ("theta2", "theta3"):
+            _check_tilt(name, getattr(self, name), self.b_depth)
 
     @property
     def tilts(self) -> tuple[float, float, float]:
@@ -168,6 +185,101 @@ class Plan:
 
 def _angle(value: float) -> str:
     return f"{value:.9g} rad ({math.degrees(value):.6g} deg)"
+
+
+def b_depth_range(tilt: float) -> tuple[float, float]:
+    """(lower, upper) (m), exclusive, of the B plate's depth of cut D for which a groove at
+    B = ``tilt`` (rad) is cut and read over the whole capture range (|dz| <= R,
+    `OFFSET_RANGE`); lower >= upper where no D is.
+
+    The B grooves are cut with dx, dy compensated and Z touched off at B = 0 (a work
+    offset that B does not turn), so at B = t the edge lies dz sin t across the groove and
+    dz (1 - cos t) deeper than at B = 0 (docs/procedures/tool_setting_6axis.md, stage 3):
+
+    - cut at all where dz = -R: D - R (1 - cos t) > 0 (the lower bound);
+    - within its profiles' half width `B_WINDOW` where dz = +R: the 90-deg V tilted by t,
+      d = D + R (1 - cos t) deep, reaches d tan(45 deg + |t|) to its lower flank's side of
+      the edge, which lies R sin|t| off: R sin|t| + d tan(45 deg + |t|) < B_WINDOW (the
+      upper bound). From 45 deg on the lower flank lies on the plate: no D.
+
+    The grooves are 1 mm apart, so a groove within its own window stays out of the next
+    one's. Measured at the capture's corner (dx, dy, dz = 500, -500, +-500 um, e = 600,
+    -800 um; noise off): at 20 deg D = 90 um is read and 110 um is not (here 99.9 um), at
+    D = 40 um 22 deg is read and 25 deg is not (here 23.07 deg).
+    """
+    t = abs(float(tilt))
+    if t >= 0.25 * math.pi:
+        return (0.0, 0.0)
+    sag = OFFSET_RANGE * (1.0 - math.cos(t))
+    return (sag, (B_WINDOW - OFFSET_RANGE * math.sin(t)) / math.tan(0.25 * math.pi + t) - sag)
+
+
+def b_tilt_limit(b_depth: float) -> float:
+    """The largest |B| (rad) at which a groove ``b_depth`` (m) deep is cut and read over the
+    capture range (`b_depth_range`; bisected to 1e-12 rad: the lower bound grows and the
+    upper one falls with the tilt); 0 where even B = 0 is not."""
+    def fits(t):
+        lower, upper = b_depth_range(t)
+        return lower < b_depth < upper
+
+    if not fits(0.0):
+        return 0.0
+    low, high = 0.0, 0.25 * math.pi
+    while high - low > 1e-12:
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if fits(middle) else (low, middle)
+    return low
+
+
+def _check_sizes(plan: Plan) -> None:
+    """A `Plan`'s feed within `MACHINE`'s linear axes' velocity limit, its depth below
+    `TRACK_WINDOW` and its B depth below `B_WINDOW`."""
+    limit = _feed_limit()
+    if plan.feed_mm_per_min > limit:
+        raise InputError(f"Expected feed_mm_per_min up to {limit:g} mm/min, the velocity "
+                         f"limit of {MACHINE}'s linear axes (its URDF), got "
+                         f"{plan.feed_mm_per_min:g} mm/min", key="feed_mm_per_min")
+    if not plan.depth < TRACK_WINDOW:
+        raise InputError(f"Expected depth below {TRACK_WINDOW / M_PER_UM:g} um, got "
+                         f"{plan.depth / M_PER_UM:g} um: the 90-deg V of depth D is 2 D wide "
+                         f"and the profiles that follow the A grooves to their ends are "
+                         f"{2.0 * TRACK_WINDOW / M_PER_UM:g} um wide (TRACK_WINDOW)",
+                         key="depth")
+    if not plan.b_depth < B_WINDOW:
+        raise InputError(f"Expected b_depth below {B_WINDOW / M_PER_UM:g} um, got "
+                         f"{plan.b_depth / M_PER_UM:g} um: the B = 0 groove, 2 D wide, would "
+                         f"fill the {2.0 * B_WINDOW / M_PER_MM:g} mm profiles across it "
+                         "(B_WINDOW)", key="b_depth")
+
+
+def _check_tilt(name: str, tilt: float, b_depth: float) -> None:
+    """A B tilt at which a groove ``b_depth`` deep is cut and read over the capture range
+    (`b_depth_range`): else refused with the tilts that are, and the depths that are at
+    this tilt."""
+    lower, upper = b_depth_range(tilt)
+    if lower < b_depth < upper:
+        return
+    depths = (f"at {abs(math.degrees(tilt)):g} deg b_depth {lower / M_PER_UM:.4g} .. "
+              f"{upper / M_PER_UM:.4g} um" if lower < upper else
+              f"at {abs(math.degrees(tilt)):g} deg no b_depth")
+    reach = f"{OFFSET_RANGE / M_PER_MM:g} mm"
+    where = (f"the groove is not cut where dz = -{reach}" if b_depth <= lower else
+             f"the tilted V reaches beyond the profiles across it where dz = +{reach}")
+    raise InputError(f"Expected {name} within +-{math.degrees(b_tilt_limit(b_depth)):.4g} deg "
+                     f"for b_depth = {b_depth / M_PER_UM:g} um ({depths}, over the capture "
+                     f"range {CAPTURE_RANGE}), got {_angle(tilt)}: {where}", key=name)
+
+
+@lru_cache(maxsize=1)
+def _feed_limit() -> float:
+    """The slowest velocity limit of `MACHINE`'s linear axes (its URDF), mm/min: a feed
+    move along any of them runs no faster."""
+    from machinesim.machines import load_machine
+
+    machine = load_machine(MACHINE)
+    rates = [float(rate) for rate, rotary in zip(machine.rapid_rate, machine.rotary,
+                                                 strict=True) if not rotary]
+    return min(rates) * 60.0 / M_PER_MM
 
 
 @lru_cache(maxsize=1)

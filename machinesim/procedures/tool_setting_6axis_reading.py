@@ -17,6 +17,7 @@ import numpy as np
 
 from machinesim.cam.tool_setting_plates import (
     B_GROOVE_X,
+    B_WINDOW,
     C_TURNS,
     CAPTURE_RANGE,
     OFFSET_RANGE,
@@ -26,6 +27,7 @@ from machinesim.cam.tool_setting_plates import (
     TOUCH_SEGMENT,
     TOUCH_STEP,
     TOUCH_TOP,
+    TRACK_WINDOW,
     TRIANGLE_R,
     Plan,
     a_grooves,
@@ -72,15 +74,16 @@ A_WINDOW = 2.75 * M_PER_MM
 #: was last seen. The step is not a round number, so that round settings do not put an end
 #: on a station, where the registration's few micrometres would decide whether the station
 #: sees the groove (and so how many stage draws the later profiles take).
-TRACK_STEP, TRACK_WINDOW, TRACK_MARGIN = 0.47 * M_PER_MM, 40 * M_PER_UM, 0.1 * M_PER_MM
+#: (TRACK_WINDOW is the layout's: `Plan` keeps the V narrower than these profiles.)
+TRACK_STEP, TRACK_MARGIN = 0.47 * M_PER_MM, 0.1 * M_PER_MM
 #: The end face is read on a profile along the centre line at the instrument's spacing,
 #: then zoomed in to +-ZOOM at FINE_SPACING: the face is vertical (zero-thickness edge
 #: profile), so its position is known to half the spacing, 0.025 nm, whatever the height noise.
 ZOOM, FINE_SPACING = 0.5 * M_PER_UM, 0.05e-9
-#: Half windows (m) across the B grooves (1 mm apart), across the triangle's sides and
-#: across the C plate's reference mark (cut with dx, dy compensated: within a few um of its
-#: place, and 3.5 mm from the nearest other groove along its profiles).
-B_WINDOW, C_WINDOW, MARK_WINDOW = 0.45 * M_PER_MM, 2.0 * M_PER_MM, 0.5 * M_PER_MM
+#: Half windows (m) across the triangle's sides and across the C plate's reference mark (cut
+#: with dx, dy compensated: within a few um of its place, and 3.5 mm from the nearest other
+#: groove along its profiles); the B grooves' is the layout's (`B_WINDOW`).
+C_WINDOW, MARK_WINDOW = 2.0 * M_PER_MM, 0.5 * M_PER_MM
 #: Sample pitch of the profiles across grooves: the microscope's 0.3 um less (1 - 0.618) nm.
 #: At a whole number of nanometres every sample of a 45-deg flank would sit at the same phase
 #: of the 1 nm height display, all would round alike and the fitted centre would snap to
