@@ -4,7 +4,7 @@ and told.
 A Ctrl-C (SIGINT), a ``kill`` (SIGTERM) or a closed terminal (SIGHUP) within
 `ctrl_c_remembered` is raised as a KeyboardInterrupt (`Terminated` for SIGTERM, `HungUp` for
 SIGHUP) and remembered, so that `machinesim._io` and `machinesim._staged` write nothing
-after it even when a library swallowed it; `_ctrl_c_deferred` holds one back until a rename
+after it even when a library swallowed it; `ctrl_c_deferred` holds one back until a rename
 or a folder swap is done; `stopped` names the stop and its exit status.
 """
 
@@ -119,7 +119,7 @@ def written_before(stop: KeyboardInterrupt, nothing: str = "nothing was written"
 
 
 @contextmanager
-def _ctrl_c_deferred() -> Iterator[None]:
+def ctrl_c_deferred() -> Iterator[None]:
     """Within the block a Ctrl-C (or SIGTERM) is held back, and raised (by the handler that
     was there) on leaving it: a folder swap is never left half done. Only in the main
     thread, where the handlers can be set, and only for a signal with a Python handler;

@@ -22,7 +22,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from machinesim import _interrupts
-from machinesim._interrupts import _ctrl_c_deferred
+from machinesim._interrupts import ctrl_c_deferred
 from machinesim.exceptions import FileError, InputError
 
 #: Longest file name component (bytes) where the file system does not say (POSIX NAME_MAX).
@@ -389,7 +389,7 @@ def write_together(items: Iterable[tuple[object, bytes | str]], encoding: str = 
         # old files' second names are done: one landing between a rename and its record
         # left the new file without its old one and the first put back (a report beside
         # another run's part), and one in the removals left .NAME.old files behind
-        with _ctrl_c_deferred():
+        with ctrl_c_deferred():
             _rename_all(staged)
             if _interrupts._written is not None:  # within: a stop held till now is told so
                 _interrupts._written.extend(str(path) for path, _ in staged)

@@ -36,7 +36,7 @@ from concurrent.futures.process import BrokenProcessPool
 import numpy as np
 
 from machinesim._cores import usable_cores
-from machinesim._interrupts import _ctrl_c_deferred, sigint_blocked
+from machinesim._interrupts import ctrl_c_deferred, sigint_blocked
 from machinesim.exceptions import InputError, MachineSimError
 
 __all__ = ["WorkerDied", "check_jobs", "in_processes"]
@@ -174,7 +174,7 @@ def in_processes(function: Callable, items: Sequence, jobs: int, *,
                     done(i, seconds)
     except BaseException:  # Ctrl-C, SIGTERM (Terminated), a worker's error
         if pool is not None:
-            with _ctrl_c_deferred():  # a second Ctrl-C waits until every worker is gone
+            with ctrl_c_deferred():  # a second Ctrl-C waits until every worker is gone
                 _stop(pool)
         raise
     pool.shutdown(wait=True)

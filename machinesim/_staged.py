@@ -15,7 +15,7 @@ import shutil
 from pathlib import Path
 
 from machinesim import _interrupts
-from machinesim._interrupts import _ctrl_c_deferred
+from machinesim._interrupts import ctrl_c_deferred
 from machinesim._io import TEMP_STEM, os_reason, pid_alive, process_space
 from machinesim.exceptions import FileError, InputError, MachineSimError
 
@@ -186,7 +186,7 @@ class StagedFolder:
         if _interrupts._ctrl_c_seen:
             raise KeyboardInterrupt
         staging = self.path
-        with _ctrl_c_deferred():
+        with ctrl_c_deferred():
             aside = None
             try:
                 if os.path.lexists(self.target):

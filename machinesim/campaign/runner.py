@@ -23,7 +23,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from machinesim._cores import usable_cores
-from machinesim._interrupts import _ctrl_c_deferred, sigint_blocked
+from machinesim._interrupts import ctrl_c_deferred, sigint_blocked
 from machinesim.campaign.distributions import Distribution, parse_distribution, parse_vary
 from machinesim.campaign.preflight import check_before_trials
 from machinesim.campaign.results import (
@@ -263,7 +263,7 @@ def _client(workers, scheduler, client, trials: int | None = None):
         environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
         environ.pop("MALLOC_TRIM_THRESHOLD_", None)
         with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}), \
-                _ctrl_c_deferred(), sigint_blocked():
+                ctrl_c_deferred(), sigint_blocked():
             # A Ctrl-C while the workers start waits until the cluster stands, and then
             # closes it (below); the workers start with SIGINT blocked, so that the
             # terminal's Ctrl-C, which reaches its whole process group, reaches none of them
