@@ -98,8 +98,12 @@ def _relative_pose(rw, pw, rt, pt, out: np.ndarray) -> None:
 def _slope(component, x):
     """d value / d position of a component error at ``x`` (a position or an array of them;
     right slope at a table breakpoint; zero beyond the ends, where the table is held
-    constant)."""
+    constant; a rotary table of a whole turn, `machinesim.errors.turns.each_turn`, read a
+    whole number of turns back into it, as its value is)."""
     x = np.asarray(x, dtype=np.float64)
+    into = getattr(component, "into", None)
+    if into is not None:  # beyond such a table the slope had been zero, not the turn's
+        x, component = into(x), component.component
     if component.kind == "poly":
         return np.polynomial.polynomial.polyval(
             x, np.polynomial.polynomial.polyder(component.values))

@@ -290,6 +290,27 @@ def test_axis_jacobian_matches_central_differences():
         np.testing.assert_allclose(jac[:, i], fd, rtol=0, atol=1e-8)
 
 
+@pytest.mark.parametrize("c_deg", [100.0, -100.0, -300.0, 340.0])
+def test_axis_jacobian_of_a_whole_turn_table_beyond_it_is_the_turns_slope(c_deg):
+    """A rotary table of a whole turn repeats each turn (`each_turn`), its slope too: at
+    C = -100 deg a 0 .. 360 deg table of EXC is read at 260 deg. Its slope there had been
+    zero (held constant beyond the ends): the C column was 2.2e-6 and 2.5e-6 m/rad off the
+    central difference at -100 and -300 deg, by Pinocchio and the batched evaluator alike."""
+    machine = load_machine("grooving_4axis")
+    positions = np.radians(np.arange(0.0, 361.0, 45.0))
+    table = ComponentError("table", positions, 5 * UM * np.sin(positions))
+    errors = ErrorModel(component={"C": {"EXC": table, "EYC": table}})
+    q = np.array([10 * MM, -4 * MM, 0.0, math.radians(c_deg)])
+    h = 1e-6  # within one segment of the table
+    dq = np.array([0.0, 0.0, 0.0, h])
+    fd = _pose_difference(machine.tool_pose(q + dq, errors),
+                          machine.tool_pose(q - dq, errors)) / (2 * h)
+    _, batched = machine.kin.pose_jacobians(q[None], machine.binding(errors))
+    for jac in (machine.axis_jacobian(q, errors), batched[0]):
+        np.testing.assert_allclose(jac[:3, 3], fd[:3], rtol=0, atol=1e-10)
+        np.testing.assert_allclose(jac[3:, 3], fd[3:], rtol=0, atol=1e-8)
+
+
 @pytest.mark.parametrize("name", MACHINES)
 def test_batched_jacobians_are_pinocchios_one_by_one(name):
     """The batched screw columns (component errors' slopes included) against Pinocchio's

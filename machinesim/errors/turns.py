@@ -58,16 +58,17 @@ class _EachTurn:
         self.component = component
         self.kind, self.positions, self.values = "table", component.positions, component.values
 
-    def _into(self, x) -> np.ndarray:
+    def into(self, x) -> np.ndarray:
+        """Positions ``x`` (rad) beyond the table shifted by whole turns into it."""
         x = np.asarray(x, dtype=np.float64)
         first, last = self.positions[0], self.positions[-1]
         return np.where((x < first) | (x > last), first + np.mod(x - first, TURN), x)
 
     def evaluate(self, x) -> np.ndarray:
-        return self.component.evaluate(self._into(x))
+        return self.component.evaluate(self.into(x))
 
     def basis(self, x) -> np.ndarray:
-        return self.component.basis(self._into(x))
+        return self.component.basis(self.into(x))
 
     def largest(self, lower: float, upper: float):
         return self.component.largest(lower, upper)
