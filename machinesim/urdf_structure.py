@@ -137,7 +137,8 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
     reads the first); one root link; the frames
     every machine needs (`REQUIRED_FRAMES`), the tool edge and the workpiece on fixed joints;
     no name taken by machinesim's error joints; every ``<origin>`` finite; every visual and
-    collision shape a box, cylinder, sphere or mesh with positive sizes.
+    collision with a shape in its ``<geometry>``, a box, cylinder, sphere or mesh with
+    positive sizes, and a visual's ``<material>`` named.
 
     Raises
     ------
@@ -240,6 +241,8 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
             raise
     for link in root.findall("link"):
         for kind in ("visual", "collision"):
+            for part in link.findall(kind):
+                _check_shaped(root, path, lines, link, kind, part)
             for geometry in link.findall(f"{kind}/geometry"):
                 for element in geometry:
                     try:
@@ -337,6 +340,27 @@ def _ordinal(n: int) -> str:
 #: The sizes (m) of URDF's shapes: attribute -> how many numbers.
 _SHAPE_SIZES = {"box": {"size": 3}, "cylinder": {"radius": 1, "length": 1},
                 "sphere": {"radius": 1}, "mesh": {}}
+
+
+def _check_shaped(root: ET.Element, path, lines, link: ET.Element, kind: str,
+                  part: ET.Element) -> None:
+    """A link's ``<visual>`` or ``<collision>`` (``kind``, ``part``) with a shape in its
+    ``<geometry>``, and a visual's ``<material>`` named: the URDF parser under Pinocchio
+    drops such a part otherwise, saying so on stderr only ("Could not parse visual element
+    for Link [table]"), and the machine loaded with the link drawn without it. Named at the
+    part's line (`_in_link_at`)."""
+    geometry = part.find("geometry")
+    material = part.find("material") if kind == "visual" else None
+    if geometry is not None and len(geometry) and (material is None or material.get("name")):
+        return
+    found = _in_link_at(root, path, lines, part)
+    where = f"{found[0] if found else path}: link {link.get('name')!r} <{kind}>"
+    if geometry is None or not len(geometry):
+        what = "has no <geometry>" if geometry is None else "has an empty <geometry>"
+        raise ModelError(f"{where}: {what}; expected one shape in it (a box, cylinder, "
+                         f"sphere or mesh): the URDF parser drops a {kind} without one")
+    raise ModelError(f"{where}: a <material> has no name=...; URDF requires one (the parser "
+                     "drops the visual without it): name it, e.g. <material name=\"grey\">")
 
 
 def _check_shape(element: ET.Element, where: str) -> None:

@@ -446,6 +446,21 @@ HOSTILE_URDFS = {
         '        <box size="1.2 -1.2 0.15"/>\n      </geometry>\n    </collision>', 1),
                                [", line 14: link 'base' <collision>: <box size='1.2 -1.2 0.15'>",
                                 "expected 3 lengths > 0 (m)"]),
+    # the URDF parser dropped a visual or collision without a shape, and a visual whose
+    # material had no name, saying so on stderr only ("Could not parse visual element for
+    # Link [base]"): the machine loaded, drawn without it
+    "visual_without_geometry": (GROOVING.replace('<geometry><box size="1.2 1.2 0.15"/></geometry>',
+                                                 '', 1),
+                                [", line 12: link 'base' <visual>: has no <geometry>",
+                                 "a box, cylinder, sphere or mesh"]),
+    "visual_empty_geometry": (GROOVING.replace('<box size="1.2 1.2 0.15"/>', '', 1),
+                              [", line 12: link 'base' <visual>: has an empty <geometry>"]),
+    "collision_without_geometry": (GROOVING.replace(
+        '<material name="bed"/></visual>',
+        '<material name="bed"/></visual>\n    <collision>\n    </collision>', 1),
+                                   [", line 13: link 'base' <collision>: has no <geometry>"]),
+    "material_without_name": (GROOVING.replace('<material name="bed"/>', '<material/>', 1),
+                              [", line 12: link 'base' <visual>: a <material> has no name"]),
     "visual_unknown_shape": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
                                               '<cone size="1.2 1.2 0.15"/>'),
                              ["link 'base' <visual>", "<cone>",
