@@ -13,6 +13,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from machinesim.errors import ComponentError, ErrorModel
+from machinesim.errors.turns import table_each_turn
 from machinesim.exceptions import InputError
 from machinesim.tolerances import TABULATED_SUM
 
@@ -52,13 +53,15 @@ def add_errors(a: ErrorModel, b: ErrorModel,
 
     Component tables of an axis are put on the union of the two models' positions (each
     table is piecewise linear, so their sum is exactly the table of the sums there, and both
-    hold their end values beyond); polynomials add coefficient by coefficient. A polynomial
-    in one model and a table in the other (the README's example errors on a machine whose
-    background holds tables) have a sum that is neither: it is tabulated over the axis's
-    ``travel``, on the table's positions and between them at a spacing at which the
-    polynomial's linear interpolation is off by at most `TABULATED_SUM` (m or rad; its
-    error is at most h^2/8 times its largest second derivative over the travel, found
-    exactly). Beyond the travel the sum holds its end values, as any table does.
+    hold their end values beyond; on a rotary axis a table of a whole turn is read a whole
+    number of turns back into it instead, as the kinematics reads it); polynomials add
+    coefficient by coefficient. A polynomial in one model and a table in the other (the
+    README's example errors on a machine whose background holds tables) have a sum that is
+    neither: it is tabulated over the axis's ``travel``, on the table's positions and
+    between them at a spacing at which the polynomial's linear interpolation is off by at
+    most `TABULATED_SUM` (m or rad; its error is at most h^2/8 times its largest second
+    derivative over the travel, found exactly). Beyond the travel the sum holds its end
+    values, as any table does.
 
     Parameters
     ----------
@@ -97,7 +100,8 @@ def add_errors(a: ErrorModel, b: ErrorModel,
                 poly = next(e for e in pair if e.kind == "poly")
                 grids.append(poly_positions(poly.values, span, axis, symbol))
         grid = np.unique(np.concatenate(grids)) if grids else None
-        component[axis] = {symbol: _add_component(ta.get(symbol), tb.get(symbol), grid)
+        component[axis] = {symbol: _add_component(ta.get(symbol), tb.get(symbol), grid,
+                                                  axis in "ABC")
                            for symbol in symbols}
     # the settings are a's as its file wrote them: a refusal of one (a nose radius the tool
     # cannot take) names that file and key; the summed location and component values are not
@@ -108,7 +112,11 @@ def add_errors(a: ErrorModel, b: ErrorModel,
                       source=a.source, written=settings, lines=a.lines)
 
 
-def _add_component(ea, eb, grid) -> ComponentError:
+def _add_component(ea, eb, grid, rotary: bool) -> ComponentError:
+    """The sum of ``ea`` and ``eb`` (either may be None), on ``grid`` when a table. On a
+    rotary axis a table of a whole turn repeats each turn (`table_each_turn`), so it is read
+    so at the grid's positions beyond it (held at its end values instead, an ECC of -180 ..
+    180 deg, 3 urad at 90 deg, read 2 urad at -270 deg beside a table of -360 .. 360 deg)."""
     present = [e for e in (ea, eb) if e is not None]
     if {e.kind for e in present} == {"poly"}:
         size = max(e.values.size for e in present)
@@ -118,7 +126,8 @@ def _add_component(ea, eb, grid) -> ComponentError:
         return ComponentError("poly", None, total)
     if len(present) == 1 and np.array_equal(present[0].positions, grid):
         return present[0]
-    return ComponentError("table", grid, sum(e.evaluate(grid) for e in present))
+    return ComponentError("table", grid, sum((table_each_turn(e) if rotary else e).evaluate(grid)
+                                             for e in present))
 
 
 def poly_positions(coefficients: np.ndarray, span, axis: str, symbol: str) -> np.ndarray:

@@ -552,6 +552,34 @@ def test_add_errors_is_exact_on_the_union_of_the_tables():
         add_errors(a, ErrorModel.from_dict({"tool": {"offset_um": [1.0, 0.0, 0.0]}}))
 
 
+def test_a_whole_turn_table_summed_with_a_longer_one_still_repeats_each_turn():
+    """A rotary table of a whole turn (ECC over -180 .. 180 deg) repeats each turn, and so
+    must its part of a sum put on the union with a table of -360 .. 360 deg (EAC, a
+    background's wobble, say): at -270 deg it is its value at 90 deg, written out here by
+    hand for every 45 deg. It had been held at its end value there (2 urad for 3), and the
+    lab's tool at C = -270 deg sat 1 urad turned, 0.1 um off at 100 mm."""
+    deg = np.radians
+    urad = 1e-6
+    ecc = ComponentError("table", deg([-180.0, -90.0, 0.0, 90.0, 180.0]),
+                         np.array([2.0, 1.0, 0.0, 3.0, 2.0]) * urad)
+    grid = deg(np.arange(-360.0, 361.0, 45.0))
+    wobble = ComponentError("table", grid, 1.5 * urad * np.sin(2 * grid))
+    total = add_errors(ErrorModel(component={"C": {"ECC": ecc}}),
+                       ErrorModel(component={"C": {"EAC": wobble}}))
+    each_turn = [0.0, 1.5, 3.0, 2.5, 2.0, 1.5, 1.0, 0.5, 0.0, 1.5, 3.0, 2.5, 2.0, 1.5, 1.0,
+                 0.5, 0.0]  # at -360, -315, ... 360 deg: ECC a turn back where beyond it
+    np.testing.assert_array_equal(total.component["C"]["ECC"].positions, grid)
+    np.testing.assert_allclose(total.component["C"]["ECC"].values,
+                               np.array(each_turn) * urad, rtol=0, atol=1e-21)
+    np.testing.assert_array_equal(total.component["C"]["EAC"].values, wobble.values)
+    machine = machinesim.load_machine("grooving_4axis")
+    by_hand = ErrorModel(component={"C": {
+        "ECC": ComponentError("table", grid, np.array(each_turn) * urad), "EAC": wobble}})
+    q = np.array([[100 * MM, 0.0, 0.0, deg(c)] for c in (-300.0, -270.0, -200.0, 250.0)])
+    np.testing.assert_allclose(machine.tool_pose(q, total), machine.tool_pose(q, by_hand),
+                               rtol=0, atol=ROUND_OFF_M)
+
+
 def test_a_polynomial_plus_a_table_is_tabulated_over_the_travel_within_its_tolerance():
     """Linear interpolation of c x^2 at spacing h is off by c h^2 / 4 at each midpoint (by
     hand): the spacing the sum is tabulated at keeps that within TABULATED_SUM, and the other

@@ -16,7 +16,7 @@ import numpy as np
 from machinesim.exceptions import ErrorModelError
 from machinesim.units import angle_text
 
-__all__ = ["TURN", "each_turn"]
+__all__ = ["TURN", "each_turn", "table_each_turn"]
 
 #: One turn, rad.
 TURN = 2.0 * math.pi
@@ -42,6 +42,15 @@ def each_turn(component, axis, name: str, source=None):
                 "over one turn "
                 "(position_deg from 0 to 360, the same value at both ends)",
                 source=source, key=name)
+        return component
+    return table_each_turn(component)
+
+
+def table_each_turn(component):
+    """A rotary axis's table as the axis moves through it (`each_turn`): one of a whole
+    turn or more read beyond it a whole number of turns back into it; a shorter table, or
+    a polynomial, ``component`` itself."""
+    if component.kind != "table":
         return component
     span = component.positions[-1] - component.positions[0]
     return _EachTurn(component) if span >= TURN * (1.0 - 1e-12) else component
