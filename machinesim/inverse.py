@@ -13,7 +13,7 @@ import numpy as np
 from machinesim import tolerances
 from machinesim.exceptions import AxisLimitError, InputError, UnreachableError
 from machinesim.rotations import not_rigid, rotation_log
-from machinesim.tolerances import IK_SINGULAR
+from machinesim.tolerances import IK_SINGULAR, IK_WEAK_TURN
 
 #: Poses solved together by `axis_values` (its working arrays, ~1 kB a pose, stay small for
 #: programs of a million blocks).
@@ -204,7 +204,11 @@ def _solve(machine, targets, binding, q, max_iterations, axis_only: bool = False
         step = np.einsum("nap,np->na", jp_pinv, dp)
         null = eye - jp_pinv @ jp
         rest = dr - np.einsum("nra,na->nr", jr, step)
-        step += np.einsum("nar,nr->na", _pinv(jr @ null), rest)
+        # matching the whole orientation, a direction that turns the tool by less than
+        # IK_WEAK_TURN per unit of axis motion is left unmatched (reported), not chased by
+        # turns beyond all proportion (A against C near B = 0 on robonano_ui)
+        weak = IK_SINGULAR if axis_only else IK_WEAK_TURN
+        step += np.einsum("nar,nr->na", _pinv(jr @ null, weak), rest)
         q[active] += step
         done = ((np.linalg.norm(dp, axis=1) < tolerances.IK_POSITION_M)
                 & (np.linalg.norm(step, axis=1) < tolerances.IK_ANGLE_RAD))
@@ -247,11 +251,11 @@ def _turn_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return axis * angle[:, None]
 
 
-def _pinv(a: np.ndarray) -> np.ndarray:
+def _pinv(a: np.ndarray, cut: float = IK_SINGULAR) -> np.ndarray:
     """Pseudo-inverses of matrices (..., m, n) with the absolute singular-value cut-off
-    `IK_SINGULAR`."""
+    ``cut`` (default `IK_SINGULAR`)."""
     u, s, vt = np.linalg.svd(a, full_matrices=False)
-    inv = np.divide(1.0, s, out=np.zeros_like(s), where=s > IK_SINGULAR)
+    inv = np.divide(1.0, s, out=np.zeros_like(s), where=s > cut)
     return (np.swapaxes(vt, -1, -2) * inv[..., None, :]) @ np.swapaxes(u, -1, -2)
 
 
