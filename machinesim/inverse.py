@@ -50,6 +50,8 @@ def axis_values(machine, wMt, errors=None, q_start=None, check_limits: bool = Tr
     The edge position is matched exactly (to `tolerances.IK_POSITION_M`); the orientation
     as far as the axes can produce it, without giving up position (a second task in the
     null space of the position task). What cannot be matched is reported in the result.
+    A pose whose orientation task drove Newton off a position the axes reach is solved
+    again from its start for the position alone (`_position_first`).
 
     Parameters
     ----------
@@ -106,10 +108,12 @@ def axis_values(machine, wMt, errors=None, q_start=None, check_limits: bool = Tr
         qs = np.empty((len(targets), n_axes))
         prev = np.zeros((1, n_axes))
         for n, t in enumerate(targets):
-            qs[n] = prev = _solve(machine, t[None], binding, prev, max_iterations, axis_only)
+            start = prev
+            prev = _solve(machine, t[None], binding, start, max_iterations, axis_only)
             if axis_only:
-                qs[n] = prev = _turned_starts(machine, t[None], binding, prev, prev,
-                                                   max_iterations)
+                prev = _turned_starts(machine, t[None], binding, prev, prev, max_iterations)
+            qs[n] = prev = _position_first(machine, t[None], binding, prev, start,
+                                           max_iterations)
     else:  # independent poses: all at once
         rows = np.minimum(np.arange(len(targets)), len(starts) - 1)
         qs = np.concatenate([
@@ -117,6 +121,7 @@ def axis_values(machine, wMt, errors=None, q_start=None, check_limits: bool = Tr
                         max_iterations, axis_only) for k in range(0, len(targets), IK_BATCH)])
         if axis_only:
             qs = _turned_starts(machine, targets, binding, qs, starts[rows], max_iterations)
+        qs = _position_first(machine, targets, binding, qs, starts[rows], max_iterations)
     pres, rres = _residuals(machine, targets, binding, qs, axis_only)
     miss = np.linalg.norm(pres, axis=1)
     if np.any(miss > tolerances.UNREACHABLE_M):
@@ -174,13 +179,33 @@ def _turned_starts(machine, targets, binding, qs, starts, max_iterations) -> np.
         qs[n] = found[np.flatnonzero(pick)[np.argmin(distance[pick])]]
     return qs
 
-def _solve(machine, targets, binding, q, max_iterations, axis_only: bool = False
-           ) -> np.ndarray:
+def _position_first(machine, targets, binding, qs, starts, max_iterations) -> np.ndarray:
+    """``qs`` (N, n_axes), with each pose whose position misses by more than
+    `tolerances.UNREACHABLE_M` solved again from its start (``starts``, (N, n_axes)) for the
+    position alone, where that reaches it: the orientation task can drive Newton off a
+    position the axes reach (grooving_4axis, its tool axis tilted 7 mrad by errors and only
+    C to turn, matching the tool axis alone: C jumped by pi each step and X, Y doubled, a
+    "best miss" of 2e7 m), and the position comes first. The orientation is then left
+    unmatched and reported."""
+    miss = np.linalg.norm(_residuals(machine, targets, binding, qs)[0], axis=1)
+    off = np.flatnonzero(miss > tolerances.UNREACHABLE_M)
+    if not len(off):
+        return qs
+    found = _solve(machine, targets[off], binding, starts[off], max_iterations, orient=False)
+    reached = np.linalg.norm(_residuals(machine, targets[off], binding, found)[0],
+                             axis=1) <= tolerances.UNREACHABLE_M
+    qs = qs.copy()
+    qs[off[reached]] = found[reached]
+    return qs
+
+
+def _solve(machine, targets, binding, q, max_iterations, axis_only: bool = False,
+           orient: bool = True) -> np.ndarray:
     """Newton steps from ``q`` (N, n_axes) towards ``targets`` (N, 4, 4), all at once:
     position first, orientation in the null space of the position task (of the tool's
-    Z axis alone, its roll free: ``axis_only``). A pose stops when its position misses
-    by less than `tolerances.IK_POSITION_M` and its last step was below
-    `tolerances.IK_ANGLE_RAD`."""
+    Z axis alone, its roll free: ``axis_only``; none: ``orient=False``). A pose stops when
+    its position misses by less than `tolerances.IK_POSITION_M` and its last step was
+    below `tolerances.IK_ANGLE_RAD`."""
     q = np.array(q, dtype=np.float64)
     eye = np.eye(q.shape[1])
     active = np.arange(len(q))
@@ -202,6 +227,14 @@ def _solve(machine, targets, binding, q, max_iterations, axis_only: bool = False
             dr = rotation_log(targets[active, :3, :3] @ np.swapaxes(pose[:, :3, :3], 1, 2))
         jp_pinv = _pinv(jp)
         step = np.einsum("nap,np->na", jp_pinv, dp)
+        if not orient:
+            q[active] += step
+            done = ((np.linalg.norm(dp, axis=1) < tolerances.IK_POSITION_M)
+                    & (np.linalg.norm(step, axis=1) < tolerances.IK_ANGLE_RAD))
+            active = active[~done]
+            if not len(active):
+                break
+            continue
         null = eye - jp_pinv @ jp
         rest = dr - np.einsum("nra,na->nr", jr, step)
         # matching the whole orientation, a direction that turns the tool by less than

@@ -431,6 +431,27 @@ def test_axis_values_matches_a_tool_axis_whose_tilt_needs_c_turned_first():
         machine.axis_values(target, orientation="axis")
 
 
+@pytest.mark.parametrize("place", [(128, 58, 77, -55), (100, 50, 50, -55), (128, 58, 77, 30),
+                                   (50, 20, 0, -55)])
+def test_axis_values_of_a_tool_axis_no_axis_can_tilt_still_reach_the_position(place):
+    """grooving_4axis (X Y Z C) with its tool and its workpiece tilted by a few mrad, the
+    tool axis alone matched: C turns the workpiece's tilt against the tool's but cannot
+    match it, and Newton, chasing it, turned C by pi each step while X and Y doubled:
+    an UnreachableError with a 'best miss' of 100 m to 630 km, where X, Y, Z reach the
+    position (from the same start) to round-off. The position comes first: it is reached,
+    the tilt reported unmatched."""
+    machine = load_machine("grooving_4axis")
+    errors = ErrorModel.from_dict({"tool": {"rotation_urad": [-1700.0, -560.0, 0.0]},
+                                   "workpiece": {"alpha_urad": 4100.0, "beta_urad": -3900.0}})
+    q = np.array([place[0] * MM, place[1] * MM, place[2] * MM, math.radians(place[3])])
+    solution = machine.axis_values(machine.tool_pose(q), errors, q_start=q,
+                                   orientation="tool_axis")
+    reached = machine.tool_pose(solution.q, errors)[:3, 3]
+    np.testing.assert_allclose(reached, machine.tool_pose(q)[:3, 3], rtol=0, atol=1e-15)
+    assert "cannot turn the tool about" in solution.unmatched
+    assert np.max(np.abs(solution.q - q)) < 1 * MM  # no turn of C, no leap of X, Y
+
+
 def test_axis_values_errors_are_clear():
     machine = load_machine("planer_4axis")
     with pytest.raises(AxisLimitError, match="axis X = 300.000000 mm outside its travel"):
