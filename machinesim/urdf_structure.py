@@ -138,7 +138,8 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
     every machine needs (`REQUIRED_FRAMES`), the tool edge and the workpiece on fixed joints;
     no name taken by machinesim's error joints; every ``<origin>`` finite; every visual and
     collision with a shape in its ``<geometry>``, a box, cylinder, sphere or mesh with
-    positive sizes, and a visual's ``<material>`` named.
+    positive sizes, and a visual's ``<material>`` named; every ``<inertial>`` with its mass
+    and inertia.
 
     Raises
     ------
@@ -251,6 +252,8 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
                         at = _in_link_at(root, path, lines, geometry)[0]
                         _check_shape(element, f"{at}: link {link.get('name')!r} <{kind}>")
                         raise
+        for inertial in link.findall("inertial"):
+            _check_inertial(root, path, lines, link, inertial)
 
 
 def _check_not_xacro(root: ET.Element, path) -> None:
@@ -361,6 +364,45 @@ def _check_shaped(root: ET.Element, path, lines, link: ET.Element, kind: str,
                          f"sphere or mesh): the URDF parser drops a {kind} without one")
     raise ModelError(f"{where}: a <material> has no name=...; URDF requires one (the parser "
                      "drops the visual without it): name it, e.g. <material name=\"grey\">")
+
+
+#: The attributes of an ``<inertia>``, each a number the URDF parser requires.
+_INERTIA = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+
+
+def _check_inertial(root: ET.Element, path, lines, link: ET.Element,
+                    inertial: ET.Element) -> None:
+    """A link's ``<inertial>`` with a ``<mass value>`` and an ``<inertia>`` of its six
+    numbers: the URDF parser under Pinocchio drops an inertial without them, saying so on
+    stderr only ("Inertial: mass element must have value attribute", "Could not parse
+    inertial element for Link [table]"), and the machine loaded. machinesim uses no mass,
+    but a URDF check refuses the file. Named at the inertial's line (`_in_link_at`)."""
+    mass, inertia = inertial.find("mass"), inertial.find("inertia")
+    if (mass is not None and mass.get("value") is not None and inertia is not None
+            and all(inertia.get(name) is not None for name in _INERTIA)):
+        try:  # numbers, finite, as the parser reads them (refused again where found)
+            _number(mass.get("value"), "")
+            for name in _INERTIA:
+                _number(inertia.get(name), "")
+            return
+        except ModelError:
+            pass
+    found = _in_link_at(root, path, lines, inertial)
+    where = f"{found[0] if found else path}: link {link.get('name')!r} <inertial>"
+    if mass is None or mass.get("value") is None:
+        raise ModelError(f"{where}: no <mass value=...> (kg); URDF requires one in an "
+                         "<inertial>, whose parser drops it otherwise: give it, or leave "
+                         "the <inertial> out (machinesim uses no mass)")
+    _number(mass.get("value"), f"{where} <mass value>")
+    if inertia is None:
+        raise ModelError(f"{where}: no <inertia ixx=... izz=...> (kg m^2); URDF requires one "
+                         "in an <inertial>: give it, or leave the <inertial> out")
+    for name in _INERTIA:
+        text = inertia.get(name)
+        if text is None:
+            raise ModelError(f"{where}: <inertia> has no {name}=...; expected "
+                             f"{', '.join(_INERTIA)} (kg m^2)")
+        _number(text, f"{where} <inertia {name}>")
 
 
 def _check_shape(element: ET.Element, where: str) -> None:

@@ -461,6 +461,23 @@ HOSTILE_URDFS = {
                                    [", line 13: link 'base' <collision>: has no <geometry>"]),
     "material_without_name": (GROOVING.replace('<material name="bed"/>', '<material/>', 1),
                               [", line 12: link 'base' <visual>: a <material> has no name"]),
+    # an <inertial> the parser cannot read was dropped with a C++ message on stderr only
+    "inertial_without_mass": (GROOVING.replace(
+        '<material name="bed"/></visual>',
+        '<material name="bed"/></visual>\n    <inertial><inertia ixx="1" ixy="0" ixz="0" '
+        'iyy="1" iyz="0" izz="1"/></inertial>', 1),
+                              [", line 13: link 'base' <inertial>: no <mass value=...> (kg)"]),
+    "inertial_mass_not_a_number": (GROOVING.replace(
+        '<material name="bed"/></visual>',
+        '<material name="bed"/></visual>\n    <inertial><mass value="1 kg"/><inertia ixx="1" '
+        'ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>', 1),
+                                   [", line 13: link 'base' <inertial> <mass value>",
+                                    "'1 kg' is not a number"]),
+    "inertia_missing_ixy": (GROOVING.replace(
+        '<material name="bed"/></visual>',
+        '<material name="bed"/></visual>\n    <inertial><mass value="1"/><inertia ixx="1" '
+        'iyy="1" izz="1"/></inertial>', 1),
+                            [", line 13: link 'base' <inertial>: <inertia> has no ixy=..."]),
     "visual_unknown_shape": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
                                               '<cone size="1.2 1.2 0.15"/>'),
                              ["link 'base' <visual>", "<cone>",
