@@ -7,6 +7,13 @@ out-of-memory killer, with no message and with whatever else it chose to kill.
 Capped at the memory there is, the allocation that would pass it fails instead (numpy's and
 manifold3d's alike raise MemoryError), and the command line says so in one line.
 
+"The memory there is" is what the machine has free when the command starts (the kernel's
+``MemAvailable``), added to the address space the process holds already, within the
+machine's or its container's total: capped at the total alone, a cut on a machine where
+other processes held 3 of its 23 GB grew to 21.6 GB, under the 23 GB cap, and was ended by
+the out-of-memory killer with no message (a 100,000-line spiral with `ball:0.5`, 227 kB a
+sweep, `machinesim cut` of a new-user pass).
+
 `memory_capped` holds the cap for a command's or a scenario's work and restores the limit
 after it. A process started meanwhile inherits the cap, so a command that may start a web
 browser (Chromium reserves tens of GB of address space, and does not start under such a
@@ -34,11 +41,31 @@ OUT_OF_MEMORY = (
     "of it (--roi), or fewer passes")
 #: Where a cgroup (a container) states its memory limit: v2, then v1.
 CGROUP_LIMITS = ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes")
+#: Where Linux states the memory free for new work (``MemAvailable``: free memory and the
+#: caches it can drop) and this process's address space (``VmSize``), in kB.
+MEMINFO = "/proc/meminfo"
+PROCESS_STATUS = "/proc/self/status"
+
+
+def _kilobytes(path: str, key: str) -> int | None:
+    """Bytes of the ``key:  N kB`` line of a /proc file, None where there is none."""
+    try:
+        lines = Path(path).read_text().splitlines()
+    except OSError:
+        return None
+    for line in lines:
+        name, _, value = line.partition(":")
+        words = value.split()
+        if name == key and words and words[0].isdigit():
+            return int(words[0]) * 1024
+    return None
 
 
 def usable_memory() -> int:
-    """Bytes of memory this process may use: the machine's physical memory, or its
-    container's limit when smaller."""
+    """Bytes of address space this process may use: the machine's physical memory, or its
+    container's limit when smaller, and no more than the memory free now (``MemAvailable``)
+    beside the address space the process holds already (``VmSize``), where Linux states
+    them: what other processes hold is not there to take."""
     total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
     for path in CGROUP_LIMITS:
         try:
@@ -47,6 +74,10 @@ def usable_memory() -> int:
             continue
         if text.isdigit():
             total = min(total, int(text))
+    available = _kilobytes(MEMINFO, "MemAvailable")
+    held = _kilobytes(PROCESS_STATUS, "VmSize")
+    if available is not None and held is not None:
+        total = min(total, held + available)
     return total
 
 
