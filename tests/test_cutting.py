@@ -341,6 +341,21 @@ def test_a_move_a_billion_metres_out_is_refused_even_with_overtravel_allowed():
     assert near.removed_volume_m3 == pytest.approx((10 * UM) ** 2 * 4 * MM, rel=1e-5, abs=0.0)
 
 
+def test_a_move_too_far_out_is_named_by_its_own_line_not_the_farthest_after_it():
+    # 'G01 X1000000.' (1000 m, a length in the wrong unit) at line 5, then 'G00 Z1.' at
+    # line 6: the rapid up is a millimetre farther from the origin, and the refusal had
+    # named line 6, a block with no X word in it
+    text = ("O1\nG90 G21\nG00 X5. Y5. Z1.\nG01 Z-0.1 F100.\nG01 X1000000.\nG00 Z1.\n"
+            "M30\n")
+    program = parse_program(text, "far.nc")
+    with pytest.raises(InputError, match=r"far\.nc, line 5: the move takes the tool 1e\+03 m "
+                                         r"from the workpiece origin \(the farthest, 1e\+03 "
+                                         r"m, at line 6\); expected within 1000 m") as info:
+        cut(program, "robonano_a0ib", tool="ball:0.5", stock="block:10x10x2",
+            allow_overtravel=True)
+    assert info.value.line == 5
+
+
 def test_a_shank_wider_than_the_end_mill_crashes_into_a_slot_it_cannot_enter():
     # a 1 mm end mill with 3 mm of body cuts a slot 1 mm wide down in 0.5 mm levels; its
     # 4 mm shank cannot follow it below 3 mm: the level at 3.5 mm is the first crash. Taken as

@@ -411,20 +411,27 @@ FARTHEST_M = 1000.0
 
 
 def _refuse_far(poses: np.ndarray, moves: _Moves, source) -> None:
-    """Raise InputError when a move takes the tool beyond `FARTHEST_M` from the origin."""
+    """Raise InputError when a move takes the tool beyond `FARTHEST_M` from the origin,
+    naming the first such move's line (and the farthest's, where that is another): the
+    farthest alone had named `G00 Z1.` after a `G01 X1000000.`, which went out first."""
     if not len(poses):
         return
     distance = np.linalg.norm(poses[:, :3, 3], axis=1)
     if not distance.max() > FARTHEST_M:
         return
+    first = int(np.argmax(distance > FARTHEST_M))
     worst = int(np.argmax(distance))
+    farthest = ""
+    if int(moves.line[worst]) != int(moves.line[first]):
+        farthest = (f" (the farthest, {distance[worst]:.3g} m, at line "
+                    f"{int(moves.line[worst])})")
     raise InputError(
-        f"the move takes the tool {distance[worst]:.3g} m from the "
-        f"workpiece origin; expected within {FARTHEST_M:g} m, beyond any machine's travel, "
-        "where float64 keeps no nanometre (its spacing there is "
-        f"{np.spacing(distance[worst]):.2g} m) and the part would come out wrong; nothing "
+        f"the move takes the tool {distance[first]:.3g} m from the "
+        f"workpiece origin{farthest}; expected within {FARTHEST_M:g} m, beyond any machine's "
+        "travel, where float64 keeps no nanometre (its spacing there is "
+        f"{np.spacing(distance[first]):.2g} m) and the part would come out wrong; nothing "
         "was cut. A length in the wrong unit is the usual cause",
-        source=source, line=int(moves.line[worst]))
+        source=source, line=int(moves.line[first]))
 
 
 def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
