@@ -574,6 +574,33 @@ def test_a_machine_without_visual_bodies_is_framed_on_its_stock_and_its_part_cop
     assert transform("/meshcat/inspection")[0, 0] == pytest.approx(1.0, rel=1e-12)
 
 
+def test_a_programs_view_tells_each_cut_as_it_goes():
+    # a 100,000-line program's view printed nothing for the 10 minutes it ran before it was
+    # stopped (it cuts the program about twice): the four grooves are four stages, then
+    # the part on the machine without errors, each told once, in order
+    told = []
+    machine_scene(load_machine("grooving_4axis"), grooves(), tool="v:150", stock=STOCK,
+                  errors=ERRORS, max_triangles=BUDGET,
+                  progress=lambda done, total: told.append((done, total)))
+    assert told == [(1, 5), (2, 5), (3, 5), (4, 5), (5, 5)]
+
+
+def test_the_view_command_writes_its_cuts_as_lines_after_ten_seconds(capsys):
+    from machinesim.viewer.cli import cut_lines
+
+    now = [100.0]
+    show = cut_lines(clock=lambda: now[0])
+    show(1, 61)  # at once: nothing, as for a quick view
+    now[0] = 111.0
+    show(12, 61)
+    now[0] = 120.0
+    show(13, 61)  # within 30 s of the last line: nothing
+    now[0] = 125.0
+    show(61, 61)  # the end, once a line was written
+    assert capsys.readouterr().err.splitlines() == ["  view: 12/61 cuts (19 %), 11 s",
+                                                    "  view: 61/61 cuts (100 %), 25 s"]
+
+
 def test_machine_scene_without_program_and_with_bad_settings():
     scene = machine_scene("robonano_a0ib")
     assert not [c for c in decoded(scene) if c["type"] == "set_animation"]

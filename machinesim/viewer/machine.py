@@ -53,7 +53,7 @@ NOMINAL_COLOUR, ACTUAL_COLOUR, TOOL_COLOUR = 0x00E5FF, 0xFF3030, 0xF0F0FF
 def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", errors=None,
                   start=None, duration_s: float = DURATION_S, max_stages: int = MAX_STAGES,
                   max_triangles: int = DISPLAY_TRIANGLES,
-                  chord_tolerance: float | None = None) -> Scene:
+                  chord_tolerance: float | None = None, progress=None) -> Scene:
     """A scene of ``machine``, and of it running ``program`` if one is given.
 
     Parameters
@@ -78,6 +78,11 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
     chord_tolerance : float, optional
         Rotary moves are split within this distance of their path (m), as `cut` splits
         them; default `machinesim.tools.path_chord_tolerance` of ``tool``.
+    progress : callable, optional
+        ``progress(done, total)`` after each cut of a program's view: its part stages, then
+        the part on the machine without errors (``total`` = stages + 1). A long program's
+        view cuts it about twice (a spiral of 8,002 moves: 14.1 s of CPU against 3.8 s for
+        ``machinesim cut``), and ``machinesim view`` prints these as lines.
     """
     from machinesim.machines import Machine, load_machine
 
@@ -101,7 +106,7 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
                                     machine.rotary, strict=True)))
     if program is not None:
         lo, hi = _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi,
-                      duration_s, max_stages, max_triangles, chord_tolerance)
+                      duration_s, max_stages, max_triangles, chord_tolerance, progress)
     if lo is None:  # no visual bodies and no program: the origin
         lo = hi = np.zeros(3)
     frame_scene(scene, lo, hi)
@@ -109,7 +114,7 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
 
 
 def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, duration_s,
-         max_stages, max_triangles, chord_tolerance):
+         max_stages, max_triangles, chord_tolerance, progress=None):
     """Animate the program; return the box (m) of everything drawn."""
     if duration_s <= 0.0 or max_stages < 1:
         raise InputError(f"duration_s and max_stages must be positive, got {duration_s} and "
@@ -142,7 +147,8 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
                     ACTUAL_COLOUR)
     scene.add_mesh("tool", *tool_mesh(tool), colour=TOOL_COLOUR)
 
-    stage_times, parts, empty = _stages(trajectory, machine, tool, stock, errors, max_stages)
+    stage_times, parts, empty = _stages(trajectory, machine, tool, stock, errors, max_stages,
+                                        progress)
     if empty:
         scene.warnings.append("the program removed no material (does it reach the stock? "
                               "the stock is placed in the workpiece frame: --stock "
@@ -160,6 +166,8 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
 
     nominal, _ = cut(program, machine, tool=tool, stock=stock, errors=None, start=q0,
                      chord_tolerance=chord_tolerance)
+    if progress is not None:
+        progress(len(parts), len(parts))
     part_lo, part_hi = parts[-1].bounds
     size = float(np.max(hi - lo))
     # at least the part's own size: beside a machine drawn as its stock alone (no visual
@@ -213,14 +221,17 @@ def cut_by_block(trajectory, machine, tool, stock, errors=None, max_stages: int 
     return times, parts
 
 
-def _stages(trajectory, machine, tool, stock, errors, max_stages):
-    """`cut_by_block`'s times and parts, and whether no stage removed any material."""
+def _stages(trajectory, machine, tool, stock, errors, max_stages, progress=None):
+    """`cut_by_block`'s times and parts, and whether no stage removed any material;
+    ``progress(done, stages + 1)`` after each stage (the one more: the nominal part)."""
     feeds = [s for s in trajectory.segments if s.kind == "linear" and len(s.q) > 1]
     groups = np.array_split(np.arange(len(feeds)), min(len(feeds), max_stages)) if feeds else []
     times, parts, empty = [0.0], [stock], True
-    for group in groups:
+    for k, group in enumerate(groups):
         paths = [machine.tool_pose(feeds[i].q, errors) for i in group]
         part, report = remove(parts[-1], tool, paths)
+        if progress is not None:
+            progress(k + 1, len(groups) + 1)
         empty = empty and bool(report.empty_cut)
         times.append(float(feeds[group[-1]].t[-1]))
         parts.append(part)
