@@ -457,6 +457,30 @@ def test_cutting_block_by_block_ends_with_the_part_cut_in_one_go():
     assert grouped[-1].volume == pytest.approx(whole.volume, rel=1e-12)
 
 
+def test_the_stages_cut_the_rapids_too_as_cut_does():
+    # a rapid through the block, then a groove fed at Y 0.5 mm: the stages had cut the feed
+    # alone, so the finished part lacked the rapid's groove, which the map coloured as the
+    # machine's error against cut()'s part; rapids alone were 'no material removed'
+    machine = load_machine("grooving_4axis")
+    tool = tool_from_spec("v:150")
+    stock = stock_from_spec(STOCK)
+    b = ProgramBuilder(1).rapid(X=-0.2 * MM, Y=0.2 * MM, Z=0.1 * MM).rapid(Z=-20 * UM)
+    rapids = b.rapid(X=1.2 * MM).rapid(Z=0.1 * MM).build()
+    both = b.rapid(Y=0.5 * MM).rapid(Z=-20 * UM).linear(
+        X=-0.2 * MM, feed_mm_per_min=500.0).rapid(Z=0.1 * MM).build()
+    for program, stages in ((both, 2), (rapids, 2)):
+        trajectory = plan(program, machine, None, tool_points=tool.vertices())
+        _, parts = cut_by_block(trajectory, machine, tool, stock)
+        whole, _ = cut(program, machine, tool=tool, stock=stock)
+        assert len(parts) == stages
+        # each groove: a V of 150 deg, 20 um deep, across the 1 mm block
+        groove = (20 * UM) ** 2 * np.tan(np.radians(75.0)) * 1 * MM
+        removed = stock.volume - parts[-1].volume
+        assert removed == pytest.approx(groove * (2 if program is both else 1), rel=1e-9,
+                                        abs=0.0)
+        assert parts[-1].volume == pytest.approx(whole.volume, rel=1e-12)
+
+
 # ----------------------------------------------------------------------- machine scene
 
 def test_machine_scene_draws_every_visual_and_moves_the_tool_as_the_kinematics_say():

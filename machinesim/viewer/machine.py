@@ -197,7 +197,8 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
 
 
 def cut_by_block(trajectory, machine, tool, stock, errors=None, max_stages: int = MAX_STAGES):
-    """The part after each feed block (or group of blocks), cut one after the other.
+    """The part after each feed block (or group of blocks), cut one after the other, each
+    with the rapids before it (the last with those after it too), as `cut` cuts them.
 
     Parameters
     ----------
@@ -223,17 +224,30 @@ def cut_by_block(trajectory, machine, tool, stock, errors=None, max_stages: int 
 
 def _stages(trajectory, machine, tool, stock, errors, max_stages, progress=None):
     """`cut_by_block`'s times and parts, and whether no stage removed any material;
-    ``progress(done, stages + 1)`` after each stage (the one more: the nominal part)."""
-    feeds = [s for s in trajectory.segments if s.kind == "linear" and len(s.q) > 1]
-    groups = np.array_split(np.arange(len(feeds)), min(len(feeds), max_stages)) if feeds else []
+    ``progress(done, stages + 1)`` after each stage (the one more: the nominal part).
+
+    A stage is a feed block or a group of them, each cut with the rapids before it (the
+    last with those after it too), as `cut` cuts every move: the stages had cut the feeds
+    alone, so a rapid through the stock was missing from the finished part, which the map
+    then coloured as the machine's error against the nominal part `cut` made (rapids
+    included), and a program of rapids alone was said to remove nothing."""
+    moving = [s for s in trajectory.segments if s.kind != "dwell" and len(s.q) > 1]
+    feeds = [i for i, s in enumerate(moving) if s.kind == "linear"]
+    if feeds:
+        groups = np.array_split(np.array(feeds), min(len(feeds), max_stages))
+        ends = [int(group[-1]) for group in groups]
+    else:  # rapids alone: one stage, as they cut too
+        ends = [len(moving) - 1] if moving else []
     times, parts, empty = [0.0], [stock], True
-    for k, group in enumerate(groups):
-        paths = [machine.tool_pose(feeds[i].q, errors) for i in group]
+    for k, end in enumerate(ends):
+        begin = ends[k - 1] + 1 if k else 0
+        members = moving[begin:end + 1] if k < len(ends) - 1 else moving[begin:]
+        paths = [machine.tool_pose(s.q, errors) for s in members]
         part, report = remove(parts[-1], tool, paths)
         if progress is not None:
-            progress(k + 1, len(groups) + 1)
+            progress(k + 1, len(ends) + 1)
         empty = empty and bool(report.empty_cut)
-        times.append(float(feeds[group[-1]].t[-1]))
+        times.append(float(moving[end].t[-1]))
         parts.append(part)
     return times, parts, empty
 
