@@ -82,12 +82,13 @@ def test_waist_of_one_substep_by_hand():
 
 
 def test_a_long_move_is_read_a_block_at_a_time_with_the_same_count(monkeypatch):
-    """A move of more samples than a block holds is read in pieces of a block: it was taken
-    whole, each sample costing 24 bytes per edge in a dozen arrays (three turns of C under
-    nose:1.0:90, 559 edges, 23,504 samples: 5 GB). Here blocks of 300 edge-samples (100
-    samples of the V's 3 edges) against a swing of 150 sub-steps (B8 to B18 over 0.1 mm of
-    X, raised to 496): no call reads more than 100 poses, and the count is the one read
-    whole (the default block, which holds the move), to the bit."""
+    """A move of more samples than a block holds is read in pieces: it was taken whole,
+    each sample costing 24 bytes per edge in a dozen arrays (three turns of C under
+    nose:1.0:90, 559 edges, 23,504 samples: 5 GB). Here blocks of 120 (poses of 120 samples,
+    or 40 samples of the V's 3 edges) against a swing of 150 sub-steps (B8 to B18 over
+    0.1 mm of X, raised to 496): no call poses more than 120 samples or reads more than
+    120 edge-samples, and the count is the one read whole (the default block, which holds
+    the move), to the bit."""
     from machinesim.motion import faces
 
     machine = machinesim.load_machine("robonano_a0ib")
@@ -98,17 +99,23 @@ def test_a_long_move_is_read_a_block_at_a_time_with_the_same_count(monkeypatch):
                       [1e-5, 0.0, 0.0, math.radians(-1.0), 0.3]])
     steps = np.array([150, 7])
     whole = faces.edge_substeps(machine, None, start, delta, steps, profile, TOL)
-    read = []
-    pose = type(machine).tool_pose
+    posed, read = [], []
+    pose, waist = type(machine).tool_pose, faces._largest_waist
 
     def counted(self, q, errors=None):
-        read.append(len(q))
+        posed.append(len(q))
         return pose(self, q, errors)
 
+    def counted_waist(poses, first, edges, top):
+        read.append(len(poses) * len(edges))
+        return waist(poses, first, edges, top)
+
     monkeypatch.setattr(type(machine), "tool_pose", counted)
-    monkeypatch.setattr(faces, "_SAMPLES_PER_BLOCK", 300)
+    monkeypatch.setattr(faces, "_largest_waist", counted_waist)
+    monkeypatch.setattr(faces, "_SAMPLES_PER_BLOCK", 120)
     blocks = faces.edge_substeps(machine, None, start, delta, steps, profile, TOL)
-    assert max(read) <= 100, read  # the old code: 159 at once
-    assert sum(read) > 159  # each piece's end read again as the next one's start
+    assert max(posed) <= 120, posed  # the old code: 159 at once
+    assert sum(posed) > 159  # each piece's end read again as the next one's start
+    assert max(read) <= 120, read  # the old code: 477 at once
     np.testing.assert_array_equal(blocks, whole)
     assert whole[0] > steps[0]  # the swing is raised: the pieces' waists are read

@@ -19,8 +19,10 @@ upright end mill) tilts nothing and adds no sub-step.
 
 A planar tool's profile (a V, a nose) has straight edges with the same first-order error
 when it tilts while it moves (docs/cutting.md, "A tilt with a move"): `edge_substeps`
-bounds each edge's waist, |D . n| / 4 (derived there), within the tolerance. Moves that
-turn no rotary axis keep their count to the bit (`profile_substeps`).
+bounds each edge's waist, |D . n| / 4 (derived there), within the tolerance, read only
+where a bound from the edge's length and the tool's turn could raise a count
+(`_uncleared`). Moves that turn no rotary axis keep their count to the bit
+(`profile_substeps`).
 """
 
 from __future__ import annotations
@@ -36,6 +38,10 @@ import numpy as np
 _MARGIN = 1.01
 #: Samples whose poses are evaluated at once (128 bytes each, 16 MB).
 _SAMPLES_PER_BLOCK = 1 << 17
+#: The share of its reach by which float64 may round a corner an edge's waist is taken
+#: from, with room: a few times 2**-52 in each of its operations; `_uncleared`'s bound is
+#: raised by it.
+_ROUNDING = 1e-12
 
 
 def face_substeps(machine, errors, starts: np.ndarray, delta: np.ndarray,
@@ -141,29 +147,70 @@ def edge_substeps(machine, errors, starts: np.ndarray, delta: np.ndarray,
     depth; measured 1.16 nm past a reference cut in 8 times the sub-steps, which keeps
     1/8 of it: 1.21 nm predicted), and at B30 4.2 nm (measured 4.0 nm).
 
+    That waist is taken only for the edges a cheap bound cannot clear (`_uncleared`: L
+    times the change of the tool's rotation over a sub-step, over 4): an edge whose every
+    waist in a piece of a move is too small to raise the move's count is skipped there,
+    which keeps every count to the bit (a nose's arc of 556 chords of 2.8 um under a C
+    turn at 1 nm: only its two flanks and its top are read).
+
     ``profile`` None or without edges: ``steps`` returned as they are.
     """
     steps = np.asarray(steps, dtype=np.int64)
     if profile is None or not len(profile.edges) or not len(steps):
         return steps
     edges = np.asarray(profile.edges, dtype=np.float64).reshape(-1, 2, 3)
-    largest = np.zeros(len(steps))
-    # each move's samples in pieces, and the pieces in blocks, of about `per` samples: a
-    # sample takes 24 bytes per edge in each of a dozen arrays, and a move was taken whole
-    # (a C turn of three turns under nose:1.0:90, 559 edges, 23,504 samples: 5 GB)
-    per = max(2, _SAMPLES_PER_BLOCK // len(edges))
-    move, first, last = _pieces(steps, per - 1)
-    ends = np.cumsum(last - first + 1)
-    lo = 0
-    while lo < len(move):
-        hi = max(lo + 1, int(np.searchsorted(ends, ends[lo] - (last[lo] - first[lo] + 1) + per,
-                                             side="right")))
-        np.maximum.at(largest, move[lo:hi], _largest_waist(
-            machine, errors, starts, delta, steps, (move[lo:hi], first[lo:hi], last[lo:hi]),
-            edges, float(profile.top)))
-        lo = hi
+    largest = _largest_waists(machine, errors, starts, delta, steps, edges,
+                              float(profile.top), tolerance)
     need = np.ceil(steps * largest / tolerance * _MARGIN).astype(np.int64)
     return np.maximum(steps, need)
+
+
+def _largest_waists(machine, errors, starts, delta, steps, edges, top, tolerance,
+                    bounded: bool = True) -> np.ndarray:
+    """The largest waist (m, `edge_substeps`) over each move's sub-steps and the edges
+    `_uncleared` leaves (all of them if not ``bounded``), 0 where it leaves none."""
+    largest = np.zeros(len(steps))
+    # each move's samples in pieces of about `per`: a sample takes 24 bytes per edge in each
+    # of a dozen arrays (a C turn of three turns under nose:1.0:90, 559 edges, 23,504
+    # samples: 5 GB taken whole); the pieces posed in blocks of _SAMPLES_PER_BLOCK samples
+    per = max(2, _SAMPLES_PER_BLOCK // len(edges))
+    move, first, last = _pieces(steps, per - 1)
+    length = np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1)
+    longest = np.argsort(-length, kind="stable")
+    extent = float(np.linalg.norm(edges, axis=2).max())
+    for block in _blocks(last - first + 1, _SAMPLES_PER_BLOCK):
+        pieces = (move[block], first[block], last[block])
+        q, head = _samples(steps, starts, delta, pieces)
+        poses = machine.tool_pose(q, errors)
+        if bounded:
+            reach = float(np.linalg.norm(poses[:, :3, 3], axis=1).max()) + extent
+            kept = _uncleared(steps[move[block]], _largest_turn(poses, head),
+                              length[longest], reach, tolerance)
+        else:
+            kept = np.full(len(block), len(edges))
+        counts = np.diff(np.append(head, len(q)))
+        for k in np.unique(kept[kept > 0]):
+            chosen = np.flatnonzero(kept == k)
+            subset = edges[np.sort(longest[:k])]
+            for part in _blocks(counts[chosen], max(2, _SAMPLES_PER_BLOCK // int(k))):
+                at = chosen[part]
+                rows = np.repeat(head[at] - np.cumsum(counts[at]) + counts[at], counts[at])
+                rows += np.arange(len(rows))
+                np.maximum.at(largest, move[block][at], _largest_waist(
+                    poses[rows], np.cumsum(counts[at]) - counts[at], subset, top))
+    return largest
+
+
+def _blocks(counts, most: int):
+    """Consecutive runs of ``counts`` (indices into it) each summing to at most ``most``,
+    or a single item where that alone exceeds it."""
+    ends = np.cumsum(counts)
+    lo = 0
+    while lo < len(counts):
+        hi = max(lo + 1, int(np.searchsorted(ends, ends[lo] - counts[lo] + most,
+                                             side="right")))
+        yield np.arange(lo, hi)
+        lo = hi
 
 
 def _pieces(steps, most: int):
@@ -188,12 +235,50 @@ def _samples(steps, starts, delta, pieces):
     return starts[at] + fraction[:, None] * delta[at], head
 
 
-def _largest_waist(machine, errors, starts, delta, steps, pieces, edges,
-                   top) -> np.ndarray:
-    """The largest |D . n| / 4 (m, `edge_substeps`) over one sub-step of each of ``pieces``
-    (`_pieces`) of the moves."""
-    q, first = _samples(steps, starts, delta, pieces)
-    poses = machine.tool_pose(q, errors)
+def _largest_turn(poses, first) -> np.ndarray:
+    """The largest ||R1 - R0|| (the largest singular value; 2 sin(theta / 2) for a turn by
+    theta) over one sub-step of each piece whose samples' ``poses`` start at rows
+    ``first``, R0 and R1 the tool's rotations at the sub-step's two ends."""
+    change = poses[1:, :3, :3] - poses[:-1, :3, :3]
+    square = np.linalg.eigvalsh(np.matmul(np.swapaxes(change, 1, 2), change))[:, -1]
+    turn = np.sqrt(np.maximum(square, 0.0))
+    turn[first[1:] - 1] = 0.0  # from one piece's end to the next one's start: no sub-step
+    return np.maximum.reduceat(np.append(turn, 0.0), first)
+
+
+def _uncleared(steps, turn, lengths, reach: float, tolerance: float) -> np.ndarray:
+    """How many of the edges of ``lengths`` (m, longest first) a piece of a move of
+    ``steps`` sub-steps and largest `_largest_turn` ``turn`` may need read.
+
+    The bound, by hand. Over a sub-step an edge of length L (vector e in the tool's
+    frame) at the tool's rotations R0, R1 has the twist D = s (R1 - R0) e (s <= 1 its
+    share below the top), so its waist |D . n| / 4 (`edge_substeps`, n a unit vector) is
+    at most |D| / 4 <= L ||R1 - R0|| / 4 <= L turn / 4 = U. If
+    ceil(steps * U / tolerance * _MARGIN) <= steps (the count's own expression, in the
+    same order, each of whose rounded operations is monotone in U), no waist of that edge
+    in that piece can raise the move's count: whichever edge holds the move's largest
+    waist, if it is cleared the count is ``steps`` and the largest over the edges read is
+    no more, and if it is not it is read. So the count is the same to the bit as when
+    every edge is read, given the same poses. The corners the waist is taken from are
+    rounded by some 1e-16 of their ``reach`` (m, from the workpiece's origin) in each
+    operation; U adds `_ROUNDING` of it, and of itself. Since U grows with L, the
+    edges cleared are the shortest: the number left is found by bisection.
+    """
+    n = len(lengths)
+    lo, hi = np.zeros(len(steps), dtype=np.int64), np.full(len(steps), n)
+    while np.any(lo < hi):
+        mid = (lo + hi) // 2
+        bound = (lengths[np.minimum(mid, n - 1)] * turn / 4.0 * (1.0 + _ROUNDING)
+                 + _ROUNDING * reach)
+        raises = np.ceil(steps * bound / tolerance * _MARGIN) > steps
+        open_ = lo < hi
+        lo, hi = (np.where(open_ & raises, mid + 1, lo), np.where(open_ & ~raises, mid, hi))
+    return lo
+
+
+def _largest_waist(poses, first, edges, top) -> np.ndarray:
+    """The largest |D . n| / 4 (m, `edge_substeps`) over one sub-step of each piece whose
+    samples' ``poses`` start at rows ``first``, over ``edges``."""
     rotation, origin = poses[:, :3, :3], poses[:, :3, 3]
     a = np.einsum("nij,kj->nki", rotation, edges[:, 0]) + origin[:, None]
     b = np.einsum("nij,kj->nki", rotation, edges[:, 1]) + origin[:, None]
