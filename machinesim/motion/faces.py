@@ -280,8 +280,10 @@ def _largest_waist(poses, first, edges, top) -> np.ndarray:
     """The largest |D . n| / 4 (m, `edge_substeps`) over one sub-step of each piece whose
     samples' ``poses`` start at rows ``first``, over ``edges``."""
     rotation, origin = poses[:, :3, :3], poses[:, :3, 3]
-    a = np.einsum("nij,kj->nki", rotation, edges[:, 0]) + origin[:, None]
-    b = np.einsum("nij,kj->nki", rotation, edges[:, 1]) + origin[:, None]
+    # both ends of every edge at once, R p + o as rows p^T R^T: a third of the time of
+    # an einsum for each end, to the same counts (not to the last bit of each waist)
+    ends = np.matmul(edges.reshape(-1, 3), np.swapaxes(rotation, 1, 2)) + origin[:, None]
+    a, b = ends[:, 0::2], ends[:, 1::2]
     # the share [lo, hi] of each edge (from a) below the top at each pose
     za, zb = a[..., 2], b[..., 2]
     with np.errstate(divide="ignore", invalid="ignore"):
