@@ -348,13 +348,15 @@ _SHAPE_SIZES = {"box": {"size": 3}, "cylinder": {"radius": 1, "length": 1},
 def _check_shaped(root: ET.Element, path, lines, link: ET.Element, kind: str,
                   part: ET.Element) -> None:
     """A link's ``<visual>`` or ``<collision>`` (``kind``, ``part``) with a shape in its
-    ``<geometry>``, and a visual's ``<material>`` named: the URDF parser under Pinocchio
-    drops such a part otherwise, saying so on stderr only ("Could not parse visual element
-    for Link [table]"), and the machine loaded with the link drawn without it. Named at the
-    part's line (`_in_link_at`)."""
+    ``<geometry>``, and a visual's ``<material>`` with a ``name`` attribute: the URDF parser
+    under Pinocchio drops such a part otherwise, saying so on stderr only ("Could not parse
+    visual element for Link [table]"), and the machine loaded with the link drawn without
+    it. An empty name (``name=""``) it reads, visual kept, so that is no refusal. Named at
+    the part's line (`_in_link_at`)."""
     geometry = part.find("geometry")
     material = part.find("material") if kind == "visual" else None
-    if geometry is not None and len(geometry) and (material is None or material.get("name")):
+    if geometry is not None and len(geometry) and (material is None
+                                                    or material.get("name") is not None):
         return
     found = _in_link_at(root, path, lines, part)
     where = f"{found[0] if found else path}: link {link.get('name')!r} <{kind}>"

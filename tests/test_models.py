@@ -616,6 +616,20 @@ def test_a_table_off_the_workpiece_side_is_refused_naming_its_line(case, text, w
     assert str(raised.value).startswith(f"{path}, line {line}: {words}"), str(raised.value)
 
 
+def test_a_visual_whose_material_has_an_empty_name_loads_with_its_visual(tmp_path):
+    # the URDF parser drops a visual whose <material> has no name attribute (refused), but
+    # reads name="" and keeps the visual: 8 visuals as the shipped file (had been refused)
+    import pinocchio as pin
+
+    text = GROOVING.replace('<material name="bed"/>', '<material name=""/>', 1)
+    path = tmp_path / "empty_material_name.urdf"
+    path.write_text(text)
+    machine = load_machine(path)
+    visuals = [pin.buildGeomFromUrdfString(machine.model, urdf, pin.GeometryType.VISUAL)
+               for urdf in (text, GROOVING)]
+    assert [len(v.geometryObjects) for v in visuals] == [8, 8]
+
+
 def test_a_table_on_the_bed_of_a_gantry_or_under_its_rotary_table_loads(tmp_path):
     # The check refuses a table that does not move with the workpiece, not a table on the
     # stem of a machine whose axes all move the tool: there the laser interferometer reads
