@@ -479,6 +479,12 @@ def test_the_stages_cut_the_rapids_too_as_cut_does():
         assert removed == pytest.approx(groove * (2 if program is both else 1), rel=1e-9,
                                         abs=0.0)
         assert parts[-1].volume == pytest.approx(whole.volume, rel=1e-12)
+    # the view names the stage of rapids alone so, not as groups of feed blocks
+    notes = machine_scene(machine, rapids, tool="v:150", stock=STOCK,
+                          max_triangles=BUDGET).notes
+    assert "part stages: 1 (stock, then after its rapids: it has no feed block)" in notes
+    notes = machine_scene(machine, both, tool="v:150", stock=STOCK, max_triangles=BUDGET).notes
+    assert "part stages: 1 (stock, then after each feed block)" in notes
 
 
 # ----------------------------------------------------------------------- machine scene

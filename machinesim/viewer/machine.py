@@ -181,12 +181,13 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
     smap = add_part(scene, "inspection/part", parts[-1], nominal, max_triangles)
     scene.legends.append(legend_for(smap, notes=(
         "finished part (enlarged, right of the machine) vs the nominal machine's",)))
+    feeds = _feed_count(trajectory)
     scene.notes += [
         f"program: {len(program.moves)} blocks, {trajectory.duration:.3g} s machining",
         f"animation: {keys[-1] / speed:.3g} s ({speed:.3g}x real time)",
         f"part stages: {len(parts) - 1} (stock, then after "
-        + ("each feed block)" if len(parts) - 1 == _feed_count(trajectory) else
-           "groups of feed blocks)"),
+        + ("its rapids: it has no feed block)" if not feeds else
+           "each feed block)" if len(parts) - 1 == feeds else "groups of feed blocks)"),
         "tool path: cyan nominal, red actual (with errors)",
     ]
     chords = arc_chord_note(program, chord_tolerance, takes_path=False)
