@@ -210,8 +210,20 @@ def test_cutting_points_copied_or_pickled_keep_their_design_and_its_gouging_note
     flat = sp.cutting_points(sp.Design(lambda x, y: 0 * x, name="flat"), spiral, theta)
     assert copy.deepcopy(flat).design is flat.design
     with pytest.raises(InputError, match=r"design 'flat' cannot be pickled: its height is "
-                       r".*<lambda>, a local function or a lambda"):
+                       r".*<lambda>, a local function"):
         pickle.dumps(flat)
+
+    # an instance of a class defined in a function, by its class's name (pickle's own
+    # AttributeError had named neither the design nor the way out)
+    class Flat:
+        def __call__(self, x, y):
+            return 0 * x
+
+    local = sp.cutting_points(sp.Design(Flat(), name="flat"), spiral, theta)
+    assert copy.deepcopy(local).design is local.design
+    with pytest.raises(InputError, match=r"design 'flat' cannot be pickled: its height is "
+                       r".*<locals>\.Flat, a local function, class or lambda"):
+        pickle.dumps(local)
 
 
 def rotational(coefficients):

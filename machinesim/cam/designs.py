@@ -53,8 +53,8 @@ class Design:
     A design is a value: `copy.copy` and `copy.deepcopy` give it back itself (its callables
     are shared as deepcopy shares functions). It pickles when its callables do: the designs
     made here (`sine_grid`, `sphere`, `tilted_plane`, `design_from_height_map`,
-    `read_design`) do, their surfaces being module-level classes; a local function or a
-    lambda is refused by name (`__getstate__`).
+    `read_design`) do, their surfaces being module-level classes; a local function, an
+    instance of a local class or a lambda is refused by name (`__getstate__`).
     """
 
     height: Callable
@@ -72,12 +72,15 @@ class Design:
         # design nor the way out
         for role in ("height", "gradient"):
             function = getattr(self, role)
-            qualname = getattr(function, "__qualname__", "")
+            # a callable object has no __qualname__ of its own: its class's names it (an
+            # instance of a class defined in a function had passed, and pickle then said
+            # "Can't pickle local object 'make.<locals>.Surface'")
+            qualname = getattr(function, "__qualname__", None) or type(function).__qualname__
             if "<locals>" in qualname or "<lambda>" in qualname:
                 raise InputError(f"design {self.name!r} cannot be pickled: its {role} is "
-                                 f"{qualname}, a local function or a lambda, which pickle "
-                                 "cannot take; define it at a module's top level (or a "
-                                 "method of a module-level class)", key="design")
+                                 f"{qualname}, a local function, class or lambda, which "
+                                 "pickle cannot take; define it at a module's top level (or "
+                                 "a method of a module-level class)", key="design")
         return dict(self.__dict__)
 
     def __call__(self, x, y) -> np.ndarray:
