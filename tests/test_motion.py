@@ -137,16 +137,29 @@ def test_a_move_of_more_than_a_day_is_noted_with_its_line_and_feed():
     ("G90 G20\nG00 X0. C0.\nG01 X1. C10. F0.001\nM30\n", 101 ** 0.5 / 0.001 * 60,
      f"F0.001 (inch/min under G20; {0.001 * 745.16 ** 0.5 / 101 ** 0.5:.6g} mm/min or "
      "deg/min)"),
-    # G21 and G20 both before the move: Program.unit_words keeps their first lines only, so
-    # which is in force is not known; both readings (38.1 mm at 0.00254 mm/min)
+    # G21 and G20 both before the move: the last before the first motion is in force (a
+    # switch after it is refused), 1.5 inch = 38.1 mm at F0.0001 inch/min = 0.00254 mm/min;
+    # each had been noted with both readings, 'F0.00254 (mm/min or deg/min), or F0.0001
+    # (inch/min) if written under G20', Program.unit_words keeping first lines only
     ("G90 G21\nG20\nG01 X1.5 F0.0001\nM30\n", 38.1 / 0.00254 * 60,
-     "F0.00254 (mm/min or deg/min), or F0.0001 (inch/min) if written under G20"),
+     "F0.0001 (inch/min under G20; 0.00254 mm/min or deg/min)"),
+    ("G20\nG21\nG20\nG01 X1.5 F0.0001\nM30\n", 38.1 / 0.00254 * 60,
+     "F0.0001 (inch/min under G20; 0.00254 mm/min or deg/min)"),
+    ("G90 G20\nG21\nG01 X38.1 F0.00254\nM30\n", 38.1 / 0.00254 * 60,
+     "F0.00254 (mm/min or deg/min)"),
+    ("G21\nG20\nG21\nG01 X38.1 F0.00254\nM30\n", 38.1 / 0.00254 * 60,
+     "F0.00254 (mm/min or deg/min)"),
 ])
 def test_a_slow_move_under_g20_is_noted_with_its_f_as_the_program_wrote_it(text, duration,
                                                                            feed):
-    slow = plan(parse_program(text), load_machine("grooving_4axis"))
+    import pickle
+
+    program = parse_program(text)
+    slow = plan(program, load_machine("grooving_4axis"))
     assert slow.duration == pytest.approx(duration, rel=1e-12)
     (note,) = slow.notes
+    in_force = "G20" if "under G20" in feed else "G21"
+    assert program.unit_in_force == pickle.loads(pickle.dumps(program)).unit_in_force == in_force
     line = text.count("\n") - 1
     assert note == (f"the feed move of line {line} takes {duration:.3g} s "
                     f"({duration / 3600:.3g} h) at {feed}, more than the 24 h one move of a "

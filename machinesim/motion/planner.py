@@ -406,17 +406,17 @@ def slow_move_notes(durations, kinds, lines, feeds, program=None,
     than `LONG_DWELL_S`, each with its line, time and the word that set it.
 
     The feed is the F as ``program`` (these moves from its move ``first`` on) wrote it: in
-    inch/min where G20 is in force at the move's line (`Program.unit_words`), with the
-    mm/min the planner used beside it, and both where the program selected G20 and G21
-    before it. The dwell's P or X is the word its line wrote (`Program.dwell_words`: a
-    canned cycle's P kept from an earlier block with that block's line; none for a program
-    built from moves)."""
+    inch/min where G20 is in force (`Program.unit_in_force`: the last G20/G21 before the
+    first motion), with the mm/min the planner used beside it; both readings for a program
+    unpickled from before that was kept that selected G20. The dwell's P or X is the word
+    its line wrote (`Program.dwell_words`: a canned cycle's P kept from an earlier block with
+    that block's line; none for a program built from moves)."""
     kinds = np.asarray(kinds)
     notes = []
     linear = np.flatnonzero(kinds == KIND_LINEAR)
     i = int(linear[np.argmax(durations[linear])]) if linear.size else None
     if i is not None and durations[i] > SLOW_MOVE_S:
-        feed = _feed_text(feeds[i], int(lines[i]), program, first + i)
+        feed = _feed_text(feeds[i], program, first + i)
         notes.append(f"the feed move of line {int(lines[i])} takes {durations[i]:.3g} s "
                      f"({durations[i] / 3600.0:.3g} h) at {feed}, "
                      f"more than the {SLOW_MOVE_S / 3600.0:g} h one move of a program takes: "
@@ -434,15 +434,17 @@ def slow_move_notes(durations, kinds, lines, feeds, program=None,
     return tuple(notes)
 
 
-def _feed_text(feed: float, line: int, program, move: int) -> str:
+def _feed_text(feed: float, program, move: int) -> str:
     """The feed (m/s; of `slow_move_notes`' move) as its program wrote it."""
     metric = f"F{feed * 60e3:.6g} (mm/min or deg/min)"
     inch = None if program is None else inch_feed_as_written(program, move)
     if inch is None:
         return metric
-    units = program.unit_words
-    if units["G20"] <= line < units.get("G21", math.inf):  # G20 in force, never G21 before
+    in_force = getattr(program, "unit_in_force", None)
+    if in_force == "G20":
         return f"F{inch[0]:.6g} ({inch[1]} under G20; {feed * 60e3:.6g} mm/min or deg/min)"
+    if in_force == "G21":
+        return metric
     return f"{metric}, or F{inch[0]:.6g} ({inch[1]}) if written under G20"
 
 

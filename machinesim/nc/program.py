@@ -169,6 +169,9 @@ class Program:
         The length units the text selected (``"G20"`` inch, ``"G21"`` mm) -> the first line
         each appeared on. Empty when it selected neither: its lengths were read in mm (the
         reader's default), and for programs built from moves.
+    unit_in_force : str or None
+        The one of those the moves were read in: the last selected before the first motion
+        (the reader refuses a switch after it). None where ``unit_words`` is empty.
     dwell_words : Mapping[int, str]
         The line of each dwell word the text wrote (G04's P or X, a canned cycle's P) -> that
         word as written (``"P1500"``, ``"X2."``), and of each hole that dwells a canned
@@ -207,7 +210,7 @@ class Program:
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
                  "tool_table", "tool_changes", "arc_blocks", "arc_chord_tolerance",
-                 "unit_words", "dwell_words", "_moves",
+                 "unit_words", "unit_in_force", "dwell_words", "_moves",
                  "exact_stops", "integer_words", "end_words", "after_end")
 
     def __init__(
@@ -324,20 +327,20 @@ class Program:
                     tool_table=None, tool_changes=(), arc_blocks=0,
                     unit_words=None, exact_stops=(), integer_words=None,
                     end_words=None, after_end=None, arc_chord_tolerance=None,
-                    dwell_words=None) -> Program:
+                    dwell_words=None, unit_in_force=None) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
                       source, work_offsets, states, integer_input, tool_table, tool_changes,
                       arc_blocks, unit_words, exact_stops, integer_words, end_words,
-                      after_end, arc_chord_tolerance, dwell_words)
+                      after_end, arc_chord_tolerance, dwell_words, unit_in_force)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
               source, work_offsets, states, integer_input, tool_table=None,
               tool_changes=(), arc_blocks=0, unit_words=None, exact_stops=(),
               integer_words=None, end_words=None, after_end=None,
-              arc_chord_tolerance=None, dwell_words=None) -> None:
+              arc_chord_tolerance=None, dwell_words=None, unit_in_force=None) -> None:
         set_ = object.__setattr__
         set_(self, "after_end", None if after_end is None else int(after_end))
         set_(self, "source", source)
@@ -360,6 +363,11 @@ class Program:
         set_(self, "arc_chord_tolerance", None if arc_chord_tolerance is None or not arc_blocks
              else float(arc_chord_tolerance))
         set_(self, "unit_words", _states(unit_words, source, "unit_words"))
+        if unit_in_force is not None and unit_in_force not in self.unit_words:
+            raise NCProgramError(f"unit_in_force must be None or one of unit_words "
+                                 f"{sorted(self.unit_words)}, got {unit_in_force!r}",
+                                 source=source, key="unit_in_force")
+        set_(self, "unit_in_force", unit_in_force)
         set_(self, "integer_words", _states(integer_words, source, "integer_words"))
         set_(self, "end_words", _states(end_words, source, "end_words"))
         set_(self, "dwell_words", _line_words(dwell_words, source, "dwell_words"))
@@ -438,9 +446,10 @@ class Program:
             return NotImplemented
         return (
             (self.number, self.source, self.work_offsets, self.states, self.integer_input,
-             self.tool_table, self.unit_words, self.tool_changes)
+             self.tool_table, self.unit_words, self.unit_in_force, self.tool_changes)
             == (other.number, other.source, other.work_offsets, other.states,
-                other.integer_input, other.tool_table, other.unit_words, other.tool_changes)
+                other.integer_input, other.tool_table, other.unit_words, other.unit_in_force,
+                other.tool_changes)
             and self._same_moves(other)
         )
 
@@ -461,7 +470,7 @@ class Program:
             unit_words=self.unit_words, exact_stops=self.exact_stops,
             integer_words=self.integer_words, end_words=self.end_words,
             after_end=self.after_end, arc_chord_tolerance=self.arc_chord_tolerance,
-            dwell_words=self.dwell_words)
+            dwell_words=self.dwell_words, unit_in_force=self.unit_in_force)
 
     def __hash__(self) -> int:
         return hash((self.number, self.source, len(self._kinds)))
@@ -474,7 +483,7 @@ class Program:
                            self.tool_changes, self.arc_blocks, dict(self.unit_words),
                            self.exact_stops, dict(self.integer_words),
                            dict(self.end_words), self.after_end, self.arc_chord_tolerance,
-                           dict(self.dwell_words)))
+                           dict(self.dwell_words), self.unit_in_force))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -491,7 +500,7 @@ def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, nu
              work_offsets, states, integer_input, tool_table=None, tool_changes=(),
              arc_blocks=0, unit_words=None, exact_stops=(), integer_words=None,
              end_words=None, after_end=None, arc_chord_tolerance=None,
-             dwell_words=None) -> Program:
+             dwell_words=None, unit_in_force=None) -> Program:
     """Unpickle a `Program` (the arrays come back writeable copies: made read-only again)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
@@ -501,4 +510,4 @@ def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, nu
                                exact_stops=exact_stops, integer_words=integer_words,
                                end_words=end_words, after_end=after_end,
                                arc_chord_tolerance=arc_chord_tolerance,
-                               dwell_words=dwell_words)
+                               dwell_words=dwell_words, unit_in_force=unit_in_force)

@@ -265,6 +265,9 @@ class Reader:
             tool_table=None if self.tools is None else self.tools.source,
             tool_changes=self.tool_changes(), arc_blocks=self.arc_blocks,
             unit_words=self.unit_words, integer_words=self.integer_words,
+            # no switch after the first motion (`Block.apply_modal`): the units at the end
+            unit_in_force=(("G20" if self.state.inch else "G21") if self.unit_words
+                           else None),
             dwell_words=self.dwell_words,
             end_words={} if self.state.end is None else {self.state.end[1]: self.state.end[0]},
             exact_stops=np.concatenate(self.out.stops) if self.out.stops else (),
