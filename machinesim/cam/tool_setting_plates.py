@@ -66,9 +66,9 @@ SAFE_Z, CLEAR_Z = 2.0 * M_PER_MM, 0.1 * M_PER_MM
 #: Axis values (m, rad; X Y Z A B C) the machine is parked at before every program: the edge
 #: high above the plates (at zero it would sit on them, or in them with a long tool).
 PARKED = (0.0, 0.0, SAFE_Z, 0.0, 0.0, 0.0)
-#: Touch-off staircase: segment length, first Z, Z step and count. Only grooves 0..200 um
-#: deep are seen (the V profile is 0.2 mm tall; deeper sweeps are buried), so a 150 um step
-#: always leaves one segment 2..190 um deep for a touch Z in -0.6 .. +0.79 mm.
+#: Touch-off staircase: segment length, first Z, Z step and count. The touch-off reads the
+#: segments 2..190 um deep (`TOUCH_DEPTHS` of the reading module: why), a range 188 um wide,
+#: so a 150 um step always leaves one segment in it for a touch Z in -0.6 .. +0.79 mm.
 TOUCH_SEGMENT, TOUCH_TOP, TOUCH_STEP, TOUCH_COUNT = (1.5 * M_PER_MM, 0.6 * M_PER_MM,
                                                      0.15 * M_PER_MM, 9)
 #: A plate: the sets (A; C of the set's two grooves), in cutting order. Each groove is

@@ -49,8 +49,11 @@ from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 
 __all__ = ["a_direction", "read_plate", "touch_off_z"]
 
-#: Touch-off: only segments this deep (m) are used: 2 um clears the microscope's noise, 190
-#: um keeps the whole 0.2 mm tall V profile visible.
+#: Touch-off: only segments this deep (m) are used: 2 um clears the microscope's noise; the
+#: 90-deg V (10 mm tall: deeper segments show too) of depth D is 2 D wide, so at 190 um it
+#: lies whole in the profile (+-0.95 mm, TOUCH_WINDOW + 0.2 mm) with 0.26 mm of plate beside
+#: it wherever |dy| <= 0.5 mm puts its centre (a V to 0.45 mm deep is whole there too, but
+#: with no plate beside it at the worst dy). 188 um holds one of the staircase's 150 um steps.
 TOUCH_DEPTHS = (2 * M_PER_UM, 190 * M_PER_UM)
 #: Half width (m) of the windows across the touch-off: the capture range and a quarter
 #: millimetre of plate either side.
