@@ -493,6 +493,7 @@ def check_summary(data: Mapping) -> None:
                 number(value["value"], f"identified[{name!r}].value", section)
                 number(value["std"], f"identified[{name!r}].std", section, null=True,
                        least=0.0)
+    names: dict[str, int] = {}
     for i, figure in enumerate(data["figures"]):
         if not isinstance(figure, Mapping):
             refuse(f"figures[{i}] must be an object, got {figure!r}", "figures")
@@ -502,6 +503,10 @@ def check_summary(data: Mapping) -> None:
         if not isinstance(figure["name"], str) or not figure["name"]:
             refuse(f"figures[{i}].name must be a non-empty string, got {figure['name']!r}",
                    "figures")
+        if names.setdefault(figure["name"], i) != i:
+            refuse(f"figures[{i}] is named {figure['name']!r}, as figures"
+                   f"[{names[figure['name']]}] is; expected each figure once (a figure is "
+                   "read by its name)", "figures")
         if figure["unit"] not in FIGURE_UNITS:
             refuse(f"figures[{i}] ({figure['name']}): unit {figure['unit']!r}; expected one "
                    f"of {', '.join(FIGURE_UNITS)}", "figures")

@@ -107,6 +107,15 @@ def check_result(result: Result) -> None:
     if not isinstance(result.figures, tuple) or not all(
             isinstance(f, Figure) for f in result.figures):
         refuse("figures", "a tuple of Figure")
+    seen: dict[str, int] = {}
+    for i, figure in enumerate(result.figures):
+        j = seen.setdefault(figure.name, i)
+        if j != i:  # a report, a campaign and Result.figure read a figure by its name
+            first = result.figures[j]
+            raise InputError(f"Result.figures: figures {j} and {i} are both named "
+                             f"{figure.name!r} ({first.unit}, {figure.unit}); expected each "
+                             "figure once, under a name of its own: a report, a campaign and "
+                             "Result.figure read a figure by its name", key="figures")
     if not isinstance(result.identification, Identified):
         refuse("identification", "an Identified")
     if not isinstance(result.evaluation, Evaluation):

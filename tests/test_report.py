@@ -515,3 +515,30 @@ def test_a_report_folder_of_a_script_is_named_as_the_script_gave_it_not_as_an_op
                                              r"report folder there") as info:
             ReportFolder(path)
         assert "--out" not in str(info.value) and info.value.key == "out"
+
+
+def test_two_figures_of_one_name_are_refused(tmp_path):
+    # a result held 'x' in um and 'x' in nm: summary.json listed both, Result.figure('x')
+    # gave the first and a campaign's trial record (name -> values) kept the second alone
+    from toy_procedure import WorkpieceX
+
+    from machinesim import Lab
+    from machinesim.experiment import Evaluation, Figure, run
+
+    class TwoX(WorkpieceX):
+        def evaluate(self, lab, identified, programs):
+            return Evaluation((Figure("x", "um", 1.0, 0.5), Figure("y", "um", 1.0, 0.5),
+                               Figure("x", "nm", 1000.0, 2.0)))
+
+    with pytest.raises(InputError, match=r"Result.figures: figures 0 and 2 are both named "
+                                         r"'x' \(um, nm\); expected each figure once"):
+        run(TwoX(), Lab("robonano_a0ib", noise=False))
+    figure = {"name": "x", "unit": "um", "before": 1.0, "after": 0.5, "paper_before": None,
+              "paper_after": None}
+    base = {"paper": "001", "procedure": "p", "machine": "m", "seed": 0, "noise": False,
+            "injected": {}, "identified": {}}
+    check_summary({**base, "figures": [figure, {**figure, "name": "y"}]})
+    with pytest.raises(InputError, match=r"figures\[1\] is named 'x', as figures\[0\] is"):
+        ReportFolder(tmp_path / "out").write_summary(
+            {**base, "figures": [figure, {**figure, "unit": "nm"}]})
+    assert not (tmp_path / "out" / "summary.json").exists()
