@@ -976,6 +976,25 @@ def test_trials_written_before_the_after_std_still_assemble():
     assert "after_z" not in summarise(ds)["figures"]["a_dx"]
 
 
+def test_trials_that_give_a_figure_in_two_units_are_refused():
+    """Trial 0 gave a_dx as 5 um, trial 1 as 5000 nm: the Dataset held 5 and 5000 in one
+    column of figure_unit 'um' (the first trial's), its mean 2502.5 um."""
+    from machinesim.campaign.results import assemble
+
+    spec = {"procedure": "tool_setting_6axis", "seed": 0, "vary": {}, "noise": True,
+            "identify_only": False}
+    records = [{"trial": t, "drawn": {}, "injected": {}, "identified": {},
+                "figures": {"a_dx": [unit, before, 0.2, None]}, "elapsed_s": 1.0,
+                "error": None} for t, (unit, before) in enumerate([("um", 5.0), ("nm", 5e3)])]
+    for order in (records, records[::-1]):
+        with pytest.raises(InputError, match=r"gives figure 'a_dx' in (nm|um), trial [01] in "
+                                             r"(um|nm): .* \(trials/trial_000000.json, "
+                                             r"trials/trial_000001.json\)"):
+            assemble(order, spec, 2)
+    records[1]["figures"]["a_dx"] = ["um", 5.0, 0.2, None]
+    assert assemble(records, spec, 2)["before"].values[:, 0].tolist() == [5.0, 5.0]
+
+
 def test_a_campaign_keeps_the_identifications_notes_and_says_how_many_trials_gave_them(
         tmp_path, capsys):
     """A fit's notes (`Identified.notes`: readings that do not fit the model, ...) were not

@@ -95,6 +95,16 @@ class Assembly:
         if not isinstance(t, int) or not 0 <= t < self.trials or self.added[t]:
             raise InputError(f"trial {t!r}; expected each of the records of trials 0 .. "
                              f"{self.trials - 1} once", key="records")
+        for name, value in record["figures"].items():
+            seen = self.units.get(name)
+            if seen is not None and seen[1] != value[0]:
+                first, then = sorted((t, seen[0]))
+                raise InputError(
+                    f"trial {t} gives figure {name!r} in {value[0]}, trial {seen[0]} in "
+                    f"{seen[1]}: a campaign's figure holds one unit (trial files of another "
+                    "version of machinesim, or edited?); delete the wrong one's file "
+                    f"(trials/trial_{first:06d}.json, trials/trial_{then:06d}.json) and run "
+                    "again to compute it anew", key="figures")
         self.added[t] = True
         for key, tables in self._TABLES.items():
             entries = record[key]
