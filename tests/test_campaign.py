@@ -539,6 +539,10 @@ def test_a_trial_file_holding_another_trial_says_what_it_holds(campaign, tmp_pat
       "elapsed_s": 1.0, "error": 3}, "error"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
       "notes": "misfit", "elapsed_s": 1.0, "error": None}, "notes"),
+    # a unit no figure has went into the Dataset's figure_unit as it stood
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {},
+      "figures": {"depth_error": ["furlong", 1.0, 0.5]}, "elapsed_s": 1.0, "error": None},
+     "figures"),
 ])
 def test_a_trial_file_that_is_json_but_no_trial_record_is_refused_naming_the_key(
         campaign, tmp_path, record, key):

@@ -37,7 +37,7 @@ from machinesim._io import (
 from machinesim._json import json_text, read_json
 from machinesim.campaign.assembly import Assembly, assemble, versions  # re-exported
 from machinesim.exceptions import FileError, InputError, brief
-from machinesim.experiment import note_kind  # re-exported
+from machinesim.experiment import FIGURE_UNITS, note_kind  # note_kind re-exported
 
 __all__ = ["LOCK_NAME", "Assembly", "CampaignFolder", "assemble", "campaign_id",
            "finished_trials", "legacy_campaign_id", "locked", "note_kind", "refuse_foreign",
@@ -433,8 +433,8 @@ def _number(value) -> bool:
 def _check_record(raw: dict, path: Path) -> None:
     """Refuse a trial file that is JSON but not a trial's record (`trials.run_trial`), naming
     the key: ``drawn`` and ``injected`` name -> number, ``identified`` name -> [value, std],
-    ``figures`` name -> [unit, before, after(, after_std)], ``notes`` (when there) a list of
-    texts, ``elapsed_s`` a number, ``error`` null or a message; assembling it would
+    ``figures`` name -> [unit (`FIGURE_UNITS`), before, after(, after_std)], ``notes`` (when
+    there) a list of texts, ``elapsed_s`` a number, ``error`` null or a message; assembling it would
     otherwise fail on the first key it lacks."""
     def refuse(key: str, what: str) -> None:
         raise InputError(f"{brief(repr(raw.get(key)))}; expected {what} (a trial record as "
@@ -447,8 +447,9 @@ def _check_record(raw: dict, path: Path) -> None:
         "identified": (lambda v: isinstance(v, list) and len(v) == 2
                        and all(_number(x) for x in v), "an object of [value, std]"),
         "figures": (lambda v: isinstance(v, list) and len(v) in (3, 4)
-                    and isinstance(v[0], str) and all(_number(x) for x in v[1:]),
-                    "an object of [unit, before, after, after_std]"),
+                    and v[0] in FIGURE_UNITS and all(_number(x) for x in v[1:]),
+                    "an object of [unit, before, after, after_std], the unit one of "
+                    + " ".join(FIGURE_UNITS)),
     }
     for key, (good, what) in entry_checks.items():
         entries = raw.get(key)
