@@ -336,9 +336,12 @@ class Result:
 
     def summary(self) -> dict:
         """summary.json of this result, in the schema of docs/reports.md."""
+        seed = self.seed  # a SeedSequence (a campaign's trial): its entropy and spawn key
+        spawned = isinstance(seed, np.random.SeedSequence)
         return {
             "paper": self.paper, "procedure": self.procedure, "machine": self.machine,
-            "seed": self.seed, "noise": self.noise,
+            "seed": seed.entropy if spawned else seed, "noise": self.noise,
+            **({"spawn_key": list(seed.spawn_key)} if spawned and seed.spawn_key else {}),
             "realism": {"preset": _preset(self.realism), "on": list(self.realism)},
             "injected": dict(self.injected),
             "identified": {name: {"value": v, "std": s}

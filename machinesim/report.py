@@ -28,8 +28,8 @@ UNIT_SUFFIXES = ("_m", "_mm", "_um", "_nm", "_rad", "_mrad", "_urad", "_deg", "_
                  "_s", "_h", "_min", "_mm3", "_m3", "_percent", "_count", "_ratio", "_index",
                  "_per_s", "_lines")
 #: Keys that are not quantities.
-PLAIN_KEYS = {"seed", "noise", "machine", "paper", "program", "scenario", "note", "notes",
-              "name", "files", "version", "units", "procedure", "line", "tool",
+PLAIN_KEYS = {"seed", "spawn_key", "noise", "machine", "paper", "program", "scenario", "note",
+              "notes", "name", "files", "version", "units", "procedure", "line", "tool",
               "rows"}  # a table's rows: its "columns" name the units
 
 
@@ -479,6 +479,10 @@ def check_summary(data: Mapping) -> None:
                 kind is int and isinstance(data[key], bool)):
             refuse(f"expected {key!r} as {kind.__name__}, got {data.get(key)!r}", key)
     number(data["seed"], "seed", "seed", least=0)
+    spawn_key = data.get("spawn_key", [])
+    if not isinstance(spawn_key, list) or not all(
+            isinstance(k, int) and not isinstance(k, bool) and k >= 0 for k in spawn_key):
+        refuse(f"expected 'spawn_key' as a list of ints >= 0, got {spawn_key!r}", "spawn_key")
     for section in ("injected", "identified"):
         for name, value in data[section].items():
             if not isinstance(name, str) or not _PARAMETER_RE.fullmatch(name):

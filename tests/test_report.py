@@ -542,3 +542,29 @@ def test_two_figures_of_one_name_are_refused(tmp_path):
         ReportFolder(tmp_path / "out").write_summary(
             {**base, "figures": [figure, {**figure, "unit": "nm"}]})
     assert not (tmp_path / "out" / "summary.json").exists()
+
+
+def test_a_result_of_a_lab_seeded_with_a_seed_sequence_writes_its_report(tmp_path):
+    # a campaign's trial 2 of seed 5 replayed (its lab seeded SeedSequence(5, spawn_key=(2,)),
+    # docs/campaigns.md): the Result took the seed, its report was refused, "summary.json:
+    # expected 'seed' as int, got SeedSequence(...)", and nothing written
+    from toy_procedure import WorkpieceX
+
+    from machinesim import Lab
+    from machinesim.experiment import run
+
+    for sequence, key in ((np.random.SeedSequence(5).spawn(3)[2], [2]),
+                          (np.random.SeedSequence(5), None)):
+        result = run(WorkpieceX(0.5), Lab("robonano_a0ib", noise=False, seed=sequence))
+        out = tmp_path / str(key)
+        ReportFolder(out).write_result(result)
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["seed"] == 5 and summary.get("spawn_key") == key
+        again = np.random.SeedSequence(summary["seed"],
+                                       spawn_key=tuple(summary.get("spawn_key", ())))
+        assert np.array_equal(again.generate_state(4), sequence.generate_state(4))
+        check_summary(summary)
+    base = {"paper": "001", "procedure": "p", "machine": "m", "seed": 0, "noise": False,
+            "injected": {}, "identified": {}, "figures": []}
+    with pytest.raises(InputError, match=r"'spawn_key' as a list of ints >= 0, got \[-1\]"):
+        check_summary({**base, "spawn_key": [-1]})
