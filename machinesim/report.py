@@ -524,7 +524,7 @@ def check_summary(data: Mapping) -> None:
     if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
         refuse(f"expected 'files' as a list of file names, got {files!r}", "files")
     if "budget" in data:
-        _check_budget(data["budget"])
+        _check_budget(data["budget"], {f["name"]: f["unit"] for f in data["figures"]})
     if "background" in data:
         background = data["background"]
         if (not isinstance(background, Mapping) or set(background) != {"file", "nonzero_count"}
@@ -543,9 +543,10 @@ def check_summary(data: Mapping) -> None:
     check_units(rest)
 
 
-def _check_budget(rows) -> None:
+def _check_budget(rows, units: Mapping[str, str]) -> None:
     """``budget`` of summary.json: a list of rows with `machinesim.budget.BUDGET_KEYS` (and
-    ``notes``, a list of non-empty strings, where a row has any)."""
+    ``notes``, a list of non-empty strings, where a row has any), each of a figure of the
+    summary's ``units`` (figure name -> unit), in its unit."""
     from machinesim.budget import BUDGET_KEYS, BUDGET_OPTIONAL_KEYS
 
     if not isinstance(rows, list):
@@ -566,6 +567,12 @@ def _check_budget(rows) -> None:
             if not isinstance(row[key], str) or not row[key]:
                 raise InputError(f"summary.json: budget[{i}].{key} must be a non-empty "
                                  f"string, got {row[key]!r}", key="budget")
+        if units.get(row["figure"]) != row["unit"]:
+            held = (f"in {units[row['figure']]}" if row["figure"] in units else
+                    f"none of that name (its figures: {', '.join(units) or 'none'})")
+            raise InputError(f"summary.json: budget[{i}] gives figure {row['figure']!r} in "
+                             f"{row['unit']}, the summary's figures {held}; expected the "
+                             "budget of this run's figures (another run's?)", key="budget")
         for key in ("after_all", "after_without", "share"):
             value = row[key]
             if (not isinstance(value, (int, float)) or isinstance(value, bool)

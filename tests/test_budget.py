@@ -97,8 +97,10 @@ def test_the_report_writes_the_budget_and_the_summary_accepts_it(tmp_path):
     folder = ReportFolder(tmp_path / "out")
     text = folder.write_budget(budget)
     assert budget.table() in text
+    # the budget's figures are the summary's (a budget of figures it has not is refused)
+    figures = [f.as_dict() for f in synthetic_run(None).figures]
     base = {"paper": "001", "procedure": "p", "machine": "m", "seed": 0, "noise": False,
-            "injected": {}, "identified": {}, "figures": [], "budget": budget.to_dict()}
+            "injected": {}, "identified": {}, "figures": figures, "budget": budget.to_dict()}
     folder.write_summary(base)
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert Budget.from_dict(summary["budget"]) == budget
@@ -144,8 +146,9 @@ def test_a_reruns_notes_reach_its_rows_budget_md_and_summary_json(tmp_path):
                          "off noted what the run with every source on did not (numbers "
                          "aside): its rows' 'after, source off' rest on that "
                          f"identification.\n\n- artefact_errors off: {misfit}\n")
+    figures = [f.as_dict() for f in synthetic_run(None).figures]  # the budget's figures
     base = {"paper": "001", "procedure": "p", "machine": "m", "seed": 0, "noise": False,
-            "injected": {}, "identified": {}, "figures": [], "budget": rows}
+            "injected": {}, "identified": {}, "figures": figures, "budget": rows}
     folder.write_summary(base)
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     check_summary(summary)

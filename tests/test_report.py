@@ -568,3 +568,24 @@ def test_a_result_of_a_lab_seeded_with_a_seed_sequence_writes_its_report(tmp_pat
             "injected": {}, "identified": {}, "figures": []}
     with pytest.raises(InputError, match=r"'spawn_key' as a list of ints >= 0, got \[-1\]"):
         check_summary({**base, "spawn_key": [-1]})
+
+
+def test_a_budget_of_figures_the_result_has_not_or_in_another_unit_is_refused(tmp_path):
+    # the toy's figure is x in um: a budget giving x in nm, or a_dx, was written beside it,
+    # one summary.json holding x in um and x in nm
+    from machinesim.budget import Budget
+
+    result = _toy_result(parts=())
+    row = {"source": "instrument_noise", "figure": "x", "unit": "um", "after_all": 0.5,
+           "after_without": 0.4, "share": 0.36}
+    for change, message in (({"unit": "nm"}, r"figure 'x' in nm, the summary's figures in "
+                                             r"um; expected the budget of this run's figures"),
+                            ({"figure": "a_dx"}, r"figure 'a_dx' in um, the summary's figures "
+                                                 r"none of that name \(its figures: x\)")):
+        out = tmp_path / change.get("figure", "x")
+        with pytest.raises(InputError, match=r"budget\[0\] gives " + message):
+            ReportFolder(out).write_result(result, budget=Budget.from_dict([{**row, **change}]))
+        assert not out.exists() or not any(out.iterdir())
+    ReportFolder(tmp_path / "right").write_result(result, budget=Budget.from_dict([row]))
+    summary = json.loads((tmp_path / "right" / "summary.json").read_text())
+    assert summary["budget"] == [row]
