@@ -112,6 +112,8 @@ class Budget:
     @classmethod
     def from_dict(cls, rows: Sequence[Mapping]) -> Budget:
         """The inverse of `to_dict` (rows as summary.json holds them)."""
+        from machinesim.experiment import FIGURE_UNITS
+
         if isinstance(rows, str | bytes | Mapping) or not isinstance(rows, Sequence):
             raise InputError(f"budget: expected a list of rows, got {type(rows).__name__}",
                              key="budget")
@@ -123,6 +125,13 @@ class Budget:
                 raise InputError(f"budget[{i}]: expected an object with "
                                  f"{', '.join(BUDGET_KEYS)}; lacks {', '.join(missing)}",
                                  key="budget")
+            for key in ("source", "figure", "unit"):  # str() had made None a source "None"
+                if not isinstance(row[key], str) or not row[key]:
+                    raise InputError(f"budget[{i}].{key} must be a non-empty string, got "
+                                     f"{row[key]!r}", key="budget")
+            if row["unit"] not in FIGURE_UNITS:
+                raise InputError(f"budget[{i}].unit {row['unit']!r}; expected one of "
+                                 f"{', '.join(FIGURE_UNITS)} (a figure's unit)", key="budget")
             numbers = []
             for key in ("after_all", "after_without", "share"):
                 value = row[key]
@@ -136,8 +145,8 @@ class Budget:
                                                       for n in notes):
                 raise InputError(f"budget[{i}].notes must be a list of non-empty strings, "
                                  f"got {notes!r}", key="budget")
-            out.append(BudgetRow(str(row["source"]), str(row["figure"]), str(row["unit"]),
-                                 *numbers, tuple(notes)))
+            out.append(BudgetRow(row["source"], row["figure"], row["unit"], *numbers,
+                                 tuple(notes)))
         return cls(tuple(out))
 
     @property

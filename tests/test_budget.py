@@ -264,7 +264,14 @@ def test_a_run_that_cannot_be_called_or_rows_that_are_no_numbers_are_refused():
                                                         r"finite number, got 'x'"),
                          ([{**row, "share": None}], r"budget\[0\]\.share must be a finite "
                                                     r"number, got None"),
-                         (5, r"budget: expected a list of rows, got int")):
+                         (5, r"budget: expected a list of rows, got int"),
+                         # read as the source 'None', the figure '3' and the unit 'furlong'
+                         ([{**row, "source": None}], r"budget\[0\]\.source must be a "
+                                                     r"non-empty string, got None"),
+                         ([{**row, "figure": 3}], r"budget\[0\]\.figure must be a non-empty "
+                                                  r"string, got 3"),
+                         ([{**row, "unit": "furlong"}], r"budget\[0\]\.unit 'furlong'; "
+                                                        r"expected one of m, mm, um")):
         with pytest.raises(InputError, match=message):
             Budget.from_dict(bad)
 
