@@ -680,6 +680,10 @@ SWITCHES_AFTER_MOTION = [
     # the first motions on the vectorised path (a run of simple lines)
     ("G00 X0\n" + "".join(f"G01 X{k}. F100.\n" for k in range(20)) + "N5 G20\n", 22,
      4, 1, "G20", "mm", "inch"),
+    # a reference return of zeros is none (the test below), one with a length word is
+    ("G91 G28 Z0.\nG90 G28 X1.\nG20\nM30\n", 3, 1, 2, "G20", "mm", "inch"),
+    ("G53 Z0.\nG53 Z-1.\nG20\nM30\n", 3, 1, 2, "G20", "mm", "inch"),
+    ("G20\nG91 G28 Z0.\nG90 G00 X0\nG21\nM30\n", 4, 1, 3, "G21", "inch", "mm"),  # G00 counts
 ]
 
 
@@ -696,6 +700,33 @@ def test_a_main_program_switching_g20_g21_after_a_motion_is_refused_naming_its_l
         f"{was} to {now} after the first motion (line {moved}), whose moves were read in "
         f"{was}: FANUC forbids switching G20/G21 within a program; select the units once, at "
         "the head of the program, before any motion")
+
+
+@pytest.mark.parametrize(("text", "expected_mm"), [
+    # a post's header: Z to the reference (0.1 m), then the units and an inch move (G54's X
+    # offset is 10 mm: X1. is 25.4 mm + 10 mm)
+    ("G91 G28 Z0.\nG90\nG20\nG00 X1.\nM30\n",
+     [[math.nan, 100.0], [35.4, 100.0]]),
+    # G53 of zeros at the reference; the angle is in degrees in either unit
+    ("G53 Z0. C90.\nG20\nG00 X1. Z-1.\nM30\n",
+     [[math.nan, 100.0], [35.4, -25.4]]),
+    # G90: through the work zero (G54's X), then the reference, then 25.4 mm + 10 mm
+    ("G90 G28 X0 Y0\nG20\nG00 X1.\nM30\n",
+     [[10.0, math.nan], [0.0, math.nan], [35.4, math.nan]]),
+    # the other way: inch, back to mm before the first move with a length
+    ("G20\nG91 G28 Z0.\nG28 X0. Y0.\nG90 G21 G00 X1.\nM30\n",
+     [[math.nan, 100.0], [0.0, 100.0], [11.0, 100.0]]),
+])
+def test_a_reference_return_of_zeros_is_no_first_motion_for_the_units(text, expected_mm):
+    # its target is the same read in mm or inch, so the units after it are read, and the
+    # moves after the switch in the new unit: X1. is 25.4 mm under G20, 1 mm under G21
+    for fast in (True, False):
+        program = parse_program(text, reference={"Z": 0.1}, fast=fast,
+                                work_offsets={"G54": {"X": 10 * MM}})
+        got = program.targets[:, [0, 2]] / MM
+        np.testing.assert_allclose(got, expected_mm, rtol=0.0, atol=1e-12)  # NaN: unset
+    if "C90." in text:
+        assert program.targets[:, 5].tolist() == pytest.approx([math.pi / 2] * 2, abs=1e-15)
 
 
 def test_units_selected_before_any_motion_or_restated_after_it_are_read():

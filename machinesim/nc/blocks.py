@@ -364,9 +364,9 @@ class Block:
     # --- moves
 
     def add(self, kind: str, dwell_s: float, block_number: int | None, *,
-            feed: float | None = None) -> None:
+            feed: float | None = None, units_free: bool = False) -> None:
         """Add a move to the modal target; a linear one at ``feed`` (m/s), the modal feed
-        when None."""
+        when None. ``units_free``: its target is the same in mm and inch (`_Output.add`)."""
         out, state = self.reader.out, self.state
         if out.count + 1 > MAX_MOVES:
             raise self.fail(f"the program expands to more than {MAX_MOVES} moves",
@@ -374,7 +374,7 @@ class Block:
         if kind == "linear" and feed is None:
             feed = state.feed
         out.add(MOVE_KINDS.index(kind), state.target, feed if kind == "linear" else None,
-                dwell_s, self.line, block_number, state.spindle)
+                dwell_s, self.line, block_number, state.spindle, units_free=units_free)
 
     def reserve(self, n: int, word: Word) -> None:
         if self.reader.out.count + n > MAX_MOVES:

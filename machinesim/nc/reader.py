@@ -144,10 +144,14 @@ class _Output:
         self.m_codes: dict[int, tuple[int, ...]] = {}
         self.stops: list[np.ndarray] = []  # indices of moves that end in an exact stop
         self.count = 0
-        self.first_motion: int | None = None  # the line of the first move that is no dwell
+        # the line of the first move that is no dwell and whose target depends on the units
+        self.first_motion: int | None = None
 
     def add(self, kind: int, target: Mapping[str, float], feed: float | None, dwell: float,
-            line: int, block: int | None, spindle: float | None) -> None:
+            line: int, block: int | None, spindle: float | None, *,
+            units_free: bool = False) -> None:
+        """One move; ``units_free`` when its target is the same read in mm or in inch (a
+        G28 or G53 of zero lengths): it is no first motion for the units rule."""
         rows, kinds, feeds, dwells, lines, spindles, blocks = self.lists
         rows.append(tuple(target.get(a, math.nan) for a in AXES))
         kinds.append(kind)
@@ -157,7 +161,7 @@ class _Output:
         spindles.append(math.nan if spindle is None else spindle)
         blocks.append(-1 if block is None else block)
         self.count += 1
-        if self.first_motion is None and kind != KIND_DWELL:
+        if self.first_motion is None and kind != KIND_DWELL and not units_free:
             self.first_motion = line
 
     def add_arrays(self, *arrays: np.ndarray) -> None:
