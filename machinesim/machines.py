@@ -143,6 +143,17 @@ def machines_summary() -> list[str]:
     return lines
 
 
+#: The Machine arrays made read-only (`_read_only`), copies and pickles included.
+_READ_ONLY = ("lower", "upper", "resolution", "rapid_rate", "rotary")
+
+
+def _read_only(values) -> np.ndarray:
+    """``values`` as a new array that refuses writes."""
+    array = np.array(values)
+    array.flags.writeable = False
+    return array
+
+
 @functools.lru_cache(maxsize=16)
 def _load(path: Path, mtime_ns: int, size: int) -> Machine:
     """The machine of ``path`` as it is now (a file edited since loads again)."""
@@ -178,11 +189,13 @@ class Machine:
             self.kin.full_q(zero, nominal), "tool_tip", relative_to="tool_mount"))
         check_joint_frames(self.path, self._axes,
                            self.kin.axis_frames(self.kin.full_q(zero, nominal)), places)
-        self.lower = np.array([a.lower for a in self._axes])
-        self.upper = np.array([a.upper for a in self._axes])
-        self.resolution = np.array([a.resolution for a in self._axes])
-        self.rapid_rate = np.array([a.velocity for a in self._axes])
-        self.rotary = np.array([a.rotary for a in self._axes])
+        # read-only: load_machine hands one cached machine to every caller, so a write
+        # (machine.lower[0] = ...) would move the travel of every later load
+        self.lower = _read_only([a.lower for a in self._axes])
+        self.upper = _read_only([a.upper for a in self._axes])
+        self.resolution = _read_only([a.resolution for a in self._axes])
+        self.rapid_rate = _read_only([a.velocity for a in self._axes])
+        self.rotary = _read_only([a.rotary for a in self._axes])
         self._bindings: dict[int, Binding] = {}
 
     def __repr__(self) -> str:
@@ -195,6 +208,13 @@ class Machine:
         state = self.__dict__.copy()
         state["_bindings"] = {}
         return state
+
+    def __setstate__(self, state: dict) -> None:
+        # numpy gives a pickled or copied array back writeable: read-only again
+        self.__dict__.update(state)
+        for name in _READ_ONLY:
+            if name in state:
+                self.__dict__[name] = _read_only(state[name])
 
     @functools.cached_property
     def digest(self) -> str:

@@ -792,6 +792,30 @@ def test_a_urdf_edited_after_loading_loads_again(tmp_path):
     assert load_machine(path).upper[0] == 0.125
 
 
+@pytest.mark.parametrize("name", ["lower", "upper", "resolution", "rapid_rate", "rotary"])
+def test_a_machine_array_refuses_a_write_and_the_cache_hands_it_unchanged(name):
+    """load_machine hands one cached Machine to every caller: a write into its travel,
+    resolution or rates had moved them for every later load (writeable arrays)."""
+    import copy
+    import pickle
+
+    machine = load_machine("grooving_4axis")
+    before = getattr(machine, name).copy()
+    with pytest.raises(ValueError, match="read-only"):
+        getattr(machine, name)[0] = 7
+    with pytest.raises(ValueError, match="read-only"):
+        getattr(machine, name)[:] += 1
+    again = load_machine("grooving_4axis")
+    assert again is machine
+    np.testing.assert_array_equal(getattr(again, name), before)
+    # a copy or a pickle (a Result sent to a worker) keeps them read-only
+    for other in (copy.copy(machine), copy.deepcopy(machine),
+                  pickle.loads(pickle.dumps(machine))):
+        np.testing.assert_array_equal(getattr(other, name), before)
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(other, name)[0] = 7
+
+
 def test_a_urdf_past_the_size_cap_is_refused_and_one_at_it_loads(tmp_path):
     """A 200 MB file took 9 minutes to parse (one long comment, which expat scanned again
     with every 64 kB it was fed) or 3.6 GB of memory (links): a file larger than any
