@@ -10,8 +10,11 @@ an `InputError` naming the parameter, the value, and the bound with why it is th
 from __future__ import annotations
 
 import math
+import numbers
 
-from machinesim.exceptions import InputError
+import numpy as np
+
+from machinesim.exceptions import InputError, brief
 from machinesim.units import M_PER_MM, angle_text, length_text
 
 #: Default length of a tool's body from its edge point to the holder (m). Ten times the
@@ -55,8 +58,20 @@ def _bound(value: float, why: str) -> str:
     return f"{value / M_PER_MM:g} mm ({value:g} m, {why})"
 
 
+def _real(name: str, value, unit: str) -> float:
+    """``value`` as a float if it is a number, else InputError naming it: a size given as
+    text ("1") ended in a TypeError deep in the mesh, an array (even of one number) in
+    "unhashable type", and True was read as 1 (1 m, 1 rad)."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        spec = ("; a tool written as text, in mm and deg, is read by tool_from_spec "
+                "('flat:1.0', 'v:90')" if isinstance(value, str) else "")
+        raise InputError(f"{name} must be a number in {unit}, got {brief(repr(value))} "
+                         f"({type(value).__name__}){spec}", key=name)
+    return float(value)
+
+
 def _check_positive(name: str, value: float) -> float:
-    value = float(value)
+    value = _real(name, value, "m")
     if not math.isfinite(value) or value <= 0.0:
         raise InputError(f"{name} must be a positive finite number, got {length_text(value)}",
                          key=name)
@@ -88,7 +103,7 @@ def _check_size(name: str, value: float) -> float:
 
 
 def _check_angle(name: str, value: float) -> float:
-    value = float(value)
+    value = _real(name, value, "rad")
     if not math.isfinite(value) or not 0.0 < value < math.pi:
         raise InputError(
             f"{name} must lie between 0 and 180 deg (0 and pi rad), got {angle_text(value)}",

@@ -1,6 +1,7 @@
 """Tools: profile geometry against the analytic shapes, chord tolerances, specs."""
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -391,6 +392,35 @@ def test_a_tool_below_what_the_engine_resolves_is_refused(make, name):
     with pytest.raises(InputError,
                        match=rf"{name} must be at least 1e-06 mm \(1e-09 m, MIN_TOOL_SIZE_M"):
         make(math.nextafter(MIN_TOOL_SIZE_M, 0.0))
+
+
+@pytest.mark.parametrize(
+    ("make", "name", "shown"),
+    [
+        (lambda: FlatEndMill("1"), "radius", "'1' (str)"),
+        (lambda: FlatEndMill(True), "radius", "True (bool)"),
+        (lambda: FlatEndMill(np.array([1e-3])), "radius", "array([0.001]) (ndarray)"),
+        (lambda: FlatEndMill(1e-3, chord_tol="1e-6"), "chord_tol", "'1e-6' (str)"),
+        (lambda: FlatEndMill(1e-3, shank_radius=True), "shank_radius", "True (bool)"),
+        (lambda: BallEndMill("0.001"), "radius", "'0.001' (str)"),
+        (lambda: BallEndMill(5e-4, height="5"), "height", "'5' (str)"),
+        (lambda: FlatEndMill(None), "radius", "None (NoneType)"),
+        (lambda: VTool("1.5"), "included_angle", "'1.5' (str)"),
+        (lambda: VTool(True), "included_angle", "True (bool)"),
+        (lambda: RoundNoseTool("0.001", 1.5), "nose_radius", "'0.001' (str)"),
+        (lambda: RoundNoseTool(1e-3, 1.5, flank_height="0.001"), "flank_height",
+         "'0.001' (str)"),
+    ],
+)
+def test_a_tool_size_that_is_no_number_is_refused_naming_it(make, name, shown):
+    """FlatEndMill("1") ended in "TypeError: '>=' not supported", VTool("1.5") in one of
+    'str' / 'float', an array radius in "unhashable type", and True was taken as 1 (a V
+    of 1 rad, a 1 m shank)."""
+    unit = "rad" if name == "included_angle" else "m"
+    with pytest.raises(InputError, match=rf"{name} must be a number in {unit}, got "
+                                         rf"{re.escape(shown)}") as raised:
+        make()
+    assert raised.value.key == name
 
 
 def test_a_spec_refusal_names_the_spec_once_and_its_parameter_once():
