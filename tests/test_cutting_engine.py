@@ -1,6 +1,7 @@
 """Material removal against analytic grooves, pyramids and capsules; reports; determinism."""
 
 import math
+import re
 
 import manifold3d
 import numpy as np
@@ -532,3 +533,30 @@ def test_a_sweep_poking_out_of_another_is_kept(monkeypatch):
     # at the same place the shallow pass lies inside the deep one: dropped
     remove(stock, tool, [deep, groove_x(2e-3, 0.2e-3)], method="boolean")
     assert found[1].tolist() == [False, True]
+
+
+def test_a_move_a_km_long_cuts_its_hand_volume_and_a_pose_farther_out_is_refused():
+    """A V from the middle of a 10 mm block to 40 m away cuts the groove of 5 mm by hand
+    (d^2 tan 45 deg per length), to 1 km within 1e-5 (1.7e-6 measured); remove refuses a
+    pose beyond FARTHEST_M (1 km), as cut refuses a move: from -1e9 to 1e9 m a flat end
+    mill's slot through the block removed nothing (an empty cut), from -1e7 to 1e7 m 1.5 %
+    less, with no word."""
+    from machinesim.end_mills import FlatEndMill
+
+    def poses(*points):
+        out = np.tile(np.eye(4), (len(points), 1, 1))
+        out[:, :3, 3] = points
+        return out
+
+    stock, depth = block(10e-3, 10e-3, 2e-3), 0.1e-3
+    hand = 5e-3 * depth ** 2
+    for end, rel in ((39.99, 1e-14), (-39.99, 1e-14), (999.99, 1e-5), (-999.99, 1e-14)):
+        _, report = remove(stock, VTool(math.pi / 2),
+                           [poses((5e-3, 5e-3, -depth), (end, 5e-3, -depth))])
+        assert report.removed_volume == pytest.approx(hand, rel=rel, abs=0), end
+    for far in (1e9, 1e7, 1000.01):
+        with pytest.raises(InputError, match=rf"path 0: pose 0 lies {re.escape(f'{far:g}')} "
+                                             r"m from the workpiece's origin .* expected "
+                                             r"within 1000 m"):
+            remove(stock, FlatEndMill(0.5e-3),
+                   [poses((-far, 5e-3, -depth), (far, 5e-3, -depth))])

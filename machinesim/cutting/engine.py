@@ -87,6 +87,14 @@ from machinesim.tolerances import (
 from machinesim.tools import Tool, arc_segments
 from machinesim.workpiece import Part
 
+#: Farthest the tool may go from the workpiece origin in a cut, m (any machine's travel is
+#: well within): float64's spacing grows with distance, 1.2e-7 m at 1e9 m, where a sweep
+#: across a 10 mm block came out as no cut at all. `remove` refuses a pose beyond it, as
+#: `machinesim.cutting.cut` refuses a move: a flat end mill's slot from -1e9 to 1e9 m
+#: through a 10 mm block removed nothing (an empty cut), from -1e7 to 1e7 m 1.5 % less; a
+#: V groove from the block's middle to 1 km away removes 1.7e-6 less, to 40 m the same bits
+#: as to 11 mm.
+FARTHEST_M = 1000.0
 #: Sweeps travelling within this angle (rad) in XY are cut together as one parallel group.
 DIRECTION_BIN_RAD = math.radians(5.0)
 #: A cut is empty when it removes at most this fraction of the volume its sweeps could
@@ -210,6 +218,20 @@ def _check_paths(paths) -> list[np.ndarray]:
             f"transform (finite, orthonormal rotation within {RIGID_TOL}, no mirror, last row "
             f"0 0 0 1): "
             f"{poses[first].tolist()}",
+            key="paths",
+        )
+    distance = np.linalg.norm(poses[:, :3, 3], axis=1)
+    far = np.flatnonzero(distance > FARTHEST_M)
+    if far.size:
+        first = int(far[0])
+        path = int(np.searchsorted(np.cumsum([len(a) for a in arrays]), first, side="right"))
+        raise InputError(
+            f"path {path}: pose {first - sum(len(a) for a in arrays[:path])} lies "
+            f"{float(distance[first]):.6g} m from the workpiece's origin "
+            f"({poses[first, :3, 3].tolist()} m); expected within {FARTHEST_M:g} m, beyond "
+            "any machine's travel, where float64 keeps no nanometre (its spacing there is "
+            f"{np.spacing(distance[first]):.2g} m) and the part would come out wrong (poses "
+            "are in m: were they given in mm or um?)",
             key="paths",
         )
     return arrays

@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from machinesim import motion
-from machinesim.cutting.engine import remove
+from machinesim.cutting.engine import FARTHEST_M, remove
 from machinesim.cutting.rapids import rapids_that_cut
 from machinesim.cutting.report import (
     CutReport,
@@ -402,12 +402,6 @@ def _beyond_tip(length: float) -> np.ndarray:
     shift = np.eye(4)
     shift[2, 3] = -length
     return shift
-
-
-#: Farthest the tool may go from the workpiece origin in a cut, m (any machine's travel is
-#: well within): float64's spacing grows with distance, 1.2e-7 m at 1e9 m, where a sweep
-#: across a 10 mm block came out as no cut at all (with allow_overtravel).
-FARTHEST_M = 1000.0
 
 
 def _refuse_far(poses: np.ndarray, moves: _Moves, source) -> None:
