@@ -560,3 +560,31 @@ def test_a_move_a_km_long_cuts_its_hand_volume_and_a_pose_farther_out_is_refused
                                              r"within 1000 m"):
             remove(stock, FlatEndMill(0.5e-3),
                    [poses((-far, 5e-3, -depth), (far, 5e-3, -depth))])
+
+
+@pytest.mark.parametrize(
+    ("stock", "paths", "key", "words"),
+    [
+        (None, [], "stock", "Expected stock as a machinesim.workpiece.Part, got NoneType None"),
+        ("block:10x10x2", [], "stock", "got str 'block:10x10x2'; a spec such as"),
+        ("part", "abc", "paths", "Expected paths as a sequence of pose arrays (N, 4, 4), "
+                                 "got str 'abc'"),
+        ("part", None, "paths", "got NoneType None"),
+        ("part", ["abc"], "paths", "path 0: expected poses of shape (N, 4, 4) as numbers, "
+                                   "got str 'abc'"),
+        ("part", [[[1.0, 2.0], [3.0]]], "paths", "path 0: expected poses of shape (N, 4, 4) "
+                                                 "as numbers, got list"),
+    ],
+)
+def test_remove_refuses_a_stock_or_paths_of_the_wrong_kind_naming_them(stock, paths, key,
+                                                                        words):
+    """remove(None, ...) ended in "AttributeError: 'NoneType' object has no attribute
+    'bounds'", paths 'abc' or a path of text in "ValueError: could not convert string to
+    float", a ragged path in numpy's "inhomogeneous shape"."""
+    stock = block(1e-3, 1e-3, 1e-3) if stock == "part" else stock
+    with pytest.raises(InputError, match=re.escape(words)) as raised:
+        remove(stock, VTool(math.pi / 2), paths)
+    assert raised.value.key == key
+    # an iterator of paths is still taken
+    _, report = remove(block(1e-3, 1e-3, 1e-3), VTool(math.pi / 2), iter([np.eye(4)[None]]))
+    assert report.removed_volume == 0.0

@@ -52,7 +52,7 @@ import functools
 import inspect
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 
 import manifold3d
@@ -198,8 +198,16 @@ def rotary_substeps(radius: float, angle: float, chord_tol: float = 1e-9) -> int
 def _check_paths(paths) -> list[np.ndarray]:
     """Paths as float64 arrays (N_i, 4, 4) of rigid transforms, else InputError naming one."""
     arrays = []
+    if isinstance(paths, str | bytes) or not isinstance(paths, Iterable):
+        raise InputError(f"Expected paths as a sequence of pose arrays (N, 4, 4), got "
+                         f"{type(paths).__name__} {brief(repr(paths))}", key="paths")
     for index, path in enumerate(paths):
-        poses = np.asarray(path, dtype=np.float64)
+        try:
+            poses = np.asarray(path, dtype=np.float64)
+        except (TypeError, ValueError):  # text, None, ragged lists: no float array
+            raise InputError(f"path {index}: expected poses of shape (N, 4, 4) as numbers, "
+                             f"got {type(path).__name__} {brief(repr(path))}",
+                             key="paths") from None
         if poses.ndim != 3 or poses.shape[1:] != (4, 4):
             raise InputError(
                 f"path {index}: expected poses of shape (N, 4, 4), got {poses.shape}",
@@ -405,6 +413,11 @@ def remove(
                          f"RoundNoseTool, BallEndMill, FlatEndMill), got "
                          f"{type(tool).__name__} {brief(repr(tool))}; a spec such as 'v:90' "
                          "is made one by machinesim.tool_specs.tool_from_spec", key="tool")
+    if not isinstance(stock, Part):  # None read .bounds: an AttributeError
+        raise InputError(f"Expected stock as a machinesim.workpiece.Part, got "
+                         f"{type(stock).__name__} {brief(repr(stock))}; a spec such as "
+                         "'block:10x10x2' is made one by machinesim.workpiece.stock_from_spec",
+                         key="stock")
     paths = _check_paths(paths)
     _check_turns(paths, bool(tool.rotational))
     if method not in ("auto", "boolean"):
