@@ -203,6 +203,14 @@ def test_turn_and_heights_refuse_what_is_not_a_number(program):
     with pytest.raises(InputError, match=r"key 'px': Expected px as numbers \(m\), got \['a'\]"):
         part.heights_at(["a"], [0.0])
     assert part.heights_at([1e-9], [0.0])[0] == pytest.approx(0.0, abs=1e-9)
+    # heights on a grid: text ended in numpy's "could not convert string to float", True
+    # was read as 1 m
+    with pytest.raises(InputError, match=r"key 'y': Expected y as numbers \(m\), got 'abc'"):
+        part.heights([0.0, 1e-4], "abc")
+    with pytest.raises(InputError, match=r"key 'x': Expected x as numbers \(m\), got \[True"):
+        part.heights([True, False], [0.0])
+    np.testing.assert_array_equal(part.heights([1e-9, 2e-4], [0.0]),
+                                  part.heights_at([1e-9, 2e-4], [0.0, 0.0])[None])
 
 
 def test_turn_refuses_a_top_not_finite_or_a_metre_away(program):

@@ -117,8 +117,8 @@ class TurnedPart:
     def heights(self, x, y) -> np.ndarray:
         """Heights over the grid ``x`` x ``y`` (m), shape (ny, nx): ``z[j, i]`` at
         ``(x[i], y[j])``."""
-        gx = np.asarray(x, dtype=np.float64)
-        gy = np.asarray(y, dtype=np.float64)
+        gx = as_floats(x, "x")  # text was a ValueError, True read as 1 m
+        gy = as_floats(y, "y")
         px, py = np.meshgrid(gx, gy)
         return self.heights_at(px, py).reshape(gy.size, gx.size)
 
