@@ -321,10 +321,11 @@ def realism_budget(procedure, result, realism, make_lab, enabled: bool = True, *
     ``progress``: a stage's printer for each rerun, ``progress("budget, <source> off")``
     (`machinesim.scenario_runs.progress_printer`).
 
-    ``jobs`` above 1 runs the reruns on that many worker processes (`error_budget`), each
+    ``jobs`` above 1 (and more than one source) runs the reruns on that many worker
+    processes, at most one per source (`error_budget`), each
     building its lab there: ``make_lab`` and ``procedure`` must then pickle (`LabInputs`
     does; a function defined inside another does not, and is refused by name), and
-    ``progress`` is told one line per rerun as it finishes,
+    ``progress`` is told how many at a time, then one line per rerun as it finishes,
     ``budget, <source> off: done in 12 s (1 of 3)``, rather than its steps."""
     from machinesim._processes import check_jobs
     from machinesim.experiment import run
@@ -342,10 +343,14 @@ def realism_budget(procedure, result, realism, make_lab, enabled: bool = True, *
         raise InputError(f"realism_budget: expected result, the run with every switch on (a "
                          f"machinesim.experiment.Result), got {type(result).__name__}",
                          key="result")
+    jobs = min(jobs, len(sources))  # one rerun: here, each step shown, no worker to start
     if jobs == 1:
         return error_budget(lambda off: result if off is None else run(
             procedure, make_lab(realism.without(off)),
             progress=None if progress is None else progress(f"budget, {off} off")), sources)
+    if progress is not None:
+        progress("budget")(f"{len(sources)} sources switched off in turn, {jobs} at a time "
+                           "on worker processes")
     finished = []
 
     def done(source, seconds):

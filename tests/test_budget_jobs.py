@@ -288,15 +288,48 @@ def test_realism_budget_builds_each_labs_rerun_on_a_worker_from_its_inputs():
     parallel = realism_budget(procedure, everything, realism, make_lab, progress=stage,
                               jobs=2)
     assert parallel.to_dict() == serial.to_dict()  # floats compared exactly
-    assert sorted(name for name, _ in told) == ["budget, lateral_noise off",
-                                                "budget, registration off"]
-    assert all(re.fullmatch(r"done in \d+ s \([12] of 2\)", text) for _, text in told)
+    assert told[0] == ("budget", "2 sources switched off in turn, 2 at a time on worker "
+                       "processes")
+    assert sorted(name for name, _ in told[1:]) == ["budget, lateral_noise off",
+                                                    "budget, registration off"]
+    assert all(re.fullmatch(r"done in \d+ s \([12] of 2\)", text) for _, text in told[1:])
 
     def nested(realism):
         return make_lab(realism)
 
     with pytest.raises(InputError, match=r"must pickle .*jobs 1"):
         realism_budget(procedure, everything, realism, nested, jobs=2)
+    assert not _workers(psutil.Process())
+
+
+def test_one_source_is_rerun_here_whatever_the_jobs():
+    """A budget of one source runs its rerun in this process, its steps shown, as
+    scenarios/workpiece_setting.py's does: a scenario's --jobs 2 with one source (paper
+    000's --realism noise_only) had started a worker for it, refusing a make_lab that does
+    not pickle."""
+    from machinesim.budget import realism_budget
+    from machinesim.experiment import run
+    from machinesim.procedures.tool_rotation_arm import ToolRotationArm
+    from machinesim.realism import Realism
+
+    realism = Realism.with_only("registration")
+    procedure = ToolRotationArm()
+    everything = run(procedure, _arm_lab(realism))
+    told = []
+
+    def stage(name):
+        return lambda text: told.append((name, text))
+
+    budget = realism_budget(procedure, everything, realism, lambda r: _arm_lab(r),
+                            progress=stage, jobs=2)  # a lambda: it does not pickle
+    steps = list(told)
+    assert {name for name, _ in steps} == {"budget, registration off"}  # its steps, here
+    assert any(text.startswith("measure") for _, text in steps)
+    told.clear()
+    serial = realism_budget(procedure, everything, realism, lambda r: _arm_lab(r),
+                            progress=stage)
+    assert budget.to_dict() == serial.to_dict()
+    assert [name for name, _ in told] == [name for name, _ in steps]
     assert not _workers(psutil.Process())
 
 
