@@ -263,12 +263,37 @@ def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentP
     return parser
 
 
+def _jobs(text: str) -> int:
+    """``--jobs``: a whole number, 1 or more, refused as the command line's error."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of worker "
+                                         "processes, 1 or more")
+    return value
+
+
+def jobs_option(parser: argparse.ArgumentParser) -> None:
+    """Add ``--jobs N`` to a scenario's parser: its error budget's reruns N at a time, each
+    on a worker process (`machinesim.budget.error_budget` ``jobs``; docs/budget.md); default
+    1, one after the other in the scenario's process."""
+    from machinesim._cores import usable_cores
+
+    parser.add_argument("--jobs", type=_jobs, default=1, metavar="N",
+                        help="the budget's reruns at a time, each on a worker process "
+                        "(default 1: one after the other in this process; the cores this "
+                        f"process may use: {usable_cores()})")
+
+
 #: The presets of `machinesim.realism.Realism` a scenario's ``--realism`` takes.
 REALISM_PRESETS = ("ideal", "noise_only", "lab")
 
 
 def realism_options(parser: argparse.ArgumentParser, default: str = "lab") -> None:
-    """Add ``--realism ideal|noise_only|lab`` and ``--budget on|off`` to a scenario's parser
+    """Add ``--realism ideal|noise_only|lab``, ``--budget on|off`` and ``--jobs N``
+    (`jobs_option`) to a scenario's parser
     (`scenario_arguments` gives the options every scenario takes; these are for scenarios
     that build their lab with a `machinesim.realism.Realism`, see `realism_from`)."""
     parser.add_argument("--realism", choices=REALISM_PRESETS, default=default,
@@ -280,6 +305,7 @@ def realism_options(parser: argparse.ArgumentParser, default: str = "lab") -> No
                         help="error budget (docs/budget.md): run again with each source of "
                         "the realism switched off in turn (default on; one more run per "
                         "source)")
+    jobs_option(parser)
 
 
 def realism_from(args):

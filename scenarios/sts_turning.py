@@ -3,10 +3,13 @@
 Every error factor is compensated before the cut, the form error predicted and then measured.
 
 Run: ``.venv/bin/python scenarios/sts_turning.py [--errors FILE.toml] [--noise on|off]
-[--realism ideal|noise_only|lab] [--budget on|off] [--seed N] [--out reports/sts_turning]``
+[--realism ideal|noise_only|lab] [--budget on|off] [--jobs N] [--seed N]
+[--out reports/sts_turning]``
 (about 3 min with the default lab realism and its error budget, which runs it once
 more per realism source, 1.55 times the time before the lathe's chord rule; 43 s with
 ``--budget off`` before it; on 2 idle cores: docs/procedures/sts_turning.md, "Results").
+``--jobs N``: the budget's reruns N at a time, each on a worker process (default 1, one
+after the other here; the same budget either way, docs/budget.md).
 
 The sts_lathe gets the tool errors of Table 5 "before" (dx = dy = -3.5 um, dR = 100 um) and
 the servo loops of Table 6 "before" (`machinesim.servo.table6_servo`), or the errors of
@@ -34,9 +37,8 @@ import time
 
 import numpy as np
 
-from machinesim import Lab
 from machinesim._io import write_atomic
-from machinesim.budget import realism_budget
+from machinesim.budget import LabInputs, realism_budget
 from machinesim.cam.spiral import spiral_program
 from machinesim.cutting.turning import edge_path_from_poses
 from machinesim.errors import ErrorModel
@@ -97,9 +99,8 @@ def report(args) -> None:
     realism = realism_from(args).without("lateral_resolution", "registration",
                                          "stage_positioning")
 
-    def make_lab(realism):
-        return Lab(machine, errors, seed=args.seed, realism=realism,
-                   servo=table6_servo("before"))
+    # plain data, so that --jobs can build the budget's labs on worker processes
+    make_lab = LabInputs(machine, errors, seed=args.seed, servo=table6_servo("before"))
 
     print(f"Paper 004 on sts_lathe: realism {realism}, seed {args.seed}\n")
     procedure = STSTurning()
@@ -110,7 +111,7 @@ def report(args) -> None:
     refuse_unfit_plane(args, make_lab(realism.without(*NOISE)), errors)
     result = run(procedure, lab, progress=stage("run"))
     budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
-                            progress=stage)
+                            progress=stage, jobs=args.jobs)
     out = ReportFolder(args.out)
     details = result.evaluation.details
     print(case_table(details))

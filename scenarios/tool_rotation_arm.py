@@ -1,10 +1,12 @@
 """Paper 000 replayed: tool setting error e_ys and arm radius r of a 4-axis planer.
 
 Run: ``.venv/bin/python scenarios/tool_rotation_arm.py [--e-ys-um -178] [--r-mm 120.555]
-[--capture-mm 1] [--realism ideal|noise_only|lab] [--budget on|off] [--errors FILE.toml]
-[--noise on|off] [--seed N] [--out reports/tool_rotation_arm]`` (about 21 s on two idle
-cores with the default lab realism and its error budget; 5 s with ``--budget off``; 3 s
-with ``--realism noise_only``).
+[--capture-mm 1] [--realism ideal|noise_only|lab] [--budget on|off] [--jobs N]
+[--errors FILE.toml] [--noise on|off] [--seed N] [--out reports/tool_rotation_arm]``
+(about 21 s on two idle cores with the default lab realism and its error budget; 5 s with
+``--budget off``; 3 s with ``--realism noise_only``). ``--jobs N``: the budget's reruns
+N at a time, each on a worker process (default 1, one after the other here; the same
+budget either way, docs/budget.md).
 
 The planer_4axis gets the paper's errors (arm radius r = 120.555 mm against the nominal
 120.5 mm, tool setting error e_ys = -0.178 mm: ``tool.y = e_ys``, ``tool.z = -(r - r0)``),
@@ -28,8 +30,8 @@ import time
 
 import numpy as np
 
-from machinesim import Lab, load_machine
-from machinesim.budget import realism_budget
+from machinesim import load_machine
+from machinesim.budget import LabInputs, realism_budget
 from machinesim.cam.prisms import CalibrationPlan
 from machinesim.exceptions import InputError
 from machinesim.experiment import run
@@ -114,8 +116,8 @@ def report(args) -> None:
     errors = read.with_parameters(given) if given else read
     realism = realism_from(args)
 
-    def make_lab(realism):
-        return Lab(machine, errors, seed=args.seed, realism=realism)
+    # plain data, so that --jobs can build the budget's labs on worker processes
+    make_lab = LabInputs(machine, errors, seed=args.seed)
 
     lab = make_lab(realism)
     injected = lab.reveal(background=False).parameters()
@@ -126,7 +128,7 @@ def report(args) -> None:
     stage = progress_printer("tool_rotation_arm")
     result = run(procedure, lab, progress=stage("run"))
     budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
-                            progress=stage)
+                            progress=stage, jobs=args.jobs)
     out = ReportFolder(args.out)
     calibration, detail = result.measurements, result.identification.detail
     out.write_program("calibration.nc", calibration.program)

@@ -17,6 +17,9 @@ default lab realism and its error budget, 9 s with ``--budget off``, 3 s with
                                 residual errors; docs/metrology.md)
     --budget on|off             the error budget: the run again with each source of the
                                 realism off in turn (default on; docs/budget.md)
+    --jobs N                    the budget's reruns at a time, each on a worker process
+                                (default 1: one after the other, in this process; the
+                                same budget to the bit either way)
     --noise on|off --seed N --out DIR   (default reports/tool_setting_6axis)
 
 On robonano_ui with those errors injected, the procedure
@@ -38,8 +41,7 @@ import sys
 
 import numpy as np
 
-from machinesim import Lab
-from machinesim.budget import realism_budget
+from machinesim.budget import LabInputs, realism_budget
 from machinesim.cam.tool_setting_plates import CAPTURE_RANGE, CENTRE_RANGE, OFFSET_RANGE, Plan
 from machinesim.errors import LARGEST_ERROR
 from machinesim.exceptions import InputError
@@ -103,8 +105,8 @@ def _configured(args) -> None:
         given.update(zip(PARAMETERS[3:], (v * M_PER_UM for v in values), strict=True))
     errors, realism = injected_errors(args, DEFAULTS, given, "robonano_ui"), realism_from(args)
     _check_capture(args, errors.parameters())
-    report(args, lambda realism: Lab("robonano_ui", errors, seed=args.seed,
-                                     realism=realism), realism)
+    # plain data, so that --jobs can build the budget's labs on worker processes
+    report(args, LabInputs("robonano_ui", errors, seed=args.seed), realism)
 
 
 def _lengths(text: str, count: int, option: str) -> list[float]:
@@ -151,7 +153,7 @@ def report(args, make_lab, realism) -> None:
     stage = progress_printer("tool_setting_6axis")
     result = run(procedure, make_lab(realism), progress=stage("run"))
     budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
-                            progress=stage)
+                            progress=stage, jobs=args.jobs)
     folder = ReportFolder(args.out)
     folder.write_json("cuts.json", result.evaluation.details["cuts"])
     details = result.evaluation.details

@@ -55,7 +55,6 @@ from __future__ import annotations
 
 import machinesim.scenario_start  # noqa: F401  (first: Ctrl-C while loading is one line)
 
-import argparse
 import math
 import re
 import sys
@@ -66,7 +65,6 @@ from types import MappingProxyType
 import numpy as np
 
 from machinesim import Lab, WorkpieceSetting, load_machine
-from machinesim._cores import usable_cores
 from machinesim.budget import error_budget
 from machinesim.cam.crown import PARK, groove_rapids_crash
 from machinesim.compensation import program_axes
@@ -87,6 +85,7 @@ from machinesim.report import ReportFolder
 from machinesim.rotations import rotation_xyz
 from machinesim.scenario_runs import (
     injected_errors,
+    jobs_option,
     parse_floats,
     progress_printer,
     scenario_arguments,
@@ -267,24 +266,9 @@ def main(argv=None) -> int:
     parser.add_argument("--all-layers", action="store_true",
                         help="cut every finishing layer of the crown, not only the last")
     parser.add_argument("--quick", action="store_true", help="smaller crown windows")
-    parser.add_argument("--jobs", type=_jobs, default=None, metavar="N",
-                        help="the budget's reruns at a time, each on a worker process "
-                        "(default 1: one after the other in this process; the cores this "
-                        f"process may use: {usable_cores()})")
+    jobs_option(parser)
     args = parser.parse_args(argv)
     return scenario_status(report, args, "workpiece_setting")
-
-
-def _jobs(text: str) -> int:
-    """--jobs: a whole number, 1 or more."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of worker "
-                                         "processes, 1 or more")
-    return value
 
 
 def report(args) -> None:
@@ -373,7 +357,7 @@ def scenario_budget(machine, errors, args, realism: Realism, results):
         progress("budget")(f"none: no source it shares out is on (realism {realism}), so "
                            "budget.md and budget.png are not written")
         return None
-    jobs = min(args.jobs or 1, len(sources))
+    jobs = min(args.jobs, len(sources))
     rerun = partial(crown_rerun, machine=machine, errors=errors, seed=args.seed,
                     realism=realism, nose_correction=nose, all_layers=args.all_layers,
                     quick=args.quick)

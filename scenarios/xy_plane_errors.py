@@ -1,9 +1,11 @@
 """Paper 003 replayed: the grooving machine's XY-plane errors and its C table's squareness.
 
 Run: ``.venv/bin/python scenarios/xy_plane_errors.py [--errors FILE.toml] [--noise on|off]
-[--realism ideal|noise_only|lab] [--budget on|off] [--seed N] [--out reports/xy_plane_errors]``
-(about 75 s with the default lab realism and its error budget; 19 s with
-``--budget off``; on 2 idle cores).
+[--realism ideal|noise_only|lab] [--budget on|off] [--jobs N] [--seed N]
+[--out reports/xy_plane_errors]`` (about 75 s with the default lab realism and its error
+budget; 19 s with ``--budget off``; on 2 idle cores). ``--jobs N``: the budget's reruns N
+at a time, each on a worker process (default 1, one after the other here; the same budget
+either way, docs/budget.md).
 
 The grooving_4axis gets the errors of ``models/errors/xy_plane_grooving_4axis.toml`` (chosen
 to give paper 003's magnitudes: 2-D errors of 11.59 um in X and 12.33 um in Y over the
@@ -36,9 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from machinesim import Lab
 from machinesim._io import write_atomic
-from machinesim.budget import realism_budget
+from machinesim.budget import LabInputs, realism_budget
 from machinesim.errors import ErrorModel
 from machinesim.experiment import run
 from machinesim.machines import load_machine
@@ -78,8 +79,8 @@ def report(args) -> None:
     realism = realism_from(args).without("registration")
     ideal = not realism.instrument_noise
 
-    def make_lab(realism):
-        return Lab(machine, errors, seed=args.seed, realism=realism)
+    # plain data, so that --jobs can build the budget's labs on worker processes
+    make_lab = LabInputs(machine, errors, seed=args.seed)
 
     lab = make_lab(realism)
     refuse_off_windows(args, lab.machine, errors)
@@ -89,7 +90,7 @@ def report(args) -> None:
     stage = progress_printer("xy_plane_errors")
     result = run(procedure, lab, progress=stage("run"))
     budget = realism_budget(procedure, result, realism, make_lab, args.budget == "on",
-                            progress=stage)
+                            progress=stage, jobs=args.jobs)
     out = ReportFolder(args.out)
     detail = result.identification.detail
     xy = result.measurements["xy"]
