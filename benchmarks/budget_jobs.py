@@ -1,7 +1,8 @@
 """Paper 002's error budget (the quick crown) with its reruns one after the other and on 2 workers.
 
 Run: ``.venv/bin/python benchmarks/budget_jobs.py [--repeats 1] [--jobs 1,2]`` (about
-10 min on 2 free cores).
+10 min on 2 free cores); ``--scenario NAME`` times another scenario's default run end to
+end instead (below).
 
 `scenarios/workpiece_setting.py --quick`'s two loads are run once with every source on, as
 its report does; then its budget (`scenario_budget`: nine sources switched off in turn, each
@@ -13,14 +14,24 @@ time, the CPU seconds of this process and its workers (user + sys), and the peak
 all of them together (the sum of their resident sets, sampled every 0.2 s); then whether
 every budget equals the first to the bit (`Budget.to_dict`, floats compared exactly), with
 the table of each jobs value's first budget printed.
+
+With ``--scenario NAME`` (``sts_turning``, ``xy_plane_errors``, ...): the scenario's default
+command line, ``scenarios/NAME.py --jobs J --out <a new folder>``, run as a process of its
+own for each ``--jobs`` in turn, ``--repeats`` times, alternating, and timed whole (its run
+with every source on, the budget, the report). Printed per jobs: the median wall time, the
+CPU seconds of the scenario and its workers, the peak memory of all of them together (as
+above); then whether every summary.json's ``budget`` rows equal the first's to the bit.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib.util
+import json
 import os
 import statistics
+import subprocess
+import sys
 import tempfile
 import threading
 import time
@@ -77,8 +88,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=1, help="budgets per jobs value")
     parser.add_argument("--jobs", default="1,2", help="the jobs values, comma-separated")
+    parser.add_argument("--scenario", default=None,
+                        help="time this scenario's default run end to end instead")
     args = parser.parse_args()
     jobs_values = [int(j) for j in args.jobs.split(",")]
+    if args.scenario is not None:
+        end_to_end(args.scenario, jobs_values, args.repeats)
+        return
 
     from machinesim import Lab, load_machine
     from machinesim.cutting.memo import CutMemo
@@ -139,6 +155,47 @@ def main() -> None:
             if row != first:
                 print(f"  budget {k + 1}, {row.source} off, {row.figure}: after "
                       f"{row.after_without!r}, the first's {first.after_without!r}")
+
+
+def end_to_end(name: str, jobs_values: list[int], repeats: int) -> None:
+    """``scenarios/<name>.py --jobs J`` timed whole, for each J in turn, ``repeats`` times."""
+    script = ROOT / "scenarios" / f"{name}.py"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    walls = {j: [] for j in jobs_values}
+    cpus = {j: [] for j in jobs_values}
+    peaks = {j: [] for j in jobs_values}
+    budgets = []
+    with tempfile.TemporaryDirectory() as folder:
+        for k in range(repeats):
+            for jobs in jobs_values:
+                out = Path(folder) / f"jobs{jobs}_{k}"
+                cpu, began = cpu_seconds(), time.perf_counter()
+                with PeakMemory() as memory:
+                    done = subprocess.run([sys.executable, str(script), "--jobs", str(jobs),
+                                           "--out", str(out)], cwd=ROOT, env=env,
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                          text=True)
+                if done.returncode != 0:
+                    raise SystemExit(f"{name} --jobs {jobs} ended with {done.returncode}:\n"
+                                     f"{done.stderr[-2000:]}")
+                walls[jobs].append(time.perf_counter() - began)
+                cpus[jobs].append(cpu_seconds() - cpu)
+                peaks[jobs].append(memory.peak)
+                summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+                budgets.append((jobs, summary["budget"]))
+                print(f"  jobs {jobs}: {walls[jobs][-1]:.0f} s, {cpus[jobs][-1]:.0f} CPU s, "
+                      f"peak {memory.peak / 2**30:.2f} GB (load average "
+                      f"{os.getloadavg()[0]:.1f})", flush=True)
+    print(f"{name}, its default run end to end ({len(budgets[0][1])} budget rows), median "
+          f"of {repeats}:")
+    for jobs in jobs_values:
+        wall = statistics.median(walls[jobs])
+        print(f"  --jobs {jobs}: {wall:6.0f} s wall, {statistics.median(cpus[jobs]):6.0f} CPU s "
+              f"(all processes), peak memory {max(peaks[jobs]) / 2**30:.2f} GB; "
+              f"{statistics.median(walls[jobs_values[0]]) / wall:.2f} x --jobs "
+              f"{jobs_values[0]}")
+    same = all(rows == budgets[0][1] for _, rows in budgets)  # floats read back exactly
+    print(f"every budget equal to the first, to the bit: {same}")
 
 
 if __name__ == "__main__":
