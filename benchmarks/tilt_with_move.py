@@ -68,8 +68,8 @@ def planned_poses(program, machine, tool, refine: int, line: int):
     trajectory = motion.plan(program, machine, None, tool_points=sections.points(),
                              chord_tolerance=path_chord_tolerance([tool]),
                              face_radius=flat_face_radius([tool]),
-                             profile=ProfileEdges(sections.profile_edges(),
-                                                  float(stock_from_spec(STOCK).bounds[1, 2])))
+                             profile=ProfileEdges.of(sections.setups(),
+                                                     stock_from_spec(STOCK)))
     moves = _Moves(trajectory, len(machine.axes))
     q, starts, lines = [], [], []
     for i in range(len(moves.q)):

@@ -161,8 +161,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
                              tool_points=tools.points(), chord_tolerance=chord_tolerance,
                              servo=servo,
                              face_radius=flat_face_radius(t for _, t, _ in tools.runs),
-                             profile=ProfileEdges(tools.profile_edges(),
-                                                  float(stock.bounds[1, 2])))
+                             profile=ProfileEdges.of(tools.setups(), stock))
     following = peak_following_error(trajectory, machine)
     moves = _Moves(trajectory, len(machine.axes))
     limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
@@ -321,24 +320,17 @@ class _ToolSections:
             self.runs.append((change.move, built[change.shape], float(change.length_m)))
             self.names.append((change.number, change.line))
 
+    def setups(self) -> list:
+        """Each (tool, length) the program cuts with, once, in the order of first use."""
+        tools = {id(t): t for _, t, _ in self.runs}
+        return [(tools[key], length)
+                for key, length in dict.fromkeys((id(t), length) for _, t, length in self.runs)]
+
     def points(self) -> np.ndarray:
         """Every tool's vertices where it cuts, in the ``tool_tip`` frame (for the chord
         tolerance of rotary moves)."""
-        setups = dict.fromkeys((id(t), length) for _, t, length in self.runs)
-        tools = {id(t): t for _, t, _ in self.runs}
-        return np.concatenate([np.asarray(tools[key].vertices(), dtype=np.float64)
-                               - np.array([0.0, 0.0, length]) for key, length in setups])
-
-    def profile_edges(self) -> np.ndarray:
-        """The planar tools' profile edges where they cut, in the ``tool_tip`` frame, shape
-        (k, 2, 3) (m): for the waist of a profile tilting while it moves
-        (`machinesim.motion.faces.edge_substeps`)."""
-        setups = dict.fromkeys((id(t), length) for _, t, length in self.runs)
-        tools = {id(t): t for _, t, _ in self.runs}
-        edges = [np.asarray(tools[key].vertices(), dtype=np.float64)[tools[key].edges()]
-                 - np.array([0.0, 0.0, length]) for key, length in setups
-                 if getattr(tools[key], "planar", False)]
-        return np.concatenate(edges) if edges else np.zeros((0, 2, 3))
+        return np.concatenate([np.asarray(tool.vertices(), dtype=np.float64)
+                               - np.array([0.0, 0.0, length]) for tool, length in self.setups()])
 
     def split(self, moves: _Moves):
         """(tool, length, section moves, sample range, (number, line)) of each run with

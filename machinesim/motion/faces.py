@@ -115,6 +115,18 @@ class ProfileEdges:
     edges: np.ndarray
     top: float = math.inf
 
+    @classmethod
+    def of(cls, setups, stock) -> ProfileEdges:
+        """The edges a cut of ``stock`` (a Part: its top is read) holds, for `plan`'s
+        ``profile``: those of the planar tools among ``setups``, each a pair (tool, length),
+        the tool's edge that far (m) beyond ``tool_tip`` along the tool axis (0: at it), in
+        the ``tool_tip`` frame. No planar tool: no edges."""
+        edges = [np.asarray(tool.vertices(), dtype=np.float64)[tool.edges()]
+                 - np.array([0.0, 0.0, length]) for tool, length in setups
+                 if getattr(tool, "planar", False)]
+        return cls(np.concatenate(edges) if edges else np.zeros((0, 2, 3)),
+                   float(stock.bounds[1, 2]))
+
 
 def edge_substeps(machine, errors, starts: np.ndarray, delta: np.ndarray,
                   steps: np.ndarray, profile: ProfileEdges | None,
