@@ -1,6 +1,7 @@
 """A V tool tilting while it moves cuts within the chord tolerance of its true sweep: the
 profile's edges get the sub-steps of `machinesim.motion.faces.edge_substeps`."""
 
+import functools
 import math
 
 import numpy as np
@@ -35,14 +36,60 @@ def test_tilting_flank_stays_within_the_chord_of_a_finer_cut():
     it in 41 sweeps, 1.16 nm past it (the hull of a sub-step's two poses across the tilted
     flank, the waist of `edge_substeps`); the edges' rule in 54, 0.87 nm past it."""
     machine = machinesim.load_machine("robonano_a0ib")
+    part, report = machinesim.cut(parse_program(TILT, "tilt.nc"), machine, tool="v:90",
+                                  stock=STOCK, start=START)
+    _, over = sliver(_fine_reference(), part)
+    assert 0.0 < over <= TOL, over
+
+
+@functools.cache
+def _fine_reference():
+    """The tilting move cut along its trajectory planned at a 64 times finer chord (8 times
+    the sub-steps of the vertices' rule), the engine given those poses."""
+    machine = machinesim.load_machine("robonano_a0ib")
     tool = tool_from_spec("v:90")
-    program = parse_program(TILT, "tilt.nc")
-    part, report = machinesim.cut(program, machine, tool=tool, stock=STOCK, start=START)
-    fine = motion.plan(program, machine, tool_points=tool.vertices(),
+    fine = motion.plan(parse_program(TILT, "tilt.nc"), machine, tool_points=tool.vertices(),
                        chord_tolerance=TOL / 64, start=START)
     reference, _ = remove(stock_from_spec(STOCK), tool, [machine.tool_pose(fine.q)])
-    _, over = sliver(reference, part)
+    return reference
+
+
+def test_cut_turned_holds_a_tilting_flank_as_cut_does():
+    """`cut_turned` plans as `cut` does: the same tilting move (C stays 0, one group) within
+    the chord of the finer cut. Planned without the profile's edges it cut 41 sweeps,
+    1.16 nm past it, where `cut` cut 54."""
+    from machinesim.cutting import cut_turned
+
+    part, report = cut_turned(parse_program(TILT, "tilt.nc"), "robonano_a0ib", tool="v:90",
+                              stock=STOCK, start=START)
+    _, over = sliver(_fine_reference(), part)
+    assert 0.0 < over <= TOL, (over, report.sweeps)
+
+
+def test_the_viewers_finished_part_holds_a_tilting_flank_as_cut_does(monkeypatch):
+    """The viewer's last stage (the part it colours by its deviation from `cut`'s) is planned
+    as `cut` plans: within the chord of the finer cut, and the nominal machine's part the
+    same as `cut`'s to the booleans' round-off. Planned without the profile's edges its last
+    stage lay 1.16 nm past the finer cut, and off `cut`'s own by the sub-steps it lacked."""
+    from machinesim.viewer import machine as viewer_machine
+
+    drawn = {}
+
+    def keep(scene, path, surface, nominal=None, *args, **kwargs):
+        drawn[path] = (surface, nominal)
+        return add_part(scene, path, surface, nominal, *args, **kwargs)
+
+    add_part = viewer_machine.add_part
+    monkeypatch.setattr(viewer_machine, "add_part", keep)
+    viewer_machine.machine_scene("robonano_a0ib", parse_program(TILT, "tilt.nc"),
+                                 tool="v:90", stock=STOCK, start=START, max_stages=1,
+                                 max_triangles=2000)
+    part, nominal = drawn["inspection/part"]
+    _, over = sliver(_fine_reference(), part)
     assert 0.0 < over <= TOL, over
+    for one, other in ((part, nominal), (nominal, part)):
+        volume, _ = sliver(one, other)
+        assert volume < 1e-24, volume  # 1e-6 um^3
 
 
 def test_untilted_moves_and_a_tilt_alone_keep_their_substeps():

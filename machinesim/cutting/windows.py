@@ -31,6 +31,7 @@ from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sweepset import dragged_past_clearance
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag, as_number
+from machinesim.motion.faces import ProfileEdges
 from machinesim.rotations import rot_z
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import check_path_chord, flat_face_radius
@@ -118,7 +119,8 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     machine.check_errors(errors)
     trajectory = motion.plan(program, machine, errors, start=start,
                              tool_points=tool.vertices(), chord_tolerance=chord_tolerance,
-                             servo=servo, face_radius=flat_face_radius([tool]))
+                             servo=servo, face_radius=flat_face_radius([tool]),
+                             profile=ProfileEdges.of([(tool, 0.0)], stock))
     limits = _overtravel(machine, _Moves(trajectory, len(machine.axes)),
                          getattr(program, "source", None), allow_overtravel)
     part = stock if roi is None else clip_to(stock, roi, floor)

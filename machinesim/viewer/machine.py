@@ -19,6 +19,7 @@ from machinesim import motion
 from machinesim.cutting import cut, remove
 from machinesim.cutting.report import arc_chord_note
 from machinesim.exceptions import InputError
+from machinesim.motion.faces import ProfileEdges
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import check_path_chord, flat_face_radius, path_chord_tolerance
 from machinesim.viewer.maps import legend_for
@@ -126,11 +127,13 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
     lo, hi = _with_stock(visualizer, machine, errors, q0, stock, lo, hi)
     if chord_tolerance is None:
         chord_tolerance = path_chord_tolerance([tool])
-    # sub-steps as cut() takes them (a flat end mill's tilted face: `motion.faces`), so that
-    # the last stage is the part cut() gives and its colours compare like with like
+    # sub-steps as cut() takes them (a flat end mill's tilted face, a planar profile tilting
+    # while it moves: `motion.faces`), so that the last stage is the part cut() gives and
+    # its colours compare like with like
     trajectory = motion.plan(program, machine, errors, start=q0, tool_points=tool.vertices(),
                              chord_tolerance=chord_tolerance,
-                             face_radius=flat_face_radius([tool]))
+                             face_radius=flat_face_radius([tool]),
+                             profile=ProfileEdges.of([(tool, 0.0)], stock))
     times, qs = _samples(trajectory, q0)
     speed = max(1.0, trajectory.duration / duration_s)
     keys = _key_times(trajectory, times[-1], speed)
