@@ -111,8 +111,10 @@ def _parser() -> argparse.ArgumentParser:
                           "as the tool)")
     cut.add_argument("--stock", required=True,
                      help="stock spec in mm: block:LxWxH (e.g. block:10x10x2, top face at "
-                          "z = 0) or cylinder:RxH (e.g. cylinder:5x2), optionally placed "
-                          "with @x,y,z (e.g. block:10x10x2@-5,-5,0)")
+                          "z = 0), cylinder:RxH (e.g. cylinder:5x2), spheres:LxWxH:R[:dimples] "
+                          "(paper 002's three reference spheres on a block, e.g. "
+                          "spheres:30x30x5:2) or crown[:OVERSIZE] (paper 002's rough crown), "
+                          "optionally placed with @x,y,z (e.g. block:10x10x2@-5,-5,0)")
     cut.add_argument("--errors", type=input_path, default=None,
                      help="injected errors, TOML with units in every key "
                           "(e.g. models/errors/example.toml); default: none")

@@ -7,6 +7,7 @@ import inspect
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -77,6 +78,23 @@ def test_help_documents_every_cut_option_with_an_example(capsys):
     assert "e.g. block:10x10x2" in out and "e.g. v:90" in out
     assert ":d=" in out and "flat:0.5:h=3:d=4" in " ".join(out.split())  # docs/cli.md's --tool
     assert "millimetres" in out and "metres" in out
+
+
+def test_cut_help_names_every_stock_form_and_each_example_builds(capsys):
+    # the help named block and cylinder only, while --stock reads spheres and crown too
+    # (docs/cli.md); each e.g. of the help must be a stock the command builds
+    with pytest.raises(SystemExit):
+        main(["cut", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    stock = text[text.index("--stock STOCK stock spec"):text.index("--errors ERRORS injected")]
+    for form in ("block:LxWxH", "cylinder:RxH", "spheres:LxWxH:R[:dimples]",
+                 "crown[:OVERSIZE]"):
+        assert form in stock, form
+    from machinesim.workpiece import stock_from_spec
+    examples = re.findall(r"e\.g\. ([a-z]+:[0-9x.:]+(?:@[-0-9.]+,[-0-9.]+,[-0-9.]+)?)", stock)
+    assert len(examples) == 4, examples
+    for example in examples:
+        assert stock_from_spec(example).volume > 0.0, example
 
 
 # --------------------------------------------------------------------- a good cut
