@@ -201,3 +201,59 @@ def test_windows_off_the_plate_or_no_xy_pairs_are_refused_before_any_cut(windows
     with pytest.raises(MachineSimError, match=f"key 'windows': {words}"):
         cut_and_read(lab, windows=windows)
     assert cuts == []
+
+
+def test_the_labs_stage_positioning_moves_the_window_readings_and_paper_003_budgets_it():
+    # Realism.stage_positioning puts each reading of the lab's white-light interferometer
+    # off its command (1 um sigma; readings in one placement share the offset). The pyramid
+    # windows of paper 003 are read with it, so its figures feel the switch, yet the budget
+    # (XYPlaneErrors.realism_sources) had left it out and gave no share for it. Second
+    # method: the same window read by an instrument without the stage, each reading's line
+    # moved by the offsets the lab's stage stream draws (one per reading, one per placement).
+    from contextlib import contextmanager
+
+    from machinesim.procedures.pyramid_windows import PAPER_PLAN, read_window
+    from machinesim.procedures.xy_plane_errors import XYPlaneErrors
+    from machinesim.realism import WHITE_LIGHT, Realism
+    from machinesim.streams import stream
+
+    assert "stage_positioning" in XYPlaneErrors.realism_sources
+    errors = ErrorModel.from_toml(Path(__file__).resolve().parents[1] / "models" / "errors"
+                                  / "xy_plane_grooving_4axis.toml")
+    on = machinesim.Lab("grooving_4axis", errors, seed=0,
+                        realism=Realism.with_only("stage_positioning"))
+    off = machinesim.Lab("grooving_4axis", errors, seed=0, realism=Realism.ideal())
+    (w_on,), ((_, part),) = cut_and_read(on, windows=CORNER)
+    (w_off,), _ = cut_and_read(off, windows=CORNER)
+
+    class Replayed:  # the stage's offsets applied to the lines asked of a stage-less reader
+        def __init__(self):
+            self.plain = off.white_light_interferometer(label="plain")
+            self.rng = stream(0, "white_light_interferometer", "pyramids",
+                              "stage_positioning")
+            self.held = None
+
+        def draw(self):
+            return WHITE_LIGHT.stage_sigma * self.rng.standard_normal(2)
+
+        def profile(self, part, start, end, spacing=None):
+            shift = self.held if self.held is not None else self.draw()
+            return self.plain.profile(part, np.asarray(start) + shift,
+                                      np.asarray(end) + shift, spacing)
+
+        @contextmanager
+        def placement(self):
+            self.held = self.draw()
+            yield self
+            self.held = None
+
+    assert WHITE_LIGHT.stage_sigma == 1e-6
+    replayed = read_window(Replayed(), part, CORNER[0], PAPER_PLAN)
+    np.testing.assert_allclose(w_on.apex, replayed.apex, rtol=0, atol=1e-15)
+    assert w_on.angle_error == pytest.approx(replayed.angle_error, abs=1e-15)
+    assert w_on.pitch == pytest.approx(replayed.pitch, abs=1e-18)
+    # switched off alone, the readings move: the sets' angle by 0.09 urad, the apexes by up
+    # to 0.13 nm (small: the offset is common to a window's profiles; what moves is the
+    # surface under them, sampled about 1 um elsewhere), far above the 1e-15 of the replay
+    assert abs(w_on.angle_error - w_off.angle_error) > 1e-9
+    assert np.abs(w_on.apex - w_off.apex).max() > 1e-12
