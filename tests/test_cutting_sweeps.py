@@ -289,3 +289,59 @@ def test_a_rotary_groove_about_a_tilted_c_axis_is_the_same_for_a_tall_and_a_shor
                                   errors=errors)[1].removed_volume_m3
                    for tool in ("v:90", "v:90:h=0.25"))
     assert abs(tall / short - 1.0) < 1e-5
+
+
+@pytest.mark.parametrize("tilt", [0.0, 0.02])
+def test_a_ball_end_mills_sweeps_are_made_again_when_read_and_cut_the_same_part(
+        tilt, monkeypatch):
+    """A ball end mill's sweeps are not held from building to cutting (`RebuiltSolid`):
+    `ball:0.5`'s are ~230 kB each, and a 100,000-line program's took 23 GB before its
+    first tile. Each is made again from its poses when read, the same mesh bit for bit as
+    the one built first, the last `REBUILT_KEPT` read are kept, and the part and report are
+    those of the sweeps held (`REBUILD_BALL_SWEEPS` False), to the bit."""
+    import machinesim.cutting.sweeps as sweeps_module
+    import machinesim.cutting.sweepset as sweepset
+    from machinesim.cutting.sweeps import RebuiltSolid
+    from machinesim.rotations import rotation_xyz
+
+    tool = BallEndMill(0.5e-3, chord_tol=2e-6)
+    stock = block(3e-3, 2e-3, 1e-3)
+    angle = np.linspace(0.0, 4.0 * np.pi, 41)
+    poses = np.repeat(np.eye(4)[None], len(angle), axis=0)
+    poses[:, :3, :3] = rotation_xyz(tilt, -tilt, 0.0)
+    radius = 0.8e-3 - 0.1e-3 * angle / np.pi
+    poses[:, :3, 3] = np.stack([1.5e-3 + radius * np.cos(angle), 1e-3 + radius * np.sin(angle),
+                                -40e-6 - 2e-6 * angle], axis=1)
+
+    def everything(low, high):
+        return np.ones(len(low), dtype=bool)
+
+    def meshes(solids):
+        return [(np.asarray(m.vert_properties), np.asarray(m.tri_verts))
+                for m in (solid.to_mesh64() for solid in solids)]
+
+    held = sweepset.SweepSet(tool, [poses], 1e-9)
+    monkeypatch.setattr(sweepset, "REBUILD_BALL_SWEEPS", False)
+    held_solids = held.hulls(everything)[0]
+    monkeypatch.setattr(sweepset, "REBUILD_BALL_SWEEPS", True)
+    made = sweepset.SweepSet(tool, [poses], 1e-9).hulls(everything)[0]
+    assert len(made) == len(held_solids) == 40
+    assert all(isinstance(list.__getitem__(made, i), RebuiltSolid) for i in range(len(made)))
+    for (v0, t0), (v1, t1) in zip(meshes(held_solids), meshes(made), strict=True):
+        assert v0.tobytes() == v1.tobytes() and t0.tobytes() == t1.tobytes()
+    monkeypatch.setattr(sweeps_module, "REBUILT_KEPT", 3)
+    kept = sweepset.SweepSet(tool, [poses], 1e-9).hulls(everything)[0]
+    read = [kept[i] for i in range(6)]
+    assert list(kept._made) == [3, 4, 5]  # the last three read
+    assert kept[5] is read[5] and kept[0] is not read[0]
+
+    parts = []
+    for rebuild in (False, True):
+        monkeypatch.setattr(sweepset, "REBUILD_BALL_SWEEPS", rebuild)
+        parts.append(remove(stock, tool, [poses], method="boolean", sweeps_per_tile=8))
+    (held_part, held_report), (part, report) = parts
+    assert report.n_cells > 1  # tiles share sweeps: read more than once
+    assert report.removed_volume == held_report.removed_volume > 0.0
+    assert report.swept_volume == held_report.swept_volume
+    for a, b in zip(held_part.mesh(), part.mesh(), strict=True):
+        assert a.tobytes() == b.tobytes()

@@ -28,6 +28,7 @@ volume over them).
 from __future__ import annotations
 
 import functools
+from collections import OrderedDict
 
 import manifold3d
 import numpy as np
@@ -40,9 +41,9 @@ from scipy.spatial import ConvexHull, QhullError
 #: against 2 s) and kept 3.7 times the triangles.
 SOLID_TOLERANCE_REL = 1e-12
 
-__all__ = ["DeferredSolid", "SolidSweep", "Solids", "clip_polygon", "clipped_bounds",
-           "clipped_prisms", "hull_mesh", "manifold_from", "mesh_volume", "polygon_triangles",
-           "prism_mesh", "prism_triangles", "vector_area"]
+__all__ = ["REBUILT_KEPT", "DeferredSolid", "RebuiltSolid", "SolidSweep", "Solids",
+           "clip_polygon", "clipped_bounds", "clipped_prisms", "hull_mesh", "manifold_from",
+           "mesh_volume", "polygon_triangles", "prism_mesh", "prism_triangles", "vector_area"]
 
 
 def manifold_from(vertices: np.ndarray, triangles: np.ndarray,
@@ -88,15 +89,54 @@ class DeferredSolid:
         return manifold3d.Manifold() if solid is None else solid
 
 
+class RebuiltSolid:
+    """A sweep's solid that is made again each time it is read and not kept (`Solids`):
+    ``build(*arguments)`` gives the same manifold each time (the same mesh, made from the
+    same poses). A ball end mill's sweep is ~230 kB as a manifold (`ball:0.5`); holding all
+    of a 100,000-line program's before cutting took 23 GB, where making each again as a
+    tile reads it costs what building it did (4 ms on a loaded machine: a tenth of a
+    1,000-sweep spiral's 46 s)."""
+
+    __slots__ = ("arguments", "build")
+
+    def __init__(self, build, *arguments) -> None:
+        self.build, self.arguments = build, arguments
+
+    def solid(self) -> manifold3d.Manifold:
+        """The manifold."""
+        return self.build(*self.arguments)
+
+
+#: `RebuiltSolid`s a `Solids` keeps made, the least recently read dropped first: the
+#: sweeps of a tile (`tiling.SWEEPS_PER_TILE`) and of its neighbour in the grid, which
+#: share those that cross their wall (~120 MB of `ball:0.5` sweeps at most).
+REBUILT_KEPT = 512
+
+
 class Solids(list):
     """Sweeps' solids by index: a `DeferredSolid` becomes its manifold the first time it is
-    read (by index or by iterating), and stays so."""
+    read (by index or by iterating), and stays so; a `RebuiltSolid` is made when read and
+    kept among the last `REBUILT_KEPT` read, so that memory does not grow with the sweeps."""
+
+    def __init__(self, *items) -> None:
+        super().__init__(*items)
+        self._made: OrderedDict[int, manifold3d.Manifold] = OrderedDict()
 
     def __getitem__(self, index):
         item = list.__getitem__(self, index)
         if isinstance(item, DeferredSolid):
             item = item.solid()
             list.__setitem__(self, index, item)
+        elif isinstance(item, RebuiltSolid):
+            key = int(index) if index >= 0 else int(index) + len(self)
+            made = self._made.get(key)
+            if made is None:
+                made = self._made[key] = item.solid()
+                while len(self._made) > REBUILT_KEPT:
+                    self._made.popitem(last=False)
+            else:
+                self._made.move_to_end(key)
+            item = made
         return item
 
     def __iter__(self):

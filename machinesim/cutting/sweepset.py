@@ -17,6 +17,7 @@ import numpy as np
 
 from machinesim.cutting.sweeps import (
     DeferredSolid,
+    RebuiltSolid,
     Solids,
     SolidSweep,
     clipped_bounds,
@@ -30,8 +31,8 @@ from machinesim.cutting.tilted_profiles import split_sweeps
 from machinesim.cutting.tilted_solids import SolidSplitter
 from machinesim.tolerances import SAME_ORIENTATION, SIDEWAYS_REL, SIDEWAYS_WARN_RAD, TWIST_M
 
-__all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "PROGRESS_STEPS", "SweepSet",
-           "dragged"]
+__all__ = ["PAIR_CLIP_MAX_VERTICES", "POINTS_PER_CHUNK", "PROGRESS_STEPS",
+           "REBUILD_BALL_SWEEPS", "SweepSet", "dragged"]
 
 #: A turning sweep whose vertices' heights change by no more than this (m) between its
 #: poses is not trimmed at the clip plane after its hull (`SweepSet.hulls`): it reaches at
@@ -47,6 +48,10 @@ PAIR_CLIP_MAX_VERTICES = 64
 HOLDER_SHANK_SIDES = 32
 #: Times at most that `SweepSet.hulls` tells its progress while it builds the sweeps.
 PROGRESS_STEPS = 200
+#: A ball end mill's sweeps are kept as `RebuiltSolid`s, made again when a tile reads them
+#: (`SweepSet.ball_sweep`), not as solids: False holds every one from the start, as before
+#: (`benchmarks/ball_sweeps.py` compares the two).
+REBUILD_BALL_SWEEPS = True
 #: Sweeps whose tool points are processed together: bounds the transient memory (k points
 #: per pose, ~100 bytes each) to ~50 MB whatever the path length.
 POINTS_PER_CHUNK = 1 << 19
@@ -302,7 +307,15 @@ class SweepSet:
         if solid is None:
             return None
         volume = solid.volume()
-        return (solid, volume) if volume > 0.0 else None
+        return _BallSweep((solid, volume)) if volume > 0.0 else None
+
+    def ball_sweep(self, index: int) -> manifold3d.Manifold:
+        """The solid `_ball_cut` made of the sweep from pose ``index`` to the next, made
+        again from the same poses, laid out as `hulls` hands them over (the same mesh, bit
+        for bit: `RebuiltSolid`)."""
+        origin = self.poses[index, :3, 3]
+        return self._ball_cut(self.poses[index, :3, :3].copy(), origin,
+                              self.poses[index + 1, :3, 3] - origin)[0]
 
     def _hull(self, points: np.ndarray, clipped: bool):
         """The convex hull of a sweep's points by Qhull (`sweeps.hull_mesh`): the clipped
@@ -479,7 +492,11 @@ class SweepSet:
                     continue  # a solid tool's body only passed by its unclipped bounds
                 reached.append(begin + int(near[row]))
                 owners.append(begin + int(near[row]))
-                hulls.append(solid)
+                # a ball's sweep is made again when a tile reads it: kept, all of them took
+                # 23 GB for a 100,000-line program before the first tile was cut
+                hulls.append(RebuiltSolid(self.ball_sweep, int(first[row]))
+                             if REBUILD_BALL_SWEEPS and isinstance(built, _BallSweep)
+                             else solid)
                 footprints.append(built[3] if len(built) > 3 else None)
                 lower.append(box[:3])
                 upper.append(box[3:])
@@ -503,6 +520,11 @@ class SweepSet:
             rows = reaching[begin:begin + step]
             low[rows], high[rows] = clipped_bounds(self.world(rows), self.edges, self.clip_z)
         return low, high
+
+
+class _BallSweep(tuple):
+    """(solid, volume) of a ball end mill's sweep that `SweepSet.ball_sweep` makes again
+    from its poses alone (`hulls` keeps it as a `RebuiltSolid`)."""
 
 
 def dragged_past_clearance(poses: np.ndarray, starts: np.ndarray) -> np.ndarray:
