@@ -287,3 +287,52 @@ def test_a_turning_feed_far_too_slow_is_refused_at_once_not_followed_for_days(tm
                                          r"5\.4e\+13 loop periods of 0\.0001 s, more than the "
                                          r"1e\+09 .*27\.8 h.*feed far too slow"):
         turn(path, "sts_lathe", "nose:1.0:90", servo=table6_servo("before"))
+
+
+ONE_TURN = "G01 Z-0.001 F10\nG01 X0.5 C360. F36000\nG00 Z0.01\n"
+
+
+@pytest.mark.parametrize(("machine", "start", "named"), [
+    ("grooving_4axis", "X1.0 Y0 Z0.01 C0", ["C travels -360 .. 360 deg", "axis Y, "]),
+    ("robonano_ui", "X1.0 Y0 Z0.01 A0 B0 C0", ["C travels -360 .. 360 deg", "axes Y, A, B, "]),
+    ("robonano_a0ib", "X1.0 Y0 Z0.01 B0 C0", ["C travels -360 .. 360 deg", "axes Y, B, "]),
+    ("planer_4axis", "X1.0 Y0 Z0.01 A0", ["no C axis", "axes Y, A, "]),
+])
+def test_turn_refuses_a_machine_that_is_not_a_lathe(machine, start, named):
+    # a turn of C facing from X 1 mm to 0.5 mm: grooving_4axis, robonano_ui and
+    # robonano_a0ib turned it (their table C goes one turn either way; two turns were
+    # refused only as beyond C's travel), with Y, A, B beside X, Z and C
+    program = machinesim.nc.parse_program(f"G90 G21\nG00 {start}\n{ONE_TURN}")
+    with pytest.raises(InputError, match="Expected a lathe") as refused:
+        turn(program, machine, allow_overtravel=True)
+    assert refused.value.key == "machine"
+    for words in [f"{machine} (axes ", *named]:
+        assert words in str(refused.value)
+    if machine != "planer_4axis":  # a lab's turn is the same turn
+        with pytest.raises(InputError, match="Expected a lathe"):
+            machinesim.Lab(machine, noise=False).turn(program)
+
+
+@pytest.mark.parametrize(("old", "new", "named"), [
+    ('lower="-100000.0" upper="100000.0"',
+     'lower="-6.283185307179586" upper="6.283185307179586"',
+     r"its C travels -360 \.\. 360 deg: a table's travel, not a work spindle's"),
+    ('<axis xyz="0.0 0.0 -1.0"/>\n    <limit lower="-100000.0"',
+     '<axis xyz="0.0 -1.0 0.0"/>\n    <limit lower="-100000.0"', "its C turns about Y, not Z"),
+])
+def test_turn_refuses_a_lathe_whose_c_is_no_work_spindle_about_z(tmp_path, old, new, named):
+    # sts_lathe with its C cut to one turn either way (X, Z, C as a lathe's, but no spindle,
+    # which is what `cut` tells turning by, `Axis.spindle`), or turning about Y (the URDF
+    # loads it): both were turned; the same file as shipped turns
+    from machinesim.machines import models_dir
+
+    text = (models_dir() / "sts_lathe.urdf").read_text()
+    other = text.replace(old, new)
+    assert other != text
+    (tmp_path / "other.urdf").write_text(other)
+    (tmp_path / "lathe.urdf").write_text(text)
+    program = machinesim.nc.parse_program(f"G90 G21\nG00 X1.0 Z0.01 C0\n{ONE_TURN}")
+    with pytest.raises(InputError, match=rf"\(axes X, Z, C\): {named}"):
+        turn(program, machinesim.load_machine(tmp_path / "other.urdf"))
+    _, report = turn(program, machinesim.load_machine(tmp_path / "lathe.urdf"))
+    assert report.runs == 1 and report.revolutions == pytest.approx(1.0)

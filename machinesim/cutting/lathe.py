@@ -65,7 +65,8 @@ from machinesim.servo import check_servo
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import RoundNoseTool, with_nose_radius_error
 
-__all__ = ["TurnedPart", "TurningReport", "followed", "turn", "turning_runs", "turning_tool"]
+__all__ = ["TurnedPart", "TurningReport", "check_lathe", "followed", "turn", "turning_runs",
+           "turning_tool"]
 
 #: Relative change of the spindle angle below which a move counts as not turning, rad.
 STILL_C_RAD = 1e-12
@@ -174,7 +175,8 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
         The NC program (`machinesim.nc`, axis values SI), or an NC file's path (read with
         `machinesim.nc.read_program`'s defaults).
     machine : Machine or str
-        A machine with a C (work spindle) and an X axis, e.g. ``"sts_lathe"``.
+        A lathe: axes X, Z and a work spindle C about Z, e.g. ``"sts_lathe"`` (`check_lathe`;
+        any other machine is refused, InputError).
     tool : str or RoundNoseTool
         The tool as programmed (``"nose:RADIUS_MM:ANGLE_DEG"``).
     errors : ErrorModel, dict or str or Path, optional
@@ -210,9 +212,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
         raise InputError(f"Expected program as a machinesim.nc.Program or an NC file's path, "
                          f"got {type(program).__name__}", key="program")
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
-    if "C" not in machine.axes or "X" not in machine.axes:
-        raise InputError(f"Expected a lathe with X and C axes, {machine.name} has "
-                         f"{', '.join(machine.axes)}", key="machine")
+    check_lathe(machine)
     tool = turning_tool(tool)
     top = as_number(top, "top")
     if abs(top) > MOST_TOP_M:
@@ -251,6 +251,37 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak,
                            empty_cut=empty, limit_violations=limits, notes=notes)
     return part, report
+
+
+def check_lathe(machine) -> None:
+    """Refuse ``machine`` (a `Machine`) unless it is a lathe as the turning engine models one:
+    a work spindle C (`Axis.spindle`) about Z, the tool moved in the XZ plane through the
+    spindle axis by X (radial) and Z alone, as ``sts_lathe``. A table C of a few turns is a
+    milling machine's, cut by `machinesim.cutting.cut`; a Y would take the tool off the
+    spindle axis, an A or B turn it out of its edge plane (`edge_path_from_poses`)."""
+    from machinesim.kinematics import SPINDLE_TRAVEL_RAD
+
+    axes = machine.axes
+    found = [f"no {letter} axis" for letter in ("X", "Z", "C") if letter not in axes]
+    c = machine.axis("C") if "C" in axes else None
+    if c is not None and not c.spindle:
+        found.append(f"its C travels {math.degrees(c.lower):g} .. {math.degrees(c.upper):g} "
+                     f"deg: a table's travel, not a work spindle's, beyond "
+                     f"{SPINDLE_TRAVEL_RAD:g} rad ({SPINDLE_TRAVEL_RAD / (2 * math.pi):.3g} "
+                     "turns: a spindle turns many in one program)")
+    elif c is not None and c.direction != 2:
+        found.append(f"its C turns about {'XYZ'[c.direction]}, not Z")
+    extra = [letter for letter in axes if letter not in ("X", "Z", "C")]
+    if extra:
+        found.append(f"{'axes' if len(extra) > 1 else 'axis'} {', '.join(extra)}, which a "
+                     "lathe has not (a Y takes the tool off the XZ plane through the spindle "
+                     "axis, an A or B turns it out of its edge plane)")
+    if found:
+        raise InputError(f"Expected a lathe: a work spindle C about Z and the tool moved in "
+                         f"the XZ plane by X and Z alone (axes X, Z, C, as sts_lathe); "
+                         f"{machine.name} (axes {', '.join(axes)}): {'; '.join(found)}. "
+                         "A milling machine (a C table's too) cuts with machinesim.cutting.cut",
+                         key="machine")
 
 
 def turning_tool(tool) -> RoundNoseTool:
