@@ -2,6 +2,8 @@
 beyond the axes' travel, errors that lift the tool off the part, errors as a dict or a TOML
 file, an errors file with a bad value."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -336,3 +338,34 @@ def test_turn_refuses_a_lathe_whose_c_is_no_work_spindle_about_z(tmp_path, old, 
         turn(program, machinesim.load_machine(tmp_path / "other.urdf"))
     _, report = turn(program, machinesim.load_machine(tmp_path / "lathe.urdf"))
     assert report.runs == 1 and report.revolutions == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("far_mm", [1e12, 1e9, 1000010.0])
+def test_turn_refuses_a_move_beyond_a_km_even_with_overtravel_allowed(far_mm):
+    # as `cut` refuses it (machinesim.cutting.engine.FARTHEST_M): a facing run out to
+    # X = 1e9 m (a length in the wrong unit) was turned with allow_overtravel, 81 points,
+    # and listed only as overtravel; the tip there is X from the spindle axis, 1 um deep
+    program = machinesim.nc.parse_program(
+        f"G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\nG01 X{far_mm:.1f} C3600. F36000\n"
+        "G01 X0.0 C7200.\nG00 Z0.01\n")
+    distance = np.hypot(far_mm, 0.001) * 1e-3
+    far = re.escape(f"the move takes the tool {distance:.3g} m from the workpiece origin")
+    with pytest.raises(InputError, match=rf"line 4: {far}; expected within 1000 m"):
+        turn(program, "sts_lathe", allow_overtravel=True)
+    with pytest.raises(InputError, match=far):
+        machinesim.Lab("sts_lathe", noise=False).turn(program, allow_overtravel=True)
+
+
+def test_a_move_within_a_km_is_turned_and_one_before_the_start_is_refused_too():
+    # 999.99 m is within FARTHEST_M: turned with allow_overtravel, X listed beyond its travel
+    near = machinesim.nc.parse_program(
+        "G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\nG01 X999990.0 C3600. F36000\n"
+        "G01 X0.0 C7200.\nG00 Z0.01\n")
+    _, report = turn(near, "sts_lathe", allow_overtravel=True)
+    assert report.runs == 1 and report.limit_violations[0].startswith("axis X = 999990.0")
+    # a rapid 1e9 m out before every axis has a value (the machine is at its home, Z at the
+    # top of its travel, until the program names an axis), which nothing turns
+    early = machinesim.nc.parse_program(f"G90 G21\nG00 X1000000000000.0\nG00 X1.0 Z0.01 C0\n"
+                                        f"{ONE_TURN}")
+    with pytest.raises(InputError, match=r"line 2: the move takes the tool 1e\+09 m"):
+        turn(early, "sts_lathe", allow_overtravel=True)

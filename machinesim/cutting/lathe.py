@@ -35,7 +35,10 @@ A program that takes an axis outside its travel is refused before anything is cu
 `AxisLimitError` naming the axis, the value, the travel and the program's lines, as
 `machinesim.cutting.cut` refuses it (the same check, on the program's axis values, move by
 move); ``allow_overtravel=True`` turns it anyway and lists it in
-`TurningReport.limit_violations`. A turn that leaves the stock as it was (the tool's tip
+`TurningReport.limit_violations`. A move that takes the tool beyond
+`machinesim.cutting.engine.FARTHEST_M` (1 km) of the workpiece origin is refused either way
+(InputError naming its line), as `cut` refuses it: float64 keeps no nanometre there. A turn
+that leaves the stock as it was (the tool's tip
 never below its top: a program above the part, a tool set too high or a workpiece too low)
 is reported, as `cut` reports one: `TurningReport.empty_cut`, with a note saying why.
 
@@ -53,7 +56,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from machinesim.cutting.lathe_following import follow_run
-from machinesim.cutting.program import _overtravel
+from machinesim.cutting.program import _overtravel, _refuse_far
 from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
@@ -224,8 +227,12 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     machine.check_errors(errors)
     if servo is not None:  # as a Lab checks it: one column per axis, each named right
         check_servo(machine, servo)
-    limits = _overtravel(machine, _program_moves(program, machine),
-                         getattr(program, "source", None), allow_overtravel)
+    moves = _program_moves(program, machine)
+    limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
+    # as `cut` refuses a move beyond FARTHEST_M (1 km), allowed overtravel or not: the
+    # moves are straight in X and Z, so their ends bound the tool's distance
+    _refuse_far(machine.tool_pose(modal_values(moves.q, start=machine.home), errors), moves,
+                getattr(program, "source", None))
     tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
     for t, points, lines in _timed_runs(program, machine, with_lines=True):
