@@ -59,6 +59,33 @@ def test_a_tool_rotation_is_split_so_the_chord_stays_within_tolerance(tolerance)
     assert r * (1 - math.cos(dtheta / 2)) <= tolerance
 
 
+@pytest.mark.parametrize("turn_deg", [720.0, 1440.0, 2880.0])
+def test_a_turn_of_whole_double_turns_is_split_by_the_sagitta_not_by_its_aliased_midpoint(
+        turn_deg):
+    """C turns 720 deg (or 1440, 2880) with the edge 5 mm from the axis: one chord's ends
+    and midpoint are one point, so the chord rule's first look saw no deviation; the old
+    planner took 1 sub-step, raised to the 45 deg sub-steps (16 for 720 deg), whose
+    sagitta r (1 - cos(22.5 deg)) is 0.38 mm. The fewest that hold are
+    ceil(theta / (2 acos(1 - tol / r))) (9935 for 720 deg), the planned and the followed
+    (servo) counts alike."""
+    from machinesim.motion.following import StepRule
+
+    machine = load_machine("grooving_4axis")
+    theta, r, tolerance = math.radians(turn_deg), 5e-3, 1e-8
+    program = parse_program(f"G90 G21 G94\nG00 X5. Y0. Z0. C0.\nG01 C{turn_deg} F36000.\n"
+                            "M30\n")
+    segment = plan(program, machine, chord_tolerance=tolerance).segments[1]
+    steps = len(segment.q) - 1
+    fewest = math.ceil(theta / (2 * math.acos(1 - tolerance / r)))
+    assert steps >= fewest
+    assert r * (1 - math.cos(theta / steps / 2)) <= tolerance
+    rule = StepRule(machine, None, np.zeros((1, 3)), np.asarray(machine.rotary), tolerance,
+                    0.0)
+    start = segment.q[:1]
+    followed = int(rule.counts(start, segment.q[-1:] - start)[0])
+    assert followed >= fewest
+
+
 def test_the_chord_follows_the_real_path_with_errors_and_the_tool_extent():
     """A longer arm (tool set 5 mm low) and a tool point 1 mm above the edge: the farthest
     point from the A axis sets the step count."""

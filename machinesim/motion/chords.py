@@ -434,6 +434,30 @@ def substeps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
     return steps, failed, sorted(stalls, key=lambda stall: stall.move)
 
 
+def hold_raised(paths: ToolPaths, start: np.ndarray, delta: np.ndarray, tolerance: float,
+                steps: np.ndarray, failed: np.ndarray, stalls: list[Stall],
+                least: np.ndarray) -> None:
+    """Raise the `substeps` counts ``steps`` to ``least`` (another rule's fewest: a rotary
+    turn of at most 45 deg a sub-step), in place, checking each raised count at its own
+    sub-step midpoints and raising it by 10 % until they hold, as `substeps` does
+    (``failed`` and ``stalls`` as there; a ``least`` beyond `MAX_SUBSTEPS` is left to the
+    caller's refusal).
+
+    A count that held is not always one that holds once raised: the midpoints see a path
+    only at the fractions they sample, and a move that turns a rotary axis by 720 deg is at
+    one point at its ends and at its middle, so one chord "held" (deviation 0) and the 16
+    sub-steps of 45 deg it was raised to left their chords by 0.38 mm at 5 mm from the axis.
+    A count that holds on a smooth path stays one when raised (its deviation falls), so such
+    a move keeps the count ``least``.
+    """
+    raised = np.flatnonzero(~failed & (least > steps) & (least <= MAX_SUBSTEPS))
+    if not raised.size:
+        return
+    _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, raised,
+                        least[raised].astype(np.float64))
+    stalls.sort(key=lambda stall: stall.move)
+
+
 def _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, todo, n,
                         since=None) -> None:
     """Counts ``n`` for moves ``todo``, raised by 10 % until their midpoints hold (into

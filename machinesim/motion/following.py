@@ -31,7 +31,7 @@ import math
 import numpy as np
 
 from machinesim.exceptions import InputError, NCProgramError
-from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps
+from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, hold_raised, substeps
 from machinesim.motion.faces import face_substeps, profile_substeps
 from machinesim.nc.program import KIND_LINEAR
 from machinesim.tolerances import MAX_STEP_TURN_RAD
@@ -69,9 +69,12 @@ class StepRule:
             return need
         if self._paths is None:
             self._paths = ToolPaths(self.machine, self.errors, self.points)
-        found, failed, _ = substeps(self._paths, starts[bends], delta[bends], self.tolerance)
+        found, failed, stalls = substeps(self._paths, starts[bends], delta[bends],
+                                         self.tolerance)
         turn = np.abs(delta[bends][:, self.rotary]).sum(axis=1)
         least = np.ceil(turn / (MAX_STEP_TURN_RAD / 2.0))
+        hold_raised(self._paths, starts[bends], delta[bends], self.tolerance, found, failed,
+                    stalls, least)
         found = np.maximum(found, np.minimum(least, MAX_SUBSTEPS + 1).astype(np.int64))
         found = face_substeps(self.machine, self.errors, starts[bends], delta[bends],
                               np.maximum(found, 1), self.face_radius, self.tolerance)

@@ -8,7 +8,7 @@ import os
 import numpy as np
 
 from machinesim.exceptions import InputError, NCProgramError
-from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, substeps
+from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, hold_raised, substeps
 from machinesim.motion.faces import ProfileEdges, face_substeps, profile_substeps
 from machinesim.motion.following import StepRule, follow_plan
 from machinesim.motion.steps import wrap_steps
@@ -252,6 +252,16 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                     source=source, line=int(lines[turning[move]]))
             found, failed, stalls = substeps(paths, starts[turning], delta[turning],
                                              chord_tolerance)
+            # a sub-step turns the tool by at most its rotary axes' turns added up; the
+            # cutting engine takes a sweep for the hull of its two poses only up to
+            # MAX_STEP_TURN_RAD (a quarter turn), which a chord tolerance as coarse as the
+            # tool would pass (--chord-nm 1e9, a C180. in one step): half of it, the
+            # machine's angular errors far inside the rest; the counts raised to it are
+            # checked again (a turn of 720 deg is one point at its ends and middle)
+            turn = np.abs(delta[turning][:, rotary]).sum(axis=1)
+            least = np.ceil(turn / (MAX_STEP_TURN_RAD / 2.0))
+            hold_raised(paths, starts[turning], delta[turning], chord_tolerance, found,
+                        failed, stalls, least)
             if failed.any():
                 first = int(np.argmax(failed))
                 bad = int(turning[first])
@@ -267,13 +277,6 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                     f"chord within {chord_tolerance * 1e9:g} nm; raise chord_tolerance "
                     "(--chord-nm on the command line)",
                     source=source, line=int(lines[bad]))
-            # a sub-step turns the tool by at most its rotary axes' turns added up; the
-            # cutting engine takes a sweep for the hull of its two poses only up to
-            # MAX_STEP_TURN_RAD (a quarter turn), which a chord tolerance as coarse as the
-            # tool would pass (--chord-nm 1e9, a C180. in one step): half of it, the
-            # machine's angular errors far inside the rest
-            turn = np.abs(delta[turning][:, rotary]).sum(axis=1)
-            least = np.ceil(turn / (MAX_STEP_TURN_RAD / 2.0))
             bad = _first_beyond(least, turning)
             if bad is not None:
                 turned = math.degrees(float(turn[np.argmax(least > MAX_SUBSTEPS)]))
