@@ -12,7 +12,7 @@ import pytest
 from test_motion_identity import assert_same, random_program
 
 from machinesim import load_machine
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, NCProgramError
 from machinesim.motion import Segment, Trajectory, chords, plan, planner
 from machinesim.nc import ProgramBuilder
 from machinesim.sampling import random_errors
@@ -62,6 +62,39 @@ def test_an_object_with_moves_only_plans_as_the_program_does(grooving):
     program = random_program(grooving, np.random.default_rng(3), 30)
     duck = SimpleNamespace(moves=tuple(program.moves), source=program.source)
     assert_same(plan(duck, grooving), reference.plan(program, grooving))
+
+
+def _duck(kind, target, feed, dwell):
+    move = SimpleNamespace(kind=kind, target=target, feed_m_per_s=feed, dwell_s=dwell, line=7)
+    return SimpleNamespace(moves=(move,), source="duck.nc")
+
+
+@pytest.mark.parametrize(("move", "key", "said"), [
+    # a feed of 0 took inf s (samples at NaN s), a negative one the axis' limit (0.04 s for
+    # 1 mm at 25 mm/s), a dwell of -1 s ran the clock back: a Move refuses each when made
+    (("linear", {"X": 1e-3}, 0.0, 0.0), "feed_m_per_s", "feed must be > 0"),
+    (("linear", {"X": 1e-3}, -1e-3, 0.0), "feed_m_per_s", "feed must be > 0"),
+    (("linear", {"X": 1e-3}, math.inf, 0.0), "feed_m_per_s", "feed must be > 0"),
+    (("rapid", {"X": 1e-3}, 1e-3, 0.0), "feed_m_per_s", "feed must be None for a rapid"),
+    (("dwell", {}, None, -1.0), "dwell_s", "got -1.0 for a dwell move"),
+    (("dwell", {}, None, math.nan), "dwell_s", "got nan for a dwell move"),
+    (("rapid", {"X": 1e-3}, None, 2.0), "dwell_s", "got 2.0 for a rapid move"),
+    (("arc", {"X": 1e-3}, 1e-3, 0.0), "kind", "got 'arc'"),
+    (("rapid", {"X": "1"}, None, 0.0), "X", "got '1'"),
+    (("rapid", {"X": math.inf}, None, 0.0), "X", "got inf"),
+])
+def test_an_object_with_moves_is_refused_a_move_a_move_would_refuse(grooving, move, key,
+                                                                      said):
+    with pytest.raises(NCProgramError, match=said) as caught:
+        plan(_duck(*move), grooving)
+    assert (caught.value.source, caught.value.line, caught.value.key) == ("duck.nc", 7, key)
+
+
+def test_an_object_with_moves_plans_a_feed_and_a_dwell_by_hand(grooving):
+    """1 mm at 60 mm/min: 1 s; a dwell of 0.5 s."""
+    duck = _duck("linear", {"X": 1e-3}, 1e-3, 0.0)
+    assert plan(duck, grooving).duration == pytest.approx(1.0, rel=1e-15)
+    assert plan(_duck("dwell", {}, None, 0.5), grooving).duration == 0.5
 
 
 def test_batches_and_threads_change_nothing(grooving, monkeypatch):

@@ -13,6 +13,7 @@ from machinesim.motion.faces import ProfileEdges, face_substeps, profile_substep
 from machinesim.motion.following import StepRule, follow_plan
 from machinesim.motion.steps import wrap_steps
 from machinesim.motion.trajectory import IdealServo, ServoModel, Trajectory
+from machinesim.nc.moves import feed_problem
 from machinesim.nc.program import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
 from machinesim.nc.rotary_feed import inch_feed_as_written
 from machinesim.tolerances import CHORD_TOLERANCE_M, MAX_STEP_TURN_RAD
@@ -90,6 +91,7 @@ def _program_arrays(program):
     targets = np.full((len(moves), len(AXES)), np.nan)
     column = {a: i for i, a in enumerate(AXES)}
     for row, move in enumerate(moves):
+        _check_move(move, _source(program))
         for letter, value in move.target.items():
             if letter not in column:
                 raise NCProgramError(f"unknown axis {letter!r}; expected one of "
@@ -101,6 +103,33 @@ def _program_arrays(program):
     dwells = np.array([m.dwell_s for m in moves], dtype=np.float64)
     lines = np.array([m.line for m in moves], dtype=np.int64)
     return targets, kinds, feeds, dwells, lines
+
+
+def _check_move(move, source: str) -> None:
+    """Refuse, naming its line, a move (of a program read move by move) whose kind, axis
+    values, feed or dwell `plan` would turn into no time or a wrong one: a `Move` checks
+    these when made, any other object nothing (a feed of 0 m/s took inf s and NaN sample
+    times, a negative one its axes' time at their velocity limit, a dwell of -1 s ran the
+    clock back)."""
+    kind, feed, dwell = move.kind, move.feed_m_per_s, move.dwell_s
+    if kind not in MOVE_KINDS:
+        raise NCProgramError(f"kind must be one of {', '.join(MOVE_KINDS)}, got {kind!r}",
+                             source=source, line=move.line, key="kind")
+    for letter, value in move.target.items():
+        if not (isinstance(value, int | float | np.integer | np.floating)
+                and not isinstance(value, bool | np.bool_) and math.isfinite(value)):
+            raise NCProgramError(f"axis value {letter} must be a finite number (m, rad), "
+                                 f"got {value!r}", source=source, line=move.line,
+                                 key=str(letter))
+    if feed is not None and not (isinstance(feed, int | float | np.integer | np.floating)
+                                 and kind == "linear" and 0.0 < feed < math.inf):
+        raise NCProgramError(feed_problem(kind, feed) + " (None: no feed given)",
+                             source=source, line=move.line, key="feed_m_per_s")
+    if not (isinstance(dwell, int | float | np.integer | np.floating)
+            and 0.0 <= dwell < math.inf and (kind == "dwell" or dwell == 0.0)):
+        raise NCProgramError(f"dwell_s must be >= 0 s for a dwell and 0.0 otherwise, got "
+                             f"{dwell!r} for a {kind} move", source=source, line=move.line,
+                             key="dwell_s")
 
 
 def _source(program) -> str:
