@@ -86,6 +86,27 @@ def test_a_turn_of_whole_double_turns_is_split_by_the_sagitta_not_by_its_aliased
     assert followed >= fewest
 
 
+def test_a_straightness_s_that_passes_its_moves_middle_is_split_to_the_tolerance(tmp_path):
+    """EYX = k x (x - 5)(x - 10) (x in mm, 1 um at its peaks, x = 2.11 and 7.89 mm) on X
+    from 0 to 10 mm: the path is on its chord at both ends and at the middle, where one
+    chord's check looks, and 1 um off it between; the old planner took one sub-step. The
+    path, sampled at 2001 points, stays within 1 nm of the planned chords."""
+    k = 1.0 / (2.1132487 * 2.8867513 * 7.8867513)  # 1 um at the peaks
+    (tmp_path / "s.toml").write_text(
+        f"[component.X]\nEYX_poly_um_mm = [0.0, {50 * k!r}, {-15 * k!r}, {k!r}]\n")
+    errors = ErrorModel.from_toml(tmp_path / "s.toml")
+    machine = load_machine("grooving_4axis")
+    program = ProgramBuilder().rapid(X=0.0, Y=0.0, Z=0.0, C=0.0).linear(
+        X=10e-3, feed_mm_per_min=100.0).build()
+    q = plan(program, machine, errors, chord_tolerance=1e-9).segments[1].q
+    assert len(q) > 2
+    dense = np.linspace(0.0, 10e-3, 2001)
+    y = np.array([machine.tool_pose([x, 0.0, 0.0, 0.0], errors)[1, 3] for x in dense])
+    nodes = np.array([machine.tool_pose(row, errors)[1, 3] for row in q])
+    assert np.abs(y).max() == pytest.approx(1e-6, rel=1e-6)  # the bow the chords must follow
+    assert np.abs(y - np.interp(dense, q[:, 0], nodes)).max() <= 1e-9
+
+
 def test_the_chord_follows_the_real_path_with_errors_and_the_tool_extent():
     """A longer arm (tool set 5 mm low) and a tool point 1 mm above the edge: the farthest
     point from the A axis sets the step count."""

@@ -147,6 +147,11 @@ class ToolPaths:
             for var in binding.varying
             if getattr(var.component, "period", None) is not None
             for at, side in _unclosed(var.component))
+        # axes whose errors vary along them as no table does (a polynomial): one chord's
+        # midpoint may miss such a path's bow (`_bowed`); a table's corners are checked
+        self.smooth_axes = np.array(sorted(
+            {var.axis for var in binding.varying
+             if getattr(var.component, "kind", None) != "table"}), dtype=np.int64)
         # (axis, table, name) of every error table, to name one where the path steps
         self.tables = tuple(
             (var.axis, var.component, _name(binding, var)) for var in binding.varying
@@ -406,6 +411,10 @@ def substeps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
         return steps, failed, stalls
     first = deviations(paths, start, delta, np.ones(count, dtype=np.int64))
     within = first <= tolerance
+    if paths.smooth_axes.size:
+        bends = np.any(delta[:, paths.smooth_axes] != 0.0, axis=1)
+        looked = np.flatnonzero(within & bends)
+        within[looked[_bowed(paths, start, delta, looked, tolerance)]] = False
     steps[within] = 1
     short = np.flatnonzero(~within)
     guess = np.maximum(2, np.ceil(np.sqrt(first[short] / tolerance))).astype(np.int64)
@@ -456,6 +465,37 @@ def hold_raised(paths: ToolPaths, start: np.ndarray, delta: np.ndarray, toleranc
     _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, raised,
                         least[raised].astype(np.float64))
     stalls.sort(key=lambda stall: stall.move)
+
+
+def _bowed(paths: ToolPaths, start: np.ndarray, delta: np.ndarray, moves: np.ndarray,
+           tolerance: float) -> np.ndarray:
+    """Which of ``moves``, whose one chord holds at its midpoint, leave it by more than
+    ``tolerance`` at a quarter and three quarters of the move (each point against the chord's
+    point at the same fraction, as the midpoint is).
+
+    One chord's midpoint sees a path only there: a straightness polynomial odd about the
+    move's middle (an S, ``EYX = c x**3`` on a move from -a to a, or x (x - 5)(x - 10) of
+    1 um on X from 0 to 10 mm) lies on the chord's middle, and the move was one sub-step
+    1 um off its path. A smooth bow (an arc, a parabola) is off by less at its quarters than
+    at its middle, so such a move still holds in one.
+    """
+    out = np.zeros(len(moves), dtype=bool)
+    f = np.array([0.0, 0.25, 0.75, 1.0])
+    per = max(1, _ROWS_PER_BATCH // (len(f) * paths.k))
+    for a in range(0, len(moves), per):
+        some = moves[a:a + per]
+        pos = paths.positions(_columns(start[some], delta[some], f), len(f))
+        shape = (len(f), len(some)) + ((paths.k,) if paths.k > 1 else ())
+        quarter = three = 0.0
+        for c in range(3):
+            p = pos[c].reshape(shape)
+            quarter = quarter + (p[1] - (0.75 * p[0] + 0.25 * p[3])) ** 2
+            three = three + (p[2] - (0.25 * p[0] + 0.75 * p[3])) ** 2
+        total = np.maximum(quarter, three)
+        if paths.k > 1:
+            total = total.max(axis=1)
+        out[a:a + per] = np.sqrt(total) > tolerance
+    return out
 
 
 def _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, todo, n,
