@@ -30,6 +30,28 @@ def test_times_follow_the_feed_rule_by_hand():
                                rtol=0, atol=1e-18)
 
 
+@pytest.mark.parametrize(("kind", "feed", "dwell", "key"), [
+    ("arc", 1e-3, 0.0, "kind"),            # timed as a feed move: 1.0 s
+    ("linear", None, 0.0, "feed_m_per_s"),  # TypeError of None / 1e-3
+    ("linear", 0.0, 0.0, "feed_m_per_s"),   # ZeroDivisionError
+    ("linear", -1e-3, 0.0, "feed_m_per_s"),  # the axis' limit: 0.04 s, silently
+    ("dwell", None, -2.0, "dwell_s"),       # -2.0 s
+    ("dwell", None, None, "dwell_s"),
+])
+def test_move_duration_refuses_a_move_it_cannot_time(kind, feed, dwell, key):
+    from machinesim.motion import move_duration
+
+    with pytest.raises(InputError) as caught:
+        move_duration(kind, np.zeros(1), np.full(1, 1e-3), np.array([False]),
+                      np.array([0.025]), feed, dwell)
+    assert caught.value.key == key
+    # 1 mm at 60 mm/min is 1 s, a dwell its time
+    assert move_duration("linear", np.zeros(1), np.full(1, 1e-3), np.array([False]),
+                         np.array([0.025]), 1e-3, 0.0) == pytest.approx(1.0, rel=1e-15)
+    assert move_duration("dwell", np.zeros(1), np.zeros(1), np.array([False]),
+                         np.array([0.025]), None, 0.5) == 0.5
+
+
 def test_a_feed_beyond_an_axis_velocity_limit_is_clamped_there():
     """No axis outruns its velocity limit (25 mm/s for X and Y, 2 rad/s for C on the
     alpha-0iB): F 1e8 mm/min over 12 mm in X takes 12 / 25 s, not 7.2 us; over 3 mm X and

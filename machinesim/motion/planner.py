@@ -29,12 +29,23 @@ SLOW_MOVE_S = 24 * 3600.0
 #: of more than a few seconds becomes more than an hour, which no machining step waits.
 LONG_DWELL_S = 3600.0
 _RAD_PER_DEG = np.pi / 180.0
+_NUMBER = int | float | np.integer | np.floating
 
 
 def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndarray,
                   rapid_rate: np.ndarray, feed_m_per_s: float | None, dwell_s: float) -> float:
-    """Time of one move by the rules in the module docstring, s."""
+    """Time of one move by the rules of `machinesim.motion` (FANUC's feed rule, clamped at
+    the axes' velocity limits ``rapid_rate``; a rapid at its slowest axis), s.
+
+    ``kind`` is one of ``"rapid"``, ``"linear"``, ``"dwell"``; a linear move that moves
+    needs a feed > 0 (m/s, its degrees counting as mm), a dwell a time >= 0: anything
+    else is refused (InputError), as a `Move` refuses it, not timed."""
+    if kind not in MOVE_KINDS:
+        raise InputError(f"kind must be one of {', '.join(MOVE_KINDS)}, got {kind!r}",
+                         key="kind")
     if kind == "dwell":
+        if not (isinstance(dwell_s, _NUMBER) and 0.0 <= dwell_s < math.inf):
+            raise InputError(f"dwell_s must be a time >= 0 s, got {dwell_s!r}", key="dwell_s")
         return float(dwell_s)
     delta = np.abs(end - start)
     if kind == "rapid":
@@ -44,6 +55,9 @@ def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndar
     length_mm = float(np.sqrt(np.sum(scaled**2)))
     if length_mm == 0.0:
         return 0.0
+    if not (isinstance(feed_m_per_s, _NUMBER) and 0.0 < feed_m_per_s < math.inf):
+        raise InputError(f"a linear move that moves needs a feed > 0 (m/s), got "
+                         f"{feed_m_per_s!r}", key="feed_m_per_s")
     feed_mm_per_s = feed_m_per_s / _M_PER_MM
     # no axis runs faster than its velocity limit: a feed beyond it is clamped there
     return max(length_mm / feed_mm_per_s, float(np.max(delta / rapid_rate)))
@@ -116,16 +130,16 @@ def _check_move(move, source: str) -> None:
         raise NCProgramError(f"kind must be one of {', '.join(MOVE_KINDS)}, got {kind!r}",
                              source=source, line=move.line, key="kind")
     for letter, value in move.target.items():
-        if not (isinstance(value, int | float | np.integer | np.floating)
+        if not (isinstance(value, _NUMBER)
                 and not isinstance(value, bool | np.bool_) and math.isfinite(value)):
             raise NCProgramError(f"axis value {letter} must be a finite number (m, rad), "
                                  f"got {value!r}", source=source, line=move.line,
                                  key=str(letter))
-    if feed is not None and not (isinstance(feed, int | float | np.integer | np.floating)
+    if feed is not None and not (isinstance(feed, _NUMBER)
                                  and kind == "linear" and 0.0 < feed < math.inf):
         raise NCProgramError(feed_problem(kind, feed) + " (None: no feed given)",
                              source=source, line=move.line, key="feed_m_per_s")
-    if not (isinstance(dwell, int | float | np.integer | np.floating)
+    if not (isinstance(dwell, _NUMBER)
             and 0.0 <= dwell < math.inf and (kind == "dwell" or dwell == 0.0)):
         raise NCProgramError(f"dwell_s must be >= 0 s for a dwell and 0.0 otherwise, got "
                              f"{dwell!r} for a {kind} move", source=source, line=move.line,
