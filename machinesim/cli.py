@@ -37,6 +37,7 @@ from machinesim._io import (
     write_together,
 )
 from machinesim._json import json_text
+from machinesim._log_lines import LOG_AFTER_S, LOG_EVERY_S, log_lines
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._program_options import (
     add_reading_options,
@@ -264,8 +265,8 @@ def _same_file(a: Path, b: Path) -> bool:
 
 #: Without a terminal (a log, a pipe) a long cut says how far it is: a first line after this
 #: many seconds (short cuts say nothing), then at most one every `LOG_PROGRESS_EVERY_S`.
-LOG_PROGRESS_AFTER_S = 10.0
-LOG_PROGRESS_EVERY_S = 30.0
+LOG_PROGRESS_AFTER_S = LOG_AFTER_S
+LOG_PROGRESS_EVERY_S = LOG_EVERY_S
 
 
 def _progress_bar(quiet: bool, clock=time.monotonic):
@@ -287,22 +288,9 @@ def _progress_bar(quiet: bool, clock=time.monotonic):
 
 
 def _progress_lines(clock):
-    """Progress as whole lines for a log: nothing for a cut shorter than
-    `LOG_PROGRESS_AFTER_S`, then a line at most every `LOG_PROGRESS_EVERY_S`, and one at the
-    end once any was written; each names the engine's stage ("building" its sweeps, then
-    "cutting")."""
-    start = clock()
-    due = [start + LOG_PROGRESS_AFTER_S, False]  # next line's time, whether any was written
-
-    def show(done: int, total: int, stage: str = "cutting") -> None:
-        now = clock()
-        if now >= due[0] or (done >= total and due[1]):
-            sys.stderr.write(f"  {stage}: {done}/{total} sweeps "
-                             f"({100 * done // max(total, 1)} %), {now - start:.0f} s\n")
-            sys.stderr.flush()
-            due[0], due[1] = now + LOG_PROGRESS_EVERY_S, True
-
-    return show
+    """Progress as whole lines for a log (`machinesim._log_lines.log_lines`), each naming the
+    engine's stage ("building" its sweeps, then "cutting")."""
+    return log_lines("cutting", "sweeps", clock, LOG_PROGRESS_AFTER_S, LOG_PROGRESS_EVERY_S)
 
 
 def _reading_notes(args, program, chord: float) -> list[str]:

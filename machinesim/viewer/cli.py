@@ -29,6 +29,7 @@ from machinesim._io import (
     named,
 )
 from machinesim._json import read_json
+from machinesim._log_lines import LOG_AFTER_S, LOG_EVERY_S, log_lines
 from machinesim._program_options import (
     add_reading_options,
     check_reading_options,
@@ -302,24 +303,13 @@ def _scene(args, budget: int):
                          chord_tolerance=chord, progress=cut_lines())
 
 
-def cut_lines(clock=time.monotonic, after_s: float = 10.0, every_s: float = 30.0):
+def cut_lines(clock=time.monotonic, after_s: float = LOG_AFTER_S, every_s: float = LOG_EVERY_S):
     """``progress(done, total)`` for a program's view, as lines on stderr: nothing for a
     view that cuts in less than ``after_s``, then a line at most every ``every_s`` and one at
     the end once any was written (`machinesim cut`'s rule for a log), e.g.
     ``  view: 12/61 cuts (19 %), 41 s``. A 100,000-line program's view had printed nothing
     for the 10 minutes it ran before it was stopped."""
-    start = clock()
-    due = [start + after_s, False]  # next line's time, whether any was written
-
-    def show(done: int, total: int) -> None:
-        now = clock()
-        if now >= due[0] or (done >= total and due[1]):
-            sys.stderr.write(f"  view: {done}/{total} cuts ({100 * done // max(total, 1)} %), "
-                             f"{now - start:.0f} s\n")
-            sys.stderr.flush()
-            due[0], due[1] = now + every_s, True
-
-    return show
+    return log_lines("view", "cuts", clock, after_s, every_s)
 
 
 def _report_mismatch(report, part: Path, path) -> list[str]:
