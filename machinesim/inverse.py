@@ -227,21 +227,14 @@ def _solve(machine, targets, binding, q, max_iterations, axis_only: bool = False
             dr = rotation_log(targets[active, :3, :3] @ np.swapaxes(pose[:, :3, :3], 1, 2))
         jp_pinv = _pinv(jp)
         step = np.einsum("nap,np->na", jp_pinv, dp)
-        if not orient:
-            q[active] += step
-            done = ((np.linalg.norm(dp, axis=1) < tolerances.IK_POSITION_M)
-                    & (np.linalg.norm(step, axis=1) < tolerances.IK_ANGLE_RAD))
-            active = active[~done]
-            if not len(active):
-                break
-            continue
-        null = eye - jp_pinv @ jp
-        rest = dr - np.einsum("nra,na->nr", jr, step)
-        # matching the whole orientation, a direction that turns the tool by less than
-        # IK_WEAK_TURN per unit of axis motion is left unmatched (reported), not chased by
-        # turns beyond all proportion (A against C near B = 0 on robonano_ui)
-        weak = IK_SINGULAR if axis_only else IK_WEAK_TURN
-        step += np.einsum("nar,nr->na", _pinv(jr @ null, weak), rest)
+        if orient:
+            null = eye - jp_pinv @ jp
+            rest = dr - np.einsum("nra,na->nr", jr, step)
+            # matching the whole orientation, a direction that turns the tool by less than
+            # IK_WEAK_TURN per unit of axis motion is left unmatched (reported), not chased
+            # by turns beyond all proportion (A against C near B = 0 on robonano_ui)
+            weak = IK_SINGULAR if axis_only else IK_WEAK_TURN
+            step += np.einsum("nar,nr->na", _pinv(jr @ null, weak), rest)
         q[active] += step
         done = ((np.linalg.norm(dp, axis=1) < tolerances.IK_POSITION_M)
                 & (np.linalg.norm(step, axis=1) < tolerances.IK_ANGLE_RAD))
