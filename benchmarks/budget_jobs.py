@@ -140,12 +140,7 @@ def main() -> None:
                   f"{os.getloadavg()[0]:.1f})", flush=True)
     print(f"budget of the quick crown ({len(budgets[0].sources)} reruns), median of "
           f"{args.repeats}:")
-    for jobs in jobs_values:
-        wall = statistics.median(walls[jobs])
-        print(f"  --jobs {jobs}: {wall:6.0f} s wall, {statistics.median(cpus[jobs]):6.0f} CPU s "
-              f"(all processes), peak memory {max(peaks[jobs]) / 2**30:.2f} GB; "
-              f"{statistics.median(walls[jobs_values[0]]) / wall:.2f} x --jobs "
-              f"{jobs_values[0]}")
+    _medians(jobs_values, walls, cpus, peaks)
     for jobs, budget in zip(jobs_values, budgets, strict=False):  # the first of each
         print(f"the budget with --jobs {jobs}:\n{budget.table()}")
     same = all(b.to_dict() == budgets[0].to_dict() for b in budgets)
@@ -155,6 +150,16 @@ def main() -> None:
             if row != first:
                 print(f"  budget {k + 1}, {row.source} off, {row.figure}: after "
                       f"{row.after_without!r}, the first's {first.after_without!r}")
+
+
+def _medians(jobs_values: list[int], walls: dict, cpus: dict, peaks: dict) -> None:
+    """A line for each ``--jobs`` value: median wall and CPU time, peak memory, speed-up."""
+    for jobs in jobs_values:
+        wall = statistics.median(walls[jobs])
+        print(f"  --jobs {jobs}: {wall:6.0f} s wall, {statistics.median(cpus[jobs]):6.0f} CPU s "
+              f"(all processes), peak memory {max(peaks[jobs]) / 2**30:.2f} GB; "
+              f"{statistics.median(walls[jobs_values[0]]) / wall:.2f} x --jobs "
+              f"{jobs_values[0]}")
 
 
 def end_to_end(name: str, jobs_values: list[int], repeats: int) -> None:
@@ -188,12 +193,7 @@ def end_to_end(name: str, jobs_values: list[int], repeats: int) -> None:
                       f"{os.getloadavg()[0]:.1f})", flush=True)
     print(f"{name}, its default run end to end ({len(budgets[0][1])} budget rows), median "
           f"of {repeats}:")
-    for jobs in jobs_values:
-        wall = statistics.median(walls[jobs])
-        print(f"  --jobs {jobs}: {wall:6.0f} s wall, {statistics.median(cpus[jobs]):6.0f} CPU s "
-              f"(all processes), peak memory {max(peaks[jobs]) / 2**30:.2f} GB; "
-              f"{statistics.median(walls[jobs_values[0]]) / wall:.2f} x --jobs "
-              f"{jobs_values[0]}")
+    _medians(jobs_values, walls, cpus, peaks)
     same = all(rows == budgets[0][1] for _, rows in budgets)  # floats read back exactly
     print(f"every budget equal to the first, to the bit: {same}")
 
