@@ -61,7 +61,7 @@ from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag, as_floats, as_number
-from machinesim.motion.planner import slow_move_notes
+from machinesim.motion.timing import slow_move_notes
 from machinesim.nc.moves import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
 from machinesim.servo import check_servo
@@ -326,7 +326,7 @@ def _rapids_below_top(program, machine, top: float) -> tuple[str, ...]:
 
 def _untimed_moves(program, machine) -> tuple[float, tuple[str, ...]]:
     """The time ``program``'s dwells wait (s), and the notes on its moves whose time is
-    hardly what it meant (`machinesim.motion.planner.slow_move_notes`, as `plan` notes
+    hardly what it meant (`machinesim.motion.timing.slow_move_notes`, as `plan` notes
     them): the longest feed move when it takes more than a day, turning or not (a plunge
     at F0.000001), and the longest dwell beyond an hour. Neither a plunge nor a dwell is
     in a turning run, which `_timed_runs` times."""
@@ -501,7 +501,7 @@ def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple, lines: np.nda
     """Time of each move between consecutive ``points`` at ``feeds`` (m/s), s: the length in
     mm with rotary axes in degrees, over F in mm/s (FANUC), or the time its slowest axis
     takes at its velocity limit ``rapid_rate`` (per axis, SI) where that is longer (a feed
-    beyond it is clamped, `machinesim.motion.planner.move_duration`); a move without a
+    beyond it is clamped, `machinesim.motion.timing.move_duration`); a move without a
     positive feed is refused naming its ``lines`` in ``source``."""
     length = _lengths(points[:-1], points[1:], axes)
     bad = ~(np.isfinite(feeds) & (feeds > 0.0))

@@ -10,7 +10,7 @@ counts a degree as an inch, the unit of F there: ``G20 G01 X1. A10. F10.`` takes
 sqrt(1 + 100) / 10 min, ``G20 G01 A90. F10.`` 9 min.
 
 A `Program` keeps one feed per move, m/s, and the planner
-(`machinesim.motion.planner.move_duration`) counts a degree as a millimetre, the metric rule.
+(`machinesim.motion.timing.move_duration`) counts a degree as a millimetre, the metric rule.
 So the reader keeps, for a move under an F read in inch/min that turns a rotary axis, the feed
 that takes the same time by the planner's rule: F converted by inch, times
 ``length_mm * M_PER_MM / (length_inch * M_PER_INCH)``, where ``length_mm`` counts degrees as
@@ -20,7 +20,7 @@ is (its factor would be 1 but for rounding).
 Internal to the reader (`machinesim.nc.blocks`, `machinesim.nc.arc_block` and the vectorised
 path in `machinesim.nc.reader`), which all use `inch_feed_scale`, so the three agree to the
 bit; `inch_feed_as_written` undoes it for the planner's note on a slow move
-(`machinesim.motion.planner.slow_move_notes`), which names the F as the program wrote it.
+(`machinesim.motion.timing.slow_move_notes`), which names the F as the program wrote it.
 """
 
 from __future__ import annotations

@@ -1,0 +1,149 @@
+"""The time of a program's moves by FANUC's feed rule, and notes on times hardly meant:
+`move_duration` of one move, `durations` of every move at once (the same operations), and
+`slow_move_notes`."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from machinesim.exceptions import InputError
+from machinesim.nc.program import KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
+from machinesim.nc.rotary_feed import inch_feed_as_written
+
+M_PER_MM = 1e-3
+#: A feed move longer than this is noted (`slow_move_notes`): a day for one move is a feed
+#: written in the wrong unit (F0.0001 mm/min for 0.1 mm/min), not a machining plan.
+SLOW_MOVE_S = 24 * 3600.0
+#: A dwell longer than this is noted (`slow_move_notes`). A dwell in a part program waits
+#: seconds (a spindle coming up to speed, a chip clearing, a spark-out); a time in the wrong
+#: unit is 1000 times what was meant (P counts milliseconds without a decimal point and
+#: seconds with one, X seconds: ``G04 X5000`` for 5 s, ``P5000.`` for 5000 ms), so a dwell
+#: of more than a few seconds becomes more than an hour, which no machining step waits.
+LONG_DWELL_S = 3600.0
+_RAD_PER_DEG = np.pi / 180.0
+NUMBER = int | float | np.integer | np.floating
+
+
+def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndarray,
+                  rapid_rate: np.ndarray, feed_m_per_s: float | None, dwell_s: float) -> float:
+    """Time of one move by the rules of `machinesim.motion` (FANUC's feed rule, clamped at
+    the axes' velocity limits ``rapid_rate``; a rapid at its slowest axis), s.
+
+    ``kind`` is one of ``"rapid"``, ``"linear"``, ``"dwell"``; a linear move that moves
+    needs a feed > 0 (m/s, its degrees counting as mm), a dwell a time >= 0: anything
+    else is refused (InputError), as a `Move` refuses it, not timed."""
+    if kind not in MOVE_KINDS:
+        raise InputError(f"kind must be one of {', '.join(MOVE_KINDS)}, got {kind!r}",
+                         key="kind")
+    if kind == "dwell":
+        if not (isinstance(dwell_s, NUMBER) and 0.0 <= dwell_s < math.inf):
+            raise InputError(f"dwell_s must be a time >= 0 s, got {dwell_s!r}", key="dwell_s")
+        return float(dwell_s)
+    delta = np.abs(end - start)
+    if kind == "rapid":
+        return float(np.max(delta / rapid_rate)) if delta.size else 0.0
+    # FANUC: degrees count as millimetres in the feed length
+    scaled = np.where(rotary, delta / _RAD_PER_DEG, delta / M_PER_MM)
+    length_mm = float(np.sqrt(np.sum(scaled**2)))
+    if length_mm == 0.0:
+        return 0.0
+    if not (isinstance(feed_m_per_s, NUMBER) and 0.0 < feed_m_per_s < math.inf):
+        raise InputError(f"a linear move that moves needs a feed > 0 (m/s), got "
+                         f"{feed_m_per_s!r}", key="feed_m_per_s")
+    feed_mm_per_s = feed_m_per_s / M_PER_MM
+    # no axis runs faster than its velocity limit: a feed beyond it is clamped there
+    return max(length_mm / feed_mm_per_s, float(np.max(delta / rapid_rate)))
+
+
+def slow_move_notes(durations, kinds, lines, feeds, program=None,
+                    first: int = 0) -> tuple[str, ...]:
+    """Notes on the moves whose time is hardly what the program meant: the longest feed
+    move when it takes more than `SLOW_MOVE_S`, and the longest dwell when it waits more
+    than `LONG_DWELL_S`, each with its line, time and the word that set it.
+
+    The feed is the F as ``program`` (these moves from its move ``first`` on) wrote it: in
+    inch/min where G20 is in force (`Program.unit_in_force`: the last G20/G21 before the
+    first motion), with the mm/min the planner used beside it; both readings for a program
+    unpickled from before that was kept that selected G20. The dwell's P or X is the word
+    its line wrote (`Program.dwell_words`: a canned cycle's P kept from an earlier block with
+    that block's line; none for a program built from moves)."""
+    kinds = np.asarray(kinds)
+    notes = []
+    linear = np.flatnonzero(kinds == KIND_LINEAR)
+    i = int(linear[np.argmax(durations[linear])]) if linear.size else None
+    if i is not None and durations[i] > SLOW_MOVE_S:
+        feed = _feed_text(feeds[i], program, first + i)
+        notes.append(f"the feed move of line {int(lines[i])} takes {durations[i]:.3g} s "
+                     f"({durations[i] / 3600.0:.3g} h) at {feed}, "
+                     f"more than the {SLOW_MOVE_S / 3600.0:g} h one move of a program takes: "
+                     "is F in the program's unit (G94: per minute)?")
+    dwell = np.flatnonzero(kinds == KIND_DWELL)
+    i = int(dwell[np.argmax(durations[dwell])]) if dwell.size else None
+    if i is not None and durations[i] > LONG_DWELL_S:
+        line = int(lines[i])
+        word = getattr(program, "dwell_words", {}).get(line)
+        notes.append(f"the dwell of line {line}{f' ({word})' if word else ''} waits "
+                     f"{durations[i]:.6g} s ({durations[i] / 3600.0:.3g} h), more than the "
+                     f"{LONG_DWELL_S / 3600.0:g} h a dwell of a program waits: is its time "
+                     "in the unit meant (P counts milliseconds without a decimal point, "
+                     "seconds with one; X seconds)?")
+    return tuple(notes)
+
+
+def _feed_text(feed: float, program, move: int) -> str:
+    """The feed (m/s; of `slow_move_notes`' move) as its program wrote it."""
+    metric = f"F{feed * 60e3:.6g} (mm/min or deg/min)"
+    inch = None if program is None else inch_feed_as_written(program, move)
+    if inch is None:
+        return metric
+    in_force = getattr(program, "unit_in_force", None)
+    if in_force == "G20":
+        return f"F{inch[0]:.6g} ({inch[1]} under G20; {feed * 60e3:.6g} mm/min or deg/min)"
+    if in_force == "G21":
+        return metric
+    return f"{metric}, or F{inch[0]:.6g} ({inch[1]}) if written under G20"
+
+
+def move_durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate) -> np.ndarray:
+    """`move_duration` of every move, by the same operations (axis by axis: the largest
+    ratio, and the squares summed in numpy's order, first axis first, for up to 7 axes)."""
+    out = np.zeros(len(kinds))
+    dwell = kinds == KIND_DWELL
+    out[dwell] = dwells[dwell]
+    n_axes = starts.shape[1]
+    if not n_axes:
+        return out
+    def slowest_axis(moves):  # s: every axis at its velocity limit
+        slowest = None
+        for i in range(n_axes):
+            ratio = np.abs(ends[moves, i] - starts[moves, i]) / rapid_rate[i]
+            slowest = ratio if slowest is None else np.maximum(slowest, ratio)
+        return slowest
+
+    rapid = np.flatnonzero(kinds == KIND_RAPID)
+    if rapid.size:
+        out[rapid] = slowest_axis(rapid)
+    linear = np.flatnonzero(kinds == KIND_LINEAR)
+    if linear.size:
+        if n_axes <= 7:
+            total = None
+            for i in range(n_axes):
+                scaled = np.abs(ends[linear, i] - starts[linear, i]) / (
+                    _RAD_PER_DEG if rotary[i] else M_PER_MM)
+                scaled *= scaled
+                total = scaled if total is None else total + scaled
+        else:
+            delta = np.abs(ends[linear] - starts[linear])
+            total = np.sum(np.where(rotary, delta / _RAD_PER_DEG, delta / M_PER_MM)**2, axis=1)
+        length_mm = np.sqrt(total)
+        moving = length_mm != 0.0
+        out[linear[moving]] = np.maximum(
+            length_mm[moving] / (feeds[linear[moving]] / M_PER_MM),
+            slowest_axis(linear[moving]))
+    return out
+
+
+__all__ = ["LONG_DWELL_S", "M_PER_MM", "NUMBER", "SLOW_MOVE_S", "move_duration", "move_durations",
+           "slow_move_notes"]
