@@ -66,8 +66,9 @@ from machinesim.cutting.holder import holder_contact, holder_in_material
 from machinesim.cutting.relief import cut_reliefs
 from machinesim.cutting.roi import roi_cells
 from machinesim.cutting.sheets import SheetReport, remove_sheets
+from machinesim.cutting.sideways import dragged
 from machinesim.cutting.stitch import exact_box, snapped_union, stitch
-from machinesim.cutting.sweepset import SweepSet, dragged
+from machinesim.cutting.sweepset import SweepSet
 from machinesim.cutting.tiling import (
     SWEEPS_PER_TILE,
     grid_tiles,

@@ -26,7 +26,7 @@ from machinesim.cutting.report import (
 )
 from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import SheetReport, trim_sheets
-from machinesim.cutting.sweepset import dragged_past_clearance, within_edge_plane
+from machinesim.cutting.sideways import dragged_past_clearance, within_edge_plane
 from machinesim.errors import as_error_model
 from machinesim.exceptions import AxisLimitError, HolderContactError, InputError, NCProgramError
 from machinesim.metrology._arrays import as_flag

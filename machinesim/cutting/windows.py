@@ -28,7 +28,7 @@ from machinesim.cutting.report import (
 )
 from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import trim_sheets
-from machinesim.cutting.sweepset import dragged_past_clearance
+from machinesim.cutting.sideways import dragged_past_clearance
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag, as_number
 from machinesim.motion.faces import ProfileEdges
