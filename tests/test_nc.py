@@ -484,6 +484,36 @@ def test_refused_arguments():
         parse_program(b"G00 X0")
 
 
+@pytest.mark.parametrize("code", ["G55", "G56", "G57", "G58", "G59"])
+def test_a_work_offset_the_given_offsets_lack_is_refused_naming_its_line(code):
+    # G54 X 10 mm given, the program selects another system: it had read as zero (machine
+    # zero), the part cut 10 mm from where G54's would be, without a word
+    text = f"G90 G21\nG00 X0 Y0 Z1.\nN20 {code}\nG00 X1.\nM30\n"
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text, "prog.nc", work_offsets={"G54": {"X": 10e-3}})
+    error = info.value
+    assert (error.line, error.column, error.key) == (3, 5, code)
+    assert f"{code} selects a work offset that work_offsets does not give (it gives G54)" in str(
+        error)
+    # given (an empty system is machine zero), the same text reads: X1. is 1 mm + its offset
+    for system, x_mm in (({"X": -20e-3}, -19.0), ({}, 1.0)):
+        program = parse_program(text, work_offsets={"G54": {"X": 10e-3}, code: system})
+        assert program.targets[:, 0].tolist() == pytest.approx([10e-3, x_mm * 1e-3],
+                                                               abs=EXACT_M)
+    # without any offsets every system is zero, as documented, and listed with its line
+    program = parse_program(text)
+    assert program.targets[-1, 0] == pytest.approx(1e-3, abs=EXACT_M)
+    assert program.states[code] == 3
+
+
+def test_g54_left_out_of_the_given_offsets_is_machine_zero():
+    # G54 is the system a program runs in without a G54..G59 word; left out it is zero, as
+    # the writer and `to_resolution` read it
+    text = "G90 G21 G54\nG00 X1.\nG55 X1.\nM30\n"
+    program = parse_program(text, work_offsets={"G55": {"X": 5e-3}})
+    assert program.targets[:, 0].tolist() == pytest.approx([1e-3, 6e-3], abs=EXACT_M)
+
+
 @pytest.mark.parametrize("distance", ["G90", "G91"])
 def test_target_beyond_float64_is_refused(distance):
     # An offset near the float64 maximum (1.798e308) plus 1e305 m overflows: absolute values

@@ -51,8 +51,9 @@ G codes
     G80, G91.1, G15 G50 G69 (the cancels of polar coordinates, scaling and rotation, as
     safe-start lines write them; G50 with an axis word, a lathe's coordinate setting, is
     refused),
-    G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words, and G55..G59 selected without
-    offsets given for them (G54's zero). Refused: G41/G42 (cutter radius
+    G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words, and G55..G59 selected when no
+    ``work_offsets`` were given (G54's zero); with offsets given, a G55..G59 they lack is
+    refused. Refused: G41/G42 (cutter radius
     compensation), G93, G95, the canned cycles G74 G76 G84..G89, tool centre point
     and tilted planes (G43.4 G43.5 G68.2 G53.1), coordinate changes (G92 G52 G68 G51 G51.1
     G16), each by name, and every G code not named here.
@@ -66,7 +67,8 @@ Subprograms
     `parser.MAX_BLOCK_RUNS` blocks are refused before anything runs.
 Axis values
     The machine target of an absolute axis word is the programmed value plus the active work
-    offset (`work_offsets`, SI, absent = 0), plus the tool length offset for Z; an
+    offset (`work_offsets`, SI; absent axes and G54 = 0, an absent G55..G59 refused when
+    any offsets are given, 0 when none are), plus the tool length offset for Z; an
     incremental word adds to the axis's current machine target. Targets are modal.
 Integer input (a number without decimal point in a length or angle: X Y Z A B C I J K R Q)
     ``integer_input="calculator"`` (the default): X10 is 10 mm (10 inch under G20), A10

@@ -36,6 +36,7 @@ from machinesim.nc.words import (
     SLOWEST_FEED_M_PER_S,
     UNITS_AFTER_MOTION,
     UNITS_IN_SUBPROGRAM,
+    WORK_OFFSET_NOT_GIVEN,
     CallProblem,
     call_of,
     g_name,
@@ -217,10 +218,15 @@ class Block:
         if "plane" in g:
             state.plane = g["plane"][0]
         if "work offset" in g:
-            state.work_offset = g["work offset"][0]
-            if state.work_offset != "G54" and state.work_offset not in self.offsets:
-                # a system without offsets is G54's zero: listed, since the program meant one
-                self.reader.note(state.work_offset, line)
+            name, word = g["work offset"]
+            if name != "G54" and name not in self.offsets:
+                if self.offsets:
+                    raise self.fail(WORK_OFFSET_NOT_GIVEN.format(
+                        name=name, given=" ".join(self.offsets)), word)
+                # no offsets at all: every system is G54's zero (machine zero), listed since
+                # the program meant one (`machinesim cut` notes it)
+                self.reader.note(name, line)
+            state.work_offset = name
         if "return level" in g:
             state.retract = g["return level"][0]
         if "scaling" in g and any(a in self.single for a in AXES):

@@ -64,7 +64,9 @@ def parse_program(
     source : str
         Name of the program in messages and in `Program.source`.
     work_offsets : mapping, optional
-        {"G54": {"X": m, ...}, ...} in SI; absent systems and axes are zero.
+        {"G54": {"X": m, ...}, ...} in SI; absent axes are zero, and so is G54. A G55..G59
+        the program selects is refused when absent from a mapping given (not empty), and
+        zero, listed in `Program.states`, when none is given.
     reference : mapping, optional
         {"Z": m, ...}: the machine coordinates (SI) of the reference position G28 returns
         to, and from which G53's words are measured (FANUC's machine zero, where its

@@ -159,6 +159,14 @@ UNITS_AFTER_MOTION = ("{code} switches the units from {was} to {now} after the f
                       "(line {moved}), whose moves were read in {was}: FANUC forbids "
                       "switching G20/G21 within a program; select the units once, at the "
                       "head of the program, before any motion")
+#: A G55..G59 the caller's work offsets do not give (`Block.apply_modal`): with offsets
+#: given, a system left out is a mistake more likely than machine zero, and read as zero it
+#: had cut the part there silently. Without any offsets every system is zero, and listed.
+WORK_OFFSET_NOT_GIVEN = ("{name} selects a work offset that work_offsets does not give (it "
+                         "gives {given}): with offsets given, a system left out is not taken "
+                         "as zero; give {name} too (read_program(..., work_offsets={{'{name}':"
+                         " {{'X': m, 'Y': m, 'Z': m}}}}), SI; {{'{name}': {{}}}} for machine "
+                         "zero)")
 
 
 def integer(word: Word) -> int | None:
