@@ -677,13 +677,17 @@ SWITCHES_AFTER_MOTION = [
     ("G04 P100\nG00 X1.\nG20\nM30\n", 3, 1, 2, "G20", "mm", "inch"),  # a dwell no motion
     # the first motion in a subprogram the main program called
     ("O1\nM98 P100\nG20\nM30\nO100\nG00 X1.\nM99\n", 3, 1, 6, "G20", "mm", "inch"),
-    # the first motions on the vectorised path (a run of simple lines)
+    # the first motions on the vectorised path (a run of simple lines): X0 of lines 1 and 2
+    # is the work zero in either unit, X1. of line 3 is the first motion
     ("G00 X0\n" + "".join(f"G01 X{k}. F100.\n" for k in range(20)) + "N5 G20\n", 22,
-     4, 1, "G20", "mm", "inch"),
+     4, 3, "G20", "mm", "inch"),
     # a reference return of zeros is none (the test below), one with a length word is
     ("G91 G28 Z0.\nG90 G28 X1.\nG20\nM30\n", 3, 1, 2, "G20", "mm", "inch"),
     ("G53 Z0.\nG53 Z-1.\nG20\nM30\n", 3, 1, 2, "G20", "mm", "inch"),
-    ("G20\nG91 G28 Z0.\nG90 G00 X0\nG21\nM30\n", 4, 1, 3, "G21", "inch", "mm"),  # G00 counts
+    # a G00 or G01 of zeros is none either (the test below), one with a length word is
+    ("G20\nG91 G28 Z0.\nG90 G00 X0\nG01 Y0.001 F1.\nG21\nM30\n", 5, 1, 4, "G21", "inch",
+     "mm"),
+    ("G90 G00 X0 Y0 Z0\nG91 G00 X0\nX1.\nG20\nM30\n", 4, 1, 3, "G20", "mm", "inch"),
 ]
 
 
@@ -716,8 +720,17 @@ def test_a_main_program_switching_g20_g21_after_a_motion_is_refused_naming_its_l
     # the other way: inch, back to mm before the first move with a length
     ("G20\nG91 G28 Z0.\nG28 X0. Y0.\nG90 G21 G00 X1.\nM30\n",
      [[math.nan, 100.0], [0.0, 100.0], [11.0, 100.0]]),
+    # G00/G01 of zeros: G90's are the work zero (G54's X, 10 mm, and Z's reference under
+    # it), G91's where the axes stand (reached by zeros); then the units and an inch move
+    ("G90 G00 X0 Z0\nG91 G01 X0 Z0. F100.\nG90\nG20\nG00 X1.\nM30\n",
+     [[10.0, 0.0], [10.0, 0.0], [35.4, 0.0]]),
+    ("G20\nG00 G90 X0. C45.\nG21\nG00 X1.\nM30\n",  # an angle: degrees in either
+     [[10.0, math.nan], [11.0, math.nan]]),
+    # a run of zeros on the vectorised path (16 lines or more), then the switch
+    ("G90 G00 X0 Z0\n" + "G01 X0 F100.\n" * 20 + "G20\nG00 X1.\nM30\n",
+     [[10.0, 0.0]] * 21 + [[35.4, 0.0]]),
 ])
-def test_a_reference_return_of_zeros_is_no_first_motion_for_the_units(text, expected_mm):
+def test_a_move_of_zero_lengths_is_no_first_motion_for_the_units(text, expected_mm):
     # its target is the same read in mm or inch, so the units after it are read, and the
     # moves after the switch in the new unit: X1. is 25.4 mm under G20, 1 mm under G21
     for fast in (True, False):

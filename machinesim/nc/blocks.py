@@ -424,7 +424,19 @@ class Block:
         if (state.motion == "G01" and state.feed_inch and state.feed is not None
                 and any(word.letter in ROTARY_AXES for word in axes)):
             feed = state.feed * self.inch_feed_scale(start, state.target, axes)
-        self.add(MOTION[state.motion], 0.0, block_number, feed=feed)
+        self.add(MOTION[state.motion], 0.0, block_number, feed=feed,
+                 units_free=self.units_free(axes))
+
+    def units_free(self, axes: list[Word]) -> bool:
+        """Whether the move of these axis words (G00, G01, G28 or G53) reaches the same
+        target read in mm or in inch: its length words are all zero. Under G90 the zeros
+        are the work zero (a work offset and a tool length are in m), G53's the reference
+        position, G28's intermediate point either; under G91 they are where the axes stand,
+        which before the first motion the units rule counts is where units-free moves left
+        them (an axis with no position yet is refused); an angle is in degrees in either
+        unit. Such a move is no first motion for the units rule (`apply_modal`): a post's
+        ``G91 G28 Z0.`` or ``G90 G00 X0 Y0`` before its G20 is read."""
+        return all(self.real(axis) == 0.0 for axis in axes if axis.letter not in ROTARY_AXES)
 
     def check_feed(self, code: str, word: Word) -> None:
         """Refuse a feed move of ``code`` (G01, G02/G03, a canned cycle's feed to the hole

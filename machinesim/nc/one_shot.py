@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from machinesim.nc.program import ROTARY_AXES
 from machinesim.nc.words import DWELL_INCREMENT_S, NON_MOVING
 
 if TYPE_CHECKING:
@@ -84,7 +83,7 @@ def read_one_shot(block: Block, code: tuple[str, Word], axes: list[Word],
                              "under G91", word)
         for axis in axes:
             state.target[axis.letter] = block.machine(axis, machine_coordinates=True)
-        units_free = _units_free(block, axes)
+        units_free = block.units_free(axes)
         if "Z" in single:  # a machine position: every control's Z is the same again
             state.length_change = None
         block.add("rapid", 0.0, block_number, units_free=units_free)
@@ -93,7 +92,7 @@ def read_one_shot(block: Block, code: tuple[str, Word], axes: list[Word],
     # reader's `reference`, machine zero where it gives none).
     # An incremental 0 on an axis whose position is not known yet (the CAM header's
     # G28 G91 Z0) is the current position whatever it is: no intermediate move there.
-    units_free = _units_free(block, axes)
+    units_free = block.units_free(axes)
     here = [a for a in axes if not (state.incremental and a.letter not in state.target
                                     and block.real(a) == 0.0)]
     if here:
@@ -105,11 +104,3 @@ def read_one_shot(block: Block, code: tuple[str, Word], axes: list[Word],
         state.length_change = None
     block.add("rapid", 0.0, block_number, units_free=units_free)
 
-
-def _units_free(block: Block, axes: list[Word]) -> bool:
-    """Whether the G28 or G53 ``block``'s moves are the same read in mm or in inch: its
-    length words are all zero. They put G53 at the reference, and G28's intermediate point
-    at the work zero (G90: a work offset and a tool length are in m) or where the axis
-    stands (G91); an angle is in degrees in either unit. Such moves are no first motion for
-    the units rule (`Block.apply_modal`): a post's ``G91 G28 Z0.`` before its G20 is read."""
-    return all(block.real(axis) == 0.0 for axis in axes if axis.letter not in ROTARY_AXES)

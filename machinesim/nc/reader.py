@@ -151,7 +151,8 @@ class _Output:
             line: int, block: int | None, spindle: float | None, *,
             units_free: bool = False) -> None:
         """One move; ``units_free`` when its target is the same read in mm or in inch (a
-        G28 or G53 of zero lengths): it is no first motion for the units rule."""
+        G00, G01, G28 or G53 of zero lengths, `Block.units_free`): it is no first motion for
+        the units rule."""
         rows, kinds, feeds, dwells, lines, spindles, blocks = self.lists
         rows.append(tuple(target.get(a, math.nan) for a in AXES))
         kinds.append(kind)
@@ -164,12 +165,15 @@ class _Output:
         if self.first_motion is None and kind != KIND_DWELL and not units_free:
             self.first_motion = line
 
-    def add_arrays(self, *arrays: np.ndarray) -> None:
+    def add_arrays(self, *arrays: np.ndarray, units_free: np.ndarray | None = None) -> None:
+        """Moves as arrays (targets, kinds, feeds, dwells, lines, spindles, blocks);
+        ``units_free``: which of them reach the same target in mm or inch (`add`)."""
         self.flush()
         self.chunks.append(arrays)
         self.count += len(arrays[1])
         if self.first_motion is None:
-            motion = np.flatnonzero(arrays[1] != KIND_DWELL)
+            moving = arrays[1] != KIND_DWELL
+            motion = np.flatnonzero(moving if units_free is None else moving & ~units_free)
             if motion.size:
                 self.first_motion = int(arrays[4][motion[0]])
 
@@ -416,8 +420,12 @@ class Reader:
         spindle = math.nan if state.spindle is None else state.spindle
         if state.exact_stop:  # G61: every block ends in position
             self.out.stops.append(self.out.count + np.arange(n, dtype=np.int64))
+        # a line whose length words are all zero reaches the same target in mm and inch
+        # (`Block.units_free`; G90 only here): no first motion for the units rule
+        lengths = [present[AXES.index(a)] & (values[col[a]] != 0.0) for a in "XYZ"]
         self.out.add_arrays(targets, kinds, feeds, np.zeros(n), rows + (i + 1),
-                            np.full(n, spindle), blocks)
+                            np.full(n, spindle), blocks,
+                            units_free=~(lengths[0] | lengths[1] | lengths[2])[rows])
         if n:
             state.target = {a: float(v) for a, v in zip(AXES, targets[-1].tolist(), strict=True)
                             if v == v}
