@@ -114,3 +114,54 @@ def test_a_cycle_block_with_k0_drills_nothing_so_needs_no_f():
     assert not (program.lines == 3).any()  # K0's block added no move
     error = _refusal(START + "G81 X1. Z-1. R1. K0\nX2.\nG80\nM30\n")
     assert (error.line, error.key) == (4, "X2.")
+
+
+# --- an F given before the G20/G21 that switched the units
+
+#: The message of a feed move under the F of line 1, given before the switch on line 2.
+F_BEFORE = ("{code} feeds at the F of line 1 ({number} {was}/min), given before {switch} on "
+            "line 2 switched the units to {now}, and no F since: whether a control keeps that "
+            "F in {was}/min or reads its number in {now}/min is not documented for FANUC "
+            "(B-63944EN/02 8.2 wants G20/G21 alone at the head of the program, before any F); "
+            "give F again after the {switch}")
+
+
+@pytest.mark.parametrize(("head", "block", "code", "line"), [
+    ("G21 F100.\nG20\n", "G00 X0 Y0 Z0.1\nG01 X1.", "G01", 4),
+    ("G21 F100.\nG20\n", "G00 X0 Y0\nG02 X2. Y0 I1. J0", "G02", 4),
+    ("G21 F100.\nG20\n", "G00 X0 Y0 Z1.\nG81 X1. Z-1. R0.5", "G81", 4),
+    # the same on the vectorised path (a run of plain lines)
+    ("G21 F100.\nG20\n", "G00 X0 Y0 Z0\n" + "G01 X0.1\n" * 20, "G01", 4),
+    ("G20 F4.\nG21\n", "G00 X0 Y0 Z0\nG01 X1.", "G01", 4),
+])
+def test_a_feed_under_an_f_from_before_a_unit_switch_is_refused_naming_both_lines(
+        head, block, code, line):
+    # G21 F100. / G20 / G01 X1.: the F had kept its reading, 100 mm/min, in an inch program
+    for fast in (True, False):
+        error = _refusal(head + block + "\nM30\n", source="prog.nc", fast=fast)
+        switch = head.split("\n")[1]
+        was, now, number = (("mm", "inch", "100") if switch == "G20" else ("inch", "mm", "4"))
+        assert (error.line, error.column, error.key) == (line, 1, code)
+        assert str(error).endswith(F_BEFORE.format(code=code, number=number, was=was,
+                                                   now=now, switch=switch))
+
+
+@pytest.mark.parametrize(("text", "feed_mm_per_min"), [
+    ("G21 F100.\nG20\nG01 X1. F4.\nM30\n", 4 * 25.4),  # F again after the switch
+    ("G21 F100.\nG20\nG00 X1.\nG01 X2. F4.\nM30\n", 4 * 25.4),  # a rapid needs none
+    ("G20 F4.\nG21\nG20\nG01 X1.\nM30\n", 4 * 25.4),  # back in the F's own unit
+    ("G21 F100.\nG21\nG01 X1.\nM30\n", 100.0),  # restated, not switched
+])
+def test_an_f_read_in_the_units_in_force_feeds(text, feed_mm_per_min):
+    program = parse_program(text)
+    feeds = program.feeds[program.kinds == KIND_LINEAR]
+    assert feeds.tolist() == pytest.approx([feed_mm_per_min * 1e-3 / 60.0], rel=1e-15)
+
+
+def test_the_f_read_on_the_vectorised_path_is_named_with_its_line():
+    # moves of zeros (no first motion for the units rule), each with its F, then the switch
+    text = "G90 G00 X0 Y0 Z0\n" + "G01 X0 F100.\n" * 20 + "G20\nG01 X1.\nM30\n"
+    for fast in (True, False):
+        error = _refusal(text, fast=fast)
+        assert error.line == 23
+        assert "the F of line 21 (100 mm/min), given before G20 on line 22" in str(error)

@@ -23,6 +23,7 @@ from machinesim.nc.program import AXES, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
 from machinesim.nc.rotary_feed import inch_feed_scale
 from machinesim.nc.words import (
     ARC,
+    FEED_BEFORE_UNITS,
     G50_SETTING,
     G_GROUPS,
     G_REFUSED,
@@ -211,6 +212,7 @@ class Block:
                 if moved is not None:
                     raise self.fail(UNITS_AFTER_MOTION.format(code=code, was=was, now=now,
                                                               moved=moved), word)
+                state.unit_switch = (code, line)
             state.inch = code == "G20"
             self.reader.unit_words.setdefault(g["units"][0], line)
         if "distance" in g:
@@ -268,6 +270,7 @@ class Block:
                 raise self.fail(f"feed must be > 0, got {single['F'].key}", single["F"])
             state.feed = self.finite(feed * self.length_unit() / 60.0, single["F"])
             state.feed_inch = state.inch
+            state.feed_line = self.line
             if state.feed < SLOWEST_FEED_M_PER_S:
                 raise self.fail(f"feed {single['F'].key} is below 1 nm a minute (1e-6 mm/min),"
                                 " slower than any control feeds: a feed in the wrong unit?",
@@ -442,10 +445,18 @@ class Block:
         """Refuse a feed move of ``code`` (G01, G02/G03, a canned cycle's feed to the hole
         bottom) when no F is in force: it has no time (FANUC stops there with alarm PS0011,
         "feed zero"); ``word`` locates the refusal."""
-        if self.state.feed is None:
+        state = self.state
+        if state.feed is None:
             raise self.fail(f"{code} feeds with no F in force: no feed rate has been given "
                             "yet (a FANUC control stops with alarm PS0011, feed zero); give "
                             "F in this block or before it (mm/min; inch/min under G20)", word)
+        if state.feed_inch != state.inch and state.unit_switch is not None:
+            was, now = ("inch", "mm") if state.feed_inch else ("mm", "inch")
+            number = state.feed * 60.0 / (M_PER_INCH if state.feed_inch else M_PER_MM)
+            switch, line = state.unit_switch
+            raise self.fail(FEED_BEFORE_UNITS.format(
+                code=code, feed_line=state.feed_line, number=f"{number:.10g}", was=was,
+                now=now, switch=switch, line=line), word)
 
     def inch_feed_scale(self, start: dict[str, float], end: dict[str, float],
                         axes: list[Word]) -> float:

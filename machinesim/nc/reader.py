@@ -71,6 +71,9 @@ class _State:
     #: the F was read under G20 (inch/min): a move turning a rotary axis counts its degrees
     #: as inches (`machinesim.nc.rotary_feed`)
     feed_inch: bool = False
+    feed_line: int | None = None  # the line of the F in force
+    #: the G20/G21 that last switched the units, and its line (an F before it: `check_feed`)
+    unit_switch: tuple[str, int] | None = None
     spindle: float | None = None
     target: dict[str, float] = field(default_factory=dict)
     number: int | None = None
@@ -402,6 +405,10 @@ class Reader:
         else:
             feed = np.full(j - i, feed_before)
         kinds = motion[rows].astype(np.int8)
+        if state.feed is not None and state.feed_inch != state.inch:
+            first_f = int(np.argmax(has_f)) if has_f.any() else j - i
+            if ((kinds == KIND_LINEAR) & (rows < first_f)).any():
+                return False  # a feed under an F from before a unit switch: refused there
         feeds = np.where(kinds == KIND_LINEAR, feed[rows], math.nan)
         if np.isnan(feeds[kinds == KIND_LINEAR]).any():
             return False  # a feed move with no F in force: the block-by-block path names it
@@ -437,6 +444,7 @@ class Reader:
             state.feed = float(feed[-1])
         if has_f.any():
             state.feed_inch = state.inch
+            state.feed_line = i + 1 + int(np.flatnonzero(has_f)[-1])
         return True
 
     def tool_length(self) -> float:

@@ -159,6 +159,17 @@ UNITS_AFTER_MOTION = ("{code} switches the units from {was} to {now} after the f
                       "(line {moved}), whose moves were read in {was}: FANUC forbids "
                       "switching G20/G21 within a program; select the units once, at the "
                       "head of the program, before any motion")
+#: A feed move under an F given before a G20/G21 that switched the units, with no F since
+#: (`Block.check_feed`): FANUC's manual lists the F among the values whose unit the switch
+#: changes, but not whether a modal F is converted or kept as a number (B-63944EN/02 8.2; the
+#: two readings differ 25.4 times), and wants G20/G21 alone at the head of the program; the
+#: reader had kept the F's old reading silently.
+FEED_BEFORE_UNITS = ("{code} feeds at the F of line {feed_line} ({number} {was}/min), given "
+                     "before {switch} on line {line} switched the units to {now}, and no F "
+                     "since: whether a control keeps that F in {was}/min or reads its number "
+                     "in {now}/min is not documented for FANUC (B-63944EN/02 8.2 wants "
+                     "G20/G21 alone at the head of the program, before any F); give F again "
+                     "after the {switch}")
 #: A G55..G59 the caller's work offsets do not give (`Block.apply_modal`): with offsets
 #: given, a system left out is a mistake more likely than machine zero, and read as zero it
 #: had cut the part there silently. Without any offsets every system is zero, and listed.
