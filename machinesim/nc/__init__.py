@@ -33,12 +33,14 @@ G codes
     into linear moves within ``chord_tolerance``, default 1 nm; centre I J K from the start
     or radius R, R < 0 over 180 deg; full circle with I J K and end = start; helical with
     the plane's third axis, other axes move with the angle; an end off the circle by more
-    than `ARC_RADIUS_TOLERANCE_M` is refused). G04 dwell (P ms, P with a decimal point s as
-    Haas reads it, or X s). G17/G18/G19 plane. G20/G21 inch/mm. G90/G91. G54..G59 work
-    offsets. G94. G28 (rapid through the intermediate point to the reference position of
-    the named axes, ``reference`` or machine zero; ``G28 G91 Z0`` before Z is known
-    goes straight to zero), G53 (one block in machine coordinates measured from the
-    reference position: no work offset, no tool length; absolute only). G43/G44 H (tool
+    than `ARC_RADIUS_TOLERANCE_M` is refused; an end within it of the start but not on it,
+    read as a short arc, is warned about: a full circle was most likely meant). G04 dwell
+    (P ms, P with a decimal point s as Haas reads it, or X s). G17/G18/G19 plane. G20/G21
+    inch/mm. G90/G91. G54..G59 work offsets. G94. G28 (rapid through the intermediate
+    point to the reference position of the named axes, ``reference`` or machine zero;
+    ``G28 G91 Z0`` before Z is known goes straight to zero), G53 (one block in machine
+    coordinates measured from the reference position: no work offset, no tool length;
+    absolute only). G43/G44 H (tool
     length from the tool table added to / taken from absolute Z words; a bare G43 takes the
     last H, refused before any; G49 cancels; like a work offset change it moves nothing by
     itself; an incremental Z before an absolute Z has carried a change is refused, since

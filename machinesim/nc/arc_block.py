@@ -16,7 +16,9 @@ from machinesim.exceptions import NCProgramError
 from machinesim.nc.arcs import (
     ARC_RADIUS_TOLERANCE_INCH_M,
     ARC_RADIUS_TOLERANCE_M,
+    FULL_CIRCLE_M,
     PLANES,
+    NearCircle,
     arc_points,
 )
 from machinesim.nc.length import check_length_carried
@@ -65,15 +67,22 @@ def read_arc(block: Block, axes: list[Word], block_number: int | None) -> None:
                        else 0.0 for k in centre_letters]
             centre = (start[u] + offsets[0], start[v] + offsets[1])
             radius = None
-        fractions, points, _, _ = arc_points(
+        tolerance = ARC_RADIUS_TOLERANCE_INCH_M if state.inch else ARC_RADIUS_TOLERANCE_M
+        fractions, points, _, sweep = arc_points(
             (start[u], start[v]), (end[u], end[v]), clockwise=state.motion == "G02",
             centre=centre, radius=radius, chord_tolerance=reader.chord_tolerance,
-            radius_tolerance=(ARC_RADIUS_TOLERANCE_INCH_M if state.inch
-                              else ARC_RADIUS_TOLERANCE_M),
-            max_segments=MAX_MOVES - reader.out.count)
+            radius_tolerance=tolerance, max_segments=MAX_MOVES - reader.out.count)
     except NCProgramError as error:
         located = single.get("R") or (given[0] if given else word)
         raise block.fail(str(error), located) from None
+    gap = math.hypot(end[u] - start[u], end[v] - start[v])
+    if centre is not None and FULL_CIRCLE_M < gap <= tolerance and abs(sweep) < math.pi:
+        # the end within the rounding a post leaves on an arc (the radius tolerance) of the
+        # start, on the side that makes the arc short: a full circle most likely meant
+        path = np.diff(np.vstack([[start[u], start[v]], points]), axis=0)
+        reader.near_circles.setdefault(block.line, NearCircle(
+            state.motion, float(np.hypot(path[:, 0], path[:, 1]).sum()), abs(sweep), gap,
+            tolerance))
     n = fractions.size
     block.reserve(n, word)
     targets = np.empty((n, len(AXES)))

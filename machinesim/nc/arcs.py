@@ -12,6 +12,7 @@ the one over 180 deg).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -55,6 +56,42 @@ _SAFETY = 1.0 - 1e-9
 #: each), the subtraction and the hypot of the chord leave its length uncertain by a few
 #: ulp of the coordinates (`_centre_from_radius`).
 _HALF_CIRCLE_ULPS = 8.0
+
+
+#: Arcs a warning lists by line; the rest are counted.
+NEAR_CIRCLES_LISTED = 5
+
+
+class NearCircle(NamedTuple):
+    """An I J K arc whose end lies within ``tolerance`` (the radius tolerance, m) of its
+    start but not on it, read as the short arc it writes (``sweep`` < 180 deg)."""
+
+    code: str  # G02 or G03
+    length: float  # m, along the moves the reader made of it
+    sweep: float  # rad
+    gap: float  # m, from its start to its end
+    tolerance: float  # m
+
+
+def near_circle_warning(arcs: dict[int, NearCircle], source: str) -> str:
+    """The warning for ``arcs`` (line -> `NearCircle`): each is read as written, a short
+    arc, where a full circle was most likely meant. An end that close to the start is within
+    what a post's rounding leaves on an arc, where a full circle's end is its start exactly;
+    no FANUC rule for such an end was found (the docs/pages search for parameter 3410 and
+    alarm PS0020 found the radius check only: Series 15i-MA B-63324EN/01 4.4 runs an end
+    off the circle within it as a spiral), so the reader warns and does not refuse: a short
+    arc, as written, is also a path an arc-fitting post may write."""
+    listed = [f"{arc.code} at line {line}: {arc.length * 1e6:.4g} um long "
+              f"({math.degrees(arc.sweep):.3g} deg), its end {arc.gap * 1e6:.4g} um from its "
+              "start" for line, arc in list(arcs.items())[:NEAR_CIRCLES_LISTED]]
+    more = len(arcs) - len(listed)
+    tolerance = next(iter(arcs.values())).tolerance
+    return (f"{source}: {len(arcs)} arc{'s' if len(arcs) > 1 else ''} with I J K whose end "
+            f"is within {tolerance * 1e6:g} um of its start but not on it (within the "
+            "rounding a post leaves on an arc's radius), read as written, a short arc, where "
+            f"a full circle was most likely meant: {'; '.join(listed)}"
+            + (f"; and {more} more" if more > 0 else "")
+            + ". For a full circle write the end as the start (or leave out its axis words)")
 
 
 def arc_points(

@@ -15,13 +15,15 @@ Internal to the reader: `machinesim.nc.parser` checks the arguments and the byte
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from machinesim.exceptions import NCProgramError
+from machinesim.exceptions import MachineSimWarning, NCProgramError
 from machinesim.nc import fastscan
+from machinesim.nc.arcs import NearCircle, near_circle_warning
 from machinesim.nc.blocks import Block
 from machinesim.nc.layout import Layout
 from machinesim.nc.lexer import Word, tokenize
@@ -226,6 +228,8 @@ class Reader:
         # each M06, in the order they run
         self.tool_events: list[tuple[int, int | None, int]] = []
         self.arc_blocks = 0  # G02/G03 blocks run
+        #: line -> an arc read short whose end is nearly its start (`near_circle_warning`)
+        self.near_circles: dict[int, NearCircle] = {}
         self.unit_words: dict[str, int] = {}  # G20/G21 -> first line
         self.dwell_words: dict[int, str] = {}  # line -> its dwell's P or X, as written
         self.kept_dwells: dict[int, float] = {}  # line -> its longest dwell of a kept P, s
@@ -268,6 +272,9 @@ class Reader:
         self.layout = Layout(self)
         self.run(self.layout.main_first, self.layout.main_stop, 0)
         self.problems.raise_all(self.source)
+        if self.near_circles:  # read_program / parse_program -> _parse -> here
+            warnings.warn(near_circle_warning(self.near_circles, self.source),
+                          MachineSimWarning, stacklevel=4)
         targets, kinds, feeds, dwells, lines, spindles, blocks = self.out.arrays()
         return Program._from_parts(
             targets, kinds, feeds, dwells, lines, spindles, blocks, self.out.m_codes,
