@@ -39,13 +39,15 @@ compensating when the path between them matters.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from machinesim import tolerances
-from machinesim.exceptions import AxisLimitError, InputError, NCProgramError
+from machinesim.exceptions import AxisLimitError, InputError, MachineSimWarning, NCProgramError
+from machinesim.inverse import singular_note
 from machinesim.machines import Machine, load_machine
 from machinesim.metrology._arrays import as_flag, as_floats, shown
 from machinesim.nc.moves import AXES, KIND_DWELL
@@ -89,12 +91,19 @@ class Compensated:
         distance from its line: 10.9 nm for 0.00001 deg at 125 mm; docs/compensation.md).
     max_rotation_residual : float
         Largest tool orientation left unmatched, rad (axis-angle norm), before rounding.
+    singular : str
+        Empty unless blocks stand at a singularity of the axes, where the orientation the
+        axes turn the tool to at the poses around is left unmatched: the lines, the largest
+        such turn in urad and its direction (`machinesim.inverse.singular_note`, also given
+        as a `MachineSimWarning`). What the machine's structure can never match (a tilt on
+        four axes) is only in ``unmatched``.
     """
 
     program: Program
     unmatched: str
     max_position_residual: float
     max_rotation_residual: float
+    singular: str = ""
 
 
 def start_axes(machine: Machine, start=None) -> np.ndarray:
@@ -347,6 +356,11 @@ def model_based(
     -------
     Compensated
 
+    Warns
+    -----
+    MachineSimWarning
+        When blocks stand at a singularity of the axes (`Compensated.singular`).
+
     Raises
     ------
     UnreachableError, AxisLimitError
@@ -374,12 +388,17 @@ def model_based(
                                        check_limits=False)
     _check_travel(program, machine, motion, nominal, solution.q)
     miss = wanted - _points(machine.tool_pose(solution.q, identified), p)
+    singular = singular_note(machine, solution.singular_residual,
+                             lambda row: f"line {int(program.lines[motion[row]])}")
+    if singular:
+        warnings.warn(f"{program.source}: {singular}", MachineSimWarning, stacklevel=2)
     return Compensated(
         program=rewrite(program, machine, solution.q, rounded=rounded),
         unmatched=solution.unmatched,
         max_position_residual=float(np.max(np.linalg.norm(miss, axis=1))),
         max_rotation_residual=float(np.max(np.linalg.norm(solution.rotation_residual,
                                                           axis=1))),
+        singular=singular,
     )
 
 

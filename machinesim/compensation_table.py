@@ -25,13 +25,15 @@ resolution), so the same rules hold as for every other compensation of the proje
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from machinesim.compensation import map_program, model_based
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, MachineSimWarning
 from machinesim.identification.xy_plane import Curve, XYPlaneMap
+from machinesim.inverse import singular_note
 
 __all__ = ["CompensationTable", "ModelCompensation"]
 
@@ -111,7 +113,9 @@ class ModelCompensation:
     ``apply`` does for any axis values what `machinesim.compensation.model_based` does for
     a program's blocks: the nominal tool pose at ``q``, then the axis values that reach it
     on the identified model (`Machine.axis_values` from ``q``). Used to measure the machine
-    with the model-based compensation active, beside `CompensationTable`.
+    with the model-based compensation active, beside `CompensationTable`. Rows at a
+    singularity of the axes, where the tool orientation is left unmatched, are told by a
+    `MachineSimWarning` (`machinesim.inverse.singular_note`).
     """
 
     machine: object
@@ -123,7 +127,13 @@ class ModelCompensation:
             raise InputError(f"Expected axis values of shape (N, {len(self.machine.axes)}), "
                              f"got {q.shape}", key="q")
         target = self.machine.tool_pose(q)
-        return self.machine.axis_values(target, self.identified, q_start=q).q
+        solution = self.machine.axis_values(target, self.identified, q_start=q)
+        singular = singular_note(self.machine, solution.singular_residual,
+                                 lambda row: f"row {row}")
+        if singular:
+            warnings.warn(f"the compensated axis values: {singular}", MachineSimWarning,
+                          stacklevel=2)
+        return solution.q
 
     def program(self, program, *, start=None, rounded: bool = True):
         """The program through `machinesim.compensation.model_based`."""

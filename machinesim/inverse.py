@@ -6,6 +6,7 @@ position task, and what the axes cannot produce reported, not hidden.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,6 +19,14 @@ from machinesim.tolerances import IK_SINGULAR, IK_WEAK_TURN
 #: Poses solved together by `axis_values` (its working arrays, ~1 kB a pose, stay small for
 #: programs of a million blocks).
 IK_BATCH = 8192
+#: Random poses within the travel on which `turn_rank` counts the directions the axes turn
+#: the tool in; a singular pose is a set of measure zero, so one would do; the most of 16.
+GENERIC_POSES = 16
+#: Turn (rad) of the rotary axes, times 1, 2, 3 ... in axis order, from a singular pose to
+#: one near it where the axes turn the tool in as many directions as at a generic pose
+#: (`_singular_parts`): the lost direction then has a singular value of this order, far
+#: above round-off, while the directions kept move by as little.
+NEAR_TURN = 1e-3
 
 
 @dataclass(frozen=True)
@@ -35,12 +44,19 @@ class AxisSolution:
         tool orientation: the part of the orientation the machine's axes cannot produce.
     unmatched : str
         Empty when the whole pose was matched, else what was not.
+    singular_residual : ndarray, shape (3,) or (N, 3)
+        The part of ``rotation_residual`` left at a singularity of the axes (rad, workpiece
+        frame): what they turn the tool by at the poses around (as many directions as at a
+        generic pose, `turn_rank`) but not at this one, e.g. A and C one axis at B = 0 on
+        robonano_ui. Zero where the pose is not singular: what is left there the machine's
+        structure can never match (a tilt on four axes, a roll on five).
     """
 
     q: np.ndarray
     position_residual: np.ndarray
     rotation_residual: np.ndarray
     unmatched: str
+    singular_residual: np.ndarray
 
 
 def axis_values(machine, wMt, errors=None, q_start=None, check_limits: bool = True,
@@ -131,14 +147,15 @@ def axis_values(machine, wMt, errors=None, q_start=None, check_limits: bool = Tr
             f"{np.round(targets[n, :3, 3] * 1e3, 6).tolist()} mm (pose {n}); the best miss "
             f"is {miss[n] * 1e9:.3g} nm")
     turned = np.linalg.norm(rres, axis=1) > tolerances.IK_ANGLE_RAD * 1e3
-    unmatched = _describe_rotations(machine, rres[turned])
+    singular = _singular_parts(machine, binding, qs, rres, turned, axis_only)
+    unmatched = _describe_rotations(machine, (rres - singular)[turned], singular[turned])
     if check_limits:
         bad = machine.limit_violations(qs)
         if bad:
             raise AxisLimitError(f"{machine.name}: the requested pose needs " + "; ".join(bad))
     if not batch:
-        return AxisSolution(qs[0], pres[0], rres[0], unmatched)
-    return AxisSolution(qs, pres, rres, unmatched)
+        return AxisSolution(qs[0], pres[0], rres[0], unmatched, singular[0])
+    return AxisSolution(qs, pres, rres, unmatched, singular)
 
 def _residuals(machine, targets, binding, q, axis_only: bool = False
                ) -> tuple[np.ndarray, np.ndarray]:
@@ -243,20 +260,136 @@ def _solve(machine, targets, binding, q, max_iterations, axis_only: bool = False
             break
     return q
 
-def _describe_rotations(machine, residuals: np.ndarray) -> str:
-    """What orientation the axes left unmatched (rad residuals, (n, 3)): one sentence
-    per set of directions, with the largest angle and how many poses ("" for none)."""
-    found: dict[str, list] = {}
-    for dr in residuals:
-        about = "/".join("XYZ"[k] for k in range(3)
-                         if abs(dr[k]) > tolerances.IK_ANGLE_RAD * 1e3)
-        largest, count = found.get(about, (0.0, 0))
-        found[about] = (max(largest, float(np.max(np.abs(dr)))), count + 1)
+def turn_rank(machine, axis_only: bool = False) -> int:
+    """How many independent directions ``machine``'s axes turn the tool in with its edge
+    held (the whole orientation; the tool's axis alone: ``axis_only``) at a generic pose.
+
+    The rank of the rotation Jacobian in the null space of the position task, as
+    `axis_values` steps in it (singular values above `IK_WEAK_TURN`, `IK_SINGULAR` for the
+    tool axis), the most over `GENERIC_POSES` random poses within the travel (nominal
+    machine: errors of micrometres and microradians move no rank). 1 on grooving_4axis (C)
+    and planer_4axis (A), 2 on robonano_a0ib (B and C, always square), 3 on robonano_ui
+    (A, B, C; 2 at B = 0, where A and C are one axis), 0 on sts_lathe (C is needed for the
+    position). A pose with fewer is singular.
+    """
+    return _turn_rank(machine, bool(axis_only))
+
+
+@functools.lru_cache(maxsize=32)
+def _turn_rank(machine, axis_only: bool) -> int:
+    rng = np.random.default_rng(0)
+    lower = np.maximum(machine.lower, -2 * np.pi)
+    upper = np.minimum(machine.upper, 2 * np.pi)
+    q = rng.uniform(lower, upper, size=(GENERIC_POSES, len(machine.axes)))
+    return int(np.max(_turn_count(_turns(machine, machine.binding(None), q, axis_only),
+                                  axis_only)))
+
+
+def _turns(machine, binding, q, axis_only: bool) -> np.ndarray:
+    """The rotation Jacobians (N, 3, n_axes; workpiece frame) in the null space of the
+    position task at the axis values ``q`` (N, n_axes): how the axes turn the tool per unit
+    of motion with the edge held, as `_solve` steps (across the tool's axis alone:
+    ``axis_only``)."""
+    pose, jac = machine.kin.pose_jacobians(q, binding)
+    jp, jr = jac[:, :3], jac[:, 3:]
+    if axis_only:
+        z = pose[:, :3, 2]
+        jr = jr - np.einsum("ni,nj,nja->nia", z, z, jr)
+    return jr @ (np.eye(q.shape[1]) - _pinv(jp) @ jp)
+
+
+def _turn_count(turns: np.ndarray, axis_only: bool) -> np.ndarray:
+    """How many directions (N,) the ``turns`` (`_turns`) turn the tool in by more than the
+    cut `_solve` drops below (`IK_WEAK_TURN`; `IK_SINGULAR` for the tool's axis)."""
+    strength = np.linalg.svd(turns, compute_uv=False)
+    return np.sum(strength > (IK_SINGULAR if axis_only else IK_WEAK_TURN), axis=1)
+
+
+def _singular_parts(machine, binding, qs, rres, turned, axis_only: bool) -> np.ndarray:
+    """The part (N, 3, rad) of each unmatched orientation ``rres`` left by a singularity.
+
+    A pose ``qs`` is singular where its axes turn the tool in fewer directions (singular
+    values above the cut `_solve` drops below) than at a generic pose (`turn_rank`). What
+    the poses around it turn the tool in is, in the limit, the span of the `turn_rank`
+    strongest directions at a pose a little way off (`NEAR_TURN` on each rotary axis);
+    the residual's projection on that span is what a generic pose would have matched
+    (all of it where the axes turn the tool every way, robonano_ui's A B C), the rest what
+    no pose matches. Zero at the poses that are not singular, and at every pose of a
+    machine whose turns never lose a direction (grooving_4axis: C turns about Z at every
+    pose, and a tilt is left by its structure, not reported as a singularity)."""
+    parts = np.zeros_like(rres)
+    generic = turn_rank(machine, axis_only)
+    left = np.flatnonzero(turned)
+    if not generic or not len(left):
+        return parts
+    left = left[_turn_count(_turns(machine, binding, qs[left], axis_only), axis_only)
+                < generic]
+    if not len(left):
+        return parts
+    if generic == (2 if axis_only else 3):  # the poses around turn the tool every way
+        parts[left] = rres[left]
+        return parts
+    near = qs[left] + machine.rotary * np.cumsum(machine.rotary) * NEAR_TURN
+    span = np.linalg.svd(_turns(machine, binding, near, axis_only))[0][:, :, :generic]
+    parts[left] = np.einsum("nig,njg,nj->ni", span, span, rres[left])
+    return parts
+
+
+def _describe_rotations(machine, structural: np.ndarray, singular: np.ndarray) -> str:
+    """What orientation the axes left unmatched (rad residuals, (n, 3), split into what
+    their structure never matches and what they leave at a singularity): one sentence per
+    set of directions and kind, with the largest angle and how many poses ("" for none)."""
+    found: dict[tuple[str, bool], tuple[float, int]] = {}
+    for at_singularity, residuals in ((False, structural), (True, singular)):
+        for dr in residuals[np.linalg.norm(residuals, axis=1)
+                            > tolerances.IK_ANGLE_RAD * 1e3]:
+            about = "/".join("XYZ"[k] for k in range(3)
+                             if abs(dr[k]) > tolerances.IK_ANGLE_RAD * 1e3)
+            largest, count = found.get((about, at_singularity), (0.0, 0))
+            found[about, at_singularity] = (max(largest, float(np.max(np.abs(dr)))),
+                                            count + 1)
     return "; ".join(
         f"{machine.name} ({''.join(machine.axes)}) cannot turn the tool about {about} "
-        f"{'here' if count == 1 else f'at {count} poses'}: orientation left unmatched by "
-        f"up to {np.degrees(largest):.6g} deg"
-        for about, (largest, count) in sorted(found.items()))
+        f"{'here' if count == 1 else f'at {count} poses'}"
+        f"{', at a singularity of its axes (the poses around can)' if at_singularity else ''}"
+        f": orientation left unmatched by up to {np.degrees(largest):.6g} deg"
+        for (about, at_singularity), (largest, count) in sorted(found.items()))
+
+
+def singular_note(machine, singular, name) -> str:
+    """What a singularity of the axes left unmatched matching the whole orientation (as
+    `machinesim.compensation.model_based` does), as one sentence ("" for nothing).
+
+    Parameters
+    ----------
+    machine : Machine
+    singular : array_like, shape (N, 3)
+        `AxisSolution.singular_residual` of N poses, rad.
+    name : callable
+        ``name(row) -> str``: what pose ``row`` is, e.g. ``"line 12"`` of a program.
+
+    Returns
+    -------
+    str
+        The poses (the first ten), the largest turn left (urad), where, and about which
+        direction (a unit vector in the workpiece frame); empty when no pose is singular.
+    """
+    singular = np.atleast_2d(singular)
+    size = np.linalg.norm(singular, axis=1)
+    rows = np.flatnonzero(size > tolerances.IK_ANGLE_RAD * 1e3)
+    if not len(rows):
+        return ""
+    worst = int(rows[np.argmax(size[rows])])
+    direction = ", ".join(f"{v:+.4f}" for v in np.round(singular[worst] / size[worst], 4)
+                          + 0.0)  # no -0.0000
+    listed = ", ".join(name(int(r)) for r in rows[:10]) + (" ..." if len(rows) > 10 else "")
+    return (f"{machine.name} ({''.join(machine.axes)}) stands at a singularity of its axes at "
+            f"{len(rows)} of {len(singular)} pose(s) ({listed}): there they turn the tool "
+            f"about a direction by less than {tolerances.IK_WEAK_TURN:g} rad per unit of "
+            f"axis motion, which they turn it about at the poses around, and the tool "
+            f"orientation is left unmatched by up to {size[worst] * 1e6:.4g} urad "
+            f"({name(worst)}) about ({direction}) in the workpiece frame. A pose off the "
+            f"singularity is matched")
 
 
 def _turn_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -285,4 +418,4 @@ def _pinv(a: np.ndarray, cut: float = IK_SINGULAR) -> np.ndarray:
     return (np.swapaxes(vt, -1, -2) * inv[..., None, :]) @ np.swapaxes(u, -1, -2)
 
 
-__all__ = ["IK_BATCH", "AxisSolution", "axis_values"]
+__all__ = ["IK_BATCH", "AxisSolution", "axis_values", "singular_note", "turn_rank"]
