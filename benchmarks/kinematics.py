@@ -8,7 +8,9 @@ program's poses (each started from its nominal axis values, as model-based compe
 does) solved in one batch against the same poses solved one at a time; and the poses of
 paper 002's crown program as `cut_turned` takes them, one `tool_pose` call per feed segment
 (before) against `Machine.tool_poses` of each C group's segments (now), alternating, checked
-equal bit for bit.
+equal bit for bit; and what the singularity check (`inverse._singular_parts`) adds to a
+batch whose every orientation is left unmatched (a tilted tool on grooving_4axis, robonano_ui
+at B = 0), timed alone beside the whole solve.
 """
 
 from __future__ import annotations
@@ -53,6 +55,7 @@ def main() -> None:
           f"{N / loop / 1e6:6.2f} M poses/s  (median of 3 x {n_loop}, scaled)")
     print(f"  speed-up: {loop / batched:.1f}x")
     inverse(machine, rng)
+    singular_check()
     crown_segments()
 
 
@@ -81,6 +84,37 @@ def inverse(machine, rng, n: int = 5_000, n_loop: int = 300) -> None:
     print(f"  one pose at a time (Pinocchio): {looped * 1e3:8.1f} ms  "
           f"{n / looped / 1e3:6.1f} k poses/s  (median of 3 x {n_loop}, scaled)")
     print(f"  speed-up: {looped / batched:.1f}x")
+
+
+def singular_check(n: int = 5_000, repeats: int = 5) -> None:
+    """`axis_values` of ``n`` poses whose orientation is all left unmatched, and the part
+    of it that tells a singularity from the structure (`inverse._singular_parts`)."""
+    from machinesim import ErrorModel, inverse
+
+    for name, tilt, b_zero in (("grooving_4axis", [-1700.0, -560.0, 0.0], False),
+                               ("robonano_ui", [10.0, 0.0, 0.0], True)):
+        machine = load_machine(name)
+        errors = ErrorModel.from_dict({"tool": {"rotation_urad": tilt}})
+        q = random_axis_values(machine, np.random.default_rng(0), n, fraction=0.5)
+        if b_zero:
+            q[:, machine.axes.index("B")] = 0.0
+        target = machine.tool_pose(q)
+        binding = machine.binding(errors)
+        whole, check = [], []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            solution = machine.axis_values(target, errors, q_start=q, check_limits=False)
+            whole.append(time.perf_counter() - start)
+            rres = solution.rotation_residual
+            start = time.perf_counter()
+            inverse._singular_parts(machine, binding, solution.q, rres,
+                                    np.ones(n, dtype=bool), False)
+            check.append(time.perf_counter() - start)
+        print(f"{name}, {n} poses, every orientation left unmatched "
+              f"({'at B = 0' if b_zero else 'a tilted tool'})")
+        print(f"  axis_values:                    {statistics.median(whole) * 1e3:8.1f} ms  "
+              f"(median of {repeats})")
+        print(f"  of it the singularity check:    {statistics.median(check) * 1e3:8.1f} ms")
 
 
 def crown_segments(repeats: int = 5) -> None:
