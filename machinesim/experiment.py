@@ -60,6 +60,12 @@ FIGURE_UNITS = ("m", "mm", "um", "nm", "rad", "mrad", "urad", "deg", "arcsec", "
 
 
 def _number(value, name: str) -> float | None:
+    """A figure's value: a float, None for None or NaN (not measured); an infinity refused.
+
+    An infinite figure was kept as None too, and written to summary.json as null, which the
+    schema reads as "not measured": a reading that diverged (a division by zero) passed as one
+    not taken. JSON has no infinity, and no length, angle, time or share is one: it is refused
+    here, naming the figure, before any report is written."""
     if value is None:
         return None
     try:
@@ -67,7 +73,12 @@ def _number(value, name: str) -> float | None:
     except (TypeError, ValueError, OverflowError) as error:  # 10**400: beyond float64
         raise InputError(f"Expected {name} as a number or None, got {brief(repr(value))}",
                          key=name) from error
-    return number if math.isfinite(number) else None
+    if math.isinf(number):
+        raise InputError(f"figure {name}: {number!r}; expected a finite number, or None (NaN) "
+                         "where nothing was measured: an infinite figure is no measurement "
+                         "(a reading or a ratio that divided by zero?), and the report has "
+                         "no way to write it but as not measured", key=name)
+    return None if math.isnan(number) else number
 
 
 @dataclass(frozen=True)
@@ -81,7 +92,8 @@ class Figure:
     unit : str
         Unit of the four values, one of `FIGURE_UNITS`.
     before, after : float or None
-        The simulated values; None where not measured (or not measurable).
+        The simulated values; None where not measured (or not measurable): NaN is taken
+        as None, an infinity refused (`_number`).
     paper_before, paper_after : float or None
         The paper's values; None where the paper gives none.
     note : str

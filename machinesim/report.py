@@ -64,14 +64,16 @@ def _has_number(items) -> bool:
 
 
 def _clean(data):
-    """JSON-ready copy: numpy scalars and arrays become Python numbers and lists; NaN -> None."""
+    """JSON-ready copy: numpy scalars and arrays become Python numbers and lists; NaN -> None
+    (not measured). An infinity stays, for the checks and `json_text` to refuse naming its
+    key: it had become None too, and null reads as "not measured"."""
     if isinstance(data, Mapping):
         return {str(k): _clean(v) for k, v in data.items()}
     if isinstance(data, (list, tuple)):
         return [_clean(v) for v in data]
     if hasattr(data, "tolist"):
         return _clean(data.tolist())
-    if isinstance(data, float) and not math.isfinite(data):
+    if isinstance(data, float) and math.isnan(data):
         return None
     return data
 
@@ -354,13 +356,15 @@ class ReportFolder:
                 return f"{v:.{digits}e}" if significant else f"{v:.{digits}f}"
             return str(v)
 
+        table = _clean({"columns": list(columns), "rows": [list(r) for r in rows]})
+        check_units(table)
+        data = json_text(table, f"{name}.json")  # before the Markdown: both or neither
         lines = ([f"### {title}", ""] if title else []) + [
             "| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
         lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
         text = "\n".join(lines) + "\n" + (f"\n{note}\n" if note else "")
         write_atomic(self._target(f"{name}.md"), text)
-        self.write_json(f"{name}.json", {"columns": list(columns),
-                                         "rows": [list(r) for r in rows]})
+        write_atomic(self._target(f"{name}.json"), data)
         return text
 
     def write_part(self, name: str, part) -> Path:

@@ -589,3 +589,41 @@ def test_a_budget_of_figures_the_result_has_not_or_in_another_unit_is_refused(tm
     ReportFolder(tmp_path / "right").write_result(result, budget=Budget.from_dict([row]))
     summary = json.loads((tmp_path / "right" / "summary.json").read_text())
     assert summary["budget"] == [row]
+
+
+def test_an_infinite_figure_is_refused_naming_it_not_written_as_not_measured(tmp_path):
+    # an infinite figure was kept as None and written as null, which summary.json's schema
+    # reads as "not measured": a reading that diverged passed as one never taken
+    from machinesim.experiment import Figure
+
+    for field in ("before", "after", "paper_before", "paper_after", "after_std"):
+        for value in (np.inf, -np.inf):
+            with pytest.raises(InputError, match=rf"figure x\.{field}: -?inf; expected a "
+                                                 r"finite number, or None \(NaN\)") as info:
+                Figure("x", "um", **{"before": 1.0, "after": 0.5, field: value})
+            assert info.value.key == f"x.{field}"
+    assert Figure("x", "um", np.nan, 0.5).before is None  # NaN: not measured, as documented
+    with pytest.raises(InputError, match=r"figure x\.after: inf"):
+        _toy_result(parts=(), after=np.inf)
+    # a summary built by hand, or any other infinite number, is refused when written, naming
+    # its key, and nothing is written
+    base = {"paper": "001", "procedure": "p", "machine": "m", "seed": 0, "noise": False,
+            "injected": {}, "identified": {}}
+    figure = {"name": "a_dx", "unit": "um", "before": 1.0, "after": np.inf,
+              "paper_before": None, "paper_after": None}
+    out = tmp_path / "out"
+    with pytest.raises(InputError, match=r"figures\[0\]\.after must be a finite number or "
+                                         r"null, got inf"):
+        ReportFolder(out).write_summary({**base, "figures": [figure]})
+    with pytest.raises(InputError, match=r"identified\['tool.x'\]\.std must be a finite "
+                                         r"number or null, got inf"):
+        ReportFolder(out).write_summary({**base, "figures": [], "identified": {
+            "tool.x": {"value": 1e-6, "std": np.inf}}})
+    with pytest.raises(Exception, match=r"details\.gap_um = -inf"):
+        ReportFolder(out).write_summary({**base, "figures": [], "details": {"gap_um": -np.inf}})
+    with pytest.raises(Exception, match=r"rows\[0\]\[1\] = inf"):
+        ReportFolder(out).write_table("t", ["a_um", "b_um"], [[1.0, np.inf]])
+    assert sorted(p.name for p in out.iterdir()) == []  # neither t.md nor t.json
+    summary = {**base, "figures": [{**figure, "after": np.nan}]}
+    ReportFolder(out).write_summary(summary)
+    assert json.loads((out / "summary.json").read_text())["figures"][0]["after"] is None
