@@ -249,9 +249,11 @@ class ReportFolder:
     def write_summary(self, summary: Mapping) -> Path:
         """``summary.json`` in the one schema of docs/reports.md (checked, `check_summary`).
 
-        The list of the folder's files is added under ``files``.
+        Its version is added first, under ``schema_version`` (`SCHEMA_VERSION`), and the
+        list of the folder's files under ``files``.
         """
-        data = _clean({**summary, "files": sorted(set(self.files) | {"summary.json"})})
+        data = _clean({"schema_version": SCHEMA_VERSION, **summary,
+                       "files": sorted(set(self.files) | {"summary.json"})})
         check_summary(data)
         target = self._target("summary.json")
         write_atomic(target, json_text(data, "summary"))
@@ -443,6 +445,13 @@ def _cell(value):
     return math.nan if value is None else value
 
 
+#: The version of summary.json's schema (docs/reports.md) this machinesim writes and reads,
+#: under ``schema_version``. A summary.json without one was written before the field was
+#: added, when the schema was this version's (the field is its only change since): it is
+#: read as this version. A change that a reader of the old schema would misread (a key's
+#: meaning or unit) takes the next number.
+SCHEMA_VERSION = 1
+
 #: Top-level keys of summary.json, with what each must hold (docs/reports.md).
 SUMMARY_KEYS = {"paper": str, "procedure": str, "machine": str, "seed": int, "noise": bool,
                 "injected": Mapping, "identified": Mapping, "figures": list}
@@ -478,6 +487,13 @@ def check_summary(data: Mapping) -> None:
 
     if not isinstance(data, Mapping):
         raise InputError(f"summary.json: expected an object, got {type(data).__name__}")
+    version = data.get("schema_version", SCHEMA_VERSION)  # none: written before the field
+    if version != SCHEMA_VERSION or not isinstance(version, int) or isinstance(version, bool):
+        newer = (" (written by a newer machinesim? update this one to read it)"
+                 if isinstance(version, int) and not isinstance(version, bool)
+                 and version > SCHEMA_VERSION else "")
+        refuse(f"schema_version {version!r}; this machinesim reads schema version "
+               f"{SCHEMA_VERSION} (docs/reports.md){newer}", "schema_version")
     for key, kind in SUMMARY_KEYS.items():
         if key not in data or not isinstance(data[key], kind) or (
                 kind is int and isinstance(data[key], bool)):
@@ -543,8 +559,29 @@ def check_summary(data: Mapping) -> None:
         if not isinstance(notes, list) or not all(isinstance(n, str) and n.strip()
                                                   for n in notes):
             refuse(f"expected 'notes' as a list of non-empty strings, got {notes!r}", "notes")
-    rest = {k: v for k, v in data.items() if k not in SUMMARY_KEYS and k != "budget"}
+    rest = {k: v for k, v in data.items()
+            if k not in SUMMARY_KEYS and k not in ("budget", "schema_version")}
     check_units(rest)
+
+
+def read_summary(path) -> dict:
+    """The summary.json at ``path`` (a file, or a report folder holding one), read and
+    checked against the schema (`check_summary`, its version among it): an `InputError`
+    naming the file and the key, for a file of another schema version (the version found
+    and the one this machinesim reads), damaged or edited. A file without
+    ``schema_version`` is read as `SCHEMA_VERSION` (written before the field was added)."""
+    from machinesim._json import read_json
+
+    path = Path(path)
+    if path.is_dir():
+        path = path / "summary.json"
+    data = read_json(path, "report summary (summary.json)")
+    try:
+        check_summary(data)
+    except InputError as error:
+        raise InputError(error.message.removeprefix("summary.json: "), source=str(path),
+                         key=error.key) from None
+    return data
 
 
 def _check_budget(rows, units: Mapping[str, str]) -> None:

@@ -627,3 +627,36 @@ def test_an_infinite_figure_is_refused_naming_it_not_written_as_not_measured(tmp
     summary = {**base, "figures": [{**figure, "after": np.nan}]}
     ReportFolder(out).write_summary(summary)
     assert json.loads((out / "summary.json").read_text())["figures"][0]["after"] is None
+
+
+def test_summary_json_carries_its_schema_version_and_a_reader_checks_it(tmp_path):
+    # summary.json had no version: a reader could not tell a file of another schema
+    from machinesim.report import SCHEMA_VERSION, read_summary
+
+    out = tmp_path / "out"
+    ReportFolder(out).write_result(_toy_result(parts=()))
+    text = (out / "summary.json").read_text()
+    assert SCHEMA_VERSION == 1 and text.startswith('{\n  "schema_version": 1,\n')
+    summary = read_summary(out)
+    assert summary == json.loads(text) and read_summary(out / "summary.json") == summary
+    # a file written before the field: read as version 1 (its only change since)
+    older = {k: v for k, v in summary.items() if k != "schema_version"}
+    (tmp_path / "old.json").write_text(json.dumps(older))
+    assert read_summary(tmp_path / "old.json") == older
+    for version, said in ((2, r"schema_version 2; this machinesim reads schema version 1 "
+                              r"\(docs/reports.md\) \(written by a newer machinesim\?"),
+                          ("1", r"schema_version '1'; this machinesim reads schema version 1"),
+                          (True, r"schema_version True; this machinesim reads"),
+                          (0, r"schema_version 0; this machinesim reads schema version 1 "
+                              r"\(docs/reports.md\)$")):
+        path = tmp_path / f"v{version}.json"
+        path.write_text(json.dumps({**summary, "schema_version": version}))
+        with pytest.raises(InputError, match=said) as info:
+            read_summary(path)
+        assert info.value.source == str(path) and info.value.key == "schema_version"
+        with pytest.raises(InputError, match=said):
+            check_summary({**summary, "schema_version": version})
+    edited = tmp_path / "edited.json"
+    edited.write_text(json.dumps({**summary, "seed": -1}))
+    with pytest.raises(InputError, match=r"edited.json, key 'seed': seed must be >= 0, got -1"):
+        read_summary(edited)
