@@ -5,6 +5,8 @@ shows it, that trial failed with its message."""
 from __future__ import annotations
 
 import io
+import json
+import re
 
 import pytest
 
@@ -411,3 +413,32 @@ def test_two_runs_finding_one_stale_lock_at_once_do_not_both_take_it(tmp_path):
         assert f"another campaign is running in this folder (pid {winners[0]}," in message
         assert json.loads((out / "campaign.lock").read_text()) == {
             "pid": winners[0], "host": socket.gethostname()}  # kept, naming the last run
+
+
+def test_a_trial_that_raises_a_fault_fails_that_trial_and_the_campaign_goes_on(
+        tmp_path, monkeypatch):
+    """A trial whose run raised anything but a MachineSimError (a ZeroDivisionError some
+    draw met) ended the whole campaign in a traceback, and the same command, resumed, ran
+    that trial into it again: a campaign that could never finish. It is that trial's
+    failure now, named as a fault with where it was raised; the other trials run."""
+    import machinesim.campaign.trials as trials
+    from machinesim.experiment import run as real_run
+
+    def failing(procedure, lab):
+        if lab.seed.spawn_key == (1,):
+            return 1 / 0
+        return real_run(procedure, lab)
+
+    monkeypatch.setattr(trials, "run", failing)
+    ds = run("tool_rotation_arm", 2, out=tmp_path, workers=0, progress=False,
+             identify_only=True)
+    assert list(ds["failed"].values) == [0, 1]
+    message = json.loads(ds.attrs["errors"])["1"]
+    assert message.startswith("ZeroDivisionError: division by zero (not a MachineSimError: "
+                              "a fault of machinesim met by this trial's draws, raised at ")
+    assert re.search(r"raised at test_campaign_api\.py:\d+ in failing; please report it "
+                     r"with the campaign's command\)$", message)
+    assert json.loads((tmp_path / "trials" / "trial_000001.json").read_text())["error"] \
+        == message
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["failures"] == [{"message": message, "trials": [1]}]

@@ -502,8 +502,10 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
         said a reader should know before trusting the values, such as readings that do not
         fit the model; empty for a failed trial), ``elapsed_s``, ``error`` (None, or the
         message of the `MachineSimError` the trial ended with: a failed identification is a
-        result too), ``warnings`` (the messages of the `MachineSimWarning` s raised in the
-        trial, kept rather than shown: for the campaign's process to show, `kept_warnings`).
+        result too; of any other exception, its type and message said as a fault of
+        machinesim, with where it was raised, `unexpected`), ``warnings`` (the messages of
+        the `MachineSimWarning` s raised in the trial, kept rather than shown: for the
+        campaign's process to show, `kept_warnings`).
     """
     began = time.perf_counter()
     drawn = _drawn(spec, i)  # once: the record's are the lab's (they were drawn twice)
@@ -555,6 +557,8 @@ def _run(spec: CampaignSpec, i: int, drawn: dict, record: dict) -> None:
         result = run(spec.build(), _LabWithInstruments(lab, sigmas) if sigmas else lab)
     except MachineSimError as error:
         record["error"] = f"{type(error).__name__}: {error}"
+    except Exception as error:  # a fault this trial's draws met: its failure, `unexpected`
+        record["error"] = unexpected(error)
     else:
         record["injected"] = {n: float(v) for n, v in result.injected.items()}
         record["identified"] = {n: [float(v), float(s)] for n, (v, s)
@@ -566,3 +570,24 @@ def _run(spec: CampaignSpec, i: int, drawn: dict, record: dict) -> None:
 
 def _float(value) -> float:
     return math.nan if value is None else float(value)
+
+
+def unexpected(error: Exception) -> str:
+    """A trial's failure message for an ``error`` that is no `MachineSimError` (a
+    ZeroDivisionError, numpy's LinAlgError): a fault of machinesim that this trial's draws
+    met, said as such with the line it was raised at, so that the report names it and the
+    campaign goes on. It ended the whole campaign in a traceback, and the same command,
+    resumed, ran the same trial into it again: a campaign that could never finish."""
+    import traceback
+
+    frames = traceback.extract_tb(error.__traceback__)
+    where = ""
+    if frames:
+        frame = frames[-1]
+        path = Path(frame.filename)
+        shown = ("/".join(path.parts[path.parts.index("machinesim"):])
+                 if "machinesim" in path.parts else path.name)
+        where = f", raised at {shown}:{frame.lineno} in {frame.name}"
+    return (f"{type(error).__name__}: {brief(str(error)) or '(no message)'} (not a "
+            f"MachineSimError: a fault of machinesim met by this trial's draws{where}; "
+            "please report it with the campaign's command)")
