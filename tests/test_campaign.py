@@ -520,7 +520,13 @@ def test_a_trial_file_holding_another_trial_says_what_it_holds(campaign, tmp_pat
     monkeypatch.setattr(runner, "run_trial", lambda spec, i: ran.append(i))
     for text, found in (((source / "trials/trial_000002.json").read_text(),
                          "the record of trial 2"),
-                        ("{}", "no trial number ('trial')"), ("[1, 2]", "a JSON list")):
+                        ("{}", "no trial number ('trial')"), ("[1, 2]", "a JSON list"),
+                        # true and 1.0 equal 1: a true ended the campaign in numpy's "truth
+                        # value of an array ... is ambiguous", a 1.0 was refused naming no file
+                        (_with_trial(source / "trials/trial_000001.json", "true"),
+                         "the record of trial True"),
+                        (_with_trial(source / "trials/trial_000001.json", "1.0"),
+                         "the record of trial 1.0")):
         path.write_text(text)
         with pytest.raises(InputError) as info:
             run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
@@ -531,8 +537,25 @@ def test_a_trial_file_holding_another_trial_says_what_it_holds(campaign, tmp_pat
     assert ran == []
 
 
+def _with_trial(path, number: str) -> str:
+    """The trial file ``path``'s text with its trial number written as ``number``."""
+    record = json.loads(path.read_text())
+    return json.dumps({**record, "trial": "@"}).replace('"@"', number)
+
+
+#: A number an edited file holds beyond float64 (JSON takes it, float() does not).
+_HUGE = 10**400
+
+
 @pytest.mark.parametrize(("record", "key"), [
     ({"trial": 0}, "drawn"),
+    # ints beyond float64 ended the campaign in 'OverflowError: int too large to convert'
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+      "elapsed_s": _HUGE, "error": None}, "elapsed_s"),
+    ({"trial": 0, "drawn": {}, "injected": {"tool.y": -_HUGE}, "identified": {},
+      "figures": {}, "elapsed_s": 1.0, "error": None}, "injected"),
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {"tool.y": [_HUGE, 1.0]},
+      "figures": {}, "elapsed_s": 1.0, "error": None}, "identified"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {"tool.y": 5e-6},
       "figures": {}, "elapsed_s": 1.0, "error": None}, "identified"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},

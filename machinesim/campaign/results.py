@@ -24,6 +24,7 @@ import os
 import re
 import socket
 import stat
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -124,7 +125,11 @@ class CampaignFolder:
 
     def read_trial(self, i: int) -> dict:
         raw = read_json(self.trial_file(i), "campaign trial")
-        if not isinstance(raw, dict) or raw.get("trial") != i:
+        # the number itself: true and 1.0 equal 1, and a true was taken for trial 1 (an
+        # array index, "The truth value of an array ... is ambiguous"), a 1.0 refused
+        # naming no file
+        if not isinstance(raw, dict) or type(raw.get("trial")) is not int \
+                or raw["trial"] != i:
             # it said "expected the record of trial 3" alone, of a copy of trial 4's file as
             # of a '{}' or a list: what the file holds, and what to do, are told too
             found = (f"a JSON {type(raw).__name__}" if not isinstance(raw, dict) else
@@ -426,8 +431,15 @@ def same_campaign(old: dict, new: dict) -> bool:
 
 
 def _number(value) -> bool:
-    """A number or null (NaN as JSON writes it)."""
-    return value is None or (isinstance(value, int | float) and not isinstance(value, bool))
+    """A number or null (NaN as JSON writes it): an int a float holds (an edited 1 followed
+    by 400 zeros, beyond float64, ended the campaign in an OverflowError as it was read)."""
+    if value is None or isinstance(value, float):
+        return True
+    return isinstance(value, int) and not isinstance(value, bool) and abs(value) <= _MOST_INT
+
+
+#: The largest int a float64 holds (`_number`).
+_MOST_INT = int(sys.float_info.max)
 
 
 def _check_record(raw: dict, path: Path) -> None:
