@@ -393,3 +393,36 @@ def test_a_script_that_runs_a_campaign_without_the_main_guard_is_told_to_add_it(
                           timeout=300)
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "c" / "campaign.nc").is_file()
+
+
+def test_a_trial_lost_on_the_cluster_is_named_and_the_finished_ones_are_kept(tmp_path,
+                                                                            monkeypatch):
+    """A task that came back from the cluster as an error rather than a record (Dask's
+    KilledWorker once a trial's worker died, after its retries: out of memory, a crash)
+    ended the campaign in Dask's exception, naming no trial and not what was kept. It is a
+    MachineSimError naming the trial, the error, and the resumption."""
+    from distributed import Client
+
+    import machinesim.campaign.runner as runner
+    from machinesim.exceptions import MachineSimError
+
+    def trial(spec, i):  # one thread: trials 0 and 1 end before 2 is lost
+        if i == 2:
+            raise RuntimeError("worker tcp://127.0.0.1:1 died")
+        return {"trial": i, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+                "elapsed_s": 0.0, "error": None}
+
+    monkeypatch.setattr(runner, "run_trial", trial)
+    with Client(processes=False, n_workers=1, threads_per_worker=1,
+                dashboard_address=None) as client, pytest.raises(MachineSimError) as info:
+        run("tool_rotation_arm", 4, out=tmp_path, client=client, progress=False,
+            identify_only=True)
+    assert str(info.value) == (
+        "campaign: trial 2 did not come back from the Dask cluster (RuntimeError: worker "
+        "tcp://127.0.0.1:1 died): its worker died (out of memory, a crash) or the task could "
+        "not be run there; the trials finished before it are kept: run the same command "
+        "again to resume (only the missing trials run)")
+    kept = sorted(p.name for p in (tmp_path / "trials").iterdir())
+    assert kept[:2] == ["trial_000000.json", "trial_000001.json"]
+    assert "trial_000002.json" not in kept
+    assert not (tmp_path / "campaign.nc").exists()

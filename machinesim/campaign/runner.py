@@ -35,7 +35,7 @@ from machinesim.campaign.results import (
 )
 from machinesim.campaign.summary import remove_report, write_report
 from machinesim.campaign.trials import CampaignSpec, check_flag, run_trial
-from machinesim.exceptions import InputError, MachineSimWarning
+from machinesim.exceptions import InputError, MachineSimError, MachineSimWarning, brief
 
 __all__ = ["run"]
 
@@ -335,16 +335,34 @@ def windowed(client, function, spec, indices):
     from distributed import as_completed
 
     waiting, window = iter(indices), _Window(client)
-    running, in_flight = as_completed(), 0
+    running, sent = as_completed(), {}
     while True:
-        for i in itertools.islice(waiting, max(0, window.size() - in_flight)):
-            running.add(client.submit(function, spec, i, pure=False))
-            in_flight += 1
-        if not in_flight:
+        for i in itertools.islice(waiting, max(0, window.size() - len(sent))):
+            future = client.submit(function, spec, i, pure=False)
+            sent[future.key] = i
+            running.add(future)
+        if not sent:
             return
-        result = next(running).result()
-        in_flight -= 1
+        future = next(running)
+        i = sent.pop(future.key)
+        try:
+            result = future.result()
+        except Exception as error:  # run_trial keeps a trial's own errors in its record
+            raise MachineSimError(_lost(i, error)) from error
         yield result
+
+
+def _lost(i: int, error: Exception) -> str:
+    """What the campaign says of trial ``i``, whose task came back from the cluster as
+    ``error`` rather than a record (`run_trial` keeps a trial's own errors in its record):
+    its worker died (Dask's KilledWorker, after its retries: out of memory, a crash of a
+    compiled library), or the task could not be sent or run. It had ended the campaign in
+    Dask's traceback, naming no trial and not what was kept."""
+    return (f"campaign: trial {i} did not come back from the Dask cluster "
+            f"({type(error).__name__}: {brief(str(error)) or 'no message'}): its worker died "
+            "(out of memory, a crash) or the task could not be run there; the trials "
+            "finished before it are kept: run the same command again to resume (only the "
+            "missing trials run)")
 
 
 def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder,
