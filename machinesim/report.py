@@ -327,10 +327,13 @@ class ReportFolder:
         table and plot (`write_budget`) and summary.json again with its rows under
         ``budget``. Returns the table's Markdown. Outside a scenario, the folder with the
         budget is swapped in whole, as `write_result`'s."""
+        summary = {**result.summary(), "budget": budget.to_dict()}
+        _check_budget(summary["budget"], {f["name"]: f["unit"] for f in summary["figures"]},
+                      {f["name"]: f["after"] for f in summary["figures"]})  # before writing
         start = len(self.files)
         with self._whole(adding=True):
             text = self.write_budget(budget)
-            self.write_summary({**result.summary(), "budget": budget.to_dict()})
+            self.write_summary(summary)
         self._report |= set(self.files[start:])  # the budget belongs to the result's report
         return text
 
@@ -544,7 +547,8 @@ def check_summary(data: Mapping) -> None:
     if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
         refuse(f"expected 'files' as a list of file names, got {files!r}", "files")
     if "budget" in data:
-        _check_budget(data["budget"], {f["name"]: f["unit"] for f in data["figures"]})
+        _check_budget(data["budget"], {f["name"]: f["unit"] for f in data["figures"]},
+                      {f["name"]: f["after"] for f in data["figures"]})
     if "background" in data:
         background = data["background"]
         if (not isinstance(background, Mapping) or set(background) != {"file", "nonzero_count"}
@@ -584,10 +588,14 @@ def read_summary(path) -> dict:
     return data
 
 
-def _check_budget(rows, units: Mapping[str, str]) -> None:
+def _check_budget(rows, units: Mapping[str, str], afters: Mapping[str, float | None]) -> None:
     """``budget`` of summary.json: a list of rows with `machinesim.budget.BUDGET_KEYS` (and
     ``notes``, a list of non-empty strings, where a row has any), each of a figure of the
-    summary's ``units`` (figure name -> unit), in its unit."""
+    summary's ``units`` (figure name -> unit), in its unit, whose ``after_all`` is the
+    figure's ``after`` in ``afters`` (figure name -> after), exactly: a budget is made from
+    the run's own figures (`machinesim.budget.error_budget` takes each row's after_all from
+    the result), and JSON gives a float back to the bit, so any difference is another
+    run's budget (of the same figures and units: a seed or an error model apart)."""
     from machinesim.budget import BUDGET_KEYS, BUDGET_OPTIONAL_KEYS
 
     if not isinstance(rows, list):
@@ -620,3 +628,11 @@ def _check_budget(rows, units: Mapping[str, str]) -> None:
                     or not math.isfinite(value)):
                 raise InputError(f"summary.json: budget[{i}].{key} must be a finite number, "
                                  f"got {value!r}", key="budget")
+        after = afters[row["figure"]]
+        if after is None or row["after_all"] != after:
+            held = "none (not measured)" if after is None else repr(after)
+            raise InputError(f"summary.json: budget[{i}] ({row['source']}) gives figure "
+                             f"{row['figure']!r} an after of {row['after_all']!r} "
+                             f"{row['unit']} with every source on, the summary's figure an "
+                             f"after of {held}; expected the budget of this run (another "
+                             "run's, of another seed or error model?)", key="budget")

@@ -660,3 +660,42 @@ def test_summary_json_carries_its_schema_version_and_a_reader_checks_it(tmp_path
     edited.write_text(json.dumps({**summary, "seed": -1}))
     with pytest.raises(InputError, match=r"edited.json, key 'seed': seed must be >= 0, got -1"):
         read_summary(edited)
+
+
+def test_a_budget_whose_after_is_not_the_results_is_refused_naming_both(tmp_path):
+    # a budget of another run of the same figure names and units (another seed) was written
+    # beside this run's figures: its "after, all on" 0.6 beside the figure's after 0.5
+    from machinesim.budget import Budget
+
+    result = _toy_result(parts=())  # figure x: after 0.5 um
+    row = {"source": "instrument_noise", "figure": "x", "unit": "um", "after_all": 0.5,
+           "after_without": 0.4, "share": 0.36}
+    said = (r"budget\[0\] \(instrument_noise\) gives figure 'x' an after of 0.6 um with every "
+            r"source on, the summary's figure an after of 0.5; expected the budget of this "
+            r"run \(another run's")
+    for how in ("write_result", "add_budget"):
+        out = tmp_path / how
+        if how == "add_budget":
+            ReportFolder(out).write_result(result)
+        before = sorted((p.name, p.read_bytes()) for p in out.iterdir()) if out.exists() else []
+        wrong = Budget.from_dict([{**row, "after_all": 0.6}])
+        with pytest.raises(InputError, match=said) as info:
+            if how == "add_budget":
+                ReportFolder(out).add_budget(result, wrong)
+            else:
+                ReportFolder(out).write_result(result, budget=wrong)
+        assert info.value.key == "budget"
+        after = sorted((p.name, p.read_bytes()) for p in out.iterdir()) if out.exists() else []
+        assert after == before  # nothing written
+    # exact: the last bit differs, the budget is another run's
+    with pytest.raises(InputError, match=r"an after of 0.5000000000000001 um"):
+        ReportFolder(tmp_path / "bit").write_result(
+            result, budget=Budget.from_dict([{**row, "after_all": 0.5000000000000001}]))
+    summary = {**result.summary(), "budget": [row]}
+    check_summary(summary)
+    unmeasured = {**summary, "figures": [{**summary["figures"][0], "after": None}]}
+    with pytest.raises(InputError, match=r"the summary's figure an after of none \(not "
+                                         r"measured\)"):
+        check_summary(unmeasured)
+    ReportFolder(tmp_path / "right").add_budget(result, Budget.from_dict([row]))
+    assert json.loads((tmp_path / "right" / "summary.json").read_text())["budget"] == [row]
