@@ -1362,3 +1362,38 @@ def test_the_campaign_command_alone_escapes_its_last_line_as_machinesim_does(tmp
     assert campaign_main(command) == 2
     assert capsys.readouterr().err == (f"machinesim campaign: error: "
                                        f"{tmp_path}/c\\x1b[31mx.urdf: not a URDF file\n")
+
+
+def test_trial_files_and_the_summary_carry_their_schema_version(campaign, tmp_path,
+                                                                 monkeypatch):
+    # neither a trial file nor the campaign's summary.json said which version of its
+    # record it held: a file of another one was read as this one's
+    from machinesim.campaign.results import TRIAL_SCHEMA_VERSION
+    from machinesim.campaign.summary import SCHEMA_VERSION
+
+    source, vary, _ = campaign
+    assert TRIAL_SCHEMA_VERSION == SCHEMA_VERSION == 1
+    text = (source / "trials/trial_000000.json").read_text()
+    assert text.startswith('{\n  "schema_version": 1,\n')
+    assert (source / "summary.json").read_text().startswith('{\n  "schema_version": 1,\n')
+    (tmp_path / "trials").mkdir()
+    for name in ("campaign.json", "trials/trial_000001.json", "trials/trial_000002.json"):
+        (tmp_path / name).write_bytes((source / name).read_bytes())
+    record = json.loads(text)
+    path = tmp_path / "trials/trial_000000.json"
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: pytest.fail("a trial ran"))
+    for version, said in ((2, "schema_version 2; this machinesim reads trial files of schema "
+                              "version 1 (written by a newer machinesim? update this one, or "
+                              "run the campaign into another --out)"),
+                          ("1", "schema_version '1'; this machinesim reads trial files of "
+                                "schema version 1")):
+        path.write_text(json.dumps({**record, "schema_version": version}))
+        with pytest.raises(InputError) as info:
+            run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
+                progress=False, report=False, **ARM)
+        assert str(info.value) == f"{path}, key 'schema_version': {said}"
+    # a file written before the field: read as version 1, the same record
+    path.write_text(json.dumps({k: v for k, v in record.items() if k != "schema_version"}))
+    ds = run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
+             progress=False, report=False, **ARM)
+    assert ds["identified"].equals(campaign[2]["identified"])

@@ -40,9 +40,9 @@ from machinesim.campaign.assembly import Assembly, assemble, versions  # re-expo
 from machinesim.exceptions import FileError, InputError, brief
 from machinesim.experiment import FIGURE_UNITS, note_kind  # note_kind re-exported
 
-__all__ = ["LOCK_NAME", "Assembly", "CampaignFolder", "assemble", "campaign_id",
-           "finished_trials", "legacy_campaign_id", "locked", "note_kind", "refuse_foreign",
-           "same_campaign", "versions"]
+__all__ = ["LOCK_NAME", "TRIAL_SCHEMA_VERSION", "Assembly", "CampaignFolder", "assemble",
+           "campaign_id", "finished_trials", "legacy_campaign_id", "locked", "note_kind",
+           "refuse_foreign", "same_campaign", "versions"]
 
 
 def _clean(value):
@@ -117,9 +117,10 @@ class CampaignFolder:
         return [i for i in finished_trials(self.path) if i < trials]
 
     def write_trial(self, record: dict) -> dict:
-        """Write ``record``; return it as `read_trial` reads it back (NaN for what JSON
-        holds as null), so that the run need not read it again."""
-        stored = _clean({**record, "campaign": self.id})
+        """Write ``record`` (`TRIAL_SCHEMA_VERSION` first); return it as `read_trial` reads
+        it back (NaN for what JSON holds as null), so that the run need not read it again."""
+        stored = _clean({"schema_version": TRIAL_SCHEMA_VERSION, **record,
+                         "campaign": self.id})
         write_atomic(self.trial_file(record["trial"]), json_text(stored, "trial"))
         return {**_nan(stored), "error": stored.get("error")}
 
@@ -138,6 +139,7 @@ class CampaignFolder:
             raise InputError(f"holds {found}; expected the record of trial {i}: delete it and "
                              "run again to compute the trial anew",
                              source=str(self.trial_file(i)), key="trial")
+        _check_version(raw, self.trial_file(i))
         _check_record(raw, self.trial_file(i))
         self._check_campaign(raw.get("campaign"), self.trial_file(i))
         return {**_nan(raw), "error": raw.get("error")}
@@ -428,6 +430,27 @@ def same_campaign(old: dict, new: dict) -> bool:
         if meaning is None or meaning != _parsed(name, before[name]):
             return False
     return True
+
+
+#: The version of a trial file's record (`trials.run_trial`, `CampaignFolder.write_trial`),
+#: under ``schema_version``. A file without one was written before the field was added, when
+#: the record was this version's (the field is its only change since): it is read as this
+#: version. A change a reader of the old record would misread takes the next number.
+TRIAL_SCHEMA_VERSION = 1
+
+
+def _check_version(raw: dict, path: Path) -> None:
+    """Refuse a trial file of another record version than `TRIAL_SCHEMA_VERSION`, naming
+    the file and both versions; none is that version (written before the field)."""
+    version = raw.get("schema_version", TRIAL_SCHEMA_VERSION)
+    if type(version) is int and version == TRIAL_SCHEMA_VERSION:
+        return
+    newer = (" (written by a newer machinesim? update this one, or run the campaign into "
+             "another --out)" if type(version) is int and version > TRIAL_SCHEMA_VERSION
+             else "")
+    raise InputError(f"schema_version {brief(repr(version))}; this machinesim reads trial "
+                     f"files of schema version {TRIAL_SCHEMA_VERSION}{newer}",
+                     source=str(path), key="schema_version")
 
 
 def _number(value) -> bool:

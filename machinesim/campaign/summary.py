@@ -6,8 +6,8 @@ scenario's report.json's ``details`` are (docs/reports.md): a `statistics.descri
 figure's ``unit``) or by the key holding them (``error_si``: m or rad, the parameter's kind);
 z-scores and rank correlations are ratios; ``count`` and the ``_count`` keys count trials.
 
-- ``procedure``, ``seed``, ``trials_count``, ``failed_count``, ``vary`` (name -> DIST text),
-  ``versions``;
+- ``schema_version`` (`SCHEMA_VERSION`), ``procedure``, ``seed``, ``trials_count``,
+  ``failed_count``, ``vary`` (name -> DIST text), ``versions``;
 - ``figures``: per figure, its ``unit`` and ``before``/``after``: `statistics.describe`
   (count, mean, std, min, max, ``shortest_95`` and ``symmetric_95`` coverage intervals) in
   the figure's unit, over the trials that measured it (``count``); ``not_measured``:
@@ -46,6 +46,11 @@ from machinesim.campaign.statistics import describe, spearman, z_scores, z_summa
 
 __all__ = ["failures", "message_kind", "notes", "remove_report", "summarise",
            "write_report"]
+
+
+#: The version of a campaign's summary.json (docs/campaigns.md), written first under
+#: ``schema_version``; a change a reader of the old one would misread takes the next number.
+SCHEMA_VERSION = 1
 
 
 def _finite(value):
@@ -94,6 +99,7 @@ def summarise(dataset) -> dict:
             "sensitivity": {v: spearman(dataset["drawn"].values[:, j], np.abs(found - truth))
                             for j, v in enumerate(varied)}}
     return _finite({
+        "schema_version": SCHEMA_VERSION,
         "procedure": dataset.attrs["procedure"], "seed": int(dataset.attrs["seed"]),
         "trials_count": int(dataset.sizes["trial"]), "failed_count": int(failed.sum()),
         "vary": json.loads(dataset.attrs["vary"]),
