@@ -556,6 +556,14 @@ _HUGE = 10**400
       "figures": {}, "elapsed_s": 1.0, "error": None}, "injected"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {"tool.y": [_HUGE, 1.0]},
       "figures": {}, "elapsed_s": 1.0, "error": None}, "identified"),
+    # a figure's name becomes hist_NAME.png: a '/' was refused once every trial had run, a
+    # NUL ended the campaign in 'ValueError: embedded null byte'
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {},
+      "figures": {"a/b": ["um", 1.0, 0.5]}, "elapsed_s": 1.0, "error": None}, "figures"),
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {},
+      "figures": {"a\x00b": ["um", 1.0, 0.5]}, "elapsed_s": 1.0, "error": None}, "figures"),
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {"../x": [1.0, 1.0]},
+      "figures": {}, "elapsed_s": 1.0, "error": None}, "identified"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {"tool.y": 5e-6},
       "figures": {}, "elapsed_s": 1.0, "error": None}, "identified"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},

@@ -37,6 +37,7 @@ from machinesim._io import (
 )
 from machinesim._json import json_text, read_json
 from machinesim.campaign.assembly import Assembly, assemble, versions  # re-exported
+from machinesim.errors.model import _PARAMETER_RE
 from machinesim.exceptions import FileError, InputError, brief
 from machinesim.experiment import FIGURE_UNITS, note_kind  # note_kind re-exported
 
@@ -461,6 +462,9 @@ def _number(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and abs(value) <= _MOST_INT
 
 
+#: A figure's name in a trial file (`_check_record`): a procedure's, as a file name takes it.
+_FIGURE_NAME = re.compile(r"[A-Za-z0-9_]+")
+
 #: The largest int a float64 holds (`_number`).
 _MOST_INT = int(sys.float_info.max)
 
@@ -490,6 +494,22 @@ def _check_record(raw: dict, path: Path) -> None:
         entries = raw.get(key)
         if not isinstance(entries, dict) or not all(good(v) for v in entries.values()):
             refuse(key, what)
+    # a figure's name becomes a file's (hist_NAME.png): 'a/b' was refused only once every
+    # trial had run ('the folder .../hist_a does not exist'), a NUL ended the campaign in
+    # 'ValueError: embedded null byte'; procedures name figures in letters, digits and _
+    odd = next((n for n in raw["figures"] if not _FIGURE_NAME.fullmatch(n)), None)
+    if odd is not None:
+        raise InputError(f"figure name {brief(repr(odd))}; expected letters, digits and _ (a "
+                         "procedure's figure, as machinesim campaign writes it): delete the "
+                         "file and run again to compute the trial anew", source=str(path),
+                         key="figures")
+    for key in ("injected", "identified"):  # error parameters' names (netCDF coordinates)
+        odd = next((n for n in raw[key] if not _PARAMETER_RE.fullmatch(n)), None)
+        if odd is not None:
+            raise InputError(f"parameter name {brief(repr(odd))}; expected an error "
+                             "parameter's (tool.y, location.C.EX0C, component.X.EXX[2]), as "
+                             "machinesim campaign writes it: delete the file and run again to "
+                             "compute the trial anew", source=str(path), key=key)
     notes = raw.get("notes", [])  # none in a file written before notes were kept
     if not isinstance(notes, list) or not all(isinstance(n, str) for n in notes):
         refuse("notes", "a list of the identification's notes (texts)")
