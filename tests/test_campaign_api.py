@@ -442,3 +442,18 @@ def test_a_trial_that_raises_a_fault_fails_that_trial_and_the_campaign_goes_on(
         == message
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["failures"] == [{"message": message, "trials": [1]}]
+
+
+@pytest.mark.parametrize("client", ["tcp://127.0.0.1:8786", 3])
+def test_a_client_that_is_no_dask_client_is_refused_before_anything_is_written(tmp_path,
+                                                                               client):
+    # a scheduler's address given as client= was taken, campaign.json written, and the
+    # campaign ended in Dask's 'ValueError: No clients found'
+    out = tmp_path / "out"
+    with pytest.raises(InputError) as info:
+        run("tool_rotation_arm", 1, out=out, client=client, progress=False,
+            identify_only=True)
+    assert str(info.value) == (f"key 'client': client={client!r}; expected a "
+                               "distributed.Client (a scheduler's address goes as "
+                               "scheduler='tcp://host:8786')")
+    assert not out.exists()

@@ -517,6 +517,13 @@ def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
         raise InputError(f"--workers {workers!r}; expected a whole number >= 0 (0: no Dask)",
                          key="--workers")
     workers = None if workers is None else int(workers)
+    if client is not None and not all(callable(getattr(client, name, None))
+                                      for name in ("submit", "nthreads")):
+        # a scheduler's address given as client= was taken, campaign.json written, and the
+        # campaign ended in Dask's 'ValueError: No clients found'
+        raise InputError(f"client={brief(repr(client))}; expected a distributed.Client (a "
+                         "scheduler's address goes as scheduler='tcp://host:8786')",
+                         key="client")
     if not isinstance(out, str | os.PathLike) or not str(out):
         raise InputError(f"out={out!r}; expected the campaign folder, a str or Path",
                          key="--out")
