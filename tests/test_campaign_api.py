@@ -457,3 +457,15 @@ def test_a_client_that_is_no_dask_client_is_refused_before_anything_is_written(t
                                "distributed.Client (a scheduler's address goes as "
                                "scheduler='tcp://host:8786')")
     assert not out.exists()
+
+
+@pytest.mark.parametrize("procedure", [["tool_rotation_arm"], {"a": 1}, None, "arm"])
+def test_a_procedure_that_is_no_procedures_name_is_refused_by_name(tmp_path, procedure):
+    # a list or a dict raised "TypeError: unhashable type: 'list'" from the look-up
+    with pytest.raises(InputError) as info:
+        CampaignSpec(procedure, 1)
+    assert str(info.value).startswith(f"key 'procedure': procedure {procedure!r}; expected "
+                                      "one of tool_rotation_arm, ")
+    with pytest.raises(InputError, match=r"key 'procedure': procedure "):
+        run(procedure, 1, out=tmp_path / "out", workers=0, progress=False)
+    assert not (tmp_path / "out").exists()

@@ -290,8 +290,9 @@ class CampaignSpec:
     quick: bool = False
 
     def __post_init__(self) -> None:
-        if self.procedure not in PROCEDURES:
-            raise InputError(f"procedure {self.procedure!r}; expected one of "
+        # a list or dict is no key: 'in' raised "TypeError: unhashable type: 'list'"
+        if not isinstance(self.procedure, str) or self.procedure not in PROCEDURES:
+            raise InputError(f"procedure {brief(repr(self.procedure))}; expected one of "
                              f"{', '.join(PROCEDURES)}", key="procedure")
         if isinstance(self.trials, bool) or not isinstance(self.trials, int | np.integer) \
                 or not 1 <= self.trials <= MAX_TRIALS:
