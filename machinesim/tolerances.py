@@ -129,14 +129,17 @@ SPHERE_CHORD_M = 1e-7
 #: does not amplify round-off into a step.
 IK_SINGULAR = 1e-9
 #: The inverse, matching the tool's whole orientation, leaves unmatched (and reports) what
-#: the axes could produce only by turning the tool less than this (rad) per rad (or m) of
-#: axis motion, in the null space of the position task: to match a residual tau there they
-#: would turn tau / s. On robonano_ui A and C are nearly one axis while B is near 0, so
-#: s = |sin B|: a 10 urad tool tilt at A = 0.3 rad, B = 0 had B take 3 urad, then C turn by
+#: the axes could produce only by turning the tool less than this (rad) per unit length of
+#: the axis step (rad and m together), in the null space of the position task: to match a
+#: residual tau there the step would be tau / s long. On robonano_ui A and C are nearly one
+#: axis while B is near 0: A against C turns the tool by |sin B| per rad of each, a step of
+#: unit length turns each by 1/sqrt(2), so s = |sin B| / sqrt(2) (the singular value there):
+#: a 10 urad tool tilt at A = 0.3 rad, B = 0 had B take 3 urad, then C turn by
 #: 253 deg and A by as much against it (an AxisLimitError of the model-based compensation,
 #: blaming the errors' size), or Newton leave its linear range (an UnreachableError of a
 #: reachable point). 1e-3 drops such gimbal lock, where B is within an error's size of 0,
-#: and keeps every direction of B beyond 0.057 deg (at most 1000 tau of turn). Matching the
+#: and keeps every direction of B beyond asin(sqrt(2) 1e-3) = 0.0810 deg (a step of at most
+#: 1000 tau, A and C at most 707 tau each). Matching the
 #: tool axis alone keeps `IK_SINGULAR`: there a C turn at a small B is how the axis tilts,
 #: and `inverse.axis_values` tries turned starts for what is left.
 IK_WEAK_TURN = 1e-3

@@ -613,3 +613,25 @@ def test_a_tool_tilt_at_b_zero_is_left_unmatched_not_chased_by_turns_of_a_and_c(
     np.testing.assert_allclose(q[4] - nominal[4], -tau * math.sin(a), rtol=1e-9, atol=0)
     np.testing.assert_allclose(q[[3, 5]], nominal[[3, 5]], rtol=0, atol=1e-9)  # A, C kept
     np.testing.assert_allclose(q[:3], nominal[:3], rtol=0, atol=1e-12)  # tip on the centres
+
+
+@pytest.mark.parametrize("b_deg, left", [(0.078, True), (0.084, False)])
+def test_the_weak_turn_cut_off_on_robonano_ui_is_where_sin_b_over_root_2_is_ik_weak_turn(
+        b_deg, left):
+    """A against C turns the tool by |sin B| per rad of each, and a step of unit length
+    turns each by 1/sqrt(2): the singular value the cut-off reads is |sin B| / sqrt(2), so
+    the 10 urad tilt across B is left unmatched up to asin(sqrt(2) IK_WEAK_TURN) = 0.0810 deg
+    (by hand) and matched beyond (tolerances.py had said 0.057 deg, asin(IK_WEAK_TURN), where
+    B = 0.06 deg is still left)."""
+    from machinesim.tolerances import IK_WEAK_TURN
+
+    cut_deg = math.degrees(math.asin(math.sqrt(2.0) * IK_WEAK_TURN))
+    assert cut_deg == pytest.approx(0.08103, abs=1e-5)
+    assert (b_deg < cut_deg) == left
+    machine = load_machine("robonano_ui")
+    errors = ErrorModel.from_dict({"tool": {"rotation_urad": [10.0, 0.0, 0.0]}})
+    program = parse_program(f"G90 G01 F100 X10. Y5. Z0 A17.18873 B{b_deg} C-114.59156\n")
+    result = model_based(program, machine, errors, rounded=False)
+    assert result.max_position_residual < 1e-13
+    assert bool(result.unmatched) == left
+    assert (result.max_rotation_residual > 9e-6) == left
