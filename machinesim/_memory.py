@@ -22,13 +22,14 @@ cap) runs without it.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-#: Environment variable: the cap in GB instead of the memory there is (for a shared machine,
-#: or to try the message).
+#: Environment variable: the cap in GB (a number > 0, `given_cap`) instead of the memory there
+#: is (for a shared machine, or to try the message).
 LIMIT_VARIABLE = "MACHINESIM_MEMORY_GB"
 #: No cap below this (bytes): the interpreter and its libraries reserve about 1-2 GB of
 #: address space before any work, and a smaller machine is better left to its own swap.
@@ -45,6 +46,8 @@ CGROUP_LIMITS = ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limi
 #: caches it can drop) and this process's address space (``VmSize``), in kB.
 MEMINFO = "/proc/meminfo"
 PROCESS_STATUS = "/proc/self/status"
+#: The largest cap set (bytes, 4 EiB): more than any machine has, within what setrlimit takes.
+_MOST = 1 << 62
 
 
 def _kilobytes(path: str, key: str) -> int | None:
@@ -81,6 +84,27 @@ def usable_memory() -> int:
     return total
 
 
+def given_cap() -> int | None:
+    """Bytes of the cap ``$MACHINESIM_MEMORY_GB`` gives (GB, a number > 0), None where it
+    is unset or empty. Anything else is an `InputError` naming it: a value that was no
+    number ("abc", "8G") or below zero had been dropped without a word (the command ran
+    under the memory there is), 0 capped the command at nothing (``machinesim machines``
+    ended "out of memory"), and "inf" in an internal error (OverflowError)."""
+    given = os.environ.get(LIMIT_VARIABLE, "").strip()
+    if not given:
+        return None
+    try:
+        gb = float(given)
+    except ValueError:
+        gb = math.nan
+    if not (math.isfinite(gb) and gb > 0.0):
+        from machinesim.exceptions import InputError
+
+        raise InputError(f"got {given!r}; expected the memory cap in GB, a number > 0 (e.g. "
+                         "8), or the variable unset (the memory there is)", key=LIMIT_VARIABLE)
+    return min(int(gb * (1 << 30)), _MOST)
+
+
 def limit_memory() -> int | None:
     """Cap this process's address space (``RLIMIT_AS``) at `usable_memory` (or
     ``$MACHINESIM_MEMORY_GB``), never below `FLOOR` nor above a cap already set; returns
@@ -89,11 +113,8 @@ def limit_memory() -> int | None:
         import resource
     except ImportError:  # Windows
         return None
-    given = os.environ.get(LIMIT_VARIABLE)
-    try:
-        limit = int(float(given) * (1 << 30)) if given else max(usable_memory(), FLOOR)
-    except ValueError:
-        return None
+    given = given_cap()
+    limit = given if given is not None else max(usable_memory(), FLOOR)
     soft, hard = resource.getrlimit(resource.RLIMIT_AS)
     if hard != resource.RLIM_INFINITY:
         limit = min(limit, hard)

@@ -117,3 +117,29 @@ def test_the_cap_is_lifted_after_the_command_and_a_viewer_runs_without_it():
         """, "3")
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["True"] * 4
+
+
+@pytest.mark.parametrize("given", ["0", "-1", "abc", "8G", "inf", "nan"])
+def test_a_cap_that_is_no_size_in_gb_is_refused_naming_the_variable(monkeypatch, given):
+    """0 had capped a command at nothing ('out of memory' for ``machinesim machines``), -1,
+    'abc' and '8G' were dropped without a word, 'inf' ended in an OverflowError."""
+    from machinesim._memory import LIMIT_VARIABLE, given_cap
+    from machinesim.exceptions import InputError
+
+    monkeypatch.setenv(LIMIT_VARIABLE, given)
+    with pytest.raises(InputError, match=rf"key 'MACHINESIM_MEMORY_GB': got '{given}'; "
+                                         r"expected the memory cap in GB, a number > 0"):
+        given_cap()
+
+
+def test_a_cap_in_gb_is_read_and_the_command_line_refuses_one_that_is_not(monkeypatch):
+    from machinesim._memory import LIMIT_VARIABLE, given_cap
+
+    for given, expected in (("3", 3 << 30), (" 0.5 ", 1 << 29), ("", None)):
+        monkeypatch.setenv(LIMIT_VARIABLE, given)
+        assert given_cap() == expected
+    done = _run("from machinesim.cli import main; raise SystemExit(main(['machines']))", "0")
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines() == [
+        "machinesim: error: key 'MACHINESIM_MEMORY_GB': got '0'; expected the memory cap in "
+        "GB, a number > 0 (e.g. 8), or the variable unset (the memory there is)"]
