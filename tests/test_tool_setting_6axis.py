@@ -620,8 +620,12 @@ CAPTURE = ("over the capture range |dx|, |dy|, |dz| <= 0.5 mm, |e| <= 1 mm")
     # robonano_ui's linear axes: velocity 0.025 m/s in its URDF, 1500 mm/min; F1e7 had been
     # written into the programs and run at the limit without a word
     ({"feed_mm_per_min": 1500.001}, "key 'feed_mm_per_min': Expected feed_mm_per_min up to "
-     "1500 mm/min, the velocity limit of robonano_ui's linear axes (its URDF), got 1500 "
+     "1500 mm/min, the velocity limit of robonano_ui's linear axes (its URDF), got 1500.001 "
      "mm/min"),
+    # the feed as given, not rounded to the limit it passes ('up to 1500 ..., got 1500')
+    ({"feed_mm_per_min": 1500 + 1e-9}, "key 'feed_mm_per_min': Expected feed_mm_per_min up "
+     "to 1500 mm/min, the velocity limit of robonano_ui's linear axes (its URDF), got "
+     "1500.000000001 mm/min"),
     ({"depth": 40 * UM}, "key 'depth': Expected depth below 40 um, got 40 um: the 90-deg V of "
      "depth D is 2 D wide and the profiles that follow the A grooves to their ends are 80 um "
      "wide (TRACK_WINDOW)"),

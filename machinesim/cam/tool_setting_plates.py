@@ -238,7 +238,7 @@ def _check_sizes(plan: Plan) -> None:
     if plan.feed_mm_per_min > limit:
         raise InputError(f"Expected feed_mm_per_min up to {limit:g} mm/min, the velocity "
                          f"limit of {MACHINE}'s linear axes (its URDF), got "
-                         f"{plan.feed_mm_per_min:g} mm/min", key="feed_mm_per_min")
+                         f"{plan.feed_mm_per_min!r} mm/min", key="feed_mm_per_min")
     if not plan.depth < TRACK_WINDOW:
         raise InputError(f"Expected depth below {TRACK_WINDOW / M_PER_UM:g} um, got "
                          f"{plan.depth / M_PER_UM:g} um: the 90-deg V of depth D is 2 D wide "
