@@ -12,6 +12,7 @@ array([5.e-06, 0.e+00, 0.e+00])
 from __future__ import annotations
 
 import importlib
+import importlib.util
 
 from machinesim.exceptions import (
     AxisLimitError,
@@ -43,6 +44,11 @@ _LAZY = {
 
 def __getattr__(name: str):
     if name not in _LAZY:
+        # a subpackage or module by attribute, as the README writes it
+        # (``machinesim.viewer.read_ply(...)`` after ``import machinesim``): it had been an
+        # AttributeError unless something had imported machinesim.viewer already
+        if not name.startswith("_") and importlib.util.find_spec(f"machinesim.{name}"):
+            return importlib.import_module(f"machinesim.{name}")
         raise AttributeError(f"module 'machinesim' has no attribute {name!r}")
     value = getattr(importlib.import_module(_LAZY[name]), name)
     globals()[name] = value
