@@ -289,7 +289,7 @@ def _scene(args, budget: int):
         # read as `machinesim cut` reads it: the same tool table, integer input and chords
         program, chord = read_for_machine(
             args, check_readable_file(args.program, "NC program (--program)"), machine, tool)
-        _refuse_tool_changes(program)
+        _refuse_tool_changes(program, tool)
         note = unit_note(program)
         if note:
             print(f"note: {printable(note)}", file=sys.stderr)
@@ -330,12 +330,17 @@ def _report_mismatch(report, part: Path, path) -> list[str]:
     return lines
 
 
-def _refuse_tool_changes(program) -> None:
+def _refuse_tool_changes(program, tool) -> None:
     """The animation cuts with one tool (--tool): refuse a program whose tool table changes
-    the tool's shape or length, rather than show a part that tool would not cut."""
+    the tool's shape or length, rather than show a part that tool would not cut. A table
+    tool of the same shape as ``tool`` (``shape = "flat:1.0"`` beside ``--tool flat:1``)
+    cuts the same part and is viewed: it had been refused as another shape."""
+    from machinesim.tool_specs import tool_from_spec
+
     for change in program.tool_changes:
-        if change.shape is not None or change.length_m != 0.0:
-            what = (f"shape {change.shape}" if change.shape is not None
+        other = change.shape is not None and tool_from_spec(change.shape) != tool
+        if other or change.length_m != 0.0:
+            what = (f"shape {change.shape}" if other
                     else f"length {change.length_m * 1e3:g} mm")
             raise InputError(
                 f"T{change.number} at line {change.line} puts a tool of {what} in the "
