@@ -359,7 +359,9 @@ def _cut(args) -> int:
     roi = parse_roi(args.roi)
 
     from machinesim.cutting import cut
+    from machinesim.cutting.breakthrough import bottom_lost
     from machinesim.cutting.roi import check_roi_meets
+    from machinesim.cutting.windows import clip_to
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
     from machinesim.tool_specs import tool_from_spec
@@ -415,6 +417,8 @@ def _cut(args) -> int:
     summary["part_unit"] = EXPORT_UNITS[file_format]
     pieces, apart = _pieces(part, stock, roi)
     summary["part_pieces_count"] = len(pieces)
+    through = bottom_lost(part, stock if roi is None else clip_to(stock, roi))
+    summary["bottom_cut_through_mm2"] = through * 1e6
     files = [(args.out, part.encode(file_format))]
     if args.report is not None:
         check_units(summary)  # units in every key, as --report promises
@@ -454,6 +458,12 @@ def _cut(args) -> int:
         print(f"warning: the part is in {len(pieces)} separate pieces ({volumes} mm^3), where "
               f"{material} {was}: a cut went through it (deeper than the stock, or round a "
               f"piece); {printable(args.out)} holds them all", file=sys.stderr)
+    if through:
+        print(f"warning: the cut went through the bottom of the stock (z = "
+              f"{stock.bounds[0, 2] * 1e3:.6g} mm; {through * 1e6:.6g} mm^2 of its bottom face "
+              "is gone): the tool went below the stock, into what holds it (table, chuck or "
+              "fixture, not modelled), as a wrong tool length or Z takes it on a machine",
+              file=sys.stderr)
     if report.empty_cut and report.edge_plane_lines:
         lines = ", ".join(map(str, report.edge_plane_lines[:5])) + (
             " ..." if len(report.edge_plane_lines) > 5 else "")

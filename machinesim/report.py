@@ -25,8 +25,8 @@ from machinesim.exceptions import FileError, InputError
 
 #: Suffixes that name a unit (or say that a number has none).
 UNIT_SUFFIXES = ("_m", "_mm", "_um", "_nm", "_rad", "_mrad", "_urad", "_deg", "_arcsec",
-                 "_s", "_h", "_min", "_mm3", "_m3", "_percent", "_count", "_ratio", "_index",
-                 "_per_s", "_lines")
+                 "_s", "_h", "_min", "_mm2", "_mm3", "_m3", "_percent", "_count", "_ratio",
+                 "_index", "_per_s", "_lines")
 #: Keys that are not quantities.
 PLAIN_KEYS = {"seed", "spawn_key", "noise", "machine", "paper", "program", "scenario", "note",
               "notes", "name", "files", "version", "units", "procedure", "line", "tool",
