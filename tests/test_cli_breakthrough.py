@@ -79,3 +79,18 @@ def test_bottom_area_of_stocks_is_their_footprint():
     hole = stock_from_spec("block:1x1x4@4,4,1")
     holed = Part(block.manifold - hole.manifold)
     assert bottom_lost(holed, block) * 1e6 == pytest.approx(1.0, rel=1e-12)
+
+
+def test_the_viewer_says_so_from_the_report(tmp_path, capsys):
+    code, err, report = cut(tmp_path, capsys, "-3.", 0.0)
+    assert code == 0, err
+    code, _, err = run(["view", tmp_path / "pocket.ply", "--report", tmp_path / "pocket.json",
+                        "--html", tmp_path / "pocket.html"], capsys)
+    assert code == 0, err
+    assert ("warning: the report says the cut went through the bottom of the stock (15.1"
+            in err), err
+    # a pocket within the block: no such line
+    code, err, report = cut(tmp_path, capsys, "-1.", 0.0)
+    code, _, err = run(["view", tmp_path / "pocket.ply", "--report", tmp_path / "pocket.json",
+                        "--html", tmp_path / "pocket.html"], capsys)
+    assert code == 0 and "bottom of the stock" not in err, err

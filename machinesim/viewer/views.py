@@ -141,12 +141,19 @@ def part_scene(surface, nominal=None, report=None, title: str = "machined part",
 def cut_warnings(report: dict) -> list[str]:
     """Lines for what a cut report says went wrong with the part itself, which its notes
     (the first `MAX_NOTE_LINES` keys) may leave out: a part in several pieces, where the
-    stock was one (``part_pieces_count``, the last key `machinesim cut` writes)."""
+    stock was one (``part_pieces_count``, the last key `machinesim cut` writes), and a cut
+    through the stock's bottom face (``bottom_cut_through_mm2``)."""
+    lines = []
     pieces = report.get("part_pieces_count")
     if isinstance(pieces, int) and not isinstance(pieces, bool) and pieces > 1:
-        return [f"the report says the part is in {pieces} separate pieces, where the stock "
-                "was one: a cut went through it"]
-    return []
+        lines.append(f"the report says the part is in {pieces} separate pieces, where the "
+                     "stock was one: a cut went through it")
+    through = report.get("bottom_cut_through_mm2")
+    if (isinstance(through, int | float) and not isinstance(through, bool)
+            and math.isfinite(through) and through > 0):
+        lines.append(f"the report says the cut went through the bottom of the stock "
+                     f"({through:.6g} mm^2 of its bottom face gone): the tool went below it")
+    return lines
 
 
 def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
