@@ -803,15 +803,19 @@ def test_a_live_server_that_cannot_start_or_hangs_is_named_not_waited_for(monkey
         with pytest.raises(MachineSimError, match="ended before giving its address: "
                                                   r"OSError: \[Errno 98\] Address already"):
             live_module.start_server(port)
-    monkeypatch.setattr(live_module, "START_TIMEOUT_S", 0.5)
-    monkeypatch.setattr(live_module, "server_command", lambda port=None: [
-        sys.executable, "-c", "import time; time.sleep(30)"])
-    with pytest.raises(MachineSimError, match="gave no address within 0.5 s"):
-        live_module.start_server()
+    with monkeypatch.context() as short:  # the short bound for the one that hangs alone
+        short.setattr(live_module, "START_TIMEOUT_S", 0.5)
+        short.setattr(live_module, "server_command", lambda port=None: [
+            sys.executable, "-c", "import time; time.sleep(30)"])
+        with pytest.raises(MachineSimError, match="gave no address within 0.5 s"):
+            live_module.start_server()
     # one that raised before it could say 'error=' (an import failed): its stderr's last
-    # line is the reason (it had said 'ended before giving its address' alone)
+    # line is the reason (it had said 'ended before giving its address' alone). It starts
+    # slowly, as any does on a loaded machine, under the default bound: it had run under
+    # the 0.5 s above, and a start slower than that was told as a hang (the flake)
     monkeypatch.setattr(live_module, "server_command", lambda port=None: [
-        sys.executable, "-c", "import sys; print('warming up', file=sys.stderr); "
+        sys.executable, "-c", "import sys, time; time.sleep(1.0); "
+        "print('warming up', file=sys.stderr); "
         "raise ImportError('no module named meshcat here')"])
     with pytest.raises(MachineSimError, match="ended before giving its address: ImportError: "
                                               "no module named meshcat here; is the port"):
@@ -871,7 +875,17 @@ def test_a_scripts_wait_ends_quietly_on_ctrl_c_and_ends_the_server():
     before = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         with serve(scene) as live:
-            timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+            # Ctrl-C once wait() is waiting on the server (a fixed 0.5 s timer could fire
+            # before it, on a loaded machine, into the test itself)
+            waiting, process_wait = threading.Event(), live.process.wait
+
+            def wait(timeout=None):
+                waiting.set()
+                return process_wait(timeout)
+
+            live.process.wait = wait
+            timer = threading.Thread(target=lambda: waiting.wait(60) and os.kill(
+                os.getpid(), signal.SIGINT))
             timer.start()
             assert live.wait() is None
             assert live.process.poll() is not None
