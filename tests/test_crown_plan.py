@@ -105,3 +105,33 @@ def test_crown_stock_is_the_blank_with_the_designed_spheres():
     assert again.volume == pytest.approx(stock.volume, rel=1e-12)
     assert cam.CROWN.cuboid_half == pytest.approx(cam.CROWN.apothem + 5 * (
         cam.CROWN.height - cam.CROWN.oversize), rel=1e-12)
+
+
+@pytest.mark.parametrize(("fields", "key"), [
+    ({"pitch": 0.0}, "pitch"), ({"pitch": float("nan")}, "pitch"),
+    ({"pitch": -12.5e-6}, "pitch"), ({"apothem": -1.5e-3}, "apothem"),
+    ({"depth_of_cut": 0.0}, "depth_of_cut"), ({"slope": 0.0}, "slope"),
+    ({"slope": math.pi / 2}, "slope"), ({"oversize": math.inf}, "oversize"),
+    ({"height": 5e-6}, "height"), ({"overrun": -1e-3}, "overrun"),
+    ({"pitch": True}, "pitch"), ({"pitch": 12.5e-12}, "pitch"),
+    ({"depth_of_cut": 4e-6}, "depth_of_cut")])
+def test_a_crown_plan_out_of_its_bounds_is_refused_naming_the_field(fields, key):
+    # CrownPlan took anything: a pitch or depth of cut of 0 was a ZeroDivisionError in
+    # crown_passes, a NaN pitch numpy's ValueError, an infinite oversize an OverflowError; a
+    # negative pitch or apothem made no pass at all, silently; a pitch in the wrong unit
+    # (12.5 pm) asked for ~10^10 passes. 4 um cuts of the 10 um oversize made layers at 4
+    # and 0 um (round(2.5) = 2), the first cutting 6 um, not 4
+    from machinesim.exceptions import InputError
+
+    with pytest.raises(InputError, match=f"key '{key}'"):
+        cam.CrownPlan(**fields)
+
+
+def test_a_crown_plan_in_its_bounds_makes_its_layers():
+    # 12 um in 3 um cuts: four layers at 9, 6, 3 and 0 um over the finished faces (hand)
+    plan = cam.CrownPlan(oversize=12e-6, depth_of_cut=3e-6)
+    assert plan.layers == 4
+    tops = sorted({round(g.start[2] / 1e-6, 9) for g in cam.crown_passes(plan)
+                   if g.start[2] == g.end[2]})  # the top face's passes, level
+    assert tops == [0.0, 3.0, 6.0, 9.0]
+    assert cam.CrownPlan() == cam.CROWN  # the paper's plan is taken as it was

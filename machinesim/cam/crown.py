@@ -33,6 +33,7 @@ from machinesim import motion
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.identification.workpiece_setting import ReferenceSpheres
+from machinesim.metrology._arrays import as_number
 from machinesim.nc import Program, ProgramBuilder
 from machinesim.realism import SphereArtefacts, draw_spheres, make_spheres
 from machinesim.rotations import rotation_xyz
@@ -43,7 +44,8 @@ from machinesim.workpiece import Part, diamond_crown
 
 __all__ = [
     "CLEARANCE", "CROWN", "CROWN_BASE", "CROWN_BASE_HEIGHT", "FEED_MM_PER_MIN", "GROOVE_BLANK",
-    "GROOVE_ROI", "GROOVE_SPHERE_DESIGN", "GROOVE_SPHERES", "GROOVE_STOCK", "PARK", "SAFE_Z",
+    "GROOVE_ROI", "GROOVE_SPHERE_DESIGN", "GROOVE_SPHERES", "GROOVE_STOCK", "MAX_PASSES", "PARK",
+    "SAFE_Z",
     "SETTING_S", "CrownPlan", "PassGroup", "crown_blank", "crown_design", "crown_passes",
     "crown_roi", "crown_sphere_design", "crown_spheres", "crown_stock", "crown_tool",
     "groove_program", "groove_rapids_crash", "machining_time", "passes_program",
@@ -56,6 +58,9 @@ FEED_MM_PER_MIN = 20.0
 #: height of rotary moves, m. 60 um clears the 10 um stock allowance plus setting errors of
 #: 50 um; rapids stay above the stock, so the engine never needs to check them against it.
 CLEARANCE, SAFE_Z = 60 * UM, 0.5 * MM
+#: Most passes a `CrownPlan` may make (all layers and faces): Table 2's plan makes 26,000;
+#: a pitch or depth of cut in the wrong unit (12.5e-12 m) asked for 10^10 and filled memory.
+MAX_PASSES = 10**7
 #: Pass ends are moved along the pass by up to this (m, in air, golden-ratio sequence): the
 #: material-removal engine slows down by orders of magnitude on unions of sweeps whose end
 #: faces are coplanar but turned off the machine axes (measured: 25 passes at gamma = 1 mrad
@@ -153,6 +158,35 @@ class CrownPlan:
     depth_of_cut: float = 1 * UM
     pitch: float = 12.5 * UM
     overrun: float = 50 * UM
+
+    def __post_init__(self) -> None:
+        # each field a finite float of its sign: a pitch of 0 was a ZeroDivisionError in
+        # crown_passes, a NaN one numpy's ValueError, a negative one no pass at all
+        for name in ("apothem", "height", "oversize", "depth_of_cut", "pitch"):
+            object.__setattr__(self, name, as_number(getattr(self, name), name, sign="> 0"))
+        object.__setattr__(self, "overrun", as_number(self.overrun, "overrun", sign=">= 0"))
+        slope = as_number(self.slope, "slope", sign="> 0", unit="rad")
+        if not slope < 0.5 * math.pi:
+            raise InputError(f"Expected slope, the side faces' angle from the flat, below pi/2 "
+                             f"rad (90 deg), got {slope!r}", key="slope")
+        object.__setattr__(self, "slope", slope)
+        if not self.height > self.oversize:
+            raise InputError(f"Expected height, the rough crown's over its flat, above the "
+                             f"oversize {self.oversize!r} m (the finished crown stands height - "
+                             f"oversize high), got {self.height!r} m", key="height")
+        ratio = self.oversize / self.depth_of_cut
+        if abs(ratio - round(ratio)) > 1e-9 * ratio:
+            raise InputError(f"Expected the oversize {self.oversize!r} m a whole number of "
+                             f"depth_of_cut, got depth_of_cut {self.depth_of_cut!r} m "
+                             f"({ratio:.6g} layers): the first layer would cut deeper than "
+                             "depth_of_cut", key="depth_of_cut")
+        # passes of the finishing: every face's rows over the cuboid's width, per layer
+        passes = 9.0 * ratio * (2.0 * (self.cuboid_half + self.overrun) / self.pitch + 1.0)
+        if not passes <= MAX_PASSES:
+            raise InputError(f"Expected at most {MAX_PASSES:.0e} passes (MAX_PASSES), got about "
+                             f"{passes:.3g} from pitch {self.pitch!r} m and depth_of_cut "
+                             f"{self.depth_of_cut!r} m: a value in another unit?",
+                             key="pitch")
 
     @property
     def rough_top(self) -> float:
