@@ -78,6 +78,20 @@ def test_bad_plans_are_refused():
     assert len(program.moves) > 0
 
 
+def test_a_pyramid_plans_numbers_are_numbers_of_their_unit():
+    # True was taken as a 1 m pitch, np.float32(50e-6) refused as no positive pitch, and a
+    # pitch of 1e-12 m (a value in another unit) asked offsets() for 2.4e9 grooves (9.6 GB)
+    for pitch in (True, "5e-5", None):
+        with pytest.raises(MachineSimError, match="key 'pitch': Expected pitch as a number"):
+            PyramidPlan(pitch=pitch)
+    with pytest.raises(MachineSimError, match=r"key 'pitch': Expected at most 1e\+06 grooves"):
+        PyramidPlan(pitch=1e-12)
+    plan = PyramidPlan(pitch=np.float32(50e-6))
+    assert plan.pitch == float(np.float32(50e-6)) and type(plan.pitch) is float
+    # 0.5 mm + 0.1 mm over 50 um: 12 pitches either side of the centre, 25 grooves a set
+    assert plan.offsets().size == 25 and PyramidPlan().offsets().size == 25
+
+
 def test_a_registered_instrument_finds_the_window_and_its_grooves():
     # A white-light interferometer whose stage sits 30 / -20 um off and turned by 1.5 mrad
     # sees the corner window (190 mm out) ~0.3 mm away from its design and its grooves off

@@ -21,10 +21,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_number
 from machinesim.nc import ProgramBuilder
 from machinesim.nc.program import Program
 
-__all__ = ["PAPER_PLAN", "PyramidPlan", "pyramid_program", "workpiece_axes"]
+__all__ = ["MAX_GROOVES", "PAPER_PLAN", "PyramidPlan", "pyramid_program", "workpiece_axes"]
+
+#: Most grooves a `PyramidPlan` may program (both sets): the paper's plan has 50; a pitch of
+#: 1e-12 m (a value in another unit) asked for 2.4 * 10^9, 9.6 GB of `offsets`.
+MAX_GROOVES = 10**6
 
 
 @dataclass(frozen=True)
@@ -54,14 +59,23 @@ class PyramidPlan:
     feed_mm_per_min: float = 2000.0
 
     def __post_init__(self) -> None:
+        # as_number: True is no 1 m (it was taken), np.float32(5e-5) a pitch (it was refused)
         for name in ("pitch", "depth", "window", "margin", "clearance", "feed_mm_per_min"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise InputError(f"Expected a positive {name}, got {value!r}", key=name)
+            unit = "mm/min" if name == "feed_mm_per_min" else "m"
+            object.__setattr__(self, name, as_number(getattr(self, name), name, sign="> 0",
+                                                     unit=unit))
+        grooves = 2.0 * (2.0 * math.ceil((0.5 * self.window + self.margin) / self.pitch) + 1.0)
+        if not grooves <= MAX_GROOVES:
+            raise InputError(f"Expected at most {MAX_GROOVES:.0e} grooves (MAX_GROOVES), got "
+                             f"{grooves:.4g} from pitch {self.pitch!r} m over the window "
+                             f"{self.window!r} m and margin {self.margin!r} m: a value in "
+                             "another unit?", key="pitch")
 
     def offsets(self) -> np.ndarray:
         """Groove centre offsets from the window centre, m (symmetric, whole pitches)."""
-        n = int(math.ceil((0.5 * self.window + self.margin) / self.pitch))
+        # a reach a whole number of pitches up to round-off (or a float32 pitch's 3e-8) is
+        # that number: ceil(12.0000003) added a groove either side beyond the margin
+        n = int(math.ceil((0.5 * self.window + self.margin) / self.pitch * (1.0 - 1e-6)))
         return self.pitch * np.arange(-n, n + 1, dtype=np.float64)
 
 
