@@ -54,6 +54,11 @@ def test_times_and_bad_input(tool_path):
     assert t[-1] == pytest.approx((tool_path.c[-1] - tool_path.c[0]) / (2 * np.pi))
     with pytest.raises(InputError, match="spindle_rpm"):
         path_times(tool_path, 0.0)
+    # a str or None was a TypeError ('>' not supported), True was taken as 1 rpm
+    for rpm in ("60", None, True, float("inf")):
+        with pytest.raises(InputError, match="key 'spindle_rpm'"):
+            path_times(tool_path, rpm)
+    assert np.array_equal(path_times(tool_path, np.int64(60)), t)
 
 
 @pytest.fixture(scope="module")

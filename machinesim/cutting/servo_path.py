@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from machinesim.cam.spiral import SPINDLE_RPM, ToolPath, _check_increasing
+from machinesim.cam.spiral import SPINDLE_RPM, ToolPath, _check_increasing, _positive
 from machinesim.cutting.turning import EdgePath
 from machinesim.exceptions import InputError
 
@@ -20,8 +20,8 @@ from machinesim.exceptions import InputError
 def path_times(path: ToolPath, spindle_rpm: float = SPINDLE_RPM) -> np.ndarray:
     """Time of each point of ``path`` (s) at a constant spindle speed, from 0; its C
     increases strictly (as `machinesim.cam.spiral.interpolate` takes it)."""
-    if not (spindle_rpm > 0.0) or not math.isfinite(spindle_rpm):
-        raise InputError(f"Expected spindle_rpm > 0, got {spindle_rpm!r}", key="spindle_rpm")
+    # a str or None was a TypeError from '>', True taken as 1 rpm
+    spindle_rpm = _positive(spindle_rpm, "spindle_rpm")
     _check_increasing(path.c, "path.c")  # times running backwards: a servo lags nothing
     return (path.c - path.c[0]) / (2.0 * math.pi * spindle_rpm / 60.0)
 
