@@ -135,3 +135,22 @@ def test_a_crown_plan_in_its_bounds_makes_its_layers():
                    if g.start[2] == g.end[2]})  # the top face's passes, level
     assert tops == [0.0, 3.0, 6.0, 9.0]
     assert cam.CrownPlan() == cam.CROWN  # the paper's plan is taken as it was
+
+
+@pytest.mark.parametrize(("fields", "words"), [
+    ({"depth": -3e-6}, "key 'depth': Expected depth > 0"),
+    ({"depth": 0.0}, "key 'depth': Expected depth > 0"),
+    ({"depth": 3e-3}, "key 'depth': Expected depth below the groove block's thickness"),
+    ({"depth": True}, "key 'depth': Expected depth as a number"),
+    ({"length": -1e-3}, "key 'length': Expected length > 0"),
+    ({"length": float("nan")}, "key 'length': Expected length > 0")])
+def test_groove_program_refuses_grooves_off_the_block(fields, words):
+    # depth -3 um made four 'grooves' 3 um over the block's top, silently (every move's Z
+    # > 0), 3 mm cut through the 3 mm block, a negative length ran each groove back along -X
+    from machinesim.exceptions import InputError
+
+    with pytest.raises(InputError, match=words):
+        cam.groove_program(**fields)
+    program = cam.groove_program(depth=5e-6, length=2e-3)
+    z = program.targets[:, 2]
+    assert np.nanmin(z) == pytest.approx(-5e-6, abs=1e-18)

@@ -73,6 +73,8 @@ GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 #: The groove workpiece: a 20 x 20 x 3 mm block centred on C with three R2 mm sphere
 #: cavities 4 mm in from its edges (`workpiece.block_with_spheres`, dimples).
 GROOVE_STOCK = "spheres:20x20x3:2:dimples@-10,-10,0"
+#: Its thickness, m: the deepest `groove_program` may cut is short of it.
+GROOVE_THICKNESS = 3 * MM
 #: The same block without its spheres (`machinesim.Lab.make_artefacts` cuts them).
 GROOVE_BLANK = "block:20x20x3@-10,-10,0"
 GROOVE_SPHERES = ReferenceSpheres(np.array([[-6.0, -6.0, 0.0], [6.0, -6.0, 0.0],
@@ -89,7 +91,16 @@ def groove_program(depth: float = 3 * UM, length: float = 1 * MM,
 
     Each groove: rapid above the crossing point, plunge to ``-depth`` at the feed (the edge
     plunging cuts nothing), feed ``length`` along the tool's +X, leave upwards at the feed.
+    ``depth`` lies between 0 and the thickness of `GROOVE_STOCK` (3 mm), ``length`` > 0 (m).
     """
+    # a negative depth made grooves in the air over the block, silently (Z = +3 um), one
+    # of 3 mm or more cut through it, a negative length ran the grooves back along -X
+    depth = as_number(depth, "depth", sign="> 0")
+    if not depth < GROOVE_THICKNESS:
+        raise InputError(f"Expected depth below the groove block's thickness "
+                         f"{GROOVE_THICKNESS:g} m (GROOVE_STOCK {GROOVE_STOCK!r}), got "
+                         f"{depth!r} m", key="depth")
+    length = as_number(length, "length", sign="> 0")
     b = ProgramBuilder(2, source="workpiece_setting grooves")
     b.rapid(X=0.0, Y=0.0, Z=SAFE_Z, B=0.0, C=0.0)
     for k in range(4):
