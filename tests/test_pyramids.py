@@ -271,3 +271,20 @@ def test_the_labs_stage_positioning_moves_the_window_readings_and_paper_003_budg
     # surface under them, sampled about 1 um elsewhere), far above the 1e-15 of the replay
     assert abs(w_on.angle_error - w_off.angle_error) > 1e-9
     assert np.abs(w_on.apex - w_off.apex).max() > 1e-12
+
+
+def test_no_rapid_of_the_pyramid_program_cuts_the_plate():
+    # each groove was entered by a rapid plunge to its depth on the plate (margin beyond
+    # the window): a G00 into the material, 14 of 14 grooves listed by rapids_that_cut
+    from machinesim.cutting import cut
+    from machinesim.nc import KIND_RAPID
+
+    m = machinesim.load_machine("grooving_4axis")
+    plan = PyramidPlan(window=0.2e-3, margin=0.05e-3)  # 7 grooves a set
+    program = pyramid_program(m, (0.0, 0.0), plan)
+    _, report = cut(program, m, "v:90", "block:1x1x1@-0.5,-0.5,0")
+    assert report.rapids_that_cut == ()
+    # no rapid ends below the plate's top (z = 0 at Z = 0 on the nominal machine)
+    z = program.targets[:, 2]
+    rapid = program.kinds == KIND_RAPID
+    assert np.nanmin(z[rapid]) == plan.clearance and np.nanmin(z) == -plan.depth

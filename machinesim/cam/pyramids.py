@@ -101,7 +101,11 @@ def workpiece_axes(machine, x: float, y: float, c: float, z: float = 0.0) -> np.
 
 def pyramid_program(machine, centre, plan: PyramidPlan = PAPER_PLAN,
                     number: int = 3003) -> Program:
-    """The two groove sets over the window centred at workpiece point ``centre`` (m)."""
+    """The two groove sets over the window centred at workpiece point ``centre`` (m).
+
+    Each groove: a rapid over its start at ``plan.clearance``, a feed down to ``-depth``
+    and along X across the window and its margins, a rapid up; C turns at the clearance.
+    """
     cx, cy = (float(v) for v in centre)
     half = 0.5 * plan.window + plan.margin
     b = ProgramBuilder(number)
@@ -115,7 +119,10 @@ def pyramid_program(machine, centre, plan: PyramidPlan = PAPER_PLAN,
                 start, end = (cx + off, cy - half), (cx + off, cy + half)
             a = workpiece_axes(machine, *start, c)
             e = workpiece_axes(machine, *end, c)
-            b.rapid(X=float(a[0]), Y=float(a[1])).rapid(Z=z_cut)
+            # down into the plate at the feed: a rapid plunge there cut the plate at G00
+            # (every groove's start, `CutReport.rapids_that_cut`)
+            b.rapid(X=float(a[0]), Y=float(a[1]))
+            b.linear(Z=z_cut, feed_mm_per_min=plan.feed_mm_per_min)
             b.linear(X=float(e[0]), Y=float(e[1]), feed_mm_per_min=plan.feed_mm_per_min)
             b.rapid(Z=plan.clearance)
     return b.build()
