@@ -146,6 +146,25 @@ def test_turning_refuses_what_it_cannot_cut(program):
             noise=False, spot=Spot(0.8e-6, "gaussian")).profile(part, (0, 0), (1e-4, 0))
 
 
+def test_encoders_record_no_turning_on_a_mill():
+    # a mill's C table (grooving_4axis: X, Y, Z, C) ran this spiral as a lathe's and was
+    # recorded (9 samples); lab.turn refuses the machine, and so does the recording now
+    text = "G01 X0 Y0 Z0 C0 F100.\nG01 X0.1 C360.\nG01 X0.05 C720.\n"
+    for name, found in (("grooving_4axis", "its C travels .* axis Y"),
+                        ("robonano_a0ib", "its C travels .* axes Y, B")):
+        lab = machinesim.Lab(name, noise=False)
+        ax = " ".join(f"{a}0" for a in lab.machine.axes)
+        program = parse_program(text.replace("X0 Y0 Z0 C0", ax))
+        with pytest.raises(InputError, match=f"Expected a lathe.*{name} .*{found}"):
+            lab.encoders().record_turning(program)
+        with pytest.raises(InputError, match=f"Expected a lathe.*{name}"):
+            lab.turn(program)
+    lathe = machinesim.Lab("sts_lathe", noise=False)
+    reading = lathe.encoders().record_turning(parse_program(text.replace(" Y0", "")))
+    # 3 points of a run of 2 moves, each turn split into quarter turns: 1 + 4 + 4 rows
+    assert reading.commanded.shape == (9, 3)
+
+
 def test_profile_error_removes_piston_and_tilt():
     r = np.linspace(0.0, 1e-4, 201)
     wave = 2e-9 * np.sin(2 * np.pi * r / 1e-4)

@@ -137,8 +137,13 @@ class Encoders:
     def record_turning(self, program) -> EncoderReading:
         """Record a turning program (`machinesim.cutting.lathe`): each run of feed moves
         that turn C as the one continuous motion the control runs it as (not move by move
-        from rest), sampled at the program's points; the runs one after the other."""
-        from machinesim.cutting.lathe import followed, turning_runs
+        from rest), sampled at the program's points; the runs one after the other. A
+        machine that is no lathe (`machinesim.cutting.lathe.check_lathe`: a mill's C table,
+        an axis beyond X, Z and C) is refused, as `Lab.turn` refuses it: its motion is no
+        turning run."""
+        from machinesim.cutting.lathe import check_lathe, followed, turning_runs
+
+        check_lathe(self.machine)
 
         ts, commands, positions, offset = [], [], [], 0.0
         for t, points in turning_runs(program, self.machine):
