@@ -253,6 +253,24 @@ def test_a_corner_of_a_table_of_a_whole_turn_is_held_each_turn(machines):
             assert worst <= tolerance, (first, turn.q[[0, -1], 2], worst)
 
 
+def test_a_corner_is_held_again_when_the_45_deg_rule_raises_the_count(machines):
+    """C turns 260 deg with the edge on the axis; EXC 0.64 um and EYC 0.2 um at 60 deg, 0
+    at 0 and 260 deg: a corner at 60 deg. The chord rule holds 160 nm with 5 sub-steps
+    (the corner off 52 deg's node by 8 deg); the 45 deg rule raises them to 6, whose
+    midpoints hold, but not the corner: left 184 nm (1.15 tolerances) off its chord's line,
+    as 64 points a sub-step show, since the corners were not checked again."""
+    machine = machines["sts_lathe"]
+    errors = machinesim.ErrorModel.from_dict({"component": {"C": {
+        "position_deg": [0.0, 60.0, 260.0], "EXC_um": [0.0, 0.64, 0.0],
+        "EYC_um": [0.0, 0.2, 0.0]}}})
+    program = ProgramBuilder(source="corner").rapid(X=0.0, Z=0.0, C=0.0).linear(
+        C=math.radians(260.0), feed_mm_per_min=100.0).build()
+    tolerance = 160e-9
+    turn = plan(program, machine, errors, chord_tolerance=tolerance).segments[1]
+    assert len(turn.q) - 1 >= 6  # at most 45 deg a sub-step
+    assert chord_deviation(machine, errors, np.zeros((1, 3)), turn.q, 64) <= tolerance
+
+
 def test_a_table_of_a_whole_turn_that_steps_where_it_wraps_is_refused_at_once(machines):
     """ECC 1 arcsec at -180 deg and -1 at 180 (the README's example before): repeated each
     turn, C's error steps 2 arcsec where C passes 180 deg, so the edge 10 mm off the C axis
