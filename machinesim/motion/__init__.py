@@ -6,7 +6,9 @@ sub-steps until the chord between consecutive samples stays within ``chord_toler
 the true path for every point of the tool (the edge and the tool's extreme points): the
 midpoint of each sub-step is evaluated through the kinematics and compared with the chord,
 and so is every point where an axis crosses a breakpoint of an error table, where the path
-has a corner (`machinesim.motion.chords`). A straight move of an axis whose errors vary
+has a corner (`machinesim.motion.chords`), and, along an axis with a polynomial error of
+degree 3 or more, the Chebyshev points of each sub-step that the degree determines (such a
+polynomial can vanish at the midpoints). A straight move of an axis whose errors vary
 along it (straightness, angular or positioning tables, polynomials) bends the same way on
 the erroneous machine, and is split by the same rule; on the nominal machine, and for axes
 without such errors, a straight move stays one sweep.

@@ -152,6 +152,13 @@ class ToolPaths:
         self.smooth_axes = np.array(sorted(
             {var.axis for var in binding.varying
              if getattr(var.component, "kind", None) != "table"}), dtype=np.int64)
+        # the highest degree of a polynomial error along each axis (0: none): a path bent by
+        # one of degree 3 or more is checked between its midpoints too (`bows.bowed_steps`)
+        self.degrees = np.zeros(len(machine.axes), dtype=np.int64)
+        for var in binding.varying:
+            if getattr(var.component, "kind", None) == "poly":
+                degree = len(np.polynomial.polynomial.polytrim(var.component.values)) - 1
+                self.degrees[var.axis] = max(int(self.degrees[var.axis]), degree)
         # (axis, table, name) of every error table, to name one where the path steps
         self.tables = tuple(
             (var.axis, var.component, _name(binding, var)) for var in binding.varying
@@ -439,11 +446,15 @@ def substeps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
 
 def _hold_corners(paths, start, delta, tolerance, steps, failed, stalls,
                   moves: np.ndarray | None = None) -> None:
-    """Corners of the error tables: checked where the path turns them (`_corner_failures`),
-    the counts of ``moves`` (default all) raised by 25 % until held, in place."""
+    """Corners of the error tables (`_corner_failures`) and the bows of polynomials of
+    degree 3 or more between the midpoints (`machinesim.motion.bows`): checked, the counts of
+    ``moves`` (default all) raised by 25 % until held, in place."""
+    from machinesim.motion.bows import bowed_steps  # bows imports this module
+
     skip = failed if moves is None else failed | ~np.isin(np.arange(len(steps)), moves)
     for _ in range(64):
-        bad = _corner_failures(paths, start, delta, steps, skip, tolerance)
+        bad = np.union1d(_corner_failures(paths, start, delta, steps, skip, tolerance),
+                         bowed_steps(paths, start, delta, steps, skip, tolerance))
         if not bad.size:
             break
         _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, bad,
