@@ -101,3 +101,32 @@ def test_a_followed_run_that_jumps_is_refused_naming_the_line_and_the_servo():
         "break the rules of a commanded step (at most 90 deg of C, the straight join within "
         "1 nm of the path) still after 8 rounds of sampling the move finer: its output "
         "jumps; check the servo loops' gains")
+
+
+class _Overshoot:
+    """Servo loops whose X settles 2 um beyond the command (an overshoot, held)."""
+
+    def follow(self, t, q):
+        reached = np.array(q, dtype=np.float64)
+        reached[:, 0] += 2e-6
+        return reached
+
+
+def test_a_followed_path_that_overshoots_the_travel_is_refused_naming_line_and_overshoot():
+    # the command ends at X 99.9999 mm, inside sts_lathe's +-100 mm; followed 2 um beyond
+    # it X reaches 100.0019 mm, 1.9 um past the travel, at line 5 (X99.9999 C720.). Only
+    # the command was checked, so the lathe turned it; cut() checks its followed samples
+    from machinesim.exceptions import AxisLimitError
+
+    program = parse_program("G90 G21 G94\nG00 X99.999 Z0.1 C0.\nG01 Z0. F10.\n"
+                            "G01 X99.9995 C360.\nG01 X99.9999 C720.\nM30\n")
+    _, report = turn(program, "sts_lathe", "nose:0.2:90")
+    assert report.limit_violations == ()
+    with pytest.raises(AxisLimitError, match=re.escape(
+            "axis X = 100.001900 mm at line 5 as the servo follows it, 0.001900 mm beyond "
+            "its travel -100.000000 mm .. 100.000000 mm")):
+        turn(program, "sts_lathe", "nose:0.2:90", servo=_Overshoot())
+    _, report = turn(program, "sts_lathe", "nose:0.2:90", servo=_Overshoot(),
+                     allow_overtravel=True)
+    assert len(report.limit_violations) == 1
+    assert report.limit_violations[0].startswith("axis X = 100.001900 mm at line 5")

@@ -35,9 +35,12 @@ A program that takes an axis outside its travel is refused before anything is cu
 `AxisLimitError` naming the axis, the value, the travel and the program's lines, as
 `machinesim.cutting.cut` refuses it (the same check, on the program's axis values, move by
 move); ``allow_overtravel=True`` turns it anyway and lists it in
-`TurningReport.limit_violations`. A move that takes the tool beyond
-`machinesim.cutting.engine.FARTHEST_M` (1 km) of the workpiece origin is refused either way
-(InputError naming its line), as `cut` refuses it: float64 keeps no nanometre there. A turn
+`TurningReport.limit_violations`. So is a run whose servo-followed path takes an axis
+beyond a travel its command keeps (a loop that overshoots), naming the axis, the line and
+by how much (`machinesim.cutting.lathe_following.followed_overtravel`). A move that takes
+the tool beyond `machinesim.cutting.engine.FARTHEST_M` (1 km) of the workpiece origin is
+refused either way (InputError naming its line), as `cut` refuses it: float64 keeps no
+nanometre there. A turn
 that leaves the stock as it was (the tool's tip
 never below its top: a program above the part, a tool set too high or a workpiece too low)
 is reported, as `cut` reports one: `TurningReport.empty_cut`, with a note saying why.
@@ -55,7 +58,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from machinesim.cutting.lathe_following import follow_run
+from machinesim.cutting.lathe_following import follow_run, followed_overtravel
 from machinesim.cutting.program import _overtravel, _refuse_far
 from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
@@ -204,7 +207,9 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     ------
     AxisLimitError
         When an axis leaves its travel (and ``allow_overtravel`` is False): the message names
-        the axis, the value, the travel and the program's lines. Nothing is turned.
+        the axis, the value, the travel and the program's lines. Nothing is turned. Also
+        when the servo's followed path leaves it where the command does not (with the
+        line and the overshoot).
     """
     from machinesim.machines import Machine, load_machine
     from machinesim.nc import Program, read_program
@@ -235,9 +240,14 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
                 getattr(program, "source", None))
     tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
-    for t, points, lines in _timed_runs(program, machine, with_lines=True):
-        t, points, reached = follow_run(servo, t, points, lines, machine,
+    beyond = {entry.split(" ", 2)[1] for entry in limits}  # the axes the command takes out
+    for command_t, points, lines in _timed_runs(program, machine, with_lines=True):
+        t, points, reached = follow_run(servo, command_t, points, lines, machine,
                                         getattr(program, "source", "<program>"))
+        if reached is not points:
+            limits += followed_overtravel(machine, command_t, lines, t, reached,
+                                          getattr(program, "source", None), allow_overtravel,
+                                          beyond)
         for k, axis in enumerate(machine.axes):
             peak[axis] = max(peak[axis], float(np.max(np.abs(points[:, k] - reached[:, k]))))
         poses = machine.tool_pose(reached, errors)

@@ -114,4 +114,42 @@ def chord_errors(servo, t, points, reached, axes, rotary) -> np.ndarray:
     return np.sqrt(np.sum(off[:, keep] ** 2, axis=1))
 
 
-__all__ = ["FOLLOWED_SLACK", "chord_errors", "follow_held", "follow_run"]
+def followed_overtravel(machine, command_t, lines, t, reached, source, allow: bool,
+                        commanded_beyond=()) -> tuple[str, ...]:
+    """Where the servo's followed run ``reached`` (samples at times ``t``; the command's steps
+    at times ``command_t``, their program ``lines``) takes an axis beyond its travel, one
+    description an axis: the value, the line, by how much, the travel. A loop that
+    overshoots carries an axis past a travel the command keeps (the command's own values
+    are checked before anything is turned, `machinesim.cutting.program._overtravel`; axes
+    in ``commanded_beyond`` are listed there and skipped here). Raises `AxisLimitError`
+    unless ``allow``."""
+    from machinesim.cutting.program import _format
+    from machinesim.exceptions import AxisLimitError
+    from machinesim.tolerances import LIMIT_SLACK
+
+    found = []
+    for i, letter in enumerate(machine.axes):
+        if letter in commanded_beyond:
+            continue
+        low, high = float(machine.lower[i]), float(machine.upper[i])
+        beyond = np.maximum(low - reached[:, i], reached[:, i] - high)
+        worst = int(np.argmax(beyond))
+        if not beyond[worst] > LIMIT_SLACK:
+            continue
+        step = int(np.clip(np.searchsorted(command_t, t[worst], side="right") - 1, 0,
+                           len(lines) - 1))
+        value = float(reached[worst, i])
+        unit = _format(bool(machine.rotary[i]), value, (low, high))
+        found.append(f"axis {letter} = {unit(value)} at line {int(lines[step])} as the servo "
+                     f"follows it, {unit(float(beyond[worst]))} beyond its travel "
+                     f"{unit(low)} .. {unit(high)}, which the command keeps (the loop "
+                     "overshoots)")
+    if found and not allow:
+        where = f"{source}: " if source else ""
+        raise AxisLimitError(f"{where}{'; '.join(found)}; nothing was turned "
+                             "(allow_overtravel=True turns it anyway and lists it)")
+    return tuple(found)
+
+
+__all__ = ["FOLLOWED_SLACK", "chord_errors", "follow_held", "follow_run",
+           "followed_overtravel"]
