@@ -364,3 +364,41 @@ def test_a_start_or_program_of_the_wrong_kind_is_refused_naming_it():
     # numbers of any kind pass, as before: ints, numpy floats, a tuple
     start = (1, np.float64(2e-3), 0, 0, 0)
     assert plan(program, machine, start=start).segments[0].q[0].tolist() == [1, 2e-3, 0, 0, 0]
+
+
+@pytest.mark.parametrize("tolerance", [1e-9, 1e-5])
+def test_an_arc_takes_its_length_over_f_not_its_chords(tolerance):
+    """G03 half circle of radius 10 mm at F600 mm/min: pi r / F = 3.14159... s. Each chord
+    carried F, so the arc took its chords' length over F: 3.3e-8 of it fast at 1 nm chords
+    and 3.2e-4 at 10 um (tol / (3 r)). The control holds F along the arc (FANUC), and so
+    does a helix's plane (its Z follows); an arc that turns a rotary axis keeps its chords'
+    feed rule (degrees count in the feed length). Pickling and new targets keep the arcs'
+    lengths."""
+    import pickle
+
+    machine = load_machine("grooving_4axis")
+    r, feed = 10.0, 600.0  # mm, mm/min
+    text = ("G90 G21 G94 G17\nG00 X10. Y0. Z0. C0.\nG01 X10. F600.\nG03 X-10. Y0. I-10. J0.\n"
+            "G03 X10. Y0. Z-1. I10. J0.\nG03 X-10. Y0. I-10. J0. C90.\nM30\n")
+    program = parse_program(text, chord_tolerance=tolerance)
+    trajectory = plan(program, machine)
+    lines = np.array([s.line for s in trajectory.segments])
+    time = {line: sum(s.duration for s in trajectory.segments if s.line == line)
+            for line in (4, 5, 6)}
+    assert time[4] == pytest.approx(math.pi * r / feed * 60.0, rel=1e-12)
+    assert time[5] == pytest.approx(math.pi * r / feed * 60.0, rel=1e-12)  # helix
+    # the arc that turns C: its chords, each sqrt(chord_mm**2 + dC_deg**2) over F
+    chords = [s for s in trajectory.segments if s.line == 6]
+    by_chords = sum(math.hypot(math.hypot(*(s.q[-1, :2] - s.q[0, :2])) * 1e3,
+                               math.degrees(s.q[-1, 3] - s.q[0, 3])) for s in chords)
+    assert time[6] == pytest.approx(by_chords / feed * 60.0, rel=1e-12)
+    assert (lines == 4).sum() > 1
+    assert np.isnan(program.arc_lengths[~np.isin(program.lines, (4, 5))]).all()
+    again = pickle.loads(pickle.dumps(program))
+    assert again == program
+    np.testing.assert_array_equal(again.arc_lengths, program.arc_lengths)
+    moved = program.with_targets(program.targets)
+    np.testing.assert_array_equal(moved.arc_lengths, program.arc_lengths)
+    with pytest.raises(NCProgramError, match="arc_lengths must be lengths >= 0"):
+        Program.from_arrays(program.targets, program.kinds, program.feeds,
+                            arc_lengths=-program.arc_lengths)

@@ -15,7 +15,8 @@ without such errors, a straight move stays one sweep.
 
 Feed and time (FANUC rule, feed per minute, G94): a move's length is
 ``sqrt(sum(d_linear_mm**2) + sum(d_rotary_deg**2))`` and takes ``length / F`` minutes, so F
-reads as mm/min for linear moves and deg/min for pure rotary moves, clamped so that no axis
+reads as mm/min for linear moves and deg/min for pure rotary moves (the chords of an arc
+take their piece of arc over F, `machinesim.nc.Program.arc_lengths`), clamped so that no axis
 runs faster than its velocity limit (the URDF's; a feed beyond it takes as long as the
 move's slowest axis at that limit, as a rapid does). A rapid takes as long as its slowest
 axis at its rapid rate (the URDF velocity limit), and its path is the straight line in axis

@@ -83,6 +83,15 @@ def _program_arrays(program):
     return targets, kinds, feeds, dwells, lines
 
 
+def _arc_lengths(program, count: int) -> np.ndarray | None:
+    """The length of arc (m) each move of ``program`` stands for, NaN where none
+    (`machinesim.nc.Program.arc_lengths`); None for a program that keeps none."""
+    lengths = getattr(program, "arc_lengths", None)
+    if not isinstance(lengths, np.ndarray) or lengths.shape != (count,):
+        return None
+    return lengths
+
+
 def _check_move(move, source: str) -> None:
     """Refuse, naming its line, a move (of a program read move by move) whose kind, axis
     values, feed or dwell `plan` would turn into no time or a wrong one: a `Move` checks
@@ -312,7 +321,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         raise error
 
     durations = move_durations(kinds, starts, ends, feeds, dwells, rotary,
-                           np.asarray(machine.rapid_rate, dtype=np.float64))
+                               np.asarray(machine.rapid_rate, dtype=np.float64),
+                               _arc_lengths(program, count))
     # times add up move after move from 0.0, as a running sum does (np.cumsum is sequential)
     clock = np.cumsum(np.concatenate([[0.0], durations]))
     cutting = float(np.cumsum(np.concatenate([[0.0], durations[kinds == KIND_LINEAR]]))[-1])

@@ -106,9 +106,16 @@ def _feed_text(feed: float, program, move: int) -> str:
     return f"{metric}, or F{inch[0]:.6g} ({inch[1]}) if written under G20"
 
 
-def move_durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate) -> np.ndarray:
+def move_durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate,
+                   arc_lengths=None) -> np.ndarray:
     """`move_duration` of every move, by the same operations (axis by axis: the largest
-    ratio, and the squares summed in numpy's order, first axis first, for up to 7 axes)."""
+    ratio, and the squares summed in numpy's order, first axis first, for up to 7 axes).
+
+    ``arc_lengths`` (m, NaN: none; `machinesim.nc.Program.arc_lengths`): a feed move that
+    is the chord of an arc takes its piece of arc over F, as the control holds F along the
+    arc, not the chord's length (which ran an arc fast by tol / (3 r) of its time for
+    chords within tol of a radius r: 3.3e-7 at 1 nm on 1 mm, 0.33 % at 10 um), still
+    clamped at the axes' velocity limits."""
     out = np.zeros(len(kinds))
     dwell = kinds == KIND_DWELL
     out[dwell] = dwells[dwell]
@@ -138,6 +145,10 @@ def move_durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate) -> np
             delta = np.abs(ends[linear] - starts[linear])
             total = np.sum(np.where(rotary, delta / _RAD_PER_DEG, delta / M_PER_MM)**2, axis=1)
         length_mm = np.sqrt(total)
+        if arc_lengths is not None:
+            arc = arc_lengths[linear]
+            on_arc = ~np.isnan(arc)
+            length_mm[on_arc] = arc[on_arc] / M_PER_MM
         moving = length_mm != 0.0
         out[linear[moving]] = np.maximum(
             length_mm[moving] / (feeds[linear[moving]] / M_PER_MM),

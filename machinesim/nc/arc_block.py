@@ -111,7 +111,17 @@ def read_arc(block: Block, axes: list[Word], block_number: int | None) -> None:
         feeds *= scale
     state.target = end
     spindle = math.nan if state.spindle is None else state.spindle
+    # the control holds F along the arc in its plane (FANUC; a helix's third axis follows):
+    # each chord takes the time of its piece of arc, chord * (x / sin x) for the half
+    # angle x it spans (exact for a circle); an arc that turns a rotary axis keeps the
+    # feed rule of its chords (its degrees count in the feed length)
+    lengths = np.full(n, math.nan)
+    if not turning:
+        plane = np.vstack([[start[u], start[v]], points])
+        chords = np.hypot(*np.diff(plane, axis=0).T)
+        half = np.abs(sweep) * np.diff(np.concatenate([[0.0], fractions])) / 2.0
+        lengths = chords / np.sinc(half / np.pi)
     reader.out.add_arrays(targets, np.full(n, KIND_LINEAR, dtype=np.int8),
                           feeds, np.zeros(n), np.full(n, block.line, np.int64),
                           np.full(n, spindle),
-                          np.full(n, -1 if block_number is None else block_number))
+                          np.full(n, -1 if block_number is None else block_number), lengths)

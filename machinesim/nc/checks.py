@@ -70,6 +70,27 @@ def _exact_stops(stops: Any, n: int, source: str) -> np.ndarray:
     return index
 
 
+def _arc_lengths(lengths: Any, n: int, source: str) -> np.ndarray:
+    """The arc length (m) of each of ``n`` moves as a float64 array, NaN where the move is
+    no arc's chord: None for none; otherwise finite lengths >= 0 or NaN, one per move."""
+    if lengths is None:
+        return np.full(n, np.nan)
+    try:
+        out = np.asarray(lengths, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as error:
+        raise NCProgramError(f"arc_lengths must be lengths (m): {error}", source=source,
+                             key="arc_lengths") from None
+    if out.shape != (n,):
+        raise NCProgramError(f"arc_lengths must have shape ({n},), got {out.shape}",
+                             source=source, key="arc_lengths")
+    bad = ~np.isnan(out) & ~((out >= 0.0) & (out < np.inf))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise NCProgramError(f"arc_lengths must be lengths >= 0 (m) or NaN (no arc), got "
+                             f"{out[i]!r} for move {i}", source=source, key="arc_lengths")
+    return out
+
+
 def _m_codes(m_codes: Mapping[int, Iterable[int]], n: int, source: str) -> FrozenMapping:
     if not isinstance(m_codes, Mapping):
         raise NCProgramError(f"m_codes must map move indices to M codes, got "

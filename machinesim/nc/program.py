@@ -18,7 +18,14 @@ from typing import Any, overload
 import numpy as np
 
 from machinesim.exceptions import NCProgramError
-from machinesim.nc.checks import _check, _exact_stops, _line_words, _m_codes, _states
+from machinesim.nc.checks import (
+    _arc_lengths,
+    _check,
+    _exact_stops,
+    _line_words,
+    _m_codes,
+    _states,
+)
 from machinesim.nc.moves import (  # noqa: F401  (re-exported: the names of this module before)
     _KIND_CODE,
     AXES,
@@ -188,6 +195,12 @@ class Program:
         line. Empty when the main program ran out at the end of the file without one (a
         FANUC control stops there with an alarm: a file cut short?), and for programs built
         from moves.
+    arc_lengths : ndarray, shape (N,), float64
+        For each chord of an arc (G02/G03) in its plane, the length of the piece of arc it
+        stands for, m (NaN for every other move, and for the chords of an arc block that
+        turns a rotary axis): the control holds F along the arc, so the chord takes that
+        length over F, not its own (`machinesim.motion.timing`). All NaN for programs built
+        from moves.
     exact_stops : ndarray, shape (K,), int64
         The moves that end in an exact stop (G09 in their block, or any block under G61):
         the control waits there until the axes are in position before the next block, so
@@ -211,7 +224,7 @@ class Program:
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
                  "tool_table", "tool_changes", "arc_blocks", "arc_chord_tolerance",
                  "unit_words", "unit_in_force", "dwell_words", "_moves",
-                 "exact_stops", "integer_words", "end_words", "after_end")
+                 "exact_stops", "integer_words", "end_words", "after_end", "_arc_lengths")
 
     def __init__(
         self,
@@ -269,12 +282,13 @@ class Program:
         integer_input: str | None = None,
         tool_table: str | None = None,
         exact_stops: Any = None,
+        arc_lengths: Any = None,
     ) -> Program:
         """A program from its arrays (layout as the attributes), checked like any program.
 
-        ``feeds``, ``spindles`` default to NaN (None), ``dwells`` to 0, ``lines`` to
-        1..N, ``block_numbers`` to -1 (None), ``exact_stops`` (move indices) to none.
-        Arrays are copied.
+        ``feeds``, ``spindles`` and ``arc_lengths`` default to NaN (None), ``dwells`` to 0,
+        ``lines`` to 1..N, ``block_numbers`` to -1 (None), ``exact_stops`` (move indices) to
+        none. Arrays are copied.
         """
         def array(values: Any, dtype: type, name: str) -> np.ndarray:
             try:
@@ -318,6 +332,7 @@ class Program:
             number, source, work_offsets, states, integer_input, tool_table,
             exact_stops=() if exact_stops is None else array(exact_stops, np.int64,
                                                              "exact_stops"),
+            arc_lengths=column(arc_lengths, np.nan, np.float64, "arc_lengths"),
         )
         return program
 
@@ -327,20 +342,21 @@ class Program:
                     tool_table=None, tool_changes=(), arc_blocks=0,
                     unit_words=None, exact_stops=(), integer_words=None,
                     end_words=None, after_end=None, arc_chord_tolerance=None,
-                    dwell_words=None, unit_in_force=None) -> Program:
+                    dwell_words=None, unit_in_force=None, arc_lengths=None) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
                       source, work_offsets, states, integer_input, tool_table, tool_changes,
                       arc_blocks, unit_words, exact_stops, integer_words, end_words,
-                      after_end, arc_chord_tolerance, dwell_words, unit_in_force)
+                      after_end, arc_chord_tolerance, dwell_words, unit_in_force, arc_lengths)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
               source, work_offsets, states, integer_input, tool_table=None,
               tool_changes=(), arc_blocks=0, unit_words=None, exact_stops=(),
               integer_words=None, end_words=None, after_end=None,
-              arc_chord_tolerance=None, dwell_words=None, unit_in_force=None) -> None:
+              arc_chord_tolerance=None, dwell_words=None, unit_in_force=None,
+              arc_lengths=None) -> None:
         set_ = object.__setattr__
         set_(self, "after_end", None if after_end is None else int(after_end))
         set_(self, "source", source)
@@ -378,6 +394,7 @@ class Program:
             set_(self, name, _readonly(array))
         set_(self, "_m_codes", codes)
         set_(self, "exact_stops", _readonly(_exact_stops(exact_stops, len(kinds), source)))
+        set_(self, "_arc_lengths", _readonly(_arc_lengths(arc_lengths, len(kinds), source)))
         set_(self, "_moves", Moves(self))
         _check(self)
 
@@ -408,6 +425,8 @@ class Program:
     block_numbers = property(lambda self: self._blocks, doc="(N,) N words, -1 = None")
     m_codes = property(lambda self: self._m_codes, doc="move index -> M codes")
     moves = property(lambda self: self._moves, doc="the moves as a Sequence of Move")
+    arc_lengths = property(lambda self: self._arc_lengths,
+                           doc="(N,) the arc (m) each arc chord stands for, NaN = none")
 
     @property
     def axes(self) -> tuple[str, ...]:
@@ -439,6 +458,7 @@ class Program:
             and np.array_equal(self._blocks, other._blocks)
             and dict(self._m_codes) == dict(other._m_codes)
             and np.array_equal(self.exact_stops, other.exact_stops)
+            and np.array_equal(self._arc_lengths, other._arc_lengths, equal_nan=True)
         )
 
     def __eq__(self, other: object) -> bool:
@@ -470,7 +490,8 @@ class Program:
             unit_words=self.unit_words, exact_stops=self.exact_stops,
             integer_words=self.integer_words, end_words=self.end_words,
             after_end=self.after_end, arc_chord_tolerance=self.arc_chord_tolerance,
-            dwell_words=self.dwell_words, unit_in_force=self.unit_in_force)
+            dwell_words=self.dwell_words, unit_in_force=self.unit_in_force,
+            arc_lengths=self._arc_lengths)
 
     def __hash__(self) -> int:
         return hash((self.number, self.source, len(self._kinds)))
@@ -483,7 +504,7 @@ class Program:
                            self.tool_changes, self.arc_blocks, dict(self.unit_words),
                            self.exact_stops, dict(self.integer_words),
                            dict(self.end_words), self.after_end, self.arc_chord_tolerance,
-                           dict(self.dwell_words), self.unit_in_force))
+                           dict(self.dwell_words), self.unit_in_force, self._arc_lengths))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -500,8 +521,9 @@ def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, nu
              work_offsets, states, integer_input, tool_table=None, tool_changes=(),
              arc_blocks=0, unit_words=None, exact_stops=(), integer_words=None,
              end_words=None, after_end=None, arc_chord_tolerance=None,
-             dwell_words=None, unit_in_force=None) -> Program:
-    """Unpickle a `Program` (the arrays come back writeable copies: made read-only again)."""
+             dwell_words=None, unit_in_force=None, arc_lengths=None) -> Program:
+    """Unpickle a `Program` (the arrays come back writeable copies: made read-only again;
+    one pickled before `Program.arc_lengths` has none)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
                                states=states, integer_input=integer_input,
@@ -510,4 +532,5 @@ def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, nu
                                exact_stops=exact_stops, integer_words=integer_words,
                                end_words=end_words, after_end=after_end,
                                arc_chord_tolerance=arc_chord_tolerance,
-                               dwell_words=dwell_words, unit_in_force=unit_in_force)
+                               dwell_words=dwell_words, unit_in_force=unit_in_force,
+                               arc_lengths=arc_lengths)

@@ -145,7 +145,7 @@ class _Output:
 
     def __init__(self) -> None:
         self.chunks: list[tuple[np.ndarray, ...]] = []
-        self.lists: tuple[list, ...] = tuple([] for _ in range(7))
+        self.lists: tuple[list, ...] = tuple([] for _ in range(8))
         self.m_codes: dict[int, tuple[int, ...]] = {}
         self.stops: list[np.ndarray] = []  # indices of moves that end in an exact stop
         self.count = 0
@@ -158,7 +158,7 @@ class _Output:
         """One move; ``units_free`` when its target is the same read in mm or in inch (a
         G00, G01, G28 or G53 of zero lengths, `Block.units_free`): it is no first motion for
         the units rule."""
-        rows, kinds, feeds, dwells, lines, spindles, blocks = self.lists
+        rows, kinds, feeds, dwells, lines, spindles, blocks, arcs = self.lists
         rows.append(tuple(target.get(a, math.nan) for a in AXES))
         kinds.append(kind)
         feeds.append(math.nan if feed is None else feed)
@@ -166,13 +166,18 @@ class _Output:
         lines.append(line)
         spindles.append(math.nan if spindle is None else spindle)
         blocks.append(-1 if block is None else block)
+        arcs.append(math.nan)
         self.count += 1
         if self.first_motion is None and kind != KIND_DWELL and not units_free:
             self.first_motion = line
 
     def add_arrays(self, *arrays: np.ndarray, units_free: np.ndarray | None = None) -> None:
-        """Moves as arrays (targets, kinds, feeds, dwells, lines, spindles, blocks);
-        ``units_free``: which of them reach the same target in mm or inch (`add`)."""
+        """Moves as arrays: targets, kinds, feeds, dwells, lines, spindles, blocks and, for
+        an arc's chords, the length of the arc each stands for (`Program.arc_lengths`;
+        default NaN: none); ``units_free``: which of them reach the same target in mm or
+        inch (`add`)."""
+        if len(arrays) == 7:
+            arrays = (*arrays, np.full(len(arrays[1]), math.nan))
         self.flush()
         self.chunks.append(arrays)
         self.count += len(arrays[1])
@@ -183,13 +188,14 @@ class _Output:
                 self.first_motion = int(arrays[4][motion[0]])
 
     def flush(self) -> None:
-        rows, kinds, feeds, dwells, lines, spindles, blocks = self.lists
+        rows, kinds, feeds, dwells, lines, spindles, blocks, arcs = self.lists
         if kinds:
             self.chunks.append((
                 np.array(rows, dtype=np.float64).reshape(-1, len(AXES)),
                 np.array(kinds, dtype=np.int8), np.array(feeds, dtype=np.float64),
                 np.array(dwells, dtype=np.float64), np.array(lines, dtype=np.int64),
-                np.array(spindles, dtype=np.float64), np.array(blocks, dtype=np.int64)))
+                np.array(spindles, dtype=np.float64), np.array(blocks, dtype=np.int64),
+                np.array(arcs, dtype=np.float64)))
             for items in self.lists:
                 items.clear()
 
@@ -197,7 +203,7 @@ class _Output:
         self.flush()
         if not self.chunks:
             return (np.empty((0, len(AXES))), np.empty(0, np.int8), np.empty(0), np.empty(0),
-                    np.empty(0, np.int64), np.empty(0), np.empty(0, np.int64))
+                    np.empty(0, np.int64), np.empty(0), np.empty(0, np.int64), np.empty(0))
         if len(self.chunks) == 1:
             return self.chunks[0]
         return tuple(np.concatenate(parts) for parts in zip(*self.chunks, strict=True))
@@ -275,7 +281,7 @@ class Reader:
         if self.near_circles:  # read_program / parse_program -> _parse -> here
             warnings.warn(near_circle_warning(self.near_circles, self.source),
                           MachineSimWarning, stacklevel=4)
-        targets, kinds, feeds, dwells, lines, spindles, blocks = self.out.arrays()
+        targets, kinds, feeds, dwells, lines, spindles, blocks, arcs = self.out.arrays()
         return Program._from_parts(
             targets, kinds, feeds, dwells, lines, spindles, blocks, self.out.m_codes,
             number=self.state.number, source=self.source, work_offsets=self.offsets,
@@ -289,7 +295,8 @@ class Reader:
             dwell_words=self.dwell_words,
             end_words={} if self.state.end is None else {self.state.end[1]: self.state.end[0]},
             exact_stops=np.concatenate(self.out.stops) if self.out.stops else (),
-            after_end=self.after_end, arc_chord_tolerance=self.chord_tolerance)
+            after_end=self.after_end, arc_chord_tolerance=self.chord_tolerance,
+            arc_lengths=arcs)
 
     def tool_changes(self) -> tuple:
         """The tools put in the spindle (`ToolChange`), from the T words and M06: at each
