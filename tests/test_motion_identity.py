@@ -271,6 +271,35 @@ def test_a_corner_is_held_again_when_the_45_deg_rule_raises_the_count(machines):
     assert chord_deviation(machine, errors, np.zeros((1, 3)), turn.q, 64) <= tolerance
 
 
+def test_a_corner_is_held_again_when_a_flat_face_raises_the_count(machines):
+    """A turns 0.7 deg on planer_4axis with a flat face 0.5 mm across (face_radius), EYA and
+    EZA tables with corners at 0.26, 0.28 and 0.48 deg, 13 nm: the chord rule holds them
+    with 70 sub-steps, the face rule raises them to 238, which left a corner 13.9 nm (1.07
+    tolerances) off its chord's line (64 points a sub-step): the raised counts' corners were
+    not checked again."""
+    machine = machines["planer_4axis"]
+    errors = machinesim.ErrorModel.from_dict({"component": {"A": {
+        "position_deg": [-45.0, 0.26, 0.28, 0.48, 45.0], "EYA_um": [0.0, 0.0, 0.4, 0.8, 0.0],
+        "EZA_um": [0.0, -0.6, -0.2, -0.2, 0.0]}}})
+    program = ProgramBuilder(source="face").rapid(X=0.0, Y=0.0, Z=0.0, A=0.0).linear(
+        A=math.radians(0.7), feed_mm_per_min=100.0).build()
+    tolerance = 13e-9
+    plain = plan(program, machine, errors, chord_tolerance=tolerance).segments[1]
+    turn = plan(program, machine, errors, chord_tolerance=tolerance,
+                face_radius=0.5e-3).segments[1]
+    assert len(turn.q) > len(plain.q)  # the face rule raised the count
+    assert chord_deviation(machine, errors, np.zeros((1, 3)), turn.q, 64) <= tolerance
+    # the servo's followed steps are held to the same rule (`following.StepRule`)
+    from machinesim.motion.following import StepRule
+
+    bending = np.array([False, False, False, True])
+    rule = StepRule(machine, errors, np.zeros((1, 3)), bending, tolerance, 0.5e-3)
+    start = turn.q[:1]
+    n = int(rule.counts(start, turn.q[-1:] - start)[0])
+    q = start + np.linspace(0.0, 1.0, n + 1)[:, None] * (turn.q[-1:] - start)
+    assert chord_deviation(machine, errors, np.zeros((1, 3)), q, 64) <= tolerance
+
+
 def test_a_table_of_a_whole_turn_that_steps_where_it_wraps_is_refused_at_once(machines):
     """ECC 1 arcsec at -180 deg and -1 at 180 (the README's example before): repeated each
     turn, C's error steps 2 arcsec where C passes 180 deg, so the edge 10 mm off the C axis

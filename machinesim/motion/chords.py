@@ -440,11 +440,11 @@ def substeps(paths: ToolPaths, start: np.ndarray, delta: np.ndarray,
     n = np.ceil(_FIRST_TRIAL * np.sqrt(d8[~fine] / tolerance))
     _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, todo, n,
                         (np.full(len(todo), _FIRST_TRIAL), d8[~fine]))
-    _hold_corners(paths, start, delta, tolerance, steps, failed, stalls)
+    hold_corners(paths, start, delta, tolerance, steps, failed, stalls)
     return steps, failed, sorted(stalls, key=lambda stall: stall.move)
 
 
-def _hold_corners(paths, start, delta, tolerance, steps, failed, stalls,
+def hold_corners(paths, start, delta, tolerance, steps, failed, stalls,
                   moves: np.ndarray | None = None) -> None:
     """Corners of the error tables (`_corner_failures`) and the bows of polynomials of
     degree 3 or more between the midpoints (`machinesim.motion.bows`): checked, the counts of
@@ -484,14 +484,14 @@ def hold_raised(paths: ToolPaths, start: np.ndarray, delta: np.ndarray, toleranc
     260 deg with the edge on the axis, EXC 0.64 um and EYC 0.2 um at 60 deg, 0 at 0 and 260:
     5 sub-steps held 160 nm, the 6 they were raised to left the corner 184 nm off its
     chord). The raised moves' corners are checked again and raised until they hold, as
-    `substeps` does (`_hold_corners`).
+    `substeps` does (`hold_corners`).
     """
     raised = np.flatnonzero(~failed & (least > steps) & (least <= MAX_SUBSTEPS))
     if not raised.size:
         return
     _raise_until_within(paths, start, delta, tolerance, steps, failed, stalls, raised,
                         least[raised].astype(np.float64))
-    _hold_corners(paths, start, delta, tolerance, steps, failed, stalls, raised)
+    hold_corners(paths, start, delta, tolerance, steps, failed, stalls, raised)
     stalls.sort(key=lambda stall: stall.move)
 
 

@@ -31,7 +31,13 @@ import math
 import numpy as np
 
 from machinesim.exceptions import InputError, NCProgramError
-from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, hold_raised, substeps
+from machinesim.motion.chords import (
+    MAX_SUBSTEPS,
+    ToolPaths,
+    hold_corners,
+    hold_raised,
+    substeps,
+)
 from machinesim.motion.faces import face_substeps, profile_substeps
 from machinesim.nc.program import KIND_LINEAR
 from machinesim.tolerances import MAX_STEP_TURN_RAD
@@ -75,11 +81,17 @@ class StepRule:
         least = np.ceil(turn / (MAX_STEP_TURN_RAD / 2.0))
         hold_raised(self._paths, starts[bends], delta[bends], self.tolerance, found, failed,
                     stalls, least)
-        found = np.maximum(found, np.minimum(least, MAX_SUBSTEPS + 1).astype(np.int64))
+        held = np.maximum(found, np.minimum(least, MAX_SUBSTEPS + 1).astype(np.int64))
         found = face_substeps(self.machine, self.errors, starts[bends], delta[bends],
-                              np.maximum(found, 1), self.face_radius, self.tolerance)
+                              np.maximum(held, 1), self.face_radius, self.tolerance)
         found = profile_substeps(self.machine, self.errors, starts[bends], delta[bends],
                                  found, self.rotary, self.profile, self.tolerance)
+        # counts the faces and profiles raised: their corners checked again, as `plan` does
+        raised = np.flatnonzero((found > held) & (found <= MAX_SUBSTEPS) & ~failed)
+        if raised.size:
+            found = np.array(found, dtype=np.int64)
+            hold_corners(self._paths, starts[bends], delta[bends], self.tolerance, found,
+                         failed, stalls, raised)
         found[failed | (found > MAX_SUBSTEPS)] = 0
         need[bends] = found
         return need

@@ -8,7 +8,13 @@ import os
 import numpy as np
 
 from machinesim.exceptions import InputError, NCProgramError
-from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, hold_raised, substeps
+from machinesim.motion.chords import (
+    MAX_SUBSTEPS,
+    ToolPaths,
+    hold_corners,
+    hold_raised,
+    substeps,
+)
 from machinesim.motion.faces import ProfileEdges, face_substeps, profile_substeps
 from machinesim.motion.following import StepRule, follow_plan
 from machinesim.motion.steps import wrap_steps
@@ -278,21 +284,9 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
             least = np.ceil(turn / (MAX_STEP_TURN_RAD / 2.0))
             hold_raised(paths, starts[turning], delta[turning], chord_tolerance, found,
                         failed, stalls, least)
-            if failed.any():
-                first = int(np.argmax(failed))
-                bad = int(turning[first])
-                stall = next((s for s in stalls if s.move == first), None)
-                if stall is not None:
-                    raise NCProgramError(
-                        _stall_message(stall, paths, axes, rotary, starts[bad], delta[bad],
-                                       chord_tolerance),
-                        source=source, line=int(lines[bad]))
-                what = "a rotary move" if np.any(delta[bad, rotary] != 0.0) else "a move"
-                raise NCProgramError(
-                    f"{what} would need more than {MAX_SUBSTEPS} sub-steps to keep the "
-                    f"chord within {chord_tolerance * 1e9:g} nm; raise chord_tolerance "
-                    "(--chord-nm on the command line)",
-                    source=source, line=int(lines[bad]))
+            unfollowed = (failed, stalls, paths, axes, rotary, starts, delta, turning, lines,
+                          source, chord_tolerance)
+            _refuse_failed(*unfollowed)
             bad = _first_beyond(least, turning)
             if bad is not None:
                 turned = math.degrees(float(turn[np.argmax(least > MAX_SUBSTEPS)]))
@@ -302,9 +296,9 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                     f"{math.degrees(MAX_STEP_TURN_RAD / 2.0):g} deg (what a sweep's hull "
                     "stands for, with room for the machine's errors); split it into moves",
                     source=source, line=int(lines[bad]))
-            found = np.maximum(found, least.astype(np.int64))
+            held = np.maximum(found, least.astype(np.int64))
             found = face_substeps(machine, errors, starts[turning], delta[turning],
-                                  np.maximum(found, 1), face_radius, chord_tolerance)
+                                  np.maximum(held, 1), face_radius, chord_tolerance)
             found = profile_substeps(machine, errors, starts[turning], delta[turning], found,
                                      rotary, profile, chord_tolerance)
             bad = _first_beyond(found, turning)
@@ -316,6 +310,15 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                     f"sub-steps to keep the face within {chord_tolerance * 1e9:g} nm; raise "
                     "chord_tolerance (--chord-nm on the command line)",
                     source=source, line=int(lines[bad]))
+            # counts the faces and profiles raised: a corner of an error table (or a
+            # polynomial's bow) the old sub-steps held at a node can lie inside a new one
+            raised = np.flatnonzero((found > held) & ~failed)
+            if raised.size:
+                found = np.array(found, dtype=np.int64)
+                hold_corners(paths, starts[turning], delta[turning], chord_tolerance, found,
+                             failed, stalls, raised)
+                stalls.sort(key=lambda stall: stall.move)
+                _refuse_failed(*unfollowed)
             steps[turning] = found
     if error is not None:
         raise error
@@ -346,6 +349,27 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     notes = slow_move_notes(durations, kinds, lines, feeds, program)
     return Trajectory(axes, q, t, offsets, kinds_out, lines_out, float(clock[-1]), cutting,
                       notes=notes, peak_lag=peak_lag)
+
+
+def _refuse_failed(failed, stalls, paths, axes, rotary, starts, delta, turning, lines, source,
+                   tolerance) -> None:
+    """Refuse, naming its line, the first move (of ``turning``) whose chords no count up to
+    `MAX_SUBSTEPS` holds: its path steps (``stalls``: where, and the table that does it),
+    or it needs more sub-steps than that."""
+    if not failed.any():
+        return
+    first = int(np.argmax(failed))
+    bad = int(turning[first])
+    stall = next((s for s in stalls if s.move == first), None)
+    if stall is not None:
+        raise NCProgramError(
+            _stall_message(stall, paths, axes, rotary, starts[bad], delta[bad], tolerance),
+            source=source, line=int(lines[bad]))
+    what = "a rotary move" if np.any(delta[bad, rotary] != 0.0) else "a move"
+    raise NCProgramError(
+        f"{what} would need more than {MAX_SUBSTEPS} sub-steps to keep the chord within "
+        f"{tolerance * 1e9:g} nm; raise chord_tolerance (--chord-nm on the command line)",
+        source=source, line=int(lines[bad]))
 
 
 def _first_beyond(counts: np.ndarray, moves: np.ndarray) -> int | None:
