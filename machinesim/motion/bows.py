@@ -67,30 +67,41 @@ def bowed_steps(paths, start, delta, steps, skip, tolerance) -> np.ndarray:
         moves = live[keys == key]
         d, n = divmod(key, MAX_SUBSTEPS + 1)
         k = int(d) + _BOW_EXTRA
-        f, to_coefficients, dense = _lobatto(k)
-        # the Lobatto points of every sub-step, sub-step after sub-step
-        fractions = ((np.arange(n)[:, None] + f[None, :]) / n).ravel()
-        per = max(1, _ROWS_PER_BATCH // (len(fractions) * paths.k))
+        # sub-steps a batch (of one move: a long one in pieces), moves a batch
+        chunk = max(1, _ROWS_PER_BATCH // ((k + 1) * paths.k))
+        per = max(1, chunk // n)
         for a in range(0, len(moves), per):
             some = moves[a:a + per]
-            pos = paths.positions(_columns(start[some], delta[some], fractions),
-                                  len(fractions))
-            shape = (n, k + 1, len(some)) + ((paths.k,) if paths.k > 1 else ())
-            coefficients = []
-            for c in range(3):
-                p = pos[c].reshape(shape)
-                chord = p[:, :1] + f.reshape((1, -1) + (1,) * (p.ndim - 2)) * (
-                    p[:, -1:] - p[:, :1])
-                coefficients.append(np.tensordot(to_coefficients, p - chord, axes=(1, 1)))
-            # coefficients[c]: (k + 1, n, moves[, points])
-            norms = np.sqrt(sum(x * x for x in coefficients))
-            bound = norms.sum(axis=0)
-            if bound.ndim == 3:
-                bound = bound.max(axis=2)
-            over = (bound > tolerance).any(axis=0)
-            for i in np.flatnonzero(over).tolist():
-                values = [np.tensordot(dense, x[:, :, i], axes=(1, 0)) for x in coefficients]
-                worst = np.sqrt(sum(v * v for v in values)).max()
-                if worst > tolerance:
-                    bad.append(int(some[i]))
+            off = np.zeros(len(some), dtype=bool)
+            for j in range(0, n, chunk):
+                off |= _off_between(paths, start[some], delta[some], n, range(j, min(j + chunk, n)),
+                                    k, tolerance)
+            bad.extend(some[off].tolist())
     return np.array(sorted(bad), dtype=np.int64)
+
+
+def _off_between(paths, start, delta, n, pieces, k, tolerance) -> np.ndarray:
+    """Which moves (``start``, ``delta``: (M, n_axes), each split into ``n`` sub-steps) leave
+    the chord of one of the sub-steps ``pieces`` by more than ``tolerance``, by the
+    interpolant of degree ``k`` at each sub-step's Chebyshev-Lobatto points (`bowed_steps`)."""
+    f, to_coefficients, dense = _lobatto(k)
+    # the Lobatto points of the sub-steps, sub-step after sub-step
+    fractions = ((np.asarray(pieces, dtype=np.float64)[:, None] + f[None, :]) / n).ravel()
+    pos = paths.positions(_columns(start, delta, fractions), len(fractions))
+    shape = (len(pieces), k + 1, len(start)) + ((paths.k,) if paths.k > 1 else ())
+    coefficients = []
+    for c in range(3):
+        p = pos[c].reshape(shape)
+        chord = p[:, :1] + f.reshape((1, -1) + (1,) * (p.ndim - 2)) * (p[:, -1:] - p[:, :1])
+        coefficients.append(np.tensordot(to_coefficients, p - chord, axes=(1, 1)))
+    # coefficients[c]: (k + 1, sub-steps, moves[, points]); |sum a_j T_j| <= sum |a_j|
+    bound = np.sqrt(sum(x * x for x in coefficients)).sum(axis=0)
+    if bound.ndim == 3:
+        bound = bound.max(axis=2)
+    out = np.zeros(len(start), dtype=bool)
+    for piece, move in zip(*np.nonzero(bound > tolerance), strict=True):
+        if out[move]:
+            continue
+        values = [dense @ x[:, piece, move] for x in coefficients]
+        out[move] = np.sqrt(sum(v * v for v in values)).max() > tolerance
+    return out
