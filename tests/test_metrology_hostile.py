@@ -28,6 +28,7 @@ from machinesim.metrology import (
     groove_pitch,
     height_map,
     intersect_lines,
+    line_distance,
     plane_angle,
     plane_intersection,
     roughness_sa,
@@ -135,6 +136,17 @@ def test_fits_refuse_what_is_not_their_input_type():
         plane_intersection("a", plane)
     with pytest.raises(InputError, match="second as a plane with a point and a unit normal"):
         plane_intersection(plane, Line2D(np.zeros(2), np.array([1.0, 0.0]), 0.0))
+    # line_distance read .point and .direction unchecked: a raw AttributeError ('str' object
+    # has no attribute 'point'), and a Line2D's (2,) arrays a numpy broadcasting error
+    edge = plane_intersection(plane, fit_plane([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0],
+                                                [0.0, 0.0, 1.0]]))
+    with pytest.raises(InputError, match="first as a line with a point and a unit direction"):
+        line_distance("a", edge)
+    with pytest.raises(InputError, match="second as a line with a point and a unit direction"):
+        line_distance(edge, Line2D(np.zeros(2), np.array([1.0, 0.0]), 0.0))
+    # the x axis (the two planes' edge) and a parallel line 3 mm off it, 1 m along and 1 m up
+    other = type(edge)(np.array([1.0, 3e-3, 1.0]), np.array([-1.0, 0.0, 0.0]))
+    assert line_distance(edge, other) == pytest.approx(math.hypot(3e-3, 1.0), rel=1e-15)
     with pytest.raises(InputError, match="first as a Line2D"):
         intersect_lines("a", "b")
     line = fit_line([[0, 0], [1, 0]])

@@ -46,15 +46,8 @@ def plane_intersection(first, second) -> Line3D:
         the planes are parallel (`PARALLEL_SINE`).
     """
     for name, plane in (("first", first), ("second", second)):
-        try:
-            values = [as_floats(getattr(plane, k), name) for k in ("point", "normal")]
-        except AttributeError:
-            values = []
-        if (len(values) != 2 or any(v.shape != (3,) or not np.isfinite(v).all() for v in values)
-                or not np.isclose(np.linalg.norm(values[1]), 1.0)):
-            raise InputError(f"Expected {name} as a plane with a point and a unit normal, each "
-                             f"3 finite numbers (a PlaneFit from fit_plane), got "
-                             f"{shown(plane)}", key=name)
+        _parts(plane, name, ("point", "normal"), "a plane with a point and a unit normal, "
+               "each 3 finite numbers (a PlaneFit from fit_plane)")
     direction = np.cross(first.normal, second.normal)
     norm = np.linalg.norm(direction)
     if not norm > PARALLEL_SINE:
@@ -69,10 +62,32 @@ def plane_intersection(first, second) -> Line3D:
 
 
 def line_distance(first: Line3D, second: Line3D) -> float:
-    """Distance between two (nearly) parallel lines, across their mean direction, m."""
-    p, d = first.point, first.direction
-    q, e = second.point, second.direction
+    """Distance between two (nearly) parallel lines, across their mean direction, m.
+
+    Raises
+    ------
+    InputError
+        When either is not a line (a point and a unit direction of 3 finite numbers each,
+        a `Line3D` from `plane_intersection`).
+    """
+    (p, d), (q, e) = (_parts(line, name, ("point", "direction"), "a line with a point and a "
+                             "unit direction, each 3 finite numbers (a Line3D from "
+                             "plane_intersection)")
+                      for line, name in ((first, "first"), (second, "second")))
     mean = d + (e if d @ e >= 0.0 else -e)
     mean = mean / np.linalg.norm(mean)
     gap = q - p
     return float(np.linalg.norm(gap - (gap @ mean) * mean))
+
+
+def _parts(value, name: str, fields: tuple[str, str], want: str) -> list[np.ndarray]:
+    """The point and unit vector ``fields`` of a plane or line as float64 arrays of 3 finite
+    numbers, or an InputError naming ``name`` (never a bare AttributeError)."""
+    try:
+        values = [as_floats(getattr(value, k), name) for k in fields]
+    except AttributeError:
+        values = []
+    if (len(values) != 2 or any(v.shape != (3,) or not np.isfinite(v).all() for v in values)
+            or not np.isclose(np.linalg.norm(values[1]), 1.0)):
+        raise InputError(f"Expected {name} as {want}, got {shown(value)}", key=name)
+    return values
