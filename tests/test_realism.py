@@ -410,6 +410,20 @@ def test_beam_misalignment_gives_the_cosine_error(a0ib):
                                                                 - 1), rtol=0, atol=1e-18)
 
 
+def test_beam_misalignment_in_mrad_given_as_rad_is_refused(a0ib):
+    # alignment=(0.1, 0), 0.1 mrad meant, read every travel short by 1 - 1/sqrt(1.01):
+    # 0.50 mm over 0.1 m, the cosine error of 0.1 rad
+    with pytest.raises(InputError, match=r"alignment angles within 0.01 rad .* got \[0.1, 0.0\]"):
+        LaserInterferometer(a0ib, None, alignment=[0.1, 0.0])
+    with pytest.raises(InputError, match="alignment angles within 0.01 rad"):
+        LaserInterferometer(a0ib, None, alignment=[0.0, -0.02])
+    # at the bound it reads, with its cosine error: 5e-5 of the travel
+    laser = LaserInterferometer(a0ib, None, noise=False, resolution=0.0, alignment=[1e-2, 0.0])
+    reading = laser.positioning("X", [0.0, 0.1])
+    assert reading.deviation[1] == pytest.approx(0.1 * (1 / math.sqrt(1 + 1e-4) - 1),
+                                                 rel=1e-9, abs=0)
+
+
 # ------------------------------------------------------------------------------- artefacts
 
 

@@ -46,6 +46,14 @@ from machinesim.metrology.instruments import Readout, as_generator, as_machine, 
 __all__ = ["InterferometerReading", "LaserInterferometer", "squareness_from_diagonal"]
 
 _REFERENCES = ("least_squares", "end_points", "none")
+#: Largest beam misalignment angle (each of ``alignment``'s two), rad: 10 mrad, 100 times
+#: the lab's 0.1 mrad (the return beam centred to ~0.03 mm over 300 mm). At 10 mrad the
+#: return beam walks 3 mm over a 300 mm travel, half of a ~6 mm beam (assumed, the usual
+#: diameter of a heterodyne laser head's beam), so the fringe signal fades; the cosine error
+#: is then already 5e-5 of the travel. A mrad given as rad lies above it: alignment=(0.1, 0),
+#: 0.1 mrad meant, had read every travel 0.5 % short (a cosine error of 5 mm per metre),
+#: as ``scale`` is bounded at 1e-3 for the same slip.
+ALIGNMENT_LIMIT = 1e-2
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,7 +101,8 @@ class LaserInterferometer:
         Default ``"tool_tip"``: the functional point, free of Abbe offsets to the cut.
     alignment : array-like, shape (2,), optional
         The beam's misalignment angles (a, b), rad (module docstring); default none. The
-        lab's: 0.1 mrad scatter per angle (`machinesim.realism.PROBE`, assumed).
+        lab's: 0.1 mrad scatter per angle (`machinesim.realism.PROBE`, assumed). Each at
+        most `ALIGNMENT_LIMIT` (10 mrad) in size: more is a unit slip (mrad given as rad).
     scale : float
         Relative error of the scale displacements along the beam are read on (positioning
         and diagonal tests): the part of the air's refractive index the instrument's air
@@ -110,6 +119,11 @@ class LaserInterferometer:
         self.readout = Readout.of(sigma, resolution, noise)
         self._rng = as_generator(rng)
         self._alignment = None if alignment is None else _vector(alignment, 2, "alignment")
+        if self._alignment is not None and np.abs(self._alignment).max() > ALIGNMENT_LIMIT:
+            raise InputError(f"Expected alignment angles within {ALIGNMENT_LIMIT:g} rad in size "
+                             "(ALIGNMENT_LIMIT: beyond it the return beam misses the "
+                             "detector; the angles are in rad, not mrad), got "
+                             f"{self._alignment.tolist()}", key="alignment")
         self._scale = as_number(scale, "scale", unit="relative")
         if not abs(self._scale) < 1e-3:
             raise InputError(f"Expected a scale error below 1e-3 (1000 ppm) in size, got "
