@@ -379,6 +379,27 @@ def test_ball_form_changes_the_effective_radius_by_its_value_where_it_touches(a0
     assert np.array_equal(lobed, plain)
 
 
+def test_a_pretravel_or_ball_form_in_um_given_as_m_is_refused(a0ib, flat):
+    """0.1 um of lobing given as 0.1 read a touch of the block's side 0.1 m early (the ball
+    centre at x = -100.25 mm for -0.25 mm), and 0.1 um of form given as 0.1 one 50 mm
+    inside the part; both stay far beyond the first-order model they feed. Up to 1 % of the
+    radius (DEPARTURE_SHARE) is read, on the closed form: touched square to a face along x,
+    a lobe of order k at phase 0 presses a cos(k pi) in."""
+    start = np.array([-1 * MM, 1.5 * MM - 40 * MM, -0.5 * MM - 1 * MM, 0.0, 0.0])
+    for options in ({"pretravel": Lobing(((3, 0.1, 0.0),))},
+                    {"ball_form": ZonalForm((2,), [0.1], [[0.0, 0.0, 1.0]])},
+                    {"pretravel": Lobing(((3, 1.5 * UM, 0.0),)),
+                     "ball_form": ZonalForm((2,), [1.5 * UM], [[0.0, 0.0, 1.0]])}):
+        with pytest.raises(InputError, match=r"amplitudes to sum to at most 0.0025 mm"):
+            TouchProbe(a0ib, None, flat, noise=False, resolution=0.0, **options)
+    plain = TouchProbe(a0ib, None, flat, noise=False, resolution=0.0).touch(start, "+X", 2 * MM)
+    lobed = TouchProbe(a0ib, None, flat, noise=False, resolution=0.0,
+                       pretravel=Lobing(((3, 2.5 * UM, 0.0),))).touch(start, "+X", 2 * MM)
+    assert plain[0] == pytest.approx(-R, abs=1e-18)
+    # the normal points along -x (phi = pi): p = 2.5 um cos(3 pi), read 2.5 um early
+    assert lobed[0] - plain[0] == pytest.approx(-2.5 * UM, abs=1e-18)
+
+
 def test_drawn_forms_have_the_stated_peak_to_valley():
     form = ZonalForm.draw(np.random.default_rng(1), 0.13 * UM)
     assert np.ptp(form(fibonacci_sphere(FORM_POINTS))) == pytest.approx(0.13 * UM, rel=1e-12)

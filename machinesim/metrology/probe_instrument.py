@@ -46,7 +46,8 @@ from machinesim.metrology.probe import touch_many
 from machinesim.tolerances import PROBE_CHORD_M
 from machinesim.units import length_text
 
-__all__ = ["BALL_RADIUS_LIMIT", "ScanReading", "StylusOverTravel", "TouchProbe"]
+__all__ = ["BALL_RADIUS_LIMIT", "DEPARTURE_SHARE", "ScanReading", "StylusOverTravel",
+           "TouchProbe"]
 
 #: Largest ball ``radius`` a `TouchProbe` takes, m: 10 mm, 40 times paper 002's R0.25 mm ruby
 #: ball and above the balls of machine-tool probe styli (a few mm across). Any real ball's
@@ -60,6 +61,15 @@ BALL_RADIUS_LIMIT = 10e-3
 class StylusOverTravel(InputError):
     """A scan met the surface more than the stylus's stroke above its path: a real probe
     would stop the machine there."""
+
+#: Largest departure of the probed ball from its radius that pre-travel and ball form may
+#: add together (the sum of their amplitudes, each term's largest value), as a fraction of
+#: the ball radius: 1 %, 2.5 um on paper 002's R0.25 mm ball, 10 times the +-0.25 um lobing
+#: of strain-gauge probes and 20 times the lab's (0.10 + 0.02 um of lobing, 0.13 um of form
+#: P-V). The model is the first-order effect of an effective radius, within (p - f)**2 / r of
+#: the exact touch: at the bound 1 % of the departure. Beyond, a unit slip (0.1 um given as
+#: 0.1) read a touch 0.1 m early, or a ball form 50 mm inside the part.
+DEPARTURE_SHARE = 0.01
 
 #: Interior points tested on each piece: a smooth path's largest departure from a chord is
 #: near its middle, and a kink anywhere inside a piece moves every interior point.
@@ -132,6 +142,8 @@ class TouchProbe:
         The machine frame at the ball centre. Default ``"probe_tip"``.
     pretravel : Lobing, optional
         Pre-travel variation with the contact direction (module docstring); default none.
+        Its amplitudes and the ball form's sum to at most `DEPARTURE_SHARE` (1 %) of
+        ``radius``.
         The lab's: 3 lobes of 0.10 um and a first order of 0.02 um, phases drawn per probe
         (`machinesim.realism.PROBE`, assumed below the +-0.25 um 2-D lobing of strain-gauge
         machine-tool probes).
@@ -168,6 +180,17 @@ class TouchProbe:
             if value is not None and not isinstance(value, kind):
                 raise InputError(f"Expected {name} as a {kind.__name__} or None, got "
                                  f"{type(value).__name__}", key=name)
+        departure = ((0.0 if pretravel is None else sum(abs(a) for _, a, _ in
+                                                        pretravel.harmonics))
+                     + (0.0 if ball_form is None else float(np.abs(ball_form.amplitudes).sum())))
+        if departure > DEPARTURE_SHARE * self.radius:
+            raise InputError(f"Expected the pre-travel and ball form amplitudes to sum to at "
+                             f"most {length_text(DEPARTURE_SHARE * self.radius)} "
+                             f"(DEPARTURE_SHARE: {DEPARTURE_SHARE:g} of the ball radius "
+                             f"{length_text(self.radius)}, where the model holds; amplitudes "
+                             f"are in m: more is a unit slip, e.g. um given as m), got "
+                             f"{length_text(departure)}", key="pretravel" if ball_form is None
+                             else "ball_form")
         self._pretravel = pretravel
         self._ball_form = ball_form
         if lobing_amplitudes is not None and not isinstance(lobing_amplitudes, Mapping):
