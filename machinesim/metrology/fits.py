@@ -55,6 +55,13 @@ CIRCLE_SCATTERS = 3.0
 #: that one's RMS residual: on a cap the other side misses by millimetres, on a ring with
 #: noisy heights both sides fit alike and the caller's side stands.
 OTHER_SIDE_RMS = 0.5
+#: A sphere fit's step has also settled when no parameter moves by more than this many times
+#: its round-off: float64's eps times the largest distance, through the Jacobian's
+#: pseudo-inverse. On a shallow cap the centre's height and the radius move together, so
+#: round-off steps grow with the distances over the cap's spread: measured 0.1-1.3 of it on
+#: caps of 0.005-0.5 rad, where `STEP_TOL` times the spread (1e-19 m on a 0.05 rad cap of a
+#: 0.5 mm sphere, whose steps stay at ~1e-17 m) refused caps below about 0.1 rad.
+ROUNDOFF_STEPS = 10.0
 #: Gauss-Newton gives up after this many iterations (it takes ~3-6 on a sphere cap).
 MAX_ITERATIONS = 100
 #: A held-radius sphere fit that does not settle on points within this fraction of the
@@ -238,7 +245,8 @@ def _settle(local, centre, fitted, held: bool, size: float):
         centre = centre + step[:3]
         if not held:
             fitted += step[3]
-        if np.abs(step).max() <= STEP_TOL * size:
+        if np.abs(step).max() <= STEP_TOL * size or np.all(
+                np.abs(step) <= ROUNDOFF_STEPS * _roundoff(jacobian, float(distance.max()))):
             return centre, fitted
     last = f"The sphere fit did not settle in {MAX_ITERATIONS} steps (last step " \
            f"{np.abs(step).max():.3g} m)"
@@ -247,6 +255,15 @@ def _settle(local, centre, fitted, held: bool, size: float):
         if near is not None:
             raise InputError(f"{last}: {near}")
     raise InputError(f"{last}: are the points on a sphere?")
+
+
+def _roundoff(jacobian: np.ndarray, scale: float) -> np.ndarray:
+    """Each parameter's step from round-off of eps ``scale`` in every distance: eps scale
+    times the norm of its row of the pseudo-inverse (zeros where the Jacobian is singular)."""
+    _, singular, vt = np.linalg.svd(jacobian, full_matrices=False)
+    if singular[-1] <= 0.0:
+        return np.zeros(len(singular))
+    return np.finfo(np.float64).eps * scale * np.sqrt(((vt.T / singular) ** 2).sum(axis=1))
 
 
 def _either_side(local, algebraic, radius: float, concave: bool, size: float) -> np.ndarray:
