@@ -138,7 +138,9 @@ class Registration:
     workpiece's ``R(rotation) (xi, yi) + offset[:2]``, and the height it shows there is the
     workpiece's plus ``offset[2] + tilt[0] xi + tilt[1] yi``. The tilt is applied as a shear
     of heights (x and y stay): a true rotation would also move each point sideways by the
-    tilt times its height, under 1 nm for tilts below 1 mrad on heights below 1 mm.
+    tilt times its height (1 um at 1 mrad and 1 mm of height; 40 nm between paper 002's
+    crown top and its flat 0.2 mm below at the lab's 0.2 mrad), and lower it by tilt^2 x / 2
+    (under 1 nm for tilts below 1 mrad over 1 mm): the shear leaves the sideways part out.
 
     Parameters
     ----------
