@@ -13,7 +13,7 @@ import numpy as np
 
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_number, frozen, profile_arrays, shown
-from machinesim.metrology.grooves import _band
+from machinesim.metrology.grooves import OWN_NOISE_DOF, _band
 
 #: Lower bound of a fit's standard uncertainty (m): noise-free profiles can fit with a zero
 #: residual; 1 pm, below any instrument resolution here, keeps the uncertainties finite.
@@ -49,7 +49,9 @@ def fit_apexes(s, z, count: int, *, prominence: float, flank_band=(0.1, 0.9)):
     Returns
     -------
     centre, depth, centre_sigma, depth_sigma : ndarray, shape (count,), read-only
-        Apex s and depth (m), with standard uncertainties from the line fits.
+        Apex s and depth (m), with standard uncertainties from the line fits, each line with
+        the noise of its own residuals (with fewer than `OWN_NOISE_DOF` degrees of freedom,
+        the pooled residual of the three), at least `SIGMA_FLOOR_M`.
 
     Raises
     ------
@@ -150,12 +152,17 @@ def _apex(u, z, parts, origin):
                          f"{b1:.3g} and {b2:.3g}", key="z")
     t = (a2 - a1) / (b1 - b2)
     dof = max(sum(fit[3] for fit in fits) - 6, 1)
-    sigma = max(math.sqrt(sum(fit[1] for fit in fits) / dof), SIGMA_FLOOR_M)
+    pooled = math.sqrt(sum(fit[1] for fit in fits) / dof)
     # derivatives of the apex position t and the depth with respect to (ar, br, a1, b1, a2, b2)
     dt = np.array([0.0, 0.0, -1.0, -t, 1.0, t]) / (b1 - b2)
     dd = np.array([1.0, t, -1.0, -t, 0.0, 0.0]) + (br - b1) * dt
+    # each line with the noise of its own residuals, as `fit_v_groove`'s: lateral noise shows
+    # on a flank as its slope times the jitter, not on the land, so a pooled noise (the long
+    # land's mostly) understated the flanks' and the apex's uncertainty
     covariance = np.zeros((6, 6))
     for k, fit in enumerate(fits):
-        covariance[2 * k:2 * k + 2, 2 * k:2 * k + 2] = fit[2]
-    return (origin + t, ar + br * t - (a1 + b1 * t), sigma * math.sqrt(dt @ covariance @ dt),
-            sigma * math.sqrt(dd @ covariance @ dd))
+        own = fit[3] - 2
+        sigma = max(math.sqrt(fit[1] / own) if own >= OWN_NOISE_DOF else pooled, SIGMA_FLOOR_M)
+        covariance[2 * k:2 * k + 2, 2 * k:2 * k + 2] = sigma * sigma * fit[2]
+    return (origin + t, ar + br * t - (a1 + b1 * t), math.sqrt(dt @ covariance @ dt),
+            math.sqrt(dd @ covariance @ dd))
