@@ -202,6 +202,20 @@ def test_registration_shows_on_a_flat_as_the_drawn_offset_and_tilt(flat):
                                         spacing=0.1 * MM).z, prof.z)
 
 
+def test_a_registration_tilt_in_mrad_given_as_rad_is_refused(flat):
+    # tilt=(0.2, 0), the lab's 0.2 mrad meant, sheared the flat to a slope of 0.2 (11 deg)
+    # and it read so, silently; the shear model holds for a levelled part only
+    with pytest.raises(InputError, match=r"tilt slopes within 0.01 rad .* got \[0.2, 0.0\]"):
+        Registration([0.0, 0.0, 0.0], 0.0, [0.2, 0.0])
+    with pytest.raises(InputError, match="tilt slopes within 0.01 rad"):
+        Registration(tilt=[0.0, -0.011])
+    # at the bound it reads the flat as that slope
+    scope = Microscope(noise=False, resolution=0.0,
+                       registration=Registration(tilt=[1e-2, -1e-2]))
+    prof = scope.profile(flat, (1 * MM, 2 * MM), (2 * MM, 1 * MM), spacing=0.1 * MM)
+    np.testing.assert_allclose(prof.z, prof.xy @ [1e-2, -1e-2], rtol=0, atol=ROUND_OFF_M)
+
+
 def test_registration_moves_an_edge_to_where_the_instrument_frame_puts_it(step):
     """The step x = 2.5 mm of the workpiece lies, along the instrument's line y = y0, at
     xi = (2.5 mm - tx + sin(t) y0) / cos(t)."""

@@ -36,6 +36,12 @@ __all__ = ["Lobing", "Registration", "RegistrationScatter", "Spot", "ZonalForm",
            "line_heights", "spot_heights"]
 
 SPOT_SHAPES = ("gaussian", "tophat")
+#: Largest slope of a `Registration`'s tilt (each of its two), rad: 10 mrad, 50 times the
+#: lab's 0.2 mrad scatter (a part levelled on the stage). The tilt is applied as a shear of
+#: heights, leaving out the sideways move of tilt x height, which at 10 mrad is already 1 %
+#: of every height; a part that leans more is no levelled part. A tilt in mrad given as rad
+#: lies above it: tilt=(0.2, 0), 0.2 mrad meant, had sheared the part by 0.2 (11 deg).
+TILT_LIMIT = 1e-2
 #: Samples of a sub-grid read per call of the height map (rows are read in blocks): keeps a
 #: block's arrays at ~100 MB whatever the map's size.
 BLOCK_SAMPLES = 4_000_000
@@ -149,7 +155,8 @@ class Registration:
     rotation : float
         rad: the instrument's x axis turned about z from the workpiece's.
     tilt : array-like, shape (2,)
-        The slopes dz/dx and dz/dy the part shows in the instrument frame (rad).
+        The slopes dz/dx and dz/dy the part shows in the instrument frame (rad), each at
+        most `TILT_LIMIT` (10 mrad) in size.
     """
 
     offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -159,6 +166,11 @@ class Registration:
     def __post_init__(self) -> None:
         object.__setattr__(self, "offset", _finite(self.offset, (3,), "offset"))
         object.__setattr__(self, "tilt", _finite(self.tilt, (2,), "tilt"))
+        if np.abs(self.tilt).max() > TILT_LIMIT:
+            raise InputError(f"Expected tilt slopes within {TILT_LIMIT:g} rad in size "
+                             "(TILT_LIMIT: a levelled part, where the shear of heights "
+                             "holds; the slopes are in rad, not mrad), got "
+                             f"{self.tilt.tolist()}", key="tilt")
         object.__setattr__(self, "rotation", float(_finite(self.rotation, (), "rotation")))
 
     @classmethod
