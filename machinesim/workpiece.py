@@ -37,12 +37,24 @@ class Part:
     Parameters
     ----------
     manifold : manifold3d.Manifold
-        The solid.
+        The solid. A `Part` is refused (a part is never mutated: use it as it is), and so is
+        a mesh (`from_mesh` takes one).
+
+    Raises
+    ------
+    InputError
+        If ``manifold`` is not a `manifold3d.Manifold`.
     """
 
     __slots__ = ("_manifold", "_vertices", "_triangles", "_volume", "reliefs")
 
     def __init__(self, manifold: manifold3d.Manifold) -> None:
+        if not isinstance(manifold, manifold3d.Manifold):
+            hint = (" (a part is never mutated: use it as it is, or Part(part.manifold))"
+                    if isinstance(manifold, Part) else
+                    " (a mesh: Part.from_mesh(vertices, triangles))")
+            raise InputError("Expected the solid as a manifold3d.Manifold, got "
+                             f"{type(manifold).__name__}{hint}", key="manifold")
         self._manifold = manifold
         self._vertices = None
         self._triangles = None

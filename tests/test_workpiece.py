@@ -112,6 +112,22 @@ def test_from_mesh_rejects_an_inside_out_mesh():
         Part.from_mesh(vertices, triangles[:, ::-1])
 
 
+def test_a_part_is_made_from_a_manifold_only_naming_what_it_got():
+    # Part(part) was taken and failed at its first use: AttributeError: 'Part' object has no
+    # attribute 'bounding_box' (or 'to_mesh64')
+    part = block(1e-3, 1e-3, 1e-3)
+    with pytest.raises(InputError, match=r"key 'manifold': Expected the solid as a "
+                       r"manifold3d.Manifold, got Part \(a part is never mutated"):
+        Part(part)
+    with pytest.raises(InputError, match=r"got tuple \(a mesh: Part.from_mesh"):
+        Part(part.mesh())
+    with pytest.raises(InputError, match="got NoneType"):
+        Part(None)
+    again = Part(part.manifold)  # what the refusal names
+    assert again.volume == pytest.approx(1e-9, rel=VOLUME_REL)
+    np.testing.assert_array_equal(again.bounds, part.bounds)
+
+
 def _read_ply(path):
     """Independent binary PLY reader for the layout written by export_ply."""
     data = open(path, "rb").read()
