@@ -34,6 +34,7 @@ from machinesim.workpiece import Part, block_with_spheres, diamond_crown
 
 MM = 1e-3
 UM = 1e-6
+NM = 1e-9
 #: Lengths fitted from exact samples: coordinates of ~10 mm carry ~2e-18 m of round-off, the
 #: line fits and intersections amplify it by ~100 at most; 1e-15 m (1 fm) fails on any real
 #: error (a wrong sample in a fit moves a result by >1e-12 m) yet leaves that room.
@@ -296,6 +297,34 @@ def test_step_positions_and_edge_distance_of_an_analytic_plateau():
     assert abs(edge_distance(s, z, level=-1 * UM) - 2.01 * MM) < EXACT_M
     with pytest.raises(InputError, match="crossing the level twice, got 0"):
         edge_distance(s, z, level=1 * UM)
+
+
+def test_a_profile_touching_the_level_crosses_it_nowhere_from_either_side():
+    # A peak touching the level from below counted 2 crossings (both at the peak), a valley
+    # touching it from above none: a sample at the level was counted as above it.
+    s = np.arange(9) * UM
+    peak = np.array([-2.0, -1.0, 0.0, -1.0, -2.0, -1.0, 1.0, 2.0, 3.0]) * NM
+    # the peak at 2 um touches; the rise crosses at 5.5 um
+    np.testing.assert_array_equal(step_positions(s, peak, 0.0), [5.5 * UM])
+    # upside down (a valley touching from above) and backwards: the same crossing
+    np.testing.assert_array_equal(step_positions(s, -peak, 0.0), [5.5 * UM])
+    np.testing.assert_array_equal(step_positions(-s[::-1], peak[::-1], 0.0), [-5.5 * UM])
+    # a flat at the level touched, and a profile starting or ending at it: no crossing
+    for z in ([-1, 0, 0, 0, -1, -2, -3, -2, -1], [0, 0, 1, 2, 3, 2, 1, 2, 3],
+              [3, 2, 1, 2, 3, 2, 1, 0, 0]):
+        for sign in (1.0, -1.0):
+            assert step_positions(s, sign * np.array(z) * NM, 0.0).size == 0
+    # a crossing through samples at the level lies at their middle, one sample at it
+    for z, at in (([-2, -1, 0, 0, 0, 1, 2, 3, 4], 3.0), ([-2, -1, 0, 1, 2, 3, 4, 5, 6], 2.0)):
+        for sign in (1.0, -1.0):
+            np.testing.assert_array_equal(step_positions(s, sign * np.array(z) * NM, 0.0),
+                                          [at * UM])
+    # the analytic plateau's flat top at its own height is a touch: no edges there
+    plateau_s = np.arange(4000) * 1.003 * UM
+    plateau = np.clip(np.minimum(0.2 * (plateau_s - 1.0 * MM), 0.2 * (3.0 * MM - plateau_s)),
+                      -10 * UM, 0.0)
+    with pytest.raises(InputError, match="crossing the level twice, got 0"):
+        edge_distance(plateau_s, plateau, level=0.0)
 
 
 def test_edge_distance_of_a_stepped_part_with_walls_between_samples():

@@ -186,6 +186,14 @@ def step_positions(s, z, level: float | None = None) -> np.ndarray:
     on both sides this is exact; a vertical wall lies between two samples, so its position is
     known to a sample spacing, and to a few percent of it when the wall sits midway.
 
+    A crossing passes from below the level to above it or back. Samples exactly at the level
+    take no side: the profile crosses where it goes from a sample below to the next one
+    above (or back) with only samples at the level between, at the middle of those (at the
+    one such sample; between the two samples, interpolated, when there is none). A profile
+    that touches the level and turns back, a peak from below or a valley from above (or a
+    flat at the level's height), does not cross it, nor does one that starts or ends at it:
+    both count no crossing, the same read upside down or backwards.
+
     Parameters
     ----------
     s : array-like, shape (k,)
@@ -206,9 +214,15 @@ def step_positions(s, z, level: float | None = None) -> np.ndarray:
     else:
         level = as_number(level, "level")
     d = z - level
-    cross = np.flatnonzero(((d[:-1] < 0.0) & (d[1:] >= 0.0)) | ((d[:-1] >= 0.0) & (d[1:] < 0.0)))
-    fraction = d[cross] / (d[cross] - d[cross + 1])
-    return frozen(s[cross] + fraction * (s[cross + 1] - s[cross]))
+    off = np.flatnonzero(d != 0.0)  # the samples on a side
+    i, j = off[:-1], off[1:]
+    change = np.sign(d[i]) != np.sign(d[j])
+    i, j = i[change], j[change]
+    # next neighbours: the interpolated crossing; else the middle of the samples at the level
+    fraction = d[i] / (d[i] - d[j])
+    next_to = j == i + 1
+    return frozen(np.where(next_to, s[i] + fraction * (s[j] - s[i]),
+                           0.5 * (s[np.minimum(i + 1, j)] + s[np.maximum(j - 1, i)])))
 
 
 def edge_distance(s, z, level: float | None = None) -> float:
