@@ -156,6 +156,17 @@ def iso230_2_targets(start: float, end: float, count: int | None = None,
     in ``[-p/4, p/4]`` (the standard leaves the spread open; a quarter interval keeps the
     targets ordered and apart).
 
+    The minimum here, ``max(5, ceil(5 L) + 1)`` over ``L`` metres, reads "five per metre" as
+    intervals of at most 200 mm (``ceil(5 L)`` intervals); read as a count of targets it
+    would be ``max(5, ceil(5 L))``, one fewer above 1 m (10, not 11, over 2 m). The
+    standard's own words were not found to settle it: searched (2026-11-30) the docs and
+    pages corpora for "ISO 230-2 target positions per metre", "at least five target
+    positions", "minimum of five target positions per metre overall minimum of five",
+    "measurement travel up to 2000 mm target positions", "axes longer than 2000 mm target
+    position every 250 mm", and the code corpus; only ISO's abstract pages and third-party
+    notes came back, none quoting the clause. So the stricter reading stays, and whether
+    the standard sets another rule for long travels is not known here.
+
     Parameters
     ----------
     start, end : float
