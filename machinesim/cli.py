@@ -442,12 +442,13 @@ def _cut(args) -> int:
         print(f"wrote {args.report} (cut report, JSON, units in every key)")
     for note in summary["notes"]:  # a note may quote a file's name: escaped, as in errors
         print(f"note: {printable(note)}", file=sys.stderr)
-    _warn_each(report.holder_contact, "holder touched the part at line {}",
+    _warn_each(program, report.holder_contact, "holder touched the part at {}",
                "holder_contact_lines")
-    _warn_each(report.rapids_that_cut, "rapid cut the part at line {}", "rapids_that_cut_lines")
-    _warn_each(report.sideways_lines, "tool dragged sideways at line {} (a non-rotational tool "
-               "cuts along its own X only; the part there is not what a real tool would "
-               "leave)", "sideways_lines")
+    _warn_each(program, report.rapids_that_cut, "rapid cut the part at {}",
+               "rapids_that_cut_lines")
+    _warn_each(program, report.sideways_lines, "tool dragged sideways at {} (a "
+               "non-rotational tool cuts along its own X only; the part there is not what a "
+               "real tool would leave)", "sideways_lines")
     for item in report.limit_violations:
         print(f"warning: outside travel: {item}", file=sys.stderr)
     if apart:
@@ -487,12 +488,12 @@ def _cut(args) -> int:
 MOST_WARNING_LINES = 20
 
 
-def _warn_each(lines, text: str, key: str) -> None:
+def _warn_each(program, lines, text: str, key: str) -> None:
     """One warning line on stderr per program line in ``lines`` (``text`` formatted with
-    it), the first `MOST_WARNING_LINES`, then one line saying how many more and where the
-    report (``key``) lists them all."""
+    it as ``line 12 (N120)``, `Program.line_text`), the first `MOST_WARNING_LINES`, then
+    one line saying how many more and where the report (``key``) lists them all."""
     for line in lines[:MOST_WARNING_LINES]:
-        print(f"warning: {text.format(line)}", file=sys.stderr)
+        print(f"warning: {text.format(program.line_text(line))}", file=sys.stderr)
     if len(lines) > MOST_WARNING_LINES:
         more = len(lines) - MOST_WARNING_LINES
         print(f"warning: ... and {more} more lines as these (lines {lines[MOST_WARNING_LINES]}"

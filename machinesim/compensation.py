@@ -151,7 +151,8 @@ def program_axes(program: Program, machine: Machine | str, *, start=None) -> np.
         letter = AXES[foreign[int(np.argmax(named[row]))]]
         raise NCProgramError(
             f"axis {letter} is not on {machine.name} (axes {''.join(machine.axes)})",
-            source=program.source, line=int(program.lines[row]), key=letter)
+            source=program.source, line=int(program.lines[row]), key=letter,
+            block=program.block_at(int(program.lines[row])))
     columns = [AXES.index(letter) for letter in machine.axes]
     return modal_values(targets[:, columns], start=start_axes(machine, start))
 

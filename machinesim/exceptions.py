@@ -37,6 +37,13 @@ def printable(text: str, keep: str = "") -> str:
                    else c.encode("unicode_escape").decode("ascii") for c in text)
 
 
+def line_of(line: int, block: int | None = None) -> str:
+    """``line 12``, or ``line 12 (N120)`` when the block there has an N word: the one way a
+    message names a line of an NC program, by the file's line a text editor shows and the
+    block number a machinist reads on the control."""
+    return f"line {line}" if block is None else f"line {line} (N{block})"
+
+
 def say(program: str, message: str) -> None:
     """Write ``program: message`` to stderr as one of machinesim's commands ends (an error,
     an interruption): what the message quotes of a file's name or a key goes through
@@ -88,7 +95,7 @@ class InputError(MachineSimError, ValueError):
         if source is not None:
             where.append(printable(source))  # a file's name may hold any byte but '/
         if line is not None:
-            where.append(f"line {line}")
+            where.append(self._line_text(line))
         if column is not None:
             where.append(f"column {column}")
         if key is not None:
@@ -99,6 +106,9 @@ class InputError(MachineSimError, ValueError):
             where.append(f"key '{shown}'")
         prefix = ", ".join(where)
         super().__init__(f"{prefix}: {message}" if prefix else message)
+
+    def _line_text(self, line: int) -> str:
+        return f"line {line}"
 
 
 class FileError(InputError, OSError):
@@ -116,7 +126,26 @@ class ErrorModelError(InputError):
 
 
 class NCProgramError(InputError):
-    """An NC program has a word, block or modal state that cannot be run."""
+    """An NC program has a word, block or modal state that cannot be run.
+
+    Takes `InputError`'s arguments and ``block``, the N word of the block at ``line`` (None
+    when it has none): the message then names ``line 12 (N120)`` (`line_of`)."""
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        source: str | None = None,
+        line: int | None = None,
+        column: int | None = None,
+        key: str | None = None,
+        block: int | None = None,
+    ) -> None:
+        self.block = block
+        super().__init__(message, source=source, line=line, column=column, key=key)
+
+    def _line_text(self, line: int) -> str:
+        return line_of(line, self.block)
 
 
 class NotConvergedError(MachineSimError):

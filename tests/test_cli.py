@@ -1179,3 +1179,30 @@ def test_a_log_names_the_stage_building_the_sweeps_before_cutting(capsys):
         "  building: 3848/3848 sweeps (100 %), 20 s",
         "  cutting: 3819/3819 sweeps (100 %), 45 s",
     ]
+
+
+def test_a_cuts_warnings_and_refusals_name_the_n_word_beside_the_line(tmp_path, capsys):
+    # the program of the test above with N words on lines 5 and 8 (none on line 9) and a
+    # rapid to X 2 m on line 11 (N110), beyond grooving_4axis's travel: a machinist finds a
+    # block by its N word, an editor by its line, so a message names both where there is an
+    # N word ('line 5 (N50)'), and the line alone where there is none (line 9, as before)
+    program = tmp_path / "crash.nc"
+    program.write_text("%\nG90 G21 G94 G54\nG00 X-0.5 Y2. Z0.1\nG00 Z-0.03\n"
+                       "N50 G01 X5.5 F500.\nG00 Z0.1\nG00 X1. Y1.\nN80 G00 Z-0.005\n"
+                       "G00 X4.\nG00 Z0.1\nN110 G00 X2000.\nM30\n%\n")
+    argv = ["cut", program, "--machine", "grooving_4axis", "--tool", "v:90:h=0.02",
+            "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply",
+            "--allow-overtravel"]
+    code, _, err = run(argv, capsys)
+    assert code == 2
+    assert err.startswith(f"machinesim: error: {program}: line 5 (N50) takes the top of the "
+                          "tool's body (0.02 mm"), err
+    code, _, err = run([*argv, "--allow-holder-contact"], capsys)
+    assert code == 0, err
+    warnings = [line for line in err.splitlines() if line.startswith("warning:")]
+    assert warnings[:3] == ["warning: holder touched the part at line 5 (N50)",
+                            "warning: rapid cut the part at line 8 (N80)",
+                            "warning: rapid cut the part at line 9"], err
+    assert len(warnings) == 4 and " at line 11 (N110) outside its travel " in warnings[3], err
+    code, _, err = run(argv[:-1], capsys)  # refused for the travel first: named alike
+    assert code == 2 and " at line 11 (N110) outside its travel " in err, err

@@ -402,3 +402,23 @@ def test_an_arc_takes_its_length_over_f_not_its_chords(tolerance):
     with pytest.raises(NCProgramError, match="arc_lengths must be lengths >= 0"):
         Program.from_arrays(program.targets, program.kinds, program.feeds,
                             arc_lengths=-program.arc_lengths)
+
+
+def test_a_planner_refusal_names_the_blocks_n_word_beside_its_line():
+    # as the reader's refusals: 'line 2 (N40)' where the block has an N word, the line
+    # alone where it has none; from a Program's arrays and from a plain list of Moves
+    machine = load_machine("grooving_4axis")
+    for text, where in (("G21 G90\nN40 G00 A1.\nM30\n", "p.nc, line 2 (N40), key 'A'"),
+                        ("G21 G90\nG00 A1.\nM30\n", "p.nc, line 2, key 'A'")):
+        program = parse_program(text, "p.nc")
+        with pytest.raises(NCProgramError) as info:
+            plan(program, machine)
+        assert str(info.value) == f"{where}: axis A is not on grooving_4axis (axes XYZC)"
+
+    class Moves:  # any object with moves (planner._program_arrays)
+        source = "m.nc"
+        moves = (Move("rapid", {"X": 0.0}, line=1, block_number=7),
+                 Move("rapid", {"B": 0.1}, line=2, block_number=8))
+
+    with pytest.raises(NCProgramError, match=r"^m.nc, line 2 \(N8\), key 'B': axis B is not"):
+        plan(Moves(), machine)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 from decimal import ROUND_HALF_EVEN, Decimal
 
 import numpy as np
@@ -833,7 +834,8 @@ def _parse_only_nc_errors(text: str, integer_input: str) -> None:
     except NCProgramError as error:
         assert error.line is not None
         assert 1 <= error.line <= text.count("\n") + 1
-        assert f"line {error.line}," in str(error)
+        # the line, and the block's N word when it has one: 'line 1,' or 'line 1 (N0),'
+        assert re.search(rf"line {error.line}( \(N[0-9]+\))?,", str(error))
         return
     try:
         written = format_program(program)
@@ -885,3 +887,23 @@ def test_the_builder_takes_numbers_not_text_or_flags(build, message):
         build(ProgramBuilder(1)).build()
     exact = ProgramBuilder(1).rapid(X=np.float64(1e-3), Y=2).dwell(np.int64(2)).build()
     assert exact.targets[0, :2].tolist() == [1e-3, 2.0] and exact.dwells[1] == 2.0
+
+
+def test_a_refusal_names_the_blocks_n_word_beside_its_line():
+    # an error names the file's line (an editor's) and, where the block has an N word, that
+    # block number (the control's): 'line 4 (N20)'; a block without one reads as before
+    text = "%\nO1000\nN10 G21 G90\nN0020 G01 X1. F100. G99.3\nG01 X2. G99.4\nM30\n%\n"
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text, "p.nc")
+    error = info.value
+    assert (error.line, error.block) == (4, 20)
+    assert str(error).startswith("p.nc, line 4 (N20), column 21, key 'G99.3': 2 problems in "
+                                 "the program (the first at line 4 (N20); ")
+    assert [str(e).split(": ")[0] for e in error.problems] == [
+        "p.nc, line 4 (N20), column 21, key 'G99.3'", "p.nc, line 5, column 9, key 'G99.4'"]
+    # a malformed word of the lexer's, and one refused by a single block
+    for bad, where in (("N30 G01 X", "p.nc, line 3 (N30), column 9, key 'X'"),
+                       ("G01 X", "p.nc, line 3, column 5, key 'X'")):
+        with pytest.raises(NCProgramError) as info:
+            parse_program(f"%\nG21\n{bad}\nM30\n%\n", "p.nc")
+        assert str(info.value).startswith(where + ": malformed number ''"), str(info.value)

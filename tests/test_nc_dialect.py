@@ -679,8 +679,8 @@ SWITCHES_AFTER_MOTION = [
     ("O1\nM98 P100\nG20\nM30\nO100\nG00 X1.\nM99\n", 3, 1, 6, "G20", "mm", "inch"),
     # the first motions on the vectorised path (a run of simple lines): X0 of lines 1 and 2
     # is the work zero in either unit, X1. of line 3 is the first motion
-    ("G00 X0\n" + "".join(f"G01 X{k}. F100.\n" for k in range(20)) + "N5 G20\n", 22,
-     4, 3, "G20", "mm", "inch"),
+    ("G00 X0\n" + "".join(f"G01 X{k}. F100.\n" for k in range(20)) + "N5 G20\n",
+     "22 (N5)", 4, 3, "G20", "mm", "inch"),  # its N word named beside the line
     # a reference return of zeros is none (the test below), one with a length word is
     ("G91 G28 Z0.\nG90 G28 X1.\nG20\nM30\n", 3, 1, 2, "G20", "mm", "inch"),
     ("G53 Z0.\nG53 Z-1.\nG20\nM30\n", 3, 1, 2, "G20", "mm", "inch"),

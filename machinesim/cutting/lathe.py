@@ -233,11 +233,11 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     if servo is not None:  # as a Lab checks it: one column per axis, each named right
         check_servo(machine, servo)
     moves = _program_moves(program, machine)
-    limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
+    limits = _overtravel(machine, moves, program, allow_overtravel)
     # as `cut` refuses a move beyond FARTHEST_M (1 km), allowed overtravel or not: the
     # moves are straight in X and Z, so their ends bound the tool's distance
     _refuse_far(machine.tool_pose(modal_values(moves.q, start=machine.home), errors), moves,
-                getattr(program, "source", None))
+                program)
     tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
     beyond = {entry.split(" ", 2)[1] for entry in limits}  # the axes the command takes out

@@ -28,10 +28,16 @@ from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sideways import dragged_past_clearance, within_edge_plane
 from machinesim.errors import as_error_model
-from machinesim.exceptions import AxisLimitError, HolderContactError, InputError, NCProgramError
+from machinesim.exceptions import (
+    AxisLimitError,
+    HolderContactError,
+    InputError,
+    NCProgramError,
+    line_of,
+)
 from machinesim.metrology._arrays import as_flag
 from machinesim.motion.faces import ProfileEdges
-from machinesim.nc import MOVE_KINDS
+from machinesim.nc import MOVE_KINDS, Program
 from machinesim.servo import check_servo
 from machinesim.tolerances import LIMIT_SLACK
 from machinesim.tool_specs import tool_from_spec
@@ -164,9 +170,9 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
                              profile=ProfileEdges.of(tools.setups(), stock))
     following = peak_following_error(trajectory, machine)
     moves = _Moves(trajectory, len(machine.axes))
-    limits = _overtravel(machine, moves, getattr(program, "source", None), allow_overtravel)
+    limits = _overtravel(machine, moves, program, allow_overtravel)
     poses = machine.tool_pose(moves.q, errors) if len(moves.q) else np.zeros((0, 4, 4))
-    _refuse_far(poses, moves, getattr(program, "source", None))
+    _refuse_far(poses, moves, program)
     part, engines, rapids, holder, sideways, sections = stock, [], [], set(), set(), []
     in_plane: set[int] = set()
     for section_tool, length, section, (lo, hi), (number, line) in tools.split(moves):
@@ -174,7 +180,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         paths = np.split(section_poses, section.breaks) if len(section_poses) else []
         before = part
         refuse = None if allow_holder_contact else _holder_refusal(
-            getattr(program, "source", None), section_tool, before, section.sweep_line)
+            program, section_tool, before, section.sweep_line)
         part, engine = remove(before, section_tool, paths, roi=roi, progress=progress,
                               sheets=False, on_holder_contact=refuse)
         rapids += rapids_that_cut(before, section_tool, section_poses, section,
@@ -396,7 +402,7 @@ def _beyond_tip(length: float) -> np.ndarray:
     return shift
 
 
-def _refuse_far(poses: np.ndarray, moves: _Moves, source) -> None:
+def _refuse_far(poses: np.ndarray, moves: _Moves, program) -> None:
     """Raise InputError when a move takes the tool beyond `FARTHEST_M` from the origin,
     naming the first such move's line (and the farthest's, where that is another): the
     farthest alone had named `G00 Z1.` after a `G01 X1000000.`, which went out first."""
@@ -409,18 +415,19 @@ def _refuse_far(poses: np.ndarray, moves: _Moves, source) -> None:
     worst = int(np.argmax(distance))
     farthest = ""
     if int(moves.line[worst]) != int(moves.line[first]):
-        farthest = (f" (the farthest, {distance[worst]:.3g} m, at line "
-                    f"{int(moves.line[worst])})")
-    raise InputError(
+        farthest = (f" (the farthest, {distance[worst]:.3g} m, at "
+                    f"{line_text(program, int(moves.line[worst]))})")
+    raise NCProgramError(
         f"the move takes the tool {distance[first]:.3g} m from the "
         f"workpiece origin{farthest}; expected within {FARTHEST_M:g} m, beyond any machine's "
         "travel, where float64 keeps no nanometre (its spacing there is "
         f"{np.spacing(distance[first]):.2g} m) and the part would come out wrong; nothing "
         "was cut. A length in the wrong unit is the usual cause",
-        source=source, line=int(moves.line[first]))
+        source=getattr(program, "source", None), line=int(moves.line[first]),
+        block=block_at(program, int(moves.line[first])))
 
 
-def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
+def _overtravel(machine, moves: _Moves, program, allow: bool) -> tuple[str, ...]:
     """Descriptions of the blocks that take an axis outside its travel, with their lines.
 
     Raises AxisLimitError listing them all unless ``allow``.
@@ -437,16 +444,29 @@ def _overtravel(machine, moves: _Moves, source, allow: bool) -> tuple[str, ...]:
         lines = list(dict.fromkeys(int(n) for n in moves.line[bad]))
         worst = bad[np.argmax(np.maximum(low - moves.q[bad, i], moves.q[bad, i] - high))]
         unit = _format(machine.rotary[i], moves.q[worst, i], (low, high))
-        found.append(f"axis {letter} = {unit(moves.q[worst, i])} at line "
-                     f"{int(moves.line[worst])} outside its travel {unit(low)} .. "
+        found.append(f"axis {letter} = {unit(moves.q[worst, i])} at "
+                     f"{line_text(program, int(moves.line[worst]))} outside its travel "
+                     f"{unit(low)} .. "
                      f"{unit(high)}{_more_lines(lines)}")
     if found and not allow:
+        source = getattr(program, "source", None)
         where = f"{source}: " if source else ""
         raise AxisLimitError(
             f"{where}{'; '.join(found)}; nothing was cut (allow_overtravel=True, "
             "machinesim cut --allow-overtravel on the command line, cuts it anyway and "
             "lists it)")
     return tuple(found)
+
+
+def block_at(program, line: int) -> int | None:
+    """The N word of ``program``'s block at ``line`` (`Program.block_at`), None when it has
+    none or ``program`` is no `Program`."""
+    return program.block_at(line) if isinstance(program, Program) else None
+
+
+def line_text(program, line: int) -> str:
+    """``line 12 (N120)``, or ``line 12`` when that block has no N word (`line_of`)."""
+    return line_of(line, block_at(program, line))
 
 
 def _more_lines(lines: list[int]) -> str:
@@ -480,7 +500,8 @@ def _refuse_turning(program, machine, start) -> None:
                     f"M0{3 if 3 in codes else 4} runs the work spindle {letter} of "
                     f"{machine.name}, which is turning: a spindle run by M03/M04 at S rpm is "
                     f"not simulated. Program {letter} as an axis (as a slow-tool-servo "
-                    f"program does) and {how}", source=source, line=int(lines[index]))
+                    f"program does) and {how}", source=source, line=int(lines[index]),
+                    block=block_at(program, int(lines[index])))
         begin = 0.0 if start is None else float(np.asarray(start, dtype=np.float64)[k])
         values = modal_values(np.asarray(program.targets)[:, [AXES.index(letter)]],
                               start=[begin])[:, 0]
@@ -493,10 +514,11 @@ def _refuse_turning(program, machine, start) -> None:
                 f"feeds while it turns the work spindle {letter} of {machine.name} "
                 f"({np.degrees(before[move]):.6g} to {np.degrees(values[move]):.6g} deg), "
                 f"which is turning, and `cut` does not turn (its tool would cut one line a "
-                f"move); {how}", source=source, line=int(lines[move]))
+                f"move); {how}", source=source, line=int(lines[move]),
+                block=block_at(program, int(lines[move])))
 
 
-def _holder_refusal(source, tool, stock: Part, sweep_line: np.ndarray):
+def _holder_refusal(program, tool, stock: Part, sweep_line: np.ndarray):
     """An ``on_holder_contact`` for `engine.remove` that refuses the cut: raises
     `HolderContactError` naming the lines of the sweeps, the tool's height and the top of
     ``stock``."""
@@ -507,9 +529,11 @@ def _holder_refusal(source, tool, stock: Part, sweep_line: np.ndarray):
         across = f", {2e3 * shank:.6g} mm across" if shank else ""
         body = ("" if height is None
                 else f" ({height * 1e3:.6g} mm from its edge, where its holder begins{across})")
+        source = getattr(program, "source", None)
         where = f"{source}: " if source else ""
         raise HolderContactError(
-            f"{where}line {lines[0]}{_more_lines(lines)} takes the top of the tool's "
+            f"{where}{line_text(program, lines[0])}{_more_lines(lines)} takes the top of the "
+            "tool's "
             f"body{body} below the top of the stock (z = {stock.bounds[1, 2] * 1e3:.6g} mm): "
             "the holder would hit the part, and the body alone would leave material "
             "standing over a tunnel; nothing was cut. Use a longer tool (--tool ...:h=MM, "

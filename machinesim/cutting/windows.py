@@ -121,8 +121,8 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
                              tool_points=tool.vertices(), chord_tolerance=chord_tolerance,
                              servo=servo, face_radius=flat_face_radius([tool]),
                              profile=ProfileEdges.of([(tool, 0.0)], stock))
-    limits = _overtravel(machine, _Moves(trajectory, len(machine.axes)),
-                         getattr(program, "source", None), allow_overtravel)
+    limits = _overtravel(machine, _Moves(trajectory, len(machine.axes)), program,
+                         allow_overtravel)
     part = stock if roi is None else clip_to(stock, roi, floor)
     column = machine.axes.index(turn_axis)
     groups: dict[int, list] = {}
@@ -146,7 +146,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         paths = [turn @ poses for poses in machine.tool_poses([s.q for s in segments], errors)]
         sweep_line = np.repeat([s.line for s in segments], [len(s.q) - 1 for s in segments])
         refuse = None if allow_holder_contact else _holder_refusal(
-            getattr(program, "source", None), tool, turned, sweep_line)
+            program, tool, turned, sweep_line)
         cut_part, report = remove(turned, tool, paths, sheets=False, on_holder_contact=refuse)
         part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
         holder.update(int(sweep_line[i]) for i in report.holder_contact)

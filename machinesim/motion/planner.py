@@ -125,6 +125,18 @@ def _check_move(move, source: str) -> None:
                              key="dwell_s")
 
 
+def _block(program, move) -> int | None:
+    """The N word of ``program``'s move ``move`` (`Program.block_numbers`), None when its
+    block has none: a refusal names it beside the line ('line 12 (N120)')."""
+    blocks = getattr(program, "block_numbers", None)
+    if isinstance(blocks, np.ndarray):
+        number = int(blocks[move])
+    else:
+        number = getattr(tuple(program.moves)[move], "block_number", None)
+        number = -1 if number is None else int(number)
+    return None if number < 0 else number
+
+
 def _source(program) -> str:
     return getattr(program, "source", "<program>")
 
@@ -228,7 +240,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
             stop = int(given[0])
             error = NCProgramError(f"axis {letter} is not on {machine.name} (axes "
                                    f"{''.join(axes)})", source=source,
-                                   line=int(lines[stop]), key=letter)
+                                   line=int(lines[stop]), block=_block(program, stop), key=letter)
     moved = np.zeros(stop, dtype=bool)
     for i in range(n_axes):
         moved |= delta[:stop, i] != 0.0
@@ -237,7 +249,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         stop = int(unfed[0])
         error = NCProgramError("a feed move (G01, or an arc: G02/G03) with no feed rate F given "
                                "so far; expected an F word in its block or one before it",
-                               source=source, line=int(lines[stop]), key="F")
+                               source=source, line=int(lines[stop]),
+                               block=_block(program, stop), key="F")
 
     # rotary moves, and moves of an axis whose errors vary along it (a straightness or
     # angular table bends a straight move): split to the chord tolerance (only those
@@ -271,7 +284,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                     f"there, more than the chord "
                     f"tolerance {chord_tolerance * 1e9:g} nm, and no chord follows a step; give "
                     "the table the same value a turn apart",
-                    source=source, line=int(lines[turning[move]]))
+                    source=source, line=int(lines[turning[move]]),
+                    block=_block(program, turning[move]))
             found, failed, stalls = substeps(paths, starts[turning], delta[turning],
                                              chord_tolerance)
             # a sub-step turns the tool by at most its rotary axes' turns added up; the
@@ -285,7 +299,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
             hold_raised(paths, starts[turning], delta[turning], chord_tolerance, found,
                         failed, stalls, least)
             unfollowed = (failed, stalls, paths, axes, rotary, starts, delta, turning, lines,
-                          source, chord_tolerance)
+                          source, chord_tolerance, program)
             _refuse_failed(*unfollowed)
             bad = _first_beyond(least, turning)
             if bad is not None:
@@ -295,7 +309,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                     "sub-steps of at most "
                     f"{math.degrees(MAX_STEP_TURN_RAD / 2.0):g} deg (what a sweep's hull "
                     "stands for, with room for the machine's errors); split it into moves",
-                    source=source, line=int(lines[bad]))
+                    source=source, line=int(lines[bad]), block=_block(program, bad))
             held = np.maximum(found, least.astype(np.int64))
             found = face_substeps(machine, errors, starts[turning], delta[turning],
                                   np.maximum(held, 1), face_radius, chord_tolerance)
@@ -309,7 +323,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                     f"a move that tilts {what} would need more than {MAX_SUBSTEPS} "
                     f"sub-steps to keep the face within {chord_tolerance * 1e9:g} nm; raise "
                     "chord_tolerance (--chord-nm on the command line)",
-                    source=source, line=int(lines[bad]))
+                    source=source, line=int(lines[bad]), block=_block(program, bad))
             # counts the faces and profiles raised: a corner of an error table (or a
             # polynomial's bow) the old sub-steps held at a node can lie inside a new one
             raised = np.flatnonzero((found > held) & ~failed)
@@ -352,7 +366,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
 
 
 def _refuse_failed(failed, stalls, paths, axes, rotary, starts, delta, turning, lines, source,
-                   tolerance) -> None:
+                   tolerance, program) -> None:
     """Refuse, naming its line, the first move (of ``turning``) whose chords no count up to
     `MAX_SUBSTEPS` holds: its path steps (``stalls``: where, and the table that does it),
     or it needs more sub-steps than that."""
@@ -364,12 +378,12 @@ def _refuse_failed(failed, stalls, paths, axes, rotary, starts, delta, turning, 
     if stall is not None:
         raise NCProgramError(
             _stall_message(stall, paths, axes, rotary, starts[bad], delta[bad], tolerance),
-            source=source, line=int(lines[bad]))
+            source=source, line=int(lines[bad]), block=_block(program, bad))
     what = "a rotary move" if np.any(delta[bad, rotary] != 0.0) else "a move"
     raise NCProgramError(
         f"{what} would need more than {MAX_SUBSTEPS} sub-steps to keep the chord within "
         f"{tolerance * 1e9:g} nm; raise chord_tolerance (--chord-nm on the command line)",
-        source=source, line=int(lines[bad]))
+        source=source, line=int(lines[bad]), block=_block(program, bad))
 
 
 def _first_beyond(counts: np.ndarray, moves: np.ndarray) -> int | None:

@@ -200,7 +200,9 @@ def _check(program: Program) -> None:
     if failures:
         index, _, message, key = min(failures, key=lambda f: (f[0], f[1]))
         line = int(lines[index]) if lines[index] >= 1 else None
-        raise NCProgramError(message, source=program.source, line=line, key=key)
+        block = int(program._blocks[index]) if line is not None else -1
+        raise NCProgramError(message, source=program.source, line=line, key=key,
+                             block=block if block >= 0 else None)
 
 
 def _dropped_axis(unset: np.ndarray, i: int) -> str:

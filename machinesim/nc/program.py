@@ -17,7 +17,7 @@ from typing import Any, overload
 
 import numpy as np
 
-from machinesim.exceptions import NCProgramError
+from machinesim.exceptions import NCProgramError, line_of
 from machinesim.nc.checks import (
     _arc_lengths,
     _check,
@@ -427,6 +427,18 @@ class Program:
     moves = property(lambda self: self._moves, doc="the moves as a Sequence of Move")
     arc_lengths = property(lambda self: self._arc_lengths,
                            doc="(N,) the arc (m) each arc chord stands for, NaN = none")
+
+    def block_at(self, line: int) -> int | None:
+        """The N word of the block at source ``line`` (of its first move there), None when
+        it has none or no move comes from that line."""
+        at = np.flatnonzero(self._lines == line)
+        block = int(self._blocks[at[0]]) if at.size else -1
+        return None if block < 0 else block
+
+    def line_text(self, line: int) -> str:
+        """``line 12 (N120)`` for a source line whose block has an N word, else ``line 12``:
+        how the cut's warnings and refusals name a line (`machinesim.exceptions.line_of`)."""
+        return line_of(line, self.block_at(line))
 
     @property
     def axes(self) -> tuple[str, ...]:

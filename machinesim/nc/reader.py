@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from machinesim.exceptions import MachineSimWarning, NCProgramError
+from machinesim.exceptions import MachineSimWarning, NCProgramError, line_of
 from machinesim.nc import fastscan
 from machinesim.nc.arcs import NearCircle, near_circle_warning
 from machinesim.nc.blocks import Block
@@ -107,12 +107,19 @@ class _State:
 class _Problems:
     """Every refusal, once each (a subprogram run 100 times reports its error once)."""
 
-    def __init__(self) -> None:
+    def __init__(self, source: str, block_at: Callable[[int], int | None]) -> None:
         self.found: dict[tuple, NCProgramError] = {}
+        self.source = source  # the program's: a line of another file has no N word here
+        self.block_at = block_at  # a line's N word (`Reader.block_at`)
 
     def add(self, error: NCProgramError) -> None:
         if len(self.found) >= MAX_PROBLEMS:
             return  # within one line too: a line of 2 million repeated words is one mistake
+        if error.line is not None and error.block is None and error.source == self.source:
+            block = self.block_at(error.line)
+            if block is not None:  # every refusal passes here: its line named with its N
+                error = NCProgramError(error.message, source=error.source, line=error.line,
+                                       column=error.column, key=error.key, block=block)
         key = (error.line, error.column, error.key, str(error))
         self.found.setdefault(key, error)
 
@@ -131,10 +138,12 @@ class _Problems:
         first = errors[0]
         stopped = "reading stopped there; " if len(errors) >= MAX_PROBLEMS else ""
         error = NCProgramError(
-            f"{len(errors)} problems in the program ({stopped}the first at line {first.line}; a "
+            f"{len(errors)} problems in the program ({stopped}the first at "
+            f"{line_of(first.line or 0, first.block)}; a "
             "refused block moves nothing, so a later problem may follow from an earlier "
             f"one: mend them in order):\n{listed}{tail}",
             source=source, line=first.line, column=first.column, key=first.key,
+            block=first.block,
         )
         error.problems = tuple(errors)
         raise error
@@ -226,7 +235,8 @@ class Reader:
         self.chord_tolerance = chord_tolerance
         self.fast = fast
         self.scan = fastscan.scan(data)
-        self.problems = _Problems()
+        self.line_blocks: dict[int, int | None] = {}  # line -> its N (`block_at`)
+        self.problems = _Problems(source, self.block_at)
         self.state = _State()
         self.out = _Output()
         self.states: dict[str, int] = {}
@@ -252,6 +262,21 @@ class Reader:
         return NCProgramError(message, source=self.source, line=line,
                               column=None if word is None else word.column,
                               key=None if word is None else word.key)
+
+    def block_at(self, line: int) -> int | None:
+        """The N word's number of the block at ``line`` (1-based), None when it has none (or
+        the line is not in the text): an error's message names both."""
+        if line in self.line_blocks:  # once a line: a line of 10,000 refused words
+            return self.line_blocks[line]
+        block = None
+        if 1 <= line <= len(self.scan.starts):
+            words = (self.cache.get(line - 1)
+                     or tokenize(self.text(line - 1), self.source, line)[0])
+            number = next((w.text for w in words if w.letter == "N"), "")
+            if number.isdigit() and len(number) <= MAX_INTEGER_DIGITS:
+                block = int(number)
+        self.line_blocks[line] = block
+        return block
 
     def text(self, i: int) -> str:
         return self.data[self.scan.starts[i]:self.scan.ends[i]].decode("utf-8", self.errors)

@@ -178,7 +178,8 @@ def _axis_texts(program: Program, column: int, offset: float) -> list[str | None
     if np.any(bad):
         k = int(np.argmax(bad))
         raise NCProgramError(f"axis {axis} relative to G54 is not finite ({relative[k]!r})",
-                             source=program.source, line=int(program.lines[rows[k]]), key=axis)
+                             source=program.source, line=int(program.lines[rows[k]]), key=axis,
+                             block=program.block_at(int(program.lines[rows[k]])))
     if axis in ROTARY_AXES:
         scaled, decimals = relative / RAD_PER_DEG, ROTARY_DECIMALS
     else:
@@ -200,7 +201,8 @@ def _feed_texts(program: Program) -> list[str | None]:
             row = rows[np.argmax(which == k)]
             raise NCProgramError(
                 f"feed {float(values[k])!r} m/s rounds to F0 at {FEED_DECIMALS} decimals in mm/min",
-                source=program.source, line=int(program.lines[row]), key="F")
+                source=program.source, line=int(program.lines[row]), key="F",
+                block=program.block_at(int(program.lines[row])))
     texts: list[str | None] = [None] * len(feeds)
     for row, k in zip(rows.tolist(), which.reshape(-1).tolist(), strict=True):
         texts[row] = distinct[k]
