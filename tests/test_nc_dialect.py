@@ -385,6 +385,25 @@ def test_states_are_listed_with_their_first_line():
     assert len(program) == 2  # the M06 dwell and the move: states move nothing
 
 
+def test_g05_1_reads_a_q_with_a_decimal_point_as_its_value():
+    # 'G05.1 Q1.', as programs and G-code lists write it, had been refused as if no Q1 were
+    # there ('G05.1 needs Q1 (on) or Q0 (off)'): FANUC reads a Q given with a point as its
+    # value, so Q1. (Q1.0) is on and Q0. (Q0.000) off, the same states as Q1 and Q0
+    text = "G05.1 Q1.\nG05.1 Q0.\nG05.1 Q1.0 R5\nG05.1 Q0.000\nG00 X0\nM30"
+    assert dict(parse_program(text).states) == {"G05.1 Q1": 1, "G05.1 Q0": 2,
+                                                "G05.1 Q1 R5": 3}
+    # any other number is still no setting, and the message says what came
+    for q in ("Q2", "Q1.5", "Q10."):
+        with pytest.raises(NCProgramError, match=rf"G05.1 needs Q1 \(on\) or Q0 \(off\), "
+                                                 rf"got {re.escape(q)}$"):
+            parse_program(f"G05.1 {q}\nG00 X0")
+    # G08's P takes no point on a FANUC control (as G04's P): refused, saying so
+    with pytest.raises(NCProgramError, match=r"G08 needs P1 \(on\) or P0 \(off\), got P1\.: "
+                                             r"a FANUC control takes no decimal point in P "
+                                             r"here \(write P1\)"):
+        parse_program("G08 P1.\nG00 X0")
+
+
 def test_a_safe_start_line_cancelling_what_is_refused_is_read_as_states():
     # Haas's safe-start line and a FANUC shop header: G50, G69 and G15 cancel scaling,
     # coordinate rotation and polar coordinates, whose codes (G51, G68, G16) are refused, so

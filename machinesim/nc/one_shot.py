@@ -18,6 +18,33 @@ if TYPE_CHECKING:
 
 __all__ = ["read_dwell", "read_one_shot"]
 
+#: The numbers a G05.1's Q may be written as, with its setting: Q1 and Q0, and with a
+#: decimal point (Q1., Q0.0), which FANUC reads as the value (Q is one of the addresses a
+#: decimal point may be given in; programs and G-code lists write ``G05.1 Q1.``). G08's P
+#: takes no decimal point on a FANUC control (as G04's P), so ``P1.`` is refused there.
+_SWITCH_NUMBERS = {"Q": {"0": 0, "1": 1, "0.": 0, "1.": 1}, "P": {"0": 0, "1": 1}}
+
+
+def _switch(word: Word) -> int | None:
+    """The setting, 1 (on) or 0 (off), of a G05.1's Q or a G08's P, or None when the number
+    is no such setting (`_SWITCH_NUMBERS`; a decimal point's trailing zeros are the same)."""
+    text = word.text
+    if "." in text:
+        text = text.rstrip("0")
+    return _SWITCH_NUMBERS[word.letter].get(text)
+
+
+def _switch_found(word: Word | None) -> str:
+    """What a refused G05.1 or G08 block gave instead of its setting, for the message."""
+    if word is None:
+        return ""
+    whole, dot, fraction = word.text.partition(".")
+    if dot and whole in ("0", "1") and not fraction.strip("0"):  # G08 P1.
+        return (f", got {word.key}: a FANUC control takes no decimal point in {word.letter} "
+                f"here (write {word.letter}{whole})")
+    return f", got {word.key}"
+
+
 #: The words of a dwell time, as the refusals of a G04 block name them (`Block.dwell_p`).
 DWELL_WORDS = ("P<milliseconds> (with a decimal point, P<seconds>, as Haas reads it) or "
                "X<seconds>")
@@ -61,9 +88,12 @@ def read_one_shot(block: Block, code: tuple[str, Word], axes: list[Word],
         if extra:
             raise block.fail(f"{name} stands in a block of its own (with {letter}1 or "
                              f"{letter}0), found {extra[0].key}", extra[0])
-        if letter not in single or single[letter].text not in ("0", "1"):
-            raise block.fail(f"{name} needs {letter}1 (on) or {letter}0 (off)", word)
-        key = f"{name} {single[letter].key}"
+        given = single.get(letter)
+        setting = None if given is None else _switch(given)
+        if setting is None:
+            raise block.fail(f"{name} needs {letter}1 (on) or {letter}0 (off)"
+                             f"{_switch_found(given)}", word)
+        key = f"{name} {letter}{setting}"
         if "R" in single:
             block.integer(single["R"], "AI contour precision level")
             key += f" {single['R'].key}"
