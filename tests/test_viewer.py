@@ -538,6 +538,31 @@ def test_machine_scene_draws_every_visual_and_moves_the_tool_as_the_kinematics_s
     np.testing.assert_allclose(points.reshape(-1, 3), expected, rtol=2.0**-24, atol=1e-12)
 
 
+def test_the_tool_path_note_says_red_is_the_nominal_path_where_no_error_is_given():
+    # 'red actual (with errors)' was said of a view given no errors too, where the red path
+    # is the cyan one: the note now says what is drawn, checked against the drawn paths
+    machine = load_machine("grooving_4axis")
+    program = grooves(n=1)
+
+    def view(errors):
+        scene = machine_scene(machine, program, tool="v:150", stock=STOCK, errors=errors,
+                              max_triangles=BUDGET)
+        paths = {c["path"]: floats(c["object"]["geometries"][0]["data"]["attributes"]
+                                   ["position"]["array"])
+                 for c in decoded(scene) if c["path"].startswith("/meshcat/workpiece/paths/")
+                 and c["type"] == "set_object"}
+        same = np.array_equal(paths["/meshcat/workpiece/paths/nominal"],
+                              paths["/meshcat/workpiece/paths/actual"])
+        return [n for n in scene.notes if n.startswith("tool path:")], same
+
+    assert view(None) == (["tool path: cyan nominal; no errors given (--errors), so the red "
+                           "actual path is the nominal one, drawn over it"], True)
+    assert view(ErrorModel()) == (["tool path: cyan nominal; the errors given are all zero, "
+                                   "so the red actual path is the nominal one, drawn over "
+                                   "it"], True)
+    assert view(ERRORS) == (["tool path: cyan nominal, red actual (with errors)"], False)
+
+
 def test_a_mesh_the_viewer_cannot_load_is_left_out_with_a_warning(tmp_path):
     # a ROS file's package:// mesh resolves only inside ROS: the machine is drawn without
     # it, and the warning names the link and the file (the view ended in a ValueError)

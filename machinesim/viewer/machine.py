@@ -18,6 +18,7 @@ from pinocchio.visualize import MeshcatVisualizer
 from machinesim import motion
 from machinesim.cutting import cut, remove
 from machinesim.cutting.report import arc_chord_note
+from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
 from machinesim.motion.faces import ProfileEdges
 from machinesim.tool_specs import tool_from_spec
@@ -191,13 +192,27 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
         f"part stages: {len(parts) - 1} (stock, then after "
         + ("its rapids: it has no feed block)" if not feeds else
            "each feed block)" if len(parts) - 1 == feeds else "groups of feed blocks)"),
-        "tool path: cyan nominal, red actual (with errors)",
+        path_note(errors),
     ]
     chords = arc_chord_note(program, chord_tolerance, takes_path=False)
     if chords:  # as cut() notes it: the stages and the part follow the program's own chords
         scene.notes.append(chords)
     extent = scale * (part_hi - part_lo)
     return lo, np.maximum(hi, anchor + extent * [1.0, 0.5, 1.0])
+
+
+def path_note(errors) -> str:
+    """The overlay's line on the two tool paths: red is the path on the machine with
+    ``errors``, which without errors (None, or a model whose every parameter is zero) is the
+    cyan nominal path itself, drawn over it; the line had said 'red actual (with errors)'
+    of a view given none."""
+    if errors is None:
+        return ("tool path: cyan nominal; no errors given (--errors), so the red actual path "
+                "is the nominal one, drawn over it")
+    if as_error_model(errors).is_zero:
+        return ("tool path: cyan nominal; the errors given are all zero, so the red actual "
+                "path is the nominal one, drawn over it")
+    return "tool path: cyan nominal, red actual (with errors)"
 
 
 def cut_by_block(trajectory, machine, tool, stock, errors=None, max_stages: int = MAX_STAGES):
