@@ -408,6 +408,27 @@ def test_a_legend_tick_at_round_off_of_zero_reads_zero():
                                                     "+499.9 nm", "+999.8 nm"]
 
 
+def test_a_legends_p_v_and_rms_below_a_picometre_read_zero():
+    # a part and its nominal the same but for round-off (2.745e-18 m) read 'P-V 2.745e-09
+    # nm': below 1 pm (tolerances.POSE_M, the geometry's resolution) a figure reads 0, and
+    # from 1 pm up it is written as before, to 4 digits
+    x = y = np.array([0.0, 1e-3])
+
+    def stats(values):
+        values = np.asarray(values, dtype=np.float64)
+        return legend_for(SurfaceMap(x, y, values, values, "deviation")).notes[0]
+
+    assert stats([[2.745e-18, 0.0], [0.0, 0.0]]) == "P-V 0 nm, RMS 0 nm"
+    assert stats([[4e-13, -5e-13], [0.0, 0.0]]) == "P-V 0 nm, RMS 0 nm"  # 0.9 pm P-V
+    # 4 pm P-V, RMS sqrt((2^2 + 2^2) / 4) = 1.414 pm
+    assert stats([[2e-12, -2e-12], [0.0, 0.0]]) == "P-V 0.004 nm, RMS 0.001414 nm"
+    # RMS sqrt(2^2 / 4) = 1 pm exactly: no longer below the cut-off, so written
+    assert stats([[2e-12, 0.0], [0.0, 0.0]]) == "P-V 0.002 nm, RMS 0.001 nm"
+    assert stats([[100e-9, -100e-9], [0.0, 0.0]]) == "P-V 200 nm, RMS 70.71 nm"
+    heights = np.full((2, 2), 0.5e-3)  # a flat top: P-V 0 as before
+    assert legend_for(SurfaceMap(x, y, heights, heights, "height")).notes[0] == "P-V 0 nm"
+
+
 def test_map_mesh_faces_up_covers_the_part_and_leaves_out_cells_off_it():
     smap = surface_map(tilted_block(1e-4), block(2 * MM, 1 * MM, 0.5 * MM), BUDGET)
     vertices, triangles, rgb = map_mesh(smap)

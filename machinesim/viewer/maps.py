@@ -40,6 +40,11 @@ TICKS = (0.0, 0.25, 0.5, 0.75, 1.0)
 #: A tick within this fraction of the bar's span of zero is labelled zero: the labels show
 #: 4 digits, so anything below 1e-6 of the span is round-off of the range's ends.
 TICK_ZERO = 1e-6
+#: A legend's figure (P-V, RMS) below this, m, reads 0: 1 pm, the resolution of machinesim's
+#: geometry (`machinesim.tolerances.POSE_M`, a pose's position; the cut's sheets are trimmed
+#: at 1 pm), below which two surfaces differ by round-off alone. A part and its nominal the
+#: same but for that had read 'P-V 2.745e-09 nm', a figure of 2.7e-18 m.
+FIGURE_ZERO_M = 1e-12
 
 
 @dataclass(frozen=True)
@@ -229,9 +234,9 @@ def legend_for(smap: SurfaceMap, title: str | None = None, notes=()) -> Legend:
     values = [0.0 if abs(v) < TICK_ZERO * (hi - lo) else v for v in values]
     ticks = tuple((f, f"{v / factor:+.4g} {name}") for f, v in zip(TICKS, values, strict=True))
     pv_name, pv_factor = length_unit(smap.peak_to_valley)
-    stats = f"P-V {smap.peak_to_valley / pv_factor:.4g} {pv_name}"
+    stats = f"P-V {figure_text(smap.peak_to_valley, pv_factor)} {pv_name}"
     if smap.kind == "deviation":
-        stats += f", RMS {smap.rms / pv_factor:.4g} {pv_name}"
+        stats += f", RMS {figure_text(smap.rms, pv_factor)} {pv_name}"
     # the figures are the nodes': a V groove narrower than their spacing falls between two
     # (the README's 20 um deep grooves across the 10 mm block read P-V 13.67 um on its
     # 317 x 317 nodes), so the legend says how far apart they stand, as a measurement would
@@ -242,6 +247,15 @@ def legend_for(smap: SurfaceMap, title: str | None = None, notes=()) -> Legend:
             "which a narrower groove or peak can fall between")
     return Legend(title or map_title(smap.kind), stops_for(smap.kind), ticks,
                   (stats, grid, *notes))
+
+
+def figure_text(value: float, factor: float) -> str:
+    """``value`` (m) in the unit of ``factor`` (m per unit) to 4 significant digits, and
+    ``0`` below `FIGURE_ZERO_M` (round-off, not a figure: 2.745e-18 m is no '2.745e-09 nm');
+    a NaN reads nan."""
+    if abs(value) < FIGURE_ZERO_M:
+        return "0"
+    return f"{value / factor:.4g}"
 
 
 def _spacing(axis: np.ndarray) -> float:
@@ -255,6 +269,6 @@ def map_title(kind: str) -> str:
             else "height z (workpiece frame)")
 
 
-__all__ = ["DIVERGING", "NO_DATA", "SEQUENTIAL", "Legend", "SurfaceMap", "colours", "grid_for",
-           "legend_for", "length_unit", "map_mesh", "map_title", "mesh_of", "stops_for",
-           "surface_map"]
+__all__ = ["DIVERGING", "NO_DATA", "SEQUENTIAL", "Legend", "SurfaceMap", "colours",
+           "figure_text", "grid_for", "legend_for", "length_unit", "map_mesh", "map_title",
+           "mesh_of", "stops_for", "surface_map"]
