@@ -1558,3 +1558,38 @@ def test_read_ply_names_an_ascii_face_index_past_any_integer_as_written(tmp_path
             read_ply(part)
         assert str(caught.value) == (f"{part}: face 1 is [0, 1, {shown}]: expected "
                                      "whole-number vertex indices")
+
+
+def test_a_report_folders_figures_are_a_table_of_name_before_after_and_unit(tmp_path):
+    # the overlay showed a summary's figures as one line of raw dicts ("figures: [{'name':
+    # 'depth_error', 'unit': 'um', ...}]"), or "figures: [7 entries]", or (past its first
+    # 15 entries) not at all: they are now a table above the notes, to 4 digits, null n/a
+    from machinesim.viewer import report_scene
+    from machinesim.viewer.scene import overlay_html
+
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+    figures = [
+        {"name": "depth_error", "unit": "um", "before": 1.23456789, "after": -0.0123456,
+         "paper_before": 1.2, "paper_after": None, "note": "the groove's depth less design"},
+        {"name": "edge_distance_planes_L1_L5", "unit": "deg", "before": None, "after": 2e-5,
+         "paper_before": None, "paper_after": None},
+    ]
+    summary = tmp_path / "summary.json"
+    summary.write_text(json.dumps({"paper": "001", "figures": figures, "seed": 0}))
+    scene = report_scene(tmp_path, BUDGET)
+    [table] = scene.tables
+    assert table.header == ("figure", "before", "after", "unit")
+    assert table.rows == (("depth_error", "1.235", "-0.01235", "um"),
+                          ("edge_distance_planes_L1_L5", "n/a", "2e-05", "deg"))
+    assert scene.notes == ["paper: 001", "seed: 0"]  # the figures are not a note too
+    page = overlay_html(scene)
+    assert ("<tr><th>figure</th><th>before</th><th>after</th><th>unit</th></tr>\n"
+            "<tr><td>depth_<wbr>error</td><td>1.235</td><td>-0.01235</td><td>um</td></tr>"
+            in page)
+    assert page.index('class="ms-table"') < page.index("<div>paper: 001</div>")
+    assert "{'name'" not in page and "figures:" not in page
+    # a 'figures' that is no list of named figures stays a note, as any key
+    for odd in ([1, 2], {"a": 1.0}, [{"name": "x"}]):
+        summary.write_text(json.dumps({"figures": odd}))
+        scene = report_scene(tmp_path, BUDGET)
+        assert scene.tables == [] and scene.notes[0].startswith("figures"), scene.notes

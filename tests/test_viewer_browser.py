@@ -190,6 +190,31 @@ def test_every_legend_of_a_report_folder_is_reached_in_an_800_px_window(browser,
     assert 0 <= left and right <= width and 0 <= top and bottom <= height, legends
 
 
+def test_a_report_folders_figures_table_fits_the_overlay_column(browser, tmp_path):
+    # the figures of a report folder, a table of name, before, after and unit: within the
+    # overlay's column (OVERLAY_WIDTH_PX) beside the 3D view, a long name wrapped, not cut
+    # off or spilling over the view; each row holds the four cells as written
+    folder = tmp_path / "report"
+    folder.mkdir()
+    tilted_block(1e-4).export_ply(folder / "part.ply")
+    figures = [{"name": f"edge_distance_planes_L{k}_L{k + 4}", "unit": "um",
+                "before": 149.8046875 - k, "after": -0.27398563029207984 * k,
+                "paper_before": None, "paper_after": None} for k in range(1, 5)]
+    (folder / "summary.json").write_text(json.dumps({"figures": figures}))
+    page = write_html(report_scene(folder, BUDGET), tmp_path / "report.html")
+    browser.open(page.as_uri())
+    overlay, table = json.loads(browser.evaluate(
+        "JSON.stringify(['#machinesim-overlay', '.ms-table'].map(q => { const r = "
+        "document.querySelector(q).getBoundingClientRect(); return [r.left, r.right]; }))"))
+    assert overlay[1] <= 8 + OVERLAY_WIDTH_PX and overlay[0] <= table[0] < table[1] <= overlay[1]
+    rows = json.loads(browser.evaluate(
+        "JSON.stringify([...document.querySelectorAll('.ms-table tr')].map(r => "
+        "[...r.cells].map(c => c.textContent)))"))
+    assert rows[0] == ["figure", "before", "after", "unit"]
+    assert rows[1] == ["edge_distance_planes_L1_L5", "148.8", "-0.274", "um"]
+    assert rows[4] == ["edge_distance_planes_L4_L8", "145.8", "-1.096", "um"]
+
+
 def test_a_live_session_is_drawn_from_127_0_0_1_only(browser):
     scene = part_scene(tilted_block(1e-4), nominal=block(2 * MM, 1 * MM, 0.5 * MM),
                        max_triangles=BUDGET)

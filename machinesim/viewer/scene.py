@@ -12,6 +12,7 @@ from __future__ import annotations
 import base64
 import html
 from pathlib import Path
+from typing import NamedTuple
 
 import meshcat
 import meshcat.geometry as mg
@@ -40,6 +41,15 @@ DEFAULT_CAMERA = (3.0, 0.0, 1.0)
 OVERLAY_WIDTH_PX = 300
 
 
+class NoteTable(NamedTuple):
+    """A small table in the overlay, above the notes: a scenario's figures (name, before,
+    after, unit), each cell text as shown."""
+
+    title: str
+    header: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+
+
 class _Recorder:
     """Receives meshcat commands like `meshcat.visualizer.ViewerWindow` and keeps them."""
 
@@ -65,6 +75,7 @@ class Scene:
         self._frames: list[tuple[str, str, bytes]] = []
         self.legends: list[Legend] = []
         self.notes: list[str] = []
+        self.tables: list[NoteTable] = []  # above the notes (`NoteTable`)
         self.warnings: list[str] = []  # shown in the overlay and printed by the command
         #: Bytes of the mesh files sent as they are (a machine's STL, OBJ and DAE visuals,
         #: `machinesim.viewer.visuals`): no triangle budget makes them smaller.
@@ -207,6 +218,12 @@ body {{ margin: 0; }}
 .ms-bar {{ position: absolute; left: 0; top: 0; width: 22px; height: 160px;
   border: 1px solid #999; }}
 .ms-tick {{ position: absolute; left: 30px; transform: translateY(50%); white-space: nowrap; }}
+.ms-table-title {{ margin-top: 4px; }}
+.ms-table {{ border-collapse: collapse; margin: 2px 0 4px; }}
+.ms-table th, .ms-table td {{ padding: 0 0 0 8px; text-align: right; white-space: nowrap; }}
+.ms-table th:first-child, .ms-table td:first-child {{ padding-left: 0; text-align: left;
+  white-space: normal; overflow-wrap: anywhere; }}
+.ms-table th {{ font-weight: bold; border-bottom: 1px solid #999; }}
 </style>
 </head>
 <body>
@@ -219,9 +236,20 @@ body {{ margin: 0; }}
 
 
 def overlay_html(scene: Scene) -> str:
-    """The overlay: the title and notes, then one panel per legend (colour bar with ticks)."""
+    """The overlay: the title, tables and notes, then one panel per legend (colour bar with
+    ticks)."""
     parts = ['<div id="machinesim-overlay">', '<div class="ms-panel">',
              f'<div class="ms-title">{html.escape(scene.title)}</div>']
+    for table in scene.tables:  # a report's figures first, then its other entries
+        parts += [f'<div class="ms-table-title">{html.escape(table.title)}</div>',
+                  '<table class="ms-table">',
+                  "<tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in table.header)
+                  + "</tr>"]
+        # a long name ('edge_distance_planes_L1_L5') may break after an underscore
+        parts += ["<tr>" + "".join(
+            f"<td>{html.escape(c).replace('_', '_<wbr>') if k == 0 else html.escape(c)}</td>"
+            for k, c in enumerate(row)) + "</tr>" for row in table.rows]
+        parts.append("</table>")
     parts += [f"<div>{html.escape(line)}</div>" for line in scene.notes]
     parts += [f"<div><b>warning:</b> {html.escape(line)}</div>" for line in scene.warnings]
     parts.append("</div>")
@@ -276,6 +304,7 @@ def write_html(scene: Scene, path) -> Path:
     return Path(path)
 
 
-__all__ = ["BACKGROUND", "OVERLAY_WIDTH_PX", "SCRIPT_CHARS_MOST", "VIEWER_JS", "Scene",
+__all__ = ["BACKGROUND", "OVERLAY_WIDTH_PX", "SCRIPT_CHARS_MOST", "VIEWER_JS", "NoteTable",
+           "Scene",
            "css_colour", "overlay_html", "page", "transform_tracks", "visibility_track",
            "write_html"]

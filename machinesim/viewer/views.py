@@ -30,7 +30,7 @@ from machinesim.viewer.meshes import (
     read_ply,
     triangle_normals,
 )
-from machinesim.viewer.scene import Scene
+from machinesim.viewer.scene import NoteTable, Scene
 
 #: Colour of a part's faces that are not colour-mapped (sides, walls, bottom): pale copper,
 #: the material of many diamond-turned parts.
@@ -190,6 +190,10 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
                               "(nominal_ply), which is not a file in the folder: each part "
                               "is coloured by its height, not by its deviation")
     if summary:
+        table = figures_table(summary.get("figures"))
+        if table is not None:  # a table, not the list of dicts as one note line
+            scene.tables.append(table)
+            summary = {k: v for k, v in summary.items() if k != "figures"}
         scene.notes += report_notes(summary)
     else:
         scene.notes.append("no summary.json in this folder")
@@ -269,6 +273,29 @@ def size_warnings(vertices_by_name: dict) -> list[str]:
     return lines
 
 
+def figures_table(figures) -> NoteTable | None:
+    """A summary.json's ``figures`` (docs/reports.md: objects with ``name``, ``before``,
+    ``after`` and ``unit``) as a table of those four, numbers to 4 significant digits and a
+    null as n/a; None when ``figures`` is not such a list (its notes then show it as it is).
+    The overlay had shown the list as one line of raw dicts: "figures: [{'name': ...}]"."""
+    if not isinstance(figures, list) or not figures or not all(
+            isinstance(f, dict) and isinstance(f.get("name"), str)
+            and isinstance(f.get("unit"), str) for f in figures):
+        return None
+
+    def cell(value) -> str:
+        if value is None:
+            return "n/a"
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            return f"{value:.4g}"
+        return str(value)
+
+    rows = tuple((f["name"], cell(f.get("before")), cell(f.get("after")), f["unit"])
+                 for f in figures)
+    return NoteTable("figures (before and after compensation)",
+                     ("figure", "before", "after", "unit"), rows)
+
+
 def report_notes(report) -> list[str]:
     """'key: value' lines of a report (a dict, or a JSON file's path), nested keys dotted."""
     data = read_json(Path(report), 'report') if isinstance(report, str | Path) else report
@@ -319,6 +346,6 @@ def _load(surface):
     return surface
 
 
-__all__ = ["PART_COLOUR", "UNIT_SLIP_SIZE_M", "add_part", "cut_warnings", "file_warnings",
-           "frame_scene", "part_scene", "precision_warnings", "report_notes", "report_scene",
-           "size_warnings"]
+__all__ = ["PART_COLOUR", "UNIT_SLIP_SIZE_M", "add_part", "cut_warnings", "figures_table",
+           "file_warnings", "frame_scene", "part_scene", "precision_warnings", "report_notes",
+           "report_scene", "size_warnings"]
