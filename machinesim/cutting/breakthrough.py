@@ -22,13 +22,21 @@ LEAST_AREA_M2 = 1e-12
 
 
 def bottom_area(vertices: np.ndarray, triangles: np.ndarray, z: float, size: float) -> float:
-    """The area (m^2) of the faces that face down (-z) and lie in the plane ``z``."""
-    corners = vertices[triangles]                              # (m, 3, 3)
+    """The area (m^2) of the faces that face down (-z) and lie in the plane ``z``.
+
+    The faces in the plane are picked by their vertices' z first, a byte per vertex and per
+    face, and only they are measured: the whole mesh's corners and normals (some 200 bytes
+    a face) had held 5.5 times the mesh (400 MB beside a 72 MB mesh of 2 million faces; a
+    cut's part may have 40 million) at the end of a cut that fitted."""
+    level = np.abs(vertices[:, 2] - z) <= PLANE_SHARE * size  # (n,)
+    on_plane = level[triangles[:, 0]]
+    on_plane &= level[triangles[:, 1]]
+    on_plane &= level[triangles[:, 2]]
+    corners = vertices[triangles[on_plane]]                    # (k, 3, 3)
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     doubled = np.linalg.norm(normals, axis=1)
-    on_plane = np.all(np.abs(corners[:, :, 2] - z) <= PLANE_SHARE * size, axis=1)
     down = normals[:, 2] <= -(1.0 - NORMAL_TOLERANCE) * doubled
-    return float(0.5 * doubled[on_plane & down].sum())
+    return float(0.5 * doubled[down].sum())
 
 
 def bottom_lost(part, material) -> float:
