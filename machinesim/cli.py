@@ -462,9 +462,10 @@ def _cut(args) -> int:
     if through:
         print(f"warning: the cut went through the bottom of the stock (z = "
               f"{stock.bounds[0, 2] * 1e3:.6g} mm; {through * 1e6:.6g} mm^2 of its bottom face "
-              "is gone): the tool went below the stock, into what holds it (table, chuck or "
-              "fixture, not modelled), as a wrong tool length or Z takes it on a machine",
-              file=sys.stderr)
+              "is gone): the tool reached the stock's bottom face or went below it, into what "
+              "holds it (table, chuck or fixture, not modelled), as a wrong tool length or Z "
+              "takes it on a machine; a through cut that is meant needs the stock on a "
+              "sacrificial plate or over a relief in the fixture", file=sys.stderr)
     if report.empty_cut and report.edge_plane_lines:
         lines = ", ".join(map(str, report.edge_plane_lines[:5])) + (
             " ..." if len(report.edge_plane_lines) > 5 else "")

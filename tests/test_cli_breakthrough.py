@@ -125,3 +125,17 @@ def test_bottom_area_holds_little_beside_the_mesh():
         tracemalloc.stop()
     assert area == expected  # the same faces summed in the same order: bit-identical
     assert peak < vertices.nbytes + triangles.nbytes, peak  # had been 5.5 times the mesh
+
+
+def test_a_pocket_to_the_bottom_exactly_is_not_said_below_it(tmp_path, capsys):
+    # the tool's end at z = -2 mm, the block's bottom: the part is the same ring (the end
+    # mill's floor takes the bottom face away), but the tool went no lower than the stock,
+    # as a through cut meant to the stock's thickness does; the warning had said 'the tool
+    # went below the stock' and named only a mistake
+    code, err, report = cut(tmp_path, capsys, "-2.", 0.0)
+    assert code == 0, err
+    assert report["bottom_cut_through_mm2"] == pytest.approx(POCKET_MM2, rel=1e-3)
+    warning = next(line for line in err.splitlines() if "bottom of the stock" in line)
+    assert "went below the stock" not in warning, warning
+    assert "reached the stock's bottom face or went below it" in warning, warning
+    assert "a through cut that is meant needs the stock on a sacrificial plate" in warning

@@ -152,7 +152,8 @@ def cut_warnings(report: dict) -> list[str]:
     if (isinstance(through, int | float) and not isinstance(through, bool)
             and math.isfinite(through) and through > 0):
         lines.append(f"the report says the cut went through the bottom of the stock "
-                     f"({through:.6g} mm^2 of its bottom face gone): the tool went below it")
+                     f"({through:.6g} mm^2 of its bottom face gone): the tool reached its "
+                     "bottom face or went below it")
     return lines
 
 
