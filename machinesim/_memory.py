@@ -89,7 +89,12 @@ def given_cap() -> int | None:
     is unset or empty. Anything else is an `InputError` naming it: a value that was no
     number ("abc", "8G") or below zero had been dropped without a word (the command ran
     under the memory there is), 0 capped the command at nothing (``machinesim machines``
-    ended "out of memory"), and "inf" in an internal error (OverflowError)."""
+    ended "out of memory"), and "inf" in an internal error (OverflowError). A cap at or
+    below the address space the process holds already (``VmSize``, where Linux states it)
+    is refused too, naming what it holds: it leaves no room, as 0 did (1e-9 and 0.05 ended
+    ``machinesim machines`` in "out of memory" alike, blaming a spec or program)."""
+    from machinesim.exceptions import InputError
+
     given = os.environ.get(LIMIT_VARIABLE, "").strip()
     if not given:
         return None
@@ -98,11 +103,18 @@ def given_cap() -> int | None:
     except ValueError:
         gb = math.nan
     if not (math.isfinite(gb) and gb > 0.0):
-        from machinesim.exceptions import InputError
-
         raise InputError(f"got {given!r}; expected the memory cap in GB, a number > 0 (e.g. "
                          "8), or the variable unset (the memory there is)", key=LIMIT_VARIABLE)
-    return min(int(gb * (1 << 30)), _MOST)
+    cap = min(int(gb * (1 << 30)), _MOST)
+    held = _kilobytes(PROCESS_STATUS, "VmSize")
+    if held is not None and cap <= held:
+        raise InputError(f"got {given!r}, a cap of {cap / (1 << 30):.3g} GB, where this "
+                         f"process holds {held / (1 << 30):.3g} GB of address space already, "
+                         "before any work: every allocation would fail ('out of memory'); "
+                         f"expected the memory cap in GB, a number above "
+                         f"{held / (1 << 30):.3g} (e.g. 8), or the variable unset (the memory "
+                         "there is)", key=LIMIT_VARIABLE)
+    return cap
 
 
 def limit_memory() -> int | None:

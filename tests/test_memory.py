@@ -132,9 +132,14 @@ def test_a_cap_that_is_no_size_in_gb_is_refused_naming_the_variable(monkeypatch,
         given_cap()
 
 
-def test_a_cap_in_gb_is_read_and_the_command_line_refuses_one_that_is_not(monkeypatch):
+def test_a_cap_in_gb_is_read_and_the_command_line_refuses_one_that_is_not(monkeypatch,
+                                                                         tmp_path):
+    import machinesim._memory as memory
     from machinesim._memory import LIMIT_VARIABLE, given_cap
 
+    status = tmp_path / "status"  # a process holding 100 MiB of address space
+    status.write_text("Name:\tpython\nVmSize:\t  102400 kB\n")
+    monkeypatch.setattr(memory, "PROCESS_STATUS", str(status))
     for given, expected in (("3", 3 << 30), (" 0.5 ", 1 << 29), ("", None)):
         monkeypatch.setenv(LIMIT_VARIABLE, given)
         assert given_cap() == expected
@@ -143,3 +148,29 @@ def test_a_cap_in_gb_is_read_and_the_command_line_refuses_one_that_is_not(monkey
     assert done.stderr.strip().splitlines() == [
         "machinesim: error: key 'MACHINESIM_MEMORY_GB': got '0'; expected the memory cap in "
         "GB, a number > 0 (e.g. 8), or the variable unset (the memory there is)"]
+
+
+@pytest.mark.parametrize("given", ["1e-9", "0.05"])
+def test_a_cap_below_what_the_process_holds_is_refused(monkeypatch, tmp_path, given):
+    """1e-9 GB (1 byte) and 0.05 GB are numbers > 0, but below the address space the
+    interpreter holds before any work: 'machinesim machines' ended in 'out of memory' (which
+    blames a spec or program), as 0 had."""
+    import machinesim._memory as memory
+    from machinesim.exceptions import InputError
+
+    status = tmp_path / "status"  # a process holding 300 MiB of address space
+    status.write_text("Name:\tpython\nVmSize:\t  307200 kB\n")
+    monkeypatch.setattr(memory, "PROCESS_STATUS", str(status))
+    monkeypatch.setenv(memory.LIMIT_VARIABLE, given)
+    with pytest.raises(InputError, match=rf"key 'MACHINESIM_MEMORY_GB': got '{given}', a cap "
+                                         r"of .* GB, where this process holds 0\.293 GB of "
+                                         r"address space already, .* a number above 0\.293"):
+        memory.given_cap()
+    monkeypatch.setenv(memory.LIMIT_VARIABLE, "0.3")  # 307.2 MiB: above it, taken
+    assert memory.given_cap() == int(0.3 * (1 << 30))
+    # the command line, with the process's own VmSize: one line, status 2
+    done = _run("from machinesim.cli import main; raise SystemExit(main(['machines']))", given)
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(
+        f"machinesim: error: key 'MACHINESIM_MEMORY_GB': got '{given}', a cap of "), lines
