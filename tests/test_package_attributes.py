@@ -41,3 +41,20 @@ def test_a_name_that_is_no_subpackage_is_still_an_attribute_error():
     assert done.stdout.splitlines() == [
         f"module 'machinesim' has no attribute {name!r}"
         for name in ("nope", "_private", "viewerx")]
+
+
+def test_a_dotted_name_is_an_attribute_error_too():
+    # getattr and hasattr with 'foo.bar' had raised ModuleNotFoundError (find_spec imports
+    # the parent), and getattr(machinesim, 'nc.words') had given machinesim.nc.words
+    names = ("foo.bar", "nc.words", "viewer.nope", "a b")
+    done = _run("import machinesim\n"
+                f"for name in {names!r}:\n"
+                "    print(hasattr(machinesim, name))\n"
+                "    try:\n"
+                "        getattr(machinesim, name)\n"
+                "    except AttributeError as error:\n"
+                "        print(error)\n")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == [
+        line for name in names
+        for line in ("False", f"module 'machinesim' has no attribute {name!r}")]
