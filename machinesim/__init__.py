@@ -12,8 +12,8 @@ array([5.e-06, 0.e+00, 0.e+00])
 from __future__ import annotations
 
 import importlib
-import importlib.util
 
+from machinesim._submodules import submodule
 from machinesim.exceptions import (
     AxisLimitError,
     ErrorModelError,
@@ -46,13 +46,8 @@ def __getattr__(name: str):
     if name not in _LAZY:
         # a subpackage or module by attribute, as the README writes it
         # (``machinesim.viewer.read_ply(...)`` after ``import machinesim``): it had been an
-        # AttributeError unless something had imported machinesim.viewer already. Only a
-        # name (no dots): find_spec('machinesim.foo.bar') imports machinesim.foo, and raised
-        # ModuleNotFoundError out of getattr and hasattr, and 'nc.words' gave a module
-        if (name.isidentifier() and not name.startswith("_")
-                and importlib.util.find_spec(f"machinesim.{name}")):
-            return importlib.import_module(f"machinesim.{name}")
-        raise AttributeError(f"module 'machinesim' has no attribute {name!r}")
+        # AttributeError unless something had imported machinesim.viewer already
+        return submodule(__name__, name)
     value = getattr(importlib.import_module(_LAZY[name]), name)
     globals()[name] = value
     return value

@@ -58,3 +58,35 @@ def test_a_dotted_name_is_an_attribute_error_too():
     assert done.stdout.splitlines() == [
         line for name in names
         for line in ("False", f"module 'machinesim' has no attribute {name!r}")]
+
+
+def test_a_module_of_a_subpackage_is_reached_as_an_attribute_too():
+    # docs/cli.md and cut's refusal of a turning program write
+    # machinesim.cutting.lathe.turn(program, "sts_lathe", "nose:0.5:90"): after 'import
+    # machinesim' it had raised "module 'machinesim.cutting' has no attribute 'lathe'"
+    done = _run("import sys, pkgutil, importlib\n"
+                "import machinesim\n"
+                "print(machinesim.cutting.lathe.turn.__module__)\n"
+                "print(machinesim.viewer.views.report_scene.__module__)\n"
+                "wrong = []\n"
+                "for package in ('cam', 'campaign', 'cutting', 'errors', 'identification',\n"
+                "                'metrology', 'motion', 'nc', 'procedures', 'viewer'):\n"
+                "    folder = importlib.util.find_spec('machinesim.' + package)\n"
+                "    for info in pkgutil.iter_modules(folder.submodule_search_locations):\n"
+                "        if info.name.startswith('_') or info.name in vars(\n"
+                "                getattr(machinesim, package)):  # a name the package binds\n"
+                "            continue\n"
+                "        module = getattr(getattr(machinesim, package), info.name)\n"
+                "        if module.__name__ != f'machinesim.{package}.{info.name}':\n"
+                "            wrong.append(module.__name__)\n"
+                "    for name in ('nope', 'lathe.turn', '_private'):\n"
+                "        try:\n"
+                "            getattr(getattr(machinesim, package), name)\n"
+                "            wrong.append(name)\n"
+                "        except AttributeError as error:\n"
+                "            assert str(error) == (f\"module 'machinesim.{package}' has no \"\n"
+                "                                  f\"attribute {name!r}\"), error\n"
+                "print(wrong)\n")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == ["machinesim.cutting.lathe", "machinesim.viewer.views",
+                                        "[]"]

@@ -14,9 +14,15 @@ intervals, z-scores of the identification, rank-correlation sensitivity
 ...                   out="reports/campaign_arm", workers=2)  # doctest: +SKIP
 """
 
+from machinesim._submodules import submodule
 from machinesim.campaign.distributions import Distribution, parse_distribution, parse_vary
 from machinesim.campaign.runner import run
 from machinesim.campaign.trials import PROCEDURES, CampaignSpec, run_trial, trial_seed
 
 __all__ = ["PROCEDURES", "CampaignSpec", "Distribution", "parse_distribution", "parse_vary",
            "run", "run_trial", "trial_seed"]
+
+
+def __getattr__(name: str):
+    # machinesim.campaign.<module> without its own import (`machinesim._submodules`)
+    return submodule(__name__, name)

@@ -40,6 +40,7 @@ or when the model meets a machine (`ErrorModel.misfit`), from Python as from the
 line; a TOML file may start with a UTF-8 byte order mark.
 """
 
+from machinesim._submodules import submodule
 from machinesim.errors._checks import AXES, LARGEST_ERROR, LINEAR_AXES
 from machinesim.errors.families import (
     ComponentError,
@@ -60,3 +61,8 @@ __all__ = [
     "WorkpieceSetting",
     "as_error_model",
 ]
+
+
+def __getattr__(name: str):
+    # machinesim.errors.<module> without its own import (`machinesim._submodules`)
+    return submodule(__name__, name)

@@ -16,6 +16,7 @@ identified values: none receives a lab, an instrument bound to one, or the injec
 (the honesty rule of DESIGN.md; `tests/test_lab.py` scans this package).
 """
 
+from machinesim._submodules import submodule
 from machinesim.identification.fit import (
     Combination,
     Estimate,
@@ -32,3 +33,8 @@ from machinesim.identification.observations import (
 
 __all__ = ["Combination", "Estimate", "Observation", "Observations", "PlanQuality", "fit",
            "from_r_test", "observations", "plan_quality"]
+
+
+def __getattr__(name: str):
+    # machinesim.identification.<module> without its own import (`machinesim._submodules`)
+    return submodule(__name__, name)

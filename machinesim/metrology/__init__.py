@@ -9,6 +9,7 @@ spheres, planes, form error and Sa (`fits`); x3p files and PNG pictures (`export
 
 from __future__ import annotations
 
+from machinesim._submodules import submodule
 from machinesim.metrology.export import export_x3p, length_unit, plot_height_map, plot_profile
 from machinesim.metrology.fits import (
     FormError,
@@ -82,3 +83,8 @@ __all__ += ["PositioningEvaluation", "evaluate_positioning", "iso230_2_targets",
             "positioning_test", "squareness_from_diagonals"]
 __all__ += ["CrownFeatures", "GrooveDepths", "Line3D", "crown_features", "groove_depths",
             "line_distance", "plane_intersection"]
+
+
+def __getattr__(name: str):
+    # machinesim.metrology.<module> without its own import (`machinesim._submodules`)
+    return submodule(__name__, name)

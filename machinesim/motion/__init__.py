@@ -33,6 +33,7 @@ Python loop per move. The `Trajectory` it returns holds all samples end to end i
 ``t`` with ``offsets`` per move; ``trajectory.segments`` gives each move as a `Segment`.
 """
 
+from machinesim._submodules import submodule
 from machinesim.motion.chords import MAX_SUBSTEPS
 from machinesim.motion.planner import move_duration, plan
 from machinesim.motion.trajectory import IdealServo, Segment, Segments, ServoModel, Trajectory
@@ -40,3 +41,8 @@ from machinesim.tolerances import CHORD_TOLERANCE_M
 
 __all__ = ["CHORD_TOLERANCE_M", "MAX_SUBSTEPS", "IdealServo", "Segment", "Segments",
            "ServoModel", "Trajectory", "move_duration", "plan"]
+
+
+def __getattr__(name: str):
+    # machinesim.motion.<module> without its own import (`machinesim._submodules`)
+    return submodule(__name__, name)

@@ -109,6 +109,7 @@ offsets gives the moves at that resolution, and formatting them again gives the 
 
 from __future__ import annotations
 
+from machinesim._submodules import submodule
 from machinesim.nc.arcs import ARC_CHORD_M, ARC_RADIUS_TOLERANCE_M
 from machinesim.nc.builder import ProgramBuilder
 from machinesim.nc.parser import (
@@ -160,3 +161,8 @@ __all__ = [
     "read_program",
     "write_program",
 ]
+
+
+def __getattr__(name: str):
+    # machinesim.nc.<module> without its own import (`machinesim._submodules`)
+    return submodule(__name__, name)

@@ -13,3 +13,10 @@ Run one with `machinesim.experiment.run(procedure, lab)`. The formulas live in
 `machinesim.identification`, which sees measurements only; the test pieces' design in
 `machinesim.cam`.
 """
+
+from machinesim._submodules import submodule
+
+
+def __getattr__(name: str):
+    # machinesim.procedures.<module> without its own import (`machinesim._submodules`)
+    return submodule(__name__, name)

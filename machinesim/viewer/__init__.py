@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import importlib
 
+from machinesim._submodules import submodule
+
 #: Names imported on first use (PEP 562), so that the command line's parser (which imports
 #: ``machinesim.viewer.cli``) does not load meshcat, trimesh and Pinocchio before it parses.
 _LAZY = {
@@ -28,7 +30,7 @@ _LAZY = {
 
 def __getattr__(name: str):
     if name not in _LAZY:
-        raise AttributeError(f"module 'machinesim.viewer' has no attribute {name!r}")
+        return submodule(__name__, name)  # machinesim.viewer.views, ...
     value = getattr(importlib.import_module(f"machinesim.viewer.{_LAZY[name]}"), name)
     globals()[name] = value
     return value
