@@ -444,6 +444,32 @@ def test_a_trial_that_raises_a_fault_fails_that_trial_and_the_campaign_goes_on(
     assert summary["failures"] == [{"message": message, "trials": [1]}]
 
 
+def test_a_trial_out_of_memory_is_no_failure_of_its_draws_and_runs_again_on_resuming(
+        tmp_path, monkeypatch):
+    """A MemoryError (the machine's memory, under the command's cap, with other trials beside
+    it) was kept as the trial's failure, said to be 'a fault of machinesim ... please report
+    it', and the resumed campaign skipped the trial for good. It ends the campaign as before
+    the faults were kept: the finished trials kept, and the same command runs it again."""
+    import machinesim.campaign.trials as trials
+    from machinesim.experiment import run as real_run
+
+    def hungry(procedure, lab):
+        if lab.seed.spawn_key == (1,):
+            raise MemoryError
+        return real_run(procedure, lab)
+
+    monkeypatch.setattr(trials, "run", hungry)
+    with pytest.raises(MemoryError):
+        run("tool_rotation_arm", 2, out=tmp_path, workers=0, progress=False,
+            identify_only=True)
+    assert sorted(p.name for p in (tmp_path / "trials").iterdir()) == ["trial_000000.json"]
+    monkeypatch.setattr(trials, "run", real_run)  # memory again: the same command resumes
+    ds = run("tool_rotation_arm", 2, out=tmp_path, workers=0, progress=False,
+             identify_only=True)
+    assert list(ds["failed"].values) == [0, 0]
+    assert json.loads(ds.attrs["errors"]) == {}
+
+
 @pytest.mark.parametrize("client", ["tcp://127.0.0.1:8786", 3])
 def test_a_client_that_is_no_dask_client_is_refused_before_anything_is_written(tmp_path,
                                                                                client):

@@ -558,6 +558,12 @@ def _run(spec: CampaignSpec, i: int, drawn: dict, record: dict) -> None:
         result = run(spec.build(), _LabWithInstruments(lab, sigmas) if sigmas else lab)
     except MachineSimError as error:
         record["error"] = f"{type(error).__name__}: {error}"
+    except MemoryError:
+        # the machine's memory, not this trial's draws (other trials ran beside it, under
+        # the command's cap): no record, so that the campaign ends as out of memory and the
+        # same command, resumed, runs this trial again. Kept as a failure it had been said
+        # to be "a fault of machinesim ... please report it" and skipped for good on resuming
+        raise
     except Exception as error:  # a fault this trial's draws met: its failure, `unexpected`
         record["error"] = unexpected(error)
     else:
