@@ -175,7 +175,14 @@ def main(argv: list[str] | None = None) -> int:
         where = f"{exc.filename}: " if exc.filename else ""
         return _fail(f"error: {where}{exc.strerror or exc}", EXIT_INPUT)
     except MemoryError:
-        return _fail(f"error: out of memory: {OUT_OF_MEMORY}", 1)
+        kept = ""
+        if args is not None and args.command == "campaign":
+            # a trial ran out of memory (a29dff5: no record, so that it runs again): what
+            # was kept, as after a Ctrl-C
+            from machinesim.campaign.cli import interrupted
+
+            kept = f"; {interrupted(args.out)}"
+        return _fail(f"error: out of memory: {OUT_OF_MEMORY}{kept}", 1)
     except Exception as exc:
         if os.environ.get("MACHINESIM_TRACEBACK"):
             raise

@@ -1405,3 +1405,26 @@ def test_trial_files_and_the_summary_carry_their_schema_version(campaign, tmp_pa
     ds = run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
              progress=False, report=False, **ARM)
     assert ds["identified"].equals(campaign[2]["identified"])
+
+
+def test_cli_out_of_memory_in_a_trial_names_what_was_kept(tmp_path, capsys, monkeypatch):
+    """A trial that runs out of memory ends the campaign (no record: it runs again on
+    resuming); the command's one line had said only 'out of memory: ... cut a window of it
+    (--roi), or fewer passes', not that the finished trials were kept, as a Ctrl-C says."""
+    from machinesim.experiment import run as real_run
+
+    def hungry(procedure, lab):
+        if lab.seed.spawn_key == (1,):
+            raise MemoryError
+        return real_run(procedure, lab)
+
+    monkeypatch.setattr(trials_module, "run", hungry)
+    out = tmp_path / "c"
+    status = cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+                       "--identify-only", "--quiet", "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 1, err
+    assert len(err) == 1 and err[0].startswith("machinesim: error: out of memory: "), err
+    assert err[0].endswith(
+        f"; kept the 1 finished trial file in {out / 'trials'} (trial_000000.json) and "
+        "campaign.json: run the same command again to resume (only the missing trials run)")
