@@ -422,3 +422,34 @@ def test_a_planner_refusal_names_the_blocks_n_word_beside_its_line():
 
     with pytest.raises(NCProgramError, match=r"^m.nc, line 2 \(N8\), key 'B': axis B is not"):
         plan(Moves(), machine)
+
+
+@pytest.mark.parametrize("tolerance", [1e-9, 1e-5])
+def test_move_duration_of_an_arc_chord_takes_its_piece_of_arc(tolerance):
+    """`move_duration` (one move) times a chord given its ``arc_length_m`` as
+    `move_durations` does: the half circle of R10 mm at F600 sums to pi r / F (3.14159 s),
+    where its chords' own lengths ran fast by tol / (3 r) (3.2e-4 at 10 um); each move the
+    same float as the planner's, and a chord given no arc length keeps its own."""
+    from machinesim.motion import move_duration
+    from machinesim.motion.timing import move_durations
+
+    program = parse_program("G90 G21 G17\nG00 X10. Y0.\nG01 X10. F600.\n"
+                            "G03 X-10. Y0. I-10. J0.\nM30\n", chord_tolerance=tolerance)
+    targets, rotary = np.nan_to_num(program.targets), np.zeros(len(program.targets[0]), bool)
+    rates = np.full(rotary.size, 1.0)
+    arc = np.flatnonzero(program.lines == 4)
+    one = [move_duration("linear", targets[i - 1], targets[i], rotary, rates,
+                         program.feeds[i], 0.0, arc_length_m=program.arc_lengths[i])
+           for i in arc]
+    assert math.fsum(one) == pytest.approx(math.pi * 10.0 / 600.0 * 60.0, rel=1e-12)
+    every = move_durations(program.kinds[arc], targets[arc - 1], targets[arc],
+                           program.feeds[arc], program.dwells[arc], rotary, rates,
+                           program.arc_lengths[arc])
+    assert one == every.tolist()
+    chords = [move_duration("linear", targets[i - 1], targets[i], rotary, rates,
+                            program.feeds[i], 0.0) for i in arc]
+    assert math.fsum(chords) < math.fsum(one) * (1.0 - tolerance / 10e-3 / 3.0 * 0.9)
+    with pytest.raises(InputError) as caught:
+        move_duration("linear", targets[arc[0] - 1], targets[arc[0]], rotary, rates,
+                      program.feeds[arc[0]], 0.0, arc_length_m=-1e-3)
+    assert caught.value.key == "arc_length_m"

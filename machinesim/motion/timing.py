@@ -27,13 +27,20 @@ NUMBER = int | float | np.integer | np.floating
 
 
 def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndarray,
-                  rapid_rate: np.ndarray, feed_m_per_s: float | None, dwell_s: float) -> float:
+                  rapid_rate: np.ndarray, feed_m_per_s: float | None, dwell_s: float,
+                  *, arc_length_m: float | None = None) -> float:
     """Time of one move by the rules of `machinesim.motion` (FANUC's feed rule, clamped at
     the axes' velocity limits ``rapid_rate``; a rapid at its slowest axis), s.
 
     ``kind`` is one of ``"rapid"``, ``"linear"``, ``"dwell"``; a linear move that moves
     needs a feed > 0 (m/s, its degrees counting as mm), a dwell a time >= 0: anything
-    else is refused (InputError), as a `Move` refuses it, not timed."""
+    else is refused (InputError), as a `Move` refuses it, not timed.
+
+    ``arc_length_m``: for a linear move that is the chord of an arc, the length of the
+    piece of arc it stands for (m; its entry of `machinesim.nc.Program.arc_lengths`; None
+    or NaN: none), which it takes over F as `move_durations` does (the control holds F
+    along the arc), still clamped at the velocity limits. Without it a chord takes its
+    own length, which runs an arc fast by tol / (3 r)."""
     if kind not in MOVE_KINDS:
         raise InputError(f"kind must be one of {', '.join(MOVE_KINDS)}, got {kind!r}",
                          key="kind")
@@ -47,6 +54,13 @@ def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndar
     # FANUC: degrees count as millimetres in the feed length
     scaled = np.where(rotary, delta / _RAD_PER_DEG, delta / M_PER_MM)
     length_mm = float(np.sqrt(np.sum(scaled**2)))
+    if arc_length_m is not None and not (isinstance(arc_length_m, NUMBER)
+                                         and (math.isnan(arc_length_m)
+                                              or 0.0 <= arc_length_m < math.inf)):
+        raise InputError(f"arc_length_m must be a length >= 0 (m), NaN or None (no arc), "
+                         f"got {arc_length_m!r}", key="arc_length_m")
+    if arc_length_m is not None and not math.isnan(arc_length_m):
+        length_mm = float(arc_length_m) / M_PER_MM
     if length_mm == 0.0:
         return 0.0
     if not (isinstance(feed_m_per_s, NUMBER) and 0.0 < feed_m_per_s < math.inf):
