@@ -2,6 +2,8 @@
 (tool setting, nose radius) to the turning engine, read by the white-light interferometer;
 the control's encoders; the operator's tool adjustment; the nose radius in the error model."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -273,6 +275,26 @@ def test_a_plunge_of_more_than_a_day_is_noted_though_it_turns_no_c():
     # it is not cut, so not in the turning time: the facing run's alone
     assert report.machining_time_s == pytest.approx(np.hypot(5.5, 18000.0) / 20.0 * 60.0,
                                                     rel=1e-12)
+
+
+def test_an_arc_plunge_is_timed_by_its_arc_as_plan_times_it():
+    # a G18 half circle of R0.505 mm down to the face (pi r = 1.5865 mm), read as 8 chords
+    # (10 um tolerance), at the F that takes each chord's piece of arc 1.003 days: noted, as
+    # plan notes it; the chords are 0.66 % (tol / (3 r)) shorter than their arcs, 0.9964
+    # days each, and the lathe timed them so: no word
+    feed = round(math.pi * 0.505 / (8 * 86400 * 1.003) * 60.0, 10)  # mm/min
+    program = parse_program(f"G21 G90 G94\nG00 X5.5 Z1. C0.\nG18 G03 X5.5 Z-0.01 R0.505 "
+                            f"F{feed:.10f}\nG01 X0. C18000. F20.\nG00 Z1.\nM30\n",
+                            chord_tolerance=1e-5)
+    assert (program.lines == 3).sum() == 8
+    report = turn(program, "sts_lathe", "nose:0.5:90")[1]
+    piece_s = math.pi * 0.505 / 8 / feed * 60.0
+    assert report.notes == (
+        f"the feed move of line 3 takes {piece_s:.3g} s ({piece_s / 3600:.3g} h) at "
+        f"F{feed:.6g} (mm/min or deg/min), more than the 24 h one move of a program takes: "
+        "is F in the program's unit (G94: per minute)?",)
+    assert report.notes == machinesim.motion.plan(program,
+                                                  machinesim.load_machine("sts_lathe")).notes
 
 
 def test_a_turning_programs_dwells_are_timed_and_a_dwell_of_more_than_an_hour_is_noted():

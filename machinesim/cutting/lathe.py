@@ -339,7 +339,8 @@ def _untimed_moves(program, machine) -> tuple[float, tuple[str, ...]]:
     hardly what it meant (`machinesim.motion.timing.slow_move_notes`, as `plan` notes
     them): the longest feed move when it takes more than a day, turning or not (a plunge
     at F0.000001), and the longest dwell beyond an hour. Neither a plunge nor a dwell is
-    in a turning run, which `_timed_runs` times."""
+    in a turning run, which `_timed_runs` times. A chord of an arc (a G02/G03 plunge) takes
+    its piece of arc over F (`machinesim.nc.Program.arc_lengths`), as `plan` times it."""
     kinds = np.asarray(program.kinds)
     feeds = np.asarray(program.feeds, dtype=np.float64)
     durations = np.where(kinds == KIND_DWELL, np.asarray(program.dwells, dtype=np.float64),
@@ -348,10 +349,15 @@ def _untimed_moves(program, machine) -> tuple[float, tuple[str, ...]]:
     q, moved, _, _ = _axis_values(program, machine, source)
     first = len(kinds) - len(moved)  # a move from a point of known axis values: later ones
     linear = np.flatnonzero(kinds[first + 1:] == KIND_LINEAR) + first + 1
+    lengths = _lengths(q[linear - first - 1], q[linear - first], machine.axes)
+    arcs = getattr(program, "arc_lengths", None)  # none in a program pickled before them
+    if isinstance(arcs, np.ndarray) and arcs.shape == kinds.shape:
+        on_arc = ~np.isnan(arcs[linear])
+        lengths[on_arc] = arcs[linear][on_arc]
     with np.errstate(divide="ignore", invalid="ignore"):  # F none or 0: no time, no note
-        times = np.maximum(
-            _lengths(q[linear - first - 1], q[linear - first], machine.axes) / feeds[linear],
-            _at_limits(q[linear - first - 1], q[linear - first], machine.rapid_rate))
+        times = np.maximum(lengths / feeds[linear],
+                           _at_limits(q[linear - first - 1], q[linear - first],
+                                      machine.rapid_rate))
     durations[linear] = np.where(np.isfinite(times), times, 0.0)
     return float(durations[kinds == KIND_DWELL].sum()), slow_move_notes(
         durations, kinds, np.asarray(program.lines), feeds, program)
@@ -512,7 +518,13 @@ def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple, lines: np.nda
     mm with rotary axes in degrees, over F in mm/s (FANUC), or the time its slowest axis
     takes at its velocity limit ``rapid_rate`` (per axis, SI) where that is longer (a feed
     beyond it is clamped, `machinesim.motion.timing.move_duration`); a move without a
-    positive feed is refused naming its ``lines`` in ``source``."""
+    positive feed is refused naming its ``lines`` in ``source``.
+
+    Every move here turns C, so none is the chord of an arc that keeps its arc's length
+    (`machinesim.nc.Program.arc_lengths`): an arc block leaves C where it was unless it
+    names C, and an arc that turns a rotary axis keeps its chords' feed rule (its degrees
+    count in the feed length), as `move_durations` times it. The chord rule here is that
+    rule, not an approximation of it."""
     length = _lengths(points[:-1], points[1:], axes)
     bad = ~(np.isfinite(feeds) & (feeds > 0.0))
     if bad.any():
