@@ -453,3 +453,24 @@ def test_move_duration_of_an_arc_chord_takes_its_piece_of_arc(tolerance):
         move_duration("linear", targets[arc[0] - 1], targets[arc[0]], rotary, rates,
                       program.feeds[arc[0]], 0.0, arc_length_m=-1e-3)
     assert caught.value.key == "arc_length_m"
+
+
+def test_a_written_arc_program_keeps_chords_timed_by_the_chord_rule():
+    """As format_program says: the writer writes an arc's chords as G01 blocks, so the text
+    read back keeps no arc lengths and its chords take their own length over F (the half
+    circle of R10 mm at F600 read at 10 um: 3.14060 s, not pi r / F = 3.14159 s)."""
+    from machinesim.nc import format_program
+
+    machine = load_machine("grooving_4axis")
+    program = parse_program("G90 G21 G17\nG00 X10. Y0. Z0. C0.\nG01 X10. F600.\n"
+                            "G03 X-10. Y0. I-10. J0.\nM30\n", chord_tolerance=1e-5)
+    text = format_program(program)
+    assert "G02" not in text and "G03" not in text
+    again = parse_program(text)
+    assert np.isnan(again.arc_lengths).all()
+    arc = program.lines == 4
+    chords_mm = np.hypot(*np.diff(program.targets[:, :2], axis=0)[arc[1:]].T).sum() * 1e3
+    time = plan(again, machine).cutting_time
+    assert time == pytest.approx(chords_mm / 600.0 * 60.0, rel=1e-7)  # 1 nm rounding
+    assert plan(program, machine).cutting_time == pytest.approx(math.pi, rel=1e-12)
+    assert math.pi * (1.0 - 1e-5 / 10e-3 / 3.0) < time < math.pi  # the sagitta <= tol
