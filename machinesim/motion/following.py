@@ -33,12 +33,12 @@ import numpy as np
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.motion.chords import (
     MAX_SUBSTEPS,
-    ToolPaths,
     hold_corners,
     hold_raised,
     substeps,
 )
 from machinesim.motion.faces import face_substeps, profile_substeps
+from machinesim.motion.tool_paths import ToolPaths
 from machinesim.nc.program import KIND_LINEAR
 from machinesim.tolerances import MAX_STEP_TURN_RAD
 

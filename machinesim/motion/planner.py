@@ -10,7 +10,6 @@ import numpy as np
 from machinesim.exceptions import InputError, NCProgramError
 from machinesim.motion.chords import (
     MAX_SUBSTEPS,
-    ToolPaths,
     hold_corners,
     hold_raised,
     substeps,
@@ -27,6 +26,7 @@ from machinesim.motion.timing import (
     move_durations,
     slow_move_notes,
 )
+from machinesim.motion.tool_paths import ToolPaths
 from machinesim.motion.trajectory import IdealServo, ServoModel, Trajectory
 from machinesim.nc.moves import feed_problem
 from machinesim.nc.program import AXES, KIND_DWELL, KIND_LINEAR, MOVE_KINDS

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from machinesim.motion.chords import MAX_SUBSTEPS, ToolPaths, _blocks, _columns
+from machinesim.motion.chords import MAX_SUBSTEPS, _blocks, _columns
+from machinesim.motion.tool_paths import ToolPaths
 
 #: Pieces each level of `_zoom` splits the worst piece into.
 _ZOOM = 64
