@@ -33,6 +33,7 @@ from __future__ import annotations
 import machinesim.scenario_start  # noqa: F401  (first: Ctrl-C while loading is one line)
 
 import io
+import math
 import time
 
 import numpy as np
@@ -257,13 +258,22 @@ def tool_against_axis(out: ReportFolder, lab, result) -> str:
         value, std = result.identified[name]
         injected = result.injected[name]
         rows.append([name, injected / NM, (against - injected) / NM, against / NM, value / NM,
-                     std / NM, (value - against) / NM, (value - against) / std])
+                     std / NM, (value - against) / NM, _in_stds(value - against, std)])
     return out.write_table(
         "tool_against_axis", ["parameter", "injected (nm)", "added by the machine (nm)",
                               "tool against the spindle axis (nm)", "identified (nm)",
                               "std (nm)", "error against the axis (nm)", "error / std"],
         rows, title="Tool offsets against the spindle axis (the tests read the tool from it)",
         digits=2)
+
+
+def _in_stds(error: float, std: float) -> float:
+    """``error`` in units of ``std``; NaN (null in the table's JSON: undefined) where the std
+    is 0 or not a number. A fit whose residuals vanish states a std of 0 (`_fit_std`:
+    s^2 = sum(r^2) / (n - p)), and a 0 std makes no unit: the Python division ended the
+    scenario in ZeroDivisionError after the run, and a numpy one's inf, which the table
+    had written as null, is now refused (an infinite figure is no measurement)."""
+    return error / std if std > 0.0 else math.nan
 
 
 def alias_table(out: ReportFolder, machine) -> str:

@@ -237,6 +237,31 @@ def test_the_tool_is_set_against_the_spindle_axis_not_the_workpiece():
         assert dy == pytest.approx(25e-9 + radius * 0.5e-6, abs=1e-15)
 
 
+def test_the_tool_against_the_axis_table_gives_no_ratio_to_a_zero_std(tmp_path):
+    """The table's error / std of a tool offset whose fit stated a std of 0 (its residuals
+    vanished): the scenario ended in ZeroDivisionError after the run. Undefined: NaN, n/a
+    in the Markdown and null in the JSON; a std of 1 nm gives the error in nm."""
+    import json
+    from types import SimpleNamespace
+
+    from machinesim.report import ReportFolder
+
+    scenario = _scenario()
+    machine = machinesim.load_machine("sts_lathe")
+    errors = ErrorModel.from_dict({"tool": {"offset_um": [-3.5, -3.5, 0.0]}})
+    lab = SimpleNamespace(machine=machine, reveal=lambda: errors)
+    against = scenario.tool_from_spindle_axis(machine, errors, STSTurning().nose_radius)
+    result = SimpleNamespace(
+        injected={"tool.x": -3.5e-6, "tool.y": -3.5e-6},
+        identified={"tool.x": (against[0] + 2e-9, 0.0), "tool.y": (against[1] - 3e-9, 1e-9)})
+    text = scenario.tool_against_axis(ReportFolder(tmp_path / "out"), lab, result)
+    rows = json.loads((tmp_path / "out" / "tool_against_axis.json").read_text())["rows"]
+    assert rows[0][0] == "tool.x" and rows[0][-1] is None
+    assert rows[1][0] == "tool.y" and rows[1][-1] == pytest.approx(-3.0, rel=1e-6)
+    assert rows[0][-2] == pytest.approx(2.0, rel=1e-6)  # the error itself, nm, is given
+    assert text.splitlines()[4].endswith("| n/a |")
+
+
 def test_the_scenario_names_its_errors_file_when_a_value_does_not_fit(tmp_path):
     path = tmp_path / "bad.toml"
     path.write_text("[tool_geometry]\nnose_radius_mm = -1.0\n")
