@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,6 +25,7 @@ from machinesim.exceptions import InputError, MachineSimError
 
 UM, NM = 1e-6, 1e-9
 ARM = dict(identify_only=True)
+EXAMPLE_ERRORS = Path(__file__).resolve().parents[1] / "models" / "errors" / "example.toml"
 
 
 # ------------------------------------------------------------------------- distributions
@@ -388,6 +390,8 @@ def test_dataset_file_holds_the_trials_seed_and_versions(campaign):
     for name in ("drawn", "injected", "identified", "identified_std"):
         assert np.array_equal(on_disk[name].values, ds[name].values)
     assert on_disk.attrs["seed"] == 11
+    assert on_disk["parameter_unit"].values.tolist() == ["m", "m"]  # tool.y, tool.z
+    assert on_disk["varied_unit"].values.tolist() == ["m", "m"]  # tool.y, microscope.sigma
     assert set(json.loads(on_disk.attrs["versions"])) >= {"machinesim", "numpy", "dask"}
     summary = json.loads((out / "summary.json").read_text())
     assert summary["trials_count"] == 3 and "z_scores.png" in summary["files"]
@@ -1009,6 +1013,51 @@ def test_trials_written_before_the_after_std_still_assemble():
     assert math.isnan(float(ds["after_std"].values[0, 0]))
     assert float(ds["after"].values[0, 0]) == 0.2
     assert "after_z" not in summarise(ds)["figures"]["a_dx"]
+
+
+def test_each_parameter_carries_its_si_unit_through_campaign_nc(monkeypatch):
+    """campaign.nc held m and rad unmarked, told apart by the name alone, and a polynomial's
+    coefficient (m/m^k) not at all. Each parameter and varied parameter now has its unit
+    from the error model (`ErrorModel.parameter_unit`), read back from the file and given
+    by summary.json and summary.md. Paper 003's model has tables: EXX's entries are
+    lengths, EAC's angles; the example model's EYX is a polynomial."""
+    import dataclasses
+
+    from machinesim.campaign.results import assemble
+    from machinesim.campaign.summary import _markdown, summarise
+    from machinesim.errors import ErrorModel
+
+    def record(t, names, drawn=None):
+        return {"trial": t, "drawn": drawn or {}, "injected": dict.fromkeys(names, 1e-6),
+                "identified": {n: [1.5e-6, 1e-6] for n in names}, "figures": {},
+                "elapsed_s": 1.0, "error": None}
+
+    names = ["component.X.EXX[2]", "component.C.EAC[3]", "location.C.EB0C", "tool.y"]
+    spec = {"procedure": "xy_plane_errors", "seed": 0, "noise": True, "identify_only": True,
+            "vary": {"component.C.EAC[3]": "1urad", "laser_interferometer.sigma": "1nm"}}
+    drawn = {"component.C.EAC[3]": 1e-6, "laser_interferometer.sigma": 1e-9}
+    ds = assemble([record(0, names, drawn)], spec, 1)
+    on_disk = xr.open_dataset(bytes(ds.to_netcdf())).load()
+    assert on_disk["parameter_unit"].values.tolist() == ["m", "rad", "rad", "m"]
+    assert on_disk["varied_unit"].values.tolist() == ["rad", "m"]
+    summary = summarise(on_disk)
+    assert [summary["parameters"][n]["unit"] for n in names] == ["m", "rad", "rad", "m"]
+    rows = _table(_markdown(summary), "parameter")
+    assert [rows[n]["unit"] for n in names] == ["m", "rad", "rad", "m"]
+    # a polynomial's coefficients: the name's kind (parameter_kind) said a length for each
+    example = ErrorModel.from_toml(EXAMPLE_ERRORS)
+    monkeypatch.setitem(PROCEDURES, "tool_setting_6axis", dataclasses.replace(
+        PROCEDURES["tool_setting_6axis"], base=lambda: example))
+    poly = [f"component.X.EYX[{k}]" for k in range(3)]
+    spec = {**spec, "procedure": "tool_setting_6axis", "vary": {}}
+    ds = assemble([record(0, poly)], spec, 1)
+    on_disk = xr.open_dataset(bytes(ds.to_netcdf())).load()
+    assert on_disk["parameter_unit"].values.tolist() == ["m", "m/m", "m/m^2"]
+    assert _markdown(summarise(on_disk)).count("| m/m^2 |") == 1
+    # a trial file naming a parameter the model has no unit for: named, not a traceback
+    with pytest.raises(InputError, match=r"'component.X.EZX\[0\]' \(trials/trial_000001.json "
+                                         r"first names it\) has no unit .*no such error"):
+        assemble([record(0, poly), record(1, ["component.X.EZX[0]"])], spec, 2)
 
 
 def test_trials_that_give_a_figure_in_two_units_are_refused():

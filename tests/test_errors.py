@@ -310,6 +310,38 @@ def test_with_parameters_sets_the_named_fields():
     assert dict(model.location["Y"]) == {"EC0Y": 8e-6}
 
 
+def test_parameter_unit_tells_a_polynomial_coefficient_from_a_table_value():
+    """Every parameter's SI unit; a polynomial's coefficient k is its value's unit per the
+    position's to the k, checked against the error it gives: EYX = c2 x**2 (x in m)."""
+    model = ErrorModel.from_toml(EXAMPLE)
+    units = {name: model.parameter_unit(name) for name in model.parameters()}
+    assert units == {
+        **{f"tool.{a}": "m" for a in "xyz"}, **{f"tool.r{a}": "rad" for a in "xyz"},
+        **{f"workpiece.{a}": "m" for a in "xyz"},
+        **{f"workpiece.{a}": "rad" for a in ("alpha", "beta", "gamma")},
+        "location.C.EX0C": "m", "location.C.EB0C": "rad",
+        **{f"component.X.EXX[{k}]": "m" for k in range(3)},  # a table's values, at any k
+        "component.X.EYX[0]": "m", "component.X.EYX[1]": "m/m", "component.X.EYX[2]": "m/m^2",
+        **{f"component.C.ECC[{k}]": "rad" for k in range(3)}}
+    # 2e-5 um/mm**2 is 2e-5 m/m**2 (1e-6 / 1e-3**2): the error at x = 0.1 m is c2 x**2 in m
+    c2 = model.parameters()["component.X.EYX[2]"]
+    assert c2 == pytest.approx(2e-5, rel=ONE_PRODUCT_RTOL)
+    assert model.component["X"]["EYX"].evaluate(0.1) == pytest.approx(c2 * 0.1**2, rel=1e-14)
+    # a location error the model lacks (with_parameters adds it), the nose radius
+    assert model.parameter_unit("location.Y.EC0Y") == "rad"
+    assert model.parameter_unit("tool_geometry.nose_radius") == "m"
+    # polynomials of a rotary axis: an offset per rad**k, an angle per rad**k
+    rotary = ErrorModel(component={"C": {
+        "EXC": ComponentError("poly", None, [1e-6, 2e-6]),
+        "ECC": ComponentError("poly", None, [0.0, 1e-6, 1e-7, 1e-8])}})
+    assert [rotary.parameter_unit(n) for n in rotary.parameters() if "component" in n] == [
+        "m", "m/rad", "rad", "rad/rad", "rad/rad^2", "rad/rad^3"]
+    for name, match in (("tool.w", "tool.w"), ("component.X.EZX[0]", "no such error"),
+                        ("component.X.EYX[3]", "3 values"), ("location.C.EX0Y", "EX0Y")):
+        with pytest.raises(ErrorModelError, match=match):
+            model.parameter_unit(name)
+
+
 @pytest.mark.parametrize(
     ("name", "value", "match"),
     [

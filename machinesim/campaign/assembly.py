@@ -20,6 +20,12 @@ variable                      dims                    what
 ``elapsed_s``                 (trial)                 wall time of the trial, s
 ``failed``                    (trial)                 1 where the trial ended in an error
 ``figure_unit``               (figure)                unit of ``before``/``after`` (coordinate)
+``parameter_unit``            (parameter)             SI unit of ``injected``, ``identified``,
+                                                      ``identified_std`` (coordinate): m or
+                                                      rad, a polynomial's coefficient k >= 1
+                                                      m/m^k, rad/m^k, m/rad^k or rad/rad^k
+                                                      (`trials.parameter_unit`)
+``varied_unit``               (varied)                SI unit of ``drawn`` (coordinate), alike
 ============================  ======================  ==========================================
 
 Attributes: the campaign's ``seed`` (an integer; one of 2**31 or more, beyond netCDF 3's
@@ -155,6 +161,28 @@ class Assembly:
                 out[:, k] = self.columns[table][name]
         return out
 
+    def _units(self, names: list[str]) -> np.ndarray:
+        """The SI unit of each parameter (`trials.parameter_unit`: m, rad, or a polynomial
+        coefficient's m/m^2): the values are SI, and the name alone tells m from rad, not a
+        polynomial's coefficient from a table's value."""
+        from machinesim.campaign.trials import parameter_unit
+        from machinesim.exceptions import MachineSimError
+
+        out = []
+        for name in names:
+            try:
+                out.append(parameter_unit(self.spec["procedure"], name))
+            except MachineSimError as error:  # a trial file edited, or of another model
+                first = self.first["identified"].get(name, (None,))[0]
+                where = "" if first is None else \
+                    f" (trials/trial_{first:06d}.json first names it)"
+                raise InputError(f"parameter {name!r}{where} has no unit in "
+                                 f"{self.spec['procedure']}'s error model: "
+                                 f"{getattr(error, 'message', error)}; delete the trial "
+                                 "files that name it and run again to compute them anew",
+                                 key="records") from None
+        return np.array(out, dtype=object)
+
     def dataset(self):
         """The Dataset, once every trial's record was added."""
         import xarray as xr
@@ -176,7 +204,9 @@ class Assembly:
         units = {name: unit for name, (_, unit) in self.units.items()}
         errors = {str(t): self.errors[t] for t in sorted(self.errors)}
         coords = {"trial": np.arange(n), "varied": np.array(varied, dtype=object),
+                  "varied_unit": ("varied", self._units(varied)),
                   "parameter": np.array(parameters, dtype=object),
+                  "parameter_unit": ("parameter", self._units(parameters)),
                   "figure": np.array(figures, dtype=object),
                   "figure_unit": ("figure", np.array([units[f] for f in figures], dtype=object))}
         # netCDF 3 has no zero-length fixed dimension: a dimension with nothing on it (no
@@ -187,9 +217,7 @@ class Assembly:
             if not len(coords[dim]):
                 for name in names:
                     del data[name]
-                del coords[dim]
-                if dim == "figure":
-                    del coords["figure_unit"]
+                del coords[dim], coords[f"{dim}_unit"]
         seed = int(spec["seed"])
         attrs = {"procedure": spec["procedure"],
                  "seed": seed if seed < _NC3_INT_END else str(seed), "trials": n,

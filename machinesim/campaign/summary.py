@@ -3,7 +3,7 @@
 summary.json (docs/campaigns.md). Its numbers are not all keyed by their unit, as a
 scenario's report.json's ``details`` are (docs/reports.md): a `statistics.describe`'s
 ``mean``, ``std``, ``min``, ``max`` and intervals are in the unit named beside them (a
-figure's ``unit``) or by the key holding them (``error_si``: m or rad, the parameter's kind);
+figure's ``unit``) or by the key holding them (``error_si``: the parameter's ``unit``, SI);
 z-scores and rank correlations are ratios; ``count`` and the ``_count`` keys count trials.
 
 - ``schema_version`` (`SCHEMA_VERSION`), ``procedure``, ``seed``, ``trials_count``,
@@ -16,9 +16,11 @@ z-scores and rank correlations are ratios; ``count`` and the ``_count`` keys cou
   Spearman rank correlation with the after value; where the procedure states the after's
   spread over labs (`Figure.after_std`), ``after_z``: the z-scores after / after_std
   (`statistics.z_summary`; a faithful spread gives std 1, 95 % within +-1.96);
-- ``parameters``: per identified parameter, the identification error (identified - injected)
-  described in SI (``error_si``), its z-scores (`statistics.z_summary`) and ``sensitivity``:
-  varied parameter -> Spearman rank correlation with the error's magnitude;
+- ``parameters``: per identified parameter, its SI ``unit`` (the Dataset's ``parameter_unit``:
+  m, rad, or a polynomial coefficient's m/m^k ...), the identification error (identified -
+  injected) described in that unit (``error_si``), its z-scores (`statistics.z_summary`)
+  and ``sensitivity``: varied parameter -> Spearman rank correlation with the error's
+  magnitude;
 - ``coverage_interval``: which intervals are given (JCGM 101 7.7.1 and 7.7.2);
 - ``failures``: each distinct message of a failed trial with the trials that ended in it
   (``{"message": ..., "trials": [...]}``, most trials first), messages that differ only in
@@ -69,6 +71,15 @@ def _names(dataset, dim: str) -> list[str]:
     return [str(v) for v in dataset[dim].values] if dim in dataset.dims else []
 
 
+def _unit(dataset, k: int, name: str) -> str:
+    """Parameter ``k``'s SI unit: the Dataset's ``parameter_unit``; for a campaign.nc
+    written before it was kept, the name's kind (`parameter_kind`: m or rad; ``SI`` for
+    neither)."""
+    if "parameter_unit" in dataset.coords:
+        return str(dataset["parameter_unit"].values[k])
+    return _SI.get(parameter_kind(name), "SI")
+
+
 def summarise(dataset) -> dict:
     """summary.json of a campaign Dataset (module docstring)."""
     failed = dataset["failed"].values.astype(bool)
@@ -95,6 +106,7 @@ def summarise(dataset) -> dict:
         found, truth = dataset["identified"].values[:, k], dataset["injected"].values[:, k]
         z = z_scores(found, truth, dataset["identified_std"].values[:, k])
         parameters[str(name)] = {
+            "unit": _unit(dataset, k, name),
             "error_si": describe(found - truth), "z": z_summary(z),
             "sensitivity": {v: spearman(dataset["drawn"].values[:, j], np.abs(found - truth))
                             for j, v in enumerate(varied)}}
@@ -155,8 +167,8 @@ def _interval(pair) -> str:
     return "n/a (too few trials)" if low is None else f"[{_g(low)}, {_g(high)}]"
 
 
-#: The SI unit of a parameter's kind (`machinesim.campaign.distributions.parameter_kind`):
-#: summary.md's identification errors put metres and radians in one column, unmarked.
+#: The SI unit of a parameter's kind (`machinesim.campaign.distributions.parameter_kind`), for a
+#: campaign.nc without ``parameter_unit`` (`_unit`).
 _SI = {"length": "m", "angle": "rad"}
 
 
@@ -196,7 +208,7 @@ def _markdown(summary: dict) -> str:
         lines.append("")
     if summary["parameters"]:
         lines += ["## Identification: error and z-scores", "",
-                  "error = identified - injected (SI: unit m or rad); z = error / reported "
+                  "error = identified - injected (SI: the unit beside it); z = error / reported "
                   "std: honest uncertainty gives mean 0, std 1, 95 % within +-1.96; rho: "
                   "Spearman rank correlation with |error|.", "",
                   *_header(["parameter", "unit", "trials", "error mean", "error std",
@@ -204,7 +216,7 @@ def _markdown(summary: dict) -> str:
                             "within +-1.96", *rho])]
         for name, p in summary["parameters"].items():
             e, z = p["error_si"], p["z"]
-            lines.append(_row([name, _SI.get(parameter_kind(name), "SI"), str(e["count"]),
+            lines.append(_row([name, p["unit"], str(e["count"]),
                                _g(e["mean"]), _g(e["std"]),
                                _interval(e["symmetric_95"]), str(z["count"]),
                                _g(z["mean"], 3), _g(z["std"], 3),

@@ -46,7 +46,8 @@ from machinesim.streams import stream
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = ["MAX_TRIALS", "PROCEDURES", "CampaignSpec", "IdentificationOnly", "ProcedureEntry",
-           "check_flag", "kept_warnings", "run_trial", "trial_seed", "trials_refused"]
+           "check_flag", "kept_warnings", "parameter_unit", "run_trial", "trial_seed",
+           "trials_refused"]
 
 
 #: Most trials a campaign takes (docs/campaigns.md): a trial is seconds to minutes of CPU and
@@ -206,6 +207,28 @@ PROCEDURES = {
         about="paper 003: the XY plane's 2-D errors, diagonals, C squareness and pyramids "
         "(default errors: models/errors/xy_plane_grooving_4axis.toml)"),
 }
+
+
+def parameter_unit(procedure: str, name: str) -> str:
+    """The SI unit of parameter ``name`` in a campaign of ``procedure``: a lab parameter's
+    (`LAB_PARAMETERS`, whose kinds are all lengths: m) or the error model's
+    (`machinesim.errors.ErrorModel.parameter_unit` on the procedure's base model, which says
+    whether a component entry is a table's value, m or rad, or a polynomial's coefficient
+    k >= 1, per m**k or rad**k: the name alone does not).
+
+    Raises
+    ------
+    InputError
+        For a procedure not in `PROCEDURES`.
+    ErrorModelError
+        For a name that is no parameter of the base model (`ErrorModel.parameter_unit`).
+    """
+    if procedure not in PROCEDURES:
+        raise InputError(f"procedure {brief(repr(procedure))}; expected one of "
+                         f"{', '.join(PROCEDURES)}", key="procedure")
+    if name in LAB_PARAMETERS:
+        return {"length": "m", "angle": "rad"}[LAB_PARAMETERS[name]]
+    return PROCEDURES[procedure].base().parameter_unit(name)
 
 
 class IdentificationOnly:

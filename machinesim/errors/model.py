@@ -41,7 +41,7 @@ from machinesim.errors.families import (
     _plain,
     _Value,
 )
-from machinesim.exceptions import ErrorModelError
+from machinesim.exceptions import ErrorModelError, brief
 from machinesim.units import FACTORS, M_PER_MM, RAD_PER_DEG
 
 _PARAMETER_RE = re.compile(
@@ -203,6 +203,48 @@ class ErrorModel(_Value):
                 for k, value in enumerate(error.values.tolist()):
                     out[f"component.{axis}.{symbol}[{k}]"] = value
         return out
+
+    def parameter_unit(self, name: str) -> str:
+        """The SI unit of parameter ``name`` (as `parameters` and `with_parameters` name them).
+
+        ``"m"`` or ``"rad"``: a tool or workpiece offset or rotation, the nose radius, a
+        location error and a component table's value by its symbol (``E<d>...``: ``d`` in X Y
+        Z a length, in A B C an angle, `machinesim.errors`). A polynomial's coefficient
+        ``k >= 1`` is its value's unit per the axis position's unit to the k
+        (``sum c_k x**k``, x in m on X Y Z, in rad on A B C): ``"m/m"``, ``"m/m^2"``,
+        ``"rad/m"``, ``"m/rad^3"``; its ``k = 0`` the value's. A location error need not be in
+        the model (`with_parameters` adds it); a component parameter must be, as there.
+
+        Raises
+        ------
+        ErrorModelError
+            For a name that is no parameter, and a component entry the model lacks.
+        """
+        match = _PARAMETER_RE.fullmatch(name) if isinstance(name, str) else None
+        if match is None:
+            raise _fail(f"unknown parameter name; expected {_PARAMETER_FORMS}", None,
+                        name if isinstance(name, str) else brief(repr(name)))
+        if match["tool"] or match["workpiece"]:
+            rotation = (match["tool"] or "").startswith("r") or match["workpiece"] in (
+                _WORKPIECE_ANGLES)
+            return "rad" if rotation else "m"
+        if match["geometry"]:
+            return "m"
+        axis, symbol = match["laxis"] or match["caxis"], match["lsym"] or match["csym"]
+        _check_axis(axis, None, name)
+        _check_symbol(symbol, axis, bool(match["laxis"]), None, name)
+        value = "m" if _quantity(symbol[1]) == "length" else "rad"
+        if match["laxis"]:
+            return value
+        error, k = self.component.get(axis, {}).get(symbol), int(match["k"])
+        if error is None or k >= error.values.size:
+            raise _fail("unknown parameter: the model has no such error"
+                        if error is None else f"unknown parameter: index {k}, but the error "
+                        f"has {error.values.size} values", None, name)
+        if error.kind == "table" or k == 0:
+            return value
+        position = "m" if _quantity(axis) == "length" else "rad"
+        return f"{value}/{position}" + (f"^{k}" if k > 1 else "")
 
     def with_parameters(self, mapping: Mapping[str, float]) -> ErrorModel:
         """A copy with the named parameters replaced (names as in `parameters`, SI values).
