@@ -1060,6 +1060,31 @@ def test_each_parameter_carries_its_si_unit_through_campaign_nc(monkeypatch):
         assemble([record(0, poly), record(1, ["component.X.EZX[0]"])], spec, 2)
 
 
+def test_a_polynomials_coefficient_is_no_length_and_is_not_varied_as_one(monkeypatch):
+    """parameter_kind read component.X.EYX[1], a polynomial's coefficient (m/m), as a
+    length, so --vary took normal:0,1um for it and drew 1e-6 m/m. With the model it is
+    neither kind, and a campaign refuses varying it, naming its unit."""
+    import dataclasses
+
+    from machinesim.campaign.distributions import parameter_kind
+    from machinesim.errors import ErrorModel
+
+    example = ErrorModel.from_toml(EXAMPLE_ERRORS)
+    assert [parameter_kind(f"component.X.EYX[{k}]", example) for k in range(3)] == [
+        "length", None, None]
+    assert parameter_kind("component.X.EXX[2]", example) == "length"  # a table's value
+    assert parameter_kind("component.C.ECC[1]", example) == "angle"
+    assert parameter_kind("component.X.EYX[1]") == "length"  # the name alone: a table's
+    monkeypatch.setitem(PROCEDURES, "tool_setting_6axis", dataclasses.replace(
+        PROCEDURES["tool_setting_6axis"], base=lambda: example))
+    with pytest.raises(InputError, match=r"--vary component.X.EYX\[2\]: a polynomial's "
+                                         r"coefficient, in m/m\^2 \(SI\)"):
+        CampaignSpec("tool_setting_6axis", 1, (parse_vary("component.X.EYX[2]=normal:0,1um"),))
+    spec = CampaignSpec("tool_setting_6axis", 1, (parse_vary("component.X.EYX[0]=1um"),
+                                                  parse_vary("component.X.EXX[1]=1um")))
+    assert [name for name, _ in spec.vary] == ["component.X.EYX[0]", "component.X.EXX[1]"]
+
+
 def test_trials_that_give_a_figure_in_two_units_are_refused():
     """Trial 0 gave a_dx as 5 um, trial 1 as 5000 nm: the Dataset held 5 and 5000 in one
     column of figure_unit 'um' (the first trial's), its mean 2502.5 um."""

@@ -52,15 +52,23 @@ def _shown(text) -> str:
     return brief(repr(text))
 
 
-def parameter_kind(name: str) -> str | None:
-    """``"length"``, ``"angle"`` or None (not a parameter name) of a parameter name.
+def parameter_kind(name: str, model=None) -> str | None:
+    """``"length"``, ``"angle"`` or None (not a parameter name, or none of the two) of a
+    parameter name.
 
     An error's symbol says which (ISO 230-1): ``E`` then the direction, X Y Z a length (a
     positioning, straightness, radial or axial error), A B C an angle; the same for a
     component table's entry ``component.X.EXX[k]``, the error's value at the table's k-th
-    position (a polynomial's coefficient k >= 1, per metre^k, has no unit of the grammar;
-    a model a campaign varies, paper 003's, has tables).
+    position. A polynomial's coefficient k >= 1 is none of the two (per m**k or rad**k,
+    `machinesim.errors.ErrorModel.parameter_unit`), and the name does not tell a
+    polynomial's from a table's: with ``model`` (an `ErrorModel` holding the error) such a
+    coefficient is None, as a DIST has no unit for it; without, the name's
+    answer is the table's (it was given for a polynomial's too, so ``normal:0,1um`` read
+    as 1e-6 m/m).
     """
+    if model is not None and name.startswith("component."):
+        unit = model.parameter_unit(name)
+        return {"m": "length", "rad": "angle"}.get(unit)
     if name in LAB_PARAMETERS:
         return LAB_PARAMETERS[name]
     if name == "tool_geometry.nose_radius":

@@ -38,6 +38,7 @@ from machinesim.campaign.distributions import (
     LAB_PARAMETERS,
     Distribution,
     checked,
+    parameter_kind,
     refuse_beyond_model,
 )
 from machinesim.exceptions import InputError, MachineSimError, MachineSimWarning, brief
@@ -358,6 +359,14 @@ class CampaignSpec:
                     f"--vary {brief(name)}: not a parameter of {self.entry.machine} nor of the "
                     f"lab{f' (did you mean {close[0]}?)' if close else ''}; expected one of the "
                     f"parameters {what} uses: {_listed(used)}", key="--vary")
+        base = self.entry.base()
+        for name in names:  # a polynomial's coefficient k >= 1: m/m**k, no --vary unit
+            if name.startswith("component.") and parameter_kind(name, base) is None:
+                raise InputError(
+                    f"--vary {name}: a polynomial's coefficient, in "
+                    f"{base.parameter_unit(name)} (SI), which a distribution's units (a "
+                    "length or an angle) cannot give; expected a table's entry, a location "
+                    "error, or the polynomial's coefficient 0", key="--vary")
         silent = [name for name in names if name.endswith(".sigma") and not self.noise]
         if silent:  # noise off: every instrument reads exact values, whatever its sigma
             raise InputError(f"--vary {', '.join(silent)}: with --noise off no instrument has "
@@ -370,7 +379,7 @@ class CampaignSpec:
                 raise InputError(f"--vary {name}: {what} never reads it ({why}); expected one "
                                  f"of the parameters {what} uses: {_listed(used)}",
                                  key="--vary")
-        refuse_beyond_model(vary, self.entry.base())  # before any trial fails on it
+        refuse_beyond_model(vary, base)  # before any trial fails on it
 
     @property
     def entry(self) -> ProcedureEntry:
