@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import warnings
 
 import numpy as np
 import pinocchio as pin
@@ -623,6 +624,7 @@ def test_the_weak_turn_cut_off_on_robonano_ui_is_where_sin_b_over_root_2_is_ik_w
     the 10 urad tilt across B is left unmatched up to asin(sqrt(2) IK_WEAK_TURN) = 0.0810 deg
     (by hand) and matched beyond (tolerances.py had said 0.057 deg, asin(IK_WEAK_TURN), where
     B = 0.06 deg is still left)."""
+    from machinesim.exceptions import MachineSimWarning
     from machinesim.tolerances import IK_WEAK_TURN
 
     cut_deg = math.degrees(math.asin(math.sqrt(2.0) * IK_WEAK_TURN))
@@ -631,7 +633,12 @@ def test_the_weak_turn_cut_off_on_robonano_ui_is_where_sin_b_over_root_2_is_ik_w
     machine = load_machine("robonano_ui")
     errors = ErrorModel.from_dict({"tool": {"rotation_urad": [10.0, 0.0, 0.0]}})
     program = parse_program(f"G90 G01 F100 X10. Y5. Z0 A17.18873 B{b_deg} C-114.59156\n")
-    result = model_based(program, machine, errors, rounded=False)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = model_based(program, machine, errors, rounded=False)
     assert result.max_position_residual < 1e-13
     assert bool(result.unmatched) == left
     assert (result.max_rotation_residual > 9e-6) == left
+    # what is left there is a singularity's (the poses around match it): told, by the same cut
+    assert bool(result.singular) == left
+    assert any(issubclass(w.category, MachineSimWarning) for w in caught) == left
