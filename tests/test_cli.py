@@ -875,6 +875,38 @@ def cut_with_report(tmp_path, capsys, text: str, tool: str, stock: str):
     return err, json.loads(report.read_text(), parse_constant=no_nan)
 
 
+def test_a_haas_header_with_g187_and_g103_cuts_the_part_it_cuts_without_them(tmp_path, capsys):
+    """A Fusion-style Haas header (safe start, G187 P3 E.. finish smoothness, G103 P1 look-ahead
+    limit) had been refused at its G187 and G103 as unknown G codes, and with them the whole
+    program. The cut follows the programmed path through its servo model, with no smoothing of
+    the control's, so the program cuts the same part as the one without those lines (the same
+    mesh, byte for byte, the same volume and time), and the report lists them at their lines."""
+    body = ["%", "O01001 (POCKET)", "(T1 D=1. CR=0. - FLAT END MILL)",
+            "N10 G00 G17 G40 G49 G80 G90", "N15 G21", "N20 G28 G91 Z0.", "N25 G90",
+            "N30 T1 M06", "N35 S10000 M03", "N40 G187 P3 E0.01", "N45 G103 P1", "N50 G54",
+            "N55 G00 X1. Y1.", "N60 Z1.", "N65 G01 Z-0.05 F100.", "N70 X4. F300.", "N75 Y2.",
+            "N80 G02 X3. Y3. I-1. J0.", "N85 G01 X1.", "N90 G00 Z5.", "N95 G103",
+            "N100 G187", "N105 G28 G91 Z0.", "N110 M30", "%"]
+    haas = tmp_path / "haas"
+    haas.mkdir()
+    err, with_them = cut_with_report(haas, capsys, "\n".join(body) + "\n", "flat:1",
+                                     "block:5x4x1")
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    _, without = cut_with_report(plain, capsys, "\n".join(
+        line for line in body if "G187" not in line and "G103" not in line) + "\n", "flat:1",
+        "block:5x4x1")
+    assert with_them["removed_volume_mm3"] > 0.0
+    for key in ("removed_volume_mm3", "machining_time_s"):
+        assert with_them[key] == without[key], key
+    assert (haas / "p.ply").read_bytes() == (plain / "p.ply").read_bytes()
+    states = {state["word"]: state["line"] for state in with_them["nc"]["states"]}
+    assert {word: states[word] for word in ("G187 P3 E0.01", "G103 P1", "G103", "G187")} == {
+        "G187 P3 E0.01": body.index("N40 G187 P3 E0.01") + 1,
+        "G103 P1": body.index("N45 G103 P1") + 1, "G103": body.index("N95 G103") + 1,
+        "G187": body.index("N100 G187") + 1}
+
+
 def test_each_feed_that_drags_a_v_tool_sideways_is_one_warning_line(tmp_path, capsys):
     # line 4 feeds along X (the V tool's own direction: clean), line 5 at 45 deg in XY and
     # line 6 along Y (both drag the edge sideways); line 2's rapid starts on the block's

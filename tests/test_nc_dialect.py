@@ -404,6 +404,57 @@ def test_g05_1_reads_a_q_with_a_decimal_point_as_its_value():
         parse_program("G08 P1.\nG00 X0")
 
 
+def test_haas_g103_look_ahead_limit_is_a_state_with_p0_to_p15():
+    # a Haas post's G103 P1 (look-ahead limited to one block) had been refused as an unknown
+    # G code, and with it the program; Haas's manual gives P the range 0-15, and G103 alone
+    # (or P0) lifts the limit: states, moving nothing
+    text = "G90 G21\nG103 P1\nG00 X0\nN40 G103 P15\nG103\nG103 P0\nX1.\nM30"
+    program = parse_program(text)
+    assert dict(program.states) == {"G103 P1": 2, "G103 P15": 4, "G103": 5, "G103 P0": 6}
+    assert program.targets[:, 0].tolist() == [0.0, 1 * MM]
+    for p, hint in (("P16", ""), ("P1.", r" \(write P1: a Haas takes a whole number here\)"),
+                    ("P-1", "")):
+        with pytest.raises(NCProgramError, match=rf"line 1, column 6, key '{re.escape(p)}': "
+                                                 rf"G103's P is the most blocks the control "
+                                                 rf"looks ahead \(0: no limit\), P0..P15, "
+                                                 rf"got {re.escape(p)}{hint}$"):
+            parse_program(f"G103 {p}\nG00 X0")
+    with pytest.raises(NCProgramError, match=r"line 1 \(N5\), column 12, key 'X1\.': G103 "
+                                             r"stands in a block of its own \(with P0..P15 "
+                                             r"or nothing\), found X1\.$"):
+        parse_program("N5 G103 P1 X1.")
+
+
+def test_haas_g187_smoothness_and_corner_rounding_is_a_state_with_p1_to_p3_and_e():
+    # a Haas post's G187 P3 E0.0004 (finish smoothness, 0.0004 in corner rounding) had been
+    # refused as an unknown G code (and E as an unknown letter): P1..P3 rough, medium,
+    # finish, E a distance >= 0, and G187 alone returns to the settings (Haas)
+    text = ("G90 G20\nG187 P3 E0.0004\nG00 X0\nG187 P1 E+.01\nG187\nG187 P2\n"
+            "G187 E0.\nX1.\nM30")
+    program = parse_program(text)
+    assert dict(program.states) == {"G187 P3 E0.0004": 2, "G187 P1 E.01": 4, "G187": 5,
+                                    "G187 P2": 6, "G187 E0.": 7}
+    assert program.targets[:, 0].tolist() == [0.0, 25.4 * MM]
+    for p in ("P0", "P4", "P3.", "P-2"):
+        with pytest.raises(NCProgramError, match=rf"G187's P is the smoothness level \(1 "
+                                                 rf"rough, 2 medium, 3 finish\), P1..P3, got "
+                                                 rf"{re.escape(p)}"):
+            parse_program(f"G187 {p}\nG00 X0")
+    with pytest.raises(NCProgramError, match=r"column 9, key 'E-0\.01': G187's E is the "
+                                             r"maximum corner rounding, a distance >= 0, got "
+                                             r"E-0\.01$"):
+        parse_program("G187 P3 E-0.01\nG00 X0")
+    # E in any other block is still an unknown letter (X1e5 is no number here), named once
+    for text in ("G00 X1e5", "G103 P1 E1."):
+        with pytest.raises(NCProgramError, match=r"unknown word letter 'E'; .* and E in a "
+                                                 r"G187 block \(Haas's maximum corner "
+                                                 r"rounding\)$"):
+            parse_program(text)
+    with pytest.raises(NCProgramError, match=r"G187 stands in a block of its own \(with "
+                                             r"P1..P3, E or nothing\), found M08$"):
+        parse_program("G187 P3 M08")
+
+
 def test_a_safe_start_line_cancelling_what_is_refused_is_read_as_states():
     # Haas's safe-start line and a FANUC shop header: G50, G69 and G15 cancel scaling,
     # coordinate rotation and polar coordinates, whose codes (G51, G68, G16) are refused, so

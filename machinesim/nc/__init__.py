@@ -22,10 +22,10 @@ Words
     (``X-.5``, ``X10.``, ``x+3``); blanks between words optional, between a letter and its
     number allowed, inside a number not. Letters read: N O G M S F P X Y Z A B C (axes and
     the rest as before) and I J K R Q L H T D where a G or M code reads them (arcs, cycles,
-    subprograms, tools). Any other letter, ``/``, ``#``, ``=``, a number without letter,
-    a malformed number is refused; so is text outside parentheses (a letter after a
-    letter: ``ROUGH THE POCKET``, one problem for the text) and a macro statement (``IF``,
-    ``GOTO``, ``WHILE``). Integer words N O G M P L H T D take at most 9 unsigned
+    subprograms, tools), E in a G187 block. Any other letter, ``/``, ``#``, ``=``, a
+    number without letter, a malformed number is refused; so is text outside parentheses
+    (a letter after a letter: ``ROUGH THE POCKET``, one problem for the text) and a macro
+    statement (``IF``, ``GOTO``, ``WHILE``). Integer words N O G M P L H T D take at most 9 unsigned
     digits. Each letter other than G and M at most once a block; G codes one per modal group.
     Within a block: modal G codes, then F S T D H, then the motion, then M codes.
 G codes
@@ -53,7 +53,8 @@ G codes
     G80, G91.1, G15 G50 G69 (the cancels of polar coordinates, scaling and rotation, as
     safe-start lines write them; G50 with an axis word, a lathe's coordinate setting, is
     refused),
-    G05.1 Q1/Q0 (R level), G08 P1/P0, T and D words, and G55..G59 selected when no
+    G05.1 Q1/Q0 (R level), G08 P1/P0, Haas's G103 P0..P15 (look-ahead limit) and G187
+    P1..P3 E (smoothness, corner rounding), T and D words, and G55..G59 selected when no
     ``work_offsets`` were given (G54's zero); with offsets given, a G55..G59 they lack is
     refused. Refused: G41/G42 (cutter radius
     compensation), G93, G95, the canned cycles G74 G76 G84..G89, tool centre point

@@ -27,6 +27,7 @@ from machinesim.nc.words import (
     G50_SETTING,
     G_GROUPS,
     G_REFUSED,
+    LOOK_AHEAD_BLOCKS,
     M99_IN_MAIN,
     M_PER_INCH,
     MAX_INTEGER_DIGITS,
@@ -166,9 +167,10 @@ class Block:
                                 f"{MAX_INTEGER_DIGITS} digits, got {word.key}", word)
                 else:
                     self.m_codes.append((code, word))
-            elif letter not in SINGLE:
+            elif letter not in SINGLE and not (letter == "E" and self.smoothing()):
                 self.refuse(f"unknown word letter {letter!r}; machinesim reads "
-                            "N O G M S F P X Y Z A B C I J K R Q L H T D", word)
+                            "N O G M S F P X Y Z A B C I J K R Q L H T D, and E in a G187 "
+                            "block (Haas's maximum corner rounding)", word)
             elif letter in self.single:
                 first = self.single[letter]
                 kind = "axis word" if letter in AXES else "word"
@@ -176,6 +178,11 @@ class Block:
                             f"{first.key} at column {first.column})", word)
             else:
                 self.single[letter] = word
+
+    def smoothing(self) -> bool:
+        """Whether the block holds G187 (Haas's smoothness and corner rounding), the one
+        code that reads an E word (`machinesim.nc.one_shot`)."""
+        return any(w.letter == "G" and g_name(w) == "G187" for w in self.words)
 
     def g_code(self, word: Word) -> None:
         if word.text[0] in "+-":
@@ -337,7 +344,8 @@ class Block:
         allowed = {
             # G81's P: kept as the cycle's dwell (a later G82 of the cycle dwells it), as
             # FANUC keeps every hole-machining word until G80; G81 itself does not dwell
-            "P": g04 or cycle is not None or 98 in codes or shot == "G08",
+            "P": (g04 or cycle is not None or 98 in codes
+                  or shot in ("G08", "G103", "G187")),
             "Q": cycle in ("G73", "G83") or shot == "G05.1",
             "R": arc or cycle is not None or shot == "G05.1",
             "I": (arc and "I" in plane_words) or cycle in PECKING,
@@ -352,8 +360,8 @@ class Block:
                    + f"; this block is in {state.plane})")
         reads = {
             "P": "G04 (dwell), G82, G73 and G83 (dwell at the bottom; G81 keeps it for a "
-                 "G82), each in ms, or s with a decimal point as Haas, G08 (P1/P0) and M98 "
-                 "(program)",
+                 "G82), each in ms, or s with a decimal point as Haas, G08 (P1/P0), G103 "
+                 f"(P0..P{LOOK_AHEAD_BLOCKS}), G187 (P1..P3) and M98 (program)",
             "Q": "G73 and G83 (peck depth) and G05.1 (Q1/Q0)",
             "R": "G02/G03 (radius), G73 and G81-G83 (R plane) and G05.1",
             "I": f"{centres} and with G73 and G83 (Haas's first peck I, with J and K)",

@@ -1,8 +1,9 @@
 """A block of a one-shot G code: a dwell (G04), a rapid through the intermediate point to the
-reference position (G28) or to machine coordinates (G53), or a setting (G08, G05.1).
+reference position (G28) or to machine coordinates (G53), or a setting of the control's
+path smoothing (G05.1, G08, G103, G187: `machinesim.nc.words.NON_MOVING`).
 
 Internal to the reader: a block (`machinesim.nc.blocks.Block`) with G04 reads here
-(`read_dwell`), one with G28, G53, G08 or G05.1 in `read_one_shot`; none of them changes
+(`read_dwell`), one with G28, G53 or a setting in `read_one_shot`; none of them changes
 the modal motion (G00 G01 G02 G03) or cancels a canned cycle.
 """
 
@@ -10,7 +11,14 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from machinesim.nc.words import DWELL_INCREMENT_S, NON_MOVING
+from machinesim.nc.words import (
+    DWELL_INCREMENT_S,
+    LOOK_AHEAD_BLOCKS,
+    NON_MOVING,
+    SINGLE,
+    SMOOTHNESS_LEVELS,
+    integer,
+)
 
 if TYPE_CHECKING:
     from machinesim.nc.blocks import Block
@@ -45,6 +53,63 @@ def _switch_found(word: Word | None) -> str:
     return f", got {word.key}"
 
 
+def _setting(block: Block, name: str, word: Word) -> str:
+    """The state a smoothing setting's block (`NON_MOVING`) is noted as, its words checked:
+    G05.1 Q1/Q0 (R level), G08 P1/P0, G103 P0..P15 or alone, G187 P1..P3 and E or alone."""
+    single = block.single
+    words = {"G05.1": "QR", "G08": "P", "G103": "P", "G187": "PE"}[name]
+    shown = {"G05.1": "with Q1 or Q0", "G08": "with P1 or P0",
+             "G103": f"with P0..P{LOOK_AHEAD_BLOCKS} or nothing",
+             "G187": "with P1..P3, E or nothing"}[name]
+    # letters the block refused as unknown (an E outside G187) are not named again here
+    extra = [w for w in block.words
+             if w.letter not in "NG" + words and (w.letter in SINGLE or w.letter == "M")]
+    if extra:
+        raise block.fail(f"{name} stands in a block of its own ({shown}), found "
+                         f"{extra[0].key}", extra[0])
+    if name == "G103":
+        return _level(block, name, single.get("P"), range(LOOK_AHEAD_BLOCKS + 1),
+                      "the most blocks the control looks ahead (0: no limit)")
+    if name == "G187":
+        key = _level(block, name, single.get("P"), SMOOTHNESS_LEVELS,
+                     "the smoothness level (1 rough, 2 medium, 3 finish)")
+        rounding = single.get("E")
+        if rounding is not None:
+            if rounding.text.startswith("-"):
+                raise block.fail(f"G187's E is the maximum corner rounding, a distance >= 0, "
+                                 f"got {rounding.key}", rounding)
+            block.real(rounding)
+            key += f" E{rounding.text.lstrip('+')}"
+        return key
+    letter = "Q" if name == "G05.1" else "P"
+    given = single.get(letter)
+    setting = None if given is None else _switch(given)
+    if setting is None:
+        raise block.fail(f"{name} needs {letter}1 (on) or {letter}0 (off)"
+                         f"{_switch_found(given)}", word)
+    key = f"{name} {letter}{setting}"
+    if "R" in single:
+        block.integer(single["R"], "AI contour precision level")
+        key += f" {single['R'].key}"
+    return key
+
+
+def _level(block: Block, name: str, given: Word | None, levels, what: str) -> str:
+    """``name`` with its P (``"G103 P1"``), or ``name`` alone when no P is given; a P outside
+    ``levels`` or with a decimal point (a Haas takes whole numbers there) is refused."""
+    if given is None:
+        return name
+    number = integer(given)
+    if number is None or number not in levels:
+        whole, dot, fraction = given.text.partition(".")
+        hint = (f" (write P{whole}: a Haas takes a whole number here)"
+                if dot and whole.isdigit() and len(whole) <= 2 and not fraction.strip("0")
+                and int(whole) in levels else "")
+        raise block.fail(f"{name}'s P is {what}, P{levels[0]}..P{levels[-1]}, got "
+                         f"{given.key}{hint}", given)
+    return f"{name} P{number}"
+
+
 #: The words of a dwell time, as the refusals of a G04 block name them (`Block.dwell_p`).
 DWELL_WORDS = ("P<milliseconds> (with a decimal point, P<seconds>, as Haas reads it) or "
                "X<seconds>")
@@ -77,27 +142,12 @@ def read_dwell(block: Block, g04: Word, axes: list[Word], block_number: int | No
 
 def read_one_shot(block: Block, code: tuple[str, Word], axes: list[Word],
                   block_number: int | None) -> None:
-    """The ``block`` of the one-shot G ``code`` (G28, G53, G08, G05.1): its rapids, or its
-    setting noted."""
+    """The ``block`` of the one-shot G ``code`` (G28, G53, or a setting: G05.1, G08, G103,
+    G187): its rapids, or its setting noted as a state (`Program.states`)."""
     name, word = code
     state, single = block.state, block.single
     if name in NON_MOVING:
-        letter = "Q" if name == "G05.1" else "P"
-        extra = [w for w in block.words if w.letter not in ("N", "G", letter, "R")
-                 or (w.letter == "R" and name != "G05.1")]
-        if extra:
-            raise block.fail(f"{name} stands in a block of its own (with {letter}1 or "
-                             f"{letter}0), found {extra[0].key}", extra[0])
-        given = single.get(letter)
-        setting = None if given is None else _switch(given)
-        if setting is None:
-            raise block.fail(f"{name} needs {letter}1 (on) or {letter}0 (off)"
-                             f"{_switch_found(given)}", word)
-        key = f"{name} {letter}{setting}"
-        if "R" in single:
-            block.integer(single["R"], "AI contour precision level")
-            key += f" {single['R'].key}"
-        block.reader.note(key, block.line)
+        block.reader.note(_setting(block, name, word), block.line)
         return
     if not axes and name == "G28":
         # a bare G28, as hand-written Haas programs start: controls differ

@@ -67,6 +67,7 @@ G_GROUPS = {
     "G17": "plane", "G18": "plane", "G19": "plane",
     "G20": "units", "G21": "units",
     "G28": "one-shot", "G53": "one-shot", "G05.1": "one-shot", "G08": "one-shot",
+    "G103": "one-shot", "G187": "one-shot",
     "G40": "cutter compensation",
     "G15": "polar coordinates", "G50": "scaling", "G69": "coordinate rotation",
     "G43": "tool length", "G44": "tool length", "G49": "tool length",
@@ -143,7 +144,25 @@ G_REFUSED = {
 SINGLE = frozenset("NOSFPXYZABCIJKRQLHTD")
 MOTION = {"G00": "rapid", "G01": "linear"}
 ARC = ("G02", "G03")
-NON_MOVING = ("G05.1", "G08")
+#: Settings of the control's own path smoothing, accepted as states (`read_one_shot`): the
+#: path cut here is the programmed one through the servo model, with no look-ahead, corner
+#: rounding or acceleration of the control, so none of them moves it. G05.1 (AI contour
+#: control) and G08 (look-ahead) are FANUC's; G103 (look-ahead limit) and G187 (smoothness
+#: and corner rounding) Haas's, as its posts write them (``G187 P3 E0.0004``, ``G103 P1``).
+NON_MOVING = ("G05.1", "G08", "G103", "G187")
+#: The most blocks G103 P lets a Haas control look ahead: "G103 specifies the maximum number
+#: of blocks the control looks ahead (Range 0-15)"; ``G103 P0``, or G103 without P, lifts the
+#: limit (Haas Mill Operator's Manual, G103 Limit Block Look-Ahead, Group 00; haascnc.com
+#: service/codes-settings, G103).
+LOOK_AHEAD_BLOCKS = 15
+#: G187's smoothness levels: P1 rough, P2 medium, P3 finish (doubling, keeping, halving the
+#: acceleration and corner rounding), overriding Setting 191; E the maximum corner rounding,
+#: overriding Setting 85 (Haas, "Advances in Motion Control", diy.haascnc.com/reference-docs/
+#: advances-motion-control: "P is the smoothness level mode, 1, 2, or 3, and E is the maximum
+#: corner rounding setting"; haas.co.uk, "Smooth Operator": "P1, P2, or P3 ... Rough, Medium
+#: or Finish"). G187 without P or E returns to the settings (as posts write it after a
+#: drilling operation).
+SMOOTHNESS_LEVELS = (1, 2, 3)
 M99_IN_MAIN = ("M99 in the main program would jump back to its start forever (FANUC); end "
                 "the main program with M30 or M02")
 #: A subprogram's G20/G21 that switches the units in force (`Block.apply_modal`): FANUC
