@@ -130,3 +130,24 @@ def test_a_followed_path_that_overshoots_the_travel_is_refused_naming_line_and_o
                      allow_overtravel=True)
     assert len(report.limit_violations) == 1
     assert report.limit_violations[0].startswith("axis X = 100.001900 mm at line 5")
+
+
+def test_the_lathe_s_following_refusals_name_the_block_s_n_word_beside_its_line():
+    # with N words the refusals of a followed run (a servo that jumps, an overshoot past the
+    # travel, refused or listed) name the block, 'line 4 (N40)', as the reader's do; they
+    # had named the line alone
+    from machinesim.exceptions import AxisLimitError
+
+    machine = load_machine("sts_lathe")
+    numbered = "\n".join(f"N{10 * i} {text}" for i, text in enumerate(FACING.splitlines(), 1))
+    with pytest.raises(NCProgramError, match=re.escape(
+            "line 4 (N40): the axes as the servo model Jump follows this move (C turns ")):
+        turn(parse_program(numbered), machine, servo=Jump(2))
+    program = parse_program("N1 G90 G21 G94\nN2 G00 X99.999 Z0.1 C0.\nN3 G01 Z0. F10.\n"
+                            "N4 G01 X99.9995 C360.\nN5 G01 X99.9999 C720.\nN6 M30\n")
+    with pytest.raises(AxisLimitError, match=re.escape(
+            "axis X = 100.001900 mm at line 5 (N5) as the servo follows it, 0.001900 mm")):
+        turn(program, machine, "nose:0.2:90", servo=_Overshoot())
+    _, report = turn(program, machine, "nose:0.2:90", servo=_Overshoot(),
+                     allow_overtravel=True)
+    assert report.limit_violations[0].startswith("axis X = 100.001900 mm at line 5 (N5) as")

@@ -274,6 +274,34 @@ def test_a_turning_move_without_a_feed_is_refused_naming_its_line():
         turn(built, "sts_lathe", "nose:1.0:90")
 
 
+def test_the_lathe_s_own_refusals_name_the_block_s_n_word_beside_its_line(tmp_path):
+    # the refusals of turn() that name a line (no feed on a turning move, a feed move before
+    # every axis is known, the M03 hint) name its block's N word too, 'line 4 (N40)', as the
+    # reader's refusals do; they had named the line alone
+    from machinesim.nc import parse_program
+    from machinesim.nc.program import Program
+
+    read = parse_program("N10 G90 G21\nN20 G00 X1.0 Z0.01 C0\nN30 G01 Z-0.001 F10\n"
+                         "N40 G01 X0 C720 F360\nN50 G01 Z0.01\n", "facing.nc")
+    built = Program.from_arrays(read.targets, read.kinds, lines=read.lines,
+                                block_numbers=read.block_numbers, source="built.nc")
+    with pytest.raises(InputError, match=r"built.nc, line 4 \(N40\): expected a positive "
+                                         r"feed on every turning move, got none"):
+        turn(built, "sts_lathe", "nose:1.0:90")
+    early = tmp_path / "early.nc"  # X and C known, Z not yet: a feed move before it
+    early.write_text("N10 G90 G21\nN20 G00 X0.5 C0\nN30 G01 X0.4 F10\nN40 G00 Z0.1\n"
+                     "N50 G01 X0 C720 F360\nM30\n")
+    with pytest.raises(InputError, match=r"early.nc, line 3 \(N30\): a feed move before "
+                                         r"every axis of sts_lathe has a value"):
+        turn(early, "sts_lathe", "nose:0.5:90")
+    conventional = tmp_path / "conventional.nc"
+    conventional.write_text("G90 G21\nN20 M03 S500\nG00 X0.5 Z0.1 C0\nG01 Z-0.005 F10\n"
+                            "G01 X0 F10\nG00 Z1\nM30\n")
+    with pytest.raises(InputError, match=r"nothing to turn \(M03 at line 2 \(N20\) runs "
+                                         r"the spindle at S rpm"):
+        turn(conventional, "sts_lathe", "nose:0.5:90")
+
+
 def test_a_turning_feed_far_too_slow_is_refused_at_once_not_followed_for_days(tmp_path):
     # F0.0001 deg/min on a 9000 deg move: 9e7 min = 5.4e9 s, 5.4e13 periods of a 10 kHz
     # loop, which the servo loops were simulated through without a word (hours per axis)

@@ -91,3 +91,15 @@ def test_a_followed_path_that_jumps_is_refused_naming_the_line_and_the_servo():
             "deg a sub-step): it still breaks them after 8 rounds of finer sampling (its "
             "path jumps); check the servo loops' gains")):
         plan(program, machine, servo=Jump(3), chord_tolerance=1.0)
+
+
+def test_a_followed_path_refused_names_the_block_s_n_word_beside_its_line():
+    # the same refusal in a program with N words names the block as a machinist finds it,
+    # 'line 4 (N40)', as the reader's and the planner's refusals do (it had said 'line 4')
+    numbered = "\n".join(f"N{10 * i} {text}"
+                         for i, text in enumerate(HALF_TURN.splitlines(), 1)) + "\n"
+    with pytest.raises(NCProgramError, match=re.escape(
+            "line 4 (N40): the axes' path as the servo model Jump follows this move does not "
+            "keep the rules")):
+        plan(parse_program(numbered), load_machine("grooving_4axis"), servo=Jump(3),
+             chord_tolerance=1.0)

@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from types import SimpleNamespace
 
@@ -62,7 +63,7 @@ from machinesim.cutting.lathe_following import follow_run, followed_overtravel
 from machinesim.cutting.program import _overtravel, _refuse_far
 from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, line_of
 from machinesim.metrology._arrays import as_flag, as_floats, as_number
 from machinesim.motion.timing import slow_move_notes
 from machinesim.nc.moves import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
@@ -243,11 +244,12 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     beyond = {entry.split(" ", 2)[1] for entry in limits}  # the axes the command takes out
     for command_t, points, lines in _timed_runs(program, machine, with_lines=True):
         t, points, reached = follow_run(servo, command_t, points, lines, machine,
-                                        getattr(program, "source", "<program>"))
+                                        getattr(program, "source", "<program>"),
+                                        block_at=program.block_at)
         if reached is not points:
             limits += followed_overtravel(machine, command_t, lines, t, reached,
                                           getattr(program, "source", None), allow_overtravel,
-                                          beyond)
+                                          beyond, block_at=program.block_at)
         for k, axis in enumerate(machine.axes):
             peak[axis] = max(peak[axis], float(np.max(np.abs(points[:, k] - reached[:, k]))))
         poses = machine.tool_pose(reached, errors)
@@ -386,11 +388,13 @@ def _timed_runs(program, machine, *, with_lines: bool = False) -> list[tuple]:
     q, kinds, feeds, lines = _axis_values(program, machine, source)
     out = []
     c_column = machine.axes.index("C")
-    for first, last in _turning_runs(q, kinds, c_column, lines, source, _spindle_hint(program)):
+    line_text = _line_text(program)
+    for first, last in _turning_runs(q, kinds, c_column, lines, source, line_text,
+                                     _spindle_hint(program)):
         points = q[first - 1:last + 1]  # moves first..last: points first-1..last
         moves = slice(first, last + 1)
         durations = _durations(points, feeds[moves], machine.axes, lines[moves], source,
-                               machine.rapid_rate)
+                               line_text, machine.rapid_rate)
         t = np.concatenate([[0.0], np.cumsum(durations)])
         t, points, rows = _within_quarter_turns(t, points, _c_steps(points[:, c_column]))
         out.append((t, points, lines[moves][rows]) if with_lines else (t, points))
@@ -466,10 +470,19 @@ def _axis_values(program, machine, source: str):
     lines = np.asarray(program.lines)
     for k in range(start):
         if kinds[k] == KIND_LINEAR:
-            raise InputError(f"{source}, line {int(lines[k])}: a feed move before every axis "
-                             f"of {machine.name} has a value", key="program")
+            raise InputError(f"{source}, {_line_text(program)(lines[k])}: a feed move before "
+                             f"every axis of {machine.name} has a value", key="program")
     feeds = np.asarray(program.feeds, dtype=np.float64)
     return q[start:], kinds[start:], feeds[start:], lines[start:]
+
+
+def _line_text(program) -> Callable[[int], str]:
+    """How a refusal names a line of ``program``: ``line 12 (N120)`` where its block has an
+    N word (`machinesim.nc.Program.line_text`), ``line 12`` for a program that keeps none."""
+    text = getattr(program, "line_text", None)
+    if callable(text):
+        return lambda line: text(int(line))
+    return lambda line: line_of(int(line))
 
 
 def _spindle_hint(program) -> str:
@@ -480,14 +493,15 @@ def _spindle_hint(program) -> str:
     if not runs:
         return ""
     code = 3 if 3 in codes[runs[0]] else 4
-    return (f" (M0{code} at line {int(program.lines[runs[0]])} runs the spindle at S rpm, which "
-            "is not simulated: program C as an axis, as a slow-tool-servo program does, "
-            "e.g. G01 X0 C18000 F7200 for 50 turns)")
+    return (f" (M0{code} at {_line_text(program)(program.lines[runs[0]])} runs the spindle at "
+            "S rpm, which is not simulated: program C as an axis, as a slow-tool-servo program "
+            "does, e.g. G01 X0 C18000 F7200 for 50 turns)")
 
 
 def _turning_runs(q, kinds, c_column: int, lines, source: str,
-                  hint: str = "") -> list[tuple[int, int]]:
-    """(first, last) move index of each run of consecutive feed moves that turn C."""
+                  line_text: Callable[[int], str], hint: str = "") -> list[tuple[int, int]]:
+    """(first, last) move index of each run of consecutive feed moves that turn C; a rapid
+    inside one is refused, naming its line by ``line_text`` (`_line_text`)."""
     c = q[:, c_column]
     dc = np.abs(np.diff(c, prepend=c[0]))
     turning = (kinds == KIND_LINEAR) & (dc > STILL_C_RAD * np.maximum(1.0, np.abs(c)))
@@ -507,18 +521,18 @@ def _turning_runs(q, kinds, c_column: int, lines, source: str,
     for first, last in runs:
         inside = rapid[(rapid >= first) & (rapid <= last)]
         if inside.size:
-            raise InputError(f"{source}, line {int(lines[inside[0]])}: a rapid inside a "
+            raise InputError(f"{source}, {line_text(lines[inside[0]])}: a rapid inside a "
                              f"turning run", key="program")
     return runs
 
 
 def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple, lines: np.ndarray,
-               source: str, rapid_rate) -> np.ndarray:
+               source: str, line_text: Callable[[int], str], rapid_rate) -> np.ndarray:
     """Time of each move between consecutive ``points`` at ``feeds`` (m/s), s: the length in
     mm with rotary axes in degrees, over F in mm/s (FANUC), or the time its slowest axis
     takes at its velocity limit ``rapid_rate`` (per axis, SI) where that is longer (a feed
     beyond it is clamped, `machinesim.motion.timing.move_duration`); a move without a
-    positive feed is refused naming its ``lines`` in ``source``.
+    positive feed is refused naming its ``lines`` in ``source`` (by ``line_text``).
 
     Every move here turns C, so none is the chord of an arc that keeps its arc's length
     (`machinesim.nc.Program.arc_lengths`): an arc block leaves C where it was unless it
@@ -531,7 +545,7 @@ def _durations(points: np.ndarray, feeds: np.ndarray, axes: tuple, lines: np.nda
         first = int(np.flatnonzero(bad)[0])
         value = float(feeds[first])
         got = "none" if math.isnan(value) else f"F{value * 6e4:g} (mm/min)"
-        raise InputError(f"{source}, line {int(lines[first])}: expected a positive feed on "
+        raise InputError(f"{source}, {line_text(lines[first])}: expected a positive feed on "
                          f"every turning move, got {got}", key="F")
     return np.maximum(length / feeds, _at_limits(points[:-1], points[1:], rapid_rate))
 

@@ -12,10 +12,11 @@ for a CAM tool path run through a servo (`machinesim.cutting.servo_path`).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
-from machinesim.exceptions import NCProgramError
+from machinesim.exceptions import NCProgramError, line_of
 from machinesim.motion.chords import MAX_SUBSTEPS
 from machinesim.motion.following import FOLLOW_ROUNDS
 from machinesim.tolerances import CHORD_TOLERANCE_M
@@ -26,16 +27,24 @@ from machinesim.tolerances import CHORD_TOLERANCE_M
 FOLLOWED_SLACK = 1e-6
 
 
-def follow_run(servo, t, points, lines, machine, source: str):
+def _no_block(line: int) -> None:
+    """No block has an N word: a run's lines named alone (``line 12``)."""
+    return None
+
+
+def follow_run(servo, t, points, lines, machine, source: str, *,
+               block_at: Callable[[int], int | None] = _no_block):
     """``(t, points, reached)``: the run followed by ``servo`` (None: exact), its followed
     steps held to the rules the command's keep (`follow_held`); a run that still breaks
-    them (a servo whose output jumps) is an `NCProgramError` naming the line and the servo
+    them (a servo whose output jumps) is an `NCProgramError` naming the line (and its
+    block's N word, ``block_at(line)``: `machinesim.nc.Program.block_at`) and the servo
     model. A run that keeps them is followed as before, bit for bit."""
     if servo is None:
         return t, points, points
 
     def refuse(step: int, why: str) -> NCProgramError:
-        return NCProgramError(why, source=source, line=int(lines[step]))
+        line = int(lines[step])
+        return NCProgramError(why, source=source, line=line, block=block_at(line))
 
     return follow_held(servo, t, points, machine.axes, machine.rotary, refuse)
 
@@ -115,14 +124,16 @@ def chord_errors(servo, t, points, reached, axes, rotary) -> np.ndarray:
 
 
 def followed_overtravel(machine, command_t, lines, t, reached, source, allow: bool,
-                        commanded_beyond=()) -> tuple[str, ...]:
+                        commanded_beyond=(), *,
+                        block_at: Callable[[int], int | None] = _no_block) -> tuple[str, ...]:
     """Where the servo's followed run ``reached`` (samples at times ``t``; the command's steps
     at times ``command_t``, their program ``lines``) takes an axis beyond its travel, one
     description an axis: the value, the line, by how much, the travel. A loop that
     overshoots carries an axis past a travel the command keeps (the command's own values
     are checked before anything is turned, `machinesim.cutting.program._overtravel`; axes
-    in ``commanded_beyond`` are listed there and skipped here). Raises `AxisLimitError`
-    unless ``allow``."""
+    in ``commanded_beyond`` are listed there and skipped here); a line is named with its
+    block's N word (``block_at``, as `follow_run`). Raises `AxisLimitError` unless
+    ``allow``."""
     from machinesim.cutting.program import _format
     from machinesim.exceptions import AxisLimitError
     from machinesim.tolerances import LIMIT_SLACK
@@ -140,8 +151,9 @@ def followed_overtravel(machine, command_t, lines, t, reached, source, allow: bo
                            len(lines) - 1))
         value = float(reached[worst, i])
         unit = _format(bool(machine.rotary[i]), value, (low, high))
-        found.append(f"axis {letter} = {unit(value)} at line {int(lines[step])} as the servo "
-                     f"follows it, {unit(float(beyond[worst]))} beyond its travel "
+        line = int(lines[step])
+        found.append(f"axis {letter} = {unit(value)} at {line_of(line, block_at(line))} as "
+                     f"the servo follows it, {unit(float(beyond[worst]))} beyond its travel "
                      f"{unit(low)} .. {unit(high)}, which the command keeps (the loop "
                      "overshoots)")
     if found and not allow:

@@ -27,6 +27,7 @@ line and the servo model.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -150,7 +151,8 @@ def follow_runs(servo, q: np.ndarray, t: np.ndarray, offsets: np.ndarray,
 
 
 def follow_plan(servo, sample, steps: np.ndarray, kinds: np.ndarray, exact_stops,
-                rule: StepRule, lines: np.ndarray, source: str):
+                rule: StepRule, lines: np.ndarray, source: str,
+                block_of: Callable[[int], int | None]):
     """The followed samples of a program: ``(q, t, offsets, peak_lag)``.
 
     ``sample(steps)`` gives the commanded samples ``(q, t, offsets)`` of the moves split
@@ -159,6 +161,8 @@ def follow_plan(servo, sample, steps: np.ndarray, kinds: np.ndarray, exact_stops
     end, split by ``rule`` (module docstring). ``peak_lag`` is each axis' largest
     |command - reached|, the lag at each motion's end included. Where nothing breaks the
     rule the samples are those of the command's sub-steps, followed.
+    A refusal names the move's line (``lines``) and its block's N word (``block_of(move)``,
+    None when it has none), ``line 12 (N120)``.
     """
     steps = np.asarray(steps, dtype=np.int64).copy()
     for _ in range(FOLLOW_ROUNDS):
@@ -180,12 +184,13 @@ def follow_plan(servo, sample, steps: np.ndarray, kinds: np.ndarray, exact_stops
         if np.any(steps > MAX_SUBSTEPS):
             bad = int(np.argmax(steps > MAX_SUBSTEPS))
             raise NCProgramError(_refusal(servo, rule, f"would need more than {MAX_SUBSTEPS} "
-                                          "sub-steps"), source=source, line=int(lines[bad]))
+                                          "sub-steps"), source=source, line=int(lines[bad]),
+                                 block=block_of(bad))
     else:
         bad = int(move_of[rows[np.argmax(need != 1)]])
         raise NCProgramError(_refusal(servo, rule, f"still breaks them after {FOLLOW_ROUNDS} "
                                       "rounds of finer sampling (its path jumps)"),
-                             source=source, line=int(lines[bad]))
+                             source=source, line=int(lines[bad]), block=block_of(bad))
     lag = np.abs(commanded - q)
     peak_lag = lag.max(axis=0) if len(lag) else np.zeros(q.shape[1])
     # each motion ends in position (a rapid or a dwell follows, or an exact stop): the axes
@@ -198,7 +203,8 @@ def follow_plan(servo, sample, steps: np.ndarray, kinds: np.ndarray, exact_stops
             bad = int(move_of[settled[np.argmax(need == 0)]])
             raise NCProgramError(_refusal(servo, rule, f"settles from its lag at the end by a "
                                           f"step that would need more than {MAX_SUBSTEPS} "
-                                          "sub-steps"), source=source, line=int(lines[bad]))
+                                          "sub-steps"), source=source, line=int(lines[bad]),
+                                 block=block_of(bad))
         if np.any(need > 1):
             q, t, offsets = _split_last_steps(q, t, offsets, settled, need, move_of)
     peak_lag.flags.writeable = False

@@ -350,7 +350,8 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                         profile)
         q, t, offsets, peak_lag = follow_plan(
             servo, lambda split: _samples(starts, delta, clock[:-1], durations, split),
-            steps, kinds, getattr(program, "exact_stops", ()), rule, lines, source)
+            steps, kinds, getattr(program, "exact_stops", ()), rule, lines, source,
+            lambda move: _block(program, move))
     else:
         q, t, offsets = _samples(starts, delta, clock[:-1], durations, steps)
     q.flags.writeable = False
