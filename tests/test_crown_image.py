@@ -319,3 +319,24 @@ def test_a_face_left_rough_is_n_a_in_plane_fits_and_images_with_the_reason():
                                atol=1e-6)
     np.testing.assert_allclose(np.delete(reading.edge_distances, 1), 2 * CROWN.apothem,
                                rtol=0, atol=5e-9)
+
+
+def test_inscribed_stays_inside_a_square_at_every_turn_and_refuses_another_box():
+    """The box turned back lies inside the square at any turn, its corners on the square's
+    inscribed circle (by hand: half size h / sqrt(2) turned has corners at radius h). A 4 x 1
+    box turned 90 deg would give a box reaching 1.41 along y against 0.5: refused by name."""
+    from machinesim.exceptions import InputError
+    from machinesim.metrology.crown_image import inscribed
+
+    square = (1.0, 3.0, -2.0, 0.0)
+    centre = np.array([2.0, -1.0])
+    for turn in np.linspace(0.0, 2 * math.pi, 17):
+        x0, x1, y0, y1 = inscribed(square, turn)
+        c, s = math.cos(turn), math.sin(turn)
+        corners = np.array([[c * x - s * y, s * x + c * y] for x in (x0, x1) for y in (y0, y1)])
+        np.testing.assert_allclose(np.hypot(*(corners - centre).T), 1.0, rtol=1e-12)
+    with pytest.raises(InputError, match=r"key 'box': expected a square box .* got "
+                                         r"\(0, 4, 0, 1\): 4 m by 1 m"):
+        inscribed((0.0, 4.0, 0.0, 1.0), math.pi / 2)
+    with pytest.raises(InputError, match=r"got \(0, 1, 0, nan\)"):
+        inscribed((0.0, 1.0, 0.0, float("nan")), 0.0)

@@ -38,6 +38,7 @@ from types import MappingProxyType
 import numpy as np
 
 from machinesim.arrays import frozen
+from machinesim.exceptions import InputError
 from machinesim.metrology.fits import fit_plane, height_map_points
 from machinesim.metrology.meshindex import MeshIndex
 from machinesim.rotations import rot_z
@@ -295,11 +296,28 @@ def turned_placements(part) -> list:
             for k in range(4)]
 
 
+#: Sides of a box `inscribed` takes as square may differ by this fraction of the larger
+#: (a window built as centre -+ half size has sides a few ulps apart).
+SQUARE_TOLERANCE = 1e-9
+
+
 def inscribed(box, turn: float):
     """The axis-aligned box, in a frame turned by ``turn`` (rad) about Z, about the turned
-    centre of ``box`` (x0, x1, y0, y1) that lies inside ``box`` at any turn: half sizes
-    divided by sqrt(2)."""
+    centre of the square ``box`` (x0, x1, y0, y1) that lies inside ``box`` at any turn: half
+    sizes divided by sqrt(2) (its corners on the square's inscribed circle).
+
+    Only a square keeps that at every turn: a 4 x 1 box turned 90 deg would give a box
+    reaching 1.41 out along y against the box's 0.5, so a box whose sides differ by more
+    than `SQUARE_TOLERANCE` of the larger is refused (InputError). Every window read so
+    (`machinesim.cam.crown.crown_roi`'s top and flat patches) is square."""
     x0, x1, y0, y1 = box
+    wide, high = x1 - x0, y1 - y0
+    if not (wide > 0 and high > 0 and abs(wide - high) <= SQUARE_TOLERANCE * max(wide, high)):
+        raise InputError(
+            "expected a square box (x0, x1, y0, y1) with x1 > x0, y1 > y0 (m), got ("
+            + ", ".join(f"{float(b):.9g}" for b in box) + f"): {float(wide):.9g} m by "
+            f"{float(high):.9g} m; only a square's box divided by sqrt(2) stays inside it at "
+            "every turn", key="box")
     c = rot_z(-turn)[:2, :2] @ np.array([(x0 + x1) / 2.0, (y0 + y1) / 2.0])
     hx, hy = (x1 - x0) / (2.0 * math.sqrt(2.0)), (y1 - y0) / (2.0 * math.sqrt(2.0))
     return (c[0] - hx, c[0] + hx, c[1] - hy, c[1] + hy)
