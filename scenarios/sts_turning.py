@@ -54,7 +54,11 @@ from machinesim.procedures.sts_aliases import (
     near_alias_rows,
     term_model,
 )
-from machinesim.procedures.sts_plane_check import PLANE_MISFIT_LIMIT, plane_misfit
+from machinesim.procedures.sts_plane_check import (
+    PLANE_MISFIT_LIMIT,
+    plane_misfit,
+    turned_rim,
+)
 from machinesim.procedures.sts_plans import PAPER, TABLE5, TEST_PLANE, TEST_SPHERE
 from machinesim.procedures.sts_turning import (
     CASES,
@@ -209,7 +213,9 @@ def refuse_unfit_plane(args, quiet_lab, errors) -> None:
     and dR as injected, its misfit set against `PLANE_MISFIT_LIMIT`. A tool far enough
     across the axis (dx < 0) or off the centre height (dy), for its nose radius error, cuts
     the plane across the axis beyond the fit's 30 um core; no range of dx and dy alone says
-    where (docs/procedures/sts_turning.md, "The plane's residual check"). About 2 s; the
+    where (docs/procedures/sts_turning.md, "The plane's residual check"). A smaller nose
+    (dR < 0) with dx < 0 ends the cut inside the read disc instead (`turned_rim`: with dR
+    -850 um from dx about -5 um whatever dy), and the message says so. About 2 s; the
     noise adds to the misfit only what the check subtracts (0.19-0.23 nm with it, 0.20 nm
     without, Table 5's tool)."""
     nose = STSTurning().nose_radius
@@ -227,6 +233,19 @@ def refuse_unfit_plane(args, quiet_lab, errors) -> None:
     misfit = plane_misfit(centre.residual_rms_known_radius, noise, lateral, TEST_PLANE.slope)
     if not misfit > PLANE_MISFIT_LIMIT:
         return
+    rim, read = turned_rim(dx, d_radius), TEST_PLANE.read_half_width
+    if rim < read:
+        cause = (f"(the plane is turned to {TEST_PLANE.turned_radius / UM:g} um from the "
+                 f"axis, and this tool's cut ends {rim / UM:.2f} um from it on one side "
+                 f"({TEST_PLANE.turned_radius / UM:g} um + dx - |dR| k), inside the "
+                 f"{read / UM:g} um the plane is read to: the stock the nose leaves there lies "
+                 "in the fit; docs/procedures/sts_turning.md, \"The plane's residual check\")")
+    else:
+        cause = (f"(the plane's fit leaves out {TEST_PLANE.core / UM:g} um about the spindle "
+                 "axis, and a nose cutting across the axis beyond it is refused by the plane's "
+                 "residual check after both test pieces are cut: with dR = 100 um, dx below "
+                 "about -6 um at dy = 0, -5 um at |dy| = 6 um, -1.5 um at 10 um; "
+                 "docs/procedures/sts_turning.md, \"The plane's residual check\")")
     given = errors.parameters()
     keys = [k for k in ("tool.x", "tool.y", "tool_geometry.nose_radius", "location.C.EX0C",
                         "location.C.EY0C") if given.get(k)]
@@ -234,12 +253,7 @@ def refuse_unfit_plane(args, quiet_lab, errors) -> None:
         args, {}, keys or ["its errors"],
         f"the tool's offsets from the spindle axis dx = {dx / UM:.4g} um, dy = {dy / UM:.4g} "
         f"um with dR = {d_radius / UM:.4g} um, whose tilted test plane (turned before the "
-        f"cut with the noise off) misfits its model by {misfit / NM:.2f} nm; that",
-        f"(the plane's fit leaves out {TEST_PLANE.core / UM:g} um about the spindle axis, "
-        "and a nose cutting across the axis beyond it is refused by the plane's residual "
-        "check after both test pieces are cut: with dR = 100 um, dx below about -6 um at dy "
-        "= 0, -5 um at |dy| = 6 um, -1.5 um at 10 um; docs/procedures/sts_turning.md, "
-        "\"The plane's residual check\")",
+        f"cut with the noise off) misfits its model by {misfit / NM:.2f} nm; that", cause,
         f"a misfit of at most {PLANE_MISFIT_LIMIT / NM:g} nm: set the tool nearer the axis "
         "(tool.x less negative, |tool.y| smaller)")
 

@@ -182,3 +182,29 @@ def test_numpy_numbers_fit_the_plane_as_the_floats_they_are():
                               noise=np.float64(0.5 * NM), lateral_sigma=np.float64(0.0),
                               d_radius=np.float64(DR))
     assert numpy == plain
+
+
+def test_a_rim_inside_the_read_disc_is_named_as_the_cause():
+    """A smaller nose (dR < 0) and dx < 0 bring the turned plane's rim inside the 100 um read
+    disc: by hand 120 um + dx - |dR| k / sqrt(1 + k^2) = 120 - 5 - 16.997 = 98.00 um for dx
+    -5 um, dR -850 um (through the lab, noise off, the fit's residuals above 2 nm lie at
+    98.0-100 um from the axis). The refusal had blamed only the core; it names the rim
+    there, and not for the paper's tool (rim 114.5 um)."""
+    from machinesim.identification.turning_tool import CentreHeight
+    from machinesim.procedures.sts_plane_check import turned_rim
+
+    assert turned_rim(-5 * UM, -850 * UM) == pytest.approx(
+        (120 - 5 - 850 * K / math.sqrt(1 + K * K)) * UM, rel=1e-12)
+    assert turned_rim(-5 * UM, 300 * UM) == pytest.approx(
+        (120 - 5 - 300 * K / math.sqrt(1 + K * K)) * UM, rel=1e-12)
+    centre = CentreHeight(dy=0.0, dy_std=1 * NM, residual_rms=60 * NM,
+                          residual_rms_known_radius=0.63 * NM)
+    small = TurnedToolErrors(dx=-5 * UM, dy_abs=0.0, d_radius=-850 * UM, centre=(0.0, 0.0),
+                             residual_rms=0.5 * NM)
+    with pytest.raises(InputError, match=r"leaves out: the turned plane's rim, .* leaves "
+                                         r"98\.00 um from it \(120 um turned \+ dx - \|dR\| k\), "
+                                         r"inside the 100 um the plane is read to"):
+        refuse_plane_misfit(centre, small, 0.0, 0.0, "t")
+    with pytest.raises(InputError) as paper:
+        refuse_plane_misfit(centre, SPHERE, 0.0, 0.0, "t")
+    assert "rim" not in str(paper.value)

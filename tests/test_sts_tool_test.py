@@ -528,3 +528,21 @@ def test_a_nose_radius_error_that_leaves_no_nose_is_refused_inside_the_range():
                                          r"compensated for: no tool has one\)"):
         sts_turning._refuse_out_of_range(found, 0.06e-9, -0.2e-6, 500e-6, "tool_test")
     sts_turning._refuse_out_of_range(found, 0.06e-9, -0.2e-6, 1e-3, "tool_test")  # 400 um: taken
+
+
+def test_the_plane_check_before_the_cut_names_the_rim_for_a_small_nose(tmp_path):
+    # dx -5 um with dR -850 um (a 150 um nose; both inside refuse_unread_tool's ranges): the
+    # plane's misfit, 0.63 nm noise off, lies at 98.0-100 um from the axis, where the cut
+    # ends (by hand 120 - 5 - 850 x 0.02 / sqrt(1.0004) = 98.00 um), not in the core: with
+    # the fit's aperture at 95 um it is 0.25 nm, with a 40 um core it stays. The message
+    # blamed the core; it names the rim
+    scenario = _scenario()
+    machine = machinesim.load_machine("sts_lathe")
+    _, args, path = _args(tmp_path, "[tool]\noffset_um = [-5, 0, 0]\n[tool_geometry]\n"
+                                    "nose_radius_um = -850.0\n")
+    errors = ErrorModel.from_toml(path)
+    scenario.refuse_unread_tool(args, machine, errors)  # inside its ranges
+    with pytest.raises(InputError, match=r"misfits its model by 0\.6\d nm; that .*this "
+                                         r"tool's cut ends 98\.00 um from it on one side "
+                                         r"\(120 um \+ dx - \|dR\| k\), inside the 100 um"):
+        scenario.refuse_unfit_plane(args, machinesim.Lab(machine, errors, noise=False), errors)

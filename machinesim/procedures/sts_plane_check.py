@@ -39,6 +39,23 @@ def plane_misfit(residual_rms: float, noise: float, lateral: float, slope: float
     return math.sqrt(max(residual_rms**2 - noise**2 - (slope * lateral) ** 2, 0.0))
 
 
+def turned_rim(dx: float, d_radius: float) -> float:
+    """The least radius (m) out to which the tilted test plane (`sts_plans.TEST_PLANE`) is
+    cut by a tool with radial offset ``dx`` and nose radius error ``d_radius`` (m).
+
+    The program puts the nose's centre where a nose of the nominal R touches the plane; a nose
+    of R + dR touches it dR s / sqrt(1 + s^2) farther out along the ray, s = k cos C the
+    plane's slope along it, and dx moves every cut by dx along the ray. So the last cut on
+    the ray at C lies at turned_radius + dx + dR k cos C / sqrt(1 + k^2 cos^2 C), least
+    turned_radius + dx - |dR| k / sqrt(1 + k^2) (C = 0 for dR < 0, 180 deg for dR > 0); a dy
+    moves it out, by about dy^2 / (2 turned_radius). Beyond it the stock rises along the nose.
+    Through the lab (noise off, dR -850 um): 98.00 um at dx -5 um, and the fit's residuals
+    above 2 nm lie at 98.0-100 um from the axis, within 26 deg of C = 0; at dx -10 um 93 um
+    (misfit 10.9 nm, 0.25 nm with the fit's aperture at 85 um)."""
+    k = TEST_PLANE.slope
+    return TEST_PLANE.turned_radius + dx - abs(d_radius) * abs(k) / math.sqrt(1.0 + k * k)
+
+
 def refuse_plane_misfit(centre, found, noise: float, lateral: float, label: str) -> float:
     """Refuse (`InputError`, key ``tool_test``) a test plane (`sts_plans.TEST_PLANE`) whose
     fit leaves a misfit above `PLANE_MISFIT_LIMIT`: ``centre`` its `CentreHeight`, fitted with
@@ -50,6 +67,13 @@ def refuse_plane_misfit(centre, found, noise: float, lateral: float, label: str)
     misfit = plane_misfit(centre.residual_rms_known_radius, noise, lateral, slope)
     if not misfit > PLANE_MISFIT_LIMIT:  # NaN (no residual given) is not refused
         return misfit
+    rim, read = turned_rim(found.dx, found.d_radius), TEST_PLANE.read_half_width
+    inside = "" if not rim < read else (
+        f"the turned plane's rim, which a tool so far off the axis with such a nose radius "
+        f"error (the sphere's dx and dR) leaves {rim / UM:.2f} um from it ("
+        f"{TEST_PLANE.turned_radius / UM:g} um turned + dx - |dR| k), inside the "
+        f"{read / UM:g} um the plane is read to, so the stock the nose leaves there lies in "
+        "the fit (with dR -850 um from dx about -5 um whatever dy); ")
     raise InputError(
         f"{label}: the turned test plane does not fit its model: residual RMS "
         f"{centre.residual_rms_known_radius / NM:.2f} nm with the nose radius error's form "
@@ -58,9 +82,10 @@ def refuse_plane_misfit(centre, found, noise: float, lateral: float, label: str)
         f"lateral noise on the plane's slope, a misfit of {misfit / NM:.2f} nm (at most "
         f"{PLANE_MISFIT_LIMIT / NM:.2f} nm); the fit reads dy {centre.dy / UM:+.4f} um, which "
         f"is not taken as a centre height (the sphere reads dx {found.dx / UM:+.2f} um, |dy| "
-        f"{found.dy_abs / UM:.2f} um). Something on the plane the model leaves out: a tool so "
-        "far off the axis (with dR 100 um, tool.x below about -6 um, or |tool.y| from about 8 "
-        "um at tool.x -3.5 um; less with a larger |dR|) that its nose "
+        f"{found.dy_abs / UM:.2f} um). Something on the plane the model leaves out: "
+        f"{inside}a tool so far off the axis (with dR 100 um, tool.x below about -6 um, or "
+        "|tool.y| from about 8 um at tool.x -3.5 um; with dR 300 um tool.x below about -4.6 "
+        "um) that its nose "
         f"cuts across the axis beyond the {core / UM:g} um about it the fit leaves out "
         "(docs/procedures/sts_turning.md, \"The plane's residual check\"), an uncut, chipped "
         "or damaged area of the plane, the spindle's runout or the machine's geometric errors, "
@@ -68,4 +93,4 @@ def refuse_plane_misfit(centre, found, noise: float, lateral: float, label: str)
         "setting (workpiece.*); check them and cut the plane again", key="tool_test")
 
 
-__all__ = ["PLANE_MISFIT_LIMIT", "plane_misfit", "refuse_plane_misfit"]
+__all__ = ["PLANE_MISFIT_LIMIT", "plane_misfit", "refuse_plane_misfit", "turned_rim"]

@@ -84,8 +84,10 @@ D_RADIUS_RANGE = (-850 * UM, 300 * UM)
 #: off) dy = 10 um is read 0.4 % off, 15 and 20 um 1.7-2 %, 30 um 12 %, and at 40 um the
 #: sphere still fits (0.08 nm) but reads dR -1815 um for 100 um. The plane's residual check
 #: (`sts_plane_check`) takes less: with dR 100 um, dx down to about -6 um at dy 0 and |dy| up
-#: to about 8 um at dx -3.5 um, less with a larger |dR|; scenarios/sts_turning.py refuses the
-#: rest before the cut (`refuse_unfit_plane`).
+#: to about 8 um at dx -3.5 um, with dR 300 um dx to about -4.6 um at dy 0; with dR -850 um
+#: dx to about -5 um whatever |dy| (up to 12 um), where the cause is the turned plane's rim
+#: inside the read disc, not the core (`sts_plane_check.turned_rim`); scenarios/sts_turning.py
+#: refuses the rest before the cut (`refuse_unfit_plane`).
 CORE_LIMIT = 20 * UM
 #: Deepest (m) the test sphere may be cut below its programmed surface for the tool test:
 #: the plan cuts it 1 to 4.6 um deep (the stock's top `TEST_SPHERE.top` over the sphere's
