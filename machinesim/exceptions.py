@@ -75,6 +75,9 @@ class InputError(MachineSimError, ValueError):
         1-based position in ``source``.
     key : str, optional
         The key, word or field the problem is in.
+    block : int, optional
+        An NC program's N word of the block at ``line``: the message then names
+        ``line 12 (N120)`` (`line_of`).
     """
 
     def __init__(
@@ -85,8 +88,10 @@ class InputError(MachineSimError, ValueError):
         line: int | None = None,
         column: int | None = None,
         key: str | None = None,
+        block: int | None = None,
     ) -> None:
         self.message = message
+        self.block = block
         self.source = source
         self.line = line
         self.column = column
@@ -95,7 +100,7 @@ class InputError(MachineSimError, ValueError):
         if source is not None:
             where.append(printable(source))  # a file's name may hold any byte but '/
         if line is not None:
-            where.append(self._line_text(line))
+            where.append(line_of(line, block))
         if column is not None:
             where.append(f"column {column}")
         if key is not None:
@@ -106,9 +111,6 @@ class InputError(MachineSimError, ValueError):
             where.append(f"key '{shown}'")
         prefix = ", ".join(where)
         super().__init__(f"{prefix}: {message}" if prefix else message)
-
-    def _line_text(self, line: int) -> str:
-        return f"line {line}"
 
 
 class FileError(InputError, OSError):
@@ -126,26 +128,8 @@ class ErrorModelError(InputError):
 
 
 class NCProgramError(InputError):
-    """An NC program has a word, block or modal state that cannot be run.
-
-    Takes `InputError`'s arguments and ``block``, the N word of the block at ``line`` (None
-    when it has none): the message then names ``line 12 (N120)`` (`line_of`)."""
-
-    def __init__(
-        self,
-        message: str,
-        *,
-        source: str | None = None,
-        line: int | None = None,
-        column: int | None = None,
-        key: str | None = None,
-        block: int | None = None,
-    ) -> None:
-        self.block = block
-        super().__init__(message, source=source, line=line, column=column, key=key)
-
-    def _line_text(self, line: int) -> str:
-        return line_of(line, self.block)
+    """An NC program has a word, block or modal state that cannot be run (its ``block``,
+    the N word at ``line``, named beside the line: `InputError`)."""
 
 
 class NotConvergedError(MachineSimError):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import pytest
 from fenced import ROOT
 
 
@@ -30,32 +31,28 @@ def test_a_subpackage_is_reached_as_an_attribute_without_its_own_import(tmp_path
     assert abs(float(done.stdout) - 200.0) < 1e-9  # mm^3: the 10 x 10 x 2 mm block
 
 
-def test_a_name_that_is_no_subpackage_is_still_an_attribute_error():
+def _looked_up(names) -> list[str]:
+    """For each name, in a fresh interpreter after ``import machinesim``: hasattr, then the
+    AttributeError's message getattr raises (or what else it raised)."""
     done = _run("import machinesim\n"
-                "for name in ('nope', '_private', 'viewerx'):\n"
-                "    try:\n"
-                "        getattr(machinesim, name)\n"
-                "    except AttributeError as error:\n"
-                "        print(error)\n")
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.splitlines() == [
-        f"module 'machinesim' has no attribute {name!r}"
-        for name in ("nope", "_private", "viewerx")]
-
-
-def test_a_dotted_name_is_an_attribute_error_too():
-    # getattr and hasattr with 'foo.bar' had raised ModuleNotFoundError (find_spec imports
-    # the parent), and getattr(machinesim, 'nc.words') had given machinesim.nc.words
-    names = ("foo.bar", "nc.words", "viewer.nope", "a b")
-    done = _run("import machinesim\n"
-                f"for name in {names!r}:\n"
+                f"for name in {tuple(names)!r}:\n"
                 "    print(hasattr(machinesim, name))\n"
                 "    try:\n"
                 "        getattr(machinesim, name)\n"
                 "    except AttributeError as error:\n"
                 "        print(error)\n")
     assert done.returncode == 0, done.stderr
-    assert done.stdout.splitlines() == [
+    return done.stdout.splitlines()
+
+
+@pytest.mark.parametrize("names", [
+    ("nope", "_private", "viewerx"),
+    # dotted: getattr and hasattr with 'foo.bar' had raised ModuleNotFoundError (find_spec
+    # imports the parent), and getattr(machinesim, 'nc.words') had given machinesim.nc.words
+    ("foo.bar", "nc.words", "viewer.nope", "a b"),
+])
+def test_a_name_that_is_no_module_of_the_package_is_an_attribute_error(names):
+    assert _looked_up(names) == [
         line for name in names
         for line in ("False", f"module 'machinesim' has no attribute {name!r}")]
 
