@@ -71,7 +71,7 @@ from machinesim.compensation import program_axes
 from machinesim.exceptions import InputError
 from machinesim.experiment import run
 from machinesim.identification.workpiece_setting import PARAMETERS, nose_shift
-from machinesim.loading import RobotLoader
+from machinesim.loading import LANDING_REACH, RobotLoader
 from machinesim.procedures.sphere_probing import probing_miss
 from machinesim.procedures.workpiece_setting import (
     EXPERIMENTS,
@@ -102,6 +102,9 @@ from machinesim.workpiece_setting_budget import (
 UM, MM = M_PER_UM, M_PER_MM
 #: Default repeatability of the loading robot, um (paper 002's LR Mate 200iD).
 ROBOT_REPEATABILITY_UM = 30.0
+#: The largest --robot-repeatability-um, um (whole): beyond it `RobotLoader` refuses the
+#: robot (its landing 3 standard deviations out turns the part past 180 deg).
+LARGEST_ROBOT_UM = math.floor(RobotLoader.largest_repeatability(RobotLoader.lever) / UM)
 #: Default C-axis centre error (location.C.EX0C, EY0C), um: chosen to match the paper's
 #: magnitude, not taken from it (section 3.2.3 blames its edge distances, 138-163 um longer
 #: before compensation, on the C table centre, without a value). Every side face is cut with
@@ -149,6 +152,12 @@ def loads(args) -> dict:
     if not (math.isfinite(repeatability) and repeatability >= 0.0):
         raise InputError(f"--robot-repeatability-um {repeatability!r}: expected a length in "
                          "um, 0 or more", key="robot-repeatability-um")
+    if repeatability > LARGEST_ROBOT_UM:  # RobotLoader's own refusal names its field, in m
+        raise InputError(
+            f"--robot-repeatability-um {repeatability:g}: a robot that lands the part "
+            f"{LANDING_REACH:g} standard deviations out beyond what a workpiece setting takes "
+            f"(1 m, 180 deg over its {RobotLoader.lever / 1e-3:g} mm grip); expected a "
+            f"length in um, 0 to {LARGEST_ROBOT_UM:d}", key="robot-repeatability-um")
     robot = RobotLoader(repeatability * UM)
     rng = np.random.default_rng(args.seed)
     landed = {load: setting_parameters(robot.land(rng)) for load in EXPERIMENTS}
@@ -247,7 +256,7 @@ def main(argv=None) -> int:
     parser = scenario_arguments(__doc__.splitlines()[0], "reports/workpiece_setting")
     parser.add_argument("--robot-repeatability-um", type=float, default=None,
                         help="repeatability of the loading robot (um, default "
-                        f"{ROBOT_REPEATABILITY_UM:g})")
+                        f"{ROBOT_REPEATABILITY_UM:g}; 0 to {LARGEST_ROBOT_UM:d})")
     parser.add_argument("--delta-um", help="position error x,y,z (um) instead of a draw")
     parser.add_argument("--rot-deg", help="rotation errors alpha,beta,gamma (deg)")
     parser.add_argument("--crown-delta-um", help="the crown's position error x,y,z (um) "

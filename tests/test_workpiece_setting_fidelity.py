@@ -465,3 +465,27 @@ def test_table_3_says_why_a_figure_is_n_a(tmp_path):
     read = SimpleNamespace(figures=figures[:1], evaluation=SimpleNamespace(details={}))
     text = scenario.table3_table(ReportFolder(tmp_path / "read"), read)
     assert text.endswith("| L1 and L5 (um) | 149.1500 | -0.3100 | 2.0000 | 0.5000 |\n")
+
+
+def test_a_robot_beyond_any_setting_is_refused_naming_the_option_in_um():
+    """--robot-repeatability-um 1e6 was refused by `RobotLoader` as "key 'repeatability': a
+    robot of repeatability 1 m ... expected a repeatability of at most 0.0757352 m": no
+    option named, the bound in m where the option takes um. The bound is 3 standard
+    deviations of the landing's turn, s / lever per axis with s = RP / RP_PER_SIGMA, at
+    180 deg: RP = RP_PER_SIGMA * pi * 20 mm / 3 = 75735.17 um."""
+    from machinesim.loading import RP_PER_SIGMA
+
+    largest_um = RP_PER_SIGMA * math.pi * 20e3 / 3.0
+    assert math.floor(largest_um) == 75735
+    with pytest.raises(MachineSimError) as refused:
+        scenario.loads(_parse(["--robot-repeatability-um", "1e6"]))
+    assert refused.value.key == "robot-repeatability-um"
+    assert str(refused.value).startswith("key 'robot-repeatability-um': "
+                                         "--robot-repeatability-um 1e+06: ")
+    assert str(refused.value).endswith("expected a length in um, 0 to 75735")
+    with pytest.raises(MachineSimError, match=r"--robot-repeatability-um 75735.2: "):
+        scenario.loads(_parse(["--robot-repeatability-um", "75735.2"]))
+    # within the bound, RobotLoader takes it (the groove landing check then refuses it)
+    with pytest.raises(MachineSimError, match=r"robot's landing \(--robot-repeatability-um "
+                       r"75735, --seed 0\) sets the grooves' block"):
+        scenario.loads(_parse(["--robot-repeatability-um", "75735"]))
