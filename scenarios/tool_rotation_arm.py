@@ -156,6 +156,11 @@ def calibration_plan(capture_mm) -> CalibrationPlan:
     return CalibrationPlan(capture=capture_mm * MM)
 
 
+#: How far past the capture an edge offset may lie and still be taken as at it (m): the
+#: rounding of r - r0 in metres, not an offset the ramps would miss.
+CAPTURE_ROUNDING_M = 1e-12
+
+
 def check_offset(args, capture: float, r0: float, e_ys: float, rho: float) -> None:
     """Refuse, naming the options that set it, an edge offset (e_ys, r - r0) (m) longer than
     the plan's ``capture`` (m), the length its ramps find: every offset within it is found
@@ -163,7 +168,9 @@ def check_offset(args, capture: float, r0: float, e_ys: float, rho: float) -> No
     r0)**2) at the given r, and r within r0 +- sqrt(capture**2 - e_ys**2) at the given e_ys.
     """
     length = math.hypot(e_ys, rho)
-    if length <= capture:
+    # r - r0 in metres rounds: --r-mm 121.5 is 1.0000000000000009 mm off r0 = 120.5 mm, at
+    # the capture of 1 mm as given; 1 pm is far below any edge the ramps resolve
+    if length <= capture + CAPTURE_ROUNDING_M:
         return
 
     def room(other):

@@ -379,3 +379,30 @@ def test_a_capture_below_the_papers_offset_names_the_capture_and_the_least_one_t
     assert result.returncode == 2
     assert ("the edge offset |(e_ys, r - r0)| = 1.00000364004 mm exceeds the plan's capture "
             "range 1 mm") in result.stderr.splitlines()[-1]
+
+
+def test_an_arm_at_the_capture_as_given_is_taken(tmp_path):
+    """--r-mm 121.5 --e-ys-um 0 is an edge offset of 1 mm, the default capture, which the
+    plan finds; it was refused as '|(e_ys, r - r0)| = 1 mm exceeds the plan's capture range
+    1 mm ... expected ... r within 119.5000 to 121.5000 mm', since 121.5 mm - 120.5 mm in
+    metres is 1.0000000000000009 mm. Past it by 0.1 um it is still refused."""
+    import argparse
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "tool_rotation_arm_scenario", Path(__file__).parents[1] / "scenarios"
+        / "tool_rotation_arm.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert R0 == pytest.approx(120.5 * MM)
+
+    def check(r_mm, e_ys_um):
+        args = argparse.Namespace(e_ys_um=e_ys_um, r_mm=r_mm, capture_mm=None, errors=None)
+        module.check_offset(args, 1.0 * MM, R0, e_ys_um * UM, r_mm * MM - R0)
+
+    assert 121.5 * MM - R0 > 1.0 * MM  # the rounding the check met
+    check(121.5, 0.0)
+    check(119.5, 0.0)
+    check(120.5, -1000.0)
+    with pytest.raises(InputError, match=r"--r-mm 121.5001: the edge offset"):
+        check(121.5001, 0.0)
