@@ -16,8 +16,18 @@ import time
 import numpy as np
 
 from machinesim import motion
-from machinesim.cutting.engine import FARTHEST_M, remove
+from machinesim.cutting.engine import remove
 from machinesim.cutting.rapids import rapids_that_cut
+from machinesim.cutting.refusals import (  # re-exported: windows, lathe, lathe_following
+    _format,  # noqa: F401
+    _holder_refusal,
+    _more_lines,  # noqa: F401
+    _overtravel,
+    _refuse_far,
+    _refuse_turning,
+    block_at,  # noqa: F401
+    line_text,  # noqa: F401
+)
 from machinesim.cutting.report import (
     CutReport,
     arc_chord_note,
@@ -28,18 +38,11 @@ from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sideways import dragged_past_clearance, within_edge_plane
 from machinesim.errors import as_error_model
-from machinesim.exceptions import (
-    AxisLimitError,
-    HolderContactError,
-    InputError,
-    NCProgramError,
-    line_of,
-)
+from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag
 from machinesim.motion.faces import ProfileEdges
-from machinesim.nc import MOVE_KINDS, Program
+from machinesim.nc import MOVE_KINDS
 from machinesim.servo import check_servo
-from machinesim.tolerances import LIMIT_SLACK
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import (
     Tool,
@@ -402,147 +405,6 @@ def _beyond_tip(length: float) -> np.ndarray:
     return shift
 
 
-def _refuse_far(poses: np.ndarray, moves: _Moves, program) -> None:
-    """Raise InputError when a move takes the tool beyond `FARTHEST_M` from the origin,
-    naming the first such move's line (and the farthest's, where that is another): the
-    farthest alone had named `G00 Z1.` after a `G01 X1000000.`, which went out first."""
-    if not len(poses):
-        return
-    distance = np.linalg.norm(poses[:, :3, 3], axis=1)
-    if not distance.max() > FARTHEST_M:
-        return
-    first = int(np.argmax(distance > FARTHEST_M))
-    worst = int(np.argmax(distance))
-    farthest = ""
-    if int(moves.line[worst]) != int(moves.line[first]):
-        farthest = (f" (the farthest, {distance[worst]:.3g} m, at "
-                    f"{line_text(program, int(moves.line[worst]))})")
-    raise NCProgramError(
-        f"the move takes the tool {distance[first]:.3g} m from the "
-        f"workpiece origin{farthest}; expected within {FARTHEST_M:g} m, beyond any machine's "
-        "travel, where float64 keeps no nanometre (its spacing there is "
-        f"{np.spacing(distance[first]):.2g} m) and the part would come out wrong; nothing "
-        "was cut. A length in the wrong unit is the usual cause",
-        source=getattr(program, "source", None), line=int(moves.line[first]),
-        block=block_at(program, int(moves.line[first])))
-
-
-def _overtravel(machine, moves: _Moves, program, allow: bool) -> tuple[str, ...]:
-    """Descriptions of the blocks that take an axis outside its travel, with their lines.
-
-    Raises AxisLimitError listing them all unless ``allow``.
-    """
-    if not len(moves.q):
-        return ()
-    found = []
-    for i, letter in enumerate(machine.axes):
-        low, high = machine.lower[i], machine.upper[i]
-        bad = np.flatnonzero((moves.q[:, i] < low - LIMIT_SLACK)
-                             | (moves.q[:, i] > high + LIMIT_SLACK))
-        if not bad.size:
-            continue
-        lines = list(dict.fromkeys(int(n) for n in moves.line[bad]))
-        worst = bad[np.argmax(np.maximum(low - moves.q[bad, i], moves.q[bad, i] - high))]
-        unit = _format(machine.rotary[i], moves.q[worst, i], (low, high))
-        found.append(f"axis {letter} = {unit(moves.q[worst, i])} at "
-                     f"{line_text(program, int(moves.line[worst]))} outside its travel "
-                     f"{unit(low)} .. "
-                     f"{unit(high)}{_more_lines(lines)}")
-    if found and not allow:
-        source = getattr(program, "source", None)
-        where = f"{source}: " if source else ""
-        raise AxisLimitError(
-            f"{where}{'; '.join(found)}; nothing was cut (allow_overtravel=True, "
-            "machinesim cut --allow-overtravel on the command line, cuts it anyway and "
-            "lists it)")
-    return tuple(found)
-
-
-def block_at(program, line: int) -> int | None:
-    """The N word of ``program``'s block at ``line`` (`Program.block_at`), None when it has
-    none or ``program`` is no `Program`."""
-    return program.block_at(line) if isinstance(program, Program) else None
-
-
-def line_text(program, line: int) -> str:
-    """``line 12 (N120)``, or ``line 12`` when that block has no N word (`line_of`)."""
-    return line_of(line, block_at(program, line))
-
-
-def _more_lines(lines: list[int]) -> str:
-    """`` (lines 3, 4, 9)`` after the first of several lines in a message (the first ten,
-    then how many more); nothing for one line."""
-    if len(lines) < 2:
-        return ""
-    tail = f" and {len(lines) - 10} more)" if len(lines) > 10 else ")"
-    return f" (lines {', '.join(map(str, lines[:10]))}{tail}"
-
-
-def _refuse_turning(program, machine, start) -> None:
-    """Refuse a program that turns a work spindle (`Axis.spindle`) while it feeds, or starts
-    one with M03/M04: that is turning, which `cut` does not do. Its engine moves a tool
-    through the part one sweep at a time, and a tool whose edge lies in the plane it turns
-    in cuts only a line per move: the part would come out as scratches, with exit 0."""
-    from machinesim.nc.moves import AXES, KIND_RAPID
-    from machinesim.nc.program import modal_values
-
-    source = getattr(program, "source", None) or "<program>"
-    lines = np.asarray(program.lines)
-    how = ("turn it with the turning engine, in Python: machinesim.cutting.lathe.turn("
-           "program, machine, tool) or Lab.turn (docs/lab.md), whose part is the turned "
-           "face as an exact height field; the command line does not turn")
-    for k, letter in enumerate(machine.axes):
-        if not machine.axis(letter).spindle:
-            continue
-        for index, codes in sorted(program.m_codes.items()):
-            if 3 in codes or 4 in codes:
-                raise NCProgramError(
-                    f"M0{3 if 3 in codes else 4} runs the work spindle {letter} of "
-                    f"{machine.name}, which is turning: a spindle run by M03/M04 at S rpm is "
-                    f"not simulated. Program {letter} as an axis (as a slow-tool-servo "
-                    f"program does) and {how}", source=source, line=int(lines[index]),
-                    block=block_at(program, int(lines[index])))
-        begin = 0.0 if start is None else float(np.asarray(start, dtype=np.float64)[k])
-        values = modal_values(np.asarray(program.targets)[:, [AXES.index(letter)]],
-                              start=[begin])[:, 0]
-        before = np.concatenate([[begin], values[:-1]])
-        turning = np.flatnonzero((np.asarray(program.kinds) != KIND_RAPID)
-                                 & (values != before) & np.isfinite(values))
-        if turning.size:
-            move = int(turning[0])
-            raise NCProgramError(
-                f"feeds while it turns the work spindle {letter} of {machine.name} "
-                f"({np.degrees(before[move]):.6g} to {np.degrees(values[move]):.6g} deg), "
-                f"which is turning, and `cut` does not turn (its tool would cut one line a "
-                f"move); {how}", source=source, line=int(lines[move]),
-                block=block_at(program, int(lines[move])))
-
-
-def _holder_refusal(program, tool, stock: Part, sweep_line: np.ndarray):
-    """An ``on_holder_contact`` for `engine.remove` that refuses the cut: raises
-    `HolderContactError` naming the lines of the sweeps, the tool's height and the top of
-    ``stock``."""
-    def refuse(sweeps) -> None:
-        lines = list(dict.fromkeys(int(sweep_line[i]) for i in sweeps))
-        height = getattr(tool, "height", None)
-        shank = float(getattr(tool, "shank_radius", 0.0) or 0.0)
-        across = f", {2e3 * shank:.6g} mm across" if shank else ""
-        body = ("" if height is None
-                else f" ({height * 1e3:.6g} mm from its edge, where its holder begins{across})")
-        source = getattr(program, "source", None)
-        where = f"{source}: " if source else ""
-        raise HolderContactError(
-            f"{where}{line_text(program, lines[0])}{_more_lines(lines)} takes the top of the "
-            "tool's "
-            f"body{body} below the top of the stock (z = {stock.bounds[1, 2] * 1e3:.6g} mm): "
-            "the holder would hit the part, and the body alone would leave material "
-            "standing over a tunnel; nothing was cut. Use a longer tool (--tool ...:h=MM, "
-            "the tool's height) or a shallower cut; allow_holder_contact=True "
-            "(machinesim cut --allow-holder-contact on the command line) cuts the body "
-            "alone and lists the lines")
-    return refuse
-
-
 def _feed_lines(moves: _Moves, sweeps, which) -> set[int]:
     """Lines of the feeds (a rapid that cuts is listed among the rapids) among ``sweeps``
     for which ``which(starts)`` holds, ``starts`` the sweeps' first poses."""
@@ -563,15 +425,3 @@ def _in_edge_plane(poses: np.ndarray):
     tool would leave the imprint of its body."""
     return lambda first: within_edge_plane(poses[first, :3, :3],
                                            poses[first + 1, :3, 3] - poses[first, :3, 3])
-
-
-def _format(rotary: bool, value: float | None = None, limits=()):
-    """A formatter of axis values in deg or mm: 5 or 6 decimals, more when ``value`` would
-    print as one of ``limits`` (a value just past a travel of 1e5 rad)."""
-    scale, unit = (np.degrees(1.0), "deg") if rotary else (1e3, "mm")
-    decimals = 5 if rotary else 6
-    while decimals < 12 and value is not None and any(
-            f"{value * scale:.{decimals}f}" == f"{limit * scale:.{decimals}f}"
-            for limit in limits):
-        decimals += 1
-    return lambda v: f"{v * scale:.{decimals}f} {unit}"
