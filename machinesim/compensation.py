@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim import tolerances
+from machinesim.errors import as_error_model
 from machinesim.exceptions import AxisLimitError, InputError, MachineSimWarning, NCProgramError
 from machinesim.inverse import singular_note
 from machinesim.machines import Machine, load_machine
@@ -343,8 +344,9 @@ def model_based(
     program : Program
         Written for the nominal machine.
     machine : Machine or str
-    identified : ErrorModel or None
-        The identified errors (None: the nominal machine, which returns the program).
+    identified : ErrorModel, dict, TOML path or None
+        The identified errors (None: the nominal machine, which returns the program); a
+        fit's `Estimate` gives its model as ``estimate.errors``.
     start : array_like, shape (n_axes,), optional
         Axis values before the first block (default zeros).
     point : array_like, shape (3,), optional
@@ -368,6 +370,8 @@ def model_based(
         From `Machine.axis_values`, when no axis values (within travel) reach a pose.
     """
     machine = _machine(machine)
+    if identified is not None:  # refused under its own name (an Estimate: use its .errors)
+        identified = as_error_model(identified, key="identified")
     machine.check_errors(identified)
     p = (np.zeros(3) if point is None
          else as_floats(point, "point", "3 coordinates (m) in the tool_tip frame"))

@@ -490,7 +490,8 @@ def test_a_correction_past_the_travel_is_refused_naming_the_lines():
 
 def test_an_estimate_or_values_by_name_given_as_the_identified_model_say_how_to_give_them():
     # A newcomer hands model_based what fit returns, or its as_dict: the messages had said
-    # only "got Estimate" and "unknown section; expected one of tool, ..."
+    # only "got Estimate" and "unknown section; expected one of tool, ...", and named the
+    # argument 'errors' (Lab's and cut's name), where model_based's is 'identified'.
     from machinesim.exceptions import ErrorModelError
     from machinesim.identification import fit, observations
 
@@ -503,8 +504,9 @@ def test_an_estimate_or_values_by_name_given_as_the_identified_model_say_how_to_
     estimate = fit(ROBONANO, observations(np.repeat(q, 3, axis=0), directions=u,
                                           values=readings, sigma=50 * NM), ["location.C.EX0C"])
     with pytest.raises(ErrorModelError, match=r"got Estimate \(its identified model is "
-                                              r"Estimate.errors\)"):
+                                              r"Estimate.errors\)") as refused:
         model_based(tilted(), ROBONANO, estimate)
+    assert refused.value.key == "identified"  # its argument's name; it had said 'errors'
     with pytest.raises(ErrorModelError, match=r"key 'location.C.EX0C': unknown section; .*"
                                               r"ErrorModel\(\).with_parameters"):
         model_based(tilted(), ROBONANO, {"location.C.EX0C": 2 * UM})

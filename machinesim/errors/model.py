@@ -454,10 +454,10 @@ class ErrorModel(_Value):
                                line=self.line_of(error.key), key=self.key_as_written(error.key))
 
 
-def as_error_model(errors) -> ErrorModel:
+def as_error_model(errors, *, key: str = "errors") -> ErrorModel:
     """``errors`` as an `ErrorModel`: one already, a dict in the TOML layout (units in every
     key, `ErrorModel.from_dict`), or the path of a TOML file (`ErrorModel.from_toml`); None
-    is the nominal machine, an empty model."""
+    is the nominal machine, an empty model. ``key``: the argument's name, for a refusal."""
     if errors is None:
         return ErrorModel()
     if isinstance(errors, ErrorModel):
@@ -470,4 +470,4 @@ def as_error_model(errors) -> ErrorModel:
     if isinstance(getattr(errors, "errors", None), ErrorModel):  # an identification's result
         hint = f" (its identified model is {type(errors).__name__}.errors)"
     raise _fail(f"Expected errors as an ErrorModel, a dict (the TOML layout, units in every "
-                f"key) or a TOML path, got {type(errors).__name__}{hint}", None, "errors")
+                f"key) or a TOML path, got {type(errors).__name__}{hint}", None, key)
