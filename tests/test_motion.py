@@ -474,3 +474,23 @@ def test_a_written_arc_program_keeps_chords_timed_by_the_chord_rule():
     assert time == pytest.approx(chords_mm / 600.0 * 60.0, rel=1e-7)  # 1 nm rounding
     assert plan(program, machine).cutting_time == pytest.approx(math.pi, rel=1e-12)
     assert math.pi * (1.0 - 1e-5 / 10e-3 / 3.0) < time < math.pi  # the sagitta <= tol
+
+
+def test_a_planner_refusal_of_a_program_without_n_words_names_its_line():
+    # _program_arrays reads any object with the arrays; one without block_numbers or moves
+    # keeps no N words: its refusal names the line alone (it had raised AttributeError:
+    # no attribute 'moves', looking for a Move's block_number)
+    targets = np.full((2, 6), np.nan)
+    targets[0, :2] = 0.0
+    targets[1, :2] = (1e-3, 0.0)
+
+    class Arrays:
+        source = "a.nc"
+        kinds = np.array([0, 1], dtype=np.int8)  # a rapid, then a feed move with no F
+        feeds = np.array([np.nan, np.nan])
+        dwells = np.zeros(2)
+        lines = np.array([2, 3], dtype=np.int64)
+
+    Arrays.targets = targets
+    with pytest.raises(NCProgramError, match=r"^a.nc, line 3, key 'F': a feed move \(G01"):
+        plan(Arrays(), load_machine("robonano_a0ib"))

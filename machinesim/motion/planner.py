@@ -127,14 +127,19 @@ def _check_move(move, source: str) -> None:
 
 def _block(program, move) -> int | None:
     """The N word of ``program``'s move ``move`` (`Program.block_numbers`), None when its
-    block has none: a refusal names it beside the line ('line 12 (N120)')."""
+    block has none: a refusal names it beside the line ('line 12 (N120)'). A program that
+    keeps no N words (an object with the arrays but neither ``block_numbers`` nor
+    ``moves``, which `_program_arrays` reads) has none: its refusal names the line alone."""
     blocks = getattr(program, "block_numbers", None)
-    if isinstance(blocks, np.ndarray):
-        number = int(blocks[move])
-    else:
+    if isinstance(blocks, np.ndarray) and blocks.ndim == 1 and move < blocks.size:
+        number = blocks[move]
+    elif hasattr(program, "moves"):
         number = getattr(tuple(program.moves)[move], "block_number", None)
-        number = -1 if number is None else int(number)
-    return None if number < 0 else number
+    else:
+        return None
+    if not isinstance(number, int | np.integer) or isinstance(number, bool):
+        return None
+    return None if number < 0 else int(number)
 
 
 def _source(program) -> str:
