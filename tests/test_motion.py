@@ -37,6 +37,8 @@ def test_times_follow_the_feed_rule_by_hand():
     ("linear", -1e-3, 0.0, "feed_m_per_s"),  # the axis' limit: 0.04 s, silently
     ("dwell", None, -2.0, "dwell_s"),       # -2.0 s
     ("dwell", None, None, "dwell_s"),
+    ("linear", True, 0.0, "feed_m_per_s"),  # 1 m/s: 0.001 s (a Move refuses it)
+    ("dwell", None, True, "dwell_s"),       # 1 s
 ])
 def test_move_duration_refuses_a_move_it_cannot_time(kind, feed, dwell, key):
     from machinesim.motion import move_duration
@@ -452,6 +454,10 @@ def test_move_duration_of_an_arc_chord_takes_its_piece_of_arc(tolerance):
     with pytest.raises(InputError) as caught:
         move_duration("linear", targets[arc[0] - 1], targets[arc[0]], rotary, rates,
                       program.feeds[arc[0]], 0.0, arc_length_m=-1e-3)
+    assert caught.value.key == "arc_length_m"
+    with pytest.raises(InputError) as caught:  # True is no length (it had timed 1 m)
+        move_duration("linear", targets[arc[0] - 1], targets[arc[0]], rotary, rates,
+                      program.feeds[arc[0]], 0.0, arc_length_m=True)
     assert caught.value.key == "arc_length_m"
 
 

@@ -26,6 +26,12 @@ _RAD_PER_DEG = np.pi / 180.0
 NUMBER = int | float | np.integer | np.floating
 
 
+def _real(value) -> bool:
+    """A number `move_duration` times (`NUMBER`), a bool not: ``True`` is no feed, dwell or
+    length (a `Move` refuses it), where Python's int would take it for 1."""
+    return isinstance(value, NUMBER) and not isinstance(value, bool)
+
+
 def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndarray,
                   rapid_rate: np.ndarray, feed_m_per_s: float | None, dwell_s: float,
                   *, arc_length_m: float | None = None) -> float:
@@ -45,7 +51,7 @@ def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndar
         raise InputError(f"kind must be one of {', '.join(MOVE_KINDS)}, got {kind!r}",
                          key="kind")
     if kind == "dwell":
-        if not (isinstance(dwell_s, NUMBER) and 0.0 <= dwell_s < math.inf):
+        if not (_real(dwell_s) and 0.0 <= dwell_s < math.inf):
             raise InputError(f"dwell_s must be a time >= 0 s, got {dwell_s!r}", key="dwell_s")
         return float(dwell_s)
     delta = np.abs(end - start)
@@ -54,7 +60,7 @@ def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndar
     # FANUC: degrees count as millimetres in the feed length
     scaled = np.where(rotary, delta / _RAD_PER_DEG, delta / M_PER_MM)
     length_mm = float(np.sqrt(np.sum(scaled**2)))
-    if arc_length_m is not None and not (isinstance(arc_length_m, NUMBER)
+    if arc_length_m is not None and not (_real(arc_length_m)
                                          and (math.isnan(arc_length_m)
                                               or 0.0 <= arc_length_m < math.inf)):
         raise InputError(f"arc_length_m must be a length >= 0 (m), NaN or None (no arc), "
@@ -63,7 +69,7 @@ def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndar
         length_mm = float(arc_length_m) / M_PER_MM
     if length_mm == 0.0:
         return 0.0
-    if not (isinstance(feed_m_per_s, NUMBER) and 0.0 < feed_m_per_s < math.inf):
+    if not (_real(feed_m_per_s) and 0.0 < feed_m_per_s < math.inf):
         raise InputError(f"a linear move that moves needs a feed > 0 (m/s), got "
                          f"{feed_m_per_s!r}", key="feed_m_per_s")
     feed_mm_per_s = feed_m_per_s / M_PER_MM
