@@ -406,6 +406,53 @@ def test_an_arc_takes_its_length_over_f_not_its_chords(tolerance):
                             arc_lengths=-program.arc_lengths)
 
 
+def test_an_arcs_chords_keep_their_arc_length_as_moves():
+    """The half circle of R10 mm at F600 read at 10 um chords takes pi r / F (3.14159 s)
+    however it reaches plan: the Program, its moves, a slice of them (the arc alone, from
+    the feed move's end) and Program.from_moves of them. Moves had been plain chords
+    (Move kept no arc length): 3.2e-4 fast (tol / (3 r)). A Move without an arc length
+    equals and pickles as before; a bad one is refused naming its key."""
+    import pickle
+    from types import SimpleNamespace
+
+    machine = load_machine("grooving_4axis")
+    program = parse_program("G90 G21 G17\nG00 X10. Y0. Z0. C0.\nG01 X10. F600.\n"
+                            "G03 X-10. Y0. I-10. J0.\nM30\n", chord_tolerance=1e-5)
+    arc = np.flatnonzero(program.lines == 4)
+    half = math.pi * 10.0 / 600.0 * 60.0  # s
+    moves = program.moves
+    assert all(m.arc_length_m == program.arc_lengths[i] for i, m in enumerate(moves)
+               if i in arc)
+    assert moves[0].arc_length_m is None
+    again = Program.from_moves(moves, source=program.source)
+    np.testing.assert_array_equal(again.arc_lengths, program.arc_lengths)
+    assert tuple(again.moves) == tuple(moves)
+    start = np.zeros(len(machine.axes))
+    start[0] = 10e-3
+    for planned in (program, SimpleNamespace(moves=moves), again,
+                    SimpleNamespace(moves=tuple(moves)[arc[0] - 1:]),
+                    SimpleNamespace(moves=moves[arc[0]:arc[-1] + 1])):
+        trajectory = plan(planned, machine, start=start)
+        assert trajectory.cutting_time == pytest.approx(half, rel=1e-12)
+    # a Move without an arc length: equal to one made before, and pickled round
+    plain = Move("linear", {"X": 1e-3}, 0.01)
+    assert plain == Move("linear", {"X": 1e-3}, 0.01, arc_length_m=None)
+    assert pickle.loads(pickle.dumps(plain)) == plain
+    old = object.__new__(Move)  # pickled before Move kept arc lengths: no such entry
+    old.__dict__.update({k: v for k, v in vars(plain).items() if k != "arc_length_m"})
+    assert pickle.loads(pickle.dumps(old)) == plain
+    assert pickle.loads(pickle.dumps(moves[arc[0]])) == moves[arc[0]]
+    for bad in (-1e-3, math.nan, math.inf, True, "1"):
+        with pytest.raises(NCProgramError) as caught:
+            Move("linear", {"X": 1e-3}, 0.01, arc_length_m=bad)
+        assert caught.value.key == "arc_length_m"
+    odd = SimpleNamespace(kind="linear", target={"X": 1e-3}, feed_m_per_s=0.01, dwell_s=0.0,
+                          line=3, arc_length_m=True)
+    with pytest.raises(NCProgramError) as caught:
+        plan(SimpleNamespace(moves=(odd,)), machine)
+    assert caught.value.key == "arc_length_m"
+
+
 def test_a_planner_refusal_names_the_blocks_n_word_beside_its_line():
     # as the reader's refusals: 'line 2 (N40)' where the block has an N word, the line
     # alone where it has none; from a Program's arrays and from a plain list of Moves

@@ -62,15 +62,18 @@ def _start_values(start, axes: tuple[str, ...]) -> np.ndarray:
 
 def _program_arrays(program):
     """targets (N, 6) (columns `machinesim.nc.AXES`, NaN: no value yet), kinds (N,) int8
-    (index into MOVE_KINDS), feeds (N,) m/s (NaN: none), dwells (N,) s, lines (N,) int64.
+    (index into MOVE_KINDS), feeds (N,) m/s (NaN: none), dwells (N,) s, lines (N,) int64,
+    and arc lengths (N,) m (NaN: no arc's chord; None for a program that keeps none).
 
     A `machinesim.nc.Program` holds these arrays; any other object with ``moves`` (each with
-    ``kind``, ``target``, ``feed_m_per_s``, ``dwell_s``, ``line``) is read move by move.
+    ``kind``, ``target``, ``feed_m_per_s``, ``dwell_s``, ``line``, and optionally
+    ``arc_length_m``, as `machinesim.nc.Move` has) is read move by move, so that its arc
+    chords are timed as the program's were.
     """
     arrays = getattr(program, "targets", None), getattr(program, "kinds", None)
     if all(isinstance(a, np.ndarray) for a in arrays):
         return (program.targets, program.kinds, program.feeds, program.dwells,
-                program.lines)
+                program.lines, _arc_lengths(program, len(program.kinds)))
     moves = tuple(program.moves)
     targets = np.full((len(moves), len(AXES)), np.nan)
     column = {a: i for i, a in enumerate(AXES)}
@@ -86,7 +89,9 @@ def _program_arrays(program):
     feeds = np.array([np.nan if m.feed_m_per_s is None else m.feed_m_per_s for m in moves])
     dwells = np.array([m.dwell_s for m in moves], dtype=np.float64)
     lines = np.array([m.line for m in moves], dtype=np.int64)
-    return targets, kinds, feeds, dwells, lines
+    arcs = [getattr(m, "arc_length_m", None) for m in moves]
+    arcs = np.array([np.nan if a is None else a for a in arcs], dtype=np.float64)
+    return targets, kinds, feeds, dwells, lines, arcs
 
 
 def _arc_lengths(program, count: int) -> np.ndarray | None:
@@ -123,6 +128,11 @@ def _check_move(move, source: str) -> None:
         raise NCProgramError(f"dwell_s must be >= 0 s for a dwell and 0.0 otherwise, got "
                              f"{dwell!r} for a {kind} move", source=source, line=move.line,
                              key="dwell_s")
+    arc = getattr(move, "arc_length_m", None)
+    if arc is not None and not (isinstance(arc, NUMBER) and not isinstance(arc, bool | np.bool_)
+                                and 0.0 <= arc < math.inf):
+        raise NCProgramError(f"arc_length_m must be None (no arc) or a length >= 0 m, got "
+                             f"{arc!r}", source=source, line=move.line, key="arc_length_m")
 
 
 def _block(program, move) -> int | None:
@@ -217,7 +227,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
                          f"got {type(profile).__name__}", key="profile")
     points = np.zeros((1, 3)) if tool_points is None else np.vstack(
         [np.zeros((1, 3)), np.asarray(tool_points, dtype=np.float64).reshape(-1, 3)])
-    targets, kinds, feeds, dwells, lines = _program_arrays(program)
+    targets, kinds, feeds, dwells, lines, arcs = _program_arrays(program)
     source = _source(program)
     count = len(kinds)
 
@@ -343,8 +353,7 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
         raise error
 
     durations = move_durations(kinds, starts, ends, feeds, dwells, rotary,
-                               np.asarray(machine.rapid_rate, dtype=np.float64),
-                               _arc_lengths(program, count))
+                               np.asarray(machine.rapid_rate, dtype=np.float64), arcs)
     # times add up move after move from 0.0, as a running sum does (np.cumsum is sequential)
     clock = np.cumsum(np.concatenate([[0.0], durations]))
     cutting = float(np.cumsum(np.concatenate([[0.0], durations[kinds == KIND_LINEAR]]))[-1])

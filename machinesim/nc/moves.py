@@ -159,6 +159,10 @@ class Move:
         The modal S word, passed through (rev/min).
     m_codes : tuple of int
         The M words of this block, in source order, passed through.
+    arc_length_m : float or None
+        For the chord of an arc (G02/G03), the length of the piece of arc it stands for, m
+        (`machinesim.nc.Program.arc_lengths`): `plan` times the chord by it over F, as the
+        control holds F along the arc. None for a move that is no arc's chord.
     """
 
     kind: Literal["rapid", "linear", "dwell"]
@@ -169,6 +173,7 @@ class Move:
     block_number: int | None = None
     spindle_rpm: float | None = None
     m_codes: tuple[int, ...] = field(default=())
+    arc_length_m: float | None = None
 
     def __post_init__(self) -> None:
         where = {"source": "<move>", "line": self.line if _is_int(self.line) else None}
@@ -214,6 +219,12 @@ class Move:
             raise NCProgramError(f"m_codes must be ints >= 0, got {codes!r}", **where,
                                  key="m_codes")
         object.__setattr__(self, "m_codes", tuple(int(c) for c in codes))
+        if self.arc_length_m is not None:
+            arc = _finite(self.arc_length_m, "arc length", **where, key="arc_length_m")
+            if arc < 0.0:
+                raise NCProgramError(f"arc_length_m must be None (no arc) or >= 0 m, got "
+                                     f"{arc!r}", **where, key="arc_length_m")
+            object.__setattr__(self, "arc_length_m", arc)
 
 
 def _is_int(value: Any) -> bool:
@@ -222,12 +233,13 @@ def _is_int(value: Any) -> bool:
 
 def _trusted_move(kind: str, target: FrozenMapping, feed: float | None, dwell: float,
                   line: int, block_number: int | None, spindle: float | None,
-                  m_codes: tuple[int, ...]) -> Move:
+                  m_codes: tuple[int, ...], arc_length: float | None = None) -> Move:
     """A `Move` from values a `Program` has already checked (no second validation)."""
     move = object.__new__(Move)
     for name, value in (("kind", kind), ("target", target), ("feed_m_per_s", feed),
                         ("dwell_s", dwell), ("line", line), ("block_number", block_number),
-                        ("spindle_rpm", spindle), ("m_codes", m_codes)):
+                        ("spindle_rpm", spindle), ("m_codes", m_codes),
+                        ("arc_length_m", arc_length)):
         object.__setattr__(move, name, value)
     return move
 

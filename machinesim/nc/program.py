@@ -199,8 +199,8 @@ class Program:
         For each chord of an arc (G02/G03) in its plane, the length of the piece of arc it
         stands for, m (NaN for every other move, and for the chords of an arc block that
         turns a rotary axis): the control holds F along the arc, so the chord takes that
-        length over F, not its own (`machinesim.motion.timing`). All NaN for programs built
-        from moves.
+        length over F, not its own (`machinesim.motion.timing`). For programs built from
+        moves, their `Move.arc_length_m` (NaN where None); `moves` hands them back.
     exact_stops : ndarray, shape (K,), int64
         The moves that end in an exact stop (G09 in their block, or any block under G61):
         the control waits there until the axes are in position before the next block, so
@@ -261,6 +261,8 @@ class Program:
                      dtype=np.int64),
             {i: m.m_codes for i, m in enumerate(moves) if m.m_codes},
             number, source, work_offsets, states, integer_input, tool_table,
+            arc_lengths=np.array([np.nan if m.arc_length_m is None else m.arc_length_m
+                                  for m in moves], dtype=np.float64),
         )
 
     @classmethod
@@ -453,11 +455,12 @@ class Program:
         feed = float(self._feeds[i])
         spindle = float(self._spindles[i])
         block = int(self._blocks[i])
+        arc = float(self._arc_lengths[i])
         return _trusted_move(MOVE_KINDS[self._kinds[i]], target,
                              None if feed != feed else feed, float(self._dwells[i]),
                              int(self._lines[i]), None if block < 0 else block,
                              None if spindle != spindle else spindle,
-                             self._m_codes.get(i, ()))
+                             self._m_codes.get(i, ()), None if arc != arc else arc)
 
     def _same_moves(self, other: Program) -> bool:
         return (
