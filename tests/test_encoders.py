@@ -124,3 +124,33 @@ def test_a_sigma_given_as_text_is_refused_naming_what_arrived():
             lab.encoders(sigma=sigma)
         assert info.value.key == "sigma"
     assert lab.encoders(sigma=[1e-9] * 5).readouts[0].sigma == 0.0  # noise off: sigma unused
+
+
+def test_a_recorded_path_past_an_axis_travel_is_refused_as_the_cut_refuses_it():
+    # sts_lathe's X travels -100 .. 100 mm: G01 X150. leaves it at line 3 (N30); the
+    # recording took it silently (3 samples), where Lab.cut refuses the same path
+    from machinesim.exceptions import AxisLimitError
+
+    lab = machinesim.Lab("sts_lathe", noise=False)
+    program = parse_program("G90 G21 G94\nN20 G01 X10. F600.\nN30 G01 X150.\nM30",
+                            source="far.nc")
+    with pytest.raises(AxisLimitError, match=r"far\.nc: axis X = 150\.000000 mm at line 3 "
+                                             r"\(N30\) outside its travel -100\.000000 mm "
+                                             r"\.\. 100\.000000 mm; nothing was recorded"):
+        lab.encoders().record(program)
+    with pytest.raises(AxisLimitError, match=r"axis X = 150\.000000 mm at line 3 \(N30\)"):
+        lab.cut(program, "ball:1")
+    reading = lab.encoders().record(program, allow_overtravel=True)
+    assert reading.commanded[-1, 0] == pytest.approx(0.150, abs=1e-15)
+    with pytest.raises(InputError, match="allow_overtravel"):
+        lab.encoders().record(program, allow_overtravel="no")
+    # the turning recording as Lab.turn: C turns while X runs out to 120 mm at line 3
+    spiral = parse_program("G01 X0 Z0 C0 F100.\nG01 X50. C360.\nG01 X120. C720.\n")
+    with pytest.raises(AxisLimitError, match=r"axis X = 120\.000000 mm at line 3 outside "
+                                             r"its travel -100\.000000 mm \.\. 100\.000000 mm; "
+                                             r"nothing was recorded"):
+        lab.encoders().record_turning(spiral)
+    with pytest.raises(AxisLimitError, match=r"axis X = 120\.000000 mm at line 3 "):
+        lab.turn(spiral)
+    assert lab.encoders().record_turning(spiral, allow_overtravel=True).commanded.shape == (
+        9, 3)

@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.arrays import frozen
-from machinesim.exceptions import InputError
-from machinesim.metrology._arrays import as_floats, as_number
+from machinesim.exceptions import AxisLimitError, InputError
+from machinesim.metrology._arrays import as_flag, as_floats, as_number
 from machinesim.metrology.instruments import Readout, as_generator, within_readout_limit
 
 __all__ = ["ENCODER_SIGMA_OF_RESOLUTION", "MAX_RECORDED_SAMPLES", "EncoderReading", "Encoders"]
@@ -108,7 +108,8 @@ class Encoders:
         return (f"Encoders({self.machine.name}, resolution="
                 f"{[r.resolution for r in self.readouts]})")
 
-    def record(self, program, *, start=None, period_s: float | None = None) -> EncoderReading:
+    def record(self, program, *, start=None, period_s: float | None = None,
+               allow_overtravel: bool = False) -> EncoderReading:
         """Run ``program`` (an NC program) and record commands and encoder positions.
 
         By default at the planned samples: each move's start and end, and every sub-step of a
@@ -116,11 +117,19 @@ class Encoders:
         ``period_s`` from the program's start as well (the command linear between the
         planned samples, as it is), so what happens inside a move (a loop settling after a
         corner, a ramp's error building up) is seen. At most `MAX_RECORDED_SAMPLES` samples.
+
+        A program whose commanded path takes an axis outside its travel is refused
+        (`AxisLimitError` naming the axis, the value, its line and the travel), as `Lab.cut`
+        refuses the same path; ``allow_overtravel=True`` records it anyway.
         """
         from machinesim import motion
+        from machinesim.cutting.program import _Moves
         from machinesim.motion.following import follow_runs
 
+        allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")
         trajectory = motion.plan(program, self.machine, None, start=start)
+        self._check_travel(_Moves(trajectory, len(self.machine.axes)), program,
+                           allow_overtravel)
         t = np.asarray(trajectory.t, dtype=np.float64)
         commanded = np.asarray(trajectory.q, dtype=np.float64)
         offsets = np.asarray(trajectory.offsets, dtype=np.int64)
@@ -134,16 +143,19 @@ class Encoders:
         return EncoderReading(tuple(self.machine.axes), frozen(t), frozen(commanded),
                               frozen(position.reshape(commanded.shape)))
 
-    def record_turning(self, program) -> EncoderReading:
+    def record_turning(self, program, *, allow_overtravel: bool = False) -> EncoderReading:
         """Record a turning program (`machinesim.cutting.lathe`): each run of feed moves
         that turn C as the one continuous motion the control runs it as (not move by move
         from rest), sampled at the program's points; the runs one after the other. A
         machine that is no lathe (`machinesim.cutting.lathe.check_lathe`: a mill's C table,
         an axis beyond X, Z and C) is refused, as `Lab.turn` refuses it: its motion is no
-        turning run."""
-        from machinesim.cutting.lathe import check_lathe, followed, turning_runs
+        turning run. So is a program whose command takes an axis outside its travel
+        (`AxisLimitError`, as `Lab.turn` refuses it), unless ``allow_overtravel``."""
+        from machinesim.cutting.lathe import _program_moves, check_lathe, followed, turning_runs
 
         check_lathe(self.machine)
+        allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")
+        self._check_travel(_program_moves(program, self.machine), program, allow_overtravel)
 
         ts, commands, positions, offset = [], [], [], 0.0
         for t, points in turning_runs(program, self.machine):
@@ -156,6 +168,19 @@ class Encoders:
         return EncoderReading(tuple(self.machine.axes), frozen(np.concatenate(ts)),
                               frozen(np.concatenate(commands)),
                               frozen(np.concatenate(positions)))
+
+    def _check_travel(self, moves, program, allow: bool) -> None:
+        """Raise AxisLimitError where ``moves`` (commanded axis values and their lines, as
+        `machinesim.cutting.program._overtravel` reads them) leave an axis' travel, unless
+        ``allow``: the descriptions and lines are the cut's."""
+        from machinesim.cutting.refusals import _overtravel
+
+        found = _overtravel(self.machine, moves, program, True)
+        if found and not allow:
+            source = getattr(program, "source", None)
+            where = f"{source}: " if source else ""
+            raise AxisLimitError(f"{where}{'; '.join(found)}; nothing was recorded "
+                                 "(allow_overtravel=True records it anyway)")
 
 
 def _at_period(t: np.ndarray, q: np.ndarray, offsets: np.ndarray, period: float):
