@@ -73,9 +73,9 @@ def test_a_rapid_below_the_stocks_top_is_noted_a_retract_is_not():
                            "G00 Z0.01\n")
     _, report = lab.turn(across, "nose:1.0:90")
     (note,) = report.notes
-    assert note.startswith("rapids with the tip below the stock's top (z = 0 um) at lines 5:")
+    assert note.startswith("rapids with the tip below the stock's top (z = 0 um) at line 5:")
     plunge = parse_program("G90 G21\nG00 X1.0 Z0.01 C0\nG00 Z-0.001\nG01 X0 C3600 F36000\n")
-    assert "at lines 3:" in lab.turn(plunge, "nose:1.0:90")[1].notes[0]
+    assert "at line 3:" in lab.turn(plunge, "nose:1.0:90")[1].notes[0]
     out = parse_program(head + "G01 X0 C3600 F36000\nG00 Z0.01\nG00 X2.\n")
     assert lab.turn(out, "nose:1.0:90")[1].notes == ()  # straight up out of the cut, then over
 
@@ -397,3 +397,22 @@ def test_a_move_within_a_km_is_turned_and_one_before_the_start_is_refused_too():
                                         f"{ONE_TURN}")
     with pytest.raises(InputError, match=r"line 2: the move takes the tool 1e\+09 m"):
         turn(early, "sts_lathe", allow_overtravel=True)
+
+
+def test_the_lathes_notes_name_a_line_with_its_block_number_as_refusals_do():
+    # the turn's notes named bare lines ("at lines 5", "the feed move of line 3", "the dwell
+    # of line 4") where its refusals and the cut name "line 5 (N50)" (Program.line_text)
+    from machinesim.nc import parse_program
+
+    lab = machinesim.Lab("sts_lathe", noise=False)
+    program = parse_program("G90 G21\nN20 G00 X1.0 Z0.01 C0\nN30 G01 Z-0.001 F0.000001\n"
+                            "N40 G04 P3700.\nN50 G01 X0.5 C1800 F36000\nN60 G00 X0.4 C1900\n"
+                            "N70 G01 X0 C3600\nN80 G00 Z0.01\n")
+    notes = lab.turn(program, "nose:1.0:90")[1].notes
+    assert [n[:n.index(" takes") if "takes" in n else n.index(" waits") if "waits" in n
+              else n.index(":")] for n in notes] == [
+        "rapids with the tip below the stock's top (z = 0 um) at line 6 (N60)",
+        "the feed move of line 3 (N30)", "the dwell of line 4 (N40) (P3700.)"]
+    # plan names them as the lathe does
+    plan_notes = machinesim.motion.plan(program, lab.machine).notes
+    assert [n for n in plan_notes if "feed move" in n or "dwell" in n] == list(notes[1:])

@@ -329,9 +329,10 @@ def _rapids_below_top(program, machine, top: float) -> tuple[str, ...]:
     below = below[below > 0]  # the first point is the start, not a move
     if not below.size:
         return ()
-    shown = ", ".join(str(int(lines[k])) for k in below[:10])
+    line_text = _line_text(program)
+    shown = ", ".join(line_text(lines[k]) for k in below[:10])
     more = f" and {below.size - 10} more" if below.size > 10 else ""
-    return (f"rapids with the tip below the stock's top (z = {top * 1e6:.6g} um) at lines "
+    return (f"rapids with the tip below the stock's top (z = {top * 1e6:.6g} um) at "
             f"{shown}{more}: the turning engine cuts only the runs of feeds that turn C, so "
             "they are not in the part; on a machine a rapid there is a crash",)
 

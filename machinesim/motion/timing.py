@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, line_of
 from machinesim.nc.program import KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
 from machinesim.nc.rotary_feed import inch_feed_as_written
 
@@ -95,8 +95,8 @@ def slow_move_notes(durations, kinds, lines, feeds, program=None,
     i = int(linear[np.argmax(durations[linear])]) if linear.size else None
     if i is not None and durations[i] > SLOW_MOVE_S:
         feed = _feed_text(feeds[i], program, first + i)
-        notes.append(f"the feed move of line {int(lines[i])} takes {durations[i]:.3g} s "
-                     f"({durations[i] / 3600.0:.3g} h) at {feed}, "
+        notes.append(f"the feed move of {_line_text(program, int(lines[i]))} takes "
+                     f"{durations[i]:.3g} s ({durations[i] / 3600.0:.3g} h) at {feed}, "
                      f"more than the {SLOW_MOVE_S / 3600.0:g} h one move of a program takes: "
                      "is F in the program's unit (G94: per minute)?")
     dwell = np.flatnonzero(kinds == KIND_DWELL)
@@ -104,12 +104,20 @@ def slow_move_notes(durations, kinds, lines, feeds, program=None,
     if i is not None and durations[i] > LONG_DWELL_S:
         line = int(lines[i])
         word = getattr(program, "dwell_words", {}).get(line)
-        notes.append(f"the dwell of line {line}{f' ({word})' if word else ''} waits "
+        said = f" ({word})" if word else ""
+        notes.append(f"the dwell of {_line_text(program, line)}{said} waits "
                      f"{durations[i]:.6g} s ({durations[i] / 3600.0:.3g} h), more than the "
                      f"{LONG_DWELL_S / 3600.0:g} h a dwell of a program waits: is its time "
                      "in the unit meant (P counts milliseconds without a decimal point, "
                      "seconds with one; X seconds)?")
     return tuple(notes)
+
+
+def _line_text(program, line: int) -> str:
+    """``line 12 (N120)`` where ``program``'s block at ``line`` has an N word
+    (`machinesim.nc.Program.line_text`), else ``line 12`` (`line_of`)."""
+    text = getattr(program, "line_text", None)
+    return text(line) if callable(text) else line_of(line)
 
 
 def _feed_text(feed: float, program, move: int) -> str:
