@@ -146,3 +146,36 @@ def test_a_pocket_in_levels_meets_its_wall_only_when_a_level_reaches_past_it(che
         cut(_pocket(5, last_wider=0.3 * MM), "grooving_4axis", **kwargs)
     candidates, found, _, _ = checked[-1]
     assert found and len(found) < len(candidates)
+
+
+def test_a_segment_top_along_x_gives_the_holder_a_room_not_an_empty_one():
+    # a top that is a segment along X (2a long, at z = h), moved d along X: face, lifted and
+    # moved all lie in the XZ plane, Qhull found no hull and the room came out empty (no
+    # holder crash could be found). Widened across to its own length, the room is the box
+    # (2a + d) x 2a x reach, by hand; a V's top (along Y) keeps its room as before.
+    from types import SimpleNamespace
+
+    from machinesim.exceptions import InputError
+
+    a, h, d, reach = 0.5 * MM, 3 * MM, 2 * MM, 10 * MM
+    poses = np.stack([np.eye(4), np.eye(4)])
+    poses[1, 0, 3] = d
+    along_x = SimpleNamespace(holder_face=np.array([[-a, 0.0, h], [a, 0.0, h]]),
+                              pairs=np.array([0]), poses=poses)
+    room = holder_room(along_x, 0, reach)
+    assert room.volume() == pytest.approx((2 * a + d) * 2 * a * reach, rel=1e-12)
+    # the same segment turned 30 deg about Z, moved along it: widened across it
+    c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)
+    turned = SimpleNamespace(holder_face=np.array([[-a * c, -a * s, h], [a * c, a * s, h]]),
+                             pairs=np.array([0]), poses=poses.copy())
+    turned.poses[1, :2, 3] = [d * c, d * s]
+    assert holder_room(turned, 0, reach).volume() == pytest.approx(
+        (2 * a + d) * 2 * a * reach, rel=1e-9)
+    along_y = SimpleNamespace(holder_face=np.array([[0.0, -a, h], [0.0, a, h]]),
+                              pairs=np.array([0]), poses=poses)
+    assert holder_room(along_y, 0, reach).volume() == pytest.approx(
+        (2 * a + d) * 2 * a * reach, rel=1e-12)
+    point = SimpleNamespace(holder_face=np.array([[0.0, 0.0, h]]), pairs=np.array([0]),
+                            poses=poses)
+    with pytest.raises(InputError, match="holder's room over sweep 0 is flat"):
+        holder_room(point, 0, reach)

@@ -21,6 +21,7 @@ from machinesim.cutting.containment import (
 )
 from machinesim.cutting.sweeps import hull_mesh, manifold_from
 from machinesim.cutting.sweepset import POINTS_PER_CHUNK
+from machinesim.exceptions import InputError
 
 if TYPE_CHECKING:
     from machinesim.cutting.sweepset import SweepSet
@@ -201,27 +202,47 @@ def _box(low, high) -> manifold3d.Manifold:
 
 def holder_room(sweeps: SweepSet, sweep: int, reach: float) -> manifold3d.Manifold:
     """The room the holder takes over sweep ``sweep``: the hull of the body's top face
-    at both poses and of the same face lifted ``reach`` along the tool axis. A top of
-    zero width (a V's or a nose's: a segment) is widened along the tool's X to its own
-    length, as the bar that carries the tool is.
+    at both poses and of the same face lifted ``reach`` along the tool axis. A top that
+    is a segment (a V's or a nose's, along Y) is widened across it (along the tool's X) to
+    its own length, as the bar that carries the tool is (`_holder_top`); a top of no
+    width (a point) is refused, InputError, not taken for an empty room.
 
     The hull is Qhull's (`sweeps.hull_mesh`), exact to float64 round-off, as the sweeps'
     are: manifold3d's QuickHull drops points within about 1e-7 of the largest coordinate of a
     plane, so the room of a tool a few nm wide, ~30 mm tall over a 10 mm block, came out
     empty, and a 2 nm ball 2 nm high cut 20 um deep with no holder contact.
     """
-    face = sweeps.holder_face
-    width = float(np.ptp(face[:, 0]))
-    if width <= 0.0:
-        half = 0.5 * max(float(np.ptp(face[:, 1])), float(np.ptp(face[:, 2])))
-        face = np.concatenate([face + [half, 0.0, 0.0], face - [half, 0.0, 0.0]])
+    face = _holder_top(sweeps.holder_face)
     local = np.concatenate([face, face + [0.0, 0.0, reach]])
     first = sweeps.pairs[sweep]
     poses = sweeps.poses[[first, first + 1]]
     points = (local @ poses[:, :3, :3].transpose(0, 2, 1) + poses[:, None, :3, 3])
     hull = hull_mesh(points.reshape(-1, 3))
     room = None if hull is None else manifold_from(hull[0], hull[1], _ROOM_ID)
-    return manifold3d.Manifold() if room is None else room
+    if room is None:  # a face of width (`_holder_top`) lifted by reach > 0 is no flat set
+        raise InputError(f"the holder's room over sweep {sweep} is flat (its face "
+                         f"{np.ptp(face, axis=0).tolist()} m wide, lifted {reach:g} m): "
+                         "the tool's body has no top for a holder to begin on, and the "
+                         "holder check would pass any cut", key="tool")
+    return room
+
+
+def _holder_top(face: np.ndarray) -> np.ndarray:
+    """The holder's face from the body's top ``face`` (k, 3), widened where it is a segment:
+    along X (a V's or a nose's top, in the YZ plane), or across it for a segment lying
+    elsewhere in XY, to its own length. A segment's room (the face lifted, at two poses) is
+    flat for any move in the segment's plane: Qhull finds no hull, and the room was empty."""
+    if float(np.ptp(face[:, 0])) <= 0.0:
+        half = 0.5 * max(float(np.ptp(face[:, 1])), float(np.ptp(face[:, 2])))
+        return np.concatenate([face + [half, 0.0, 0.0], face - [half, 0.0, 0.0]])
+    xy = face[:, :2] - face[:, :2].mean(axis=0)
+    spread = np.linalg.svd(xy, compute_uv=False) if len(face) > 1 else np.zeros(2)
+    if spread.size > 1 and spread[1] > _SEGMENT_REL * spread[0]:
+        return face
+    along = np.linalg.svd(xy)[2][0]
+    across = np.array([-along[1], along[0], 0.0])
+    half = 0.5 * float(np.ptp(xy @ along))
+    return np.concatenate([face + half * across, face - half * across])
 
 
 #: Material boxes tested at once against a chunk of sweeps' boxes (`holder_in_material`):
@@ -231,6 +252,9 @@ _BOXES_PER_TEST = 64
 #: Consecutive sweeps of one batch of `_Walk.cut` compared with each other for containment
 #: (`contained_sweeps`): a bore 12.8 mm deep has 2,840 sweeps before its first candidate.
 _CONTAINED_WINDOW = 4096
+
+#: A top face thinner across than this fraction of its length is a segment (`_holder_top`).
+_SEGMENT_REL = 1e-9
 
 #: The run id of the holder's rooms: they are only intersected with the part, never kept.
 _ROOM_ID = manifold3d.Manifold.reserve_ids(1)
