@@ -14,8 +14,11 @@ import pytest
 
 from machinesim._cores import usable_cores
 from machinesim.campaign import run
+from machinesim.campaign.runner import NO_DASHBOARD
 
 pytest.importorskip("distributed")
+#: Two clusters of this file starting at once (-n 2) fought for port 8787: Dask warned.
+pytestmark = pytest.mark.filterwarnings("error:Port .* is already in use")
 
 VARY = ["tool.y=normal:-178um,20um", "microscope.sigma=uniform:5nm,60nm"]
 NAMES = ("drawn", "injected", "identified", "identified_std")
@@ -222,6 +225,34 @@ def test_a_local_cluster_has_no_more_workers_than_trials_to_run(tmp_path, monkey
     assert asked == [1]
 
 
+def test_a_local_cluster_leaves_port_8787_alone_and_starts_without_a_word():
+    # with dashboard_address=None the scheduler's HTTP server (it keeps one for health
+    # checks with no dashboard) took 8787, Dask's default; a second cluster meanwhile (two
+    # campaigns, the tests at -n 2) found it taken and Dask warned "Port 8787 is already in
+    # use". The cluster's own server is on a free port of 127.0.0.1, and so is a test's.
+    import warnings
+
+    from distributed import Client
+
+    import machinesim.campaign.runner as runner
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        client, cluster = runner._client(1, None, None, trials=1)
+        try:
+            server = cluster.scheduler.http_server
+            assert (server.address, server.port != 8787) == ("127.0.0.1", True)
+            with Client(processes=False, n_workers=1, threads_per_worker=1,
+                        **NO_DASHBOARD) as other:
+                second = other.cluster.scheduler.http_server
+                assert second.address == "127.0.0.1" and second.port not in (8787,
+                                                                             server.port)
+        finally:
+            client.close()
+            cluster.close()
+    assert [str(w.message) for w in caught if "already in use" in str(w.message)] == []
+
+
 def test_workers_drop_only_the_heartbeat_that_found_the_scheduler_gone():
     """As a campaign's cluster closes after a Ctrl-C a worker's last heartbeat may find the
     scheduler gone, and Dask printed that as an ERROR with a traceback after the campaign's
@@ -283,7 +314,7 @@ def test_a_large_campaign_keeps_a_few_trials_per_thread_in_flight(tmp_path, monk
     monkeypatch.setattr(runner, "run_trial", trial)
     monkeypatch.setattr(CampaignFolder, "write_trial", written)
     with Client(processes=False, n_workers=1, threads_per_worker=1,
-                dashboard_address=None) as client:
+                **NO_DASHBOARD) as client:
         spy = Counting(client)
         ds = run("tool_rotation_arm", 40, out=tmp_path, client=spy, progress=False,
                  report=False, identify_only=True)
@@ -304,7 +335,7 @@ def test_the_progress_rate_counts_from_the_first_trial_not_the_clusters_start(
                 "elapsed_s": 0.0, "error": None}
 
     client = Client(processes=False, n_workers=1, threads_per_worker=1,
-                    dashboard_address=None)
+                    **NO_DASHBOARD)
 
     def slow_start(workers, scheduler, given, trials=None):
         time.sleep(3.0)  # a LocalCluster's start: seconds
@@ -414,7 +445,7 @@ def test_a_trial_lost_on_the_cluster_is_named_and_the_finished_ones_are_kept(tmp
 
     monkeypatch.setattr(runner, "run_trial", trial)
     with Client(processes=False, n_workers=1, threads_per_worker=1,
-                dashboard_address=None) as client, pytest.raises(MachineSimError) as info:
+                **NO_DASHBOARD) as client, pytest.raises(MachineSimError) as info:
         run("tool_rotation_arm", 4, out=tmp_path, client=client, progress=False,
             identify_only=True)
     assert str(info.value) == (

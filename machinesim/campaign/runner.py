@@ -155,6 +155,14 @@ def _vary(vary) -> tuple[tuple[str, Distribution], ...]:
     return tuple(out)
 
 
+#: How a local cluster starts (`LocalCluster`'s keywords): no dashboard, and its scheduler's
+#: HTTP server (health checks, which it keeps with no dashboard) on a free port of
+#: 127.0.0.1, not on 8787. With ``dashboard_address=None`` the server took 8787 first (its
+#: default port), and where a second cluster had it, Dask warned "Port 8787 is already in
+#: use" and moved on. The address is LocalCluster's documented form ('localhost:8787'; port 0
+#: a random one); ``dashboard`` False, as None had it, keeps the dashboard off.
+NO_DASHBOARD = {"dashboard_address": "127.0.0.1:0", "scheduler_kwargs": {"dashboard": False}}
+
 #: Seconds a ``--scheduler`` has to accept the connection and answer Dask's handshake.
 SCHEDULER_TIMEOUT_S = 20.0
 
@@ -250,36 +258,32 @@ def _client(workers, scheduler, client, trials: int | None = None):
     count = workers if workers is not None else usable_cores()
     if trials is not None:  # a worker with no trial to run only costs its start (~2 s, ~0.3 GB)
         count = max(1, min(count, trials))
-    with warnings.catch_warnings():
-        # the scheduler's HTTP server (health checks; the dashboard is off) moves to a free
-        # port when 8787 is taken, by another campaign say: nothing for the user to act on
-        warnings.filterwarnings("ignore", message="Port .* is already in use")
-        # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers, which makes glibc
-        # hand back every freed block at once: a trial's many short-lived numpy arrays then
-        # cost a fresh mmap each, and a probing trial ran 2.95 s instead of 1.64 s on one
-        # core. Workers keep the nanny's single-thread BLAS settings without that one.
-        import dask
+    # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers, which makes glibc
+    # hand back every freed block at once: a trial's many short-lived numpy arrays then
+    # cost a fresh mmap each, and a probing trial ran 2.95 s instead of 1.64 s on one
+    # core. Workers keep the nanny's single-thread BLAS settings without that one.
+    import dask
 
-        environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
-        environ.pop("MALLOC_TRIM_THRESHOLD_", None)
-        with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}), \
-                ctrl_c_deferred(), sigint_blocked():
-            # A Ctrl-C while the workers start waits until the cluster stands, and then
-            # closes it (below); the workers start with SIGINT blocked, so that the
-            # terminal's Ctrl-C, which reaches its whole process group, reaches none of them
-            # while it imports (a traceback each), nor later (their preload ignores it too).
-            try:
-                cluster = LocalCluster(n_workers=count, threads_per_worker=1,
-                                       processes=True, dashboard_address=None,
-                                       silence_logs=logging.ERROR,
-                                       preload=["machinesim.campaign._worker_setup"])
-            except RuntimeError as exc:  # each worker's own message is on stderr above
-                main = sys.modules.get("__main__")
-                script = getattr(main, "__file__", None)
-                if script is None or getattr(main, "__spec__", True) is not None:
-                    raise  # python -m ..., an interactive session: no script's guard missing
-                raise InputError(f"the local Dask workers did not start ({exc}); {GUARD}",
-                                 source=script, key="workers") from exc
+    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
+    environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}), \
+            ctrl_c_deferred(), sigint_blocked():
+        # A Ctrl-C while the workers start waits until the cluster stands, and then
+        # closes it (below); the workers start with SIGINT blocked, so that the
+        # terminal's Ctrl-C, which reaches its whole process group, reaches none of them
+        # while it imports (a traceback each), nor later (their preload ignores it too).
+        try:
+            cluster = LocalCluster(n_workers=count, threads_per_worker=1,
+                                   processes=True, **NO_DASHBOARD,
+                                   silence_logs=logging.ERROR,
+                                   preload=["machinesim.campaign._worker_setup"])
+        except RuntimeError as exc:  # each worker's own message is on stderr above
+            main = sys.modules.get("__main__")
+            script = getattr(main, "__file__", None)
+            if script is None or getattr(main, "__spec__", True) is not None:
+                raise  # python -m ..., an interactive session: no script's guard missing
+            raise InputError(f"the local Dask workers did not start ({exc}); {GUARD}",
+                             source=script, key="workers") from exc
     try:
         client = Client(cluster)
         client.run(_one_core_each)
