@@ -38,7 +38,8 @@ BUDGET_OPTIONAL_KEYS = ("notes",)
 
 
 def quadrature_share(after_all: float, after_without: float) -> float:
-    """The share of a source in a figure: ``(a^2 - b^2) / a^2``, 0 when ``a == 0``.
+    """The share of a source in a figure: ``(a^2 - b^2) / a^2``; NaN when ``a == 0`` (a
+    share of nothing is undefined: written n/a in the table, null in summary.json).
 
     Parameters
     ----------
@@ -51,7 +52,7 @@ def quadrature_share(after_all: float, after_without: float) -> float:
     if not (math.isfinite(a) and math.isfinite(b)):
         raise InputError(f"budget: expected finite figures, got after_all={after_all!r}, "
                          f"after_without={after_without!r}")
-    return 0.0 if a == 0.0 else (a * a - b * b) / (a * a)
+    return math.nan if a == 0.0 else (a * a - b * b) / (a * a)
 
 
 @dataclass(frozen=True)
@@ -72,7 +73,8 @@ class BudgetRow:
     after_without : float
         The same with only this source off.
     share : float
-        ``(a^2 - b^2) / a^2`` with ``a = |after_all|``, ``b = |after_without|``; 0 if a == 0.
+        ``(a^2 - b^2) / a^2`` with ``a = |after_all|``, ``b = |after_without|``; NaN (a
+        share of nothing, undefined) if a == 0.
     notes : tuple of str
         What the identification of the run with this source off noted
         (`machinesim.experiment.Identified.notes`: readings that do not fit the model, ...)
@@ -90,8 +92,10 @@ class BudgetRow:
 
     def as_dict(self) -> dict:
         """The row as summary.json holds it (keys `BUDGET_KEYS`, and ``notes`` when it has
-        any)."""
+        any); a NaN share (of a figure of 0) as None, JSON's null."""
         out = {key: getattr(self, key) for key in BUDGET_KEYS}
+        if math.isnan(self.share):
+            out["share"] = None
         if self.notes:
             out["notes"] = list(self.notes)
         return out
@@ -135,10 +139,15 @@ class Budget:
             numbers = []
             for key in ("after_all", "after_without", "share"):
                 value = row[key]
+                if key == "share" and value is None and numbers[0] == 0.0:
+                    numbers.append(math.nan)  # a share of a figure of 0: undefined (to_dict)
+                    continue
                 if (not isinstance(value, int | float) or isinstance(value, bool)
                         or not math.isfinite(value)):
+                    null = (" (null only where after_all is 0: a share of nothing)"
+                            if key == "share" and value is None else "")
                     raise InputError(f"budget[{i}].{key} must be a finite number, got "
-                                     f"{value!r}", key="budget")
+                                     f"{value!r}{null}", key="budget")
                 numbers.append(float(value))
             notes = row.get("notes", [])
             if not isinstance(notes, list) or not all(isinstance(n, str) and n.strip()
@@ -191,7 +200,8 @@ class Budget:
 
     def unexplained(self, figure: str) -> float:
         """``1 - sum of the shares`` of ``figure``: what no listed source explains (under the
-        independence assumption of the module docstring)."""
+        independence assumption of the module docstring); NaN for a figure of 0, whose
+        shares are."""
         shares = [row.share for row in self.rows if row.figure == figure]
         if not shares:
             raise InputError(f"budget has no figure {figure!r}; it has "
@@ -208,9 +218,9 @@ class Budget:
             for row in rows:
                 lines.append(f"| {row.figure} | {row.unit} | {row.source} | "
                              f"{row.after_all:.4g} | {row.after_without:.4g} | "
-                             f"{100.0 * row.share:.1f} % |")
+                             f"{_percent(row.share)} |")
             lines.append(f"| {figure} | {rows[0].unit} | (none of these) | | | "
-                         f"{100.0 * self.unexplained(figure):.1f} % |")
+                         f"{_percent(self.unexplained(figure))} |")
         return "\n".join(lines) + "\n"
 
     def to_dict(self) -> list[dict]:
@@ -223,7 +233,8 @@ class Budget:
 
         The axis spans -100 .. 100 %: a share beyond (a figure near 0 with every source on,
         which switching one off moves far) is drawn to the edge, hatched, its value written
-        beside it (`clipped_shares`). Written whole or not at all
+        beside it, and an undefined one (a figure of 0) as no bar, written n/a
+        (`clipped_shares`). Written whole or not at all
         (`machinesim._io.write_atomic`); ``path`` ends in ``.png`` (any case: another
         ending is refused).
         """
@@ -277,11 +288,20 @@ PLOT_LIMIT_PERCENT = 100.0
 FIGURES_PER_PANEL = 8
 
 
+def _percent(share: float) -> str:
+    """A share as the table writes it: ``12.3 %``, or ``n/a`` where it is undefined (NaN)."""
+    return "n/a" if math.isnan(share) else f"{100.0 * share:.1f} %"
+
+
 def clipped_shares(percent: Sequence[float], limit: float) -> tuple[list[float], list[str]]:
     """Bar heights within ``-limit .. limit`` and, for each bar cut there, its value as a
-    label (``""`` for the others)."""
+    label (``""`` for the others); an undefined share (NaN) is no bar, labelled n/a."""
     heights, labels = [], []
     for value in percent:
+        if math.isnan(value):
+            heights.append(0.0)
+            labels.append("n/a")
+            continue
         clipped = min(max(float(value), -limit), limit)
         heights.append(clipped)
         labels.append("" if clipped == value else f"{value:.0f} %")

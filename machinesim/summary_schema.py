@@ -227,10 +227,14 @@ def _check_budget(rows, units: Mapping[str, str], afters: Mapping[str, float | N
                              "budget of this run's figures (another run's?)", key="budget")
         for key in ("after_all", "after_without", "share"):
             value = row[key]
+            if key == "share" and value is None and row["after_all"] == 0.0:
+                continue  # a share of a figure of 0: undefined, null (docs/budget.md)
             if (not isinstance(value, (int, float)) or isinstance(value, bool)
                     or not math.isfinite(value)):
+                null = (" (null only where after_all is 0: a share of nothing)"
+                        if key == "share" and value is None else "")
                 raise InputError(f"summary.json: budget[{i}].{key} must be a finite number, "
-                                 f"got {value!r}", key="budget")
+                                 f"got {value!r}{null}", key="budget")
         after = afters[row["figure"]]
         if after is None or row["after_all"] != after:
             held = "none (not measured)" if after is None else repr(after)

@@ -55,7 +55,7 @@ def test_shares_of_independent_sources_are_their_squares_over_the_total():
 def test_quadrature_share_by_hand():
     assert quadrature_share(5.0, 3.0) == pytest.approx(16.0 / 25.0)  # 3-4-5 triangle
     assert quadrature_share(-5.0, 4.0) == pytest.approx(9.0 / 25.0)
-    assert quadrature_share(0.0, 2.0) == 0.0
+    assert math.isnan(quadrature_share(0.0, 2.0))  # a share of nothing: undefined
     assert quadrature_share(1.0, 2.0) == pytest.approx(-3.0)  # switching off made it worse
     with pytest.raises(InputError, match="finite"):
         quadrature_share(np.nan, 1.0)
@@ -286,3 +286,49 @@ def test_a_rerun_giving_a_figure_in_another_unit_is_refused():
     with pytest.raises(InputError, match="figure 'a_dx' is in 'nm', with every source on "
                                          "in 'um'; expected one unit"):
         error_budget(run, ["instrument_noise"])
+
+
+def test_a_share_of_a_figure_of_zero_is_undefined_in_the_table_plot_and_json(tmp_path):
+    # a figure whose after is exactly 0 with every source on: (a^2 - b^2) / a^2 is 0/0, or
+    # -b^2/0, and was written 0.0 % (the source "explains none of it", though switching it
+    # off moved the figure to 0.4); now NaN: n/a in the table and the plot, null in
+    # summary.json, read back as NaN
+    def run(off):
+        after = {None: 0.0, "instrument_noise": 0.4, "background": 0.0}[off]
+        return SimpleNamespace(figures=(Figure("a_dx", "um", 1.0, after),
+                                        Figure("a_dy", "um", 1.0, 0.5 if off else 1.0)))
+
+    budget = error_budget(run, ["instrument_noise", "background"])
+    assert all(math.isnan(budget.share(s, "a_dx")) for s in budget.sources)
+    assert math.isnan(budget.unexplained("a_dx"))
+    assert budget.share("instrument_noise", "a_dy") == pytest.approx(0.75)  # 1 - 0.5^2
+    table = budget.table().splitlines()
+    assert table[2:5] == ["| a_dx | um | instrument_noise | 0 | 0.4 | n/a |",
+                          "| a_dx | um | background | 0 | 0 | n/a |",
+                          "| a_dx | um | (none of these) | | | n/a |"]
+    assert table[5] == "| a_dy | um | instrument_noise | 1 | 0.5 | 75.0 % |"
+    assert clipped_shares([math.nan, 50.0], 100.0) == ([0.0, 50.0], ["n/a", ""])
+    rows = budget.to_dict()
+    assert [r["share"] for r in rows] == [None, None, pytest.approx(0.75),
+                                          pytest.approx(0.75)]
+    folder = ReportFolder(tmp_path / "out")
+    folder.write_budget(budget)
+    assert (tmp_path / "out" / "budget.png").stat().st_size > 0
+    figures = [f.as_dict() for f in run(None).figures]
+    folder.write_summary({"paper": "001", "procedure": "p", "machine": "m", "seed": 0,
+                          "noise": False, "injected": {}, "identified": {},
+                          "figures": figures, "budget": rows})
+    read = json.loads((tmp_path / "out" / "summary.json").read_text())["budget"]
+    assert [r["share"] for r in read[:2]] == [None, None]
+    back = Budget.from_dict(read)
+    assert math.isnan(back.share("background", "a_dx"))
+    assert back.share("instrument_noise", "a_dy") == budget.share("instrument_noise", "a_dy")
+    # null stays refused where the figure is not 0: there the share is a number
+    with pytest.raises(InputError, match=r"budget\[2\]\.share must be a finite number, got "
+                                         r"None \(null only where after_all is 0"):
+        Budget.from_dict([*read[:2], {**read[2], "share": None}])
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    summary["budget"][2]["share"] = None
+    with pytest.raises(InputError, match=r"budget\[2\]\.share must be a finite number, got "
+                                         r"None \(null only where after_all is 0"):
+        check_summary(summary)
