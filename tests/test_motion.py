@@ -453,6 +453,46 @@ def test_an_arcs_chords_keep_their_arc_length_as_moves():
     assert caught.value.key == "arc_length_m"
 
 
+def test_an_arc_length_is_taken_only_by_a_chord_of_that_arc():
+    """A Move keeps its chord's arc length, so a program cut from the middle of an arc, or
+    given new targets, carries arc lengths of moves it no longer makes. The half circle of
+    R10 mm at F600 read at 10 um chords (5 deg each, 0.8727 mm of arc): cut at its fifth
+    chord and planned from zero, the first move goes from (0, 0) to that chord's end,
+    10 mm (1 s at F600), and was timed as 0.8727 mm (0.087 s, clamped at X's velocity
+    limit: 0.363 s). Such a move takes its own length; a chord of its arc still its piece
+    of arc (the slice planned from the chord's start, the whole program: pi r / F)."""
+    from machinesim.motion.timing import move_duration
+
+    machine = load_machine("grooving_4axis")
+    program = parse_program("G90 G21 G17\nG00 X10. Y0. Z0. C0.\nG01 X10. F600.\n"
+                            "G03 X-10. Y0. I-10. J0.\nM30\n", chord_tolerance=1e-5)
+    arc = np.flatnonzero(program.lines == 4)
+    k = int(arc[4])
+    cut = Program.from_moves(program.moves[k:], source=program.source)
+    start = np.zeros(len(machine.axes))
+    first = plan(cut, machine, start=start).segments[0]
+    end = program.targets[k, :2]
+    assert first.duration == pytest.approx(math.hypot(*end) / 0.01, rel=1e-12)  # 10 mm/s
+    assert first.duration == pytest.approx(1.0, rel=1e-9)
+    # planned from the chord's start it is that chord: its piece of arc over F
+    start[:3] = program.targets[k - 1, :3]
+    resumed = plan(cut, machine, start=start)
+    assert resumed.segments[0].duration == pytest.approx(
+        program.arc_lengths[k] / 0.01, rel=1e-12)
+    assert plan(program, machine).cutting_time == pytest.approx(math.pi, rel=1e-12)
+    # one move: a chord's arc length taken, another move's not
+    rotary = np.array(machine.rotary)
+    rate = np.asarray(machine.rapid_rate, dtype=np.float64)
+    a, b = np.zeros(4), np.zeros(4)
+    b[:2] = program.targets[k, :2] - program.targets[k - 1, :2]
+    assert move_duration("linear", a, b, rotary, rate, 0.01, 0.0,
+                         arc_length_m=program.arc_lengths[k]) == pytest.approx(
+        program.arc_lengths[k] / 0.01, rel=1e-12)
+    b[:2] = program.targets[k, :2]
+    assert move_duration("linear", a, b, rotary, rate, 0.01, 0.0,
+                         arc_length_m=program.arc_lengths[k]) == pytest.approx(1.0, rel=1e-9)
+
+
 def test_a_planner_refusal_names_the_blocks_n_word_beside_its_line():
     # as the reader's refusals: 'line 2 (N40)' where the block has an N word, the line
     # alone where it has none; from a Program's arrays and from a plain list of Moves

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from machinesim.exceptions import InputError, line_of
+from machinesim.nc.arcs import MAX_STEP_RAD
 from machinesim.nc.program import KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
 from machinesim.nc.rotary_feed import inch_feed_as_written
 
@@ -24,12 +25,40 @@ SLOW_MOVE_S = 24 * 3600.0
 LONG_DWELL_S = 3600.0
 _RAD_PER_DEG = np.pi / 180.0
 NUMBER = int | float | np.integer | np.floating
+#: The most the piece of arc a chord stands for exceeds the chord: x / sin x at the half
+#: angle of the reader's longest step (`machinesim.nc.arcs.MAX_STEP_RAD`), 1.1107.
+ARC_OVER_CHORD = (MAX_STEP_RAD / 2.0) / math.sin(MAX_STEP_RAD / 2.0)
+#: Slack (relative, and absolute in m) of `on_chord`'s test: a compensated program's chords
+#: (`Program.with_targets`) end micrometres from the read ones, rounded to the resolution.
+ARC_CHORD_SLACK = 1e-2
+ARC_CHORD_SLACK_M = 1e-8
 
 
 def _real(value) -> bool:
     """A number `move_duration` times (`NUMBER`), a bool not: ``True`` is no feed, dwell or
     length (a `Move` refuses it), where Python's int would take it for 1."""
     return isinstance(value, NUMBER) and not isinstance(value, bool)
+
+
+def on_chord(arc_lengths: np.ndarray, deltas: np.ndarray, rotary: np.ndarray) -> np.ndarray:
+    """Whether each move of axis motion ``deltas`` (n, n_axes; m, rad) is a chord of the
+    piece of arc ``arc_lengths`` (n,) m gives it: in one plane of two linear axes its chord c
+    has c <= arc <= `ARC_OVER_CHORD` c (with `ARC_CHORD_SLACK`), as every chord the reader
+    makes of an arc has in its plane. An arc length kept by a move that is no such chord
+    (the first move of a program cut from the middle of an arc, planned from elsewhere;
+    moves put together out of order; new targets) describes another move: the move takes
+    its own length, as any feed move."""
+    linear = np.flatnonzero(~np.asarray(rotary, dtype=bool))
+    d = np.abs(np.asarray(deltas, dtype=np.float64)[:, linear])
+    if len(linear) >= 2:
+        chords = np.stack([np.hypot(d[:, i], d[:, j]) for i in range(len(linear))
+                           for j in range(i + 1, len(linear))], axis=1)
+    else:
+        chords = d  # one linear axis (or none): its motion is the chord
+    arcs = np.asarray(arc_lengths, dtype=np.float64)[:, None]
+    low = chords * (1.0 - ARC_CHORD_SLACK) - ARC_CHORD_SLACK_M
+    high = chords * (ARC_OVER_CHORD * (1.0 + ARC_CHORD_SLACK)) + ARC_CHORD_SLACK_M
+    return np.any((low <= arcs) & (arcs <= high), axis=1)
 
 
 def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndarray,
@@ -45,8 +74,9 @@ def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndar
     ``arc_length_m``: for a linear move that is the chord of an arc, the length of the
     piece of arc it stands for (m; its entry of `machinesim.nc.Program.arc_lengths`; None
     or NaN: none), which it takes over F as `move_durations` does (the control holds F
-    along the arc), still clamped at the velocity limits. Without it a chord takes its
-    own length, which runs an arc fast by tol / (3 r)."""
+    along the arc), still clamped at the velocity limits, when the move is a chord of it
+    (`on_chord`; else the move takes its own length). Without it a chord takes its own
+    length, which runs an arc fast by tol / (3 r)."""
     if kind not in MOVE_KINDS:
         raise InputError(f"kind must be one of {', '.join(MOVE_KINDS)}, got {kind!r}",
                          key="kind")
@@ -65,7 +95,8 @@ def move_duration(kind: str, start: np.ndarray, end: np.ndarray, rotary: np.ndar
                                               or 0.0 <= arc_length_m < math.inf)):
         raise InputError(f"arc_length_m must be a length >= 0 (m), NaN or None (no arc), "
                          f"got {arc_length_m!r}", key="arc_length_m")
-    if arc_length_m is not None and not math.isnan(arc_length_m):
+    if (arc_length_m is not None and not math.isnan(arc_length_m)
+            and on_chord(np.array([arc_length_m]), delta[None], rotary)[0]):
         length_mm = float(arc_length_m) / M_PER_MM
     if length_mm == 0.0:
         return 0.0
@@ -143,7 +174,8 @@ def move_durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate,
     is the chord of an arc takes its piece of arc over F, as the control holds F along the
     arc, not the chord's length (which ran an arc fast by tol / (3 r) of its time for
     chords within tol of a radius r: 3.3e-7 at 1 nm on 1 mm, 0.33 % at 10 um), still
-    clamped at the axes' velocity limits."""
+    clamped at the axes' velocity limits; an arc length whose move is no chord of it
+    (`on_chord`) is not taken."""
     out = np.zeros(len(kinds))
     dwell = kinds == KIND_DWELL
     out[dwell] = dwells[dwell]
@@ -175,7 +207,9 @@ def move_durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate,
         length_mm = np.sqrt(total)
         if arc_lengths is not None:
             arc = arc_lengths[linear]
-            on_arc = ~np.isnan(arc)
+            on_arc = np.flatnonzero(~np.isnan(arc))
+            on_arc = on_arc[on_chord(arc[on_arc], ends[linear[on_arc]] - starts[linear[on_arc]],
+                                     rotary)]
             length_mm[on_arc] = arc[on_arc] / M_PER_MM
         moving = length_mm != 0.0
         out[linear[moving]] = np.maximum(
@@ -184,5 +218,5 @@ def move_durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate,
     return out
 
 
-__all__ = ["LONG_DWELL_S", "M_PER_MM", "NUMBER", "SLOW_MOVE_S", "move_duration", "move_durations",
-           "slow_move_notes"]
+__all__ = ["ARC_OVER_CHORD", "LONG_DWELL_S", "M_PER_MM", "NUMBER", "SLOW_MOVE_S", "move_duration",
+           "move_durations", "on_chord", "slow_move_notes"]
