@@ -47,7 +47,13 @@ import numpy as np
 
 from machinesim import tolerances
 from machinesim.errors import as_error_model
-from machinesim.exceptions import AxisLimitError, InputError, MachineSimWarning, NCProgramError
+from machinesim.exceptions import (
+    AxisLimitError,
+    InputError,
+    MachineSimWarning,
+    NCProgramError,
+    line_of,
+)
 from machinesim.inverse import singular_note
 from machinesim.machines import Machine, load_machine
 from machinesim.metrology._arrays import as_flag, as_floats, shown
@@ -393,8 +399,10 @@ def model_based(
                                        check_limits=False)
     _check_travel(program, machine, motion, nominal, solution.q)
     miss = wanted - _points(machine.tool_pose(solution.q, identified), p)
-    singular = singular_note(machine, solution.singular_residual,
-                             lambda row: f"line {int(program.lines[motion[row]])}")
+    blocks = program.block_numbers
+    singular = singular_note(machine, solution.singular_residual, lambda row: line_of(
+        int(program.lines[motion[row]]),
+        None if blocks[motion[row]] < 0 else int(blocks[motion[row]])))
     if singular:
         warnings.warn(f"{program.source}: {singular}", MachineSimWarning, stacklevel=2)
     return Compensated(

@@ -371,8 +371,9 @@ def singular_note(machine, singular, name) -> str:
     Returns
     -------
     str
-        The poses (the first ten), the largest turn left (urad), where, and about which
-        direction (a unit vector in the workpiece frame); empty when no pose is singular.
+        Where the poses are (the first ten names, each once: the chords of an arc are
+        poses of one line), the largest turn left (urad), where, and about which direction
+        (a unit vector in the workpiece frame); empty when no pose is singular.
     """
     singular = np.atleast_2d(singular)
     size = np.linalg.norm(singular, axis=1)
@@ -382,7 +383,12 @@ def singular_note(machine, singular, name) -> str:
     worst = int(rows[np.argmax(size[rows])])
     direction = ", ".join(f"{v:+.4f}" for v in np.round(singular[worst] / size[worst], 4)
                           + 0.0)  # no -0.0000
-    listed = ", ".join(name(int(r)) for r in rows[:10]) + (" ..." if len(rows) > 10 else "")
+    names: dict[str, None] = {}
+    for r in rows.tolist():
+        names.setdefault(name(int(r)))
+        if len(names) > 10:
+            break
+    listed = ", ".join(list(names)[:10]) + (" ..." if len(names) > 10 else "")
     return (f"{machine.name} ({''.join(machine.axes)}) stands at a singularity of its axes at "
             f"{len(rows)} of {len(singular)} pose(s) ({listed}): there they turn the tool "
             f"about a direction by less than {tolerances.IK_WEAK_TURN:g} rad per unit of "

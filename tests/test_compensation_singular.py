@@ -99,6 +99,22 @@ def test_model_based_warns_of_blocks_at_a_singularity_naming_lines_size_and_dire
     assert result.max_rotation_residual == pytest.approx(TAU * math.cos(A), rel=1e-6)
 
 
+def test_the_singularity_warning_names_each_line_once_with_its_n_word():
+    """The warning named poses, not lines: an arc at B = 0 (its chords poses of one line)
+    was listed 'line 2, line 3, line 3, line 3, ... line 3 ...' (nine times the arc's
+    line). Each line is named once, with its block's N word as the reader's messages do
+    ('line 3 (N30)'); the count stays that of the poses."""
+    program = parse_program("G90 G17 G01 F100 X10. Y5. Z0 A17.18873 B0 C-114.59156\n"
+                            "N30 G03 X5. Y10. I-5. J0\nN40 G01 X4.\nG01 X3.\n", "arc.nc",
+                            chord_tolerance=1e-5)
+    poses = int(np.sum(program.kinds != 2))  # the motion blocks (no dwell)
+    assert poses > 12
+    with pytest.warns(MachineSimWarning):
+        result = model_based(program, UI, TILT, rounded=False)
+    assert re.search(rf"at {poses} of {poses} pose\(s\) \(line 1, line 2 \(N30\), "
+                     r"line 3 \(N40\), line 4\): there", result.singular), result.singular
+
+
 def test_a_pose_off_the_singularity_is_matched_and_nothing_is_told():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
