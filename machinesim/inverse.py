@@ -271,8 +271,15 @@ def turn_rank(machine, axis_only: bool = False) -> int:
     and planer_4axis (A), 2 on robonano_a0ib (B and C, always square), 3 on robonano_ui
     (A, B, C; 2 at B = 0, where A and C are one axis), 0 on sts_lathe (C is needed for the
     position). A pose with fewer is singular.
+
+    ``machine``: a `machinesim.machines.Machine` or the name of a shipped one (anything
+    else an InputError, as ``axis_only`` not True or False).
     """
-    return _turn_rank(machine, bool(axis_only))
+    # (imported here: metrology's instruments import the machines, which import this)
+    from machinesim.metrology._arrays import as_flag
+    from machinesim.metrology.instruments import as_machine
+
+    return _turn_rank(as_machine(machine), as_flag(axis_only, "axis_only"))
 
 
 @functools.lru_cache(maxsize=32)

@@ -55,6 +55,24 @@ def test_turn_rank_counts_the_directions_the_structure_turns_the_tool_in(name, w
     assert turn_rank(machine, axis_only=True) == tool_axis
 
 
+def test_turn_rank_takes_a_machine_or_its_name_and_refuses_anything_else():
+    # a name (as machinesim's other entry points take) was a TypeError "'>=' not supported
+    # between instances of 'builtin_function_or_method' and 'float'" (str.lower taken for
+    # the travel), None an AttributeError, a dict "unhashable type"; axis_only "no" True
+    from machinesim.exceptions import InputError, ModelError
+
+    assert turn_rank("robonano_ui") == 3 and turn_rank("robonano_ui", axis_only=True) == 2
+    for bad in (None, 3, {}):
+        with pytest.raises(InputError) as info:
+            turn_rank(bad)
+        assert info.value.key == "machine"
+    with pytest.raises(ModelError, match="nope"):
+        turn_rank("nope")
+    with pytest.raises(InputError) as info:
+        turn_rank(UI, axis_only="no")
+    assert info.value.key == "axis_only"
+
+
 @pytest.mark.parametrize("b_deg", ["0", "0.03"])
 def test_a_tilt_left_at_gimbal_lock_is_a_singular_residual(b_deg):
     """At B = 0 (and 0.03 deg, where A against C turns the tool by 3.7e-4 rad per rad,
