@@ -406,6 +406,24 @@ def test_an_arc_takes_its_length_over_f_not_its_chords(tolerance):
                             arc_lengths=-program.arc_lengths)
 
 
+@pytest.mark.parametrize("units, feed", [("G21", "F600."), ("G20", "F23.62204724")])
+def test_an_arc_whose_rotary_word_keeps_its_axis_takes_its_length_over_f(units, feed):
+    """A post that writes every axis on every block writes C0. in an arc where C stands at
+    0: nothing turns, and the control holds F along the arc (pi r / F for the half circle
+    of R10 mm, here read at 10 um chords). The reader took any rotary word for a turn and
+    kept the chords' own lengths: 3.2e-4 fast (tol / (3 r)). Under G20 the same (F in
+    inch/min, 600 mm/min); a C that does turn keeps its chords' rule (the test above)."""
+    machine = load_machine("grooving_4axis")
+    scale = 25.4 if units == "G20" else 1.0
+    text = (f"G90 {units} G17\nG00 X{10 / scale:.10f} Y0. Z0. C0.\n"
+            f"G01 X{10 / scale:.10f} {feed}\n"
+            f"G03 X{-10 / scale:.10f} Y0. I{-10 / scale:.10f} J0. C0.\nM30\n")
+    program = parse_program(text, chord_tolerance=1e-5)
+    assert not np.isnan(program.arc_lengths[program.lines == 4]).any()
+    time = sum(s.duration for s in plan(program, machine).segments if s.line == 4)
+    assert time == pytest.approx(math.pi * 10.0 / 600.0 * 60.0, rel=1e-9)
+
+
 def test_an_arcs_chords_keep_their_arc_length_as_moves():
     """The half circle of R10 mm at F600 read at 10 um chords takes pi r / F (3.14159 s)
     however it reaches plan: the Program, its moves, a slice of them (the arc alone, from

@@ -99,7 +99,10 @@ def read_arc(block: Block, axes: list[Word], block_number: int | None) -> None:
             targets[:, k] = math.nan
     block.check_feed(state.motion, g_word)
     feeds = np.full(n, state.feed)
-    turning = [w for w in axes if w.letter in ROTARY_AXES]
+    # a rotary word that keeps its axis where it stands (a post writing every axis on
+    # every block) turns nothing: the chords keep the arc's feed rule
+    turning = [w for w in axes if w.letter in ROTARY_AXES
+               and not end[w.letter] == start.get(w.letter, math.nan)]
     if state.feed_inch and turning:  # a rotary axis's degrees count as inches in the feed
         starts = np.vstack([[start.get(a, math.nan) for a in AXES], targets[:-1]])
         scale, unknown = inch_feed_scale(starts, targets)
