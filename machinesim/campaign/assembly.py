@@ -33,7 +33,10 @@ integers, as its decimal digits), ``procedure``, ``trials``, ``vary`` (JSON), ``
 ``identify_only``, ``versions`` (JSON: machinesim, numpy, scipy, xarray, dask, distributed,
 python), ``errors`` (JSON: trial -> message of each failed trial), ``notes`` (JSON: the
 trials' notes as `Assembly.notes` groups them, each ``{"note": ..., "trials": [...]}``, most
-trials first; a trial's own notes are in its file).
+trials first; a trial's own notes are in its file). A campaign of a user's own procedure
+(`machinesim.campaign.own`) has its reference as ``procedure`` (``package.module:Class``)
+and besides ``procedure_name`` (its ``name``), ``machine`` and ``base_errors`` (JSON: the
+error model the trials are drawn on, SI, `ErrorModel.to_dict`).
 """
 
 from __future__ import annotations
@@ -165,13 +168,13 @@ class Assembly:
         """The SI unit of each parameter (`trials.parameter_unit`: m, rad, or a polynomial
         coefficient's m/m^2): the values are SI, and the name alone tells m from rad, not a
         polynomial's coefficient from a table's value."""
-        from machinesim.campaign.trials import parameter_unit
+        from machinesim.campaign.trials import spec_parameter_unit
         from machinesim.exceptions import MachineSimError
 
         out = []
         for name in names:
             try:
-                out.append(parameter_unit(self.spec["procedure"], name))
+                out.append(spec_parameter_unit(self.spec, name))
             except MachineSimError as error:  # a trial file edited, or of another model
                 first = self.first["identified"].get(name, (None,))[0]
                 where = "" if first is None else \
@@ -226,6 +229,9 @@ class Assembly:
                  "vary": json.dumps(spec["vary"]), "versions": json.dumps(versions()),
                  "errors": json.dumps(errors), "notes": json.dumps(self.notes()),
                  "seeding": "trial i: numpy SeedSequence(seed).spawn(trials)[i]"}
+        if "machine" in spec:  # a user's procedure (`procedure` is its reference)
+            attrs.update(procedure_name=spec["name"], machine=spec["machine"],
+                         base_errors=json.dumps(spec["errors"]))
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
 

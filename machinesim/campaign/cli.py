@@ -7,6 +7,7 @@ runs it. ``python -m machinesim.campaign.cli ...`` runs it alone.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -30,6 +31,8 @@ PARAM: an error parameter of the procedure's machine (tool.y, workpiece.alpha,
 
 procedures:
 {procedures}
+  package.module:ClassName: a procedure of your own (docs/procedures/your_own.md), with
+    --machine NAME and, optionally, --errors FILE.toml (the errors --vary is set on)
 
 examples:
   # paper 000: e_ys and r against the microscope's noise, 20 trials on 2 local workers
@@ -66,7 +69,12 @@ def _folder(text: str) -> Path:
 
 
 def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    parser.add_argument("procedure", help=f"one of {', '.join(PROCEDURES)}")
+    parser.add_argument("procedure", help=f"one of {', '.join(PROCEDURES)}, or your own "
+                        "as package.module:ClassName")
+    parser.add_argument("--machine", default=None, metavar="NAME",
+                        help="your own procedure's machine (not for a shipped one)")
+    parser.add_argument("--errors", default=None, metavar="FILE",
+                        help="your own procedure's errors, a TOML error model (default: none)")
     parser.add_argument("--trials", type=int, required=True, metavar="N",
                         help=f"number of trials, 1 to {MAX_TRIALS}")
     where = parser.add_mutually_exclusive_group()
@@ -112,10 +120,14 @@ def run_campaign(args) -> int:
     if not 1 <= args.trials <= MAX_TRIALS:  # before anything else: nothing to wait for
         raise InputError(trials_refused(args.trials), key="--trials")
     vary = [parse_vary(text) for text in args.vary]
+    if ":" in args.procedure and "" not in sys.path and os.getcwd() not in sys.path:
+        # your own procedure's module, in the folder the command is run from (an installed
+        # command's sys.path has its own folder, not that one), for the workers too
+        sys.path.insert(0, os.getcwd())
     dataset = run(args.procedure, args.trials, vary=vary, seed=args.seed, out=args.out,
                   workers=args.workers, scheduler=args.scheduler, noise=args.noise == "on",
                   identify_only=args.identify_only, quick=args.quick,
-                  progress=not args.quiet)
+                  progress=not args.quiet, machine=args.machine, errors=args.errors)
     from machinesim.campaign.summary import failures, notes
 
     failed, total = int(dataset["failed"].sum()), dataset.sizes["trial"]

@@ -445,16 +445,21 @@ def _read(folder: CampaignFolder, done: list[int], assembly: Assembly, stream) -
         line.end()
 
 
-def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
+def run(procedure, trials: int, *, vary: Iterable = (), seed: int = 0, out,
         workers: int | None = None, scheduler: str | None = None, client=None,
         noise: bool = True, identify_only: bool = False, quick: bool = False,
-        progress: bool = True, report: bool = True):
+        progress: bool = True, report: bool = True, machine: str | None = None,
+        errors=None):
     """Run ``trials`` trials of ``procedure`` (those not already in ``out``) and assemble them.
 
     Parameters
     ----------
-    procedure : str
-        A key of `machinesim.campaign.PROCEDURES` (``"tool_rotation_arm"``, ...).
+    procedure : str, or a procedure class or object
+        A key of `machinesim.campaign.PROCEDURES` (``"tool_rotation_arm"``, ...), or a
+        procedure of your own (docs/procedures/your_own.md, `machinesim.campaign.own`): a
+        ``"package.module:ClassName"`` reference, which each worker imports; or the class
+        or an instance, which Dask pickles to its workers (a trial runs the class called
+        with no arguments, or a copy of the instance).
     trials : int
         N.
     vary : iterable of ``"PARAM=DIST"`` or (name, DIST) pairs; or a dict name -> DIST
@@ -477,6 +482,11 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
     report : bool
         Write summary.json, summary.md and the plots beside campaign.nc; False: campaign.nc
         alone, and an earlier report in ``out`` (of the trials then) is removed.
+    machine : str
+        Your own procedure's machine (``"grooving_4axis"``); not for a shipped one.
+    errors : ErrorModel, dict (the TOML layout) or TOML path, optional
+        Your own procedure's errors, as `machinesim.Lab` takes them: the model each trial's
+        ``vary`` is set on (default: none); not for a shipped one, whose are its paper's.
 
     Returns
     -------
@@ -486,7 +496,7 @@ def run(procedure: str, trials: int, *, vary: Iterable = (), seed: int = 0, out,
     _refuse_in_a_starting_worker()
     with _each_warning_once():
         return _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
-                    identify_only, quick, progress, report)
+                    identify_only, quick, progress, report, machine, errors)
 
 
 #: What a script that runs a campaign needs, said where a worker's start met its call.
@@ -511,7 +521,7 @@ def _refuse_in_a_starting_worker() -> None:
 
 
 def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
-         identify_only, quick, progress, report):
+         identify_only, quick, progress, report, machine, errors):
     """`run`, its warnings shown by `_each_warning_once`."""
     given = sum(x is not None for x in (scheduler, client)) + (workers is not None)
     if given > 1:
@@ -534,8 +544,13 @@ def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
     for flag, value in (("progress", progress), ("report", report)):
         check_flag(value, flag)
     spec = CampaignSpec(procedure, trials, _vary(vary), seed=seed, noise=noise,
-                        identify_only=identify_only, quick=quick)
+                        identify_only=identify_only, quick=quick, machine_name=machine,
+                        errors=errors)
     check_before_trials(spec)  # the procedure's own checks: refused now, not in every trial
+    if spec.given is not None and not (workers == 0 and scheduler is None and client is None):
+        from machinesim.campaign.own import check_picklable
+
+        check_picklable(spec.given, spec.procedure)  # Dask's to send: refused before any file
     if scheduler is not None:  # before the folder is made: nothing written for a wrong address
         check_scheduler(scheduler)
     refuse_foreign(out)  # before the lock's file is made in it (checked again under the lock)

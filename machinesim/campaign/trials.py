@@ -47,8 +47,8 @@ from machinesim.streams import stream
 from machinesim.units import M_PER_MM, M_PER_UM
 
 __all__ = ["MAX_TRIALS", "PROCEDURES", "CampaignSpec", "IdentificationOnly", "ProcedureEntry",
-           "check_flag", "kept_warnings", "parameter_unit", "run_trial", "trial_seed",
-           "trials_refused"]
+           "check_flag", "kept_warnings", "parameter_unit", "run_trial", "spec_parameter_unit",
+           "trial_seed", "trials_refused"]
 
 
 #: Most trials a campaign takes (docs/campaigns.md): a trial is seconds to minutes of CPU and
@@ -210,6 +210,18 @@ PROCEDURES = {
 }
 
 
+def spec_parameter_unit(spec: Mapping, name: str) -> str:
+    """`parameter_unit` of a campaign's spec (campaign.json's, `CampaignSpec.describe`): a
+    user's procedure's campaign holds its machine and error model (``errors``, SI) there."""
+    if "machine" not in spec:
+        return parameter_unit(spec["procedure"], name)
+    if name in LAB_PARAMETERS:
+        return {"length": "m", "angle": "rad"}[LAB_PARAMETERS[name]]
+    from machinesim.errors import ErrorModel
+
+    return ErrorModel.from_dict(spec["errors"], source="campaign.json").parameter_unit(name)
+
+
 def parameter_unit(procedure: str, name: str) -> str:
     """The SI unit of parameter ``name`` in a campaign of ``procedure``: a lab parameter's
     (`LAB_PARAMETERS`, whose kinds are all lengths: m) or the error model's
@@ -240,8 +252,9 @@ class IdentificationOnly:
     def __init__(self, procedure) -> None:
         self.procedure = procedure
         self.name = f"{procedure.name}/identification"
-        self.paper = procedure.paper
-        self.lab_uses = {"measure": tuple(procedure.lab_uses["measure"]), "evaluate": ()}
+        self.paper = getattr(procedure, "paper", "")
+        self.lab_uses = {"measure": tuple(procedure.lab_uses.get("measure", ())),
+                         "evaluate": ()}
 
     def measure(self, lab):
         return self.procedure.measure(lab)
@@ -288,8 +301,11 @@ class CampaignSpec:
 
     Parameters
     ----------
-    procedure : str
-        A key of `PROCEDURES`.
+    procedure : str, or a procedure class or object
+        A key of `PROCEDURES`; or a user's own procedure (docs/procedures/your_own.md,
+        `machinesim.campaign.own`): a ``"package.module:ClassName"`` reference, the class or
+        an instance. Kept as the key or the reference (a class's or object's
+        ``module:qualname``); the class or object given is kept as `given`.
     trials : int
         N, the number of trials (1 .. `MAX_TRIALS`).
     vary : tuple of (str, Distribution)
@@ -303,21 +319,31 @@ class CampaignSpec:
     quick : bool
         The crown's smaller windows; refused for a procedure it changes nothing in (every
         one but ``workpiece_setting``), and with ``identify_only`` (no crown is read).
+    machine_name : str, optional
+        A user's procedure's machine (`machinesim.load_machine`'s name); refused for a
+        shipped one, which has its own.
+    errors : optional
+        A user's procedure's errors, the model the trials' ``vary`` is set on: what `Lab`
+        takes (an `ErrorModel`, a dict in the TOML layout, a TOML path; None: no errors),
+        kept as an `ErrorModel`; refused for a shipped procedure, whose defaults are its
+        paper's.
+    given : optional
+        The user's procedure class or object, run in place of importing the reference.
     """
 
-    procedure: str
+    procedure: Any
     trials: int
     vary: tuple[tuple[str, Distribution], ...] = ()
     seed: int = 0
     noise: bool = True
     identify_only: bool = False
     quick: bool = False
+    machine_name: str | None = None
+    errors: Any = None
+    given: Any = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        # a list or dict is no key: 'in' raised "TypeError: unhashable type: 'list'"
-        if not isinstance(self.procedure, str) or self.procedure not in PROCEDURES:
-            raise InputError(f"procedure {brief(repr(self.procedure))}; expected one of "
-                             f"{', '.join(PROCEDURES)}", key="procedure")
+        self._procedure()
         if isinstance(self.trials, bool) or not isinstance(self.trials, int | np.integer) \
                 or not 1 <= self.trials <= MAX_TRIALS:
             raise InputError(trials_refused(self.trials), key="--trials")
@@ -381,8 +407,46 @@ class CampaignSpec:
                                  key="--vary")
         refuse_beyond_model(vary, base)  # before any trial fails on it
 
+    def _procedure(self) -> None:
+        """Check `procedure` (and for a user's own, `machine_name` and `errors`), keeping
+        it as a key or a reference."""
+        from machinesim.campaign import own
+
+        procedure = self.procedure
+        ours = isinstance(procedure, str) and procedure in PROCEDURES
+        if ours:
+            for key in ("machine_name", "errors"):
+                if getattr(self, key) is not None:
+                    raise InputError(
+                        f"{key.removesuffix('_name')}={brief(repr(getattr(self, key)))} is for "
+                        f"a procedure of your own; {procedure} runs on "
+                        f"{PROCEDURES[procedure].machine} with its paper's errors (vary them "
+                        "with --vary)", key=key.removesuffix("_name"))
+            return
+        reference, given, errors = own.accepted(procedure, self.given, self.machine_name,
+                                                self.errors, shipped=PROCEDURES)
+        object.__setattr__(self, "procedure", reference)
+        object.__setattr__(self, "given", given)
+        object.__setattr__(self, "errors", errors)
+        self.build()  # a procedure, checked: refused now rather than in every trial
+
+    @property
+    def own(self) -> bool:
+        """Whether this is a user's own procedure (not one of `PROCEDURES`)."""
+        return self.machine_name is not None
+
+    def _own_build(self, options):
+        from machinesim.campaign import own
+
+        given = self.given if self.given is not None else own.resolve(self.procedure)
+        return own.fresh(given, self.procedure)
+
     @property
     def entry(self) -> ProcedureEntry:
+        if self.own:
+            errors = self.errors
+            return ProcedureEntry(self.machine_name, self._own_build,
+                                  base=lambda: errors, about=f"your own: {self.procedure}")
         return PROCEDURES[self.procedure]
 
     @property
@@ -419,9 +483,13 @@ class CampaignSpec:
 
     def describe(self) -> dict:
         """The spec as plain values (campaign.json; the resume check compares it)."""
-        return {"procedure": self.procedure, "seed": self.seed, "noise": self.noise,
-                "identify_only": self.identify_only, "quick": self.quick,
-                "vary": {n: d.text for n, d in self.vary}}
+        described = {"procedure": self.procedure, "seed": self.seed, "noise": self.noise,
+                     "identify_only": self.identify_only, "quick": self.quick,
+                     "vary": {n: d.text for n, d in self.vary}}
+        if self.own:  # what a user's procedure's campaign is besides (a shipped one's: fixed)
+            described.update(name=self.entry.build({}).name, machine=self.machine_name,
+                             errors=self.errors.to_dict())
+        return described
 
 
 #: Why a procedure that does not declare a use (`machinesim.experiment.LAB_USES`) never
@@ -545,6 +613,8 @@ def run_trial(spec: CampaignSpec, i: int) -> dict:
     record = {"trial": int(i), "drawn": drawn, "injected": {}, "identified": {},
               "figures": {}, "notes": [], "elapsed_s": math.nan, "error": None,
               "warnings": []}
+    if spec.own:  # the reference, as campaign.json has it (a shipped key: campaign.json's alone)
+        record["procedure"] = spec.procedure
     with kept_warnings(record["warnings"]):
         _run(spec, i, drawn, record)
     record["elapsed_s"] = time.perf_counter() - began
@@ -579,6 +649,10 @@ def _run(spec: CampaignSpec, i: int, drawn: dict, record: dict) -> None:
     """Run trial ``i`` (`run_trial`), filling ``record``."""
     from machinesim.lab import Lab
 
+    # outside the try: a user's procedure this process cannot import or make (a worker
+    # without its module) is no result of this trial's draws, and ends the campaign with
+    # the trials kept, rather than failing every trial for good
+    procedure = spec.build()
     try:  # a landing out of the error model's range fails its trial, not the campaign
         errors, lab_parameters = _set_up(spec, i, drawn)
         model = spec.entry.base().with_parameters(errors)
@@ -587,7 +661,7 @@ def _run(spec: CampaignSpec, i: int, drawn: dict, record: dict) -> None:
         lab = Lab(spec.machine, model, noise=spec.noise, seed=trial_seed(spec.seed, i))
         sigmas = {kind: lab_parameters[f"{kind}.sigma"] for kind in INSTRUMENTS
                   if f"{kind}.sigma" in lab_parameters}
-        result = run(spec.build(), _LabWithInstruments(lab, sigmas) if sigmas else lab)
+        result = run(procedure, _LabWithInstruments(lab, sigmas) if sigmas else lab)
     except MachineSimError as error:
         record["error"] = f"{type(error).__name__}: {error}"
     except MemoryError:

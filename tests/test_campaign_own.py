@@ -1,0 +1,176 @@
+"""A campaign of a user's own procedure (docs/procedures/your_own.md's example, the tool
+offset from an R-test checked on a groove): given as a ``module:Class`` reference, the class
+or an instance, in this process and on a local Dask worker, each trial gives what
+`machinesim.experiment.run` gives on a lab of the trial's errors and seed; a folder begun
+with one procedure is not resumed with another."""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+
+import numpy as np
+import pytest
+from fenced import ROOT
+
+import machinesim
+from machinesim.campaign import CampaignSpec, run
+from machinesim.campaign.trials import trial_seed
+from machinesim.errors.model import as_error_model
+from machinesim.exceptions import InputError
+from machinesim.experiment import run as run_experiment
+
+MACHINE = "grooving_4axis"
+ERRORS = {"tool": {"offset_um": [4.0, -3.0, 2.0]}}  # the page's
+VARY = ["tool.y=uniform:-5um,5um"]
+SEED = 3
+#: The module the page's example class is saved as (`example`).
+MODULE = "own_procedure_example"
+
+
+@pytest.fixture(scope="module")
+def example(tmp_path_factory):
+    """The page's first block up to its run, saved as a module on sys.path (this process's,
+    and so the Dask workers' it starts), with a second procedure of another name."""
+    page = (ROOT / "docs" / "procedures" / "your_own.md").read_text(encoding="utf-8")
+    block = re.search(r"```python\n(.*?)```", page, re.S)[1]
+    code = block[:block.index("errors = {")]
+    folder = tmp_path_factory.mktemp("own")
+    (folder / f"{MODULE}.py").write_text(
+        code + "\n\nclass Other(ToolOffsetRTest):\n    name = \"other\"\n", encoding="utf-8")
+    sys.path.insert(0, str(folder))
+    try:
+        module = __import__(MODULE)
+        yield module
+    finally:
+        sys.path.remove(str(folder))
+        sys.modules.pop(MODULE, None)
+
+
+def _options(**more):
+    return dict(machine=MACHINE, errors=ERRORS, vary=VARY, seed=SEED, progress=False,
+                report=False, **more)
+
+
+def _as_run_gives(dataset, procedure_class) -> None:
+    """Each trial of ``dataset`` as `experiment.run` gives it on the trial's lab: the page's
+    errors with the drawn tool.y, seeded with the trial's seed."""
+    for i in dataset.trial.values:
+        drawn = float(dataset.drawn.sel(trial=i, varied="tool.y"))
+        model = as_error_model(ERRORS).with_parameters({"tool.y": drawn})
+        result = run_experiment(procedure_class(),
+                                machinesim.Lab(MACHINE, model, seed=trial_seed(SEED, i)))
+        for name in ("tool.x", "tool.y", "tool.z"):
+            value, std = result.identified[name]
+            assert dataset.identified.sel(trial=i, parameter=name) == value, (i, name)
+            assert dataset.identified_std.sel(trial=i, parameter=name) == std, (i, name)
+            assert dataset.injected.sel(trial=i, parameter=name) == result.injected[name]
+        for figure in result.figures:
+            assert dataset.before.sel(trial=i, figure=figure.name) == figure.before
+            assert dataset.after.sel(trial=i, figure=figure.name) == figure.after
+        # the page's hand values: the groove shifted by the tool's Y offset, compensated
+        assert abs(result.figure("groove_y_error").before - drawn * 1e6) < 0.05
+        assert abs(result.figure("groove_y_error").after) < 0.05
+
+
+def test_the_pages_procedure_as_a_campaign_gives_what_experiment_run_gives(example,
+                                                                            tmp_path):
+    here = run(f"{MODULE}:ToolOffsetRTest", 3, out=tmp_path / "here", workers=0,
+               **_options())
+    assert not here.failed.values.any()
+    assert len(set(here.drawn.values.ravel())) == 3  # three draws, not one three times
+    _as_run_gives(here, example.ToolOffsetRTest)
+    assert here.attrs["procedure"] == f"{MODULE}:ToolOffsetRTest"
+    assert here.attrs["procedure_name"] == "tool_offset_rtest"
+    assert here.attrs["machine"] == MACHINE
+    assert json.loads(here.attrs["base_errors"])["tool"]["offset_m"] == [4e-6, -3e-6, 2e-6]
+    assert list(here.parameter_unit.values) == ["m", "m", "m"]
+    stored = json.loads((tmp_path / "here" / "campaign.json").read_text())
+    assert (stored["procedure"], stored["name"], stored["machine"]) == (
+        f"{MODULE}:ToolOffsetRTest", "tool_offset_rtest", MACHINE)
+    trial = json.loads((tmp_path / "here" / "trials" / "trial_000002.json").read_text())
+    assert trial["procedure"] == f"{MODULE}:ToolOffsetRTest"
+    # the class and an instance are the same campaign, trial by trial
+    for given in (example.ToolOffsetRTest, example.ToolOffsetRTest()):
+        again = run(given, 3, out=tmp_path / type(given).__name__, workers=0, **_options())
+        for name in ("identified", "before", "after"):
+            assert np.array_equal(again[name].values, here[name].values), name
+
+
+def test_the_pages_procedure_on_a_dask_worker_by_its_reference(example, tmp_path):
+    pytest.importorskip("distributed")
+    there = run(f"{MODULE}:ToolOffsetRTest", 2, out=tmp_path / "there", workers=1,
+                **_options())
+    assert not there.failed.values.any(), there.attrs["errors"]
+    _as_run_gives(there, example.ToolOffsetRTest)
+
+
+def test_a_resume_with_another_procedure_is_refused(example, tmp_path):
+    out = tmp_path / "out"
+    run(f"{MODULE}:ToolOffsetRTest", 1, out=out, workers=0, **_options())
+    with pytest.raises(InputError, match=r"holds another campaign \(.*procedure: "
+                       rf"'{MODULE}:ToolOffsetRTest' there, '{MODULE}:Other' now"):
+        run(example.Other, 2, out=out, workers=0, **_options())
+    with pytest.raises(InputError, match=r"holds another campaign \(errors: "):
+        run(f"{MODULE}:ToolOffsetRTest", 2, out=out, workers=0,
+            **{**_options(), "errors": {"tool": {"offset_um": [4.0, -3.0, 3.0]}}})
+    with pytest.raises(InputError, match=r"holds another campaign \(.*procedure: "
+                       r"'own_procedure_example:ToolOffsetRTest' there, 'tool_rotation_arm'"):
+        run("tool_rotation_arm", 2, out=out, workers=0, progress=False, report=False)
+    # the same procedure resumes: trial 0 read, trial 1 run
+    assert run(example.ToolOffsetRTest(), 2, out=out, workers=0,
+               **_options()).sizes["trial"] == 2
+
+
+def test_what_a_campaign_of_your_own_procedure_refuses(example, tmp_path):
+    with pytest.raises(InputError, match=r"key 'procedure': procedure 'no_such_module:X': "
+                       r"cannot import 'no_such_module' .*expected an importable "
+                       r"'package\.module:ClassName'"):
+        CampaignSpec("no_such_module:X", 1, machine_name=MACHINE)
+    with pytest.raises(InputError, match=rf"{MODULE} has no 'ToolOffsetRtest' \(did you "
+                       r"mean ToolOffsetRTest\?\)"):
+        CampaignSpec(f"{MODULE}:ToolOffsetRtest", 1, machine_name=MACHINE)
+    with pytest.raises(InputError, match=r"key 'machine': machine=None; expected the name "
+                       r"of the machine"):
+        CampaignSpec(example.ToolOffsetRTest, 1)
+    with pytest.raises(InputError, match=r"key 'machine': machine='grooving_4axis' is for a "
+                       r"procedure of your own; tool_rotation_arm runs on planer_4axis"):
+        CampaignSpec("tool_rotation_arm", 1, machine_name=MACHINE)
+
+    class Unsendable(example.ToolOffsetRTest):  # copied for each trial, never pickled
+        def __deepcopy__(self, memo):
+            return Unsendable()
+
+        def __reduce__(self):
+            raise TypeError("holds an open device")
+
+    with pytest.raises(InputError, match=r"cannot be pickled for the Dask workers "
+                       r"\(TypeError: holds an open device\); expected an importable "
+                       r"'package\.module:ClassName' reference .* or workers=0"):
+        run(Unsendable(), 1, out=tmp_path / "dask", workers=1, **_options())
+    assert not (tmp_path / "dask").exists()
+    lacking = type("Lacking", (), {"name": "x", "lab_uses": {}, "measure": lambda s, lab: 0})
+    with pytest.raises(InputError, match=r"has no identify, compensate, evaluate"):
+        CampaignSpec(lacking, 1, machine_name=MACHINE)
+
+
+def test_the_command_runs_your_own_procedure_from_the_folder_it_is_run_in(example, tmp_path,
+                                                                          monkeypatch):
+    """``machinesim campaign package.module:Class --machine NAME --errors FILE``: the module
+    found in the current folder, which an installed command's sys.path does not hold."""
+    from machinesim.campaign.cli import main
+
+    source = (sys.modules[MODULE].__file__)
+    (tmp_path / "here_procedure.py").write_text(open(source, encoding="utf-8").read(),
+                                                encoding="utf-8")
+    (tmp_path / "errors.toml").write_text("[tool]\noffset_um = [4.0, -3.0, 2.0]\n",
+                                          encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "path", [p for p in sys.path if p not in ("", str(tmp_path))])
+    assert main(["here_procedure:ToolOffsetRTest", "--machine", MACHINE, "--errors",
+                 "errors.toml", "--trials", "1", "--seed", str(SEED), "--vary", VARY[0],
+                 "--workers", "0", "--out", "out", "--quiet"]) == 0
+    stored = json.loads((tmp_path / "out" / "campaign.json").read_text())
+    assert stored["procedure"] == "here_procedure:ToolOffsetRTest"
+    assert stored["errors"]["tool"]["offset_m"] == [4e-6, -3e-6, 2e-6]
