@@ -6,10 +6,11 @@ as it is read back, its version among it."""
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, brief
 
 #: Suffixes that name a unit (or say that a number has none).
 UNIT_SUFFIXES = ("_m", "_mm", "_um", "_nm", "_rad", "_mrad", "_urad", "_deg", "_arcsec",
@@ -43,6 +44,18 @@ def check_units(data, path: str = "", named: bool = False) -> None:
 
 def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _is_finite(value) -> bool:
+    """Whether the number ``value`` is finite as a float64: an int beyond the largest float
+    is not (math.isfinite raised OverflowError on it: a traceback out of read_summary)."""
+    if isinstance(value, int):
+        return abs(value) <= _MOST_INT
+    return math.isfinite(value)
+
+
+#: The largest int a float64 holds.
+_MOST_INT = int(sys.float_info.max)
 
 
 def _has_number(items) -> bool:
@@ -85,9 +98,9 @@ def check_summary(data: Mapping) -> None:
     def number(value, where: str, key: str, *, null: bool = False, least=None) -> None:
         if value is None and null:
             return
-        if not _is_number(value) or not math.isfinite(value):
+        if not _is_number(value) or not _is_finite(value):
             refuse(f"{where} must be a finite number{' or null' if null else ''}, got "
-                   f"{value!r}", key)
+                   f"{brief(repr(value))}", key)
         if least is not None and value < least:
             refuse(f"{where} must be >= {least}, got {value!r}", key)
 
@@ -104,7 +117,8 @@ def check_summary(data: Mapping) -> None:
         if key not in data or not isinstance(data[key], kind) or (
                 kind is int and isinstance(data[key], bool)):
             refuse(f"expected {key!r} as {kind.__name__}, got {data.get(key)!r}", key)
-    number(data["seed"], "seed", "seed", least=0)
+    if data["seed"] < 0:  # an int (above) of any size: a seed is no float (Lab's seed=2**1100)
+        refuse(f"seed must be >= 0, got {brief(repr(data['seed']))}", "seed")
     spawn_key = data.get("spawn_key", [])
     if not isinstance(spawn_key, list) or not all(
             isinstance(k, int) and not isinstance(k, bool) and k >= 0 for k in spawn_key):
@@ -229,12 +243,11 @@ def _check_budget(rows, units: Mapping[str, str], afters: Mapping[str, float | N
             value = row[key]
             if key == "share" and value is None and row["after_all"] == 0.0:
                 continue  # a share of a figure of 0: undefined, null (docs/budget.md)
-            if (not isinstance(value, (int, float)) or isinstance(value, bool)
-                    or not math.isfinite(value)):
+            if not _is_number(value) or not _is_finite(value):
                 null = (" (null only where after_all is 0: a share of nothing)"
                         if key == "share" and value is None else "")
                 raise InputError(f"summary.json: budget[{i}].{key} must be a finite number, "
-                                 f"got {value!r}{null}", key="budget")
+                                 f"got {brief(repr(value))}{null}", key="budget")
         after = afters[row["figure"]]
         if after is None or row["after_all"] != after:
             held = "none (not measured)" if after is None else repr(after)

@@ -699,3 +699,37 @@ def test_a_budget_whose_after_is_not_the_results_is_refused_naming_both(tmp_path
         check_summary(unmeasured)
     ReportFolder(tmp_path / "right").add_budget(result, Budget.from_dict([row]))
     assert json.loads((tmp_path / "right" / "summary.json").read_text())["budget"] == [row]
+
+
+def test_a_summary_number_beyond_a_float_is_refused_and_a_seed_of_any_size_is_written(
+        tmp_path):
+    # math.isfinite of an int beyond the largest float raised OverflowError: read_summary of
+    # a summary.json edited to an after of 1 and 400 zeros ended in a traceback, and so did
+    # write_result of a Lab seeded with 2**1100 (a seed numpy takes: an int of any size)
+    from toy_procedure import WorkpieceX
+
+    from machinesim import Lab
+    from machinesim.experiment import run
+    from machinesim.report import read_summary
+
+    seed = 2**1100
+    out = tmp_path / "out"
+    ReportFolder(out).write_result(run(WorkpieceX(0.5, ()), Lab("robonano_a0ib", noise=False,
+                                                                seed=seed)))
+    summary = read_summary(out)
+    assert summary["seed"] == seed and summary["figures"][0]["after"] == 0.5
+    huge = 10**400
+    for change, said in (({"figures": [{**summary["figures"][0], "before": huge}]},
+                          r"figures\[0\].before must be a finite number or null, got "
+                          r"1000000000000000000000000000000000000000\.\.\.000000000000 "
+                          r"\(401 characters\)"),
+                         ({"injected": {"tool.x": huge}}, r"injected\['tool.x'\] must be a "
+                                                          "finite number"),
+                         ({"budget": [{"source": "s", "figure": "x", "unit": "um",
+                                       "after_all": 0.5, "after_without": 0.4,
+                                       "share": huge}]},
+                          r"budget\[0\].share must be a finite number")):
+        path = tmp_path / "edited.json"
+        path.write_text(json.dumps({**summary, **change}))
+        with pytest.raises(InputError, match=said):
+            read_summary(path)
