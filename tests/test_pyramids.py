@@ -92,6 +92,28 @@ def test_a_pyramid_plans_numbers_are_numbers_of_their_unit():
     assert plan.offsets().size == 25 and PyramidPlan().offsets().size == 25
 
 
+def test_pyramid_programs_arguments_are_refused_naming_them_and_a_machine_by_name_taken():
+    # a centre of 3 numbers was Python's 'too many values to unpack', 'ab' and 3 its
+    # ValueError and TypeError, a plan that is no PyramidPlan and a machine's name an
+    # AttributeError, a lathe (XZC) 'tuple.index(x): x not in tuple'
+    plan = PyramidPlan(window=0.1e-3)
+    m = machinesim.load_machine("grooving_4axis")
+    for centre in ((0.0, 0.0, 0.0), "ab", 3, (math.nan, 0.0)):
+        with pytest.raises(MachineSimError, match="key 'centre': Expected centre as 2"):
+            pyramid_program(m, centre, plan)
+    with pytest.raises(MachineSimError, match="key 'plan': Expected plan as a PyramidPlan, "
+                                              "got int"):
+        pyramid_program(m, (0.0, 0.0), 3)
+    with pytest.raises(MachineSimError, match=r"key 'machine': Expected a machine with X, Y, "
+                                              r"Z and C axes, got sts_lathe \(XZC\), without Y"):
+        pyramid_program("sts_lathe", (0.0, 0.0), plan)
+    # by name, the same program as of the loaded machine (the same moves, bit for bit): 7
+    # grooves a set (0.05 + 0.1 mm over 50 um: 3 either side), 4 moves each and 2 for C
+    by_name, loaded = (pyramid_program(machine, (1e-3, -2e-3), plan)
+                       for machine in ("grooving_4axis", m))
+    assert list(by_name.moves) == list(loaded.moves) and len(loaded.moves) == 2 * (2 + 4 * 7)
+
+
 def test_a_registered_instrument_finds_the_window_and_its_grooves():
     # A white-light interferometer whose stage sits 30 / -20 um off and turned by 1.5 mrad
     # sees the corner window (190 mm out) ~0.3 mm away from its design and its grooves off

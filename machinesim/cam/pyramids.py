@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim.exceptions import InputError
-from machinesim.metrology._arrays import as_number
+from machinesim.metrology._arrays import as_floats, as_number, shown
 from machinesim.nc import ProgramBuilder
 from machinesim.nc.program import Program
 
@@ -86,6 +86,11 @@ PAPER_PLAN = PyramidPlan()
 def workpiece_axes(machine, x: float, y: float, c: float, z: float = 0.0) -> np.ndarray:
     """X and Y that put the nominal tool tip over workpiece point (x, y) with C at ``c``."""
     n = len(machine.axes)
+    missing = [a for a in "XYZC" if a not in machine.axes]
+    if missing:  # sts_lathe (XZC): 'tuple.index(x): x not in tuple'
+        raise InputError(f"Expected a machine with X, Y, Z and C axes, got {machine.name} "
+                         f"({''.join(machine.axes)}), without {', '.join(missing)}",
+                         key="machine")
     ix, iy, iz, ic = (machine.axes.index(a) for a in "XYZC")
     q = np.zeros(n)
     q[iz], q[ic] = z, c
@@ -101,12 +106,25 @@ def workpiece_axes(machine, x: float, y: float, c: float, z: float = 0.0) -> np.
 
 def pyramid_program(machine, centre, plan: PyramidPlan = PAPER_PLAN,
                     number: int = 3003) -> Program:
-    """The two groove sets over the window centred at workpiece point ``centre`` (m).
+    """The two groove sets over the window centred at workpiece point ``centre`` (m, 2
+    numbers), on ``machine`` (a `Machine` with X, Y, Z and C axes, or its name).
 
     Each groove: a rapid over its start at ``plan.clearance``, a feed down to ``-depth``
     and along X across the window and its margins, a rapid up; C turns at the clearance.
     """
-    cx, cy = (float(v) for v in centre)
+    # a centre of 3 numbers, text or one number was Python's ValueError or TypeError, and a
+    # plan that is no PyramidPlan an AttributeError ('int' object has no attribute 'window')
+    from machinesim.metrology.instruments import as_machine
+
+    machine = as_machine(machine)  # a name was 'str' object has no attribute 'axes'
+    if not isinstance(plan, PyramidPlan):
+        raise InputError(f"Expected plan as a PyramidPlan, got {type(plan).__name__}",
+                         key="plan")
+    point = as_floats(centre, "centre", "2 numbers (m): the window's centre x, y")
+    if point.shape != (2,) or not np.isfinite(point).all():
+        raise InputError(f"Expected centre as 2 finite numbers (m), the window's centre x, y "
+                         f"on the workpiece, got {shown(centre)}", key="centre")
+    cx, cy = (float(v) for v in point)
     half = 0.5 * plan.window + plan.margin
     b = ProgramBuilder(number)
     z_cut = -plan.depth
