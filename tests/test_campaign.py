@@ -593,6 +593,35 @@ def test_a_trial_file_that_is_json_but_no_trial_record_is_refused_naming_the_key
     assert "trial_000000.json" in str(info.value) and f"key '{key}'" in str(info.value)
 
 
+@pytest.mark.parametrize(("edit", "said"), [
+    (lambda drawn: drawn.pop("tool.y"), "drawn has no value of 'tool.y'"),
+    (lambda drawn: drawn.update({"tool.y": None}), "drawn has no value of 'tool.y'"),
+    (lambda drawn: drawn.update({"tool.z": 1e-6}),
+     "drawn has values of 'tool.z', which the campaign does not vary"),
+])
+def test_a_trial_file_whose_drawn_is_not_of_the_varied_parameters_is_refused(
+        campaign, tmp_path, edit, said):
+    # a trial file edited to lack a varied parameter's value (or to hold null) gave that
+    # trial a NaN in campaign.nc's drawn, silently, its other numbers kept as a good trial's;
+    # one naming a parameter the campaign does not vary was taken, the name dropped
+    source, vary, ds = campaign
+    (tmp_path / "trials").mkdir()
+    for name in ("campaign.json", "trials/trial_000000.json", "trials/trial_000002.json"):
+        (tmp_path / name).write_bytes((source / name).read_bytes())
+    record = json.loads((source / "trials/trial_000001.json").read_text())
+    (tmp_path / "trials/trial_000001.json").write_text(json.dumps(record))
+    again = run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
+                progress=False, report=False, **ARM)  # as written: read, the same numbers
+    assert np.array_equal(again.drawn.values, ds.drawn.values)
+    edit(record["drawn"])
+    (tmp_path / "trials/trial_000001.json").write_text(json.dumps(record))
+    with pytest.raises(InputError, match=said) as info:
+        run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
+            progress=False, report=False, **ARM)
+    assert info.value.key == "drawn" and info.value.source.endswith("trial_000001.json")
+    assert "(tool.y, microscope.sigma)" in str(info.value)
+
+
 def test_a_campaign_json_that_is_not_an_object_is_refused(tmp_path):
     (tmp_path / "campaign.json").write_text("[]")
     with pytest.raises(InputError) as info:

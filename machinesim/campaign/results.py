@@ -141,7 +141,7 @@ class CampaignFolder:
                              "run again to compute the trial anew",
                              source=str(self.trial_file(i)), key="trial")
         _check_version(raw, self.trial_file(i))
-        _check_record(raw, self.trial_file(i))
+        _check_record(raw, self.trial_file(i), tuple(self.spec["vary"]))
         self._check_campaign(raw.get("campaign"), self.trial_file(i))
         return {**_nan(raw), "error": raw.get("error")}
 
@@ -469,9 +469,11 @@ _FIGURE_NAME = re.compile(r"[A-Za-z0-9_]+")
 _MOST_INT = int(sys.float_info.max)
 
 
-def _check_record(raw: dict, path: Path) -> None:
+def _check_record(raw: dict, path: Path, varied: tuple[str, ...]) -> None:
     """Refuse a trial file that is JSON but not a trial's record (`trials.run_trial`), naming
-    the key: ``drawn`` and ``injected`` name -> number, ``identified`` name -> [value, std],
+    the key: ``drawn`` each of the campaign's ``varied`` parameters -> a number (no other,
+    none null: a trial draws each before it runs, failed or not), ``injected`` name ->
+    number, ``identified`` name -> [value, std],
     ``figures`` name -> [unit (`FIGURE_UNITS`), before, after(, after_std)], ``notes`` (when
     there) a list of texts, ``elapsed_s`` a number, ``error`` null or a message; assembling it would
     otherwise fail on the first key it lacks."""
@@ -517,6 +519,21 @@ def _check_record(raw: dict, path: Path) -> None:
         refuse("elapsed_s", "a number of seconds")
     if not (raw.get("error") is None or isinstance(raw.get("error"), str)):
         refuse("error", "null or the failed trial's message")
+    # drawn: what the trial ran with, each varied parameter's value. A file edited to lack
+    # one (or hold null) gave that trial a NaN in campaign.nc's drawn, silently, and one
+    # naming another parameter was taken, the name dropped
+    drawn = raw["drawn"]
+    if set(drawn) != set(varied) or any(drawn[name] is None for name in varied):
+        lacking = sorted(name for name in varied if drawn.get(name) is None)
+        extra = sorted(set(drawn) - set(varied))
+        said = "; ".join(
+            ([f"no value of {', '.join(map(repr, lacking))}"] if lacking else [])
+            + ([f"values of {', '.join(map(repr, extra))}, which the campaign does not vary"]
+               if extra else []))
+        raise InputError(f"drawn has {brief(said)}; expected a number for each parameter the "
+                         f"campaign varies ({brief(', '.join(varied)) or 'none'}), as "
+                         "machinesim campaign writes it: delete the file and run again to "
+                         "compute the trial anew", source=str(path), key="drawn")
 
 
 def finished_trials(path) -> list[int]:
