@@ -189,14 +189,23 @@ def read_summary(path) -> dict:
     """The summary.json at ``path`` (a file, or a report folder holding one), read and
     checked against the schema (`check_summary`, its version among it): an `InputError`
     naming the file and the key, for a file of another schema version (the version found
-    and the one this machinesim reads), damaged or edited. A file without
+    and the one this machinesim reads), damaged or edited, or a campaign's summary.json;
+    key 'path' for a ``path`` that is no file name (None, a number). A file without
     ``schema_version`` is read as `SCHEMA_VERSION` (written before the field was added)."""
+    from machinesim._io import check_path
     from machinesim._json import read_json
 
-    path = Path(path)
+    # None or a number was 'TypeError: expected str, bytes or os.PathLike object'
+    path = Path(check_path(path, "reading a report summary (summary.json)"))
     if path.is_dir():
         path = path / "summary.json"
     data = read_json(path, "report summary (summary.json)")
+    if isinstance(data, Mapping) and "paper" not in data and "trials_count" in data:
+        # a campaign folder's summary.json was refused as "expected 'paper' as str, got
+        # None", as if a report's were damaged
+        raise InputError("a campaign's summary.json (machinesim campaign, docs/campaigns.md: "
+                         "its trials' statistics), not a scenario report's; expected the "
+                         "summary.json of a report folder (docs/reports.md)", source=str(path))
     try:
         check_summary(data)
     except InputError as error:

@@ -733,3 +733,26 @@ def test_a_summary_number_beyond_a_float_is_refused_and_a_seed_of_any_size_is_wr
         path.write_text(json.dumps({**summary, **change}))
         with pytest.raises(InputError, match=said):
             read_summary(path)
+
+
+def test_read_summary_names_a_path_that_is_none_and_a_campaigns_summary(tmp_path):
+    # read_summary(None) was "TypeError: expected str, bytes or os.PathLike object", and a
+    # campaign folder's summary.json was refused as a damaged report's: "key 'paper':
+    # expected 'paper' as str, got None"
+    from machinesim.report import read_summary
+
+    for path in (None, 3):
+        with pytest.raises(InputError, match="reading a report summary .*expected a file "
+                                             "name") as info:
+            read_summary(path)
+        assert info.value.key == "path"
+    campaign = tmp_path / "campaign"
+    campaign.mkdir()
+    (campaign / "summary.json").write_text(json.dumps(
+        {"schema_version": 1, "procedure": "tool_rotation_arm", "seed": 1,
+         "trials_count": 3, "failed_count": 0, "figures": {}}))
+    for path in (campaign, campaign / "summary.json"):
+        with pytest.raises(InputError, match=r"a campaign's summary.json \(machinesim "
+                                             r"campaign.*not a scenario report's") as info:
+            read_summary(path)
+        assert info.value.source == str(campaign / "summary.json")
