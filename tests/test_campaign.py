@@ -574,6 +574,12 @@ _HUGE = 10**400
       "elapsed_s": 1.0, "error": 3}, "error"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
       "notes": "misfit", "elapsed_s": 1.0, "error": None}, "notes"),
+    # a std is a spread: an edited -1 was taken, flipping that trial's z-score
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {"tool.y": [1e-6, -1e-9]},
+      "figures": {}, "elapsed_s": 1.0, "error": None}, "identified"),
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {},
+      "figures": {"depth_error": ["um", 1.0, 0.5, -0.1]}, "elapsed_s": 1.0, "error": None},
+     "figures"),
     # a unit no figure has went into the Dataset's figure_unit as it stood
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {},
       "figures": {"depth_error": ["furlong", 1.0, 0.5]}, "elapsed_s": 1.0, "error": None},

@@ -462,6 +462,11 @@ def _number(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and abs(value) <= _MOST_INT
 
 
+def _spread(value) -> bool:
+    """A std or spread: null (none stated) or a number >= 0 (`_number`)."""
+    return value is None or value >= 0
+
+
 #: A figure's name in a trial file (`_check_record`): a procedure's, as a file name takes it.
 _FIGURE_NAME = re.compile(r"[A-Za-z0-9_]+")
 
@@ -473,9 +478,9 @@ def _check_record(raw: dict, path: Path, varied: tuple[str, ...]) -> None:
     """Refuse a trial file that is JSON but not a trial's record (`trials.run_trial`), naming
     the key: ``drawn`` each of the campaign's ``varied`` parameters -> a number (no other,
     none null: a trial draws each before it runs, failed or not), ``injected`` name ->
-    number, ``identified`` name -> [value, std],
-    ``figures`` name -> [unit (`FIGURE_UNITS`), before, after(, after_std)], ``notes`` (when
-    there) a list of texts, ``elapsed_s`` a number, ``error`` null or a message; assembling it would
+    number, ``identified`` name -> [value, std >= 0 or null], ``figures`` name -> [unit
+    (`FIGURE_UNITS`), before, after(, after_std >= 0 or null)], ``notes`` (when there) a
+    list of texts, ``elapsed_s`` a number, ``error`` null or a message; assembling it would
     otherwise fail on the first key it lacks."""
     def refuse(key: str, what: str) -> None:
         raise InputError(f"{brief(repr(raw.get(key)))}; expected {what} (a trial record as "
@@ -485,12 +490,15 @@ def _check_record(raw: dict, path: Path, varied: tuple[str, ...]) -> None:
     entry_checks = {
         "drawn": (lambda v: _number(v), "an object of numbers"),
         "injected": (lambda v: _number(v), "an object of numbers"),
+        # a std is a spread, >= 0 (or null): an edited -1 flipped that trial's z-score
         "identified": (lambda v: isinstance(v, list) and len(v) == 2
-                       and all(_number(x) for x in v), "an object of [value, std]"),
+                       and all(_number(x) for x in v) and _spread(v[1]),
+                       "an object of [value, std], the std >= 0 or null"),
         "figures": (lambda v: isinstance(v, list) and len(v) in (3, 4)
-                    and v[0] in FIGURE_UNITS and all(_number(x) for x in v[1:]),
+                    and v[0] in FIGURE_UNITS and all(_number(x) for x in v[1:])
+                    and (len(v) == 3 or _spread(v[3])),
                     "an object of [unit, before, after, after_std], the unit one of "
-                    + " ".join(FIGURE_UNITS)),
+                    + " ".join(FIGURE_UNITS) + ", the after_std >= 0 or null"),
     }
     for key, (good, what) in entry_checks.items():
         entries = raw.get(key)
