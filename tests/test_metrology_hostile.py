@@ -101,6 +101,28 @@ def test_text_in_point_and_centre_arrays_is_refused():
         fit_line([["0", "0"], ["1", "1"]])  # numbers spelled as text are not converted
 
 
+def test_a_bool_among_numbers_is_refused_not_read_as_1_or_0():
+    # numpy makes (True, 0) an int array and [0.5, False] a float one: as_floats took them,
+    # so Registration(offset=(True, 0, 0)) was a 1 m offset and fit_plane of points with a
+    # True read it as 1 m; all-bool arrays were refused already
+    from machinesim.metrology._arrays import as_floats
+    from machinesim.metrology.imperfections import Registration
+
+    for value in ((True, 0), [[0.5, False]], [np.True_, 2.0], [[0.0, 1.0], (2.0, True)]):
+        with pytest.raises(InputError, match="key 'x': Expected x as numbers"):
+            as_floats(value, "x")
+    with pytest.raises(InputError, match="key 'offset'"):
+        Registration(offset=(True, 0, 0))
+    points = np.random.default_rng(1).normal(size=(100, 3)).tolist()  # a long list: 0s
+    points[7][2] = True  # and 1s looked up
+    with pytest.raises(InputError, match="key 'points'"):
+        fit_plane(points)
+    points[7][2] = 1  # the numbers 1 and 0, ints or floats, are numbers
+    assert as_floats(points, "points")[7, 2] == 1.0 and as_floats((1, 0), "x").tolist() == [
+        1.0, 0.0]
+    assert Registration(offset=(1e-6, 0, 0)).offset.tolist() == [1e-6, 0.0, 0.0]
+
+
 def test_roughness_cutoff_must_be_a_number_of_at_least_two_spacings():
     x, y, z = flat_map()
     z = z + np.random.default_rng(1).normal(size=z.shape) * NM
