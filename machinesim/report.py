@@ -18,7 +18,7 @@ from collections.abc import Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-from machinesim._io import write_atomic
+from machinesim._io import write_atomic, write_together
 from machinesim._json import json_text
 from machinesim._staged import StagedFolder, _link_or_copy
 from machinesim.exceptions import FileError, InputError
@@ -322,7 +322,8 @@ class ReportFolder:
     def write_table(self, name: str, columns: Sequence[str], rows: Sequence[Sequence],
                     title: str = "", digits: int = 3, *, significant: bool = False,
                     note: str = "") -> str:
-        """A table as ``name.md`` and ``name.json``; returns the Markdown (for printing).
+        """A table as ``name.md`` and ``name.json``, both or neither (`write_together`);
+        returns the Markdown (for printing).
         Numbers are shown with ``digits`` decimals, or with ``significant`` as ``digits + 1``
         significant digits in scientific notation (SI values from 1e-12 to 1e-3 alike);
         ``note``, a paragraph under the Markdown table."""
@@ -340,8 +341,10 @@ class ReportFolder:
             "| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
         lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
         text = "\n".join(lines) + "\n" + (f"\n{note}\n" if note else "")
-        write_atomic(self._target(f"{name}.md"), text)
-        write_atomic(self._target(f"{name}.json"), data)
+        # together: written one after the other, a full disk (or a Ctrl-C) between them left
+        # the new name.md beside the old name.json, two tables of one name that disagree
+        write_together([(self._target(f"{name}.md"), text),
+                        (self._target(f"{name}.json"), data)])
         return text
 
     def write_part(self, name: str, part) -> Path:

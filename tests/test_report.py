@@ -756,3 +756,31 @@ def test_read_summary_names_a_path_that_is_none_and_a_campaigns_summary(tmp_path
                                              r"campaign.*not a scenario report's") as info:
             read_summary(path)
         assert info.value.source == str(campaign / "summary.json")
+
+
+def test_a_tables_markdown_and_json_are_written_both_or_neither(tmp_path, monkeypatch):
+    # written one after the other, a full disk at name.json left the new name.md beside the
+    # old name.json: one table's two files telling two different tables
+    import errno
+
+    from machinesim import _io
+    from machinesim.exceptions import MachineSimError
+
+    out = ReportFolder(tmp_path / "out")
+    out.write_table("t", ["depth_um"], [[1.0]])
+    before = _snapshot(tmp_path / "out")
+    real = _io._stage
+
+    def full_at_the_json(path, raw):
+        if path.name == "t.json":
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        return real(path, raw)
+
+    monkeypatch.setattr(_io, "_stage", full_at_the_json)
+    with pytest.raises(MachineSimError, match="No space left on device"):
+        out.write_table("t", ["depth_um"], [[2.0]])
+    assert _snapshot(tmp_path / "out") == before and _siblings(tmp_path / "out") == []
+    monkeypatch.setattr(_io, "_stage", real)
+    out.write_table("t", ["depth_um"], [[2.0]])
+    assert json.loads((tmp_path / "out/t.json").read_text())["rows"] == [[2.0]]
+    assert "| 2.000 |" in (tmp_path / "out/t.md").read_text()
