@@ -26,7 +26,8 @@ from dataclasses import dataclass
 from functools import partial
 
 from machinesim._io import check_ending, write_atomic
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, brief
+from machinesim.summary_schema import _is_finite, _is_number
 
 __all__ = ["BUDGET_KEYS", "BUDGET_OPTIONAL_KEYS", "Budget", "BudgetRow", "LabInputs",
            "clipped_shares", "error_budget", "notes_of_rerun", "quadrature_share", "realism_budget"]
@@ -142,12 +143,13 @@ class Budget:
                 if key == "share" and value is None and numbers[0] == 0.0:
                     numbers.append(math.nan)  # a share of a figure of 0: undefined (to_dict)
                     continue
-                if (not isinstance(value, int | float) or isinstance(value, bool)
-                        or not math.isfinite(value)):
+                # an int beyond float64 (10**400) is no finite number: math.isfinite raised
+                # OverflowError on it
+                if not _is_number(value) or not _is_finite(value):
                     null = (" (null only where after_all is 0: a share of nothing)"
                             if key == "share" and value is None else "")
                     raise InputError(f"budget[{i}].{key} must be a finite number, got "
-                                     f"{value!r}{null}", key="budget")
+                                     f"{brief(repr(value))}{null}", key="budget")
                 numbers.append(float(value))
             notes = row.get("notes", [])
             if not isinstance(notes, list) or not all(isinstance(n, str) and n.strip()

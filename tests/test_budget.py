@@ -271,7 +271,13 @@ def test_a_run_that_cannot_be_called_or_rows_that_are_no_numbers_are_refused():
                          ([{**row, "figure": 3}], r"budget\[0\]\.figure must be a non-empty "
                                                   r"string, got 3"),
                          ([{**row, "unit": "furlong"}], r"budget\[0\]\.unit 'furlong'; "
-                                                        r"expected one of m, mm, um")):
+                                                        r"expected one of m, mm, um"),
+                         # an int beyond float64 (JSON takes it): math.isfinite's OverflowError
+                         ([{**row, "after_all": 10**400}], r"budget\[0\]\.after_all must be "
+                                                           r"a finite number, got 1000000000"
+                                                           r"000000000000000000000000000000"
+                                                           r"\.\.\.000000000000 \(401 "
+                                                           r"characters\)")):
         with pytest.raises(InputError, match=message):
             Budget.from_dict(bad)
 
