@@ -128,6 +128,10 @@ def _parameters(values: Mapping, what: str) -> Mapping[str, tuple[float, float]]
         except (TypeError, ValueError, OverflowError):  # 10**400: beyond float64
             raise InputError(f"Expected {what}[{name!r}] as numbers (value, std), got "
                              f"{brief(repr(value))}", key=name) from None
+        if out[str(name)][1] < 0.0:  # a spread: summary.json and a campaign's trial files
+            # refuse a negative one as they are read, after the run that made it had ended
+            raise InputError(f"Expected {what}[{name!r}]'s std >= 0 (or NaN: none stated), "
+                             f"got {brief(repr(value))}", key=name)
     return MappingProxyType(out)
 
 
@@ -139,7 +143,8 @@ class Identified:
     ----------
     parameters : Mapping[str, (float, float)]
         Error parameter name (as `Machine.parameter_names` spells it) -> (value, std), SI
-        (m, rad); std NaN where the procedure gives none. A bare number means std unknown.
+        (m, rad); std >= 0, NaN where the procedure gives none. A bare number means std
+        unknown.
     detail : Any
         The procedure's own result (its paper's quantities), for `compensate` and reports.
     notes : tuple of str

@@ -163,6 +163,20 @@ def test_an_int_beyond_float64_is_no_figure_nor_identified_value():
     assert refused.value.key == "workpiece.x"
 
 
+def test_an_identified_std_is_a_spread_refused_below_zero_when_identified():
+    # Identified took (1e-6, -1e-9): the run ended, then its report's summary.json was
+    # refused ('std must be >= 0') and a campaign wrote a trial file its resume refuses
+    from machinesim.experiment import Identified
+
+    with pytest.raises(InputError, match=r"Expected parameters\['tool.x'\]'s std >= 0 \(or "
+                                         r"NaN: none stated\), got \(1e-06, -1e-09\)") as info:
+        Identified({"tool.x": (1e-6, -1e-9)})
+    assert info.value.key == "tool.x"
+    kept = Identified({"tool.x": (1e-6, 0.0), "tool.y": (2e-6, math.nan), "tool.z": 3e-6})
+    assert kept.parameters["tool.x"] == (1e-6, 0.0) and math.isnan(
+        kept.parameters["tool.y"][1]) and math.isnan(kept.parameters["tool.z"][1])
+
+
 @pytest.mark.parametrize("path", [None, b"run.pkl", 5])
 def test_a_saved_result_named_by_no_file_name_is_refused_as_such(path):
     # save_result refused these (check_path); load_result's check_readable_file gave them
