@@ -241,6 +241,10 @@ class Budget:
         ending is refused).
         """
         check_ending(path, "png", "Budget.plot", "a PNG picture")
+        write_atomic(path, self.png())
+
+    def png(self) -> bytes:
+        """The bar plot of `plot` as PNG bytes (for a caller writing it with other files)."""
         import matplotlib
 
         matplotlib.use("Agg")
@@ -281,7 +285,7 @@ class Budget:
         figure.tight_layout()
         figure.savefig(buffer, format="png")
         plt.close(figure)
-        write_atomic(path, buffer.getvalue())
+        return buffer.getvalue()
 
 
 #: The budget plot's axis, percent either way: a share of 100 % is the whole figure.

@@ -310,13 +310,15 @@ class ReportFolder:
         return text
 
     def write_budget(self, budget, name: str = "budget") -> str:
-        """A `machinesim.budget.Budget` as ``name.md`` (table) and ``name.png`` (bar plot);
-        returns the Markdown."""
+        """A `machinesim.budget.Budget` as ``name.md`` (table) and ``name.png`` (bar plot),
+        both or neither (`write_together`); returns the Markdown."""
         notes = budget.notes_text()
         text = ("### Error budget: share of each source in the 'after' figures\n\n"
                 + budget.table() + (f"\n{notes}" if notes else ""))
-        write_atomic(self._target(f"{name}.md"), text)
-        budget.plot(self._target(f"{name}.png"))
+        # together, as a table's two files (`write_table`): one after the other, a full disk
+        # at the plot left the new table beside the old plot
+        write_together([(self._target(f"{name}.md"), text),
+                        (self._target(f"{name}.png"), budget.png())])
         return text
 
     def write_table(self, name: str, columns: Sequence[str], rows: Sequence[Sequence],

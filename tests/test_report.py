@@ -784,3 +784,36 @@ def test_a_tables_markdown_and_json_are_written_both_or_neither(tmp_path, monkey
     out.write_table("t", ["depth_um"], [[2.0]])
     assert json.loads((tmp_path / "out/t.json").read_text())["rows"] == [[2.0]]
     assert "| 2.000 |" in (tmp_path / "out/t.md").read_text()
+
+
+def test_a_budgets_table_and_plot_are_written_both_or_neither(tmp_path, monkeypatch):
+    # write_budget wrote budget.md, then the plot: a full disk at the plot left the new
+    # table beside the old plot
+    import errno
+
+    from machinesim import _io
+    from machinesim.budget import Budget
+    from machinesim.exceptions import MachineSimError
+
+    row = {"source": "s", "figure": "x", "unit": "um", "after_all": 0.5,
+           "after_without": 0.3, "share": 0.64}
+    out = ReportFolder(tmp_path / "out")
+    out.write_budget(Budget.from_dict([row]))
+    before = _snapshot(tmp_path / "out")
+    assert sorted(before) == ["budget.md", "budget.png"]
+    real = _io._stage
+
+    def full_at_the_plot(path, raw):
+        if path.name == "budget.png":
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        return real(path, raw)
+
+    monkeypatch.setattr(_io, "_stage", full_at_the_plot)
+    other = Budget.from_dict([{**row, "after_without": 0.4, "share": 0.36}])
+    with pytest.raises(MachineSimError, match="No space left on device"):
+        out.write_budget(other)
+    assert _snapshot(tmp_path / "out") == before and _siblings(tmp_path / "out") == []
+    monkeypatch.setattr(_io, "_stage", real)
+    out.write_budget(other)
+    assert "36" in (tmp_path / "out/budget.md").read_text()
+    assert (tmp_path / "out/budget.png").read_bytes() != before["budget.png"]
