@@ -108,7 +108,8 @@ def test_a_bool_among_numbers_is_refused_not_read_as_1_or_0():
     from machinesim.metrology._arrays import as_floats
     from machinesim.metrology.imperfections import Registration
 
-    for value in ((True, 0), [[0.5, False]], [np.True_, 2.0], [[0.0, 1.0], (2.0, True)]):
+    for value in ((True, 0), [[0.5, False]], [np.True_, 2.0], [[0.0, 1.0], (2.0, True)],
+                  [np.array([True, False]), [0.5, 2.0]]):
         with pytest.raises(InputError, match="key 'x': Expected x as numbers"):
             as_floats(value, "x")
     with pytest.raises(InputError, match="key 'offset'"):

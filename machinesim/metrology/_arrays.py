@@ -137,7 +137,8 @@ def _holds_bool(items, array: np.ndarray) -> bool:
 
 def _any_bool(items) -> bool:
     for v in items:
-        if isinstance(v, _BOOLS) or (isinstance(v, (list, tuple)) and _any_bool(v)):
+        if isinstance(v, _BOOLS) or (isinstance(v, (list, tuple)) and _any_bool(v)) or (
+                isinstance(v, np.ndarray) and v.dtype.kind == "b"):
             return True
     return False
 
