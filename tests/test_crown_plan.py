@@ -114,7 +114,10 @@ def test_crown_stock_is_the_blank_with_the_designed_spheres():
     ({"slope": math.pi / 2}, "slope"), ({"oversize": math.inf}, "oversize"),
     ({"height": 5e-6}, "height"), ({"overrun": -1e-3}, "overrun"),
     ({"pitch": True}, "pitch"), ({"pitch": 12.5e-12}, "pitch"),
-    ({"depth_of_cut": 4e-6}, "depth_of_cut")])
+    ({"depth_of_cut": 4e-6}, "depth_of_cut"),
+    # too many passes named by the field that asks for them: these were told as the pitch
+    ({"slope": 1e-9}, "slope"), ({"overrun": 1.0}, "overrun"), ({"apothem": 10.0}, "apothem"),
+    ({"height": 1000.0}, "height"), ({"depth_of_cut": 1e-12}, "depth_of_cut")])
 def test_a_crown_plan_out_of_its_bounds_is_refused_naming_the_field(fields, key):
     # CrownPlan took anything: a pitch or depth of cut of 0 was a ZeroDivisionError in
     # crown_passes, a NaN pitch numpy's ValueError, an infinite oversize an OverflowError; a

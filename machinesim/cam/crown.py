@@ -27,7 +27,7 @@ setting (`CrownPlan`). `crown_blank` is the rough crown without its spheres, for
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -133,10 +133,32 @@ class CrownPlan:
         # passes of the finishing: every face's rows over the cuboid's width, per layer
         passes = 9.0 * ratio * (2.0 * (self.cuboid_half + self.overrun) / self.pitch + 1.0)
         if not passes <= MAX_PASSES:
+            # named by the field furthest from Table 2's plan in the passes' direction: a
+            # slope of 1e-9 rad (a foot 60 km out) or an overrun of 1 m was told as the pitch
+            key = self._furthest()
+            unit = "rad" if key == "slope" else "m"
+            paper = next(f.default for f in fields(CrownPlan) if f.name == key)
             raise InputError(f"Expected at most {MAX_PASSES:.0e} passes (MAX_PASSES), got about "
-                             f"{passes:.3g} from pitch {self.pitch!r} m and depth_of_cut "
-                             f"{self.depth_of_cut!r} m: a value in another unit?",
-                             key="pitch")
+                             f"{passes:.3g}: {round(ratio)} layers of rows {self.pitch!r} m "
+                             f"apart over {2.0 * (self.cuboid_half + self.overrun):.3g} m (2 "
+                             "(apothem + (height - oversize) / tan(slope) + overrun)); "
+                             f"{key} {getattr(self, key)!r} "
+                             f"{unit} (Table 2's plan: {paper:.6g} {unit}) asks for them most: "
+                             "a value in another unit?", key=key)
+
+    def _furthest(self) -> str:
+        """The field whose ratio to Table 2's plan (the fields' defaults) multiplies the
+        passes most, each taken as if alone (the width's terms by their own ratio)."""
+        paper = {f.name: f.default for f in fields(CrownPlan)}
+        standing = (self.height - self.oversize) / (paper["height"] - paper["oversize"])
+        times = {"pitch": paper["pitch"] / self.pitch,
+                 "depth_of_cut": paper["depth_of_cut"] / self.depth_of_cut,
+                 "oversize": self.oversize / paper["oversize"],
+                 "apothem": self.apothem / paper["apothem"],
+                 "overrun": self.overrun / paper["overrun"],
+                 "slope": math.tan(paper["slope"]) / math.tan(self.slope),
+                 "height": standing}
+        return max(times, key=times.__getitem__)
 
     @property
     def rough_top(self) -> float:
