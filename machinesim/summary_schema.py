@@ -211,6 +211,11 @@ def read_summary(path) -> dict:
     except InputError as error:
         raise InputError(error.message.removeprefix("summary.json: "), source=str(path),
                          key=error.key) from None
+    except RecursionError:  # lists in lists 500 deep under a key of its own: JSON takes
+        # them (read_json's bound is the parser's), check_units's recursion did not
+        raise InputError("nested too deeply to be a report summary (a key added by hand?); "
+                         "expected the summary.json of docs/reports.md", source=str(path)) \
+            from None
     return data
 
 

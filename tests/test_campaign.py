@@ -628,6 +628,22 @@ def test_a_trial_file_whose_drawn_is_not_of_the_varied_parameters_is_refused(
     assert "(tool.y, microscope.sigma)" in str(info.value)
 
 
+def test_a_trial_file_nested_too_deeply_is_refused_naming_it(campaign, tmp_path):
+    # lists 500 deep under a key added by hand parse (read_json's bound is the parser's),
+    # and reading the record back (NaN for null, recursively) ended in RecursionError
+    source, vary, _ = campaign
+    (tmp_path / "trials").mkdir()
+    for name in ("campaign.json", "trials/trial_000000.json", "trials/trial_000002.json"):
+        (tmp_path / name).write_bytes((source / name).read_bytes())
+    text = (source / "trials/trial_000001.json").read_text().rstrip()
+    (tmp_path / "trials/trial_000001.json").write_text(
+        text[:-1] + ', "extra": ' + "[" * 500 + "]" * 500 + "}")
+    with pytest.raises(InputError, match="nested too deeply to be a trial's record") as info:
+        run("tool_rotation_arm", 3, vary=vary, seed=11, out=tmp_path, workers=0,
+            progress=False, report=False, **ARM)
+    assert info.value.source.endswith("trial_000001.json")
+
+
 def test_a_campaign_json_that_is_not_an_object_is_refused(tmp_path):
     (tmp_path / "campaign.json").write_text("[]")
     with pytest.raises(InputError) as info:

@@ -817,3 +817,19 @@ def test_a_budgets_table_and_plot_are_written_both_or_neither(tmp_path, monkeypa
     out.write_budget(other)
     assert "36" in (tmp_path / "out/budget.md").read_text()
     assert (tmp_path / "out/budget.png").read_bytes() != before["budget.png"]
+
+
+def test_a_summary_nested_too_deeply_for_its_checks_is_refused_naming_it(tmp_path):
+    # lists 500 deep under a key of its own parse (read_json's bound is the parser's), and
+    # check_units' recursion ended read_summary in RecursionError
+    from machinesim.report import read_summary
+
+    path = tmp_path / "summary.json"
+    base = {"schema_version": 1, "paper": "001", "procedure": "p", "machine": "m",
+            "seed": 0, "noise": False, "injected": {}, "identified": {}, "figures": []}
+    path.write_text(json.dumps(base)[:-1] + ', "extra": ' + "[" * 500 + "]" * 500 + "}")
+    with pytest.raises(InputError, match="nested too deeply to be a report summary") as info:
+        read_summary(path)
+    assert info.value.source == str(path)
+    path.write_text(json.dumps(base))
+    assert read_summary(path) == base

@@ -143,7 +143,14 @@ class CampaignFolder:
         _check_version(raw, self.trial_file(i))
         _check_record(raw, self.trial_file(i), tuple(self.spec["vary"]))
         self._check_campaign(raw.get("campaign"), self.trial_file(i))
-        return {**_nan(raw), "error": raw.get("error")}
+        try:
+            return {**_nan(raw), "error": raw.get("error")}
+        except RecursionError:  # a key added by hand, lists in lists 500 deep: JSON takes
+            # them (read_json's bound is the parser's), _nan's recursion did not
+            raise InputError("nested too deeply to be a trial's record (a key added by hand?); "
+                             "expected the record as machinesim campaign writes it: delete the "
+                             "file and run again to compute the trial anew",
+                             source=str(self.trial_file(i))) from None
 
     def _check_campaign(self, found, path: Path) -> None:
         """Refuse a trial file written by another campaign (`campaign_id`): one copied from
