@@ -310,10 +310,14 @@ class Kinematics(BatchedKinematics):
                         for j in range(1, self.model.njoints)}
         self.axis_q = np.array([self.q_index[a] for a in self.axes])
         self.axis_v = np.array([self.v_index[a] for a in self.axes])
+        # the frames are links (Pinocchio's BODY frames): a joint may bear a link's name (URDF
+        # keeps them apart), and looked up by name alone a fixed joint named "table" made
+        # Pinocchio's "Several frames match" ValueError, and one named "probe_tip" gave a
+        # machine without that link a probe_tip frame at the joint
         self.frame_id = {}
         for name in ("base", "table", "workpiece", "tool_mount", "tool_tip", "probe_tip"):
-            if self.model.existFrame(name):
-                self.frame_id[name] = self.model.getFrameId(name)
+            if self.model.existFrame(name, pin.FrameType.BODY):
+                self.frame_id[name] = self.model.getFrameId(name, pin.FrameType.BODY)
         self._plans: dict[tuple[int, str, frozenset], tuple[object, list]] = {}
 
     def __getstate__(self) -> dict:

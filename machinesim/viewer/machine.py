@@ -304,7 +304,7 @@ def _body_tracks(visualizer, machine, errors, times, key_q) -> dict:
     model, data = visualizer.model, visualizer.data
     geometry, gdata = visualizer.visual_model, visualizer.visual_data
     binding = machine.binding(errors)
-    frames = {name: model.getFrameId(name) for name in ("workpiece", "tool_tip")}
+    frames = {name: machine.kin.frame_id[name] for name in ("workpiece", "tool_tip")}
     bodies = {g.name: [] for g in geometry.geometryObjects}
     placed = {name: [] for name in frames}
     for q in key_q:
@@ -328,7 +328,7 @@ def _with_stock(visualizer, machine, errors, q0, stock, lo, hi):
     workpiece frame placed at axis values ``q0``."""
     model, data = visualizer.model, visualizer.data
     pin.framesForwardKinematics(model, data, machine.kin.full_q(q0, machine.binding(errors)))
-    pose = data.oMf[model.getFrameId("workpiece")]
+    pose = data.oMf[machine.kin.frame_id["workpiece"]]
     box = np.array(np.meshgrid(*stock.bounds.T)).reshape(3, -1).T
     corners = box @ pose.rotation.T + pose.translation
     if lo is None:
