@@ -438,6 +438,21 @@ def _parse_fields(section: Any, name: str, spec: dict, source: str,
     return out
 
 
+def _check_apart(positions: np.ndarray, in_file: np.ndarray, source: str, key: str,
+                 unit: str) -> None:
+    """Refuse positions that increase as written (``in_file``, in ``unit``) but not once in
+    SI (``positions``): the product underflows (``position_mm = [0.0, 5e-324]`` is [0, 0] m),
+    and the table's own check then named neither the file nor the key (``key 'positions':
+    ... got 0.0 then 0.0 m or rad``)."""
+    if np.all(np.diff(positions) > 0.0):
+        return
+    i = int(np.argmax(np.diff(positions) <= 0.0))
+    si = "m" if unit in LENGTH else "rad"
+    raise _fail(f"positions {in_file[i].item()!r} and {in_file[i + 1].item()!r} {unit} "
+                f"(indices {i}, {i + 1}) are both {positions[i].item()!r} {si} once in {si} "
+                f"(float64); expected positions strictly increasing in {si} too", source, key)
+
+
 def _symbol_unit(key: Any, axis: str, location: bool, source: str, path: str):
     """(symbol, rest of the key split at '_') of a [location.*] or [component.*] key."""
     zero = "0" if location else ""
@@ -487,6 +502,7 @@ def _parse_component(axis: Any, table: Any, source: str,
             in_file = _numbers(value, source, key_path)
             _check_increasing(in_file, source, key_path, key.split("_")[1])
             positions, position_key = in_file * factor, key
+            _check_apart(positions, in_file, source, key_path, key.split("_")[1])
             written[f"{path}.position"] = (key_path, in_file)
             continue
         symbol, units = _symbol_unit(key, axis, False, source, key_path)
