@@ -126,7 +126,9 @@ def _check_increasing(positions: np.ndarray, source: str | None, key: str | None
                       unit: str) -> None:
     """Refuse positions that do not increase, naming them in ``unit``, the unit they were
     written in (``mm`` from a ``position_mm`` key; ``m or rad`` from Python)."""
-    if np.any(not_up := np.diff(positions) <= 0.0):
+    # compared, not subtracted: the difference of -1e308 and 1e308 overflowed, and numpy's
+    # RuntimeWarning reached the command line's stderr with a line of numpy's source
+    if np.any(not_up := positions[1:] <= positions[:-1]):
         i = int(np.argmax(not_up))
         raise _fail(
             f"positions must be strictly increasing, got {positions[i].item()!r} then "

@@ -444,9 +444,9 @@ def _check_apart(positions: np.ndarray, in_file: np.ndarray, source: str, key: s
     SI (``positions``): the product underflows (``position_mm = [0.0, 5e-324]`` is [0, 0] m),
     and the table's own check then named neither the file nor the key (``key 'positions':
     ... got 0.0 then 0.0 m or rad``)."""
-    if np.all(np.diff(positions) > 0.0):
+    if not np.any(equal := positions[1:] <= positions[:-1]):  # compared: no overflow
         return
-    i = int(np.argmax(np.diff(positions) <= 0.0))
+    i = int(np.argmax(equal))
     si = "m" if unit in LENGTH else "rad"
     raise _fail(f"positions {in_file[i].item()!r} and {in_file[i + 1].item()!r} {unit} "
                 f"(indices {i}, {i + 1}) are both {positions[i].item()!r} {si} once in {si} "
