@@ -29,6 +29,8 @@ from machinesim.urdf_checks import (
     COARSEST_RESOLUTION_M,
     COARSEST_RESOLUTION_RAD,
     DEGREE_LIKE_RAD,
+    FINEST_RESOLUTION_M,
+    FINEST_RESOLUTION_RAD,
     MAX_TRAVEL_M,
     MAX_TRAVEL_RAD,
     RAPID_RATE_M_PER_S,
@@ -57,7 +59,8 @@ from machinesim.urdf_structure import (
 # The checks and limits of `machinesim.urdf_checks` and `machinesim.urdf_structure` are
 # importable from here, where they were defined until those modules were split off.
 __all__ = ["AXIS_ORDER", "COARSEST_RESOLUTION_M", "COARSEST_RESOLUTION_RAD", "DEGREE_LIKE_RAD",
-           "MAX_DEPTH", "MAX_LINKS", "MAX_PLACEMENT_M", "MAX_TRAVEL_M", "MAX_TRAVEL_RAD",
+           "FINEST_RESOLUTION_M", "FINEST_RESOLUTION_RAD", "MAX_DEPTH", "MAX_LINKS",
+           "MAX_PLACEMENT_M", "MAX_TRAVEL_M", "MAX_TRAVEL_RAD",
            "MAX_URDF_BYTES", "RAPID_RATE_M_PER_S", "RAPID_RATE_RAD_PER_S", "REQUIRED_FRAMES",
            "ZERO_POSE_TOL", "check_joint_frames", "check_tool_mount", "check_tree",
            "check_zero_pose", "joint_places", "read_axes", "read_urdf"]
@@ -254,6 +257,12 @@ def read_axes(root: ET.Element, path: Path,
             raise ModelError(f"{resolution_at[name]}: <machinesim:axis joint={name!r}> resolution "
                              f"{resolution[name]!r} ({unit}); expected at most {coarsest:g} "
                              f"{unit} (SI: 1 nm is 1e-9)")
+        finest = FINEST_RESOLUTION_RAD if kind == "revolute" else FINEST_RESOLUTION_M
+        if resolution[name] < finest:
+            unit = "rad" if kind == "revolute" else "m"
+            raise ModelError(f"{resolution_at[name]}: <machinesim:axis joint={name!r}> resolution "
+                             f"{resolution[name]!r} ({unit}); expected at least {finest:g} "
+                             f"{unit} (1 pm: finer than any machine's scale; SI: 1 nm is 1e-9)")
         # a bad <limit> at its own line; no <limit> at the joint's
         at_limit = f"{element_at.get(id(joint.find('limit')), joint_at)}: joint {name!r}"
         lower, upper, velocity = _limits(joint, at_limit, kind == "revolute")

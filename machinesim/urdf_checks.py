@@ -54,6 +54,11 @@ MAX_TRAVEL_M = 10.0
 #: The coarsest command resolution a machine axis plausibly has (0.1 mm, 0.01 rad).
 COARSEST_RESOLUTION_M = 1e-4
 COARSEST_RESOLUTION_RAD = 1e-2
+#: The finest command resolution machinesim takes (1 pm, 1e-12 rad): a thousandth of the
+#: shipped 1 nm, finer than any machine's scale. The encoders round each reading to it, and
+#: a resolution of 5e-324 (or 1e-310) loaded and read 0.1 m as inf (0.1 / 5e-324 overflows).
+FINEST_RESOLUTION_M = 1e-12
+FINEST_RESOLUTION_RAD = 1e-12
 MAX_TRAVEL_RAD = 1e9
 #: The fastest machine tools rapid at 2-3 m/s; 10 m/s refuses a rate written in mm/s (a
 #: ROBOnano's 25 mm/s as 25 loaded, its rapids 1000 times too fast).

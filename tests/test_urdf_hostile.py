@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 from machinesim.errors import ErrorModel
+from machinesim.exceptions import ModelError
 from machinesim.machines import load_machine, models_dir
+from machinesim.metrology.instruments import Readout
 
 MILL3 = models_dir() / "examples" / "mill3.urdf"
 #: Errors that move the tool and the workpiece through every frame of the chain.
@@ -46,3 +48,28 @@ def test_a_joint_named_as_a_frame_loads_as_the_machine_with_its_links_frames(joi
     for frame in machine.frames:
         np.testing.assert_array_equal(machine.frame_pose(frame, q, errors),
                                       shipped.frame_pose(frame, q, errors))
+
+
+@pytest.mark.parametrize("resolution", ["5e-324", "1e-310", "9e-13"])
+def test_a_resolution_finer_than_a_picometre_is_refused_naming_its_line(resolution, tmp_path):
+    # 5e-324 (a denormal) loaded, and the encoders, which round each reading to the
+    # resolution, read Z = 0.1 m as inf (0.1 / 5e-324 overflows; 1e-310 likewise)
+    path = _mill3(tmp_path, "fine", '<machinesim:axis joint="Z" resolution="1e-9"/>',
+                  f'<machinesim:axis joint="Z" resolution="{resolution}"/>')
+    with pytest.raises(ModelError) as info:
+        load_machine(path)
+    assert str(info.value) == (
+        f"{path.resolve()}, line 49: <machinesim:axis joint='Z'> resolution "
+        f"{float(resolution)!r} (m); expected at least 1e-12 m (1 pm: finer than any "
+        "machine's scale; SI: 1 nm is 1e-9)")
+
+
+def test_a_picometre_resolution_loads_and_its_encoders_read_to_it(tmp_path):
+    path = _mill3(tmp_path, "pm", '<machinesim:axis joint="Z" resolution="1e-9"/>',
+                  '<machinesim:axis joint="Z" resolution="1e-12"/>')
+    machine = load_machine(path)
+    assert machine.resolution.tolist() == [1e-9, 1e-9, 1e-12]
+    readout = Readout.of(0.0, float(machine.resolution[2]), False, limit=None)
+    # 0.1 m + 0.4 pm reads 0.1 m, 0.1 m + 0.6 pm reads 0.1 m + 1 pm: rounded to the step
+    read = readout.read(np.array([0.1 + 0.4e-12, 0.1 + 0.6e-12]), np.random.default_rng(0))
+    assert np.abs(read - np.array([0.1, 0.1 + 1e-12])).max() < 3e-17  # 2 ulps of 0.1
