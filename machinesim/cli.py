@@ -415,11 +415,12 @@ def _cut(args) -> int:
         from machinesim.errors.unit_slips import (
             below_any_machine,
             beyond_any_machine,
+            far_polynomials,
             short_tables,
         )
 
         summary["notes"] += [*below_any_machine(errors), *beyond_any_machine(errors),
-                             *short_tables(errors, machine)]
+                             *short_tables(errors, machine), *far_polynomials(errors, machine)]
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
     pieces, apart = _pieces(part, stock, roi)

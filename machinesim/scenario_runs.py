@@ -337,9 +337,15 @@ def errors_file(path, machine):
     (`beyond_any_machine`: um or urad under a key in mm or deg); and tables whose positions
     span less than 1 % of their axis's travel on the scenario's ``machine`` (a
     `machinesim.machines.Machine`, required: `short_tables`, um of travel under position_um,
-    mm meant). The run goes on: each can be meant."""
+    mm meant), and polynomials that reach 10 mm or 10 deg within its travel
+    (`far_polynomials`). The run goes on: each can be meant."""
     from machinesim.errors import ErrorModel
-    from machinesim.errors.unit_slips import below_any_machine, beyond_any_machine, short_tables
+    from machinesim.errors.unit_slips import (
+        below_any_machine,
+        beyond_any_machine,
+        far_polynomials,
+        short_tables,
+    )
 
     errors = ErrorModel.from_toml(path)
     name = Path(sys.argv[0]).stem or "scenario"
@@ -347,7 +353,7 @@ def errors_file(path, machine):
         f"{path}: sets no error (no key in any section): the machine as built, every error "
         "zero"]
     for line in [*notes, *below_any_machine(errors), *beyond_any_machine(errors),
-                 *short_tables(errors, machine)]:
+                 *short_tables(errors, machine), *far_polynomials(errors, machine)]:
         print(f"{name}: note: {line}", file=sys.stderr, flush=True)
     return errors
 

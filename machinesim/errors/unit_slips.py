@@ -19,7 +19,7 @@ from machinesim.units import FACTORS, is_length
 
 __all__ = ["LARGEST_LIKELY_ERROR_M", "LARGEST_LIKELY_ERROR_RAD", "SHORTEST_TABLE_SHARE",
            "SMALLEST_WRITTEN_ERROR_SI", "below_any_machine", "beyond_any_machine",
-           "short_tables"]
+           "far_polynomials", "short_tables"]
 
 
 #: Below this (m or rad) an error value written in a file is no error any machine shows (a
@@ -157,6 +157,42 @@ def short_tables(model: ErrorModel, machine) -> list[str]:
                      f"{axis}'s {show(travel)} "
                      f"travel, and its tables hold their end values beyond "
                      f"{show(positions[0])} .. {show(positions[-1])}{guess}")
+    return lines
+
+
+def far_polynomials(model: ErrorModel, machine) -> list[str]:
+    """Lines naming each polynomial the file wrote that reaches `LARGEST_LIKELY_ERROR_M` (a
+    length) or `LARGEST_LIKELY_ERROR_RAD` (an angle) over its axis's travel on ``machine``:
+    `beyond_any_machine` leaves polynomials out, their size being the travel's, and
+    `ErrorModel.check_travel` refuses only what passes `LARGEST_ERROR` (1 m, 180 deg), so
+    ``EXX_poly_um_mm = [0.0, 0.0, 1.0]`` (c_2 in um/mm**2, perhaps meant per m**2) put the
+    tool 62.5 mm off at X = 250 mm on grooving_4axis with exit 0 and no note. Axes the
+    machine lacks are left to the fit check. Each line begins with the file and the key's
+    line, as `below_any_machine`'s."""
+    lines = []
+    for axis, errors in model.component.items():
+        if axis not in machine.axes:
+            continue
+        i = machine.axes.index(axis)
+        lower, upper = float(machine.lower[i]), float(machine.upper[i])
+        for symbol, error in errors.items():
+            if error.kind != "poly":
+                continue
+            value, where = error.largest(lower, upper)
+            length = symbol[1] in "XYZ"  # EXX .. EZC: a length; EAX .. ECC: an angle
+            if abs(value) < (LARGEST_LIKELY_ERROR_M if length else LARGEST_LIKELY_ERROR_RAD):
+                continue
+            field = f"component.{axis}.{symbol}"
+            key = model.key_as_written(field) or field
+            reach = (f"{value * 1e3:.4g} mm" if length else f"{np.degrees(value):.4g} deg")
+            at = (f"{np.degrees(where):.4g} deg" if machine.rotary[i]
+                  else f"{where * 1e3:.4g} mm")
+            written = model.written.get(field, (key, error.values))[1]
+            shown = np.asarray(written, dtype=np.float64).tolist()
+            lines.append(f"{_noted_at(model, field)}{key} = {shown!r} reaches {reach} at "
+                         f"{axis} = {at} within {axis}'s travel, beyond the errors of any "
+                         "machine: were its coefficients written for other units than its key "
+                         "asks?")
     return lines
 
 
