@@ -417,10 +417,12 @@ def _cut(args) -> int:
             beyond_any_machine,
             far_polynomials,
             short_tables,
+            turn_steps,
         )
 
         summary["notes"] += [*below_any_machine(errors), *beyond_any_machine(errors),
-                             *short_tables(errors, machine), *far_polynomials(errors, machine)]
+                             *short_tables(errors, machine), *far_polynomials(errors, machine),
+                             *turn_steps(errors, machine)]
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
     pieces, apart = _pieces(part, stock, roi)

@@ -76,3 +76,44 @@ def test_a_polynomial_reaching_beyond_any_machine_within_the_travel_is_noted(tmp
     assert "EAX_poly_urad_mm = [0.0, 700.0] reaches -10.03 deg at X = -250 mm" in line, line
     path.write_text("[component.X]\nEAX_poly_urad_mm = [0.0, 690.0]\n")  # 9.88 deg: none
     assert far_polynomials(ErrorModel.from_toml(path), machine) == []
+
+
+def test_a_turn_table_whose_values_a_turn_apart_differ_is_noted(tmp_path, capsys):
+    # the table spans -180 .. 180 deg, a whole turn, and repeats each turn beyond it on
+    # grooving_4axis's C (-360 .. 360 deg): ECC steps from 2 to 1 arcsec as C passes 180 deg,
+    # which turns the tool about C by 1 arcsec at once, 10 mm * 4.848e-6 rad = 0.0485 um at
+    # X = 10 mm by hand, with exit 0 and no note before
+    import numpy as np
+
+    from machinesim.cli import main
+    from machinesim.errors.unit_slips import turn_steps
+    from machinesim.machines import load_machine
+
+    machine = load_machine("grooving_4axis")
+    path = tmp_path / "turn.toml"
+    path.write_text("[component.C]\nposition_deg = [-180.0, 0.0, 180.0]\n"
+                    "ECC_arcsec = [1.0, 0.0, 2.0]\n")
+    errors = ErrorModel.from_toml(path)
+    moved = [machine.tool_pose(np.array([0.01, 0.0, 0.0, np.radians(c)]), errors)[:3, 3]
+             - machine.tool_pose(np.array([0.01, 0.0, 0.0, np.radians(c)]))[:3, 3]
+             for c in (180.0 - 1e-9, 180.0 + 1e-9)]
+    assert abs(np.linalg.norm(moved[0] - moved[1]) - 0.01 * np.radians(1 / 3600)) < 1e-12
+    note = (f"{path}, line 3: component.C.ECC_arcsec is 1 arcsec at C = -180 deg and 2 arcsec "
+            "at 180 deg, a turn apart: the table repeats each turn beyond -180 .. 180 deg, "
+            "within C's travel, so the error steps by 1 arcsec there, which no chord follows: "
+            "give the same value a turn apart")
+    assert turn_steps(errors, machine) == [note]
+    program = tmp_path / "p.nc"
+    program.write_text("G90 G21\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nG01 X2.\nG00 Z1.\nM30\n")
+    code = main(["cut", str(program), "--machine", "grooving_4axis", "--tool", "v:90",
+                 "--stock", "block:10x10x2", "--out", str(tmp_path / "a.ply"), "--errors",
+                 str(path), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 0 and f"note: {note}" in err, err
+    # the same value a turn apart, and a table of less than a turn (which holds its end
+    # values beyond it, as on a linear axis), are not noted
+    for text in ("ECC_arcsec = [1.0, 0.0, 1.0]", "ECC_arcsec = [1.0, 0.0, 2.0]"):
+        positions = ("[-180.0, 0.0, 180.0]" if text.endswith("1.0]")
+                     else "[-180.0, 0.0, 179.0]")
+        path.write_text(f"[component.C]\nposition_deg = {positions}\n{text}\n")
+        assert turn_steps(ErrorModel.from_toml(path), machine) == []

@@ -3,8 +3,11 @@ refusals, for the command line and the scenarios (`machinesim cut --errors`,
 `machinesim.scenario_runs.errors_file`). A value below anything a machine shows
 (`below_any_machine`: SI where the key asks um or urad), one beyond the errors of any
 machine (`beyond_any_machine`: um or urad where the key asks mm or deg), and an error table
-over a sliver of its axis's travel (`short_tables`: positions in um where mm were meant).
-Each note begins with the file and the key's line (`ErrorModel.line_of`, from
+over a sliver of its axis's travel (`short_tables`: positions in um where mm were meant),
+a polynomial beyond the errors of any machine within its axis's travel (`far_polynomials`);
+and, no unit slip but as silent, a rotary axis's table of a turn whose values a turn apart
+differ where the axis turns past it (`turn_steps`: the error steps there). Each note
+begins with the file and the key's line (`ErrorModel.line_of`, from
 `machinesim.errors.toml.key_lines`). Moved out of `machinesim.errors.toml`, which reads
 and writes the files; every name is still importable from there.
 """
@@ -19,7 +22,7 @@ from machinesim.units import FACTORS, is_length
 
 __all__ = ["LARGEST_LIKELY_ERROR_M", "LARGEST_LIKELY_ERROR_RAD", "SHORTEST_TABLE_SHARE",
            "SMALLEST_WRITTEN_ERROR_SI", "below_any_machine", "beyond_any_machine",
-           "far_polynomials", "short_tables"]
+           "far_polynomials", "short_tables", "turn_steps"]
 
 
 #: Below this (m or rad) an error value written in a file is no error any machine shows (a
@@ -193,6 +196,49 @@ def far_polynomials(model: ErrorModel, machine) -> list[str]:
                          f"{axis} = {at} within {axis}'s travel, beyond the errors of any "
                          "machine: were its coefficients written for other units than its key "
                          "asks?")
+    return lines
+
+
+def turn_steps(model: ErrorModel, machine) -> list[str]:
+    """Lines naming each table of a rotary axis that spans a whole turn or more, whose
+    values a turn apart differ by `SMALLEST_WRITTEN_ERROR_SI` or more, where ``machine``'s
+    travel of the axis reaches beyond the table: it repeats each turn there
+    (`machinesim.errors.turns.each_turn`), so the error steps as the axis passes the
+    table's end, and no chord follows a step. ``ECC_arcsec = [1.0, 0.0, 2.0]`` at
+    ``position_deg = [-180.0, 0.0, 180.0]`` on grooving_4axis's C (-360 .. 360 deg) moved
+    the tool 0.048 um at X = 10 mm as C passed 180 deg, without a word. Each line begins
+    with the file and the key's line, as `below_any_machine`'s."""
+    from machinesim.errors.turns import TURN, table_each_turn
+
+    lines = []
+    for axis, errors in model.component.items():
+        if axis not in machine.axes or not machine.rotary[machine.axes.index(axis)]:
+            continue
+        i = machine.axes.index(axis)
+        for symbol, error in errors.items():
+            if table_each_turn(error) is error:  # a polynomial, or less than a turn
+                continue
+            first, last = float(error.positions[0]), float(error.positions[-1])
+            pairs = ([(first, first + TURN)] if machine.lower[i] < first else []) + (
+                [(last - TURN, last)] if machine.upper[i] > last else [])
+            steps = [(abs(float(np.diff(error.evaluate(np.array(pair)))[0])), pair)
+                     for pair in pairs]
+            if not steps or max(steps)[0] < SMALLEST_WRITTEN_ERROR_SI:
+                continue
+            step, (a, b) = max(steps)
+            field = f"component.{axis}.{symbol}"
+            key = model.key_as_written(field) or field
+            unit = key.rsplit("_", 1)[-1]
+            if unit not in FACTORS:
+                unit = "m" if symbol[1] in "XYZ" else "rad"
+            va, vb = (float(v) / FACTORS[unit] for v in error.evaluate(np.array([a, b])))
+            lines.append(
+                f"{_noted_at(model, field)}{key} is {va:g} {unit} at {axis} = "
+                f"{np.degrees(a):g} deg and {vb:g} {unit} at {np.degrees(b):g} deg, a turn "
+                f"apart: the table repeats each turn beyond {np.degrees(first):g} .. "
+                f"{np.degrees(last):g} deg, within {axis}'s travel, so the error steps by "
+                f"{step / FACTORS[unit]:g} {unit} there, which no chord follows: give the "
+                "same value a turn apart")
     return lines
 
 
