@@ -117,3 +117,32 @@ def test_a_turn_table_whose_values_a_turn_apart_differ_is_noted(tmp_path, capsys
                      else "[-180.0, 0.0, 179.0]")
         path.write_text(f"[component.C]\nposition_deg = {positions}\n{text}\n")
         assert turn_steps(ErrorModel.from_toml(path), machine) == []
+
+
+def test_a_long_polynomial_whose_unit_factor_leaves_float64_reads_its_coefficients(tmp_path):
+    # um/nm**k is 1e-6 / 1e-9**k m/m**k: from k = 35 (1e309) the factor alone overflowed, so
+    # a zero coefficient there read 0 * inf = nan and the file was refused, "coefficient c_35
+    # = 0 um/nm**35 is inf times as large in m/m**35, beyond float64", with numpy's
+    # RuntimeWarnings (divide by zero, overflow, invalid value) on stderr before it
+    path = tmp_path / "F.toml"
+    zeros = ", ".join(["0.0"] * 38)
+    path.write_text(f"[component.X]\nEXX_poly_um_nm = [0.0, 0.001, {zeros}]\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        values = ErrorModel.from_toml(path).component["X"]["EXX"].values
+        assert values.size == 40 and values[1] == 0.001 * (1e-6 / 1e-9)  # 1 um/um, by hand
+        assert not values[2:].any()
+        # a coefficient there that is finite in SI reads as the product, rounded once:
+        # 1e-300 um/nm**40 = 1e-306 m / 1e-360 m**40 = 1e54 m/m**40 (within the float 1e-9's
+        # own 1e-17 relative, to the 40th power: 2.5e-15 off)
+        path.write_text(f"[component.X]\nEXX_poly_um_nm = [0.0, 0.0, {zeros}, 1e-300]\n")
+        values = ErrorModel.from_toml(path).component["X"]["EXX"].values
+        assert values[40] == pytest.approx(1e54, rel=1e-14)
+        # beyond float64 in SI, refused naming the factor as :g writes it
+        path.write_text(f"[component.X]\nEXX_poly_um_nm = [0.0, 0.0, {zeros}, 1.0]\n")
+        with pytest.raises(ErrorModelError) as info:
+            ErrorModel.from_toml(path)
+        assert str(info.value) == (
+            f"{path}, line 2, key 'component.X.EXX_poly_um_nm': coefficient c_40 = 1 um/nm**40 "
+            "is 1e+354 times as large in m/m**40, beyond float64; expected a length error of "
+            "at most 1e+06 um (1 m) over the travel")

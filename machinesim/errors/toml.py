@@ -5,11 +5,14 @@
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import stat
 import tomllib
 from collections.abc import Mapping
+from decimal import Decimal
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -68,6 +71,16 @@ def _poly_factors(value_factor: float, position_factor: float, count: int) -> np
     trip through a file costs two roundings per coefficient.
     """
     return value_factor / np.power(position_factor, np.arange(count, dtype=np.float64))
+
+
+def _exact_si(coefficient: float, value_factor: float, position_factor: float, k: int) -> float:
+    """``coefficient`` (file units) times ``value_factor / position_factor**k`` in SI, taken
+    exactly and rounded once: inf beyond float64 (then refused), 0.0 below it."""
+    try:
+        exact = Fraction(coefficient) * Fraction(value_factor) / Fraction(position_factor) ** k
+        return float(exact)
+    except OverflowError:
+        return math.copysign(math.inf, coefficient)
 
 
 def _utf16_text(data: bytes) -> bool:
@@ -516,15 +529,24 @@ def _parse_component(axis: Any, table: Any, source: str,
             value_factor = _check_unit(units[1], quantity, source, key_path)
             position_factor = _check_unit(units[2], axis_quantity, source, key_path)
             coefficients = _numbers(value, source, key_path)
-            factors = _poly_factors(value_factor, position_factor, coefficients.size)
-            with np.errstate(over="ignore"):
+            with np.errstate(over="ignore", divide="ignore", under="ignore", invalid="ignore"):
+                factors = _poly_factors(value_factor, position_factor, coefficients.size)
                 si = coefficients * factors
+            # where a factor alone leaves float64 (1e-6 / (1e-9)**35 for um/nm**35 is 1e309),
+            # the product is taken exactly: a zero coefficient there read 0 * inf = nan and
+            # was refused as 'beyond float64', with numpy's RuntimeWarnings on stderr
+            for k in np.flatnonzero(~(np.abs(factors) >= np.finfo(np.float64).tiny)
+                                    | ~np.isfinite(factors)):
+                si[k] = _exact_si(coefficients[k], value_factor, position_factor, int(k))
             if not np.all(np.isfinite(si)):
                 k = int(np.argmin(np.isfinite(si)))
                 si_unit = f"{_SI_UNITS[quantity]}/{_SI_UNITS[_position_kind(axis)]}**{k}"
                 largest = _limit(quantity, units[1], value_factor)  # in the unit written
+                factor = (f"{factors[k]:g}" if np.isfinite(factors[k]) else re.sub(  # as :g
+                    r"\.?0+(?=e)", "", format(Decimal(value_factor)
+                                              / Decimal(position_factor) ** k, ".6g")))
                 raise _fail(f"coefficient c_{k} = {coefficients[k]:g} {units[1]}/{units[2]}**{k}"
-                            f" is {factors[k]:g} times as large in {si_unit}, beyond float64; "
+                            f" is {factor} times as large in {si_unit}, beyond float64; "
                             f"expected a {quantity} error of at most {largest} over the travel",
                             source, key_path)
             out[symbol] = ComponentError("poly", None, si)
