@@ -108,7 +108,7 @@ class RobotLoader:
         Parameters
         ----------
         rng : numpy.random.Generator or int or None
-            Source of the draw, or its seed.
+            Source of the draw, or its seed (a non-negative int, numpy's too).
 
         Returns
         -------
@@ -116,11 +116,12 @@ class RobotLoader:
             delta (3,) m with standard deviation `position_sigma` per axis; alpha, beta,
             gamma rad with standard deviation `angle_sigma` each.
         """
-        if not isinstance(rng, np.random.Generator):
-            if rng is not None and (isinstance(rng, bool) or not isinstance(rng, int)):
-                raise InputError(f"Expected rng as a numpy Generator, an int seed or None, "
-                                 f"got {rng!r}", key="rng")
-            rng = np.random.default_rng(rng)
+        from machinesim.metrology.instruments import as_generator
+
+        # as every seeded draw of machinesim takes one: a numpy integer is a seed too
+        # ("expected ... an int seed ..., got np.int64(3)"), and a negative one is refused
+        # as an InputError (numpy's "ValueError: expected non-negative integer" had passed)
+        rng = as_generator(rng)
         delta = self.position_sigma * rng.standard_normal(3)
         alpha, beta, gamma = self.angle_sigma * rng.standard_normal(3)
         return WorkpieceSetting(delta, float(alpha), float(beta), float(gamma))
