@@ -270,6 +270,12 @@ def _check_not_xacro(root: ET.Element, path) -> None:
             if "${" in value or "$(" in value:
                 raise ModelError(f"{path}: <{local} {attribute}={value!r}> is a xacro "
                                  f"expression, not a value: {expand}")
+    include = root.find("include")  # SDF's, or xacro's written without its prefix
+    if include is not None:
+        raise ModelError(f"{path}: <include filename={include.get('filename')!r}> is not URDF: "
+                         "its parser drops it, and the links and joints of that file with it "
+                         "(they loaded missing, or without a word); write them into this "
+                         f"file, or, for a xacro file's <xacro:include>, {expand}")
 
 
 #: The elements URDF allows once in a joint, a link, a link's visual or collision and its

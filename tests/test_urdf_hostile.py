@@ -73,3 +73,18 @@ def test_a_picometre_resolution_loads_and_its_encoders_read_to_it(tmp_path):
     # 0.1 m + 0.4 pm reads 0.1 m, 0.1 m + 0.6 pm reads 0.1 m + 1 pm: rounded to the step
     read = readout.read(np.array([0.1 + 0.4e-12, 0.1 + 0.6e-12]), np.random.default_rng(0))
     assert np.abs(read - np.array([0.1, 0.1 + 1e-12])).max() < 3e-17  # 2 ulps of 0.1
+
+
+def test_an_include_is_refused_as_not_urdf(tmp_path):
+    # the URDF parser drops <include>, and the links and joints of its file with it: it
+    # loaded without a word where the machine needed none of them, and otherwise as
+    # "child link ... does not exist", neither saying why
+    path = _mill3(tmp_path, "include", '<link name="base"/>',
+                  '<include filename="parts.urdf"/><link name="base"/>')
+    with pytest.raises(ModelError) as info:
+        load_machine(path)
+    assert str(info.value) == (
+        f"{path.resolve()}: <include filename='parts.urdf'> is not URDF: its parser drops it, "
+        "and the links and joints of that file with it (they loaded missing, or without a "
+        "word); write them into this file, or, for a xacro file's <xacro:include>, expand it "
+        "first (xacro include.urdf > machine.urdf) and load the URDF")
