@@ -82,6 +82,10 @@ def read_urdf(path: Path, lines: dict[str, list[int]] | None = None) -> ET.Eleme
             data = file.read(MAX_URDF_BYTES + 1)
     except OSError as exc:
         raise ModelError(f"{path}: cannot read the URDF file ({exc.strerror})") from None
+    if not data.strip():  # expat: "not readable XML (no element found: line 1, column 0)"
+        raise ModelError(f"{path}: the file is empty ({len(data)} bytes"
+                         f"{', all blank' if data else ''}); expected a URDF, <robot name=...> "
+                         "holding the machine's links and joints")
     if len(data) > MAX_URDF_BYTES:
         raise ModelError(f"{path}: larger than {MAX_URDF_BYTES // 2**20} MB; a machine's URDF "
                          "is a few kB (meshes are files of their own): expected at most "

@@ -88,3 +88,14 @@ def test_an_include_is_refused_as_not_urdf(tmp_path):
         "and the links and joints of that file with it (they loaded missing, or without a "
         "word); write them into this file, or, for a xacro file's <xacro:include>, expand it "
         "first (xacro include.urdf > machine.urdf) and load the URDF")
+
+
+@pytest.mark.parametrize("data, said", [(b"", "0 bytes"), (b"\n  \r\n", "5 bytes, all blank")])
+def test_an_empty_urdf_says_it_is_empty(data, said, tmp_path):
+    # was expat's "not readable XML (no element found: line 1, column 0)"
+    path = tmp_path / "empty.urdf"
+    path.write_bytes(data)
+    with pytest.raises(ModelError) as info:
+        load_machine(path)
+    assert str(info.value) == (f"{path.resolve()}: the file is empty ({said}); expected a URDF, "
+                               "<robot name=...> holding the machine's links and joints")
