@@ -42,6 +42,7 @@ import pinocchio as pin
 from machinesim.batched_kinematics import BatchedKinematics, _slope
 from machinesim.errors.turns import each_turn
 from machinesim.exceptions import ErrorModelError, ModelError
+from machinesim.units import M_PER_MM, RAD_PER_DEG, quotient_text
 
 #: The six error degrees of freedom, in the order of ``T(t) Rx Ry Rz``.
 DOFS = ("tx", "ty", "tz", "rx", "ry", "rz")
@@ -362,8 +363,10 @@ class Kinematics(BatchedKinematics):
         slack = 1e-12
         if span is not None and (span[0] < ax.lower - slack or span[1] > ax.upper + slack):
             unit, scale = ("deg", 180.0 / np.pi) if ax.rotary else ("mm", 1e3)
+            per_unit = RAD_PER_DEG if ax.rotary else M_PER_MM
+            ends = [quotient_text(end, per_unit, 6) for end in span]  # 1e306 m: not inf mm
             raise ErrorModelError(
-                f"table positions {span[0] * scale:g} .. {span[1] * scale:g} {unit} lie outside "
+                f"table positions {ends[0]} .. {ends[1]} {unit} lie outside "
                 f"the travel of axis {ax.letter}, {ax.lower * scale:g} .. "
                 f"{ax.upper * scale:g} {unit}", source=self.source, key=key)
 

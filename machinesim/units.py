@@ -34,16 +34,36 @@ RAD_PER_DEG = ANGLE["deg"]
 SHOWN_DIGITS = 12
 
 
+def quotient_text(value: float, factor: float, digits: int = SHOWN_DIGITS) -> str:
+    """``value`` (SI) over ``factor`` (SI per unit) to ``digits`` significant digits, as
+    ``:g`` writes it, also where the quotient leaves float64 (1e306 m is 1e309 mm): worked
+    out in decimal then, not shown as inf."""
+    value = float(value)
+    quotient = value / factor
+    if math.isfinite(quotient) or not math.isfinite(value):
+        return f"{quotient:.{digits}g}"
+    from decimal import Decimal, localcontext
+
+    with localcontext() as context:
+        context.prec = digits
+        text = format(+(Decimal(value) / Decimal(factor)), f".{digits}g")
+    mantissa, _, exponent = text.partition("e")  # :g's form: no trailing zeros
+    if "." in mantissa:
+        mantissa = mantissa.rstrip("0").rstrip(".")
+    return f"{mantissa}e{exponent}" if exponent else mantissa
+
+
 def length_text(value_m: float) -> str:
     """A length (m) as a refusal shows it: in mm, the unit of the tool and stock specs, then
-    in m, the Python API's: ``9 mm (0.009 m)``."""
-    return f"{value_m / M_PER_MM:.{SHOWN_DIGITS}g} mm ({value_m:.{SHOWN_DIGITS}g} m)"
+    in m, the Python API's: ``9 mm (0.009 m)``; ``1e+309 mm (1e+306 m)`` (not ``inf mm``)
+    beyond float64 in mm."""
+    return f"{quotient_text(value_m, M_PER_MM)} mm ({value_m:.{SHOWN_DIGITS}g} m)"
 
 
 def angle_text(value_rad: float) -> str:
     """An angle (rad) as a refusal shows it: in deg, the unit of the specs, then in rad:
     ``180 deg (3.14159265359 rad)``."""
-    return (f"{value_rad / RAD_PER_DEG:.{SHOWN_DIGITS}g} deg "
+    return (f"{quotient_text(value_rad, RAD_PER_DEG)} deg "
             f"({value_rad:.{SHOWN_DIGITS}g} rad)")
 
 
