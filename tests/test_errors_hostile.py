@@ -146,3 +146,23 @@ def test_a_long_polynomial_whose_unit_factor_leaves_float64_reads_its_coefficien
             f"{path}, line 2, key 'component.X.EXX_poly_um_nm': coefficient c_40 = 1 um/nm**40 "
             "is 1e+354 times as large in m/m**40, beyond float64; expected a length error of "
             "at most 1e+06 um (1 m) over the travel")
+
+
+def test_a_tool_table_or_a_servo_file_given_for_the_errors_says_which_it_is(tmp_path):
+    # were "unknown key; expected offset_<length unit>, rotation_<angle unit>" and "unknown
+    # section; expected one of tool, ...", neither saying the file is another option's
+    path = tmp_path / "F.toml"
+    path.write_text("[tool.1]\nlength_mm = 0.0\n")  # docs/nc.md's least tool table
+    with pytest.raises(ErrorModelError) as info:
+        ErrorModel.from_toml(path)
+    assert str(info.value) == (
+        f"{path}, line 1, key 'tool.1': unknown key; expected offset_<length unit>, "
+        "rotation_<angle unit> ([tool.1] is a tool table's, given with --tools; an error "
+        "file's [tool] is the tool setting error)")
+    path.write_text("[X]\nkp_N_per_m = 1.2e6\nmass_kg = 12.0\n")  # docs/cli.md's servo table
+    with pytest.raises(ErrorModelError) as info:
+        ErrorModel.from_toml(path)
+    assert str(info.value) == (
+        f"{path}, line 1, key 'X': unknown section; expected one of tool, tool_geometry, "
+        "workpiece, location, component; [X] alone is a servo loop's table (--servo); an "
+        "axis's errors go in [location.X] and [component.X]")

@@ -21,6 +21,7 @@ import tomli_w
 
 from machinesim._io import not_a_regular_file, write_atomic
 from machinesim.errors._checks import (
+    AXES,
     LINEAR_AXES,
     _check_axis,
     _check_increasing,
@@ -395,6 +396,9 @@ def _model_from_dict(data: Any, source: str, lines: dict[str, int]) -> ErrorMode
                 hint = ("; a parameter name (SI values by name, as Estimate.as_dict and "
                         "Machine.parameter_names give them) goes through "
                         "ErrorModel().with_parameters({name: value})")
+            elif isinstance(section, str) and section in AXES:  # a servo file given for it
+                hint = (f"; [{section}] alone is a servo loop's table (--servo); an axis's "
+                        f"errors go in [location.{section}] and [component.{section}]")
             raise _fail(f"unknown section; expected one of {', '.join(_SECTIONS)}{hint}",
                         source, section)
     tool_spec = {"offset": ("length", 3), "rotation": ("angle", 3)}
@@ -435,7 +439,11 @@ def _parse_fields(section: Any, name: str, spec: dict, source: str,
         if key not in spec:  # field names may hold '_' (nose_radius): the unit is the last part
             parts = key.rsplit("_", 1)
         if parts[0] not in spec or len(parts) > 2:
-            raise _fail(f"unknown key; expected {expected}", source, path)
+            hint = ""
+            if name == "tool" and isinstance(value, Mapping) and key.isdigit():
+                hint = (f" ([tool.{key}] is a tool table's, given with --tools; an error "
+                        "file's [tool] is the tool setting error)")
+            raise _fail(f"unknown key; expected {expected}{hint}", source, path)
         quantity, size = spec[parts[0]]
         if len(parts) == 1:
             message = f"key has no unit suffix; expected {parts[0]}_<{quantity} unit>"
