@@ -166,3 +166,24 @@ def test_a_tool_table_or_a_servo_file_given_for_the_errors_says_which_it_is(tmp_
         f"{path}, line 1, key 'X': unknown section; expected one of tool, tool_geometry, "
         "workpiece, location, component; [X] alone is a servo loop's table (--servo); an "
         "axis's errors go in [location.X] and [component.X]")
+
+
+@pytest.mark.parametrize("name, value, said", [
+    ("tool.x", 2.0, "2000 mm (2 m) is no length error"),
+    ("tool.rz", 4.0, "229.183118052 deg (4 rad) is no angle error"),
+    ("tool_geometry.nose_radius", 5.0, "5000 mm (5 m) is no length error"),
+    ("workpiece.z", -3.0, "3000 mm (3 m) is no length error"),
+    ("workpiece.gamma", 4.0, "229.183118052 deg (4 rad) is no angle error"),
+    ("component.X.EXX[1]", 2.0, "2000 mm (2 m) is no length error")])
+def test_with_parameters_names_the_parameter_whose_value_is_no_error(name, value, said):
+    # the settings' own checks named their field: "key 'offset'" for tool.x (or y or z),
+    # "key 'gamma'", "key 'component.X.EXX'" for EXX[1]: which of many parameters was it?
+    model = ErrorModel.from_dict({"component": {"X": {"position_mm": [-250.0, 0.0, 250.0],
+                                                      "EXX_um": [0.0, 1.0, 2.0]}}}, "d")
+    with pytest.raises(ErrorModelError) as info:
+        model.with_parameters({"tool.y": 1e-6, name: value})
+    assert info.value.key == name
+    assert said in str(info.value)
+    # a polynomial's coefficient has no bound of its own (its reach over a travel has)
+    model = ErrorModel.from_dict({"component": {"X": {"EYX_poly_um_mm": [0.0, 1e-3]}}}, "d")
+    assert model.with_parameters({"component.X.EYX[1]": 2.0}).component["X"]["EYX"].values[1] == 2.0

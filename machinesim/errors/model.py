@@ -273,14 +273,21 @@ class ErrorModel(_Value):
             if match is None:
                 raise _fail(f"unknown parameter name; expected {_PARAMETER_FORMS}", None, name)
             value = _number(raw, None, name)
+            # each value's size is checked under its own name: the settings' own checks named
+            # the field ("key 'offset'" for tool.x, "key 'component.X.EXX'" for EXX[1])
             if match["tool"]:
-                target = rotation if match["tool"].startswith("r") else offset
+                angle = match["tool"].startswith("r")
+                _check_si(value, "angle" if angle else "length", name)
+                target = rotation if angle else offset
                 target["xyz".index(match["tool"][-1])] = value
             elif match["geometry"]:
+                _check_si(value, "length", name)
                 nose_radius = value
             elif match["workpiece"] in ("x", "y", "z"):
+                _check_si(value, "length", name)
                 delta["xyz".index(match["workpiece"])] = value
             elif match["workpiece"]:
+                _check_si(value, "angle", name)
                 angles[match["workpiece"]] = value
             elif match["laxis"]:
                 _check_axis(match["laxis"], None, name)
@@ -293,6 +300,8 @@ class ErrorModel(_Value):
                 if k >= coefficients.size:
                     message = f"unknown parameter: index {k}, but the error has "
                     raise _fail(f"{message}{coefficients.size} values", None, name)
+                if self.component[match["caxis"]][match["csym"]].kind == "table":
+                    _check_si(value, _quantity(match["csym"][1]), name)
                 coefficients[k] = value
         component = {
             axis: {s: ComponentError(e.kind, e.positions, values[axis, s]) for s, e in t.items()}
