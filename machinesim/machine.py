@@ -444,8 +444,13 @@ class Machine:
             want = f"({n},)" + (f" or (N, {n})" if batch else "")
             raise InputError(f"{self.name} has axes {''.join(self.axes)}: expected axis values "
                              f"of shape {want}, got {arr.shape}")
-        if not np.all(np.isfinite(arr)):
-            raise InputError("axis values contain NaN or inf")
+        if not np.all(np.isfinite(arr)):  # which one: "axis values contain NaN or inf" said not
+            rows = np.atleast_2d(arr)
+            bad = tuple(np.argwhere(~np.isfinite(rows))[0])
+            row = f" in row {bad[0]} of {len(arr)}" if arr.ndim == 2 else ""
+            raise InputError(f"axis values contain NaN or inf: {self.axes[bad[1]]} = "
+                             f"{float(rows[bad])!r}{row} ({''.join(self.axes)}, m and rad); "
+                             "expected finite numbers", key="q")
         return arr
 
 

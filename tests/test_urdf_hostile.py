@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from machinesim.errors import ErrorModel
-from machinesim.exceptions import ModelError
+from machinesim.exceptions import InputError, ModelError
 from machinesim.machines import load_machine, models_dir
 from machinesim.metrology.instruments import Readout
 
@@ -99,3 +99,15 @@ def test_an_empty_urdf_says_it_is_empty(data, said, tmp_path):
         load_machine(path)
     assert str(info.value) == (f"{path.resolve()}: the file is empty ({said}); expected a URDF, "
                                "<robot name=...> holding the machine's links and joints")
+
+
+def test_axis_values_with_nan_or_inf_name_the_axis_and_row():
+    # "axis values contain NaN or inf", naming neither the axis nor the row of many
+    machine = load_machine("grooving_4axis")
+    with pytest.raises(InputError) as info:
+        machine.tool_pose([0.0, np.nan, 0.0, 0.0])
+    assert info.value.key == "q"
+    assert str(info.value) == ("key 'q': axis values contain NaN or inf: Y = nan (XYZC, m and "
+                               "rad); expected finite numbers")
+    with pytest.raises(InputError, match=r"C = inf in row 1 of 2 \(XYZC, m and rad\)"):
+        machine.limit_violations([[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, np.inf]])
