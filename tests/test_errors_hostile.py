@@ -187,3 +187,23 @@ def test_with_parameters_names_the_parameter_whose_value_is_no_error(name, value
     # a polynomial's coefficient has no bound of its own (its reach over a travel has)
     model = ErrorModel.from_dict({"component": {"X": {"EYX_poly_um_mm": [0.0, 1e-3]}}}, "d")
     assert model.with_parameters({"component.X.EYX[1]": 2.0}).component["X"]["EYX"].values[1] == 2.0
+
+
+def test_a_toml_file_past_the_size_cap_is_refused_before_it_is_read_and_one_at_it_reads(
+        tmp_path):
+    # a 20 MB error file of one table (1,000,000 positions) took 25 s and 210 MB to read
+    # before anything was checked
+    from machinesim.errors.toml import MAX_TOML_BYTES
+
+    path = tmp_path / "F.toml"
+    head = "[tool]\noffset_um = [1.0, 0.0, 0.0]\n"
+    path.write_text(head + "#" * (MAX_TOML_BYTES - len(head) - 1) + "\n")  # at the cap
+    assert path.stat().st_size == MAX_TOML_BYTES
+    assert ErrorModel.from_toml(path).tool.offset.tolist() == [1e-6, 0.0, 0.0]
+    with path.open("a") as file:
+        file.write("\n")  # one byte past it
+    with pytest.raises(ErrorModelError) as info:
+        ErrorModel.from_toml(path)
+    assert str(info.value) == (
+        f"{path}: larger than 4 MB; an error model, tool table or servo file is a few kB (an "
+        "error table of 10,000 positions some 0.2 MB): expected at most 4 MB")

@@ -13,7 +13,6 @@ import tomllib
 from collections.abc import Mapping
 from decimal import Decimal
 from fractions import Fraction
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -56,6 +55,10 @@ from machinesim.exceptions import ErrorModelError
 from machinesim.units import ANGLE, FACTORS, LENGTH
 
 _SECTIONS = ("tool", "tool_geometry", "workpiece", "location", "component")
+#: Bytes beyond which a TOML file is not an error model, tool table or servo file (`_read_toml`):
+#: tomllib and the key scan read 1 MB in some 1.2 s and 10 MB of memory, so a 20 MB file of
+#: one table took 25 s and 210 MB before anything was checked, a 200 MB one minutes and GBs.
+MAX_TOML_BYTES = 4 * 2**20
 _TOML_POSITION_RE = re.compile(r"\s*\(at line (\d+), column (\d+)\)")
 _READABLE_UNITS = {"length": "um", "angle": "urad", "linear": "mm", "rotary": "deg"}
 _SI_UNITS = {"length": "m", "angle": "rad", "linear": "m", "rotary": "rad"}
@@ -128,7 +131,14 @@ def _read_toml(path: str | os.PathLike, error: type) -> tuple[str, dict[str, Any
             # a FIFO with no writer blocks for ever, /dev/zero fills the memory: refuse before
             # reading
             raise error(f"{not_a_regular_file(path)}; expected a TOML file", source=source)
-        text = Path(path).read_bytes().decode("utf-8-sig")
+        with open(path, "rb") as file:
+            data = file.read(MAX_TOML_BYTES + 1)
+        if len(data) > MAX_TOML_BYTES:
+            raise error(f"larger than {MAX_TOML_BYTES // 2**20} MB; an error model, tool table "
+                        "or servo file is a few kB (an error table of 10,000 positions some "
+                        f"0.2 MB): expected at most {MAX_TOML_BYTES // 2**20} MB",
+                        source=source)
+        text = data.decode("utf-8-sig")
         data = tomllib.loads(text)
     except OSError as exc:
         raise error(f"cannot read the file: {exc.strerror or exc}", source=source) from None
