@@ -207,3 +207,17 @@ def test_a_toml_file_past_the_size_cap_is_refused_before_it_is_read_and_one_at_i
     assert str(info.value) == (
         f"{path}: larger than 4 MB; an error model, tool table or servo file is a few kB (an "
         "error table of 10,000 positions some 0.2 MB): expected at most 4 MB")
+
+
+def test_a_polynomial_on_a_spindle_gets_its_refusal_and_no_note_before_it():
+    # sts_lathe's C turns -1e5 .. 1e5 rad: a polynomial there is refused (each_turn), and
+    # far_polynomials noted it first, "reaches -5730 mm at C = -5.73e+06 deg", which a
+    # scenario's --errors printed before the refusal
+    from machinesim.errors.unit_slips import far_polynomials
+    from machinesim.machines import load_machine
+
+    machine = load_machine("sts_lathe")
+    errors = ErrorModel.from_dict({"component": {"C": {"EXC_poly_um_deg": [0.0, 1.0]}}}, "d")
+    assert far_polynomials(errors, machine) == []
+    with pytest.raises(ErrorModelError, match="a polynomial in the angle does not repeat"):
+        machine.check_errors(errors)

@@ -18,6 +18,7 @@ import numpy as np
 
 from machinesim.errors._checks import _shown
 from machinesim.errors.model import ErrorModel
+from machinesim.errors.turns import TURN
 from machinesim.units import FACTORS, is_length
 
 __all__ = ["LARGEST_LIKELY_ERROR_M", "LARGEST_LIKELY_ERROR_RAD", "SHORTEST_TABLE_SHARE",
@@ -178,6 +179,8 @@ def far_polynomials(model: ErrorModel, machine) -> list[str]:
             continue
         i = machine.axes.index(axis)
         lower, upper = float(machine.lower[i]), float(machine.upper[i])
+        if machine.rotary[i] and (lower < -TURN or upper > TURN):
+            continue  # a polynomial there is refused (`each_turn`): no note before that
         for symbol, error in errors.items():
             if error.kind != "poly":
                 continue
@@ -208,7 +211,7 @@ def turn_steps(model: ErrorModel, machine) -> list[str]:
     ``position_deg = [-180.0, 0.0, 180.0]`` on grooving_4axis's C (-360 .. 360 deg) moved
     the tool 0.048 um at X = 10 mm as C passed 180 deg, without a word. Each line begins
     with the file and the key's line, as `below_any_machine`'s."""
-    from machinesim.errors.turns import TURN, table_each_turn
+    from machinesim.errors.turns import table_each_turn
 
     lines = []
     for axis, errors in model.component.items():
