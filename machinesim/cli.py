@@ -469,6 +469,12 @@ def _cut(args) -> int:
         print(f"warning: the part is in {len(pieces)} separate pieces ({volumes} mm^3), where "
               f"{material} {was}: a cut went through it (deeper than the stock, or round a "
               f"piece); {printable(args.out)} holds them all", file=sys.stderr)
+    if not pieces:  # a tool wider than the part, or a through cut over all of it
+        material = "the stock in the --roi windows" if roi else "the stock"
+        print(f"warning: nothing of {material} is left: the cut removed all of it "
+              f"({summary['removed_volume_mm3']:.6g} mm^3), and {printable(args.out)} holds "
+              "no faces (a tool wider than the part, or a depth below its bottom?)",
+              file=sys.stderr)
     if through:
         print(f"warning: the cut went through the bottom of the stock (z = "
               f"{stock.bounds[0, 2] * 1e3:.6g} mm; {through * 1e6:.6g} mm^2 of its bottom face "

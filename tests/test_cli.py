@@ -449,6 +449,27 @@ def test_a_groove_through_the_stock_is_said_to_leave_the_part_in_pieces(tmp_path
     assert code == 0 and "separate pieces" not in err, err
 
 
+def test_a_cut_that_leaves_nothing_of_the_stock_says_so(tmp_path, capsys):
+    """A 60 mm face mill 3 mm down across a 10 x 10 x 2 mm block takes all of it: 200 mm^3
+    removed, a PLY of 0 vertices, which the command wrote with exit 0 and only the bottom's
+    warning; `machinesim view` then refuses the file. A warning now says nothing is left.
+    Half as deep (1 mm: 100 mm^3 taken) leaves one piece and no such word."""
+    for depth, removed in ((3.0, 200.0), (1.0, 100.0)):
+        program = tmp_path / f"face{depth:g}.nc"
+        program.write_text(f"G90 G21 G17\nG00 X-40. Y5. Z1.\nG01 Z-{depth:g} F200.\n"
+                           "X50.\nG00 Z1.\nM30\n")
+        report = tmp_path / f"face{depth:g}.json"
+        code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool",
+                            "flat:30:h=20", "--stock", "block:10x10x2", "--quiet", "--out",
+                            tmp_path / f"face{depth:g}.ply", "--report", report], capsys)
+        assert code == 0, err
+        summary = json.loads(report.read_text())
+        assert summary["removed_volume_mm3"] == pytest.approx(removed, rel=1e-12)
+        assert summary["part_pieces_count"] == (0 if depth > 2 else 1)
+        said = "warning: nothing of the stock is left: the cut removed all of it (200 mm^3)"
+        assert (said in err) == (depth > 2), err
+
+
 def test_an_errors_file_that_sets_nothing_is_noted(tmp_path, capsys):
     """An errors file with a section and no key (or empty) cuts with every error zero, as
     the docs say; a note says so, where a file meant to hold errors was taken silently. One
