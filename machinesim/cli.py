@@ -371,6 +371,7 @@ def _cut(args) -> int:
     from machinesim.cutting.windows import clip_to
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
+    from machinesim.nc.program import KIND_DWELL
     from machinesim.tool_specs import tool_from_spec
     from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
@@ -489,7 +490,7 @@ def _cut(args) -> int:
               f"{lines}) move the tool within its edge plane (a plunge), where a V or nose "
               "tool's zero-thickness edge sweeps no volume; it cuts by moving along its own X",
               file=sys.stderr)
-    elif report.empty_cut and not program.moves:
+    elif report.empty_cut and not (program.kinds != KIND_DWELL).any():  # dwells alone too
         print(f"warning: the program has no moves ({printable(args.program)} holds no "
               "G00/G01/G02/G03 block that runs), so nothing was removed", file=sys.stderr)
     elif report.empty_cut:

@@ -422,6 +422,10 @@ def test_an_empty_program_file_is_refused_and_one_without_moves_says_so(tmp_path
     code, err = run_cli(argv, capsys)
     assert code == 0 and out.exists(), err
     assert "the program has no moves" in err and "does it reach the stock" not in err, err
+    program.write_text("G90 G21\nG04 P500\nM30\n")  # a dwell moves no axis either
+    code, err = run_cli(argv, capsys)
+    assert code == 0 and out.exists(), err
+    assert "the program has no moves" in err and "does it reach the stock" not in err, err
 
 
 @pytest.mark.parametrize("option", ["--out", "--report"])

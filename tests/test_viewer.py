@@ -1187,6 +1187,22 @@ def test_a_program_that_misses_the_stock_is_warned_on_the_page_and_on_stderr(tmp
                 in page.read_text(encoding="utf-8")) == missed
 
 
+def test_a_program_without_moves_is_said_to_have_none_not_to_miss_the_stock(tmp_path,
+                                                                           capsys):
+    # '%', '%' (or a dwell alone) cut nothing; the page sent its user to --stock's placement
+    # ("does it reach the stock?"), where machinesim cut says the program has no moves
+    for name, text in (("none", "%\n%\n"), ("dwell", "G90 G21\nG04 P500\nM30\n")):
+        program, page = tmp_path / f"{name}.nc", tmp_path / f"{name}.html"
+        program.write_text(text)
+        assert run(["grooving_4axis", "--program", str(program), "--stock", STOCK,
+                    "--tool", "v:150", "--max-triangles", str(BUDGET), "--html",
+                    str(page)]) == 0
+        err = capsys.readouterr().err
+        said = "the program has no moves (no G00/G01/G02/G03 block that runs)"
+        assert f"warning: {said}" in err and "does it reach" not in err, err
+        assert f"<b>warning:</b> {said}" in page.read_text(encoding="utf-8")
+
+
 def test_a_report_folder_not_yet_written_is_no_such_folder(tmp_path):
     # docs/viewer.md's `machinesim view reports/tool_rotation_arm/` before the scenario ran
     # said "unknown machine 'reports/tool_rotation_arm/'", as if a machine name were misspelt

@@ -153,7 +153,10 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
 
     stage_times, parts, empty = _stages(trajectory, machine, tool, stock, errors, max_stages,
                                         progress)
-    if empty:
+    if empty and not moving:  # as machinesim cut says it: the stock is not what to move
+        scene.warnings.append("the program has no moves (no G00/G01/G02/G03 block that "
+                              "runs), so nothing was removed")
+    elif empty:
         scene.warnings.append("the program removed no material (does it reach the stock? "
                               "the stock is placed in the workpiece frame: --stock "
                               "block:LxWxH@x,y,z, mm)")
