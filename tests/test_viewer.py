@@ -1203,6 +1203,24 @@ def test_a_program_without_moves_is_said_to_have_none_not_to_miss_the_stock(tmp_
         assert f"<b>warning:</b> {said}" in page.read_text(encoding="utf-8")
 
 
+def test_a_program_that_takes_the_whole_stock_animates_and_says_nothing_is_left(tmp_path,
+                                                                             capsys):
+    # a 60 mm face mill 3 mm down across a 10 x 10 x 2 mm block takes all of it (200 mm^3,
+    # as machinesim cut measures): the page had ended in "machinesim: error: the part has no
+    # vertices" after a RuntimeWarning of NaN bounds; 1 mm down it draws the finished part
+    for depth, gone in ((3.0, True), (1.0, False)):
+        program, page = tmp_path / f"face{depth:g}.nc", tmp_path / f"face{depth:g}.html"
+        program.write_text(f"G90 G21 G17\nG00 X-40. Y5. Z1.\nG01 Z-{depth:g} F200.\n"
+                           "X50.\nG00 Z1.\nM30\n")
+        assert run(["grooving_4axis", "--program", str(program), "--stock", "block:10x10x2",
+                    "--tool", "flat:30:h=20", "--max-triangles", str(BUDGET), "--html",
+                    str(page)]) == 0
+        err = capsys.readouterr().err
+        said = "nothing of the stock is left: the program removed all of it"
+        assert (f"warning: {said}" in err) == gone, err
+        assert (f"<b>warning:</b> {said}" in page.read_text(encoding="utf-8")) == gone
+
+
 def test_a_report_folder_not_yet_written_is_no_such_folder(tmp_path):
     # docs/viewer.md's `machinesim view reports/tool_rotation_arm/` before the scenario ran
     # said "unknown machine 'reports/tool_rotation_arm/'", as if a machine name were misspelt

@@ -171,6 +171,15 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
             switch, [on[0] <= t < (on[1] if len(on) > 1 else np.inf) for t in switch])]
     scene.animate(tracks)
 
+    if parts[-1].triangle_count == 0:  # bounds of nothing are NaN: no finished part to draw
+        scene.warnings.append("nothing of the stock is left: the program removed all of it, "
+                              "so no finished part is drawn (a tool wider than the part, or "
+                              "a depth below its bottom?)")
+        scene.notes += _program_notes(program, trajectory, keys, speed, parts, errors,
+                                      chord_tolerance)
+        if progress is not None:
+            progress(len(parts), len(parts))
+        return lo, hi
     nominal, _ = cut(program, machine, tool=tool, stock=stock, errors=None, start=q0,
                      chord_tolerance=chord_tolerance)
     if progress is not None:
@@ -188,8 +197,16 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
     smap = add_part(scene, "inspection/part", parts[-1], nominal, max_triangles)
     scene.legends.append(legend_for(smap, notes=(
         "finished part (enlarged, right of the machine) vs the nominal machine's",)))
+    scene.notes += _program_notes(program, trajectory, keys, speed, parts, errors,
+                                  chord_tolerance)
+    extent = scale * (part_hi - part_lo)
+    return lo, np.maximum(hi, anchor + extent * [1.0, 0.5, 1.0])
+
+
+def _program_notes(program, trajectory, keys, speed, parts, errors, chord_tolerance):
+    """The overlay's lines on the program, its animation, the part's stages and paths."""
     feeds = _feed_count(trajectory)
-    scene.notes += [
+    notes = [
         f"program: {len(program.moves)} blocks, {trajectory.duration:.3g} s machining",
         f"animation: {keys[-1] / speed:.3g} s ({speed:.3g}x real time)",
         f"part stages: {len(parts) - 1} (stock, then after "
@@ -199,9 +216,8 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
     ]
     chords = arc_chord_note(program, chord_tolerance, takes_path=False)
     if chords:  # as cut() notes it: the stages and the part follow the program's own chords
-        scene.notes.append(chords)
-    extent = scale * (part_hi - part_lo)
-    return lo, np.maximum(hi, anchor + extent * [1.0, 0.5, 1.0])
+        notes.append(chords)
+    return notes
 
 
 def path_note(errors) -> str:
