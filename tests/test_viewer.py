@@ -1221,6 +1221,22 @@ def test_a_program_that_takes_the_whole_stock_animates_and_says_nothing_is_left(
         assert (f"<b>warning:</b> {said}" in page.read_text(encoding="utf-8")) == gone
 
 
+def test_a_program_view_notes_how_its_text_was_read_as_cut_does(tmp_path, capsys):
+    # X-1 Y0.4 Z0.1 without a decimal point read as mm, a file without M30 and text after
+    # its closing %: machinesim cut notes each; view noted only a missing G20/G21
+    program = tmp_path / "grooves.nc"
+    program.write_text("%\nG90 G21\nG00 X-1 Y0.4 Z0.1\nG00 Z-0.02\nG01 X1.2 F500\n"
+                       "G00 Z0.1\n%\nG00 X5.\n")
+    assert run(["grooving_4axis", "--program", str(program), "--stock", STOCK, "--tool",
+                "v:150", "--max-triangles", str(BUDGET), "--html",
+                str(tmp_path / "g.html")]) == 0
+    err = capsys.readouterr().err
+    assert ("note: numbers without a decimal point (X at line 3) were read in mm and deg "
+            "(calculator-type input, the default)") in err, err
+    assert "note: the program has no M30 or M02 (its last move is at line 6)" in err, err
+    assert "note: the text from line 8 on, after the % that ends the program" in err, err
+
+
 def test_a_report_folder_not_yet_written_is_no_such_folder(tmp_path):
     # docs/viewer.md's `machinesim view reports/tool_rotation_arm/` before the scenario ran
     # said "unknown machine 'reports/tool_rotation_arm/'", as if a machine name were misspelt

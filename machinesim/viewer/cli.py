@@ -32,7 +32,10 @@ from machinesim._json import read_json
 from machinesim._log_lines import LOG_AFTER_S, LOG_EVERY_S, log_lines
 from machinesim._program_options import (
     add_reading_options,
+    after_end_note,
     check_reading_options,
+    end_note,
+    integer_note,
     read_for_machine,
     unit_note,
 )
@@ -290,9 +293,12 @@ def _scene(args, budget: int):
         program, chord = read_for_machine(
             args, check_readable_file(args.program, "NC program (--program)"), machine, tool)
         _refuse_tool_changes(program, tool)
-        note = unit_note(program)
-        if note:
-            print(f"note: {printable(note)}", file=sys.stderr)
+        # the notes machinesim cut gives on how the text was read: X10 read as 10 mm, a
+        # file without M30 (cut short?), text after the closing %; view had given the unit's
+        for note in (unit_note(program), integer_note(program), end_note(program),
+                     after_end_note(program)):
+            if note:
+                print(f"note: {printable(note)}", file=sys.stderr)
     if args.errors is not None:
         from machinesim.errors import ErrorModel
 
