@@ -73,6 +73,16 @@ def read_for_machine(args: argparse.Namespace, path, machine, tool):
     return read_program(path, chord_tolerance=chord, **reading), chord
 
 
+def work_offset_notes(program) -> list[str]:
+    """The notes for G54..G59 words the program selects, which the command line gives no
+    offsets for: each is taken as zero, the same as G54."""
+    from machinesim.nc.program import WORK_OFFSETS
+
+    return [f"{word} at line {line} selects a work offset this command is not given: "
+            "taken as zero, the same as G54 (docs/nc.md)"
+            for word, line in program.states.items() if word in WORK_OFFSETS]
+
+
 def integer_note(program) -> str | None:
     """The note for a program read under calculator-type input whose text wrote non-zero
     lengths or angles without a decimal point (``Z-1``: 1 mm here, 1 um on a FANUC control

@@ -47,6 +47,7 @@ from machinesim._program_options import (
     integer_note,
     read_for_machine,
     unit_note,
+    work_offset_notes,
 )
 from machinesim.exceptions import (
     AxisLimitError,
@@ -304,16 +305,12 @@ def _reading_notes(args, program, chord: float) -> list[str]:
     """What the command line chose in reading the program that the user should know: arcs
     and rotary moves split coarser than 1 nm by default, work offsets it was not given, the
     unit of a program that selects none, a program that ends without M02/M30."""
-    from machinesim.nc.program import WORK_OFFSETS
-
     notes = []
     if chord > CHORD_TOLERANCE_M and args.chord_nm is None and _has_chords(program):
         notes.append(f"arcs and rotary moves were split into chords within {chord * 1e9:.4g} "
                      "nm, a tenth of the tool's own facets (--chord-nm sets it; "
                      "docs/cutting.md)")
-    notes += [f"{word} at line {line} selects a work offset this command is not given: "
-              "taken as zero, the same as G54 (docs/nc.md)"
-              for word, line in program.states.items() if word in WORK_OFFSETS]
+    notes += work_offset_notes(program)
     notes += [note for note in (unit_note(program), integer_note(program), end_note(program),
                                 after_end_note(program))
               if note]

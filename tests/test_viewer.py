@@ -1227,6 +1227,13 @@ def test_a_program_view_notes_how_its_text_was_read_as_cut_does(tmp_path, capsys
     program = tmp_path / "grooves.nc"
     program.write_text("%\nG90 G21\nG00 X-1 Y0.4 Z0.1\nG00 Z-0.02\nG01 X1.2 F500\n"
                        "G00 Z0.1\n%\nG00 X5.\n")
+    offset = tmp_path / "g55.nc"  # a work offset the command line is not given
+    offset.write_text("G90 G21 G55\nG00 X-0.2 Y0.4 Z0.1\nG01 Z-0.02 F500.\nX1.2\nM30\n")
+    assert run(["grooving_4axis", "--program", str(offset), "--stock", STOCK, "--tool",
+                "v:150", "--max-triangles", str(BUDGET), "--html",
+                str(tmp_path / "o.html")]) == 0
+    assert ("note: G55 at line 1 selects a work offset this command is not given: taken as "
+            "zero, the same as G54") in capsys.readouterr().err
     assert run(["grooving_4axis", "--program", str(program), "--stock", STOCK, "--tool",
                 "v:150", "--max-triangles", str(BUDGET), "--html",
                 str(tmp_path / "g.html")]) == 0

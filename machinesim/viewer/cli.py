@@ -38,6 +38,7 @@ from machinesim._program_options import (
     integer_note,
     read_for_machine,
     unit_note,
+    work_offset_notes,
 )
 from machinesim.exceptions import InputError, printable
 
@@ -295,8 +296,8 @@ def _scene(args, budget: int):
         _refuse_tool_changes(program, tool)
         # the notes machinesim cut gives on how the text was read: X10 read as 10 mm, a
         # file without M30 (cut short?), text after the closing %; view had given the unit's
-        for note in (unit_note(program), integer_note(program), end_note(program),
-                     after_end_note(program)):
+        for note in (*work_offset_notes(program), unit_note(program), integer_note(program),
+                     end_note(program), after_end_note(program)):
             if note:
                 print(f"note: {printable(note)}", file=sys.stderr)
     if args.errors is not None:
