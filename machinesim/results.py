@@ -22,7 +22,6 @@ import numpy as np
 
 from machinesim._frozen import reduce_frozen
 from machinesim.exceptions import InputError, brief
-from machinesim.identification.fit import MODEL_MISFIT
 
 __all__ = ["FIGURE_UNITS", "Evaluation", "Figure", "Identified", "Result", "fit_notes",
            "note_kind"]
@@ -194,7 +193,7 @@ def fit_notes(fit: str, estimate, *, sigma_leaves_out: str | None = None) -> tup
     so that the fit's misfit is read beside what the procedure knows of its readings.
     """
     notes = tuple(f"{fit}: {note}" for note in estimate.notes)
-    if sigma_leaves_out and estimate.normalised_residual_rms > MODEL_MISFIT:
+    if sigma_leaves_out and estimate.misfit:
         notes += (f"{fit}: its sigma leaves out {sigma_leaves_out}, which may account for "
                   "that misfit; the std this report gives includes it",)
     return notes

@@ -116,7 +116,8 @@ def test_the_report_writes_the_budget_and_the_summary_accepts_it(tmp_path):
 #: A misfit note as `machinesim.experiment.fit_notes` leads it, with its numbers as {}.
 MISFIT = ("fit_check (heights): the readings do not fit the model: normalised residual {} "
           "(about 1 when the model holds every error the readings show and sigma is right; "
-          "residual RMS {} m): an error missing from the parameters or the prior, or sigma "
+          "above {} by chance with probability {} at {} degrees of freedom; residual RMS {} "
+          "m): an error missing from the parameters or the prior, or sigma "
           "too small; the values may be far off")
 
 
@@ -125,7 +126,7 @@ def test_a_reruns_notes_reach_its_rows_budget_md_and_summary_json(tmp_path):
     rows, budget.md under the table and its rows in summary.json; a rerun that notes nothing,
     or only what the run with every source on notes (numbers aside), adds none. Before, the
     reruns' notes were dropped: a row resting on a misfit looked as sound as any."""
-    misfit = MISFIT.format(7.25, "3.1e-08")
+    misfit = MISFIT.format(7.25, 1.34, 0.001, 42, "3.1e-08")
     notes = {None: (), "instrument_noise": (), "artefact_errors": (misfit,),
              "background": ()}
 
@@ -160,7 +161,8 @@ def test_a_reruns_notes_reach_its_rows_budget_md_and_summary_json(tmp_path):
     # the run with every source on misfits too: the same kind of note, other numbers, is not
     # the rerun's own; another kind is
     apart = "fit_check (heights): tool.y and tool.z are barely told apart (correlation 0.999)"
-    notes.update({None: (MISFIT.format(3.5, "1.2e-08"),), "background": (misfit, apart)})
+    notes.update({None: (MISFIT.format(3.5, 1.34, 0.001, 42, "1.2e-08"),),
+                  "background": (misfit, apart)})
     budget = error_budget(noting, list(SOURCES))
     assert budget.notes == {"background": (apart,)}
     assert "artefact_errors off" not in budget.notes_text()

@@ -19,6 +19,7 @@ from machinesim.cutting import cut
 from machinesim.exceptions import InputError
 from machinesim.experiment import Identified, run
 from machinesim.identification import tool_rotation_arm as arm
+from machinesim.identification.fit import misfit_limit
 from machinesim.metrology import Microscope, fit_apexes
 from machinesim.nc import ProgramBuilder
 from machinesim.procedures import tool_rotation_arm as procedure
@@ -865,7 +866,9 @@ def test_a_fit_that_warns_reaches_identified_md_and_summary_json(exact_run, tmp_
     assert rms == pytest.approx(math.sqrt(alone @ alone / t.size), abs=0.01 * UM)
     note = ("fit_check (heights): the readings do not fit the model: normalised residual "
             f"{normalised:.3g} (about 1 when the model holds every error the readings show "
-            f"and sigma is right; residual RMS {rms:.3g} m): an error missing from the "
+            f"and sigma is right; above {misfit_limit(t.size - 3):.3g} by chance with "
+            f"probability 0.001 at {t.size - 3} degrees of freedom; residual RMS {rms:.3g} "
+            "m): an error missing from the "
             "parameters or the prior, or sigma too small; the values may be far off")
     assert identified.notes[0] == note
     assert identified.notes == (

@@ -57,7 +57,7 @@ from machinesim.metrology.instruments import as_machine
 
 __all__ = [
     "Combination", "Estimate", "NotConvergedError", "Observation", "Observations",
-    "PlanQuality", "fit", "observations", "plan_quality",
+    "PlanQuality", "fit", "misfit_limit", "observations", "plan_quality",
 ]
 
 #: Gauss-Newton steps before `fit` gives up. From a zero prior it converges in 4 steps for
@@ -65,10 +65,33 @@ __all__ = [
 #: 50 leaves room for a slowly converging fit without hiding a divergence.
 MAX_ITERATIONS = 50
 
-#: Normalised residual RMS beyond which the readings are reported as not fitting the model:
-#: with N - rank degrees of freedom and right sigma it is about 1 (above 1.5 by chance with
-#: probability < 1e-3 from 20 degrees of freedom on).
+#: The chance that `fit` notes a misfit of readings the model holds, their sigma right: with
+#: Gaussian noise of those sigma, the weighted sum of squared residuals at the estimate,
+#: ``normalised_residual_rms**2 * dof``, is chi-square with dof = N - rank degrees of
+#: freedom, and a misfit is noted when it exceeds that distribution's 1 - MISFIT_FALSE_ALARM
+#: quantile (`misfit_limit`; docs/identification.md, "The misfit test").
+MISFIT_FALSE_ALARM = 1e-3
+
+#: Normalised residual RMS beyond which the readings are reported as not fitting the model
+#: where the chi-square test has no degrees of freedom to go on (`misfit_limit` of dof < 1):
+#: the fallback. At dof 0 `fit`'s normalised residual is NaN, never above it.
 MODEL_MISFIT = 3.0
+
+
+def misfit_limit(dof: int) -> float:
+    """The normalised residual RMS above which a fit with ``dof`` degrees of freedom (N - rank)
+    is noted as not fitting its model: ``sqrt(chi2.isf(MISFIT_FALSE_ALARM, dof) / dof)``, the
+    RMS that right sigma and a right model exceed with probability `MISFIT_FALSE_ALARM`
+    (3.29 at 1 degree of freedom, 1.39 at 33, 1.01 at 100,000); `MODEL_MISFIT` when
+    ``dof`` < 1."""
+    from scipy.stats import chi2  # here: scipy.stats takes long to import
+
+    if isinstance(dof, bool) or not isinstance(dof, int | np.integer):
+        raise InputError(f"expected the degrees of freedom as an int, got {dof!r}", key="dof")
+    dof = int(dof)
+    if dof < 1:
+        return MODEL_MISFIT
+    return math.sqrt(float(chi2.isf(MISFIT_FALSE_ALARM, dof)) / dof)
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,10 +132,17 @@ class Estimate(_Figures):
     scale_notes: tuple = ()
 
     @property
+    def misfit(self) -> bool:
+        """True when the readings do not fit the model: the normalised residual is above
+        `misfit_limit` of N - rank degrees of freedom (a parameter the readings show but
+        neither ``params`` nor the prior holds, or sigma given too small; with right sigma
+        and a right model, by chance with probability `MISFIT_FALSE_ALARM`)."""
+        return bool(self.normalised_residual_rms
+                    > misfit_limit(self.n_observations - self.rank))
+
+    @property
     def notes(self) -> tuple[str, ...]:
-        """As `PlanQuality.notes`, and when the readings do not fit the model: a normalised
-        residual above `MODEL_MISFIT` (a parameter the readings show but neither ``params``
-        nor the prior holds, or sigma given too small)."""
+        """As `PlanQuality.notes`, and when the readings do not fit the model (`misfit`)."""
         out = list(super().notes)
         for c in self.unseen_at_prior:
             stds = ", ".join(f"{n} {self.std[self.names.index(n)]:.3g}" for n in c.names)
@@ -121,10 +151,13 @@ class Estimate(_Figures):
                        f"these values rest on that small lever (std {stds}) and may be far "
                        "off (a compensation through them may add error). Fix a datum (leave "
                        "a parameter out of the fit) or add readings that see it")
-        if self.normalised_residual_rms > MODEL_MISFIT:
+        if self.misfit:
+            dof = self.n_observations - self.rank
             out.append(f"the readings do not fit the model: normalised residual "
                        f"{self.normalised_residual_rms:.3g} (about 1 when the model holds "
-                       f"every error the readings show and sigma is right; residual RMS "
+                       f"every error the readings show and sigma is right; above "
+                       f"{misfit_limit(dof):.3g} by chance with probability "
+                       f"{MISFIT_FALSE_ALARM:g} at {dof} degrees of freedom; residual RMS "
                        f"{self.residual_rms:.3g} m): an error missing from the parameters "
                        "or the prior, or sigma too small; the values may be far off")
         return tuple(out)
