@@ -605,3 +605,28 @@ def test_a_planner_refusal_of_a_program_without_n_words_names_its_line():
     Arrays.targets = targets
     with pytest.raises(NCProgramError, match=r"^a.nc, line 3, key 'F': a feed move \(G01"):
         plan(Arrays(), load_machine("robonano_a0ib"))
+
+
+def test_move_and_segment_indices_are_read_as_a_tuple_reads_them():
+    # a float index ended in "AttributeError: 'float' object has no attribute '__index__'"
+    # (program.moves, trajectory.segments) or numpy's IndexError (trajectory.segment); a
+    # tuple of the same moves refuses it with TypeError and takes a NumPy integer or a bool
+    program = parse_program("G90 G21\nG01 X1. F100.\nG01 X2.\nM30\n")
+    tr = plan(program, "robonano_ui")
+    as_tuple = tuple(program.moves)
+    for index in (1.0, "1", None):
+        with pytest.raises(TypeError, match="move indices must be integers or slices, not"):
+            program.moves[index]
+        with pytest.raises(TypeError, match="move indices must be integers or slices, not"):
+            tr.segments[index]
+        with pytest.raises(TypeError, match="move indices must be integers or slices, not"):
+            tr.segment(index)
+        with pytest.raises(TypeError):
+            as_tuple[index]
+    assert program.moves[np.int64(1)] == program.moves[True] == as_tuple[1]
+    assert program.moves[-1] == as_tuple[-1]
+    assert tr.segments[np.int64(-1)].line == tr.segments[len(tr) - 1].line
+    with pytest.raises(IndexError, match="move index 2 out of range for 2 moves"):
+        program.moves[2]
+    with pytest.raises(IndexError, match=f"move index {len(tr)} out of range"):
+        tr.segment(len(tr))

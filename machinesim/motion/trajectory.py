@@ -9,7 +9,7 @@ from typing import Protocol, overload
 
 import numpy as np
 
-from machinesim.nc.program import MOVE_KINDS
+from machinesim.nc.program import MOVE_KINDS, move_index
 
 
 class ServoModel(Protocol):
@@ -117,10 +117,7 @@ class Trajectory:
 
     def segment(self, i: int) -> Segment:
         """Move ``i`` as a `Segment` (views, no copy)."""
-        n = len(self.kinds)
-        if not -n <= i < n:
-            raise IndexError(f"move index {i} out of range for {n} moves")
-        i %= n
+        i = move_index(i, len(self.kinds))
         a, b = int(self.offsets[i]), int(self.offsets[i + 1])
         return Segment(MOVE_KINDS[self.kinds[i]], self.q[a:b], self.t[a:b], int(self.lines[i]))
 
@@ -157,7 +154,7 @@ class Segments(Sequence):
     def __getitem__(self, index):
         if isinstance(index, slice):
             return tuple(self._trajectory.segment(i) for i in range(*index.indices(len(self))))
-        return self._trajectory.segment(index.__index__())
+        return self._trajectory.segment(index)
 
     def __iter__(self) -> Iterator[Segment]:
         tr = self._trajectory

@@ -12,6 +12,7 @@ every `Program`, however it was made, can be written back as NC text.
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any, overload
 
@@ -48,6 +49,22 @@ from machinesim.nc.moves import (  # noqa: F401  (re-exported: the names of this
 )
 
 
+def move_index(index: Any, n: int) -> int:
+    """The move ``index`` names among ``n`` moves, counted from 0 (a negative one from the
+    end), as a tuple reads an index: an integer (anything with ``__index__``: a NumPy
+    integer, a bool) within -n .. n - 1, else IndexError; anything else (a float such as
+    1.0, a string, None) TypeError, as a tuple refuses it. Both `Moves` and the planned
+    trajectory's `machinesim.motion.Segments` read their indices so."""
+    try:
+        i = operator.index(index)
+    except TypeError:
+        raise TypeError(f"move indices must be integers or slices, not "
+                        f"{type(index).__name__} ({index!r})") from None
+    if not -n <= i < n:
+        raise IndexError(f"move index {i} out of range for {n} moves")
+    return i % n
+
+
 class Moves(Sequence):
     """The moves of a `Program` as a read-only sequence of `Move` values made on demand.
 
@@ -72,11 +89,7 @@ class Moves(Sequence):
     def __getitem__(self, index):
         if isinstance(index, slice):
             return tuple(self._program._move(i) for i in range(*index.indices(len(self))))
-        n = len(self)
-        i = index.__index__()
-        if not -n <= i < n:
-            raise IndexError(f"move index {index} out of range for {n} moves")
-        return self._program._move(i % n)
+        return self._program._move(move_index(index, len(self)))
 
     def __iter__(self) -> Iterator[Move]:
         program = self._program
