@@ -92,6 +92,9 @@ def axis_values(machine, wMt, errors=None, q_start=None, check_limits: bool = Tr
         keeping the solution that matches best, within the travel first, then nearest
         the start. ``rotation_residual`` is then the tool axis's misalignment.
 
+    ``machine`` is a `machinesim.machines.Machine` or the name of a shipped one (anything
+    else an InputError, as ``check_limits`` not True or False).
+
     Raises
     ------
     UnreachableError
@@ -99,6 +102,12 @@ def axis_values(machine, wMt, errors=None, q_start=None, check_limits: bool = Tr
     AxisLimitError
         When the solution lies outside the travel (``check_limits``).
     """
+    # (imported here: metrology's instruments import the machines, which import this)
+    from machinesim.metrology._arrays import as_flag
+    from machinesim.metrology.instruments import as_machine
+
+    machine = as_machine(machine)
+    check_limits = as_flag(check_limits, "check_limits")
     target = np.asarray(wMt, dtype=np.float64)
     if target.shape[-2:] != (4, 4) or target.ndim not in (2, 3):
         raise InputError(f"expected a pose of shape (4, 4) or (N, 4, 4), got {target.shape}")

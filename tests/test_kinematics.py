@@ -393,6 +393,27 @@ def test_axis_values_from_zero_on_the_nominal_machine():
     np.testing.assert_allclose(solution.q, q, atol=1e-12)
 
 
+def test_inverse_axis_values_takes_a_machine_or_its_name_and_refuses_anything_else():
+    # machinesim.inverse.axis_values('robonano_a0ib', ...) ended in "AttributeError: 'str'
+    # object has no attribute 'axes'", None likewise; check_limits="no" counted as True
+    from machinesim.exceptions import ModelError
+    from machinesim.inverse import axis_values
+
+    machine = load_machine("robonano_a0ib")
+    q = np.array([3 * MM, -2 * MM, 1 * MM, math.radians(20), math.radians(-30)])
+    solution = axis_values("robonano_a0ib", machine.tool_pose(q))
+    np.testing.assert_allclose(solution.q, q, atol=1e-12)
+    for bad in (None, 3, {}):
+        with pytest.raises(InputError) as info:
+            axis_values(bad, np.eye(4))
+        assert info.value.key == "machine"
+    with pytest.raises(ModelError, match="nope"):
+        axis_values("nope", np.eye(4))
+    with pytest.raises(InputError) as info:
+        axis_values(machine, np.eye(4), check_limits="no")
+    assert info.value.key == "check_limits"
+
+
 def test_axis_values_reports_the_orientation_a_planer_cannot_make():
     machine = load_machine("planer_4axis")
     target = trans([1 * MM, 2 * MM, 0.0]) @ rot(1, 0.01)  # a tilt about Y: no axis for it
