@@ -132,6 +132,26 @@ def test_a_followed_path_that_overshoots_the_travel_is_refused_naming_line_and_o
     assert report.limit_violations[0].startswith("axis X = 100.001900 mm at line 5")
 
 
+def test_an_axis_that_overshoots_in_several_runs_is_listed_once_at_its_worst():
+    # two turning runs (a plunge between them) each overshooting X by 2 um: X was listed
+    # once per run ('at line 5' and 'at line 7'), where the report lists an axis once. The
+    # second run ends at X 99.99995 mm: followed 100.00195 mm, 1.95 um past the travel
+    from machinesim.exceptions import AxisLimitError
+
+    program = parse_program("G90 G21 G94\nG00 X99.999 Z0.1 C0.\nG01 Z0. F10.\n"
+                            "G01 X99.9995 C360.\nG01 X99.9999 C720.\nG01 Z-0.001\n"
+                            "G01 X99.99995 C1080.\nM30\n")
+    _, report = turn(program, "sts_lathe", "nose:0.2:90", servo=_Overshoot(),
+                     allow_overtravel=True)
+    assert report.limit_violations == (
+        "axis X = 100.001950 mm at line 7 as the servo follows it, 0.001950 mm beyond its "
+        "travel -100.000000 mm .. 100.000000 mm, which the command keeps (the loop "
+        "overshoots)",)
+    with pytest.raises(AxisLimitError, match=re.escape(  # refused at the first run, as before
+            "axis X = 100.001900 mm at line 5 as the servo follows it")):
+        turn(program, "sts_lathe", "nose:0.2:90", servo=_Overshoot())
+
+
 def test_the_lathe_s_following_refusals_name_the_block_s_n_word_beside_its_line():
     # with N words the refusals of a followed run (a servo that jumps, an overshoot past the
     # travel, refused or listed) name the block, 'line 4 (N40)', as the reader's do; they

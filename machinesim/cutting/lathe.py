@@ -59,7 +59,12 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from machinesim.cutting.lathe_following import follow_run, followed_overtravel
+from machinesim.cutting.lathe_following import (
+    follow_run,
+    followed_beyond,
+    refuse_followed,
+    worst_beyond,
+)
 from machinesim.cutting.program import _overtravel, _refuse_far
 from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
@@ -242,14 +247,16 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
     beyond = {entry.split(" ", 2)[1] for entry in limits}  # the axes the command takes out
+    overshoots = []  # per run, `followed_beyond`'s axes: each listed once, at its worst
     for command_t, points, lines in _timed_runs(program, machine, with_lines=True):
         t, points, reached = follow_run(servo, command_t, points, lines, machine,
                                         getattr(program, "source", "<program>"),
                                         block_at=program.block_at)
-        if reached is not points:
-            limits += followed_overtravel(machine, command_t, lines, t, reached,
-                                          getattr(program, "source", None), allow_overtravel,
-                                          beyond, block_at=program.block_at)
+        if reached is not points:  # refused at the first run that overshoots, or listed
+            overshoots.append(followed_beyond(machine, command_t, lines, t, reached, beyond,
+                                              block_at=program.block_at))
+            refuse_followed(worst_beyond(machine, overshoots[-1]),
+                            getattr(program, "source", None), allow_overtravel)
         for k, axis in enumerate(machine.axes):
             peak[axis] = max(peak[axis], float(np.max(np.abs(points[:, k] - reached[:, k]))))
         poses = machine.tool_pose(reached, errors)
@@ -257,6 +264,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
         seconds += float(t[-1])
         c = points[:, machine.axes.index("C")]
         turns += abs(float(c[-1] - c[0])) / (2.0 * math.pi)
+    limits += worst_beyond(machine, *overshoots)
     part = TurnedPart(tuple(paths), tool, top)
     lowest = min(float(path.z.min()) for path in paths)
     empty = not lowest < top  # the nose's lowest point is its tip (`nose_profile`)

@@ -123,22 +123,18 @@ def chord_errors(servo, t, points, reached, axes, rotary) -> np.ndarray:
     return np.sqrt(np.sum(off[:, keep] ** 2, axis=1))
 
 
-def followed_overtravel(machine, command_t, lines, t, reached, source, allow: bool,
-                        commanded_beyond=(), *,
-                        block_at: Callable[[int], int | None] = _no_block) -> tuple[str, ...]:
+def followed_beyond(machine, command_t, lines, t, reached, commanded_beyond=(), *,
+                    block_at: Callable[[int], int | None] = _no_block
+                    ) -> dict[str, tuple[float, str]]:
     """Where the servo's followed run ``reached`` (samples at times ``t``; the command's steps
-    at times ``command_t``, their program ``lines``) takes an axis beyond its travel, one
-    description an axis: the value, the line, by how much, the travel. A loop that
-    overshoots carries an axis past a travel the command keeps (the command's own values
-    are checked before anything is turned, `machinesim.cutting.program._overtravel`; axes
-    in ``commanded_beyond`` are listed there and skipped here); a line is named with its
-    block's N word (``block_at``, as `follow_run`). Raises `AxisLimitError` unless
-    ``allow``."""
+    at times ``command_t``, their program ``lines``) takes an axis beyond its travel: per
+    axis letter, by how much (m or rad) and its description (the value, the line, by how
+    much, the travel), at the run's worst sample. Axes in ``commanded_beyond`` are skipped
+    (`followed_overtravel`)."""
     from machinesim.cutting.program import _format
-    from machinesim.exceptions import AxisLimitError
     from machinesim.tolerances import LIMIT_SLACK
 
-    found = []
+    found = {}
     for i, letter in enumerate(machine.axes):
         if letter in commanded_beyond:
             continue
@@ -152,16 +148,52 @@ def followed_overtravel(machine, command_t, lines, t, reached, source, allow: bo
         value = float(reached[worst, i])
         unit = _format(bool(machine.rotary[i]), value, (low, high))
         line = int(lines[step])
-        found.append(f"axis {letter} = {unit(value)} at {line_of(line, block_at(line))} as "
-                     f"the servo follows it, {unit(float(beyond[worst]))} beyond its travel "
-                     f"{unit(low)} .. {unit(high)}, which the command keeps (the loop "
-                     "overshoots)")
+        found[letter] = (float(beyond[worst]), (
+            f"axis {letter} = {unit(value)} at {line_of(line, block_at(line))} as "
+            f"the servo follows it, {unit(float(beyond[worst]))} beyond its travel "
+            f"{unit(low)} .. {unit(high)}, which the command keeps (the loop overshoots)"))
+    return found
+
+
+def worst_beyond(machine, *founds: dict[str, tuple[float, str]]) -> tuple[str, ...]:
+    """The descriptions of `followed_beyond`'s ``founds`` (one per run), one per axis in the
+    machine's axis order: the run that takes it farthest (the first of equals)."""
+    worst: dict[str, tuple[float, str]] = {}
+    for found in founds:
+        for letter, (by, text) in found.items():
+            if letter not in worst or by > worst[letter][0]:
+                worst[letter] = (by, text)
+    return tuple(worst[letter][1] for letter in machine.axes if letter in worst)
+
+
+def followed_overtravel(machine, command_t, lines, t, reached, source, allow: bool,
+                        commanded_beyond=(), *,
+                        block_at: Callable[[int], int | None] = _no_block) -> tuple[str, ...]:
+    """Where the servo's followed run ``reached`` (samples at times ``t``; the command's steps
+    at times ``command_t``, their program ``lines``) takes an axis beyond its travel, one
+    description an axis: the value, the line, by how much, the travel (`followed_beyond`;
+    a turn of several runs lists each axis once, at its worst run: `worst_beyond`). A loop
+    that overshoots carries an axis past a travel the command keeps (the command's own
+    values are checked before anything is turned, `machinesim.cutting.program._overtravel`;
+    axes in ``commanded_beyond`` are listed there and skipped here); a line is named with
+    its block's N word (``block_at``, as `follow_run`). Raises `AxisLimitError` unless
+    ``allow``."""
+    found = worst_beyond(machine, followed_beyond(machine, command_t, lines, t, reached,
+                                                  commanded_beyond, block_at=block_at))
+    refuse_followed(found, source, allow)
+    return found
+
+
+def refuse_followed(found: tuple[str, ...], source, allow: bool) -> None:
+    """Raise `AxisLimitError` on `followed_overtravel`'s descriptions ``found`` unless
+    ``allow`` (or none were found)."""
+    from machinesim.exceptions import AxisLimitError
+
     if found and not allow:
         where = f"{source}: " if source else ""
         raise AxisLimitError(f"{where}{'; '.join(found)}; nothing was turned "
                              "(allow_overtravel=True turns it anyway and lists it)")
-    return tuple(found)
 
 
-__all__ = ["FOLLOWED_SLACK", "chord_errors", "follow_held", "follow_run",
-           "followed_overtravel"]
+__all__ = ["FOLLOWED_SLACK", "chord_errors", "follow_held", "follow_run", "followed_beyond",
+           "followed_overtravel", "refuse_followed", "worst_beyond"]
