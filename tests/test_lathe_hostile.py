@@ -416,3 +416,29 @@ def test_the_lathes_notes_name_a_line_with_its_block_number_as_refusals_do():
     # plan names them as the lathe does
     plan_notes = machinesim.motion.plan(program, lab.machine).notes
     assert [n for n in plan_notes if "feed move" in n or "dwell" in n] == list(notes[1:])
+
+
+def test_a_move_that_only_kept_an_arc_length_is_noted_by_its_own_length_as_plan_times_it():
+    # a G02 plunge (R10 mm in XZ at F0.001, 10 um chords of 0.8727 mm of arc: 52,360 s
+    # each, under a day) cut at its fifth chord after the move to X10 Z0: that move goes
+    # hypot(10 - 5.7738, 0.9369) = 4.329 mm, 259,728 s (72.1 h) by plan, but the lathe's
+    # note took the 0.8727 mm of arc it kept (52,360 s) and said nothing
+    from machinesim.motion import plan
+    from machinesim.nc import Program, parse_program
+
+    arc = parse_program("G90 G21 G18\nG00 X10. Z0. C0.\nG01 X10. F0.001\n"
+                        "G02 X10. Z-20. R10.\nM30\n", chord_tolerance=1e-5)
+    k = int(np.flatnonzero(arc.lines == 4)[4])
+    face = parse_program("G90 G21\nG01 X9. Z-20. C360. F10.\nM30\n")
+    program = Program.from_moves(arc.moves[:2] + arc.moves[k:] + tuple(face.moves),
+                                 source="cut.nc")
+    by_hand = np.hypot(*(arc.targets[k, [0, 2]] - [0.01, 0.0])) / (0.001e-3 / 60.0)
+    assert by_hand == pytest.approx(2.597e5, rel=1e-3)
+    assert plan(program, "sts_lathe").segments[2].duration == pytest.approx(by_hand, rel=1e-9)
+    _, report = turn(program, "sts_lathe")
+    assert any(note.startswith("the feed move of line 4 takes 2.6e+05 s (72.1 h) at F0.001")
+               for note in report.notes)
+    # the whole arc, each chord a chord of it: no note (52,360 s a chord), as before
+    whole = Program.from_moves(arc.moves[:] + tuple(face.moves), source="arc.nc")
+    _, report = turn(whole, "sts_lathe")
+    assert not any("feed move" in note for note in report.notes)

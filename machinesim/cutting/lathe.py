@@ -70,7 +70,7 @@ from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError, line_of
 from machinesim.metrology._arrays import as_flag, as_floats, as_number
-from machinesim.motion.timing import slow_move_notes
+from machinesim.motion.timing import on_chord, slow_move_notes
 from machinesim.nc.moves import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
 from machinesim.servo import check_servo
@@ -351,7 +351,9 @@ def _untimed_moves(program, machine) -> tuple[float, tuple[str, ...]]:
     them): the longest feed move when it takes more than a day, turning or not (a plunge
     at F0.000001), and the longest dwell beyond an hour. Neither a plunge nor a dwell is
     in a turning run, which `_timed_runs` times. A chord of an arc (a G02/G03 plunge) takes
-    its piece of arc over F (`machinesim.nc.Program.arc_lengths`), as `plan` times it."""
+    its piece of arc over F (`machinesim.nc.Program.arc_lengths`) when it is a chord of it
+    (`machinesim.motion.timing.on_chord`), as `plan` times it; a move that only kept an arc
+    length (a program cut from an arc's middle) its own length."""
     kinds = np.asarray(program.kinds)
     feeds = np.asarray(program.feeds, dtype=np.float64)
     durations = np.where(kinds == KIND_DWELL, np.asarray(program.dwells, dtype=np.float64),
@@ -363,8 +365,10 @@ def _untimed_moves(program, machine) -> tuple[float, tuple[str, ...]]:
     lengths = _lengths(q[linear - first - 1], q[linear - first], machine.axes)
     arcs = getattr(program, "arc_lengths", None)  # none in a program pickled before them
     if isinstance(arcs, np.ndarray) and arcs.shape == kinds.shape:
-        on_arc = ~np.isnan(arcs[linear])
-        lengths[on_arc] = arcs[linear][on_arc]
+        on_arc = np.flatnonzero(~np.isnan(arcs[linear]))
+        ends = q[linear[on_arc] - first] - q[linear[on_arc] - first - 1]
+        on_arc = on_arc[on_chord(arcs[linear[on_arc]], ends, machine.rotary)]
+        lengths[on_arc] = arcs[linear[on_arc]]
     with np.errstate(divide="ignore", invalid="ignore"):  # F none or 0: no time, no note
         times = np.maximum(lengths / feeds[linear],
                            _at_limits(q[linear - first - 1], q[linear - first],
