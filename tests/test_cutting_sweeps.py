@@ -345,3 +345,25 @@ def test_a_ball_end_mills_sweeps_are_made_again_when_read_and_cut_the_same_part(
     assert report.swept_volume == held_report.swept_volume
     for a, b in zip(held_part.mesh(), part.mesh(), strict=True):
         assert a.tobytes() == b.tobytes()
+
+
+def test_a_path_of_one_pose_removes_the_tool_standing_there():
+    """One pose is the tool standing there: it removes its own volume, as the same pose
+    given twice does (it had formed no sweep and removed nothing, without a word). A flat
+    end mill 1 mm into a block, well inside it: the regular polygon of its corners on the
+    circle, n/2 r^2 sin(2 pi / n), times the depth."""
+    tool = FlatEndMill(0.5e-3)
+    n, depth = tool.segments, 1e-3
+    assert np.allclose(np.hypot(*tool.vertices()[:n, :2].T), 0.5e-3, rtol=1e-15)
+    by_hand = n / 2 * 0.5e-3 ** 2 * math.sin(2 * math.pi / n) * depth
+    stock = block(10e-3, 10e-3, 2e-3)
+    at = np.eye(4)
+    at[:3, 3] = (5e-3, 5e-3, -depth)
+    one, one_report = remove(stock, tool, [at[None]])
+    two, two_report = remove(stock, tool, [np.stack([at, at])])
+    assert one_report.removed_volume == pytest.approx(by_hand, rel=VOLUME_REL)
+    assert one_report.n_sweeps == two_report.n_sweeps == 1
+    assert not one_report.empty_cut
+    assert one_report.removed_volume == two_report.removed_volume
+    assert one.manifold.volume() == pytest.approx(two.manifold.volume(), rel=VOLUME_REL)
+    assert stock.manifold.volume() - one.manifold.volume() == pytest.approx(by_hand, rel=1e-9)

@@ -124,7 +124,8 @@ class EngineReport:
         Volume removed from the stock (clipped to the ROI), m^3, integrated over the cut
         (exact to float64 round-off of the cut's own size, whatever the stock's).
     n_sweeps : int
-        Sweeps in the input (consecutive pose pairs over all paths).
+        Sweeps in the input (consecutive pose pairs over all paths; one for a path of one
+        pose).
     n_sweeps_cut : int
         Sweeps that reach the stock region and were subtracted.
     n_degenerate : int
@@ -371,7 +372,8 @@ def remove(
         The tool (machinesim.tools), in its tool_tip frame.
     paths : sequence of array-like, each shape (N_i, 4, 4)
         wMt poses of the tool_tip frame in the workpiece frame (m). Consecutive poses of a
-        path form sweeps; nothing joins one path to the next.
+        path form sweeps; a path of one pose is one sweep, the tool standing there (its
+        own volume, as that pose given twice); nothing joins one path to the next.
     roi : array-like, shape (n, 4), optional
         Windows (xmin, xmax, ymin, ymax), m. Only sweeps touching a window are cut and the
         result is the stock clipped to the windows.
@@ -420,6 +422,10 @@ def remove(
                          "'block:10x10x2' is made one by machinesim.workpiece.stock_from_spec",
                          key="stock")
     paths = _check_paths(paths)
+    # A path of one pose is the tool standing there, and the volume it sweeps, the hull of
+    # that pose and itself, is the tool: one sweep, as the same pose given twice (it had
+    # formed no sweep and was passed over without a word).
+    paths = [np.concatenate([poses, poses]) if len(poses) == 1 else poses for poses in paths]
     _check_turns(paths, bool(tool.rotational))
     if method not in ("auto", "boolean"):
         raise InputError(f"method must be 'auto' or 'boolean', got {method!r}", key="method")
