@@ -364,6 +364,7 @@ def _cut(args) -> int:
 
     from machinesim.cutting import cut
     from machinesim.cutting.breakthrough import bottom_lost
+    from machinesim.cutting.report import NOTHING_LEFT
     from machinesim.cutting.roi import check_roi_meets
     from machinesim.cutting.windows import clip_to
     from machinesim.errors import ErrorModel
@@ -448,8 +449,11 @@ def _cut(args) -> int:
         print(f"  largest following error: {lags}")
     if args.report is not None:
         print(f"wrote {args.report} (cut report, JSON, units in every key)")
+    # nothing of the stock left is cut()'s note (`nothing_left_note`), said as a warning
+    left = [note for note in summary["notes"] if note.startswith(NOTHING_LEFT)]
     for note in summary["notes"]:  # a note may quote a file's name: escaped, as in errors
-        print(f"note: {printable(note)}", file=sys.stderr)
+        if note not in left:
+            print(f"note: {printable(note)}", file=sys.stderr)
     _warn_each(program, report.holder_contact, "holder touched the part at {}",
                "holder_contact_lines")
     _warn_each(program, report.rapids_that_cut, "rapid cut the part at {}",
@@ -467,12 +471,8 @@ def _cut(args) -> int:
         print(f"warning: the part is in {len(pieces)} separate pieces ({volumes} mm^3), where "
               f"{material} {was}: a cut went through it (deeper than the stock, or round a "
               f"piece); {printable(args.out)} holds them all", file=sys.stderr)
-    if not pieces:  # a tool wider than the part, or a through cut over all of it
-        material = "the stock in the --roi windows" if roi else "the stock"
-        print(f"warning: nothing of {material} is left: the cut removed all of it "
-              f"({summary['removed_volume_mm3']:.6g} mm^3), and {printable(args.out)} holds "
-              "no faces (a tool wider than the part, or a depth below its bottom?)",
-              file=sys.stderr)
+    for note in left:  # a tool wider than the part, or a through cut over all of it
+        print(f"warning: {note}; {printable(args.out)} holds none", file=sys.stderr)
     if through:
         print(f"warning: the cut went through the bottom of the stock (z = "
               f"{stock.bounds[0, 2] * 1e3:.6g} mm; {through * 1e6:.6g} mm^2 of its bottom face "

@@ -468,6 +468,9 @@ def test_a_cut_that_leaves_nothing_of_the_stock_says_so(tmp_path, capsys):
         assert summary["part_pieces_count"] == (0 if depth > 2 else 1)
         said = "warning: nothing of the stock is left: the cut removed all of it (200 mm^3)"
         assert (said in err) == (depth > 2), err
+        # cut()'s note, read from its report: in the JSON's notes, a warning on stderr once
+        noted = [n for n in summary["notes"] if n.startswith("nothing of the stock is left")]
+        assert len(noted) == (depth > 2) and "note: nothing" not in err, err
 
 
 def test_an_errors_file_that_sets_nothing_is_noted(tmp_path, capsys):

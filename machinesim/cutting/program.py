@@ -32,6 +32,7 @@ from machinesim.cutting.report import (
     CutReport,
     arc_chord_note,
     nc_summary,
+    nothing_left_note,
     peak_following_error,
 )
 from machinesim.cutting.roi import check_roi_meets
@@ -202,8 +203,9 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     sheets, sheet_note = SheetReport(), None
     if any(e.method == "boolean" for e in engines):
         part, sheets, sheet_note = trim_sheets(part)
+    removed = float(sum(e.removed_volume for e in engines) + sheets.volume)
     report = CutReport(
-        removed_volume_m3=float(sum(e.removed_volume for e in engines) + sheets.volume),
+        removed_volume_m3=removed,
         machining_time_s=trajectory.duration,
         cutting_time_s=trajectory.cutting_time,
         sweeps=sum(int(e.n_sweeps_cut) for e in engines),
@@ -215,7 +217,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         engine="+".join(dict.fromkeys(e.method for e in engines)),
         elapsed_s=time.perf_counter() - began,
         notes=tuple(note for note in (*trajectory.notes, *tools.notes, sheet_note,
-                                      arc_chord_note(program, chord_tolerance)) if note),
+                                      arc_chord_note(program, chord_tolerance),
+                                      nothing_left_note(part, removed, roi)) if note),
         holder_contact=tuple(sorted(holder)),
         sideways_lines=tuple(sorted(sideways)),
         edge_plane_lines=tuple(sorted(in_plane)),

@@ -46,6 +46,8 @@ class CutReport:
     elapsed_s : float
         Wall time of the simulation.
     notes : tuple of str
+        What a reader of the part should know: how the program was read and cut, sheets
+        left, and nothing of the stock left (`nothing_left_note`).
     holder_contact : tuple of int
         Source lines of moves in which the top of the tool's body, where its holder begins,
         came below the top of the stock over it (`EngineReport.holder_contact`).
@@ -187,4 +189,23 @@ def arc_chord_note(program, chord_tolerance: float, *, takes_path: bool = True) 
             f"chord_tolerance={chord_tolerance:.4g} to follow them as closely)")
 
 
-__all__ = ["CutReport", "arc_chord_note", "nc_summary", "peak_following_error"]
+#: How `nothing_left_note` begins, with or without windows: ``machinesim cut`` prints that
+#: note as a warning.
+NOTHING_LEFT = "nothing of the stock"
+
+
+def nothing_left_note(part, removed_m3: float, roi=None) -> str:
+    """A note when ``part`` has no faces, else '': the cut removed all of the stock (of the
+    stock in the ``roi`` windows, which `cut` refuses when none overlaps it, so there was
+    material to remove), as a face mill wider than the part taken below its bottom does. A
+    part file of it holds no faces, which ``machinesim view`` refuses."""
+    if part.triangle_count:
+        return ""
+    material = "the stock" if roi is None else "the stock in the roi windows"
+    return (f"nothing of {material} is left: the cut removed all of it "
+            f"({removed_m3 * 1e9:.6g} mm^3), and the part has no faces (a tool wider than "
+            "the part, or a depth below its bottom?)")
+
+
+__all__ = ["NOTHING_LEFT", "CutReport", "arc_chord_note", "nc_summary", "nothing_left_note",
+           "peak_following_error"]
