@@ -73,6 +73,31 @@ def read_for_machine(args: argparse.Namespace, path, machine, tool):
     return read_program(path, chord_tolerance=chord, **reading), chord
 
 
+def chord_note(args: argparse.Namespace, program, chord: float) -> str | None:
+    """The note for arcs and rotary moves split into chords coarser than 1 nm (the axes'
+    resolution) by default, ``--chord-nm`` not given, when the program has them
+    (`has_chords`): a tenth of a ball or flat end mill's facets, 100 nm; or None."""
+    from machinesim.tolerances import CHORD_TOLERANCE_M
+
+    if chord <= CHORD_TOLERANCE_M or args.chord_nm is not None or not has_chords(program):
+        return None
+    return (f"arcs and rotary moves were split into chords within {chord * 1e9:.4g} nm, a "
+            "tenth of the tool's own facets (--chord-nm sets it; docs/cutting.md)")
+
+
+def has_chords(program) -> bool:
+    """Whether the chord tolerance shapes the cut: the program has arcs, or feed moves that
+    turn a rotary axis."""
+    import numpy as np
+
+    from machinesim.nc.program import AXES, KIND_LINEAR, ROTARY_AXES
+
+    rotary = program.targets[:, [AXES.index(a) for a in ROTARY_AXES]]
+    feeds = program.kinds[1:] == KIND_LINEAR
+    turns = (np.diff(rotary, axis=0) != 0.0) & ~np.isnan(rotary[:-1]) & feeds[:, None]
+    return program.arc_blocks > 0 or bool(turns.any())
+
+
 def work_offset_notes(program) -> list[str]:
     """The notes for G54..G59 words the program selects, which the command line gives no
     offsets for: each is taken as zero, the same as G54."""

@@ -43,6 +43,7 @@ from machinesim._program_options import (
     add_reading_options,
     after_end_note,
     check_reading_options,
+    chord_note,
     end_note,
     integer_note,
     read_for_machine,
@@ -59,7 +60,6 @@ from machinesim.exceptions import (
     warnings_as_lines,
 )
 from machinesim.report import check_units
-from machinesim.tolerances import CHORD_TOLERANCE_M
 
 EXAMPLES = """examples (from the repository's folder):
   machinesim machines
@@ -305,29 +305,12 @@ def _reading_notes(args, program, chord: float) -> list[str]:
     """What the command line chose in reading the program that the user should know: arcs
     and rotary moves split coarser than 1 nm by default, work offsets it was not given, the
     unit of a program that selects none, a program that ends without M02/M30."""
-    notes = []
-    if chord > CHORD_TOLERANCE_M and args.chord_nm is None and _has_chords(program):
-        notes.append(f"arcs and rotary moves were split into chords within {chord * 1e9:.4g} "
-                     "nm, a tenth of the tool's own facets (--chord-nm sets it; "
-                     "docs/cutting.md)")
+    notes = [note for note in (chord_note(args, program, chord),) if note]
     notes += work_offset_notes(program)
     notes += [note for note in (unit_note(program), integer_note(program), end_note(program),
                                 after_end_note(program))
               if note]
     return notes
-
-
-def _has_chords(program) -> bool:
-    """Whether the chord tolerance shaped the cut: the program has arcs, or feed moves that
-    turn a rotary axis."""
-    import numpy as np
-
-    from machinesim.nc.program import AXES, KIND_LINEAR, ROTARY_AXES
-
-    rotary = program.targets[:, [AXES.index(a) for a in ROTARY_AXES]]
-    feeds = program.kinds[1:] == KIND_LINEAR
-    turns = (np.diff(rotary, axis=0) != 0.0) & ~np.isnan(rotary[:-1]) & feeds[:, None]
-    return program.arc_blocks > 0 or bool(turns.any())
 
 
 def _cut(args) -> int:

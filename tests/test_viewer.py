@@ -1244,6 +1244,21 @@ def test_a_program_view_notes_how_its_text_was_read_as_cut_does(tmp_path, capsys
     assert "note: the text from line 8 on, after the % that ends the program" in err, err
 
 
+def test_a_program_view_notes_its_arcs_split_coarser_than_1_nm_as_cut_does(tmp_path, capsys):
+    # an arc under a ball end mill is split within 100 nm by default (a tenth of its 1 um
+    # facets): machinesim cut notes it, view noted nothing; --chord-nm given, neither does
+    program = tmp_path / "arc.nc"
+    program.write_text("G90 G21 G17\nG00 X0.2 Y0.4 Z0.1\nG02 X0.6 Y0.4 I0.2 J0. F500.\nM30\n")
+    said = ("note: arcs and rotary moves were split into chords within 100 nm, a tenth of the "
+            "tool's own facets (--chord-nm sets it; docs/cutting.md)")
+    for chord in ((), ("--chord-nm", "100")):
+        assert run(["grooving_4axis", "--program", str(program), "--stock", STOCK, "--tool",
+                    "ball:0.5", *chord, "--max-triangles", str(BUDGET), "--html",
+                    str(tmp_path / "a.html")]) == 0
+        err = capsys.readouterr().err
+        assert (said in err) == (not chord), err
+
+
 def test_a_report_folder_not_yet_written_is_no_such_folder(tmp_path):
     # docs/viewer.md's `machinesim view reports/tool_rotation_arm/` before the scenario ran
     # said "unknown machine 'reports/tool_rotation_arm/'", as if a machine name were misspelt

@@ -34,6 +34,7 @@ from machinesim._program_options import (
     add_reading_options,
     after_end_note,
     check_reading_options,
+    chord_note,
     end_note,
     integer_note,
     read_for_machine,
@@ -294,10 +295,12 @@ def _scene(args, budget: int):
         program, chord = read_for_machine(
             args, check_readable_file(args.program, "NC program (--program)"), machine, tool)
         _refuse_tool_changes(program, tool)
-        # the notes machinesim cut gives on how the text was read: X10 read as 10 mm, a
-        # file without M30 (cut short?), text after the closing %; view had given the unit's
-        for note in (*work_offset_notes(program), unit_note(program), integer_note(program),
-                     end_note(program), after_end_note(program)):
+        # the notes machinesim cut gives on how the text was read and split: arcs cut as
+        # chords coarser than 1 nm by default, X10 read as 10 mm, a file without M30 (cut
+        # short?), text after the closing %; view had given the unit's
+        for note in (chord_note(args, program, chord), *work_offset_notes(program),
+                     unit_note(program), integer_note(program), end_note(program),
+                     after_end_note(program)):
             if note:
                 print(f"note: {printable(note)}", file=sys.stderr)
     if args.errors is not None:
