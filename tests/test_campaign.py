@@ -1196,6 +1196,33 @@ def test_a_campaign_keeps_the_identifications_notes_and_says_how_many_trials_gav
     assert "Notes of the identification" not in (tmp_path / "level/summary.md").read_text()
 
 
+def test_a_failed_trials_figures_and_values_are_left_out():
+    """A trial file whose ``error`` says the trial failed, edited to hold figures and
+    identified values as well: they went into campaign.nc and the statistics as a trial
+    that ran (after mean 2.0 of 1, 2, 3 here); a failed trial is its draws and message
+    alone. The two trials that ran: mean after 1.5, std 0.7071 (hand: sqrt(0.5))."""
+    from machinesim.campaign.results import assemble
+    from machinesim.campaign.summary import summarise
+
+    records = [{"trial": t, "drawn": {}, "injected": {"tool.y": 0.0},
+                "identified": {"tool.y": [1e-6 * (t + 1), 1e-7]},
+                "figures": {"depth_error": ["um", 5.0, 1.0 + t]}, "notes": [],
+                "elapsed_s": 1.0, "error": "InputError: no" if t == 2 else None}
+               for t in range(3)]
+    spec = {"procedure": "tool_rotation_arm", "seed": 0, "vary": {}, "noise": True,
+            "identify_only": False}
+    ds = assemble(records, spec, 3)
+    assert np.array_equal(ds["after"].values[:, 0], [1.0, 2.0, np.nan], equal_nan=True)
+    assert np.isnan(ds["identified"].values[2, 0]) and np.isnan(ds["injected"].values[2, 0])
+    assert ds["failed"].values.tolist() == [0, 0, 1]
+    after = summarise(ds)["figures"]["depth_error"]["after"]
+    assert after["count"] == 2 and after["mean"] == 1.5
+    assert after["std"] == pytest.approx(math.sqrt(0.5), rel=1e-15)
+    # a figure only a failed trial names is no figure of the campaign
+    records[2]["figures"]["other"] = ["um", 1.0, 1.0]
+    assert list(assemble(records, spec, 3)["figure"].values) == ["depth_error"]
+
+
 def test_notes_that_differ_only_in_their_numbers_are_one_in_the_summary():
     """Counted by hand: trials 0 and 2 misfit (residuals 25.7 and 31.2, one note), trial 2
     also notes two parameters barely told apart, trial 1 notes nothing, trial 3 failed and

@@ -99,12 +99,17 @@ class Assembly:
         self.added = np.zeros(self.trials, dtype=bool)
 
     def add(self, record: dict) -> None:
-        """Take trial ``record["trial"]``'s record (`trials.run_trial`, NaN for null)."""
+        """Take trial ``record["trial"]``'s record (`trials.run_trial`, NaN for null).
+
+        A failed trial's (``error`` not None) is its draws, time and message alone: what it
+        holds besides (a trial file edited, or written by hand) is left out, as NaN, where
+        its figures were taken into the statistics as a trial that ran."""
         t = record["trial"]
         if not isinstance(t, int) or not 0 <= t < self.trials or self.added[t]:
             raise InputError(f"trial {t!r}; expected each of the records of trials 0 .. "
                              f"{self.trials - 1} once", key="records")
-        for name, value in record["figures"].items():
+        failed = record["error"] is not None
+        for name, value in ({} if failed else record["figures"]).items():
             seen = self.units.get(name)
             if seen is not None and seen[1] != value[0]:
                 first, then = sorted((t, seen[0]))
@@ -116,6 +121,8 @@ class Assembly:
                     "again to compute it anew", key="figures")
         self.added[t] = True
         for key, tables in self._TABLES.items():
+            if failed and key != "drawn":  # a failed trial identified and measured nothing
+                continue
             entries = record[key]
             if key == "drawn":
                 entries = {name: entries[name] for name in self.varied if name in entries}
@@ -136,7 +143,7 @@ class Assembly:
                         (value[index] if index < len(value) else None)
                     column[t] = np.nan if got is None else got
         self.elapsed[t] = record["elapsed_s"]
-        if record["error"] is not None:
+        if failed:
             self.failed[t] = 1
             self.errors[t] = record["error"]
         elif "notes" in record:
