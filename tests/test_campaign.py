@@ -572,6 +572,11 @@ _HUGE = 10**400
       "figures": {}, "elapsed_s": 1.0, "error": None}, "identified"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
       "elapsed_s": 1.0, "error": 3}, "error"),
+    # a blank message was taken as a failure that names nothing
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+      "elapsed_s": 1.0, "error": ""}, "error"),
+    ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+      "elapsed_s": 1.0, "error": " \n"}, "error"),
     ({"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
       "notes": "misfit", "elapsed_s": 1.0, "error": None}, "notes"),
     # a std is a spread: an edited -1 was taken, flipping that trial's z-score
@@ -597,6 +602,22 @@ def test_a_trial_file_that_is_json_but_no_trial_record_is_refused_naming_the_key
         run("tool_rotation_arm", 1, vary=vary, seed=11, out=tmp_path, workers=0,
             progress=False, report=False, **ARM)
     assert "trial_000000.json" in str(info.value) and f"key '{key}'" in str(info.value)
+
+
+def test_a_trial_file_whose_error_is_blank_is_refused():
+    # "" was taken as a failure: the trial counted as failed, its message a blank line in
+    # summary.md's "Failed trials"; a failure names what failed
+    from machinesim.campaign.results import _check_record
+
+    record = {"trial": 0, "drawn": {}, "injected": {}, "identified": {}, "figures": {},
+              "elapsed_s": 1.0}
+    _check_record({**record, "error": "InputError: no"}, Path("t.json"), ())
+    _check_record({**record, "error": None}, Path("t.json"), ())
+    for blank in ("", " \n"):
+        with pytest.raises(InputError, match="expected null or the failed trial's message, "
+                           "which names what failed") as info:
+            _check_record({**record, "error": blank}, Path("t.json"), ())
+        assert info.value.key == "error" and info.value.source == "t.json"
 
 
 @pytest.mark.parametrize(("edit", "said"), [

@@ -487,8 +487,8 @@ def _check_record(raw: dict, path: Path, varied: tuple[str, ...]) -> None:
     none null: a trial draws each before it runs, failed or not), ``injected`` name ->
     number, ``identified`` name -> [value, std >= 0 or null], ``figures`` name -> [unit
     (`FIGURE_UNITS`), before, after(, after_std >= 0 or null)], ``notes`` (when there) a
-    list of texts, ``elapsed_s`` a number, ``error`` null or a message; assembling it would
-    otherwise fail on the first key it lacks."""
+    list of texts, ``elapsed_s`` a number, ``error`` null or a message (not blank);
+    assembling it would otherwise fail on the first key it lacks."""
     def refuse(key: str, what: str) -> None:
         raise InputError(f"{brief(repr(raw.get(key)))}; expected {what} (a trial record as "
                          "machinesim campaign writes it): delete the file and run again to "
@@ -532,8 +532,11 @@ def _check_record(raw: dict, path: Path, varied: tuple[str, ...]) -> None:
         refuse("notes", "a list of the identification's notes (texts)")
     if not _number(raw.get("elapsed_s")):
         refuse("elapsed_s", "a number of seconds")
-    if not (raw.get("error") is None or isinstance(raw.get("error"), str)):
-        refuse("error", "null or the failed trial's message")
+    # an empty message was taken as a failure naming nothing (summary.md's "Failed trials"
+    # listed it as a blank line): a failure says what failed
+    error = raw.get("error")
+    if not (error is None or isinstance(error, str) and error.strip()):
+        refuse("error", "null or the failed trial's message, which names what failed")
     # drawn: what the trial ran with, each varied parameter's value. A file edited to lack
     # one (or hold null) gave that trial a NaN in campaign.nc's drawn, silently, and one
     # naming another parameter was taken, the name dropped
