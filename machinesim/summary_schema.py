@@ -78,6 +78,28 @@ SUMMARY_KEYS = {"paper": str, "procedure": str, "machine": str, "seed": int, "no
 FIGURE_KEYS = ("name", "unit", "before", "after", "paper_before", "paper_after")
 
 
+def _version_refusal(data: Mapping) -> str | None:
+    """Why the summary ``data`` is of a schema version this machinesim does not read; None
+    when it is `SCHEMA_VERSION` (or has none: written before the field)."""
+    version = data.get("schema_version", SCHEMA_VERSION)  # none: written before the field
+    if version == SCHEMA_VERSION and isinstance(version, int) and not isinstance(version, bool):
+        return None
+    newer = (" (written by a newer machinesim? update this one to read it)"
+             if isinstance(version, int) and not isinstance(version, bool)
+             and version > SCHEMA_VERSION else "")
+    return (f"schema_version {brief(repr(version))}; this machinesim reads schema version "
+            f"{SCHEMA_VERSION} (docs/reports.md){newer}")
+
+
+def check_version(data, source: str | None = None) -> None:
+    """Raise InputError (naming ``source`` and the key) when the summary ``data`` (an
+    object) is of another schema version than `SCHEMA_VERSION` (`check_summary`'s check,
+    for a reader that takes the rest of a summary as it finds it: the viewer)."""
+    wrong_version = _version_refusal(data) if isinstance(data, Mapping) else None
+    if wrong_version is not None:
+        raise InputError(wrong_version, source=source, key="schema_version")
+
+
 def check_summary(data: Mapping) -> None:
     """Raise InputError when ``data`` is not a summary.json of the documented schema.
 
@@ -106,13 +128,9 @@ def check_summary(data: Mapping) -> None:
 
     if not isinstance(data, Mapping):
         raise InputError(f"summary.json: expected an object, got {type(data).__name__}")
-    version = data.get("schema_version", SCHEMA_VERSION)  # none: written before the field
-    if version != SCHEMA_VERSION or not isinstance(version, int) or isinstance(version, bool):
-        newer = (" (written by a newer machinesim? update this one to read it)"
-                 if isinstance(version, int) and not isinstance(version, bool)
-                 and version > SCHEMA_VERSION else "")
-        refuse(f"schema_version {version!r}; this machinesim reads schema version "
-               f"{SCHEMA_VERSION} (docs/reports.md){newer}", "schema_version")
+    wrong_version = _version_refusal(data)
+    if wrong_version is not None:
+        refuse(wrong_version, "schema_version")
     for key, kind in SUMMARY_KEYS.items():
         if key not in data or not isinstance(data[key], kind) or (
                 kind is int and isinstance(data[key], bool)):

@@ -1099,6 +1099,30 @@ def test_cli_refuses_tool_stock_and_duration_where_no_program_runs(tmp_path):
     assert run(["robonano_a0ib", "--errors", str(errors), "--html", page]) == 0
 
 
+def test_a_report_folders_summary_of_another_schema_version_is_refused(tmp_path):
+    # report_scene read summary.json's keys as this version's whatever its schema_version
+    # (a newer machinesim's report was shown as if of version 1); read_summary refuses it
+    from machinesim.report import read_summary
+    from machinesim.viewer import report_scene
+
+    stock_from_spec("block:1x1x1").export_ply(tmp_path / "part.ply")
+    summary = tmp_path / "summary.json"
+    for version in (1, None):  # none: written before the field, read as version 1
+        summary.write_text(json.dumps({"pv_nm": 123.0} if version is None
+                                      else {"schema_version": version, "pv_nm": 123.0}))
+        assert "pv_nm: 123" in report_scene(tmp_path, BUDGET).notes
+    for version, newer in ((2, True), ("1", False), (True, False)):
+        summary.write_text(json.dumps({"schema_version": version, "pv_nm": 123.0}))
+        with pytest.raises(InputError) as info:
+            report_scene(tmp_path, BUDGET)
+        with pytest.raises(InputError) as read:
+            read_summary(summary)
+        assert info.value.key == read.value.key == "schema_version"
+        assert info.value.source == str(summary)
+        assert info.value.message == read.value.message  # the same check's words
+        assert ("written by a newer machinesim" in info.value.message) is newer
+
+
 def test_a_report_folder_whose_summary_names_a_missing_nominal_is_warned_about(tmp_path):
     # the parts were coloured by height, as if no nominal had been named, without a word
     from machinesim.viewer import report_scene

@@ -14,6 +14,7 @@ import numpy as np
 
 from machinesim._json import read_json
 from machinesim.exceptions import InputError
+from machinesim.summary_schema import check_version
 from machinesim.viewer.maps import (
     SurfaceMap,
     legend_for,
@@ -174,6 +175,9 @@ def report_scene(folder, max_triangles: int = DISPLAY_TRIANGLES) -> Scene:
     if not isinstance(summary, dict):
         raise InputError(f"expected a JSON object, got {type(summary).__name__}",
                          source=str(summary_path))
+    # a summary of another schema version (a newer machinesim's) was shown as this one's,
+    # its keys read as this version's meaning
+    check_version(summary, source=str(summary_path))
     nominal_path = folder / str(summary.get("nominal_ply", "nominal.ply"))
     shown = [p for p in plys if p != nominal_path] or plys
     # a folder holding only the nominal part shows it by height
