@@ -432,9 +432,11 @@ class Machine:
         return arr
 
     def _check_q(self, q, batch: bool = True) -> np.ndarray:
-        try:
-            arr = np.asarray(q, dtype=np.float64)
-        except (TypeError, ValueError):
+        from machinesim.metrology._arrays import as_floats
+
+        try:  # numbers only: a bool among them ([True, 0, 0, 0]) was read as 1 m or 1 rad
+            arr = as_floats(q, "q")
+        except InputError:
             raise InputError(f"expected axis values as numbers (m, rad) in the order "
                              f"{''.join(self.axes)}, got {type(q).__name__} {q!r:.60}",
                              key="q") from None

@@ -111,3 +111,22 @@ def test_axis_values_with_nan_or_inf_name_the_axis_and_row():
                                "rad); expected finite numbers")
     with pytest.raises(InputError, match=r"C = inf in row 1 of 2 \(XYZC, m and rad\)"):
         machine.limit_violations([[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, np.inf]])
+
+
+def test_axis_values_that_are_bools_are_refused():
+    # tool_pose([True, 0, 0, 0]) read True as X = 1 m: numbers only (as_floats), through
+    # each method that takes axis values (Machine._check_q)
+    machine = load_machine("grooving_4axis")
+    said = "key 'q': expected axis values as numbers (m, rad) in the order XYZC, got "
+    for q in ([True, 0, 0, 0], (0.0, np.bool_(False), 0.0, 0.0),
+              np.array([True, False, False, False]), [10**400, 0, 0, 0]):
+        with pytest.raises(InputError) as info:
+            machine.tool_pose(q)
+        assert str(info.value).startswith(said) and info.value.key == "q"
+    with pytest.raises(InputError, match="expected axis values as numbers"):
+        machine.limit_violations([[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, True]])
+    with pytest.raises(InputError, match="expected axis values as numbers"):
+        machine.frame_pose("tool_tip", [0, 0, 0, False])
+    # numbers of any kind are taken as before: X = 1 m as an int, a float, a numpy int
+    for q in ([1, 0, 0, 0], [1.0, 0.0, 0.0, 0.0], np.array([1, 0, 0, 0])):
+        assert np.array_equal(machine.tool_pose(q), machine.tool_pose([1.0, 0.0, 0.0, 0.0]))
