@@ -153,3 +153,37 @@ def test_a_campaign_nc_written_without_a_report_has_no_earlier_one_beside_it(
         assert on_disk.sizes["trial"] == 3
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "campaign.json", "campaign.lock", "campaign.nc", "notes.txt", "trials"]
+
+
+def test_figures_near_float64s_end_are_summarised_without_overflow(tmp_path):
+    """An after of 1e308 in each of three trials (a trial file edited, or a procedure's
+    figure): its sum overflowed, numpy warned 'overflow encountered in reduce', the mean and
+    std were null, and the histogram ended the campaign in 'Too many bins for data range'
+    (as did an equal after of 1e17: numpy's bin of +-0.5 around it is none). Now mean 1e308
+    and std 0 (three equal values), no warning, the report written; 1, 2, 3 as before
+    (mean 2, std 1)."""
+    import warnings
+
+    import pytest
+
+    from machinesim.campaign.results import assemble
+    from machinesim.campaign.summary import write_report
+
+    spec = {"procedure": "tool_rotation_arm", "seed": 0, "vary": {}, "noise": True,
+            "identify_only": False}
+    for k, (afters, mean, std) in enumerate([((1e308,) * 3, 1e308, 0.0),
+                                             ((1e17,) * 3, 1e17, 0.0),
+                                             ((-1e308, 1.0, 1e308), 0.0, 1e308),
+                                             ((1.0, 2.0, 3.0), 2.0, 1.0)]):
+        records = [{**_record(t), "figures": {"depth_error": ["um", 50.0, after]},
+                    "identified": {"tool.y": [after * 1e-12, 2e-9]}}
+                   for t, after in enumerate(afters)]
+        (tmp_path / str(k)).mkdir()
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            summary = write_report(assemble(records, spec, 3), tmp_path / str(k))
+        after = summary["figures"]["depth_error"]["after"]
+        assert after["count"] == 3 and after["mean"] == pytest.approx(mean, abs=1e-300)
+        assert after["std"] == pytest.approx(std, rel=1e-15)
+        assert (tmp_path / str(k) / "hist_depth_error.png").stat().st_size > 0
+        assert (tmp_path / str(k) / "z_scores.png").stat().st_size > 0

@@ -71,25 +71,43 @@ def coverage_interval(values, p: float = COVERAGE, kind: str = "shortest"
     return (float(y[r]), float(y[r + q]))
 
 
+def _mean_std(y: np.ndarray) -> tuple[float, float]:
+    """The mean and std (n - 1; NaN for one value) of the sorted finite values ``y`` (at
+    least one), without overflow: values near float64's end (an edited after of 1e308) made
+    their sum infinite, with numpy's RuntimeWarning, and the mean and std NaN. Such values
+    are taken again divided by the largest magnitude (the same mean and std, scaled back; a
+    std beyond float64, of values of both signs near its end, is inf). Others are computed
+    as before, to the bit."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        mean = float(y.mean())
+        std = float(y.std(ddof=1)) if y.size > 1 else math.nan
+        if math.isfinite(mean) and (y.size == 1 or math.isfinite(std)):
+            return mean, std
+        scale = max(abs(float(y[0])), abs(float(y[-1])))  # sorted: the largest at an end
+        scaled = y / scale
+        return (scale * float(scaled.mean()),
+                scale * float(scaled.std(ddof=1)) if y.size > 1 else math.nan)
+
+
 def describe(values) -> dict:
     """count, mean, std (n - 1), both 95 % coverage intervals, min, max of the finite values."""
     y = _sorted(values)
     out = {"count": int(y.size), "mean": math.nan, "std": math.nan, "min": math.nan,
            "max": math.nan}
     if y.size:
-        out.update(mean=float(y.mean()), min=float(y[0]), max=float(y[-1]))
-    if y.size > 1:
-        out["std"] = float(y.std(ddof=1))
+        mean, std = _mean_std(y)
+        out.update(mean=mean, std=std, min=float(y[0]), max=float(y[-1]))
     out["shortest_95"] = list(coverage_interval(y, kind="shortest"))
     out["symmetric_95"] = list(coverage_interval(y, kind="symmetric"))
     return out
 
 
 def z_scores(identified, injected, std) -> np.ndarray:
-    """(identified - injected) / std, elementwise; NaN where std is not a positive number."""
+    """(identified - injected) / std, elementwise; NaN where std is not a positive number,
+    inf where it is beyond float64 (left out of the statistics as any non-finite value)."""
     identified, injected, std = (np.asarray(a, dtype=np.float64)
                                  for a in (identified, injected, std))
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         z = (identified - injected) / std
     return np.where(np.isfinite(std) & (std > 0.0), z, np.nan)
 
@@ -100,10 +118,8 @@ def z_summary(z) -> dict:
     out = {"count": int(y.size), "mean": math.nan, "std": math.nan,
            "within_1_96_ratio": math.nan}
     if y.size:
-        out["mean"] = float(y.mean())
+        out["mean"], out["std"] = _mean_std(y)
         out["within_1_96_ratio"] = float(np.mean(np.abs(y) <= 1.959963984540054))
-    if y.size > 1:
-        out["std"] = float(y.std(ddof=1))
     return out
 
 

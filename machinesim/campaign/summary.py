@@ -104,11 +104,13 @@ def summarise(dataset) -> dict:
     parameters = {}
     for k, name in enumerate(_names(dataset, "parameter")):
         found, truth = dataset["identified"].values[:, k], dataset["injected"].values[:, k]
+        with np.errstate(over="ignore"):  # beyond float64: inf, left out as NaN is
+            error = found - truth
         z = z_scores(found, truth, dataset["identified_std"].values[:, k])
         parameters[str(name)] = {
             "unit": _unit(dataset, k, name),
-            "error_si": describe(found - truth), "z": z_summary(z),
-            "sensitivity": {v: spearman(dataset["drawn"].values[:, j], np.abs(found - truth))
+            "error_si": describe(error), "z": z_summary(z),
+            "sensitivity": {v: spearman(dataset["drawn"].values[:, j], np.abs(error))
                             for j, v in enumerate(varied)}}
     return _finite({
         "schema_version": SCHEMA_VERSION,
@@ -309,8 +311,9 @@ def _plots(dataset) -> dict[str, bytes]:
         for ax, which, colour in zip(axes, ("before", "after"), ("C0", "C1"), strict=True):
             y = dataset[which].values[:, k]
             y = y[np.isfinite(y)]
+            scale = _scale(y)
             if y.size:
-                ax.hist(y, bins=max(5, min(40, y.size // 3)), color=colour)
+                _hist(ax, y, max(5, min(40, y.size // 3)), scale, color=colour)
                 # counts of trials: whole numbers (4 trials had ticks every 0.25)
                 ax.yaxis.set_major_locator(MaxNLocator(integer=True))
                 # a few values as they are: the default's 8 ticks of a spread of nanometres
@@ -320,7 +323,8 @@ def _plots(dataset) -> dict[str, bytes]:
                 ax.ticklabel_format(axis="x", useOffset=False)
             else:
                 ax.text(0.5, 0.5, "not measured", ha="center", transform=ax.transAxes)
-            ax.set_xlabel(f"{name} {which} ({unit})")
+            ax.set_xlabel(f"{name} {which} ({unit}" + (f", x {scale:g})" if scale != 1.0
+                                                       else ")"))
             ax.set_ylabel("trials")
             ax.set_title(f"{which} compensation ({y.size} trials)")
         fig.tight_layout()
@@ -336,8 +340,10 @@ def _plots(dataset) -> dict[str, bytes]:
         ax.plot(grid, np.exp(-grid**2 / 2) / math.sqrt(2 * math.pi), "k-", label="N(0, 1)")
         for name, z in z_all:
             if z.size:
-                ax.hist(z, bins=max(5, min(30, z.size // 3)), density=True, alpha=0.4,
-                        label=name, histtype="stepfilled")
+                scale = _scale(z)
+                _hist(ax, z, max(5, min(30, z.size // 3)), scale, density=True, alpha=0.4,
+                      label=name if scale == 1.0 else f"{name} (x {scale:g})",
+                      histtype="stepfilled")
         ax.set_xlabel("z = (identified - injected) / reported std")
         ax.set_ylabel("density")
         ax.set_title("Identification error against the reported std")
@@ -345,6 +351,31 @@ def _plots(dataset) -> dict[str, bytes]:
         fig.tight_layout()
         save(fig, "z_scores.png")
     return written
+
+
+#: The largest magnitude a histogram shows as it is (`_scale`): near float64's end (1e308)
+#: numpy's bins and matplotlib's axis overflowed ('Too many bins for data range', a
+#: traceback out of the campaign once every trial had run).
+_PLOT_LARGEST = 1e300
+
+
+def _scale(y: np.ndarray) -> float:
+    """1, or for values beyond `_PLOT_LARGEST` the power of ten they are shown in units of."""
+    largest = float(np.max(np.abs(y))) if y.size else 0.0
+    return 10.0 ** math.floor(math.log10(largest)) if largest > _PLOT_LARGEST else 1.0
+
+
+def _hist(ax, y: np.ndarray, bins: int, scale: float, **options) -> None:
+    """``ax.hist`` of the finite values ``y`` / ``scale`` (`_scale`) in ``bins`` bins. Values
+    all equal beyond 2**50 get bins over +-1e-6 of their size: numpy's own, +-0.5, is no bin
+    at all there (an equal after of 1e17 in every trial was 'Too many bins for data
+    range'); below, numpy's are kept."""
+    y = y / scale
+    low, high = float(y.min()), float(y.max())
+    if low == high and abs(low) >= 2.0**50:
+        half = abs(low) * 1e-6
+        options["range"] = (low - half, low + half)
+    ax.hist(y, bins=bins, **options)
 
 
 def write_report(dataset, folder, with_files=None) -> dict:
