@@ -148,6 +148,16 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
         it, the joint or link, and the value.
     """
     if root.tag != "robot":
+        namespace, _, local = root.tag.rpartition("}")
+        if local == "robot" and namespace:
+            # a default xmlns="..." on <robot> (xacro writes one for xacro:targetNamespace)
+            # puts every element in that namespace: urdfdom, which matches names as
+            # written, ignores it; this reader finds none of <robot>'s links and joints
+            raise ModelError(f"{path}: root element <robot> in the XML namespace "
+                             f"{namespace.lstrip('{')!r} (a default "
+                             f"xmlns=\"{namespace.lstrip('{')}\" on it); expected <robot> "
+                             "in no namespace, as URDF's elements are: remove the xmlns=... "
+                             "attribute from <robot> (a prefixed xmlns:name=... stays)")
         raise ModelError(f"{path}: root element <{root.tag}>; expected <robot>")
     if not root.get("name"):
         raise ModelError(f"{path}: <robot> has no name=...; URDF requires one")

@@ -293,6 +293,13 @@ HOSTILE_URDFS = {
                       ["joint name 'tool_tx' is reserved"]),
     "not_a_robot": (GROOVING.replace("<robot ", "<robut ").replace("</robot>", "</robut>"),
                     ["root element <robut>", "expected <robot>"]),
+    # a default namespace (xacro's xacro:targetNamespace writes one): refused as root
+    # element <{http://www.ros.org}robot>; expected <robot>, saying neither what nor how
+    "default_namespace": (GROOVING.replace("<robot ", '<robot xmlns="http://www.ros.org" ', 1),
+                          ["root element <robot> in the XML namespace 'http://www.ros.org' (a "
+                           'default xmlns="http://www.ros.org" on it); expected <robot> in no '
+                           "namespace, as URDF's elements are: remove the xmlns=... attribute "
+                           "from <robot>"]),
     "truncated": (GROOVING[:len(GROOVING) // 2], ["not readable XML"]),
     # a CAD tool's comment in Latin-1 (line 4, after the file's 3 header lines) with no
     # encoding declared: expat, reading UTF-8, said "not well-formed (invalid token)" at a
