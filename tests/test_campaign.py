@@ -16,6 +16,8 @@ import xarray as xr
 from scipy import stats
 
 import machinesim.campaign.runner as runner
+import machinesim.campaign.shipped as shipped_module
+import machinesim.campaign.spec as spec_module
 import machinesim.campaign.trials as trials_module
 from machinesim.campaign import CampaignSpec, parse_distribution, parse_vary, run, run_trial
 from machinesim.campaign.statistics import coverage_interval, ranks, spearman, z_scores, z_summary
@@ -144,7 +146,7 @@ def test_a_trial_draws_its_varied_parameters_once_and_a_spec_reads_its_base_mode
         return real_read(cls, *args, **options)
 
     monkeypatch.setattr(ErrorModel, "from_toml", classmethod(reading))
-    monkeypatch.setattr(trials_module, "_MODEL_FILES", {}, raising=False)  # as in a new process
+    monkeypatch.setattr(shipped_module, "_MODEL_FILES", {}, raising=False)  # as in a new process
     spec = CampaignSpec("xy_plane_errors", 1,
                         (parse_vary("laser_interferometer.sigma=uniform:10nm,20nm"),),
                         identify_only=True)
@@ -175,7 +177,7 @@ def test_an_error_model_file_is_parsed_once_while_its_bytes_stay_the_same(tmp_pa
         return real_read(cls, path)
 
     monkeypatch.setattr(ErrorModel, "from_toml", classmethod(reading))
-    monkeypatch.setattr(trials_module, "_MODEL_FILES", {}, raising=False)
+    monkeypatch.setattr(shipped_module, "_MODEL_FILES", {}, raising=False)
     first = PROCEDURES["xy_plane_errors"].base()
     assert PROCEDURES["xy_plane_errors"].base() is first and len(read) == 1
     shipped = models_dir() / "errors" / "xy_plane_grooving_4axis.toml"
@@ -183,10 +185,10 @@ def test_an_error_model_file_is_parsed_once_while_its_bytes_stay_the_same(tmp_pa
     # an edited file is read again, even within the file system's time resolution
     copy = tmp_path / "model.toml"
     copy.write_text("[location.C]\nEX0C_um = 1.0\n")
-    assert trials_module.error_model_file(copy).parameters()["location.C.EX0C"] == 1e-6
+    assert shipped_module.error_model_file(copy).parameters()["location.C.EX0C"] == 1e-6
     copy.write_text("[location.C]\nEX0C_um = 2.0\n")
-    assert trials_module.error_model_file(copy).parameters()["location.C.EX0C"] == 2e-6
-    assert trials_module.error_model_file(copy).parameters()["location.C.EX0C"] == 2e-6
+    assert shipped_module.error_model_file(copy).parameters()["location.C.EX0C"] == 2e-6
+    assert shipped_module.error_model_file(copy).parameters()["location.C.EX0C"] == 2e-6
     assert len(read) == 3
 
 
@@ -1292,11 +1294,11 @@ def test_a_machines_warning_is_shown_once_not_once_per_trial(tmp_path, monkeypat
 
     load = machines.load_machine
     monkeypatch.setattr(machines, "load_machine", lambda name: load(degree_like_planer))
-    monkeypatch.setattr(trials_module, "_MACHINES", {})
+    monkeypatch.setattr(spec_module, "_MACHINES", {})
     real = trials_module.run_trial
 
     def trial(spec, i):  # each trial loads the machine again, as a fresh worker would
-        trials_module._MACHINES.clear()
+        spec_module._MACHINES.clear()
         machines._load.cache_clear()
         return real(spec, i)
 

@@ -356,6 +356,7 @@ def test_the_progress_rate_counts_from_the_first_trial_not_the_clusters_start(
 def _trial_on_a_planer_that_warns(urdf: str, spec, i: int):
     """`run_trial` in a worker whose planer_4axis is ``urdf`` (`degree_like_planer`): each
     worker process loads it, and warns, in its first trial."""
+    import machinesim.campaign.spec as spec_module
     import machinesim.machines as machines
     from machinesim.campaign import trials
 
@@ -367,7 +368,7 @@ def _trial_on_a_planer_that_warns(urdf: str, spec, i: int):
 
         load_that.planer_that_warns = True
         machines.load_machine = load_that
-        trials._MACHINES.clear()
+        spec_module._MACHINES.clear()
     return trials.run_trial(spec, i)
 
 
@@ -381,13 +382,13 @@ def test_a_machines_warning_on_two_workers_is_one_line(tmp_path, capfd, monkeypa
     import functools
 
     import machinesim.campaign.runner as runner
-    import machinesim.campaign.trials as trials
+    import machinesim.campaign.spec as spec
     import machinesim.machines as machines
     from machinesim.cli import main as cli_main
 
     urdf, load = degree_like_planer, machines.load_machine
     monkeypatch.setattr(machines, "load_machine", lambda name: load(urdf))
-    monkeypatch.setattr(trials, "_MACHINES", {})
+    monkeypatch.setattr(spec, "_MACHINES", {})
     monkeypatch.setattr(runner, "run_trial",
                         functools.partial(_trial_on_a_planer_that_warns, urdf))
     status = cli_main(["campaign", "tool_rotation_arm", "--trials", "4", "--workers", "2",

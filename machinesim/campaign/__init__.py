@@ -17,7 +17,9 @@ intervals, z-scores of the identification, rank-correlation sensitivity
 from machinesim._submodules import submodule
 from machinesim.campaign.distributions import Distribution, parse_distribution, parse_vary
 from machinesim.campaign.runner import run
-from machinesim.campaign.trials import PROCEDURES, CampaignSpec, run_trial, trial_seed
+from machinesim.campaign.shipped import PROCEDURES
+from machinesim.campaign.spec import CampaignSpec
+from machinesim.campaign.trials import run_trial, trial_seed
 
 __all__ = ["PROCEDURES", "CampaignSpec", "Distribution", "parse_distribution", "parse_vary",
            "run", "run_trial", "trial_seed"]

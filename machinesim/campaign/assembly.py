@@ -175,7 +175,7 @@ class Assembly:
         """The SI unit of each parameter (`trials.parameter_unit`: m, rad, or a polynomial
         coefficient's m/m^2): the values are SI, and the name alone tells m from rad, not a
         polynomial's coefficient from a table's value."""
-        from machinesim.campaign.trials import spec_parameter_unit
+        from machinesim.campaign.shipped import spec_parameter_unit
         from machinesim.exceptions import MachineSimError
 
         out = []

@@ -14,7 +14,8 @@ from pathlib import Path
 from machinesim._arguments import ArgumentParser
 from machinesim._interrupts import ctrl_c_remembered, stopped
 from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
-from machinesim.campaign.trials import MAX_TRIALS, PROCEDURES, trials_refused
+from machinesim.campaign.shipped import PROCEDURES
+from machinesim.campaign.spec import MAX_TRIALS, trials_refused
 from machinesim.exceptions import InputError, MachineSimError, printable, say, warnings_as_lines
 
 __all__ = ["add_campaign_parser", "interrupted", "main", "run_campaign"]

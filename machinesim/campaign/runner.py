@@ -33,8 +33,9 @@ from machinesim.campaign.results import (
     locked,
     refuse_foreign,
 )
+from machinesim.campaign.spec import CampaignSpec, check_flag
 from machinesim.campaign.summary import remove_report, write_report
-from machinesim.campaign.trials import CampaignSpec, check_flag, run_trial
+from machinesim.campaign.trials import run_trial
 from machinesim.exceptions import InputError, MachineSimError, MachineSimWarning, brief
 
 __all__ = ["run"]
