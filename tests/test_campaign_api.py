@@ -262,6 +262,37 @@ def test_a_second_campaign_on_a_folder_in_use_is_refused_naming_the_folder_and_p
     assert ran == [0]
 
 
+def test_a_folder_another_run_is_making_a_campaign_folder_is_refused_as_busy(tmp_path):
+    """Two campaigns started on one new --out at the same instant: the second found the
+    first's campaign.json being written (its temporary file there, no campaign.json yet),
+    and before taking the lock refused the folder as "holds .campaign.json.PID@...tmp but
+    no campaign.json: not a campaign folder (a scenario's report, ...)", where it is a
+    campaign's, running. It is refused as the running campaign's, as a moment later; a
+    temporary file a killed run left (no lock held) is refused as foreign, as it was."""
+    import fcntl
+    import os
+    import socket
+
+    out = tmp_path / "c"
+    out.mkdir()
+    temporary = out / f".campaign.json.{os.getpid()}@0f62b50f-wfu1kvvo.tmp"
+    temporary.write_text("{")
+    fd = os.open(out / "campaign.lock", os.O_RDWR | os.O_CREAT)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # the first run, making the folder
+        os.write(fd, json.dumps({"pid": os.getpid(), "host": socket.gethostname()}).encode())
+        with pytest.raises(InputError) as info:
+            run("tool_rotation_arm", 1, out=out, report=False, **ARM)
+        assert str(info.value).startswith(
+            f"{out}: another campaign is running in this folder (pid {os.getpid()}, "
+            f"holding {out / 'campaign.lock'})"), info.value
+    finally:
+        os.close(fd)  # the first run killed: its temporary file left, its lock free
+    with pytest.raises(InputError, match=r"holds \.campaign\.json\..*\.tmp but no campaign"):
+        run("tool_rotation_arm", 1, out=out, report=False, **ARM)
+    assert sorted(os.listdir(out)) == sorted(["campaign.lock", temporary.name])
+
+
 def _lock_free(path) -> bool:
     """Whether no open file holds the lock ``path`` (flock: a lock another open file of
     this very process holds refuses it too)."""

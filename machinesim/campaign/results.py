@@ -43,7 +43,7 @@ from machinesim.experiment import FIGURE_UNITS, note_kind  # note_kind re-export
 
 __all__ = ["LOCK_NAME", "TRIAL_SCHEMA_VERSION", "Assembly", "CampaignFolder", "assemble",
            "campaign_id", "finished_trials", "legacy_campaign_id", "locked", "note_kind",
-           "refuse_foreign", "same_campaign", "versions"]
+           "refuse_busy", "refuse_foreign", "same_campaign", "versions"]
 
 
 def _clean(value):
@@ -294,6 +294,33 @@ def locked(folder) -> Iterator[None]:
         yield
     finally:
         os.close(fd)  # the kernel releases the lock
+
+
+def refuse_busy(folder) -> None:
+    """Refuse ``folder`` as `locked` would while another run holds its lock (`_busy`),
+    leaving it as it is (no lock file made, none kept): for a refusal found before the lock
+    is taken (`refuse_foreign`), which a run making the folder its campaign's just then
+    meets (its campaign.json's temporary file there, no campaign.json yet) and had told as
+    no campaign folder."""
+    try:
+        import fcntl
+    except ImportError:  # Windows: `locked` says so
+        return
+    path = Path(folder) / LOCK_NAME
+    try:  # never through a link, and a FIFO opened without waiting for a writer
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | os.O_NONBLOCK)
+    except OSError:  # no lock file (or none to open): nobody holds it
+        return
+    try:
+        if stat.S_ISREG(os.fstat(fd).st_mode):
+            try:
+                fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)  # released as fd closes
+            except BlockingIOError:
+                raise _busy(Path(folder), _named_holder(path)) from None
+            except OSError:  # a file system without locks: `locked` says so
+                pass
+    finally:
+        os.close(fd)
 
 
 def _lock_refused(folder: Path, exc: OSError) -> FileError:

@@ -31,6 +31,7 @@ from machinesim.campaign.results import (
     CampaignFolder,
     finished_trials,
     locked,
+    refuse_busy,
     refuse_foreign,
 )
 from machinesim.campaign.spec import CampaignSpec, check_flag
@@ -554,7 +555,11 @@ def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
         check_picklable(spec.given, spec.procedure)  # Dask's to send: refused before any file
     if scheduler is not None:  # before the folder is made: nothing written for a wrong address
         check_scheduler(scheduler)
-    refuse_foreign(out)  # before the lock's file is made in it (checked again under the lock)
+    try:
+        refuse_foreign(out)  # before the lock's file is made in it (checked again under the lock)
+    except InputError:
+        refuse_busy(out)  # another run making DIR a campaign's just now: its temporary file
+        raise
     with locked(out):  # a second campaign on DIR meanwhile is refused
         folder = CampaignFolder(out, spec.describe())
         stored = folder.spec["vary"]
