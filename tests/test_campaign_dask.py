@@ -427,6 +427,22 @@ def test_a_script_that_runs_a_campaign_without_the_main_guard_is_told_to_add_it(
     assert (tmp_path / "c" / "campaign.nc").is_file()
 
 
+def test_a_program_fed_to_python_on_standard_input_starts_local_workers(tmp_path):
+    # ``python - <<EOF`` (a shell's here-document, ssh, CI): the spawned workers were told to
+    # run the parent's __main__.__file__, '<stdin>', which is no file, so none started and
+    # the call was refused as a script without the __main__ guard ("Nanny failed to
+    # start"), with the guard as well; such a program now runs as an interactive one
+    program = ("import machinesim.campaign as campaign\n"
+               f"ds = campaign.run('tool_rotation_arm', 1, out={str(tmp_path / 'c')!r}, "
+               "workers=1, identify_only=True, progress=False, report=False)\n"
+               "import __main__\nprint(int(ds.failed.sum()), __main__.__file__)\n")
+    done = subprocess.run([sys.executable, "-"], input=program, capture_output=True,
+                          text=True, timeout=300, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["0", "<stdin>"]  # the trial ran; __file__ put back
+    assert (tmp_path / "c" / "campaign.nc").is_file()
+
+
 def test_a_trial_lost_on_the_cluster_is_named_and_the_finished_ones_are_kept(tmp_path,
                                                                             monkeypatch):
     """A task that came back from the cluster as an error rather than a record (Dask's

@@ -269,7 +269,7 @@ def _client(workers, scheduler, client, trials: int | None = None):
     environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
     environ.pop("MALLOC_TRIM_THRESHOLD_", None)
     with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}), \
-            ctrl_c_deferred(), sigint_blocked():
+            ctrl_c_deferred(), sigint_blocked(), _main_from_no_file_kept_here():
         # A Ctrl-C while the workers start waits until the cluster stands, and then
         # closes it (below); the workers start with SIGINT blocked, so that the
         # terminal's Ctrl-C, which reaches its whole process group, reaches none of them
@@ -293,6 +293,26 @@ def _client(workers, scheduler, client, trials: int | None = None):
         cluster.close()
         raise
     return client, cluster
+
+
+@contextlib.contextmanager
+def _main_from_no_file_kept_here():
+    """Within the block, a main program read from no file (``python -`` fed on standard
+    input: ``__file__`` is ``'<stdin>'``) is not handed to the workers spawned to run again.
+    multiprocessing's spawn runs the parent's ``__main__.__file__`` in each new process, and
+    '<stdin>' is no file: every local worker failed to start, and the call was refused as a
+    script without the ``__main__`` guard, whether it had one or not. Without it the workers
+    start as an interactive session's do (docs/campaigns.md: no guard needed there)."""
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if not (isinstance(path, str) and path.startswith("<") and path.endswith(">")):
+        yield
+        return
+    del main.__file__
+    try:
+        yield
+    finally:
+        main.__file__ = path
 
 
 def _one_core_each(dask_worker) -> None:
