@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import re
 
 import pytest
@@ -291,6 +292,40 @@ def test_a_folder_another_run_is_making_a_campaign_folder_is_refused_as_busy(tmp
     with pytest.raises(InputError, match=r"holds \.campaign\.json\..*\.tmp but no campaign"):
         run("tool_rotation_arm", 1, out=out, report=False, **ARM)
     assert sorted(os.listdir(out)) == sorted(["campaign.lock", temporary.name])
+
+
+def test_a_second_ctrl_c_while_the_cluster_closes_waits_for_the_close(tmp_path, monkeypatch):
+    """An impatient user's Ctrl-C pressed again while the campaign closed its local cluster
+    after the first broke into the close: the cluster was left to Dask's atexit, which the
+    next Ctrl-C broke into too, "Exception ignored in atexit callback: <function
+    close_clusters ...> ... KeyboardInterrupt" after the command's line. The close now
+    finishes first, and the Ctrl-C held meanwhile is raised after it."""
+    import signal
+
+    closed = []
+
+    class Client:
+        def close(self):
+            os.kill(os.getpid(), signal.SIGINT)  # the second Ctrl-C, as the client closes
+            closed.append("client")
+
+    class Cluster:
+        def close(self):
+            closed.append("cluster")
+
+    def windowed(client, function, spec, indices):
+        raise KeyboardInterrupt  # the first Ctrl-C, while the trials run
+        yield
+
+    monkeypatch.setattr(runner, "_client", lambda *args: (Client(), Cluster()))
+    monkeypatch.setattr(runner, "windowed", windowed)
+    usual = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run("tool_rotation_arm", 2, out=tmp_path / "c", **{**ARM, "workers": 2})
+    finally:
+        signal.signal(signal.SIGINT, usual)
+    assert closed == ["client", "cluster"]
 
 
 def _lock_free(path) -> bool:

@@ -411,10 +411,11 @@ def _execute(spec: CampaignSpec, missing: list[int], folder: CampaignFolder,
             assembly.add(folder.write_trial(record))
             progress.step(record)
     finally:
-        if owned:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+        if owned:  # a Ctrl-C again meanwhile waits: no cluster left to Dask's atexit to close
+            with ctrl_c_deferred():
+                client.close()
+                if cluster is not None:
+                    cluster.close()
 
 
 def _warned(record: dict) -> dict:
