@@ -139,17 +139,27 @@ def test_a_profile_moved_a_tenth_of_a_nanometre_out_of_its_plane_removes_its_pri
                                                   abs=0.0)
 
 
-def test_cut_notes_when_nothing_of_the_stock_is_left(tmp_path):
+@pytest.mark.parametrize("cutter", ["cut", "cut_turned"])
+def test_cut_notes_when_nothing_of_the_stock_is_left(tmp_path, cutter):
     """A 60 mm face mill 3 mm down across a 10 x 10 x 2 mm block removes all of it, 200 mm^3
     (its whole volume by hand): cut() said nothing of it (only the command line warned,
     from its own count of the part's pieces); its report's notes now say so, which
-    ``machinesim cut`` prints as a warning. 1 mm down (100 mm^3) leaves the part, no note."""
+    ``machinesim cut`` prints as a warning. 1 mm down (100 mm^3) leaves the part, no note.
+    ``cut_turned`` builds its own report and had no such note: it notes it by the same rule
+    (`nothing_left_note`), in the same words."""
+    from machinesim.cutting import cut_turned
+    from machinesim.nc import read_program
+
     for depth, removed in ((3.0, 200e-9), (1.0, 100e-9)):
         program = tmp_path / f"face{depth:g}.nc"
         program.write_text(f"G90 G21 G17\nG00 X-40. Y5. Z1.\nG01 Z-{depth:g} F200.\n"
                            "X50.\nG00 Z1.\nM30\n")
-        part, report = cut(program, "grooving_4axis", tool="flat:30:h=20",
-                           stock="block:10x10x2")
+        if cutter == "cut":
+            part, report = cut(program, "grooving_4axis", tool="flat:30:h=20",
+                               stock="block:10x10x2")
+        else:
+            part, report = cut_turned(read_program(program), "grooving_4axis",
+                                      tool="flat:30:h=20", stock="block:10x10x2")
         assert report.removed_volume_m3 == pytest.approx(removed, rel=VOLUME_REL)
         said = [note for note in report.notes if note.startswith("nothing of the stock")]
         if depth > 2.0:

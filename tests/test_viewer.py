@@ -1240,7 +1240,11 @@ def test_a_program_that_takes_the_whole_stock_animates_and_says_nothing_is_left(
                     "--tool", "flat:30:h=20", "--max-triangles", str(BUDGET), "--html",
                     str(page)]) == 0
         err = capsys.readouterr().err
-        said = "nothing of the stock is left: the program removed all of it"
+        # cut()'s note (`nothing_left_note`), by its rule and in its words: the viewer had
+        # decided for itself, 'the program removed all of it, so no finished part is drawn'
+        said = ("nothing of the stock is left: the cut removed all of it (200 mm^3), and the "
+                "part has no faces (a tool wider than the part, or a depth below its bottom?); "
+                "no finished part is drawn")
         assert (f"warning: {said}" in err) == gone, err
         assert (f"<b>warning:</b> {said}" in page.read_text(encoding="utf-8")) == gone
 

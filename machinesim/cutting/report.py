@@ -198,7 +198,9 @@ def nothing_left_note(part, removed_m3: float, roi=None) -> str:
     """A note when ``part`` has no faces, else '': the cut removed all of the stock (of the
     stock in the ``roi`` windows, which `cut` refuses when none overlaps it, so there was
     material to remove), as a face mill wider than the part taken below its bottom does. A
-    part file of it holds no faces, which ``machinesim view`` refuses."""
+    part file of it holds no faces, which ``machinesim view`` refuses. The one rule for it:
+    `machinesim.cutting.cut` and ``cut_turned`` add it to their notes, and the viewer
+    (`machinesim.viewer.machine_scene`) warns it when its last stage is empty."""
     if part.triangle_count:
         return ""
     material = "the stock" if roi is None else "the stock in the roi windows"

@@ -24,6 +24,7 @@ from machinesim.cutting.report import (
     CutReport,
     arc_chord_note,
     nc_summary,
+    nothing_left_note,
     peak_following_error,
 )
 from machinesim.cutting.roi import check_roi_meets
@@ -166,15 +167,17 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         if progress is not None:
             progress(done, total)
     part, sheets, sheet_note = trim_sheets(part)
+    total_removed = float(removed + sheets.volume)
     return part, CutReport(
-        removed_volume_m3=float(removed + sheets.volume), machining_time_s=trajectory.duration,
+        removed_volume_m3=total_removed, machining_time_s=trajectory.duration,
         cutting_time_s=trajectory.cutting_time, sweeps=sweeps, substeps=trajectory.substeps,
         rapids_that_cut=(), limit_violations=limits, sideways_sweeps=sideways,
         empty_cut=not removed > EMPTY_SWEPT_REL * swept, engine="boolean, turned groups",
         elapsed_s=time.perf_counter() - began,
         notes=tuple(note for note in (
             *trajectory.notes, "rapids not cut nor checked against the part (turned groups)",
-            sheet_note, arc_chord_note(program, chord_tolerance, takes_path=False)) if note),
+            sheet_note, arc_chord_note(program, chord_tolerance, takes_path=False),
+            nothing_left_note(part, total_removed, roi)) if note),
         holder_contact=tuple(sorted(holder)), engine_s=engine_s, nc=nc_summary(program),
         thin_sheets=sheets.count, sideways_lines=tuple(sorted(sideways_lines)),
         peak_following_error=peak_following_error(trajectory, machine))

@@ -17,7 +17,7 @@ from pinocchio.visualize import MeshcatVisualizer
 
 from machinesim import motion
 from machinesim.cutting import cut, remove
-from machinesim.cutting.report import arc_chord_note
+from machinesim.cutting.report import arc_chord_note, nothing_left_note
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
 from machinesim.motion.faces import ProfileEdges
@@ -151,8 +151,8 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
                     ACTUAL_COLOUR)
     scene.add_mesh("tool", *tool_mesh(tool), colour=TOOL_COLOUR)
 
-    stage_times, parts, empty = _stages(trajectory, machine, tool, stock, errors, max_stages,
-                                        progress)
+    stage_times, parts, empty, removed = _stages(trajectory, machine, tool, stock, errors,
+                                                 max_stages, progress)
     if empty and not moving:  # as machinesim cut says it: the stock is not what to move
         scene.warnings.append("the program has no moves (no G00/G01/G02/G03 block that "
                               "runs), so nothing was removed")
@@ -171,10 +171,9 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
             switch, [on[0] <= t < (on[1] if len(on) > 1 else np.inf) for t in switch])]
     scene.animate(tracks)
 
-    if parts[-1].triangle_count == 0:  # bounds of nothing are NaN: no finished part to draw
-        scene.warnings.append("nothing of the stock is left: the program removed all of it, "
-                              "so no finished part is drawn (a tool wider than the part, or "
-                              "a depth below its bottom?)")
+    left = nothing_left_note(parts[-1], removed)  # cut()'s rule and words
+    if left:  # bounds of nothing are NaN: no finished part to draw
+        scene.warnings.append(f"{left}; no finished part is drawn")
         scene.notes += _program_notes(program, trajectory, keys, speed, parts, errors,
                                       chord_tolerance)
         if progress is not None:
@@ -256,13 +255,14 @@ def cut_by_block(trajectory, machine, tool, stock, errors=None, max_stages: int 
     parts : list of Part
         The stock, then the part after each block or group (same length as ``times``).
     """
-    times, parts, _ = _stages(trajectory, machine, tool, stock, errors, max_stages)
+    times, parts, _, _ = _stages(trajectory, machine, tool, stock, errors, max_stages)
     return times, parts
 
 
 def _stages(trajectory, machine, tool, stock, errors, max_stages, progress=None):
-    """`cut_by_block`'s times and parts, and whether no stage removed any material;
-    ``progress(done, stages + 1)`` after each stage (the one more: the nominal part).
+    """`cut_by_block`'s times and parts, whether no stage removed any material, and the
+    volume (m^3) all stages removed; ``progress(done, stages + 1)`` after each stage (the
+    one more: the nominal part).
 
     A stage is a feed block or a group of them, each cut with the rapids before it (the
     last with those after it too), as `cut` cuts every move: the stages had cut the feeds
@@ -276,7 +276,7 @@ def _stages(trajectory, machine, tool, stock, errors, max_stages, progress=None)
         ends = [int(group[-1]) for group in groups]
     else:  # rapids alone: one stage, as they cut too
         ends = [len(moving) - 1] if moving else []
-    times, parts, empty = [0.0], [stock], True
+    times, parts, empty, removed = [0.0], [stock], True, 0.0
     for k, end in enumerate(ends):
         begin = ends[k - 1] + 1 if k else 0
         members = moving[begin:end + 1] if k < len(ends) - 1 else moving[begin:]
@@ -285,9 +285,10 @@ def _stages(trajectory, machine, tool, stock, errors, max_stages, progress=None)
         if progress is not None:
             progress(k + 1, len(ends) + 1)
         empty = empty and bool(report.empty_cut)
+        removed += float(report.removed_volume)
         times.append(float(moving[end].t[-1]))
         parts.append(part)
-    return times, parts, empty
+    return times, parts, empty, removed
 
 
 def _feed_count(trajectory) -> int:
