@@ -394,17 +394,9 @@ def _cut(args) -> int:
         summary["notes"].append(f"{args.servo} sets no servo loop (no axis table): every axis "
                                 "followed its command exactly, a following error of 0")
     if errors is not None:
-        from machinesim.errors.unit_slips import (
-            below_any_machine,
-            beyond_any_machine,
-            far_polynomials,
-            short_tables,
-            turn_steps,
-        )
+        from machinesim.errors.unit_slips import unit_slip_notes
 
-        summary["notes"] += [*below_any_machine(errors), *beyond_any_machine(errors),
-                             *short_tables(errors, machine), *far_polynomials(errors, machine),
-                             *turn_steps(errors, machine)]
+        summary["notes"] += unit_slip_notes(errors, machine)
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
     pieces, apart = _pieces(part, stock, roi)

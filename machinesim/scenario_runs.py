@@ -339,24 +339,17 @@ def errors_file(path, machine):
     `machinesim.machines.Machine`, required: `short_tables`, um of travel under position_um,
     mm meant), and polynomials that reach 10 mm or 10 deg within its travel
     (`far_polynomials`), and a rotary axis's table of a turn whose values a turn apart
-    differ where the travel wraps it (`turn_steps`). The run goes on: each can be meant."""
+    differ where the travel wraps it (`turn_steps`): `unit_slip_notes`, as cut's. The run
+    goes on: each can be meant."""
     from machinesim.errors import ErrorModel
-    from machinesim.errors.unit_slips import (
-        below_any_machine,
-        beyond_any_machine,
-        far_polynomials,
-        short_tables,
-        turn_steps,
-    )
+    from machinesim.errors.unit_slips import unit_slip_notes
 
     errors = ErrorModel.from_toml(path)
     name = Path(sys.argv[0]).stem or "scenario"
     notes = [] if errors.written else [
         f"{path}: sets no error (no key in any section): the machine as built, every error "
         "zero"]
-    for line in [*notes, *below_any_machine(errors), *beyond_any_machine(errors),
-                 *short_tables(errors, machine), *far_polynomials(errors, machine),
-                 *turn_steps(errors, machine)]:
+    for line in [*notes, *unit_slip_notes(errors, machine)]:
         print(f"{name}: note: {line}", file=sys.stderr, flush=True)
     return errors
 

@@ -23,7 +23,7 @@ from machinesim.units import FACTORS, is_length
 
 __all__ = ["LARGEST_LIKELY_ERROR_M", "LARGEST_LIKELY_ERROR_RAD", "SHORTEST_TABLE_SHARE",
            "SMALLEST_WRITTEN_ERROR_SI", "below_any_machine", "beyond_any_machine",
-           "far_polynomials", "short_tables", "turn_steps"]
+           "far_polynomials", "short_tables", "turn_steps", "unit_slip_notes"]
 
 
 #: Below this (m or rad) an error value written in a file is no error any machine shows (a
@@ -243,6 +243,17 @@ def turn_steps(model: ErrorModel, machine) -> list[str]:
                 f"{step / FACTORS[unit]:g} {unit} there, which no chord follows: give the "
                 "same value a turn apart")
     return lines
+
+
+def unit_slip_notes(model: ErrorModel, machine) -> list[str]:
+    """Every note of this module on ``model`` against ``machine`` (a
+    `machinesim.machines.Machine`), in one order: `below_any_machine`, `beyond_any_machine`,
+    `short_tables`, `far_polynomials`, `turn_steps`. What ``machinesim cut --errors`` adds
+    to its notes and a scenario's ``--errors`` prints (`scenario_runs.errors_file`): one
+    list, so a new check reaches both."""
+    return [*below_any_machine(model), *beyond_any_machine(model),
+            *short_tables(model, machine), *far_polynomials(model, machine),
+            *turn_steps(model, machine)]
 
 
 #: The units an error value is more likely written in, for a key in each unit.
