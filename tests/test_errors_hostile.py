@@ -46,11 +46,25 @@ def test_positions_a_float64_range_apart_are_read_without_numpys_overflow_warnin
             ErrorModel.from_toml(path)
 
 
+def _cut_with(errors, tmp_path, capsys) -> str:
+    """The stderr of ``machinesim cut`` of a 10 um deep V groove 2 mm along X on
+    grooving_4axis with ``errors`` as its --errors file, which exits 0."""
+    from machinesim.cli import main
+
+    program = tmp_path / "p.nc"
+    program.write_text("G90 G21\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nG01 X2.\nG00 Z1.\nM30\n")
+    code = main(["cut", str(program), "--machine", "grooving_4axis", "--tool", "v:90",
+                 "--stock", "block:10x10x2", "--out", str(tmp_path / "a.ply"), "--errors",
+                 str(errors), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    return err
+
+
 def test_a_polynomial_reaching_beyond_any_machine_within_the_travel_is_noted(tmp_path, capsys):
     # c_2 = 1 um/mm**2 (perhaps meant per m**2) reaches 1 * 250**2 um = 62.5 mm at the ends
     # of grooving_4axis's X (-250 .. 250 mm), by hand; below check_travel's 1 m, so it was cut
     # with exit 0 and no note, while a table value of 62.5 mm is noted (beyond_any_machine)
-    from machinesim.cli import main
     from machinesim.errors.unit_slips import far_polynomials
     from machinesim.machines import load_machine
 
@@ -63,13 +77,8 @@ def test_a_polynomial_reaching_beyond_any_machine_within_the_travel_is_noted(tmp
             "at X = -250 mm within X's travel, beyond the errors of any machine: were its "
             "coefficients written for other units than its key asks?")
     assert far_polynomials(errors, machine) == [note]  # C's reaches 3.6 um at 360 deg: none
-    program = tmp_path / "p.nc"
-    program.write_text("G90 G21\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nG01 X2.\nG00 Z1.\nM30\n")
-    code = main(["cut", str(program), "--machine", "grooving_4axis", "--tool", "v:90",
-                 "--stock", "block:10x10x2", "--out", str(tmp_path / "a.ply"), "--errors",
-                 str(path), "--quiet"])
-    err = capsys.readouterr().err
-    assert code == 0 and f"note: {note}" in err, err
+    err = _cut_with(path, tmp_path, capsys)
+    assert f"note: {note}" in err, err
     # an angle's: EAX_poly_urad_mm = [0, 700] urad/mm turns 175 mrad (10.03 deg) at 250 mm
     path.write_text("[component.X]\nEAX_poly_urad_mm = [0.0, 700.0]\n")
     [line] = far_polynomials(ErrorModel.from_toml(path), machine)
@@ -85,7 +94,6 @@ def test_a_turn_table_whose_values_a_turn_apart_differ_is_noted(tmp_path, capsys
     # X = 10 mm by hand, with exit 0 and no note before
     import numpy as np
 
-    from machinesim.cli import main
     from machinesim.errors.unit_slips import turn_steps
     from machinesim.machines import load_machine
 
@@ -103,13 +111,8 @@ def test_a_turn_table_whose_values_a_turn_apart_differ_is_noted(tmp_path, capsys
             "within C's travel, so the error steps by 1 arcsec there, which no chord follows: "
             "give the same value a turn apart")
     assert turn_steps(errors, machine) == [note]
-    program = tmp_path / "p.nc"
-    program.write_text("G90 G21\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nG01 X2.\nG00 Z1.\nM30\n")
-    code = main(["cut", str(program), "--machine", "grooving_4axis", "--tool", "v:90",
-                 "--stock", "block:10x10x2", "--out", str(tmp_path / "a.ply"), "--errors",
-                 str(path), "--quiet"])
-    err = capsys.readouterr().err
-    assert code == 0 and f"note: {note}" in err, err
+    err = _cut_with(path, tmp_path, capsys)
+    assert f"note: {note}" in err, err
     # the same value a turn apart, and a table of less than a turn (which holds its end
     # values beyond it, as on a linear axis), are not noted
     for text in ("ECC_arcsec = [1.0, 0.0, 1.0]", "ECC_arcsec = [1.0, 0.0, 2.0]"):
