@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
@@ -128,6 +129,26 @@ def _report(files, stop_after=None):
 
 def _siblings(folder):
     return sorted(p.name for p in folder.parent.iterdir() if p != folder)
+
+
+@contextlib.contextmanager
+def _disk_full_at(name):
+    """Within it, staging a file called ``name`` (`machinesim._io._stage`) fails as a full
+    disk does (ENOSPC); other files are staged as ever."""
+    import errno
+
+    from machinesim import _io
+
+    real = _io._stage
+
+    def full(path, raw):
+        if path.name == name:
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        return real(path, raw)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(_io, "_stage", full)
+        yield
 
 
 def test_a_rerun_stopped_midway_leaves_the_previous_report_whole(tmp_path, capsys):
@@ -758,40 +779,26 @@ def test_read_summary_names_a_path_that_is_none_and_a_campaigns_summary(tmp_path
         assert info.value.source == str(campaign / "summary.json")
 
 
-def test_a_tables_markdown_and_json_are_written_both_or_neither(tmp_path, monkeypatch):
+def test_a_tables_markdown_and_json_are_written_both_or_neither(tmp_path):
     # written one after the other, a full disk at name.json left the new name.md beside the
     # old name.json: one table's two files telling two different tables
-    import errno
-
-    from machinesim import _io
     from machinesim.exceptions import MachineSimError
 
     out = ReportFolder(tmp_path / "out")
     out.write_table("t", ["depth_um"], [[1.0]])
     before = _snapshot(tmp_path / "out")
-    real = _io._stage
-
-    def full_at_the_json(path, raw):
-        if path.name == "t.json":
-            raise OSError(errno.ENOSPC, "No space left on device", str(path))
-        return real(path, raw)
-
-    monkeypatch.setattr(_io, "_stage", full_at_the_json)
-    with pytest.raises(MachineSimError, match="No space left on device"):
+    with _disk_full_at("t.json"), pytest.raises(MachineSimError,
+                                                match="No space left on device"):
         out.write_table("t", ["depth_um"], [[2.0]])
     assert _snapshot(tmp_path / "out") == before and _siblings(tmp_path / "out") == []
-    monkeypatch.setattr(_io, "_stage", real)
     out.write_table("t", ["depth_um"], [[2.0]])
     assert json.loads((tmp_path / "out/t.json").read_text())["rows"] == [[2.0]]
     assert "| 2.000 |" in (tmp_path / "out/t.md").read_text()
 
 
-def test_a_budgets_table_and_plot_are_written_both_or_neither(tmp_path, monkeypatch):
+def test_a_budgets_table_and_plot_are_written_both_or_neither(tmp_path):
     # write_budget wrote budget.md, then the plot: a full disk at the plot left the new
     # table beside the old plot
-    import errno
-
-    from machinesim import _io
     from machinesim.budget import Budget
     from machinesim.exceptions import MachineSimError
 
@@ -801,19 +808,11 @@ def test_a_budgets_table_and_plot_are_written_both_or_neither(tmp_path, monkeypa
     out.write_budget(Budget.from_dict([row]))
     before = _snapshot(tmp_path / "out")
     assert sorted(before) == ["budget.md", "budget.png"]
-    real = _io._stage
-
-    def full_at_the_plot(path, raw):
-        if path.name == "budget.png":
-            raise OSError(errno.ENOSPC, "No space left on device", str(path))
-        return real(path, raw)
-
-    monkeypatch.setattr(_io, "_stage", full_at_the_plot)
     other = Budget.from_dict([{**row, "after_without": 0.4, "share": 0.36}])
-    with pytest.raises(MachineSimError, match="No space left on device"):
+    with _disk_full_at("budget.png"), pytest.raises(MachineSimError,
+                                                    match="No space left on device"):
         out.write_budget(other)
     assert _snapshot(tmp_path / "out") == before and _siblings(tmp_path / "out") == []
-    monkeypatch.setattr(_io, "_stage", real)
     out.write_budget(other)
     assert "36" in (tmp_path / "out/budget.md").read_text()
     assert (tmp_path / "out/budget.png").read_bytes() != before["budget.png"]
