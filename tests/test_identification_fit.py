@@ -755,3 +755,35 @@ def test_an_r_test_reading_given_where_observations_go_is_told_the_way_in():
                                          r"lab.r_test\(\).read\(q\) returns, got ndarray"):
         from_r_test(np.zeros((2, 3)))
     assert len(from_r_test(reading)) == 6  # the way in: 2 poses x X, Y, Z
+
+
+def test_estimate_and_plan_quality_say_what_they_are_with_units():
+    """Their repr had been the dataclass dump: every std, the k x k covariance and
+    correlation as bare SI arrays (some 4,000 characters for 6 parameters), the values
+    themselves after them, no unit anywhere. Now the counts, then each value and std with
+    its unit. Hand values: X, Y, Z read at 8 poses, sigma 50 nm: std 50 nm / sqrt(8) for
+    the X offsets, and 2 x 50 nm / sqrt(8) for tool.z + workpiece.z told apart by B."""
+    machine = load_machine("robonano_ui")
+    deg = np.pi / 180
+    abc = [(a, b, c) for a in (0, 180) for b in (-30, 30) for c in (0, 120)]
+    q = np.repeat([[0.01 * i, 0.0, 0.02, a * deg, b * deg, c * deg]
+                   for i, (a, b, c) in enumerate(abc)], 3, axis=0)
+    u = np.tile(np.eye(3), (len(abc), 1))
+    names = ["tool.x", "workpiece.x", "workpiece.gamma"]
+    quality = plan_quality(machine, q, names, directions=u, sigma=50e-9)
+    assert repr(quality).startswith("PlanQuality(3 parameters, 24 readings, rank 3, ")
+    assert f"tool.x std {50e-9 / np.sqrt(8):.3g} m" in repr(quality)
+    assert "workpiece.gamma std " in repr(quality) and repr(quality).endswith(" rad)")
+    truth = ErrorModel().with_parameters({"tool.x": 120e-6, "workpiece.x": 15e-6,
+                                          "workpiece.gamma": 1e-3})
+    readings = np.einsum("ni,ni->n", u, machine.tool_pose(q, truth)[:, :3, 3]
+                         - machine.tool_pose(q)[:, :3, 3])
+    estimate = fit(machine, observations(q, directions=u, values=readings, sigma=50e-9),
+                   names)
+    text = repr(estimate)
+    assert text.startswith("Estimate(3 parameters, 24 readings, rank 3, ")
+    assert "tool.x = 0.00012 m +- " in text and "workpiece.gamma = 0.001 rad +- " in text
+    assert "covariance" not in text and len(text) < 600
+    many = plan_quality(machine, q, list(machine.parameter_names())[:12], directions=u,
+                        sigma=50e-9)
+    assert repr(many).endswith("... 4 more)") and " unidentifiable" in repr(many)

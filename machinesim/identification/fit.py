@@ -45,6 +45,7 @@ from machinesim.identification.identifiability import (
     _figures,
     _linearise,
     _scale_notes,
+    listed,
 )
 from machinesim.identification.observation_model import _Plan
 from machinesim.identification.observations import (
@@ -94,7 +95,7 @@ def misfit_limit(dof: int) -> float:
     return math.sqrt(float(chi2.isf(MISFIT_FALSE_ALARM, dof)) / dof)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Estimate(_Figures):
     __doc__ = ("""The result of `fit`: the parameters and what the readings could identify.
 
@@ -161,6 +162,11 @@ class Estimate(_Figures):
                        f"{self.residual_rms:.3g} m): an error missing from the parameters "
                        "or the prior, or sigma too small; the values may be far off")
         return tuple(out)
+
+    def __repr__(self) -> str:
+        return (f"Estimate({self._summary()}, residual RMS {self.residual_rms:.3g} m "
+                f"(normalised {self.normalised_residual_rms:.3g}), {self.iterations} "
+                f"iterations: {listed(self.names, self.values, self.std)})")
 
     def as_dict(self) -> dict[str, dict[str, float]]:
         """``{name: {"value": v, "std": s}}`` in SI (std NaN when unidentifiable)."""

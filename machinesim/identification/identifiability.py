@@ -114,6 +114,41 @@ class _Figures:
                                "separate them")
         return tuple(out)
 
+    def _summary(self) -> str:
+        """Counts and figures for a repr: what the object is, without its matrices."""
+        notes = len(self.notes)
+        return (f"{len(self.names)} parameters, {self.n_observations} readings, rank "
+                f"{self.rank}, condition {self.condition:.3g}, {notes} "
+                f"note{'' if notes == 1 else 's'}")
+
+
+#: Parameters a repr lists before it says how many more there are.
+REPR_PARAMETERS = 8
+
+
+def parameter_unit(name: str) -> str:
+    """The SI unit of a parameter's value: 'rad' or 'm', 'SI' for a component error's
+    table entry or polynomial coefficient (m or rad, per unit of the axis' travel^k)."""
+    if name.startswith("component."):
+        return "SI"
+    return "rad" if is_angle(name) else "m"
+
+
+def listed(names, values, std=None) -> str:
+    """``name = value unit +- std unit`` for a repr, the first `REPR_PARAMETERS` of them."""
+    items = []
+    for i, name in enumerate(names[:REPR_PARAMETERS]):
+        unit = parameter_unit(name)
+        text = f"{name} = {float(values[i]):.6g} {unit}" if values is not None else name
+        if std is not None:
+            s = float(std[i])
+            text += (" unidentifiable" if math.isnan(s) else
+                     f"{' +- ' if values is not None else ' std '}{s:.3g} {unit}")
+        items.append(text)
+    if len(names) > REPR_PARAMETERS:
+        items.append(f"... {len(names) - REPR_PARAMETERS} more")
+    return ", ".join(items)
+
 
 def _unseen_note(c: Combination, rank: int, k: int) -> str:
     """The note on one direction the readings cannot see (`_Figures.notes`)."""
@@ -158,7 +193,7 @@ _FIGURES_DOC = """
 """
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class PlanQuality(_Figures):
     __doc__ = ("""What a measurement plan can identify, before any reading (`plan_quality`).
 
@@ -171,6 +206,10 @@ class PlanQuality(_Figures):
 """)
 
     scale_notes: tuple = ()
+
+    def __repr__(self) -> str:
+        return (f"PlanQuality({self._summary()}: "
+                f"{listed(self.names, None, self.std)})")
 
 
 @dataclass(frozen=True, eq=False)
