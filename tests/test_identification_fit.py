@@ -787,3 +787,20 @@ def test_estimate_and_plan_quality_say_what_they_are_with_units():
     many = plan_quality(machine, q, list(machine.parameter_names())[:12], directions=u,
                         sigma=50e-9)
     assert repr(many).endswith("... 4 more)") and " unidentifiable" in repr(many)
+
+
+def test_an_estimate_names_a_polynomial_coefficient_s_unit():
+    """A polynomial's coefficient k is m per m^k (ErrorModel.parameter_unit): the repr
+    gives it so, where the plan, without a model, says SI."""
+    machine = load_machine("grooving_4axis")
+    prior = ErrorModel.from_dict({"component": {"X": {"EYX_poly_um_mm": [0.0, 0.0]}}})
+    q = np.zeros((5, 4))
+    q[:, 0] = np.linspace(-0.1, 0.1, 5)
+    u = np.tile([0.0, 1.0, 0.0], (5, 1))
+    names = ["component.X.EYX[0]", "component.X.EYX[1]"]
+    estimate = fit(machine, observations(q, directions=u, values=1e-6 * q[:, 0] + 2e-7,
+                                         sigma=1e-8), names, prior=prior)
+    assert np.allclose(estimate.values, [2e-7, 1e-6], rtol=1e-6, atol=1e-15)
+    assert "component.X.EYX[1] = 1e-06 m/m +- " in repr(estimate)
+    assert "component.X.EYX[0] std " in repr(plan_quality(machine, q, names, directions=u,
+                                                         sigma=1e-8, prior=prior))

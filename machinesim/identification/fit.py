@@ -166,7 +166,8 @@ class Estimate(_Figures):
     def __repr__(self) -> str:
         return (f"Estimate({self._summary()}, residual RMS {self.residual_rms:.3g} m "
                 f"(normalised {self.normalised_residual_rms:.3g}), {self.iterations} "
-                f"iterations: {listed(self.names, self.values, self.std)})")
+                f"iterations: "
+                f"{listed(self.names, self.values, self.std, self.errors.parameter_unit)})")
 
     def as_dict(self) -> dict[str, dict[str, float]]:
         """``{name: {"value": v, "std": s}}`` in SI (std NaN when unidentifiable)."""

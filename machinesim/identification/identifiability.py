@@ -134,11 +134,12 @@ def parameter_unit(name: str) -> str:
     return "rad" if is_angle(name) else "m"
 
 
-def listed(names, values, std=None) -> str:
-    """``name = value unit +- std unit`` for a repr, the first `REPR_PARAMETERS` of them."""
+def listed(names, values, std=None, unit_of=parameter_unit) -> str:
+    """``name = value unit +- std unit`` for a repr, the first `REPR_PARAMETERS` of them
+    (`unit_of`: a model's `ErrorModel.parameter_unit`, which knows its polynomials)."""
     items = []
     for i, name in enumerate(names[:REPR_PARAMETERS]):
-        unit = parameter_unit(name)
+        unit = unit_of(name)
         text = f"{name} = {float(values[i]):.6g} {unit}" if values is not None else name
         if std is not None:
             s = float(std[i])
