@@ -1119,3 +1119,22 @@ def test_a_python_value_beyond_the_bound_is_told_in_mm_or_deg_first_and_si_besid
     with pytest.raises(ErrorModelError) as info:
         build()
     assert str(info.value) == expected
+
+
+def test_an_error_model_says_what_it_holds_with_units():
+    """Its repr had been the dataclass dump of every family, the zero ones too, as bare SI
+    arrays: ErrorModel(tool=ToolSetting(offset=array([ 4.e-06, -2.e-06,  0.e+00]), ...),
+    no unit anywhere, and a background file's 70 table values at full length. Now the
+    non-zero parameters with their units, where it was read from, the first 8."""
+    assert repr(ErrorModel()) == "ErrorModel(no errors)"
+    model = ErrorModel.from_dict({"tool": {"offset_um": [4.0, -2.0, 0.0]},
+                                  "workpiece": {"gamma_deg": 1.0}}, source="mine")
+    assert repr(model) == (f"ErrorModel(tool.x = 4e-06 m, tool.y = -2e-06 m, "
+                           f"workpiece.gamma = {math.pi / 180:.6g} rad; from mine)")
+    assert str(ErrorModel.from_dict({"component": {"X": {"EYX_poly_um_mm": [0.0, 2.0]}}})
+               ) == "ErrorModel(component.X.EYX[1] = 0.002 m/m; from <dict>)"
+    many = ErrorModel().with_parameters({f"tool.{n}": 1e-6 for n in ("x", "y", "z")}
+                                        | {f"workpiece.{n}": 1e-6 for n in ("x", "y", "z")}
+                                        | {"location.C.EX0C": 1e-6, "location.C.EY0C": 1e-6,
+                                           "location.C.EA0C": 1e-6, "location.C.EB0C": 1e-6})
+    assert repr(many).endswith("location.C.EY0C = 1e-06 m, ... 2 more non-zero)")

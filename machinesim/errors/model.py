@@ -112,6 +112,10 @@ def _check_component(axes: Mapping[str, Mapping[str, Any]]) -> None:
                 raise _fail(message, None, f"component.{axis}.{symbol}")
 
 
+#: Parameters an ErrorModel's repr lists before it says how many more are not zero.
+REPR_PARAMETERS = 8
+
+
 @dataclass(frozen=True, eq=False)
 class ErrorModel(_Value):
     """All injected errors of a machine; ``ErrorModel()`` has none.
@@ -174,6 +178,16 @@ class ErrorModel(_Value):
         if not isinstance(self.lines, Mapping):
             raise _fail(f"expected a mapping, got {_describe(self.lines)}", None, "lines")
         object.__setattr__(self, "lines", MappingProxyType(dict(self.lines)))
+
+    def __repr__(self) -> str:
+        """Its non-zero parameters with their units (SI), the first `REPR_PARAMETERS`."""
+        given = {n: v for n, v in self.parameters().items() if v != 0.0}
+        items = [f"{n} = {v:.6g} {self.parameter_unit(n)}"
+                 for n, v in list(given.items())[:REPR_PARAMETERS]]
+        if len(given) > REPR_PARAMETERS:
+            items.append(f"... {len(given) - REPR_PARAMETERS} more non-zero")
+        where = "" if self.source is None else f"; from {self.source}"
+        return f"ErrorModel({', '.join(items) or 'no errors'}{where})"
 
     @property
     def is_zero(self) -> bool:
