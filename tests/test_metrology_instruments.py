@@ -388,3 +388,19 @@ def test_an_instrument_marks_the_samples_off_the_part_missing_and_refuses_a_trac
             instrument.profile(two, (1.5 * mm, 0.0), (1.5 * mm, 2 * mm), 0.1 * mm)
         with pytest.raises(InputError, match=r"reads no surface: all 100 of its samples"):
             instrument.height_map(two, 1.05 * mm, 1.95 * mm, 0.05 * mm, 0.95 * mm, 0.1 * mm)
+
+
+def test_a_profile_and_a_height_map_say_what_they_are_with_units():
+    """Their repr had been the dataclass dump, numpy's elided arrays of bare SI
+    (Profile(s=array([0.0000e+00, 3.0000e-07, ...]), z=array([ 5.0e-09, ...]), ...)):
+    neither the count, the line in mm nor the heights' range in a unit. Hand values: a
+    line of 1 mm at 0.3 um spacing holds 3334 samples, half of it (1667) off a 10 mm
+    block's edge; 4 x 2 um read at 0.5 um spacing is 9 x 5; noise off, the top reads 0."""
+    part = block(10 * MM, 10 * MM, 2 * MM)
+    profile = Microscope(noise=False).profile(part, (5 * MM, 9.5 * MM), (5 * MM, 10.5 * MM))
+    assert repr(profile) == ("Profile(3334 samples from (5, 9.5) mm to (5, 10.5) mm, "
+                             "1667 missing, z 0 .. 0 um)")
+    heights = WhiteLightInterferometer(noise=False).height_map(part, 1 * MM, 1.004 * MM,
+                                                                2 * MM, 2.002 * MM)
+    assert repr(heights) == ("HeightMap(5 x 9 samples over x 1 .. 1.004 mm, "
+                             "y 2 .. 2.002 mm, 0 missing, z 0 .. 0 um)")

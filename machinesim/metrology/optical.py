@@ -62,7 +62,15 @@ from machinesim.units import M_PER_MM
 __all__ = ["HeightMap", "Microscope", "Profile", "WhiteLightInterferometer"]
 
 
-@dataclass(frozen=True, eq=False)
+def _span(z: np.ndarray) -> str:
+    """The heights read, for a repr: missing count and range, um."""
+    read = z[~np.isnan(z)]
+    heights = (f"z {read.min() * 1e6:.6g} .. {read.max() * 1e6:.6g} um" if read.size
+               else "nothing read")
+    return f"{z.size - read.size} missing, {heights}"
+
+
+@dataclass(frozen=True, eq=False, repr=False)
 class Profile:
     """Heights read along a straight line in xy.
 
@@ -97,8 +105,13 @@ class Profile:
         direction = (self.end - self.start) / np.hypot(*(self.end - self.start))
         return self.start + self.s[:, None] * direction
 
+    def __repr__(self) -> str:
+        (x0, y0), (x1, y1) = self.start * 1e3, self.end * 1e3
+        return (f"Profile({self.s.size} samples from ({x0:.6g}, {y0:.6g}) mm to ({x1:.6g}, "
+                f"{y1:.6g}) mm, {_span(self.z)})")
 
-@dataclass(frozen=True, eq=False)
+
+@dataclass(frozen=True, eq=False, repr=False)
 class HeightMap:
     """Heights read over a rectangular grid.
 
@@ -122,6 +135,11 @@ class HeightMap:
         """Shape (ny, nx), bool: True where the sample read nothing (off the part; ``z``
         NaN)."""
         return _flags(np.isnan(self.z))
+
+    def __repr__(self) -> str:
+        x, y = self.x * 1e3, self.y * 1e3
+        return (f"HeightMap({y.size} x {x.size} samples over x {x.min():.6g} .. "
+                f"{x.max():.6g} mm, y {y.min():.6g} .. {y.max():.6g} mm, {_span(self.z)})")
 
 
 class _Profiler:
