@@ -170,6 +170,34 @@ class Identified:
 
     __reduce__ = reduce_frozen  # pickles (parameters is read-only: a mappingproxy)
 
+    def __repr__(self) -> str:
+        detail = "" if self.detail is None else f"; detail {type(self.detail).__name__}"
+        return (f"Identified({len(self.parameters)} parameters: "
+                f"{_listed(self.parameters)}; {_count(self.notes, 'note')}{detail})")
+
+
+def _count(items, what: str) -> str:
+    return f"{len(items)} {what}{'' if len(items) == 1 else 's'}"
+
+
+def _listed(parameters: Mapping[str, tuple[float, float]], polynomials=()) -> str:
+    """``name = value unit +- std unit`` for a repr (identifiability.listed): a component
+    table's entry in its symbol's unit, a polynomial's coefficient (``polynomials``) 'SI'."""
+    from machinesim.identification.identifiability import listed, parameter_unit
+
+    def unit_of(name: str) -> str:
+        if not name.startswith("component."):
+            return parameter_unit(name)
+        error, symbol = name.split("[")[0], name.split(".")[2]
+        if error in polynomials or len(symbol) < 2:
+            return "SI"
+        return "m" if symbol[1] in "XYZ" else "rad"
+
+    names = list(parameters)
+    pairs = np.array([parameters[n] for n in names], dtype=float).reshape(-1, 2)
+    return (listed(names, pairs[:, 0], pairs[:, 1], unit_of, "(no std)") if names
+            else "none")
+
 
 #: A number in a note (a residual, a correlation, a std), not part of a name (``EX0C``,
 #: ``EAC[3]``): `note_kind` leaves it out.
@@ -221,7 +249,7 @@ class Evaluation:
     __reduce__ = reduce_frozen  # pickles, a procedure's read-only mappings too
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Result:
     """One run of a procedure on a lab.
 
@@ -297,6 +325,21 @@ class Result:
         """The identification's notes (`Identified.notes`; none from an ``identification``
         that is no `Identified`)."""
         return tuple(getattr(self.identification, "notes", ()))
+
+    def __repr__(self) -> str:
+        def shown(value) -> str:
+            return "none" if value is None else f"{value:.4g}"
+
+        figures = ", ".join(f"{f.name} {shown(f.before)} -> {shown(f.after)} {f.unit}"
+                            for f in self.figures)
+        seed = self.seed  # a campaign trial's SeedSequence: its entropy and spawn key
+        if isinstance(seed, np.random.SeedSequence):
+            seed = f"{seed.entropy} spawn {tuple(seed.spawn_key)}"
+        return (f"Result({self.procedure} ({self.paper}) on {self.machine}, seed "
+                f"{seed}, noise {'on' if self.noise else 'off'}, realism "
+                f"{_preset(self.realism)}; identified "
+                f"{_listed(self.identified, self.polynomials)}; figures before -> after: "
+                f"{figures or 'none'}; {_count(self.notes, 'note')})")
 
     def figure(self, name: str) -> Figure:
         """The figure called ``name``."""

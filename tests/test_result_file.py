@@ -185,3 +185,26 @@ def test_a_saved_result_named_by_no_file_name_is_refused_as_such(path):
                                          r"\(str or pathlib.Path\), got ") as refused:
         load_result(path)
     assert refused.value.key == "path"
+
+
+def test_a_result_and_its_identified_say_what_they_are_with_units(result, tmp_path):
+    """Their repr had been the dataclass dump: a Result's measurements, programs and
+    evaluation in full, identified as bare SI tuples (`mappingproxy({'tool.x':
+    (3.997833333334532e-06, 1.4433997290348152e-08), ...})`), no unit. Now the run, each
+    identified value with its unit and std, each figure before -> after in its unit, the
+    notes' count; the same after a save and load."""
+    from machinesim.experiment import Identified
+
+    text = repr(result)
+    assert text.startswith("Result(workpiece_x (")
+    assert " on robonano_a0ib, seed 0, noise off, realism ideal; " in text
+    assert "figures before -> after: x 1 -> 0.5 um; 0 notes)" in text
+    assert "identified workpiece.x = " in text and " m +- 1e-09 m;" in text
+    assert repr(load_result(save_result(result, tmp_path / "r.pkl"))) == text
+    identified = Identified({"workpiece.gamma": (1e-3, 2e-6), "component.X.EXX[1]": 3e-8,
+                             "component.C.EAC[0]": (1e-6, 0.0)}, detail=[1.0],
+                            notes=("fit: a note",))
+    assert repr(identified) == (
+        "Identified(3 parameters: workpiece.gamma = 0.001 rad +- 2e-06 rad, "
+        "component.X.EXX[1] = 3e-08 m (no std), component.C.EAC[0] = 1e-06 rad "
+        "+- 0 rad; 1 note; detail list)")

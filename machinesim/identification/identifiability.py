@@ -134,16 +134,18 @@ def parameter_unit(name: str) -> str:
     return "rad" if is_angle(name) else "m"
 
 
-def listed(names, values, std=None, unit_of=parameter_unit) -> str:
+def listed(names, values, std=None, unit_of=parameter_unit,
+           no_std: str = "unidentifiable") -> str:
     """``name = value unit +- std unit`` for a repr, the first `REPR_PARAMETERS` of them
-    (`unit_of`: a model's `ErrorModel.parameter_unit`, which knows its polynomials)."""
+    (`unit_of`: a model's `ErrorModel.parameter_unit`, which knows its polynomials;
+    `no_std`: what a NaN std means)."""
     items = []
     for i, name in enumerate(names[:REPR_PARAMETERS]):
         unit = unit_of(name)
         text = f"{name} = {float(values[i]):.6g} {unit}" if values is not None else name
         if std is not None:
             s = float(std[i])
-            text += (" unidentifiable" if math.isnan(s) else
+            text += (f" {no_std}" if math.isnan(s) else
                      f"{' +- ' if values is not None else ' std '}{s:.3g} {unit}")
         items.append(text)
     if len(names) > REPR_PARAMETERS:
