@@ -112,6 +112,12 @@ class Compensated:
     max_rotation_residual: float
     singular: str = ""
 
+    def __repr__(self) -> str:
+        left = "; ".join(x for x in (self.unmatched, self.singular) if x) or "all matched"
+        return (f"Compensated({self.program!r}, position residual "
+                f"{self.max_position_residual:.3g} m, rotation residual "
+                f"{self.max_rotation_residual:.3g} rad before rounding; {left})")
+
 
 def start_axes(machine: Machine, start=None) -> np.ndarray:
     """The axis values before the first block, (n_axes,), SI: ``start`` or zeros.

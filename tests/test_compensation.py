@@ -644,3 +644,21 @@ def test_the_weak_turn_cut_off_on_robonano_ui_is_where_sin_b_over_root_2_is_ik_w
     # what is left there is a singularity's (the poses around match it): told, by the same cut
     assert bool(result.singular) == left
     assert any(issubclass(w.category, MachineSimWarning) for w in caught) == left
+
+
+def test_a_compensated_program_says_what_it_left_with_units():
+    """Its repr had named the residuals' fields without their units
+    (max_position_residual=0.0, max_rotation_residual=5.877471754111438e-39). Now they
+    come with m and rad, and what was left unmatched, or 'all matched'. A tool offset on
+    grooving_4axis is matched exactly (docs/compensation.md); a tilt about X of 1e-5 rad
+    cannot be, by four axes that turn only about Z: 1e-5 rad left."""
+    program, machine = read_program("models/examples/grooves.nc"), load_machine("grooving_4axis")
+    shifted = model_based(program, machine, ErrorModel.from_dict(
+        {"tool": {"offset_um": [4.0, -2.0, 0.0]}}), start=None, point=None)
+    assert repr(shifted).startswith("Compensated(Program(16 moves, number=1, ")
+    assert re.search(r", position residual \S+ m, rotation residual \S+ rad before "
+                     r"rounding; all matched\)$", repr(shifted))
+    tilted = model_based(program, machine, ErrorModel.from_dict(
+        {"tool": {"rotation_urad": [10.0, 0.0, 0.0]}}), start=None, point=None)
+    assert f"rotation residual {1e-5:.3g} rad before rounding; {tilted.unmatched})" in repr(
+        tilted) and tilted.unmatched
