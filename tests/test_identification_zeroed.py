@@ -97,3 +97,22 @@ def test_an_r_test_zeroed_at_its_first_pose_identifies_c_without_the_constant_of
     assert misread.normalised_residual_rms > 10.0
     with pytest.raises(InputError, match="zero as one of nominal, first"):
         lab.r_test(zero="start")
+
+
+def test_an_r_test_reading_says_what_it_read_with_units():
+    """Its repr had been the dataclass dump of bare SI arrays (q, displacement, point) and
+    sigma=5.0000833326389e-08, no unit. Now the poses, the ball, the zero, each direction's
+    range in um and sigma in m. Hand values: a tool offset of 1 um along X reads 1 um in X
+    at q = 0 (the tool frame is the workpiece's there); zeroed on that pose, 0, with sqrt(2)
+    times the stated sigma."""
+    lab = machinesim.Lab("robonano_a0ib", {"tool": {"offset_um": [1.0, 0.0, 0.0]}},
+                         noise=False)
+    nominal = lab.r_test(label="nominal").read(np.zeros((2, 5)))
+    assert repr(nominal) == (
+        "RTestReading(2 poses of 5 axes, ball at (0, 0, 0) mm in tool_tip, against the "
+        f"nominal place: displacement X 1 .. 1, Y 0 .. 0, Z 0 .. 0 um, sigma "
+        f"{nominal.sigma:.3g} m)")
+    zeroed = lab.r_test(label="zeroed", zero="first").read(np.zeros((2, 5)))
+    assert repr(zeroed).endswith(
+        f"zeroed at q[0]: displacement X 0 .. 0, Y 0 .. 0, Z 0 .. 0 um, sigma "
+        f"{nominal.sigma * np.sqrt(2):.3g} m)")

@@ -80,6 +80,16 @@ class RTestReading:
     point: np.ndarray
     zero_at: np.ndarray | None = None
 
+    def __repr__(self) -> str:
+        ball = ", ".join(f"{v * 1e3:.6g}" for v in self.point)
+        zero = "against the nominal place" if self.zero_at is None else "zeroed at q[0]"
+        d = self.displacement * 1e6
+        spans = ", ".join(f"{a} {d[:, i].min():.6g} .. {d[:, i].max():.6g}"
+                          for i, a in enumerate("XYZ")) if len(d) else "none"
+        return (f"RTestReading({len(self.q)} poses of {self.q.shape[1]} axes, ball at ({ball}) "
+                f"mm in {self.frame}, {zero}: displacement {spans} um, sigma "
+                f"{self.sigma:.3g} m)")
+
 
 #: The least `ball_reach`, m: 200 mm, beyond the styli and tool-holder extensions that carry
 #: an R-test's ball (tens of mm, a long one 100-150 mm), whatever the machine's linear travel.
