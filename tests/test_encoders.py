@@ -154,3 +154,23 @@ def test_a_recorded_path_past_an_axis_travel_is_refused_as_the_cut_refuses_it():
         lab.turn(spiral)
     assert lab.encoders().record_turning(spiral, allow_overtravel=True).commanded.shape == (
         9, 3)
+
+
+def test_an_encoder_reading_and_the_encoders_say_what_they_are_with_units():
+    """The reading's repr had been the dataclass dump of bare SI arrays (t, commanded,
+    position), the lag nowhere; the encoders' a list of resolutions of m and rad mixed,
+    [1e-09, 1e-09, 1e-09, 1.7453292519943297e-07]. Now the samples, the time span and each
+    axis' peak lag in um or urad; each resolution with its unit. Hand value (docs/lab.md): a
+    PD loop of Kp 1.2e6 N/m on a guide of 1600 N s/m lags v c / Kp, X at 3 mm/s 4 um."""
+    from machinesim.nc import ProgramBuilder
+
+    slide = AxisServo(kp=1.2e6, ki=0.0, kd=3700.0, mass=12.0, damping=1600.0, name="X")
+    lab = machinesim.Lab("grooving_4axis", noise=False, servo=PIDServo((slide, None, None,
+                                                                         None)))
+    program = ProgramBuilder(1).linear(X=3e-3, feed_mm_per_min=180).build()  # 3 mm/s
+    encoders = lab.encoders()
+    assert repr(encoders) == ("Encoders(grooving_4axis, resolution X 1e-09 m, Y 1e-09 m, "
+                              f"Z 1e-09 m, C {np.radians(1e-5):.6g} rad)")
+    assert repr(encoders.record(program)) == (
+        "EncoderReading(2 samples of XYZC over 0 .. 1 s; peak following error X "
+        f"{3e-3 * 1600 / 1.2e6 * 1e6:.6g} um, Y 0 um, Z 0 um, C 0 urad)")

@@ -70,6 +70,18 @@ class EncoderReading:
                              key="axis")
         return float(np.max(np.abs(self.following_error[:, self.axes.index(axis)])))
 
+    def __repr__(self) -> str:
+        span = f"{self.t[0]:.6g} .. {self.t[-1]:.6g} s" if len(self.t) else "no time"
+        peaks = ", ".join(f"{a} {self.peak(a) * 1e6:.6g} {_micro(a)}" for a in self.axes
+                          ) if len(self.t) else "none"
+        return (f"EncoderReading({len(self.t)} samples of {''.join(self.axes)} over {span}; "
+                f"peak following error {peaks})")
+
+
+def _micro(axis: str) -> str:
+    """um for a linear axis, urad for a rotary one (A, B, C)."""
+    return "urad" if axis.upper() in "ABC" else "um"
+
 
 class Encoders:
     """The control's recording of its axis encoders (module docstring).
@@ -105,8 +117,9 @@ class Encoders:
         self._rng = as_generator(rng)
 
     def __repr__(self) -> str:
-        return (f"Encoders({self.machine.name}, resolution="
-                f"{[r.resolution for r in self.readouts]})")
+        each = ", ".join(f"{a} {r.resolution:.6g} {'rad' if a.upper() in 'ABC' else 'm'}"
+                         for a, r in zip(self.machine.axes, self.readouts, strict=True))
+        return f"Encoders({self.machine.name}, resolution {each})"
 
     def record(self, program, *, start=None, period_s: float | None = None,
                allow_overtravel: bool = False) -> EncoderReading:
