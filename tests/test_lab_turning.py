@@ -371,3 +371,21 @@ def test_a_nose_radius_the_tool_cannot_take_names_its_file_in_a_lab_with_backgro
         f"{path}, line 2, key 'tool_geometry.nose_radius_um': the error model's "
         "tool_geometry.nose_radius_um = -1000 does not fit the RoundNoseTool (nose_radius must "
         "be a positive finite number, got -0.8 mm (-0.0008 m))")
+
+
+def test_a_turned_part_says_what_it_is_with_units():
+    """Its repr had been the dataclass dump: each EdgePath's four arrays (angle, along,
+    offset, z) in bare SI, then the tool's fields, hundreds of lines for a facing cut. Now
+    the runs, the path points, the turns cut, the nose radius in mm and the top in m. Hand
+    values: a facing cut from X = 5 mm to 0 over C = 18000 deg is 50 turns; a tool offset
+    of 0.5 um along Z leaves the face 0.5 um higher (-1 um deep: -0.5 um)."""
+    program = parse_program("%\nO1\nG90 G21 G94\nG00 X5. Z0.1 C0.\nG01 Z-0.001 F10.\n"
+                            "G01 X0. C18000. F36000.\nG00 Z0.1\n%\n")
+    deepest = []
+    for errors in (None, {"tool": {"offset_um": [0.0, 0.0, 0.5]}}):
+        lab = machinesim.Lab("sts_lathe", errors, noise=False)
+        part, _ = lab.turn(program, "nose:1.0:90")
+        assert repr(part) == ("TurnedPart(1 run, 201 path points over 50 turns, nose radius "
+                              "1 mm, top 0 m)")
+        deepest.append(part.heights_at(np.linspace(-4e-3, 4e-3, 8001), np.zeros(8001)).min())
+    assert deepest == pytest.approx([-1e-6, -0.5e-6], abs=1e-12)

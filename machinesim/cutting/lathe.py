@@ -114,6 +114,13 @@ class TurnedPart:
     tool: RoundNoseTool
     top: float
 
+    def __repr__(self) -> str:
+        points = sum(p.angle.size for p in self.paths)
+        turns = sum(abs(p.angle[-1] - p.angle[0]) for p in self.paths) / (2 * math.pi)
+        return (f"TurnedPart({len(self.paths)} run{'' if len(self.paths) == 1 else 's'}, "
+                f"{points} path points over {turns:.6g} turns, nose radius "
+                f"{self.tool.nose_radius * 1e3:.6g} mm, top {self.top:.6g} m)")
+
     def heights_at(self, px, py) -> np.ndarray:
         """Heights at the points ``(px[i], py[i])`` (m, workpiece frame), shape (n,)."""
         px = as_floats(px, "px").ravel()
