@@ -295,8 +295,9 @@ class Lab:
 
         Parameters
         ----------
-        stock : Part
-            The workpiece without its spheres, workpiece frame.
+        stock : Part or str
+            The workpiece without its spheres, workpiece frame: a `Part`, or a spec such as
+            ``"block:10x10x2"`` (mm, `machinesim.workpiece.stock_from_spec`), as `cut` takes.
         design : SphereArtefacts
             The spheres as designed (what CAM and the procedure know).
         label : str
@@ -313,6 +314,13 @@ class Lab:
         if not isinstance(design, SphereArtefacts):
             raise InputError(f"Expected design as a machinesim.realism.SphereArtefacts, got "
                              f"{type(design).__name__}", key="design")
+        from machinesim.workpiece import Part, stock_from_spec
+
+        if isinstance(stock, str):
+            stock = stock_from_spec(stock)
+        elif not isinstance(stock, Part):
+            raise InputError(f"Expected stock as a spec such as 'block:10x10x2' or a Part, "
+                             f"got {type(stock).__name__}", key="stock")
         label = self._label("artefact", label, numbered=False)
         # None (made every time) for a stock that won't pickle; the seed and the realism
         # decide the spheres too, fixed for the lab's life (`Fixed`)

@@ -488,6 +488,22 @@ def test_artefacts_off_are_the_design_made_exactly(flat):
         lab.make_artefacts(flat, design, label=None)
 
 
+def test_artefacts_are_made_in_a_stock_given_as_a_spec_as_cut_takes_it():
+    """docs/lab.md's lab.make_artefacts(stock, design, label=) took a Part only: the spec
+    lab.cut takes, "block:10x10x2", ended in TypeError: unsupported operand type(s) for -:
+    'str' and 'Manifold' inside realism.make_spheres. Now it is read as cut reads it (mm),
+    the same workpiece as the Part built by hand; anything else is refused naming 'stock'."""
+    design = SphereArtefacts(np.array([[1.2, 1.0, 0.0], [3.8, 1.0, 0.0], [1.2, 2.0, 0.0]]) * MM,
+                             0.25 * MM)
+    made = Lab("robonano_a0ib", seed=1).make_artefacts("block:5x3x1", design, label="a")
+    reference = block_with_spheres(5 * MM, 3 * MM, 1 * MM, 0.25 * MM,
+                                   design.centres[:, :2], dimples=True)
+    assert _same_mesh(made, reference)
+    with pytest.raises(InputError, match=r"key 'stock': Expected stock as a spec such as "
+                                         r"'block:10x10x2' or a Part, got NoneType"):
+        Lab("robonano_a0ib").make_artefacts(None, design, label="a")
+
+
 def test_artefacts_on_are_drawn_per_workpiece_and_cut_where_they_are(flat):
     centres = np.array([[1.2, 1.0, 0.0], [3.8, 1.0, 0.0], [1.2, 2.0, 0.0]]) * MM
     design = SphereArtefacts(centres, 0.4 * MM)
