@@ -328,9 +328,27 @@ class SphereArtefacts:
         object.__setattr__(self, "radius", check_length(self.radius, "radius", positive=True))
         object.__setattr__(self, "chord_tol", check_length(self.chord_tol, "chord_tol",
                                                            positive=True))
+        _check_sphere_polygon(self.radius, self.chord_tol)
         if not isinstance(self.cavities, bool):
             raise InputError(f"Expected cavities as True or False, got {self.cavities!r}",
                              key="cavities")
+
+
+def _check_sphere_polygon(radius: float, chord_tol: float) -> None:
+    """Refuse a sphere whose polygon (`machinesim.tools.sphere_polygon`, about segments^2 / 4
+    vertices) would exceed `MAX_TOOL_VERTICES`: a radius of 1 (mm given as m) at the
+    default chord_tol is 12 million vertices a sphere, which were built without end."""
+    import math
+
+    from machinesim.tool_sizes import MAX_TOOL_VERTICES
+    from machinesim.tools import arc_segments
+
+    segments = 4 * math.ceil(arc_segments(radius, 2.0 * math.pi, chord_tol) / 4)
+    if segments ** 2 // 4 > MAX_TOOL_VERTICES:
+        raise InputError(f"a sphere of radius {radius:.6g} m at chord_tol {chord_tol:.3g} m "
+                         f"would be a polygon of some {segments ** 2 // 4:,} vertices, over "
+                         f"MAX_TOOL_VERTICES ({MAX_TOOL_VERTICES:,}): expected the radius in "
+                         "m (1 mm is 0.001), or a larger chord_tol", key="radius")
 
 
 @dataclass(frozen=True, eq=False)

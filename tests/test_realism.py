@@ -475,8 +475,8 @@ def _same_mesh(a: Part, b: Part) -> bool:
 
 
 def test_artefacts_off_are_the_design_made_exactly(flat):
-    design = SphereArtefacts([[1.2, 1.0, 0.0], [3.8, 1.0, 0.0], [1.2, 2.0, 0.0]], 0.25)
-    design = SphereArtefacts(design.centres * MM, 0.25 * MM, cavities=True)
+    design = SphereArtefacts(np.array([[1.2, 1.0, 0.0], [3.8, 1.0, 0.0], [1.2, 2.0, 0.0]]) * MM,
+                             0.25 * MM, cavities=True)
     lab = Lab("robonano_a0ib", seed=1)
     made = lab.make_artefacts(flat, design, label="block")
     reference = block_with_spheres(5 * MM, 3 * MM, 1 * MM, 0.25 * MM,
@@ -502,6 +502,20 @@ def test_artefacts_are_made_in_a_stock_given_as_a_spec_as_cut_takes_it():
     with pytest.raises(InputError, match=r"key 'stock': Expected stock as a spec such as "
                                          r"'block:10x10x2' or a Part, got NoneType"):
         Lab("robonano_a0ib").make_artefacts(None, design, label="a")
+
+
+def test_a_sphere_design_in_mm_is_refused_before_its_polygon_is_built():
+    """SphereArtefacts(centres, 1.0), a radius of 1 mm given as m, was taken, and
+    make_artefacts then built a sphere polygon of some 12 million vertices per sphere at
+    the default chord_tol (over 120 s, never finishing). Now refused at design, naming the
+    radius, the polygon's size against MAX_TOOL_VERTICES and the unit; 1 mm is made."""
+    centres = np.array([[2.0, 2.0, 0.0], [8.0, 2.0, 0.0], [5.0, 8.0, 0.0]])
+    with pytest.raises(InputError, match=r"key 'radius': a sphere of radius 1 m at chord_tol "
+                                         r"1e-07 m would be a polygon of some 12,348,196 "
+                                         r"vertices, over MAX_TOOL_VERTICES \(200,000\): "
+                                         r"expected the radius in m"):
+        SphereArtefacts(centres, 1.0)
+    assert SphereArtefacts(centres * MM, 1.0 * MM).radius == 1e-3
 
 
 def test_artefacts_on_are_drawn_per_workpiece_and_cut_where_they_are(flat):
