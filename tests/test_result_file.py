@@ -202,9 +202,9 @@ def test_a_result_and_its_identified_say_what_they_are_with_units(result, tmp_pa
     assert "identified workpiece.x = " in text and " m +- 1e-09 m;" in text
     assert repr(load_result(save_result(result, tmp_path / "r.pkl"))) == text
     identified = Identified({"workpiece.gamma": (1e-3, 2e-6), "component.X.EXX[1]": 3e-8,
-                             "component.C.EAC[0]": (1e-6, 0.0)}, detail=[1.0],
-                            notes=("fit: a note",))
+                             "component.C.EAC[0]": (1e-6, 0.0), "squareness_xy": 1e-5},
+                            detail=[1.0], notes=("fit: a note",))
     assert repr(identified) == (
-        "Identified(3 parameters: workpiece.gamma = 0.001 rad +- 2e-06 rad, "
+        "Identified(4 parameters: workpiece.gamma = 0.001 rad +- 2e-06 rad, "
         "component.X.EXX[1] = 3e-08 m (no std), component.C.EAC[0] = 1e-06 rad "
-        "+- 0 rad; 1 note; detail list)")
+        "+- 0 rad, squareness_xy = 1e-05 SI (no std); 1 note; detail list)")

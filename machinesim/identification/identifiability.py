@@ -128,8 +128,10 @@ REPR_PARAMETERS = 8
 
 def parameter_unit(name: str) -> str:
     """The SI unit of a parameter's value: 'rad' or 'm', 'SI' for a component error's
-    table entry or polynomial coefficient (m or rad, per unit of the axis' travel^k)."""
-    if name.startswith("component."):
+    table entry or polynomial coefficient (m or rad, per unit of the axis' travel^k) and
+    for a name that is no error parameter's (a procedure's own quantity)."""
+    known = ("tool.", "tool_geometry.", "workpiece.", "location.")
+    if name.startswith("component.") or not name.startswith(known):
         return "SI"
     return "rad" if is_angle(name) else "m"
 
