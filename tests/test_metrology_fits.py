@@ -267,3 +267,17 @@ def test_sphere_of_a_noisy_shallow_cap_as_least_squares_finds_it():
     # 2.94625210864e-17 m^2, this fit's 2.94625210841e-17)
     np.testing.assert_allclose(mine, p, rtol=0, atol=1e-4)  # 0.1 nm
     assert np.sum(residual(mine) ** 2) <= np.sum(residual(p) ** 2)
+
+
+def test_a_v_groove_fit_says_what_it_found_with_units():
+    """Its repr had been the dataclass dump of bare SI and radians (centre=0.0025000028,
+    depth=1.99996e-05, left_flank_angle=0.78517...). Now each figure in mm, um, nm or deg.
+    Hand values: an exact 90 deg V 20 um deep centred 1 mm along a profile at 1 um
+    spacing, land either side: depth 20 um, width 40 um, flanks 45 deg, no residual."""
+    from machinesim.metrology import fit_v_groove
+
+    s = np.arange(0, 2001) * UM  # 0 .. 2 mm at 1 um
+    z = np.minimum(0.0, np.abs(s - 1 * MM) - 20 * UM)
+    text = repr(fit_v_groove(s, z))
+    assert text.startswith("VGroove(centre 1 mm +- ")
+    assert ", depth 20 um +- " in text and ", width 40 um, flanks 45 and 45 deg, " in text

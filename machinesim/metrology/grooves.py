@@ -72,7 +72,7 @@ LEVEL_LAND_FRACTION = 1e-3
 REFINE_PASSES = 2
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class VGroove:
     """A V groove fitted on a profile; lengths in m along the profile (s) and in z, angles in rad.
 
@@ -118,6 +118,14 @@ class VGroove:
     def included_angle(self) -> float:
         """Angle between the two flanks (rad): the tool's included angle for a V tool."""
         return math.pi - self.left_flank_angle - self.right_flank_angle
+
+    def __repr__(self) -> str:
+        return (f"VGroove(centre {self.centre * 1e3:.6g} mm +- {self.centre_sigma * 1e9:.3g} nm "
+                f"along the profile, depth {self.depth * 1e6:.6g} um +- "
+                f"{self.depth_sigma * 1e9:.3g} nm, width {self.width * 1e6:.6g} um, flanks "
+                f"{math.degrees(self.left_flank_angle):.6g} and "
+                f"{math.degrees(self.right_flank_angle):.6g} deg, residual RMS "
+                f"{self.residual_rms * 1e9:.3g} nm)")
 
 
 @dataclass(frozen=True, eq=False)
