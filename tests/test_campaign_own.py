@@ -174,3 +174,13 @@ def test_the_command_runs_your_own_procedure_from_the_folder_it_is_run_in(exampl
     stored = json.loads((tmp_path / "out" / "campaign.json").read_text())
     assert stored["procedure"] == "here_procedure:ToolOffsetRTest"
     assert stored["errors"]["tool"]["offset_m"] == [4e-6, -3e-6, 2e-6]
+
+
+@pytest.mark.parametrize("uses", [3, None, 2.5])
+def test_lab_uses_that_are_no_tuple_of_names_are_refused(example, uses):
+    """``lab_uses = {"measure": 3}``: an InputError naming it, not the TypeError of iterating
+    over a number."""
+    bad = type("BadUses", (example.ToolOffsetRTest,), {"lab_uses": {"measure": uses}})
+    with pytest.raises(InputError, match=r"key 'procedure': procedure .*BadUses: "
+                       rf"lab_uses\['measure'\] {uses!r}; expected a tuple of microscope"):
+        CampaignSpec(bad, 1, machine_name=MACHINE)

@@ -166,8 +166,10 @@ def _check(procedure, shown: str) -> None:
                          "mapping {'measure': (...), 'evaluate': (...)} of what each step "
                          f"reads of the lab, among {', '.join(LAB_USES)}", key="procedure")
     for step, names in uses.items():
-        if isinstance(names, str) or not all(isinstance(n, str) for n in names) \
-                or not set(names) <= set(LAB_USES):
+        # a number or None is no tuple: 'for n in names' raised "TypeError: 'int' object is
+        # not iterable" out of the campaign's start
+        if not isinstance(names, tuple | list | set | frozenset) \
+                or not all(isinstance(n, str) for n in names) or not set(names) <= set(LAB_USES):
             raise InputError(f"procedure {shown}: lab_uses[{step!r}] {brief(repr(names))}; "
                              f"expected a tuple of {', '.join(LAB_USES)}", key="procedure")
 
