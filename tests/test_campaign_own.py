@@ -184,3 +184,14 @@ def test_lab_uses_that_are_no_tuple_of_names_are_refused(example, uses):
     with pytest.raises(InputError, match=r"key 'procedure': procedure .*BadUses: "
                        rf"lab_uses\['measure'\] {uses!r}; expected a tuple of microscope"):
         CampaignSpec(bad, 1, machine_name=MACHINE)
+
+
+def test_a_procedure_without_paper_is_refused_before_any_trial(example):
+    """`experiment.run` puts ``procedure.paper`` into each result: one without it is refused
+    when the campaign is set up, not failed trial by trial after its cuts."""
+    for paper in (None, 3):
+        bad = type("NoPaper", (example.ToolOffsetRTest,), {"paper": paper})
+        with pytest.raises(InputError, match=r"key 'procedure': procedure .*NoPaper: paper "
+                           rf"{paper!r}; expected a text"):
+            CampaignSpec(bad, 1, machine_name=MACHINE)
+    assert CampaignSpec(example.ToolOffsetRTest, 1, machine_name=MACHINE).own

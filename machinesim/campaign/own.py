@@ -147,8 +147,8 @@ def fresh(given, shown: str):
 
 def _check(procedure, shown: str) -> None:
     """Refuse an object that is no procedure a campaign can run: the four steps, a ``name``
-    (text) and ``lab_uses`` (a mapping of ``"measure"``/``"evaluate"`` to names of
-    `machinesim.experiment.LAB_USES`, which says what the campaign may vary)."""
+    and a ``paper`` (texts) and ``lab_uses`` (a mapping of ``"measure"``/``"evaluate"`` to
+    names of `machinesim.experiment.LAB_USES`, which says what the campaign may vary)."""
     from machinesim.experiment import LAB_USES
 
     missing = [step for step in STEPS if not callable(getattr(procedure, step, None))]
@@ -160,6 +160,13 @@ def _check(procedure, shown: str) -> None:
     if not isinstance(name, str) or not name:
         raise InputError(f"procedure {shown}: name {brief(repr(name))}; expected a text (its "
                          "key, e.g. 'tool_offset_rtest')", key="procedure")
+    # experiment.run puts it into each Result: without it every trial failed, after its
+    # cuts and readings, as "AttributeError: ... 'paper'" said to be a fault of machinesim
+    paper = getattr(procedure, "paper", None)
+    if not isinstance(paper, str):
+        raise InputError(f"procedure {shown}: paper {brief(repr(paper))}; expected a text "
+                         "(where its method comes from, e.g. 'docs/procedures/your_own.md'; "
+                         "any text)", key="procedure")
     uses = getattr(procedure, "lab_uses", None)
     if not isinstance(uses, Mapping) or not set(uses) <= {"measure", "evaluate"}:
         raise InputError(f"procedure {shown}: lab_uses {brief(repr(uses))}; expected a "
