@@ -195,3 +195,40 @@ def test_a_procedure_without_paper_is_refused_before_any_trial(example):
                            rf"{paper!r}; expected a text"):
             CampaignSpec(bad, 1, machine_name=MACHINE)
     assert CampaignSpec(example.ToolOffsetRTest, 1, machine_name=MACHINE).own
+
+
+def test_a_fault_of_your_own_procedure_is_said_to_be_yours(example, tmp_path):
+    """A trial whose procedure's own code raises (no MachineSimError) fails naming that
+    code, not as "a fault of machinesim ... please report it"; one that machinesim's code
+    raises under it is still machinesim's."""
+    source = tmp_path / "faulty_procedure.py"
+    source.write_text(f"from {MODULE} import ToolOffsetRTest\n\n\n"
+                      "class Faulty(ToolOffsetRTest):\n"
+                      "    def identify(self, reading):\n"
+                      "        raise ValueError('my own bug')\n", encoding="utf-8")
+    sys.path.insert(0, str(tmp_path))
+    try:
+        from faulty_procedure import Faulty
+
+        failed = run(Faulty(), 1, out=tmp_path / "out", workers=0, **_options())
+    finally:
+        sys.path.remove(str(tmp_path))
+        sys.modules.pop("faulty_procedure", None)
+    message = json.loads(failed.attrs["errors"])["0"]
+    assert message.startswith("ValueError: my own bug (not a MachineSimError: raised by your "
+                              "procedure's code at faulty_procedure.py:6 in identify, met "
+                              "by this trial's draws; a failed trial is kept as done"), message
+    assert "fault of machinesim" not in message
+
+    from machinesim.campaign.trials import unexpected
+
+    def machinesims():  # a frame of machinesim innermost: machinesim's fault, as before
+        from machinesim.campaign.trials import trial_seed as seeded
+
+        return seeded(-1, 0)
+
+    try:
+        machinesims()
+    except Exception as error:  # noqa: BLE001 - whatever trial_seed raises on a bad seed
+        said = unexpected(error, example.ToolOffsetRTest())
+    assert "a fault of machinesim" in said, said

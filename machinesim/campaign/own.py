@@ -26,14 +26,16 @@ from __future__ import annotations
 import copy
 import difflib
 import importlib
+import inspect
 import re
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 from machinesim.exceptions import InputError, brief
 
-__all__ = ["STEPS", "accepted", "check_picklable", "fresh", "is_reference", "reference_of",
-           "resolve"]
+__all__ = ["STEPS", "accepted", "check_picklable", "fresh", "innermost_frame", "is_reference",
+           "reference_of", "resolve"]
 
 #: What `machinesim.experiment.run` calls, in order.
 STEPS = ("measure", "identify", "compensate", "evaluate")
@@ -194,3 +196,25 @@ def check_picklable(given, shown: str) -> None:
                          "importable 'package.module:ClassName' reference (each worker "
                          "imports it and calls the class with no arguments), or workers=0 "
                          "to run the trials in this process", key="procedure") from None
+
+
+def innermost_frame(frames, procedure):
+    """The innermost of ``frames`` (`traceback.extract_tb`'s) in the source of
+    ``procedure``'s class or a base of it outside machinesim, when no frame of machinesim
+    lies deeper; else None (`machinesim.campaign.trials.unexpected`: whose fault it is)."""
+    package = Path(__file__).resolve().parents[1]  # machinesim/
+    files = set()
+    for cls in type(procedure).__mro__:
+        try:
+            source = inspect.getsourcefile(cls)
+        except (TypeError, OSError):  # a builtin (object), or no file
+            continue
+        if source is not None and package not in Path(source).resolve().parents:
+            files.add(Path(source).resolve())
+    for frame in reversed(frames):
+        where = Path(frame.filename).resolve()
+        if where in files:
+            return frame
+        if package in where.parents:
+            return None
+    return None

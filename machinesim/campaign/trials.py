@@ -210,7 +210,7 @@ def _run(spec: CampaignSpec, i: int, drawn: dict, record: dict) -> None:
         # to be "a fault of machinesim ... please report it" and skipped for good on resuming
         raise
     except Exception as error:  # a fault this trial's draws met: its failure, `unexpected`
-        record["error"] = unexpected(error)
+        record["error"] = unexpected(error, procedure if spec.own else None)
     else:
         record["injected"] = {n: float(v) for n, v in result.injected.items()}
         record["identified"] = {n: [float(v), float(s)] for n, (v, s)
@@ -224,12 +224,18 @@ def _float(value) -> float:
     return math.nan if value is None else float(value)
 
 
-def unexpected(error: Exception) -> str:
+def unexpected(error: Exception, procedure=None) -> str:
     """A trial's failure message for an ``error`` that is no `MachineSimError` (a
     ZeroDivisionError, numpy's LinAlgError): a fault of machinesim that this trial's draws
     met, said as such with the line it was raised at, so that the report names it and the
     campaign goes on. It ended the whole campaign in a traceback, and the same command,
-    resumed, ran the same trial into it again: a campaign that could never finish."""
+    resumed, ran the same trial into it again: a campaign that could never finish.
+
+    ``procedure``: a user's own procedure (docs/procedures/your_own.md), whose code may
+    raise too. When the innermost frame that is machinesim's or of the procedure's own
+    class (or a base of it outside machinesim) is the procedure's, the fault is the
+    procedure's, and said so, with that frame: such a failure had read "a fault of
+    machinesim ...; please report it" for a ValueError raised in the user's ``identify``."""
     import traceback
 
     frames = traceback.extract_tb(error.__traceback__)
@@ -240,6 +246,16 @@ def unexpected(error: Exception) -> str:
         shown = ("/".join(path.parts[path.parts.index("machinesim"):])
                  if "machinesim" in path.parts else path.name)
         where = f", raised at {shown}:{frame.lineno} in {frame.name}"
+    from machinesim.campaign.own import innermost_frame
+
+    own = None if procedure is None else innermost_frame(frames, procedure)
+    if own is not None:
+        deeper = "" if own is frames[-1] else f" (innermost{where.removeprefix(',')})"
+        return (f"{type(error).__name__}: {brief(str(error)) or '(no message)'} (not a "
+                f"MachineSimError: raised by your procedure's code at "
+                f"{Path(own.filename).name}:{own.lineno} in {own.name}{deeper}, met by "
+                "this trial's draws; a failed trial is kept as done: once the procedure "
+                "is fixed, run the campaign into another --out)")
     return (f"{type(error).__name__}: {brief(str(error)) or '(no message)'} (not a "
             f"MachineSimError: a fault of machinesim met by this trial's draws{where}; "
             "please report it with the campaign's command)")
