@@ -232,3 +232,14 @@ def test_a_fault_of_your_own_procedure_is_said_to_be_yours(example, tmp_path):
     except Exception as error:  # noqa: BLE001 - whatever trial_seed raises on a bad seed
         said = unexpected(error, example.ToolOffsetRTest())
     assert "a fault of machinesim" in said, said
+
+
+def test_the_commands_help_says_where_your_procedures_module_is_looked_for(capsys):
+    from machinesim.campaign.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    shown = " ".join(capsys.readouterr().out.split())
+    assert "package.module:ClassName: a procedure of your own" in shown
+    assert "its module is looked for in the current folder too" in shown
+    assert "with --scheduler it must import on every worker of that cluster" in shown

@@ -33,7 +33,9 @@ PARAM: an error parameter of the procedure's machine (tool.y, workpiece.alpha,
 procedures:
 {procedures}
   package.module:ClassName: a procedure of your own (docs/procedures/your_own.md), with
-    --machine NAME and, optionally, --errors FILE.toml (the errors --vary is set on)
+    --machine NAME and, optionally, --errors FILE.toml (the errors --vary is set on); its
+    module is looked for in the current folder too (local workers are started with it),
+    and with --scheduler it must import on every worker of that cluster
 
 examples:
   # paper 000: e_ys and r against the microscope's noise, 20 trials on 2 local workers
