@@ -243,3 +243,25 @@ def test_the_commands_help_says_where_your_procedures_module_is_looked_for(capsy
     assert "package.module:ClassName: a procedure of your own" in shown
     assert "its module is looked for in the current folder too" in shown
     assert "with --scheduler it must import on every worker of that cluster" in shown
+
+
+def test_a_resume_with_other_errors_names_the_entry_that_differs(example, tmp_path):
+    """The refusal of a folder begun with other errors names the entries that differ, not
+    the whole error model (96,016 characters with a table of 2,001 positions)."""
+    from machinesim.campaign.results import CampaignFolder
+
+    positions = np.linspace(-140.0, 140.0, 2001).tolist()
+
+    def spec(z_um):
+        errors = {"tool": {"offset_um": [4.0, -3.0, z_um]},
+                  "component": {"X": {"position_mm": positions, "EZX_um": [0.0] * 2001}}}
+        return CampaignSpec(example.ToolOffsetRTest, 1, machine_name=MACHINE,
+                            errors=errors).describe()
+
+    CampaignFolder(tmp_path / "out", spec(2.0))
+    with pytest.raises(InputError) as info:
+        CampaignFolder(tmp_path / "out", spec(3.0))
+    message = str(info.value)
+    assert ("holds another campaign (errors: tool.offset_m [4e-06, -3e-06, 2e-06] there, "
+            "[4e-06, -3e-06, 3e-06] now); give another --out or empty it") in message
+    assert len(message) < 300, len(message)
