@@ -282,6 +282,32 @@ def test_a_round_spot_reads_a_slanted_edge_as_a_square_one(step):
                                atol=1e-14)
 
 
+def test_a_spot_reads_an_edge_and_a_through_hole_where_they_are_whatever_its_samples():
+    """A plate 50 um square with a through hole x, y in [20, 30] um: read along y = 25 um
+    without a spot, the samples strictly inside the hole read NaN, the rest the top (0).
+    Through a symmetric spot the same samples read NaN (less than half its weight on the
+    plate) and the rest 0: the hole's edges stay where they are. Averaging any sub-sample
+    that hit the plate, a 3 um Gaussian had read into the hole up to its outermost node,
+    3.6 um at 5 samples, 10 um at 25 (no NaN left), the finer the smaller the hole."""
+    hole = manifold3d.Manifold.cube((10 * UM, 10 * UM, 1 * MM)).translate(
+        (20 * UM, 20 * UM, -0.5 * MM))
+    plate = Part(block(50 * UM, 50 * UM, 10 * UM).manifold - hole)
+    a, b, spacing = (5 * UM, 25 * UM), (45 * UM, 25 * UM), 0.1 * UM + 1e-12  # off the edges
+    bare = Microscope(noise=False, resolution=0.0).profile(plate, a, b, spacing)
+    x = bare.xy[:, 0]
+    inside = (x > 20 * UM) & (x < 30 * UM)
+    assert np.array_equal(bare.missing, inside) and inside.sum() == 100
+    np.testing.assert_allclose(bare.z[~inside], 0.0, rtol=0, atol=ROUND_OFF_M)
+    for shape in ("gaussian", "tophat"):
+        for samples in (5, 9, 25):
+            scope = Microscope(noise=False, resolution=0.0, spot=Spot(3 * UM, shape, samples))
+            prof = scope.profile(plate, a, b, spacing)
+            assert np.array_equal(prof.missing, inside), (shape, samples)
+            np.testing.assert_allclose(prof.z[~inside], 0.0, rtol=0, atol=ROUND_OFF_M)
+        hm = scope.height_map(plate, 5 * UM, 45 * UM, 24 * UM, 26 * UM, spacing)  # 25 too
+        assert np.array_equal(hm.missing, np.broadcast_to(inside, hm.z.shape))
+
+
 def test_a_spot_reads_a_plane_unchanged(flat):
     reg = Registration([0.0, 0.0, 1 * UM], 0.0, [2e-4, 1e-4])
     for shape in ("tophat", "gaussian"):
