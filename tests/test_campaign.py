@@ -1396,6 +1396,63 @@ def test_cli_ctrl_c_before_any_trial_says_so(tmp_path, capsys, monkeypatch):
     assert err == (f"machinesim: interrupted; no trial had finished; kept "
                    f"{tmp_path / 'c' / 'campaign.json'}: run the same command again to start "
                    "it over")
+    # what it says is all that is left: the lock and the empty trials/ it made are gone
+    assert sorted(p.name for p in (tmp_path / "c").iterdir()) == ["campaign.json"]
+
+
+def test_cli_ctrl_c_before_campaign_json_leaves_nothing_it_made(tmp_path, capsys,
+                                                                 monkeypatch):
+    """A Ctrl-C after the lock was taken and trials/ made, before campaign.json was written,
+    said 'interrupted; nothing was written' while the folder held campaign.lock and an
+    empty trials/: what the run made and holds nothing is taken away, what was there
+    before stays."""
+    import machinesim.campaign.results as results
+
+    def stopped(path, what):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(results, "check_writable", stopped)
+    command = ["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+               "--identify-only", "--quiet", "--out"]
+    new = tmp_path / "a" / "b"  # two folders this run makes
+    assert cli_main([*command, str(new)]) == 130
+    assert capsys.readouterr().err.strip() == "machinesim: interrupted; nothing was written"
+    assert list(tmp_path.iterdir()) == []
+    # a folder there before, with a lock of an earlier run and an empty trials/: kept
+    old = tmp_path / "old"
+    (old / "trials").mkdir(parents=True)
+    (old / "campaign.lock").write_text('{"pid": 1, "host": "elsewhere"}\n')
+    assert cli_main([*command, str(old)]) == 130
+    assert capsys.readouterr().err.strip() == "machinesim: interrupted; nothing was written"
+    assert sorted(p.name for p in old.iterdir()) == ["campaign.lock", "trials"]
+    assert list((old / "trials").iterdir()) == []
+    # an empty folder there before: kept, empty
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert cli_main([*command, str(empty)]) == 130
+    assert list(empty.iterdir()) == []
+
+
+def test_a_lock_removed_by_a_stopped_run_is_not_taken(tmp_path, monkeypatch):
+    """A run that opened the lock file before the run holding it was stopped (and removed
+    it) takes the folder's lock file, not the removed one: two runs would have held two
+    files, each its own 'lock'."""
+    import os
+
+    from machinesim.campaign import results
+
+    real_same, calls = results._same_file, []
+
+    def removed_once(fd, path):  # the file open is unlinked just after the flock
+        calls.append(path)
+        if len(calls) == 1:
+            path.unlink()
+        return real_same(fd, path)
+
+    monkeypatch.setattr(results, "_same_file", removed_once)
+    with results.locked(tmp_path):
+        assert results._lock_holder(tmp_path / "campaign.lock")[0] == os.getpid()
+    assert len(calls) == 2
 
 
 def test_a_varied_microscope_noise_leaves_an_objectives_own():

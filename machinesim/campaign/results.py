@@ -278,9 +278,14 @@ def locked(folder) -> Iterator[None]:
     on the open file, held for the block and released when its process ends, however it
     ends (SIGKILL, a power loss), so a killed campaign's lock is free to the next run, and
     of two runs that find it at the same instant one takes it (both did when each removed
-    the stale file, or the other's fresh one, and made its own). The file is never removed
-    (it stays after the run, held by nobody); it names the pid and host of the run that
-    took it last, for the message refusing a second run.
+    the stale file, or the other's fresh one, and made its own). The file stays after the
+    run, held by nobody; it names the pid and host of the run that took it last, for the
+    message refusing a second run.
+
+    A run stopped within the block (KeyboardInterrupt: Ctrl-C, or SIGTERM turned into one)
+    takes away what it made here that holds nothing (`_unmade_when_stopped`): a Ctrl-C
+    before campaign.json was written had left campaign.lock and an empty trials/ behind
+    the command's 'interrupted; nothing was written'.
     """
     folder = Path(folder)
     try:
@@ -289,12 +294,18 @@ def locked(folder) -> Iterator[None]:
         raise FileError("cannot lock the campaign folder: campaigns need POSIX file locks "
                         "(fcntl.flock), which this Python lacks; run the campaign on Linux "
                         "or macOS", source=str(folder)) from None
+    new_folders = _missing_folders(folder)
     _make_folder(folder)
     path = folder / LOCK_NAME
+    had_trials = os.path.lexists(folder / "trials")
+    # not through a symbolic link: the run writes its pid into the file, and a
+    # campaign.lock linked to another file overwrote that file (it is no lock of ours)
+    flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0)
     try:
-        # not through a symbolic link: the run writes its pid into the file, and a
-        # campaign.lock linked to another file overwrote that file (it is no lock of ours)
-        fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
+        try:
+            fd, made = os.open(path, flags | os.O_EXCL, 0o644), True
+        except FileExistsError:
+            fd, made = os.open(path, flags, 0o644), False
     except OSError as exc:
         raise _lock_refused(folder, exc) from None
     if not stat.S_ISREG(os.fstat(fd).st_mode):  # a FIFO: its truncation failed as a bare
@@ -310,12 +321,60 @@ def locked(folder) -> Iterator[None]:
             raise FileError(f"cannot lock the campaign's lock {LOCK_NAME}: "
                             f"{exc.strerror or exc}; expected a folder on a file system "
                             "that takes file locks (flock)", source=str(folder)) from None
+        if not _same_file(fd, path):  # removed by the run that held it (stopped): it
+            os.close(fd)              # is no longer the folder's lock; take the one there
+            fd = -1
+            with locked(folder):
+                yield
+            return
         os.ftruncate(fd, 0)
         os.write(fd, (json.dumps({"pid": os.getpid(), "host": socket.gethostname()})
                       + "\n").encode())
-        yield
+        try:
+            yield
+        except KeyboardInterrupt:
+            _unmade_when_stopped(folder, made, had_trials)  # the lock still held
+            os.close(fd)
+            fd = -1
+            for made_folder in new_folders:  # deepest first; another run's lock stays
+                with contextlib.suppress(OSError):
+                    made_folder.rmdir()
+            raise
     finally:
-        os.close(fd)  # the kernel releases the lock
+        if fd >= 0:
+            os.close(fd)  # the kernel releases the lock
+
+
+def _missing_folders(folder: Path) -> list[Path]:
+    """``folder`` and the folders above it that are not there (deepest first)."""
+    missing = []
+    while not os.path.lexists(folder) and folder != folder.parent:
+        missing.append(folder)
+        folder = folder.parent
+    return missing
+
+
+def _same_file(fd: int, path: Path) -> bool:
+    """Whether ``path`` is still the file open as ``fd``."""
+    try:
+        there = os.stat(path, follow_symlinks=False)
+    except OSError:
+        return False
+    here = os.fstat(fd)
+    return (there.st_dev, there.st_ino) == (here.st_dev, here.st_ino)
+
+
+def _unmade_when_stopped(folder: Path, made_lock: bool, had_trials: bool) -> None:
+    """Take away, for a run stopped while it holds ``folder``'s lock, what it made there that
+    holds nothing: trials/ when empty and not there before, and the lock file when it made
+    it (removed while still held: a run that opened it meanwhile finds it gone, `locked`).
+    What was there before stays, and so do campaign.json and any trial file."""
+    if not had_trials:
+        with contextlib.suppress(OSError):  # not empty, or not a folder: kept
+            (folder / "trials").rmdir()
+    if made_lock:
+        with contextlib.suppress(OSError):
+            (folder / LOCK_NAME).unlink()
 
 
 def refuse_busy(folder) -> None:
