@@ -14,7 +14,7 @@ import pytest
 
 from machinesim._cores import usable_cores
 from machinesim.campaign import run
-from machinesim.campaign.runner import NO_DASHBOARD
+from machinesim.campaign.cluster import NO_DASHBOARD
 
 pytest.importorskip("distributed")
 #: Two clusters of this file starting at once (-n 2) fought for port 8787: Dask warned.
@@ -178,10 +178,10 @@ def _run_bounded(tmp_path, scheduler: str, seconds: float):
 ], ids=["silent", "no-dask-bytes"])
 def test_a_scheduler_address_where_no_scheduler_answers_is_refused_in_time(
         tmp_path, monkeypatch, reply, why):
-    import machinesim.campaign.runner as runner
+    import machinesim.campaign.cluster as cluster
     from machinesim.exceptions import InputError
 
-    monkeypatch.setattr(runner, "SCHEDULER_TIMEOUT_S", 2.0)
+    monkeypatch.setattr(cluster, "SCHEDULER_TIMEOUT_S", 2.0)
     server = _NoScheduler(reply)
     try:
         error, seconds = _run_bounded(tmp_path, server.address, 30.0)

@@ -1,4 +1,4 @@
-"""Preloaded into each local Dask worker process of a campaign (`runner._client`).
+"""Preloaded into each local Dask worker process of a campaign (`cluster._client`).
 
 A Ctrl-C reaches every process of the terminal's group. The campaign's own process stops
 the run and says what it kept; a worker that took the SIGINT as well printed a
