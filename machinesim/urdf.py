@@ -111,8 +111,42 @@ def read_urdf(path: Path, lines: dict[str, list[int]] | None = None) -> ET.Eleme
     found = _element_lines(data)
     if lines is not None:
         lines.update(found)
+    if root.tag == "robot" and not found["xacro"]:  # else check_tree says what the file is
+        _check_namespaces(path, found["foreign"])
     check_tree(root, path, found)
     return root
+
+
+#: The namespaces of xml:lang, xml:space and xsi:schemaLocation, attributes no URDF reader
+#: reads, which pass as machinesim's own elements do (and xacro's, which `check_tree`
+#: refuses saying to expand the file).
+_PASSING = ("http://www.w3.org/XML/1998/namespace", "http://www.w3.org/2001/XMLSchema-instance")
+
+
+def _check_namespaces(path: Path, foreign: list[tuple[int, str, str, str]]) -> None:
+    """Refuse the first element or attribute (outside a ``<gazebo>`` extension) in an XML
+    namespace other than machinesim's: an ``<origin xmlns="...">`` (a default namespace on
+    it or above it) is ``origin`` to urdfdom, which matches names as written, but this
+    reader found no ``origin`` and dropped it, so a joint's placement loaded as zero
+    without a word; a prefixed ``<ros:origin>`` both drop."""
+    if not foreign:
+        return
+    line, kind, written, namespace = foreign[0]
+    local = written.rpartition(":")[2]
+    where = f"{path}, line {line}: {kind} {written!r}" if kind == "attribute" else \
+        f"{path}, line {line}: <{written}>"
+    if written.startswith("machinesim:"):
+        hint = (f"machinesim's elements are in {_NS.strip('{}')!r}: declare "
+                f"xmlns:machinesim=\"{_NS.strip('{}')}\" on <robot>")
+    elif ":" not in written:
+        hint = (f"a default xmlns=\"{namespace}\" on it or above it puts it there; URDF's "
+                f"parser reads it as <{local}>, this reader would drop it: remove the "
+                "xmlns=... attribute (URDF's elements are in no namespace)")
+    else:
+        hint = (f"neither URDF's parser nor this reader reads it (both drop it): remove it, "
+                f"or write it as {local!r} in no namespace")
+    raise ModelError(f"{where} is in the XML namespace {namespace!r}, which this reader does "
+                     f"not read as URDF; {hint}")
 
 
 def _encoding_hint(data: bytes) -> str:
@@ -139,16 +173,38 @@ def _element_lines(data: bytes) -> dict[str, list[int] | array]:
     origin, geometry ...) and of each ``<machinesim:axis>``, in the order of the file, by
     tag: ``findall`` gives the same elements in the same order, and ElementTree keeps no
     lines. ``data`` has parsed. The links' lines are 4 bytes each (an ``array``): a CAD
-    export has 100,000s of visuals."""
+    export has 100,000s of visuals. Key ``"foreign"``: the first element or attribute below
+    ``<robot>`` and outside a ``<gazebo>`` in a namespace neither machinesim's nor xacro's
+    nor `_PASSING`, as (line, "element" or "attribute", its name as written, its namespace), for
+    `_check_namespaces`; ``"xacro"``: whether the file has xacro's elements or attributes."""
     parser = expat.ParserCreate(namespace_separator="}")
-    found: dict[str, list[int] | array] = {"link": [], "joint": [], "in_joint": [],
-                                           "axis": [], "in_link": array("I")}
+    parser.namespace_prefixes = True  # "uri}local}prefix": tells <p:origin> from xmlns="uri"
+    found: dict = {"link": [], "joint": [], "in_joint": [], "axis": [], "in_link": array("I"),
+                   "foreign": [], "xacro": False}
     depth = 0
     in_joint = in_link = False
+    gazebo = 0  # the depth of the <gazebo> extension being read, 0 outside one
+
+    def foreign(name: str, kind: str) -> None:
+        namespace, _, local = name.partition("}")
+        local, _, prefix = local.partition("}")
+        if namespace.rstrip("/").endswith("xacro"):
+            found["xacro"] = True
+        elif namespace not in (_NS[1:-1], *_PASSING) and not gazebo and not found["foreign"]:
+            written = f"{prefix}:{local}" if prefix else local
+            found["foreign"].append((parser.CurrentLineNumber, kind, written, namespace))
 
     def start(tag, attributes):
-        nonlocal depth, in_joint, in_link
+        nonlocal depth, in_joint, in_link, gazebo
         depth += 1
+        if depth == 2 and tag == "gazebo":
+            gazebo = depth
+        if depth > 1 and "}" in tag:
+            foreign(tag, "element")
+        for name in attributes:
+            if "}" in name:
+                foreign(name, "attribute")
+        tag = tag.rpartition("}")[0] if tag.count("}") == 2 else tag  # the prefix dropped
         if depth == 2:
             in_joint, in_link = tag == "joint", tag == "link"
             if tag in ("link", "joint"):
@@ -161,7 +217,9 @@ def _element_lines(data: bytes) -> dict[str, list[int] | array]:
             found["axis"].append(parser.CurrentLineNumber)
 
     def end(tag):
-        nonlocal depth
+        nonlocal depth, gazebo
+        if depth == gazebo:
+            gazebo = 0
         depth -= 1
 
     parser.StartElementHandler, parser.EndElementHandler = start, end

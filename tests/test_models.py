@@ -419,8 +419,39 @@ HOSTILE_URDFS = {
                          ["<machinesim:axis joint='Q'> names no axis joint"]),
     "other_namespace": (GROOVING.replace('xmlns:machinesim="https://machinesim.invalid/urdf"',
                                          'xmlns:machinesim="http://example.com/ms"'),
-                        ["no <machinesim:axis", "is there, in http://example.com/ms",
+                        ["<machinesim:axis> is in the XML namespace 'http://example.com/ms'",
                          'declare xmlns:machinesim="https://machinesim.invalid/urdf"']),
+    # urdfdom reads <origin xmlns="..."> as the joint's origin (it matches names as
+    # written); this reader found no <origin>: a base set 0.5 m up on a floor link loaded
+    # without a word at the floor, and Y's 80 mm above the base was refused as a zero pose
+    # 80 mm off
+    "default_namespace_floor_origin": (GROOVING.replace(
+        '  <link name="base">',
+        '  <link name="floor"/>\n  <joint name="mount" type="fixed"><parent link="floor"/>'
+        '<child link="base"/><origin xmlns="http://www.ros.org" xyz="0 0 0.5"/></joint>\n'
+        '  <link name="base">', 1),
+                                       [", line 12: <origin> is in the XML namespace "
+                                        "'http://www.ros.org'", "reads it as <origin>"]),
+    "default_namespace_origin": (GROOVING.replace('<origin xyz="0.0 0.0 0.08"',
+                                                  '<origin xmlns="http://www.ros.org" '
+                                                  'xyz="0.0 0.0 0.08"', 1),
+                                 [", line 39: <origin> is in the XML namespace "
+                                  "'http://www.ros.org'", "reads it as <origin>",
+                                  "remove the xmlns=... attribute"]),
+    "default_namespace_joint": (GROOVING.replace('<joint name="Y" type="prismatic">',
+                                                 '<joint xmlns="urn:x" name="Y" '
+                                                 'type="prismatic">', 1),
+                                [", line 37: <joint> is in the XML namespace 'urn:x'"]),
+    "prefixed_limit": (GROOVING.replace('<robot ', '<robot xmlns:ros="urn:ros" ', 1)
+                       .replace('<axis xyz="0.0 -1.0 0.0"/>',
+                                '<axis xyz="0.0 -1.0 0.0"/><ros:limit lower="0"/>', 1),
+                       [", line 40: <ros:limit> is in the XML namespace 'urn:ros'",
+                        "both drop it", "write it as 'limit' in no namespace"]),
+    "prefixed_attribute": (GROOVING.replace('<robot ', '<robot xmlns:ros="urn:ros" ', 1)
+                           .replace('<origin xyz="0.0 0.0 0.08"',
+                                    '<origin ros:xyz="0.0 0.0 0.08"', 1),
+                           [", line 39: attribute 'ros:xyz' is in the XML namespace "
+                            "'urn:ros'"]),
     "visual_box_not_a_number": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
                                                  '<box size="a 1.2 0.15"/>'),
                                 [", line 12: link 'base' <visual> <box size>",
@@ -519,6 +550,22 @@ def test_a_hostile_urdf_is_a_located_model_error(case, tmp_path):
     assert message.startswith(str(path)), message
     for word in words:
         assert word in message, f"{word!r} not in {message!r}"
+
+
+def test_namespaced_extensions_urdf_ignores_still_load(tmp_path):
+    # a Gazebo extension's prefixed plugin elements (neither reader reads a <gazebo>),
+    # xml:lang, and machinesim's own elements load as the plain file does
+    text = (GROOVING.replace('<robot ', '<robot xmlns:sensor="urn:gz#sensor" ', 1)
+            .replace('<link name="base">', '<gazebo reference="base"><sensor:camera '
+                     'sensor:name="c" xmlns="urn:gz"/></gazebo>\n  <link name="base" '
+                     'xml:lang="en">', 1))
+    path = tmp_path / "extended.urdf"
+    path.write_text(text)
+    plain = tmp_path / "plain.urdf"
+    plain.write_text(GROOVING)
+    machine, reference = load_machine(path), load_machine(plain)
+    assert machine.axes == reference.axes
+    assert np.array_equal(machine.tool_pose(machine.home), reference.tool_pose(reference.home))
 
 
 def test_the_hand_written_example_machine_cuts_as_the_shipped_one_and_takes_its_errors():
