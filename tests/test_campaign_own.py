@@ -176,6 +176,27 @@ def test_the_command_runs_your_own_procedure_from_the_folder_it_is_run_in(exampl
     assert stored["errors"]["tool"]["offset_m"] == [4e-6, -3e-6, 2e-6]
 
 
+@pytest.mark.parametrize(("given", "said"), [
+    ([], "key '--machine': --machine not given; expected the name of the machine procedure "
+         f"{MODULE}:ToolOffsetRTest is for (e.g. --machine grooving_4axis)"),
+    (["--machine", ""], "--machine ''; expected the name of the machine"),
+])
+def test_the_command_names_its_machine_option(example, given, said, tmp_path, capsys):
+    """The command said "machine=None ... (e.g. machine='grooving_4axis')", the Python
+    parameter, where the user forgot --machine; a shipped procedure given --machine or
+    --errors said machine=... / errors=... the same way. Nothing is written."""
+    from machinesim.campaign.cli import main
+
+    common = ["--trials", "1", "--workers", "0", "--out", str(tmp_path / "out"), "--quiet"]
+    assert main([f"{MODULE}:ToolOffsetRTest", *given, *common]) == 2
+    assert said in capsys.readouterr().err
+    for option in ("--machine", "--errors"):
+        assert main(["tool_rotation_arm", option, "x", *common]) == 2
+        assert (f"key '{option}': {option} 'x' is for a procedure of your own; "
+                "tool_rotation_arm runs on") in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("uses", [3, None, 2.5])
 def test_lab_uses_that_are_no_tuple_of_names_are_refused(example, uses):
     """``lab_uses = {"measure": 3}``: an InputError naming it, not the TypeError of iterating

@@ -16,7 +16,14 @@ from machinesim._interrupts import ctrl_c_remembered, stopped
 from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
 from machinesim.campaign.shipped import PROCEDURES
 from machinesim.campaign.spec import MAX_TRIALS, trials_refused
-from machinesim.exceptions import InputError, MachineSimError, printable, say, warnings_as_lines
+from machinesim.exceptions import (
+    InputError,
+    MachineSimError,
+    brief,
+    printable,
+    say,
+    warnings_as_lines,
+)
 
 __all__ = ["add_campaign_parser", "interrupted", "main", "run_campaign"]
 
@@ -122,6 +129,7 @@ def run_campaign(args) -> int:
 
     if not 1 <= args.trials <= MAX_TRIALS:  # before anything else: nothing to wait for
         raise InputError(trials_refused(args.trials), key="--trials")
+    _check_own_options(args)
     vary = [parse_vary(text) for text in args.vary]
     if ":" in args.procedure and "" not in sys.path and os.getcwd() not in sys.path:
         # your own procedure's module, in the folder the command is run from (an installed
@@ -151,6 +159,27 @@ def run_campaign(args) -> int:
         f"failed; the most common message ({len(first['trials'])} of them): "
         f"{first['message']} (summary.md lists every message)")
     return 1 if failed == total else 0
+
+
+def _check_own_options(args) -> None:
+    """Refuse --machine or --errors with a shipped procedure, and your own procedure
+    without --machine, naming the option as typed: `run` refused them as the Python
+    parameters ("machine=None; expected the name of the machine ... (e.g.
+    machine='grooving_4axis')"), which the command line has not."""
+    from machinesim.campaign.own import is_reference
+
+    if args.procedure in PROCEDURES:
+        for option, value in (("--machine", args.machine), ("--errors", args.errors)):
+            if value is not None:
+                entry = PROCEDURES[args.procedure]
+                raise InputError(f"{option} {brief(repr(value))} is for a procedure of your "
+                                 f"own; {args.procedure} runs on {entry.machine} with its "
+                                 "paper's errors (vary them with --vary)", key=option)
+    elif is_reference(args.procedure) and not args.machine:
+        given = "not given" if args.machine is None else repr(args.machine)
+        raise InputError(f"--machine {given}; expected the name of the machine procedure "
+                         f"{args.procedure} is for (e.g. --machine grooving_4axis): a "
+                         "campaign of your own procedure needs it", key="--machine")
 
 
 def interrupted(out) -> str:
