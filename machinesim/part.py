@@ -7,13 +7,20 @@ from __future__ import annotations
 
 import os
 import struct
+import warnings
 
 import manifold3d
 import numpy as np
 
 from machinesim._io import write_atomic
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, MachineSimWarning
 from machinesim.units import M_PER_MM
+
+#: A part this large (m) in any direction is noted as perhaps in millimetres: meshes are read
+#: as metres, and no shipped machine travels more than 0.5 m on an axis, so a part of a
+#: millimetre or more written in millimetres (1000 times too large) measures 1 m or more.
+#: A note, not a refusal: metre-class optics are diamond turned on machines of one's own.
+UNIT_SLIP_SIZE_M = 1.0
 
 
 class Part:
@@ -118,6 +125,12 @@ class Part:
         InputError
             If the arrays have the wrong shape, the mesh is not a closed 2-manifold, or it is
             inside out (wound clockwise seen from outside: a negative volume).
+
+        Warns
+        -----
+        MachineSimWarning
+            If the part measures `UNIT_SLIP_SIZE_M` or more in x, y or z: perhaps a mesh in
+            millimetres (STL's convention) read as metres.
         """
         # manifold3d accepts only writeable C arrays: copy, which also detaches the caller's.
         vertices = np.array(vertices, dtype=np.float64, order="C")
@@ -143,6 +156,12 @@ class Part:
             raise InputError(f"mesh is inside out: it encloses {manifold.volume():.6g} m^3; "
                              "expected triangles counter-clockwise seen from outside "
                              "(reverse each triangle's vertex order)")
+        size = np.ptp(vertices, axis=0)
+        if size.max() >= UNIT_SLIP_SIZE_M:
+            warnings.warn(f"the mesh measures {size[0]:.6g} x {size[1]:.6g} x {size[2]:.6g} m, "
+                          "larger than any shipped machine's travel (0.5 m at most): "
+                          "vertices are read as metres; was it written in millimetres (as STL is)?",
+                          MachineSimWarning, stacklevel=2)
         return cls(manifold)
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:

@@ -2,11 +2,12 @@
 
 import math
 import os
+import warnings
 
 import numpy as np
 import pytest
 
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, MachineSimWarning
 from machinesim.tool_specs import tool_from_spec
 from machinesim.workpiece import (
     Part,
@@ -330,3 +331,19 @@ def test_a_stock_spec_number_may_end_in_mm_as_a_tool_spec_size_may():
     assert stock_from_spec("block:10x10x2mm").volume == pytest.approx(200e-9, rel=VOLUME_REL)
     with pytest.raises(InputError, match="expected 3 numbers separated by 'x' in '10x10x2um'"):
         stock_from_spec("block:10x10x2um")
+
+
+def test_from_mesh_notes_a_part_in_millimetres_read_as_metres(tmp_path):
+    # an STL (millimetres, as CAD tools read it) read back as it is was taken silently as a
+    # part 1000 times too large: the 10 mm block a 10 m one, whose profiles read flat land
+    trimesh = pytest.importorskip("trimesh")
+    block(10e-3, 10e-3, 5e-3).export_stl(tmp_path / "part.stl")
+    stl = trimesh.load(tmp_path / "part.stl", process=True)
+    with pytest.warns(MachineSimWarning, match=r"measures 10 x 10 x 5 m, larger than any "
+                      r"shipped machine's travel \(0.5 m at most\).*millimetres"):
+        part = Part.from_mesh(stl.vertices, stl.faces)
+    assert part.volume == pytest.approx(500.0, rel=1e-6)  # m^3: the noted part is still made
+    # the largest shipped travel (X 500 mm on grooving_4axis) is a size no note is due for
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Part.from_mesh(*block(0.5, 0.5, 0.1).mesh())

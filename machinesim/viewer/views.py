@@ -14,6 +14,7 @@ import numpy as np
 
 from machinesim._json import read_json
 from machinesim.exceptions import InputError
+from machinesim.part import UNIT_SLIP_SIZE_M
 from machinesim.summary_schema import check_version
 from machinesim.viewer.maps import (
     SurfaceMap,
@@ -40,10 +41,6 @@ PART_COLOUR = 0xD9A066
 GAP = 0.25
 #: Lines of a report JSON shown in the overlay (the rest is left out, with a note).
 MAX_NOTE_LINES = 14
-#: A part this large (m) in any direction is noted as perhaps in millimetres: PLY coordinates
-#: are read as metres, and no shipped machine travels more than 0.5 m on an axis, so a part
-#: of a millimetre or more written in millimetres (1000 times too large) shows as 1 m or more.
-UNIT_SLIP_SIZE_M = 1.0
 #: Camera position in the world for a scene scaled to 1 (front right, above): the whole
 #: scene fills about two thirds of the view of meshcat's 75-degree camera.
 CAMERA_POSITION = np.array([0.55, -0.9, 0.65])
