@@ -261,10 +261,14 @@ class Lab:
         if np.abs(commanded).max() > stroke:
             # judged on the moves as commanded, which the operator knows: a check of where
             # the tool lands would answer, by refusing or not, where the hidden tool is
+            largest = float(np.abs(move).max())
+            # a move longer than the whole stroke is one no adjuster makes: a unit slip
+            slip = (f"; offset is in m, {largest:g} m: given in mm or um?"
+                    if largest > 2.0 * stroke else "")
             raise InputError(f"a tool adjustment of {np.round(move * 1e6, 6).tolist()} um "
                              f"takes the adjuster to {np.round(commanded * 1e6, 6).tolist()} "
                              f"um, beyond its stroke of +-{stroke * 1e3:g} mm per axis "
-                             "(machinesim.realism.TOOL_ADJUSTER_STROKE_M)", key="offset")
+                             f"(machinesim.realism.TOOL_ADJUSTER_STROKE_M{slip})", key="offset")
         self.__commanded = commanded
         label = self._label("tool_adjuster", label)
         if self.noise:

@@ -778,3 +778,16 @@ def test_run_refuses_a_lab_whose_servo_an_earlier_run_tuned():
         run(ToolRotationArm(), ideal, progress=stop)
     with pytest.raises(InputError, match=r"Expected as_made as True or False, got 'no'"):
         ideal.reveal_servo(as_made="no")
+
+
+def test_a_tool_adjustment_given_in_mm_is_refused_naming_the_unit():
+    # adjust_tool([10, 0, 0]), 10 mm meant, is a 10 m move: it was refused by the +-5 mm
+    # stroke with no word of the unit; a move longer than the whole stroke (10 mm) asks
+    lab = Lab("robonano_a0ib", seed=1)
+    with pytest.raises(InputError, match=r"offset is in m, 10 m: given in mm or um\?"):
+        lab.adjust_tool([10, 0, 0])
+    # a move the adjuster could make from elsewhere in its stroke is no unit slip
+    lab.adjust_tool([-4e-3, 0.0, 0.0])
+    with pytest.raises(InputError, match="beyond its stroke") as info:
+        lab.adjust_tool([9.5e-3, 0.0, 0.0])
+    assert "given in mm" not in str(info.value)
