@@ -66,6 +66,7 @@ from machinesim.cutting.lathe_following import (
     worst_beyond,
 )
 from machinesim.cutting.program import _overtravel, _refuse_far
+from machinesim.cutting.report import following_note
 from machinesim.cutting.turning import edge_path_from_poses, turned_heights
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError, line_of
@@ -181,6 +182,16 @@ class TurningReport:
     empty_cut: bool = False
     limit_violations: tuple[str, ...] = ()
     notes: tuple[str, ...] = field(default=())
+
+    def __repr__(self) -> str:
+        plural = "" if self.runs == 1 else "s"
+        flagged = (f"; {len(self.limit_violations)} limit violation"
+                   f"{'' if len(self.limit_violations) == 1 else 's'}"
+                   if self.limit_violations else "") + ("; empty cut" if self.empty_cut else "")
+        return (f"TurningReport({self.runs} run{plural}, {self.points} path points over "
+                f"{self.revolutions:.6g} revolutions, machining {self.machining_time_s:.6g} s"
+                f"{following_note(self.peak_following_error)}{flagged}; {len(self.notes)} "
+                f"note{'' if len(self.notes) == 1 else 's'})")
 
 
 def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,

@@ -92,6 +92,25 @@ class CutReport:
     edge_plane_lines: tuple[int, ...] = field(default=())
     peak_following_error: Mapping = field(default_factory=dict, hash=False)
 
+    def __repr__(self) -> str:
+        lines = [("rapids that cut at line", self.rapids_that_cut),
+                 ("holder contact at line", self.holder_contact),
+                 ("sideways at line", self.sideways_lines)]
+        flagged = [f"{what}{'' if len(at) == 1 else 's'} {_lines(at)}"
+                   for what, at in lines if at]
+        if self.limit_violations:
+            flagged.append(_count(self.limit_violations, "limit violation"))
+        if self.empty_cut:
+            flagged.append("empty cut")
+        return (f"CutReport({self.engine} engine: removed "
+                f"{self.removed_volume_m3 * 1e9:.6g} mm^3 in {self.sweeps} of "
+                f"{self.substeps} sub-steps, machining {self.machining_time_s:.6g} s "
+                f"(cutting {self.cutting_time_s:.6g} s), {_count(self.tools, 'tool run')}, "
+                f"{_count(range(self.thin_sheets), 'thin sheet')} cut away"
+                f"{following_note(self.peak_following_error)}"
+                f"{''.join('; ' + f for f in flagged)}; {_count(self.notes, 'note')}; "
+                f"took {self.elapsed_s:.3g} s)")
+
     def to_dict(self) -> dict:
         """JSON-ready dict, every key with its unit."""
         return {
@@ -123,6 +142,25 @@ class CutReport:
             "peak_following_error_um_or_urad": {axis: value * 1e6 for axis, value
                                                 in self.peak_following_error.items()},
         }
+
+
+def _count(items, what: str) -> str:
+    return f"{len(items)} {what}{'' if len(items) == 1 else 's'}"
+
+
+def _lines(lines, most: int = 5) -> str:
+    """Source lines for a repr, the first ``most`` of them and how many more."""
+    shown = ", ".join(str(line) for line in lines[:most])
+    return shown if len(lines) <= most else f"{shown} and {len(lines) - most} more"
+
+
+def following_note(peak: Mapping) -> str:
+    """``, peak following error X 1.2, C 0.4 um or urad`` for a report's repr; empty
+    without servo loops (no entry, or every entry zero)."""
+    if not any(peak.values()):
+        return ""
+    listed = ", ".join(f"{axis} {value * 1e6:.3g}" for axis, value in peak.items())
+    return f", peak following error {listed} um or urad"
 
 
 def peak_following_error(trajectory, machine) -> dict:
@@ -209,5 +247,6 @@ def nothing_left_note(part, removed_m3: float, roi=None) -> str:
             "the part, or a depth below its bottom?)")
 
 
-__all__ = ["NOTHING_LEFT", "CutReport", "arc_chord_note", "nc_summary", "nothing_left_note",
+__all__ = ["NOTHING_LEFT", "CutReport", "arc_chord_note", "following_note", "nc_summary",
+           "nothing_left_note",
            "peak_following_error"]
