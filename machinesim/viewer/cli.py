@@ -305,8 +305,15 @@ def _scene(args, budget: int):
                 print(f"note: {printable(note)}", file=sys.stderr)
     if args.errors is not None:
         from machinesim.errors import ErrorModel
+        from machinesim.errors.unit_slips import unit_slip_notes
 
         errors = ErrorModel.from_toml(args.errors)
+        machine.check_errors(errors)  # a misfit is refused before the notes, as cut does
+        # the notes machinesim cut and the scenarios give on values perhaps written in other
+        # units than their keys ask (a table far beyond any machine's errors, ...): view had
+        # given none, animating such a file without a word
+        for note in unit_slip_notes(errors, machine):
+            print(f"note: {printable(note)}", file=sys.stderr)
     return machine_scene(machine, program, tool=tool, stock=stock,
                          errors=errors, max_triangles=budget,
                          duration_s=DEFAULT_DURATION_S if args.duration is None else args.duration,
