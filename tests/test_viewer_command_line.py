@@ -51,3 +51,22 @@ def test_an_error_file_gets_the_unit_slip_notes_cut_gives(tmp_path, captured, ca
             "62.5 mm at X = -250 mm within X's travel, beyond the errors of any machine: were "
             "its coefficients written for other units than its key asks?") in err, err
     assert captured["errors"].written
+
+
+def test_a_program_selecting_two_tools_without_a_table_gets_cuts_note(tmp_path, captured,
+                                                                       capsys):
+    # T1 M6 and T2 M6 read without --tools: --tool cuts every move, which machinesim cut
+    # notes (docs/nc.md, 'Tool table'); view animated it with no word
+    program = tmp_path / "two.nc"
+    program.write_text("G90 G21\nT1 M6\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nG01 X2.\nT2 M6\n"
+                       "G00 Z1.\nM30\n")
+    assert run(["grooving_4axis", "--program", str(program), "--tool", "v:90", "--html",
+                str(tmp_path / "two.html")]) == 0
+    err = capsys.readouterr().err
+    assert ("note: the program selects 2 tools (T1 at line 2, T2 at line 6) but was read "
+            "without a tool table, so the cut's own tool (VTool) cut every move") in err, err
+    # one tool selected: no note
+    program.write_text("G90 G21\nT1 M6\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nG01 X2.\nM30\n")
+    assert run(["grooving_4axis", "--program", str(program), "--tool", "v:90", "--html",
+                str(tmp_path / "one.html")]) == 0
+    assert "tools" not in capsys.readouterr().err

@@ -323,7 +323,7 @@ class _ToolSections:
         self.names = [(None, None)]  # (tool number, line of the change)
         #: what a reader of the part should know about the tools it was cut with
         notes = (_radius_note(change, tool) for change in getattr(program, "tool_changes", ()))
-        self.notes = tuple(dict.fromkeys(note for note in (*notes, _untabled_note(program, tool))
+        self.notes = tuple(dict.fromkeys(note for note in (*notes, untabled_note(program, tool))
                                          if note))
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
@@ -384,7 +384,7 @@ def _radius_note(change, tool) -> str:
             "(shape = \"flat:R\", \"ball:R\", \"nose:R:ANGLE\" or \"v:ANGLE\")")
 
 
-def _untabled_note(program, tool) -> str:
+def untabled_note(program, tool) -> str:
     """A note when a program read without a tool table selects several tools (T words):
     its T words are then only listed as states, and the cut's own tool cut every move (a
     ball finish after a flat roughing, cut as the flat), else ''."""
