@@ -70,3 +70,18 @@ def test_a_program_selecting_two_tools_without_a_table_gets_cuts_note(tmp_path, 
     assert run(["grooving_4axis", "--program", str(program), "--tool", "v:90", "--html",
                 str(tmp_path / "one.html")]) == 0
     assert "tools" not in capsys.readouterr().err
+
+
+def test_a_table_radius_the_tool_has_not_gets_cuts_note(tmp_path, captured, capsys):
+    # tool 1: radius 2 mm and no shape, beside --tool flat:1 (radius 1 mm): flat:1 cuts for
+    # it, which machinesim cut notes; view animated it with no word
+    program = tmp_path / "t1.nc"
+    program.write_text("G90 G21\nT1 M6\nG43 H1\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nG01 X2.\n"
+                       "G00 Z1.\nM30\n")
+    tools = tmp_path / "tools.toml"
+    tools.write_text("[tool.1]\nlength_mm = 0.0\nradius_mm = 2.0\n")
+    assert run(["grooving_4axis", "--program", str(program), "--tools", str(tools), "--tool",
+                "flat:1", "--html", str(tmp_path / "t1.html")]) == 0
+    err = capsys.readouterr().err
+    assert ("note: T1 (line 2): the tool table gives radius 2 mm and no shape, so the cut's "
+            "own tool (radius 1 mm, FlatEndMill) cut for it") in err, err

@@ -322,9 +322,7 @@ class _ToolSections:
         self.runs = [(0, tool, 0.0)]
         self.names = [(None, None)]  # (tool number, line of the change)
         #: what a reader of the part should know about the tools it was cut with
-        notes = (_radius_note(change, tool) for change in getattr(program, "tool_changes", ()))
-        self.notes = tuple(dict.fromkeys(note for note in (*notes, untabled_note(program, tool))
-                                         if note))
+        self.notes = tool_notes(program, tool)
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
                 built[change.shape] = with_nose_radius_error(tool_from_spec(change.shape),
@@ -358,6 +356,16 @@ class _ToolSections:
                 yield tool, length, section, (lo, hi), name
 
 
+def tool_notes(program, tool) -> tuple[str, ...]:
+    """What a reader of a part cut by ``program`` with ``tool`` (the cut's own) should know
+    about the tools it was cut with: a table radius the cutting tool does not have
+    (`_radius_note`, per change), several tools selected without a table (`_untabled_note`);
+    each once. A cut's notes hold them, and ``machinesim view --program`` prints them."""
+    notes = (_radius_note(change, tool) for change in getattr(program, "tool_changes", ()))
+    return tuple(dict.fromkeys(note for note in (*notes, _untabled_note(program, tool))
+                               if note))
+
+
 def _radius_note(change, tool) -> str:
     """A note when a tool change gives a radius that the tool which cuts for it does not
     have: its table shape's (a D register of 2 mm beside a ball:0.5, which cuts: perhaps a
@@ -384,7 +392,7 @@ def _radius_note(change, tool) -> str:
             "(shape = \"flat:R\", \"ball:R\", \"nose:R:ANGLE\" or \"v:ANGLE\")")
 
 
-def untabled_note(program, tool) -> str:
+def _untabled_note(program, tool) -> str:
     """A note when a program read without a tool table selects several tools (T words):
     its T words are then only listed as states, and the cut's own tool cut every move (a
     ball finish after a flat roughing, cut as the flat), else ''."""

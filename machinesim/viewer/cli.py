@@ -295,13 +295,12 @@ def _scene(args, budget: int):
         program, chord = read_for_machine(
             args, check_readable_file(args.program, "NC program (--program)"), machine, tool)
         _refuse_tool_changes(program, tool)
-        from machinesim.cutting.program import untabled_note
+        from machinesim.cutting.program import tool_notes
 
-        # T1 M06 .. T2 M06 read without a table: cut's note that --tool cut every move (view
-        # had said nothing, animating a two-tool program with one tool without a word)
-        untabled = untabled_note(program, tool)
-        if untabled:
-            print(f"note: {printable(untabled)}", file=sys.stderr)
+        # cut's notes on the tools: T1 M06 .. T2 M06 read without a table (--tool cut every
+        # move), a table radius --tool has not (a 2 mm D beside flat:1); view had said nothing
+        for note in tool_notes(program, tool):
+            print(f"note: {printable(note)}", file=sys.stderr)
         # the notes machinesim cut gives on how the text was read and split: arcs cut as
         # chords coarser than 1 nm by default, X10 read as 10 mm, a file without M30 (cut
         # short?), text after the closing %; view had given the unit's
