@@ -85,3 +85,19 @@ def test_a_table_radius_the_tool_has_not_gets_cuts_note(tmp_path, captured, caps
     err = capsys.readouterr().err
     assert ("note: T1 (line 2): the tool table gives radius 2 mm and no shape, so the cut's "
             "own tool (radius 1 mm, FlatEndMill) cut for it") in err, err
+
+
+@pytest.mark.parametrize("text", ["", "[component.X]\n"])
+def test_an_error_file_setting_no_error_gets_cuts_note(tmp_path, captured, capsys, text):
+    # an empty file, or a section without keys: machinesim cut notes that it sets no error;
+    # view said nothing on the command line
+    program = tmp_path / "p.nc"
+    program.write_text(GROOVE)
+    errors = tmp_path / "none.toml"
+    errors.write_text(text)
+    assert run(["grooving_4axis", "--program", str(program), "--errors", str(errors),
+                "--html", str(tmp_path / "p.html")]) == 0
+    err = capsys.readouterr().err
+    assert (f"note: {errors} sets no error (no key in any section): viewed on the machine as "
+            "built, every error zero") in err, err
+    assert not captured["errors"].written

@@ -315,6 +315,10 @@ def _scene(args, budget: int):
 
         errors = ErrorModel.from_toml(args.errors)
         machine.check_errors(errors)  # a misfit is refused before the notes, as cut does
+        if not errors.written:  # an empty file, or sections without keys: cut's note (view
+            # had said nothing on the command line, the page's tool-path line alone telling)
+            print(f"note: {printable(str(args.errors))} sets no error (no key in any section): "
+                  "viewed on the machine as built, every error zero", file=sys.stderr)
         # the notes machinesim cut and the scenarios give on values perhaps written in other
         # units than their keys ask (a table far beyond any machine's errors, ...): view had
         # given none, animating such a file without a word
