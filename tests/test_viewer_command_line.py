@@ -101,3 +101,16 @@ def test_an_error_file_setting_no_error_gets_cuts_note(tmp_path, captured, capsy
     assert (f"note: {errors} sets no error (no key in any section): viewed on the machine as "
             "built, every error zero") in err, err
     assert not captured["errors"].written
+
+
+@pytest.mark.parametrize("port", ["7005", "6000"])
+def test_a_port_beside_html_is_refused(tmp_path, port):
+    # an --html page has no server: the port was taken and ignored (exit 0), as --tool
+    # without --program had been before it was refused
+    from machinesim.exceptions import InputError
+
+    page = tmp_path / "m.html"
+    with pytest.raises(InputError, match=f"--port {port} is the live server's, and --html "
+                                         "writes a page that needs none"):
+        run(["robonano_a0ib", "--html", str(page), "--port", port])
+    assert not page.exists()

@@ -137,9 +137,14 @@ def run_view(args: argparse.Namespace) -> int:
                          f"most {SCRIPT_CHARS_MOST:,}: more opens blank)")
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0.0):
         raise InputError(f"--duration {args.duration}: expected a positive number of seconds")
+    if args.port is not None and args.html is not None:
+        # an exported page starts no server: --port 7005 (or the bad port 6000) beside --html
+        # had been taken and ignored, the command exiting 0
+        raise InputError(f"--port {args.port} is the live server's, and --html writes a page "
+                         "that needs none: give one or the other")
     if args.port is not None and not 0 < args.port < 65536:
         raise InputError(f"--port {args.port}: expected a TCP port, 1 .. 65535")
-    if args.port in BAD_PORTS and args.html is None:
+    if args.port in BAD_PORTS:
         raise InputError(f"--port {args.port}: browsers refuse to open pages on this port (a "
                          "'bad port' of the Fetch standard; Chromium: ERR_UNSAFE_PORT); "
                          "expected another, e.g. 7000")
