@@ -114,3 +114,20 @@ def test_a_port_beside_html_is_refused(tmp_path, port):
                                          "writes a page that needs none"):
         run(["robonano_a0ib", "--html", str(page), "--port", port])
     assert not page.exists()
+
+
+def test_a_turning_program_is_refused_before_any_stage_is_cut(tmp_path, monkeypatch):
+    # C turns 0 to 360 deg while Z feeds on sts_lathe: refused as cut refuses it, but only
+    # after the stages had been cut (384 s for this program) by the part without errors
+    import machinesim.viewer.machine as viewer_machine
+    from machinesim.exceptions import NCProgramError
+
+    def no_stages(*args, **kwargs):
+        raise AssertionError("a stage was cut before the refusal")
+
+    monkeypatch.setattr(viewer_machine, "_stages", no_stages)
+    program = tmp_path / "turn.nc"
+    program.write_text("G90 G21\nG00 X1. Z1.\nG01 Z0. F10.\nG01 C360. Z-0.01\nM30\n")
+    with pytest.raises(NCProgramError, match="line 4.*feeds while it turns the work spindle C "
+                                             "of sts_lathe \\(0 to 360 deg\\)"):
+        run(["sts_lathe", "--program", str(program), "--html", str(tmp_path / "t.html")])

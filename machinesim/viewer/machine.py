@@ -121,6 +121,12 @@ def _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi, d
     if duration_s <= 0.0 or max_stages < 1:
         raise InputError(f"duration_s and max_stages must be positive, got {duration_s} and "
                          f"{max_stages}")
+    from machinesim.cutting.refusals import _refuse_turning
+
+    # a turning program is refused as cut refuses it, before any stage is cut: the refusal
+    # had come from the part without errors, cut last (a 4-line turn on sts_lathe, after
+    # 384 s of stages)
+    _refuse_turning(program, machine, q0)
     tool = tool_from_spec(tool) if isinstance(tool, str) else tool
     stock = stock_from_spec(stock) if isinstance(stock, str) else stock
     # the stock where it stands: a machine without visual bodies has only it to frame (its
