@@ -4,36 +4,15 @@ note, never a traceback or a silently wrong page (docs/viewer.md)."""
 
 from __future__ import annotations
 
-import argparse
-
 import pytest
+import test_viewer_tool_table
 
-from machinesim.viewer.cli import add_view_parser, run_view
-from machinesim.viewer.scene import Scene
+#: `machinesim view`'s command line, and its scene recorded, not drawn: test_viewer_tool_table's
+run = test_viewer_tool_table.run
+captured = test_viewer_tool_table.captured
 
 #: A 10 um deep V groove 2 mm along X, as test_errors_hostile cuts it.
 GROOVE = "G90 G21\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nG01 X2.\nG00 Z1.\nM30\n"
-
-
-def run(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(prog="machinesim")
-    add_view_parser(parser.add_subparsers(dest="command", required=True))
-    return run_view(parser.parse_args(["view", *argv]))
-
-
-@pytest.fixture
-def captured(monkeypatch):
-    """machine_scene replaced by one that records its arguments and draws nothing."""
-    import machinesim.viewer.machine as viewer_machine
-
-    seen = {}
-
-    def capture(machine, program, **kwargs):
-        seen.update(program=program, **kwargs)
-        return Scene("captured")
-
-    monkeypatch.setattr(viewer_machine, "machine_scene", capture)
-    return seen
 
 
 def test_an_error_file_gets_the_unit_slip_notes_cut_gives(tmp_path, captured, capsys):
