@@ -66,7 +66,8 @@ def follow_held(servo, t, points, axes, rotary, refuse):
     jumps) is refused: ``refuse(step, why)`` gives the error to raise, ``step`` the given run's
     step, ``why`` the words. A run that keeps them is followed once, its samples unchanged: the
     check follows a second sampling, with the mid-points, and only reads it."""
-    from machinesim.cutting.lathe import MOST_C_STEP_RAD, _c_steps, _within_quarter_turns, followed
+    from machinesim.cutting.lathe import followed
+    from machinesim.cutting.lathe_program import MOST_C_STEP_RAD, _c_steps, _within_quarter_turns
 
     reached = followed(servo.follow, t, points)
     c_column = axes.index("C")
