@@ -77,6 +77,45 @@ def test_ctrl_c_on_a_campaign_with_workers_is_one_line_and_no_worker_traceback(
     assert "interrupted; kept the" in err and str(tmp_path / "trials") in err
 
 
+def _squared(spec, i):
+    return i * i
+
+
+def test_a_ctrl_c_as_a_finished_trials_future_is_let_go_stops_the_trials(monkeypatch):
+    """The Ctrl-C of the test above landed, 2 runs in 8, in Dask's Future.__del__ (a
+    finished trial's future let go as the next was sent, just after the progress line):
+    printed as 'Exception ignored in: <function Future.__del__ ...> KeyboardInterrupt' and
+    swallowed, the trials went on. A SIGINT raised inside that __del__ now stops them."""
+    import signal
+    import threading
+
+    import distributed
+    from distributed import Client
+
+    from machinesim.campaign.runner import windowed
+
+    release, sent, ignored, done = distributed.Future.__del__, [], [], []
+
+    def ctrl_c_inside(future):  # the handler runs here, inside __del__, at once
+        if not sent and threading.current_thread() is threading.main_thread():
+            sent.append(future.key)
+            signal.raise_signal(signal.SIGINT)
+        release(future)
+
+    monkeypatch.setattr(sys, "unraisablehook", ignored.append)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with Client(processes=False, n_workers=1, threads_per_worker=1,
+                    **NO_DASHBOARD) as client, monkeypatch.context() as patched:
+            patched.setattr(distributed.Future, "__del__", ctrl_c_inside)
+            with pytest.raises(KeyboardInterrupt):
+                done.extend(windowed(client, _squared, None, range(6)))
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert sent and done == []
+    assert not [u for u in ignored if isinstance(u.exc_value, KeyboardInterrupt)], ignored
+
+
 #: The command line with a Ctrl-C to its process group 0.3 s after each worker process is
 #: asked to start: while the worker still imports, and the cluster is still being built.
 _CTRL_C_AT_WORKER_START = """

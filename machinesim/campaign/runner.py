@@ -22,6 +22,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from machinesim._interrupts import ctrl_c_deferred
 from machinesim.campaign.cluster import (
     GUARD,
     NO_DASHBOARD,
@@ -191,7 +192,12 @@ def windowed(client, function, spec, indices):
     finishes: the path every trial of a campaign takes (benchmarks/campaign.py times it).
     All of them at once (client.map) held 100000 tasks in the client and the scheduler,
     1.3 GB and 30 s before the first trial started, and as long again to cancel on a
-    Ctrl-C."""
+    Ctrl-C.
+
+    A finished future is let go under `ctrl_c_deferred`: its last reference ran Dask's
+    ``Future.__del__`` here, where a Ctrl-C landing was printed as "Exception ignored in:
+    <function Future.__del__ ...> KeyboardInterrupt" and swallowed (the campaign went on
+    to its next write). Each one sent is held by ``running`` until it finishes."""
     from distributed import as_completed
 
     waiting, window = iter(indices), _Window(client)
@@ -201,6 +207,7 @@ def windowed(client, function, spec, indices):
             future = client.submit(function, spec, i, pure=False)
             sent[future.key] = i
             running.add(future)
+            del future
         if not sent:
             return
         future = next(running)
@@ -209,6 +216,9 @@ def windowed(client, function, spec, indices):
             result = future.result()
         except Exception as error:  # run_trial keeps a trial's own errors in its record
             raise MachineSimError(_lost(i, error)) from error
+        finally:
+            with ctrl_c_deferred():  # its __del__ runs here, a Ctrl-C raised after it
+                del future
         yield result
 
 
