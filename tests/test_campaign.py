@@ -1439,9 +1439,9 @@ def test_a_lock_removed_by_a_stopped_run_is_not_taken(tmp_path, monkeypatch):
     files, each its own 'lock'."""
     import os
 
-    from machinesim.campaign import results
+    from machinesim.campaign import lock
 
-    real_same, calls = results._same_file, []
+    real_same, calls = lock._same_file, []
 
     def removed_once(fd, path):  # the file open is unlinked just after the flock
         calls.append(path)
@@ -1449,9 +1449,9 @@ def test_a_lock_removed_by_a_stopped_run_is_not_taken(tmp_path, monkeypatch):
             path.unlink()
         return real_same(fd, path)
 
-    monkeypatch.setattr(results, "_same_file", removed_once)
-    with results.locked(tmp_path):
-        assert results._lock_holder(tmp_path / "campaign.lock")[0] == os.getpid()
+    monkeypatch.setattr(lock, "_same_file", removed_once)
+    with lock.locked(tmp_path):
+        assert lock._lock_holder(tmp_path / "campaign.lock")[0] == os.getpid()
     assert len(calls) == 2
 
 

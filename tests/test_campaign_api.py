@@ -410,7 +410,7 @@ def _race_for_the_lock(out: str, lined_up, ran, refused) -> None:
     import threading
     import time
 
-    from machinesim.campaign import results
+    from machinesim.campaign import lock
 
     first = [True]
 
@@ -421,7 +421,7 @@ def _race_for_the_lock(out: str, lined_up, ran, refused) -> None:
         if index == 0:
             time.sleep(0.2)
 
-    read, flock = results._lock_holder, fcntl.flock
+    read, flock = lock._lock_holder, fcntl.flock
 
     def lined_up_holder(path):
         held = read(path)
@@ -436,9 +436,9 @@ def _race_for_the_lock(out: str, lined_up, ran, refused) -> None:
             both_there()
         return flock(fd, operation)
 
-    results._lock_holder, fcntl.flock = lined_up_holder, lined_up_flock
+    lock._lock_holder, fcntl.flock = lined_up_holder, lined_up_flock
     try:
-        with results.locked(out):
+        with lock.locked(out):
             ran.put(os.getpid())
             time.sleep(1.0)  # the run: the other is refused meanwhile, not after
     except InputError as error:
