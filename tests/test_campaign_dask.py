@@ -116,6 +116,66 @@ def test_a_ctrl_c_as_a_finished_trials_future_is_let_go_stops_the_trials(monkeyp
     assert not [u for u in ignored if isinstance(u.exc_value, KeyboardInterrupt)], ignored
 
 
+@pytest.mark.parametrize("call", ["result", "nthreads", "submit"])
+def test_a_ctrl_c_inside_dasks_sync_lets_the_call_finish_and_stops_the_trials(call):
+    """A Ctrl-C in distributed.utils.sync (a finished trial's future.result(), the window's
+    client.nthreads()) before Dask's coroutine made its future printed tornado's
+    "NameError: cannot access free variable 'future'" traceback; one in client.submit left
+    a Future without _cleared (its __del__: "Exception ignored ... AttributeError"). The call
+    now finishes (the future is done; the count waits runner.COUNT_WAIT_S at most; submit
+    does not wait), the Ctrl-C raised after."""
+    import signal
+    import threading
+
+    import distributed
+    from distributed import Client
+
+    from machinesim.campaign.runner import windowed
+
+    owner = distributed.Future if call == "result" else Client
+    original, finished, done = getattr(owner, call), [], []
+
+    def ctrl_c_inside(self, *args, **options):  # the handler runs here, at once
+        if not finished and threading.current_thread() is threading.main_thread():
+            signal.raise_signal(signal.SIGINT)
+            answer = original(self, *args, **options)
+            finished.append(call)
+            return answer
+        return original(self, *args, **options)
+
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with Client(processes=False, n_workers=1, threads_per_worker=1,
+                    **NO_DASHBOARD) as client, pytest.MonkeyPatch.context() as patched:
+            patched.setattr(owner, call, ctrl_c_inside)
+            with pytest.raises(KeyboardInterrupt):
+                done.extend(windowed(client, _squared, None, range(6)))
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert finished == [call] and done == []
+
+
+def test_the_windows_thread_count_waits_a_bounded_time_and_a_late_one_keeps_the_last():
+    """The count is asked under ctrl_c_deferred, so it must not wait for ever on a
+    scheduler that stops answering: Dask's callback_timeout bounds it, and a count that
+    times out leaves the last one (3 threads: 2 x 3 = 6 in flight)."""
+    from machinesim.campaign.runner import COUNT_WAIT_S, _Window
+
+    waits, answers = [], [{"tcp://a:1": 3}, TimeoutError("timed out after 2.0 s.")]
+
+    class Scheduler:
+        def nthreads(self, callback_timeout=None):
+            waits.append(callback_timeout)
+            answer = answers.pop(0)
+            if isinstance(answer, Exception):
+                raise answer
+            return answer
+
+    window = _Window(Scheduler(), every_s=0.0)
+    assert (window.size(), window.size()) == (6, 6)
+    assert waits == [COUNT_WAIT_S, COUNT_WAIT_S] and 0 < COUNT_WAIT_S <= 10
+
+
 #: The command line with a Ctrl-C to its process group 0.3 s after each worker process is
 #: asked to start: while the worker still imports, and the cluster is still being built.
 _CTRL_C_AT_WORKER_START = """

@@ -167,12 +167,19 @@ def _vary(vary) -> tuple[tuple[str, Distribution], ...]:
 #: Trials a campaign keeps in flight on Dask per worker thread (one running, one waiting
 #: to start as it finishes), and at least (while a cluster's workers join).
 IN_FLIGHT_PER_THREAD, MIN_IN_FLIGHT = 2, 4
+#: Longest wait, in seconds, for the scheduler's count of worker threads (a Ctrl-C is held
+#: meanwhile): past it the last count stands, and it is asked again `_Window.every_s` later.
+COUNT_WAIT_S = 2.0
 
 
 class _Window:
     """How many trials to keep in flight on ``client``'s cluster: `IN_FLIGHT_PER_THREAD` per
     worker thread, `MIN_IN_FLIGHT` at least; the threads counted again every ``every_s``
-    seconds, so that workers joining a cluster (or leaving it) get trials (or not)."""
+    seconds, so that workers joining a cluster (or leaving it) get trials (or not).
+
+    The count is asked under `ctrl_c_deferred`, for `COUNT_WAIT_S` at most: a Ctrl-C landing
+    in Dask's ``sync`` before its coroutine made its future printed tornado's "NameError:
+    cannot access free variable 'future'" traceback (Dask's cancel callback)."""
 
     def __init__(self, client, every_s: float = 5.0) -> None:
         self.client, self.every_s = client, every_s
@@ -181,8 +188,13 @@ class _Window:
     def size(self) -> int:
         now = time.monotonic()
         if now - self.counted >= self.every_s:
-            self.threads = sum(self.client.nthreads().values())
             self.counted = now
+            with ctrl_c_deferred():  # raised after it, within COUNT_WAIT_S
+                try:
+                    self.threads = sum(
+                        self.client.nthreads(callback_timeout=COUNT_WAIT_S).values())
+                except TimeoutError:  # a busy scheduler: the last count stands
+                    pass
         return max(MIN_IN_FLIGHT, IN_FLIGHT_PER_THREAD * self.threads)
 
 
@@ -194,30 +206,37 @@ def windowed(client, function, spec, indices):
     1.3 GB and 30 s before the first trial started, and as long again to cancel on a
     Ctrl-C.
 
-    A finished future is let go under `ctrl_c_deferred`: its last reference ran Dask's
-    ``Future.__del__`` here, where a Ctrl-C landing was printed as "Exception ignored in:
-    <function Future.__del__ ...> KeyboardInterrupt" and swallowed (the campaign went on
-    to its next write). Each one sent is held by ``running`` until it finishes."""
+    A finished future's result is taken and the future let go under `ctrl_c_deferred`:
+    its last reference ran Dask's ``Future.__del__`` here, where a Ctrl-C landing was
+    printed as "Exception ignored in: <function Future.__del__ ...> KeyboardInterrupt" and
+    swallowed (the campaign went on to its next write), and one landing in ``result``'s
+    Dask ``sync`` before its coroutine made its future printed tornado's "NameError: cannot
+    access free variable 'future'" traceback. It is finished (as_completed yielded it), so
+    ``result`` returns at once and the held Ctrl-C is raised right after. Each one sent is
+    held by ``running`` until it finishes; it is sent under `ctrl_c_deferred` too (a Ctrl-C
+    inside ``Future.__init__`` left one without ``_cleared``, and its ``__del__`` printed
+    "Exception ignored ... AttributeError")."""
     from distributed import as_completed
 
     waiting, window = iter(indices), _Window(client)
     running, sent = as_completed(), {}
     while True:
         for i in itertools.islice(waiting, max(0, window.size() - len(sent))):
-            future = client.submit(function, spec, i, pure=False)
-            sent[future.key] = i
-            running.add(future)
-            del future
+            with ctrl_c_deferred():  # no Future left half made (submit does not wait)
+                future = client.submit(function, spec, i, pure=False)
+                sent[future.key] = i
+                running.add(future)
+                del future
         if not sent:
             return
         future = next(running)
         i = sent.pop(future.key)
-        try:
-            result = future.result()
-        except Exception as error:  # run_trial keeps a trial's own errors in its record
-            raise MachineSimError(_lost(i, error)) from error
-        finally:
-            with ctrl_c_deferred():  # its __del__ runs here, a Ctrl-C raised after it
+        with ctrl_c_deferred():  # result and __del__ run here, a Ctrl-C raised after them
+            try:
+                result = future.result()
+            except Exception as error:  # run_trial keeps a trial's own errors in its record
+                raise MachineSimError(_lost(i, error)) from error
+            finally:
                 del future
         yield result
 
