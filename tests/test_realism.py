@@ -308,6 +308,35 @@ def test_a_spot_reads_an_edge_and_a_through_hole_where_they_are_whatever_its_sam
         assert np.array_equal(hm.missing, np.broadcast_to(inside, hm.z.shape))
 
 
+def test_a_spot_of_even_samples_reads_a_through_hole_where_it_is():
+    """The plate with its 10 um through hole of the test above, read along y = 25 um through
+    spots of 2, 4 and 6 samples. Such a spot has no node at its centre: within its innermost
+    node's offset of the hole's edge (a 3 um FWHM Gaussian of 2 samples: sigma = 1.27 um) half
+    its weight lies on the plate on either side of the edge, so at 'at least half' the samples
+    up to 1.27 um inside the hole read the plate: 75 NaN of the 100 at 2 samples, 81 and 85
+    at 4 and 6 (innermost nodes 0.95, 0.79 um), a top-hat's 85, 93, 95 (0.75, 0.375, 0.25
+    um). A tie goes by the spot's centre, read as a point sample: NaN exactly at the 100
+    samples strictly inside the hole, as without a spot."""
+    hole = manifold3d.Manifold.cube((10 * UM, 10 * UM, 1 * MM)).translate(
+        (20 * UM, 20 * UM, -0.5 * MM))
+    plate = Part(block(50 * UM, 50 * UM, 10 * UM).manifold - hole)
+    a, b, spacing = (5 * UM, 25 * UM), (45 * UM, 25 * UM), 0.1 * UM + 1e-12  # off the edges
+    for shape in ("gaussian", "tophat"):
+        for samples in (2, 4, 6):
+            scope = Microscope(noise=False, resolution=0.0, spot=Spot(3 * UM, shape, samples))
+            prof = scope.profile(plate, a, b, spacing)
+            x = prof.xy[:, 0]
+            inside = (x > 20 * UM) & (x < 30 * UM)
+            assert inside.sum() == 100
+            assert np.array_equal(prof.missing, inside), (shape, samples, prof.missing.sum())
+            np.testing.assert_allclose(prof.z[~inside], 0.0, rtol=0, atol=ROUND_OFF_M)
+            # rows of y 24.5 .. 25.5 um: the 6-sample Gaussian's outermost nodes (4.24 um)
+            # stay inside the hole's y extent, 20 .. 30 um
+            hm = scope.height_map(plate, 5 * UM, 45 * UM, 24.5 * UM, 25.5 * UM, spacing)
+            assert np.array_equal(hm.missing, np.broadcast_to(inside, hm.z.shape)), (
+                shape, samples)
+
+
 def test_a_spot_reads_a_plane_unchanged(flat):
     reg = Registration([0.0, 0.0, 1 * UM], 0.0, [2e-4, 1e-4])
     for shape in ("tophat", "gaussian"):

@@ -51,8 +51,17 @@ BLOCK_SAMPLES = 4_000_000
 #: crosses it, as without one, whatever the spot's ``samples``; averaging whatever points hit
 #: the part had moved the edge out to the spot's outermost node (a 3 um FWHM Gaussian: 3.6 um
 #: at 5 samples, 10 um at 25), reading a hole smaller the finer the spot was sampled. The
-#: slack takes the round-off of weights that sum to exactly half on an edge.
+#: slack takes the round-off of weights that sum to exactly half on an edge. A spot of an even
+#: ``samples`` has no node at its centre, and its weight on the part is exactly half wherever
+#: its centre lies within its innermost node's offset of a straight edge, on either side (a
+#: 3 um Gaussian of 2 samples: 1.27 um): there the spot's centre decides, as a point sample
+#: (`SPOT_TIE`).
 SPOT_COVER = 0.5 - 1e-12
+#: Weights within this of half on the part are a tie, read only where the spot's centre, as a
+#: point sample, is on the part (it reads NaN otherwise): else an even spot read up to its
+#: innermost node's offset into a hole (a 10 um hole through a 3 um Gaussian of 2 samples
+#: read 2.5 um narrower), the edge again set by the quadrature, not by the spot.
+SPOT_TIE = 1e-12
 #: Unit vectors on which a drawn form is scaled to its stated peak-to-valley: a Fibonacci
 #: sphere this dense puts every point within ~0.04 rad of a sample, where a degree-4 term
 #: moves by under 1 % of its amplitude.
@@ -379,7 +388,12 @@ def spot_heights(vertices, triangles, x, y, dx, dy, spot: Spot | None) -> np.nda
         # (rows, n_y offsets, nx, n_x offsets) heights of every sub-sample of the block
         sub = h[(block - lo)[:, :, None, None], ix[None, None, :, :]]
         weights = wx[None, :, None, None] * wx[None, None, None, :]
-        out[j0:j0 + rows] = _weighted(sub, weights, axes=(1, 3))
+        out[j0:j0 + rows], tie = _weighted(sub, weights, axes=(1, 3))
+        if tie.any():  # the spot's centre decides (`SPOT_TIE`): read those rows bare
+            cx, jx = np.unique(x + dx, return_inverse=True)
+            cy, jy = np.unique((y + dy)[j0:j0 + rows], return_inverse=True)
+            centre = grid_heights((vertices, triangles), cx, cy)[jy[:, None], jx[None, :]]
+            out[j0:j0 + rows][tie & ~np.isfinite(centre)] = np.nan
     return out
 
 
@@ -413,19 +427,29 @@ def line_heights(vertices, triangles, start, direction, s, ds, across: float,
         line = _LineSamples(origin, u, points, vertices)
         z = _finish(_zbuffer(vertices, triangles, line))
         heights[:, pick] = z[inverse.reshape(len(s), len(pick))]
-    return _weighted(heights, weights[None, :], axes=(1,))
+    out, tie = _weighted(heights, weights[None, :], axes=(1,))
+    if tie.any():  # the spot's centre decides (`SPOT_TIE`): read the line bare there
+        points, inverse = np.unique((s + ds)[tie], return_inverse=True)
+        origin = np.asarray(start, dtype=np.float64) + across * normal
+        centre = _finish(_zbuffer(vertices, triangles,
+                                  _LineSamples(origin, u, points, vertices)))
+        out[np.flatnonzero(tie)[~np.isfinite(centre[inverse])]] = np.nan
+    return out
 
 
-def _weighted(values: np.ndarray, weights: np.ndarray, axes: tuple) -> np.ndarray:
+def _weighted(values: np.ndarray, weights: np.ndarray, axes: tuple
+              ) -> tuple[np.ndarray, np.ndarray]:
     """Weighted mean over ``axes`` of the finite values (``weights`` sum to 1 over them); NaN
-    where the finite ones weigh less than `SPOT_COVER` (the spot mostly off the part)."""
+    where the finite ones weigh less than `SPOT_COVER` (the spot mostly off the part). And
+    where they weigh half, to `SPOT_TIE`: a tie, which the caller decides by the spot's
+    centre (boolean, the mean's shape)."""
     seen = np.isfinite(values)
     w = np.where(seen, weights, 0.0)
     total = np.sum(w, axis=axes)
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = np.sum(np.where(seen, values, 0.0) * w, axis=axes) / total
     mean[~(total >= SPOT_COVER)] = np.nan
-    return mean
+    return mean, np.abs(total - 0.5) <= SPOT_TIE
 
 
 class _LineSamples(_Line):
