@@ -328,6 +328,13 @@ def read_axes(root: ET.Element, path: Path,
         # a bad <limit> at its own line; no <limit> at the joint's
         at_limit = f"{element_at.get(id(joint.find('limit')), joint_at)}: joint {name!r}"
         lower, upper, velocity = _limits(joint, at_limit, kind == "revolute")
+        if upper - lower < resolution[name]:  # no command moves it: travel or step mistyped
+            unit = "rad" if kind == "revolute" else "m"
+            raise ModelError(f"{at_limit}: <limit lower={lower!r} upper={upper!r}> ({unit}) "
+                             f"spans {upper - lower:g} {unit}, less than one step of the "
+                             f"axis' resolution {resolution[name]!r} {unit} "
+                             f"({resolution_at[name]}): no command moves it; expected a "
+                             "travel of at least one step (lengths in m, angles in rad)")
         axes.append(Axis(
             letter=name, rotary=kind == "revolute", side=side, direction=k,
             lower=lower, upper=upper, velocity=velocity, resolution=resolution[name]))

@@ -130,3 +130,33 @@ def test_axis_values_that_are_bools_are_refused():
     # numbers of any kind are taken as before: X = 1 m as an int, a float, a numpy int
     for q in ([1, 0, 0, 0], [1.0, 0.0, 0.0, 0.0], np.array([1, 0, 0, 0])):
         assert np.array_equal(machine.tool_pose(q), machine.tool_pose([1.0, 0.0, 0.0, 0.0]))
+
+
+
+@pytest.mark.parametrize("upper, resolution, said", [
+    ("1e-10", "1e-9", "upper=1e-10> (m) spans 1e-10 m, less than one step of the axis' "
+                      "resolution 1e-09 m"),
+    ("5e-5", "1e-4", "upper=5e-05> (m) spans 5e-05 m, less than one step of the axis' "
+                     "resolution 0.0001 m")])
+def test_a_travel_shorter_than_one_resolution_step_is_refused_at_its_limit(
+        upper, resolution, said, tmp_path):
+    # Z travel 0 .. 0.1 nm on a 1 nm scale loaded, and no command moves it a step: a target
+    # rounds to 0 or to 1 nm, beyond its travel. Refused at the <limit>'s line (37), naming
+    # the span, the resolution and the resolution's line (49)
+    text = MILL3.read_text().replace('lower="-0.05" upper="0.1"', f'lower="0" upper="{upper}"')
+    text = text.replace('<machinesim:axis joint="Z" resolution="1e-9"/>',
+                        f'<machinesim:axis joint="Z" resolution="{resolution}"/>')
+    path = tmp_path / "short.urdf"
+    path.write_text(text)
+    with pytest.raises(ModelError) as info:
+        load_machine(path)
+    assert str(info.value) == (
+        f"{path.resolve()}, line 37: joint 'Z': <limit lower=0.0 {said} "
+        f"({path.resolve()}, line 49): no command moves it; expected a travel of at least one "
+        "step (lengths in m, angles in rad)")
+
+
+def test_a_travel_of_exactly_one_step_loads(tmp_path):
+    path = _mill3(tmp_path, "one", 'lower="-0.05" upper="0.1"', 'lower="0" upper="1e-9"')
+    machine = load_machine(path)
+    assert machine.upper[2] - machine.lower[2] == machine.resolution[2] == 1e-9
