@@ -37,6 +37,7 @@ from machinesim.urdf_checks import (
     RAPID_RATE_RAD_PER_S,
     ZERO_POSE_TOL,
     _limits,
+    _millimetre_warning,
     _namespace_hint,
     _turned_frame_hint,
     check_joint_frames,
@@ -260,6 +261,7 @@ def read_axes(root: ET.Element, path: Path,
     tool_side, wp_side = ancestors("tool_tip"), ancestors("workpiece")
     element_at = _in_joint_at(root, path, lines)
     axes = []
+    limits_at = {}  # each axis joint's <limit> place, for a warning after the loop
     for index, joint in enumerate(root.findall("joint")):
         kind = joint.get("type")
         if kind == "fixed":
@@ -328,6 +330,7 @@ def read_axes(root: ET.Element, path: Path,
         # a bad <limit> at its own line; no <limit> at the joint's
         at_limit = f"{element_at.get(id(joint.find('limit')), joint_at)}: joint {name!r}"
         lower, upper, velocity = _limits(joint, at_limit, kind == "revolute")
+        limits_at[name] = at_limit
         if upper - lower < resolution[name]:  # no command moves it: travel or step mistyped
             unit = "rad" if kind == "revolute" else "m"
             raise ModelError(f"{at_limit}: <limit lower={lower!r} upper={upper!r}> ({unit}) "
@@ -338,6 +341,11 @@ def read_axes(root: ET.Element, path: Path,
         axes.append(Axis(
             letter=name, rotary=kind == "revolute", side=side, direction=k,
             lower=lower, upper=upper, velocity=velocity, resolution=resolution[name]))
+    linear = [(a.upper - a.lower, a) for a in axes if not a.rotary]
+    if linear:  # a machine written in mm, every number under 10, passes every check above
+        longest = max(linear, key=lambda pair: pair[0])[1]
+        _millimetre_warning(limits_at[longest.letter], longest.letter, longest.lower,
+                            longest.upper)
     if not axes:  # Pinocchio's model then has no axis to index: an IndexError at load
         raise ModelError(f"{path}: no axis joint; expected at least one, named by its NC "
                          "letter: X, Y, Z (prismatic) or A, B, C (revolute)")

@@ -69,6 +69,13 @@ RAPID_RATE_RAD_PER_S = (1e-6, 1e5)
 #: -100 .. 100 deg loads as +-16 turns), and within the travel that, read as degrees, is
 #: still no spindle's (beyond it both readings are a spindle).
 DEGREE_LIKE_RAD = (2.0 * math.pi * 1.001, math.degrees(SPINDLE_TRAVEL_RAD))
+#: A linear travel this long or longer loads with a warning (`_millimetre_warning`): a machine
+#: written in millimetres whose every length is under `MAX_TRAVEL_M` (a 5 mm stage, written
+#: 5) passes every check, scaled 1000 times as a whole, its zero pose and directions intact.
+#: No check on the file's own numbers tells it from a machine that large (a uniform scale
+#: keeps every ratio), so the longest travel is the evidence: the shipped machines travel
+#: 0.5 m at most, the parts' unit-slip note starts at the same 1 m (`part.UNIT_SLIP_SIZE_M`).
+MM_LIKE_TRAVEL_M = 1.0
 
 
 def check_zero_pose(path, axes: tuple[Axis, ...], wMt: np.ndarray,
@@ -290,6 +297,22 @@ def _limits(joint: ET.Element, where: str, rotary: bool) -> tuple[float, float, 
     if rotary:
         _degree_warning(where, lower, upper)
     return lower, upper, velocity
+
+
+def _millimetre_warning(where: str, letter: str, lower: float, upper: float) -> None:
+    """Warn (`MachineSimWarning`) of a longest linear travel of `MM_LIKE_TRAVEL_M` or more
+    (``where``, the <limit>'s place, and ``letter``, its axis): perhaps a machine written in
+    millimetres. A warning, not a refusal: a machine of a metre's travel is a machine too."""
+    travel = upper - lower
+    if not travel >= MM_LIKE_TRAVEL_M:
+        return
+    warnings.warn(
+        f"{where}: <limit lower={lower!r} upper={upper!r}> gives {letter} a travel of "
+        f"{travel:g} m, the longest of the machine's linear axes (the shipped machines travel "
+        "0.5 m at most). URDF lengths are metres: a machine written in millimetres loads 1000 "
+        "times too large, its origins and rapid rates with it, and a program in mm never "
+        f"leaves its travel. If these are millimetres, write every length in m ({upper:g} mm "
+        f"is {upper / 1e3:g}) and velocities in m/s", MachineSimWarning, stacklevel=2)
 
 
 def _degree_warning(where: str, lower: float, upper: float) -> None:

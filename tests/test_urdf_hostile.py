@@ -160,3 +160,49 @@ def test_a_travel_of_exactly_one_step_loads(tmp_path):
     path = _mill3(tmp_path, "one", 'lower="-0.05" upper="0.1"', 'lower="0" upper="1e-9"')
     machine = load_machine(path)
     assert machine.upper[2] - machine.lower[2] == machine.resolution[2] == 1e-9
+
+
+def _scaled_mill3(tmp_path: Path, name: str, k: float) -> Path:
+    """mill3 with every origin, limit and velocity times ``k``: a machine of the same shape."""
+    import re
+
+    def times(match):
+        return f'{match.group(1)}="{float(match.group(2)) * k:g}"'
+
+    text = re.sub(r'(lower|upper|velocity)="([-0-9.e]+)"', times, MILL3.read_text())
+    text = re.sub(r'<origin xyz="([^"]+)"', lambda m: '<origin xyz="' + " ".join(
+        f"{float(v) * k:g}" for v in m.group(1).split()) + '"', text)
+    path = tmp_path / f"{name}.urdf"
+    path.write_text(text)
+    return path
+
+
+def test_a_machine_written_in_millimetres_loads_with_a_warning(tmp_path):
+    # a 7.5 x 5 x 3.75 mm stage written in mm, every number under 10 (X -3.75 .. 3.75,
+    # origins up to 7.5, velocities 0.625): it passed every check (travel within 10 m, the
+    # zero pose and directions kept by a uniform scale) and loaded 1000 times too large, X
+    # travelling 7.5 m. Its longest travel, beyond 1 m, is now a warning at X's <limit>
+    # (line 23); the same stage in m loads without one, as the shipped machines do
+    import warnings
+
+    from machinesim.exceptions import MachineSimWarning
+
+    path = _scaled_mill3(tmp_path, "mm", 1e3 / 40)
+    with pytest.warns(MachineSimWarning) as caught:
+        machine = load_machine(path)
+    assert machine.upper.tolist() == [3.75, 2.5, 2.5]
+    [message] = [str(w.message) for w in caught]
+    assert message == (
+        f"{path.resolve()}, line 23: joint 'X': <limit lower=-3.75 upper=3.75> gives X a "
+        "travel of 7.5 m, the longest of the machine's linear axes (the shipped machines "
+        "travel 0.5 m at most). URDF lengths are metres: a machine written in millimetres "
+        "loads 1000 times too large, its origins and rapid rates with it, and a program in mm "
+        "never leaves its travel. If these are millimetres, write every length in m (3.75 mm "
+        "is 0.00375) and velocities in m/s")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        small = load_machine(_scaled_mill3(tmp_path, "m", 1 / 40))  # the stage in m
+        assert small.upper.tolist() == [0.00375, 0.0025, 0.0025]
+        for name in ("grooving_4axis", "planer_4axis", "robonano_a0ib", "robonano_ui",
+                     "sts_lathe"):
+            load_machine(models_dir() / f"{name}.urdf")
