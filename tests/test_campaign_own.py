@@ -286,3 +286,28 @@ def test_a_resume_with_other_errors_names_the_entry_that_differs(example, tmp_pa
     assert ("holds another campaign (errors: tool.offset_m [4e-06, -3e-06, 2e-06] there, "
             "[4e-06, -3e-06, 3e-06] now); give another --out or empty it") in message
     assert len(message) < 300, len(message)
+
+
+def test_a_campaign_notes_its_errors_files_unit_slips_as_cut_does(example, tmp_path):
+    # machinesim cut, view and the scenarios note an error file's values perhaps written in
+    # other units (unit_slips.unit_slip_notes); a campaign of one's own procedure given the
+    # same file ran its trials without a word. EX0C_um = 4e-6 is 4 pm, below anything a
+    # machine shows: noted once, before the trials, as a MachineSimWarning (the campaign's
+    # channel, one 'machinesim: warning:' line on the command line); the page's errors none
+    import warnings
+
+    from machinesim.errors.unit_slips import unit_slip_notes
+    from machinesim.exceptions import MachineSimWarning
+    from machinesim.machines import load_machine
+
+    path = tmp_path / "slip.toml"
+    path.write_text("[tool]\noffset_um = [4.0, -3.0, 2.0]\n[location.C]\nEX0C_um = 4e-6\n")
+    [note] = unit_slip_notes(as_error_model(path), load_machine(MACHINE))
+    assert note.startswith(f"{path}, line 4: location.C.EX0C_um = 4e-06 is at most"), note
+    options = {**_options(), "errors": path}
+    with pytest.warns(MachineSimWarning) as caught:
+        run(f"{MODULE}:ToolOffsetRTest", 1, out=tmp_path / "slip", workers=0, **options)
+    assert [str(w.message) for w in caught if str(w.message) == note] == [note]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MachineSimWarning)
+        run(f"{MODULE}:ToolOffsetRTest", 1, out=tmp_path / "page", workers=0, **_options())

@@ -424,6 +424,11 @@ def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
                         identify_only=identify_only, quick=quick, machine_name=machine,
                         errors=errors)
     check_before_trials(spec)  # the procedure's own checks: refused now, not in every trial
+    if spec.own and spec.errors is not None:  # machinesim cut's and view's notes on the file
+        from machinesim.errors.unit_slips import unit_slip_notes
+
+        for note in unit_slip_notes(spec.errors, spec.machine):
+            warnings.warn(note, MachineSimWarning, stacklevel=3)
     if spec.given is not None and not (workers == 0 and scheduler is None and client is None):
         from machinesim.campaign.own import check_picklable
 
