@@ -116,3 +116,20 @@ def flat():
     from machinesim.workpiece import block
 
     return block(5e-3, 3e-3, 1e-3)
+
+
+#: The trials of `campaign`: paper 000's calibration alone (``identify_only``: ~1.5 s each).
+ARM = dict(identify_only=True)
+
+
+@pytest.fixture(scope="module")
+def campaign(tmp_path_factory):
+    """Paper 000's calibration campaign of 3 trials, two parameters varied (tests of
+    campaigns' results and of resuming them): its folder, its ``vary`` and its Dataset."""
+    from machinesim.campaign import run
+
+    out = tmp_path_factory.mktemp("arm")
+    vary = ["tool.y=normal:-178um,20um", "microscope.sigma=uniform:5nm,60nm"]
+    ds = run("tool_rotation_arm", 3, vary=vary, seed=11, out=out, workers=0,
+             progress=False, **ARM)
+    return out, vary, ds
