@@ -27,7 +27,7 @@ NOT_RUN = {
                                         "tests/test_tool_setting_6axis*.py run it",
     "procedures/workpiece_setting.md": "sixteen seeded runs of the grooves load, 3-10 min; "
                                        "tests/test_workpiece_setting*.py run the procedure",
-    "viewer.md": "serves a page until Ctrl-C; tests/test_viewer.py serves and stops one",
+    "viewer.md": "serves a page until Ctrl-C; tests/test_viewer_live.py serves and stops one",
 }
 
 
