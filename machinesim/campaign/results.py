@@ -95,11 +95,13 @@ class CampaignFolder:
                 raise InputError(f"{brief(repr(old))}; expected the campaign spec, an object "
                                  "(procedure, seed, noise, vary, ...)", source=str(stored))
             if not same_campaign(old, spec):
-                diff = ", ".join(_difference(k, old.get(k), spec.get(k))
-                                 for k in sorted(set(old) | set(spec))
-                                 if old.get(k) != spec.get(k))
+                keys = sorted(k for k in set(old) | set(_identity_kept(old, spec))
+                              if old.get(k) != spec.get(k))
+                diff = ", ".join(_difference(k, old.get(k), spec.get(k)) for k in keys)
+                back = (" (or put the procedure's code back as it was, to resume)"
+                        if "code" in keys and "procedure" not in keys else "")
                 raise InputError(f"holds another campaign ({diff}); give another --out or "
-                                 "empty it", source=str(self.path))
+                                 f"empty it{back}", source=str(self.path))
             spec = old  # the texts the campaign was begun with, when spelt otherwise now
         else:
             write_atomic(stored, json_text(spec, "campaign spec"))
@@ -169,11 +171,32 @@ class CampaignFolder:
         return path
 
 
+#: campaign.json's keys that name the code a campaign runs and its procedure's state
+#: (`CampaignSpec.describe`, `machinesim.campaign.identity`), added 2026-12-01: a
+#: campaign.json written before has none, and is resumed as it was (nothing then told
+#: what code its trials ran).
+IDENTITY_KEYS = ("machinesim", "code", "state")
+
+
+def _identity_kept(old: dict, new: dict) -> dict:
+    """``new`` without the `IDENTITY_KEYS` that campaign.json ``old`` was written without."""
+    return {k: v for k, v in new.items() if k in old or k not in IDENTITY_KEYS}
+
+
 def _difference(key: str, old, new) -> str:
     """How campaign.json's ``key`` differs, for the refusal of another campaign: a user's
     procedure's ``errors`` (its whole error model, tables and all) by the entries that
     differ, each value `brief` (the model was shown whole: 96,016 characters for a table of
     2,001 positions, the one offset that differed lost in it)."""
+    if key == "code" and isinstance(old, dict) and isinstance(new, dict):
+        return _code_difference(old, new)
+    if key == "state":
+        return ("state: the procedure object's state (its attributes: the arguments it was "
+                f"made with) is digest {new} now, {old} there: other arguments, or another "
+                "object, than the campaign began with")
+    if key == "machinesim":
+        return (f"machinesim: version {old} there, {new} now (its trials ran the other "
+                "version's code)")
     if key != "errors" or not isinstance(old, dict) or not isinstance(new, dict):
         return f"{key}: {old!r} there, {new!r} now"
     found = []
@@ -189,6 +212,27 @@ def _difference(key: str, old, new) -> str:
     walk(old, new, "")
     more = f"; and {len(found) - 4} more" if len(found) > 4 else ""
     return f"errors: {'; '.join(found[:4])}{more}"
+
+
+def _code_difference(old: dict, new: dict) -> str:
+    """How a user's procedure's code (`machinesim.campaign.identity.code_of`) differs from the
+    code its campaign began with: the classes whose source and the modules whose file
+    changed, or came or went."""
+    said = []
+    for part, what in (("classes", "the source of class"), ("modules", "the file of module")):
+        before, now = old.get(part), new.get(part)
+        if not isinstance(before, dict) or not isinstance(now, dict):
+            continue
+        for name in sorted(set(before) | set(now)):
+            if name not in before:
+                said.append(f"{what} {name} is new")
+            elif name not in now:
+                said.append(f"{what} {name} is no longer run")
+            elif before[name] != now[name]:
+                said.append(f"{what} {name} changed")
+    shown = "; ".join(said) if said else f"{brief(repr(old))} there, {brief(repr(new))} now"
+    return (f"code: {shown}, since the campaign began: its trials ran the code as it was, "
+            "and a resume would mix them with the new code's in one summary")
 
 
 def refuse_foreign(path) -> None:
@@ -285,6 +329,7 @@ def same_campaign(old: dict, new: dict) -> bool:
     They had compared within 1e-12 relative while the identity rounds to 12 digits: 1um
     and 1.000000000004um were refused as two campaigns, yet each took the other's trial
     files (one identity); 1.0000000000049um and 1.0000000000051um the other way round."""
+    new = _identity_kept(old, new)  # a campaign.json written before they were kept
     if old == new:
         return True
     if {k: v for k, v in old.items() if k != "vary"} != \

@@ -265,8 +265,14 @@ class CampaignSpec:
                      "identify_only": self.identify_only, "quick": self.quick,
                      "vary": {n: d.text for n, d in self.vary}}
         if self.own:  # what a user's procedure's campaign is besides (a shipped one's: fixed)
-            described.update(name=self.entry.build({}).name, machine=self.machine_name,
-                             errors=self.errors.to_dict())
+            from machinesim.campaign.identity import code_of
+
+            built = self.entry.build({})  # a fresh instance, or a copy of the one given
+            described.update(name=built.name, machine=self.machine_name,
+                             errors=self.errors.to_dict(), code=code_of(built))
+        # the code a trial runs: machinesim's by its version, a user's by its digests
+        # (`machinesim.campaign.identity`); a resume with other code is refused
+        described["machinesim"] = _version()
         return described
 
 
@@ -306,6 +312,12 @@ def _entries(table: str, indices: list[int]) -> str:
 
 def _head(name: str) -> str:
     return name.partition(".")[0]
+
+
+def _version() -> str:
+    from machinesim import __version__
+
+    return __version__
 
 
 _MACHINES: dict[str, Any] = {}

@@ -1,0 +1,223 @@
+"""What a campaign's procedure is, beyond its name: the code a user's own procedure runs and
+the state its object holds (`code_of`, `state_of`), digested into campaign.json so that a
+folder is resumed only by the procedure it was begun with
+(`machinesim.campaign.CampaignSpec.describe`, `machinesim.campaign.results.same_campaign`).
+
+Without them a campaign of ``mine:Probe`` resumed after the user edited ``Probe`` ran its
+missing trials with the new code, and the summary took the mean of old and new trials as
+one; two instances of one class with other constructor arguments were one campaign.
+
+- The code: the SHA-256 (first 16 hex digits) of the source of each class in the
+  procedure's MRO outside machinesim and the standard library (`inspect.getsource`), and of
+  each such class's module file (a helper function beside the class is code it runs too).
+  A class without a source file (one typed at the interactive prompt or fed on stdin) is
+  digested by its methods' bytecode, constants and names instead.
+- The state: a digest of the object's state as `copy` and `pickle` take it
+  (``__reduce_ex__``: ``vars()`` for a plain object), written out in a canonical form (keys
+  and sets sorted, floats to the bit, arrays by dtype, shape and bytes), so that it is the
+  same in every process whatever ``PYTHONHASHSEED``; a class or reference is digested by
+  the instance it makes (the class called with no arguments), so that the class and an
+  instance made alike are one campaign. State it cannot write so (an open file, a lock, a
+  lambda) is refused, naming where it lies in the object (`InputError`).
+
+machinesim's own code (the shipped procedures, the lab) is named by its version
+(`machinesim.__version__`), which campaign.json keeps as ``machinesim``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import json
+import math
+import sys
+import sysconfig
+import types
+from pathlib import Path
+
+from machinesim.exceptions import InputError, brief
+
+__all__ = ["DIGITS", "code_of", "state_of"]
+
+#: Hex digits of each SHA-256 digest kept.
+DIGITS = 16
+
+#: How deep `state_of` follows an object's state before refusing it.
+_DEEPEST = 40
+
+
+def _digest(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()[:DIGITS]
+
+
+def _outside(cls: type) -> bool:
+    """Whether ``cls`` is a user's: not machinesim's (its version names it), nor a builtin's
+    or the standard library's."""
+    module = sys.modules.get(cls.__module__)
+    if cls.__module__ == "builtins" or module is None:
+        return False
+    if cls.__module__ == "machinesim" or cls.__module__.startswith("machinesim."):
+        return False
+    path = getattr(module, "__file__", None)
+    if path is None:
+        return cls.__module__ == "__main__"  # the interactive prompt, stdin
+    stdlib = Path(sysconfig.get_paths()["stdlib"]).resolve()
+    where = Path(path).resolve()
+    return stdlib not in where.parents or "site-packages" in where.parts
+
+
+def code_of(procedure) -> dict:
+    """``{"classes": {module:qualname: digest}, "modules": {module: digest}}`` of the code
+    ``procedure`` (a class or an object) runs, outside machinesim (module docstring)."""
+    cls = procedure if isinstance(procedure, type) else type(procedure)
+    classes, modules = {}, {}
+    for each in cls.__mro__:
+        if not _outside(each):
+            continue
+        try:
+            source = inspect.getsource(each).encode()
+        except (OSError, TypeError):  # no source file: typed in, or fed on stdin
+            source = _bytecode(each)
+        classes[f"{each.__module__}:{each.__qualname__}"] = _digest(source)
+        path = getattr(sys.modules[each.__module__], "__file__", None)
+        if path is not None and each.__module__ not in modules:
+            try:
+                modules[each.__module__] = _digest(Path(path).read_bytes())
+            except OSError:  # gone since it was imported: its class's source still counts
+                pass
+    return {"classes": classes, "modules": modules}
+
+
+def _bytecode(cls: type) -> bytes:
+    """A class's methods and attributes, for one without source: each function's bytecode,
+    constants and names (not its line numbers), other attributes by their canonical state."""
+    parts = []
+    for name, value in sorted(vars(cls).items()):
+        if name in ("__dict__", "__weakref__", "__module__", "__qualname__", "__doc__"):
+            continue
+        if isinstance(value, staticmethod | classmethod):
+            value = value.__func__
+        if isinstance(value, property):
+            codes = [_code(f.__code__) for f in (value.fget, value.fset, value.fdel)
+                     if f is not None]
+        elif isinstance(value, types.FunctionType):
+            codes = [_code(value.__code__)]
+        else:
+            try:
+                codes = [_canonical(value, name, set(), 0)]
+            except _Undigestible:
+                codes = [type(value).__qualname__]
+        parts.append([name, codes])
+    return json.dumps(parts, sort_keys=True, default=str).encode()
+
+
+def _code(code: types.CodeType) -> list:
+    return [code.co_code.hex(), list(code.co_names), list(code.co_varnames),
+            [_code(c) if isinstance(c, types.CodeType) else repr(c) for c in code.co_consts]]
+
+
+class _Undigestible(Exception):
+    """State `_canonical` cannot write out; its text says where and why."""
+
+
+def state_of(procedure, shown: str, made: bool = False) -> str | None:
+    """The digest of ``procedure``'s state (an object; module docstring). Raises InputError
+    naming ``shown`` and the attribute whose value has no canonical form; with ``made`` (the
+    object is one the campaign made, a class called with no arguments, whose state its code
+    decides), None for such state instead."""
+    try:
+        canonical = _canonical(procedure, "", set(), 0)
+    except _Undigestible as error:
+        if made:
+            return None
+        raise InputError(f"procedure {shown}: {error}", key="procedure") from None
+    return _digest(json.dumps(canonical, sort_keys=True, separators=(",", ":"),
+                              ensure_ascii=True).encode())
+
+
+_PLAIN = (str, int, bool, type(None))
+
+
+def _canonical(value, path: str, seen: set, depth: int):
+    """``value`` as JSON whose text is the same in every process, or InputError naming
+    ``path`` (the attribute, as ``.gain`` or ``.table['x'][2]``)."""
+    if isinstance(value, _PLAIN):
+        return [type(value).__name__, value] if not isinstance(value, int) or \
+            isinstance(value, bool) or abs(value) < 2**53 else ["int", str(value)]
+    if isinstance(value, float):  # to the bit; nan and the infinities, which JSON lacks
+        return ["float", value.hex() if math.isfinite(value) else repr(value)]
+    if isinstance(value, complex):
+        return ["complex", value.real.hex(), value.imag.hex()]
+    if isinstance(value, bytes | bytearray):
+        return [type(value).__name__, value.hex()]
+    if depth > _DEEPEST:
+        raise _undigestible(path, value, f"nested more than {_DEEPEST} deep")
+    if id(value) in seen:
+        raise _undigestible(path, value, "it holds itself (a cycle)")
+    seen = seen | {id(value)}
+    depth += 1
+    if isinstance(value, list | tuple):
+        return [type(value).__name__,
+                [_canonical(v, f"{path}[{k}]", seen, depth) for k, v in enumerate(value)]]
+    if isinstance(value, set | frozenset):
+        items = [_canonical(v, f"{path}{{...}}", seen, depth) for v in value]
+        return [type(value).__name__, sorted(items, key=json.dumps)]
+    if isinstance(value, dict):
+        items = [[_canonical(k, f"{path} key", seen, depth),
+                  _canonical(v, f"{path}[{k!r}]", seen, depth)] for k, v in value.items()]
+        return [type(value).__name__, sorted(items, key=lambda kv: json.dumps(kv[0]))]
+    if isinstance(value, type | types.FunctionType | types.BuiltinFunctionType):
+        name = getattr(value, "__qualname__", "")
+        if "<lambda>" in name or "<locals>" in name:
+            raise _undigestible(path, value, "a function or class made inside a function "
+                                "has no name to digest it by")
+        return ["named", f"{value.__module__}:{name}"]
+    array = _array(value, path)
+    if array is not None:
+        return array
+    try:
+        reduced = value.__reduce_ex__(4)
+    except RecursionError:
+        raise _undigestible(path, value, "nested too deeply") from None
+    except Exception as error:  # noqa: BLE001 - whatever refuses to be copied or pickled
+        raise _undigestible(path, value, f"{type(error).__name__}: {error}") from None
+    if isinstance(reduced, str) or not isinstance(reduced, tuple):  # a global's name
+        return ["global", f"{type(value).__module__}:{reduced}"]
+    cls = type(value)
+    parts = [f"{cls.__module__}:{cls.__qualname__}",
+             _canonical(reduced[1] if len(reduced) > 1 else (), f"{path}(...)", seen, depth)]
+    state = reduced[2] if len(reduced) > 2 else None
+    if isinstance(state, tuple) and len(state) == 2 and isinstance(state[1], dict):
+        state = {**(state[0] or {}), **state[1]}  # __slots__: (dict, slots)
+    if isinstance(state, dict) and all(isinstance(k, str) for k in state):
+        parts.append(["attributes", [[k, _canonical(v, f"{path}.{k}", seen, depth)]
+                                     for k, v in sorted(state.items())]])
+    else:
+        parts.append(_canonical(state, f"{path}(state)", seen, depth))
+    for k, items in ((3, "items"), (4, "entries")):  # a list's or dict's own items
+        if len(reduced) > k and reduced[k] is not None:
+            parts.append([items, _canonical(list(reduced[k]), f"{path}[...]", seen, depth)])
+    return ["object", parts]
+
+
+def _array(value, path: str):
+    """A numpy array or scalar by its dtype, shape and bytes (None for anything else)."""
+    numpy = sys.modules.get("numpy")
+    if numpy is None or not isinstance(value, numpy.ndarray | numpy.generic):
+        return None
+    array = numpy.asarray(value)
+    if array.dtype.hasobject:
+        return ["ndarray-object", list(array.shape),
+                [_canonical(v, f"{path}[...]", set(), 0) for v in array.ravel().tolist()]]
+    return ["ndarray", array.dtype.str, list(array.shape),
+            _digest(numpy.ascontiguousarray(array).tobytes())]
+
+
+def _undigestible(path: str, value, why: str) -> _Undigestible:
+    where = f"its attribute {path.lstrip('.')}" if path else "the object itself"
+    return _Undigestible(
+        f"its state cannot be digested at {where} ({type(value).__name__} "
+        f"{brief(repr(value))}: {why}), and a campaign keeps that digest to tell a resume "
+        "with other arguments from its own; expected an object whose attributes are plain "
+        "values (numbers, texts, lists, dicts, arrays, objects of those), or give its class "
+        "(called with no arguments in each trial) or a 'package.module:ClassName' reference")

@@ -1,0 +1,130 @@
+"""A campaign folder knows the code its procedure ran and the state of the procedure's object
+(`machinesim.campaign.identity`): a resume after the user edited the procedure's class (or
+its module), or with an instance made with other arguments, or under another machinesim
+version, is refused naming what changed; the same code and state resume, and a campaign.json
+written before these were kept is resumed as it was."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import sys
+
+import pytest
+
+import machinesim
+from machinesim.campaign import CampaignSpec, run
+from machinesim.campaign import own as own_module
+from machinesim.campaign.identity import code_of
+from machinesim.campaign.results import IDENTITY_KEYS, CampaignFolder
+from machinesim.exceptions import InputError
+
+MACHINE = "grooving_4axis"
+MODULE = "identity_probe_module"
+SOURCE = '''\
+class Probe:
+    name = "probe"
+    paper = "tests/test_campaign_identity.py"
+    lab_uses = {{"measure": (), "evaluate": ()}}
+
+    def __init__(self, gain=1.0):
+        self.gain = gain
+        self.table = {{"b": [1, 2.5], "a": {{3, 4}}}}
+
+    def measure(self, lab):
+        return None
+
+    def identify(self, reading):
+        return {body}
+
+    def compensate(self, identified):
+        return {{}}
+
+    def evaluate(self, lab, identified, programs):
+        return None
+{tail}'''
+
+
+@pytest.fixture
+def module(tmp_path):
+    """Write the procedure's module (``write(body, tail)``) and import it afresh, as a new
+    process would after an edit."""
+    sys.path.insert(0, str(tmp_path))
+
+    def write(body="1.0", tail=""):
+        (tmp_path / f"{MODULE}.py").write_text(SOURCE.format(body=body, tail=tail),
+                                               encoding="utf-8")
+        sys.modules.pop(MODULE, None)
+        own_module._RESOLVED.pop(f"{MODULE}:Probe", None)
+        importlib.invalidate_caches()
+        return importlib.import_module(MODULE)
+
+    try:
+        yield write
+    finally:
+        sys.path.remove(str(tmp_path))
+        sys.modules.pop(MODULE, None)
+        own_module._RESOLVED.pop(f"{MODULE}:Probe", None)
+
+
+def _folder(out, procedure):
+    return CampaignFolder(out, CampaignSpec(procedure, 2, machine_name=MACHINE).describe())
+
+
+def test_a_resume_after_the_procedures_class_was_edited_is_refused(module, tmp_path):
+    out = tmp_path / "out"
+    module()
+    _folder(out, f"{MODULE}:Probe")  # begun: campaign.json holds the code's digests
+    stored = json.loads((out / "campaign.json").read_text())
+    assert set(stored["code"]["classes"]) == {f"{MODULE}:Probe"}
+    assert set(stored["code"]["modules"]) == {MODULE}
+    assert stored["machinesim"] == machinesim.__version__
+    module(body="2.0")  # the user edits identify
+    with pytest.raises(InputError) as info:
+        run(f"{MODULE}:Probe", 2, machine=MACHINE, out=out, workers=0, progress=False,
+            report=False)
+    said = str(info.value)
+    assert str(out) in said
+    assert (f"holds another campaign (code: the source of class {MODULE}:Probe changed; the "
+            f"file of module {MODULE} changed, since the campaign began: its trials ran the "
+            "code as it was, and a resume would mix them with the new code's in one "
+            "summary); give another --out or empty it (or put the procedure's code back as "
+            "it was, to resume)") in said, said
+    assert not (out / "trials" / "trial_000000.json").exists()  # refused before any trial
+    # an edit beside the class (a helper it may call) changes the module's file alone
+    module(tail="\n\ndef helper():\n    return 2\n")
+    with pytest.raises(InputError, match=rf"code: the file of module {MODULE} changed, since"):
+        _folder(out, f"{MODULE}:Probe")
+    module()  # put back: the same campaign again
+    assert _folder(out, f"{MODULE}:Probe").spec == stored
+
+
+def test_a_resume_under_another_machinesim_version_is_refused(monkeypatch, tmp_path):
+    spec = CampaignSpec("tool_rotation_arm", 2)
+    CampaignFolder(tmp_path, spec.describe())
+    begun = machinesim.__version__
+    monkeypatch.setattr(machinesim, "__version__", "99.0")
+    with pytest.raises(InputError, match=r"holds another campaign \(machinesim: version "
+                       rf"{begun.replace('.', '[.]')} there, 99[.]0 now \(its trials ran the "
+                       r"other version's code\)\); give another --out or empty it"):
+        CampaignFolder(tmp_path, spec.describe())
+
+
+def test_a_campaign_json_written_before_the_identity_was_kept_resumes(module, tmp_path):
+    module()
+    out = tmp_path / "out"
+    folder = _folder(out, f"{MODULE}:Probe")
+    old = {k: v for k, v in folder.spec.items() if k not in IDENTITY_KEYS}
+    (out / "campaign.json").write_text(json.dumps(old))
+    module(body="2.0")  # nothing tells what code its trials ran: taken as it was
+    assert _folder(out, f"{MODULE}:Probe").spec == old
+
+
+def test_code_of_a_class_without_a_source_file_is_its_bytecode():
+    namespace = {"__name__": "__main__"}
+    exec("class Typed:\n    def identify(self, r):\n        return 1\n", namespace)  # noqa: S102
+    first = code_of(namespace["Typed"])
+    exec("class Typed:\n    def identify(self, r):\n        return 2\n", namespace)  # noqa: S102
+    assert code_of(namespace["Typed"]) != first
+    exec("class Typed:\n    def identify(self, r):\n        return 1\n", namespace)  # noqa: S102
+    assert code_of(namespace["Typed"]) == first
