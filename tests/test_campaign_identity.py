@@ -15,7 +15,7 @@ import pytest
 import machinesim
 from machinesim.campaign import CampaignSpec, run
 from machinesim.campaign import own as own_module
-from machinesim.campaign.identity import code_of
+from machinesim.campaign.identity import code_of, state_of
 from machinesim.campaign.results import IDENTITY_KEYS, CampaignFolder
 from machinesim.exceptions import InputError
 
@@ -97,6 +97,42 @@ def test_a_resume_after_the_procedures_class_was_edited_is_refused(module, tmp_p
         _folder(out, f"{MODULE}:Probe")
     module()  # put back: the same campaign again
     assert _folder(out, f"{MODULE}:Probe").spec == stored
+
+
+def test_another_instance_state_is_another_campaign(module, tmp_path):
+    probe = module().Probe
+    out = tmp_path / "out"
+    _folder(out, probe(gain=1.0))
+    with pytest.raises(InputError, match=r"holds another campaign \(state: the procedure "
+                       r"object's state \(its attributes: the arguments it was made with\) is "
+                       r"digest [0-9a-f]{16} now, [0-9a-f]{16} there"):
+        _folder(out, probe(gain=2.0))
+    # the class (called with no arguments) and a reference make the same state
+    _folder(out, probe)
+    _folder(out, f"{MODULE}:Probe")
+    # a digest of the state as written out, not of its text in this process: a set's
+    # order, a dict's insertion order and a float to the bit
+    a, b = probe(), probe()
+    b.table = {"a": {4, 3}, "b": [1, 2.5]}
+    assert state_of(a, "a") == state_of(b, "b")
+    b.table["b"][1] = 2.5 + 2**-51
+    assert state_of(a, "a") != state_of(b, "b")
+
+
+def test_state_that_cannot_be_digested_is_refused_for_an_object_not_a_class(module, tmp_path):
+    probe = module().Probe()
+    probe.scale = lambda x: 2 * x
+    with pytest.raises(InputError, match=r"key 'procedure': procedure "
+                       rf"{MODULE}:Probe: its state cannot be digested at its attribute "
+                       r"scale \(function .*has no name to digest it by\).*expected an "
+                       r"object whose attributes are plain values"):
+        _folder(tmp_path / "out", probe)
+    assert not (tmp_path / "out").exists()
+    made = module(tail="\n\nclass Made(Probe):\n    def __init__(self):\n"
+                  "        self.scale = lambda x: 2 * x\n").Made
+    described = CampaignSpec(made, 1, machine_name=MACHINE).describe()
+    assert described["state"] is None  # its code decides it: the code's digest holds it
+    assert set(described["code"]["classes"]) == {f"{MODULE}:Made", f"{MODULE}:Probe"}
 
 
 def test_a_resume_under_another_machinesim_version_is_refused(monkeypatch, tmp_path):

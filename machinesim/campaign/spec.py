@@ -219,6 +219,11 @@ class CampaignSpec:
         given = self.given if self.given is not None else own.resolve(self.procedure)
         return own.fresh(given, self.procedure)
 
+    def _object(self) -> bool:
+        """Whether the user gave an object (not a class, nor a reference): its state is
+        then the arguments it was made with, which a campaign must tell apart."""
+        return self.given is not None and not isinstance(self.given, type)
+
     @property
     def entry(self) -> ProcedureEntry:
         if self.own:
@@ -265,11 +270,12 @@ class CampaignSpec:
                      "identify_only": self.identify_only, "quick": self.quick,
                      "vary": {n: d.text for n, d in self.vary}}
         if self.own:  # what a user's procedure's campaign is besides (a shipped one's: fixed)
-            from machinesim.campaign.identity import code_of
+            from machinesim.campaign.identity import code_of, state_of
 
             built = self.entry.build({})  # a fresh instance, or a copy of the one given
             described.update(name=built.name, machine=self.machine_name,
-                             errors=self.errors.to_dict(), code=code_of(built))
+                             errors=self.errors.to_dict(), code=code_of(built),
+                             state=state_of(built, self.procedure, made=not self._object()))
         # the code a trial runs: machinesim's by its version, a user's by its digests
         # (`machinesim.campaign.identity`); a resume with other code is refused
         described["machinesim"] = _version()
