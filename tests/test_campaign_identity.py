@@ -164,3 +164,26 @@ def test_code_of_a_class_without_a_source_file_is_its_bytecode():
     assert code_of(namespace["Typed"]) != first
     exec("class Typed:\n    def identify(self, r):\n        return 1\n", namespace)  # noqa: S102
     assert code_of(namespace["Typed"]) == first
+
+
+def test_a_class_in_the_script_is_known_by_its_source_not_the_scripts_file(tmp_path,
+                                                                          monkeypatch):
+    """A script that defines its procedure and calls the campaign is edited to extend N (the
+    call's --trials): its file changes, its class does not, and the campaign resumes."""
+    import types
+
+    script = tmp_path / "campaign_script.py"
+
+    def load(trials):
+        script.write_text("class Mine:\n    def identify(self, r):\n        return 1\n\n\n"
+                          f"TRIALS = {trials}\n", encoding="utf-8")
+        main = types.ModuleType("__main__")
+        main.__file__ = str(script)
+        monkeypatch.setitem(sys.modules, "__main__", main)
+        exec(compile(script.read_text(), str(script), "exec"), main.__dict__)  # noqa: S102
+        return main.Mine
+
+    first = code_of(load(10))
+    assert first == {"classes": {"__main__:Mine": first["classes"]["__main__:Mine"]},
+                     "modules": {}}
+    assert code_of(load(20)) == first

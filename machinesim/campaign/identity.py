@@ -9,7 +9,8 @@ one; two instances of one class with other constructor arguments were one campai
 
 - The code: the SHA-256 (first 16 hex digits) of the source of each class in the
   procedure's MRO outside machinesim and the standard library (`inspect.getsource`), and of
-  each such class's module file (a helper function beside the class is code it runs too).
+  each such class's module file (a helper function beside the class is code it runs too),
+  but a script's (``__main__``), which holds the campaign's call as well.
   A class without a source file (one typed at the interactive prompt or fed on stdin) is
   digested by its methods' bytecode, constants and names instead.
 - The state: a digest of the object's state as `copy` and `pickle` take it
@@ -80,7 +81,9 @@ def code_of(procedure) -> dict:
             source = _bytecode(each)
         classes[f"{each.__module__}:{each.__qualname__}"] = _digest(source)
         path = getattr(sys.modules[each.__module__], "__file__", None)
-        if path is not None and each.__module__ not in modules:
+        # a script's own file holds the campaign's call too: extending N, the script edited
+        # for it, was refused as another campaign; its classes' sources are what it runs
+        if path is not None and each.__module__ not in modules | {"__main__": None}:
             try:
                 modules[each.__module__] = _digest(Path(path).read_bytes())
             except OSError:  # gone since it was imported: its class's source still counts
