@@ -54,14 +54,34 @@ def stopped(stop: KeyboardInterrupt) -> tuple[str, int]:
     return "interrupted", EXIT_INTERRUPTED
 
 
+#: The kind of the last stop `_on_ctrl_c` raised (KeyboardInterrupt, `Terminated`, `HungUp`),
+#: for `_stop_behind` when a library turned it into another exception.
+_stop_kind: type[KeyboardInterrupt] = KeyboardInterrupt
+
+
 def _on_ctrl_c(signum, frame):
-    global _ctrl_c_seen
+    global _ctrl_c_seen, _stop_kind
     _ctrl_c_seen = True
-    if signum == signal.SIGTERM:
-        raise Terminated
-    if signum == getattr(signal, "SIGHUP", None):
-        raise HungUp
-    raise KeyboardInterrupt
+    _stop_kind = (HungUp if signum == getattr(signal, "SIGHUP", None)
+                  else Terminated if signum == signal.SIGTERM else KeyboardInterrupt)
+    raise _stop_kind
+
+
+def _stop_behind(error: BaseException) -> KeyboardInterrupt | None:
+    """The stop behind ``error``, an exception that is no KeyboardInterrupt: one in its
+    chain (``__cause__``, ``__context__``), or, when a stop was seen (`_ctrl_c_seen`: a
+    library caught it and raised something else, or nothing), a new one of its kind; None
+    when there is none. A Ctrl-C landing as a pybind11 module initialised (matplotlib's,
+    scipy's, imported as the command ran) came out as "ImportError: initialization failed",
+    its cause the KeyboardInterrupt, and the command said "internal error: ImportError:
+    initialization failed", status 1."""
+    seen, link = set(), error
+    while link is not None and id(link) not in seen:
+        if isinstance(link, KeyboardInterrupt):
+            return link
+        seen.add(id(link))
+        link = link.__cause__ or link.__context__
+    return _stop_kind() if _ctrl_c_seen else None
 
 
 #: The signals `ctrl_c_remembered` handles, each with the handler it replaces (Python's own
@@ -83,7 +103,9 @@ def ctrl_c_remembered() -> Iterator[None]:
     `HungUp` (a `Terminated`), for the same reason. Each handler is installed
     only where the usual one is (a background job started with SIGINT ignored keeps
     ignoring it), and only in the main thread (where signals arrive); the old handlers are
-    put back on leaving.
+    put back on leaving. An exception other than a KeyboardInterrupt that leaves the block
+    after a stop (with one in its chain, or once one was seen) leaves as that stop
+    (`_stop_behind`): the run was interrupted, whatever a library made of it.
     """
     global _ctrl_c_seen, _written
     main = threading.current_thread() is threading.main_thread()
@@ -97,6 +119,14 @@ def ctrl_c_remembered() -> Iterator[None]:
     except KeyboardInterrupt as stop:
         stop.written = tuple(dict.fromkeys(_written))  # for `written_before`, past the block
         raise
+    except Exception as error:  # a stop a library turned into another exception
+        stop = _stop_behind(error)
+        if stop is None:
+            raise
+        stop.written = tuple(dict.fromkeys(_written))
+        if stop.__traceback__ is not None:  # the one in its chain: no loop of causes
+            raise stop from None
+        raise stop from error
     finally:
         for number in ours:
             signal.signal(number, previous[number])

@@ -252,6 +252,44 @@ def test_cli_ctrl_c_before_any_trial_says_so(tmp_path, capsys, monkeypatch):
     assert sorted(p.name for p in (tmp_path / "c").iterdir()) == ["campaign.json"]
 
 
+@pytest.mark.parametrize("chained", [True, False], ids=["its cause", "swallowed"])
+def test_a_ctrl_c_a_library_turned_into_an_import_error_is_the_interrupted_line(
+        tmp_path, capsys, monkeypatch, chained):
+    """A Ctrl-C landing as a pybind11 module initialised (matplotlib's, scipy's, imported as
+    the command runs) comes out of the import as "ImportError: initialization failed", the
+    Ctrl-C its cause; the command said "machinesim: internal error: ImportError:
+    initialization failed (a bug in machinesim ...)", status 1. A library that swallows the
+    Ctrl-C and raises something else (no cause) is the same stop."""
+    import os
+    import signal
+    import time
+
+    import machinesim.campaign.cli as campaign_cli
+
+    def importing(args):
+        if chained:
+            try:
+                raise KeyboardInterrupt  # as the signal's handler raises it in the import
+            except KeyboardInterrupt as stop:
+                raise ImportError("initialization failed") from stop
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)  # the handler raises within
+        except BaseException:  # noqa: BLE001 - a library's own catch-all, as in an import
+            pass
+        raise ImportError("initialization failed")
+
+    monkeypatch.setattr(campaign_cli, "run_campaign", importing)
+    assert cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+                     "--quiet", "--out", str(tmp_path / "c")]) == 130
+    assert capsys.readouterr().err.strip() == "machinesim: interrupted; nothing was written"
+    # an ImportError of no stop is still what it is
+    monkeypatch.setattr(campaign_cli, "run_campaign", lambda args: __import__("no_such_mod"))
+    assert cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+                     "--quiet", "--out", str(tmp_path / "c")]) == 1
+    assert "internal error: ModuleNotFoundError" in capsys.readouterr().err
+
+
 def test_cli_ctrl_c_before_campaign_json_leaves_nothing_it_made(tmp_path, capsys,
                                                                  monkeypatch):
     """A Ctrl-C after the lock was taken and trials/ made, before campaign.json was written,
