@@ -204,7 +204,16 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
         raise InputError(f"{procedure.name}.identify returned {type(identified).__name__}; "
                          "expected an Identified", key="identify")
     programs = step("compensate", procedure.compensate, identified)
+    if not isinstance(programs, Mapping):  # dict(programs) below raised a TypeError
+        raise InputError(f"{procedure.name}.compensate returned {type(programs).__name__}; "
+                         "expected a mapping of names to programs (an empty dict for none)",
+                         key="compensate")
     evaluation = step("evaluate", procedure.evaluate, lab, identified, programs)
+    if not isinstance(evaluation, Evaluation):  # a None had raised "AttributeError:
+        # 'NoneType' object has no attribute 'figures'", said to be machinesim's fault
+        raise InputError(f"{procedure.name}.evaluate returned {type(evaluation).__name__}; "
+                         "expected an Evaluation (Evaluation(figures=()) for none)",
+                         key="evaluate")
     clock["total_s"] = time.perf_counter() - began
     injected, not_identified, background, polynomials = _truth(lab, identified.parameters)
     return Result(

@@ -311,3 +311,72 @@ def test_a_campaign_notes_its_errors_files_unit_slips_as_cut_does(example, tmp_p
     with warnings.catch_warnings():
         warnings.simplefilter("error", MachineSimWarning)
         run(f"{MODULE}:ToolOffsetRTest", 1, out=tmp_path / "page", workers=0, **_options())
+
+
+class _Stub:
+    """A procedure that reads nothing: each hostile variant below changes one step."""
+
+    name = "stub"
+    paper = "tests/test_campaign_own.py"
+    lab_uses = {"measure": (), "evaluate": ()}
+
+    def measure(self, lab):
+        return None
+
+    def identify(self, reading):
+        from machinesim.experiment import Identified
+
+        return Identified({"tool.x": (0.0, 1e-9)})
+
+    def compensate(self, identified):
+        return {}
+
+    def evaluate(self, lab, identified, programs):
+        from machinesim.experiment import Evaluation, Figure
+
+        return Evaluation(figures=(Figure("f", "um", 1.0, 0.5),))
+
+
+class _NoEvaluation(_Stub):
+    def evaluate(self, lab, identified, programs):
+        return None
+
+
+class _NoPrograms(_Stub):
+    def compensate(self, identified):
+        return ["groove"]
+
+
+class _NoParameter(_Stub):
+    def identify(self, reading):
+        from machinesim.experiment import Identified
+
+        return Identified({"tool.x": (0.0, 1e-9), "tool.offset": (1e-6, 1e-9)})
+
+
+@pytest.mark.parametrize(("procedure", "said"), [
+    (_NoEvaluation, "InputError: key 'evaluate': stub.evaluate returned NoneType; expected an "
+                    "Evaluation (Evaluation(figures=()) for none)"),
+    (_NoPrograms, "InputError: key 'compensate': stub.compensate returned list; expected a "
+                  "mapping of names to programs (an empty dict for none)"),
+    (_NoParameter, "InputError: key 'identify': stub.identify named 'tool.offset', no "
+                   "parameter of the campaign's error model (unknown parameter name; expected "
+                   "tool.<x|y|z|rx|ry|rz>, "),
+])
+def test_a_procedure_whose_step_returns_what_no_step_may_fails_its_trials_saying_so(
+        procedure, said, tmp_path):
+    """evaluate returning None failed every trial as "AttributeError: 'NoneType' object has
+    no attribute 'figures' (not a MachineSimError: a fault of machinesim ...; please report
+    it)"; compensate returning a list as a TypeError said alike; an identified name no error
+    parameter has ran every trial, then ended the campaign refusing to assemble them ("has
+    no unit ...; delete the trial files that name it")."""
+    failed = run(procedure, 2, out=tmp_path / "out", workers=0, machine=MACHINE,
+                 progress=False, report=False)
+    assert failed.failed.values.all()
+    for message in json.loads(failed.attrs["errors"]).values():
+        assert message.startswith(said), message
+    # the good stub runs: what the variants changed is what they are refused for
+    good = run(_Stub, 2, out=tmp_path / "good", workers=0, machine=MACHINE, progress=False,
+               report=False)
+    assert not good.failed.values.any() and list(good.after.values.ravel()) == [0.5, 0.5]
+

@@ -212,12 +212,36 @@ def _run(spec: CampaignSpec, i: int, drawn: dict, record: dict) -> None:
     except Exception as error:  # a fault this trial's draws met: its failure, `unexpected`
         record["error"] = unexpected(error, procedure if spec.own else None)
     else:
+        unknown = _no_parameter(spec, procedure.name, result.identified)
+        if unknown is not None:
+            record["error"] = unknown
+            return
         record["injected"] = {n: float(v) for n, v in result.injected.items()}
         record["identified"] = {n: [float(v), float(s)] for n, (v, s)
                                 in result.identified.items()}
         record["figures"] = {f.name: [f.unit, _float(f.before), _float(f.after),
                                       _float(f.after_std)] for f in result.figures}
         record["notes"] = [str(note) for note in result.notes]
+
+
+def _no_parameter(spec: CampaignSpec, shown: str, identified) -> str | None:
+    """The failure of a trial whose procedure of the user's own identified a name that is no
+    parameter of the campaign's error model (nor a lab parameter), or None. Such a trial had
+    been kept as done, and the campaign ended once every trial had run, refusing to assemble
+    them ("parameter 'foo.bar' ... has no unit ...; delete the trial files that name it")."""
+    if not spec.own:  # machinesim's procedures name their own parameters
+        return None
+    base = spec.entry.base()
+    for name in identified:
+        try:
+            if name not in LAB_PARAMETERS:
+                base.parameter_unit(name)
+        except MachineSimError as error:
+            return (f"InputError: key 'identify': {shown}.identify named "
+                    f"{brief(repr(name))}, no parameter of the campaign's error model "
+                    f"({getattr(error, 'message', error)}); expected the names of the "
+                    "error parameters it identifies")
+    return None
 
 
 def _float(value) -> float:
