@@ -354,6 +354,12 @@ class _NoParameter(_Stub):
         return Identified({"tool.x": (0.0, 1e-9), "tool.offset": (1e-6, 1e-9)})
 
 
+class _RaisingName(_Stub):
+    @property
+    def name(self):
+        raise RuntimeError("not connected")
+
+
 @pytest.mark.parametrize(("procedure", "said"), [
     (_NoEvaluation, "InputError: key 'evaluate': stub.evaluate returned NoneType; expected an "
                     "Evaluation (Evaluation(figures=()) for none)"),
@@ -380,3 +386,10 @@ def test_a_procedure_whose_step_returns_what_no_step_may_fails_its_trials_saying
                report=False)
     assert not good.failed.values.any() and list(good.after.values.ravel()) == [0.5, 0.5]
 
+
+def test_a_procedure_whose_name_raises_is_refused_naming_it(tmp_path):
+    with pytest.raises(InputError, match=r"key 'procedure': procedure .*_RaisingName: reading "
+                       r"its name raised RuntimeError: not connected; expected a text, its key"):
+        run(_RaisingName, 1, out=tmp_path / "out", workers=0, machine=MACHINE, progress=False,
+            report=False)
+    assert not (tmp_path / "out").exists()

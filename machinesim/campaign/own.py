@@ -158,18 +158,18 @@ def _check(procedure, shown: str) -> None:
         raise InputError(f"procedure {shown} ({type(procedure).__name__}) has no "
                          f"{', '.join(missing)}; expected a procedure with "
                          f"{', '.join(STEPS)} (docs/procedures/your_own.md)", key="procedure")
-    name = getattr(procedure, "name", None)
+    name = _attribute(procedure, "name", shown)
     if not isinstance(name, str) or not name:
         raise InputError(f"procedure {shown}: name {brief(repr(name))}; expected a text (its "
                          "key, e.g. 'tool_offset_rtest')", key="procedure")
     # experiment.run puts it into each Result: without it every trial failed, after its
     # cuts and readings, as "AttributeError: ... 'paper'" said to be a fault of machinesim
-    paper = getattr(procedure, "paper", None)
+    paper = _attribute(procedure, "paper", shown)
     if not isinstance(paper, str):
         raise InputError(f"procedure {shown}: paper {brief(repr(paper))}; expected a text "
                          "(where its method comes from, e.g. 'docs/procedures/your_own.md'; "
                          "any text)", key="procedure")
-    uses = getattr(procedure, "lab_uses", None)
+    uses = _attribute(procedure, "lab_uses", shown)
     if not isinstance(uses, Mapping) or not set(uses) <= {"measure", "evaluate"}:
         raise InputError(f"procedure {shown}: lab_uses {brief(repr(uses))}; expected a "
                          "mapping {'measure': (...), 'evaluate': (...)} of what each step "
@@ -181,6 +181,23 @@ def _check(procedure, shown: str) -> None:
                 or not all(isinstance(n, str) for n in names) or not set(names) <= set(LAB_USES):
             raise InputError(f"procedure {shown}: lab_uses[{step!r}] {brief(repr(names))}; "
                              f"expected a tuple of {', '.join(LAB_USES)}", key="procedure")
+
+
+def _attribute(procedure, key: str, shown: str):
+    """``procedure``'s attribute ``key`` (None when it has none); a property that raises is
+    refused naming it (a RuntimeError out of ``name`` had ended the campaign's start in a
+    traceback)."""
+    try:
+        return getattr(procedure, key, None)
+    except Exception as error:  # noqa: BLE001 - whatever the user's property raises
+        raise InputError(f"procedure {shown}: reading its {key} raised "
+                         f"{type(error).__name__}: {brief(str(error))}; expected "
+                         f"{_WANTED[key]} (docs/procedures/your_own.md)",
+                         key="procedure") from None
+
+
+_WANTED = {"name": "a text, its key", "paper": "a text, where its method comes from",
+           "lab_uses": "a mapping of what each step reads of the lab"}
 
 
 def check_picklable(given, shown: str) -> None:
