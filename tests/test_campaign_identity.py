@@ -187,3 +187,18 @@ def test_a_class_in_the_script_is_known_by_its_source_not_the_scripts_file(tmp_p
     assert first == {"classes": {"__main__:Mine": first["classes"]["__main__:Mine"]},
                      "modules": {}}
     assert code_of(load(20)) == first
+
+
+def test_a_class_that_makes_another_state_each_time_is_known_by_its_code(module, tmp_path):
+    """A procedure class whose __init__ keeps a time or a counter has another state each time
+    the campaign makes it: with that state in campaign.json no resume could ever match."""
+    counted = module(tail="\n\nclass Counted(Probe):\n    made = [0]\n\n"
+                     "    def __init__(self):\n        super().__init__()\n"
+                     "        Counted.made[0] += 1\n        self.serial = Counted.made[0]\n"
+                     ).Counted
+    first = CampaignSpec(counted, 1, machine_name=MACHINE).describe()
+    assert first["state"] is None
+    _folder(tmp_path / "out", counted)
+    _folder(tmp_path / "out", counted)  # resumed
+    assert CampaignSpec(module().Probe, 1, machine_name=MACHINE).describe()["state"] \
+        is not None

@@ -273,9 +273,13 @@ class CampaignSpec:
             from machinesim.campaign.identity import code_of, state_of
 
             built = self.entry.build({})  # a fresh instance, or a copy of the one given
+            state = state_of(built, self.procedure, made=not self._object())
+            if not self._object() and state != state_of(self.entry.build({}), "", made=True):
+                # a class that makes another state each time (a time, a draw, a counter in
+                # __init__): no resume could match it; its code, which decides it, names it
+                state = None
             described.update(name=built.name, machine=self.machine_name,
-                             errors=self.errors.to_dict(), code=code_of(built),
-                             state=state_of(built, self.procedure, made=not self._object()))
+                             errors=self.errors.to_dict(), code=code_of(built), state=state)
         # the code a trial runs: machinesim's by its version, a user's by its digests
         # (`machinesim.campaign.identity`); a resume with other code is refused
         described["machinesim"] = _version()
