@@ -354,6 +354,13 @@ class _NoParameter(_Stub):
         return Identified({"tool.x": (0.0, 1e-9), "tool.offset": (1e-6, 1e-9)})
 
 
+class _LabParameter(_Stub):
+    def identify(self, reading):
+        from machinesim.experiment import Identified
+
+        return Identified({"microscope.sigma": (12e-9, 1e-9)})
+
+
 class _RaisingName(_Stub):
     @property
     def name(self):
@@ -368,6 +375,8 @@ class _RaisingName(_Stub):
     (_NoParameter, "InputError: key 'identify': stub.identify named 'tool.offset', no "
                    "parameter of the campaign's error model (unknown parameter name; expected "
                    "tool.<x|y|z|rx|ry|rz>, "),
+    (_LabParameter, "InputError: key 'identify': stub.identify named 'microscope.sigma', "
+                    "no parameter of the campaign's error model (unknown parameter name"),
 ])
 def test_a_procedure_whose_step_returns_what_no_step_may_fails_its_trials_saying_so(
         procedure, said, tmp_path):

@@ -226,16 +226,17 @@ def _run(spec: CampaignSpec, i: int, drawn: dict, record: dict) -> None:
 
 def _no_parameter(spec: CampaignSpec, shown: str, identified) -> str | None:
     """The failure of a trial whose procedure of the user's own identified a name that is no
-    parameter of the campaign's error model (nor a lab parameter), or None. Such a trial had
+    parameter of the campaign's error model (a lab parameter neither: `experiment.run`
+    compares an identified name with the lab's errors, which hold no instrument's sigma,
+    so its error was read against 0), or None. Such a trial had
     been kept as done, and the campaign ended once every trial had run, refusing to assemble
     them ("parameter 'foo.bar' ... has no unit ...; delete the trial files that name it")."""
     if not spec.own:  # machinesim's procedures name their own parameters
         return None
     base = spec.entry.base()
     for name in identified:
-        try:
-            if name not in LAB_PARAMETERS:
-                base.parameter_unit(name)
+        try:  # a lab parameter too: the truth has no value of it, its error read as if 0
+            base.parameter_unit(name)
         except MachineSimError as error:
             return (f"InputError: key 'identify': {shown}.identify named "
                     f"{brief(repr(name))}, no parameter of the campaign's error model "
