@@ -14,7 +14,6 @@ import pytest
 
 import machinesim
 from machinesim.campaign import CampaignSpec, run
-from machinesim.campaign import own as own_module
 from machinesim.campaign.identity import code_of, state_of
 from machinesim.campaign.results import IDENTITY_KEYS, CampaignFolder
 from machinesim.exceptions import InputError
@@ -54,9 +53,9 @@ def module(tmp_path):
     def write(body="1.0", tail=""):
         (tmp_path / f"{MODULE}.py").write_text(SOURCE.format(body=body, tail=tail),
                                                encoding="utf-8")
-        sys.modules.pop(MODULE, None)
-        own_module._RESOLVED.pop(f"{MODULE}:Probe", None)
         importlib.invalidate_caches()
+        if MODULE in sys.modules:  # as a notebook's user reloads it after an edit
+            return importlib.reload(sys.modules[MODULE])
         return importlib.import_module(MODULE)
 
     try:
@@ -64,7 +63,6 @@ def module(tmp_path):
     finally:
         sys.path.remove(str(tmp_path))
         sys.modules.pop(MODULE, None)
-        own_module._RESOLVED.pop(f"{MODULE}:Probe", None)
 
 
 def _folder(out, procedure):
@@ -202,3 +200,13 @@ def test_a_class_that_makes_another_state_each_time_is_known_by_its_code(module,
     _folder(tmp_path / "out", counted)  # resumed
     assert CampaignSpec(module().Probe, 1, machine_name=MACHINE).describe()["state"] \
         is not None
+
+
+def test_a_reference_runs_the_module_as_reloaded(module):
+    """A notebook's user edits the module and reloads it: a campaign by its reference ran the
+    class first resolved in the process (kept per reference), while campaign.json's code
+    digest read the file as edited."""
+    module()
+    assert CampaignSpec(f"{MODULE}:Probe", 1, machine_name=MACHINE).build().identify(None) == 1.0
+    module(body="2.0")
+    assert CampaignSpec(f"{MODULE}:Probe", 1, machine_name=MACHINE).build().identify(None) == 2.0

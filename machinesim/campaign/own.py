@@ -60,12 +60,8 @@ def reference_of(procedure) -> str:
     return f"{cls.__module__}:{cls.__qualname__}"
 
 
-#: References resolved in this process: text -> the class or object.
-_RESOLVED: dict[str, Any] = {}
-
-
 def resolve(reference: str):
-    """The class (or object) ``reference`` names, imported once per process.
+    """The class (or object) ``reference`` names, its module imported once per process.
 
     Raises
     ------
@@ -73,8 +69,9 @@ def resolve(reference: str):
         Key ``procedure``: a module that cannot be imported (or raised as it was), or a name
         it does not hold, naming the reference and what is expected.
     """
-    if reference in _RESOLVED:
-        return _RESOLVED[reference]
+    # not kept per reference: the module as sys.modules holds it now, so that a module
+    # reloaded (importlib.reload in a notebook) runs its new class, as campaign.json's code
+    # digest (`machinesim.campaign.identity`) reads it; import_module imports it once
     module_name, _, path = reference.partition(":")
     try:
         target = importlib.import_module(module_name)
@@ -94,7 +91,6 @@ def resolve(reference: str):
                              f"{f' (did you mean {close[0]}?)' if close else ''}; "
                              f"{_EXPECTED}", key="procedure")
         target = getattr(target, part)
-    _RESOLVED[reference] = target
     return target
 
 
