@@ -210,3 +210,21 @@ def test_a_reference_runs_the_module_as_reloaded(module):
     assert CampaignSpec(f"{MODULE}:Probe", 1, machine_name=MACHINE).build().identify(None) == 1.0
     module(body="2.0")
     assert CampaignSpec(f"{MODULE}:Probe", 1, machine_name=MACHINE).build().identify(None) == 2.0
+
+
+def test_the_state_digest_is_the_same_whatever_the_hash_seed():
+    """A resume is another process, with another PYTHONHASHSEED: a set of texts iterates in
+    another order there (a pickle's bytes differ), its digest must not."""
+    import os
+    import subprocess
+
+    code = ("from machinesim.campaign.identity import state_of\n"
+            "class P:\n    def __init__(self):\n"
+            "        self.tags = {'alpha', 'beta', 'gamma', 'delta', 'epsilon'}\n"
+            "        self.by = {'y': frozenset({'p', 'q', 'r'}), 'x': (1.5, 'z')}\n"
+            "print(state_of(P(), 'P'), list(P().tags))\n")
+    said = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                           check=True, env={**os.environ, "PYTHONHASHSEED": seed}).stdout.split(
+                               " ", 1) for seed in ("1", "2", "3", "4")]
+    assert len({digest for digest, _ in said}) == 1, said
+    assert len({order for _, order in said}) > 1  # the sets did iterate otherwise
