@@ -18,6 +18,8 @@ while they load ends cleanly.
 
 from __future__ import annotations
 
+import machinesim._cli_start as _cli_start  # first: a Ctrl-C while the rest loads is one line
+
 import argparse
 import math
 import os
@@ -154,6 +156,7 @@ def main(argv: list[str] | None = None) -> int:
 
     Usage errors and ``--help`` leave through argparse's ``SystemExit`` (status 2 and 0).
     """
+    _cli_start.loaded()  # Python's handler again: ctrl_c_remembered puts its own in its place
     args = None
     _closed_streams_to_null()
     try:

@@ -290,6 +290,54 @@ def test_a_ctrl_c_a_library_turned_into_an_import_error_is_the_interrupted_line(
     assert "internal error: ModuleNotFoundError" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("command", [True, False], ids=["the command", "an importer"])
+def test_a_ctrl_c_while_the_command_line_loads_is_one_line(command):
+    """SIGINT 0.12 to 0.19 s after ``machinesim campaign ...`` started landed in the imports
+    of machinesim.cli (before its main), and ended in Python's traceback of that import
+    (status -2); one landing in numpy's loading read "machinesim: internal error:
+    ImportError: IMPORTANT: PLEASE READ THIS ... Importing the numpy C-extensions failed" (25
+    lines, status 1). machinesim._cli_start, cli's first import, says one line and ends
+    with 130 when the program is the command; a program that imports it keeps its Ctrl-C."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    code = ("import os, signal, sys, time\n"
+            f"sys.argv[0] = {'machinesim' if command else 'mine.py'!r}\n"
+            "import machinesim._cli_start\n"
+            "os.kill(os.getpid(), signal.SIGINT)\n"
+            "time.sleep(5)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+                          env={**os.environ}, timeout=60)
+    if command:
+        assert (done.returncode, done.stderr) == (
+            130, "machinesim: interrupted; nothing was written\n")
+    else:
+        assert done.returncode == -signal.SIGINT and "KeyboardInterrupt" in done.stderr
+
+
+def test_the_command_lines_main_puts_pythons_ctrl_c_back():
+    """Once main runs, a Ctrl-C is the command's (ctrl_c_remembered's: the trials kept are
+    named), not the loading's "nothing was written"."""
+    import signal
+    import subprocess
+    import sys
+
+    code = ("import signal, sys\n"
+            "sys.argv[0] = 'machinesim'\n"
+            "import machinesim.cli, machinesim._cli_start as start\n"
+            "print(signal.getsignal(signal.SIGINT) is start.on_ctrl_c)\n"
+            "try:\n    machinesim.cli.main(['--version'])\nexcept SystemExit:\n    pass\n"
+            "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+                          check=True, timeout=60)
+    said = done.stdout.split()  # True, the version's line, True
+    assert (said[0], said[-1]) == ("True", "True"), done.stdout
+
+
 def test_cli_ctrl_c_before_campaign_json_leaves_nothing_it_made(tmp_path, capsys,
                                                                  monkeypatch):
     """A Ctrl-C after the lock was taken and trials/ made, before campaign.json was written,

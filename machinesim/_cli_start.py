@@ -1,0 +1,47 @@
+"""Imported first by `machinesim.cli`, before the modules the command line loads: a Ctrl-C
+while they load (about 0.13 s of the command's start) ends in one line on stderr and status
+130, as one in the command does, not in a traceback of the import it stopped.
+
+As `machinesim.scenario_start` does for a scenario: nothing is written before the command
+runs, so the handler says so and ends the process at once (`os._exit`). It is installed only
+where Python's own handler is (a background job started with SIGINT ignored keeps ignoring
+it) and only when the program run is the command (``sys.argv[0]`` the ``machinesim`` script,
+or ``python -m machinesim``'s ``machinesim/__main__.py``: a test or a program that imports
+machinesim.cli keeps its own Ctrl-C); `machinesim.cli.main` puts Python's handler back as it
+begins (`loaded`). What comes before this import, Python's own start and ``import
+machinesim`` (about 0.1 s), still ends in Python's traceback.
+ruff's isort keeps this import first (pyproject.toml, its own section).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+from pathlib import Path
+
+
+def on_ctrl_c(signum, frame) -> None:
+    """SIGINT while the command line loads: one line, status 130."""
+    try:
+        os.write(2, b"machinesim: interrupted; nothing was written\n")
+    except OSError:  # started without a stderr (2>&-): the status says it
+        pass
+    os._exit(130)
+
+
+def loaded() -> None:
+    """The command begins: Python's own handler again."""
+    if signal.getsignal(signal.SIGINT) is on_ctrl_c:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def _is_the_command(argv0: str) -> bool:
+    path = Path(argv0)
+    return path.name.removesuffix(".exe") == "machinesim" or (
+        path.name == "__main__.py" and path.parent.name == "machinesim")
+
+
+if (signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        and _is_the_command(sys.argv[0] if sys.argv else "")):
+    signal.signal(signal.SIGINT, on_ctrl_c)
