@@ -29,7 +29,7 @@ def test_apexes_of_a_tilted_exact_profile(tilt):
     # the noise of the 90th percentile of the heights) read the tilted ends as cut.
     centre, depth, _, _ = fit_apexes(*prisms(tilt), 3, prominence=5 * UM)
     # exact lines: float64 round-off of ~1e-20 m, amplified by the fits (as in
-    # tests/test_tool_rotation_arm.py's exact prism profile)
+    # tests/test_tool_rotation_arm_equations.py's exact prism profile)
     np.testing.assert_allclose(centre, CENTRES, rtol=0, atol=1e-15)
     np.testing.assert_allclose(depth, DEPTH, rtol=0, atol=1e-17)
 
