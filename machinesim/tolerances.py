@@ -219,8 +219,8 @@ FIT_NULL_COMPONENT = 1e-6
 FIT_ZERO_COLUMN = 1e-12
 #: Gauss-Newton stops when every length step is below this (m): 1000x below the 1 nm axis
 #: resolution of the machines, and far above the float64 floor of the steps (~1e-16 m on
-#: the R-test fits of tests/test_identification_fit.py, noisy or not, iterated past this
-#: rule), so it is reached, not approached: quadratic convergence lands well under it.
+#: the R-test fits of tests/test_identification_fit_r_test.py, noisy or not, iterated past
+#: this rule), so it is reached, not approached: quadratic convergence lands well under it.
 FIT_STEP_M = 1e-12
 #: The same for angle steps (rad): 1e5x below the 0.00001 deg (1.7e-7 rad) rotary resolution
 #: (a 1e-12 rad step moves a point 0.1 m away by 1e-13 m); the floor measured as above is

@@ -7,7 +7,7 @@ through the fit's own values, which took fits of it to mrad and past pi rad.
 """
 
 import numpy as np
-from test_identification_fit import random_truth
+from identification_fit_helpers import random_truth
 
 import machinesim
 from machinesim.identification import fit, from_r_test, plan_quality

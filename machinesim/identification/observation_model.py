@@ -56,7 +56,7 @@ class _Plan:
         per pose) by the batched evaluator (`Machine.frame_pose`), under 1 us a pose on
         robonano_a0ib. It had been one Pinocchio pass a pose (`Machine.pinocchio_pose`,
         15-26 us), most of a fit's time once the Jacobian was batched; the readings of the
-        two agree to 2.4e-16 m (tests/test_identification_fit.py holds them).
+        two agree to 2.4e-16 m (tests/test_identification_fit_jacobian.py holds them).
         """
         out = np.empty((len(self.obs), 3))
         for frame, rows, unique, inverse in self.groups:
