@@ -1,5 +1,5 @@
 """A procedure that measures nothing, for tests of what runs, reports and report folders do
-with a result whatever a procedure reads (tests/test_lab.py, tests/test_report_summary.py,
+with a result whatever a procedure reads (tests/test_lab_report.py, tests/test_report_summary.py,
 tests/test_report_write_result.py)."""
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ identifies:
 
 Every function here takes measurements (readings, profiles, fitted features) and returns
 identified values: none receives a lab, an instrument bound to one, or the injected errors
-(the honesty rule of DESIGN.md; `tests/test_lab.py` scans this package).
+(the honesty rule of DESIGN.md; `tests/test_lab_truth.py` scans this package).
 """
 
 from machinesim._submodules import submodule
