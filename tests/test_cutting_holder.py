@@ -179,3 +179,32 @@ def test_a_segment_top_along_x_gives_the_holder_a_room_not_an_empty_one():
                             poses=poses)
     with pytest.raises(InputError, match="holder's room over sweep 0 is flat"):
         holder_room(point, 0, reach)
+
+
+@pytest.mark.parametrize("method", ["auto", "boolean"])
+def test_a_body_taken_wholly_below_the_stock_has_its_holder_through_it(method):
+    """A ball 0.5 mm in radius, its body 10 mm high, drawn across a 10 x 10 x 2 mm block with
+    its edge 15 mm down: the body's top is at z = -5 mm, 3 mm below the block's bottom, and
+    its holder rises from there through the whole block (by hand: its room holds the block's
+    2 mm over the bar's width along all 10 mm). The holder check tested the top face's own
+    box against the stock's z range, found it clear, and the cut said only that it removed
+    nothing. A tool 12 mm longer than the program's, without its G43, does this."""
+    from machinesim.cutting import remove
+    from machinesim.tools import BallEndMill
+    from machinesim.workpiece import block
+
+    stock, tool = block(10 * MM, 10 * MM, 2 * MM), BallEndMill(0.5 * MM)
+    path = np.tile(np.eye(4), (2, 1, 1))
+    path[:, :3, 3] = [[-2 * MM, 5 * MM, -15 * MM], [12 * MM, 5 * MM, -15 * MM]]
+    met = []
+    _, report = remove(stock, tool, [path], method=method, on_holder_contact=met.append)
+    assert met == [(0,)]
+    assert report.holder_contact == (0,)
+    assert report.removed_volume == 0.0  # the body itself never meets the block
+    beside = path.copy()
+    beside[:, 1, 3] = 20 * MM  # the same pass beside the block: no holder in it
+    _, report = remove(stock, tool, [beside], method=method, on_holder_contact=met.append)
+    assert met == [(0,)] and report.holder_contact == ()
+    with pytest.raises(HolderContactError, match=r"line 4 takes the top of the tool's body"):
+        cut(parse_program("G90 G21\nG00 X-2. Y5. Z1.\nG01 Z-15. F200.\nX12.\nM30\n"),
+            "grooving_4axis", tool, "block:10x10x2")

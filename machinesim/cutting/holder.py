@@ -37,7 +37,9 @@ HOLDER_MATERIAL_M3 = 1e-21
 def holder_contact(sweeps: SweepSet, below: float, keep) -> list[int]:
     """The sweeps of ``sweeps`` (indices over all paths) in which the top of the tool's
     body, where the holder begins, comes below ``below`` (the stock top) where ``keep``
-    finds stock."""
+    finds stock. The holder rises from that face through ``below``, so its box, not the
+    face's, is what ``keep`` tests: a body taken wholly below the stock (a tool longer than
+    the program's, without its G43) has its holder through the stock, not clear of it."""
     found = []
     face = sweeps.holder_face
     step = max(1, POINTS_PER_CHUNK // (2 * len(face)))
@@ -47,6 +49,7 @@ def holder_contact(sweeps: SweepSet, below: float, keep) -> list[int]:
                   + sweeps.poses[k, None, :3, 3] for k in (first, first + 1))
         low = np.minimum(t0.min(axis=1), t1.min(axis=1))
         high = np.maximum(t0.max(axis=1), t1.max(axis=1))
+        high[:, 2] = np.maximum(high[:, 2], below)  # the holder, up through the top
         hit = (low[:, 2] < below) & keep(low, high)
         found.extend((begin + np.flatnonzero(hit)).tolist())
     return found
