@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 
 from machinesim.end_mills import ball_rings
-from machinesim.exceptions import InputError, brief
+from machinesim.exceptions import InputError, MachineSimWarning, brief
+from machinesim.part import UNIT_SLIP_SIZE_M
 from machinesim.tolerances import BALL_CHORD_M
 from machinesim.tool_sizes import MAX_TOOL_SIZE_M
 from machinesim.tools import BallEndMill, FlatEndMill, RoundNoseTool, Tool, VTool
@@ -114,13 +116,7 @@ def tool_from_spec(spec: str, *, name: str = "tool spec") -> Tool:
     values = [_spec_number(where, field, what, unit, f"'{_KIND_FORMS[kind]}'", str(spec))
               for field, (what, unit) in zip(fields[1:], _SPEC_VALUES[kind], strict=True)]
     try:
-        if kind == "v":
-            return VTool(values[0] * RAD_PER_DEG, **extra)
-        if kind == "nose":
-            return RoundNoseTool(values[0] * M_PER_MM, values[1] * RAD_PER_DEG, **extra)
-        if kind == "flat":
-            return FlatEndMill(values[0] * M_PER_MM, **extra)
-        return BallEndMill(values[0] * M_PER_MM, **extra)
+        tool = _built(kind, values, extra)
     except InputError as error:
         # the tool's own message names its parameter (radius, height, ...): not again as a key
         message = error.message
@@ -133,6 +129,36 @@ def tool_from_spec(spec: str, *, name: str = "tool spec") -> Tool:
                        f"ball:{values[0] / 1e3:g}); a larger ball is built in Python, "
                        "BallEndMill(radius_m, chord_tol=...) with a coarser chord_tol")
         raise InputError(f"{where}: {message}") from None
+    _wide_tool_warning(where, kind, values)  # once built: a refused spec is only refused
+    return tool
+
+
+def _built(kind: str, values: list[float], extra: dict[str, float]) -> Tool:
+    """The tool of a spec's ``kind``, its ``values`` (mm, deg) and ``extra`` keywords (m)."""
+    if kind == "v":
+        return VTool(values[0] * RAD_PER_DEG, **extra)
+    if kind == "nose":
+        return RoundNoseTool(values[0] * M_PER_MM, values[1] * RAD_PER_DEG, **extra)
+    if kind == "flat":
+        return FlatEndMill(values[0] * M_PER_MM, **extra)
+    return BallEndMill(values[0] * M_PER_MM, **extra)
+
+
+def _wide_tool_warning(where: str, kind: str, values: list[float]) -> None:
+    """Warn (`MachineSimWarning`) of a flat end mill or nose whose radius (mm, ``values[0]``)
+    makes it `UNIT_SLIP_SIZE_M` (1 m) across or more: perhaps a radius in um. ``flat:500``
+    meant as 500 um built a tool 1 m across, which took the whole top off a 10 mm block
+    without a word. A warning, not a refusal: sizes up to `MAX_TOOL_SIZE_M` are built (a ball
+    that large is refused for its facets, and that refusal says what it would be in um)."""
+    if kind not in ("flat", "nose") or not 2.0 * values[0] * M_PER_MM >= UNIT_SLIP_SIZE_M:
+        return
+    meant = f"{kind}:{values[0] / 1e3:g}" + "".join(f":{v:g}" for v in values[1:])
+    what, whole = ("radius", "a tool") if kind == "flat" else ("nose radius", "a nose")
+    warnings.warn(
+        f"{where}: a {what} of {values[0]:g} mm is {whole} {2.0 * values[0] / 1e3:g} m "
+        "across, wider than any shipped machine's travel (0.5 m at most). A spec's sizes are "
+        f"mm: if it is in um, {values[0]:g} um is {meant}",
+        MachineSimWarning, stacklevel=1)  # here, not the caller's: each message shown once
 
 
 #: Each kind's form, for a refusal of one of its numbers.

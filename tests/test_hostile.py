@@ -16,6 +16,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -126,6 +127,32 @@ def test_a_tool_spec_of_any_size_builds_a_tool_or_is_an_input_error(spec):
     except InputError:
         return
     assert np.all(np.isfinite(tool.vertices()))
+
+
+def test_a_tool_a_metre_across_is_built_with_a_warning_that_its_radius_may_be_in_um():
+    """``flat:500``, a radius of 500 um written where the spec takes mm, built a flat end
+    mill 1 m across (500 mm = 0.5 m radius) without a word; it took the whole top off a 10 mm
+    block. A
+    tool `UNIT_SLIP_SIZE_M` (1 m) across or more now warns, naming the spec in um; 499.9 mm
+    (0.9998 m across) and a ball (refused from 80.6 mm, saying so) do not."""
+    from machinesim.exceptions import MachineSimWarning
+
+    with pytest.warns(MachineSimWarning) as caught:
+        tool = tool_from_spec("flat:500", name="--tool")
+    assert tool.radius == 0.5
+    assert [str(w.message) for w in caught] == [
+        "--tool 'flat:500': a radius of 500 mm is a tool 1 m across, wider than any "
+        "shipped machine's travel (0.5 m at most). A spec's sizes are mm: if it is in um, "
+        "500 um is flat:0.5"]
+    with pytest.warns(MachineSimWarning, match=r"a nose radius of 500 mm is a nose 1 m "
+                      r"across, .* 500 um is nose:0\.5:90$"):
+        tool_from_spec("nose:500:90:h=5")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for spec in ("flat:499.9", "nose:2:90", "ball:80.6", "v:90", "flat:0.5:h=900"):
+            tool_from_spec(spec)
+        with pytest.raises(InputError, match="at most 1000 mm"):  # refused, not also warned
+            tool_from_spec("flat:2000")
 
 
 @SETTINGS
