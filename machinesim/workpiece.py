@@ -183,6 +183,7 @@ def _numbers(where: str, text: str, count: int, separator: str,
     try:
         values = [float(field) for field in fields]
     except ValueError:
+        _other_unit(where, fields)
         values = []
     if len(values) != count or not all(math.isfinite(v) for v in values):
         raise InputError(
@@ -194,6 +195,29 @@ def _numbers(where: str, text: str, count: int, separator: str,
     if not sizes and not all(abs(v) <= high for v in values):
         raise InputError(f"{where}: placement {text!r} must lie within +-{high:g} mm")
     return values
+
+
+#: Units a stock spec's number may be written in by mistake (its numbers are mm), and their mm.
+_OTHER_UNITS_MM = {"in": 25.4, '"': 25.4, "inch": 25.4, "cm": 10.0, "um": 1e-3, "m": 1e3}
+_UNIT_SHOWN = {'"': "in", "inch": "in"}
+
+
+def _other_unit(where: str, fields: list[str]) -> None:
+    """Refuse the first of ``fields`` that is a number in another unit (`_OTHER_UNITS_MM`,
+    ``0.08in``), saying what it is in mm: such a field was refused as 'expected 3 numbers',
+    not as the unit it is."""
+    for field in fields:
+        text = field.strip()
+        for unit, mm in _OTHER_UNITS_MM.items():
+            if not text.lower().endswith(unit):
+                continue
+            try:
+                value = float(text[:-len(unit)])
+            except ValueError:
+                continue
+            raise InputError(f"{where}: {text!r} is not in mm: a stock spec's numbers are mm "
+                             f"(and may end in 'mm'); {value:g} {_UNIT_SHOWN.get(unit, unit)} is "
+                             f"{value * mm:g} mm")
 
 
 def stock_from_spec(spec: str, *, name: str = "stock spec") -> Part:

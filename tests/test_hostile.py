@@ -129,6 +129,27 @@ def test_a_tool_spec_of_any_size_builds_a_tool_or_is_an_input_error(spec):
     assert np.all(np.isfinite(tool.vertices()))
 
 
+@pytest.mark.parametrize(("spec", "said"), [
+    ("block:0.4x0.4x0.08in", "'0.08in' is not in mm: a stock spec's numbers are mm (and may "
+                             "end in 'mm'); 0.08 in is 2.032 mm"),
+    ('block:1x1x0.2"', "'0.2\"' is not in mm: a stock spec's numbers are mm (and may end in "
+                       "'mm'); 0.2 in is 5.08 mm"),
+    ("cylinder:5umx2", "'5um' is not in mm: a stock spec's numbers are mm (and may end in "
+                       "'mm'); 5 um is 0.005 mm"),
+    ("block:10x10x2@1in,0,0", "'1in' is not in mm: a stock spec's numbers are mm (and may end "
+                              "in 'mm'); 1 in is 25.4 mm"),
+])
+def test_a_stock_spec_in_another_unit_is_refused_naming_it_and_its_mm(spec, said):
+    """A stock written in inches (or um, cm, m) was refused as 'expected 3 numbers separated
+    by 'x' in '0.4x0.4x0.08in'', never naming the unit; now the number, the unit and its
+    value in mm (0.08 in x 25.4 = 2.032 mm, 0.2 in = 5.08 mm, 5 um = 0.005 mm by hand)."""
+    with pytest.raises(InputError) as caught:
+        workpiece.stock_from_spec(spec, name="--stock")
+    assert caught.value.message == f"--stock {spec!r}: {said}"
+    assert workpiece.stock_from_spec("block:10x10x2mm").manifold.volume() == pytest.approx(
+        200e-9, rel=1e-12)
+
+
 def test_a_tool_a_metre_across_is_built_with_a_warning_that_its_radius_may_be_in_um():
     """``flat:500``, a radius of 500 um written where the spec takes mm, built a flat end
     mill 1 m across (500 mm = 0.5 m radius) without a word; it took the whole top off a 10 mm

@@ -329,7 +329,8 @@ def test_a_stock_spec_number_may_end_in_mm_as_a_tool_spec_size_may():
         np.testing.assert_array_equal(stock_from_spec(spec).bounds,
                                       stock_from_spec(plain).bounds)
     assert stock_from_spec("block:10x10x2mm").volume == pytest.approx(200e-9, rel=VOLUME_REL)
-    with pytest.raises(InputError, match="expected 3 numbers separated by 'x' in '10x10x2um'"):
+    # another unit is refused as that unit, with its value in mm (it read 'expected 3 numbers')
+    with pytest.raises(InputError, match=r"'2um' is not in mm: .*; 2 um is 0\.002 mm$"):
         stock_from_spec("block:10x10x2um")
 
 
