@@ -348,8 +348,8 @@ def remove(
     on_holder_contact : callable(sweeps), optional
         Called before anything is cut with the sweeps in which the holder meets the stock,
         when there are any: those whose body top comes below the stock's top within its box
-        (`SweepSet.holder_contact`) and whose holder's room then holds material that the
-        earlier sweeps of ``paths`` left (`SweepSet.holder_in_material`). A caller that
+        (`holder.holder_contact`) and whose holder's room then holds material that the
+        earlier sweeps of ``paths`` left (`holder.holder_in_material`). A caller that
         refuses such a cut raises there and wastes no cutting.
 
     Returns
