@@ -10,7 +10,7 @@ from viewer_helpers import BUDGET, tilted_block
 
 from machinesim.cutting import cut
 from machinesim.metrology import height_map
-from machinesim.nc import ProgramBuilder
+from machinesim.nc import ProgramBuilder, parse_program
 from machinesim.viewer import surface_map
 from machinesim.viewer.maps import DIVERGING, NO_DATA, SurfaceMap, colours, legend_for, map_mesh
 from machinesim.workpiece import block, stock_from_spec
@@ -54,6 +54,24 @@ def test_a_legend_says_its_p_v_is_the_grid_nodes_and_how_far_apart_they_stand():
     assert legend.notes[1] == ("317 x 317 exact heights (metrology.height_map), 31.65 um "
                                "apart: the P-V and RMS of these nodes, which a narrower "
                                "groove or peak can fall between")
+
+
+def test_a_map_reads_the_top_at_the_parts_rim_not_its_side_faces():
+    # A flat end mill's G18 dip 0.15 mm deep run off the block's edge at x = 10 mm (a
+    # new-user pass's trunnion part): the cut leaves the side face at x = 10 mm with vertices
+    # 1.7e-18 m inside it, so the floor's triangles end short of a node on the bounds, which
+    # read that leaning face's plane: -3.04 mm on a 5 mm block, the legend's P-V 3378 um
+    # where the errors were 10 um. The dip bottoms at its 0.15 mm (less its 100 nm chords).
+    program = parse_program("G21 G90\nG00 X5.5 Y3. Z1.\nG01 Z0. F100.\n"
+                            "G18 G02 X9.5 Z0. R13.408333\nG00 Z1.\nM30\n",
+                            chord_tolerance=1e-7)
+    part, report = cut(program, "grooving_4axis", tool="flat:1.0",
+                       stock="block:20x20x5@-10,-10,0")
+    assert report.removed_volume_m3 > 0.0
+    smap = surface_map(part)
+    assert smap.x[-1] == pytest.approx(10 * MM, abs=1e-14)
+    assert np.nanmin(smap.heights) >= -0.15 * MM - 1e-12
+    assert np.nanmin(smap.heights[:, -1]) == pytest.approx(-65.67 * UM, abs=0.01 * UM)
 
 
 def test_a_legend_tick_at_round_off_of_zero_reads_zero():

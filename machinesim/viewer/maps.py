@@ -33,6 +33,14 @@ NO_DATA = np.array([0.5, 0.5, 0.5])
 #: Half range (m) used when every deviation is zero, so the legend still has a scale: 1 nm,
 #: the axis resolution of the machines.
 MIN_HALF_RANGE_M = 1e-9
+#: The grid's outer nodes stand this share of the part's largest coordinate (or of its
+#: extent, when larger) inside its bounds (`grid_for`). On the bounds they lie on the
+#: part's side faces, which a cut leaves a few ulps off vertical: a side face's vertex at
+#: x = 10 mm - 1.7e-18 m ended the top's triangles short of the rim node, which read the
+#: leaning face's plane instead, 3.04 mm down a 5 mm block beside a floor 0.15 mm deep (a
+#: G18 dip run off the block's edge). 1e-13 is some 450 ulps of the coordinate: clear of
+#: such a lean, and 2e-16 m on a 2 mm part, far below anything the map draws.
+RIM_INSET = 1e-13
 
 
 #: Where a legend's ticks stand along its colour bar, 0 (bottom) to 1 (top).
@@ -111,13 +119,17 @@ def mesh_of(surface) -> tuple[np.ndarray, np.ndarray]:
 def grid_for(bounds, max_triangles: int = DISPLAY_TRIANGLES) -> tuple[np.ndarray, np.ndarray]:
     """Square-celled grid over ``bounds`` ((2, 2) or (2, 3), m) with at most ``max_triangles``.
 
-    The grid includes the bounds' edges, so a rectangular part is covered to its rim.
+    The grid's outer nodes stand `RIM_INSET` inside the bounds' edges, so a rectangular part
+    is covered to its rim and they read its top there, not its side faces.
     """
     lo, hi = np.asarray(bounds, dtype=np.float64)[:, :2]
     size = hi - lo
     if not np.all(size > 0.0):
         raise InputError(f"the part has no extent in x or y: bounds {lo.tolist()} .. "
                          f"{hi.tolist()} m")
+    inset = RIM_INSET * np.maximum(np.maximum(np.abs(lo), np.abs(hi)), size)
+    lo, hi = lo + inset, hi - inset
+    size = hi - lo
     cells = max(max_triangles // 2, 1)
     spacing = math.sqrt(size[0] * size[1] / cells)
     nx, ny = (max(int(s / spacing), 1) for s in size)

@@ -77,7 +77,8 @@ def add_part(scene: Scene, path: str, surface, nominal=None,
                               "the other way?")
     elif smap.kind == "deviation" and not np.isfinite(smap.values).any():
         # else a grey map, a +-1 nm scale and 'P-V nan um', with no word why
-        lo, hi = smap.x[[0, -1]] * 1e3, smap.y[[0, -1]] * 1e3
+        # the part's bounds, which the map covers (its outer nodes stand a hair inside)
+        lo, hi = (np.array([vertices[:, k].min(), vertices[:, k].max()]) * 1e3 for k in (0, 1))
         scene.warnings.append(f"the nominal part lies under no point of {name}'s map (x "
                               f"{lo[0]:.6g} .. {lo[1]:.6g} mm, y {hi[0]:.6g} .. {hi[1]:.6g} "
                               "mm): no deviation to show; are both in the same workpiece "
