@@ -252,6 +252,18 @@ def test_interferometer_straightness_and_its_reference_lines(grooving):
                                atol=ROUND_OFF_M)
 
 
+def test_interferometer_straightness_with_its_arguments_swapped_is_refused_in_words(grooving):
+    # straightness("X", "Y", positions), the direction before the positions (a new-user
+    # pass): the array reached `direction not in ("X", "Y", "Z")` and numpy raised "The
+    # truth value of an array with more than one element is ambiguous", a traceback
+    laser = LaserInterferometer(grooving, None, noise=False)
+    with pytest.raises(InputError, match=r"key 'direction'.*got a ndarray.*"
+                                         r"straightness\('X', positions, 'Y'\)"):
+        laser.straightness("X", "Y", TABLE_X)
+    with pytest.raises(InputError, match="key 'direction'.*got 'W'"):
+        laser.straightness("X", TABLE_X, "W")
+
+
 @pytest.mark.parametrize("corner, opposite", [((-200 * MM, -150 * MM), (200 * MM, 150 * MM)),
                                               ((200 * MM, -150 * MM), (-200 * MM, 150 * MM))])
 def test_iso_230_6_diagonal_sees_the_squareness_in_closed_form(grooving, corner, opposite):

@@ -354,6 +354,13 @@ def _unit(k: int) -> np.ndarray:
 
 
 def _direction_index(direction) -> int:
+    if not isinstance(direction, str):
+        # an array here (the positions, given before the direction) made `in` raise numpy's
+        # "truth value of an array ... is ambiguous" ValueError, with a traceback
+        raise InputError(f"Expected a machine direction 'X', 'Y' or 'Z', got a "
+                         f"{type(direction).__name__} (straightness takes the axis, its "
+                         "positions, then the direction: straightness('X', positions, 'Y'))",
+                         key="direction")
     if direction not in ("X", "Y", "Z"):
         raise InputError(f"Expected a machine direction 'X', 'Y' or 'Z', got {direction!r}",
                          key="direction")
