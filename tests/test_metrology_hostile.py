@@ -278,6 +278,19 @@ def test_a_probe_ball_given_in_mm_is_refused_when_the_probe_is_built(a0ib, flat)
     np.testing.assert_allclose(q, above(a0ib, 2.5 * MM, 1.5 * MM, 10 * MM), rtol=0, atol=1e-10)
 
 
+def test_a_touch_probe_on_a_machine_without_one_says_what_it_lacks(flat):
+    # lab.touch_probe(part) on a new user's trunnion (no probe_tip) said only "Expected a
+    # frame of trun5 (...), got 'probe_tip'", an argument the call had not given
+    lab = machinesim.Lab("grooving_4axis", noise=False)
+    assert "probe_tip" not in lab.machine.frames
+    with pytest.raises(InputError, match=r"key 'frame': Expected a frame of grooving_4axis "
+                                         r"\(.*\), got 'probe_tip'; a touch probe rides on "
+                                         r"'probe_tip', its ball centre, .*add one to its URDF"):
+        lab.touch_probe(flat)
+    with pytest.raises(InputError, match=r"got 'no_such'$"):
+        lab.touch_probe(flat, frame="no_such")
+
+
 def test_probe_lobing_amplitudes_must_be_a_mapping(a0ib, flat):
     with pytest.raises(InputError, match=r"lobing_amplitudes as a mapping of lobing order to "
                                          r"amplitude \(m\), e.g. \{3: 1e-7\}, or None, got "

@@ -174,8 +174,14 @@ def motion_of(machine, errors, frame: str | None = None):
         When ``frame`` is not a frame of ``machine``.
     """
     if frame is not None and frame not in machine.frames:
+        # a touch probe asked of a machine without one named only 'probe_tip', an argument
+        # its caller (`lab.touch_probe(part)`) had not given
+        hint = ("; a touch probe rides on 'probe_tip', its ball centre, which a machine "
+                "without a probe lacks: add one to its URDF, a link on a fixed joint of the "
+                "tool side (docs/machines.md, robonano_a0ib's probe_body -> probe_tip)"
+                if frame == "probe_tip" else "")
         raise InputError(f"Expected a frame of {machine.name} ({', '.join(machine.frames)}), "
-                         f"got {frame!r}", key="frame")
+                         f"got {frame!r}{hint}", key="frame")
     machine.check_errors(errors)
 
     def pose(frame: str, q) -> np.ndarray:
