@@ -101,17 +101,22 @@ def load_machine(name_or_path: str | Path) -> Machine:
     return _load(path, stat.st_mtime_ns, stat.st_size)
 
 
+def travel_text(m) -> str:
+    """A machine's travel, axis by axis: mm, deg, or 'spindle' (`machinesim machines`, the
+    viewer's overlay)."""
+    return ", ".join(
+        (f"{a} spindle" if m.axis(a).spindle
+         else f"{a} {np.degrees(lo):g}..{np.degrees(hi):g} deg")
+        if m.axis(a).rotary else f"{a} {lo * 1e3:g}..{hi * 1e3:g} mm"
+        for a, lo, hi in zip(m.axes, m.lower, m.upper, strict=True))
+
+
 def machines_summary() -> list[str]:
     """One line per shipped machine: name, axes and travel (mm, deg)."""
     lines = []
     for name in list_machines():
         m = load_machine(name)
-        travel = ", ".join(
-            (f"{a} spindle" if m.axis(a).spindle
-             else f"{a} {np.degrees(lo):g}..{np.degrees(hi):g} deg")
-            if m.axis(a).rotary else f"{a} {lo * 1e3:g}..{hi * 1e3:g} mm"
-            for a, lo, hi in zip(m.axes, m.lower, m.upper, strict=True))
-        lines.append(f"{name:16s} {''.join(m.axes):8s} {travel}")
+        lines.append(f"{name:16s} {''.join(m.axes):8s} {travel_text(m)}")
     return lines
 
 
@@ -122,5 +127,5 @@ def _load(path: Path, mtime_ns: int, size: int) -> Machine:
 
 
 __all__ = ["AXIS_ORDER", "AxisSolution", "DOFS", "Machine", "check_tree", "list_machines",
-           "load_machine", "machines_summary", "models_dir"]
+           "load_machine", "machines_summary", "models_dir", "travel_text"]
 

@@ -254,6 +254,10 @@ def test_the_view_command_writes_its_cuts_as_lines_after_ten_seconds(capsys):
 def test_machine_scene_without_program_and_with_bad_settings():
     scene = machine_scene("robonano_a0ib")
     assert not [c for c in decoded(scene) if c["type"] == "set_animation"]
-    assert scene.notes[0].startswith("travel: X -140..140 mm")
+    # the rotary axes' travel as `machinesim machines` gives it (they read "B rotary")
+    assert scene.notes[0] == ("travel: X -140..140 mm, Y -75..75 mm, Z -30..100 mm, "
+                              "B -100..100 deg, C -360..360 deg")
+    assert machine_scene("sts_lathe").notes[0] == ("travel: X -100..100 mm, Z -50..100 mm, "
+                                                   "C spindle")
     with pytest.raises(InputError, match="duration_s and max_stages must be positive"):
         machine_scene("grooving_4axis", grooves(), stock=STOCK, duration_s=0.0)

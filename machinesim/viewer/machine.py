@@ -20,6 +20,7 @@ from machinesim.cutting import cut, remove
 from machinesim.cutting.report import arc_chord_note, nothing_left_note
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
+from machinesim.machines import travel_text
 from machinesim.motion.faces import ProfileEdges
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import check_path_chord, flat_face_radius, path_chord_tolerance
@@ -102,10 +103,9 @@ def machine_scene(machine, program=None, *, tool="v:90", stock="block:10x10x2", 
     q0 = machine.home if start is None else np.asarray(start, dtype=np.float64)
     visualizer.display(machine.kin.full_q(q0, binding))
     lo, hi = _machine_box(visualizer)
-    scene.notes.append("travel: " + ", ".join(
-        f"{a} {lo_a * 1e3:g}..{hi_a * 1e3:g} mm" if not r else f"{a} rotary"
-        for a, lo_a, hi_a, r in zip(machine.axes, machine.lower, machine.upper,
-                                    machine.rotary, strict=True)))
+    # the rotary axes' travel too, as `machinesim machines` gives it: "A rotary" had hidden
+    # a trunnion's -110..110 deg tilt
+    scene.notes.append("travel: " + travel_text(machine))
     if program is not None:
         lo, hi = _run(scene, visualizer, machine, program, tool, stock, errors, q0, lo, hi,
                       duration_s, max_stages, max_triangles, chord_tolerance, progress)
