@@ -93,8 +93,13 @@ def has_chords(program) -> bool:
     from machinesim.nc.program import AXES, KIND_LINEAR, ROTARY_AXES
 
     rotary = program.targets[:, [AXES.index(a) for a in ROTARY_AXES]]
-    feeds = program.kinds[1:] == KIND_LINEAR
-    turns = (np.diff(rotary, axis=0) != 0.0) & ~np.isnan(rotary[:-1]) & feeds[:, None]
+    # an axis not yet programmed stands at the home, where `cut` and `view` start (every
+    # rotary axis at zero, `Machine.home`): a first `G01 A1.` turns A from 0, and is split
+    # into sub-steps as any other; it had been skipped (its previous target NaN), and a
+    # program turning its rotary axes only in such feeds got no note
+    rotary = np.vstack([np.zeros((1, rotary.shape[1])), np.nan_to_num(rotary, nan=0.0)])
+    feeds = program.kinds == KIND_LINEAR
+    turns = (np.diff(rotary, axis=0) != 0.0) & feeds[:, None]
     return program.arc_blocks > 0 or bool(turns.any())
 
 

@@ -79,6 +79,26 @@ def test_the_command_line_reports_the_chord_it_cut_with(tmp_path, capsys, tool, 
     assert ("note: arcs and rotary moves were split into chords within 100 nm" in err) == noted
 
 
+@pytest.mark.parametrize("first_c", ["", "G00 C0.\n"])
+def test_a_first_rotary_feed_from_home_is_noted_as_split(tmp_path, capsys, first_c):
+    # G01 C10. with no C word before it (a new-user pass's trunnion program, G01 A1.): C
+    # turns from the home's 0 and the move is cut in sub-steps of the 100 nm chord, as
+    # after a G00 C0., but its previous target was NaN and the note was left out
+    program = tmp_path / "turn.nc"
+    program.write_text(f"G90 G21\n{first_c}G00 X5. Y0. Z1.\nG01 Z-0.01 F100.\n"
+                       "G01 C10. F360.\nG00 Z1.\nM30\n")
+    report = tmp_path / "r.json"
+    code = main([str(a) for a in ["cut", program, "--machine", "grooving_4axis", "--tool",
+                                  "ball:0.5", "--stock", "block:10x10x2@0,-5,0", "--quiet",
+                                  "--out", tmp_path / "p.ply", "--report", report]])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    # 10 deg at 5 mm split within 100 nm: chords of at most sqrt(8 x 100 nm / 5 mm) rad
+    steps = math.ceil(math.radians(10.0) / math.sqrt(8 * 100e-9 / 5e-3))
+    assert json.loads(report.read_text())["sweeps_count"] >= steps == 14
+    assert "note: arcs and rotary moves were split into chords within 100 nm" in err
+
+
 def _chord_refusal(value) -> str:
     """The refusal of a ``chord_tolerance`` of ``value`` (m), written out: the words of
     ``--chord-nm``'s (tests/test_cli.py), in m."""
