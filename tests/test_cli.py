@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_helpers import CUT, assert_clean_failure, run
 
 import machinesim
 import machinesim.cutting
@@ -26,27 +27,6 @@ GROOVING = ROOT / "models" / "grooving_4axis.urdf"
 #: grooves.nc: four 90-deg V grooves 20 um deep right across the 10 mm block: each removes
 #: a triangle of depth d and width 2 d (area d^2) over 10 mm.
 GROOVES_MM3 = 4 * 0.020**2 * 10.0
-CUT = ["--machine", "grooving_4axis", "--tool", "v:90", "--stock", "block:10x10x2", "--quiet"]
-
-
-def run(argv, capsys) -> tuple[int, str, str]:
-    """Exit status, stdout and stderr of ``machinesim ARGV`` run in this process."""
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:  # argparse: usage errors and --help
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def assert_clean_failure(code: int, err: str, *words: str, status: int = 2) -> None:
-    """A refusal: the status, one line on stderr naming what is wrong, no traceback."""
-    assert code == status, err
-    assert "Traceback" not in err and "internal error" not in err, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("machinesim: "), err
-    for word in words:
-        assert word in err, f"{word!r} not in {err!r}"
 
 
 def entry_point() -> list[str]:

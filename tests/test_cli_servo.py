@@ -3,7 +3,7 @@
 import json
 
 import pytest
-from test_cli import CUT, assert_clean_failure, run
+from cli_helpers import CUT, assert_clean_failure, run
 
 PD_X = """# a PD loop on X: a 12 kg slide on a guide of 1600 N s/m
 [X]

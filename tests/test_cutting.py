@@ -8,6 +8,7 @@ import math
 import manifold3d
 import numpy as np
 import pytest
+from cutting_helpers import _slot_in_steps
 
 from machinesim import ErrorModel, ToolSetting
 from machinesim.cli import main
@@ -402,16 +403,6 @@ def test_a_cut_deeper_than_the_tool_is_refused_naming_its_line_or_cut_and_listed
     assert report.to_dict()["holder_contact_lines"] == [program.moves[2].line]
     _, clear = cut(grooves(n=1), "grooving_4axis", tool="v:90", stock="block:5x3x1")
     assert clear.holder_contact == ()
-
-
-def _slot_in_steps(steps, last_y=0.0):
-    """A slot along X cut 1 mm deeper each pass, the last pass at ``last_y`` (m)."""
-    b = ProgramBuilder(1)
-    for k in range(1, steps + 1):
-        y = last_y if k == steps else 0.0
-        b.rapid(X=-3 * MM, Y=y, Z=1 * MM).linear(Z=-k * MM, feed_mm_per_min=300.0)
-        b.linear(X=3 * MM).rapid(Z=1 * MM)
-    return b.build()
 
 
 def test_a_slot_cut_in_steps_deeper_than_the_body_opens_the_way_for_its_holder():

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_cutting import _slot_in_steps  # the slot of the holder tests there
+from cutting_helpers import _slot_in_steps  # the slot of test_cutting.py's holder tests
 
 import machinesim.cutting.engine as engine
 from machinesim.cutting import cut

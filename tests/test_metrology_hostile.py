@@ -9,7 +9,7 @@ import os
 
 import numpy as np
 import pytest
-from test_metrology_instruments import above
+from metrology_helpers import above
 
 import machinesim
 from machinesim import _io

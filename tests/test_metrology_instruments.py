@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from metrology_helpers import above
 
 import machinesim
 from machinesim.cutting import cut
@@ -42,14 +43,6 @@ N = 2000
 def grooving():
     return machinesim.load_machine("grooving_4axis")
 
-
-
-def above(a0ib, x, y, z_centre):
-    """Axis values that put the nominal ball centre at (x, y, z_centre): the probe_tip sits
-    40 mm along +Y and 1 mm above the tool edge (docs/machines.md)."""
-    q = np.zeros(len(a0ib.axes))
-    q[:3] = x, y - 40 * MM, z_centre - 1 * MM
-    return q
 
 
 def assert_noise_model(readings, truth, readout):

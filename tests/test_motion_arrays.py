@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import motion_reference as reference
 import numpy as np
 import pytest
-from test_motion_identity import assert_same, random_program
+from motion_helpers import assert_same, random_program
 
 from machinesim import load_machine
 from machinesim.exceptions import InputError, NCProgramError

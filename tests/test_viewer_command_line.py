@@ -5,11 +5,12 @@ note, never a traceback or a silently wrong page (docs/viewer.md)."""
 from __future__ import annotations
 
 import pytest
-import test_viewer_tool_table
+import viewer_helpers
+from viewer_helpers import run
 
-#: `machinesim view`'s command line, and its scene recorded, not drawn: test_viewer_tool_table's
-run = test_viewer_tool_table.run
-captured = test_viewer_tool_table.captured
+#: `machinesim view`'s scene recorded, not drawn (a fixture: imported by name, pytest's
+#: argument of that name would read as its redefinition)
+captured = viewer_helpers.captured
 
 #: A 10 um deep V groove 2 mm along X, as test_errors_hostile cuts it.
 GROOVE = "G90 G21\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nG01 X2.\nG00 Z1.\nM30\n"

@@ -4,38 +4,19 @@ a length is refused at its T line (docs/viewer.md)."""
 
 from __future__ import annotations
 
-import argparse
-
 import pytest
+import viewer_helpers
+from viewer_helpers import run
 
 from machinesim.exceptions import InputError
 from machinesim.tool_specs import tool_from_spec
-from machinesim.viewer.cli import add_view_parser, run_view
-from machinesim.viewer.scene import Scene
 
 #: A Fusion 360-style block: T1 M06, then G43 H1, one slot 2 mm wide across x = 1..3 mm.
 PROGRAM = ("%\nO1001 (SLOT)\nG90 G94 G17\nG21\nT1 M6\nG54\nG0 X1. Y0.4\nG43 Z5. H1\n"
            "G1 Z-0.1 F200.\nX3. F400.\nG0 Z5.\nM30\n%\n")
-
-
-def run(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(prog="machinesim")
-    add_view_parser(parser.add_subparsers(dest="command", required=True))
-    return run_view(parser.parse_args(["view", *argv]))
-
-
-@pytest.fixture
-def captured(monkeypatch):
-    import machinesim.viewer.machine as viewer_machine
-
-    seen = {}
-
-    def capture(machine, program, **kwargs):
-        seen.update(program=program, **kwargs)
-        return Scene("captured")
-
-    monkeypatch.setattr(viewer_machine, "machine_scene", capture)
-    return seen
+#: `machinesim view`'s scene recorded, not drawn (a fixture: imported by name, pytest's
+#: argument of that name would read as its redefinition)
+captured = viewer_helpers.captured
 
 
 def test_a_table_tool_of_the_tools_own_shape_is_viewed(tmp_path, captured):

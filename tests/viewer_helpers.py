@@ -1,16 +1,18 @@
 """What several of the viewer's test files share (not collected: no test_ prefix): a
 small display budget, a grooves program and its errors, a tilted block, a PLY file's
-bytes and `machinesim view` through its parser."""
+bytes, `machinesim view` through its parser and its machine scene recorded, not drawn."""
 
 from __future__ import annotations
 
 import argparse
 
 import numpy as np
+import pytest
 
 from machinesim import ErrorModel, ToolSetting
 from machinesim.nc import ProgramBuilder
 from machinesim.viewer.cli import add_view_parser, run_view
+from machinesim.viewer.scene import Scene
 from machinesim.workpiece import Part
 
 UM, MM = 1e-6, 1e-3
@@ -58,3 +60,17 @@ def run(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="machinesim")
     add_view_parser(parser.add_subparsers(dest="command", required=True))
     return run_view(parser.parse_args(["view", *argv]))
+
+
+@pytest.fixture
+def captured(monkeypatch):
+    import machinesim.viewer.machine as viewer_machine
+
+    seen = {}
+
+    def capture(machine, program, **kwargs):
+        seen.update(program=program, **kwargs)
+        return Scene("captured")
+
+    monkeypatch.setattr(viewer_machine, "machine_scene", capture)
+    return seen
