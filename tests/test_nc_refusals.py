@@ -1,0 +1,312 @@
+"""What the NC reader refuses, located: each refusal the language describes at its line,
+column and word (and the block's N word), text outside a comment, a work offset the given
+offsets lack, targets beyond float64, bad arguments; fuzzed text raises only
+NCProgramError."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from machinesim.exceptions import NCProgramError, brief
+from machinesim.nc import format_program, parse_program
+
+#: Targets are a decimal in mm times 1e-3 plus an offset: float64 round-off at <= 0.1 m is
+#: below 1e-17 m per operation; 1e-15 m leaves room for a few operations and is 1e6 x below
+#: 1 nm, so any real misreading (a unit, an offset, a sign) fails.
+EXACT_M = 1e-15
+
+
+# (text, line, column, word, message): each refusal the language describes.
+REFUSALS = [
+    ("G00 X0 Y0\nG02 X1. Y1.", 2, 1, "G02", "G02 needs the centre"),
+    ("G03 X1 I1", 1, 5, "X1", "the arc starts where X is not known yet"),
+    ("G00 X0\n\nG41 X0", 3, 1, "G41", r"cutter radius compensation \(G41\) is not supp"),
+    ("G00 X0\nG42 D1 G01 X1. F100.", 2, 1, "G42", "compensation 'in wear' .* holds the "
+     "tool-centre path already, its G42 adding only the wear .* without the G42 and D"),
+    ("G54.1 X0", 1, 1, "G54.1", "unknown G code G54.1"),
+    ("G95", 1, 1, "G95", r"feed per revolution \(G95\)"),
+    ("G00 X0 U1", 1, 8, "U1", "unknown word letter 'U'"),
+    ("G00 X0 I5", 1, 8, "I5", "word I is only read with G02/G03"),
+    ("G00 X0\nM99", 2, 1, "M99", "M99 in the main program would jump back"),
+    ("G00 Z0\nG43 H1 Z5.", 2, 5, "H1", "G43 H1 needs tool 1's length"),
+    ("G00 X0\nG91 G53 X0", 2, 5, "G53", "machine coordinates, which are absolute"),
+    # a bare G28 (26 in one public set of Haas-style programs) is read differently by
+    # Haas (every axis home) and FANUC (none): the message had said neither
+    ("G28", 1, 1, "G28", "G28 without axis words: a Haas control returns every axis to "
+     "machine zero, a FANUC moves none; name the axes it moves, Z first"),
+    ("G53", 1, 1, "G53", "G53 needs the axes it moves"),
+    ("G05.1 Q2", 1, 1, "G05.1", r"G05.1 needs Q1 \(on\) or Q0 \(off\)"),
+    ("G05.1 Q1 X0", 1, 10, "X0", "G05.1 stands in a block of its own"),
+    ("G81 X0 Z-1 R1", 1, 1, "G81", "Z is not known yet"),
+    ("G00 Z5\nG81 X0 Z3. R2.", 2, 8, "Z3.", "hole bottom Z .* is not below the R plane"),
+    ("G00 X0 Y0\nG02 X10. Y0 R4. F100", 2, 13, "R4.", "more than the diameter"),
+    ("G00 X0 Y0\nG02 X10. Y0 I5.01 F100", 2, 13, "I5.01", "end point is off the arc"),
+    ("G00 X0 Y0\nG02 X10. I5. R5.", 2, 14, "R5.", "an arc takes R or I J, not both"),
+    ("G00 X0 Y0\nG03 X0 Y0 R5.", 2, 11, "R5.", "cannot be a full circle"),
+    # an M98 problem points at the word at fault, P or L (it had pointed at M98)
+    ("O1\nM98 P2\nM30", 2, 5, "P2", "M98 calls O0002, which is not in this file"),
+    ("O1\nM98 P2\nM30\nO2\nM98 P2\nM99", 5, 5, "P2", "O0002 calls itself"),
+    ("O1\nM30\nO2\nG04 P1\nM99\nG04 P2", 6, 1, "G04", "block after M99 on line 5"),
+    ("O1\nM30\nO2\nM30\nM99", 4, 1, "M30", "M30 in subprogram O0002"),
+    ("M98 P00002", 1, 5, "P00002", "asks for 0 repeats"),
+    ("M98", 1, 1, "M98", r"M98 needs P<program number> \(an unsigned integer\)$"),
+    ("M98 P1.5", 1, 5, "P1.5", r"M98 needs P<program number> \(an unsigned integer\), got P1.5"),
+    ("O1\nM98 P2 L1.5\nM30\nO2\nM99", 2, 8, "L1.5", "M98 L takes an unsigned integer"),
+    ("O1\nM98 P2 L99999999\nM30\nO2\nM98 P3 L9999\nM99\nO3\nG04 P0\nM99", 2, 8, "L99999999",
+     "more than 50000000 blocks"),
+    ("G00 X1e5", 1, 7, "E5", "unknown word letter 'E'"),
+    ("G00 X1.2.3", 1, 5, "X1.2.3", "malformed number"),
+    ("G00 X--1", 1, 5, "X--1", "malformed number .* e.g. X-12.5$"),
+    ("G00 X2. Y2. Z5.\nG83 X2. Y2. Z-2. R1. Q.5 F50.\nG91 X2. K3", 3, 1, "G91",
+     r"G83 repeated in G91 with R \(line 2\) and Z \(line 2\) given in G90: .* restate R "
+     "and Z after changing G90/G91"),
+    ("G00 X2. Y2. Z5.\nG83 X2. Y2. Z-2. R1. Q.5 F50.\nG91 X2. R-4. K3", 3, 1, "G91",
+     r"with Z \(line 2\) given in G90: .* restate Z after"),
+    ("G01 X1 F--5", 1, 8, "F--5", "malformed number .* e.g. F12.5$"),  # F-12.5 is refused
+    ("G1.2.3", 1, 1, "G1.2.3", "malformed number .* e.g. G12$"),
+    ("G00 Y", 1, 5, "Y", "malformed number"),
+    ("G00 Xnan", 1, 5, "Xnan", "Xnan is not a finite number"),
+    ("G00 X0\nG01 Z-inf F100.", 2, 5, "Z-inf", "Z-inf is not a finite number"),
+    ("G00 X0\nG01 YInfinity F100.", 2, 5, "YInfinity", "YInfinity is not a finite number"),
+    ("G00 X1 X2", 1, 8, "X2", "axis word X appears twice in one block"),
+    ("G01 X1 F10 F20", 1, 12, "F20", "word F appears twice"),
+    ("G00 G01 X1", 1, 5, "G01", "two motion G-codes in one block: G00 and G01"),
+    ("G00 X0\nG04 G01 X1", 2, 5, "G01", "two motion G-codes in one block: G04 and G01"),
+    ("G90 G91", 1, 5, "G91", "two distance G-codes in one block"),
+    # P with a decimal point is seconds (Haas): the messages had said P is milliseconds
+    ("G04", 1, 1, "G04", r"dwell without time: G04 needs P<milliseconds> \(with a decimal "
+     r"point, P<seconds>, as Haas reads it\) or X<seconds>$"),
+    ("G04 P-1.5", 1, 5, "P-1.5", "G04's dwell P-1.5 must be >= 0 .with a decimal point P is "
+     "seconds"),
+    ("G04 P-1500", 1, 5, "P-1500", "dwell time must be an unsigned integer"),
+    ("G04 P100 X1.", 1, 10, "X1.", "got both P and X"),
+    ("G04 X-1.", 1, 5, "X-1.", "dwell time must be >= 0"),
+    ("G04 Y1", 1, 5, "Y1", r"axis word Y in a dwell block; G04 takes only "
+     r"P<milliseconds> \(with a decimal point, P<seconds>, as Haas reads it\) or X<seconds>$"),
+    ("G00 X0 P100", 1, 8, "P100", "P is only read with G04"),
+    ("X1", 1, 1, "X1", "without a motion mode"),
+    ("G91 G00 X1", 1, 9, "X1", "incremental .G91. move on axis X before its position"),
+    ("G00 X0\nM30\nG00 X1", 3, 1, "G00", "block after the program end M30 on line 2"),
+    ("G00 X0 (unclosed", 1, 8, "(", "comment '\\(' is not closed"),
+    ("G00 X0 )", 1, 8, ")", "without an opening"),
+    ("G00 X0 (a (b) c)", 1, 11, "(", "comments do not nest: .* opened at column 8"),
+    ("O1\nM98 P1\nM30", 2, 5, "P1", "M98 calls O0001, the main program itself"),
+    ("G00 X0 / Y1", 1, 8, "/", "block delete '/' is not read: a FANUC control skips"),
+    ("G00 X12,5 Y0", 1, 8, ",", "decimal comma in 'X12,5': NC numbers take a decimal point"),
+    ("G00 X0 Z1.\nG93 G01 X1. F10.", 2, 1, "G93", "inverse time feed \\(G93"),
+    ("G00 X0 Y0 Z5.\nG74 X1. Y1. Z-1. R1. F100.", 2, 1, "G74",
+     "canned cycle G74 \\(left-hand tapping\\) is not supported: machinesim expands G73, G81"),
+    ("G00 X0 Y0 Z5.\nG98 G84 X1. Y1. Z-1. R1. F100.", 2, 5, "G84",
+     "canned cycle G84 \\(tapping\\) is not supported"),
+    ("G00 X0 Y0 Z5.\nG43.4 H1", 2, 1, "G43.4",
+     "tool centre point control \\(G43.4\\) is not supported: the axis words"),
+    ("G92 X0 Y0 Z50.", 1, 1, "G92", "setting the work coordinates at the current position "
+     "\\(G92\\) is not supported: it would move every later axis word"),
+    ("G00 X0\n/G01 X1. F10.", 2, 1, "/", "block delete '/' is not read"),
+    ("G00 X0\n/2 G01 X1. F10.", 2, 1, "/2", "block delete '/2' is not read"),
+    ("G00 #1", 1, 5, "#", "macro variable '#1': macro variables and expressions"),
+    ("#101=[#1*2.] (CUSTOM MACRO B)", 1, 1, "#", "are not read: post the program with"),
+    # one problem for the whole expression: it had been ten, one for each letter of 'sqrt'
+    ("G00 X0 Y0\nG02 X600. I[300 + [100 * [0.00099 * sqrt[2]]]]", 2, 11,
+     "I[300 + [100 * [0.00099 * sqrt[2]]]]", "^[^\n]*is a macro expression: macro"),
+    ("G01 X#146/2+#148 F100.", 1, 5, "X#146/2+#148", r"X#146/2\+#148 is a macro expression"),
+    ("G00 10", 1, 5, "10", "without an address letter"),
+    ("G01 X0 F0", 1, 8, "F0", "feed must be > 0"),
+    ("G01 X0 F-5", 1, 8, "F-5", "feed must be > 0"),
+    ("G01 X0 F0." + "0" * 30 + "1", 1, 8, "F0." + "0" * 30 + "1", "below 1 nm a minute"),
+    ("G00 X0\nG01 X1. F0.0000009", 2, 9, "F0.0000009", "below 1 nm a minute"),
+    ("S-100", 1, 1, "S-100", "spindle speed must be >= 0"),
+    ("M3.5", 1, 1, "M3.5", "M code must be an unsigned integer"),
+    ("N1234567890", 1, 1, "N1234567890", "at most 9 digits"),
+    ("G-1", 1, 1, "G-1", "has a sign"),
+    ("G00 X0\nO1", 2, 1, "O1", "must be the first block"),
+    ("O1\nM30\nO2\nM99\nO2\nM99", 5, 1, "O2", "subprogram O0002 is defined twice"),
+    ("O1 G00", 1, 4, "G00", "must stand alone"),
+    ("G00 X0\n% G00", 2, 3, "G00", "must stand alone on its line"),
+    # one problem for the text, not one for each of its letters (MPCNC posts write such
+    # lines as comments): 'vfd enable' had been nine problems
+    ("G00 X0\n% vfd enable (MPCNC)", 2, 3, "vfd enable",
+     "^[^\n]*found 'vfd enable' after it: past the opening one, a '%' ends the program"),
+    ("G00 X0 %", 1, 8, "%", "found it after words"),
+    ("G00 X" + "9" * 400, 1, 5, "X" + "9" * 400, "out of range"),
+    ("G00 X1.\nG04 X" + "9" * 400 + ".", 2, 5, "X" + "9" * 400 + ".", "out of range"),
+]
+
+
+#: What a word is, in the refusal of text outside parentheses.
+_TEXT_WANTED = ("a word is one letter and a number (X1., M98 P1000); expected a comment in "
+                "parentheses")
+_MACRO_WANTED = ("(custom macro B: IF, GOTO, WHILE/DO/END, DPRNT) is not read: machinesim reads "
+                 "no branches, loops or macro output; post the program with them resolved into "
+                 "plain blocks")
+
+
+@pytest.mark.parametrize(("text", "line", "column", "key", "message"), [
+    # prose outside parentheses: one problem for the text (to the line's end, or a comment),
+    # not one 'malformed number' for each of its letters (14 for ROUGH THE POCKET)
+    ("ROUGH THE POCKET\nG00 X0", 1, 1, "ROUGH THE POCKET",
+     f"text 'ROUGH THE POCKET' outside a comment: {_TEXT_WANTED}, e.g. '(ROUGH THE POCKET)'"),
+    ("G00 X0\nG01 X1. FEED SLOWLY (NOTE)", 2, 9, "FEED SLOWLY",
+     f"text 'FEED SLOWLY' outside a comment: {_TEXT_WANTED}, e.g. '(FEED SLOWLY)'"),
+    ("G00 X0 Y0\nA POCKET", 2, 1, "A POCKET",
+     f"text 'A POCKET' outside a comment: {_TEXT_WANTED}, e.g. '(A POCKET)'"),
+    ("G00 X1.5MM", 1, 9, "MM", f"text 'MM' outside a comment: {_TEXT_WANTED}, e.g. '(MM)'"),
+    ("G00 X0\nEND OF PROGRAM", 2, 1, "END OF PROGRAM",
+     f"text 'END OF PROGRAM' outside a comment: {_TEXT_WANTED}, e.g. '(END OF PROGRAM)'"),
+    # custom macro B statements, refused as macros: each had been one problem per letter
+    ("IF [#1 GT 2] GOTO 10", 1, 1, "IF [#1 GT 2] GOTO 10",
+     f"macro statement 'IF [#1 GT 2] GOTO 10' {_MACRO_WANTED}"),
+    ("G00 X0\nWHILE [#1 LT 3] DO1 (LOOP)", 2, 1, "WHILE [#1 LT 3] DO1",
+     f"macro statement 'WHILE [#1 LT 3] DO1' {_MACRO_WANTED}"),
+    ("GOTO 10", 1, 1, "GOTO 10", f"macro statement 'GOTO 10' {_MACRO_WANTED}"),
+    ("G00 X0\nEND1", 2, 1, "END1", f"macro statement 'END1' {_MACRO_WANTED}"),
+    # a lone letter before a word is still a missing number, not text
+    ("G00 X Y1.", 1, 5, "X",
+     "malformed number '' after 'X'; expected digits with an optional sign and decimal "
+     "point, e.g. X-12.5"),
+])
+def test_text_outside_a_comment_is_one_problem(text, line, column, key, message):
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text, "prog.nc")
+    error = info.value
+    assert (error.line, error.column, error.key) == (line, column, key)
+    assert str(error) == f"prog.nc, line {line}, column {column}, key '{key}': {message}"
+
+
+def test_words_packed_without_blanks_are_no_text():
+    program = parse_program("g90g21\nG01X1.Y2.F100.\nM98P1000\nM30\nO1000\nx3.y-4.\nM99\n")
+    assert program.targets[:, :2].tolist() == [[1e-3, 2e-3], [3e-3, -4e-3]]
+
+
+@pytest.mark.parametrize(("text", "line", "column", "word", "message"), REFUSALS)
+def test_refusals_name_line_column_and_word(text, line, column, word, message):
+    with pytest.raises(NCProgramError, match=message) as info:
+        parse_program(text, "prog.nc")
+    error = info.value
+    assert (error.source, error.line, error.column, error.key) == ("prog.nc", line, column, word)
+    # the key stays whole; the message shows a long one by its ends (`brief`)
+    assert str(error).startswith(f"prog.nc, line {line}, column {column}, key '{brief(word)}': ")
+
+
+def test_refused_arguments():
+    with pytest.raises(NCProgramError, match="integer_input must be one of"):
+        parse_program("G00 X0", integer_input="decimal")
+    with pytest.raises(NCProgramError, match="unknown work offset 'G60'"):
+        parse_program("G00 X0", work_offsets={"G60": {"X": 0.0}})
+    with pytest.raises(NCProgramError, match="unknown axis 'U'"):
+        parse_program("G00 X0", work_offsets={"G54": {"U": 0.0}})
+    with pytest.raises(NCProgramError, match="must be str"):
+        parse_program(b"G00 X0")
+
+
+@pytest.mark.parametrize("code", ["G55", "G56", "G57", "G58", "G59"])
+def test_a_work_offset_the_given_offsets_lack_is_refused_naming_its_line(code):
+    # G54 X 10 mm given, the program selects another system: it had read as zero (machine
+    # zero), the part cut 10 mm from where G54's would be, without a word
+    text = f"G90 G21\nG00 X0 Y0 Z1.\nN20 {code}\nG00 X1.\nM30\n"
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text, "prog.nc", work_offsets={"G54": {"X": 10e-3}})
+    error = info.value
+    assert (error.line, error.column, error.key) == (3, 5, code)
+    assert f"{code} selects a work offset that work_offsets does not give (it gives G54)" in str(
+        error)
+    # given (an empty system is machine zero), the same text reads: X1. is 1 mm + its offset
+    for system, x_mm in (({"X": -20e-3}, -19.0), ({}, 1.0)):
+        program = parse_program(text, work_offsets={"G54": {"X": 10e-3}, code: system})
+        assert program.targets[:, 0].tolist() == pytest.approx([10e-3, x_mm * 1e-3],
+                                                               abs=EXACT_M)
+    # without any offsets every system is zero, as documented, and listed with its line
+    program = parse_program(text)
+    assert program.targets[-1, 0] == pytest.approx(1e-3, abs=EXACT_M)
+    assert program.states[code] == 3
+
+
+def test_g54_left_out_of_the_given_offsets_is_machine_zero():
+    # G54 is the system a program runs in without a G54..G59 word; left out it is zero, as
+    # the writer and `to_resolution` read it
+    text = "G90 G21 G54\nG00 X1.\nG55 X1.\nM30\n"
+    program = parse_program(text, work_offsets={"G55": {"X": 5e-3}})
+    assert program.targets[:, 0].tolist() == pytest.approx([1e-3, 6e-3], abs=EXACT_M)
+
+
+@pytest.mark.parametrize("distance", ["G90", "G91"])
+def test_target_beyond_float64_is_refused(distance):
+    # An offset near the float64 maximum (1.798e308) plus 1e305 m overflows: absolute values
+    # add the offset, incremental ones the previous target (which holds the offset).
+    huge = "1" + "0" * 308 + "."  # 1e308 mm = 1e305 m
+    with pytest.raises(NCProgramError, match="out of range") as info:
+        parse_program(f"G00 X0\n{distance} X{huge}", work_offsets={"G54": {"X": 1.797e308}})
+    assert (info.value.line, info.value.column, info.value.key) == (2, 5, "X" + huge)
+
+
+NC_CHARACTERS = "GXYZABCMNFSPOIJKTgxz0123456789.+-  ()%;\n\t/#"
+_number = st.one_of(
+    st.integers(-10**12, 10**12).map(str),
+    st.floats(allow_nan=False, allow_infinity=False, width=64).map(lambda v: f"{v:f}"),
+    st.text("0123456789.+-", max_size=6),
+)
+_any_word = st.tuples(st.sampled_from("GGGMNFSPOXYZABCxyzIT"), _number).map("".join)
+# Mostly well-formed words, so that many programs parse and reach the writer too.
+_good_word = st.one_of(
+    st.sampled_from(["G0", "G00", "G1", "g01", "G04", "G90", "G91", "G20", "G21", "G18",
+                     "G55", "G94", "M3", "M08", "M30", "S1000", "F100", "P250"]),
+    st.tuples(st.sampled_from("XYZABCxz"), _number).map("".join),
+)
+_word = st.one_of(_good_word, _good_word, _good_word, _any_word)
+_block = st.lists(_word, max_size=6).map(" ".join)
+_words_text = st.tuples(
+    st.sampled_from(["", "G00 X0 Y0 Z0 A0 B0 C0\n", "G01 X0 F100\n"]),
+    st.lists(_block, max_size=12).map("\n".join),
+).map("".join)
+
+
+def _parse_only_nc_errors(text: str, integer_input: str) -> None:
+    try:
+        program = parse_program(text, "fuzz.nc", integer_input=integer_input)
+    except NCProgramError as error:
+        assert error.line is not None
+        assert 1 <= error.line <= text.count("\n") + 1
+        # the line, and the block's N word when it has one: 'line 1,' or 'line 1 (N0),'
+        assert re.search(rf"line {error.line}( \(N[0-9]+\))?,", str(error))
+        return
+    try:
+        written = format_program(program)
+    except NCProgramError:
+        return
+    parse_program(written)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.text(NC_CHARACTERS, max_size=200), st.sampled_from(["calculator", "increment"]))
+def test_fuzz_nc_characters_raise_only_nc_errors(text, integer_input):
+    _parse_only_nc_errors(text, integer_input)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_words_text, st.sampled_from(["calculator", "increment"]))
+def test_fuzz_word_sequences_raise_only_nc_errors(text, integer_input):
+    _parse_only_nc_errors(text, integer_input)
+
+
+def test_a_refusal_names_the_blocks_n_word_beside_its_line():
+    # an error names the file's line (an editor's) and, where the block has an N word, that
+    # block number (the control's): 'line 4 (N20)'; a block without one reads as before
+    text = "%\nO1000\nN10 G21 G90\nN0020 G01 X1. F100. G99.3\nG01 X2. G99.4\nM30\n%\n"
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text, "p.nc")
+    error = info.value
+    assert (error.line, error.block) == (4, 20)
+    assert str(error).startswith("p.nc, line 4 (N20), column 21, key 'G99.3': 2 problems in "
+                                 "the program (the first at line 4 (N20); ")
+    assert [str(e).split(": ")[0] for e in error.problems] == [
+        "p.nc, line 4 (N20), column 21, key 'G99.3'", "p.nc, line 5, column 9, key 'G99.4'"]
+    # a malformed word of the lexer's, and one refused by a single block
+    for bad, where in (("N30 G01 X", "p.nc, line 3 (N30), column 9, key 'X'"),
+                       ("G01 X", "p.nc, line 3, column 5, key 'X'")):
+        with pytest.raises(NCProgramError) as info:
+            parse_program(f"%\nG21\n{bad}\nM30\n%\n", "p.nc")
+        assert str(info.value).startswith(where + ": malformed number ''"), str(info.value)
