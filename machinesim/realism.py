@@ -112,6 +112,21 @@ class Realism:
         """The switches that are on, in order."""
         return tuple(name for name in self.names() if getattr(self, name))
 
+    def __repr__(self) -> str:
+        """The preset, or the switches on, or the lab's without those off when fewer are
+        (flags: no units): 'Realism(lab: all 10 on)', 'Realism(lateral_noise, registration
+        on; 8 off)', 'Realism(lab without registration)'."""
+        on, names = self.on, self.names()
+        off = tuple(name for name in names if name not in on)
+        if not on:
+            return f"Realism(ideal: all {len(names)} off)"
+        if not off:
+            return f"Realism(lab: all {len(names)} on)"
+        if len(off) < len(on):
+            return f"Realism(lab without {', '.join(off)})"
+        named = "noise_only: " if self == Realism.noise_only() else ""
+        return f"Realism({named}{', '.join(on)} on; {len(off)} off)"
+
     def __str__(self) -> str:
         for preset in ("ideal", "noise_only", "lab"):
             if self == getattr(Realism, preset)():

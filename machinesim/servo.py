@@ -58,6 +58,13 @@ MAX_ACC_FF = 2.0
 MAX_FOLLOW_PERIODS = 10**9
 
 
+#: `AxisServo`'s repr: the fields it names, and their units on a linear and a rotary axis.
+_REPR_FIELDS = (("kp", "Kp"), ("ki", "Ki"), ("kd", "Kd"), ("mass", "mass"),
+                ("damping", "damping"))
+_LINEAR_UNITS = ("N/m", "N/(m s)", "N s/m", "kg", "N s/m")
+_ROTARY_UNITS = ("N m/rad", "N m/(rad s)", "N m s/rad", "kg m^2", "N m s/rad")
+
+
 class ServoDivergenceError(MachineSimError):
     """The sampled servo loop of an axis is unstable: the axis would oscillate and diverge."""
 
@@ -206,6 +213,28 @@ class AxisServo:
                 "time already (Routh-Hurwitz on m s^3 + (c + Kd) s^2 + Kp s + Ki), so lower "
                 f"gains alike or a shorter period do not help; raise Kp, Kd or the damping{lower}")
 
+    def __repr__(self) -> str:
+        return f"AxisServo({self.summary()})"
+
+    def summary(self) -> str:
+        """The axis in one line with its units: linear for an axis named X, Y or Z, rotary
+        (per rad, kg m^2) for A, B or C, "SI" for any other name (the kind unknown)."""
+        letter = self.name.upper()
+        if len(letter) == 1 and letter in "XYZABC":
+            units = _ROTARY_UNITS if letter in "ABC" else _LINEAR_UNITS
+            gains = ", ".join(f"{label} {getattr(self, key):g} {unit}" for (key, label), unit
+                              in zip(_REPR_FIELDS, units, strict=True))
+        else:
+            gains = "SI, per m or rad: " + ", ".join(f"{label} {getattr(self, key):g}"
+                                                     for key, label in _REPR_FIELDS)
+        if self.acc_ff:
+            filtered = (f" through {self.bandwidth_hz:g} Hz" if np.isfinite(self.bandwidth_hz)
+                        else "")
+            forward = f"feed-forward {self.acc_ff:.4g} x the inertial force{filtered}"
+        else:
+            forward = "no feed-forward"
+        return f"{self.name}: {gains}; {forward}; loop {self.sample_time_s * 1e3:g} ms"
+
     @property
     def pole_radius(self) -> float:
         """Largest |z| of the closed loop's poles (< 1: stable)."""
@@ -317,6 +346,11 @@ class PIDServo:
     and read back at the requested times (linear interpolation)."""
 
     axes: tuple
+
+    def __repr__(self) -> str:
+        parts = [f"column {i + 1} exact" if axis is None else axis.summary()
+                 for i, axis in enumerate(self.axes)]
+        return f"PIDServo({' | '.join(parts) or 'no axes'})"
 
     def follow(self, t: np.ndarray, q: np.ndarray) -> np.ndarray:
         t = np.asarray(t, dtype=np.float64)

@@ -90,6 +90,19 @@ def test_presets_and_variants():
         Realism(registration="yes")
 
 
+def test_a_realism_says_which_switches_are_on():
+    """Its repr had been the dataclass dump of all ten flags ('Realism(instrument_noise=
+    True, lateral_resolution=False, ...)'): the preset, or the switches on (in their order)
+    and how many are off, or the lab's without the few that are off."""
+    assert repr(Realism.ideal()) == "Realism(ideal: all 10 off)"
+    assert repr(Realism.lab()) == "Realism(lab: all 10 on)"
+    assert repr(Realism.noise_only()) == "Realism(noise_only: instrument_noise on; 9 off)"
+    assert repr(Realism.with_only("registration", "lateral_noise")) == (
+        "Realism(lateral_noise, registration on; 8 off)")
+    assert repr(Realism.lab().without("air_refraction", "registration")) == (
+        "Realism(lab without registration, air_refraction)")
+
+
 def test_lab_arguments():
     assert repr(Lab("robonano_a0ib", seed=2)) == "Lab(robonano_a0ib, noise=on, seed=2)"
     assert repr(Lab("robonano_a0ib", seed=2, realism=Realism.lab().without("registration"))

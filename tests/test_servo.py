@@ -222,3 +222,24 @@ def test_a_servo_model_returning_nan_is_named_by_the_planner():
     program = parse_program("G90 G21\nG01 X1.0 Z-0.5 F100\nG01 X2.0\n")
     with pytest.raises(InputError, match=r"servo.follow returned .*not finite.*Broken"):
         plan(program, load_machine("sts_lathe"), servo=Broken())
+
+
+def test_an_axis_and_a_servo_say_what_they_are_with_units():
+    """Their repr had been the dataclass dump of bare SI ('AxisServo(kp=1200000.0, ki=0.0,
+    kd=3700.0, mass=12.0, damping=1600.0, acc_ff=0.0, bandwidth_hz=inf, sample_time_s=
+    0.0001, name='X')'). Hand values: docs/lab.md's slide; Table 6 "after" c reads Kp 100
+    per mrad as 1e5 N m/rad, inertia 0.3 kg m^2; its z feeds forward ACCFF 0.001 x 1000 = 1
+    of the inertial force through System BW 16 Hz; 1e-4 s is 0.1 ms."""
+    slide = AxisServo(kp=1.2e6, ki=0.0, kd=3700.0, mass=12.0, damping=1600.0, name="X")
+    assert repr(slide) == ("AxisServo(X: Kp 1.2e+06 N/m, Ki 0 N/(m s), Kd 3700 N s/m, mass "
+                           "12 kg, damping 1600 N s/m; no feed-forward; loop 0.1 ms)")
+    unnamed = AxisServo(kp=1e4, ki=0.0, kd=0.0, mass=1.0, damping=100.0, sample_time_s=1e-3)
+    assert repr(unnamed) == ("AxisServo(axis: SI, per m or rad: Kp 10000, Ki 0, Kd 0, mass 1, "
+                             "damping 100; no feed-forward; loop 1 ms)")
+    assert repr(PIDServo((slide, None))) == f"PIDServo({slide.summary()} | column 2 exact)"
+    after = repr(table6_servo("after", ("z", "y", "c")))
+    assert after == (
+        "PIDServo(z: Kp 180000 N/m, Ki 1e+07 N/(m s), Kd 1500 N s/m, mass 4.8 kg, damping "
+        "1600 N s/m; feed-forward 1 x the inertial force through 16 Hz; loop 0.1 ms | column 2 "
+        "exact | c: Kp 100000 N m/rad, Ki 1e+07 N m/(rad s), Kd 1500 N m s/rad, mass 0.3 kg "
+        "m^2, damping 50 N m s/rad; no feed-forward; loop 0.1 ms)")
