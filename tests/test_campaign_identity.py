@@ -228,3 +228,27 @@ def test_the_state_digest_is_the_same_whatever_the_hash_seed():
                                " ", 1) for seed in ("1", "2", "3", "4")]
     assert len({digest for digest, _ in said}) == 1, said
     assert len({order for _, order in said}) > 1  # the sets did iterate otherwise
+
+
+def test_a_machine_held_is_known_by_its_urdf_not_the_path_it_was_loaded_by(module,
+                                                                            monkeypatch):
+    """A procedure that keeps a loaded Machine, resumed from another folder (the URDF by
+    another path, relative or absolute, or through a symlink) or after reading its digest:
+    the same machine, the same state; another URDF, another."""
+    from machinesim.machine import Machine
+    from machinesim.machines import models_dir
+
+    urdf = models_dir() / "grooving_4axis.urdf"
+    probe = module().Probe
+    made = []
+    for path in (urdf, urdf.parent / ".." / urdf.parent.name / urdf.name):
+        made.append(probe())
+        made[-1].machine = Machine(path)
+    monkeypatch.chdir(urdf.parent)
+    made.append(probe())
+    made[-1].machine = Machine(urdf.name)
+    assert made[-1].machine.digest  # read (cached on the machine) in one run, not in another
+    assert len({state_of(p, "p") for p in made}) == 1
+    other = probe()
+    other.machine = Machine(models_dir() / "sts_lathe.urdf")
+    assert state_of(other, "p") != state_of(made[0], "p")

@@ -16,10 +16,11 @@ one; two instances of one class with other constructor arguments were one campai
 - The state: a digest of the object's state as `copy` and `pickle` take it
   (``__reduce_ex__``: ``vars()`` for a plain object), written out in a canonical form (keys
   and sets sorted, floats to the bit, arrays by dtype, shape and bytes), so that it is the
-  same in every process whatever ``PYTHONHASHSEED``; a class or reference is digested by
-  the instance it makes (the class called with no arguments), so that the class and an
-  instance made alike are one campaign. State it cannot write so (an open file, a lock, a
-  lambda) is refused, naming where it lies in the object (`InputError`).
+  same in every process whatever ``PYTHONHASHSEED``; a loaded machinesim ``Machine`` by
+  the digest of its URDF (`Machine.digest`), not the path it was loaded by; a class or
+  reference is digested by the instance it makes (the class called with no arguments), so
+  that the class and an instance made alike are one campaign. State it cannot write so (an
+  open file, a lock, a lambda) is refused, naming where it lies in the object (`InputError`).
 
 machinesim's own code (the shipped procedures, the lab) is named by its version
 (`machinesim.__version__`), which campaign.json keeps as ``machinesim``.
@@ -178,6 +179,13 @@ def _canonical(value, path: str, seen: set, depth: int):
     array = _array(value, path)
     if array is not None:
         return array
+    machine = sys.modules.get("machinesim.machine")
+    if machine is not None and type(value) is machine.Machine:
+        # by the URDF it was built from (two machines with one digest move alike), not by
+        # its attributes: they hold the path it was loaded by (relative, absolute, through
+        # a symlink: a resume from another folder was another campaign) and its digest once
+        # read (cached on it: a machine whose digest was read was another state)
+        return ["machine", value.digest]
     try:
         reduced = value.__reduce_ex__(4)
     except RecursionError:
