@@ -252,3 +252,23 @@ def test_a_machine_held_is_known_by_its_urdf_not_the_path_it_was_loaded_by(modul
     other = probe()
     other.machine = Machine(models_dir() / "sts_lathe.urdf")
     assert state_of(other, "p") != state_of(made[0], "p")
+
+
+def test_a_run_describes_its_campaign_once(module, tmp_path):
+    """The runner keeps one description of its campaign (for campaign.json, the vary texts'
+    check and the Dataset): describing it builds the procedure twice (its state, and a
+    second instance to tell whether it makes the same state each time), and the runner
+    described it three times, building the user's class six times before any trial."""
+    counted = module(tail="\n\nclass Counted(Probe):\n    made = [0]\n\n"
+                     "    def __init__(self):\n        super().__init__()\n"
+                     "        Counted.made[0] += 1\n").Counted
+    spec = CampaignSpec(counted, 1, machine_name=MACHINE)
+    counted.made[0] = 0
+    spec.describe()
+    assert counted.made[0] == 2  # its state, and a second instance's
+    counted.made[0] = 0
+    run(counted, 1, machine=MACHINE, out=tmp_path / "out", workers=0, progress=False,
+        report=False)
+    # the spec's own check (1) and its parameters' lab_uses (1), one description (2), the one
+    # trial (1)
+    assert counted.made[0] == 5

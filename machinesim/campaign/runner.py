@@ -441,14 +441,17 @@ def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
         refuse_busy(out)  # another run making DIR a campaign's just now: its temporary file
         raise
     with locked(out):  # a second campaign on DIR meanwhile is refused
-        folder = CampaignFolder(out, spec.describe())
+        # described once: a user's procedure is built twice for each description (its state)
+        described = spec.describe()
+        folder = CampaignFolder(out, described)
         stored = folder.spec["vary"]
-        if list(stored.items()) != list(spec.describe()["vary"].items()):
+        if list(stored.items()) != list(described["vary"].items()):
             # the same distributions spelt otherwise (10nm, 0.01um) or given in another order:
             # the missing trials draw from the texts the campaign was begun with, to the last
             # bit as its first trials did, and the Dataset keeps its order of them
             spec = dataclasses.replace(spec, vary=tuple(
                 (name, parse_distribution(text, name)) for name, text in stored.items()))
+            described = {**described, "vary": {n: d.text for n, d in spec.vary}}  # describe()'s
         done = folder.done(spec.trials)
         beyond = [i for i in finished_trials(folder.path) if i >= spec.trials]
         if beyond:  # not progress: said under --quiet too, the summary is of fewer trials
@@ -457,7 +460,7 @@ def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
                   f"{beyond[0]}): left out of this summary, kept for a larger --trials",
                   file=sys.stderr)
         missing = sorted(set(range(spec.trials)) - set(done))
-        assembly = Assembly(spec.describe(), spec.trials)  # each record's numbers, not the record
+        assembly = Assembly(described, spec.trials)  # each record's numbers, not the record
         # the trials already there are read first: a damaged file is refused before the missing
         # trials run, not after
         _read(folder, done, assembly, sys.stderr if progress else None)
