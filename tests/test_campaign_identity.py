@@ -272,3 +272,22 @@ def test_a_run_describes_its_campaign_once(module, tmp_path):
     # the spec's own check (1) and its parameters' lab_uses (1), one description (2), the one
     # trial (1)
     assert counted.made[0] == 5
+
+
+def test_an_object_holding_a_method_bound_to_itself_is_digested(module):
+    """A procedure object that picks one of its methods in __init__ (self.step = self._fast)
+    holds itself: it was refused as a cycle ('it holds itself'), though copy.deepcopy and
+    pickle take it. It is written out by where it lies, as a pickle's memo does."""
+    probe = module(tail="\n\nclass Picks(Probe):\n    def __init__(self, fast=True):\n"
+                   "        super().__init__()\n"
+                   "        self.step = self.fast if fast else self.slow\n\n"
+                   "    def fast(self):\n        return 1\n\n"
+                   "    def slow(self):\n        return 2\n").Picks
+    fast, slow = state_of(probe(), "p"), state_of(probe(fast=False), "p")
+    assert fast == state_of(probe(), "p") != slow
+    # a parent link: the child's link back is the root's, wherever the child lies
+    a, b = probe(), probe()
+    a.child, b.child = {"up": a}, {"up": b}
+    assert state_of(a, "a") == state_of(b, "b") != fast
+    b.child = {"up": {"up": b}}  # one level more before the link: another state
+    assert state_of(b, "b") != state_of(a, "a")

@@ -17,7 +17,8 @@ one; two instances of one class with other constructor arguments were one campai
   (``__reduce_ex__``: ``vars()`` for a plain object), written out in a canonical form (keys
   and sets sorted, floats to the bit, arrays by dtype, shape and bytes), so that it is the
   same in every process whatever ``PYTHONHASHSEED``; a loaded machinesim ``Machine`` by
-  the digest of its URDF (`Machine.digest`), not the path it was loaded by; a class or
+  the digest of its URDF (`Machine.digest`), not the path it was loaded by; an object that
+  holds what holds it (a method bound to the procedure itself) by where that lies; a class or
   reference is digested by the instance it makes (the class called with no arguments), so
   that the class and an instance made alike are one campaign. State it cannot write so (an
   open file, a lock, a lambda) is refused, naming where it lies in the object (`InputError`).
@@ -108,7 +109,7 @@ def _bytecode(cls: type) -> bytes:
             codes = [_code(value.__code__)]
         else:
             try:
-                codes = [_canonical(value, name, set(), 0)]
+                codes = [_canonical(value, name, {}, 0)]
             except _Undigestible:
                 codes = [type(value).__qualname__]
         parts.append([name, codes])
@@ -130,7 +131,7 @@ def state_of(procedure, shown: str, made: bool = False) -> str | None:
     object is one the campaign made, a class called with no arguments, whose state its code
     decides), None for such state instead."""
     try:
-        canonical = _canonical(procedure, "", set(), 0)
+        canonical = _canonical(procedure, "", {}, 0)
     except _Undigestible as error:
         if made:
             return None
@@ -142,9 +143,10 @@ def state_of(procedure, shown: str, made: bool = False) -> str | None:
 _PLAIN = (str, int, bool, type(None))
 
 
-def _canonical(value, path: str, seen: set, depth: int):
+def _canonical(value, path: str, seen: dict, depth: int):
     """``value`` as JSON whose text is the same in every process, or InputError naming
-    ``path`` (the attribute, as ``.gain`` or ``.table['x'][2]``)."""
+    ``path`` (the attribute, as ``.gain`` or ``.table['x'][2]``); ``seen``: the path of each
+    object that holds it, by id."""
     if isinstance(value, _PLAIN):
         return [type(value).__name__, value] if not isinstance(value, int) or \
             isinstance(value, bool) or abs(value) < 2**53 else ["int", str(value)]
@@ -156,9 +158,10 @@ def _canonical(value, path: str, seen: set, depth: int):
         return [type(value).__name__, value.hex()]
     if depth > _DEEPEST:
         raise _undigestible(path, value, f"nested more than {_DEEPEST} deep")
-    if id(value) in seen:
-        raise _undigestible(path, value, "it holds itself (a cycle)")
-    seen = seen | {id(value)}
+    if id(value) in seen:  # it holds what holds it (a method bound to the object itself,
+        # a parent link): by where that lies, as a pickle by its memo; it was refused
+        return ["back", seen[id(value)]]
+    seen = {**seen, id(value): path}
     depth += 1
     if isinstance(value, list | tuple):
         return [type(value).__name__,
@@ -219,7 +222,7 @@ def _array(value, path: str):
     array = numpy.asarray(value)
     if array.dtype.hasobject:
         return ["ndarray-object", list(array.shape),
-                [_canonical(v, f"{path}[...]", set(), 0) for v in array.ravel().tolist()]]
+                [_canonical(v, f"{path}[...]", {}, 0) for v in array.ravel().tolist()]]
     return ["ndarray", array.dtype.str, list(array.shape),
             _digest(numpy.ascontiguousarray(array).tobytes())]
 
