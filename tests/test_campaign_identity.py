@@ -291,3 +291,15 @@ def test_an_object_holding_a_method_bound_to_itself_is_digested(module):
     assert state_of(a, "a") == state_of(b, "b") != fast
     b.child = {"up": {"up": b}}  # one level more before the link: another state
     assert state_of(b, "b") != state_of(a, "a")
+
+
+def test_a_cached_propertys_value_is_not_state(module):
+    """A functools.cached_property's value is kept in the object's attributes once read: a
+    script that read it before the run (in one run, not in the next) made another state of
+    the same procedure object."""
+    probe = module(tail="\n\nimport functools\n\n\nclass Cached(Probe):\n"
+                   "    @functools.cached_property\n    def doubled(self):\n"
+                   "        return 2 * self.gain\n").Cached
+    unread, read = probe(), probe()
+    assert read.doubled == 2.0
+    assert state_of(unread, "p") == state_of(read, "p") != state_of(probe(gain=3.0), "p")

@@ -18,7 +18,8 @@ one; two instances of one class with other constructor arguments were one campai
   and sets sorted, floats to the bit, arrays by dtype, shape and bytes), so that it is the
   same in every process whatever ``PYTHONHASHSEED``; a loaded machinesim ``Machine`` by
   the digest of its URDF (`Machine.digest`), not the path it was loaded by; an object that
-  holds what holds it (a method bound to the procedure itself) by where that lies; a class or
+  holds what holds it (a method bound to the procedure itself) by where that lies; without
+  the values of its ``functools.cached_property``s (there once read, from the rest); a class or
   reference is digested by the instance it makes (the class called with no arguments), so
   that the class and an instance made alike are one campaign. State it cannot write so (an
   open file, a lock, a lambda) is refused, naming where it lies in the object (`InputError`).
@@ -29,6 +30,7 @@ machinesim's own code (the shipped procedures, the lab) is named by its version
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import inspect
 import json
@@ -204,8 +206,12 @@ def _canonical(value, path: str, seen: dict, depth: int):
     if isinstance(state, tuple) and len(state) == 2 and isinstance(state[1], dict):
         state = {**(state[0] or {}), **state[1]}  # __slots__: (dict, slots)
     if isinstance(state, dict) and all(isinstance(k, str) for k in state):
+        # not a functools.cached_property's value: computed from the rest when first read,
+        # it is there once the script read it (another state for the same object)
         parts.append(["attributes", [[k, _canonical(v, f"{path}.{k}", seen, depth)]
-                                     for k, v in sorted(state.items())]])
+                                     for k, v in sorted(state.items())
+                                     if not isinstance(inspect.getattr_static(cls, k, None),
+                                                       functools.cached_property)]])
     else:
         parts.append(_canonical(state, f"{path}(state)", seen, depth))
     for k, items in ((3, "items"), (4, "entries")):  # a list's or dict's own items
