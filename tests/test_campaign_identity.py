@@ -303,3 +303,17 @@ def test_a_cached_propertys_value_is_not_state(module):
     unread, read = probe(), probe()
     assert read.doubled == 2.0
     assert state_of(unread, "p") == state_of(read, "p") != state_of(probe(gain=3.0), "p")
+
+
+def test_minus_zero_is_the_zero_it_equals(module):
+    """Probe(gain=-0.0) and Probe(gain=0.0) are equal arguments (-0.0 == 0.0, and so in an
+    array): one campaign; the smallest float above zero is another."""
+    import numpy as np
+
+    probe = module().Probe
+    zero = state_of(probe(gain=0.0), "p")
+    assert state_of(probe(gain=-0.0), "p") == zero != state_of(probe(gain=5e-324), "p")
+    assert state_of(probe(gain=complex(-0.0, -0.0)), "p") == state_of(probe(gain=0j), "p")
+    assert state_of(probe(gain=np.array([-0.0, 1.0], dtype=np.float32)), "p") == \
+        state_of(probe(gain=np.array([0.0, 1.0], dtype=np.float32)), "p")
+    assert state_of(probe(gain=np.float64(-0.0)), "p") == zero  # a float's subclass

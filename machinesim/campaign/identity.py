@@ -15,14 +15,15 @@ one; two instances of one class with other constructor arguments were one campai
   digested by its methods' bytecode, constants and names instead.
 - The state: a digest of the object's state as `copy` and `pickle` take it
   (``__reduce_ex__``: ``vars()`` for a plain object), written out in a canonical form (keys
-  and sets sorted, floats to the bit, arrays by dtype, shape and bytes), so that it is the
-  same in every process whatever ``PYTHONHASHSEED``; a loaded machinesim ``Machine`` by
-  the digest of its URDF (`Machine.digest`), not the path it was loaded by; an object that
-  holds what holds it (a method bound to the procedure itself) by where that lies; without
-  the values of its ``functools.cached_property``s (there once read, from the rest); a class or
-  reference is digested by the instance it makes (the class called with no arguments), so
-  that the class and an instance made alike are one campaign. State it cannot write so (an
-  open file, a lock, a lambda) is refused, naming where it lies in the object (`InputError`).
+  and sets sorted, floats to the bit but -0.0 as 0.0, arrays by dtype, shape and bytes), so
+  that it is the same in every process whatever ``PYTHONHASHSEED``; a loaded machinesim
+  ``Machine`` by the digest of its URDF (`Machine.digest`), not the path it was loaded by;
+  an object that holds what holds it (a method bound to the procedure itself) by where that
+  lies; without the values of its ``functools.cached_property``s (there once read, from the
+  rest); a class or reference is digested by the instance it makes (the class called with no
+  arguments), so that the class and an instance made alike are one campaign. State it cannot
+  write so (an open file, a lock, a lambda) is refused, naming where it lies in the object
+  (`InputError`).
 
 machinesim's own code (the shipped procedures, the lab) is named by its version
 (`machinesim.__version__`), which campaign.json keeps as ``machinesim``.
@@ -152,10 +153,11 @@ def _canonical(value, path: str, seen: dict, depth: int):
     if isinstance(value, _PLAIN):
         return [type(value).__name__, value] if not isinstance(value, int) or \
             isinstance(value, bool) or abs(value) < 2**53 else ["int", str(value)]
-    if isinstance(value, float):  # to the bit; nan and the infinities, which JSON lacks
-        return ["float", value.hex() if math.isfinite(value) else repr(value)]
+    if isinstance(value, float):  # to the bit; nan and the infinities, which JSON lacks;
+        # -0.0 as the 0.0 it equals (+ 0.0): Probe(offset=-0.0) was another campaign
+        return ["float", (value + 0.0).hex() if math.isfinite(value) else repr(value)]
     if isinstance(value, complex):
-        return ["complex", value.real.hex(), value.imag.hex()]
+        return ["complex", (value.real + 0.0).hex(), (value.imag + 0.0).hex()]
     if isinstance(value, bytes | bytearray):
         return [type(value).__name__, value.hex()]
     if depth > _DEEPEST:
@@ -229,6 +231,8 @@ def _array(value, path: str):
     if array.dtype.hasobject:
         return ["ndarray-object", list(array.shape),
                 [_canonical(v, f"{path}[...]", {}, 0) for v in array.ravel().tolist()]]
+    if array.dtype.kind in "fc":  # -0.0 as 0.0, as a float's
+        array = array + array.dtype.type(0)
     return ["ndarray", array.dtype.str, list(array.shape),
             _digest(numpy.ascontiguousarray(array).tobytes())]
 
