@@ -183,7 +183,7 @@ def test_a_class_in_the_script_is_known_by_its_source_not_the_scripts_file(tmp_p
 
     first = code_of(load(10))
     assert first == {"classes": {"__main__:Mine": first["classes"]["__main__:Mine"]},
-                     "modules": {}}
+                     "modules": {}, "imports": {}}
     assert code_of(load(20)) == first
 
 
@@ -317,3 +317,30 @@ def test_minus_zero_is_the_zero_it_equals(module):
     assert state_of(probe(gain=np.array([-0.0, 1.0], dtype=np.float32)), "p") == \
         state_of(probe(gain=np.array([0.0, 1.0], dtype=np.float32)), "p")
     assert state_of(probe(gain=np.float64(-0.0)), "p") == zero  # a float's subclass
+
+
+def test_a_helper_imported_from_another_file_is_code_the_campaign_knows(module, tmp_path):
+    """The class's module imports a helper from another file of the user's: an edit of the
+    helper (its body, or a default argument) was resumed with the campaign's old code's
+    trials; it is refused naming that file. One level deep, and not an installed package."""
+    helper = tmp_path / "identity_probe_helper.py"
+    helper.write_text("def gain(x=1.0):\n    return x\n", encoding="utf-8")
+    tail = ("\n\nimport numpy\nfrom identity_probe_helper import gain\n\n\n"
+            "class Helped(Probe):\n    def identify(self, reading):\n        return gain()\n")
+    try:
+        module(tail=tail)
+        out = tmp_path / "out"
+        begun = _folder(out, f"{MODULE}:Helped").spec["code"]
+        assert set(begun["imports"]) == {"identity_probe_helper"}  # not numpy
+        helper.write_text("def gain(x=2.0):\n    return x\n", encoding="utf-8")
+        with pytest.raises(InputError, match=r"holds another campaign \(code: the file of "
+                           r"imported module identity_probe_helper changed, since the "
+                           r"campaign began"):
+            _folder(out, f"{MODULE}:Helped")
+        # a campaign.json written before the imports were kept resumes as it was
+        stored = json.loads((out / "campaign.json").read_text())
+        del stored["code"]["imports"]
+        (out / "campaign.json").write_text(json.dumps(stored))
+        assert _folder(out, f"{MODULE}:Helped").spec == stored
+    finally:
+        sys.modules.pop("identity_probe_helper", None)

@@ -10,7 +10,9 @@ one; two instances of one class with other constructor arguments were one campai
 - The code: the SHA-256 (first 16 hex digits) of the source of each class in the
   procedure's MRO outside machinesim and the standard library (`inspect.getsource`), and of
   each such class's module file (a helper function beside the class is code it runs too),
-  but a script's (``__main__``), which holds the campaign's call as well.
+  but a script's (``__main__``), which holds the campaign's call as well; and (``imports``)
+  of each module of the user's that those modules (a script too) import, one level deep (a
+  helper from another file): not an installed package's (site-packages), nor deeper.
   A class without a source file (one typed at the interactive prompt or fed on stdin) is
   digested by its methods' bytecode, constants and names instead.
 - The state: a digest of the object's state as `copy` and `pickle` take it
@@ -93,7 +95,47 @@ def code_of(procedure) -> dict:
                 modules[each.__module__] = _digest(Path(path).read_bytes())
             except OSError:  # gone since it was imported: its class's source still counts
                 pass
-    return {"classes": classes, "modules": modules}
+    return {"classes": classes, "modules": modules, "imports": _imports(classes, modules)}
+
+
+def _imports(classes: dict, modules: dict) -> dict:
+    """``{module: digest}`` of the file of each module of the user's that the modules of
+    ``classes`` import (a module, or a function or class from it, among their globals),
+    one level deep: a helper the class calls from another file of the user's. Not the
+    standard library's, an installed package's (site-packages) nor machinesim's."""
+    found = {}
+    for holder in sorted({name.split(":", 1)[0] for name in classes}):
+        for value in list(vars(sys.modules[holder]).values()):
+            if isinstance(value, types.ModuleType):
+                name = value.__name__
+            elif isinstance(value, type | types.FunctionType):
+                name = getattr(value, "__module__", None)
+            else:
+                continue
+            if not isinstance(name, str) or name in modules or name in found \
+                    or name in (holder, "__main__"):
+                continue
+            path = _user_file(sys.modules.get(name))
+            if path is not None:
+                try:
+                    found[name] = _digest(path.read_bytes())
+                except OSError:  # gone since it was imported
+                    pass
+    return dict(sorted(found.items()))
+
+
+def _user_file(module) -> Path | None:
+    """The file of ``module`` when it is the user's own: neither machinesim's, the standard
+    library's nor an installed package's."""
+    name = getattr(module, "__name__", "")
+    path = getattr(module, "__file__", None)
+    if not isinstance(path, str) or name == "machinesim" or name.startswith("machinesim."):
+        return None
+    where = Path(path).resolve()
+    stdlib = Path(sysconfig.get_paths()["stdlib"]).resolve()
+    if stdlib in where.parents or {"site-packages", "dist-packages"} & set(where.parts):
+        return None
+    return where if where.suffix == ".py" else None
 
 
 def _bytecode(cls: type) -> bytes:

@@ -95,9 +95,9 @@ class CampaignFolder:
                 raise InputError(f"{brief(repr(old))}; expected the campaign spec, an object "
                                  "(procedure, seed, noise, vary, ...)", source=str(stored))
             if not same_campaign(old, spec):
-                keys = sorted(k for k in set(old) | set(_identity_kept(old, spec))
-                              if old.get(k) != spec.get(k))
-                diff = ", ".join(_difference(k, old.get(k), spec.get(k)) for k in keys)
+                kept = _identity_kept(old, spec)
+                keys = sorted(k for k in set(old) | set(kept) if old.get(k) != kept.get(k))
+                diff = ", ".join(_difference(k, old.get(k), kept.get(k)) for k in keys)
                 back = (" (or put the procedure's code back as it was, to resume)"
                         if "code" in keys and "procedure" not in keys else "")
                 raise InputError(f"holds another campaign ({diff}); give another --out or "
@@ -179,8 +179,14 @@ IDENTITY_KEYS = ("machinesim", "code", "state")
 
 
 def _identity_kept(old: dict, new: dict) -> dict:
-    """``new`` without the `IDENTITY_KEYS` that campaign.json ``old`` was written without."""
-    return {k: v for k, v in new.items() if k in old or k not in IDENTITY_KEYS}
+    """``new`` without the `IDENTITY_KEYS` that campaign.json ``old`` was written without,
+    and without its code's ``imports`` when ``old``'s code has none (written before they
+    were kept, 2026-12-01)."""
+    kept = {k: v for k, v in new.items() if k in old or k not in IDENTITY_KEYS}
+    code, was = kept.get("code"), old.get("code")
+    if isinstance(code, dict) and isinstance(was, dict) and "imports" not in was:
+        kept["code"] = {k: v for k, v in code.items() if k != "imports"}
+    return kept
 
 
 def _difference(key: str, old, new) -> str:
@@ -219,7 +225,8 @@ def _code_difference(old: dict, new: dict) -> str:
     code its campaign began with: the classes whose source and the modules whose file
     changed, or came or went."""
     said = []
-    for part, what in (("classes", "the source of class"), ("modules", "the file of module")):
+    for part, what in (("classes", "the source of class"), ("modules", "the file of module"),
+                       ("imports", "the file of imported module")):
         before, now = old.get(part), new.get(part)
         if not isinstance(before, dict) or not isinstance(now, dict):
             continue
