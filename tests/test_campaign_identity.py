@@ -344,3 +344,23 @@ def test_a_helper_imported_from_another_file_is_code_the_campaign_knows(module, 
         assert _folder(out, f"{MODULE}:Helped").spec == stored
     finally:
         sys.modules.pop("identity_probe_helper", None)
+
+
+def test_code_of_a_class_without_a_source_file_is_the_same_whatever_the_hash_seed():
+    """A class typed in (no source file) is digested by its bytecode: a set of texts in a
+    method (``r in {"alpha", ...}``, a frozenset constant) was written by its repr, in
+    another order in each process, so a resume of such a campaign was refused."""
+    import os
+    import subprocess
+
+    code = ("from machinesim.campaign.identity import code_of\n"
+            "ns = {'__name__': '__main__'}\n"
+            "exec('class Typed:\\n    def identify(self, r):\\n"
+            "        return r in {\"alpha\", \"beta\", \"gamma\", \"delta\"}\\n', ns)\n"
+            "print(code_of(ns['Typed'])['classes'], repr(frozenset({'alpha', 'beta', 'gamma', "
+            "'delta'})))\n")
+    said = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                           check=True, env={**os.environ, "PYTHONHASHSEED": seed}).stdout.split(
+                               "} ", 1) for seed in ("1", "2", "3", "4")]
+    assert len({digest for digest, _ in said}) == 1, said
+    assert len({order for _, order in said}) > 1  # the sets did iterate otherwise

@@ -163,7 +163,18 @@ def _bytecode(cls: type) -> bytes:
 
 def _code(code: types.CodeType) -> list:
     return [code.co_code.hex(), list(code.co_names), list(code.co_varnames),
-            [_code(c) if isinstance(c, types.CodeType) else repr(c) for c in code.co_consts]]
+            [_code(c) if isinstance(c, types.CodeType) else _constant(c)
+             for c in code.co_consts]]
+
+
+def _constant(value) -> str | list:
+    """A code object's constant by its repr, but one that holds a frozenset (``x in {"a",
+    "b"}`` compiles to one) in its canonical form: a frozenset's repr is in the order of its
+    texts' hashes, another in each process (``PYTHONHASHSEED``)."""
+    def holds_set(c) -> bool:
+        return isinstance(c, frozenset) or isinstance(c, tuple) and any(map(holds_set, c))
+
+    return _canonical(value, "", {}, 0) if holds_set(value) else repr(value)
 
 
 class _Undigestible(Exception):
