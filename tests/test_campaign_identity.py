@@ -364,3 +364,25 @@ def test_code_of_a_class_without_a_source_file_is_the_same_whatever_the_hash_see
                                "} ", 1) for seed in ("1", "2", "3", "4")]
     assert len({digest for digest, _ in said}) == 1, said
     assert len({order for _, order in said}) > 1  # the sets did iterate otherwise
+
+
+def test_a_path_the_class_makes_from_its_file_is_the_same_through_a_symlink(module, tmp_path):
+    """A class that keeps Path(__file__).parent / 'cal.csv' (its data beside it), imported
+    through a symlinked folder on sys.path (another checkout's link, another sys.path entry):
+    the same file, the same state; a relative path is kept as written (from another folder
+    it names another file)."""
+    from pathlib import Path
+
+    probe = module(tail="\n\nfrom pathlib import Path\n\n\nclass Data(Probe):\n"
+                   "    def __init__(self):\n        super().__init__()\n"
+                   "        self.data = Path(__file__).parent / 'cal.csv'\n").Data
+    (tmp_path / "link").symlink_to(tmp_path, target_is_directory=True)
+    direct, linked = probe(), probe()
+    linked.data = tmp_path / "link" / "cal.csv"
+    assert linked.data != direct.data
+    assert state_of(direct, "p") == state_of(linked, "p")
+    linked.data = tmp_path / "link" / "other.csv"
+    assert state_of(direct, "p") != state_of(linked, "p")
+    relative, linked_relative = probe(), probe()
+    relative.data, linked_relative.data = Path("cal.csv"), Path("link/cal.csv")
+    assert state_of(relative, "p") != state_of(linked_relative, "p")

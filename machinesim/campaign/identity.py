@@ -20,6 +20,7 @@ one; two instances of one class with other constructor arguments were one campai
   and sets sorted, floats to the bit but -0.0 as 0.0, arrays by dtype, shape and bytes), so
   that it is the same in every process whatever ``PYTHONHASHSEED``; a loaded machinesim
   ``Machine`` by the digest of its URDF (`Machine.digest`), not the path it was loaded by;
+  an absolute ``pathlib.Path`` as its real path (``os.path.realpath``), a relative one as it is;
   an object that holds what holds it (a method bound to the procedure itself) by where that
   lies; without the values of its ``functools.cached_property``s (there once read, from the
   rest); a class or reference is digested by the instance it makes (the class called with no
@@ -38,6 +39,7 @@ import hashlib
 import inspect
 import json
 import math
+import os
 import sys
 import sysconfig
 import types
@@ -239,6 +241,11 @@ def _canonical(value, path: str, seen: dict, depth: int):
     array = _array(value, path)
     if array is not None:
         return array
+    if isinstance(value, Path) and value.is_absolute():
+        # the file it names, not the way there: Path(__file__).parent / "cal.csv" in
+        # __init__ names it through the sys.path entry the module was imported by (a
+        # symlinked folder: another state). Not a relative path: another folder's is another
+        value = type(value)(os.path.realpath(value))
     machine = sys.modules.get("machinesim.machine")
     if machine is not None and type(value) is machine.Machine:
         # by the URDF it was built from (two machines with one digest move alike), not by
