@@ -386,3 +386,31 @@ def test_a_path_the_class_makes_from_its_file_is_the_same_through_a_symlink(modu
     relative, linked_relative = probe(), probe()
     relative.data, linked_relative.data = Path("cal.csv"), Path("link/cal.csv")
     assert state_of(relative, "p") != state_of(linked_relative, "p")
+
+
+def test_a_script_imports_what_its_class_names_alone(tmp_path, monkeypatch):
+    """A script that defines its procedure imports a module of helpers the class calls and
+    one it plots with after the campaign: an edit of the plotting module is no change of
+    the procedure's code (the script's other work), an edit of the helpers is."""
+    import types
+
+    monkeypatch.syspath_prepend(str(tmp_path))
+    for name in ("script_helpers", "script_plotting"):
+        (tmp_path / f"{name}.py").write_text("def f():\n    return 1\n", encoding="utf-8")
+        monkeypatch.delitem(sys.modules, name, raising=False)
+    script = tmp_path / "campaign_script.py"
+    script.write_text("import script_helpers\nimport script_plotting\n\n\nclass Mine:\n"
+                      "    def identify(self, r):\n        return script_helpers.f()\n\n\n"
+                      "script_plotting.f()\n", encoding="utf-8")
+    main = types.ModuleType("__main__")
+    main.__file__ = str(script)
+    monkeypatch.setitem(sys.modules, "__main__", main)
+    exec(compile(script.read_text(), str(script), "exec"), main.__dict__)  # noqa: S102
+    first = code_of(main.Mine)
+    assert set(first["imports"]) == {"script_helpers"}
+    (tmp_path / "script_plotting.py").write_text("def f():\n    return 2\n", encoding="utf-8")
+    assert code_of(main.Mine) == first
+    (tmp_path / "script_helpers.py").write_text("def f():\n    return 2\n", encoding="utf-8")
+    assert code_of(main.Mine)["imports"] != first["imports"]
+    for name in ("script_helpers", "script_plotting"):
+        sys.modules.pop(name, None)

@@ -11,8 +11,9 @@ one; two instances of one class with other constructor arguments were one campai
   procedure's MRO outside machinesim and the standard library (`inspect.getsource`), and of
   each such class's module file (a helper function beside the class is code it runs too),
   but a script's (``__main__``), which holds the campaign's call as well; and (``imports``)
-  of each module of the user's that those modules (a script too) import, one level deep (a
-  helper from another file): not an installed package's (site-packages), nor deeper.
+  of each module of the user's that those modules import (a script: those its classes
+  name), one level deep (a helper from another file): not an installed package's
+  (site-packages), nor deeper.
   A class without a source file (one typed at the interactive prompt or fed on stdin) is
   digested by its methods' bytecode, constants and names instead.
 - The state: a digest of the object's state as `copy` and `pickle` take it
@@ -80,10 +81,11 @@ def code_of(procedure) -> dict:
     """``{"classes": {module:qualname: digest}, "modules": {module: digest}}`` of the code
     ``procedure`` (a class or an object) runs, outside machinesim (module docstring)."""
     cls = procedure if isinstance(procedure, type) else type(procedure)
-    classes, modules = {}, {}
+    classes, modules, users = {}, {}, []
     for each in cls.__mro__:
         if not _outside(each):
             continue
+        users.append(each)
         try:
             source = inspect.getsource(each).encode()
         except (OSError, TypeError):  # no source file: typed in, or fed on stdin
@@ -97,17 +99,23 @@ def code_of(procedure) -> dict:
                 modules[each.__module__] = _digest(Path(path).read_bytes())
             except OSError:  # gone since it was imported: its class's source still counts
                 pass
-    return {"classes": classes, "modules": modules, "imports": _imports(classes, modules)}
+    return {"classes": classes, "modules": modules, "imports": _imports(users, modules)}
 
 
-def _imports(classes: dict, modules: dict) -> dict:
+def _imports(classes: list, modules: dict) -> dict:
     """``{module: digest}`` of the file of each module of the user's that the modules of
     ``classes`` import (a module, or a function or class from it, among their globals),
     one level deep: a helper the class calls from another file of the user's. Not the
-    standard library's, an installed package's (site-packages) nor machinesim's."""
+    standard library's, an installed package's (site-packages) nor machinesim's. A script's
+    (``__main__``) imports those its classes name alone: it imports for its other work too
+    (a plot's module, edited after the campaign began, was a change of its code)."""
     found = {}
-    for holder in sorted({name.split(":", 1)[0] for name in classes}):
-        for value in list(vars(sys.modules[holder]).values()):
+    for holder in sorted({each.__module__ for each in classes}):
+        named = None if holder != "__main__" else \
+            {n for each in classes if each.__module__ == holder for n in _names(each)}
+        for key, value in list(vars(sys.modules[holder]).items()):
+            if named is not None and key not in named:
+                continue
             if isinstance(value, types.ModuleType):
                 name = value.__name__
             elif isinstance(value, type | types.FunctionType):
@@ -124,6 +132,24 @@ def _imports(classes: dict, modules: dict) -> dict:
                 except OSError:  # gone since it was imported
                     pass
     return dict(sorted(found.items()))
+
+
+def _names(cls: type) -> set:
+    """The global and attribute names the functions of ``cls``'s body use (their code's
+    ``co_names``, nested code too)."""
+    found, codes = set(), []
+    for value in vars(cls).values():
+        if isinstance(value, staticmethod | classmethod):
+            value = value.__func__
+        if isinstance(value, property):
+            codes += [f.__code__ for f in (value.fget, value.fset, value.fdel) if f is not None]
+        elif isinstance(value, types.FunctionType):
+            codes.append(value.__code__)
+    while codes:
+        code = codes.pop()
+        found.update(code.co_names)
+        codes += [c for c in code.co_consts if isinstance(c, types.CodeType)]
+    return found
 
 
 def _user_file(module) -> Path | None:
