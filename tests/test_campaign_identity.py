@@ -414,3 +414,38 @@ def test_a_script_imports_what_its_class_names_alone(tmp_path, monkeypatch):
     assert code_of(main.Mine)["imports"] != first["imports"]
     for name in ("script_helpers", "script_plotting"):
         sys.modules.pop(name, None)
+
+
+def test_plain_data_a_procedure_may_keep_is_digested_alike_in_every_process(tmp_path):
+    """What a real procedure keeps (an Enum, a dataclass, numpy's Generator and RandomState,
+    a dict with int and str keys, a set of tuples, a functools.partial, an ErrorModel, a
+    Path) is digested, not refused, and alike in processes with other hash seeds and
+    working folders: a resume of such a campaign is not refused."""
+    import os
+    import subprocess
+
+    (tmp_path / "kept_state_module.py").write_text(
+        "import dataclasses, enum, functools, pathlib\nimport numpy as np\n"
+        "from machinesim.errors.model import ErrorModel\n\n\n"
+        "class Mode(enum.Enum):\n    FAST = 'fast'\n\n\n"
+        "@dataclasses.dataclass\nclass Settings:\n    gain: float = 1.5\n"
+        "    axes: tuple = ('X', 'Z')\n\n\n"
+        "def scale(x, k):\n    return k * x\n\n\n"
+        "class Kept:\n    def __init__(self):\n        self.mode = Mode.FAST\n"
+        "        self.settings = Settings()\n        self.rng = np.random.default_rng(7)\n"
+        "        self.legacy = np.random.RandomState(7)\n"
+        "        self.table = {1: 'one', 'two': 2, (3, 4): {'alpha', 'beta', 'gamma'}}\n"
+        "        self.pairs = {(1, 'a'), (2, 'b'), (0, 'z')}\n"
+        "        self.scale = functools.partial(scale, k=2.0)\n"
+        "        self.errors = ErrorModel.from_dict({'tool': {'offset_um': [1.0, 2.0, 3.0]}})\n"
+        "        self.data = pathlib.Path('/tmp/cal.csv')\n", encoding="utf-8")
+    code = ("from kept_state_module import Kept\n"
+            "from machinesim.campaign.identity import state_of\n"
+            "print(state_of(Kept(), 'Kept'))\n")
+    said = set()
+    for seed, folder in (("1", tmp_path), ("2", tmp_path.parent), ("3", tmp_path)):
+        path = os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")])
+        said.add(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                check=True, cwd=folder, env={**os.environ, "PYTHONPATH": path,
+                                                             "PYTHONHASHSEED": seed}).stdout)
+    assert len(said) == 1 and len(said.pop().strip()) == 16
