@@ -449,3 +449,33 @@ def test_plain_data_a_procedure_may_keep_is_digested_alike_in_every_process(tmp_
                                 check=True, cwd=folder, env={**os.environ, "PYTHONPATH": path,
                                                              "PYTHONHASHSEED": seed}).stdout)
     assert len(said) == 1 and len(said.pop().strip()) == 16
+
+
+def test_machinesims_objects_read_from_a_file_are_the_same_through_a_symlink(module, tmp_path):
+    """A procedure that keeps a tool table or an NC program it read from beside its module
+    (Path(__file__).parent / ...), imported through a symlinked folder: machinesim keeps the
+    file's path as text (`source`, for messages), which was another state; a text naming a
+    file that is there is taken by its real path. Text naming nothing is text."""
+    import shutil
+
+    from fenced import ROOT
+
+    from machinesim.machines import models_dir
+    from machinesim.nc import read_program
+    from machinesim.nc.tooltable import ToolTable
+
+    shutil.copy(models_dir() / "examples" / "grooves.nc", tmp_path / "grooves.nc")
+    shutil.copy(ROOT / "tests" / "nc_corpus" / "tools.toml", tmp_path / "tools.toml")
+    (tmp_path / "link").symlink_to(tmp_path, target_is_directory=True)
+    probe = module().Probe
+    kept = []
+    for folder in (tmp_path, tmp_path / "link"):
+        kept.append(probe())
+        kept[-1].program = read_program(str(folder / "grooves.nc"))
+        kept[-1].tools = ToolTable.from_toml(str(folder / "tools.toml"))
+        kept[-1].data = str(folder / "grooves.nc")
+    assert kept[0].program.source != kept[1].program.source
+    assert state_of(kept[0], "p") == state_of(kept[1], "p")
+    texts = [probe(), probe()]
+    texts[0].note, texts[1].note = "/no/such//file", "/no/such/file"
+    assert state_of(texts[0], "p") != state_of(texts[1], "p")

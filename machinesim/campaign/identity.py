@@ -21,7 +21,8 @@ one; two instances of one class with other constructor arguments were one campai
   and sets sorted, floats to the bit but -0.0 as 0.0, arrays by dtype, shape and bytes), so
   that it is the same in every process whatever ``PYTHONHASHSEED``; a loaded machinesim
   ``Machine`` by the digest of its URDF (`Machine.digest`), not the path it was loaded by;
-  an absolute ``pathlib.Path`` as its real path (``os.path.realpath``), a relative one as it is;
+  an absolute ``pathlib.Path``, or a text naming a file that is there by an absolute path, as
+  its real path (``os.path.realpath``), a relative one as it is;
   an object that holds what holds it (a method bound to the procedure itself) by where that
   lies; without the values of its ``functools.cached_property``s (there once read, from the
   rest); a class or reference is digested by the instance it makes (the class called with no
@@ -231,6 +232,11 @@ def _canonical(value, path: str, seen: dict, depth: int):
     """``value`` as JSON whose text is the same in every process, or InputError naming
     ``path`` (the attribute, as ``.gain`` or ``.table['x'][2]``); ``seen``: the path of each
     object that holds it, by id."""
+    if isinstance(value, str) and os.path.isabs(value) and os.path.exists(value):
+        # a text naming a file that is there, by its real path, as an absolute Path: a tool
+        # table's or a program's source (machinesim keeps it for messages), a path made
+        # from __file__, through a symlinked folder, was another state
+        value = os.path.realpath(value)
     if isinstance(value, _PLAIN):
         return [type(value).__name__, value] if not isinstance(value, int) or \
             isinstance(value, bool) or abs(value) < 2**53 else ["int", str(value)]
