@@ -2,13 +2,18 @@
 they load (numpy, Pinocchio, SciPy: a second or two) ends in one line on stderr and status
 130, as one during the run does (`machinesim.scenario_runs.scenario_status`), not in a
 traceback of the import it stopped (or in numpy's "Importing the numpy C-extensions failed",
-when the Ctrl-C lands inside numpy's own loading).
+when the Ctrl-C lands inside numpy's own loading). A SIGTERM (``kill PID``) or SIGHUP (a
+closed terminal) while they load ends alike, in ``NAME: terminated; nothing was written``
+(status 143) or ``hung up`` (129), as the run's own handlers say them: before, the process
+died of the signal with no line (a parent saw -15, not 143).
 
 Nothing is written before the run begins, so the handler says so and ends the process at
-once (`os._exit`). It is installed only where Python's own handler is (a background job
-started with SIGINT ignored keeps ignoring it) and only when the script run is a scenario
-(``sys.argv[0]`` in a ``scenarios`` folder: a test that imports a scenario's module keeps
-its own Ctrl-C); `scenario_status` puts Python's handler back when the run begins.
+once (`os._exit`). It is installed only where the usual handler is (Python's own for SIGINT,
+the default action for SIGTERM and SIGHUP: a background job started with SIGINT ignored
+keeps ignoring it; a budget's worker process keeps SIGTERM's and SIGHUP's, `_WORKER`) and
+only when the script run is a scenario (``sys.argv[0]`` in a
+``scenarios`` folder: a test that imports a scenario's module keeps its own handlers);
+`scenario_status` puts the usual handlers back when the run begins (`loaded`).
 ruff's isort keeps this import first (pyproject.toml, its own section).
 """
 
@@ -19,20 +24,39 @@ import signal
 import sys
 from pathlib import Path
 
+#: Each signal handled while the scenario loads: (the handler it replaces, what the line
+#: says, the exit status: 128 + the signal, as `machinesim._interrupts` gives them).
+_STOPS = {signal.SIGINT: (signal.default_int_handler, "interrupted", 130),
+          signal.SIGTERM: (signal.SIG_DFL, "terminated", 143),
+          **({signal.SIGHUP: (signal.SIG_DFL, "hung up", 129)}
+             if hasattr(signal, "SIGHUP") else {})}
+
 
 def on_ctrl_c(signum, frame) -> None:
-    """SIGINT while the scenario loads: one line, status 130."""
+    """SIGINT (or SIGTERM, SIGHUP) while the scenario loads: one line, status 130 (143, 129)."""
+    _, how, status = _STOPS[signum]
     name = Path(sys.argv[0]).stem or "scenario"
-    os.write(2, f"{name}: interrupted; nothing was written\n".encode())
-    os._exit(130)
+    try:
+        os.write(2, f"{name}: {how}; nothing was written\n".encode())
+    except OSError:  # no stderr (2>&-, or a terminal that closed): the status says it
+        pass
+    os._exit(status)
 
 
 def loaded() -> None:
-    """The scenario's run begins: Python's own handler again."""
-    if signal.getsignal(signal.SIGINT) is on_ctrl_c:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    """The scenario's run begins: the usual handlers again."""
+    for number, (usual, _, _) in _STOPS.items():
+        if signal.getsignal(number) is on_ctrl_c:
+            signal.signal(number, usual)
 
 
-if (signal.getsignal(signal.SIGINT) is signal.default_int_handler
-        and Path(sys.argv[0] if sys.argv else "").resolve().parent.name == "scenarios"):
-    signal.signal(signal.SIGINT, on_ctrl_c)
+#: A budget's worker (`machinesim._processes`, spawned: its ``python -c`` loaded
+#: multiprocessing.spawn before it runs the scenario's script as ``__mp_main__``, with the
+#: scenario's argv) keeps SIGTERM's and SIGHUP's default: the parent ends its workers with
+#: SIGTERM, and says itself what was stopped.
+_WORKER = "multiprocessing.spawn" in sys.modules
+
+if Path(sys.argv[0] if sys.argv else "").resolve().parent.name == "scenarios":
+    for _number, (_usual, _, _) in _STOPS.items():
+        if signal.getsignal(_number) is _usual and not (_WORKER and _usual is signal.SIG_DFL):
+            signal.signal(_number, on_ctrl_c)

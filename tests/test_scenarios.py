@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import signal
 import subprocess
 import sys
@@ -181,6 +182,52 @@ def test_a_scenario_stopped_by_ctrl_c_while_its_libraries_load_says_so_in_one_li
     assert "Traceback" not in err, err
     assert err.splitlines() == ["sts_turning: interrupted; nothing was written"], err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(("sig", "how", "status"), [(signal.SIGTERM, "terminated", 143),
+                                                  (signal.SIGHUP, "hung up", 129)])
+def test_a_scenario_stopped_by_sigterm_or_sighup_while_its_libraries_load_says_so(
+        tmp_path, as_in_a_terminal, interrupted, sig, how, status):
+    """`kill PID` (or a closed terminal) once numpy's library is mapped: one line and status
+    128 + the signal, as the run's own handlers give (docs/reports.md). The process died of
+    the signal with no line: a parent saw -15 (-1), not 143 (129)."""
+    out = tmp_path / "report"
+    process = subprocess.Popen([sys.executable, str(ROOT / "scenarios" / "sts_turning.py"),
+                                "--out", str(out)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, cwd=ROOT, **as_in_a_terminal)
+    _, err = interrupted(process, "site-packages/numpy/", sig)
+    assert process.returncode == status, err
+    assert err.splitlines() == [f"sts_turning: {how}; nothing was written"], err
+    assert not out.exists()
+
+
+WORKER_PROBE = """\
+import machinesim.scenario_start as start
+import multiprocessing, signal
+def probe(conn):
+    conn.send([signal.getsignal(s) is start.on_ctrl_c for s in (signal.SIGTERM, signal.SIGHUP)])
+if __name__ == "__main__":
+    mine = [signal.getsignal(s) is start.on_ctrl_c for s in (signal.SIGTERM, signal.SIGHUP)]
+    context = multiprocessing.get_context("spawn")
+    here, there = context.Pipe()
+    worker = context.Process(target=probe, args=(there,))
+    worker.start()
+    print(mine, here.recv())
+    worker.join()
+"""
+
+
+def test_a_scenarios_spawned_worker_keeps_the_default_sigterm(tmp_path):
+    """A budget's worker runs the scenario's script again (spawn, the scenario's argv), so
+    it loads scenario_start too; the parent ends its workers with SIGTERM and says what was
+    stopped itself, so a worker keeps SIGTERM's and SIGHUP's default (no line of its own),
+    while the scenario's own process takes them."""
+    script = tmp_path / "scenarios" / "probe.py"
+    script.parent.mkdir()
+    script.write_text(WORKER_PROBE)
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          check=True, timeout=60, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert done.stdout.strip() == "[True, True] [False, False]", done.stderr
 
 
 def test_every_paper_scenario_refuses_a_report_folder_it_cannot_write_before_it_runs(tmp_path):
