@@ -86,6 +86,12 @@ def identified_notes(result) -> str:
     return "\n\n".join(paragraphs)
 
 
+def _markdown_cell(text: str) -> str:
+    """``text`` as one cell of a Markdown table: each ``|`` escaped (``\\|``), a line break
+    a space (a table's row is one line)."""
+    return text.replace("|", "\\|").replace("\r\n", " ").replace("\n", " ").replace("\r", " ")
+
+
 class ReportFolder:
     """A scenario's output folder.
 
@@ -328,19 +334,23 @@ class ReportFolder:
         returns the Markdown (for printing).
         Numbers are shown with ``digits`` decimals, or with ``significant`` as ``digits + 1``
         significant digits in scientific notation (SI values from 1e-12 to 1e-3 alike);
-        ``note``, a paragraph under the Markdown table."""
+        ``note``, a paragraph under the Markdown table. A ``|`` within a cell or column
+        name is written ``\\|`` (GitHub's Markdown reads it as the character): bare, it ended
+        the cell, and a note with ``|angle - 90 deg|`` split its row into more cells than
+        the header has (the JSON keeps the text as given)."""
         def cell(v):
             if isinstance(v, float):
                 if not math.isfinite(v):
                     return "n/a"
                 return f"{v:.{digits}e}" if significant else f"{v:.{digits}f}"
-            return str(v)
+            return _markdown_cell(str(v))
 
         table = _clean({"columns": list(columns), "rows": [list(r) for r in rows]})
         check_units(table)
         data = json_text(table, f"{name}.json")  # before the Markdown: both or neither
         lines = ([f"### {title}", ""] if title else []) + [
-            "| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+            "| " + " | ".join(_markdown_cell(str(c)) for c in columns) + " |",
+            "|" + "---|" * len(columns)]
         lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
         text = "\n".join(lines) + "\n" + (f"\n{note}\n" if note else "")
         # together: written one after the other, a full disk (or a Ctrl-C) between them left

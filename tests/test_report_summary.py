@@ -5,6 +5,7 @@ nesting too deep refused, `read_summary` naming what it cannot read."""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -34,6 +35,21 @@ def test_summary_and_tables_round_trip(tmp_path):
     assert summary["figures"][0]["before"] is None
     assert summary["details"]["depth_error_um"] == [None, 60.9]
     assert summary["files"] == ["si.json", "si.md", "summary.json", "table.json", "table.md"]
+
+
+def test_a_pipe_within_a_table_cell_keeps_the_markdown_row_whole(tmp_path):
+    """paper 003's figures.md wrote a note with '|angle between the groove sets - 90 deg|'
+    bare: its row had 10 cells under a header of 8. A cell's (and a column's) '|' is '\\|'
+    in the Markdown, which reads it as the character; the JSON keeps the text."""
+    note = "largest |angle - 90 deg| over\nthe windows"
+    text = ReportFolder(tmp_path / "out").write_table("t", ["a_um", "b|c"], [[1.0, note]])
+    rows = [line for line in text.splitlines() if line.startswith("|")]
+    # a row's cells are what lies between its unescaped pipes: 2 in every row
+    assert [len(re.split(r"(?<!\\)\|", row)) - 2 for row in rows] == [2, 2, 2], text
+    assert rows[2] == "| 1.000 | largest \\|angle - 90 deg\\| over the windows |"
+    assert rows[0] == "| a_um | b\\|c |"
+    table = json.loads((tmp_path / "out" / "t.json").read_text())
+    assert table == {"columns": ["a_um", "b|c"], "rows": [[1.0, note]]}
 
 
 def test_the_summary_schema_is_enforced(tmp_path):
