@@ -1,6 +1,7 @@
 """Imported first by `machinesim.cli`, before the modules the command line loads: a Ctrl-C
 while they load (about 0.13 s of the command's start) ends in one line on stderr and status
-130, as one in the command does, not in a traceback of the import it stopped.
+130, as one in the command does, not in a traceback of the import it stopped; a SIGTERM or
+SIGHUP there in ``machinesim: terminated; nothing was written`` (143) or ``hung up`` (129).
 
 As `machinesim.scenario_start` does for a scenario: nothing is written before the command
 runs, so the handler says so and ends the process at once (`os._exit`). It is installed only
@@ -20,20 +21,37 @@ import signal
 import sys
 from pathlib import Path
 
+#: Each signal handled while the command line loads: (the handler it replaces, what the line
+#: says, the exit status, 128 + the signal as `machinesim._interrupts` gives them). SIGTERM
+#: and SIGHUP there ended the process by the signal itself, with no line (a parent saw -15).
+_STOPS = {signal.SIGINT: (signal.default_int_handler, "interrupted", 130),
+          signal.SIGTERM: (signal.SIG_DFL, "terminated", 143),
+          **({signal.SIGHUP: (signal.SIG_DFL, "hung up", 129)}
+             if hasattr(signal, "SIGHUP") else {})}
+
+#: A process multiprocessing spawned from the command (a campaign's local Dask workers run
+#: its main module again, with its argv; its ``python -c`` loaded multiprocessing.spawn
+#: first) keeps SIGTERM's and SIGHUP's default: it never reaches `loaded`, and its parent
+#: ends it with SIGTERM.
+_WORKER = "multiprocessing.spawn" in sys.modules
+
 
 def on_ctrl_c(signum, frame) -> None:
-    """SIGINT while the command line loads: one line, status 130."""
+    """SIGINT (SIGTERM, SIGHUP) while the command line loads: one line, status 130 (143,
+    129)."""
+    _, how, status = _STOPS[signum]
     try:
-        os.write(2, b"machinesim: interrupted; nothing was written\n")
+        os.write(2, f"machinesim: {how}; nothing was written\n".encode())
     except OSError:  # started without a stderr (2>&-): the status says it
         pass
-    os._exit(130)
+    os._exit(status)
 
 
 def loaded() -> None:
-    """The command begins: Python's own handler again."""
-    if signal.getsignal(signal.SIGINT) is on_ctrl_c:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    """The command begins: the usual handlers again."""
+    for number, (usual, _, _) in _STOPS.items():
+        if signal.getsignal(number) is on_ctrl_c:
+            signal.signal(number, usual)
 
 
 def _is_the_command(argv0: str) -> bool:
@@ -42,6 +60,7 @@ def _is_the_command(argv0: str) -> bool:
         path.name == "__main__.py" and path.parent.name == "machinesim")
 
 
-if (signal.getsignal(signal.SIGINT) is signal.default_int_handler
-        and _is_the_command(sys.argv[0] if sys.argv else "")):
-    signal.signal(signal.SIGINT, on_ctrl_c)
+if _is_the_command(sys.argv[0] if sys.argv else ""):
+    for _number, (_usual, _, _) in _STOPS.items():
+        if signal.getsignal(_number) is _usual and not (_WORKER and _usual is signal.SIG_DFL):
+            signal.signal(_number, on_ctrl_c)

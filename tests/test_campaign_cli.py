@@ -318,6 +318,32 @@ def test_a_ctrl_c_while_the_command_line_loads_is_one_line(command):
         assert done.returncode == -signal.SIGINT and "KeyboardInterrupt" in done.stderr
 
 
+@pytest.mark.parametrize(("name", "how", "status"), [("SIGTERM", "terminated", 143),
+                                                   ("SIGHUP", "hung up", 129),
+                                                   ("SIGTERM", None, -15)],
+                         ids=["sigterm", "sighup", "a spawned worker"])
+def test_a_sigterm_or_sighup_while_the_command_line_loads_is_one_line(name, how, status):
+    """``kill PID`` (or a closed terminal) while machinesim.cli loads ended the process by
+    the signal, no line, -15 (-1) to a parent, where the same in the command says
+    'terminated' and 143 (docs/cli.md's exit codes). A process multiprocessing spawned
+    (multiprocessing.spawn loaded before the command's module: a campaign's Dask worker)
+    keeps the default: its parent ends it with SIGTERM, and it never reaches main."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import os, signal, sys, time\n"
+            + ("import multiprocessing.spawn\n" if how is None else "")
+            + "sys.argv[0] = 'machinesim'\n"
+            "import machinesim._cli_start\n"
+            f"os.kill(os.getpid(), signal.{name})\n"
+            "time.sleep(5)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env={**os.environ}, timeout=60)
+    said = "" if how is None else f"machinesim: {how}; nothing was written\n"
+    assert (done.returncode, done.stderr) == (status, said)
+
+
 def test_the_command_lines_main_puts_pythons_ctrl_c_back():
     """Once main runs, a Ctrl-C is the command's (ctrl_c_remembered's: the trials kept are
     named), not the loading's "nothing was written"."""
