@@ -588,3 +588,36 @@ def test_remove_refuses_a_stock_or_paths_of_the_wrong_kind_naming_them(stock, pa
     # an iterator of paths is still taken
     _, report = remove(block(1e-3, 1e-3, 1e-3), VTool(math.pi / 2), iter([np.eye(4)[None]]))
     assert report.removed_volume == 0.0
+
+
+def test_a_ball_line_in_short_moves_is_cut_as_one_move(monkeypatch):
+    # A level ball groove from x = 0.5 to 3.5 mm in 60 moves of 50 um, exactly in line:
+    # joined into one sweep (`machinesim.cutting.collinear`), the part is the one-move
+    # cut's, volume and removed volume to 1e-12; a turn of 1e-6 rad at one point keeps the
+    # two lines apart, and their part stays the one of two moves (to 1e-12).
+    from machinesim.cutting import collinear, engine
+
+    chains = []
+
+    def recorded(*args):
+        head, solids = collinear.joined_ball_sweeps(*args)
+        chains.append(None if head is None else len(np.unique(head)))
+        return head, solids
+
+    stock, tool = block(4e-3, 4e-3, 1e-3), BallEndMill(0.25e-3)
+    xs = 0.5e-3 + 50e-6 * np.arange(61)
+    short = np.array([pose((x, 2e-3, -40e-6)) for x in xs])
+    one, report_one = remove(stock, tool, [short[[0, -1]]], method="boolean")
+    monkeypatch.setattr(engine, "joined_ball_sweeps", recorded)
+    many, report_many = remove(stock, tool, [short], method="boolean")
+    bent = short.copy()
+    bent[30:, 1, 3] += (bent[30:, 0, 3] - bent[30, 0, 3]) * 1e-6
+    turned, _ = remove(stock, tool, [bent], method="boolean")
+    assert report_many.n_sweeps_cut == 60
+    # the first line is one chain; the bent line's moves, rounded, join where in line
+    assert chains[0] == 1 and 2 <= chains[1] <= 31
+    assert many.manifold.volume() == pytest.approx(one.manifold.volume(), rel=VOLUME_REL)
+    assert report_many.removed_volume == pytest.approx(report_one.removed_volume,
+                                                       rel=VOLUME_REL, abs=0.0)
+    two, _ = remove(stock, tool, [bent[[0, 30, -1]]], method="boolean")
+    assert turned.manifold.volume() == pytest.approx(two.manifold.volume(), rel=VOLUME_REL)

@@ -26,7 +26,8 @@ never touching the part mesh once per sweep:
    crossing sweeps costs as much as cutting them (and manifold3d, left lazy, would form
    exactly that union). An upright flat end mill's level passes are taken first: those on
    one floor are one prism, over the union of their footprints in the plane
-   (`machinesim.cutting.footprints`).
+   (`machinesim.cutting.footprints`); a ball end mill's level moves exactly in line are
+   one sweep of the joined move (`machinesim.cutting.collinear`).
 4. The region is split into cells (ROI windows, and a grid of tiles inside each): a tile is
    cut with only the sweeps that touch it, which keeps manifold3d's faster-than-linear
    boolean cost down, and the tiles of a cell are joined by `stitch` (a mesh merge along
@@ -59,6 +60,7 @@ import manifold3d
 import numpy as np
 from manifold3d import OpType
 
+from machinesim.cutting.collinear import joined_ball_sweeps
 from machinesim.cutting.containment import CONTAINED_REL, contained_sweeps
 from machinesim.cutting.cut_volume import (  # noqa: F401  (re-exported: the names engine had)
     FACE_KEY,
@@ -449,7 +451,7 @@ def remove(
             )
             return relief.part, report
     (hulls, lower, upper, direction, n_degenerate, sideways, swept, reached, footprints,
-     _) = sweeps.hulls(touches, progress=_building(progress))
+     owners) = sweeps.hulls(touches, progress=_building(progress))
     keys = _direction_keys(direction)
 
     def planned(cut: np.ndarray):
@@ -481,6 +483,8 @@ def remove(
     if progress is not None:
         progress(done, total)
 
+    # Ball sweeps along one straight line are cut as the one sweep of the line they make.
+    head, joined = joined_ball_sweeps(sweeps, hulls, owners)
     base = stock.manifold
     top = float(bounds[1, 2])
     stock_pieces, cell_parts = [], []
@@ -496,13 +500,15 @@ def remove(
             stock_pieces.append(piece)
             uncut = piece
             prisms, rest = level_prisms(members, footprints, sweeps.run_id)
+            if head is not None:
+                rest = np.unique(head[rest])
             for prism in prisms:  # level passes, each floor's united in the plane
                 piece = piece - prism
                 piece.num_tri()
             for key in np.unique(keys[rest]):
                 for run in union_runs(rest[keys[rest] == key], lower, upper):
                     piece = piece - manifold3d.Manifold.batch_boolean(
-                        [hulls[i] for i in run], OpType.Add)
+                        [joined[i] for i in run], OpType.Add)
                     # Evaluate now: manifold3d is lazy and would flatten A - B - C into
                     # A - (B + C), the union this loop exists to avoid.
                     piece.num_tri()

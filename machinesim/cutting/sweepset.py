@@ -318,6 +318,13 @@ class SweepSet:
         return self._ball_cut(self.poses[index, :3, :3].copy(), origin,
                               self.poses[index + 1, :3, 3] - origin)[0]
 
+    def ball_line(self, start: int, end: int) -> manifold3d.Manifold:
+        """`ball_sweep` of the straight level move from pose ``start`` to pose ``end``, the
+        chain of moves between them in line (`machinesim.cutting.collinear`)."""
+        origin = self.poses[start, :3, 3]
+        return self._ball_cut(self.poses[start, :3, :3].copy(), origin,
+                              self.poses[end, :3, 3] - origin)[0]
+
     def _hull(self, points: np.ndarray, clipped: bool):
         """The convex hull of a sweep's points by Qhull (`sweeps.hull_mesh`): the clipped
         candidates, or all points (then trimmed by the clip plane where they cross it)."""
