@@ -65,7 +65,7 @@ def test_a_program_file_cut_with_a_ball_follows_its_arcs_at_a_tenth_of_the_balls
 def test_the_command_line_reports_the_chord_it_cut_with(tmp_path, capsys, tool, option,
                                                         chord_nm, noted):
     # a line with an arc in it: the chord is noted only where something was split by it
-    # (tests/test_cli.py has the cases without arcs)
+    # (tests/test_cli_cut.py has the cases without arcs)
     program = tmp_path / "line.nc"
     program.write_text("G90 G21\nG00 X-1. Y5. Z1.\nG01 Z-0.01 F100.\nX4.\nG02 X6. R1.\n"
                        "G01 X11.\nG00 Z1.\nM30\n")
@@ -101,7 +101,7 @@ def test_a_first_rotary_feed_from_home_is_noted_as_split(tmp_path, capsys, first
 
 def _chord_refusal(value) -> str:
     """The refusal of a ``chord_tolerance`` of ``value`` (m), written out: the words of
-    ``--chord-nm``'s (tests/test_cli.py), in m."""
+    ``--chord-nm``'s (tests/test_cli_refusals.py), in m."""
     return (f"chord_tolerance {value!r}: expected a length in m from 1e-09, the axes' "
             "resolution (no machine follows a path more finely, and the chords grow in "
             "number as 1/sqrt(chord_tolerance): ten times 1 nm's at 1e-11), to 1 (1 m, more "
@@ -137,7 +137,7 @@ def _quarter(tmp_path):
 
 @pytest.mark.parametrize("chord", [1e-9, 1.0])
 def test_the_api_takes_the_chord_tolerances_bounds(tmp_path, chord):
-    # the bounds themselves are taken, as --chord-nm's are (tests/test_cli.py); the quarter
+    # the bounds themselves are taken, as --chord-nm's are (tests/test_cli_cut.py); the quarter
     # arc read at 1 um, so that 1 nm costs no more sweeps than 1 m
     program = read_program(_quarter(tmp_path), chord_tolerance=1e-6)
     _, report = cut(program, "grooving_4axis", tool="v:90", stock="block:10x10x2",
