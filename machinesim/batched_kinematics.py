@@ -4,7 +4,7 @@ It walks the same Pinocchio model as `Kinematics`'s one-configuration algorithms
 placements and joint types) over many configurations at once with numpy: poses
 (`Kinematics.poses`), poses with their axis Jacobians (`Kinematics.pose_jacobians`) and error
 Jacobians (`Kinematics.error_jacobians`). Tests hold it against Pinocchio's
-``forwardKinematics`` and joint Jacobians pose by pose (tests/test_kinematics.py).
+``forwardKinematics`` and joint Jacobians pose by pose (tests/test_kinematics_jacobians.py).
 `Kinematics` has these methods from `BatchedKinematics`, a mixin; `machinesim.motion.chords`
 walks the same plans (`BatchedKinematics._plan`) with its own runner.
 """

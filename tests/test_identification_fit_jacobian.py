@@ -45,7 +45,7 @@ def test_error_jacobian_of_a_point_matches_central_differences(name, frame):
               - place(errors.with_parameters({p: base - h}))) / (2 * h)
         # truncation h^2 / 6 * (third derivative, ~ the 1 m lever) ~ 2e-13, round-off
         # 1e-16 m / 1e-6 ~ 1e-10 per unit: 1e-8 holds with margin, far below the
-        # 1e-3 .. 1 size of the entries (as tests/test_kinematics.py)
+        # 1e-3 .. 1 size of the entries (as tests/test_kinematics_jacobians.py)
         np.testing.assert_allclose(jac[:, :3, c], fd, rtol=0, atol=1e-8, err_msg=p)
     # one point for all rows, and one configuration, give the same rows
     single = machine.error_jacobian(q[1], errors, names, frame=frame, point=point[1])
