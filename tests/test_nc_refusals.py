@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from machinesim.exceptions import NCProgramError, brief
-from machinesim.nc import format_program, parse_program
+from machinesim.nc import format_program, parse_program, parser, read_program
 
 #: Targets are a decimal in mm times 1e-3 plus an offset: float64 round-off at <= 0.1 m is
 #: below 1e-17 m per operation; 1e-15 m leaves room for a few operations and is 1e6 x below
@@ -310,3 +310,38 @@ def test_a_refusal_names_the_blocks_n_word_beside_its_line():
         with pytest.raises(NCProgramError) as info:
             parse_program(f"%\nG21\n{bad}\nM30\n%\n", "p.nc")
         assert str(info.value).startswith(where + ": malformed number ''"), str(info.value)
+
+
+def test_a_program_of_more_lines_than_the_limit_is_refused_before_it_is_parsed(
+        monkeypatch, tmp_path):
+    # A program of MAX_LINES lines reads; one line more is refused, naming the limit, by
+    # parse_program and by read_program (which stops reading the file at the line too many),
+    # with or without a line end after the last line.
+    monkeypatch.setattr(parser, "MAX_LINES", 6)
+    monkeypatch.setattr(parser, "READ_CHUNK_BYTES", 8)
+    lines = ["G90 G21", "G01 X1. F100.", "X2.", "X3.", "X4."]
+    path = tmp_path / "p.nc"
+    for end in ("", "\n"):
+        text = "\n".join([*lines, "M30"]) + end  # 6 lines
+        assert len(parse_program(text)) == 4
+        path.write_text(text)
+        assert len(read_program(path)) == 4
+        text = "\n".join([*lines, "X5.", "M30"]) + end  # 7 lines
+        path.write_text(text)
+        with pytest.raises(NCProgramError) as parsed:
+            parse_program(text, "p.nc")
+        with pytest.raises(NCProgramError) as read:
+            read_program(path)
+        for info, source in ((parsed, "p.nc"), (read, str(path))):
+            assert str(info.value).startswith(f"{source}: the program has more than 6 lines, "
+                                              "the most machinesim reads")
+
+
+def test_a_file_of_21_million_lines_is_refused_without_reading_them(tmp_path):
+    # 21,000,000 line ends (21 MB): refused at the limit of 20,000,000 lines, where the file
+    # had been read whole, split and scanned (3.2 GB and 120 s for 21 million short moves)
+    path = tmp_path / "long.nc"
+    path.write_bytes(b"G90 G21\nG01 X1. F100.\n" + b"\n" * 21_000_000)
+    with pytest.raises(NCProgramError, match=r"more than 20000000 lines") as info:
+        read_program(path)
+    assert info.value.line is None and info.value.source == str(path)

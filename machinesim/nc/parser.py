@@ -37,6 +37,7 @@ from machinesim.nc.words import (
     M_PER_INCH,
     MAX_BLOCK_RUNS,
     MAX_INTEGER_DIGITS,
+    MAX_LINES,
     MAX_MOVES,
     MAX_SUBPROGRAM_DEPTH,
 )
@@ -128,8 +129,7 @@ def read_program(path: str | os.PathLike, **kwargs) -> Program:
                              "with machinesim.nc.parse_program(text)", key="path")
     check_readable_file(path, "NC program")
     try:
-        with open(path, "rb") as file:
-            data = file.read()
+        data = _read_lines_bounded(path, source)
     except OSError as exc:
         raise NCProgramError(f"cannot read the NC program: {exc.strerror or exc}",
                              source=source) from None
@@ -164,6 +164,8 @@ def _parse(data: bytes, errors: str, source: str, work_offsets, integer_input, t
         raise NCProgramError(f"chord_tolerance must be a length > 0 (m), got "
                              f"{chord_tolerance!r}", source=source, key="chord_tolerance")
     offsets = work_offsets_si(work_offsets, source=source)
+    if data.count(b"\n") + (not data.endswith(b"\n")) > MAX_LINES:
+        _refuse_many_lines(source)
     data = data.removeprefix(UTF8_BOM)  # Windows editors start UTF-8 files with one
     if data.rstrip().endswith(DOS_EOF):  # DOS editors and DNC senders end files with one
         data = data.rstrip().rstrip(DOS_EOF)
@@ -191,6 +193,33 @@ NOT_TEXT_SHARE = 0.05
 #: character are zero (and almost none on the other side).
 UTF16_ZERO_SHARE = 0.3
 _TEXT_CONTROLS = frozenset(b"\t\n\r\f\v")
+
+
+#: Bytes read at a time by `read_program`, counting line ends as it goes.
+READ_CHUNK_BYTES = 1 << 24
+
+
+def _read_lines_bounded(path, source: str) -> bytes:
+    """The file's bytes, read a chunk at a time and refused as soon as they hold more than
+    `words.MAX_LINES` lines: a file of 21 million short lines had been read whole, split
+    into lines and scanned (3.2 GB after 120 s) before its moves reached `MAX_MOVES`."""
+    chunks = []
+    line_ends = 0
+    with open(path, "rb") as file:
+        while chunk := file.read(READ_CHUNK_BYTES):
+            line_ends += chunk.count(b"\n")
+            if line_ends > MAX_LINES:
+                _refuse_many_lines(source)
+            chunks.append(chunk)
+    return b"".join(chunks)
+
+
+def _refuse_many_lines(source: str) -> None:
+    raise NCProgramError(
+        f"the program has more than {MAX_LINES} lines, the most machinesim reads "
+        f"(nc.words.MAX_LINES; each line holds one block at most, and a program may expand "
+        f"to {MAX_MOVES} moves), refused before any is parsed: split it into programs of "
+        "fewer lines", source=source)
 
 
 def _refuse_binary(data: bytes, source: str) -> None:
@@ -225,5 +254,5 @@ def _utf16_zeros(probe: bytes) -> bool:
 
 
 __all__ = ["INCREMENT_INCH_M", "INCREMENT_M", "INCREMENT_RAD", "MAX_BLOCK_RUNS",
-           "MAX_INTEGER_DIGITS", "MAX_MOVES", "MAX_SUBPROGRAM_DEPTH", "M_PER_INCH",
+           "MAX_INTEGER_DIGITS", "MAX_LINES", "MAX_MOVES", "MAX_SUBPROGRAM_DEPTH", "M_PER_INCH",
            "parse_program", "read_program"]

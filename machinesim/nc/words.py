@@ -58,6 +58,11 @@ MAX_SUBPROGRAM_DEPTH = 10
 #: Most moves one program may expand to (arcs, cycles, repeats included): twice the 10^7
 #: points of the largest freeform programs, ~1.3 GB of move arrays.
 MAX_MOVES = 20_000_000
+#: Most lines a program file may hold (text after the % that ends it included), refused
+#: before any is read: a line holds one block at most, so a file of more lines is a program
+#: beyond `MAX_MOVES` but for its blank and comment lines, and reading one costs ~300 bytes a
+#: line (5 million `G01 X.. Y..` lines: 1.45 GB) where counting its line ends costs nothing.
+MAX_LINES = MAX_MOVES
 #: Most blocks one program may run, counting each subprogram repeat, so that nested repeat
 #: counts (9999 x 9999 x ...) are refused before they run, not after hours.
 MAX_BLOCK_RUNS = 50_000_000
