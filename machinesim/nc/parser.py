@@ -192,6 +192,9 @@ NOT_TEXT_SHARE = 0.05
 #: UTF-16 without a byte-order mark: more than this share of the bytes on one side of each
 #: character are zero (and almost none on the other side).
 UTF16_ZERO_SHARE = 0.3
+#: Text in a one-byte encoding (Latin-1, Windows-1252) with more than this share of bytes
+#: that are not UTF-8 is refused whole too: an NC program is mostly ASCII words.
+NOT_ASCII_SHARE = 0.5
 _TEXT_CONTROLS = frozenset(b"\t\n\r\f\v")
 
 
@@ -232,9 +235,17 @@ def _refuse_binary(data: bytes, source: str) -> None:
             "character, as Windows Notepad's 'Unicode' saves it); expected ASCII or UTF-8: "
             "save it as UTF-8", source=source)
     text = probe.decode("utf-8", "replace")
-    odd = [i for i, ch in enumerate(text) if ch == "\ufffd" or ord(ch) == 127
-           or (ord(ch) < 32 and ord(ch) not in _TEXT_CONTROLS)]
-    if len(odd) > NOT_TEXT_SHARE * max(len(text), 1):
+    if len(data) <= TEXT_PROBE_BYTES and data.rstrip().endswith(DOS_EOF):
+        text = text[:text.rindex("\x1a")]  # a DOS end-of-file mark, skipped where it stands
+    controls = [i for i, ch in enumerate(text)
+                if ord(ch) == 127 or (ord(ch) < 32 and ord(ch) not in _TEXT_CONTROLS)]
+    odd = sorted(controls + [i for i, ch in enumerate(text) if ch == "\ufffd"])
+    # Text in a one-byte encoding (Latin-1, Windows-1252: a comment's 'ä' or '°') holds no
+    # control byte and is mostly ASCII: its bytes that are not UTF-8 are left to the reader,
+    # which reads them in a comment and names any other; a short program's one comment had
+    # made it 'not text'.
+    size = max(len(text), 1)
+    if len(odd) > NOT_TEXT_SHARE * size and (controls or len(odd) > NOT_ASCII_SHARE * size):
         odd, first = len(odd), odd[0]
         raise NCProgramError(
             f"not a text file: {odd} of its first {len(text)} characters are control bytes "
