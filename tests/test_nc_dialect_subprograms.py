@@ -132,8 +132,16 @@ def test_a_packed_p_calling_a_missing_program_says_how_it_was_read():
 def test_subprogram_depth_and_recursion_are_refused_before_running():
     chain = "O1\nM98 P2\nM30\n" + "".join(f"O{k}\nM98 P{k + 1}\nM99\n" for k in range(2, 13))
     chain += "O13\nG00 X0\nM99\n"
-    with pytest.raises(NCProgramError, match="nests deeper than 10 levels"):
+    with pytest.raises(NCProgramError, match="nests deeper than 10 levels") as info:
         parse_program(chain)
+    # 11 levels end: too deep, not endless (it had said 'the program would never end')
+    assert str(info.value).endswith(
+        "-> O0011 -> O0012); FANUC controls nest 4 to 10 levels; call the deepest ones from a "
+        "shallower level")
+    assert (info.value.line, info.value.key) == (32, "P12")
+    # 10 levels read, and run the deepest one's move once
+    ten = chain.replace("O11\nM98 P12\n", "O11\nG00 X1.\n")
+    assert np.asarray(parse_program(ten).targets)[:, 0].tolist() == [0.001]
     mutual = "O1\nM98 P2\nM30\nO2\nM98 P3\nM99\nO3\nM98 P2\nM99\n"
     with pytest.raises(NCProgramError, match=r"calls itself \(main -> O0002 -> O0003 -> O0002"):
         parse_program(mutual)

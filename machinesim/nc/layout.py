@@ -158,8 +158,11 @@ class Layout:
                                        for k in chain + (number,))
                     what = ("calls itself" if number in chain
                             else f"nests deeper than {MAX_SUBPROGRAM_DEPTH} levels")
-                    raise reader.fail(f"subprogram O{number:04d} {what} ({path}); the "
-                                      "program would never end", i + 1, call.program_word)
+                    why = ("the program would never end" if number in chain else
+                           f"FANUC controls nest 4 to {MAX_SUBPROGRAM_DEPTH} levels; call the "
+                           "deepest ones from a shallower level")
+                    raise reader.fail(f"subprogram O{number:04d} {what} ({path}); {why}",
+                                      i + 1, call.program_word)
                 count += call.repeats * total(number, chain + (number,))
                 if count > MAX_BLOCK_RUNS:
                     raise reader.fail(f"with its repeats the program runs more than "
