@@ -53,6 +53,10 @@ REFUSALS = [
     ("O1\nM30\nO2\nG04 P1\nM99\nG04 P2", 6, 1, "G04", "block after M99 on line 5"),
     ("O1\nM30\nO2\nM30\nM99", 4, 1, "M30", "M30 in subprogram O0002"),
     ("M98 P00002", 1, 5, "P00002", "asks for 0 repeats"),
+    # L0 is the same 0 repeats as P00002 and is refused alike (it had run no call, silently)
+    ("O1\nM98 P2 L0\nM30\nO2\nG00 X1.\nM99", 2, 8, "L0",
+     r"M98 P2 L0 asks for 0 repeats of O0002; leave out L for one call, or the block for none$"),
+    ("O1\nM98 P2 L00\nM30\nO2\nG00 X1.\nM99", 2, 8, "L00", "asks for 0 repeats"),
     ("M98", 1, 1, "M98", r"M98 needs P<program number> \(an unsigned integer\)$"),
     ("M98 P1.5", 1, 5, "P1.5", r"M98 needs P<program number> \(an unsigned integer\), got P1.5"),
     ("O1\nM98 P2 L1.5\nM30\nO2\nM99", 2, 8, "L1.5", "M98 L takes an unsigned integer"),

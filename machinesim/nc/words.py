@@ -289,6 +289,10 @@ def call_of(words: list[Word], defined: Mapping[int, int] | None = None,
         if repeats is None:
             return CallProblem(
                 f"M98 L takes an unsigned integer repeat count, got {count.key}", count)
+        if repeats == 0:  # as P0<number> below: no call at all, most likely not what was meant
+            return CallProblem(f"M98 {p.key} {count.key} asks for 0 repeats of "
+                               f"O{int(p.text):04d}; leave out L for one call, or the block "
+                               "for none", count)
         return Call(int(p.text), repeats, p, count)
     if len(p.text) > 4:  # FANUC's P<repeats><4-digit program number>
         repeats = int(p.text[:-4])
