@@ -371,3 +371,22 @@ def test_a_dwell_longer_than_the_longest_p_is_refused_naming_it(block, key):
                        ) as info:
         parse_program(f"G00 X0 Y0 Z2.\n{block}\nM30\n", "p.nc")
     assert (info.value.line, info.value.key) == (2, key)
+
+
+_LONG = "9" * 100_000
+
+
+@pytest.mark.parametrize("block, key", [
+    (f"N{_LONG} G00 X1.", f"N{_LONG}"), (f"T{_LONG}", f"T{_LONG}"),
+    (f"G00 G43 H{_LONG} Z1.", f"H{_LONG}"), (f"G04 P{_LONG}", f"P{_LONG}"),
+    (f"G{_LONG} X1.", f"G{_LONG}"), (f"G01 X1. F0.{'0' * 100_000}1", f"F0.{'0' * 100_000}1"),
+    (f"M98 P2 L{_LONG}", f"L{_LONG}"), (f"G01 X1. F-{_LONG}.", f"F-{_LONG}.")])
+def test_a_refused_word_of_100000_digits_is_shown_by_its_ends(block, key):
+    # the message named such a word whole in its text (a 100 MB N word: 100 MB of stderr),
+    # though its key was already shown by its ends
+    with pytest.raises(NCProgramError) as info:
+        parse_program(f"G90 G21\n{block}\nM30\nO2\nG00 X2.\nM99\n", "p.nc")
+    assert (info.value.line, info.value.key) == (2, key)
+    message = str(info.value)
+    assert len(message) < 2000, message[:300]
+    assert message.count(brief(key)) >= 1

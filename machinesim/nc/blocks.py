@@ -165,7 +165,7 @@ class Block:
                 code = integer(word)
                 if code is None:
                     self.refuse(f"M code must be an unsigned integer of at most "
-                                f"{MAX_INTEGER_DIGITS} digits, got {word.key}", word)
+                                f"{MAX_INTEGER_DIGITS} digits, got {brief(word.key)}", word)
                 else:
                     self.m_codes.append((code, word))
             elif letter not in SINGLE and not (letter == "E" and self.smoothing()):
@@ -176,7 +176,7 @@ class Block:
                 first = self.single[letter]
                 kind = "axis word" if letter in AXES else "word"
                 self.refuse(f"{kind} {letter} appears twice in one block (first as "
-                            f"{first.key} at column {first.column})", word)
+                            f"{brief(first.key)} at column {first.column})", word)
             else:
                 self.single[letter] = word
 
@@ -187,7 +187,7 @@ class Block:
 
     def g_code(self, word: Word) -> None:
         if word.text[0] in "+-":
-            self.refuse(f"G code {word.key} has a sign; expected e.g. G01", word)
+            self.refuse(f"G code {brief(word.key)} has a sign; expected e.g. G01", word)
             return
         name = g_name(word)
         if name in G_REFUSED:
@@ -197,7 +197,7 @@ class Block:
             return
         group = G_GROUPS.get(name)
         if group is None:
-            self.refuse(f"unknown G code {name}; machinesim reads "
+            self.refuse(f"unknown G code {brief(name)}; machinesim reads "
                         f"{' '.join(sorted(G_GROUPS))}", word)
             return
         if group in self.g_codes:
@@ -275,18 +275,19 @@ class Block:
         if "F" in single:
             feed = self.real(single["F"])
             if feed <= 0.0:
-                raise self.fail(f"feed must be > 0, got {single['F'].key}", single["F"])
+                raise self.fail(f"feed must be > 0, got {brief(single['F'].key)}", single["F"])
             state.feed = self.finite(feed * self.length_unit() / 60.0, single["F"])
             state.feed_inch = state.inch
             state.feed_line = self.line
             if state.feed < SLOWEST_FEED_M_PER_S:
-                raise self.fail(f"feed {single['F'].key} is below 1 nm a minute (1e-6 mm/min),"
-                                " slower than any control feeds: a feed in the wrong unit?",
+                raise self.fail(f"feed {brief(single['F'].key)} is below 1 nm a minute (1e-6 "
+                                "mm/min), slower than any control feeds: a feed in the wrong "
+                                "unit?",
                                 single["F"])
         if "S" in single:
             spindle = self.real(single["S"])
             if spindle < 0.0:
-                raise self.fail(f"spindle speed must be >= 0, got {single['S'].key}",
+                raise self.fail(f"spindle speed must be >= 0, got {brief(single['S'].key)}",
                                 single["S"])
             state.spindle = spindle
 
@@ -534,8 +535,8 @@ class Block:
             return self.integer(word, "dwell time") / 1000.0
         seconds = self.real(word)
         if not seconds >= 0.0:
-            raise self.fail(f"{code}'s dwell {word.key} must be >= 0 (with a decimal point P "
-                            "is seconds, as Haas reads it; without, milliseconds)", word)
+            raise self.fail(f"{code}'s dwell {brief(word.key)} must be >= 0 (with a decimal "
+                            "point P is seconds, as Haas reads it; without, milliseconds)", word)
         return self.dwell_within(word, seconds)
 
     def dwell_within(self, word: Word, seconds: float) -> float:
@@ -550,5 +551,5 @@ class Block:
         number = integer(word)
         if number is None:
             raise self.fail(f"{what} must be an unsigned integer of at most "
-                            f"{MAX_INTEGER_DIGITS} digits, got {word.key}", word)
+                            f"{MAX_INTEGER_DIGITS} digits, got {brief(word.key)}", word)
         return number

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from machinesim.exceptions import NCProgramError
+from machinesim.exceptions import NCProgramError, brief
 from machinesim.nc.cycles import drill_steps
 from machinesim.nc.length import check_length_carried
 from machinesim.nc.words import MAX_MOVES
@@ -62,7 +62,7 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
         state.cycle_return = None  # a Q without Haas's K. drills without its returns to R
     if "P" in single:
         state.cycle_p = block.dwell_p(single["P"], state.cycle)
-        state.cycle_p_word = f"{single['P'].key} of line {block.line}"
+        state.cycle_p_word = f"{brief(single['P'].key)} of line {block.line}"
         # Haas's G73/G83 dwell it after the last peck; one kept from a G82 does not
         # make them dwell (FANUC's sequences, docs/nc.md)
         state.peck_dwell = state.cycle in PECKING
@@ -140,14 +140,14 @@ def return_depth(block: Block) -> float:
     if state.cycle != "G73" or state.cycle_q is None:
         where = "G73 without a peck Q" if state.cycle == "G73" else state.cycle
         raise block.fail(
-            f"{word.key} has a decimal point, so it is no repeat count (FANUC's K, an "
+            f"{brief(word.key)} has a decimal point, so it is no repeat count (FANUC's K, an "
             f"integer: K2); a length K is read only in G73 with Q (Haas: back to the R plane after "
             f"pecks adding up to K) and in G73/G83 beside I and J (the smallest peck), not in "
             f"{where}", word)
     value = block.finite(block.real(word) * block.length_of(word), word)
     if not value > 0.0:
         raise block.fail(f"G73's K with Q (Haas's depth drilled between returns to the R "
-                         f"plane) must be > 0, got {word.key}", word)
+                         f"plane) must be > 0, got {brief(word.key)}", word)
     return value
 
 
@@ -170,9 +170,9 @@ def variable_peck(block: Block) -> tuple[float, float, float]:
                              single[letter])
         if not value > 0.0:
             raise block.fail(f"{cycle}'s {letter} must be > 0 (a length: Haas's I J K are "
-                             f"always positive), got {single[letter].key}", single[letter])
+                             f"always positive), got {brief(single[letter].key)}", single[letter])
         values.append(value)
     if values[2] > values[0]:
-        raise block.fail(f"{cycle}'s smallest peck K ({single['K'].key}) is larger than its "
-                         f"first peck I ({single['I'].key}); expected K <= I", single["K"])
+        raise block.fail(f"{cycle}'s smallest peck K ({brief(single['K'].key)}) is larger than its "
+                         f"first peck I ({brief(single['I'].key)}); expected K <= I", single["K"])
     return values[0], values[1], values[2]

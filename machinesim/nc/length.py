@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from machinesim.exceptions import brief
+
 if TYPE_CHECKING:
     from machinesim.nc.blocks import Block
     from machinesim.nc.lexer import Word
@@ -49,7 +51,7 @@ def check_length_carried(block: Block, word: Word | None, axes: list[Word] = ())
     if word is None and axes and not state.incremental and "Z" in state.target:
         side = "higher" if delta > 0.0 else "lower"  # Z targets carry + the length
         raise block.fail(
-            f"{axes[0].key} moves without Z after {words} at line {line}, which changed the "
+            f"{brief(axes[0].key)} moves without Z after {words} at line {line}, which changed the "
             f"tool length offset by {delta * 1e3:+.6g} mm, before any Z: FANUC by default "
             "(parameter 5006#6 TOS = 0) moves Z by the change in that block, so this move "
             f"runs there {abs(delta) * 1e3:.6g} mm {side} than here, where (as on LinuxCNC) "
@@ -58,7 +60,7 @@ def check_length_carried(block: Block, word: Word | None, axes: list[Word] = ())
     if word is None or not state.incremental:
         return
     raise block.fail(
-        f"incremental {word.key} after {words} at line {line}, which changed the tool "
+        f"incremental {brief(word.key)} after {words} at line {line}, which changed the tool "
         f"length offset by {delta * 1e3:+.6g} mm, before any absolute Z: controls differ "
         f"on where it ends, {abs(delta) * 1e3:.6g} mm apart (FANUC by default, parameter "
         "5006#6 TOS = 0, moves Z by the change in that block; LinuxCNC, or a control that "

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from machinesim.exceptions import brief
 from machinesim.nc.words import (
     DWELL_INCREMENT_S,
     LOOK_AHEAD_BLOCKS,
@@ -48,9 +49,9 @@ def _switch_found(word: Word | None) -> str:
         return ""
     whole, dot, fraction = word.text.partition(".")
     if dot and whole in ("0", "1") and not fraction.strip("0"):  # G08 P1.
-        return (f", got {word.key}: a FANUC control takes no decimal point in {word.letter} "
+        return (f", got {brief(word.key)}: a FANUC control takes no decimal point in {word.letter} "
                 f"here (write {word.letter}{whole})")
-    return f", got {word.key}"
+    return f", got {brief(word.key)}"
 
 
 def _setting(block: Block, name: str, word: Word) -> str:
@@ -66,7 +67,7 @@ def _setting(block: Block, name: str, word: Word) -> str:
              if w.letter not in "NG" + words and (w.letter in SINGLE or w.letter == "M")]
     if extra:
         raise block.fail(f"{name} stands in a block of its own ({shown}), found "
-                         f"{extra[0].key}", extra[0])
+                         f"{brief(extra[0].key)}", extra[0])
     if name == "G103":
         return _level(block, name, single.get("P"), range(LOOK_AHEAD_BLOCKS + 1),
                       "the most blocks the control looks ahead (0: no limit)")
@@ -77,7 +78,7 @@ def _setting(block: Block, name: str, word: Word) -> str:
         if rounding is not None:
             if rounding.text.startswith("-"):
                 raise block.fail(f"G187's E is the maximum corner rounding, a distance >= 0, "
-                                 f"got {rounding.key}", rounding)
+                                 f"got {brief(rounding.key)}", rounding)
             block.real(rounding)
             key += f" E{rounding.text.lstrip('+')}"
         return key
@@ -90,7 +91,7 @@ def _setting(block: Block, name: str, word: Word) -> str:
     key = f"{name} {letter}{setting}"
     if "R" in single:
         block.integer(single["R"], "AI contour precision level")
-        key += f" {single['R'].key}"
+        key += f" {brief(single['R'].key)}"
     return key
 
 
@@ -106,7 +107,7 @@ def _level(block: Block, name: str, given: Word | None, levels, what: str) -> st
                 if dot and whole.isdigit() and len(whole) <= 2 and not fraction.strip("0")
                 and int(whole) in levels else "")
         raise block.fail(f"{name}'s P is {what}, P{levels[0]}..P{levels[-1]}, got "
-                         f"{given.key}{hint}", given)
+                         f"{brief(given.key)}{hint}", given)
     return f"{name} P{number}"
 
 
@@ -134,7 +135,7 @@ def read_dwell(block: Block, g04: Word, axes: list[Word], block_number: int | No
         if block.increment is not None and "." not in word.text:
             dwell_s *= DWELL_INCREMENT_S[block.reader.integer_input]
         if dwell_s < 0.0:
-            raise block.fail(f"dwell time must be >= 0, got {word.key}", word)
+            raise block.fail(f"dwell time must be >= 0, got {brief(word.key)}", word)
         block.dwell_within(word, dwell_s)
     else:
         raise block.fail(f"dwell without time: G04 needs {DWELL_WORDS}", g04)

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from machinesim.exceptions import MachineSimWarning, NCProgramError, line_of
+from machinesim.exceptions import MachineSimWarning, NCProgramError, brief, line_of
 from machinesim.nc import fastscan
 from machinesim.nc.arcs import NearCircle, near_circle_warning
 from machinesim.nc.blocks import Block
@@ -499,12 +499,12 @@ class Reader:
         others = [w for w in words if w is not word]
         if others:
             self.problems.add(self.fail(f"the O number must stand alone in its block, found "
-                                        f"{others[0].key} with it", line, others[0]))
+                                        f"{brief(others[0].key)} with it", line, others[0]))
             return
         number = integer(word)
         if number is None:
             self.problems.add(self.fail(f"program number must be an unsigned integer of at "
-                                        f"most {MAX_INTEGER_DIGITS} digits, got {word.key}",
+                                        f"most {MAX_INTEGER_DIGITS} digits, got {brief(word.key)}",
                                         line, word))
             return
         self.state.number = number
@@ -524,7 +524,7 @@ class Reader:
                          f"between the M30 and O{number:04d}, so that both programs stand "
                          "before the file's closing '%'")
             # a P of 5 to 8 digits: say how it was read, as O12345 may have been meant
-            what = (f"M98 {word.key} calls O{number:04d} ({call.repeats} x: FANUC's "
+            what = (f"M98 {brief(word.key)} calls O{number:04d} ({call.repeats} x: FANUC's "
                     "P<repeats><4-digit program number>)" if len(word.text) > 4
                     else f"M98 calls O{number:04d}")
             raise self.fail(f"{what}, {where} (subprograms: {have})", line, word)

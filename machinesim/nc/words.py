@@ -259,8 +259,8 @@ def call_of(words: list[Word], defined: Mapping[int, int] | None = None,
         return CallProblem("M98 needs P<program number> (an unsigned integer)", m98)
     whole = integer(p)
     if defined and whole is not None and whole > MAX_PROGRAM_NUMBER and whole in defined:
-        keys = p.key if count is None else f"{p.key} {count.key}"
-        reading = (f" ({p.key}: {int(p.text[:-4])} x O{p.text[-4:]})"
+        keys = brief(p.key) if count is None else f"{brief(p.key)} {brief(count.key)}"
+        reading = (f" ({brief(p.key)}: {int(p.text[:-4])} x O{p.text[-4:]})"
                    if count is None and len(p.text) <= MAX_CALL_DIGITS else "")
         return CallProblem(
             f"M98 {keys}: O{whole}, defined on line {defined[whole]}, cannot be called: M98 "
@@ -283,21 +283,21 @@ def call_of(words: list[Word], defined: Mapping[int, int] | None = None,
             packed = (f" or M98 P{repeats}{p.text[-4:]}" if repeats is not None
                       and 0 < repeats < 10_000 else "")
             return CallProblem(
-                f"M98 {p.key} {count.key}: a P of more than 4 digits holds its own repeat "
-                f"count ({int(p.text[:-4])} x O{p.text[-4:]}), so L cannot be given beside "
-                f"it; write M98 P{int(p.text[-4:])} {count.key}{packed}", count)
+                f"M98 {brief(p.key)} {brief(count.key)}: a P of more than 4 digits holds its "
+                f"own repeat count ({int(p.text[:-4])} x O{p.text[-4:]}), so L cannot be given "
+                f"beside it; write M98 P{int(p.text[-4:])} {brief(count.key)}{packed}", count)
         if repeats is None:
             return CallProblem(
-                f"M98 L takes an unsigned integer repeat count, got {count.key}", count)
+                f"M98 L takes an unsigned integer repeat count, got {brief(count.key)}", count)
         if repeats == 0:  # as P0<number> below: no call at all, most likely not what was meant
-            return CallProblem(f"M98 {p.key} {count.key} asks for 0 repeats of "
+            return CallProblem(f"M98 {brief(p.key)} {brief(count.key)} asks for 0 repeats of "
                                f"O{int(p.text):04d}; leave out L for one call, or the block "
                                "for none", count)
         return Call(int(p.text), repeats, p, count)
     if len(p.text) > 4:  # FANUC's P<repeats><4-digit program number>
         repeats = int(p.text[:-4])
         if repeats == 0:
-            return CallProblem(f"M98 {p.key} asks for 0 repeats of O{p.text[-4:]}; write "
+            return CallProblem(f"M98 {brief(p.key)} asks for 0 repeats of O{p.text[-4:]}; write "
                                f"M98 P{int(p.text[-4:])} for one call or use L", p)
         return Call(int(p.text[-4:]), repeats, p, p)
     return Call(int(p.text), 1, p, p)
