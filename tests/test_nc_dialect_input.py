@@ -257,3 +257,25 @@ def test_bytes_mostly_not_utf8_or_with_control_bytes_are_still_no_text(tmp_path,
     with pytest.raises(NCProgramError, match="not a text file") as info:
         read_program(path)
     assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("encoding", ["utf-32", "utf-32-le", "utf-32-be"])
+def test_a_utf32_file_is_named_utf32(tmp_path, encoding):
+    # with its byte-order mark it had been called UTF-16, without it 'not a text file'
+    path = tmp_path / "prog.nc"
+    path.write_bytes("%\nG90 G21\nG00 X1. Y1. Z1.\nM30\n%\n".encode(encoding))
+    with pytest.raises(NCProgramError) as info:
+        read_program(path)
+    assert str(info.value) == (f"{path}: the file is UTF-32 text (a byte-order mark, or three "
+                               "zero bytes beside each character); expected ASCII or UTF-8: "
+                               "save it as UTF-8")
+
+
+@pytest.mark.parametrize("data", [np.arange(200, dtype="<i4").tobytes(),
+                                  np.arange(200, dtype=">i4").tobytes(), b"\x00" * 400])
+def test_small_binary_integers_are_no_utf32(tmp_path, data):
+    # three zero bytes of four, but the fourth no text: a binary, refused as such
+    path = tmp_path / "prog.nc"
+    path.write_bytes(data)
+    with pytest.raises(NCProgramError, match="not a text file"):
+        read_program(path)

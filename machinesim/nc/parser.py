@@ -229,6 +229,10 @@ def _refuse_binary(data: bytes, source: str) -> None:
     """Refuse, in one message, a file that is UTF-16 or not text at all (a binary picked by
     mistake); a stray byte in a text program is left to the reader, which names its line."""
     probe = data[:TEXT_PROBE_BYTES]
+    if probe[:4] in (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff") or _utf32_zeros(probe):
+        raise NCProgramError(
+            "the file is UTF-32 text (a byte-order mark, or three zero bytes beside each "
+            "character); expected ASCII or UTF-8: save it as UTF-8", source=source)
     if probe[:2] in (b"\xff\xfe", b"\xfe\xff") or _utf16_zeros(probe):
         raise NCProgramError(
             "the file is UTF-16 text (a byte-order mark or a zero byte beside each "
@@ -251,6 +255,22 @@ def _refuse_binary(data: bytes, source: str) -> None:
             f"not a text file: {odd} of its first {len(text)} characters are control bytes "
             f"or not UTF-8 (the first at character {first + 1}); expected an NC program as "
             "ASCII or UTF-8 text", source=source)
+
+
+def _utf32_zeros(probe: bytes) -> bool:
+    """Whether ``probe`` reads as UTF-32 without a byte-order mark: ASCII saved so has three
+    zero bytes beside each character, the same three of every four, and the fourth text, not
+    the low bytes of small binary integers (it had been called UTF-16 with its mark, 'not a
+    text file' without)."""
+    quarter = len(probe) // 4
+    if quarter < 2:
+        return False
+    lanes = sorted((probe[k::4] for k in range(4)), key=lambda lane: lane.count(0))
+    if lanes[1].count(0) != quarter:
+        return False
+    text = lanes[0]  # the characters' lane, which in text holds few controls or zeros
+    odd = sum(1 for b in text if b == 127 or (b < 32 and b not in _TEXT_CONTROLS))
+    return odd < NOT_TEXT_SHARE * quarter
 
 
 def _utf16_zeros(probe: bytes) -> bool:
