@@ -16,42 +16,11 @@ ruff's isort keeps this import first (pyproject.toml, its own section).
 
 from __future__ import annotations
 
-import os
-import signal
+# the handlers, their line and statuses are a scenario's (one mechanism for both programs)
+from machinesim.scenario_start import install, loaded, on_ctrl_c  # noqa: F401
+
 import sys
 from pathlib import Path
-
-#: Each signal handled while the command line loads: (the handler it replaces, what the line
-#: says, the exit status, 128 + the signal as `machinesim._interrupts` gives them). SIGTERM
-#: and SIGHUP there ended the process by the signal itself, with no line (a parent saw -15).
-_STOPS = {signal.SIGINT: (signal.default_int_handler, "interrupted", 130),
-          signal.SIGTERM: (signal.SIG_DFL, "terminated", 143),
-          **({signal.SIGHUP: (signal.SIG_DFL, "hung up", 129)}
-             if hasattr(signal, "SIGHUP") else {})}
-
-#: A process multiprocessing spawned from the command (a campaign's local Dask workers run
-#: its main module again, with its argv; its ``python -c`` loaded multiprocessing.spawn
-#: first) keeps SIGTERM's and SIGHUP's default: it never reaches `loaded`, and its parent
-#: ends it with SIGTERM.
-_WORKER = "multiprocessing.spawn" in sys.modules
-
-
-def on_ctrl_c(signum, frame) -> None:
-    """SIGINT (SIGTERM, SIGHUP) while the command line loads: one line, status 130 (143,
-    129)."""
-    _, how, status = _STOPS[signum]
-    try:
-        os.write(2, f"machinesim: {how}; nothing was written\n".encode())
-    except OSError:  # started without a stderr (2>&-): the status says it
-        pass
-    os._exit(status)
-
-
-def loaded() -> None:
-    """The command begins: the usual handlers again."""
-    for number, (usual, _, _) in _STOPS.items():
-        if signal.getsignal(number) is on_ctrl_c:
-            signal.signal(number, usual)
 
 
 def _is_the_command(argv0: str) -> bool:
@@ -61,6 +30,4 @@ def _is_the_command(argv0: str) -> bool:
 
 
 if _is_the_command(sys.argv[0] if sys.argv else ""):
-    for _number, (_usual, _, _) in _STOPS.items():
-        if signal.getsignal(_number) is _usual and not (_WORKER and _usual is signal.SIG_DFL):
-            signal.signal(_number, on_ctrl_c)
+    install("machinesim")

@@ -32,19 +32,22 @@ _STOPS = {signal.SIGINT: (signal.default_int_handler, "interrupted", 130),
              if hasattr(signal, "SIGHUP") else {})}
 
 
+#: The program's name in the line `on_ctrl_c` writes (`install`).
+_NAME = "scenario"
+
+
 def on_ctrl_c(signum, frame) -> None:
-    """SIGINT (or SIGTERM, SIGHUP) while the scenario loads: one line, status 130 (143, 129)."""
+    """SIGINT (or SIGTERM, SIGHUP) while the program loads: one line, status 130 (143, 129)."""
     _, how, status = _STOPS[signum]
-    name = Path(sys.argv[0]).stem or "scenario"
     try:
-        os.write(2, f"{name}: {how}; nothing was written\n".encode())
+        os.write(2, f"{_NAME}: {how}; nothing was written\n".encode())
     except OSError:  # no stderr (2>&-, or a terminal that closed): the status says it
         pass
     os._exit(status)
 
 
 def loaded() -> None:
-    """The scenario's run begins: the usual handlers again."""
+    """The program's run begins: the usual handlers again."""
     for number, (usual, _, _) in _STOPS.items():
         if signal.getsignal(number) is on_ctrl_c:
             signal.signal(number, usual)
@@ -56,7 +59,16 @@ def loaded() -> None:
 #: SIGTERM, and says itself what was stopped.
 _WORKER = "multiprocessing.spawn" in sys.modules
 
+def install(name: str) -> None:
+    """Handle each of `_STOPS` with `on_ctrl_c`, naming the program ``name``, where its usual
+    handler is (not in a spawned worker, `_WORKER`, for SIGTERM and SIGHUP). Also the command
+    line's (`machinesim._cli_start`)."""
+    global _NAME
+    _NAME = name
+    for number, (usual, _, _) in _STOPS.items():
+        if signal.getsignal(number) is usual and not (_WORKER and usual is signal.SIG_DFL):
+            signal.signal(number, on_ctrl_c)
+
+
 if Path(sys.argv[0] if sys.argv else "").resolve().parent.name == "scenarios":
-    for _number, (_usual, _, _) in _STOPS.items():
-        if signal.getsignal(_number) is _usual and not (_WORKER and _usual is signal.SIG_DFL):
-            signal.signal(_number, on_ctrl_c)
+    install(Path(sys.argv[0]).stem or "scenario")
