@@ -280,8 +280,15 @@ def test_a_ctrl_c_a_library_turned_into_an_import_error_is_the_interrupted_line(
         raise ImportError("initialization failed")
 
     monkeypatch.setattr(campaign_cli, "run_campaign", importing)
-    assert cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
-                     "--quiet", "--out", str(tmp_path / "c")]) == 130
+    # Python's own Ctrl-C, as a terminal's command has it: a runner started as a shell's
+    # background job inherits SIGINT ignored, and the os.kill above would then do nothing
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        status = cli_main(["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+                           "--quiet", "--out", str(tmp_path / "c")])
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert status == 130
     assert capsys.readouterr().err.strip() == "machinesim: interrupted; nothing was written"
     # an ImportError of no stop is still what it is
     monkeypatch.setattr(campaign_cli, "run_campaign", lambda args: __import__("no_such_mod"))
@@ -322,7 +329,8 @@ def test_a_ctrl_c_while_the_command_line_loads_is_one_line(command):
                                                    ("SIGHUP", "hung up", 129),
                                                    ("SIGTERM", None, -15)],
                          ids=["sigterm", "sighup", "a spawned worker"])
-def test_a_sigterm_or_sighup_while_the_command_line_loads_is_one_line(name, how, status):
+def test_a_sigterm_or_sighup_while_the_command_line_loads_is_one_line(name, how, status,
+                                                                      as_in_a_terminal):
     """``kill PID`` (or a closed terminal) while machinesim.cli loads ended the process by
     the signal, no line, -15 (-1) to a parent, where the same in the command says
     'terminated' and 143 (docs/cli.md's exit codes). A process multiprocessing spawned
@@ -339,7 +347,7 @@ def test_a_sigterm_or_sighup_while_the_command_line_loads_is_one_line(name, how,
             f"os.kill(os.getpid(), signal.{name})\n"
             "time.sleep(5)\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          env={**os.environ}, timeout=60)
+                          env={**os.environ}, timeout=60, **as_in_a_terminal)
     said = "" if how is None else f"machinesim: {how}; nothing was written\n"
     assert (done.returncode, done.stderr) == (status, said)
 

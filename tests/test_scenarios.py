@@ -217,7 +217,7 @@ if __name__ == "__main__":
 """
 
 
-def test_a_scenarios_spawned_worker_keeps_the_default_sigterm(tmp_path):
+def test_a_scenarios_spawned_worker_keeps_the_default_sigterm(tmp_path, as_in_a_terminal):
     """A budget's worker runs the scenario's script again (spawn, the scenario's argv), so
     it loads scenario_start too; the parent ends its workers with SIGTERM and says what was
     stopped itself, so a worker keeps SIGTERM's and SIGHUP's default (no line of its own),
@@ -226,7 +226,8 @@ def test_a_scenarios_spawned_worker_keeps_the_default_sigterm(tmp_path):
     script.parent.mkdir()
     script.write_text(WORKER_PROBE)
     done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                          check=True, timeout=60, env={**os.environ, "PYTHONPATH": str(ROOT)})
+                          check=True, timeout=60, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                          **as_in_a_terminal)
     assert done.stdout.strip() == "[True, True] [False, False]", done.stderr
 
 
