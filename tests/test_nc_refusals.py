@@ -351,28 +351,6 @@ def test_a_file_of_21_million_lines_is_refused_without_reading_them(tmp_path):
     assert info.value.line is None and info.value.source == str(path)
 
 
-@pytest.mark.parametrize("block, rule", [("G04 X999999.999", "calculator"),
-                                         ("G04 P999999.999", "calculator"),
-                                         ("G04 P999999999", "calculator"),
-                                         ("G04 X999999999", "is-b")])
-def test_the_longest_dwell_is_that_of_a_9_digit_p(block, rule):
-    # 999,999,999 ms, the longest integer P, is 999,999.999 s however it is written
-    program = parse_program(f"G00 X0\n{block}\nM30\n", integer_input=rule)
-    assert program.dwells[-1] == pytest.approx(999_999.999, rel=1e-15)
-
-
-@pytest.mark.parametrize("block, key", [
-    ("G04 X1000000.", "X1000000."), ("G04 P1000000.", "P1000000."),
-    ("G04 X1" + "0" * 308 + ".", "X1" + "0" * 308 + "."),
-    ("G82 X1. Y1. Z-1. R1. P1000000.5 F100.", "P1000000.5")])
-def test_a_dwell_longer_than_the_longest_p_is_refused_naming_it(block, key):
-    # a G04 X of 1e308 s had been read, and two of them made the program's time infinite
-    with pytest.raises(NCProgramError, match=r"more than the 999999\.999 s of the longest P"
-                       ) as info:
-        parse_program(f"G00 X0 Y0 Z2.\n{block}\nM30\n", "p.nc")
-    assert (info.value.line, info.value.key) == (2, key)
-
-
 _LONG = "9" * 100_000
 
 

@@ -30,7 +30,6 @@ from machinesim.nc.words import (
     LOOK_AHEAD_BLOCKS,
     M99_IN_MAIN,
     M_PER_INCH,
-    MAX_DWELL_S,
     MAX_INTEGER_DIGITS,
     MAX_MOVES,
     MOTION,
@@ -537,14 +536,6 @@ class Block:
         if not seconds >= 0.0:
             raise self.fail(f"{code}'s dwell {brief(word.key)} must be >= 0 (with a decimal "
                             "point P is seconds, as Haas reads it; without, milliseconds)", word)
-        return self.dwell_within(word, seconds)
-
-    def dwell_within(self, word: Word, seconds: float) -> float:
-        """``seconds``, the dwell ``word`` states, refused beyond `words.MAX_DWELL_S`."""
-        if seconds > MAX_DWELL_S * (1.0 + 1e-12):  # X999999999 under IS-B: 999999.999 + 1 ulp
-            raise self.fail(f"dwell {brief(word.key)} waits {seconds:.6g} s, more than the "
-                            f"{MAX_DWELL_S:.3f} s of the longest P (9 digits of ms, 11.6 "
-                            "days) that machinesim reads: a time in the wrong unit?", word)
         return seconds
 
     def integer(self, word: Word, what: str) -> int:

@@ -43,11 +43,6 @@ SLOWEST_FEED_M_PER_S = 1e-9 / 60.0
 #: Integer words (N O G M P L H T D) longer than this are refused: FANUC takes at most 8
 #: digits, and the bound keeps int() away from Python's digit limit on hostile input.
 MAX_INTEGER_DIGITS = 9
-#: The longest dwell read, s: that of the longest integer P, 9 digits of milliseconds
-#: (11.6 days). A G04 X or a P with a decimal point (seconds) beyond it is refused: a time
-#: of 1e308 s had been read, and two made the program's time infinite (a cut's report
-#: refused as not finite, naming no line).
-MAX_DWELL_S = (10**MAX_INTEGER_DIGITS - 1) / 1000.0
 #: Most digits of M98's P: FANUC's M98 P<repeats><program>, a repeat count of up to 4
 #: digits before the 4-digit program number (Series 0i-MC Operator's Manual B-64124EN/01,
 #: 12.3 "Subprogram (M98, M99)": M98 P51002 calls O1002 five times; later controls take
