@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import importlib
 import json
+import os
+import subprocess
 import sys
 
 import pytest
@@ -215,17 +217,13 @@ def test_a_reference_runs_the_module_as_reloaded(module):
 def test_the_state_digest_is_the_same_whatever_the_hash_seed():
     """A resume is another process, with another PYTHONHASHSEED: a set of texts iterates in
     another order there (a pickle's bytes differ), its digest must not."""
-    import os
-    import subprocess
 
     code = ("from machinesim.campaign.identity import state_of\n"
             "class P:\n    def __init__(self):\n"
             "        self.tags = {'alpha', 'beta', 'gamma', 'delta', 'epsilon'}\n"
             "        self.by = {'y': frozenset({'p', 'q', 'r'}), 'x': (1.5, 'z')}\n"
             "print(state_of(P(), 'P'), list(P().tags))\n")
-    said = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                           check=True, env={**os.environ, "PYTHONHASHSEED": seed}).stdout.split(
-                               " ", 1) for seed in ("1", "2", "3", "4")]
+    said = _under_hash_seeds(code, " ")
     assert len({digest for digest, _ in said}) == 1, said
     assert len({order for _, order in said}) > 1  # the sets did iterate otherwise
 
@@ -350,8 +348,6 @@ def test_code_of_a_class_without_a_source_file_is_the_same_whatever_the_hash_see
     """A class typed in (no source file) is digested by its bytecode: a set of texts in a
     method (``r in {"alpha", ...}``, a frozenset constant) was written by its repr, in
     another order in each process, so a resume of such a campaign was refused."""
-    import os
-    import subprocess
 
     code = ("from machinesim.campaign.identity import code_of\n"
             "ns = {'__name__': '__main__'}\n"
@@ -359,9 +355,7 @@ def test_code_of_a_class_without_a_source_file_is_the_same_whatever_the_hash_see
             "        return r in {\"alpha\", \"beta\", \"gamma\", \"delta\"}\\n', ns)\n"
             "print(code_of(ns['Typed'])['classes'], repr(frozenset({'alpha', 'beta', 'gamma', "
             "'delta'})))\n")
-    said = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                           check=True, env={**os.environ, "PYTHONHASHSEED": seed}).stdout.split(
-                               "} ", 1) for seed in ("1", "2", "3", "4")]
+    said = _under_hash_seeds(code, "} ")
     assert len({digest for digest, _ in said}) == 1, said
     assert len({order for _, order in said}) > 1  # the sets did iterate otherwise
 
@@ -479,3 +473,11 @@ def test_machinesims_objects_read_from_a_file_are_the_same_through_a_symlink(mod
     texts = [probe(), probe()]
     texts[0].note, texts[1].note = "/no/such//file", "/no/such/file"
     assert state_of(texts[0], "p") != state_of(texts[1], "p")
+
+
+def _under_hash_seeds(code: str, separator: str) -> list[list[str]]:
+    """``code``'s printed line, split once at ``separator`` (a digest, then the order a set
+    iterated in), in processes of four PYTHONHASHSEEDs."""
+    return [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                           check=True, env={**os.environ, "PYTHONHASHSEED": seed}
+                           ).stdout.split(separator, 1) for seed in ("1", "2", "3", "4")]
