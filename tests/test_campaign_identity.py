@@ -103,10 +103,26 @@ def test_another_instance_state_is_another_campaign(module, tmp_path):
     probe = module().Probe
     out = tmp_path / "out"
     _folder(out, probe(gain=1.0))
+    # the refusal names the attribute that differs, and its values: the one digest of the
+    # whole state had said only that something did
+    with pytest.raises(InputError, match=r"holds another campaign \(state: the procedure "
+                       r"object's attributes \(the arguments it was made with\) differ: gain "
+                       r"1\.0 there, 2\.0 now\); give another --out"):
+        _folder(out, probe(gain=2.0))
+    other = probe()
+    other.table = {"b": [1, 2.5 + 2**-51], "a": {3, 4}}  # one bit, deep inside
+    other.extra = None
+    with pytest.raises(InputError, match=r"differ: extra is new; table changed\)"):
+        _folder(out, other)
+    # one begun before the attributes were kept: the digests, as it said then
+    stored = json.loads((out / "campaign.json").read_text())
+    del stored["state_attributes"]
+    (out / "campaign.json").write_text(json.dumps(stored))
     with pytest.raises(InputError, match=r"holds another campaign \(state: the procedure "
                        r"object's state \(its attributes: the arguments it was made with\) is "
                        r"digest [0-9a-f]{16} now, [0-9a-f]{16} there"):
         _folder(out, probe(gain=2.0))
+    _folder(out, probe(gain=-0.0 + 1.0))  # and it resumes as before
     # the class (called with no arguments) and a reference make the same state
     _folder(out, probe)
     _folder(out, f"{MODULE}:Probe")

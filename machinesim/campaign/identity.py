@@ -49,7 +49,7 @@ from pathlib import Path
 
 from machinesim.exceptions import InputError, brief
 
-__all__ = ["DIGITS", "code_of", "state_of"]
+__all__ = ["DIGITS", "attributes_of", "code_of", "state_of"]
 
 #: Hex digits of each SHA-256 digest kept.
 DIGITS = 16
@@ -223,6 +223,39 @@ def state_of(procedure, shown: str, made: bool = False) -> str | None:
         raise InputError(f"procedure {shown}: {error}", key="procedure") from None
     return _digest(json.dumps(canonical, sort_keys=True, separators=(",", ":"),
                               ensure_ascii=True).encode())
+
+
+def attributes_of(procedure) -> dict | None:
+    """Each attribute of ``procedure``'s state (`state_of`'s form, taken apart at the top):
+    its name -> [the digest of its canonical form, its value as shown when a number, a text,
+    a bool or None (else None)]. campaign.json keeps it beside ``state`` so that a refused
+    resume names the attributes that differ ("gain 1.0 there, 2.0 now"), where the one
+    digest said only that something did. A function of the digested form, so one state has
+    one entry. None where `state_of` has no attributes to take apart (a list, an object
+    pickled by its arguments, state it cannot digest)."""
+    try:
+        canonical = _canonical(procedure, "", {}, 0)
+    except _Undigestible:
+        return None
+    if canonical[0] != "object":
+        return None
+    found = [part for part in canonical[1][2:] if part[0] == "attributes"]
+    if len(found) != 1:
+        return None
+    return {name: [_digest(json.dumps(value, sort_keys=True, separators=(",", ":"),
+                                      ensure_ascii=True).encode()), _shown(value)]
+            for name, value in found[0][1]}
+
+
+def _shown(canonical) -> str | None:
+    """A plain value's text from its canonical form (`_canonical`), for a message."""
+    kind = canonical[0]
+    if kind == "float" and len(canonical) == 2:
+        text = canonical[1]
+        return repr(float.fromhex(text) if text not in ("nan", "inf", "-inf") else float(text))
+    if kind in ("int", "bool", "NoneType", "str") and len(canonical) == 2:
+        return brief(repr(int(canonical[1]) if kind == "int" else canonical[1]))
+    return None
 
 
 _PLAIN = (str, int, bool, type(None))

@@ -97,7 +97,9 @@ class CampaignFolder:
             if not same_campaign(old, spec):
                 kept = _identity_kept(old, spec)
                 keys = sorted(k for k in set(old) | set(kept) if old.get(k) != kept.get(k))
-                diff = ", ".join(_difference(k, old.get(k), kept.get(k)) for k in keys)
+                diff = ", ".join(_state_difference(old, kept) if k == "state" else
+                                 _difference(k, old.get(k), kept.get(k)) for k in keys
+                                 if k != "state_attributes" or "state" not in keys)
                 back = (" (or put the procedure's code back as it was, to resume)"
                         if "code" in keys and "procedure" not in keys else "")
                 raise InputError(f"holds another campaign ({diff}); give another --out or "
@@ -175,7 +177,7 @@ class CampaignFolder:
 #: (`CampaignSpec.describe`, `machinesim.campaign.identity`), added 2026-12-01: a
 #: campaign.json written before has none, and is resumed as it was (nothing then told
 #: what code its trials ran).
-IDENTITY_KEYS = ("machinesim", "code", "state")
+IDENTITY_KEYS = ("machinesim", "code", "state", "state_attributes")
 
 
 def _identity_kept(old: dict, new: dict) -> dict:
@@ -218,6 +220,31 @@ def _difference(key: str, old, new) -> str:
     walk(old, new, "")
     more = f"; and {len(found) - 4} more" if len(found) > 4 else ""
     return f"errors: {'; '.join(found[:4])}{more}"
+
+
+def _state_difference(old: dict, new: dict) -> str:
+    """How a user's procedure object's state differs from the campaign's (campaign.json's
+    ``state``): by the attributes whose digests differ (``state_attributes``,
+    `machinesim.campaign.identity.attributes_of`), each with its values where they are plain
+    ("gain 1.0 there, 2.0 now"); by the two digests where either campaign lacks them (one
+    begun before they were kept, a state not made of attributes)."""
+    before, now = old.get("state_attributes"), new.get("state_attributes")
+    said = []
+    if isinstance(before, dict) and isinstance(now, dict):
+        for name in sorted(set(before) | set(now)):
+            was, is_ = before.get(name), now.get(name)
+            if was is None:
+                said.append(f"{name} is new")
+            elif is_ is None:
+                said.append(f"{name} is gone")
+            elif was[0] != is_[0]:
+                said.append(f"{name} {was[1]} there, {is_[1]} now" if was[1] is not None and
+                            is_[1] is not None else f"{name} changed")
+    if not said:
+        return _difference("state", old.get("state"), new.get("state"))
+    more = f"; and {len(said) - 4} more" if len(said) > 4 else ""
+    return (f"state: the procedure object's attributes (the arguments it was made with) "
+            f"differ: {'; '.join(said[:4])}{more}")
 
 
 def _code_difference(old: dict, new: dict) -> str:

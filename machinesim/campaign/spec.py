@@ -270,7 +270,7 @@ class CampaignSpec:
                      "identify_only": self.identify_only, "quick": self.quick,
                      "vary": {n: d.text for n, d in self.vary}}
         if self.own:  # what a user's procedure's campaign is besides (a shipped one's: fixed)
-            from machinesim.campaign.identity import code_of, state_of
+            from machinesim.campaign.identity import attributes_of, code_of, state_of
 
             built = self.entry.build({})  # a fresh instance, or a copy of the one given
             state = state_of(built, self.procedure, made=not self._object())
@@ -279,7 +279,8 @@ class CampaignSpec:
                 # __init__): no resume could match it; its code, which decides it, names it
                 state = None
             described.update(name=built.name, machine=self.machine_name,
-                             errors=self.errors.to_dict(), code=code_of(built), state=state)
+                             errors=self.errors.to_dict(), code=code_of(built), state=state,
+                             state_attributes=None if state is None else attributes_of(built))
         # the code a trial runs: machinesim's by its version, a user's by its digests
         # (`machinesim.campaign.identity`); a resume with other code is refused
         described["machinesim"] = _version()
