@@ -1,5 +1,6 @@
-"""What the lab's test files (tests/test_lab_truth.py, _report.py, _refusals.py) share
-(not collected: no test_ prefix): the truth they inject and a groove to cut."""
+"""What the lab's test files (tests/test_lab_truth.py, _report.py, _refusals.py) and the
+realism ones (tests/test_realism_*.py, through realism_helpers.py too) share (not collected:
+no test_ prefix): the truth they inject and a groove to cut."""
 
 from __future__ import annotations
 
