@@ -219,3 +219,22 @@ def test_missing_file_is_named(tmp_path):
 def test_constructors_refuse(build, match):
     with pytest.raises(ErrorModelError, match=match):
         build()
+
+
+@pytest.mark.parametrize("text", [
+    "[component.X]\nEXX_poly_ppm_mm = [0.0, 10.0]\n",
+    "[component.X]\nposition_mm = [0.0, 10.0]\nEXX_ppm = [0.0, 10.0]\n",
+    "[location.Y]\nEC0Y_ppm = 10.0\n",
+])
+def test_ppm_is_refused_saying_how_a_scale_error_and_a_slope_are_written(tmp_path, text):
+    """No key takes a ratio: the refusal says what to write instead, and what it says reads
+    as the ratio: 10 ppm of X is 100 nm over 10 mm, 10 ppm across Y is 10 urad."""
+    path = tmp_path / "ppm.toml"
+    path.write_text(text)
+    with pytest.raises(ErrorModelError, match=r"unit 'ppm' is not recognised.*ppm is a ratio.*"
+                       r"EXX_poly_um_m = \[0\.0, s\].*an angle of s urad"):
+        ErrorModel.from_toml(path)
+    path.write_text("[component.X]\nEXX_poly_um_m = [0.0, 10.0]\n[location.Y]\nEC0Y_urad = 10.0\n")
+    model = ErrorModel.from_toml(path)
+    assert model.component["X"]["EXX"].evaluate([10e-3])[0] == pytest.approx(100e-9, rel=1e-15)
+    assert model.location["Y"]["EC0Y"] == pytest.approx(10e-6, rel=1e-15)

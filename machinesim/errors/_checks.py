@@ -144,6 +144,17 @@ def _quantity(letter: str) -> str:
     return "length" if letter in LINEAR_AXES else "angle"
 
 
+#: What a ratio written as a unit means in an error model's keys (no unit of the file is one):
+#: a scale error is the slope of a positioning polynomial, and a slope across an axis is an
+#: angle. 10 ppm of X had been refused as an unknown length unit with no word of how to write it.
+_RATIO_HINTS = {
+    "ppm": ("; ppm is a ratio, not a length or an angle: a scale error of s ppm is the slope "
+            "of the axis's positioning polynomial in um per m, e.g. [component.X] "
+            "EXX_poly_um_m = [0.0, s], and a slope of s ppm across an axis (a squareness, a "
+            "tilt) is an angle of s urad"),
+}
+
+
 def _check_unit(unit: str, quantity: str, source: str | None, key: str) -> float:
     """The factor to SI of `unit`, which must be a `quantity` ('length' or 'angle') unit."""
     units = LENGTH if quantity == "length" else ANGLE
@@ -154,7 +165,8 @@ def _check_unit(unit: str, quantity: str, source: str | None, key: str) -> float
     if unit in FACTORS:
         other = "an angle" if quantity == "length" else "a length"
         raise _fail(f"{expected}, got {unit!r}, {other} unit", source, key)
-    raise _fail(f"unit {unit!r} is not recognised; {expected}", source, key)
+    raise _fail(f"unit {unit!r} is not recognised; {expected}{_RATIO_HINTS.get(unit, '')}",
+                source, key)
 
 
 def _check_axis(axis: Any, source: str | None, key: str) -> None:
