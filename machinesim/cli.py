@@ -397,9 +397,11 @@ def _cut(args) -> int:
         summary["notes"].append(f"{args.servo} sets no servo loop (no axis table): every axis "
                                 "followed its command exactly, a following error of 0")
     if errors is not None:
+        from machinesim.errors.idle import idle_location_notes
         from machinesim.errors.unit_slips import unit_slip_notes
 
         summary["notes"] += unit_slip_notes(errors, machine)
+        summary["notes"] += idle_location_notes(errors, machine, program, machine.home)
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
     pieces, apart = _pieces(part, stock, roi)

@@ -329,3 +329,51 @@ def test_a_cuts_warnings_and_refusals_name_the_n_word_beside_the_line(tmp_path, 
     assert len(warnings) == 4 and " at line 11 (N110) outside its travel " in warnings[3], err
     code, _, err = run(argv[:-1], capsys)  # refused for the travel first: named alike
     assert code == 2 and " at line 11 (N110) outside its travel " in err, err
+
+
+def test_location_errors_of_an_axis_the_program_keeps_at_zero_are_noted(tmp_path, capsys):
+    """C's line offset and tilt (EX0C 5 um, EB0C 3 urad) on a slot cut at C = 0 throughout
+    move nothing (E J E^-1 is the identity at C = 0): the part is bit for bit the one cut
+    without errors, which a user injecting them to see them had no word of. Now a note names
+    them; EC0C, C's zero offset, turns the part at C = 0 too and is not named. The same slot
+    cut at C = 180 deg shows them (the slot 2 EX0C off) and has no note."""
+    slot = "G90 G21\nG00 {c}X0.5 Y5. Z0.1\nG01 Z-0.02 F50.\nX10.5 F100.\nG00 Z0.1\nM30\n"
+    errors = tmp_path / "c.toml"
+    errors.write_text("[location.C]\nEX0C_um = 5.0\nEB0C_urad = 3.0\n")
+    zero_offset = tmp_path / "c0.toml"
+    zero_offset.write_text("[location.C]\nEC0C_urad = 10.0\n")
+    parts, notes = {}, {}
+    for name, c, stock, errs in (("plain", "", "block:12x10x2", None),
+                                 ("idle", "", "block:12x10x2", errors),
+                                 ("zero", "", "block:12x10x2", zero_offset),
+                                 ("turned", "C180. ", "block:12x10x2@-11.5,-11,0", errors)):
+        program = tmp_path / f"{name}.nc"
+        program.write_text(slot.format(c=c))
+        argv = ["cut", program, "--machine", "robonano_a0ib", "--tool", "v:90", "--stock",
+                stock, "--quiet", "--out", tmp_path / f"{name}.ply", "--report",
+                tmp_path / f"{name}.json"] + (["--errors", errs] if errs else [])
+        code, _, err = run(argv, capsys)
+        assert code == 0, err
+        parts[name] = machinesim.viewer.read_ply(tmp_path / f"{name}.ply")[0]
+        notes[name] = (err, json.loads((tmp_path / f"{name}.json").read_text())["notes"])
+    note = (f"{errors}, line 2: location.C EX0C, EB0C move nothing in this program: C stays "
+            "at 0 from its start to its end, and the offsets and tilts of its line show only "
+            "as it turns; the part is the one the machine without them cuts")
+    assert f"note: {note}" in notes["idle"][0] and note in notes["idle"][1]
+    assert np.array_equal(parts["idle"], parts["plain"])
+    for name in ("plain", "zero", "turned"):
+        assert "move nothing" not in notes[name][0], (name, notes[name][0])
+    # where they do move the slot, by hand: the far end's bottom corner (nominal x = 10.5 mm,
+    # y = 5 mm, or -10.5, -5 mm at C = 180 deg). EC0C turns the tool by 10 urad about C's
+    # line: (x - e y, y + e x), 50 nm back and 105 nm across. At C = 180 deg the slot is
+    # turned about C's true line, 2 EX0C + 2 EB0C h along X (h = 24.98 mm, the slot bottom
+    # above the C joint frame): 10 um + 0.14988 um
+    def far_end(vertices, sign):
+        slot = vertices[(vertices[:, 2] < -1e-9) & (vertices[:, 2] > -1e-4)]
+        end = slot[sign * slot[:, 0] >= (sign * slot[:, 0]).max() - 1e-15]
+        return end[np.argmin(end[:, 2])]
+
+    np.testing.assert_allclose(far_end(parts["zero"], 1) - far_end(parts["plain"], 1),
+                               [-50e-9, 105e-9, 0.0], atol=1e-12)
+    np.testing.assert_allclose(far_end(parts["turned"], -1)[:2], [-10.5e-3 + 10.14988e-6, -5e-3],
+                               atol=1e-11)
