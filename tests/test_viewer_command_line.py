@@ -83,6 +83,21 @@ def test_an_error_file_setting_no_error_gets_cuts_note(tmp_path, captured, capsy
     assert not captured["errors"].written
 
 
+def test_location_errors_the_program_never_shows_get_cuts_note(tmp_path, captured, capsys):
+    # the groove never turns C: EX0C moves nothing there, which machinesim cut notes; C's
+    # zero offset EC0C turns the part at C = 0 and is not named
+    program = tmp_path / "p.nc"
+    program.write_text(GROOVE)
+    errors = tmp_path / "c.toml"
+    errors.write_text("[location.C]\nEC0C_urad = 1.0\nEX0C_um = 2.0\n")
+    assert run(["grooving_4axis", "--program", str(program), "--errors", str(errors),
+                "--html", str(tmp_path / "p.html")]) == 0
+    err = capsys.readouterr().err
+    assert (f"note: {errors}, line 3: location.C EX0C moves nothing in this program: C stays "
+            "at 0 from its start to its end") in err, err
+    assert "EC0C" not in err, err
+
+
 @pytest.mark.parametrize("port", ["7005", "6000"])
 def test_a_port_beside_html_is_refused(tmp_path, port):
     # an --html page has no server: the port was taken and ignored (exit 0), as --tool

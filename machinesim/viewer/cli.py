@@ -329,6 +329,11 @@ def _scene(args, budget: int):
         # given none, animating such a file without a word
         for note in unit_slip_notes(errors, machine):
             print(f"note: {printable(note)}", file=sys.stderr)
+        if program is not None:  # cut's note on location errors its program never shows
+            from machinesim.errors.idle import idle_location_notes
+
+            for note in idle_location_notes(errors, machine, program, machine.home):
+                print(f"note: {printable(note)}", file=sys.stderr)
     return machine_scene(machine, program, tool=tool, stock=stock,
                          errors=errors, max_triangles=budget,
                          duration_s=DEFAULT_DURATION_S if args.duration is None else args.duration,
