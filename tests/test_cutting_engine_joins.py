@@ -211,3 +211,26 @@ def test_a_ball_line_in_short_moves_is_cut_as_one_move(monkeypatch):
                                                        rel=VOLUME_REL, abs=0.0)
     two, _ = remove(stock, tool, [bent[[0, 30, -1]]], method="boolean")
     assert turned.manifold.volume() == pytest.approx(two.manifold.volume(), rel=VOLUME_REL)
+
+
+def test_windows_after_one_cut_in_tiles_are_cut():
+    # Two windows, the first cut in a grid of tiles stitched at their walls: the second is
+    # cut too (the stitched cell once took the name of the sweeps' solids, and the next
+    # window read a sweep from it: TypeError 'Manifold' object is not subscriptable).
+    # 90 deg V grooves d deep remove d^2 per length; two crossing remove 4 d^3 / 3 twice.
+    from cutting_engine_helpers import groove_y
+
+    depth = 6e-6
+    stock = block(4e-3, 4e-3, 1e-3)
+    paths = [groove_x(y, depth) for y in (0.5e-3, 1.2e-3, 1.5e-3, 1.8e-3, 2.5e-3, 3.5e-3)]
+    paths += [groove_y(x, depth) for x in (1.2e-3, 1.6e-3, 3.2e-3)]
+    windows = [(1e-3, 2e-3, 1e-3, 2e-3), (3e-3, 3.5e-3, 3e-3, 4e-3)]
+    # window 1: three grooves along X and two along Y, 1 mm each, six crossings;
+    # window 2: one along X 0.5 mm, one along Y 1 mm, one crossing
+    removed = depth ** 2 * (3e-3 + 2e-3 + 0.5e-3 + 1e-3) - 7 * 4 * depth ** 3 / 3
+    for per_tile in (1000, 2):
+        part, report = remove(stock, VTool(math.pi / 2), paths, roi=windows,
+                              method="boolean", sweeps_per_tile=per_tile)
+        assert report.n_cells > 2 or per_tile == 1000
+        assert report.removed_volume == pytest.approx(removed, rel=1e-9, abs=0.0)
+        assert part.volume == pytest.approx(1.5e-3 * 1e-3 * 1e-3 - removed, rel=VOLUME_REL)

@@ -522,9 +522,9 @@ def remove(
                 progress(done, total)
         if len(pieces) > 1:
             boxes = [box for box, _ in tiles]
-            joined = stitch(pieces, boxes, cell, scale)
+            stitched = stitch(pieces, boxes, cell, scale)
             # the walls put on their planes first: else the union leaves a crack of no width
-            cell_parts.append(joined if joined is not None
+            cell_parts.append(stitched if stitched is not None
                               else snapped_union(pieces, boxes, cell, scale))
         else:
             cell_parts.append(manifold3d.Manifold.batch_boolean(pieces, OpType.Add))
