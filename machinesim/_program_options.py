@@ -73,34 +73,75 @@ def read_for_machine(args: argparse.Namespace, path, machine, tool):
     return read_program(path, chord_tolerance=chord, **reading), chord
 
 
-def chord_note(args: argparse.Namespace, program, chord: float) -> str | None:
+def chord_note(args: argparse.Namespace, program, chord: float, machine=None,
+               errors=None) -> str | None:
     """The note for arcs and rotary moves split into chords coarser than 1 nm (the axes'
     resolution) by default, ``--chord-nm`` not given, when the program has them
-    (`has_chords`): a tenth of a ball or flat end mill's facets, 100 nm; or None."""
+    (`has_chords`): a tenth of a ball or flat end mill's facets, 100 nm; or None.
+
+    With the ``machine`` and its ``errors``, the feeds along a linear axis whose errors vary
+    along it (a straightness or angular table, `bent_axes`) count too: the planner splits
+    them to the same chords (`machinesim.motion.planner`), and the note names those axes."""
     from machinesim.tolerances import CHORD_TOLERANCE_M
 
-    if chord <= CHORD_TOLERANCE_M or args.chord_nm is not None or not has_chords(program):
+    if chord <= CHORD_TOLERANCE_M or args.chord_nm is not None:
         return None
-    return (f"arcs and rotary moves were split into chords within {chord * 1e9:.4g} nm, a "
+    bent = bent_axes(machine, errors) if machine is not None else ()
+    home = dict(zip(machine.axes, machine.home.tolist(), strict=True)) if bent else {}
+    bending = [axis for axis in bent if _feeds_move(program, (axis,), home)]
+    if not bending and not has_chords(program):
+        return None
+    what = "arcs and rotary moves"
+    if bending:
+        one = len(bending) == 1
+        vary = "its errors vary along it" if one else "their errors vary along them"
+        what += (f", and feeds along {' and '.join(bending)} ({vary} in --errors: a "
+                 "straight move there is a curve),")
+    return (f"{what} were split into chords within {chord * 1e9:.4g} nm, a "
             "tenth of the tool's own facets (--chord-nm sets it; docs/cutting.md)")
+
+
+def bent_axes(machine, errors) -> tuple[str, ...]:
+    """The names of ``machine``'s linear axes whose ``errors`` vary along them (component
+    tables: a straight move of such an axis is a curve, split to the chord tolerance as a
+    rotary move is, `machinesim.motion.planner`), in the machine's order; () without
+    errors."""
+    if errors is None:
+        return ()
+    varying = {var.axis for var in machine.binding(errors).varying}
+    return tuple(name for i, name in enumerate(machine.axes)
+                 if i in varying and not machine.rotary[i])
+
+
+def _feeds_move(program, names, home) -> bool:
+    """Whether a feed move of ``program`` changes one of the axes ``names`` (those the
+    program has), an axis not yet programmed standing at ``home`` (name -> value, 0.0 if
+    absent)."""
+    import numpy as np
+
+    from machinesim.nc.program import AXES, KIND_LINEAR
+
+    names = [name for name in names if name in AXES]
+    if not names:
+        return False
+    values = program.targets[:, [AXES.index(a) for a in names]]
+    start = np.array([home.get(name, 0.0) for name in names])
+    # an axis not yet programmed stands where the cut starts (`Machine.home`)
+    values = np.vstack([start[None], np.where(np.isnan(values), start[None], values)])
+    feeds = program.kinds == KIND_LINEAR
+    return bool(((np.diff(values, axis=0) != 0.0) & feeds[:, None]).any())
 
 
 def has_chords(program) -> bool:
     """Whether the chord tolerance shapes the cut: the program has arcs, or feed moves that
     turn a rotary axis."""
-    import numpy as np
+    from machinesim.nc.program import ROTARY_AXES
 
-    from machinesim.nc.program import AXES, KIND_LINEAR, ROTARY_AXES
-
-    rotary = program.targets[:, [AXES.index(a) for a in ROTARY_AXES]]
     # an axis not yet programmed stands at the home, where `cut` and `view` start (every
     # rotary axis at zero, `Machine.home`): a first `G01 A1.` turns A from 0, and is split
     # into sub-steps as any other; it had been skipped (its previous target NaN), and a
     # program turning its rotary axes only in such feeds got no note
-    rotary = np.vstack([np.zeros((1, rotary.shape[1])), np.nan_to_num(rotary, nan=0.0)])
-    feeds = program.kinds == KIND_LINEAR
-    turns = (np.diff(rotary, axis=0) != 0.0) & feeds[:, None]
-    return program.arc_blocks > 0 or bool(turns.any())
+    return program.arc_blocks > 0 or _feeds_move(program, ROTARY_AXES, {})
 
 
 def work_offset_notes(program) -> list[str]:

@@ -304,11 +304,12 @@ def _progress_lines(clock):
     return log_lines("cutting", "sweeps", clock, LOG_PROGRESS_AFTER_S, LOG_PROGRESS_EVERY_S)
 
 
-def _reading_notes(args, program, chord: float) -> list[str]:
-    """What the command line chose in reading the program that the user should know: arcs
-    and rotary moves split coarser than 1 nm by default, work offsets it was not given, the
-    unit of a program that selects none, a program that ends without M02/M30."""
-    notes = [note for note in (chord_note(args, program, chord),) if note]
+def _reading_notes(args, program, chord: float, machine, errors) -> list[str]:
+    """What the command line chose in reading the program that the user should know: arcs,
+    rotary moves and moves that ``errors`` bend split coarser than 1 nm by default, work
+    offsets it was not given, the unit of a program that selects none, a program that ends
+    without M02/M30."""
+    notes = [note for note in (chord_note(args, program, chord, machine, errors),) if note]
     notes += work_offset_notes(program)
     notes += [note for note in (unit_note(program), integer_note(program), end_note(program),
                                 after_end_note(program))
@@ -389,7 +390,8 @@ def _cut(args) -> int:
         raise type(error)(f"{error}; {hint}") from None
     summary = report.to_dict()
     summary["path_chord_tolerance_nm"] = chord * 1e9
-    summary["notes"] = [*summary["notes"], *_reading_notes(args, program, chord)]
+    summary["notes"] = [*summary["notes"], *_reading_notes(args, program, chord, machine,
+                                                                errors)]
     if errors is not None and not errors.written:  # an empty file, or sections without keys
         summary["notes"].append(f"{args.errors} sets no error (no key in any section): cut "
                                 "on the machine as built, every error zero")

@@ -338,3 +338,28 @@ def test_the_chord_note_is_given_when_arcs_or_rotary_feeds_were_split(tmp_path, 
             "tool's own facets (--chord-nm sets it; docs/cutting.md)")
     assert (f"note: {note}" in err.splitlines()) == noted
     assert (note in summary["notes"]) == noted
+
+
+def test_the_chord_note_names_the_axes_whose_errors_bend_straight_feeds(tmp_path, capsys):
+    # A straightness table on X (EZX 2 um at 5 mm, a curve) makes the planner split a
+    # straight X feed into chords within the 100 nm of a ball, as it splits a rotary move:
+    # 11 sweeps where the nominal machine cuts 1. The note had not been given (no arc, no
+    # rotary feed); it now names X. Without the table, or with --chord-nm, none.
+    errors = tmp_path / "bend.toml"
+    errors.write_text("[component.X]\nposition_mm = [-10.0, -5.0, 0.0, 5.0, 10.0]\n"
+                      "EZX_um = [0.0, 2.0, 0.0, -2.0, 0.0]\n")
+    program, report = tmp_path / "p.nc", tmp_path / "r.json"
+    program.write_text("G90 G21\nG0 X-1. Y1. Z0.1\nG1 Z-0.01 F100.\nX6.\nG0 Z0.1\nM30\n")
+    note = ("arcs and rotary moves, and feeds along X (its errors vary along it in --errors: "
+            "a straight move there is a curve), were split into chords within 100 nm, a "
+            "tenth of the tool's own facets (--chord-nm sets it; docs/cutting.md)")
+    for extra, noted, sweeps in (([], False, 1), (["--errors", errors], True, 11),
+                                 (["--errors", errors, "--chord-nm", "100"], False, 11)):
+        code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool",
+                            "ball:0.5", "--stock", "block:5x3x1", "--quiet", "--out",
+                            tmp_path / "p.ply", "--report", report, *extra], capsys)
+        assert code == 0, err
+        summary = json.loads(report.read_text(), parse_constant=no_nan)
+        assert summary["sweeps_count"] == sweeps
+        assert (f"note: {note}" in err.splitlines()) == noted
+        assert (note in summary["notes"]) == noted

@@ -309,17 +309,20 @@ def _scene(args, budget: int):
         # the notes machinesim cut gives on how the text was read and split: arcs cut as
         # chords coarser than 1 nm by default, X10 read as 10 mm, a file without M30 (cut
         # short?), text after the closing %; view had given the unit's
-        for note in (chord_note(args, program, chord), *work_offset_notes(program),
+        if args.errors is not None:  # read before the notes: the chords' note names
+            # the axes its tables bend (a misfit is refused before the notes, as cut does)
+            errors = _errors_for(args.errors, machine)
+        for note in (chord_note(args, program, chord, machine, errors),
+                     *work_offset_notes(program),
                      unit_note(program), integer_note(program), end_note(program),
                      after_end_note(program)):
             if note:
                 print(f"note: {printable(note)}", file=sys.stderr)
     if args.errors is not None:
-        from machinesim.errors import ErrorModel
         from machinesim.errors.unit_slips import unit_slip_notes
 
-        errors = ErrorModel.from_toml(args.errors)
-        machine.check_errors(errors)  # a misfit is refused before the notes, as cut does
+        if errors is None:
+            errors = _errors_for(args.errors, machine)
         if not errors.written:  # an empty file, or sections without keys: cut's note (view
             # had said nothing on the command line, the page's tool-path line alone telling)
             print(f"note: {printable(str(args.errors))} sets no error (no key in any section): "
@@ -338,6 +341,15 @@ def _scene(args, budget: int):
                          errors=errors, max_triangles=budget,
                          duration_s=DEFAULT_DURATION_S if args.duration is None else args.duration,
                          chord_tolerance=chord, progress=cut_lines())
+
+
+def _errors_for(path, machine):
+    """The error model at ``path``, checked against ``machine`` (a misfit refused)."""
+    from machinesim.errors import ErrorModel
+
+    errors = ErrorModel.from_toml(path)
+    machine.check_errors(errors)
+    return errors
 
 
 def cut_lines(clock=time.monotonic, after_s: float = LOG_AFTER_S, every_s: float = LOG_EVERY_S):
