@@ -22,13 +22,18 @@ MM = 1e-3
 
 def reference(sweeps, candidates, solid, reach, keep):
     """Every candidate's room against the solid less every earlier sweep in the stock's
-    box, one candidate at a time (candidates x earlier sweeps booleans)."""
+    box, one candidate at a time (candidates x earlier sweeps booleans); less its own sweep
+    too where it takes the tool straight down its axis (a plunge: its body has cut its
+    hole before the holder follows)."""
     hulls, *_, owners = SweepSet.hulls(sweeps, keep)
     owners = np.asarray(owners)
     found = []
     for i in candidates:
         met = solid ^ holder_room(sweeps, i, reach)
-        for j in np.flatnonzero(owners < i):
+        start, end = sweeps.poses[sweeps.pairs[i]], sweeps.poses[sweeps.pairs[i] + 1]
+        down = (np.array_equal(start[:3, :3], end[:3, :3])
+                and float(start[:3, 2] @ (end[:3, 3] - start[:3, 3])) < 0.0)
+        for j in np.flatnonzero((owners < i) | ((owners == i) & down)):
             met = met - hulls[j]
             met.num_tri()
         if met.volume() > HOLDER_MATERIAL_M3:
@@ -81,7 +86,8 @@ def checked(monkeypatch):
 def test_a_stepped_slot_opens_the_way_as_the_reference_finds(checked):
     # flat end mill, 2 mm of body, a slot 3 mm deep in 1 mm steps: the last pass's holder
     # is in the slot the earlier passes cut (nothing found); moved 0.5 mm sideways, it
-    # meets the wall: its plunge, feed and lift
+    # meets the wall: its feed and lift (its plunge's holder, no wider than the body,
+    # follows the body down the hole the plunge itself drilled)
     stock = "block:10x6x5@-5,-3,0"
     cut(_slot_in_steps(3), "grooving_4axis", tool="flat:1.0:h=2", stock=stock)
     candidates, found, _, _ = checked[-1]
@@ -90,7 +96,7 @@ def test_a_stepped_slot_opens_the_way_as_the_reference_finds(checked):
         cut(_slot_in_steps(3, last_y=0.5 * MM), "grooving_4axis", tool="flat:1.0:h=2",
             stock=stock)
     candidates, found, _, _ = checked[-1]
-    assert len(found) == 3 and found == candidates[-3:]
+    assert len(candidates) >= 3 and found == candidates[-2:]
 
 
 def _bore(depth_mm, radius_mm=0.4, pitch_mm=0.25):
@@ -208,3 +214,32 @@ def test_a_body_taken_wholly_below_the_stock_has_its_holder_through_it(method):
     with pytest.raises(HolderContactError, match=r"line 4 takes the top of the tool's body"):
         cut(parse_program("G90 G21\nG00 X-2. Y5. Z1.\nG01 Z-15. F200.\nX12.\nM30\n"),
             "grooving_4axis", tool, "block:10x10x2")
+
+
+def test_a_plunge_deeper_than_the_body_is_cut_and_a_move_at_that_depth_refused(checked):
+    """A ball 0.5 mm in radius, its body 10 mm high and its holder no wider, plunged 12 mm
+    into a 20 mm block: its holder follows the body down the hole the body drilled (any
+    point of the holder's room that the body sweeps, the body swept first), so no holder
+    meets the part, and the cut is the one --allow-holder-contact makes, a hole of the
+    ball's section (the body alone leaves nothing standing). It was refused as a crash:
+    the plunge's own sweep was not counted as cut. Moved sideways at that depth, or with
+    a holder 2 mm wide, the holder meets the part and the line is refused."""
+    stock = "block:10x10x20"
+    plunge = "G90 G21\nG00 X5. Y5. Z1.\nG01 Z-12. F100.\n"
+    part, report = cut(parse_program(plunge + "G00 Z15.\nM30\n"), "grooving_4axis",
+                       tool="ball:0.5", stock=stock)
+    allowed, by_body = cut(parse_program(plunge + "G00 Z15.\nM30\n"), "grooving_4axis",
+                           tool="ball:0.5", stock=stock, allow_holder_contact=True)
+    assert report.holder_contact == ()  # (allowed, the box test's lines are listed)
+    assert checked[0][0] and checked[0][1] == []  # candidates, none meets material
+    assert report.removed_volume_m3 == pytest.approx(by_body.removed_volume_m3, rel=1e-12)
+    # a cylinder 0.5 mm in radius 11.5 mm deep and a half ball, to the facets' 1 um
+    hand = np.pi * (0.5 * MM) ** 2 * 11.5 * MM + 2 / 3 * np.pi * (0.5 * MM) ** 3
+    assert report.removed_volume_m3 == pytest.approx(hand, rel=5e-3)
+    assert part.volume == pytest.approx(allowed.volume, rel=1e-12)
+    with pytest.raises(HolderContactError, match=r": line 4 \(lines 4, 5\) takes the top"):
+        cut(parse_program(plunge + "X6.\nG00 Z15.\nM30\n"), "grooving_4axis",
+            tool="ball:0.5", stock=stock)
+    with pytest.raises(HolderContactError, match=r": line 3 \(lines 3, 4\) takes the top"):
+        cut(parse_program(plunge + "G00 Z15.\nM30\n"), "grooving_4axis",
+            tool="ball:0.5:d=2", stock=stock)

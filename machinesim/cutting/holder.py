@@ -22,6 +22,7 @@ from machinesim.cutting.containment import (
 from machinesim.cutting.sweeps import hull_mesh, manifold_from
 from machinesim.cutting.sweepset import POINTS_PER_CHUNK
 from machinesim.exceptions import InputError
+from machinesim.tolerances import SAME_ORIENTATION
 
 if TYPE_CHECKING:
     from machinesim.cutting.sweepset import SweepSet
@@ -104,10 +105,28 @@ def holder_in_material(sweeps: SweepSet, candidates, solid: manifold3d.Manifold,
     owners = np.asarray(owners, dtype=np.int64)
     found = set()
     for i in inside:
-        walk.cut(np.arange(walk.done, int(np.searchsorted(owners, i))))
+        # a sweep that takes the tool down its own axis has cut what its room holds of its
+        # own body's sweep before the holder came there (`_descends`): counted as earlier
+        side = "right" if _descends(sweeps, i) else "left"
+        walk.cut(np.arange(walk.done, int(np.searchsorted(owners, i, side=side))))
         if walk.holds(rooms[i]):
             found.add(i)
     return [i for i in order if i in found]
+
+
+def _descends(sweeps: SweepSet, sweep: int) -> bool:
+    """Whether sweep ``sweep`` moves the tool down its own axis without turning (a plunge,
+    a ramp), so that its body has cut what its holder meets of the body's own sweep before
+    the holder came there: a point the holder covers at time t lies at least the body's
+    height H above the tip along the axis a, a point the body covers at t' at most H, so
+    a . tip(t') >= a . tip(t), and a . tip falls along the move: t' <= t. A plunge deeper
+    than the body had been refused as a crash, its own hole never counted as cut; a move
+    back up the axis (the holder there first) or one that turns is not such a sweep."""
+    first = sweeps.pairs[sweep]
+    start, end = sweeps.poses[first], sweeps.poses[first + 1]
+    if np.abs(end[:3, :3] - start[:3, :3]).max() > SAME_ORIENTATION:
+        return False
+    return float(start[:3, 2] @ (end[:3, 3] - start[:3, 3])) < 0.0
 
 
 class _Walk:
