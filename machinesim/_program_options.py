@@ -86,9 +86,10 @@ def chord_note(args: argparse.Namespace, program, chord: float, machine=None,
 
     if chord <= CHORD_TOLERANCE_M or args.chord_nm is not None:
         return None
-    bent = bent_axes(machine, errors) if machine is not None else ()
+    bent = bent_axes(machine, errors) if machine is not None else {}
     home = dict(zip(machine.axes, machine.home.tolist(), strict=True)) if bent else {}
-    bending = [axis for axis in bent if _feeds_move(program, (axis,), home)]
+    bending = [axis for axis, components in bent.items()
+               if _feeds_move(program, (axis,), home, components)]
     if not bending and not has_chords(program):
         return None
     what = "arcs and rotary moves"
@@ -101,22 +102,57 @@ def chord_note(args: argparse.Namespace, program, chord: float, machine=None,
             "tenth of the tool's own facets (--chord-nm sets it; docs/cutting.md)")
 
 
-def bent_axes(machine, errors) -> tuple[str, ...]:
-    """The names of ``machine``'s linear axes whose ``errors`` vary along them (component
-    tables: a straight move of such an axis is a curve, split to the chord tolerance as a
-    rotary move is, `machinesim.motion.planner`), in the machine's order; () without
-    errors."""
+def bent_axes(machine, errors) -> dict[str, list]:
+    """``machine``'s linear axes whose ``errors`` vary along them (component tables: a
+    straight move of such an axis is a curve, split to the chord tolerance as a rotary move
+    is, `machinesim.motion.planner`), in the machine's order: name -> its components that
+    vary; {} without errors. A component that takes one value along the axis (a table of
+    equal values, a polynomial of its constant term alone) is not one: it moves the tool
+    and bends no move, which the planner cuts as one chord."""
     if errors is None:
-        return ()
-    varying = {var.axis for var in machine.binding(errors).varying}
-    return tuple(name for i, name in enumerate(machine.axes)
-                 if i in varying and not machine.rotary[i])
+        return {}
+    found: dict[int, list] = {}
+    for var in machine.binding(errors).varying:
+        if not machine.rotary[var.axis] and _varies(var.component):
+            found.setdefault(var.axis, []).append(var.component)
+    return {name: found[i] for i, name in enumerate(machine.axes) if i in found}
 
 
-def _feeds_move(program, names, home) -> bool:
+def _varies(component) -> bool:
+    """Whether ``component`` (a table or a polynomial) takes more than one value."""
+    import numpy as np
+
+    values = np.asarray(component.values, dtype=np.float64)
+    if component.kind == "table":
+        return bool(np.ptp(values) > 0.0)
+    return bool(np.any(values[1:] != 0.0))
+
+
+def _bends(component, low, high):
+    """Whether ``component`` takes more than one value between the axis positions ``low``
+    and ``high`` (arrays, low < high), each: a polynomial that varies does on any span; a
+    table where a segment the span reaches has unequal ends (beyond its first and last
+    position a table is constant)."""
+    import numpy as np
+
+    if component.kind != "table":
+        return np.full(len(low), _varies(component))
+    positions = np.asarray(component.positions, dtype=np.float64)
+    values = np.asarray(component.values, dtype=np.float64)
+    # sloped[k]: the sloping segments before segment k - 1 (segment -1 lies before the
+    # first position, segment n - 1 after the last, both flat)
+    sloped = np.concatenate([[0, 0], np.cumsum(values[1:] != values[:-1]), [0]])
+    sloped[-1] = sloped[-2]
+    first = np.searchsorted(positions, low, side="right")  # segment just after low, + 1
+    last = np.searchsorted(positions, high, side="left")  # segment just before high, + 1
+    return sloped[last + 1] - sloped[first] > 0
+
+
+def _feeds_move(program, names, home, components=None) -> bool:
     """Whether a feed move of ``program`` changes one of the axes ``names`` (those the
     program has), an axis not yet programmed standing at ``home`` (name -> value, 0.0 if
-    absent)."""
+    absent); with ``components`` (of the one axis named, `bent_axes`), only a feed over
+    which one of them varies (`_bends`)."""
     import numpy as np
 
     from machinesim.nc.program import AXES, KIND_LINEAR
@@ -129,7 +165,13 @@ def _feeds_move(program, names, home) -> bool:
     # an axis not yet programmed stands where the cut starts (`Machine.home`)
     values = np.vstack([start[None], np.where(np.isnan(values), start[None], values)])
     feeds = program.kinds == KIND_LINEAR
-    return bool(((np.diff(values, axis=0) != 0.0) & feeds[:, None]).any())
+    moved = (np.diff(values, axis=0) != 0.0) & feeds[:, None]
+    if components is None or not moved.any():
+        return bool(moved.any())
+    rows = np.flatnonzero(moved[:, 0])
+    low = np.minimum(values[rows, 0], values[rows + 1, 0])
+    high = np.maximum(values[rows, 0], values[rows + 1, 0])
+    return any(bool(_bends(component, low, high).any()) for component in components)
 
 
 def has_chords(program) -> bool:

@@ -10,6 +10,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 from cli_helpers import CUT, GROOVES, ROOT, assert_clean_failure, cut_with_report, no_nan, run
 
@@ -363,3 +364,45 @@ def test_the_chord_note_names_the_axes_whose_errors_bend_straight_feeds(tmp_path
         assert summary["sweeps_count"] == sweeps
         assert (f"note: {note}" in err.splitlines()) == noted
         assert (note in summary["notes"]) == noted
+
+
+@pytest.mark.parametrize("table, noted, sweeps", [
+    ("position_mm = [-10.0, -5.0, 0.0, 5.0, 10.0]\nEZX_um = [2.0, 2.0, 2.0, 2.0, 2.0]\n",
+     False, 1),  # the same 2 um everywhere: the groove moved, straight
+    ("position_mm = [-100.0, -50.0, 50.0, 100.0]\nEZX_um = [1.0, 0.0, 0.0, 1.0]\n",
+     False, 1),  # bent beyond +-50 mm only: X -1 .. 6 mm is straight
+    ("position_mm = [5.5, 10.0]\nEZX_um = [0.0, 2.0]\n", True, 8),  # bends from 5.5 mm
+], ids=["constant", "flat-over-the-feeds", "bends-from-5.5mm"])
+def test_the_chord_note_is_not_given_for_errors_that_bend_no_feed(tmp_path, capsys, table,
+                                                                 noted, sweeps):
+    # A table that takes one value over the feeds along its axis moves them and bends none:
+    # the planner cuts the X feed as one sweep, and the note's 'a straight move there is a
+    # curve ... split into chords' was given all the same (any component table counted)
+    errors = tmp_path / "e.toml"
+    errors.write_text(f"[component.X]\n{table}")
+    program, report = tmp_path / "p.nc", tmp_path / "r.json"
+    program.write_text("G90 G21\nG0 X-1. Y1. Z0.1\nG1 Z-0.01 F100.\nX6.\nG0 Z0.1\nM30\n")
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "ball:0.5",
+                        "--stock", "block:5x3x1", "--quiet", "--out", tmp_path / "p.ply",
+                        "--report", report, "--errors", errors], capsys)
+    assert code == 0, err
+    summary = json.loads(report.read_text(), parse_constant=no_nan)
+    assert summary["sweeps_count"] == sweeps
+    assert ("feeds along X" in err) == noted
+    assert any("feeds along X" in note for note in summary["notes"]) == noted
+
+
+def test_a_table_bends_a_span_as_sampled_finely():
+    # _bends (by the table's sloping segments) against the table sampled at 2,001 points
+    from machinesim._program_options import _bends
+    from machinesim.errors.families import ComponentError
+
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        positions = np.sort(rng.choice(np.arange(-8, 9), size=5, replace=False)).astype(float)
+        table = ComponentError("table", positions, rng.integers(0, 2, size=5).astype(float))
+        low = rng.integers(-10, 10, size=40).astype(float) + rng.choice([0.0, 0.5], size=40)
+        high = low + rng.choice([0.5, 1.0, 3.0, 7.0], size=40)
+        sampled = [np.ptp(table.evaluate(np.linspace(a, b, 2001))) > 0 for a, b in
+                   zip(low, high, strict=True)]
+        assert _bends(table, low, high).tolist() == sampled
