@@ -497,3 +497,21 @@ def _under_hash_seeds(code: str, separator: str) -> list[list[str]]:
     return [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                            check=True, env={**os.environ, "PYTHONHASHSEED": seed}
                            ).stdout.split(separator, 1) for seed in ("1", "2", "3", "4")]
+
+
+@pytest.mark.parametrize("entry", [5, [], "x", ["0123456789abcdef"]])
+def test_a_hand_edited_state_attributes_entry_is_refused_by_the_digests(module, tmp_path,
+                                                                        entry):
+    # campaign.json's state_attributes as attributes_of writes it is name -> [digest, shown];
+    # an entry edited into another shape was read into a TypeError or an IndexError (a
+    # traceback) where the refusal of another state was to be told: the digests tell it
+    probe = module().Probe
+    out = tmp_path / "out"
+    _folder(out, probe(gain=1.0))
+    stored = json.loads((out / "campaign.json").read_text())
+    stored["state_attributes"]["gain"] = entry
+    (out / "campaign.json").write_text(json.dumps(stored))
+    with pytest.raises(InputError, match=r"holds another campaign \(state: the procedure "
+                       r"object's state \(its attributes: the arguments it was made with\) is "
+                       r"digest [0-9a-f]{16} now, [0-9a-f]{16} there"):
+        _folder(out, probe(gain=2.0))

@@ -228,9 +228,9 @@ def _state_difference(old: dict, new: dict) -> str:
     `machinesim.campaign.identity.attributes_of`), each with its values where they are plain
     ("gain 1.0 there, 2.0 now"); by the two digests where either campaign lacks them (one
     begun before they were kept, a state not made of attributes)."""
-    before, now = old.get("state_attributes"), new.get("state_attributes")
+    before, now = _attributes(old), _attributes(new)
     said = []
-    if isinstance(before, dict) and isinstance(now, dict):
+    if before is not None and now is not None:
         for name in sorted(set(before) | set(now)):
             was, is_ = before.get(name), now.get(name)
             if was is None:
@@ -245,6 +245,19 @@ def _state_difference(old: dict, new: dict) -> str:
     more = f"; and {len(said) - 4} more" if len(said) > 4 else ""
     return (f"state: the procedure object's attributes (the arguments it was made with) "
             f"differ: {'; '.join(said[:4])}{more}")
+
+
+def _attributes(spec: dict) -> dict | None:
+    """``spec``'s ``state_attributes`` where it is as `attributes_of` writes it (each name
+    -> [digest text, shown text or None]), else None: a campaign.json edited by hand (an
+    entry 5, [] or a digest alone) was read into a TypeError or an IndexError where the
+    refusal was to be told; it is refused by the two digests instead."""
+    found = spec.get("state_attributes")
+    if not isinstance(found, dict) or not all(
+            isinstance(entry, list) and len(entry) == 2 and isinstance(entry[0], str)
+            and isinstance(entry[1], str | None) for entry in found.values()):
+        return None
+    return found
 
 
 def _code_difference(old: dict, new: dict) -> str:
