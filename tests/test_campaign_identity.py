@@ -16,7 +16,7 @@ import pytest
 
 import machinesim
 from machinesim.campaign import CampaignSpec, run
-from machinesim.campaign.identity import code_of, state_of
+from machinesim.campaign.identity import attributes_of, code_of, state_of
 from machinesim.campaign.results import IDENTITY_KEYS, CampaignFolder
 from machinesim.exceptions import InputError
 
@@ -515,3 +515,22 @@ def test_a_hand_edited_state_attributes_entry_is_refused_by_the_digests(module, 
                        r"object's state \(its attributes: the arguments it was made with\) is "
                        r"digest [0-9a-f]{16} now, [0-9a-f]{16} there"):
         _folder(out, probe(gain=2.0))
+
+
+class _Versioned:
+    """A procedure whose own __getstate__ returns a pair that is not __slots__' one."""
+
+    def __init__(self, gain=1.0):
+        self.gain = gain
+
+    def __getstate__(self):
+        return ("v2", {"gain": self.gain})
+
+
+def test_a_getstate_pair_that_is_not_slots_is_digested_as_a_tuple():
+    # __slots__ pickle as (dict or None, slots dict); a __getstate__ of the user's returning
+    # another pair ("v2", {...}) was unpacked as one, a TypeError ('str' object is not a
+    # mapping) out of state_of, a traceback where a campaign was to begin
+    assert state_of(_Versioned(), "v") == state_of(_Versioned(1.0), "v")
+    assert state_of(_Versioned(), "v") != state_of(_Versioned(2.0), "v")
+    assert attributes_of(_Versioned()) is None  # no attributes at the top: the digests tell

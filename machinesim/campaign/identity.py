@@ -330,8 +330,11 @@ def _canonical(value, path: str, seen: dict, depth: int):
     parts = [f"{cls.__module__}:{cls.__qualname__}",
              _canonical(reduced[1] if len(reduced) > 1 else (), f"{path}(...)", seen, depth)]
     state = reduced[2] if len(reduced) > 2 else None
-    if isinstance(state, tuple) and len(state) == 2 and isinstance(state[1], dict):
-        state = {**(state[0] or {}), **state[1]}  # __slots__: (dict, slots)
+    if isinstance(state, tuple) and len(state) == 2 and isinstance(state[1], dict) \
+            and isinstance(state[0], dict | None):
+        # __slots__: (dict, slots); another pair (a __getstate__ of its own returning
+        # ("v2", {...})) is a tuple like any other: it was unpacked, a TypeError
+        state = {**(state[0] or {}), **state[1]}
     if isinstance(state, dict) and all(isinstance(k, str) for k in state):
         # not a functools.cached_property's value: computed from the rest when first read,
         # it is there once the script read it (another state for the same object)
