@@ -534,3 +534,22 @@ def test_a_getstate_pair_that_is_not_slots_is_digested_as_a_tuple():
     assert state_of(_Versioned(), "v") == state_of(_Versioned(1.0), "v")
     assert state_of(_Versioned(), "v") != state_of(_Versioned(2.0), "v")
     assert attributes_of(_Versioned()) is None  # no attributes at the top: the digests tell
+
+
+class _Plain:
+    """A plain object: its state, its attributes (set by hand)."""
+
+    def __init__(self, **attributes):
+        self.__dict__.update(attributes)
+
+
+def test_an_int_of_more_digits_than_python_writes_is_digested():
+    # str() of an int of more than 4,300 digits raises ValueError (Python's limit on
+    # decimal text): a procedure holding 10**5000 made state_of raise it, a traceback where
+    # the campaign was to begin; it is digested by its hex, and shown so when it changes
+    big = 10**5000
+    assert state_of(_Plain(n=big), "a") == state_of(_Plain(n=big), "b") \
+        != state_of(_Plain(n=big + 1), "c")
+    assert attributes_of(_Plain(n=big))["n"][1].startswith(hex(big)[:40])
+    # beyond 2**53 but within the limit: decimal text, as before, shown as the number
+    assert attributes_of(_Plain(n=2**60))["n"][1] == "1152921504606846976"

@@ -253,8 +253,11 @@ def _shown(canonical) -> str | None:
     if kind == "float" and len(canonical) == 2:
         text = canonical[1]
         return repr(float.fromhex(text) if text not in ("nan", "inf", "-inf") else float(text))
-    if kind in ("int", "bool", "NoneType", "str") and len(canonical) == 2:
-        return brief(repr(int(canonical[1]) if kind == "int" else canonical[1]))
+    if kind == "int" and len(canonical) == 2:  # a number, or its text (`_int_text`)
+        text = canonical[1]
+        return brief(text if isinstance(text, str) else repr(text))
+    if kind in ("bool", "NoneType", "str") and len(canonical) == 2:
+        return brief(repr(canonical[1]))
     return None
 
 
@@ -272,7 +275,7 @@ def _canonical(value, path: str, seen: dict, depth: int):
         value = os.path.realpath(value)
     if isinstance(value, _PLAIN):
         return [type(value).__name__, value] if not isinstance(value, int) or \
-            isinstance(value, bool) or abs(value) < 2**53 else ["int", str(value)]
+            isinstance(value, bool) or abs(value) < 2**53 else ["int", _int_text(value)]
     if isinstance(value, float):  # to the bit; nan and the infinities, which JSON lacks;
         # -0.0 as the 0.0 it equals (+ 0.0): Probe(offset=-0.0) was another campaign
         return ["float", (value + 0.0).hex() if math.isfinite(value) else repr(value)]
@@ -348,6 +351,17 @@ def _canonical(value, path: str, seen: dict, depth: int):
         if len(reduced) > k and reduced[k] is not None:
             parts.append([items, _canonical(list(reduced[k]), f"{path}[...]", seen, depth)])
     return ["object", parts]
+
+
+def _int_text(value: int) -> str:
+    """An int beyond float64's 2**53 as text: in decimal (as ever), or in hex where Python
+    refuses the decimal (more than ``sys.get_int_max_str_digits()`` digits, 4,300 by default:
+    10**5000 in a procedure's attribute raised ValueError out of `state_of`, a traceback);
+    a decimal text never begins 0x, so the two never meet."""
+    try:
+        return str(value)
+    except ValueError:
+        return hex(value)
 
 
 def _array(value, path: str):
