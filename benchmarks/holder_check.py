@@ -113,7 +113,7 @@ def old_holder_in_material(sweeps, candidates, solid, reach, keep=None) -> list[
 
 def child(case: str, method: str) -> dict:
     """One run: the bore cut until its refusal, the check timed."""
-    import machinesim.cutting.engine as engine
+    import machinesim.cutting.holder as holder
     from machinesim.cutting import cut
     from machinesim.exceptions import HolderContactError
     from machinesim.nc import parse_program
@@ -121,7 +121,7 @@ def child(case: str, method: str) -> dict:
     from machinesim.tools import path_chord_tolerance
 
     depth, tool, stock = CASES[case]
-    check = engine.holder_in_material if method == "new" else old_holder_in_material
+    check = holder.holder_in_material if method == "new" else old_holder_in_material
     seen: dict = {"check_s": 0.0, "check_cpu_s": 0.0, "sweeps": 0, "candidates": 0,
                   "found": []}  # as left when no sweep is a candidate
 
@@ -133,7 +133,7 @@ def child(case: str, method: str) -> dict:
                     candidates=len(candidates), found=[int(i) for i in found])
         return found
 
-    engine.holder_in_material = timed
+    holder.holder_in_material = timed
     text = pocket(depth) if case == "pocket" else bore(depth)
     program = parse_program(text, chord_tolerance=path_chord_tolerance(
         [tool_from_spec(tool)]))

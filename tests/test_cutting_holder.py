@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from cutting_helpers import _slot_in_steps  # the slot of test_cutting.py's holder tests
 
-import machinesim.cutting.engine as engine
+import machinesim.cutting.holder as holder
 from machinesim.cutting import cut
 from machinesim.cutting.holder import HOLDER_MATERIAL_M3, holder_in_material, holder_room
 from machinesim.cutting.sweeps import Solids
@@ -79,7 +79,7 @@ def checked(monkeypatch):
         calls.append((list(candidates), found, reads, count))
         return found
 
-    monkeypatch.setattr(engine, "holder_in_material", both)
+    monkeypatch.setattr(holder, "holder_in_material", both)
     return calls
 
 

@@ -69,7 +69,7 @@ from machinesim.cutting.cut_volume import (  # noqa: F401  (re-exported: the nam
 )
 from machinesim.cutting.footprints import level_prisms, united_in_plane
 from machinesim.cutting.frame import into_frame, out_of_frame, tool_frame
-from machinesim.cutting.holder import holder_contact, holder_in_material
+from machinesim.cutting.holder import judge_holder
 from machinesim.cutting.relief import cut_reliefs
 from machinesim.cutting.roi import roi_cells
 from machinesim.cutting.sheets import SheetReport, remove_sheets
@@ -287,6 +287,18 @@ def _direction_keys(direction: np.ndarray) -> np.ndarray:
     return np.where(planar > PLANAR_TRAVEL_REL * np.linalg.norm(direction, axis=1), key, -1)
 
 
+def _holder_sweeps(sweeps: SweepSet, tool, paths, z_high: float,
+                   holder_stock: Part | None) -> SweepSet:
+    """The sweeps the holder is judged with: ``sweeps``, or, when ``holder_stock`` rises
+    above the stock they are clipped to (a part clipped to windows cut down to below the
+    top elsewhere), the same clipped over it, so that they cut all its material."""
+    if holder_stock is None:
+        return sweeps
+    bounds = holder_stock.bounds
+    top = bounds[1, 2] + CLIP_MARGIN_REL * (float(np.abs(bounds).max()) or 1.0)
+    return sweeps if top <= z_high else SweepSet(tool, paths, top)
+
+
 def _building(progress):
     """``progress`` told the stage "building", when it takes a ``stage`` keyword, else None:
     a callable of (done, total) alone, as `remove` was documented to call, is left as it
@@ -311,6 +323,7 @@ def remove(
     method: str = "auto",
     sheets: bool = True,
     on_holder_contact: Callable[[tuple[int, ...]], None] | None = None,
+    holder_stock: Part | None = None,
 ) -> tuple[Part, EngineReport]:
     """Cut ``stock`` with ``tool`` moved along ``paths``.
 
@@ -352,7 +365,12 @@ def remove(
         when there are any: those whose body top comes below the stock's top within its box
         (`holder.holder_contact`) and whose holder's room then holds material that the
         earlier sweeps of ``paths`` left (`holder.holder_in_material`). A caller that
-        refuses such a cut raises there and wastes no cutting.
+        refuses such a cut raises there and wastes no cutting. The holder is judged over
+        the whole stock, windows or not (`holder.judge_holder`).
+    holder_stock : Part, optional
+        The material the holder is judged against, when ``stock`` is not all of it: a
+        caller that cuts a part already clipped to windows gives the part as it is outside
+        them (`machinesim.cutting.cut`'s later tools). Default: ``stock``.
 
     Returns
     -------
@@ -398,30 +416,22 @@ def remove(
                & (high[:, None, 1] >= cell_array[None, :, 2] - margin))
         return inside & hit.any(axis=1)
 
-    def whole(low: np.ndarray, high: np.ndarray) -> np.ndarray:
-        """The stock's whole box, windows or not: what the holder meets lies anywhere."""
-        return ((low[:, 2] <= z_high) & (high[:, 2] >= z_low)
-                & (low[:, 0] <= bounds[1, 0] + margin) & (high[:, 0] >= bounds[0, 0] - margin)
-                & (low[:, 1] <= bounds[1, 1] + margin) & (high[:, 1] >= bounds[0, 1] - margin))
-
     sweeps = SweepSet(tool, paths, z_high)
     frame = tool_frame(sweeps.poses, tool) if sweeps.count else None
     if frame is not None and (roi is None or cells):
         # A tilted end mill: cut, and its holder judged, where it stands upright, so that
         # its coinciding faces coincide (a height field needs a level block: none here).
+        # The stock is cut down to the windows first; the holder is judged over all of it.
         framed, framed_paths = into_frame(stock, paths, frame, None if roi is None else cells)
+        framed_holder = None if roi is None and holder_stock is None else into_frame(
+            stock if holder_stock is None else holder_stock, [], frame)[0]
         part, report = remove(framed, tool, framed_paths, progress=progress,
                               sweeps_per_tile=sweeps_per_tile, method="boolean", sheets=sheets,
-                              on_holder_contact=on_holder_contact)
+                              on_holder_contact=on_holder_contact, holder_stock=framed_holder)
         return out_of_frame(part, frame), replace(report,
                                                   elapsed_s=time.perf_counter() - start)
-    holder = tuple(holder_contact(sweeps, bounds[1, 2], touches))
-    if holder and on_holder_contact is not None:
-        # the stock's box says it may; before refusing, the material says whether it does
-        reach = 2.0 * float(np.linalg.norm(bounds[1] - bounds[0])) + scale  # past it
-        holder = tuple(holder_in_material(sweeps, holder, stock.manifold, reach, whole))
-        if holder:
-            on_holder_contact(holder)
+    holder = judge_holder(_holder_sweeps(sweeps, tool, paths, z_high, holder_stock),
+                          stock if holder_stock is None else holder_stock, on_holder_contact)
     if method == "auto" and sweeps.count:
         relief = cut_reliefs(stock, sweeps.vertices, sweeps.poses, sweeps.pairs,
                              None if roi is None else cells, sweeps.pose_bounds)

@@ -19,20 +19,110 @@ from machinesim.cutting.containment import (
     contained_sweeps,
     vertices_and_planes,
 )
+from machinesim.cutting.frame import into_frame, tool_frame
 from machinesim.cutting.sweeps import hull_mesh, manifold_from
-from machinesim.cutting.sweepset import POINTS_PER_CHUNK
+from machinesim.cutting.sweepset import POINTS_PER_CHUNK, SweepSet
 from machinesim.exceptions import InputError
-from machinesim.tolerances import SAME_ORIENTATION
+from machinesim.tolerances import CLIP_MARGIN_REL, SAME_ORIENTATION
 
 if TYPE_CHECKING:
-    from machinesim.cutting.sweepset import SweepSet
+    from machinesim.workpiece import Part
 
-__all__ = ["HOLDER_MATERIAL_M3", "holder_contact", "holder_in_material", "holder_room"]
+__all__ = ["HOLDER_MATERIAL_M3", "check_holder", "holder_contact", "holder_in_material",
+           "holder_reach", "holder_room", "judge_holder"]
 
 #: Material inside the holder's room over a sweep (m^3) above which the holder meets the part:
 #: 1 um x 1 um x 1 nm. A body cut flush to its top leaves round-off slivers (1e-19 m thick
 #: over a few mm^2: ~1e-25 m^3) far below it; any real contact is far above.
 HOLDER_MATERIAL_M3 = 1e-21
+
+
+def judge_holder(sweeps: SweepSet, stock: Part, on_holder_contact=None) -> tuple[int, ...]:
+    """The sweeps of ``sweeps`` whose holder meets ``stock``, anywhere over it: those whose
+    body top comes below the stock's top within its box (`holder_contact`), and, with
+    ``on_holder_contact`` (a refusal), of those only the ones whose room holds material the
+    earlier sweeps left (`holder_in_material`), ``on_holder_contact`` called with them.
+
+    The whole stock, never a window of it: the holder meeting the part outside the windows
+    a cut is read in is a crash all the same (a holder crash at x = 8 mm was cut, exit 0,
+    with --roi 0,3,0,10, and refused without it).
+    """
+    bounds = stock.bounds
+    scale = float(np.abs(bounds).max()) or 1.0
+    margin = CLIP_MARGIN_REL * scale
+    low, high = bounds[0] - margin, bounds[1] + margin
+    # the candidates' box as the engine's cell over the whole stock met them: a margin
+    # more across (the cell's own, and the one it is met with)
+    wide = np.array([margin, margin, 0.0])
+
+    def whole(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        return (lo <= high).all(axis=1) & (hi >= low).all(axis=1)
+
+    holder = tuple(holder_contact(
+        sweeps, bounds[1, 2],
+        lambda lo, hi: (lo <= high + wide).all(axis=1) & (hi >= low - wide).all(axis=1)))
+    if holder and on_holder_contact is not None:
+        # the stock's box says it may; before refusing, the material says whether it does
+        reach = 2.0 * float(np.linalg.norm(bounds[1] - bounds[0])) + scale  # past it
+        holder = tuple(holder_in_material(sweeps, holder, stock.manifold, reach, whole))
+        if holder:
+            on_holder_contact(holder)
+    return holder
+
+
+def check_holder(stock: Part, tool, paths: list[np.ndarray],
+                 on_holder_contact=None) -> tuple[int, ...]:
+    """`judge_holder` for ``tool`` along ``paths`` (workpiece frame, in program order)
+    over ``stock``, without cutting: for a caller that cuts the sweeps in another order
+    (`machinesim.cutting.cut_turned`, by turn groups), since the material a holder meets
+    is what the sweeps before it, in the program's order, left. A tilted end mill that does
+    not turn is judged in its own frame, as `machinesim.cutting.remove` judges it."""
+    paths = _one_sweep_each(paths)
+    if not paths:
+        return ()
+    scale = float(np.abs(stock.bounds).max()) or 1.0
+    z_high = stock.bounds[1, 2] + CLIP_MARGIN_REL * scale
+    sweeps = SweepSet(tool, paths, z_high)
+    frame = tool_frame(sweeps.poses, tool) if sweeps.count else None
+    if frame is not None:
+        stock, paths = into_frame(stock, paths, frame)
+        z_high = stock.bounds[1, 2] + CLIP_MARGIN_REL * scale
+        sweeps = SweepSet(tool, paths, z_high)
+    return judge_holder(sweeps, stock, on_holder_contact)
+
+
+def holder_reach(stock: Part, tool, paths: list[np.ndarray]):
+    """The box (xmin, xmax, ymin, ymax), m, over which the holders of ``tool`` along
+    ``paths`` may meet ``stock``: the rooms' (`holder_room`) of the sweeps `holder_contact`
+    finds over the stock's whole box, or None when it finds none. `machinesim.cutting.cut`
+    reads what earlier tools left there when it cuts within windows."""
+    paths = _one_sweep_each(paths)
+    if not paths:
+        return None
+    bounds = stock.bounds
+    scale = float(np.abs(bounds).max()) or 1.0
+    low, high = bounds[0] - CLIP_MARGIN_REL * scale, bounds[1] + CLIP_MARGIN_REL * scale
+    sweeps = SweepSet(tool, paths, high[2])
+    found = holder_contact(sweeps, bounds[1, 2],
+                           lambda lo, hi: (lo <= high).all(axis=1) & (hi >= low).all(axis=1))
+    if not found:
+        return None
+    reach = 2.0 * float(np.linalg.norm(bounds[1] - bounds[0])) + scale
+    face = _holder_top(sweeps.holder_face)
+    local = np.concatenate([face, face + [0.0, 0.0, reach]])
+    first = sweeps.pairs[np.asarray(found)]
+    poses = sweeps.poses[np.concatenate([first, first + 1])]
+    points = (local @ poses[:, :3, :3].transpose(0, 2, 1) + poses[:, None, :3, 3])
+    points = points.reshape(-1, 3)
+    least, most = points.min(axis=0), points.max(axis=0)
+    return (float(least[0]), float(most[0]), float(least[1]), float(most[1]))
+
+
+def _one_sweep_each(paths) -> list[np.ndarray]:
+    """``paths`` with a path of one pose given twice: the tool standing there is one sweep,
+    as `machinesim.cutting.remove` takes it."""
+    return [np.concatenate([poses, poses]) if len(poses) == 1 else np.asarray(poses)
+            for poses in paths if len(poses)]
 
 
 def holder_contact(sweeps: SweepSet, below: float, keep) -> list[int]:

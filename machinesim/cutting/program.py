@@ -17,6 +17,7 @@ import numpy as np
 
 from machinesim import motion
 from machinesim.cutting.engine import remove
+from machinesim.cutting.holder import holder_reach
 from machinesim.cutting.rapids import rapids_that_cut
 from machinesim.cutting.refusals import (  # re-exported: windows, lathe, lathe_following
     _format,  # noqa: F401
@@ -35,7 +36,7 @@ from machinesim.cutting.report import (
     nothing_left_note,
     peak_following_error,
 )
-from machinesim.cutting.roi import check_roi_meets
+from machinesim.cutting.roi import check_roi_meets, roi_cells
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sideways import dragged_past_clearance, within_edge_plane
 from machinesim.errors import as_error_model
@@ -179,6 +180,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     _refuse_far(poses, moves, program)
     part, engines, rapids, holder, sideways, sections = stock, [], [], set(), set(), []
     in_plane: set[int] = set()
+    done: list = []  # the tools cut so far, with their paths
     for section_tool, length, section, (lo, hi), (number, line) in tools.split(moves):
         section_poses = poses[lo:hi] if length == 0.0 else poses[lo:hi] @ _beyond_tip(length)
         paths = np.split(section_poses, section.breaks) if len(section_poses) else []
@@ -186,7 +188,10 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         refuse = None if allow_holder_contact else _holder_refusal(
             program, section_tool, before, section.sweep_line)
         part, engine = remove(before, section_tool, paths, roi=roi, progress=progress,
-                              sheets=False, on_holder_contact=refuse)
+                              sheets=False, on_holder_contact=refuse,
+                              holder_stock=_outside_windows(stock, roi, done, section_tool,
+                                                            paths, allow_holder_contact))
+        done.append((section_tool, paths))
         rapids += rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)
         holder |= {int(section.sweep_line[i]) for i in engine.holder_contact}
@@ -229,6 +234,35 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         thin_sheets=sheets.count,
     )
     return part, report
+
+
+def _outside_windows(stock: Part, roi, done: list, tool, paths: list,
+                     allowed: bool) -> Part | None:
+    """The material a later tool's holder is judged against when the part is cut within
+    windows ``roi``: the part the engine is given holds only the windows, and the holder
+    meeting the part outside them is a crash all the same. None where that part serves:
+    no windows, the first tool (the engine judges it over ``stock``), or rooms of the
+    holder (`holder_reach`) within one window. With ``allowed`` (holder contact allowed)
+    the stock itself, whose box is all the listing reads. Otherwise the tools ``done``
+    (tool, paths) are cut again from ``stock`` over the rooms' box alone."""
+    if roi is None or not done:
+        return None
+    if allowed:
+        return stock
+    box = holder_reach(stock, tool, paths)
+    if box is None:
+        return None  # no sweep's holder comes below the stock's top over it
+    (x0, y0, _), (x1, y1, _) = stock.bounds
+    box = (max(box[0], x0), min(box[1], x1), max(box[2], y0), min(box[3], y1))
+    if box[0] >= box[1] or box[2] >= box[3]:
+        return None
+    if any(c[0] <= box[0] and box[1] <= c[1] and c[2] <= box[2] and box[3] <= c[3]
+           for c in roi_cells(roi, stock.bounds)):
+        return None  # the part given holds all the rooms see
+    material = stock
+    for earlier, earlier_paths in done:
+        material, _ = remove(material, earlier, earlier_paths, roi=[box], sheets=False)
+    return material
 
 
 class _Moves:

@@ -1,0 +1,70 @@
+"""The holder check reads the whole stock, whatever windows (``roi``) the part is cut in: the
+holder meeting the part outside them is a crash all the same, and a cut that refuses it
+without windows refuses it with them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from machinesim.cutting import cut, remove
+from machinesim.exceptions import HolderContactError
+from machinesim.nc import parse_program
+from machinesim.rotations import rot_x
+from machinesim.tools import FlatEndMill
+from machinesim.workpiece import block
+
+MM = 1e-3
+
+#: A shallow pass at x = 1 mm, in the window below, then a pass at x = 8 mm 11 mm down with
+#: a 10 mm body: the body's top 1 mm below the block's top, its holder in the block (x 0 to
+#: 10 mm), outside the window.
+CRASH = ("G21 G90 G17\nG00 X1. Y-1. Z1.\nG01 Z-0.05 F100.\nG01 Y11.\nG00 Z1.\n"
+         "G00 X8. Y-1.\nG01 Z-11. F100.\nG01 Y11.\nG00 Z15.\nM30\n")
+WINDOW = [(0.0, 3 * MM, 0.0, 10 * MM)]
+
+
+@pytest.mark.parametrize("roi", [None, WINDOW])
+def test_a_holder_crash_outside_the_windows_is_refused(roi):
+    # with the window it was cut, exit 0, no word (the window's part is that of the pass
+    # at x = 1 mm alone)
+    with pytest.raises(HolderContactError, match=r"line 8 takes the top of the tool's body"):
+        cut(parse_program(CRASH), "grooving_4axis", tool="flat:1.0",
+            stock="block:10x10x10", roi=roi)
+
+
+def test_a_tilted_end_mill_is_judged_over_the_whole_stock_too():
+    # an end mill tilted 1 mrad (cut in its own frame, where the stock was cut down to the
+    # windows before the holder was judged): the same pass 11 mm down at x = 8 mm
+    stock, tool = block(10 * MM, 10 * MM, 10 * MM), FlatEndMill(1 * MM)
+    path = np.tile(np.eye(4), (2, 1, 1))
+    path[:, :3, :3] = rot_x(1e-3)
+    path[:, :3, 3] = [[8 * MM, -1 * MM, -11 * MM], [8 * MM, 11 * MM, -11 * MM]]
+    for roi in (None, WINDOW):
+        met = []
+        remove(stock, tool, [path], roi=roi, on_holder_contact=met.append)
+        assert met == [(0,)]
+
+
+def _two_tools(tmp_path, x_mm: float):
+    """T1 (the cut's flat:1.0:h=12) cuts a slot 5 mm deep along Y at x = 8 mm; T2, a flat
+    end mill 1 mm across with a 2 mm body, runs 4 mm down along Y at ``x_mm``: in the slot
+    (x 7 to 9 mm) its holder is in air, at x = 6 mm it meets the slot's wall."""
+    table = tmp_path / "tools.toml"
+    table.write_text('[tool.1]\nlength_mm = 0.0\n'
+                     '[tool.2]\nlength_mm = 0.0\nshape = "flat:0.5:h=2"\n')
+    text = ("G21 G90\nT1 M06\nG00 X8. Y-2. Z1.\nG01 Z-5. F100.\nY12.\nG00 Z15.\n"
+            f"T2 M06\nG00 X{x_mm:.1f} Y-1. Z1.\nG01 Z-4. F100.\nY11.\nG00 Z15.\nM30\n")
+    return parse_program(text, tools=table)
+
+
+@pytest.mark.parametrize("roi", [None, WINDOW])
+def test_a_later_tool_is_judged_against_what_the_earlier_left_outside_the_windows(tmp_path,
+                                                                                  roi):
+    # with the window the part T2 was given held the window alone: its crash at x = 6 mm
+    # was cut without a word; in the slot (the rooms' box re-cut by T1 alone) it is cut
+    kwargs = {"tool": "flat:1.0:h=12", "stock": "block:10x10x10", "roi": roi}
+    _, report = cut(_two_tools(tmp_path, 8.0), "grooving_4axis", **kwargs)
+    assert report.holder_contact == ()
+    with pytest.raises(HolderContactError, match=r"line 10 takes the top of the tool's body"):
+        cut(_two_tools(tmp_path, 6.0), "grooving_4axis", **kwargs)
