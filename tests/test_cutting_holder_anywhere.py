@@ -68,3 +68,36 @@ def test_a_later_tool_is_judged_against_what_the_earlier_left_outside_the_window
     assert report.holder_contact == ()
     with pytest.raises(HolderContactError, match=r"line 10 takes the top of the tool's body"):
         cut(_two_tools(tmp_path, 6.0), "grooving_4axis", **kwargs)
+
+
+def _turned_slot(x_mm: float = 0.0) -> str:
+    """A shallow pass at C = 0; at C = 90 deg three passes along X through the C axis, 1, 2
+    and 3 mm down (a slot 1 mm wide along the workpiece's Y); at C = 0 again a pass along Y
+    3 mm down at X = ``x_mm`` (line 22): in the slot for 0, in its wall for 0.6 mm. The
+    tool's body is 2 mm tall."""
+    lines = ["G21 G90", "G00 C0. X-3. Y2. Z1.", "G01 Z-0.1 F300.", "X3.", "G00 Z1.",
+             "G00 C90."]
+    for k in (1, 2, 3):
+        lines += ["G00 X-4. Y0. Z1.", f"G01 Z-{k}. F300.", "X4.", "G00 Z1."]
+    lines += ["G00 C0.", f"G00 X{x_mm:.1f} Y-4. Z1.", "G01 Z-3. F300.", "Y4.", "G00 Z5.",
+              "M30"]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize("roi", [None, [(-5 * MM, -2 * MM, -5 * MM, 5 * MM)]])
+def test_turned_groups_judge_the_holder_in_the_programs_order(roi):
+    # the last pass (line 22), at C = 0, runs in the slot the C = 90 deg passes cut before
+    # it: cut cuts it; cut_turned cut the C = 0 group first and refused it (its holder in
+    # a block not yet slotted). Moved 0.6 mm into the slot's wall both refuse it, with a
+    # window off the slot too (cut_turned judged the stock cut down to the window)
+    from machinesim.cutting import cut_turned
+
+    kwargs = {"tool": "flat:1.0:h=2", "stock": "block:10x10x5@-5,-5,0", "roi": roi}
+    parts = [f(parse_program(_turned_slot()), "grooving_4axis", **kwargs)
+             for f in (cut, cut_turned)]
+    assert all(report.holder_contact == () for _, report in parts)
+    assert parts[1][0].volume == pytest.approx(parts[0][0].volume, rel=1e-12)
+    for f in (cut, cut_turned):
+        with pytest.raises(HolderContactError,
+                           match=r": line 22( \(lines 22, 23\))? takes the top of the tool"):
+            f(parse_program(_turned_slot(0.6)), "grooving_4axis", **kwargs)

@@ -19,6 +19,7 @@ import numpy as np
 
 from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
+from machinesim.cutting.holder import check_holder
 from machinesim.cutting.program import _holder_refusal, _Moves, _overtravel, check_progress
 from machinesim.cutting.report import (
     CutReport,
@@ -55,6 +56,23 @@ def clip_to(stock: Part, boxes, floor: float | None = None) -> Part:
                                                                    manifold3d.OpType.Add))
 
 
+def _holder_lines(program, machine, errors, tool, stock: Part, feeds: list,
+                  allowed: bool) -> set[int]:
+    """The lines of the feeds ``feeds`` (the trajectory's linear segments, in the program's
+    order) whose holder meets ``stock``, judged in that order over the whole stock
+    (`holder.check_holder`); unless ``allowed``, the cut is refused there
+    (`HolderContactError`). The turn groups are cut in another order, and a group's own
+    check read the part as the groups before it had left it: a pass at C = 0 in the slot a
+    pass at C = 90 deg cut before it was refused when the C = 0 group came first, where
+    `machinesim.cutting.cut` cuts it."""
+    if not feeds:
+        return set()
+    paths = machine.tool_poses([s.q for s in feeds], errors)
+    sweep_line = np.repeat([s.line for s in feeds], [max(len(s.q) - 1, 1) for s in feeds])
+    refuse = None if allowed else _holder_refusal(program, tool, stock, sweep_line)
+    return {int(sweep_line[i]) for i in check_holder(stock, tool, paths, refuse)}
+
+
 def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *,
                roi=None, floor: float | None = None, start=None, turn_step: float = math.pi / 4,
                turn_axis: str = "C", chord_tolerance: float = motion.CHORD_TOLERANCE_M,
@@ -67,7 +85,9 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     multiple k of ``turn_step``; each group's sweeps are subtracted from the part turned by
     -k ``turn_step`` about the workpiece Z, with the poses turned alike, and the part turned
     back. Rapids are neither cut nor checked against the part (the program must keep them
-    above it; the report says so in its notes).
+    above it; the report says so in its notes). The holder is judged before any group is
+    cut, over the feeds in the program's order and the whole stock, windows or not
+    (`_holder_lines`): the material a holder meets is what the feeds before it left.
 
     Parameters
     ----------
@@ -127,13 +147,13 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     part = stock if roi is None else clip_to(stock, roi, floor)
     column = machine.axes.index(turn_axis)
     groups: dict[int, list] = {}
-    for segment in trajectory.segments:
-        if segment.kind == "linear":
-            key = int(round(float(segment.q[0, column]) / turn_step))
-            groups.setdefault(key, []).append(segment)
+    feeds = [segment for segment in trajectory.segments if segment.kind == "linear"]
+    for segment in feeds:
+        key = int(round(float(segment.q[0, column]) / turn_step))
+        groups.setdefault(key, []).append(segment)
+    holder = _holder_lines(program, machine, errors, tool, stock, feeds, allow_holder_contact)
     removed = swept = engine_s = 0.0
     sweeps = sideways = 0
-    holder: set[int] = set()
     sideways_lines: set[int] = set()
     step_deg = math.degrees(turn_step)
     total = sum(len(s.q) - 1 for segments in groups.values() for s in segments)
@@ -146,11 +166,9 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         turned = Part(part.manifold.rotate((0.0, 0.0, -step_deg * key)))
         paths = [turn @ poses for poses in machine.tool_poses([s.q for s in segments], errors)]
         sweep_line = np.repeat([s.line for s in segments], [len(s.q) - 1 for s in segments])
-        refuse = None if allow_holder_contact else _holder_refusal(
-            program, tool, turned, sweep_line)
-        cut_part, report = remove(turned, tool, paths, sheets=False, on_holder_contact=refuse)
+        # the holder was judged before, in the program's order (`_holder_lines`)
+        cut_part, report = remove(turned, tool, paths, sheets=False)
         part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
-        holder.update(int(sweep_line[i]) for i in report.holder_contact)
         sweeps += report.n_sweeps_cut
         sideways += len(report.sideways)
         if report.sideways:  # the feeds among them that a real tool would not cut cleanly
