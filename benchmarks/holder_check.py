@@ -11,8 +11,9 @@ up with the half turns', so the wall keeps slivers of some 1e-15 m^3 in the room
 them), the arcs split within the tool's path chord (100 nm):
 
 - ``deep``: 12.8 mm deep with ``flat:1.35`` (its 10 mm body's top under the stock's top in
-  the bore): refused;
-- ``short``: 1.5 mm deep with ``flat:1.35:h=1``: refused;
+  the bore): refused until the holder was judged within one chord (docs/cutting.md), cut
+  now (0 of 994 candidates found, the check 13.5 s of CPU);
+- ``short``: 1.5 mm deep with ``flat:1.35:h=1``: refused so too, cut now;
 - ``pocket``, not refused (the levels below the body find the pocket the levels above
   opened): ``flat:1.0`` (10 mm body) down 11 mm in 0.5 mm levels, each a plunge at the
   corner and five passes 4 mm along X, 0.5 mm apart in Y, joined by steps in Y (265
@@ -72,14 +73,15 @@ def pocket(depth_mm: float, level_mm: float = 0.5) -> str:
     return "\n".join(lines) + "\n"
 
 
-def old_holder_in_material(sweeps, candidates, solid, reach, keep=None) -> list[int]:
+def old_holder_in_material(sweeps, candidates, solid, reach, keep=None,
+                           tolerance=0.0) -> list[int]:
     """`holder_in_material` before the walk: each candidate's material less the earlier
     sweeps one at a time (those sharing most of its box first) until none is left."""
     from machinesim.cutting.holder import HOLDER_MATERIAL_M3, holder_room
 
     inside = {}
     for i in (int(i) for i in candidates):
-        met = solid ^ holder_room(sweeps, i, reach)
+        met = solid ^ holder_room(sweeps, i, reach, tolerance)
         if met.volume() > HOLDER_MATERIAL_M3:
             inside[i] = met
     if not inside or keep is None:
@@ -125,9 +127,9 @@ def child(case: str, method: str) -> dict:
     seen: dict = {"check_s": 0.0, "check_cpu_s": 0.0, "sweeps": 0, "candidates": 0,
                   "found": []}  # as left when no sweep is a candidate
 
-    def timed(sweeps, candidates, solid, reach, keep=None):
+    def timed(sweeps, candidates, solid, reach, keep=None, tolerance=0.0):
         start, cpu = time.perf_counter(), time.process_time()
-        found = check(sweeps, candidates, solid, reach, keep)
+        found = check(sweeps, candidates, solid, reach, keep, tolerance)
         seen.update(check_s=time.perf_counter() - start,
                     check_cpu_s=time.process_time() - cpu, sweeps=sweeps.count,
                     candidates=len(candidates), found=[int(i) for i in found])

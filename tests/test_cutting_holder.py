@@ -20,7 +20,7 @@ from machinesim.nc import ProgramBuilder, parse_program
 MM = 1e-3
 
 
-def reference(sweeps, candidates, solid, reach, keep):
+def reference(sweeps, candidates, solid, reach, keep, tolerance=0.0):
     """Every candidate's room against the solid less every earlier sweep in the stock's
     box, one candidate at a time (candidates x earlier sweeps booleans); less its own sweep
     too where it takes the tool straight down its axis (a plunge: its body has cut its
@@ -29,7 +29,7 @@ def reference(sweeps, candidates, solid, reach, keep):
     owners = np.asarray(owners)
     found = []
     for i in candidates:
-        met = solid ^ holder_room(sweeps, i, reach)
+        met = solid ^ holder_room(sweeps, i, reach, tolerance)
         start, end = sweeps.poses[sweeps.pairs[i]], sweeps.poses[sweeps.pairs[i] + 1]
         down = (np.array_equal(start[:3, :3], end[:3, :3])
                 and float(start[:3, 2] @ (end[:3, 3] - start[:3, 3])) < 0.0)
@@ -66,16 +66,16 @@ def checked(monkeypatch):
         built.append(_Counted(result[0]))
         return (built[-1], *result[1:])
 
-    def both(sweeps, candidates, solid, reach, keep=None):
+    def both(sweeps, candidates, solid, reach, keep=None, tolerance=0.0):
         built.clear()
         monkeypatch.setattr(SweepSet, "hulls", counted)
         try:
-            found = holder_in_material(sweeps, candidates, solid, reach, keep)
+            found = holder_in_material(sweeps, candidates, solid, reach, keep, tolerance)
         finally:
             monkeypatch.setattr(SweepSet, "hulls", original)
         reads = int(max((b.reads.max(initial=0) for b in built), default=0))
         count = sum(len(b) for b in built)
-        assert found == reference(sweeps, candidates, solid, reach, keep)
+        assert found == reference(sweeps, candidates, solid, reach, keep, tolerance)
         calls.append((list(candidates), found, reads, count))
         return found
 
@@ -114,18 +114,34 @@ def _bore(depth_mm, radius_mm=0.4, pitch_mm=0.25):
     return parse_program("\n".join(lines) + "\n", chord_tolerance=1e-5)
 
 
-def test_a_bore_deeper_than_the_body_is_refused_for_the_sweeps_the_reference_finds(checked):
-    # 1.5 mm deep with 1 mm of body: the helix's holder is in the bore the turns above it
-    # cut, the bottom circle's chords, not those of the half turns, leave slivers of the
-    # wall in the rooms over them
-    with pytest.raises(HolderContactError):
-        cut(_bore(1.5), "grooving_4axis", tool="flat:1.0:h=1", stock="block:5x5x3@-2.5,-2.5,0")
+def test_a_bore_deeper_than_the_body_is_cut_its_holder_within_one_chord(checked, monkeypatch):
+    # 1.5 mm deep with 1 mm of body, the holder as wide: the helix's holder is in the bore
+    # the turns above it cut; the bottom circle's chords (15, 8.74 um inside the circle at
+    # their middles) do not line up with the half turns' (8 each, 7.69 um), so the holder
+    # at a chord's end, on the circle, meets the wall where a half turn's chord left it
+    # 7.69 um short: slivers within one chord (10 um, the tolerance the arcs were read
+    # within), no crash, and the bore was refused. Judged within one chord it is cut, as
+    # with allow_holder_contact (the body's cut, nothing refused or listed).
+    import machinesim.cutting.program as program
+
+    kwargs = {"tool": "flat:1.0:h=1", "stock": "block:5x5x3@-2.5,-2.5,0"}
+    part, report = cut(_bore(1.5), "grooving_4axis", **kwargs)
     candidates, found, reads, count = checked[-1]
-    assert found and len(found) < len(candidates)
+    assert candidates and found == [] and report.holder_contact == ()
     # each sweep's solid is read a few times at most (containment, clipping, subtraction),
     # not once for every candidate after it
     assert count > 2 * 4 and reads <= 4
-
+    allowed, by_body = cut(_bore(1.5), "grooving_4axis", allow_holder_contact=True, **kwargs)
+    assert report.removed_volume_m3 == pytest.approx(by_body.removed_volume_m3, rel=1e-12)
+    assert part.volume == pytest.approx(allowed.volume, rel=1e-12)
+    # the holder enters the wall by the half turns' chords' sag, R (1 - cos(pi / 16)) =
+    # 7.686 um by hand: a tolerance just under it refuses the bottom circle, just over cuts
+    sag = 0.4 * MM * (1.0 - np.cos(np.pi / 16))
+    monkeypatch.setattr(program, "holder_tolerance", lambda *_: 0.98 * sag)
+    with pytest.raises(HolderContactError, match=r"line 10 takes the top"):
+        cut(_bore(1.5), "grooving_4axis", **kwargs)
+    monkeypatch.setattr(program, "holder_tolerance", lambda *_: 1.02 * sag)
+    cut(_bore(1.5), "grooving_4axis", **kwargs)
 
 
 def _pocket(levels, last_wider=0.0):
@@ -243,3 +259,15 @@ def test_a_plunge_deeper_than_the_body_is_cut_and_a_move_at_that_depth_refused(c
     with pytest.raises(HolderContactError, match=r": line 3 \(lines 3, 4\) takes the top"):
         cut(parse_program(plunge + "G00 Z15.\nM30\n"), "grooving_4axis",
             tool="ball:0.5:d=2", stock=stock)
+
+
+@pytest.mark.parametrize("bad", [-1e-9, float("nan"), "1e-6", None])
+def test_a_holder_tolerance_that_is_no_length_is_refused_naming_it(bad):
+    from machinesim.cutting import remove
+    from machinesim.exceptions import InputError
+    from machinesim.tools import FlatEndMill
+    from machinesim.workpiece import block
+
+    with pytest.raises(InputError, match="holder_tolerance"):
+        remove(block(MM, MM, MM), FlatEndMill(0.1 * MM), [np.tile(np.eye(4), (2, 1, 1))],
+               holder_tolerance=bad)

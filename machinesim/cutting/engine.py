@@ -85,6 +85,7 @@ from machinesim.cutting.tiling import (
     union_runs,
 )
 from machinesim.exceptions import InputError, brief
+from machinesim.metrology._arrays import as_number
 from machinesim.rotations import not_rigid
 from machinesim.tolerances import (
     CLIP_MARGIN_REL,
@@ -324,6 +325,7 @@ def remove(
     sheets: bool = True,
     on_holder_contact: Callable[[tuple[int, ...]], None] | None = None,
     holder_stock: Part | None = None,
+    holder_tolerance: float = 0.0,
 ) -> tuple[Part, EngineReport]:
     """Cut ``stock`` with ``tool`` moved along ``paths``.
 
@@ -371,6 +373,9 @@ def remove(
         The material the holder is judged against, when ``stock`` is not all of it: a
         caller that cuts a part already clipped to windows gives the part as it is outside
         them (`machinesim.cutting.cut`'s later tools). Default: ``stock``.
+    holder_tolerance : float
+        How far the holder may enter the material, m: the chord tolerance ``paths`` were
+        split within (`holder.holder_in_material`). Default 0.
 
     Returns
     -------
@@ -390,6 +395,7 @@ def remove(
                          "'block:10x10x2' is made one by machinesim.workpiece.stock_from_spec",
                          key="stock")
     paths = _check_paths(paths)
+    holder_tolerance = as_number(holder_tolerance, "holder_tolerance", sign=">= 0")
     # A path of one pose is the tool standing there, and the volume it sweeps, the hull of
     # that pose and itself, is the tool: one sweep, as the same pose given twice (it had
     # formed no sweep and was passed over without a word).
@@ -427,11 +433,13 @@ def remove(
             stock if holder_stock is None else holder_stock, [], frame)[0]
         part, report = remove(framed, tool, framed_paths, progress=progress,
                               sweeps_per_tile=sweeps_per_tile, method="boolean", sheets=sheets,
-                              on_holder_contact=on_holder_contact, holder_stock=framed_holder)
+                              on_holder_contact=on_holder_contact, holder_stock=framed_holder,
+                              holder_tolerance=holder_tolerance)
         return out_of_frame(part, frame), replace(report,
                                                   elapsed_s=time.perf_counter() - start)
     holder = judge_holder(_holder_sweeps(sweeps, tool, paths, z_high, holder_stock),
-                          stock if holder_stock is None else holder_stock, on_holder_contact)
+                          stock if holder_stock is None else holder_stock, on_holder_contact,
+                          holder_tolerance)
     if method == "auto" and sweeps.count:
         relief = cut_reliefs(stock, sweeps.vertices, sweeps.poses, sweeps.pairs,
                              None if roi is None else cells, sweeps.pose_bounds)

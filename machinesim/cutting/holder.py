@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import manifold3d
 import numpy as np
+from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 from machinesim.cutting.containment import (
     CONTAINED_CANDIDATES,
@@ -37,11 +38,13 @@ __all__ = ["HOLDER_MATERIAL_M3", "check_holder", "holder_contact", "holder_in_ma
 HOLDER_MATERIAL_M3 = 1e-21
 
 
-def judge_holder(sweeps: SweepSet, stock: Part, on_holder_contact=None) -> tuple[int, ...]:
+def judge_holder(sweeps: SweepSet, stock: Part, on_holder_contact=None,
+                 tolerance: float = 0.0) -> tuple[int, ...]:
     """The sweeps of ``sweeps`` whose holder meets ``stock``, anywhere over it: those whose
     body top comes below the stock's top within its box (`holder_contact`), and, with
     ``on_holder_contact`` (a refusal), of those only the ones whose room holds material the
-    earlier sweeps left (`holder_in_material`), ``on_holder_contact`` called with them.
+    earlier sweeps left (`holder_in_material`, within ``tolerance``, m, the paths' chord
+    tolerance), ``on_holder_contact`` called with them.
 
     The whole stock, never a window of it: the holder meeting the part outside the windows
     a cut is read in is a crash all the same (a holder crash at x = 8 mm was cut, exit 0,
@@ -64,14 +67,15 @@ def judge_holder(sweeps: SweepSet, stock: Part, on_holder_contact=None) -> tuple
     if holder and on_holder_contact is not None:
         # the stock's box says it may; before refusing, the material says whether it does
         reach = 2.0 * float(np.linalg.norm(bounds[1] - bounds[0])) + scale  # past it
-        holder = tuple(holder_in_material(sweeps, holder, stock.manifold, reach, whole))
+        holder = tuple(holder_in_material(sweeps, holder, stock.manifold, reach, whole,
+                                          tolerance))
         if holder:
             on_holder_contact(holder)
     return holder
 
 
-def check_holder(stock: Part, tool, paths: list[np.ndarray],
-                 on_holder_contact=None) -> tuple[int, ...]:
+def check_holder(stock: Part, tool, paths: list[np.ndarray], on_holder_contact=None,
+                 tolerance: float = 0.0) -> tuple[int, ...]:
     """`judge_holder` for ``tool`` along ``paths`` (workpiece frame, in program order)
     over ``stock``, without cutting: for a caller that cuts the sweeps in another order
     (`machinesim.cutting.cut_turned`, by turn groups), since the material a holder meets
@@ -88,7 +92,7 @@ def check_holder(stock: Part, tool, paths: list[np.ndarray],
         stock, paths = into_frame(stock, paths, frame)
         z_high = stock.bounds[1, 2] + CLIP_MARGIN_REL * scale
         sweeps = SweepSet(tool, paths, z_high)
-    return judge_holder(sweeps, stock, on_holder_contact)
+    return judge_holder(sweeps, stock, on_holder_contact, tolerance)
 
 
 def holder_reach(stock: Part, tool, paths: list[np.ndarray]):
@@ -147,7 +151,7 @@ def holder_contact(sweeps: SweepSet, below: float, keep) -> list[int]:
 
 
 def holder_in_material(sweeps: SweepSet, candidates, solid: manifold3d.Manifold,
-                       reach: float, keep=None) -> list[int]:
+                       reach: float, keep=None, tolerance: float = 0.0) -> list[int]:
     """Those of the sweeps ``candidates`` whose holder meets ``solid`` as this tool has cut
     it by then: more than `HOLDER_MATERIAL_M3` of it inside the holder's room over the sweep
     (`holder_room`), in the order given. The bounding-box test of `holder_contact` finds
@@ -166,9 +170,17 @@ def holder_in_material(sweeps: SweepSet, candidates, solid: manifold3d.Manifold,
     candidate's material was cut by the earlier sweeps until none was left: candidates x
     earlier sweeps booleans where slivers stay (a helical bore's bottom circle, its chords
     not those of the half turns, 5 min 11 s before its refusal).
+
+    ``tolerance`` (m): how far the holder may enter the material, the rooms' faces taken in
+    by as much (`holder_room`'s ``inset``): the chord tolerance the paths were split within.
+    Arcs cut as chords put the holder into walls the body cut by up to one chord where its
+    own chords and the body's do not line up (a helical bore's bottom circle under its half
+    turns, refused as a crash): each chord lies inside its arc by at most the tolerance, the
+    holder at a chord's end reaches the arc's wall, and the body along another's middle cut
+    the wall that much short of it.
     """
     order = list(dict.fromkeys(int(i) for i in candidates))
-    rooms = {i: holder_room(sweeps, i, reach) for i in order}
+    rooms = {i: holder_room(sweeps, i, reach, tolerance) for i in order}
     inside = {}
     for i in sorted(order):
         met = solid ^ rooms[i]
@@ -312,7 +324,8 @@ def _box(low, high) -> manifold3d.Manifold:
     return manifold3d.Manifold.cube(tuple(np.asarray(high) - low)).translate(tuple(low))
 
 
-def holder_room(sweeps: SweepSet, sweep: int, reach: float) -> manifold3d.Manifold:
+def holder_room(sweeps: SweepSet, sweep: int, reach: float,
+                inset: float = 0.0) -> manifold3d.Manifold:
     """The room the holder takes over sweep ``sweep``: the hull of the body's top face
     at both poses and of the same face lifted ``reach`` along the tool axis. A top that
     is a segment (a V's or a nose's, along Y) is widened across it (along the tool's X) to
@@ -323,8 +336,11 @@ def holder_room(sweeps: SweepSet, sweep: int, reach: float) -> manifold3d.Manifo
     are: manifold3d's QuickHull drops points within about 1e-7 of the largest coordinate of a
     plane, so the room of a tool a few nm wide, ~30 mm tall over a 10 mm block, came out
     empty, and a 2 nm ball 2 nm high cut 20 um deep with no holder contact.
+
+    ``inset`` (m, >= 0): the face is taken that much in from its edges first (`_inset`), the
+    holder's tolerance, one chord of the paths (`holder_in_material`).
     """
-    face = _holder_top(sweeps.holder_face)
+    face = _inset(_holder_top(sweeps.holder_face), inset)
     local = np.concatenate([face, face + [0.0, 0.0, reach]])
     first = sweeps.pairs[sweep]
     poses = sweeps.poses[[first, first + 1]]
@@ -355,6 +371,29 @@ def _holder_top(face: np.ndarray) -> np.ndarray:
     across = np.array([-along[1], along[0], 0.0])
     half = 0.5 * float(np.ptp(xy @ along))
     return np.concatenate([face + half * across, face - half * across])
+
+
+def _inset(face: np.ndarray, inset: float) -> np.ndarray:
+    """The face ``face`` (k, 3), flat at one height in the tool's frame, taken ``inset`` (m)
+    in from each of its edges (a polygon's offset: each edge's line moved in by ``inset``),
+    at most half way to its centre, so that a face narrower than the tolerance keeps a
+    holder. ``face`` itself for ``inset`` 0 or a face of no area."""
+    if inset <= 0.0:
+        return face
+    xy = face[:, :2]
+    try:
+        hull = ConvexHull(xy)
+    except QhullError:
+        return face
+    normals, offsets = hull.equations[:, :2], hull.equations[:, 2]  # n . x + d <= 0 inside
+    centre = xy[hull.vertices].mean(axis=0)
+    room = float(-(normals @ centre + offsets).min())  # the centre's distance to an edge
+    step = min(inset, 0.5 * room)
+    if not step > 0.0:
+        return face
+    inner = HalfspaceIntersection(np.column_stack([normals, offsets + step]), centre)
+    points = inner.intersections
+    return np.column_stack([points, np.full(len(points), face[0, 2])])
 
 
 #: Material boxes tested at once against a chunk of sweeps' boxes (`holder_in_material`):

@@ -190,7 +190,8 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         part, engine = remove(before, section_tool, paths, roi=roi, progress=progress,
                               sheets=False, on_holder_contact=refuse,
                               holder_stock=_outside_windows(stock, roi, done, section_tool,
-                                                            paths, allow_holder_contact))
+                                                            paths, allow_holder_contact),
+                              holder_tolerance=holder_tolerance(program, chord_tolerance))
         done.append((section_tool, paths))
         rapids += rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)
@@ -234,6 +235,16 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         thin_sheets=sheets.count,
     )
     return part, report
+
+
+def holder_tolerance(program, chord_tolerance: float) -> float:
+    """How far the holder may enter the material (m): one chord, the larger of the tolerance
+    the planner split the program's moves within and the one its arcs were read as chords
+    within (`Program.arc_chord_tolerance`). The holder's chords and the body's need not line
+    up, and the holder at a chord's end meets the wall the body cut along another chord's
+    middle, that much short of the arc (docs/cutting.md)."""
+    read = getattr(program, "arc_chord_tolerance", None)
+    return float(chord_tolerance if read is None else max(chord_tolerance, read))
 
 
 def _outside_windows(stock: Part, roi, done: list, tool, paths: list,

@@ -20,7 +20,13 @@ import numpy as np
 from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
 from machinesim.cutting.holder import check_holder
-from machinesim.cutting.program import _holder_refusal, _Moves, _overtravel, check_progress
+from machinesim.cutting.program import (
+    _holder_refusal,
+    _Moves,
+    _overtravel,
+    check_progress,
+    holder_tolerance,
+)
 from machinesim.cutting.report import (
     CutReport,
     arc_chord_note,
@@ -57,20 +63,21 @@ def clip_to(stock: Part, boxes, floor: float | None = None) -> Part:
 
 
 def _holder_lines(program, machine, errors, tool, stock: Part, feeds: list,
-                  allowed: bool) -> set[int]:
+                  allowed: bool, tolerance: float) -> set[int]:
     """The lines of the feeds ``feeds`` (the trajectory's linear segments, in the program's
     order) whose holder meets ``stock``, judged in that order over the whole stock
     (`holder.check_holder`); unless ``allowed``, the cut is refused there
     (`HolderContactError`). The turn groups are cut in another order, and a group's own
     check read the part as the groups before it had left it: a pass at C = 0 in the slot a
     pass at C = 90 deg cut before it was refused when the C = 0 group came first, where
-    `machinesim.cutting.cut` cuts it."""
+    `machinesim.cutting.cut` cuts it. The holder may enter the material by ``tolerance``
+    (m, one chord: `program.holder_tolerance`)."""
     if not feeds:
         return set()
     paths = machine.tool_poses([s.q for s in feeds], errors)
     sweep_line = np.repeat([s.line for s in feeds], [max(len(s.q) - 1, 1) for s in feeds])
     refuse = None if allowed else _holder_refusal(program, tool, stock, sweep_line)
-    return {int(sweep_line[i]) for i in check_holder(stock, tool, paths, refuse)}
+    return {int(sweep_line[i]) for i in check_holder(stock, tool, paths, refuse, tolerance)}
 
 
 def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *,
@@ -151,7 +158,8 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     for segment in feeds:
         key = int(round(float(segment.q[0, column]) / turn_step))
         groups.setdefault(key, []).append(segment)
-    holder = _holder_lines(program, machine, errors, tool, stock, feeds, allow_holder_contact)
+    holder = _holder_lines(program, machine, errors, tool, stock, feeds, allow_holder_contact,
+                           holder_tolerance(program, chord_tolerance))
     removed = swept = engine_s = 0.0
     sweeps = sideways = 0
     sideways_lines: set[int] = set()
