@@ -263,6 +263,8 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     # moves are straight in X and Z, so their ends bound the tool's distance
     _refuse_far(machine.tool_pose(modal_values(moves.q, start=machine.home), errors), moves,
                 program)
+    # the dwells and feed moves timed (and their total checked) before any run is turned
+    waits, slow = _untimed_moves(program, machine)
     tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
     beyond = {entry.split(" ", 2)[1] for entry in limits}  # the axes the command takes out
@@ -291,7 +293,6 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
               f"above the stock's top (z = {top * 1e6:.6g} um) throughout; does the program "
               "reach the stock, and do the errors set the tool too high or the workpiece too "
               "low (tool.z, workpiece.z)?",) if empty else ())
-    waits, slow = _untimed_moves(program, machine)
     seconds += waits
     notes += _rapids_below_top(program, machine, top) + slow
     report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak,

@@ -28,7 +28,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from machinesim.exceptions import InputError, line_of
-from machinesim.motion.timing import on_chord, slow_move_notes
+from machinesim.motion.timing import check_total_time, on_chord, slow_move_notes
 from machinesim.nc.moves import AXES, KIND_DWELL, KIND_LINEAR, KIND_RAPID, ROTARY_AXES
 from machinesim.nc.program import modal_values
 
@@ -73,7 +73,9 @@ def _untimed_moves(program, machine) -> tuple[float, tuple[str, ...]]:
     in a turning run, which `_timed_runs` times. A chord of an arc (a G02/G03 plunge) takes
     its piece of arc over F (`machinesim.nc.Program.arc_lengths`) when it is a chord of it
     (`machinesim.motion.timing.on_chord`), as `plan` times it; a move that only kept an arc
-    length (a program cut from an arc's middle) its own length."""
+    length (a program cut from an arc's middle) its own length. Dwells and feed moves that
+    take more than `machinesim.nc.words.MAX_PROGRAM_TIME_S` in all are refused
+    (`machinesim.motion.timing.check_total_time`), as `plan` refuses them."""
     kinds = np.asarray(program.kinds)
     feeds = np.asarray(program.feeds, dtype=np.float64)
     durations = np.where(kinds == KIND_DWELL, np.asarray(program.dwells, dtype=np.float64),
@@ -94,8 +96,18 @@ def _untimed_moves(program, machine) -> tuple[float, tuple[str, ...]]:
                            _at_limits(q[linear - first - 1], q[linear - first],
                                       machine.rapid_rate))
     durations[linear] = np.where(np.isfinite(times), times, 0.0)
+    check_total_time(durations, kinds, np.asarray(program.lines), program,
+                     block_of=lambda move: _block_number(program, move))
     return float(durations[kinds == KIND_DWELL].sum()), slow_move_notes(
         durations, kinds, np.asarray(program.lines), feeds, program)
+
+
+def _block_number(program, move: int) -> int | None:
+    """The N word of ``program``'s move ``move`` (None: none), for a refusal's line."""
+    blocks = getattr(program, "block_numbers", None)
+    if not isinstance(blocks, np.ndarray) or not 0 <= move < blocks.size or blocks[move] < 0:
+        return None
+    return int(blocks[move])
 
 
 def _program_moves(program, machine) -> SimpleNamespace:

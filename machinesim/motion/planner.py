@@ -22,6 +22,7 @@ from machinesim.motion.timing import (
     M_PER_MM,
     NUMBER,
     SLOW_MOVE_S,
+    check_total_time,
     move_duration,
     move_durations,
     slow_move_notes,
@@ -352,8 +353,11 @@ def plan(program, machine, errors=None, *, start=None, tool_points=None,
     if error is not None:
         raise error
 
-    durations = move_durations(kinds, starts, ends, feeds, dwells, rotary,
-                               np.asarray(machine.rapid_rate, dtype=np.float64), arcs)
+    with np.errstate(over="ignore", invalid="ignore"):  # refused just below
+        durations = move_durations(kinds, starts, ends, feeds, dwells, rotary,
+                                   np.asarray(machine.rapid_rate, dtype=np.float64), arcs)
+    check_total_time(durations, kinds, lines, program,
+                     block_of=lambda move: _block(program, move))
     # times add up move after move from 0.0, as a running sum does (np.cumsum is sequential)
     clock = np.cumsum(np.concatenate([[0.0], durations]))
     cutting = float(np.cumsum(np.concatenate([[0.0], durations[kinds == KIND_LINEAR]]))[-1])

@@ -8,10 +8,11 @@ import math
 
 import numpy as np
 
-from machinesim.exceptions import InputError, line_of
+from machinesim.exceptions import InputError, NCProgramError, brief, line_of
 from machinesim.nc.arcs import MAX_STEP_RAD
 from machinesim.nc.program import KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
 from machinesim.nc.rotary_feed import inch_feed_as_written
+from machinesim.nc.words import MAX_PROGRAM_TIME_S
 
 M_PER_MM = 1e-3
 #: A feed move longer than this is noted (`slow_move_notes`): a day for one move is a feed
@@ -144,6 +145,41 @@ def slow_move_notes(durations, kinds, lines, feeds, program=None,
     return tuple(notes)
 
 
+def check_total_time(durations, kinds, lines, program=None, *, block_of=None) -> None:
+    """Refuse (`NCProgramError`) moves and dwells that take more than `MAX_PROGRAM_TIME_S`
+    in all, or one whose time is no finite number (a move of 1e304 m at the slowest feed):
+    the program's clock, their float64 running sum, keeps 0.1 ms only up to there, and
+    beyond it overflows to inf. The error names the line at which the sum passes the bound
+    and the longest move or dwell, with its line and word (`Program.dwell_words`).
+    ``block_of(move)``: the N word of a move's block (None: none), for the line's name."""
+    durations = np.asarray(durations, dtype=np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        clock = np.cumsum(durations)
+    beyond = np.flatnonzero(~(clock <= MAX_PROGRAM_TIME_S))
+    if not beyond.size:
+        return
+    at = int(beyond[0])
+    unknown = np.isnan(durations)
+    longest = int(np.argmax(unknown)) if unknown.any() else int(np.argmax(durations))
+    kinds = np.asarray(kinds)
+    line = int(lines[longest])
+    if kinds[longest] == KIND_DWELL:
+        word = getattr(program, "dwell_words", {}).get(line)
+        what = "dwell" + (f" ({brief(word)})" if word else "")
+    else:
+        what = "rapid" if kinds[longest] == KIND_RAPID else "feed move"
+    taken = (f"{durations[longest]:.3g} s" if math.isfinite(durations[longest])
+             else "a time beyond float64 (its length over its feed overflowed)")
+    block = None if block_of is None else block_of(at)
+    raise NCProgramError(
+        f"the program's moves and dwells take more than {MAX_PROGRAM_TIME_S:.6g} s (2**39 s, "
+        f"about 17,400 years) by this line, the longest the {what} of "
+        f"{_line_text(program, line)}, {taken}: a program's clock, a float64 sum of "
+        "seconds, keeps 0.1 ms only up to there (and overflows to inf beyond 1.8e308 s); is "
+        "a time, feed or length in the unit meant?",
+        source=getattr(program, "source", "<program>"), line=int(lines[at]), block=block)
+
+
 def _line_text(program, line: int) -> str:
     """``line 12 (N120)`` where ``program``'s block at ``line`` has an N word
     (`machinesim.nc.Program.line_text`), else ``line 12`` (`line_of`)."""
@@ -218,5 +254,6 @@ def move_durations(kinds, starts, ends, feeds, dwells, rotary, rapid_rate,
     return out
 
 
-__all__ = ["ARC_OVER_CHORD", "LONG_DWELL_S", "M_PER_MM", "NUMBER", "SLOW_MOVE_S", "move_duration",
-           "move_durations", "on_chord", "slow_move_notes"]
+__all__ = ["ARC_OVER_CHORD", "LONG_DWELL_S", "MAX_PROGRAM_TIME_S", "M_PER_MM", "NUMBER",
+           "SLOW_MOVE_S", "check_total_time", "move_duration", "move_durations", "on_chord",
+           "slow_move_notes"]

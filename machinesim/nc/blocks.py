@@ -32,6 +32,7 @@ from machinesim.nc.words import (
     M_PER_INCH,
     MAX_INTEGER_DIGITS,
     MAX_MOVES,
+    MAX_PROGRAM_TIME_S,
     MOTION,
     OTHER_CYCLES,
     SINGLE,
@@ -536,6 +537,19 @@ class Block:
         if not seconds >= 0.0:
             raise self.fail(f"{code}'s dwell {brief(word.key)} must be >= 0 (with a decimal "
                             "point P is seconds, as Haas reads it; without, milliseconds)", word)
+        return self.dwell_within(seconds, word, code)
+
+    def dwell_within(self, seconds: float, word: Word, code: str) -> float:
+        """``seconds``, the dwell ``word`` of ``code`` states, refused beyond
+        `MAX_PROGRAM_TIME_S`, the longest a whole program may take: no program holding it
+        could be timed. A long dwell within it is read (and noted by the planner)."""
+        if seconds > MAX_PROGRAM_TIME_S:
+            raise self.fail(
+                f"{code}'s dwell {brief(word.key)} waits {seconds:.3g} s, more than the "
+                f"{MAX_PROGRAM_TIME_S:.6g} s (2**39 s, about 17,400 years) a whole program may "
+                "take: its clock, a float64 sum of seconds, keeps 0.1 ms only up to there; "
+                "is the time in the unit meant (P counts milliseconds without a decimal "
+                "point, seconds with one; X seconds)?", word)
         return seconds
 
     def integer(self, word: Word, what: str) -> int:

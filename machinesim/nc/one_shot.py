@@ -136,6 +136,7 @@ def read_dwell(block: Block, g04: Word, axes: list[Word], block_number: int | No
             dwell_s *= DWELL_INCREMENT_S[block.reader.integer_input]
         if dwell_s < 0.0:
             raise block.fail(f"dwell time must be >= 0, got {brief(word.key)}", word)
+        dwell_s = block.dwell_within(dwell_s, word, "G04")
     else:
         raise block.fail(f"dwell without time: G04 needs {DWELL_WORDS}", g04)
     block.add("dwell", dwell_s, block_number)

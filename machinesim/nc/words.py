@@ -36,6 +36,15 @@ INCREMENTS = {
 #: 0.001 s under IS-B, 0.0001 s under IS-C (X10 is 1 ms there, not 10); P is in ms under
 #: both. The nanometre machines' rule keeps the millisecond (no table for it was found).
 DWELL_INCREMENT_S = {"increment": 1e-3, "is-b": 1e-3, "is-c": 1e-4}
+#: The longest a program may take in all, s: 2**39 s, about 17,400 years. A program's clock
+#: is a float64 running sum of its moves' and dwells' seconds, spaced at most 2**-14 s (61 us)
+#: apart below it, so that it keeps every 0.1 ms: the least increment of time a program writes
+#: (IS-C's ``G04 X``, `DWELL_INCREMENT_S`) and the servo loop's default period. A dwell of a
+#: billion seconds (31 years, noted as a slip) stays far inside; a time beyond it is a number
+#: in the wrong unit or no time at all (``G04 X`` with 1e308 written out: two of them had
+#: summed to inf). A dwell word beyond it is refused by the reader, a program whose moves and
+#: dwells add up beyond it by the planner (`machinesim.motion.timing.check_total_time`).
+MAX_PROGRAM_TIME_S = 2.0**39
 #: The slowest feed a program may ask for, m/s: 1 nm a minute, far below any control's
 #: least feed (FANUC: 0.001 mm/min at IS-B). Below it a feed was typed in the wrong unit
 #: (F0.000...1 took 3e33 s of machining, silently).
