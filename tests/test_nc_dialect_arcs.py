@@ -245,3 +245,34 @@ def test_a_word_a_million_characters_long_is_shown_by_its_ends(word, shown):
         parse_program(f"G00 X0. Y0. Z1.\nG01 F100.\n{word}\n", "long.nc")
     message = str(info.value)
     assert len(message) < 400 and shown in message and "line 3, column 1" in message
+
+
+#: 1e299 and 1e300 mm written out (the reader takes no exponent)
+_E299, _E300 = "1" + "0" * 299 + ".", "1" + "0" * 300 + "."
+
+
+@pytest.mark.parametrize("words, radius", [
+    (f"R{_E299}", "1e+299"), (f"R-{_E299}", "1e+299"),  # had crashed: ZeroDivisionError
+    (f"I{_E300}", "1e+300"),  # had been refused as needing a 156-digit count of segments
+    ("R2000000000.", "2e+09"), ("I-2000000000.", "2e+09"),  # 2,000 km
+])
+def test_an_arc_too_large_for_float64_to_place_within_the_chord_tolerance_is_refused(
+        words, radius):
+    # float64 places a point of a circle of radius r within about 4 ulp of r, r 2**-50:
+    # 1 nm (the default tolerance) at r = 1e-9 * 2**50 m = 1.1259e9 mm
+    with pytest.raises(NCProgramError) as caught:
+        parse_program(f"G90 G21\nG00 X0 Y0 Z1.\nG02 X2. Y0 {words} F100.\nM30\n", "a.nc")
+    error = caught.value
+    assert (error.line, error.key) == (3, words)
+    assert f"radius of {radius} mm is too large" in str(error)
+    assert "beyond 1.1259e+09 mm" in str(error)
+
+
+def test_a_flat_arc_within_the_bound_reads_as_its_chord():
+    # R 1e9 mm (1,000 km) over a 2 mm chord: its sagitta, 1 mm^2 / (2 * 1e9 mm) = 5e-10 mm,
+    # is within the 1 nm tolerance, so it is one move to its end, its arc the chord's length
+    # (to 2 mm * (1 + (1 / 1e9)^2 / 6): the same float64)
+    program = parse_program("G90 G21\nG00 X0 Y0 Z1.\nG02 X2. Y0 R1000000000. F100.\nM30\n")
+    assert len(program) == 2
+    assert program.targets[-1, :2].tolist() == [0.002, 0.0]
+    assert program.arc_lengths[-1] == pytest.approx(0.002, rel=1e-15)

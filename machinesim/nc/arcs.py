@@ -51,6 +51,13 @@ MAX_STEP_RAD = math.pi / 2
 #: The step is taken for the tolerance times this, so that float64 rounding of the angles
 #: (~1e-16 relative) never puts a chord's sagitta over the tolerance itself.
 _SAFETY = 1.0 - 1e-9
+#: An arc's points, centre + r (cos a, sin a), carry round-off of about 4 ulp of its radius r
+#: (the centre's, the angle's, up to 2 ulp of r at a = pi, and the sum's): r times this. An
+#: arc whose r times it passes the chord tolerance is refused (`arc_points`): float64 cannot
+#: place its points within the tolerance (at 1 nm, radii beyond 1.1e6 m, 1,100 km; a lens or
+#: mirror of 20 m radius is far inside), and a radius of 1e300 mm had overflowed r^2 to inf
+#: and crashed the reader with ZeroDivisionError.
+RADIUS_ROUND_OFF = 2.0**-50
 #: An arc by R whose half chord comes within this many ulp of the largest coordinate of
 #: its radius is a half circle: the end points' decimal-to-binary rounding (half an ulp
 #: each), the subtraction and the hypot of the chord leave its length uncertain by a few
@@ -147,6 +154,7 @@ def arc_points(
     e = np.array(end, dtype=np.float64)
     chord = float(np.hypot(*(e - s)))
     if radius is not None:
+        _check_radius(abs(radius), chord_tolerance)
         c = _centre_from_radius(s, e, chord, radius, clockwise, radius_tolerance)
     else:
         c = np.array(centre, dtype=np.float64)
@@ -155,6 +163,7 @@ def arc_points(
     if r0 == 0.0:
         raise NCProgramError("the arc's centre is its start point (zero radius); give I J K "
                              "from the start to the centre")
+    _check_radius(max(r0, r1), chord_tolerance)
     if radius is None and abs(r1 - r0) > radius_tolerance:
         raise NCProgramError(
             f"the end point is off the arc: radius {r0 * 1e3:.6f} mm at the start (from I J K) "
@@ -188,6 +197,19 @@ def arc_points(
     fractions[-1] = 1.0
     points[-1] = e
     return fractions, points, r0, signed
+
+
+def _check_radius(radius: float, chord_tolerance: float) -> None:
+    """Refuse a ``radius`` (m) whose points float64 cannot place within ``chord_tolerance``
+    (m) of the circle (`RADIUS_ROUND_OFF`)."""
+    if not radius * RADIUS_ROUND_OFF <= chord_tolerance:
+        raise NCProgramError(
+            f"the arc's radius of {radius * 1e3:.6g} mm is too large: float64 places its "
+            f"points only within about {radius * RADIUS_ROUND_OFF * 1e9:.3g} nm (4 ulp of the "
+            f"radius) of the circle, more than the chord tolerance "
+            f"{chord_tolerance * 1e9:g} nm, so radii beyond "
+            f"{chord_tolerance / RADIUS_ROUND_OFF * 1e3:.6g} mm are not read; is the radius "
+            "(R, or the centre I J K) in the unit meant? An arc this flat is its chord: G01")
 
 
 def _centre_from_radius(s: np.ndarray, e: np.ndarray, chord: float, radius: float,
