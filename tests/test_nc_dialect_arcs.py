@@ -276,3 +276,14 @@ def test_a_flat_arc_within_the_bound_reads_as_its_chord():
     assert len(program) == 2
     assert program.targets[-1, :2].tolist() == [0.002, 0.0]
     assert program.arc_lengths[-1] == pytest.approx(0.002, rel=1e-15)
+
+
+@pytest.mark.parametrize("word", [f"I1{'0' * 310}.", f"R1{'0' * 310}."])
+def test_a_centre_or_radius_word_beyond_float64_is_named_once(word):
+    # 1e310 mm written out: the word's own refusal had been wrapped by the arc's, 'a.nc,
+    # line 3, column 12, key ...: a.nc, line 3, column 12, key ...: value of ...'
+    with pytest.raises(NCProgramError) as caught:
+        parse_program(f"G90 G21\nG00 X0 Y0 Z1.\nG02 X2. Y0 {word} F100.\nM30\n", "a.nc")
+    assert (caught.value.line, caught.value.column) == (3, 12)
+    assert str(caught.value).count("a.nc, line 3") == 1
+    assert str(caught.value).endswith("is out of range (not finite in float64)")

@@ -58,16 +58,17 @@ def read_arc(block: Block, axes: list[Word], block_number: int | None) -> None:
     if "R" not in single and not given:
         raise block.fail(f"{state.motion} needs the centre ({' '.join(centre_letters)}) or "
                          "the radius R", g_word)
+    # the words' own refusals (not finite) name their place already: outside the try below
+    if "R" in single:
+        radius = block.real(single["R"]) * block.length_of(single["R"])
+        centre = None
+    else:
+        offsets = [block.real(single[k]) * block.length_of(single[k]) if k in single
+                   else 0.0 for k in centre_letters]
+        centre = (start[u] + offsets[0], start[v] + offsets[1])
+        radius = None
+    tolerance = ARC_RADIUS_TOLERANCE_INCH_M if state.inch else ARC_RADIUS_TOLERANCE_M
     try:
-        if "R" in single:
-            radius = block.real(single["R"]) * block.length_of(single["R"])
-            centre = None
-        else:
-            offsets = [block.real(single[k]) * block.length_of(single[k]) if k in single
-                       else 0.0 for k in centre_letters]
-            centre = (start[u] + offsets[0], start[v] + offsets[1])
-            radius = None
-        tolerance = ARC_RADIUS_TOLERANCE_INCH_M if state.inch else ARC_RADIUS_TOLERANCE_M
         fractions, points, _, sweep = arc_points(
             (start[u], start[v]), (end[u], end[v]), clockwise=state.motion == "G02",
             centre=centre, radius=radius, chord_tolerance=reader.chord_tolerance,
