@@ -384,6 +384,19 @@ def test_turn_refuses_a_move_beyond_a_km_even_with_overtravel_allowed(far_mm):
         machinesim.Lab("sts_lathe", noise=False).turn(program, allow_overtravel=True)
 
 
+def test_a_move_too_far_to_square_is_refused_with_its_distance():
+    # 1e200 mm written out (1e197 m): its distance by np.linalg.norm squared to inf, and the
+    # refusal said 'the move takes the tool inf m ... (its spacing there is nan m)'
+    program = machinesim.nc.parse_program(
+        f"G90 G21\nG00 X1.0 Z0.01 C0\nG01 Z-0.001 F10\nG01 X1{'0' * 200}. C3600. F36000\n"
+        "G01 X0.0 C7200.\nG00 Z0.01\n")
+    with pytest.raises(InputError) as caught:
+        turn(program, "sts_lathe", allow_overtravel=True)
+    assert caught.value.line == 4
+    assert "the move takes the tool 1e+197 m from the workpiece origin" in str(caught.value)
+    assert "its spacing there is 1.7e+181 m" in str(caught.value)
+
+
 def test_a_move_within_a_km_is_turned_and_one_before_the_start_is_refused_too():
     # 999.99 m is within FARTHEST_M: turned with allow_overtravel, X listed beyond its travel
     near = machinesim.nc.parse_program(

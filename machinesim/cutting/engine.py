@@ -230,8 +230,11 @@ def _check_paths(paths) -> list[np.ndarray]:
             f"{poses[first].tolist()}",
             key="paths",
         )
-    distance = np.linalg.norm(poses[:, :3, 3], axis=1)
-    far = np.flatnonzero(distance > FARTHEST_M)
+    # hypot, not norm: a tool 1e304 m out squared to inf ('inf m', 'spacing nan m'), and a
+    # distance not finite is beyond too (NaN > FARTHEST_M is False)
+    where = poses[:, :3, 3]
+    distance = np.hypot(np.hypot(where[:, 0], where[:, 1]), where[:, 2])
+    far = np.flatnonzero(~(distance <= FARTHEST_M))
     if far.size:
         first = int(far[0])
         path = int(np.searchsorted(np.cumsum([len(a) for a in arrays]), first, side="right"))

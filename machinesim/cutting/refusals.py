@@ -34,11 +34,15 @@ def _refuse_far(poses: np.ndarray, moves: _Moves, program) -> None:
     farthest alone had named `G00 Z1.` after a `G01 X1000000.`, which went out first."""
     if not len(poses):
         return
-    distance = np.linalg.norm(poses[:, :3, 3], axis=1)
-    if not distance.max() > FARTHEST_M:
+    # hypot, not norm: a tool 1e304 m out squared to inf ('inf m', 'spacing nan m'), and a
+    # distance not finite is beyond too (NaN > FARTHEST_M is False)
+    where = poses[:, :3, 3]
+    distance = np.hypot(np.hypot(where[:, 0], where[:, 1]), where[:, 2])
+    beyond = ~(distance <= FARTHEST_M)
+    if not beyond.any():
         return
-    first = int(np.argmax(distance > FARTHEST_M))
-    worst = int(np.argmax(distance))
+    first = int(np.argmax(beyond))
+    worst = int(np.argmax(np.where(np.isnan(distance), np.inf, distance)))
     farthest = ""
     if int(moves.line[worst]) != int(moves.line[first]):
         farthest = (f" (the farthest, {distance[worst]:.3g} m, at "
