@@ -132,6 +132,11 @@ class NCProgramError(InputError):
     the N word at ``line``, named beside the line: `InputError`)."""
 
 
+class ProgramTimeError(NCProgramError):
+    """An NC program's moves and dwells take longer in all than its float64 clock keeps
+    (`machinesim.nc.words.MAX_PROGRAM_TIME_S`), or one of them no finite time."""
+
+
 class NotConvergedError(MachineSimError):
     """An iteration (e.g. the Gauss-Newton of `machinesim.identification.fit`) did not reach
     its stopping rule within its cap."""

@@ -342,6 +342,20 @@ def test_a_move_a_billion_metres_out_is_refused_even_with_overtravel_allowed():
     assert near.removed_volume_m3 == pytest.approx((10 * UM) ** 2 * 4 * MM, rel=1e-5, abs=0.0)
 
 
+def test_a_slow_move_far_out_is_refused_for_its_distance_not_for_its_time():
+    # 1e9 m at F100 takes 6e11 s, beyond a program's 2**39 s: the planner's refusal of the
+    # time had replaced the travel's and the distance's, the likelier cause; a program of a
+    # time that long within the travel is still refused for it
+    program = (ProgramBuilder(1).rapid(X=1 * MM, Y=1 * MM, Z=0.1 * MM)
+               .linear(X=1e9, feed_mm_per_min=100.0).build())
+    with pytest.raises(AxisLimitError, match=r"axis X = 1000000000000.000000 mm at line 2 "):
+        cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    slow = (ProgramBuilder(1).rapid(X=1 * MM, Y=1 * MM, Z=0.1 * MM).dwell(3e11).dwell(3e11)
+            .build())
+    with pytest.raises(NCProgramError, match="take more than 5.49756e"):
+        cut(slow, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+
+
 def test_a_move_too_far_out_is_named_by_its_own_line_not_the_farthest_after_it():
     # 'G01 X1000000.' (1000 m, a length in the wrong unit) at line 5, then 'G00 Z1.' at
     # line 6: the rapid up is a millimetre farther from the origin, and the refusal had

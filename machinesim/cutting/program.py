@@ -28,6 +28,7 @@ from machinesim.cutting.refusals import (  # re-exported: windows, lathe, lathe_
     _refuse_turning,
     block_at,  # noqa: F401
     line_text,  # noqa: F401
+    refuse_far_ends,
 )
 from machinesim.cutting.report import (
     CutReport,
@@ -40,7 +41,7 @@ from machinesim.cutting.roi import check_roi_meets, roi_cells
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sideways import dragged_past_clearance, within_edge_plane
 from machinesim.errors import as_error_model
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, ProgramTimeError
 from machinesim.metrology._arrays import as_flag
 from machinesim.motion.faces import ProfileEdges
 from machinesim.nc import MOVE_KINDS
@@ -168,11 +169,15 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     tools = _ToolSections(program, tool, errors)
     if chord_tolerance is None:
         chord_tolerance = path_chord_tolerance(t for _, t, _ in tools.runs)
-    trajectory = motion.plan(program, machine, errors, start=start,
-                             tool_points=tools.points(), chord_tolerance=chord_tolerance,
-                             servo=servo,
-                             face_radius=flat_face_radius(t for _, t, _ in tools.runs),
-                             profile=ProfileEdges.of(tools.setups(), stock))
+    try:
+        trajectory = motion.plan(program, machine, errors, start=start,
+                                 tool_points=tools.points(), chord_tolerance=chord_tolerance,
+                                 servo=servo,
+                                 face_radius=flat_face_radius(t for _, t, _ in tools.runs),
+                                 profile=ProfileEdges.of(tools.setups(), stock))
+    except ProgramTimeError:  # a move out of the travel or 1 km away is the likelier cause
+        refuse_far_ends(program, machine, errors, start, allow_overtravel)
+        raise
     following = peak_following_error(trajectory, machine)
     moves = _Moves(trajectory, len(machine.axes))
     limits = _overtravel(machine, moves, program, allow_overtravel)

@@ -9,6 +9,7 @@ refused naming its lines (``line 12 (N120)``). The turning engine
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -20,7 +21,8 @@ from machinesim.exceptions import (
     NCProgramError,
     line_of,
 )
-from machinesim.nc import Program
+from machinesim.nc import AXES, Program
+from machinesim.nc.program import modal_values
 from machinesim.tolerances import LIMIT_SLACK
 
 if TYPE_CHECKING:
@@ -55,6 +57,22 @@ def _refuse_far(poses: np.ndarray, moves: _Moves, program) -> None:
         "was cut. A length in the wrong unit is the usual cause",
         source=getattr(program, "source", None), line=int(moves.line[first]),
         block=block_at(program, int(moves.line[first])))
+
+
+def refuse_far_ends(program, machine, errors, start, allow_overtravel: bool) -> None:
+    """What `cut` refuses after planning, checked on ``program``'s move ends: an axis beyond
+    its travel (unless ``allow_overtravel``), the tool beyond `FARTHEST_M`. Called where the
+    planner refused the program's time in all (`machinesim.exceptions.ProgramTimeError`): a
+    move a billion metres out at a feed took more than 2**39 s, and that refusal had
+    replaced the one naming the distance, the likelier cause (a length in the wrong unit).
+    The moves are straight in axis space, so their ends bound the axes' values."""
+    axes = tuple(machine.axes)
+    q0 = np.zeros(len(axes)) if start is None else np.asarray(start, dtype=np.float64)
+    targets = np.asarray(program.targets)[:, [AXES.index(a) for a in axes]]
+    q = modal_values(targets, start=q0)
+    moves = SimpleNamespace(q=q, line=np.asarray(program.lines))
+    _overtravel(machine, moves, program, allow_overtravel)
+    _refuse_far(machine.tool_pose(q, errors), moves, program)
 
 
 def _overtravel(machine, moves: _Moves, program, allow: bool) -> tuple[str, ...]:

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from machinesim.exceptions import InputError, NCProgramError, brief, line_of
+from machinesim.exceptions import InputError, ProgramTimeError, brief, line_of
 from machinesim.nc.arcs import MAX_STEP_RAD
 from machinesim.nc.program import KIND_DWELL, KIND_LINEAR, KIND_RAPID, MOVE_KINDS
 from machinesim.nc.rotary_feed import inch_feed_as_written
@@ -146,7 +146,7 @@ def slow_move_notes(durations, kinds, lines, feeds, program=None,
 
 
 def check_total_time(durations, kinds, lines, program=None, *, block_of=None) -> None:
-    """Refuse (`NCProgramError`) moves and dwells that take more than `MAX_PROGRAM_TIME_S`
+    """Refuse (`ProgramTimeError`) moves and dwells that take more than `MAX_PROGRAM_TIME_S`
     in all, or one whose time is no finite number (a move of 1e304 m at the slowest feed):
     the program's clock, their float64 running sum, keeps 0.1 ms only up to there, and
     beyond it overflows to inf. The error names the line at which the sum passes the bound
@@ -171,7 +171,7 @@ def check_total_time(durations, kinds, lines, program=None, *, block_of=None) ->
     taken = (f"{durations[longest]:.3g} s" if math.isfinite(durations[longest])
              else "a time beyond float64 (its length over its feed overflowed)")
     block = None if block_of is None else block_of(at)
-    raise NCProgramError(
+    raise ProgramTimeError(
         f"the program's moves and dwells take more than {MAX_PROGRAM_TIME_S:.6g} s (2**39 s, "
         f"about 17,400 years) by this line, the longest the {what} of "
         f"{_line_text(program, line)}, {taken}: a program's clock, a float64 sum of "
