@@ -130,3 +130,13 @@ def test_a_dwell_of_an_hour_is_not_noted_and_a_built_one_is_noted_without_a_word
         "the dwell of line 2 waits 1e+09 s (2.78e+05 h), more than the 1 h a dwell of a "
         "program waits: is its time in the unit meant (P counts milliseconds without a "
         "decimal point, seconds with one; X seconds)?",)
+
+
+def test_a_long_dwells_note_shows_a_long_word_by_its_ends():
+    # X5000. written with 300 leading zeros: the note had held the whole 306-character word
+    word = "X" + "0" * 300 + "5000."
+    program = parse_program(f"G90 G21\nG00 X1. Z1.\nG04 {word}\nM30\n")
+    (note,) = plan(program, load_machine("grooving_4axis")).notes
+    shown = f"X{'0' * 39}...00000005000. (306 characters)"  # 40 and 12 characters
+    assert note == DWELL_NOTE.format(line=3, word=shown, seconds=5000.0, hours=5000 / 3600)
+    assert program.dwell_words == {3: word}  # kept whole

@@ -136,7 +136,7 @@ def slow_move_notes(durations, kinds, lines, feeds, program=None,
     if i is not None and durations[i] > LONG_DWELL_S:
         line = int(lines[i])
         word = getattr(program, "dwell_words", {}).get(line)
-        said = f" ({word})" if word else ""
+        said = f" ({brief(word)})" if word else ""  # a word of 300 zeros, shown by its ends
         notes.append(f"the dwell of {_line_text(program, line)}{said} waits "
                      f"{durations[i]:.6g} s ({durations[i] / 3600.0:.3g} h), more than the "
                      f"{LONG_DWELL_S / 3600.0:g} h a dwell of a program waits: is its time "
