@@ -240,6 +240,18 @@ def test_a_peck_typed_in_the_wrong_unit_is_refused_before_it_makes_thousands_of_
     assert int(np.sum(np.asarray(program.kinds) == KIND_LINEAR)) == 1000
 
 
+def test_pecks_too_many_for_float64_are_refused_not_a_crash():
+    # 1e307 mm (written out) from R to Z in pecks of 1e-301 mm: the count overflows to inf,
+    # and math.ceil(inf) had raised OverflowError out of the reader; 2 mm in such pecks,
+    # 2e301 of them, had been named by a 302-digit integer
+    tiny = "0." + "0" * 300 + "1"
+    with pytest.raises(NCProgramError, match="makes inf pecks in one hole"):
+        parse_program(f"G00 X2. Y2. Z2.\nG83 X2. Y2. Z-1{'0' * 307}. R1. Q{tiny} F30.\n")
+    with pytest.raises(NCProgramError) as caught:
+        parse_program(f"G00 X2. Y2. Z2.\nG83 X2. Y2. Z-1. R1. Q{tiny} F30.\n")
+    assert "makes 2e+301 pecks in one hole" in str(caught.value)
+
+
 @pytest.mark.parametrize("data, expected", [
     ("G00 X1. Y1. Z1.\n".encode("utf-16"), "UTF-16 text"),
     ("G00 X1. Y1. Z1.\n".encode("utf-16-le"), "UTF-16 text"),

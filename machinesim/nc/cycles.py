@@ -117,14 +117,16 @@ def _pecks(cycle: str, r_z: float, bottom_z: float, peck: float | None) -> list[
     """Machine Z at the end of each peck of Q ``peck``, the last one at ``bottom_z``."""
     if peck is None or not peck > 0.0:
         raise NCProgramError(f"{cycle} needs a peck depth Q > 0 (or Haas's I J K)")
-    pecks = math.ceil((r_z - bottom_z) / peck)
-    if pecks > MOST_PECKS:
+    count = (r_z - bottom_z) / peck  # inf for a depth of 1e305 m over a peck of 1e-304 m
+    if not count <= MOST_PECKS:  # math.ceil(inf) had raised OverflowError
         raise NCProgramError(
-            f"{cycle} with Q {peck * 1e3:.6g} mm makes {pecks} pecks in one hole "
+            f"{cycle} with Q {peck * 1e3:.6g} mm makes "
+            f"{math.ceil(count) if count < 1e15 else f'{count:.3g}'} pecks in one hole "
             f"({(r_z - bottom_z) * 1e3:.6g} mm from R to Z), more than {MOST_PECKS} (a "
             f"micro drill pecking 1 um at a time through 1 mm). Check Q "
             f"(a Q without a decimal point is read by --integer-input: 'increment' makes "
             f"Q1 1 nm)")
+    pecks = math.ceil(count)
     depths = []
     for k in range(1, pecks + 1):
         depths.append(bottom_z if k == pecks else max(r_z - k * peck, bottom_z))
