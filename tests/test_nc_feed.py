@@ -165,3 +165,14 @@ def test_the_f_read_on_the_vectorised_path_is_named_with_its_line():
         error = _refusal(text, fast=fast)
         assert error.line == 23
         assert "the F of line 21 (100 mm/min), given before G20 on line 22" in str(error)
+
+
+@pytest.mark.parametrize("move", [f"X1. A1{'0' * 300}.", f"X1{'0' * 200}. A1."])
+def test_a_g20_move_of_linear_and_rotary_axes_too_long_to_square_keeps_its_feed(move):
+    # F10. under G20 counts a degree as an inch. With A 1e300 deg beside X 1 inch the move is
+    # all but rotary: F10 deg/min, 10 mm/min in the metric equivalent; with X 1e200 inch all
+    # but linear: 10 inch/min = 254 mm/min. Its squared lengths overflowed to inf, the feed
+    # was inf / inf = NaN, and the planner refused it as 'a feed move ... with no feed rate F'
+    program = parse_program(f"G90 G20\nG00 X0 A0\nG01 {move} F10.\nM30\n")
+    expected = 10.0 if "A1000" in move else 254.0
+    assert program.feeds[-1] * 60e3 == pytest.approx(expected, rel=1e-12)

@@ -57,29 +57,49 @@ def inch_feed_scale(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, n
     length_mm, length_inch = np.zeros(n), np.zeros(n)
     linear, rotary = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)  # moves or may
     unknown = np.zeros(n, dtype=bool)
+    parts_mm, parts_inch = [], []  # each axis's motion in mm (deg) and in inches (deg)
     for k, letter in enumerate(AXES):
         first = np.isnan(starts[:, k]) & ~np.isnan(ends[:, k])
         delta = np.abs(ends[:, k] - starts[:, k])
         delta[np.isnan(delta)] = 0.0
         unknown |= first
         moving = (delta > 0.0) | first
-        if letter in ROTARY_AXES:
-            rotary |= moving
-            turned = delta / RAD_PER_DEG
-            turned *= turned
-            length_mm += turned
-            length_inch += turned
-        else:
-            linear |= moving
-            length_mm += (delta / M_PER_MM) ** 2
-            length_inch += (delta / M_PER_INCH) ** 2
+        with np.errstate(over="ignore"):  # squares beyond float64: summed again below
+            if letter in ROTARY_AXES:
+                rotary |= moving
+                parts_mm.append(delta / RAD_PER_DEG)
+                parts_inch.append(parts_mm[-1])
+                turned = parts_mm[-1] * parts_mm[-1]
+                length_mm += turned
+                length_inch += turned
+            else:
+                linear |= moving
+                parts_mm.append(delta / M_PER_MM)
+                parts_inch.append(delta / M_PER_INCH)
+                length_mm += parts_mm[-1] ** 2
+                length_inch += parts_inch[-1] ** 2
     scale = np.ones(n)
     scale[rotary & ~linear] = ROTARY_ONLY_SCALE
     mixed = rotary & linear
     known = mixed & ~unknown
-    scale[known] = (np.sqrt(length_mm[known]) * M_PER_MM
-                    / (np.sqrt(length_inch[known]) * M_PER_INCH))
+    with np.errstate(invalid="ignore"):  # inf / inf: taken again just below
+        scale[known] = (np.sqrt(length_mm[known]) * M_PER_MM
+                        / (np.sqrt(length_inch[known]) * M_PER_INCH))
+    # a move of more than 1e154 mm or deg squares to inf, and its factor had been inf / inf,
+    # a NaN feed that the planner took for no F at all: its lengths are taken again, each
+    # axis's part over the largest first (as hypot does)
+    over = np.flatnonzero(known & ~(np.isfinite(length_mm) & np.isfinite(length_inch)))
+    if over.size:
+        scale[over] = (_length(np.stack(parts_mm, axis=1)[over]) * M_PER_MM
+                       / (_length(np.stack(parts_inch, axis=1)[over]) * M_PER_INCH))
     return scale, mixed & unknown
+
+
+def _length(parts: np.ndarray) -> np.ndarray:
+    """The length of each row of ``parts`` (finite, >= 0, each row's largest > 0), its
+    squares summed over the largest part so that none overflows."""
+    largest = parts.max(axis=1)
+    return np.sqrt(np.sum((parts / largest[:, None]) ** 2, axis=1)) * largest
 
 
 def inch_feed_as_written(program, move: int) -> tuple[float, str] | None:
