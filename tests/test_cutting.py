@@ -356,6 +356,16 @@ def test_a_slow_move_far_out_is_refused_for_its_distance_not_for_its_time():
         cut(slow, "grooving_4axis", tool="v:90", stock="block:5x3x1")
 
 
+def test_an_axis_value_at_the_float64_edge_is_named_in_six_digits():
+    # X = 1e304 m (1e307 mm): the travel refusal had printed its 308 digits and 6 decimals
+    program = ProgramBuilder(1).rapid(X=-1e304, Y=1 * MM, Z=0.1 * MM).build()
+    with pytest.raises(AxisLimitError) as caught:
+        cut(program, "grooving_4axis", tool="v:90", stock="block:5x3x1")
+    assert "axis X = -1e+307 mm at line 1 outside its travel -250.000000 mm .. " in str(
+        caught.value)
+    assert len(str(caught.value)) < 400
+
+
 def test_a_move_too_far_out_is_named_by_its_own_line_not_the_farthest_after_it():
     # 'G01 X1000000.' (1000 m, a length in the wrong unit) at line 5, then 'G00 Z1.' at
     # line 6: the rapid up is a millimetre farther from the origin, and the refusal had

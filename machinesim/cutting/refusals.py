@@ -200,4 +200,7 @@ def _format(rotary: bool, value: float | None = None, limits=()):
             f"{value * scale:.{decimals}f}" == f"{limit * scale:.{decimals}f}"
             for limit in limits):
         decimals += 1
-    return lambda v: f"{v * scale:.{decimals}f} {unit}"
+    # beyond 1e15 mm (deg) float64's spacing is 0.125 and more, the decimals noise: a value
+    # of 1e307 mm had been printed with its 308 digits and 6 decimals
+    return lambda v: (f"{v * scale:.{decimals}f} {unit}" if abs(v * scale) < 1e15
+                      else f"{v * scale:.6g} {unit}")
