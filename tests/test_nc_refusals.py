@@ -368,3 +368,17 @@ def test_a_refused_word_of_100000_digits_is_shown_by_its_ends(block, key):
     message = str(info.value)
     assert len(message) < 2000, message[:300]
     assert message.count(brief(key)) >= 1
+
+
+def test_an_incremental_word_that_takes_the_axis_beyond_float64_is_named_so():
+    # 17,980 steps of X 1e307 mm (written out) under G91 pass float64's 1.8e308 mm: each
+    # such word had been refused as 'value of X1000... is out of range (not finite in
+    # float64)', which the word itself is not
+    step = "G00 X1" + "0" * 307 + ".\n"
+    with pytest.raises(NCProgramError) as caught:
+        parse_program("G90 G21\nG00 X0 Y0 Z1.\nG91\n" + step * 17980 + "M30\n", "g.nc")
+    error = caught.value
+    assert (error.line, error.column) == (17980, 5)  # X = 1e304 m x 17976 before it
+    assert "incremental (G91) X1000" in str(error)
+    assert "from X = 1.7976e+308 m takes the axis out of range (beyond float64)" in str(error)
+    assert "value of" not in str(error)

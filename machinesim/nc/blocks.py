@@ -414,7 +414,16 @@ class Block:
                     "give an absolute (G90) value first",
                     word,
                 )
-            value += state.target[letter]
+            step, value = value, value + state.target[letter]
+            if not math.isfinite(value) and math.isfinite(step):
+                # the word is finite, its sum with the position not: it had been refused
+                # as 'value of X1000... is out of range', which the word is not
+                raise self.fail(
+                    f"incremental (G91) {brief(word.key)} from {letter} = "
+                    f"{state.target[letter]:.6g} {'rad' if letter in 'ABC' else 'm'} takes "
+                    "the axis out of range (beyond float64); expected a position within the "
+                    "machine's travel",
+                    word)
         else:
             value += self.offsets.get(state.work_offset, {}).get(letter, 0.0)
             if letter == "Z":
