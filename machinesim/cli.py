@@ -390,6 +390,7 @@ def _cut(args) -> int:
         raise type(error)(f"{error}; {hint}") from None
     summary = report.to_dict()
     summary["path_chord_tolerance_nm"] = chord * 1e9
+    # the cut's notes hold those on --errors (unit slips, idle location errors: cut()'s own)
     summary["notes"] = [*summary["notes"], *_reading_notes(args, program, chord, machine,
                                                                 errors)]
     if errors is not None and not errors.written:  # an empty file, or sections without keys
@@ -398,12 +399,6 @@ def _cut(args) -> int:
     if servo is not None and all(axis is None for axis in servo.axes):  # no [X] .. table
         summary["notes"].append(f"{args.servo} sets no servo loop (no axis table): every axis "
                                 "followed its command exactly, a following error of 0")
-    if errors is not None:
-        from machinesim.errors.idle import idle_location_notes
-        from machinesim.errors.unit_slips import unit_slip_notes
-
-        summary["notes"] += unit_slip_notes(errors, machine)
-        summary["notes"] += idle_location_notes(errors, machine, program, machine.home)
     summary["part_file"] = str(args.out)
     summary["part_unit"] = EXPORT_UNITS[file_format]
     pieces, apart = _pieces(part, stock, roi)

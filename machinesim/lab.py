@@ -36,6 +36,7 @@ Lab(robonano_a0ib, noise=on, seed=1, realism=lab)
 
 from __future__ import annotations
 
+import inspect
 import os
 from dataclasses import replace
 
@@ -197,11 +198,17 @@ class Lab:
         once, with every sweep done. ``Lab.reuse_cuts = False`` (on a lab or the class)
         cuts every time.
 
+        Its report has no notes on the errors (`machinesim.errors.notes`, which `cut`'s
+        report ends with): they name the keys and values of the lab's truth, which a
+        procedure holding the report must not read.
+
         Returns
         -------
         (Part, CutReport)
         """
         from machinesim.cutting import cut, cut_turned
+        from machinesim.cutting.program import _cut
+        from machinesim.cutting.windows import _cut_turned
 
         if "errors" in options:
             raise InputError("a lab cuts with its own errors; pass none to Lab.cut",
@@ -221,8 +228,12 @@ class Lab:
             if progress is not None:
                 progress(reused[1].sweeps, reused[1].sweeps)
             return reused
-        part, report = cutter(program, self.machine, tool, stock, self.__truth, roi=roi,
-                              progress=progress, **options)
+        # the public cutter's defaults, then the options, without its notes on the truth
+        options = {name: p.default for name, p in inspect.signature(cutter).parameters.items()
+                   if p.kind is p.KEYWORD_ONLY and name not in ("roi", "progress")} | options
+        part, report = (_cut_turned if cutter is cut_turned else _cut)(
+            program, self.machine, tool, stock, self.__truth, roi=roi, progress=progress,
+            file_notes=False, **options)
         CUTS.put(key, part, report)
         return part, report
 

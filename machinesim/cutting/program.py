@@ -141,6 +141,15 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         `CutReport.holder_contact`, instead of refusing it. The part is then not what a
         real machine leaves: that one crashes.
 
+    Returns
+    -------
+    part : Part
+    report : CutReport
+        Its ``notes`` end with those on ``errors`` (`machinesim.errors.notes.error_file_notes`:
+        a value perhaps written in other units than its key asks, location errors of an axis
+        the program keeps at zero, which move nothing), as ``machinesim cut --errors`` prints
+        them. A `Lab`'s cut carries none: its errors are the truth.
+
     Raises
     ------
     AxisLimitError
@@ -151,6 +160,17 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         of the stock over it (and ``allow_holder_contact`` is False): the message names the
         program's lines, the tool's height and the stock's top. Nothing is returned.
     """
+    return _cut(program, machine, tool, stock, errors, roi=roi, start=start,
+                chord_tolerance=chord_tolerance, servo=servo, progress=progress,
+                allow_overtravel=allow_overtravel, allow_holder_contact=allow_holder_contact,
+                file_notes=True)
+
+
+def _cut(program, machine, tool, stock, errors, *, roi, start, chord_tolerance, servo, progress,
+         allow_overtravel, allow_holder_contact, file_notes: bool) -> tuple[Part, CutReport]:
+    """`cut`, its notes on ``errors`` added when ``file_notes``: `Lab.cut` passes False, its
+    errors being the truth (a note names their keys and values)."""
+    from machinesim.errors.notes import error_file_notes
     from machinesim.machines import Machine, load_machine
 
     began = time.perf_counter()
@@ -229,7 +249,10 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         elapsed_s=time.perf_counter() - began,
         notes=tuple(note for note in (*trajectory.notes, *tools.notes, sheet_note,
                                       arc_chord_note(program, chord_tolerance),
-                                      nothing_left_note(part, removed, roi)) if note),
+                                      nothing_left_note(part, removed, roi),
+                                      *(error_file_notes(errors, machine, program, start)
+                                        if file_notes and errors is not None else ()))
+                     if note),
         holder_contact=tuple(sorted(holder)),
         sideways_lines=tuple(sorted(sideways)),
         edge_plane_lines=tuple(sorted(in_plane)),

@@ -127,8 +127,23 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     part : Part
     report : CutReport
         ``sweeps`` counts the feed sweeps that reached the material; ``sideways_sweeps`` those
-        the engine flags as dragging the tool across its edge.
+        the engine flags as dragging the tool across its edge. Its ``notes`` end with those
+        on ``errors``, as `machinesim.cutting.cut`'s (a `Lab`'s cut carries none).
     """
+    return _cut_turned(program, machine, tool, stock, errors, roi=roi, floor=floor,
+                       start=start, turn_step=turn_step, turn_axis=turn_axis,
+                       chord_tolerance=chord_tolerance, servo=servo,
+                       allow_overtravel=allow_overtravel,
+                       allow_holder_contact=allow_holder_contact, progress=progress,
+                       file_notes=True)
+
+
+def _cut_turned(program, machine, tool, stock, errors, *, roi, floor, start, turn_step,
+                turn_axis, chord_tolerance, servo, allow_overtravel, allow_holder_contact,
+                progress, file_notes: bool) -> tuple[Part, CutReport]:
+    """`cut_turned`, its notes on ``errors`` added when ``file_notes`` (`Lab.cut` passes
+    False: its errors are the truth)."""
+    from machinesim.errors.notes import error_file_notes
     from machinesim.machines import Machine, load_machine
 
     began = time.perf_counter()
@@ -203,7 +218,9 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         notes=tuple(note for note in (
             *trajectory.notes, "rapids not cut nor checked against the part (turned groups)",
             sheet_note, arc_chord_note(program, chord_tolerance, takes_path=False),
-            nothing_left_note(part, total_removed, roi)) if note),
+            nothing_left_note(part, total_removed, roi),
+            *(error_file_notes(errors, machine, program, start)
+              if file_notes and errors is not None else ())) if note),
         holder_contact=tuple(sorted(holder)), engine_s=engine_s, nc=nc_summary(program),
         thin_sheets=sheets.count, sideways_lines=tuple(sorted(sideways_lines)),
         peak_following_error=peak_following_error(trajectory, machine))

@@ -1,5 +1,5 @@
-"""Location errors a program never shows: notes for the command line (`machinesim cut
---errors`).
+"""Location errors a program never shows: notes in a cut's report (`machinesim.errors.notes`,
+which `machinesim cut --errors` prints).
 
 A location error moves and tilts an axis's line without moving what the axis carries at
 zero (docs/machines.md, "How errors enter": ``E_i J_i(q) E_i^-1`` is the identity where

@@ -248,9 +248,10 @@ def turn_steps(model: ErrorModel, machine) -> list[str]:
 def unit_slip_notes(model: ErrorModel, machine) -> list[str]:
     """Every note of this module on ``model`` against ``machine`` (a
     `machinesim.machines.Machine`), in one order: `below_any_machine`, `beyond_any_machine`,
-    `short_tables`, `far_polynomials`, `turn_steps`. What ``machinesim cut --errors`` adds
-    to its notes and a scenario's ``--errors`` prints (`scenario_runs.errors_file`): one
-    list, so a new check reaches both."""
+    `short_tables`, `far_polynomials`, `turn_steps`. What `machinesim.cutting.cut` adds to
+    its report's notes (`machinesim.errors.notes`, which ``machinesim cut --errors`` prints)
+    and a scenario's ``--errors`` prints (`scenario_runs.errors_file`): one list, so a new
+    check reaches both."""
     return [*below_any_machine(model), *beyond_any_machine(model),
             *short_tables(model, machine), *far_polynomials(model, machine),
             *turn_steps(model, machine)]

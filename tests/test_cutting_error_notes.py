@@ -1,0 +1,95 @@
+"""The notes on an errors file (a value perhaps written in other units than its key asks,
+location errors an axis kept at zero never shows) in the report of a cut made in Python,
+where a user reads them, printed once by ``machinesim cut``; and none in a `Lab`'s cut,
+whose errors are the truth a procedure must not read."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from cli_helpers import run
+
+import machinesim
+from machinesim.cutting import cut_turned
+from machinesim.errors import ErrorModel
+from machinesim.exceptions import InputError
+from machinesim.nc import parse_program
+
+#: A slot along X at C = 0 throughout, as test_cli_notes cuts it on robonano_a0ib.
+SLOT = "G90 G21\nG00 X0.5 Y5. Z0.1\nG01 Z-0.02 F50.\nX10.5 F100.\nG00 Z0.1\nM30\n"
+#: EX0C_um = 4e-6 is 4 um written in metres (4 pm: a unit slip); with EB0C both move nothing
+#: at C = 0 (E J E^-1 is the identity there).
+ERRORS = "[location.C]\nEX0C_um = 4e-6\nEB0C_urad = 3.0\n"
+KEYS = {"tool": "v:90", "stock": "block:12x10x2"}
+
+
+@pytest.fixture(scope="module")
+def errors_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("notes") / "mine.toml"
+    path.write_text(ERRORS)
+    return path
+
+
+def _notes(path) -> tuple[str, str]:
+    # the words test_cli_notes asserts for machinesim cut, the line counted by hand
+    slip = (f"{path}, line 2: location.C.EX0C_um = 4e-06 is at most 4e-06 um (4e-12 m), below "
+            "anything a machine shows: was it written in m, where the key asks um?")
+    idle = (f"{path}, line 2: location.C EX0C, EB0C move nothing in this program: C stays at "
+            "0 from its start to its end, and the offsets and tilts of its line show only as "
+            "it turns; the part is the one the machine without them cuts")
+    return slip, idle
+
+
+def test_a_python_cut_reports_the_notes_machinesim_cut_prints(errors_file):
+    # ErrorModel.from_toml and machinesim.cut: report.notes had been silent on both
+    program = parse_program(SLOT)
+    machine = machinesim.load_machine("robonano_a0ib")
+    errors = ErrorModel.from_toml(errors_file)
+    _, report = machinesim.cut(program, machine, errors=errors, **KEYS)
+    assert report.notes[-2:] == _notes(errors_file), report.notes
+    _, report = machinesim.cut(program, machine, errors=str(errors_file), **KEYS)
+    assert report.notes[-2:] == _notes(errors_file), report.notes
+    _, report = cut_turned(program, machine, errors=errors, **KEYS)
+    assert report.notes[-2:] == _notes(errors_file), report.notes
+    # C at 180 deg from the start on: they move the slot, and only the slip is noted
+    _, report = machinesim.cut(program, machine, errors=errors, start=np.where(
+        np.array(machine.axes) == "C", np.pi, 0.0), **KEYS)
+    assert report.notes[-1] == _notes(errors_file)[0], report.notes
+    assert not any("move nothing" in note for note in report.notes), report.notes
+
+
+def test_a_labs_cut_names_none_of_its_errors(errors_file):
+    # the lab's errors are its truth: a procedure reading its cut's notes would learn which
+    # location errors it has, and their values
+    program = parse_program(SLOT)
+    lab = machinesim.Lab("robonano_a0ib", errors_file, noise=False)
+    lab.reuse_cuts = False
+    for options in ({}, {"turn_step": np.pi / 4}):
+        part, report = lab.cut(program, **KEYS, **options)
+        assert not any("EX0C" in note or "mine.toml" in note for note in report.notes), (
+            options, report.notes)
+        # the same part as cut() with those errors makes, notes apart
+        cutter = cut_turned if options else machinesim.cut
+        made, public = cutter(program, lab.machine, errors=lab.reveal(), **KEYS, **options)
+        assert np.array_equal(part.mesh()[0], made.mesh()[0])
+        assert report.notes == public.notes[:len(report.notes)]
+        assert len(public.notes) == len(report.notes) + 2
+    with pytest.raises(InputError, match="has no option 'file_notes'"):
+        lab.cut(program, file_notes=True, **KEYS)
+
+
+def test_machinesim_cut_prints_and_writes_each_note_once(errors_file, tmp_path, capsys):
+    # the cut's report holds them now: the command line had added its own, which would
+    # print each twice
+    program = tmp_path / "slot.nc"
+    program.write_text(SLOT)
+    code, _, err = run(["cut", program, "--machine", "robonano_a0ib", "--tool", "v:90",
+                        "--stock", "block:12x10x2", "--errors", errors_file, "--quiet",
+                        "--out", tmp_path / "p.ply", "--report", tmp_path / "r.json"], capsys)
+    assert code == 0, err
+    notes = json.loads((tmp_path / "r.json").read_text())["notes"]
+    for note in _notes(errors_file):
+        assert err.count(note) == 1 and err.count(f"note: {note}") == 1, err
+        assert notes.count(note) == 1, notes
