@@ -98,6 +98,31 @@ def test_location_errors_the_program_never_shows_get_cuts_note(tmp_path, capture
     assert "EC0C" not in err, err
 
 
+def test_an_error_file_gets_the_notes_a_cut_report_holds_once_each(tmp_path, captured,
+                                                                   capsys):
+    # one list: what machinesim.cut's report ends with on the same file and program (cut from
+    # machinesim cut's start, the machine's home), each printed once, in its order
+    import machinesim
+    from machinesim.errors import ErrorModel
+    from machinesim.nc import parse_program
+
+    program = tmp_path / "p.nc"
+    program.write_text(GROOVE)
+    errors = tmp_path / "c.toml"
+    errors.write_text("[location.C]\nEX0C_um = 4e-6\nEB0C_urad = 3.0\n")
+    machine = machinesim.load_machine("grooving_4axis")
+    _, report = machinesim.cut(parse_program(GROOVE), machine, errors=ErrorModel.from_toml(
+        errors), start=machine.home)
+    cuts = [note for note in report.notes if note.startswith(str(errors))]
+    assert len(cuts) == 2, report.notes  # the unit slip, EX0C and EB0C idle
+    assert run(["grooving_4axis", "--program", str(program), "--tool", "v:90", "--errors",
+                str(errors), "--html", str(tmp_path / "p.html")]) == 0
+    err = capsys.readouterr().err
+    noted = [line.removeprefix("note: ") for line in err.splitlines()
+             if line.startswith(f"note: {errors}")]
+    assert noted == cuts, err
+
+
 @pytest.mark.parametrize("port", ["7005", "6000"])
 def test_a_port_beside_html_is_refused(tmp_path, port):
     # an --html page has no server: the port was taken and ignored (exit 0), as --tool

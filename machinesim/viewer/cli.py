@@ -319,7 +319,7 @@ def _scene(args, budget: int):
             if note:
                 print(f"note: {printable(note)}", file=sys.stderr)
     if args.errors is not None:
-        from machinesim.errors.unit_slips import unit_slip_notes
+        from machinesim.errors.notes import error_file_notes
 
         if errors is None:
             errors = _errors_for(args.errors, machine)
@@ -327,16 +327,12 @@ def _scene(args, budget: int):
             # had said nothing on the command line, the page's tool-path line alone telling)
             print(f"note: {printable(str(args.errors))} sets no error (no key in any section): "
                   "viewed on the machine as built, every error zero", file=sys.stderr)
-        # the notes machinesim cut and the scenarios give on values perhaps written in other
-        # units than their keys ask (a table far beyond any machine's errors, ...): view had
-        # given none, animating such a file without a word
-        for note in unit_slip_notes(errors, machine):
+        # the notes a cut's report holds on the file (cut's list, from machinesim cut's start):
+        # values perhaps written in other units than their keys ask (a table far beyond any
+        # machine's errors, ...), and with a program, location errors it never shows; view
+        # had given none, animating such a file without a word
+        for note in error_file_notes(errors, machine, program, machine.home):
             print(f"note: {printable(note)}", file=sys.stderr)
-        if program is not None:  # cut's note on location errors its program never shows
-            from machinesim.errors.idle import idle_location_notes
-
-            for note in idle_location_notes(errors, machine, program, machine.home):
-                print(f"note: {printable(note)}", file=sys.stderr)
     return machine_scene(machine, program, tool=tool, stock=stock,
                          errors=errors, max_triangles=budget,
                          duration_s=DEFAULT_DURATION_S if args.duration is None else args.duration,
