@@ -93,3 +93,34 @@ def test_machinesim_cut_prints_and_writes_each_note_once(errors_file, tmp_path, 
     for note in _notes(errors_file):
         assert err.count(note) == 1 and err.count(f"note: {note}") == 1, err
         assert notes.count(note) == 1, notes
+
+
+@pytest.mark.parametrize("radius_mm", [1.0, 2.0])
+def test_a_tool_tables_radius_is_checked_against_the_tool_as_given(tmp_path, radius_mm):
+    # nose:1.0 beside a table radius of 1 mm agrees: with a nose radius error of 3 um in a
+    # Lab, its cut had noted "the cut's own tool (radius 1.003 mm ...)", the truth to 1 nm;
+    # beside 2 mm the note names the tool as given (1 mm), as machinesim view does
+    from machinesim.cutting.program import tool_notes
+    from machinesim.nc import read_program
+    from machinesim.tool_specs import tool_from_spec
+
+    tools = tmp_path / "tools.toml"
+    tools.write_text(f"[tool.1]\nlength_mm = 0.0\nradius_mm = {radius_mm}\n")
+    path = tmp_path / "t1.nc"
+    path.write_text(SLOT.replace("G21\n", "G21\nT1 M6\n"))
+    program = read_program(path, tools=tools)
+    given = tool_notes(program, tool_from_spec("nose:1.0:90"))
+    assert len(given) == (radius_mm != 1.0)
+    assert all("(radius 1 mm, RoundNoseTool)" in note for note in given), given
+    errors = {"tool_geometry": {"nose_radius_um": 3.0}}
+    lab = machinesim.Lab("robonano_a0ib", errors, noise=False)
+    lab.reuse_cuts = False
+    volumes = []
+    for cutter in (lab.cut, lambda *a: machinesim.cut(a[0], lab.machine, *a[1:],
+                                                      errors=errors)):
+        part, report = cutter(program, "nose:1.0:90", "block:12x10x2")
+        assert [note for note in report.notes if note.startswith("T1")] == list(given)
+        volumes.append(part.volume)
+    # the error still cuts: a nose 3 um larger, the groove otherwise (not the nominal's)
+    nominal, _ = machinesim.cut(program, lab.machine, "nose:1.0:90", "block:12x10x2")
+    assert volumes[0] == volumes[1] != nominal.volume

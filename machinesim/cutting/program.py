@@ -389,13 +389,16 @@ class _ToolSections:
     """
 
     def __init__(self, program, tool, errors=None) -> None:
+        #: what a reader of the part should know about the tools it was cut with: the tools
+        #: as given, as view notes them (the nose radius error is the machine's, and in a
+        #: Lab's cut the truth: a table radius of 1 mm beside nose:1.0 had been noted as
+        #: disagreeing with a tool of 1.003 mm)
+        self.notes = tool_notes(program, tool)
         tool = with_nose_radius_error(tool, errors)  # every tool as it is
         built = {None: tool}
         # (first move, tool, length) of each run of moves between changes, and its name
         self.runs = [(0, tool, 0.0)]
         self.names = [(None, None)]  # (tool number, line of the change)
-        #: what a reader of the part should know about the tools it was cut with
-        self.notes = tool_notes(program, tool)
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
                 built[change.shape] = with_nose_radius_error(tool_from_spec(change.shape),
