@@ -383,8 +383,8 @@ def write_together(items: Iterable[tuple[object, bytes | str]], encoding: str = 
                 staged.append((path, _stage(path, raw)))
             except OSError as exc:
                 raise _write_error(path, exc) from None
-        if _interrupts._ctrl_c_seen:
-            raise KeyboardInterrupt
+        if _interrupts._ctrl_c_seen:  # as what it was: SIGTERM is `Terminated` (143)
+            raise _interrupts._stop_kind
         # a Ctrl-C or SIGTERM during the renames is held until they and the removal of the
         # old files' second names are done: one landing between a rename and its record
         # left the new file without its old one and the first put back (a report beside

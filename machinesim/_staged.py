@@ -177,14 +177,15 @@ class StagedFolder:
         Raises
         ------
         KeyboardInterrupt
-            Without swapping anything, when a Ctrl-C was seen (`ctrl_c_remembered`).
+            Without swapping anything, when a Ctrl-C was seen (`ctrl_c_remembered`); a
+            SIGTERM or SIGHUP as what it was (`Terminated`, `HungUp`).
         FileError
             When the swap fails; the old folder is then in place.
         """
         if self.path is None:
             raise MachineSimError("the staged folder was already committed or discarded")
-        if _interrupts._ctrl_c_seen:
-            raise KeyboardInterrupt
+        if _interrupts._ctrl_c_seen:  # as what it was: SIGTERM is `Terminated` (143)
+            raise _interrupts._stop_kind
         staging = self.path
         with ctrl_c_deferred():
             aside = None
