@@ -11,6 +11,7 @@ or a folder swap is done; `stopped` names the stop and its exit status.
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -67,6 +68,20 @@ def _on_ctrl_c(signum, frame):
     raise _stop_kind
 
 
+def _stops_unsaid(hook):
+    """``hook`` (`sys.unraisablehook`) but for a stop `_on_ctrl_c` raised where Python cannot
+    raise it, in a ``__del__`` or a weakref callback: Python reports it and goes on, and the
+    stop is remembered (`_ctrl_c_seen`) and said in the command's one line. A ``kill`` of a
+    campaign as it assembled its results printed "Exception ignored in: <function
+    WeakKeyDictionary.__init__.<locals>.remove ...>", a traceback and
+    "machinesim._interrupts.Terminated:" before its line."""
+    def unsaid(unraisable) -> None:
+        if not (_ctrl_c_seen and isinstance(unraisable.exc_type, type)
+                and issubclass(unraisable.exc_type, KeyboardInterrupt)):
+            hook(unraisable)
+    return unsaid
+
+
 def _stop_behind(error: BaseException) -> KeyboardInterrupt | None:
     """The stop behind ``error``, an exception that is no KeyboardInterrupt: one in its
     chain (``__cause__``, ``__context__``), or, when a stop was seen (`_ctrl_c_seen`: a
@@ -105,7 +120,9 @@ def ctrl_c_remembered() -> Iterator[None]:
     ignoring it), and only in the main thread (where signals arrive); the old handlers are
     put back on leaving. An exception other than a KeyboardInterrupt that leaves the block
     after a stop (with one in its chain, or once one was seen) leaves as that stop
-    (`_stop_behind`): the run was interrupted, whatever a library made of it.
+    (`_stop_behind`): the run was interrupted, whatever a library made of it. A stop raised
+    where Python only reports it (a ``__del__``, a weakref callback) is not reported
+    (`_stops_unsaid`): it is remembered, and the command says it in its line.
     """
     global _ctrl_c_seen, _written
     main = threading.current_thread() is threading.main_thread()
@@ -113,6 +130,9 @@ def ctrl_c_remembered() -> Iterator[None]:
     ours = [number for number, usual in _STOPS if main and previous[number] is usual]
     for number in ours:
         signal.signal(number, _on_ctrl_c)
+    hook = sys.unraisablehook
+    if ours:
+        sys.unraisablehook = _stops_unsaid(hook)
     written, _written = _written, []
     try:
         yield
@@ -130,6 +150,7 @@ def ctrl_c_remembered() -> Iterator[None]:
     finally:
         for number in ours:
             signal.signal(number, previous[number])
+        sys.unraisablehook = hook
         _ctrl_c_seen = False
         _written = written
 

@@ -9,6 +9,7 @@ import math
 import os
 import signal
 import struct
+import sys
 import time
 from pathlib import Path
 
@@ -259,6 +260,46 @@ def test_a_sigterm_a_library_swallowed_stops_the_write_as_what_it_was(tmp_path, 
         signal.signal(signum, before)
     assert [type(stop) for stop in stops] == [raised, raised]
     assert [_interrupts.stopped(stop)[1] for stop in stops] == [128 + signum] * 2
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_stop_in_a_finaliser_is_remembered_and_not_reported(tmp_path):
+    """A real SIGTERM landing in a ``__del__`` (as one did in a WeakKeyDictionary's callback
+    while a campaign assembled its results): Python reports such an exception through
+    `sys.unraisablehook` ("Exception ignored in: ...", a traceback, "Terminated:" on stderr
+    before the command's one line) and goes on. It is remembered (the write after it stops
+    as `Terminated`) and not reported; another exception there still is, and the hook is
+    put back on leaving."""
+    reported = []
+
+    def record(unraisable):
+        reported.append(unraisable)
+
+    before_hook = sys.unraisablehook
+    sys.unraisablehook = record
+
+    class Finalised:
+        def __init__(self, signum=None):
+            self.signum = signum
+
+        def __del__(self):
+            if self.signum is None:
+                raise ValueError("not a stop")
+            os.kill(os.getpid(), self.signum)
+            time.sleep(1.0)  # the handler raises here, at the latest
+
+    before = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        with _interrupts.ctrl_c_remembered():
+            Finalised()
+            Finalised(signal.SIGTERM)
+            with pytest.raises(_interrupts.Terminated):
+                _io.write_together([(tmp_path / "part.ply", "part")])
+        assert sys.unraisablehook is record
+    finally:
+        signal.signal(signal.SIGTERM, before)
+        sys.unraisablehook = before_hook
+    assert [type(r.exc_value) for r in reported] == [ValueError]
     assert list(tmp_path.iterdir()) == []
 
 
