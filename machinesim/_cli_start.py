@@ -17,7 +17,7 @@ ruff's isort keeps this import first (pyproject.toml, its own section).
 from __future__ import annotations
 
 # the handlers, their line and statuses are a scenario's (one mechanism for both programs)
-from machinesim.scenario_start import install, loaded, on_ctrl_c  # noqa: F401
+from machinesim.scenario_start import finished, install, loaded, on_ctrl_c  # noqa: F401
 
 import sys
 from pathlib import Path

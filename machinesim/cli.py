@@ -192,6 +192,8 @@ def main(argv: list[str] | None = None) -> int:
             raise
         return _fail(f"internal error: {type(exc).__name__}: {exc} (a bug in machinesim: "
                      "please report it; MACHINESIM_TRACEBACK=1 shows where)", 1)
+    finally:
+        _cli_start.finished()  # done and said: a stop as the interpreter ends is ignored
 
 
 def _closed_streams_to_null() -> None:

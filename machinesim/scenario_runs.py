@@ -56,7 +56,7 @@ def scenario_status(report, args, name: str | None = None) -> int:
     `ReportFolder.publish`. A folder that is not a report (files, but no summary.json
     listing them) is refused before the run rather than replaced.
     """
-    from machinesim.scenario_start import loaded
+    from machinesim.scenario_start import finished, loaded
 
     from machinesim.exceptions import MachineSimError, say
 
@@ -95,6 +95,7 @@ def scenario_status(report, args, name: str | None = None) -> int:
         if staged is not None:
             staged.discard()
             STAGED.pop(folder_key(out), None)
+        finished()  # done and said: a stop as the interpreter ends is ignored
     return 0
 
 

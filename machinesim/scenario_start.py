@@ -53,6 +53,25 @@ def loaded() -> None:
             signal.signal(number, usual)
 
 
+def finished() -> None:
+    """The program's work is done and said (its files written or not, its last line
+    printed): a Ctrl-C, SIGTERM or SIGHUP from here to the process's exit is ignored, where
+    `install` handled them (the command, a scenario) and the usual handler is back. Python
+    puts the default action back as it finalises (some 0.3 s after a cut, longer after a
+    campaign), and a stop there ended the process by its signal with no line: a ``kill``
+    just after a cut's "wrote part.ply" or a campaign's "campaign: 6 trials ..." gave -15,
+    not 0 (the files whole and said) nor 143 with its line."""
+    if not _INSTALLED:
+        return
+    for number, (usual, _, _) in _STOPS.items():
+        if signal.getsignal(number) is usual:
+            signal.signal(number, signal.SIG_IGN)
+
+
+#: Whether `install` ran: the program is the command or a scenario (`finished`).
+_INSTALLED = False
+
+
 #: A budget's worker (`machinesim._processes`, spawned: its ``python -c`` loaded
 #: multiprocessing.spawn before it runs the scenario's script as ``__mp_main__``, with the
 #: scenario's argv) keeps SIGTERM's and SIGHUP's default: the parent ends its workers with
@@ -63,8 +82,9 @@ def install(name: str) -> None:
     """Handle each of `_STOPS` with `on_ctrl_c`, naming the program ``name``, where its usual
     handler is (not in a spawned worker, `_WORKER`, for SIGTERM and SIGHUP). Also the command
     line's (`machinesim._cli_start`)."""
-    global _NAME
+    global _NAME, _INSTALLED
     _NAME = name
+    _INSTALLED = True
     for number, (usual, _, _) in _STOPS.items():
         if signal.getsignal(number) is usual and not (_WORKER and usual is signal.SIG_DFL):
             signal.signal(number, on_ctrl_c)
