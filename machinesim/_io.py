@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import errno
 import hashlib
+import json
 import os
 import secrets
 import shutil
@@ -210,18 +211,15 @@ def process_space() -> str:
 _TEMP_RANDOM = 8
 
 
-def _clear_stale_temps(path: Path) -> None:
+def _clear_stale_temps(path: Path, names: list[str]) -> None:
     """Remove the temporary files a killed run (SIGKILL, a power loss: nothing could run)
     left beside ``path``: ``.NAME.PID@HOST-XXXXXXXX.tmp`` of a process that is gone
     (`pid_alive`). They were never renamed into place, so no reader took them for ``path``,
     but they stayed for good, one per killed write. Those of live runs are left alone, and
     those of another host or PID namespace (HOST not this process's `process_space`),
-    whose process this one cannot ask about."""
+    whose process this one cannot ask about. ``names``: the folder's entries."""
     head = _temp_head(path)
-    try:
-        names = [e.name for e in os.scandir(path.parent) if e.name.startswith(head)]
-    except OSError:
-        return
+    names = [name for name in names if name.startswith(head)]
     space = f"@{process_space()}"
     for name in names:
         pid, dash, rest = name[len(head):].partition("-")
@@ -262,7 +260,12 @@ def _mode(path: Path) -> int:
 def _stage(path: Path, raw: bytes) -> str:
     """Write ``raw`` to a flushed temporary file beside ``path``; return its name. Those a
     killed run left beside ``path`` are removed first (`_clear_stale_temps`)."""
-    _clear_stale_temps(path)
+    try:  # one listing for both: a campaign's trials folder holds one file per trial
+        names = [entry.name for entry in os.scandir(path.parent)]
+    except OSError:
+        names = []
+    _undo_killed_sets(path.parent, names)
+    _clear_stale_temps(path, names)
     handle, temp = tempfile.mkstemp(dir=path.parent, prefix=_temp_prefix(path), suffix=".tmp")
     try:
         with os.fdopen(handle, "wb") as file:
@@ -399,18 +402,21 @@ def write_together(items: Iterable[tuple[object, bytes | str]], encoding: str = 
 
 
 def _rename_all(staged: list[tuple[Path, str]]) -> None:
-    """Rename every staged file into place; on any failure put the old files back."""
+    """Rename every staged file into place; on any failure put the old files back. Several
+    files are renamed under a journal (`_journal`), so that a run killed between two
+    renames (SIGKILL, a power loss: nothing of it can run) is undone by the next write
+    beside the first of them (`_undo_killed_sets`)."""
     done: list[tuple[Path, str | None]] = []
+    backups: list[str | None] = []
     failing = staged[0][0]
+    journal = None
     try:
-        for failing, temp in staged:
-            backup = _backup(failing) if len(staged) > 1 else None
-            try:
-                os.replace(temp, failing)
-            except BaseException:
-                if backup is not None:
-                    Path(backup).unlink(missing_ok=True)
-                raise
+        for failing, _ in staged:
+            backups.append(_backup(failing) if len(staged) > 1 else None)
+        if len(staged) > 1:
+            journal = _journal(staged, backups)
+        for (failing, temp), backup in zip(staged, backups, strict=True):
+            os.replace(temp, failing)
             done.append((failing, backup))
     except BaseException as exc:
         for path, backup in reversed(done):
@@ -418,12 +424,71 @@ def _rename_all(staged: list[tuple[Path, str]]) -> None:
                 os.replace(backup, path)
             else:
                 path.unlink(missing_ok=True)
+        for backup in backups[len(done):]:
+            if backup is not None:
+                Path(backup).unlink(missing_ok=True)
+        if journal is not None:
+            Path(journal).unlink(missing_ok=True)
         if isinstance(exc, OSError):
             raise _write_error(failing, exc) from None
         raise
+    if journal is not None:  # first: without it the set is whole, and stays
+        Path(journal).unlink(missing_ok=True)
     for _, backup in done:
         if backup is not None:
             Path(backup).unlink(missing_ok=True)
+
+
+def _journal(staged: list[tuple[Path, str]], backups: list[str | None]) -> str:
+    """Write, beside the first file, ``.NAME.PID@HOST-XXXXXXXX.set``: each file with its old
+    version's second name (None: there was none) and the new version's identity
+    (`_identity`), flushed to disk before the first rename. Removed once every file is
+    renamed in."""
+    entries = [[os.path.abspath(path), backup, _identity(temp)]
+               for (path, temp), backup in zip(staged, backups, strict=True)]
+    first = staged[0][0]
+    handle, name = tempfile.mkstemp(dir=first.parent, prefix=_temp_prefix(first), suffix=".set")
+    with os.fdopen(handle, "w", encoding="utf-8") as file:
+        json.dump(entries, file)
+        file.flush()
+        os.fsync(file.fileno())
+    return name
+
+
+def _identity(path) -> list[int]:
+    """A file's inode, size and modification time (ns): a rename keeps them, and a file
+    written since differs in one of them (an inode alone is reused once freed)."""
+    status = os.stat(path)
+    return [status.st_ino, status.st_size, status.st_mtime_ns]
+
+
+def _undo_killed_sets(folder: Path, names: list[str]) -> None:
+    """Undo the renames of files written together by a run killed among them (its journal,
+    `_journal`, left in ``folder``): each file that is still that run's new version gets its
+    old version back (or is removed when there was none), so that a part is not left beside
+    another run's report. A file written since (`_identity`) is left alone. ``names``: the
+    folder's entries."""
+    for name in (name for name in names if name.endswith(".set")):
+        pid, at, host = name[:-len(".set")].rpartition("-")[0].rpartition(".")[2].partition("@")
+        if not (pid.isdigit() and at and host == process_space() and int(pid) != os.getpid()
+                and not pid_alive(int(pid))):
+            continue
+        try:
+            try:
+                entries = json.loads((folder / name).read_text(encoding="utf-8"))
+            except ValueError:  # killed as it wrote the journal: before any rename
+                entries = []
+            for target, backup, identity in entries:
+                if os.path.exists(target) and _identity(target) == identity:
+                    if backup is None:
+                        os.unlink(target)
+                    elif os.path.exists(backup):
+                        os.replace(backup, target)
+                if backup is not None:
+                    Path(backup).unlink(missing_ok=True)
+            os.unlink(folder / name)
+        except (OSError, TypeError, ValueError):
+            pass
 
 
 def _backup(path: Path) -> str | None:

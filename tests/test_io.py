@@ -503,3 +503,58 @@ def test_stl_and_glb_are_millimetres_and_say_so_ply_stays_metres(tmp_path):
     assert EXPORT_UNITS == {"ply": "m", "stl": "mm", "glb": "mm"}
     for file_format in EXPORT_UNITS:
         assert part.encode(file_format) == (tmp_path / f"part.{file_format}").read_bytes()
+
+
+_KILLED_BETWEEN_RENAMES = """
+import os, signal, sys
+from pathlib import Path
+from machinesim import _io
+folder, replaced = Path(sys.argv[1]), []
+real = os.replace
+def replace(src, dst):
+    real(src, dst)
+    replaced.append(dst)
+    if len(replaced) == 1:  # SIGKILL between the part's rename and the report's
+        os.kill(os.getpid(), signal.SIGKILL)
+os.replace = replace
+_io.write_together([(folder / "part.ply", "new part"), (folder / "report.json", "new report")])
+"""
+
+
+@pytest.mark.parametrize("old", [True, False], ids=["old files", "no files before"])
+def test_a_run_killed_between_the_renames_is_undone_by_the_next_write(tmp_path, old):
+    """SIGKILL (nothing can run) between the renames of files written together: the new
+    part stood beside the old report (or alone), with the old part's second name
+    (``.part.ply....old``) left for good. The next write beside the part undoes the killed
+    run's renames from its journal (``.part.ply....set``): the old files, or none, and no
+    journal or second names left."""
+    import subprocess
+    import sys
+
+    if old:
+        (tmp_path / "part.ply").write_text("old part")
+        (tmp_path / "report.json").write_text("old report")
+    killed = subprocess.run([sys.executable, "-c", _KILLED_BETWEEN_RENAMES, str(tmp_path)],
+                            timeout=120)
+    assert killed.returncode == -signal.SIGKILL
+    assert (tmp_path / "part.ply").read_text() == "new part"  # the state the kill left
+    _io.write_atomic(tmp_path / "other.txt", "x")  # any later write in the folder
+    left = {p.name: p.read_text() for p in tmp_path.iterdir()
+            if not p.name.startswith(".report.json.")}  # the killed run's unrenamed temp
+    assert left == {"other.txt": "x", **({"part.ply": "old part", "report.json": "old report"}
+                                          if old else {})}
+
+
+def test_undoing_a_killed_set_leaves_a_file_written_since(tmp_path):
+    """The undo takes back only the killed run's own new version (its inode): a part
+    written since by another means stays."""
+    import subprocess
+    import sys
+
+    (tmp_path / "part.ply").write_text("old part")
+    subprocess.run([sys.executable, "-c", _KILLED_BETWEEN_RENAMES, str(tmp_path)], timeout=120)
+    (tmp_path / "part.ply").unlink()
+    (tmp_path / "part.ply").write_text("written since")
+    _io.write_atomic(tmp_path / "other.txt", "x")
+    assert (tmp_path / "part.ply").read_text() == "written since"
+    assert not any(p.name.endswith((".set", ".old")) for p in tmp_path.iterdir())
