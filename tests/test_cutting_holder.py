@@ -261,6 +261,67 @@ def test_a_plunge_deeper_than_the_body_is_cut_and_a_move_at_that_depth_refused(c
             tool="ball:0.5:d=2", stock=stock)
 
 
+
+#: robonano_a0ib at B = 30 deg: a plunge from X0 Z5 along the tool axis (0.5, 0, cos 30)
+#: to X-8.5 ends at Z = 5 - 8.5 / tan 30 deg, 17 mm along it (mm).
+TILTED_END_Z = 5.0 - 8.5 / np.tan(np.radians(30.0))
+
+
+def _tilted_plunge(z_text, tool="ball:0.5", **kwargs):
+    program = (f"G90 G21\nG00 X0. Y0. Z5. B30.\nG01 X-8.5 Z{z_text} F100.\n"
+               "G00 X0. Z5.\nM30\n")
+    return cut(parse_program(program), "robonano_a0ib", tool=tool,
+               stock="block:40x40x20@-20,-20,0", **kwargs)
+
+
+@pytest.mark.parametrize("z_text", ["-9.72243186433", "-9.7224319", "-9.722432", "-9.7224"])
+def test_a_tilted_plunge_written_to_4_to_11_decimals_is_cut(z_text):
+    """The plunge at B30 with its end written to 11, 7, 6 and 4 decimals: only 0 and 45 deg
+    are reached exactly at 4-6, and the end 36 pm (7 decimals) to 32 nm (4) off the axis in Z
+    leaves its holder that much times sin 30 deg beside the hole the body drilled. Before the
+    holder was judged within one chord (e438d6c) it was refused as a crash from 7 decimals
+    down (a reviewer read 1.1e-18 m^3 in the holder's room at 7, 4.2e-18 at 6). Within one
+    chord (100 nm, a tenth of the ball's 1 um facets) it is cut: no holder contact, the cut
+    --allow-holder-contact makes, and by hand the ball's hole, a cylinder from the ball's
+    centre to the top face along the axis (an oblique cut of a cylinder holds pi r^2 times
+    its length on the axis) and a half ball, to the facets' 1 um. At 4 decimals or more an
+    end computed from a written start lies at most 0.05 um (cos B + sin B) <= 71 nm beside
+    the axis, and the holder enters the wall by less (see the next test): within 100 nm."""
+    part, report = _tilted_plunge(z_text)
+    allowed, by_body = _tilted_plunge(z_text, allow_holder_contact=True)
+    assert report.holder_contact == ()
+    assert report.removed_volume_m3 == pytest.approx(by_body.removed_volume_m3, rel=1e-12)
+    assert part.volume == pytest.approx(allowed.volume, rel=1e-12)
+    centre_z = float(z_text) * MM + 0.5 * MM * np.cos(np.radians(30.0))
+    hand = (np.pi * (0.5 * MM) ** 2 * (-centre_z / np.cos(np.radians(30.0)))
+            + 2 / 3 * np.pi * (0.5 * MM) ** 3)
+    assert report.removed_volume_m3 == pytest.approx(hand, rel=5e-3)
+
+
+def test_a_tilted_ramp_whose_holder_enters_the_wall_past_one_chord_is_refused():
+    """The same feed with its end dz off the axis in Z: the end lies dz sin 30 deg = dz / 2
+    beside the axis, and the holder's room h above the body's top is where the body was
+    h / L of the way back along the feed (L = 17 mm), dz / 2 * h / L beside it. So the
+    holder enters the wall by dz / 2 * h_max / L, h_max the most of the room below the
+    stock's top on the side the end moved away from; one chord (t = 100 nm) is allowed:
+    refused beyond dz = 2 t L / h_max. The body's top at the end lies 10 mm up the axis,
+    at z = Z_end + 10 cos 30 = -1.0622 mm, the room's side 0.5 mm out 0.25 mm lower (dz < 0)
+    or higher (dz > 0): h_max = (1.0622 +- 0.25) / cos 30 = 1.5152 or 0.9378 mm, so 2.244 um
+    below the axis and 3.625 um above (a scan: 2.2 cut, 2.3 refused; 3.6 cut, 3.7 refused).
+    At 0.95 of it the ramp is cut, at 1.05 (1.2 and 1.9 um beside the axis, a dozen and
+    more chords) refused, as is the exact plunge with a holder 2 mm wide."""
+    top = TILTED_END_Z + 10.0 * np.cos(np.radians(30.0))
+    for side in (-1.0, 1.0):
+        h_max = -(top + side * 0.25) / np.cos(np.radians(30.0))
+        limit = 2.0 * 100e-6 * 17.0 / h_max  # mm
+        _, report = _tilted_plunge(f"{TILTED_END_Z + side * 0.95 * limit:.7f}")
+        assert report.holder_contact == ()
+        with pytest.raises(HolderContactError, match=r": line 3 \(lines 3, 4\) takes the top"):
+            _tilted_plunge(f"{TILTED_END_Z + side * 1.05 * limit:.7f}")
+    with pytest.raises(HolderContactError, match=r": line 3 \(lines 3, 4\) takes the top"):
+        _tilted_plunge("-9.72243186433", tool="ball:0.5:d=2")
+
+
 @pytest.mark.parametrize("bad", [-1e-9, float("nan"), "1e-6", None])
 def test_a_holder_tolerance_that_is_no_length_is_refused_naming_it(bad):
     from machinesim.cutting import remove
