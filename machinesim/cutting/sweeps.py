@@ -418,14 +418,17 @@ def clipped_bounds(points: np.ndarray, segments: np.ndarray, level: float):
         +inf and -inf where nothing lies below the plane.
     """
     below = points[:, :, 2] <= level
-    a, b = points[:, segments[:, 0]], points[:, segments[:, 1]]
-    crossing = below[:, segments[:, 0]] != below[:, segments[:, 1]]
-    # Segments that do not cross may divide by zero; only crossing ones are read.
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (level - a[:, :, 2]) / (b[:, :, 2] - a[:, :, 2])
-        cut = a + t[:, :, None] * (b - a)
-    cut[:, :, 2] = level
-    every = np.concatenate([points, cut], axis=1)
-    valid = np.concatenate([below, crossing], axis=1)[:, :, None]
-    return (np.where(valid, every, np.inf).min(axis=1),
-            np.where(valid, every, -np.inf).max(axis=1))
+    first, second = segments[:, 0], segments[:, 1]
+    # Only the segments that cross the plane are cut (a few of the thousands of a profile's
+    # sweep): each crossing is the same float operations as over every segment at once,
+    # and a min or max does not depend on the order it reads its values in.
+    sets, crossing = np.nonzero(below[:, first] != below[:, second])
+    a, b = points[sets, first[crossing]], points[sets, second[crossing]]
+    t = (level - a[:, 2]) / (b[:, 2] - a[:, 2])
+    cut = a + t[:, None] * (b - a)
+    cut[:, 2] = level
+    low = np.where(below[:, :, None], points, np.inf).min(axis=1)
+    high = np.where(below[:, :, None], points, -np.inf).max(axis=1)
+    np.minimum.at(low, sets, cut)
+    np.maximum.at(high, sets, cut)
+    return low, high
