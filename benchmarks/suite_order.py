@@ -2,7 +2,7 @@
 measured per-test durations: the collected order against tests/conftest.py's order (the
 files of `SLOWEST_FILES_S` first), over draws of noise on every duration.
 
-Run: ``.venv/bin/python benchmarks/suite_order.py DURATIONS... --collected FILE`` where each
+Run: ``.venv/bin/python benchmarks/suite_order.py --collected FILE DURATIONS...`` where each
 DURATIONS file is the output of ``pytest -n 2 --durations=0`` on some of the test files and
 FILE the output of ``pytest --collect-only -q`` taken without this order
 (``git stash`` the hook, or collect on an older commit). Prints, per order, the median, mean
