@@ -26,6 +26,7 @@ from machinesim.exceptions import (
     ModelError,
     NCProgramError,
     NotConvergedError,
+    ProgramTimeError,
     ReadOnlyError,
     UnreachableError,
 )
@@ -85,6 +86,7 @@ __all__ = [
     "ModelError",
     "NCProgramError",
     "NotConvergedError",
+    "ProgramTimeError",
     "ReadOnlyError",
     "UnreachableError",
     "Realism",
