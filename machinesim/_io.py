@@ -444,7 +444,8 @@ def _journal(staged: list[tuple[Path, str]], backups: list[str | None]) -> str:
     version's second name (None: there was none) and the new version's identity
     (`_identity`), flushed to disk before the first rename. Removed once every file is
     renamed in."""
-    entries = [[os.path.abspath(path), backup, _identity(temp)]
+    entries = [[os.path.abspath(path), None if backup is None else os.path.abspath(backup),
+                _identity(temp)]
                for (path, temp), backup in zip(staged, backups, strict=True)]
     first = staged[0][0]
     handle, name = tempfile.mkstemp(dir=first.parent, prefix=_temp_prefix(first), suffix=".set")

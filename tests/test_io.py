@@ -558,3 +558,30 @@ def test_undoing_a_killed_set_leaves_a_file_written_since(tmp_path):
     _io.write_atomic(tmp_path / "other.txt", "x")
     assert (tmp_path / "part.ply").read_text() == "written since"
     assert not any(p.name.endswith((".set", ".old")) for p in tmp_path.iterdir())
+
+
+_KILLED_RELATIVE = _KILLED_BETWEEN_RENAMES.replace(
+    "folder, replaced = Path(sys.argv[1]), []", "folder, replaced = Path('.'), []")
+
+
+def test_a_killed_set_written_by_relative_names_is_undone_from_another_folder(tmp_path,
+                                                                              monkeypatch):
+    """``machinesim cut ... -o part.ply`` names its files relative to its working folder.
+    The journal kept the old part's second name as written (relative), so the next write
+    from another working folder looked for it there: the new part stayed beside the old
+    report, the journal was removed and the old part's second name left for good."""
+    import subprocess
+    import sys
+
+    folder = tmp_path / "out"
+    folder.mkdir()
+    (folder / "part.ply").write_text("old part")
+    (folder / "report.json").write_text("old report")
+    killed = subprocess.run([sys.executable, "-c", _KILLED_RELATIVE], cwd=folder, timeout=120)
+    assert killed.returncode == -signal.SIGKILL
+    assert (folder / "part.ply").read_text() == "new part"
+    monkeypatch.chdir(tmp_path)
+    _io.write_atomic(Path("out") / "other.txt", "x")
+    assert (folder / "part.ply").read_text() == "old part"
+    assert (folder / "report.json").read_text() == "old report"
+    assert not any(p.name.endswith((".set", ".old")) for p in folder.iterdir())
