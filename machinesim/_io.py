@@ -459,7 +459,7 @@ def _journal(staged: list[tuple[Path, str]], backups: list[str | None]) -> str:
 def _identity(path) -> list[int]:
     """A file's inode, size and modification time (ns): a rename keeps them, and a file
     written since differs in one of them (an inode alone is reused once freed)."""
-    status = os.stat(path)
+    status = os.lstat(path)  # the new version is a file; a link put there since is not it
     return [status.st_ino, status.st_size, status.st_mtime_ns]
 
 
@@ -467,20 +467,20 @@ def _undo_killed_sets(folder: Path, names: list[str]) -> None:
     """Undo the renames of files written together by a run killed among them (its journal,
     `_journal`, left in ``folder``): each file that is still that run's new version gets its
     old version back (or is removed when there was none), so that a part is not left beside
-    another run's report. A file written since (`_identity`) is left alone. ``names``: the
-    folder's entries."""
+    another run's report. A file written since (`_identity`) is left alone, and so is a
+    journal that is not one this user's run could have written (`_journal_entries`).
+    ``names``: the folder's entries."""
     for name in (name for name in names if name.endswith(".set")):
         pid, at, host = name[:-len(".set")].rpartition("-")[0].rpartition(".")[2].partition("@")
         if not (pid.isdigit() and at and host == process_space() and int(pid) != os.getpid()
                 and not pid_alive(int(pid))):
             continue
         try:
-            try:
-                entries = json.loads((folder / name).read_text(encoding="utf-8"))
-            except ValueError:  # killed as it wrote the journal: before any rename
-                entries = []
+            entries = _journal_entries(folder, name, f"{pid}@{host}")
+            if entries is None:
+                continue
             for target, backup, identity in entries:
-                if os.path.exists(target) and _identity(target) == identity:
+                if os.path.lexists(target) and _identity(target) == identity:
                     if backup is None:
                         os.unlink(target)
                     elif os.path.exists(backup):
@@ -488,8 +488,52 @@ def _undo_killed_sets(folder: Path, names: list[str]) -> None:
                 if backup is not None:
                     Path(backup).unlink(missing_ok=True)
             os.unlink(folder / name)
-        except (OSError, TypeError, ValueError):
+        except OSError:
             pass
+
+
+def _journal_entries(folder: Path, name: str, run: str) -> list | None:
+    """The entries of the journal ``name`` in ``folder`` left by the run ``run``
+    (``PID@HOST``), or None when it is not one that run wrote: a journal is a list of
+    files to put back and second names to remove, and one from elsewhere (another user's, in
+    a shared folder; a corrupt one) had the next write remove or replace whatever it named
+    (``/etc/...``, ``../x``). A journal is this user's regular file; its first file is the
+    one beside it whose name it starts with; every file is an absolute, normal path, and
+    each second name is that run's ``.NAME.PID@HOST-XXXXXXXX.old`` beside its file; each
+    identity three integers. A journal cut short as it was written (killed before it was
+    flushed, so before any rename) has no entries."""
+    journal = folder / name
+    status = os.lstat(journal)
+    if not stat.S_ISREG(status.st_mode) or (hasattr(os, "getuid")
+                                            and status.st_uid != os.getuid()):
+        return None
+    try:
+        entries = json.loads(journal.read_text(encoding="utf-8"))
+    except (ValueError, UnicodeDecodeError):
+        return []
+    if not isinstance(entries, list) or not entries:
+        return None
+    for entry in entries:
+        if not (isinstance(entry, list) and len(entry) == 3):
+            return None
+        target, backup, identity = entry
+        if not (isinstance(target, str) and os.path.isabs(target)
+                and os.path.normpath(target) == target
+                and isinstance(identity, list) and len(identity) == 3
+                and all(type(number) is int for number in identity)):
+            return None
+        if backup is not None:
+            head = f"{_temp_head(Path(target))}{run}-"
+            base = os.path.basename(backup) if isinstance(backup, str) else ""
+            if not (isinstance(backup, str) and os.path.dirname(backup) == os.path.dirname(target)
+                    and base.startswith(head) and base.endswith(".old")
+                    and len(base) == len(head) + _TEMP_RANDOM + len(".old")):
+                return None
+    first = Path(entries[0][0])
+    if not (name.startswith(f"{_temp_head(first)}{run}-")
+            and os.path.samefile(first.parent, folder)):
+        return None
+    return entries
 
 
 def _backup(path: Path) -> str | None:

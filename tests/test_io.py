@@ -585,3 +585,68 @@ def test_a_killed_set_written_by_relative_names_is_undone_from_another_folder(tm
     assert (folder / "part.ply").read_text() == "old part"
     assert (folder / "report.json").read_text() == "old report"
     assert not any(p.name.endswith((".set", ".old")) for p in folder.iterdir())
+
+
+def _journal_of_a_dead_run(folder, entries, first="part.ply"):
+    """A journal ``.FIRST.PID@HOST-abcdefgh.set`` in ``folder`` of a run that is gone."""
+    import subprocess
+    import sys
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    run = f"{gone.pid}@{_io.process_space()}"
+    (folder / f".{first}.{run}-abcdefgh.set").write_text(json.dumps(entries))
+    return run
+
+
+@pytest.mark.parametrize("kind", ["second name outside", "dot-dot",
+                                  "second name of another file"])
+def test_a_journal_naming_other_files_is_left_alone(tmp_path, kind):
+    """A journal is a list of files to put back and second names to remove, read by the
+    next write in its folder: one naming files elsewhere (a corrupt one, or one put in a
+    shared folder) had that write remove them (a second name is removed whatever it is; a
+    file still 'the new version', its inode, size and mtime, removed when it had no old
+    one). Such a journal is not acted on, and the files it names stay. (A file of the set
+    may lie in another folder, a report beside its part or not: only its identity guards it,
+    and a journal is taken only from this user's own files.)"""
+    folder = tmp_path / "out"
+    folder.mkdir()
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me")
+    status = victim.stat()
+    identity = [status.st_ino, status.st_size, status.st_mtime_ns]
+    part = str(folder / "part.ply")
+    entries = {
+        "second name outside": [[part, str(victim), [1, 2, 3]]],
+        "dot-dot": [[part, None, [1, 2, 3]], [f"{folder}/../victim.txt", None, identity]],
+        "second name of another file": [[part, f"{folder}/../victim.txt", [1, 2, 3]]],
+    }[kind]
+    _journal_of_a_dead_run(folder, entries)
+    _io.write_atomic(folder / "other.txt", "x")
+    assert victim.read_text() == "keep me"
+
+
+def test_a_journal_of_the_run_with_its_own_second_names_is_still_undone(tmp_path):
+    """The checks keep a journal as `_journal` writes it: the new part (its identity) is
+    removed, the old report's second name put back."""
+    folder = tmp_path / "out"
+    folder.mkdir()
+    (folder / "part.ply").write_text("new part")
+    status = (folder / "part.ply").stat()
+    import subprocess
+    import sys
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    run = f"{gone.pid}@{_io.process_space()}"
+    backup = folder / f".report.json.{run}-0123abcd.old"
+    backup.write_text("old report")
+    (folder / "report.json").write_text("new report")
+    report = (folder / "report.json").stat()
+    (folder / f".part.ply.{run}-abcdefgh.set").write_text(json.dumps(
+        [[str(folder / "part.ply"), None, [status.st_ino, status.st_size, status.st_mtime_ns]],
+         [str(folder / "report.json"), str(backup),
+          [report.st_ino, report.st_size, report.st_mtime_ns]]]))
+    _io.write_atomic(folder / "other.txt", "x")
+    assert {p.name: p.read_text() for p in folder.iterdir()} == {
+        "other.txt": "x", "report.json": "old report"}
