@@ -405,16 +405,22 @@ def _rename_all(staged: list[tuple[Path, str]]) -> None:
     """Rename every staged file into place; on any failure put the old files back. Several
     files are renamed under a journal (`_journal`), so that a run killed between two
     renames (SIGKILL, a power loss: nothing of it can run) is undone by the next write
-    beside the first of them (`_undo_killed_sets`)."""
+    beside the first of them (`_undo_killed_sets`). The journal is written before the old
+    files' second names are made and removed after they are: a run killed at any step
+    leaves none of them but under its journal."""
     done: list[tuple[Path, str | None]] = []
     backups: list[str | None] = []
     failing = staged[0][0]
     journal = None
     try:
-        for failing, _ in staged:
-            backups.append(_backup(failing) if len(staged) > 1 else None)
         if len(staged) > 1:
+            backups = [_backup_name(path) for path, _ in staged]
             journal = _journal(staged, backups)
+            for (failing, _), backup in zip(staged, backups, strict=True):
+                if backup is not None:
+                    _backup(failing, backup)
+        else:
+            backups = [None]
         for (failing, temp), backup in zip(staged, backups, strict=True):
             os.replace(temp, failing)
             done.append((failing, backup))
@@ -432,20 +438,19 @@ def _rename_all(staged: list[tuple[Path, str]]) -> None:
         if isinstance(exc, OSError):
             raise _write_error(failing, exc) from None
         raise
-    if journal is not None:  # first: without it the set is whole, and stays
-        Path(journal).unlink(missing_ok=True)
-    for _, backup in done:
+    for _, backup in done:  # killed among these, the journal finds every file new: kept
         if backup is not None:
             Path(backup).unlink(missing_ok=True)
+    if journal is not None:
+        Path(journal).unlink(missing_ok=True)
 
 
 def _journal(staged: list[tuple[Path, str]], backups: list[str | None]) -> str:
     """Write, beside the first file, ``.NAME.PID@HOST-XXXXXXXX.set``: each file with its old
-    version's second name (None: there was none) and the new version's identity
-    (`_identity`), flushed to disk before the first rename. Removed once every file is
-    renamed in."""
-    entries = [[os.path.abspath(path), None if backup is None else os.path.abspath(backup),
-                _identity(temp)]
+    version's second name (`_backup_name`; None: there was none) and the new version's
+    identity (`_identity`), flushed to disk before the second names are made. Removed once
+    every file is renamed in and the second names are removed."""
+    entries = [[os.path.abspath(path), backup, _identity(temp)]
                for (path, temp), backup in zip(staged, backups, strict=True)]
     first = staged[0][0]
     handle, name = tempfile.mkstemp(dir=first.parent, prefix=_temp_prefix(first), suffix=".set")
@@ -479,8 +484,11 @@ def _undo_killed_sets(folder: Path, names: list[str]) -> None:
             entries = _journal_entries(folder, name, f"{pid}@{host}")
             if entries is None:
                 continue
-            for target, backup, identity in entries:
-                if os.path.lexists(target) and _identity(target) == identity:
+            new = [os.path.lexists(target) and _identity(target) == identity
+                   for target, _, identity in entries]
+            for (target, backup, _), is_new in zip(entries, new, strict=True):
+                # every file new: killed after its renames, the set is whole and stays
+                if is_new and not all(new):
                     if backup is None:
                         os.unlink(target)
                     elif os.path.exists(backup):
@@ -536,16 +544,20 @@ def _journal_entries(folder: Path, name: str, run: str) -> list | None:
     return entries
 
 
-def _backup(path: Path) -> str | None:
-    """A second name for the current ``path`` (hard link, else a copy), or None if none."""
+def _backup_name(path: Path) -> str | None:
+    """The name `_backup` gives the current ``path``'s second name, or None if there is no
+    file (absolute: a later run, in another working folder, reads it from the journal)."""
     if not path.is_file():
         return None
-    name = str(path.parent / f"{_temp_prefix(path)}{secrets.token_hex(4)}.old")
+    return os.path.abspath(path.parent / f"{_temp_prefix(path)}{secrets.token_hex(4)}.old")
+
+
+def _backup(path: Path, name: str) -> None:
+    """Give the current ``path`` the second name ``name`` (a hard link, else a copy)."""
     try:
         os.link(path, name)
     except OSError:
         shutil.copy2(path, name)
-    return name
 
 
 def stdout_to_null(stream) -> None:

@@ -627,26 +627,68 @@ def test_a_journal_naming_other_files_is_left_alone(tmp_path, kind):
 
 
 def test_a_journal_of_the_run_with_its_own_second_names_is_still_undone(tmp_path):
-    """The checks keep a journal as `_journal` writes it: the new part (its identity) is
-    removed, the old report's second name put back."""
+    """The checks keep a journal as `_journal` writes it: killed between the renames, the
+    new part gets its old version back from its second name, the report (never renamed)
+    stays, and both second names go."""
     folder = tmp_path / "out"
     folder.mkdir()
     (folder / "part.ply").write_text("new part")
+    (folder / "report.json").write_text("old report")
     status = (folder / "part.ply").stat()
+    run = _journal_of_a_dead_run(folder, [])
+    backups = [folder / f".part.ply.{run}-0123abcd.old",
+               folder / f".report.json.{run}-4567cdef.old"]
+    backups[0].write_text("old part")
+    os.link(folder / "report.json", backups[1])
+    next(folder.glob("*.set")).write_text(json.dumps(
+        [[str(folder / "part.ply"), str(backups[0]),
+          [status.st_ino, status.st_size, status.st_mtime_ns]],
+         [str(folder / "report.json"), str(backups[1]), [1, 2, 3]]]))
+    _io.write_atomic(folder / "other.txt", "x")
+    assert {p.name: p.read_text() for p in folder.iterdir()} == {
+        "other.txt": "x", "part.ply": "old part", "report.json": "old report"}
+
+
+_KILLED_AT = """
+import os, pathlib, shutil, signal, sys
+from pathlib import Path
+from machinesim import _io
+folder, step = Path(sys.argv[1]), sys.argv[2]
+def killing(real, when):
+    def call(*args, **kwargs):
+        if when(*args):
+            os.kill(os.getpid(), signal.SIGKILL)
+        return real(*args, **kwargs)
+    return call
+if step == "after a second name":  # the part's second name made, nothing else yet
+    real_link = os.link
+    def link(src, dst):
+        real_link(src, dst)
+        os.kill(os.getpid(), signal.SIGKILL)
+    os.link = link
+elif step == "removing the second names":  # both files renamed in
+    pathlib.Path.unlink = killing(pathlib.Path.unlink, lambda p, *a: str(p).endswith(".old"))
+_io.write_together([(folder / "part.ply", "new part"), (folder / "report.json", "new report")])
+"""
+
+
+@pytest.mark.parametrize("step", ["after a second name", "removing the second names"])
+def test_a_run_killed_around_its_journal_leaves_no_second_names(tmp_path, step):
+    """SIGKILL after the old part's second name (``.part.ply.PID@HOST-X.old``) was made and
+    before the journal was written, or after the journal was removed and before the second
+    names were: no journal named them, so they stayed for good, one per killed write. The
+    next write leaves one whole set (old or new) and no second name or journal."""
     import subprocess
     import sys
 
-    gone = subprocess.Popen([sys.executable, "-c", "pass"])
-    gone.wait()
-    run = f"{gone.pid}@{_io.process_space()}"
-    backup = folder / f".report.json.{run}-0123abcd.old"
-    backup.write_text("old report")
-    (folder / "report.json").write_text("new report")
-    report = (folder / "report.json").stat()
-    (folder / f".part.ply.{run}-abcdefgh.set").write_text(json.dumps(
-        [[str(folder / "part.ply"), None, [status.st_ino, status.st_size, status.st_mtime_ns]],
-         [str(folder / "report.json"), str(backup),
-          [report.st_ino, report.st_size, report.st_mtime_ns]]]))
-    _io.write_atomic(folder / "other.txt", "x")
-    assert {p.name: p.read_text() for p in folder.iterdir()} == {
-        "other.txt": "x", "report.json": "old report"}
+    (tmp_path / "part.ply").write_text("old part")
+    (tmp_path / "report.json").write_text("old report")
+    killed = subprocess.run([sys.executable, "-c", _KILLED_AT, str(tmp_path), step],
+                            timeout=120)
+    assert killed.returncode == -signal.SIGKILL
+    _io.write_atomic(tmp_path / "other.txt", "x")
+    left = {p.name: p.read_text() for p in tmp_path.iterdir() if not p.name.endswith(".tmp")}
+    kept = {"part.ply": left.pop("part.ply", None), "report.json": left.pop("report.json", None)}
+    assert kept in ({"part.ply": "old part", "report.json": "old report"},
+                    {"part.ply": "new part", "report.json": "new report"})
+    assert left == {"other.txt": "x"}
