@@ -101,3 +101,44 @@ def test_turned_groups_judge_the_holder_in_the_programs_order(roi):
         with pytest.raises(HolderContactError,
                            match=r": line 22( \(lines 22, 23\))? takes the top of the tool"):
             f(parse_program(_turned_slot(0.6)), "grooving_4axis", **kwargs)
+
+
+def _slot_then_step(dx_mm: float) -> str:
+    """Straight moves only: a slot along Y at x = 5 mm, 0.5 then 1 mm down, then a pass
+    1.5 mm down ``dx_mm`` over (line 12): a 1 mm body (flat:1.0:h=1) there has its holder
+    from z = -0.5 mm up, over x = 4.55 to 5.55 mm for 0.05, into the slot's wall (x = 5.5 mm)
+    by 50 um."""
+    return ("G21 G90\nG00 X5. Y-1. Z1.\nG01 Z-0.5 F100.\nY11.\nG00 Z1.\nG00 X5. Y-1.\n"
+            "G01 Z-1.0\nY11.\nG00 Z1.\n"
+            f"G00 X{5 + dx_mm:.3f} Y-1.\nG01 Z-1.5\nY11.\nG00 Z5.\nM30\n")
+
+
+@pytest.mark.parametrize("name", ["cut", "cut_turned"])
+def test_a_coarse_chord_tolerance_forgives_no_holder_in_a_straight_wall(name):
+    # the holder was judged within the cut's chord tolerance (100 um here, --chord-nm takes
+    # up to 1 m) though no move is split into chords: straight moves are cut exactly, and
+    # the holder 50 um into the wall was cut without a word
+    from machinesim.cutting import cut_turned
+    from machinesim.cutting.program import holder_tolerance
+
+    f = {"cut": cut, "cut_turned": cut_turned}[name]
+    kwargs = {"tool": "flat:1.0:h=1", "stock": "block:10x10x3", "chord_tolerance": 1e-4}
+    _, report = f(parse_program(_slot_then_step(0.0)), "grooving_4axis", **kwargs)
+    assert report.holder_contact == ()  # in the slot: touching its wall, no more
+    with pytest.raises(HolderContactError, match=r"line 12 takes the top of the tool's body"):
+        f(parse_program(_slot_then_step(0.05)), "grooving_4axis", **kwargs)
+    # no chords, no tolerance; arcs read within 10 um give their 10 um
+    from machinesim import motion
+
+    straight = parse_program(_slot_then_step(0.05))
+    plan = motion.plan(straight, _machine(), chord_tolerance=1e-4)
+    assert holder_tolerance(straight, 1e-4, plan) == 0.0
+    arcs = parse_program("G21 G90 G17\nG00 X1. Y0. Z0.\nG02 X-1. Y0. I-1. J0. F100.\nM30\n",
+                         chord_tolerance=1e-5)
+    assert holder_tolerance(arcs, 1e-7, motion.plan(arcs, _machine())) == 1e-5
+
+
+def _machine():
+    from machinesim.machines import load_machine
+
+    return load_machine("grooving_4axis")

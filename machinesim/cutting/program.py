@@ -216,7 +216,8 @@ def _cut(program, machine, tool, stock, errors, *, roi, start, chord_tolerance, 
                               sheets=False, on_holder_contact=refuse,
                               holder_stock=_outside_windows(stock, roi, done, section_tool,
                                                             paths, allow_holder_contact),
-                              holder_tolerance=holder_tolerance(program, chord_tolerance))
+                              holder_tolerance=holder_tolerance(program, chord_tolerance,
+                                                                trajectory))
         done.append((section_tool, paths))
         rapids += rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)
@@ -265,14 +266,18 @@ def _cut(program, machine, tool, stock, errors, *, roi, start, chord_tolerance, 
     return part, report
 
 
-def holder_tolerance(program, chord_tolerance: float) -> float:
+def holder_tolerance(program, chord_tolerance: float, trajectory) -> float:
     """How far the holder may enter the material (m): one chord, the larger of the tolerance
-    the planner split the program's moves within and the one its arcs were read as chords
-    within (`Program.arc_chord_tolerance`). The holder's chords and the body's need not line
+    the planner split the program's moves within, where it split any (``trajectory``'s feeds
+    of more than one sub-step: rotary moves, or axes whose errors bend them), and the one its
+    arcs were read as chords within (`Program.arc_chord_tolerance`, None without arcs); 0
+    where the paths are no chords (straight moves, one sweep each, are cut exactly, and a
+    holder in their walls is a crash). The holder's chords and the body's need not line
     up, and the holder at a chord's end meets the wall the body cut along another chord's
     middle, that much short of the arc (docs/cutting.md)."""
     read = getattr(program, "arc_chord_tolerance", None)
-    return float(chord_tolerance if read is None else max(chord_tolerance, read))
+    split = any(s.kind == "linear" and len(s.q) > 2 for s in trajectory.segments)
+    return float(max(chord_tolerance if split else 0.0, 0.0 if read is None else read))
 
 
 def _outside_windows(stock: Part, roi, done: list, tool, paths: list,

@@ -174,7 +174,7 @@ def _cut_turned(program, machine, tool, stock, errors, *, roi, floor, start, tur
         key = int(round(float(segment.q[0, column]) / turn_step))
         groups.setdefault(key, []).append(segment)
     holder = _holder_lines(program, machine, errors, tool, stock, feeds, allow_holder_contact,
-                           holder_tolerance(program, chord_tolerance))
+                           holder_tolerance(program, chord_tolerance, trajectory))
     removed = swept = engine_s = 0.0
     sweeps = sideways = 0
     sideways_lines: set[int] = set()
