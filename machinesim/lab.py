@@ -51,11 +51,30 @@ from machinesim.metrology.imperfections import Lobing, Registration, ZonalForm
 from machinesim.realism import Realism, SphereArtefacts
 from machinesim.servo import check_servo as _check_servo
 from machinesim.streams import stream
+from machinesim.tools import NoseRadiusMisfit
 
 __all__ = ["CUTS", "Lab"]
 
 #: The cuts this process made, for `Lab.cut` to hand back when asked for again.
 CUTS = CutMemo()
+
+
+def _misfit(tool, has_radius: bool) -> InputError:
+    """The refusal of a tool the lab's nose radius error does not fit, naming the tool as
+    commanded: `with_nose_radius_error`'s own names the error's key, value and file (the
+    lab's truth), and the radius with it."""
+    kind = type(tool).__name__
+    if not has_radius:
+        return InputError(f"the lab's tool has a nose radius error (tool_geometry.nose_radius of "
+                          f"the errors it was made with), which a {kind} cannot take (it has "
+                          "no nose radius); expected a round-nose ('nose:R:ANGLE'), ball or "
+                          "flat end mill", key="tool")
+    radius = getattr(tool, "nose_radius", None)
+    radius = getattr(tool, "radius", None) if radius is None else radius
+    return InputError(f"the {kind} of radius {radius * 1e3:g} mm as commanded does not fit the "
+                      "lab's tool: with its nose radius error (tool_geometry.nose_radius of "
+                      "the errors it was made with) the radius would not be positive; "
+                      "expected a tool of a larger radius", key="tool")
 
 
 class Lab:
@@ -231,9 +250,15 @@ class Lab:
         # the public cutter's defaults, then the options, without its notes on the truth
         options = {name: p.default for name, p in inspect.signature(cutter).parameters.items()
                    if p.kind is p.KEYWORD_ONLY and name not in ("roi", "progress")} | options
-        part, report = (_cut_turned if cutter is cut_turned else _cut)(
-            program, self.machine, tool, stock, self.__truth, roi=roi, progress=progress,
-            file_notes=False, **options)
+        misfit = None
+        try:
+            part, report = (_cut_turned if cutter is cut_turned else _cut)(
+                program, self.machine, tool, stock, self.__truth, roi=roi, progress=progress,
+                file_notes=False, **options)
+        except NoseRadiusMisfit as error:  # raised below, outside: no __context__ to read
+            misfit = error.tool, error.has_radius
+        if misfit is not None:
+            raise _misfit(*misfit)
         CUTS.put(key, part, report)
         return part, report
 
@@ -250,8 +275,13 @@ class Lab:
         """
         from machinesim.cutting.lathe import turn
 
-        return turn(program, self.machine, tool, self.__truth, servo=self.__servo, top=top,
-                    allow_overtravel=allow_overtravel)
+        misfit = None
+        try:
+            return turn(program, self.machine, tool, self.__truth, servo=self.__servo, top=top,
+                        allow_overtravel=allow_overtravel)
+        except NoseRadiusMisfit as error:  # raised below, outside: no __context__ to read
+            misfit = error.tool, error.has_radius
+        raise _misfit(*misfit)
 
     def adjust_tool(self, offset, *, label: str | None = None) -> None:
         """The operator moves the tool in its holder by ``offset`` (tool_mount X, Y, Z, m),

@@ -68,8 +68,20 @@ from machinesim.units import LENGTH, M_PER_NM, angle_text, length_text
 # importable from here, where they were until those modules were split off.
 __all__ = ["MAX_TOOL_SIZE_M", "MAX_TOOL_VERTICES", "MIN_TOOL_SIZE_M", "TOOL_HEIGHT_M",
            "BallEndMill", "FlatEndMill", "RoundNoseTool", "Tool", "VTool", "arc_segments",
-           "flat_face_radius", "path_chord_tolerance", "ring_facet_depth", "sphere_polygon",
-           "with_nose_radius_error"]
+           "NoseRadiusMisfit", "flat_face_radius", "path_chord_tolerance", "ring_facet_depth",
+           "sphere_polygon", "with_nose_radius_error"]
+
+
+class NoseRadiusMisfit(InputError):
+    """`with_nose_radius_error` refuses a tool the error model's nose radius error does not
+    fit. ``tool`` is the tool as given (commanded, without the error), ``has_radius`` whether
+    it has a radius at all (a V tool has not): what `machinesim.Lab` tells instead of the
+    message, which names the error (the lab's truth)."""
+
+    def __init__(self, message: str, *, tool, has_radius: bool, **where) -> None:
+        super().__init__(message, **where)
+        self.tool = tool
+        self.has_radius = has_radius
 
 
 def arc_segments(radius: float, angle: float, chord_tol: float) -> int:
@@ -437,7 +449,7 @@ def with_nose_radius_error(tool: Tool, errors) -> Tool:
 
     Raises
     ------
-    InputError
+    NoseRadiusMisfit
         When the error is not zero and the tool has no radius (a V tool), or the radius
         would not be positive.
     """
@@ -454,9 +466,11 @@ def with_nose_radius_error(tool: Tool, errors) -> Tool:
         if isinstance(tool, BallEndMill | FlatEndMill):
             return tool.with_errors(radius_error=d_radius)
     except InputError as error:  # name the error model's key the user wrote, and the value
-        raise InputError(f"the error model's {key} = {shown} does not fit the "
-                         f"{type(tool).__name__} ({error.message})", source=source,
-                         line=errors.line_of(key), key=key) from None
-    raise InputError(f"the error model has {key} = {shown}, but a {type(tool).__name__} has "
-                     "no nose radius; expected a round-nose ('nose:R:ANGLE'), ball or flat end "
-                     "mill", source=source, line=errors.line_of(key), key=key)
+        raise NoseRadiusMisfit(f"the error model's {key} = {shown} does not fit the "
+                               f"{type(tool).__name__} ({error.message})", tool=tool,
+                               has_radius=True, source=source, line=errors.line_of(key),
+                               key=key) from None
+    raise NoseRadiusMisfit(f"the error model has {key} = {shown}, but a {type(tool).__name__} "
+                           "has no nose radius; expected a round-nose ('nose:R:ANGLE'), ball or "
+                           "flat end mill", tool=tool, has_radius=False, source=source,
+                           line=errors.line_of(key), key=key)

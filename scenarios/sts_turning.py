@@ -41,6 +41,7 @@ import numpy as np
 from machinesim._io import write_atomic
 from machinesim.budget import LabInputs, realism_budget
 from machinesim.cam.spiral import spiral_program
+from machinesim.cutting.lathe import turning_tool
 from machinesim.cutting.turning import edge_path_from_poses
 from machinesim.errors import ErrorModel
 from machinesim.experiment import run
@@ -80,6 +81,7 @@ from machinesim.scenario_runs import (
     scenario_arguments,
 )
 from machinesim.servo import table6_servo
+from machinesim.tools import with_nose_radius_error
 
 NM, UM = 1e-9, 1e-6
 
@@ -166,9 +168,12 @@ def refuse_unread_tool(args, machine, errors) -> None:
     not identify: its offset dx from the spindle axis outside `DX_RANGE`, its centre height
     |dy| beyond `CORE_LIMIT` (`tool_from_spindle_axis`, through ``machine``'s kinematics) or
     its nose radius error dR outside `D_RADIUS_RANGE` (one leaving no nose is the tool's
-    own refusal), naming the ``--errors`` file and the keys. The tool test cut the sphere
-    and refused its reading after 13 to 80 s (a nose radius error of 100 mm, um typed for
-    mm: 78 s), blaming the sphere's depth or centre height for a dx of -11 um."""
+    own refusal, `with_nose_radius_error`'s, asked here: the lab's names the tool as
+    commanded, not the file, the key as written or the value, which are its truth), naming
+    the ``--errors`` file and the keys. The tool test cut the sphere and refused its reading
+    after 13 to 80 s (a nose radius error of 100 mm, um typed for mm: 78 s), blaming the
+    sphere's depth or centre height for a dx of -11 um."""
+    with_nose_radius_error(turning_tool(STSTurning().tool), errors)
     dx, dy = tool_from_spindle_axis(machine, errors, STSTurning().nose_radius)
     d_radius = errors.parameters().get("tool_geometry.nose_radius", 0.0)
     nose = STSTurning().nose_radius

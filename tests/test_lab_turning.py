@@ -360,13 +360,22 @@ def test_a_turning_move_of_more_than_a_day_under_g20_is_noted_with_its_f_in_inch
 def test_a_nose_radius_the_tool_cannot_take_names_its_file_in_a_lab_with_background(
         tmp_path, program):
     # the lab adds its background to the injected errors: the sum kept neither the file nor
-    # the key as written, so the refusal named neither (the scenario's --errors, default lab)
+    # the key as written, so the refusal named neither (the scenario's --errors, default lab).
+    # The lab's refusal is read by the procedure that turns: it names the tool as commanded
+    # and the key, not the file or the value (tests/test_lab_texts.py); turn() given the
+    # errors names all three
     path = tmp_path / "errors.toml"
     path.write_text("[tool_geometry]\nnose_radius_um = -1000\n", encoding="utf-8")
     lab = machinesim.Lab("sts_lathe", machinesim.ErrorModel.from_toml(path),
                          realism=machinesim.Realism.lab())
     with pytest.raises(InputError) as refused:
         lab.turn(program, TOOL, top=1e-6)
+    assert str(refused.value) == (
+        "key 'tool': the RoundNoseTool of radius 0.2 mm as commanded does not fit the lab's "
+        "tool: with its nose radius error (tool_geometry.nose_radius of the errors it was made "
+        "with) the radius would not be positive; expected a tool of a larger radius")
+    with pytest.raises(InputError) as refused:
+        turn(program, "sts_lathe", TOOL, machinesim.ErrorModel.from_toml(path))
     assert str(refused.value) == (
         f"{path}, line 2, key 'tool_geometry.nose_radius_um': the error model's "
         "tool_geometry.nose_radius_um = -1000 does not fit the RoundNoseTool (nose_radius must "
