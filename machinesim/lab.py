@@ -270,15 +270,18 @@ class Lab:
 
         Returns
         -------
-        (TurnedPart, TurningReport)
-            The part is a height field the optical instruments read.
+        (TurnedFace, TurningReport)
+            The part is a height field the optical instruments read (`heights_at`,
+            `heights`, `top`); the tool it was cut with and the edge's paths, which hold the
+            lab's errors, are not handed out, and an empty cut's note does not say how far
+            above the stock the tip stayed.
         """
-        from machinesim.cutting.lathe import turn
+        from machinesim.cutting.lathe import _turn
 
         misfit = None
         try:
-            return turn(program, self.machine, tool, self.__truth, servo=self.__servo, top=top,
-                        allow_overtravel=allow_overtravel)
+            return _turn(program, self.machine, tool, self.__truth, servo=self.__servo,
+                         top=top, allow_overtravel=allow_overtravel, truth_told=False)
         except NoseRadiusMisfit as error:  # raised below, outside: no __context__ to read
             misfit = error.tool, error.has_radius
         raise _misfit(*misfit)

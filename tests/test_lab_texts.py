@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
 import pytest
 from lab_helpers import groove
 
@@ -74,3 +75,38 @@ def test_a_tool_the_nose_radius_error_does_not_fit_is_refused_naming_the_tool(tm
         else:
             machinesim.cut(groove(), "robonano_a0ib", "nose:0.002:90", "block:10x10x2",
                            str(path))
+
+
+def test_a_lab_turned_face_names_the_nose_radius_as_commanded_and_keeps_how_it_was_cut():
+    """Lab.turn handed out turn()'s TurnedPart: its repr said "nose radius 0.203142 mm" for
+    nose:0.2:90 in a lab with a nose radius error of 3.14159 um (0.2 mm + the error), and its
+    public ``tool`` and ``paths`` held the erred tool and the paths set off by the tool
+    setting error. Its face is now a TurnedFace: the same heights, the radius as commanded,
+    and nothing public but ``heights_at``, ``heights`` and ``top``."""
+    errors = {"tool": {"offset_um": [1.2345678, 0.0, 0.0]},
+              "tool_geometry": {"nose_radius_um": 3.14159}}
+    face, _ = Lab("sts_lathe", errors, noise=False).turn(FACING, "nose:0.2:90")
+    part, _ = machinesim.cutting.lathe.turn(FACING, "sts_lathe", "nose:0.2:90", errors)
+    assert repr(face) == ("TurnedFace(1 run, 201 path points over 50 turns, nose radius "
+                          "0.2 mm as commanded, top 0 m)")
+    assert "0.203142 mm" in repr(part)  # turn() given the errors tells them
+    assert not _tells(repr(face), 3.14159e-6, 0.2e-3 + 3.14159e-6, 1.2345678e-6)
+    assert {name for name in dir(face) if not name.startswith("_")} == {
+        "heights", "heights_at", "top"}
+    x = np.linspace(-4e-3, 4e-3, 801)
+    np.testing.assert_array_equal(face.heights_at(x, 0 * x), part.heights_at(x, 0 * x))
+    np.testing.assert_array_equal(face.heights(x[:5], x[:3]), part.heights(x[:5], x[:3]))
+
+
+def test_an_empty_turn_in_a_lab_does_not_say_how_far_above_the_tip_stayed():
+    """A facing cut with its tip at z = 0 on a top at 0 cuts nothing when the lab's tool sits
+    1.2345678 um high: the note said "the tool's tip stays 1.23457 um or more above the
+    stock's top": the injected tool.z to 6 digits. turn() given the errors still says so."""
+    errors = {"tool": {"offset_um": [0.0, 0.0, 1.2345678]}}
+    _, report = Lab("sts_lathe", errors, noise=False).turn(FACING, "nose:1.0:90")
+    assert report.empty_cut
+    assert report.notes[0].startswith("nothing was cut: the tool's tip stays above the "
+                                      "stock's top (z = 0 um) throughout")
+    assert not any(_tells(note, 1.2345678e-6) for note in report.notes)
+    _, told = machinesim.cutting.lathe.turn(FACING, "sts_lathe", "nose:1.0:90", errors)
+    assert "stays 1.23457 um or more above" in told.notes[0]

@@ -394,7 +394,9 @@ def test_a_turned_part_says_what_it_is_with_units():
     for errors in (None, {"tool": {"offset_um": [0.0, 0.0, 0.5]}}):
         lab = machinesim.Lab("sts_lathe", errors, noise=False)
         part, _ = lab.turn(program, "nose:1.0:90")
-        assert repr(part) == ("TurnedPart(1 run, 201 path points over 50 turns, nose radius "
-                              "1 mm, top 0 m)")
+        assert repr(part) == ("TurnedFace(1 run, 201 path points over 50 turns, nose radius "
+                              "1 mm as commanded, top 0 m)")
+        assert repr(turn(program, "sts_lathe", "nose:1.0:90", errors)[0]) == (
+            "TurnedPart(1 run, 201 path points over 50 turns, nose radius 1 mm, top 0 m)")
         deepest.append(part.heights_at(np.linspace(-4e-3, 4e-3, 8001), np.zeros(8001)).min())
     assert deepest == pytest.approx([-1e-6, -0.5e-6], abs=1e-12)

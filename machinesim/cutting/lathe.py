@@ -84,8 +84,8 @@ from machinesim.servo import check_servo
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import RoundNoseTool, with_nose_radius_error
 
-__all__ = ["TurnedPart", "TurningReport", "check_lathe", "followed", "turn", "turning_runs",
-           "turning_tool"]
+__all__ = ["TurnedFace", "TurnedPart", "TurningReport", "check_lathe", "followed", "turn",
+           "turning_runs", "turning_tool"]
 
 #: How long the servo loops follow the run's first velocity before its start (s): the
 #: spindle run up before the tool engages. 3 s is a revolution at paper 004's 20 rpm and
@@ -143,6 +143,41 @@ class TurnedPart:
         gy = as_floats(y, "y")
         px, py = np.meshgrid(gx, gy)
         return self.heights_at(px, py).reshape(gy.size, gx.size)
+
+
+class TurnedFace:
+    """A turned face as `machinesim.Lab.turn` hands it out: its heights, which the optical
+    instruments read, and its top. How it was cut is the lab's truth and kept private: the
+    `TurnedPart`'s tool has the nose radius error, its paths the tool setting error; its
+    repr names the nose radius as commanded."""
+
+    __slots__ = ("__commanded", "__part")
+
+    def __init__(self, part: TurnedPart, commanded: RoundNoseTool) -> None:
+        self.__part = part
+        self.__commanded = commanded
+
+    @property
+    def top(self) -> float:
+        """The stock's top, m."""
+        return self.__part.top
+
+    def __repr__(self) -> str:
+        paths = self.__part.paths
+        points = sum(p.angle.size for p in paths)
+        turns = sum(abs(p.angle[-1] - p.angle[0]) for p in paths) / (2 * math.pi)
+        return (f"TurnedFace({len(paths)} run{'' if len(paths) == 1 else 's'}, {points} path "
+                f"points over {turns:.6g} turns, nose radius "
+                f"{self.__commanded.nose_radius * 1e3:.6g} mm as commanded, top "
+                f"{self.top:.6g} m)")
+
+    def heights_at(self, px, py) -> np.ndarray:
+        """`TurnedPart.heights_at`."""
+        return self.__part.heights_at(px, py)
+
+    def heights(self, x, y) -> np.ndarray:
+        """`TurnedPart.heights`."""
+        return self.__part.heights(x, y)
 
 
 @dataclass(frozen=True)
@@ -236,6 +271,15 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
         when the servo's followed path leaves it where the command does not (with the
         line and the overshoot).
     """
+    return _turn(program, machine, tool, errors, servo=servo, top=top,
+                 allow_overtravel=allow_overtravel, truth_told=True)
+
+
+def _turn(program, machine, tool, errors, *, servo, top: float, allow_overtravel: bool,
+          truth_told: bool) -> tuple[TurnedPart | TurnedFace, TurningReport]:
+    """`turn`; with ``truth_told`` False (`Lab.turn`: its errors are the lab's truth) the part
+    is a `TurnedFace`, and an empty cut's note does not say how far above the stock the tip
+    stayed (the tool setting and workpiece errors, to the digit)."""
     from machinesim.machines import Machine, load_machine
     from machinesim.nc import Program, read_program
 
@@ -265,6 +309,7 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
                 program)
     # the dwells and feed moves timed (and their total checked) before any run is turned
     waits, slow = _untimed_moves(program, machine)
+    commanded = tool
     tool = with_nose_radius_error(tool, errors)
     paths, seconds, turns, peak = [], 0.0, 0.0, dict.fromkeys(machine.axes, 0.0)
     beyond = {entry.split(" ", 2)[1] for entry in limits}  # the axes the command takes out
@@ -289,10 +334,13 @@ def turn(program, machine, tool="nose:1.0:90", errors=None, *, servo=None,
     part = TurnedPart(tuple(paths), tool, top)
     lowest = min(float(path.z.min()) for path in paths)
     empty = not lowest < top  # the nose's lowest point is its tip (`nose_profile`)
-    notes = ((f"nothing was cut: the tool's tip stays {(lowest - top) * 1e6:.6g} um or more "
-              f"above the stock's top (z = {top * 1e6:.6g} um) throughout; does the program "
-              "reach the stock, and do the errors set the tool too high or the workpiece too "
-              "low (tool.z, workpiece.z)?",) if empty else ())
+    above = f"{(lowest - top) * 1e6:.6g} um or more above" if truth_told else "above"
+    notes = ((f"nothing was cut: the tool's tip stays {above} the stock's top "
+              f"(z = {top * 1e6:.6g} um) throughout; does the program reach the stock, and do "
+              "the errors set the tool too high or the workpiece too low (tool.z, "
+              "workpiece.z)?",) if empty else ())
+    if not truth_told:
+        part = TurnedFace(part, commanded)
     seconds += waits
     notes += _rapids_below_top(program, machine, top) + slow
     report = TurningReport(sum(len(p) for p in paths), len(paths), seconds, turns, peak,
