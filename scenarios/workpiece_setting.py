@@ -35,7 +35,10 @@ at the report; ``--quick``: smaller crown windows, as the tests run it) with opt
                                 or the tip as the paper's eq 7 does (off)
     --all-layers                cut all ten 1 um finishing layers of the crown, not only the
                                 last (about ten times longer; the same part)
-    --quick                     smaller crown windows
+    --quick                     smaller crown windows (the same passes and feed sweeps:
+                                every row reaches a window either way; it saves the
+                                booleans' size and readings, docs/procedures/
+                                workpiece_setting.md, "Cut")
     --noise on|off --seed N --out DIR   (default reports/workpiece_setting)
 
 On `robonano_a0ib` the robot sets two workpieces on the C table: a block for the crossing
