@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import re
+import time
 import urllib.request
 from pathlib import Path
 
@@ -163,6 +164,45 @@ def test_a_scripts_wait_ends_quietly_on_ctrl_c_and_ends_the_server():
     with serve(scene) as live:
         live.process.terminate()
         assert live.wait() == -signal.SIGTERM
+
+
+def test_a_ctrl_c_another_thread_receives_still_stops_a_scripts_wait():
+    """A Ctrl-C is process-directed: the kernel may hand it to any thread that does not block
+    it (the server's stderr reader, a script's own threads). Python's handler there only
+    sets a flag, which a main thread blocked in waitpid never read: a fresh-clone CI hung
+    14 minutes in the test above. wait() waits in steps and reads it between them."""
+    import signal
+    import threading
+
+    scene = part_scene(tilted_block(1e-4), max_triangles=BUDGET)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with serve(scene) as live:
+            waiting, process_wait = threading.Event(), live.process.wait
+
+            def wait(timeout=None):
+                waiting.set()
+                return process_wait(timeout)
+
+            live.process.wait = wait
+
+            def elsewhere():  # the signal to this thread, then, if nothing reads it, an end
+                if waiting.wait(60):
+                    signal.pthread_kill(threading.get_ident(), signal.SIGINT)
+                    end = time.monotonic() + 20
+                    while live.process.poll() is None and time.monotonic() < end:
+                        time.sleep(0.05)
+                    if live.process.poll() is None:
+                        live.process.kill()  # the old wait returns -9: fails, not hangs
+
+            other = threading.Thread(target=elsewhere)
+            other.start()
+            assert live.wait() is None
+            other.join()
+            # ended by wait's own close (SIGTERM) on the Ctrl-C, not by the kill 20 s on
+            assert live.process.returncode == -signal.SIGTERM
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 def _unused_port() -> int:

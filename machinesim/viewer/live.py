@@ -26,6 +26,10 @@ LOOPBACK = "127.0.0.1"
 START_TIMEOUT_S = 30.0
 #: Seconds to wait for the server to take one command (a large mesh is a few MB).
 REPLY_TIMEOUT_S = 60.0
+
+#: `LiveSession.wait` waits on the server in steps of this many seconds, so that a Ctrl-C
+#: the kernel delivered to another thread of the process is read between two steps.
+WAIT_STEP_S = 0.2
 #: ZeroMQ command that sets the page's title and overlay (ours, beside meshcat's commands).
 PAGE_COMMAND = b"machinesim_page"
 #: Lines of the server's stderr kept from its start, and from the start of its first Python
@@ -176,7 +180,13 @@ class LiveSession:
         the command line's viewer is, without a KeyboardInterrupt traceback). SIGTERM
         (`machinesim._interrupts.Terminated`) ends the server too and is raised on."""
         try:
-            return self.process.wait()
+            while True:  # in steps: a Ctrl-C the kernel hands to another of this process's
+                # threads (the server's stderr reader) only sets Python's flag, which a main
+                # thread blocked in waitpid never reads; between steps it does
+                try:
+                    return self.process.wait(timeout=WAIT_STEP_S)
+                except subprocess.TimeoutExpired:
+                    continue
         except KeyboardInterrupt as stop:
             self.close()
             if isinstance(stop, Terminated):
