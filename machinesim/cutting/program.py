@@ -277,7 +277,16 @@ def holder_tolerance(program, chord_tolerance: float, trajectory) -> float:
     middle, that much short of the arc (docs/cutting.md)."""
     read = getattr(program, "arc_chord_tolerance", None)
     split = any(s.kind == "linear" and len(s.q) > 2 for s in trajectory.segments)
-    return float(max(chord_tolerance if split else 0.0, 0.0 if read is None else read))
+    written = min(chord_tolerance, WRITTEN_ROUNDING_M)  # the words' decimals, below
+    return float(max(chord_tolerance if split else written, 0.0 if read is None else read))
+
+
+#: The holder's allowance on straight moves (m; at most the cut's chord tolerance): an NC
+#: word is written to finite decimals, so a plunge meant down a tilted tool's axis ends off
+#: it by up to half the last digit in each coordinate, and its holder grazes the hole's
+#: wall by picometres to nanometres (at 4 decimals of mm, at most 71 nm off the axis). A
+#: straight pass 50 um into a wall is still a crash at any --chord-nm.
+WRITTEN_ROUNDING_M = 1e-7
 
 
 def _outside_windows(stock: Part, roi, done: list, tool, paths: list,
