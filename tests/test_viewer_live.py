@@ -133,6 +133,21 @@ def test_a_web_port_in_meshcats_zeromq_range_is_left_to_the_web_server():
         held.close()
 
 
+def _waiting(live):
+    """An event set once ``live.wait()`` is waiting on its server (its process's wait is
+    wrapped to set it)."""
+    import threading
+
+    waiting, process_wait = threading.Event(), live.process.wait
+
+    def wait(timeout=None):
+        waiting.set()
+        return process_wait(timeout)
+
+    live.process.wait = wait
+    return waiting
+
+
 def test_a_scripts_wait_ends_quietly_on_ctrl_c_and_ends_the_server():
     """``live.wait()`` in a script (docs/viewer.md) stopped by Ctrl-C: it returns None
     (it raised KeyboardInterrupt into the script, a traceback) and the server has ended;
@@ -146,13 +161,7 @@ def test_a_scripts_wait_ends_quietly_on_ctrl_c_and_ends_the_server():
         with serve(scene) as live:
             # Ctrl-C once wait() is waiting on the server (a fixed 0.5 s timer could fire
             # before it, on a loaded machine, into the test itself)
-            waiting, process_wait = threading.Event(), live.process.wait
-
-            def wait(timeout=None):
-                waiting.set()
-                return process_wait(timeout)
-
-            live.process.wait = wait
+            waiting = _waiting(live)
             timer = threading.Thread(target=lambda: waiting.wait(60) and os.kill(
                 os.getpid(), signal.SIGINT))
             timer.start()
@@ -178,13 +187,7 @@ def test_a_ctrl_c_another_thread_receives_still_stops_a_scripts_wait():
     before = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         with serve(scene) as live:
-            waiting, process_wait = threading.Event(), live.process.wait
-
-            def wait(timeout=None):
-                waiting.set()
-                return process_wait(timeout)
-
-            live.process.wait = wait
+            waiting = _waiting(live)
 
             def elsewhere():  # the signal to this thread, then, if nothing reads it, an end
                 if waiting.wait(60):
