@@ -199,16 +199,23 @@ def work_offset_notes(program) -> list[str]:
 def integer_note(program) -> str | None:
     """The note for a program read under calculator-type input whose text wrote non-zero
     lengths or angles without a decimal point (``Z-1``: 1 mm here, 1 um on a FANUC control
-    without calculator-type input at IS-B), or None."""
+    without calculator-type input at IS-B), or None. It names the unit the lengths were
+    read in, inches under G20 (``X3``: 3 inches, 0.0003 inch at IS-B), and each rule's
+    increment in it (docs/nc.md, "Integer input")."""
     words = getattr(program, "integer_words", {}) or {}
     if getattr(program, "integer_input", None) != "calculator" or not words:
         return None
     shown = ", ".join(f"{letter} at line {line}" for letter, line in
                       sorted(words.items(), key=lambda item: (item[1], item[0])))
-    return (f"numbers without a decimal point ({shown}) were read in mm and deg "
+    if getattr(program, "unit_in_force", None) == "G20":
+        unit, increments = "inches (G20)", ("0.0001 inch", "0.00001 inch", "0.0000001 inch")
+    else:
+        unit, increments = "mm", ("0.001 mm", "0.0001 mm", "1 nm")
+    return (f"numbers without a decimal point ({shown}) were read in {unit} and deg "
             "(calculator-type input, the default); a FANUC control without it reads them "
-            "in its least input increment: give --integer-input is-b (0.001 mm), is-c "
-            "(0.0001 mm) or increment (1 nm) if the program was written for one")
+            f"in its least input increment: give --integer-input is-b ({increments[0]}), "
+            f"is-c ({increments[1]}) or increment ({increments[2]}) if the program was "
+            "written for one")
 
 
 def end_note(program) -> str | None:

@@ -57,6 +57,28 @@ def test_integer_input_increment_reads_axis_words_in_nanometres(tmp_path, capsys
             in err)
 
 
+def test_the_integer_note_of_an_inch_program_names_inches(tmp_path, capsys):
+    """Under G20, calculator-type input reads `X1` as 1 inch, and the note says so with the
+    increments in inches (docs/nc.md, "Integer input"); it had said "read in mm" and
+    offered is-b as 0.001 mm. The groove shows how X1 was read: a 90-deg V 0.0008 inch
+    deep (area d^2) that runs right across the 10 mm block, as 1 inch (25.4 mm) from
+    X-0.04 inch does, and 1 mm would not."""
+    program = tmp_path / "inch.nc"
+    program.write_text("G90 G20 G94\nG00 X-0.04 Y0.2 Z0.004\nZ-0.0008\nG01 X1 F4.\n"
+                       "G00 Z0.004\nM30\n")
+    report = tmp_path / "r.json"
+    code, _, err = run(["cut", program, *CUT, "--out", tmp_path / "p.ply", "--report",
+                        report], capsys)
+    assert code == 0, err
+    depth_mm = 0.0008 * 25.4
+    data = json.loads(report.read_text())
+    assert data["removed_volume_mm3"] == pytest.approx(10.0 * depth_mm**2, rel=1e-6)
+    assert ("note: numbers without a decimal point (X at line 4) were read in inches (G20) "
+            "and deg" in err), err
+    assert "is-b (0.0001 inch), is-c (0.00001 inch) or increment (0.0000001 inch)" in err
+    assert "mm" not in err.split("note: numbers without a decimal point")[1].splitlines()[0]
+
+
 def test_an_overtravel_refusal_says_how_numbers_without_a_point_were_read(tmp_path, capsys):
     """A program posted for FANUC IS-B (X11000 is 11 mm) read in mm leaves the travel: the
     refusal names the words read without a point and the rule to give, since the notes of a
