@@ -278,6 +278,32 @@ def test_word_after_semicolon_is_refused_at_its_column(text, column, word):
     assert (info.value.line, info.value.column, info.value.key) == (2, column, word)
 
 
+@pytest.mark.parametrize(("line", "column", "word", "comment"), [
+    ("; G61 exact path mode was requested", 3, "G61", "'(G61 exact path mode was requested)'"),
+    ("  ;T3 Diameter: 0.70mm", 4, "T3", "'(T3 Diameter: 0.70mm)'"),
+    (";G42", 2, "G42", "'(G42)'"),
+    ("; T1 (6 mm) tool", 3, "T1", "e.g. '(T1 tool)'"),
+])
+def test_a_word_after_a_semicolon_that_starts_the_line_names_no_lost_block(
+        line, column, word, comment):
+    """A line starting with ';' (a drill post's '; T3 Diameter: 0.70mm', LinuxCNC's ';G42'
+    left out) has no block before the ';' to lose: the refusal says that the line is a
+    comment in LinuxCNC and grbl and a block on FANUC, and gives the comment in
+    parentheses; it had said the block 'would be lost' and to put each block on its own
+    line, which it already is."""
+    with pytest.raises(NCProgramError) as info:
+        parse_program(f"G90 G21\n{line}\nG00 X1.\n", "p.nc")
+    error = info.value
+    assert (error.line, error.column, error.key) == (2, column, word)
+    assert f"word '{word}' after the ';' that starts the line" in str(error)
+    assert "would be lost" not in str(error) and "on its own line" not in str(error)
+    assert f"write the comment in parentheses ({comment})" in str(error)
+    # written as the message says, the line is a comment: the program reads as without it
+    if comment.startswith("'("):
+        fixed = parse_program(f"G90 G21\n{comment[1:-1]}\nG00 X1.\n", "p.nc")
+        assert fixed == parse_program("G90 G21\n\nG00 X1.\n", "p.nc")
+
+
 @pytest.mark.parametrize("comment", [
     "; move to x1", ";", ";  ;; ", "; N.B. slow here", "; 3 passes", "; E5 is no word here",
     "; (T1) tool", "; G-code from CAM", "(a; X1.) ; cut",

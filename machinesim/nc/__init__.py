@@ -16,7 +16,9 @@ Lines and blocks
     Comments: ``(...)`` closed on the same line (no nesting), and everything after ``;``.
     Text after ``;`` that starts like a word (a letter read here, blanks allowed, a number:
     ``; X11.``, ``; T1 tool``) is refused, for ``;`` ends a block in FANUC text and that
-    block would be lost; ``; move to x1`` or a ``;`` with nothing after it is a comment.
+    block would be lost (at a line's start, a whole-line comment in LinuxCNC and grbl, that
+    text would run as the next block: write it in parentheses); ``; move to x1`` or a ``;``
+    with nothing after it is a comment.
 Words
     A letter (either case) and a number: optional sign, digits, optional decimal point
     (``X-.5``, ``X10.``, ``x+3``); blanks between words optional, between a letter and its

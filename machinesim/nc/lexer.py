@@ -216,10 +216,22 @@ def _after_end_of_block(raw: str, semicolon: int, fail) -> None:
     if match is None:
         return
     key = match.group(1).upper() + match.group(2)
-    fail(f"word {key!r} after the ';' at column {semicolon + 1} would be lost: words after "
-         "';' on the same line are read as a comment, but ';' ends a block in FANUC text; "
-         "put each block on its own line (or write the comment in parentheses, e.g. "
-         "'(T1 tool)')", i + 1, key)
+    if raw[:semicolon].strip(_BLANK):
+        fail(f"word {key!r} after the ';' at column {semicolon + 1} would be lost: words "
+             "after ';' on the same line are read as a comment, but ';' ends a block in "
+             "FANUC text; put each block on its own line (or write the comment in "
+             "parentheses, e.g. '(T1 tool)')", i + 1, key)
+        return
+    # the line starts with ';': a whole-line comment in LinuxCNC, grbl and Mach3 (a drill
+    # post's '; T3 Diameter: 0.70mm'), where no block comes before it to be lost; on a FANUC
+    # control ';' ends an empty block and the text after it runs as the next one
+    text = raw[i:].rstrip(_BLANK + "\r\n")
+    shown = (f"'({brief(text)})'" if "(" not in text and ")" not in text
+             else "e.g. '(T1 tool)'")
+    fail(f"word {key!r} after the ';' that starts the line: a line starting with ';' is a "
+         "comment in LinuxCNC and grbl, but ';' ends a block in FANUC text, where "
+         f"{key!r} starts the next block; write the comment in parentheses ({shown}), or "
+         "remove the ';' to run it as a block", i + 1, key)
 
 
 def _colon_before_letter(raw: str, colon: int, letter: int, fail) -> None:
