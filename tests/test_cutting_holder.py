@@ -24,12 +24,13 @@ def reference(sweeps, candidates, solid, reach, keep, tolerance=0.0):
     """Every candidate's room against the solid less every earlier sweep in the stock's
     box, one candidate at a time (candidates x earlier sweeps booleans); less its own sweep
     too where it takes the tool straight down its axis (a plunge: its body has cut its
-    hole before the holder follows)."""
+    hole before the holder follows). ``tolerance``: one value, or one per sweep."""
     hulls, *_, owners = SweepSet.hulls(sweeps, keep)
     owners = np.asarray(owners)
     found = []
     for i in candidates:
-        met = solid ^ holder_room(sweeps, i, reach, tolerance)
+        inset = float(tolerance if np.ndim(tolerance) == 0 else tolerance[i])
+        met = solid ^ holder_room(sweeps, i, reach, inset)
         start, end = sweeps.poses[sweeps.pairs[i]], sweeps.poses[sweeps.pairs[i] + 1]
         down = (np.array_equal(start[:3, :3], end[:3, :3])
                 and float(start[:3, 2] @ (end[:3, 3] - start[:3, 3])) < 0.0)
@@ -322,8 +323,10 @@ def test_a_tilted_ramp_whose_holder_enters_the_wall_past_one_chord_is_refused():
         _tilted_plunge("-9.72243186433", tool="ball:0.5:d=2")
 
 
-@pytest.mark.parametrize("bad", [-1e-9, float("nan"), "1e-6", None])
+@pytest.mark.parametrize("bad", [-1e-9, float("nan"), "1e-6", None, [1e-9, 1e-9],
+                                 [float("nan")], [-1e-9], ["1e-6"]])
 def test_a_holder_tolerance_that_is_no_length_is_refused_naming_it(bad):
+    # one value, or one per sweep (the path below is one sweep: two values are no fit)
     from machinesim.cutting import remove
     from machinesim.exceptions import InputError
     from machinesim.tools import FlatEndMill

@@ -204,6 +204,27 @@ def _building(progress):
     return functools.partial(progress, stage="building")
 
 
+def _holder_tolerance(value, paths: list) -> float | np.ndarray:
+    """``value`` (`remove`'s ``holder_tolerance``) as a length >= 0 (m), or as one per sweep
+    of ``paths`` (a path of one pose is one sweep), or an InputError naming it."""
+    if np.ndim(value) == 0 or isinstance(value, str | bytes):
+        return as_number(value, "holder_tolerance", sign=">= 0")
+    count = sum(max(len(poses) - 1, 1) for poses in paths)
+    try:
+        each = np.asarray(value)
+    except (TypeError, ValueError):  # ragged
+        each = None
+    if each is not None and each.dtype.kind in "iuf":  # not "1e-6", not True
+        each = each.astype(np.float64)
+    else:
+        each = None
+    if each is None or each.shape != (count,) or not (np.isfinite(each) & (each >= 0.0)).all():
+        raise InputError(f"Expected holder_tolerance as a length >= 0 (m) or {count} of them, "
+                         f"one per sweep of paths, got {brief(repr(value))}",
+                         key="holder_tolerance")
+    return each
+
+
 def remove(
     stock: Part,
     tool,
@@ -216,7 +237,7 @@ def remove(
     sheets: bool = True,
     on_holder_contact: Callable[[tuple[int, ...]], None] | None = None,
     holder_stock: Part | None = None,
-    holder_tolerance: float = 0.0,
+    holder_tolerance=0.0,
 ) -> tuple[Part, EngineReport]:
     """Cut ``stock`` with ``tool`` moved along ``paths``.
 
@@ -264,9 +285,11 @@ def remove(
         The material the holder is judged against, when ``stock`` is not all of it: a
         caller that cuts a part already clipped to windows gives the part as it is outside
         them (`machinesim.cutting.cut`'s later tools). Default: ``stock``.
-    holder_tolerance : float
-        How far the holder may enter the material, m: the chord tolerance ``paths`` were
-        split within (`holder.holder_in_material`). Default 0.
+    holder_tolerance : float or array_like, shape (n_sweeps,)
+        How far the holder may enter the material, m, one value or one per sweep (in the
+        order of ``paths``; a path of one pose is one sweep): one chord of the sweep's move,
+        or of the chorded moves that cut the walls about its holder before
+        (`holder.holder_in_material`, `machinesim.cutting.holder_allowance`). Default 0.
 
     Returns
     -------
@@ -286,7 +309,7 @@ def remove(
                          "'block:10x10x2' is made one by machinesim.workpiece.stock_from_spec",
                          key="stock")
     paths = _check_paths(paths)
-    holder_tolerance = as_number(holder_tolerance, "holder_tolerance", sign=">= 0")
+    holder_tolerance = _holder_tolerance(holder_tolerance, paths)
     # A path of one pose is the tool standing there, and the volume it sweeps, the hull of
     # that pose and itself, is the tool: one sweep, as the same pose given twice (it had
     # formed no sweep and was passed over without a word).

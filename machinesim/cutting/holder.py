@@ -39,12 +39,12 @@ HOLDER_MATERIAL_M3 = 1e-21
 
 
 def judge_holder(sweeps: SweepSet, stock: Part, on_holder_contact=None,
-                 tolerance: float = 0.0) -> tuple[int, ...]:
+                 tolerance=0.0) -> tuple[int, ...]:
     """The sweeps of ``sweeps`` whose holder meets ``stock``, anywhere over it: those whose
     body top comes below the stock's top within its box (`holder_contact`), and, with
     ``on_holder_contact`` (a refusal), of those only the ones whose room holds material the
-    earlier sweeps left (`holder_in_material`, within ``tolerance``, m, the paths' chord
-    tolerance), ``on_holder_contact`` called with them.
+    earlier sweeps left (`holder_in_material`, within ``tolerance``, m, one value or one per
+    sweep: a chord, `holder_allowance`), ``on_holder_contact`` called with them.
 
     The whole stock, never a window of it: the holder meeting the part outside the windows
     a cut is read in is a crash all the same (a holder crash at x = 8 mm was cut, exit 0,
@@ -75,7 +75,7 @@ def judge_holder(sweeps: SweepSet, stock: Part, on_holder_contact=None,
 
 
 def check_holder(stock: Part, tool, paths: list[np.ndarray], on_holder_contact=None,
-                 tolerance: float = 0.0) -> tuple[int, ...]:
+                 tolerance=0.0) -> tuple[int, ...]:
     """`judge_holder` for ``tool`` along ``paths`` (workpiece frame, in program order)
     over ``stock``, without cutting: for a caller that cuts the sweeps in another order
     (`machinesim.cutting.cut_turned`, by turn groups), since the material a holder meets
@@ -151,7 +151,7 @@ def holder_contact(sweeps: SweepSet, below: float, keep) -> list[int]:
 
 
 def holder_in_material(sweeps: SweepSet, candidates, solid: manifold3d.Manifold,
-                       reach: float, keep=None, tolerance: float = 0.0) -> list[int]:
+                       reach: float, keep=None, tolerance=0.0) -> list[int]:
     """Those of the sweeps ``candidates`` whose holder meets ``solid`` as this tool has cut
     it by then: more than `HOLDER_MATERIAL_M3` of it inside the holder's room over the sweep
     (`holder_room`), in the order given. The bounding-box test of `holder_contact` finds
@@ -171,8 +171,9 @@ def holder_in_material(sweeps: SweepSet, candidates, solid: manifold3d.Manifold,
     earlier sweeps booleans where slivers stay (a helical bore's bottom circle, its chords
     not those of the half turns, 5 min 11 s before its refusal).
 
-    ``tolerance`` (m): how far the holder may enter the material, the rooms' faces taken in
-    by as much (`holder_room`'s ``inset``): the chord tolerance the paths were split within.
+    ``tolerance`` (m; one value, or one per sweep of ``sweeps``): how far the holder may
+    enter the material, the rooms' faces taken in by as much (`holder_room`'s ``inset``):
+    one chord (`machinesim.cutting.holder_allowance`).
     Arcs cut as chords put the holder into walls the body cut by up to one chord where its
     own chords and the body's do not line up (a helical bore's bottom circle under its half
     turns, refused as a crash): each chord lies inside its arc by at most the tolerance, the
@@ -180,7 +181,8 @@ def holder_in_material(sweeps: SweepSet, candidates, solid: manifold3d.Manifold,
     the wall that much short of it.
     """
     order = list(dict.fromkeys(int(i) for i in candidates))
-    rooms = {i: holder_room(sweeps, i, reach, tolerance) for i in order}
+    each = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (sweeps.count,))
+    rooms = {i: holder_room(sweeps, i, reach, float(each[i])) for i in order}
     inside = {}
     for i in sorted(order):
         met = solid ^ rooms[i]

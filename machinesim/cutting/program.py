@@ -18,6 +18,7 @@ import numpy as np
 from machinesim import motion
 from machinesim.cutting.engine import remove
 from machinesim.cutting.holder import holder_reach
+from machinesim.cutting.holder_allowance import sweep_allowances
 from machinesim.cutting.rapids import rapids_that_cut
 from machinesim.cutting.refusals import (  # re-exported: windows, lathe, lathe_following
     _format,  # noqa: F401
@@ -45,6 +46,7 @@ from machinesim.exceptions import InputError, ProgramTimeError
 from machinesim.metrology._arrays import as_flag
 from machinesim.motion.faces import ProfileEdges
 from machinesim.nc import MOVE_KINDS
+from machinesim.nc.moves import ROTARY_AXES
 from machinesim.servo import check_servo
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import (
@@ -206,18 +208,25 @@ def _cut(program, machine, tool, stock, errors, *, roi, start, chord_tolerance, 
     part, engines, rapids, holder, sideways, sections = stock, [], [], set(), set(), []
     in_plane: set[int] = set()
     done: list = []  # the tools cut so far, with their paths
+    own = np.broadcast_to(np.asarray(holder_tolerance(program, chord_tolerance, trajectory),
+                                     dtype=np.float64), (len(trajectory.kinds),))
+    floor, chorded = min(chord_tolerance, WRITTEN_ROUNDING_M), None
     for section_tool, length, section, (lo, hi), (number, line) in tools.split(moves):
         section_poses = poses[lo:hi] if length == 0.0 else poses[lo:hi] @ _beyond_tip(length)
         paths = np.split(section_poses, section.breaks) if len(section_poses) else []
         before = part
         refuse = None if allow_holder_contact else _holder_refusal(
             program, section_tool, before, section.sweep_line)
+        allowance = own[section.sweep_move]
+        if refuse is not None:  # its own chord, or one of the chorded cuts about its holder
+            allowance, chorded = sweep_allowances(section_tool, paths, allowance,
+                                                  float(stock.bounds[1, 2]), floor, chorded,
+                                                  carry=len(tools.runs) > 1)
         part, engine = remove(before, section_tool, paths, roi=roi, progress=progress,
                               sheets=False, on_holder_contact=refuse,
                               holder_stock=_outside_windows(stock, roi, done, section_tool,
                                                             paths, allow_holder_contact),
-                              holder_tolerance=holder_tolerance(program, chord_tolerance,
-                                                                trajectory))
+                              holder_tolerance=allowance)
         done.append((section_tool, paths))
         rapids += rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)
@@ -266,19 +275,39 @@ def _cut(program, machine, tool, stock, errors, *, roi, start, chord_tolerance, 
     return part, report
 
 
-def holder_tolerance(program, chord_tolerance: float, trajectory) -> float:
-    """How far the holder may enter the material (m): one chord, the larger of the tolerance
-    the planner split the program's moves within, where it split any (``trajectory``'s feeds
-    of more than one sub-step: rotary moves, or axes whose errors bend them), and the one its
-    arcs were read as chords within (`Program.arc_chord_tolerance`, None without arcs); 0
-    where the paths are no chords (straight moves, one sweep each, are cut exactly, and a
-    holder in their walls is a crash). The holder's chords and the body's need not line
-    up, and the holder at a chord's end meets the wall the body cut along another chord's
-    middle, that much short of the arc (docs/cutting.md)."""
+def holder_tolerance(program, chord_tolerance: float, trajectory) -> np.ndarray:
+    """How far the holder of each move of ``trajectory`` may enter the material on its own
+    account (m, shape (M,)): one chord of the move. A move the planner split (more than one
+    sub-step: a rotary move, or one of an axis whose errors bend it) gets the chord
+    tolerance it was split within, a chord of an arc the tolerance the arcs were read within
+    (`Program.arc_chord_tolerance`; the reader keeps no arc length for the chords of an arc
+    that turns a rotary axis, so a feed that turns one, in a program with arcs, gets it
+    too), and the larger where both; any other move, straight and cut exactly, only the
+    rounding of its words (`WRITTEN_ROUNDING_M`, or the chord tolerance if finer). One arc
+    read coarse, or one rotary move under a coarse ``--chord-nm``, anywhere in the program
+    had given every move its chord, and a holder 0.2 mm into a straight wall was cut.
+
+    The holder at a chord's end meets the wall the body cut along another chord's middle,
+    that much short of the arc, and a straight pass's holder meets the walls chorded moves
+    cut: `holder_allowance.sweep_allowances` gives each sweep the largest of its own and of
+    the chorded sweeps that cut next to its holder before (docs/cutting.md)."""
+    count = len(trajectory.kinds)
+    allowance = np.full(count, min(chord_tolerance, WRITTEN_ROUNDING_M))
+    moving = trajectory.kinds != MOVE_KINDS.index("dwell")
+    split = moving & (np.diff(trajectory.offsets) > 2)
+    allowance[split] = np.maximum(allowance[split], chord_tolerance)
     read = getattr(program, "arc_chord_tolerance", None)
-    split = any(s.kind == "linear" and len(s.q) > 2 for s in trajectory.segments)
-    written = min(chord_tolerance, WRITTEN_ROUNDING_M)  # the words' decimals, below
-    return float(max(chord_tolerance if split else written, 0.0 if read is None else read))
+    if read is not None:
+        lengths = getattr(program, "arc_lengths", None)
+        arcs = (np.isfinite(lengths) if isinstance(lengths, np.ndarray)
+                and lengths.shape == (count,) else np.zeros(count, dtype=bool))
+        rotary = [k for k, axis in enumerate(trajectory.axes) if axis in ROTARY_AXES]
+        first, last = trajectory.offsets[:-1], np.maximum(trajectory.offsets[1:] - 1, 0)
+        turns = (trajectory.kinds == MOVE_KINDS.index("linear")) & (
+            trajectory.q[first][:, rotary] != trajectory.q[last][:, rotary]).any(axis=1)
+        arcs |= turns
+        allowance[arcs] = np.maximum(allowance[arcs], float(read))
+    return allowance
 
 
 #: The holder's allowance on straight moves (m; at most the cut's chord tolerance): an NC
@@ -333,9 +362,9 @@ class _Moves:
         Source line of the move each sample ends, and whether that move is a rapid.
     breaks : ndarray of int
         Sample indices where a new path starts (`numpy.split` points).
-    sweep_line, sweep_rapid : ndarray, shape (s,)
+    sweep_line, sweep_move, sweep_rapid : ndarray, shape (s,)
         Per sweep (consecutive samples of a path, in the engine's order): the line of its
-        move, and whether the move is a rapid.
+        move, the move's index in the trajectory, and whether the move is a rapid.
     sweep_start : ndarray, shape (s,)
         Index of each sweep's first sample.
     """
@@ -346,7 +375,7 @@ class _Moves:
         if not counts.size:
             self.q = np.zeros((0, n_axes))
             self.line = self.sweep_line = self.sweep_start = np.zeros(0, dtype=np.int64)
-            self.move = np.zeros(0, dtype=np.int64)
+            self.move = self.sweep_move = np.zeros(0, dtype=np.int64)
             self.path_start = np.zeros(0, dtype=bool)
             self.rapid = self.sweep_rapid = np.zeros(0, dtype=bool)
             self.breaks = np.zeros(0, dtype=np.int64)
@@ -375,6 +404,7 @@ class _Moves:
         end = np.flatnonzero(~path_start)
         self.sweep_start = end - 1
         self.sweep_line = self.line[end]
+        self.sweep_move = self.move[end]
         self.sweep_rapid = self.rapid[end]
 
     def section(self, first_move: int, stop_move: int) -> tuple[_Moves, tuple[int, int]]:

@@ -20,7 +20,9 @@ import numpy as np
 from machinesim import motion
 from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
 from machinesim.cutting.holder import check_holder
+from machinesim.cutting.holder_allowance import sweep_allowances
 from machinesim.cutting.program import (
+    WRITTEN_ROUNDING_M,
     _holder_refusal,
     _Moves,
     _overtravel,
@@ -40,6 +42,7 @@ from machinesim.cutting.sideways import dragged_past_clearance
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag, as_number
 from machinesim.motion.faces import ProfileEdges
+from machinesim.nc import MOVE_KINDS
 from machinesim.rotations import rot_z
 from machinesim.tool_specs import tool_from_spec
 from machinesim.tools import check_path_chord, flat_face_radius
@@ -63,20 +66,27 @@ def clip_to(stock: Part, boxes, floor: float | None = None) -> Part:
 
 
 def _holder_lines(program, machine, errors, tool, stock: Part, feeds: list,
-                  allowed: bool, tolerance: float) -> set[int]:
+                  allowed: bool, own: np.ndarray, floor: float) -> set[int]:
     """The lines of the feeds ``feeds`` (the trajectory's linear segments, in the program's
     order) whose holder meets ``stock``, judged in that order over the whole stock
     (`holder.check_holder`); unless ``allowed``, the cut is refused there
     (`HolderContactError`). The turn groups are cut in another order, and a group's own
     check read the part as the groups before it had left it: a pass at C = 0 in the slot a
     pass at C = 90 deg cut before it was refused when the C = 0 group came first, where
-    `machinesim.cutting.cut` cuts it. The holder may enter the material by ``tolerance``
-    (m, one chord: `program.holder_tolerance`)."""
+    `machinesim.cutting.cut` cuts it. The holder may enter the material by one chord, each
+    feed's own (``own``, m, one per feed: `program.holder_tolerance`) or that of the chorded
+    feeds before it about its holder (``floor`` the allowance of a feed that is no chord:
+    `holder_allowance.sweep_allowances`)."""
     if not feeds:
         return set()
     paths = machine.tool_poses([s.q for s in feeds], errors)
-    sweep_line = np.repeat([s.line for s in feeds], [max(len(s.q) - 1, 1) for s in feeds])
+    counts = [max(len(s.q) - 1, 1) for s in feeds]
+    sweep_line = np.repeat([s.line for s in feeds], counts)
     refuse = None if allowed else _holder_refusal(program, tool, stock, sweep_line)
+    tolerance = np.repeat(own, counts)
+    if refuse is not None:
+        tolerance, _ = sweep_allowances(tool, paths, tolerance, float(stock.bounds[1, 2]),
+                                        floor)
     return {int(sweep_line[i]) for i in check_holder(stock, tool, paths, refuse, tolerance)}
 
 
@@ -169,12 +179,15 @@ def _cut_turned(program, machine, tool, stock, errors, *, roi, floor, start, tur
     part = stock if roi is None else clip_to(stock, roi, floor)
     column = machine.axes.index(turn_axis)
     groups: dict[int, list] = {}
-    feeds = [segment for segment in trajectory.segments if segment.kind == "linear"]
+    linear = trajectory.kinds == MOVE_KINDS.index("linear")
+    feeds = [trajectory.segment(int(k)) for k in np.flatnonzero(linear)]
     for segment in feeds:
         key = int(round(float(segment.q[0, column]) / turn_step))
         groups.setdefault(key, []).append(segment)
+    own = np.broadcast_to(np.asarray(holder_tolerance(program, chord_tolerance, trajectory),
+                                     dtype=np.float64), linear.shape)[linear]
     holder = _holder_lines(program, machine, errors, tool, stock, feeds, allow_holder_contact,
-                           holder_tolerance(program, chord_tolerance, trajectory))
+                           own, min(chord_tolerance, WRITTEN_ROUNDING_M))
     removed = swept = engine_s = 0.0
     sweeps = sideways = 0
     sideways_lines: set[int] = set()
