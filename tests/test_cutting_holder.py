@@ -299,6 +299,23 @@ def test_a_tilted_plunge_written_to_4_to_11_decimals_is_cut(z_text):
     assert report.removed_volume_m3 == pytest.approx(hand, rel=5e-3)
 
 
+def test_a_tilted_plunge_written_to_4_decimals_is_cut_at_any_chord_tolerance():
+    """With a 2 mm body (its holder in the hole from 15 mm along the axis down, about 0.56
+    of the plunge) the end written to 4 decimals, 32 nm off the axis in Z (16 nm beside it),
+    puts the holder up to some 9 nm into the hole's wall: within the words' rounding
+    (100 nm), and cut at the default chord, but the allowance was capped by the chord
+    tolerance, and with chord_tolerance=1e-9 (--chord-nm 1) the same program was refused
+    as a crash. The words' rounding is the text's: cut at both, as
+    --allow-holder-contact cuts it."""
+    z_text = f"{TILTED_END_Z:.4f}"
+    parts = [_tilted_plunge(z_text, tool="ball:0.5:h=2", chord_tolerance=chord)
+             for chord in (1e-7, 1e-9)]
+    allowed, _ = _tilted_plunge(z_text, tool="ball:0.5:h=2", chord_tolerance=1e-9,
+                                allow_holder_contact=True)
+    assert all(report.holder_contact == () for _, report in parts)
+    assert parts[1][0].volume == pytest.approx(allowed.volume, rel=1e-12)
+
+
 def test_a_tilted_ramp_whose_holder_enters_the_wall_past_one_chord_is_refused():
     """The same feed with its end dz off the axis in Z: the end lies dz sin 30 deg = dz / 2
     beside the axis, and the holder's room h above the body's top is where the body was

@@ -71,11 +71,11 @@ def test_each_move_gets_its_own_chord():
     assert (own[arc] == 1e-5).all()  # as read
     assert (own[turn] == 1e-4).all()  # as split
     assert (own[~arc & ~turn] == WRITTEN_ROUNDING_M).all()  # written, cut exactly
-    # the chord tolerance, where finer than the words' rounding; the turn, a feed that turns
+    # a finer chord tolerance leaves the words' rounding as it is; the turn, a feed that turns
     # C in a program with arcs, keeps the arcs' (the reader keeps no arc length for the
     # chords of an arc that turns a rotary axis, so they are not told apart)
     fine = holder_tolerance(program, 1e-9, plan)
-    assert (fine[~arc & ~turn] == 1e-9).all() and (fine[turn] == 1e-5).all()
+    assert (fine[~arc & ~turn] == WRITTEN_ROUNDING_M).all() and (fine[turn] == 1e-5).all()
 
 
 def _bore_then_across(out_mm: float = 0.0, tools: str = "") -> str:

@@ -210,7 +210,7 @@ def _cut(program, machine, tool, stock, errors, *, roi, start, chord_tolerance, 
     done: list = []  # the tools cut so far, with their paths
     own = np.broadcast_to(np.asarray(holder_tolerance(program, chord_tolerance, trajectory),
                                      dtype=np.float64), (len(trajectory.kinds),))
-    floor, chorded = min(chord_tolerance, WRITTEN_ROUNDING_M), None
+    floor, chorded = WRITTEN_ROUNDING_M, None
     for section_tool, length, section, (lo, hi), (number, line) in tools.split(moves):
         section_poses = poses[lo:hi] if length == 0.0 else poses[lo:hi] @ _beyond_tip(length)
         paths = np.split(section_poses, section.breaks) if len(section_poses) else []
@@ -283,7 +283,7 @@ def holder_tolerance(program, chord_tolerance: float, trajectory) -> np.ndarray:
     (`Program.arc_chord_tolerance`; the reader keeps no arc length for the chords of an arc
     that turns a rotary axis, so a feed that turns one, in a program with arcs, gets it
     too), and the larger where both; any other move, straight and cut exactly, only the
-    rounding of its words (`WRITTEN_ROUNDING_M`, or the chord tolerance if finer). One arc
+    rounding of its words (`WRITTEN_ROUNDING_M`, whatever the chord tolerance). One arc
     read coarse, or one rotary move under a coarse ``--chord-nm``, anywhere in the program
     had given every move its chord, and a holder 0.2 mm into a straight wall was cut.
 
@@ -292,7 +292,7 @@ def holder_tolerance(program, chord_tolerance: float, trajectory) -> np.ndarray:
     cut: `holder_allowance.sweep_allowances` gives each sweep the largest of its own and of
     the chorded sweeps that cut next to its holder before (docs/cutting.md)."""
     count = len(trajectory.kinds)
-    allowance = np.full(count, min(chord_tolerance, WRITTEN_ROUNDING_M))
+    allowance = np.full(count, WRITTEN_ROUNDING_M)
     moving = trajectory.kinds != MOVE_KINDS.index("dwell")
     split = moving & (np.diff(trajectory.offsets) > 2)
     allowance[split] = np.maximum(allowance[split], chord_tolerance)
@@ -310,11 +310,12 @@ def holder_tolerance(program, chord_tolerance: float, trajectory) -> np.ndarray:
     return allowance
 
 
-#: The holder's allowance on straight moves (m; at most the cut's chord tolerance): an NC
-#: word is written to finite decimals, so a plunge meant down a tilted tool's axis ends off
-#: it by up to half the last digit in each coordinate, and its holder grazes the hole's
-#: wall by picometres to nanometres (at 4 decimals of mm, at most 71 nm off the axis). A
-#: straight pass 50 um into a wall is still a crash at any --chord-nm.
+#: The holder's allowance on straight moves (m): an NC word is written to finite decimals,
+#: so a plunge meant down a tilted tool's axis ends off it by up to half the last digit in
+#: each coordinate, and its holder grazes the hole's wall by picometres to nanometres (at 4
+#: decimals of mm, at most 71 nm off the axis). The text's rounding, not the chord
+#: tolerance's: capped by it, a plunge cut at the default chord was refused under
+#: --chord-nm 1. A straight pass 50 um into a wall is still a crash at any --chord-nm.
 WRITTEN_ROUNDING_M = 1e-7
 
 

@@ -187,7 +187,7 @@ def _cut_turned(program, machine, tool, stock, errors, *, roi, floor, start, tur
     own = np.broadcast_to(np.asarray(holder_tolerance(program, chord_tolerance, trajectory),
                                      dtype=np.float64), linear.shape)[linear]
     holder = _holder_lines(program, machine, errors, tool, stock, feeds, allow_holder_contact,
-                           own, min(chord_tolerance, WRITTEN_ROUNDING_M))
+                           own, WRITTEN_ROUNDING_M)
     removed = swept = engine_s = 0.0
     sweeps = sideways = 0
     sideways_lines: set[int] = set()
