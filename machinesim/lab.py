@@ -36,7 +36,6 @@ Lab(robonano_a0ib, noise=on, seed=1, realism=lab)
 
 from __future__ import annotations
 
-import inspect
 import os
 from dataclasses import replace
 
@@ -247,9 +246,7 @@ class Lab:
             if progress is not None:
                 progress(reused[1].sweeps, reused[1].sweeps)
             return reused
-        # the public cutter's defaults, then the options, without its notes on the truth
-        options = {name: p.default for name, p in inspect.signature(cutter).parameters.items()
-                   if p.kind is p.KEYWORD_ONLY and name not in ("roi", "progress")} | options
+        # the inner cutters default as the public ones; without their notes on the truth
         misfit = None
         try:
             part, report = (_cut_turned if cutter is cut_turned else _cut)(

@@ -82,6 +82,41 @@ def test_the_lab_cuts_with_its_truth_as_cut_does_with_the_errors():
         lab.cut(groove(), errors=None)
 
 
+def test_the_inner_cutters_lab_cut_calls_default_as_the_public_ones():
+    # Lab.cut hands the inner cutters only the options it was given: each option left out
+    # must default as the public cutter's does, or a lab would cut otherwise than
+    # machinesim.cut with the same errors
+    import inspect
+
+    from machinesim.cutting import cut, cut_turned
+    from machinesim.cutting.program import _cut
+    from machinesim.cutting.windows import _cut_turned
+
+    def defaults(function):
+        return {name: p.default for name, p in inspect.signature(function).parameters.items()
+                if p.kind is p.KEYWORD_ONLY}
+
+    for public, inner in ((cut, _cut), (cut_turned, _cut_turned)):
+        inner_defaults = defaults(inner)
+        assert inner_defaults.pop("file_notes") is inspect.Parameter.empty  # always said
+        assert inner_defaults == defaults(public), inner.__name__
+
+
+def test_the_lab_cuts_turned_with_its_truth_as_cut_turned_does_with_the_errors():
+    lab = Lab("robonano_a0ib", TRUTH, noise=False)
+    part, report = lab.cut(groove(), "v:90", "block:10x10x2", turn_step=0.5)
+    direct, direct_report = machinesim.cutting.cut_turned(
+        groove(), "robonano_a0ib", "v:90", "block:10x10x2", ErrorModel.from_dict(TRUTH),
+        turn_step=0.5)
+    for a, b in zip(part.mesh(), direct.mesh(), strict=True):
+        assert np.array_equal(a, b)
+    # the same notes but those on the errors, which name the lab's truth
+    assert report.notes == direct_report.notes[:len(report.notes)]
+    assert not any("EX0C" in note for note in report.notes)
+    assert any("EX0C" in note for note in direct_report.notes)
+    assert report.removed_volume_m3 == direct_report.removed_volume_m3
+
+
 def test_a_reading_does_not_change_when_another_instrument_reads_first():
     def read(extra: bool):
         lab = Lab("robonano_a0ib", TRUTH, seed=11)

@@ -168,10 +168,13 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
                 file_notes=True)
 
 
-def _cut(program, machine, tool, stock, errors, *, roi, start, chord_tolerance, servo, progress,
-         allow_overtravel, allow_holder_contact, file_notes: bool) -> tuple[Part, CutReport]:
+def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, start=None,
+         chord_tolerance: float | None = None, servo=None, progress=None,
+         allow_overtravel: bool = False, allow_holder_contact: bool = False
+         ) -> tuple[Part, CutReport]:
     """`cut`, its notes on ``errors`` added when ``file_notes``: `Lab.cut` passes False, its
-    errors being the truth (a note names their keys and values)."""
+    errors being the truth (a note names their keys and values). Its options default as
+    `cut`'s (`Lab.cut` leaves out those it was not given)."""
     from machinesim.errors.notes import error_file_notes
     from machinesim.machines import Machine, load_machine
 

@@ -148,11 +148,15 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
                        file_notes=True)
 
 
-def _cut_turned(program, machine, tool, stock, errors, *, roi, floor, start, turn_step,
-                turn_axis, chord_tolerance, servo, allow_overtravel, allow_holder_contact,
-                progress, file_notes: bool) -> tuple[Part, CutReport]:
+def _cut_turned(program, machine, tool, stock, errors, *, file_notes: bool, roi=None,
+                floor: float | None = None, start=None, turn_step: float = math.pi / 4,
+                turn_axis: str = "C", chord_tolerance: float = motion.CHORD_TOLERANCE_M,
+                servo=None, allow_overtravel: bool = False,
+                allow_holder_contact: bool = False, progress=None
+                ) -> tuple[Part, CutReport]:
     """`cut_turned`, its notes on ``errors`` added when ``file_notes`` (`Lab.cut` passes
-    False: its errors are the truth)."""
+    False: its errors are the truth). Its options default as `cut_turned`'s (`Lab.cut`
+    leaves out those it was not given)."""
     from machinesim.errors.notes import error_file_notes
     from machinesim.machines import Machine, load_machine
 
