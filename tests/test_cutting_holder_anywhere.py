@@ -146,3 +146,61 @@ def _machine():
     from machinesim.machines import load_machine
 
     return load_machine("grooving_4axis")
+
+
+#: A workpiece set tilted (paper 002's setting error, as models/errors/example.toml has it):
+#: an end mill's floors are level only in its own frame, which differs at each C.
+TILTED = {"workpiece": {"alpha_deg": 0.01, "beta_deg": -0.02}}
+
+
+def test_turned_groups_on_a_tilted_workpiece_judge_the_holder_in_each_c_positions_frame(
+        monkeypatch):
+    # the program's C = 0, 90 deg, 0 legs share no tool frame, and the check walked the
+    # sweeps in the workpiece frame, where each end mill floor is tilted with its own
+    # round-off: the walk's material broke into slivers (a contour in 3 levels under a short
+    # body with one pass at C = 90 deg: 235 s of CPU, 27 s without that pass). Each leg is
+    # now walked where the tool stands upright: every sweep the walk builds is a pure
+    # translation. The verdicts are cut's: in the slot, cut; 0.6 mm into its wall, refused
+    from machinesim.cutting import cut_turned
+    from machinesim.cutting.sweepset import SweepSet
+    from machinesim.errors import as_error_model
+
+    built = []
+    hulls = SweepSet.hulls
+
+    def spy(self, keep, progress=None):
+        built.append(self.poses[:, :3, :3].copy())
+        return hulls(self, keep, progress)
+
+    errors = as_error_model(TILTED)
+    kwargs = {"tool": "flat:1.0:h=2", "stock": "block:10x10x5@-5,-5,0", "errors": errors}
+    monkeypatch.setattr(SweepSet, "hulls", spy)
+    _, report = cut_turned(parse_program(_turned_slot()), "grooving_4axis", **kwargs)
+    assert report.holder_contact == ()
+    # the check's walk, then the two turn groups' own cuts (in their frames, as before)
+    assert len(built) > 2 and all((rotation == np.eye(3)).all() for rotation in built)
+    monkeypatch.undo()
+    for f in (cut, cut_turned):
+        with pytest.raises(HolderContactError,
+                           match=r": line 22( \(lines 22, 23\))? takes the top of the tool"):
+            f(parse_program(_turned_slot(0.6)), "grooving_4axis", **kwargs)
+
+
+def test_the_turn_between_two_c_positions_keeps_a_level_face_level():
+    # the tool frames at C = a and b on a tilted workpiece, F = W^T Rz(-C), differ by Rz(b - a)
+    # (the tilt cancels): the turn the walk makes between them is that, its Z row and column
+    # exact, so a level face keeps its height to the bit; with the C axis itself tilted
+    # (10 urad about X) the frames differ by more, and the turn is the product as it is
+    from machinesim.cutting.holder import _between
+    from machinesim.rotations import rot_y, rot_z
+
+    tilt = rot_x(np.radians(0.01)) @ rot_y(np.radians(-0.02))
+    for a, b in ((0.0, np.pi / 2), (np.pi / 2, 0.0), (0.3, -2.1)):
+        f_a, f_b = tilt.T @ rot_z(-a), tilt.T @ rot_z(-b)
+        turn = _between(f_b, f_a)
+        assert (turn[2] == [0.0, 0.0, 1.0]).all() and (turn[:, 2] == [0.0, 0.0, 1.0]).all()
+        np.testing.assert_allclose(turn, rot_z(b - a), atol=1e-15)
+        point = np.array([1.3e-3, -2.7e-3, -4e-4])
+        assert (turn @ point)[2] == point[2]
+    f_a, f_b = tilt.T, (rot_x(1e-5) @ tilt).T @ rot_z(-np.pi / 2)
+    np.testing.assert_array_equal(_between(f_b, f_a), f_b.T @ f_a)
