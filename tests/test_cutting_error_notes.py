@@ -53,6 +53,15 @@ def test_a_python_cut_reports_the_notes_machinesim_cut_prints(errors_file):
     assert report.notes[-2:] == _notes(errors_file), report.notes
     _, report = cut_turned(program, machine, errors=errors, **KEYS)
     assert report.notes[-2:] == _notes(errors_file), report.notes
+    # as a path or a dict, as cut takes them (cut_turned ended with an AttributeError,
+    # 'dict' object has no attribute 'written', after the whole cut)
+    _, report = cut_turned(program, machine, errors=str(errors_file), **KEYS)
+    assert report.notes[-2:] == _notes(errors_file), report.notes
+    given = {"location": {"C": {"EX0C_um": 4e-6, "EB0C_urad": 3.0}}}
+    _, public = machinesim.cut(program, machine, errors=given, **KEYS)
+    _, report = cut_turned(program, machine, errors=given, **KEYS)
+    assert "move nothing" in report.notes[-1]
+    assert report.notes[-2:] == public.notes[-2:], report.notes
     # C at 180 deg from the start on: they move the slot, and only the slip is noted
     _, report = machinesim.cut(program, machine, errors=errors, start=np.where(
         np.array(machine.axes) == "C", np.pi, 0.0), **KEYS)

@@ -39,6 +39,7 @@ from machinesim.cutting.report import (
 from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sideways import dragged_past_clearance
+from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag, as_number
 from machinesim.motion.faces import ProfileEdges
@@ -112,8 +113,9 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
     machine : Machine
     tool, stock
         As `machinesim.cutting.cut`.
-    errors : ErrorModel, optional
-        The machine's errors (None: the nominal machine).
+    errors : ErrorModel, dict or str or Path, optional
+        The machine's errors (None: the nominal machine), as `machinesim.cutting.cut` takes
+        them (`machinesim.errors.as_error_model`).
     roi : sequence of (x0, x1, y0, y1), optional
         Cut only inside these boxes (m): the stock is clipped to them first (`clip_to`),
         and below ``floor`` (m) if given.
@@ -166,6 +168,9 @@ def _cut_turned(program, machine, tool, stock, errors, *, file_notes: bool, roi=
     allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")  # "no" is no True
     allow_holder_contact = as_flag(allow_holder_contact, "allow_holder_contact")
     check_progress(progress)
+    # a dict in the TOML layout or a TOML file's path, as `cut` takes them: the notes on
+    # them read an ErrorModel's, and a dict ended the whole cut with an AttributeError
+    errors = None if errors is None else as_error_model(errors)
     tool = tool_from_spec(tool) if isinstance(tool, str) else tool
     stock = stock_from_spec(stock) if isinstance(stock, str) else stock
     check_roi_meets(roi, stock)
