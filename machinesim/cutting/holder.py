@@ -177,15 +177,18 @@ def _turned_box(box: np.ndarray, turn: np.ndarray) -> np.ndarray:
 
 
 def _in_material_by_legs(stock: Part, tool, paths: list[np.ndarray], legs, candidates,
-                         tolerance: float) -> list[int]:
+                         tolerance) -> list[int]:
     """`holder_in_material` for paths whose tool stands in several orientations, one per leg
     (`_legs`): each leg's sweeps and rooms are built in its own frame, where the end mill's
     floors are level and coincide, and the one running material is turned from leg to leg
     (`_between`) as the walk goes through the sweeps in the program's order. In the
     workpiece frame each sweep's floor is tilted with its own round-off and the walk's
     material broke into slivers (a contour in 3 levels 0.4 mm apart under a 0.5 mm body,
-    with one pass at C = 90 deg: 235 s of CPU against 27 s without that pass)."""
+    with one pass at C = 90 deg: 235 s of CPU against 27 s without that pass).
+    ``tolerance`` (m): one value, or one per sweep of all the legs in the program's order
+    (`holder_in_material`'s)."""
     reach, per_leg, inside, offset = _reach(stock), [], {}, 0
+    tolerance = np.asarray(tolerance, dtype=np.float64)
     for begin, end, frame in legs:
         leg_stock, leg_paths = into_frame(stock, paths[begin:end], frame)
         scale = float(np.abs(leg_stock.bounds).max()) or 1.0
@@ -193,7 +196,8 @@ def _in_material_by_legs(stock: Part, tool, paths: list[np.ndarray], legs, candi
         mine = [int(i) - offset for i in candidates if offset <= int(i) < offset + sweeps.count]
         rooms = {}
         for i in sorted(set(mine)):
-            room = holder_room(sweeps, i, reach, tolerance)
+            room = holder_room(sweeps, i, reach, float(
+                tolerance if tolerance.ndim == 0 else tolerance[offset + i]))
             met = leg_stock.manifold ^ room
             if met.volume() > HOLDER_MATERIAL_M3:
                 rooms[i] = room
