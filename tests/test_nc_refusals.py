@@ -181,6 +181,53 @@ def test_text_outside_a_comment_is_one_problem(text, line, column, key, message)
     assert str(error) == f"prog.nc, line {line}, column {column}, key '{key}': {message}"
 
 
+_NAMED = ("LinuxCNC named parameter (#<name>), which this reader of FANUC text does not read "
+          "(no parameters or expressions): expand the program with their values before "
+          "reading it (docs/nc.md, 'LinuxCNC programs')")
+_O_WORD = ("which this reader of FANUC text does not read (its subroutines, branches and loops "
+           "are LinuxCNC's, not FANUC's O1234 ... M99 called by M98): expand the program into "
+           "plain blocks before reading it (docs/nc.md, 'LinuxCNC programs')")
+
+
+@pytest.mark.parametrize(("text", "problems"), [
+    # LinuxCNC's test-xyzbc.ngc: each construct had been two or three problems (the '#', a
+    # "malformed number '<'", stray text 'x_max>'), none naming it
+    ("G21 G90\n #<x_max> = #<xy_max> (=30)\nG01 X#<x_max> F#<feedrate>\n"
+     "G03 X-#<x_max> Y0 I0 J - #<g3_j>\nM30", [
+         (2, 2, "#<x_max> = #<xy_max>", f"'#<x_max> = #<xy_max>' sets a {_NAMED}"),
+         (3, 5, "X#<x_max>", f"X#<x_max> takes its value from a {_NAMED}; expected a number, "
+          "e.g. X-12.5"),
+         (3, 15, "F#<feedrate>", f"F#<feedrate> takes its value from a {_NAMED}; expected a "
+          "number, e.g. F12.5"),
+         (4, 5, "X-#<x_max>", f"X-#<x_max> takes its value from a {_NAMED}; expected a "
+          "number, e.g. X-12.5"),
+         (4, 22, "J- #<g3_j>", f"J- #<g3_j> takes its value from a {_NAMED}; expected a "
+          "number, e.g. J-12.5"),
+     ]),
+    ("o<test-xyzbc> sub\nG21 G00 X0\no<test-xyzbc> endsub\no<test-xyzbc> call [20] (b)\n"
+     "O100 while [#1 lt 3]\nM30", [
+         (1, 1, "o<test-xyzbc> sub",
+          f"LinuxCNC O-word subroutine 'o<test-xyzbc> sub', {_O_WORD}"),
+         (3, 1, "o<test-xyzbc> endsub",
+          f"LinuxCNC O-word subroutine 'o<test-xyzbc> endsub', {_O_WORD}"),
+         (4, 1, "o<test-xyzbc> call [20]",
+          f"LinuxCNC O-word subroutine 'o<test-xyzbc> call [20]', {_O_WORD}"),
+         (5, 1, "O100 while [#1 lt 3]",
+          f"LinuxCNC O-word flow control 'O100 while [#1 lt 3]', {_O_WORD}"),
+     ]),
+])
+def test_linuxcnc_constructs_are_one_problem_each_naming_them(text, problems):
+    with pytest.raises(NCProgramError) as info:
+        parse_program(text, "prog.ngc")
+    found = [(p.line, p.column, p.key, p.message) for p in info.value.problems]
+    assert found == problems
+
+
+def test_a_fanuc_program_number_with_a_comment_is_no_o_word():
+    program = parse_program("O1000 (WHILE SUB)\nG21 G00 X1.\nM30")
+    assert program.targets[:, 0].tolist() == [1e-3]
+
+
 def test_words_packed_without_blanks_are_no_text():
     program = parse_program("g90g21\nG01X1.Y2.F100.\nM98P1000\nM30\nO1000\nx3.y-4.\nM99\n")
     assert program.targets[:, :2].tolist() == [[1e-3, 2e-3], [3e-3, -4e-3]]

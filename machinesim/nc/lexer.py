@@ -140,11 +140,25 @@ def tokenize(raw: str, source: str, line: int, *,
                      letter + special.group())
                 i = special.end()
                 continue
-            if match is None and i < n and raw[i] in "#[":
-                stop = _end_of_expression(raw, i)
-                fail(f"{letter}{brief(raw[i:stop])} is a macro expression: {_MACROS}; "
-                     f"expected a number, e.g. {_example(letter)}", start + 1,
-                     letter + raw[i:stop])
+            if letter == "O" and c != ":" and (raw[i:i + 1] == "<" or (
+                    match is not None and _o_word_keyword(raw, end) is not None)):
+                i = _linuxcnc_o_word(raw, start, fail)
+                continue
+            sign = i
+            if match is None and sign < n and raw[sign] in "+-":
+                sign += 1
+                while sign < n and raw[sign] in _BLANK:
+                    sign += 1
+            if match is None and sign < n and raw[sign] in "#[":
+                stop = _end_of_expression(raw, sign)
+                if raw.startswith("#<", sign):  # X#<x_max>, X-#<x_max>
+                    fail(f"{letter}{brief(raw[i:stop])} takes its value from a "
+                         f"{_NAMED_PARAMETER}; expected a number, e.g. {_example(letter)}",
+                         start + 1, letter + raw[i:stop])
+                else:
+                    fail(f"{letter}{brief(raw[i:stop])} is a macro expression: {_MACROS}; "
+                         f"expected a number, e.g. {_example(letter)}", start + 1,
+                         letter + raw[i:stop])
                 i = stop
                 continue
             if match is None and c != ":" and _starts_text(raw, start + 1, i):
@@ -184,6 +198,10 @@ def tokenize(raw: str, source: str, line: int, *,
             fail(f"decimal comma in {raw[start:stop]!r}: NC numbers take a decimal point "
                  "(X1.5, not X1,5); the comma would split the number in two", i + 1, ",")
             i = stop
+        elif c == "#" and raw.startswith("#<", i):  # LinuxCNC's '#<x_max> = 30'
+            text = raw[i:_end_of_line_text(raw, i)].rstrip(_BLANK)
+            fail(f"{brief(text)!r} sets a {_NAMED_PARAMETER}", i + 1, text)
+            break
         elif c == "#":  # a macro variable: '#1=2.', '#101=[#1*2]'
             fail(f"macro variable {brief(raw[i:].rstrip())!r}: {_MACROS}", i + 1, c)
             break
@@ -307,11 +325,77 @@ _MACROS = ("macro variables and expressions (#1, [#1 * 2], custom macro B or Lin
            "expressions) are not read: post the program with their values")
 
 
+#: LinuxCNC's named parameters (``#<x_max> = 30``, ``G01 X#<x_max>``): one problem for each,
+#: naming it (``X#<x_max>`` had been three: the '#', a "malformed number '<'" and stray text).
+_NAMED_PARAMETER = ("LinuxCNC named parameter (#<name>), which this reader of FANUC text does "
+                    "not read (no parameters or expressions): expand the program with their "
+                    "values before reading it (docs/nc.md, 'LinuxCNC programs')")
+
+#: LinuxCNC's O-word statements by their keyword: what each kind is called in the refusal.
+_O_WORD_KINDS = {
+    **dict.fromkeys(("sub", "endsub", "call", "return"), "subroutine"),
+    **dict.fromkeys(("if", "elseif", "else", "endif", "while", "endwhile", "do", "repeat",
+                     "endrepeat", "break", "continue"), "flow control"),
+}
+
+
+def _o_word_keyword(raw: str, i: int) -> str | None:
+    """The LinuxCNC O-word keyword (``sub``, ``call``, ``while`` ...) that starts at
+    ``raw[i]`` past blanks, as a whole run of letters, or None."""
+    while i < len(raw) and raw[i] in _BLANK:
+        i += 1
+    stop = i
+    while stop < len(raw) and raw[stop] in _LETTERS:
+        stop += 1
+    word = raw[i:stop].lower()
+    return word if word in _O_WORD_KINDS else None
+
+
+def _end_of_line_text(raw: str, i: int) -> int:
+    """Where the text from ``raw[i]`` ends: the line's end, or a comment after it."""
+    stop = len(raw)
+    for mark in "(;":
+        found = raw.find(mark, i)
+        if 0 <= found < stop:
+            stop = found
+    return stop
+
+
+def _linuxcnc_o_word(raw: str, start: int, fail) -> int:
+    """Refuse, as one problem, LinuxCNC's O-word statement from the 'o' at ``raw[start]``
+    to the line's end or its comment (``o<probe> sub``, ``o100 call [1] [2]``,
+    ``o<loop> while [#1 lt 3]``): each had been a "malformed number '<'" and stray text.
+    Returns the index where reading goes on."""
+    i = start + 1
+    while i < len(raw) and raw[i] in _BLANK:
+        i += 1
+    if raw.startswith("<", i):
+        close = raw.find(">", i)
+        i = close + 1 if close >= 0 else len(raw)
+    else:
+        number = _NUMBER.match(raw, i)
+        i = number.end() if number else i
+    keyword = _o_word_keyword(raw, i)
+    stop = _end_of_line_text(raw, start)
+    text = raw[start:stop].rstrip(_BLANK)
+    kind = _O_WORD_KINDS.get(keyword, "statement") if keyword else "statement"
+    fail(f"LinuxCNC O-word {kind} {brief(text)!r}, which this reader of FANUC text does not "
+         "read (its subroutines, branches and loops are LinuxCNC's, not FANUC's O1234 ... "
+         "M99 called by M98): expand the program into plain blocks before reading it "
+         "(docs/nc.md, 'LinuxCNC programs')", start + 1, text)
+    return stop
+
+
 def _end_of_expression(raw: str, i: int) -> int:
     """The end of the macro expression starting at ``raw[i]`` ('#' or '['): its brackets
-    closed (or the line's end), then what is not a blank, letter or comment."""
+    closed (or the line's end), then what is not a blank, letter or comment. A LinuxCNC
+    named parameter's name, ``#<x_max>``, is part of it."""
     depth = 0
     while i < len(raw):
+        if raw.startswith("#<", i):
+            close = raw.find(">", i)
+            i = close + 1 if close >= 0 else len(raw)
+            continue
         if raw[i] == "[":
             depth += 1
         elif raw[i] == "]":
