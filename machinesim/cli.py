@@ -353,6 +353,7 @@ def _cut(args) -> int:
 
     from machinesim.cutting import cut
     from machinesim.cutting.breakthrough import bottom_lost
+    from machinesim.cutting.engine import EMPTY_SWEPT_REL
     from machinesim.cutting.report import NOTHING_LEFT
     from machinesim.cutting.roi import check_roi_meets
     from machinesim.cutting.windows import clip_to
@@ -418,8 +419,13 @@ def _cut(args) -> int:
     for entry in summary["tools"] if len(summary["tools"]) > 1 else ():
         name = ("--tool before the first change" if entry["tool"] is None
                 else f"T{entry['tool']} from line {entry['line']}")
-        print(f"  {name}: length {entry['length_mm']:.6g} mm, removed "
-              f"{entry['removed_volume_mm3']:.6g} mm^3")
+        # a run that removed nothing (it retraced an earlier tool's cut) integrates to the
+        # booleans' round-off, not 0: '2.01832e-13 mm^3' had read as material removed
+        volume = entry["removed_volume_mm3"]
+        removed = (f"{volume:.6g} mm^3" if not entry["empty_cut"] else "nothing" if volume == 0
+                   else f"nothing ({volume:.3g} mm^3 of round-off: at most "
+                        f"{EMPTY_SWEPT_REL:.0e} of the volume its sweeps went through)")
+        print(f"  {name}: length {entry['length_mm']:.6g} mm, removed {removed}")
     if report.peak_following_error:
         lags = ", ".join(
             f"{axis} {value * 1e6:.4f} {'urad' if rotary else 'um'}"

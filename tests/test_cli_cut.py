@@ -170,6 +170,32 @@ def test_each_tool_cuts_at_its_length_and_the_summary_says_what_it_removed(tmp_p
         assert t["removed_volume_mm3"] == pytest.approx(0.01**2 * 10.0, rel=1e-9)
 
 
+def test_a_tool_that_retraces_an_earlier_tools_groove_removed_nothing(tmp_path, capsys):
+    # T1 cuts a 90-deg V groove 10 um deep and 10 mm long (d^2 x L = 1e-3 mm^3); T2, the same
+    # V 2.5 mm longer, runs the same groove at the same depth: its volume is what the booleans
+    # leave of nothing, round-off ('T18 ... removed 2.01832e-13 mm^3' had read as material)
+    table = tmp_path / "tools.toml"
+    table.write_text('[tool.1]\nlength_mm = 0.0\n[tool.2]\nlength_mm = 2.5\nshape = "v:90"\n')
+    program = tmp_path / "retrace.nc"
+    program.write_text("T1 M06\nG00 X0 Y1. Z1.\nG01 Z-0.01 F100.\nX10.\nG00 Z5.\n"
+                       "T2 M06\nG43 H2 Z1.\nG00 X0 Y1.\nG01 Z-0.01\nX10.\nG00 Z5.\nM30\n")
+    report = tmp_path / "r.json"
+    code, out, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
+                          "--stock", "block:12x4x1@-1,0,0", "--tools", table, "--out",
+                          tmp_path / "p.ply", "--report", report, "--quiet"], capsys)
+    assert code == 0, err
+    assert "T1 from line 1: length 0 mm, removed 0.001 mm^3" in out
+    line = next(t for t in out.splitlines() if t.startswith("  T2 "))
+    assert line.startswith("  T2 from line 6: length 2.5 mm, removed nothing")
+    assert "mm^3" not in line or "mm^3 of round-off" in line
+    summary = json.loads(report.read_text(), parse_constant=no_nan)
+    first, second = summary["tools"]
+    assert first["removed_volume_mm3"] == pytest.approx(0.01**2 * 10.0, rel=1e-9)
+    assert (first["empty_cut"], second["empty_cut"]) == (False, True)
+    assert abs(second["removed_volume_mm3"]) <= 1e-9 * first["removed_volume_mm3"]
+    assert summary["removed_volume_mm3"] == pytest.approx(0.01**2 * 10.0, rel=1e-9)
+
+
 def test_the_nc_reader_takes_a_tool_table(tmp_path):
     table = tmp_path / "tools.toml"
     table.write_text("")

@@ -240,7 +240,7 @@ def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, s
         engines.append(engine)
         sections.append({"tool": number, "line": line, "length_m": length,
                          "removed_volume_m3": float(engine.removed_volume),
-                         "engine": engine.method})
+                         "empty_cut": bool(engine.empty_cut), "engine": engine.method})
     if not engines:  # no tool moved: the stock as it is, and an engine report saying so
         part, engine = remove(stock, tool, [], roi=roi, progress=progress)
         engines.append(engine)

@@ -64,8 +64,10 @@ class CutReport:
     tools : tuple of Mapping
         One entry per run of moves cut by one tool (`Program.tool_changes`): ``tool``
         (its number, None for the cut's own tool before any change), ``line`` (where it
-        was put in, None before any change), ``length_m``, ``removed_volume_m3`` and
-        ``engine``.
+        was put in, None before any change), ``length_m``, ``removed_volume_m3``,
+        ``empty_cut`` (the run removed nothing: its volume at most the booleans' round-off,
+        `EngineReport.empty_cut`, as the run of a tool that only retraces what an earlier
+        tool cut) and ``engine``.
     peak_following_error : Mapping
         With servo loops: axis letter -> largest |command - reached| over the program's
         samples (m, rad for a rotary axis); empty without.
@@ -138,7 +140,8 @@ class CutReport:
                    "tool_table": self.nc.get("tool_table")},
             "tools": [{"tool": t["tool"], "line": t["line"], "length_mm": t["length_m"] * 1e3,
                        "removed_volume_mm3": t["removed_volume_m3"] * 1e9,
-                       "engine": t["engine"]} for t in self.tools],
+                       "empty_cut": t["empty_cut"], "engine": t["engine"]}
+                      for t in self.tools],
             "peak_following_error_um_or_urad": {axis: value * 1e6 for axis, value
                                                 in self.peak_following_error.items()},
         }
