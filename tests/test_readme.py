@@ -11,6 +11,7 @@ so that the files the examples write land there and not in the working tree.
 from __future__ import annotations
 
 import json
+import re
 import shlex
 import shutil
 import subprocess
@@ -23,7 +24,7 @@ import pytest
 from fenced import ROOT, link_repository_folders
 from fenced import fenced_blocks as blocks_of
 
-from machinesim import ErrorModel, list_machines, load_machine
+from machinesim import ErrorModel, ErrorModelError, list_machines, load_machine
 
 README = ROOT / "README.md"
 EXAMPLE_ERRORS = "models/errors/example.toml"
@@ -133,6 +134,29 @@ def test_the_example_errors_fit_each_machine_the_readme_uses_them_with(name, sou
     assert np.all(np.isfinite(pose))
     assert not np.allclose(pose, machine.tool_pose(np.zeros(len(machine.axes))), rtol=0,
                            atol=1e-9)
+
+
+def test_the_readme_says_which_machines_the_example_errors_fit_and_where_the_rest_refuse():
+    # it had shown the file as the errors file with no word of its machines: on
+    # planer_4axis (no C axis) a newcomer met a refusal the README had not prepared
+    text = " ".join(README.read_text(encoding="utf-8").split())
+    said = re.search(r"This is `models/errors/example\.toml`, which fits ((?:`\w+`(?:, | and ))+"
+                     r"`\w+`)\. The other two machines refuse it, naming the key: (.*?)\n?"
+                     r"Error parameter names", text)
+    assert said is not None
+    errors = ErrorModel.from_toml(ROOT / EXAMPLE_ERRORS)
+    fits, refused = [], {}
+    for name in list_machines():
+        try:
+            load_machine(name).check_errors(errors)
+            fits.append(name)
+        except ErrorModelError as error:
+            refused[name] = error.key
+    assert re.findall(r"`(\w+)`", said.group(1)) == fits
+    assert len(refused) == 2
+    for name, key in refused.items():  # each named with the key it is refused at
+        assert re.search(f"`{name}` [^`]*(?:`[^`]*`[^`]*)*?at `{re.escape(key)}`",
+                         said.group(2)), (name, key)
 
 
 def test_the_readme_error_model_is_the_shipped_example_in_part():
