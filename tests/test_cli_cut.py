@@ -196,6 +196,35 @@ def test_a_tool_that_retraces_an_earlier_tools_groove_removed_nothing(tmp_path, 
     assert summary["removed_volume_mm3"] == pytest.approx(0.01**2 * 10.0, rel=1e-9)
 
 
+def test_each_tools_run_tells_its_progress_under_its_name(tmp_path):
+    # two tools, two grooves: the runs are built and cut in turn, each counted on its own;
+    # the progress had told both as plain "cutting"/"building", counts restarting unexplained
+    table = tmp_path / "tools.toml"
+    table.write_text('[tool.1]\nlength_mm = 0.0\n[tool.2]\nlength_mm = 2.5\nshape = "v:90"\n')
+    program = tmp_path / "two_tools.nc"
+    program.write_text("T1 M06\nG00 X0 Y1. Z1.\nG01 Z-0.01 F100.\nX10.\nG00 Z5.\n"
+                       "T2 M06\nG43 H2 Z1.\nG00 X0 Y3.\nG01 Z-0.01\nX10.\nG00 Z5.\nM30\n")
+    staged, plain = [], []
+
+    def cut(progress):
+        return machinesim.cut(machinesim.nc.read_program(program, tools=table),
+                              "grooving_4axis", tool="v:90", stock="block:12x4x1@-1,0,0",
+                              progress=progress)[1]
+
+    report = cut(lambda done, total, stage="cutting": staged.append((stage, done, total)))
+    cut(lambda done, total: plain.append((done, total)))
+    names = [stage.split(" ", 1)[1] for stage, _, _ in staged]
+    first = names.index("(T2 from line 6)")  # T1's run told first, whole, then T2's
+    assert set(names[:first]) == {"(T1 from line 1)"} and set(names[first:]) == {
+        "(T2 from line 6)"}
+    ends = [(done, total) for stage, done, total in staged if stage.startswith("cutting")
+            and done == total]
+    assert sum(total for _, total in ends) == report.sweeps == 2  # a groove each
+    # a callable of (done, total) alone is told the cut as before, without the building
+    assert plain == [(done, total) for stage, done, total in staged
+                     if stage.startswith("cutting")]
+
+
 def test_the_nc_reader_takes_a_tool_table(tmp_path):
     table = tmp_path / "tools.toml"
     table.write_text("")

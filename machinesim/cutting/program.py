@@ -10,6 +10,7 @@ set, when the body alone cuts and the lines are listed.
 
 from __future__ import annotations
 
+import inspect
 import os
 import time
 
@@ -75,6 +76,28 @@ def check_progress(progress) -> None:
                          f"{progress!r:.60}", key="progress")
 
 
+def _run_progress(progress, number, line):
+    """``progress`` for the run of one tool of a program with several, each run built and cut
+    in turn, its sweeps counted on their own: a callable that takes a ``stage`` keyword is
+    told the run's tool in it, ``stage="cutting (T18 from line 29)"``, as `machinesim cut`
+    names the runs in its summary (the bar had shown "cutting 310/310", "building 384/384",
+    "cutting 310/310" with no word of which count was which tool's); any other is left as
+    it is."""
+    if progress is None:
+        return None
+    try:
+        inspect.signature(progress).bind(0, 0, stage="cutting")
+    except (TypeError, ValueError):
+        return progress
+    name = ("--tool before the first change" if number is None
+            else f"T{number} from line {line}")
+
+    def told(done: int, total: int, stage: str = "cutting") -> None:
+        progress(done, total, stage=f"{stage} ({name})")
+
+    return told
+
+
 def _arguments(program, tool, stock, errors):
     """`cut`'s program, tool, stock and errors as the objects it works on, or an InputError
     naming the argument and what it takes."""
@@ -133,7 +156,9 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
     servo : motion.ServoModel, optional
         Axis follow-up model (default ideal).
     progress : callable(done, total), optional
-        Called as the engine works through the sweeps.
+        Called as the engine works through the sweeps. With tool changes each tool's run is
+        built and cut in turn, counted on its own, and a callable that takes a ``stage``
+        keyword is told the run's tool in it: ``stage="cutting (T18 from line 29)"``.
     allow_overtravel : bool
         Cut a program that takes an axis outside its travel, listing where, instead of
         refusing it.
@@ -225,7 +250,8 @@ def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, s
             allowance, chorded = sweep_allowances(section_tool, paths, allowance,
                                                   float(stock.bounds[1, 2]), floor, chorded,
                                                   carry=len(tools.runs) > 1)
-        part, engine = remove(before, section_tool, paths, roi=roi, progress=progress,
+        told = progress if len(tools.runs) == 1 else _run_progress(progress, number, line)
+        part, engine = remove(before, section_tool, paths, roi=roi, progress=told,
                               sheets=False, on_holder_contact=refuse,
                               holder_stock=_outside_windows(stock, roi, done, section_tool,
                                                             paths, allow_holder_contact),
