@@ -28,6 +28,7 @@ from numpy.polynomial import hermite, legendre
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_floats, as_number, shown
+from machinesim.metrology.blur import gaussian_blur
 from machinesim.metrology.instruments import OPTICAL_LIMIT
 from machinesim.metrology.surface import _finish, _Line, _zbuffer, grid_heights
 from machinesim.tolerances import LINE_MARGIN
@@ -90,6 +91,13 @@ class Spot:
         up to ``2 samples - 1``), a top-hat equally weighted points at the centres of
         ``samples`` equal cells: a step edge read across then rises in ``samples`` equal
         steps over the width, the top-hat's ramp in the limit.
+    exact : bool
+        False (default): the sub-grid above. True (a ``"gaussian"`` spot only): the exact
+        Gaussian blur of the mesh's top surface, integrated in closed form over each of its
+        planes (`machinesim.metrology.blur`), ``samples`` unused: a wall or a kink reads the
+        blur of a true Gaussian spot wherever it lies, not a staircase where the nodes cross
+        it. Its weight on the part decides as the sub-grid's (`SPOT_COVER`, `SPOT_TIE`). A
+        part read as a height field has no planes: refused there as every spot is.
 
     Notes
     -----
@@ -103,6 +111,7 @@ class Spot:
     width: float
     shape: str = "gaussian"
     samples: int = 5
+    exact: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "width", as_number(
@@ -116,6 +125,13 @@ class Spot:
             raise InputError(f"Expected samples an int >= 1, got {self.samples!r}",
                              key="samples")
         object.__setattr__(self, "samples", int(self.samples))
+        if not isinstance(self.exact, bool | np.bool_):  # "no" is no True
+            raise InputError(f"Expected exact as True or False, got {self.exact!r:.60}",
+                             key="exact")
+        if self.exact and self.shape != "gaussian":
+            raise InputError(f"Expected exact=True with a 'gaussian' spot (the closed form "
+                             f"is the Gaussian's), got shape {self.shape!r}", key="exact")
+        object.__setattr__(self, "exact", bool(self.exact))
 
     def axis(self) -> tuple[np.ndarray, np.ndarray]:
         """Offsets (m) and weights along one axis, each shape (samples,); weights sum to 1."""
@@ -372,8 +388,20 @@ def spot_heights(vertices, triangles, x, y, dx, dy, spot: Spot | None) -> np.nda
 
     ``x``, ``y`` are the nominal sample axes and ``dx``, ``dy`` how far each column and row
     really sits off (lateral noise; zeros for none), all m. Without a spot each value is the
-    exact height there; with one, the spot's weighted mean of the exact heights around it.
+    exact height there; with one, the spot's weighted mean of the exact heights around it
+    (its sub-grid's, or with ``exact`` the spot's blur in closed form).
     """
+    if spot is not None and spot.exact:
+        shape = (len(y), len(x))
+        px = np.broadcast_to((x + dx)[None, :], shape).ravel()
+        py = np.broadcast_to((y + dy)[:, None], shape).ravel()
+        out, tie = _blurred(vertices, triangles, px, py, spot)
+        if tie.any():  # the spot's centre decides (`SPOT_TIE`): read those samples bare
+            cx, jx = np.unique(px[tie], return_inverse=True)
+            cy, jy = np.unique(py[tie], return_inverse=True)
+            centre = grid_heights((vertices, triangles), cx, cy)[jy, jx]
+            out[np.flatnonzero(tie)[~np.isfinite(centre)]] = np.nan
+        return out.reshape(shape)
     ox, wx = (np.zeros(1), np.ones(1)) if spot is None else spot.axis()
     xs, ix = np.unique(((x + dx)[:, None] + ox[None, :]).ravel(), return_inverse=True)
     ys, iy = np.unique(((y + dy)[:, None] + ox[None, :]).ravel(), return_inverse=True)
@@ -407,11 +435,22 @@ def line_heights(vertices, triangles, start, direction, s, ds, across: float,
     ``n``: its weight is the same in every frame, and the rotated Gauss-Hermite grid is exact
     for the same polynomials, so a line in any direction reads ``samples`` lines. A top-hat
     is a pixel square to the instrument's x and y: its offsets are split into their parts
-    along and across the line, up to ``samples**2`` lines for a slanted one.
+    along and across the line, up to ``samples**2`` lines for a slanted one. An ``exact``
+    spot reads the blur at each sample in closed form, no lines.
     """
     ox, w = (np.zeros(1), np.ones(1)) if spot is None else spot.axis()
     u = np.asarray(direction, dtype=np.float64)
     normal = np.array([-u[1], u[0]])
+    if spot is not None and spot.exact:
+        origin = np.asarray(start, dtype=np.float64) + across * normal
+        points = origin + (s + ds)[:, None] * u
+        out, tie = _blurred(vertices, triangles, points[:, 0], points[:, 1], spot)
+        if tie.any():  # the spot's centre decides (`SPOT_TIE`): read the line bare there
+            centre, inverse = np.unique((s + ds)[tie], return_inverse=True)
+            z = _finish(_zbuffer(vertices, triangles,
+                                 _LineSamples(origin, u, centre, vertices)))
+            out[np.flatnonzero(tie)[~np.isfinite(z[inverse])]] = np.nan
+        return out
     offsets = np.stack(np.meshgrid(ox, ox, indexing="ij"), axis=-1).reshape(-1, 2)
     weights = np.outer(w, w).ravel()
     if spot is not None and spot.shape == "gaussian":
@@ -435,6 +474,16 @@ def line_heights(vertices, triangles, start, direction, s, ds, across: float,
                                   _LineSamples(origin, u, points, vertices)))
         out[np.flatnonzero(tie)[~np.isfinite(centre[inverse])]] = np.nan
     return out
+
+
+def _blurred(vertices, triangles, px, py, spot: Spot) -> tuple[np.ndarray, np.ndarray]:
+    """An ``exact`` spot's reading at the points ``(px, py)`` and its ties, as `_weighted`:
+    the blur's mean where its weight on the part is at least `SPOT_COVER`, else NaN."""
+    total, weight = gaussian_blur(vertices, triangles, px, py, _fwhm_sigma(spot.width))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = total / weight
+    mean[~(weight >= SPOT_COVER)] = np.nan
+    return mean, np.abs(weight - 0.5) <= SPOT_TIE
 
 
 def _weighted(values: np.ndarray, weights: np.ndarray, axes: tuple

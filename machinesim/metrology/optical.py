@@ -177,7 +177,8 @@ class _Profiler:
 
     def __repr__(self) -> str:
         r = self.readout
-        extra = "" if self.spot is None else f", spot={self.spot.shape}:{self.spot.width:g} m"
+        extra = "" if self.spot is None else (f", spot={self.spot.shape}:{self.spot.width:g} m"
+                                              + (" exact" if self.spot.exact else ""))
         if self.lateral_sigma > 0.0:
             extra += f", lateral_sigma={self.lateral_sigma:g} m"
         if self.stage_sigma > 0.0:
@@ -220,7 +221,7 @@ class _Profiler:
         if self.spot is None and self.lateral_sigma == 0.0:
             s, z = profile(surface, a, b, spacing, refuse=False)
         else:
-            per_sample = 1 if self.spot is None else self.spot.samples**2
+            per_sample = 1 if self.spot is None or self.spot.exact else self.spot.samples**2
             s = _line_samples(a, b, as_positive(spacing, "spacing"), per_sample)
             ds, across = np.zeros(len(s)), 0.0
             if self._lateral_rng is not None:
