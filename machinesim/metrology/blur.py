@@ -47,9 +47,11 @@ WALL_WIDTH = 1e-7
 #: samples weigh up to 1 + 1.1e-4 there). A boolean's round-off leans a wall out by
 #: ~1e-13 m, an overlap that weighs ~1e-7 of the spot, and is passed.
 OVERLAP = 1e-5
-#: The fine grid's step, in sigmas (1/40), over +-REACH: its midpoint sum is within ~1e-5 of
-#: a wall's height of the closed form (a 1 um spot across walls and a V, against 1/80).
+#: The fine grid's step, in sigmas (1/40), over +-REACH, and its turn about the sample, rad
+#: (the spot is round; machined walls lie along x, y and 45 deg, not along 57.3 deg): its
+#: midpoint sum is within 1e-4 of a wall's height of the closed form (tests/test_spot_exact.py).
 FINE = 1.0 / 40.0
+FINE_TURN = 1.0
 #: Samples blurred at once: their pairs with the triangles near them are the arrays.
 POINT_BLOCK = 20_000
 #: (triangle, sample) pairs evaluated at once (each ~40 float64 temporaries: ~50 MB).
@@ -192,15 +194,22 @@ def _right(h: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def _fine(vertices, triangles, px: float, py: float, sigma: float) -> tuple[float, float]:
-    """One sample's blur as `gaussian_blur` gives it, summed on the grid of step `FINE` sigma
-    (off the sample's centre by 0.318 step, so that no wall through it falls on a node)."""
+    """One sample's blur as `gaussian_blur` gives it, summed on a grid of step `FINE` sigma
+    turned by `FINE_TURN` about the sample (the spot is round): a wall along the grid's
+    lines had been read in steps of a node row, up to 5e-3 of its height off."""
     n = int(math.ceil(REACH / FINE))
-    offsets = (np.arange(-n, n + 1) + 1.0 / math.pi) * FINE * sigma
+    offsets = (np.arange(-n, n + 1) + 0.5) * FINE * sigma
     g = np.exp(-0.5 * (offsets / sigma) ** 2)
     w = np.outer(g, g) / np.sum(g) ** 2
     x, y = vertices[triangles, 0], vertices[triangles, 1]
-    near = ((x.min(axis=1) <= px + offsets[-1]) & (x.max(axis=1) >= px + offsets[0])
-            & (y.min(axis=1) <= py + offsets[-1]) & (y.max(axis=1) >= py + offsets[0]))
-    z = grid_heights((vertices, triangles[near]), px + offsets, py + offsets)
+    reach = np.hypot(offsets[0], offsets[0])
+    near = ((x.min(axis=1) <= px + reach) & (x.max(axis=1) >= px - reach)
+            & (y.min(axis=1) <= py + reach) & (y.max(axis=1) >= py - reach))
+    used = np.unique(triangles[near])
+    c, s = math.cos(FINE_TURN), math.sin(FINE_TURN)
+    dx, dy = vertices[used, 0] - px, vertices[used, 1] - py
+    turned = np.column_stack([c * dx + s * dy, c * dy - s * dx, vertices[used, 2]])
+    index = np.searchsorted(used, triangles[near])
+    z = grid_heights((turned, index), offsets, offsets)
     seen = np.isfinite(z)
     return float(np.sum(np.where(seen, z, 0.0) * w)), float(np.sum(w[seen]))
