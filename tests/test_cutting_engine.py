@@ -256,3 +256,19 @@ def test_a_move_a_km_long_cuts_its_hand_volume_and_a_pose_farther_out_is_refused
                                              r"within 1000 m"):
             remove(stock, FlatEndMill(0.5e-3),
                    [poses((-far, 5e-3, -depth), (far, 5e-3, -depth))])
+
+
+def test_a_path_of_no_pose_before_the_others_drops_no_sweep():
+    """A flat end mill 1 mm in radius along Y through a 10 mm block 0.5 mm deep cuts 2 x 0.5
+    x 10 = 10 mm^3 by hand; a path of no pose given first had ended at pose -1, and the
+    sweep that pair was taken from was the cut's last: the slot, cut without a word, 0 mm^3
+    (n_sweeps 1 of 2)."""
+    from machinesim.end_mills import FlatEndMill
+
+    path = np.tile(np.eye(4), (3, 1, 1))
+    path[:, :3, 3] = [(5e-3, -1e-3, 1e-3), (5e-3, -1e-3, -0.5e-3), (5e-3, 11e-3, -0.5e-3)]
+    empty = np.zeros((0, 4, 4))
+    for paths in ([path], [empty, path], [path, empty], [empty, path, empty]):
+        _, report = remove(block(10e-3, 10e-3, 3e-3), FlatEndMill(1e-3), paths)
+        assert report.n_sweeps == 2
+        assert report.removed_volume == pytest.approx(10e-9, rel=1e-9)

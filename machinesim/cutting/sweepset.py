@@ -79,10 +79,12 @@ class SweepSet:
         # Every sweep's faces carry this id, so the faces a cut leaves can be found.
         self.run_id = manifold3d.Manifold.reserve_ids(1)
         self.poses = np.concatenate(paths) if paths else np.zeros((0, 4, 4))
-        # A sweep joins pose i to pose i + 1 of the same path, never across paths.
+        # A sweep joins pose i to pose i + 1 of the same path, never across paths. A path of
+        # no pose before any pose ends at -1: no pair (np.delete took it from the end, and
+        # the last sweep of the cut was never cut).
         last = np.cumsum([len(poses) for poses in paths], dtype=np.int64) - 1
         self.pairs = np.delete(np.arange(max(len(self.poses) - 1, 0), dtype=np.int64),
-                               last[last < len(self.poses) - 1])
+                               last[(last >= 0) & (last < len(self.poses) - 1)])
         self.count = len(self.pairs)
         k = len(self.vertices)
         self.edges = edges
