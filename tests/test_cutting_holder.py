@@ -352,3 +352,31 @@ def test_a_holder_tolerance_that_is_no_length_is_refused_naming_it(bad):
     with pytest.raises(InputError, match="holder_tolerance"):
         remove(block(MM, MM, MM), FlatEndMill(0.1 * MM), [np.tile(np.eye(4), (2, 1, 1))],
                holder_tolerance=bad)
+
+
+def test_an_empty_path_is_no_sweep_of_holder_tolerance():
+    # a path of no pose makes no sweep (a path of one pose makes one): counted as one, two
+    # values for the pass below and an empty path were refused, asking for 3, and three
+    # were taken and failed in the holder check (ValueError: operands could not be broadcast)
+    from machinesim.cutting import remove
+    from machinesim.exceptions import InputError
+    from machinesim.tool_specs import tool_from_spec
+    from machinesim.workpiece import stock_from_spec
+
+    tool = tool_from_spec("flat:1.0:h=1")
+    stock = stock_from_spec("block:10x10x3")
+    # a pass along Y 2 mm deep: the holder, from 1 mm down, in the block (sweep 1)
+    path = np.array([np.eye(4)] * 3)
+    path[:, :3, 3] = [[5 * MM, -MM, MM], [5 * MM, -MM, -2 * MM], [5 * MM, 11 * MM, -2 * MM]]
+    empty = np.zeros((0, 4, 4))
+    met = []
+    alone, report = remove(stock, tool, [path], holder_tolerance=[1e-7, 1e-7],
+                           on_holder_contact=met.append)
+    for paths in ([path, empty], [empty, path]):
+        part, with_empty = remove(stock, tool, paths, holder_tolerance=[1e-7, 1e-7],
+                                  on_holder_contact=met.append)
+        assert with_empty.holder_contact == report.holder_contact == (1,)
+        assert part.volume == pytest.approx(alone.volume, rel=1e-12)
+        with pytest.raises(InputError, match=r"holder_tolerance .* or 2 of them"):
+            remove(stock, tool, paths, holder_tolerance=[1e-7] * 3)
+    assert met == [(1,)] * 3

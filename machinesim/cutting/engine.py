@@ -206,10 +206,11 @@ def _building(progress):
 
 def _holder_tolerance(value, paths: list) -> float | np.ndarray:
     """``value`` (`remove`'s ``holder_tolerance``) as a length >= 0 (m), or as one per sweep
-    of ``paths`` (a path of one pose is one sweep), or an InputError naming it."""
+    of ``paths`` (a path of one pose is one sweep, a path of none none), or an InputError
+    naming it."""
     if np.ndim(value) == 0 or isinstance(value, str | bytes):
         return as_number(value, "holder_tolerance", sign=">= 0")
-    count = sum(max(len(poses) - 1, 1) for poses in paths)
+    count = sum(max(len(poses) - 1, 1) for poses in paths if len(poses))
     try:
         each = np.asarray(value)
     except (TypeError, ValueError):  # ragged
