@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.special import ndtr
 
 from machinesim import Lab, load_machine
 from machinesim.cam.crown import (
@@ -19,11 +20,14 @@ from machinesim.cam.crown import (
     crown_design,
     crown_roi,
 )
+from machinesim.exceptions import InputError
 from machinesim.metrology import Microscope
 from machinesim.metrology.crown_image import (
+    CLEARANCE_SIGMAS,
     crown_image_reading,
     profile_edges,
     profile_reading,
+    spot_clearance,
     turned_placements,
 )
 from machinesim.realism import OBJECTIVE_10X, Realism
@@ -109,6 +113,75 @@ def test_a_face_that_ends_in_a_step_has_its_foot_at_the_step():
     edges = profile_edges(s, smooth, pixel=False, band=0.5e-6)
     assert edges.s_foot == pytest.approx(top + 300e-6, abs=1e-12)
     assert edges.inclination == pytest.approx(math.atan(0.2), abs=1e-12)
+
+
+def _blurred(s, base, kinks, steps, sigma):
+    """The Gaussian blur (standard deviation ``sigma``) of the profile ``base`` plus slope
+    changes ``kinks`` [(at, change)] and steps ``steps`` [(at, height)], in closed form: a
+    step h at a reads h Phi(u), a slope change c at a reads c ((s - a) Phi(u) + sigma phi(u)),
+    u = (s - a) / sigma; a constant is unchanged. A surface the same along the profile's
+    normal reads so through a round Gaussian spot."""
+    z = np.full_like(s, base)
+    for at, change in kinks:
+        u = (s - at) / sigma
+        z += change * ((s - at) * ndtr(u) + sigma * np.exp(-0.5 * u * u) / math.sqrt(2 * math.pi))
+    for at, height in steps:
+        z += height * ndtr((s - at) / sigma)
+    return z
+
+
+def test_a_face_that_steps_away_to_a_wall_has_its_foot_cursor_clear_of_the_walls_blur():
+    """Paper 002's face 2 after: a face at slope 0.2 whose passes stop 1.2 um short of a
+    9.5 um wall up to the uncut band, read through the 10x's 1 um spot at its 1.32 um pixel,
+    the last sample on the face's line 0.5 um before the wall (the wall's blur lifts it
+    1.13 um, the ledge 0.14 um: inside the 1.4 um band). The foot cursor goes on the last
+    sample `CLEARANCE_SIGMAS` sigmas or more before the wall, and S reads atan 0.2 within
+    what the blur can move the two cursors: each slope change c lifts or lowers a sample by
+    at most c sigma phi(0), a step h at k sigmas by h Phi(-k)."""
+    pixel, spot = OBJECTIVE_10X.pixel, OBJECTIVE_10X.spot
+    sigma = spot.width / (2 * math.sqrt(2 * math.log(2)))  # the width is the FWHM
+    s = np.arange(400) * pixel
+    top, slope, wall, height, band = s[76], 0.2, s[295] + 0.5 * UM, 9.5 * UM, 1.4 * UM
+    face_end = wall - 1.2 * UM
+    # the face, its ledge, the wall and the uncut band parallel to the face (the rough face)
+    kinks = [(top, -slope), (face_end, slope), (wall, -slope)]
+    z = _blurred(s, 60 * UM, kinks, [(wall, height)], sigma)
+    clearance = spot_clearance(spot)
+    assert clearance == pytest.approx(CLEARANCE_SIGMAS * sigma, rel=1e-15)
+    assert height * ndtr(-CLEARANCE_SIGMAS) < 1e-3 * height
+    old = profile_edges(s, z, pixel=True, band=band)
+    assert old.s_foot == s[295]  # the face's last sample: 0.5 um from the wall
+    edges = profile_edges(s, z, pixel=True, band=band, clearance=clearance)
+    clear = s[s <= wall - CLEARANCE_SIGMAS * sigma]
+    assert edges.s_foot == clear[-1] == s[294]
+    assert edges.s_top == top
+    bound = (3 * slope * sigma / math.sqrt(2 * math.pi) + height * ndtr(-CLEARANCE_SIGMAS)) / (
+        edges.s_foot - edges.s_top)
+    assert abs(edges.inclination - math.atan(slope)) <= bound
+    assert abs(old.inclination - math.atan(slope)) > 10 * bound  # the wall's blur read
+    # without a spot (exact heights) the foot is the face's last sample either way
+    sharp = _blurred(s, 60 * UM, kinks, [], 1e-12)
+    sharp = np.where(s > wall, sharp + height, sharp)
+    assert profile_edges(s, sharp, pixel=True, band=band).s_foot == s[295]
+    # a face that runs on into the flat keeps its corner, clearance or not
+    smooth = _blurred(s, 60 * UM, [(top, -slope), (s[376], slope)], [], sigma)
+    for c in (0.0, clearance):
+        assert profile_edges(s, smooth, pixel=False, band=band, clearance=c).s_foot \
+            == pytest.approx(s[376], abs=1e-9)
+
+
+def test_a_face_with_no_sample_clear_of_its_wall_says_so_and_a_bad_clearance_is_refused():
+    s = np.arange(400) * UM
+    z = np.where(s < 100 * UM, 60 * UM, 60 * UM - 0.2 * (s - 100 * UM))
+    z = np.where(s >= 395 * UM, z + 10.2 * UM, z)
+    why = profile_reading(s, z, pixel=True, band=0.5 * UM, clearance=300 * UM)
+    assert isinstance(why, str) and why.startswith("no foot clear of the wall")
+    assert "394 um" in why and "300 um" in why
+    assert profile_edges(s, z, pixel=True, band=0.5 * UM, clearance=300 * UM) is None
+    assert profile_edges(s, z, pixel=True, band=0.5 * UM, clearance=3 * UM).s_foot == s[391]
+    for bad in (-1e-6, float("nan"), "1e-6"):
+        with pytest.raises(InputError, match="clearance"):
+            profile_reading(s, z, pixel=True, band=0.5 * UM, clearance=bad)
 
 
 def test_a_profile_without_a_level_top_is_unreadable():

@@ -16,7 +16,10 @@ the side surface". `crown_image_reading` does that on a simulated part:
   edge: the top and the face, the face and the flat (`profile_edges`);
 - an operator's cursor sits on a pixel: with the instrument's lateral resolution
   (``microscope.spot`` set) each edge is the sample nearest that corner and its height the
-  height read there; without, the corner itself on the fitted lines (exact readings);
+  height read there; without, the corner itself on the fitted lines (exact readings); a
+  foot before an uncut band is the face's last sample, kept clear of the wall the band
+  stands on by the spot's reach (`spot_clearance`), as an operator who sees the wall keeps
+  the cursor off its blur;
 - S_k = atan(height / length) between the top and foot cursors of the middle profile;
   L_k: the distance from face k + 4's top edge point (middle profile) to the line through
   face k's two top edge points (v = -a, +a), averaged over three readings, each of two
@@ -39,15 +42,16 @@ import numpy as np
 
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
+from machinesim.metrology._arrays import as_number
 from machinesim.metrology.fits import fit_plane, height_map_points
 from machinesim.metrology.meshindex import MeshIndex
 from machinesim.rotations import rot_z
 from machinesim.units import M_PER_UM
 from machinesim.workpiece import Part
 
-__all__ = ["EDGE_GUARD", "REPEATS", "ROUGH_FACE_FRACTION", "CrownImageReading", "ProfileEdges",
-           "crown_image_reading", "profile_edges", "profile_reading", "rough_face",
-           "turned_placements"]
+__all__ = ["CLEARANCE_SIGMAS", "EDGE_GUARD", "REPEATS", "ROUGH_FACE_FRACTION", "CrownImageReading",
+           "ProfileEdges", "crown_image_reading", "profile_edges", "profile_reading",
+           "rough_face", "spot_clearance", "turned_placements"]
 
 UM = M_PER_UM
 
@@ -79,6 +83,15 @@ BAND_SIGMAS, BAND_FLOOR = 5.0, 0.5 * UM
 #: before and -0.7 .. +2.4 um after. Half the allowance, 5 um, lies between with 2.6 um to
 #: spare on the cut side and 4.3 um on the rough side.
 ROUGH_FACE_FRACTION = 0.5
+#: Where a face steps away (an uncut band beyond its last pass), its foot cursor keeps this
+#: many spot sigmas before the face's last sample, so that the wall the band stands on does
+#: not lift the height read there. A Gaussian spot of standard deviation sigma reads a step
+#: of height h at distance d before it lifted by h Phi(-d / sigma): Phi(-3.1) = 9.7e-4, under
+#: 0.1 % of the wall (9 nm on paper 002's 9.5 um wall, against the 10x's 0.18 um noise). The
+#: face's last sample keeps within the band of the face's line, so a wall higher than twice
+#: the band lies beyond it (the blur reads half the step at the wall): the cursor lies at
+#: least this far from the wall (`spot_clearance`).
+CLEARANCE_SIGMAS = 3.1
 
 
 @dataclass(frozen=True)
@@ -146,6 +159,19 @@ def _top_level(s: np.ndarray, z: np.ndarray, band: float, guard: float, reach: f
     return level
 
 
+def spot_clearance(spot) -> float:
+    """How far (m) a foot cursor keeps before a wall seen through ``spot``
+    (`machinesim.metrology.Spot`, or None: 0): `CLEARANCE_SIGMAS` sigmas of a Gaussian spot
+    (its width is the full width at half maximum, sigma = width / (2 sqrt(2 ln 2)),
+    0.425 um for the 10x's 1.0 um), half the side of a top-hat (which reads nothing of a
+    step farther off than that)."""
+    if spot is None:
+        return 0.0
+    if spot.shape == "tophat":
+        return 0.5 * spot.width
+    return CLEARANCE_SIGMAS * spot.width / (2.0 * math.sqrt(2.0 * math.log(2.0)))
+
+
 def _corner(a: np.ndarray, b: np.ndarray) -> float:
     return float((b[1] - a[1]) / (a[0] - b[0]))
 
@@ -157,7 +183,8 @@ def _cursor(s: np.ndarray, z: np.ndarray, at: float) -> int:
 
 def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
                   reach: float = EDGE_REACH, iterations: int = 4,
-                  design: tuple[np.ndarray, float] | None = None) -> ProfileEdges | None:
+                  design: tuple[np.ndarray, float] | None = None,
+                  clearance: float = 0.0) -> ProfileEdges | None:
     """The top edge and the foot of the face in a profile across it, levelled on the flat.
 
     Top edge: from where the profile first falls below the top's line (`_top_level`) by more
@@ -169,7 +196,11 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
     Foot: where the profile leaves the face's line (refitted on what keeps to it) by more
     than ``band`` going out; if what follows runs on from the face (a ledge or the flat),
     the corner of the face's line and its line; if it steps away (an uncut band beyond the
-    finished face), the face's last sample. ``pixel``: each cursor on the sample nearest
+    finished face), the face's last sample at least ``clearance`` (m) before the last that
+    keeps to its line: the wall that band stands on lies beyond that, and its blur through
+    the instrument's spot lifts the samples next to it (`spot_clearance`: a few sigmas of
+    the spot; 0, the default, where no spot is known: the last that keeps to the line).
+    ``pixel``: each cursor on the sample nearest
     its edge and the height read there (an operator reading an image); else the edges on
     the fitted lines. ``design``: the designed face's line along the profile (`np.polyfit`'s
     coefficients, heights above the flat, m) and the stock allowance (m); given, a face
@@ -177,7 +208,7 @@ def profile_edges(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
     profile does not run from a top down a cut face (`profile_reading` says why).
     """
     edges = profile_reading(s, z, pixel=pixel, band=band, guard=guard, reach=reach,
-                            iterations=iterations, design=design)
+                            iterations=iterations, design=design, clearance=clearance)
     return edges if isinstance(edges, ProfileEdges) else None
 
 
@@ -199,9 +230,11 @@ def rough_face(out: float, allowance: float) -> str | None:
 
 def profile_reading(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD,
                     reach: float = EDGE_REACH, iterations: int = 4,
-                    design: tuple[np.ndarray, float] | None = None) -> ProfileEdges | str:
+                    design: tuple[np.ndarray, float] | None = None,
+                    clearance: float = 0.0) -> ProfileEdges | str:
     """`profile_edges`, or where the profile does not run from a top down a face, what it
     found instead (a sentence: which edge or line could not be read, and why)."""
+    clearance = as_number(clearance, "clearance", sign=">= 0")
     s, z = np.asarray(s, dtype=np.float64), np.asarray(z, dtype=np.float64)
     finite = np.isfinite(z)
     if np.count_nonzero(finite[:10]) < 5:
@@ -258,6 +291,7 @@ def profile_reading(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD
     beyond = _line(s, z, (s > s_end + guard) & (s < s_end + reach))
     last = float(s[np.flatnonzero((s < s_end) & finite)[-1]])
     s_foot = last
+    stepped = len(past) > 0  # the profile leaves the face's line (not its own end)
     if beyond is not None and beyond[0] != face[0]:
         corner = _corner(face, beyond)
         if last - reach < corner < s_end + reach and abs(
@@ -271,7 +305,7 @@ def profile_reading(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD
                 if inner is None or outer is None or inner[0] == outer[0]:
                     break
                 face, corner = inner, _corner(inner, outer)
-            s_foot = corner
+            s_foot, stepped = corner, False
     if design is not None:
         # the face's line against the design's, at the middle of the face as read
         line, allowance = design
@@ -281,6 +315,17 @@ def profile_reading(s, z, *, pixel: bool, band: float, guard: float = EDGE_GUARD
         if (why := rough_face(out, allowance)) is not None:
             return (f"the rough face: the face's line, read from the top edge at "
                     f"{_um(s_top)} to the foot at {_um(s_foot)} along the profile, {why}")
+    if stepped and clearance > 0.0:
+        # the foot cursor clear of the wall's blur: on the last face sample (one the face's
+        # line was fitted on, guard past the top edge) ``clearance`` before the last sample
+        # that keeps to the line
+        clear = np.flatnonzero((s <= last - clearance) & (s > s_top + guard) & finite)
+        if len(clear) == 0:
+            return (f"no foot clear of the wall: the face steps away after its last sample "
+                    f"on its line at {_um(last)}, and no sample of the face from the top "
+                    f"edge at {_um(s_top)} on lies {_um(clearance)} (the spot's reach) "
+                    "before it, where the wall's blur does not lift the height read")
+        s_foot = float(s[clear[-1]])
     if not pixel:
         return ProfileEdges(s_top, float(np.polyval(top, s_top)), s_foot,
                             float(np.polyval(face, s_foot)))
@@ -348,13 +393,14 @@ def _face_edges(mesh, microscope, bottom, sign: float, vs, image, design) -> lis
     r0, r1 = image[0], image[1]
     pixel = microscope.spot is not None
     band = BAND_SIGMAS * microscope.readout.sigma + BAND_FLOOR
+    clearance = spot_clearance(microscope.spot)  # the objective's resolution, as published
     out = []
     with microscope.placement():
         for v in vs:
             start, end = sign * np.array([r0, v]), sign * np.array([r1, v])
             read = microscope.profile(mesh, start, end)
             edges = profile_reading(read.s, _levelled(read, bottom), pixel=pixel, band=band,
-                                    design=design)
+                                    design=design, clearance=clearance)
             point = (np.full(2, np.nan) if isinstance(edges, str)
                      else start + (end - start) / (r1 - r0) * edges.s_top)
             out.append((point, edges))
