@@ -147,20 +147,29 @@ def test_tools_and_integer_input_reach_the_nc_reader(tmp_path, capsys, monkeypat
     assert_clean_failure(code, err, "none.toml: no such file; expected the tool table (--tools)")
 
 
-def test_each_tool_cuts_at_its_length_and_the_summary_says_what_it_removed(tmp_path, capsys):
-    # Two 90-deg V grooves 10 um deep and 10 mm long (each d^2 x L = 1e-3 mm^3): T1 the
-    # model's tool, T2 2.5 mm longer with G43 H2 lifting Z by as much, so both cut at the
-    # programmed depth; the change to T2 is made 5 mm up, clear of the part.
+def _two_v_tools(tmp_path, capsys, t2_y_mm):
+    """`machinesim cut` of two 90-deg V grooves 10 um deep and 10 mm long, T1 the model's
+    tool at Y1, T2 2.5 mm longer (G43 H2 lifting Z by as much) at Y ``t2_y_mm``: (exit
+    code, stdout, stderr, report path)."""
     table = tmp_path / "tools.toml"
     table.write_text('[tool.1]\nlength_mm = 0.0\n'   # no shape: the cut's --tool
                      '[tool.2]\nlength_mm = 2.5\nshape = "v:90"\n')
     program = tmp_path / "two_tools.nc"
     program.write_text("T1 M06\nG00 X0 Y1. Z1.\nG01 Z-0.01 F100.\nX10.\nG00 Z5.\n"
-                       "T2 M06\nG43 H2 Z1.\nG00 X0 Y3.\nG01 Z-0.01\nX10.\nG00 Z5.\nM30\n")
+                       f"T2 M06\nG43 H2 Z1.\nG00 X0 Y{t2_y_mm}.\nG01 Z-0.01\nX10.\n"
+                       "G00 Z5.\nM30\n")
     report = tmp_path / "r.json"
     code, out, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
                           "--stock", "block:12x4x1@-1,0,0", "--tools", table, "--out",
                           tmp_path / "p.ply", "--report", report, "--quiet"], capsys)
+    return code, out, err, report
+
+
+def test_each_tool_cuts_at_its_length_and_the_summary_says_what_it_removed(tmp_path, capsys):
+    # Two 90-deg V grooves 10 um deep and 10 mm long (each d^2 x L = 1e-3 mm^3): T1 the
+    # model's tool, T2 2.5 mm longer with G43 H2 lifting Z by as much, so both cut at the
+    # programmed depth; the change to T2 is made 5 mm up, clear of the part.
+    code, out, err, report = _two_v_tools(tmp_path, capsys, t2_y_mm=3)
     assert code == 0, err
     assert "T1 from line 1: length 0 mm, removed 0.001 mm^3" in out
     assert "T2 from line 6: length 2.5 mm, removed 0.001 mm^3" in out
@@ -174,15 +183,7 @@ def test_a_tool_that_retraces_an_earlier_tools_groove_removed_nothing(tmp_path, 
     # T1 cuts a 90-deg V groove 10 um deep and 10 mm long (d^2 x L = 1e-3 mm^3); T2, the same
     # V 2.5 mm longer, runs the same groove at the same depth: its volume is what the booleans
     # leave of nothing, round-off ('T18 ... removed 2.01832e-13 mm^3' had read as material)
-    table = tmp_path / "tools.toml"
-    table.write_text('[tool.1]\nlength_mm = 0.0\n[tool.2]\nlength_mm = 2.5\nshape = "v:90"\n')
-    program = tmp_path / "retrace.nc"
-    program.write_text("T1 M06\nG00 X0 Y1. Z1.\nG01 Z-0.01 F100.\nX10.\nG00 Z5.\n"
-                       "T2 M06\nG43 H2 Z1.\nG00 X0 Y1.\nG01 Z-0.01\nX10.\nG00 Z5.\nM30\n")
-    report = tmp_path / "r.json"
-    code, out, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
-                          "--stock", "block:12x4x1@-1,0,0", "--tools", table, "--out",
-                          tmp_path / "p.ply", "--report", report, "--quiet"], capsys)
+    code, out, err, report = _two_v_tools(tmp_path, capsys, t2_y_mm=1)
     assert code == 0, err
     assert "T1 from line 1: length 0 mm, removed 0.001 mm^3" in out
     line = next(t for t in out.splitlines() if t.startswith("  T2 "))
