@@ -20,17 +20,21 @@ from machinesim.nc import ProgramBuilder, parse_program
 MM = 1e-3
 
 
-def reference(sweeps, candidates, solid, reach, keep, tolerance=0.0):
+def reference(sweeps, candidates, solid, reach, keep, tolerance=0.0, lent=None):
     """Every candidate's room against the solid less every earlier sweep in the stock's
     box, one candidate at a time (candidates x earlier sweeps booleans); less its own sweep
     too where it takes the tool straight down its axis (a plunge: its body has cut its
-    hole before the holder follows). ``tolerance``: one value, or one per sweep."""
+    hole before the holder follows). ``tolerance``: one value, or one per sweep; ``lent``: a
+    borrowed one only inside the lenders' boxes, the sweep's own outside them."""
     hulls, *_, owners = SweepSet.hulls(sweeps, keep)
     owners = np.asarray(owners)
     found = []
     for i in candidates:
         inset = float(tolerance if np.ndim(tolerance) == 0 else tolerance[i])
-        met = solid ^ holder_room(sweeps, i, reach, inset)
+        room = holder_room(sweeps, i, reach, inset)
+        if lent and i in lent:
+            room = room + (holder_room(sweeps, i, reach, lent[i][0]) - lent[i][1])
+        met = solid ^ room
         start, end = sweeps.poses[sweeps.pairs[i]], sweeps.poses[sweeps.pairs[i] + 1]
         down = (np.array_equal(start[:3, :3], end[:3, :3])
                 and float(start[:3, 2] @ (end[:3, 3] - start[:3, 3])) < 0.0)
@@ -67,16 +71,17 @@ def checked(monkeypatch):
         built.append(_Counted(result[0]))
         return (built[-1], *result[1:])
 
-    def both(sweeps, candidates, solid, reach, keep=None, tolerance=0.0):
+    def both(sweeps, candidates, solid, reach, keep=None, tolerance=0.0, lent=None):
         built.clear()
         monkeypatch.setattr(SweepSet, "hulls", counted)
         try:
-            found = holder_in_material(sweeps, candidates, solid, reach, keep, tolerance)
+            found = holder_in_material(sweeps, candidates, solid, reach, keep, tolerance,
+                                       lent)
         finally:
             monkeypatch.setattr(SweepSet, "hulls", original)
         reads = int(max((b.reads.max(initial=0) for b in built), default=0))
         count = sum(len(b) for b in built)
-        assert found == reference(sweeps, candidates, solid, reach, keep, tolerance)
+        assert found == reference(sweeps, candidates, solid, reach, keep, tolerance, lent)
         calls.append((list(candidates), found, reads, count))
         return found
 

@@ -125,3 +125,80 @@ def test_a_straight_pass_whose_holder_meets_a_wall_arcs_cut_gets_their_chord(tmp
     assert part.volume == pytest.approx(allowed.volume, rel=1e-12)
     with pytest.raises(HolderContactError, match=rf"line {line} \(lines {line}, "):
         cut(read(0.1), "grooving_4axis", **kwargs)
+
+
+#: an arc read within 1 mm at the slot's far end, 0.1 mm deep, about (5, 10.5) mm: its body
+#: (1 mm in radius) cuts the block's top to x 3.5 .. 6.5 mm over y 9.5 .. 10 mm, its box
+#: meeting the room of the pass along the whole slot there and nowhere else
+ARC_AT_THE_END = "G00 X4.5 Y10.5\nG01 Z-0.1\nG02 X5.5 Y10.5 I0.5 J0.\nG00 Z5.\n"
+
+
+@pytest.mark.parametrize("f", [cut, cut_turned])
+def test_a_chorded_cut_at_one_end_forgives_no_holder_in_the_wall_along_the_pass(f):
+    # the pass (line 16) runs its holder 0.2 mm into the slot's straight wall over y 0 ..
+    # 9.5 mm, far from any chord: the arc, whose box met the pass's room at y 9.5 mm, lent
+    # the whole pass its 1 mm (0.5 mm, half the holder's radius), and it was cut, exit 0
+    def slot(dx_mm):
+        return parse_program(_slot_then_step(dx_mm, "").replace(
+            f"G00 X{5 + dx_mm:.3f} Y-1.", ARC_AT_THE_END + f"G00 X{5 + dx_mm:.3f} Y-1."),
+            chord_tolerance=1 * MM)
+
+    with pytest.raises(HolderContactError, match=r"line 16 takes the top of the tool's body"):
+        f(slot(0.2), "grooving_4axis", **KWARGS)
+    _, report = f(slot(0.0), "grooving_4axis", **KWARGS)
+    assert report.holder_contact == ()  # in the slot, touching its wall
+
+
+def test_a_chorded_cut_lends_only_inside_its_box_on_each_leg_of_a_tilted_workpiece(
+        monkeypatch):
+    # the same slot, arc and pass on a tilted workpiece (paper 002's setting error), after a
+    # feed at C = 90 deg in air: the end mill stands in two orientations, and cut_turned's
+    # check walks each leg in its own frame (holder._in_material_by_legs), the slot's sweeps
+    # being the program's from the C = 90 leg's count on. There too the arc's 1 mm holds
+    # only inside its box, turned into the leg's frame: 0.2 mm into the wall is refused
+    from machinesim.cutting import holder
+
+    tilted = {"workpiece": {"alpha_deg": 0.01, "beta_deg": -0.02}}
+    away = "G00 C90. X20. Y20. Z5.\nG01 X22. F100.\nG00 Z5.\nG00 C0.\n"
+
+    def slot(dx_mm):
+        return parse_program(_slot_then_step(dx_mm, "").replace(
+            f"G00 X{5 + dx_mm:.3f} Y-1.", ARC_AT_THE_END + f"G00 X{5 + dx_mm:.3f} Y-1.")
+            .replace("G21 G90\n", "G21 G90\n" + away), chord_tolerance=1 * MM)
+
+    lent = []
+    walk = holder._in_material_by_legs
+
+    def spy(*args):  # (stock, tool, paths, legs, candidates, tolerance, lent)
+        lent.append((len(args[3]), dict(args[6] or {}) if len(args) > 6 else {}))
+        return walk(*args)
+
+    monkeypatch.setattr(holder, "_in_material_by_legs", spy)
+    with pytest.raises(HolderContactError, match=r"line 20 takes the top of the tool's body"):
+        cut_turned(slot(0.2), "grooving_4axis", errors=tilted, **KWARGS)
+    assert lent and lent[-1][0] == 2 and lent[-1][1]  # two legs, the pass's chord borrowed
+    _, report = cut_turned(slot(0.0), "grooving_4axis", errors=tilted, **KWARGS)
+    assert report.holder_contact == ()  # in the slot, touching its wall
+
+
+def test_a_leg_of_a_tilted_workpiece_borrows_inside_the_lenders_boxes_turned_into_its_frame():
+    # the bore and the pass across it, 0.8 mm off the C axis, cut at C = 90 deg on a tilted
+    # workpiece after a feed at C = 0 in air: cut_turned's check walks the C = 90 leg in its
+    # own frame, 90 deg about the axis from the workpiece's. The arcs' boxes, kept in the
+    # workpiece frame, are turned into it with the stock: left unturned they lay about the
+    # bore's place turned 90 deg away, and the pass the arcs' chord forgives was refused
+    import re
+
+    tilted = {"workpiece": {"alpha_deg": 0.01, "beta_deg": -0.02}}
+    kwargs = {"tool": "flat:1.0:h=1", "stock": "block:5x5x3@-2.5,-2.5,0", "errors": tilted}
+
+    def read(out_mm):
+        lines = [re.sub(r"X(-?[0-9.]+)", lambda m: f"X{float(m.group(1)) + 0.8:.4f}", line)
+                 for line in _bore_then_across(out_mm).splitlines()]
+        lines.insert(1, "G00 C0. X4. Y4. Z1.\nG01 X4.5 F100.\nG00 Z1.\nG00 C90.")
+        return parse_program("\n".join(lines) + "\n", chord_tolerance=1e-5)
+
+    _, report = cut_turned(read(0.0), "grooving_4axis", **kwargs)
+    assert report.holder_contact == ()
+    with pytest.raises(HolderContactError, match=r"line 15 \(lines 15, 16\)"):
+        cut_turned(read(0.1), "grooving_4axis", **kwargs)

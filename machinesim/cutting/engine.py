@@ -70,6 +70,7 @@ from machinesim.cutting.cut_volume import (  # noqa: F401  (re-exported: the nam
 from machinesim.cutting.footprints import level_prisms, united_in_plane
 from machinesim.cutting.frame import into_frame, out_of_frame, tool_frame
 from machinesim.cutting.holder import judge_holder
+from machinesim.cutting.holder_allowance import turned_lent
 from machinesim.cutting.poses import (  # noqa: F401  (re-exported: the names engine had)
     FARTHEST_M,
     _check_paths,
@@ -239,6 +240,7 @@ def remove(
     on_holder_contact: Callable[[tuple[int, ...]], None] | None = None,
     holder_stock: Part | None = None,
     holder_tolerance=0.0,
+    holder_lent=None,
 ) -> tuple[Part, EngineReport]:
     """Cut ``stock`` with ``tool`` moved along ``paths``.
 
@@ -291,6 +293,9 @@ def remove(
         order of ``paths``; a path of one pose is one sweep): one chord of the sweep's move,
         or of the chorded moves that cut the walls about its holder before
         (`holder.holder_in_material`, `machinesim.cutting.holder_allowance`). Default 0.
+    holder_lent : dict, optional
+        Where a sweep whose ``holder_tolerance`` is borrowed from chorded sweeps may use it
+        (`holder_allowance.Lent`, workpiece frame): inside their boxes; elsewhere its own.
 
     Returns
     -------
@@ -349,12 +354,13 @@ def remove(
         part, report = remove(framed, tool, framed_paths, progress=progress,
                               sweeps_per_tile=sweeps_per_tile, method="boolean", sheets=sheets,
                               on_holder_contact=on_holder_contact, holder_stock=framed_holder,
-                              holder_tolerance=holder_tolerance)
+                              holder_tolerance=holder_tolerance,
+                              holder_lent=turned_lent(holder_lent, frame.T))
         return out_of_frame(part, frame), replace(report,
                                                   elapsed_s=time.perf_counter() - start)
     holder = judge_holder(_holder_sweeps(sweeps, tool, paths, z_high, holder_stock),
                           stock if holder_stock is None else holder_stock, on_holder_contact,
-                          holder_tolerance)
+                          holder_tolerance, holder_lent)
     if method == "auto" and sweeps.count:
         relief = cut_reliefs(stock, sweeps.vertices, sweeps.poses, sweeps.pairs,
                              None if roi is None else cells, sweeps.pose_bounds)

@@ -21,6 +21,7 @@ from machinesim.cutting.containment import (
     vertices_and_planes,
 )
 from machinesim.cutting.frame import flat_end, into_frame, tool_frame
+from machinesim.cutting.holder_allowance import turned_lent
 from machinesim.cutting.sweeps import hull_mesh, manifold_from
 from machinesim.cutting.sweepset import POINTS_PER_CHUNK, SweepSet
 from machinesim.exceptions import InputError
@@ -39,12 +40,13 @@ HOLDER_MATERIAL_M3 = 1e-21
 
 
 def judge_holder(sweeps: SweepSet, stock: Part, on_holder_contact=None,
-                 tolerance=0.0) -> tuple[int, ...]:
+                 tolerance=0.0, lent=None) -> tuple[int, ...]:
     """The sweeps of ``sweeps`` whose holder meets ``stock``, anywhere over it: those whose
     body top comes below the stock's top within its box (`holder_contact`), and, with
     ``on_holder_contact`` (a refusal), of those only the ones whose room holds material the
     earlier sweeps left (`holder_in_material`, within ``tolerance``, m, one value or one per
-    sweep: a chord, `holder_allowance`), ``on_holder_contact`` called with them.
+    sweep: a chord, `holder_allowance`; a borrowed one only where ``lent`` says),
+    ``on_holder_contact`` called with them.
 
     The whole stock, never a window of it: the holder meeting the part outside the windows
     a cut is read in is a crash all the same (a holder crash at x = 8 mm was cut, exit 0,
@@ -54,7 +56,7 @@ def judge_holder(sweeps: SweepSet, stock: Part, on_holder_contact=None,
     if holder and on_holder_contact is not None:
         # the stock's box says it may; before refusing, the material says whether it does
         holder = tuple(holder_in_material(sweeps, holder, stock.manifold, _reach(stock),
-                                          _region(stock), tolerance))
+                                          _region(stock), tolerance, lent))
         if holder:
             on_holder_contact(holder)
     return holder
@@ -94,7 +96,7 @@ def _region(stock: Part):
 
 
 def check_holder(stock: Part, tool, paths: list[np.ndarray], on_holder_contact=None,
-                 tolerance=0.0) -> tuple[int, ...]:
+                 tolerance=0.0, lent=None) -> tuple[int, ...]:
     """`judge_holder` for ``tool`` along ``paths`` (workpiece frame, in program order)
     over ``stock``, without cutting: for a caller that cuts the sweeps in another order
     (`machinesim.cutting.cut_turned`, by turn groups), since the material a holder meets
@@ -113,17 +115,18 @@ def check_holder(stock: Part, tool, paths: list[np.ndarray], on_holder_contact=N
         stock, paths = into_frame(stock, paths, frame)
         z_high = stock.bounds[1, 2] + CLIP_MARGIN_REL * scale
         sweeps = SweepSet(tool, paths, z_high)
+        lent = turned_lent(lent, frame.T)
     elif on_holder_contact is not None and sweeps.count:
         legs = _legs(paths, tool)
         if legs is not None:
             holder = _box_step(sweeps, stock)
             if holder:
                 holder = tuple(_in_material_by_legs(stock, tool, paths, legs, holder,
-                                                    tolerance))
+                                                    tolerance, lent))
             if holder:
                 on_holder_contact(holder)
             return holder
-    return judge_holder(sweeps, stock, on_holder_contact, tolerance)
+    return judge_holder(sweeps, stock, on_holder_contact, tolerance, lent)
 
 
 def _legs(paths: list[np.ndarray], tool) -> list[tuple[int, int, np.ndarray]] | None:
@@ -177,7 +180,7 @@ def _turned_box(box: np.ndarray, turn: np.ndarray) -> np.ndarray:
 
 
 def _in_material_by_legs(stock: Part, tool, paths: list[np.ndarray], legs, candidates,
-                         tolerance) -> list[int]:
+                         tolerance, lent=None) -> list[int]:
     """`holder_in_material` for paths whose tool stands in several orientations, one per leg
     (`_legs`): each leg's sweeps and rooms are built in its own frame, where the end mill's
     floors are level and coincide, and the one running material is turned from leg to leg
@@ -185,19 +188,24 @@ def _in_material_by_legs(stock: Part, tool, paths: list[np.ndarray], legs, candi
     workpiece frame each sweep's floor is tilted with its own round-off and the walk's
     material broke into slivers (a contour in 3 levels 0.4 mm apart under a 0.5 mm body,
     with one pass at C = 90 deg: 235 s of CPU against 27 s without that pass).
-    ``tolerance`` (m): one value, or one per sweep of all the legs in the program's order
-    (`holder_in_material`'s)."""
+    ``tolerance`` (m): one value, or one per sweep of all the legs in the program's order,
+    and ``lent`` keyed by those sweeps, its boxes in the workpiece frame
+    (`holder_in_material`'s): each leg's sweep i is the program's sweep offset + i."""
     reach, per_leg, inside, offset = _reach(stock), [], {}, 0
     tolerance = np.asarray(tolerance, dtype=np.float64)
     for begin, end, frame in legs:
         leg_stock, leg_paths = into_frame(stock, paths[begin:end], frame)
         scale = float(np.abs(leg_stock.bounds).max()) or 1.0
         sweeps = SweepSet(tool, leg_paths, leg_stock.bounds[1, 2] + CLIP_MARGIN_REL * scale)
-        mine = [int(i) - offset for i in candidates if offset <= int(i) < offset + sweeps.count]
+        mine = sorted({int(i) - offset for i in candidates
+                       if offset <= int(i) < offset + sweeps.count})
+        # the lenders' boxes turned into this leg's frame, as its stock and paths are
+        borrowed = turned_lent({i: lent[offset + i] for i in mine if offset + i in lent},
+                               frame.T) if lent else {}
         rooms = {}
-        for i in sorted(set(mine)):
-            room = holder_room(sweeps, i, reach, float(
-                tolerance if tolerance.ndim == 0 else tolerance[offset + i]))
+        for i in mine:
+            room = _room(sweeps, i, reach, float(
+                tolerance if tolerance.ndim == 0 else tolerance[offset + i]), borrowed.get(i))
             met = leg_stock.manifold ^ room
             if met.volume() > HOLDER_MATERIAL_M3:
                 rooms[i] = room
@@ -295,7 +303,7 @@ def holder_contact(sweeps: SweepSet, below: float, keep) -> list[int]:
 
 
 def holder_in_material(sweeps: SweepSet, candidates, solid: manifold3d.Manifold,
-                       reach: float, keep=None, tolerance=0.0) -> list[int]:
+                       reach: float, keep=None, tolerance=0.0, lent=None) -> list[int]:
     """Those of the sweeps ``candidates`` whose holder meets ``solid`` as this tool has cut
     it by then: more than `HOLDER_MATERIAL_M3` of it inside the holder's room over the sweep
     (`holder_room`), in the order given. The bounding-box test of `holder_contact` finds
@@ -323,10 +331,16 @@ def holder_in_material(sweeps: SweepSet, candidates, solid: manifold3d.Manifold,
     turns, refused as a crash): each chord lies inside its arc by at most the tolerance, the
     holder at a chord's end reaches the arc's wall, and the body along another's middle cut
     the wall that much short of it.
+
+    ``lent`` ({sweep: (own allowance, m; boxes)}, `holder_allowance.Lent`): a sweep whose
+    ``tolerance`` it borrowed from the chorded sweeps that cut next to its holder may enter
+    the material by it only inside their boxes, elsewhere by its own: its room is the one
+    taken in by ``tolerance``, and outside the boxes the one taken in by its own.
     """
     order = list(dict.fromkeys(int(i) for i in candidates))
     each = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (sweeps.count,))
-    rooms = {i: holder_room(sweeps, i, reach, float(each[i])) for i in order}
+    rooms = {i: _room(sweeps, i, reach, float(each[i]), lent.get(i) if lent else None)
+             for i in order}
     inside = {}
     for i in sorted(order):
         met = solid ^ rooms[i]
@@ -462,6 +476,19 @@ class _Walk:
             if float((points @ normal.T - offset).max()) <= self.tol:
                 return True
         return False
+
+
+def _room(sweeps: SweepSet, sweep: int, reach: float, inset: float,
+          lent=None) -> manifold3d.Manifold:
+    """The holder's room over sweep ``sweep`` taken in by ``inset`` (`holder_room`), but by
+    a borrowed ``inset`` only inside the lenders' boxes: ``lent`` (its own allowance, m; the
+    boxes, in the frame of ``sweeps``: `holder_allowance.Lent`'s entry), outside them the
+    room taken in by its own. None: ``inset`` throughout."""
+    room = holder_room(sweeps, sweep, reach, inset)
+    if lent is None:
+        return room
+    own, boxes = lent
+    return room + (holder_room(sweeps, sweep, reach, own) - boxes)
 
 
 def _box(low, high) -> manifold3d.Manifold:

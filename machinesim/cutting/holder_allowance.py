@@ -12,20 +12,32 @@ chorded sweeps before it (in the program's order, earlier tools' too) whose body
 widened by their own allowance, meets the box of its holder's room below the stock's top
 (`sweep_allowances`). A chorded move elsewhere (an arc in air, a rotary move across the
 part) lends a straight pass nothing: a holder 0.2 mm into a straight wall is refused
-whatever the program's arcs were read within, or ``--chord-nm``.
+whatever the program's arcs were read within, or ``--chord-nm``. Nor does a chorded move
+whose box meets a long pass's room somewhere: the larger allowance holds only inside the
+boxes of the chorded sweeps that lend it (`Lent`); outside them the holder is judged by its
+own.
 """
 
 from __future__ import annotations
 
+import manifold3d
 import numpy as np
 
 from machinesim.cutting.sweepset import POINTS_PER_CHUNK, SweepSet
 
-__all__ = ["Chorded", "sweep_allowances"]
+__all__ = ["Chorded", "Lent", "sweep_allowances", "turned_lent"]
 
 #: (lower (k, 3), upper (k, 3), allowance (k,)): the boxes of the bodies of chorded sweeps
 #: cut so far, widened by their allowance (m), in the workpiece frame.
 Chorded = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+#: {sweep: (its own allowance, m; the union of the widened boxes of the chorded sweeps that
+#: lend it a larger one)}, for the sweeps whose allowance is borrowed: their holder may enter
+#: the material by the larger allowance inside that union, by their own outside it
+#: (`holder.holder_in_material`'s ``lent``). A straight pass 0.2 mm into a straight slot's
+#: wall over 10 mm had been cut, exit 0, because an arc read within 1 mm cut 0.1 mm deep at
+#: the slot's far end, its box meeting the pass's room there.
+Lent = dict[int, tuple[float, manifold3d.Manifold]]
 
 #: Box pairs compared at once (`_widened`): bounds the transient (n x k x 3) arrays.
 _PAIRS_PER_TEST = 1 << 20
@@ -36,12 +48,22 @@ def no_chords() -> Chorded:
     return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
 
 
+def turned_lent(lent: Lent | None, rotation: np.ndarray) -> Lent | None:
+    """``lent`` with its boxes turned by ``rotation`` (3 x 3), into the frame the sweeps and
+    the stock are turned into (`machinesim.cutting.frame.into_frame`)."""
+    if not lent:
+        return lent
+    matrix = np.hstack([np.asarray(rotation, dtype=np.float64), np.zeros((3, 1))])
+    return {i: (own, boxes.transform(matrix)) for i, (own, boxes) in lent.items()}
+
+
 def sweep_allowances(tool, paths: list[np.ndarray], own, top: float, floor: float,
                      before: Chorded | None = None, carry: bool = False
-                     ) -> tuple[np.ndarray, Chorded]:
+                     ) -> tuple[np.ndarray, Chorded, Lent]:
     """Each sweep's allowance (m) for ``tool`` along ``paths`` (workpiece frame, program
-    order; consecutive poses of a path form sweeps, a path of one pose is one sweep), and
-    the chorded sweeps cut so far, ``before`` with these added.
+    order; consecutive poses of a path form sweeps, a path of one pose is one sweep), the
+    chorded sweeps cut so far, ``before`` with these added, and where each sweep whose
+    allowance is borrowed may use it (`Lent`: inside the lenders' widened boxes).
 
     ``own`` (per sweep, m): its move's allowance. A sweep is chorded where ``own`` exceeds
     ``floor`` (the written rounding a straight move gets). A sweep whose holder's face comes
@@ -56,30 +78,32 @@ def sweep_allowances(tool, paths: list[np.ndarray], own, top: float, floor: floa
     before = no_chords() if before is None else before
     own = np.asarray(own, dtype=np.float64)
     if not paths:
-        return own, before
+        return own, before, {}
     sweeps = SweepSet(tool, paths, top)
     if own.shape != (sweeps.count,):
-        return own, before  # the engine refuses the mismatch, naming holder_tolerance
+        return own, before, {}  # the engine refuses the mismatch, naming holder_tolerance
     chorded = np.flatnonzero(own > floor)
     candidates = _below(sweeps, top)
     most = max(float(before[2].max(initial=0.0)), float(own[chorded].max(initial=0.0)))
     candidates = candidates[own[candidates] < most]
     if not carry and not len(candidates):
-        return own, before  # no sweep's holder below the top may borrow a larger chord
+        return own, before, {}  # no sweep's holder below the top may borrow a larger chord
     low, high = _body_boxes(sweeps, chorded)
     reaches = low[:, 2] <= top  # a chorded sweep wholly above the stock cut nothing
     chorded, low, high = chorded[reaches], low[reaches], high[reaches]
     widen = own[chorded][:, None]
     after = (np.concatenate([before[0], low - widen]), np.concatenate([before[1], high + widen]),
              np.concatenate([before[2], own[chorded]]))
-    allowance = own.copy()
+    allowance, lent = own.copy(), {}
     if len(candidates) and len(after[2]):
         room_low, room_high = _room_boxes(sweeps, candidates, top)
         # the run's own chorded sweeps count only before the candidate; earlier runs' all
         order = np.concatenate([np.full(len(before[2]), -1), chorded])
-        allowance[candidates] = np.maximum(
-            own[candidates], _widened(room_low, room_high, candidates, after, order))
-    return allowance, after
+        lent = _widened(room_low, room_high, candidates, own[candidates], after, order)
+        for i, (_, most) in lent.items():
+            allowance[i] = most
+        lent = {i: (float(own[i]), boxes) for i, (boxes, _) in lent.items()}
+    return allowance, after, lent
 
 
 def _below(sweeps: SweepSet, top: float) -> np.ndarray:
@@ -142,16 +166,25 @@ def _room_boxes(sweeps: SweepSet, which: np.ndarray, top: float):
     return low, high
 
 
-def _widened(room_low, room_high, candidates, chorded: Chorded, order) -> np.ndarray:
-    """For each candidate, the largest allowance of the chorded boxes meeting its room's box
-    whose ``order`` (sweep index; -1 for earlier runs) is below its own, 0 where none."""
+def _widened(room_low, room_high, candidates, own, chorded: Chorded, order
+             ) -> dict[int, tuple[manifold3d.Manifold, float]]:
+    """For each candidate that borrows, {its index: (the union of the chorded boxes meeting
+    its room's box whose ``order`` (sweep index; -1 for earlier runs) is below its own and
+    whose allowance exceeds its own ``own``, the largest of those allowances)}."""
     low, high, allowance = chorded
-    out = np.zeros(len(candidates))
+    out = {}
     step = max(1, _PAIRS_PER_TEST // max(len(allowance), 1))
     for begin in range(0, len(candidates), step):
         rows = slice(begin, begin + step)
         meets = ((room_low[rows, None, :] <= high[None]).all(axis=2)
                  & (room_high[rows, None, :] >= low[None]).all(axis=2)
-                 & (order[None, :] < candidates[rows, None]))
-        out[rows] = np.where(meets, allowance[None, :], 0.0).max(axis=1, initial=0.0)
+                 & (order[None, :] < candidates[rows, None])
+                 & (allowance[None, :] > own[rows, None]))
+        for row in np.flatnonzero(meets.any(axis=1)):
+            lenders = np.flatnonzero(meets[row])
+            boxes = [manifold3d.Manifold.cube(tuple(high[k] - low[k])).translate(
+                tuple(low[k])) for k in lenders]
+            union = boxes[0] if len(boxes) == 1 else manifold3d.Manifold.batch_boolean(
+                boxes, manifold3d.OpType.Add)
+            out[int(candidates[begin + row])] = (union, float(allowance[lenders].max()))
     return out

@@ -245,17 +245,17 @@ def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, s
         before = part
         refuse = None if allow_holder_contact else _holder_refusal(
             program, section_tool, before, section.sweep_line)
-        allowance = own[section.sweep_move]
+        allowance, lent = own[section.sweep_move], None
         if refuse is not None:  # its own chord, or one of the chorded cuts about its holder
-            allowance, chorded = sweep_allowances(section_tool, paths, allowance,
-                                                  float(stock.bounds[1, 2]), floor, chorded,
-                                                  carry=len(tools.runs) > 1)
+            allowance, chorded, lent = sweep_allowances(section_tool, paths, allowance,
+                                                        float(stock.bounds[1, 2]), floor,
+                                                        chorded, carry=len(tools.runs) > 1)
         told = progress if len(tools.runs) == 1 else _run_progress(progress, number, line)
         part, engine = remove(before, section_tool, paths, roi=roi, progress=told,
                               sheets=False, on_holder_contact=refuse,
                               holder_stock=_outside_windows(stock, roi, done, section_tool,
                                                             paths, allow_holder_contact),
-                              holder_tolerance=allowance)
+                              holder_tolerance=allowance, holder_lent=lent)
         done.append((section_tool, paths))
         rapids += rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)

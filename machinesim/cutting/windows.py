@@ -84,11 +84,12 @@ def _holder_lines(program, machine, errors, tool, stock: Part, feeds: list,
     counts = [max(len(s.q) - 1, 1) for s in feeds]
     sweep_line = np.repeat([s.line for s in feeds], counts)
     refuse = None if allowed else _holder_refusal(program, tool, stock, sweep_line)
-    tolerance = np.repeat(own, counts)
+    tolerance, lent = np.repeat(own, counts), None
     if refuse is not None:
-        tolerance, _ = sweep_allowances(tool, paths, tolerance, float(stock.bounds[1, 2]),
-                                        floor)
-    return {int(sweep_line[i]) for i in check_holder(stock, tool, paths, refuse, tolerance)}
+        tolerance, _, lent = sweep_allowances(tool, paths, tolerance,
+                                              float(stock.bounds[1, 2]), floor)
+    return {int(sweep_line[i])
+            for i in check_holder(stock, tool, paths, refuse, tolerance, lent)}
 
 
 def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *,
