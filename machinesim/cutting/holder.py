@@ -226,12 +226,7 @@ def _in_material_by_legs(stock: Part, tool, paths: list[np.ndarray], legs, candi
         whole = _region(leg_stock)
 
         def into_a_room(low, high, near=near, whole=whole):
-            meets = np.zeros(len(low), dtype=bool)
-            for begin in range(0, len(near), _BOXES_PER_TEST):
-                part = near[begin:begin + _BOXES_PER_TEST]
-                meets |= ((low[:, None, :] <= part[None, :, 3:])
-                          & (high[:, None, :] >= part[None, :, :3])).all(axis=2).any(axis=1)
-            return whole(low, high) & meets
+            return whole(low, high) & _meets_any(low, high, near)
 
         hulls, lower, upper, *_, owners = sweeps.hulls(into_a_room)
         walk = _Walk(material, hulls, lower, upper, tol)
@@ -351,12 +346,7 @@ def holder_in_material(sweeps: SweepSet, candidates, solid: manifold3d.Manifold,
     boxes = np.array(list(inside.values())).reshape(-1, 6)
 
     def into_a_room(low: np.ndarray, high: np.ndarray) -> np.ndarray:
-        meets = np.zeros(len(low), dtype=bool)
-        for begin in range(0, len(boxes), _BOXES_PER_TEST):
-            part = boxes[begin:begin + _BOXES_PER_TEST]
-            meets |= ((low[:, None, :] <= part[None, :, 3:])
-                      & (high[:, None, :] >= part[None, :, :3])).all(axis=2).any(axis=1)
-        return keep(low, high) & meets
+        return keep(low, high) & _meets_any(low, high, boxes)
 
     hulls, lower, upper, *_, owners = sweeps.hulls(into_a_room)
     low, high = boxes[:, :3].min(axis=0), boxes[:, 3:].max(axis=0)
@@ -572,6 +562,18 @@ def _inset(face: np.ndarray, inset: float) -> np.ndarray:
 #: Material boxes tested at once against a chunk of sweeps' boxes (`holder_in_material`):
 #: bounds the transient (sweeps x boxes x 3) arrays.
 _BOXES_PER_TEST = 64
+
+
+def _meets_any(low: np.ndarray, high: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """Whether each box (``low``, ``high``: (n, 3) each) meets any of ``boxes`` ((k, 6): low,
+    high), compared `_BOXES_PER_TEST` at a time."""
+    meets = np.zeros(len(low), dtype=bool)
+    for begin in range(0, len(boxes), _BOXES_PER_TEST):
+        part = boxes[begin:begin + _BOXES_PER_TEST]
+        meets |= ((low[:, None, :] <= part[None, :, 3:])
+                  & (high[:, None, :] >= part[None, :, :3])).all(axis=2).any(axis=1)
+    return meets
+
 
 #: Consecutive sweeps of one batch of `_Walk.cut` compared with each other for containment
 #: (`contained_sweeps`): a bore 12.8 mm deep has 2,840 sweeps before its first candidate.
