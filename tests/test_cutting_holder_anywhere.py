@@ -191,7 +191,7 @@ def test_the_turn_between_two_c_positions_keeps_a_level_face_level():
     # (the tilt cancels): the turn the walk makes between them is that, its Z row and column
     # exact, so a level face keeps its height to the bit; with the C axis itself tilted
     # (10 urad about X) the frames differ by more, and the turn is the product as it is
-    from machinesim.cutting.holder import _between
+    from machinesim.cutting.holder_legs import _between
     from machinesim.rotations import rot_y, rot_z
 
     tilt = rot_x(np.radians(0.01)) @ rot_y(np.radians(-0.02))

@@ -153,10 +153,10 @@ def test_a_chorded_cut_lends_only_inside_its_box_on_each_leg_of_a_tilted_workpie
         monkeypatch):
     # the same slot, arc and pass on a tilted workpiece (paper 002's setting error), after a
     # feed at C = 90 deg in air: the end mill stands in two orientations, and cut_turned's
-    # check walks each leg in its own frame (holder._in_material_by_legs), the slot's sweeps
+    # check walks each leg in its own frame (holder_legs.in_material_by_legs), the slot's sweeps
     # being the program's from the C = 90 leg's count on. There too the arc's 1 mm holds
     # only inside its box, turned into the leg's frame: 0.2 mm into the wall is refused
-    from machinesim.cutting import holder
+    from machinesim.cutting import holder_legs
 
     tilted = {"workpiece": {"alpha_deg": 0.01, "beta_deg": -0.02}}
     away = "G00 C90. X20. Y20. Z5.\nG01 X22. F100.\nG00 Z5.\nG00 C0.\n"
@@ -167,13 +167,13 @@ def test_a_chorded_cut_lends_only_inside_its_box_on_each_leg_of_a_tilted_workpie
             .replace("G21 G90\n", "G21 G90\n" + away), chord_tolerance=1 * MM)
 
     lent = []
-    walk = holder._in_material_by_legs
+    walk = holder_legs.in_material_by_legs
 
     def spy(*args):  # (stock, tool, paths, legs, candidates, tolerance, lent)
         lent.append((len(args[3]), dict(args[6] or {}) if len(args) > 6 else {}))
         return walk(*args)
 
-    monkeypatch.setattr(holder, "_in_material_by_legs", spy)
+    monkeypatch.setattr(holder_legs, "in_material_by_legs", spy)
     with pytest.raises(HolderContactError, match=r"line 20 takes the top of the tool's body"):
         cut_turned(slot(0.2), "grooving_4axis", errors=tilted, **KWARGS)
     assert lent and lent[-1][0] == 2 and lent[-1][1]  # two legs, the pass's chord borrowed
