@@ -109,7 +109,7 @@ def test_a_tool_tables_radius_is_checked_against_the_tool_as_given(tmp_path, rad
     # nose:1.0 beside a table radius of 1 mm agrees: with a nose radius error of 3 um in a
     # Lab, its cut had noted "the cut's own tool (radius 1.003 mm ...)", the truth to 1 nm;
     # beside 2 mm the note names the tool as given (1 mm), as machinesim view does
-    from machinesim.cutting.program import tool_notes
+    from machinesim.cutting.tool_runs import tool_notes
     from machinesim.nc import read_program
     from machinesim.tool_specs import tool_from_spec
 

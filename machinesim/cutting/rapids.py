@@ -34,7 +34,7 @@ from machinesim.tolerances import (
 from machinesim.workpiece import Part
 
 if TYPE_CHECKING:
-    from machinesim.cutting.program import _Moves
+    from machinesim.cutting.tool_runs import _Moves
 
 __all__ = ["rapids_that_cut"]
 

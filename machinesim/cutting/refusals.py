@@ -26,7 +26,7 @@ from machinesim.nc.program import modal_values
 from machinesim.tolerances import LIMIT_SLACK
 
 if TYPE_CHECKING:
-    from machinesim.cutting.program import _Moves
+    from machinesim.cutting.tool_runs import _Moves
     from machinesim.workpiece import Part
 
 

@@ -24,7 +24,6 @@ from machinesim.cutting.holder_allowance import sweep_allowances
 from machinesim.cutting.program import (
     WRITTEN_ROUNDING_M,
     _holder_refusal,
-    _Moves,
     _overtravel,
     check_progress,
     holder_tolerance,
@@ -39,6 +38,7 @@ from machinesim.cutting.report import (
 from machinesim.cutting.roi import check_roi_meets
 from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sideways import dragged_past_clearance
+from machinesim.cutting.tool_runs import _Moves
 from machinesim.errors import as_error_model
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_flag, as_number

@@ -136,7 +136,7 @@ class Encoders:
         refuses the same path; ``allow_overtravel=True`` records it anyway.
         """
         from machinesim import motion
-        from machinesim.cutting.program import _Moves
+        from machinesim.cutting.tool_runs import _Moves
         from machinesim.motion.following import follow_runs
 
         allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")

@@ -300,7 +300,7 @@ def _scene(args, budget: int):
         program, chord = read_for_machine(
             args, check_readable_file(args.program, "NC program (--program)"), machine, tool)
         _refuse_tool_changes(program, tool)
-        from machinesim.cutting.program import tool_notes
+        from machinesim.cutting.tool_runs import tool_notes
 
         # cut's notes on the tools: T1 M06 .. T2 M06 read without a table (--tool cut every
         # move), a table radius --tool has not (a 2 mm D beside flat:1); view had said nothing
