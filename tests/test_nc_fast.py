@@ -51,7 +51,8 @@ _program = st.tuples(
 
 def _outcome(text: str, **kwargs):
     try:
-        return parse_program(text, "gen.nc", **kwargs)
+        program = parse_program(text, "gen.nc", **kwargs)
+        return program, program.length_digit  # (not part of ==: read from the text)
     except NCProgramError as error:
         return ("error", str(error), [str(p) for p in getattr(error, "problems", ())])
 
@@ -63,6 +64,7 @@ def test_corpus_is_identical_on_both_paths(path):
         slow = read_program(path, tools=CORPUS / "tools.toml", integer_input=integer_input,
                             fast=False)
         assert fast == slow
+        assert fast.length_digit == slow.length_digit
 
 
 @settings(max_examples=300, deadline=None)
@@ -108,6 +110,9 @@ def test_scanner_agrees_with_the_tokenizer(lines):
             assert scan.values[column, i] == float(w.text)  # exactly float(text)
             assert str(scan.values[column, i]) == str(float(w.text))  # -0.0 too
             assert scan.point[column, i] == ("." in w.text)
+        decimals = [len(w.text) - 1 - w.text.index(".") for w in words
+                    if w.letter in "XYZ" and "." in w.text]
+        assert scan.decimals[i] == max(decimals, default=0)
 
 
 @settings(max_examples=500, deadline=None)

@@ -506,22 +506,29 @@ class Block:
             self.reader.integer_words.setdefault(word.letter, self.line)
 
     def length_of(self, word: Word) -> float:
-        """Metres per unit of a length word that is not an axis (I J K R Q)."""
+        """Metres per unit of a length word (X Y Z I J K R Q)."""
         if "." not in word.text:
             self.bare(word)
             if self.increment is not None:
                 metric, inch, _ = self.increment
-                return inch if self.state.inch else metric
-        return self.length_unit()
+                return self.digit(inch if self.state.inch else metric, word)
+        return self.digit(self.length_unit(), word)
 
     def axis_unit(self, word: Word) -> float:
-        rotary = word.letter in ROTARY_AXES
+        if word.letter not in ROTARY_AXES:
+            return self.length_of(word)
         if "." not in word.text:
             self.bare(word)
             if self.increment is not None:
-                metric, inch, angle = self.increment
-                return angle if rotary else (inch if self.state.inch else metric)
-        return RAD_PER_DEG if rotary else self.length_unit()
+                return self.increment[2]
+        return RAD_PER_DEG
+
+    def digit(self, unit: float, word: Word) -> float:
+        """``unit`` (m per unit of the length ``word``), its last digit's value kept for
+        `Program.length_digit` (`Reader.written_to`)."""
+        point = word.text.find(".")
+        self.reader.written_to(unit if point < 0 else unit / 10.0 ** (len(word.text) - 1 - point))
+        return unit
 
     def real(self, word: Word) -> float:
         return self.finite(float(word.text), word)

@@ -91,6 +91,21 @@ def _arc_lengths(lengths: Any, n: int, source: str) -> np.ndarray:
     return out
 
 
+def _length_digit(digit: Any, source: str) -> float | None:
+    """``Program.length_digit``: None, or a length > 0 (m)."""
+    if digit is None:
+        return None
+    try:
+        value = float(digit)
+    except (TypeError, ValueError):
+        value = math.nan
+    if not 0.0 < value < math.inf:
+        raise NCProgramError(f"length_digit must be None or a length > 0 (m), the value of "
+                             f"the last digit of the text's finest length word, got "
+                             f"{digit!r}", source=source, key="length_digit")
+    return value
+
+
 def _m_codes(m_codes: Mapping[int, Iterable[int]], n: int, source: str) -> FrozenMapping:
     if not isinstance(m_codes, Mapping):
         raise NCProgramError(f"m_codes must map move indices to M codes, got "

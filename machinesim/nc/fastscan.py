@@ -26,6 +26,7 @@ rounded value of the decimal: exactly what ``float(text)`` gives.
 
 from __future__ import annotations
 
+import math
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -73,6 +74,10 @@ class Scan:
         ``float(text)`` exactly; NaN where the line has no such word (or is not simple).
     point : ndarray, shape (9, n_lines), bool
         The number was written with a decimal point (for integer input).
+    decimals : ndarray, shape (n_lines,), int8
+        The most digits written after the point in the line's X, Y and Z words (0 where it
+        has none with digits there, or is not simple): the resolution the text wrote its
+        positions to (`machinesim.nc.Program.length_digit`).
     """
 
     starts: np.ndarray
@@ -81,6 +86,7 @@ class Scan:
     empty: np.ndarray
     values: np.ndarray
     point: np.ndarray
+    decimals: np.ndarray
 
 
 def scan(data: bytes) -> Scan:
@@ -104,6 +110,7 @@ def scan(data: bytes) -> Scan:
     words = np.empty(n_lines, dtype=np.int64)
     values = np.empty((len(LETTERS), n_lines))
     point = np.empty((len(LETTERS), n_lines), dtype=bool)
+    decimals = np.empty(n_lines, dtype=np.int8)
     jobs = []
     line = 0
     position = 0
@@ -126,8 +133,9 @@ def scan(data: bytes) -> Scan:
         if chunk is None:  # left to the word-by-word path, which reads any line alike
             rows = slice(first, first + count)
             simple[rows], words[rows], values[:, rows], point[:, rows] = False, 0, np.nan, False
+            decimals[rows] = 0
         else:
-            _scan_chunk(chunk, first, count, simple, words, values, point)
+            _scan_chunk(chunk, first, count, simple, words, values, point, decimals)
 
     if not jobs:  # empty text: one empty line
         jobs.append((everything, 0, 1))
@@ -138,11 +146,27 @@ def scan(data: bytes) -> Scan:
         for job in jobs:
             run(job)
     empty = simple & (words == 0)
-    return Scan(starts, ends, simple, empty, values, point)
+    return Scan(starts, ends, simple, empty, values, point, decimals)
+
+
+def written_digit(found: Scan, i: int, j: int, unit: float, bare: float) -> float:
+    """What the last digit of the finest X, Y or Z word of lines [i, j) stands for (m; inf
+    where they have none): ``unit`` (m per unit of the lengths) over 10 to the most digits
+    after a point, or ``bare`` (m per unit of a number without a point) where finer."""
+    digit = math.inf
+    rows = [COLUMN[letter] for letter in "XYZ"]
+    given = ~np.isnan(found.values[rows, i:j])
+    pointed = found.point[rows, i:j]
+    if (given & pointed).any():
+        digit = unit / 10.0 ** int(found.decimals[i:j].max())
+    if (given & ~pointed).any():
+        digit = min(digit, bare)
+    return digit
 
 
 def _scan_chunk(a: np.ndarray, line0: int, n_lines: int, simple: np.ndarray,
-                words: np.ndarray, values: np.ndarray, point: np.ndarray) -> None:
+                words: np.ndarray, values: np.ndarray, point: np.ndarray,
+                decimals: np.ndarray) -> None:
     """Read one chunk (whole lines, starting at line ``line0``) into the output arrays."""
     size = a.size
     rows = slice(line0, line0 + n_lines)
@@ -201,6 +225,7 @@ def _scan_chunk(a: np.ndarray, line0: int, n_lines: int, simple: np.ndarray,
     # the words: one per run that follows a letter read here
     word = column >= 0
     column, number, signed, dotted = column[word], number[word], signed[word], dotted[word]
+    frac = frac[word]
     nd = n_digits[word]
     token_line = line_of[starts[word]]
     integer_word = (column == _N) | (column == _G)
@@ -220,5 +245,11 @@ def _scan_chunk(a: np.ndarray, line0: int, n_lines: int, simple: np.ndarray,
     flat = column[keep] * values.shape[1] + (line0 + token_line[keep])
     values.reshape(-1)[flat] = number[keep]
     point.reshape(-1)[flat] = dotted[keep]
+    # each letter at most once in a kept line: one assignment per letter, then the most
+    found = np.zeros((3, n_lines), dtype=np.int8)
+    for row, letter in enumerate("XYZ"):
+        ours = keep & (column == COLUMN[letter])
+        found[row, token_line[ours]] = frac[ours]
+    decimals[line0:line0 + n_lines] = found.max(axis=0)
     words[line0:line0 + n_lines] = np.where(bad, 0, count[:n_lines])
     simple[line0:line0 + n_lines] = ~bad

@@ -23,6 +23,7 @@ from machinesim.nc.checks import (
     _arc_lengths,
     _check,
     _exact_stops,
+    _length_digit,
     _line_words,
     _m_codes,
     _states,
@@ -185,6 +186,15 @@ class Program:
         That ``chord_tolerance`` (m) when arcs were read (``arc_blocks`` > 0), else None:
         `machinesim.cutting.cut` notes a program whose arcs are chords finer or coarser than
         the tolerance it cuts with.
+    length_digit : float or None
+        What the last digit of the text's finest length word stands for, m: the unit of the
+        length words (mm, or inch under G20) over 10 to the most digits written after the
+        point in any of them (X Y Z I J K R Q; ``X1.2345`` in mm: 1e-7 m), or the unit a
+        number without a point is read in (`integer_input`) where that is finer. A position
+        computed and then written is that text's rounding off the place it was computed
+        for: `machinesim.cutting.program.written_rounding` allows the holder that much on a
+        straight move. None when no length word was read, for programs built from moves, and
+        after `with_targets`.
     unit_words : Mapping[str, int]
         The length units the text selected (``"G20"`` inch, ``"G21"`` mm) -> the first line
         each appeared on. Empty when it selected neither: its lengths were read in mm (the
@@ -236,7 +246,7 @@ class Program:
     __slots__ = ("_targets", "_kinds", "_feeds", "_dwells", "_lines", "_spindles", "_blocks",
                  "_m_codes", "number", "source", "work_offsets", "states", "integer_input",
                  "tool_table", "tool_changes", "arc_blocks", "arc_chord_tolerance",
-                 "unit_words", "unit_in_force", "dwell_words", "_moves",
+                 "length_digit", "unit_words", "unit_in_force", "dwell_words", "_moves",
                  "exact_stops", "integer_words", "end_words", "after_end", "_arc_lengths")
 
     def __init__(
@@ -357,13 +367,15 @@ class Program:
                     tool_table=None, tool_changes=(), arc_blocks=0,
                     unit_words=None, exact_stops=(), integer_words=None,
                     end_words=None, after_end=None, arc_chord_tolerance=None,
-                    dwell_words=None, unit_in_force=None, arc_lengths=None) -> Program:
+                    dwell_words=None, unit_in_force=None, arc_lengths=None,
+                    length_digit=None) -> Program:
         """A program that takes the reader's arrays without copying them (still checked)."""
         program = object.__new__(cls)
         program._init(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
                       source, work_offsets, states, integer_input, tool_table, tool_changes,
                       arc_blocks, unit_words, exact_stops, integer_words, end_words,
-                      after_end, arc_chord_tolerance, dwell_words, unit_in_force, arc_lengths)
+                      after_end, arc_chord_tolerance, dwell_words, unit_in_force, arc_lengths,
+                      length_digit)
         return program
 
     def _init(self, targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, number,
@@ -371,7 +383,7 @@ class Program:
               tool_changes=(), arc_blocks=0, unit_words=None, exact_stops=(),
               integer_words=None, end_words=None, after_end=None,
               arc_chord_tolerance=None, dwell_words=None, unit_in_force=None,
-              arc_lengths=None) -> None:
+              arc_lengths=None, length_digit=None) -> None:
         set_ = object.__setattr__
         set_(self, "after_end", None if after_end is None else int(after_end))
         set_(self, "source", source)
@@ -393,6 +405,7 @@ class Program:
         set_(self, "arc_blocks", int(arc_blocks))
         set_(self, "arc_chord_tolerance", None if arc_chord_tolerance is None or not arc_blocks
              else float(arc_chord_tolerance))
+        set_(self, "length_digit", _length_digit(length_digit, source))
         set_(self, "unit_words", _states(unit_words, source, "unit_words"))
         if unit_in_force is not None and unit_in_force not in self.unit_words:
             raise NCProgramError(f"unit_in_force must be None or one of unit_words "
@@ -504,7 +517,9 @@ class Program:
     def with_targets(self, targets) -> Program:
         """The same program with new axis targets, shape (N, 6) in `AXES` order (m, rad; NaN
         where an axis has no value yet): kinds, feeds, dwells, lines, spindle speeds, block
-        numbers, M codes, tool changes, exact stops and everything read with the text kept."""
+        numbers, M codes, tool changes, exact stops and everything read with the text kept,
+        but `length_digit`: the new targets are no words of the text (compensated, they are
+        rounded to the machine's resolution, as the text written from them reads back)."""
         targets = np.array(targets, dtype=np.float64)
         if targets.shape != self._targets.shape:
             raise NCProgramError(f"expected targets of shape {self._targets.shape}, got "
@@ -532,7 +547,8 @@ class Program:
                            self.tool_changes, self.arc_blocks, dict(self.unit_words),
                            self.exact_stops, dict(self.integer_words),
                            dict(self.end_words), self.after_end, self.arc_chord_tolerance,
-                           dict(self.dwell_words), self.unit_in_force, self._arc_lengths))
+                           dict(self.dwell_words), self.unit_in_force, self._arc_lengths,
+                           self.length_digit))
 
     def __len__(self) -> int:
         return len(self._kinds)
@@ -549,9 +565,10 @@ def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, nu
              work_offsets, states, integer_input, tool_table=None, tool_changes=(),
              arc_blocks=0, unit_words=None, exact_stops=(), integer_words=None,
              end_words=None, after_end=None, arc_chord_tolerance=None,
-             dwell_words=None, unit_in_force=None, arc_lengths=None) -> Program:
+             dwell_words=None, unit_in_force=None, arc_lengths=None,
+             length_digit=None) -> Program:
     """Unpickle a `Program` (the arrays come back writeable copies: made read-only again;
-    one pickled before `Program.arc_lengths` has none)."""
+    one pickled before `Program.arc_lengths` or `Program.length_digit` has none)."""
     return Program._from_parts(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes,
                                number=number, source=source, work_offsets=work_offsets,
                                states=states, integer_input=integer_input,
@@ -561,4 +578,4 @@ def _rebuild(targets, kinds, feeds, dwells, lines, spindles, blocks, m_codes, nu
                                end_words=end_words, after_end=after_end,
                                arc_chord_tolerance=arc_chord_tolerance,
                                dwell_words=dwell_words, unit_in_force=unit_in_force,
-                               arc_lengths=arc_lengths)
+                               arc_lengths=arc_lengths, length_digit=length_digit)

@@ -244,6 +244,9 @@ class Reader:
         # each M06, in the order they run
         self.tool_events: list[tuple[int, int | None, int]] = []
         self.arc_blocks = 0  # G02/G03 blocks run
+        #: m, what the last digit of the finest length word read stands for (`Program`'s
+        #: ``length_digit``; inf: none read yet)
+        self.length_digit = math.inf
         #: line -> an arc read short whose end is nearly its start (`near_circle_warning`)
         self.near_circles: dict[int, NearCircle] = {}
         self.unit_words: dict[str, int] = {}  # G20/G21 -> first line
@@ -297,6 +300,12 @@ class Reader:
     def note(self, key: str, line: int) -> None:
         self.states.setdefault(key, line)
 
+    def written_to(self, digit: float) -> None:
+        """Keep ``digit`` (m, what the last digit of a length word read stands for) where it
+        is finer than those before (`Program.length_digit`)."""
+        if digit < self.length_digit:
+            self.length_digit = digit
+
     # --- the whole program
 
     def read(self) -> Program:
@@ -321,7 +330,8 @@ class Reader:
             end_words={} if self.state.end is None else {self.state.end[1]: self.state.end[0]},
             exact_stops=np.concatenate(self.out.stops) if self.out.stops else (),
             after_end=self.after_end, arc_chord_tolerance=self.chord_tolerance,
-            arc_lengths=arcs)
+            arc_lengths=arcs,
+            length_digit=None if self.length_digit == math.inf else self.length_digit)
 
     def tool_changes(self) -> tuple:
         """The tools put in the spindle (`ToolChange`), from the T words and M06: at each
@@ -469,6 +479,9 @@ class Reader:
         # a line whose length words are all zero reaches the same target in mm and inch
         # (`Block.units_free`; G90 only here): no first motion for the units rule
         lengths = [present[AXES.index(a)] & (values[col[a]] != 0.0) for a in "XYZ"]
+        self.written_to(fastscan.written_digit(self.scan, i, j, length_unit, length_unit
+                                               if self.increment is None else
+                                               self.increment[1 if state.inch else 0]))
         self.out.add_arrays(targets, kinds, feeds, np.zeros(n), rows + (i + 1),
                             np.full(n, spindle), blocks,
                             units_free=~(lengths[0] | lengths[1] | lengths[2])[rows])
