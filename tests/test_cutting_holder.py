@@ -292,7 +292,8 @@ def test_a_tilted_plunge_written_to_4_to_11_decimals_is_cut(z_text):
     centre to the top face along the axis (an oblique cut of a cylinder holds pi r^2 times
     its length on the axis) and a half ball, to the facets' 1 um. At 4 decimals or more an
     end computed from a written start lies at most 0.05 um (cos B + sin B) <= 71 nm beside
-    the axis, and the holder enters the wall by less (see the next test): within 100 nm."""
+    the axis, and the holder enters the wall by less (see the next test): within 100 nm,
+    the least allowance of a straight move (141 nm at 4 decimals: `written_rounding`)."""
     part, report = _tilted_plunge(z_text)
     allowed, by_body = _tilted_plunge(z_text, allow_holder_contact=True)
     assert report.holder_contact == ()
@@ -308,9 +309,9 @@ def test_a_tilted_plunge_written_to_4_decimals_is_cut_at_any_chord_tolerance():
     """With a 2 mm body (its holder in the hole from 15 mm along the axis down, about 0.56
     of the plunge) the end written to 4 decimals, 32 nm off the axis in Z (16 nm beside it),
     puts the holder up to some 9 nm into the hole's wall: within the words' rounding
-    (100 nm), and cut at the default chord, but the allowance was capped by the chord
-    tolerance, and with chord_tolerance=1e-9 (--chord-nm 1) the same program was refused
-    as a crash. The words' rounding is the text's: cut at both, as
+    (141 nm at 4 decimals, `written_rounding`), and cut at the default chord, but the
+    allowance was capped by the chord tolerance, and with chord_tolerance=1e-9 (--chord-nm
+    1) the same program was refused as a crash. The words' rounding is the text's: cut at both, as
     --allow-holder-contact cuts it."""
     z_text = f"{TILTED_END_Z:.4f}"
     parts = [_tilted_plunge(z_text, tool="ball:0.5:h=2", chord_tolerance=chord)

@@ -127,19 +127,20 @@ def test_a_coarse_chord_tolerance_forgives_no_holder_in_a_straight_wall(name):
     assert report.holder_contact == ()  # in the slot: touching its wall, no more
     with pytest.raises(HolderContactError, match=r"line 12 takes the top of the tool's body"):
         f(parse_program(_slot_then_step(0.05)), "grooving_4axis", **kwargs)
-    # no chords: only the words' rounding (100 nm, whatever the chord tolerance), move by
-    # move; an arc read within 10 um gives its chords their 10 um, the rapid before it its
-    # words' rounding
+    # no chords: only the words' rounding (whatever the chord tolerance; written to 3
+    # decimals of mm, sqrt(2) um: `written_rounding`), move by move; an arc read within
+    # 10 um gives its chords their 10 um, the rapid before it its words' rounding (no
+    # decimals: taken as 3)
     from machinesim import motion
 
     straight = parse_program(_slot_then_step(0.05))
     plan = motion.plan(straight, _machine(), chord_tolerance=1e-4)
-    assert (holder_tolerance(straight, 1e-4, plan) == 1e-7).all()
-    assert (holder_tolerance(straight, 1e-9, plan) == 1e-7).all()
+    assert (holder_tolerance(straight, 1e-4, plan) == np.sqrt(2.0) * 1e-6).all()
+    assert (holder_tolerance(straight, 1e-9, plan) == np.sqrt(2.0) * 1e-6).all()
     arcs = parse_program("G21 G90 G17\nG00 X1. Y0. Z0.\nG02 X-1. Y0. I-1. J0. F100.\nM30\n",
                          chord_tolerance=1e-5)
     own = holder_tolerance(arcs, 1e-7, motion.plan(arcs, _machine()))
-    assert own[0] == 1e-7 and len(own) > 2 and (own[1:] == 1e-5).all()
+    assert own[0] == np.sqrt(2.0) * 1e-6 and len(own) > 2 and (own[1:] == 1e-5).all()
 
 
 def _machine():

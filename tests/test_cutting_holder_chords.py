@@ -57,7 +57,7 @@ def test_a_rotary_move_elsewhere_under_a_coarse_chord_forgives_no_holder_in_a_wa
 
 def test_each_move_gets_its_own_chord():
     from machinesim import motion
-    from machinesim.cutting.program import WRITTEN_ROUNDING_M, holder_tolerance
+    from machinesim.cutting.program import holder_tolerance
     from machinesim.machines import load_machine
 
     machine = load_machine("grooving_4axis")
@@ -65,17 +65,18 @@ def test_each_move_gets_its_own_chord():
                             chord_tolerance=1e-5)
     plan = motion.plan(program, machine, chord_tolerance=1e-4)
     own = holder_tolerance(program, 1e-4, plan)
+    written = np.sqrt(2.0) * 1e-6  # the words' rounding at 3 decimals of mm
     lines = np.asarray(plan.lines)
     arc, turn = lines == 15, lines == 18  # the G02 and the G01 C180.
     assert arc.sum() > 1 and turn.sum() == 1  # the arc's chords, the turn one move
     assert (own[arc] == 1e-5).all()  # as read
     assert (own[turn] == 1e-4).all()  # as split
-    assert (own[~arc & ~turn] == WRITTEN_ROUNDING_M).all()  # written, cut exactly
+    assert (own[~arc & ~turn] == written).all()  # written, cut exactly
     # a finer chord tolerance leaves the words' rounding as it is; the turn, a feed that turns
     # C in a program with arcs, keeps the arcs' (the reader keeps no arc length for the
     # chords of an arc that turns a rotary axis, so they are not told apart)
     fine = holder_tolerance(program, 1e-9, plan)
-    assert (fine[~arc & ~turn] == WRITTEN_ROUNDING_M).all() and (fine[turn] == 1e-5).all()
+    assert (fine[~arc & ~turn] == written).all() and (fine[turn] == 1e-5).all()
 
 
 def _bore_then_across(out_mm: float = 0.0, tools: str = "") -> str:

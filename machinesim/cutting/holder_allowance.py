@@ -3,8 +3,9 @@
 to it before.
 
 A sweep's own allowance is its move's (`machinesim.cutting.program.holder_tolerance`): the
-rounding of the program's words on a straight move, the tolerance its chords were made
-within on a chord of an arc or of a move the planner split. The holder also meets walls
+rounding of the program's words on a straight move (`program.written_rounding`, from the
+decimals the text wrote), the tolerance its chords were made within on a chord of an arc
+or of a move the planner split. The holder also meets walls
 other sweeps cut: a straight pass along a pocket whose wall an arc cut as chords finds the
 wall up to one of those chords' sag short of the arc, and its holder, true to the arc,
 enters it by that much. So a sweep's allowance is the largest of its own and of those of the

@@ -11,6 +11,7 @@ set, when the body alone cuts and the lines are listed.
 from __future__ import annotations
 
 import inspect
+import math
 import os
 import time
 
@@ -230,7 +231,7 @@ def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, s
     done: list = []  # the tools cut so far, with their paths
     own = np.broadcast_to(np.asarray(holder_tolerance(program, chord_tolerance, trajectory),
                                      dtype=np.float64), (len(trajectory.kinds),))
-    floor, chorded = WRITTEN_ROUNDING_M, None
+    floor, chorded = written_rounding(program), None
     for section_tool, length, section, (lo, hi), (number, line) in tools.split(moves):
         section_poses = poses[lo:hi] if length == 0.0 else poses[lo:hi] @ _beyond_tip(length)
         paths = np.split(section_poses, section.breaks) if len(section_poses) else []
@@ -304,16 +305,18 @@ def holder_tolerance(program, chord_tolerance: float, trajectory) -> np.ndarray:
     (`Program.arc_chord_tolerance`; the reader keeps no arc length for the chords of an arc
     that turns a rotary axis, so a feed that turns one, in a program with arcs, gets it
     too), and the larger where both; any other move, straight and cut exactly, only the
-    rounding of its words (`WRITTEN_ROUNDING_M`, whatever the chord tolerance). One arc
-    read coarse, or one rotary move under a coarse ``--chord-nm``, anywhere in the program
-    had given every move its chord, and a holder 0.2 mm into a straight wall was cut.
+    rounding of the words it was written with (`written_rounding`: sqrt(2) digits of the
+    text's finest length word, 1.414 um at 3 decimals of mm, 100 nm at the least, whatever
+    the chord tolerance). One arc read coarse, or one rotary move under a coarse
+    ``--chord-nm``, anywhere in the program had given every move its chord, and a holder
+    0.2 mm into a straight wall was cut.
 
     The holder at a chord's end meets the wall the body cut along another chord's middle,
     that much short of the arc, and a straight pass's holder meets the walls chorded moves
     cut: `holder_allowance.sweep_allowances` gives each sweep the largest of its own and of
     the chorded sweeps that cut next to its holder before (docs/cutting.md)."""
     count = len(trajectory.kinds)
-    allowance = np.full(count, WRITTEN_ROUNDING_M)
+    allowance = np.full(count, written_rounding(program))
     moving = trajectory.kinds != MOVE_KINDS.index("dwell")
     split = moving & (np.diff(trajectory.offsets) > 2)
     allowance[split] = np.maximum(allowance[split], chord_tolerance)
@@ -331,13 +334,49 @@ def holder_tolerance(program, chord_tolerance: float, trajectory) -> np.ndarray:
     return allowance
 
 
-#: The holder's allowance on straight moves (m): an NC word is written to finite decimals,
-#: so a plunge meant down a tilted tool's axis ends off it by up to half the last digit in
-#: each coordinate, and its holder grazes the hole's wall by picometres to nanometres (at 4
-#: decimals of mm, at most 71 nm off the axis). The text's rounding, not the chord
-#: tolerance's: capped by it, a plunge cut at the default chord was refused under
-#: --chord-nm 1. A straight pass 50 um into a wall is still a crash at any --chord-nm.
+#: The least allowance of the holder on a straight move (m): that of a program built from
+#: moves, and of one written to 5 decimals of mm or more (`written_rounding`). The text's
+#: rounding, not the chord tolerance's: capped by it, a plunge cut at the default chord was
+#: refused under --chord-nm 1. A straight pass 50 um into a wall is a crash at any
+#: --chord-nm and any decimals.
 WRITTEN_ROUNDING_M = 1e-7
+#: The coarsest last digit a program's lengths are taken as written to (m): 3 decimals of
+#: mm (G21, or no unit word) and 4 of inch (G20), as CAM posts write them. A hand-written
+#: program of fewer decimals (``X1.5``) meant its positions as written, and gets no more.
+COARSEST_DIGIT_M = {"G21": 1e-6, "G20": 2.54e-6}
+
+
+def written_rounding(program) -> float:
+    """The holder's allowance on a straight move of ``program`` (m): the rounding of the
+    words it was written with, sqrt(2) d.
+
+    d is `Program.length_digit`, what the last digit of the text's finest length word
+    stands for, taken at most `COARSEST_DIGIT_M`. A position computed and then written lies
+    up to d / 2 off in each coordinate. A plunge meant down a tilted tool's axis runs from a
+    written start to a written end, both computed (a post writes the point above the hole
+    along the axis too), so the written move's direction is off the axis by the difference
+    of two roundings, up to d in each coordinate it changes. The holder follows the body
+    down the hole the body drilled along the written move: h above the body's top it is
+    where the body's top was h back along the move, h / L of the move's offset across the
+    axis beside it (L the move's length), and h < L, so it enters the wall by less than
+    that offset. The tool tilted by one rotary axis (B, in the Z-X plane, on every shipped
+    machine), a move down its axis changes two coordinates, X and Z (one it does not change
+    is the same word at both ends): at most sqrt(2) d across the axis. A tool tilted out of
+    every plane of two linear axes changes three, up to sqrt(3) d, and such a plunge may
+    still be refused. The finest word sets d: a program of 3 decimals with one word of 6 is
+    allowed the 6 decimals' rounding.
+
+    So 1.414 um at 3 decimals of mm, 3.592 um at 4 of inch, 141 nm at 4 of mm, and never
+    below `WRITTEN_ROUNDING_M` (100 nm: 5 decimals of mm and more, and a program with no
+    `length_digit`: built from moves, or compensated, its targets rounded to the machine's
+    1 nm as the text written from it reads back; the rounding of the text it came from
+    is still in its targets, and a tilted plunge of 3 decimals may be refused there).
+    """
+    digit = getattr(program, "length_digit", None)
+    if digit is None:
+        return WRITTEN_ROUNDING_M
+    coarsest = COARSEST_DIGIT_M["G20" if program.unit_in_force == "G20" else "G21"]
+    return max(WRITTEN_ROUNDING_M, math.sqrt(2.0) * min(float(digit), coarsest))
 
 
 def _outside_windows(stock: Part, roi, done: list, tool, paths: list,

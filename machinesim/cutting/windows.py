@@ -22,11 +22,11 @@ from machinesim.cutting.engine import EMPTY_SWEPT_REL, remove
 from machinesim.cutting.holder import check_holder
 from machinesim.cutting.holder_allowance import sweep_allowances
 from machinesim.cutting.program import (
-    WRITTEN_ROUNDING_M,
     _holder_refusal,
     _overtravel,
     check_progress,
     holder_tolerance,
+    written_rounding,
 )
 from machinesim.cutting.report import (
     CutReport,
@@ -197,7 +197,7 @@ def _cut_turned(program, machine, tool, stock, errors, *, file_notes: bool, roi=
     own = np.broadcast_to(np.asarray(holder_tolerance(program, chord_tolerance, trajectory),
                                      dtype=np.float64), linear.shape)[linear]
     holder = _holder_lines(program, machine, errors, tool, stock, feeds, allow_holder_contact,
-                           own, WRITTEN_ROUNDING_M)
+                           own, written_rounding(program))
     removed = swept = engine_s = 0.0
     sweeps = sideways = 0
     sideways_lines: set[int] = set()
