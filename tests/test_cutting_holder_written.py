@@ -158,3 +158,15 @@ def test_the_written_digit_is_pickled_and_none_for_targets_not_read():
     with pytest.raises(NCProgramError, match=r"length_digit must be None or a length > 0 "
                                              r"\(m\).*got -1\.0"):
         function(*arguments[:-1], -1.0)
+
+
+def test_a_word_of_hundreds_of_decimals_is_read_with_its_digit_bounded():
+    """``X1.`` and 400 zeros is 1 mm: the last digit's 10 ** -400 mm is beyond float64 and
+    had ended the read in an OverflowError. Counted to `MOST_DECIMALS` (30) decimals, the
+    digit is 1e-30 mm and the allowance the floor."""
+    from machinesim.nc.blocks import MOST_DECIMALS
+
+    program = parse_program("G21 G90\nG01 X1." + "0" * 400 + " Y2. F100.\nM30\n")
+    assert program.targets[-1, 0] == 1e-3
+    assert program.length_digit == pytest.approx(1e-3 / 10.0 ** MOST_DECIMALS, rel=1e-14, abs=0.0)
+    assert written_rounding(program) == WRITTEN_ROUNDING_M

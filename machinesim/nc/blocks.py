@@ -49,6 +49,9 @@ from machinesim.units import M_PER_MM, RAD_PER_DEG
 
 #: M06 puts the tool selected by the last T word in the spindle (FANUC machining centres).
 TOOL_CHANGE = 6
+#: The most decimals a length word's last digit is counted to (`Block.digit`): 1e-30 of a
+#: unit, far below anything the holder's allowance reads.
+MOST_DECIMALS = 30
 
 if TYPE_CHECKING:
     from machinesim.nc.reader import Reader
@@ -525,9 +528,12 @@ class Block:
 
     def digit(self, unit: float, word: Word) -> float:
         """``unit`` (m per unit of the length ``word``), its last digit's value kept for
-        `Program.length_digit` (`Reader.written_to`)."""
+        `Program.length_digit` (`Reader.written_to`). Past `MOST_DECIMALS` decimals the
+        digit is taken as that many's: ``X1.`` with 400 zeros is 1 mm, and 10 ** 400 is
+        beyond float64."""
         point = word.text.find(".")
-        self.reader.written_to(unit if point < 0 else unit / 10.0 ** (len(word.text) - 1 - point))
+        self.reader.written_to(unit if point < 0 else unit / 10.0 ** min(
+            len(word.text) - 1 - point, MOST_DECIMALS))
         return unit
 
     def real(self, word: Word) -> float:
