@@ -77,6 +77,26 @@ def test_a_tilted_plunge_written_as_posts_write_it_is_cut(plunge, decimals, inch
     assert abs(_across(text)) * 1e-3 <= written_rounding(parse_program(text))
 
 
+@pytest.mark.parametrize("integer_input", ["calculator", "increment", "is-b", "is-c"])
+def test_a_zero_written_without_a_point_leaves_the_plunge_cut_under_any_integer_input(
+        integer_input):
+    """A post writes ``Y0`` for a zero: it reads 0 whatever the integer input (no entry in
+    `Program.integer_words`), so it tells nothing of the decimals. Under ``increment`` it
+    had counted as a digit of 1 nm, the allowance fell to the 100 nm floor, and the
+    3-decimal plunge with both ends computed (1.339 um across the axis), cut when read as a
+    calculator reads it, was refused as a crash with the same targets."""
+    text = _plunge(*BOTH_COMPUTED, 3).replace("Y0.", "Y0")
+    calculator = parse_program(text)
+    program = parse_program(text, integer_input=integer_input)
+    assert program.integer_words == {}
+    assert np.array_equal(program.targets, calculator.targets, equal_nan=True)
+    assert program.length_digit == pytest.approx(1e-6, rel=1e-14)  # 3 decimals of mm
+    part, report = cut(program, "robonano_a0ib", tool=TOOL, stock=STOCK)
+    assert report.holder_contact == ()
+    assert part.volume == pytest.approx(cut(calculator, "robonano_a0ib", tool=TOOL,
+                                            stock=STOCK)[0].volume, rel=1e-12)
+
+
 def test_half_the_rounding_refuses_a_plunge_whose_two_ends_were_rounded():
     """The allowance counts a whole digit on each axis, not half: the plunge whose start and
     end were both computed and rounded runs 1.339 um across the axis at 3 decimals of mm,
@@ -154,6 +174,10 @@ def test_the_written_digit_is_pickled_and_none_for_targets_not_read():
     assert parse_program("G00 B30.\nM30\n").length_digit is None  # no length word
     bare = parse_program("G21\nG00 X1500 Y2.\nM30\n", integer_input="increment")
     assert bare.length_digit == pytest.approx(1e-9, rel=1e-14)  # X1500: 1500 nm
+    for fast in (True, False):  # a zero without a point: no digit, on either path
+        zeros = parse_program("G21\nG00 X0 Y0 Z-0\nM30\n", integer_input="increment",
+                              fast=fast)
+        assert zeros.length_digit is None
     function, arguments = program.__reduce__()
     with pytest.raises(NCProgramError, match=r"length_digit must be None or a length > 0 "
                                              r"\(m\).*got -1\.0"):

@@ -509,12 +509,15 @@ class Block:
             self.reader.integer_words.setdefault(word.letter, self.line)
 
     def length_of(self, word: Word) -> float:
-        """Metres per unit of a length word (X Y Z I J K R Q)."""
+        """Metres per unit of a length word (X Y Z I J K R Q). A zero written without a
+        point keeps no digit (`digit`): it reads the same whatever the integer input."""
         if "." not in word.text:
             self.bare(word)
+            unit = self.length_unit()
             if self.increment is not None:
                 metric, inch, _ = self.increment
-                return self.digit(inch if self.state.inch else metric, word)
+                unit = inch if self.state.inch else metric
+            return unit if self.real(word) == 0.0 else self.digit(unit, word)
         return self.digit(self.length_unit(), word)
 
     def axis_unit(self, word: Word) -> float:

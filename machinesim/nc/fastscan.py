@@ -152,14 +152,16 @@ def scan(data: bytes) -> Scan:
 def written_digit(found: Scan, i: int, j: int, unit: float, bare: float) -> float:
     """What the last digit of the finest X, Y or Z word of lines [i, j) stands for (m; inf
     where they have none): ``unit`` (m per unit of the lengths) over 10 to the most digits
-    after a point, or ``bare`` (m per unit of a number without a point) where finer."""
+    after a point, or ``bare`` (m per unit of a number without a point) where finer. A zero
+    without a point counts for nothing (`machinesim.nc.blocks.Block.length_of`)."""
     digit = math.inf
     rows = [COLUMN[letter] for letter in "XYZ"]
-    given = ~np.isnan(found.values[rows, i:j])
+    values = found.values[rows, i:j]
+    given = ~np.isnan(values)
     pointed = found.point[rows, i:j]
     if (given & pointed).any():
         digit = unit / 10.0 ** int(found.decimals[i:j].max())
-    if (given & ~pointed).any():
+    if (given & ~pointed & (values != 0.0)).any():
         digit = min(digit, bare)
     return digit
 

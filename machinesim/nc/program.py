@@ -190,9 +190,10 @@ class Program:
         What the last digit of the text's finest length word stands for, m: the unit of the
         length words (mm, or inch under G20) over 10 to the most digits written after the
         point in any of them (X Y Z I J K R Q; ``X1.2345`` in mm: 1e-7 m), or the unit a
-        number without a point is read in (`integer_input`) where that is finer. A position
-        computed and then written is that text's rounding off the place it was computed
-        for: `machinesim.cutting.program.written_rounding` allows the holder that much on a
+        number without a point is read in (`integer_input`) where that is finer (not a zero
+        without a point: ``Y0`` reads 0 in any unit). A position computed and then written
+        is that text's rounding off the place it was computed for:
+        `machinesim.cutting.program.written_rounding` allows the holder that much on a
         straight move. None when no length word was read, for programs built from moves, and
         after `with_targets`.
     unit_words : Mapping[str, int]
