@@ -97,6 +97,29 @@ def test_a_zero_written_without_a_point_leaves_the_plunge_cut_under_any_integer_
                                             stock=STOCK)[0].volume, rel=1e-12)
 
 
+@pytest.mark.parametrize("plunge", [FROM_WRITTEN, BOTH_COMPUTED])
+def test_a_compensated_plunge_keeps_the_rounding_of_the_text_it_came_from(plunge):
+    """`compensation.rewrite` with the program's own axis values (a compensation that
+    corrects nothing) leaves every target written as it was, to the bit: the 3-decimal
+    plunges are cut as the program read is. `Program.with_targets` had dropped
+    `length_digit`, the allowance fell to 100 nm, and both were refused at line 3 with the
+    same targets."""
+    from machinesim.compensation import program_axes, rewrite
+    from machinesim.machines import load_machine
+
+    machine = load_machine("robonano_a0ib")
+    program = parse_program(_plunge(*plunge, 3))
+    motion = [i for i, move in enumerate(program.moves) if move.kind != "dwell"]
+    compensated = rewrite(program, machine, program_axes(program, machine)[motion])
+    written = ~np.isnan(program.targets)  # (rewrite gives every axis on every move)
+    assert np.array_equal(compensated.targets[written], program.targets[written])
+    assert written_rounding(compensated) == pytest.approx(np.sqrt(2.0) * 1e-6, rel=1e-14)
+    part, report = cut(compensated, machine, tool=TOOL, stock=STOCK)
+    assert report.holder_contact == ()
+    assert part.volume == pytest.approx(cut(program, machine, tool=TOOL, stock=STOCK)[0].volume,
+                                        rel=1e-12)
+
+
 def test_half_the_rounding_refuses_a_plunge_whose_two_ends_were_rounded():
     """The allowance counts a whole digit on each axis, not half: the plunge whose start and
     end were both computed and rounded runs 1.339 um across the axis at 3 decimals of mm,
@@ -166,9 +189,9 @@ def test_the_allowance_is_sqrt_2_digits_of_the_finest_length_word(text, digit, a
 def test_the_written_digit_is_pickled_and_none_for_targets_not_read():
     program = parse_program("G21\nG00 X1.234 Z-0.5\nM30\n")
     assert pickle.loads(pickle.dumps(program)).length_digit == program.length_digit
-    # new targets (compensated: rounded to 1 nm, as the text written from them reads back)
-    moved = program.with_targets(program.targets)
-    assert moved.length_digit is None and written_rounding(moved) == WRITTEN_ROUNDING_M
+    # targets moved from the text's (compensated) keep its rounding
+    moved = program.with_targets(program.targets + 1e-6)
+    assert moved.length_digit == program.length_digit == pytest.approx(1e-6, rel=1e-14)
     built = Program.from_moves([Move("rapid", {"X": 0.001234})])
     assert built.length_digit is None and written_rounding(built) == WRITTEN_ROUNDING_M
     assert parse_program("G00 B30.\nM30\n").length_digit is None  # no length word

@@ -368,9 +368,8 @@ def written_rounding(program) -> float:
 
     So 1.414 um at 3 decimals of mm, 3.592 um at 4 of inch, 141 nm at 4 of mm, and never
     below `WRITTEN_ROUNDING_M` (100 nm: 5 decimals of mm and more, and a program with no
-    `length_digit`: built from moves, or compensated, its targets rounded to the machine's
-    1 nm as the text written from it reads back; the rounding of the text it came from
-    is still in its targets, and a tilted plunge of 3 decimals may be refused there).
+    `length_digit`, built from moves). A compensated program (`Program.with_targets`)
+    keeps the text's: the rounding of its words is still in its targets.
     """
     digit = getattr(program, "length_digit", None)
     if digit is None:

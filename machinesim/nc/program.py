@@ -194,8 +194,8 @@ class Program:
         without a point: ``Y0`` reads 0 in any unit). A position computed and then written
         is that text's rounding off the place it was computed for:
         `machinesim.cutting.program.written_rounding` allows the holder that much on a
-        straight move. None when no length word was read, for programs built from moves, and
-        after `with_targets`.
+        straight move. None when no length word was read, and for programs built from moves
+        (`with_targets` keeps it).
     unit_words : Mapping[str, int]
         The length units the text selected (``"G20"`` inch, ``"G21"`` mm) -> the first line
         each appeared on. Empty when it selected neither: its lengths were read in mm (the
@@ -519,8 +519,8 @@ class Program:
         """The same program with new axis targets, shape (N, 6) in `AXES` order (m, rad; NaN
         where an axis has no value yet): kinds, feeds, dwells, lines, spindle speeds, block
         numbers, M codes, tool changes, exact stops and everything read with the text kept,
-        but `length_digit`: the new targets are no words of the text (compensated, they are
-        rounded to the machine's resolution, as the text written from them reads back)."""
+        `length_digit` too: targets moved from the text's (compensated) keep its rounding,
+        as they keep its arcs' chords (`arc_chord_tolerance`)."""
         targets = np.array(targets, dtype=np.float64)
         if targets.shape != self._targets.shape:
             raise NCProgramError(f"expected targets of shape {self._targets.shape}, got "
@@ -535,7 +535,7 @@ class Program:
             integer_words=self.integer_words, end_words=self.end_words,
             after_end=self.after_end, arc_chord_tolerance=self.arc_chord_tolerance,
             dwell_words=self.dwell_words, unit_in_force=self.unit_in_force,
-            arc_lengths=self._arc_lengths)
+            arc_lengths=self._arc_lengths, length_digit=self.length_digit)
 
     def __hash__(self) -> int:
         return hash((self.number, self.source, len(self._kinds)))
