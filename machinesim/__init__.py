@@ -28,6 +28,7 @@ from machinesim.exceptions import (
     NotConvergedError,
     ProgramTimeError,
     ReadOnlyError,
+    SubtractionError,
     UnreachableError,
 )
 
@@ -88,6 +89,7 @@ __all__ = [
     "NotConvergedError",
     "ProgramTimeError",
     "ReadOnlyError",
+    "SubtractionError",
     "UnreachableError",
     "Realism",
     "ToolGeometry",

@@ -159,6 +159,17 @@ class HolderContactError(MachineSimError):
     hit the part (a real machine crashes there; the body alone would leave a tunnel)."""
 
 
+class SubtractionError(MachineSimError):
+    """manifold3d's booleans left material inside sweeps that were subtracted, and
+    subtracting them one at a time left it too: the part would be wrong, so none is returned
+    (`machinesim.cutting.run_check`). ``sweeps`` holds the sweeps' indices over the paths
+    given to `machinesim.cutting.engine.remove`."""
+
+    def __init__(self, message: str, *, sweeps: tuple[int, ...] = ()) -> None:
+        self.sweeps = tuple(sweeps)
+        super().__init__(message)
+
+
 class ReadOnlyError(MachineSimError, AttributeError):
     """An attribute fixed when its object was made was set or deleted (a `Lab`'s machine,
     seed, noise, realism): a `MachineSimError`, and an `AttributeError` as Python's own

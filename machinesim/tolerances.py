@@ -103,6 +103,11 @@ RAPID_EDGE_HALF_THICKNESS_M = 1e-7
 #: hundredth of an atom's diameter, a thousandth of the axes' 1 nm resolution, and 4x the
 #: thickest such sheet found (2.6e-13 m, paper 002's crown).
 SHEET_M = 1e-12
+#: A face of a part whose centroid lies deeper than this (m) inside a convex sweep just
+#: subtracted is material the subtraction left (`machinesim.cutting.run_check`): 1 pm, the
+#: sheet's thickness; the deepest centroid of a correct run measured 4.2e-16 m, the faces of
+#: the wedge manifold3d left 1.9e-10 to 9.0e-8 m (a rotary turn, docs/cutting.md).
+INSIDE_SWEEP_M = 1e-12
 
 # --- tools
 #: Chord tolerance of profile arcs (m): 1 nm, the axis resolution of the machines (1 nm),

@@ -79,6 +79,7 @@ from machinesim.cutting.poses import (  # noqa: F401  (re-exported: the names en
 )
 from machinesim.cutting.relief import cut_reliefs
 from machinesim.cutting.roi import roi_cells
+from machinesim.cutting.run_check import check_runs_value, checked_sweeps, subtract_run
 from machinesim.cutting.sheets import SheetReport, remove_sheets
 from machinesim.cutting.sideways import dragged
 from machinesim.cutting.stitch import exact_box, snapped_union, stitch
@@ -241,6 +242,7 @@ def remove(
     holder_stock: Part | None = None,
     holder_tolerance=0.0,
     holder_lent=None,
+    check_runs: str = "turning",
 ) -> tuple[Part, EngineReport]:
     """Cut ``stock`` with ``tool`` moved along ``paths``.
 
@@ -296,6 +298,13 @@ def remove(
     holder_lent : dict, optional
         Where a sweep whose ``holder_tolerance`` is borrowed from chorded sweeps may use it
         (`holder_allowance.Lent`, workpiece frame): inside their boxes; elsewhere its own.
+    check_runs : {"turning", "all", "off"}
+        Which runs of step 3 have their subtraction checked for material left inside their
+        sweeps, subtracted again one sweep at a time where there is, and refused with
+        `SubtractionError` where that leaves it too (`machinesim.cutting.run_check`): runs
+        with a sweep that turns the tool (the default; where manifold3d was seen to leave
+        such material, a rotary turn), every run, or none. Checking every run costs a
+        plain milling cut about a quarter more time (docs/cutting.md).
 
     Returns
     -------
@@ -323,6 +332,7 @@ def remove(
     _check_turns(paths, bool(tool.rotational))
     if method not in ("auto", "boolean"):
         raise InputError(f"method must be 'auto' or 'boolean', got {method!r}", key="method")
+    check_runs = check_runs_value(check_runs)
     bounds = stock.bounds
     scale = float(np.abs(bounds).max()) or 1.0
     margin = CLIP_MARGIN_REL * scale
@@ -355,7 +365,8 @@ def remove(
                               sweeps_per_tile=sweeps_per_tile, method="boolean", sheets=sheets,
                               on_holder_contact=on_holder_contact, holder_stock=framed_holder,
                               holder_tolerance=holder_tolerance,
-                              holder_lent=turned_lent(holder_lent, frame.T))
+                              holder_lent=turned_lent(holder_lent, frame.T),
+                              check_runs=check_runs)
         return out_of_frame(part, frame), replace(report,
                                                   elapsed_s=time.perf_counter() - start)
     holder = judge_holder(_holder_sweeps(sweeps, tool, paths, z_high, holder_stock),
@@ -424,6 +435,7 @@ def remove(
 
     # Ball sweeps along one straight line are cut as the one sweep of the line they make.
     head, joined = joined_ball_sweeps(sweeps, hulls, owners)
+    checked = checked_sweeps(check_runs, sweeps.poses, sweeps.pairs, owners)
     base = stock.manifold
     top = float(bounds[1, 2])
     stock_pieces, cell_parts = [], []
@@ -446,11 +458,8 @@ def remove(
                 piece.num_tri()
             for key in np.unique(keys[rest]):
                 for run in union_runs(rest[keys[rest] == key], lower, upper):
-                    piece = piece - manifold3d.Manifold.batch_boolean(
-                        [joined[i] for i in run], OpType.Add)
-                    # Evaluate now: manifold3d is lazy and would flatten A - B - C into
-                    # A - (B + C), the union this loop exists to avoid.
-                    piece.num_tri()
+                    piece = subtract_run(piece, [joined[i] for i in run],
+                                         [owners[i] for i in run], checked[run].any())
             if len(members):
                 removed += removed_volume(uncut, piece, sweeps.run_id, top)
             pieces.append(piece)

@@ -32,6 +32,7 @@ from machinesim.cutting.refusals import (  # re-exported: windows, lathe, lathe_
     block_at,  # noqa: F401
     line_text,  # noqa: F401
     refuse_far_ends,
+    subtraction_refusal,
 )
 from machinesim.cutting.report import (
     CutReport,
@@ -45,7 +46,7 @@ from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sideways import dragged_past_clearance, within_edge_plane
 from machinesim.cutting.tool_runs import _Moves, _ToolSections
 from machinesim.errors import as_error_model
-from machinesim.exceptions import InputError, ProgramTimeError
+from machinesim.exceptions import InputError, ProgramTimeError, SubtractionError
 from machinesim.metrology._arrays import as_flag
 from machinesim.motion.faces import ProfileEdges
 from machinesim.nc import MOVE_KINDS
@@ -244,11 +245,14 @@ def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, s
                                                         float(stock.bounds[1, 2]), floor,
                                                         chorded, carry=len(tools.runs) > 1)
         told = progress if len(tools.runs) == 1 else _run_progress(progress, number, line)
-        part, engine = remove(before, section_tool, paths, roi=roi, progress=told,
-                              sheets=False, on_holder_contact=refuse,
-                              holder_stock=_outside_windows(stock, roi, done, section_tool,
-                                                            paths, allow_holder_contact),
-                              holder_tolerance=allowance, holder_lent=lent)
+        try:
+            part, engine = remove(before, section_tool, paths, roi=roi, progress=told,
+                                  sheets=False, on_holder_contact=refuse,
+                                  holder_stock=_outside_windows(stock, roi, done, section_tool,
+                                                                paths, allow_holder_contact),
+                                  holder_tolerance=allowance, holder_lent=lent)
+        except SubtractionError as error:
+            raise subtraction_refusal(error, program, section.sweep_line) from None
         done.append((section_tool, paths))
         rapids += rapids_that_cut(before, section_tool, section_poses, section,
                                    engine.reached, roi)

@@ -19,6 +19,7 @@ from machinesim.exceptions import (
     AxisLimitError,
     HolderContactError,
     NCProgramError,
+    SubtractionError,
     line_of,
 )
 from machinesim.nc import AXES, Program
@@ -189,6 +190,19 @@ def _holder_refusal(program, tool, stock: Part, sweep_line: np.ndarray):
             "(machinesim cut --allow-holder-contact on the command line) cuts the body "
             "alone and lists the lines")
     return refuse
+
+
+def subtraction_refusal(error: SubtractionError, program,
+                        sweep_line: np.ndarray) -> SubtractionError:
+    """``error`` (`engine.remove`'s, naming sweeps of a tool's run) naming the program's
+    lines of those sweeps (``sweep_line``: the line of each sweep of the run)."""
+    lines = list(dict.fromkeys(int(sweep_line[i]) for i in error.sweeps))
+    if not lines:
+        return error
+    source = getattr(program, "source", None)
+    where = f"{source}: " if source else ""
+    return SubtractionError(f"{where}{line_text(program, lines[0])}{_more_lines(lines)}: "
+                            f"{error}", sweeps=error.sweeps)
 
 
 def _format(rotary: bool, value: float | None = None, limits=()):
