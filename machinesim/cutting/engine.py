@@ -24,8 +24,10 @@ never touching the part mesh once per sweep:
    a union's cost grows with its overlapping pairs; groups that cross each other are
    subtracted one after the other, each evaluated before the next, because the union of
    crossing sweeps costs as much as cutting them (and manifold3d, left lazy, would form
-   exactly that union). An upright flat end mill's level passes are taken first: those on
-   one floor are one prism, over the union of their footprints in the plane
+   exactly that union). A run of a tool that turns is checked for material manifold3d
+   left inside its sweeps, and cut again one sweep at a time where there is any
+   (`machinesim.cutting.run_check`). An upright flat end mill's level passes are taken
+   first: those on one floor are one prism, over the union of their footprints in the plane
    (`machinesim.cutting.footprints`); a ball end mill's level moves exactly in line are
    one sweep of the joined move (`machinesim.cutting.collinear`).
 4. The region is split into cells (ROI windows, and a grid of tiles inside each): a tile is
