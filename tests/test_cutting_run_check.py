@@ -166,3 +166,20 @@ def test_cut_names_the_lines_of_a_refused_run(monkeypatch):
     with pytest.raises(SubtractionError, match=r"^<string>: line 3 \(lines 3, 5\): manifold3d's "):
         machinesim.cut(machinesim.nc.parse_program(program), "grooving_4axis",
                        tool="ball:1.0", stock="block:4x4x1")
+
+
+def test_a_turn_that_moves_no_vertex_past_the_twist_is_not_checked():
+    # a tool's vertices 1 mm from its tip; turned about X by 5e-9 rad they move 5e-12 m, by
+    # 2e-8 rad 2e-11 m: only the second is past TWIST_M (1e-11 m), a sweep cut turning
+    vertices = np.array([[0.0, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]])
+
+    def turned(angle):
+        c, s = math.cos(angle), math.sin(angle)
+        return pose((0.0, 0.0, 0.0), np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]))
+
+    poses = np.array([pose((0.0, 0.0, 0.0)), turned(5e-9), turned(2.5e-8), turned(2.5e-8)])
+    sweeps = types.SimpleNamespace(poses=poses, pairs=np.array([0, 1, 2]), vertices=vertices)
+    assert run_check.checked_sweeps("turning", sweeps, [0, 1, 2]).tolist() == [False, True,
+                                                                               False]
+    assert run_check.checked_sweeps("all", sweeps, [0, 2]).tolist() == [True, True]
+    assert run_check.checked_sweeps("off", sweeps, [0, 1]).tolist() == [False, False]

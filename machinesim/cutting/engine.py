@@ -437,7 +437,7 @@ def remove(
 
     # Ball sweeps along one straight line are cut as the one sweep of the line they make.
     head, joined = joined_ball_sweeps(sweeps, hulls, owners)
-    checked = checked_sweeps(check_runs, sweeps.poses, sweeps.pairs, owners)
+    checked = checked_sweeps(check_runs, sweeps, owners)
     base = stock.manifold
     top = float(bounds[1, 2])
     stock_pieces, cell_parts = [], []
