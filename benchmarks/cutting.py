@@ -449,28 +449,13 @@ def run_slanted_child(args) -> None:
 
 def run_crown_before() -> dict:
     """Case g: paper 002's crown before compensation, cut with runs and with one union."""
-    import importlib.util
-    from types import SimpleNamespace
+    from _crown import crown_before
 
-    from machinesim import Lab, load_machine
     from machinesim.cam.crown import PARK
     from machinesim.cutting import engine
     from machinesim.metrology.surface import height_map
-    from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
-    from machinesim.realism import Realism
 
-    path = Path(__file__).resolve().parents[1] / "scenarios" / "workpiece_setting.py"
-    spec = importlib.util.spec_from_file_location("workpiece_setting_scenario", path)
-    scenario = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(scenario)
-    defaults = SimpleNamespace(robot_repeatability_um=None, delta_um=None, rot_deg=None,
-                               crown_delta_um=None, crown_rot_deg=None, errors=None, seed=0)
-    lab = Lab(load_machine("robonano_a0ib"), scenario.loads(defaults)["crown"], seed=0,
-              realism=Realism.lab())
-    lab.reuse_cuts = False  # the same inputs twice, two engine settings: cut both times
-    procedure = RobotLoadedWorkpiece("crown")
-    found = procedure.identify(procedure.measure(lab)).detail.found
-    layout, program = procedure.layout(found), procedure.nominal_program(found)
+    lab, procedure, layout, program = crown_before()
 
     def cut():
         start = time.perf_counter()

@@ -120,24 +120,17 @@ def singular_check(n: int = 5_000, repeats: int = 5) -> None:
 def crown_segments(repeats: int = 5) -> None:
     """Paper 002's crown after compensation (`make demo`'s default run, seed 0): the poses
     of its feed segments, grouped by C as `machinesim.cutting.cut_turned` groups them."""
-    import importlib.util
     import math
-    from pathlib import Path
-    from types import SimpleNamespace
+
+    from _crown import crown_errors
 
     from machinesim import Lab, motion
     from machinesim.cam.crown import PARK
     from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
     from machinesim.realism import Realism
 
-    path = Path(__file__).resolve().parents[1] / "scenarios" / "workpiece_setting.py"
-    spec = importlib.util.spec_from_file_location("workpiece_setting_scenario", path)
-    scenario = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(scenario)
-    defaults = SimpleNamespace(robot_repeatability_um=None, delta_um=None, rot_deg=None,
-                               crown_delta_um=None, crown_rot_deg=None, errors=None, seed=0)
     machine = load_machine("robonano_a0ib")
-    errors = scenario.loads(defaults)["crown"]
+    errors = crown_errors()
     procedure = RobotLoadedWorkpiece("crown")
     identified = procedure.identify(procedure.measure(Lab(machine, errors, seed=0,
                                                           realism=Realism.lab())))

@@ -86,27 +86,11 @@ def cases(folder: Path) -> dict:
 
 @functools.cache
 def crown_setup():
-    """The lab, layout and program of paper 002's crown before compensation, measured once
-    (benchmarks/cutting.py's case g)."""
-    import importlib.util
-    from types import SimpleNamespace
+    """The lab, procedure, layout and program of paper 002's crown before compensation,
+    measured once (`_crown.crown_before`, benchmarks/cutting.py's case g too)."""
+    from _crown import crown_before
 
-    from machinesim import Lab, load_machine
-    from machinesim.procedures.workpiece_setting import RobotLoadedWorkpiece
-    from machinesim.realism import Realism
-
-    path = ROOT / "scenarios" / "workpiece_setting.py"
-    spec = importlib.util.spec_from_file_location("workpiece_setting_scenario", path)
-    scenario = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(scenario)
-    defaults = SimpleNamespace(robot_repeatability_um=None, delta_um=None, rot_deg=None,
-                               crown_delta_um=None, crown_rot_deg=None, errors=None, seed=0)
-    lab = Lab(load_machine("robonano_a0ib"), scenario.loads(defaults)["crown"], seed=0,
-              realism=Realism.lab())
-    lab.reuse_cuts = False  # the same inputs each time: cut each time
-    procedure = RobotLoadedWorkpiece("crown")
-    found = procedure.identify(procedure.measure(lab)).detail.found
-    return lab, procedure, procedure.layout(found), procedure.nominal_program(found)
+    return crown_before()
 
 
 def crown_cut() -> float:
