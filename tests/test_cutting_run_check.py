@@ -158,14 +158,20 @@ def test_bad_check_runs_is_refused(value):
         remove(block(4e-3, 4e-3, 1e-3), BallEndMill(0.5e-3), turning_paths(), check_runs=value)
 
 
-def test_cut_names_the_lines_of_a_refused_run(monkeypatch):
+@pytest.mark.parametrize("cutter", ["cut", "cut_turned"])
+def test_cut_names_the_lines_of_a_refused_run(monkeypatch, cutter):
+    """Both cutters name the program's lines of the first refused run's sweeps: the plunge
+    (line 3) and the retract (line 5) that cuts; cut_turned cuts no rapid, and its first
+    run is the plunge's alone."""
     def refuse(piece, solids, sweeps, check):
         raise SubtractionError("manifold3d's subtraction left material", sweeps=tuple(sweeps))
     monkeypatch.setattr(engine, "subtract_run", refuse)
     program = ("G21 G90 G17\nG00 X1. Y2. Z1.\nG01 Z-0.2 F50.\nG01 X3. F100.\nG00 Z5.\nM30\n")
-    with pytest.raises(SubtractionError, match=r"^<string>: line 3 \(lines 3, 5\): manifold3d's "):
-        machinesim.cut(machinesim.nc.parse_program(program), "grooving_4axis",
-                       tool="ball:1.0", stock="block:4x4x1")
+    lines = r"line 3 \(lines 3, 5\)" if cutter == "cut" else r"line 3"
+    with pytest.raises(SubtractionError, match=rf"^<string>: {lines}: manifold3d's "):
+        getattr(machinesim.cutting, cutter)(machinesim.nc.parse_program(program),
+                                            "grooving_4axis", tool="ball:1.0",
+                                            stock="block:4x4x1")
 
 
 def test_a_turn_that_moves_no_vertex_past_the_twist_is_not_checked():

@@ -28,6 +28,7 @@ from machinesim.cutting.program import (
     holder_tolerance,
     written_rounding,
 )
+from machinesim.cutting.refusals import subtraction_refusal
 from machinesim.cutting.report import (
     CutReport,
     arc_chord_note,
@@ -40,7 +41,7 @@ from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sideways import dragged_past_clearance
 from machinesim.cutting.tool_runs import _Moves
 from machinesim.errors import as_error_model
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, SubtractionError
 from machinesim.metrology._arrays import as_flag, as_number
 from machinesim.motion.faces import ProfileEdges
 from machinesim.nc import MOVE_KINDS
@@ -213,7 +214,10 @@ def _cut_turned(program, machine, tool, stock, errors, *, file_notes: bool, roi=
         paths = [turn @ poses for poses in machine.tool_poses([s.q for s in segments], errors)]
         sweep_line = np.repeat([s.line for s in segments], [len(s.q) - 1 for s in segments])
         # the holder was judged before, in the program's order (`_holder_lines`)
-        cut_part, report = remove(turned, tool, paths, sheets=False)
+        try:
+            cut_part, report = remove(turned, tool, paths, sheets=False)
+        except SubtractionError as error:
+            raise subtraction_refusal(error, program, sweep_line) from None
         part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
         sweeps += report.n_sweeps_cut
         sideways += len(report.sideways)
