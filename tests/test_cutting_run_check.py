@@ -1,6 +1,7 @@
 """The check of each run's subtraction (machinesim.cutting.run_check): material manifold3d
 leaves inside the sweeps it subtracted is cut again one sweep at a time, or refused."""
 
+import json
 import math
 import types
 from pathlib import Path
@@ -189,3 +190,54 @@ def test_a_turn_that_moves_no_vertex_past_the_twist_is_not_checked():
                                                                                False]
     assert run_check.checked_sweeps("all", sweeps, [0, 2]).tolist() == [True, True]
     assert run_check.checked_sweeps("off", sweeps, [0, 1]).tolist() == [False, False]
+
+
+#: A straight groove 0.2 mm deep along X at y = 2 mm (lines 3 and 4), cut by a ball of 1 mm.
+GROOVE = "G21 G90 G17\nG00 X1. Y2. Z1.\nG01 Z-0.2 F50.\nG01 X3. F100.\nG00 Z5.\nM30\n"
+
+
+@pytest.mark.parametrize("how", ["cut", "cut_turned", "Lab.cut", "machinesim cut"])
+def test_every_run_is_checked_when_a_user_asks(union_short_of, how, tmp_path, capsys):
+    """``check_runs`` through each way a user cuts: a run of straight moves whose union
+    misses a tetrahedron inside its sweeps (leg 20 um: 20e-6^3 / 6 m^3 of the block kept) is
+    cut whole with "all", and keeps that tetrahedron with the default, which checks only
+    the runs of a tool that turns."""
+    from cli_helpers import run
+
+    def cutting(check_runs=None):
+        """The removed volume (m^3) of the groove cut ``how``."""
+        options = {} if check_runs is None else {"check_runs": check_runs}
+        program = machinesim.nc.parse_program(GROOVE)
+        where = {"tool": "ball:1.0", "stock": "block:4x4x1"}
+        if how == "cut":
+            return machinesim.cut(program, "grooving_4axis", **where,
+                                  **options)[1].removed_volume_m3
+        if how == "cut_turned":
+            return machinesim.cutting.cut_turned(program, "grooving_4axis", **where,
+                                                 **options)[1].removed_volume_m3
+        if how == "Lab.cut":
+            lab = machinesim.Lab("grooving_4axis")
+            lab.reuse_cuts = False
+            return lab.cut(program, **where, **options)[1].removed_volume_m3
+        nc, report = tmp_path / "groove.nc", tmp_path / f"r_{check_runs}.json"
+        nc.write_text(GROOVE)
+        flag = [] if check_runs is None else ["--check-runs", check_runs]
+        code, _, err = run(["cut", nc, "--machine", "grooving_4axis", "--tool", "ball:1.0",
+                            "--stock", "block:4x4x1", "--quiet", "--out",
+                            tmp_path / "part.ply", "--report", report, *flag], capsys)
+        assert code == 0, err
+        return json.loads(report.read_text())["removed_volume_mm3"] * 1e-9
+
+    exact = cutting("off")
+    leg = 20e-6
+    union_short_of(tetrahedron((2e-3, 2e-3, -0.15e-3), leg))
+    assert exact - cutting() == pytest.approx(leg ** 3 / 6, rel=1e-6, abs=0.0)
+    assert cutting("all") == pytest.approx(exact, rel=1e-12)
+
+
+@pytest.mark.parametrize("cutter", ["cut", "cut_turned"])
+def test_a_bad_check_runs_is_refused_before_any_cut(cutter):
+    with pytest.raises(InputError, match="key 'check_runs': Expected check_runs as one of"):
+        getattr(machinesim.cutting, cutter)(machinesim.nc.parse_program(GROOVE),
+                                            "grooving_4axis", tool="ball:1.0",
+                                            stock="block:4x4x1", check_runs="every")

@@ -133,13 +133,13 @@ def test_a_cut_option_the_lab_does_not_take_is_refused_with_the_options_it_takes
     lab = Lab("robonano_a0ib", noise=False)
     with pytest.raises(InputError, match=r"Lab.cut has no option 'chord'; it takes start, "
                                          r"chord_tolerance, servo, progress, allow_overtravel, "
-                                         r"allow_holder_contact, turn_step") as info:
+                                         r"allow_holder_contact, check_runs, turn_step") as info:
         lab.cut(groove(), "v:90", "block:10x10x2", chord=1e-9)
     assert info.value.key == "chord"
     with pytest.raises(InputError, match=r"Lab.cut with turn_step has no option 'chord'; it "
                                          r"takes floor, start, turn_step, turn_axis, "
                                          r"chord_tolerance, servo, allow_overtravel, "
-                                         r"allow_holder_contact, progress"):
+                                         r"allow_holder_contact, progress, check_runs"):
         lab.cut(groove(), "v:90", "block:10x10x2", turn_step=0.5, chord=1e-9)
     for cutter in (lambda **o: lab.cut(groove(), "v:90", "block:10x10x2", **o),
                    lambda **o: machinesim.cut(groove(), "robonano_a0ib", **o)):

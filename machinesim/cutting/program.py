@@ -42,6 +42,7 @@ from machinesim.cutting.report import (
     peak_following_error,
 )
 from machinesim.cutting.roi import check_roi_meets, roi_cells
+from machinesim.cutting.run_check import check_runs_value
 from machinesim.cutting.sheets import SheetReport, trim_sheets
 from machinesim.cutting.sideways import dragged_past_clearance, within_edge_plane
 from machinesim.cutting.tool_runs import _Moves, _ToolSections
@@ -117,8 +118,8 @@ def _arguments(program, tool, stock, errors):
 
 def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, roi=None,
         start=None, chord_tolerance: float | None = None, servo=None,
-        progress=None, allow_overtravel: bool = False, allow_holder_contact: bool = False
-        ) -> tuple[Part, CutReport]:
+        progress=None, allow_overtravel: bool = False, allow_holder_contact: bool = False,
+        check_runs: str = "turning") -> tuple[Part, CutReport]:
     """Run ``program`` on ``machine`` (with ``errors``) and return the machined part.
 
     Parameters
@@ -161,6 +162,12 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         modelled, would hit the part), the body alone cutting and the lines listed in
         `CutReport.holder_contact`, instead of refusing it. The part is then not what a
         real machine leaves: that one crashes.
+    check_runs : {"turning", "all", "off"}
+        Which runs of sweeps have their subtraction checked for material the boolean kernel
+        left inside the sweeps (`machinesim.cutting.run_check`; cut again one sweep at a time
+        where there is): those with a sweep that turns the tool (the default: where
+        manifold3d was seen to leave such material, a rotary turn), every run (plain
+        milling then takes 13-35 % longer), or none (docs/cutting.md).
 
     Returns
     -------
@@ -180,17 +187,20 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         When a move takes the top of the tool's body, where its holder begins, below the top
         of the stock over it (and ``allow_holder_contact`` is False): the message names the
         program's lines, the tool's height and the stock's top. Nothing is returned.
+    SubtractionError
+        When a run of sweeps subtracted one at a time still leaves material inside them: the
+        message names the program's lines. Nothing is returned.
     """
     return _cut(program, machine, tool, stock, errors, roi=roi, start=start,
                 chord_tolerance=chord_tolerance, servo=servo, progress=progress,
                 allow_overtravel=allow_overtravel, allow_holder_contact=allow_holder_contact,
-                file_notes=True)
+                check_runs=check_runs, file_notes=True)
 
 
 def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, start=None,
          chord_tolerance: float | None = None, servo=None, progress=None,
-         allow_overtravel: bool = False, allow_holder_contact: bool = False
-         ) -> tuple[Part, CutReport]:
+         allow_overtravel: bool = False, allow_holder_contact: bool = False,
+         check_runs: str = "turning") -> tuple[Part, CutReport]:
     """`cut`, its notes on ``errors`` added when ``file_notes``: `Lab.cut` passes False, its
     errors being the truth (a note names their keys and values). Its options default as
     `cut`'s (`Lab.cut` leaves out those it was not given)."""
@@ -202,6 +212,7 @@ def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, s
         chord_tolerance = check_path_chord(chord_tolerance)
     allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")  # "no" is no True
     allow_holder_contact = as_flag(allow_holder_contact, "allow_holder_contact")
+    check_runs = check_runs_value(check_runs)
     check_progress(progress)
     program, tool, stock, errors = _arguments(program, tool, stock, errors)
     check_roi_meets(roi, stock)
@@ -250,7 +261,8 @@ def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, s
                                   sheets=False, on_holder_contact=refuse,
                                   holder_stock=_outside_windows(stock, roi, done, section_tool,
                                                                 paths, allow_holder_contact),
-                                  holder_tolerance=allowance, holder_lent=lent)
+                                  holder_tolerance=allowance, holder_lent=lent,
+                                  check_runs=check_runs)
         except SubtractionError as error:
             raise subtraction_refusal(error, program, section.sweep_line) from None
         done.append((section_tool, paths))

@@ -37,6 +37,7 @@ from machinesim.cutting.report import (
     peak_following_error,
 )
 from machinesim.cutting.roi import check_roi_meets
+from machinesim.cutting.run_check import check_runs_value
 from machinesim.cutting.sheets import trim_sheets
 from machinesim.cutting.sideways import dragged_past_clearance
 from machinesim.cutting.tool_runs import _Moves
@@ -97,7 +98,7 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
                roi=None, floor: float | None = None, start=None, turn_step: float = math.pi / 4,
                turn_axis: str = "C", chord_tolerance: float = motion.CHORD_TOLERANCE_M,
                servo=None, allow_overtravel: bool = False,
-               allow_holder_contact: bool = False, progress=None
+               allow_holder_contact: bool = False, progress=None, check_runs: str = "turning"
                ) -> tuple[Part, CutReport]:
     """Cut ``program`` as `machinesim.cutting.cut` does, each turn group in its own frame.
 
@@ -128,10 +129,10 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
         rad, > 0.
     turn_axis : str
         The rotary axis about the workpiece Z whose positions group the feed moves.
-    chord_tolerance, servo, allow_overtravel, allow_holder_contact
+    chord_tolerance, servo, allow_overtravel, allow_holder_contact, check_runs
         As `machinesim.cutting.cut` (an axis outside its travel raises `AxisLimitError`
         unless ``allow_overtravel``, a holder that would hit the part `HolderContactError`
-        unless ``allow_holder_contact``).
+        unless ``allow_holder_contact``; a subtraction that leaves material `SubtractionError`).
     progress : callable(done, total), optional
         Called before the first group and after each, in feed sweeps (a group's sweeps
         count as done once its cut is).
@@ -149,15 +150,15 @@ def cut_turned(program, machine, tool="v:90", stock="block:10x10x2", errors=None
                        chord_tolerance=chord_tolerance, servo=servo,
                        allow_overtravel=allow_overtravel,
                        allow_holder_contact=allow_holder_contact, progress=progress,
-                       file_notes=True)
+                       check_runs=check_runs, file_notes=True)
 
 
 def _cut_turned(program, machine, tool, stock, errors, *, file_notes: bool, roi=None,
                 floor: float | None = None, start=None, turn_step: float = math.pi / 4,
                 turn_axis: str = "C", chord_tolerance: float = motion.CHORD_TOLERANCE_M,
                 servo=None, allow_overtravel: bool = False,
-                allow_holder_contact: bool = False, progress=None
-                ) -> tuple[Part, CutReport]:
+                allow_holder_contact: bool = False, progress=None,
+                check_runs: str = "turning") -> tuple[Part, CutReport]:
     """`cut_turned`, its notes on ``errors`` added when ``file_notes`` (`Lab.cut` passes
     False: its errors are the truth). Its options default as `cut_turned`'s (`Lab.cut`
     leaves out those it was not given)."""
@@ -169,6 +170,7 @@ def _cut_turned(program, machine, tool, stock, errors, *, file_notes: bool, roi=
     machine = machine if isinstance(machine, Machine) else load_machine(machine)
     allow_overtravel = as_flag(allow_overtravel, "allow_overtravel")  # "no" is no True
     allow_holder_contact = as_flag(allow_holder_contact, "allow_holder_contact")
+    check_runs = check_runs_value(check_runs)
     check_progress(progress)
     # a dict in the TOML layout or a TOML file's path, as `cut` takes them: the notes on
     # them read an ErrorModel's, and a dict ended the whole cut with an AttributeError
@@ -215,7 +217,7 @@ def _cut_turned(program, machine, tool, stock, errors, *, file_notes: bool, roi=
         sweep_line = np.repeat([s.line for s in segments], [len(s.q) - 1 for s in segments])
         # the holder was judged before, in the program's order (`_holder_lines`)
         try:
-            cut_part, report = remove(turned, tool, paths, sheets=False)
+            cut_part, report = remove(turned, tool, paths, sheets=False, check_runs=check_runs)
         except SubtractionError as error:
             raise subtraction_refusal(error, program, sweep_line) from None
         part = Part(cut_part.manifold.rotate((0.0, 0.0, step_deg * key)))
