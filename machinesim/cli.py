@@ -147,7 +147,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="which runs of sweeps have their subtraction checked for material "
                           "the boolean kernel left inside them, and cut again one sweep at "
                           "a time where there is: those that turn the tool (default), all "
-                          "(plain milling takes 13-35 %% longer) or none (docs/cutting.md)")
+                          "(plain milling takes 16-26 %% longer) or none (docs/cutting.md)")
     cut.add_argument("--quiet", action="store_true",
                      help="no progress (a bar on a terminal, lines in a log past 10 s)")
     add_view_parser(sub)

@@ -167,7 +167,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, ro
         left inside the sweeps (`machinesim.cutting.run_check`; cut again one sweep at a time
         where there is): those with a sweep that turns the tool (the default: where
         manifold3d was seen to leave such material, a rotary turn), every run (plain
-        milling then takes 13-35 % longer), or none (docs/cutting.md).
+        milling then takes 16-26 % longer), or none (docs/cutting.md).
 
     Returns
     -------
