@@ -306,7 +306,7 @@ def remove(
         `SubtractionError` where that leaves it too (`machinesim.cutting.run_check`): runs
         with a sweep that turns the tool (the default; where manifold3d was seen to leave
         such material, a rotary turn), every run, or none. Checking every run costs a
-        plain milling cut about a quarter more time (docs/cutting.md).
+        plain milling cut 16-26 % more CPU (docs/cutting.md).
 
     Returns
     -------
