@@ -454,10 +454,14 @@ def _journal(staged: list[tuple[Path, str]], backups: list[str | None]) -> str:
                for (path, temp), backup in zip(staged, backups, strict=True)]
     first = staged[0][0]
     handle, name = tempfile.mkstemp(dir=first.parent, prefix=_temp_prefix(first), suffix=".set")
-    with os.fdopen(handle, "w", encoding="utf-8") as file:
-        json.dump(entries, file)
-        file.flush()
-        os.fsync(file.fileno())
+    try:  # a journal not written whole (a full disk) is not left behind
+        with os.fdopen(handle, "w", encoding="utf-8") as file:
+            json.dump(entries, file)
+            file.flush()
+            os.fsync(file.fileno())
+    except BaseException:
+        Path(name).unlink(missing_ok=True)
+        raise
     return name
 
 

@@ -115,6 +115,30 @@ def test_a_full_disk_is_an_input_error_and_leaves_the_old_file(tmp_path, monkeyp
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report.json"]
 
 
+def test_a_full_disk_as_the_journal_is_written_leaves_no_journal(tmp_path, monkeypatch):
+    # two files are renamed in under a journal; a disk that fills as the journal is flushed
+    # had left an empty .NAME.PID@HOST-XXXX.set beside the old files
+    (tmp_path / "part.ply").write_text("old part")
+    (tmp_path / "report.json").write_text("old report")
+    real_fsync = os.fsync
+    calls = []
+
+    def full_on_the_journal(fd):
+        calls.append(fd)
+        if os.readlink(f"/proc/self/fd/{fd}").endswith(".set"):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real_fsync(fd)
+
+    monkeypatch.setattr(_io.os, "fsync", full_on_the_journal)
+    with pytest.raises(InputError, match="part.ply: cannot write: No space left on device"):
+        _io.write_together([(tmp_path / "part.ply", "new part"),
+                            (tmp_path / "report.json", "new report")])
+    assert len(calls) == 3  # the two staged files, then the journal
+    assert (tmp_path / "part.ply").read_text() == "old part"
+    assert (tmp_path / "report.json").read_text() == "old report"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["part.ply", "report.json"]
+
+
 def test_readable_file_checks_name_the_path(tmp_path):
     (tmp_path / "dir").mkdir()
     with pytest.raises(InputError, match="nope.nc: no such file; expected the NC program"):
