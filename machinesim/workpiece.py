@@ -185,10 +185,14 @@ def _numbers(where: str, text: str, count: int, separator: str,
     except ValueError:
         _other_unit(where, fields)
         values = []
-    if len(values) != count or not all(math.isfinite(v) for v in values):
+    if len(values) != count:
         raise InputError(
             f"{where}: expected {count} numbers separated by {separator!r} in "
             f"{text!r}; forms: {_STOCK_FORMS}")
+    unbounded = [field.strip() for field, v in zip(fields, values, strict=True)
+                 if not math.isfinite(v)]
+    if unbounded:  # '1e400' reads as inf: it is a number, just not a finite one
+        raise InputError(f"{where}: {unbounded[0]!r} in {text!r} is not a finite number of mm")
     low, high = STOCK_SIZE_MM
     if sizes and not all(low <= v <= high for v in values):
         raise InputError(f"{where}: sizes {text!r} must lie in {low:g} .. {high:g} mm")

@@ -249,6 +249,9 @@ def test_a_ply_part_read_by_trimesh_as_the_readme_says_is_the_part(tmp_path):
         # stock standing at the origin with exit 0
         ("block:10x10x2@", "'block:10x10x2@'.*expected 3 numbers separated by ',' in ''"),
         ("cylinder:5x2@ ", "expected 3 numbers separated by ','"),
+        # an overflowing size reads as inf; it was told 'expected 3 numbers', which it had
+        ("block:1e400x10x2", "'1e400' in '1e400x10x2' is not a finite number of mm"),
+        ("block:10x10x2@0,nan,0", "'nan' in '0,nan,0' is not a finite number of mm"),
         ("sphere:1", "'sphere:1'.*expected 'block:LxWxH'"),
         ("spheres:10x10x2:3", "radius must be positive and below"),
         ("spheres:10x10x2:1:bumps", "expected 'dimples'"),
