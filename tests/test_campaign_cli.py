@@ -204,6 +204,27 @@ def test_cli_refuses_an_absurd_trial_count_at_once(tmp_path, capsys):
     assert CampaignSpec("tool_rotation_arm", MAX_TRIALS).trials == MAX_TRIALS
 
 
+@pytest.mark.parametrize(("option", "value", "expected"), [
+    ("--trials", "1e3", "--trials '1e3'; expected a whole number from 1 to 100000"),
+    ("--seed", "1e3", "--seed '1e3'; expected a whole number >= 0"),
+    ("--workers", "two", "--workers 'two'; expected a whole number >= 0 (0: no Dask)"),
+])
+def test_cli_refuses_a_whole_number_option_that_is_not_one_as_in_python(
+        tmp_path, capsys, option, value, expected):
+    """'--seed 1e3' was argparse's "invalid int value: '1e3'" with the usage, while '--seed
+    -1' and CampaignSpec(seed=1e3) are the campaign's own one line: now all are."""
+    options = {"--trials": "2", "--seed": "0", "--workers": "0", option: value}
+    command = ["campaign", "tool_rotation_arm", "--out", str(tmp_path / "c")]
+    for name, given in options.items():
+        command += [name, given]
+    status = cli_main(command)
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith(f"machinesim: error: key '{option}': {expected}"), err
+    assert not (tmp_path / "c").exists()
+
+
 def test_cli_ctrl_c_says_which_trials_are_kept_and_the_rerun_resumes(tmp_path, capsys,
                                                                       monkeypatch):
     real = runner.run_trial

@@ -78,6 +78,17 @@ def _folder(text: str) -> Path:
     return Path(text)
 
 
+def _whole(text: str) -> int | str:
+    """A whole-number option (--trials, --workers, --seed) as an int, or its text as given
+    when it is not one: refused then as the campaign refuses it in Python (`trials_refused`,
+    `CampaignSpec`, `run`), one line naming what is expected, not argparse's "invalid int
+    value: '1e3'"."""
+    try:
+        return int(text)
+    except ValueError:
+        return text
+
+
 def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("procedure", help=f"one of {', '.join(PROCEDURES)}, or your own "
                         "as package.module:ClassName")
@@ -85,17 +96,17 @@ def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help="your own procedure's machine (not for a shipped one)")
     parser.add_argument("--errors", default=None, metavar="FILE",
                         help="your own procedure's errors, a TOML error model (default: none)")
-    parser.add_argument("--trials", type=int, required=True, metavar="N",
+    parser.add_argument("--trials", type=_whole, required=True, metavar="N",
                         help=f"number of trials, 1 to {MAX_TRIALS}")
     where = parser.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, default=None, metavar="K",
+    where.add_argument("--workers", type=_whole, default=None, metavar="K",
                        help="local Dask worker processes (default: the cores this process may use; "
                        "0: no Dask, in this process)")
     where.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="run on this Dask scheduler (e.g. tcp://host:8786)")
     parser.add_argument("--vary", action="append", default=[], metavar="PARAM=DIST",
                         help="a parameter's distribution over the trials (repeatable)")
-    parser.add_argument("--seed", type=int, default=0,
+    parser.add_argument("--seed", type=_whole, default=0,
                         help="the campaign's seed: trial i is SeedSequence(seed).spawn(N)[i]")
     parser.add_argument("--noise", choices=("on", "off"), default="on",
                         help="instrument noise (default on)")
@@ -127,7 +138,8 @@ def run_campaign(args) -> int:
     propagates to the caller (``machinesim``'s main prints it as one line)."""
     from machinesim.campaign.runner import run
 
-    if not 1 <= args.trials <= MAX_TRIALS:  # before anything else: nothing to wait for
+    # before anything else: nothing to wait for
+    if not isinstance(args.trials, int) or not 1 <= args.trials <= MAX_TRIALS:
         raise InputError(trials_refused(args.trials), key="--trials")
     _check_own_options(args)
     vary = [parse_vary(text) for text in args.vary]
