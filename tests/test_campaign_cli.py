@@ -246,6 +246,43 @@ def test_cli_ctrl_c_says_which_trials_are_kept_and_the_rerun_resumes(tmp_path, c
     assert "2 trials (0 failed)" in capsys.readouterr().out
 
 
+def test_cli_a_full_disk_says_which_trials_are_kept_and_the_rerun_resumes(tmp_path, capsys,
+                                                                          monkeypatch):
+    """A disk that fills after the first trial: the refusal said only "cannot write: No
+    space left on device", not that the finished trial is kept and a rerun resumes."""
+    import errno
+    import os
+
+    from machinesim import _io
+
+    real_fsync, real = os.fsync, runner.run_trial
+    ran = []
+
+    def full_once_a_trial_ran(fd):
+        if len(ran) > 1:  # as the second trial's file is written
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real_fsync(fd)
+
+    monkeypatch.setattr(runner, "run_trial", lambda spec, i: ran.append(i) or real(spec, i))
+    command = ["campaign", "tool_rotation_arm", "--trials", "2", "--workers", "0",
+               "--identify-only", "--quiet", "--seed", "5", "--out", str(tmp_path)]
+    monkeypatch.setattr(_io.os, "fsync", full_once_a_trial_ran)
+    assert cli_main(command) == 2
+    err = capsys.readouterr().err
+    trial = tmp_path / "trials" / "trial_000001.json"
+    assert err.strip() == (
+        f"machinesim: error: {trial}: cannot write: No space left on device; the campaign "
+        f"stopped; kept the 1 finished trial file in {tmp_path / 'trials'} "
+        "(trial_000000.json) and campaign.json: run the same command again to resume (only "
+        "the missing trials run) once the file can be written"), err
+
+    monkeypatch.setattr(_io.os, "fsync", real_fsync)
+    ran.clear()
+    assert cli_main(command) == 0
+    assert ran == [1]  # resumed: only the missing trial ran
+    assert "2 trials (0 failed)" in capsys.readouterr().out
+
+
 def test_the_interrupted_line_says_which_trials_between_the_kept_ones_are_missing(tmp_path):
     # with workers trials finish out of order: 5 files, 0 .. 5, read as six finished
     from machinesim.campaign.cli import interrupted

@@ -17,6 +17,7 @@ from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
 from machinesim.campaign.shipped import PROCEDURES
 from machinesim.campaign.spec import MAX_TRIALS, trials_refused
 from machinesim.exceptions import (
+    FileError,
     InputError,
     MachineSimError,
     brief,
@@ -147,10 +148,18 @@ def run_campaign(args) -> int:
         # your own procedure's module, in the folder the command is run from (an installed
         # command's sys.path has its own folder, not that one), for the workers too
         sys.path.insert(0, os.getcwd())
-    dataset = run(args.procedure, args.trials, vary=vary, seed=args.seed, out=args.out,
-                  workers=args.workers, scheduler=args.scheduler, noise=args.noise == "on",
-                  identify_only=args.identify_only, quick=args.quick,
-                  progress=not args.quiet, machine=args.machine, errors=args.errors)
+    try:
+        dataset = run(args.procedure, args.trials, vary=vary, seed=args.seed, out=args.out,
+                      workers=args.workers, scheduler=args.scheduler,
+                      noise=args.noise == "on", identify_only=args.identify_only,
+                      quick=args.quick, progress=not args.quiet, machine=args.machine,
+                      errors=args.errors)
+    except FileError as error:  # a full disk said only "cannot write: No space left ..."
+        kept = interrupted(args.out)
+        if kept == "nothing was written":
+            raise
+        raise FileError(f"{error.message}; the campaign stopped; {kept} once the file can "
+                        "be written", source=error.source) from None
     from machinesim.campaign.summary import failures, notes
 
     failed, total = int(dataset["failed"].sum()), dataset.sizes["trial"]
