@@ -135,6 +135,9 @@ def groove_table(folder: ReportFolder, grooves) -> str:
                  ["  share of labs below this run's spread, the paper's 100 nm", "",
                   f"{labs['simulated_quantile_ratio']:.0%}, "
                   f"{labs['paper_quantile_ratio']:.0%}", ""]]
+        if "tilt_correlation_ratio" in labs:  # not in a report written before it was kept
+            rows.append(["  the two tilts' stated correlation (both read sphere S1)", "",
+                         f"{labs['tilt_correlation_ratio']:.2f}", ""])
     return folder.write_table(
         "grooves", ["groove", "before (um)", "after, eqs 5-7 (um)", "after, model-based (um)"],
         rows, title="Depth at the end of each groove (3 um programmed; paper Fig. 8b: "

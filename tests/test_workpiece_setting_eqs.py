@@ -163,6 +163,12 @@ def test_the_spheres_tolerance_through_eqs_1_to_4_matches_a_monte_carlo():
         draws.append([*got.delta, got.alpha, got.beta, got.gamma])
     spread = np.std(draws, axis=0)
     np.testing.assert_allclose([std[n] for n in ws.PARAMETERS[:6]], spread, rtol=0.05)
+    # alpha and beta both read S1: their correlation, as the drawn workshops show it (the
+    # Monte Carlo's own ~0.016 at 4000 draws)
+    drawn = np.corrcoef(np.array(draws)[:, 3], np.array(draws)[:, 4])[0, 1]
+    assert abs(wsu.tilt_correlation(wsu.design_covariance(found, designed, 1 * UM))
+               - drawn) < 0.05
+    assert abs(drawn) > 0.2  # S1 is shared: not independent
     # ~1 um and ~0.1 mrad (1 um over the 12 mm between spheres): the paper's "less than 1-2
     # um" and ~0.007 deg; the C centre compares each sphere with itself
     assert 0.5 * UM < std["workpiece.x"] < 2 * UM and 5e-5 < std["workpiece.gamma"] < 2e-4

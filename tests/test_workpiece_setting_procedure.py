@@ -242,6 +242,37 @@ def test_a_setting_found_on_the_grooves_compensates_the_grooves_only():
         RobotLoadedWorkpiece("crown").compensate(identified)
 
 
+def test_the_stated_std_and_tilt_correlation_sum_the_three_sources():
+    """With the lab's stated imperfections, each std is the three sources' in quadrature
+    (the fit's own std, `design_std`, `contact_std`: the stds as summed before the
+    covariances were kept), and the tilts' correlation is that of the summed covariances:
+    negative, as both tilts read sphere S1 (alpha from S1 -> S3, beta from S1 -> S2)."""
+    import math
+
+    from machinesim.identification import workpiece_setting_uncertainty as wsu
+    from machinesim.realism import Realism
+
+    procedure = RobotLoadedWorkpiece("grooves")
+    measurements = procedure.measure(Lab(MACHINE, seed=0, realism=Realism.lab()))
+    identified = procedure.identify(measurements)
+    detail, scatter = identified.detail, measurements.artefact_scatter
+    fit = dict(zip(detail.check.names, detail.check.std.tolist(), strict=True))
+    places = wsu.design_std(detail.found, measurements.readings.spheres.centres,
+                            scatter.position)
+    contacts = wsu.contact_std(measurements.readings, scatter.form)
+    for name, (_, std) in identified.parameters.items():
+        assert std == pytest.approx(math.hypot(fit[name], places[name], contacts[name]),
+                                    rel=1e-12), name
+    sa, sb = (identified.parameters[f"workpiece.{a}"][1] for a in ("alpha", "beta"))
+    a, b = (detail.check.names.index(f"workpiece.{a}") for a in ("alpha", "beta"))
+    covariance_ab = (detail.check.covariance[a, b]
+                     + wsu.design_covariance(detail.found, measurements.readings.spheres.centres,
+                                             scatter.position)[3, 4]
+                     + wsu.contact_covariance(measurements.readings, scatter.form)[3, 4])
+    assert detail.tilt_correlation == pytest.approx(covariance_ab / (sa * sb), rel=1e-12)
+    assert -0.7 < detail.tilt_correlation < -0.2
+
+
 def test_a_setting_saved_before_it_named_its_workpiece_still_compensates():
     """A SettingIdentification pickled before 17fd31d kept ``experiment`` (a saved result's
     detail) holds no such attribute: every step's workpiece check raised AttributeError
@@ -256,10 +287,11 @@ def test_a_setting_saved_before_it_named_its_workpiece_still_compensates():
     identified = procedure.identify(procedure.measure(Lab(MACHINE, noise=False)))
     old = SettingIdentification.__new__(SettingIdentification)  # the old class's state
     old.__dict__.update({k: v for k, v in vars(identified.detail).items()
-                         if k != "experiment"})
+                         if k not in ("experiment", "tilt_correlation")})
     loaded = pickle.loads(pickle.dumps(Identified(identified.parameters, old,
                                                   identified.notes)))
     assert loaded.detail.experiment is None
+    assert loaded.detail.tilt_correlation == 0.0  # independent tilts, as was assumed then
     programs = procedure.compensate(loaded)
     assert {name: format_program(p) for name, p in programs.items()} == {
         name: format_program(p) for name, p in procedure.compensate(identified).items()}

@@ -44,7 +44,8 @@ from machinesim.metrology.imperfections import Lobing, ZonalForm
 from machinesim.metrology.probe_instrument import GRAZING_COSINE
 from machinesim.rotations import rot_z
 
-__all__ = ["CONTACT_DRAWS", "DESIGN_STEP_M", "contact_std", "design_std",
+__all__ = ["CONTACT_DRAWS", "DESIGN_STEP_M", "contact_covariance", "contact_std",
+           "design_covariance", "design_std", "setting_covariance", "tilt_correlation",
            "tilt_spread_quantile", "tilt_spread_quantiles"]
 
 #: Step (m) of the central differences of `design_std`: eqs 1-4 are smooth on the 12 mm
@@ -58,21 +59,29 @@ CONTACT_DRAWS_SEED = 20021
 
 
 def design_std(found: Identification, designed, position_sigma: float) -> dict[str, float]:
-    """Standard uncertainties (SI) of eqs 1-4 from the spheres' places: eqs 1-4 take the
-    designed centres as where the spheres are, and a workshop makes each centre within
-    ``position_sigma`` (m, per coordinate, independent) of its design.
-
-    A sphere made ``e`` off its design is found where the workpiece puts ``design + e``:
-    the measured centre moves by ``R e``, which for an isotropic scatter is a move of the
-    same size. So the tolerance is propagated to first order (central differences of 1 nm
-    on each coordinate) through `setting_from_centres` on the measured centres. The C-axis
-    centre (Fig. 6) compares each sphere with itself turned by 180 deg, so its places do not
-    enter it (0).
+    """Standard uncertainties (SI) of eqs 1-4 from the spheres' places: the square roots of
+    `design_covariance`'s diagonal.
 
     Returns
     -------
     dict
         `PARAMETERS` -> standard uncertainty (m or rad).
+    """
+    return _stds(design_covariance(found, designed, position_sigma))
+
+
+def design_covariance(found: Identification, designed, position_sigma: float) -> np.ndarray:
+    """Covariance (SI, `PARAMETERS` order, 8 x 8) of eqs 1-4 from the spheres' places: eqs
+    1-4 take the designed centres as where the spheres are, and a workshop makes each centre
+    within ``position_sigma`` (m, per coordinate, independent) of its design.
+
+    A sphere made ``e`` off its design is found where the workpiece puts ``design + e``:
+    the measured centre moves by ``R e``, which for an isotropic scatter is a move of the
+    same size. So the tolerance is propagated to first order (central differences of 1 nm
+    on each coordinate, the Jacobian ``J``; ``sigma^2 J J^T``) through
+    `setting_from_centres` on the measured centres. Alpha and beta both read sphere S1
+    (S1 -> S3 and S1 -> S2), which correlates them. The C-axis centre (Fig. 6) compares
+    each sphere with itself turned by 180 deg, so its places do not enter it (0).
     """
     designed = ReferenceSpheres(designed).centres
     sigma = float(position_sigma)
@@ -85,22 +94,41 @@ def design_std(found: Identification, designed, position_sigma: float) -> dict[s
         return np.r_[setting.delta, setting.alpha, setting.beta, setting.gamma]
 
     h = DESIGN_STEP_M
-    variance = np.zeros(6)
+    jacobian = np.zeros((6, found.centres.size))
     for i in range(found.centres.size):
         step = np.zeros(found.centres.size)
         step[i] = h
         step = step.reshape(found.centres.shape)
-        variance += ((values(found.centres + step) - values(found.centres - step)) / (2.0 * h)
-                     * sigma) ** 2
-    return dict(zip(PARAMETERS, (*np.sqrt(variance).tolist(), 0.0, 0.0), strict=True))
+        jacobian[:, i] = (values(found.centres + step) - values(found.centres - step)) / (2.0 * h)
+    covariance = np.zeros((len(PARAMETERS), len(PARAMETERS)))
+    covariance[:6, :6] = sigma ** 2 * jacobian @ jacobian.T
+    return covariance
+
+
+def _stds(covariance: np.ndarray) -> dict[str, float]:
+    """`PARAMETERS` -> the square root of ``covariance``'s diagonal."""
+    return dict(zip(PARAMETERS, np.sqrt(np.diag(covariance)).tolist(), strict=True))
 
 
 def contact_std(readings: SphereReadings, sphere_form: float = 0.0,
                 draws: int = CONTACT_DRAWS) -> dict[str, float]:
     """Standard uncertainties (SI) of eqs 1-4 and Fig. 6 from what the lab states of each
-    contact: the probe's pre-travel (`SphereReadings.lobing_amplitudes`), its ball's form
-    (`SphereReadings.sphericity`) and the spheres' own form (``sphere_form``, m peak to
-    valley, `Lab.artefact_scatter`).
+    contact: the square roots of `contact_covariance`'s diagonal.
+
+    Returns
+    -------
+    dict
+        `PARAMETERS` -> standard uncertainty (m or rad); zeros when nothing is stated.
+    """
+    return _stds(contact_covariance(readings, sphere_form, draws))
+
+
+def contact_covariance(readings: SphereReadings, sphere_form: float = 0.0,
+                       draws: int = CONTACT_DRAWS) -> np.ndarray:
+    """Covariance (SI, `PARAMETERS` order, 8 x 8) of eqs 1-4 and Fig. 6 from what the lab
+    states of each contact: the probe's pre-travel (`SphereReadings.lobing_amplitudes`), its
+    ball's form (`SphereReadings.sphericity`) and the spheres' own form (``sphere_form``, m
+    peak to valley, `Lab.artefact_scatter`).
 
     A contact of normal ``n`` (surface to ball centre) is read as if the ball had pressed
     ``p(n) - f(-n) + g(-n)`` further along ``n`` (`machinesim.metrology.probe_instrument`;
@@ -111,14 +139,10 @@ def contact_std(readings: SphereReadings, sphere_form: float = 0.0,
     labs drawn from the statements (phases and axes unknown; one probe for all readings,
     one form per sphere, turned with the table for the readings at C = 180 deg), every
     reading is moved so, the spheres refitted and identified again; the result is the RMS
-    of the change of each parameter. ``n`` is the direction from each scanned ball centre to
-    the fitted cavity centre, in machine coordinates: a fixed turn of the probe's frame only
-    turns the unknown phases and axes.
-
-    Returns
-    -------
-    dict
-        `PARAMETERS` -> standard uncertainty (m or rad); zeros when nothing is stated.
+    of the change of each parameter (the mean of the changes' outer products). ``n`` is the
+    direction from each scanned ball centre to the fitted cavity centre, in machine
+    coordinates: a fixed turn of the probe's frame only turns the unknown phases and axes.
+    Zeros when nothing is stated.
     """
     amplitudes, sphericity = dict(readings.lobing_amplitudes), float(readings.sphericity)
     sphere_form = float(sphere_form)
@@ -126,7 +150,7 @@ def contact_std(readings: SphereReadings, sphere_form: float = 0.0,
         raise InputError(f"Expected sphere_form >= 0 (m), got {sphere_form!r}",
                          key="sphere_form")
     if not amplitudes and sphericity == 0.0 and sphere_form == 0.0:
-        return dict.fromkeys(PARAMETERS, 0.0)
+        return np.zeros((len(PARAMETERS), len(PARAMETERS)))
     if any(r.points is None for r in (*readings.first, *readings.turned)):
         raise InputError("Expected the scanned points of every sphere reading (sphere_reading "
                          "keeps them) to propagate the stated imperfections", key="points")
@@ -134,7 +158,7 @@ def contact_std(readings: SphereReadings, sphere_form: float = 0.0,
     normals = {name: [_contact_normals(r) for r in getattr(readings, name)]
                for name in ("first", "turned")}
     rng = np.random.default_rng(CONTACT_DRAWS_SEED)
-    squares = np.zeros(len(PARAMETERS))
+    products = np.zeros((len(PARAMETERS), len(PARAMETERS)))
     for _ in range(int(draws)):
         lobing = Lobing.draw(rng, amplitudes) if amplitudes else None
         ball = ZonalForm.draw(rng, sphericity) if sphericity > 0.0 else None
@@ -146,8 +170,36 @@ def contact_std(readings: SphereReadings, sphere_form: float = 0.0,
                                                    forms, strict=True))
             for name in ("first", "turned")})
         found = parameters(identify(moved))
-        squares += np.array([found[n] - base[n] for n in PARAMETERS]) ** 2
-    return dict(zip(PARAMETERS, np.sqrt(squares / draws).tolist(), strict=True))
+        change = np.array([found[n] - base[n] for n in PARAMETERS])
+        products += np.outer(change, change)
+    return products / draws
+
+
+def setting_covariance(check, found: Identification, readings: SphereReadings,
+                       artefact_scatter=None) -> np.ndarray:
+    """Covariance (SI, `PARAMETERS` order, 8 x 8) of the identified setting and C centre:
+    the fit cross-check's (``check``, `fit_setting`'s `Estimate`: the probe's stated noise
+    to first order), the spheres' stated places (`design_covariance`, when the lab states
+    an ``artefact_scatter``) and each contact as stated (`contact_covariance`), summed:
+    independent sources. NaN where the fit cannot see a parameter."""
+    order = [check.names.index(name) for name in PARAMETERS]
+    covariance = np.asarray(check.covariance, dtype=np.float64)[np.ix_(order, order)]
+    if artefact_scatter is not None:
+        covariance = covariance + design_covariance(found, readings.spheres.centres,
+                                                    artefact_scatter.position)
+    form = artefact_scatter.form if artefact_scatter is not None else 0.0
+    return covariance + contact_covariance(readings, form)
+
+
+def tilt_correlation(covariance) -> float:
+    """The correlation of alpha and beta in ``covariance`` (`PARAMETERS` order, SI): 0 when
+    either has no spread, NaN when either is unknown (NaN)."""
+    covariance = np.asarray(covariance, dtype=np.float64)
+    a, b = PARAMETERS.index("workpiece.alpha"), PARAMETERS.index("workpiece.beta")
+    scale = math.sqrt(covariance[a, a] * covariance[b, b])
+    if not math.isfinite(scale) or not math.isfinite(covariance[a, b]):
+        return math.nan
+    return float(np.clip(covariance[a, b] / scale, -1.0, 1.0)) if scale > 0.0 else 0.0
 
 
 def _contact_normals(r: SphereReading) -> np.ndarray:
@@ -185,27 +237,52 @@ def _as_read(r: SphereReading, normal: np.ndarray, lobing, ball, form,
     return replace(moved, bottom=bottom)
 
 
-def _spread_cdf(spread, sigma_alpha: float, sigma_beta: float, span: float):
-    """P(span max(|da|, |db|) <= spread) for independent normal da, db (`tilt_spread_quantiles`)."""
-    from scipy.special import erf
+def _spread_cdf(spread, sigma_alpha: float, sigma_beta: float, span: float,
+                correlation: float = 0.0) -> float:
+    """P(span max(|da|, |db|) <= spread) for normal da, db of stds ``sigma_alpha``,
+    ``sigma_beta`` and ``correlation`` (`tilt_spread_quantiles`)."""
+    from scipy.integrate import quad
+    from scipy.special import erf, ndtr
 
-    def inside(sigma):
-        return erf(spread / (span * sigma * math.sqrt(2.0))) if sigma > 0.0 else 1.0
+    limit = spread / span  # each tilt within +-limit
+    if sigma_alpha == 0.0 or sigma_beta == 0.0 or correlation == 0.0:
+        def inside(sigma):
+            return erf(limit / (sigma * math.sqrt(2.0))) if sigma > 0.0 else 1.0
 
-    return inside(sigma_alpha) * inside(sigma_beta)
+        return inside(sigma_alpha) * inside(sigma_beta)
+    rho = correlation
+    if abs(rho) == 1.0:  # db = +-(sigma_beta / sigma_alpha) da: one variable
+        return erf(min(limit / sigma_alpha, limit / sigma_beta) / math.sqrt(2.0))
+    # da = sigma_alpha z; given z, db is normal about rho sigma_beta z of std
+    # sigma_beta sqrt(1 - rho^2): P = integral over |z| <= limit / sigma_alpha of
+    # phi(z) P(|db| <= limit | z), even in z
+    width = sigma_beta * math.sqrt(1.0 - rho * rho)
+
+    def given(z):
+        mean = rho * sigma_beta * z
+        return (math.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi)
+                * (ndtr((limit - mean) / width) - ndtr((-limit - mean) / width)))
+
+    half, _ = quad(given, 0.0, limit / sigma_alpha, epsabs=1e-14, epsrel=1e-12, limit=200)
+    return min(2.0 * half, 1.0)
 
 
-def _check_spread_inputs(sigma_alpha, sigma_beta, span) -> tuple[float, float, float]:
+def _check_spread_inputs(sigma_alpha, sigma_beta, span,
+                         correlation=0.0) -> tuple[float, float, float, float]:
     values = tuple(float(v) for v in (sigma_alpha, sigma_beta, span))
     if not all(math.isfinite(v) and v >= 0.0 for v in values) or values[2] == 0.0 or (
             values[0] == 0.0 and values[1] == 0.0):
         raise InputError(f"Expected tilt stds >= 0 (rad, not both 0) and a span > 0 (m), got "
                          f"{sigma_alpha!r}, {sigma_beta!r} and {span!r}", key="sigma")
-    return values
+    rho = float(correlation)
+    if not (math.isfinite(rho) and -1.0 <= rho <= 1.0):
+        raise InputError(f"Expected the tilts' correlation in -1 .. 1, got {correlation!r}",
+                         key="correlation")
+    return (*values, rho)
 
 
 def tilt_spread_quantiles(sigma_alpha: float, sigma_beta: float, span: float,
-                          quantiles) -> np.ndarray:
+                          quantiles, correlation: float = 0.0) -> np.ndarray:
     """Quantiles over labs of the spread of depths read at the far ends of crossing grooves
     cut after compensation, from the stated uncertainty of the identified tilts.
 
@@ -214,11 +291,11 @@ def tilt_spread_quantiles(sigma_alpha: float, sigma_beta: float, span: float,
     ``da`` about X and ``db`` about Y has its surface ``db span / 2`` and ``da span / 2``
     higher or lower at the ends, of either sign: the four depths spread by
     ``s = span max(|da|, |db|)`` (a height error common to all four cancels). With ``da``,
-    ``db`` independent normals of the stated stds,
-    ``P(s <= t) = erf(t / (span sigma_alpha sqrt 2)) erf(t / (span sigma_beta sqrt 2))``,
-    inverted here by bisection. Left out: the depth readings' own noise (nanometres) and the
-    correlation of the two tilts through the sphere they share (at a correlation of 0.5
-    the median is 5 % lower).
+    ``db`` normal of the stated stds and independent,
+    ``P(s <= t) = erf(t / (span sigma_alpha sqrt 2)) erf(t / (span sigma_beta sqrt 2))``;
+    correlated (the two tilts read the sphere S1 they share), the same rectangle's
+    probability is one integral over ``da`` of the normal ``db`` given ``da`` (`quad`).
+    Inverted here by bisection. Left out: the depth readings' own noise (nanometres).
 
     Parameters
     ----------
@@ -228,6 +305,8 @@ def tilt_spread_quantiles(sigma_alpha: float, sigma_beta: float, span: float,
         Distance between opposite groove ends (m).
     quantiles : array_like
         Probabilities in (0, 1).
+    correlation : float
+        Correlation of the identified alpha and beta, -1 .. 1 (default 0: independent).
 
     Returns
     -------
@@ -236,18 +315,18 @@ def tilt_spread_quantiles(sigma_alpha: float, sigma_beta: float, span: float,
     """
     from scipy.optimize import brentq
 
-    sa, sb, span = _check_spread_inputs(sigma_alpha, sigma_beta, span)
+    sa, sb, span, rho = _check_spread_inputs(sigma_alpha, sigma_beta, span, correlation)
     q = np.asarray(quantiles, dtype=np.float64)
     if q.size == 0 or not np.all((q > 0.0) & (q < 1.0)):
         raise InputError(f"Expected quantiles in (0, 1), got {quantiles!r}", key="quantiles")
     top = span * max(sa, sb) * 10.0  # erf(10 / sqrt 2) = 1 - 1.5e-23: every quantile below
-    return np.array([brentq(lambda t, p=p: _spread_cdf(t, sa, sb, span) - p, 0.0, top,
+    return np.array([brentq(lambda t, p=p: _spread_cdf(t, sa, sb, span, rho) - p, 0.0, top,
                             xtol=1e-15, rtol=1e-12) for p in q.ravel()]).reshape(q.shape)
 
 
 def tilt_spread_quantile(spread: float, sigma_alpha: float, sigma_beta: float,
-                         span: float) -> float:
+                         span: float, correlation: float = 0.0) -> float:
     """Which quantile of the spread over labs (`tilt_spread_quantiles`) ``spread`` (m) is:
     the share of labs whose four depths would spread less."""
-    sa, sb, span = _check_spread_inputs(sigma_alpha, sigma_beta, span)
-    return float(_spread_cdf(max(float(spread), 0.0), sa, sb, span))
+    sa, sb, span, rho = _check_spread_inputs(sigma_alpha, sigma_beta, span, correlation)
+    return float(_spread_cdf(max(float(spread), 0.0), sa, sb, span, rho))

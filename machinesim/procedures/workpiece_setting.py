@@ -65,6 +65,7 @@ from machinesim.exceptions import InputError
 from machinesim.experiment import Evaluation, Identified, check_instance, check_lab, fit_notes
 from machinesim.identification.fit import Estimate
 from machinesim.identification.workpiece_setting import (
+    PARAMETERS,
     Identification,
     ReferenceSpheres,
     SphereReadings,
@@ -73,7 +74,10 @@ from machinesim.identification.workpiece_setting import (
     identify,
     parameters,
 )
-from machinesim.identification.workpiece_setting_uncertainty import contact_std, design_std
+from machinesim.identification.workpiece_setting_uncertainty import (
+    setting_covariance,
+    tilt_correlation,
+)
 from machinesim.metrology._arrays import as_flag
 from machinesim.metrology.crown_image import crown_image_reading, turned_placements
 from machinesim.metrology.part_features import crown_features, groove_depths
@@ -170,17 +174,22 @@ class SettingIdentification:
         is one load's, and compensates that workpiece's program only. None in one saved
         (pickled) before this field was kept: which workpiece it was is not known, and each
         workpiece's steps take it, as they did then.
+    tilt_correlation : float
+        Correlation of the identified alpha and beta over labs, from the same sources as
+        their stds (the probe's noise, the spheres' places, each contact): both read
+        sphere S1. 0 (independent, as was assumed then) in one saved before it was kept.
     """
 
     found: Identification
     check: Estimate
     machine: object
     experiment: str | None
+    tilt_correlation: float = 0.0
 
     def __setstate__(self, state: dict) -> None:
         # a detail pickled before `experiment` was kept holds no such key; without it every
         # step that checks the workpiece raised AttributeError on an old saved result
-        for name, value in {"experiment": None, **state}.items():
+        for name, value in {"experiment": None, "tilt_correlation": 0.0, **state}.items():
             object.__setattr__(self, name, value)
 
     def agreement(self) -> dict[str, float]:
@@ -319,17 +328,14 @@ class RobotLoadedWorkpiece:
         readings = measurements.readings
         found = identify(readings)
         check = fit_setting(measurements.machine, readings, found)
-        std = dict(zip(check.names, check.std.tolist(), strict=True))
         scatter = measurements.artefact_scatter
-        places = (design_std(found, readings.spheres.centres, scatter.position)
-                  if scatter is not None else dict.fromkeys(std, 0.0))
-        contacts = contact_std(readings, scatter.form if scatter is not None else 0.0)
-        std = {name: math.hypot(value, places[name], contacts[name])
-               for name, value in std.items()}
+        covariance = setting_covariance(check, found, readings, scatter)
+        std = {name: math.sqrt(covariance[i, i]) for i, name in enumerate(PARAMETERS)}
         return Identified({name: (value, std[name]) for name, value in
                            parameters(found).items()},
                           SettingIdentification(found, check, measurements.machine,
-                                                measurements.experiment),
+                                                measurements.experiment,
+                                                tilt_correlation(covariance)),
                           notes=fit_notes("fit_setting", check, sigma_leaves_out=(
                               "the spheres' stated place and form scatter"
                               if scatter is not None else None)))

@@ -207,21 +207,25 @@ SPREAD_QUANTILES = {"q10": 0.1, "median": 0.5, "q90": 0.9}
 
 def _spread_over_labs(identified: Identified, grooves: Evaluation) -> dict:
     """The grooves' spread after compensation as labs with the stated tilt uncertainty
-    would cut it (`tilt_spread_quantiles`; the ends read farthest out, 2 x the last
-    station, apart), and where the paper's spread falls among them."""
+    would cut it (`tilt_spread_quantiles`, with the tilts' stated correlation; the ends read
+    farthest out, 2 x the last station, apart), and where the paper's spread falls among
+    them."""
     sa = identified.parameters["workpiece.alpha"][1]
     sb = identified.parameters["workpiece.beta"][1]
     if not (math.isfinite(sa) and math.isfinite(sb)) or (sa == 0.0 and sb == 0.0):
         return {}
+    # both tilts read sphere S1: correlated (0 in a result saved before it was kept)
+    rho = getattr(identified.detail, "tilt_correlation", 0.0)
     span = 2.0 * grooves.details["groove_stations_mm"][-1] * MM
     found = next(f.after for f in grooves.figures if f.name == "groove_depth_spread")
-    spread = tilt_spread_quantiles(sa, sb, span, list(SPREAD_QUANTILES.values()))
+    spread = tilt_spread_quantiles(sa, sb, span, list(SPREAD_QUANTILES.values()), rho)
     over_labs = {f"{name}_nm": value / M_PER_NM
                  for name, value in zip(SPREAD_QUANTILES, spread.tolist(), strict=True)}
     over_labs["paper_quantile_ratio"] = tilt_spread_quantile(
-        PAPER_GROOVE_SPREAD_NM * M_PER_NM, sa, sb, span)
+        PAPER_GROOVE_SPREAD_NM * M_PER_NM, sa, sb, span, rho)
     over_labs["simulated_quantile_ratio"] = tilt_spread_quantile(
-        found * M_PER_NM, sa, sb, span)
+        found * M_PER_NM, sa, sb, span, rho)
+    over_labs["tilt_correlation_ratio"] = rho
     return {"groove_spread_after_over_labs": over_labs}
 
 
