@@ -219,3 +219,81 @@ def test_leaving_slivers_out_finds_the_same_sheets(monkeypatch):
     order_a, order_b = np.lexsort(left_out[0].T), np.lexsort(every[0].T)
     np.testing.assert_array_equal(left_out[0][order_a], every[0][order_b])
     np.testing.assert_array_equal(left_out[1][order_a], every[1][order_b])
+
+
+#: A flat tetrahedron a V tool led in a spiral under servo lag left in its groove, beside the
+#: part (grooving_4axis, docs/cli.md's --servo example loops): its four vertices (m) lie in
+#: one plane to 1e-18 m, its volume -1.3e-29 m^3.
+FLAT_TETRAHEDRON = (np.array([
+    [2.9999275531231371e-03, 9.3607091900975940e-06, 0.0],
+    [2.9999283746517427e-03, 2.7113786632219548e-07, -1.9999999999964491e-05],
+    [2.9999283991575751e-03, 0.0, -1.9728862132534858e-05],
+    [2.9999283991575751e-03, 7.4573569651532708e-20, 0.0]]),
+    np.array([[1, 2, 0], [1, 3, 2], [1, 0, 3], [2, 3, 0]]))
+
+
+def _with_flat_tetrahedron(solid):
+    """``solid`` and `FLAT_TETRAHEDRON` as one manifold, the tetrahedron a run of its own
+    (original id 99, face ids 100-103), the solid's runs and face ids kept."""
+    mesh = solid.to_mesh64()
+    runs = np.asarray(mesh.run_index, dtype=np.uint64)
+    return manifold3d.Manifold(manifold3d.Mesh64(
+        vert_properties=np.vstack([mesh.vert_properties, FLAT_TETRAHEDRON[0]]),
+        tri_verts=np.vstack([mesh.tri_verts, FLAT_TETRAHEDRON[1] + len(mesh.vert_properties)]
+                            ).astype(np.uint64),
+        run_index=np.r_[runs, runs[-1] + 12].astype(np.uint64),
+        run_original_id=np.r_[mesh.run_original_id, 99].astype(np.uint32),
+        run_transform=np.concatenate([mesh.run_transform, mesh.run_transform[:1]]),
+        face_id=np.r_[mesh.face_id, 100, 101, 102, 103].astype(np.uint64)))
+
+
+def test_a_flat_piece_beside_the_part_is_a_sheet_removed_whole():
+    """The flat tetrahedron's faces face each other within round-off, so the pairing reads
+    none as a sheet; it stood beside the part as a 20 um wall, and `machinesim cut` warned
+    of a part in separate pieces. Now it goes whole; the part is left to the bit, each face
+    with its origin."""
+    from machinesim.cutting.flat_pieces import flat_pieces
+
+    block = (manifold3d.Manifold.cube((1 * MM, 1 * MM, 1 * MM))
+             - manifold3d.Manifold.cylinder(2 * MM, 0.2 * MM, 0.2 * MM, 32)).translate(
+        (1 * MM, 1 * MM, -1 * MM))
+    part = _with_flat_tetrahedron(block)
+    assert 99 in np.asarray(part.to_mesh64().run_original_id).tolist()
+    assert len(part.decompose()) == 2
+    vertices, triangles = _arrays_of(part)
+    assert len(find_sheets(vertices, triangles)[0]) == 0  # not found as pairs of faces
+    trimmed, report = remove_sheets(part)
+    assert len(trimmed.decompose()) == 1 and trimmed.volume() == block.volume()
+    kept, mesh = trimmed.to_mesh64(), block.to_mesh64()
+    assert sorted(map(tuple, np.asarray(kept.vert_properties))) == sorted(
+        map(tuple, np.asarray(mesh.vert_properties)))
+    assert sorted(np.asarray(kept.face_id).tolist()) == sorted(np.asarray(mesh.face_id).tolist())
+    assert _runs_with_faces(kept) == _runs_with_faces(mesh)
+    assert report.pieces == 1 and report.count == 1 and report.removed
+    assert abs(report.volume) < 1e-28 and report.thickness_max < SHEET_M
+    # a plate 3 pm thick beside the block is material: kept, as a piece of the part
+    plate = manifold3d.Manifold.cube((1 * MM, 3e-12, 1 * MM)).translate((3 * MM, 0.0, -1 * MM))
+    both = block + plate
+    assert len(both.decompose()) == 2 and flat_pieces(both) == (both, [])
+    # a void's shell is a piece of negative volume, which `Manifold.compose` drops (it would
+    # fill the void): a part with one keeps its flat pieces
+    void = block - manifold3d.Manifold.cube((0.2 * MM,) * 3).translate((1.5 * MM, 1.5 * MM,
+                                                                        -0.6 * MM))
+    assert void.volume() < block.volume() and len(void.decompose()) == 2
+    with_void = _with_flat_tetrahedron(void)
+    assert flat_pieces(with_void) == (with_void, [])
+    # a part that is one flat piece is left as it is
+    alone = manifold3d.Manifold(manifold3d.Mesh64(
+        vert_properties=FLAT_TETRAHEDRON[0], tri_verts=FLAT_TETRAHEDRON[1].astype(np.uint64)))
+    assert flat_pieces(alone) == (alone, [])
+
+
+def _arrays_of(solid):
+    mesh = solid.to_mesh64()
+    return np.asarray(mesh.vert_properties)[:, :3], np.asarray(mesh.tri_verts, dtype=np.int64)
+
+
+def _runs_with_faces(mesh) -> list[int]:
+    """The original ids of a mesh's runs that hold a triangle (compose keeps empty ones)."""
+    counts = np.diff(np.asarray(mesh.run_index, dtype=np.int64))
+    return sorted(np.asarray(mesh.run_original_id)[:len(counts)][counts > 0].tolist())
