@@ -23,6 +23,7 @@ from machinesim.nc.program import AXES, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
 from machinesim.nc.rotary_feed import inch_feed_scale
 from machinesim.nc.words import (
     ARC,
+    CYCLE_WITH_MOTION,
     FEED_BEFORE_UNITS,
     G50_SETTING,
     G_GROUPS,
@@ -99,6 +100,12 @@ class Block:
         if "O" in single:
             raise self.fail("the O number must stand alone in the first block of the program "
                             "or of a subprogram", single["O"])
+        motion, cycle = g.get("motion"), g.get("canned cycle")
+        if motion is not None and (motion[0] in MOTION or motion[0] in ARC) \
+                and cycle is not None and cycle[0] != "G80":
+            # `G01 G81 X1. Y1. Z-1. R1. F50.` had drilled, its G01 read as nothing
+            raise self.fail(CYCLE_WITH_MOTION.format(motion=motion[0], cycle=cycle[0]),
+                            cycle[1])
         length_before = self.reader.tool_length()
         self.apply_modal()
         block_number = self.integer(single["N"], "block number") if "N" in single else None
@@ -108,7 +115,6 @@ class Block:
         if "T" in single:
             self.reader.tool_events.append(
                 (self.reader.out.count, self.integer(single["T"], "tool number"), self.line))
-        motion = g.get("motion")
         one_shot = g.get("one-shot")
         if motion is not None and motion[0] == "G04" and one_shot is not None:
             raise self.fail(f"G04 and {one_shot[0]} in one block; give each its own block",
