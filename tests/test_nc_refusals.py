@@ -45,9 +45,14 @@ REFUSALS = [
     ("G00 Z5\nG81 X0 Z3. R2.", 2, 8, "Z3.", "hole bottom Z .* is not below the R plane"),
     # a G01 or G00 beside the cycle code had been read as nothing: the block drilled
     ("G00 X0 Y0 Z5.\nG01 G81 X1. Y1. Z-1. R1. F50.", 2, 5, "G81",
-     "G01 and the canned cycle G81 in one block: controls differ"),
+     "G01 and the canned cycle G81 in one block: both take the block.s axis words"),
     ("G00 X0 Y0 Z5.\nG83 G00 X1. Y1. Z-1. R1. Q.5 F50.", 2, 1, "G83",
-     r"G00 and the canned cycle G83 in one block: .* give G83 its own block"),
+     r"G00 and the canned cycle G83 in one block: .* give each its own block \(G80 ends"),
+    # ... and a G28 or G53 beside it had moved through Z-1 at rapid, its R read as nothing
+    ("G00 X0 Y0 Z5.\nG81 G28 X1. Y1. Z-1. R1. F50.", 2, 1, "G81",
+     "G28 and the canned cycle G81 in one block: both take the block's axis words"),
+    ("G00 X0 Y0 Z5.\nG53 G73 X1. Y1. Z-1. R1. Q.5 F50.", 2, 5, "G73",
+     "G53 and the canned cycle G73 in one block"),
     ("G00 X0 Y0\nG02 X10. Y0 R4. F100", 2, 13, "R4.", "more than the diameter"),
     ("G00 X0 Y0\nG02 X10. Y0 I5.01 F100", 2, 13, "I5.01", "end point is off the arc"),
     ("G00 X0 Y0\nG02 X10. I5. R5.", 2, 14, "R5.", "an arc takes R or I J, not both"),

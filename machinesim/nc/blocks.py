@@ -101,11 +101,13 @@ class Block:
             raise self.fail("the O number must stand alone in the first block of the program "
                             "or of a subprogram", single["O"])
         motion, cycle = g.get("motion"), g.get("canned cycle")
-        if motion is not None and (motion[0] in MOTION or motion[0] in ARC) \
-                and cycle is not None and cycle[0] != "G80":
-            # `G01 G81 X1. Y1. Z-1. R1. F50.` had drilled, its G01 read as nothing
-            raise self.fail(CYCLE_WITH_MOTION.format(motion=motion[0], cycle=cycle[0]),
-                            cycle[1])
+        if cycle is not None and cycle[0] != "G80":
+            # `G01 G81 X1. Y1. Z-1. R1. F50.` had drilled, its G01 read as nothing, and
+            # `G81 G28 X1. Y1. Z-1. R1.` had gone through Z-1 at rapid, its R read as nothing
+            for group, codes in (("motion", (*MOTION, *ARC)), ("one-shot", ("G28", "G53"))):
+                if group in g and g[group][0] in codes:
+                    raise self.fail(CYCLE_WITH_MOTION.format(code=g[group][0],
+                                                             cycle=cycle[0]), cycle[1])
         length_before = self.reader.tool_length()
         self.apply_modal()
         block_number = self.integer(single["N"], "block number") if "N" in single else None

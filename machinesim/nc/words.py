@@ -179,16 +179,18 @@ LOOK_AHEAD_BLOCKS = 15
 SMOOTHNESS_LEVELS = (1, 2, 3)
 M99_IN_MAIN = ("M99 in the main program would jump back to its start forever (FANUC); end "
                 "the main program with M30 or M02")
-#: A block holding a canned cycle (G73, G81..G83) and a code of G00..G03 (`Block._run`):
-#: LinuxCNC counts both as motion codes and refuses two in a block; which one a FANUC-style
+#: A block holding a canned cycle (G73, G81..G83) and a code of G00..G03, G28 or G53, which
+#: take the block's axis words too (`Block._run`): LinuxCNC refuses such a block (two motion
+#: codes, or a motion code and a G28/G53 that both use axis words); which one a FANUC-style
 #: control runs was not found documented. Read as the cycle, the G01 of
 #: `G01 G81 X1. Y1. Z-1. R1. F50.` had been read as nothing; read as the G01, the block
-#: would be a feed to X1 Y1 Z-1 and no hole.
-CYCLE_WITH_MOTION = ("{motion} and the canned cycle {cycle} in one block: controls differ on "
-                     "which of the two the block runs (LinuxCNC refuses two motion codes in "
-                     "a block), and the holes and the moves of the one differ from those of "
-                     "the other; give {cycle} its own block (and {motion} a block of its own "
-                     "after G80)")
+#: would be a feed to X1 Y1 Z-1 and no hole. With G28 or G53 the block had moved as the
+#: G28/G53, at rapid to Z-1, its R read as nothing.
+CYCLE_WITH_MOTION = ("{code} and the canned cycle {cycle} in one block: both take the block's "
+                     "axis words, and controls differ on which of the two the block runs "
+                     "(LinuxCNC refuses such a block); the holes and the moves of the one "
+                     "differ from those of the other: give each its own block (G80 ends the "
+                     "cycle)")
 #: A subprogram's G20/G21 that switches the units in force (`Block.apply_modal`): FANUC
 #: forbids the switch within a program (B-63944EN/02, 8.2: "G20 and G21 must not be switched
 #: during a program"), and a subprogram's units stay in force after its M99.
