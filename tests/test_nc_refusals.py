@@ -53,6 +53,15 @@ REFUSALS = [
      "G28 and the canned cycle G81 in one block: both take the block's axis words"),
     ("G00 X0 Y0 Z5.\nG53 G73 X1. Y1. Z-1. R1. Q.5 F50.", 2, 5, "G73",
      "G53 and the canned cycle G73 in one block"),
+    # a cycle's word in a block that drills no hole had been read as nothing: the next hole
+    # pecked 0.5, dwelt 0.1 s, went down to R1
+    ("G00 X0 Y0 Z5.\nG83 X1. Y1. Z-1. R1. Q0.5 F50.\nQ0.2\nX2.", 3, 1, "Q0.2",
+     "word Q while the canned cycle G83 is active, in a block without X, Y, Z or R, which "
+     "drills no hole: .* give it in the block of the hole it is for$"),
+    ("G00 X0 Y0 Z5.\nG82 X1. Y1. Z-1. R1. P100 F50.\nP500\nX2.", 3, 1, "P500",
+     "word P while the canned cycle G82 is active, in a block without X, Y, Z or R"),
+    ("G00 X0 Y0 Z5.\nG81 X1. Y1. Z-1. R1. F50.\nG28 Z5. R2.\nX2.", 3, 9, "R2.",
+     "word R while the canned cycle G81 is active, in a G28 block, which drills no hole"),
     ("G00 X0 Y0\nG02 X10. Y0 R4. F100", 2, 13, "R4.", "more than the diameter"),
     ("G00 X0 Y0\nG02 X10. Y0 I5.01 F100", 2, 13, "I5.01", "end point is off the arc"),
     ("G00 X0 Y0\nG02 X10. I5. R5.", 2, 14, "R5.", "an arc takes R or I J, not both"),

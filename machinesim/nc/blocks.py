@@ -353,19 +353,26 @@ class Block:
         shot = None if one_shot is None else one_shot[0]
         cycle = state.cycle
         arc = state.motion in ARC and cycle is None and one_shot is None and not g04
+        # the cycle reads its words in a block that drills (`read_cycle`): in a G28, G53 or
+        # G04 block, or one without X Y Z R, they had been read as nothing (`Q0.2` alone)
+        drills = (cycle is not None and one_shot is None and not g04
+                  and any(k in single for k in "XYZR"))
+        hole = cycle if drills else None
         plane_words = PLANES[state.plane][1]
         allowed = {
             # G81's P: kept as the cycle's dwell (a later G82 of the cycle dwells it), as
             # FANUC keeps every hole-machining word until G80; G81 itself does not dwell
-            "P": (g04 or cycle is not None or 98 in codes
+            "P": (g04 or drills or 98 in codes
                   or shot in ("G08", "G103", "G187")),
-            "Q": cycle in ("G73", "G83") or shot == "G05.1",
-            "R": arc or cycle is not None or shot == "G05.1",
-            "I": (arc and "I" in plane_words) or cycle in PECKING,
-            "J": (arc and "J" in plane_words) or cycle in PECKING,
-            "K": (arc and "K" in plane_words) or cycle is not None,
+            "Q": hole in ("G73", "G83") or shot == "G05.1",
+            "R": arc or drills or shot == "G05.1",
+            "I": (arc and "I" in plane_words) or hole in PECKING,
+            "J": (arc and "J" in plane_words) or hole in PECKING,
+            "K": (arc and "K" in plane_words) or drills,
             "L": 98 in codes,
         }
+        cycle_reads = {"P", "R", "K"} | ({"Q"} if cycle in ("G73", "G83") else set()) | (
+            {"I", "J"} if cycle in PECKING else set())
         # each plane's own centre words: K in a G17 arc had been told it is read "with
         # G02/G03 in G17 (centre words I J)", where it is not
         centres = ("G02/G03 as an arc centre word of its plane ("
@@ -388,7 +395,17 @@ class Block:
         }
         for letter, ok in allowed.items():
             if letter in single and not ok:
-                self.refuse(f"word {letter} is only read with {reads[letter]}", single[letter])
+                if cycle is not None and not drills and letter in cycle_reads:
+                    where = (f"a {shot or 'G04'} block" if shot or g04
+                             else "a block without X, Y, Z or R")
+                    self.refuse(f"word {letter} while the canned cycle {cycle} is active, in "
+                                f"{where}, which drills no hole: {cycle} reads its "
+                                f"{letter} in the block of a hole (with X, Y, Z or R), and "
+                                f"here it would be read as nothing; give it in the block of "
+                                "the hole it is for", single[letter])
+                else:
+                    self.refuse(f"word {letter} is only read with {reads[letter]}",
+                                single[letter])
                 del single[letter]
 
     # --- moves
