@@ -84,6 +84,24 @@ def test_p_in_a_g81_block_is_kept_for_the_cycle_and_moves_as_without_it():
     assert kept.targets[kept.dwells == 0.1, 2] == pytest.approx(-1 * MM, abs=EXACT_M)
 
 
+def test_a_rotary_word_under_a_cycle_is_a_hole_there():
+    """FANUC's lathe manual drills `G83 Z-40.0 R-5.0 ...` then `C90.0`, `C180.0`, `C270.0` as
+    holes 2 to 4, and Haas positions "X and Y axes (and optional A)": a rotary word alone
+    under a cycle positions the axis at rapid and drills (it had turned C and drilled
+    nothing: one hole of four, exit 0), and beside X (it had been refused) both move. G91
+    C90. K3 drills three more, 90 deg apart."""
+    head = "G21 G90\nG00 X0 Y0 Z5. C0\nG98 G81 X3. Y0 Z-0.5 R0.5 F50.\n"
+    program = parse_program(head + "C90.\nX4. C180.\nG91 C90. Z-1. R-4.5 K3\nG90 G80\n")
+    bottoms = program.targets[program.kinds == KIND_LINEAR]
+    assert np.degrees(bottoms[:, 5]).tolist() == pytest.approx([0, 90, 180, 270, 360, 450])
+    assert bottoms[:, 0].tolist() == pytest.approx([3 * MM, 3 * MM] + [4 * MM] * 4)
+    assert np.all(bottoms[:, 2] == pytest.approx(-0.5 * MM, abs=EXACT_M))
+    rows = program.lines == 4  # C90.: to C90 at the initial level, R, the bottom, back up
+    assert program.kinds[rows].tolist() == [KIND_RAPID, KIND_RAPID, KIND_LINEAR, KIND_RAPID]
+    assert np.degrees(program.targets[rows, 5]).tolist() == pytest.approx([90] * 4)
+    assert (program.targets[rows, 2] / MM).tolist() == pytest.approx([5, 0.5, -0.5, 5])
+
+
 def test_a_motion_code_cancels_the_cycle():
     program = parse_program("G00 Z5.\nG81 X1. Z-1. R1. F10\nG00 X2.\nX3.")
     assert program.targets[-2:, 0].tolist() == [2 * MM, 3 * MM]

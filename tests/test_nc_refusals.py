@@ -56,10 +56,10 @@ REFUSALS = [
     # a cycle's word in a block that drills no hole had been read as nothing: the next hole
     # pecked 0.5, dwelt 0.1 s, went down to R1
     ("G00 X0 Y0 Z5.\nG83 X1. Y1. Z-1. R1. Q0.5 F50.\nQ0.2\nX2.", 3, 1, "Q0.2",
-     "word Q while the canned cycle G83 is active, in a block without X, Y, Z or R, which "
-     "drills no hole: .* give it in the block of the hole it is for$"),
+     "word Q while the canned cycle G83 is active, in a block without X, Y, Z, R or a rotary "
+     "axis, which drills no hole: .* give it in the block of the hole it is for$"),
     ("G00 X0 Y0 Z5.\nG82 X1. Y1. Z-1. R1. P100 F50.\nP500\nX2.", 3, 1, "P500",
-     "word P while the canned cycle G82 is active, in a block without X, Y, Z or R"),
+     "word P while the canned cycle G82 is active, in a block without X, Y, Z, R or a "),
     ("G00 X0 Y0 Z5.\nG81 X1. Y1. Z-1. R1. F50.\nG28 Z5. R2.\nX2.", 3, 9, "R2.",
      "word R while the canned cycle G81 is active, in a G28 block, which drills no hole"),
     ("G00 X0 Y0\nG02 X10. Y0 R4. F100", 2, 13, "R4.", "more than the diameter"),

@@ -15,7 +15,7 @@ import numpy as np
 from machinesim.exceptions import NCProgramError, brief
 from machinesim.nc.arc_block import read_arc
 from machinesim.nc.arcs import PLANES
-from machinesim.nc.drilling import PECKING, read_cycle
+from machinesim.nc.drilling import HOLE_WORDS, PECKING, read_cycle
 from machinesim.nc.length import check_length_carried, note_length_change
 from machinesim.nc.lexer import Word
 from machinesim.nc.one_shot import read_dwell, read_one_shot
@@ -134,7 +134,7 @@ class Block:
             read_dwell(self, motion[1], axes, block_number)
         elif one_shot is not None:
             read_one_shot(self, one_shot, axes, block_number)
-        elif state.cycle is not None and any(k in single for k in "XYZR"):
+        elif state.cycle is not None and any(k in single for k in HOLE_WORDS):
             read_cycle(self, axes, block_number)
         elif state.motion in ARC and (axes or any(k in single for k in "IJKR")):
             read_arc(self, axes, block_number)
@@ -356,7 +356,7 @@ class Block:
         # the cycle reads its words in a block that drills (`read_cycle`): in a G28, G53 or
         # G04 block, or one without X Y Z R, they had been read as nothing (`Q0.2` alone)
         drills = (cycle is not None and one_shot is None and not g04
-                  and any(k in single for k in "XYZR"))
+                  and any(k in single for k in HOLE_WORDS))
         hole = cycle if drills else None
         plane_words = PLANES[state.plane][1]
         allowed = {
@@ -397,10 +397,11 @@ class Block:
             if letter in single and not ok:
                 if cycle is not None and not drills and letter in cycle_reads:
                     where = (f"a {shot or 'G04'} block" if shot or g04
-                             else "a block without X, Y, Z or R")
+                             else "a block without X, Y, Z, R or a rotary axis")
                     self.refuse(f"word {letter} while the canned cycle {cycle} is active, in "
                                 f"{where}, which drills no hole: {cycle} reads its "
-                                f"{letter} in the block of a hole (with X, Y, Z or R), and "
+                                f"{letter} in the block of a hole (with X, Y, Z, R or a "
+                                "rotary axis), and "
                                 f"here it would be read as nothing; give it in the block of "
                                 "the hole it is for", single[letter])
                 else:

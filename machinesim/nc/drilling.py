@@ -1,7 +1,7 @@
 """A canned-cycle block (G73, G81, G82, G83): its words, its pecks, its moves.
 
-Internal to the reader: a block (`machinesim.nc.blocks.Block`) with X Y Z or R under a
-canned cycle reads here (`read_cycle`), keeping the cycle's R plane, hole bottom, peck
+Internal to the reader: a block (`machinesim.nc.blocks.Block`) with X Y Z R or a rotary
+axis under a canned cycle reads here (`read_cycle`), keeping the cycle's R plane, hole bottom, peck
 (Q, or Haas's variable peck I J K: `variable_peck`; with G73's Q, Haas's K of depth between
 returns to R: `return_depth`) and dwell P in the modal state until
 G80 or a motion code; the steps of one hole come from `machinesim.nc.cycles`.
@@ -20,7 +20,12 @@ if TYPE_CHECKING:
     from machinesim.nc.blocks import Block
     from machinesim.nc.lexer import Word
 
-__all__ = ["PECKING", "read_cycle", "return_depth", "variable_peck"]
+__all__ = ["HOLE_WORDS", "PECKING", "read_cycle", "return_depth", "variable_peck"]
+
+#: The words that make a block under a canned cycle a hole: its position in X Y and the
+#: rotary axes (FANUC's lathe manual drills `G83 Z-40.0 R-5.0 ...` then `C90.0`, `C180.0`
+#: as holes 2 and 3; Haas positions "X and Y axes (and optional A)"), its bottom Z, its R.
+HOLE_WORDS = "XYZRABC"
 
 #: The peck drilling cycles, which take Q or Haas's I J K, and a P of their own.
 PECKING = ("G73", "G83")
@@ -31,10 +36,6 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
     hole (each of K repeats) added to the reader's moves."""
     state, single = block.state, block.single
     cycle_word = block.g_codes.get("canned cycle", (None, next(iter(block.words))))[1]
-    for word in axes:
-        if word.letter not in "XYZ":
-            raise block.fail(f"axis word {word.letter} in a canned cycle block; a drilling "
-                             "cycle takes X Y Z R Q P K F (G73 and G83: I J too)", word)
     check_length_carried(block, single.get("R") or single.get("Z"))
     if "R" in single:
         r = block.real(single["R"]) * block.length_of(single["R"])
@@ -106,10 +107,13 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
     if repeats:  # K0 keeps the cycle's data and drills nothing: no feed move to refuse
         block.check_feed(state.cycle, cycle_word)
     block.reserve(repeats * (len(steps) + 1), cycle_word)
-    plane = [w for w in axes if w.letter in "XY"]
+    # the hole's position: X Y and the rotary axes, as FANUC's `C90.0` in G83 mode drills a
+    # hole at C90 and Haas positions A with X Y (a rotary word alone had turned the axis
+    # and drilled nothing; beside X or Y it had been refused)
+    position = [w for w in axes if w.letter != "Z"]
     for _ in range(repeats):
-        if plane or repeats > 1:
-            state.target.update({w.letter: block.machine(w) for w in plane})
+        if position or repeats > 1:
+            state.target.update({w.letter: block.machine(w) for w in position})
         block.add("rapid", 0.0, block_number)
         for kind, value in steps:
             if kind == "dwell":
