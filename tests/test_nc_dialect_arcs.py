@@ -287,3 +287,17 @@ def test_a_centre_or_radius_word_beyond_float64_is_named_once(word):
     assert (caught.value.line, caught.value.column) == (3, 12)
     assert str(caught.value).count("a.nc, line 3") == 1
     assert str(caught.value).endswith("is out of range (not finite in float64)")
+
+
+def test_an_arc_past_the_moves_left_says_what_they_are_left_of(monkeypatch):
+    """An arc that would take the program past its most moves (`MAX_MOVES`, lowered here
+    to 4000) is refused naming the moves left: 4000 less the 2 before it. The message had
+    said 'more than the 3998 left; raise the chord tolerance' only, where a subprogram's
+    repeats had used the moves (`M98 P2 L9999` around a full circle)."""
+    monkeypatch.setattr("machinesim.nc.arc_block.MAX_MOVES", 4000)
+    text = "G21 G90 G17\nG00 X0 Y0 Z0\nG01 X0.1 F100.\nG02 X0.1 Y0 I5.\n"
+    with pytest.raises(NCProgramError, match=r"the arc \(radius 5 mm, 360 deg\) needs 4968 "
+                       "segments") as caught:
+        parse_program(text, chord_tolerance=1e-9)
+    assert "more than the 3998 moves left of the most a program may expand to; raise the " \
+           "chord tolerance, or, where the moves before it are many" in str(caught.value)

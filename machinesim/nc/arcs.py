@@ -185,7 +185,9 @@ def arc_points(
         raise NCProgramError(
             f"the arc (radius {r0 * 1e3:.6g} mm, {math.degrees(sweep):.6g} deg) needs {n} "
             f"segments to stay within the chord tolerance {chord_tolerance * 1e9:g} nm, more "
-            f"than the {max_segments} left; raise the chord tolerance"
+            f"than the {max_segments} moves left of the most a program may expand to; raise "
+            "the chord tolerance, or, where the moves before it are many (a subprogram's "
+            "repeats), make the program shorter"
         )
     signed = -sweep if clockwise else sweep
     fractions = np.arange(1, n + 1, dtype=np.float64) / n
