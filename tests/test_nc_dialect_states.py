@@ -279,6 +279,19 @@ def test_a_safe_start_line_cancelling_what_is_refused_is_read_as_states():
             parse_program(f"G00 X0\n{code}\nM30")
 
 
+def test_g97_spindle_speed_in_rpm_is_read_as_the_program_without_it():
+    # posts write `G97 S1000 M03` (S in rpm, as every S is read here): it had been refused
+    # as an unknown G code, and with it the whole program
+    body = "G00 X1. Y2. Z3.\nG01 X4. F100.\nM30"
+    with_g97 = parse_program(f"G21 G90\nG97 S1000 M03\n{body}")
+    without = parse_program(f"G21 G90\nS1000 M03\n{body}")
+    assert np.array_equal(with_g97.targets, without.targets, equal_nan=True)
+    assert np.array_equal(with_g97.feeds, without.feeds, equal_nan=True)
+    assert with_g97.kinds.tolist() == without.kinds.tolist()
+    assert np.array_equal(with_g97.spindles, without.spindles, equal_nan=True)
+    assert dict(with_g97.m_codes) == dict(without.m_codes)
+
+
 def test_g50_with_axis_words_is_a_lathe_coordinate_setting_and_refused():
     # on a FANUC lathe (G code system A) G50 X Z sets the coordinates, as G92 does on a
     # mill: read as the milling dialect's scaling cancel, its X Z words would move the tool

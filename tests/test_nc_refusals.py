@@ -29,6 +29,8 @@ REFUSALS = [
      "tool-centre path already, its G42 adding only the wear .* without the G42 and D"),
     ("G54.1 X0", 1, 1, "G54.1", "unknown G code G54.1"),
     ("G95", 1, 1, "G95", r"feed per revolution \(G95\)"),
+    ("G00 X0\nG96 S200 M03", 2, 1, "G96", r"constant surface speed \(G96, S in m/min\) is "
+     r"not supported: S is read as the spindle speed in rpm \(G97\)"),
     ("G00 X0 U1", 1, 8, "U1", "unknown word letter 'U'"),
     ("G00 X0 I5", 1, 8, "I5", "word I is only read with G02/G03"),
     ("G00 X0\nM99", 2, 1, "M99", "M99 in the main program would jump back"),

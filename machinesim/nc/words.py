@@ -93,6 +93,9 @@ G_GROUPS = {
     "G90": "distance", "G91": "distance",
     "G91.1": "arc centre",
     "G94": "feed mode",
+    # S in rpm, as every S is read: posts write `G97 S1000 M03` (it had been refused as an
+    # unknown G code, and with it the whole program)
+    "G97": "spindle speed mode",
     "G98": "return level", "G99": "return level",
 }  # fmt: skip
 CUTTER_COMPENSATION = (
@@ -140,6 +143,8 @@ G_REFUSED = {
     "G93": "inverse time feed (G93, F = 1/min per block, as multi-axis posts write it) is "
            "not supported; post G94 with F in mm/min",
     "G95": "feed per revolution (G95) is not supported; use G94 with F in mm/min",
+    "G96": "constant surface speed (G96, S in m/min) is not supported: S is read as the "
+           "spindle speed in rpm (G97); post G97 with S in rpm",
     **{code: f"canned cycle {code} ({what}) is not supported: machinesim expands G73, G81, "
              "G82 and G83 only; post the holes as G73/G81/G82/G83 or as G00/G01 moves"
        for code, what in OTHER_CYCLES.items()},
