@@ -189,6 +189,10 @@ DOS_EOF = b"\x1a"
 #: rather than as a problem at every block.
 TEXT_PROBE_BYTES = 4096
 NOT_TEXT_SHARE = 0.05
+#: ... and at least this many of them: a short program's comment holding a terminal colour
+#: code (ESC and a NUL, 2 of 39 characters) had made the file 'not text', where the reader
+#: reads any character in a comment and names a stray one elsewhere at its line.
+NOT_TEXT_FEWEST = 8
 #: UTF-16 without a byte-order mark: more than this share of the bytes on one side of each
 #: character are zero (and almost none on the other side).
 UTF16_ZERO_SHARE = 0.3
@@ -249,7 +253,8 @@ def _refuse_binary(data: bytes, source: str) -> None:
     # which reads them in a comment and names any other; a short program's one comment had
     # made it 'not text'.
     size = max(len(text), 1)
-    if len(odd) > NOT_TEXT_SHARE * size and (controls or len(odd) > NOT_ASCII_SHARE * size):
+    if len(odd) > max(NOT_TEXT_SHARE * size, NOT_TEXT_FEWEST) and (
+            controls or len(odd) > NOT_ASCII_SHARE * size):
         odd, first = len(odd), odd[0]
         raise NCProgramError(
             f"not a text file: {odd} of its first {len(text)} characters are control bytes "
