@@ -180,6 +180,12 @@ def test_tool_changes_follow_t_and_m06():
     turret = parse_program("G00 X0\nT1\nX1.\nT2 X2.\nM30", tools=table)
     assert [(c.number, c.line) for c in turret.tool_changes] == [(1, 2), (2, 4)]
     assert parse_program(text).tool_changes == ()  # without a table T is a state only
+    # an M06 before any T had been passed over, the cut going on with --tool unsaid: which
+    # tool it puts in is the control's, refused at its line (without a table, a state)
+    with pytest.raises(NCProgramError, match="M06 with no tool selected before it") as info:
+        parse_program("G21 G90\nM06\nG00 X0 Y0 Z0\nT1 M06\nM30", "m06.nc", tools=table)
+    assert (info.value.source, info.value.line, info.value.key) == ("m06.nc", 2, "M06")
+    assert parse_program("G21 G90\nM06\nG00 X0 Y0 Z0\nM30").tool_changes == ()
 
 
 def test_states_are_listed_with_their_first_line():

@@ -347,7 +347,14 @@ class Reader:
         for move, number, line in events:
             if number is not None:
                 selected = number
-            elif selected is not None:
+            elif selected is None:
+                # it had been passed over, the cut going on with --tool and no word said
+                raise NCProgramError(
+                    "M06 with no tool selected before it (no T word): which tool it puts "
+                    "in the spindle is the control's, not the program's; give T<n> before it "
+                    "or in its block (T1 M06), as the tool table's tools are selected",
+                    source=self.source, line=line, key="M06")
+            else:
                 found.append(self.tools.change(move, selected, line))
         return tuple(found)
 
