@@ -277,7 +277,10 @@ def _limits(joint: ET.Element, where: str, rotary: bool) -> tuple[float, float, 
     if limit.get("effort") is None:
         raise ModelError(f"{where}: <limit> has no effort=...; URDF requires it on every "
                          "<limit> (any number: machinesim does not use it)")
-    _number(limit.get("effort"), f"{where} <limit effort>")
+    effort = _number(limit.get("effort"), f"{where} <limit effort>")
+    if effort < 0.0:  # Pinocchio: "Some components of min_effort are greater than max_effort"
+        raise ModelError(f"{where}: <limit effort={effort!r}>; expected a number >= 0 "
+                         "(machinesim does not use it, but Pinocchio refuses a negative one)")
     lower, upper, velocity = values["lower"], values["upper"], values["velocity"]
     if not lower < upper:
         raise ModelError(f"{where}: <limit lower={lower!r} upper={upper!r}> ({unit}); "

@@ -161,6 +161,7 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
         raise ModelError(f"{path}: root element <{root.tag}>; expected <robot>")
     if not root.get("name"):
         raise ModelError(f"{path}: <robot> has no name=...; URDF requires one")
+    _check_version(root, path)
     _check_not_xacro(root, path)
     count = len(root.findall("link"))
     if count > MAX_LINKS:
@@ -224,6 +225,10 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
                                      "effort and velocity on every <limit> (a fixed joint "
                                      "needs no <limit>)")
                 _number(text, f"{named} <limit {attribute}>")
+            for attribute in ("lower", "upper"):
+                if limit.get(attribute) is not None:
+                    _number(limit.get(attribute), f"{named} <limit {attribute}>")
+        _check_joint_numbers(joint, name, element_at, at)
     _check_acyclic(links, parent_joint, parent_link, path)
     roots = sorted(link for link in links if link not in parent_joint)
     if len(roots) != 1:
@@ -264,6 +269,63 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
                         raise
         for inertial in link.findall("inertial"):
             _check_inertial(root, path, lines, link, inertial)
+
+
+#: The other elements of a joint the URDF parser under Pinocchio reads, each with its number
+#: attributes and the one it requires: it refuses the whole file for one that is missing or
+#: not a number (`_number`), saying which on stderr only, in lines of C++ above the one
+#: line "The XML stream does not contain a valid URDF model" that named neither the joint
+#: nor the file's line (a fixed joint's <dynamics damping="nan">, a <safety_controller>
+#: without k_velocity, a <mimic> without joint=...).
+_JOINT_NUMBERS = {"dynamics": (("damping", "friction"), None),
+                  "safety_controller": (("soft_lower_limit", "soft_upper_limit", "k_position",
+                                         "k_velocity"), "k_velocity"),
+                  "calibration": (("rising", "falling"), None),
+                  "mimic": (("multiplier", "offset"), "joint")}
+
+
+def _check_joint_numbers(joint: ET.Element, name: str, element_at: dict[int, str],
+                         at: str) -> None:
+    """A joint's ``<dynamics>``, ``<safety_controller>``, ``<calibration>`` and ``<mimic>``
+    as the URDF parser reads them (`_JOINT_NUMBERS`): their number attributes numbers, the
+    attribute each requires there, and a ``<dynamics>`` with damping or friction. Named at
+    the element's own line (``element_at``, else ``at``, the joint's)."""
+    for tag, (numbers, required) in _JOINT_NUMBERS.items():
+        element = joint.find(tag)
+        if element is None:
+            continue
+        named = f"{element_at.get(id(element), at)}: joint {name!r}"
+        if required is not None and element.get(required) is None:
+            raise ModelError(f"{named}: <{tag}> has no {required}=...; URDF requires it (its "
+                             f"parser refuses the file without it): give it, or leave the "
+                             f"<{tag}> out (machinesim does not use it)")
+        for attribute in numbers:
+            if element.get(attribute) is not None:
+                _number(element.get(attribute), f"{named} <{tag} {attribute}>")
+        if tag == "dynamics" and not any(element.get(a) is not None for a in numbers):
+            raise ModelError(f"{named}: <dynamics> has neither damping=... nor friction=...; "
+                             "URDF requires one (its parser refuses the file otherwise): give "
+                             "it, or leave the <dynamics> out (machinesim does not use it)")
+
+
+#: A ``<robot version>`` as the URDF parser under Pinocchio reads it, "MAJOR.MINOR", and
+#: the versions it reads.
+_VERSION = re.compile(r"\s*\+?([0-9]+)\.\s*([+-]?[0-9]+)")
+_VERSIONS = ((1, 0), (1, 1), (1, 2))
+
+
+def _check_version(root: ET.Element, path) -> None:
+    """Refuse a ``<robot version>`` the URDF parser refuses (``2.0``, ``1``, ``1.0.0``): it
+    did so in C++ lines on stderr, and machinesim's one line said only "The XML stream does
+    not contain a valid URDF model", naming neither the attribute nor its value."""
+    text = root.get("version")
+    if text is None:
+        return
+    match = _VERSION.fullmatch(text)
+    if match is None or (int(match[1]), int(match[2])) not in _VERSIONS:
+        raise ModelError(f"{path}: <robot version={text!r}>; expected a URDF version the URDF "
+                         f"parser reads, {', '.join(f'{a}.{b}' for a, b in _VERSIONS)} "
+                         "(or none: 1.0)")
 
 
 def _check_not_xacro(root: ET.Element, path) -> None:

@@ -356,6 +356,32 @@ HOSTILE_URDFS = {
         '<robot name="grooving_4axis"',
         '<!DOCTYPE robot [<!ENTITY e SYSTEM "file:///etc/hostname">]>\n<robot name="&e;"', 1),
                         ["not readable XML (reference to external entity in attribute"]),
+    # what the URDF parser reads of a joint beside its origin, axis and limit, and <robot
+    # version>: it refused a bad one with lines of C++ on stderr and "The XML stream does not
+    # contain a valid URDF model", naming neither the joint nor the value
+    "fixed_joint_dynamics_nan": (_in_joint("table_fixed", "<origin", '<dynamics damping="nan"/>'
+                                           "<origin"),
+                                 [", line 51: joint 'table_fixed' <dynamics damping>: 'nan'"]),
+    "fixed_joint_dynamics_empty": (_in_joint("table_fixed", "<origin", "<dynamics/><origin"),
+                                   ["joint 'table_fixed': <dynamics> has neither damping"]),
+    "fixed_joint_limit_lower_nan": (_in_joint("table_fixed", "<origin", '<limit lower="nan" '
+                                              'effort="1" velocity="1"/><origin'),
+                                    ["joint 'table_fixed' <limit lower>: 'nan'; expected a "
+                                     "finite number"]),
+    "fixed_joint_safety_without_k_velocity": (
+        _in_joint("table_fixed", "<origin", '<safety_controller soft_lower_limit="0"/><origin'),
+        ["joint 'table_fixed': <safety_controller> has no k_velocity=..."]),
+    "fixed_joint_calibration_not_a_number": (
+        _in_joint("table_fixed", "<origin", '<calibration rising="1 mm"/><origin'),
+        ["joint 'table_fixed' <calibration rising>: '1 mm' is not a number"]),
+    "fixed_joint_mimic_without_joint": (_in_joint("table_fixed", "<origin", "<mimic/><origin"),
+                                        ["joint 'table_fixed': <mimic> has no joint=..."]),
+    "robot_version_2": (GROOVING.replace('<robot name="grooving_4axis"',
+                                         '<robot name="grooving_4axis" version="2.0"', 1),
+                        ["<robot version='2.0'>; expected a URDF version", "1.0, 1.1, 1.2"]),
+    # Pinocchio refused it in one line that named neither the joint nor the value
+    "effort_negative": (_in_joint("X", 'effort="1000.0"', 'effort="-1"'),
+                        [", line 61: joint 'X': <limit effort=-1.0>; expected a number >= 0"]),
     "nested_deep": (GROOVING.replace('<link name="base">', '<link name="base">'
                                      + "<a>" * 100_000 + "</a>" * 100_000),
                     ["XML nested 100002 elements deep", "expected at most 64"]),
