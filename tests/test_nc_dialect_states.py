@@ -121,6 +121,11 @@ def test_tool_table_refusals(tmp_path):
         ({"tool": {"1": {"length": 5.0}}}, "unknown key 'length'"),
         ({"tool": {"1": {"length_in": 5.0}}}, "unknown length unit 'in'"),
         ({"tool": {"x": {"length_mm": 5.0}}}, "tool number must be an unsigned integer"),
+        # digits other than ASCII's, which str.isdigit() passed: '²' was an internal
+        # ValueError of int(), '١' (Arabic-Indic) and '１' (full width) read as tool 1
+        ({"tool": {"\u00b2": {"length_mm": 5.0}}}, "unsigned integer up to 99999999, got '²'"),
+        ({"tool": {"\u0661": {"length_mm": 5.0}}}, "unsigned integer up to 99999999, got '١'"),
+        ({"tool": {"\uff11": {"length_mm": 5.0}}}, "unsigned integer up to 99999999, got '１'"),
         ({"tool": {"1": {"radius_mm": -1.0}}}, "must be >= 0"),
         ({"tool": {"1": {"length_mm": float("nan")}}}, "must be a finite number"),
         # TOML reads 10**400 exactly (1329 bits): it was an internal OverflowError

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -37,6 +38,7 @@ from machinesim.units import LENGTH
 
 #: Largest tool number read: 8 digits, as FANUC's T words (H and D registers are fewer).
 MAX_TOOL_NUMBER = 99999999
+_TOOL_NUMBER = re.compile(r"[0-9]+")
 
 
 @dataclass(frozen=True)
@@ -116,7 +118,9 @@ class ToolTable:
         for name, entry in tables.items():
             key = f"tool.{name}"
             text = str(name)
-            if not text.isdigit() or int(text) > MAX_TOOL_NUMBER:
+            # ASCII digits, as a T, H or D word is written: str.isdigit() also passed '²',
+            # which int() refused with an internal ValueError, and '١' or '１', read as 1
+            if not _TOOL_NUMBER.fullmatch(text) or int(text) > MAX_TOOL_NUMBER:
                 raise NCProgramError(f"tool number must be an unsigned integer up to "
                                      f"{MAX_TOOL_NUMBER}, got {text!r}",
                                      **_where(source, key, lines))
