@@ -140,11 +140,15 @@ class AxisServo:
 
         from scipy.signal import BadCoefficients
 
-        with warnings.catch_warnings():
+        # np.errstate: such an overflow printed numpy's RuntimeWarning above the refusal
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("error", BadCoefficients)
             try:
                 loops = self._build()
-            except BadCoefficients:
+            # LinAlgError, or scipy's ValueError: the coefficients overflowed to inf (damping
+            # = 1e300, mass = 1e-300: 1 / (m s^2 + c s) sampled; Kd = 1e300 alone), which
+            # ended a --servo cut with status 1
+            except (BadCoefficients, np.linalg.LinAlgError, ValueError):
                 raise InputError(
                     f"servo loop of axis {self.name} cannot be formed in float64 (its transfer "
                     f"function's coefficients are badly conditioned) from Kp = {self.kp:g}, "

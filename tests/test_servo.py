@@ -200,10 +200,18 @@ def test_a_gain_given_as_text_is_named():
         AxisServo(kp=1.0, ki=0.0, kd=0.0, mass="4")
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")  # numpy's overflow, not one line
 def test_values_no_machine_axis_has_are_refused_not_turned_into_a_silent_loop():
     # a 1e30 kg mass underflows the loop's coefficients; a 1e-12 s period left no poles
     with pytest.raises(InputError, match="badly conditioned"):
         AxisServo(kp=1e6, ki=0.0, kd=1e3, mass=1e30, damping=100.0)
+    # a damping of 1e300 or a mass of 1e-300 overflows them to inf: numpy's LinAlgError
+    # ("Array must not contain infs or NaNs"; scipy's ValueError for a Kd of 1e300 on a
+    # 1e-300 kg mass) ended `cut --servo` with status 1
+    for kp, kd, mass, damping in ((1.2e6, 3700.0, 12.0, 1e300), (1.2e6, 3700.0, 1e-300, 1600.0),
+                                  (0.0, 1e300, 1e-300, 0.0)):
+        with pytest.raises(InputError, match="badly conditioned"):
+            AxisServo(kp=kp, ki=0.0, kd=kd, mass=mass, damping=damping)
     with pytest.raises(InputError, match="period .* 1e-07 .. 0.1 s"):
         AxisServo(kp=1e6, ki=1e7, kd=1e3, mass=10.0, damping=100.0, sample_time_s=1e-12)
 
