@@ -58,7 +58,8 @@ def check_readable_file(path, what: str) -> Path:
         if path.is_dir():
             raise FileError(f"is a folder; expected the {what} file", source=str(path))
         if not path.exists():
-            raise FileError(f"no such file; expected the {what}", source=str(path))
+            raise FileError(f"{broken_link(path) or 'no such file'}; expected the {what}",
+                            source=str(path))
         if not path.is_file():
             # a FIFO or device would block or never end: refuse it before opening
             raise FileError(f"{not_a_regular_file(path)}; expected the {what}",
@@ -70,6 +71,22 @@ def check_readable_file(path, what: str) -> Path:
     except OSError as exc:
         raise FileError(f"cannot read the {what}: {os_reason(exc)}", source=str(path)) from None
     return path
+
+
+def broken_link(path) -> str | None:
+    """What ``path``, which does not exist as far as ``stat`` sees, is when a symbolic link
+    is why, for a message in place of "no such file" (which ``ls``, showing the link,
+    belies): "is a symbolic link to 'b.urdf', which does not exist", or, for links that lead
+    round in a loop (or a folder of its path that is one), "cannot be reached: too many
+    levels of symbolic links (a loop)". None for a path that is simply not there."""
+    try:
+        os.stat(path)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "cannot be reached: too many levels of symbolic links (a loop)"
+        if os.path.islink(path):
+            return f"is a symbolic link to {os.readlink(path)!r}, which does not exist"
+    return None
 
 
 def not_a_regular_file(path) -> str:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from machinesim._io import not_a_regular_file
+from machinesim._io import broken_link, not_a_regular_file
 from machinesim.exceptions import ModelError
 from machinesim.inverse import AxisSolution
 from machinesim.kinematics import DOFS
@@ -92,7 +92,7 @@ def load_machine(name_or_path: str | Path) -> Machine:
     elif path.exists() and not path.is_file():  # reading a FIFO blocks, /dev/zero never ends
         raise ModelError(f"{path}: {not_a_regular_file(path)}; expected a .urdf file")
     elif not path.is_file():
-        raise ModelError(f"{path}: no such URDF file")
+        raise ModelError(f"{path}: {broken_link(path) or 'no such URDF file'}")
     path = path.resolve()
     try:
         stat = path.stat()

@@ -143,6 +143,19 @@ def test_readable_file_checks_name_the_path(tmp_path):
     (tmp_path / "dir").mkdir()
     with pytest.raises(InputError, match="nope.nc: no such file; expected the NC program"):
         _io.check_readable_file(tmp_path / "nope.nc", "NC program")
+    # a symbolic link in a loop, or to nothing, was "no such file", though ls shows it
+    (tmp_path / "loop.toml").symlink_to("loop.toml")
+    (tmp_path / "moved.toml").symlink_to("errors/moved.toml")
+    with pytest.raises(InputError) as raised:
+        _io.check_readable_file(tmp_path / "loop.toml", "error model (--errors)")
+    assert str(raised.value) == (f"{tmp_path / 'loop.toml'}: cannot be reached: too many "
+                                 "levels of symbolic links (a loop); expected the error model "
+                                 "(--errors)")
+    with pytest.raises(InputError) as raised:
+        _io.check_readable_file(tmp_path / "moved.toml", "tool table")
+    assert str(raised.value) == (f"{tmp_path / 'moved.toml'}: is a symbolic link to "
+                                 "'errors/moved.toml', which does not exist; expected the tool "
+                                 "table")
     with pytest.raises(InputError) as raised:  # was wrapped: "cannot read ...: .../dir: is a"
         _io.check_readable_file(tmp_path / "dir", "NC program")
     assert str(raised.value) == f"{tmp_path / 'dir'}: is a folder; expected the NC program file"

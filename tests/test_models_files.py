@@ -124,6 +124,22 @@ def test_a_pipe_or_a_device_given_as_the_urdf_says_what_it_is(tmp_path):
                                  "regular file; expected a .urdf file")
 
 
+def test_a_broken_link_given_as_the_urdf_says_what_it_is(tmp_path):
+    # both were "no such URDF file", though ls shows the links there
+    loop, dangling = tmp_path / "loop.urdf", tmp_path / "dangling.urdf"
+    loop.symlink_to(tmp_path / "back.urdf")
+    (tmp_path / "back.urdf").symlink_to(loop)
+    dangling.symlink_to("moved.urdf")
+    with pytest.raises(ModelError) as raised:
+        load_machine(loop)
+    assert str(raised.value) == (f"{loop}: cannot be reached: too many levels of symbolic "
+                                 "links (a loop)")
+    with pytest.raises(ModelError) as raised:
+        load_machine(dangling)
+    assert str(raised.value) == (f"{dangling}: is a symbolic link to 'moved.urdf', which "
+                                 "does not exist")
+
+
 def test_a_urdf_edited_after_loading_loads_again(tmp_path):
     path = tmp_path / "edited.urdf"
     path.write_text(GROOVING)
