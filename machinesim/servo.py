@@ -186,7 +186,7 @@ class AxisServo:
             if radius > 1.0 + 1e-9:
                 raise ServoDivergenceError(
                     f"servo loop of axis {self.name} is unstable (largest closed-loop pole "
-                    f"|z| = {radius:.9f} > 1) {gains}: the axis would oscillate; "
+                    f"|z| = {_pole(radius)} > 1) {gains}: the axis would oscillate; "
                     f"{cause or 'lower the gains'}")
             edge = ("from an integral gain too small to act against Kp (use Ki = 0 for none) "
                     "or from gains at the edge of stability")
@@ -311,6 +311,13 @@ class AxisServo:
             if forward is not None:
                 y = y + forward(np.gradient(np.gradient(r, ts), ts)[a - lo:b - lo])
             yield a, b, start + y
+
+
+def _pole(radius: float) -> str:
+    """A closed-loop pole's |z| for a message: to 9 decimals, which tell one just past the
+    unit circle from it, or to 6 digits once it is 1000 or more (Kd = 1e200 put |z| =
+    4.1e192 there as 193 digits and 9 decimals)."""
+    return f"{radius:.9f}" if radius < 1e3 else f"{radius:.6g}"
 
 
 def _order(system) -> int:
@@ -494,8 +501,9 @@ def servo_from_toml(path, machine) -> PIDServo:
             raise InputError(f"[{letter}] {key}: {error.message}", source=source,
                              line=lines.get(f"{letter}.{key}", lines.get(letter)),
                              key=f"{letter}.{key}") from None
-        except ServoDivergenceError as error:
-            raise ServoDivergenceError(f"{source}, [{letter}]: {error}") from None
+        except ServoDivergenceError as error:  # at its table's line, as the other refusals
+            line = f", line {lines[letter]}" if letter in lines else ""
+            raise ServoDivergenceError(f"{source}{line}, [{letter}]: {error}") from None
     return PIDServo(tuple(columns))
 
 

@@ -66,6 +66,14 @@ def test_instability_matches_routh_criterion(factor, stable):
         assert "axis x is unstable" in str(info.value)
 
 
+def test_a_pole_far_outside_the_unit_circle_is_written_in_six_digits():
+    # Kd = 1e200 put |z| = 4.1e194 in the message as its 195 digits and 9 decimals
+    with pytest.raises(ServoDivergenceError) as info:
+        AxisServo(kp=1.2e6, ki=0.0, kd=1e200, mass=12.0, damping=1600.0)
+    assert re.search(r"largest closed-loop pole \|z\| = \d\.\d{5}e\+\d+ > 1\)", str(info.value))
+    assert len(str(info.value)) < 250, str(info.value)
+
+
 def test_a_loop_unstable_in_continuous_time_says_what_to_change():
     # m s^3 + (c + Kd) s^2 + Kp s + Ki is stable iff (c + Kd) Kp > m Ki (Routh-Hurwitz); where
     # it is not, "lower the gains" (all of them) does not settle it
