@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import re
+import unicodedata
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -45,10 +46,10 @@ MAX_LINKS = 2000
 #: loads with every Abbe offset a thousand times too long.
 MAX_PLACEMENT_M = 10.0
 #: A number as the URDF parser under Pinocchio (urdfdom, a C++ stream) reads one: ASCII
-#: digits, a point, an exponent, blanks before it only. Python's float() reads more
-#: ("1_000", Arabic-Indic digits, a trailing blank), which the parser then refused without
-#: naming the joint.
-_URDF_NUMBER = re.compile(r"\s*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+#: digits, a point, an exponent, ASCII blanks before it only. Python's float() reads more
+#: ("1_000", Arabic-Indic digits, a trailing blank, a no-break space before it), which the
+#: parser then refused without naming the joint.
+_URDF_NUMBER = re.compile(r"[ \t\n\r]*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 
 
 def _at(path, lines: dict[str, list[int]] | None, tag: str, index: int) -> str:
@@ -114,15 +115,37 @@ def _number(text: str, where: str) -> float:
     return value
 
 
+def _fields(text: str) -> list[str]:
+    """The numbers of a URDF attribute of several (``xyz``, a box's ``size``, a mesh's
+    ``scale``) as the URDF parser splits them: at spaces only. ``str.split()`` splits at any
+    Unicode blank too, so ``xyz="0\u00a00 0.05"`` (a no-break space, as a word processor or
+    web page writes one) read as three numbers here, and the parser refused the file with
+    lines of C++ on stderr and a message that named neither the joint nor the value."""
+    return [field for field in text.split(" ") if field]
+
+
+def _blank_hint(text: str) -> str:
+    """For attribute text holding a blank that is not a space (a no-break space, a tab or
+    line end written as a character reference): which, since ``repr`` shows it as a code."""
+    odd = sorted({c for c in text if c.isspace() and c != " "})
+    if not odd:
+        return ""
+    named = ", ".join(f"U+{ord(c):04X} {unicodedata.name(c, 'a control character')}"
+                      for c in odd)
+    return f" ({named} separates no numbers for the URDF parser: write plain spaces)"
+
+
 def _vector(element: ET.Element, attribute: str, where: str,
             default: str | None = None) -> np.ndarray:
-    """Three finite floats from a URDF attribute (``xyz``, ``rpy``)."""
+    """Three finite floats from a URDF attribute (``xyz``, ``rpy``), split as the URDF
+    parser splits them (`_fields`)."""
     text = element.get(attribute, default)
     if text is None:
         raise ModelError(f"{where}: no {attribute}=...; expected three numbers")
-    fields = text.split()
+    fields = _fields(text)
     if len(fields) != 3:
-        raise ModelError(f"{where}: {attribute}={text!r}; expected three numbers")
+        raise ModelError(f"{where}: {attribute}={text!r}; expected three numbers"
+                         f"{_blank_hint(text)}")
     return np.array([_number(f, f"{where} {attribute}") for f in fields])
 
 
@@ -498,7 +521,7 @@ def _check_shape(element: ET.Element, where: str) -> None:
         # the URDF parser drops the whole visual of a scale it cannot read, saying so on
         # stderr only (or takes 1 1 1), so a mesh in mm scaled "0.001 0.001" was not drawn
         text = element.get("scale")
-        fields = text.split()
+        fields = _fields(text)
         for field in fields:
             _number(field, f"{where} <mesh scale>")
         if len(fields) != 3:
@@ -507,7 +530,7 @@ def _check_shape(element: ET.Element, where: str) -> None:
                              "0.001 for a mesh in mm)")
     for attribute, count in _SHAPE_SIZES[element.tag].items():
         text = element.get(attribute)
-        fields = [] if text is None else text.split()
+        fields = [] if text is None else _fields(text)
         values = [_number(f, f"{where} <{element.tag} {attribute}>") for f in fields]
         if len(values) != count or not all(v > 0.0 for v in values):
             raise ModelError(f"{where}: <{element.tag} {attribute}={text!r}>; expected "

@@ -382,6 +382,21 @@ HOSTILE_URDFS = {
     # Pinocchio refused it in one line that named neither the joint nor the value
     "effort_negative": (_in_joint("X", 'effort="1000.0"', 'effort="-1"'),
                         [", line 61: joint 'X': <limit effort=-1.0>; expected a number >= 0"]),
+    # a no-break space (a word processor's, a web page's) between numbers or before one:
+    # str.split() and float() took it for a blank, the URDF parser does not, and refused the
+    # file in lines of C++ on stderr, then "The XML stream does not contain a valid URDF
+    # model", naming neither the joint nor the value
+    "origin_no_break_space": (_in_joint("X", 'xyz="0.0 0.4 0.55"', 'xyz="0.0\u00a00.4 0.55"'),
+                              [", line 59: joint 'X' <origin>: xyz='0.0\\xa00.4 0.55'; expected "
+                               "three numbers (U+00A0 NO-BREAK SPACE separates no numbers"]),
+    "axis_em_space": (_in_joint("X", '<axis xyz="1.0 0.0 0.0"/>', '<axis xyz="1.0\u20030.0 0.0"/>'),
+                      [", line 60: joint 'X' <axis>: xyz='1.0\\u20030.0 0.0'", "U+2003 EM SPACE"]),
+    "limit_no_break_space": (_in_joint("X", 'lower="-0.25"', 'lower="\u00a0-0.25"'),
+                             [", line 61: joint 'X' <limit lower>: '\\xa0-0.25' is not a number "
+                              "as a URDF parser reads one"]),
+    "box_size_line_end": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
+                                           '<box size="1.2 1.2&#13;0.15"/>'),
+                          ["link 'base' <visual> <box size>: '1.2\\r0.15' is not a number"]),
     "nested_deep": (GROOVING.replace('<link name="base">', '<link name="base">'
                                      + "<a>" * 100_000 + "</a>" * 100_000),
                     ["XML nested 100002 elements deep", "expected at most 64"]),

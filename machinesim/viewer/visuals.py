@@ -25,7 +25,7 @@ try:
 except ImportError:  # Pinocchio before 3.4 is built on hpp-fcl, coal's former name
     import hppfcl as coal
 
-from machinesim.urdf_structure import _URDF_NUMBER
+from machinesim.urdf_structure import _URDF_NUMBER, _fields
 from machinesim.viewer.scene import Scene
 
 #: Mesh files whose geometry object keeps only the path (the visualizer sends the file
@@ -145,7 +145,7 @@ def _scale(mesh: ET.Element) -> np.ndarray | None:
     text = mesh.get("scale")
     if text is None:
         return np.ones(3)
-    fields = text.split()
+    fields = _fields(text)
     if len(fields) != 3 or not all(_URDF_NUMBER.fullmatch(f) for f in fields):
         return None
     scale = np.array([float(f) for f in fields], dtype=np.float64)
