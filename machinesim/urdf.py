@@ -168,7 +168,8 @@ def _encoding_hint(data: bytes) -> str:
 
 
 def _element_lines(data: bytes) -> dict[str, list[int] | array]:
-    """The line of each ``<link>`` and ``<joint>`` under ``<robot>``, of each element in a
+    """The line of each ``<link>``, ``<joint>`` and ``<material>`` under ``<robot>``, of each
+    element in a
     joint (key ``"in_joint"``, the joints' children one after the other), of each child and
     grandchild of a link (key ``"in_link"``, in the order of the file: a visual, then its
     origin, geometry ...) and of each ``<machinesim:axis>``, in the order of the file, by
@@ -180,7 +181,8 @@ def _element_lines(data: bytes) -> dict[str, list[int] | array]:
     `_check_namespaces`; ``"xacro"``: whether the file has xacro's elements or attributes."""
     parser = expat.ParserCreate(namespace_separator="}")
     parser.namespace_prefixes = True  # "uri}local}prefix": tells <p:origin> from xmlns="uri"
-    found: dict = {"link": [], "joint": [], "in_joint": [], "axis": [], "in_link": array("I"),
+    found: dict = {"link": [], "joint": [], "material": [], "in_joint": [], "axis": [],
+                   "in_link": array("I"),
                    "foreign": [], "xacro": False}
     depth = 0
     in_joint = in_link = False
@@ -208,7 +210,7 @@ def _element_lines(data: bytes) -> dict[str, list[int] | array]:
         tag = tag.rpartition("}")[0] if tag.count("}") == 2 else tag  # the prefix dropped
         if depth == 2:
             in_joint, in_link = tag == "joint", tag == "link"
-            if tag in ("link", "joint"):
+            if tag in ("link", "joint", "material"):
                 found[tag].append(parser.CurrentLineNumber)
         elif depth == 3 and in_joint:
             found["in_joint"].append(parser.CurrentLineNumber)

@@ -252,6 +252,7 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
                 if limit.get(attribute) is not None:
                     _number(limit.get(attribute), f"{named} <limit {attribute}>")
         _check_joint_numbers(joint, name, element_at, at)
+    _check_materials(root, path, lines)
     _check_acyclic(links, parent_joint, parent_link, path)
     roots = sorted(link for link in links if link not in parent_joint)
     if len(roots) != 1:
@@ -329,6 +330,28 @@ def _check_joint_numbers(joint: ET.Element, name: str, element_at: dict[int, str
             raise ModelError(f"{named}: <dynamics> has neither damping=... nor friction=...; "
                              "URDF requires one (its parser refuses the file otherwise): give "
                              "it, or leave the <dynamics> out (machinesim does not use it)")
+
+
+def _check_materials(root: ET.Element, path, lines: dict[str, list[int]] | None) -> None:
+    """The ``<material>`` elements under ``<robot>`` (the visuals' colours by name), each
+    named, and each name once: the URDF parser refuses the whole file for a name given twice
+    ("material 'grey' is not unique" in C++ on stderr, then "The XML stream does not contain
+    a valid URDF model", naming no material), and drops one without a name with a message
+    on stderr only."""
+    seen = set()
+    for index, material in enumerate(root.findall("material")):
+        name, at = material.get("name"), _at(path, lines, "material", index)
+        if not name:
+            raise ModelError(f"{at}: a <material> under <robot> has no name=...; URDF requires "
+                             "one (its parser drops it): name it, as the visuals that use it "
+                             "do, e.g. <material name=\"grey\">")
+        if name in seen:
+            first = _at(path, lines, "material",
+                        [m.get("name") for m in root.findall("material")].index(name))
+            raise ModelError(f"{at}: <material name={name!r}> is defined twice under <robot> "
+                             f"(first at {first.rpartition(', ')[2]}); URDF requires each name "
+                             "once (its parser refuses the file): keep the one meant")
+        seen.add(name)
 
 
 #: A ``<robot version>`` as the URDF parser under Pinocchio reads it, "MAJOR.MINOR", and

@@ -397,6 +397,16 @@ HOSTILE_URDFS = {
     "box_size_line_end": (GROOVING.replace('<box size="1.2 1.2 0.15"/>',
                                            '<box size="1.2 1.2&#13;0.15"/>'),
                           ["link 'base' <visual> <box size>: '1.2\\r0.15' is not a number"]),
+    # the URDF parser refused a name given twice, in C++ on stderr and a line naming no
+    # material, and dropped one without a name, saying so on stderr only
+    "material_defined_twice": (GROOVING.replace(
+        '<link name="base">', '<material name="grey"><color rgba="0.5 0.5 0.5 1"/></material>'
+        '\n  <material name="grey"><color rgba="0.6 0.6 0.6 1"/></material>\n  <link name="base">',
+        1), [", line 12: <material name='grey'> is defined twice under <robot> (first at line "
+             "11)"]),
+    "material_without_name_under_robot": (GROOVING.replace(
+        '<link name="base">', '<material><color rgba="0.5 0.5 0.5 1"/></material>'
+        '<link name="base">', 1), [", line 11: a <material> under <robot> has no name=..."]),
     "nested_deep": (GROOVING.replace('<link name="base">', '<link name="base">'
                                      + "<a>" * 100_000 + "</a>" * 100_000),
                     ["XML nested 100002 elements deep", "expected at most 64"]),
