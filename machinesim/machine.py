@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -392,7 +393,9 @@ class Machine:
             symbol, _, index = rest[:-1].partition("[")
             comp = (errors.component.get(letter, {}).get(symbol) if errors is not None
                     else None)
-            if comp is None or not index.isdigit() or int(index) >= len(comp.values):
+            # ASCII digits: str.isdigit() passes '²', which int() refused (a ValueError)
+            if (comp is None or not re.fullmatch("[0-9]+", index)
+                    or int(index) >= len(comp.values)):
                 raise ErrorModelError(
                     f"no component error {letter}.{symbol} with an entry {index} in the error "
                     "model; a component parameter needs its table or polynomial there",

@@ -25,6 +25,7 @@ from machinesim.errors import (
     WorkpieceSetting,
 )
 from machinesim.exceptions import ErrorModelError
+from machinesim.machines import load_machine
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "models" / "errors" / "example.toml"
 
@@ -275,6 +276,19 @@ def test_with_parameters_sets_the_named_fields():
     assert list(model.location["C"].items()) == [("EX0C", 2e-6), ("EA0C", 7e-6),
                                                  ("EB0C", pytest.approx(1.5e-5, rel=1e-15))]
     assert dict(model.location["Y"]) == {"EC0Y": 8e-6}
+
+
+def test_a_parameter_index_in_other_digits_is_no_parameter():
+    # '\u0661' (Arabic-Indic 1) set entry 1 of the table, and error_jacobian ended in int()'s
+    # ValueError on '\u00b2' (superscript 2), which str.isdigit() passes
+    model = ErrorModel.from_toml(EXAMPLE)
+    machine = load_machine("grooving_4axis")
+    for index in ("\u0661", "\u00b2"):
+        name = f"component.X.EXX[{index}]"
+        with pytest.raises(ErrorModelError, match="unknown parameter name"):
+            model.with_parameters({name: 5e-6})
+        with pytest.raises(ErrorModelError, match=r"no component error X\.EXX with an entry"):
+            machine.error_jacobian(machine.home, model, [name])
 
 
 def test_parameter_unit_tells_a_polynomial_coefficient_from_a_table_value():

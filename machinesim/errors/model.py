@@ -46,7 +46,8 @@ from machinesim.units import FACTORS, M_PER_MM, RAD_PER_DEG
 
 _PARAMETER_RE = re.compile(
     r"tool\.(?P<tool>x|y|z|rx|ry|rz)|tool_geometry\.(?P<geometry>nose_radius)|workpiece\.(?P<workpiece>x|y|z|alpha|beta|gamma)"
-    r"|location\.(?P<laxis>\w)\.(?P<lsym>\w+)|component\.(?P<caxis>\w)\.(?P<csym>\w+)\[(?P<k>\d+)\]"
+    r"|location\.(?P<laxis>\w)\.(?P<lsym>\w+)|component\.(?P<caxis>\w)\.(?P<csym>\w+)\[(?P<k>\d+)\]",
+    re.ASCII,  # \d took 'component.X.EXX[١]' (an Arabic-Indic 1) for entry 1
 )
 _PARAMETER_FORMS = (
     "tool.<x|y|z|rx|ry|rz>, tool_geometry.nose_radius, workpiece.<x|y|z|alpha|beta|gamma>, "
