@@ -105,6 +105,16 @@ def read_urdf(path: Path, lines: dict[str, list[int]] | None = None) -> ET.Eleme
         raise ModelError(f"{path}: not readable XML ({exc}){hint}") from None
     except RecursionError:
         raise ModelError(f"{path}: XML nested too deeply to be a URDF") from None
+    except (LookupError, ValueError) as exc:
+        # expat's: an encoding Python does not know (LookupError), or one of several bytes a
+        # character it cannot read (ValueError: "multi-byte encodings are not supported",
+        # a Japanese CAD tool's Shift_JIS); both ended the command as an internal error
+        declared = re.search(rb"""^\s*<\?xml[^>]*encoding\s*=\s*["']([^"']*)""", data)
+        name = declared[1].decode("ascii", "replace") if declared else "?"
+        raise ModelError(f"{path}: its XML declaration gives encoding=\"{name}\", which the "
+                         f"XML reader cannot read ({exc}); expected UTF-8, UTF-16 or a "
+                         "single-byte encoding such as ISO-8859-1: save the file as UTF-8 "
+                         "(and write encoding=\"UTF-8\", or no encoding)") from None
     depth = _depth(root)
     if depth > MAX_DEPTH:
         raise ModelError(f"{path}: XML nested {depth} elements deep; a URDF is at most a few "

@@ -407,6 +407,16 @@ HOSTILE_URDFS = {
     "material_without_name_under_robot": (GROOVING.replace(
         '<link name="base">', '<material><color rgba="0.5 0.5 0.5 1"/></material>'
         '<link name="base">', 1), [", line 11: a <material> under <robot> has no name=..."]),
+    # expat reads no multi-byte encoding but UTF-8 and UTF-16, and no encoding Python does
+    # not know: its ValueError and LookupError ended the command as internal errors
+    "encoding_shift_jis": (GROOVING.replace('<?xml version="1.0"?>',
+                                            '<?xml version="1.0" encoding="Shift_JIS"?>', 1),
+                           ["its XML declaration gives encoding=\"Shift_JIS\", which the XML "
+                            "reader cannot read (multi-byte encodings are not supported)",
+                            "save the file as UTF-8"]),
+    "encoding_unknown": (GROOVING.replace('<?xml version="1.0"?>',
+                                          "<?xml version='1.0' encoding='UTF8X'?>", 1),
+                         ["gives encoding=\"UTF8X\"", "(unknown encoding: UTF8X)"]),
     "nested_deep": (GROOVING.replace('<link name="base">', '<link name="base">'
                                      + "<a>" * 100_000 + "</a>" * 100_000),
                     ["XML nested 100002 elements deep", "expected at most 64"]),
