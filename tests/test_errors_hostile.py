@@ -3,6 +3,7 @@ naming the file, the line, the key, the value and what was expected."""
 
 from __future__ import annotations
 
+import time
 import warnings
 
 import pytest
@@ -149,6 +150,25 @@ def test_a_long_polynomial_whose_unit_factor_leaves_float64_reads_its_coefficien
             f"{path}, line 2, key 'component.X.EXX_poly_um_nm': coefficient c_40 = 1 um/nm**40 "
             "is 1e+354 times as large in m/m**40, beyond float64; expected a length error of "
             "at most 1e+06 um (1 m) over the travel")
+
+
+def test_a_polynomial_of_thousands_of_coefficients_reads_at_once(tmp_path):
+    # each coefficient past c_105 in um/mm**k (whose factor 1e-6 / 1e-3**k leaves float64)
+    # was taken exactly, with powers of 1e-3 growing to millions of digits: 6,000 zeros (a
+    # 12 kB file) took some 15 s, 10,000 a minute, 300,000 never ended
+    path = tmp_path / "F.toml"
+    path.write_text("[component.X]\nEXX_poly_um_mm = [0.001" + ", 0.0" * 6000 + "]\n")
+    start = time.perf_counter()
+    values = ErrorModel.from_toml(path).component["X"]["EXX"].values
+    assert time.perf_counter() - start < 5.0
+    assert values.size == 6001 and values[0] == 0.001 * 1e-6 and not values[1:].any()
+    # a coefficient beyond float64 in SI is still refused, the first such one named
+    path.write_text("[component.X]\nEXX_poly_um_mm = [0.0" + ", 1e-300" * 6000 + "]\n")
+    start = time.perf_counter()
+    with pytest.raises(ErrorModelError, match=r"coefficient c_205 = 1e-300 um/mm\*\*205 is "
+                       r"1e\+609 times as large in m/m\*\*205, beyond float64"):
+        ErrorModel.from_toml(path)
+    assert time.perf_counter() - start < 5.0
 
 
 def test_a_tool_table_or_a_servo_file_given_for_the_errors_says_which_it_is(tmp_path):

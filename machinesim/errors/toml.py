@@ -79,7 +79,20 @@ def _poly_factors(value_factor: float, position_factor: float, count: int) -> np
 
 def _exact_si(coefficient: float, value_factor: float, position_factor: float, k: int) -> float:
     """``coefficient`` (file units) times ``value_factor / position_factor**k`` in SI, taken
-    exactly and rounded once: inf beyond float64 (then refused), 0.0 below it."""
+    exactly and rounded once: inf beyond float64 (then refused), 0.0 below it.
+
+    The exact power is taken only where the product may be a float64: a polynomial of
+    10,000 zero coefficients in um/mm**k (a 20 kB file) took a minute to read, its powers
+    of 1e-3 growing to numbers of millions of digits, and one of 300,000 never ended. Its
+    binary exponent (`math.frexp`) tells the others apart at once."""
+    if coefficient == 0.0:
+        return 0.0
+    exponent = (math.frexp(coefficient)[1] + math.frexp(value_factor)[1]
+                - k * (math.frexp(position_factor)[1] - 1))  # within k + 2 of its own
+    if exponent - k - 2 > 1024:  # at least 2**1025: beyond float64
+        return math.copysign(math.inf, coefficient)
+    if exponent + k + 2 < -1075:  # below half the smallest subnormal: rounds to 0
+        return math.copysign(0.0, coefficient)
     try:
         exact = Fraction(coefficient) * Fraction(value_factor) / Fraction(position_factor) ** k
         return float(exact)
