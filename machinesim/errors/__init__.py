@@ -30,19 +30,21 @@ of rotary axes in deg (polynomials in um or urad per mm**k or deg**k).
 `ErrorModel.to_dict` gives the same structure in m and rad, so that it round trips exactly.
 Every value read must be finite, an angle at most 180 deg and a length at most 1 m either way
 (`LARGEST_ERROR`: beyond that it is another setting, not an error of one); a table's
-positions must lie within the machine's travel of its axis, and a polynomial must stay
-within the same bound over that travel (`ErrorModel.check_travel`, when the model meets a
-machine). A model read from a file keeps the file's name, its keys as written and the line
-of each (`ErrorModel.source`, `ErrorModel.written`, `ErrorModel.lines`), so a refusal of a
-key names the file, the key's line and the key (``F.toml, line 3, key 'tool.offset_um':
-...``; an array spanning lines is the line of its key), whether found as the file is read
-or when the model meets a machine (`ErrorModel.misfit`), from Python as from the command
-line; a TOML file may start with a UTF-8 byte order mark.
+positions must lie within the machine's travel of its axis, and a polynomial (of at most
+`MAX_POLY_COEFFICIENTS`, 1000, coefficients) must stay within the same bound over that
+travel (`ErrorModel.check_travel`, when the model meets a machine). A model read from a
+file keeps the file's name, its keys as written and the line of each (`ErrorModel.source`,
+`ErrorModel.written`, `ErrorModel.lines`), so a refusal of a key names the file, the key's
+line and the key (``F.toml, line 3, key 'tool.offset_um': ...``; an array spanning lines
+is the line of its key), whether found as the file is read or when the model meets a
+machine (`ErrorModel.misfit`), from Python as from the command line; a TOML file may start
+with a UTF-8 byte order mark.
 """
 
 from machinesim._submodules import submodule
 from machinesim.errors._checks import AXES, LARGEST_ERROR, LINEAR_AXES
 from machinesim.errors.families import (
+    MAX_POLY_COEFFICIENTS,
     ComponentError,
     ToolGeometry,
     ToolSetting,
@@ -54,6 +56,7 @@ __all__ = [
     "AXES",
     "LARGEST_ERROR",
     "LINEAR_AXES",
+    "MAX_POLY_COEFFICIENTS",
     "ComponentError",
     "ErrorModel",
     "ToolGeometry",

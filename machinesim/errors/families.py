@@ -126,6 +126,21 @@ class WorkpieceSetting(_Value):
             _check_si(getattr(self, name), "angle", name)
 
 
+#: Coefficients beyond which a polynomial is no axis error's: one of a few degrees gives
+#: an error curve (finer detail is a table). Every evaluation makes a pass over the
+#: coefficients, so 300,000 of them (600 kB of zeros, under the 4 MB a file may hold) cut
+#: in 15 s and `machinesim view` of the program did not end within 3 minutes.
+MAX_POLY_COEFFICIENTS = 1000
+
+
+def check_poly_size(count: int, source: str | None, key: str | None) -> None:
+    """Refuse a polynomial of more than `MAX_POLY_COEFFICIENTS` coefficients."""
+    if count > MAX_POLY_COEFFICIENTS:
+        raise _fail(f"a polynomial of {count} coefficients (degree {count - 1}); expected at "
+                    f"most {MAX_POLY_COEFFICIENTS}: an axis error's polynomial has a few, and "
+                    "finer detail is a table (position_<unit> beside the values)", source, key)
+
+
 @dataclass(frozen=True, eq=False)
 class ComponentError(_Value):
     """One position-dependent error (one symbol on one axis): a table or a polynomial.
@@ -166,6 +181,8 @@ class ComponentError(_Value):
         elif positions is not None:
             message = f"a polynomial has no positions, got {_describe(positions)}"
             raise _fail(message, None, "positions")
+        else:
+            check_poly_size(values.size, None, "values")
         object.__setattr__(self, "positions", positions)
         object.__setattr__(self, "values", values)
 

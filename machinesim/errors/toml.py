@@ -40,6 +40,7 @@ from machinesim.errors.families import (
     ToolGeometry,
     ToolSetting,
     WorkpieceSetting,
+    check_poly_size,
 )
 from machinesim.errors.model import ErrorModel
 from machinesim.errors.unit_slips import (  # noqa: F401  (importable from here, as before)
@@ -560,6 +561,7 @@ def _parse_component(axis: Any, table: Any, source: str,
             value_factor = _check_unit(units[1], quantity, source, key_path)
             position_factor = _check_unit(units[2], axis_quantity, source, key_path)
             coefficients = _numbers(value, source, key_path)
+            check_poly_size(coefficients.size, source, key_path)
             with np.errstate(over="ignore", divide="ignore", under="ignore", invalid="ignore"):
                 factors = _poly_factors(value_factor, position_factor, coefficients.size)
                 si = coefficients * factors
