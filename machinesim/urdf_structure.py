@@ -15,6 +15,7 @@ satisfy is `machinesim.urdf_checks`.
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 import unicodedata
@@ -345,6 +346,13 @@ def _check_materials(root: ET.Element, path, lines: dict[str, list[int]] | None)
             raise ModelError(f"{at}: a <material> under <robot> has no name=...; URDF requires "
                              "one (its parser drops it): name it, as the visuals that use it "
                              "do, e.g. <material name=\"grey\">")
+        color = material.find("color")
+        if color is not None and color.get("rgba") is None:
+            raise ModelError(f"{at}: <material name={name!r}> has a <color> without rgba=...; "
+                             "URDF requires it there (its parser drops the material, and the "
+                             "visuals that name it are drawn without it)")
+        _check_rgba(None if color is None else color.get("rgba"),
+                    f"{at}: <material name={name!r}>")
         if name in seen:
             first = _at(path, lines, "material",
                         [m.get("name") for m in root.findall("material")].index(name))
@@ -479,8 +487,10 @@ def _check_shaped(root: ET.Element, path, lines, link: ET.Element, kind: str,
     the part's line (`_in_link_at`)."""
     geometry = part.find("geometry")
     material = part.find("material") if kind == "visual" else None
-    if geometry is not None and len(geometry) and (material is None
-                                                    or material.get("name") is not None):
+    color = None if material is None else material.find("color")
+    rgba = None if color is None else color.get("rgba")
+    if geometry is not None and len(geometry) and (material is None or (
+            material.get("name") is not None and (rgba is None or _rgba_read(rgba)))):
         return
     found = _in_link_at(root, path, lines, part)
     where = f"{found[0] if found else path}: link {link.get('name')!r} <{kind}>"
@@ -488,8 +498,33 @@ def _check_shaped(root: ET.Element, path, lines, link: ET.Element, kind: str,
         what = "has no <geometry>" if geometry is None else "has an empty <geometry>"
         raise ModelError(f"{where}: {what}; expected one shape in it (a box, cylinder, "
                          f"sphere or mesh): the URDF parser drops a {kind} without one")
-    raise ModelError(f"{where}: a <material> has no name=...; URDF requires one (the parser "
-                     "drops the visual without it): name it, e.g. <material name=\"grey\">")
+    if material.get("name") is None:
+        raise ModelError(f"{where}: a <material> has no name=...; URDF requires one (the "
+                         "parser drops the visual without it): name it, e.g. <material "
+                         "name=\"grey\">")
+    _check_rgba(rgba, f"{where} <material name={material.get('name')!r}>")
+
+
+@functools.lru_cache(maxsize=256)  # a CAD export's 100,000s of visuals share a few colours
+def _rgba_read(text: str) -> bool:
+    """Whether a ``<color rgba>`` reads as the URDF parser reads one: four numbers (split at
+    spaces, `_fields`), each from 0 to 1."""
+    fields = _fields(text)
+    return len(fields) == 4 and all(_URDF_NUMBER.fullmatch(field) and 0.0 <= float(field) <= 1.0
+                                    for field in fields)
+
+
+def _check_rgba(rgba: str | None, where: str) -> None:
+    """Refuse a ``<color rgba>`` the URDF parser misreads: one outside 0 .. 1 or not a number
+    it drops with a C++ message on stderr only ("Material [grey] has malformed color rgba
+    values"), and three numbers (``rgba="0.5 0.5 0.5"``, an alpha left out) or five it
+    takes without a word as black, so the machine was drawn in other colours than the
+    file's."""
+    if rgba is None or _rgba_read(rgba):
+        return
+    raise ModelError(f"{where}: <color rgba={rgba!r}>; expected four numbers from 0 to 1, "
+                     "red, green, blue and alpha (1 opaque), separated by spaces: the URDF "
+                     "parser drops or misreads another colour")
 
 
 #: The attributes of an ``<inertia>``, each a number the URDF parser requires.

@@ -417,6 +417,21 @@ HOSTILE_URDFS = {
     "encoding_unknown": (GROOVING.replace('<?xml version="1.0"?>',
                                           "<?xml version='1.0' encoding='UTF8X'?>", 1),
                          ["gives encoding=\"UTF8X\"", "(unknown encoding: UTF8X)"]),
+    # a colour the URDF parser cannot read it dropped with a C++ message on stderr only; one
+    # of three numbers (no alpha) it took as black without a word
+    "material_color_three_numbers": (GROOVING.replace('rgba="0.35 0.37 0.40 1"',
+                                                      'rgba="0.35 0.37 0.40"', 1),
+                                     [", line 5: <material name='bed'>: <color rgba='0.35 0.37 "
+                                      "0.40'>; expected four numbers from 0 to 1"]),
+    "visual_color_beyond_one": (GROOVING.replace(
+        '<material name="bed"/></visual>',
+        '<material name="bed"><color rgba="0.35 0.37 1.5 1"/></material></visual>', 1),
+                                [", line 12: link 'base' <visual> <material name='bed'>: <color "
+                                 "rgba='0.35 0.37 1.5 1'>; expected four numbers from 0 to 1"]),
+    "material_color_without_rgba": (GROOVING.replace('<color rgba="0.35 0.37 0.40 1"/>',
+                                                     '<color/>', 1),
+                                    [", line 5: <material name='bed'> has a <color> without "
+                                     "rgba=..."]),
     "nested_deep": (GROOVING.replace('<link name="base">', '<link name="base">'
                                      + "<a>" * 100_000 + "</a>" * 100_000),
                     ["XML nested 100002 elements deep", "expected at most 64"]),
