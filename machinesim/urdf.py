@@ -179,21 +179,19 @@ def _encoding_hint(data: bytes) -> str:
 
 def _element_lines(data: bytes) -> dict[str, list[int] | array]:
     """The line of each ``<link>``, ``<joint>`` and ``<material>`` under ``<robot>``, of each
-    element in a
-    joint (key ``"in_joint"``, the joints' children one after the other), of each child and
-    grandchild of a link (key ``"in_link"``, in the order of the file: a visual, then its
-    origin, geometry ...) and of each ``<machinesim:axis>``, in the order of the file, by
-    tag: ``findall`` gives the same elements in the same order, and ElementTree keeps no
-    lines. ``data`` has parsed. The links' lines are 4 bytes each (an ``array``): a CAD
-    export has 100,000s of visuals. Key ``"foreign"``: the first element or attribute below
+    element in a joint (key ``"in_joint"``, the joints' children one after the other), of
+    each child and grandchild of a link (key ``"in_link"``, in the order of the file: a
+    visual, then its origin, geometry ...) and of each ``<machinesim:axis>``, in the order of
+    the file, by tag: ``findall`` gives the same elements in the same order, and ElementTree
+    keeps no lines. ``data`` has parsed. The links' lines are 4 bytes each (an ``array``): a
+    CAD export has 100,000s of visuals. Key ``"foreign"``: the first element or attribute below
     ``<robot>`` and outside a ``<gazebo>`` in a namespace neither machinesim's nor xacro's
     nor `_PASSING`, as (line, "element" or "attribute", its name as written, its namespace), for
     `_check_namespaces`; ``"xacro"``: whether the file has xacro's elements or attributes."""
     parser = expat.ParserCreate(namespace_separator="}")
     parser.namespace_prefixes = True  # "uri}local}prefix": tells <p:origin> from xmlns="uri"
     found: dict = {"link": [], "joint": [], "material": [], "in_joint": [], "axis": [],
-                   "in_link": array("I"),
-                   "foreign": [], "xacro": False}
+                   "in_link": array("I"), "foreign": [], "xacro": False}
     depth = 0
     in_joint = in_link = False
     gazebo = 0  # the depth of the <gazebo> extension being read, 0 outside one

@@ -276,7 +276,7 @@ def _limits(joint: ET.Element, where: str, rotary: bool) -> tuple[float, float, 
     # URDF parser under Pinocchio refuses the whole file without naming the joint
     if limit.get("effort") is None:
         raise ModelError(f"{where}: <limit> has no effort=...; URDF requires it on every "
-                         "<limit> (any number: machinesim does not use it)")
+                         "<limit> (any number >= 0: machinesim does not use it)")
     effort = _number(limit.get("effort"), f"{where} <limit effort>")
     if effort < 0.0:  # Pinocchio: "Some components of min_effort are greater than max_effort"
         raise ModelError(f"{where}: <limit effort={effort!r}>; expected a number >= 0 "
