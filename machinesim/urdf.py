@@ -44,16 +44,14 @@ from machinesim.urdf_checks import (
     check_tool_mount,
     check_zero_pose,
 )
+from machinesim.urdf_reading import _at, _number, _vector
 from machinesim.urdf_structure import (
     MAX_DEPTH,
     MAX_LINKS,
     MAX_PLACEMENT_M,
     MAX_URDF_BYTES,
     REQUIRED_FRAMES,
-    _at,
     _in_joint_at,
-    _number,
-    _vector,
     check_tree,
 )
 

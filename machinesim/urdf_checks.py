@@ -26,15 +26,13 @@ import numpy as np
 
 from machinesim.exceptions import MachineSimWarning, ModelError
 from machinesim.kinematics import SPINDLE_TRAVEL_RAD, Axis
+from machinesim.urdf_reading import _at, _number, _vector
 from machinesim.urdf_structure import (
     MAX_DEPTH,  # noqa: F401 (importable from here, as before the split)
     MAX_LINKS,  # noqa: F401 (importable from here, as before the split)
     MAX_PLACEMENT_M,  # noqa: F401 (importable from here, as before the split)
     MAX_URDF_BYTES,  # noqa: F401 (importable from here, as before the split)
     REQUIRED_FRAMES,
-    _at,
-    _number,
-    _vector,
     check_tree,
 )
 

@@ -6,8 +6,9 @@ uniquely named links and joints, no cycle, one root, the frames every machine ha
 (`REQUIRED_FRAMES`), finite origins within a machine's size (`MAX_PLACEMENT_M`), no xacro,
 no element given twice where URDF allows one, URDF's shapes, no name of machinesim's error
 joints; with the file's size, depth and link-count limits (`MAX_URDF_BYTES`, `MAX_DEPTH`,
-`MAX_LINKS`) and the readers of URDF numbers (`_number`, `_vector`) that refuse what the
-URDF parser under Pinocchio would, and `_at`, which puts an element's line in a message.
+`MAX_LINKS`). The readers of URDF numbers that refuse what the URDF parser under Pinocchio
+would, and `_at`, which puts an element's line in a message, are
+`machinesim.urdf_reading`'s; the optional elements' checks `machinesim.urdf_elements`'.
 A bad file is a located `ModelError` (file, line, joint or link, value, what was expected),
 never a hang or a traceback. What the machine's axes and its nominal kinematics must
 satisfy is `machinesim.urdf_checks`.
@@ -15,10 +16,6 @@ satisfy is `machinesim.urdf_checks`.
 
 from __future__ import annotations
 
-import functools
-import math
-import re
-import unicodedata
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -26,6 +23,14 @@ import numpy as np
 
 from machinesim.exceptions import ModelError
 from machinesim.kinematics import DOFS
+from machinesim.urdf_elements import (
+    _check_joint_numbers,
+    _check_materials,
+    _check_rgba,
+    _check_version,
+    _rgba_read,
+)
+from machinesim.urdf_reading import _at, _fields, _number, _vector
 
 __all__ = ["MAX_DEPTH", "MAX_LINKS", "MAX_PLACEMENT_M", "MAX_URDF_BYTES", "REQUIRED_FRAMES",
            "check_tree"]
@@ -46,17 +51,6 @@ MAX_LINKS = 2000
 #: within metres of each other, and a file whose origins are written in mm (its limits in m)
 #: loads with every Abbe offset a thousand times too long.
 MAX_PLACEMENT_M = 10.0
-#: A number as the URDF parser under Pinocchio (urdfdom, a C++ stream) reads one: ASCII
-#: digits, a point, an exponent, ASCII blanks before it only. Python's float() reads more
-#: ("1_000", Arabic-Indic digits, a trailing blank, a no-break space before it), which the
-#: parser then refused without naming the joint.
-_URDF_NUMBER = re.compile(r"[ \t\n\r]*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
-
-
-def _at(path, lines: dict[str, list[int]] | None, tag: str, index: int) -> str:
-    """``path`` and the line of the ``index``-th ``tag`` element when known."""
-    found = (lines or {}).get(tag, ())
-    return f"{path}, line {found[index]}" if index < len(found) else f"{path}"
 
 
 def _in_joint_at(root: ET.Element, path, lines: dict[str, list[int]] | None
@@ -100,54 +94,6 @@ def _in_link_at(root: ET.Element, path, lines: dict[str, list[int]] | None,
                     return at, link, child
                 count += 1
     return None
-
-
-def _number(text: str, where: str) -> float:
-    """A finite float from URDF attribute text, or ModelError naming ``where`` and the text."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise ModelError(f"{where}: {text!r} is not a number") from None
-    if not math.isfinite(value):
-        raise ModelError(f"{where}: {text!r}; expected a finite number")
-    if not _URDF_NUMBER.fullmatch(text):
-        raise ModelError(f"{where}: {text!r} is not a number as a URDF parser reads one "
-                         "(ASCII digits, '.', an exponent; no '_', no blank after it)")
-    return value
-
-
-def _fields(text: str) -> list[str]:
-    """The numbers of a URDF attribute of several (``xyz``, a box's ``size``, a mesh's
-    ``scale``) as the URDF parser splits them: at spaces only. ``str.split()`` splits at any
-    Unicode blank too, so ``xyz="0\u00a00 0.05"`` (a no-break space, as a word processor or
-    web page writes one) read as three numbers here, and the parser refused the file with
-    lines of C++ on stderr and a message that named neither the joint nor the value."""
-    return [field for field in text.split(" ") if field]
-
-
-def _blank_hint(text: str) -> str:
-    """For attribute text holding a blank that is not a space (a no-break space, a tab or
-    line end written as a character reference): which, since ``repr`` shows it as a code."""
-    odd = sorted({c for c in text if c.isspace() and c != " "})
-    if not odd:
-        return ""
-    named = ", ".join(f"U+{ord(c):04X} {unicodedata.name(c, 'a control character')}"
-                      for c in odd)
-    return f" ({named} separates no numbers for the URDF parser: write plain spaces)"
-
-
-def _vector(element: ET.Element, attribute: str, where: str,
-            default: str | None = None) -> np.ndarray:
-    """Three finite floats from a URDF attribute (``xyz``, ``rpy``), split as the URDF
-    parser splits them (`_fields`)."""
-    text = element.get(attribute, default)
-    if text is None:
-        raise ModelError(f"{where}: no {attribute}=...; expected three numbers")
-    fields = _fields(text)
-    if len(fields) != 3:
-        raise ModelError(f"{where}: {attribute}={text!r}; expected three numbers"
-                         f"{_blank_hint(text)}")
-    return np.array([_number(f, f"{where} {attribute}") for f in fields])
 
 
 def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None) -> None:
@@ -296,92 +242,6 @@ def check_tree(root: ET.Element, path, lines: dict[str, list[int]] | None = None
             _check_inertial(root, path, lines, link, inertial)
 
 
-#: The other elements of a joint the URDF parser under Pinocchio reads, each with its number
-#: attributes and the one it requires: it refuses the whole file for one that is missing or
-#: not a number (`_number`), saying which on stderr only, in lines of C++ above the one
-#: line "The XML stream does not contain a valid URDF model" that named neither the joint
-#: nor the file's line (a fixed joint's <dynamics damping="nan">, a <safety_controller>
-#: without k_velocity, a <mimic> without joint=...).
-_JOINT_NUMBERS = {"dynamics": (("damping", "friction"), None),
-                  "safety_controller": (("soft_lower_limit", "soft_upper_limit", "k_position",
-                                         "k_velocity"), "k_velocity"),
-                  "calibration": (("rising", "falling"), None),
-                  "mimic": (("multiplier", "offset"), "joint")}
-
-
-def _check_joint_numbers(joint: ET.Element, name: str, element_at: dict[int, str],
-                         at: str) -> None:
-    """A joint's ``<dynamics>``, ``<safety_controller>``, ``<calibration>`` and ``<mimic>``
-    as the URDF parser reads them (`_JOINT_NUMBERS`): their number attributes numbers, the
-    attribute each requires there, and a ``<dynamics>`` with damping or friction. Named at
-    the element's own line (``element_at``, else ``at``, the joint's)."""
-    for tag, (numbers, required) in _JOINT_NUMBERS.items():
-        element = joint.find(tag)
-        if element is None:
-            continue
-        named = f"{element_at.get(id(element), at)}: joint {name!r}"
-        if required is not None and element.get(required) is None:
-            raise ModelError(f"{named}: <{tag}> has no {required}=...; URDF requires it (its "
-                             f"parser refuses the file without it): give it, or leave the "
-                             f"<{tag}> out (machinesim does not use it)")
-        for attribute in numbers:
-            if element.get(attribute) is not None:
-                _number(element.get(attribute), f"{named} <{tag} {attribute}>")
-        if tag == "dynamics" and not any(element.get(a) is not None for a in numbers):
-            raise ModelError(f"{named}: <dynamics> has neither damping=... nor friction=...; "
-                             "URDF requires one (its parser refuses the file otherwise): give "
-                             "it, or leave the <dynamics> out (machinesim does not use it)")
-
-
-def _check_materials(root: ET.Element, path, lines: dict[str, list[int]] | None) -> None:
-    """The ``<material>`` elements under ``<robot>`` (the visuals' colours by name), each
-    named, and each name once: the URDF parser refuses the whole file for a name given twice
-    ("material 'grey' is not unique" in C++ on stderr, then "The XML stream does not contain
-    a valid URDF model", naming no material), and drops one without a name with a message
-    on stderr only."""
-    seen = set()
-    for index, material in enumerate(root.findall("material")):
-        name, at = material.get("name"), _at(path, lines, "material", index)
-        if not name:
-            raise ModelError(f"{at}: a <material> under <robot> has no name=...; URDF requires "
-                             "one (its parser drops it): name it, as the visuals that use it "
-                             "do, e.g. <material name=\"grey\">")
-        color = material.find("color")
-        if color is not None and color.get("rgba") is None:
-            raise ModelError(f"{at}: <material name={name!r}> has a <color> without rgba=...; "
-                             "URDF requires it there (its parser drops the material, and the "
-                             "visuals that name it are drawn without it)")
-        _check_rgba(None if color is None else color.get("rgba"),
-                    f"{at}: <material name={name!r}>")
-        if name in seen:
-            first = _at(path, lines, "material",
-                        [m.get("name") for m in root.findall("material")].index(name))
-            raise ModelError(f"{at}: <material name={name!r}> is defined twice under <robot> "
-                             f"(first at {first.rpartition(', ')[2]}); URDF requires each name "
-                             "once (its parser refuses the file): keep the one meant")
-        seen.add(name)
-
-
-#: A ``<robot version>`` as the URDF parser under Pinocchio reads it, "MAJOR.MINOR", and
-#: the versions it reads.
-_VERSION = re.compile(r"\s*\+?([0-9]+)\.\s*([+-]?[0-9]+)")
-_VERSIONS = ((1, 0), (1, 1), (1, 2))
-
-
-def _check_version(root: ET.Element, path) -> None:
-    """Refuse a ``<robot version>`` the URDF parser refuses (``2.0``, ``1``, ``1.0.0``): it
-    did so in C++ lines on stderr, and machinesim's one line said only "The XML stream does
-    not contain a valid URDF model", naming neither the attribute nor its value."""
-    text = root.get("version")
-    if text is None:
-        return
-    match = _VERSION.fullmatch(text)
-    if match is None or (int(match[1]), int(match[2])) not in _VERSIONS:
-        raise ModelError(f"{path}: <robot version={text!r}>; expected a URDF version the URDF "
-                         f"parser reads, {', '.join(f'{a}.{b}' for a, b in _VERSIONS)} "
-                         "(or none: 1.0)")
-
-
 def _check_not_xacro(root: ET.Element, path) -> None:
     """Refuse a xacro file (macros, properties, ``${...}``) given for its URDF: its links
     made by a macro were missing ("child link 'x_carriage' does not exist") and its
@@ -503,28 +363,6 @@ def _check_shaped(root: ET.Element, path, lines, link: ET.Element, kind: str,
                          "parser drops the visual without it): name it, e.g. <material "
                          "name=\"grey\">")
     _check_rgba(rgba, f"{where} <material name={material.get('name')!r}>")
-
-
-@functools.lru_cache(maxsize=256)  # a CAD export's 100,000s of visuals share a few colours
-def _rgba_read(text: str) -> bool:
-    """Whether a ``<color rgba>`` reads as the URDF parser reads one: four numbers (split at
-    spaces, `_fields`), each from 0 to 1."""
-    fields = _fields(text)
-    return len(fields) == 4 and all(_URDF_NUMBER.fullmatch(field) and 0.0 <= float(field) <= 1.0
-                                    for field in fields)
-
-
-def _check_rgba(rgba: str | None, where: str) -> None:
-    """Refuse a ``<color rgba>`` the URDF parser misreads: one outside 0 .. 1 or not a number
-    it drops with a C++ message on stderr only ("Material [grey] has malformed color rgba
-    values"), and three numbers (``rgba="0.5 0.5 0.5"``, an alpha left out) or five it
-    takes without a word as black, so the machine was drawn in other colours than the
-    file's."""
-    if rgba is None or _rgba_read(rgba):
-        return
-    raise ModelError(f"{where}: <color rgba={rgba!r}>; expected four numbers from 0 to 1, "
-                     "red, green, blue and alpha (1 opaque), separated by spaces: the URDF "
-                     "parser drops or misreads another colour")
 
 
 #: The attributes of an ``<inertia>``, each a number the URDF parser requires.

@@ -25,7 +25,7 @@ try:
 except ImportError:  # Pinocchio before 3.4 is built on hpp-fcl, coal's former name
     import hppfcl as coal
 
-from machinesim.urdf_structure import _URDF_NUMBER, _fields
+from machinesim.urdf_reading import _URDF_NUMBER, _fields
 from machinesim.viewer.scene import Scene
 
 #: Mesh files whose geometry object keeps only the path (the visualizer sends the file
