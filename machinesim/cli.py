@@ -63,6 +63,7 @@ from machinesim.exceptions import (
     warnings_as_lines,
 )
 from machinesim.report import check_units
+from machinesim.units import typed_float
 
 EXAMPLES = """examples (from the repository's folder):
   machinesim machines
@@ -264,7 +265,7 @@ def parse_roi(texts) -> list[tuple[float, float, float, float]] | None:
     windows = []
     for text in texts:
         try:
-            values = [float(v) * 1e-3 for v in str(text).split(",")]
+            values = [typed_float(v) * 1e-3 for v in str(text).split(",")]
         except ValueError:
             values = []
         if (len(values) != 4 or not all(math.isfinite(v) for v in values)

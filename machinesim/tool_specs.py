@@ -14,7 +14,7 @@ from machinesim.part import UNIT_SLIP_SIZE_M
 from machinesim.tolerances import BALL_CHORD_M
 from machinesim.tool_sizes import MAX_TOOL_SIZE_M
 from machinesim.tools import BallEndMill, FlatEndMill, RoundNoseTool, Tool, VTool
-from machinesim.units import M_PER_MM, RAD_PER_DEG
+from machinesim.units import M_PER_MM, RAD_PER_DEG, typed_float
 
 _SPEC_FORMS = ("'v:ANGLE_DEG', 'nose:RADIUS_MM:ANGLE_DEG', 'ball:RADIUS_MM' or "
                "'flat:RADIUS_MM', optionally "
@@ -48,7 +48,7 @@ def _spec_number(where: str, text: str, what: str, unit: str, form: str, spec: s
     text = text.strip()
     number = text[:-len(unit)] if text.lower().endswith(unit) else text
     try:
-        return float(number)
+        return typed_float(number)
     except ValueError:
         pass
     shown = repr(field if field is not None else text)

@@ -7,6 +7,7 @@ Every conversion goes through the factors below, so a unit is never guessed. `to
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -32,6 +33,23 @@ RAD_PER_DEG = ANGLE["deg"]
 #: Significant digits of a number in a message (`length_text`, `angle_text`): every number a
 #: user types, clean of the round-off of converting it (9 mm is 0.009000000000000001 m).
 SHOWN_DIGITS = 12
+
+
+#: A number as typed in a spec or option (``--tool``, ``--stock``, ``--roi``): ASCII digits, a
+#: point, an exponent, a sign (or inf, nan, which their callers refuse as not finite).
+#: Python's float() reads more: '0_5' as 5 (a typo of 0.5 made a ball of 5 mm, ten times the
+#: one meant, exit 0), and full-width or other Unicode digits ('０.５').
+_TYPED_NUMBER = re.compile(r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+                           r"|inf|infinity|nan)", re.IGNORECASE)
+
+
+def typed_float(text: str) -> float:
+    """``text`` (blanks around it allowed) as a float when it is written as a plain number
+    (`_TYPED_NUMBER`); ValueError otherwise, as float() raises it."""
+    text = str(text).strip()
+    if not _TYPED_NUMBER.fullmatch(text):
+        raise ValueError(f"could not convert string to float: {text!r}")
+    return float(text)
 
 
 def quotient_text(value: float, factor: float, digits: int = SHOWN_DIGITS) -> str:

@@ -29,7 +29,7 @@ from machinesim.part import (  # re-exported; _unpickle_part so older pickles st
 )
 from machinesim.tolerances import CYLINDER_CHORD_M, SPHERE_CHORD_M
 from machinesim.tools import arc_segments, sphere_polygon
-from machinesim.units import M_PER_MM, M_PER_UM, length_text
+from machinesim.units import M_PER_MM, M_PER_UM, length_text, typed_float
 
 
 def _sizes(kind: str, form: str, **sizes) -> list[float]:
@@ -181,7 +181,7 @@ def _numbers(where: str, text: str, count: int, separator: str,
     fields = [f.strip()[:-2] if f.strip().lower().endswith("mm") else f
               for f in text.split(separator)]
     try:
-        values = [float(field) for field in fields]
+        values = [typed_float(field) for field in fields]
     except ValueError:
         _other_unit(where, fields)
         values = []

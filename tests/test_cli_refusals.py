@@ -53,7 +53,8 @@ def test_outputs_naming_one_file_or_an_input_are_refused(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("roi", ["nan,1,0,1", "0,inf,0,1", "1,0,0,1", "0,1,0", "a,b,c,d", ""])
+@pytest.mark.parametrize("roi", ["nan,1,0,1", "0,inf,0,1", "1,0,0,1", "0,1,0", "a,b,c,d", "",
+                                 "0,1_0,0,1"])  # float() reads 1_0 as 10
 def test_a_bad_roi_is_refused_before_cutting(tmp_path, capsys, roi):
     code, _, err = run(["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply", f"--roi={roi}"],
                        capsys)

@@ -319,6 +319,12 @@ def test_a_spec_shank_diameter_of_zero_is_refused():
         ("ball:0.5um", "^tool spec 'ball:0.5um': '0.5um' is not a radius; expected "
                        "'ball:RADIUS_MM': a number in mm, which may end in 'mm'$"),
         ("v:90mm", "'90mm' is not an included angle; expected 'v:ANGLE_DEG'"),
+        # float() reads '0_5' as 5 (a typo of 0.5 had made a 5 mm ball, exit 0) and
+        # full-width digits as ASCII ones
+        ("ball:0_5", "^tool spec 'ball:0_5': '0_5' is not a radius; expected "
+                     "'ball:RADIUS_MM': a number in mm"),
+        ("ball:\uff10.\uff15", "'\uff10.\uff15' is not a radius"),
+        ("v:90:h=1_0", "'h=1_0' is not a height"),
         ("nose:0.5deg:90", "'0.5deg' is not a nose radius; expected 'nose:RADIUS_MM:ANGLE_DEG'"),
         ("v:90:h=2um", "'h=2um' is not a height; expected 'h=HEIGHT_MM', e.g. 'h=5': a number "
                        "in mm"),

@@ -251,6 +251,9 @@ def test_a_ply_part_read_by_trimesh_as_the_readme_says_is_the_part(tmp_path):
         ("cylinder:5x2@ ", "expected 3 numbers separated by ','"),
         # an overflowing size reads as inf; it was told 'expected 3 numbers', which it had
         ("block:1e400x10x2", "'1e400' in '1e400x10x2' is not a finite number of mm"),
+        # float() reads '1_0' as 10 and full-width digits as ASCII ones
+        ("block:1_0x10x2", "expected 3 numbers separated by 'x' in '1_0x10x2'"),
+        ("block:\uff11\uff10x10x2", "expected 3 numbers separated by 'x'"),
         ("block:10x10x2@0,nan,0", "'nan' in '0,nan,0' is not a finite number of mm"),
         ("sphere:1", "'sphere:1'.*expected 'block:LxWxH'"),
         ("spheres:10x10x2:3", "radius must be positive and below"),
