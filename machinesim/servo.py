@@ -154,7 +154,7 @@ class AxisServo:
                     f"function's coefficients are badly conditioned) from Kp = {self.kp:g}, "
                     f"Ki = {self.ki:g}, Kd = {self.kd:g}, mass = {self.mass:g}, damping = "
                     f"{self.damping:g} at Ts = {self.sample_time_s:g} s: values far from a "
-                    "machine axis' (SI: N/m, kg, N s/m)", key="mass") from None
+                    "machine axis' (SI: N/m, kg, N s/m)") from None  # no one key: all
         object.__setattr__(self, "_loops", loops)
 
     def _build(self):
@@ -497,6 +497,9 @@ def servo_from_toml(path, machine) -> PIDServo:
             columns.append(AxisServo(**values, name=letter))
         except InputError as error:
             field = error.key
+            if field is None:  # the loop as a whole (every value named): at its table's line
+                raise InputError(f"[{letter}]: {error.message}", source=source,
+                                 line=lines.get(letter), key=letter) from None
             key = keys.get(field, field)
             raise InputError(f"[{letter}] {key}: {error.message}", source=source,
                              line=lines.get(f"{letter}.{key}", lines.get(letter)),

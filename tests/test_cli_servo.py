@@ -52,9 +52,10 @@ def test_a_servo_file_lags_the_cut_by_v_c_over_kp(tmp_path, capsys):
     # unstable gains named the file and the table, not its line
     (PD_X.replace("kd_N_s_per_m = 3700.0", "kd_N_s_per_m = 1e200"), 2,
      ["[X]: servo loop of axis X is unstable", "Kd = 1e+200"]),
-    # the loop's coefficients overflowed: an internal LinAlgError (exit 1)
-    (PD_X.replace("damping_N_s_per_m = 1600.0", "damping_N_s_per_m = 1e300"), 6,
-     ["cannot be formed in float64", "damping = 1e+300"]),
+    # the loop's coefficients overflowed: an internal LinAlgError (exit 1); then named at
+    # the mass_kg key whatever value it was: the loop as a whole, at its table's line
+    (PD_X.replace("damping_N_s_per_m = 1600.0", "damping_N_s_per_m = 1e300"), 2,
+     ["key 'X': [X]: servo loop of axis X cannot be formed in float64", "damping = 1e+300"]),
     # 10**400 (1329 bits) is read exactly by TOML; it was an internal error (exit 1)
     (PD_X.replace("1.2e6", "1" + "0" * 400), 3, ["kp_N_per_m", "integer of 1329 bits",
                                                  "beyond float64"]),
