@@ -45,10 +45,10 @@ def check_reading_options(args: argparse.Namespace) -> None:
 
 def table_tools(table) -> list:
     """The tools a tool table's ``shape`` entries name (none without a table)."""
-    from machinesim.tool_specs import tool_from_spec
+    from machinesim.nc.tooltable import table_tool
 
     entries = table.tools.values() if table is not None else ()
-    return [tool_from_spec(entry.shape) for entry in entries if entry.shape is not None]
+    return [table_tool(entry.shape) for entry in entries if entry.shape is not None]
 
 
 def read_for_machine(args: argparse.Namespace, path, machine, tool):

@@ -484,3 +484,21 @@ def test_a_table_bends_a_span_as_sampled_finely():
         sampled = [np.ptp(table.evaluate(np.linspace(a, b, 2001))) > 0 for a, b in
                    zip(low, high, strict=True)]
         assert _bends(table, low, high).tolist() == sampled
+
+
+def test_a_tool_table_shape_perhaps_in_um_is_warned_of_once_at_its_line(tmp_path, capsys):
+    """`shape = "flat:500"` (500 um meant) warned twice, naming the spec alone ('tool spec
+    'flat:500': ...'), not the table, its line or key: once now, at them."""
+    table = tmp_path / "tools.toml"
+    table.write_text('[tool.1]\nlength_mm = 0.0\nshape = "flat:500"\n')
+    program = tmp_path / "t1.nc"
+    program.write_text("G21 G90\nT1 M06\nG00 X0 Y0 Z1.\nG01 Z-0.01 F100.\nX5.\nM30\n")
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "flat:0.5",
+                        "--stock", "block:10x10x2", "--quiet", "--tools", table, "--out",
+                        tmp_path / "p.ply"], capsys)
+    assert code == 0, err
+    warned = [line for line in err.splitlines() if "flat:500" in line]
+    assert warned == [f"machinesim: warning: {table}, line 3, key 'tool.1.shape': tool spec "
+                      "'flat:500': a radius of 500 mm is a tool 1 m across, wider than any "
+                      "shipped machine's travel (0.5 m at most). A spec's sizes are mm: if it "
+                      "is in um, 500 um is flat:0.5"], err

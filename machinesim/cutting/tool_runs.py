@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from machinesim.nc import MOVE_KINDS
-from machinesim.tool_specs import tool_from_spec
+from machinesim.nc.tooltable import table_tool
 from machinesim.tools import with_nose_radius_error
 
 __all__ = ["JOIN_TOL", "RADIUS_AGREE_M", "tool_notes"]
@@ -123,7 +123,7 @@ class _ToolSections:
         self.names = [(None, None)]  # (tool number, line of the change)
         for change in getattr(program, "tool_changes", ()):
             if change.shape not in built:
-                built[change.shape] = with_nose_radius_error(tool_from_spec(change.shape),
+                built[change.shape] = with_nose_radius_error(table_tool(change.shape),
                                                              errors)
             self.runs.append((change.move, built[change.shape], float(change.length_m)))
             self.names.append((change.number, change.line))
@@ -172,7 +172,7 @@ def _radius_note(change, tool) -> str:
     if change.radius_m is None:
         return ""
     if change.shape is not None:
-        shaped = tool_from_spec(change.shape)
+        shaped = table_tool(change.shape)
         radius = getattr(shaped, "radius", getattr(shaped, "nose_radius", None))
         if radius is None or abs(radius - change.radius_m) <= RADIUS_AGREE_M:
             return ""

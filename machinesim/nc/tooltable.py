@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -214,11 +215,27 @@ def _shape(value: Any, where: Mapping[str, Any]) -> str:
     if not isinstance(value, str):
         raise NCProgramError(f"shape must be a tool spec string such as \"ball:0.5\", got "
                              f"{value!r}", **where)
-    try:
-        tool_from_spec(value)
-    except InputError as error:
-        raise NCProgramError(str(error.args[0] if error.args else error), **where) from None
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        try:
+            tool_from_spec(value)
+        except InputError as error:
+            raise NCProgramError(str(error.args[0] if error.args else error), **where) from None
+    # a warning on the spec (`flat:500`, a radius perhaps in um) named the spec alone, not
+    # the table or line it came from: said again with them
+    place = InputError("", **where).args[0].removesuffix(": ")
+    for warning in said:
+        warnings.warn(f"{place}: {warning.message}", warning.category, stacklevel=2)
     return value
+
+
+def table_tool(shape: str):
+    """The tool a table's ``shape`` names (`tool_from_spec`), built again where a cut changes
+    to it: its warnings, said at the table's line when it was read (`_shape`), not again
+    without it."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return tool_from_spec(shape)
 
 
 def tool_table(tools: Any) -> ToolTable | None:

@@ -380,10 +380,10 @@ def _refuse_tool_changes(program, tool) -> None:
     the tool's shape or length, rather than show a part that tool would not cut. A table
     tool of the same shape as ``tool`` (``shape = "flat:1.0"`` beside ``--tool flat:1``)
     cuts the same part and is viewed: it had been refused as another shape."""
-    from machinesim.tool_specs import tool_from_spec
+    from machinesim.nc.tooltable import table_tool
 
     for change in program.tool_changes:
-        other = change.shape is not None and tool_from_spec(change.shape) != tool
+        other = change.shape is not None and table_tool(change.shape) != tool
         if other or change.length_m != 0.0:
             what = (f"shape {change.shape}" if other
                     else f"length {change.length_m * 1e3:g} mm")
