@@ -168,9 +168,10 @@ def test_a_mesh_the_viewer_cannot_load_is_left_out_with_a_warning(tmp_path):
     path.write_text(text)
     scene = machine_scene(load_machine(path))
     assert scene.warnings == [f"{path}: mesh files that could not be loaded, drawn without "
-                              "them: base (package://foo/meshes/base.stl) (a relative path is "
-                              f"looked up in {tmp_path}, package://<package>/... there and in "
-                              "the two folders above it; give the file's path)"]
+                              "them: base (package://foo/meshes/base.stl: not found) (a "
+                              f"relative path is looked up in {tmp_path}, package://<package>/"
+                              "... there and in the two folders above it; give the file's "
+                              "path)"]
     objects = {c["path"] for c in decoded(scene) if c["type"] == "set_object"}
     assert "/meshcat/machine/visuals/tool_tip_0" in objects  # the rest is drawn
 

@@ -133,8 +133,10 @@ def test_an_stl_not_found_or_not_an_stl_is_left_out_with_a_warning_and_the_rest_
     scene = machine_scene(load_machine(path))
     assert scene.warnings == [
         f"{path}: mesh files that could not be loaded, drawn without them: y_carriage "
-        "(meshes/cut.stl), y_carriage (meshes/text.stl), table "
-        f"(package://foo/meshes/table.stl) (a relative path is looked up in {path.parent}, "
+        "(meshes/cut.stl: not an STL: binary, or text starting 'solid'), y_carriage "
+        "(meshes/text.stl: not an STL: binary, or text starting 'solid'), table "
+        f"(package://foo/meshes/table.stl: not found) (a relative path is looked up in "
+        f"{path.parent}, "
         "package://<package>/... there and in the two folders above it; give the file's "
         "path)"]
     drawn = {c["path"]: c for c in commands(scene) if c["type"] == "set_object"}
@@ -209,3 +211,19 @@ def test_an_obj_visual_s_file_counts_in_the_page_as_an_stl_s_does(tmp_path, monk
     with pytest.raises(InputError, match=r"the machine's mesh files \(STL, OBJ, DAE visuals\) "
                                          r"alone are .* no --max-triangles makes smaller"):
         scene.to_html()
+
+
+def test_a_mesh_that_is_there_but_no_file_is_named_so_not_as_not_found(tmp_path):
+    # a folder or a FIFO named .stl had been told, as a missing file is, where relative
+    # paths are looked up and to give the file's path
+    import os
+
+    (tmp_path / "mill/urdf/meshes/folder.stl").mkdir(parents=True)
+    os.mkfifo(tmp_path / "mill/urdf/meshes/pipe.stl")
+    path = meshed_machine(tmp_path, {"base": mesh_visual("meshes/folder.stl"),
+                                     "table": mesh_visual("meshes/pipe.stl")})
+    scene = machine_scene(load_machine(path))
+    assert scene.warnings == [
+        f"{path}: mesh files that could not be loaded, drawn without them: base "
+        "(meshes/folder.stl: not a regular file), table (meshes/pipe.stl: not a regular "
+        "file)"]

@@ -59,7 +59,9 @@ def machine_visuals(machine, scene: Scene) -> pin.GeometryModel:
             found = resource_path(mesh.get("filename"), dirs)
             if found is None or not _stl_readable(found):
                 link.remove(visual)
-                left_out.append(f"{link.get('name')} ({mesh.get('filename')})")
+                why = (_not_found(mesh.get("filename"), dirs) if found is None
+                       else "not an STL: binary, or text starting 'solid'")
+                left_out.append(f"{link.get('name')} ({mesh.get('filename')}: {why})")
                 continue
             deferred[id(visual)] = (found, _scale(mesh))
             geometry = visual.find("geometry")
@@ -74,7 +76,8 @@ def machine_visuals(machine, scene: Scene) -> pin.GeometryModel:
                 mesh = visual.find("geometry/mesh")
                 if mesh is not None:
                     link.remove(visual)
-                    left_out.append(f"{link.get('name')} ({mesh.get('filename')})")
+                    left_out.append(f"{link.get('name')} ({mesh.get('filename')}: "
+                                    "not found, or not read by Pinocchio)")
         model = pin.buildGeomFromUrdfString(machine.model, ET.tostring(root, encoding="unicode"),
                                             pin.GeometryType.VISUAL, package_dirs=dirs)
     files = {}
@@ -91,12 +94,15 @@ def machine_visuals(machine, scene: Scene) -> pin.GeometryModel:
         if Path(g.meshPath).suffix.lower() in SENT_SUFFIXES and os.path.isfile(g.meshPath):
             scene.mesh_file_bytes += os.path.getsize(g.meshPath)
     if left_out:
+        # where a file is looked up, only where one was not found: a FIFO or a text file
+        # named .stl had been told to give the file's path too
+        where = (f" (a relative path is looked up in {folder}, package://<package>/... there "
+                 "and in the two folders above it; give the file's path)"
+                 if any("not found" in entry for entry in left_out) else "")
         scene.warnings.append(
             f"{machine.path}: mesh files that could not be loaded, drawn without them: "
             f"{', '.join(left_out[:5])}"
-            f"{f' and {len(left_out) - 5} more' if len(left_out) > 5 else ''}"
-            f" (a relative path is looked up in {folder}, package://<package>/... there and "
-            "in the two folders above it; give the file's path)")
+            f"{f' and {len(left_out) - 5} more' if len(left_out) > 5 else ''}{where}")
     return model
 
 
@@ -119,6 +125,20 @@ def resource_path(filename: str, dirs: list[str]) -> str | None:
         if os.path.exists(candidate):
             return candidate if os.path.isfile(candidate) else None
     return None
+
+
+def _not_found(filename: str, dirs: list[str]) -> str:
+    """Why `resource_path` found no file for ``filename``: there is none, or what is there
+    is not a regular file (a folder, a FIFO, a device)."""
+    scheme, separator, rest = filename.partition("://")
+    if separator and scheme not in ("file", "package", "model"):
+        return f"not found: {scheme}:// is not a path"
+    name = rest if separator else filename
+    places = [name] if (scheme == "file" or os.path.isabs(name)) else [
+        f"{folder}/{name}" for folder in dirs]
+    if any(os.path.exists(place) for place in places):
+        return "not a regular file"
+    return "not found"
 
 
 def _stl_readable(path: str) -> bool:
