@@ -14,13 +14,13 @@ import numpy as np
 
 from machinesim.exceptions import NCProgramError, brief
 from machinesim.nc.arc_block import read_arc
-from machinesim.nc.arcs import PLANES
-from machinesim.nc.drilling import HOLE_WORDS, PECKING, read_cycle
+from machinesim.nc.drilling import HOLE_WORDS, read_cycle
 from machinesim.nc.length import check_length_carried, note_length_change
 from machinesim.nc.lexer import Word
 from machinesim.nc.one_shot import read_dwell, read_one_shot
 from machinesim.nc.program import AXES, MOVE_KINDS, PROGRAM_END, ROTARY_AXES
 from machinesim.nc.rotary_feed import inch_feed_scale
+from machinesim.nc.word_context import check_word_context
 from machinesim.nc.words import (
     ARC,
     CYCLE_WITH_MOTION,
@@ -28,7 +28,6 @@ from machinesim.nc.words import (
     G50_SETTING,
     G_GROUPS,
     G_REFUSED,
-    LOOK_AHEAD_BLOCKS,
     M99_IN_MAIN,
     M_PER_INCH,
     MAX_INTEGER_DIGITS,
@@ -125,7 +124,7 @@ class Block:
             state.motion = motion[0]
             if state.cycle is not None and "canned cycle" not in g:
                 state.cycle = None  # a motion code cancels the canned cycle
-        self.check_context(motion, one_shot)
+        check_word_context(self, motion, one_shot)
         codes = [code for code, _ in self.m_codes]
         ends = [c for c in codes if c in PROGRAM_END]
         first_move = self.reader.out.count
@@ -337,77 +336,6 @@ class Block:
 
     def tool_word(self) -> Word | None:
         return self.single.get("H") or self.g_codes.get("tool length", (None, None))[1]
-
-    def check_context(self, motion, one_shot) -> None:
-        """Refuse P Q R I J K L where nothing reads them."""
-        state, single = self.state, self.single
-        if self.refused_cycle is not None:
-            # the cycle's own words (R plane, P dwell, Q shift or peck, I J K, L repeats):
-            # its refusal says what is wrong; "word R is only read with G02/G03 ..., G81-G83"
-            # beside it had read as a second mistake in a block with one
-            for letter in "PQRIJKL":
-                single.pop(letter, None)
-            return
-        codes = {code for code, _ in self.m_codes}
-        g04 = motion is not None and motion[0] == "G04"
-        shot = None if one_shot is None else one_shot[0]
-        cycle = state.cycle
-        arc = state.motion in ARC and cycle is None and one_shot is None and not g04
-        # the cycle reads its words in a block that drills (`read_cycle`): in a G28, G53 or
-        # G04 block, or one without X Y Z R, they had been read as nothing (`Q0.2` alone)
-        drills = (cycle is not None and one_shot is None and not g04
-                  and any(k in single for k in HOLE_WORDS))
-        hole = cycle if drills else None
-        plane_words = PLANES[state.plane][1]
-        allowed = {
-            # G81's P: kept as the cycle's dwell (a later G82 of the cycle dwells it), as
-            # FANUC keeps every hole-machining word until G80; G81 itself does not dwell
-            "P": (g04 or drills or 98 in codes
-                  or shot in ("G08", "G103", "G187")),
-            "Q": hole in ("G73", "G83") or shot == "G05.1",
-            "R": arc or drills or shot == "G05.1",
-            "I": (arc and "I" in plane_words) or hole in PECKING,
-            "J": (arc and "J" in plane_words) or hole in PECKING,
-            "K": (arc and "K" in plane_words) or drills,
-            "L": 98 in codes,
-        }
-        cycle_reads = {"P", "R", "K"} | ({"Q"} if cycle in ("G73", "G83") else set()) | (
-            {"I", "J"} if cycle in PECKING else set())
-        # each plane's own centre words: K in a G17 arc had been told it is read "with
-        # G02/G03 in G17 (centre words I J)", where it is not
-        centres = ("G02/G03 as an arc centre word of its plane ("
-                   + ", ".join(f"{name}: {' '.join(words)}" for name, (_, words) in PLANES.items())
-                   + f"; this block is in {state.plane})")
-        reads = {
-            "P": "G04 (dwell), G82, G73 and G83 (dwell at the bottom; G81 keeps it for a "
-                 "G82), each in ms, or s with a decimal point as Haas, G08 (P1/P0), G103 "
-                 f"(P0..P{LOOK_AHEAD_BLOCKS}), G187 (P1..P3) and M98 (program)",
-            "Q": "G73 and G83 (peck depth) and G05.1 (Q1/Q0)",
-            "R": "G02/G03 (radius), G73 and G81-G83 (R plane) and G05.1",
-            "I": f"{centres} and with G73 and G83 (Haas's first peck I, with J and K)",
-            "J": f"{centres} and with G73 and G83 (Haas's peck reduction J, with I and K)",
-            "K": f"{centres} and with G73 and G81-G83 (repeats; with G73 and G83 beside I "
-                 "and J, Haas's smallest peck; with G73's Q and a decimal point, Haas's depth "
-                 "between returns to R)",
-            "L": "M98 (repeat count)" + (
-                "; a canned cycle's repeat count is K here, as on current FANUC controls "
-                "(older ones, and LinuxCNC, write L): write K" if cycle is not None else ""),
-        }
-        for letter, ok in allowed.items():
-            if letter in single and not ok:
-                if cycle is not None and not drills and letter in cycle_reads:
-                    where = (f"a {shot or 'G04'} block" if shot or g04
-                             else "a block without X, Y, Z, R or a rotary axis")
-                    self.refuse(f"word {letter} while the canned cycle {cycle} is active, in "
-                                f"{where}, which drills no hole: {cycle} reads its "
-                                f"{letter} in the block of a hole (with X, Y, Z, R or a "
-                                "rotary axis), and "
-                                f"here it would be read as nothing; give it in the block of "
-                                "the hole it is for", single[letter])
-                else:
-                    self.refuse(f"word {letter} is only read with {reads[letter]}",
-                                single[letter])
-                del single[letter]
 
     # --- moves
 
