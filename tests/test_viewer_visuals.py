@@ -227,3 +227,17 @@ def test_a_mesh_that_is_there_but_no_file_is_named_so_not_as_not_found(tmp_path)
         f"{path}: mesh files that could not be loaded, drawn without them: base "
         "(meshes/folder.stl: not a regular file), table (meshes/pipe.stl: not a regular "
         "file)"]
+
+
+def test_an_obj_with_a_vertex_not_finite_is_left_out_with_a_warning(tmp_path, capfd):
+    # Pinocchio read it, and its solver printed "eigen: too many iterations in Jacobi
+    # transform." from C++ on stderr, the view going on with exit 0 and no word of the file
+    (tmp_path / "mill/urdf/meshes").mkdir(parents=True)
+    (tmp_path / "mill/urdf/meshes/bad.obj").write_text(
+        "o t\nv 0 0 0\nv 0.01 0 0\nv 0 1 nan\nf 1 2 3\n")
+    path = meshed_machine(tmp_path, {"base": mesh_visual("meshes/bad.obj")})
+    scene = machine_scene(load_machine(path))
+    assert scene.warnings == [f"{path}: mesh files that could not be loaded, drawn without "
+                              "them: base (meshes/bad.obj: a vertex that is not a finite "
+                              "number)"]
+    assert "eigen" not in capfd.readouterr().err

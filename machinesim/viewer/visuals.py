@@ -13,6 +13,7 @@ geometry object it makes, which the visualizer then sends as before.
 from __future__ import annotations
 
 import os
+import re
 import struct
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -53,6 +54,13 @@ def machine_visuals(machine, scene: Scene) -> pin.GeometryModel:
     for link in root.iter("link"):
         for visual in link.findall("visual"):
             mesh = visual.find("geometry/mesh")
+            if mesh is not None and Path(mesh.get("filename")).suffix.lower() == ".obj":
+                found = resource_path(mesh.get("filename"), dirs)
+                if found is not None and _obj_not_finite(found):
+                    link.remove(visual)
+                    left_out.append(f"{link.get('name')} ({mesh.get('filename')}: a vertex "
+                                    "that is not a finite number)")
+                continue
             if mesh is None or Path(mesh.get("filename")).suffix.lower() not in \
                     DEFERRED_SUFFIXES or _scale(mesh) is None:
                 continue
@@ -139,6 +147,22 @@ def _not_found(filename: str, dirs: list[str]) -> str:
     if any(os.path.exists(place) for place in places):
         return "not a regular file"
     return "not found"
+
+
+#: An OBJ vertex line holding nan or inf: Pinocchio's reader (assimp) takes it, and its
+#: bounding volume's eigen-solver printed "eigen: too many iterations in Jacobi transform."
+#: on stderr from C++, the view going on with exit 0.
+_OBJ_NOT_FINITE = re.compile(rb"(?im)^[ \t]*v[ \t][^\n]*?(?:nan|inf)")
+
+
+def _obj_not_finite(path: str) -> bool:
+    """Whether the OBJ file ``path`` has a vertex with a coordinate nan or inf (unreadable:
+    left to Pinocchio, which names it)."""
+    try:
+        with open(path, "rb") as file:
+            return _OBJ_NOT_FINITE.search(file.read()) is not None
+    except OSError:
+        return False
 
 
 def _stl_readable(path: str) -> bool:
