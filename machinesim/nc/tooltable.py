@@ -223,9 +223,9 @@ def _shape(value: Any, where: Mapping[str, Any]) -> str:
             raise NCProgramError(str(error.args[0] if error.args else error), **where) from None
     # a warning on the spec (`flat:500`, a radius perhaps in um) named the spec alone, not
     # the table or line it came from: said again with them
-    place = InputError("", **where).args[0].removesuffix(": ")
-    for warning in said:
-        warnings.warn(f"{place}: {warning.message}", warning.category, stacklevel=2)
+    for warning in said:  # located as a refusal of the same key is
+        warnings.warn(str(NCProgramError(str(warning.message), **where)), warning.category,
+                      stacklevel=2)
     return value
 
 
