@@ -12,8 +12,9 @@ engine refused the cut, naming poses). `follow_plan` holds the followed steps to
 rules (`StepRule`):
 
 * a step within a motion is the servo's own path: the motion is followed again on a finer
-  sampling of the same command (more samples on each of its moves, so the new ones lie on
-  the followed path), until every step keeps the rules;
+  sampling of the same command (each step that breaks the rules split into the pieces it
+  needs, the others kept: the loops are simulated at their own period and read back at the
+  samples, so the new ones lie on the followed path), until every step keeps the rules;
 * the last step of a motion, from the axes' lag when the command ends to the command's end
   where they settle (`plan` puts each motion's end in position), goes straight in axis
   space, as documented for `plan`: it is split as a commanded move is, its sub-steps
@@ -43,9 +44,9 @@ from machinesim.motion.tool_paths import ToolPaths
 from machinesim.nc.program import KIND_LINEAR
 from machinesim.tolerances import MAX_STEP_TURN_RAD
 
-#: Rounds of following a motion again on a finer sampling: each raises a move's sub-steps
-#: to what its worst followed step needs, so a smooth followed path holds after one or two
-#: (a step the path makes at one instant, which no sampling follows, is refused after these).
+#: Rounds of following a motion again on a finer sampling: each splits every followed step
+#: that breaks the rules into the pieces it needs, so a smooth followed path holds after one
+#: or two (a step the path makes at one instant, which no sampling follows, is refused after these).
 FOLLOW_ROUNDS = 8
 
 
@@ -164,10 +165,9 @@ def follow_plan(servo, sample, steps: np.ndarray, kinds: np.ndarray, exact_stops
     A refusal names the move's line (``lines``) and its block's N word (``block_of(move)``,
     None when it has none), ``line 12 (N120)``.
     """
-    steps = np.asarray(steps, dtype=np.int64).copy()
+    commanded, t, offsets = sample(np.asarray(steps, dtype=np.int64))
     for _ in range(FOLLOW_ROUNDS):
-        q, t, offsets = sample(steps)
-        commanded = q.copy()
+        q = commanded.copy()
         settled = follow_runs(servo, q, t, offsets, kinds, exact_stops)
         move_of = np.repeat(np.arange(len(kinds)), np.diff(offsets))
         # the steps within a move, but for a motion's last (its settling, split below)
@@ -178,14 +178,17 @@ def follow_plan(servo, sample, steps: np.ndarray, kinds: np.ndarray, exact_stops
         need = rule.counts(q[rows], q[rows + 1] - q[rows])
         if np.all(need == 1):
             break
-        factor = np.ones(len(kinds), dtype=np.int64)
-        np.maximum.at(factor, move_of[rows], np.where(need == 0, MAX_SUBSTEPS + 1, need))
-        steps *= factor
-        if np.any(steps > MAX_SUBSTEPS):
-            bad = int(np.argmax(steps > MAX_SUBSTEPS))
+        # only the steps that break the rule are split: the command between two samples is
+        # straight in axis space and in time, so its new samples are the command's own
+        need = np.where(need == 0, MAX_SUBSTEPS + 1, need)
+        total = np.diff(offsets) - 1
+        np.add.at(total, move_of[rows], need - 1)
+        if np.any(total > MAX_SUBSTEPS):
+            bad = int(np.argmax(total > MAX_SUBSTEPS))
             raise NCProgramError(_refusal(servo, rule, f"would need more than {MAX_SUBSTEPS} "
                                           "sub-steps"), source=source, line=int(lines[bad]),
                                  block=block_of(bad))
+        commanded, t, offsets = _split_steps(commanded, t, offsets, rows + 1, need, move_of)
     else:
         bad = int(move_of[rows[np.argmax(need != 1)]])
         raise NCProgramError(_refusal(servo, rule, f"still breaks them after {FOLLOW_ROUNDS} "
@@ -206,7 +209,7 @@ def follow_plan(servo, sample, steps: np.ndarray, kinds: np.ndarray, exact_stops
                                           "sub-steps"), source=source, line=int(lines[bad]),
                                  block=block_of(bad))
         if np.any(need > 1):
-            q, t, offsets = _split_last_steps(q, t, offsets, settled, need, move_of)
+            q, t, offsets = _split_steps(q, t, offsets, settled, need, move_of)
     peak_lag.flags.writeable = False
     return q, t, offsets, peak_lag
 
@@ -220,11 +223,12 @@ def _refusal(servo, rule: StepRule, what: str) -> str:
             "line)")
 
 
-def _split_last_steps(q, t, offsets, settled, need, move_of):
-    """``q``, ``t``, ``offsets`` with the step into each row of ``settled`` split into
-    ``need`` equal steps (straight in axis space and in time)."""
+def _split_steps(q, t, offsets, ends, need, move_of):
+    """``q``, ``t``, ``offsets`` with the step into each row of ``ends`` (a row after the
+    first of its move) split into ``need`` equal steps (straight in axis space and in
+    time)."""
     extra = need - 1
-    where = settled[extra > 0]
+    where = ends[extra > 0]
     counts = extra[extra > 0]
     total = int(counts.sum())
     piece = np.repeat(np.arange(len(where)), counts)
@@ -233,7 +237,7 @@ def _split_last_steps(q, t, offsets, settled, need, move_of):
     a, b = where[piece] - 1, where[piece]
     new_q = q[a] + f[:, None] * (q[b] - q[a])
     new_t = t[a] + f * (t[b] - t[a])
-    at = np.repeat(where, counts)  # inserted before the settled row
+    at = np.repeat(where, counts)  # inserted before the step's end row
     q = np.insert(q, at, new_q, axis=0)
     t = np.insert(t, at, new_t)
     added = np.zeros(len(offsets) - 1, dtype=np.int64)
