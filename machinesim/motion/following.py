@@ -46,7 +46,8 @@ from machinesim.tolerances import MAX_STEP_TURN_RAD
 
 #: Rounds of following a motion again on a finer sampling: each splits every followed step
 #: that breaks the rules into the pieces it needs, so a smooth followed path holds after one
-#: or two (a step the path makes at one instant, which no sampling follows, is refused after these).
+#: or two (a step the path makes at one instant, which no sampling follows, is refused after
+#: these).
 FOLLOW_ROUNDS = 8
 
 
