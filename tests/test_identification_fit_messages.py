@@ -191,6 +191,17 @@ def test_readings_that_are_not_numbers_are_refused_naming_the_argument(key, bad)
         observations(**given)
 
 
+@pytest.mark.parametrize("frame", [3, None, b"tool_tip"])
+def test_a_frame_that_is_no_name_is_refused_naming_it(frame):
+    # frame=3 had ended in a TypeError, "object of type 'int' has no len()" from
+    # inside Observations, naming no argument
+    q, u = xy_plan()
+    with pytest.raises(InputError, match=rf"key 'frames': expected the frame as a name "
+                                         rf"\(str\).*got {re.escape(repr(frame))} "
+                                         rf"\({type(frame).__name__}\)"):
+        observations(q, directions=u, values=np.zeros(len(q)), sigma=SIGMA, frame=frame)
+
+
 def test_the_machine_may_be_named_as_everywhere_else_and_anything_else_is_refused():
     # fit("robonano_ui", ...) had raised AttributeError: 'str' object has no attribute
     # 'check_errors', while Lab, cut and the compensation take a shipped machine's name

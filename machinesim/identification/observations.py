@@ -156,6 +156,15 @@ class Observations:
         points = (np.zeros(3) if self.points is None
                   else as_floats(self.points, "points", "point coordinates (m)"))
         frames = self.frames
+        # a frame is named by text: 3 or None had ended in "object of type 'int' has no
+        # len()", and a lone name's letters are not read as one frame each
+        if not isinstance(frames, str):
+            named = tuple(frames) if isinstance(frames, Iterable) else None
+            if named is None or not all(isinstance(f, str) for f in named):
+                raise InputError(f"expected the frame as a name (str), e.g. 'tool_tip', or one "
+                                 f"name per reading, got {frames!r} ({type(frames).__name__})",
+                                 key="frames")
+            frames = named
         if q.ndim not in (1, 2) or q.shape[-1] == 0:
             raise InputError(f"expected axis values of shape (n_axes,) or (N, n_axes), got "
                              f"{q.shape}", key="q")
@@ -232,9 +241,6 @@ class Observations:
                              f"finite standard uncertainty from {low:g} m to {high:g} m (a "
                              "sigma beyond is no displacement sensor's, and its weight 1/sigma "
                              "leaves float64 in the fit: given in um or nm?)", key="sigma")
-        wrong = [f for f in frames if not isinstance(f, str)]
-        if wrong:
-            raise InputError(f"expected frame names (str), got {wrong[0]!r}", key="frames")
         object.__setattr__(self, "q", frozen(q))
         object.__setattr__(self, "values", frozen(values))
         object.__setattr__(self, "directions", frozen(unit))
