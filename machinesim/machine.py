@@ -264,7 +264,9 @@ class Machine:
         return out[0] if q.ndim == 1 else out
 
     def parameter_names(self, errors=None) -> tuple[str, ...]:
-        """Every error parameter name this machine accepts (tables: those in ``errors``)."""
+        """Every error parameter name this machine accepts (tables: those in ``errors``, an
+        `ErrorModel` or what `binding` takes)."""
+        errors = _error_model(errors)
         names = [*TOOL_PARAMS, NOSE_RADIUS_PARAM, *WORKPIECE_PARAMS]
         for a in self._axes:
             names += [f"location.{a.letter}.{s}" for s in a.location_symbols()]
@@ -323,6 +325,7 @@ class Machine:
             raise InputError(f"frame {frame!r} is not on {self.name}; it has "
                              f"{', '.join(self.frames)}")
         q = self._check_q(q)
+        errors = _error_model(errors)
         binding = self.binding(errors)
         if params is None:
             params = tuple(errors.parameters()) if errors is not None else ()
@@ -466,3 +469,12 @@ def _fmt(a: Axis, value: float) -> str:
 
 
 __all__ = ["NOSE_RADIUS_PARAM", "Machine"]
+
+
+def _error_model(errors):
+    """``errors`` as `Machine.binding` reads it (an `ErrorModel`, a dict in the TOML layout, a
+    TOML path), None kept: the methods that read its tables too had taken a dict or a path
+    as the model itself and failed on it (``'dict' object has no attribute 'component'``)."""
+    from machinesim.errors import ErrorModel, as_error_model
+
+    return errors if errors is None or isinstance(errors, ErrorModel) else as_error_model(errors)

@@ -192,3 +192,27 @@ def test_error_jacobian_of_many_poses_asks_pinocchio_for_none(monkeypatch):
     monkeypatch.setattr(machine.kin, "frame_pose", per_pose)
     jac = machine.error_jacobian(q, None, names, point=[0.0, 0.0, 0.01])
     np.testing.assert_array_equal(jac, expected)
+
+
+def test_a_dict_or_a_toml_path_is_the_model_it_reads_everywhere_errors_are_taken(tmp_path):
+    # tool_pose took the TOML layout's dict or a TOML path, as Lab and cut do, but
+    # error_jacobian and parameter_names read them as the model itself: AttributeError
+    # "'dict' object has no attribute 'component'" (or 'parameters'), naming nothing
+    machine = load_machine("robonano_a0ib")
+    layout = {"tool": {"offset_um": [1.0, 0.0, 0.0]},
+              "component": {"X": {"position_mm": [-140.0, 0.0, 140.0],
+                                  "EXX_um": [2.0, 0.0, -1.0]}}}
+    model = ErrorModel.from_dict(layout)
+    path = tmp_path / "errors.toml"
+    model.to_toml(path)
+    q = np.array([[0.07, 0.01, 0.0, 0.0, 0.0], [-0.03, 0.0, 0.02, -0.1, 1.0]])
+    for given in (layout, path, str(path)):
+        assert machine.parameter_names(given) == machine.parameter_names(model)
+        assert machine.parameter_names(given)[-3:] == tuple(
+            f"component.X.EXX[{i}]" for i in range(3))
+        np.testing.assert_array_equal(machine.error_jacobian(q, given),
+                                      machine.error_jacobian(q, model))
+    # X = 0.07 m, halfway between the table's 0 and 140 mm, B = C = 0: entry 1 weighs 0.5
+    # and moves the edge along the workpiece's x
+    column = machine.error_jacobian(q, layout, ["component.X.EXX[1]"])
+    assert column[0, 0, 0] == pytest.approx(0.5, abs=1e-12)
