@@ -57,6 +57,7 @@ from machinesim.exceptions import (
 from machinesim.inverse import singular_note
 from machinesim.machines import Machine, load_machine
 from machinesim.metrology._arrays import as_flag, as_floats, shown
+from machinesim.metrology.rtest import refuse_far_points
 from machinesim.nc.moves import AXES, KIND_DWELL
 from machinesim.nc.program import Program, modal_values
 from machinesim.nc.writer import LINEAR_DECIMALS, ROTARY_DECIMALS
@@ -390,6 +391,8 @@ def model_based(
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise InputError(f"point must be 3 finite coordinates (m) in the tool_tip frame, got "
                          f"{np.asarray(point).tolist()!r}", key="point")
+    refuse_far_points(machine, p, "tool_tip", key="point",
+                      what="a point of the tool kept on the path")
     nominal, motion = _motion_axes(program, machine, start)
     if not len(motion):
         return Compensated(rewrite(program, machine, nominal, rounded=rounded), "", 0.0, 0.0)

@@ -68,6 +68,15 @@ def test_rewrite_and_point_check_their_input():
         rewrite(grooves(), GROOVING, np.zeros((5, 4)))
     with pytest.raises(InputError, match="point must be 3 finite coordinates"):
         model_based(tilted(), ROBONANO, None, point=[0.0, 1.0])
+    # a point 25 mm up the tool given in mm had been kept on the path as 25 m up; the
+    # reach is the diagonal of robonano_a0ib's travel, 280 x 150 x 130 mm: 343.22 mm
+    with pytest.raises(InputError, match=r"key 'point': expected the point at most 343\.22 mm "
+                                         r"from tool_tip's origin .*got \[0\.0, 0\.0, 25\.0\], "
+                                         r"25000 mm \(25 m\) from it"):
+        model_based(tilted(), ROBONANO, None, point=[0.0, 0.0, 25.0])
+    kept = model_based(tilted(), ROBONANO, None, point=[0.0, 0.0, 0.343])
+    assert format_program(kept.program) == format_program(model_based(tilted(), ROBONANO,
+                                                                       None).program)
 
 
 def test_a_correction_past_the_travel_is_refused_naming_the_lines():

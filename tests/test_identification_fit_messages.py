@@ -202,6 +202,26 @@ def test_a_frame_that_is_no_name_is_refused_naming_it(frame):
         observations(q, directions=u, values=np.zeros(len(q)), sigma=SIGMA, frame=frame)
 
 
+def test_a_point_given_in_mm_as_m_is_refused_before_its_lever_is_fitted():
+    # point=[0, 0, 40] (a ball 40 mm up the tool, in mm) had been fitted as 40 m: every
+    # angle's effect 1000 times too large, with no note. robonano_ui's linear travel is
+    # 280 x 100 x 130 mm (docs/machines.md): its diagonal, 324.5 mm, is the reach
+    q, u = xy_plan()
+    far = r"324\.5 mm from tool_tip's origin .*in m, not mm\), got \[0\.0, 0\.0, 40\.0\], " \
+          r"40000 mm \(40 m\) from it"
+    with pytest.raises(InputError, match=r"key 'points': reading 0: expected the point at most "
+                                         + far):
+        plan_quality(MACHINE, q, ["tool.rx"], directions=u, sigma=SIGMA, point=[0, 0, 40.0])
+    points = np.zeros((len(q), 3))
+    points[3] = [0.0, 0.0, 40.0]
+    with pytest.raises(InputError, match="reading 3: expected the point at most " + far):
+        fit(MACHINE, observations(q, directions=u, values=np.zeros(len(q)), sigma=SIGMA,
+                                  point=points), ["tool.rx"])
+    # 324 mm is a long stylus, not a unit slip: the plan is judged as given
+    assert plan_quality(MACHINE, q, ["tool.x"], directions=u, sigma=SIGMA,
+                        point=[0, 0, 0.324]).rank == 1
+
+
 def test_the_machine_may_be_named_as_everywhere_else_and_anything_else_is_refused():
     # fit("robonano_ui", ...) had raised AttributeError: 'str' object has no attribute
     # 'check_errors', while Lab, cut and the compensation take a shipped machine's name

@@ -13,6 +13,7 @@ import numpy as np
 
 from machinesim.exceptions import AxisLimitError, InputError
 from machinesim.identification.observations import Observations
+from machinesim.metrology.rtest import refuse_far_points
 
 
 class _Plan:
@@ -27,6 +28,10 @@ class _Plan:
         if unknown:
             raise InputError(f"frame {unknown[0]!r} is not on {machine.name}; it has "
                              f"{', '.join(machine.frames)}", key="frames")
+        # a point 40 m up the tool (40 mm meant) levers every angle 1000-fold, fitted
+        # without a note
+        refuse_far_points(machine, obs.points, obs.frames, key="points",
+                          what="a point on the tool or a probe")
         outside = machine.limit_violations(obs.q)
         if outside:
             raise AxisLimitError(f"{machine.name}: readings at axis values the machine cannot "

@@ -35,7 +35,8 @@ from machinesim.metrology._arrays import as_floats, shown
 from machinesim.metrology.instruments import Readout, as_generator, as_machine, motion_of
 from machinesim.units import M_PER_MM, length_text
 
-__all__ = ["BALL_REACH_FLOOR", "RTest", "RTestReading", "ZEROS", "ball_reach"]
+__all__ = ["BALL_REACH_FLOOR", "RTest", "RTestReading", "ZEROS", "ball_reach",
+           "refuse_far_points"]
 
 #: Where the R-test's sensors read zero (`RTest`).
 ZEROS = ("nominal", "first")
@@ -111,6 +112,30 @@ def ball_reach(machine) -> float:
     linear = ~np.asarray(machine.rotary, dtype=bool)
     diagonal = float(np.linalg.norm((machine.upper - machine.lower)[linear]))
     return max(diagonal, BALL_REACH_FLOOR)
+
+
+def refuse_far_points(machine, points, frames, *, key: str, what: str) -> None:
+    """Refuse a point fixed in a machine frame farther than `ball_reach` from its origin: a
+    point on the tool or a probe (an R-test's ball, a kept tool point) given in mm as m.
+
+    ``points`` (N, 3), m, each in its frame of ``frames`` (one name, or one per point);
+    ``what`` says what they are in the message (``"a point on the tool or a probe"``). The
+    first such point is named, with its index when there are several, its distance and the
+    reach; an InputError of ``key``."""
+    points = np.atleast_2d(np.asarray(points, dtype=np.float64))
+    lever = np.linalg.norm(points, axis=1)
+    reach = ball_reach(machine)
+    far = np.flatnonzero(lever > reach)
+    if not far.size:
+        return
+    k = int(far[0])
+    frame = frames if isinstance(frames, str) else frames[k]
+    which = f"reading {k}: " if len(points) > 1 else ""
+    raise InputError(f"{which}expected the point at most {reach / M_PER_MM:.6g} mm from "
+                     f"{frame}'s origin ({_reach_text(machine, reach)}: {what} sits tens of "
+                     f"mm from it; the point is in m, not mm), got "
+                     f"{shown(points[k].tolist())}, {length_text(float(lever[k]))} from it",
+                     key=key)
 
 
 def _reach_text(machine, reach: float) -> str:
