@@ -103,16 +103,22 @@ def axis_values(machine, wMt, errors=None, q_start=None, check_limits: bool = Tr
         When the solution lies outside the travel (``check_limits``).
     """
     # (imported here: metrology's instruments import the machines, which import this)
-    from machinesim.metrology._arrays import as_flag
+    from machinesim.metrology._arrays import as_flag, as_floats
     from machinesim.metrology.instruments import as_machine
 
     machine = as_machine(machine)
     check_limits = as_flag(check_limits, "check_limits")
-    target = np.asarray(wMt, dtype=np.float64)
+    # numbers only: a complex pose had lost its imaginary part with a ComplexWarning, and a
+    # pose of texts ("1", "0", ...) was read as numbers
+    target = as_floats(wMt, "wMt", "a pose (4 x 4, m)")
     if target.shape[-2:] != (4, 4) or target.ndim not in (2, 3):
-        raise InputError(f"expected a pose of shape (4, 4) or (N, 4, 4), got {target.shape}")
+        raise InputError(f"expected a pose of shape (4, 4) or (N, 4, 4), got {target.shape}",
+                         key="wMt")
     if not np.all(np.isfinite(target)):
-        raise InputError("the requested pose has NaN or inf entries")
+        n = int(np.flatnonzero(~np.isfinite(target.reshape(-1, 16)).all(axis=1))[0])
+        raise InputError(f"{machine.name}: the requested pose {n} has NaN or inf entries, "
+                         f"{np.reshape(target, (-1, 4, 4))[n].tolist()}; expected finite "
+                         "numbers (m)", key="wMt")
     batch = target.ndim == 3
     targets = target if batch else target[None]
     bad = not_rigid(targets, tolerances.RIGID_TOL)

@@ -6,6 +6,7 @@ clear errors for bad input."""
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -162,6 +163,27 @@ def test_axis_values_errors_are_clear():
             machine.axis_values(pose)
     batch = np.stack([np.eye(4), np.eye(4), np.diag([-1.0, -1.0, -1.0, 1.0])])
     with pytest.raises(InputError, match="pose 2 is not a rigid motion"):
+        machine.axis_values(batch)
+
+
+@pytest.mark.parametrize("pose", [np.eye(4) + 1e-3j, np.eye(4).astype(str).tolist(),
+                                  np.eye(4).astype(object).tolist() + [[None] * 4]])
+def test_a_pose_that_is_not_real_numbers_is_refused_naming_it(pose):
+    # a complex pose lost its imaginary part with numpy's ComplexWarning and was solved; a
+    # pose of texts ("1.0", "0.0") was read as numbers; a None raised numpy's TypeError
+    machine = load_machine("planer_4axis")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # refused, not warned about and solved
+        with pytest.raises(InputError, match=r"key 'wMt': Expected wMt as a pose \(4 x 4, m\)"):
+            machine.axis_values(pose)
+
+
+def test_a_pose_with_nan_is_refused_naming_which():
+    machine = load_machine("planer_4axis")
+    batch = np.stack([np.eye(4), np.eye(4)])
+    batch[1, 0, 3] = np.nan
+    with pytest.raises(InputError, match=r"key 'wMt': planer_4axis: the requested pose 1 has "
+                                         r"NaN or inf entries, \[\[1.0, 0.0, 0.0, nan\]"):
         machine.axis_values(batch)
 
 
