@@ -197,11 +197,14 @@ def to_resolution(q, machine: Machine | str, work_offsets=None) -> np.ndarray:
         0.00001 deg): the text could not carry it.
     """
     machine = _machine(machine)
-    q = np.asarray(q, dtype=np.float64)
+    q = as_floats(q, "q", "axis values (m, rad)")  # text had raised numpy's ValueError
     if q.shape[-1:] != (len(machine.axes),) or q.ndim not in (1, 2):
         raise InputError(f"expected axis values of shape ({len(machine.axes)},) or "
                          f"(N, {len(machine.axes)}) for axes {''.join(machine.axes)}, "
-                         f"got {q.shape}")
+                         f"got {q.shape}", key="q")
+    if not np.isfinite(q).all():  # NaN had come back NaN: no value an NC word can carry
+        raise InputError(f"expected finite axis values (m, rad), got {shown(q.tolist())}",
+                         key="q")
     g54 = (work_offsets or {}).get("G54", {})
     offset = np.array([g54.get(a, 0.0) for a in machine.axes])
     # The parser reads a word as float(text) * unit + offset; n / scale is that float(text)
@@ -314,14 +317,15 @@ def map_program(
                 f"{' '.join(machine.axes)} in m and rad)")
     try:
         kind = np.asarray(result).dtype  # flags and text are no axis values (True: 1 m)
-        mapped = np.asarray(result, dtype=np.float64)
     except (TypeError, ValueError):
         raise InputError(f"the compensation function must return {expected}, got "
                          f"{type(result).__name__}", source=program.source) from None
-    if kind.kind not in "iuf":
+    if kind.kind not in "iuf":  # judged before converting: complex had warned, then refused
         name = {"b": "bool", "U": "str", "S": "bytes", "O": "object"}.get(kind.kind, kind.name)
+        got = f"an array of {name}" if np.ndim(result) else type(result).__name__
         raise InputError(f"the compensation function must return {expected}, of numbers, got "
-                         f"an array of {name}", source=program.source)
+                         f"{got}", source=program.source)
+    mapped = np.asarray(result, dtype=np.float64)
     if mapped.shape != shape:
         raise InputError(f"the compensation function must return {expected}, got shape "
                          f"{mapped.shape}", source=program.source)

@@ -6,6 +6,7 @@ identified model, arguments of the wrong kind, and values that are not finite.""
 from __future__ import annotations
 
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -205,3 +206,25 @@ def test_a_function_that_cannot_be_called_or_returns_text_or_flags_is_refused():
     listed = map_program(grooves(), GROOVING, lambda q: q.tolist(), rounded=False)  # a list
     same = map_program(grooves(), GROOVING, lambda q: q, rounded=False)
     assert np.array_equal(listed.targets, same.targets, equal_nan=True)
+
+
+def test_a_complex_function_output_is_refused_without_numpy_s_warning_first():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a ComplexWarning had come out before the refusal
+        with pytest.raises(InputError, match=r"of numbers, got an array of complex128"):
+            map_program(grooves(), GROOVING, lambda q: q + 0j)
+
+
+@pytest.mark.parametrize("q, match", [
+    ([[0.0, 0.0, np.nan, 0.0]], r"expected finite axis values \(m, rad\), got "
+                                r"\[\[0\.0, 0\.0, nan, 0\.0\]\]"),
+    ("x", r"Expected q as axis values \(m, rad\), got 'x'"),
+    ([["0", "0", "0", "0"]], r"Expected q as axis values"),
+])
+def test_to_resolution_refuses_what_no_nc_word_carries(q, match):
+    # NaN had come back NaN, and text raised numpy's ValueError naming no argument
+    with pytest.raises(InputError, match=match) as info:
+        to_resolution(q, GROOVING)
+    assert info.value.key == "q"
+    # a value it rounds: 1.23456789 mm on X to the 1 nm grid, the float the word X1.234568 reads
+    assert to_resolution([1.23456789e-3, 0.0, 0.0, 0.0], GROOVING)[0] == float("1.234568") * MM
