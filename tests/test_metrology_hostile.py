@@ -391,6 +391,33 @@ def test_optical_settings_are_bounded_by_the_field_of_view(name):
     assert getattr(owner, name) == 1e-3
 
 
+@pytest.mark.parametrize("read", ["profile", "height_map"])
+def test_a_reading_s_spacing_is_bounded_by_the_field_of_view_as_lateral_spacing_is(flat, read):
+    # spacing=0.3 (um meant) per reading had read the 4 mm line across the block as one
+    # sample, and a 2 x 2 mm map as one pixel, where lateral_spacing=0.3 was refused
+    scope = Microscope(rng=0, noise=False)
+    window = {"profile": ((0.5 * MM, 1.5 * MM), (4.5 * MM, 1.5 * MM)),
+              "height_map": (1 * MM, 3 * MM, 0.5 * MM, 2.5 * MM)}[read]
+    with pytest.raises(InputError, match=r"key 'spacing': Expected spacing <= 0.001 m "
+                                         r"\(OPTICAL_LIMIT.*got 0.3$"):
+        getattr(scope, read)(flat, *window, spacing=0.3)
+    at_limit = getattr(scope, read)(flat, *window, spacing=OPTICAL_LIMIT)
+    # 4 mm at 1 mm: 5 samples; 2 x 2 mm at 1 mm: 3 x 3, all on the top face at z = 0
+    assert at_limit.z.shape == {"profile": (5,), "height_map": (3, 3)}[read]
+    assert np.all(at_limit.z == 0.0)
+
+
+def test_the_exact_profile_refuses_a_spacing_that_reads_one_sample(flat):
+    from machinesim.metrology import profile
+
+    with pytest.raises(InputError, match=r"key 'spacing': Expected a spacing shorter than the "
+                                         r"line, got spacing 0.3 m over a 0.004 m line: it "
+                                         r"would read one sample"):
+        profile(flat, (0.5 * MM, 1.5 * MM), (4.5 * MM, 1.5 * MM), 0.3)
+    s, z = profile(flat, (0.5 * MM, 1.5 * MM), (4.5 * MM, 1.5 * MM), 3 * MM)
+    assert s.tolist() == [0.0, 3 * MM] and z.tolist() == [0.0, 0.0]
+
+
 def test_spot_width_is_bounded_by_the_field_of_view():
     with pytest.raises(InputError, match=r"width <= 0.001 m \(OPTICAL_LIMIT.*got 0.002"):
         Spot(width=2e-3)

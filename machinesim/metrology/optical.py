@@ -203,7 +203,7 @@ class _Profiler:
         -------
         Profile
         """
-        spacing = as_positive(self.lateral_spacing if spacing is None else spacing, "spacing")
+        spacing = _pitch(self.lateral_spacing if spacing is None else spacing)
         nominal = as_vector(start, 2, "start"), as_vector(end, 2, "end")
         if not _is_field(part):
             self._check_on_part(part, *nominal, spacing=spacing)
@@ -256,7 +256,7 @@ class _Profiler:
         -------
         HeightMap
         """
-        spacing = as_positive(self.lateral_spacing if spacing is None else spacing, "spacing")
+        spacing = _pitch(self.lateral_spacing if spacing is None else spacing)
         (x0, x1), (y0, y1) = _limits(x0, x1, "x"), _limits(y0, y1, "y")
         if not _is_field(part):
             self._check_on_part(part, np.array([x0, y0]), np.array([x1, y1]), spacing,
@@ -526,6 +526,13 @@ def _setting(value, name: str) -> float:
     return as_number(value, name, sign=">= 0", limit=OPTICAL_LIMIT,
                      why=" (OPTICAL_LIMIT: the widest field of view modelled; more is a unit "
                          "slip, e.g. mm given as m)")
+
+
+def _pitch(spacing) -> float:
+    """A reading's ``spacing``: > 0 and, as `lateral_spacing`, at most `OPTICAL_LIMIT`, a
+    pixel within the field of view (``spacing=0.3``, um meant, had read a 2 mm profile as
+    one sample and a height map as one pixel)."""
+    return _setting(as_positive(spacing, "spacing"), "spacing")
 
 
 def _line_samples(start: np.ndarray, end: np.ndarray, spacing: float,

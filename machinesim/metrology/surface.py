@@ -177,6 +177,10 @@ def profile(surface, start, end, spacing: float, *, refuse: bool = True
     if length == 0.0:
         raise InputError(f"Expected a profile of non-zero length, got start = end = {start}")
     count = line_count(length, spacing)
+    if count < 2.0:  # spacing=0.3 (um meant) over a 2 mm line read the start alone
+        raise InputError(f"Expected a spacing shorter than the line, got spacing {spacing:g} m "
+                         f"over a {length:g} m line: it would read one sample, at start "
+                         "(spacing is in m: 0.3 um is 3e-07)", key="spacing")
     check_samples(count, spacing, f"a {length:g} m line")
     s = np.arange(int(count)) * spacing
     if abs(s[-1] - length) <= END_SLACK * spacing:
