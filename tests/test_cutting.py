@@ -74,6 +74,22 @@ def test_roi_windows_that_miss_the_stock_are_refused_by_cut_as_by_the_command_li
     assert not report.empty_cut
 
 
+@pytest.mark.parametrize("roi, match", [
+    ("x", r"Expected roi as windows \(xmin, xmax, ymin, ymax\), m, got 'x'"),
+    ([("0", "1", "0", "1")], r"Expected roi as windows .*got \[\('0', "),
+    ([(math.nan, 1 * MM, 0.0, 1 * MM)], r"roi: expected finite windows \(m\), got "
+                                        r"\[\[nan, 0.001, 0.0, 0.001\]\]"),
+    ((0.0, 1 * MM, 0.0, 1 * MM), r"of shape \(n, 4\), got \(4,\) \(one window is "
+                                 r"\[\(xmin, xmax, ymin, ymax\)\]\)"),
+])
+def test_roi_that_is_no_windows_of_numbers_is_refused_naming_it(roi, match):
+    # roi="x" had raised numpy's ValueError "could not convert string to float", and a NaN
+    # window was told as a shape of (n, 4) while its shape was (1, 4)
+    with pytest.raises(InputError, match=match) as info:
+        cut(grooves(), "grooving_4axis", tool="v:90", stock="block:5x3x1", roi=roi)
+    assert info.value.key == "roi"
+
+
 def test_a_tool_setting_error_moves_the_groove_by_exactly_the_offset():
     dy, dz = 3 * UM, -2 * UM
     errors = ErrorModel(tool=ToolSetting([0.0, dy, dz], [0.0, 0.0, 0.0]))

@@ -17,13 +17,20 @@ def roi_cells(roi, bounds: np.ndarray) -> list[tuple[float, float, float, float]
     InputError
         When ``roi`` is not an (n, 4) array of finite numbers with xmin < xmax, ymin < ymax.
     """
-    windows = np.asarray(roi, dtype=np.float64)
-    if windows.ndim != 2 or windows.shape[1] != 4 or not np.all(np.isfinite(windows)):
+    from machinesim.metrology._arrays import as_floats, shown
+
+    # numbers only: roi="x" had raised numpy's ValueError, naming nothing
+    windows = as_floats(roi, "roi", "windows (xmin, xmax, ymin, ymax), m")
+    if windows.ndim != 2 or windows.shape[1] != 4:
+        one = " (one window is [(xmin, xmax, ymin, ymax)])" if windows.shape == (4,) else ""
         raise InputError(
             f"roi: expected windows (xmin, xmax, ymin, ymax) of shape (n, 4), got "
-            f"{windows.shape}",
+            f"{windows.shape}{one}",
             key="roi",
         )
+    if not np.all(np.isfinite(windows)):  # had been told as the shape, which was right
+        raise InputError(f"roi: expected finite windows (m), got {shown(windows.tolist())}",
+                         key="roi")
     if np.any(windows[:, 1] <= windows[:, 0]) or np.any(windows[:, 3] <= windows[:, 2]):
         raise InputError("roi: each window needs xmin < xmax and ymin < ymax", key="roi")
     cells = []
