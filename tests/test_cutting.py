@@ -339,6 +339,23 @@ def test_overtravel_is_an_error_naming_axis_value_travel_and_line_unless_allowed
     assert report.to_dict()["limit_violations"] == list(report.limit_violations)
 
 
+def test_a_start_outside_the_travel_is_refused_naming_the_start_not_a_line():
+    # C given in degrees (90 for 90 deg) at start: grooves never program C, so it stayed at
+    # 90 rad and the refusal named the first block's line, which writes no C; grooving_4axis'
+    # C travels one turn either way, 360 deg, and 90 rad is 5156.62016 deg
+    start = [0.0, 0.0, 0.1, 90.0]
+    with pytest.raises(AxisLimitError, match=r"^start: axis C = 5156\.62016 deg outside its "
+                                             r"travel -360\.00000 deg \.\. 360\.00000 deg: "
+                                             r".*start is in m and rad, in the order XYZC"):
+        cut(grooves(), "grooving_4axis", tool="v:90", stock="block:5x3x1", start=start)
+    _, report = cut(grooves(), "grooving_4axis", tool="v:90", stock="block:5x3x1",
+                    start=start, allow_overtravel=True)
+    assert report.limit_violations and "axis C = 5156.62016 deg" in report.limit_violations[0]
+    machine = load_machine("grooving_4axis")  # the home is inside: cut as before
+    assert cut(grooves(), machine, tool="v:90", stock="block:5x3x1",
+               start=machine.home)[1].limit_violations == ()
+
+
 def test_a_move_a_billion_metres_out_is_refused_even_with_overtravel_allowed():
     # a feed across the block to X = 1e9 m (1e12 mm, a length in the wrong unit): float64's
     # spacing there is 1.2e-7 m and the slot came out uncut, exit 0; 900 m out it cuts

@@ -32,6 +32,7 @@ from machinesim.cutting.refusals import (  # re-exported: windows, lathe, lathe_
     block_at,  # noqa: F401
     line_text,  # noqa: F401
     refuse_far_ends,
+    refuse_start_outside,
     subtraction_refusal,
 )
 from machinesim.cutting.report import (
@@ -221,6 +222,7 @@ def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, s
     if servo is not None:  # as a Lab checks it: one column per axis, each named right
         check_servo(machine, servo)
     _refuse_turning(program, machine, start)
+    refuse_start_outside(machine, start, allow_overtravel)
     tools = _ToolSections(program, tool, errors)
     if chord_tolerance is None:
         chord_tolerance = path_chord_tolerance(t for _, t, _ in tools.runs)

@@ -76,6 +76,27 @@ def refuse_far_ends(program, machine, errors, start, allow_overtravel: bool) -> 
     _refuse_far(machine.tool_pose(q, errors), moves, program)
 
 
+def refuse_start_outside(machine, start, allow: bool) -> None:
+    """Raise AxisLimitError when ``start`` puts an axis outside its travel, unless ``allow``;
+    checked before planning (a rapid from 100 m away is long to plan). A start in mm or deg
+    (``[0, 0, 0.1, 90]`` for C at 90 deg) had been refused at the program's first line,
+    naming a value the program never wrote there: an axis it does not move stays at start."""
+    from machinesim.motion.planner import _start_values
+
+    if start is None or allow:
+        return
+    q0 = _start_values(start, tuple(machine.axes))
+    if q0.shape != (len(machine.axes),) or not np.isfinite(q0).all():
+        return  # the planner refuses it, naming the shape or the values
+    outside = machine.limit_violations(q0)
+    if outside:
+        raise AxisLimitError(
+            f"start: {'; '.join(outside)}: the axes stand at start before the first block, "
+            "and an axis the program does not move stays there (start is in m and rad, in "
+            f"the order {''.join(machine.axes)}); nothing was cut (allow_overtravel=True cuts "
+            "it anyway)")
+
+
 def _overtravel(machine, moves: _Moves, program, allow: bool) -> tuple[str, ...]:
     """Descriptions of the blocks that take an axis outside its travel, with their lines.
 
