@@ -203,6 +203,7 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
     if not isinstance(identified, Identified):
         raise InputError(f"{procedure.name}.identify returned {type(identified).__name__}; "
                          "expected an Identified", key="identify")
+    _refuse_unknown_parameters(procedure.name, lab.machine, identified.parameters)
     programs = step("compensate", procedure.compensate, identified)
     if not isinstance(programs, Mapping):  # dict(programs) below raised a TypeError
         raise InputError(f"{procedure.name}.compensate returned {type(programs).__name__}; "
@@ -225,6 +226,36 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
         elapsed_s=MappingProxyType(clock), not_identified=MappingProxyType(not_identified),
         realism=lab.realism.on, background=MappingProxyType(background),
         polynomials=polynomials)
+
+
+#: The sections of an error model: an identified name under one of them is an error
+#: parameter's, which the machine must have (a procedure's own quantity is named otherwise).
+_SECTIONS = ("tool.", "tool_geometry.", "workpiece.", "location.", "component.")
+
+
+def _refuse_unknown_parameters(name: str, machine, identified: Mapping) -> None:
+    """Refuse an identified name in an error model's section that no error of ``machine``
+    has (``tool.xx``, ``location.B.EX0B`` on a machine without B, ``component.Q.EXX[0]``): it
+    had run on, its value reported beside an injected 0, the truth's ``get`` of a name it
+    has not. Judged on the machine's axes and the names' form alone, not on the truth's
+    tables, which the procedure does not know."""
+    import difflib
+
+    known = machine.parameter_names(None)
+    for parameter in identified:
+        if not parameter.startswith(_SECTIONS) or parameter in known:
+            continue
+        match = _PARAMETER_RE.fullmatch(parameter)
+        if match is not None and match["caxis"] in machine.axes:
+            continue  # a table's entry or a polynomial's coefficient, of an axis it has
+        close = difflib.get_close_matches(parameter, known, n=1, cutoff=0.8)
+        hint = f" (did you mean {close[0]}?)" if close else ""
+        raise InputError(f"{name}.identify named {parameter!r}, no error parameter of "
+                         f"{machine.name} (axes {''.join(machine.axes)}){hint}: its value would "
+                         "be reported against an injected 0; expected the names "
+                         "Machine.parameter_names gives, or a name outside the error model's "
+                         f"sections ({', '.join(s[:-1] for s in _SECTIONS)}) for a "
+                         "quantity of the procedure's own", key="identify")
 
 
 def _truth(lab, identified: Mapping) -> tuple[dict, dict, dict, tuple[str, ...]]:

@@ -372,9 +372,10 @@ class _RaisingName(_Stub):
                     "Evaluation (Evaluation(figures=()) for none)"),
     (_NoPrograms, "InputError: key 'compensate': stub.compensate returned list; expected a "
                   "mapping of names to programs (an empty dict for none)"),
+    # refused by experiment.run itself, as outside a campaign: no error of the machine's
     (_NoParameter, "InputError: key 'identify': stub.identify named 'tool.offset', no "
-                   "parameter of the campaign's error model (unknown parameter name; expected "
-                   "tool.<x|y|z|rx|ry|rz>, "),
+                   "error parameter of grooving_4axis (axes XYZC): its value would be "
+                   "reported against an injected 0"),
     (_LabParameter, "InputError: key 'identify': stub.identify named 'microscope.sigma', "
                     "no parameter of the campaign's error model (unknown parameter name"),
 ])

@@ -207,6 +207,55 @@ def test_run_refuses_a_procedures_class_for_a_procedure():
     assert info.value.key == "procedure"
 
 
+class _Names:
+    """A procedure of one's own that identifies ``names`` (each 1 um, std 0) and cuts
+    nothing: what run does with the names alone."""
+
+    name, paper, lab_uses = "names", "tests", {"measure": (), "evaluate": ()}
+
+    def __init__(self, names):
+        self.names = names
+
+    def measure(self, lab):
+        return {}
+
+    def identify(self, measurements):
+        from machinesim.experiment import Identified
+
+        return Identified({name: (1e-6, 0.0) for name in self.names})
+
+    def compensate(self, identified):
+        return {}
+
+    def evaluate(self, lab, identified, programs):
+        from machinesim.experiment import Evaluation
+
+        return Evaluation(figures=())
+
+
+@pytest.mark.parametrize("name, hint", [
+    ("tool.xx", " (did you mean tool.x?)"), ("location.B.EX0B", " (did you mean "
+                                                               "location.C.EX0C?)"),
+    ("component.Q.EXX[0]", ""), ("workpiece.gama", " (did you mean workpiece.gamma?)"),
+])
+def test_run_refuses_an_identified_error_parameter_the_machine_has_not(name, hint):
+    # identify naming tool.xx (or an axis grooving_4axis lacks) ran on, and the result set
+    # its identified 1 um beside an injected 0.0: the truth's get of a name it has not
+    from machinesim.experiment import run
+
+    lab = Lab("grooving_4axis", {"tool": {"offset_um": [1.0, 0.0, 0.0]}}, noise=False)
+    with pytest.raises(InputError) as info:
+        run(_Names(["tool.x", name]), lab)
+    assert str(info.value).startswith(
+        f"key 'identify': names.identify named {name!r}, no error parameter of grooving_4axis "
+        f"(axes XYZC){hint}: its value would be reported against an injected 0")
+    # the machine's own names pass, a table entry of an axis it has and a quantity of the
+    # procedure's own too; tool.x's truth is the injected 1 um
+    result = run(_Names(["tool.x", "location.C.EB0C", "component.X.EZX[2]", "arm.r"]),
+                 Lab("grooving_4axis", {"tool": {"offset_um": [1.0, 0.0, 0.0]}}, noise=False))
+    assert result.injected["tool.x"] == pytest.approx(1e-6, abs=1e-18)
+
+
 def test_run_refuses_a_lab_whose_servo_an_earlier_run_tuned():
     # sts_turning's evaluate tunes the servo to Table 6 "after" before Case 4; run again on
     # that lab (noise off, no tool error: no tool move to refuse), its Case 1, the control
