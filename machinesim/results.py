@@ -40,6 +40,9 @@ def _number(value, name: str) -> float | None:
     here, naming the figure, before any report is written."""
     if value is None:
         return None
+    if isinstance(value, str | bytes | bool | np.bool_):  # "1.23" was read as 1.23, True as 1
+        raise InputError(f"Expected {name} as a number or None, got {brief(repr(value))}",
+                         key=name)
     try:
         number = float(value)
     except (TypeError, ValueError, OverflowError) as error:  # 10**400: beyond float64

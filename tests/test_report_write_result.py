@@ -4,6 +4,7 @@ result replacing the first, file and folder names, and the figures and budgets i
 from __future__ import annotations
 
 import json
+import re
 from argparse import Namespace
 
 import numpy as np
@@ -223,6 +224,20 @@ def test_a_budget_of_figures_the_result_has_not_or_in_another_unit_is_refused(tm
     ReportFolder(tmp_path / "right").write_result(result, budget=Budget.from_dict([row]))
     summary = json.loads((tmp_path / "right" / "summary.json").read_text())
     assert summary["budget"] == [row]
+
+
+@pytest.mark.parametrize("value", ["1.23", b"1", True, np.True_])
+def test_a_figure_given_as_text_or_a_flag_is_refused_naming_it(value):
+    # Figure("x", "um", "1.23", ...) was read as 1.23 and True as 1.0: a table row formatted
+    # to text, or a comparison's outcome, went into the report as a measurement
+    from machinesim.experiment import Figure
+
+    for field in ("before", "after", "paper_before", "paper_after", "after_std"):
+        with pytest.raises(InputError, match=rf"Expected x\.{field} as a number or None, "
+                                             rf"got {re.escape(repr(value))}") as info:
+            Figure("x", "um", **{"before": 1.0, "after": 0.5, field: value})
+        assert info.value.key == f"x.{field}"
+    assert Figure("x", "count", np.int64(3), 2).before == 3.0  # numbers of any kind pass
 
 
 def test_an_infinite_figure_is_refused_naming_it_not_written_as_not_measured(tmp_path):
