@@ -358,6 +358,20 @@ class PIDServo:
 
     axes: tuple
 
+    def __post_init__(self) -> None:
+        # PIDServo((1, None, None, None)) had been made, and failed in its repr or at the
+        # first cut ("'int' object has no attribute 'summary'"), naming no column
+        if not isinstance(self.axes, tuple | list):
+            raise InputError(f"Expected the axis columns as a tuple, one AxisServo or None per "
+                             f"axis of the machine (machine.axes order), got "
+                             f"{type(self.axes).__name__}", key="axes")
+        for i, axis in enumerate(self.axes):
+            if axis is not None and not isinstance(axis, AxisServo):
+                raise InputError(f"column {i + 1}: expected an AxisServo or None (the axis "
+                                 f"follows exactly), got {type(axis).__name__} {axis!r:.40}",
+                                 key="axes")
+        object.__setattr__(self, "axes", tuple(self.axes))
+
     def __repr__(self) -> str:
         parts = [f"column {i + 1} exact" if axis is None else axis.summary()
                  for i, axis in enumerate(self.axes)]
@@ -458,7 +472,9 @@ def servo_from_toml(path, machine) -> PIDServo:
     ``[C]``), SI with the unit in every key (`SERVO_KEYS`); an axis without a table follows
     its command exactly. Errors name the file, the line, the table and the key."""
     from machinesim.errors.toml import read_toml_lines
+    from machinesim.metrology.instruments import as_machine
 
+    machine = as_machine(machine)  # a shipped machine's name too, as Lab takes it
     source = str(path)
     data, lines = read_toml_lines(path)
     axes = tuple(machine.axes)

@@ -7,7 +7,7 @@ import pytest
 
 import machinesim
 from machinesim.nc import ProgramBuilder
-from machinesim.servo import AxisServo, PIDServo, table6_servo
+from machinesim.servo import AxisServo, PIDServo, servo_from_toml, table6_servo
 
 MASS, DAMPING, KP, KD = 12.0, 1600.0, 1.2e6, 3700.0  # a 12 kg slide, about 50 Hz
 
@@ -127,3 +127,31 @@ def test_a_servo_file_path_handed_to_a_lab_names_the_reader(tmp_path):
     with pytest.raises(machinesim.InputError, match=r"got str: a servo file is read with "
                        r"machinesim\.servo\.servo_from_toml\(path, machine\)"):
         machinesim.Lab("sts_lathe", servo=str(tmp_path / "servo.toml"))
+
+
+@pytest.mark.parametrize("column", [1, "x", table6_servo("before")])
+def test_a_column_that_is_no_axis_loop_is_refused_when_the_servo_is_made(column):
+    # PIDServo((1, None, None, None)) was made; its repr and its first cut raised
+    # AttributeError "'int' object has no attribute 'summary'" (or 'reach'), naming no column
+    with pytest.raises(machinesim.InputError) as caught:
+        PIDServo((None, column, None, None))
+    assert str(caught.value).startswith(
+        f"key 'axes': column 2: expected an AxisServo or None (the axis follows exactly), "
+        f"got {type(column).__name__} ")
+    with pytest.raises(machinesim.InputError, match=r"key 'axes': Expected the axis columns "
+                                                    r"as a tuple.*got AxisServo"):
+        PIDServo(_loop())
+    listed = PIDServo([_loop("X"), None, None, None])  # a list is taken, kept as a tuple
+    assert isinstance(listed.axes, tuple) and listed.axes[0].name == "X"
+
+
+def test_a_servo_file_is_read_for_a_machine_given_by_name(tmp_path):
+    # servo_from_toml(path, "grooving_4axis") raised AttributeError "'str' object has no
+    # attribute 'axes'", where Lab, cut and the instruments take a shipped machine's name
+    path = tmp_path / "servo.toml"
+    path.write_text("[Y]\nkp_N_per_m = 1.2e6\nki_N_per_m_s = 0.0\nkd_N_s_per_m = 3700.0\n"
+                    "mass_kg = 12.0\ndamping_N_s_per_m = 1600.0\n")
+    by_name = servo_from_toml(path, "grooving_4axis")
+    assert by_name == servo_from_toml(path, machinesim.load_machine("grooving_4axis"))
+    assert [a is None for a in by_name.axes] == [True, False, True, True]
+    assert by_name.axes[1].kp == 1.2e6 and by_name.axes[1].mass == 12.0
