@@ -132,13 +132,23 @@ class Part:
             If the part measures `UNIT_SLIP_SIZE_M` or more in x, y or z: perhaps a mesh in
             millimetres (STL's convention) read as metres.
         """
+        from machinesim.metrology._arrays import as_floats, shown
+
         # manifold3d accepts only writeable C arrays: copy, which also detaches the caller's.
-        vertices = np.array(vertices, dtype=np.float64, order="C")
-        triangles = np.array(triangles, order="C")
+        # Numbers only: a path given for the vertices had raised numpy's ValueError.
+        vertices = np.ascontiguousarray(as_floats(vertices, "vertices", "coordinates (m)"))
+        triangles = np.array(as_floats(triangles, "triangles", "vertex indices"), order="C")
         if vertices.ndim != 2 or vertices.shape[1] != 3 or not np.all(np.isfinite(vertices)):
-            raise InputError(f"expected finite vertices of shape (n, 3), got {vertices.shape}")
-        if triangles.ndim != 2 or triangles.shape[1] != 3:
-            raise InputError(f"expected triangles of shape (m, 3), got {triangles.shape}")
+            raise InputError(f"expected finite vertices of shape (n, 3), got {vertices.shape}",
+                             key="vertices")
+        if triangles.ndim != 2 or triangles.shape[1] != 3 or not len(triangles):
+            # none: an empty mesh had ended in numpy's "zero-size array to reduction"
+            raise InputError(f"expected triangles of shape (m, 3), m >= 4 for a closed solid, "
+                             f"got {triangles.shape}", key="triangles")
+        if not np.all(np.isfinite(triangles) & (triangles == np.round(triangles))):
+            raise InputError(f"expected whole vertex indices, got {shown(triangles.tolist())}",
+                             key="triangles")  # 1.5 had been cast to index 1
+        triangles = triangles.astype(np.int64)
         if triangles.size and (triangles.min() < 0 or triangles.max() >= len(vertices)):
             raise InputError(
                 f"triangle indices must lie in [0, {len(vertices)}), got "

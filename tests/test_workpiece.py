@@ -113,6 +113,25 @@ def test_from_mesh_rejects_an_inside_out_mesh():
         Part.from_mesh(vertices, triangles[:, ::-1])
 
 
+def test_from_mesh_refuses_what_is_no_mesh_naming_the_array():
+    # a path for the vertices and an empty mesh had raised numpy's ValueError ("could not
+    # convert string to float", "zero-size array to reduction"), and an index 1.5 was cast
+    # to 1, a closed mesh of another shape
+    vertices, triangles = block(1e-3, 1e-3, 1e-3).mesh()
+    with pytest.raises(InputError, match=r"key 'vertices': Expected vertices as coordinates "
+                                         r"\(m\), got 'part.ply'"):
+        Part.from_mesh("part.ply", triangles)
+    with pytest.raises(InputError, match=r"key 'triangles': expected triangles of shape "
+                                         r"\(m, 3\), m >= 4 for a closed solid, got \(0, 3\)"):
+        Part.from_mesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=int))
+    halves = triangles.astype(float)
+    halves[0, 1] += 0.5
+    with pytest.raises(InputError, match=r"key 'triangles': expected whole vertex indices"):
+        Part.from_mesh(vertices, halves)
+    whole = Part.from_mesh(vertices, triangles.astype(float))  # whole floats are indices
+    assert whole.volume == pytest.approx(1e-9, rel=VOLUME_REL)
+
+
 def test_a_part_is_made_from_a_manifold_only_naming_what_it_got():
     # Part(part) was taken and failed at its first use: AttributeError: 'Part' object has no
     # attribute 'bounding_box' (or 'to_mesh64')
