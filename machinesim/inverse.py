@@ -133,7 +133,8 @@ def axis_values(machine, wMt, errors=None, q_start=None, check_limits: bool = Tr
                          key="orientation")
     axis_only = orientation == "tool_axis"
     n_axes = len(machine.axes)
-    starts = None if q_start is None else np.atleast_2d(machine._check_q(q_start))
+    starts = (None if q_start is None
+              else np.atleast_2d(machine._check_q(q_start, key="q_start")))
     binding = machine.binding(errors)
     if starts is None:  # each pose from the solution before it
         qs = np.empty((len(targets), n_axes))

@@ -437,28 +437,28 @@ class Machine:
             raise InputError(f"point coordinates contain NaN or inf: {arr.tolist()}")
         return arr
 
-    def _check_q(self, q, batch: bool = True) -> np.ndarray:
+    def _check_q(self, q, batch: bool = True, key: str = "q") -> np.ndarray:
         from machinesim.metrology._arrays import as_floats
 
         try:  # numbers only: a bool among them ([True, 0, 0, 0]) was read as 1 m or 1 rad
-            arr = as_floats(q, "q")
+            arr = as_floats(q, key)
         except InputError:
             raise InputError(f"expected axis values as numbers (m, rad) in the order "
                              f"{''.join(self.axes)}, got {type(q).__name__} {q!r:.60}",
-                             key="q") from None
+                             key=key) from None
         n = len(self.axes)
         ok = (arr.shape == (n,)) or (batch and arr.ndim == 2 and arr.shape[1] == n)
         if not ok:
             want = f"({n},)" + (f" or (N, {n})" if batch else "")
             raise InputError(f"{self.name} has axes {''.join(self.axes)}: expected axis values "
-                             f"of shape {want}, got {arr.shape}")
+                             f"of shape {want}, got {arr.shape}", key=key)
         if not np.all(np.isfinite(arr)):  # which one: "axis values contain NaN or inf" said not
             rows = np.atleast_2d(arr)
             bad = tuple(np.argwhere(~np.isfinite(rows))[0])
             row = f" in row {bad[0]} of {len(arr)}" if arr.ndim == 2 else ""
             raise InputError(f"axis values contain NaN or inf: {self.axes[bad[1]]} = "
                              f"{float(rows[bad])!r}{row} ({''.join(self.axes)}, m and rad); "
-                             "expected finite numbers", key="q")
+                             "expected finite numbers", key=key)
         return arr
 
 

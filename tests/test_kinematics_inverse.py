@@ -178,6 +178,21 @@ def test_a_pose_that_is_not_real_numbers_is_refused_naming_it(pose):
             machine.axis_values(pose)
 
 
+def test_a_bad_q_start_is_named_q_start_not_q():
+    # axis_values(wMt, q_start=...) refused a NaN or short start under key 'q', the name of
+    # no argument it takes
+    machine = load_machine("planer_4axis")
+    with pytest.raises(InputError, match=r"^key 'q_start': axis values contain NaN or inf: "
+                                         r"Y = nan \(XYZA, m and rad\)"):
+        machine.axis_values(np.eye(4), q_start=[0.0, np.nan, 0.0, 0.0])
+    with pytest.raises(InputError, match=r"^key 'q_start': planer_4axis has axes XYZA: "
+                                         r"expected axis values of shape \(4,\) or \(N, 4\), "
+                                         r"got \(3,\)"):
+        machine.axis_values(np.eye(4), q_start=[0.0, 0.0, 0.0])
+    with pytest.raises(InputError, match=r"^key 'q': planer_4axis has axes XYZA"):
+        machine.tool_pose([0.0, 0.0])
+
+
 def test_a_pose_with_nan_is_refused_naming_which():
     machine = load_machine("planer_4axis")
     batch = np.stack([np.eye(4), np.eye(4)])
