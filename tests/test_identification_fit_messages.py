@@ -222,6 +222,27 @@ def test_a_point_given_in_mm_as_m_is_refused_before_its_lever_is_fitted():
                         point=[0, 0, 0.324]).rank == 1
 
 
+def test_a_prior_in_the_toml_layout_or_a_toml_file_is_the_model_it_writes(tmp_path):
+    # Lab, cut and tool_pose take errors as a TOML layout dict or a TOML path; fit's prior
+    # read the dict's sections as parameter names ("key 'tool': unknown parameter name")
+    # and refused the path ("got str")
+    q, u = xy_plan()
+    layout = {"tool": {"offset_um": [0.0, 0.0, 2.0]}, "workpiece": {"gamma_deg": 0.5}}
+    path = tmp_path / "prior.toml"
+    ErrorModel.from_dict(layout).to_toml(path)
+    by_name = plan_quality(MACHINE, q, ["tool.x"], directions=u, sigma=SIGMA,
+                           prior={"tool.z": 2 * UM, "workpiece.gamma": 0.5 * DEG})
+    for prior in (layout, path, str(path)):
+        quality = plan_quality(MACHINE, q, ["tool.x"], directions=u, sigma=SIGMA, prior=prior)
+        np.testing.assert_array_equal(quality.std, by_name.std)
+    with pytest.raises(InputError, match=r"key 'prior': expected the prior as an ErrorModel, "
+                                         r"a mapping name -> value \(SI\), a dict in the TOML "
+                                         r"layout or a TOML path, got int"):
+        plan_quality(MACHINE, q, ["tool.x"], directions=u, sigma=SIGMA, prior=3)
+    with pytest.raises(ErrorModelError, match=r"key 'tol': unknown section"):
+        plan_quality(MACHINE, q, ["tool.x"], directions=u, sigma=SIGMA, prior={"tol": {}})
+
+
 def test_the_machine_may_be_named_as_everywhere_else_and_anything_else_is_refused():
     # fit("robonano_ui", ...) had raised AttributeError: 'str' object has no attribute
     # 'check_errors', while Lab, cut and the compensation take a shipped machine's name

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -33,7 +34,7 @@ import numpy as np
 
 from machinesim import tolerances
 from machinesim.arrays import frozen
-from machinesim.errors import LARGEST_ERROR, ErrorModel
+from machinesim.errors import LARGEST_ERROR, ErrorModel, as_error_model
 from machinesim.exceptions import ErrorModelError, InputError, NotConvergedError
 from machinesim.identification.identifiability import (
     _FIGURES_DOC,
@@ -181,11 +182,18 @@ def _prior(machine, prior) -> ErrorModel:
         model = ErrorModel()
     elif isinstance(prior, ErrorModel):
         model = prior
+    elif isinstance(prior, Mapping) and prior and not any("." in str(k) for k in prior):
+        # the TOML layout ({"tool": {"offset_um": ...}}), as Lab and cut take errors: its
+        # sections had been read as parameter names ("key 'tool': unknown parameter name")
+        model = as_error_model(prior, key="prior")
     elif isinstance(prior, Mapping):
         model = ErrorModel().with_parameters(prior)
+    elif isinstance(prior, str | os.PathLike):  # a TOML file, as Lab and cut take one
+        model = as_error_model(prior, key="prior")
     else:
-        raise InputError(f"expected the prior as an ErrorModel or a mapping name -> value "
-                         f"(SI), got {type(prior).__name__}", key="prior")
+        raise InputError(f"expected the prior as an ErrorModel, a mapping name -> value "
+                         f"(SI), a dict in the TOML layout or a TOML path, got "
+                         f"{type(prior).__name__}", key="prior")
     machine.check_errors(model)
     return model
 
@@ -262,7 +270,8 @@ def fit(machine, observations: Observations | Iterable, params: Sequence[str], *
     params : sequence of str
         The parameters to fit (`Machine.parameter_names`), k of them.
     prior : ErrorModel or mapping of str to float, optional
-        The starting point, and the values of every parameter not fitted (default: no error).
+        The starting point, and the values of every parameter not fitted (default: no error);
+        also a dict in the TOML layout or a TOML path, as `machinesim.Lab` takes errors.
     max_iterations : int
         Gauss-Newton steps before `NotConvergedError`.
     progress : callable(str), optional
@@ -394,7 +403,8 @@ def plan_quality(machine, q, params: Sequence[str], *, directions, sigma,
         Where the sensors are set to zero (`Observation.zero_at`): what a zeroed plan cannot
         see (a constant offset) is then named.
     prior : ErrorModel or mapping of str to float, optional
-        Where to linearise (default: the nominal machine).
+        Where to linearise (default: the nominal machine); also a dict in the TOML layout or
+        a TOML path.
 
     Returns
     -------
