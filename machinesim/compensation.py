@@ -129,7 +129,7 @@ def start_axes(machine: Machine, start=None) -> np.ndarray:
     q = np.zeros(len(axes)) if start is None else as_floats(start, "start", "axis values (m, rad)")
     if q.shape != (len(axes),):
         raise InputError(f"start must have shape ({len(axes)},) for axes {''.join(axes)}, "
-                         f"got {q.shape}")
+                         f"got {q.shape}", key="start")
     if not np.all(np.isfinite(q)):
         raise InputError(f"start must be finite, got {q.tolist()}", key="start")
     return q
@@ -478,7 +478,16 @@ def _machine(machine: Machine | str) -> Machine:
 
 
 def _motion_axes(program: Program, machine: Machine, start) -> tuple[np.ndarray, list[int]]:
-    """Full axis vectors (n_motion, n_axes) of the motion blocks, and their move indices."""
+    """Full axis vectors (n_motion, n_axes) of the motion blocks, and their move indices.
+
+    A ``start`` outside the travel is refused, as `cut` refuses it: C given as 90 (deg
+    meant) had been written, 90 rad, into every block before the program's first C word."""
+    outside = [] if start is None else machine.limit_violations(start_axes(machine, start))
+    if outside:
+        where = f"{program.source}: " if program.source else ""
+        raise AxisLimitError(f"{where}start: {'; '.join(outside)}: an axis stays there, in "
+                             "every block written, until the program moves it (start is in m "
+                             f"and rad, in the order {''.join(machine.axes)})")
     q = program_axes(program, machine, start=start)
     motion = [n for n, move in enumerate(program.moves) if move.kind != "dwell"]
     return q[motion], motion

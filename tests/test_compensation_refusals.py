@@ -14,7 +14,7 @@ from compensation_helpers import grooves, tilted
 
 from machinesim import ErrorModel, load_machine
 from machinesim.compensation import map_program, model_based, rewrite, to_resolution
-from machinesim.exceptions import InputError
+from machinesim.exceptions import AxisLimitError, InputError
 from machinesim.nc import format_program, parse_program
 from machinesim.units import RAD_PER_DEG
 
@@ -228,3 +228,22 @@ def test_to_resolution_refuses_what_no_nc_word_carries(q, match):
     assert info.value.key == "q"
     # a value it rounds: 1.23456789 mm on X to the 1 nm grid, the float the word X1.234568 reads
     assert to_resolution([1.23456789e-3, 0.0, 0.0, 0.0], GROOVING)[0] == float("1.234568") * MM
+
+
+def test_a_start_outside_the_travel_is_refused_on_both_routes_naming_it():
+    # start=[0, 0, 0.1, 90] (C in deg) had been written, 90 rad, into N10, the block before
+    # the grooves' first C word: a program beyond C's one turn each way (360 deg), taken
+    start = [0.0, 0.0, 0.1, 90.0]
+    said = (r"^grooves\.nc: start: axis C = 5156\.62016 deg outside its travel -360\.00000 "
+            r"deg \.\. 360\.00000 deg: an axis stays there, in every block written, until "
+            r"the program moves it \(start is in m and rad, in the order XYZC\)")
+    with pytest.raises(AxisLimitError, match=said):
+        model_based(grooves(), GROOVING, None, start=start)
+    with pytest.raises(AxisLimitError, match=said):
+        map_program(grooves(), GROOVING, lambda q: q, start=start)
+    with pytest.raises(InputError, match=r"start must have shape \(4,\)") as info:
+        model_based(grooves(), GROOVING, None, start=[0.0, 0.0, 0.1])
+    assert info.value.key == "start"
+    home = model_based(grooves(), GROOVING, None, start=GROOVING.home).program
+    assert home.targets[1, 1] == 0.0 and home.targets[1, 5] == 0.0  # N10's Y and C: the home's
+
