@@ -405,9 +405,6 @@ def _cut(args) -> int:
     # the cut's notes hold those on --errors (unit slips, idle location errors: cut()'s own)
     summary["notes"] = [*summary["notes"], *_reading_notes(args, program, chord, machine,
                                                                 errors)]
-    if errors is not None and not errors.written:  # an empty file, or sections without keys
-        summary["notes"].append(f"{args.errors} sets no error (no key in any section): cut "
-                                "on the machine as built, every error zero")
     if servo is not None and all(axis is None for axis in servo.axes):  # no [X] .. table
         summary["notes"].append(f"{args.servo} sets no servo loop (no axis table): every axis "
                                 "followed its command exactly, a following error of 0")

@@ -89,6 +89,33 @@ def test_a_labs_cut_names_none_of_its_errors(errors_file):
         lab.cut(program, file_notes=True, **KEYS)
 
 
+def test_a_file_that_sets_no_error_is_noted_in_a_python_cut_as_on_the_command_line(tmp_path,
+                                                                                  capsys):
+    # machinesim cut noted such a file; cut(..., errors="empty.toml") cut on the machine as
+    # built with no note. A Lab's cut still notes nothing of its errors
+    program = parse_program(SLOT)
+    empty, zeros = tmp_path / "empty.toml", tmp_path / "zeros.toml"
+    empty.write_text("# to fill in\n[tool]\n")
+    zeros.write_text("[tool]\noffset_um = [0.0, 0.0, 0.0]\n")
+    said = (f"{empty} sets no error (no key in any section): cut on the machine as built, "
+            "every error zero")
+    for errors in (empty, str(empty)):
+        _, report = machinesim.cut(program, "robonano_a0ib", errors=errors, **KEYS)
+        assert report.notes.count(said) == 1, report.notes
+    for errors in (zeros, {}, ErrorModel(), None):  # zeros written on purpose, or no file
+        _, report = machinesim.cut(program, "robonano_a0ib", errors=errors, **KEYS)
+        assert not any("sets no error" in note for note in report.notes), (errors, report.notes)
+    lab = machinesim.Lab("robonano_a0ib", empty, noise=False)
+    assert not any("sets no error" in note for note in lab.cut(program, **KEYS)[1].notes)
+    path = tmp_path / "slot.nc"  # the command line prints and writes it once
+    path.write_text(SLOT)
+    code, _, err = run(["cut", path, "--machine", "robonano_a0ib", "--tool", "v:90", "--stock",
+                        "block:12x10x2", "--errors", empty, "--quiet", "--out",
+                        tmp_path / "p.ply", "--report", tmp_path / "r.json"], capsys)
+    assert code == 0 and err.count(f"note: {said}") == 1, err
+    assert json.loads((tmp_path / "r.json").read_text())["notes"].count(said) == 1
+
+
 def test_machinesim_cut_prints_and_writes_each_note_once(errors_file, tmp_path, capsys):
     # the cut's report holds them now: the command line had added its own, which would
     # print each twice

@@ -331,7 +331,7 @@ def _scene(args, budget: int):
         # values perhaps written in other units than their keys ask (a table far beyond any
         # machine's errors, ...), and with a program, location errors it never shows; view
         # had given none, animating such a file without a word
-        for note in error_file_notes(errors, machine, program, machine.home):
+        for note in error_file_notes(errors, machine, program, machine.home, done=None):
             print(f"note: {printable(note)}", file=sys.stderr)
     return machine_scene(machine, program, tool=tool, stock=stock,
                          errors=errors, max_triangles=budget,
