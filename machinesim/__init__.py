@@ -15,6 +15,7 @@ import importlib
 
 from machinesim._submodules import submodule
 from machinesim.exceptions import (
+    ArgumentError,
     AxisLimitError,
     ErrorModelError,
     FileError,
@@ -71,6 +72,7 @@ def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, **opt
 
 
 __all__ = [
+    "ArgumentError",
     "AxisLimitError",
     "AxisSolution",
     "ComponentError",

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim import tolerances
+from machinesim._keywords import keywords_checked
 from machinesim.errors import as_error_model
 from machinesim.exceptions import (
     AxisLimitError,
@@ -263,6 +264,7 @@ def rewrite(program: Program, machine: Machine | str, q, *, rounded: bool = True
     return program.with_targets(targets)
 
 
+@keywords_checked
 def map_program(
     program: Program,
     machine: Machine | str,
@@ -340,6 +342,7 @@ def map_program(
     return rewrite(program, machine, mapped, rounded=rounded)
 
 
+@keywords_checked
 def model_based(
     program: Program,
     machine: Machine | str,

@@ -113,6 +113,12 @@ class InputError(MachineSimError, ValueError):
         super().__init__(f"{prefix}: {message}" if prefix else message)
 
 
+class ArgumentError(InputError, TypeError):
+    """A public function was called with arguments it does not take (a misspelt keyword, one
+    positional too many): Python's own message, with the close name and the arguments it
+    takes. A `TypeError` too, as the call's own error was."""
+
+
 class FileError(InputError, OSError):
     """A file-system problem with a file the user named (``source``): an `InputError`, so a
     `MachineSimError`, and also an `OSError`, so that code written for the plain library

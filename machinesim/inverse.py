@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim import tolerances
+from machinesim._keywords import keywords_checked
 from machinesim.exceptions import AxisLimitError, InputError, UnreachableError
 from machinesim.rotations import not_rigid, rotation_log
 from machinesim.tolerances import IK_SINGULAR, IK_WEAK_TURN
@@ -59,6 +60,7 @@ class AxisSolution:
     singular_residual: np.ndarray
 
 
+@keywords_checked
 def axis_values(machine, wMt, errors=None, q_start=None, check_limits: bool = True,
                 max_iterations: int = 50, orientation: str = "whole") -> AxisSolution:
     """Axis values that put the tool edge at the pose ``wMt`` on ``machine``.

@@ -42,6 +42,7 @@ from dataclasses import replace
 import numpy as np
 
 from machinesim import realism as _realism
+from machinesim._keywords import keywords_checked
 from machinesim.cutting.memo import CutMemo
 from machinesim.errors import ErrorModel, as_error_model
 from machinesim.exceptions import InputError
@@ -124,6 +125,7 @@ class Lab:
     realism = Fixed("the instruments the lab handed out and the artefacts it made have the "
                     "imperfections its realism switched on")
 
+    @keywords_checked
     def __init__(self, machine, errors=None, *, noise: bool = True, seed: int = 0,
                  realism: Realism | None = None, background=None, servo=None) -> None:
         from machinesim.machines import Machine, load_machine

@@ -15,6 +15,7 @@ import numpy as np
 import pinocchio as pin
 
 from machinesim import inverse, tolerances
+from machinesim._keywords import keywords_checked
 from machinesim.errors.turns import each_turn
 from machinesim.exceptions import (
     ErrorModelError,
@@ -200,6 +201,7 @@ class Machine:
         """Raise ErrorModelError when ``errors`` does not fit this machine."""
         self.binding(errors)
 
+    @keywords_checked
     def tool_pose(self, q, errors=None) -> np.ndarray:
         """Pose of ``tool_tip`` in the ``workpiece`` frame.
 
@@ -241,6 +243,7 @@ class Machine:
         out = self.kin.poses(np.concatenate(qs), self.binding(errors), "tool_tip", runs=sizes)
         return np.split(out, np.cumsum(sizes)[:-1])
 
+    @keywords_checked
     def frame_pose(self, frame: str, q, errors=None) -> np.ndarray:
         """Pose of any named frame (e.g. ``probe_tip``) in the workpiece frame; see tool_pose."""
         if frame not in self.kin.frame_id:
@@ -277,6 +280,7 @@ class Machine:
                               for i in range(len(comp.values))]
         return tuple(names)
 
+    @keywords_checked
     def error_jacobian(self, q, errors=None, params=None, *, frame: str = "tool_tip",
                        point=None) -> np.ndarray:
         """Derivative of a frame's pose (or of a point fixed in it) w.r.t. named error parameters.
@@ -368,6 +372,7 @@ class Machine:
             out[:, :3, :] += np.cross(out[:, 3:, :], arm[:, :, None], axis=1)
         return out[0] if q.ndim == 1 else out
 
+    @keywords_checked
     def axis_jacobian(self, q, errors=None) -> np.ndarray:
         """Derivative of the tool pose (6, n_axes) with respect to the axis values."""
         q = self._check_q(q, batch=False)

@@ -50,6 +50,44 @@ def test_the_api_refuses_what_it_cannot_use_with_a_machinesim_error():
         "microscope.sigma"]
 
 
+@pytest.mark.parametrize("call, key, said", [
+    (lambda: machinesim.cut("models/examples/grooves.nc", "grooving_4axis",
+                            allow_overtravle=True),
+     "allow_overtravle", "cut() got an unexpected keyword argument 'allow_overtravle' (did you "
+                         "mean allow_overtravel?); it takes program, machine, tool, stock"),
+    (lambda: Lab("planer_4axis", nosie=False),
+     "nosie", "Lab.__init__() got an unexpected keyword argument 'nosie' (did you mean noise?); "
+              "it takes machine, errors, noise, seed, realism, background, servo"),
+    (lambda: machinesim.load_machine("planer_4axis").tool_pose(np.zeros(4), error=None),
+     "error", "Machine.tool_pose() got an unexpected keyword argument 'error' (did you mean "
+              "errors?); it takes q, errors"),
+    (lambda: Lab("planer_4axis").microscope().profile(None, (0, 0), (1e-3, 0), spaceing=1e-6),
+     "spaceing", "_Profiler.profile() got an unexpected keyword argument 'spaceing' (did you "
+                 "mean spacing?); it takes part, start, end, spacing"),
+    (lambda: Lab(), None, "Lab.__init__() missing 1 required positional argument: 'machine'"),
+])
+def test_an_argument_a_public_call_does_not_take_is_a_machinesim_error_naming_it(call, key,
+                                                                                  said):
+    # Python's own TypeError had ended these, outside machinesim's errors and with no hint
+    # of the name meant; it is still a TypeError, as code catching that expects
+    with pytest.raises(machinesim.ArgumentError) as info:
+        call()
+    assert isinstance(info.value, InputError) and isinstance(info.value, TypeError)
+    assert info.value.key == key and said in str(info.value), str(info.value)
+
+
+def test_a_type_error_inside_a_call_that_binds_is_left_as_it_is():
+    from machinesim._keywords import keywords_checked
+
+    @keywords_checked
+    def raises(x, *, y=0):
+        raise TypeError("from the body")
+
+    with pytest.raises(TypeError, match="^from the body$") as info:
+        raises(1, y=2)
+    assert not isinstance(info.value, machinesim.MachineSimError)
+
+
 def test_a_background_file_refused_names_its_line(tmp_path):
     # the refusal of a background file's key kept the file but dropped the key's line
     path = tmp_path / "own.toml"

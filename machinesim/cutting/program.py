@@ -18,6 +18,7 @@ import time
 import numpy as np
 
 from machinesim import motion
+from machinesim._keywords import keywords_checked
 from machinesim.cutting.engine import remove
 from machinesim.cutting.holder import holder_reach
 from machinesim.cutting.holder_allowance import sweep_allowances
@@ -117,6 +118,7 @@ def _arguments(program, tool, stock, errors):
     return program, tool, stock, None if errors is None else as_error_model(errors)
 
 
+@keywords_checked
 def cut(program, machine, tool="v:90", stock="block:10x10x2", errors=None, *, roi=None,
         start=None, chord_tolerance: float | None = None, servo=None,
         progress=None, allow_overtravel: bool = False, allow_holder_contact: bool = False,

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from machinesim import tolerances
+from machinesim._keywords import keywords_checked
 from machinesim.arrays import frozen
 from machinesim.errors import LARGEST_ERROR, ErrorModel, as_error_model
 from machinesim.exceptions import ErrorModelError, InputError, NotConvergedError
@@ -245,6 +246,7 @@ def _near_names(name: str, listed: Sequence[str], machine) -> str:
     return f"(did you mean {' or '.join(near)}?) " if near else ""
 
 
+@keywords_checked
 def fit(machine, observations: Observations | Iterable, params: Sequence[str], *,
         prior=None, max_iterations: int = MAX_ITERATIONS,
         progress: Callable[[str], None] | None = None) -> Estimate:
@@ -372,6 +374,7 @@ def _check_not_diverged(machine, names, values: np.ndarray, iterations: int) -> 
             "or give a prior nearer the solution")
 
 
+@keywords_checked
 def plan_quality(machine, q, params: Sequence[str], *, directions, sigma,
                  frame="tool_tip", point=None, zero_at=None, prior=None) -> PlanQuality:
     """What a measurement plan can identify, before any reading is taken.

@@ -16,6 +16,7 @@ from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
 
+from machinesim._keywords import keywords_checked
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_floats
@@ -326,6 +327,7 @@ def from_r_test(reading) -> Observations:
                         zero_at=getattr(reading, "zero_at", None))
 
 
+@keywords_checked
 def observations(q, *, directions, values, sigma, frame="tool_tip",
                  point=None, zero_at=None) -> Observations:
     """Readings as one `Observations` batch (each argument one for all, or one per reading):

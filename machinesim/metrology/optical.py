@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from machinesim._keywords import keywords_checked
 from machinesim.arrays import frozen
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_number
@@ -186,6 +187,7 @@ class _Profiler:
         return (f"{type(self).__name__}(sigma={r.sigma:g} m, resolution={r.resolution:g} m, "
                 f"lateral_spacing={self.lateral_spacing:g} m{extra})")
 
+    @keywords_checked
     def profile(self, part, start, end, spacing: float | None = None) -> Profile:
         """Read the heights along a line.
 
@@ -238,6 +240,7 @@ class _Profiler:
                    f"{nominal[1][1]:g}) m", "start")
         return Profile(s, self._display(z), frozen(nominal[0]), frozen(nominal[1]))
 
+    @keywords_checked
     def height_map(self, part, x0: float, x1: float, y0: float, y1: float,
                    spacing: float | None = None) -> HeightMap:
         """Read the heights over the rectangle [x0, x1] x [y0, y1].
