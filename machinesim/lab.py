@@ -37,6 +37,7 @@ Lab(robonano_a0ib, noise=on, seed=1, realism=lab)
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -45,7 +46,7 @@ from machinesim import realism as _realism
 from machinesim._keywords import keywords_checked
 from machinesim.cutting.memo import CutMemo
 from machinesim.errors import ErrorModel, as_error_model
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, MachineSimWarning
 from machinesim.lab_checks import Fixed, check_cut_options, check_options
 from machinesim.metrology.imperfections import Lobing, Registration, ZonalForm
 from machinesim.realism import Realism, SphereArtefacts
@@ -192,6 +193,13 @@ class Lab:
         self.__instruments: dict[str, dict] = {}
         self.__artefacts: dict[str, object] = {}
         self.__workpieces: dict[str, tuple] = {}  # label -> (digest of what made it, part)
+        if isinstance(errors, str | os.PathLike):
+            # told to whoever set the lab up, once it is made, as `machinesim cut` tells
+            # them; the lab's own cuts and readings say nothing of its errors
+            from machinesim.errors.notes import error_file_notes
+
+            for note in error_file_notes(injected, self.machine, done="the lab is set up"):
+                warnings.warn(note, MachineSimWarning, stacklevel=3)
 
     def __repr__(self) -> str:
         told = f", realism={self.realism}" if self.__told else ""

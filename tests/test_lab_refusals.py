@@ -25,6 +25,37 @@ def test_bad_lab_arguments_are_clear_errors():
         Lab("robonano_a0ib", {"location": {"A": {"EX0A_um": 1.0}}})
 
 
+def test_an_errors_file_that_sets_nothing_or_slips_a_unit_is_told_to_whoever_sets_the_lab_up(
+        tmp_path):
+    # machinesim cut notes both; a Lab had taken them without a word, an empty file a
+    # machine as built and 178 um written under offset_mm a tool 178 mm off
+    import warnings
+
+    from machinesim.exceptions import MachineSimWarning
+
+    empty = tmp_path / "empty.toml"
+    empty.write_text("[tool]\n")
+    slip = tmp_path / "slip.toml"
+    slip.write_text("[tool]\noffset_mm = [0.0, -178.0, 0.0]\n")
+    with pytest.warns(MachineSimWarning) as told:
+        lab = Lab("grooving_4axis", empty)
+    assert [str(w.message) for w in told] == [
+        f"{empty} sets no error (no key in any section): the lab is set up on the machine as "
+        "built, every error zero"]
+    assert told[0].filename == __file__  # the caller's line, not the lab's
+    with pytest.warns(MachineSimWarning, match=r"slip.toml, line 2: tool.offset_mm = "
+                      r"\[0.0, -178.0, 0.0\] reaches 178 mm.*written in um, where the key "
+                      "asks mm"):
+        Lab("grooving_4axis", slip)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Lab("grooving_4axis", "models/errors/example.toml")  # a file of errors: no word
+        Lab("grooving_4axis", ErrorModel())  # a model made in Python: the maker's own
+    # the lab's cut keeps quiet about its errors
+    _, report = lab.cut(groove(), tool="v:90", stock="block:10x10x2")
+    assert not any("sets no error" in note for note in report.notes)
+
+
 def test_the_api_refuses_what_it_cannot_use_with_a_machinesim_error():
     from machinesim.campaign.runner import _vary
     from machinesim.experiment import run
