@@ -427,3 +427,43 @@ def test_an_estimate_names_a_polynomial_coefficient_s_unit():
     assert "component.X.EYX[1] = 1e-06 m/m +- " in repr(estimate)
     assert "component.X.EYX[0] std " in repr(plan_quality(machine, q, names, directions=u,
                                                          sigma=1e-8, prior=prior))
+
+
+def test_readings_taken_on_one_machine_are_refused_on_another():
+    # an R-test read on planer_4axis (X Y Z A) had been fitted on grooving_4axis (X Y Z C),
+    # its A column read as C, with no complaint: the arrays have the same width
+    import pickle
+
+    from machinesim import Lab
+    from machinesim.identification import from_r_test
+    from machinesim.metrology import RTestReading
+
+    lab = Lab("planer_4axis", noise=False)
+    q = np.zeros((3, 4))
+    q[:, 3] = [-0.5, 0.0, 0.5]
+    reading = lab.r_test().read(q)
+    assert (reading.machine, reading.axes) == ("planer_4axis", ("X", "Y", "Z", "A"))
+    obs = from_r_test(reading)
+    assert (obs.machine, obs.axes, obs[4].machine) == ("planer_4axis", ("X", "Y", "Z", "A"),
+                                                       "planer_4axis")
+    refused = (r"key 'observations': the readings were taken on planer_4axis \(axes XYZA\), "
+               r"not on grooving_4axis \(axes XYZC\)")
+    for given in (obs, [obs[0], obs[1]], Observations.of([obs, obs])):
+        with pytest.raises(InputError, match=refused):
+            fit("grooving_4axis", given, ["tool.x"])
+    assert fit(lab.machine, obs, ["tool.x"]).rank == 1  # on its own machine
+    other = observations(np.zeros(4), directions=[1, 0, 0], values=0.0, sigma=SIGMA,
+                         axes="XYZC")
+    with pytest.raises(InputError, match=r"observations taken on a machine not named \(axes "
+                                         r"XYZC\) and on planer_4axis \(axes XYZA\)"):
+        Observations.of([obs, other])
+    with pytest.raises(InputError, match="key 'axes': expected 4 axis letters, one per column "
+                                         "of q, got 'XYZ'"):
+        observations(np.zeros(4), directions=[1, 0, 0], values=0.0, sigma=SIGMA, axes="XYZ")
+    # a reading pickled before it carried its machine: not known, so not checked
+    old = RTestReading.__new__(RTestReading)
+    old.__dict__.update({k: v for k, v in reading.__dict__.items()
+                         if k not in ("machine", "axes")})
+    old = pickle.loads(pickle.dumps(old))
+    assert (old.machine, old.axes) == (None, None)
+    assert fit("grooving_4axis", from_r_test(old), ["tool.x"]).rank == 1

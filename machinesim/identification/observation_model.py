@@ -20,6 +20,8 @@ class _Plan:
     """The readings bound to a machine and a parameter list: model readings and Jacobian."""
 
     def __init__(self, machine, obs: Observations, names: tuple[str, ...]) -> None:
+        # an R-test read on planer_4axis (XYZA) had been fitted on grooving_4axis (XYZC)
+        obs.check_machine(machine)
         if obs.q.shape[1] != len(machine.axes):
             raise InputError(
                 f"{machine.name} has axes {''.join(machine.axes)}: expected axis values of "

@@ -69,6 +69,11 @@ class Observation:
         Axis values where the sensor was set to zero (a dial or an R-test nest zeroed at a
         start pose): the reading is then the change of the displacement from there to
         ``q``, which no constant offset moves. None: the displacement itself.
+    machine : str, optional
+        The name of the machine the reading was taken on; `fit` refuses it on another.
+        None (the default): not known, not checked.
+    axes : str or sequence of str, optional
+        That machine's axis letters in ``q``'s order (``"XYZA"``); kept as a tuple.
     """
 
     q: np.ndarray
@@ -79,6 +84,8 @@ class Observation:
     frame: str = "tool_tip"
     point: np.ndarray = field(default_factory=lambda: np.zeros(3))
     zero_at: np.ndarray | None = None
+    machine: str | None = None
+    axes: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         for key, want in (("q", 1), ("value", 0), ("direction", 1), ("sigma", 0),
@@ -92,7 +99,8 @@ class Observation:
                              f"{np.shape(self.zero_at)}", key="zero_at")
         batch = Observations(self.q, values=self.value, directions=self.direction,
                              sigma=self.sigma, frames=self.frame, points=self.point,
-                             zero_at=self.zero_at)
+                             zero_at=self.zero_at, machine=self.machine, axes=self.axes)
+        object.__setattr__(self, "axes", batch.axes)
         object.__setattr__(self, "zero_at", None if self.zero_at is None
                            else frozen(batch.zero_at[0]))
         object.__setattr__(self, "q", frozen(batch.q[0]))
@@ -128,6 +136,10 @@ class Observations:
     zero_at : array_like, shape (n_axes,) or (N, n_axes), optional
         Axis values where each reading's sensor was set to zero (`Observation.zero_at`);
         a row of NaN (and the default, None) for a reading of the displacement itself.
+    machine : str, optional
+        The name of the machine the readings were taken on (`Observation.machine`).
+    axes : str or sequence of str, optional
+        That machine's axis letters in ``q``'s order; kept as a tuple.
 
     Attributes
     ----------
@@ -146,6 +158,8 @@ class Observations:
     frames: tuple[str, ...] | str = "tool_tip"
     points: np.ndarray | None = None
     zero_at: np.ndarray | None = None
+    machine: str | None = None
+    axes: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         # numbers only: text ("1e-6", even read as a number), None, booleans, complex values
@@ -169,6 +183,7 @@ class Observations:
         if q.ndim not in (1, 2) or q.shape[-1] == 0:
             raise InputError(f"expected axis values of shape (n_axes,) or (N, n_axes), got "
                              f"{q.shape}", key="q")
+        axes = _axes(self.machine, self.axes, q.shape[-1])
         zero_at = (np.full(q.shape[-1], np.nan) if self.zero_at is None
                    else as_floats(self.zero_at, "zero_at", "axis values (m, rad)"))
         if zero_at.ndim not in (1, 2) or zero_at.shape[-1] != q.shape[-1]:
@@ -249,6 +264,7 @@ class Observations:
         object.__setattr__(self, "frames", frames)
         object.__setattr__(self, "points", frozen(points))
         object.__setattr__(self, "zero_at", frozen(zero_at))
+        object.__setattr__(self, "axes", axes)
 
     @property
     def zeroed(self) -> np.ndarray:
@@ -261,7 +277,8 @@ class Observations:
     def __getitem__(self, i: int) -> Observation:
         return Observation(self.q[i], value=self.values[i], direction=self.directions[i],
                            sigma=self.sigma[i], frame=self.frames[i], point=self.points[i],
-                           zero_at=self.zero_at[i] if self.zeroed[i] else None)
+                           zero_at=self.zero_at[i] if self.zeroed[i] else None,
+                           machine=self.machine, axes=self.axes)
 
     def __iter__(self):
         return (self[i] for i in range(len(self)))
@@ -282,7 +299,8 @@ class Observations:
                 parts.append(Observations(item.q, values=item.value,
                                           directions=item.direction, sigma=item.sigma,
                                           frames=item.frame, points=item.point,
-                                          zero_at=item.zero_at))
+                                          zero_at=item.zero_at, machine=item.machine,
+                                          axes=item.axes))
             elif isinstance(item, Observations):
                 parts.append(item)
             else:
@@ -294,13 +312,60 @@ class Observations:
         if len(widths) > 1:
             raise InputError(f"observations have axis values of different lengths "
                              f"{sorted(widths)}; expected one machine's n_axes", key="q")
+        machine, axes = None, None
+        for p in parts:  # one machine's readings: the first known, the rest checked against it
+            if machine is None and axes is None:
+                machine, axes = p.machine, p.axes
+            elif not p.taken_on(machine, axes):
+                raise InputError(f"observations taken on {_named(p.machine, p.axes)} and on "
+                                 f"{_named(machine, axes)}; expected one machine's readings",
+                                 key="observations")
         return cls(np.concatenate([p.q for p in parts]),
                    values=np.concatenate([p.values for p in parts]),
                    directions=np.concatenate([p.directions for p in parts]),
                    sigma=np.concatenate([p.sigma for p in parts]),
                    frames=tuple(f for p in parts for f in p.frames),
                    points=np.concatenate([p.points for p in parts]),
-                   zero_at=np.concatenate([p.zero_at for p in parts]))
+                   zero_at=np.concatenate([p.zero_at for p in parts]),
+                   machine=machine, axes=axes)
+
+    def taken_on(self, machine: str | None, axes) -> bool:
+        """False when the readings are known to be from a machine other than the one named
+        ``machine`` with axis letters ``axes`` (each None: not known, not compared)."""
+        return ((self.machine is None or machine is None or self.machine == machine)
+                and (self.axes is None or axes is None or self.axes == tuple(axes)))
+
+    def check_machine(self, machine) -> None:
+        """Refuse readings taken on a machine other than ``machine`` (a `Machine`): their
+        columns are another machine's axes, even when as many."""
+        if not self.taken_on(machine.name, machine.axes):
+            raise InputError(f"the readings were taken on {_named(self.machine, self.axes)}, "
+                             f"not on {_named(machine.name, machine.axes)}; expected readings "
+                             f"taken on {machine.name} (fit them on the machine they were "
+                             "taken on)", key="observations")
+
+
+def _axes(machine, axes, width: int) -> tuple[str, ...] | None:
+    """The machine's axis letters as a tuple (None when not given), checked against q's
+    width; ``machine`` checked to be a name."""
+    if machine is not None and not isinstance(machine, str):
+        raise InputError(f"expected the machine the readings were taken on as its name (str), "
+                         f"got {type(machine).__name__}", key="machine")
+    if axes is None:
+        return None
+    letters = tuple(axes) if isinstance(axes, str | Iterable) else None
+    if letters is None or not all(isinstance(a, str) for a in letters):
+        raise InputError(f"expected the axes as letters, e.g. 'XYZA', got {axes!r}", key="axes")
+    if len(letters) != width:
+        raise InputError(f"expected {width} axis letters, one per column of q, got "
+                         f"{''.join(letters)!r}", key="axes")
+    return letters
+
+
+def _named(machine: str | None, axes) -> str:
+    """``planer_4axis (axes XYZA)``, as a message names a reading's machine."""
+    name = "a machine not named" if machine is None else machine
+    return name if axes is None else f"{name} (axes {''.join(axes)})"
 
 
 def _kind(value) -> str:
@@ -324,12 +389,14 @@ def from_r_test(reading) -> Observations:
                         values=reading.displacement.reshape(-1),
                         directions=np.tile(np.eye(3), (n, 1)), sigma=reading.sigma,
                         frames=reading.frame, points=reading.point,
-                        zero_at=getattr(reading, "zero_at", None))
+                        zero_at=getattr(reading, "zero_at", None),
+                        machine=getattr(reading, "machine", None),
+                        axes=getattr(reading, "axes", None))
 
 
 @keywords_checked
 def observations(q, *, directions, values, sigma, frame="tool_tip",
-                 point=None, zero_at=None) -> Observations:
+                 point=None, zero_at=None, machine=None, axes=None) -> Observations:
     """Readings as one `Observations` batch (each argument one for all, or one per reading):
     ``observations(q, directions=u, values=readings, sigma=50e-9)``, the axis values first and
     the rest by keyword, as `Observations` and `plan_quality` take them.
@@ -350,8 +417,12 @@ def observations(q, *, directions, values, sigma, frame="tool_tip",
         Point coordinates in the frame, m.
     zero_at : array_like, shape (n_axes,) or (N, n_axes), optional
         Axis values where the sensors were set to zero (`Observation.zero_at`).
+    machine : str, optional
+        The name of the machine the readings were taken on (`Observation.machine`).
+    axes : str or sequence of str, optional
+        That machine's axis letters in ``q``'s order.
     """
     return Observations(q, values=values, directions=directions, sigma=sigma, frames=frame,
-                        points=point, zero_at=zero_at)
+                        points=point, zero_at=zero_at, machine=machine, axes=axes)
 
 

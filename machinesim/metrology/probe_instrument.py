@@ -100,11 +100,18 @@ class ScanReading:
         touch the surface (NaN rows where it hung free). `TouchProbe.nominal_centres` turns
         them into measured points (NaN rows staying NaN: drop them, or fit with a function
         that leaves NaN rows out, as `machinesim.metrology.fit_sphere` does).
+    machine : str or None
+        The name of the machine the scan was taken on (None when not known: a reading
+        pickled before it was recorded).
+    axes : tuple of str or None
+        That machine's axis letters, the columns of ``q`` and ``contact_q``.
     """
 
     q: np.ndarray
     deflection: np.ndarray
     contact_q: np.ndarray
+    machine: str | None = None
+    axes: tuple[str, ...] | None = None
 
 
 class TouchProbe:
@@ -314,7 +321,8 @@ class TouchProbe:
         contact[np.isnan(deflection)] = np.nan
         for array in (deflection, contact):
             array.setflags(write=False)
-        return ScanReading(recorded, deflection, contact)
+        return ScanReading(recorded, deflection, contact, self.machine.name,
+                           tuple(self.machine.axes))
 
     def nominal_centres(self, q) -> np.ndarray:
         """Ball centres the nominal machine puts at recorded axis values (what a lab computes).

@@ -72,6 +72,12 @@ class RTestReading:
     zero_at : ndarray, shape (n_axes,), read-only, or None
         The pose where the sensors were set to zero (``zero="first"``: the first row of
         ``q``), or None for readings against the nominal place.
+    machine : str or None
+        The name of the machine the readings were taken on, None when not known (a reading
+        pickled before it was recorded): `machinesim.identification.fit` refuses to fit
+        them on another machine.
+    axes : tuple of str or None
+        That machine's axis letters, the columns of ``q`` (None when not known).
     """
 
     q: np.ndarray
@@ -80,6 +86,8 @@ class RTestReading:
     frame: str
     point: np.ndarray
     zero_at: np.ndarray | None = None
+    machine: str | None = None
+    axes: tuple[str, ...] | None = None
 
     def __repr__(self) -> str:
         ball = ", ".join(f"{v * 1e3:.6g}" for v in self.point)
@@ -229,14 +237,15 @@ class RTest:
         actual = self._centre(self._pose(self.frame, q))
         nominal = self._centre(self.machine.frame_pose(self.frame, q))
         displayed = self.readout.read(actual - nominal, self._rng)
+        taken_on = {"machine": self.machine.name, "axes": tuple(self.machine.axes)}
         if self.zero == "nominal":
             return RTestReading(frozen(q), frozen(displayed), self.uncertainty, self.frame,
-                                self.point)
+                                self.point, **taken_on)
         # zeroed on the ball at the first pose: every display less the one there (both
         # counts of the same sensors, so the difference keeps the display's step)
         return RTestReading(frozen(q), frozen(displayed - displayed[0]),
                             math.sqrt(2.0) * self.uncertainty, self.frame, self.point,
-                            frozen(q[0].copy()))
+                            frozen(q[0].copy()), **taken_on)
 
     def _centre(self, wMf: np.ndarray) -> np.ndarray:
         return wMf[:, :3, 3] + wMf[:, :3, :3] @ self.point
