@@ -45,6 +45,23 @@ def test_noise_false_reads_exact_values(tmp_path):
     assert one.attrs["noise"] == 0
 
 
+@pytest.mark.parametrize("given, words", [
+    ({"trials": 0}, "key 'trials': trials=0; expected a whole number from 1 to 100000 "),
+    ({"trials": 2.0}, "key 'trials': trials=2.0; expected a whole number from 1 to 100000 "),
+    ({"seed": -1}, "key 'seed': seed=-1; expected a whole number >= 0"),
+    ({"workers": -1}, r"key 'workers': workers=-1; expected a whole number >= 0 \(0: no "),
+    ({"workers": "two"}, "key 'workers': workers='two'; expected a whole number >= 0")])
+def test_a_count_that_is_no_whole_number_is_refused_naming_the_argument(given, words,
+                                                                        tmp_path):
+    """campaign.run(..., trials=0) had answered "key '--trials': --trials 0; ...", naming the
+    command line's flag to a Python caller; the command keeps --trials (test_campaign_cli)."""
+    arguments = {"trials": 1, **ARM, **given}
+    with pytest.raises(InputError, match=words) as info:
+        run("tool_rotation_arm", out=tmp_path / "c", **arguments)
+    assert "--" not in str(info.value)
+    assert not (tmp_path / "c").exists()
+
+
 @pytest.mark.parametrize("vary, words", [
     (5, "vary=5; expected PARAM=DIST texts"),
     ([5], r"vary item 5; expected PARAM=DIST or a \(name, DIST\) pair"),

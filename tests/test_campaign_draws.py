@@ -195,7 +195,7 @@ def test_unknown_parameter_and_bad_trials_are_refused():
     offered = str(info.value).partition("uses: ")[2].split(", ")
     assert offered == list(CampaignSpec("tool_rotation_arm", 2).parameters())
     assert "microscope.sigma" in offered and "robot.repeatability" not in offered
-    with pytest.raises(InputError, match="--trials 0"):
+    with pytest.raises(InputError, match="key 'trials': trials=0;"):
         CampaignSpec("tool_rotation_arm", 0)
     with pytest.raises(InputError, match="'paper_999'"):
         CampaignSpec("paper_999", 2)

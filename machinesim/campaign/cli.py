@@ -15,7 +15,7 @@ from machinesim._arguments import ArgumentParser
 from machinesim._interrupts import ctrl_c_remembered, stopped
 from machinesim.campaign.distributions import LAB_PARAMETERS, parse_vary
 from machinesim.campaign.shipped import PROCEDURES
-from machinesim.campaign.spec import MAX_TRIALS, trials_refused
+from machinesim.campaign.spec import MAX_TRIALS, check_whole
 from machinesim.exceptions import (
     FileError,
     InputError,
@@ -81,8 +81,8 @@ def _folder(text: str) -> Path:
 
 def _whole(text: str) -> int | str:
     """A whole-number option (--trials, --workers, --seed) as an int, or its text as given
-    when it is not one: refused then as the campaign refuses it in Python (`trials_refused`,
-    `CampaignSpec`, `run`), one line naming what is expected, not argparse's "invalid int
+    when it is not one: refused then as the campaign refuses it in Python (`check_whole`,
+    naming the option), one line naming what is expected, not argparse's "invalid int
     value: '1e3'"."""
     try:
         return int(text)
@@ -139,9 +139,11 @@ def run_campaign(args) -> int:
     propagates to the caller (``machinesim``'s main prints it as one line)."""
     from machinesim.campaign.runner import run
 
-    # before anything else: nothing to wait for
-    if not isinstance(args.trials, int) or not 1 <= args.trials <= MAX_TRIALS:
-        raise InputError(trials_refused(args.trials), key="--trials")
+    # before anything else: nothing to wait for; named as options, where run names its
+    # arguments (trials=0)
+    for name in ("trials", "seed", "workers"):
+        if getattr(args, name) is not None:
+            check_whole(getattr(args, name), name, option=True)
     _check_own_options(args)
     vary = [parse_vary(text) for text in args.vary]
     if ":" in args.procedure and "" not in sys.path and os.getcwd() not in sys.path:

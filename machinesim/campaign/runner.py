@@ -20,8 +20,6 @@ import time
 import warnings
 from collections.abc import Iterable
 
-import numpy as np
-
 from machinesim._interrupts import ctrl_c_deferred
 from machinesim.campaign.cluster import (
     GUARD,
@@ -41,7 +39,7 @@ from machinesim.campaign.results import (
     refuse_busy,
     refuse_foreign,
 )
-from machinesim.campaign.spec import CampaignSpec, check_flag
+from machinesim.campaign.spec import CampaignSpec, check_flag, check_whole
 from machinesim.campaign.summary import remove_report, write_report
 from machinesim.campaign.trials import run_trial
 from machinesim.exceptions import InputError, MachineSimError, MachineSimWarning, brief
@@ -403,11 +401,7 @@ def _run(procedure, trials, vary, seed, out, workers, scheduler, client, noise,
     given = sum(x is not None for x in (scheduler, client)) + (workers is not None)
     if given > 1:
         raise InputError("give one of workers, scheduler and client", key="workers")
-    if workers is not None and (isinstance(workers, bool)
-                                or not isinstance(workers, int | np.integer) or workers < 0):
-        raise InputError(f"--workers {workers!r}; expected a whole number >= 0 (0: no Dask)",
-                         key="--workers")
-    workers = None if workers is None else int(workers)
+    workers = None if workers is None else check_whole(workers, "workers")
     if client is not None and not all(callable(getattr(client, name, None))
                                       for name in ("submit", "nthreads")):
         # a scheduler's address given as client= was taken, campaign.json written, and the

@@ -26,7 +26,8 @@ from machinesim.campaign.shipped import PROCEDURES, ProcedureEntry
 from machinesim.exceptions import InputError, brief
 from machinesim.experiment import Evaluation, Identified
 
-__all__ = ["MAX_TRIALS", "CampaignSpec", "IdentificationOnly", "check_flag", "trials_refused"]
+__all__ = ["MAX_TRIALS", "WHOLE_ARGUMENTS", "CampaignSpec", "IdentificationOnly", "check_flag",
+           "check_whole"]
 
 
 #: Most trials a campaign takes (docs/campaigns.md): a trial is seconds to minutes of CPU and
@@ -35,10 +36,28 @@ __all__ = ["MAX_TRIALS", "CampaignSpec", "IdentificationOnly", "check_flag", "tr
 MAX_TRIALS = 100_000
 
 
-def trials_refused(trials) -> str:
-    """The message refusing ``trials`` as a campaign's N."""
-    return (f"--trials {trials!r}; expected a whole number from 1 to {MAX_TRIALS} (the most "
-            "trials a campaign takes, docs/campaigns.md)")
+#: A campaign's whole-number arguments: the least, the most (None: no bound) and why.
+WHOLE_ARGUMENTS = {
+    "trials": (1, MAX_TRIALS, " (the most trials a campaign takes, docs/campaigns.md)"),
+    "seed": (0, None, ""),
+    "workers": (0, None, " (0: no Dask)"),
+}
+
+
+def check_whole(value, name: str, *, option: bool = False) -> int:
+    """``value`` of the whole-number argument ``name`` (`WHOLE_ARGUMENTS`) as an int, or an
+    InputError naming it as the caller gave it: ``trials=0`` (key ``trials``) from Python,
+    ``--trials 0`` (key ``--trials``) from the command line (``option``), whose text that
+    is no number arrives as given (``'1e3'``). Python's campaign.run had been told of
+    ``--trials``, a flag it has not."""
+    least, most, why = WHOLE_ARGUMENTS[name]
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < least \
+            or (most is not None and value > most):
+        given = f"--{name} {value!r}" if option else f"{name}={value!r}"
+        bound = f">= {least}" if most is None else f"from {least} to {most}"
+        raise InputError(f"{given}; expected a whole number {bound}{why}",
+                         key=f"--{name}" if option else name)
+    return int(value)
 
 
 def check_flag(value, name: str) -> None:
@@ -122,15 +141,8 @@ class CampaignSpec:
 
     def __post_init__(self) -> None:
         self._procedure()
-        if isinstance(self.trials, bool) or not isinstance(self.trials, int | np.integer) \
-                or not 1 <= self.trials <= MAX_TRIALS:
-            raise InputError(trials_refused(self.trials), key="--trials")
-        object.__setattr__(self, "trials", int(self.trials))
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int | np.integer) \
-                or self.seed < 0:
-            raise InputError(f"--seed {self.seed!r}; expected a whole number >= 0",
-                             key="--seed")
-        object.__setattr__(self, "seed", int(self.seed))
+        object.__setattr__(self, "trials", check_whole(self.trials, "trials"))
+        object.__setattr__(self, "seed", check_whole(self.seed, "seed"))
         for flag in ("noise", "identify_only", "quick"):
             check_flag(getattr(self, flag), flag)
             object.__setattr__(self, flag, bool(getattr(self, flag)))

@@ -44,7 +44,7 @@ from machinesim.campaign.spec import (
     CampaignSpec,
     IdentificationOnly,
     check_flag,
-    trials_refused,
+    check_whole,
 )
 from machinesim.exceptions import InputError, MachineSimError, MachineSimWarning, brief
 from machinesim.experiment import run
@@ -53,7 +53,7 @@ from machinesim.units import M_PER_UM
 
 __all__ = ["MAX_TRIALS", "PROCEDURES", "CampaignSpec", "IdentificationOnly", "ProcedureEntry",
            "check_flag", "error_model_file", "kept_warnings", "parameter_unit", "run_trial",
-           "spec_parameter_unit", "trial_seed", "trials_refused"]
+           "spec_parameter_unit", "trial_seed", "check_whole"]
 
 
 class _LabWithInstruments:
