@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import contextlib
 import io
+import re
+import sys
 
 import pytest
 from fenced import ROOT, fenced_blocks, link_repository_folders, stated_output
@@ -37,7 +39,10 @@ def doc_blocks() -> list[tuple[str, int, str]]:
             for line, code in fenced_blocks(page, "python")]
 
 
-BLOCKS = [block for block in doc_blocks() if block[0] not in NOT_RUN]
+#: A script's guard: a block holding it runs its guarded part only as ``__main__``
+#: (`test_your_own_procedures_campaign_block_runs_its_campaign`), not as ``__docs__``.
+GUARD = 'if __name__ == "__main__":'
+BLOCKS = [block for block in doc_blocks() if block[0] not in NOT_RUN and GUARD not in block[2]]
 
 
 def test_the_docs_have_the_blocks_this_test_runs_and_skips():
@@ -67,3 +72,46 @@ def test_python_block_runs_and_prints_what_its_page_says(page, line, code, tmp_p
     stated = stated_output(DOCS / page, line)
     if stated is not None:
         assert printed.getvalue() == stated, f"docs/{page}:{line}"
+
+
+def test_your_own_procedures_campaign_block_runs_its_campaign(tmp_path, monkeypatch):
+    """docs/procedures/your_own.md's campaign block, run as the script the page says to save
+    beside tool_offset.py (the example's class): run as ``__docs__``, as the blocks above,
+    its campaign under the ``__main__`` guard never ran, so that check could not fail. Its
+    8 trials on 2 workers take 2 on 1 here (a Dask worker still imports tool_offset), the
+    first 2 of the page's 8 (trial i's seed is the same in both)."""
+    pytest.importorskip("distributed")
+    import machinesim.campaign as campaign
+
+    page = DOCS / "procedures" / "your_own.md"
+    codes = [code for _, code in fenced_blocks(page, "python")]
+    example = next(code for code in codes if "class ToolOffsetRTest" in code)
+    line, script = next((line, code) for line, code in fenced_blocks(page, "python")
+                        if GUARD in code)
+    link_repository_folders(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.syspath_prepend(str(tmp_path))  # a script's own folder is on its sys.path
+    monkeypatch.delitem(sys.modules, "tool_offset", raising=False)
+    (tmp_path / "tool_offset.py").write_text(example[:example.index("errors = {")],
+                                             encoding="utf-8")
+    given, full = [], campaign.run
+
+    def smaller(procedure, trials, **options):
+        given.append((trials, options["workers"]))
+        return full(procedure, 2, **{**options, "workers": 1, "progress": False})
+
+    monkeypatch.setattr(campaign, "run", smaller)
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        exec(compile(script, f"docs/procedures/your_own.md:{line}", "exec"),
+             {"__name__": "__main__"})
+    sys.modules.pop("tool_offset", None)
+    assert given == [(8, 2)]
+    # the page: no trial failed, the groove's Y error after compensation at most 0.028 um
+    said = re.fullmatch(r"(\d+) failed; groove Y error after: at most (\d\.\d{3}) um\n",
+                        printed.getvalue())
+    assert said is not None, printed.getvalue()
+    assert said[1] == "0" and float(said[2]) <= 0.028, printed.getvalue()
+    assert "no trial failed, the groove's Y error after compensation at most 0.028 um" in \
+        " ".join(page.read_text(encoding="utf-8").split())
+    assert (tmp_path / "reports" / "campaign_tool_offset" / "campaign.nc").exists()
