@@ -361,12 +361,11 @@ def _cut(args) -> int:
     from machinesim.cutting import cut
     from machinesim.cutting.breakthrough import bottom_lost
     from machinesim.cutting.engine import EMPTY_SWEPT_REL
-    from machinesim.cutting.report import NOTHING_LEFT
+    from machinesim.cutting.report import NO_MOVES, NOTHING_LEFT
     from machinesim.cutting.roi import check_roi_meets
     from machinesim.cutting.windows import clip_to
     from machinesim.errors import ErrorModel
     from machinesim.machines import load_machine
-    from machinesim.nc.program import KIND_DWELL
     from machinesim.tool_specs import tool_from_spec
     from machinesim.workpiece import EXPORT_UNITS, stock_from_spec
 
@@ -442,8 +441,10 @@ def _cut(args) -> int:
         print(f"wrote {args.report} (cut report, JSON, units in every key)")
     # nothing of the stock left is cut()'s note (`nothing_left_note`), said as a warning
     left = [note for note in summary["notes"] if note.startswith(NOTHING_LEFT)]
+    # and the program's having no moves (`no_moves_note`), once, as a warning
+    still = [note for note in summary["notes"] if note.startswith(NO_MOVES)]
     for note in summary["notes"]:  # a note may quote a file's name: escaped, as in errors
-        if note not in left:
+        if note not in left and note not in still:
             print(f"note: {printable(note)}", file=sys.stderr)
     _warn_each(program, report.holder_contact, "holder touched the part at {}",
                "holder_contact_lines")
@@ -478,9 +479,8 @@ def _cut(args) -> int:
               f"{lines}) move the tool within its edge plane (a plunge), where a V or nose "
               "tool's zero-thickness edge sweeps no volume; it cuts by moving along its own X",
               file=sys.stderr)
-    elif report.empty_cut and not (program.kinds != KIND_DWELL).any():  # dwells alone too
-        print(f"warning: the program has no moves ({printable(args.program)} holds no "
-              "G00/G01/G02/G03 block that runs), so nothing was removed", file=sys.stderr)
+    elif still:  # dwells alone too
+        print(f"warning: {printable(still[0])}", file=sys.stderr)
     elif report.empty_cut:
         where = "the stock in the --roi windows" if roi else "the stock"
         print(f"warning: the program removed no material (does it reach {where}?)",

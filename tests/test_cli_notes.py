@@ -95,6 +95,31 @@ def test_a_cut_that_leaves_nothing_of_the_stock_says_so(tmp_path, capsys):
         assert len(noted) == (depth > 2) and "note: nothing" not in err, err
 
 
+def test_a_program_without_moves_is_noted_in_python_as_on_the_command_line(tmp_path,
+                                                                           capsys):
+    """cut(parse_program('%\\nO1\\nM30\\n%', 'x.nc'), 'grooving_4axis') gave empty_cut=True
+    with notes=(), where machinesim cut warned "the program has no moves": the report's notes
+    carry it now, and the command line prints it once, as a warning, and writes it once.
+    A program with moves that miss the stock has no such note."""
+    said = ("the program has no moves (x.nc holds no G00/G01/G02/G03 block that runs), so "
+            "nothing was removed")
+    _, report = machinesim.cut(machinesim.nc.parse_program("%\nO1\nM30\n%", "x.nc"),
+                               "grooving_4axis")
+    assert report.empty_cut and report.notes == (said,)
+    _, report = machinesim.cut(machinesim.nc.parse_program("G90 G21\nG00 X1. Z30.\nM30\n",
+                                                           "x.nc"), "grooving_4axis")
+    assert report.empty_cut and not any("no moves" in note for note in report.notes)
+    program = tmp_path / "x.nc"
+    program.write_text("%\nO1\nM30\n%\n")
+    code, _, err = run(["cut", program, "--machine", "grooving_4axis", "--tool", "v:90",
+                        "--stock", "block:10x10x2", "--quiet", "--out", tmp_path / "p.ply",
+                        "--report", tmp_path / "r.json"], capsys)
+    said = said.replace("x.nc", str(program))
+    assert code == 0 and err.count("has no moves") == 1, err
+    assert f"warning: {said}" in err, err
+    assert json.loads((tmp_path / "r.json").read_text())["notes"].count(said) == 1
+
+
 def test_an_errors_file_that_sets_nothing_is_noted(tmp_path, capsys):
     """An errors file with a section and no key (or empty) cuts with every error zero, as
     the docs say; a note says so, where a file meant to hold errors was taken silently. One

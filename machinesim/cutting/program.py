@@ -40,6 +40,7 @@ from machinesim.cutting.report import (
     CutReport,
     arc_chord_note,
     nc_summary,
+    no_moves_note,
     nothing_left_note,
     peak_following_error,
 )
@@ -299,7 +300,8 @@ def _cut(program, machine, tool, stock, errors, *, file_notes: bool, roi=None, s
         empty_cut=all(bool(e.empty_cut) for e in engines),
         engine="+".join(dict.fromkeys(e.method for e in engines)),
         elapsed_s=time.perf_counter() - began,
-        notes=tuple(note for note in (*trajectory.notes, *tools.notes, sheet_note,
+        notes=tuple(note for note in (no_moves_note(program), *trajectory.notes,
+                                      *tools.notes, sheet_note,
                                       arc_chord_note(program, chord_tolerance),
                                       nothing_left_note(part, removed, roi),
                                       *(error_file_notes(errors, machine, program, start)

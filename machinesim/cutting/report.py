@@ -250,6 +250,22 @@ def nothing_left_note(part, removed_m3: float, roi=None) -> str:
             "the part, or a depth below its bottom?)")
 
 
-__all__ = ["NOTHING_LEFT", "CutReport", "arc_chord_note", "following_note", "nc_summary",
-           "nothing_left_note",
-           "peak_following_error"]
+#: How `no_moves_note` begins: ``machinesim cut`` prints that note as a warning.
+NO_MOVES = "the program has no moves"
+
+
+def no_moves_note(program) -> str:
+    """A note when ``program`` has no move that runs (a comment and M30, dwells alone), else
+    '': nothing was removed because nothing moved, not because the moves miss the stock.
+    `machinesim.cutting.cut` adds it to its notes; ``machinesim cut`` had said it alone, as
+    a warning, and a cut from Python gave ``empty_cut=True`` with no note."""
+    from machinesim.nc.moves import KIND_DWELL
+
+    if (program.kinds != KIND_DWELL).any():
+        return ""
+    return (f"{NO_MOVES} ({program.source} holds no G00/G01/G02/G03 block that runs), so "
+            "nothing was removed")
+
+
+__all__ = ["NOTHING_LEFT", "NO_MOVES", "CutReport", "arc_chord_note", "following_note",
+           "nc_summary", "no_moves_note", "nothing_left_note", "peak_following_error"]
