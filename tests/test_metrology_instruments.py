@@ -142,6 +142,17 @@ def test_probe_refuses_bad_set_ups(a0ib, grooving, flat):
         probe.touch([0.0, 0.0, 0.0], "-Z", 1 * MM)
     with pytest.raises(AxisLimitError, match="axis X"):
         probe.touch(above(a0ib, 200 * MM, 1.5 * MM, 1 * MM), "-Z", 1 * MM)
+    # 5 mm given in m: the search had run 5 m down, past Z's -30 mm, and returned None
+    with pytest.raises(AxisLimitError, match=r"robonano_a0ib: a search of max_travel 5 along "
+                                             r"-Z from q_start ends at axis Z = -5000\.0+ mm "
+                                             r"outside its travel -30\.0+ mm \.\. 100\.0+ mm; "
+                                             r"expected it within the travel \(max_travel is "
+                                             r"in m"):
+        probe.touch(above(a0ib, 2.5 * MM, 1.5 * MM, 1 * MM), "-Z", 5)
+    # to the end of the travel is searched: 30 mm down from Z = 0 meets the block's top
+    top = TouchProbe(a0ib, None, flat, noise=False).touch(
+        above(a0ib, 2.5 * MM, 1.5 * MM, 1 * MM), "-Z", 30 * MM)
+    np.testing.assert_allclose(top, above(a0ib, 2.5 * MM, 1.5 * MM, R), rtol=0, atol=EXACT_M)
     with pytest.raises(InputError, match="sigma >= 0"):
         TouchProbe(a0ib, None, flat, sigma=-1e-9)
     with pytest.raises(InputError, match="rng"):

@@ -235,7 +235,9 @@ class TouchProbe:
             (normalised here). Travel t then moves the axes by t times the unit vector:
             metres for a move of linear axes.
         max_travel : float
-            Longest travel to search, > 0 (m for a move of linear axes).
+            Longest travel to search, > 0 (m for a move of linear axes). The search must
+            end within every axis's travel, as a control alarms on a skip move whose end
+            lies beyond a soft limit: 5 given for 5 mm is refused, not searched in vain.
 
         Returns
         -------
@@ -249,11 +251,20 @@ class TouchProbe:
         InputError
             For bad arguments or a ball that overlaps the part at ``q_start``.
         AxisLimitError
-            When the start or the contact lies outside an axis travel.
+            When the start, the end of the search or the contact lies outside an axis
+            travel.
         """
         q_start = self._q(q_start, "q_start")[None]
         u = self._direction(direction)
         travel = as_positive(max_travel, "max_travel")
+        # a search past the travel (5 m given for 5 mm) had run on and returned None
+        beyond = self.machine.limit_violations(q_start + travel * u)
+        if beyond:
+            along = direction if isinstance(direction, str) else shown(u.tolist())
+            raise AxisLimitError(f"{self.machine.name}: a search of max_travel {travel:g} "
+                                 f"along {along} from q_start ends at {'; '.join(beyond)}; "
+                                 "expected it within the travel (max_travel is in m for a "
+                                 "move of linear axes: 5 mm is 0.005)")
         t, speed, normal, velocity = self._sweep(q_start, u, travel, "q_start")
         if np.isnan(t[0]):
             return None
