@@ -272,17 +272,14 @@ def _truth(lab, identified: Mapping) -> tuple[dict, dict, dict, tuple[str, ...]]
     another in the injected or background model has no true value here (the report reads
     NaN) rather than the wrong one. The background is summarised: its file and how many of
     its parameters are non-zero. ``injected`` is in `ErrorModel.parameters`'s order, an
-    identified name the injected model does not hold (a location error it has none of) too,
-    at 0: the machine has none of it. A quantity of the procedure's own (a name outside the
-    error model's sections, ``arm.r``) is left out, as not known: the errors hold no value
-    of it, and it had been listed as injected 0.0, read as a true value of zero.
+    identified name the injected model does not hold (a location error it has none of) too.
     """
     truth, own, extra = lab.reveal(), lab.reveal(background=False), lab.reveal_background()
     true, written = truth.parameters(), own.parameters()
     injected = {}
     for name in _in_parameter_order({**dict.fromkeys(written), **dict.fromkeys(identified)}):
         if name in identified:
-            if name.startswith(_SECTIONS) and _one_meaning(name, truth, (own, extra)):
+            if _one_meaning(name, truth, (own, extra)):
                 injected[name] = true.get(name, 0.0)
         elif written[name] != 0.0:
             injected[name] = written[name]

@@ -267,10 +267,9 @@ class Result:
         What was injected, SI: each identified parameter with the value the machine had (the
         injected errors plus the machine's background, what the identification is compared
         with; left out for a component parameter whose name means another table entry or
-        coefficient there than in the injected model, and for a quantity of the procedure's
-        own, ``arm.r``, whose true value the errors do not hold), and each other non-zero
-        parameter of the injected model as written. The background's own parameters are not
-        listed (``background``). In `ErrorModel.parameters`'s order.
+        coefficient there than in the injected model), and each other non-zero parameter of
+        the injected model as written. The background's own parameters are not listed
+        (``background``). In `ErrorModel.parameters`'s order.
     identified : Mapping[str, (float, float)]
         (value, std), SI.
     figures : tuple of Figure

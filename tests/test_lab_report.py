@@ -329,32 +329,3 @@ def test_injected_keeps_the_error_models_order_for_identified_names_never_writte
     # a name of no error-model form keeps its place among such names, after the rest
     assert _in_parameter_order(["b.other", "component.X.EXX[0]", "a.other", "tool.x"]) == [
         "tool.x", "component.X.EXX[0]", "b.other", "a.other"]
-
-
-def test_a_quantity_of_the_procedures_own_has_no_injected_value():
-    """A procedure identifying a quantity of its own (``arm.r``, no error parameter) had it
-    in ``injected`` as 0.0, read as a true value of zero; the injected errors hold no value
-    of it: it is left out (the report's table reads n/a), as a name of no one meaning is."""
-    from machinesim.experiment import Evaluation, Figure, Identified, run
-
-    class Own:
-        name, paper = "own", "none"
-
-        def measure(self, lab):
-            return 0.0
-
-        def identify(self, measurements):
-            return Identified({"arm.r": (0.1, 0.0), "workpiece.x": (measurements, 1e-9),
-                               "location.C.EX0C": (measurements, 1e-9)}, None)
-
-        def compensate(self, identified):
-            return {}
-
-        def evaluate(self, lab, identified, programs):
-            return Evaluation((Figure("x", "um", 1.0, 0.0),))
-
-    lab = Lab("grooving_4axis", {"workpiece": {"delta_um": [3.0, 0.0, 0.0]}}, noise=False)
-    result = run(Own(), lab)
-    # workpiece.x as written; EX0C an error the machine has none of: a true 0
-    assert dict(result.injected) == {"workpiece.x": 3e-6, "location.C.EX0C": 0.0}
-    assert "arm.r" not in result.summary()["injected"]
