@@ -228,34 +228,30 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
         polynomials=polynomials)
 
 
-#: The sections of an error model: an identified name under one of them is an error
-#: parameter's, which the machine must have (a procedure's own quantity is named otherwise).
-_SECTIONS = ("tool.", "tool_geometry.", "workpiece.", "location.", "component.")
-
-
 def _refuse_unknown_parameters(name: str, machine, identified: Mapping) -> None:
-    """Refuse an identified name in an error model's section that no error of ``machine``
-    has (``tool.xx``, ``location.B.EX0B`` on a machine without B, ``component.Q.EXX[0]``): it
-    had run on, its value reported beside an injected 0, the truth's ``get`` of a name it
-    has not. Judged on the machine's axes and the names' form alone, not on the truth's
-    tables, which the procedure does not know."""
+    """Refuse an identified name that no error of ``machine`` has: ``tool.xx``,
+    ``location.B.EX0B`` on a machine without B, ``component.Q.EXX[0]`` had run on, its value
+    reported beside an injected 0; a quantity of the procedure's own (``arm.r``) ran to its
+    report, whose summary.json holds error parameters only, and was refused there, after
+    the whole run. Judged on the machine's axes and the names' form alone, not on the
+    truth's tables, which the procedure does not know."""
     import difflib
 
     known = machine.parameter_names(None)
     for parameter in identified:
-        if not parameter.startswith(_SECTIONS) or parameter in known:
+        if parameter in known:
             continue
-        match = _PARAMETER_RE.fullmatch(parameter)
+        match = _PARAMETER_RE.fullmatch(parameter) if isinstance(parameter, str) else None
         if match is not None and match["caxis"] in machine.axes:
             continue  # a table's entry or a polynomial's coefficient, of an axis it has
-        close = difflib.get_close_matches(parameter, known, n=1, cutoff=0.8)
+        close = difflib.get_close_matches(str(parameter), known, n=1, cutoff=0.8)
         hint = f" (did you mean {close[0]}?)" if close else ""
         raise InputError(f"{name}.identify named {parameter!r}, no error parameter of "
                          f"{machine.name} (axes {''.join(machine.axes)}){hint}: its value would "
                          "be reported against an injected 0; expected the names "
-                         "Machine.parameter_names gives, or a name outside the error model's "
-                         f"sections ({', '.join(s[:-1] for s in _SECTIONS)}) for a "
-                         "quantity of the procedure's own", key="identify")
+                         "Machine.parameter_names gives (a quantity of the procedure's own, "
+                         "such as an arm's radius, goes in Identified.detail and an "
+                         "Evaluation's figures)", key="identify")
 
 
 def _truth(lab, identified: Mapping) -> tuple[dict, dict, dict, tuple[str, ...]]:

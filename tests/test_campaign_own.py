@@ -377,7 +377,8 @@ class _RaisingName(_Stub):
                    "error parameter of grooving_4axis (axes XYZC): its value would be "
                    "reported against an injected 0"),
     (_LabParameter, "InputError: key 'identify': stub.identify named 'microscope.sigma', "
-                    "no parameter of the campaign's error model (unknown parameter name"),
+                    "no error parameter of grooving_4axis (axes XYZC): its value would be "
+                    "reported against an injected 0"),
 ])
 def test_a_procedure_whose_step_returns_what_no_step_may_fails_its_trials_saying_so(
         procedure, said, tmp_path):

@@ -306,11 +306,15 @@ class _Names:
     ("tool.xx", " (did you mean tool.x?)"), ("location.B.EX0B", " (did you mean "
                                                                "location.C.EX0C?)"),
     ("component.Q.EXX[0]", ""), ("workpiece.gama", " (did you mean workpiece.gamma?)"),
+    # a quantity of the procedure's own ran to its report and was refused only when
+    # summary.json was written ("identified key 'arm.r' is not an error parameter name")
+    ("arm.r", ""),
 ])
 def test_run_refuses_an_identified_error_parameter_the_machine_has_not(name, hint):
     # identify naming tool.xx (or an axis grooving_4axis lacks) ran on, and the result set
     # its identified 1 um beside an injected 0.0: the truth's get of a name it has not
     from machinesim.experiment import run
+    from machinesim.summary_schema import check_summary
 
     lab = Lab("grooving_4axis", {"tool": {"offset_um": [1.0, 0.0, 0.0]}}, noise=False)
     with pytest.raises(InputError) as info:
@@ -318,11 +322,12 @@ def test_run_refuses_an_identified_error_parameter_the_machine_has_not(name, hin
     assert str(info.value).startswith(
         f"key 'identify': names.identify named {name!r}, no error parameter of grooving_4axis "
         f"(axes XYZC){hint}: its value would be reported against an injected 0")
-    # the machine's own names pass, a table entry of an axis it has and a quantity of the
-    # procedure's own too; tool.x's truth is the injected 1 um
-    result = run(_Names(["tool.x", "location.C.EB0C", "component.X.EZX[2]", "arm.r"]),
+    # the machine's own names pass, and a table entry of an axis it has; tool.x's truth is
+    # the injected 1 um
+    result = run(_Names(["tool.x", "location.C.EB0C", "component.X.EZX[2]"]),
                  Lab("grooving_4axis", {"tool": {"offset_um": [1.0, 0.0, 0.0]}}, noise=False))
     assert result.injected["tool.x"] == pytest.approx(1e-6, abs=1e-18)
+    check_summary(result.summary())  # and its summary.json holds them
 
 
 def test_run_refuses_a_lab_whose_servo_an_earlier_run_tuned():
