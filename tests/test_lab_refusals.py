@@ -96,6 +96,11 @@ def test_the_api_refuses_what_it_cannot_use_with_a_machinesim_error():
      "spaceing", "_Profiler.profile() got an unexpected keyword argument 'spaceing' (did you "
                  "mean spacing?); it takes part, start, end, spacing"),
     (lambda: Lab(), None, "Lab.__init__() missing 1 required positional argument: 'machine'"),
+    (lambda: machinesim.campaign.run("tool_rotation_arm", 1), None,
+     "run() missing 1 required keyword-only argument: 'out'; it takes procedure, trials, vary, "
+     "seed, out"),
+    (lambda: machinesim.campaign.run("tool_rotation_arm", 1, out="x", wokers=2),
+     "wokers", "run() got an unexpected keyword argument 'wokers' (did you mean workers?)"),
 ])
 def test_an_argument_a_public_call_does_not_take_is_a_machinesim_error_naming_it(call, key,
                                                                                   said):

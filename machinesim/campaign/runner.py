@@ -21,6 +21,7 @@ import warnings
 from collections.abc import Iterable
 
 from machinesim._interrupts import ctrl_c_deferred
+from machinesim._keywords import keywords_checked
 from machinesim.campaign.cluster import (
     GUARD,
     NO_DASHBOARD,
@@ -326,6 +327,7 @@ def _read(folder: CampaignFolder, done: list[int], assembly: Assembly, stream) -
         line.end()
 
 
+@keywords_checked
 def run(procedure, trials: int, *, vary: Iterable = (), seed: int = 0, out,
         workers: int | None = None, scheduler: str | None = None, client=None,
         noise: bool = True, identify_only: bool = False, quick: bool = False,
