@@ -9,6 +9,7 @@ import argparse
 import json
 import math
 import os
+import re
 import sys
 import time
 from collections.abc import Mapping, Sequence
@@ -22,6 +23,11 @@ from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._staged import StagedFolder
 from machinesim.exceptions import InputError
 from machinesim.report import STAGED, folder_key
+from machinesim.units import typed_float
+
+#: A whole number as typed: ASCII digits, a '+' before them allowed. int() reads more: '1_0'
+#: as 10 and full-width digits ('３') as 3, without a word.
+_TYPED_WHOLE = re.compile(r"\+?[0-9]+")
 
 
 def progress_printer(scenario: str):
@@ -235,14 +241,32 @@ def run_scenario(report, args) -> None:
     sys.exit(scenario_status(report, args))
 
 
+def _whole(text: str) -> int | None:
+    """``text`` (blanks around it allowed) as an int when written as a whole number of ASCII
+    digits (`_TYPED_WHOLE`), else None."""
+    text = str(text).strip()
+    return int(text) if _TYPED_WHOLE.fullmatch(text) else None
+
+
+def typed_number(text: str) -> float:
+    """An argparse type for a scenario's number option (``--r-mm``, ``--e-ys-um``): ``text``
+    as a float when written as a plain number (`machinesim.units.typed_float`), refused as
+    the command line's error otherwise. float() read '0_5' as 5 (``--r-mm 0_5``: an arm of
+    5 mm) and full-width digits ('１２０') as 120. Whether the value is finite and in range
+    is the scenario's to say, in its terms."""
+    try:
+        return typed_float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a number (ASCII digits, a point, an exponent: 120.555, -1.78e2), "
+            f"got {text!r}") from None
+
+
 def _seed(text: str) -> int:
     """``--seed``: a non-negative integer (numpy's seeds), refused as the command line's
     error (argparse: usage and status 2), not deep in the first random draw."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if value < 0:
+    value = _whole(text)
+    if value is None:
         raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
     return value
 
@@ -266,11 +290,8 @@ def scenario_arguments(description: str, default_out: str) -> argparse.ArgumentP
 
 def _jobs(text: str) -> int:
     """``--jobs``: a whole number, 1 or more, refused as the command line's error."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
+    value = _whole(text)
+    if value is None or value < 1:
         raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number of worker "
                                          "processes, 1 or more")
     return value
@@ -319,13 +340,15 @@ def realism_from(args):
 
 
 def parse_floats(text: str, count: int, option: str) -> list[float]:
-    """``"a,b,c"`` -> floats, with a clear error naming the option."""
+    """``"a,b,c"`` -> floats, with a clear error naming the option; each written as a
+    plain number (`machinesim.units.typed_float`: not '0_5', which float() read as 5)."""
     try:
-        values = [float(v) for v in text.split(",")]
+        values = [typed_float(v) for v in text.split(",")]
     except ValueError:
         values = []
     if len(values) != count or not all(math.isfinite(v) for v in values):
-        raise InputError(f"{option} {text!r}: expected {count} comma-separated finite numbers")
+        raise InputError(f"{option} {text!r}: expected {count} comma-separated finite numbers "
+                         "(ASCII digits, a point, an exponent: 250,-3.5e2,0)")
     return values
 
 

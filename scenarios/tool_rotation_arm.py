@@ -50,6 +50,7 @@ from machinesim.scenario_runs import (
     refuse_beyond_capture,
     run_scenario,
     scenario_arguments,
+    typed_number,
 )
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 
@@ -75,13 +76,13 @@ BACKGROUND_NOTE = (
 
 def main() -> None:
     parser = scenario_arguments(__doc__.splitlines()[0], "reports/tool_rotation_arm")
-    parser.add_argument("--e-ys-um", type=float, default=None,
+    parser.add_argument("--e-ys-um", type=typed_number, default=None,
                         help="injected tool setting error e_ys (tool.y), um (default -178, "
                         "the paper's)")
-    parser.add_argument("--r-mm", type=float, default=None,
+    parser.add_argument("--r-mm", type=typed_number, default=None,
                         help="injected arm radius r, mm: tool.z = -(r - r0) (default 120.555, "
                         "the paper's)")
-    parser.add_argument("--capture-mm", type=float, default=None,
+    parser.add_argument("--capture-mm", type=typed_number, default=None,
                         help="largest edge offset |(e_ys, r - r0)| the calibration ramps find, "
                         f"mm (default 1; the ramps grow with it; at most {MAX_CAPTURE_MM:.4g}: "
                         "deeper ramps would take the top of the tool's "

@@ -90,6 +90,7 @@ from machinesim.scenario_runs import (
     progress_printer,
     scenario_arguments,
     scenario_status,
+    typed_number,
 )
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 from machinesim.workpiece_setting_budget import (
@@ -261,7 +262,7 @@ def _given_setting(delta_um, rot_deg, prefix: str) -> dict[str, float]:
 
 def main(argv=None) -> int:
     parser = scenario_arguments(__doc__.splitlines()[0], "reports/workpiece_setting")
-    parser.add_argument("--robot-repeatability-um", type=float, default=None,
+    parser.add_argument("--robot-repeatability-um", type=typed_number, default=None,
                         help="repeatability of the loading robot (um, default "
                         f"{ROBOT_REPEATABILITY_UM:g}; 0 to {LARGEST_ROBOT_UM:d})")
     parser.add_argument("--delta-um", help="position error x,y,z (um) instead of a draw")

@@ -18,13 +18,54 @@ from machinesim._io import process_space
 from machinesim._staged import StagedFolder, clear_stale_folders
 from machinesim.exceptions import InputError
 from machinesim.report import ReportFolder
-from machinesim.scenario_runs import parse_floats, scenario_arguments, scenario_status
+from machinesim.scenario_runs import (
+    jobs_option,
+    parse_floats,
+    scenario_arguments,
+    scenario_status,
+    typed_number,
+)
 
 
 def test_parse_floats_names_the_option():
     assert parse_floats("1,2.5,-3", 3, "--delta-um") == [1.0, 2.5, -3.0]
     with pytest.raises(InputError, match="--delta-um '1,2': expected 3 comma-separated"):
         parse_floats("1,2", 3, "--delta-um")
+    # float() read '0_5' as 5 and full-width digits as digits: --tool-offset-um 0_5,0,0 ran
+    # with dx = 5 um, exit 0
+    assert parse_floats(" 1, -2e1 ,+.5", 3, "--delta-um") == [1.0, -20.0, 0.5]
+    for text in ("0_5,0,0", "\uff11,0,0", "1,2,3_0"):
+        with pytest.raises(InputError) as refused:
+            parse_floats(text, 3, "--delta-um")
+        assert str(refused.value) == (f"--delta-um {text!r}: expected 3 comma-separated "
+                                      "finite numbers (ASCII digits, a point, an exponent: "
+                                      "250,-3.5e2,0)")
+
+
+def test_a_scenarios_number_options_take_numbers_as_typed(capsys):
+    # --r-mm 0_5 ran an arm of 5 mm (float() reads the underscore as a digit separator),
+    # --r-mm with full-width digits ran 120 mm, --seed 1_0 ran seed 10, --jobs with a
+    # full-width 2 ran two workers: each without a word
+    parser = scenario_arguments("a scenario", "reports/x")
+    parser.add_argument("--r-mm", type=typed_number)
+    jobs_option(parser)
+    args = parser.parse_args(["--r-mm", "1.2e2", "--seed", "+7", "--jobs", "2"])
+    assert (args.r_mm, args.seed, args.jobs) == (120.0, 7, 2)
+    assert parser.parse_args(["--r-mm", "inf"]).r_mm == float("inf")  # the scenario's check
+    for option, text, expected in (
+            ("--r-mm", "0_5", "expected a number (ASCII digits, a point, an exponent: "
+             "120.555, -1.78e2), got '0_5'"),
+            ("--r-mm", "\uff11\uff12\uff10", "expected a number (ASCII digits, a point, "
+             "an exponent: 120.555, -1.78e2), got '\uff11\uff12\uff10'"),
+            ("--seed", "1_0", "expected a non-negative integer, got '1_0'"),
+            ("--seed", "\uff13", "expected a non-negative integer, got '\uff13'"),
+            ("--jobs", "\uff12", "'\uff12': expected a whole number of worker processes, 1 or "
+             "more")):
+        with pytest.raises(SystemExit) as stop:
+            parser.parse_args([option, text])
+        assert stop.value.code == 2
+        assert capsys.readouterr().err.splitlines()[-1] == (
+            f"{parser.prog}: error: argument {option}: {expected}")
 
 
 def _report(files, stop_after=None):
