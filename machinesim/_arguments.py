@@ -7,8 +7,9 @@ import difflib
 import re
 import sys
 
-#: A value that starts like a negative number: ``-707,-707``, ``-1e-3``, ``-.5``.
-_NEGATIVE = re.compile(r"-\.?\d")
+#: A value that starts like a negative number: ``-707,-707``, ``-1e-3``, ``-.5``, and
+#: ``-inf``, ``-nan``, which the option's own check refuses, naming them.
+_NEGATIVE = re.compile(r"-(?:\.?\d|inf|nan)", re.IGNORECASE)
 #: Options that may be given more than once: each adds to what the others gave (``--roi``,
 #: ``--vary``), or ends the command (``--help``, ``--version``). argparse keeps the last of
 #: any other and drops the rest without a word.
@@ -72,7 +73,8 @@ class ArgumentParser(argparse.ArgumentParser):
         """``--option -707,-707`` as ``--option=-707,-707`` for an option that takes one
         value: argparse takes a word that starts with '-' for an option unless it is a
         plain negative number (``-178``), so a negative first component (``--c-offset-um
-        -707,-707``, ``--e-ys-um -1e3``) ended in "expected one argument"."""
+        -707,-707``, ``--e-ys-um -1e3``) ended in "expected one argument", and so did
+        ``--r-mm -inf``, which the option's check refuses as not finite."""
         valued = {s for action in self._actions if action.nargs is None
                   for s in action.option_strings}
         out: list[str] = []

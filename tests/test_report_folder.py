@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import subprocess
 import sys
@@ -271,6 +272,11 @@ def test_an_option_takes_a_value_list_that_starts_with_a_minus_sign(capsys):
     assert (args.c_offset_um, args.e_ys_um, args.quick, args.seed) == ("-707,-707", -1000.0,
                                                                         True, 3)
     assert parser.parse_args(["--e-ys-um", "-.5"]).e_ys_um == -0.5
+    # '-inf' and '-nan' too, for the option's check to name them: "--e-ys-um -inf" and
+    # "--tool-offset-um -inf,0,0" ended in "expected one argument"
+    assert parser.parse_args(["--e-ys-um", "-inf"]).e_ys_um == -math.inf
+    assert math.isnan(parser.parse_args(["--e-ys-um", "-NaN"]).e_ys_um)
+    assert parser.parse_args(["--c-offset-um", "-Infinity,0"]).c_offset_um == "-Infinity,0"
     # a flag's next word is not its value, and a value refused is refused as before
     with pytest.raises(SystemExit):
         parser.parse_args(["--quick", "-5"])
