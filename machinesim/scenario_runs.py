@@ -18,7 +18,7 @@ from typing import NoReturn
 
 from machinesim._arguments import ArgumentParser
 from machinesim._interrupts import ctrl_c_remembered, stopped
-from machinesim._io import folder_path, input_path, stdout_to_null
+from machinesim._io import folder_path, input_path, os_reason, stdout_to_null
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._staged import StagedFolder
 from machinesim.exceptions import InputError
@@ -189,12 +189,16 @@ def _stage_report(out) -> StagedFolder:
         refuse(f"cannot make the report folder there ({reason}); expected a folder, or a "
                "path where one can be made")
 
-    if os.path.lexists(target) and not target.is_dir():
-        cannot("a file is there")
-    blocking = next((p for p in target.parents if p.exists()), None)
-    if blocking is not None and not blocking.is_dir():
-        cannot(f"{str(blocking)!r} is a file, not a folder")
-    if target.is_dir():
+    try:  # a name too long for the file system fails its stat (ENAMETOOLONG)
+        if os.path.lexists(target) and not target.is_dir():
+            cannot("a file is there")
+        blocking = next((p for p in target.parents if p.exists()), None)
+        if blocking is not None and not blocking.is_dir():
+            cannot(f"{str(blocking)!r} is a file, not a folder")
+        is_folder = target.is_dir()
+    except OSError as exc:
+        cannot(os_reason(exc))
+    if is_folder:
         if not os.access(target, os.R_OK | os.W_OK | os.X_OK):
             refuse("the report folder is not writable")
         _check_replaceable(target, refuse)

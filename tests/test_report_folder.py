@@ -251,6 +251,19 @@ def test_a_folder_that_is_not_a_report_is_refused_not_replaced(tmp_path, capsys)
         out.rmdir()
 
 
+def test_a_report_folder_name_too_long_for_the_file_system_is_refused_naming_out(
+        tmp_path, capsys):
+    # --out with a 300-character name printed "s: error: /abs/path/xxx...: File name too
+    # long" (an OSError of the folder's stat), naming neither --out nor what was expected
+    limit = os.pathconf(tmp_path, "PC_NAME_MAX")
+    for out in (tmp_path / ("x" * (limit + 1)), tmp_path / ("y" * (limit + 1)) / "report"):
+        assert scenario_status(_report({"a.md": "a\n"}), Namespace(out=out), "s") == 2
+        assert capsys.readouterr().err == (
+            f"s: error: key 'out': --out {str(out)!r}: cannot make the report folder there "
+            "(File name too long); expected a folder, or a path where one can be made\n")
+    assert os.listdir(tmp_path) == []
+
+
 def test_a_scenario_names_a_misspelt_option_with_the_one_meant(capsys):
     parser = scenario_arguments("a scenario", "reports/x")
     with pytest.raises(SystemExit) as stop:
