@@ -20,7 +20,7 @@ paper's four cases on the one lab: Case 1 as found, Case 2 after the tool-workpi
 radius), Case 3 with the modified program (Table 4), Case 4 with the servo tuned (Table 6
 "after"). Each case's form error is predicted before the cut (program, tool, servo shares,
 Fig. 16) and measured after it along theta = 0, r 150-350 um (Figs 17-18); Sa over 100 x
-100 um. Writes summary.json (docs/reports.md), the case table, the profiles, the shares,
+100 um. Writes summary.json (docs/reports.md), the case table (cases.md), the profiles, the shares,
 a 3-D view of the Case 4 surface, the tool against the spindle axis and the errors the tool
 test reads as the tool's, exactly and nearly (`machinesim.procedures.sts_aliases`). The white-light
 interferometer reads the turned height field without spot or registration (modelled for
@@ -121,7 +121,7 @@ def report(args) -> None:
                             progress=stage, jobs=args.jobs)
     out = ReportFolder(args.out)
     details = result.evaluation.details
-    print(case_table(details))
+    print(case_table(out, details))
     profiles(out, "profiles.png", result)
     shares(out, "shares.png", details)
     surface_3d(out, "case_4_surface.png", result)
@@ -346,20 +346,22 @@ def tool_from_spindle_axis(machine, errors, nose_radius: float,
     return sign * float(np.mean(path.along)) - radius, sign * float(np.mean(path.offset))
 
 
-def case_table(details) -> str:
-    """The cases side by side with the paper's (Figs 16 and 18)."""
-    lines = ["| case | compensated | predicted P-V (nm): program | tool | servo | total "
-             "| measured P-V (nm) | paper measured (nm) | Sa (nm) |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for name in CASES:
-        d = details[name]
-        paper = PAPER[name]
-        lines.append(
-            f"| {name[-1]} | {d['compensated']} | {d['predicted_program_pv_nm']:.2f} | "
-            f"{d['predicted_tool_pv_nm']:.2f} | {d['predicted_servo_pv_nm']:.2f} | "
-            f"{d['predicted_pv_nm']:.2f} | {d['measured_pv_nm']:.2f} | "
-            f"{'-' if paper is None else f'{paper:g}'} | {d['sa_nm']:.2f} |")
-    return "\n".join(lines) + "\n"
+def case_table(out: ReportFolder, details) -> str:
+    """The cases side by side with the paper's (Figs 16 and 18), as ``cases.md`` and
+    ``cases.json`` (the paper's measured P-V n/a, null, where it gives none)."""
+    rows = [[name[-1], details[name]["compensated"],
+             details[name]["predicted_program_pv_nm"], details[name]["predicted_tool_pv_nm"],
+             details[name]["predicted_servo_pv_nm"], details[name]["predicted_pv_nm"],
+             details[name]["measured_pv_nm"],
+             math.nan if PAPER[name] is None else PAPER[name], details[name]["sa_nm"]]
+            for name in CASES]
+    return out.write_table(
+        "cases", ["case", "compensated", "predicted P-V, program (nm)",
+                  "predicted P-V, tool (nm)", "predicted P-V, servo (nm)",
+                  "predicted P-V, total (nm)", "measured P-V (nm)", "paper measured (nm)",
+                  "Sa (nm)"], rows,
+        title="The four cases: form error predicted before the cut and measured after",
+        digits=2)
 
 
 def _save(out: ReportFolder, name: str, figure) -> None:

@@ -2,7 +2,7 @@
 workpiece), its table without a ratio to a zero std, its errors file named, and what it
 refuses before anything is cut (a workpiece set too high, a tool its test or the plane
 check cannot identify), a height just inside the range taken, and what the plane check
-reads before the cut."""
+reads before the cut; the case table it writes."""
 
 import importlib.util
 import re
@@ -79,6 +79,28 @@ def test_the_tool_against_the_axis_table_gives_no_ratio_to_a_zero_std(tmp_path):
     assert rows[1][0] == "tool.y" and rows[1][-1] == pytest.approx(-3.0, rel=1e-6)
     assert rows[0][-2] == pytest.approx(2.0, rel=1e-6)  # the error itself, nm, is given
     assert text.splitlines()[4].endswith("| n/a |")
+
+
+def test_the_case_table_is_written_to_the_report_folder(tmp_path):
+    """The scenario's docstring says it writes the case table; it was printed only, and the
+    folder held no file with the predicted shares side by side."""
+    import json
+
+    from machinesim.report import ReportFolder
+
+    scenario = _scenario()
+    details = {f"case_{k}": {"compensated": f"c{k}", "predicted_program_pv_nm": 1.0 * k,
+                             "predicted_tool_pv_nm": 2.0 * k, "predicted_servo_pv_nm": 3.0 * k,
+                             "predicted_pv_nm": 4.0 * k, "measured_pv_nm": 5.0 * k,
+                             "sa_nm": 0.125 * k} for k in (1, 2, 3, 4)}
+    text = scenario.case_table(ReportFolder(tmp_path / "out"), details)
+    table = json.loads((tmp_path / "out" / "cases.json").read_text())
+    assert table["columns"][2] == "predicted P-V, program (nm)"
+    # case 3: the paper gives no measured P-V (null); the others its 40, 20, 8 nm
+    assert table["rows"][2] == ["3", "c3", 3.0, 6.0, 9.0, 12.0, 15.0, None, 0.375]
+    assert [row[7] for row in table["rows"]] == [40.0, 20.0, None, 8.0]
+    assert "| 3 | c3 | 3.00 | 6.00 | 9.00 | 12.00 | 15.00 | n/a | 0.38 |" in text
+    assert (tmp_path / "out" / "cases.md").read_text() == text
 
 
 def test_the_scenario_names_its_errors_file_when_a_value_does_not_fit(tmp_path):
