@@ -211,6 +211,45 @@ def test_a_setting_that_puts_a_sphere_beyond_the_probe_s_reach_is_refused_before
             scenario.loads(_parse(argv))
 
 
+def test_a_setting_that_puts_a_sphere_beyond_the_bottom_touch_s_reach_is_refused_first():
+    """The bottom touch meets a sphere set at most the probe ball's radius (0.25 mm) lower
+    and starts inside the part for one more than 2.05 mm higher: --crown-delta-um 0,0,-300
+    ran the grooves' whole load, then the probe refused the crown naming a 'centre' in
+    metres ("Expected the bottom touch under [-0.006, -0.006] m to meet the sphere within
+    0.0023 m, it met nothing"), no option; --delta-um 0,0,-300 the same at the grooves'
+    probing. Measured through the lab: -250 um found, -251 missed; 2040 found, 2060
+    refused ('start clear of the part')."""
+    probing_miss = sphere_probing.probing_miss
+    spheres = cam.GROOVE_SPHERES
+    for dz in (-249.0, 0.0, 2049.0):
+        assert probing_miss(spheres, WorkpieceSetting(np.array([0.0, 0.0, dz * UM]))) is None
+    low = probing_miss(spheres, WorkpieceSetting(np.array([0.0, 0.0, -251.0 * UM])))
+    assert low == ("it puts reference sphere S1 (designed at x -6, y -6 mm) 0.251 mm lower "
+                   "than its place, where the probe finds a sphere at most 0.25 mm lower (its "
+                   "bottom touch meets nothing below) and 2.05 mm higher (it would start "
+                   "inside the part above)")
+    assert "S1 (designed at x -6, y -6 mm) 2.051 mm higher" in probing_miss(
+        spheres, WorkpieceSetting(np.array([0.0, 0.0, 2051.0 * UM])))
+    # a tilt about X lowers the spheres on -Y (S1, S2 at y = -6 mm) by 6 sin(alpha): 0.3 mm
+    # at 2.865 deg with z 0, while S3 (y = +6 mm) rises as much
+    alpha = math.asin(0.3 / 6.0)
+    centres = np.asarray(spheres.centres)
+    lowered = 6.0 * math.sin(alpha) * math.cos(0.0) + (centres[0, 2] / MM) * (
+        math.cos(alpha) - 1.0)
+    assert f"{lowered:.4g} mm lower than its place" in probing_miss(
+        spheres, WorkpieceSetting(alpha=-alpha))
+    for argv, words in (
+            (["--delta-um", "0,0,-300"], r"--delta-um 0,0,-300 sets the grooves' block so that "
+             r"it puts reference sphere S1 \(designed at x -6, y -6 mm\) 0.3 mm lower than "
+             r"its place"),
+            (["--crown-delta-um", "0,0,-300"], r"--crown-delta-um 0,0,-300 sets the crown so "
+             r"that .* 0.3 mm lower"),
+            (["--crown-delta-um", "0,0,2500"], r"--crown-delta-um 0,0,2500 sets the crown so "
+             r"that .* 2.5 mm higher")):
+        with pytest.raises(MachineSimError, match=words):
+            scenario.loads(_parse(argv))
+
+
 def _parse(argv):
     captured = {}
 

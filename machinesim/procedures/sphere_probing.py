@@ -43,6 +43,17 @@ MM = M_PER_MM
 #: (320, 320) missed. `probing_miss` refuses beyond it; within, a diagonal setting can still
 #: be missed, and the probe says so.
 SIDEWAYS_REACH = 0.34 * M_PER_MM
+#: How far (m) a reference sphere may sit below its designed place for the default plan's
+#: bottom touch to meet it: the touch starts ``lift`` over the designed centre and runs
+#: ``lift`` + the sphere's radius down, and the ball meets the cavity's bottom its own
+#: radius (0.25 mm) over it. Measured through the lab (either load set (0, 0, dz)): noise
+#: off, -250 um found and -251 missed; with the lab's realism -240 found, -245 missed.
+HEIGHT_REACH_BELOW = 0.25 * M_PER_MM
+#: How far (m) a reference sphere may sit above its designed place: the scans and the
+#: touch start ``lift`` (0.3 mm) over the designed centre, which lies in the part once the
+#: sphere is more than its radius less the ball's, plus ``lift``, higher (2.05 mm), and the
+#: probe refuses to start there. Measured: 2040 um found, 2060 refused, either load.
+HEIGHT_REACH_ABOVE = 2.05 * M_PER_MM
 
 
 @dataclass(frozen=True)
@@ -222,24 +233,38 @@ def probing_miss(spheres: ReferenceSpheres, setting, plan: ProbePlan = ProbePlan
                  ) -> str | None:
     """Whether a workpiece set by ``setting`` (a `WorkpieceSetting`: ``W = T(d) Rx Ry Rz``)
     puts a reference sphere farther off its designed place in x or y than `read_sphere`'s
-    scans find it with the default plan (`SIDEWAYS_REACH`): what moves, or None (always
-    None for another plan, whose reach is not measured). The scans are made about the
-    designed centres; beyond that reach they run into the cavity's wall (over the stylus's
-    stroke) or miss it, and the reading is refused after the probe has run. The C centre's
-    offset, micrometres across, is left out, as the sphere's height (the bottom touch finds
-    it)."""
+    scans find it with the default plan (`SIDEWAYS_REACH`), or lower or higher than its
+    bottom touch reaches (`HEIGHT_REACH_BELOW`, `HEIGHT_REACH_ABOVE`): what moves, or None
+    (always None for another plan, whose reach is not measured). The scans are made about
+    the designed centres; beyond that reach they run into the cavity's wall (over the
+    stylus's stroke) or miss it, the bottom touch meets nothing, or the probe would start
+    inside the part, and the reading is refused after the probe has run. The C centre's
+    offset, micrometres across, is left out."""
+    if plan != PROBE_PLAN:
+        return None
     centres = spheres.centres
     rotation = rotation_xyz(setting.alpha, setting.beta, setting.gamma)
     landed = np.asarray(setting.delta, dtype=np.float64) + centres @ rotation.T
     side = np.abs(landed - centres)[:, :2]
     k, axis = np.unravel_index(int(np.argmax(side)), side.shape)
-    if plan != PROBE_PLAN or side[k, axis] <= SIDEWAYS_REACH:
-        return None
-    x, y = centres[k, :2] / M_PER_MM
-    return (f"it puts reference sphere S{k + 1} (designed at x {x:g}, y {y:g} mm) "
-            f"{side[k, axis] / M_PER_MM:.4g} mm off its place in {'xy'[axis]}, where the "
-            f"probe's scans find a sphere at most about {SIDEWAYS_REACH / M_PER_MM:g} mm off "
-            "in x or y")
+    if side[k, axis] > SIDEWAYS_REACH:
+        x, y = centres[k, :2] / M_PER_MM
+        return (f"it puts reference sphere S{k + 1} (designed at x {x:g}, y {y:g} mm) "
+                f"{side[k, axis] / M_PER_MM:.4g} mm off its place in {'xy'[axis]}, where the "
+                f"probe's scans find a sphere at most about {SIDEWAYS_REACH / M_PER_MM:g} mm "
+                "off in x or y")
+    height = landed[:, 2] - centres[:, 2]
+    for k in (int(np.argmin(height)), int(np.argmax(height))):
+        low = height[k] < -HEIGHT_REACH_BELOW
+        if low or height[k] > HEIGHT_REACH_ABOVE:
+            x, y = centres[k, :2] / M_PER_MM
+            return (f"it puts reference sphere S{k + 1} (designed at x {x:g}, y {y:g} mm) "
+                    f"{abs(height[k]) / M_PER_MM:.4g} mm {'lower' if low else 'higher'} than "
+                    "its place, where the probe finds a sphere at most "
+                    f"{HEIGHT_REACH_BELOW / M_PER_MM:g} mm lower (its bottom touch meets "
+                    f"nothing below) and {HEIGHT_REACH_ABOVE / M_PER_MM:g} mm higher (it "
+                    "would start inside the part above)")
+    return None
 
 
 def read_spheres(probe, spheres: ReferenceSpheres, plan: ProbePlan = ProbePlan()
