@@ -12,11 +12,13 @@ from __future__ import annotations
 import machinesim.scenario_start  # noqa: F401  (first: Ctrl-C while loading is one line)
 
 import argparse
+import sys
 
 import numpy as np
 
 import machinesim
 from machinesim.machines import machines_summary
+from machinesim.scenario_runs import scenario_status
 from machinesim.units import deg, mm, um
 
 
@@ -41,9 +43,15 @@ def sweep_table(machine, errors, target_mm=(1.0, 1.0, 0.0)) -> str:
     return "\n".join(lines)
 
 
-def main() -> None:
+def main() -> int:
     # no options: --help says what it shows, and anything else is refused (exit 2)
-    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
+    args = argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
+    # as every scenario: a closed pipe, a full disk or a Ctrl-C is one line, not a traceback
+    return scenario_status(show, args, "demo")
+
+
+def show(args) -> None:
+    """Print the machines and the landing table."""
     print("machinesim machines\n")
     print("machine          axes     travel")
     print("\n".join(machines_summary()))
@@ -58,4 +66,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -49,6 +49,25 @@ def test_demo_prints_the_machines_and_the_landing_table():
         assert (dx, dy, dz) == pytest.approx((x * math.cos(tc), x * math.sin(tc), z), abs=1e-3)
 
 
+def test_demo_ends_a_closed_pipe_or_a_full_disk_in_one_line():
+    # demo.py | head -2 and demo.py > /dev/full ended in a BrokenPipeError's and an
+    # OSError's traceback (status 1): demo ran outside scenario_status
+    demo = [sys.executable, str(ROOT / "scenarios" / "demo.py")]
+    closed = subprocess.Popen(demo, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True, cwd=ROOT)
+    closed.stdout.close()  # before its first line: it loads for most of a second
+    err = closed.stderr.read()
+    assert closed.wait(timeout=60) == 0
+    assert err == ("demo: stdout was closed early (a pipe's reader that stopped reading); "
+                   "nothing was written\n")
+    if os.path.exists("/dev/full"):
+        with open("/dev/full", "w") as full:
+            result = subprocess.run(demo, stdout=full, stderr=subprocess.PIPE, text=True,
+                                    check=False, cwd=ROOT, timeout=60)
+        assert result.returncode == 2
+        assert result.stderr == "demo: error: No space left on device\n"
+
+
 def test_xy_plane_errors_writes_the_paper_figures(tmp_path):
     import json
 
