@@ -18,7 +18,7 @@ from typing import NoReturn
 
 from machinesim._arguments import ArgumentParser
 from machinesim._interrupts import ctrl_c_remembered, stopped
-from machinesim._io import folder_path, input_path, os_reason, stdout_to_null
+from machinesim._io import broken_link, folder_path, input_path, os_reason, stdout_to_null
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._staged import StagedFolder
 from machinesim.exceptions import InputError
@@ -191,7 +191,8 @@ def _stage_report(out) -> StagedFolder:
 
     try:  # a name too long for the file system fails its stat (ENAMETOOLONG)
         if os.path.lexists(target) and not target.is_dir():
-            cannot("a file is there")
+            loop = broken_link(path)  # a link that leads round in a loop is no file
+            cannot(f"it {loop}" if loop else "a file is there")
         blocking = next((p for p in target.parents if p.exists()), None)
         if blocking is not None and not blocking.is_dir():
             cannot(f"{str(blocking)!r} is a file, not a folder")

@@ -264,6 +264,18 @@ def test_a_report_folder_name_too_long_for_the_file_system_is_refused_naming_out
     assert os.listdir(tmp_path) == []
 
 
+def test_a_report_folder_that_is_a_symbolic_link_loop_is_refused_as_one(tmp_path, capsys):
+    # --out loop (a link to itself) was refused as "a file is there", which ls belies
+    out = tmp_path / "loop"
+    out.symlink_to("loop")
+    assert scenario_status(_report({"a.md": "a\n"}), Namespace(out=out), "s") == 2
+    assert capsys.readouterr().err == (
+        f"s: error: key 'out': --out {str(out)!r}: cannot make the report folder there (it "
+        "cannot be reached: too many levels of symbolic links (a loop)); expected a folder, "
+        "or a path where one can be made\n")
+    assert os.listdir(tmp_path) == ["loop"]
+
+
 def test_a_scenario_names_a_misspelt_option_with_the_one_meant(capsys):
     parser = scenario_arguments("a scenario", "reports/x")
     with pytest.raises(SystemExit) as stop:
