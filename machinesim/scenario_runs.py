@@ -250,7 +250,14 @@ def _whole(text: str) -> int | None:
     """``text`` (blanks around it allowed) as an int when written as a whole number of ASCII
     digits (`_TYPED_WHOLE`), else None."""
     text = str(text).strip()
-    return int(text) if _TYPED_WHOLE.fullmatch(text) else None
+    if not _TYPED_WHOLE.fullmatch(text):
+        return None
+    if len(text.lstrip("+")) > sys.get_int_max_str_digits():
+        # int() refuses it (ValueError), and argparse had said "invalid _seed value"
+        raise argparse.ArgumentTypeError(
+            f"expected a whole number of at most {sys.get_int_max_str_digits()} digits "
+            f"(Python's limit), got one of {len(text.lstrip('+'))} digits")
+    return int(text)
 
 
 def typed_number(text: str) -> float:

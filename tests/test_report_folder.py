@@ -61,7 +61,11 @@ def test_a_scenarios_number_options_take_numbers_as_typed(capsys):
             ("--seed", "1_0", "expected a non-negative integer, got '1_0'"),
             ("--seed", "\uff13", "expected a non-negative integer, got '\uff13'"),
             ("--jobs", "\uff12", "'\uff12': expected a whole number of worker processes, 1 or "
-             "more")):
+             "more"),
+            # int() refuses more digits than its limit: "invalid _seed value: '1000...'"
+            ("--seed", "1" + "0" * sys.get_int_max_str_digits(), "expected a whole number "
+             f"of at most {sys.get_int_max_str_digits()} digits (Python's limit), got one of "
+             f"{sys.get_int_max_str_digits() + 1} digits")):
         with pytest.raises(SystemExit) as stop:
             parser.parse_args([option, text])
         assert stop.value.code == 2
