@@ -60,6 +60,26 @@ def folder_key(path) -> str:
     return os.path.realpath(Path(path))
 
 
+def listed_files(folder) -> tuple[set[str], str | None]:
+    """The names a report folder's summary.json lists under ``files``, and None; or an empty
+    set and why it is no report's summary (it cannot be read, is not JSON, or lists no
+    files): a folder holding it is not a report folder, and replacing it whole would lose
+    the user's file. Without a summary.json: an empty set and None."""
+    path = Path(folder) / "summary.json"
+    if not path.exists():
+        return set(), None
+    try:
+        summary = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        return set(), f"it cannot be read: {exc.strerror or exc}"
+    except ValueError as exc:  # a UnicodeDecodeError too
+        return set(), f"it is not JSON: {exc}"
+    listed = summary.get("files") if isinstance(summary, dict) else None
+    if not isinstance(listed, list):
+        return set(), "it lists no files under 'files', as a report's does"
+    return {str(n) for n in listed}, None
+
+
 def identified_notes(result) -> str:
     """The notes under a result's table of identified parameters (identified.md; "" when
     there are none): what was injected and not identified, what the std leaves out when
@@ -198,12 +218,12 @@ class ReportFolder:
         except OSError as exc:
             raise FileError(f"cannot read the report folder ({exc.strerror or exc})",
                             source=str(self.final)) from None
-        try:
-            listed = json.loads((self.final / "summary.json").read_text(encoding="utf-8"))
-            listed = listed.get("files") if isinstance(listed, dict) else None
-        except (OSError, ValueError):
-            listed = None
-        listed = {str(n) for n in listed} if isinstance(listed, list) else set()
+        listed, unlike = listed_files(self.final)
+        if unlike is not None:
+            raise InputError(f"report folder {str(self.final)!r}: holds a summary.json that "
+                             f"is no report's ({unlike}), so it is not a report folder; the "
+                             "new report replaces the folder whole, so it would be lost: "
+                             "move it, or give another folder", key="out")
         foreign = [n for n in names if n not in ours and n not in listed]
         if not foreign:
             return listed

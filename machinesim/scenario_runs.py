@@ -6,7 +6,6 @@ Ctrl-C or a full memory. The folder's contents are `machinesim.report`'s.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import re
@@ -22,7 +21,7 @@ from machinesim._io import broken_link, folder_path, input_path, os_reason, stdo
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._staged import StagedFolder
 from machinesim.exceptions import InputError
-from machinesim.report import STAGED, folder_key
+from machinesim.report import STAGED, folder_key, listed_files
 from machinesim.units import typed_float
 
 #: A whole number as typed: ASCII digits, a '+' before them allowed. int() reads more: '1_0'
@@ -228,12 +227,11 @@ def _check_replaceable(folder: Path, refuse) -> None:
         refuse(f"holds files ({shown(names)}) but no summary.json, so it is not a report "
                "folder, and a new report replaces its folder whole; give a new or empty "
                "folder (or one a scenario wrote)")
-    try:
-        listed = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
-        listed = listed.get("files") if isinstance(listed, dict) else None
-    except (OSError, ValueError):
-        listed = None
-    listed = {str(n) for n in listed} if isinstance(listed, list) else set()
+    listed, unlike = listed_files(folder)
+    if unlike is not None:
+        refuse(f"holds a summary.json that is no report's ({unlike}), so it is not a report "
+               "folder, and a new report replaces its folder whole; give a new or empty "
+               "folder (or one a scenario wrote)")
     foreign = [n for n in names if n != "summary.json" and n not in listed]
     if foreign:
         refuse(f"holds files its summary.json does not list ({shown(foreign)}); a new report "

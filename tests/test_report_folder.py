@@ -236,10 +236,19 @@ def test_another_hosts_live_staging_folder_is_left_alone(tmp_path, monkeypatch):
 
 
 def test_a_folder_that_is_not_a_report_is_refused_not_replaced(tmp_path, capsys):
+    # a summary.json of the user's own (not JSON, or no list of files) was taken for a
+    # report's: alone in the folder it was replaced without a word, and beside a report's
+    # files the refusal said "does not list" of a file it could not read
     for content, message in (({"notes.txt": "mine"}, "holds files (notes.txt) but no summary.json"),
                              ({"summary.json": '{"files": ["summary.json"]}',
                                "notes.txt": "mine"},
-                              "holds files its summary.json does not list (notes.txt)")):
+                              "holds files its summary.json does not list (notes.txt)"),
+                             ({"summary.json": "[]"}, "holds a summary.json that is no "
+                              "report's (it lists no files under 'files', as a report's "
+                              "does), so it is not a report folder"),
+                             ({"summary.json": '{"files": ["a', "a.md": "a"},
+                              "holds a summary.json that is no report's (it is not JSON: "
+                              "Unterminated string starting at: line 1 column 12 (char 11))")):
         out = tmp_path / "report"
         out.mkdir()
         for name, text in content.items():

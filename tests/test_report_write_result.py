@@ -78,6 +78,18 @@ def test_write_result_outside_a_scenario_writes_the_folder_whole_or_not_at_all(
     assert all(_snapshot(out)[name] == report[name] for name in report if name != "summary.json")
 
 
+def test_write_result_refuses_a_folder_whose_summary_json_is_no_reports(tmp_path):
+    # a folder holding only a summary.json of the user's own (no list of files) was
+    # replaced by the report, the file lost
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "summary.json").write_text('{"my": "own"}')
+    with pytest.raises(InputError, match=r"report folder .*: holds a summary.json that is no "
+                                         r"report's \(it lists no files under 'files'"):
+        ReportFolder(mine).write_result(_toy_result())
+    assert _snapshot(mine) == {"summary.json": b'{"my": "own"}'} and _siblings(mine) == []
+
+
 def test_a_second_result_through_one_folder_replaces_the_first_report_whole(tmp_path):
     # folder.write_result(first); folder.write_result(second) left the first's parts
     # (old_a.ply, old_b.ply) beside the second's report, and its summary.json listed them as
