@@ -78,9 +78,8 @@ def scenario_status(report, args, name: str | None = None) -> int:
             if staged is not None and staged.path is not None:
                 staged.commit()
             stdout.flush()  # the last buffered lines meet a closed pipe here, if at all
-            if stdout.closed_early:
-                say(name, "stdout was closed early (a pipe's reader that stopped "
-                    f"reading); {_interrupted(out, staged)}")
+            if stdout.closed:
+                say(name, f"{stdout.closed}; {_interrupted(out, staged)}")
     except MachineSimError as error:
         say(name, f"error: {error}")
         return 2
@@ -108,22 +107,29 @@ class _stdout_may_close:
     """Within: a reader that stops reading stdout (``scenario ... | head -1``) does not stop
     the run. The first write that meets the closed pipe sends stdout to the null device
     from then on, as Python's documentation advises (the signal module's notes on SIGPIPE),
-    and the report folder is still written whole; ``closed_early`` says it happened."""
+    and the report folder is still written whole; ``closed`` says it happened, and how. So
+    for a run started with stdout closed (``>&-``), where Python's ``sys.stdout`` is None
+    and the first print ended in AttributeError's traceback."""
 
     def __init__(self) -> None:
-        self.closed_early = False
+        self.closed = ""
 
     def __enter__(self):
-        self.stream = sys.stdout
+        self.stream = self.usual = sys.stdout
+        if self.stream is None:
+            self.stream = open(os.devnull, "w", encoding="utf-8")
+            self.closed = "stdout was closed when the run began (no file descriptor 1)"
         sys.stdout = self
         return self
 
     def __exit__(self, *exc) -> None:
-        sys.stdout = self.stream
+        sys.stdout = self.usual
         try:
             self.stream.flush()
         except BrokenPipeError:
             self._to_null()
+        if self.usual is None:
+            self.stream.close()
 
     def write(self, text: str) -> int:
         try:
@@ -139,7 +145,7 @@ class _stdout_may_close:
             self._to_null()
 
     def _to_null(self) -> None:
-        self.closed_early = True
+        self.closed = "stdout was closed early (a pipe's reader that stopped reading)"
         stdout_to_null(self.stream)
 
     def __getattr__(self, attribute: str):  # isatty, encoding, fileno, ...

@@ -357,6 +357,21 @@ def test_a_reader_that_stops_reading_stdout_does_not_cost_the_report(tmp_path):
     assert json.loads((out / "summary.json").read_text())["files"]
 
 
+def test_a_run_started_with_stdout_closed_writes_its_report(tmp_path, capsys, monkeypatch):
+    """``scenario ... >&-``: Python's sys.stdout is None, and the first print ended in
+    "AttributeError: 'NoneType' object has no attribute 'write'" (then 'flush') with two
+    tracebacks, exit 1, no report. Now the report is written whole, exit 0, one line."""
+    out = tmp_path / "report"
+    monkeypatch.setattr(sys, "stdout", None)
+    assert scenario_status(_report({"a.md": "a\n"}), Namespace(out=out), "s") == 0
+    assert sys.stdout is None  # as it was
+    monkeypatch.undo()
+    assert capsys.readouterr().err == (
+        "s: stdout was closed when the run began (no file descriptor 1); this run's report "
+        f"was written whole to {str(out)!r}\n")
+    assert json.loads((out / "summary.json").read_text())["files"] == ["a.md", "summary.json"]
+
+
 def test_a_full_disk_names_the_file_as_in_the_report_and_says_the_old_report_is_kept(
         tmp_path, capsys):
     """A write that fails midway (disk full) named the staging folder's file, removed on the
