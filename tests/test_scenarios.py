@@ -161,12 +161,13 @@ def test_a_scenario_stopped_by_ctrl_c_or_sigterm_says_so_in_one_line(
     """SIGINT (or SIGTERM, ``kill PID``, or SIGHUP, its terminal closed) while paper 002's
     first load is measured: status 130 (143, 129), one line on stderr after the progress
     lines, no traceback, no report written (its files come after the runs), and no staging
-    folder left beside the report's. A summary.json an earlier run left in the folder stays
-    whole. (SIGTERM and SIGHUP ended the process where it stood: status -15 or -1, and the
-    staging folder stayed until the next run.)"""
+    folder left beside the report's. A summary.json an earlier run left in the folder (a
+    report's, listing the folder's files) stays whole. (SIGTERM and SIGHUP ended the
+    process where it stood: status -15 or -1, and the staging folder stayed until the next
+    run.)"""
     out_folder = tmp_path / "report"
     out_folder.mkdir()
-    (out_folder / "summary.json").write_text('{"kept": true}')
+    (out_folder / "summary.json").write_text('{"files": ["summary.json"], "kept": true}')
     process = subprocess.Popen([sys.executable, str(ROOT / "scenarios" / "workpiece_setting.py"),
                                 "--quick", "--out", str(out_folder)], stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, cwd=ROOT, **as_in_a_terminal)
@@ -182,7 +183,8 @@ def test_a_scenario_stopped_by_ctrl_c_or_sigterm_says_so_in_one_line(
     last = [line for line in err.splitlines() if not line.startswith("workpiece_setting [")]
     assert len(last) == 1 and last[0].startswith(f"workpiece_setting: {said}"), err
     assert out == ""
-    assert json.loads((out_folder / "summary.json").read_text()) == {"kept": True}
+    assert json.loads((out_folder / "summary.json").read_text()) == {"files": ["summary.json"],
+                                                                     "kept": True}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
 
 
