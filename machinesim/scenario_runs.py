@@ -71,7 +71,8 @@ def scenario_status(report, args, name: str | None = None) -> int:
     staged = None
     try:
         # past the memory there is: MemoryError, not the OOM killer
-        with ctrl_c_remembered(), memory_capped(), _stdout_may_close() as stdout:
+        with (ctrl_c_remembered(), memory_capped(), _may_close("stdout") as stdout,
+              _may_close("stderr")):
             if out is not None:
                 staged = _stage_report(out)
             report(args)
@@ -103,30 +104,38 @@ def scenario_status(report, args, name: str | None = None) -> int:
     return 0
 
 
-class _stdout_may_close:
+class _may_close:
     """Within: a reader that stops reading stdout (``scenario ... | head -1``) does not stop
     the run. The first write that meets the closed pipe sends stdout to the null device
     from then on, as Python's documentation advises (the signal module's notes on SIGPIPE),
     and the report folder is still written whole; ``closed`` says it happened, and how. So
     for a run started with stdout closed (``>&-``), where Python's ``sys.stdout`` is None
-    and the first print ended in AttributeError's traceback."""
+    and the first print ended in AttributeError's traceback.
 
-    def __init__(self) -> None:
+    ``_may_close("stderr")``: the same for stderr, where the progress lines and notes go,
+    and on any failed write (a full disk, a closed terminal), not a closed pipe only: with
+    ``scenario ... 2>&1 | head -1`` the next progress line ended the run in status 2 with
+    no report and no line, and the lines are worth no run."""
+
+    def __init__(self, name: str = "stdout") -> None:
+        self.name = name
+        self.lost = BrokenPipeError if name == "stdout" else OSError
         self.closed = ""
 
     def __enter__(self):
-        self.stream = self.usual = sys.stdout
+        self.stream = self.usual = getattr(sys, self.name)
         if self.stream is None:
             self.stream = open(os.devnull, "w", encoding="utf-8")
-            self.closed = "stdout was closed when the run began (no file descriptor 1)"
-        sys.stdout = self
+            self.closed = (f"{self.name} was closed when the run began (no file descriptor "
+                           f"{1 if self.name == 'stdout' else 2})")
+        setattr(sys, self.name, self)
         return self
 
     def __exit__(self, *exc) -> None:
-        sys.stdout = self.usual
+        setattr(sys, self.name, self.usual)
         try:
             self.stream.flush()
-        except BrokenPipeError:
+        except self.lost:
             self._to_null()
         if self.usual is None:
             self.stream.close()
@@ -134,19 +143,22 @@ class _stdout_may_close:
     def write(self, text: str) -> int:
         try:
             return self.stream.write(text)
-        except BrokenPipeError:
+        except self.lost:
             self._to_null()
             return len(text)
 
     def flush(self) -> None:
         try:
             self.stream.flush()
-        except BrokenPipeError:
+        except self.lost:
             self._to_null()
 
     def _to_null(self) -> None:
-        self.closed = "stdout was closed early (a pipe's reader that stopped reading)"
-        stdout_to_null(self.stream)
+        self.closed = f"{self.name} was closed early (a pipe's reader that stopped reading)"
+        try:
+            stdout_to_null(self.stream)
+        except (OSError, ValueError):  # no descriptor to point elsewhere: a stream of its own
+            self.stream = open(os.devnull, "w", encoding="utf-8")
 
     def __getattr__(self, attribute: str):  # isatty, encoding, fileno, ...
         return getattr(self.stream, attribute)

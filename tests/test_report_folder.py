@@ -357,6 +357,30 @@ def test_a_reader_that_stops_reading_stdout_does_not_cost_the_report(tmp_path):
     assert json.loads((out / "summary.json").read_text())["files"]
 
 
+def test_a_reader_that_stops_reading_stdout_and_stderr_does_not_cost_the_report(tmp_path):
+    """``scenario ... 2>&1 | head -1``: the next progress line on stderr met the closed pipe
+    and ended the run in status 2, with no report and no line (stderr was the pipe). Now
+    stderr goes to the null device as stdout does, and the report is written whole, exit
+    0; and the same with stderr a full disk (``2>/dev/full``)."""
+    script = PRINTING_REPORT.replace('print("table row", k)',
+                                     'print("progress", k, file=sys.stderr, flush=True)')
+    assert script != PRINTING_REPORT
+    out = tmp_path / "report"
+    child = subprocess.Popen([sys.executable, "-c", script, str(out)],
+                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    assert child.stdout.readline() == "progress 0\n"
+    child.stdout.close()  # as head does after its line
+    assert child.wait(timeout=120) == 0
+    assert (out / "a.md").read_text() == "a\n"
+    assert json.loads((out / "summary.json").read_text())["files"] == ["a.md", "summary.json"]
+    if os.path.exists("/dev/full"):
+        full_out = tmp_path / "full"
+        with open("/dev/full", "w") as full:
+            assert subprocess.run([sys.executable, "-c", script, str(full_out)],
+                                  stderr=full, timeout=120, check=False).returncode == 0
+        assert (full_out / "a.md").read_text() == "a\n"
+
+
 def test_a_run_started_with_stdout_closed_writes_its_report(tmp_path, capsys, monkeypatch):
     """``scenario ... >&-``: Python's sys.stdout is None, and the first print ended in
     "AttributeError: 'NoneType' object has no attribute 'write'" (then 'flush') with two
