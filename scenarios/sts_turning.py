@@ -114,6 +114,7 @@ def report(args) -> None:
     stage = progress_printer("sts_turning")
     lab = make_lab(realism)
     refuse_too_deep(args, lab.machine, errors)
+    refuse_too_high(args, lab.machine, errors)
     refuse_unread_tool(args, lab.machine, errors)
     refuse_unfit_plane(args, make_lab(realism.without(*NOISE)), errors)
     result = run(procedure, lab, progress=stage("run"))
@@ -139,17 +140,24 @@ HEIGHT_KEYS = ("tool.z", "workpiece.z", "tool.rx", "tool.ry", "workpiece.alpha",
                "workpiece.beta")
 
 
+def _tip_drop(machine, errors) -> tuple[np.ndarray, np.ndarray]:
+    """The test sphere's programmed radii (m, each point of its path) and how far (m) the
+    injected ``errors`` put the tool tip below its programmed height there (negative:
+    above), through ``machine``'s kinematics."""
+    path = TEST_SPHERE.path(STSTurning().nose_radius)
+    q = np.zeros((path.x.size, len(machine.axes)))
+    for letter, values in (("X", path.x), ("Z", path.z), ("C", path.c)):
+        q[:, machine.axes.index(letter)] = values
+    return np.abs(path.x), machine.tool_pose(q)[:, 2, 3] - machine.tool_pose(q, errors)[:, 2, 3]
+
+
 def refuse_too_deep(args, machine, errors) -> None:
     """Refuse, before anything is cut, injected ``errors`` that put the tool tip more than
     `DEPTH_RANGE` below the test sphere's programmed tips (the most over its program, through
     ``machine``'s kinematics), naming the ``--errors`` file and the keys that set the height:
     the tool test would cut the sphere that much deeper and refuse it only after the cut and
     a fit of minutes (a workpiece set 50 um high: about 150 s to 'did not converge')."""
-    path = TEST_SPHERE.path(STSTurning().nose_radius)
-    q = np.zeros((path.x.size, len(machine.axes)))
-    for letter, values in (("X", path.x), ("Z", path.z), ("C", path.c)):
-        q[:, machine.axes.index(letter)] = values
-    below = float(np.max(machine.tool_pose(q)[:, 2, 3] - machine.tool_pose(q, errors)[:, 2, 3]))
+    below = float(np.max(_tip_drop(machine, errors)[1]))
     if below <= DEPTH_RANGE:
         return
     parameters = errors.parameters()
@@ -161,6 +169,34 @@ def refuse_too_deep(args, machine, errors) -> None:
         f"(the test sphere is cut {pole / UM:.2g} to {rim / UM:.2g} um deep; the tool-error "
         f"fit reads dx and dR from a sphere cut at most {DEPTH_RANGE / UM:g} um deeper)",
         f"the tool tip at most {DEPTH_RANGE / UM:g} um below it (tool.z, workpiece.z)")
+
+
+def refuse_too_high(args, machine, errors) -> None:
+    """Refuse, before anything is cut, injected ``errors`` that put the tool tip higher over
+    every point of the test sphere's path within `CORE_LIMIT` (20 um) of its pole than the
+    plan cuts there (1 um at the pole, 1.1 um at 20 um), naming the ``--errors`` file and the
+    keys that set the height: the sphere's top stays uncut, an uncut core wider than the
+    tool test reads, and the test refuses the sphere after the cut and its fit. Through the
+    lab (Table 5's tool, noise off): tool.z 0.9 um ran; 1.2 um was refused after the turn
+    (the sphere misfits the model by 16 nm), 3.4 um too (an uncut centre 59 um across), 5 um
+    as 'no cut' in the window, and 10 um by the plane check before the cut, naming tool.x,
+    tool.y and the nose radius for the misfit that tool.z made."""
+    radius, drop = _tip_drop(machine, errors)
+    core = radius <= CORE_LIMIT
+    depth = TEST_SPHERE.top - TEST_SPHERE.design()(radius[core], 0.0)
+    if not np.all(-drop[core] > depth):
+        return
+    parameters = errors.parameters()
+    keys = [name for name in HEIGHT_KEYS if parameters.get(name)] or ["its errors"]
+    edge = float(np.max(depth))
+    refuse_beyond_capture(
+        args, {}, keys,
+        f"the tool tip {float(np.min(-drop[core])) / UM:.4g} um above the test sphere's "
+        "programmed surface",
+        f"(the test sphere is cut {float(np.min(depth)) / UM:.2g} to {edge / UM:.2g} um deep "
+        f"within {CORE_LIMIT / UM:g} um of its pole, the widest uncut core the tool test "
+        "reads: a tip higher than that leaves the sphere's top uncut)",
+        f"the tool tip less than {edge / UM:.2g} um above it (tool.z, workpiece.z)")
 
 
 def refuse_unread_tool(args, machine, errors) -> None:

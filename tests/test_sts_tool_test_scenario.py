@@ -145,6 +145,33 @@ def test_the_scenario_refuses_a_workpiece_set_too_high_before_anything_is_cut(tm
         "um deeper): expected the tool tip at most 15 um below it (tool.z, workpiece.z)")
 
 
+def test_the_scenario_refuses_a_tool_set_too_high_before_anything_is_cut(tmp_path,
+                                                                       monkeypatch):
+    # [tool] offset_um = [-3.5, -3.5, 10]: the plane check refused it before the cut naming
+    # tool.x, tool.y and the nose radius; 5 um high was refused only after the turn ("shows
+    # no cut"), 1.2 um after the turn and the fit (a misfit of 16 nm). The plan cuts the
+    # sphere 1 um deep at its pole and 1 + r^2 / (2 x 2 mm) at r: 1.1 um at 20 um, the
+    # widest uncut core the tool test reads
+    scenario = _scenario()
+    machine = machinesim.load_machine("sts_lathe")
+    assert scenario.refuse_too_high(None, machine, scenario.default_errors()) is None
+    inside = ErrorModel.from_dict({"tool": {"offset_um": [-3.5, -3.5, 1.0]}})
+    assert scenario.refuse_too_high(None, machine, inside) is None
+    scenario, args, path = _args(tmp_path, "[tool]\noffset_um = [-3.5, -3.5, 1.2]\n"
+                                           "[tool_geometry]\nnose_radius_um = 100\n")
+    turns = []
+    monkeypatch.setattr(machinesim.Lab, "turn", lambda *a, **k: turns.append(a))
+    with pytest.raises(InputError) as refused:
+        scenario.report(args)
+    assert not turns
+    assert str(refused.value) == (
+        f"key 'errors': --errors {path} (tool.z): the tool tip 1.2 um above the test sphere's "
+        "programmed surface exceeds the plan's capture range (the test sphere is cut 1 to 1.1 "
+        "um deep within 20 um of its pole, the widest uncut core the tool test reads: a tip "
+        "higher than that leaves the sphere's top uncut): expected the tool tip less than 1.1 "
+        "um above it (tool.z, workpiece.z)")
+
+
 def test_a_height_just_inside_the_depth_range_is_taken(tmp_path):
     # 14.9 um up: within the 15 um; a tool 16 um down (tool.z -16 um: the tip 16 um below)
     # is refused naming tool.z
