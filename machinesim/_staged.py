@@ -121,8 +121,8 @@ class StagedFolder:
     Parameters
     ----------
     path : str or os.PathLike
-        The folder (its parent is made when missing). A symbolic link is followed: the
-        folder it names is the one replaced.
+        The folder (its parent is made when missing, and removed again when nothing was
+        swapped in). A symbolic link is followed: the folder it names is the one replaced.
 
     Attributes
     ----------
@@ -148,6 +148,10 @@ class StagedFolder:
         _refuse_working_folder(self.final, self.target)
         self.commits = 0
         self.path: Path | None = None
+        # the parents made here, deepest first: a run that ends before its first swap takes
+        # them away again (an --out a/b/c that failed left a/b behind, empty)
+        self._made = [p for p in (self.target.parent, *self.target.parent.parents)
+                      if not os.path.lexists(p)]
         self.target.parent.mkdir(parents=True, exist_ok=True)
         clear_stale_folders(self.target)
         self._begin(seed=False)
@@ -216,6 +220,12 @@ class StagedFolder:
             shutil.rmtree(self.path, ignore_errors=True)
             _ours.discard(str(self.path))
             self.path = None
+            if self.commits == 0:
+                for parent in self._made:  # only if still empty: another run may use it
+                    try:
+                        os.rmdir(parent)
+                    except OSError:
+                        break
 
 
 __all__ = ["StagedFolder", "clear_stale_folders"]

@@ -146,9 +146,13 @@ def test_an_error_midway_leaves_the_previous_report_and_no_folder_is_made(tmp_pa
 
     assert scenario_status(failing, Namespace(out=out), "s") == 2
     assert capsys.readouterr().err.strip() == "s: error: bad value"
-    assert not out.exists() and _siblings(out) == []
+    # the parent made for it goes too: a failed --out new/report left new/, empty
+    assert not out.exists() and not out.parent.exists()
     assert scenario_status(_report({"a.md": "a\n"}, stop_after=0), Namespace(out=out)) == 130
-    assert not out.exists() and _siblings(out) == []
+    assert not out.exists() and not out.parent.exists()
+    out.parent.mkdir()  # a parent that was there stays
+    assert scenario_status(failing, Namespace(out=out), "s") == 2
+    assert sorted(os.listdir(out.parent)) == [] and out.parent.is_dir()
 
 
 def test_a_published_report_survives_an_interrupt_of_what_follows(tmp_path, capsys):
