@@ -7,6 +7,8 @@ import difflib
 import re
 import sys
 
+from machinesim.units import typed_float
+
 #: A value that starts like a negative number: ``-707,-707``, ``-1e-3``, ``-.5``, and
 #: ``-inf``, ``-nan``, which the option's own check refuses, naming them.
 _NEGATIVE = re.compile(r"-(?:\.?\d|inf|nan)", re.IGNORECASE)
@@ -103,3 +105,16 @@ class ArgumentParser(argparse.ArgumentParser):
                     hints.append(f"{option} is not an option here; did you mean {close[0]}?")
         super().error("; ".join([message, *hints]))
 
+
+def typed_number(text: str) -> float:
+    """An argparse type for a number option (a scenario's ``--r-mm``, ``--chord-nm``,
+    ``view --duration``): ``text`` as a float when written as a plain number
+    (`machinesim.units.typed_float`), refused as the command line's error otherwise.
+    float() read '0_5' as 5 (``--e-ys-um 0_5``: 5 um) and full-width digits ('１２０') as
+    120. Whether the value is finite and in range is the command's to say, in its terms."""
+    try:
+        return typed_float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a number (ASCII digits, a point, an exponent: 120.555, -1.78e2), "
+            f"got {text!r}") from None

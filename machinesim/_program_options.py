@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 
+from machinesim._arguments import typed_number
 from machinesim._io import check_readable_file, input_path
 
 
@@ -24,7 +25,7 @@ def add_reading_options(parser) -> None:
                              "(X10 is 10 mm, the default), or in least input increments: "
                              "increment (X10 is 10 nm), is-b (FANUC IS-B: 0.01 mm), is-c "
                              "(IS-C: 0.001 mm)")
-    parser.add_argument("--chord-nm", type=float, default=None, metavar="NM",
+    parser.add_argument("--chord-nm", type=typed_number, default=None, metavar="NM",
                         help="largest distance of the chords arcs and rotary moves are cut "
                              "as from the true path, nm, from 1 (the axes' resolution) to "
                              "1e9; default: a tenth of the finest "

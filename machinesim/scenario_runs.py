@@ -276,20 +276,6 @@ def _whole(text: str) -> int | None:
     return int(text)
 
 
-def typed_number(text: str) -> float:
-    """An argparse type for a scenario's number option (``--r-mm``, ``--e-ys-um``): ``text``
-    as a float when written as a plain number (`machinesim.units.typed_float`), refused as
-    the command line's error otherwise. float() read '0_5' as 5 (``--r-mm 0_5``: an arm of
-    5 mm) and full-width digits ('１２０') as 120. Whether the value is finite and in range
-    is the scenario's to say, in its terms."""
-    try:
-        return typed_float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected a number (ASCII digits, a point, an exponent: 120.555, -1.78e2), "
-            f"got {text!r}") from None
-
-
 def _seed(text: str) -> int:
     """``--seed``: a non-negative integer (numpy's seeds), refused as the command line's
     error (argparse: usage and status 2), not deep in the first random draw."""

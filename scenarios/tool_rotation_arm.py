@@ -31,6 +31,7 @@ import time
 import numpy as np
 
 from machinesim import load_machine
+from machinesim._arguments import typed_number
 from machinesim.budget import LabInputs, realism_budget
 from machinesim.cam.prisms import CalibrationPlan
 from machinesim.exceptions import InputError
@@ -50,7 +51,6 @@ from machinesim.scenario_runs import (
     refuse_beyond_capture,
     run_scenario,
     scenario_arguments,
-    typed_number,
 )
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 

@@ -65,6 +65,7 @@ from functools import partial
 import numpy as np
 
 from machinesim import Lab, WorkpieceSetting, load_machine
+from machinesim._arguments import typed_number
 from machinesim.budget import error_budget
 from machinesim.cam.crown import PARK, groove_rapids_crash
 from machinesim.compensation import program_axes
@@ -90,7 +91,6 @@ from machinesim.scenario_runs import (
     progress_printer,
     scenario_arguments,
     scenario_status,
-    typed_number,
 )
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 from machinesim.workpiece_setting_budget import (

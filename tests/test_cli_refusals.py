@@ -77,6 +77,22 @@ def test_a_chord_tolerance_outside_1_nm_to_1_m_is_refused(tmp_path, capsys, chor
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("command, option, text", [
+    ("cut", "--chord-nm", "0_5"), ("cut", "--chord-nm", "\uff15"),
+    ("view", "--chord-nm", "0_5"), ("view", "--duration", "1_0")])
+def test_a_number_option_takes_plain_numbers_only(tmp_path, capsys, command, option, text):
+    # float() reads '0_5' as 5 and a full-width 5 as 5: --chord-nm 0_5 cut with 5 nm chords
+    # and view --duration 1_0 played 10 s, without a word
+    given = (["cut", GROOVES, *CUT, "--out", tmp_path / "p.ply"] if command == "cut" else
+             ["view", "--machine", "grooving_4axis", "--program", GROOVES, "--html",
+              tmp_path / "v.html"])
+    code, _, err = run([*given, option, text], capsys)
+    assert code == 2
+    assert err.endswith(f"error: argument {option}: expected a number (ASCII digits, a point, "
+                        f"an exponent: 120.555, -1.78e2), got {text!r}\n"), err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_reversed_roi_is_named_once(tmp_path, capsys):
     # the line read "machinesim: error: key '--roi': --roi '5,4,1,3': expected ...", the
     # option named twice

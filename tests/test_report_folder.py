@@ -15,6 +15,7 @@ from argparse import Namespace
 import pytest
 from report_helpers import _siblings, _snapshot
 
+from machinesim._arguments import typed_number
 from machinesim._io import process_space
 from machinesim._staged import StagedFolder, clear_stale_folders
 from machinesim.exceptions import InputError
@@ -24,7 +25,6 @@ from machinesim.scenario_runs import (
     parse_floats,
     scenario_arguments,
     scenario_status,
-    typed_number,
 )
 
 

@@ -20,6 +20,7 @@ import sys
 import time
 from pathlib import Path
 
+from machinesim._arguments import typed_number
 from machinesim._interrupts import stopped
 from machinesim._io import (
     check_readable_file,
@@ -108,7 +109,7 @@ def add_view_parser(sub) -> argparse.ArgumentParser:
     machine.add_argument("--errors", type=input_path, default=None,
                          help="injected errors, TOML (default: none)")
     add_reading_options(machine)
-    machine.add_argument("--duration", type=float, default=None,
+    machine.add_argument("--duration", type=typed_number, default=None,
                          help="longest animation, s: a longer program plays faster "
                               "(default 20)")
     return view
