@@ -17,7 +17,14 @@ from typing import NoReturn
 
 from machinesim._arguments import ArgumentParser
 from machinesim._interrupts import ctrl_c_remembered, stopped
-from machinesim._io import broken_link, folder_path, input_path, os_reason, stdout_to_null
+from machinesim._io import (
+    broken_link,
+    check_readable_file,
+    folder_path,
+    input_path,
+    os_reason,
+    stdout_to_null,
+)
 from machinesim._memory import OUT_OF_MEMORY, memory_capped
 from machinesim._staged import StagedFolder
 from machinesim.exceptions import InputError
@@ -382,7 +389,8 @@ def errors_file(path, machine):
     from machinesim.errors import ErrorModel
     from machinesim.errors.unit_slips import unit_slip_notes
 
-    errors = ErrorModel.from_toml(path)
+    # named as machinesim cut names it: "nope.toml: cannot read the file" named no option
+    errors = ErrorModel.from_toml(check_readable_file(path, "error model (--errors)"))
     name = Path(sys.argv[0]).stem or "scenario"
     notes = [] if errors.written else [
         f"{path}: sets no error (no key in any section): the machine as built, every error "

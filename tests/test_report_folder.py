@@ -293,6 +293,23 @@ def test_a_report_folder_that_is_a_symbolic_link_loop_is_refused_as_one(tmp_path
     assert os.listdir(tmp_path) == ["loop"]
 
 
+def test_a_scenarios_errors_file_that_cannot_be_read_is_named_as_the_option(tmp_path):
+    # "nope.toml: cannot read the file: No such file or directory" named no option, where
+    # machinesim cut names --errors
+    from machinesim import load_machine
+    from machinesim.scenario_runs import errors_file
+
+    machine = load_machine("grooving_4axis")
+    missing = tmp_path / "nope.toml"
+    with pytest.raises(InputError) as info:
+        errors_file(missing, machine)
+    assert str(info.value) == f"{missing}: no such file; expected the error model (--errors)"
+    with pytest.raises(InputError) as info:
+        errors_file(tmp_path, machine)
+    assert str(info.value) == (f"{tmp_path}: is a folder; expected the error model (--errors) "
+                               "file")
+
+
 def test_a_scenario_names_a_misspelt_option_with_the_one_meant(capsys):
     parser = scenario_arguments("a scenario", "reports/x")
     with pytest.raises(SystemExit) as stop:
