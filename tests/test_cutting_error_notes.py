@@ -14,7 +14,7 @@ from cli_helpers import run
 import machinesim
 from machinesim.cutting import cut_turned
 from machinesim.errors import ErrorModel
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, MachineSimWarning
 from machinesim.nc import parse_program
 
 #: A slot along X at C = 0 throughout, as test_cli_notes cuts it on robonano_a0ib.
@@ -73,7 +73,9 @@ def test_a_labs_cut_names_none_of_its_errors(errors_file):
     # the lab's errors are its truth: a procedure reading its cut's notes would learn which
     # location errors it has, and their values
     program = parse_program(SLOT)
-    lab = machinesim.Lab("robonano_a0ib", errors_file, noise=False)
+    with pytest.warns(MachineSimWarning) as told:  # told to whoever sets the lab up
+        lab = machinesim.Lab("robonano_a0ib", errors_file, noise=False)
+    assert [str(w.message) for w in told] == [_notes(errors_file)[0]]
     lab.reuse_cuts = False
     for options in ({}, {"turn_step": np.pi / 4}):
         part, report = lab.cut(program, **KEYS, **options)
@@ -105,7 +107,9 @@ def test_a_file_that_sets_no_error_is_noted_in_a_python_cut_as_on_the_command_li
     for errors in (zeros, {}, ErrorModel(), None):  # zeros written on purpose, or no file
         _, report = machinesim.cut(program, "robonano_a0ib", errors=errors, **KEYS)
         assert not any("sets no error" in note for note in report.notes), (errors, report.notes)
-    lab = machinesim.Lab("robonano_a0ib", empty, noise=False)
+    with pytest.warns(MachineSimWarning, match="sets no error .*: the lab is set up on the "
+                      "machine as built"):
+        lab = machinesim.Lab("robonano_a0ib", empty, noise=False)
     assert not any("sets no error" in note for note in lab.cut(program, **KEYS)[1].notes)
     path = tmp_path / "slot.nc"  # the command line prints and writes it once
     path.write_text(SLOT)
