@@ -127,18 +127,24 @@ def _args(tmp_path, toml):
     return scenario, args, path
 
 
+def _refused_before_turning(scenario, args, monkeypatch) -> str:
+    """The message of the InputError ``scenario.report(args)`` raises, after checking that
+    no turn was made before it (``Lab.turn`` counted)."""
+    turns = []
+    monkeypatch.setattr(machinesim.Lab, "turn", lambda *a, **k: turns.append(a))
+    with pytest.raises(InputError) as refused:
+        scenario.report(args)
+    assert not turns
+    return str(refused.value)
+
+
 def test_the_scenario_refuses_a_workpiece_set_too_high_before_anything_is_cut(tmp_path,
                                                                             monkeypatch):
     # [workpiece] delta_um = [0, 0, 50]: the workpiece frame 50 um up puts the tool tip 50 um
     # below every programmed tip; the tool test cut the sphere and fitted for about 150 s
     # before it refused
     scenario, args, path = _args(tmp_path, "[workpiece]\ndelta_um = [0, 0, 50]\n")
-    turns = []
-    monkeypatch.setattr(machinesim.Lab, "turn", lambda *a, **k: turns.append(a))
-    with pytest.raises(InputError) as refused:
-        scenario.report(args)
-    assert not turns
-    assert str(refused.value) == (
+    assert _refused_before_turning(scenario, args, monkeypatch) == (
         f"key 'errors': --errors {path} (workpiece.z): the tool tip 50 um below the test "
         "sphere's programmed surface exceeds the plan's capture range (the test sphere is cut "
         "1 to 4.6 um deep; the tool-error fit reads dx and dR from a sphere cut at most 15 "
@@ -159,12 +165,7 @@ def test_the_scenario_refuses_a_tool_set_too_high_before_anything_is_cut(tmp_pat
     assert scenario.refuse_too_high(None, machine, inside) is None
     scenario, args, path = _args(tmp_path, "[tool]\noffset_um = [-3.5, -3.5, 1.2]\n"
                                            "[tool_geometry]\nnose_radius_um = 100\n")
-    turns = []
-    monkeypatch.setattr(machinesim.Lab, "turn", lambda *a, **k: turns.append(a))
-    with pytest.raises(InputError) as refused:
-        scenario.report(args)
-    assert not turns
-    assert str(refused.value) == (
+    assert _refused_before_turning(scenario, args, monkeypatch) == (
         f"key 'errors': --errors {path} (tool.z): the tool tip 1.2 um above the test sphere's "
         "programmed surface exceeds the plan's capture range (the test sphere is cut 1 to 1.1 "
         "um deep within 20 um of its pole, the widest uncut core the tool test reads: a tip "
