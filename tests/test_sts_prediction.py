@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 import machinesim.cam.spiral as sp
+from machinesim.exceptions import InputError
 from machinesim.machines import load_machine
+from machinesim.metrology.encoders import EncoderReading
 from machinesim.procedures.sts_plans import MEASURE_LINE
 from machinesim.procedures.sts_prediction import predict
 
@@ -47,9 +49,23 @@ def test_the_tool_share_of_a_radial_offset_is_the_tilt_free_pv_of_the_shifted_gr
     q = np.zeros((len(path.c), len(machine.axes)))
     for axis, values in (("X", path.x), ("Z", path.z), ("C", path.c)):
         q[:, machine.axes.index(axis)] = values
-    recording = SimpleNamespace(commanded=q, position=q)
+    recording = EncoderReading(tuple(machine.axes), np.arange(len(q), dtype=float), q, q,
+                               machine=machine.name)
     known = SimpleNamespace(dx=dx, dy=0.0, d_radius=0.0)
     prediction = predict(machine, sp.sine_grid(), recording, known, NOSE, NOSE)
     # 401 samples of the line for the dense u: 0.03 % apart
     assert prediction.tool == pytest.approx(by_hand, rel=1e-3, abs=0.0)
     assert prediction.servo == 0.0  # followed exactly
+
+
+@pytest.mark.parametrize("taken_on", [("robonano_a0ib", "XYZBC"), ("other_lathe", "XZC")])
+def test_a_recording_of_another_machine_is_refused(taken_on):
+    # a recording's columns are its machine's axes: another machine's, even with the same
+    # letters, would be read as this lathe's X, Z and C
+    name, axes = taken_on
+    machine = load_machine("sts_lathe")
+    q = np.zeros((3, len(axes)))
+    recording = EncoderReading(tuple(axes), np.arange(3.0), q, q, machine=name)
+    known = SimpleNamespace(dx=0.0, dy=0.0, d_radius=0.0)
+    with pytest.raises(InputError, match=f"recording is of {name} .*not of sts_lathe"):
+        predict(machine, sp.sine_grid(), recording, known, NOSE, NOSE)

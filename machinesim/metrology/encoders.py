@@ -51,12 +51,25 @@ class EncoderReading:
         The control's commands.
     position : ndarray (N, n_axes)
         What the encoders read.
+    machine : str or None
+        The name of the machine recorded (None when not known).
     """
 
     axes: tuple
     t: np.ndarray
     commanded: np.ndarray
     position: np.ndarray
+    machine: str | None = None
+
+    def check_machine(self, machine) -> None:
+        """Refuse a recording of a machine other than ``machine`` (a `Machine`): its columns
+        are that machine's axes, even when as many and named alike."""
+        if ((self.machine is not None and self.machine != machine.name)
+                or tuple(self.axes) != tuple(machine.axes)):
+            raise InputError(f"the recording is of {self.machine or 'an unnamed machine'} "
+                             f"(axes {''.join(self.axes)}), not of {machine.name} (axes "
+                             f"{''.join(machine.axes)}); expected the encoders' recording of "
+                             f"the program on {machine.name}", key="recording")
 
     @property
     def following_error(self) -> np.ndarray:
@@ -154,7 +167,8 @@ class Encoders:
         position = np.column_stack([readout.read(reached[:, i], self._rng)
                                     for i, readout in enumerate(self.readouts)])
         return EncoderReading(tuple(self.machine.axes), frozen(t), frozen(commanded),
-                              frozen(position.reshape(commanded.shape)))
+                              frozen(position.reshape(commanded.shape)),
+                              machine=self.machine.name)
 
     def record_turning(self, program, *, allow_overtravel: bool = False) -> EncoderReading:
         """Record a turning program (`machinesim.cutting.lathe`): each run of feed moves
@@ -180,7 +194,7 @@ class Encoders:
                                               for i, readout in enumerate(self.readouts)]))
         return EncoderReading(tuple(self.machine.axes), frozen(np.concatenate(ts)),
                               frozen(np.concatenate(commands)),
-                              frozen(np.concatenate(positions)))
+                              frozen(np.concatenate(positions)), machine=self.machine.name)
 
     def _check_travel(self, moves, program, allow: bool) -> None:
         """Raise AxisLimitError where ``moves`` (commanded axis values and their lines, as

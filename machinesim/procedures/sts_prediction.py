@@ -78,6 +78,7 @@ def predict(machine, design, recording, known, nose_radius: float,
     compensated_radius : float
         The nose radius the program was compensated for, m.
     """
+    recording.check_machine(machine)
     r = _line()
     zero = np.zeros_like(r)
     target = design(r, zero)
