@@ -204,6 +204,7 @@ def run(procedure: Procedure, lab, *, progress: Callable[[str], None] | None = N
         raise InputError(f"{procedure.name}.identify returned {type(identified).__name__}; "
                          "expected an Identified", key="identify")
     _refuse_unknown_parameters(procedure.name, lab.machine, identified.parameters)
+    _refuse_values_beyond_any_error(procedure.name, identified.parameters)
     programs = step("compensate", procedure.compensate, identified)
     if not isinstance(programs, Mapping):  # dict(programs) below raised a TypeError
         raise InputError(f"{procedure.name}.compensate returned {type(programs).__name__}; "
@@ -252,6 +253,37 @@ def _refuse_unknown_parameters(name: str, machine, identified: Mapping) -> None:
                          "Machine.parameter_names gives (a quantity of the procedure's own, "
                          "such as an arm's radius, goes in Identified.detail and an "
                          "Evaluation's figures)", key="identify")
+
+
+def _refuse_values_beyond_any_error(name: str, identified: Mapping) -> None:
+    """Refuse an identified offset or angle no error model can hold (`LARGEST_ERROR`: 1 m,
+    pi rad, as an errors file is bounded), and warn of one beyond the errors of any machine
+    (`unit_slips.LARGEST_LIKELY_ERROR_M`, 10 mm; 10 deg): an identify that reported its
+    um as m (``tool.x`` 4.0 for 4 um) ran to a report of 4 m against an injected 4 um. A
+    component table's entry or polynomial coefficient (its unit the axis's) is left out."""
+    import warnings
+
+    from machinesim.errors._checks import LARGEST_ERROR
+    from machinesim.errors.unit_slips import LARGEST_LIKELY_ERROR_M, LARGEST_LIKELY_ERROR_RAD
+    from machinesim.exceptions import MachineSimWarning
+    from machinesim.identification.identifiability import parameter_unit
+
+    for parameter, (value, _) in identified.items():
+        unit = parameter_unit(parameter)
+        if unit == "SI" or not np.isfinite(value):
+            continue
+        length = unit == "m"
+        shown = f"{value * 1e3:.6g} mm" if length else f"{np.degrees(value):.6g} deg"
+        hint = ("were its values given in um or mm, where SI (m) is expected?" if length
+                else "were its values given in urad, mrad or deg, where rad is expected?")
+        if abs(value) >= LARGEST_ERROR["length" if length else "angle"]:
+            raise InputError(f"{name}.identify gave {parameter} = {value!r} {unit} "
+                             f"({shown}), beyond what an error model holds (1 m, 180 deg): "
+                             f"{hint}", key="identify")
+        if abs(value) >= (LARGEST_LIKELY_ERROR_M if length else LARGEST_LIKELY_ERROR_RAD):
+            warnings.warn(f"{name}.identify gave {parameter} = {value!r} {unit} ({shown}), "
+                          f"beyond the errors of any machine (10 mm, 10 deg): {hint}",
+                          MachineSimWarning, stacklevel=3)
 
 
 def _truth(lab, identified: Mapping) -> tuple[dict, dict, dict, tuple[str, ...]]:

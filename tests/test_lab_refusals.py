@@ -392,3 +392,45 @@ def test_a_tool_adjustment_given_in_mm_is_refused_naming_the_unit():
     with pytest.raises(InputError, match="beyond its stroke") as info:
         lab.adjust_tool([9.5e-3, 0.0, 0.0])
     assert "given in mm" not in str(info.value)
+
+
+class _Values(_Names):
+    name = "values"
+
+    def __init__(self, values):
+        super().__init__(list(values))
+        self.values = values
+
+    def identify(self, measurements):
+        from machinesim.experiment import Identified
+
+        return Identified({name: (value, 0.0) for name, value in self.values.items()})
+
+
+@pytest.mark.parametrize("name, value, shown", [
+    ("tool.x", 4.0, "4000 mm"),                  # 4 um reported as 4 (m)
+    ("workpiece.gamma", -200.0, "-11459.2 deg"),  # 200 urad reported as 200 (rad)
+])
+def test_run_refuses_an_identified_value_no_error_model_holds(name, value, shown):
+    # an identify that gave its um as m ran to a report of 4 m identified against 4 um
+    from machinesim.experiment import run
+
+    lab = Lab("grooving_4axis", {"tool": {"offset_um": [4.0, 0.0, 0.0]}}, noise=False)
+    with pytest.raises(InputError) as info:
+        run(_Values({name: value}), lab)
+    assert str(info.value).startswith(
+        f"key 'identify': values.identify gave {name} = {value!r} "
+        f"{'m' if name == 'tool.x' else 'rad'} ({shown}), beyond what an error model holds")
+
+
+def test_run_warns_of_an_identified_value_beyond_any_machines_errors():
+    # 20 mm: 20 um given in mm; an error model can hold it, no machine is set that far off
+    from machinesim.exceptions import MachineSimWarning
+    from machinesim.experiment import run
+
+    lab = Lab("grooving_4axis", {"tool": {"offset_um": [4.0, 0.0, 0.0]}}, noise=False)
+    with pytest.warns(MachineSimWarning, match=r"tool\.x = 0\.02 m \(20 mm\), beyond the "
+                                               r"errors of any machine") as record:
+        result = run(_Values({"tool.x": 0.02, "tool.y": 9e-3}), lab)
+    assert len(record) == 1 and record[0].filename == __file__  # 9 mm is not noted
+    assert result.identified["tool.x"][0] == 0.02
