@@ -112,9 +112,9 @@ def counted(tally: dict):
         tally["again"] += 1
         return ONE_AT_A_TIME(piece, solids)
 
-    def subtract_run(piece, solids, sweeps, check=True):
+    def subtract_run(piece, solids, sweeps, check=True, pieces=None):
         tally["checked"] += bool(check)
-        return SUBTRACT_RUN(piece, solids, sweeps, check)
+        return SUBTRACT_RUN(piece, solids, sweeps, check, pieces)
 
     run_check.one_at_a_time = one_at_a_time
     return subtract_run

@@ -164,7 +164,7 @@ def test_cut_names_the_lines_of_a_refused_run(monkeypatch, cutter):
     """Both cutters name the program's lines of the first refused run's sweeps: the plunge
     (line 3) and the retract (line 5) that cuts; cut_turned cuts no rapid, and its first
     run is the plunge's alone."""
-    def refuse(piece, solids, sweeps, check):
+    def refuse(piece, solids, sweeps, check, pieces=None):
         raise SubtractionError("manifold3d's subtraction left material", sweeps=tuple(sweeps))
     monkeypatch.setattr(engine, "subtract_run", refuse)
     program = ("G21 G90 G17\nG00 X1. Y2. Z1.\nG01 Z-0.2 F50.\nG01 X3. F100.\nG00 Z5.\nM30\n")

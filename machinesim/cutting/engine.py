@@ -461,7 +461,8 @@ def remove(
             for key in np.unique(keys[rest]):
                 for run in union_runs(rest[keys[rest] == key], lower, upper):
                     piece = subtract_run(piece, [joined[i] for i in run],
-                                         [owners[i] for i in run], checked[run].any())
+                                         [owners[i] for i in run], checked[run].any(),
+                                         pieces=[joined.pieces(i) for i in run])
             if len(members):
                 removed += removed_volume(uncut, piece, sweeps.run_id, top)
             pieces.append(piece)

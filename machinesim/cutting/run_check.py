@@ -11,12 +11,33 @@ cannot see it; its faces' centroids can.
 The check (`subtract_run`): after a run is subtracted, the centroid of each triangle of the
 part that has a vertex the part before did not have (the faces the subtraction made; the
 wedge's are among them) is tested against the plane equations of each of the run's sweeps
-that is convex (Qhull's hull of its vertices has its volume, `CONVEX_REL`: every sweep but
-the unions of split pieces, `SweepSet._united`). A centroid deeper than
-`tolerances.INSIDE_SWEEP_M` inside one is material the subtraction should have removed: the
-run is subtracted again one sweep at a time (which leaves none on the case above) and
-checked again, and if material is still there the cut is refused with `SubtractionError`
-rather than a wrong part returned.
+that is convex (Qhull's hull of its vertices has its volume, `CONVEX_REL`), and of each
+convex piece of those that are not: a tool tilted across itself is cut as the union of
+pieces' hulls (`SweepSet._united`, `tilted_profiles.halves`, `tilted_solids`), whose own hull
+holds material outside it; the pieces' planes and bounds are kept with the union when it is
+built (`sweeps.UnitedSolid`, `Solids.pieces`). A centroid deeper than
+`tolerances.INSIDE_SWEEP_M` inside a solid or a piece is material the subtraction should have
+removed (a point as deep inside a piece is at least as deep inside the union): the run is
+subtracted again one sweep at a time (which leaves none on the case above) and checked again,
+and if material is still there the cut is refused with `SubtractionError` rather than a wrong
+part returned.
+
+A piece's depth is the union's wherever the union's own surface is nearer than the faces
+the pieces share; a face left nearer such a seam than its depth in the union is found no
+deeper than its distance to the seam (0 on it). Before the pieces were kept, the unions
+were left out whole: a tool swung across its sides (tests/test_cutting_run_check_pieces.py)
+kept the material a run's union missed. What they cost, CPU of `deepest_inside` over the 3
+runs of 20 sweeps swung +-1 deg about a Y line 50 um above the end face (a ball's equator),
+every sweep split in two (medians of 3 on 2 shared cores; the cut itself 0.35-0.49 s for
+flat:0.5, 1.4-1.8 s for ball:0.5): flat:0.5 7.3 ms before (Qhull of each union, then left
+out), 7.5 ms now; v:90 swung +-2 deg 2.7, 2.9 ms; ball:0.5 23 ms before, 282 ms now, each of
+its 9,990 new faces near every piece (the sweeps nearly coincide) and tested against the
+578 planes of the pieces about the ball: the same sweeps cut unsplit, as convex hulls,
+checked in 436 ms. The planes kept take 3.0, 0.4 and 19.9 kB a sweep (flat, V, ball), less
+than the union's mesh as float64 arrays (4.7, 0.5, 24.4 kB) that its manifold holds more
+than once over. Paper 002's crown before compensation (benchmarks/run_check.py's crown case,
+cut once each way) splits no sweep and checks no run (its feed moves are cut as
+translations): 120.4 s CPU before, 114.4 s now, the removed volume the same to the bit.
 """
 
 from __future__ import annotations
@@ -28,6 +49,7 @@ import numpy as np
 from manifold3d import OpType
 from scipy.spatial import ConvexHull
 
+from machinesim.cutting.sweeps import ConvexPiece
 from machinesim.exceptions import InputError, SubtractionError, brief
 from machinesim.tolerances import INSIDE_SWEEP_M, SAME_ORIENTATION, TWIST_M
 
@@ -94,26 +116,42 @@ def checked_sweeps(check_runs: str, sweeps, owners) -> np.ndarray:
     return turning
 
 
-def _planes(solids: Sequence[manifold3d.Manifold]) -> tuple[np.ndarray, np.ndarray,
-                                                              np.ndarray, np.ndarray]:
+def _planes(solids: Sequence[manifold3d.Manifold],
+            pieces: Sequence[Sequence[ConvexPiece] | None] | None = None
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The outward plane equations (p, 4) of the convex ``solids`` (Qhull's, of the hull of
-    each one's vertices), the start of each solid's rows, and the solids' bounds (c, 3)
-    twice; a solid that is not convex is left out. Qhull's planes, not those of the solids'
-    own triangles: those need a test of each solid's convexity against every plane (a ball
+    each one's vertices) and of the convex pieces of the others, the start of each solid's
+    or piece's rows, and their bounds (c, 3) twice.
+
+    A solid whose ``pieces`` are given (a union of split pieces, `SweepSet._united`) stands
+    for its pieces' planes and bounds as they were kept when it was built (no hull here); a
+    solid without is taken convex when Qhull's hull of its vertices has its volume
+    (`CONVEX_REL`), and left out if not. Qhull's planes, not those of the solids' own
+    triangles: those need a test of each solid's convexity against every plane (a ball
     sweep's thousands), which made a raster's check 4 times as slow."""
     equations, starts, lower, upper = [], [], [], []
     count = 0
-    for solid in solids:
+
+    def add(rows, low, high):
+        nonlocal count
+        equations.append(rows)
+        starts.append(count)
+        count += len(rows)
+        lower.append(low)
+        upper.append(high)
+
+    for index, solid in enumerate(solids):
+        split = None if pieces is None else pieces[index]
+        if split is not None:
+            for piece in split:
+                add(*piece)
+            continue
         vertices = np.asarray(solid.to_mesh64().vert_properties)[:, :3]
         hull = ConvexHull(vertices)
         if not abs(hull.volume - solid.volume()) <= CONVEX_REL * hull.volume:
             continue
-        rows = np.unique(hull.equations, axis=0)  # a facet's triangles share its equation
-        equations.append(rows)
-        starts.append(count)
-        count += len(rows)
-        lower.append(vertices.min(axis=0))
-        upper.append(vertices.max(axis=0))
+        # a facet's triangles share its equation
+        add(np.unique(hull.equations, axis=0), vertices.min(axis=0), vertices.max(axis=0))
     if not equations:
         empty = np.zeros((0, 3))
         return np.zeros((0, 4)), np.zeros(0, dtype=np.int64), empty, empty
@@ -179,9 +217,10 @@ def _deepest_in(points: np.ndarray, equations: np.ndarray) -> float:
 
 
 def deepest_inside(before: manifold3d.Manifold, after: manifold3d.Manifold,
-                   solids: Sequence[manifold3d.Manifold]) -> float:
+                   solids: Sequence[manifold3d.Manifold],
+                   pieces: Sequence[Sequence[ConvexPiece] | None] | None = None) -> float:
     """How deep (m) the deepest face ``after`` made lies inside one of the convex ``solids``
-    (<= 0 when none lies inside).
+    or one of the convex pieces of the others (0 when none lies inside).
 
     Parameters
     ----------
@@ -189,9 +228,14 @@ def deepest_inside(before: manifold3d.Manifold, after: manifold3d.Manifold,
         The part before and after ``solids`` were subtracted; the faces tested are the
         triangles of ``after`` with a vertex that ``before`` does not have.
     solids : sequence of manifold3d.Manifold
-        The sweeps subtracted; those that are not convex (`CONVEX_REL`) are not tested.
+        The sweeps subtracted; those that are not convex (`CONVEX_REL`) and have no
+        ``pieces`` are not tested.
+    pieces : sequence of (sequence of ConvexPiece or None), optional
+        For each of ``solids``, the convex pieces it is the union of (`Solids.pieces`), or
+        None where it is convex itself. A face as deep inside a piece is at least as deep
+        inside the union.
     """
-    equations, starts, lower, upper = _planes(solids)
+    equations, starts, lower, upper = _planes(solids, pieces)
     if not len(equations):
         return 0.0
     mesh = after.to_mesh64()
@@ -219,10 +263,13 @@ def one_at_a_time(piece: manifold3d.Manifold,
 
 
 def subtract_run(piece: manifold3d.Manifold, solids: Sequence[manifold3d.Manifold],
-                 sweeps: Sequence[int], check: bool = True) -> manifold3d.Manifold:
+                 sweeps: Sequence[int], check: bool = True,
+                 pieces: Sequence[Sequence[ConvexPiece] | None] | None = None
+                 ) -> manifold3d.Manifold:
     """``piece`` less the union of ``solids`` (one `batch_boolean`), evaluated, and checked
-    when ``check``: a face left deeper than `INSIDE_SWEEP_M` inside a convex solid has the
-    run subtracted again one solid at a time, and checked again.
+    when ``check``: a face left deeper than `INSIDE_SWEEP_M` inside a convex solid, or a
+    convex piece of one that is not (``pieces``), has the run subtracted again one solid at
+    a time, and checked again.
 
     Parameters
     ----------
@@ -234,6 +281,8 @@ def subtract_run(piece: manifold3d.Manifold, solids: Sequence[manifold3d.Manifol
         The sweeps' indices over all paths, named by the error.
     check : bool
         Test the result (`deepest_inside`); False subtracts only.
+    pieces : sequence of (sequence of ConvexPiece or None), optional
+        Each solid's convex pieces where it is their union (`deepest_inside`).
 
     Raises
     ------
@@ -247,11 +296,11 @@ def subtract_run(piece: manifold3d.Manifold, solids: Sequence[manifold3d.Manifol
     after.num_tri()
     if not check:
         return after
-    depth = deepest_inside(piece, after, solids)
+    depth = deepest_inside(piece, after, solids, pieces)
     if depth <= INSIDE_SWEEP_M:
         return after
     again = one_at_a_time(piece, solids)
-    redone = deepest_inside(piece, again, solids)
+    redone = deepest_inside(piece, again, solids, pieces)
     if redone <= INSIDE_SWEEP_M:
         return again
     raise SubtractionError(

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import functools
 from collections import OrderedDict
+from typing import NamedTuple
 
 import manifold3d
 import numpy as np
@@ -41,9 +42,10 @@ from scipy.spatial import ConvexHull, QhullError
 #: against 2 s) and kept 3.7 times the triangles.
 SOLID_TOLERANCE_REL = 1e-12
 
-__all__ = ["REBUILT_KEPT", "DeferredSolid", "RebuiltSolid", "SolidSweep", "Solids",
-           "clip_polygon", "clipped_bounds", "clipped_prisms", "hull_mesh", "manifold_from",
-           "mesh_volume", "polygon_triangles", "prism_mesh", "prism_triangles", "vector_area"]
+__all__ = ["REBUILT_KEPT", "ConvexPiece", "DeferredSolid", "RebuiltSolid", "SolidSweep",
+           "Solids", "UnitedSolid", "clip_polygon", "clipped_bounds", "clipped_prisms",
+           "convex_piece", "hull_mesh", "manifold_from", "mesh_volume", "polygon_triangles",
+           "prism_mesh", "prism_triangles", "vector_area"]
 
 
 def manifold_from(vertices: np.ndarray, triangles: np.ndarray,
@@ -107,6 +109,41 @@ class RebuiltSolid:
         return self.build(*self.arguments)
 
 
+class ConvexPiece(NamedTuple):
+    """One convex piece of a `UnitedSolid`."""
+
+    #: Its outward planes (p, 4), Qhull's: unit normal n and offset c, n . x + c <= 0
+    #: inside, sorted.
+    equations: np.ndarray
+    #: Its bounds (3,), m.
+    lower: np.ndarray
+    upper: np.ndarray
+
+
+class UnitedSolid:
+    """A sweep cut as the union of convex pieces (`SweepSet._united`: a tool tilted across
+    itself), which is not convex: its manifold, and its pieces' planes and bounds
+    (`ConvexPiece`), which the check of a run's subtraction tests the faces it made against
+    (`machinesim.cutting.run_check`; the union's own hull holds material outside it). The
+    planes take less room than the manifold they come with (``SweepSet.hulls`` keeps both)."""
+
+    __slots__ = ("pieces", "solid")
+
+    def __init__(self, solid: manifold3d.Manifold, pieces: list[ConvexPiece]) -> None:
+        self.solid, self.pieces = solid, tuple(pieces)
+
+
+def convex_piece(vertices: np.ndarray, equations: np.ndarray,
+                 top: float | None = None) -> ConvexPiece:
+    """The `ConvexPiece` of the hull of ``vertices`` (n, 3) whose faces lie in the planes
+    ``equations`` (f, 4, `hull_mesh`'s), cut to z <= ``top`` (m) when it is given."""
+    lower, upper = vertices.min(axis=0), vertices.max(axis=0)
+    if top is not None:
+        equations = np.unique(np.concatenate([equations, [[0.0, 0.0, 1.0, -top]]]), axis=0)
+        upper[2] = min(upper[2], top)
+    return ConvexPiece(equations, lower, upper)
+
+
 #: `RebuiltSolid`s a `Solids` keeps made, the least recently read dropped first: the
 #: sweeps of a tile (`tiling.SWEEPS_PER_TILE`) and of its neighbour in the grid, which
 #: share those that cross their wall (~120 MB of `ball:0.5` sweeps at most).
@@ -116,7 +153,8 @@ REBUILT_KEPT = 512
 class Solids(list):
     """Sweeps' solids by index: a `DeferredSolid` becomes its manifold the first time it is
     read (by index or by iterating), and stays so; a `RebuiltSolid` is made when read and
-    kept among the last `REBUILT_KEPT` read, so that memory does not grow with the sweeps."""
+    kept among the last `REBUILT_KEPT` read, so that memory does not grow with the sweeps;
+    a `UnitedSolid` reads as its manifold, its convex pieces by `pieces`."""
 
     def __init__(self, *items) -> None:
         super().__init__(*items)
@@ -137,6 +175,8 @@ class Solids(list):
             else:
                 self._made.move_to_end(key)
             item = made
+        elif isinstance(item, UnitedSolid):
+            item = item.solid
         return item
 
     def __iter__(self):
@@ -145,6 +185,12 @@ class Solids(list):
     def deferred(self, index: int) -> bool:
         """Whether the solid at ``index`` has not been made yet."""
         return isinstance(list.__getitem__(self, index), DeferredSolid)
+
+    def pieces(self, index: int) -> tuple[ConvexPiece, ...] | None:
+        """The convex pieces of the sweep at ``index`` when it is their union (`UnitedSolid`),
+        None when it is convex itself."""
+        item = list.__getitem__(self, index)
+        return item.pieces if isinstance(item, UnitedSolid) else None
 
 
 def vector_area(polygon: np.ndarray) -> np.ndarray:
@@ -347,8 +393,9 @@ class SolidSweep:
         return vertices, inverse.reshape(-1, 3).astype(np.uint64)
 
 
-def hull_mesh(points: np.ndarray):
-    """Convex hull of points (n, 3) by Qhull: vertices, outward triangles (uint64), volume.
+def hull_mesh(points: np.ndarray, planes: bool = False):
+    """Convex hull of points (n, 3) by Qhull: vertices, outward triangles (uint64), volume,
+    and with ``planes`` its faces' outward equations (f, 4), Qhull's, each once, sorted.
 
     Each face of the hull that Qhull triangulated as a fan (a profile's end face, the top
     of a clipped sweep: polygons of hundreds of vertices) is triangulated again by
@@ -365,8 +412,8 @@ def hull_mesh(points: np.ndarray):
     flip = np.einsum("ij,ij->i", normal, hull.equations[:, :3]) < 0.0
     simplices[flip] = simplices[flip][:, ::-1]
     # Qhull gives the triangles of one face that face's own plane: group them by it.
-    _, face, count = np.unique(hull.equations, axis=0, return_inverse=True,
-                               return_counts=True)
+    equations, face, count = np.unique(hull.equations, axis=0, return_inverse=True,
+                                       return_counts=True)
     face = face.reshape(-1)
     large = np.flatnonzero(count >= 3)
     if len(large):
@@ -377,7 +424,8 @@ def hull_mesh(points: np.ndarray):
                         else simplices[face == group])
         simplices = np.concatenate(kept)
     used, inverse = np.unique(simplices, return_inverse=True)
-    return points[used], inverse.reshape(-1, 3).astype(np.uint64), float(hull.volume)
+    mesh = points[used], inverse.reshape(-1, 3).astype(np.uint64), float(hull.volume)
+    return (*mesh, equations) if planes else mesh
 
 
 def _boundary_loop(triangles: np.ndarray) -> np.ndarray | None:

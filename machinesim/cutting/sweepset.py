@@ -21,8 +21,10 @@ from machinesim.cutting.sweeps import (
     RebuiltSolid,
     Solids,
     SolidSweep,
+    UnitedSolid,
     clipped_bounds,
     clipped_prisms,
+    convex_piece,
     hull_mesh,
     manifold_from,
     mesh_volume,
@@ -327,27 +329,34 @@ class SweepSet:
         return self._ball_cut(self.poses[start, :3, :3].copy(), origin,
                               self.poses[end, :3, 3] - origin)[0]
 
-    def _hull(self, points: np.ndarray, clipped: bool):
+    def _hull(self, points: np.ndarray, clipped: bool, piece: bool = False):
         """The convex hull of a sweep's points by Qhull (`sweeps.hull_mesh`): the clipped
-        candidates, or all points (then trimmed by the clip plane where they cross it)."""
-        hull = hull_mesh(points)
+        candidates, or all points (then trimmed by the clip plane where they cross it); with
+        ``piece``, (solid, volume) has its `sweeps.ConvexPiece` third."""
+        hull = hull_mesh(points, planes=piece)
         if hull is None:
             return None
-        return self._solid(hull[0], hull[1], not clipped and points[:, 2].max() > self.clip_z)
+        trim = not clipped and points[:, 2].max() > self.clip_z
+        built = self._solid(hull[0], hull[1], trim)
+        if not piece or not isinstance(built, tuple):
+            return built
+        return (*built, convex_piece(hull[0], hull[3], self.clip_z if trim else None))
 
     def _united(self, pieces, clipped: bool):
         """`_hull` of each piece of a split sweep (`tilted_profiles.halves`,
-        `tilted_solids.SolidSplitter.pieces`), united."""
-        built = [self._hull(points, clipped) for points in pieces if points is not None]
+        `tilted_solids.SolidSplitter.pieces`), united, with the pieces' planes (the run
+        check's: `_UnitedSweep`)."""
+        built = [self._hull(points, clipped, piece=True) for points in pieces
+                 if points is not None]
         solids = [b for b in built if isinstance(b, tuple)]
         if not solids:
             return "above" if all(b == "above" for b in built) else None
         if len(solids) == 1:
-            return solids[0]
+            return solids[0][:2]
         solid = solids[0][0]
         for other in solids[1:]:
             solid = solid + other[0]
-        return solid, solid.volume()
+        return _UnitedSweep(solid, solid.volume(), [b[2] for b in solids])
 
     def hulls(self, keep: Callable[[np.ndarray, np.ndarray], np.ndarray],
               progress: Callable[[int, int], None] | None = None):
@@ -504,9 +513,11 @@ class SweepSet:
                 owners.append(begin + int(near[row]))
                 # a ball's sweep is made again when a tile reads it: kept, all of them took
                 # 23 GB for a 100,000-line program before the first tile was cut
-                hulls.append(RebuiltSolid(self.ball_sweep, int(first[row]))
-                             if REBUILD_BALL_SWEEPS and isinstance(built, _BallSweep)
-                             else solid)
+                if REBUILD_BALL_SWEEPS and isinstance(built, _BallSweep):
+                    hulls.append(RebuiltSolid(self.ball_sweep, int(first[row])))
+                else:
+                    hulls.append(UnitedSolid(solid, built.pieces)
+                                 if isinstance(built, _UnitedSweep) else solid)
                 footprints.append(built[3] if len(built) > 3 else None)
                 lower.append(box[:3])
                 upper.append(box[3:])
@@ -536,3 +547,13 @@ class _BallSweep(tuple):
     """(solid, volume) of a ball end mill's sweep that `SweepSet.ball_sweep` makes again
     from its poses alone (`hulls` keeps it as a `RebuiltSolid`)."""
 
+
+
+class _UnitedSweep(tuple):
+    """(solid, volume) of a sweep `SweepSet._united` made of convex pieces, and the pieces
+    (`sweeps.ConvexPiece`) as ``pieces`` (`hulls` keeps it as a `UnitedSolid`)."""
+
+    def __new__(cls, solid, volume: float, pieces):
+        built = super().__new__(cls, (solid, volume))
+        built.pieces = pieces
+        return built
