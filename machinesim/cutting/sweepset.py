@@ -548,7 +548,6 @@ class _BallSweep(tuple):
     from its poses alone (`hulls` keeps it as a `RebuiltSolid`)."""
 
 
-
 class _UnitedSweep(tuple):
     """(solid, volume) of a sweep `SweepSet._united` made of convex pieces, and the pieces
     (`sweeps.ConvexPiece`) as ``pieces`` (`hulls` keeps it as a `UnitedSolid`)."""
