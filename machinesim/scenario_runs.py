@@ -55,7 +55,8 @@ def progress_printer(scenario: str):
 def scenario_status(report, args, name: str | None = None) -> int:
     """Run a scenario's ``report(args)`` and give its exit status: 0; 2 after a
     `machinesim.MachineSimError`, its one-line message on stderr (``NAME: error: message``,
-    as ``machinesim: error: ...`` on the command line; ``name`` defaults to the script's
+    as ``machinesim: error: ...`` on the command line; a `MachineSimWarning` as one
+    ``machinesim: warning: ...`` line, as there; ``name`` defaults to the script's
     name; also a report folder (``args.out``) that cannot be made or written, checked before
     the run, and a file that failed to write); 130 after Ctrl-C, one line saying so
     (``NAME: interrupted; ...``), 143 after SIGTERM (``NAME: terminated; ...``). Never a
@@ -70,7 +71,7 @@ def scenario_status(report, args, name: str | None = None) -> int:
     """
     from machinesim.scenario_start import finished, loaded
 
-    from machinesim.exceptions import MachineSimError, say
+    from machinesim.exceptions import MachineSimError, say, warnings_as_lines
 
     loaded()
     name = name or Path(sys.argv[0]).stem or "scenario"
@@ -79,7 +80,7 @@ def scenario_status(report, args, name: str | None = None) -> int:
     try:
         # past the memory there is: MemoryError, not the OOM killer
         with (ctrl_c_remembered(), memory_capped(), _may_close("stdout") as stdout,
-              _may_close("stderr")):
+              _may_close("stderr"), warnings_as_lines()):
             if out is not None:
                 staged = _stage_report(out)
             report(args)

@@ -400,3 +400,53 @@ def test_a_turned_part_says_what_it_is_with_units():
             "TurnedPart(1 run, 201 path points over 50 turns, nose radius 1 mm, top 0 m)")
         deepest.append(part.heights_at(np.linspace(-4e-3, 4e-3, 8001), np.zeros(8001)).min())
     assert deepest == pytest.approx([-1e-6, -0.5e-6], abs=1e-12)
+
+
+def test_a_grid_cut_with_the_tool_set_high_reads_its_uncut_crests():
+    # The sine grid is cut 0.9 to 1 um below the stock's top; a tool tip set 0.95 um high
+    # cuts the same surface 0.95 um higher, and where that passes the top (crests) the
+    # stock stays. The share of the measured line that reads the top is then the share of
+    # the grid cut as programmed (tool.z = 0) that lies above top - 0.95 um - UNCUT_BAND:
+    # a second cut, shifted by hand. Bracketed analytically too: the grid along the line is
+    # A sin(k r) + A over two whole wavelengths, cut within -4.1 .. +0.25 nm of it (the
+    # as-found program's interpolation), so the share lies between P(sin > -0.205) = 0.566
+    # (design above 39.75 nm) and P(sin > -0.118) = 0.538 (above 44.1 nm), by
+    # P(sin > a) = 1/2 - asin(a) / pi over whole wavelengths.
+    import machinesim.cam.spiral as sp
+    from machinesim.procedures.sts_plans import MEASURE_LINE, PLANS
+    from machinesim.procedures.sts_turning import GRID_TOP, UNCUT_BAND, STSTurning, uncut_share
+
+    procedure = STSTurning()
+    program = sp.spiral_program(PLANS["before"].path(sp.sine_grid(), procedure.nose_radius))
+    high = 0.95e-6
+    read = {}
+    for z in (0.0, high):
+        lab = machinesim.Lab("sts_lathe", {"tool": {"offset_um": [0.0, 0.0, z * 1e6]}},
+                             noise=False)
+        part, _ = lab.turn(program, procedure.tool, top=GRID_TOP)
+        read[z] = lab.white_light_interferometer(label="grid").profile(part, *MEASURE_LINE).z
+    assert uncut_share(read[0.0]) == 0.0
+    share = uncut_share(read[high])
+    shifted = np.asarray(read[0.0]) + high
+    assert share == pytest.approx(float(np.mean(shifted > GRID_TOP - UNCUT_BAND)),
+                                  abs=1.0 / len(shifted))
+    assert 0.5 - math.asin(-0.118) / math.pi - 1e-3 < share < 0.5 - math.asin(-0.205) / math.pi
+
+
+def test_a_case_partly_uncut_says_so_in_its_figures():
+    from machinesim.procedures.sts_prediction import Prediction
+    from machinesim.procedures.sts_turning import CASES, CaseResult, STSTurning
+
+    def case(name, line, window):
+        prediction = Prediction(6e-9, 1e-9, 1e-9, 5e-9, np.zeros(3))
+        return CaseResult(name, prediction, 31e-9, np.zeros(3), np.zeros(3), 0.4e-9, 10, 1.0,
+                          (), uncut_line=line, uncut_window=window)
+
+    cases = {name: case(name, 0.0, 0.0) for name in CASES}
+    cases["case_4"] = case("case_4", 0.32, 0.5)
+    notes = {f.name: f.note for f in STSTurning().figures(cases)}
+    said = ("case_4: 32% of the measured line and 50% of the Sa window read the stock's "
+            "top, uncut")
+    for name in ("form_error_pv", "sa", "form_error_pv_case_4"):
+        assert said in notes[name]
+    assert "uncut" not in notes["form_error_pv_case_1"] + notes["form_error_pv_predicted"]

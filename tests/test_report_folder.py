@@ -477,3 +477,21 @@ def test_a_budgets_table_and_plot_are_written_both_or_neither(tmp_path):
     out.write_budget(other)
     assert "36" in (tmp_path / "out/budget.md").read_text()
     assert (tmp_path / "out/budget.png").read_bytes() != before["budget.png"]
+
+
+def test_a_scenario_shows_a_machinesim_warning_as_one_line(tmp_path, capsys):
+    # Python's own form named the warning's source line in machinesim and printed it
+    # ('/.../experiment.py:180: MachineSimWarning: ...'), where the command lines print one
+    # 'machinesim: warning:' line
+    import warnings
+
+    from machinesim.exceptions import MachineSimWarning
+
+    def report(args):
+        warnings.warn("case_4: 40% of the measured line reads the stock's top",
+                      MachineSimWarning, stacklevel=2)
+
+    assert scenario_status(report, Namespace(out=None), "s") == 0
+    err = capsys.readouterr().err
+    assert err == ("machinesim: warning: case_4: 40% of the measured line reads the stock's "
+                   "top\n")

@@ -28,6 +28,7 @@ errors and the encoder recording, never the injected values (docs/procedures/sts
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -35,7 +36,7 @@ import numpy as np
 
 from machinesim.cam import spiral as sp
 from machinesim.cutting.lathe import turning_tool
-from machinesim.exceptions import InputError, NotConvergedError
+from machinesim.exceptions import InputError, MachineSimWarning, NotConvergedError
 from machinesim.experiment import Evaluation, Figure, Identified, check_lab
 from machinesim.identification.turning_tool import fit_centre_height, identify_tool_errors
 from machinesim.metrology.fits import roughness_sa
@@ -62,6 +63,15 @@ from machinesim.servo import TABLE6, table6_servo
 __all__ = ["CASES", "PROGRAM_OF", "STSTurning", "test_cut"]
 
 NM, UM = 1e-9, 1e-6
+
+#: The stock's top over the sine grid's design, m: the program cuts the grid (0 .. 100 nm)
+#: 0.9 to 1 um below it.
+GRID_TOP = 1 * UM
+#: A point of the grid's measured line or window that reads within this (m) of the stock's
+#: top was not cut (`uncut_share`): twenty times the interferometer's 0.5 nm noise, so that
+#: the stock's top always reads within it, where a cut point lies 0.9 um or more below it
+#: unless the tool tip is set nearly that much higher than programmed.
+UNCUT_BAND = 10 * NM
 
 #: Largest misfit (m) of the test sphere's fit, its residual RMS less the interferometer's
 #: stated noise in quadrature, for which the tool errors are taken: the exact form
@@ -351,6 +361,27 @@ class CaseResult:
     points: int
     machining_time_s: float
     heights: tuple = field(repr=False, default=())
+    #: Shares of the measured line and of the Sa window that read the stock's top
+    #: (`uncut_share`): 0 when the grid was cut everywhere it was read.
+    uncut_line: float = 0.0
+    uncut_window: float = 0.0
+
+    def uncut_note(self) -> str:
+        """What a reader of the case's figures must know when part of it was not cut."""
+        if not (self.uncut_line or self.uncut_window):
+            return ""
+        return (f"; {self.name}: {self.uncut_line:.0%} of the measured line and "
+                f"{self.uncut_window:.0%} of the Sa window read the stock's top, uncut (the "
+                "tool tip above the program there: tool.z, workpiece.z?), so its P-V is "
+                "partly the stock's")
+
+
+def uncut_share(heights) -> float:
+    """The share of the finite ``heights`` (m) that read within `UNCUT_BAND` of the stock's
+    top over the grid (`GRID_TOP`): points the tool did not cut."""
+    z = np.asarray(heights, dtype=np.float64)
+    z = z[np.isfinite(z)]
+    return float(np.mean(z > GRID_TOP - UNCUT_BAND)) if z.size else 0.0
 
 
 @dataclass(frozen=True)
@@ -432,6 +463,9 @@ class STSTurning:
             radius = self.nose_radius + (0.0 if name == "case_1" else found.d_radius)
             cases[name] = self.run_case(lab, name, programs[PROGRAM_OF[name]], design, known,
                                         radius)
+            if cases[name].uncut_note():
+                warnings.warn(f"STSTurning{cases[name].uncut_note()}", MachineSimWarning,
+                              stacklevel=2)
         return Evaluation(figures=self.figures(cases), details=details(cases, alignment),
                           parts={}, programs={})
 
@@ -453,7 +487,7 @@ class STSTurning:
         """Predict, then turn and measure, one case."""
         recording = lab.encoders(label=f"{name}_encoders").record_turning(program)
         prediction = predict(lab.machine, design, recording, known, self.nose_radius, radius)
-        part, report = lab.turn(program, self.tool, top=1 * UM)
+        part, report = lab.turn(program, self.tool, top=GRID_TOP)
         wli = lab.white_light_interferometer(label=name)
         start, end, spacing = MEASURE_LINE
         profile = wli.profile(part, start, end, spacing)
@@ -465,21 +499,24 @@ class STSTurning:
         sa = roughness_sa(window.x, window.y, window.z - design(gx, gy), l_cutoff=SA_L_CUTOFF)
         return CaseResult(name, prediction, measured.pv, r, measured.residual, sa,
                           report.points, report.machining_time_s,
-                          (window.x, window.y, np.asarray(window.z)))
+                          (window.x, window.y, np.asarray(window.z)),
+                          uncut_share(profile.z), uncut_share(window.z))
 
     def figures(self, cases) -> tuple:
         one, four = cases["case_1"], cases["case_4"]
+        ends = one.uncut_note() + four.uncut_note()
         rows = [
             Figure("form_error_pv", "nm", one.measured_pv / NM, four.measured_pv / NM,
                    PAPER["case_1"], PAPER["case_4"],
-                   note="measured, Case 1 -> Case 4; paper prints um for Case 1, read nm"),
+                   note="measured, Case 1 -> Case 4; paper prints um for Case 1, read nm"
+                        + ends),
             Figure("form_error_pv_predicted", "nm", one.prediction.total / NM,
                    four.prediction.total / NM,
                    note=f"predicted before cutting; paper: Case 4 < "
                         f"{PAPER_BOUNDS['predicted_case_4']:g} nm"),
             Figure("sa", "nm", one.sa / NM, four.sa / NM,
                    note=f"design removed, L-filter 8 um; paper: Case 4 < "
-                        f"{PAPER_BOUNDS['sa']:g} nm"),
+                        f"{PAPER_BOUNDS['sa']:g} nm{ends}"),
             Figure("program_form_error_pv", "nm", one.prediction.program / NM,
                    four.prediction.program / NM, *PAPER["program"],
                    note="Table 4 before -> after, predicted"),
@@ -490,7 +527,8 @@ class STSTurning:
         for name, case in cases.items():
             rows.append(Figure(f"form_error_pv_{name}", "nm", case.prediction.total / NM,
                                case.measured_pv / NM, None, PAPER[name],
-                               note="before: predicted, after: measured"))
+                               note="before: predicted, after: measured"
+                                    + case.uncut_note()))
         return tuple(rows)
 
 
@@ -504,6 +542,8 @@ def details(cases, alignment) -> dict:
                      "predicted_tool_pv_nm": p.tool / NM,
                      "predicted_servo_pv_nm": p.servo / NM,
                      "measured_pv_nm": case.measured_pv / NM, "sa_nm": case.sa / NM,
+                     "uncut_line_ratio": case.uncut_line,
+                     "uncut_window_ratio": case.uncut_window,
                      "points_count": case.points,
                      "machining_time_s": case.machining_time_s,
                      "profile_r_um": (case.measured_r / UM).tolist(),
