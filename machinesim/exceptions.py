@@ -137,6 +137,18 @@ class NCProgramError(InputError):
     """An NC program has a word, block or modal state that cannot be run (its ``block``,
     the N word at ``line``, named beside the line: `InputError`)."""
 
+    @property
+    def problems(self) -> tuple[NCProgramError, ...]:
+        """Every problem the reader found, the first first (docs/nc.md, "Everything
+        refused, at once"); an error of one problem holds itself. It had been set on an
+        error of several only, and ``error.problems`` of a program with one problem raised
+        AttributeError."""
+        return self.__dict__.get("_problems", (self,))
+
+    @problems.setter
+    def problems(self, value) -> None:
+        self.__dict__["_problems"] = tuple(value)
+
 
 class ProgramTimeError(NCProgramError):
     """An NC program's moves and dwells take longer in all than its float64 clock keeps

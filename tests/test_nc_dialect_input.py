@@ -193,7 +193,7 @@ def test_one_line_of_repeated_words_is_one_problem_read_to_its_cap():
     line = "G01 F100. " + "X1. " * 30_000
     with pytest.raises(NCProgramError) as info:
         parse_program("G00 X0. Y0. Z1.\n" + line + "\n", "long.nc")
-    assert MAX_LINE_ITEMS == 10_000 and not hasattr(info.value, "problems")
+    assert MAX_LINE_ITEMS == 10_000 and info.value.problems == (info.value,)
     # G01 and F100. are two words, so the cap falls on the 9,999th 'X1.' (0-based 9,998),
     # which starts at column 11 + 4 x 9,998
     assert info.value.line == 2 and info.value.column == 11 + 4 * 9_998 == 40_003

@@ -244,6 +244,34 @@ def test_linuxcnc_constructs_are_one_problem_each_naming_them(text, problems):
     assert found == problems
 
 
+@pytest.mark.parametrize(("block", "code"), [
+    # a Fusion 360 post's tilted plane: six problems, its I J K 'only read with G02/G03'
+    # and its X 'without a motion mode; give G00 or G01 first'
+    ("G68.2 X0. Y0. Z0. I0. J45. K0.", "G68.2"),
+    ("G52 X10. Y5.", "G52"),  # its advice had been to make the origin a move
+    ("G10 L2 P1 X0 Y0 Z0", "G10"),  # work offset setting: four problems
+    ("G65 P9810 X1. Y2. Z3.", "G65"),  # a probing macro's call
+    ("G54.1 P7", "G54.1"),  # an extended work offset, Fusion's for a 7th one
+    ("G05 P10000", "G05"),  # FANUC's high-precision contour control
+])
+def test_a_refused_codes_own_words_are_not_refused_again(block, code):
+    with pytest.raises(NCProgramError) as info:
+        parse_program(f"G90 G21\n{block}\nM30\n", "prog.nc")
+    error = info.value
+    assert (error.line, error.column, error.key) == (2, 1, code)
+    assert "problems in the program" not in str(error)
+
+
+def test_an_error_of_one_problem_holds_it_in_problems():
+    # docs/nc.md: "all in error.problems"; it had been set on an error of several only
+    with pytest.raises(NCProgramError) as info:
+        parse_program("G90 G21\nG00 X0 U1\nM30\n", "prog.nc")
+    assert info.value.problems == (info.value,)
+    with pytest.raises(NCProgramError) as info:
+        parse_program("G90 G21\nG00 X0 U1\nG00 X0 V1\nM30\n", "prog.nc")
+    assert [(p.line, p.key) for p in info.value.problems] == [(2, "U1"), (3, "V1")]
+
+
 def test_a_fanuc_program_number_with_a_comment_is_no_o_word():
     program = parse_program("O1000 (WHILE SUB)\nG21 G00 X1.\nM30")
     assert program.targets[:, 0].tolist() == [1e-3]

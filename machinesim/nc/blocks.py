@@ -35,6 +35,7 @@ from machinesim.nc.words import (
     MAX_PROGRAM_TIME_S,
     MOTION,
     OTHER_CYCLES,
+    OWN_WORDS,
     SINGLE,
     SLOWEST_FEED_M_PER_S,
     UNITS_AFTER_MOTION,
@@ -73,6 +74,7 @@ class Block:
         self.g_codes: dict[str, tuple[str, Word]] = {}
         self.m_codes: list[tuple[int, Word]] = []
         self.refused_cycle: str | None = None  # a canned cycle not read (G74, G84..G89)
+        self.refused_code: str | None = None  # a code not read whose words are its own
 
     def fail(self, message: str, word: Word | None) -> NCProgramError:
         return self.reader.fail(message, self.line, word)
@@ -96,6 +98,10 @@ class Block:
         state = self.state
         self.classify()
         single, g = self.single, self.g_codes
+        if self.refused_code is not None:
+            # its words are its data (words.OWN_WORDS): its refusal says what is wrong
+            for letter in (*AXES, *"PQRIJKL"):
+                single.pop(letter, None)
         if "O" in single:
             raise self.fail("the O number must stand alone in the first block of the program "
                             "or of a subprogram", single["O"])
@@ -204,11 +210,14 @@ class Block:
             self.refuse(G_REFUSED[name], word)
             if name in OTHER_CYCLES:
                 self.refused_cycle = name
+            if name in OWN_WORDS:
+                self.refused_code = name
             return
         group = G_GROUPS.get(name)
         if group is None:
             self.refuse(f"unknown G code {brief(name)}; machinesim reads "
                         f"{' '.join(sorted(G_GROUPS))}", word)
+            self.refused_code = name
             return
         if group in self.g_codes:
             first = self.g_codes[group][0]

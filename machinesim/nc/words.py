@@ -160,6 +160,13 @@ G_REFUSED = {
              "(read_program(..., work_offsets=...))"
        for code, what in COORDINATE_CHANGES.items()},
 }
+#: Refused codes whose block's axis words and P Q R I J K L are the code's own data, not a
+#: move or an arc (G52's and G92's X Y Z, G68.2's origin and angles I J K), as are an unknown
+#: code's (G10 L2 P1 X.. Y.., G65 P9810 X.., G54.1 P1, G05 P10000): such a block's words are
+#: not read. Each had been refused once more beside the code, as 'axis word X without a motion
+#: mode; give G00 or G01 first' (which would make G52's origin a move) or 'word P is only read
+#: with ...', six problems for one `G68.2 X0. Y0. Z0. I0. J45. K0.`
+OWN_WORDS = frozenset({*COORDINATE_CHANGES, "G68.2", "G53.1"})
 SINGLE = frozenset("NOSFPXYZABCIJKRQLHTD")
 MOTION = {"G00": "rapid", "G01": "linear"}
 ARC = ("G02", "G03")
