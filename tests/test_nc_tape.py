@@ -92,6 +92,19 @@ def test_an_iso_colon_program_number_reads_as_an_o_number():
         "O1234\nG90 G21\nM98 P2000\nM30\nO2000\nG01 X1. F100.\nM99\n")
 
 
+def test_an_iso_colon_number_in_the_program_is_named_as_written():
+    # NX's sample FANUC output numbers its tool change block ':0030'; the refusal had named
+    # a key 'O0030', which the file does not hold
+    text = "%\nN0010 G40 G17 G90 G21\nN0020 G91 G28 Z0.0\n:0030 T00 M06\nN0040 G0 G90 X1.\nM02\n%\n"
+    with pytest.raises(NCProgramError) as error:
+        parse_program(text, "nx.nc")
+    assert (error.value.line, error.value.column, error.value.key) == (4, 1, ":0030")
+    assert str(error.value).startswith(
+        "nx.nc, line 4, column 1, key ':0030': ':0030' is a program number (':' is the "
+        "ISO-code address of O: O0030): the O number must be the first block")
+    assert str(error.value).endswith("write N0030")
+
+
 @pytest.mark.parametrize("text, key, fix", [
     (":O1001", ":O1001", "write ':1001' or 'O1001', not both"),
     (": o 12 (PART)", ": o 12", "write ':12' or 'O12', not both"),

@@ -67,10 +67,20 @@ class Layout:
                 self.skip.add(i)
                 number = integer(o_word)
                 if current is None and main_end is None:
-                    problems.add(reader.fail(
-                        "the O number must be the first block of the program; a subprogram "
-                        "starts with its O number after the main program's end (M02/M30)",
-                        line, o_word))
+                    message = ("the O number must be the first block of the program; a "
+                               "subprogram starts with its O number after the main "
+                               "program's end (M02/M30)")
+                    error = reader.fail(message, line, o_word)
+                    if reader.text(i)[o_word.column - 1] == ":":
+                        # NX's sample posts number a tool change block ':0030' (the ISO
+                        # alignment function); it had been named 'O0030', never written
+                        error = NCProgramError(
+                            f"':{o_word.text}' is a program number (':' is the ISO-code "
+                            f"address of O: O{o_word.text}): {message}; if it numbers the "
+                            f"block, as NX posts write a tool change block, write "
+                            f"N{o_word.text}", source=error.source, line=line,
+                            column=o_word.column, key=":" + o_word.text)
+                    problems.add(error)
                     continue
                 if current is None:
                     self.main_stop = i
