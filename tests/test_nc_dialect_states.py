@@ -221,6 +221,29 @@ def test_g05_1_reads_a_q_with_a_decimal_point_as_its_value():
         parse_program("G08 P1.\nG00 X0")
 
 
+def test_fanuc_g05_p10000_high_precision_contour_control_is_a_state():
+    # 'G05 P10000' / 'G05 P0', as posts for 16i/18i-class controls write it (Mastercam's
+    # FANUC post, Makino), had been refused as an unknown G code: it smooths the control's
+    # path as G05.1 Q1 does, and the programmed path cut here is the same without it
+    text = "G90 G21\nG05 P10000\nG00 X1. Y0 Z1.\nG5 P00000\nX2.\nM30"
+    program = parse_program(text)
+    assert dict(program.states) == {"G05 P10000": 2, "G05 P0": 4}
+    assert program.targets[:, 0].tolist() == [1 * MM, 2 * MM]
+    # its other P numbers are high-speed cycle (P1) and binary (P3) operation, whose path is
+    # data stored in the control: refused, as a P with a point (FANUC's P takes none)
+    for block, column, key in (("G05 P1", 5, "P1"), ("G05 P3", 5, "P3"), ("G05", 1, "G05"),
+                               ("G05 P10000.", 5, "P10000.")):
+        with pytest.raises(NCProgramError, match="G05 is read as FANUC's high-precision "
+                                                 r"contour control, P10000 \(on\) or P0 "
+                                                 r"\(off\), got .*: its other P numbers run "
+                                                 "high-speed cycle") as info:
+            parse_program(f"{block}\nG00 X0")
+        assert (info.value.line, info.value.column, info.value.key) == (1, column, key)
+    with pytest.raises(NCProgramError, match=r"G05 stands in a block of its own \(with "
+                                             r"P10000 or P0\), found X1\.$"):
+        parse_program("G05 P10000 X1.")
+
+
 def test_haas_g103_look_ahead_limit_is_a_state_with_p0_to_p15():
     # a Haas post's G103 P1 (look-ahead limited to one block) had been refused as an unknown
     # G code, and with it the program; Haas's manual gives P the range 0-15, and G103 alone

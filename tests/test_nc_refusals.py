@@ -252,7 +252,7 @@ def test_linuxcnc_constructs_are_one_problem_each_naming_them(text, problems):
     ("G10 L2 P1 X0 Y0 Z0", "G10"),  # work offset setting: four problems
     ("G65 P9810 X1. Y2. Z3.", "G65"),  # a probing macro's call
     ("G54.1 P7", "G54.1"),  # an extended work offset, Fusion's for a 7th one
-    ("G05 P10000", "G05"),  # FANUC's high-precision contour control
+    ("G30 G91 Z0.", "G30"),  # the second reference position, a Mastercam tool change's
 ])
 def test_a_refused_codes_own_words_are_not_refused_again(block, code):
     with pytest.raises(NCProgramError) as info:

@@ -55,7 +55,7 @@ G codes
     G80, G91.1, G15 G50 G69 (the cancels of polar coordinates, scaling and rotation, as
     safe-start lines write them; G50 with an axis word, a lathe's coordinate setting, is
     refused),
-    G05.1 Q1/Q0 (R level), G08 P1/P0, Haas's G103 P0..P15 (look-ahead limit) and G187
+    G05 P10000/P0, G05.1 Q1/Q0 (R level), G08 P1/P0, Haas's G103 P0..P15 (look-ahead limit) and G187
     P1..P3 E (smoothness, corner rounding), T and D words, and G55..G59 selected when no
     ``work_offsets`` were given (G54's zero); with offsets given, a G55..G59 they lack is
     refused. Refused: G41/G42 (cutter radius

@@ -1,6 +1,6 @@
 """A block of a one-shot G code: a dwell (G04), a rapid through the intermediate point to the
 reference position (G28) or to machine coordinates (G53), or a setting of the control's
-path smoothing (G05.1, G08, G103, G187: `machinesim.nc.words.NON_MOVING`).
+path smoothing (G05, G05.1, G08, G103, G187: `machinesim.nc.words.NON_MOVING`).
 
 Internal to the reader: a block (`machinesim.nc.blocks.Block`) with G04 reads here
 (`read_dwell`), one with G28, G53 or a setting in `read_one_shot`; none of them changes
@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 from machinesim.exceptions import brief
 from machinesim.nc.words import (
     DWELL_INCREMENT_S,
+    G05_SETTINGS,
     LOOK_AHEAD_BLOCKS,
     NON_MOVING,
     SINGLE,
@@ -56,10 +57,11 @@ def _switch_found(word: Word | None) -> str:
 
 def _setting(block: Block, name: str, word: Word) -> str:
     """The state a smoothing setting's block (`NON_MOVING`) is noted as, its words checked:
-    G05.1 Q1/Q0 (R level), G08 P1/P0, G103 P0..P15 or alone, G187 P1..P3 and E or alone."""
+    G05 P10000/P0, G05.1 Q1/Q0 (R level), G08 P1/P0, G103 P0..P15 or alone, G187 P1..P3
+    and E or alone."""
     single = block.single
-    words = {"G05.1": "QR", "G08": "P", "G103": "P", "G187": "PE"}[name]
-    shown = {"G05.1": "with Q1 or Q0", "G08": "with P1 or P0",
+    words = {"G05": "P", "G05.1": "QR", "G08": "P", "G103": "P", "G187": "PE"}[name]
+    shown = {"G05": "with P10000 or P0", "G05.1": "with Q1 or Q0", "G08": "with P1 or P0",
              "G103": f"with P0..P{LOOK_AHEAD_BLOCKS} or nothing",
              "G187": "with P1..P3, E or nothing"}[name]
     # letters the block refused as unknown (an E outside G187) are not named again here
@@ -82,6 +84,17 @@ def _setting(block: Block, name: str, word: Word) -> str:
             block.real(rounding)
             key += f" E{rounding.text.lstrip('+')}"
         return key
+    if name == "G05":
+        given = single.get("P")
+        number = None if given is None else integer(given)
+        if number not in G05_SETTINGS:
+            found = "no P" if given is None else brief(given.key)
+            raise block.fail(
+                f"G05 is read as FANUC's high-precision contour control, P10000 (on) or P0 "
+                f"(off), got {found}: its other P numbers run high-speed cycle (P1) or "
+                "binary (P3) operation, whose path is data stored in the control, not in "
+                "this program; post the path as blocks", word if given is None else given)
+        return f"G05 P{number}"
     letter = "Q" if name == "G05.1" else "P"
     given = single.get(letter)
     setting = None if given is None else _switch(given)
@@ -144,7 +157,7 @@ def read_dwell(block: Block, g04: Word, axes: list[Word], block_number: int | No
 
 def read_one_shot(block: Block, code: tuple[str, Word], axes: list[Word],
                   block_number: int | None) -> None:
-    """The ``block`` of the one-shot G ``code`` (G28, G53, or a setting: G05.1, G08, G103,
+    """The ``block`` of the one-shot G ``code`` (G28, G53, or a setting: G05, G05.1, G08, G103,
     G187): its rapids, or its setting noted as a state (`Program.states`)."""
     name, word = code
     state, single = block.state, block.single

@@ -48,7 +48,7 @@ def check_word_context(block: Block, motion, one_shot) -> None:
         # G81's P: kept as the cycle's dwell (a later G82 of the cycle dwells it), as
         # FANUC keeps every hole-machining word until G80; G81 itself does not dwell
         "P": (g04 or drills or 98 in codes
-              or shot in ("G08", "G103", "G187")),
+              or shot in ("G05", "G08", "G103", "G187")),
         "Q": hole in ("G73", "G83") or shot == "G05.1",
         "R": arc or drills or shot == "G05.1",
         "I": (arc and "I" in plane_words) or hole in PECKING,
@@ -65,7 +65,8 @@ def check_word_context(block: Block, motion, one_shot) -> None:
                + f"; this block is in {state.plane})")
     reads = {
         "P": "G04 (dwell), G82, G73 and G83 (dwell at the bottom; G81 keeps it for a "
-             "G82), each in ms, or s with a decimal point as Haas, G08 (P1/P0), G103 "
+             "G82), each in ms, or s with a decimal point as Haas, G05 (P10000/P0), "
+             "G08 (P1/P0), G103 "
              f"(P0..P{LOOK_AHEAD_BLOCKS}), G187 (P1..P3) and M98 (program)",
         "Q": "G73 and G83 (peck depth) and G05.1 (Q1/Q0)",
         "R": "G02/G03 (radius), G73 and G81-G83 (R plane) and G05.1",

@@ -80,7 +80,7 @@ G_GROUPS = {
     "G00": "motion", "G01": "motion", "G02": "motion", "G03": "motion", "G04": "motion",
     "G17": "plane", "G18": "plane", "G19": "plane",
     "G20": "units", "G21": "units",
-    "G28": "one-shot", "G53": "one-shot", "G05.1": "one-shot", "G08": "one-shot",
+    "G28": "one-shot", "G53": "one-shot", "G05": "one-shot", "G05.1": "one-shot", "G08": "one-shot",
     "G103": "one-shot", "G187": "one-shot",
     "G40": "cutter compensation",
     "G15": "polar coordinates", "G50": "scaling", "G69": "coordinate rotation",
@@ -175,7 +175,13 @@ ARC = ("G02", "G03")
 #: rounding or acceleration of the control, so none of them moves it. G05.1 (AI contour
 #: control) and G08 (look-ahead) are FANUC's; G103 (look-ahead limit) and G187 (smoothness
 #: and corner rounding) Haas's, as its posts write them (``G187 P3 E0.0004``, ``G103 P1``).
-NON_MOVING = ("G05.1", "G08", "G103", "G187")
+#: G05 P10000 / P0 is FANUC's high-precision (AI) contour control on / off, as posts for
+#: 16i/18i-class controls write it (Mastercam's FANUC post, Makino); it had been refused
+#: as an unknown G code. Its other P numbers are not settings but FANUC's high-speed cycle
+#: (P1) and binary (P3) operation, whose path is data stored in the control: refused.
+NON_MOVING = ("G05", "G05.1", "G08", "G103", "G187")
+#: G05's P numbers read as a setting (`NON_MOVING`): on, off.
+G05_SETTINGS = (10000, 0)
 #: The most blocks G103 P lets a Haas control look ahead: "G103 specifies the maximum number
 #: of blocks the control looks ahead (Range 0-15)"; ``G103 P0``, or G103 without P, lifts the
 #: limit (Haas Mill Operator's Manual, G103 Limit Block Look-Ahead, Group 00; haascnc.com
