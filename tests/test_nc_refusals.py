@@ -28,6 +28,16 @@ REFUSALS = [
     ("G00 X0\nG42 D1 G01 X1. F100.", 2, 1, "G42", "compensation 'in wear' .* holds the "
      "tool-centre path already, its G42 adding only the wear .* without the G42 and D"),
     ("G54.1 X0", 1, 1, "G54.1", "unknown G code G54.1"),
+    # G30 had been an 'unknown G code', and M99's, M97's and M198's P 'only read with G04
+    # ..., M98 (program)'
+    ("G00 X0\nG91 G30 Z0.", 2, 5, "G30", "second, third or fourth reference position "
+     r"\(G30, P2..P4\), which the machine's parameters place, is not supported; post G28"),
+    ("O1\nM98 P2\nM30\nO2\nG00 X1.\nM99 P10", 6, 5, "P10", "M99 P10 returns to the block "
+     "N10 of the calling program, not to the block after its M98, and is not read"),
+    ("G00 X0\nM97 P1000\nM30", 2, 5, "P1000", r"M97 P1000 \(Haas's call of the local "
+     r"subprogram at N1000 of this program\) is not read: write the subprogram as O1000"),
+    ("G00 X0\nM198 P1000\nM30", 2, 6, "P1000", "M198 P1000 calls a subprogram from an "
+     "external device"),
     ("G95", 1, 1, "G95", r"feed per revolution \(G95\)"),
     ("G00 X0\nG96 S200 M03", 2, 1, "G96", r"constant surface speed \(G96, S in m/min\) is "
      r"not supported: S is read as the spindle speed in rpm \(G97\)"),

@@ -20,6 +20,21 @@ if TYPE_CHECKING:
 
 __all__ = ["check_word_context"]
 
+#: M codes whose P is a call or a return elsewhere than M98 / M99 read, each refused so: the
+#: P had been told it 'is only read with G04 ..., M98 (program)', and a Haas program's local
+#: subprogram at N1000 then refused as blocks after M30 and an M99 in the main program.
+CALLS = {
+    99: "M99 P{p} returns to the block N{p} of the calling program, not to the block after "
+        "its M98, and is not read: end the subprogram with M99 alone and put the blocks "
+        "from N{p} on after the M98",
+    97: "M97 P{p} (Haas's call of the local subprogram at N{p} of this program) is not read: "
+        "write the subprogram as O{p} ... M99 after the main program's M30 and call it with "
+        "M98 P{p}",
+    198: "M198 P{p} calls a subprogram from an external device (FANUC's memory card or "
+         "data server), which is not read: put O{p} ... M99 in this file after the main "
+         "program's M30 and call it with M98 P{p}",
+}
+
 
 def check_word_context(block: Block, motion, one_shot) -> None:
     """Refuse the block's P Q R I J K L where nothing reads them: in its motion (``motion``:
@@ -81,7 +96,10 @@ def check_word_context(block: Block, motion, one_shot) -> None:
     }
     for letter, ok in allowed.items():
         if letter in single and not ok:
-            if cycle is not None and not drills and letter in cycle_reads:
+            call = next((c for c in CALLS if c in codes), None) if letter == "P" else None
+            if call is not None:
+                block.refuse(CALLS[call].format(p=single[letter].text), single[letter])
+            elif cycle is not None and not drills and letter in cycle_reads:
                 where = (f"a {shot or 'G04'} block" if shot or g04
                          else "a block without X, Y, Z, R or a rotary axis")
                 block.refuse(f"word {letter} while the canned cycle {cycle} is active, in "

@@ -138,6 +138,10 @@ COORDINATE_CHANGES = {
     "G51.1": "mirror image", "G16": "polar coordinates",
 }
 G_REFUSED = {
+    "G30": "a return to the second, third or fourth reference position (G30, P2..P4), "
+           "which the machine's parameters place, is not supported; post G28 to the "
+           "reference position (on the command line the machine's home, Z at the top of its "
+           "travel) or G53 with machine coordinates",
     "G41": CUTTER_COMPENSATION.format(code="G41"),
     "G42": CUTTER_COMPENSATION.format(code="G42"),
     "G93": "inverse time feed (G93, F = 1/min per block, as multi-axis posts write it) is "
@@ -166,7 +170,7 @@ G_REFUSED = {
 #: not read. Each had been refused once more beside the code, as 'axis word X without a motion
 #: mode; give G00 or G01 first' (which would make G52's origin a move) or 'word P is only read
 #: with ...', six problems for one `G68.2 X0. Y0. Z0. I0. J45. K0.`
-OWN_WORDS = frozenset({*COORDINATE_CHANGES, "G68.2", "G53.1"})
+OWN_WORDS = frozenset({*COORDINATE_CHANGES, "G68.2", "G53.1", "G30"})
 SINGLE = frozenset("NOSFPXYZABCIJKRQLHTD")
 MOTION = {"G00": "rapid", "G01": "linear"}
 ARC = ("G02", "G03")
