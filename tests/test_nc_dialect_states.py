@@ -103,6 +103,26 @@ def test_an_incremental_z_after_a_tool_length_change_is_refused():
     assert z == pytest.approx([0.5, -12.0, 8.0, 9.0], abs=1e-12)
 
 
+def test_a_g49_after_g28_z_or_g53_z_changes_no_length():
+    """G28 Z and G53 Z cancel the tool length offset vector on Z, G43 staying modal (FANUC
+    Series 0i-MB B-63844EN/02, 14.1.2), so the G49 a Fusion 360 FANUC post writes after its
+    G28 G91 Z0. changes nothing, and the next tool's G00 X Y runs at the reference on a FANUC
+    as here. It had been refused as a change of the whole length (-2.5 mm), every program
+    of such a post with a tool table whose lengths are not 0."""
+    for retract, z in (("G28 G91 Z0.\nG90", 0.0), ("G53 Z20.", 20.0)):
+        text = (f"G90 G00 X0 Y0\nT2 M06\nG43 Z10. H2\n{retract}\nG49\nT1 M06\n"
+                "G00 X10. Y15.\nG43 Z15. H1\nM30\n")
+        program = parse_program(text, tools=TOOLS)
+        assert program.targets[-2:, :3].ravel().tolist() == pytest.approx(
+            [10 * MM, 15 * MM, z * MM, 10 * MM, 15 * MM, 65 * MM], abs=EXACT_M)
+    # there a G43 H2 changes the length from 0: FANUC lifts Z 2.5 mm in its block
+    with pytest.raises(NCProgramError, match=r"X10\. moves without Z after G43 H2 at line 4, "
+                                             r"which changed the tool length offset by "
+                                             r"\+2.5 mm"):
+        parse_program("G90 G00 X0 Y0\nG43 Z10. H1\nG28 G91 Z0.\nG90 G43 H2\nG00 X10.\n",
+                      tools=TOOLS)
+
+
 def test_tool_words_are_checked_against_the_table():
     with pytest.raises(NCProgramError, match="H7: tool 7|no length for tool 7") as info:
         parse_program("G00 Z0\nG43 H7 Z1.", tools=TOOLS)

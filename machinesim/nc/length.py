@@ -1,7 +1,8 @@
 """A tool length change (G43/G44 H, G49) that waits for a Z to carry it.
 
 FANUC by default (parameter 5006#6 TOS = 0) moves Z by the change in the G43/G44/G49 block
-itself; LinuxCNC, and controls that shift coordinates, carry it with the next absolute Z only
+itself (after G28 Z or G53 Z, which cancel the offset on Z, a change from 0); LinuxCNC, and
+controls that shift coordinates, carry it with the next absolute Z only
 (docs/nc.md, "Tool table"), as machinesim's reader does. Until an absolute Z (or G28 Z,
 G53 Z, a cycle's absolute R and Z) carries the change, the two readings put what follows
 the change apart in Z, so it is refused, naming the line of the change and the difference:
@@ -32,6 +33,14 @@ def note_length_change(block: Block, length_before: float) -> None:
     ``length_before`` (m) waits for a Z, unless it returns to the length a Z last carried."""
     state = block.state
     length_after = block.reader.tool_length()
+    if state.length_change is None and state.length_cancelled:
+        # G28 Z or G53 Z cancelled the offset on Z (FANUC B-63844EN/02, 14.1.2): a G43, G44,
+        # G49 or H of this block changes it from 0, so a post's G49 after its G28 G91 Z0.
+        # changes nothing (it had been refused as a change of the whole length), and a
+        # G43 H1 there lifts Z by H1's length on a FANUC
+        if "tool length" not in block.g_codes and "H" not in block.single:
+            return
+        length_before = 0.0
     if length_after == length_before:
         return
     words = "G49" if state.length_mode == "G49" else f"{state.length_mode} H{state.h}"

@@ -86,6 +86,11 @@ class _State:
     #: (line, words, the length the last absolute Z carried, m) of a tool length change that
     #: no absolute Z has carried yet: an incremental Z then ends apart on different controls
     length_change: tuple[int, str, float] | None = None
+    #: Z last moved to the reference position (G28 Z) or to machine coordinates (G53 Z),
+    #: which cancel the tool length offset vector on Z until a Z word restores it, G43/G44
+    #: staying modal (FANUC Series 0i-MB B-63844EN/02, 14.1.2): a G43/G44/G49 then changes
+    #: the offset from 0, and a post's G49 after its G28 G91 Z0. changes nothing
+    length_cancelled: bool = False
     cycle: str | None = None
     cycle_z: float | None = None  # machine Z of the hole bottom
     cycle_r: float | None = None  # machine Z of the R plane
@@ -497,6 +502,7 @@ class Reader:
                             if v == v}
         if present[AXES.index("Z")].any():  # an absolute Z carries a tool length change
             state.length_change = None
+            state.length_cancelled = False
         if not np.isnan(motion[-1]):
             state.motion = ("G00", "G01")[int(motion[-1])]
         if not np.isnan(feed[-1]):
