@@ -27,7 +27,14 @@ REFUSALS = [
     ("G00 X0\n\nG41 X0", 3, 1, "G41", r"cutter radius compensation \(G41\) is not supp"),
     ("G00 X0\nG42 D1 G01 X1. F100.", 2, 1, "G42", "compensation 'in wear' .* holds the "
      "tool-centre path already, its G42 adding only the wear .* without the G42 and D"),
-    ("G54.1 X0", 1, 1, "G54.1", "unknown G code G54.1"),
+    # Fusion 360's seventh work offset, work offset setting and probing macro had been
+    # 'unknown G code' with the list of codes read
+    ("G54.1 P7", 1, 1, "G54.1", r"an extended work offset \(G54.1 P<n>\) is not read: give "
+     "the offset as one of G54..G59"),
+    ("G10 L2 P1 X0 Y0 Z0", 1, 1, "G10", r"data setting \(G10: work offsets, tool offsets, "
+     r"parameters\) is not read"),
+    ("G65 P9810 X1. F1000.", 1, 1, "G65", r"a macro call \(G65 P<program>, such as a probing "
+     r"cycle\) is not read"),
     # G30 had been an 'unknown G code', and M99's, M97's and M198's P 'only read with G04
     # ..., M98 (program)'
     ("G00 X0\nG91 G30 Z0.", 2, 5, "G30", "second, third or fourth reference position "

@@ -137,7 +137,21 @@ COORDINATE_CHANGES = {
     "coordinate system", "G68": "coordinate rotation", "G51": "scaling",
     "G51.1": "mirror image", "G16": "polar coordinates",
 }
+#: Codes of a post's set-up and probing, whose words are data for the control (Fusion 360
+#: writes G54.1 P7 for a seventh work offset, G10 L2 to set one, G65 P9810 to call a probe
+#: macro): each had been an 'unknown G code', named by the list of codes read.
+CONTROL_DATA = {
+    "G54.1": "an extended work offset (G54.1 P<n>) is not read: give the offset as one of "
+             "G54..G59 (read_program(..., work_offsets=...); on the command line work zero "
+             "is machine zero)",
+    "G10": "data setting (G10: work offsets, tool offsets, parameters) is not read: give a "
+           "work offset with read_program(..., work_offsets=...) and tool lengths in a tool "
+           "table (--tools)",
+    "G65": "a macro call (G65 P<program>, such as a probing cycle) is not read: its program "
+           "runs on the control; post the moves it would make, or leave it out",
+}
 G_REFUSED = {
+    **CONTROL_DATA,
     "G30": "a return to the second, third or fourth reference position (G30, P2..P4), "
            "which the machine's parameters place, is not supported; post G28 to the "
            "reference position (on the command line the machine's home, Z at the top of its "
@@ -170,7 +184,7 @@ G_REFUSED = {
 #: not read. Each had been refused once more beside the code, as 'axis word X without a motion
 #: mode; give G00 or G01 first' (which would make G52's origin a move) or 'word P is only read
 #: with ...', six problems for one `G68.2 X0. Y0. Z0. I0. J45. K0.`
-OWN_WORDS = frozenset({*COORDINATE_CHANGES, "G68.2", "G53.1", "G30"})
+OWN_WORDS = frozenset({*COORDINATE_CHANGES, *CONTROL_DATA, "G68.2", "G53.1", "G30"})
 SINGLE = frozenset("NOSFPXYZABCIJKRQLHTD")
 MOTION = {"G00": "rapid", "G01": "linear"}
 ARC = ("G02", "G03")
