@@ -82,7 +82,8 @@ def test_an_incremental_z_after_a_tool_length_change_is_refused():
     """FANUC (TOS = 0) moves Z by a G43/G44/G49 change in its own block; LinuxCNC carries it
     with the next absolute Z. After G43 H2 (2.5 mm) from Z10, G91 Z-12 ends at machine
     Z 0.5 mm on the first and -2 mm on the second: refused, not read as either. An absolute
-    Z, a G28 Z or a G53 Z carries the change, and the incremental moves after it agree."""
+    Z carries the change, and the incremental moves after it agree (a G28 Z or a G53 Z
+    cancels the offset on Z instead: the next test)."""
     for text, line, key in [
         ("G90 G00 X0 Z10.\nG91 G43 H2 Z0\n", 2, "Z0"),
         ("G90 G00 X0 Z10.\nG43 H2\nG91 G01 Z-12. F100.\n", 3, "Z-12."),
@@ -96,11 +97,9 @@ def test_an_incremental_z_after_a_tool_length_change_is_refused():
         assert (info.value.line, info.value.key) == (line, key)
     z = [parse_program(text, tools=TOOLS).targets[-1, 2] / MM for text in [
         "G90 G00 X0 Z10.\nG43 H2\nG01 Z10. F100.\nG91 Z-12.\n",  # absolute Z carries it
-        "G90 G00 X0 Z10.\nG43 H2\nG91 G28 Z0\nZ-12.\n",  # at the reference (0)
-        "G90 G00 X0 Z10.\nG43 H2\nG53 Z20.\nG91 Z-12.\n",  # a machine position
         "G90 G00 X0 Z10.\nG43 H2\nG49 X1.\nG91 Z-1.\n",  # changed back: nothing waits
     ]]
-    assert z == pytest.approx([0.5, -12.0, 8.0, 9.0], abs=1e-12)
+    assert z == pytest.approx([0.5, 9.0], abs=1e-12)
 
 
 def test_a_g49_after_g28_z_or_g53_z_changes_no_length():
@@ -121,6 +120,28 @@ def test_a_g49_after_g28_z_or_g53_z_changes_no_length():
                                              r"\+2.5 mm"):
         parse_program("G90 G00 X0 Y0\nG43 Z10. H1\nG28 G91 Z0.\nG90 G43 H2\nG00 X10.\n",
                       tools=TOOLS)
+
+
+@pytest.mark.parametrize("retract", ["G28 G91 Z0.", "G91 G28 Z0", "G53 Z20."])
+def test_an_incremental_z_after_g28_z_or_g53_z_with_a_length_offset_modal_is_refused(retract):
+    """After G28 Z or G53 Z the offset vector on Z is cancelled, G43 H2 staying modal
+    (FANUC B-63844EN/02, 14.1.2); a FANUC restores it with the next Z move, so an
+    incremental Z there ends H2's 2.5 mm apart from a control that kept the offset. It had
+    run (G28 G91 Z0. then G01 Z-5.: 95 mm, the reference less 5, with G43 H1)."""
+    text = f"G90 G00 X0 Y0\nG43 Z10. H2\n{retract}\nG91 G01 Z-5. F100.\n"
+    with pytest.raises(NCProgramError, match=r"incremental Z-5\. after the G28 Z or G53 Z at "
+                                             r"line 3, which cancelled the tool length offset "
+                                             r"on Z while G43 H2 \(2\.5 mm\) stayed "
+                                             r"modal") as info:
+        parse_program(text, tools=TOOLS, reference={"Z": 0.1})
+    assert (info.value.line, info.value.key) == (4, "Z-5.")
+    # an absolute Z restores it on every control; incremental moves after it are read
+    program = parse_program(text.replace("G91 G01 Z-5.", "G90 G00 Z20.\nG91 G01 Z-5."),
+                            tools=TOOLS, reference={"Z": 0.1})
+    assert program.targets[-1, 2] == pytest.approx(17.5 * MM, abs=EXACT_M)
+    # with G49 in force nothing was cancelled that a move could restore
+    parse_program(text.replace(retract, f"{retract}\nG49"), tools=TOOLS,
+                  reference={"Z": 0.1})
 
 
 def test_tool_words_are_checked_against_the_table():

@@ -395,7 +395,7 @@ class Block:
             if letter == "Z":
                 value += self.reader.tool_length()
                 state.length_change = None  # carried by this Z
-                state.length_cancelled = False
+                state.length_cancelled = None
         return self.finite(value, word)
 
     def straight(self, axes: list[Word], block_number: int | None) -> None:

@@ -56,7 +56,7 @@ def read_cycle(block: Block, axes: list[Word], block_number: int | None) -> None
             z += block.offsets.get(state.work_offset, {}).get("Z", 0.0)
             z += block.reader.tool_length()
             state.length_change = None  # the hole's R and Z carry it
-            state.length_cancelled = False
+            state.length_cancelled = None
         state.cycle_z = block.finite(z, single["Z"])
     if "Q" in single:
         state.cycle_q = abs(block.real(single["Q"]) * block.length_of(single["Q"]))

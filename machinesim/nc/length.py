@@ -52,6 +52,16 @@ def check_length_carried(block: Block, word: Word | None, axes: list[Word] = ())
     """Refuse an incremental Z (or a G91 cycle's R: ``word``) while a tool length change
     waits for an absolute Z, and a G90 move without Z (``axes``, ``word`` None) then."""
     state = block.state
+    length = block.reader.tool_length()
+    if (state.length_cancelled and word is not None and state.incremental
+            and length != 0.0):
+        raise block.fail(
+            f"incremental {brief(word.key)} after the G28 Z or G53 Z at line "
+            f"{state.length_cancelled}, which cancelled the tool length offset on Z while "
+            f"{state.length_mode} H{state.h} ({length * 1e3:.6g} mm) stayed modal: a FANUC "
+            "restores the offset with this move and ends it that much apart from a control "
+            "that kept it; give an absolute Z after the reference return (G90 Z..) before "
+            "incremental moves along Z", word)
     change = state.length_change
     if change is None:
         return

@@ -181,7 +181,7 @@ def read_one_shot(block: Block, code: tuple[str, Word], axes: list[Word],
         units_free = block.units_free(axes)
         if "Z" in single:  # a machine position: every control's Z is the same again
             state.length_change = None
-            state.length_cancelled = True  # and the offset vector on Z is cancelled
+            state.length_cancelled = block.line  # and the offset vector on Z is cancelled
         block.add("rapid", 0.0, block_number, units_free=units_free)
         return
     # G28: through the intermediate point to the reference position of these axes (the
@@ -198,6 +198,6 @@ def read_one_shot(block: Block, code: tuple[str, Word], axes: list[Word],
         state.target[axis.letter] = block.reader.reference.get(axis.letter, 0.0)
     if "Z" in single:  # at the reference, every control's Z is the same again
         state.length_change = None
-        state.length_cancelled = True  # and the offset vector on Z is cancelled
+        state.length_cancelled = block.line  # and the offset vector on Z is cancelled
     block.add("rapid", 0.0, block_number, units_free=units_free)
 

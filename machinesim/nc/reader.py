@@ -90,7 +90,7 @@ class _State:
     #: which cancel the tool length offset vector on Z until a Z word restores it, G43/G44
     #: staying modal (FANUC Series 0i-MB B-63844EN/02, 14.1.2): a G43/G44/G49 then changes
     #: the offset from 0, and a post's G49 after its G28 G91 Z0. changes nothing
-    length_cancelled: bool = False
+    length_cancelled: int | None = None  # the line of that G28 Z or G53 Z
     cycle: str | None = None
     cycle_z: float | None = None  # machine Z of the hole bottom
     cycle_r: float | None = None  # machine Z of the R plane
@@ -502,7 +502,7 @@ class Reader:
                             if v == v}
         if present[AXES.index("Z")].any():  # an absolute Z carries a tool length change
             state.length_change = None
-            state.length_cancelled = False
+            state.length_cancelled = None
         if not np.isnan(motion[-1]):
             state.motion = ("G00", "G01")[int(motion[-1])]
         if not np.isnan(feed[-1]):
