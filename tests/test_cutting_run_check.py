@@ -123,15 +123,23 @@ def turning_paths():
                       for k, r in enumerate(rotations)])]
 
 
-def test_remove_checks_the_runs_of_a_turning_tool(union_short_of):
-    stock, tool, paths = block(4e-3, 4e-3, 1e-3), BallEndMill(0.5e-3), turning_paths()
+def cut_exact_then_short(stock, tool, paths, union_short_of, corner, leg=20e-6):
+    """The exact cut (part, report) of ``paths``, after checking that with the check off a
+    run whose union misses the tetrahedron of legs ``leg`` at ``corner`` keeps its volume,
+    leg^3 / 6 (`union_short_of` stays in force for the caller's cuts)."""
     exact, exact_report = remove(stock, tool, paths, method="boolean")
-    # 50 um above the tip at the first pose: inside its sweep and the block
-    leg = 20e-6
-    union_short_of(tetrahedron((1e-3, 2e-3, -0.15e-3), leg))
-    kept, kept_report = remove(stock, tool, paths, method="boolean", check_runs="off")
+    union_short_of(tetrahedron(corner, leg))
+    _, kept_report = remove(stock, tool, paths, method="boolean", check_runs="off")
     assert exact_report.removed_volume - kept_report.removed_volume == pytest.approx(
         leg ** 3 / 6, rel=1e-6, abs=0.0)
+    return exact, exact_report
+
+
+def test_remove_checks_the_runs_of_a_turning_tool(union_short_of):
+    stock, tool, paths = block(4e-3, 4e-3, 1e-3), BallEndMill(0.5e-3), turning_paths()
+    # 50 um above the tip at the first pose: inside its sweep and the block
+    exact, exact_report = cut_exact_then_short(stock, tool, paths, union_short_of,
+                                               (1e-3, 2e-3, -0.15e-3))
     for check in ("turning", "all"):
         part, report = remove(stock, tool, paths, method="boolean", check_runs=check)
         assert report.removed_volume == pytest.approx(exact_report.removed_volume, rel=1e-12)

@@ -10,7 +10,12 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 from scipy.spatial import HalfspaceIntersection
-from test_cutting_run_check import ROUND_OFF_M3, tetrahedron, union_short_of  # noqa: F401
+from test_cutting_run_check import (  # noqa: F401
+    ROUND_OFF_M3,
+    cut_exact_then_short,
+    tetrahedron,
+    union_short_of,
+)
 from tilted_cuts import swing
 
 from machinesim.cutting import remove, run_check, sweepset
@@ -112,14 +117,10 @@ def test_a_split_sweep_keeps_the_planes_of_its_pieces(kind):
 def test_remove_checks_the_runs_of_split_sweeps(union_short_of):  # noqa: F811
     stock, tool = block(10e-3, 10e-3, 2e-3), FlatEndMill(RADIUS, chord_tol=1e-5)
     paths = [_swung(ABOVE)]
-    exact, exact_report = remove(stock, tool, paths, method="boolean")
     # 20 um above the end face at the middle pose, by the axis: inside the two sweeps that
     # end there, and the block
-    leg = 20e-6
-    union_short_of(tetrahedron((5e-3, 5e-3, -80e-6), leg))
-    kept, kept_report = remove(stock, tool, paths, method="boolean", check_runs="off")
-    assert exact_report.removed_volume - kept_report.removed_volume == pytest.approx(
-        leg ** 3 / 6, rel=1e-6, abs=0.0)
+    exact, exact_report = cut_exact_then_short(stock, tool, paths, union_short_of,
+                                               (5e-3, 5e-3, -80e-6))
     part, report = remove(stock, tool, paths, method="boolean")
     assert report.removed_volume == pytest.approx(exact_report.removed_volume, rel=1e-12,
                                                       abs=0.0)
