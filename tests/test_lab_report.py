@@ -27,7 +27,7 @@ def test_run_tells_its_progress_step_by_step_in_order():
         name, paper = "counting", "none"
 
         def measure(self, lab):
-            return 1.0
+            return 1e-6  # a reading, m
 
         def identify(self, measurements):
             return Identified({"workpiece.x": (measurements, float("nan"))}, None)
