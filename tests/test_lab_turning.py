@@ -413,8 +413,9 @@ def test_a_grid_cut_with_the_tool_set_high_reads_its_uncut_crests():
     # (design above 39.75 nm) and P(sin > -0.118) = 0.538 (above 44.1 nm), by
     # P(sin > a) = 1/2 - asin(a) / pi over whole wavelengths.
     import machinesim.cam.spiral as sp
+    from machinesim.procedures.sts_cases import GRID_TOP, UNCUT_BAND, uncut_share
     from machinesim.procedures.sts_plans import MEASURE_LINE, PLANS
-    from machinesim.procedures.sts_turning import GRID_TOP, UNCUT_BAND, STSTurning, uncut_share
+    from machinesim.procedures.sts_turning import STSTurning
 
     procedure = STSTurning()
     program = sp.spiral_program(PLANS["before"].path(sp.sine_grid(), procedure.nose_radius))
@@ -434,8 +435,9 @@ def test_a_grid_cut_with_the_tool_set_high_reads_its_uncut_crests():
 
 
 def test_a_case_partly_uncut_says_so_in_its_figures():
+    from machinesim.procedures.sts_cases import CASES, CaseResult
     from machinesim.procedures.sts_prediction import Prediction
-    from machinesim.procedures.sts_turning import CASES, CaseResult, STSTurning
+    from machinesim.procedures.sts_turning import STSTurning
 
     def case(name, line, window):
         prediction = Prediction(6e-9, 1e-9, 1e-9, 5e-9, np.zeros(3))
