@@ -310,3 +310,28 @@ def test_no_rapid_of_the_pyramid_program_cuts_the_plate():
     z = program.targets[:, 2]
     rapid = program.kinds == KIND_RAPID
     assert np.nanmin(z[rapid]) == plan.clearance and np.nanmin(z) == -plan.depth
+
+
+def test_apexes_above_the_plates_top_are_counted_as_uncut_and_said():
+    # A tool set 2 um high cuts every groove 23 um deep, 2 um short of half the pitch, so
+    # each ridge stands as a 4 um flat of the plate's top: the part's highest point there
+    # is the plate's top, where the apexes read (the flanks' crossing, the tool's height)
+    # lie 2 um above it, in the air. Every one is counted and said; none at the nominal
+    # machine (test_nominal_machine_cuts_sharp_pyramids_at_the_top: all at the top).
+    from machinesim.metrology import height_map
+    from machinesim.procedures.pyramid_windows import PLATE_TOP, uncut_note
+
+    lab = machinesim.Lab("grooving_4axis", {"tool": {"offset_um": [0.0, 0.0, 2.0]}},
+                         noise=False)
+    (w,), ((_, part),) = cut_and_read(lab, windows=((0.0, 0.0),))
+    np.testing.assert_allclose(w.apex, 2e-6, atol=1e-9)
+    grid = np.linspace(-0.3e-3, 0.3e-3, 601)   # 1 um steps: 4 samples across each flat
+    assert np.nanmax(height_map(part, grid, grid)) == pytest.approx(PLATE_TOP, abs=1e-12)
+    assert w.uncut == w.apex.size == 144
+    note = uncut_note([w], "before")
+    assert note.startswith("before: window 1 (0, 0) mm: 144 of 144 apexes up to 2 um above "
+                           "the plate's top, uncut")
+    assert note.endswith("the part's own apexes (at most the top) range 0.000 um")
+    nominal, _ = cut_and_read(machinesim.Lab("grooving_4axis", noise=False),
+                              windows=((0.0, 0.0),))
+    assert nominal[0].uncut == 0 and uncut_note(nominal, "before") == ""

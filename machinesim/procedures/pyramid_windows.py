@@ -27,8 +27,8 @@ from machinesim.cam.pyramids import PAPER_PLAN, PyramidPlan, pyramid_program, wo
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_number
 
-__all__ = ["WINDOWS", "PyramidWindow", "capture", "cut_and_read", "path_errors", "read_window",
-           "v_flanks"]
+__all__ = ["PLATE_TOP", "UNCUT_BAND", "WINDOWS", "PyramidWindow", "capture", "cut_and_read",
+           "path_errors", "read_window", "uncut_note", "v_flanks"]
 
 WINDOWS = ((0.0, 0.0), (-0.19, -0.19), (0.19, -0.19), (0.19, 0.19), (-0.19, 0.19))
 """Window centres on the 400 mm plate (workpiece frame, m): centre and four corners."""
@@ -38,6 +38,13 @@ STOCK_XY = (-0.2, 0.2)
 """`STOCK`'s extent in x and in y, m: a window's square must lie within it."""
 SPACING = 0.1e-6
 """Profile sample spacing, m."""
+PLATE_TOP = 0.0
+"""`STOCK`'s top, m: the plan's grooves are as deep as half their pitch, so the ridges of a
+pattern cut as programmed meet at it."""
+UNCUT_BAND = 20e-9
+"""An apex read more than this (m) above `PLATE_TOP` was not cut to a point: its flanks
+cross in the air over a flat of uncut plate (`PyramidWindow.uncut`). About eight times the
+scatter of the flanks' crossings in the lab realism (2.6 nm at the plate's centre)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,6 +67,30 @@ class PyramidWindow:
     apex: np.ndarray
     pitch: float
     angle_error: float
+
+    @property
+    def uncut(self) -> int:
+        """How many apexes read above the plate's top (`UNCUT_BAND`): there the tool did not
+        reach the plan's depth, the ridges stand flat at the plate's top, and the apex read
+        is where the flanks would cross, in the air over the part."""
+        return int(np.sum(self.apex > PLATE_TOP + UNCUT_BAND))
+
+
+def uncut_note(windows, state: str) -> str:
+    """What a reader of the pyramid figures must know when some ``windows`` (`PyramidWindow`,
+    in `WINDOWS`' order) were not cut to a point (`PyramidWindow.uncut`): each such window,
+    how many apexes and how far above the plate's top, and the range of the part's own
+    apexes (each at most the plate's top). Empty when every apex was cut."""
+    parts = [f"window {k} ({round(w.centre[0] * 1e3)}, {round(w.centre[1] * 1e3)}) mm: {w.uncut} "
+             f"of {w.apex.size} apexes up to {(w.apex.max() - PLATE_TOP) * 1e6:.3g} um"
+             for k, w in enumerate(windows, start=1) if w.uncut]
+    if not parts:
+        return ""
+    real = np.concatenate([np.minimum(w.apex, PLATE_TOP).ravel() for w in windows])
+    return (f"{state}: {'; '.join(parts)} above the plate's top, uncut (the tool tip above "
+            "the program there: tool.z, C's tilt?): there the ridges stand flat at the top "
+            "and the apex read is where the flanks cross, in the air; the part's own apexes "
+            f"(at most the top) range {np.ptp(real) * 1e6:.3f} um")
 
 
 #: Sample spacing of the profiles that find a window's edges, m.

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import warnings
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -32,7 +33,7 @@ import numpy as np
 
 from machinesim.compensation_table import CompensationTable, ModelCompensation
 from machinesim.errors import ErrorModel
-from machinesim.exceptions import InputError
+from machinesim.exceptions import InputError, MachineSimWarning
 from machinesim.experiment import Evaluation, Figure, Identified, check_lab, fit_notes
 from machinesim.identification.c_axis_squareness import (
     LOCATION,
@@ -45,7 +46,7 @@ from machinesim.identification.c_axis_squareness import (
 )
 from machinesim.identification.xy_plane import fit_xy_plane
 from machinesim.nc import ProgramBuilder
-from machinesim.procedures.pyramid_windows import cut_and_read
+from machinesim.procedures.pyramid_windows import cut_and_read, uncut_note
 from machinesim.procedures.step_inputs import (
     check_identified,
     check_measurements,
@@ -242,6 +243,10 @@ class XYPlaneErrors:
                 for k, cut in enumerate(runs, start=1)}
         (h_before, a_before), (h_after, a_after) = (
             _pyramid_figures(w) for w in (pyramids_before, pyramids_after))
+        uncut = "; ".join(note for note in (uncut_note(pyramids_before, "before"),
+                                            uncut_note(pyramids_after, "after")) if note)
+        if uncut:
+            warnings.warn(f"XYPlaneErrors: pyramids {uncut}", MachineSimWarning, stacklevel=2)
         um = 1e6
         figures = (
             Figure("xy_error_x", "um", rx * um, ax * um, *PAPER_FIGURES["xy_error_x"],
@@ -270,7 +275,7 @@ class XYPlaneErrors:
                    note="angle of C to the XY normal, hypot(EA0C, EB0C); after: model route"),
             Figure("pyramid_height_range", "um", h_before * um, h_after * um,
                    note="range of the pyramid apex heights over the five 1 x 1 mm windows; "
-                   "after: model route"),
+                   "after: model route" + (f"; {uncut}" if uncut else "")),
             Figure("groove_set_angle_error", "urad", a_before * 1e6, a_after * 1e6,
                    note="largest |angle between the groove sets - 90 deg| over the windows; "
                    "after: model route"),
@@ -295,6 +300,8 @@ class XYPlaneErrors:
             "fit_residual_rms_um": identified.detail["fit"].residual_rms * um,
             "pyramid_apex_mean_before_um": [float(w.apex.mean()) * um for w in pyramids_before],
             "pyramid_apex_mean_after_um": [float(w.apex.mean()) * um for w in pyramids_after],
+            "pyramid_apexes_uncut_before_count": [w.uncut for w in pyramids_before],
+            "pyramid_apexes_uncut_after_count": [w.uncut for w in pyramids_after],
             "pyramid_pitch_before_um": [w.pitch * um for w in pyramids_before],
             "pyramid_pitch_after_um": [w.pitch * um for w in pyramids_after],
             "groove_set_angle_before_urad": [w.angle_error * 1e6 for w in pyramids_before],
