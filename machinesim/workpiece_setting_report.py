@@ -120,11 +120,20 @@ def table3_table(folder: ReportFolder, crown) -> str:
 def groove_table(folder: ReportFolder, grooves) -> str:
     details = grooves.evaluation.details
     model = details["groove_end_depths_after_model_um"]
-    rows = [[f"C = {90 * k} deg", grooves.figure(f"groove_depth_C{90 * k}").before,
-             grooves.figure(f"groove_depth_C{90 * k}").after, model[k]] for k in range(4)]
+    figures = [grooves.figure(f"groove_depth_C{90 * k}") for k in range(4)]
+    # an end where no groove was cut: why (the evaluation's details)
+    unread = [f"- C = {90 * k} deg, simulated {state}: {why}" for k in range(4)
+              for state in ("before", "after")
+              if (why := details.get(f"groove_{state}_unread", {}).get(f"groove_depth_C{90 * k}"))]
     spread = grooves.figure("groove_depth_spread")
-    rows.append(["spread of the four (nm)", spread.before, spread.after,
-                 details["groove_depth_spread_after_model_nm"]])
+
+    def cell(value):  # None: an end where no groove was cut (the note says why)
+        return "n/a" if value is None else value
+
+    rows = [[f"C = {90 * k} deg", cell(f.before), cell(f.after), cell(model[k])]
+            for k, f in enumerate(figures)]
+    rows.append(["spread of the four (nm)", cell(spread.before), cell(spread.after),
+                 cell(details["groove_depth_spread_after_model_nm"])])
     labs = details.get("groove_spread_after_over_labs")
     if labs is not None:
         # docs/procedures/workpiece_setting.md: one run is one draw of the lab
@@ -133,15 +142,17 @@ def groove_table(folder: ReportFolder, grooves) -> str:
                  ["  10 % and 90 % of labs below (nm)", "",
                   f"{labs['q10_nm']:.3g} and {labs['q90_nm']:.3g}", ""],
                  ["  share of labs below this run's spread, the paper's 100 nm", "",
-                  f"{labs['simulated_quantile_ratio']:.0%}, "
-                  f"{labs['paper_quantile_ratio']:.0%}", ""]]
+                  (f"{labs['simulated_quantile_ratio']:.0%}"
+                   if "simulated_quantile_ratio" in labs else "n/a")
+                  + f", {labs['paper_quantile_ratio']:.0%}", ""]]
         if "tilt_correlation_ratio" in labs:  # not in a report written before it was kept
             rows.append(["  the two tilts' stated correlation (both read sphere S1)", "",
                          f"{labs['tilt_correlation_ratio']:.2f}", ""])
     return folder.write_table(
         "grooves", ["groove", "before (um)", "after, eqs 5-7 (um)", "after, model-based (um)"],
         rows, title="Depth at the end of each groove (3 um programmed; paper Fig. 8b: "
-        "within about 100 nm of each other after)", digits=4)
+        "within about 100 nm of each other after)", digits=4,
+        note="n/a: no groove cut there, where\n" + "\n".join(unread) if unread else "")
 
 
 def identification_table(folder: ReportFolder, results) -> str:

@@ -54,11 +54,14 @@ def test_the_procedure_identifies_the_injected_load(grooves_run):
         assert abs(value - truth_parameters[name]) < bound, name
         assert result.injected[name] == truth_parameters[name] and std > 0.0
     # the grooves after compensation (rounded to the NC text's 1 nm): the paper's 100 nm;
-    # before, the workpiece landed 15 um low and no groove appears (the paper's Fig. 8a)
+    # before, the workpiece landed 15 um low and no groove appears (the paper's Fig. 8a):
+    # n/a, saying so (its depths of 0.0 had been given as the grooves' and a spread of 0)
     assert result.figure("groove_depth_spread").after < 5.0
+    assert result.figure("groove_depth_spread").before is None
     depths = [result.figure(f"groove_depth_C{90 * k}") for k in range(4)]
     assert all(abs(f.after - 3.0) < 0.05 for f in depths)
-    assert all(f.before == 0.0 for f in depths)
+    assert all(f.before is None and "before n/a: no groove at its end" in f.note
+               for f in depths)
 
 
 def test_an_after_only_grooves_run_reads_the_figures_of_the_whole_run(grooves_run,
@@ -296,3 +299,38 @@ def test_a_setting_saved_before_it_named_its_workpiece_still_compensates():
     assert {name: format_program(p) for name, p in programs.items()} == {
         name: format_program(p) for name, p in procedure.compensate(identified).items()}
     assert pickle.loads(pickle.dumps(identified)).detail.experiment == "grooves"
+
+
+def test_grooves_the_tool_never_reached_read_as_not_cut_not_as_depths():
+    # The block set 5 um low (a sixth of the robot's 30 um repeatability) under the nominal
+    # program, whose grooves are 3 um deep: the tool passes 2 um over the top and cuts
+    # nothing, so the part is the block (its heights along the grooves are the top's). The
+    # profiles across the grooves then read the top face's noise, a few nm, which the
+    # figures gave as the grooves' depths and their spread (3.6 nm, "within the paper's
+    # 100 nm"), exit 0; now the ends are n/a, saying no groove was cut there.
+    from machinesim.cam.crown import GROOVE_ROI, PARK, groove_program
+    from machinesim.metrology import height_map
+    from machinesim.metrology.part_features import STATIONS, UNCUT_DEPTH, groove_depths
+    from machinesim.procedures.workpiece_setting import GROOVE_TOOL
+    from machinesim.procedures.workpiece_setting_figures import groove_figures
+
+    procedure = RobotLoadedWorkpiece("grooves")
+    setting = {"workpiece": {"delta_um": [12.0, -8.0, -5.0]}}
+    lab = Lab(MACHINE, setting, seed=0)
+    block = procedure.workpiece(lab)
+    part, _ = lab.cut(groove_program(), GROOVE_TOOL, block, roi=GROOVE_ROI, start=PARK)
+    x = np.linspace(-STATIONS[-1], STATIONS[-1], 381)
+    assert np.array_equal(height_map(part, x, np.zeros(1)), height_map(block, x, np.zeros(1)))
+    read = groove_depths(part, lab.microscope(label="grooves"))
+    assert read.uncut.all() and np.abs(read.depths).max() < 0.2 * UNCUT_DEPTH
+    deep = groove_depths(cut(groove_program(), MACHINE, GROOVE_TOOL, block, None,
+                             roi=GROOVE_ROI, start=PARK)[0], lab.microscope(label="cut"))
+    assert not deep.uncut.any()   # the same block where the program puts it: 3 um deep
+    figures, details = groove_figures({"before": read, "after": deep, "after_model": deep})
+    figures = {f.name: f for f in figures}
+    for k in range(4):
+        f = figures[f"groove_depth_C{90 * k}"]
+        assert f.before is None and f.after == pytest.approx(3.0, abs=0.05)
+        assert "before n/a: no groove at its end" in f.note
+    assert figures["groove_depth_spread"].before is None
+    assert details["groove_uncut_stations_before_count"] == [len(STATIONS)] * 4

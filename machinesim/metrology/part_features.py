@@ -24,8 +24,8 @@ from machinesim.metrology.planes import line_distance, plane_intersection
 from machinesim.rotations import rot_z
 from machinesim.units import M_PER_MM, M_PER_UM
 
-__all__ = ["MAP_SPACING", "STATIONS", "CrownFeatures", "GrooveDepths", "crown_features",
-           "groove_depths"]
+__all__ = ["MAP_SPACING", "STATIONS", "UNCUT_DEPTH", "CrownFeatures", "GrooveDepths",
+           "crown_features", "groove_depths"]
 
 MM, UM = M_PER_MM, M_PER_UM
 
@@ -40,6 +40,10 @@ PROFILE_HALF, BOTTOM_HALF = 0.35 * MM, 25 * UM
 #: Patches of the uncut top face between the grooves, centre distance from the crossing
 #: along the diagonals and half size, m: the reference surface for the depths.
 PATCH_AT, PATCH_HALF = 0.75 * MM, 0.15 * MM
+#: A station read shallower than this (m) holds no groove the tool cut: its profile's
+#: lowest stretch is the top face's noise (a block set 5 um low, its grooves not cut at all,
+#: read -2 .. +4 nm with the lab's 12 nm microscope), not a depth (`GrooveDepths.uncut`).
+UNCUT_DEPTH = 0.05 * UM
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +65,12 @@ class GrooveDepths:
     def ends(self) -> np.ndarray:
         """Depths at the last station, shape (4,)."""
         return self.depths[:, -1]
+
+    @property
+    def uncut(self) -> np.ndarray:
+        """Where no groove was cut, shape (4, n): the stations read shallower than
+        `UNCUT_DEPTH`, the top face's own noise (the tool above the face there)."""
+        return ~(self.depths >= UNCUT_DEPTH)
 
 
 def groove_depths(part, microscope, stations=STATIONS) -> GrooveDepths:

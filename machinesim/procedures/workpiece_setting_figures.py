@@ -24,7 +24,7 @@ from machinesim.identification.workpiece_setting_uncertainty import (
     tilt_spread_quantiles,
 )
 from machinesim.metrology.crown_image import CrownImageReading
-from machinesim.metrology.part_features import CrownFeatures, GrooveDepths
+from machinesim.metrology.part_features import UNCUT_DEPTH, CrownFeatures, GrooveDepths
 from machinesim.units import M_PER_MM, M_PER_NM, M_PER_UM
 
 __all__ = [
@@ -50,24 +50,54 @@ def groove_figures(depths: dict[str, GrooveDepths], after_only: bool = False
     """The grooves' figures (each end's depth before and after, and their spread against
     Fig. 8b) and details (the depths at every station, the model-based route's unless
     ``after_only``), from `groove_depths` of the parts ``"before"``, ``"after"`` and
-    ``"after_model"``."""
+    ``"after_model"``. An end where no groove was cut (`GrooveDepths.uncut`: it reads the
+    top face) is n/a, and so is the spread of that state, the note saying which and what
+    was read: a depth of the face's noise is no groove's depth."""
     before, after = depths["before"], depths["after"]
-    figures = [Figure(f"groove_depth_C{90 * k}", "um", before.ends[k] / UM,
-                      after.ends[k] / UM, note="depth at the end of the groove cut at "
-                      f"C = {90 * k} deg (3 um programmed)") for k in range(4)]
-    figures.append(Figure("groove_depth_spread", "nm", np.ptp(before.ends) / M_PER_NM,
-                          np.ptp(after.ends) / M_PER_NM,
+    unread = {name: groove_unread(d) for name, d in (("before", before), ("after", after))}
+
+    def end(d: GrooveDepths, k: int):
+        return None if d.uncut[k, -1] else float(d.ends[k] / UM)
+
+    def spread(d: GrooveDepths):
+        return None if d.uncut[:, -1].any() else float(np.ptp(d.ends) / M_PER_NM)
+
+    def why(k: int) -> str:
+        return "".join(f"; {name} n/a: {texts[k]}" for name, texts in unread.items()
+                       if k in texts)
+
+    uncut_ends = "".join(
+        f"; {name} n/a: no groove cut at the end of the groove at C = "
+        f"{', '.join(str(90 * k) for k in texts)} deg" for name, texts in unread.items() if texts)
+
+    figures = [Figure(f"groove_depth_C{90 * k}", "um", end(before, k), end(after, k),
+                      note="depth at the end of the groove cut at "
+                      f"C = {90 * k} deg (3 um programmed){why(k)}") for k in range(4)]
+    figures.append(Figure("groove_depth_spread", "nm", spread(before), spread(after),
                           paper_after=PAPER_GROOVE_SPREAD_NM,
-                          note="paper Fig. 8b: within about 100 nm of each other"))
+                          note=f"paper Fig. 8b: within about 100 nm of each other{uncut_ends}"))
     details = {"groove_stations_mm": (before.stations / MM).tolist(),
                **{f"groove_depths_{name}_um": (d.depths / UM).tolist()
                   for name, d in depths.items()},
+               **{f"groove_uncut_stations_{name}_count": d.uncut.sum(axis=1).tolist()
+                  for name, d in depths.items()},
+               **{f"groove_{name}_unread": {f"groove_depth_C{90 * k}": text
+                                            for k, text in texts.items()}
+                  for name, texts in unread.items() if texts},
                **({} if after_only else {
-                   "groove_depth_spread_after_model_nm": float(np.ptp(
-                       depths["after_model"].ends) / M_PER_NM),
-                   "groove_end_depths_after_model_um": (depths["after_model"].ends / UM)
-                   .tolist()})}
+                   "groove_depth_spread_after_model_nm": spread(depths["after_model"]),
+                   "groove_end_depths_after_model_um": [end(depths["after_model"], k)
+                                                        for k in range(4)]})}
     return tuple(figures), details
+
+
+def groove_unread(d: GrooveDepths) -> dict[int, str]:
+    """Why each groove's end (k: cut at C = 90 k deg) is not read, for those not cut there."""
+    return {k: f"no groove at its end: it reads {d.ends[k] / UM * 1e3:.1f} nm deep, less than "
+               f"the {UNCUT_DEPTH / UM * 1e3:.0f} nm a cut groove reads, the top face (not cut "
+               f"at {int(d.uncut[k].sum())} of its {d.uncut.shape[1]} stations: the tool above "
+               "the face there, the block set low or tilted, tool.z?)"
+            for k in range(4) if d.uncut[k, -1]}
 
 
 def crown_figures(machine, crown: CrownPlan, features: dict[str, CrownFeatures],
@@ -223,8 +253,9 @@ def _spread_over_labs(identified: Identified, grooves: Evaluation) -> dict:
                  for name, value in zip(SPREAD_QUANTILES, spread.tolist(), strict=True)}
     over_labs["paper_quantile_ratio"] = tilt_spread_quantile(
         PAPER_GROOVE_SPREAD_NM * M_PER_NM, sa, sb, span, rho)
-    over_labs["simulated_quantile_ratio"] = tilt_spread_quantile(
-        found * M_PER_NM, sa, sb, span, rho)
+    if found is not None:  # None: an end not cut (`groove_figures`)
+        over_labs["simulated_quantile_ratio"] = tilt_spread_quantile(
+            found * M_PER_NM, sa, sb, span, rho)
     over_labs["tilt_correlation_ratio"] = rho
     return {"groove_spread_after_over_labs": over_labs}
 
