@@ -43,7 +43,7 @@ from machinesim.budget import LabInputs, realism_budget
 from machinesim.errors import ErrorModel
 from machinesim.experiment import run
 from machinesim.machines import load_machine
-from machinesim.procedures.pyramid_windows import WINDOWS, capture, path_errors
+from machinesim.procedures.pyramid_windows import WINDOWS, capture, path_errors, rapid_reach
 from machinesim.procedures.xy_plane_errors import XYPlaneErrors, compensations
 from machinesim.procedures.xy_plane_measurements import (
     DIAGONALS,
@@ -140,22 +140,29 @@ def refuse_off_windows(args, machine, errors) -> None:
     """Refuse, before anything is measured or cut, injected ``errors`` that cut the pyramid
     windows' grooves beyond what their reading captures (`capture`: 0.2 mm across or along,
     7.5 um shallower; through ``machine``'s kinematics at the ends of each window's outer
-    grooves), naming the ``--errors`` file and the keys that move the tool most there. The
+    grooves), or so deep that the rapids run into the plate (`rapid_reach`: 0.5 mm; a tool
+    1 mm low ran for more than 7 min without a word), naming the ``--errors`` file and the
+    keys that move the tool most there. The
     run refused only at the first window, after the laser tests, the fits and its cut (10 s
     of 16 with the default errors x 1000, naming neither the file nor a key), and a tool cut
     8 to 15 um high read the apexes low with no word (10 um high read 8.3 um)."""
     q, off = path_errors(machine, errors)
     plane, above = capture()
+    below = rapid_reach()
     beyond_plane = np.abs(off[:, :2]) - plane
-    if beyond_plane.max() <= 0.0 and off[:, 2].max() <= above:
+    if beyond_plane.max() <= 0.0 and off[:, 2].max() <= above and off[:, 2].min() >= -below:
         return
     if beyond_plane.max() > 0.0:
         row, col = np.unravel_index(np.argmax(beyond_plane), beyond_plane.shape)
         found = (f"the tool tip {abs(off[row, col]) / UM:.4g} um off its path in "
                  f"{'xy'[col]} at a pyramid window's groove end")
-    else:
+    elif off[:, 2].max() > above:
         row, col = int(np.argmax(off[:, 2])), 2
         found = (f"the tool tip {off[row, 2] / UM:.4g} um above its path at a pyramid "
+                 "window's groove end")
+    else:
+        row, col = int(np.argmin(off[:, 2])), 2
+        found = (f"the tool tip {-off[row, 2] / UM:.4g} um below its path at a pyramid "
                  "window's groove end")
     values = errors.parameters()
     names = [name for name, value in values.items() if value]
@@ -165,9 +172,11 @@ def refuse_off_windows(args, machine, errors) -> None:
     refuse_beyond_capture(
         args, {}, keys or ["its errors"], found,
         f"(the 1 mm windows' grooves are read within {plane / UM:g} um of their place "
-        f"and at most {above / UM:g} um shallower than cut: docs/procedures/xy_plane_errors.md)",
-        f"the tool tip within {plane / UM:g} um of its path in x and y and at most "
-        f"{above / UM:g} um above it")
+        f"and at most {above / UM:g} um shallower than cut, and the program's rapids run "
+        f"{below / UM:g} um over the plate, which a tip lower runs them into, a crash: "
+        "docs/procedures/xy_plane_errors.md)",
+        f"the tool tip within {plane / UM:g} um of its path in x and y, at most "
+        f"{above / UM:g} um above it and less than {below / UM:g} um below it")
 
 
 def paper_table(result) -> str:

@@ -187,8 +187,15 @@ def test_errors_beyond_the_windows_capture_are_refused_before_anything_is_cut():
                            r"\(location.C.EA0C\): the tool tip \d+ um above its path")):
         with pytest.raises(MachineSimError, match=words + r".*within 200 um .* 7.5 um above"):
             refuse(args, machine, ErrorModel.from_dict(errors))
+    # a tool 0.6 mm low runs the rapids, 0.5 mm over the plate, into it: a crash, and a
+    # run 1 mm low cut for more than 7 min without a word (0.2 s a window at 0.3 mm low)
+    with pytest.raises(MachineSimError, match=r"\(tool.z\): the tool tip 600 um below its "
+                       r"path .* rapids run 500 um over the plate, which a tip lower runs "
+                       r"them into, a crash.* less than 500 um below it"):
+        refuse(args, machine, ErrorModel.from_dict({"tool": {"offset_um": [0, 0, -600.0]}}))
     # inside the capture, and the paper's default errors, are run
     refuse(args, machine, ErrorModel.from_dict({"tool": {"offset_um": [0, 0, 7.4]}}))
+    refuse(args, machine, ErrorModel.from_dict({"tool": {"offset_um": [0, 0, -499.0]}}))
     refuse(args, machine, ErrorModel.from_dict({"location": {"C": {"EX0C_um": 199.0}}}))
     refuse(args, machine, ErrorModel.from_toml(
         Path(__file__).resolve().parents[1] / "models/errors/xy_plane_grooving_4axis.toml"))

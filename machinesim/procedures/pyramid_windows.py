@@ -28,7 +28,7 @@ from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_number
 
 __all__ = ["PLATE_TOP", "UNCUT_BAND", "WINDOWS", "PyramidWindow", "capture", "cut_and_read",
-           "path_errors", "read_window", "uncut_note", "v_flanks"]
+           "path_errors", "rapid_reach", "read_window", "uncut_note", "v_flanks"]
 
 WINDOWS = ((0.0, 0.0), (-0.19, -0.19), (0.19, -0.19), (0.19, 0.19), (-0.19, 0.19))
 """Window centres on the 400 mm plate (workpiece frame, m): centre and four corners."""
@@ -287,11 +287,22 @@ def capture(plan: PyramidPlan = PAPER_PLAN) -> tuple[float, float]:
     Above: a groove cut that much shallower than ``plan.depth`` still has flank where
     `v_flanks` fits it (up to ``FLANK_BAND[1]`` pitch from its bottom): 25 - 17.5 = 7.5 um.
     Beyond, the fit takes in the plate's uncut top between the grooves, and the apexes read
-    low without a word (a tool 10 um high read 8.3 um). Below, nothing limits the reading.
+    low without a word (a tool 10 um high read 8.3 um). Below, nothing limits the reading;
+    the program's rapids do (`rapid_reach`).
     """
     _, half = _read_span(plan)
     return (0.5 * plan.window + plan.margin - half - 0.5 * plan.pitch,
             plan.depth - FLANK_BAND[1] * plan.pitch)
+
+
+def rapid_reach(plan: PyramidPlan = PAPER_PLAN) -> float:
+    """How far (m) the tool tip may cut below its programmed path before the program's
+    rapids, run ``plan.clearance`` over the plate's top, run into the plate: a crash (the
+    cut lists them, `CutReport.rapids_that_cut`, and from about 0.7 mm low each window's
+    boolean of the rapids' sweeps took minutes, where it takes 0.2 s: 0.9 mm low did not
+    end in 60 s, a run 1 mm low not in 7 min). Set against `path_errors` before anything
+    is cut, as `capture` is."""
+    return plan.clearance
 
 
 def path_errors(machine, errors, plan: PyramidPlan = PAPER_PLAN, windows=WINDOWS):
