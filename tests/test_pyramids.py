@@ -342,3 +342,16 @@ def test_apexes_above_the_plates_top_are_counted_as_uncut_and_said():
     nominal, _ = cut_and_read(machinesim.Lab("grooving_4axis", noise=False),
                               windows=((0.0, 0.0),))
     assert nominal[0].uncut == 0 and uncut_note(nominal, "before") == ""
+    # an instrument with a registration of its own reads heights in its frame (tens of um
+    # off at a corner): against the window's highest sample, where the flats read, the
+    # apexes stand 2 um up (less its tilt over the window); cut to a point, none does
+    from machinesim.procedures.pyramid_windows import UNCUT_BAND_REGISTERED
+    from machinesim.realism import Realism
+
+    for tool_z, uncut in ((2.0, 144), (0.0, 0)):
+        lab = machinesim.Lab("grooving_4axis", {"tool": {"offset_um": [0.0, 0.0, tool_z]}},
+                             seed=0, realism=Realism.lab())
+        (w,), _ = cut_and_read(lab, windows=CORNER)
+        assert w.top_band == UNCUT_BAND_REGISTERED and w.uncut == uncut
+        if uncut:
+            np.testing.assert_allclose(w.apex - w.top, 2e-6, atol=0.3e-6)

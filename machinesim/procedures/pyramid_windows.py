@@ -27,8 +27,9 @@ from machinesim.cam.pyramids import PAPER_PLAN, PyramidPlan, pyramid_program, wo
 from machinesim.exceptions import InputError
 from machinesim.metrology._arrays import as_number
 
-__all__ = ["PLATE_TOP", "UNCUT_BAND", "WINDOWS", "PyramidWindow", "capture", "cut_and_read",
-           "path_errors", "rapid_reach", "read_window", "uncut_note", "v_flanks"]
+__all__ = ["PLATE_TOP", "UNCUT_BAND", "UNCUT_BAND_REGISTERED", "WINDOWS", "PyramidWindow",
+           "capture", "cut_and_read", "path_errors", "rapid_reach", "read_window", "uncut_note",
+           "v_flanks"]
 
 WINDOWS = ((0.0, 0.0), (-0.19, -0.19), (0.19, -0.19), (0.19, 0.19), (-0.19, 0.19))
 """Window centres on the 400 mm plate (workpiece frame, m): centre and four corners."""
@@ -39,13 +40,19 @@ STOCK_XY = (-0.2, 0.2)
 SPACING = 0.1e-6
 """Profile sample spacing, m."""
 PLATE_TOP = 0.0
-"""`STOCK`'s top, m: the plan's grooves are as deep as half their pitch, so the ridges of a
-pattern cut as programmed meet at it."""
+"""`STOCK`'s top, m: the plan's grooves are half their pitch deep, so the ridges of a pattern
+cut as programmed meet at it."""
 UNCUT_BAND = 20e-9
-"""An apex read more than this (m) above `PLATE_TOP` was not cut to a point: its flanks
-cross in the air over a flat of uncut plate (`PyramidWindow.uncut`). About eight times the
-scatter of the flanks' crossings in the lab realism (2.6 nm at the plate's centre)."""
-
+"""An apex read more than this (m) above the plate's top was not cut to a point: its flanks
+cross in the air over a flat of the uncut top (`PyramidWindow.uncut`); about eight times the
+2.6 nm scatter of the crossings in the lab realism. For an instrument that reads in the
+part's frame (no stated registration)."""
+UNCUT_BAND_REGISTERED = 0.5e-6
+"""The same (m) against the window's highest sample, for an instrument whose heights carry a
+registration (its stated `registration_scatter`: a height zero and tilt of its own, tens of
+um between windows): a flat of uncut top reads there, and a ridge cut to a point reads its
+highest sample up to 0.36 um below the crossing with the lab's spot, lateral noise and stage
+(seeds 0 and 11), the profile running up to that far beside the other set's ridge."""
 
 @dataclass(frozen=True, eq=False)
 class PyramidWindow:
@@ -67,13 +74,16 @@ class PyramidWindow:
     apex: np.ndarray
     pitch: float
     angle_error: float
+    top: float = PLATE_TOP
+    top_band: float = UNCUT_BAND
 
     @property
     def uncut(self) -> int:
-        """How many apexes read above the plate's top (`UNCUT_BAND`): there the tool did not
-        reach the plan's depth, the ridges stand flat at the plate's top, and the apex read
-        is where the flanks would cross, in the air over the part."""
-        return int(np.sum(self.apex > PLATE_TOP + UNCUT_BAND))
+        """How many apexes read more than ``top_band`` above ``top``, the plate's top (the
+        window's highest sample for a registered instrument, `UNCUT_BAND_REGISTERED`): there
+        the tool did not reach the plan's depth, the ridges stand as flats of the plate's
+        top, and the apex read is where the flanks would cross, in the air over the part."""
+        return int(np.sum(self.apex > self.top + self.top_band))
 
 
 def uncut_note(windows, state: str) -> str:
@@ -82,11 +92,11 @@ def uncut_note(windows, state: str) -> str:
     how many apexes and how far above the plate's top, and the range of the part's own
     apexes (each at most the plate's top). Empty when every apex was cut."""
     parts = [f"window {k} ({round(w.centre[0] * 1e3)}, {round(w.centre[1] * 1e3)}) mm: {w.uncut} "
-             f"of {w.apex.size} apexes up to {(w.apex.max() - PLATE_TOP) * 1e6:.3g} um"
+             f"of {w.apex.size} apexes up to {(w.apex.max() - w.top) * 1e6:.3g} um"
              for k, w in enumerate(windows, start=1) if w.uncut]
     if not parts:
         return ""
-    real = np.concatenate([np.minimum(w.apex, PLATE_TOP).ravel() for w in windows])
+    real = np.concatenate([np.minimum(w.apex, w.top).ravel() for w in windows])
     return (f"{state}: {'; '.join(parts)} above the plate's top, uncut (the tool tip above "
             "the program there: tool.z, C's tilt?): there the ridges stand flat at the top "
             "and the apex read is where the flanks cross, in the air; the part's own apexes "
@@ -224,10 +234,14 @@ def read_window(instrument, part, centre, plan: PyramidPlan = PAPER_PLAN,
                  for along_x in (True, False)]
         sets = [_read_set(instrument, part, cx, cy, along_x, nominal, half, p, span,
                           phase[0], phase[1]) for along_x in (True, False)]
-    (pos1, r1, m1), (pos2, r2, m2) = sets
+    (pos1, r1, m1, top1), (pos2, r2, m2, top2) = sets
     apex = np.minimum(r1[:, None], r2[None, :])
     pitch = float(np.mean(np.concatenate([np.diff(pos1), np.diff(pos2)])))
-    return PyramidWindow((cx, cy), apex, pitch, float(-(m1 + m2)))
+    # the plate's top, against which an apex read above it was not cut to a point: where
+    # the instrument reads in the part's frame, the stock's; else its own highest sample
+    top = ((PLATE_TOP, UNCUT_BAND) if getattr(instrument, "registration_scatter", None) is None
+           else (max(top1, top2), UNCUT_BAND_REGISTERED))
+    return PyramidWindow((cx, cy), apex, pitch, float(-(m1 + m2)), *top)
 
 
 def _across(instrument, part, cx, cy, along_x, half, at):
@@ -246,8 +260,9 @@ def _groove_offset(instrument, part, cx, cy, along_x, half, p) -> float:
 
 
 def _read_set(instrument, part, cx, cy, along_x, nominal, half, p, span, offset_1, offset_2):
-    """One groove set of a window: positions and ridge heights on the centre profile, and
-    the grooves' slope from the profiles either side, all along the other set's ridges
+    """One groove set of a window: positions and ridge heights on the centre profile, the
+    grooves' slope from the profiles either side, and the centre profile's highest sample,
+    all along the other set's ridges
     (half a pitch off its grooves as found: ``offset_1``, ``offset_2`` of sets 1 and 2)."""
     offset, other = (offset_1, offset_2) if along_x else (offset_2, offset_1)
     centre = (cx if along_x else cy) + other + 0.5 * p
@@ -266,7 +281,9 @@ def _read_set(instrument, part, cx, cy, along_x, nominal, half, p, span, offset_
         positions[shift] = pos + base
         ridges[shift] = _ridges(lefts, rights)
     slope = np.mean((positions[span] - positions[-span]) / (2.0 * span))
-    return positions[0.0], ridges[0.0], slope
+    # the highest the centre profile reads: along the other set's ridge it runs over every
+    # pyramid's top, the plate's own where a ridge was not cut to a point
+    return positions[0.0], ridges[0.0], slope, float(np.nanmax(profiles[0.0].z))
 
 
 def _read_span(plan: PyramidPlan) -> tuple[np.ndarray, float]:
