@@ -371,8 +371,8 @@ def realism_budget(procedure, result, realism, make_lab, enabled: bool = True, *
                          key="result")
     jobs = min(jobs, len(sources))  # one rerun: here, each step shown, no worker to start
     if jobs == 1:
-        return error_budget(lambda off: result if off is None else run(
-            procedure, make_lab(realism.without(off)),
+        return error_budget(lambda off: result if off is None else _quietly(
+            run, procedure, make_lab(realism.without(off)),
             progress=None if progress is None else progress(f"budget, {off} off")), sources)
     if progress is not None:
         progress("budget")(f"{len(sources)} sources switched off in turn, {jobs} at a time "
@@ -394,7 +394,21 @@ def _rerun_without(off: str, *, procedure, make_lab, realism):
     """`realism_budget`'s rerun with ``off`` switched off, as a worker process runs it."""
     from machinesim.experiment import run
 
-    return run(procedure, make_lab(realism.without(off)))
+    return _quietly(run, procedure, make_lab(realism.without(off)))
+
+
+def _quietly(run, *args, **kwargs):
+    """``run(*args, **kwargs)`` with its `MachineSimWarning`s kept to itself: a rerun's
+    warning is of a variant of the run, whose own warning the user has already seen
+    (paper 003's uncut pyramids were said six times over, once per rerun, each with the
+    variant's figures)."""
+    import warnings
+
+    from machinesim.exceptions import MachineSimWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MachineSimWarning)
+        return run(*args, **kwargs)
 
 
 @dataclass(frozen=True)

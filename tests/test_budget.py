@@ -340,3 +340,32 @@ def test_a_share_of_a_figure_of_zero_is_undefined_in_the_table_plot_and_json(tmp
     with pytest.raises(InputError, match=r"budget\[2\]\.share must be a finite number, got "
                                          r"None \(null only where after_all is 0"):
         check_summary(summary)
+
+
+def test_a_budgets_reruns_keep_their_warnings_to_themselves(monkeypatch):
+    # a procedure's MachineSimWarning (paper 003's uncut pyramids) was said once by the run
+    # and again by each rerun with a source off, with the variant's figures: six lines
+    import warnings
+    from types import SimpleNamespace
+
+    from machinesim import experiment
+    from machinesim.budget import realism_budget
+    from machinesim.exceptions import MachineSimWarning
+    from machinesim.realism import Realism
+    from machinesim.results import Figure
+
+    class Procedure:
+        realism_sources = ("instrument_noise", "lateral_noise")
+
+    def rerun(procedure, lab, progress=None):
+        warnings.warn(f"variant {lab}", MachineSimWarning, stacklevel=2)
+        return SimpleNamespace(figures=(Figure("depth", "um", 1.0, 2.0),))
+
+    monkeypatch.setattr(experiment, "run", rerun)
+    everything = SimpleNamespace(figures=(Figure("depth", "um", 1.0, 3.0),))
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        budget = realism_budget(Procedure(), everything, Realism.lab(), str)
+    assert said == []
+    # the reruns ran: each source's share of the 3 um is (9 - 4) / 9
+    assert [row["share"] for row in budget.to_dict()] == pytest.approx([5 / 9] * 2)
